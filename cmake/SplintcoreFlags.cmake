@@ -1,0 +1,48 @@
+# Compiler flags for splintcore's own targets.
+#
+# Determinism first: the same input must give the same output bytes with g++ and clang++,
+# at -O0 and -O2, on x86-64 and AArch64. So no floating-point contraction (an FMA rounds
+# once where a multiply-then-add rounds twice), no fast-math, and IEEE semantics kept.
+
+include_guard(GLOBAL)
+
+option(SPLINTCORE_WERROR "Treat warnings as errors on splintcore's own code" ON)
+option(SPLINTCORE_SANITIZE "Build with AddressSanitizer and UndefinedBehaviorSanitizer" OFF)
+option(SPLINTCORE_CORE_NO_EXCEPTIONS "Build the core library with -fno-exceptions -fno-rtti" ON)
+option(SPLINTCORE_FUZZ "Build libFuzzer targets (clang only)" OFF)
+
+set(SPLINTCORE_WARNINGS
+  -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wsign-conversion
+  -Wcast-align -Wnon-virtual-dtor -Wold-style-cast -Wdouble-promotion)
+if(SPLINTCORE_WERROR)
+  list(APPEND SPLINTCORE_WARNINGS -Werror)
+endif()
+
+# Flags that change results: applied to everything we compile, tests and tools included,
+# so a golden hash computed in a test is the one the tool writes.
+set(SPLINTCORE_FP_FLAGS -ffp-contract=off -fno-fast-math)
+if(CMAKE_CXX_COMPILER_ID MATCHES "GNU")
+  # x87 extended precision would break bit-identity; SSE2 is the x86-64 baseline anyway.
+  if(CMAKE_SYSTEM_PROCESSOR MATCHES "i.86")
+    list(APPEND SPLINTCORE_FP_FLAGS -msse2 -mfpmath=sse)
+  endif()
+endif()
+add_compile_options(${SPLINTCORE_FP_FLAGS})
+
+if(SPLINTCORE_SANITIZE)
+  add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
+# splintcore_apply_warnings(target): our warning set, on our own code only.
+function(splintcore_apply_warnings target)
+  target_compile_options(${target} PRIVATE ${SPLINTCORE_WARNINGS})
+endfunction()
+
+# splintcore_apply_core_flags(target): what the core library is built with.
+function(splintcore_apply_core_flags target)
+  splintcore_apply_warnings(${target})
+  if(SPLINTCORE_CORE_NO_EXCEPTIONS)
+    target_compile_options(${target} PRIVATE -fno-exceptions -fno-rtti)
+  endif()
+endfunction()

@@ -1,0 +1,139 @@
+// splintcore geometry: Vec3, axis-aligned boxes, rigid transforms and exact predicates.
+// Floor 2: depends only on core.h.
+#ifndef SPLINTCORE_GEOMETRY_H
+#define SPLINTCORE_GEOMETRY_H
+
+#include <cmath>
+
+#include "splintcore/core.h"
+
+namespace splintcore {
+
+struct Vec3 {
+  double x = 0.0;
+  double y = 0.0;
+  double z = 0.0;
+
+  constexpr Vec3() = default;
+  constexpr Vec3(double x_, double y_, double z_) : x(x_), y(y_), z(z_) {}
+
+  double operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
+  double& operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
+};
+
+inline Vec3 operator+(const Vec3& a, const Vec3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline Vec3 operator-(const Vec3& a, const Vec3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline Vec3 operator-(const Vec3& a) { return {-a.x, -a.y, -a.z}; }
+inline Vec3 operator*(const Vec3& a, double s) { return {a.x * s, a.y * s, a.z * s}; }
+inline Vec3 operator*(double s, const Vec3& a) { return {a.x * s, a.y * s, a.z * s}; }
+inline bool operator==(const Vec3& a, const Vec3& b) {
+  return a.x == b.x && a.y == b.y && a.z == b.z;
+}
+inline bool operator!=(const Vec3& a, const Vec3& b) { return !(a == b); }
+
+inline double dot(const Vec3& a, const Vec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline double length_squared(const Vec3& a) { return dot(a, a); }
+// sqrt is correctly rounded by IEEE 754 on every platform, so this is bit-reproducible.
+inline double length(const Vec3& a) { return std::sqrt(dot(a, a)); }
+inline Vec3 min_vec(const Vec3& a, const Vec3& b) {
+  return {a.x < b.x ? a.x : b.x, a.y < b.y ? a.y : b.y, a.z < b.z ? a.z : b.z};
+}
+inline Vec3 max_vec(const Vec3& a, const Vec3& b) {
+  return {a.x > b.x ? a.x : b.x, a.y > b.y ? a.y : b.y, a.z > b.z ? a.z : b.z};
+}
+
+// True when the value is neither NaN nor infinite (decided on the bit pattern, so it holds
+// under any compiler flag).
+inline bool is_finite(double v) {
+  uint64_t bits;
+  std::memcpy(&bits, &v, sizeof(bits));
+  return (bits & 0x7ff0000000000000ull) != 0x7ff0000000000000ull;
+}
+inline bool is_finite(float v) {
+  uint32_t bits;
+  std::memcpy(&bits, &v, sizeof(bits));
+  return (bits & 0x7f800000u) != 0x7f800000u;
+}
+inline bool is_finite(const Vec3& v) { return is_finite(v.x) && is_finite(v.y) && is_finite(v.z); }
+
+// ---------------------------------------------------------------------------------------------
+// Axis-aligned bounding box. Empty until a point is added.
+
+struct Aabb {
+  Vec3 lo{HUGE_VAL, HUGE_VAL, HUGE_VAL};
+  Vec3 hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+
+  bool empty() const { return lo.x > hi.x || lo.y > hi.y || lo.z > hi.z; }
+  void add(const Vec3& p) { lo = min_vec(lo, p); hi = max_vec(hi, p); }
+  void add(const Aabb& b) { lo = min_vec(lo, b.lo); hi = max_vec(hi, b.hi); }
+  Vec3 extent() const { return empty() ? Vec3{} : hi - lo; }
+  Vec3 center() const { return empty() ? Vec3{} : (lo + hi) * 0.5; }
+  bool overlaps(const Aabb& b) const {
+    return lo.x <= b.hi.x && b.lo.x <= hi.x && lo.y <= b.hi.y && b.lo.y <= hi.y &&
+           lo.z <= b.hi.z && b.lo.z <= hi.z;
+  }
+  bool contains(const Vec3& p) const {
+    return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z &&
+           p.z <= hi.z;
+  }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Rigid transform: p' = R p + t, R a rotation (orthonormal, det +1).
+
+struct RigidTransform {
+  double r[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  Vec3 t{};
+
+  Vec3 apply_point(const Vec3& p) const {
+    return {r[0][0] * p.x + r[0][1] * p.y + r[0][2] * p.z + t.x,
+            r[1][0] * p.x + r[1][1] * p.y + r[1][2] * p.z + t.y,
+            r[2][0] * p.x + r[2][1] * p.y + r[2][2] * p.z + t.z};
+  }
+  Vec3 apply_vector(const Vec3& v) const {
+    return {r[0][0] * v.x + r[0][1] * v.y + r[0][2] * v.z,
+            r[1][0] * v.x + r[1][1] * v.y + r[1][2] * v.z,
+            r[2][0] * v.x + r[2][1] * v.y + r[2][2] * v.z};
+  }
+  static RigidTransform translation(const Vec3& t_) {
+    RigidTransform x;
+    x.t = t_;
+    return x;
+  }
+};
+
+// this then next: (next o first)(p) = next(first(p)).
+RigidTransform compose(const RigidTransform& next, const RigidTransform& first);
+RigidTransform inverse(const RigidTransform& x);
+
+// Builds a rigid transform from a row-major 4x4 matrix, checking that it is rigid: finite,
+// last row 0 0 0 1, R^T R = I within `tolerance` per entry, det(R) = +1 within tolerance
+// (a reflection would turn a mesh inside out). The error names the offending entry.
+Status rigid_from_matrix(const double m[16], double tolerance, RigidTransform* out);
+
+// ---------------------------------------------------------------------------------------------
+// Exact geometric predicates (Shewchuk, "Adaptive Precision Floating-Point Arithmetic and Fast
+// Robust Geometric Predicates", 1997). The sign of each result is always exact for finite
+// inputs whose products neither overflow nor underflow (any coordinates within
+// [1e-140, 1e140] in magnitude, or zero); the magnitude is an approximation.
+
+// > 0 when a, b, c run counter-clockwise, < 0 clockwise, 0 when collinear.
+// Equals (a - c) x (b - c) in exact arithmetic.
+double orient2d(double ax, double ay, double bx, double by, double cx, double cy);
+
+// > 0 when d lies below the plane through a, b, c (a, b, c counter-clockwise seen from above),
+// < 0 above, 0 when coplanar. Equals det[a - d; b - d; c - d] in exact arithmetic.
+double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
+
+inline int sign_of(double v) { return (v > 0) - (v < 0); }
+
+// True when a, b, c are exactly collinear (including coincident points): all three
+// coordinate-plane projections have zero orientation.
+bool collinear3d(const Vec3& a, const Vec3& b, const Vec3& c);
+
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_GEOMETRY_H

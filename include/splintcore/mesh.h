@@ -1,0 +1,114 @@
+// splintcore mesh: the one indexed triangle mesh type, welding of STL soup, topology checks
+// and measures. Floor 3: depends on core.h and geometry.h.
+#ifndef SPLINTCORE_MESH_H
+#define SPLINTCORE_MESH_H
+
+#include "splintcore/core.h"
+#include "splintcore/geometry.h"
+
+namespace splintcore {
+
+struct Triangle {
+  uint32_t v[3];  // counter-clockwise seen from outside
+};
+
+// A triangle as STL stores it: three float32 corners (the facet normal is not kept: it is
+// recomputed from the corners, whose order defines the orientation).
+struct SoupTriangle {
+  float p[3][3];
+};
+
+// Indexed triangle mesh in an arena. Vertices are double so that later stages (Boolean
+// intersection points) are exact where they can be; STL input is float32, held exactly.
+struct Mesh {
+  ArenaArray<Vec3> vertices;
+  ArenaArray<Triangle> triangles;
+
+  Mesh() = default;
+  explicit Mesh(Arena* arena) : vertices(arena), triangles(arena) {}
+  void bind(Arena* arena) { vertices.bind(arena); triangles.bind(arena); }
+};
+
+// Bytes weld_exact() may take from the arena for `triangle_count` triangles, at most (outputs
+// and temporaries together; the temporaries are returned before it finishes).
+uint64_t weld_exact_bound(uint64_t triangle_count);
+
+// Welds soup into `out` (bound to an arena, appended to): corners with bit-identical
+// coordinates become one vertex (-0.0 and +0.0 are the same). Vertex ids are given in order of
+// first appearance, so the result depends only on the soup, never on hashing. Triangles whose
+// corners weld together are kept (check_mesh() reports them as degenerate).
+// Errors: kArenaExhausted; kNonFinite (names the triangle); kLimitExceeded (> 2^32-1 corners).
+Status weld_exact(const Context& ctx, Span<const SoupTriangle> soup, Mesh* out);
+
+// Welds corners closer than `tolerance` (max-norm, mm), order-independently: the connected
+// components of the "closer than tolerance" relation become one vertex, placed at the
+// component's lexicographically smallest corner. Permuting the soup's triangles permutes the
+// output triangles but never changes vertex positions.
+Status weld_tolerance(const Context& ctx, Span<const SoupTriangle> soup, double tolerance,
+                      Mesh* out);
+
+// ---------------------------------------------------------------------------------------------
+// Checks and measures.
+
+struct EdgeRef {
+  uint32_t v0 = 0, v1 = 0;   // vertex ids (v0 < v1)
+  uint32_t triangle = 0;     // one triangle using the edge
+};
+
+struct MeshReport {
+  uint64_t vertex_count = 0;
+  uint64_t triangle_count = 0;
+  uint64_t unreferenced_vertices = 0;
+  uint64_t edge_count = 0;               // distinct undirected edges
+  uint64_t boundary_edges = 0;           // used by one triangle
+  uint64_t nonmanifold_edges = 0;        // used by three or more
+  uint64_t orientation_conflicts = 0;    // used twice in the same direction
+  uint64_t degenerate_triangles = 0;     // repeated vertex ids or zero area (exact)
+  uint64_t duplicate_triangles = 0;      // same vertex set as an earlier triangle
+  uint64_t shells = 0;                   // components connected through edges
+  int64_t euler_characteristic = 0;      // V - E + F over referenced vertices
+  int64_t genus = -1;                    // sum over shells, when closed and edge-manifold
+  double area = 0.0;                     // mm^2
+  double volume = 0.0;                   // signed, mm^3 (> 0 when outward)
+  Aabb bounds;
+
+  // The first offender of each kind (index order), for error messages.
+  EdgeRef first_boundary_edge{};
+  EdgeRef first_nonmanifold_edge{};
+  EdgeRef first_orientation_conflict{};
+  uint32_t first_degenerate_triangle = 0;
+  uint32_t first_duplicate_triangle = 0;
+
+  bool closed() const { return boundary_edges == 0 && triangle_count > 0; }
+  bool edge_manifold() const { return nonmanifold_edges == 0; }
+  bool oriented() const { return orientation_conflicts == 0; }
+  bool outward() const { return volume > 0.0; }
+  // Closed, manifold, consistently oriented, outward, nothing degenerate or duplicated.
+  bool is_valid_solid() const {
+    return closed() && edge_manifold() && oriented() && outward() &&
+           degenerate_triangles == 0 && duplicate_triangles == 0;
+  }
+};
+
+uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count);
+
+// Fills `report` (temporaries from the arena, returned before it finishes).
+// Errors: kArenaExhausted; kInvalidMesh when a triangle references a vertex that does not
+// exist (names the triangle).
+Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report);
+
+// Turns a report into the first error a solid would have, or ok: "mesh is not closed: 12
+// boundary edges, first between vertices 4 and 9 (triangle 17)" and so on.
+Status require_valid_solid(const MeshReport& report);
+
+// Individual measures (deterministic: summed in triangle order, relative to the box centre).
+Aabb mesh_bounds(const Mesh& mesh);
+double mesh_area(const Mesh& mesh);
+double mesh_volume(const Mesh& mesh);
+
+// Applies a rigid transform to every vertex in place.
+void transform_mesh(const RigidTransform& x, Mesh* mesh);
+
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_MESH_H

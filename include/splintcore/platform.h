@@ -1,0 +1,101 @@
+// splintcore platform: the hosted layer (files, atomic output, threads, clock). Floor 5.
+// Everything else takes byte sources, sinks and executors; a firmware build leaves this out
+// (CMake option SPLINTCORE_WITH_PLATFORM=OFF).
+#ifndef SPLINTCORE_PLATFORM_H
+#define SPLINTCORE_PLATFORM_H
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdio>
+#include <mutex>
+#include <thread>
+
+#include "splintcore/core.h"
+#include "splintcore/io.h"
+
+namespace splintcore {
+
+// A file opened for reading as a ByteSource (size known from the file system).
+class FileSource {
+ public:
+  FileSource() = default;
+  ~FileSource();
+  FileSource(const FileSource&) = delete;
+  FileSource& operator=(const FileSource&) = delete;
+
+  Status open(const char* path);
+  ByteSource source();
+  void close();
+
+ private:
+  std::FILE* file_ = nullptr;
+  uint64_t size_ = kUnknownSize;
+  char path_[Status::kFileCapacity] = {};
+};
+
+// Output written atomically: bytes go to a temporary file in the destination's folder; commit()
+// flushes, syncs and renames it over the destination. Anything else (an error, a destructor
+// without commit) removes the temporary file, so a failed run never leaves an output behind.
+class AtomicFile {
+ public:
+  AtomicFile() = default;
+  ~AtomicFile();
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  Status open(const char* path);
+  ByteSink sink();  // seekable
+  Status commit();
+  void abort();
+
+ private:
+  std::FILE* file_ = nullptr;
+  char path_[4096] = {};
+  char temp_path_[4096 + 32] = {};
+  bool failed_ = false;
+};
+
+// Reads a whole file into arena memory (for tools and tests).
+Status read_file(Arena& arena, const char* path, uint64_t max_bytes, Span<uint8_t>* out);
+
+// A pool of std::threads implementing Executor (at most kMaxThreads). Workers take task
+// indices from a shared counter; which thread runs which index never affects results, since
+// tasks write only to their own slots. threads == 1 runs tasks inline on the caller.
+class ThreadExecutor {
+ public:
+  static constexpr unsigned kMaxThreads = 64;
+  explicit ThreadExecutor(unsigned threads);
+  ~ThreadExecutor();
+  ThreadExecutor(const ThreadExecutor&) = delete;
+  ThreadExecutor& operator=(const ThreadExecutor&) = delete;
+
+  const Executor& executor() const { return executor_; }
+  unsigned threads() const { return threads_; }
+
+ private:
+  static void run(void* self, uint32_t count, TaskFunction task, void* context);
+  void worker_loop();
+  void drain();
+
+  unsigned threads_ = 1;
+  Executor executor_{};
+  std::thread workers_[kMaxThreads];
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::condition_variable done_;
+  uint64_t generation_ = 0;
+  bool stopping_ = false;
+  TaskFunction task_ = nullptr;
+  void* context_ = nullptr;
+  uint32_t count_ = 0;
+  std::atomic<uint32_t> next_{0};
+  uint32_t finished_workers_ = 0;
+  std::mutex run_mutex_;  // one run() at a time
+};
+
+// Seconds from a monotonic clock (for timing; never reaches output bytes).
+double monotonic_seconds();
+
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_PLATFORM_H

@@ -1,0 +1,192 @@
+// Arena: a stack allocator with a hard cap (after Jolt's TempAllocatorImpl: one fixed budget,
+// strict LIFO, failures reported with the size that would have been enough).
+#include <new>
+
+#include "splintcore/core.h"
+
+namespace splintcore {
+
+// Every block starts with this header; the payload follows it. In buffer mode the one block
+// is described by root_storage_ and its payload is the caller's buffer.
+struct Arena::Block {
+  Block* previous;   // the block below this one in the stack
+  Block* next;       // a cached block above (after a rewind), reused before asking the hooks
+  unsigned char* payload;
+  size_t payload_bytes;
+  size_t used_before;  // arena bytes in use below this block's payload
+  size_t total_bytes;  // what the hooks handed out (0 for the caller's buffer)
+};
+
+
+namespace {
+constexpr size_t kHeaderBytes = 64;  // header rounded up so payloads stay 64-byte aligned
+
+size_t align_up(size_t value, size_t alignment) {
+  return (value + alignment - 1) & ~(alignment - 1);
+}
+}  // namespace
+
+Arena::Arena(void* buffer, size_t bytes) : cap_(bytes) {
+  static_assert(sizeof(Block) <= sizeof(root_storage_), "root_storage_ too small");
+  current_ = ::new (static_cast<void*>(root_storage_)) Block{};
+  current_->payload = static_cast<unsigned char*>(buffer);
+  current_->payload_bytes = buffer != nullptr ? bytes : 0;
+  if (buffer == nullptr) cap_ = 0;
+}
+
+Arena::Arena(const AllocatorHooks& hooks, size_t cap, size_t block_bytes)
+    : cap_(cap), block_bytes_(block_bytes < 4096 ? 4096 : block_bytes), hooks_(hooks),
+      owns_blocks_(true) {
+  SPLINTCORE_ASSERT(hooks.allocate != nullptr && hooks.release != nullptr);
+  // An empty root block so current_ is never null.
+  current_ = ::new (static_cast<void*>(root_storage_)) Block{};
+}
+
+Arena::~Arena() {
+  if (!owns_blocks_) return;
+  reset();
+  release_unused_blocks();
+}
+
+void Arena::note_failure(size_t need) {
+  last_need_ = need;
+}
+
+Status Arena::exhausted_status() const {
+  return make_error(StatusCode::kArenaExhausted, "arena exhausted: need ", last_need_,
+                    " bytes, cap ", cap_, "; increase the memory cap to at least ", last_need_,
+                    " bytes");
+}
+
+bool Arena::new_block(size_t min_payload, size_t alignment) {
+  // Reuse a cached block above the current one if it is big enough.
+  Block* cached = current_->next;
+  size_t used_here = used_;
+  if (cached != nullptr) {
+    size_t start = align_up(reinterpret_cast<uintptr_t>(cached->payload), alignment) -
+                   reinterpret_cast<uintptr_t>(cached->payload);
+    if (start + min_payload <= cached->payload_bytes) {
+      cached->used_before = used_here;
+      current_ = cached;
+      offset_ = 0;
+      return true;
+    }
+    // Too small: give back every cached block, then ask for a fresh one.
+    release_unused_blocks();
+  }
+  size_t payload = min_payload + alignment;
+  if (payload < block_bytes_ - kHeaderBytes) payload = block_bytes_ - kHeaderBytes;
+  uint64_t total = 0;
+  if (!checked_add(payload, kHeaderBytes, &total) || total > SIZE_MAX) return false;
+  uint64_t new_reserved = 0;
+  if (!checked_add(reserved_, total, &new_reserved) || new_reserved > cap_) {
+    // Try the smallest block that would do before giving up.
+    payload = min_payload + alignment;
+    total = payload + kHeaderBytes;
+    if (reserved_ + total > cap_) {
+      note_failure(reserved_ + static_cast<size_t>(total));
+      return false;
+    }
+  }
+  void* memory = hooks_.allocate(hooks_.user, static_cast<size_t>(total));
+  if (memory == nullptr) {
+    note_failure(reserved_ + static_cast<size_t>(total));
+    return false;
+  }
+  reserved_ += static_cast<size_t>(total);
+  Block* block = ::new (memory) Block{};
+  block->payload = static_cast<unsigned char*>(memory) + kHeaderBytes;
+  block->payload_bytes = payload;
+  block->total_bytes = static_cast<size_t>(total);
+  block->previous = current_;
+  block->used_before = used_here;
+  current_->next = block;
+  current_ = block;
+  offset_ = 0;
+  return true;
+}
+
+void* Arena::allocate(size_t bytes, size_t alignment) {
+  SPLINTCORE_ASSERT(alignment != 0 && (alignment & (alignment - 1)) == 0);
+  if (current_->payload != nullptr) {
+    uintptr_t base = reinterpret_cast<uintptr_t>(current_->payload);
+    size_t start = align_up(base + offset_, alignment) - base;
+    if (start <= current_->payload_bytes && bytes <= current_->payload_bytes - start) {
+      size_t new_used = current_->used_before + start + bytes;
+      if (!owns_blocks_ && new_used > cap_) {
+        note_failure(new_used);
+        return nullptr;
+      }
+      offset_ = start + bytes;
+      used_ = new_used;
+      if (used_ > high_water_) high_water_ = used_;
+      return current_->payload + start;
+    }
+  }
+  if (!owns_blocks_) {
+    uint64_t need = 0;
+    if (!checked_add(used_, bytes, &need) || need > SIZE_MAX) need = SIZE_MAX;
+    note_failure(static_cast<size_t>(need) + (alignment > kDefaultAlignment ? alignment : 0));
+    return nullptr;
+  }
+  if (!new_block(bytes, alignment)) return nullptr;
+  return allocate(bytes, alignment);
+}
+
+bool Arena::try_extend(void* pointer, size_t old_bytes, size_t new_bytes) {
+  unsigned char* p = static_cast<unsigned char*>(pointer);
+  if (current_->payload == nullptr || p < current_->payload) return false;
+  size_t start = static_cast<size_t>(p - current_->payload);
+  if (start + old_bytes != offset_) return false;  // not the top allocation
+  if (new_bytes < old_bytes) return false;
+  if (new_bytes - old_bytes > current_->payload_bytes - offset_) {
+    if (!owns_blocks_) note_failure(current_->used_before + start + new_bytes);
+    return false;
+  }
+  size_t new_used = current_->used_before + start + new_bytes;
+  if (!owns_blocks_ && new_used > cap_) {
+    note_failure(new_used);
+    return false;
+  }
+  offset_ = start + new_bytes;
+  used_ = new_used;
+  if (used_ > high_water_) high_water_ = used_;
+  return true;
+}
+
+Arena::Marker Arena::mark() const {
+  Marker m;
+  m.block = current_;
+  m.offset = offset_;
+  m.used = used_;
+  return m;
+}
+
+void Arena::rewind(const Marker& marker) {
+  // Blocks above the marker stay cached (linked through next) for reuse.
+  current_ = static_cast<Block*>(marker.block);
+  offset_ = marker.offset;
+  used_ = marker.used;
+}
+
+void Arena::reset() {
+  Block* b = current_;
+  while (b->previous != nullptr) b = b->previous;
+  current_ = b;
+  offset_ = 0;
+  used_ = 0;
+}
+
+void Arena::release_unused_blocks() {
+  if (!owns_blocks_) return;
+  Block* b = current_->next;
+  current_->next = nullptr;
+  while (b != nullptr) {
+    Block* next = b->next;
+    reserved_ -= b->total_bytes;
+    hooks_.release(hooks_.user, b, b->total_bytes);
+    b = next;
+  }
+}
+
+}  // namespace splintcore

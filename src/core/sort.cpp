@@ -1,0 +1,50 @@
+// Stable LSD radix sort on 64-bit keys: the same order on every platform and compiler (the
+// order of equal keys is their input order), and O(n) for the edge and vertex keys the mesh
+// code sorts. Passes whose byte is the same for every key are skipped.
+#include "splintcore/core.h"
+
+namespace splintcore {
+
+void radix_sort(Span<KeyIndex> items, Span<KeyIndex> scratch) {
+  const size_t n = items.size();
+  if (n < 2) return;
+  SPLINTCORE_ASSERT(scratch.size() >= n);
+  // One histogram pass over all 8 bytes at once.
+  uint32_t counts[8][256] = {};
+  for (size_t i = 0; i < n; ++i) {
+    uint64_t k = items.data()[i].key;
+    for (int b = 0; b < 8; ++b) ++counts[b][(k >> (8 * b)) & 0xff];
+  }
+  KeyIndex* from = items.data();
+  KeyIndex* to = scratch.data();
+  for (int b = 0; b < 8; ++b) {
+    uint32_t* c = counts[b];
+    uint64_t first_byte = (from[0].key >> (8 * b)) & 0xff;
+    if (c[first_byte] == n) continue;  // every key has this byte: nothing to do
+    uint32_t offsets[256];
+    uint32_t sum = 0;
+    for (int v = 0; v < 256; ++v) {
+      offsets[v] = sum;
+      sum += c[v];
+    }
+    const int shift = 8 * b;
+    for (size_t i = 0; i < n; ++i) {
+      const KeyIndex& item = from[i];
+      to[offsets[(item.key >> shift) & 0xff]++] = item;
+    }
+    KeyIndex* t = from;
+    from = to;
+    to = t;
+  }
+  if (from != items.data()) std::memcpy(items.data(), from, n * sizeof(KeyIndex));
+}
+
+Status radix_sort(Arena& arena, Span<KeyIndex> items) {
+  ArenaScope scope(arena);
+  KeyIndex* scratch = arena.allocate_array<KeyIndex>(items.size());
+  if (scratch == nullptr && items.size() > 0) return arena.exhausted_status();
+  radix_sort(items, Span<KeyIndex>(scratch, items.size()));
+  return Status::ok();
+}
+
+}  // namespace splintcore

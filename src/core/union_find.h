@@ -1,0 +1,52 @@
+// Union-find over arena arrays, deterministic: the smaller index always becomes the root, so
+// the roots (and anything numbered by them) depend only on the unions made, not their order.
+#ifndef SPLINTCORE_SRC_CORE_UNION_FIND_H
+#define SPLINTCORE_SRC_CORE_UNION_FIND_H
+
+#include "splintcore/core.h"
+
+namespace splintcore {
+
+class UnionFind {
+ public:
+  // Takes n entries from the arena; false when it is exhausted.
+  [[nodiscard]] bool init(Arena& arena, uint32_t n) {
+    parent_ = arena.allocate_array<uint32_t>(n);
+    if (parent_ == nullptr && n > 0) return false;
+    for (uint32_t i = 0; i < n; ++i) parent_[i] = i;
+    size_ = n;
+    return true;
+  }
+  uint32_t find(uint32_t x) {
+    SPLINTCORE_ASSERT(x < size_);
+    uint32_t root = x;
+    while (parent_[root] != root) root = parent_[root];
+    while (parent_[x] != root) {  // path compression, iterative
+      uint32_t next = parent_[x];
+      parent_[x] = root;
+      x = next;
+    }
+    return root;
+  }
+  // Returns true when a and b were in different sets.
+  bool unite(uint32_t a, uint32_t b) {
+    uint32_t ra = find(a);
+    uint32_t rb = find(b);
+    if (ra == rb) return false;
+    if (ra < rb) {
+      parent_[rb] = ra;
+    } else {
+      parent_[ra] = rb;
+    }
+    return true;
+  }
+  uint32_t size() const { return size_; }
+
+ private:
+  uint32_t* parent_ = nullptr;
+  uint32_t size_ = 0;
+};
+
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_SRC_CORE_UNION_FIND_H

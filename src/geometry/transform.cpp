@@ -1,0 +1,68 @@
+// Rigid transforms: composition, inverse, and validation of a 4x4 matrix from a surgical plan.
+#include "splintcore/geometry.h"
+
+namespace splintcore {
+
+RigidTransform compose(const RigidTransform& next, const RigidTransform& first) {
+  RigidTransform out;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      out.r[i][j] = next.r[i][0] * first.r[0][j] + next.r[i][1] * first.r[1][j] +
+                    next.r[i][2] * first.r[2][j];
+    }
+  }
+  out.t = next.apply_point(first.t);
+  return out;
+}
+
+RigidTransform inverse(const RigidTransform& x) {
+  RigidTransform out;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) out.r[i][j] = x.r[j][i];
+  }
+  out.t = -out.apply_vector(x.t);
+  return out;
+}
+
+Status rigid_from_matrix(const double m[16], double tolerance, RigidTransform* out) {
+  for (int i = 0; i < 16; ++i) {
+    if (!is_finite(m[i])) {
+      return make_error(StatusCode::kNonFinite, "transform entry (", i / 4, ",", i % 4,
+                        ") is not finite")
+          .at_index(static_cast<uint64_t>(i));
+    }
+  }
+  if (m[12] != 0.0 || m[13] != 0.0 || m[14] != 0.0 || m[15] != 1.0) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "transform's last row must be 0 0 0 1 (no projection or scale)");
+  }
+  RigidTransform x;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) x.r[i][j] = m[4 * i + j];
+  }
+  x.t = Vec3{m[3], m[7], m[11]};
+  // R^T R must be the identity: columns of unit length and mutually orthogonal.
+  for (int a = 0; a < 3; ++a) {
+    for (int b = a; b < 3; ++b) {
+      double d = x.r[0][a] * x.r[0][b] + x.r[1][a] * x.r[1][b] + x.r[2][a] * x.r[2][b];
+      double expected = a == b ? 1.0 : 0.0;
+      double err = d - expected;
+      if (err > tolerance || err < -tolerance) {
+        return make_error(StatusCode::kInvalidArgument, "transform is not rigid: columns ", a,
+                          " and ", b, " have dot product ", d, " (expected ", expected,
+                          "; scale or shear?)");
+      }
+    }
+  }
+  double det = x.r[0][0] * (x.r[1][1] * x.r[2][2] - x.r[1][2] * x.r[2][1]) -
+               x.r[0][1] * (x.r[1][0] * x.r[2][2] - x.r[1][2] * x.r[2][0]) +
+               x.r[0][2] * (x.r[1][0] * x.r[2][1] - x.r[1][1] * x.r[2][0]);
+  if (det < 0.0) {
+    return make_error(StatusCode::kInvalidArgument, "transform is a reflection (det ", det,
+                      "): it would turn the mesh inside out");
+  }
+  *out = x;
+  return Status::ok();
+}
+
+}  // namespace splintcore

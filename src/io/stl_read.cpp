@@ -1,0 +1,463 @@
+// STL reader (binary and ASCII), streaming from a ByteSource through a fixed chunk buffer.
+//
+// Format: binary = 80-byte header, uint32 little-endian triangle count, then per triangle 12
+// float32 little-endian (normal, three corners) and a uint16 attribute; ASCII = "solid name",
+// facets of "facet normal n n n / outer loop / vertex x y z (x3) / endloop / endfacet", then
+// "endsolid". Facet normals are read (ASCII: checked to be numbers) but not kept.
+//
+// Hostile input: the binary count is never trusted; it must equal the triangles actually
+// present, and when the source knows its size the two are compared before anything is
+// reserved. Every error carries the byte offset (binary) or line and column (ASCII).
+#include <charconv>
+
+#include "splintcore/io.h"
+
+namespace splintcore {
+
+namespace {
+
+constexpr size_t kBinaryHeaderBytes = 84;
+constexpr size_t kBinaryRecordBytes = 50;
+constexpr size_t kDetectBytes = 1024;
+constexpr size_t kMaxTokenBytes = 256;
+
+// A window over the source: buf[pos, end) holds unread bytes, `base` is the absolute offset
+// of buf[0].
+struct Reader {
+  const ByteSource* source = nullptr;
+  uint8_t* buf = nullptr;
+  size_t cap = 0;
+  size_t pos = 0;
+  size_t end = 0;
+  uint64_t base = 0;
+  bool at_eof = false;
+
+  uint64_t offset() const { return base + pos; }
+  size_t available() const { return end - pos; }
+
+  // Makes at least `n` bytes available unless the source ends first.
+  Status fill(size_t n) {
+    SPLINTCORE_ASSERT(n <= cap);
+    if (available() >= n || at_eof) return Status::ok();
+    if (pos > 0) {
+      std::memmove(buf, buf + pos, end - pos);
+      base += pos;
+      end -= pos;
+      pos = 0;
+    }
+    while (end < n && !at_eof) {
+      int64_t got = source->read(source->user, buf + end, cap - end);
+      if (got < 0) {
+        return make_error(StatusCode::kIoError, "read failed").at_byte(base + end);
+      }
+      if (static_cast<uint64_t>(got) > cap - end) {
+        return Status::error(StatusCode::kIoError, "byte source returned more than asked");
+      }
+      if (got == 0) at_eof = true;
+      end += static_cast<size_t>(got);
+    }
+    return Status::ok();
+  }
+};
+
+inline uint32_t load_u32(const uint8_t* p) {
+  return uint32_t{p[0]} | (uint32_t{p[1]} << 8) | (uint32_t{p[2]} << 16) | (uint32_t{p[3]} << 24);
+}
+
+inline float load_f32(const uint8_t* p) {
+  uint32_t bits = load_u32(p);
+  float f;
+  std::memcpy(&f, &bits, sizeof(f));
+  return f;
+}
+
+Status located(Status s, const ByteSource& source) {
+  if (source.name != nullptr) s.in_file(source.name);
+  return s;
+}
+
+Status check_corner(const float* xyz, uint64_t triangle, int corner, double max_abs) {
+  for (int a = 0; a < 3; ++a) {
+    if (!is_finite(xyz[a])) {
+      return make_error(StatusCode::kNonFinite, "triangle ", triangle, " vertex ", corner,
+                        " has a non-finite coordinate (NaN or infinity)")
+          .at_index(triangle);
+    }
+    double v = static_cast<double>(xyz[a]);
+    if (v > max_abs || v < -max_abs) {
+      return make_error(StatusCode::kLimitExceeded, "triangle ", triangle, " vertex ", corner,
+                        " has coordinate ", v, " mm, beyond the limit of +-", max_abs,
+                        " mm (wrong units?)")
+          .at_index(triangle);
+    }
+  }
+  return Status::ok();
+}
+
+Status read_binary(const Context& ctx, Reader& in, const StlReadOptions& options,
+                   ArenaArray<SoupTriangle>* out, StlInfo* info) {
+  SPLINTCORE_RETURN_IF_ERROR(in.fill(kBinaryHeaderBytes));
+  if (in.available() < kBinaryHeaderBytes) {
+    return make_error(StatusCode::kTruncated, "binary STL is ", in.available(),
+                      " bytes: too short for the 84-byte header")
+        .at_byte(in.offset() + in.available());
+  }
+  std::memcpy(info->header, in.buf + in.pos, 80);
+  info->header[80] = '\0';
+  const uint64_t declared = load_u32(in.buf + in.pos + 80);
+  in.pos += kBinaryHeaderBytes;
+  const uint64_t expected_bytes = kBinaryHeaderBytes + kBinaryRecordBytes * declared;
+  if (in.source->size != kUnknownSize && in.source->size != expected_bytes) {
+    const uint64_t size = in.source->size;
+    if (size < expected_bytes) {
+      return make_error(StatusCode::kTruncated, "binary STL header declares ", declared,
+                        " triangles (", expected_bytes, " bytes) but the input has ", size,
+                        " bytes")
+          .at_byte(size);
+    }
+    return make_error(StatusCode::kParseError, "binary STL header declares ", declared,
+                      " triangles (", expected_bytes, " bytes) but the input has ", size,
+                      " bytes: ", size - expected_bytes, " bytes after the last triangle")
+        .at_byte(expected_bytes);
+  }
+  if (declared > options.max_triangles) {
+    return make_error(StatusCode::kLimitExceeded, "binary STL declares ", declared,
+                      " triangles, over the limit of ", options.max_triangles)
+        .at_byte(80);
+  }
+  // Reserve only when the size confirmed the count; otherwise grow as triangles arrive.
+  if (in.source->size != kUnknownSize) {
+    if (!out->reserve(out->size() + static_cast<size_t>(declared))) {
+      return ctx.arena->exhausted_status();
+    }
+  }
+  for (uint64_t t = 0; t < declared; ++t) {
+    if ((t & 0xffff) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read", t, declared));
+    if (in.available() < kBinaryRecordBytes) {
+      SPLINTCORE_RETURN_IF_ERROR(in.fill(kBinaryRecordBytes));
+      if (in.available() < kBinaryRecordBytes) {
+        return make_error(StatusCode::kTruncated, "binary STL ends inside triangle ", t, " of ",
+                          declared, " declared")
+            .at_byte(in.offset() + in.available())
+            .at_index(t);
+      }
+    }
+    const uint8_t* record = in.buf + in.pos;
+    SoupTriangle tri;
+    for (int k = 0; k < 3; ++k) {
+      for (int a = 0; a < 3; ++a) {
+        tri.p[k][a] = load_f32(record + 12 + 12 * k + 4 * a);
+      }
+      Status s = check_corner(tri.p[k], t, k, options.max_abs_coordinate);
+      if (!s.is_ok()) return s.at_byte(in.offset() + 12 + 12 * static_cast<uint64_t>(k));
+    }
+    if (!out->push_back(tri)) return ctx.arena->exhausted_status();
+    in.pos += kBinaryRecordBytes;
+  }
+  SPLINTCORE_RETURN_IF_ERROR(in.fill(1));
+  if (in.available() > 0) {
+    return make_error(StatusCode::kParseError, "binary STL has data after the ", declared,
+                      " triangles its header declares")
+        .at_byte(in.offset());
+  }
+  info->triangles = declared;
+  info->bytes = in.offset();
+  return Status::ok();
+}
+
+// ASCII tokenizer: white-space separated tokens, with line and column of each token start.
+struct Tokenizer {
+  Reader* in = nullptr;
+  uint64_t line = 1;
+  uint64_t column = 1;
+  uint64_t token_line = 1;
+  uint64_t token_column = 1;
+  char token[kMaxTokenBytes + 1] = {};
+  size_t length = 0;
+
+  static bool is_space(uint8_t c) {
+    return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v';
+  }
+
+  // Reads the next token; length == 0 at the end of input.
+  Status next() {
+    length = 0;
+    for (;;) {
+      if (in->available() == 0) {
+        SPLINTCORE_RETURN_IF_ERROR(in->fill(1));
+        if (in->available() == 0) return Status::ok();
+      }
+      uint8_t c = in->buf[in->pos];
+      if (!is_space(c)) break;
+      advance(c);
+    }
+    token_line = line;
+    token_column = column;
+    for (;;) {
+      if (in->available() == 0) {
+        SPLINTCORE_RETURN_IF_ERROR(in->fill(1));
+        if (in->available() == 0) break;
+      }
+      uint8_t c = in->buf[in->pos];
+      if (is_space(c)) break;
+      if (c < 0x20 || c > 0x7e) {
+        return make_error(StatusCode::kParseError, "ASCII STL has a non-text byte (", c, ")")
+            .at_line(line, column)
+            .at_byte(in->offset());
+      }
+      if (length == kMaxTokenBytes) {
+        return make_error(StatusCode::kParseError, "ASCII STL token longer than ",
+                          kMaxTokenBytes, " characters")
+            .at_line(token_line, token_column);
+      }
+      token[length++] = static_cast<char>(c);
+      advance(c);
+    }
+    token[length] = '\0';
+    return Status::ok();
+  }
+
+  // Skips to the end of the line (the solid name), copying up to `cap - 1` bytes of it.
+  Status rest_of_line(char* copy, size_t cap) {
+    size_t n = 0;
+    bool leading = true;
+    for (;;) {
+      if (in->available() == 0) {
+        SPLINTCORE_RETURN_IF_ERROR(in->fill(1));
+        if (in->available() == 0) break;
+      }
+      uint8_t c = in->buf[in->pos];
+      if (c == '\n') break;
+      advance(c);
+      if (leading && (c == ' ' || c == '\t')) continue;
+      leading = false;
+      if (c != '\r' && copy != nullptr && n + 1 < cap && c >= 0x20 && c <= 0x7e) {
+        copy[n++] = static_cast<char>(c);
+      }
+    }
+    if (copy != nullptr && cap > 0) copy[n] = '\0';
+    return Status::ok();
+  }
+
+  void advance(uint8_t c) {
+    ++in->pos;
+    if (c == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+  }
+
+  bool is(const char* keyword) const {
+    size_t n = std::strlen(keyword);
+    if (n != length) return false;
+    for (size_t i = 0; i < n; ++i) {
+      char c = token[i];
+      if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+      if (c != keyword[i]) return false;
+    }
+    return true;
+  }
+
+  Status error_here(StatusCode code, const char* what) const {
+    Status s = make_error(code, what);
+    if (length > 0) {
+      s.append(", found '");
+      s.append(token, length < 40 ? length : 40);
+      s.append("'");
+    } else {
+      s.append(", found the end of the input");
+    }
+    return s.at_line(token_line, token_column);
+  }
+
+  Status expect(const char* keyword) {
+    SPLINTCORE_RETURN_IF_ERROR(next());
+    if (is(keyword)) return Status::ok();
+    Status s = make_error(length == 0 ? StatusCode::kTruncated : StatusCode::kParseError,
+                          "expected '", keyword, "'");
+    if (length > 0) {
+      s.append(", found '");
+      s.append(token, length < 40 ? length : 40);
+      s.append("'");
+    } else {
+      s.append(", found the end of the input");
+    }
+    return s.at_line(token_line, token_column);
+  }
+
+  Status number(float* value) {
+    SPLINTCORE_RETURN_IF_ERROR(next());
+    if (length == 0) return error_here(StatusCode::kTruncated, "expected a number");
+    const char* first = token;
+    const char* last = token + length;
+    if (*first == '+') ++first;  // from_chars takes no '+'; STL writers sometimes emit one
+    // Only digits, sign, point and exponent: from_chars would also take "inf" and "nan".
+    for (const char* p = first; p < last; ++p) {
+      char c = *p;
+      bool ok = (c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.' || c == 'e' ||
+                c == 'E';
+      if (!ok) {
+        bool named = (last - first >= 3) &&
+                     ((first[0] == 'n' || first[0] == 'N' || first[0] == 'i' ||
+                       first[0] == 'I') ||
+                      (first[0] == '-' && (first[1] == 'n' || first[1] == 'i' ||
+                                           first[1] == 'N' || first[1] == 'I')));
+        return error_here(named ? StatusCode::kNonFinite : StatusCode::kParseError,
+                          named ? "non-finite number (NaN or infinity)" : "expected a number");
+      }
+    }
+    auto r = std::from_chars(first, last, *value, std::chars_format::general);
+    if (r.ec == std::errc::result_out_of_range) {
+      return error_here(StatusCode::kParseError, "number out of float32 range");
+    }
+    if (r.ec != std::errc() || r.ptr != last) {
+      return error_here(StatusCode::kParseError, "expected a number");
+    }
+    return Status::ok();
+  }
+};
+
+Status read_ascii(const Context& ctx, Reader& in, const StlReadOptions& options,
+                  ArenaArray<SoupTriangle>* out, StlInfo* info) {
+  Tokenizer tok;
+  tok.in = &in;
+  SPLINTCORE_RETURN_IF_ERROR(tok.expect("solid"));
+  SPLINTCORE_RETURN_IF_ERROR(tok.rest_of_line(info->header, sizeof(info->header)));
+  uint64_t count = 0;
+  for (;;) {
+    SPLINTCORE_RETURN_IF_ERROR(tok.next());
+    if (tok.is("endsolid")) {
+      SPLINTCORE_RETURN_IF_ERROR(tok.rest_of_line(nullptr, 0));
+      SPLINTCORE_RETURN_IF_ERROR(tok.next());
+      if (tok.length == 0) break;            // end of input
+      if (tok.is("solid")) {                 // several solids in one file: read them all
+        SPLINTCORE_RETURN_IF_ERROR(tok.rest_of_line(nullptr, 0));
+        continue;
+      }
+      return tok.error_here(StatusCode::kParseError, "expected 'solid' or the end after 'endsolid'");
+    }
+    if (!tok.is("facet")) {
+      return tok.error_here(tok.length == 0 ? StatusCode::kTruncated : StatusCode::kParseError,
+                            "expected 'facet' or 'endsolid'");
+    }
+    const uint64_t facet_line = tok.token_line;
+    if ((count & 0xffff) == 0) {
+      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read", in.offset(), in.source->size));
+    }
+    if (count >= options.max_triangles) {
+      return make_error(StatusCode::kLimitExceeded, "ASCII STL has more than ",
+                        options.max_triangles, " triangles (the limit)")
+          .at_line(facet_line);
+    }
+    SPLINTCORE_RETURN_IF_ERROR(tok.expect("normal"));
+    float normal[3];
+    for (float& n : normal) SPLINTCORE_RETURN_IF_ERROR(tok.number(&n));
+    SPLINTCORE_RETURN_IF_ERROR(tok.expect("outer"));
+    SPLINTCORE_RETURN_IF_ERROR(tok.expect("loop"));
+    SoupTriangle tri;
+    for (int k = 0; k < 3; ++k) {
+      SPLINTCORE_RETURN_IF_ERROR(tok.expect("vertex"));
+      const uint64_t vertex_line = tok.token_line;
+      for (float& v : tri.p[k]) SPLINTCORE_RETURN_IF_ERROR(tok.number(&v));
+      Status s = check_corner(tri.p[k], count, k, options.max_abs_coordinate);
+      if (!s.is_ok()) return s.at_line(vertex_line);
+    }
+    SPLINTCORE_RETURN_IF_ERROR(tok.expect("endloop"));
+    SPLINTCORE_RETURN_IF_ERROR(tok.expect("endfacet"));
+    if (!out->push_back(tri)) return ctx.arena->exhausted_status();
+    ++count;
+  }
+  info->triangles = count;
+  info->bytes = in.offset();
+  return Status::ok();
+}
+
+bool looks_ascii(const uint8_t* p, size_t n) {
+  size_t i = 0;
+  while (i < n && (p[i] == ' ' || p[i] == '\t' || p[i] == '\r' || p[i] == '\n')) ++i;
+  if (n - i < 5) return false;
+  const char* solid = "solid";
+  for (size_t k = 0; k < 5; ++k) {
+    char c = static_cast<char>(p[i + k]);
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+    if (c != solid[k]) return false;
+  }
+  for (size_t k = 0; k < n; ++k) {
+    uint8_t c = p[k];
+    bool text = (c >= 0x20 && c <= 0x7e) || c == '\t' || c == '\r' || c == '\n';
+    if (!text) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+Status read_stl(const Context& ctx, const ByteSource& source, const StlReadOptions& options,
+                ArenaArray<SoupTriangle>* out, StlInfo* info) {
+  StlInfo local;
+  if (info == nullptr) info = &local;
+  *info = StlInfo{};
+  if (source.read == nullptr) {
+    return Status::error(StatusCode::kInvalidArgument, "read_stl: byte source has no read()");
+  }
+  size_t chunk = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
+  // The chunk buffer sits below the growing triangle array so that the array stays at the
+  // top of the arena and grows in place. It is not reclaimed here (read_stl_mesh does).
+  Reader in;
+  in.source = &source;
+  in.cap = chunk;
+  in.buf = ctx.arena->allocate_array<uint8_t>(chunk);
+  if (in.buf == nullptr) return located(ctx.arena->exhausted_status(), source);
+
+  Status s = in.fill(kDetectBytes);
+  if (s.is_ok()) {
+    StlFormat format = options.format;
+    if (format == StlFormat::kAuto) {
+      size_t n = in.available() < kDetectBytes ? in.available() : kDetectBytes;
+      format = looks_ascii(in.buf, n) ? StlFormat::kAscii : StlFormat::kBinary;
+    }
+    info->format = format;
+    s = format == StlFormat::kAscii ? read_ascii(ctx, in, options, out, info)
+                                    : read_binary(ctx, in, options, out, info);
+  }
+  return located(s, source);
+}
+
+Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlReadOptions& options,
+                     Mesh* out, StlInfo* info) {
+  Arena& arena = *ctx.arena;
+  if (!out->vertices.empty() || !out->triangles.empty()) {
+    return Status::error(StatusCode::kInvalidArgument, "read_stl_mesh: output mesh must be empty");
+  }
+  const Arena::Marker start = arena.mark();
+  ArenaArray<SoupTriangle> soup(&arena);
+  Status s = read_stl(ctx, source, options, &soup, info);
+  if (!s.is_ok()) {
+    arena.rewind(start);
+    return s;
+  }
+  Mesh welded(&arena);
+  s = weld_exact(ctx, soup.span(), &welded);
+  if (!s.is_ok()) {
+    arena.rewind(start);
+    return located(s, source);
+  }
+  // Move the mesh down over the soup and the read buffer. Destinations never lie above their
+  // sources' live bytes and memmove handles any overlap, so the copies are safe.
+  const size_t nt = welded.triangles.size();
+  const size_t nv = welded.vertices.size();
+  arena.rewind(start);
+  Triangle* tris = arena.allocate_array<Triangle>(nt);
+  if (nt > 0) std::memmove(static_cast<void*>(tris), welded.triangles.data(), nt * sizeof(Triangle));
+  Vec3* verts = arena.allocate_array<Vec3>(nv);
+  if (nv > 0) std::memmove(static_cast<void*>(verts), welded.vertices.data(), nv * sizeof(Vec3));
+  SPLINTCORE_ASSERT((tris != nullptr || nt == 0) && (verts != nullptr || nv == 0));
+  out->bind(&arena);
+  out->triangles.adopt(tris, nt, nt);
+  out->vertices.adopt(verts, nv, nv);
+  return Status::ok();
+}
+
+}  // namespace splintcore

@@ -1,0 +1,258 @@
+// Streaming STL writer. Triangles are encoded into a fixed buffer and handed to the sink when
+// it fills, so a mesh never needs to exist whole. The bytes are a pure function of the
+// triangles given (see io.h for the rounding and normal rules).
+#include <charconv>
+#include <cfloat>
+
+#include "splintcore/io.h"
+
+namespace splintcore {
+
+namespace {
+
+constexpr size_t kRecordBytes = 50;
+constexpr size_t kMaxAsciiFacetBytes = 512;  // 12 numbers of at most ~16 chars plus keywords
+
+inline void store_u32(uint8_t* p, uint32_t v) {
+  p[0] = static_cast<uint8_t>(v);
+  p[1] = static_cast<uint8_t>(v >> 8);
+  p[2] = static_cast<uint8_t>(v >> 16);
+  p[3] = static_cast<uint8_t>(v >> 24);
+}
+
+inline void store_f32(uint8_t* p, float f) {
+  uint32_t bits;
+  std::memcpy(&bits, &f, sizeof(bits));
+  if (bits == 0x80000000u) bits = 0;  // -0 is written as +0
+  store_u32(p, bits);
+}
+
+// Rounds to float32 (to nearest, ties to even: the IEEE default) after checking the range,
+// since converting an out-of-range double to float is undefined behaviour.
+Status to_float(const Vec3& v, float out[3], uint64_t triangle, int corner) {
+  for (int a = 0; a < 3; ++a) {
+    double x = v[a];
+    if (!is_finite(x)) {
+      return make_error(StatusCode::kNonFinite, "cannot write triangle ", triangle, ": vertex ",
+                        corner, " is not finite")
+          .at_index(triangle);
+    }
+    if (x > double{FLT_MAX} || x < -double{FLT_MAX}) {
+      return make_error(StatusCode::kLimitExceeded, "cannot write triangle ", triangle,
+                        ": coordinate ", x, " is beyond float32 range")
+          .at_index(triangle);
+    }
+    out[a] = static_cast<float>(x);
+  }
+  return Status::ok();
+}
+
+// The facet normal of the triangle as written (from the float32 corners).
+void facet_normal(const float p[3][3], float n[3]) {
+  Vec3 a{p[0][0], p[0][1], p[0][2]};
+  Vec3 b{p[1][0], p[1][1], p[1][2]};
+  Vec3 c{p[2][0], p[2][1], p[2][2]};
+  Vec3 m = cross(b - a, c - a);
+  double len = length(m);
+  if (len > 0.0 && is_finite(len)) {
+    m = Vec3{m.x / len, m.y / len, m.z / len};
+  } else {
+    m = Vec3{};
+  }
+  n[0] = static_cast<float>(m.x);
+  n[1] = static_cast<float>(m.y);
+  n[2] = static_cast<float>(m.z);
+}
+
+size_t put_text(uint8_t* out, const char* text) {
+  size_t n = std::strlen(text);
+  std::memcpy(out, text, n);
+  return n;
+}
+
+size_t put_float(uint8_t* out, float f) {
+  if (f == 0.0f) f = 0.0f;  // no "-0"
+  char* first = reinterpret_cast<char*>(out);
+  auto r = std::to_chars(first, first + 32, f);
+  return static_cast<size_t>(r.ptr - first);
+}
+
+size_t put_triple(uint8_t* out, const float v[3]) {
+  size_t n = 0;
+  for (int a = 0; a < 3; ++a) {
+    out[n++] = ' ';
+    n += put_float(out + n, v[a]);
+  }
+  out[n++] = '\n';
+  return n;
+}
+
+bool valid_solid_name(const char* name) {
+  if (name == nullptr) return false;
+  size_t n = std::strlen(name);
+  if (n == 0 || n > 64) return false;
+  for (size_t i = 0; i < n; ++i) {
+    char c = name[i];
+    bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+              c == '_' || c == '-' || c == '.';
+    if (!ok) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+Status StlWriter::begin(const Context& ctx, const ByteSink& sink, const StlWriteOptions& options,
+                        uint64_t triangle_count) {
+  SPLINTCORE_ASSERT(!open_);
+  if (sink.write == nullptr) {
+    return Status::error(StatusCode::kInvalidArgument, "STL writer: sink has no write()");
+  }
+  binary_ = options.format != StlFormat::kAscii;
+  count_known_ = triangle_count != kUnknownSize;
+  if (binary_ && !count_known_ && sink.seek == nullptr) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "binary STL with an unknown triangle count needs a seekable sink "
+                         "(or pass the count to begin())");
+  }
+  if (binary_ && count_known_ && triangle_count > UINT32_MAX) {
+    return make_error(StatusCode::kLimitExceeded, "binary STL holds at most ", UINT32_MAX,
+                      " triangles, asked for ", triangle_count);
+  }
+  if (!binary_ && !valid_solid_name(options.solid_name)) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "ASCII STL solid name must be 1-64 letters, digits, '_', '-' or '.'");
+  }
+  size_t capacity = options.buffer_bytes < 4096 ? 4096 : options.buffer_bytes;
+  buffer_ = ctx.arena->allocate_array<uint8_t>(capacity);
+  if (buffer_ == nullptr) return ctx.arena->exhausted_status();
+  capacity_ = capacity;
+  sink_ = sink;
+  declared_ = count_known_ ? triangle_count : 0;
+  written_ = 0;
+  bytes_ = 0;
+  used_ = 0;
+  solid_name_ = options.solid_name;
+  open_ = true;
+  if (binary_) {
+    std::memset(buffer_, ' ', 80);
+    std::memcpy(buffer_, kStlBinaryHeader, sizeof(kStlBinaryHeader) - 1);
+    store_u32(buffer_ + 80, static_cast<uint32_t>(declared_));
+    used_ = 84;
+  } else {
+    used_ += put_text(buffer_, "solid ");
+    used_ += put_text(buffer_ + used_, solid_name_);
+    buffer_[used_++] = '\n';
+  }
+  return Status::ok();
+}
+
+Status StlWriter::flush() {
+  if (used_ == 0) return Status::ok();
+  if (!sink_.write(sink_.user, buffer_, used_)) {
+    Status s = make_error(StatusCode::kIoError, "write failed").at_byte(bytes_);
+    if (sink_.name != nullptr) s.in_file(sink_.name);
+    open_ = false;
+    return s;
+  }
+  bytes_ += used_;
+  used_ = 0;
+  return Status::ok();
+}
+
+Status StlWriter::add(const Vec3& a, const Vec3& b, const Vec3& c) {
+  SPLINTCORE_ASSERT(open_);
+  if (count_known_ && written_ >= declared_) {
+    open_ = false;
+    return make_error(StatusCode::kInvalidArgument, "STL writer: more triangles than the ",
+                      declared_, " declared");
+  }
+  if (binary_ && written_ >= UINT32_MAX) {
+    open_ = false;
+    return make_error(StatusCode::kLimitExceeded, "binary STL holds at most ", UINT32_MAX,
+                      " triangles");
+  }
+  float p[3][3];
+  SPLINTCORE_RETURN_IF_ERROR(to_float(a, p[0], written_, 0));
+  SPLINTCORE_RETURN_IF_ERROR(to_float(b, p[1], written_, 1));
+  SPLINTCORE_RETURN_IF_ERROR(to_float(c, p[2], written_, 2));
+  float n[3];
+  facet_normal(p, n);
+  const size_t need = binary_ ? kRecordBytes : kMaxAsciiFacetBytes;
+  if (capacity_ - used_ < need) SPLINTCORE_RETURN_IF_ERROR(flush());
+  uint8_t* out = buffer_ + used_;
+  if (binary_) {
+    for (int a3 = 0; a3 < 3; ++a3) store_f32(out + 4 * a3, n[a3]);
+    for (int k = 0; k < 3; ++k) {
+      for (int a3 = 0; a3 < 3; ++a3) store_f32(out + 12 + 12 * k + 4 * a3, p[k][a3]);
+    }
+    out[48] = 0;
+    out[49] = 0;
+    used_ += kRecordBytes;
+  } else {
+    size_t m = put_text(out, "  facet normal");
+    m += put_triple(out + m, n);
+    m += put_text(out + m, "    outer loop\n");
+    for (int k = 0; k < 3; ++k) {
+      m += put_text(out + m, "      vertex");
+      m += put_triple(out + m, p[k]);
+    }
+    m += put_text(out + m, "    endloop\n  endfacet\n");
+    used_ += m;
+  }
+  ++written_;
+  return Status::ok();
+}
+
+Status StlWriter::finish() {
+  SPLINTCORE_ASSERT(open_);
+  if (count_known_ && written_ != declared_) {
+    open_ = false;
+    return make_error(StatusCode::kInvalidArgument, "STL writer: declared ", declared_,
+                      " triangles but wrote ", written_);
+  }
+  if (!binary_) {
+    if (capacity_ - used_ < 80) SPLINTCORE_RETURN_IF_ERROR(flush());
+    used_ += put_text(buffer_ + used_, "endsolid ");
+    used_ += put_text(buffer_ + used_, solid_name_);
+    buffer_[used_++] = '\n';
+  }
+  SPLINTCORE_RETURN_IF_ERROR(flush());
+  if (binary_ && !count_known_) {
+    uint8_t count[4];
+    store_u32(count, static_cast<uint32_t>(written_));
+    if (!sink_.seek(sink_.user, 80) || !sink_.write(sink_.user, count, 4) ||
+        !sink_.seek(sink_.user, bytes_)) {
+      open_ = false;
+      Status s = make_error(StatusCode::kIoError, "could not patch the triangle count").at_byte(80);
+      if (sink_.name != nullptr) s.in_file(sink_.name);
+      return s;
+    }
+  }
+  open_ = false;
+  return Status::ok();
+}
+
+Status write_stl(const Context& ctx, const Mesh& mesh, const ByteSink& sink,
+                 const StlWriteOptions& options) {
+  ArenaScope scope(*ctx.arena);
+  StlWriter writer;
+  SPLINTCORE_RETURN_IF_ERROR(writer.begin(ctx, sink, options, mesh.triangles.size()));
+  const Vec3* v = mesh.vertices.data();
+  const size_t nv = mesh.vertices.size();
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) {
+      return make_error(StatusCode::kInvalidMesh, "triangle ", t,
+                        " refers to a vertex that does not exist")
+          .at_index(t);
+    }
+    if ((t & 0xffff) == 0) {
+      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "write", t, mesh.triangles.size()));
+    }
+    SPLINTCORE_RETURN_IF_ERROR(writer.add(v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]));
+  }
+  return writer.finish();
+}
+
+}  // namespace splintcore

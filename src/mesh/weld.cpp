@@ -1,0 +1,289 @@
+// Vertex welding of STL triangle soup.
+//
+// Exact welding: an open-addressing hash table keyed on the corners' float32 bit patterns.
+// Vertex ids are handed out in order of first appearance, so the output is a function of the
+// soup alone (the hash only decides where entries sit, never an order that reaches output).
+//
+// Tolerance welding: corners are bucketed on a grid of cell size `tolerance`; corners in the
+// same cell, or within tolerance (max-norm) across neighbouring cells, are united
+// (union-find). Each component becomes one vertex at its lexicographically smallest corner,
+// which makes positions independent of the order of the soup.
+#include "core/union_find.h"
+#include "splintcore/mesh.h"
+
+namespace splintcore {
+
+namespace {
+
+inline uint32_t float_key(float f) {
+  uint32_t bits;
+  std::memcpy(&bits, &f, sizeof(bits));
+  return bits == 0x80000000u ? 0u : bits;  // -0 welds with +0
+}
+
+inline uint64_t corner_hash(const float* p) {
+  uint64_t h = hash_mix((uint64_t{float_key(p[0])} << 32) ^ float_key(p[1]));
+  return hash_mix(h ^ float_key(p[2]));
+}
+
+inline bool same_corner(const float* a, const float* b) {
+  return float_key(a[0]) == float_key(b[0]) && float_key(a[1]) == float_key(b[1]) &&
+         float_key(a[2]) == float_key(b[2]);
+}
+
+inline Vec3 to_vec3(const float* p) {
+  // -0 becomes +0 here too, so the mesh never holds a negative zero from the soup.
+  return {static_cast<double>(p[0]) + 0.0, static_cast<double>(p[1]) + 0.0,
+          static_cast<double>(p[2]) + 0.0};
+}
+
+uint64_t table_size_for(uint64_t corners) {
+  uint64_t size = 16;
+  while (size < corners + corners / 2) size <<= 1;
+  return size;
+}
+
+Status check_soup(Span<const SoupTriangle> soup) {
+  if (soup.size() > (uint64_t{UINT32_MAX} - 1) / 3) {
+    return make_error(StatusCode::kLimitExceeded, "mesh has ", soup.size(),
+                      " triangles; at most ", (uint64_t{UINT32_MAX} - 1) / 3,
+                      " are supported (32-bit vertex ids)");
+  }
+  for (size_t t = 0; t < soup.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      for (int a = 0; a < 3; ++a) {
+        if (!is_finite(soup[t].p[k][a])) {
+          return make_error(StatusCode::kNonFinite, "triangle ", t, " corner ", k,
+                            " has a non-finite coordinate (NaN or infinity)")
+              .at_index(t);
+        }
+      }
+    }
+  }
+  return Status::ok();
+}
+
+// Copies the `count` vertices at `source` into a fresh arena allocation made after rewinding to
+// `marker` (the temporaries between are dropped), and points `out` at it.
+Status compact_vertices(Arena& arena, const Arena::Marker& marker, const Vec3* source,
+                        size_t count, ArenaArray<Vec3>* out) {
+  arena.rewind(marker);
+  Vec3* target = arena.allocate_array<Vec3>(count);
+  if (target == nullptr && count > 0) return arena.exhausted_status();  // cannot happen: it fit
+  if (count > 0) std::memmove(static_cast<void*>(target), source, count * sizeof(Vec3));
+  out->adopt(target, count, count);
+  return Status::ok();
+}
+
+}  // namespace
+
+uint64_t weld_exact_bound(uint64_t triangle_count) {
+  const uint64_t corners = 3 * triangle_count;
+  return triangle_count * sizeof(Triangle) + table_size_for(corners) * sizeof(uint32_t) +
+         corners * sizeof(Vec3) + 4 * 64;
+}
+
+Status weld_exact(const Context& ctx, Span<const SoupTriangle> soup, Mesh* out) {
+  Arena& arena = *ctx.arena;
+  if (!out->vertices.empty() || !out->triangles.empty()) {
+    return Status::error(StatusCode::kInvalidArgument, "weld_exact: output mesh must be empty");
+  }
+  SPLINTCORE_RETURN_IF_ERROR(check_soup(soup));
+  const size_t n = soup.size();
+  if (!out->triangles.resize(n)) return arena.exhausted_status();
+
+  const Arena::Marker temp_start = arena.mark();
+  const uint64_t table_size = table_size_for(3 * uint64_t{n});
+  const uint64_t mask = table_size - 1;
+  // Each slot holds 1 + the corner index of a vertex's first appearance (0: empty).
+  uint32_t* table = arena.allocate_array<uint32_t>(static_cast<size_t>(table_size));
+  if (table == nullptr) return arena.exhausted_status();
+  std::memset(table, 0, static_cast<size_t>(table_size) * sizeof(uint32_t));
+
+  const float* corners = &soup.data()[0].p[0][0];
+  Triangle* tris = out->triangles.data();
+  uint32_t vertex_count = 0;
+  // Pass 1: give each corner its vertex id. The slot stores the first corner; its id is the
+  // id already written into that corner's triangle.
+  for (size_t t = 0; t < n; ++t) {
+    if ((t & 0xffff) == 0) {
+      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "weld", t, n));
+    }
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t corner = static_cast<uint32_t>(3 * t + static_cast<size_t>(k));
+      const float* p = corners + 3 * size_t{corner};
+      uint64_t slot = corner_hash(p) & mask;
+      for (;;) {
+        uint32_t entry = table[slot];
+        if (entry == 0) {
+          table[slot] = corner + 1;
+          tris[t].v[k] = vertex_count++;
+          break;
+        }
+        const uint32_t first = entry - 1;
+        if (same_corner(corners + 3 * size_t{first}, p)) {
+          tris[t].v[k] = tris[first / 3].v[first % 3];
+          break;
+        }
+        slot = (slot + 1) & mask;
+      }
+    }
+  }
+  // Pass 2: positions, in id order (ids were handed out in corner order).
+  Vec3* positions = arena.allocate_array<Vec3>(vertex_count);
+  if (positions == nullptr && vertex_count > 0) return arena.exhausted_status();
+  uint32_t next = 0;
+  for (size_t c = 0; c < 3 * n && next < vertex_count; ++c) {
+    if (tris[c / 3].v[c % 3] == next) positions[next++] = to_vec3(corners + 3 * c);
+  }
+  SPLINTCORE_ASSERT(next == vertex_count);
+  return compact_vertices(arena, temp_start, positions, vertex_count, &out->vertices);
+}
+
+Status weld_tolerance(const Context& ctx, Span<const SoupTriangle> soup, double tolerance,
+                      Mesh* out) {
+  Arena& arena = *ctx.arena;
+  if (!out->vertices.empty() || !out->triangles.empty()) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "weld_tolerance: output mesh must be empty");
+  }
+  if (!is_finite(tolerance) || !(tolerance > 0.0)) {
+    return make_error(StatusCode::kInvalidArgument, "weld tolerance must be > 0 mm, got ",
+                      tolerance);
+  }
+  SPLINTCORE_RETURN_IF_ERROR(check_soup(soup));
+  const size_t n = soup.size();
+  const uint32_t corner_count = static_cast<uint32_t>(3 * n);
+  const float* corners = &soup.data()[0].p[0][0];
+  // Cells must fit in 21 bits per axis after offsetting, for a 63-bit key.
+  double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL};
+  double hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (uint32_t c = 0; c < corner_count; ++c) {
+    for (int a = 0; a < 3; ++a) {
+      double x = static_cast<double>(corners[3 * size_t{c} + static_cast<size_t>(a)]);
+      lo[a] = x < lo[a] ? x : lo[a];
+      hi[a] = x > hi[a] ? x : hi[a];
+    }
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (corner_count > 0 && (hi[a] - lo[a]) / tolerance > double{(1 << 20) - 2}) {
+      return make_error(StatusCode::kLimitExceeded, "weld tolerance ", tolerance,
+                        " mm is too small for a mesh ", hi[a] - lo[a],
+                        " mm across (at most 2^20 cells per axis)");
+    }
+  }
+  if (!out->triangles.resize(n)) return arena.exhausted_status();
+  const Arena::Marker temp_start = arena.mark();
+
+  auto cell_of = [&](uint32_t c, int a) -> uint64_t {
+    double x = static_cast<double>(corners[3 * size_t{c} + static_cast<size_t>(a)]);
+    return static_cast<uint64_t>((x - lo[a]) / tolerance) + 1;  // >= 1, leaves room for -1
+  };
+  auto cell_key = [](uint64_t cx, uint64_t cy, uint64_t cz) -> uint64_t {
+    return (cx << 42) | (cy << 21) | cz;
+  };
+
+  KeyIndex* items = arena.allocate_array<KeyIndex>(corner_count);
+  if (items == nullptr && corner_count > 0) return arena.exhausted_status();
+  for (uint32_t c = 0; c < corner_count; ++c) {
+    items[c] = KeyIndex{cell_key(cell_of(c, 0), cell_of(c, 1), cell_of(c, 2)), c, 0};
+  }
+  SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena, Span<KeyIndex>(items, corner_count)));
+
+  UnionFind sets;
+  if (!sets.init(arena, corner_count)) return arena.exhausted_status();
+  auto within = [&](uint32_t a, uint32_t b) {
+    for (int k = 0; k < 3; ++k) {
+      double d = static_cast<double>(corners[3 * size_t{a} + static_cast<size_t>(k)]) -
+                 static_cast<double>(corners[3 * size_t{b} + static_cast<size_t>(k)]);
+      if (d > tolerance || d < -tolerance) return false;
+    }
+    return true;
+  };
+  // Finds the run of items with `key` by binary search (items are sorted by key).
+  auto find_run = [&](uint64_t key, uint32_t* begin) -> uint32_t {
+    uint32_t a = 0, b = corner_count;
+    while (a < b) {
+      uint32_t m = a + (b - a) / 2;
+      if (items[m].key < key) a = m + 1; else b = m;
+    }
+    *begin = a;
+    uint32_t e = a;
+    while (e < corner_count && items[e].key == key) ++e;
+    return e;
+  };
+  // For each cell run, compare with itself and the 13 neighbours that come after it in key
+  // order (the other 13 see this cell as their forward neighbour).
+  static const int kForward[13][3] = {{1, -1, -1}, {1, -1, 0}, {1, -1, 1}, {1, 0, -1},
+                                      {1, 0, 0},   {1, 0, 1},  {1, 1, -1}, {1, 1, 0},
+                                      {1, 1, 1},   {0, 1, -1}, {0, 1, 0},  {0, 1, 1},
+                                      {0, 0, 1}};
+  uint32_t run_begin = 0;
+  while (run_begin < corner_count) {
+    uint32_t run_end = run_begin;
+    while (run_end < corner_count && items[run_end].key == items[run_begin].key) ++run_end;
+    const uint64_t key = items[run_begin].key;
+    const uint64_t cx = key >> 42, cy = (key >> 21) & 0x1fffff, cz = key & 0x1fffff;
+    // Corners in one cell are less than `tolerance` apart on every axis: one component.
+    for (uint32_t i = run_begin + 1; i < run_end; ++i) {
+      sets.unite(items[run_begin].index, items[i].index);
+    }
+    // Two cells join when any pair across them is within tolerance; one pair is enough.
+    for (const auto& d : kForward) {
+      uint32_t nb = 0;
+      uint32_t ne = find_run(cell_key(cx + static_cast<uint64_t>(d[0]),
+                                      cy + static_cast<uint64_t>(d[1]),
+                                      cz + static_cast<uint64_t>(d[2])),
+                             &nb);
+      bool joined = false;
+      for (uint32_t i = run_begin; i < run_end && !joined; ++i) {
+        for (uint32_t j = nb; j < ne && !joined; ++j) {
+          if (within(items[i].index, items[j].index)) {
+            sets.unite(items[i].index, items[j].index);
+            joined = true;
+          }
+        }
+      }
+    }
+    run_begin = run_end;
+  }
+  // Representative corner of each component: the lexicographically smallest position.
+  uint32_t* best = arena.allocate_array<uint32_t>(corner_count);
+  uint32_t* id_of_root = arena.allocate_array<uint32_t>(corner_count);
+  if ((best == nullptr || id_of_root == nullptr) && corner_count > 0) {
+    return arena.exhausted_status();
+  }
+  auto less = [&](uint32_t a, uint32_t b) {
+    for (int k = 0; k < 3; ++k) {
+      float fa = corners[3 * size_t{a} + static_cast<size_t>(k)];
+      float fb = corners[3 * size_t{b} + static_cast<size_t>(k)];
+      if (fa < fb) return true;
+      if (fb < fa) return false;
+    }
+    return false;
+  };
+  for (uint32_t c = 0; c < corner_count; ++c) {
+    best[c] = c;
+    id_of_root[c] = UINT32_MAX;
+  }
+  for (uint32_t c = 0; c < corner_count; ++c) {
+    uint32_t r = sets.find(c);
+    if (less(c, best[r])) best[r] = c;
+  }
+  uint32_t vertex_count = 0;
+  Triangle* tris = out->triangles.data();
+  for (uint32_t c = 0; c < corner_count; ++c) {
+    uint32_t r = sets.find(c);
+    if (id_of_root[r] == UINT32_MAX) id_of_root[r] = vertex_count++;
+    tris[c / 3].v[c % 3] = id_of_root[r];
+  }
+  Vec3* positions = arena.allocate_array<Vec3>(vertex_count);
+  if (positions == nullptr && vertex_count > 0) return arena.exhausted_status();
+  for (uint32_t c = 0; c < corner_count; ++c) {
+    uint32_t r = sets.find(c);
+    positions[id_of_root[r]] = to_vec3(corners + 3 * size_t{best[r]});
+  }
+  return compact_vertices(arena, temp_start, positions, vertex_count, &out->vertices);
+}
+
+}  // namespace splintcore

@@ -1,0 +1,179 @@
+// Files for hosted builds: a ByteSource over a FILE*, and atomic output (temporary file in the
+// destination's folder, fsync, rename), so a failed run never leaves a partial output file.
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+
+#include "splintcore/platform.h"
+
+namespace splintcore {
+
+namespace {
+
+int64_t file_read(void* user, uint8_t* buffer, size_t capacity) {
+  std::FILE* f = static_cast<std::FILE*>(user);
+  size_t got = std::fread(buffer, 1, capacity, f);
+  if (got == 0 && std::ferror(f)) return -1;
+  return static_cast<int64_t>(got);
+}
+
+bool file_write(void* user, const uint8_t* data, size_t bytes) {
+  std::FILE* f = static_cast<std::FILE*>(user);
+  return std::fwrite(data, 1, bytes, f) == bytes;
+}
+
+bool file_seek(void* user, uint64_t offset) {
+  std::FILE* f = static_cast<std::FILE*>(user);
+  if (offset > static_cast<uint64_t>(INT64_MAX)) return false;
+  return fseeko(f, static_cast<off_t>(offset), SEEK_SET) == 0;
+}
+
+Status errno_error(const char* what, const char* path) {
+  Status s = make_error(StatusCode::kIoError, what, ": ", std::strerror(errno));
+  s.in_file(path);
+  return s;
+}
+
+std::atomic<uint32_t> g_temp_counter{0};  // distinct temporary names within one process
+
+}  // namespace
+
+FileSource::~FileSource() { close(); }
+
+Status FileSource::open(const char* path) {
+  close();
+  file_ = std::fopen(path, "rb");
+  if (file_ == nullptr) return errno_error("cannot open for reading", path);
+  struct stat st;
+  if (fstat(fileno(file_), &st) == 0 && S_ISREG(st.st_mode)) {
+    size_ = static_cast<uint64_t>(st.st_size);
+  } else if (fstat(fileno(file_), &st) == 0 && S_ISDIR(st.st_mode)) {
+    close();
+    errno = EISDIR;
+    return errno_error("cannot read", path);
+  } else {
+    size_ = kUnknownSize;  // a pipe or device: readers check counts as they go
+  }
+  size_t n = std::strlen(path);
+  if (n >= sizeof(path_)) {
+    path += n - (sizeof(path_) - 1);
+    n = sizeof(path_) - 1;
+  }
+  std::memcpy(path_, path, n);
+  path_[n] = '\0';
+  return Status::ok();
+}
+
+ByteSource FileSource::source() {
+  ByteSource s;
+  s.read = file_read;
+  s.user = file_;
+  s.size = size_;
+  s.name = path_;
+  return s;
+}
+
+void FileSource::close() {
+  if (file_ != nullptr) std::fclose(file_);
+  file_ = nullptr;
+  size_ = kUnknownSize;
+}
+
+AtomicFile::~AtomicFile() { abort(); }
+
+Status AtomicFile::open(const char* path) {
+  abort();
+  size_t n = std::strlen(path);
+  if (n == 0 || n + 32 >= sizeof(path_)) {
+    return make_error(StatusCode::kInvalidArgument, "output path is empty or too long");
+  }
+  std::memcpy(path_, path, n + 1);
+  std::snprintf(temp_path_, sizeof(temp_path_), "%s.tmp-%ld-%u", path,
+                static_cast<long>(getpid()), g_temp_counter.fetch_add(1));
+  // O_EXCL: never write through a name something else already uses.
+  int fd = ::open(temp_path_, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) return errno_error("cannot create temporary output file", temp_path_);
+  file_ = fdopen(fd, "wb");
+  if (file_ == nullptr) {
+    ::close(fd);
+    std::remove(temp_path_);
+    return errno_error("cannot open temporary output file", temp_path_);
+  }
+  failed_ = false;
+  return Status::ok();
+}
+
+ByteSink AtomicFile::sink() {
+  ByteSink s;
+  s.write = file_write;
+  s.seek = file_seek;
+  s.user = file_;
+  s.name = path_;
+  return s;
+}
+
+Status AtomicFile::commit() {
+  if (file_ == nullptr) return Status::error(StatusCode::kInvalidArgument, "no open output file");
+  bool ok = std::fflush(file_) == 0 && fsync(fileno(file_)) == 0;
+  int saved = errno;
+  ok = (std::fclose(file_) == 0) && ok;
+  file_ = nullptr;
+  if (!ok) {
+    errno = saved;
+    Status s = errno_error("cannot write output file", path_);
+    std::remove(temp_path_);
+    temp_path_[0] = '\0';
+    return s;
+  }
+  if (std::rename(temp_path_, path_) != 0) {
+    Status s = errno_error("cannot move the output into place", path_);
+    std::remove(temp_path_);
+    temp_path_[0] = '\0';
+    return s;
+  }
+  temp_path_[0] = '\0';
+  return Status::ok();
+}
+
+void AtomicFile::abort() {
+  if (file_ != nullptr) {
+    std::fclose(file_);
+    file_ = nullptr;
+  }
+  if (temp_path_[0] != '\0') {
+    std::remove(temp_path_);
+    temp_path_[0] = '\0';
+  }
+}
+
+Status read_file(Arena& arena, const char* path, uint64_t max_bytes, Span<uint8_t>* out) {
+  FileSource file;
+  SPLINTCORE_RETURN_IF_ERROR(file.open(path));
+  ByteSource src = file.source();
+  if (src.size == kUnknownSize) {
+    return make_error(StatusCode::kUnsupported, "not a regular file").in_file(path);
+  }
+  if (src.size > max_bytes) {
+    return make_error(StatusCode::kLimitExceeded, "file is ", src.size,
+                      " bytes, over the limit of ", max_bytes)
+        .in_file(path);
+  }
+  uint8_t* data = arena.allocate_array<uint8_t>(static_cast<size_t>(src.size));
+  if (data == nullptr) return arena.exhausted_status();
+  uint64_t got = 0;
+  while (got < src.size) {
+    int64_t n = src.read(src.user, data + got, static_cast<size_t>(src.size - got));
+    if (n < 0) return make_error(StatusCode::kIoError, "read failed").in_file(path).at_byte(got);
+    if (n == 0) {
+      return make_error(StatusCode::kTruncated, "file shrank while reading").in_file(path).at_byte(got);
+    }
+    got += static_cast<uint64_t>(n);
+  }
+  *out = Span<uint8_t>(data, static_cast<size_t>(src.size));
+  return Status::ok();
+}
+
+}  // namespace splintcore

@@ -1,0 +1,80 @@
+// Printer profiles and the printability check: a valid solid (closed, edge-manifold,
+// consistently and outward oriented, nothing degenerate) that fits the build volume.
+#include "splintcore/printer.h"
+
+namespace splintcore {
+
+namespace {
+const PrinterProfile kEden260{
+    "eden260",
+    "Stratasys Eden260-class PolyJet: tray 255 x 252 mm, 200 mm build height, 16 um layers",
+    Vec3{255.0, 252.0, 200.0},
+    0.016,
+    0.6,
+};
+
+// Whole layers needed for a height; exact for the decimal layer sizes printers use, since the
+// quotient is rounded up only when it is clearly above an integer.
+uint64_t layers_for(double height, double layer) {
+  if (!(height > 0.0) || !(layer > 0.0)) return 0;
+  double q = height / layer;
+  double whole = static_cast<double>(static_cast<uint64_t>(q));
+  if (q - whole > 1e-9) whole += 1.0;
+  return static_cast<uint64_t>(whole);
+}
+}  // namespace
+
+const PrinterProfile& eden260_profile() { return kEden260; }
+
+const PrinterProfile* find_printer_profile(const char* name) {
+  if (name != nullptr && std::strcmp(name, kEden260.name) == 0) return &kEden260;
+  return nullptr;
+}
+
+Status check_printable(const Context& ctx, const Mesh& mesh, const PrinterProfile& profile,
+                       const PrintCheckOptions& options, PrintCheck* out) {
+  *out = PrintCheck{};
+  if (!(profile.build_volume_mm.x > 0.0) || !(profile.build_volume_mm.y > 0.0) ||
+      !(profile.build_volume_mm.z > 0.0) || !(profile.layer_thickness_mm > 0.0)) {
+    return make_error(StatusCode::kInvalidArgument, "printer profile '", profile.name,
+                      "' has a non-positive build volume or layer thickness");
+  }
+  SPLINTCORE_RETURN_IF_ERROR(check_mesh(ctx, mesh, &out->mesh));
+  const Aabb& box = out->mesh.bounds;
+  out->extent = box.extent();
+  const Vec3 e = out->extent;
+  const double margin = options.margin_mm > 0.0 ? options.margin_mm : 0.0;
+  const Vec3 room{profile.build_volume_mm.x - 2 * margin, profile.build_volume_mm.y - 2 * margin,
+                  profile.build_volume_mm.z};
+  out->fits = !box.empty() && e.x <= room.x && e.y <= room.y && e.z <= room.z;
+  out->fits_rotated = !out->fits && !box.empty() && e.y <= room.x && e.x <= room.y &&
+                      e.z <= room.z;
+  if (options.place_on_tray && !box.empty()) {
+    // Centre on the tray in x and y, bottom on the tray (z = 0).
+    Vec3 c = box.center();
+    out->placement = RigidTransform::translation(
+        Vec3{profile.build_volume_mm.x * 0.5 - c.x, profile.build_volume_mm.y * 0.5 - c.y,
+             -box.lo.z});
+  }
+  out->layers = layers_for(e.z, profile.layer_thickness_mm);
+  const double longest = e.x > e.y ? (e.x > e.z ? e.x : e.z) : (e.y > e.z ? e.y : e.z);
+  out->units_suspect = !box.empty() && (longest < 1.0 || longest > 1000.0);
+  out->printable = out->mesh.is_valid_solid() && (out->fits || out->fits_rotated);
+  return Status::ok();
+}
+
+Status require_printable(const PrintCheck& check, const PrinterProfile& profile) {
+  SPLINTCORE_RETURN_IF_ERROR(require_valid_solid(check.mesh));
+  if (!check.fits && !check.fits_rotated) {
+    const Vec3& e = check.extent;
+    Status s = make_error(StatusCode::kInvalidMesh, "part is ", e.x, " x ", e.y, " x ", e.z,
+                          " mm and does not fit the ", profile.name, " build volume (",
+                          profile.build_volume_mm.x, " x ", profile.build_volume_mm.y, " x ",
+                          profile.build_volume_mm.z, " mm)");
+    if (check.units_suspect) s.append("; the size suggests wrong units");
+    return s;
+  }
+  return Status::ok();
+}
+
+}  // namespace splintcore

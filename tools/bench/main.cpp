@@ -1,0 +1,212 @@
+// splintcore-bench: our own benchmark harness (no dependency). Each benchmark runs once to warm
+// up, then --repeat times; one line per result:
+//   bench=NAME size=N median_s=T min_s=T max_s=T peak_arena_bytes=B
+// Lines starting with '#' are derived figures (rates) and notes.
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "../common/cli.h"
+#include "../common/shapes.h"
+#include "splintcore/core.h"
+#include "splintcore/io.h"
+#include "splintcore/mesh.h"
+#include "splintcore/platform.h"
+
+namespace splintcore {
+namespace {
+
+struct Result {
+  double median = 0, min = 0, max = 0;
+  uint64_t peak_arena = 0;
+};
+
+struct Harness {
+  int repeat = 7;
+  std::string filter;
+  bool failed = false;
+
+  bool wanted(const char* name) const {
+    return filter.empty() || std::strstr(name, filter.c_str()) != nullptr;
+  }
+
+  // `body` runs one iteration on a rewound arena and returns its status.
+  Result measure(const char* name, uint64_t size, Arena& arena,
+                 const std::function<Status(Arena&)>& body) {
+    Result r;
+    std::vector<double> times;
+    const Arena::Marker start = arena.mark();
+    for (int i = 0; i < repeat + 1; ++i) {
+      arena.rewind(start);
+      arena.reset_high_water();
+      double t0 = monotonic_seconds();
+      Status s = body(arena);
+      double t = monotonic_seconds() - t0;
+      if (!s.is_ok()) {
+        cli::print_error(s);
+        failed = true;
+        return r;
+      }
+      uint64_t peak = arena.high_water() - start.used;
+      if (peak > r.peak_arena) r.peak_arena = peak;
+      if (i > 0) times.push_back(t);  // the first run warms caches and pages
+    }
+    arena.rewind(start);
+    std::sort(times.begin(), times.end());
+    r.median = times[times.size() / 2];
+    r.min = times.front();
+    r.max = times.back();
+    std::printf("bench=%s size=%llu median_s=%.6f min_s=%.6f max_s=%.6f peak_arena_bytes=%llu\n",
+                name, static_cast<unsigned long long>(size), r.median, r.min, r.max,
+                static_cast<unsigned long long>(r.peak_arena));
+    std::fflush(stdout);
+    return r;
+  }
+};
+
+std::vector<uint8_t> to_binary_stl(const std::vector<SoupTriangle>& soup) {
+  std::vector<uint8_t> bytes(84 + 50 * soup.size(), 0);
+  uint32_t n = static_cast<uint32_t>(soup.size());
+  std::memcpy(bytes.data() + 80, &n, 4);  // little-endian hosts only (benchmark input)
+  for (size_t t = 0; t < soup.size(); ++t) {
+    std::memcpy(bytes.data() + 84 + 50 * t + 12, soup[t].p, 36);
+  }
+  return bytes;
+}
+
+std::vector<uint8_t> read_whole(const std::string& path) {
+  std::vector<uint8_t> out;
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) return out;
+  uint8_t buf[1 << 16];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof(buf), f)) > 0) out.insert(out.end(), buf, buf + n);
+  std::fclose(f);
+  return out;
+}
+
+void bench_stl(Harness& h, Arena& arena, const char* label, const std::vector<uint8_t>& stl) {
+  Context ctx(&arena);
+  uint64_t triangles = (stl.size() - 84) / 50;
+  std::string name = std::string("stl_read_weld") + label;
+  if (h.wanted(name.c_str())) {
+    h.measure(name.c_str(), triangles, arena, [&](Arena& a) {
+      MemorySource ms{stl.data(), stl.size(), 0, 0};
+      Mesh mesh(&a);
+      return read_stl_mesh(ctx, memory_source(&ms), StlReadOptions{}, &mesh, nullptr);
+    });
+  }
+  // The mesh the writers and checks use.
+  Mesh mesh(&arena);
+  MemorySource ms{stl.data(), stl.size(), 0, 0};
+  Status s = read_stl_mesh(ctx, memory_source(&ms), StlReadOptions{}, &mesh, nullptr);
+  if (!s.is_ok()) {
+    cli::print_error(s);
+    h.failed = true;
+    return;
+  }
+  std::vector<uint8_t> out(84 + 50 * mesh.triangles.size() + 1024);
+  name = std::string("stl_write_binary") + label;
+  if (h.wanted(name.c_str())) {
+    Result r = h.measure(name.c_str(), mesh.triangles.size(), arena, [&](Arena& a) {
+      MemorySink sink{out.data(), out.size(), 0, 0};
+      Context c(&a);
+      return write_stl(c, mesh, memory_sink(&sink), StlWriteOptions{});
+    });
+    double bytes = 84.0 + 50.0 * static_cast<double>(mesh.triangles.size());
+    std::printf("# %s: %.2f GB/s (%.0f bytes per run, median)\n", name.c_str(),
+                bytes / r.median / 1e9, bytes);
+  }
+  name = std::string("stl_write_ascii") + label;
+  if (h.wanted(name.c_str())) {
+    std::vector<uint8_t> text(400 * mesh.triangles.size() + 1024);
+    uint64_t written = 0;
+    Result r = h.measure(name.c_str(), mesh.triangles.size(), arena, [&](Arena& a) {
+      MemorySink sink{text.data(), text.size(), 0, 0};
+      Context c(&a);
+      StlWriteOptions wo;
+      wo.format = StlFormat::kAscii;
+      Status st = write_stl(c, mesh, memory_sink(&sink), wo);
+      written = sink.size;
+      return st;
+    });
+    std::printf("# %s: %.2f GB/s (%llu bytes per run, median)\n", name.c_str(),
+                static_cast<double>(written) / r.median / 1e9,
+                static_cast<unsigned long long>(written));
+  }
+  name = std::string("mesh_check") + label;
+  if (h.wanted(name.c_str())) {
+    h.measure(name.c_str(), mesh.triangles.size(), arena, [&](Arena& a) {
+      Context c(&a);
+      MeshReport report;
+      return check_mesh(c, mesh, &report);
+    });
+  }
+}
+
+int run(int argc, char** argv) {
+  Harness h;
+  std::string realdata = "../shared/realdata/open-full-jaw-patient26";
+  uint64_t cap = uint64_t{4} << 30;
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    uint64_t v = 0;
+    if (a == "--filter" && i + 1 < argc) {
+      h.filter = argv[++i];
+    } else if (a == "--repeat" && i + 1 < argc && cli::parse_unsigned(argv[i + 1], &v) && v > 0) {
+      h.repeat = static_cast<int>(v);
+      ++i;
+    } else if (a == "--realdata" && i + 1 < argc) {
+      realdata = argv[++i];
+    } else if (a == "--memory-cap" && i + 1 < argc && cli::parse_size(argv[i + 1], &cap)) {
+      ++i;
+    } else {
+      std::fprintf(stderr,
+                   "usage: splintcore-bench [--filter SUBSTRING] [--repeat N] "
+                   "[--realdata DIR] [--memory-cap SIZE]\n");
+      return a == "--help" ? 0 : 2;
+    }
+  }
+  void* buffer = std::malloc(static_cast<size_t>(cap));
+  if (buffer == nullptr) {
+    std::fprintf(stderr, "splintcore-bench: cannot reserve %llu bytes\n",
+                 static_cast<unsigned long long>(cap));
+    return 1;
+  }
+  {
+    Arena arena(buffer, static_cast<size_t>(cap));
+    // A torus of 2 x 521 x 521 = 542,882 triangles: the size of the paper's largest jaw.
+    std::vector<uint8_t> torus = to_binary_stl(shapes::torus(521, 521, 30.0, 8.0));
+    bench_stl(h, arena, "", torus);
+
+    // The real CBCT dentition, all 31 teeth in one soup (skipped when absent).
+    std::vector<uint8_t> all;
+    uint32_t count = 0;
+    for (int tooth = 1; tooth <= 32; ++tooth) {
+      std::string dir = tooth <= 16 ? "/maxilla/" : "/mandible/";
+      std::vector<uint8_t> one = read_whole(realdata + dir + "tooth_" + std::to_string(tooth) +
+                                            ".stl");
+      if (one.size() < 84) continue;
+      if (all.empty()) all.assign(84, 0);
+      all.insert(all.end(), one.begin() + 84, one.end());
+      count += static_cast<uint32_t>((one.size() - 84) / 50);
+    }
+    if (!all.empty()) {
+      std::memcpy(all.data() + 80, &count, 4);
+      bench_stl(h, arena, "_realdata", all);
+    } else {
+      std::printf("# realdata not found at %s: skipped\n", realdata.c_str());
+    }
+  }
+  std::free(buffer);
+  return h.failed ? 1 : 0;
+}
+
+}  // namespace
+}  // namespace splintcore
+
+int main(int argc, char** argv) { return splintcore::run(argc, argv); }

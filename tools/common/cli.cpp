@@ -1,0 +1,90 @@
+#include "cli.h"
+
+#include <charconv>
+#include <cstring>
+
+namespace splintcore {
+namespace cli {
+
+bool parse_unsigned(const char* text, uint64_t* out) {
+  if (text == nullptr || *text == '\0') return false;
+  const char* end = text + std::strlen(text);
+  auto r = std::from_chars(text, end, *out);
+  return r.ec == std::errc() && r.ptr == end;
+}
+
+bool parse_size(const char* text, uint64_t* out) {
+  if (text == nullptr || *text == '\0') return false;
+  size_t n = std::strlen(text);
+  uint64_t scale = 1;
+  char last = text[n - 1];
+  if (last == 'K' || last == 'k') scale = uint64_t{1} << 10;
+  if (last == 'M' || last == 'm') scale = uint64_t{1} << 20;
+  if (last == 'G' || last == 'g') scale = uint64_t{1} << 30;
+  if (scale != 1) --n;
+  if (n == 0) return false;
+  uint64_t value = 0;
+  auto r = std::from_chars(text, text + n, value);
+  if (r.ec != std::errc() || r.ptr != text + n) return false;
+  return checked_mul(value, scale, out);
+}
+
+std::string json_escape(const char* text) {
+  std::string out = "\"";
+  for (const char* p = text; p != nullptr && *p != '\0'; ++p) {
+    unsigned char c = static_cast<unsigned char>(*p);
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += static_cast<char>(c);
+    } else if (c < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof(buf), "\\u%04x", c);
+      out += buf;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return out + "\"";
+}
+
+std::string json_number(double value) {
+  if (!is_finite(value)) return "null";
+  char buf[32];
+  auto r = std::to_chars(buf, buf + sizeof(buf), value);
+  return std::string(buf, r.ptr);
+}
+
+void JsonObject::key(const char* k) {
+  if (!body_.empty()) body_ += ",";
+  body_ += json_escape(k) + ":";
+}
+void JsonObject::add(const char* k, const char* value) { key(k); body_ += json_escape(value); }
+void JsonObject::add(const char* k, bool value) { key(k); body_ += value ? "true" : "false"; }
+void JsonObject::add(const char* k, uint64_t value) { key(k); body_ += std::to_string(value); }
+void JsonObject::add(const char* k, int64_t value) { key(k); body_ += std::to_string(value); }
+void JsonObject::add(const char* k, double value) { key(k); body_ += json_number(value); }
+void JsonObject::add(const char* k, const Vec3& v) {
+  key(k);
+  body_ += "[" + json_number(v.x) + "," + json_number(v.y) + "," + json_number(v.z) + "]";
+}
+void JsonObject::add_raw(const char* k, const std::string& json) { key(k); body_ += json; }
+
+void JsonObject::add_status(const Status& s) {
+  add("status", status_code_name(s.code()));
+  if (s.is_ok()) return;
+  add("message", s.message());
+  if (s.file()[0] != '\0') add("file", s.file());
+  if (s.byte_offset() != kNoPosition) add("byte_offset", s.byte_offset());
+  if (s.line() != kNoPosition) add("line", s.line());
+  if (s.column() != kNoPosition) add("column", s.column());
+  if (s.index() != kNoPosition) add("index", s.index());
+}
+
+void print_error(const Status& status) {
+  char text[512];
+  status.format(text, sizeof(text));
+  std::fprintf(stderr, "splintcore: error: %s\n", text);
+}
+
+}  // namespace cli
+}  // namespace splintcore

@@ -1,0 +1,360 @@
+// splintcore: the command-line program. One subcommand per stage of the method; each takes
+// --help, --json, --memory-cap SIZE and --threads N, exits 0 on success, 1 when the input is
+// rejected (or a check fails, or the memory cap is too small), 2 on a usage error.
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "../common/cli.h"
+#include "splintcore/core.h"
+#include "splintcore/io.h"
+#include "splintcore/mesh.h"
+#include "splintcore/platform.h"
+#include "splintcore/printer.h"
+
+namespace splintcore {
+namespace {
+
+using cli::JsonObject;
+using cli::kExitOk;
+using cli::kExitRejected;
+using cli::kExitUsage;
+
+constexpr uint64_t kDefaultMemoryCap = uint64_t{1} << 30;
+
+const char kUsage[] =
+    "usage: splintcore <command> [options]\n"
+    "\n"
+    "commands:\n"
+    "  check IN.stl [--printer eden260]     check a mesh is a printable solid\n"
+    "  convert IN.stl -o OUT.stl [--ascii]  read, weld, check and rewrite an STL\n"
+    "\n"
+    "options of every command:\n"
+    "  --help            this text for the command\n"
+    "  --json            one JSON object on stdout with every figure\n"
+    "  --memory-cap SIZE arena cap, e.g. 64M or 2G (default 1G)\n"
+    "  --threads N       worker threads (default 1; results are identical for any N)\n"
+    "\n"
+    "exit status: 0 success, 1 input rejected or check failed, 2 usage error\n";
+
+const char kCheckUsage[] =
+    "usage: splintcore check IN.stl [--printer NAME] [--no-place] [--json]\n"
+    "                       [--memory-cap SIZE] [--threads N]\n"
+    "\n"
+    "Reads a binary or ASCII STL, welds identical vertices and reports: closed, edge-manifold,\n"
+    "consistently and outward oriented, degenerate and duplicate triangles, shells, genus,\n"
+    "area, volume, extent, and whether it fits the printer's build volume (centred on the\n"
+    "tray unless --no-place). Exit 0 only when the mesh is printable.\n"
+    "Printers: eden260 (Stratasys Eden260-class PolyJet, 255 x 252 x 200 mm, 16 um layers).\n";
+
+const char kConvertUsage[] =
+    "usage: splintcore convert IN.stl -o OUT.stl [--ascii] [--json]\n"
+    "                         [--memory-cap SIZE] [--threads N]\n"
+    "\n"
+    "Reads a binary or ASCII STL, welds identical vertices, checks it, and writes it through\n"
+    "the streaming writer (binary unless --ascii). The output is written atomically: on any\n"
+    "error no output file is left behind. The bytes depend only on the input's triangles.\n";
+
+struct Options {
+  bool help = false;
+  bool json = false;
+  uint64_t memory_cap = kDefaultMemoryCap;
+  unsigned threads = 1;
+  std::vector<const char*> positional;
+  const char* output = nullptr;
+  const char* printer = "eden260";
+  bool ascii = false;
+  bool place = true;
+};
+
+int usage_error(const char* message, const char* usage) {
+  std::fprintf(stderr, "splintcore: %s\n\n%s", message, usage);
+  return kExitUsage;
+}
+
+// Parses argv after the command name. Returns -1 to go on, or an exit code.
+int parse_options(int argc, char** argv, const char* usage, bool takes_output, Options* o) {
+  for (int i = 0; i < argc; ++i) {
+    const char* a = argv[i];
+    auto value = [&](const char* name) -> const char* {
+      if (i + 1 >= argc) return nullptr;
+      (void)name;
+      return argv[++i];
+    };
+    if (std::strcmp(a, "--help") == 0 || std::strcmp(a, "-h") == 0) {
+      o->help = true;
+    } else if (std::strcmp(a, "--json") == 0) {
+      o->json = true;
+    } else if (std::strcmp(a, "--memory-cap") == 0) {
+      const char* v = value(a);
+      if (v == nullptr || !cli::parse_size(v, &o->memory_cap) || o->memory_cap == 0) {
+        return usage_error("--memory-cap needs a size such as 64M, 2G or 1048576", usage);
+      }
+      if (o->memory_cap > (uint64_t{1} << 40)) {
+        return usage_error("--memory-cap is over 1T", usage);
+      }
+    } else if (std::strcmp(a, "--threads") == 0) {
+      const char* v = value(a);
+      uint64_t n = 0;
+      if (v == nullptr || !cli::parse_unsigned(v, &n) || n == 0 || n > 64) {
+        return usage_error("--threads needs a number from 1 to 64", usage);
+      }
+      o->threads = static_cast<unsigned>(n);
+    } else if (takes_output && (std::strcmp(a, "-o") == 0 || std::strcmp(a, "--output") == 0)) {
+      o->output = value(a);
+      if (o->output == nullptr) return usage_error("-o needs a file name", usage);
+    } else if (std::strcmp(a, "--printer") == 0) {
+      o->printer = value(a);
+      if (o->printer == nullptr) return usage_error("--printer needs a name", usage);
+    } else if (std::strcmp(a, "--ascii") == 0 && takes_output) {
+      o->ascii = true;
+    } else if (std::strcmp(a, "--no-place") == 0) {
+      o->place = false;
+    } else if (a[0] == '-' && a[1] != '\0') {
+      std::string m = std::string("unknown option '") + a + "'";
+      return usage_error(m.c_str(), usage);
+    } else {
+      o->positional.push_back(a);
+    }
+  }
+  if (o->help) {
+    std::fputs(usage, stdout);
+    return kExitOk;
+  }
+  return -1;
+}
+
+// The arena for a run: one block of the cap, committed by the OS only as it is touched.
+struct RunMemory {
+  void* buffer = nullptr;
+  explicit RunMemory(uint64_t cap) { buffer = std::malloc(static_cast<size_t>(cap)); }
+  ~RunMemory() { std::free(buffer); }
+};
+
+void add_mesh_report(JsonObject* j, const MeshReport& r) {
+  j->add("vertices", r.vertex_count);
+  j->add("triangles", r.triangle_count);
+  j->add("edges", r.edge_count);
+  j->add("boundary_edges", r.boundary_edges);
+  j->add("nonmanifold_edges", r.nonmanifold_edges);
+  j->add("orientation_conflicts", r.orientation_conflicts);
+  j->add("degenerate_triangles", r.degenerate_triangles);
+  j->add("duplicate_triangles", r.duplicate_triangles);
+  j->add("unreferenced_vertices", r.unreferenced_vertices);
+  j->add("shells", r.shells);
+  j->add("euler_characteristic", r.euler_characteristic);
+  j->add("genus", r.genus);
+  j->add("closed", r.closed());
+  j->add("edge_manifold", r.edge_manifold());
+  j->add("oriented", r.oriented());
+  j->add("outward", r.outward());
+  j->add("area_mm2", r.area);
+  j->add("volume_mm3", r.volume);
+  j->add("bounds_min_mm", r.bounds.lo);
+  j->add("bounds_max_mm", r.bounds.hi);
+}
+
+void print_mesh_report(const MeshReport& r) {
+  std::printf("mesh: %llu vertices, %llu triangles, %llu edges, %llu shell(s), genus %lld\n",
+              static_cast<unsigned long long>(r.vertex_count),
+              static_cast<unsigned long long>(r.triangle_count),
+              static_cast<unsigned long long>(r.edge_count),
+              static_cast<unsigned long long>(r.shells), static_cast<long long>(r.genus));
+  std::printf("closed: %s (%llu boundary edges)\n", r.closed() ? "yes" : "no",
+              static_cast<unsigned long long>(r.boundary_edges));
+  std::printf("edge-manifold: %s (%llu edges with 3+ triangles)\n",
+              r.edge_manifold() ? "yes" : "no",
+              static_cast<unsigned long long>(r.nonmanifold_edges));
+  std::printf("consistently oriented: %s (%llu conflicting edges)\n",
+              r.oriented() ? "yes" : "no",
+              static_cast<unsigned long long>(r.orientation_conflicts));
+  std::printf("outward: %s\n", r.outward() ? "yes" : "no");
+  std::printf("degenerate triangles: %llu, duplicate triangles: %llu\n",
+              static_cast<unsigned long long>(r.degenerate_triangles),
+              static_cast<unsigned long long>(r.duplicate_triangles));
+  std::printf("area: %.6f mm^2, volume: %.6f mm^3\n", r.area, r.volume);
+  std::printf("bounds: [%.6f, %.6f, %.6f] - [%.6f, %.6f, %.6f] mm\n", r.bounds.lo.x,
+              r.bounds.lo.y, r.bounds.lo.z, r.bounds.hi.x, r.bounds.hi.y, r.bounds.hi.z);
+}
+
+const char* format_name(StlFormat f) {
+  return f == StlFormat::kAscii ? "ascii" : (f == StlFormat::kBinary ? "binary" : "auto");
+}
+
+// Reports a failed run (JSON on stdout when asked, the message on stderr) and returns 1.
+int rejected(const Options& o, const char* command, const Status& s, Arena* arena) {
+  cli::print_error(s);
+  if (o.json) {
+    JsonObject j;
+    j.add("command", command);
+    j.add_status(s);
+    if (arena != nullptr) j.add("peak_arena_bytes", static_cast<uint64_t>(arena->high_water()));
+    std::printf("%s\n", j.str().c_str());
+  }
+  return kExitRejected;
+}
+
+int run_check(int argc, char** argv) {
+  Options o;
+  int early = parse_options(argc, argv, kCheckUsage, false, &o);
+  if (early >= 0) return early;
+  if (o.positional.size() != 1) return usage_error("check takes one input file", kCheckUsage);
+  const PrinterProfile* profile = find_printer_profile(o.printer);
+  if (profile == nullptr) {
+    std::string m = std::string("unknown printer '") + o.printer + "' (known: eden260)";
+    return usage_error(m.c_str(), kCheckUsage);
+  }
+  RunMemory memory(o.memory_cap);
+  if (memory.buffer == nullptr) {
+    return rejected(o, "check", make_error(StatusCode::kArenaExhausted,
+                                           "cannot reserve the memory cap of ", o.memory_cap,
+                                           " bytes"), nullptr);
+  }
+  Arena arena(memory.buffer, static_cast<size_t>(o.memory_cap));
+  ThreadExecutor threads(o.threads);
+  Context ctx(&arena, &threads.executor(), nullptr);
+  const double t0 = monotonic_seconds();
+
+  FileSource file;
+  Status s = file.open(o.positional[0]);
+  if (!s.is_ok()) return rejected(o, "check", s, &arena);
+  Mesh mesh(&arena);
+  StlInfo info;
+  s = read_stl_mesh(ctx, file.source(), StlReadOptions{}, &mesh, &info);
+  if (!s.is_ok()) return rejected(o, "check", s, &arena);
+  PrintCheckOptions pco;
+  pco.place_on_tray = o.place;
+  PrintCheck pc;
+  s = check_printable(ctx, mesh, *profile, pco, &pc);
+  if (!s.is_ok()) return rejected(o, "check", s.in_file(o.positional[0]), &arena);
+  Status verdict = require_printable(pc, *profile);
+  if (!verdict.is_ok()) verdict.in_file(o.positional[0]);
+  const double seconds = monotonic_seconds() - t0;
+
+  if (o.json) {
+    JsonObject j;
+    j.add("command", "check");
+    j.add("input", o.positional[0]);
+    j.add_status(verdict);
+    j.add("format", format_name(info.format));
+    j.add("input_bytes", info.bytes);
+    j.add("input_triangles", info.triangles);
+    add_mesh_report(&j, pc.mesh);
+    j.add("printer", profile->name);
+    j.add("extent_mm", pc.extent);
+    j.add("fits", pc.fits);
+    j.add("fits_rotated", pc.fits_rotated);
+    j.add("placement_translation_mm", pc.placement.t);
+    j.add("layers", pc.layers);
+    j.add("units_suspect", pc.units_suspect);
+    j.add("printable", pc.printable);
+    j.add("time_s", seconds);
+    j.add("peak_arena_bytes", static_cast<uint64_t>(arena.high_water()));
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("input: %s (%s STL, %llu triangles, %llu bytes)\n", o.positional[0],
+                format_name(info.format), static_cast<unsigned long long>(info.triangles),
+                static_cast<unsigned long long>(info.bytes));
+    print_mesh_report(pc.mesh);
+    std::printf("printer: %s: extent %.3f x %.3f x %.3f mm, %s, %llu layers\n", profile->name,
+                pc.extent.x, pc.extent.y, pc.extent.z,
+                pc.fits ? "fits" : (pc.fits_rotated ? "fits turned 90 degrees" : "does NOT fit"),
+                static_cast<unsigned long long>(pc.layers));
+    if (pc.units_suspect) std::printf("warning: the size suggests wrong units (not mm?)\n");
+    std::printf("printable: %s\n", pc.printable ? "yes" : "no");
+    std::printf("time: %.3f s, peak arena: %llu bytes\n", seconds,
+                static_cast<unsigned long long>(arena.high_water()));
+  }
+  if (!verdict.is_ok()) {
+    cli::print_error(verdict);
+    return kExitRejected;
+  }
+  return kExitOk;
+}
+
+int run_convert(int argc, char** argv) {
+  Options o;
+  int early = parse_options(argc, argv, kConvertUsage, true, &o);
+  if (early >= 0) return early;
+  if (o.positional.size() != 1) return usage_error("convert takes one input file", kConvertUsage);
+  if (o.output == nullptr) return usage_error("convert needs -o OUT.stl", kConvertUsage);
+  RunMemory memory(o.memory_cap);
+  if (memory.buffer == nullptr) {
+    return rejected(o, "convert", make_error(StatusCode::kArenaExhausted,
+                                             "cannot reserve the memory cap of ", o.memory_cap,
+                                             " bytes"), nullptr);
+  }
+  Arena arena(memory.buffer, static_cast<size_t>(o.memory_cap));
+  ThreadExecutor threads(o.threads);
+  Context ctx(&arena, &threads.executor(), nullptr);
+  const double t0 = monotonic_seconds();
+
+  FileSource file;
+  Status s = file.open(o.positional[0]);
+  if (!s.is_ok()) return rejected(o, "convert", s, &arena);
+  Mesh mesh(&arena);
+  StlInfo info;
+  s = read_stl_mesh(ctx, file.source(), StlReadOptions{}, &mesh, &info);
+  if (!s.is_ok()) return rejected(o, "convert", s, &arena);
+  MeshReport report;
+  s = check_mesh(ctx, mesh, &report);
+  if (!s.is_ok()) return rejected(o, "convert", s.in_file(o.positional[0]), &arena);
+
+  AtomicFile out;
+  s = out.open(o.output);
+  if (!s.is_ok()) return rejected(o, "convert", s, &arena);
+  StlWriteOptions wo;
+  wo.format = o.ascii ? StlFormat::kAscii : StlFormat::kBinary;
+  s = write_stl(ctx, mesh, out.sink(), wo);
+  if (!s.is_ok()) return rejected(o, "convert", s, &arena);  // ~AtomicFile removes the temp
+  s = out.commit();
+  if (!s.is_ok()) return rejected(o, "convert", s, &arena);
+  const double seconds = monotonic_seconds() - t0;
+
+  if (o.json) {
+    JsonObject j;
+    j.add("command", "convert");
+    j.add("input", o.positional[0]);
+    j.add("output", o.output);
+    j.add_status(Status::ok());
+    j.add("input_format", format_name(info.format));
+    j.add("output_format", o.ascii ? "ascii" : "binary");
+    j.add("input_triangles", info.triangles);
+    add_mesh_report(&j, report);
+    j.add("valid_solid", report.is_valid_solid());
+    j.add("time_s", seconds);
+    j.add("peak_arena_bytes", static_cast<uint64_t>(arena.high_water()));
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("input: %s (%s STL, %llu triangles)\n", o.positional[0], format_name(info.format),
+                static_cast<unsigned long long>(info.triangles));
+    print_mesh_report(report);
+    std::printf("output: %s (%s STL)\n", o.output, o.ascii ? "ascii" : "binary");
+    std::printf("time: %.3f s, peak arena: %llu bytes\n", seconds,
+                static_cast<unsigned long long>(arena.high_water()));
+  }
+  return kExitOk;
+}
+
+}  // namespace
+}  // namespace splintcore
+
+int main(int argc, char** argv) {
+  using namespace splintcore;
+  if (argc < 2) {
+    std::fputs(kUsage, stderr);
+    return cli::kExitUsage;
+  }
+  const char* command = argv[1];
+  if (std::strcmp(command, "--help") == 0 || std::strcmp(command, "-h") == 0 ||
+      std::strcmp(command, "help") == 0) {
+    std::fputs(kUsage, stdout);
+    return cli::kExitOk;
+  }
+  if (std::strcmp(command, "check") == 0) return run_check(argc - 2, argv + 2);
+  if (std::strcmp(command, "convert") == 0) return run_convert(argc - 2, argv + 2);
+  std::fprintf(stderr, "splintcore: unknown command '%s'\n\n%s", command, kUsage);
+  return cli::kExitUsage;
+}
