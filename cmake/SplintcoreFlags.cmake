@@ -34,6 +34,12 @@ if(SPLINTCORE_SANITIZE)
   add_link_options(-fsanitize=address,undefined)
 endif()
 
+if(SPLINTCORE_FUZZ)
+  # Coverage instrumentation for everything; the fuzz targets add the libFuzzer main.
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
 # splintcore_apply_warnings(target): our warning set, on our own code only.
 function(splintcore_apply_warnings target)
   target_compile_options(${target} PRIVATE ${SPLINTCORE_WARNINGS})

@@ -59,7 +59,9 @@ class [[nodiscard]] Status {
   static constexpr size_t kMessageCapacity = 256;
   static constexpr size_t kFileCapacity = 128;
 
-  Status() = default;  // ok
+  // Ok. Only the first byte of each text buffer is set: a Status is made on every return,
+  // so constructing one must not touch 400 bytes.
+  Status() { message_[0] = '\0'; file_[0] = '\0'; }
   static Status ok() { return Status(); }
   static Status error(StatusCode code, const char* message);
 
@@ -94,8 +96,8 @@ class [[nodiscard]] Status {
  private:
   StatusCode code_ = StatusCode::kOk;
   uint16_t message_length_ = 0;
-  char message_[kMessageCapacity] = {};
-  char file_[kFileCapacity] = {};
+  char message_[kMessageCapacity];
+  char file_[kFileCapacity];
   uint64_t byte_offset_ = kNoPosition;
   uint64_t line_ = kNoPosition;
   uint64_t column_ = kNoPosition;
@@ -143,14 +145,20 @@ Status make_error(StatusCode code, const Parts&... parts) {
   return !__builtin_add_overflow(a, b, out);
 }
 
+// "64M", "2G", "512K" (binary multiples, either case) or a plain byte count -> bytes. False
+// when malformed or overflowing. Used for memory caps in case files and on command lines.
+[[nodiscard]] bool parse_byte_size(const char* text, uint64_t* out);
+
 // ---------------------------------------------------------------------------------------------
 // Arena: a strict stack allocator with a hard cap.
 //
 // Two ways to give it memory:
 // - a caller buffer (firmware: a static array): the cap is the buffer size;
 // - caller allocate/release hooks with a cap: memory is taken in blocks as needed and
-//   counted against the cap (block headers and block tails included), released by ~Arena or
-//   release_unused_blocks().
+//   counted against the cap (block headers and block tails included). Blocks above the top
+//   after a rewind stay cached for reuse (and so still count) until release_unused_blocks()
+//   or ~Arena: data there stays readable after a rewind, which lets a function move its
+//   result down over its temporaries.
 // Allocation never fails silently: it returns nullptr and records the need, and
 // exhausted_status() turns that into "arena exhausted: need N bytes, cap M".
 // Not thread-safe: give each worker its own Arena (e.g. over a slice of the parent's).
@@ -205,8 +213,12 @@ class Arena {
   void reset_high_water() { high_water_ = used_; }
   size_t reserved() const { return reserved_; }  // hooks mode: bytes taken from the hooks
 
-  // The last failure: the total the arena would have needed, and a ready error.
+  // The last failure: the total the arena would have needed (failed requests in a row add up),
+  // and a ready error.
   size_t last_need() const { return last_need_; }
+  // Drops the "failed requests add up" state: for a caller whose failed request is replaced
+  // by a smaller one (not added to), e.g. a growth that falls back to the exact size.
+  void forget_failure() { failing_ = false; }
   Status exhausted_status() const;
 
   // Hooks mode: give back blocks that rewind() left cached above the current top.
@@ -227,6 +239,7 @@ class Arena {
   size_t last_need_ = 0;
   AllocatorHooks hooks_{};
   bool owns_blocks_ = false;
+  bool failing_ = false;  // the last request failed (needs add up until a success or rewind)
   alignas(16) unsigned char root_storage_[48];  // the Block header for buffer mode
 };
 
@@ -334,7 +347,9 @@ class ArenaArray {
   bool grow_to(size_t wanted, size_t needed) {
     SPLINTCORE_ASSERT(arena_ != nullptr);
     if (try_capacity(wanted)) return true;
-    return wanted != needed && try_capacity(needed);
+    if (wanted == needed) return false;
+    arena_->forget_failure();  // the exact size replaces the failed larger request
+    return try_capacity(needed);
   }
   bool try_capacity(size_t n) {
     if (n > SIZE_MAX / sizeof(T)) return false;

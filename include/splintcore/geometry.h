@@ -116,9 +116,11 @@ Status rigid_from_matrix(const double m[16], double tolerance, RigidTransform* o
 
 // ---------------------------------------------------------------------------------------------
 // Exact geometric predicates (Shewchuk, "Adaptive Precision Floating-Point Arithmetic and Fast
-// Robust Geometric Predicates", 1997). The sign of each result is always exact for finite
-// inputs whose products neither overflow nor underflow (any coordinates within
-// [1e-140, 1e140] in magnitude, or zero); the magnitude is an approximation.
+// Robust Geometric Predicates", 1997). The sign of each result is exact for finite inputs
+// whose products neither overflow nor underflow: every nonzero coordinate within
+// [2^-485, 2^509] (about 1e-146 .. 1.6e153) for orient2d and collinear3d, and within
+// [2^-306, 2^338] (about 7.7e-93 .. 5.6e101) for orient3d (see predicates.cpp). The
+// magnitude is an approximation.
 
 // > 0 when a, b, c run counter-clockwise, < 0 clockwise, 0 when collinear.
 // Equals (a - c) x (b - c) in exact arithmetic.
@@ -133,6 +135,25 @@ inline int sign_of(double v) { return (v > 0) - (v < 0); }
 // True when a, b, c are exactly collinear (including coincident points): all three
 // coordinate-plane projections have zero orientation.
 bool collinear3d(const Vec3& a, const Vec3& b, const Vec3& c);
+
+// ---------------------------------------------------------------------------------------------
+// Exact intersection tests on closed triangles and segments (decided by orient2d/orient3d
+// only, so every answer is exact within orient3d's range above: nonzero coordinates of
+// magnitude 2^-306 .. 2^338, which every float32 STL coordinate and every mm-scale double
+// meets; subnormal coordinates are outside it). Degenerate triangles are the caller's to
+// reject first.
+
+// Does the closed segment pq meet the closed triangle abc?
+bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
+                                 const Vec3& c);
+
+// Do the closed triangles abc and def meet (touching counts)?
+bool triangles_intersect(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
+                         const Vec3& e, const Vec3& f);
+
+// For coplanar work: an axis (0 x, 1 y, 2 z) to drop so that the projection of the triangle
+// abc is not degenerate, or -1 when abc is degenerate (collinear).
+int projection_axis(const Vec3& a, const Vec3& b, const Vec3& c);
 
 }  // namespace splintcore
 

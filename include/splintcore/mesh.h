@@ -106,6 +106,27 @@ Aabb mesh_bounds(const Mesh& mesh);
 double mesh_area(const Mesh& mesh);
 double mesh_volume(const Mesh& mesh);
 
+// ---------------------------------------------------------------------------------------------
+// Self-intersection: pairs of triangles that meet other than through the vertices and edges
+// they share. Decided exactly (triangles_intersect and orient3d/orient2d): triangles sharing
+// an edge conflict only when coplanar and folded onto each other; sharing a vertex, only when
+// they meet elsewhere; sharing all three vertices always. Degenerate triangles are skipped
+// (check_mesh reports them).
+
+struct SelfIntersectionReport {
+  uint64_t intersecting_pairs = 0;   // counted up to max_pairs (then it stops)
+  uint32_t first_a = 0, first_b = 0;  // the smallest pair (a < b) found, when any
+  uint64_t candidate_pairs = 0;      // pairs whose boxes overlap (tested exactly)
+  bool self_intersecting() const { return intersecting_pairs > 0; }
+};
+
+uint64_t find_self_intersections_bound(uint64_t triangle_count);
+
+// Sweep over triangle boxes sorted by x, exact tests on overlapping pairs. max_pairs = 0
+// counts all pairs. Errors: kArenaExhausted, kInvalidMesh (index out of range), kCancelled.
+Status find_self_intersections(const Context& ctx, const Mesh& mesh, uint64_t max_pairs,
+                               SelfIntersectionReport* report);
+
 // Applies a rigid transform to every vertex in place.
 void transform_mesh(const RigidTransform& x, Mesh* mesh);
 

@@ -48,8 +48,18 @@ Arena::~Arena() {
   release_unused_blocks();
 }
 
+// Failed requests in a row add up: code that makes several allocations and then checks them
+// (or a caller that goes on after one fails) needs all of them, so the reported need is the
+// first failure's need plus what each later failed request would have added on top of the
+// current use. A successful allocation or a rewind starts a new count.
 void Arena::note_failure(size_t need) {
-  last_need_ = need;
+  const size_t base = owns_blocks_ ? reserved_ : used_;
+  if (failing_ && need >= base && last_need_ <= SIZE_MAX - (need - base)) {
+    last_need_ += need - base;
+  } else {
+    last_need_ = need;
+  }
+  failing_ = true;
 }
 
 Status Arena::exhausted_status() const {
@@ -59,32 +69,31 @@ Status Arena::exhausted_status() const {
 }
 
 bool Arena::new_block(size_t min_payload, size_t alignment) {
-  // Reuse a cached block above the current one if it is big enough.
+  // Reuse the cached block above the current one if it is big enough. A cached block that is
+  // too small is kept (not released): callers may still read data there after a rewind, e.g.
+  // to move a result down over its temporaries. A fresh block is linked in before it.
   Block* cached = current_->next;
-  size_t used_here = used_;
+  const size_t used_here = used_;
   if (cached != nullptr) {
     size_t start = align_up(reinterpret_cast<uintptr_t>(cached->payload), alignment) -
                    reinterpret_cast<uintptr_t>(cached->payload);
-    if (start + min_payload <= cached->payload_bytes) {
+    if (start <= cached->payload_bytes && min_payload <= cached->payload_bytes - start) {
       cached->used_before = used_here;
       current_ = cached;
       offset_ = 0;
       return true;
     }
-    // Too small: give back every cached block, then ask for a fresh one.
-    release_unused_blocks();
   }
-  size_t payload = min_payload + alignment;
+  uint64_t payload = uint64_t{min_payload} + alignment;
   if (payload < block_bytes_ - kHeaderBytes) payload = block_bytes_ - kHeaderBytes;
-  uint64_t total = 0;
-  if (!checked_add(payload, kHeaderBytes, &total) || total > SIZE_MAX) return false;
-  uint64_t new_reserved = 0;
-  if (!checked_add(reserved_, total, &new_reserved) || new_reserved > cap_) {
-    // Try the smallest block that would do before giving up.
-    payload = min_payload + alignment;
+  uint64_t total = payload + kHeaderBytes;
+  if (reserved_ + total > cap_) {
+    // The smallest block that would do, before giving up.
+    payload = uint64_t{min_payload} + alignment;
     total = payload + kHeaderBytes;
-    if (reserved_ + total > cap_) {
-      note_failure(reserved_ + static_cast<size_t>(total));
+    if (total > SIZE_MAX || reserved_ + total > cap_) {
+      note_failure(total > SIZE_MAX - reserved_ ? SIZE_MAX
+                                                : reserved_ + static_cast<size_t>(total));
       return false;
     }
   }
@@ -96,10 +105,12 @@ bool Arena::new_block(size_t min_payload, size_t alignment) {
   reserved_ += static_cast<size_t>(total);
   Block* block = ::new (memory) Block{};
   block->payload = static_cast<unsigned char*>(memory) + kHeaderBytes;
-  block->payload_bytes = payload;
+  block->payload_bytes = static_cast<size_t>(payload);
   block->total_bytes = static_cast<size_t>(total);
   block->previous = current_;
+  block->next = cached;
   block->used_before = used_here;
+  if (cached != nullptr) cached->previous = block;
   current_->next = block;
   current_ = block;
   offset_ = 0;
@@ -109,24 +120,26 @@ bool Arena::new_block(size_t min_payload, size_t alignment) {
 void* Arena::allocate(size_t bytes, size_t alignment) {
   SPLINTCORE_ASSERT(alignment != 0 && (alignment & (alignment - 1)) == 0);
   if (current_->payload != nullptr) {
-    uintptr_t base = reinterpret_cast<uintptr_t>(current_->payload);
-    size_t start = align_up(base + offset_, alignment) - base;
+    const uintptr_t base = reinterpret_cast<uintptr_t>(current_->payload);
+    const size_t start = align_up(base + offset_, alignment) - base;
     if (start <= current_->payload_bytes && bytes <= current_->payload_bytes - start) {
-      size_t new_used = current_->used_before + start + bytes;
-      if (!owns_blocks_ && new_used > cap_) {
-        note_failure(new_used);
-        return nullptr;
-      }
+      failing_ = false;
       offset_ = start + bytes;
-      used_ = new_used;
+      used_ = current_->used_before + offset_;
       if (used_ > high_water_) high_water_ = used_;
       return current_->payload + start;
     }
-  }
-  if (!owns_blocks_) {
-    uint64_t need = 0;
-    if (!checked_add(used_, bytes, &need) || need > SIZE_MAX) need = SIZE_MAX;
-    note_failure(static_cast<size_t>(need) + (alignment > kDefaultAlignment ? alignment : 0));
+    if (!owns_blocks_) {
+      // The need includes the alignment padding, so a cap of exactly `need` succeeds.
+      uint64_t need = 0;
+      if (!checked_add(uint64_t{current_->used_before} + start, bytes, &need) || need > SIZE_MAX) {
+        need = SIZE_MAX;
+      }
+      note_failure(static_cast<size_t>(need));
+      return nullptr;
+    }
+  } else if (!owns_blocks_) {
+    note_failure(bytes);  // no buffer at all (cap 0)
     return nullptr;
   }
   if (!new_block(bytes, alignment)) return nullptr;
@@ -134,22 +147,17 @@ void* Arena::allocate(size_t bytes, size_t alignment) {
 }
 
 bool Arena::try_extend(void* pointer, size_t old_bytes, size_t new_bytes) {
+  // An opportunistic attempt: failing here is not a failure of the caller (who then copies),
+  // so nothing is noted.
   unsigned char* p = static_cast<unsigned char*>(pointer);
   if (current_->payload == nullptr || p < current_->payload) return false;
-  size_t start = static_cast<size_t>(p - current_->payload);
+  const size_t start = static_cast<size_t>(p - current_->payload);
   if (start + old_bytes != offset_) return false;  // not the top allocation
   if (new_bytes < old_bytes) return false;
-  if (new_bytes - old_bytes > current_->payload_bytes - offset_) {
-    if (!owns_blocks_) note_failure(current_->used_before + start + new_bytes);
-    return false;
-  }
-  size_t new_used = current_->used_before + start + new_bytes;
-  if (!owns_blocks_ && new_used > cap_) {
-    note_failure(new_used);
-    return false;
-  }
+  if (new_bytes - old_bytes > current_->payload_bytes - offset_) return false;
+  failing_ = false;
   offset_ = start + new_bytes;
-  used_ = new_used;
+  used_ = current_->used_before + offset_;
   if (used_ > high_water_) high_water_ = used_;
   return true;
 }
@@ -167,6 +175,7 @@ void Arena::rewind(const Marker& marker) {
   current_ = static_cast<Block*>(marker.block);
   offset_ = marker.offset;
   used_ = marker.used;
+  failing_ = false;
 }
 
 void Arena::reset() {
@@ -187,6 +196,28 @@ void Arena::release_unused_blocks() {
     hooks_.release(hooks_.user, b, b->total_bytes);
     b = next;
   }
+}
+
+bool parse_byte_size(const char* text, uint64_t* out) {
+  if (text == nullptr) return false;
+  size_t n = std::strlen(text);
+  if (n == 0) return false;
+  uint64_t scale = 1;
+  const char last = text[n - 1];
+  if (last == 'K' || last == 'k') scale = uint64_t{1} << 10;
+  if (last == 'M' || last == 'm') scale = uint64_t{1} << 20;
+  if (last == 'G' || last == 'g') scale = uint64_t{1} << 30;
+  if (scale != 1) --n;
+  if (n == 0 || n > 19) return false;
+  uint64_t value = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (text[i] < '0' || text[i] > '9') return false;
+    if (!checked_mul(value, 10, &value) ||
+        !checked_add(value, static_cast<uint64_t>(text[i] - '0'), &value)) {
+      return false;
+    }
+  }
+  return checked_mul(value, scale, out);
 }
 
 }  // namespace splintcore

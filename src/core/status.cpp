@@ -10,11 +10,24 @@ namespace splintcore {
 
 namespace {
 
+// Hosted builds print the failed assertion; a core-only (firmware) build has no stdio and
+// relies on the embedder's handler.
 void default_assert_handler(const char* expression, const char* file, int line) {
-#if !defined(SPLINTCORE_BARE_METAL)
-  std::fprintf(stderr, "splintcore: assertion failed: %s (%s:%d)\n", expression, file, line);
+#if defined(SPLINTCORE_WITH_PLATFORM)
+  char number[16];
+  auto r = std::to_chars(number, number + sizeof(number) - 1, line);
+  *r.ptr = '\0';
+  std::fputs("splintcore: assertion failed: ", stderr);
+  std::fputs(expression, stderr);
+  std::fputs(" (", stderr);
+  std::fputs(file, stderr);
+  std::fputs(":", stderr);
+  std::fputs(number, stderr);
+  std::fputs(")\n", stderr);
 #else
-  (void)expression; (void)file; (void)line;
+  (void)expression;
+  (void)file;
+  (void)line;
 #endif
 }
 

@@ -41,6 +41,18 @@
 
 #include "splintcore/geometry.h"
 
+// Contraction into FMA is not only a matter of bit-identity here: it breaks Two-Sum, Split and
+// Two-Product (their round-off terms rely on every operation being rounded separately), and
+// the predicates then return wrong signs. The build passes -ffp-contract=off; these pragmas
+// keep the file correct when compiled without it (GCC defaults to -ffp-contract=fast in C++,
+// which fuses on AArch64 and on x86-64 with -mfma). The GCC pragma holds even against
+// -ffp-contract=fast; clang's does not (an explicit -ffp-contract=fast wins there).
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#elif defined(__GNUC__)
+#pragma GCC optimize("fp-contract=off")
+#endif
+
 #if !defined(FLT_EVAL_METHOD) || FLT_EVAL_METHOD != 0
 #error "splintcore predicates need double arithmetic evaluated in double (FLT_EVAL_METHOD 0)"
 #endif
@@ -433,6 +445,10 @@ double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
                            (magnitude(adxbdy) + magnitude(bdxady)) * magnitude(cdz);
   const double errbound = kO3dErrBoundA * permanent;
   if (det > errbound || -det > errbound) return det;
+  // A zero permanent means every term has an exactly zero factor (a rounded difference or
+  // product is zero only when it is exactly zero, inside the range above): the determinant is
+  // exactly 0. Common and worth the test: four points on an axis-aligned plane.
+  if (permanent == 0.0) return 0.0;
   return orient3d_adapt(a, b, c, d, permanent);
 }
 

@@ -76,13 +76,25 @@ Status located(Status s, const ByteSource& source) {
   return s;
 }
 
-Status check_corner(const float* xyz, uint64_t triangle, int corner, double max_abs) {
+// True when all three coordinates are finite and within +-max_abs (NaN fails both tests).
+inline bool corner_ok(const float* xyz, double max_abs) {
+  bool ok = true;
+  for (int a = 0; a < 3; ++a) {
+    double v = static_cast<double>(xyz[a]);
+    ok = ok && v <= max_abs && v >= -max_abs;
+  }
+  return ok;
+}
+
+Status corner_error(const float* xyz, uint64_t triangle, int corner, double max_abs) {
   for (int a = 0; a < 3; ++a) {
     if (!is_finite(xyz[a])) {
       return make_error(StatusCode::kNonFinite, "triangle ", triangle, " vertex ", corner,
                         " has a non-finite coordinate (NaN or infinity)")
           .at_index(triangle);
     }
+  }
+  for (int a = 0; a < 3; ++a) {
     double v = static_cast<double>(xyz[a]);
     if (v > max_abs || v < -max_abs) {
       return make_error(StatusCode::kLimitExceeded, "triangle ", triangle, " vertex ", corner,
@@ -148,8 +160,10 @@ Status read_binary(const Context& ctx, Reader& in, const StlReadOptions& options
       for (int a = 0; a < 3; ++a) {
         tri.p[k][a] = load_f32(record + 12 + 12 * k + 4 * a);
       }
-      Status s = check_corner(tri.p[k], t, k, options.max_abs_coordinate);
-      if (!s.is_ok()) return s.at_byte(in.offset() + 12 + 12 * static_cast<uint64_t>(k));
+      if (!corner_ok(tri.p[k], options.max_abs_coordinate)) {
+        return corner_error(tri.p[k], t, k, options.max_abs_coordinate)
+            .at_byte(in.offset() + 12 + 12 * static_cast<uint64_t>(k));
+      }
     }
     if (!out->push_back(tri)) return ctx.arena->exhausted_status();
     in.pos += kBinaryRecordBytes;
@@ -185,7 +199,12 @@ struct Tokenizer {
     for (;;) {
       if (in->available() == 0) {
         SPLINTCORE_RETURN_IF_ERROR(in->fill(1));
-        if (in->available() == 0) return Status::ok();
+        if (in->available() == 0) {
+          // No token: "found the end of the input" errors point at where the input ends.
+          token_line = line;
+          token_column = column;
+          return Status::ok();
+        }
       }
       uint8_t c = in->buf[in->pos];
       if (!is_space(c)) break;
@@ -292,7 +311,8 @@ struct Tokenizer {
     if (length == 0) return error_here(StatusCode::kTruncated, "expected a number");
     const char* first = token;
     const char* last = token + length;
-    if (*first == '+') ++first;  // from_chars takes no '+'; STL writers sometimes emit one
+    // from_chars takes no '+'; STL writers sometimes emit one (but "+-1" is not a number).
+    if (*first == '+' && length > 1 && first[1] != '-') ++first;
     // Only digits, sign, point and exponent: from_chars would also take "inf" and "nan".
     for (const char* p = first; p < last; ++p) {
       char c = *p;
@@ -361,8 +381,9 @@ Status read_ascii(const Context& ctx, Reader& in, const StlReadOptions& options,
       SPLINTCORE_RETURN_IF_ERROR(tok.expect("vertex"));
       const uint64_t vertex_line = tok.token_line;
       for (float& v : tri.p[k]) SPLINTCORE_RETURN_IF_ERROR(tok.number(&v));
-      Status s = check_corner(tri.p[k], count, k, options.max_abs_coordinate);
-      if (!s.is_ok()) return s.at_line(vertex_line);
+      if (!corner_ok(tri.p[k], options.max_abs_coordinate)) {
+        return corner_error(tri.p[k], count, k, options.max_abs_coordinate).at_line(vertex_line);
+      }
     }
     SPLINTCORE_RETURN_IF_ERROR(tok.expect("endloop"));
     SPLINTCORE_RETURN_IF_ERROR(tok.expect("endfacet"));
@@ -444,10 +465,11 @@ Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlRead
     arena.rewind(start);
     return located(s, source);
   }
-  // Move the mesh down over the soup and the read buffer. Destinations never lie above their
-  // sources' live bytes and memmove handles any overlap, so the copies are safe.
   const size_t nt = welded.triangles.size();
   const size_t nv = welded.vertices.size();
+  // Move the mesh down over the soup and the read buffer. Allocation after the rewind runs in
+  // the same order as before, so a destination never lies above live bytes not yet copied
+  // (blocks above a rewind stay cached, never released) and memmove handles any overlap.
   arena.rewind(start);
   Triangle* tris = arena.allocate_array<Triangle>(nt);
   if (nt > 0) std::memmove(static_cast<void*>(tris), welded.triangles.data(), nt * sizeof(Triangle));

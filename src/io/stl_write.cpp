@@ -11,6 +11,7 @@ namespace splintcore {
 namespace {
 
 constexpr size_t kRecordBytes = 50;
+constexpr double kFloatMax = static_cast<double>(FLT_MAX);
 constexpr size_t kMaxAsciiFacetBytes = 512;  // 12 numbers of at most ~16 chars plus keywords
 
 inline void store_u32(uint8_t* p, uint32_t v) {
@@ -28,30 +29,37 @@ inline void store_f32(uint8_t* p, float f) {
 }
 
 // Rounds to float32 (to nearest, ties to even: the IEEE default) after checking the range,
-// since converting an out-of-range double to float is undefined behaviour.
-Status to_float(const Vec3& v, float out[3], uint64_t triangle, int corner) {
+// since converting an out-of-range double to float is undefined behaviour. False when the
+// value is not finite or beyond float32 range.
+inline bool to_float(const Vec3& v, float out[3]) {
+  const double c[3] = {v.x, v.y, v.z};
+  bool ok = true;
   for (int a = 0; a < 3; ++a) {
-    double x = v[a];
-    if (!is_finite(x)) {
-      return make_error(StatusCode::kNonFinite, "cannot write triangle ", triangle, ": vertex ",
-                        corner, " is not finite")
-          .at_index(triangle);
-    }
-    if (x > double{FLT_MAX} || x < -double{FLT_MAX}) {
-      return make_error(StatusCode::kLimitExceeded, "cannot write triangle ", triangle,
-                        ": coordinate ", x, " is beyond float32 range")
-          .at_index(triangle);
-    }
-    out[a] = static_cast<float>(x);
+    // Also false for NaN; infinities fail the range test.
+    ok = ok && c[a] <= kFloatMax && c[a] >= -kFloatMax;
+    out[a] = ok ? static_cast<float>(c[a]) : 0.0f;
   }
-  return Status::ok();
+  return ok;
+}
+
+Status unwritable(const Vec3& v, uint64_t triangle, int corner) {
+  if (!is_finite(v)) {
+    return make_error(StatusCode::kNonFinite, "cannot write triangle ", triangle, ": vertex ",
+                      corner, " is not finite")
+        .at_index(triangle);
+  }
+  return make_error(StatusCode::kLimitExceeded, "cannot write triangle ", triangle, ": vertex ",
+                    corner, " is beyond float32 range")
+      .at_index(triangle);
 }
 
 // The facet normal of the triangle as written (from the float32 corners).
 void facet_normal(const float p[3][3], float n[3]) {
-  Vec3 a{p[0][0], p[0][1], p[0][2]};
-  Vec3 b{p[1][0], p[1][1], p[1][2]};
-  Vec3 c{p[2][0], p[2][1], p[2][2]};
+  auto corner = [&](int k) {
+    return Vec3{static_cast<double>(p[k][0]), static_cast<double>(p[k][1]),
+                static_cast<double>(p[k][2])};
+  };
+  const Vec3 a = corner(0), b = corner(1), c = corner(2);
   Vec3 m = cross(b - a, c - a);
   double len = length(m);
   if (len > 0.0 && is_finite(len)) {
@@ -104,7 +112,7 @@ bool valid_solid_name(const char* name) {
 
 Status StlWriter::begin(const Context& ctx, const ByteSink& sink, const StlWriteOptions& options,
                         uint64_t triangle_count) {
-  SPLINTCORE_ASSERT(!open_);
+  if (open_) return Status::error(StatusCode::kInvalidArgument, "STL writer is already open");
   if (sink.write == nullptr) {
     return Status::error(StatusCode::kInvalidArgument, "STL writer: sink has no write()");
   }
@@ -160,8 +168,15 @@ Status StlWriter::flush() {
   return Status::ok();
 }
 
+namespace {
+Status not_open() {
+  return Status::error(StatusCode::kInvalidArgument,
+                       "STL writer is not open (begin() failed, or an earlier error closed it)");
+}
+}  // namespace
+
 Status StlWriter::add(const Vec3& a, const Vec3& b, const Vec3& c) {
-  SPLINTCORE_ASSERT(open_);
+  if (!open_) return not_open();
   if (count_known_ && written_ >= declared_) {
     open_ = false;
     return make_error(StatusCode::kInvalidArgument, "STL writer: more triangles than the ",
@@ -173,9 +188,13 @@ Status StlWriter::add(const Vec3& a, const Vec3& b, const Vec3& c) {
                       " triangles");
   }
   float p[3][3];
-  SPLINTCORE_RETURN_IF_ERROR(to_float(a, p[0], written_, 0));
-  SPLINTCORE_RETURN_IF_ERROR(to_float(b, p[1], written_, 1));
-  SPLINTCORE_RETURN_IF_ERROR(to_float(c, p[2], written_, 2));
+  const Vec3* corners[3] = {&a, &b, &c};
+  for (int k = 0; k < 3; ++k) {
+    if (!to_float(*corners[k], p[k])) {
+      open_ = false;  // the output is incomplete: no finish() may seal it
+      return unwritable(*corners[k], written_, k);
+    }
+  }
   float n[3];
   facet_normal(p, n);
   const size_t need = binary_ ? kRecordBytes : kMaxAsciiFacetBytes;
@@ -205,7 +224,7 @@ Status StlWriter::add(const Vec3& a, const Vec3& b, const Vec3& c) {
 }
 
 Status StlWriter::finish() {
-  SPLINTCORE_ASSERT(open_);
+  if (!open_) return not_open();
   if (count_known_ && written_ != declared_) {
     open_ = false;
     return make_error(StatusCode::kInvalidArgument, "STL writer: declared ", declared_,

@@ -90,6 +90,7 @@ Status weld_exact(const Context& ctx, Span<const SoupTriangle> soup, Mesh* out) 
   }
   SPLINTCORE_RETURN_IF_ERROR(check_soup(soup));
   const size_t n = soup.size();
+  if (n == 0) return Status::ok();
   if (!out->triangles.resize(n)) return arena.exhausted_status();
 
   const Arena::Marker temp_start = arena.mark();
@@ -153,6 +154,7 @@ Status weld_tolerance(const Context& ctx, Span<const SoupTriangle> soup, double 
   }
   SPLINTCORE_RETURN_IF_ERROR(check_soup(soup));
   const size_t n = soup.size();
+  if (n == 0) return Status::ok();
   const uint32_t corner_count = static_cast<uint32_t>(3 * n);
   const float* corners = &soup.data()[0].p[0][0];
   // Cells must fit in 21 bits per axis after offsetting, for a 63-bit key.

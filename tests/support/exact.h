@@ -25,13 +25,28 @@ class BigInt {
  public:
   BigInt() = default;
   explicit BigInt(int64_t value) {
-    negative_ = value < 0;
     // Magnitude via unsigned arithmetic (well defined for INT64_MIN too).
-    uint64_t magnitude = negative_ ? ~static_cast<uint64_t>(value) + 1u : static_cast<uint64_t>(value);
-    while (magnitude != 0) {
-      limbs_.push_back(static_cast<uint32_t>(magnitude & 0xffffffffu));
-      magnitude >>= 32;
-    }
+    const uint64_t magnitude =
+        value < 0 ? ~static_cast<uint64_t>(value) + 1u : static_cast<uint64_t>(value);
+    *this = from_magnitude(magnitude, 0, value < 0);
+  }
+
+  // (negative ? -1 : 1) * magnitude * 2^shift.
+  static BigInt from_magnitude(uint64_t magnitude, unsigned shift, bool negative) {
+    BigInt r;
+    if (magnitude == 0) return r;
+    const size_t limb_shift = shift / 32;
+    const unsigned bit_shift = shift % 32;
+    r.limbs_.assign(limb_shift + 3, 0u);
+    // The 64-bit magnitude shifted by bit_shift < 32 spans at most three limbs.
+    const uint64_t low = magnitude << bit_shift;
+    const uint64_t high = bit_shift == 0 ? 0 : magnitude >> (64 - bit_shift);
+    r.limbs_[limb_shift] = static_cast<uint32_t>(low & 0xffffffffu);
+    r.limbs_[limb_shift + 1] = static_cast<uint32_t>(low >> 32);
+    r.limbs_[limb_shift + 2] = static_cast<uint32_t>(high);
+    r.negative_ = negative;
+    r.normalize();
+    return r;
   }
 
   int sign() const { return limbs_.empty() ? 0 : (negative_ ? -1 : 1); }
@@ -44,40 +59,28 @@ class BigInt {
     return r;
   }
 
-  friend BigInt operator+(const BigInt& a, const BigInt& b) {
-    BigInt r;
-    if (a.negative_ == b.negative_) {
-      r.limbs_ = add_magnitudes(a.limbs_, b.limbs_);
-      r.negative_ = a.negative_;
-    } else {
-      const int c = compare_magnitudes(a.limbs_, b.limbs_);
-      if (c == 0) return BigInt();
-      if (c > 0) {
-        r.limbs_ = subtract_magnitudes(a.limbs_, b.limbs_);
-        r.negative_ = a.negative_;
-      } else {
-        r.limbs_ = subtract_magnitudes(b.limbs_, a.limbs_);
-        r.negative_ = b.negative_;
-      }
-    }
-    r.normalize();
-    return r;
-  }
-  friend BigInt operator-(const BigInt& a, const BigInt& b) { return a + (-b); }
+  friend BigInt operator+(const BigInt& a, const BigInt& b) { return add_signed(a, b, false); }
+  friend BigInt operator-(const BigInt& a, const BigInt& b) { return add_signed(a, b, true); }
 
   friend BigInt operator*(const BigInt& a, const BigInt& b) {
     BigInt r;
     if (a.is_zero() || b.is_zero()) return r;
-    r.limbs_.assign(a.limbs_.size() + b.limbs_.size(), 0u);
-    for (size_t i = 0; i < a.limbs_.size(); ++i) {
+    const size_t na = a.limbs_.size();
+    const size_t nb = b.limbs_.size();
+    r.limbs_.assign(na + nb, 0u);
+    // Raw pointers: the loops stay fast in unoptimised (-O0) test builds too.
+    const uint32_t* pa = a.limbs_.data();
+    const uint32_t* pb = b.limbs_.data();
+    uint32_t* pr = r.limbs_.data();
+    for (size_t i = 0; i < na; ++i) {
       uint64_t carry = 0;
-      for (size_t j = 0; j < b.limbs_.size(); ++j) {
+      for (size_t j = 0; j < nb; ++j) {
         // (2^32-1)^2 + 2 (2^32-1) < 2^64: no overflow.
-        const uint64_t t = static_cast<uint64_t>(a.limbs_[i]) * b.limbs_[j] + r.limbs_[i + j] + carry;
-        r.limbs_[i + j] = static_cast<uint32_t>(t & 0xffffffffu);
+        const uint64_t t = static_cast<uint64_t>(pa[i]) * pb[j] + pr[i + j] + carry;
+        pr[i + j] = static_cast<uint32_t>(t & 0xffffffffu);
         carry = t >> 32;
       }
-      r.limbs_[i + b.limbs_.size()] = static_cast<uint32_t>(carry);
+      pr[i + nb] = static_cast<uint32_t>(carry);
     }
     r.negative_ = a.negative_ != b.negative_;
     r.normalize();
@@ -108,6 +111,27 @@ class BigInt {
   friend bool operator<(const BigInt& a, const BigInt& b) { return compare(a, b) < 0; }
 
  private:
+  // a + b, or a - b when subtract_b.
+  static BigInt add_signed(const BigInt& a, const BigInt& b, bool subtract_b) {
+    const bool b_negative = subtract_b ? !b.negative_ : b.negative_;
+    BigInt r;
+    if (a.negative_ == b_negative) {
+      r.limbs_ = add_magnitudes(a.limbs_, b.limbs_);
+      r.negative_ = a.negative_;
+    } else {
+      const int c = compare_magnitudes(a.limbs_, b.limbs_);
+      if (c == 0) return r;
+      if (c > 0) {
+        r.limbs_ = subtract_magnitudes(a.limbs_, b.limbs_);
+        r.negative_ = a.negative_;
+      } else {
+        r.limbs_ = subtract_magnitudes(b.limbs_, a.limbs_);
+        r.negative_ = b_negative;
+      }
+    }
+    r.normalize();
+    return r;
+  }
   static int compare_magnitudes(const std::vector<uint32_t>& a, const std::vector<uint32_t>& b) {
     if (a.size() != b.size()) return a.size() < b.size() ? -1 : 1;
     for (size_t i = a.size(); i-- > 0;) {
@@ -119,37 +143,51 @@ class BigInt {
                                               const std::vector<uint32_t>& b) {
     const std::vector<uint32_t>& longer = a.size() >= b.size() ? a : b;
     const std::vector<uint32_t>& shorter = a.size() >= b.size() ? b : a;
-    std::vector<uint32_t> r(longer.size() + 1, 0u);
+    const size_t nl = longer.size();
+    const size_t ns = shorter.size();
+    std::vector<uint32_t> r(nl + 1, 0u);
+    const uint32_t* pl = longer.data();
+    const uint32_t* ps = shorter.data();
+    uint32_t* pr = r.data();
     uint64_t carry = 0;
-    for (size_t i = 0; i < longer.size(); ++i) {
-      const uint64_t t = static_cast<uint64_t>(longer[i]) + (i < shorter.size() ? shorter[i] : 0u) + carry;
-      r[i] = static_cast<uint32_t>(t & 0xffffffffu);
+    for (size_t i = 0; i < nl; ++i) {
+      const uint64_t t = static_cast<uint64_t>(pl[i]) + (i < ns ? ps[i] : 0u) + carry;
+      pr[i] = static_cast<uint32_t>(t & 0xffffffffu);
       carry = t >> 32;
     }
-    r[longer.size()] = static_cast<uint32_t>(carry);
+    pr[nl] = static_cast<uint32_t>(carry);
     return r;
   }
   // a - b for |a| >= |b|.
   static std::vector<uint32_t> subtract_magnitudes(const std::vector<uint32_t>& a,
                                                    const std::vector<uint32_t>& b) {
-    std::vector<uint32_t> r(a.size(), 0u);
+    const size_t na = a.size();
+    const size_t nb = b.size();
+    std::vector<uint32_t> r(na, 0u);
+    const uint32_t* pa = a.data();
+    const uint32_t* pb = b.data();
+    uint32_t* pr = r.data();
     uint64_t borrow = 0;
-    for (size_t i = 0; i < a.size(); ++i) {
-      const uint64_t subtrahend = static_cast<uint64_t>(i < b.size() ? b[i] : 0u) + borrow;
-      const uint64_t minuend = a[i];
+    for (size_t i = 0; i < na; ++i) {
+      const uint64_t subtrahend = static_cast<uint64_t>(i < nb ? pb[i] : 0u) + borrow;
+      const uint64_t minuend = pa[i];
       if (minuend >= subtrahend) {
-        r[i] = static_cast<uint32_t>(minuend - subtrahend);
+        pr[i] = static_cast<uint32_t>(minuend - subtrahend);
         borrow = 0;
       } else {
-        r[i] = static_cast<uint32_t>((minuend + (uint64_t{1} << 32)) - subtrahend);
+        pr[i] = static_cast<uint32_t>((minuend + (uint64_t{1} << 32)) - subtrahend);
         borrow = 1;
       }
     }
     return r;  // borrow is 0 here since |a| >= |b|
   }
+  // Drops leading zero limbs; zero is never negative.
   void normalize() {
-    while (!limbs_.empty() && limbs_.back() == 0u) limbs_.pop_back();
-    if (limbs_.empty()) negative_ = false;
+    size_t n = limbs_.size();
+    const uint32_t* p = limbs_.data();
+    while (n > 0 && p[n - 1] == 0u) --n;
+    limbs_.resize(n);
+    if (n == 0) negative_ = false;
   }
 
   bool negative_ = false;
@@ -195,8 +233,9 @@ inline std::vector<BigInt> to_common_scale(const double* values, size_t count) {
   }
   std::vector<BigInt> out(count);
   for (size_t i = 0; i < count; ++i) {
-    if (parts[i].mantissa == 0) continue;
-    out[i] = BigInt(parts[i].mantissa).shifted_left(static_cast<unsigned>(parts[i].exponent - emin));
+    const int64_t m = parts[i].mantissa;  // |m| < 2^53
+    out[i] = BigInt::from_magnitude(static_cast<uint64_t>(m < 0 ? -m : m),
+                                    static_cast<unsigned>(parts[i].exponent - emin), m < 0);
   }
   return out;
 }

@@ -13,6 +13,7 @@
 #include "../common/cli.h"
 #include "../common/shapes.h"
 #include "splintcore/core.h"
+#include "splintcore/design.h"
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
 #include "splintcore/platform.h"
@@ -148,9 +149,48 @@ void bench_stl(Harness& h, Arena& arena, const char* label, const std::vector<ui
   }
 }
 
+// The initial splint base at the paper's scale (fixtures/cases/paper_scale.json: 2,612
+// triangles): generation alone (what the paper timed: 0.061-0.148 s) and with the exact
+// self-intersection guarantee.
+void bench_base(Harness& h, Arena& arena, const std::string& fixtures) {
+  const std::string path = fixtures + "/cases/paper_scale.json";
+  std::vector<uint8_t> text = read_whole(path);
+  if (text.empty()) {
+    std::printf("# %s not found: base benchmarks skipped\n", path.c_str());
+    return;
+  }
+  Context ctx(&arena);
+  CaseFile c;
+  Status s = parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(),
+                        path.c_str(), &c);
+  if (!s.is_ok()) {
+    cli::print_error(s);
+    h.failed = true;
+    return;
+  }
+  for (bool guarantee : {false, true}) {
+    const char* name = guarantee ? "base_build_checked" : "base_build";
+    if (!h.wanted(name)) continue;
+    CaseFile variant = c;
+    variant.base.check_self_intersection = guarantee;
+    size_t triangles = 0;
+    h.measure(name, 2612, arena, [&](Arena& a) {
+      Context cx(&a);
+      Mesh m(&a);
+      BaseReport r;
+      Status st = build_case_base(cx, variant, &m, &r);
+      triangles = m.triangles.size();
+      return st;
+    });
+    std::printf("# %s: %zu triangles (closed, manifold, outward checked%s)\n", name, triangles,
+                guarantee ? "; exact self-intersection test" : "");
+  }
+}
+
 int run(int argc, char** argv) {
   Harness h;
   std::string realdata = "../shared/realdata/open-full-jaw-patient26";
+  std::string fixtures = "fixtures";
   uint64_t cap = uint64_t{4} << 30;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
@@ -162,12 +202,14 @@ int run(int argc, char** argv) {
       ++i;
     } else if (a == "--realdata" && i + 1 < argc) {
       realdata = argv[++i];
+    } else if (a == "--fixtures" && i + 1 < argc) {
+      fixtures = argv[++i];
     } else if (a == "--memory-cap" && i + 1 < argc && cli::parse_size(argv[i + 1], &cap)) {
       ++i;
     } else {
       std::fprintf(stderr,
                    "usage: splintcore-bench [--filter SUBSTRING] [--repeat N] "
-                   "[--realdata DIR] [--memory-cap SIZE]\n");
+                   "[--realdata DIR] [--fixtures DIR] [--memory-cap SIZE]\n");
       return a == "--help" ? 0 : 2;
     }
   }
@@ -179,6 +221,7 @@ int run(int argc, char** argv) {
   }
   {
     Arena arena(buffer, static_cast<size_t>(cap));
+    bench_base(h, arena, fixtures);
     // A torus of 2 x 521 x 521 = 542,882 triangles: the size of the paper's largest jaw.
     std::vector<uint8_t> torus = to_binary_stl(shapes::torus(521, 521, 30.0, 8.0));
     bench_stl(h, arena, "", torus);

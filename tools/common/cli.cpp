@@ -13,21 +13,7 @@ bool parse_unsigned(const char* text, uint64_t* out) {
   return r.ec == std::errc() && r.ptr == end;
 }
 
-bool parse_size(const char* text, uint64_t* out) {
-  if (text == nullptr || *text == '\0') return false;
-  size_t n = std::strlen(text);
-  uint64_t scale = 1;
-  char last = text[n - 1];
-  if (last == 'K' || last == 'k') scale = uint64_t{1} << 10;
-  if (last == 'M' || last == 'm') scale = uint64_t{1} << 20;
-  if (last == 'G' || last == 'g') scale = uint64_t{1} << 30;
-  if (scale != 1) --n;
-  if (n == 0) return false;
-  uint64_t value = 0;
-  auto r = std::from_chars(text, text + n, value);
-  if (r.ec != std::errc() || r.ptr != text + n) return false;
-  return checked_mul(value, scale, out);
-}
+bool parse_size(const char* text, uint64_t* out) { return parse_byte_size(text, out); }
 
 std::string json_escape(const char* text) {
   std::string out = "\"";

@@ -1,0 +1,336 @@
+// The case file: strict schema over the strict JSON parser (format: docs/case-format.md).
+// Every object rejects keys it does not know, every value is type- and range-checked, and
+// every error names the line and column of the offending value.
+#include "splintcore/design.h"
+
+namespace splintcore {
+
+namespace {
+
+struct Reader {
+  const JsonDocument* doc;
+  Arena* arena;
+
+  Status fail(const JsonValue& at, StatusCode code, const char* a, const char* b = "",
+              const char* c = "") const {
+    Status s = json_error(*doc, at, code, a);
+    s.append(b).append(c);
+    return s;
+  }
+
+  // Rejects keys not in `allowed` (a null-terminated list).
+  Status known_keys(const JsonValue& object, const char* const* allowed, const char* what) const {
+    for (uint32_t k = object.first_child; k != kJsonNone; k = doc->at(k).next_sibling) {
+      const JsonValue& member = doc->at(k);
+      bool ok = false;
+      for (const char* const* a = allowed; *a != nullptr; ++a) ok = ok || std::strcmp(*a, member.key) == 0;
+      if (!ok) {
+        Status s = json_error(*doc, member, StatusCode::kInvalidArgument, "unknown key \"");
+        s.append(member.key).append("\" in ").append(what).append(" (allowed:");
+        for (const char* const* a = allowed; *a != nullptr; ++a) s.append(" ").append(*a);
+        return s.append(")");
+      }
+    }
+    return Status::ok();
+  }
+
+  Status expect_type(const JsonValue& v, JsonType type, const char* key) const {
+    if (v.type == type) return Status::ok();
+    Status s = json_error(*doc, v, StatusCode::kInvalidArgument, "\"");
+    return s.append(key).append("\" must be ").append(json_type_name(type)).append(", not ")
+        .append(json_type_name(v.type));
+  }
+
+  Status number(const JsonValue& v, const char* key, double lo, double hi, double* out) const {
+    SPLINTCORE_RETURN_IF_ERROR(expect_type(v, JsonType::kNumber, key));
+    if (!(v.number >= lo && v.number <= hi)) {
+      Status s = json_error(*doc, v, StatusCode::kInvalidArgument, "\"");
+      return s.append(key).append("\" is ").append_f64(v.number).append(", outside [")
+          .append_f64(lo).append(", ").append_f64(hi).append("]");
+    }
+    *out = v.number;
+    return Status::ok();
+  }
+
+  Status vec3(const JsonValue& v, const char* key, Vec3* out) const {
+    SPLINTCORE_RETURN_IF_ERROR(expect_type(v, JsonType::kArray, key));
+    if (v.child_count != 3) {
+      Status s = json_error(*doc, v, StatusCode::kInvalidArgument, "\"");
+      return s.append(key).append("\" needs 3 numbers, has ").append_u64(v.child_count);
+    }
+    uint32_t k = v.first_child;
+    for (int a = 0; a < 3; ++a, k = doc->at(k).next_sibling) {
+      double x = 0;
+      SPLINTCORE_RETURN_IF_ERROR(number(doc->at(k), key, -1e6, 1e6, &x));
+      (*out)[a] = x;
+    }
+    return Status::ok();
+  }
+
+  Status unit_vector(const JsonValue& v, const char* key, Vec3* out) const {
+    SPLINTCORE_RETURN_IF_ERROR(vec3(v, key, out));
+    if (!(length(*out) > 1e-12)) {
+      Status s = json_error(*doc, v, StatusCode::kInvalidArgument, "\"");
+      return s.append(key).append("\" must not be the zero vector");
+    }
+    return Status::ok();
+  }
+
+  Status string(const JsonValue& v, const char* key, const char** out) const {
+    SPLINTCORE_RETURN_IF_ERROR(expect_type(v, JsonType::kString, key));
+    if (v.length == 0 || std::strlen(v.string) != v.length) {
+      Status s = json_error(*doc, v, StatusCode::kInvalidArgument, "\"");
+      return s.append(key).append("\" must be a non-empty string");
+    }
+    *out = v.string;
+    return Status::ok();
+  }
+};
+
+bool safe_id(const char* s) {
+  size_t n = std::strlen(s);
+  if (n == 0 || n > 64) return false;
+  for (size_t i = 0; i < n; ++i) {
+    char c = s[i];
+    bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+              c == '_' || c == '-' || c == '.';
+    if (!ok) return false;
+  }
+  return true;
+}
+
+Status parse_picks(const Reader& r, const JsonValue& list, const char* key, double inner_default,
+                   double outside_default, Span<const Pick>* out) {
+  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(list, JsonType::kArray, key));
+  Pick* picks = r.arena->allocate_array<Pick>(list.child_count);
+  if (picks == nullptr && list.child_count > 0) return r.arena->exhausted_status();
+  static const char* const kPickKeys[] = {"position", "normal", "direction", "inner_length_mm",
+                                          "outside_length_mm", nullptr};
+  uint32_t i = 0;
+  for (uint32_t k = list.first_child; k != kJsonNone; k = r.doc->at(k).next_sibling, ++i) {
+    const JsonValue& p = r.doc->at(k);
+    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(p, JsonType::kObject, key));
+    SPLINTCORE_RETURN_IF_ERROR(r.known_keys(p, kPickKeys, "a pick"));
+    Pick pick;
+    pick.inner_length = inner_default;
+    pick.outside_length = outside_default;
+    const JsonValue* position = r.doc->member(p, "position");
+    if (position == nullptr) {
+      return r.fail(p, StatusCode::kInvalidArgument, "pick without \"position\" in \"", key, "\"");
+    }
+    SPLINTCORE_RETURN_IF_ERROR(r.vec3(*position, "position", &pick.position));
+    if (const JsonValue* v = r.doc->member(p, "normal")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.unit_vector(*v, "normal", &pick.normal));
+    }
+    if (const JsonValue* v = r.doc->member(p, "direction")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.unit_vector(*v, "direction", &pick.direction));
+    }
+    if (const JsonValue* v = r.doc->member(p, "inner_length_mm")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*v, "inner_length_mm", 0, 100, &pick.inner_length));
+    }
+    if (const JsonValue* v = r.doc->member(p, "outside_length_mm")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*v, "outside_length_mm", 0, 100, &pick.outside_length));
+    }
+    picks[i] = pick;
+  }
+  *out = Span<const Pick>(picks, list.child_count);
+  return Status::ok();
+}
+
+}  // namespace
+
+Status parse_case(const Context& ctx, const char* text, size_t length, const char* name,
+                  CaseFile* out) {
+  *out = CaseFile{};
+  JsonDocument doc;
+  JsonLimits limits;
+  limits.max_bytes = 16 << 20;
+  SPLINTCORE_RETURN_IF_ERROR(parse_json(ctx, text, length, limits, name, &doc));
+  Reader r{&doc, ctx.arena};
+  const JsonValue& root = doc.root();
+  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(root, JsonType::kObject, "the case"));
+  static const char* const kRootKeys[] = {"splintcore_case", "case_id", "units", "jaws", "base",
+                                          "insertion_direction", "printer", "memory_cap",
+                                          "output", nullptr};
+  SPLINTCORE_RETURN_IF_ERROR(r.known_keys(root, kRootKeys, "the case"));
+
+  const JsonValue* version = doc.member(root, "splintcore_case");
+  if (version == nullptr) {
+    return r.fail(root, StatusCode::kInvalidArgument,
+                  "not a splintcore case file: no \"splintcore_case\" version key");
+  }
+  double v = 0;
+  SPLINTCORE_RETURN_IF_ERROR(r.number(*version, "splintcore_case", 1, 1e6, &v));
+  if (v != static_cast<double>(static_cast<uint32_t>(v))) {
+    return r.fail(*version, StatusCode::kInvalidArgument, "\"splintcore_case\" must be an integer");
+  }
+  if (v > kCaseFormatVersion) {
+    return make_error(StatusCode::kUnsupported, "case format version ", static_cast<uint64_t>(v),
+                      " is newer than this splintcore reads (", kCaseFormatVersion, ")")
+        .at_line(version->line, version->column)
+        .in_file(name);
+  }
+  out->version = static_cast<uint32_t>(v);
+
+  if (const JsonValue* id = doc.member(root, "case_id")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.string(*id, "case_id", &out->case_id));
+    if (!safe_id(out->case_id)) {
+      return r.fail(*id, StatusCode::kInvalidArgument,
+                    "\"case_id\" must be 1-64 letters, digits, '_', '-' or '.'");
+    }
+  }
+  if (const JsonValue* units = doc.member(root, "units")) {
+    const char* u = nullptr;
+    SPLINTCORE_RETURN_IF_ERROR(r.string(*units, "units", &u));
+    if (std::strcmp(u, "mm") != 0) {
+      return r.fail(*units, StatusCode::kInvalidArgument, "\"units\" must be \"mm\" (got \"", u,
+                    "\"): convert the meshes and the case to millimetres");
+    }
+  }
+
+  if (const JsonValue* jaws = doc.member(root, "jaws")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*jaws, JsonType::kArray, "jaws"));
+    CaseJaw* list = ctx.arena->allocate_array<CaseJaw>(jaws->child_count);
+    if (list == nullptr && jaws->child_count > 0) return ctx.arena->exhausted_status();
+    static const char* const kJawKeys[] = {"role", "mesh", "transform", nullptr};
+    uint32_t i = 0;
+    for (uint32_t k = jaws->first_child; k != kJsonNone; k = doc.at(k).next_sibling, ++i) {
+      const JsonValue& j = doc.at(k);
+      SPLINTCORE_RETURN_IF_ERROR(r.expect_type(j, JsonType::kObject, "jaws"));
+      SPLINTCORE_RETURN_IF_ERROR(r.known_keys(j, kJawKeys, "a jaw"));
+      CaseJaw jaw;
+      const JsonValue* role = doc.member(j, "role");
+      const JsonValue* mesh = doc.member(j, "mesh");
+      if (role == nullptr || mesh == nullptr) {
+        return r.fail(j, StatusCode::kInvalidArgument, "a jaw needs \"role\" and \"mesh\"");
+      }
+      SPLINTCORE_RETURN_IF_ERROR(r.string(*role, "role", &jaw.role));
+      if (std::strcmp(jaw.role, "maxilla") != 0 && std::strcmp(jaw.role, "mandible") != 0) {
+        return r.fail(*role, StatusCode::kInvalidArgument,
+                      "\"role\" must be \"maxilla\" or \"mandible\"");
+      }
+      SPLINTCORE_RETURN_IF_ERROR(r.string(*mesh, "mesh", &jaw.mesh));
+      if (const JsonValue* t = doc.member(j, "transform")) {
+        SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*t, JsonType::kArray, "transform"));
+        if (t->child_count != 16) {
+          return r.fail(*t, StatusCode::kInvalidArgument,
+                        "\"transform\" needs 16 numbers (a row-major 4x4 matrix)");
+        }
+        double m[16];
+        uint32_t e = t->first_child;
+        for (int a = 0; a < 16; ++a, e = doc.at(e).next_sibling) {
+          SPLINTCORE_RETURN_IF_ERROR(r.number(doc.at(e), "transform", -1e6, 1e6, &m[a]));
+        }
+        Status s = rigid_from_matrix(m, 1e-6, &jaw.transform);
+        if (!s.is_ok()) {
+          Status located = json_error(doc, *t, s.code(), "\"transform\": ");
+          return located.append(s.message());
+        }
+      }
+      for (uint32_t e = 0; e < i; ++e) {
+        if (std::strcmp(list[e].role, jaw.role) == 0) {
+          return r.fail(*role, StatusCode::kInvalidArgument, "two jaws with the role \"", jaw.role,
+                        "\"");
+        }
+      }
+      list[i] = jaw;
+    }
+    out->jaws = Span<const CaseJaw>(list, jaws->child_count);
+  }
+
+  const JsonValue* base = doc.member(root, "base");
+  if (base == nullptr) return r.fail(root, StatusCode::kInvalidArgument, "no \"base\" object");
+  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*base, JsonType::kObject, "base"));
+  static const char* const kBaseKeys[] = {"occlusal_normal", "spacing_mm", "corner_radius_mm",
+                                          "corner_segments", "inner_length_mm",
+                                          "outside_length_mm", "upper", "lower", nullptr};
+  SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*base, kBaseKeys, "\"base\""));
+  if (const JsonValue* o = doc.member(*base, "occlusal_normal")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.unit_vector(*o, "occlusal_normal", &out->occlusal_normal));
+  }
+  if (const JsonValue* s = doc.member(*base, "spacing_mm")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "spacing_mm", 0.01, 50, &out->base.spacing_mm));
+  }
+  if (const JsonValue* s = doc.member(*base, "corner_radius_mm")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "corner_radius_mm", 0, 20, &out->base.corner_radius_mm));
+  }
+  if (const JsonValue* s = doc.member(*base, "corner_segments")) {
+    double segs = 0;
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "corner_segments", 1, 16, &segs));
+    uint32_t u = static_cast<uint32_t>(segs);
+    if (static_cast<double>(u) != segs || (u & (u - 1)) != 0) {
+      return r.fail(*s, StatusCode::kInvalidArgument, "\"corner_segments\" must be 1, 2, 4, 8 or 16");
+    }
+    out->base.corner_segments = u;
+  }
+  double inner_default = 3.0, outside_default = 3.0;
+  if (const JsonValue* s = doc.member(*base, "inner_length_mm")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "inner_length_mm", 0, 100, &inner_default));
+  }
+  if (const JsonValue* s = doc.member(*base, "outside_length_mm")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "outside_length_mm", 0, 100, &outside_default));
+  }
+  const JsonValue* upper = doc.member(*base, "upper");
+  const JsonValue* lower = doc.member(*base, "lower");
+  if (upper == nullptr || lower == nullptr) {
+    return r.fail(*base, StatusCode::kInvalidArgument, "\"base\" needs \"upper\" and \"lower\" pick lists");
+  }
+  SPLINTCORE_RETURN_IF_ERROR(parse_picks(r, *upper, "upper", inner_default, outside_default, &out->upper));
+  SPLINTCORE_RETURN_IF_ERROR(parse_picks(r, *lower, "lower", inner_default, outside_default, &out->lower));
+  if (out->upper.size() != out->lower.size()) {
+    Status s = r.fail(*lower, StatusCode::kInvalidArgument, "upper and lower pick lists do not pair up: ");
+    return s.append_u64(out->upper.size()).append(" upper, ").append_u64(out->lower.size())
+        .append(" lower (the i-th upper pick pairs with the i-th lower pick)");
+  }
+
+  if (const JsonValue* d = doc.member(root, "insertion_direction")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.unit_vector(*d, "insertion_direction", &out->insertion_direction));
+    out->has_insertion_direction = true;
+  }
+  if (const JsonValue* p = doc.member(root, "printer")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.string(*p, "printer", &out->printer));
+  }
+  if (const JsonValue* m = doc.member(root, "memory_cap")) {
+    if (m->type == JsonType::kString) {
+      if (!parse_byte_size(m->string, &out->memory_cap) || out->memory_cap == 0) {
+        return r.fail(*m, StatusCode::kInvalidArgument,
+                      "\"memory_cap\" must be a size such as \"256M\", \"2G\" or a byte count");
+      }
+    } else if (m->type != JsonType::kNumber) {
+      return r.fail(*m, StatusCode::kInvalidArgument,
+                    "\"memory_cap\" must be a string such as \"256M\" or a number of bytes");
+    } else {
+      double bytes = 0;
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*m, "memory_cap", 1, 1099511627776.0, &bytes));
+      // A fraction of a byte is a mistake in the file: refused, not silently cut off.
+      if (bytes != static_cast<double>(static_cast<uint64_t>(bytes))) {
+        return r.fail(*m, StatusCode::kInvalidArgument,
+                      "\"memory_cap\" must be a whole number of bytes");
+      }
+      out->memory_cap = static_cast<uint64_t>(bytes);
+    }
+  }
+  if (const JsonValue* o = doc.member(root, "output")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*o, JsonType::kObject, "output"));
+    static const char* const kOutputKeys[] = {"splint", "report", nullptr};
+    SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*o, kOutputKeys, "\"output\""));
+    if (const JsonValue* s = doc.member(*o, "splint")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.string(*s, "splint", &out->output_splint));
+    }
+    if (const JsonValue* s = doc.member(*o, "report")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.string(*s, "report", &out->output_report));
+    }
+  }
+  return Status::ok();
+}
+
+Status build_case_base(const Context& ctx, const CaseFile& c, Mesh* out, BaseReport* report) {
+  // The lines are temporaries; the mesh must sit below them, so the lines are made first into
+  // arena memory that is then left in place (a few KB), and the mesh grows above.
+  ArenaArray<Line> upper(ctx.arena), lower(ctx.arena);
+  SPLINTCORE_RETURN_IF_ERROR(make_lines(ctx, c.upper, c.occlusal_normal, "upper", &upper));
+  SPLINTCORE_RETURN_IF_ERROR(make_lines(ctx, c.lower, c.occlusal_normal, "lower", &lower));
+  return build_splint_base(ctx, upper.span(), lower.span(), c.base, out, report);
+}
+
+}  // namespace splintcore

@@ -1,0 +1,468 @@
+// The initial splint base (Chen et al. 2016, section "The Generation of the Initial Splint"):
+// picks -> Lines -> four splines through the line ends -> sections sampled at matched
+// arc-length fractions -> ruled surfaces between consecutive sections -> one closed solid.
+//
+// Decisions beyond the paper:
+// - Sections are matched per pick interval: the i-th upper and lower picks always land on the
+//   same section, and between them every curve is sampled at the same fractions of its own
+//   arc length (so the sampling follows arc length, not pick index, and a dense cluster of
+//   picks on one curve does not skew the others).
+// - Corners are rounded (the paper's open problem: sharp splint edges injure soft tissue) by
+//   circular fillets in each section's corner plane; arc points come from repeated angle
+//   bisection, which needs only sqrt, so the bytes are the same on every platform.
+// - The result is checked as STL will store it (vertices rounded to float32): closed,
+//   manifold, outward, nothing degenerate, and no self-intersection (exact test). A base that
+//   fails is an error naming the pick interval, never an output.
+#include <cmath>
+
+#include "splintcore/spline.h"
+
+namespace splintcore {
+
+namespace {
+
+constexpr uint32_t kArcSamples = 32;   // arc-length table resolution per pick interval
+constexpr uint64_t kMaxSections = 1u << 20;
+
+bool finite_vec(const Vec3& v) { return is_finite(v); }
+
+Vec3 normalized(const Vec3& v) {
+  const double len = length(v);
+  return len > 0.0 ? Vec3{v.x / len, v.y / len, v.z / len} : Vec3{};
+}
+
+// Project onto the plane with unit normal o.
+Vec3 in_plane(const Vec3& v, const Vec3& o) { return v - o * dot(v, o); }
+
+Status pick_error(const char* list, size_t index, const char* what) {
+  return make_error(StatusCode::kInvalidArgument, list, " pick ", index, ": ", what)
+      .at_index(index);
+}
+
+// The four curves of the base, in section order.
+enum Curve { kUpperInner = 0, kUpperOutside = 1, kLowerOutside = 2, kLowerInner = 3 };
+const char* const kCurveNames[4] = {"upper inner", "upper outside", "lower outside",
+                                    "lower inner"};
+
+const Vec3& line_end(Span<const Line> upper, Span<const Line> lower, int curve, size_t i) {
+  switch (curve) {
+    case kUpperInner: return upper[i].inner;
+    case kUpperOutside: return upper[i].outside;
+    case kLowerOutside: return lower[i].outside;
+    default: return lower[i].inner;
+  }
+}
+
+// Control points of curve segment i (from point i to i + 1), with phantom end points
+// reflected through the end picks.
+void segment_controls(Span<const Line> upper, Span<const Line> lower, int curve, size_t i,
+                      Vec3 p[4]) {
+  const size_t n = upper.size();
+  p[1] = line_end(upper, lower, curve, i);
+  p[2] = line_end(upper, lower, curve, i + 1);
+  p[0] = i > 0 ? line_end(upper, lower, curve, i - 1) : p[1] * 2.0 - p[2];
+  p[3] = i + 2 < n ? line_end(upper, lower, curve, i + 2) : p[2] * 2.0 - p[1];
+}
+
+// Cumulative chord lengths of a segment at kArcSamples + 1 uniform parameters.
+void arc_table(const Vec3 p[4], double cumulative[kArcSamples + 1]) {
+  Vec3 previous = p[1];
+  cumulative[0] = 0.0;
+  for (uint32_t k = 1; k <= kArcSamples; ++k) {
+    Vec3 q = catmull_rom_point(p[0], p[1], p[2], p[3], static_cast<double>(k) / kArcSamples);
+    cumulative[k] = cumulative[k - 1] + length(q - previous);
+    previous = q;
+  }
+}
+
+// The point at arc-length fraction f of the segment (linear inversion of the table).
+Vec3 point_at_fraction(const Vec3 p[4], const double cumulative[kArcSamples + 1], double f) {
+  if (f <= 0.0) return p[1];
+  const double target = f * cumulative[kArcSamples];
+  uint32_t k = 0;
+  while (k + 1 < kArcSamples && cumulative[k + 1] < target) ++k;
+  const double span = cumulative[k + 1] - cumulative[k];
+  const double local = span > 0.0 ? (target - cumulative[k]) / span : 0.0;
+  const double u = (static_cast<double>(k) + local) / kArcSamples;
+  return catmull_rom_point(p[0], p[1], p[2], p[3], u);
+}
+
+// Fillet of corner q between prev and next: `segments` + 1 arc points from the tangent point
+// towards prev to the tangent point towards next.
+Status round_corner(const Vec3& prev, const Vec3& q, const Vec3& next, double radius,
+                    uint32_t segments, Vec3* arc, size_t section, int corner) {
+  const Vec3 to_prev = prev - q, to_next = next - q;
+  const double lp = length(to_prev), ln = length(to_next);
+  const Vec3 u = normalized(to_prev), w = normalized(to_next);
+  const double c = dot(u, w);
+  if (!(lp > 0.0) || !(ln > 0.0) || !(c < 1.0) || !(c > -1.0)) {
+    return make_error(StatusCode::kInvalidArgument, "section ", section, " corner ", corner,
+                      " is degenerate: cannot round it");
+  }
+  const double tangent_distance = radius * std::sqrt((1.0 + c) / (1.0 - c));
+  if (tangent_distance > 0.5 * lp || tangent_distance > 0.5 * ln) {
+    return make_error(StatusCode::kInvalidArgument, "corner radius ", radius,
+                      " mm is too large for section ", section, " (corner ", corner,
+                      " would need ", tangent_distance, " mm of each side)");
+  }
+  const double center_distance = radius / std::sqrt((1.0 - c) * 0.5);
+  const Vec3 center = q + normalized(u + w) * center_distance;
+  arc[0] = q + u * tangent_distance;
+  arc[segments] = q + w * tangent_distance;
+  for (uint32_t step = segments; step > 1; step /= 2) {
+    for (uint32_t i = 0; i < segments; i += step) {
+      const Vec3 mid = normalized((arc[i] - center) + (arc[i + step] - center));
+      arc[i + step / 2] = center + mid * radius;
+    }
+  }
+  return Status::ok();
+}
+
+// Newell's normal of a closed polygon (twice its vector area).
+Vec3 polygon_normal(const Vec3* p, uint32_t n) {
+  Vec3 sum{};
+  for (uint32_t i = 0; i < n; ++i) sum = sum + cross(p[i], p[(i + 1) % n]);
+  return sum;
+}
+
+bool round_to_float(Vec3* v) {
+  constexpr double kMax = 3.4028234663852886e38;
+  for (int a = 0; a < 3; ++a) {
+    double x = (*v)[a];
+    if (!(x <= kMax && x >= -kMax)) return false;
+    (*v)[a] = static_cast<double>(static_cast<float>(x)) + 0.0;
+  }
+  return true;
+}
+
+}  // namespace
+
+Status make_lines(const Context& ctx, Span<const Pick> picks, const Vec3& occlusal_normal,
+                  const char* list_name, ArenaArray<Line>* out) {
+  const size_t n = picks.size();
+  if (n < 2) {
+    return make_error(StatusCode::kInvalidArgument, list_name, " list has ", n,
+                      " picks; the spline needs at least 2");
+  }
+  if (!finite_vec(occlusal_normal) || !(length(occlusal_normal) > 0.0)) {
+    return Status::error(StatusCode::kInvalidArgument, "occlusal normal must be a nonzero vector");
+  }
+  const Vec3 o = normalized(occlusal_normal);
+  Vec3 centroid{};
+  for (size_t i = 0; i < n; ++i) {
+    const Pick& p = picks[i];
+    if (!finite_vec(p.position) || !finite_vec(p.normal) || !finite_vec(p.direction) ||
+        !is_finite(p.inner_length) || !is_finite(p.outside_length)) {
+      return pick_error(list_name, i, "has a non-finite value");
+    }
+    if (p.inner_length < 0.0 || p.outside_length < 0.0) {
+      return pick_error(list_name, i, "line lengths must not be negative");
+    }
+    if (!(p.inner_length + p.outside_length > 0.0)) {
+      return pick_error(list_name, i, "zero-length line (inner and outside lengths are 0)");
+    }
+    if (i > 0 && p.position == picks[i - 1].position) {
+      return pick_error(list_name, i, "same position as the previous pick");
+    }
+    centroid = centroid + p.position;
+  }
+  centroid = centroid * (1.0 / static_cast<double>(n));
+  // The outward side of the arch: the in-plane perpendicular of the tangent whose side faces
+  // away from the centroid on the whole (one sign for the list, so it never flips mid-arch).
+  double side = 0.0;
+  auto perpendicular = [&](size_t i) {
+    const Vec3& a = picks[i > 0 ? i - 1 : 0].position;
+    const Vec3& b = picks[i + 1 < n ? i + 1 : n - 1].position;
+    return normalized(in_plane(cross(b - a, o), o));
+  };
+  for (size_t i = 0; i < n; ++i) side += dot(perpendicular(i), in_plane(picks[i].position - centroid, o));
+  const double sign = side < 0.0 ? -1.0 : 1.0;
+
+  if (!out->reserve(out->size() + n)) return ctx.arena->exhausted_status();
+  for (size_t i = 0; i < n; ++i) {
+    const Pick& p = picks[i];
+    const Vec3 outward = perpendicular(i) * sign;
+    Vec3 d;
+    if (length(p.direction) > 0.0) {
+      d = normalized(p.direction);
+    } else if (length(p.normal) > 0.0) {
+      const Vec3 projected = in_plane(normalized(p.normal), o);
+      if (!(length(projected) > 1e-6)) {
+        return pick_error(list_name, i, "normal is parallel to the occlusal normal: no direction "
+                                        "in the occlusal plane (give \"direction\")");
+      }
+      d = normalized(projected);
+      if (dot(d, outward) < 0.0) d = -d;
+    } else {
+      if (!(length(outward) > 0.0)) {
+        return pick_error(list_name, i, "no direction: the arch tangent is along the occlusal "
+                                        "normal (give \"direction\" or \"normal\")");
+      }
+      d = outward;
+    }
+    Line line;
+    line.direction = d;
+    line.inner_length = p.inner_length;
+    line.outside_length = p.outside_length;
+    line.inner = p.position - d * p.inner_length;
+    line.outside = p.position + d * p.outside_length;
+    if (!out->push_back(line)) return ctx.arena->exhausted_status();
+  }
+  return Status::ok();
+}
+
+uint64_t splint_base_bound(uint64_t sections, uint32_t points_per_section) {
+  const uint64_t v = sections * points_per_section;
+  const uint64_t t = 2 * v;
+  return v * sizeof(Vec3) + t * sizeof(Triangle) + sections * sizeof(uint32_t) +
+         check_mesh_bound(v, t) + find_self_intersections_bound(t) + 16 * 64;
+}
+
+Status build_splint_base(const Context& ctx, Span<const Line> upper, Span<const Line> lower,
+                         const BaseParams& params, Mesh* out, BaseReport* report) {
+  Arena& arena = *ctx.arena;
+  *report = BaseReport{};
+  if (!out->vertices.empty() || !out->triangles.empty()) {
+    return Status::error(StatusCode::kInvalidArgument, "build_splint_base: output mesh must be empty");
+  }
+  const size_t n = upper.size();
+  if (n != lower.size()) {
+    return make_error(StatusCode::kInvalidArgument, "upper and lower lists do not pair up: ", n,
+                      " upper picks, ", lower.size(), " lower picks (the i-th upper pick pairs "
+                      "with the i-th lower pick)");
+  }
+  if (n < 2) {
+    return make_error(StatusCode::kInvalidArgument, "the base needs at least 2 picks per list, got ", n);
+  }
+  if (!is_finite(params.spacing_mm) || !(params.spacing_mm > 0.0)) {
+    return make_error(StatusCode::kInvalidArgument, "spacing must be > 0 mm, got ", params.spacing_mm);
+  }
+  const double radius = params.corner_radius_mm;
+  const uint32_t segs = params.corner_segments;
+  if (!is_finite(radius) || radius < 0.0) {
+    return make_error(StatusCode::kInvalidArgument, "corner radius must be >= 0 mm, got ", radius);
+  }
+  if (radius > 0.0 && (segs == 0 || segs > 16 || (segs & (segs - 1)) != 0)) {
+    return make_error(StatusCode::kInvalidArgument, "corner segments must be 1, 2, 4, 8 or 16, got ",
+                      segs);
+  }
+  for (size_t i = 0; i < n; ++i) {
+    for (int c = 0; c < 4; ++c) {
+      if (!finite_vec(line_end(upper, lower, c, i))) {
+        return make_error(StatusCode::kInvalidArgument, kCurveNames[c], " end of pick ", i,
+                          " is not finite").at_index(i);
+      }
+      if (i + 1 < n && line_end(upper, lower, c, i) == line_end(upper, lower, c, i + 1)) {
+        return make_error(StatusCode::kInvalidArgument, kCurveNames[c], " ends of picks ", i,
+                          " and ", i + 1, " coincide").at_index(i);
+      }
+    }
+  }
+  const uint32_t corner_points = radius > 0.0 ? segs + 1 : 1;
+  const uint32_t P = 4 * corner_points;
+
+  // Sections per pick interval: enough that no curve's samples are further apart than spacing.
+  auto sections_between = [&](size_t i, uint32_t* count) -> Status {
+    double longest = 0.0;
+    for (int c = 0; c < 4; ++c) {
+      Vec3 p[4];
+      double cum[kArcSamples + 1];
+      segment_controls(upper, lower, c, i, p);
+      arc_table(p, cum);
+      longest = cum[kArcSamples] > longest ? cum[kArcSamples] : longest;
+    }
+    const double m = std::ceil(longest / params.spacing_mm);
+    if (!(m < static_cast<double>(kMaxSections))) {
+      return make_error(StatusCode::kLimitExceeded, "spacing ", params.spacing_mm,
+                        " mm gives too many sections between picks ", i, " and ", i + 1);
+    }
+    *count = m < 1.0 ? 1u : static_cast<uint32_t>(m);
+    return Status::ok();
+  };
+  uint64_t sections = 1;
+  for (size_t i = 0; i + 1 < n; ++i) {
+    uint32_t m = 0;
+    SPLINTCORE_RETURN_IF_ERROR(sections_between(i, &m));
+    sections += m;
+    if (sections > kMaxSections) {
+      return make_error(StatusCode::kLimitExceeded, "more than ", kMaxSections,
+                        " sections: spacing ", params.spacing_mm, " mm is too fine");
+    }
+  }
+  const uint32_t S = static_cast<uint32_t>(sections);
+  report->sections = S;
+  report->points_per_section = P;
+
+  // The outputs first, so that the temporaries above them can be dropped at the end.
+  Mesh& mesh = *out;
+  const uint64_t tri_count = 2 * uint64_t{S - 1} * P + 2 * uint64_t{P - 2};
+  if (!mesh.vertices.resize(size_t{S} * P) ||
+      !mesh.triangles.resize(static_cast<size_t>(tri_count))) {
+    return arena.exhausted_status();
+  }
+  ArenaScope temps(arena);
+  uint32_t* interval_of = arena.allocate_array<uint32_t>(S);  // section -> pick interval
+  Vec3* corners = arena.allocate_array<Vec3>(size_t{4} * S);  // the four line-end curves
+  if (interval_of == nullptr || corners == nullptr) return arena.exhausted_status();
+  {
+    uint32_t k = 0;
+    for (size_t i = 0; i + 1 < n; ++i) {
+      uint32_t m = 0;
+      SPLINTCORE_RETURN_IF_ERROR(sections_between(i, &m));
+      Vec3 p[4][4];
+      double cum[4][kArcSamples + 1];
+      for (int c = 0; c < 4; ++c) {
+        segment_controls(upper, lower, c, i, p[c]);
+        arc_table(p[c], cum[c]);
+      }
+      for (uint32_t j = 0; j < m; ++j) {
+        const double f = static_cast<double>(j) / m;
+        for (int c = 0; c < 4; ++c) {
+          corners[4 * size_t{k} + static_cast<size_t>(c)] = point_at_fraction(p[c], cum[c], f);
+        }
+        interval_of[k] = static_cast<uint32_t>(i);
+        ++k;
+      }
+    }
+    for (int c = 0; c < 4; ++c) {
+      corners[4 * size_t{k} + static_cast<size_t>(c)] = line_end(upper, lower, c, n - 1);
+    }
+    interval_of[k] = static_cast<uint32_t>(n - 2);
+  }
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "base", 1, 4));
+
+  // Every section must turn the same way around the arch: a section whose upper and lower
+  // lines, or inner and outside curves, have crossed is turned over.
+  double first_turn = 0.0;
+  for (uint32_t k = 0; k < S; ++k) {
+    const Vec3* q = corners + 4 * size_t{k};
+    const Vec3 normal = polygon_normal(q, 4);
+    const Vec3* qa = corners + 4 * size_t{k > 0 ? k - 1 : k};
+    const Vec3* qb = corners + 4 * size_t{k + 1 < S ? k + 1 : k};
+    const Vec3 tangent = (qb[0] + qb[1] + qb[2] + qb[3]) * 0.25 - (qa[0] + qa[1] + qa[2] + qa[3]) * 0.25;
+    const double turn = dot(normal, tangent);
+    const double scale = length(normal) * length(tangent);
+    if (!(scale > 0.0) || !(turn > 1e-9 * scale || turn < -1e-9 * scale)) {
+      return make_error(StatusCode::kInvalidArgument, "section ", k, " between picks ",
+                        interval_of[k], " and ", interval_of[k] + 1,
+                        " is flat or lies along the arch: the upper and lower lines coincide "
+                        "or the lines run along the arch")
+          .at_index(interval_of[k]);
+    }
+    if (k == 0) {
+      first_turn = turn;
+    } else if ((turn > 0.0) != (first_turn > 0.0)) {
+      return make_error(StatusCode::kInvalidArgument, "the lines fold between picks ",
+                        interval_of[k], " and ", interval_of[k] + 1,
+                        ": the section turns over (inner and outside curves, or upper and lower "
+                        "lines, cross)")
+          .at_index(interval_of[k]);
+    }
+  }
+
+  // Section polygons (rounded corners) into the output vertices.
+  Vec3* verts = mesh.vertices.data();
+  for (uint32_t k = 0; k < S; ++k) {
+    const Vec3* q = corners + 4 * size_t{k};
+    Vec3* sec = verts + size_t{k} * P;
+    for (int c = 0; c < 4; ++c) {
+      if (radius > 0.0) {
+        SPLINTCORE_RETURN_IF_ERROR(round_corner(q[(c + 3) % 4], q[c], q[(c + 1) % 4], radius,
+                                                segs, sec + static_cast<size_t>(c) * corner_points,
+                                                k, c));
+      } else {
+        sec[c] = q[c];
+      }
+    }
+    if (params.snap_to_float32) {
+      for (uint32_t j = 0; j < P; ++j) {
+        if (!round_to_float(&sec[j])) {
+          return make_error(StatusCode::kLimitExceeded, "section ", k, " is beyond float32 range");
+        }
+      }
+    }
+  }
+  // The caps are fans from the first point; they need convex end sections.
+  const uint32_t ends[2] = {0u, S - 1};
+  for (uint32_t k : ends) {
+    const Vec3* sec = verts + size_t{k} * P;
+    const Vec3 normal = polygon_normal(sec, P);
+    for (uint32_t j = 1; j + 1 < P; ++j) {
+      if (!(dot(cross(sec[j] - sec[0], sec[j + 1] - sec[0]), normal) > 0.0)) {
+        return make_error(StatusCode::kInvalidArgument, "the end section at pick ",
+                          k == 0 ? 0 : n - 1, " is not convex: cannot close the base there")
+            .at_index(k == 0 ? 0 : n - 1);
+      }
+    }
+  }
+
+  // Ruled surfaces between consecutive sections, then the two caps.
+  Triangle* tris = mesh.triangles.data();
+  size_t t = 0;
+  for (uint32_t k = 0; k + 1 < S; ++k) {
+    for (uint32_t j = 0; j < P; ++j) {
+      const uint32_t a = k * P + j, b = k * P + (j + 1) % P;
+      const uint32_t c = (k + 1) * P + (j + 1) % P, d = (k + 1) * P + j;
+      tris[t++] = Triangle{{a, b, c}};
+      tris[t++] = Triangle{{a, c, d}};
+    }
+  }
+  const uint32_t last = (S - 1) * P;
+  for (uint32_t j = 1; j + 1 < P; ++j) {
+    tris[t++] = Triangle{{0, j + 1, j}};
+    tris[t++] = Triangle{{last, last + j, last + j + 1}};
+  }
+  SPLINTCORE_ASSERT(t == tri_count);
+  // Outward: the winding above depends on which way the sections turn; flip if inward.
+  if (mesh_volume(mesh) < 0.0) {
+    for (size_t i = 0; i < t; ++i) {
+      uint32_t s = tris[i].v[1];
+      tris[i].v[1] = tris[i].v[2];
+      tris[i].v[2] = s;
+    }
+  }
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "base", 2, 4));
+
+  // The guarantee: a valid solid, as written, without self-intersection.
+  {
+    MeshReport r;
+    SPLINTCORE_RETURN_IF_ERROR(check_mesh(ctx, mesh, &r));
+    Status valid = require_valid_solid(r);
+    if (!valid.is_ok()) {
+      const uint64_t bad = valid.index();
+      Status s = make_error(StatusCode::kInvalidArgument, "splint base is not a valid solid: ",
+                            valid.message());
+      if (bad != kNoPosition && bad < 2 * uint64_t{S - 1} * P) {
+        const uint32_t k = static_cast<uint32_t>(bad / (2 * P));
+        s.append(" (between picks ").append_u64(interval_of[k]).append(" and ")
+            .append_u64(interval_of[k] + 1).append(")");
+        s.at_index(interval_of[k]);
+      }
+      return s;
+    }
+    report->volume = r.volume;
+  }
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "base", 3, 4));
+  if (params.check_self_intersection) {
+    SelfIntersectionReport si;
+    SPLINTCORE_RETURN_IF_ERROR(find_self_intersections(ctx, mesh, 1, &si));
+    report->self_intersection_candidates = si.candidate_pairs;
+    if (si.self_intersecting()) {
+      auto where = [&](uint32_t tri) -> uint32_t {
+        return tri < 2 * (S - 1) * P ? interval_of[tri / (2 * P)]
+                                     : (tri % 2 == 0 ? 0u : static_cast<uint32_t>(n - 2));
+      };
+      const uint32_t ia = where(si.first_a), ib = where(si.first_b);
+      return make_error(StatusCode::kInvalidArgument,
+                        "the splint base would intersect itself: triangle ", si.first_a,
+                        " (between picks ", ia, " and ", ia + 1, ") meets triangle ", si.first_b,
+                        " (between picks ", ib, " and ", ib + 1,
+                        "); the lines fold or the curves cross there")
+          .at_index(ia);
+    }
+  }
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "base", 4, 4));
+  return Status::ok();
+}
+
+}  // namespace splintcore

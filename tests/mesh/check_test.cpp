@@ -1,0 +1,145 @@
+#include <random>
+
+#include "support/test_util.h"
+
+namespace splintcore {
+namespace {
+
+using test::TestArena;
+
+MeshReport check(TestArena& t, const std::vector<SoupTriangle>& soup) {
+  Mesh mesh;
+  Status s = test::mesh_from_soup(t.arena, soup, &mesh);
+  EXPECT_TRUE(s.is_ok()) << test::format(s);
+  MeshReport r;
+  Context ctx(&t.arena);
+  s = check_mesh(ctx, mesh, &r);
+  EXPECT_TRUE(s.is_ok()) << test::format(s);
+  return r;
+}
+
+std::vector<SoupTriangle> unit_box() {
+  const float lo[3] = {0, 0, 0}, hi[3] = {2, 3, 4};
+  return shapes::box(lo, hi);
+}
+
+TEST(CheckMesh, BoxIsAValidGenusZeroSolidWithExactMeasures) {
+  TestArena t;
+  MeshReport r = check(t, unit_box());
+  EXPECT_TRUE(r.is_valid_solid());
+  EXPECT_EQ(r.vertex_count, 8u);
+  EXPECT_EQ(r.edge_count, 18u);
+  EXPECT_EQ(r.shells, 1u);
+  EXPECT_EQ(r.euler_characteristic, 2);
+  EXPECT_EQ(r.genus, 0);
+  EXPECT_DOUBLE_EQ(r.volume, 24.0);
+  EXPECT_DOUBLE_EQ(r.area, 2 * (6.0 + 8.0 + 12.0));
+  EXPECT_EQ(r.bounds.hi, (Vec3{2, 3, 4}));
+  EXPECT_TRUE(require_valid_solid(r).is_ok());
+}
+
+TEST(CheckMesh, TorusHasGenusOne) {
+  TestArena t;
+  MeshReport r = check(t, shapes::torus(32, 16, 10, 3));
+  EXPECT_TRUE(r.is_valid_solid());
+  EXPECT_EQ(r.genus, 1);
+  EXPECT_EQ(r.euler_characteristic, 0);
+  // Volume of the polyhedral torus converges to 2 pi^2 R r^2 from below.
+  const double exact = 2 * 9.869604401089358 * 10 * 9;
+  EXPECT_LT(r.volume, exact);
+  EXPECT_GT(r.volume, 0.95 * exact);
+}
+
+TEST(CheckMesh, OpenMeshReportsFirstBoundaryEdge) {
+  TestArena t;
+  auto soup = unit_box();
+  soup.erase(soup.begin() + 5);
+  MeshReport r = check(t, soup);
+  EXPECT_FALSE(r.closed());
+  EXPECT_EQ(r.boundary_edges, 3u);
+  EXPECT_EQ(r.genus, -1);
+  Status s = require_valid_solid(r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_NE(std::strstr(s.message(), "not closed: 3 boundary edges"), nullptr) << s.message();
+}
+
+TEST(CheckMesh, FlippedTriangleIsAnOrientationConflict) {
+  TestArena t;
+  auto soup = unit_box();
+  std::swap(soup[3].p[1], soup[3].p[2]);
+  MeshReport r = check(t, soup);
+  EXPECT_TRUE(r.closed());
+  EXPECT_EQ(r.orientation_conflicts, 3u);
+  // Triangle 3 (top face) conflicts with its three neighbours; the first reported edge is the
+  // one with the smallest triangle: top-face partner 2.
+  EXPECT_EQ(r.first_orientation_conflict.triangle, 2u);
+  EXPECT_FALSE(r.is_valid_solid());
+}
+
+TEST(CheckMesh, InsideOutBoxHasNegativeVolume) {
+  TestArena t;
+  auto soup = unit_box();
+  for (auto& tri : soup) std::swap(tri.p[1], tri.p[2]);
+  MeshReport r = check(t, soup);
+  EXPECT_TRUE(r.oriented());
+  EXPECT_DOUBLE_EQ(r.volume, -24.0);
+  Status s = require_valid_solid(r);
+  EXPECT_NE(std::strstr(s.message(), "inside out"), nullptr);
+}
+
+TEST(CheckMesh, NonManifoldEdgeDegenerateAndDuplicateTriangles) {
+  TestArena t;
+  auto soup = unit_box();
+  // A fin sharing the box edge (0,0,0)-(2,0,0) with two box triangles.
+  float a[3] = {0, 0, 0}, b[3] = {2, 0, 0}, c[3] = {1, -5, 0};
+  soup.push_back(shapes::soup_triangle(a, b, c));
+  // A zero-area sliver (collinear corners) and a repeated triangle.
+  float m[3] = {1, 0, 0};
+  soup.push_back(shapes::soup_triangle(a, m, b));
+  soup.push_back(soup[0]);
+  MeshReport r = check(t, soup);
+  EXPECT_GE(r.nonmanifold_edges, 1u);
+  EXPECT_EQ(r.degenerate_triangles, 1u);
+  EXPECT_EQ(r.first_degenerate_triangle, 13u);
+  EXPECT_EQ(r.duplicate_triangles, 1u);
+  EXPECT_EQ(r.first_duplicate_triangle, 14u);
+}
+
+TEST(CheckMesh, TwoShellsAndOutOfRangeIndex) {
+  TestArena t;
+  auto soup = unit_box();
+  const float lo[3] = {5, 5, 5}, hi[3] = {6, 6, 6};
+  auto second = shapes::box(lo, hi);
+  soup.insert(soup.end(), second.begin(), second.end());
+  MeshReport r = check(t, soup);
+  EXPECT_EQ(r.shells, 2u);
+  EXPECT_EQ(r.genus, 0);
+  EXPECT_DOUBLE_EQ(r.volume, 25.0);
+
+  Mesh bad(&t.arena);
+  ASSERT_TRUE(bad.vertices.push_back(Vec3{}));
+  ASSERT_TRUE(bad.triangles.push_back(Triangle{{0, 0, 3}}));
+  Context ctx(&t.arena);
+  Status s = check_mesh(ctx, bad, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_EQ(s.index(), 0u);
+}
+
+// Property: random rigid motions of closed meshes keep them valid solids with the same
+// topology, and the volume agrees with the analytic box volume.
+TEST(CheckMesh, PropertyRandomBoxesStayValid) {
+  std::mt19937_64 rng(99);
+  std::uniform_real_distribution<float> u(-50, 50), s(0.5f, 20);
+  for (int i = 0; i < 200; ++i) {
+    TestArena t(1 << 20);
+    float lo[3] = {u(rng), u(rng), u(rng)};
+    float hi[3] = {lo[0] + s(rng), lo[1] + s(rng), lo[2] + s(rng)};
+    MeshReport r = check(t, shapes::box(lo, hi));
+    ASSERT_TRUE(r.is_valid_solid());
+    double exact = (double{hi[0]} - lo[0]) * (double{hi[1]} - lo[1]) * (double{hi[2]} - lo[2]);
+    ASSERT_NEAR(r.volume, exact, 1e-12 * exact);
+  }
+}
+
+}  // namespace
+}  // namespace splintcore

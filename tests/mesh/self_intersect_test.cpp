@@ -1,0 +1,731 @@
+// Tests of find_self_intersections (src/mesh/self_intersect.cpp): valid closed meshes report
+// nothing; meshes with known self-intersections report them; the shared-vertex and shared-edge
+// rules of mesh.h on hand-made pairs; the count, first pair and candidate count on hundreds
+// of random small meshes against an O(n^2) brute force built on the independent exact oracle
+// of tests/geometry/triangle_test.cpp; max_pairs; arena exhaustion, bad indices, cancellation.
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <random>
+#include <utility>
+#include <vector>
+
+#include "support/exact.h"
+#include "support/test_util.h"
+
+// The independent oracle, defined in tests/geometry/triangle_test.cpp (the same test binary):
+// exact closed triangle-triangle and segment-triangle tests by separating axes in big-integer
+// arithmetic, never the library's predicates. Triangles must be non-degenerate.
+namespace splintcore_test {
+namespace tri_oracle {
+bool triangles_meet(const splintcore::Vec3& a, const splintcore::Vec3& b,
+                    const splintcore::Vec3& c, const splintcore::Vec3& d,
+                    const splintcore::Vec3& e, const splintcore::Vec3& f);
+bool segment_meets_triangle(const splintcore::Vec3& p, const splintcore::Vec3& q,
+                            const splintcore::Vec3& a, const splintcore::Vec3& b,
+                            const splintcore::Vec3& c);
+// For coplanar p, q, s, t with s, t off line pq: same side of the line?
+bool same_side_of_line(const splintcore::Vec3& p, const splintcore::Vec3& q,
+                       const splintcore::Vec3& s, const splintcore::Vec3& t);
+}  // namespace tri_oracle
+}  // namespace splintcore_test
+
+namespace splintcore {
+namespace {
+
+using splintcore_test::exact_collinear3d;
+using splintcore_test::exact_orient3d_sign;
+using test::TestArena;
+namespace oracle = splintcore_test::tri_oracle;
+
+#if defined(__OPTIMIZE__)
+constexpr int kRandomDivisor = 1;
+#else
+constexpr int kRandomDivisor = 4;
+#endif
+
+// ---- the brute force -------------------------------------------------------------------------
+
+bool skipped(const Vec3* v, const Triangle& t) {
+  return t.v[0] == t.v[1] || t.v[1] == t.v[2] || t.v[0] == t.v[2] ||
+         exact_collinear3d(v[t.v[0]], v[t.v[1]], v[t.v[2]]);
+}
+
+// Do the non-degenerate triangles s and t conflict: meet other than through the vertex ids
+// they share (mesh.h)? Decided from the definitions with the oracle:
+// - no shared id: they conflict iff the closed triangles meet.
+// - all three shared: the same triangle twice, always a conflict.
+// - two shared (edge pq, free vertices s' and t'): if the triangles are not coplanar their
+//   planes meet in line pq, and each triangle meets that line in the segment pq, so pq is all
+//   they share. If coplanar with s', t' on opposite sides of line pq, they lie in opposite
+//   closed half-planes and again share only pq. If on the same side, both contain the points
+//   just beside the middle of pq on that side: a conflict. So: conflict iff coplanar and on the
+//   same side.
+// - one shared (vertex o): S and T conflict iff S n T != {o}. If x != o is in both, the ray
+//   from o through x stays in S up to the point where it leaves S, which is on the edge of S
+//   opposite o (a ray from a vertex into a triangle exits through the opposite edge, its ends
+//   included), and likewise for T. The nearer of the two exit points is in both triangles and on
+//   the opposite edge of one of them. Conversely a point of an opposite edge is not o (S and T
+//   are non-degenerate). So: conflict iff the edge of S opposite o meets T, or the edge of T
+//   opposite o meets S.
+bool brute_conflict(const Vec3* v, const Triangle& s, const Triangle& t) {
+  int shared = 0, s_shared[3] = {0, 0, 0}, t_shared[3] = {0, 0, 0};
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      if (s.v[i] == t.v[j]) {
+        ++shared;
+        s_shared[i] = 1;
+        t_shared[j] = 1;
+      }
+    }
+  }
+  const Vec3 &a = v[s.v[0]], &b = v[s.v[1]], &c = v[s.v[2]];
+  const Vec3 &d = v[t.v[0]], &e = v[t.v[1]], &f = v[t.v[2]];
+  if (shared == 0) return oracle::triangles_meet(a, b, c, d, e, f);
+  if (shared == 3) return true;
+  if (shared == 2) {
+    int sf = 0, tf = 0;  // the free corners
+    while (s_shared[sf]) ++sf;
+    while (t_shared[tf]) ++tf;
+    const Vec3& p = v[s.v[(sf + 1) % 3]];
+    const Vec3& q = v[s.v[(sf + 2) % 3]];
+    return exact_orient3d_sign(p, q, v[s.v[sf]], v[t.v[tf]]) == 0 &&
+           oracle::same_side_of_line(p, q, v[s.v[sf]], v[t.v[tf]]);
+  }
+  int so = 0, to = 0;  // the shared corner
+  while (!s_shared[so]) ++so;
+  while (!t_shared[to]) ++to;
+  return oracle::segment_meets_triangle(v[s.v[(so + 1) % 3]], v[s.v[(so + 2) % 3]], d, e, f) ||
+         oracle::segment_meets_triangle(v[t.v[(to + 1) % 3]], v[t.v[(to + 2) % 3]], a, b, c);
+}
+
+Aabb box_of(const Vec3* v, const Triangle& t) {
+  Aabb b;
+  for (uint32_t id : t.v) b.add(v[id]);
+  return b;
+}
+
+struct Brute {
+  uint64_t pairs = 0;
+  uint64_t candidates = 0;  // non-degenerate pairs whose closed boxes overlap
+  uint32_t first_a = 0, first_b = 0;
+  std::vector<std::pair<uint32_t, uint32_t>> conflicts;
+  bool is_conflict(uint32_t a, uint32_t b) const {
+    for (const auto& c : conflicts) {
+      if (c.first == a && c.second == b) return true;
+    }
+    return false;
+  }
+};
+
+// Every pair a < b (boxes that do not overlap cannot meet: a sound shortcut).
+Brute brute_force(const Mesh& mesh) {
+  Brute r;
+  const Vec3* v = mesh.vertices.data();
+  const size_t n = mesh.triangles.size();
+  std::vector<char> skip(n);
+  std::vector<Aabb> boxes(n);
+  for (size_t i = 0; i < n; ++i) {
+    skip[i] = skipped(v, mesh.triangles[i]);
+    boxes[i] = box_of(v, mesh.triangles[i]);
+  }
+  for (uint32_t a = 0; a < n; ++a) {
+    if (skip[a]) continue;
+    for (uint32_t b = a + 1; b < n; ++b) {
+      if (skip[b] || !boxes[a].overlaps(boxes[b])) continue;
+      ++r.candidates;
+      if (!brute_conflict(v, mesh.triangles[a], mesh.triangles[b])) continue;
+      if (r.pairs++ == 0) {
+        r.first_a = a;
+        r.first_b = b;
+      }
+      r.conflicts.push_back({a, b});
+    }
+  }
+  return r;
+}
+
+// ---- helpers -----------------------------------------------------------------------------------
+
+SelfIntersectionReport run(const Mesh& mesh, uint64_t max_pairs = 0) {
+  TestArena work(size_t{16} << 20);
+  Context ctx(&work.arena);
+  SelfIntersectionReport r;
+  Status s = find_self_intersections(ctx, mesh, max_pairs, &r);
+  EXPECT_TRUE(s.is_ok()) << test::format(s);
+  EXPECT_EQ(work.arena.used(), 0u);  // temporaries returned
+  return r;
+}
+
+// Library and brute force agree on the count, the first pair and the candidate count.
+void expect_matches_brute_force(const Mesh& mesh, const char* what) {
+  const SelfIntersectionReport r = run(mesh);
+  const Brute b = brute_force(mesh);
+  EXPECT_EQ(r.intersecting_pairs, b.pairs) << what;
+  EXPECT_EQ(r.candidate_pairs, b.candidates) << what;
+  if (b.pairs > 0) {
+    EXPECT_EQ(r.first_a, b.first_a) << what;
+    EXPECT_EQ(r.first_b, b.first_b) << what;
+  }
+}
+
+Mesh welded(TestArena& t, const std::vector<SoupTriangle>& soup) {
+  Mesh mesh;
+  Status s = test::mesh_from_soup(t.arena, soup, &mesh);
+  EXPECT_TRUE(s.is_ok()) << test::format(s);
+  return mesh;
+}
+
+// A mesh from explicit vertices and triangles (ids exactly as given).
+Mesh make_mesh(TestArena& t, const std::vector<Vec3>& vertices,
+               const std::vector<Triangle>& triangles) {
+  Mesh mesh(&t.arena);
+  for (const Vec3& p : vertices) EXPECT_TRUE(mesh.vertices.push_back(p));
+  for (const Triangle& tri : triangles) EXPECT_TRUE(mesh.triangles.push_back(tri));
+  return mesh;
+}
+
+// Appends `other` as a separate shell (its vertex ids shifted: no id shared).
+void append_shell(Mesh* mesh, const Mesh& other) {
+  const uint32_t base = static_cast<uint32_t>(mesh->vertices.size());
+  for (const Vec3& p : other.vertices) EXPECT_TRUE(mesh->vertices.push_back(p));
+  for (const Triangle& t : other.triangles) {
+    EXPECT_TRUE(mesh->triangles.push_back(Triangle{{t.v[0] + base, t.v[1] + base, t.v[2] + base}}));
+  }
+}
+
+std::vector<SoupTriangle> box_soup(float x0, float y0, float z0, float x1, float y1, float z1) {
+  const float lo[3] = {x0, y0, z0}, hi[3] = {x1, y1, z1};
+  return shapes::box(lo, hi);
+}
+
+// A sphere: the octahedron's faces split into n^2 triangles each on the lattice i + j + k = n,
+// projected onto the sphere, float32 corners (points on shared edges are computed from the
+// same lattice coordinates, so they weld; -0 and +0 weld too). Outward, closed, genus 0.
+std::vector<SoupTriangle> octasphere(int n, double radius) {
+  std::vector<SoupTriangle> out;
+  for (int octant = 0; octant < 8; ++octant) {
+    const int sx = (octant & 1) ? -1 : 1, sy = (octant & 2) ? -1 : 1, sz = (octant & 4) ? -1 : 1;
+    auto point = [&](int i, int j, int k, float* p) {
+      const double x = sx * i, y = sy * j, z = sz * k;
+      const double len = std::sqrt(x * x + y * y + z * z);
+      p[0] = static_cast<float>(radius * x / len);
+      p[1] = static_cast<float>(radius * y / len);
+      p[2] = static_cast<float>(radius * z / len);
+    };
+    auto add = [&](int i0, int j0, int i1, int j1, int i2, int j2) {
+      float a[3], b[3], c[3];
+      point(i0, j0, n - i0 - j0, a);
+      point(i1, j1, n - i1 - j1, b);
+      point(i2, j2, n - i2 - j2, c);
+      // (i, j, k) -> (i+1, j, k-1) -> (i, j+1, k-1) is outward in the + octant; a mirror
+      // (odd number of negative signs) reverses it.
+      if (sx * sy * sz > 0) {
+        out.push_back(shapes::soup_triangle(a, b, c));
+      } else {
+        out.push_back(shapes::soup_triangle(a, c, b));
+      }
+    };
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; i + j < n; ++j) {
+        add(i, j, i + 1, j, i, j + 1);
+        if (i + j + 1 < n) add(i + 1, j, i + 1, j + 1, i, j + 1);
+      }
+    }
+  }
+  return out;
+}
+
+// ---- closed valid meshes -----------------------------------------------------------------------
+
+TEST(SelfIntersection, ValidClosedMeshesReportNothing) {
+  TestArena t;
+  struct Case {
+    const char* name;
+    std::vector<SoupTriangle> soup;
+  };
+  const std::vector<Case> cases = {
+      {"torus 32x16", shapes::torus(32, 16, 10, 3)},
+      {"thin torus 48x6", shapes::torus(48, 6, 10, 0.5)},
+      {"box", box_soup(0, 0, 0, 2, 3, 4)},
+      {"flat box", box_soup(-1, -1, 0, 1, 1, 0.001f)},
+      {"octasphere 8", octasphere(8, 5.0)},
+      {"octasphere 20", octasphere(20, 1.0)},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    Mesh mesh = welded(t, c.soup);
+    MeshReport check;
+    Context ctx(&t.arena);
+    SPLINTCORE_ASSERT_OK(check_mesh(ctx, mesh, &check));
+    ASSERT_TRUE(check.is_valid_solid());
+    const SelfIntersectionReport r = run(mesh);
+    EXPECT_EQ(r.intersecting_pairs, 0u);
+    EXPECT_FALSE(r.self_intersecting());
+    EXPECT_GT(r.candidate_pairs, mesh.triangles.size());  // neighbours are tested
+    expect_matches_brute_force(mesh, c.name);
+  }
+}
+
+// Two unit boxes side by side, [0,1]^3 and [1,2]x[0,1]^2, as separate shells (no shared vertex
+// id). All contact is in the square Q = {x = 1} x [0,1]^2. Expected: 62 intersecting pairs,
+// counted by how each triangle meets the plane x = 1:
+//   each box has 2 triangles covering Q (the same two triangles in both boxes: the same
+//   diagonal), 4 triangles meeting it in one edge of Q, 4 meeting it in one corner of Q;
+//   face x face 4 (identical or sharing the diagonal), face x edge 8 + 8, face x corner 6 + 6,
+//   edge x edge 12 (same edge or adjacent ones), edge x corner 8 + 8, corner x corner 2.
+// The coplanar overlapping face triangles are genuine self-intersections of the union; the
+// smallest pair is (0, 12): box A's first triangle (z = 0, corner (1,0,0)) and box B's first
+// (z = 0, edge from (1,0,0)), coplanar and touching at that point only.
+TEST(SelfIntersection, TwoShellsTouchingAtAFaceWithSeparateVertexIds) {
+  TestArena t;
+  Mesh a = welded(t, box_soup(0, 0, 0, 1, 1, 1));
+  Mesh b = welded(t, box_soup(1, 0, 0, 2, 1, 1));
+  Mesh mesh(&t.arena);
+  append_shell(&mesh, a);
+  append_shell(&mesh, b);
+  ASSERT_EQ(mesh.vertices.size(), 16u);
+  const SelfIntersectionReport r = run(mesh);
+  EXPECT_EQ(r.intersecting_pairs, 62u);
+  EXPECT_EQ(r.first_a, 0u);
+  EXPECT_EQ(r.first_b, 12u);
+  expect_matches_brute_force(mesh, "two shells");
+
+  // Welded instead (one set of ids): the shared face becomes two pairs of duplicate triangles
+  // (all three ids shared); everything else touches only through shared ids and is fine.
+  std::vector<SoupTriangle> soup = box_soup(0, 0, 0, 1, 1, 1);
+  for (const SoupTriangle& s : box_soup(1, 0, 0, 2, 1, 1)) soup.push_back(s);
+  Mesh one = welded(t, soup);
+  ASSERT_EQ(one.vertices.size(), 12u);
+  const SelfIntersectionReport w = run(one);
+  EXPECT_EQ(w.intersecting_pairs, 2u);
+  expect_matches_brute_force(one, "two boxes welded");
+}
+
+// ---- known self-intersections ------------------------------------------------------------------
+
+TEST(SelfIntersection, TorusWithAVertexPushedThroughTheOppositeWall) {
+  TestArena t;
+  Mesh mesh = welded(t, shapes::torus(32, 16, 10, 3));
+  ASSERT_EQ(run(mesh).intersecting_pairs, 0u);
+  // The outer-equator vertex (13, 0, 0) pushed to (4, 0, 0): through the tube and out through
+  // its inner wall (radius 7) into the hole.
+  uint32_t id = UINT32_MAX;
+  for (uint32_t i = 0; i < mesh.vertices.size(); ++i) {
+    if (mesh.vertices[i] == Vec3{13, 0, 0}) id = i;
+  }
+  ASSERT_NE(id, UINT32_MAX);
+  mesh.vertices[id] = Vec3{4, 0, 0};
+  const SelfIntersectionReport r = run(mesh);
+  EXPECT_GT(r.intersecting_pairs, 0u);
+  const Brute b = brute_force(mesh);
+  EXPECT_EQ(r.intersecting_pairs, b.pairs);
+  ASSERT_TRUE(b.is_conflict(r.first_a, r.first_b));
+  // Every conflicting pair has one of the spike's triangles (those using the moved vertex).
+  for (const auto& c : b.conflicts) {
+    const Triangle& s = mesh.triangles[c.first];
+    const Triangle& u = mesh.triangles[c.second];
+    const bool s_spike = s.v[0] == id || s.v[1] == id || s.v[2] == id;
+    const bool u_spike = u.v[0] == id || u.v[1] == id || u.v[2] == id;
+    EXPECT_TRUE(s_spike || u_spike);
+  }
+  expect_matches_brute_force(mesh, "pushed torus");
+}
+
+TEST(SelfIntersection, TwoOverlappingBoxesInOneMesh) {
+  TestArena t;
+  std::vector<SoupTriangle> soup = box_soup(0, 0, 0, 2, 2, 2);
+  for (const SoupTriangle& s : box_soup(1, 1, 1, 3, 3, 3)) soup.push_back(s);
+  Mesh mesh = welded(t, soup);
+  ASSERT_EQ(mesh.vertices.size(), 16u);  // no shared corner
+  const SelfIntersectionReport r = run(mesh);
+  EXPECT_GT(r.intersecting_pairs, 0u);
+  const Mesh& m = mesh;
+  const Triangle& s = m.triangles[r.first_a];
+  const Triangle& u = m.triangles[r.first_b];
+  EXPECT_LT(r.first_a, r.first_b);
+  EXPECT_TRUE(oracle::triangles_meet(m.vertices[s.v[0]], m.vertices[s.v[1]], m.vertices[s.v[2]],
+                                     m.vertices[u.v[0]], m.vertices[u.v[1]], m.vertices[u.v[2]]));
+  expect_matches_brute_force(mesh, "overlapping boxes");
+
+  // Offset by float32 amounts so nothing is axis-coincident, and rotated a little.
+  std::vector<SoupTriangle> tilted = box_soup(0, 0, 0, 2, 2, 2);
+  for (const SoupTriangle& q : box_soup(1.25f, 0.5f, 0.75f, 3.1f, 2.7f, 2.2f)) tilted.push_back(q);
+  for (SoupTriangle& q : tilted) {
+    for (auto& p : q.p) {
+      const float x = p[0], y = p[1];
+      p[0] = 0.8f * x - 0.6f * y;
+      p[1] = 0.6f * x + 0.8f * y;
+    }
+  }
+  Mesh tm = welded(t, tilted);
+  const SelfIntersectionReport tr = run(tm);
+  EXPECT_GT(tr.intersecting_pairs, 0u);
+  expect_matches_brute_force(tm, "overlapping boxes, rotated");
+}
+
+// ---- the shared-vertex and shared-edge rules ---------------------------------------------------
+
+uint64_t pairs_of(const std::vector<Vec3>& v, const std::vector<Triangle>& tris) {
+  TestArena t(size_t{1} << 20);
+  Mesh mesh = make_mesh(t, v, tris);
+  const Brute b = brute_force(mesh);
+  const SelfIntersectionReport r = run(mesh);
+  EXPECT_EQ(r.intersecting_pairs, b.pairs) << "brute force disagrees";
+  return r.intersecting_pairs;
+}
+
+TEST(SelfIntersection, TrianglesSharingAnEdge) {
+  const Vec3 p{0, 0, 0}, q{4, 0, 0}, s{1, 3, 0};
+  // Coplanar, the free vertices on the same side of the shared edge: folded onto each other.
+  EXPECT_EQ(pairs_of({p, q, s, {3, 2, 0}}, {{{0, 1, 2}}, {{1, 0, 3}}}), 1u);
+  EXPECT_EQ(pairs_of({p, q, s, {3, 2, 0}}, {{{0, 1, 2}}, {{0, 1, 3}}}), 1u);  // any winding
+  EXPECT_EQ(pairs_of({p, q, s, {9, 1, 0}}, {{{0, 1, 2}}, {{1, 0, 3}}}), 1u);  // beyond q
+  EXPECT_EQ(pairs_of({p, q, s, {1, 3, 0}}, {{{0, 1, 2}}, {{1, 0, 3}}}), 1u);  // same position
+  // Coplanar, opposite sides: a flat continuation.
+  EXPECT_EQ(pairs_of({p, q, s, {2, -3, 0}}, {{{0, 1, 2}}, {{1, 0, 3}}}), 0u);
+  EXPECT_EQ(pairs_of({p, q, s, {-5, -1, 0}}, {{{0, 1, 2}}, {{1, 0, 3}}}), 0u);
+  // Not coplanar (even nearly folded shut): only the edge is shared.
+  EXPECT_EQ(pairs_of({p, q, s, {2, 1, 1}}, {{{0, 1, 2}}, {{1, 0, 3}}}), 0u);
+  EXPECT_EQ(pairs_of({p, q, s, {1, 3, 0x1p-40}}, {{{0, 1, 2}}, {{1, 0, 3}}}), 0u);
+  EXPECT_EQ(pairs_of({p, q, s, {3, 2, -0x1p-60}}, {{{0, 1, 2}}, {{1, 0, 3}}}), 0u);
+  // Tilted plane from float32 values, exactly coplanar and folded.
+  const Vec3 a{0.25, 0.5, 0.75}, b{1.5, 0.375, 1.875};  // z = x + y
+  const Vec3 c{0.5, 1.25, 1.75}, d{1.0, 1.0, 2.0};
+  ASSERT_EQ(exact_orient3d_sign(a, b, c, d), 0);
+  EXPECT_EQ(pairs_of({a, b, c, d}, {{{0, 1, 2}}, {{1, 0, 3}}}), 1u);
+  // All three shared: the same triangle twice (either winding).
+  EXPECT_EQ(pairs_of({p, q, s}, {{{0, 1, 2}}, {{2, 1, 0}}}), 1u);
+  EXPECT_EQ(pairs_of({p, q, s}, {{{0, 1, 2}}, {{1, 2, 0}}}), 1u);
+}
+
+TEST(SelfIntersection, TrianglesSharingOneVertex) {
+  const Vec3 o{0, 0, 0};
+  // Coplanar wedges that overlap.
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {4, 4, 0}, {4, 2, 0}, {0, 4, 0}},
+                     {{{0, 1, 2}}, {{0, 3, 4}}}), 1u);
+  // Coplanar wedges along one ray (they share a segment from o).
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {4, 4, 0}, {2, 2, 0}, {0, 4, 0}},
+                     {{{0, 1, 2}}, {{0, 3, 4}}}), 1u);
+  // One wedge inside the other.
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {1, 1, 0}, {1, 2, 0}},
+                     {{{0, 1, 2}}, {{0, 3, 4}}}), 1u);
+  // Coplanar wedges meeting only at o.
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}, {-4, 4, 0}},
+                     {{{0, 1, 2}}, {{0, 3, 4}}}), 0u);
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {4, 4, 0}, {-4, 0, 0}, {-4, -4, 0}},
+                     {{{0, 1, 2}}, {{0, 3, 4}}}), 0u);  // vertical angles
+  // Not coplanar: meeting only at o.
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {0, 0, 4}, {-4, -4, 4}},
+                     {{{0, 1, 2}}, {{0, 3, 4}}}), 0u);
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {-1, -1, 1}, {-1, -1, -1}},
+                     {{{0, 1, 2}}, {{0, 3, 4}}}), 0u);  // through o's outside
+  // Not coplanar: the far edge of one pierces the other, or just touches it.
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {1, 1, 1}, {1, 1, -1}},
+                     {{{0, 1, 2}}, {{0, 3, 4}}}), 1u);
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {1, 1, 0}, {1, 1, 5}},
+                     {{{0, 1, 2}}, {{0, 3, 4}}}), 1u);  // vertex on the face
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {2, 2, 0}, {2, 2, 5}},
+                     {{{0, 1, 2}}, {{0, 3, 4}}}), 1u);  // on the far edge
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {2, 2, 0x1p-50}, {2, 2, 5}},
+                     {{{0, 1, 2}}, {{0, 3, 4}}}), 0u);  // just above it
+  // A vertex of one at another vertex position of the other (different id): a second contact.
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {4, 0, 0}, {0, 0, 4}},
+                     {{{0, 1, 2}}, {{0, 3, 4}}}), 1u);
+}
+
+// ---- random small meshes against the brute force -----------------------------------------------
+
+struct RandomMeshStats {
+  int64_t meshes = 0, triangles = 0, skipped = 0, pairs = 0, meshes_with_pairs = 0;
+  int64_t by_shared[4] = {0, 0, 0, 0};       // conflicting pairs by shared ids
+  int64_t tested_shared[4] = {0, 0, 0, 0};   // candidate pairs by shared ids
+};
+
+Vec3 pool_point(std::mt19937_64& rng, int kind) {
+  auto integer = [&](int lo, int hi) {
+    return static_cast<double>(lo + static_cast<int>(rng() % static_cast<uint64_t>(hi - lo + 1)));
+  };
+  auto f32 = [&]() {
+    return static_cast<double>(static_cast<float>(static_cast<double>(rng() >> 11) * 0x1p-53));
+  };
+  switch (kind) {
+    case 0: {
+      const double x = integer(0, 3), y = integer(0, 3), z = integer(0, 3);
+      return {x, y, z};
+    }
+    case 1: {  // a slab: many coplanar triangles
+      const double x = integer(0, 4), y = integer(0, 4), z = integer(0, 1);
+      return {x, y, z};
+    }
+    case 2: {
+      const double x = f32(), y = f32(), z = f32();
+      return {x, y, z};
+    }
+    default: {  // dyadic points on the tilted plane z = x + y, or one ulp off it (2^-300 off
+                // it at 0: the predicates are exact for magnitudes >= 2^-306, not subnormals)
+      const double x = integer(0, 8) * 0.125, y = integer(0, 8) * 0.125;
+      double z = x + y;
+      if (rng() % 4 == 0) z = z == 0.0 ? 0x1p-300 : std::nextafter(z, 9.0);
+      return {x, y, z};
+    }
+  }
+}
+
+// Kinds 0-3: 20-60 triangles on a pool of 6-14 vertices (some at repeated positions), mostly
+// sharing an edge with an earlier triangle (folds, fans, duplicates); degenerate triangles are
+// mostly redrawn, a few kept (skipped by both sides).
+// Kinds 4-5: a small closed mesh (a 32-triangle octasphere, a 48-triangle torus) with one or
+// two vertices moved: onto another vertex's position, an edge midpoint, or a random point
+// nearby; about half of these stay free of self-intersections.
+Mesh random_mesh(TestArena& t, std::mt19937_64& rng, int kind) {
+  std::vector<Vec3> v;
+  std::vector<Triangle> tris;
+  if (kind >= 4) {
+    TestArena scratch(size_t{1} << 20);
+    Mesh closed = welded(scratch, kind == 4 ? octasphere(2, 2.0) : shapes::torus(8, 3, 3, 1));
+    v.assign(closed.vertices.begin(), closed.vertices.end());
+    tris.assign(closed.triangles.begin(), closed.triangles.end());
+    const int moves = rng() % 4 == 0 ? 2 : 1;
+    for (int i = 0; i < moves; ++i) {
+      Vec3& p = v[rng() % v.size()];
+      const Triangle& near = tris[rng() % tris.size()];
+      switch (rng() % 3) {
+        case 0: p = v[near.v[rng() % 3]]; break;
+        case 1: p = (v[near.v[0]] + v[near.v[1]]) * 0.5; break;
+        default: {
+          const double dx = static_cast<double>(rng() % 9) * 0.25 - 1.0;
+          const double dy = static_cast<double>(rng() % 9) * 0.25 - 1.0;
+          const double dz = static_cast<double>(rng() % 9) * 0.25 - 1.0;
+          p = p + Vec3{dx, dy, dz} * 0.25;
+        }
+      }
+    }
+    return make_mesh(t, v, tris);
+  }
+  const int pool = 6 + static_cast<int>(rng() % 9);
+  const int count = 20 + static_cast<int>(rng() % 41);
+  for (int i = 0; i < pool; ++i) {
+    if (i > 0 && rng() % 6 == 0) {
+      v.push_back(v[rng() % v.size()]);  // an earlier position under a new id
+    } else {
+      v.push_back(pool_point(rng, kind));
+    }
+  }
+  for (int i = 0; i < count; ++i) {
+    Triangle tri;
+    for (int attempt = 0; attempt < 20; ++attempt) {
+      for (uint32_t& id : tri.v) id = static_cast<uint32_t>(rng() % v.size());
+      if (!tris.empty() && rng() % 3 != 0) {
+        const Triangle& old = tris[rng() % tris.size()];
+        const int k = static_cast<int>(rng() % 3);
+        tri.v[0] = old.v[(k + 1) % 3];
+        tri.v[1] = old.v[k];
+      }
+      if (!skipped(v.data(), tri) || rng() % 16 == 0) break;
+    }
+    tris.push_back(tri);
+  }
+  return make_mesh(t, v, tris);
+}
+
+TEST(SelfIntersection, RandomSmallMeshesMatchBruteForce) {
+  std::mt19937_64 rng(2024);
+  RandomMeshStats st;
+  const int meshes = 360 / kRandomDivisor;
+  for (int m = 0; m < meshes; ++m) {
+    TestArena t(size_t{1} << 20);
+    const int kind = m % 6;
+    Mesh mesh = random_mesh(t, rng, kind);
+    const SelfIntersectionReport r = run(mesh);
+    const Brute b = brute_force(mesh);
+    ++st.meshes;
+    st.triangles += static_cast<int64_t>(mesh.triangles.size());
+    for (const Triangle& tri : mesh.triangles) st.skipped += skipped(mesh.vertices.data(), tri);
+    st.pairs += static_cast<int64_t>(b.pairs);
+    st.meshes_with_pairs += b.pairs > 0;
+    for (const auto& c : b.conflicts) {
+      int shared = 0;
+      for (uint32_t x : mesh.triangles[c.first].v) {
+        for (uint32_t y : mesh.triangles[c.second].v) shared += x == y;
+      }
+      ++st.by_shared[shared];
+    }
+    const Vec3* v = mesh.vertices.data();
+    for (uint32_t a = 0; a < mesh.triangles.size(); ++a) {
+      for (uint32_t c = a + 1; c < mesh.triangles.size(); ++c) {
+        if (skipped(v, mesh.triangles[a]) || skipped(v, mesh.triangles[c])) continue;
+        int shared = 0;
+        for (uint32_t x : mesh.triangles[a].v) {
+          for (uint32_t y : mesh.triangles[c].v) shared += x == y;
+        }
+        ++st.tested_shared[shared];
+      }
+    }
+    ASSERT_EQ(r.intersecting_pairs, b.pairs) << "mesh " << m << " (kind " << kind << ")";
+    ASSERT_EQ(r.candidate_pairs, b.candidates) << "mesh " << m;
+    if (b.pairs > 0) {
+      ASSERT_EQ(r.first_a, b.first_a) << "mesh " << m;
+      ASSERT_EQ(r.first_b, b.first_b) << "mesh " << m;
+    }
+    // max_pairs stops at that many, with a genuine first pair.
+    for (uint64_t k : {uint64_t{1}, uint64_t{2}, uint64_t{5}}) {
+      const SelfIntersectionReport rk = run(mesh, k);
+      ASSERT_EQ(rk.intersecting_pairs, b.pairs < k ? b.pairs : k) << "mesh " << m;
+      if (rk.intersecting_pairs > 0) {
+        ASSERT_TRUE(b.is_conflict(rk.first_a, rk.first_b)) << "mesh " << m;
+      }
+      ASSERT_LE(rk.candidate_pairs, r.candidate_pairs);
+      if (b.pairs < k) {
+        ASSERT_EQ(rk.candidate_pairs, r.candidate_pairs);  // never stopped
+      }
+    }
+  }
+  std::printf(
+      "[   info   ] %lld meshes, %lld triangles (%lld degenerate, skipped), %lld conflicting "
+      "pairs in %lld meshes; conflicts / tested by shared ids: 0: %lld/%lld, 1: %lld/%lld, "
+      "2: %lld/%lld, 3: %lld/%lld\n",
+      static_cast<long long>(st.meshes), static_cast<long long>(st.triangles),
+      static_cast<long long>(st.skipped), static_cast<long long>(st.pairs),
+      static_cast<long long>(st.meshes_with_pairs), static_cast<long long>(st.by_shared[0]),
+      static_cast<long long>(st.tested_shared[0]), static_cast<long long>(st.by_shared[1]),
+      static_cast<long long>(st.tested_shared[1]), static_cast<long long>(st.by_shared[2]),
+      static_cast<long long>(st.tested_shared[2]), static_cast<long long>(st.by_shared[3]),
+      static_cast<long long>(st.tested_shared[3]));
+  // Hard sets: every sharing case both conflicts and does not, often.
+  for (int s = 0; s < 3; ++s) {
+    EXPECT_GT(st.by_shared[s], st.meshes) << "shared " << s;
+    EXPECT_LT(st.by_shared[s], st.tested_shared[s] * 9 / 10) << "shared " << s;
+  }
+  EXPECT_GT(st.by_shared[3], 0);
+  EXPECT_GT(st.skipped, 0);
+  EXPECT_GT(st.meshes_with_pairs, st.meshes / 2);
+  EXPECT_LT(st.meshes_with_pairs, st.meshes * 19 / 20);
+}
+
+// ---- max_pairs, arena, errors --------------------------------------------------------------------
+
+TEST(SelfIntersection, MaxPairsStopsEarly) {
+  TestArena t;
+  std::vector<SoupTriangle> soup = box_soup(0, 0, 0, 2, 2, 2);
+  for (const SoupTriangle& s : box_soup(1, 1, 1, 3, 3, 3)) soup.push_back(s);
+  Mesh mesh = welded(t, soup);
+  const SelfIntersectionReport all = run(mesh);
+  ASSERT_GT(all.intersecting_pairs, 3u);
+  const Brute b = brute_force(mesh);
+  for (uint64_t k = 1; k <= all.intersecting_pairs + 2; ++k) {
+    const SelfIntersectionReport r = run(mesh, k);
+    EXPECT_EQ(r.intersecting_pairs, k < all.intersecting_pairs ? k : all.intersecting_pairs);
+    EXPECT_TRUE(b.is_conflict(r.first_a, r.first_b)) << k;
+    EXPECT_LE(r.candidate_pairs, all.candidate_pairs);
+  }
+  EXPECT_EQ(run(mesh, 1).self_intersecting(), true);
+}
+
+// Every cap from 0 up: kArenaExhausted with an actionable need, or the full answer.
+TEST(SelfIntersection, ArenaExhaustionSweep) {
+  TestArena t;
+  std::vector<SoupTriangle> soup = box_soup(0, 0, 0, 2, 2, 2);
+  for (const SoupTriangle& s : box_soup(1, 1, 1, 3, 3, 3)) soup.push_back(s);
+  for (const SoupTriangle& s : shapes::torus(8, 6, 10, 3)) soup.push_back(s);
+  Mesh mesh = welded(t, soup);
+  const SelfIntersectionReport expected = run(mesh);
+  ASSERT_GT(expected.intersecting_pairs, 0u);
+
+  std::vector<unsigned char> memory(size_t{1} << 16);
+  unsigned char* base = memory.data();
+  base += (64 - reinterpret_cast<uintptr_t>(base) % 64) % 64;  // same padding for every cap
+  size_t high_water = 0;
+  {
+    Arena arena(base, memory.size() - 64);
+    Context ctx(&arena);
+    SelfIntersectionReport r;
+    SPLINTCORE_ASSERT_OK(find_self_intersections(ctx, mesh, 0, &r));
+    high_water = arena.high_water();
+    EXPECT_EQ(arena.used(), 0u);
+  }
+  ASSERT_GT(high_water, 0u);
+  ASSERT_LT(high_water + 256, memory.size() - 64);
+  EXPECT_LE(high_water, find_self_intersections_bound(mesh.triangles.size()));
+
+  auto attempt = [&](size_t cap, SelfIntersectionReport* r, size_t* need) {
+    Arena arena(base, cap);
+    Context ctx(&arena);
+    Status s = find_self_intersections(ctx, mesh, 0, r);
+    EXPECT_EQ(arena.used(), 0u) << "cap " << cap;
+    EXPECT_LE(arena.high_water(), cap);
+    *need = arena.last_need();
+    return s;
+  };
+  size_t first_success = 0;
+  for (size_t cap = 0; cap <= high_water + 256; ++cap) {
+    SelfIntersectionReport r;
+    size_t need = 0;
+    Status s = attempt(cap, &r, &need);
+    if (s.is_ok()) {
+      if (first_success == 0) first_success = cap;
+      EXPECT_EQ(r.intersecting_pairs, expected.intersecting_pairs) << "cap " << cap;
+      EXPECT_EQ(r.first_a, expected.first_a) << "cap " << cap;
+      EXPECT_EQ(r.first_b, expected.first_b) << "cap " << cap;
+      EXPECT_EQ(r.candidate_pairs, expected.candidate_pairs) << "cap " << cap;
+      continue;
+    }
+    ASSERT_EQ(s.code(), StatusCode::kArenaExhausted) << "cap " << cap << ": " << test::format(s);
+    EXPECT_EQ(first_success, 0u) << "failed at cap " << cap << " after succeeding at "
+                                 << first_success;
+    EXPECT_GT(need, cap) << test::format(s);
+    EXPECT_NE(std::string(s.message()).find("arena exhausted"), std::string::npos);
+    // The need is actionable: with it, the run succeeds or gets further.
+    if (cap % 7 == 0 && need <= high_water + 256) {
+      SelfIntersectionReport again;
+      size_t need2 = 0;
+      Status s2 = attempt(need, &again, &need2);
+      if (!s2.is_ok()) {
+        EXPECT_GT(need2, need) << "cap " << cap;
+      }
+    }
+  }
+  EXPECT_EQ(first_success, high_water);
+  {
+    SelfIntersectionReport r;
+    size_t need = 0;
+    Status s = attempt(high_water - 1, &r, &need);
+    EXPECT_FALSE(s.is_ok());
+  }
+}
+
+TEST(SelfIntersection, EmptyMeshBadIndexAndCancellation) {
+  TestArena t;
+  Mesh empty(&t.arena);
+  const SelfIntersectionReport r = run(empty);
+  EXPECT_EQ(r.intersecting_pairs, 0u);
+  EXPECT_EQ(r.candidate_pairs, 0u);
+
+  Mesh bad = make_mesh(t, {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{{0, 1, 2}}, {{0, 1, 3}}});
+  {
+    TestArena work(size_t{1} << 20);
+    Context ctx(&work.arena);
+    SelfIntersectionReport rep;
+    Status s = find_self_intersections(ctx, bad, 0, &rep);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+    EXPECT_EQ(s.index(), 1u);
+    EXPECT_EQ(work.arena.used(), 0u);
+  }
+
+  Mesh torus = welded(t, shapes::torus(16, 8, 10, 3));
+  {
+    TestArena work(size_t{1} << 20);
+    Progress progress;
+    progress.report = [](void*, const char*, uint64_t, uint64_t) { return false; };
+    Context ctx(&work.arena, nullptr, &progress);
+    SelfIntersectionReport rep;
+    Status s = find_self_intersections(ctx, torus, 0, &rep);
+    EXPECT_EQ(s.code(), StatusCode::kCancelled);
+    EXPECT_EQ(work.arena.used(), 0u);
+  }
+}
+
+}  // namespace
+}  // namespace splintcore

@@ -1,0 +1,70 @@
+#include "splintcore/printer.h"
+#include "support/test_util.h"
+
+namespace splintcore {
+namespace {
+
+using test::TestArena;
+
+PrintCheck run_check(TestArena& t, const std::vector<SoupTriangle>& soup,
+                     const PrintCheckOptions& options = PrintCheckOptions{}) {
+  Mesh mesh;
+  Status s = test::mesh_from_soup(t.arena, soup, &mesh);
+  EXPECT_TRUE(s.is_ok()) << test::format(s);
+  PrintCheck pc;
+  Context ctx(&t.arena);
+  s = check_printable(ctx, mesh, eden260_profile(), options, &pc);
+  EXPECT_TRUE(s.is_ok()) << test::format(s);
+  return pc;
+}
+
+TEST(Printer, Eden260Profile) {
+  const PrinterProfile* p = find_printer_profile("eden260");
+  ASSERT_NE(p, nullptr);
+  EXPECT_EQ(p->build_volume_mm, (Vec3{255, 252, 200}));
+  EXPECT_DOUBLE_EQ(p->layer_thickness_mm, 0.016);
+  EXPECT_EQ(find_printer_profile("eden999"), nullptr);
+}
+
+TEST(Printer, SplintSizedBoxIsPrintableAndPlacedOnTheTray) {
+  TestArena t;
+  const float lo[3] = {10, -20, 40}, hi[3] = {80, 50, 56};
+  PrintCheck pc = run_check(t, shapes::box(lo, hi));
+  EXPECT_TRUE(pc.printable);
+  EXPECT_TRUE(pc.fits);
+  EXPECT_EQ(pc.layers, 1000u);  // 16 mm / 0.016 mm
+  EXPECT_FALSE(pc.units_suspect);
+  Vec3 placed_lo = pc.placement.apply_point(Vec3{10, -20, 40});
+  Vec3 placed_hi = pc.placement.apply_point(Vec3{80, 50, 56});
+  EXPECT_DOUBLE_EQ(placed_lo.z, 0.0);
+  EXPECT_DOUBLE_EQ(placed_lo.x + placed_hi.x, 255.0);  // centred
+  EXPECT_DOUBLE_EQ(placed_lo.y + placed_hi.y, 252.0);
+  EXPECT_TRUE(require_printable(pc, eden260_profile()).is_ok());
+}
+
+TEST(Printer, TooLargeAndRotatedFits) {
+  TestArena t;
+  const float lo[3] = {0, 0, 0}, big[3] = {300, 20, 20};
+  PrintCheck pc = run_check(t, shapes::box(lo, big));
+  EXPECT_FALSE(pc.fits);
+  EXPECT_FALSE(pc.fits_rotated);
+  EXPECT_FALSE(pc.printable);
+  Status s = require_printable(pc, eden260_profile());
+  EXPECT_NE(std::strstr(s.message(), "does not fit"), nullptr) << s.message();
+  // 246 mm long in y: over the 242 mm usable y (252 - 2 x 5 margin) but fits turned in x.
+  const float tall[3] = {20, 244, 20};
+  pc = run_check(t, shapes::box(lo, tall));
+  EXPECT_FALSE(pc.fits);
+  EXPECT_TRUE(pc.fits_rotated);
+  EXPECT_TRUE(pc.printable);
+}
+
+TEST(Printer, MetresAreSuspect) {
+  TestArena t;
+  const float lo[3] = {0, 0, 0}, hi[3] = {0.07f, 0.06f, 0.02f};
+  PrintCheck pc = run_check(t, shapes::box(lo, hi));
+  EXPECT_TRUE(pc.units_suspect);
+}
+
+}  // namespace
+}  // namespace splintcore

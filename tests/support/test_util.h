@@ -1,0 +1,137 @@
+// Helpers for the tests (test code may use the standard containers; the core may not).
+#ifndef SPLINTCORE_TESTS_TEST_UTIL_H
+#define SPLINTCORE_TESTS_TEST_UTIL_H
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/shapes.h"
+#include "splintcore/core.h"
+#include "splintcore/io.h"
+#include "splintcore/mesh.h"
+
+namespace splintcore {
+namespace test {
+
+// An arena over a heap buffer owned by the test.
+// The buffer is not zeroed (nothing may depend on arena contents), so a large cap costs
+// nothing until it is touched.
+struct TestArena {
+  std::unique_ptr<unsigned char[]> buffer;
+  Arena arena;
+  explicit TestArena(size_t bytes = size_t{256} << 20)
+      : buffer(new unsigned char[bytes]), arena(buffer.get(), bytes) {}
+};
+
+inline std::string format(const Status& s) {
+  char text[1024];
+  s.format(text, sizeof(text));
+  return text;
+}
+
+#define SPLINTCORE_EXPECT_OK(expr)                                             \
+  do {                                                                         \
+    ::splintcore::Status st_ = (expr);                                         \
+    EXPECT_TRUE(st_.is_ok()) << ::splintcore::test::format(st_);               \
+  } while (0)
+#define SPLINTCORE_ASSERT_OK(expr)                                             \
+  do {                                                                         \
+    ::splintcore::Status st_ = (expr);                                         \
+    ASSERT_TRUE(st_.is_ok()) << ::splintcore::test::format(st_);               \
+  } while (0)
+
+inline void put_u32(std::vector<uint8_t>& out, size_t at, uint32_t v) {
+  for (int i = 0; i < 4; ++i) out[at + static_cast<size_t>(i)] = static_cast<uint8_t>(v >> (8 * i));
+}
+inline void put_f32(std::vector<uint8_t>& out, size_t at, float f) {
+  uint32_t bits;
+  std::memcpy(&bits, &f, 4);
+  put_u32(out, at, bits);
+}
+
+// A binary STL of the soup (zero normals), header text as given (may begin with "solid").
+inline std::vector<uint8_t> binary_stl(const std::vector<SoupTriangle>& soup,
+                                       const char* header = "test binary") {
+  std::vector<uint8_t> out(84 + 50 * soup.size(), 0);
+  std::memcpy(out.data(), header, std::strlen(header) < 80 ? std::strlen(header) : 80);
+  put_u32(out, 80, static_cast<uint32_t>(soup.size()));
+  for (size_t t = 0; t < soup.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      for (int a = 0; a < 3; ++a) {
+        put_f32(out, 84 + 50 * t + 12 + 12 * static_cast<size_t>(k) + 4 * static_cast<size_t>(a),
+                soup[t].p[k][a]);
+      }
+    }
+  }
+  return out;
+}
+
+inline std::vector<uint8_t> to_bytes(const std::string& s) {
+  return std::vector<uint8_t>(s.begin(), s.end());
+}
+
+// Reads STL bytes into a mesh (welded) in `arena`.
+inline Status mesh_from_bytes(Arena& arena, const std::vector<uint8_t>& bytes, Mesh* mesh,
+                              StlInfo* info = nullptr, size_t max_chunk = 0) {
+  MemorySource ms{bytes.data(), bytes.size(), 0, max_chunk};
+  Context ctx(&arena);
+  mesh->bind(&arena);
+  return read_stl_mesh(ctx, memory_source(&ms), StlReadOptions{}, mesh, info);
+}
+
+inline Status mesh_from_soup(Arena& arena, const std::vector<SoupTriangle>& soup, Mesh* mesh) {
+  Context ctx(&arena);
+  mesh->bind(&arena);
+  return weld_exact(ctx, Span<const SoupTriangle>(soup.data(), soup.size()), mesh);
+}
+
+// Writes a mesh to bytes in memory.
+inline Status mesh_to_bytes(Arena& arena, const Mesh& mesh, StlFormat format,
+                            std::vector<uint8_t>* out) {
+  out->assign(84 + 400 * mesh.triangles.size() + 4096, 0);
+  MemorySink sink{out->data(), out->size(), 0, 0};
+  Context ctx(&arena);
+  StlWriteOptions wo;
+  wo.format = format;
+  Status s = write_stl(ctx, mesh, memory_sink(&sink), wo);
+  out->resize(static_cast<size_t>(sink.size));
+  return s;
+}
+
+inline std::string sha256_hex(const void* data, size_t n) {
+  Sha256 sha;
+  sha.update(data, n);
+  uint8_t digest[32];
+  sha.finish(digest);
+  char hex[65];
+  Sha256::to_hex(digest, hex);
+  return hex;
+}
+
+inline std::vector<uint8_t> read_file_bytes(const std::string& path) {
+  std::vector<uint8_t> out;
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) return out;
+  uint8_t buf[65536];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof(buf), f)) > 0) out.insert(out.end(), buf, buf + n);
+  std::fclose(f);
+  return out;
+}
+
+inline bool file_exists(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) return false;
+  std::fclose(f);
+  return true;
+}
+
+}  // namespace test
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_TESTS_TEST_UTIL_H

@@ -1,0 +1,112 @@
+#!/usr/bin/env bash
+# The splintcore program: exit codes, --help, --json, --memory-cap, atomic output.
+# usage: cli_test.sh PATH/TO/splintcore FIXTURES_DIR
+set -u
+tool=$1
+fixtures=$2
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+passed=0
+failed=0
+
+expect_exit() {  # expect_exit CODE DESCRIPTION -- command...
+  local want=$1 what=$2
+  shift 3
+  "$@" >"$work/out" 2>"$work/err"
+  local got=$?
+  if [ "$got" -eq "$want" ]; then
+    passed=$((passed + 1))
+  else
+    failed=$((failed + 1))
+    echo "FAIL: $what: exit $got, expected $want"
+    sed 's/^/  stdout: /' "$work/out" | head -5
+    sed 's/^/  stderr: /' "$work/err" | head -5
+  fi
+}
+
+check() {  # check DESCRIPTION -- test-command...
+  local what=$1
+  shift 2
+  if "$@"; then
+    passed=$((passed + 1))
+  else
+    failed=$((failed + 1))
+    echo "FAIL: $what"
+  fi
+}
+
+json_ok() {  # the file holds exactly one JSON object
+  if command -v python3 >/dev/null 2>&1; then
+    python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); assert isinstance(d, dict)' "$1"
+  else
+    grep -q '^{.*}$' "$1"
+  fi
+}
+
+expect_exit 0 "help" -- "$tool" --help
+expect_exit 2 "no command" -- "$tool"
+expect_exit 2 "unknown command" -- "$tool" frobnicate
+expect_exit 0 "check --help" -- "$tool" check --help
+check "check --help mentions --memory-cap" -- grep -q -- "--memory-cap" "$work/out"
+expect_exit 2 "check without input" -- "$tool" check
+expect_exit 2 "bad memory cap" -- "$tool" check "$fixtures/stl/torus_binary.stl" --memory-cap 12Q
+expect_exit 2 "bad threads" -- "$tool" check "$fixtures/stl/torus_binary.stl" --threads 0
+expect_exit 2 "unknown printer" -- "$tool" check "$fixtures/stl/torus_binary.stl" --printer nope
+expect_exit 2 "unknown option" -- "$tool" convert "$fixtures/stl/torus_binary.stl" --frob
+expect_exit 2 "convert without -o" -- "$tool" convert "$fixtures/stl/torus_binary.stl"
+
+expect_exit 0 "check printable torus" -- "$tool" check "$fixtures/stl/torus_binary.stl"
+check "human summary says printable" -- grep -q "printable: yes" "$work/out"
+expect_exit 0 "check --json" -- "$tool" check "$fixtures/stl/torus_binary.stl" --json --threads 2
+check "check --json is one JSON object" -- json_ok "$work/out"
+check "check --json has the genus" -- grep -q '"genus":1' "$work/out"
+check "check --json has peak arena" -- grep -q '"peak_arena_bytes":' "$work/out"
+expect_exit 0 "check binary file with solid header" -- "$tool" check "$fixtures/stl/box_solid_header.stl"
+expect_exit 0 "check ascii tetra" -- "$tool" check "$fixtures/stl/tetra_ascii.stl"
+expect_exit 1 "check open box" -- "$tool" check "$fixtures/stl/open_box_ascii.stl"
+check "open box message names the boundary" -- grep -q "not closed" "$work/err"
+expect_exit 1 "check inside-out box" -- "$tool" check "$fixtures/stl/inside_out_box.stl" --json
+check "inside-out json status" -- grep -q '"status":"invalid_mesh"' "$work/out"
+expect_exit 1 "check too large box" -- "$tool" check "$fixtures/stl/too_large_box.stl"
+check "too large message" -- grep -q "does not fit" "$work/err"
+expect_exit 1 "check missing file" -- "$tool" check "$work/nope.stl"
+
+# Truncated input: rejected with the byte offset; nothing written.
+head -c 1000 "$fixtures/stl/torus_binary.stl" > "$work/cut.stl"
+expect_exit 1 "convert truncated" -- "$tool" convert "$work/cut.stl" -o "$work/never.stl" --json
+check "truncated json names the byte" -- grep -q '"byte_offset":' "$work/out"
+check "no output after failure" -- test ! -e "$work/never.stl"
+
+# Convert, determinism across runs and thread counts, ASCII round trip.
+expect_exit 0 "convert" -- "$tool" convert "$fixtures/stl/torus_binary.stl" -o "$work/a.stl"
+expect_exit 0 "convert again, 2 threads" -- "$tool" convert "$fixtures/stl/torus_binary.stl" -o "$work/b.stl" --threads 2
+check "same bytes" -- cmp -s "$work/a.stl" "$work/b.stl"
+expect_exit 0 "convert to ascii" -- "$tool" convert "$work/a.stl" -o "$work/a_ascii.stl" --ascii
+expect_exit 0 "convert ascii back" -- "$tool" convert "$work/a_ascii.stl" -o "$work/c.stl"
+check "ascii round trip is exact" -- cmp -s "$work/a.stl" "$work/c.stl"
+
+# Memory cap too small: clean error naming the need; an existing output is left untouched.
+cp "$work/a.stl" "$work/keep.stl"
+expect_exit 1 "convert under a 4K cap" -- "$tool" convert "$fixtures/stl/torus_binary.stl" -o "$work/keep.stl" --memory-cap 4K
+check "cap message" -- grep -q "arena exhausted: need" "$work/err"
+check "existing output untouched" -- cmp -s "$work/a.stl" "$work/keep.stl"
+check "no temporary files left" -- test -z "$(ls "$work" | grep '\.tmp-')"
+expect_exit 1 "unwritable output folder" -- "$tool" convert "$fixtures/stl/torus_binary.stl" -o "$work/no/such/dir/x.stl"
+
+# The initial splint base from a case file.
+expect_exit 0 "base --help" -- "$tool" base --help
+expect_exit 2 "base without -o" -- "$tool" base "$fixtures/cases/paper_scale.json"
+expect_exit 0 "base paper scale" -- "$tool" base "$fixtures/cases/paper_scale.json" -o "$work/base.stl" --json
+check "base json is one object" -- json_ok "$work/out"
+check "base json has 2612 triangles" -- grep -q '"triangles":2612' "$work/out"
+expect_exit 0 "check the written base" -- "$tool" check "$work/base.stl"
+printf '{"splintcore_case": 1,\n  "base": {"upper": [], "lower": [], "frob": 1}}\n' > "$work/bad.json"
+expect_exit 1 "base with an unknown key" -- "$tool" base "$work/bad.json" -o "$work/bad.stl"
+check "unknown key message has line:column" -- grep -q "bad.json:2:.*unknown key \"frob\"" "$work/err"
+check "no output after a bad case" -- test ! -e "$work/bad.stl"
+printf '{"splintcore_case": 1, "base": {"upper": [{"position": [0,0,1]}, {"position": [0,0,1]}],\n "lower": [{"position": [0,0,0]}, {"position": [5,0,0]}]}}\n' > "$work/dup.json"
+expect_exit 1 "base with a repeated pick" -- "$tool" base "$work/dup.json" -o "$work/dup.stl"
+check "repeated pick named" -- grep -q "upper pick 1: same position" "$work/err"
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
