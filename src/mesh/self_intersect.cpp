@@ -18,6 +18,51 @@ struct Box {
   double hi[3];
 };
 
+// A triangle's plane for a floating-point filter: side(x) = n . (x - a) with
+// n = (b - a) x (c - a), and `nabs` the magnitudes of the terms of each component of n, so that
+// nabs . |x - a| is the permanent of the determinant det[b - a, c - a, x - a]. Its rounding
+// error is below (7 + 56 eps) eps times the permanent (Shewchuk's orient3d bound: the same
+// three-term sum of a coordinate times a 2x2 minor); a sign whose magnitude clears 1e-15
+// times the permanent is therefore the exact sign. Anything closer goes to the exact tests.
+struct Plane {
+  Vec3 a;
+  Vec3 n;
+  Vec3 nabs;
+};
+
+constexpr double kPlaneFilter = 1e-15;
+
+Plane plane_of(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 e1 = b - a, e2 = c - a;
+  Plane p;
+  p.a = a;
+  p.n = cross(e1, e2);
+  auto m = [](double x) { return x < 0 ? -x : x; };
+  p.nabs = Vec3{m(e1.y * e2.z) + m(e1.z * e2.y), m(e1.z * e2.x) + m(e1.x * e2.z),
+                m(e1.x * e2.y) + m(e1.y * e2.x)};
+  return p;
+}
+
+// +1 or -1 when x is certainly on that side of the plane, 0 when the filter cannot tell.
+inline int certain_side(const Plane& p, const Vec3& x) {
+  const Vec3 d = x - p.a;
+  const double side = p.n.x * d.x + p.n.y * d.y + p.n.z * d.z;
+  const double permanent = p.nabs.x * (d.x < 0 ? -d.x : d.x) + p.nabs.y * (d.y < 0 ? -d.y : d.y) +
+                           p.nabs.z * (d.z < 0 ? -d.z : d.z);
+  const double bound = kPlaneFilter * permanent;
+  return side > bound ? 1 : (side < -bound ? -1 : 0);
+}
+
+// True when the filter proves that p and q lie strictly on one side of the plane.
+inline bool certainly_one_side(const Plane& plane, const Vec3* pts, int n) {
+  const int s0 = certain_side(plane, pts[0]);
+  if (s0 == 0) return false;
+  for (int i = 1; i < n; ++i) {
+    if (certain_side(plane, pts[i]) != s0) return false;
+  }
+  return true;
+}
+
 // Same side of the shared edge ab, for coplanar c and d?
 bool folded_onto(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   int axis = projection_axis(a, b, c);
@@ -35,8 +80,10 @@ bool folded_onto(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   return sign_of(orient2d(ax, ay, bx, by, cx, cy)) * sign_of(orient2d(ax, ay, bx, by, dx, dy)) > 0;
 }
 
-// Do triangles s and t conflict, given the vertex ids they share?
-bool conflict(const Vec3* v, const Triangle& s, const Triangle& t) {
+// Do triangles s and t conflict, given the vertex ids they share? The planes let the common
+// cases be decided by the filter; whatever it cannot decide goes to the exact tests.
+bool conflict(const Vec3* v, const Triangle& s, const Triangle& t, const Plane& ps,
+              const Plane& pt) {
   int shared = 0;
   int s_at[3] = {-1, -1, -1};  // for each corner of s, the matching corner of t
   for (int i = 0; i < 3; ++i) {
@@ -49,7 +96,11 @@ bool conflict(const Vec3* v, const Triangle& s, const Triangle& t) {
   }
   const Vec3 &a = v[s.v[0]], &b = v[s.v[1]], &c = v[s.v[2]];
   const Vec3 &d = v[t.v[0]], &e = v[t.v[1]], &f = v[t.v[2]];
-  if (shared == 0) return triangles_intersect(a, b, c, d, e, f);
+  if (shared == 0) {
+    const Vec3 tv[3] = {d, e, f}, sv[3] = {a, b, c};
+    if (certainly_one_side(ps, tv, 3) || certainly_one_side(pt, sv, 3)) return false;
+    return triangles_intersect(a, b, c, d, e, f);
+  }
   if (shared >= 3) return true;  // the same three vertices twice
   if (shared == 2) {
     int s_free = s_at[0] < 0 ? 0 : (s_at[1] < 0 ? 1 : 2);
@@ -58,7 +109,8 @@ bool conflict(const Vec3* v, const Triangle& s, const Triangle& t) {
     const Vec3& q = v[s.v[(s_free + 2) % 3]];
     const Vec3& sc = v[s.v[s_free]];
     const Vec3& tc = v[t.v[t_free]];
-    if (orient3d(p, q, sc, tc) != 0.0) return false;  // the shared edge is all they share
+    if (certain_side(ps, tc) != 0) return false;  // not coplanar: the edge is all they share
+    if (orient3d(p, q, sc, tc) != 0.0) return false;
     return folded_onto(p, q, sc, tc);
   }
   // One shared vertex: they conflict iff the edge of either opposite it meets the other.
@@ -68,13 +120,18 @@ bool conflict(const Vec3* v, const Triangle& s, const Triangle& t) {
   const Vec3& s2 = v[s.v[(si + 2) % 3]];
   const Vec3& t1 = v[t.v[(ti + 1) % 3]];
   const Vec3& t2 = v[t.v[(ti + 2) % 3]];
-  return segment_intersects_triangle(s1, s2, d, e, f) || segment_intersects_triangle(t1, t2, a, b, c);
+  const Vec3 s_edge[2] = {s1, s2}, t_edge[2] = {t1, t2};
+  const bool s_edge_clear = certainly_one_side(pt, s_edge, 2);
+  const bool t_edge_clear = certainly_one_side(ps, t_edge, 2);
+  return (!s_edge_clear && segment_intersects_triangle(s1, s2, d, e, f)) ||
+         (!t_edge_clear && segment_intersects_triangle(t1, t2, a, b, c));
 }
 
 }  // namespace
 
 uint64_t find_self_intersections_bound(uint64_t triangle_count) {
-  return triangle_count * (sizeof(Box) + 2 * sizeof(KeyIndex) + 1) + 4 * 64;
+  return triangle_count * (2 * sizeof(Box) + 8 + sizeof(Plane) + 2 * sizeof(KeyIndex) + 1) +
+         6 * 64;
 }
 
 Status find_self_intersections(const Context& ctx, const Mesh& mesh, uint64_t max_pairs,
@@ -93,7 +150,9 @@ Status find_self_intersections(const Context& ctx, const Mesh& mesh, uint64_t ma
   KeyIndex* order = arena.allocate_array<KeyIndex>(nt);
   KeyIndex* scratch = arena.allocate_array<KeyIndex>(nt);
   uint8_t* skip = arena.allocate_array<uint8_t>(nt);
-  if ((boxes == nullptr || order == nullptr || scratch == nullptr || skip == nullptr) && nt > 0) {
+  Plane* planes = arena.allocate_array<Plane>(nt);
+  if ((boxes == nullptr || order == nullptr || scratch == nullptr || skip == nullptr ||
+       planes == nullptr) && nt > 0) {
     return arena.exhausted_status();
   }
   for (size_t t = 0; t < nt; ++t) {
@@ -112,26 +171,48 @@ Status find_self_intersections(const Context& ctx, const Mesh& mesh, uint64_t ma
     }
     skip[t] = tri.v[0] == tri.v[1] || tri.v[1] == tri.v[2] || tri.v[0] == tri.v[2] ||
               collinear3d(v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]);
+    planes[t] = plane_of(v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]);
     order[t] = KeyIndex{order_key(b.lo[0]), static_cast<uint32_t>(t), 0};
   }
   radix_sort(Span<KeyIndex>(order, nt), Span<KeyIndex>(scratch, nt));
 
+  // Boxes in sweep order, contiguous: the inner loop below runs over many pairs whose x
+  // ranges overlap but y or z do not, and must stream through memory.
+  struct SweepBox {
+    double lo[3];
+    double hi[3];
+    uint32_t triangle;
+    uint32_t skip;
+  };
+  SweepBox* sweep = arena.allocate_array<SweepBox>(nt);
+  if (sweep == nullptr && nt > 0) return arena.exhausted_status();
+  for (size_t i = 0; i < nt; ++i) {
+    const uint32_t t = order[i].index;
+    SweepBox& b = sweep[i];
+    for (int a = 0; a < 3; ++a) {
+      b.lo[a] = boxes[t].lo[a];
+      b.hi[a] = boxes[t].hi[a];
+    }
+    b.triangle = t;
+    b.skip = skip[t];
+  }
+
   bool have_first = false;
   for (size_t i = 0; i < nt; ++i) {
     if ((i & 0xfff) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "self-intersection", i, nt));
-    const uint32_t s = order[i].index;
-    if (skip[s]) continue;
-    const Box& bs = boxes[s];
+    const SweepBox& bs = sweep[i];
+    if (bs.skip) continue;
+    const uint32_t s = bs.triangle;
     for (size_t j = i + 1; j < nt; ++j) {
-      const uint32_t t = order[j].index;
-      const Box& bt = boxes[t];
+      const SweepBox& bt = sweep[j];
       if (bt.lo[0] > bs.hi[0]) break;
-      if (skip[t]) continue;
-      if (bt.lo[1] > bs.hi[1] || bt.hi[1] < bs.lo[1] || bt.lo[2] > bs.hi[2] || bt.hi[2] < bs.lo[2]) {
+      if (bt.lo[1] > bs.hi[1] || bt.hi[1] < bs.lo[1] || bt.lo[2] > bs.hi[2] || bt.hi[2] < bs.lo[2] ||
+          bt.skip) {
         continue;
       }
+      const uint32_t t = bt.triangle;
       ++report->candidate_pairs;
-      if (!conflict(v, tris[s], tris[t])) continue;
+      if (!conflict(v, tris[s], tris[t], planes[s], planes[t])) continue;
       ++report->intersecting_pairs;
       uint32_t a = s < t ? s : t, b = s < t ? t : s;
       if (!have_first || a < report->first_a || (a == report->first_a && b < report->first_b)) {
