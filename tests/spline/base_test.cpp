@@ -6,6 +6,7 @@
 #include "splintcore/design.h"
 #include "splintcore/platform.h"
 #include "splintcore/spline.h"
+#include "support/self_intersection_oracle.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -269,8 +270,13 @@ TEST(SplintBase, ArenaExhaustionIsCleanAtEveryCap) {
 TEST(SplintBase, PropertyRandomArchesAreValidSolids) {
   std::mt19937_64 rng(2016);
   std::uniform_real_distribution<double> U(0.0, 1.0);
-  int built = 0;
-  for (int trial = 0; trial < 300; ++trial) {
+  int built = 0, brute_checked = 0;
+#if defined(__OPTIMIZE__)
+  const int kTrials = 300, kBruteEvery = 15;
+#else
+  const int kTrials = 100, kBruteEvery = 50;  // unoptimised builds: fewer, same generator
+#endif
+  for (int trial = 0; trial < kTrials; ++trial) {
     TestArena t(size_t{32} << 20);
     const int n = 3 + static_cast<int>(U(rng) * 16);
     const double a = 18 + 12 * U(rng), b = 30 + 20 * U(rng), phi0 = -0.3 + 0.5 * U(rng);
@@ -303,9 +309,34 @@ TEST(SplintBase, PropertyRandomArchesAreValidSolids) {
     Context ctx(&t.arena);
     ASSERT_TRUE(find_self_intersections(ctx, bb.mesh, 0, &si).is_ok());
     ASSERT_FALSE(si.self_intersecting()) << "trial " << trial;
+    // Independently: every pair of triangles by the big-integer oracle (a sample of the
+    // trials, as it is quadratic).
+    if (trial % kBruteEvery == 0) {
+      brute::Brute b = brute::brute_force(bb.mesh);
+      ASSERT_EQ(b.pairs, 0u) << "trial " << trial << ": triangles " << b.first_a << " and "
+                             << b.first_b << " meet";
+      ++brute_checked;
+    }
     ++built;
   }
-  EXPECT_EQ(built, 300);
+  EXPECT_EQ(built, kTrials);
+  EXPECT_EQ(brute_checked, kTrials / kBruteEvery);
+}
+
+// The independent check can fail: a base whose far end is bent back through its start.
+TEST(SplintBase, BruteForceOracleSeesAnInjectedIntersection) {
+  TestArena t;
+  std::vector<Pick> up, lo;
+  prism(4, 12.0, 2.0, 2.0, 2.0, &up, &lo);
+  Built b = build(t, up, lo);
+  ASSERT_TRUE(b.status.is_ok());
+  brute::Brute clean = brute::brute_force(b.mesh);
+  EXPECT_EQ(clean.pairs, 0u);
+  // Move the last section into the middle of the bar.
+  const uint32_t S = b.report.sections;
+  for (uint32_t j = 0; j < 4; ++j) b.mesh.vertices[4 * size_t{S - 1} + j].x = 6.25;
+  brute::Brute bent = brute::brute_force(b.mesh);
+  EXPECT_GT(bent.pairs, 0u);
 }
 
 TEST(SplintBase, DeterministicAcrossRunsAndThreadCounts) {
