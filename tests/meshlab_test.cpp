@@ -32,6 +32,19 @@ std::string meshlab_log(const std::string& stl) {
   return text.str();
 }
 
+// Writes the bytes to a temporary STL, runs MeshLab on it, removes it, returns the log.
+std::string meshlab_log_of_bytes(const std::vector<uint8_t>& bytes) {
+  char path[] = "/tmp/splintcore-meshlab-XXXXXX.stl";
+  int fd = mkstemps(path, 4);
+  EXPECT_GE(fd, 0);
+  if (fd < 0) return "";
+  EXPECT_EQ(write(fd, bytes.data(), bytes.size()), static_cast<ssize_t>(bytes.size()));
+  close(fd);
+  std::string log = meshlab_log(path);
+  std::remove(path);
+  return log;
+}
+
 double number_after(const std::string& text, const std::string& label) {
   size_t at = text.find(label);
   if (at == std::string::npos) return std::nan("");
@@ -53,13 +66,7 @@ TEST(MeshLab, ConvertedFixturesAreWatertightTwoManifoldWithOurVolume) {
         &mesh));
     std::vector<uint8_t> out;
     SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(t.arena, mesh, StlFormat::kBinary, &out));
-    char path[] = "/tmp/splintcore-meshlab-XXXXXX.stl";
-    int fd = mkstemps(path, 4);
-    ASSERT_GE(fd, 0);
-    ASSERT_EQ(write(fd, out.data(), out.size()), static_cast<ssize_t>(out.size()));
-    close(fd);
-    std::string log = meshlab_log(path);
-    std::remove(path);
+    std::string log = meshlab_log_of_bytes(out);
     EXPECT_NE(log.find("Mesh is two-manifold"), std::string::npos) << c.fixture << "\n" << log;
     EXPECT_NE(log.find("Boundary Edges 0"), std::string::npos) << c.fixture;
     EXPECT_NE(log.find("Genus is " + std::to_string(c.genus)), std::string::npos) << c.fixture;
@@ -84,13 +91,7 @@ TEST(MeshLab, CaseBasesAreWatertightTwoManifold) {
     SPLINTCORE_ASSERT_OK(build_case_base(ctx, c, &m, &r));
     std::vector<uint8_t> out;
     SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(t.arena, m, StlFormat::kBinary, &out));
-    char path[] = "/tmp/splintcore-meshlab-XXXXXX.stl";
-    int fd = mkstemps(path, 4);
-    ASSERT_GE(fd, 0);
-    ASSERT_EQ(write(fd, out.data(), out.size()), static_cast<ssize_t>(out.size()));
-    close(fd);
-    std::string log = meshlab_log(path);
-    std::remove(path);
+    std::string log = meshlab_log_of_bytes(out);
     EXPECT_NE(log.find("Mesh is two-manifold"), std::string::npos) << fixture << "\n" << log;
     EXPECT_NE(log.find("Boundary Edges 0"), std::string::npos) << fixture;
     EXPECT_NE(log.find("Genus is 0"), std::string::npos) << fixture;

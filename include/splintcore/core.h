@@ -149,6 +149,10 @@ Status make_error(StatusCode code, const Parts&... parts) {
 // when malformed or overflowing. Used for memory caps in case files and on command lines.
 [[nodiscard]] bool parse_byte_size(const char* text, uint64_t* out);
 
+// 1..max_length characters of A-Z a-z 0-9 '_' '-' '.': safe in file names, STL solid names,
+// reports and labels.
+[[nodiscard]] bool is_plain_name(const char* text, size_t max_length);
+
 // ---------------------------------------------------------------------------------------------
 // Arena: a strict stack allocator with a hard cap.
 //

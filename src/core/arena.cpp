@@ -198,26 +198,4 @@ void Arena::release_unused_blocks() {
   }
 }
 
-bool parse_byte_size(const char* text, uint64_t* out) {
-  if (text == nullptr) return false;
-  size_t n = std::strlen(text);
-  if (n == 0) return false;
-  uint64_t scale = 1;
-  const char last = text[n - 1];
-  if (last == 'K' || last == 'k') scale = uint64_t{1} << 10;
-  if (last == 'M' || last == 'm') scale = uint64_t{1} << 20;
-  if (last == 'G' || last == 'g') scale = uint64_t{1} << 30;
-  if (scale != 1) --n;
-  if (n == 0 || n > 19) return false;
-  uint64_t value = 0;
-  for (size_t i = 0; i < n; ++i) {
-    if (text[i] < '0' || text[i] > '9') return false;
-    if (!checked_mul(value, 10, &value) ||
-        !checked_add(value, static_cast<uint64_t>(text[i] - '0'), &value)) {
-      return false;
-    }
-  }
-  return checked_mul(value, scale, out);
-}
-
 }  // namespace splintcore

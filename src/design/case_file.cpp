@@ -87,18 +87,6 @@ struct Reader {
   }
 };
 
-bool safe_id(const char* s) {
-  size_t n = std::strlen(s);
-  if (n == 0 || n > 64) return false;
-  for (size_t i = 0; i < n; ++i) {
-    char c = s[i];
-    bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-              c == '_' || c == '-' || c == '.';
-    if (!ok) return false;
-  }
-  return true;
-}
-
 Status parse_picks(const Reader& r, const JsonValue& list, const char* key, double inner_default,
                    double outside_default, Span<const Pick>* out) {
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(list, JsonType::kArray, key));
@@ -174,7 +162,7 @@ Status parse_case(const Context& ctx, const char* text, size_t length, const cha
 
   if (const JsonValue* id = doc.member(root, "case_id")) {
     SPLINTCORE_RETURN_IF_ERROR(r.string(*id, "case_id", &out->case_id));
-    if (!safe_id(out->case_id)) {
+    if (!is_plain_name(out->case_id, 64)) {
       return r.fail(*id, StatusCode::kInvalidArgument,
                     "\"case_id\" must be 1-64 letters, digits, '_', '-' or '.'");
     }

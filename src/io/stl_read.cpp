@@ -279,8 +279,10 @@ struct Tokenizer {
     return true;
   }
 
-  Status error_here(StatusCode code, const char* what) const {
-    Status s = make_error(code, what);
+  // "<what>, found '<token>'" (or "the end of the input"), located at the token.
+  Status error_here(StatusCode code, const char* what, const char* detail = "",
+                    const char* detail2 = "") const {
+    Status s = make_error(code, what, detail, detail2);
     if (length > 0) {
       s.append(", found '");
       s.append(token, length < 40 ? length : 40);
@@ -294,16 +296,8 @@ struct Tokenizer {
   Status expect(const char* keyword) {
     SPLINTCORE_RETURN_IF_ERROR(next());
     if (is(keyword)) return Status::ok();
-    Status s = make_error(length == 0 ? StatusCode::kTruncated : StatusCode::kParseError,
-                          "expected '", keyword, "'");
-    if (length > 0) {
-      s.append(", found '");
-      s.append(token, length < 40 ? length : 40);
-      s.append("'");
-    } else {
-      s.append(", found the end of the input");
-    }
-    return s.at_line(token_line, token_column);
+    return error_here(length == 0 ? StatusCode::kTruncated : StatusCode::kParseError,
+                      "expected '", keyword, "'");
   }
 
   Status number(float* value) {

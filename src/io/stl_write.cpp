@@ -95,19 +95,6 @@ size_t put_triple(uint8_t* out, const float v[3]) {
   return n;
 }
 
-bool valid_solid_name(const char* name) {
-  if (name == nullptr) return false;
-  size_t n = std::strlen(name);
-  if (n == 0 || n > 64) return false;
-  for (size_t i = 0; i < n; ++i) {
-    char c = name[i];
-    bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-              c == '_' || c == '-' || c == '.';
-    if (!ok) return false;
-  }
-  return true;
-}
-
 }  // namespace
 
 Status StlWriter::begin(const Context& ctx, const ByteSink& sink, const StlWriteOptions& options,
@@ -127,7 +114,7 @@ Status StlWriter::begin(const Context& ctx, const ByteSink& sink, const StlWrite
     return make_error(StatusCode::kLimitExceeded, "binary STL holds at most ", UINT32_MAX,
                       " triangles, asked for ", triangle_count);
   }
-  if (!binary_ && !valid_solid_name(options.solid_name)) {
+  if (!binary_ && !is_plain_name(options.solid_name, 64)) {
     return Status::error(StatusCode::kInvalidArgument,
                          "ASCII STL solid name must be 1-64 letters, digits, '_', '-' or '.'");
   }

@@ -145,6 +145,33 @@ struct RunMemory {
   ~RunMemory() { std::free(buffer); }
 };
 
+// What every subcommand runs with: the arena, the thread pool, the context, the start time.
+struct Run {
+  RunMemory memory;
+  Arena arena;
+  ThreadExecutor threads;
+  Context ctx;
+  double start;
+  explicit Run(const Options& o)
+      : memory(o.memory_cap),
+        arena(memory.buffer, memory.buffer != nullptr ? static_cast<size_t>(o.memory_cap) : 0),
+        threads(o.threads),
+        ctx(&arena, &threads.executor(), nullptr),
+        start(monotonic_seconds()) {}
+  bool has_memory() const { return memory.buffer != nullptr; }
+};
+
+// Writes a mesh through the streaming writer into a temporary file renamed over `path` only
+// when everything succeeded.
+Status write_atomically(const Context& ctx, const Mesh& mesh, const char* path, bool ascii) {
+  AtomicFile out;
+  SPLINTCORE_RETURN_IF_ERROR(out.open(path));
+  StlWriteOptions wo;
+  wo.format = ascii ? StlFormat::kAscii : StlFormat::kBinary;
+  SPLINTCORE_RETURN_IF_ERROR(write_stl(ctx, mesh, out.sink(), wo));  // ~AtomicFile cleans up
+  return out.commit();
+}
+
 void add_mesh_report(JsonObject* j, const MeshReport& r) {
   j->add("vertices", r.vertex_count);
   j->add("triangles", r.triangle_count);
@@ -208,6 +235,12 @@ int rejected(const Options& o, const char* command, const Status& s, Arena* aren
   return kExitRejected;
 }
 
+int no_memory(const Options& o, const char* command) {
+  return rejected(o, command, make_error(StatusCode::kArenaExhausted,
+                                         "cannot reserve the memory cap of ", o.memory_cap,
+                                         " bytes"), nullptr);
+}
+
 int run_check(int argc, char** argv) {
   Options o;
   int early = parse_options(argc, argv, kCheckUsage, false, &o);
@@ -218,16 +251,11 @@ int run_check(int argc, char** argv) {
     std::string m = std::string("unknown printer '") + o.printer + "' (known: eden260)";
     return usage_error(m.c_str(), kCheckUsage);
   }
-  RunMemory memory(o.memory_cap);
-  if (memory.buffer == nullptr) {
-    return rejected(o, "check", make_error(StatusCode::kArenaExhausted,
-                                           "cannot reserve the memory cap of ", o.memory_cap,
-                                           " bytes"), nullptr);
-  }
-  Arena arena(memory.buffer, static_cast<size_t>(o.memory_cap));
-  ThreadExecutor threads(o.threads);
-  Context ctx(&arena, &threads.executor(), nullptr);
-  const double t0 = monotonic_seconds();
+  Run run(o);
+  if (!run.has_memory()) return no_memory(o, "check");
+  Arena& arena = run.arena;
+  const Context& ctx = run.ctx;
+  const double t0 = run.start;
 
   FileSource file;
   Status s = file.open(o.positional[0]);
@@ -292,16 +320,11 @@ int run_convert(int argc, char** argv) {
   if (early >= 0) return early;
   if (o.positional.size() != 1) return usage_error("convert takes one input file", kConvertUsage);
   if (o.output == nullptr) return usage_error("convert needs -o OUT.stl", kConvertUsage);
-  RunMemory memory(o.memory_cap);
-  if (memory.buffer == nullptr) {
-    return rejected(o, "convert", make_error(StatusCode::kArenaExhausted,
-                                             "cannot reserve the memory cap of ", o.memory_cap,
-                                             " bytes"), nullptr);
-  }
-  Arena arena(memory.buffer, static_cast<size_t>(o.memory_cap));
-  ThreadExecutor threads(o.threads);
-  Context ctx(&arena, &threads.executor(), nullptr);
-  const double t0 = monotonic_seconds();
+  Run run(o);
+  if (!run.has_memory()) return no_memory(o, "convert");
+  Arena& arena = run.arena;
+  const Context& ctx = run.ctx;
+  const double t0 = run.start;
 
   FileSource file;
   Status s = file.open(o.positional[0]);
@@ -314,14 +337,7 @@ int run_convert(int argc, char** argv) {
   s = check_mesh(ctx, mesh, &report);
   if (!s.is_ok()) return rejected(o, "convert", s.in_file(o.positional[0]), &arena);
 
-  AtomicFile out;
-  s = out.open(o.output);
-  if (!s.is_ok()) return rejected(o, "convert", s, &arena);
-  StlWriteOptions wo;
-  wo.format = o.ascii ? StlFormat::kAscii : StlFormat::kBinary;
-  s = write_stl(ctx, mesh, out.sink(), wo);
-  if (!s.is_ok()) return rejected(o, "convert", s, &arena);  // ~AtomicFile removes the temp
-  s = out.commit();
+  s = write_atomically(ctx, mesh, o.output, o.ascii);
   if (!s.is_ok()) return rejected(o, "convert", s, &arena);
   const double seconds = monotonic_seconds() - t0;
 
@@ -356,16 +372,11 @@ int run_base(int argc, char** argv) {
   if (early >= 0) return early;
   if (o.positional.size() != 1) return usage_error("base takes one case file", kBaseUsage);
   if (o.output == nullptr) return usage_error("base needs -o BASE.stl", kBaseUsage);
-  RunMemory memory(o.memory_cap);
-  if (memory.buffer == nullptr) {
-    return rejected(o, "base", make_error(StatusCode::kArenaExhausted,
-                                          "cannot reserve the memory cap of ", o.memory_cap,
-                                          " bytes"), nullptr);
-  }
-  Arena arena(memory.buffer, static_cast<size_t>(o.memory_cap));
-  ThreadExecutor threads(o.threads);
-  Context ctx(&arena, &threads.executor(), nullptr);
-  const double t0 = monotonic_seconds();
+  Run run(o);
+  if (!run.has_memory()) return no_memory(o, "base");
+  Arena& arena = run.arena;
+  const Context& ctx = run.ctx;
+  const double t0 = run.start;
 
   Span<uint8_t> text;
   Status s = read_file(arena, o.positional[0], 16 << 20, &text);
@@ -380,14 +391,7 @@ int run_base(int argc, char** argv) {
   if (!s.is_ok()) return rejected(o, "base", s.in_file(o.positional[0]), &arena);
   const double t_build = monotonic_seconds();
 
-  AtomicFile out;
-  s = out.open(o.output);
-  if (!s.is_ok()) return rejected(o, "base", s, &arena);
-  StlWriteOptions wo;
-  wo.format = o.ascii ? StlFormat::kAscii : StlFormat::kBinary;
-  s = write_stl(ctx, base, out.sink(), wo);
-  if (!s.is_ok()) return rejected(o, "base", s, &arena);
-  s = out.commit();
+  s = write_atomically(ctx, base, o.output, o.ascii);
   if (!s.is_ok()) return rejected(o, "base", s, &arena);
   const double t_end = monotonic_seconds();
 
