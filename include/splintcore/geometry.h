@@ -151,6 +151,13 @@ bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, co
 bool triangles_intersect(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
                          const Vec3& e, const Vec3& f);
 
+// The same two tests when the caller already knows the points are coplanar (exactly): they
+// skip the orient3d calls that would find it out again.
+bool coplanar_segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a,
+                                          const Vec3& b, const Vec3& c);
+bool coplanar_triangles_intersect(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
+                                  const Vec3& e, const Vec3& f);
+
 // For coplanar work: an axis (0 x, 1 y, 2 z) to drop so that the projection of the triangle
 // abc is not degenerate, or -1 when abc is degenerate (collinear).
 int projection_axis(const Vec3& a, const Vec3& b, const Vec3& c);

@@ -82,17 +82,29 @@ int projection_axis(const Vec3& a, const Vec3& b, const Vec3& c) {
   return -1;
 }
 
+bool coplanar_segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a,
+                                          const Vec3& b, const Vec3& c) {
+  const int axis = projection_axis(a, b, c);
+  if (axis < 0) return false;  // degenerate triangle: not handled here
+  return segment_triangle_2d(drop(p, axis), drop(q, axis), drop(a, axis), drop(b, axis),
+                             drop(c, axis));
+}
+
+bool coplanar_triangles_intersect(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
+                                  const Vec3& e, const Vec3& f) {
+  const int axis = projection_axis(a, b, c);
+  if (axis < 0) return false;
+  const P2 t1[3] = {drop(a, axis), drop(b, axis), drop(c, axis)};
+  const P2 t2[3] = {drop(d, axis), drop(e, axis), drop(f, axis)};
+  return triangles_meet_2d(t1, t2);
+}
+
 bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
                                  const Vec3& c) {
   const int sp = sign_of(orient3d(a, b, c, p));
   const int sq = sign_of(orient3d(a, b, c, q));
   if (sp * sq > 0) return false;  // both strictly on one side
-  if (sp == 0 && sq == 0) {
-    int axis = projection_axis(a, b, c);
-    if (axis < 0) return false;  // degenerate triangle: not handled here
-    return segment_triangle_2d(drop(p, axis), drop(q, axis), drop(a, axis), drop(b, axis),
-                               drop(c, axis));
-  }
+  if (sp == 0 && sq == 0) return coplanar_segment_intersects_triangle(p, q, a, b, c);
   // The segment crosses or touches the plane at one point; it is inside the closed triangle
   // iff the line pq sees the three edges with signs that do not disagree.
   const int s1 = sign_of(orient3d(p, q, a, b));
@@ -114,13 +126,7 @@ bool triangles_intersect(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3
   const int sb = sign_of(orient3d(d, e, f, b));
   const int sc = sign_of(orient3d(d, e, f, c));
   if (sa == sb && sb == sc && sa != 0) return false;
-  if (sd == 0 && se == 0 && sf == 0) {
-    const int axis = projection_axis(a, b, c);
-    if (axis < 0) return false;
-    const P2 t1[3] = {drop(a, axis), drop(b, axis), drop(c, axis)};
-    const P2 t2[3] = {drop(d, axis), drop(e, axis), drop(f, axis)};
-    return triangles_meet_2d(t1, t2);
-  }
+  if (sd == 0 && se == 0 && sf == 0) return coplanar_triangles_intersect(a, b, c, d, e, f);
   return segment_intersects_triangle(a, b, d, e, f) || segment_intersects_triangle(b, c, d, e, f) ||
          segment_intersects_triangle(c, a, d, e, f) || segment_intersects_triangle(d, e, a, b, c) ||
          segment_intersects_triangle(e, f, a, b, c) || segment_intersects_triangle(f, d, a, b, c);

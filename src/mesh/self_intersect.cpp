@@ -43,24 +43,30 @@ Plane plane_of(const Vec3& a, const Vec3& b, const Vec3& c) {
   return p;
 }
 
-// +1 or -1 when x is certainly on that side of the plane, 0 when the filter cannot tell.
-inline int certain_side(const Plane& p, const Vec3& x) {
+// Where a point is relative to a plane, as far as the filter can tell. kOn is exact: a zero
+// permanent means every term of the determinant has an exactly zero factor (a rounded
+// difference or product is zero only when it is exactly zero), so the point is on the plane.
+enum Side : int { kBelow = -1, kUnknown = 0, kAbove = 1, kOn = 2 };
+
+inline Side side_of(const Plane& p, const Vec3& x) {
   const Vec3 d = x - p.a;
   const double side = p.n.x * d.x + p.n.y * d.y + p.n.z * d.z;
   const double permanent = p.nabs.x * (d.x < 0 ? -d.x : d.x) + p.nabs.y * (d.y < 0 ? -d.y : d.y) +
                            p.nabs.z * (d.z < 0 ? -d.z : d.z);
+  if (permanent == 0.0) return kOn;
   const double bound = kPlaneFilter * permanent;
-  return side > bound ? 1 : (side < -bound ? -1 : 0);
+  return side > bound ? kAbove : (side < -bound ? kBelow : kUnknown);
 }
 
-// True when the filter proves that p and q lie strictly on one side of the plane.
-inline bool certainly_one_side(const Plane& plane, const Vec3* pts, int n) {
-  const int s0 = certain_side(plane, pts[0]);
-  if (s0 == 0) return false;
-  for (int i = 1; i < n; ++i) {
-    if (certain_side(plane, pts[i]) != s0) return false;
-  }
-  return true;
+// All strictly on one side (certain), all exactly on the plane, or neither.
+enum Spread { kSeparated, kCoplanar, kMixed };
+
+inline Spread spread(const Plane& plane, const Vec3* pts, int n) {
+  const Side s0 = side_of(plane, pts[0]);
+  bool same = s0 != kUnknown;
+  for (int i = 1; i < n && same; ++i) same = side_of(plane, pts[i]) == s0;
+  if (!same) return kMixed;
+  return s0 == kOn ? kCoplanar : kSeparated;
 }
 
 // Same side of the shared edge ab, for coplanar c and d?
@@ -78,6 +84,17 @@ bool folded_onto(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   drop(c, &cx, &cy);
   drop(d, &dx, &dy);
   return sign_of(orient2d(ax, ay, bx, by, cx, cy)) * sign_of(orient2d(ax, ay, bx, by, dx, dy)) > 0;
+}
+
+// Does the edge pq meet triangle abc (whose plane is pl)?
+inline bool edge_meets(const Plane& pl, const Vec3& p, const Vec3& q, const Vec3& a,
+                       const Vec3& b, const Vec3& c) {
+  const Vec3 pts[2] = {p, q};
+  switch (spread(pl, pts, 2)) {
+    case kSeparated: return false;
+    case kCoplanar: return coplanar_segment_intersects_triangle(p, q, a, b, c);
+    default: return segment_intersects_triangle(p, q, a, b, c);
+  }
 }
 
 // Do triangles s and t conflict, given the vertex ids they share? The planes let the common
@@ -98,7 +115,10 @@ bool conflict(const Vec3* v, const Triangle& s, const Triangle& t, const Plane& 
   const Vec3 &d = v[t.v[0]], &e = v[t.v[1]], &f = v[t.v[2]];
   if (shared == 0) {
     const Vec3 tv[3] = {d, e, f}, sv[3] = {a, b, c};
-    if (certainly_one_side(ps, tv, 3) || certainly_one_side(pt, sv, 3)) return false;
+    const Spread t_vs_s = spread(ps, tv, 3);
+    if (t_vs_s == kSeparated) return false;
+    if (t_vs_s == kCoplanar) return coplanar_triangles_intersect(a, b, c, d, e, f);
+    if (spread(pt, sv, 3) == kSeparated) return false;
     return triangles_intersect(a, b, c, d, e, f);
   }
   if (shared >= 3) return true;  // the same three vertices twice
@@ -109,8 +129,10 @@ bool conflict(const Vec3* v, const Triangle& s, const Triangle& t, const Plane& 
     const Vec3& q = v[s.v[(s_free + 2) % 3]];
     const Vec3& sc = v[s.v[s_free]];
     const Vec3& tc = v[t.v[t_free]];
-    if (certain_side(ps, tc) != 0) return false;  // not coplanar: the edge is all they share
-    if (orient3d(p, q, sc, tc) != 0.0) return false;
+    const Side side = side_of(ps, tc);
+    // Not coplanar: the shared edge is all they share.
+    if (side == kAbove || side == kBelow) return false;
+    if (side == kUnknown && orient3d(p, q, sc, tc) != 0.0) return false;
     return folded_onto(p, q, sc, tc);
   }
   // One shared vertex: they conflict iff the edge of either opposite it meets the other.
@@ -120,11 +142,7 @@ bool conflict(const Vec3* v, const Triangle& s, const Triangle& t, const Plane& 
   const Vec3& s2 = v[s.v[(si + 2) % 3]];
   const Vec3& t1 = v[t.v[(ti + 1) % 3]];
   const Vec3& t2 = v[t.v[(ti + 2) % 3]];
-  const Vec3 s_edge[2] = {s1, s2}, t_edge[2] = {t1, t2};
-  const bool s_edge_clear = certainly_one_side(pt, s_edge, 2);
-  const bool t_edge_clear = certainly_one_side(ps, t_edge, 2);
-  return (!s_edge_clear && segment_intersects_triangle(s1, s2, d, e, f)) ||
-         (!t_edge_clear && segment_intersects_triangle(t1, t2, a, b, c));
+  return edge_meets(pt, s1, s2, d, e, f) || edge_meets(ps, t1, t2, a, b, c);
 }
 
 }  // namespace
