@@ -115,6 +115,15 @@ RigidTransform inverse(const RigidTransform& x);
 Status rigid_from_matrix(const double m[16], double tolerance, RigidTransform* out);
 
 // ---------------------------------------------------------------------------------------------
+// Angles without libm: atan by range reduction to |t| <= tan(7.5 deg) and a Taylor series, with
+// only + - * / (the libm functions are not the same bits on every platform). Accurate to a few
+// ulps; exactly the same bits everywhere.
+double deterministic_atan(double x);
+double deterministic_atan2(double y, double x);  // in [-pi, pi]; atan2(0, 0) = 0
+// The angle between two vectors, in [0, pi] (0 when either is zero).
+double angle_between(const Vec3& a, const Vec3& b);
+
+// ---------------------------------------------------------------------------------------------
 // Exact geometric predicates (Shewchuk, "Adaptive Precision Floating-Point Arithmetic and Fast
 // Robust Geometric Predicates", 1997). The sign of each result is exact for finite inputs
 // whose products neither overflow nor underflow: every nonzero coordinate within

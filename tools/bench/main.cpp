@@ -14,6 +14,7 @@
 #include "../common/shapes.h"
 #include "splintcore/core.h"
 #include "splintcore/design.h"
+#include "splintcore/distance.h"
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
 #include "splintcore/platform.h"
@@ -187,6 +188,111 @@ void bench_base(Harness& h, Arena& arena, const std::string& fixtures) {
   }
 }
 
+// The distance engine (issue 4's protocol): build the index over a mesh, then answer
+// 1,000,000 closest-point queries within 2 mm of the surface on one core: one at a time, and
+// as a batch (Morton-ordered, seeded). Query points: a random triangle, a random point on it,
+// moved along the normal by a uniform offset in [-2, 2] mm (fixed seed).
+void bench_distance(Harness& h, Arena& arena, const char* label, const Mesh& mesh) {
+  const std::string build_name = std::string("distance_build") + label;
+  const std::string closest_name = std::string("closest_point") + label;
+  const std::string batch_name = std::string("closest_point_batch") + label;
+  const std::string signed_name = std::string("signed_distance") + label;
+  if (!h.wanted(build_name.c_str()) && !h.wanted(closest_name.c_str()) &&
+      !h.wanted(batch_name.c_str()) && !h.wanted(signed_name.c_str())) {
+    return;
+  }
+  const size_t nt = mesh.triangles.size();
+  if (h.wanted(build_name.c_str())) {
+    Result r = h.measure(build_name.c_str(), nt, arena, [&](Arena& a) {
+      Context c(&a);
+      DistanceIndex index;
+      return build_distance_index(c, mesh, DistanceIndexOptions{}, &index);
+    });
+    (void)r;
+  }
+  Context ctx(&arena);
+  const size_t before = arena.used();
+  DistanceIndex index;
+  Status s = build_distance_index(ctx, mesh, DistanceIndexOptions{}, &index);
+  if (!s.is_ok()) {
+    cli::print_error(s);
+    h.failed = true;
+    return;
+  }
+  std::printf("# %s: index keeps %zu bytes (%.1f MiB) for %zu triangles\n", build_name.c_str(),
+              arena.used() - before, static_cast<double>(arena.used() - before) / 1048576.0, nt);
+  std::vector<Vec3> queries(1000000);
+  uint64_t state = 0x9e3779b97f4a7c15ull;
+  auto next = [&]() {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) * (1.0 / 9007199254740992.0);
+  };
+  const Vec3* v = mesh.vertices.data();
+  for (Vec3& q : queries) {
+    const Triangle& t = mesh.triangles[static_cast<size_t>(next() * static_cast<double>(nt)) % nt];
+    double a = next(), b = next();
+    if (a + b > 1) {
+      a = 1 - a;
+      b = 1 - b;
+    }
+    const Vec3 p = v[t.v[0]] + (v[t.v[1]] - v[t.v[0]]) * a + (v[t.v[2]] - v[t.v[0]]) * b;
+    Vec3 n = cross(v[t.v[1]] - v[t.v[0]], v[t.v[2]] - v[t.v[0]]);
+    const double len = length(n);
+    n = len > 0 ? n * (1.0 / len) : Vec3{};
+    q = p + n * (4.0 * next() - 2.0);
+  }
+  std::vector<ClosestPoint> results(queries.size());
+  if (h.wanted(closest_name.c_str())) {
+    Result r = h.measure(closest_name.c_str(), queries.size(), arena, [&](Arena&) {
+      for (size_t i = 0; i < queries.size(); ++i) closest_point(index, queries[i], &results[i]);
+      return Status::ok();
+    });
+    std::printf("# %s: %.0f queries/s\n", closest_name.c_str(),
+                static_cast<double>(queries.size()) / r.median);
+  }
+  if (h.wanted(batch_name.c_str())) {
+    Result r = h.measure(batch_name.c_str(), queries.size(), arena, [&](Arena& a) {
+      Context c(&a);
+      return batch_closest_points(c, index, Span<const Vec3>(queries.data(), queries.size()),
+                                  Span<ClosestPoint>(results.data(), results.size()));
+    });
+    std::printf("# %s: %.0f queries/s (one thread)\n", batch_name.c_str(),
+                static_cast<double>(queries.size()) / r.median);
+  }
+  if (h.wanted(signed_name.c_str())) {
+    std::vector<double> d(queries.size());
+    Result r = h.measure(signed_name.c_str(), queries.size(), arena, [&](Arena& a) {
+      Context c(&a);
+      return batch_signed_distances(c, index, Span<const Vec3>(queries.data(), queries.size()),
+                                    SignMethod::kAuto, Span<double>(d.data(), d.size()));
+    });
+    std::printf("# %s: %.0f queries/s (one thread, %s)\n", signed_name.c_str(),
+                static_cast<double>(queries.size()) / r.median,
+                index.closed_manifold ? "pseudonormals" : "winding numbers");
+  }
+}
+
+void bench_distance_sizes(Harness& h, Arena& arena) {
+  // Tori of about the paper's three jaw sizes (86,866, 324,246 and 543,530 cells).
+  const uint32_t sizes[3] = {209, 403, 521};
+  const char* labels[3] = {"_87k", "_324k", "_543k"};
+  for (int i = 0; i < 3; ++i) {
+    const std::string any = std::string("_") + labels[i];
+    Arena::Marker m = arena.mark();
+    std::vector<SoupTriangle> soup = shapes::torus(sizes[i], sizes[i], 30.0, 8.0);
+    Context ctx(&arena);
+    Mesh mesh(&arena);
+    Status s = weld_exact(ctx, Span<const SoupTriangle>(soup.data(), soup.size()), &mesh);
+    if (!s.is_ok()) {
+      cli::print_error(s);
+      h.failed = true;
+      return;
+    }
+    bench_distance(h, arena, labels[i], mesh);
+    arena.rewind(m);
+  }
+}
+
 int run(int argc, char** argv) {
   Harness h;
   std::string realdata = "../shared/realdata/open-full-jaw-patient26";
@@ -222,6 +328,7 @@ int run(int argc, char** argv) {
   {
     Arena arena(buffer, static_cast<size_t>(cap));
     bench_base(h, arena, fixtures);
+    bench_distance_sizes(h, arena);
     // A torus of 2 x 521 x 521 = 542,882 triangles: the size of the paper's largest jaw.
     std::vector<uint8_t> torus = to_binary_stl(shapes::torus(521, 521, 30.0, 8.0));
     bench_stl(h, arena, "", torus);
@@ -241,6 +348,15 @@ int run(int argc, char** argv) {
     if (!all.empty()) {
       std::memcpy(all.data() + 80, &count, 4);
       bench_stl(h, arena, "_realdata", all);
+      {
+        Arena::Marker m = arena.mark();
+        Context ctx(&arena);
+        Mesh mesh(&arena);
+        MemorySource ms{all.data(), all.size(), 0, 0};
+        Status s = read_stl_mesh(ctx, memory_source(&ms), StlReadOptions{}, &mesh, nullptr);
+        if (s.is_ok()) bench_distance(h, arena, "_realdata", mesh);
+        arena.rewind(m);
+      }
     } else {
       std::printf("# realdata not found at %s: skipped\n", realdata.c_str());
     }

@@ -1,6 +1,7 @@
 // splintcore: the command-line program. One subcommand per stage of the method; each takes
 // --help, --json, --memory-cap SIZE and --threads N, exits 0 on success, 1 when the input is
 // rejected (or a check fails, or the memory cap is too small), 2 on a usage error.
+#include <charconv>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -10,6 +11,7 @@
 #include "../common/cli.h"
 #include "splintcore/core.h"
 #include "splintcore/design.h"
+#include "splintcore/distance.h"
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
 #include "splintcore/platform.h"
@@ -32,6 +34,7 @@ const char kUsage[] =
     "  check IN.stl [--printer eden260]     check a mesh is a printable solid\n"
     "  convert IN.stl -o OUT.stl [--ascii]  read, weld, check and rewrite an STL\n"
     "  base CASE.json -o BASE.stl           build the initial splint base from the picks\n"
+    "  distance MESH.stl --query X,Y,Z ...  closest point, signed distance, winding number\n"
     "\n"
     "options of every command:\n"
     "  --help            this text for the command\n"
@@ -69,6 +72,16 @@ const char kBaseUsage[] =
     "The base is checked (closed, manifold, outward, no self-intersection, as float32) before\n"
     "it is written, atomically. The case format is in docs/case-format.md.\n";
 
+const char kDistanceUsage[] =
+    "usage: splintcore distance MESH.stl --query X,Y,Z [--query X,Y,Z ...]\n"
+    "                          [--sign auto|pseudonormal|winding] [--json]\n"
+    "                          [--memory-cap SIZE] [--threads N]\n"
+    "\n"
+    "Builds the distance index (a BVH) over the mesh and prints, per query point (mm): the\n"
+    "closest point, its triangle and feature (face, edge or vertex), the unsigned and signed\n"
+    "distance (negative inside) and the generalised winding number. --sign auto uses\n"
+    "pseudonormals on a closed manifold mesh and the winding number otherwise.\n";
+
 struct Options {
   bool help = false;
   bool json = false;
@@ -79,7 +92,29 @@ struct Options {
   const char* printer = "eden260";
   bool ascii = false;
   bool place = true;
+  std::vector<Vec3> queries;
+  SignMethod sign = SignMethod::kAuto;
 };
+
+// "X,Y,Z" -> a point; false when malformed or not finite.
+bool parse_point(const char* text, Vec3* out) {
+  const char* p = text;
+  for (int a = 0; a < 3; ++a) {
+    const char* end = p;
+    while (*end != '\0' && *end != ',') ++end;
+    double value = 0;
+    auto r = std::from_chars(p, end, value);
+    if (r.ec != std::errc() || r.ptr != end || !is_finite(value)) return false;
+    (*out)[a] = value;
+    if (a < 2) {
+      if (*end != ',') return false;
+      p = end + 1;
+    } else if (*end != '\0') {
+      return false;
+    }
+  }
+  return true;
+}
 
 int usage_error(const char* message, const char* usage) {
   std::fprintf(stderr, "splintcore: %s\n\n%s", message, usage);
@@ -124,6 +159,24 @@ int parse_options(int argc, char** argv, const char* usage, bool takes_output, O
       o->ascii = true;
     } else if (std::strcmp(a, "--no-place") == 0) {
       o->place = false;
+    } else if (std::strcmp(a, "--query") == 0) {
+      const char* v = value(a);
+      Vec3 q;
+      if (v == nullptr || !parse_point(v, &q)) {
+        return usage_error("--query needs X,Y,Z (three finite numbers, mm)", usage);
+      }
+      o->queries.push_back(q);
+    } else if (std::strcmp(a, "--sign") == 0) {
+      const char* v = value(a);
+      if (v != nullptr && std::strcmp(v, "auto") == 0) {
+        o->sign = SignMethod::kAuto;
+      } else if (v != nullptr && std::strcmp(v, "pseudonormal") == 0) {
+        o->sign = SignMethod::kPseudonormal;
+      } else if (v != nullptr && std::strcmp(v, "winding") == 0) {
+        o->sign = SignMethod::kWindingNumber;
+      } else {
+        return usage_error("--sign takes auto, pseudonormal or winding", usage);
+      }
     } else if (a[0] == '-' && a[1] != '\0') {
       std::string m = std::string("unknown option '") + a + "'";
       return usage_error(m.c_str(), usage);
@@ -431,6 +484,90 @@ int run_base(int argc, char** argv) {
   return kExitOk;
 }
 
+int run_distance(int argc, char** argv) {
+  Options o;
+  int early = parse_options(argc, argv, kDistanceUsage, false, &o);
+  if (early >= 0) return early;
+  if (o.positional.size() != 1) return usage_error("distance takes one mesh file", kDistanceUsage);
+  if (o.queries.empty()) return usage_error("distance needs at least one --query X,Y,Z", kDistanceUsage);
+  Run run(o);
+  if (!run.has_memory()) return no_memory(o, "distance");
+  Arena& arena = run.arena;
+  const Context& ctx = run.ctx;
+  const double t0 = run.start;
+
+  FileSource file;
+  Status s = file.open(o.positional[0]);
+  if (!s.is_ok()) return rejected(o, "distance", s, &arena);
+  Mesh mesh(&arena);
+  StlInfo info;
+  s = read_stl_mesh(ctx, file.source(), StlReadOptions{}, &mesh, &info);
+  if (!s.is_ok()) return rejected(o, "distance", s, &arena);
+  if (mesh.triangles.size() == 0) {
+    return rejected(o, "distance", Status::error(StatusCode::kInvalidMesh, "mesh is empty")
+                                       .in_file(o.positional[0]), &arena);
+  }
+  const size_t before = arena.used();
+  DistanceIndex index;
+  s = build_distance_index(ctx, mesh, DistanceIndexOptions{}, &index);
+  if (!s.is_ok()) return rejected(o, "distance", s.in_file(o.positional[0]), &arena);
+  const double t_build = monotonic_seconds();
+  const size_t index_bytes = arena.used() - before;
+
+  std::string rows = "[";
+  for (size_t i = 0; i < o.queries.size(); ++i) {
+    const Vec3& q = o.queries[i];
+    SignedDistance sd;
+    signed_distance(index, q, o.sign, &sd);
+    const double w = sd.method == SignMethod::kWindingNumber ? sd.winding : winding_number(index, q);
+    const char* method = sd.method == SignMethod::kPseudonormal ? "pseudonormal" : "winding";
+    if (o.json) {
+      JsonObject r;
+      r.add("query", q);
+      r.add("closest_point", sd.closest.point);
+      r.add("triangle", static_cast<uint64_t>(sd.closest.triangle));
+      r.add("feature", feature_name(sd.closest.feature));
+      r.add("feature_index", static_cast<uint64_t>(sd.closest.feature_index));
+      r.add("distance", sd.closest.distance);
+      r.add("signed_distance", sd.distance);
+      r.add("inside", sd.distance < 0);
+      r.add("winding_number", w);
+      r.add("sign_method", method);
+      rows += (i > 0 ? "," : "") + r.str();
+    } else {
+      std::printf("query %.6g,%.6g,%.6g: closest %.9g,%.9g,%.9g on triangle %u (%s %u), "
+                  "distance %.9g, signed %.9g (%s), winding number %.6f\n",
+                  q.x, q.y, q.z, sd.closest.point.x, sd.closest.point.y, sd.closest.point.z,
+                  sd.closest.triangle, feature_name(sd.closest.feature),
+                  sd.closest.feature_index, sd.closest.distance, sd.distance, method, w);
+    }
+  }
+  rows += "]";
+  const double t_end = monotonic_seconds();
+  if (o.json) {
+    JsonObject j;
+    j.add("command", "distance");
+    j.add("input", o.positional[0]);
+    j.add_status(Status::ok());
+    j.add("triangles", static_cast<uint64_t>(mesh.triangles.size()));
+    j.add("closed_manifold", index.closed_manifold);
+    j.add("index_nodes", static_cast<uint64_t>(index.nodes.size()));
+    j.add("index_bytes", static_cast<uint64_t>(index_bytes));
+    j.add_raw("queries", rows);
+    j.add("build_s", t_build - t0);
+    j.add("time_s", t_end - t0);
+    j.add("peak_arena_bytes", static_cast<uint64_t>(arena.high_water()));
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("index: %zu triangles, %zu nodes, %zu bytes, %s; built in %.4f s; peak arena "
+                "%llu bytes\n",
+                mesh.triangles.size(), index.nodes.size(), index_bytes,
+                index.closed_manifold ? "closed manifold" : "open or non-manifold",
+                t_build - t0, static_cast<unsigned long long>(arena.high_water()));
+  }
+  return kExitOk;
+}
+
 }  // namespace
 }  // namespace splintcore
 
@@ -449,6 +586,7 @@ int main(int argc, char** argv) {
   if (std::strcmp(command, "check") == 0) return run_check(argc - 2, argv + 2);
   if (std::strcmp(command, "convert") == 0) return run_convert(argc - 2, argv + 2);
   if (std::strcmp(command, "base") == 0) return run_base(argc - 2, argv + 2);
+  if (std::strcmp(command, "distance") == 0) return run_distance(argc - 2, argv + 2);
   std::fprintf(stderr, "splintcore: unknown command '%s'\n\n%s", command, kUsage);
   return cli::kExitUsage;
 }

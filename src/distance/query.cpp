@@ -1,0 +1,562 @@
+// Queries on the distance index: closest point (Ericson, "Real-Time Collision Detection",
+// 5.1.5, with the Voronoi region giving the feature), signed distance by angle-weighted
+// pseudonormals (Baerentzen and Aanaes 2005) or by the generalised winding number (Jacobson,
+// Kavan and Sorkine-Hornung, "Robust inside-outside segmentation using generalized winding
+// numbers", SIGGRAPH 2013; solid angles by Van Oosterom and Strackee 1983) with the
+// hierarchical far field of Barill et al. 2018, ray and segment tests, box queries, batches
+// and the narrow-band volume sampler.
+#include <cmath>
+
+#include "splintcore/distance.h"
+
+namespace splintcore {
+
+namespace {
+
+constexpr uint32_t kStack = 128;
+constexpr double kFourPi = 12.566370614359172954;
+
+inline bool is_leaf(const BvhNode& n) { return n.count > 0 || n.index == 0; }
+
+inline double box_distance_squared(const BvhNode& n, const Vec3& q) {
+  double d2 = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double lo = static_cast<double>(n.lo[a]), hi = static_cast<double>(n.hi[a]);
+    const double x = q[a];
+    const double d = x < lo ? lo - x : (x > hi ? x - hi : 0.0);
+    d2 += d * d;
+  }
+  return d2;
+}
+
+inline double box_centre_distance_squared(const BvhNode& n, const Vec3& q) {
+  double d2 = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double c = 0.5 * (static_cast<double>(n.lo[a]) + static_cast<double>(n.hi[a]));
+    d2 += (c - q[a]) * (c - q[a]);
+  }
+  return d2;
+}
+
+// Closest point on triangle abc to p, with the feature (Ericson 5.1.5).
+void closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, Vec3* out,
+                         Feature* feature, uint8_t* index) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) {
+    *out = a; *feature = Feature::kVertex; *index = 0;
+    return;
+  }
+  const Vec3 bp = p - b;
+  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) {
+    *out = b; *feature = Feature::kVertex; *index = 1;
+    return;
+  }
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double t = d1 / (d1 - d3);
+    *out = a + ab * t; *feature = Feature::kEdge; *index = 0;
+    return;
+  }
+  const Vec3 cp = p - c;
+  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) {
+    *out = c; *feature = Feature::kVertex; *index = 2;
+    return;
+  }
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double t = d2 / (d2 - d6);
+    *out = a + ac * t; *feature = Feature::kEdge; *index = 2;  // edge c -> a
+    return;
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    *out = b + (c - b) * t; *feature = Feature::kEdge; *index = 1;
+    return;
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  const double v = vb * denom, w = vc * denom;
+  *out = a + ab * v + ac * w;
+  *feature = Feature::kFace;
+  *index = 0;
+}
+
+// Closest point among triangles within sqrt(limit2) of q; false when none is. A seed triangle
+// (kNoNeighbor: none), e.g. the answer for a nearby query, starts the search with a tight
+// bound; the answer is the same with or without it (ties still go to the smallest id).
+bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, ClosestPoint* out,
+                    uint32_t seed = kNoNeighbor) {
+  const Mesh& mesh = *index.mesh;
+  if (mesh.triangles.size() == 0) return false;
+  const Vec3* v = mesh.vertices.data();
+  const BvhNode* nodes = index.nodes.data();
+  double best2 = limit2;
+  bool found = false;
+  uint32_t best_tri = 0;
+  ClosestPoint best;
+  if (seed != kNoNeighbor) {
+    const Triangle& tri = mesh.triangles[seed];
+    Vec3 p;
+    Feature f;
+    uint8_t fi;
+    closest_on_triangle(q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], &p, &f, &fi);
+    const double d2 = length_squared(p - q);
+    if (d2 <= limit2) {
+      best2 = d2;
+      best_tri = seed;
+      found = true;
+      best.point = p;
+      best.triangle = seed;
+      best.feature = f;
+      best.feature_index = fi;
+    }
+  }
+  uint32_t stack[kStack];
+  uint32_t top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const BvhNode& node = nodes[stack[--top]];
+    if (box_distance_squared(node, q) > best2) continue;
+    if (is_leaf(node)) {
+      for (uint32_t k = node.index; k < node.index + node.count; ++k) {
+        const uint32_t t = index.order[k];
+        const Triangle& tri = mesh.triangles[t];
+        Vec3 p;
+        Feature f;
+        uint8_t fi;
+        closest_on_triangle(q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], &p, &f, &fi);
+        const double d2 = length_squared(p - q);
+        // Ties go to the smallest triangle id: the answer never depends on the tree.
+        if (d2 < best2 || (d2 == best2 && (!found || t < best_tri))) {
+          if (d2 > limit2) continue;
+          best2 = d2;
+          best_tri = t;
+          found = true;
+          best.point = p;
+          best.triangle = t;
+          best.feature = f;
+          best.feature_index = fi;
+        }
+      }
+      continue;
+    }
+    // Visit the nearer child first (push it last).
+    const uint32_t c0 = node.index, c1 = node.index + 1;
+    const double d0 = box_distance_squared(nodes[c0], q), d1 = box_distance_squared(nodes[c1], q);
+    if (top + 2 > kStack) continue;  // cannot happen: depth is bounded at build time
+    // Nearer box first; when q is inside both (common near the top), the nearer box centre.
+    bool first0 = d0 < d1;
+    if (d0 == d1) first0 = box_centre_distance_squared(nodes[c0], q) <= box_centre_distance_squared(nodes[c1], q);
+    if (first0) {
+      if (d1 <= best2) stack[top++] = c1;
+      if (d0 <= best2) stack[top++] = c0;
+    } else {
+      if (d0 <= best2) stack[top++] = c0;
+      if (d1 <= best2) stack[top++] = c1;
+    }
+  }
+  if (!found) return false;
+  best.distance = std::sqrt(best2);
+  *out = best;
+  return true;
+}
+
+// Solid angle of triangle abc seen from q (Van Oosterom and Strackee).
+double solid_angle(const Vec3& q, const Vec3& a0, const Vec3& b0, const Vec3& c0) {
+  const Vec3 a = a0 - q, b = b0 - q, c = c0 - q;
+  const double la = length(a), lb = length(b), lc = length(c);
+  const double det = dot(a, cross(b, c));
+  const double den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
+  return 2.0 * deterministic_atan2(det, den);
+}
+
+Vec3 face_normal(const Mesh& mesh, uint32_t t) {
+  const Triangle& tri = mesh.triangles[t];
+  const Vec3* v = mesh.vertices.data();
+  const Vec3 n = cross(v[tri.v[1]] - v[tri.v[0]], v[tri.v[2]] - v[tri.v[0]]);
+  const double len = length(n);
+  return len > 0 ? n * (1.0 / len) : Vec3{};
+}
+
+}  // namespace
+
+bool closest_point(const DistanceIndex& index, const Vec3& q, ClosestPoint* out) {
+  return closest_within(index, q, HUGE_VAL, out);
+}
+
+double winding_number(const DistanceIndex& index, const Vec3& q, double beta) {
+  const Mesh& mesh = *index.mesh;
+  if (mesh.triangles.size() == 0) return 0.0;
+  const Vec3* v = mesh.vertices.data();
+  const BvhNode* nodes = index.nodes.data();
+  const double beta2 = beta * beta;
+  double sum = 0;
+  uint32_t stack[kStack];
+  uint32_t top = 0;
+  stack[top++] = 0;
+  // Fixed order (left child before right), so the sum is the same bits every time.
+  while (top > 0) {
+    const uint32_t i = stack[--top];
+    const BvhNode& node = nodes[i];
+    if (beta > 0 && i != 0) {
+      const BvhDipole& dp = index.dipoles[i];
+      const Vec3 c{dp.center[0], dp.center[1], dp.center[2]};
+      const Vec3 r = c - q;
+      const double d2 = length_squared(r);
+      const double rad = static_cast<double>(dp.radius);
+      if (d2 > beta2 * rad * rad) {
+        const Vec3 nrm{dp.normal[0], dp.normal[1], dp.normal[2]};
+        const double d = std::sqrt(d2);
+        sum += dot(r, nrm) / (d2 * d);
+        continue;
+      }
+    }
+    if (is_leaf(node)) {
+      for (uint32_t k = node.index; k < node.index + node.count; ++k) {
+        const Triangle& tri = mesh.triangles[index.order[k]];
+        sum += solid_angle(q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]);
+      }
+      continue;
+    }
+    stack[top++] = node.index + 1;
+    stack[top++] = node.index;
+  }
+  return sum / kFourPi;
+}
+
+bool signed_distance(const DistanceIndex& index, const Vec3& q, SignMethod method,
+                     SignedDistance* out) {
+  *out = SignedDistance{};
+  if (!closest_point(index, q, &out->closest)) return false;
+  const ClosestPoint& cp = out->closest;
+  if (method == SignMethod::kAuto) {
+    method = index.closed_manifold ? SignMethod::kPseudonormal : SignMethod::kWindingNumber;
+  }
+  out->method = method;
+  if (cp.distance == 0.0) {
+    out->distance = 0.0;
+    return true;
+  }
+  bool inside = false;
+  if (method == SignMethod::kPseudonormal) {
+    const Mesh& mesh = *index.mesh;
+    const Triangle& tri = mesh.triangles[cp.triangle];
+    Vec3 normal;
+    bool ok = true;
+    switch (cp.feature) {
+      case Feature::kFace:
+        normal = face_normal(mesh, cp.triangle);
+        break;
+      case Feature::kEdge: {
+        const uint32_t other = index.neighbors[3 * size_t{cp.triangle} + cp.feature_index];
+        ok = other != kNoNeighbor;
+        if (ok) normal = face_normal(mesh, cp.triangle) + face_normal(mesh, other);
+        break;
+      }
+      case Feature::kVertex:
+        normal = index.vertex_normals[tri.v[cp.feature_index]];
+        break;
+    }
+    if (ok) {
+      inside = dot(q - cp.point, normal) < 0.0;
+    } else {
+      method = SignMethod::kWindingNumber;  // an open edge: the pseudonormal is undefined
+      out->method = method;
+    }
+  }
+  if (method == SignMethod::kWindingNumber) {
+    out->winding = winding_number(index, q);
+    inside = out->winding >= 0.5;
+  }
+  out->distance = inside ? -cp.distance : cp.distance;
+  return true;
+}
+
+bool ray_intersect(const DistanceIndex& index, const Vec3& origin, const Vec3& direction,
+                   double t_max, RayHit* out) {
+  const Mesh& mesh = *index.mesh;
+  if (mesh.triangles.size() == 0) return false;
+  const Vec3* v = mesh.vertices.data();
+  const BvhNode* nodes = index.nodes.data();
+  const Vec3 inv{1.0 / direction.x, 1.0 / direction.y, 1.0 / direction.z};
+  double best_t = t_max;
+  bool found = false;
+  uint32_t best_tri = 0;
+  uint32_t stack[kStack];
+  uint32_t top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const BvhNode& node = nodes[stack[--top]];
+    // Slab test (inf/nan from zero direction components resolved conservatively).
+    double t0 = 0, t1 = best_t;
+    bool miss = false;
+    for (int a = 0; a < 3 && !miss; ++a) {
+      const double lo = static_cast<double>(node.lo[a]), hi = static_cast<double>(node.hi[a]);
+      if (direction[a] == 0.0) {
+        miss = origin[a] < lo || origin[a] > hi;
+        continue;
+      }
+      double ta = (lo - origin[a]) * inv[a], tb = (hi - origin[a]) * inv[a];
+      if (ta > tb) { const double s = ta; ta = tb; tb = s; }
+      t0 = ta > t0 ? ta : t0;
+      t1 = tb < t1 ? tb : t1;
+      miss = t0 > t1 * (1 + 4e-16) + 1e-300;
+    }
+    if (miss) continue;
+    if (is_leaf(node)) {
+      for (uint32_t k = node.index; k < node.index + node.count; ++k) {
+        const uint32_t t = index.order[k];
+        const Triangle& tri = mesh.triangles[t];
+        const Vec3 &a = v[tri.v[0]], &b = v[tri.v[1]], &c = v[tri.v[2]];
+        // Moller-Trumbore.
+        const Vec3 e1 = b - a, e2 = c - a;
+        const Vec3 p = cross(direction, e2);
+        const double det = dot(e1, p);
+        if (det == 0.0) continue;
+        const double inv_det = 1.0 / det;
+        const Vec3 s = origin - a;
+        const double u = dot(s, p) * inv_det;
+        if (u < 0.0 || u > 1.0) continue;
+        const Vec3 qv = cross(s, e1);
+        const double w = dot(direction, qv) * inv_det;
+        if (w < 0.0 || u + w > 1.0) continue;
+        const double th = dot(e2, qv) * inv_det;
+        if (th < 0.0 || th > best_t) continue;
+        if (th < best_t || !found || t < best_tri) {
+          best_t = th;
+          best_tri = t;
+          found = true;
+        }
+      }
+      continue;
+    }
+    stack[top++] = node.index + 1;
+    stack[top++] = node.index;
+  }
+  if (!found) return false;
+  out->t = best_t;
+  out->triangle = best_tri;
+  return true;
+}
+
+bool segment_intersects_mesh(const DistanceIndex& index, const Vec3& p, const Vec3& q,
+                             uint32_t* triangle) {
+  const Mesh& mesh = *index.mesh;
+  if (mesh.triangles.size() == 0) return false;
+  const Vec3* v = mesh.vertices.data();
+  Aabb box;
+  box.add(p);
+  box.add(q);
+  bool found = false;
+  uint32_t best = 0;
+  uint32_t stack[kStack];
+  uint32_t top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const BvhNode& node = index.nodes[stack[--top]];
+    if (static_cast<double>(node.lo[0]) > box.hi.x || static_cast<double>(node.hi[0]) < box.lo.x ||
+        static_cast<double>(node.lo[1]) > box.hi.y || static_cast<double>(node.hi[1]) < box.lo.y ||
+        static_cast<double>(node.lo[2]) > box.hi.z || static_cast<double>(node.hi[2]) < box.lo.z) {
+      continue;
+    }
+    if (is_leaf(node)) {
+      for (uint32_t k = node.index; k < node.index + node.count; ++k) {
+        const uint32_t t = index.order[k];
+        if (found && t >= best) continue;
+        const Triangle& tri = mesh.triangles[t];
+        if (collinear3d(v[tri.v[0]], v[tri.v[1]], v[tri.v[2]])) continue;
+        if (segment_intersects_triangle(p, q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]])) {
+          best = t;
+          found = true;
+        }
+      }
+      continue;
+    }
+    stack[top++] = node.index + 1;
+    stack[top++] = node.index;
+  }
+  if (found && triangle != nullptr) *triangle = best;
+  return found;
+}
+
+Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aabb& box,
+                        ArenaArray<uint32_t>* out) {
+  const size_t start = out->size();
+  if (index.mesh->triangles.size() == 0 || box.empty()) return Status::ok();
+  uint32_t stack[kStack];
+  uint32_t top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const BvhNode& node = index.nodes[stack[--top]];
+    if (static_cast<double>(node.lo[0]) > box.hi.x || static_cast<double>(node.hi[0]) < box.lo.x ||
+        static_cast<double>(node.lo[1]) > box.hi.y || static_cast<double>(node.hi[1]) < box.lo.y ||
+        static_cast<double>(node.lo[2]) > box.hi.z || static_cast<double>(node.hi[2]) < box.lo.z) {
+      continue;
+    }
+    if (is_leaf(node)) {
+      const Vec3* v = index.mesh->vertices.data();
+      for (uint32_t k = node.index; k < node.index + node.count; ++k) {
+        const uint32_t t = index.order[k];
+        const Triangle& tri = index.mesh->triangles[t];
+        Aabb tb;
+        tb.add(v[tri.v[0]]);
+        tb.add(v[tri.v[1]]);
+        tb.add(v[tri.v[2]]);
+        if (!tb.overlaps(box)) continue;
+        if (!out->push_back(t)) return ctx.arena->exhausted_status();
+      }
+      continue;
+    }
+    stack[top++] = node.index + 1;
+    stack[top++] = node.index;
+  }
+  // Ascending ids: the order of the result never depends on the tree.
+  const size_t found = out->size() - start;
+  if (found > 1) {
+    ArenaScope scope(*ctx.arena);
+    KeyIndex* keys = ctx.arena->allocate_array<KeyIndex>(found);
+    if (keys == nullptr) return ctx.arena->exhausted_status();
+    for (size_t i = 0; i < found; ++i) keys[i] = KeyIndex{(*out)[start + i], 0, 0};
+    SPLINTCORE_RETURN_IF_ERROR(radix_sort(*ctx.arena, Span<KeyIndex>(keys, found)));
+    for (size_t i = 0; i < found; ++i) (*out)[start + i] = static_cast<uint32_t>(keys[i].key);
+  }
+  return Status::ok();
+}
+
+namespace {
+constexpr uint32_t kBatch = 1024;  // queries per task
+}  // namespace
+
+// Batches are processed in Morton order of the queries, each seeded with the answer to the
+// one before it: nearby queries share nodes and triangles (cache) and start with a tight
+// bound. Results land at their own index, so the order changes nothing but the time.
+Status batch_closest_points(const Context& ctx, const DistanceIndex& index,
+                            Span<const Vec3> queries, Span<ClosestPoint> results) {
+  if (queries.size() != results.size()) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "batch_closest_points: queries and results differ in size");
+  }
+  const size_t n = queries.size();
+  if (n == 0 || index.mesh->triangles.size() == 0) {
+    for (size_t k = 0; k < n; ++k) results[k] = ClosestPoint{};
+    return Status::ok();
+  }
+  constexpr size_t kChunk = size_t{1} << 16;
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);
+  KeyIndex* keys = arena.allocate_array<KeyIndex>(kChunk);
+  KeyIndex* scratch = arena.allocate_array<KeyIndex>(kChunk);
+  if (keys == nullptr || scratch == nullptr) return arena.exhausted_status();
+  const BvhNode& root = index.nodes[0];
+  const Vec3 lo{root.lo[0], root.lo[1], root.lo[2]};
+  double scale[3];
+  for (int a = 0; a < 3; ++a) {
+    const double ext = static_cast<double>(root.hi[a]) - static_cast<double>(root.lo[a]);
+    scale[a] = ext > 0 ? 1023.0 / ext : 0.0;
+  }
+  for (size_t first = 0; first < n; first += kChunk) {
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "closest points", first, n));
+    const size_t count = first + kChunk < n ? kChunk : n - first;
+    for (size_t k = 0; k < count; ++k) {
+      uint64_t code = 0;
+      const Vec3& q = queries[first + k];
+      for (int a = 0; a < 3; ++a) {
+        double x = (q[a] - lo[a]) * scale[a];
+        x = x < 0 || x != x ? 0 : (x > 1023.0 ? 1023.0 : x);
+        uint64_t c = static_cast<uint64_t>(x);
+        for (int bit = 0; bit < 10; ++bit) code |= ((c >> bit) & 1) << (3 * bit + (2 - a));
+      }
+      keys[k] = KeyIndex{code, static_cast<uint32_t>(k), 0};
+    }
+    radix_sort(Span<KeyIndex>(keys, count), Span<KeyIndex>(scratch, count));
+    const uint32_t tasks = static_cast<uint32_t>((count + kBatch - 1) / kBatch);
+    auto task = [&](uint32_t i) {
+      const size_t b = size_t{i} * kBatch;
+      const size_t e = b + kBatch < count ? b + kBatch : count;
+      uint32_t seed = kNoNeighbor;
+      for (size_t k = b; k < e; ++k) {
+        const size_t at = first + keys[k].index;
+        ClosestPoint cp;
+        if (closest_within(index, queries[at], HUGE_VAL, &cp, seed)) {
+          results[at] = cp;
+          seed = cp.triangle;
+        } else {
+          results[at] = ClosestPoint{};
+        }
+      }
+    };
+    parallel_for_each(ctx.executor, tasks, task);
+  }
+  return Status::ok();
+}
+
+Status batch_signed_distances(const Context& ctx, const DistanceIndex& index,
+                              Span<const Vec3> queries, SignMethod method, Span<double> results) {
+  if (queries.size() != results.size()) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "batch_signed_distances: queries and results differ in size");
+  }
+  const size_t n = queries.size();
+  for (size_t first = 0; first < n; first += size_t{kBatch} * 256) {
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "signed distances", first, n));
+    const size_t end = first + size_t{kBatch} * 256 < n ? first + size_t{kBatch} * 256 : n;
+    const uint32_t tasks = static_cast<uint32_t>((end - first + kBatch - 1) / kBatch);
+    auto task = [&](uint32_t i) {
+      const size_t b = first + size_t{i} * kBatch;
+      const size_t e = b + kBatch < end ? b + kBatch : end;
+      for (size_t k = b; k < e; ++k) {
+        SignedDistance sd;
+        results[k] = signed_distance(index, queries[k], method, &sd) ? sd.distance : HUGE_VAL;
+      }
+    };
+    parallel_for_each(ctx.executor, tasks, task);
+  }
+  return Status::ok();
+}
+
+Status sample_sdf(const Context& ctx, const DistanceIndex& index, const SdfGrid& grid,
+                  SignMethod method, uint32_t z_begin, uint32_t z_end, Span<float> out) {
+  if (!(grid.spacing > 0) || !(grid.band > 0) || z_begin > z_end || z_end > grid.nz) {
+    return Status::error(StatusCode::kInvalidArgument, "sample_sdf: bad grid or z range");
+  }
+  const uint64_t layer = uint64_t{grid.nx} * grid.ny;
+  if (out.size() != layer * (z_end - z_begin)) {
+    return make_error(StatusCode::kInvalidArgument, "sample_sdf: output holds ", out.size(),
+                      " values, the layers need ", layer * (z_end - z_begin));
+  }
+  if (method == SignMethod::kAuto) {
+    method = index.closed_manifold ? SignMethod::kPseudonormal : SignMethod::kWindingNumber;
+  }
+  const double band = grid.band;
+  const float fband = static_cast<float>(band);
+  for (uint32_t z = z_begin; z < z_end; ++z) {
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance volume", z - z_begin, z_end - z_begin));
+    auto row = [&](uint32_t y) {
+      float* dst = out.data() + (uint64_t{z - z_begin} * grid.ny + y) * grid.nx;
+      for (uint32_t x = 0; x < grid.nx; ++x) {
+        const Vec3 p = grid.origin + Vec3{grid.spacing * x, grid.spacing * y, grid.spacing * z};
+        ClosestPoint cp;
+        if (closest_within(index, p, band * band, &cp)) {
+          SignedDistance sd;
+          // Within the band: the full signed distance (the closest point is found again; the
+          // pruned search above only decided that it is near).
+          signed_distance(index, p, method, &sd);
+          double d = sd.distance;
+          d = d > band ? band : (d < -band ? -band : d);
+          dst[x] = static_cast<float>(d);
+        } else {
+          // Beyond the band only the sign matters; the winding number gives it without a
+          // closest point.
+          dst[x] = winding_number(index, p) >= 0.5 ? -fband : fband;
+        }
+      }
+    };
+    parallel_for_each(ctx.executor, grid.ny, row);
+  }
+  return Status::ok();
+}
+
+}  // namespace splintcore
