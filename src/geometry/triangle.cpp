@@ -99,20 +99,30 @@ bool coplanar_triangles_intersect(const Vec3& a, const Vec3& b, const Vec3& c, c
   return triangles_meet_2d(t1, t2);
 }
 
-bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
-                                 const Vec3& c) {
-  const int sp = sign_of(orient3d(a, b, c, p));
-  const int sq = sign_of(orient3d(a, b, c, q));
+namespace {
+// Segment pq against triangle abc, given the exact sides sp and sq of p and q relative to the
+// plane of abc (orient3d signs), so that callers who know them do not compute them again.
+bool segment_meets(const Vec3& p, const Vec3& q, int sp, int sq, const Vec3& a, const Vec3& b,
+                   const Vec3& c) {
   if (sp * sq > 0) return false;  // both strictly on one side
   if (sp == 0 && sq == 0) return coplanar_segment_intersects_triangle(p, q, a, b, c);
   // The segment crosses or touches the plane at one point; it is inside the closed triangle
   // iff the line pq sees the three edges with signs that do not disagree.
   const int s1 = sign_of(orient3d(p, q, a, b));
   const int s2 = sign_of(orient3d(p, q, b, c));
+  if (s1 * s2 < 0) return false;
   const int s3 = sign_of(orient3d(p, q, c, a));
   const bool has_pos = s1 > 0 || s2 > 0 || s3 > 0;
   const bool has_neg = s1 < 0 || s2 < 0 || s3 < 0;
   return !(has_pos && has_neg);
+}
+}  // namespace
+
+bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
+                                 const Vec3& c) {
+  const int sp = sign_of(orient3d(a, b, c, p));
+  const int sq = sign_of(orient3d(a, b, c, q));
+  return segment_meets(p, q, sp, sq, a, b, c);
 }
 
 bool triangles_intersect(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
@@ -127,9 +137,10 @@ bool triangles_intersect(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3
   const int sc = sign_of(orient3d(d, e, f, c));
   if (sa == sb && sb == sc && sa != 0) return false;
   if (sd == 0 && se == 0 && sf == 0) return coplanar_triangles_intersect(a, b, c, d, e, f);
-  return segment_intersects_triangle(a, b, d, e, f) || segment_intersects_triangle(b, c, d, e, f) ||
-         segment_intersects_triangle(c, a, d, e, f) || segment_intersects_triangle(d, e, a, b, c) ||
-         segment_intersects_triangle(e, f, a, b, c) || segment_intersects_triangle(f, d, a, b, c);
+  // Only edges that reach the other plane can meet the other triangle; the sides are known.
+  return segment_meets(a, b, sa, sb, d, e, f) || segment_meets(b, c, sb, sc, d, e, f) ||
+         segment_meets(c, a, sc, sa, d, e, f) || segment_meets(d, e, sd, se, a, b, c) ||
+         segment_meets(e, f, se, sf, a, b, c) || segment_meets(f, d, sf, sd, a, b, c);
 }
 
 }  // namespace splintcore
