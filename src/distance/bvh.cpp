@@ -222,8 +222,10 @@ Status build_distance_index(const Context& ctx, const Mesh& mesh,
       } else {
         const uint32_t children[2] = {node.index, node.index + 1};
         for (uint32_t c : children) {
-          box.add(Vec3{nodes[c].lo[0], nodes[c].lo[1], nodes[c].lo[2]});
-          box.add(Vec3{nodes[c].hi[0], nodes[c].hi[1], nodes[c].hi[2]});
+          box.add(Vec3{static_cast<double>(nodes[c].lo[0]), static_cast<double>(nodes[c].lo[1]),
+                       static_cast<double>(nodes[c].lo[2])});
+          box.add(Vec3{static_cast<double>(nodes[c].hi[0]), static_cast<double>(nodes[c].hi[1]),
+                       static_cast<double>(nodes[c].hi[2])});
           nsum = nsum + area_normal[c];
           wsum = wsum + weighted[c];
           asum += area[c];
@@ -240,7 +242,10 @@ Status build_distance_index(const Context& ctx, const Mesh& mesh,
       const Vec3 center = asum > 0 ? wsum * (1.0 / asum) : box.center();
       // Radius: the box's half diagonal plus the centre's offset from the box centre bounds
       // the distance to every corner (triangle inequality), with one square root.
-      const Vec3 flo{node.lo[0], node.lo[1], node.lo[2]}, fhi{node.hi[0], node.hi[1], node.hi[2]};
+      const Vec3 flo{static_cast<double>(node.lo[0]), static_cast<double>(node.lo[1]),
+                     static_cast<double>(node.lo[2])};
+      const Vec3 fhi{static_cast<double>(node.hi[0]), static_cast<double>(node.hi[1]),
+                     static_cast<double>(node.hi[2])};
       const double reach = 0.5 * length(fhi - flo) + length((flo + fhi) * 0.5 - center);
       BvhDipole& dp = dipoles[i];
       for (int a = 0; a < 3; ++a) {
@@ -248,7 +253,8 @@ Status build_distance_index(const Context& ctx, const Mesh& mesh,
         dp.normal[a] = static_cast<float>(nsum[a]);
       }
       // The float centre moved by up to half an ulp per axis: widen the radius for that.
-      const Vec3 fc{dp.center[0], dp.center[1], dp.center[2]};
+      const Vec3 fc{static_cast<double>(dp.center[0]), static_cast<double>(dp.center[1]),
+                    static_cast<double>(dp.center[2])};
       dp.radius = float_up((reach + length(fc - center) * 2.0) * (1.0 + 1e-12));
     }
   }

@@ -38,7 +38,72 @@ inline double box_centre_distance_squared(const BvhNode& n, const Vec3& q) {
   return d2;
 }
 
-// Closest point on triangle abc to p, with the feature (Ericson 5.1.5).
+// a * b - c * d to about one ulp: Dekker's exact products (no FMA, so the same bits
+// everywhere) and Knuth's exact difference (Shewchuk 1997, section 2).
+inline void exact_product(double a, double b, double* hi, double* lo) {
+  constexpr double kSplit = 134217729.0;  // 2^27 + 1
+  *hi = a * b;
+  double t = kSplit * a;
+  const double ah = t - (t - a), al = a - ah;
+  t = kSplit * b;
+  const double bh = t - (t - b), bl = b - bh;
+  *lo = al * bl - (((*hi - ah * bh) - al * bh) - ah * bl);
+}
+inline double difference_of_products(double a, double b, double c, double d) {
+  double p, pe, q, qe;
+  exact_product(a, b, &p, &pe);
+  exact_product(c, d, &q, &qe);
+  const double s = p - q;
+  const double bvirt = p - s;
+  const double e = (p - (s + bvirt)) + (bvirt - q);
+  return s + (e + (pe - qe));
+}
+
+// Closest point on a sliver (a triangle much thinner than it is long), where the barycentric
+// tests of Ericson's routine below lose about eps / sin^2 of the triangle's size (a point on
+// the triangle came out 7e-4 off it). Here: the projection onto the plane when it falls in the
+// closed triangle, with a normal accurate to an ulp (so it is the plane of the triangle, not a
+// tilted one), else the nearest of the three closed edges; each step is well conditioned.
+void closest_on_sliver(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, Vec3* out,
+                       Feature* feature, uint8_t* index) {
+  const Vec3 ab = b - a, ac = c - a;
+  const Vec3 n{difference_of_products(ab.y, ac.z, ab.z, ac.y),
+               difference_of_products(ab.z, ac.x, ab.x, ac.z),
+               difference_of_products(ab.x, ac.y, ab.y, ac.x)};
+  const double n2 = dot(n, n);
+  if (n2 > 0 && dot(cross(ab, p - a), n) >= 0 && dot(cross(c - b, p - b), n) >= 0 &&
+      dot(cross(a - c, p - c), n) >= 0) {
+    *out = p - n * (dot(p - a, n) / n2);
+    *feature = Feature::kFace;
+    *index = 0;
+    return;
+  }
+  const Vec3* v[3] = {&a, &b, &c};
+  double best = 0;
+  for (uint8_t k = 0; k < 3; ++k) {
+    const Vec3& v0 = *v[k];
+    const Vec3& v1 = *v[(k + 1) % 3];
+    const Vec3 e = v1 - v0;
+    const double num = dot(p - v0, e), den = dot(e, e);
+    Vec3 q;
+    Feature f;
+    uint8_t fi;
+    if (num <= 0 || den == 0) {
+      q = v0; f = Feature::kVertex; fi = k;
+    } else if (num >= den) {
+      q = v1; f = Feature::kVertex; fi = static_cast<uint8_t>((k + 1) % 3);
+    } else {
+      q = v0 + e * (num / den); f = Feature::kEdge; fi = k;
+    }
+    const double d2 = length_squared(p - q);
+    if (k == 0 || d2 < best) {
+      best = d2;
+      *out = q; *feature = f; *index = fi;
+    }
+  }
+}
+
+// Closest point on triangle abc to p, with the feature (Ericson 5.1.5; slivers above).
 void closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, Vec3* out,
                          Feature* feature, uint8_t* index) {
   const Vec3 ab = b - a, ac = c - a, ap = p - a;
@@ -52,6 +117,18 @@ void closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
   if (d3 >= 0 && d4 <= d3) {
     *out = b; *feature = Feature::kVertex; *index = 1;
     return;
+  }
+  {
+    // The tests below divide by |ab x ac|^2 in effect: on a sliver (twice the area below a
+    // quarter of the longest edge squared; |ab x ac|^2 by Lagrange's identity) use the
+    // routine above.
+    const double lab = dot(ab, ab), lac = dot(ac, ac), abac = dot(ab, ac);
+    const double lbc = lab + lac - 2.0 * abac;
+    const double longest = lab > lac ? (lab > lbc ? lab : lbc) : (lac > lbc ? lac : lbc);
+    if ((lab * lac - abac * abac) * 16.0 < longest * longest) {
+      closest_on_sliver(p, a, b, c, out, feature, index);
+      return;
+    }
   }
   const double vc = d1 * d4 - d3 * d2;
   if (vc <= 0 && d1 >= 0 && d3 <= 0) {
@@ -159,6 +236,44 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
     }
   }
   if (!found) return false;
+  if (best2 > 0) {
+    // A point exactly on the surface comes out a rounding error (~1e-16 relative) away from
+    // it; decide exactly, so that it gets distance 0 (and signed distance +0, as documented).
+    const Triangle& tri = mesh.triangles[best_tri];
+    const Vec3 &a = v[tri.v[0]], &b = v[tri.v[1]], &c = v[tri.v[2]];
+    const Vec3* corners[4] = {&q, &a, &b, &c};
+    double m = 0;
+    for (const Vec3* p : corners) {
+      for (int k = 0; k < 3; ++k) m = std::fabs((*p)[k]) > m ? std::fabs((*p)[k]) : m;
+    }
+    const double tiny = m * 0x1p-40;
+    int axis;
+    if (best2 <= tiny * tiny && orient3d(a, b, c, q) == 0 &&
+        (axis = projection_axis(a, b, c)) >= 0) {
+      const int u = (axis + 1) % 3, w = (axis + 2) % 3;
+      const int s[3] = {sign_of(orient2d(a[u], a[w], b[u], b[w], q[u], q[w])),
+                        sign_of(orient2d(b[u], b[w], c[u], c[w], q[u], q[w])),
+                        sign_of(orient2d(c[u], c[w], a[u], a[w], q[u], q[w]))};
+      if ((s[0] >= 0 && s[1] >= 0 && s[2] >= 0) || (s[0] <= 0 && s[1] <= 0 && s[2] <= 0)) {
+        best2 = 0;
+        best.point = q;
+        best.feature = Feature::kFace;
+        best.feature_index = 0;
+        for (uint8_t k = 0; k < 3; ++k) {
+          if (s[k] == 0 && s[(k + 2) % 3] == 0) {  // on edges k and k - 1: vertex k
+            best.point = v[tri.v[k]];
+            best.feature = Feature::kVertex;
+            best.feature_index = k;
+            break;
+          }
+          if (s[k] == 0) {
+            best.feature = Feature::kEdge;
+            best.feature_index = k;
+          }
+        }
+      }
+    }
+  }
   best.distance = std::sqrt(best2);
   *out = best;
   return true;
@@ -203,12 +318,14 @@ double winding_number(const DistanceIndex& index, const Vec3& q, double beta) {
     const BvhNode& node = nodes[i];
     if (beta > 0 && i != 0) {
       const BvhDipole& dp = index.dipoles[i];
-      const Vec3 c{dp.center[0], dp.center[1], dp.center[2]};
+      const Vec3 c{static_cast<double>(dp.center[0]), static_cast<double>(dp.center[1]),
+                   static_cast<double>(dp.center[2])};
       const Vec3 r = c - q;
       const double d2 = length_squared(r);
       const double rad = static_cast<double>(dp.radius);
       if (d2 > beta2 * rad * rad) {
-        const Vec3 nrm{dp.normal[0], dp.normal[1], dp.normal[2]};
+        const Vec3 nrm{static_cast<double>(dp.normal[0]), static_cast<double>(dp.normal[1]),
+                       static_cast<double>(dp.normal[2])};
         const double d = std::sqrt(d2);
         sum += dot(r, nrm) / (d2 * d);
         continue;
@@ -451,7 +568,8 @@ Status batch_closest_points(const Context& ctx, const DistanceIndex& index,
   KeyIndex* scratch = arena.allocate_array<KeyIndex>(kChunk);
   if (keys == nullptr || scratch == nullptr) return arena.exhausted_status();
   const BvhNode& root = index.nodes[0];
-  const Vec3 lo{root.lo[0], root.lo[1], root.lo[2]};
+  const Vec3 lo{static_cast<double>(root.lo[0]), static_cast<double>(root.lo[1]),
+                static_cast<double>(root.lo[2])};
   double scale[3];
   for (int a = 0; a < 3; ++a) {
     const double ext = static_cast<double>(root.hi[a]) - static_cast<double>(root.lo[a]);
@@ -523,9 +641,10 @@ Status sample_sdf(const Context& ctx, const DistanceIndex& index, const SdfGrid&
     return Status::error(StatusCode::kInvalidArgument, "sample_sdf: bad grid or z range");
   }
   const uint64_t layer = uint64_t{grid.nx} * grid.ny;
-  if (out.size() != layer * (z_end - z_begin)) {
+  uint64_t need = 0;  // checked: 2^31 x 2^31 x 4 layers would wrap to 0 and pass
+  if (!checked_mul(layer, z_end - z_begin, &need) || out.size() != need) {
     return make_error(StatusCode::kInvalidArgument, "sample_sdf: output holds ", out.size(),
-                      " values, the layers need ", layer * (z_end - z_begin));
+                      " values, the layers need ", layer, " x ", z_end - z_begin);
   }
   if (method == SignMethod::kAuto) {
     method = index.closed_manifold ? SignMethod::kPseudonormal : SignMethod::kWindingNumber;
