@@ -25,16 +25,30 @@ inline uint64_t spread_bits(uint64_t v) {
   return v;
 }
 
+// The float next to f towards -infinity (or +infinity), by its bits (finite f only; the
+// library call costs more than everything else in the bounds pass).
+inline float float_step(float f, bool up) {
+  uint32_t bits;
+  std::memcpy(&bits, &f, sizeof(bits));
+  if ((bits & 0x7fffffffu) == 0) {
+    bits = up ? 1u : 0x80000001u;  // the smallest subnormal of the right sign
+  } else if (((bits >> 31) == 0) == up) {
+    ++bits;  // away from zero
+  } else {
+    --bits;  // towards zero
+  }
+  std::memcpy(&f, &bits, sizeof(f));
+  return f;
+}
+
 // Float bounds that contain the double value: rounded down for lo, up for hi.
 inline float float_down(double x) {
   float f = static_cast<float>(x);
-  if (static_cast<double>(f) > x) f = std::nextafter(f, -HUGE_VALF);
-  return f;
+  return static_cast<double>(f) > x ? float_step(f, false) : f;
 }
 inline float float_up(double x) {
   float f = static_cast<float>(x);
-  if (static_cast<double>(f) < x) f = std::nextafter(f, HUGE_VALF);
-  return f;
+  return static_cast<double>(f) < x ? float_step(f, true) : f;
 }
 
 inline int highest_bit(uint64_t x) { return 63 - __builtin_clzll(x); }

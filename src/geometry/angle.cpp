@@ -1,60 +1,39 @@
 // atan without libm, so that angle weights (pseudonormals) and solid angles (winding numbers)
-// are the same bits on every platform. Range reduction: atan(x) = c + atan((x - tan c) /
-// (1 + x tan c)) with c the multiple of 15 degrees nearest atan(x), which leaves |t| <=
-// tan(7.5 deg) = 0.1317; there the series t - t^3/3 + t^5/5 - ... needs 10 terms for full
-// double precision (0.1317^21 / 21 < 1e-19).
+// are the same bits on every platform. For |x| <= 1: atan(x) = atan(c) + atan((x - c) /
+// (1 + x c)) with c = k / 16 the nearest sixteenth, which leaves |t| <= 1/32; there
+// t - t^3/3 + t^5/5 - t^7/7 + t^9/9 is exact to double precision (the next term is below
+// 1e-16 of t). For |x| > 1, atan(x) = pi/2 - atan(1/x). The table holds atan(k/16) rounded
+// to double (fixed literals, so the same everywhere).
 #include "splintcore/geometry.h"
 
 namespace splintcore {
 
 namespace {
-// tan(k * 15 degrees), k = 0..5, and k * pi / 12.
-constexpr double kTan15[6] = {0.0,
-                              0.26794919243112270647,  // 2 - sqrt(3)
-                              0.57735026918962576451,  // 1 / sqrt(3)
-                              1.0,
-                              1.73205080756887729353,  // sqrt(3)
-                              3.73205080756887729353};  // 2 + sqrt(3)
-constexpr double kAngle15[6] = {0.0, 0.26179938779914943654, 0.52359877559829887308,
-                                0.78539816339744830962, 1.04719755119659774615,
-                                1.30899693899574718269};
+constexpr double kAtanSixteenths[17] = {
+    0.0,                  0.06241880999595735, 0.12435499454676144, 0.18534794999569476,
+    0.24497866312686414,  0.3028848683749714,  0.35877067027057225, 0.4124104415973873,
+    0.4636476090008061,   0.5123894603107377,  0.5585993153435624,  0.6022873461349642,
+    0.6435011087932844,   0.6823165548747481,  0.7188299996216245,  0.7531512809621944,
+    0.7853981633974483};
 constexpr double kHalfPi = 1.57079632679489661923;
 constexpr double kPi = 3.14159265358979323846;
-// Midpoints between consecutive multiples: tan(7.5 + 15 k degrees).
-constexpr double kSplit[6] = {0.13165249758739585347, 0.41421356237309504880,
-                              0.76732698797895999893, 1.30322537284120588734,
-                              2.41421356237309504880, 7.59575411272515360661};
 
-double atan_small(double t) {
+// atan(a) for 0 <= a <= 1.
+inline double atan_unit(double a) {
+  const int k = static_cast<int>(a * 16.0 + 0.5);
+  const double c = static_cast<double>(k) * 0.0625;
+  const double t = (a - c) / (1.0 + a * c);
   const double z = t * t;
-  // Horner on t * (1 - z/3 + z^2/5 - ... - z^9/19).
-  double sum = -1.0 / 19.0;
-  sum = sum * z + 1.0 / 17.0;
-  sum = sum * z - 1.0 / 15.0;
-  sum = sum * z + 1.0 / 13.0;
-  sum = sum * z - 1.0 / 11.0;
-  sum = sum * z + 1.0 / 9.0;
-  sum = sum * z - 1.0 / 7.0;
-  sum = sum * z + 1.0 / 5.0;
-  sum = sum * z - 1.0 / 3.0;
-  return t + t * (sum * z);
+  const double series = t + t * z * (-1.0 / 3.0 + z * (1.0 / 5.0 + z * (-1.0 / 7.0 + z * (1.0 / 9.0))));
+  return kAtanSixteenths[k] + series;
 }
 }  // namespace
 
 double deterministic_atan(double x) {
   if (x != x) return x;  // NaN
   const bool negative = x < 0.0;
-  double a = negative ? -x : x;
-  double result;
-  if (a > kSplit[5]) {
-    // Beyond 82.5 degrees: pi/2 - atan(1/a), with 1/a < 0.1317.
-    result = kHalfPi - atan_small(1.0 / a);
-  } else {
-    int k = 0;
-    while (k < 5 && a > kSplit[k]) ++k;
-    const double t = k == 0 ? a : (a - kTan15[k]) / (1.0 + a * kTan15[k]);
-    result = kAngle15[k] + atan_small(t);
-  }
+  const double a = negative ? -x : x;
+  const double result = a <= 1.0 ? atan_unit(a) : kHalfPi - atan_unit(1.0 / a);
   return negative ? -result : result;
 }
 
@@ -65,9 +44,9 @@ double deterministic_atan2(double y, double x) {
     if (y < 0.0) return -kHalfPi;
     return 0.0;
   }
-  // atan of the smaller over the larger magnitude keeps the argument in [-1, 1].
+  // atan of the smaller over the larger magnitude keeps the argument in [0, 1].
   const double ax = x < 0 ? -x : x, ay = y < 0 ? -y : y;
-  double r = ay <= ax ? deterministic_atan(ay / ax) : kHalfPi - deterministic_atan(ax / ay);
+  double r = ay <= ax ? atan_unit(ay / ax) : kHalfPi - atan_unit(ax / ay);
   if (x < 0.0) r = kPi - r;
   return y < 0.0 ? -r : r;
 }
