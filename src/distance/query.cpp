@@ -344,10 +344,10 @@ double winding_number(const DistanceIndex& index, const Vec3& q, double beta) {
   return sum / kFourPi;
 }
 
-bool signed_distance(const DistanceIndex& index, const Vec3& q, SignMethod method,
-                     SignedDistance* out) {
-  *out = SignedDistance{};
-  if (!closest_point(index, q, &out->closest)) return false;
+namespace {
+// The sign for q whose closest point is already in out->closest.
+void finish_signed(const DistanceIndex& index, const Vec3& q, SignMethod method,
+                   SignedDistance* out) {
   const ClosestPoint& cp = out->closest;
   if (method == SignMethod::kAuto) {
     method = index.closed_manifold ? SignMethod::kPseudonormal : SignMethod::kWindingNumber;
@@ -355,7 +355,7 @@ bool signed_distance(const DistanceIndex& index, const Vec3& q, SignMethod metho
   out->method = method;
   if (cp.distance == 0.0) {
     out->distance = 0.0;
-    return true;
+    return;
   }
   bool inside = false;
   if (method == SignMethod::kPseudonormal) {
@@ -389,6 +389,14 @@ bool signed_distance(const DistanceIndex& index, const Vec3& q, SignMethod metho
     inside = out->winding >= 0.5;
   }
   out->distance = inside ? -cp.distance : cp.distance;
+}
+}  // namespace
+
+bool signed_distance(const DistanceIndex& index, const Vec3& q, SignMethod method,
+                     SignedDistance* out) {
+  *out = SignedDistance{};
+  if (!closest_point(index, q, &out->closest)) return false;
+  finish_signed(index, q, method, out);
   return true;
 }
 
@@ -545,27 +553,22 @@ Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aa
 
 namespace {
 constexpr uint32_t kBatch = 1024;  // queries per task
-}  // namespace
 
 // Batches are processed in Morton order of the queries, each seeded with the answer to the
 // one before it: nearby queries share nodes and triangles (cache) and start with a tight
 // bound. Results land at their own index, so the order changes nothing but the time.
-Status batch_closest_points(const Context& ctx, const DistanceIndex& index,
-                            Span<const Vec3> queries, Span<ClosestPoint> results) {
-  if (queries.size() != results.size()) {
-    return Status::error(StatusCode::kInvalidArgument,
-                         "batch_closest_points: queries and results differ in size");
-  }
+// `answer(at, seed)` handles queries[at] and updates the seed.
+template <class Answer>
+Status morton_batch(const Context& ctx, const DistanceIndex& index, Span<const Vec3> queries,
+                    const char* stage, Answer& answer) {
   const size_t n = queries.size();
-  if (n == 0 || index.mesh->triangles.size() == 0) {
-    for (size_t k = 0; k < n; ++k) results[k] = ClosestPoint{};
-    return Status::ok();
-  }
+  if (n == 0) return Status::ok();
   constexpr size_t kChunk = size_t{1} << 16;
+  const size_t chunk = n < kChunk ? n : kChunk;
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
-  KeyIndex* keys = arena.allocate_array<KeyIndex>(kChunk);
-  KeyIndex* scratch = arena.allocate_array<KeyIndex>(kChunk);
+  KeyIndex* keys = arena.allocate_array<KeyIndex>(chunk);
+  KeyIndex* scratch = arena.allocate_array<KeyIndex>(chunk);
   if (keys == nullptr || scratch == nullptr) return arena.exhausted_status();
   const BvhNode& root = index.nodes[0];
   const Vec3 lo{static_cast<double>(root.lo[0]), static_cast<double>(root.lo[1]),
@@ -576,7 +579,7 @@ Status batch_closest_points(const Context& ctx, const DistanceIndex& index,
     scale[a] = ext > 0 ? 1023.0 / ext : 0.0;
   }
   for (size_t first = 0; first < n; first += kChunk) {
-    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "closest points", first, n));
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, stage, first, n));
     const size_t count = first + kChunk < n ? kChunk : n - first;
     for (size_t k = 0; k < count; ++k) {
       uint64_t code = 0;
@@ -584,7 +587,7 @@ Status batch_closest_points(const Context& ctx, const DistanceIndex& index,
       for (int a = 0; a < 3; ++a) {
         double x = (q[a] - lo[a]) * scale[a];
         x = x < 0 || x != x ? 0 : (x > 1023.0 ? 1023.0 : x);
-        uint64_t c = static_cast<uint64_t>(x);
+        const uint64_t c = static_cast<uint64_t>(x);
         for (int bit = 0; bit < 10; ++bit) code |= ((c >> bit) & 1) << (3 * bit + (2 - a));
       }
       keys[k] = KeyIndex{code, static_cast<uint32_t>(k), 0};
@@ -595,20 +598,35 @@ Status batch_closest_points(const Context& ctx, const DistanceIndex& index,
       const size_t b = size_t{i} * kBatch;
       const size_t e = b + kBatch < count ? b + kBatch : count;
       uint32_t seed = kNoNeighbor;
-      for (size_t k = b; k < e; ++k) {
-        const size_t at = first + keys[k].index;
-        ClosestPoint cp;
-        if (closest_within(index, queries[at], HUGE_VAL, &cp, seed)) {
-          results[at] = cp;
-          seed = cp.triangle;
-        } else {
-          results[at] = ClosestPoint{};
-        }
-      }
+      for (size_t k = b; k < e; ++k) answer(first + keys[k].index, &seed);
     };
     parallel_for_each(ctx.executor, tasks, task);
   }
   return Status::ok();
+}
+
+}  // namespace
+
+Status batch_closest_points(const Context& ctx, const DistanceIndex& index,
+                            Span<const Vec3> queries, Span<ClosestPoint> results) {
+  if (queries.size() != results.size()) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "batch_closest_points: queries and results differ in size");
+  }
+  if (index.mesh->triangles.size() == 0) {
+    for (size_t k = 0; k < results.size(); ++k) results[k] = ClosestPoint{};
+    return Status::ok();
+  }
+  auto answer = [&](size_t at, uint32_t* seed) {
+    ClosestPoint cp;
+    if (closest_within(index, queries[at], HUGE_VAL, &cp, *seed)) {
+      results[at] = cp;
+      *seed = cp.triangle;
+    } else {
+      results[at] = ClosestPoint{};
+    }
+  };
+  return morton_batch(ctx, index, queries, "closest points", answer);
 }
 
 Status batch_signed_distances(const Context& ctx, const DistanceIndex& index,
@@ -617,22 +635,21 @@ Status batch_signed_distances(const Context& ctx, const DistanceIndex& index,
     return Status::error(StatusCode::kInvalidArgument,
                          "batch_signed_distances: queries and results differ in size");
   }
-  const size_t n = queries.size();
-  for (size_t first = 0; first < n; first += size_t{kBatch} * 256) {
-    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "signed distances", first, n));
-    const size_t end = first + size_t{kBatch} * 256 < n ? first + size_t{kBatch} * 256 : n;
-    const uint32_t tasks = static_cast<uint32_t>((end - first + kBatch - 1) / kBatch);
-    auto task = [&](uint32_t i) {
-      const size_t b = first + size_t{i} * kBatch;
-      const size_t e = b + kBatch < end ? b + kBatch : end;
-      for (size_t k = b; k < e; ++k) {
-        SignedDistance sd;
-        results[k] = signed_distance(index, queries[k], method, &sd) ? sd.distance : HUGE_VAL;
-      }
-    };
-    parallel_for_each(ctx.executor, tasks, task);
+  if (index.mesh->triangles.size() == 0) {
+    for (size_t k = 0; k < results.size(); ++k) results[k] = HUGE_VAL;
+    return Status::ok();
   }
-  return Status::ok();
+  auto answer = [&](size_t at, uint32_t* seed) {
+    SignedDistance sd;
+    if (closest_within(index, queries[at], HUGE_VAL, &sd.closest, *seed)) {
+      finish_signed(index, queries[at], method, &sd);
+      results[at] = sd.distance;
+      *seed = sd.closest.triangle;
+    } else {
+      results[at] = HUGE_VAL;
+    }
+  };
+  return morton_batch(ctx, index, queries, "signed distances", answer);
 }
 
 Status sample_sdf(const Context& ctx, const DistanceIndex& index, const SdfGrid& grid,
