@@ -672,14 +672,15 @@ Status sample_sdf(const Context& ctx, const DistanceIndex& index, const SdfGrid&
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance volume", z - z_begin, z_end - z_begin));
     auto row = [&](uint32_t y) {
       float* dst = out.data() + (uint64_t{z - z_begin} * grid.ny + y) * grid.nx;
+      uint32_t seed = kNoNeighbor;
       for (uint32_t x = 0; x < grid.nx; ++x) {
         const Vec3 p = grid.origin + Vec3{grid.spacing * x, grid.spacing * y, grid.spacing * z};
-        ClosestPoint cp;
-        if (closest_within(index, p, band * band, &cp)) {
-          SignedDistance sd;
-          // Within the band: the full signed distance (the closest point is found again; the
-          // pruned search above only decided that it is near).
-          signed_distance(index, p, method, &sd);
+        // Within the band the search bounded by the band finds the same closest point as an
+        // unbounded one (same tie-breaks); the previous sample of the row seeds it.
+        SignedDistance sd;
+        if (closest_within(index, p, band * band, &sd.closest, seed)) {
+          seed = sd.closest.triangle;
+          finish_signed(index, p, method, &sd);
           double d = sd.distance;
           d = d > band ? band : (d < -band ? -band : d);
           dst[x] = static_cast<float>(d);
