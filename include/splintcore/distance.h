@@ -104,8 +104,10 @@ struct SignedDistance {
 bool signed_distance(const DistanceIndex& index, const Vec3& q, SignMethod method,
                      SignedDistance* out);
 
-// First hit of the ray origin + t * direction, t in [0, t_max] (closed triangles, exact
-// Moller-Trumbore in double with a tie-break on the triangle id). False when nothing is hit.
+// First hit of the ray origin + t * direction, t in [0, t_max]: Moller-Trumbore in double on
+// closed triangles (not exact: a ray through an edge may hit either side or, rarely, neither;
+// use segment_intersects_mesh for exact decisions), ties on t go to the smaller triangle id.
+// False when nothing is hit.
 struct RayHit {
   double t = 0;
   uint32_t triangle = 0;
