@@ -467,6 +467,35 @@ bool ray_intersect(const DistanceIndex& index, const Vec3& origin, const Vec3& d
   return true;
 }
 
+namespace {
+inline bool node_overlaps(const BvhNode& node, const Aabb& box) {
+  return !(static_cast<double>(node.lo[0]) > box.hi.x || static_cast<double>(node.hi[0]) < box.lo.x ||
+           static_cast<double>(node.lo[1]) > box.hi.y || static_cast<double>(node.hi[1]) < box.lo.y ||
+           static_cast<double>(node.lo[2]) > box.hi.z || static_cast<double>(node.hi[2]) < box.lo.z);
+}
+
+// Calls visit(triangle id) for every triangle in a leaf whose box overlaps `box`; stops when
+// visit returns false.
+template <class Visit>
+void for_each_triangle_near(const DistanceIndex& index, const Aabb& box, Visit& visit) {
+  uint32_t stack[kStack];
+  uint32_t top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const BvhNode& node = index.nodes[stack[--top]];
+    if (!node_overlaps(node, box)) continue;
+    if (is_leaf(node)) {
+      for (uint32_t k = node.index; k < node.index + node.count; ++k) {
+        if (!visit(index.order[k])) return;
+      }
+      continue;
+    }
+    stack[top++] = node.index + 1;
+    stack[top++] = node.index;
+  }
+}
+}  // namespace
+
 bool segment_intersects_mesh(const DistanceIndex& index, const Vec3& p, const Vec3& q,
                              uint32_t* triangle) {
   const Mesh& mesh = *index.mesh;
@@ -477,32 +506,17 @@ bool segment_intersects_mesh(const DistanceIndex& index, const Vec3& p, const Ve
   box.add(q);
   bool found = false;
   uint32_t best = 0;
-  uint32_t stack[kStack];
-  uint32_t top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const BvhNode& node = index.nodes[stack[--top]];
-    if (static_cast<double>(node.lo[0]) > box.hi.x || static_cast<double>(node.hi[0]) < box.lo.x ||
-        static_cast<double>(node.lo[1]) > box.hi.y || static_cast<double>(node.hi[1]) < box.lo.y ||
-        static_cast<double>(node.lo[2]) > box.hi.z || static_cast<double>(node.hi[2]) < box.lo.z) {
-      continue;
+  auto visit = [&](uint32_t t) {
+    if (found && t >= best) return true;
+    const Triangle& tri = mesh.triangles[t];
+    if (collinear3d(v[tri.v[0]], v[tri.v[1]], v[tri.v[2]])) return true;
+    if (segment_intersects_triangle(p, q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]])) {
+      best = t;
+      found = true;
     }
-    if (is_leaf(node)) {
-      for (uint32_t k = node.index; k < node.index + node.count; ++k) {
-        const uint32_t t = index.order[k];
-        if (found && t >= best) continue;
-        const Triangle& tri = mesh.triangles[t];
-        if (collinear3d(v[tri.v[0]], v[tri.v[1]], v[tri.v[2]])) continue;
-        if (segment_intersects_triangle(p, q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]])) {
-          best = t;
-          found = true;
-        }
-      }
-      continue;
-    }
-    stack[top++] = node.index + 1;
-    stack[top++] = node.index;
-  }
+    return true;
+  };
+  for_each_triangle_near(index, box, visit);
   if (found && triangle != nullptr) *triangle = best;
   return found;
 }
@@ -511,33 +525,23 @@ Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aa
                         ArenaArray<uint32_t>* out) {
   const size_t start = out->size();
   if (index.mesh->triangles.size() == 0 || box.empty()) return Status::ok();
-  uint32_t stack[kStack];
-  uint32_t top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const BvhNode& node = index.nodes[stack[--top]];
-    if (static_cast<double>(node.lo[0]) > box.hi.x || static_cast<double>(node.hi[0]) < box.lo.x ||
-        static_cast<double>(node.lo[1]) > box.hi.y || static_cast<double>(node.hi[1]) < box.lo.y ||
-        static_cast<double>(node.lo[2]) > box.hi.z || static_cast<double>(node.hi[2]) < box.lo.z) {
-      continue;
+  const Vec3* v = index.mesh->vertices.data();
+  bool exhausted = false;
+  auto visit = [&](uint32_t t) {
+    const Triangle& tri = index.mesh->triangles[t];
+    Aabb tb;
+    tb.add(v[tri.v[0]]);
+    tb.add(v[tri.v[1]]);
+    tb.add(v[tri.v[2]]);
+    if (!tb.overlaps(box)) return true;
+    if (!out->push_back(t)) {
+      exhausted = true;
+      return false;
     }
-    if (is_leaf(node)) {
-      const Vec3* v = index.mesh->vertices.data();
-      for (uint32_t k = node.index; k < node.index + node.count; ++k) {
-        const uint32_t t = index.order[k];
-        const Triangle& tri = index.mesh->triangles[t];
-        Aabb tb;
-        tb.add(v[tri.v[0]]);
-        tb.add(v[tri.v[1]]);
-        tb.add(v[tri.v[2]]);
-        if (!tb.overlaps(box)) continue;
-        if (!out->push_back(t)) return ctx.arena->exhausted_status();
-      }
-      continue;
-    }
-    stack[top++] = node.index + 1;
-    stack[top++] = node.index;
-  }
+    return true;
+  };
+  for_each_triangle_near(index, box, visit);
+  if (exhausted) return ctx.arena->exhausted_status();
   // Ascending ids: the order of the result never depends on the tree.
   const size_t found = out->size() - start;
   if (found > 1) {

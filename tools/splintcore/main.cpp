@@ -214,6 +214,13 @@ struct Run {
   bool has_memory() const { return memory.buffer != nullptr; }
 };
 
+// Reads an STL file (binary or ASCII) into a welded mesh.
+Status read_mesh_file(const Context& ctx, const char* path, Mesh* mesh, StlInfo* info) {
+  FileSource file;
+  SPLINTCORE_RETURN_IF_ERROR(file.open(path));
+  return read_stl_mesh(ctx, file.source(), StlReadOptions{}, mesh, info);
+}
+
 // Writes a mesh through the streaming writer into a temporary file renamed over `path` only
 // when everything succeeded.
 Status write_atomically(const Context& ctx, const Mesh& mesh, const char* path, bool ascii) {
@@ -310,12 +317,9 @@ int run_check(int argc, char** argv) {
   const Context& ctx = run.ctx;
   const double t0 = run.start;
 
-  FileSource file;
-  Status s = file.open(o.positional[0]);
-  if (!s.is_ok()) return rejected(o, "check", s, &arena);
   Mesh mesh(&arena);
   StlInfo info;
-  s = read_stl_mesh(ctx, file.source(), StlReadOptions{}, &mesh, &info);
+  Status s = read_mesh_file(ctx, o.positional[0], &mesh, &info);
   if (!s.is_ok()) return rejected(o, "check", s, &arena);
   PrintCheckOptions pco;
   pco.place_on_tray = o.place;
@@ -379,12 +383,9 @@ int run_convert(int argc, char** argv) {
   const Context& ctx = run.ctx;
   const double t0 = run.start;
 
-  FileSource file;
-  Status s = file.open(o.positional[0]);
-  if (!s.is_ok()) return rejected(o, "convert", s, &arena);
   Mesh mesh(&arena);
   StlInfo info;
-  s = read_stl_mesh(ctx, file.source(), StlReadOptions{}, &mesh, &info);
+  Status s = read_mesh_file(ctx, o.positional[0], &mesh, &info);
   if (!s.is_ok()) return rejected(o, "convert", s, &arena);
   MeshReport report;
   s = check_mesh(ctx, mesh, &report);
@@ -496,12 +497,9 @@ int run_distance(int argc, char** argv) {
   const Context& ctx = run.ctx;
   const double t0 = run.start;
 
-  FileSource file;
-  Status s = file.open(o.positional[0]);
-  if (!s.is_ok()) return rejected(o, "distance", s, &arena);
   Mesh mesh(&arena);
   StlInfo info;
-  s = read_stl_mesh(ctx, file.source(), StlReadOptions{}, &mesh, &info);
+  Status s = read_mesh_file(ctx, o.positional[0], &mesh, &info);
   if (!s.is_ok()) return rejected(o, "distance", s, &arena);
   if (mesh.triangles.size() == 0) {
     return rejected(o, "distance", Status::error(StatusCode::kInvalidMesh, "mesh is empty")
