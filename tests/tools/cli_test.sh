@@ -108,5 +108,17 @@ printf '{"splintcore_case": 1, "base": {"upper": [{"position": [0,0,1]}, {"posit
 expect_exit 1 "base with a repeated pick" -- "$tool" base "$work/dup.json" -o "$work/dup.stl"
 check "repeated pick named" -- grep -q "upper pick 1: same position" "$work/err"
 
+# Distance queries.
+expect_exit 2 "distance without a query" -- "$tool" distance "$fixtures/stl/box_solid_header.stl"
+expect_exit 2 "distance with a bad query" -- "$tool" distance "$fixtures/stl/box_solid_header.stl" --query 1,2
+expect_exit 2 "distance with a bad sign method" -- "$tool" distance "$fixtures/stl/box_solid_header.stl" --query 1,2,3 --sign maybe
+expect_exit 0 "distance inside the box" -- "$tool" distance "$fixtures/stl/box_solid_header.stl" --query 16,12,8 --query 40,12,8 --json
+check "distance json is one object" -- json_ok "$work/out"
+check "centre is 5 mm inside" -- grep -q '"signed_distance":-5' "$work/out"
+check "outside point is 9 mm out" -- grep -q '"signed_distance":9' "$work/out"
+expect_exit 0 "distance by winding number" -- "$tool" distance "$fixtures/stl/torus_binary.stl" --query 20,0,0 --sign winding
+check "winding method reported" -- grep -q "(winding)" "$work/out"
+expect_exit 1 "distance on a missing file" -- "$tool" distance "$work/none.stl" --query 0,0,0
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
