@@ -437,6 +437,8 @@ struct KeyIndex {
 void radix_sort(Span<KeyIndex> items, Span<KeyIndex> scratch);
 // The same, taking scratch from the arena (rewound before return).
 Status radix_sort(Arena& arena, Span<KeyIndex> items);
+// Plain 64-bit keys (half the memory traffic when a key and an index fit in 64 bits).
+void radix_sort(Span<uint64_t> items, Span<uint64_t> scratch);
 
 // 64-bit mixer (splitmix64 finaliser): fixed on every platform.
 inline uint64_t hash_mix(uint64_t x) {

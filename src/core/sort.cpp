@@ -5,21 +5,26 @@
 
 namespace splintcore {
 
-void radix_sort(Span<KeyIndex> items, Span<KeyIndex> scratch) {
+namespace {
+inline uint64_t key_of(const KeyIndex& item) { return item.key; }
+inline uint64_t key_of(uint64_t item) { return item; }
+
+template <class T>
+void lsd_radix_sort(Span<T> items, Span<T> scratch) {
   const size_t n = items.size();
   if (n < 2) return;
-  SPLINTCORE_ASSERT(scratch.size() >= n);
+  SPLINTCORE_ASSERT(scratch.size() >= n && n <= UINT32_MAX);
   // One histogram pass over all 8 bytes at once.
   uint32_t counts[8][256] = {};
   for (size_t i = 0; i < n; ++i) {
-    uint64_t k = items.data()[i].key;
+    const uint64_t k = key_of(items.data()[i]);
     for (int b = 0; b < 8; ++b) ++counts[b][(k >> (8 * b)) & 0xff];
   }
-  KeyIndex* from = items.data();
-  KeyIndex* to = scratch.data();
+  T* from = items.data();
+  T* to = scratch.data();
   for (int b = 0; b < 8; ++b) {
     uint32_t* c = counts[b];
-    uint64_t first_byte = (from[0].key >> (8 * b)) & 0xff;
+    const uint64_t first_byte = (key_of(from[0]) >> (8 * b)) & 0xff;
     if (c[first_byte] == n) continue;  // every key has this byte: nothing to do
     uint32_t offsets[256];
     uint32_t sum = 0;
@@ -29,15 +34,19 @@ void radix_sort(Span<KeyIndex> items, Span<KeyIndex> scratch) {
     }
     const int shift = 8 * b;
     for (size_t i = 0; i < n; ++i) {
-      const KeyIndex& item = from[i];
-      to[offsets[(item.key >> shift) & 0xff]++] = item;
+      const T& item = from[i];
+      to[offsets[(key_of(item) >> shift) & 0xff]++] = item;
     }
-    KeyIndex* t = from;
+    T* t = from;
     from = to;
     to = t;
   }
-  if (from != items.data()) std::memcpy(items.data(), from, n * sizeof(KeyIndex));
+  if (from != items.data()) std::memcpy(static_cast<void*>(items.data()), from, n * sizeof(T));
 }
+}  // namespace
+
+void radix_sort(Span<KeyIndex> items, Span<KeyIndex> scratch) { lsd_radix_sort(items, scratch); }
+void radix_sort(Span<uint64_t> items, Span<uint64_t> scratch) { lsd_radix_sort(items, scratch); }
 
 Status radix_sort(Arena& arena, Span<KeyIndex> items) {
   ArenaScope scope(arena);

@@ -73,7 +73,7 @@ uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,
                         triangle_count * (sizeof(uint32_t) * 4) + vertex_count * sizeof(Vec3);
   // Temporaries (the largest stage): Morton keys and scratch, the per-node sums, or the
   // per-vertex half-edge lists.
-  const uint64_t temps = 2 * triangle_count * sizeof(KeyIndex) +
+  const uint64_t temps = 2 * triangle_count * sizeof(uint64_t) +
                          nodes * (2 * sizeof(Vec3) + sizeof(double)) +
                          3 * triangle_count * 8 + (2 * vertex_count + 1) * sizeof(uint32_t) +
                          kMaxDepth * 16;
@@ -131,29 +131,37 @@ Status build_distance_index(const Context& ctx, const Mesh& mesh,
     const Triangle& tri = tris[t];
     centroids.add((v[tri.v[0]] + v[tri.v[1]] + v[tri.v[2]]) * (1.0 / 3.0));
   }
-  KeyIndex* keys = arena.allocate_array<KeyIndex>(nt);
-  KeyIndex* scratch = arena.allocate_array<KeyIndex>(nt);
+  // Key = Morton code in the high bits, triangle id in the low bits: one 64-bit word per
+  // triangle to sort (half the traffic of a key-index pair). The code gets 3 * code_bits bits,
+  // code_bits = min(16, (64 - id bits) / 3): 16 up to 65,536 triangles ... 14 up to 4 million.
+  uint32_t id_bits = 1;
+  while (id_bits < 32 && (uint64_t{1} << id_bits) < nt) ++id_bits;
+  const uint32_t code_bits = (64 - id_bits) / 3 < 16 ? (64 - id_bits) / 3 : 16;
+  uint64_t* keys = arena.allocate_array<uint64_t>(nt);
+  uint64_t* scratch = arena.allocate_array<uint64_t>(nt);
   if (nt > 0 && (keys == nullptr || scratch == nullptr)) return arena.exhausted_status();
   {
     const Vec3 lo = centroids.lo;
     const Vec3 ext = centroids.extent();
-    const double scale[3] = {ext.x > 0 ? 65535.0 / ext.x : 0.0,
-                             ext.y > 0 ? 65535.0 / ext.y : 0.0,
-                             ext.z > 0 ? 65535.0 / ext.z : 0.0};
+    const double cells = static_cast<double>((uint64_t{1} << code_bits) - 1);
+    const double scale[3] = {ext.x > 0 ? cells / ext.x : 0.0, ext.y > 0 ? cells / ext.y : 0.0,
+                             ext.z > 0 ? cells / ext.z : 0.0};
     for (uint32_t t = 0; t < n; ++t) {
       const Triangle& tri = tris[t];
       const Vec3 c = (v[tri.v[0]] + v[tri.v[1]] + v[tri.v[2]]) * (1.0 / 3.0);
       uint64_t q[3];
       for (int a = 0; a < 3; ++a) {
         double x = (c[a] - lo[a]) * scale[a];
-        x = x < 0 ? 0 : (x > 65535.0 ? 65535.0 : x);
+        x = x < 0 ? 0 : (x > cells ? cells : x);
         q[a] = static_cast<uint64_t>(x);
       }
-      keys[t] = KeyIndex{(spread_bits(q[0]) << 2) | (spread_bits(q[1]) << 1) | spread_bits(q[2]),
-                         t, 0};
+      const uint64_t code =
+          (spread_bits(q[0]) << 2) | (spread_bits(q[1]) << 1) | spread_bits(q[2]);
+      keys[t] = (code << id_bits) | t;
     }
-    radix_sort(Span<KeyIndex>(keys, nt), Span<KeyIndex>(scratch, nt));
-    for (uint32_t i = 0; i < n; ++i) order[i] = keys[i].index;
+    radix_sort(Span<uint64_t>(keys, nt), Span<uint64_t>(scratch, nt));
+    const uint64_t id_mask = (uint64_t{1} << id_bits) - 1;
+    for (uint32_t i = 0; i < n; ++i) order[i] = static_cast<uint32_t>(keys[i] & id_mask);
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 1, 4));
 
@@ -161,7 +169,9 @@ Status build_distance_index(const Context& ctx, const Mesh& mesh,
   // its first triangle's. Children are allocated in pairs, so node 0 is the root and
   // children always follow their parent: the reverse of creation order is bottom-up.
   {
-    auto leaf_code = [&](uint32_t l) { return n == 0 ? 0 : keys[size_t{l} * leaf_size].key; };
+    // A leaf's code is its first triangle's (the id bits only break ties among equal codes,
+    // and splitting on them is as good as any other split there).
+    auto leaf_code = [&](uint32_t l) { return n == 0 ? 0 : keys[size_t{l} * leaf_size]; };
     struct Range {
       uint32_t node, first, last;  // leaves [first, last]
     };
@@ -305,21 +315,31 @@ Status build_distance_index(const Context& ctx, const Mesh& mesh,
         lists[start[a] + fill[a]++] = HalfEdge{tris[t].v[(k + 1) % 3], 3 * t + k};
       }
     }
+    // Each undirected edge is examined once, from its half-edge that runs from the smaller id
+    // to the larger; a manifold pair sets both neighbours. Any half-edge left without a
+    // neighbour (boundary, non-manifold, or a pair used in the same direction) means the mesh
+    // is not a closed oriented manifold.
+    for (size_t i = 0; i < 3 * nt; ++i) neighbors[i] = kNoNeighbor;
     for (uint32_t t = 0; t < n; ++t) {
       for (uint32_t k = 0; k < 3; ++k) {
         const uint32_t a = tris[t].v[k], b = tris[t].v[(k + 1) % 3];
-        uint32_t same = 0, reverse = 0, other = kNoNeighbor;
+        if (a >= b) continue;
+        uint32_t same = 0, reverse = 0, other_use = 0;
         for (uint32_t e = start[a]; e < start[a + 1]; ++e) same += lists[e].to == b;
         for (uint32_t e = start[b]; e < start[b + 1]; ++e) {
           if (lists[e].to == a) {
             ++reverse;
-            other = lists[e].use / 3;
+            other_use = lists[e].use;
           }
         }
-        const bool manifold = same == 1 && reverse == 1 && a != b;
-        neighbors[3 * size_t{t} + k] = manifold ? other : kNoNeighbor;
-        closed_manifold = closed_manifold && manifold;
+        if (same == 1 && reverse == 1) {
+          neighbors[3 * size_t{t} + k] = other_use / 3;
+          neighbors[other_use] = t;
+        }
       }
+    }
+    for (size_t i = 0; i < 3 * nt && closed_manifold; ++i) {
+      closed_manifold = neighbors[i] != kNoNeighbor;
     }
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 3, 4));
@@ -332,10 +352,12 @@ Status build_distance_index(const Context& ctx, const Mesh& mesh,
     const double len = length(normal);
     if (!(len > 0)) continue;
     const Vec3 unit = normal * (1.0 / len);
-    // The angles of a triangle sum to pi: two atan2 calls give the third.
+    // The angles of a triangle sum to pi: two atan2 calls give the third. At every corner
+    // the two edges' cross product has the length `len` (twice the area), so only the dot
+    // products differ.
     const Vec3 &p0 = v[tri.v[0]], &p1 = v[tri.v[1]], &p2 = v[tri.v[2]];
-    const double a0 = angle_between(p1 - p0, p2 - p0);
-    const double a1 = angle_between(p2 - p1, p0 - p1);
+    const double a0 = deterministic_atan2(len, dot(p1 - p0, p2 - p0));
+    const double a1 = deterministic_atan2(len, dot(p2 - p1, p0 - p1));
     double a2 = 3.14159265358979323846 - a0 - a1;
     a2 = a2 < 0 ? 0 : a2;
     vnormals[tri.v[0]] = vnormals[tri.v[0]] + unit * a0;

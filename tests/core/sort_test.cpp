@@ -28,6 +28,21 @@ TEST(RadixSort, MatchesStableSortOnRandomKeys) {
   }
 }
 
+TEST(RadixSort, PlainKeysMatchStdSort) {
+  std::mt19937_64 rng(43);
+  for (int round = 0; round < 20; ++round) {
+    const size_t n = static_cast<size_t>(rng() % 5000);
+    const int bits = static_cast<int>(rng() % 64) + 1;
+    std::vector<uint64_t> items(n);
+    for (uint64_t& k : items) k = bits == 64 ? rng() : rng() & ((uint64_t{1} << bits) - 1);
+    std::vector<uint64_t> expected = items;
+    std::sort(expected.begin(), expected.end());
+    std::vector<uint64_t> scratch(n);
+    radix_sort(Span<uint64_t>(items.data(), n), Span<uint64_t>(scratch.data(), n));
+    ASSERT_EQ(items, expected);
+  }
+}
+
 TEST(RadixSort, ArenaVariantReportsExhaustion) {
   std::vector<KeyIndex> items(100, KeyIndex{1, 0, 0});
   unsigned char buffer[64];
