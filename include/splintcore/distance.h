@@ -37,6 +37,7 @@ struct BvhDipole {
   float center[3];
   float normal[3];
   float radius;
+  float area;  // of the node's triangles (parents sum their children's)
 };
 
 enum class Feature : uint8_t { kFace = 0, kEdge = 1, kVertex = 2 };
