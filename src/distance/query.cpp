@@ -174,23 +174,27 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
   bool found = false;
   uint32_t best_tri = 0;
   ClosestPoint best;
-  if (seed != kNoNeighbor) {
-    const Triangle& tri = mesh.triangles[seed];
+  // Keeps triangle t when it is closer, or as close with a smaller id (so the answer never
+  // depends on the tree or the seed), and within the limit.
+  auto consider = [&](uint32_t t) {
+    const Triangle& tri = mesh.triangles[t];
     Vec3 p;
     Feature f;
     uint8_t fi;
     closest_on_triangle(q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], &p, &f, &fi);
     const double d2 = length_squared(p - q);
-    if (d2 <= limit2) {
+    if (d2 > limit2) return;
+    if (d2 < best2 || (d2 == best2 && (!found || t < best_tri))) {
       best2 = d2;
-      best_tri = seed;
+      best_tri = t;
       found = true;
       best.point = p;
-      best.triangle = seed;
+      best.triangle = t;
       best.feature = f;
       best.feature_index = fi;
     }
-  }
+  };
+  if (seed != kNoNeighbor) consider(seed);
   uint32_t stack[kStack];
   uint32_t top = 0;
   stack[top++] = 0;
@@ -198,26 +202,7 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
     const BvhNode& node = nodes[stack[--top]];
     if (box_distance_squared(node, q) > best2) continue;
     if (is_leaf(node)) {
-      for (uint32_t k = node.index; k < node.index + node.count; ++k) {
-        const uint32_t t = index.order[k];
-        const Triangle& tri = mesh.triangles[t];
-        Vec3 p;
-        Feature f;
-        uint8_t fi;
-        closest_on_triangle(q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], &p, &f, &fi);
-        const double d2 = length_squared(p - q);
-        // Ties go to the smallest triangle id: the answer never depends on the tree.
-        if (d2 < best2 || (d2 == best2 && (!found || t < best_tri))) {
-          if (d2 > limit2) continue;
-          best2 = d2;
-          best_tri = t;
-          found = true;
-          best.point = p;
-          best.triangle = t;
-          best.feature = f;
-          best.feature_index = fi;
-        }
-      }
+      for (uint32_t k = node.index; k < node.index + node.count; ++k) consider(index.order[k]);
       continue;
     }
     // Visit the nearer child first (push it last).
