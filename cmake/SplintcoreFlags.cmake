@@ -22,6 +22,12 @@ endif()
 # so a golden hash computed in a test is the one the tool writes.
 set(SPLINTCORE_FP_FLAGS -ffp-contract=off -fno-fast-math)
 if(CMAKE_CXX_COMPILER_ID MATCHES "GNU")
+  # GCC 12's basic-block (SLP) vectoriser drops double -> float -> double round trips on
+  # neighbouring fields (Vec3{(double)(float)p.x, (double)(float)p.y, ...} keeps x and y
+  # unrounded at -O2; reproduced with Debian's g++ 12.2). Rounding to float32 is what makes a
+  # written STL what we checked, so it is off for everything we compile. round_to_float32()
+  # (geometry.h) also rounds through a volatile, so a consumer's flags cannot bring it back.
+  list(APPEND SPLINTCORE_FP_FLAGS -fno-tree-slp-vectorize)
   # x87 extended precision would break bit-identity; SSE2 is the x86-64 baseline anyway.
   if(CMAKE_SYSTEM_PROCESSOR MATCHES "i.86")
     list(APPEND SPLINTCORE_FP_FLAGS -msse2 -mfpmath=sse)

@@ -59,6 +59,11 @@ inline bool is_finite(float v) {
 }
 inline bool is_finite(const Vec3& v) { return is_finite(v.x) && is_finite(v.y) && is_finite(v.z); }
 
+// Rounds each coordinate to the nearest float32 (what STL stores), -0 to +0. False (and v
+// unchanged) when a coordinate is not finite or beyond float32's range. Out of line and through
+// a volatile: GCC 12's SLP vectoriser drops neighbouring double -> float -> double round trips.
+bool round_to_float32(Vec3* v);
+
 // ---------------------------------------------------------------------------------------------
 // Axis-aligned bounding box. Empty until a point is added.
 
@@ -127,13 +132,21 @@ double angle_between(const Vec3& a, const Vec3& b);
 // Exact geometric predicates (Shewchuk, "Adaptive Precision Floating-Point Arithmetic and Fast
 // Robust Geometric Predicates", 1997). The sign of each result is exact for finite inputs
 // whose products neither overflow nor underflow: every nonzero coordinate within
-// [2^-485, 2^509] (about 1e-146 .. 1.6e153) for orient2d and collinear3d, and within
-// [2^-306, 2^338] (about 7.7e-93 .. 5.6e101) for orient3d (see predicates.cpp). The
-// magnitude is an approximation.
+// [2^-485, 2^509] (about 1e-146 .. 1.6e153) for orient2d and collinear3d, within
+// [2^-306, 2^338] (about 7.7e-93 .. 5.6e101) for orient3d, and within [2^-216, 2^240] for
+// incircle (see predicates.cpp). The magnitude is an approximation.
 
 // > 0 when a, b, c run counter-clockwise, < 0 clockwise, 0 when collinear.
 // Equals (a - c) x (b - c) in exact arithmetic.
 double orient2d(double ax, double ay, double bx, double by, double cx, double cy);
+
+// > 0 when d lies strictly inside the circle through a, b, c (a, b, c counter-clockwise),
+// < 0 outside, 0 on it (or when a, b, c are collinear and d on their line). Equals
+// det[a - d, |a - d|^2; b - d, |b - d|^2; c - d, |c - d|^2] in exact arithmetic. A polynomial of
+// degree 4: the sign is exact when every nonzero coordinate is within [2^-216, 2^240] (about
+// 9.5e-66 .. 1.8e72).
+double incircle(double ax, double ay, double bx, double by, double cx, double cy, double dx,
+                double dy);
 
 // > 0 when d lies below the plane through a, b, c (a, b, c counter-clockwise seen from above),
 // < 0 above, 0 when coplanar. Equals det[a - d; b - d; c - d] in exact arithmetic.

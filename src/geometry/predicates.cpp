@@ -1,11 +1,12 @@
-// Exact orientation predicates: orient2d, orient3d, collinear3d.
+// Exact orientation and in-circle predicates: orient2d, orient3d, collinear3d, incircle.
 //
 // Source: J. R. Shewchuk, "Adaptive Precision Floating-Point Arithmetic and Fast Robust
 // Geometric Predicates", Discrete & Computational Geometry 18(3), 1997.
 //   Section 2 (2.3-2.6): expansion arithmetic - Two-Sum, Fast-Two-Sum, Split, Two-Product,
 //     Fast-Expansion-Sum and Scale-Expansion, here with zero elimination.
 //   Section 4 (4.2-4.3): the orientation tests with their forward error bounds
-//     (ccwerrboundA/B for orient2d, o3derrboundA/B for orient3d).
+//     (ccwerrboundA/B for orient2d, o3derrboundA/B for orient3d), and the in-circle test
+//     (iccerrboundA/B) of Section 4.4.
 // Written from the paper (not from predicates.c).
 //
 // Stages implemented:
@@ -16,18 +17,25 @@
 //             4x4 determinant of the original coordinates as a sum of 2x2 minors scaled by
 //             the z coordinates (the "exact" evaluation of Section 4.3, not the adaptive C/D).
 //   collinear3d: the three coordinate-plane projections through orient2d.
+//   incircle: A (filter), B (exact determinant of the rounded differences: exact whenever the
+//             differences are, e.g. for integer or small dyadic coordinates), then the exact
+//             4x4 lifted determinant of the original coordinates (as orient3d's exact stage,
+//             with the lifting x^2 + y^2 in place of z).
 // The sign is exact; the magnitude is an approximation (a stage estimate, or the most
 // significant component of the exact expansion).
 //
 // Range in which the sign is exact (finite inputs; every nonzero coordinate must satisfy):
 //   orient2d, collinear3d: 2^-485 <= |x| <= 2^509   (about 1.0e-146 .. 1.6e153)
 //   orient3d:              2^-306 <= |x| <= 2^338   (about 7.7e-93  .. 5.6e101)
-// Zero coordinates are always fine. Reason: each predicate is a polynomial of degree 2 (3);
-// every coordinate is a multiple of its last mantissa bit, which is at least 2^-537 (2^-358)
-// in these ranges, so every product of two (three) of them is a multiple of 2^-1074, the
-// smallest subnormal: products and their round-off terms never underflow, and subnormal
-// results are exact. The upper bounds keep the filters' permanents below 2^1024 and
-// Split(x) = (2^27 + 1) x finite. Outside these ranges the sign may be wrong.
+//   incircle:              2^-216 <= |x| <= 2^240   (about 9.5e-66  .. 1.8e72)
+// Zero coordinates are always fine. Reason: each predicate is a polynomial of degree 2 (3, 4);
+// every coordinate is a multiple of its last mantissa bit, which is at least 2^-537 (2^-358,
+// 2^-268) in these ranges, so every product of two (three, four) of them is a multiple of
+// 2^-1074, the smallest subnormal: products and their round-off terms never underflow, and
+// subnormal results are exact. The upper bounds keep the filters' permanents below 2^1024 and
+// Split(x) = (2^27 + 1) x finite (for incircle: permanent < 2^8 M^4 and expansion components
+// < 2^6 M^4 for M the largest magnitude, both far below 2^1024 / 2^27). Outside these ranges
+// the sign may be wrong.
 //
 // Requirements on the arithmetic: IEEE 754 binary64, round-to-nearest-even, no extended
 // precision (FLT_EVAL_METHOD == 0), no contraction into FMA (-ffp-contract=off), no
@@ -70,6 +78,8 @@ constexpr double kCcwErrBoundA = (3.0 + 16.0 * kEpsilon) * kEpsilon;
 constexpr double kCcwErrBoundB = (2.0 + 12.0 * kEpsilon) * kEpsilon;
 constexpr double kO3dErrBoundA = (7.0 + 56.0 * kEpsilon) * kEpsilon;
 constexpr double kO3dErrBoundB = (3.0 + 28.0 * kEpsilon) * kEpsilon;
+constexpr double kIccErrBoundA = (10.0 + 96.0 * kEpsilon) * kEpsilon;
+constexpr double kIccErrBoundB = (4.0 + 48.0 * kEpsilon) * kEpsilon;
 
 // ---- exact two-term operations (Section 2.3-2.5). x is the rounded result, y the exact
 // round-off, so x + y equals the exact value.
@@ -304,11 +314,18 @@ int minor3_xy(const double pq[4], const double qr[4], const double third[4], boo
   return fast_expansion_sum_zeroelim(len2, sum2, 4, third_signed, out);
 }
 
-// det[a 1; b 1; c 1; d 1] = det[a - d; b - d; c - d], exactly, from the original coordinates:
-// expansion along the z column,
-//   az M(b,c,d) - bz M(a,c,d) + cz M(a,b,d) - dz M(a,b,c),
-// where M(p,q,r) = m(p,q) + m(q,r) + m(r,p) is the xy 3x3 minor.
-double orient3d_exact(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+// The four xy 3x3 minors of the rows a, b, c, d of a 4x4 matrix [x y * 1]:
+// M(p,q,r) = m(p,q) + m(q,r) + m(r,p) for (p,q,r) = (b,c,d), (a,c,d), (a,b,d), (a,b,c).
+// Each holds 12 components; the lengths are returned in len[0..3].
+struct XyMinors {
+  double bcd[12];
+  double acd[12];
+  double abd[12];
+  double abc[12];
+  int len[4];
+};
+
+void xy_minors(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, XyMinors* out) {
   double ab[4];
   double bc[4];
   double cd[4];
@@ -322,14 +339,27 @@ double orient3d_exact(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d
   minor_xy(a, c, ac);
   minor_xy(b, d, bd);
 
-  double m_bcd[12];  // bc + cd + db = bc + cd - bd
-  double m_acd[12];  // ac + cd + da
-  double m_abd[12];  // ab + bd + da
-  double m_abc[12];  // ab + bc + ca = ab + bc - ac
-  const int bcd_len = minor3_xy(bc, cd, bd, true, m_bcd);
-  const int acd_len = minor3_xy(ac, cd, da, false, m_acd);
-  const int abd_len = minor3_xy(ab, bd, da, false, m_abd);
-  const int abc_len = minor3_xy(ab, bc, ac, true, m_abc);
+  out->len[0] = minor3_xy(bc, cd, bd, true, out->bcd);   // bc + cd + db = bc + cd - bd
+  out->len[1] = minor3_xy(ac, cd, da, false, out->acd);  // ac + cd + da
+  out->len[2] = minor3_xy(ab, bd, da, false, out->abd);  // ab + bd + da
+  out->len[3] = minor3_xy(ab, bc, ac, true, out->abc);   // ab + bc + ca = ab + bc - ac
+}
+
+// det[a 1; b 1; c 1; d 1] = det[a - d; b - d; c - d], exactly, from the original coordinates:
+// expansion along the z column,
+//   az M(b,c,d) - bz M(a,c,d) + cz M(a,b,d) - dz M(a,b,c),
+// where M(p,q,r) = m(p,q) + m(q,r) + m(r,p) is the xy 3x3 minor.
+double orient3d_exact(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  XyMinors m;
+  xy_minors(a, b, c, d, &m);
+  const int bcd_len = m.len[0];
+  const int acd_len = m.len[1];
+  const int abd_len = m.len[2];
+  const int abc_len = m.len[3];
+  const double* m_bcd = m.bcd;
+  const double* m_acd = m.acd;
+  const double* m_abd = m.abd;
+  const double* m_abc = m.abc;
 
   double a_det[24];
   double b_det[24];
@@ -395,6 +425,94 @@ double orient3d_adapt(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d
   return orient3d_exact(a, b, c, d);
 }
 
+// ---- incircle stages B and the exact evaluation.
+
+// (x^2 + y^2) * e for the expansion e (1 to 12 components), negated when `negative`.
+// `out` must hold 8 * elen components.
+int lift_scale(int elen, const double* e, double x, double y, bool negative, double* out) {
+  double ex[24];
+  double exx[48];
+  double ey[24];
+  double eyy[48];
+  const int ex_len = scale_expansion_zeroelim(elen, e, x, ex);
+  const int exx_len = scale_expansion_zeroelim(ex_len, ex, x, exx);
+  const int ey_len = scale_expansion_zeroelim(elen, e, y, ey);
+  const int eyy_len = scale_expansion_zeroelim(ey_len, ey, y, eyy);
+  const int len = fast_expansion_sum_zeroelim(exx_len, exx, eyy_len, eyy, out);
+  if (negative) negate(len, out);
+  return len;
+}
+
+// det[a l(a) 1; b l(b) 1; c l(c) 1; d l(d) 1] with l(p) = px^2 + py^2, exactly, from the
+// original coordinates (subtracting row d and then the multiples 2 dx, 2 dy of the x, y
+// columns from the lift column turns it into the determinant of the differences that
+// incircle() evaluates). Expansion along the lift column:
+//   l(a) M(b,c,d) - l(b) M(a,c,d) + l(c) M(a,b,d) - l(d) M(a,b,c).
+double incircle_exact(double ax, double ay, double bx, double by, double cx, double cy,
+                      double dx, double dy) {
+  const Vec3 a{ax, ay, 0.0};
+  const Vec3 b{bx, by, 0.0};
+  const Vec3 c{cx, cy, 0.0};
+  const Vec3 d{dx, dy, 0.0};
+  XyMinors m;
+  xy_minors(a, b, c, d, &m);
+  double a_det[96];
+  double b_det[96];
+  double c_det[96];
+  double d_det[96];
+  const int a_len = lift_scale(m.len[0], m.bcd, ax, ay, false, a_det);
+  const int b_len = lift_scale(m.len[1], m.acd, bx, by, true, b_det);
+  const int c_len = lift_scale(m.len[2], m.abd, cx, cy, false, c_det);
+  const int d_len = lift_scale(m.len[3], m.abc, dx, dy, true, d_det);
+  double ab_det[192];
+  double cd_det[192];
+  double det[384];
+  const int ab_len = fast_expansion_sum_zeroelim(a_len, a_det, b_len, b_det, ab_det);
+  const int cd_len = fast_expansion_sum_zeroelim(c_len, c_det, d_len, d_det, cd_det);
+  const int det_len = fast_expansion_sum_zeroelim(ab_len, ab_det, cd_len, cd_det, det);
+  return det[det_len - 1];
+}
+
+double incircle_adapt(double ax, double ay, double bx, double by, double cx, double cy,
+                      double dx, double dy, double permanent) {
+  const double adx = ax - dx;
+  const double bdx = bx - dx;
+  const double cdx = cx - dx;
+  const double ady = ay - dy;
+  const double bdy = by - dy;
+  const double cdy = cy - dy;
+
+  // Stage B: the determinant of the rounded differences, exactly:
+  //   (adx^2 + ady^2) bc + (bdx^2 + bdy^2) ca + (cdx^2 + cdy^2) ab.
+  double bc[4];
+  double ca[4];
+  double ab[4];
+  two_by_two(bdx, cdy, cdx, bdy, bc);
+  two_by_two(cdx, ady, adx, cdy, ca);
+  two_by_two(adx, bdy, bdx, ady, ab);
+  double a_det[32];
+  double b_det[32];
+  double c_det[32];
+  const int a_len = lift_scale(4, bc, adx, ady, false, a_det);
+  const int b_len = lift_scale(4, ca, bdx, bdy, false, b_det);
+  const int c_len = lift_scale(4, ab, cdx, cdy, false, c_det);
+  double ab_det[64];
+  double fin[96];
+  const int ab_len = fast_expansion_sum_zeroelim(a_len, a_det, b_len, b_det, ab_det);
+  const int fin_len = fast_expansion_sum_zeroelim(ab_len, ab_det, c_len, c_det, fin);
+  const double det = estimate(fin_len, fin);
+  const double errbound = kIccErrBoundB * permanent;
+  if (det > errbound || -det > errbound) return det;
+
+  if (two_diff_tail(ax, dx, adx) == 0.0 && two_diff_tail(bx, dx, bdx) == 0.0 &&
+      two_diff_tail(cx, dx, cdx) == 0.0 && two_diff_tail(ay, dy, ady) == 0.0 &&
+      two_diff_tail(by, dy, bdy) == 0.0 && two_diff_tail(cy, dy, cdy) == 0.0) {
+    // The differences were exact, so the stage B expansion is the determinant.
+    return fin[fin_len - 1];
+  }
+  return incircle_exact(ax, ay, bx, by, cx, cy, dx, dy);
+}
+
 }  // namespace
 
 double orient2d(double ax, double ay, double bx, double by, double cx, double cy) {
@@ -450,6 +568,39 @@ double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   // exactly 0. Common and worth the test: four points on an axis-aligned plane.
   if (permanent == 0.0) return 0.0;
   return orient3d_adapt(a, b, c, d, permanent);
+}
+
+double incircle(double ax, double ay, double bx, double by, double cx, double cy, double dx,
+                double dy) {
+  const double adx = ax - dx;
+  const double bdx = bx - dx;
+  const double cdx = cx - dx;
+  const double ady = ay - dy;
+  const double bdy = by - dy;
+  const double cdy = cy - dy;
+
+  const double bdxcdy = bdx * cdy;
+  const double cdxbdy = cdx * bdy;
+  const double alift = adx * adx + ady * ady;
+  const double cdxady = cdx * ady;
+  const double adxcdy = adx * cdy;
+  const double blift = bdx * bdx + bdy * bdy;
+  const double adxbdy = adx * bdy;
+  const double bdxady = bdx * ady;
+  const double clift = cdx * cdx + cdy * cdy;
+
+  const double det = alift * (bdxcdy - cdxbdy) + blift * (cdxady - adxcdy) +
+                     clift * (adxbdy - bdxady);
+  const double permanent = (magnitude(bdxcdy) + magnitude(cdxbdy)) * alift +
+                           (magnitude(cdxady) + magnitude(adxcdy)) * blift +
+                           (magnitude(adxbdy) + magnitude(bdxady)) * clift;
+  const double errbound = kIccErrBoundA * permanent;
+  if (det > errbound || -det > errbound) return det;
+  // A zero permanent: every term has an exactly zero factor (a lift is zero only when its
+  // point equals d, a product only when a factor is zero, inside the range), so the
+  // determinant is exactly 0. Common: d equal to one of a, b, c.
+  if (permanent == 0.0) return 0.0;
+  return incircle_adapt(ax, ay, bx, by, cx, cy, dx, dy, permanent);
 }
 
 bool collinear3d(const Vec3& a, const Vec3& b, const Vec3& c) {

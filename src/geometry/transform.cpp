@@ -65,4 +65,17 @@ Status rigid_from_matrix(const double m[16], double tolerance, RigidTransform* o
   return Status::ok();
 }
 
+bool round_to_float32(Vec3* v) {
+  constexpr double kMax = 3.4028234663852886e38;  // FLT_MAX
+  double r[3];
+  for (int a = 0; a < 3; ++a) {
+    const double x = (*v)[a];
+    if (!(x <= kMax && x >= -kMax)) return false;
+    volatile float f = static_cast<float>(x);
+    r[a] = static_cast<double>(f) + 0.0;
+  }
+  *v = Vec3{r[0], r[1], r[2]};
+  return true;
+}
+
 }  // namespace splintcore

@@ -125,15 +125,6 @@ Vec3 polygon_normal(const Vec3* p, uint32_t n) {
   return sum;
 }
 
-bool round_to_float(Vec3* v) {
-  constexpr double kMax = 3.4028234663852886e38;
-  for (int a = 0; a < 3; ++a) {
-    double x = (*v)[a];
-    if (!(x <= kMax && x >= -kMax)) return false;
-    (*v)[a] = static_cast<double>(static_cast<float>(x)) + 0.0;
-  }
-  return true;
-}
 
 }  // namespace
 
@@ -376,7 +367,7 @@ Status build_splint_base(const Context& ctx, Span<const Line> upper, Span<const 
     }
     if (params.snap_to_float32) {
       for (uint32_t j = 0; j < P; ++j) {
-        if (!round_to_float(&sec[j])) {
+        if (!round_to_float32(&sec[j])) {
           return make_error(StatusCode::kLimitExceeded, "section ", k, " is beyond float32 range");
         }
       }

@@ -35,6 +35,7 @@
 namespace {
 
 using splintcore::collinear3d;
+using splintcore::incircle;
 using splintcore::orient2d;
 using splintcore::orient3d;
 using splintcore::sign_of;
@@ -43,6 +44,7 @@ using splintcore_test::BigInt;
 using splintcore_test::exact_collinear3d;
 using splintcore_test::exact_orient2d_sign;
 using splintcore_test::exact_orient3d_sign;
+using splintcore_test::to_common_scale;
 
 // ---- deterministic random inputs ------------------------------------------------------------
 
@@ -944,6 +946,335 @@ TEST(Predicates, Collinear3dExactAndPerturbed) {
               static_cast<long long>(exact_cases), static_cast<long long>(perturbed_cases),
               static_cast<long long>(perturbed_false), static_cast<long long>(other_cases));
   EXPECT_GT(perturbed_false, perturbed_cases / 2);
+}
+
+// ---- incircle ------------------------------------------------------------------------------
+
+// Sign of det[a - d, |a - d|^2; b - d, |b - d|^2; c - d, |c - d|^2], exactly (the oracle for
+// incircle: the coordinates on one common integer scale, then integer arithmetic).
+int exact_incircle_sign(double ax, double ay, double bx, double by, double cx, double cy,
+                        double dx, double dy) {
+  const double v[8] = {ax, ay, bx, by, cx, cy, dx, dy};
+  const std::vector<BigInt> n = to_common_scale(v, 8);
+  const BigInt adx = n[0] - n[6], ady = n[1] - n[7];
+  const BigInt bdx = n[2] - n[6], bdy = n[3] - n[7];
+  const BigInt cdx = n[4] - n[6], cdy = n[5] - n[7];
+  const BigInt alift = adx * adx + ady * ady;
+  const BigInt blift = bdx * bdx + bdy * bdy;
+  const BigInt clift = cdx * cdx + cdy * cdy;
+  const BigInt det = alift * (bdx * cdy - bdy * cdx) + blift * (cdx * ady - adx * cdy) +
+                     clift * (adx * bdy - bdx * ady);
+  return det.sign();
+}
+
+int naive_incircle_sign(double ax, double ay, double bx, double by, double cx, double cy,
+                        double dx, double dy) {
+  const double adx = ax - dx, ady = ay - dy, bdx = bx - dx, bdy = by - dy;
+  const double cdx = cx - dx, cdy = cy - dy;
+  return sign_of((adx * adx + ady * ady) * (bdx * cdy - bdy * cdx) +
+                 (bdx * bdx + bdy * bdy) * (cdx * ady - adx * cdy) +
+                 (cdx * cdx + cdy * cdy) * (adx * bdy - bdx * ady));
+}
+
+struct Circle4 {
+  Point2 p[4];  // a, b, c, d
+};
+
+int check_incircle(Tally& t, const Circle4& q) {
+  const Point2 *a = &q.p[0], *b = &q.p[1], *c = &q.p[2], *d = &q.p[3];
+  const int expected = exact_incircle_sign(a->x, a->y, b->x, b->y, c->x, c->y, d->x, d->y);
+  const int got = sign_of(incircle(a->x, a->y, b->x, b->y, c->x, c->y, d->x, d->y));
+  ++t.cases;
+  if (expected == 0) ++t.zeros;
+  if (naive_incircle_sign(a->x, a->y, b->x, b->y, c->x, c->y, d->x, d->y) != expected) {
+    ++t.naive_wrong;
+  }
+  if (got != expected && ++t.wrong <= 5) {
+    ADD_FAILURE() << t.name << ": incircle(" << hex(a->x) << ", " << hex(a->y) << ", "
+                  << hex(b->x) << ", " << hex(b->y) << ", " << hex(c->x) << ", " << hex(c->y)
+                  << ", " << hex(d->x) << ", " << hex(d->y) << ") has sign " << got
+                  << ", exact sign " << expected;
+  }
+  return expected;
+}
+
+// A point of the circle (cx, cy, r) from the rational parametrisation
+// ((1 - t^2) / (1 + t^2), 2 t / (1 + t^2)), rounded: nearly on the circle.
+Point2 on_circle(double cx, double cy, double r, double t) {
+  const double den = 1.0 + t * t;
+  return {cx + r * ((1.0 - t * t) / den), cy + r * ((2.0 * t) / den)};
+}
+
+// v rounded to float32. Through a volatile: g++ 12 at -O2 folds the pair of conversions
+// (double)(float)x of two neighbouring fields into nothing when it vectorises them (SLP), so
+// `p = {(double)(float)p.x, (double)(float)p.y}` keeps p unrounded.
+double to_float32(double v) {
+  const volatile float f = static_cast<float>(v);
+  return static_cast<double>(f);
+}
+
+// Four nearly cocircular points (kind: unit, millimetre or float32 scale).
+Circle4 near_circle(Rng& rng, int kind) {
+  const double cx = line_coordinate(rng, kind);
+  const double cy = line_coordinate(rng, kind);
+  const double r = kind % 3 == 0 ? rng.uniform(0.01, 1.0) : rng.uniform(0.1, 500.0);
+  Circle4 q;
+  for (Point2& p : q.p) {
+    const double t = rng.uniform(-3.0, 3.0);
+    p = on_circle(cx, cy, r, t);
+    if (kind % 3 == 2) p = {to_float32(p.x), to_float32(p.y)};
+  }
+  return q;
+}
+
+TEST(Predicates, IncircleSimpleExactCases) {
+  // The unit square's circle: the centre is inside, far points outside, corners on it.
+  EXPECT_GT(incircle(0, 0, 1, 0, 1, 1, 0.5, 0.5), 0.0);
+  EXPECT_LT(incircle(0, 0, 1, 0, 1, 1, 3, 3), 0.0);
+  EXPECT_EQ(incircle(0, 0, 1, 0, 1, 1, 0, 1), 0.0);
+  EXPECT_EQ(incircle(0, 0, 2, 0, 0, 2, 2, 2), 0.0);
+  // Clockwise a, b, c: the sign flips.
+  EXPECT_LT(incircle(0, 0, 1, 1, 1, 0, 0.5, 0.5), 0.0);
+  EXPECT_GT(incircle(0, 0, 1, 1, 1, 0, 3, 3), 0.0);
+  // d equal to a vertex: on the circle.
+  EXPECT_EQ(incircle(0.1, 0.2, 0.7, 0.3, 0.4, 0.9, 0.7, 0.3), 0.0);
+  EXPECT_EQ(incircle(0.1, 0.2, 0.7, 0.3, 0.4, 0.9, 0.1, 0.2), 0.0);
+  // A Pythagorean circle (radius 5) moved and scaled by powers of two: exactly cocircular.
+  for (int e = -200; e <= 200; e += 25) {
+    const double s = std::ldexp(1.0, e);
+    EXPECT_EQ(incircle((7 + 3) * s, (11 + 4) * s, (7 - 4) * s, (11 + 3) * s, (7 - 5) * s,
+                       11 * s, (7 + 4) * s, (11 - 3) * s),
+              0.0)
+        << e;
+    EXPECT_GT(incircle((7 + 3) * s, (11 + 4) * s, (7 - 4) * s, (11 + 3) * s, (7 - 5) * s,
+                       11 * s, (7 + 4) * s, (11 - 2) * s),
+              0.0)
+        << e;
+  }
+  // Decimal points of the circle x^2 + y^2 = 1: after rounding, whatever the oracle says.
+  EXPECT_EQ(sign_of(incircle(0.6, 0.8, -0.8, 0.6, -0.6, -0.8, 0.8, -0.6)),
+            exact_incircle_sign(0.6, 0.8, -0.8, 0.6, -0.6, -0.8, 0.8, -0.6));
+  // Collinear a, b, c: the "circle" is the line (d to the left of a->b->c counts as outside).
+  EXPECT_EQ(incircle(0, 0, 1, 0, 2, 0, 5, 0), 0.0);
+  EXPECT_EQ(sign_of(incircle(0, 0, 1, 0, 2, 0, 1, 1)), exact_incircle_sign(0, 0, 1, 0, 2, 0, 1, 1));
+  EXPECT_EQ(sign_of(incircle(0, 0, 1, 0, 2, 0, 1, -1)),
+            exact_incircle_sign(0, 0, 1, 0, 2, 0, 1, -1));
+}
+
+TEST(Predicates, IncircleRandomMatchesOracle) {
+  int64_t total = 0;
+  for (Range r : kAllRanges) {
+    Tally t(std::string("incircle random ") + range_name(r));
+    Rng rng(8000 + static_cast<uint64_t>(r));
+    for (int i = 0; i < 20000; ++i) {
+      Circle4 q;
+      for (Point2& p : q.p) {
+        p.x = random_coordinate(rng, r);
+        p.y = random_coordinate(rng, r);
+      }
+      check_incircle(t, q);
+    }
+    t.print();
+    EXPECT_EQ(t.wrong, 0) << t.name;
+    total += t.cases;
+  }
+  EXPECT_GE(total, 120000);
+}
+
+TEST(Predicates, IncircleNearCocircularMatchesOracle) {
+  // Rounded points of a circle, then a few ulps of perturbation.
+  Tally perturbed("incircle on a circle +- 3 ulps");
+  Rng rng(8101);
+  for (int i = 0; i < 40000; ++i) {
+    Circle4 q = near_circle(rng, i);
+    for (Point2& p : q.p) {
+      if (rng.coin()) p.x = ulps(p.x, rng.small(-3, 3));
+      if (rng.coin()) p.y = ulps(p.y, rng.small(-3, 3));
+    }
+    check_incircle(perturbed, q);
+  }
+  perturbed.print();
+  EXPECT_EQ(perturbed.wrong, 0);
+  EXPECT_GT(perturbed.naive_wrong, 0) << "the inputs must be hard for the naive formula";
+
+  // d sweeps a 64 x 64 nextafter grid around a rounded point of the circle through a, b, c.
+  Tally grid("incircle nextafter grids 64x64");
+  for (int config = 0; config < 12; ++config) {
+    Circle4 q = near_circle(rng, config);
+    const std::vector<double> xs = ulp_row(q.p[3].x);
+    const std::vector<double> ys = ulp_row(q.p[3].y);
+    for (double x : xs) {
+      for (double y : ys) {
+        q.p[3] = {x, y};
+        check_incircle(grid, q);
+      }
+    }
+  }
+  grid.print();
+  EXPECT_EQ(grid.wrong, 0);
+  EXPECT_GT(grid.naive_wrong, 0);
+
+  // Clusters: four points within a few ulps of 123.456 (differences are not exact).
+  Tally cluster("incircle ulp clusters at 123.456");
+  for (int i = 0; i < 20000; ++i) {
+    Circle4 q;
+    for (Point2& p : q.p) {
+      p.x = ulps(123.456, rng.small(-40, 40));
+      p.y = ulps(-654.321, rng.small(-40, 40));
+    }
+    check_incircle(cluster, q);
+  }
+  cluster.print();
+  EXPECT_EQ(cluster.wrong, 0);
+  EXPECT_GT(cluster.zeros, 0);
+}
+
+TEST(Predicates, IncircleExactlyCocircularIsZero) {
+  Rng rng(8201);
+  Tally rect("incircle rectangle corners (random doubles)");
+  Tally pyth("incircle Pythagorean circles (integers scaled)");
+  // The corners of any axis-aligned rectangle are cocircular, whatever the coordinates: the
+  // differences are not exact in general, so this reaches the exact stage.
+  for (int i = 0; i < 20000; ++i) {
+    const Range r = kAllRanges[i % 6];
+    const double x0 = random_coordinate(rng, r), x1 = random_coordinate(rng, r);
+    const double y0 = random_coordinate(rng, r), y1 = random_coordinate(rng, r);
+    Point2 corners[4] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+    Circle4 q;
+    for (int k = 0; k < 4; ++k) q.p[k] = corners[(k + i) % 4];
+    if (i % 3 == 0) std::swap(q.p[1], q.p[2]);
+    const int expected = check_incircle(rect, q);
+    ASSERT_EQ(expected, 0);
+    ASSERT_EQ(incircle(q.p[0].x, q.p[0].y, q.p[1].x, q.p[1].y, q.p[2].x, q.p[2].y, q.p[3].x,
+                       q.p[3].y),
+              0.0);
+  }
+  // Integer points of x^2 + y^2 = 25 (and 65^2), moved to an integer centre and scaled.
+  const int p5[12][2] = {{5, 0}, {4, 3}, {3, 4}, {0, 5}, {-3, 4}, {-4, 3},
+                         {-5, 0}, {-4, -3}, {-3, -4}, {0, -5}, {3, -4}, {4, -3}};
+  const int p65[8][2] = {{65, 0}, {63, 16}, {60, 25}, {56, 33}, {52, 39}, {39, 52}, {33, 56},
+                         {16, 63}};
+  for (int i = 0; i < 20000; ++i) {
+    const double scale = std::ldexp(1.0, rng.small(-150, 150));
+    const double cx = static_cast<double>(rng.small(-1000, 1000));
+    const double cy = static_cast<double>(rng.small(-1000, 1000));
+    Circle4 q;
+    for (Point2& p : q.p) {
+      double x, y;
+      if (i % 2 == 0) {
+        const int k = rng.small(0, 11);
+        x = p5[k][0];
+        y = p5[k][1];
+      } else {
+        const int k = rng.small(0, 7);
+        x = rng.coin() ? p65[k][0] : -p65[k][0];
+        y = rng.coin() ? p65[k][1] : -p65[k][1];
+      }
+      p = {(cx + x) * scale, (cy + y) * scale};
+    }
+    ASSERT_EQ(check_incircle(pyth, q), 0);
+  }
+  rect.print();
+  pyth.print();
+  EXPECT_EQ(rect.wrong, 0);
+  EXPECT_EQ(pyth.wrong, 0);
+  EXPECT_GT(rect.naive_wrong, 0);
+}
+
+TEST(Predicates, IncircleNearRangeLimitsMatchOracle) {
+  // The documented range is 2^-216 <= |x| <= 2^240 for nonzero coordinates.
+  Tally t("incircle grids scaled by 2^228 and 2^-216");
+  Rng rng(8301);
+  for (int config = 0; config < 8; ++config) {
+    Circle4 q;
+    bool ok = false;
+    while (!ok) {
+      q = near_circle(rng, 1);
+      ok = true;
+      for (const Point2& p : q.p) {
+        ok = ok && std::fabs(p.x) >= 1.5 && std::fabs(p.x) < 1024 && std::fabs(p.y) >= 1.5 &&
+             std::fabs(p.y) < 1024;
+      }
+    }
+    const double scale = std::ldexp(1.0, config % 2 == 0 ? 228 : -216);
+    for (Point2& p : q.p) p = {p.x * scale, p.y * scale};
+    const std::vector<double> xs = ulp_row(q.p[config % 4].x);
+    const std::vector<double> ys = ulp_row(q.p[config % 4].y);
+    for (size_t i = 0; i < 64; i += 2) {
+      for (size_t j = 0; j < 64; j += 2) {
+        q.p[config % 4] = {xs[i], ys[j]};
+        check_incircle(t, q);
+      }
+    }
+  }
+  t.print();
+  EXPECT_EQ(t.wrong, 0);
+
+  // Clusters a few ulps apart at the low end: the products of four differences are subnormal.
+  Tally cluster("incircle ulp clusters at 2^-216");
+  for (int i = 0; i < 20000; ++i) {
+    const double scale = 0x1p-216;
+    const double bx = rng.signed_uniform(1.5, 2.0) * scale;
+    const double by = rng.signed_uniform(1.5, 2.0) * scale;
+    Circle4 q;
+    for (Point2& p : q.p) p = {ulps(bx, rng.small(-16, 16)), ulps(by, rng.small(-16, 16))};
+    check_incircle(cluster, q);
+  }
+  cluster.print();
+  EXPECT_EQ(cluster.wrong, 0);
+  EXPECT_GT(cluster.zeros, 0);
+}
+
+TEST(Predicates, IncirclePermutationsChangeSignExactly) {
+  Rng rng(8401);
+  Tally t("incircle permutation symmetry (base queries)");
+  for (int i = 0; i < 20000; ++i) {
+    Circle4 q = near_circle(rng, i);
+    for (Point2& p : q.p) {
+      if (rng.coin()) p.x = ulps(p.x, rng.small(-2, 2));
+    }
+    const int s = check_incircle(t, q);
+    // The lifted determinant is alternating: every transposition negates.
+    auto sign_of_order = [&q](int i0, int i1, int i2, int i3) {
+      return sign_of(incircle(q.p[i0].x, q.p[i0].y, q.p[i1].x, q.p[i1].y, q.p[i2].x, q.p[i2].y,
+                              q.p[i3].x, q.p[i3].y));
+    };
+    ASSERT_EQ(sign_of_order(1, 0, 2, 3), -s);
+    ASSERT_EQ(sign_of_order(0, 2, 1, 3), -s);
+    ASSERT_EQ(sign_of_order(3, 1, 2, 0), -s);
+    ASSERT_EQ(sign_of_order(0, 1, 3, 2), -s);
+    ASSERT_EQ(sign_of_order(1, 2, 0, 3), s);
+    ASSERT_EQ(sign_of_order(3, 2, 1, 0), s);
+    ASSERT_EQ(sign_of_order(1, 0, 3, 2), s);
+  }
+  t.print();
+  EXPECT_EQ(t.wrong, 0);
+}
+
+// As ResultBitsArePinned, for incircle.
+TEST(Predicates, IncircleResultBitsArePinned) {
+  uint64_t h = 0;
+  Rng rng(8501);
+  for (int config = 0; config < 6; ++config) {
+    Circle4 q = near_circle(rng, config);
+    const std::vector<double> xs = ulp_row(q.p[3].x);
+    const std::vector<double> ys = ulp_row(q.p[3].y);
+    for (size_t i = 0; i < 64; i += 3) {
+      for (size_t j = 0; j < 64; j += 3) {
+        q.p[3] = {xs[i], ys[j]};
+        h = fold(h, incircle(q.p[0].x, q.p[0].y, q.p[1].x, q.p[1].y, q.p[2].x, q.p[2].y,
+                             q.p[3].x, q.p[3].y));
+      }
+    }
+  }
+  for (int i = 0; i < 2000; ++i) {
+    const Range r = kAllRanges[i % 6];
+    double c[8];
+    for (double& v : c) v = random_coordinate(rng, r);
+    h = fold(h, incircle(c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]));
+  }
+  std::printf("[   info   ] result hash: incircle 0x%016llx\n", static_cast<unsigned long long>(h));
+  EXPECT_EQ(h, 0x30dd3b9f3430ac1aull);
 }
 
 }  // namespace
