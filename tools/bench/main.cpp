@@ -11,7 +11,10 @@
 #include <vector>
 
 #include "../common/cli.h"
+#include "../common/phantom.h"
+#include "../common/realcase.h"
 #include "../common/shapes.h"
+#include "splintcore/boolean.h"
 #include "splintcore/core.h"
 #include "splintcore/design.h"
 #include "splintcore/distance.h"
@@ -293,6 +296,125 @@ void bench_distance_sizes(Harness& h, Arena& arena) {
   }
 }
 
+// The Boolean at the paper's Table 1 sizes: the base of fixtures/cases/paper_scale.json minus
+// the phantom maxilla and mandible (the mandible opened by the case's 2 mm), B's two shells
+// together holding 86,866, 324,246 and 543,530 triangles (half each).
+void bench_boolean_phantom(Harness& h, Arena& arena, const std::string& fixtures) {
+  if (!h.wanted("boolean_phantom")) return;
+  const std::string path = fixtures + "/cases/paper_scale.json";
+  std::vector<uint8_t> text = read_whole(path);
+  if (text.empty()) return;
+  const Arena::Marker m = arena.mark();
+  Context ctx(&arena);
+  CaseFile c;
+  Mesh base(&arena);
+  BaseReport br;
+  Status s = parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(),
+                        path.c_str(), &c);
+  if (s.is_ok()) s = build_case_base(ctx, c, &base, &br);
+  const uint64_t sizes[3] = {86866, 324246, 543530};
+  const char* names[3] = {"boolean_phantom_87k", "boolean_phantom_324k", "boolean_phantom_543k"};
+  for (int i = 0; i < 3 && s.is_ok(); ++i) {
+    if (!h.wanted(names[i])) continue;
+    phantom::JawMesh upper, lower;
+    phantom::PhantomOptions po;
+    po.target_triangles = sizes[i] / 2;
+    s = phantom::make_jaw(phantom::Jaw::kMaxilla, po, &upper);
+    if (s.is_ok()) s = phantom::make_jaw(phantom::Jaw::kMandible, po, &lower);
+    if (!s.is_ok()) break;
+    const Arena::Marker mj = arena.mark();
+    Mesh jaws(&arena);
+    if (!jaws.vertices.reserve(upper.vertices.size() + lower.vertices.size()) ||
+        !jaws.triangles.reserve(upper.triangles.size() + lower.triangles.size())) {
+      s = arena.exhausted_status();
+      break;
+    }
+    for (const Vec3& v : upper.vertices) (void)jaws.vertices.push_back(v);
+    for (const Triangle& t : upper.triangles) (void)jaws.triangles.push_back(t);
+    const uint32_t off = static_cast<uint32_t>(upper.vertices.size());
+    for (const Vec3& v : lower.vertices) (void)jaws.vertices.push_back(Vec3{v.x, v.y, v.z - 2.0});
+    for (const Triangle& t : lower.triangles) {
+      (void)jaws.triangles.push_back(Triangle{{t.v[0] + off, t.v[1] + off, t.v[2] + off}});
+    }
+    BooleanStats st;
+    uint64_t out_tris = 0;
+    double volume = 0;
+    for (int checked = 0; checked < 2; ++checked) {
+      BooleanOptions bo;
+      bo.check_self_intersection = checked != 0;
+      const std::string name = std::string(names[i]) + (checked != 0 ? "_checked" : "");
+      h.measure(name.c_str(), jaws.triangles.size(), arena, [&](Arena& a) {
+        Mesh out;
+        Status r = mesh_boolean(Context(&a), base, jaws, bo, &out, &st);
+        out_tris = out.triangles.size();
+        if (r.is_ok()) volume = mesh_volume(out);
+        return r;
+      });
+    }
+    std::printf("# %s: base %zu triangles, jaws %zu triangles (%llu near), %llu crossing pairs "
+                "of %llu candidates, output %llu triangles, volume %.6f mm3\n",
+                names[i], base.triangles.size(), jaws.triangles.size(),
+                static_cast<unsigned long long>(st.near_b_triangles),
+                static_cast<unsigned long long>(st.intersecting_pairs),
+                static_cast<unsigned long long>(st.candidate_pairs),
+                static_cast<unsigned long long>(out_tris), volume);
+    arena.rewind(mj);
+  }
+  if (!s.is_ok()) {
+    cli::print_error(s);
+    h.failed = true;
+  }
+  arena.rewind(m);
+}
+
+// The Boolean on the real case: the wafer minus the 31 teeth (bite opened 2 mm), the operation
+// alone (meshes in memory, index build included, self-intersection check excluded) and with
+// the exact self-intersection check of the result.
+void bench_boolean_realdata(Harness& h, Arena& arena, const std::string& dir) {
+  if (!h.wanted("boolean_realdata")) return;
+  realcase::RealCase rc;
+  std::string error;
+  if (!realcase::load(dir, 2.0, 1.5, 6.0, &rc, &error)) {
+    std::printf("# realdata not found (%s): boolean_realdata skipped\n", error.c_str());
+    return;
+  }
+  const Arena::Marker m = arena.mark();
+  Mesh teeth, wafer;
+  BaseReport br;
+  Status s = realcase::teeth_mesh(arena, rc, &teeth);
+  if (s.is_ok()) s = realcase::wafer_mesh(arena, rc, 0.5, &wafer, &br);
+  if (!s.is_ok()) {
+    cli::print_error(s);
+    h.failed = true;
+    arena.rewind(m);
+    return;
+  }
+  BooleanStats st;
+  uint64_t out_tris = 0;
+  double volume = 0;
+  for (int checked = 0; checked < 2; ++checked) {
+    BooleanOptions bo;
+    bo.check_self_intersection = checked != 0;
+    h.measure(checked != 0 ? "boolean_realdata_checked" : "boolean_realdata",
+              teeth.triangles.size(), arena, [&](Arena& a) {
+                Mesh out;
+                Status r = mesh_boolean(Context(&a), wafer, teeth, bo, &out, &st);
+                out_tris = out.triangles.size();
+                if (r.is_ok()) volume = mesh_volume(out);
+                return r;
+              });
+  }
+  std::printf("# boolean_realdata: wafer %zu triangles, teeth %zu triangles (%llu near), %llu "
+              "crossing pairs of %llu candidates, %llu points, output %llu triangles, volume %.6f mm3\n",
+              wafer.triangles.size(), teeth.triangles.size(),
+              static_cast<unsigned long long>(st.near_b_triangles),
+              static_cast<unsigned long long>(st.intersecting_pairs),
+              static_cast<unsigned long long>(st.candidate_pairs),
+              static_cast<unsigned long long>(st.intersection_points),
+              static_cast<unsigned long long>(out_tris), volume);
+  arena.rewind(m);
+}
+
 int run(int argc, char** argv) {
   Harness h;
   std::string realdata = "../shared/realdata/open-full-jaw-patient26";
@@ -328,6 +450,8 @@ int run(int argc, char** argv) {
   {
     Arena arena(buffer, static_cast<size_t>(cap));
     bench_base(h, arena, fixtures);
+    bench_boolean_phantom(h, arena, fixtures);
+    bench_boolean_realdata(h, arena, realdata);
     bench_distance_sizes(h, arena);
     // A torus of 2 x 521 x 521 = 542,882 triangles: the size of the paper's largest jaw.
     std::vector<uint8_t> torus = to_binary_stl(shapes::torus(521, 521, 30.0, 8.0));

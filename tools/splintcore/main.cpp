@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "../common/cli.h"
+#include "splintcore/boolean.h"
 #include "splintcore/core.h"
 #include "splintcore/design.h"
 #include "splintcore/distance.h"
@@ -35,6 +36,8 @@ const char kUsage[] =
     "  convert IN.stl -o OUT.stl [--ascii]  read, weld, check and rewrite an STL\n"
     "  base CASE.json -o BASE.stl           build the initial splint base from the picks\n"
     "  distance MESH.stl --query X,Y,Z ...  closest point, signed distance, winding number\n"
+    "  boolean --difference A.stl B.stl... -o OUT.stl   splint base minus jaws (or --union,\n"
+    "                                       --intersection)\n"
     "\n"
     "options of every command:\n"
     "  --help            this text for the command\n"
@@ -82,6 +85,21 @@ const char kDistanceUsage[] =
     "distance (negative inside) and the generalised winding number. --sign auto uses\n"
     "pseudonormals on a closed manifold mesh and the winding number otherwise.\n";
 
+const char kBooleanUsage[] =
+    "usage: splintcore boolean --difference|--union|--intersection A.stl B.stl [B2.stl ...]\n"
+    "                         -o OUT.stl [--translate-b X,Y,Z] [--ascii] [--no-self-check]\n"
+    "                         [--json] [--memory-cap SIZE] [--threads N]\n"
+    "\n"
+    "A is a closed solid (the splint base); B is the union of the other files' shells (the\n"
+    "jaws: one closed shell per tooth is fine, shells must not overlap each other inside A),\n"
+    "optionally translated by --translate-b (mm; e.g. to open the bite). Both are split along\n"
+    "their intersection with exact predicates, re-triangulated, classified and assembled; the\n"
+    "jaw's own triangles form the imprint, its vertices copied bit for bit. The result is\n"
+    "checked as float32 (closed, manifold, outward, no vertex merged or triangle flattened by\n"
+    "rounding, and, unless --no-self-check, no self-intersection) before it is written,\n"
+    "atomically. Exact degenerate contacts (a vertex on the other surface, coplanar overlap)\n"
+    "are rejected in this version, naming the triangles: move B by a tiny offset.\n";
+
 struct Options {
   bool help = false;
   bool json = false;
@@ -94,6 +112,9 @@ struct Options {
   bool place = true;
   std::vector<Vec3> queries;
   SignMethod sign = SignMethod::kAuto;
+  int boolean_op = -1;
+  bool self_check = true;
+  Vec3 translate_b{};
 };
 
 // "X,Y,Z" -> a point; false when malformed or not finite.
@@ -176,6 +197,20 @@ int parse_options(int argc, char** argv, const char* usage, bool takes_output, O
         o->sign = SignMethod::kWindingNumber;
       } else {
         return usage_error("--sign takes auto, pseudonormal or winding", usage);
+      }
+    } else if (std::strcmp(a, "--difference") == 0 || std::strcmp(a, "--union") == 0 ||
+               std::strcmp(a, "--intersection") == 0) {
+      const int op = a[2] == 'd' ? 0 : (a[2] == 'u' ? 1 : 2);
+      if (o->boolean_op >= 0 && o->boolean_op != op) {
+        return usage_error("give one of --difference, --union, --intersection", usage);
+      }
+      o->boolean_op = op;
+    } else if (std::strcmp(a, "--no-self-check") == 0) {
+      o->self_check = false;
+    } else if (std::strcmp(a, "--translate-b") == 0) {
+      const char* v = value(a);
+      if (v == nullptr || !parse_point(v, &o->translate_b)) {
+        return usage_error("--translate-b needs X,Y,Z (three finite numbers, mm)", usage);
       }
     } else if (a[0] == '-' && a[1] != '\0') {
       std::string m = std::string("unknown option '") + a + "'";
@@ -566,6 +601,135 @@ int run_distance(int argc, char** argv) {
   return kExitOk;
 }
 
+int run_boolean(int argc, char** argv) {
+  Options o;
+  int early = parse_options(argc, argv, kBooleanUsage, true, &o);
+  if (early >= 0) return early;
+  if (o.boolean_op < 0) {
+    return usage_error("boolean needs --difference, --union or --intersection", kBooleanUsage);
+  }
+  if (o.positional.size() < 2) return usage_error("boolean takes A.stl and at least one B.stl", kBooleanUsage);
+  if (o.output == nullptr) return usage_error("boolean needs -o OUT.stl", kBooleanUsage);
+  Run run(o);
+  if (!run.has_memory()) return no_memory(o, "boolean");
+  Arena& arena = run.arena;
+  const Context& ctx = run.ctx;
+  const double t0 = run.start;
+
+  Mesh a(&arena);
+  StlInfo info;
+  Status s = read_mesh_file(ctx, o.positional[0], &a, &info);
+  if (!s.is_ok()) return rejected(o, "boolean", s, &arena);
+  // B: the shells of every other file, in order, in one mesh.
+  Mesh b(&arena);
+  for (size_t f = 1; f < o.positional.size(); ++f) {
+    const Arena::Marker mark = arena.mark();
+    Mesh part(&arena);
+    s = read_mesh_file(ctx, o.positional[f], &part, &info);
+    if (!s.is_ok()) return rejected(o, "boolean", s, &arena);
+    if (b.vertices.size() + part.vertices.size() >= (size_t{1} << 31)) {
+      return rejected(o, "boolean", Status::error(StatusCode::kLimitExceeded, "B is too large")
+                                        .in_file(o.positional[f]), &arena);
+    }
+    if (f == 1) {
+      b = part;  // the first file's arrays stay where they are
+      continue;
+    }
+    // Later files: copy after B's arrays (which then grow in place or move up).
+    const uint32_t off = static_cast<uint32_t>(b.vertices.size());
+    std::vector<Vec3> vs(part.vertices.begin(), part.vertices.end());
+    std::vector<Triangle> ts(part.triangles.begin(), part.triangles.end());
+    arena.rewind(mark);
+    for (const Vec3& v : vs) {
+      if (!b.vertices.push_back(v)) return rejected(o, "boolean", arena.exhausted_status(), &arena);
+    }
+    for (const Triangle& t : ts) {
+      if (!b.triangles.push_back(Triangle{{t.v[0] + off, t.v[1] + off, t.v[2] + off}})) {
+        return rejected(o, "boolean", arena.exhausted_status(), &arena);
+      }
+    }
+  }
+  for (Vec3& v : b.vertices) v = v + o.translate_b;
+  const double t_read = monotonic_seconds();
+
+  BooleanOptions bo;
+  bo.op = o.boolean_op == 0 ? BooleanOp::kDifference
+                            : (o.boolean_op == 1 ? BooleanOp::kUnion : BooleanOp::kIntersection);
+  bo.check_self_intersection = false;  // timed separately below
+  Mesh out;
+  BooleanStats st;
+  s = mesh_boolean(ctx, a, b, bo, &out, &st);
+  if (!s.is_ok()) return rejected(o, "boolean", s, &arena);
+  const double t_op = monotonic_seconds();
+  SelfIntersectionReport si;
+  if (o.self_check) {
+    s = find_self_intersections(ctx, out, 1, &si);
+    if (!s.is_ok()) return rejected(o, "boolean", s, &arena);
+    if (si.self_intersecting()) {
+      return rejected(o, "boolean",
+                      make_error(StatusCode::kUnsupported, "the result self-intersects as float32: "
+                                 "triangles ", si.first_a, " and ", si.first_b, "; nothing written"),
+                      &arena);
+    }
+  }
+  const double t_check = monotonic_seconds();
+  MeshReport report;
+  s = check_mesh(ctx, out, &report);
+  if (!s.is_ok()) return rejected(o, "boolean", s, &arena);
+  s = write_atomically(ctx, out, o.output, o.ascii);
+  if (!s.is_ok()) return rejected(o, "boolean", s, &arena);
+  const double t_end = monotonic_seconds();
+
+  uint64_t b_triangles = b.triangles.size();
+  if (o.json) {
+    JsonObject j;
+    j.add("command", "boolean");
+    j.add("operation", boolean_op_name(bo.op));
+    j.add("a", o.positional[0]);
+    j.add("output", o.output);
+    j.add_status(Status::ok());
+    j.add("a_triangles", static_cast<uint64_t>(a.triangles.size()));
+    j.add("b_triangles", b_triangles);
+    j.add("near_b_triangles", st.near_b_triangles);
+    j.add("candidate_pairs", st.candidate_pairs);
+    j.add("intersecting_pairs", st.intersecting_pairs);
+    j.add("intersection_points", st.intersection_points);
+    j.add("cut_triangles_a", st.cut_triangles_a);
+    j.add("cut_triangles_b", st.cut_triangles_b);
+    j.add("patches", st.patches);
+    j.add("self_intersection_checked", o.self_check);
+    add_mesh_report(&j, report);
+    j.add("valid_solid", report.is_valid_solid());
+    j.add("read_s", t_read - t0);
+    j.add("boolean_s", t_op - t_read);
+    j.add("self_check_s", t_check - t_op);
+    j.add("time_s", t_end - t0);
+    j.add("peak_arena_bytes", static_cast<uint64_t>(arena.high_water()));
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("A: %s, %zu triangles; B: %zu file(s), %llu triangles (%llu near A)\n",
+                o.positional[0], a.triangles.size(), o.positional.size() - 1,
+                static_cast<unsigned long long>(b_triangles),
+                static_cast<unsigned long long>(st.near_b_triangles));
+    std::printf("%s: %llu candidate pairs, %llu crossing, %llu intersection points, %llu + %llu "
+                "triangles cut, %llu patches\n",
+                boolean_op_name(bo.op), static_cast<unsigned long long>(st.candidate_pairs),
+                static_cast<unsigned long long>(st.intersecting_pairs),
+                static_cast<unsigned long long>(st.intersection_points),
+                static_cast<unsigned long long>(st.cut_triangles_a),
+                static_cast<unsigned long long>(st.cut_triangles_b),
+                static_cast<unsigned long long>(st.patches));
+    print_mesh_report(report);
+    std::printf("self-intersection: %s\n", o.self_check ? "none (exact check)" : "not checked");
+    std::printf("output: %s (%s STL)\n", o.output, o.ascii ? "ascii" : "binary");
+    std::printf("time: read %.4f s, boolean %.4f s, check %.4f s, total %.4f s; peak arena %llu "
+                "bytes\n",
+                t_read - t0, t_op - t_read, t_check - t_op, t_end - t0,
+                static_cast<unsigned long long>(arena.high_water()));
+  }
+  return kExitOk;
+}
+
 }  // namespace
 }  // namespace splintcore
 
@@ -585,6 +749,7 @@ int main(int argc, char** argv) {
   if (std::strcmp(command, "convert") == 0) return run_convert(argc - 2, argv + 2);
   if (std::strcmp(command, "base") == 0) return run_base(argc - 2, argv + 2);
   if (std::strcmp(command, "distance") == 0) return run_distance(argc - 2, argv + 2);
+  if (std::strcmp(command, "boolean") == 0) return run_boolean(argc - 2, argv + 2);
   std::fprintf(stderr, "splintcore: unknown command '%s'\n\n%s", command, kUsage);
   return cli::kExitUsage;
 }

@@ -1,0 +1,366 @@
+// Tests of the Boolean (src/boolean/boolean.cpp): analytic shapes in generic position, the
+// volume identities every corefinement must keep (|A - B| + |A * B| = |A|,
+// |A + B| = |A| + |B| - |A * B|), closed manifold outward output without self-intersections,
+// input vertices copied bit for bit and intersection points on both surfaces, degenerate
+// contacts reported (not guessed), determinism and arena exhaustion.
+//
+// Random streams are std::mt19937_64 with fixed seeds.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "splintcore/boolean.h"
+#include "splintcore/distance.h"
+#include "splintcore/mesh.h"
+#include "support/test_util.h"
+
+namespace splintcore {
+namespace {
+
+using test::TestArena;
+
+constexpr double kPi = 3.14159265358979323846;
+
+RigidTransform rotation(double ax, double ay, double az, const Vec3& t) {
+  // Rz * Ry * Rx, then translate.
+  const double cx = std::cos(ax), sx = std::sin(ax), cy = std::cos(ay), sy = std::sin(ay),
+               cz = std::cos(az), sz = std::sin(az);
+  RigidTransform x;
+  x.r[0][0] = cz * cy; x.r[0][1] = cz * sy * sx - sz * cx; x.r[0][2] = cz * sy * cx + sz * sx;
+  x.r[1][0] = sz * cy; x.r[1][1] = sz * sy * sx + cz * cx; x.r[1][2] = sz * sy * cx - cz * sx;
+  x.r[2][0] = -sy;     x.r[2][1] = cy * sx;                x.r[2][2] = cy * cx;
+  x.t = t;
+  return x;
+}
+
+Mesh box_mesh(Arena& arena, const Vec3& lo, const Vec3& hi, const RigidTransform& x) {
+  Mesh m(&arena);
+  for (int i = 0; i < 8; ++i) {
+    Vec3 p{(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z};
+    EXPECT_TRUE(m.vertices.push_back(x.apply_point(p)));
+  }
+  const uint32_t f[12][3] = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                             {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  for (const auto& t : f) EXPECT_TRUE(m.triangles.push_back(Triangle{{t[0], t[1], t[2]}}));
+  return m;
+}
+
+Mesh sphere_mesh(Arena& arena, double r, int nlat, int nlon, const RigidTransform& x) {
+  Mesh m(&arena);
+  EXPECT_TRUE(m.vertices.push_back(x.apply_point(Vec3{0, 0, r})));
+  for (int i = 1; i < nlat; ++i) {
+    const double th = kPi * i / nlat;
+    for (int j = 0; j < nlon; ++j) {
+      const double ph = 2 * kPi * j / nlon;
+      EXPECT_TRUE(m.vertices.push_back(
+          x.apply_point(Vec3{r * std::sin(th) * std::cos(ph), r * std::sin(th) * std::sin(ph),
+                             r * std::cos(th)})));
+    }
+  }
+  const uint32_t south = static_cast<uint32_t>(m.vertices.size());
+  EXPECT_TRUE(m.vertices.push_back(x.apply_point(Vec3{0, 0, -r})));
+  auto ring = [&](int i, int j) {
+    return static_cast<uint32_t>(1 + (i - 1) * nlon + ((j % nlon) + nlon) % nlon);
+  };
+  for (int j = 0; j < nlon; ++j) {
+    EXPECT_TRUE(m.triangles.push_back(Triangle{{0, ring(1, j), ring(1, j + 1)}}));
+  }
+  for (int i = 1; i + 1 < nlat; ++i) {
+    for (int j = 0; j < nlon; ++j) {
+      EXPECT_TRUE(m.triangles.push_back(Triangle{{ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)}}));
+      EXPECT_TRUE(m.triangles.push_back(Triangle{{ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)}}));
+    }
+  }
+  for (int j = 0; j < nlon; ++j) {
+    EXPECT_TRUE(m.triangles.push_back(Triangle{{south, ring(nlat - 1, j + 1), ring(nlat - 1, j)}}));
+  }
+  return m;
+}
+
+// Appends b's shells to a (a second shell in one mesh).
+void append_mesh(const Mesh& b, Mesh* a) {
+  const uint32_t off = static_cast<uint32_t>(a->vertices.size());
+  for (const Vec3& v : b.vertices) EXPECT_TRUE(a->vertices.push_back(v));
+  for (const Triangle& t : b.triangles) {
+    EXPECT_TRUE(a->triangles.push_back(Triangle{{t.v[0] + off, t.v[1] + off, t.v[2] + off}}));
+  }
+}
+
+MeshReport report_of(Arena& arena, const Mesh& m) {
+  MeshReport r;
+  EXPECT_TRUE(check_mesh(Context(&arena), m, &r).is_ok());
+  return r;
+}
+
+// The tests work on double meshes: no float32 rounding unless a test asks for it.
+BooleanOptions opts(BooleanOp op) {
+  BooleanOptions o;
+  o.op = op;
+  o.float32_output = false;
+  return o;
+}
+
+struct Result {
+  Status status;
+  double volume = 0;
+  uint64_t triangles = 0;
+  BooleanStats stats;
+};
+
+// Runs op and checks what every successful result must be.
+Result run_op(Arena& arena, const Mesh& a, const Mesh& b, BooleanOp op, bool expect_nonempty) {
+  ArenaScope scope(arena);
+  Result res;
+  Mesh out;
+  res.status = mesh_boolean(Context(&arena), a, b, opts(op), &out, &res.stats);
+  if (!res.status.is_ok()) return res;
+  res.triangles = out.triangles.size();
+  if (out.triangles.size() == 0) {
+    EXPECT_FALSE(expect_nonempty) << boolean_op_name(op);
+    return res;
+  }
+  const MeshReport r = report_of(arena, out);
+  if (op != BooleanOp::kUnion) {
+    EXPECT_TRUE(r.is_valid_solid()) << boolean_op_name(op) << ": " << test::format(require_valid_solid(r));
+  }
+  res.volume = r.volume;
+  SelfIntersectionReport si;
+  EXPECT_TRUE(find_self_intersections(Context(&arena), out, 1, &si).is_ok());
+  EXPECT_FALSE(si.self_intersecting()) << boolean_op_name(op) << " pair " << si.first_a << " "
+                                       << si.first_b;
+  return res;
+}
+
+TEST(BooleanTest, SphereInsideCubeMakesACavity) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {2, 2, 2}, RigidTransform{});
+  Mesh b = sphere_mesh(arena, 0.5, 12, 24, rotation(0.1, 0.2, 0.3, {1.01, 0.98, 1.03}));
+  const double vb = mesh_volume(b);
+  Result d = run_op(arena, a, b, BooleanOp::kDifference, true);
+  ASSERT_TRUE(d.status.is_ok()) << test::format(d.status);
+  EXPECT_EQ(d.stats.intersecting_pairs, 0u);
+  EXPECT_NEAR(d.volume, 8.0 - vb, 1e-12);
+  EXPECT_EQ(d.triangles, a.triangles.size() + b.triangles.size());
+  Result i = run_op(arena, a, b, BooleanOp::kIntersection, true);
+  ASSERT_TRUE(i.status.is_ok()) << test::format(i.status);
+  EXPECT_NEAR(i.volume, vb, 1e-12);
+}
+
+TEST(BooleanTest, CubeMinusSphereCrossingAFace) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  Mesh b = sphere_mesh(arena, 0.45, 16, 32, rotation(0.3, -0.2, 0.7, {0.52, 0.47, 0.93}));
+  const double va = 1.0, vb = mesh_volume(b);
+  Result d = run_op(arena, a, b, BooleanOp::kDifference, true);
+  ASSERT_TRUE(d.status.is_ok()) << test::format(d.status);
+  Result i = run_op(arena, a, b, BooleanOp::kIntersection, true);
+  ASSERT_TRUE(i.status.is_ok()) << test::format(i.status);
+  Result u = run_op(arena, a, b, BooleanOp::kUnion, true);
+  ASSERT_TRUE(u.status.is_ok()) << test::format(u.status);
+  EXPECT_GT(d.stats.intersecting_pairs, 0u);
+  EXPECT_NEAR((d.volume + i.volume) / va, 1.0, 1e-12);
+  EXPECT_NEAR((u.volume + i.volume) / (va + vb), 1.0, 1e-12);
+  EXPECT_GT(i.volume, 0.2 * vb);
+  EXPECT_LT(i.volume, 0.8 * vb);
+}
+
+TEST(BooleanTest, DisjointAndSwallowed) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  Mesh far = sphere_mesh(arena, 0.3, 8, 16, rotation(0, 0, 0, {5, 5, 5}));
+  Result d = run_op(arena, a, far, BooleanOp::kDifference, true);
+  ASSERT_TRUE(d.status.is_ok()) << test::format(d.status);
+  EXPECT_NEAR(d.volume, 1.0, 1e-15);
+  EXPECT_EQ(d.stats.near_b_triangles, 0u);
+  Result i = run_op(arena, a, far, BooleanOp::kIntersection, false);
+  ASSERT_TRUE(i.status.is_ok());
+  EXPECT_EQ(i.triangles, 0u);
+  // A inside B: nothing is left of A - B.
+  Mesh big = sphere_mesh(arena, 3.0, 8, 16, rotation(0.1, 0.1, 0.1, {0.5, 0.5, 0.5}));
+  Result s = run_op(arena, a, big, BooleanOp::kDifference, false);
+  ASSERT_TRUE(s.status.is_ok()) << test::format(s.status);
+  EXPECT_EQ(s.triangles, 0u);
+  EXPECT_GE(s.stats.winding_queries, 1u);
+}
+
+TEST(BooleanTest, TwoShellsInB) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {2, 1, 1}, rotation(0.02, 0.01, 0.03, {0, 0, 0}));
+  Mesh b = sphere_mesh(arena, 0.4, 10, 20, rotation(0.3, 0.2, 0.1, {0.4, 0.5, 0.95}));
+  Mesh b2 = sphere_mesh(arena, 0.35, 9, 18, rotation(0.1, 0.5, 0.2, {1.5, 0.45, 0.1}));
+  Mesh both(&arena);
+  append_mesh(b, &both);
+  append_mesh(b2, &both);
+  const double va = mesh_volume(a);
+  Result d = run_op(arena, a, both, BooleanOp::kDifference, true);
+  ASSERT_TRUE(d.status.is_ok()) << test::format(d.status);
+  Result i = run_op(arena, a, both, BooleanOp::kIntersection, true);
+  ASSERT_TRUE(i.status.is_ok()) << test::format(i.status);
+  EXPECT_NEAR((d.volume + i.volume) / va, 1.0, 1e-12);
+  // The same as subtracting one after the other.
+  Result d1 = run_op(arena, a, b, BooleanOp::kIntersection, true);
+  Result d2 = run_op(arena, a, b2, BooleanOp::kIntersection, true);
+  ASSERT_TRUE(d1.status.is_ok() && d2.status.is_ok());
+  EXPECT_NEAR(i.volume, d1.volume + d2.volume, 1e-12);
+}
+
+TEST(BooleanTest, CubeMinusRotatedCube) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  Mesh b = box_mesh(arena, {-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5},
+                    rotation(0.4, 0.5, 0.6, {0.9, 0.85, 0.95}));
+  const double vb = mesh_volume(b);
+  Result d = run_op(arena, a, b, BooleanOp::kDifference, true);
+  ASSERT_TRUE(d.status.is_ok()) << test::format(d.status);
+  Result i = run_op(arena, a, b, BooleanOp::kIntersection, true);
+  ASSERT_TRUE(i.status.is_ok()) << test::format(i.status);
+  Result u = run_op(arena, a, b, BooleanOp::kUnion, true);
+  ASSERT_TRUE(u.status.is_ok()) << test::format(u.status);
+  EXPECT_NEAR(d.volume + i.volume, 1.0, 1e-12);
+  EXPECT_NEAR(u.volume + i.volume, 1.0 + vb, 1e-12);
+}
+
+TEST(BooleanTest, DegenerateContactIsReportedNotGuessed) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  // Shares the face z = 1 (coplanar overlap).
+  Mesh b = box_mesh(arena, {0.25, 0.25, 0.5}, {0.75, 0.75, 1.0}, RigidTransform{});
+  ArenaScope scope(arena);
+  Mesh out;
+  Status s = mesh_boolean(Context(&arena), a, b, opts(BooleanOp::kDifference), &out, nullptr);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_EQ(s.code(), StatusCode::kUnsupported);
+  EXPECT_NE(std::string(s.message()).find("of B"), std::string::npos) << s.message();
+}
+
+TEST(BooleanTest, OutputVerticesAreInputVerticesOrOnBothSurfaces) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, rotation(0.05, 0.1, 0.15, {0, 0, 0}));
+  Mesh b = sphere_mesh(arena, 0.6, 14, 28, rotation(0.3, 0.2, 0.1, {0.9, 0.4, 0.6}));
+  Mesh out;
+  BooleanStats st;
+  SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&arena), a, b, opts(BooleanOp::kDifference), &out, &st));
+  DistanceIndex ia, ib;
+  SPLINTCORE_ASSERT_OK(build_distance_index(Context(&arena), a, DistanceIndexOptions{}, &ia));
+  SPLINTCORE_ASSERT_OK(build_distance_index(Context(&arena), b, DistanceIndexOptions{}, &ib));
+  uint64_t on_both = 0;
+  for (const Vec3& v : out.vertices) {
+    bool input = false;
+    for (const Vec3& x : a.vertices) input = input || (x == v);
+    for (const Vec3& x : b.vertices) input = input || (x == v);
+    if (input) continue;
+    ClosestPoint ca, cb;
+    ASSERT_TRUE(closest_point(ia, v, &ca));
+    ASSERT_TRUE(closest_point(ib, v, &cb));
+    EXPECT_LT(ca.distance, 1e-15);
+    EXPECT_LT(cb.distance, 1e-15);
+    ++on_both;
+  }
+  EXPECT_EQ(on_both, st.intersection_points);
+}
+
+// Many random rigid placements of a sphere and a box against a box: the identities hold on all.
+TEST(BooleanTest, RandomPlacementsKeepTheVolumeIdentities) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  std::mt19937_64 rng(20261121);
+  std::uniform_real_distribution<double> angle(0, 2 * kPi), pos(-0.2, 1.2), rad(0.2, 0.6);
+  Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, rotation(0.01, 0.02, 0.03, {0, 0, 0}));
+  const double va = mesh_volume(a);
+  int done = 0, unsupported = 0;
+  for (int c = 0; c < 150; ++c) {
+    ArenaScope scope(arena);
+    const RigidTransform x = rotation(angle(rng), angle(rng), angle(rng), {pos(rng), pos(rng), pos(rng)});
+    const double r = rad(rng);
+    Mesh b = (c % 2 == 0) ? sphere_mesh(arena, r, 6 + c % 7, 10 + c % 9, x)
+                          : box_mesh(arena, {-r, -r, -r}, {r, r, 1.5 * r}, x);
+    const double vb = mesh_volume(b);
+    Result d = run_op(arena, a, b, BooleanOp::kDifference, false);
+    Result i = run_op(arena, a, b, BooleanOp::kIntersection, false);
+    Result u = run_op(arena, a, b, BooleanOp::kUnion, true);
+    if (!d.status.is_ok() || !i.status.is_ok() || !u.status.is_ok()) {
+      EXPECT_EQ(d.status.code(), StatusCode::kUnsupported) << c << test::format(d.status);
+      ++unsupported;
+      continue;
+    }
+    EXPECT_NEAR((d.volume + i.volume) / va, 1.0, 1e-9) << "case " << c;
+    EXPECT_NEAR((u.volume + i.volume) / (va + vb), 1.0, 1e-9) << "case " << c;
+    ++done;
+  }
+  EXPECT_EQ(unsupported, 0);
+  EXPECT_EQ(done, 150);
+}
+
+TEST(BooleanTest, SameBytesEveryRun) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  Mesh b = sphere_mesh(arena, 0.45, 16, 32, rotation(0.3, -0.2, 0.7, {0.52, 0.47, 0.93}));
+  std::string first;
+  for (int run = 0; run < 2; ++run) {
+    ArenaScope scope(arena);
+    Mesh out;
+    SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&arena), a, b, opts(BooleanOp::kDifference), &out, nullptr));
+    const std::string h =
+        test::sha256_hex(out.vertices.data(), out.vertices.size() * sizeof(Vec3)) +
+        test::sha256_hex(out.triangles.data(), out.triangles.size() * sizeof(Triangle));
+    if (run == 0) first = h; else EXPECT_EQ(h, first);
+  }
+}
+
+TEST(BooleanTest, ArenaExhaustionIsCleanAtEveryCap) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  Mesh b = sphere_mesh(arena, 0.45, 6, 10, rotation(0.3, -0.2, 0.7, {0.52, 0.47, 0.93}));
+  size_t need = 0;
+  {
+    std::vector<unsigned char> big(size_t{8} << 20);
+    Arena probe(big.data(), big.size());
+    Mesh out;
+    SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&probe), a, b, opts(BooleanOp::kDifference), &out, nullptr));
+    need = probe.high_water();
+  }
+  int failures = 0;
+  for (size_t cap = 0; cap < need; cap += (need / 300) + 1) {
+    std::vector<unsigned char> buf(cap + 1);
+    Arena small(buf.data(), cap);
+    Mesh out;
+    Status s = mesh_boolean(Context(&small), a, b, opts(BooleanOp::kDifference), &out, nullptr);
+    ASSERT_FALSE(s.is_ok()) << cap;
+    EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << cap << test::format(s);
+    EXPECT_EQ(small.used(), 0u);
+    ++failures;
+  }
+  std::vector<unsigned char> buf(need);
+  Arena exact(buf.data(), need);
+  Mesh out;
+  SPLINTCORE_EXPECT_OK(mesh_boolean(Context(&exact), a, b, opts(BooleanOp::kDifference), &out, nullptr));
+  EXPECT_GT(failures, 100);
+}
+
+TEST(BooleanTest, RejectsOpenA) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  a.triangles.pop_back();
+  Mesh b = sphere_mesh(arena, 0.45, 6, 10, rotation(0.3, -0.2, 0.7, {0.52, 0.47, 0.93}));
+  Mesh out;
+  Status s = mesh_boolean(Context(&arena), a, b, opts(BooleanOp::kDifference), &out, nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+}
+
+}  // namespace
+}  // namespace splintcore
