@@ -245,7 +245,8 @@ class BooleanRun {
 
   DistanceIndex index_a_{};             // built when a part of B needs a winding number
   bool have_a_index_ = false;
-  uint8_t* near_b_ = nullptr;           // per B triangle
+  uint8_t* near_b_ = nullptr;           // per B triangle: its box meets A's
+  ArenaArray<uint32_t> near_ids_;       // the near B triangles, ascending
   ArenaArray<Hit> hits_;
   uint32_t* hit_points_ = nullptr;      // 2 per hit: start, end point ids
   ArenaArray<Point> points_;
@@ -389,22 +390,52 @@ Status BooleanRun::find_hits() {
     }
   }
 
+  // B's vertices against A's box once (6 outcode bits, 64 when not finite); a triangle is near
+  // when no side of the box has all three of its corners beyond it.
+  const uint32_t nvb = in_.nvb;
+  uint8_t* outcode = arena_.allocate_array<uint8_t>(nvb);
   near_b_ = arena_.allocate_array<uint8_t>(in_.ntb);
-  if (near_b_ == nullptr && in_.ntb > 0) return arena_.exhausted_status();
-  hits_.bind(&arena_);
+  if ((outcode == nullptr && nvb > 0) || (near_b_ == nullptr && in_.ntb > 0)) {
+    return arena_.exhausted_status();
+  }
   const Vec3* vb = b.vertices.data();
+  for (uint32_t v = 0; v < nvb; ++v) {
+    const Vec3& p = vb[v];
+    outcode[v] = static_cast<uint8_t>(
+        (p.x < abox.lo.x ? 1 : 0) | (p.x > abox.hi.x ? 2 : 0) | (p.y < abox.lo.y ? 4 : 0) |
+        (p.y > abox.hi.y ? 8 : 0) | (p.z < abox.lo.z ? 16 : 0) | (p.z > abox.hi.z ? 32 : 0) |
+        (is_finite(p) ? 0 : 64));
+  }
+  near_ids_.bind(&arena_);
   for (uint32_t t = 0; t < in_.ntb; ++t) {
-    if ((t & 65535u) == 0) {
-      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: pairs", t, in_.ntb));
+    const Triangle& tri = b.triangles[t];
+    if (tri.v[0] >= nvb || tri.v[1] >= nvb || tri.v[2] >= nvb) {
+      return make_error(StatusCode::kInvalidMesh, "triangle ", t,
+                        " of B refers to a vertex that does not exist")
+          .at_index(t);
+    }
+    const uint32_t o0 = outcode[tri.v[0]], o1 = outcode[tri.v[1]], o2 = outcode[tri.v[2]];
+    const bool is_near = ((o0 & o1 & o2) & 63u) == 0;
+    near_b_[t] = is_near ? 1 : 0;
+    if (!is_near) continue;
+    if (((o0 | o1 | o2) & 64u) != 0) {
+      return make_error(StatusCode::kNonFinite, "triangle ", t, " of B has a vertex that is not finite")
+          .at_index(t);
+    }
+    if (!near_ids_.push_back(t)) return arena_.exhausted_status();
+  }
+  st_.near_b_triangles = near_ids_.size();
+  hits_.bind(&arena_);
+  for (size_t ni = 0; ni < near_ids_.size(); ++ni) {
+    const uint32_t t = near_ids_[ni];
+    if ((ni & 65535u) == 0) {
+      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: pairs", ni, near_ids_.size()));
     }
     const Triangle& tri = b.triangles[t];
     Aabb box;
     box.add(vb[tri.v[0]]);
     box.add(vb[tri.v[1]]);
     box.add(vb[tri.v[2]]);
-    near_b_[t] = box.overlaps(abox) ? 1 : 0;
-    if (near_b_[t] == 0) continue;
-    ++st_.near_b_triangles;
     uint32_t lo[3], hi[3];
     cell_range(box, lo, hi);
     bool flat_checked = false;
@@ -481,7 +512,13 @@ Status BooleanRun::number_points() {
     const Hit& h = hits_[items[i].index / 2];
     const PointKey* k = (items[i].index & 1) == 0 ? &h.start : &h.end;
     if (prev == nullptr || k->edge != prev->edge || k->tri != prev->tri) {
-      if (!points_.push_back(make_point(in_, *k))) return arena_.exhausted_status();
+      // Rounded to float32 here, before any triangle is re-triangulated, when the result is
+      // for STL: the triangulations are then valid for the coordinates the file will hold.
+      Point pt = make_point(in_, *k);
+      if (options_.float32_output && !round_to_float32(&pt.p)) {
+        return make_error(StatusCode::kLimitExceeded, "intersection point beyond float32 range");
+      }
+      if (!points_.push_back(pt)) return arena_.exhausted_status();
     }
     hit_points_[items[i].index] = static_cast<uint32_t>(points_.size() - 1);
     prev = k;
@@ -772,12 +809,15 @@ Status BooleanRun::flood(bool side_a) {
     const uint32_t t = static_cast<uint32_t>(order_[i].key);
     if (t >= toff && t - toff < nt) cut[t - toff] = 1;
   }
-  auto wanted = [&](uint32_t t) { return cut[t] == 0 && (side_a || near_b_[t] != 0); };
+  // The triangles that take part: all of A's, B's near ones; the uncut ones are flooded.
+  const uint32_t count = side_a ? nt : static_cast<uint32_t>(near_ids_.size());
+  auto id = [&](uint32_t i) { return side_a ? i : near_ids_[i]; };
   // Vertex -> uncut triangles (compressed rows).
   std::memset(start, 0, (size_t{nv} + 1) * sizeof(uint32_t));
   uint64_t uses = 0;
-  for (uint32_t t = 0; t < nt; ++t) {
-    if (!wanted(t)) continue;
+  for (uint32_t i = 0; i < count; ++i) {
+    const uint32_t t = id(i);
+    if (cut[t] != 0) continue;
     for (uint32_t v : mesh.triangles[t].v) ++start[v + 1];
     uses += 3;
   }
@@ -789,8 +829,9 @@ Status BooleanRun::flood(bool side_a) {
     return arena_.exhausted_status();
   }
   std::memcpy(fill, start, size_t{nv} * sizeof(uint32_t));
-  for (uint32_t t = 0; t < nt; ++t) {
-    if (!wanted(t)) continue;
+  for (uint32_t i = 0; i < count; ++i) {
+    const uint32_t t = id(i);
+    if (cut[t] != 0) continue;
     for (uint32_t v : mesh.triangles[t].v) rows[fill[v]++] = t;
   }
   int8_t* vs = vstate_ + voff;
@@ -818,8 +859,9 @@ Status BooleanRun::flood(bool side_a) {
   // Parts without a cut: one winding number of the other mesh each.
   DistanceIndex index_b{};
   bool have_b = false;
-  for (uint32_t t = 0; t < nt; ++t) {
-    if (!wanted(t)) continue;
+  for (uint32_t i = 0; i < count; ++i) {
+    const uint32_t t = id(i);
+    if (cut[t] != 0) continue;
     const Triangle& tri = mesh.triangles[t];
     if (vs[tri.v[0]] != 0) continue;
     const Vec3 centroid = (mesh.vertices[tri.v[0]] + mesh.vertices[tri.v[1]] +
@@ -865,11 +907,15 @@ Status BooleanRun::assemble(Mesh* result) {
   std::memset(remap, 0xff, size_t{nv_all} * sizeof(uint32_t));
   // Visits the result's triangles in order (A's, then B's, each in input order, a cut triangle
   // replaced by its pieces): emit(v0, v1, v2) for each kept one.
+  // Visits the result's triangles in order (A's, then B's near ones, each in input order, a
+  // cut triangle replaced by its pieces; for the union B's far ones last): emit(v0, v1, v2)
+  // for each kept one.
   auto visit = [&](auto&& emit) -> Status {
     size_t piece = 0;
-    const uint32_t nt = in_.nta + in_.ntb;
-    for (uint32_t t = 0; t < nt; ++t) {
-      const bool is_a = t < in_.nta;
+    const uint32_t count = in_.nta + static_cast<uint32_t>(near_ids_.size());
+    for (uint32_t i = 0; i < count; ++i) {
+      const bool is_a = i < in_.nta;
+      const uint32_t t = is_a ? i : in_.nta + near_ids_[i - in_.nta];
       const bool keep_inside = is_a ? keep_a_inside : keep_b_inside;
       const bool reverse = !is_a && reverse_b;
       if (piece < tris_.size() && tris_[piece].src == t) {
@@ -882,16 +928,20 @@ Status BooleanRun::assemble(Mesh* result) {
       }
       uint32_t c[3];
       in_.corners(t, c);
-      int8_t s = -1;  // far from A: outside it
-      if (is_a || near_b_[t - in_.nta] != 0) {
-        s = vstate_[c[0]];
-        if (s == 0 || vstate_[c[1]] != s || vstate_[c[2]] != s) {
-          return make_error(StatusCode::kInternal, "boolean: triangle ", t,
-                            " was left unclassified");
-        }
+      const int8_t s = vstate_[c[0]];
+      if (s == 0 || vstate_[c[1]] != s || vstate_[c[2]] != s) {
+        return make_error(StatusCode::kInternal, "boolean: triangle ", t,
+                          " was left unclassified");
       }
       if ((s > 0) != keep_inside) continue;
       if (reverse) emit(c[0], c[2], c[1]); else emit(c[0], c[1], c[2]);
+    }
+    if (op_ == BooleanOp::kUnion) {
+      for (uint32_t t = 0; t < in_.ntb; ++t) {
+        if (near_b_[t] != 0) continue;
+        const Triangle& bt = in_.b->triangles[t];
+        emit(in_.nva + bt.v[0], in_.nva + bt.v[1], in_.nva + bt.v[2]);
+      }
     }
     return Status::ok();
   };
@@ -913,11 +963,7 @@ Status BooleanRun::assemble(Mesh* result) {
   if (out_v == nullptr && nv > 0) return arena_.exhausted_status();
   for (uint32_t v = 0; v < nv_all; ++v) {
     if (remap[v] == ~0u) continue;
-    Vec3 p = v < base ? in_.vertex(v) : points_[v - base].p;
-    if (options_.float32_output && v >= base && !round_to_float32(&p)) {
-      return make_error(StatusCode::kLimitExceeded, "intersection point beyond float32 range");
-    }
-    out_v[remap[v]] = p;
+    out_v[remap[v]] = v < base ? in_.vertex(v) : points_[v - base].p;
   }
   result->triangles.adopt(out_t, static_cast<size_t>(kept), static_cast<size_t>(kept));
   result->vertices.adopt(out_v, nv, nv);
@@ -934,25 +980,19 @@ Status BooleanRun::run(Mesh* result) {
       return make_error(StatusCode::kInvalidMesh, "A must be a solid: ", s.message());
     }
   }
-  for (uint32_t v = 0; v < in_.nvb; ++v) {
-    if (!is_finite(in_.b->vertices[v])) {
-      return make_error(StatusCode::kNonFinite, "vertex ", v, " of B is not finite").at_index(v);
-    }
-  }
-  for (uint32_t t = 0; t < in_.ntb; ++t) {
-    const Triangle& tri = in_.b->triangles[t];
-    if (tri.v[0] >= in_.nvb || tri.v[1] >= in_.nvb || tri.v[2] >= in_.nvb) {
-      return make_error(StatusCode::kInvalidMesh, "triangle ", t,
-                        " of B refers to a vertex that does not exist")
-          .at_index(t);
-    }
-  }
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: pairs", 0, in_.ntb));
   SPLINTCORE_RETURN_IF_ERROR(find_hits());
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: points", 0, 1));
   SPLINTCORE_RETURN_IF_ERROR(number_points());
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: split", 0, 1));
   SPLINTCORE_RETURN_IF_ERROR(split_triangles());
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: classify", 0, 1));
   SPLINTCORE_RETURN_IF_ERROR(classify());
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: assemble", 0, 1));
   SPLINTCORE_RETURN_IF_ERROR(assemble(result));
-  return check_result(result);
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: check", 0, 1));
+  SPLINTCORE_RETURN_IF_ERROR(check_result(result));
+  return report_progress(ctx_, "boolean: done", 1, 1);
 }
 
 Status BooleanRun::check_result(Mesh* result) {
@@ -1023,21 +1063,55 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
     return make_error(StatusCode::kLimitExceeded, "Boolean inputs too large for 32-bit ids: ", nv,
                       " vertices, ", nt, " triangles");
   }
-  Inputs in;
-  in.a = &a;
-  in.b = &b;
-  in.nva = static_cast<uint32_t>(a.vertices.size());
-  in.nvb = static_cast<uint32_t>(b.vertices.size());
-  in.nta = static_cast<uint32_t>(a.triangles.size());
-  in.ntb = static_cast<uint32_t>(b.triangles.size());
+  // Attempt k > 0 runs with A translated by k * step * (1, 3, 7): step is 2^-16 mm (15 nm),
+  // or the float32 spacing of A's largest coordinate if that is coarser, so float32 vertices
+  // of A stay float32. B is never moved.
+  double max_abs = 0;
+  for (const Vec3& v : a.vertices) {
+    for (int k = 0; k < 3; ++k) max_abs = v[k] < 0 ? (-v[k] > max_abs ? -v[k] : max_abs) : (v[k] > max_abs ? v[k] : max_abs);
+  }
+  double step = 1.0 / 65536.0;
+  while (step * 8388608.0 <= max_abs && step < 1e300) step *= 2.0;  // ulp(max_abs) <= step
   const Arena::Marker start = arena.mark();
   Mesh result;
-  BooleanRun run(ctx, in, options, stats);
-  Status s = run.run(&result);
-  if (!s.is_ok()) {
-    const size_t need = arena.last_need();
+  Status s;
+  for (uint32_t attempt = 0; attempt <= options.max_nudges; ++attempt) {
+    *stats = BooleanStats{};
     arena.rewind(start);
-    (void)need;
+    Mesh moved;
+    const Mesh* pa = &a;
+    if (attempt > 0) {
+      const Vec3 d{attempt * step, 3.0 * attempt * step, 7.0 * attempt * step};
+      moved.bind(&arena);
+      if (!moved.vertices.reserve(a.vertices.size()) || !moved.triangles.reserve(a.triangles.size())) {
+        s = arena.exhausted_status();
+        break;
+      }
+      for (const Vec3& v : a.vertices) (void)moved.vertices.push_back(v + d);
+      for (const Triangle& t : a.triangles) (void)moved.triangles.push_back(t);
+      pa = &moved;
+      stats->nudge = d;
+    }
+    stats->attempts = attempt + 1;
+    Inputs in;
+    in.a = pa;
+    in.b = &b;
+    in.nva = static_cast<uint32_t>(a.vertices.size());
+    in.nvb = static_cast<uint32_t>(b.vertices.size());
+    in.nta = static_cast<uint32_t>(a.triangles.size());
+    in.ntb = static_cast<uint32_t>(b.triangles.size());
+    result = Mesh();
+    BooleanRun run(ctx, in, options, stats);
+    s = run.run(&result);
+    if (s.code() != StatusCode::kUnsupported) break;
+  }
+  if (!s.is_ok()) {
+    arena.rewind(start);
+    if (s.code() == StatusCode::kUnsupported && options.max_nudges > 0) {
+      s.append(" (also with A moved by up to ");
+      s.append_u64(options.max_nudges);
+      s.append(" nudges)");
+    }
     return s;
   }
   // Move the result down over the temporaries (triangles were allocated before vertices, so

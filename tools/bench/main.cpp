@@ -296,11 +296,52 @@ void bench_distance_sizes(Harness& h, Arena& arena) {
   }
 }
 
+// Stage times from the progress callback: the time from one stage's first report to the
+// next stage's, summed over the runs (printed per run).
+struct StageClock {
+  std::vector<std::string> names;
+  std::vector<double> seconds;
+  std::string current;
+  double since = 0;
+  int runs = 0;
+  static bool report(void* user, const char* stage, uint64_t, uint64_t) {
+    StageClock* c = static_cast<StageClock*>(user);
+    if (c->current == stage) return true;
+    const double now = monotonic_seconds();
+    if (!c->current.empty()) {
+      size_t i = 0;
+      while (i < c->names.size() && c->names[i] != c->current) ++i;
+      if (i == c->names.size()) {
+        c->names.push_back(c->current);
+        c->seconds.push_back(0);
+      }
+      c->seconds[i] += now - c->since;
+    }
+    c->current = stage;
+    c->since = now;
+    if (c->current == "boolean: done") {
+      c->current.clear();
+      ++c->runs;
+    }
+    return true;
+  }
+  void print(const char* name) const {
+    std::printf("# %s stages (ms per run):", name);
+    for (size_t i = 0; i < names.size(); ++i) {
+      std::printf(" %s %.2f;", names[i].c_str() + 9, 1e3 * seconds[i] / (runs > 0 ? runs : 1));
+    }
+    std::printf("\n");
+  }
+};
+
 // The Boolean at the paper's Table 1 sizes: the base of fixtures/cases/paper_scale.json minus
 // the phantom maxilla and mandible (the mandible opened by the case's 2 mm), B's two shells
 // together holding 86,866, 324,246 and 543,530 triangles (half each).
 void bench_boolean_phantom(Harness& h, Arena& arena, const std::string& fixtures) {
-  if (!h.wanted("boolean_phantom")) return;
+  if (!h.wanted("boolean_phantom_87k") && !h.wanted("boolean_phantom_324k") &&
+      !h.wanted("boolean_phantom_543k")) {
+    return;
+  }
   const std::string path = fixtures + "/cases/paper_scale.json";
   std::vector<uint8_t> text = read_whole(path);
   if (text.empty()) return;
@@ -343,13 +384,18 @@ void bench_boolean_phantom(Harness& h, Arena& arena, const std::string& fixtures
       BooleanOptions bo;
       bo.check_self_intersection = checked != 0;
       const std::string name = std::string(names[i]) + (checked != 0 ? "_checked" : "");
+      StageClock clock;
+      Progress progress;
+      progress.report = &StageClock::report;
+      progress.user = &clock;
       h.measure(name.c_str(), jaws.triangles.size(), arena, [&](Arena& a) {
         Mesh out;
-        Status r = mesh_boolean(Context(&a), base, jaws, bo, &out, &st);
+        Status r = mesh_boolean(Context(&a, nullptr, &progress), base, jaws, bo, &out, &st);
         out_tris = out.triangles.size();
         if (r.is_ok()) volume = mesh_volume(out);
         return r;
       });
+      clock.print(name.c_str());
     }
     std::printf("# %s: base %zu triangles, jaws %zu triangles (%llu near), %llu crossing pairs "
                 "of %llu candidates, output %llu triangles, volume %.6f mm3\n",
@@ -395,14 +441,19 @@ void bench_boolean_realdata(Harness& h, Arena& arena, const std::string& dir) {
   for (int checked = 0; checked < 2; ++checked) {
     BooleanOptions bo;
     bo.check_self_intersection = checked != 0;
-    h.measure(checked != 0 ? "boolean_realdata_checked" : "boolean_realdata",
-              teeth.triangles.size(), arena, [&](Arena& a) {
-                Mesh out;
-                Status r = mesh_boolean(Context(&a), wafer, teeth, bo, &out, &st);
-                out_tris = out.triangles.size();
-                if (r.is_ok()) volume = mesh_volume(out);
-                return r;
-              });
+    const char* name = checked != 0 ? "boolean_realdata_checked" : "boolean_realdata";
+    StageClock clock;
+    Progress progress;
+    progress.report = &StageClock::report;
+    progress.user = &clock;
+    h.measure(name, teeth.triangles.size(), arena, [&](Arena& a) {
+      Mesh out;
+      Status r = mesh_boolean(Context(&a, nullptr, &progress), wafer, teeth, bo, &out, &st);
+      out_tris = out.triangles.size();
+      if (r.is_ok()) volume = mesh_volume(out);
+      return r;
+    });
+    clock.print(name);
   }
   std::printf("# boolean_realdata: wafer %zu triangles, teeth %zu triangles (%llu near), %llu "
               "crossing pairs of %llu candidates, %llu points, output %llu triangles, volume %.6f mm3\n",
