@@ -116,14 +116,23 @@ double mesh_volume(const Mesh& mesh);
 struct SelfIntersectionReport {
   uint64_t intersecting_pairs = 0;   // counted up to max_pairs (then it stops)
   uint32_t first_a = 0, first_b = 0;  // the smallest pair (a < b) found, when any
-  uint64_t candidate_pairs = 0;      // pairs whose boxes overlap (tested exactly)
+  // Pairs of non-degenerate triangles kept by the broad phase, examined before stopping: those
+  // whose 14-DOPs (quantized and slightly widened) overlap; whose boxes overlap, when a
+  // coordinate is not finite or, unless zero, beyond [2^-306, 2^100] in magnitude. Every
+  // pair that shares a vertex id or meets is one. Not the number of exact tests: filters
+  // settle most of them.
+  uint64_t candidate_pairs = 0;
   bool self_intersecting() const { return intersecting_pairs > 0; }
 };
 
 uint64_t find_self_intersections_bound(uint64_t triangle_count);
 
-// Sweep over triangle boxes sorted by x, exact tests on overlapping pairs. max_pairs = 0
-// counts all pairs. Errors: kArenaExhausted, kInvalidMesh (index out of range), kCancelled.
+// A hierarchy of 14-DOPs over the triangles traversed against itself; pairs sharing a vertex
+// are cleared a vertex star at a time when the star is certainly embedded, the others behind
+// floating-point filters, the rest by the exact tests. max_pairs = 0 counts all pairs. When
+// more than max_pairs pairs conflict, the pairs counted (and the first pair) are the first
+// max_pairs found by a sweep over triangle boxes sorted by x, whatever the hierarchy does.
+// Errors: kArenaExhausted, kInvalidMesh (index out of range), kCancelled.
 Status find_self_intersections(const Context& ctx, const Mesh& mesh, uint64_t max_pairs,
                                SelfIntersectionReport* report);
 
