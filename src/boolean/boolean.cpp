@@ -927,7 +927,7 @@ Status BooleanRun::split_triangles() {
         return make_error(StatusCode::kUnsupported,
                           "inconsistent inside/outside classification in triangle ",
                           t < in_.nta ? t : t - in_.nta, t < in_.nta ? " of A" : " of B",
-                          " (a nearly degenerate contact)")
+                          " (overlapping shells in B, or a nearly degenerate contact)")
             .at_index(t < in_.nta ? t : t - in_.nta);
       }
     }

@@ -23,6 +23,8 @@
 // original algorithm) answers, so the pairs reported are the ones it always reported.
 #include "splintcore/mesh.h"
 
+#include "geometry/plane_filter.h"
+
 namespace splintcore {
 
 namespace {
@@ -36,45 +38,13 @@ inline uint64_t order_key(double v) {
 
 inline double magnitude(double x) { return x < 0 ? -x : x; }
 
-// A triangle's plane for a floating-point filter: side(x) = n . (x - a) with
-// n = (b - a) x (c - a), and `nabs` the magnitudes of the terms of each component of n, so that
-// nabs . |x - a| is the permanent of the determinant det[b - a, c - a, x - a]. Its rounding
-// error is below (7 + 56 eps) eps times the permanent (Shewchuk's orient3d bound: the same
-// three-term sum of a coordinate times a 2x2 minor); a sign whose magnitude clears 1e-15
-// times the permanent is therefore the exact sign. Anything closer goes to the exact tests.
-struct Plane {
-  Vec3 a;
-  Vec3 n;
-  Vec3 nabs;
-};
-
-constexpr double kPlaneFilter = 1e-15;
-
-Plane plane_of(const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 e1 = b - a, e2 = c - a;
-  Plane p;
-  p.a = a;
-  p.n = cross(e1, e2);
-  p.nabs = Vec3{magnitude(e1.y * e2.z) + magnitude(e1.z * e2.y),
-                magnitude(e1.z * e2.x) + magnitude(e1.x * e2.z),
-                magnitude(e1.x * e2.y) + magnitude(e1.y * e2.x)};
-  return p;
-}
-
-// Where a point is relative to a plane, as far as the filter can tell. kOn is exact: a zero
-// permanent means every term of the determinant has an exactly zero factor (a rounded
-// difference or product is zero only when it is exactly zero), so the point is on the plane.
-enum Side : int { kBelow = -1, kUnknown = 0, kAbove = 1, kOn = 2 };
-
-inline Side side_of(const Plane& p, const Vec3& x) {
-  const Vec3 d = x - p.a;
-  const double side = p.n.x * d.x + p.n.y * d.y + p.n.z * d.z;
-  const double permanent =
-      p.nabs.x * magnitude(d.x) + p.nabs.y * magnitude(d.y) + p.nabs.z * magnitude(d.z);
-  if (permanent == 0.0) return kOn;
-  const double bound = kPlaneFilter * permanent;
-  return side > bound ? kAbove : (side < -bound ? kBelow : kUnknown);
-}
+// A triangle's plane as a floating-point filter (src/geometry/plane_filter.h): a side it
+// reports is exact; kUnknown goes to the exact tests.
+using Plane = PlaneFilter;
+constexpr double kPlaneFilter = kPlaneFilterBound;
+inline Plane plane_of(const Vec3& a, const Vec3& b, const Vec3& c) { return plane_filter(a, b, c); }
+enum Side : int { kBelow = -1, kOn = 0, kAbove = 1, kUnknown = 2 };
+inline Side side_of(const Plane& p, const Vec3& x) { return static_cast<Side>(filtered_side(p, x)); }
 
 // All strictly on one side (certain), all exactly on the plane, or neither.
 enum Spread { kSeparated, kCoplanar, kMixed };

@@ -120,5 +120,45 @@ expect_exit 0 "distance by winding number" -- "$tool" distance "$fixtures/stl/to
 check "winding method reported" -- grep -q "(winding)" "$work/out"
 expect_exit 1 "distance on a missing file" -- "$tool" distance "$work/none.stl" --query 0,0,0
 
+# Phantom jaws and the Boolean: base minus maxilla, written atomically and checked again.
+expect_exit 2 "phantom without -o" -- "$tool" phantom --triangles 4000
+expect_exit 2 "phantom with too few triangles" -- "$tool" phantom --triangles 10 -o "$work"
+expect_exit 0 "phantom" -- "$tool" phantom --triangles 6000 -o "$work" --json
+check "phantom json is one object" -- json_ok "$work/out"
+check "phantom wrote the maxilla" -- test -s "$work/maxilla.stl"
+check "phantom wrote the mandible" -- test -s "$work/mandible.stl"
+cp "$work/maxilla.stl" "$work/maxilla.first"
+expect_exit 0 "phantom again" -- "$tool" phantom --triangles 6000 -o "$work"
+check "phantom bytes are the same every run" -- cmp -s "$work/maxilla.stl" "$work/maxilla.first"
+expect_exit 0 "base for the Boolean" -- "$tool" base "$fixtures/cases/paper_scale.json" -o "$work/base.stl"
+expect_exit 2 "boolean without an operation" -- "$tool" boolean "$work/base.stl" "$work/maxilla.stl" -o "$work/cut.stl"
+expect_exit 2 "boolean with two operations" -- "$tool" boolean --union --difference "$work/base.stl" "$work/maxilla.stl" -o "$work/cut.stl"
+expect_exit 2 "boolean with one input" -- "$tool" boolean --difference "$work/base.stl" -o "$work/cut.stl"
+expect_exit 2 "boolean without -o" -- "$tool" boolean --difference "$work/base.stl" "$work/maxilla.stl"
+expect_exit 2 "boolean with a bad translation" -- "$tool" boolean --difference "$work/base.stl" "$work/maxilla.stl" -o "$work/cut.stl" --translate-b 1,2
+expect_exit 0 "boolean difference" -- "$tool" boolean --difference "$work/base.stl" "$work/maxilla.stl" -o "$work/cut.stl" --json
+check "boolean json is one object" -- json_ok "$work/out"
+check "boolean reports a valid solid" -- grep -q '"valid_solid":true' "$work/out"
+check "boolean cut crowns" -- grep -q '"intersecting_pairs":[1-9]' "$work/out"
+expect_exit 0 "the written difference is a printable solid" -- "$tool" check "$work/cut.stl"
+cp "$work/cut.stl" "$work/cut.first"
+expect_exit 0 "boolean again, two threads" -- "$tool" boolean --difference "$work/base.stl" "$work/maxilla.stl" -o "$work/cut.stl" --threads 2
+check "boolean bytes are the same every run" -- cmp -s "$work/cut.stl" "$work/cut.first"
+expect_exit 1 "boolean with both jaws in occlusion (overlapping shells)" -- "$tool" boolean --difference "$work/base.stl" "$work/maxilla.stl" "$work/mandible.stl" -o "$work/both.stl"
+check "overlap reported" -- grep -q "inconsistent inside/outside" "$work/err"
+check "no output after the overlap" -- test ! -e "$work/both.stl"
+expect_exit 2 "boolean with a translation per file, miscounted" -- "$tool" boolean --difference "$work/base.stl" "$work/maxilla.stl" "$work/mandible.stl" -o "$work/both.stl" --translate-b 0,0,0 --translate-b 0,0,-2 --translate-b 0,0,0
+expect_exit 0 "boolean with both jaws, the mandible opened" -- "$tool" boolean --difference "$work/base.stl" "$work/maxilla.stl" "$work/mandible.stl" -o "$work/both.stl" --translate-b 0,0,0 --translate-b 0,0,-2
+expect_exit 0 "the written splint is a printable solid" -- "$tool" check "$work/both.stl"
+expect_exit 0 "boolean intersection" -- "$tool" boolean --intersection "$work/base.stl" "$work/maxilla.stl" -o "$work/inter.stl"
+expect_exit 0 "the written intersection is a solid" -- "$tool" check "$work/inter.stl" --no-place
+expect_exit 1 "boolean with an open A" -- "$tool" boolean --difference "$fixtures/stl/open_box_ascii.stl" "$work/maxilla.stl" -o "$work/open.stl"
+check "open A named" -- grep -q "A must be a solid" "$work/err"
+check "no output after an open A" -- test ! -e "$work/open.stl"
+expect_exit 1 "boolean under a tiny memory cap" -- "$tool" boolean --difference "$work/base.stl" "$work/maxilla.stl" -o "$work/small.stl" --memory-cap 300K
+check "tiny cap says arena exhausted" -- grep -qi "arena exhausted" "$work/err"
+check "no output after exhaustion" -- test ! -e "$work/small.stl"
+expect_exit 1 "boolean on a missing file" -- "$tool" boolean --difference "$work/base.stl" "$work/none.stl" -o "$work/none-out.stl"
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
