@@ -76,6 +76,7 @@ struct BooleanStats {
   uint64_t cut_triangles_b = 0;
   uint64_t winding_queries = 0;      // parts without a cut, classified by winding number
   uint64_t output_triangles = 0;
+  uint64_t output_triangles_a = 0;   // the result's first triangles come from A, the rest from B
   uint64_t self_intersection_candidates = 0;  // pairs tested by the final check
   uint32_t attempts = 0;                      // 1 + the nudges tried
   Vec3 nudge{};                               // A's translation in the returned result

@@ -1093,7 +1093,7 @@ Status BooleanRun::assemble(Mesh* result) {
         for (; piece < tris_.size() && tris_[piece].src == t; ++piece) {
           const OutTri& o = tris_[piece];
           if ((o.state > 0) != keep_inside) continue;
-          if (reverse) emit(o.v[0], o.v[2], o.v[1]); else emit(o.v[0], o.v[1], o.v[2]);
+          if (reverse) emit(o.v[0], o.v[2], o.v[1], is_a); else emit(o.v[0], o.v[1], o.v[2], is_a);
         }
         continue;
       }
@@ -1105,24 +1105,28 @@ Status BooleanRun::assemble(Mesh* result) {
                           " was left unclassified");
       }
       if ((s > 0) != keep_inside) continue;
-      if (reverse) emit(c[0], c[2], c[1]); else emit(c[0], c[1], c[2]);
+      if (reverse) emit(c[0], c[2], c[1], is_a); else emit(c[0], c[1], c[2], is_a);
     }
     if (op_ == BooleanOp::kUnion) {
       for (uint32_t t = 0; t < in_.ntb; ++t) {
         if (near_b_[t] != 0) continue;
         const Triangle& bt = in_.b->triangles[t];
-        emit(in_.nva + bt.v[0], in_.nva + bt.v[1], in_.nva + bt.v[2]);
+        emit(in_.nva + bt.v[0], in_.nva + bt.v[1], in_.nva + bt.v[2], false);
       }
     }
     return Status::ok();
   };
   uint64_t kept = 0;
-  SPLINTCORE_RETURN_IF_ERROR(visit([&](uint32_t, uint32_t, uint32_t) { ++kept; }));
+  uint64_t kept_a = 0;
+  SPLINTCORE_RETURN_IF_ERROR(visit([&](uint32_t, uint32_t, uint32_t, bool is_a) {
+    ++kept;
+    kept_a += is_a ? 1 : 0;
+  }));
   Triangle* out_t = arena_.allocate_array<Triangle>(static_cast<size_t>(kept));
   if (out_t == nullptr && kept > 0) return arena_.exhausted_status();
   uint32_t nv = 0;
   size_t k = 0;
-  SPLINTCORE_RETURN_IF_ERROR(visit([&](uint32_t v0, uint32_t v1, uint32_t v2) {
+  SPLINTCORE_RETURN_IF_ERROR(visit([&](uint32_t v0, uint32_t v1, uint32_t v2, bool) {
     uint32_t v[3] = {v0, v1, v2};
     for (uint32_t& x : v) {
       if (remap[x] == ~0u) remap[x] = nv++;
@@ -1139,6 +1143,7 @@ Status BooleanRun::assemble(Mesh* result) {
   result->triangles.adopt(out_t, static_cast<size_t>(kept), static_cast<size_t>(kept));
   result->vertices.adopt(out_v, nv, nv);
   st_.output_triangles = kept;
+  st_.output_triangles_a = kept_a;
   return Status::ok();
 }
 
