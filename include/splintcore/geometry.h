@@ -59,6 +59,22 @@ inline bool is_finite(float v) {
 }
 inline bool is_finite(const Vec3& v) { return is_finite(v.x) && is_finite(v.y) && is_finite(v.z); }
 
+// True when the double is exactly a float32 value (decided on the bits: no float arithmetic
+// that a compiler could elide). NaN and infinity count as not exact.
+inline bool is_float32_exact(double x) {
+  uint64_t bits;
+  std::memcpy(&bits, &x, sizeof(bits));
+  const uint64_t mantissa = bits & ((uint64_t{1} << 52) - 1);
+  const int e = static_cast<int>((bits >> 52) & 0x7ff) - 1023;
+  if (((bits >> 52) & 0x7ff) == 0) return mantissa == 0;  // zero (double subnormals are not)
+  if (e > 127 || e < -149) return false;
+  const int dropped = e >= -126 ? 29 : 29 + (-126 - e);  // mantissa bits float32 lacks
+  return (mantissa & ((uint64_t{1} << dropped) - 1)) == 0;
+}
+inline bool is_float32_exact(const Vec3& v) {
+  return is_float32_exact(v.x) && is_float32_exact(v.y) && is_float32_exact(v.z);
+}
+
 // Rounds each coordinate to the nearest float32 (what STL stores), -0 to +0. False (and v
 // unchanged) when a coordinate is not finite or beyond float32's range. Out of line and through
 // a volatile: GCC 12's SLP vectoriser drops neighbouring double -> float -> double round trips.

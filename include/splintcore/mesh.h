@@ -97,6 +97,18 @@ uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count);
 // exist (names the triangle).
 Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report);
 
+// What a constructed solid must be, checked in linear time (half-edges bucketed by vertex):
+// every edge used by exactly two triangles in opposite directions (closed, edge-manifold,
+// consistently oriented), no triangle of zero area (exact), positive volume (*volume gets
+// mesh_volume()). Shells, genus and duplicate triangles are check_mesh's. Errors: kInvalidMesh
+// naming the first offending edge (its vertices and a triangle; at_index: that triangle) or
+// triangle; kArenaExhausted.
+uint64_t check_closed_oriented_bound(uint64_t vertex_count, uint64_t triangle_count);
+// The first triangle of zero area (exact: a filter, then collinear3d), or kNoTriangle.
+constexpr uint32_t kNoTriangle = ~uint32_t{0};
+uint32_t find_flat_triangle(const Mesh& mesh);
+Status check_closed_oriented(const Context& ctx, const Mesh& mesh, double* volume);
+
 // Turns a report into the first error a solid would have, or ok: "mesh is not closed: 12
 // boundary edges, first between vertices 4 and 9 (triangle 17)" and so on.
 Status require_valid_solid(const MeshReport& report);

@@ -22,6 +22,15 @@ namespace splintcore {
 // segment's centripetal knot interval. Consecutive points must differ.
 Vec3 catmull_rom_point(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3, double u);
 
+// The same with the knots computed once for many points on one segment (the same bits).
+struct CatmullRomSegment {
+  Vec3 p[4];
+  double t1 = 0, t2 = 0, t3 = 0;  // knots (t0 = 0)
+};
+CatmullRomSegment catmull_rom_segment(const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                                      const Vec3& p3);
+Vec3 catmull_rom_point(const CatmullRomSegment& segment, double u);
+
 // ---------------------------------------------------------------------------------------------
 // Picks and lines.
 

@@ -488,6 +488,15 @@ Status BooleanRun::find_hits() {
       return make_error(StatusCode::kNonFinite, "triangle ", t, " of B has a vertex that is not finite")
           .at_index(t);
     }
+    if (options_.float32_output &&
+        !(is_float32_exact(vb[tri.v[0]]) && is_float32_exact(vb[tri.v[1]]) &&
+          is_float32_exact(vb[tri.v[2]]))) {
+      return make_error(StatusCode::kInvalidArgument, "triangle ", t,
+                        " of B has a vertex that is not a float32 value: for STL output B must "
+                        "be as read from STL (its vertices are kept bit for bit); turn "
+                        "float32_output off for double meshes")
+          .at_index(t);
+    }
     if (!near_ids_.push_back(t)) return arena_.exhausted_status();
   }
   st_.near_b_triangles = near_ids_.size();
@@ -1176,74 +1185,25 @@ Status BooleanRun::run(Mesh* result) {
 // triangle (exact), positive volume; then, when asked, no self-intersection. Linear except for
 // the sort of the intersection points.
 Status BooleanRun::check_result(Mesh* result) {
-  const uint32_t nv = static_cast<uint32_t>(result->vertices.size());
-  const uint32_t nt = static_cast<uint32_t>(result->triangles.size());
-  if (nt == 0) return Status::ok();
+  if (result->triangles.size() == 0) return Status::ok();
   ArenaScope scope(arena_);
-  const Vec3* v = result->vertices.data();
-  const Triangle* tris = result->triangles.data();
   const char* as = options_.float32_output ? " (as float32)" : "";
   const StatusCode fragile = options_.float32_output ? StatusCode::kUnsupported : StatusCode::kInternal;
-  // Half-edges bucketed by their smaller vertex.
-  uint32_t* start = arena_.allocate_array<uint32_t>(size_t{nv} + 1);
-  uint64_t* half = arena_.allocate_array<uint64_t>(size_t{3} * nt);  // other << 33 | dir << 32 | tri
-  if (start == nullptr || half == nullptr) return arena_.exhausted_status();
-  std::memset(start, 0, (size_t{nv} + 1) * sizeof(uint32_t));
-  for (uint32_t t = 0; t < nt; ++t) {
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t a0 = tris[t].v[k], a1 = tris[t].v[(k + 1) % 3];
-      ++start[(a0 < a1 ? a0 : a1) + 1];
-    }
+  // A flat triangle can come from rounding (then A is nudged); anything else would be a bug
+  // (or, for the union, an open B).
+  const uint32_t flat = find_flat_triangle(*result);
+  if (flat != kNoTriangle) {
+    return make_error(fragile, "Boolean ", boolean_op_name(op_), " result has a flat triangle ",
+                      flat, as)
+        .at_index(flat);
   }
-  for (uint32_t i = 0; i < nv; ++i) start[i + 1] += start[i];
-  for (uint32_t t = 0; t < nt; ++t) {
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t a0 = tris[t].v[k], a1 = tris[t].v[(k + 1) % 3];
-      const uint32_t lo = a0 < a1 ? a0 : a1, hi = a0 < a1 ? a1 : a0;
-      half[start[lo]++] = (uint64_t{hi} << 33) | (uint64_t{a0 < a1 ? 1u : 0u} << 32) | t;
-    }
-  }
-  for (uint32_t i = nv; i > 0; --i) start[i] = start[i - 1];
-  start[0] = 0;
-  for (uint32_t lo = 0; lo < nv; ++lo) {
-    for (uint32_t i = start[lo]; i < start[lo + 1]; ++i) {
-      const uint64_t hi = half[i] >> 33;
-      uint32_t uses = 0, forward = 0;
-      for (uint32_t j = start[lo]; j < start[lo + 1]; ++j) {
-        if ((half[j] >> 33) != hi) continue;
-        ++uses;
-        forward += static_cast<uint32_t>((half[j] >> 32) & 1u);
-      }
-      if (uses != 2 || forward != 1) {
-        const uint32_t t = static_cast<uint32_t>(half[i]);
-        const char* what = uses == 1 ? "open (boundary edge)"
-                                     : (uses > 2 ? "not edge-manifold" : "not consistently oriented");
-        return make_error(op_ == BooleanOp::kUnion ? StatusCode::kInvalidMesh : StatusCode::kInternal,
-                          "Boolean ", boolean_op_name(op_), " result is ", what, " at the edge of vertices ",
-                          lo, " and ", hi, " (triangle ", t, ")", as,
-                          op_ == BooleanOp::kUnion ? ": is B closed?" : "")
-            .at_index(t);
-      }
-    }
-  }
-  // Flat triangles: a floating-point filter, exact when it cannot tell.
   double volume = 0;
-  for (uint32_t t = 0; t < nt; ++t) {
-    const Vec3& p0 = v[tris[t].v[0]];
-    const Vec3 e1 = v[tris[t].v[1]] - p0, e2 = v[tris[t].v[2]] - p0;
-    const Vec3 c = cross(e1, e2);
-    volume += dot(p0, c);
-    const double c2 = length_squared(c);
-    if (!(c2 > 1e-24 * length_squared(e1) * length_squared(e2)) &&
-        collinear3d(p0, v[tris[t].v[1]], v[tris[t].v[2]])) {
-      return make_error(fragile, "Boolean ", boolean_op_name(op_), " result has a flat triangle ",
-                        t, as)
-          .at_index(t);
-    }
-  }
-  if (!(volume > 0)) {
-    return make_error(StatusCode::kInternal, "Boolean ", boolean_op_name(op_),
-                      " result is not outward (volume ", volume / 6.0, ")");
+  Status s = check_closed_oriented(ctx_, *result, &volume);
+  if (s.code() == StatusCode::kArenaExhausted) return s;
+  if (!s.is_ok()) {
+    return make_error(op_ == BooleanOp::kUnion ? StatusCode::kInvalidMesh : StatusCode::kInternal,
+                      "Boolean ", boolean_op_name(op_), " result", as, ": ", s.message())
+        .at_index(s.index());
   }
   if (options_.check_self_intersection) {
     SelfIntersectionReport si;
@@ -1292,14 +1252,25 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
     arena.rewind(start);
     Mesh moved;
     const Mesh* pa = &a;
-    if (attempt > 0) {
+    // For STL output A is used as it will be written: rounded to float32 (a no-op for A read
+    // from STL), after the nudge (a nudge can carry a coordinate into a coarser binade).
+    if (attempt > 0 || options.float32_output) {
       const Vec3 d{attempt * step, 3.0 * attempt * step, 7.0 * attempt * step};
       moved.bind(&arena);
       if (!moved.vertices.reserve(a.vertices.size()) || !moved.triangles.reserve(a.triangles.size())) {
         s = arena.exhausted_status();
         break;
       }
-      for (const Vec3& v : a.vertices) (void)moved.vertices.push_back(v + d);
+      bool in_range = true;
+      for (const Vec3& v : a.vertices) {
+        Vec3 p = v + d;
+        if (options.float32_output) in_range = round_to_float32(&p) && in_range;
+        (void)moved.vertices.push_back(p);
+      }
+      if (!in_range) {
+        s = Status::error(StatusCode::kLimitExceeded, "A has a coordinate beyond float32 range");
+        break;
+      }
       for (const Triangle& t : a.triangles) (void)moved.triangles.push_back(t);
       pa = &moved;
       stats->nudge = d;

@@ -256,4 +256,101 @@ Status require_valid_solid(const MeshReport& r) {
   return Status::ok();
 }
 
+uint32_t find_flat_triangle(const Mesh& mesh) {
+  const Triangle* tris = mesh.triangles.data();
+  const Vec3* v = mesh.vertices.data();
+  const uint32_t nt = static_cast<uint32_t>(mesh.triangles.size());
+  for (uint32_t t = 0; t < nt; ++t) {
+    const Vec3& p0 = v[tris[t].v[0]];
+    const Vec3 e1 = v[tris[t].v[1]] - p0, e2 = v[tris[t].v[2]] - p0;
+    const double c2 = length_squared(cross(e1, e2));
+    if (!(c2 > 1e-24 * length_squared(e1) * length_squared(e2)) &&
+        collinear3d(p0, v[tris[t].v[1]], v[tris[t].v[2]])) {
+      return t;
+    }
+  }
+  return kNoTriangle;
+}
+
+uint64_t check_closed_oriented_bound(uint64_t vertex_count, uint64_t triangle_count) {
+  return (vertex_count + 1) * sizeof(uint32_t) + 3 * triangle_count * sizeof(uint64_t) + 64;
+}
+
+Status check_closed_oriented(const Context& ctx, const Mesh& mesh, double* volume) {
+  Arena& arena = *ctx.arena;
+  const uint64_t nv64 = mesh.vertices.size(), nt64 = mesh.triangles.size();
+  if (nt64 == 0) return Status::error(StatusCode::kInvalidMesh, "mesh is empty");
+  if (nv64 >= (uint64_t{1} << 31) || nt64 >= (uint64_t{1} << 31)) {
+    return make_error(StatusCode::kLimitExceeded, "mesh too large to check: ", nt64,
+                      " triangles, ", nv64, " vertices");
+  }
+  const uint32_t nv = static_cast<uint32_t>(nv64), nt = static_cast<uint32_t>(nt64);
+  const Triangle* tris = mesh.triangles.data();
+  for (uint32_t t = 0; t < nt; ++t) {
+    for (uint32_t k : tris[t].v) {
+      if (k >= nv) {
+        return make_error(StatusCode::kInvalidMesh, "triangle ", t, " refers to vertex ", k,
+                          " but the mesh has ", nv, " vertices")
+            .at_index(t);
+      }
+    }
+  }
+  ArenaScope scope(arena);
+  // Half-edges bucketed by their smaller vertex: other end << 33 | forward << 32 | triangle.
+  uint32_t* start = arena.allocate_array<uint32_t>(size_t{nv} + 1);
+  uint64_t* half = arena.allocate_array<uint64_t>(size_t{3} * nt);
+  if (start == nullptr || half == nullptr) return arena.exhausted_status();
+  std::memset(start, 0, (size_t{nv} + 1) * sizeof(uint32_t));
+  for (uint32_t t = 0; t < nt; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = tris[t].v[k], b = tris[t].v[(k + 1) % 3];
+      ++start[(a < b ? a : b) + 1];
+    }
+  }
+  for (uint32_t i = 0; i < nv; ++i) start[i + 1] += start[i];
+  for (uint32_t t = 0; t < nt; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = tris[t].v[k], b = tris[t].v[(k + 1) % 3];
+      const uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
+      half[start[lo]++] = (uint64_t{hi} << 33) | (uint64_t{a < b ? 1u : 0u} << 32) | t;
+    }
+  }
+  for (uint32_t i = nv; i > 0; --i) start[i] = start[i - 1];
+  start[0] = 0;
+  for (uint32_t lo = 0; lo < nv; ++lo) {
+    for (uint32_t i = start[lo]; i < start[lo + 1]; ++i) {
+      const uint64_t hi = half[i] >> 33;
+      uint32_t uses = 0, forward = 0;
+      for (uint32_t j = start[lo]; j < start[lo + 1]; ++j) {
+        if ((half[j] >> 33) != hi) continue;
+        ++uses;
+        forward += static_cast<uint32_t>((half[j] >> 32) & 1u);
+      }
+      if (uses != 2 || forward != 1) {
+        const uint32_t t = static_cast<uint32_t>(half[i]);
+        const char* what = uses == 1 ? "not closed: a boundary edge"
+                           : uses > 2 ? "not edge-manifold: an edge with 3 or more triangles"
+                                      : (lo == hi ? "degenerate: a triangle repeats a vertex"
+                                                  : "not consistently oriented: an edge used twice "
+                                                    "in the same direction");
+        return make_error(StatusCode::kInvalidMesh, "mesh is ", what, " between vertices ", lo,
+                          " and ", hi, " (triangle ", t, ")")
+            .at_index(t);
+      }
+    }
+  }
+  const uint32_t flat = find_flat_triangle(mesh);
+  if (flat != kNoTriangle) {
+    return make_error(StatusCode::kInvalidMesh, "mesh is degenerate: triangle ", flat,
+                      " has zero area")
+        .at_index(flat);
+  }
+  const double vol = mesh_volume(mesh);
+  if (volume != nullptr) *volume = vol;
+  if (!(vol > 0)) {
+    return make_error(StatusCode::kInvalidMesh, "mesh is inside out: volume ", vol, " mm^3");
+  }
+  return Status::ok();
+}
+
 }  // namespace splintcore

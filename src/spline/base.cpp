@@ -66,10 +66,11 @@ void segment_controls(Span<const Line> upper, Span<const Line> lower, int curve,
 
 // Cumulative chord lengths of a segment at kArcSamples + 1 uniform parameters.
 void arc_table(const Vec3 p[4], double cumulative[kArcSamples + 1]) {
+  const CatmullRomSegment seg = catmull_rom_segment(p[0], p[1], p[2], p[3]);
   Vec3 previous = p[1];
   cumulative[0] = 0.0;
   for (uint32_t k = 1; k <= kArcSamples; ++k) {
-    Vec3 q = catmull_rom_point(p[0], p[1], p[2], p[3], static_cast<double>(k) / kArcSamples);
+    Vec3 q = catmull_rom_point(seg, static_cast<double>(k) / kArcSamples);
     cumulative[k] = cumulative[k - 1] + length(q - previous);
     previous = q;
   }
@@ -206,7 +207,7 @@ uint64_t splint_base_bound(uint64_t sections, uint32_t points_per_section) {
   const uint64_t v = sections * points_per_section;
   const uint64_t t = 2 * v;
   return v * sizeof(Vec3) + t * sizeof(Triangle) + sections * sizeof(uint32_t) +
-         check_mesh_bound(v, t) + find_self_intersections_bound(t) + 16 * 64;
+         check_closed_oriented_bound(v, t) + find_self_intersections_bound(t) + 16 * 64;
 }
 
 Status build_splint_base(const Context& ctx, Span<const Line> upper, Span<const Line> lower,
@@ -253,14 +254,14 @@ Status build_splint_base(const Context& ctx, Span<const Line> upper, Span<const 
   const uint32_t P = 4 * corner_points;
 
   // Sections per pick interval: enough that no curve's samples are further apart than spacing.
-  auto sections_between = [&](size_t i, uint32_t* count) -> Status {
+  // Fills the four curves' control points and arc-length tables of interval i on the way.
+  auto interval_tables = [&](size_t i, Vec3 p[4][4], double cum[4][kArcSamples + 1],
+                             uint32_t* count) -> Status {
     double longest = 0.0;
     for (int c = 0; c < 4; ++c) {
-      Vec3 p[4];
-      double cum[kArcSamples + 1];
-      segment_controls(upper, lower, c, i, p);
-      arc_table(p, cum);
-      longest = cum[kArcSamples] > longest ? cum[kArcSamples] : longest;
+      segment_controls(upper, lower, c, i, p[c]);
+      arc_table(p[c], cum[c]);
+      longest = cum[c][kArcSamples] > longest ? cum[c][kArcSamples] : longest;
     }
     const double m = std::ceil(longest / params.spacing_mm);
     if (!(m < static_cast<double>(kMaxSections))) {
@@ -269,6 +270,11 @@ Status build_splint_base(const Context& ctx, Span<const Line> upper, Span<const 
     }
     *count = m < 1.0 ? 1u : static_cast<uint32_t>(m);
     return Status::ok();
+  };
+  auto sections_between = [&](size_t i, uint32_t* count) -> Status {
+    Vec3 p[4][4];
+    double cum[4][kArcSamples + 1];
+    return interval_tables(i, p, cum, count);
   };
   uint64_t sections = 1;
   for (size_t i = 0; i + 1 < n; ++i) {
@@ -299,13 +305,9 @@ Status build_splint_base(const Context& ctx, Span<const Line> upper, Span<const 
     uint32_t k = 0;
     for (size_t i = 0; i + 1 < n; ++i) {
       uint32_t m = 0;
-      SPLINTCORE_RETURN_IF_ERROR(sections_between(i, &m));
       Vec3 p[4][4];
       double cum[4][kArcSamples + 1];
-      for (int c = 0; c < 4; ++c) {
-        segment_controls(upper, lower, c, i, p[c]);
-        arc_table(p[c], cum[c]);
-      }
+      SPLINTCORE_RETURN_IF_ERROR(interval_tables(i, p, cum, &m));
       for (uint32_t j = 0; j < m; ++j) {
         const double f = static_cast<double>(j) / m;
         for (int c = 0; c < 4; ++c) {
@@ -416,9 +418,9 @@ Status build_splint_base(const Context& ctx, Span<const Line> upper, Span<const 
 
   // The guarantee: a valid solid, as written, without self-intersection.
   {
-    MeshReport r;
-    SPLINTCORE_RETURN_IF_ERROR(check_mesh(ctx, mesh, &r));
-    Status valid = require_valid_solid(r);
+    double volume = 0;
+    Status valid = check_closed_oriented(ctx, mesh, &volume);
+    if (valid.code() == StatusCode::kArenaExhausted) return valid;
     if (!valid.is_ok()) {
       const uint64_t bad = valid.index();
       Status s = make_error(StatusCode::kInvalidArgument, "splint base is not a valid solid: ",
@@ -431,7 +433,7 @@ Status build_splint_base(const Context& ctx, Span<const Line> upper, Span<const 
       }
       return s;
     }
-    report->volume = r.volume;
+    report->volume = volume;
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "base", 3, 4));
   if (params.check_self_intersection) {

@@ -19,14 +19,33 @@ inline Vec3 lerp_knots(const Vec3& a, const Vec3& b, double ta, double tb, doubl
 }
 }  // namespace
 
+CatmullRomSegment catmull_rom_segment(const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                                      const Vec3& p3) {
+  CatmullRomSegment s;
+  s.p[0] = p0;
+  s.p[1] = p1;
+  s.p[2] = p2;
+  s.p[3] = p3;
+  s.t1 = 0.0 + knot_interval(p0, p1);
+  s.t2 = s.t1 + knot_interval(p1, p2);
+  s.t3 = s.t2 + knot_interval(p2, p3);
+  return s;
+}
+
 Vec3 catmull_rom_point(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3, double u) {
+  return catmull_rom_point(catmull_rom_segment(p0, p1, p2, p3), u);
+}
+
+Vec3 catmull_rom_point(const CatmullRomSegment& s, double u) {
   // The ends are returned exactly, so sections at picks sit exactly on the lines' ends.
+  const Vec3& p0 = s.p[0];
+  const Vec3& p1 = s.p[1];
+  const Vec3& p2 = s.p[2];
+  const Vec3& p3 = s.p[3];
   if (u <= 0.0) return p1;
   if (u >= 1.0) return p2;
   const double t0 = 0.0;
-  const double t1 = t0 + knot_interval(p0, p1);
-  const double t2 = t1 + knot_interval(p1, p2);
-  const double t3 = t2 + knot_interval(p2, p3);
+  const double t1 = s.t1, t2 = s.t2, t3 = s.t3;
   const double t = t1 + (t2 - t1) * u;
   const Vec3 a1 = lerp_knots(p0, p1, t0, t1, t);
   const Vec3 a2 = lerp_knots(p1, p2, t1, t2, t);

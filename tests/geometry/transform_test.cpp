@@ -37,3 +37,38 @@ TEST(RigidTransform, RejectsScaleShearReflectionAndProjection) {
 
 }  // namespace
 }  // namespace splintcore
+
+namespace splintcore {
+namespace {
+
+TEST(Float32, ExactnessIsDecidedOnTheBits) {
+  EXPECT_TRUE(is_float32_exact(0.0));
+  EXPECT_TRUE(is_float32_exact(-0.0));
+  EXPECT_TRUE(is_float32_exact(1.5));
+  EXPECT_TRUE(is_float32_exact(static_cast<double>(0.1f)));
+  EXPECT_FALSE(is_float32_exact(0.1));
+  EXPECT_TRUE(is_float32_exact(std::ldexp(1.0, -149)));   // the smallest float32 subnormal
+  EXPECT_FALSE(is_float32_exact(std::ldexp(1.0, -150)));
+  EXPECT_TRUE(is_float32_exact(std::ldexp(3.0, -149)));
+  EXPECT_FALSE(is_float32_exact(std::ldexp(3.0, -150)));
+  EXPECT_TRUE(is_float32_exact(3.4028234663852886e38));   // FLT_MAX
+  EXPECT_FALSE(is_float32_exact(std::ldexp(1.0, 128)));
+  EXPECT_FALSE(is_float32_exact(1.0 + std::ldexp(1.0, -24)));
+  EXPECT_TRUE(is_float32_exact(1.0 + std::ldexp(1.0, -23)));
+  EXPECT_FALSE(is_float32_exact(std::nan("")));
+  EXPECT_FALSE(is_float32_exact(HUGE_VAL));
+  // Every value round_to_float32 makes is exact, and rounding leaves exact values alone.
+  for (double x : {0.1, 1e-40, -7.3, 1234.5678, 3.0e38}) {
+    Vec3 v{x, -x, x * 0.5};
+    ASSERT_TRUE(round_to_float32(&v));
+    EXPECT_TRUE(is_float32_exact(v));
+    const Vec3 w = v;
+    ASSERT_TRUE(round_to_float32(&v));
+    EXPECT_EQ(v, w);
+  }
+  Vec3 big{4e38, 0, 0};
+  EXPECT_FALSE(round_to_float32(&big));
+}
+
+}  // namespace
+}  // namespace splintcore
