@@ -1,55 +1,16 @@
 // MeshLab (meshlabserver) as an oracle independent of our own checks: our written STL must be
 // two-manifold and watertight for MeshLab too, with the same genus and volume. Skips when
 // meshlabserver or xvfb-run is not installed (the README's test command installs both).
-#include <unistd.h>
-
-#include <cstdlib>
-#include <fstream>
-#include <sstream>
-
 #include "splintcore/design.h"
+#include "support/meshlab.h"
 #include "support/test_util.h"
 
 namespace splintcore {
 namespace {
 
-bool have_meshlab() {
-  return std::system("command -v meshlabserver >/dev/null 2>&1 && "
-                     "command -v xvfb-run >/dev/null 2>&1") == 0;
-}
-
-// Runs the topology + geometry filters on `stl` and returns MeshLab's log.
-std::string meshlab_log(const std::string& stl) {
-  std::string log = stl + ".meshlab.log";
-  std::string cmd = "xvfb-run -a meshlabserver -i '" + stl + "' -s '" +
-                    std::string(SPLINTCORE_FIXTURES_DIR) + "/meshlab/topo.mlx' -l '" + log +
-                    "' >/dev/null 2>&1";
-  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  std::ifstream in(log);
-  std::stringstream text;
-  text << in.rdbuf();
-  std::remove(log.c_str());
-  return text.str();
-}
-
-// Writes the bytes to a temporary STL, runs MeshLab on it, removes it, returns the log.
-std::string meshlab_log_of_bytes(const std::vector<uint8_t>& bytes) {
-  char path[] = "/tmp/splintcore-meshlab-XXXXXX.stl";
-  int fd = mkstemps(path, 4);
-  EXPECT_GE(fd, 0);
-  if (fd < 0) return "";
-  EXPECT_EQ(write(fd, bytes.data(), bytes.size()), static_cast<ssize_t>(bytes.size()));
-  close(fd);
-  std::string log = meshlab_log(path);
-  std::remove(path);
-  return log;
-}
-
-double number_after(const std::string& text, const std::string& label) {
-  size_t at = text.find(label);
-  if (at == std::string::npos) return std::nan("");
-  return std::strtod(text.c_str() + at + label.size(), nullptr);
-}
+using test::have_meshlab;
+using test::meshlab_log_of_bytes;
+using test::number_after;
 
 TEST(MeshLab, ConvertedFixturesAreWatertightTwoManifoldWithOurVolume) {
   if (!have_meshlab()) GTEST_SKIP() << "meshlabserver/xvfb-run not installed";

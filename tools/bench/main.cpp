@@ -373,7 +373,12 @@ void bench_boolean_phantom(Harness& h, Arena& arena, const std::string& fixtures
     for (const Vec3& v : upper.vertices) (void)jaws.vertices.push_back(v);
     for (const Triangle& t : upper.triangles) (void)jaws.triangles.push_back(t);
     const uint32_t off = static_cast<uint32_t>(upper.vertices.size());
-    for (const Vec3& v : lower.vertices) (void)jaws.vertices.push_back(Vec3{v.x, v.y, v.z - 2.0});
+    // The mandible opened by the case's 2 mm and rounded to float32, as its STL would hold it.
+    for (const Vec3& v : lower.vertices) {
+      Vec3 p{v.x, v.y, v.z - 2.0};
+      (void)round_to_float32(&p);
+      (void)jaws.vertices.push_back(p);
+    }
     for (const Triangle& t : lower.triangles) {
       (void)jaws.triangles.push_back(Triangle{{t.v[0] + off, t.v[1] + off, t.v[2] + off}});
     }

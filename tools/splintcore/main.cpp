@@ -95,7 +95,8 @@ const char kBooleanUsage[] =
     "A is a closed solid (the splint base); B is the union of the other files' shells (the\n"
     "jaws: one closed shell per tooth is fine, shells must not overlap each other inside A),\n"
     "translated by --translate-b (mm; given once it moves every B file, given once per B file\n"
-    "it moves each in order: e.g. 0,0,0 then 0,0,-2 opens the bite). Both are split along\n"
+    "it moves each in order: e.g. 0,0,0 then 0,0,-2 opens the bite; moved vertices are rounded\n"
+    "to float32, as a moved jaw's STL would hold them). Both are split along\n"
     "their intersection with exact predicates, re-triangulated, classified and assembled; the\n"
     "jaw's own triangles form the imprint, its vertices copied bit for bit. The result is\n"
     "checked as float32 (closed, manifold, outward, no vertex merged or triangle flattened by\n"
@@ -656,7 +657,16 @@ int run_boolean(int argc, char** argv) {
     }
     const Vec3 d = o.translate_b.empty() ? Vec3{}
                                          : o.translate_b[o.translate_b.size() == 1 ? 0 : f - 1];
-    for (Vec3& v : part.vertices) v = v + d;
+    // A moved jaw is rounded to float32, as its own STL would hold it: the Boolean keeps B's
+    // vertices bit for bit, so they must be what the output file can store.
+    for (Vec3& v : part.vertices) {
+      v = v + d;
+      if (!round_to_float32(&v)) {
+        return rejected(o, "boolean", Status::error(StatusCode::kLimitExceeded,
+                                                    "a translated vertex is beyond float32 range")
+                                          .in_file(o.positional[f]), &arena);
+      }
+    }
     if (f == 1) {
       b = part;  // the first file's arrays stay where they are
       continue;
