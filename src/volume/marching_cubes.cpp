@@ -1,0 +1,585 @@
+// Tiled iso-surface extraction by marching tetrahedra.
+//
+// Sources: Lorensen and Cline, "Marching cubes: a high resolution 3D surface construction
+// algorithm", SIGGRAPH 1987 (the sweep); Doi and Koide, "An efficient method of triangulating
+// equi-valued surfaces by using tetrahedral cells", IEICE Trans. 1991 (marching tetrahedra);
+// Freudenthal, "Simplizialzerlegungen von beschraenkter Flachheit", Annals of Mathematics 1942
+// and Kuhn, "Some combinatorial lemmas in topology", IBM J. 1960 (the subdivision of a cube into
+// six tetrahedra along its diagonal, which is consistent across neighbouring cubes).
+//
+// Sweep: cell layers z = -1 .. nz-1 in order; a slab of sample layers is filled per call and
+// the last layer is carried into the next slab. Edge vertex ids live in three per-layer tables
+// (in-plane edges of the lower and upper sample layer of the current cells, and the edges that
+// leave the lower layer upwards); the upper in-plane table becomes the lower one for the next
+// cell layer. Nothing else is kept, so the output order is the global cell order whatever the
+// slab size. See volume.h for the conventions.
+#include "splintcore/volume.h"
+
+namespace splintcore {
+
+namespace {
+
+constexpr uint32_t kNoVertex = ~uint32_t{0};
+constexpr uint64_t kAlign = 16;
+
+// --- the tetrahedra and their 16 cases ---------------------------------------------------------
+
+// Cube corner k is at (k & 1, (k >> 1) & 1, (k >> 2) & 1). The six Kuhn tetrahedra are the
+// chains 0 -> e_a -> e_a + e_b -> 7 over the axis permutations (a, b, c); listed positively
+// oriented (det(p1 - p0, p2 - p0, p3 - p0) > 0): odd permutations have their last two swapped.
+// Every edge of a chain joins a corner to a componentwise larger one.
+constexpr uint8_t kTets[6][4] = {
+    {0, 1, 3, 7},  // x y z (even)
+    {0, 1, 7, 5},  // x z y (odd)
+    {0, 2, 7, 3},  // y x z (odd)
+    {0, 2, 6, 7},  // y z x (even)
+    {0, 4, 5, 7},  // z x y (even)
+    {0, 4, 7, 6},  // z y x (odd)
+};
+
+struct TetCase {
+  uint8_t triangles = 0;
+  uint8_t edge[2][3][2] = {};  // per triangle corner: the two tetrahedron vertices (local)
+};
+struct TetCases {
+  TetCase c[16];
+};
+
+constexpr bool even_permutation(const uint8_t p[4]) {
+  int inversions = 0;
+  for (int i = 0; i < 4; ++i) {
+    for (int j = i + 1; j < 4; ++j) inversions += p[i] > p[j] ? 1 : 0;
+  }
+  return (inversions & 1) == 0;
+}
+
+// For a positive tetrahedron (0,1,2,3), face (1,2,3) is counter-clockwise seen from outside,
+// i.e. its normal points away from vertex 0; even permutations keep this. So with one inside
+// vertex i and (i, j, k, l) even, the triangle (ij, ik, il) faces away from i (outward); with
+// one outside vertex it is reversed; with inside {a, b}, outside {c, d}, (a, b, c, d) even, the
+// quad (ac, ad, bd, bc) faces the outside pair.
+constexpr TetCases make_tet_cases() {
+  TetCases t{};
+  constexpr uint8_t kEven[4][4] = {{0, 1, 2, 3}, {1, 0, 3, 2}, {2, 0, 1, 3}, {3, 0, 2, 1}};
+  for (int m = 1; m < 15; ++m) {
+    int count = 0;
+    for (int i = 0; i < 4; ++i) count += (m >> i) & 1;
+    TetCase& c = t.c[m];
+    if (count == 1 || count == 3) {
+      int lone = 0;
+      for (int i = 0; i < 4; ++i) {
+        if ((((m >> i) & 1) == 1) == (count == 1)) lone = i;
+      }
+      const uint8_t* e = kEven[lone];
+      const int order[3] = {1, count == 1 ? 2 : 3, count == 1 ? 3 : 2};
+      c.triangles = 1;
+      for (int k = 0; k < 3; ++k) {
+        c.edge[0][k][0] = e[0];
+        c.edge[0][k][1] = e[order[k]];
+      }
+    } else {
+      uint8_t p[4] = {0, 0, 0, 0};
+      int in = 0, out = 2;
+      for (int i = 0; i < 4; ++i) {
+        if ((m >> i) & 1) {
+          p[in++] = static_cast<uint8_t>(i);
+        } else {
+          p[out++] = static_cast<uint8_t>(i);
+        }
+      }
+      if (!even_permutation(p)) {
+        const uint8_t s = p[2];
+        p[2] = p[3];
+        p[3] = s;
+      }
+      const uint8_t a = p[0], b = p[1], cc = p[2], d = p[3];
+      const uint8_t quad[4][2] = {{a, cc}, {a, d}, {b, d}, {b, cc}};
+      const int split[2][3] = {{0, 1, 2}, {0, 2, 3}};
+      c.triangles = 2;
+      for (int tri = 0; tri < 2; ++tri) {
+        for (int k = 0; k < 3; ++k) {
+          c.edge[tri][k][0] = quad[split[tri][k]][0];
+          c.edge[tri][k][1] = quad[split[tri][k]][1];
+        }
+      }
+    }
+  }
+  return t;
+}
+
+constexpr TetCases kCases = make_tet_cases();
+
+// --- sizes --------------------------------------------------------------------------------------
+
+bool align_up(uint64_t v, uint64_t* out) {
+  if (v > UINT64_MAX - (kAlign - 1)) return false;
+  *out = (v + kAlign - 1) & ~(kAlign - 1);
+  return true;
+}
+
+// Bytes of the sample buffer (layers + 1) and of the edge tables; false on overflow.
+bool working_parts(const VolumeGrid& g, uint32_t layers, uint64_t* samples, uint64_t* edges) {
+  uint64_t layer = 0, s = 0, e = 0, pts = 0;
+  if (!checked_mul(g.nx, g.ny, &layer) || !checked_mul(layer, uint64_t{layers} + 1, &s) ||
+      !checked_mul(s, 4, &s) || !align_up(s, &s)) {
+    return false;
+  }
+  if (!checked_mul(uint64_t{g.nx} + 1, uint64_t{g.ny} + 1, &pts) || !checked_mul(pts, 40, &e) ||
+      !align_up(e, &e)) {
+    return false;
+  }
+  *samples = s;
+  *edges = e;
+  return true;
+}
+
+Status check_grid(const VolumeGrid& g) {
+  if (g.nx == 0 || g.ny == 0 || g.nz == 0) {
+    return make_error(StatusCode::kInvalidArgument, "marching cubes: empty grid (", g.nx, " x ",
+                      g.ny, " x ", g.nz, " samples)");
+  }
+  if (!(g.spacing > 0) || !is_finite(g.spacing) || !is_finite(g.origin)) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "marching cubes: the grid spacing must be finite and > 0 and the origin "
+                      "finite (spacing ",
+                      g.spacing, ")");
+  }
+  return Status::ok();
+}
+
+// --- the sweep ----------------------------------------------------------------------------------
+
+struct Corner {
+  float value;
+  bool real;    // a sample of the grid (false: beyond the border)
+  bool inside;  // real && value < iso
+};
+
+struct Sweep {
+  const VolumeGrid* grid = nullptr;
+  double iso = 0;
+  const MarchingCubesVisitor* visitor = nullptr;
+  uint64_t points_per_layer = 0;  // (nx + 1)(ny + 1): lower endpoints -1 .. n-1
+  uint32_t* inplane_lo = nullptr;  // 3 per point: +x, +y, +x+y at z = cz
+  uint32_t* inplane_hi = nullptr;  // the same at z = cz + 1
+  uint32_t* upward = nullptr;      // 4 per point: +z, +x+z, +y+z, +x+y+z from z = cz
+  uint64_t vertices = 0;
+  uint64_t triangles = 0;
+};
+
+inline Corner corner_at(const float* row, int64_t x, uint32_t nx, double iso) {
+  if (row == nullptr || x < 0 || x >= static_cast<int64_t>(nx)) return {0.0f, false, false};
+  const float v = row[x];
+  return {v, true, static_cast<double>(v) < iso};
+}
+
+// The vertex on the edge from corner `lo` to corner `hi` of cell (cx, cy, cz).
+inline Vec3 edge_vertex(const Sweep& s, int64_t cx, int64_t cy, int64_t cz, unsigned lo,
+                        unsigned d, const Corner& f0, const Corner& f1) {
+  double t;
+  if (!f0.real) {
+    t = 1.0 - kEdgeMargin;
+  } else if (!f1.real) {
+    t = kEdgeMargin;
+  } else {
+    const double a = static_cast<double>(f0.value), b = static_cast<double>(f1.value);
+    t = (s.iso - a) / (b - a);
+    t = t < kEdgeMargin ? kEdgeMargin : (t > 1.0 - kEdgeMargin ? 1.0 - kEdgeMargin : t);
+  }
+  const VolumeGrid& g = *s.grid;
+  const double px = static_cast<double>(cx + static_cast<int64_t>(lo & 1u));
+  const double py = static_cast<double>(cy + static_cast<int64_t>((lo >> 1) & 1u));
+  const double pz = static_cast<double>(cz + static_cast<int64_t>((lo >> 2) & 1u));
+  return {(d & 1u) ? g.origin.x + g.spacing * (px + t) : g.origin.x + g.spacing * px,
+          (d & 2u) ? g.origin.y + g.spacing * (py + t) : g.origin.y + g.spacing * py,
+          (d & 4u) ? g.origin.z + g.spacing * (pz + t) : g.origin.z + g.spacing * pz};
+}
+
+// One cell: corners[k] for cube corner k. Emits its tetrahedra's triangles.
+Status march_cell(Sweep& s, int64_t cx, int64_t cy, int64_t cz, const Corner corners[8]) {
+  const uint64_t row_points = uint64_t{s.grid->nx} + 1;
+  for (int tet = 0; tet < 6; ++tet) {
+    const uint8_t* v = kTets[tet];
+    unsigned m = 0;
+    for (unsigned i = 0; i < 4; ++i) m |= corners[v[i]].inside ? (1u << i) : 0u;
+    const TetCase& c = kCases.c[m];
+    for (int tri = 0; tri < c.triangles; ++tri) {
+      Triangle out{};
+      Vec3 p[3];
+      for (int k = 0; k < 3; ++k) {
+        unsigned u = v[c.edge[tri][k][0]], w = v[c.edge[tri][k][1]];
+        if ((u & w) != u) {  // u must be the lower endpoint (its bits a subset of w's)
+          const unsigned swap = u;
+          u = w;
+          w = swap;
+        }
+        const unsigned d = u ^ w;
+        const uint64_t px = static_cast<uint64_t>(cx + 1 + static_cast<int64_t>(u & 1u));
+        const uint64_t py = static_cast<uint64_t>(cy + 1 + static_cast<int64_t>((u >> 1) & 1u));
+        const uint64_t point = py * row_points + px;
+        uint32_t* slot;
+        if (d & 4u) {
+          slot = &s.upward[point * 4 + (d & 3u)];
+        } else {
+          slot = &((u & 4u) ? s.inplane_hi : s.inplane_lo)[point * 3 + d - 1];
+        }
+        p[k] = edge_vertex(s, cx, cy, cz, u, d, corners[u], corners[w]);
+        if (*slot == kNoVertex) {
+          if (s.vertices >= kNoVertex) {
+            return make_error(StatusCode::kLimitExceeded, "marching cubes: more than ",
+                              uint64_t{kNoVertex}, " vertices (32-bit vertex ids)");
+          }
+          *slot = static_cast<uint32_t>(s.vertices++);
+          if (s.visitor->vertex != nullptr) {
+            SPLINTCORE_RETURN_IF_ERROR(s.visitor->vertex(s.visitor->user, *slot, p[k]));
+          }
+        }
+        out.v[k] = *slot;
+      }
+      ++s.triangles;
+      if (s.visitor->triangle != nullptr) {
+        SPLINTCORE_RETURN_IF_ERROR(s.visitor->triangle(s.visitor->user, out, p[0], p[1], p[2]));
+      }
+    }
+  }
+  return Status::ok();
+}
+
+// Cell layer cz: samples of layer cz in `lo`, of cz + 1 in `hi` (null: beyond the grid).
+Status march_layer(Sweep& s, int64_t cz, const float* lo, const float* hi) {
+  const uint32_t nx = s.grid->nx, ny = s.grid->ny;
+  {
+    uint32_t* t = s.inplane_lo;
+    s.inplane_lo = s.inplane_hi;
+    s.inplane_hi = t;
+    std::memset(s.inplane_hi, 0xff, static_cast<size_t>(s.points_per_layer * 3 * 4));
+    std::memset(s.upward, 0xff, static_cast<size_t>(s.points_per_layer * 4 * 4));
+  }
+  for (int64_t cy = -1; cy < static_cast<int64_t>(ny); ++cy) {
+    // Rows (y, z) of the four columns: column c = dy + 2 dz holds corners k = x + 2c.
+    const float* rows[4];
+    for (int c = 0; c < 4; ++c) {
+      const int64_t y = cy + (c & 1);
+      const float* layer = (c & 2) ? hi : lo;
+      rows[c] = (layer == nullptr || y < 0 || y >= static_cast<int64_t>(ny))
+                    ? nullptr
+                    : layer + static_cast<uint64_t>(y) * nx;
+    }
+    if (rows[0] == nullptr && rows[1] == nullptr && rows[2] == nullptr && rows[3] == nullptr) {
+      continue;  // all outside
+    }
+    Corner left[4], right[4];
+    for (int c = 0; c < 4; ++c) left[c] = corner_at(rows[c], -1, nx, s.iso);
+    for (int64_t cx = -1; cx < static_cast<int64_t>(nx); ++cx) {
+      unsigned mask = 0;
+      for (int c = 0; c < 4; ++c) {
+        right[c] = corner_at(rows[c], cx + 1, nx, s.iso);
+        mask |= (left[c].inside ? 1u : 0u) << (2 * c);
+        mask |= (right[c].inside ? 1u : 0u) << (2 * c + 1);
+      }
+      if (mask != 0 && mask != 255) {
+        Corner corners[8];
+        for (int c = 0; c < 4; ++c) {
+          corners[2 * c] = left[c];
+          corners[2 * c + 1] = right[c];
+        }
+        SPLINTCORE_RETURN_IF_ERROR(march_cell(s, cx, cy, cz, corners));
+      }
+      for (int c = 0; c < 4; ++c) left[c] = right[c];
+    }
+  }
+  return Status::ok();
+}
+
+uint32_t choose_layers(const Arena& arena, const VolumeGrid& grid, uint32_t requested,
+                       uint64_t share_divisor) {
+  if (requested != 0) return requested < grid.nz ? requested : grid.nz;
+  const uint64_t free_bytes = arena.cap() > arena.used() ? arena.cap() - arena.used() : 0;
+  const uint64_t budget = free_bytes / share_divisor;
+  uint32_t best = 1;
+  const uint32_t limit =
+      grid.nz < kMarchingCubesDefaultLayers ? grid.nz : kMarchingCubesDefaultLayers;
+  for (uint32_t k = 2; k <= limit; ++k) {
+    const uint64_t need = marching_cubes_working_set(grid, k);
+    if (need == 0 || need > budget) break;
+    best = k;
+  }
+  return best;
+}
+
+Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& source,
+                 const MarchingCubesOptions& options, const MarchingCubesVisitor& visitor,
+                 uint64_t share_divisor, MarchingCubesStats* stats) {
+  SPLINTCORE_RETURN_IF_ERROR(check_grid(grid));
+  if (!is_finite(options.iso)) {
+    return make_error(StatusCode::kInvalidArgument, "marching cubes: the iso value is not finite");
+  }
+  if (source.fill == nullptr) {
+    return make_error(StatusCode::kInvalidArgument, "marching cubes: no layer source");
+  }
+  SPLINTCORE_ASSERT(ctx.arena != nullptr);
+  Arena& arena = *ctx.arena;
+  const uint64_t minimum = marching_cubes_working_set(grid, 1);
+  if (minimum == 0 || minimum > SIZE_MAX) {
+    return make_error(StatusCode::kLimitExceeded, "marching cubes: a layer of ", grid.nx, " x ",
+                      grid.ny, " samples is too large to address");
+  }
+  const uint64_t free_bytes = arena.cap() > arena.used() ? arena.cap() - arena.used() : 0;
+  if (free_bytes < minimum) {
+    uint64_t total = 0;
+    if (!checked_add(arena.used(), minimum, &total)) total = UINT64_MAX;
+    return make_error(StatusCode::kArenaExhausted, "marching cubes: needs at least ", minimum,
+                      " bytes of free arena for one layer of ", grid.nx, " x ", grid.ny,
+                      " cells, ", free_bytes, " are free (cap ", arena.cap(), ", in use ",
+                      arena.used(), "); increase the memory cap to at least ", total, " bytes");
+  }
+  const uint32_t layers = choose_layers(arena, grid, options.layers_per_tile, share_divisor);
+  uint64_t sample_bytes = 0, edge_bytes = 0;
+  if (!working_parts(grid, layers, &sample_bytes, &edge_bytes) || sample_bytes > SIZE_MAX) {
+    return make_error(StatusCode::kLimitExceeded, "marching cubes: a slab of ", layers,
+                      " layers is too large to address");
+  }
+  // Not rewound here: the mesh variant's log grows above the working set (callers rewind).
+  const uint64_t layer_floats = uint64_t{grid.nx} * grid.ny;
+  float* samples = arena.allocate_array<float>(static_cast<size_t>(layer_floats * (layers + 1)));
+  uint32_t* edges = samples == nullptr
+                        ? nullptr
+                        : arena.allocate_array<uint32_t>(static_cast<size_t>(edge_bytes / 4));
+  if (edges == nullptr) return arena.exhausted_status();
+
+  Sweep s;
+  s.grid = &grid;
+  s.iso = options.iso;
+  s.visitor = &visitor;
+  s.points_per_layer = (uint64_t{grid.nx} + 1) * (uint64_t{grid.ny} + 1);
+  s.inplane_lo = edges;
+  s.inplane_hi = edges + s.points_per_layer * 3;
+  s.upward = edges + s.points_per_layer * 6;
+  std::memset(s.inplane_lo, 0xff, static_cast<size_t>(s.points_per_layer * 3 * 4));
+
+  uint32_t fill_calls = 0;
+  const int64_t nz = grid.nz;
+  for (uint32_t next_z = 0; next_z < grid.nz;) {
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "marching cubes", next_z, grid.nz));
+    const uint32_t n = grid.nz - next_z < layers ? grid.nz - next_z : layers;
+    // Slot j of the buffer holds sample layer next_z - 1 + j (slot 0: carried from the last slab).
+    float* fresh = samples + layer_floats;
+    SPLINTCORE_RETURN_IF_ERROR(source.fill(
+        source.user, next_z, next_z + n, Span<float>(fresh, static_cast<size_t>(layer_floats * n))));
+    ++fill_calls;
+    for (uint64_t i = 0; i < layer_floats * n; ++i) {
+      if (!is_finite(fresh[i])) {
+        const uint64_t x = i % grid.nx, y = (i / grid.nx) % grid.ny;
+        const uint64_t z = next_z + i / layer_floats;
+        return make_error(StatusCode::kNonFinite, "marching cubes: sample (", x, ", ", y, ", ", z,
+                          ") is not finite (NaN or infinity)")
+            .at_index(z * layer_floats + i % layer_floats);
+      }
+    }
+    const int64_t first = static_cast<int64_t>(next_z) - 1;
+    const int64_t last = static_cast<int64_t>(next_z + n) == nz ? nz - 1 : first + n - 1;
+    for (int64_t cz = first; cz <= last; ++cz) {
+      const int64_t slot = cz - first;  // layer cz is in slot cz - (next_z - 1)
+      const float* lo = cz < 0 ? nullptr : samples + static_cast<uint64_t>(slot) * layer_floats;
+      const float* hi =
+          cz + 1 >= nz ? nullptr : samples + static_cast<uint64_t>(slot + 1) * layer_floats;
+      SPLINTCORE_RETURN_IF_ERROR(march_layer(s, cz, lo, hi));
+    }
+    std::memcpy(samples, samples + layer_floats * n, static_cast<size_t>(layer_floats * 4));
+    next_z += n;
+  }
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "marching cubes", grid.nz, grid.nz));
+  if (stats != nullptr) {
+    stats->vertices = s.vertices;
+    stats->triangles = s.triangles;
+    stats->layers_per_tile = layers;
+    stats->fill_calls = fill_calls;
+    stats->working_set_bytes = sample_bytes + edge_bytes;
+  }
+  return Status::ok();
+}
+
+// --- the mesh variant: an output log, split into the mesh arrays at the end ---------------------
+//
+// The log is one growing array at the top of the arena (it extends in place): per triangle its
+// three ids, then the positions (6 words each) of the vertices it introduced, in id order.
+
+constexpr size_t kLogGrowthWords = 1024;
+
+struct MeshLog {
+  ArenaArray<uint32_t> words;
+  Vec3 pending[3];
+  uint32_t pending_count = 0;
+  uint64_t vertices = 0;
+  uint64_t triangles = 0;
+};
+
+Status log_vertex(void* user, uint32_t, const Vec3& position) {
+  MeshLog& log = *static_cast<MeshLog*>(user);
+  SPLINTCORE_ASSERT(log.pending_count < 3);
+  log.pending[log.pending_count++] = position;
+  return Status::ok();
+}
+
+Status log_triangle(void* user, const Triangle& t, const Vec3&, const Vec3&, const Vec3&) {
+  MeshLog& log = *static_cast<MeshLog*>(user);
+  const size_t start = log.words.size();
+  const size_t need = start + 3 + 6 * size_t{log.pending_count};
+  if (need > log.words.capacity()) {
+    // Amortised growth (resize() alone grows to the exact size: a copy each time the array
+    // cannot extend in place), by an eighth so that the slack stays small under a tight cap;
+    // the exact size when the larger request does not fit.
+    Arena& arena = *log.words.arena();
+    if (!log.words.reserve(need + need / 8 + kLogGrowthWords)) {
+      arena.forget_failure();
+      if (!log.words.reserve(need)) return arena.exhausted_status();
+    }
+  }
+  if (!log.words.resize(need)) return log.words.arena()->exhausted_status();
+  uint32_t* w = log.words.data() + start;
+  std::memcpy(w, t.v, 12);
+  std::memcpy(w + 3, log.pending, 24 * size_t{log.pending_count});
+  log.vertices += log.pending_count;
+  log.pending_count = 0;
+  ++log.triangles;
+  return Status::ok();
+}
+
+}  // namespace
+
+uint64_t marching_cubes_working_set(const VolumeGrid& grid, uint32_t layers) {
+  if (grid.nx == 0 || grid.ny == 0 || layers == 0) return 0;
+  uint64_t samples = 0, edges = 0, total = 0;
+  if (!working_parts(grid, layers, &samples, &edges) || !checked_add(samples, edges, &total) ||
+      !checked_add(total, kAlign, &total)) {
+    return 0;
+  }
+  return total;
+}
+
+Status marching_cubes_memory(const VolumeGrid& grid, MarchingCubesMemory* out) {
+  if (grid.nx == 0 || grid.ny == 0 || grid.nz == 0) return check_grid(grid);
+  const uint32_t layers =
+      grid.nz < kMarchingCubesDefaultLayers ? grid.nz : kMarchingCubesDefaultLayers;
+  const uint64_t minimum = marching_cubes_working_set(grid, 1);
+  const uint64_t comfortable = marching_cubes_working_set(grid, layers);
+  if (minimum == 0 || comfortable == 0) {
+    return make_error(StatusCode::kLimitExceeded, "marching cubes: a grid of ", grid.nx, " x ",
+                      grid.ny, " samples per layer overflows 64-bit sizes");
+  }
+  out->minimum = minimum;
+  out->comfortable = comfortable;
+  out->comfortable_layers = layers;
+  return Status::ok();
+}
+
+uint64_t marching_cubes_mesh_bytes(uint64_t vertex_count, uint64_t triangle_count) {
+  // The log (24 V + 12 T, with up to an eighth and 4 KiB of growth slack), the triangle copy
+  // (12 T) and alignment padding.
+  uint64_t v = 0, t = 0, log = 0, copy = 0, total = 0;
+  if (!checked_mul(vertex_count, 24, &v) || !checked_mul(triangle_count, 12, &t) ||
+      !checked_add(v, t, &log) || !checked_add(log, log / 8 + 4 * kLogGrowthWords, &log) ||
+      !checked_add(log, t, &copy) || !checked_add(copy, 4 * kAlign, &total)) {
+    return UINT64_MAX;
+  }
+  return total;
+}
+
+Status marching_cubes(const Context& ctx, const VolumeGrid& grid, const LayerSource& source,
+                      const MarchingCubesOptions& options, const MarchingCubesVisitor& visitor,
+                      MarchingCubesStats* stats) {
+  SPLINTCORE_ASSERT(ctx.arena != nullptr);
+  ArenaScope scope(*ctx.arena);
+  return run_sweep(ctx, grid, source, options, visitor, 1, stats);
+}
+
+Status marching_cubes_mesh(const Context& ctx, const VolumeGrid& grid, const LayerSource& source,
+                           const MarchingCubesOptions& options, Mesh* out,
+                           MarchingCubesStats* stats) {
+  SPLINTCORE_ASSERT(ctx.arena != nullptr && out != nullptr);
+  SPLINTCORE_ASSERT(out->vertices.arena() == ctx.arena && out->triangles.arena() == ctx.arena);
+  if (!out->vertices.empty() || !out->triangles.empty()) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "marching_cubes_mesh: the output mesh must be empty");
+  }
+  Arena& arena = *ctx.arena;
+  const Arena::Marker start = arena.mark();
+  // The log sits above the working set, which run_sweep allocates first: it is bound now and
+  // first grows inside the sweep. Both are dropped by the rewind below; their bytes stay
+  // readable (an arena never clears them) while the mesh is moved down over them.
+  MeshLog log;
+  log.words.bind(&arena);
+  MarchingCubesVisitor visitor;
+  visitor.vertex = log_vertex;
+  visitor.triangle = log_triangle;
+  visitor.user = &log;
+  MarchingCubesStats local;
+  Status st = run_sweep(ctx, grid, source, options, visitor, 4, &local);
+  if (!st.is_ok()) {
+    arena.rewind(start);
+    return st;
+  }
+  SPLINTCORE_ASSERT(log.vertices == local.vertices && log.triangles == local.triangles);
+  const uint64_t vertex_count = log.vertices, triangle_count = log.triangles;
+  if (triangle_count == 0) {
+    arena.rewind(start);
+    if (stats != nullptr) *stats = local;
+    return Status::ok();
+  }
+  // The triangles out of the log, to a copy at the top (the log is the last allocation, so
+  // the copy is above it).
+  const uint32_t* words = log.words.data();
+  Triangle* tris = arena.allocate_array<Triangle>(static_cast<size_t>(triangle_count));
+  if (tris == nullptr) {
+    st = arena.exhausted_status();
+    arena.rewind(start);
+    return st;
+  }
+  {
+    size_t at = 0;
+    uint64_t seen = 0;
+    for (uint64_t t = 0; t < triangle_count; ++t) {
+      std::memcpy(tris[t].v, words + at, 12);
+      uint32_t fresh = 0;
+      for (int k = 0; k < 3; ++k) fresh += tris[t].v[k] >= seen ? 1u : 0u;
+      seen += fresh;
+      at += 3 + 6 * size_t{fresh};
+    }
+  }
+  // Vertices down to where the arena's top was: each destination is at or below its source
+  // (the log starts at or above it and holds more than the vertices before any record).
+  arena.rewind(start);
+  Vec3* verts = arena.allocate_array<Vec3>(static_cast<size_t>(vertex_count));
+  if (verts == nullptr) {
+    st = arena.exhausted_status();
+    arena.rewind(start);
+    return st;
+  }
+  {
+    size_t at = 0;
+    uint64_t seen = 0;
+    for (uint64_t t = 0; t < triangle_count; ++t) {
+      uint32_t fresh = 0;
+      for (int k = 0; k < 3; ++k) fresh += tris[t].v[k] >= seen ? 1u : 0u;
+      if (fresh > 0) {
+        std::memmove(static_cast<void*>(verts + seen), words + at + 3, 24 * size_t{fresh});
+      }
+      seen += fresh;
+      at += 3 + 6 * size_t{fresh};
+    }
+  }
+  Triangle* final_tris = arena.allocate_array<Triangle>(static_cast<size_t>(triangle_count));
+  if (final_tris == nullptr) {
+    st = arena.exhausted_status();
+    arena.rewind(start);
+    return st;
+  }
+  std::memmove(static_cast<void*>(final_tris), tris, static_cast<size_t>(triangle_count) * 12);
+  out->vertices.adopt(verts, static_cast<size_t>(vertex_count), static_cast<size_t>(vertex_count));
+  out->triangles.adopt(final_tris, static_cast<size_t>(triangle_count),
+                       static_cast<size_t>(triangle_count));
+  if (stats != nullptr) *stats = local;
+  return Status::ok();
+}
+
+}  // namespace splintcore
