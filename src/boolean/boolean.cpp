@@ -481,13 +481,13 @@ Status BooleanRun::find_hits() {
           .at_index(t);
     }
     const uint32_t o0 = outcode[tri.v[0]], o1 = outcode[tri.v[1]], o2 = outcode[tri.v[2]];
-    const bool is_near = ((o0 & o1 & o2) & 63u) == 0;
-    near_b_[t] = is_near ? 1 : 0;
-    if (!is_near) continue;
     if (((o0 | o1 | o2) & 64u) != 0) {
       return make_error(StatusCode::kNonFinite, "triangle ", t, " of B has a vertex that is not finite")
           .at_index(t);
     }
+    const bool is_near = ((o0 & o1 & o2) & 63u) == 0;
+    near_b_[t] = is_near ? 1 : 0;
+    if (!is_near) continue;
     if (options_.float32_output &&
         !(is_float32_exact(vb[tri.v[0]]) && is_float32_exact(vb[tri.v[1]]) &&
           is_float32_exact(vb[tri.v[2]]))) {

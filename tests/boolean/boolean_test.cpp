@@ -374,3 +374,50 @@ TEST(BooleanTest, RejectsOpenA) {
 
 }  // namespace
 }  // namespace splintcore
+
+namespace splintcore {
+namespace {
+
+TEST(BooleanTest, EmptyBLeavesAAndHostileBIsNamed) {
+  test::TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  Mesh empty(&arena);
+  Result d = run_op(arena, a, empty, BooleanOp::kDifference, true);
+  ASSERT_TRUE(d.status.is_ok()) << test::format(d.status);
+  EXPECT_EQ(d.triangles, 12u);
+  EXPECT_NEAR(d.volume, 1.0, 1e-15);
+  // A NaN vertex in a triangle near A.
+  Mesh b = sphere_mesh(arena, 0.45, 6, 10, rotation(0.3, -0.2, 0.7, {0.52, 0.47, 0.93}));
+  b.vertices[3].x = std::nan("");
+  {
+    ArenaScope scope(arena);
+    Mesh out;
+    Status s = mesh_boolean(Context(&arena), a, b, opts(BooleanOp::kDifference), &out, nullptr);
+    EXPECT_EQ(s.code(), StatusCode::kNonFinite) << test::format(s);
+    EXPECT_NE(std::string(s.message()).find("of B"), std::string::npos);
+  }
+  // An index out of range.
+  b.vertices[3].x = 0.5;
+  b.triangles[5].v[1] = 100000;
+  {
+    ArenaScope scope(arena);
+    Mesh out;
+    Status s = mesh_boolean(Context(&arena), a, b, opts(BooleanOp::kDifference), &out, nullptr);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidMesh) << test::format(s);
+    EXPECT_EQ(s.index(), 5u);
+  }
+  // Double B with float32 output: refused (B's vertices are kept bit for bit).
+  b.triangles[5].v[1] = b.triangles[5].v[0] == 0 ? 1 : 0;
+  Mesh c = sphere_mesh(arena, 0.45, 6, 10, rotation(0.3, -0.2, 0.7, {0.52, 0.47, 0.93}));
+  {
+    ArenaScope scope(arena);
+    Mesh out;
+    BooleanOptions o;
+    Status s = mesh_boolean(Context(&arena), a, c, o, &out, nullptr);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << test::format(s);
+  }
+}
+
+}  // namespace
+}  // namespace splintcore
