@@ -270,12 +270,36 @@ struct OutTri {
   int8_t state;   // +1 inside the other solid, -1 outside
 };
 
+// The broad phase, computed once for all attempts: B's triangles near A's box (with their
+// validity checked) and a uniform grid over A's box whose cells list the triangles of A whose
+// box and plane meet them (A is the small mesh: the splint base). Everything is widened by
+// `reach`, the most a nudge (and its float32 rounding) can move A, so the candidates are a
+// superset for every attempt; the exact tests then use A as moved. Its memory stays until the
+// Boolean returns (the per-triangle planes of A, about 100 bytes a triangle, included).
+struct Broadphase {
+  Aabb abox;  // A's bounds widened by reach
+  double h = 1, inv_h = 1;
+  uint32_t dim[3] = {1, 1, 1};
+  uint32_t* start = nullptr;  // cell -> [start[c], start[c + 1]) in items
+  uint32_t* items = nullptr;
+  uint8_t* near_b = nullptr;  // per B triangle: its box meets abox
+  ArenaArray<uint32_t> near_ids;
+
+  void cell_range(const Aabb& box, uint32_t lo[3], uint32_t hi[3]) const {
+    for (int k = 0; k < 3; ++k) {
+      const double l = (box.lo[k] - abox.lo[k]) * inv_h, u = (box.hi[k] - abox.lo[k]) * inv_h;
+      lo[k] = l <= 0.0 ? 0u : (l >= dim[k] - 1.0 ? dim[k] - 1 : static_cast<uint32_t>(l));
+      hi[k] = u <= 0.0 ? 0u : (u >= dim[k] - 1.0 ? dim[k] - 1 : static_cast<uint32_t>(u));
+    }
+  }
+};
+
 class BooleanRun {
  public:
-  BooleanRun(const Context& ctx, const Inputs& in, const BooleanOptions& options,
-             BooleanStats* stats)
+  BooleanRun(const Context& ctx, const Inputs& in, const Broadphase& bp,
+             const BooleanOptions& options, BooleanStats* stats)
       : ctx_(ctx), arena_(*ctx.arena), in_(in), op_(options.op), options_(options),
-        st_(*stats) {}
+        st_(*stats), bp_(bp) {}
 
   Status run(Mesh* result);
 
@@ -299,8 +323,7 @@ class BooleanRun {
 
   DistanceIndex index_a_{};             // built when a part of B needs a winding number
   bool have_a_index_ = false;
-  uint8_t* near_b_ = nullptr;           // per B triangle: its box meets A's
-  ArenaArray<uint32_t> near_ids_;       // the near B triangles, ascending
+  const Broadphase& bp_;                // near B triangles and A's grid (all attempts)
   ArenaArray<Hit> hits_;
   uint32_t* hit_points_ = nullptr;      // 2 per hit: start, end point ids
   ArenaArray<Point> points_;
@@ -355,9 +378,152 @@ inline bool box_meets_plane(const PlaneSlab& p, const Aabb& box) {
 // whose box and plane meet it (A is the small mesh: the splint base). A triangle of B looks
 // only at the cells its box covers, so B's many triangles far from A's surface cost a few
 // comparisons each.
+Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double reach,
+                        bool float32_output, Broadphase* bp) {
+  Arena& arena = *ctx.arena;
+  const uint32_t nta = static_cast<uint32_t>(a.triangles.size());
+  const uint32_t ntb = static_cast<uint32_t>(b.triangles.size());
+  const uint32_t nvb = static_cast<uint32_t>(b.vertices.size());
+  Aabb abox = mesh_bounds(a);
+  abox.lo = abox.lo - Vec3{reach, reach, reach};
+  abox.hi = abox.hi + Vec3{reach, reach, reach};
+  bp->abox = abox;
+  PlaneSlab* slabs = arena.allocate_array<PlaneSlab>(nta);
+  Aabb* boxes = arena.allocate_array<Aabb>(nta);
+  if (slabs == nullptr || boxes == nullptr) return arena.exhausted_status();
+  for (uint32_t t = 0; t < nta; ++t) {
+    const Triangle& at = a.triangles[t];
+    const Vec3& p0 = a.vertices[at.v[0]];
+    const Vec3& p1 = a.vertices[at.v[1]];
+    const Vec3& p2 = a.vertices[at.v[2]];
+    slabs[t] = slab_of(p0, p1, p2);
+    boxes[t] = Aabb{};
+    boxes[t].add(p0);
+    boxes[t].add(p1);
+    boxes[t].add(p2);
+    boxes[t].lo = boxes[t].lo - Vec3{reach, reach, reach};
+    boxes[t].hi = boxes[t].hi + Vec3{reach, reach, reach};
+  }
+  // About 16 cells per triangle of A (a power-of-two size, so every platform picks the same
+  // grid), cubic cells, at most 256 a side.
+  const Vec3 ext = abox.extent();
+  const double volume = (ext.x + 1e-9) * (ext.y + 1e-9) * (ext.z + 1e-9);
+  const double target = 16.0 * nta + 64.0;
+  double h = 1.0;
+  while (volume / (h * h * h) > target && h < 1e30) h *= 2.0;
+  while (volume / (h * h * h) < target / 8.0 && h > 1e-30) h *= 0.5;
+  uint32_t* dim = bp->dim;
+  for (int k = 0; k < 3; ++k) {
+    double cells = ext[k] / h;
+    if (cells > 256.0) h = ext[k] / 256.0;
+  }
+  for (int k = 0; k < 3; ++k) {
+    const double cells = ext[k] / h;
+    dim[k] = cells < 1.0 ? 1u : (cells >= 256.0 ? 256u : static_cast<uint32_t>(cells) + 1u);
+  }
+  bp->h = h;
+  const double inv_h = 1.0 / h;
+  bp->inv_h = inv_h;
+  const size_t cells = size_t{dim[0]} * dim[1] * dim[2];
+  uint32_t* start = arena.allocate_array<uint32_t>(cells + 1);
+  if (start == nullptr) return arena.exhausted_status();
+  std::memset(start, 0, (cells + 1) * sizeof(uint32_t));
+  // The cells a triangle's plane passes through within its box, column by column along the
+  // plane's dominant axis: in each column of cells the plane spans one interval of that axis
+  // (its values at the column's four corners bound it), widened by a hair and by twice the
+  // reach (a plane moved by `reach` moves at most sqrt(3) reach along its dominant axis).
+  auto for_each_cell = [&](uint32_t t, auto&& visit) {
+    uint32_t lo[3], hi[3];
+    bp->cell_range(boxes[t], lo, hi);
+    const Vec3& n = slabs[t].n;
+    const double an[3] = {n.x < 0 ? -n.x : n.x, n.y < 0 ? -n.y : n.y, n.z < 0 ? -n.z : n.z};
+    const int w = (an[0] >= an[1] && an[0] >= an[2]) ? 0 : (an[1] >= an[2] ? 1 : 2);
+    const int u = (w + 1) % 3, v = (w + 2) % 3;
+    uint32_t idx[3];
+    for (idx[u] = lo[u]; idx[u] <= hi[u]; ++idx[u]) {
+      for (idx[v] = lo[v]; idx[v] <= hi[v]; ++idx[v]) {
+        double wmin = HUGE_VAL, wmax = -HUGE_VAL;
+        for (int corner = 0; corner < 4; ++corner) {
+          const double cu = abox.lo[u] + (idx[u] + static_cast<uint32_t>(corner & 1)) * h;
+          const double cv = abox.lo[v] + (idx[v] + static_cast<uint32_t>(corner >> 1)) * h;
+          const double cw = (slabs[t].d - n[u] * cu - n[v] * cv) / n[w];
+          wmin = cw < wmin ? cw : wmin;
+          wmax = cw > wmax ? cw : wmax;
+        }
+        const double pad = 1e-9 * ((wmin < 0 ? -wmin : wmin) + (wmax < 0 ? -wmax : wmax) + 1.0) +
+                           1e-6 * h + 2.0 * reach;
+        const double l = (wmin - pad - abox.lo[w]) * inv_h, r = (wmax + pad - abox.lo[w]) * inv_h;
+        uint32_t k0 = l <= 0.0 ? 0u : (l >= dim[w] - 1.0 ? dim[w] - 1 : static_cast<uint32_t>(l));
+        uint32_t k1 = r <= 0.0 ? 0u : (r >= dim[w] - 1.0 ? dim[w] - 1 : static_cast<uint32_t>(r));
+        if (k0 < lo[w]) k0 = lo[w];
+        if (k1 > hi[w]) k1 = hi[w];
+        for (idx[w] = k0; idx[w] <= k1; ++idx[w]) {
+          visit((size_t{idx[2]} * dim[1] + idx[1]) * dim[0] + idx[0]);
+        }
+      }
+    }
+  };
+  // Two passes over A: count, then fill.
+  for (uint32_t t = 0; t < nta; ++t) for_each_cell(t, [&](size_t c) { ++start[c + 1]; });
+  for (size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+  uint32_t* items = arena.allocate_array<uint32_t>(start[cells]);
+  if (items == nullptr && start[cells] > 0) return arena.exhausted_status();
+  for (uint32_t t = 0; t < nta; ++t) for_each_cell(t, [&](size_t c) { items[start[c]++] = t; });
+  for (size_t c = cells; c > 0; --c) start[c] = start[c - 1];
+  start[0] = 0;
+  bp->start = start;
+  bp->items = items;
+
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "boolean: cull", 0, 1));
+  // B's vertices against A's box once (6 outcode bits, 64 when not finite); a triangle is near
+  // when no side of the box has all three of its corners beyond it.
+  uint8_t* outcode = arena.allocate_array<uint8_t>(nvb);
+  bp->near_b = arena.allocate_array<uint8_t>(ntb);
+  if ((outcode == nullptr && nvb > 0) || (bp->near_b == nullptr && ntb > 0)) {
+    return arena.exhausted_status();
+  }
+  const Vec3* vb = b.vertices.data();
+  for (uint32_t v = 0; v < nvb; ++v) {
+    const Vec3& p = vb[v];
+    outcode[v] = static_cast<uint8_t>(
+        (p.x < abox.lo.x ? 1 : 0) | (p.x > abox.hi.x ? 2 : 0) | (p.y < abox.lo.y ? 4 : 0) |
+        (p.y > abox.hi.y ? 8 : 0) | (p.z < abox.lo.z ? 16 : 0) | (p.z > abox.hi.z ? 32 : 0) |
+        (is_finite(p) ? 0 : 64));
+  }
+  bp->near_ids.bind(&arena);
+  for (uint32_t t = 0; t < ntb; ++t) {
+    const Triangle& tri = b.triangles[t];
+    if (tri.v[0] >= nvb || tri.v[1] >= nvb || tri.v[2] >= nvb) {
+      return make_error(StatusCode::kInvalidMesh, "triangle ", t,
+                        " of B refers to a vertex that does not exist")
+          .at_index(t);
+    }
+    const uint32_t o0 = outcode[tri.v[0]], o1 = outcode[tri.v[1]], o2 = outcode[tri.v[2]];
+    if (((o0 | o1 | o2) & 64u) != 0) {
+      return make_error(StatusCode::kNonFinite, "triangle ", t, " of B has a vertex that is not finite")
+          .at_index(t);
+    }
+    const bool is_near = ((o0 & o1 & o2) & 63u) == 0;
+    bp->near_b[t] = is_near ? 1 : 0;
+    if (!is_near) continue;
+    if (float32_output &&
+        !(is_float32_exact(vb[tri.v[0]]) && is_float32_exact(vb[tri.v[1]]) &&
+          is_float32_exact(vb[tri.v[2]]))) {
+      return make_error(StatusCode::kInvalidArgument, "triangle ", t,
+                        " of B has a vertex that is not a float32 value: for STL output B must "
+                        "be as read from STL (its vertices are kept bit for bit); turn "
+                        "float32_output off for double meshes")
+          .at_index(t);
+    }
+    if (!bp->near_ids.push_back(t)) return arena.exhausted_status();
+  }
+  return Status::ok();
+}
+
+// Candidate pairs through the broad phase's grid; each decided exactly (intersect_pair) with A
+// as this attempt has it.
 Status BooleanRun::find_hits() {
   const Mesh& b = *in_.b;
-  const Aabb abox = mesh_bounds(*in_.a);
   const uint32_t nta = in_.nta;
   PlaneSlab* slabs = arena_.allocate_array<PlaneSlab>(nta);
   PlaneFilter* filters = arena_.allocate_array<PlaneFilter>(nta);
@@ -382,130 +548,17 @@ Status BooleanRun::find_hits() {
     boxes[t].add(p2);
     stamp[t] = ~0u;
   }
-  // About 16 cells per triangle of A (a power-of-two size, so every platform picks the same
-  // grid), cubic cells, at most 256 a side.
-  const Vec3 ext = abox.extent();
-  const double volume = (ext.x + 1e-9) * (ext.y + 1e-9) * (ext.z + 1e-9);
-  const double target = 16.0 * nta + 64.0;
-  double h = 1.0;
-  while (volume / (h * h * h) > target && h < 1e30) h *= 2.0;
-  while (volume / (h * h * h) < target / 8.0 && h > 1e-30) h *= 0.5;
-  uint32_t dim[3];
-  for (int k = 0; k < 3; ++k) {
-    double cells = ext[k] / h;
-    if (cells > 256.0) h = ext[k] / 256.0;
-  }
-  for (int k = 0; k < 3; ++k) {
-    const double cells = ext[k] / h;
-    dim[k] = cells < 1.0 ? 1u : (cells >= 256.0 ? 256u : static_cast<uint32_t>(cells) + 1u);
-  }
-  const double inv_h = 1.0 / h;
-  auto cell_range = [&](const Aabb& box, uint32_t lo[3], uint32_t hi[3]) {
-    for (int k = 0; k < 3; ++k) {
-      const double l = (box.lo[k] - abox.lo[k]) * inv_h, u = (box.hi[k] - abox.lo[k]) * inv_h;
-      lo[k] = l <= 0.0 ? 0u : (l >= dim[k] - 1.0 ? dim[k] - 1 : static_cast<uint32_t>(l));
-      hi[k] = u <= 0.0 ? 0u : (u >= dim[k] - 1.0 ? dim[k] - 1 : static_cast<uint32_t>(u));
-    }
-  };
-  const size_t cells = size_t{dim[0]} * dim[1] * dim[2];
-  uint32_t* start = arena_.allocate_array<uint32_t>(cells + 1);
-  if (start == nullptr) return arena_.exhausted_status();
-  std::memset(start, 0, (cells + 1) * sizeof(uint32_t));
-  // The cells a triangle's plane passes through within its box, column by column along the
-  // plane's dominant axis: in each column of cells the plane spans one interval of that axis
-  // (its values at the column's four corners bound it), widened by a hair (a filter, not a
-  // decision).
-  auto for_each_cell = [&](uint32_t t, auto&& visit) {
-    uint32_t lo[3], hi[3];
-    cell_range(boxes[t], lo, hi);
-    const Vec3& n = slabs[t].n;
-    const double an[3] = {n.x < 0 ? -n.x : n.x, n.y < 0 ? -n.y : n.y, n.z < 0 ? -n.z : n.z};
-    const int w = (an[0] >= an[1] && an[0] >= an[2]) ? 0 : (an[1] >= an[2] ? 1 : 2);
-    const int u = (w + 1) % 3, v = (w + 2) % 3;
-    uint32_t idx[3];
-    for (idx[u] = lo[u]; idx[u] <= hi[u]; ++idx[u]) {
-      for (idx[v] = lo[v]; idx[v] <= hi[v]; ++idx[v]) {
-        double wmin = HUGE_VAL, wmax = -HUGE_VAL;
-        for (int corner = 0; corner < 4; ++corner) {
-          const double cu = abox.lo[u] + (idx[u] + static_cast<uint32_t>(corner & 1)) * h;
-          const double cv = abox.lo[v] + (idx[v] + static_cast<uint32_t>(corner >> 1)) * h;
-          const double cw = (slabs[t].d - n[u] * cu - n[v] * cv) / n[w];
-          wmin = cw < wmin ? cw : wmin;
-          wmax = cw > wmax ? cw : wmax;
-        }
-        const double pad = 1e-9 * ((wmin < 0 ? -wmin : wmin) + (wmax < 0 ? -wmax : wmax) + 1.0) + 1e-6 * h;
-        const double l = (wmin - pad - abox.lo[w]) * inv_h, r = (wmax + pad - abox.lo[w]) * inv_h;
-        uint32_t k0 = l <= 0.0 ? 0u : (l >= dim[w] - 1.0 ? dim[w] - 1 : static_cast<uint32_t>(l));
-        uint32_t k1 = r <= 0.0 ? 0u : (r >= dim[w] - 1.0 ? dim[w] - 1 : static_cast<uint32_t>(r));
-        if (k0 < lo[w]) k0 = lo[w];
-        if (k1 > hi[w]) k1 = hi[w];
-        for (idx[w] = k0; idx[w] <= k1; ++idx[w]) {
-          visit((size_t{idx[2]} * dim[1] + idx[1]) * dim[0] + idx[0]);
-        }
-      }
-    }
-  };
-  // Two passes over A: count, then fill.
-  uint32_t* items = nullptr;
-  for (uint32_t t = 0; t < nta; ++t) for_each_cell(t, [&](size_t c) { ++start[c + 1]; });
-  for (size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
-  items = arena_.allocate_array<uint32_t>(start[cells]);
-  if (items == nullptr && start[cells] > 0) return arena_.exhausted_status();
-  for (uint32_t t = 0; t < nta; ++t) for_each_cell(t, [&](size_t c) { items[start[c]++] = t; });
-  for (size_t c = cells; c > 0; --c) start[c] = start[c - 1];
-  start[0] = 0;
-
-  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: cull", 0, 1));
-  // B's vertices against A's box once (6 outcode bits, 64 when not finite); a triangle is near
-  // when no side of the box has all three of its corners beyond it.
-  const uint32_t nvb = in_.nvb;
-  uint8_t* outcode = arena_.allocate_array<uint8_t>(nvb);
-  near_b_ = arena_.allocate_array<uint8_t>(in_.ntb);
-  if ((outcode == nullptr && nvb > 0) || (near_b_ == nullptr && in_.ntb > 0)) {
-    return arena_.exhausted_status();
-  }
+  const uint32_t* dim = bp_.dim;
+  const uint32_t* start = bp_.start;
+  const uint32_t* items = bp_.items;
   const Vec3* vb = b.vertices.data();
-  for (uint32_t v = 0; v < nvb; ++v) {
-    const Vec3& p = vb[v];
-    outcode[v] = static_cast<uint8_t>(
-        (p.x < abox.lo.x ? 1 : 0) | (p.x > abox.hi.x ? 2 : 0) | (p.y < abox.lo.y ? 4 : 0) |
-        (p.y > abox.hi.y ? 8 : 0) | (p.z < abox.lo.z ? 16 : 0) | (p.z > abox.hi.z ? 32 : 0) |
-        (is_finite(p) ? 0 : 64));
-  }
-  near_ids_.bind(&arena_);
-  for (uint32_t t = 0; t < in_.ntb; ++t) {
-    const Triangle& tri = b.triangles[t];
-    if (tri.v[0] >= nvb || tri.v[1] >= nvb || tri.v[2] >= nvb) {
-      return make_error(StatusCode::kInvalidMesh, "triangle ", t,
-                        " of B refers to a vertex that does not exist")
-          .at_index(t);
-    }
-    const uint32_t o0 = outcode[tri.v[0]], o1 = outcode[tri.v[1]], o2 = outcode[tri.v[2]];
-    if (((o0 | o1 | o2) & 64u) != 0) {
-      return make_error(StatusCode::kNonFinite, "triangle ", t, " of B has a vertex that is not finite")
-          .at_index(t);
-    }
-    const bool is_near = ((o0 & o1 & o2) & 63u) == 0;
-    near_b_[t] = is_near ? 1 : 0;
-    if (!is_near) continue;
-    if (options_.float32_output &&
-        !(is_float32_exact(vb[tri.v[0]]) && is_float32_exact(vb[tri.v[1]]) &&
-          is_float32_exact(vb[tri.v[2]]))) {
-      return make_error(StatusCode::kInvalidArgument, "triangle ", t,
-                        " of B has a vertex that is not a float32 value: for STL output B must "
-                        "be as read from STL (its vertices are kept bit for bit); turn "
-                        "float32_output off for double meshes")
-          .at_index(t);
-    }
-    if (!near_ids_.push_back(t)) return arena_.exhausted_status();
-  }
-  st_.near_b_triangles = near_ids_.size();
+  st_.near_b_triangles = bp_.near_ids.size();
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", 0, 1));
   hits_.bind(&arena_);
-  for (size_t ni = 0; ni < near_ids_.size(); ++ni) {
-    const uint32_t t = near_ids_[ni];
+  for (size_t ni = 0; ni < bp_.near_ids.size(); ++ni) {
+    const uint32_t t = bp_.near_ids[ni];
     if ((ni & 65535u) == 0) {
-      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", ni, near_ids_.size()));
+      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", ni, bp_.near_ids.size()));
     }
     const Triangle& tri = b.triangles[t];
     Aabb box;
@@ -513,7 +566,7 @@ Status BooleanRun::find_hits() {
     box.add(vb[tri.v[1]]);
     box.add(vb[tri.v[2]]);
     uint32_t lo[3], hi[3];
-    cell_range(box, lo, hi);
+    bp_.cell_range(box, lo, hi);
     bool flat_checked = false;
     PlaneFilter pb{};
     for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
@@ -990,8 +1043,8 @@ Status BooleanRun::flood(bool side_a) {
     if (t >= toff && t - toff < nt) cut[t - toff] = 1;
   }
   // The triangles that take part: all of A's, B's near ones; the uncut ones are flooded.
-  const uint32_t count = side_a ? nt : static_cast<uint32_t>(near_ids_.size());
-  auto id = [&](uint32_t i) { return side_a ? i : near_ids_[i]; };
+  const uint32_t count = side_a ? nt : static_cast<uint32_t>(bp_.near_ids.size());
+  auto id = [&](uint32_t i) { return side_a ? i : bp_.near_ids[i]; };
   // Vertex -> uncut triangles (compressed rows).
   std::memset(start, 0, (size_t{nv} + 1) * sizeof(uint32_t));
   uint64_t uses = 0;
@@ -1092,10 +1145,10 @@ Status BooleanRun::assemble(Mesh* result) {
   // for each kept one.
   auto visit = [&](auto&& emit) -> Status {
     size_t piece = 0;
-    const uint32_t count = in_.nta + static_cast<uint32_t>(near_ids_.size());
+    const uint32_t count = in_.nta + static_cast<uint32_t>(bp_.near_ids.size());
     for (uint32_t i = 0; i < count; ++i) {
       const bool is_a = i < in_.nta;
-      const uint32_t t = is_a ? i : in_.nta + near_ids_[i - in_.nta];
+      const uint32_t t = is_a ? i : in_.nta + bp_.near_ids[i - in_.nta];
       const bool keep_inside = is_a ? keep_a_inside : keep_b_inside;
       const bool reverse = !is_a && reverse_b;
       if (piece < tris_.size() && tris_[piece].src == t) {
@@ -1118,7 +1171,7 @@ Status BooleanRun::assemble(Mesh* result) {
     }
     if (op_ == BooleanOp::kUnion) {
       for (uint32_t t = 0; t < in_.ntb; ++t) {
-        if (near_b_[t] != 0) continue;
+        if (bp_.near_b[t] != 0) continue;
         const Triangle& bt = in_.b->triangles[t];
         emit(in_.nva + bt.v[0], in_.nva + bt.v[1], in_.nva + bt.v[2], false);
       }
@@ -1165,7 +1218,7 @@ Status BooleanRun::run(Mesh* result) {
       return make_error(StatusCode::kInvalidMesh, "A must be a solid: ", s.message());
     }
   }
-  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: pairs", 0, in_.ntb));
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", 0, in_.ntb));
   SPLINTCORE_RETURN_IF_ERROR(find_hits());
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: points", 0, 1));
   SPLINTCORE_RETURN_IF_ERROR(number_points());
@@ -1245,11 +1298,20 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
   double step = 1.0 / 65536.0;
   while (step * 8388608.0 <= max_abs && step < 1e300) step *= 2.0;  // ulp(max_abs) <= step
   const Arena::Marker start = arena.mark();
+  // What a nudge can move A by, with its float32 rounding: the broad phase covers all attempts.
+  const double reach = (options.max_nudges + 1.0) * step * 8.0;
+  Broadphase bp;
+  Status s = report_progress(ctx, "boolean: grid", 0, 1);
+  if (s.is_ok()) s = build_broadphase(ctx, a, b, reach, options.float32_output, &bp);
+  if (!s.is_ok()) {
+    arena.rewind(start);
+    return s;
+  }
+  const Arena::Marker attempts_start = arena.mark();
   Mesh result;
-  Status s;
   for (uint32_t attempt = 0; attempt <= options.max_nudges; ++attempt) {
     *stats = BooleanStats{};
-    arena.rewind(start);
+    arena.rewind(attempts_start);
     Mesh moved;
     const Mesh* pa = &a;
     // For STL output A is used as it will be written: rounded to float32 (a no-op for A read
@@ -1284,7 +1346,7 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
     in.nta = static_cast<uint32_t>(a.triangles.size());
     in.ntb = static_cast<uint32_t>(b.triangles.size());
     result = Mesh();
-    BooleanRun run(ctx, in, options, stats);
+    BooleanRun run(ctx, in, bp, options, stats);
     s = run.run(&result);
     if (s.code() != StatusCode::kUnsupported) break;
   }
