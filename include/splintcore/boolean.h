@@ -4,34 +4,45 @@
 // assembled from the pieces an operation keeps. Floor 5: core, geometry, mesh, distance.
 //
 // How it decides, and what it promises:
-// - Only the part of B near A is touched: B's triangles whose boxes miss A's box are never
-//   split or classified (they are outside A); the rest are paired with A's triangles through a
-//   bounding volume hierarchy over A.
-// - Each candidate pair is decided by exact predicates (orient3d on the input coordinates).
-//   An intersection point is named symbolically (an edge of one mesh and a triangle of the
-//   other) and computed once, so every triangle that shares it gets the same vertex: the result
-//   has no cracks by construction. Its coordinates are the rounded double of the exact point.
-// - Each cut triangle is re-triangulated on its own plane (projected to 2-D, constrained
-//   Delaunay with exact orient2d/incircle on the rounded points) along its intersection
-//   segments, so the two meshes share every intersection edge.
-// - Pieces are grouped into patches (connected without crossing an intersection edge). A patch
-//   next to an intersection edge is classified exactly by the side of the other triangle's plane
-//   it lies on, derived from the same predicates; the rest (whole shells that do not cross the
-//   other mesh) by the generalised winding number of the other mesh. Two exact answers that
-//   disagree on one patch are an error, never a guess.
-// - Input vertices are copied bit for bit; every output vertex is an input vertex or a rounded
-//   intersection point of an edge of one mesh with a triangle of the other.
+// - Only the part of B near A is touched: B's vertices are tested once against A's box, and
+//   B's triangles whose corners all lie beyond one side of it are never split or classified
+//   (they are outside A). The rest are paired with A's triangles through a uniform grid over
+//   A (A is the small mesh: the splint base), with plane and edge-plane filters.
+// - Each candidate pair is decided by exact predicates (orient3d on the input coordinates,
+//   after filters that only answer when they are certain). An intersection point is named
+//   symbolically (an edge of one mesh and a triangle of the other) and computed once, so every
+//   triangle that shares it gets the same vertex: the result has no cracks by construction.
+// - Each cut triangle is re-triangulated on its own plane (projected to 2-D along the normal's
+//   dominant axis; one chord: a triangle and a Delaunay-split quadrilateral; otherwise a
+//   constrained Delaunay triangulation with exact orient2d/incircle) along its intersection
+//   segments, so the two meshes share every intersection edge. With float32 output the
+//   points are rounded to float32 BEFORE this, so the triangulations are valid for the
+//   coordinates the STL will hold.
+// - Classification: each piece lies on a known side of the segment it touches (the direction
+//   of a segment is fixed by the same exact predicates), pieces of one triangle joined by
+//   other edges share their side, and the corners of cut triangles pass their side to the
+//   uncut triangles by flooding through each mesh; a part no cut reaches (a whole shell) gets
+//   one generalised winding number of the other mesh. Two answers that disagree are an error,
+//   never a guess.
+// - Input vertices are copied bit for bit; every other output vertex is an intersection point
+//   of an edge of one mesh with a triangle of the other (rounded to float32 for STL output).
 // - Degenerate contacts (a vertex exactly on the other surface, edges that cross exactly,
-//   coplanar overlapping triangles) are reported as kUnsupported naming the two triangles, in
-//   this version; nothing is written from such an input. The caller may move B by a tiny
-//   rigid offset and retry (see splintcore boolean --help).
-// - The result is checked (closed, edge-manifold, consistently oriented, no degenerate
-//   triangle) before it is returned for the difference and the intersection; a failure is an
-//   error, never a silently broken mesh.
+//   coplanar overlapping triangles) and configurations that float32 rounding would break (two
+//   points rounded together, a flat or folded piece) are resolved by one defined rule: A (never
+//   B) is translated by a tiny fixed offset (BooleanOptions::max_nudges: k * 2^-16 mm *
+//   (1, 3, 7), at most about 1 um) and the operation is run again; the offset used is in
+//   BooleanStats::nudge. With max_nudges = 0 they are kUnsupported errors naming the two
+//   triangles. Coplanar overlaps therefore leave a film as thin as the offset instead of being
+//   merged exactly (not yet handled by an exact coplanar rule).
+// - The result is checked before it is returned: no two points rounded together, every edge
+//   used twice in opposite directions (closed, edge-manifold, oriented), no flat triangle,
+//   positive volume, and (check_self_intersection) no self-intersection, exactly. A failure
+//   is an error, never a silently broken mesh.
 //
-// B may hold several shells (one per tooth); they must not overlap each other inside A (the
-// pieces of one shell inside another are not removed in this version). B may be open (a scan)
-// when its border lies outside A.
+// B may hold several shells (one per tooth); they must not overlap each other inside A
+// (detected as an inconsistent classification: an error). B may be open (a scan) when its
+// border lies outside A. With float32 output B's vertices must be float32 values (as read from
+// STL; a moved jaw must be rounded first), since they are kept bit for bit.
 #ifndef SPLINTCORE_BOOLEAN_H
 #define SPLINTCORE_BOOLEAN_H
 
@@ -84,11 +95,13 @@ struct BooleanStats {
 
 // Computes options.op of the closed mesh A and the mesh B into `out` (empty).
 // A must be a valid solid (closed, edge-manifold, outward). Temporaries are returned before it
-// finishes; the result is moved down over them. Errors: kInvalidMesh (A is not a solid, a
-// degenerate triangle of B meets A: named), kUnsupported (a degenerate contact: the two
-// triangles are named), kArenaExhausted (the message says how much was needed at that point),
-// kLimitExceeded (more than 2^31 vertices or triangles in all), kCancelled, kInternal (a
-// result that fails its own check: please report it with the inputs).
+// finishes; the result is moved down over them. Single-threaded (ctx.executor is not used yet),
+// so trivially the same at any thread count. Errors: kInvalidMesh (A is not a solid, a
+// degenerate triangle of B meets A, an index out of range: named), kNonFinite, kInvalidArgument
+// (B not float32 with float32 output), kUnsupported (a degenerate or float32-fragile contact
+// that no nudge resolved, overlapping shells of B: named), kArenaExhausted (the message says how
+// much was needed at that point), kLimitExceeded (more than 2^31 vertices or triangles),
+// kCancelled, kInternal (a result that fails its own check: please report it with the inputs).
 Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
                     const BooleanOptions& options, Mesh* out, BooleanStats* stats);
 

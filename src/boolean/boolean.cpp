@@ -1211,11 +1211,11 @@ Status BooleanRun::assemble(Mesh* result) {
 
 Status BooleanRun::run(Mesh* result) {
   {
-    MeshReport report;
-    SPLINTCORE_RETURN_IF_ERROR(check_mesh(ctx_, *in_.a, &report));
-    Status s = require_valid_solid(report);
+    Status s = check_closed_oriented(ctx_, *in_.a, nullptr);
+    if (s.code() == StatusCode::kArenaExhausted) return s;
     if (!s.is_ok()) {
-      return make_error(StatusCode::kInvalidMesh, "A must be a solid: ", s.message());
+      return make_error(StatusCode::kInvalidMesh, "A must be a solid: ", s.message())
+          .at_index(s.index());
     }
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", 0, in_.ntb));
