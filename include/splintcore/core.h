@@ -49,6 +49,9 @@ enum class StatusCode : uint8_t {
   kInternal,         // a bug: please report it
 };
 
+// The library's version, "MAJOR.MINOR.PATCH" (for reports that must say what made a file).
+const char* library_version();
+
 // Short stable name of a code, e.g. "arena_exhausted" (used in JSON output).
 const char* status_code_name(StatusCode code);
 

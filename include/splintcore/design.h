@@ -3,9 +3,11 @@
 #ifndef SPLINTCORE_DESIGN_H
 #define SPLINTCORE_DESIGN_H
 
+#include "splintcore/boolean.h"
 #include "splintcore/core.h"
 #include "splintcore/geometry.h"
 #include "splintcore/json.h"
+#include "splintcore/printer.h"
 #include "splintcore/spline.h"
 
 namespace splintcore {
@@ -46,6 +48,30 @@ Status parse_case(const Context& ctx, const char* text, size_t length, const cha
 
 // Picks -> lines -> base, as the case says. `out` must be empty.
 Status build_case_base(const Context& ctx, const CaseFile& c, Mesh* out, BaseReport* report);
+
+// ---------------------------------------------------------------------------------------------
+// The design pipeline as far as it has landed: the jaws repositioned by the plan, the base from
+// the picks, the Boolean difference base minus jaws, the printer check. (Interference
+// elimination and CT reconstruction join when their issues land.)
+
+struct DesignReport {
+  uint64_t jaw_triangles = 0;   // all jaws together, as given
+  BaseReport base;
+  BooleanStats boolean;
+  PrintCheck print;
+  const char* printer = "";     // the profile used
+};
+
+// The splint for case `c` from its jaws (jaws[i] is the mesh of c.jaws[i], as read: it is not
+// changed). Each jaw is moved by its transform and rounded to float32 (what a moved jaw's STL
+// holds; the Boolean keeps these bits), the base is built, the jaws are subtracted, and the
+// result is checked for the case's printer (not moved: it stays in the case's frame). `splint`
+// must be empty. Stage progress goes to ctx.progress ("design: jaws", "design: base",
+// "design: boolean", "design: printer"). Errors: those of the stages (naming the stage and,
+// for a jaw, its index and role), kInvalidArgument (jaw count differs from the case, unknown
+// printer), and kInvalidMesh when the result is not printable (require_printable's reason).
+Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* splint,
+                     DesignReport* report);
 
 }  // namespace splintcore
 

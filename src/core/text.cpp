@@ -38,4 +38,9 @@ bool is_plain_name(const char* text, size_t max_length) {
   return true;
 }
 
+#ifndef SPLINTCORE_VERSION
+#error "SPLINTCORE_VERSION is set by CMakeLists.txt"
+#endif
+const char* library_version() { return SPLINTCORE_VERSION; }
+
 }  // namespace splintcore

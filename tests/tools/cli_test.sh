@@ -160,5 +160,26 @@ check "tiny cap says arena exhausted" -- grep -qi "arena exhausted" "$work/err"
 check "no output after exhaustion" -- test ! -e "$work/small.stl"
 expect_exit 1 "boolean on a missing file" -- "$tool" boolean --difference "$work/base.stl" "$work/none.stl" -o "$work/none-out.stl"
 
+# The pipeline on the paper-scale case with the 6,000-triangle phantom jaws: the splint's bytes
+# are the Boolean golden's.
+mkdir -p "$work/case" "$work/design"
+"$tool" phantom --triangles 6000 -o "$work/case" >/dev/null
+cp "$fixtures/cases/paper_scale.json" "$work/case/case.json"
+expect_exit 2 "design without -o" -- "$tool" design "$work/case/case.json"
+expect_exit 0 "design" -- "$tool" design "$work/case/case.json" -o "$work/design"
+check "design wrote the splint" -- test -s "$work/design/splint.stl"
+check "design wrote the report" -- json_ok "$work/design/report.json"
+golden=$(grep "boolean:paper_scale-phantom6000" "$fixtures/golden.sha256" | cut -d' ' -f1)
+check "design splint has the golden bytes" -- grep -q "\"splint_sha256\":\"$golden\"" "$work/design/report.json"
+check "report has the case hash" -- grep -q '"case_sha256":"[0-9a-f]\{64\}"' "$work/design/report.json"
+check "report has the stages" -- grep -q '"stage":"boolean"' "$work/design/report.json"
+expect_exit 0 "the designed splint is printable" -- "$tool" check "$work/design/splint.stl"
+rm "$work/case/mandible.stl"
+mkdir -p "$work/design2"
+expect_exit 1 "design with a missing jaw" -- "$tool" design "$work/case/case.json" -o "$work/design2"
+check "missing jaw named" -- grep -q "mandible.stl" "$work/err"
+check "no splint after a failure" -- test ! -e "$work/design2/splint.stl"
+check "no report after a failure" -- test ! -e "$work/design2/report.json"
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -1,6 +1,8 @@
 // splintcore: the command-line program. One subcommand per stage of the method; each takes
 // --help, --json, --memory-cap SIZE and --threads N, exits 0 on success, 1 when the input is
 // rejected (or a check fails, or the memory cap is too small), 2 on a usage error.
+#include <unistd.h>
+
 #include <charconv>
 #include <cstdio>
 #include <cstdlib>
@@ -40,6 +42,8 @@ const char kUsage[] =
     "  boolean --difference A.stl B.stl... -o OUT.stl   splint base minus jaws (or --union,\n"
     "                                       --intersection)\n"
     "  phantom --triangles N -o DIR         synthetic maxilla.stl and mandible.stl\n"
+    "  design CASE.json -o OUTDIR           the splint: jaws moved, base, base minus jaws,\n"
+    "                                       printer check, splint.stl and report.json\n"
     "\n"
     "options of every command:\n"
     "  --help            this text for the command\n"
@@ -112,6 +116,20 @@ const char kPhantomUsage[] =
     "triangles per jaw (2000..16000000, within 1%), in occlusion, in the frame of\n"
     "fixtures/cases/paper_scale.json: with that case's mandible transform (2 mm down) its base\n"
     "cuts 1.3-1.5 mm into every crown. The bytes depend only on N.\n";
+
+const char kDesignUsage[] =
+    "usage: splintcore design CASE.json -o OUTDIR [--json] [--memory-cap SIZE] [--threads N]\n"
+    "\n"
+    "Runs the method on a case file (docs/case-format.md): reads the jaws it names (paths\n"
+    "relative to the case file), moves each by its transform (rounded to float32, as a moved\n"
+    "jaw's STL holds it), builds the base from the picks, subtracts the jaws (exact Boolean),\n"
+    "checks the result for the case's printer, and writes OUTDIR/splint.stl (or the case's\n"
+    "output.splint) and OUTDIR/report.json (or output.report), each atomically. The report holds\n"
+    "what an auditor needs to reproduce the run: library version, SHA-256 of the case and of\n"
+    "every input, every parameter as used, each stage's time, the peak arena, each check, and\n"
+    "the splint's SHA-256. Progress goes to stderr when it is a terminal. Interference\n"
+    "elimination and CT input join when their issues land.\n"
+    "Exit status: 0 splint written, 1 rejected (the message names the stage), 2 usage.\n";
 
 struct Options {
   bool help = false;
@@ -830,6 +848,242 @@ int run_phantom(int argc, char** argv) {
   return kExitOk;
 }
 
+// Stage times and peak arena per stage from the progress callback (tools only: the clock).
+struct DesignClock {
+  Arena* arena = nullptr;
+  bool print = false;
+  std::vector<std::string> names;
+  std::vector<double> seconds;
+  std::vector<uint64_t> peaks;
+  std::string current;
+  double since = 0;
+  static bool report(void* user, const char* stage, uint64_t, uint64_t) {
+    DesignClock* c = static_cast<DesignClock*>(user);
+    if (std::strncmp(stage, "design: ", 8) != 0 || c->current == stage) return true;
+    const double now = monotonic_seconds();
+    if (!c->current.empty()) {
+      c->names.push_back(c->current.substr(8));
+      c->seconds.push_back(now - c->since);
+      c->peaks.push_back(c->arena->high_water());
+      if (c->print) std::fprintf(stderr, " %.3f s\n", now - c->since);
+    }
+    c->current = stage;
+    c->since = now;
+    if (c->print && c->current != "design: done") std::fprintf(stderr, "%s...", stage + 8);
+    return true;
+  }
+};
+
+std::string hex_sha256(const void* data, size_t size) {
+  Sha256 sha;
+  sha.update(data, size);
+  uint8_t digest[32];
+  sha.finish(digest);
+  char hex[65];
+  Sha256::to_hex(digest, hex);
+  return hex;
+}
+
+bool read_whole_file(const std::string& path, std::vector<uint8_t>* out) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) return false;
+  out->clear();
+  uint8_t buffer[1 << 16];
+  size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) out->insert(out->end(), buffer, buffer + n);
+  const bool ok = std::ferror(f) == 0;
+  std::fclose(f);
+  return ok;
+}
+
+Status write_bytes_atomically(const std::string& path, const std::string& bytes) {
+  AtomicFile file;
+  SPLINTCORE_RETURN_IF_ERROR(file.open(path.c_str()));
+  ByteSink sink = file.sink();
+  if (!sink.write(sink.user, reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size())) {
+    return Status::error(StatusCode::kIoError, "cannot write").in_file(path.c_str());
+  }
+  return file.commit();
+}
+
+int run_design(int argc, char** argv) {
+  Options o;
+  int early = parse_options(argc, argv, kDesignUsage, true, &o);
+  if (early >= 0) return early;
+  if (o.positional.size() != 1) return usage_error("design takes one case file", kDesignUsage);
+  if (o.output == nullptr) return usage_error("design needs -o OUTDIR", kDesignUsage);
+  Run run(o);
+  if (!run.has_memory()) return no_memory(o, "design");
+  Arena& arena = run.arena;
+  const double t0 = run.start;
+  const std::string case_path = o.positional[0];
+  std::vector<uint8_t> case_bytes;
+  if (!read_whole_file(case_path, &case_bytes)) {
+    return rejected(o, "design", Status::error(StatusCode::kIoError, "cannot read the case file")
+                                     .in_file(case_path.c_str()), &arena);
+  }
+  CaseFile c;
+  Status s = parse_case(run.ctx, reinterpret_cast<const char*>(case_bytes.data()),
+                        case_bytes.size(), case_path.c_str(), &c);
+  if (!s.is_ok()) return rejected(o, "design", s, &arena);
+  const size_t slash = case_path.find_last_of('/');
+  const std::string folder = slash == std::string::npos ? "" : case_path.substr(0, slash + 1);
+
+  DesignClock clock;
+  clock.arena = &arena;
+  clock.print = isatty(2) != 0 && !o.json;
+  Progress progress;
+  progress.report = &DesignClock::report;
+  progress.user = &clock;
+  const Context ctx(&arena, &run.threads.executor(), &progress);
+
+  // The jaws, as read (their bytes hashed for the report).
+  std::vector<std::string> jaw_paths, jaw_hashes;
+  std::vector<Mesh> jaws;
+  for (const CaseJaw& j : c.jaws) {
+    const std::string path = j.mesh[0] == '/' ? std::string(j.mesh) : folder + j.mesh;
+    std::vector<uint8_t> bytes;
+    if (!read_whole_file(path, &bytes)) {
+      return rejected(o, "design", Status::error(StatusCode::kIoError, "cannot read the jaw mesh")
+                                       .in_file(path.c_str()), &arena);
+    }
+    MemorySource ms{bytes.data(), bytes.size(), 0, 0};
+    Mesh m;
+    s = read_stl_mesh(ctx, memory_source(&ms, path.c_str()), StlReadOptions{}, &m, nullptr);
+    if (!s.is_ok()) return rejected(o, "design", s, &arena);
+    jaw_paths.push_back(path);
+    jaw_hashes.push_back(hex_sha256(bytes.data(), bytes.size()));
+    jaws.push_back(m);
+  }
+  const double t_read = monotonic_seconds();
+  Mesh splint;
+  DesignReport report;
+  s = design_splint(ctx, c, Span<const Mesh>(jaws.data(), jaws.size()), &splint, &report);
+  if (clock.print && !s.is_ok()) std::fprintf(stderr, " failed\n");
+  if (!s.is_ok()) return rejected(o, "design", s.in_file(case_path.c_str()), &arena);
+  const double t_design = monotonic_seconds();
+
+  // The splint's bytes: hashed, then written atomically.
+  std::vector<uint8_t> stl(84 + 50 * splint.triangles.size());
+  MemorySink sink{stl.data(), stl.size(), 0, 0};
+  s = write_stl(ctx, splint, memory_sink(&sink), StlWriteOptions{});
+  if (!s.is_ok()) return rejected(o, "design", s, &arena);
+  stl.resize(static_cast<size_t>(sink.size));
+  const std::string out_dir = o.output;
+  const std::string splint_path =
+      out_dir + "/" + (c.output_splint != nullptr ? c.output_splint : "splint.stl");
+  const std::string report_path =
+      out_dir + "/" + (c.output_report != nullptr ? c.output_report : "report.json");
+  const std::string splint_hash = hex_sha256(stl.data(), stl.size());
+  s = write_bytes_atomically(splint_path, std::string(stl.begin(), stl.end()));
+  if (!s.is_ok()) return rejected(o, "design", s, &arena);
+  const double t_end = monotonic_seconds();
+
+  JsonObject j;
+  j.add("command", "design");
+  j.add_status(Status::ok());
+  j.add("library_version", library_version());
+  j.add("case", case_path);
+  j.add("case_id", c.case_id);
+  j.add("case_sha256", hex_sha256(case_bytes.data(), case_bytes.size()));
+  std::string inputs = "[";
+  for (size_t i = 0; i < jaw_paths.size(); ++i) {
+    JsonObject r;
+    r.add("role", c.jaws[i].role);
+    r.add("mesh", jaw_paths[i]);
+    r.add("sha256", jaw_hashes[i]);
+    r.add("triangles", static_cast<uint64_t>(jaws[i].triangles.size()));
+    const RigidTransform& x = c.jaws[i].transform;
+    std::string m = "[";
+    for (int row = 0; row < 3; ++row) {
+      for (int col = 0; col < 3; ++col) m += cli::json_number(x.r[row][col]) + ",";
+      m += cli::json_number(x.t[row]) + ",";
+    }
+    m += "0,0,0,1]";
+    r.add_raw("transform", m);
+    inputs += (i > 0 ? "," : "") + r.str();
+  }
+  inputs += "]";
+  j.add_raw("inputs", inputs);
+  JsonObject params;
+  params.add("occlusal_normal", c.occlusal_normal);
+  params.add("spacing_mm", c.base.spacing_mm);
+  params.add("corner_radius_mm", c.base.corner_radius_mm);
+  params.add("corner_segments", static_cast<uint64_t>(c.base.corner_segments));
+  params.add("upper_picks", static_cast<uint64_t>(c.upper.size()));
+  params.add("lower_picks", static_cast<uint64_t>(c.lower.size()));
+  params.add("printer", report.printer);
+  params.add("memory_cap_bytes", o.memory_cap);
+  params.add("threads", static_cast<uint64_t>(o.threads));
+  params.add("boolean_float32_output", true);
+  params.add("boolean_max_nudges", static_cast<uint64_t>(BooleanOptions{}.max_nudges));
+  if (c.has_insertion_direction) params.add("insertion_direction", c.insertion_direction);
+  j.add_raw("parameters", params.str());
+  std::string stages = "[";
+  for (size_t i = 0; i < clock.names.size(); ++i) {
+    JsonObject r;
+    r.add("stage", clock.names[i]);
+    r.add("time_s", clock.seconds[i]);
+    r.add("peak_arena_bytes", clock.peaks[i]);
+    stages += (i > 0 ? "," : "") + r.str();
+  }
+  stages += "]";
+  j.add_raw("stages", stages);
+  JsonObject checks;
+  checks.add("base_sections", static_cast<uint64_t>(report.base.sections));
+  checks.add("base_triangles_self_intersection_candidates", report.base.self_intersection_candidates);
+  checks.add("boolean_intersecting_pairs", report.boolean.intersecting_pairs);
+  checks.add("boolean_intersection_points", report.boolean.intersection_points);
+  checks.add("boolean_attempts", static_cast<uint64_t>(report.boolean.attempts));
+  checks.add("boolean_nudge_mm", report.boolean.nudge);
+  checks.add("self_intersection_free", true);
+  checks.add("closed", report.print.mesh.closed());
+  checks.add("edge_manifold", report.print.mesh.edge_manifold());
+  checks.add("outward", report.print.mesh.outward());
+  checks.add("shells", report.print.mesh.shells);
+  checks.add("fits_tray", report.print.fits);
+  checks.add("fits_tray_rotated", report.print.fits_rotated);
+  checks.add("layers", report.print.layers);
+  checks.add("printable", report.print.printable);
+  j.add_raw("checks", checks.str());
+  JsonObject out;
+  out.add("splint", splint_path);
+  out.add("splint_sha256", splint_hash);
+  out.add("triangles", static_cast<uint64_t>(splint.triangles.size()));
+  out.add("volume_mm3", report.print.mesh.volume);
+  out.add("extent_mm", report.print.extent);
+  j.add_raw("output", out.str());
+  j.add("read_s", t_read - t0);
+  j.add("design_s", t_design - t_read);
+  j.add("time_s", t_end - t0);
+  j.add("peak_arena_bytes", static_cast<uint64_t>(arena.high_water()));
+  s = write_bytes_atomically(report_path, j.str() + "\n");
+  if (!s.is_ok()) return rejected(o, "design", s, &arena);
+
+  if (o.json) {
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("case %s (%s): %zu jaw(s), %llu triangles; base %u sections, %zu + %zu picks\n",
+                case_path.c_str(), c.case_id, jaws.size(),
+                static_cast<unsigned long long>(report.jaw_triangles), report.base.sections,
+                c.upper.size(), c.lower.size());
+    std::printf("boolean: %llu crossing pairs, %llu intersection points, %u attempt(s)\n",
+                static_cast<unsigned long long>(report.boolean.intersecting_pairs),
+                static_cast<unsigned long long>(report.boolean.intersection_points),
+                report.boolean.attempts);
+    std::printf("splint: %zu triangles, %.3f mm^3, closed, manifold, no self-intersection; "
+                "printable on %s (%s)\n",
+                splint.triangles.size(), report.print.mesh.volume, report.printer,
+                report.print.fits ? "fits the tray" : "fits turned 90 degrees");
+    std::printf("wrote %s (sha256 %s) and %s\n", splint_path.c_str(), splint_hash.c_str(),
+                report_path.c_str());
+    std::printf("time: read %.3f s, design %.3f s, total %.3f s; peak arena %llu bytes\n",
+                t_read - t0, t_design - t_read, t_end - t0,
+                static_cast<unsigned long long>(arena.high_water()));
+  }
+  return kExitOk;
+}
+
 }  // namespace
 }  // namespace splintcore
 
@@ -851,6 +1105,7 @@ int main(int argc, char** argv) {
   if (std::strcmp(command, "distance") == 0) return run_distance(argc - 2, argv + 2);
   if (std::strcmp(command, "boolean") == 0) return run_boolean(argc - 2, argv + 2);
   if (std::strcmp(command, "phantom") == 0) return run_phantom(argc - 2, argv + 2);
+  if (std::strcmp(command, "design") == 0) return run_design(argc - 2, argv + 2);
   std::fprintf(stderr, "splintcore: unknown command '%s'\n\n%s", command, kUsage);
   return cli::kExitUsage;
 }

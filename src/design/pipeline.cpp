@@ -1,0 +1,133 @@
+// The design pipeline: jaws moved by the plan, base, Boolean difference, printer check.
+#include "splintcore/design.h"
+
+namespace splintcore {
+
+namespace {
+
+Status stage_error(const Status& s, const char* stage) {
+  if (s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) return s;
+  Status e = make_error(s.code(), stage, ": ", s.message());
+  if (s.index() != kNoPosition) e.at_index(s.index());
+  return e;
+}
+
+}  // namespace
+
+Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* splint,
+                     DesignReport* report) {
+  Arena& arena = *ctx.arena;
+  *report = DesignReport{};
+  if (!splint->vertices.empty() || !splint->triangles.empty()) {
+    return Status::error(StatusCode::kInvalidArgument, "design_splint: output mesh must be empty");
+  }
+  if (jaws.size() != c.jaws.size()) {
+    return make_error(StatusCode::kInvalidArgument, "design: the case names ", c.jaws.size(),
+                      " jaws but ", jaws.size(), " meshes were given");
+  }
+  if (jaws.empty()) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "design: the case has no jaws to subtract (\"jaws\" is empty)");
+  }
+  const PrinterProfile* profile = find_printer_profile(c.printer);
+  if (profile == nullptr) {
+    return make_error(StatusCode::kInvalidArgument, "design: unknown printer \"", c.printer,
+                      "\" (known: eden260)");
+  }
+  report->printer = profile->name;
+  const Arena::Marker start = arena.mark();
+  // A stage report may cancel: then nothing stays in the arena either.
+  auto stage = [&](const char* name) -> Status {
+    Status st = report_progress(ctx, name, 0, 1);
+    if (!st.is_ok()) arena.rewind(start);
+    return st;
+  };
+
+  // The jaws, moved and rounded, in one mesh (B of the Boolean).
+  SPLINTCORE_RETURN_IF_ERROR(stage("design: jaws"));
+  uint64_t nv = 0, nt = 0;
+  for (const Mesh& m : jaws) {
+    nv += m.vertices.size();
+    nt += m.triangles.size();
+  }
+  report->jaw_triangles = nt;
+  if (nv >= (uint64_t{1} << 31) || nt >= (uint64_t{1} << 31)) {
+    return make_error(StatusCode::kLimitExceeded, "design: the jaws have ", nt, " triangles and ",
+                      nv, " vertices; at most 2^31 each");
+  }
+  Mesh b(&arena);
+  if (!b.vertices.reserve(static_cast<size_t>(nv)) || !b.triangles.reserve(static_cast<size_t>(nt))) {
+    arena.rewind(start);
+    return arena.exhausted_status();
+  }
+  for (size_t j = 0; j < jaws.size(); ++j) {
+    const uint32_t off = static_cast<uint32_t>(b.vertices.size());
+    const uint32_t count = static_cast<uint32_t>(jaws[j].vertices.size());
+    for (const Vec3& v : jaws[j].vertices) {
+      Vec3 p = c.jaws[j].transform.apply_point(v);
+      if (!round_to_float32(&p)) {
+        arena.rewind(start);
+        return make_error(StatusCode::kLimitExceeded, "design: jaw ", j, " (", c.jaws[j].role,
+                          ") moved beyond float32 range")
+            .at_index(j);
+      }
+      (void)b.vertices.push_back(p);
+    }
+    for (const Triangle& t : jaws[j].triangles) {
+      if (t.v[0] >= count || t.v[1] >= count || t.v[2] >= count) {
+        arena.rewind(start);
+        return make_error(StatusCode::kInvalidMesh, "design: jaw ", j, " (", c.jaws[j].role,
+                          ") has a triangle that refers to a vertex that does not exist")
+            .at_index(j);
+      }
+      (void)b.triangles.push_back(Triangle{{t.v[0] + off, t.v[1] + off, t.v[2] + off}});
+    }
+  }
+
+  // The base, then the Boolean: the base's temporaries go, the base stays until the result is
+  // moved down over everything.
+  SPLINTCORE_RETURN_IF_ERROR(stage("design: base"));
+  Mesh base(&arena);
+  Status s = build_case_base(ctx, c, &base, &report->base);
+  if (!s.is_ok()) {
+    arena.rewind(start);
+    return stage_error(s, "base");
+  }
+  SPLINTCORE_RETURN_IF_ERROR(stage("design: boolean"));
+  Mesh cut;
+  BooleanOptions bo;
+  bo.op = BooleanOp::kDifference;
+  s = mesh_boolean(ctx, base, b, bo, &cut, &report->boolean);
+  if (!s.is_ok()) {
+    arena.rewind(start);
+    return stage_error(s, "boolean (base minus jaws)");
+  }
+  SPLINTCORE_RETURN_IF_ERROR(stage("design: printer"));
+  PrintCheckOptions pco;
+  pco.place_on_tray = true;  // for the fit only: the splint itself stays in the case's frame
+  s = check_printable(ctx, cut, *profile, pco, &report->print);
+  if (s.is_ok()) s = require_printable(report->print, *profile);
+  if (!s.is_ok()) {
+    arena.rewind(start);
+    return stage_error(s, "printer check");
+  }
+  // Move the splint down over the jaws' copy and the base (triangles first: see
+  // read_stl_mesh for why that order is safe).
+  const size_t t_count = cut.triangles.size();
+  const size_t v_count = cut.vertices.size();
+  const Triangle* src_t = cut.triangles.data();
+  const Vec3* src_v = cut.vertices.data();
+  arena.rewind(start);
+  Triangle* tris = arena.allocate_array<Triangle>(t_count);
+  if (t_count > 0) std::memmove(static_cast<void*>(tris), src_t, t_count * sizeof(Triangle));
+  Vec3* verts = arena.allocate_array<Vec3>(v_count);
+  if (v_count > 0) std::memmove(static_cast<void*>(verts), src_v, v_count * sizeof(Vec3));
+  SPLINTCORE_ASSERT((tris != nullptr || t_count == 0) && (verts != nullptr || v_count == 0));
+  splint->bind(&arena);
+  splint->triangles.adopt(tris, t_count, t_count);
+  splint->vertices.adopt(verts, v_count, v_count);
+  (void)report_progress(ctx, "design: done", 1, 1);  // the splint is made: too late to cancel
+  return Status::ok();
+}
+
+}  // namespace splintcore
