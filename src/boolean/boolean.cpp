@@ -1055,8 +1055,14 @@ Status BooleanRun::flood(bool side_a) {
     uses += 3;
   }
   for (uint32_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+  // start[] holds uint32 prefix sums of the uses, and rows is sized by them (size_t is 32 bits
+  // on 32-bit targets): more than 2^32 - 1 uses must fail, not wrap.
+  if (uses > UINT32_MAX) {
+    return Status::error(StatusCode::kLimitExceeded,
+                         "boolean: more than 4294967295 vertex uses in one mesh");
+  }
   uint32_t* fill = arena_.allocate_array<uint32_t>(nv);
-  uint32_t* rows = arena_.allocate_array<uint32_t>(uses);
+  uint32_t* rows = arena_.allocate_array<uint32_t>(static_cast<size_t>(uses));
   uint32_t* queue = arena_.allocate_array<uint32_t>(nv);
   if (((fill == nullptr || queue == nullptr) && nv > 0) || (rows == nullptr && uses > 0)) {
     return arena_.exhausted_status();

@@ -695,9 +695,20 @@ Status cdt(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> seg
 
   // ---- the output first (it must survive the temporaries), then the temporaries.
   const uint64_t expected = 2 * uint64_t{n} - boundary_count - 2;  // b + 2 i - 2
-  if (!out->reserve(out->size() + expected)) return out->arena()->exhausted_status();
+  const uint64_t out_total = uint64_t{out->size()} + expected;
+  if (out_total > SIZE_MAX) {  // 32-bit targets: fail, never wrap
+    return make_error(StatusCode::kLimitExceeded, "cdt: ", out_total,
+                      " output triangles are more than this target can address");
+  }
+  if (!out->reserve(static_cast<size_t>(out_total))) return out->arena()->exhausted_status();
   ArenaScope scope(arena);
-  const Sizes z = sizes_for(n);
+  // n <= kMaxPoints, so every count (at most 3 * (2n + 1)) fits a 32-bit size_t.
+  static_assert(3 * (2 * kMaxPoints + 1) <= UINT32_MAX, "CDT counts must fit 32 bits");
+  const Sizes z64 = sizes_for(n);
+  const struct {
+    size_t tris, verts, edges;
+  } z = {static_cast<size_t>(z64.tris), static_cast<size_t>(z64.verts),
+         static_cast<size_t>(z64.edges)};
   Work w;
   w.n = n;
   CdtPoint* pts = arena.allocate_array<CdtPoint>(z.verts);

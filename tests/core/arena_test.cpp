@@ -66,11 +66,14 @@ TEST(Arena, ZeroCapArenaFailsCleanly) {
   Arena arena(nullptr, 0);
   EXPECT_EQ(arena.allocate(1, 1), nullptr);
   EXPECT_EQ(arena.exhausted_status().code(), StatusCode::kArenaExhausted);
-  EXPECT_EQ(arena.allocate_array<double>(size_t{1} << 62), nullptr);  // overflowing size
+  // Overflowing size: 2^62 * 8 overflows 64 bits; on 32-bit targets 2^30 * 8 exceeds SIZE_MAX.
+  EXPECT_EQ(arena.allocate_array<double>(SIZE_MAX / 4 + 1), nullptr);
 }
 
 TEST(Arena, ScopeRewinds) {
-  unsigned char buffer[256];
+  // Aligned as the arena aligns (16): a plain char array is only 8-aligned on 32-bit ARM, and
+  // the padding would count in used().
+  alignas(Arena::kDefaultAlignment) unsigned char buffer[256];
   Arena arena(buffer, sizeof(buffer));
   ASSERT_NE(arena.allocate(16), nullptr);
   {

@@ -97,10 +97,15 @@ enum class Arithmetic { kAuto, kBigInt };
 
 namespace {
 
+// __int128 is a fast path only: 32-bit targets (ARMv7, Cortex-M) have no __int128 and use BigInt.
+#ifdef __SIZEOF_INT128__
 __extension__ typedef __int128 Int128;
+#endif
 
 int sgn(const BigInt& v) { return v.sign(); }
+#ifdef __SIZEOF_INT128__
 int sgn(Int128 v) { return (v > 0) - (v < 0); }
+#endif
 
 template <class Z>
 struct V3 {
@@ -167,9 +172,11 @@ void convert(const DyadicParts& d, int emin, BigInt* out) {
   *out = BigInt::from_magnitude(static_cast<uint64_t>(m < 0 ? -m : m),
                                 static_cast<unsigned>(m == 0 ? 0 : d.exponent - emin), m < 0);
 }
+#ifdef __SIZEOF_INT128__
 void convert(const DyadicParts& d, int emin, Int128* out) {
   *out = d.mantissa == 0 ? 0 : static_cast<Int128>(d.mantissa) * (Int128{1} << (d.exponent - emin));
 }
+#endif
 
 // The points as integer vectors on the common scale.
 template <class Z>
@@ -378,7 +385,13 @@ bool segment_meets_z(const std::vector<V3<Z>>& P, Info* info) {
 }
 
 bool use_int128(const Scaled& s, Arithmetic arithmetic) {
+#ifdef __SIZEOF_INT128__
   return arithmetic == Arithmetic::kAuto && s.max_bits <= 40;
+#else
+  (void)s;
+  (void)arithmetic;
+  return false;
+#endif
 }
 
 }  // namespace
@@ -398,7 +411,11 @@ bool triangles_meet_with(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3
     return false;
   }
   const Scaled s = scale(in, 6);
+#ifdef __SIZEOF_INT128__
   if (use_int128(s, arithmetic)) return triangles_meet_z(integer_points<Int128>(s, 6), info);
+#else
+  (void)arithmetic;
+#endif
   return triangles_meet_z(integer_points<BigInt>(s, 6), info);
 }
 
@@ -411,9 +428,13 @@ bool segment_meets_triangle_with(const Vec3& p, const Vec3& q, const Vec3& a, co
   if (info != nullptr) *info = Info{};
   if (boxes_apart(in, 2, in + 2, 3)) return false;
   const Scaled s = scale(in, 5);
+#ifdef __SIZEOF_INT128__
   if (use_int128(s, arithmetic)) {
     return segment_meets_z(integer_points<Int128>(s, 5), info);
   }
+#else
+  (void)arithmetic;
+#endif
   return segment_meets_z(integer_points<BigInt>(s, 5), info);
 }
 
@@ -820,6 +841,9 @@ TEST(TriangleOracle, ConsistentWithItsSegmentTest) {
 // The __int128 shortcut and BigInt give the same answers (on random and constructed inputs,
 // small enough for the shortcut or not).
 TEST(TriangleOracle, ArithmeticPathsAgree) {
+#ifndef __SIZEOF_INT128__
+  GTEST_SKIP() << "no __int128 on this target: the oracle runs on BigInt only";
+#endif
   Rng rng(13);
   int64_t narrow = 0, cases = 0;
   for (int i = 0; i < 8000 / kRandomDivisor; ++i) {
