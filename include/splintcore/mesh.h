@@ -148,6 +148,13 @@ uint64_t find_self_intersections_bound(uint64_t triangle_count);
 Status find_self_intersections(const Context& ctx, const Mesh& mesh, uint64_t max_pairs,
                                SelfIntersectionReport* report);
 
+// Moves a mesh that sits above `start` in the arena (a result built after its temporaries)
+// down to `start`, rewinding everything else, and points `out` at it. The mesh's triangles
+// must have been allocated before its vertices (then no destination lies above bytes not yet
+// copied; memmove handles the overlap). Never fails: the moved mesh needs no more room than it
+// had.
+void move_mesh_down(Arena& arena, const Arena::Marker& start, const Mesh& mesh, Mesh* out);
+
 // Applies a rigid transform to every vertex in place.
 void transform_mesh(const RigidTransform& x, Mesh* mesh);
 

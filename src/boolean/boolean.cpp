@@ -1365,21 +1365,8 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
     }
     return s;
   }
-  // Move the result down over the temporaries (triangles were allocated before vertices, so
-  // no destination lies above bytes not yet copied; memmove handles the overlap).
-  const size_t t_count = result.triangles.size();
-  const size_t v_count = result.vertices.size();
-  const Triangle* src_t = result.triangles.data();
-  const Vec3* src_v = result.vertices.data();
-  arena.rewind(start);
-  Triangle* tris = arena.allocate_array<Triangle>(t_count);
-  if (t_count > 0) std::memmove(static_cast<void*>(tris), src_t, t_count * sizeof(Triangle));
-  Vec3* verts = arena.allocate_array<Vec3>(v_count);
-  if (v_count > 0) std::memmove(static_cast<void*>(verts), src_v, v_count * sizeof(Vec3));
-  SPLINTCORE_ASSERT((tris != nullptr || t_count == 0) && (verts != nullptr || v_count == 0));
-  out->bind(&arena);
-  out->triangles.adopt(tris, t_count, t_count);
-  out->vertices.adopt(verts, v_count, v_count);
+  // The result down over the temporaries (its triangles were allocated before its vertices).
+  move_mesh_down(arena, start, result, out);
   return Status::ok();
 }
 

@@ -111,21 +111,8 @@ Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
     arena.rewind(start);
     return stage_error(s, "printer check");
   }
-  // Move the splint down over the jaws' copy and the base (triangles first: see
-  // read_stl_mesh for why that order is safe).
-  const size_t t_count = cut.triangles.size();
-  const size_t v_count = cut.vertices.size();
-  const Triangle* src_t = cut.triangles.data();
-  const Vec3* src_v = cut.vertices.data();
-  arena.rewind(start);
-  Triangle* tris = arena.allocate_array<Triangle>(t_count);
-  if (t_count > 0) std::memmove(static_cast<void*>(tris), src_t, t_count * sizeof(Triangle));
-  Vec3* verts = arena.allocate_array<Vec3>(v_count);
-  if (v_count > 0) std::memmove(static_cast<void*>(verts), src_v, v_count * sizeof(Vec3));
-  SPLINTCORE_ASSERT((tris != nullptr || t_count == 0) && (verts != nullptr || v_count == 0));
-  splint->bind(&arena);
-  splint->triangles.adopt(tris, t_count, t_count);
-  splint->vertices.adopt(verts, v_count, v_count);
+  // The splint down over the jaws' copy and the base.
+  move_mesh_down(arena, start, cut, splint);
   (void)report_progress(ctx, "design: done", 1, 1);  // the splint is made: too late to cancel
   return Status::ok();
 }

@@ -459,20 +459,8 @@ Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlRead
     arena.rewind(start);
     return located(s, source);
   }
-  const size_t nt = welded.triangles.size();
-  const size_t nv = welded.vertices.size();
-  // Move the mesh down over the soup and the read buffer. Allocation after the rewind runs in
-  // the same order as before, so a destination never lies above live bytes not yet copied
-  // (blocks above a rewind stay cached, never released) and memmove handles any overlap.
-  arena.rewind(start);
-  Triangle* tris = arena.allocate_array<Triangle>(nt);
-  if (nt > 0) std::memmove(static_cast<void*>(tris), welded.triangles.data(), nt * sizeof(Triangle));
-  Vec3* verts = arena.allocate_array<Vec3>(nv);
-  if (nv > 0) std::memmove(static_cast<void*>(verts), welded.vertices.data(), nv * sizeof(Vec3));
-  SPLINTCORE_ASSERT((tris != nullptr || nt == 0) && (verts != nullptr || nv == 0));
-  out->bind(&arena);
-  out->triangles.adopt(tris, nt, nt);
-  out->vertices.adopt(verts, nv, nv);
+  // The mesh down over the soup and the read buffer (weld_exact allocates triangles first).
+  move_mesh_down(arena, start, welded, out);
   return Status::ok();
 }
 
