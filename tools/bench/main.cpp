@@ -85,12 +85,7 @@ std::vector<uint8_t> to_binary_stl(const std::vector<SoupTriangle>& soup) {
 
 std::vector<uint8_t> read_whole(const std::string& path) {
   std::vector<uint8_t> out;
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) return out;
-  uint8_t buf[1 << 16];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof(buf), f)) > 0) out.insert(out.end(), buf, buf + n);
-  std::fclose(f);
+  if (!cli::read_whole_file(path, &out)) out.clear();
   return out;
 }
 

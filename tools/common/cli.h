@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "splintcore/core.h"
 #include "splintcore/geometry.h"
@@ -44,6 +45,9 @@ class JsonObject {
 
 std::string json_escape(const char* text);
 std::string json_number(double value);
+
+// Reads a whole file into `out`; false when it cannot be opened or read.
+bool read_whole_file(const std::string& path, std::vector<uint8_t>* out);
 
 // Prints "splintcore: <formatted status>" to stderr.
 void print_error(const Status& status);

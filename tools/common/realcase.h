@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "cli.h"
 #include "splintcore/core.h"
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
@@ -31,16 +32,11 @@ struct RealCase {
 };
 
 inline bool read_tooth(const std::string& path, Tooth* t, std::string* error) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) {
-    *error = "cannot open " + path;
+  std::vector<uint8_t> bytes;
+  if (!cli::read_whole_file(path, &bytes)) {
+    *error = "cannot read " + path;
     return false;
   }
-  std::vector<uint8_t> bytes;
-  uint8_t buf[1 << 16];
-  size_t n = 0;
-  while ((n = std::fread(buf, 1, sizeof(buf), f)) > 0) bytes.insert(bytes.end(), buf, buf + n);
-  std::fclose(f);
   std::vector<unsigned char> memory(bytes.size() * 4 + (size_t{8} << 20));
   Arena arena(memory.data(), memory.size());
   MemorySource ms;

@@ -889,18 +889,6 @@ std::string hex_sha256(const void* data, size_t size) {
   return hex;
 }
 
-bool read_whole_file(const std::string& path, std::vector<uint8_t>* out) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) return false;
-  out->clear();
-  uint8_t buffer[1 << 16];
-  size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) out->insert(out->end(), buffer, buffer + n);
-  const bool ok = std::ferror(f) == 0;
-  std::fclose(f);
-  return ok;
-}
-
 Status write_bytes_atomically(const std::string& path, const std::string& bytes) {
   AtomicFile file;
   SPLINTCORE_RETURN_IF_ERROR(file.open(path.c_str()));
@@ -923,7 +911,7 @@ int run_design(int argc, char** argv) {
   const double t0 = run.start;
   const std::string case_path = o.positional[0];
   std::vector<uint8_t> case_bytes;
-  if (!read_whole_file(case_path, &case_bytes)) {
+  if (!cli::read_whole_file(case_path, &case_bytes)) {
     return rejected(o, "design", Status::error(StatusCode::kIoError, "cannot read the case file")
                                      .in_file(case_path.c_str()), &arena);
   }
@@ -948,7 +936,7 @@ int run_design(int argc, char** argv) {
   for (const CaseJaw& j : c.jaws) {
     const std::string path = j.mesh[0] == '/' ? std::string(j.mesh) : folder + j.mesh;
     std::vector<uint8_t> bytes;
-    if (!read_whole_file(path, &bytes)) {
+    if (!cli::read_whole_file(path, &bytes)) {
       return rejected(o, "design", Status::error(StatusCode::kIoError, "cannot read the jaw mesh")
                                        .in_file(path.c_str()), &arena);
     }
