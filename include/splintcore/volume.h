@@ -25,7 +25,7 @@
 //   t = (iso - f0) / (f1 - f0) in double from the lower endpoint (f0 there, f1 at the upper),
 //   clamped to [kEdgeMargin, 1 - kEdgeMargin] (so no vertex sits on a sample, and no triangle
 //   has zero area even where samples equal iso), at
-//   origin[a] + spacing * (i[a] + t * d[a]) per axis (d[a] = 0: origin[a] + spacing * i[a],
+//   origin[a] + spacing[a] * (i[a] + t * d[a]) per axis (d[a] = 0: origin[a] + spacing[a] * i[a],
 //   the sample position sample_sdf uses). Edges to a sample beyond the grid use t =
 //   kEdgeMargin from the sample inside the grid. The bits are a function of the edge and its
 //   two samples, never of the slab or the cell that computes them.
@@ -44,10 +44,12 @@
 
 namespace splintcore {
 
-// A regular grid: sample (i, j, k) is at origin + spacing * (i, j, k), 0 <= i < nx and so on.
+// A regular grid: sample (i, j, k) is at origin + (spacing.x i, spacing.y j, spacing.z k),
+// 0 <= i < nx and so on. Spacing may differ per axis (CT slices are often thicker than their
+// pixels are wide); the extraction is the same piecewise-linear level set either way.
 struct VolumeGrid {
   Vec3 origin{};
-  double spacing = 0;  // mm, > 0
+  Vec3 spacing{};  // mm between samples along x, y, z, each > 0
   uint32_t nx = 0, ny = 0, nz = 0;
 };
 

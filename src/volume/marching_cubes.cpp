@@ -138,11 +138,12 @@ Status check_grid(const VolumeGrid& g) {
     return make_error(StatusCode::kInvalidArgument, "marching cubes: empty grid (", g.nx, " x ",
                       g.ny, " x ", g.nz, " samples)");
   }
-  if (!(g.spacing > 0) || !is_finite(g.spacing) || !is_finite(g.origin)) {
+  if (!(g.spacing.x > 0) || !(g.spacing.y > 0) || !(g.spacing.z > 0) || !is_finite(g.spacing) ||
+      !is_finite(g.origin)) {
     return make_error(StatusCode::kInvalidArgument,
-                      "marching cubes: the grid spacing must be finite and > 0 and the origin "
-                      "finite (spacing ",
-                      g.spacing, ")");
+                      "marching cubes: the grid spacing must be finite and > 0 on each axis and "
+                      "the origin finite (spacing ",
+                      g.spacing.x, ", ", g.spacing.y, ", ", g.spacing.z, ")");
   }
   return Status::ok();
 }
@@ -190,9 +191,9 @@ inline Vec3 edge_vertex(const Sweep& s, int64_t cx, int64_t cy, int64_t cz, unsi
   const double px = static_cast<double>(cx + static_cast<int64_t>(lo & 1u));
   const double py = static_cast<double>(cy + static_cast<int64_t>((lo >> 1) & 1u));
   const double pz = static_cast<double>(cz + static_cast<int64_t>((lo >> 2) & 1u));
-  return {(d & 1u) ? g.origin.x + g.spacing * (px + t) : g.origin.x + g.spacing * px,
-          (d & 2u) ? g.origin.y + g.spacing * (py + t) : g.origin.y + g.spacing * py,
-          (d & 4u) ? g.origin.z + g.spacing * (pz + t) : g.origin.z + g.spacing * pz};
+  return {(d & 1u) ? g.origin.x + g.spacing.x * (px + t) : g.origin.x + g.spacing.x * px,
+          (d & 2u) ? g.origin.y + g.spacing.y * (py + t) : g.origin.y + g.spacing.y * py,
+          (d & 4u) ? g.origin.z + g.spacing.z * (pz + t) : g.origin.z + g.spacing.z * pz};
 }
 
 // One cell: corners[k] for cube corner k. Emits its tetrahedra's triangles.

@@ -25,6 +25,8 @@ using test::TestArena;
 
 constexpr double kPi = 3.14159265358979323846;
 
+Vec3 uniform(double h) { return Vec3{h, h, h}; }
+
 // A field given by a function of the sample position (in double, rounded to float).
 struct Field {
   VolumeGrid grid;
@@ -53,7 +55,7 @@ Status fill_field(void* user, uint32_t z_begin, uint32_t z_end, Span<float> out)
         if (!field.table.empty()) {
           out[i] = field.table[(size_t{z} * g.ny + y) * g.nx + x];
         } else {
-          const Vec3 p = g.origin + Vec3{g.spacing * x, g.spacing * y, g.spacing * z};
+          const Vec3 p = g.origin + Vec3{g.spacing.x * x, g.spacing.y * y, g.spacing.z * z};
           out[i] = static_cast<float>(field.f(field, p));
         }
       }
@@ -83,11 +85,11 @@ Field sphere(double r, uint32_t cells) {
   Field fd;
   fd.f = sphere_sdf;
   fd.a = r;
-  fd.grid.spacing = 2 * r / cells;
+  fd.grid.spacing = uniform(2 * r / cells);
   const uint32_t n = cells + 4;
   fd.grid.nx = fd.grid.ny = fd.grid.nz = n;
   fd.grid.origin = Vec3{-1.3, 2.1, -0.7};
-  const double h = fd.grid.spacing;
+  const double h = fd.grid.spacing.x;
   fd.center = fd.grid.origin + Vec3{h * n * 0.5 + 0.137 * h, h * n * 0.5 - 0.211 * h,
                                     h * n * 0.5 + 0.093 * h};
   return fd;
@@ -98,7 +100,7 @@ Field torus(double big_r, double small_r, double h) {
   fd.f = torus_sdf;
   fd.a = big_r;
   fd.b = small_r;
-  fd.grid.spacing = h;
+  fd.grid.spacing = uniform(h);
   fd.grid.nx = fd.grid.ny = static_cast<uint32_t>(2 * (big_r + small_r) / h) + 5;
   fd.grid.nz = static_cast<uint32_t>(2 * small_r / h) + 5;
   fd.grid.origin = Vec3{0.0, 0.0, 0.0};
@@ -186,7 +188,7 @@ TEST(MarchingCubes, SphereIsClosedManifoldGenusZeroAndAccurate) {
     EXPECT_EQ(stats.vertices, mesh.vertices.size());
     EXPECT_EQ(stats.triangles, mesh.triangles.size());
     expect_valid_solid(mesh, 0);
-    const double h = fd.grid.spacing;
+    const double h = fd.grid.spacing.x;
     // Every vertex within a small fraction of a voxel of the sphere (linear interpolation of
     // the distance along an edge of length <= sqrt(3) h errs by about h^2 / r).
     double worst = 0;
@@ -199,6 +201,29 @@ TEST(MarchingCubes, SphereIsClosedManifoldGenusZeroAndAccurate) {
     const double measured = mesh_volume(mesh);
     EXPECT_NEAR(measured, exact, 4 * kPi * r * r * (0.25 * h * h / r));
   }
+}
+
+TEST(MarchingCubes, AnisotropicSpacingIsAccurate) {
+  // CT-like voxels: 0.3 x 0.35 mm in plane, 0.6 mm between slices.
+  const double r = 5.0;
+  Field fd = sphere(r, 24);
+  fd.grid.spacing = Vec3{0.3, 0.35, 0.6};
+  fd.grid.nx = 40;
+  fd.grid.ny = 34;
+  fd.grid.nz = 20;
+  fd.center = fd.grid.origin + Vec3{0.3 * 20.1, 0.35 * 16.9, 0.6 * 10.2};
+  TestArena ta(size_t{64} << 20);
+  Mesh mesh;
+  SPLINTCORE_ASSERT_OK(run_mesh(ta.arena, fd, 0, &mesh));
+  expect_valid_solid(mesh, 0);
+  double worst = 0;
+  for (const Vec3& p : mesh.vertices) worst = std::fmax(worst, std::fabs(length(p - fd.center) - r));
+  // Chordal error of the longest edge (the body diagonal, about 0.757 mm): L^2 / (8 r).
+  const double l2 = 0.3 * 0.3 + 0.35 * 0.35 + 0.6 * 0.6;
+  EXPECT_LT(worst, l2 / (8 * r) + 1e-6);
+  EXPECT_GT(worst, 0.0);
+  const double exact = 4.0 / 3.0 * kPi * r * r * r;
+  EXPECT_NEAR(mesh_volume(mesh), exact, 4 * kPi * r * r * (l2 / (8 * r)));
 }
 
 TEST(MarchingCubes, TorusIsGenusOne) {
@@ -406,7 +431,7 @@ TEST(MarchingCubes, FieldTouchingTheBorderIsClosed) {
   Mesh mesh;
   SPLINTCORE_ASSERT_OK(run_mesh(ta.arena, fd, 4, &mesh));
   expect_valid_solid(mesh, 0);
-  const double h = fd.grid.spacing;
+  const double h = fd.grid.spacing.x;
   const VolumeGrid& g = fd.grid;
   for (const Vec3& p : mesh.vertices) {
     for (int a = 0; a < 3; ++a) {
@@ -428,7 +453,7 @@ TEST(MarchingCubes, FieldTouchingTheBorderIsClosed) {
   EXPECT_NEAR(mesh_volume(box), side_x * side_y * side_z, 1e-6 * side_x * side_y * side_z);
   // A single inside sample in a 1 x 1 x 1 grid.
   Field one;
-  one.grid.spacing = 1.0;
+  one.grid.spacing = uniform(1.0);
   one.grid.nx = one.grid.ny = one.grid.nz = 1;
   one.table.assign(1, -1.0f);
   TestArena tc(size_t{1} << 20);
@@ -441,7 +466,7 @@ TEST(MarchingCubes, SamplesExactlyAtIsoGiveNoDegenerateTriangles) {
   // Integer-valued box field on an integer grid: whole planes of samples equal the iso value.
   Field box;
   box.f = box_field;
-  box.grid.spacing = 1.0;
+  box.grid.spacing = uniform(1.0);
   box.grid.nx = box.grid.ny = box.grid.nz = 12;
   box.center = Vec3{5, 6, 5};
   box.a = 3;
@@ -455,7 +480,7 @@ TEST(MarchingCubes, SamplesExactlyAtIsoGiveNoDegenerateTriangles) {
   // A plane through a layer of samples, closed by the border.
   Field plane;
   plane.f = plane_field;
-  plane.grid.spacing = 0.5;
+  plane.grid.spacing = uniform(0.5);
   plane.grid.nx = 7;
   plane.grid.ny = 5;
   plane.grid.nz = 9;
@@ -468,7 +493,7 @@ TEST(MarchingCubes, SamplesExactlyAtIsoGiveNoDegenerateTriangles) {
   std::mt19937_64 rng(20240611);
   for (int round = 0; round < 40; ++round) {
     Field rnd;
-    rnd.grid.spacing = 0.25;
+    rnd.grid.spacing = uniform(0.25);
     rnd.grid.origin = Vec3{1.0, -2.0, 3.0};
     rnd.grid.nx = 3 + static_cast<uint32_t>(rng() % 6);
     rnd.grid.ny = 3 + static_cast<uint32_t>(rng() % 6);
@@ -644,7 +669,10 @@ TEST(MarchingCubes, ErrorsAreCleanAndLeaveNoOutput) {
     EXPECT_EQ(marching_cubes(ctx, empty, source_of(&fd), MarchingCubesOptions{}, none).code(),
               StatusCode::kInvalidArgument);
     VolumeGrid flat = fd.grid;
-    flat.spacing = 0;
+    flat.spacing.z = 0;
+    EXPECT_EQ(marching_cubes(ctx, flat, source_of(&fd), MarchingCubesOptions{}, none).code(),
+              StatusCode::kInvalidArgument);
+    flat.spacing.z = -fd.grid.spacing.x;
     EXPECT_EQ(marching_cubes(ctx, flat, source_of(&fd), MarchingCubesOptions{}, none).code(),
               StatusCode::kInvalidArgument);
     MarchingCubesOptions nan_iso;
