@@ -87,6 +87,12 @@ Status build_distance_index(const Context& ctx, const Mesh& mesh,
 // point-triangle computation in double (about 1e-15 relative).
 bool closest_point(const DistanceIndex& index, const Vec3& q, ClosestPoint* out);
 
+// The closest point of the closed triangle abc to p (Ericson 5.1.5, with a well-conditioned
+// path for slivers): the routine every query above uses. `feature`/`index` (may be null) say
+// which part of the triangle it lies on.
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
+                               Feature* feature = nullptr, uint8_t* index = nullptr);
+
 // Generalised winding number of the mesh at q: 1 inside a closed outward mesh, 0 outside,
 // fractional near holes. `beta` >= 1 is the far-field accuracy (Barill et al.): a node is
 // replaced by its dipole when its distance exceeds beta times its radius; 0 sums every

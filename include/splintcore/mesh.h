@@ -153,7 +153,10 @@ Status find_self_intersections(const Context& ctx, const Mesh& mesh, uint64_t ma
 // must have been allocated before its vertices (then no destination lies above bytes not yet
 // copied; memmove handles the overlap). Never fails: the moved mesh needs no more room than it
 // had.
-void move_mesh_down(Arena& arena, const Arena::Marker& start, const Mesh& mesh, Mesh* out);
+// `vertices_first`: the same for a mesh whose vertices were allocated before its triangles
+// (marching_cubes_mesh's output).
+void move_mesh_down(Arena& arena, const Arena::Marker& start, const Mesh& mesh, Mesh* out,
+                    bool vertices_first = false);
 
 // Applies a rigid transform to every vertex in place.
 void transform_mesh(const RigidTransform& x, Mesh* mesh);

@@ -283,6 +283,17 @@ Vec3 face_normal(const Mesh& mesh, uint32_t t) {
 
 }  // namespace
 
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
+                               Feature* feature, uint8_t* index) {
+  Vec3 out;
+  Feature f;
+  uint8_t i;
+  closest_on_triangle(p, a, b, c, &out, &f, &i);
+  if (feature != nullptr) *feature = f;
+  if (index != nullptr) *index = i;
+  return out;
+}
+
 bool closest_point(const DistanceIndex& index, const Vec3& q, ClosestPoint* out) {
   return closest_within(index, q, HUGE_VAL, out);
 }

@@ -34,16 +34,26 @@ void transform_mesh(const RigidTransform& x, Mesh* mesh) {
   for (Vec3& v : mesh->vertices) v = x.apply_point(v);
 }
 
-void move_mesh_down(Arena& arena, const Arena::Marker& start, const Mesh& mesh, Mesh* out) {
+void move_mesh_down(Arena& arena, const Arena::Marker& start, const Mesh& mesh, Mesh* out,
+                    bool vertices_first) {
   const size_t t_count = mesh.triangles.size();
   const size_t v_count = mesh.vertices.size();
   const Triangle* src_t = mesh.triangles.data();
   const Vec3* src_v = mesh.vertices.data();
   arena.rewind(start);
-  Triangle* tris = arena.allocate_array<Triangle>(t_count);
+  Triangle* tris = nullptr;
+  Vec3* verts = nullptr;
+  // The array allocated first moves first: then no destination lies above bytes not yet copied.
+  if (vertices_first) {
+    verts = arena.allocate_array<Vec3>(v_count);
+    if (v_count > 0) std::memmove(static_cast<void*>(verts), src_v, v_count * sizeof(Vec3));
+  }
+  tris = arena.allocate_array<Triangle>(t_count);
   if (t_count > 0) std::memmove(static_cast<void*>(tris), src_t, t_count * sizeof(Triangle));
-  Vec3* verts = arena.allocate_array<Vec3>(v_count);
-  if (v_count > 0) std::memmove(static_cast<void*>(verts), src_v, v_count * sizeof(Vec3));
+  if (!vertices_first) {
+    verts = arena.allocate_array<Vec3>(v_count);
+    if (v_count > 0) std::memmove(static_cast<void*>(verts), src_v, v_count * sizeof(Vec3));
+  }
   SPLINTCORE_ASSERT((tris != nullptr || t_count == 0) && (verts != nullptr || v_count == 0));
   out->bind(&arena);
   out->triangles.adopt(tris, t_count, t_count);

@@ -1,0 +1,86 @@
+// splintcore blockout: interference (undercut) elimination along an insertion direction
+// (Chen et al. 2016, "The Interference Elimination", Figs. 5-6). Floor 6: core, geometry,
+// mesh, distance, volume.
+//
+// The swept volume of the jaws along the direction d is S = { p + t d : p in J, t >= 0 }: every
+// point a jaw passes through as it moves along d (the paper: each layer contains the layers
+// before it). It is sampled on a grid whose third axis is d, swept in increasing w = p . d,
+// with a 2-D state per column only (memory bounded by the cross-section, not the volume), and
+// meshed by the tiled extractor of volume.h, whose output bytes do not depend on the slab size.
+//
+// The field. For a sample p outside S, the distance to S is exactly
+//   dist(p, S) = min over t >= 0 of dist(p - t d, J),
+// the distance from the half-line below p to J. The sweep keeps it per column as a running
+// minimum of the distances from the column's segments between consecutive layers to J's
+// triangles (continuous in t, so rims and silhouettes that fall between layers are not
+// missed). p is inside S exactly when that half-line meets J, decided by the exact segment-
+// triangle predicate. Inside S the running minimum says nothing about depth: the paper's
+// binary image and a plain running minimum of signed distances both place the surface too far
+// inside (the latter because depth inside J along the column is less than depth inside S).
+// Here an inside sample i next to the surface gets the linear extrapolation of the exact
+// outside field along a grid axis e: f(i) = 2 f(i + e) - f(i + 2 e), taken from the axis with
+// the steepest outside slope, so that the iso-surface crossing on that edge is where the
+// outside distance extrapolates to zero: exact for a plane, second order on curved surfaces.
+// Only triangles facing against d or parallel to it can be the first contact of a column, so
+// the others are skipped.
+#ifndef SPLINTCORE_BLOCKOUT_H
+#define SPLINTCORE_BLOCKOUT_H
+
+#include "splintcore/core.h"
+#include "splintcore/geometry.h"
+#include "splintcore/mesh.h"
+#include "splintcore/volume.h"
+
+namespace splintcore {
+
+struct SweepOptions {
+  // The direction the jaws move in (relative to the splint) as the splint is taken off: the
+  // splint's insertion direction. Any non-zero finite vector; it is normalised. For the
+  // paper's big-end-up cone blocked out along its axis (a cylinder results) it points down.
+  Vec3 direction{0, 0, 1};
+  double voxel = 0.1;       // mm, the grid spacing
+  // How far beyond the jaws' far end (largest p . d) the swept volume is kept, mm; it is closed
+  // there by a flat cap. 0: a cap just past the jaws.
+  double extent = 0;
+  // false: the plain running minimum inside (for measuring the bias it has); true: the
+  // extrapolated inside field described above.
+  bool correct_bias = true;
+  uint32_t layers_per_tile = 0;  // slab size for the extractor (0: automatic); bytes unchanged
+};
+
+struct SweepStats {
+  uint32_t nx = 0, ny = 0, nz = 0;      // the grid (z along the direction)
+  uint64_t voxels = 0;                  // nx * ny * nz
+  uint64_t front_triangles = 0;         // triangles facing against or across d (the rest skip)
+  uint64_t segment_tests = 0;           // column segment against triangle: exact tests
+  uint64_t distance_evaluations = 0;    // column segment to triangle distances
+  uint64_t inside_columns = 0;          // columns that met a jaw
+  uint64_t corrected_samples = 0;       // inside samples given an extrapolated value
+  MarchingCubesStats extraction;
+  Vec3 axis_u{}, axis_v{}, axis_w{};    // the grid's axes in the jaws' frame (axis_w = d)
+};
+
+// Arena bytes the sweep's own state takes for `jaws` (local vertex copies, sorted triangle
+// list, five layers of the field and one of the column state), without the extractor's
+// working set (marching_cubes_working_set) and output.
+uint64_t sweep_state_bytes(uint64_t vertex_count, uint64_t triangle_count, uint32_t nx,
+                           uint32_t ny);
+
+// Streams the surface of the swept volume (outward, closed, in the jaws' frame) to `visitor`.
+// The jaws must have finite vertices; they need not be closed (a column's first contact with
+// any triangle counts), but a closed, outward mesh is what makes S the solid the paper means.
+// Errors: kInvalidArgument (a zero or non-finite direction, voxel not > 0, negative extent, no
+// triangles), kLimitExceeded (a grid above 2^31 samples per axis or 2^62 in all), kNonFinite
+// (a vertex), kArenaExhausted (naming the need), kCancelled, those of marching_cubes().
+// Progress: "sweep" per layer, then the extractor's.
+Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& options,
+                    const MarchingCubesVisitor& visitor, SweepStats* stats = nullptr);
+
+// The same surface as a mesh in ctx.arena (`out` empty; on error the arena's top is back where
+// it was and `out` is empty).
+Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& options,
+                         Mesh* out, SweepStats* stats = nullptr);
+
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_BLOCKOUT_H
