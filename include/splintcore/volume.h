@@ -97,8 +97,10 @@ struct MarchingCubesStats {
 
 // Arena bytes of the sweep's working set with `layers` sample layers per fill call (buffer-mode
 // arena, alignment padding included):
-//   16 + align16(4 nx ny (layers + 1)) + align16(40 (nx + 1)(ny + 1))
-// (the samples of the slab plus the carried layer; ten 32-bit edge ids per grid point of one
+//   16 + align16(4 nx ny (layers + 1)) + align16(8 ceil((nx + 2) / 64) ny (layers + 1))
+//      + align16(40 (nx + 1)(ny + 1))
+// (the samples of the slab plus the carried layer, and their inside bits, one bit per sample
+// with a clear bit beyond each end of a row; ten 32-bit edge ids per grid point of one
 // layer: three in-plane edges on each of the two layers of the current cells, four edges
 // leaving the lower layer upwards). 0 when the grid is empty or the size overflows.
 uint64_t marching_cubes_working_set(const VolumeGrid& grid, uint32_t layers);

@@ -272,40 +272,53 @@ Status make_raw_layer(Sweep& s, uint32_t k) {
 void make_output_layer(Sweep& s, uint32_t k, float* out) {
   const VolumeGrid& g = s.grid;
   const size_t layer = size_t{g.nx} * g.ny;
-  const float* here = s.ring + (k % kRing) * layer;
+  // Raw layers k - 2 .. k + 2 (null: beyond the grid or not made).
+  const float* z[5];
+  for (int dz = -2; dz <= 2; ++dz) {
+    const int64_t kk = static_cast<int64_t>(k) + dz;
+    z[dz + 2] = (kk < 0 || kk >= static_cast<int64_t>(s.raw_done))
+                    ? nullptr
+                    : s.ring + (static_cast<uint64_t>(kk) % kRing) * layer;
+  }
+  const float* here = z[2];
+  std::memcpy(out, here, layer * sizeof(float));
   const float fband = s.fband;
-  for (uint32_t y = 0; y < g.ny; ++y) {
-    for (uint32_t x = 0; x < g.nx; ++x) {
-      const size_t at = size_t{y} * g.nx + x;
-      const float raw = here[at];
-      if (raw > 0.0f) {
-        out[at] = raw;
-        continue;
-      }
+  const int64_t nx = g.nx, ny = g.ny;
+  for (int64_t y = 0; y < ny; ++y) {
+    const size_t row = static_cast<size_t>(y) * g.nx;
+    for (int64_t x = 0; x < nx; ++x) {
+      const size_t at = row + static_cast<size_t>(x);
+      if (here[at] > 0.0f) continue;  // outside: the exact distance, as is
       float value = -fband;
       if (s.correct_bias) {
-        // The steepest axis with two outside samples in the band: extrapolate to this one.
+        // Samples i + e and i + 2 e along each axis direction e (null pointer: beyond).
+        const float* near[6];
+        const float* far[6];
+        const size_t sx = 1, sy = g.nx;
+        near[0] = x + 1 < nx ? here + at + sx : nullptr;
+        far[0] = x + 2 < nx ? here + at + 2 * sx : nullptr;
+        near[1] = x >= 1 ? here + at - sx : nullptr;
+        far[1] = x >= 2 ? here + at - 2 * sx : nullptr;
+        near[2] = y + 1 < ny ? here + at + sy : nullptr;
+        far[2] = y + 2 < ny ? here + at + 2 * sy : nullptr;
+        near[3] = y >= 1 ? here + at - sy : nullptr;
+        far[3] = y >= 2 ? here + at - 2 * sy : nullptr;
+        near[4] = z[3] != nullptr ? z[3] + at : nullptr;
+        far[4] = z[4] != nullptr ? z[4] + at : nullptr;
+        near[5] = z[1] != nullptr ? z[1] + at : nullptr;
+        far[5] = z[0] != nullptr ? z[0] + at : nullptr;
+        // The steepest direction with two outside samples in the band: extrapolate from it.
         double best_slope = 0, best = 0;
         bool found = false;
-        for (int axis = 0; axis < 3; ++axis) {
-          for (int sign = -1; sign <= 1; sign += 2) {
-            int64_t i1[3] = {x, y, k}, i2[3] = {x, y, k};
-            i1[axis] += sign;
-            i2[axis] += 2 * sign;
-            const int64_t n = axis == 0 ? g.nx : (axis == 1 ? g.ny : g.nz);
-            if (i2[axis] < 0 || i2[axis] >= n) continue;
-            if (axis == 2 && static_cast<uint32_t>(i2[2]) >= s.raw_done) continue;
-            const float* l1 = s.ring + (static_cast<uint64_t>(i1[2]) % kRing) * layer;
-            const float* l2 = s.ring + (static_cast<uint64_t>(i2[2]) % kRing) * layer;
-            const float f1 = l1[static_cast<size_t>(i1[1]) * g.nx + static_cast<size_t>(i1[0])];
-            const float f2 = l2[static_cast<size_t>(i2[1]) * g.nx + static_cast<size_t>(i2[0])];
-            if (!(f1 > 0.0f) || !(f2 > f1) || !(f2 < fband)) continue;
-            const double slope = static_cast<double>(f2) - static_cast<double>(f1);
-            if (!found || slope > best_slope) {
-              found = true;
-              best_slope = slope;
-              best = 2.0 * static_cast<double>(f1) - static_cast<double>(f2);
-            }
+        for (int e = 0; e < 6; ++e) {
+          if (near[e] == nullptr || far[e] == nullptr) continue;
+          const float f1 = *near[e], f2 = *far[e];
+          if (!(f1 > 0.0f) || !(f2 > f1) || !(f2 < fband)) continue;
+          const double slope = static_cast<double>(f2) - static_cast<double>(f1);
+          if (!found || slope > best_slope) {
+            found = true;
+            best_slope = slope;
+            best = 2.0 * static_cast<double>(f1) - static_cast<double>(f2);
           }
         }
         if (found) {

@@ -13,6 +13,8 @@
 // leave the lower layer upwards); the upper in-plane table becomes the lower one for the next
 // cell layer. Nothing else is kept, so the output order is the global cell order whatever the
 // slab size. See volume.h for the conventions.
+#include <cmath>
+
 #include "splintcore/volume.h"
 
 namespace splintcore {
@@ -117,11 +119,21 @@ bool align_up(uint64_t v, uint64_t* out) {
   return true;
 }
 
-// Bytes of the sample buffer (layers + 1) and of the edge tables; false on overflow.
+// 64-bit words of one row's inside bits: sample x at bit x + 1, the outside beyond both ends
+// at bits 0 and nx + 1.
+inline uint64_t bit_words(uint32_t nx) { return (uint64_t{nx} + 2 + 63) / 64; }
+
+// Bytes of the sample buffer (layers + 1, with each layer's inside bits) and of the edge
+// tables; false on overflow.
 bool working_parts(const VolumeGrid& g, uint32_t layers, uint64_t* samples, uint64_t* edges) {
-  uint64_t layer = 0, s = 0, e = 0, pts = 0;
+  uint64_t layer = 0, s = 0, e = 0, pts = 0, bits = 0;
   if (!checked_mul(g.nx, g.ny, &layer) || !checked_mul(layer, uint64_t{layers} + 1, &s) ||
       !checked_mul(s, 4, &s) || !align_up(s, &s)) {
+    return false;
+  }
+  if (!checked_mul(bit_words(g.nx) * 8, g.ny, &bits) ||
+      !checked_mul(bits, uint64_t{layers} + 1, &bits) || !align_up(bits, &bits) ||
+      !checked_add(s, bits, &s)) {
     return false;
   }
   if (!checked_mul(uint64_t{g.nx} + 1, uint64_t{g.ny} + 1, &pts) || !checked_mul(pts, 40, &e) ||
@@ -164,6 +176,10 @@ struct Sweep {
   uint32_t* inplane_lo = nullptr;  // 3 per point: +x, +y, +x+y at z = cz
   uint32_t* inplane_hi = nullptr;  // the same at z = cz + 1
   uint32_t* upward = nullptr;      // 4 per point: +z, +x+z, +y+z, +x+y+z from z = cz
+  // The tables are never cleared: an id is current when it was made in the cell layer that
+  // owns the table (ids grow), i.e. at or above the first id of that layer.
+  uint64_t lo_first = 0;           // first id of the previous cell layer (owner of inplane_lo)
+  uint64_t hi_first = 0;           // first id of this cell layer (inplane_hi, upward)
   uint64_t vertices = 0;
   uint64_t triangles = 0;
 };
@@ -219,13 +235,17 @@ Status march_cell(Sweep& s, int64_t cx, int64_t cy, int64_t cz, const Corner cor
         const uint64_t py = static_cast<uint64_t>(cy + 1 + static_cast<int64_t>((u >> 1) & 1u));
         const uint64_t point = py * row_points + px;
         uint32_t* slot;
+        uint64_t first = s.hi_first;
         if (d & 4u) {
           slot = &s.upward[point * 4 + (d & 3u)];
+        } else if (u & 4u) {
+          slot = &s.inplane_hi[point * 3 + d - 1];
         } else {
-          slot = &((u & 4u) ? s.inplane_hi : s.inplane_lo)[point * 3 + d - 1];
+          slot = &s.inplane_lo[point * 3 + d - 1];
+          first = s.lo_first;
         }
         p[k] = edge_vertex(s, cx, cy, cz, u, d, corners[u], corners[w]);
-        if (*slot == kNoVertex) {
+        if (*slot == kNoVertex || *slot < first) {
           if (s.vertices >= kNoVertex) {
             return make_error(StatusCode::kLimitExceeded, "marching cubes: more than ",
                               uint64_t{kNoVertex}, " vertices (32-bit vertex ids)");
@@ -246,47 +266,124 @@ Status march_cell(Sweep& s, int64_t cx, int64_t cy, int64_t cz, const Corner cor
   return Status::ok();
 }
 
-// Cell layer cz: samples of layer cz in `lo`, of cz + 1 in `hi` (null: beyond the grid).
-Status march_layer(Sweep& s, int64_t cz, const float* lo, const float* hi) {
+// The float t with (double)v < iso exactly when v < t, for every float v: the least float not
+// below iso (comparing in float then needs no conversion per sample).
+float float_threshold(double iso) {
+  constexpr double kMaxFloat = 3.4028234663852886e38;
+  if (iso > kMaxFloat) return HUGE_VALF;    // every finite sample is below
+  if (iso < -kMaxFloat) return -HUGE_VALF;  // none is
+  float t = static_cast<float>(iso);  // nearest
+  if (static_cast<double>(t) < iso) {
+    uint32_t bits;
+    std::memcpy(&bits, &t, 4);
+    // The next float up (iso is finite and within float range here, or t is infinite).
+    if ((bits & 0x80000000u) == 0) {
+      ++bits;
+    } else if (bits == 0x80000000u) {
+      bits = 1;  // -0 -> the least positive
+    } else {
+      --bits;
+    }
+    std::memcpy(&t, &bits, 4);
+  }
+  return t;
+}
+
+// The inside bits of one sample layer (bit x + 1 of row y: sample (x, y) < iso).
+void classify_layer(const float* layer, uint32_t nx, uint32_t ny, float threshold, uint64_t* bits) {
+  const uint64_t words = bit_words(nx);
+  for (uint32_t y = 0; y < ny; ++y) {
+    const float* row = layer + uint64_t{y} * nx;
+    uint64_t* out = bits + uint64_t{y} * words;
+    // Word w holds samples x = 64 w - 1 .. 64 w + 62 at bits 0 .. 63.
+    for (uint64_t w = 0; w < words; ++w) {
+      const int64_t x0 = static_cast<int64_t>(w * 64) - 1;
+      const int64_t from = x0 < 0 ? 0 : x0;
+      const int64_t to = x0 + 64 < static_cast<int64_t>(nx) ? x0 + 64 : static_cast<int64_t>(nx);
+      uint64_t word = 0;
+      int64_t x = from;
+      for (; x + 4 <= to; x += 4) {
+        const uint64_t b0 = static_cast<uint64_t>(row[x] < threshold);
+        const uint64_t b1 = static_cast<uint64_t>(row[x + 1] < threshold);
+        const uint64_t b2 = static_cast<uint64_t>(row[x + 2] < threshold);
+        const uint64_t b3 = static_cast<uint64_t>(row[x + 3] < threshold);
+        word |= (b0 | (b1 << 1) | (b2 << 2) | (b3 << 3)) << (x - x0);
+      }
+      for (; x < to; ++x) word |= static_cast<uint64_t>(row[x] < threshold) << (x - x0);
+      out[w] = word;
+    }
+  }
+}
+
+// Cell layer cz: samples of layer cz in `lo`, of cz + 1 in `hi` (null: beyond the grid), and
+// their inside bits. Only cells whose eight corners are not all inside or all outside are
+// visited (found 64 at a time from the bits); they are visited in the same order as a full
+// scan would, so the output does not change.
+Status march_layer(Sweep& s, int64_t cz, const float* lo, const float* hi, const uint64_t* lo_bits,
+                   const uint64_t* hi_bits) {
   const uint32_t nx = s.grid->nx, ny = s.grid->ny;
   {
     uint32_t* t = s.inplane_lo;
     s.inplane_lo = s.inplane_hi;
     s.inplane_hi = t;
-    std::memset(s.inplane_hi, 0xff, static_cast<size_t>(s.points_per_layer * 3 * 4));
-    std::memset(s.upward, 0xff, static_cast<size_t>(s.points_per_layer * 4 * 4));
+    s.lo_first = s.hi_first;
+    s.hi_first = s.vertices;
   }
+  const uint64_t words = bit_words(nx);
   for (int64_t cy = -1; cy < static_cast<int64_t>(ny); ++cy) {
     // Rows (y, z) of the four columns: column c = dy + 2 dz holds corners k = x + 2c.
     const float* rows[4];
+    const uint64_t* bit_rows[4];
     for (int c = 0; c < 4; ++c) {
       const int64_t y = cy + (c & 1);
       const float* layer = (c & 2) ? hi : lo;
-      rows[c] = (layer == nullptr || y < 0 || y >= static_cast<int64_t>(ny))
-                    ? nullptr
-                    : layer + static_cast<uint64_t>(y) * nx;
+      const uint64_t* layer_bits = (c & 2) ? hi_bits : lo_bits;
+      const bool real = layer != nullptr && y >= 0 && y < static_cast<int64_t>(ny);
+      rows[c] = real ? layer + static_cast<uint64_t>(y) * nx : nullptr;
+      bit_rows[c] = real ? layer_bits + static_cast<uint64_t>(y) * words : nullptr;
     }
     if (rows[0] == nullptr && rows[1] == nullptr && rows[2] == nullptr && rows[3] == nullptr) {
       continue;  // all outside
     }
-    Corner left[4], right[4];
-    for (int c = 0; c < 4; ++c) left[c] = corner_at(rows[c], -1, nx, s.iso);
-    for (int64_t cx = -1; cx < static_cast<int64_t>(nx); ++cx) {
-      unsigned mask = 0;
+    // Cell cx has its corners at bits cx + 1 and cx + 2; it is mixed unless all eight are set
+    // (all inside) or all clear. mixed bit p stands for the cell with lower corner bit p.
+    uint64_t all_next = 0, any_next = 0;
+    auto load = [&](uint64_t w, uint64_t* all, uint64_t* any) {
+      uint64_t a = ~uint64_t{0}, o = 0;
       for (int c = 0; c < 4; ++c) {
-        right[c] = corner_at(rows[c], cx + 1, nx, s.iso);
-        mask |= (left[c].inside ? 1u : 0u) << (2 * c);
-        mask |= (right[c].inside ? 1u : 0u) << (2 * c + 1);
+        const uint64_t v = (bit_rows[c] != nullptr && w < words) ? bit_rows[c][w] : 0;
+        a &= v;
+        o |= v;
       }
-      if (mask != 0 && mask != 255) {
+      *all = a;
+      *any = o;
+    };
+    load(0, &all_next, &any_next);
+    for (uint64_t w = 0; w < words; ++w) {
+      const uint64_t all = all_next, any = any_next;
+      load(w + 1, &all_next, &any_next);
+      // The corner above bit p is bit p + 1 (the next word's bit 0 for p = 63).
+      const uint64_t all_up = (all >> 1) | (all_next << 63);
+      const uint64_t any_up = (any >> 1) | (any_next << 63);
+      uint64_t mixed = ~((all & all_up) | ~(any | any_up));
+      // Lower corner bits 0 .. nx: cells -1 .. nx - 1.
+      const uint64_t first_bit = w * 64;
+      const uint64_t last_bit = uint64_t{nx};  // inclusive
+      if (first_bit + 63 > last_bit) {
+        const uint64_t keep = last_bit >= first_bit ? last_bit - first_bit + 1 : 0;
+        mixed &= keep >= 64 ? ~uint64_t{0} : ((uint64_t{1} << keep) - 1);
+      }
+      while (mixed != 0) {
+        const unsigned b = static_cast<unsigned>(__builtin_ctzll(mixed));
+        mixed &= mixed - 1;
+        const int64_t cx = static_cast<int64_t>(first_bit + b) - 1;
         Corner corners[8];
         for (int c = 0; c < 4; ++c) {
-          corners[2 * c] = left[c];
-          corners[2 * c + 1] = right[c];
+          corners[2 * c] = corner_at(rows[c], cx, nx, s.iso);
+          corners[2 * c + 1] = corner_at(rows[c], cx + 1, nx, s.iso);
         }
         SPLINTCORE_RETURN_IF_ERROR(march_cell(s, cx, cy, cz, corners));
       }
-      for (int c = 0; c < 4; ++c) left[c] = right[c];
     }
   }
   return Status::ok();
@@ -342,8 +439,12 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
   }
   // Not rewound here: the mesh variant's log grows above the working set (callers rewind).
   const uint64_t layer_floats = uint64_t{grid.nx} * grid.ny;
+  const uint64_t layer_words = bit_words(grid.nx) * grid.ny;
   float* samples = arena.allocate_array<float>(static_cast<size_t>(layer_floats * (layers + 1)));
-  uint32_t* edges = samples == nullptr
+  uint64_t* bits = samples == nullptr ? nullptr
+                                      : arena.allocate_array<uint64_t>(
+                                            static_cast<size_t>(layer_words * (layers + 1)));
+  uint32_t* edges = bits == nullptr
                         ? nullptr
                         : arena.allocate_array<uint32_t>(static_cast<size_t>(edge_bytes / 4));
   if (edges == nullptr) return arena.exhausted_status();
@@ -356,10 +457,11 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
   s.inplane_lo = edges;
   s.inplane_hi = edges + s.points_per_layer * 3;
   s.upward = edges + s.points_per_layer * 6;
-  std::memset(s.inplane_lo, 0xff, static_cast<size_t>(s.points_per_layer * 3 * 4));
+  std::memset(edges, 0xff, static_cast<size_t>(s.points_per_layer * 10 * 4));
 
   uint32_t fill_calls = 0;
   const int64_t nz = grid.nz;
+  const float threshold = float_threshold(options.iso);
   for (uint32_t next_z = 0; next_z < grid.nz;) {
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "marching cubes", next_z, grid.nz));
     const uint32_t n = grid.nz - next_z < layers ? grid.nz - next_z : layers;
@@ -368,7 +470,31 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
     SPLINTCORE_RETURN_IF_ERROR(source.fill(
         source.user, next_z, next_z + n, Span<float>(fresh, static_cast<size_t>(layer_floats * n))));
     ++fill_calls;
-    for (uint64_t i = 0; i < layer_floats * n; ++i) {
+    // A branch-free scan first (it vectorises); the position only when something is wrong.
+    uint32_t exponent_ones = 0;
+    {
+      // Four independent lanes: a non-finite float has all exponent bits set, so the lane's
+      // maximum of (bits & exponent mask) reaches the mask.
+      uint32_t lane[4] = {0, 0, 0, 0};
+      const uint64_t count = layer_floats * n;
+      uint64_t i = 0;
+      for (; i + 4 <= count; i += 4) {
+        uint32_t w[4];
+        std::memcpy(w, fresh + i, 16);
+        for (int k = 0; k < 4; ++k) {
+          const uint32_t e = w[k] & 0x7f800000u;
+          lane[k] = lane[k] > e ? lane[k] : e;
+        }
+      }
+      for (; i < count; ++i) {
+        uint32_t w;
+        std::memcpy(&w, fresh + i, 4);
+        const uint32_t e = w & 0x7f800000u;
+        lane[0] = lane[0] > e ? lane[0] : e;
+      }
+      for (int k = 0; k < 4; ++k) exponent_ones |= static_cast<uint32_t>(lane[k] == 0x7f800000u);
+    }
+    for (uint64_t i = 0; exponent_ones != 0 && i < layer_floats * n; ++i) {
       if (!is_finite(fresh[i])) {
         const uint64_t x = i % grid.nx, y = (i / grid.nx) % grid.ny;
         const uint64_t z = next_z + i / layer_floats;
@@ -377,6 +503,10 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
             .at_index(z * layer_floats + i % layer_floats);
       }
     }
+    for (uint32_t j = 1; j <= n; ++j) {
+      classify_layer(samples + layer_floats * j, grid.nx, grid.ny, threshold,
+                     bits + layer_words * j);
+    }
     const int64_t first = static_cast<int64_t>(next_z) - 1;
     const int64_t last = static_cast<int64_t>(next_z + n) == nz ? nz - 1 : first + n - 1;
     for (int64_t cz = first; cz <= last; ++cz) {
@@ -384,9 +514,11 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
       const float* lo = cz < 0 ? nullptr : samples + static_cast<uint64_t>(slot) * layer_floats;
       const float* hi =
           cz + 1 >= nz ? nullptr : samples + static_cast<uint64_t>(slot + 1) * layer_floats;
-      SPLINTCORE_RETURN_IF_ERROR(march_layer(s, cz, lo, hi));
+      const uint64_t* lo_bits = bits + static_cast<uint64_t>(slot) * layer_words;
+      SPLINTCORE_RETURN_IF_ERROR(march_layer(s, cz, lo, hi, lo_bits, lo_bits + layer_words));
     }
     std::memcpy(samples, samples + layer_floats * n, static_cast<size_t>(layer_floats * 4));
+    std::memcpy(bits, bits + layer_words * n, static_cast<size_t>(layer_words * 8));
     next_z += n;
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "marching cubes", grid.nz, grid.nz));

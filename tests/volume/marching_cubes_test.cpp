@@ -345,7 +345,10 @@ TEST(MarchingCubes, CapBelowMinimumIsACleanError) {
   MarchingCubesMemory memory;
   SPLINTCORE_ASSERT_OK(marching_cubes_memory(fd.grid, &memory));
   const uint64_t n = fd.grid.nx;
-  EXPECT_EQ(memory.minimum, 16 + ((8 * n * n + 15) / 16) * 16 + ((40 * (n + 1) * (n + 1) + 15) / 16) * 16);
+  const uint64_t bit_words = (n + 2 + 63) / 64;
+  EXPECT_EQ(memory.minimum, 16 + ((8 * n * n + 15) / 16) * 16 +
+                                ((8 * bit_words * n * 2 + 15) / 16) * 16 +
+                                ((40 * (n + 1) * (n + 1) + 15) / 16) * 16);
   EXPECT_EQ(memory.comfortable_layers, 16u);
   EXPECT_GT(memory.comfortable, memory.minimum);
 
@@ -556,6 +559,42 @@ TEST(MarchingCubes, StreamingYieldsExactlyTheMeshTriangles) {
     }
     EXPECT_EQ(bytes, expected_stl);
   }
+}
+
+TEST(MarchingCubes, IsoBetweenTwoFloatsClassifiesExactly) {
+  // Samples are float, iso is double: "inside" is (double)sample < iso, exactly, also when iso
+  // lies strictly between two floats (the extractor compares against the least float not
+  // below iso).
+  const float above = 0.1f;  // 0.100000001490116... > 0.1
+  const float below = std::nextafter(above, 0.0f);
+  Field fd;
+  fd.grid.spacing = uniform(1.0);
+  fd.grid.nx = 3;
+  fd.grid.ny = fd.grid.nz = 1;
+  fd.table = {below, above, below};
+  auto inside_count = [&](double iso, uint64_t* triangles) {
+    TestArena ta(size_t{1} << 20);
+    Mesh mesh;
+    MarchingCubesStats stats;
+    Status st = run_mesh(ta.arena, fd, 0, &mesh, &stats, iso);
+    *triangles = stats.triangles;
+    return st;
+  };
+  uint64_t t_mid = 0, t_all = 0, t_none = 0, t_huge = 0;
+  SPLINTCORE_ASSERT_OK(inside_count(0.1, &t_mid));          // two separate inside samples
+  SPLINTCORE_ASSERT_OK(inside_count(0.10000001, &t_all));   // all three: one blob
+  SPLINTCORE_ASSERT_OK(inside_count(-1e39, &t_none));       // below every float: nothing
+  SPLINTCORE_ASSERT_OK(inside_count(1e39, &t_huge));        // above every float: all inside
+  EXPECT_GT(t_mid, 0u);
+  EXPECT_GT(t_all, 0u);
+  EXPECT_NE(t_mid, t_all);
+  EXPECT_EQ(t_none, 0u);
+  EXPECT_EQ(t_huge, t_all);
+  // Just above `below` (nearer to it than to `above`): rounding iso to the nearest float would
+  // make `below` outside too and give nothing.
+  uint64_t t_near = 0;
+  SPLINTCORE_ASSERT_OK(inside_count(static_cast<double>(below) + 1e-12, &t_near));
+  EXPECT_EQ(t_near, t_mid);
 }
 
 TEST(MarchingCubes, GoldenHashIsTheSameEverywhere) {
