@@ -26,6 +26,7 @@
 #ifndef SPLINTCORE_BLOCKOUT_H
 #define SPLINTCORE_BLOCKOUT_H
 
+#include "splintcore/boolean.h"
 #include "splintcore/core.h"
 #include "splintcore/geometry.h"
 #include "splintcore/mesh.h"
@@ -42,6 +43,12 @@ struct SweepOptions {
   // How far beyond the jaws' far end (largest p . d) the swept volume is kept, mm; it is closed
   // there by a flat cap. 0: a cap just past the jaws.
   double extent = 0;
+  // Only the part of the swept volume in this box (in the jaws' frame) is wanted, e.g. the
+  // splint's bounds: the grid is cut to it (plus two voxels), closed by caps at its faces;
+  // `extent` is then ignored (the box says how far to go). Columns are still swept from the
+  // jaws' near end, so what lies inside the box is exactly what the whole sweep gives there.
+  bool has_region = false;
+  Aabb region;
   // false: the plain running minimum inside (for measuring the bias it has); true: the
   // extrapolated inside field described above.
   bool correct_bias = true;
@@ -49,7 +56,8 @@ struct SweepOptions {
 };
 
 struct SweepStats {
-  uint32_t nx = 0, ny = 0, nz = 0;      // the grid (z along the direction)
+  uint32_t nx = 0, ny = 0, nz = 0;      // the extracted grid (z along the direction)
+  uint32_t preroll_layers = 0;          // layers swept before the region's first (not meshed)
   uint64_t voxels = 0;                  // nx * ny * nz
   uint64_t front_triangles = 0;         // triangles facing against or across d (the rest skip)
   uint64_t segment_tests = 0;           // column segment against triangle: exact tests
@@ -69,8 +77,9 @@ uint64_t sweep_state_bytes(uint64_t vertex_count, uint64_t triangle_count, uint3
 // Streams the surface of the swept volume (outward, closed, in the jaws' frame) to `visitor`.
 // The jaws must have finite vertices; they need not be closed (a column's first contact with
 // any triangle counts), but a closed, outward mesh is what makes S the solid the paper means.
+// An empty result (a region that misses the jaws' shadow) is no error: nothing is streamed.
 // Errors: kInvalidArgument (a zero or non-finite direction, voxel not > 0, negative extent, no
-// triangles), kLimitExceeded (a grid above 2^31 samples per axis or 2^62 in all), kNonFinite
+// triangles, an empty or non-finite region), kLimitExceeded (a grid above 2^31 samples per axis or 2^62 in all), kNonFinite
 // (a vertex), kArenaExhausted (naming the need), kCancelled, those of marching_cubes().
 // Progress: "sweep" per layer, then the extractor's.
 Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& options,
@@ -80,6 +89,33 @@ Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOption
 // it was and `out` is empty).
 Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& options,
                          Mesh* out, SweepStats* stats = nullptr);
+
+// ---------------------------------------------------------------------------------------------
+// Interference elimination: the splint minus the jaws' swept volume.
+
+struct BlockoutOptions {
+  SweepOptions sweep;      // direction and voxel; the region is set to the splint's bounds
+  BooleanOptions boolean;  // the operation is always the difference
+};
+
+struct BlockoutStats {
+  SweepStats sweep;
+  uint64_t swept_triangles = 0;  // the swept volume's mesh inside the splint's bounds
+  BooleanStats boolean;
+};
+
+// `out` = `splint` minus the part of the jaws' swept volume (sweep_volume above, direction =
+// the splint's insertion direction for these jaws) that lies in the splint's bounds. The swept
+// mesh is rounded to float32 (as the Boolean's B), then subtracted with mesh_boolean, whose
+// checks the result passes (closed, manifold, outward, float32-exact, optionally no
+// self-intersection). A splint the sweep does not reach comes back unchanged (copied).
+// For a wafer between two jaws call it once per jaw: the maxilla's direction is the
+// mandible's reversed. Memory: the sweep's state and extractor, the swept mesh, then the
+// Boolean's; only `out` stays (moved down to where the arena's top was). Errors: those of
+// sweep_volume_mesh and mesh_boolean (the latter prefixed "blockout:"), kInvalidArgument (out
+// not empty), kLimitExceeded (a swept vertex beyond float32 range).
+Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
+                const BlockoutOptions& options, Mesh* out, BlockoutStats* stats = nullptr);
 
 }  // namespace splintcore
 

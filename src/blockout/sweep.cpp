@@ -125,7 +125,15 @@ inline uint64_t double_key(double v) {
 struct Sweep {
   const Context* ctx = nullptr;
   Frame frame;
-  VolumeGrid grid;             // local frame: z along the direction
+  VolumeGrid grid;             // local frame: z along the direction; the whole sweep
+  VolumeGrid mesh_grid;        // the part extracted: layers k0 .. k0 + mesh_grid.nz - 1
+  uint32_t k0 = 0;
+  // Samples sit on one lattice whatever the region: sample (x, y) of the grid is lattice
+  // point (ix0 + x, iy0 + y), its coordinates computed from the lattice's origin, so a region
+  // sees exactly the field values of the whole sweep.
+  Vec3 lattice{};
+  int64_t ix0 = 0, iy0 = 0;
+  bool empty = false;          // the region misses the sweep: nothing to extract
   double band = 0;
   float fband = 0;
   bool correct_bias = true;
@@ -175,10 +183,10 @@ Status make_raw_layer(Sweep& s, uint32_t k) {
     const double xmax = std::fmax(a.x, std::fmax(b.x, c.x)) + s.band;
     const double ymin = std::fmin(a.y, std::fmin(b.y, c.y)) - s.band;
     const double ymax = std::fmax(a.y, std::fmax(b.y, c.y)) + s.band;
-    const double fx0 = std::ceil((xmin - g.origin.x) / g.spacing.x);
-    const double fx1 = std::floor((xmax - g.origin.x) / g.spacing.x);
-    const double fy0 = std::ceil((ymin - g.origin.y) / g.spacing.y);
-    const double fy1 = std::floor((ymax - g.origin.y) / g.spacing.y);
+    const double fx0 = std::ceil((xmin - s.lattice.x) / g.spacing.x) - static_cast<double>(s.ix0);
+    const double fx1 = std::floor((xmax - s.lattice.x) / g.spacing.x) - static_cast<double>(s.ix0);
+    const double fy0 = std::ceil((ymin - s.lattice.y) / g.spacing.y) - static_cast<double>(s.iy0);
+    const double fy1 = std::floor((ymax - s.lattice.y) / g.spacing.y) - static_cast<double>(s.iy0);
     const int64_t x0 = fx0 < 0 ? 0 : static_cast<int64_t>(fx0);
     const int64_t y0 = fy0 < 0 ? 0 : static_cast<int64_t>(fy0);
     const int64_t x1 = fx1 > g.nx - 1.0 ? g.nx - 1 : static_cast<int64_t>(fx1);
@@ -187,11 +195,11 @@ Status make_raw_layer(Sweep& s, uint32_t k) {
     // cheaper column tests below.
     const bool vertical = orient2d(a.x, a.y, b.x, b.y, c.x, c.y) == 0;
     for (int64_t y = y0; y <= y1; ++y) {
-      const double py = sample_coord(g.origin.y, g.spacing.y, y);
+      const double py = sample_coord(s.lattice.y, g.spacing.y, s.iy0 + y);
       float* row = s.state + static_cast<size_t>(y) * g.nx;
       for (int64_t x = x0; x <= x1; ++x) {
         if (row[x] == 0.0f) continue;  // inside for good
-        const double px = sample_coord(g.origin.x, g.spacing.x, x);
+        const double px = sample_coord(s.lattice.x, g.spacing.x, s.ix0 + x);
         const Vec3 p{px, py, w_lo}, q{px, py, w_hi};
         ++s.stats->segment_tests;
         double d2 = 0;
@@ -336,13 +344,14 @@ void make_output_layer(Sweep& s, uint32_t k, float* out) {
 Status fill_layers(void* user, uint32_t z_begin, uint32_t z_end, Span<float> out) {
   Sweep& s = *static_cast<Sweep*>(user);
   const size_t layer = size_t{s.grid.nx} * s.grid.ny;
-  for (uint32_t k = z_begin; k < z_end; ++k) {
+  for (uint32_t z = z_begin; z < z_end; ++z) {
+    const uint32_t k = z + s.k0;
     const uint32_t need = k + 2 < s.grid.nz ? k + 2 : s.grid.nz - 1;
     while (s.raw_done <= need) {
       SPLINTCORE_RETURN_IF_ERROR(report_progress(*s.ctx, "sweep", s.raw_done, s.grid.nz));
       SPLINTCORE_RETURN_IF_ERROR(make_raw_layer(s, s.raw_done));
     }
-    make_output_layer(s, k, out.data() + size_t{k - z_begin} * layer);
+    make_output_layer(s, k, out.data() + size_t{z - z_begin} * layer);
   }
   return Status::ok();
 }
@@ -450,14 +459,45 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
     wmin[t] = std::fmin(local[g.v[0]].z, std::fmin(local[g.v[1]].z, local[g.v[2]].z));
     wmax[t] = std::fmax(local[g.v[0]].z, std::fmax(local[g.v[1]].z, local[g.v[2]].z));
   }
-  // The grid: the jaws' box, a band and a voxel around it, to `extent` past the far end.
+  // The grid: the jaws' box, a band and a voxel around it, to `extent` past the far end; with
+  // a region, its part of that in x and y, and from the jaws' near end to the region's far
+  // end in w (the layers before the region are swept but not meshed).
   const double h = o.voxel;
   const double band = kBandVoxels * h;
   const double margin = band + h;
-  const Vec3 lo = box.lo - Vec3{margin, margin, margin};
-  const Vec3 hi = box.hi + Vec3{margin, margin, o.extent + h};
-  double counts[3];
-  for (int a = 0; a < 3; ++a) {
+  Vec3 lo = box.lo - Vec3{margin, margin, margin};
+  Vec3 hi = box.hi + Vec3{margin, margin, o.extent + h};
+  double mesh_lo_w = lo.z;
+  s->lattice = lo;
+  if (o.has_region) {
+    if (o.region.empty() || !is_finite(o.region.lo) || !is_finite(o.region.hi)) {
+      return make_error(StatusCode::kInvalidArgument, "sweep: the region is empty or not finite");
+    }
+    Aabb r;  // the region's box in the local frame (its eight corners)
+    for (int c = 0; c < 8; ++c) {
+      const Vec3 corner{(c & 1) ? o.region.hi.x : o.region.lo.x,
+                        (c & 2) ? o.region.hi.y : o.region.lo.y,
+                        (c & 4) ? o.region.hi.z : o.region.lo.z};
+      r.add(to_local(s->frame, corner));
+    }
+    const double pad = 2 * h;
+    // The first lattice column at or below the region's (padded) start; the end is cut
+    // to the region below.
+    const double fx = std::floor((r.lo.x - pad - lo.x) / h);
+    const double fy = std::floor((r.lo.y - pad - lo.y) / h);
+    if (fx > 0 && fx < 2147483648.0) s->ix0 = static_cast<int64_t>(fx);
+    if (fy > 0 && fy < 2147483648.0) s->iy0 = static_cast<int64_t>(fy);
+    s->lattice = lo;
+    lo.x = lo.x + h * static_cast<double>(s->ix0);
+    lo.y = lo.y + h * static_cast<double>(s->iy0);
+    hi.x = std::fmin(hi.x, r.hi.x + pad);
+    hi.y = std::fmin(hi.y, r.hi.y + pad);
+    hi.z = r.hi.z + pad;
+    mesh_lo_w = r.lo.z - pad;
+    if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) s->empty = true;
+  }
+  double counts[3] = {1, 1, 1};
+  for (int a = 0; a < 3 && !s->empty; ++a) {
     counts[a] = std::floor((hi[a] - lo[a]) / h) + 1.0;
     if (!(counts[a] < 2147483648.0)) {
       return make_error(StatusCode::kLimitExceeded, "sweep: the grid would have ", counts[a],
@@ -469,6 +509,22 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   s->grid.nx = static_cast<uint32_t>(counts[0]);
   s->grid.ny = static_cast<uint32_t>(counts[1]);
   s->grid.nz = static_cast<uint32_t>(counts[2]);
+  {
+    const double first = std::floor((mesh_lo_w - lo.z) / h);
+    s->k0 = first <= 0 ? 0 : (first >= counts[2] ? s->grid.nz : static_cast<uint32_t>(first));
+    if (s->k0 >= s->grid.nz) s->empty = true;
+  }
+  s->mesh_grid = s->grid;
+  s->mesh_grid.origin.z = lo.z + h * static_cast<double>(s->k0);
+  s->mesh_grid.nz = s->empty ? 0 : s->grid.nz - s->k0;
+  if (s->empty) {
+    s->ctx = &ctx;
+    s->stats = stats;
+    stats->axis_u = s->frame.u;
+    stats->axis_v = s->frame.v;
+    stats->axis_w = s->frame.w;
+    return Status::ok();
+  }
   uint64_t layer = 0, ring_bytes = 0;
   if (!checked_mul(uint64_t{s->grid.nx}, s->grid.ny, &layer) ||
       !checked_mul(layer, 4 * (kRing + 1), &ring_bytes) || ring_bytes > SIZE_MAX) {
@@ -489,10 +545,11 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   s->ctx = &ctx;
   s->correct_bias = o.correct_bias;
   s->stats = stats;
-  stats->nx = s->grid.nx;
-  stats->ny = s->grid.ny;
-  stats->nz = s->grid.nz;
-  stats->voxels = layer * s->grid.nz;
+  stats->nx = s->empty ? 0 : s->mesh_grid.nx;
+  stats->ny = s->empty ? 0 : s->mesh_grid.ny;
+  stats->nz = s->mesh_grid.nz;
+  stats->preroll_layers = s->empty ? 0 : s->k0;
+  stats->voxels = s->empty ? 0 : layer * s->mesh_grid.nz;
   stats->axis_u = s->frame.u;
   stats->axis_v = s->frame.v;
   stats->axis_w = s->frame.w;
@@ -522,10 +579,12 @@ Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOption
   outer.vertex = world_vertex;
   outer.triangle = world_triangle;
   outer.user = &wv;
+  if (s.empty) return Status::ok();
   MarchingCubesOptions mc;
   mc.iso = 0.0;
   mc.layers_per_tile = options.layers_per_tile;
-  return marching_cubes(ctx, s.grid, LayerSource{fill_layers, &s}, mc, outer, &st->extraction);
+  return marching_cubes(ctx, s.mesh_grid, LayerSource{fill_layers, &s}, mc, outer,
+                        &st->extraction);
 }
 
 Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& options,
@@ -542,11 +601,11 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
   Sweep s;
   Status status = prepare(ctx, jaws, options, &s, st);
   Mesh mesh(&arena);
-  if (status.is_ok()) {
+  if (status.is_ok() && !s.empty) {
     MarchingCubesOptions mc;
     mc.iso = 0.0;
     mc.layers_per_tile = options.layers_per_tile;
-    status = marching_cubes_mesh(ctx, s.grid, LayerSource{fill_layers, &s}, mc, &mesh,
+    status = marching_cubes_mesh(ctx, s.mesh_grid, LayerSource{fill_layers, &s}, mc, &mesh,
                                  &st->extraction);
   }
   if (!status.is_ok()) {
