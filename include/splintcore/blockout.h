@@ -49,6 +49,12 @@ struct SweepOptions {
   // jaws' near end, so what lies inside the box is exactly what the whole sweep gives there.
   bool has_region = false;
   Aabb region;
+  // Extract the surface this far inside the swept volume (mm, 0 <= inset < 2 voxels). The
+  // blockout subtracts the swept volume from a splint that already holds the jaw's imprint,
+  // whose surface the swept volume's front part reproduces to within the voxel error: an
+  // inset a little above that error keeps the two from meeting except where the swept
+  // volume really leaves the jaw (the undercuts), at the price of leaving that much undercut.
+  double inset = 0;
   // false: the plain running minimum inside (for measuring the bias it has); true: the
   // extrapolated inside field described above.
   bool correct_bias = true;

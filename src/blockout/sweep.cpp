@@ -382,6 +382,10 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
                       "sweep: the voxel size must be > 0 and the extent >= 0 (voxel ", o.voxel,
                       " mm, extent ", o.extent, " mm)");
   }
+  if (!(o.inset >= 0) || !(o.inset < 2 * o.voxel)) {
+    return make_error(StatusCode::kInvalidArgument, "sweep: the inset must be >= 0 and below two "
+                      "voxels (inset ", o.inset, " mm, voxel ", o.voxel, " mm)");
+  }
   SPLINTCORE_RETURN_IF_ERROR(make_frame(o.direction, &s->frame));
   uint64_t vertex_count = 0, triangle_count = 0;
   for (const Mesh& m : jaws) {
@@ -581,7 +585,7 @@ Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOption
   outer.user = &wv;
   if (s.empty) return Status::ok();
   MarchingCubesOptions mc;
-  mc.iso = 0.0;
+  mc.iso = -options.inset;
   mc.layers_per_tile = options.layers_per_tile;
   return marching_cubes(ctx, s.mesh_grid, LayerSource{fill_layers, &s}, mc, outer,
                         &st->extraction);
@@ -603,7 +607,7 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
   Mesh mesh(&arena);
   if (status.is_ok() && !s.empty) {
     MarchingCubesOptions mc;
-    mc.iso = 0.0;
+    mc.iso = -options.inset;
     mc.layers_per_tile = options.layers_per_tile;
     status = marching_cubes_mesh(ctx, s.mesh_grid, LayerSource{fill_layers, &s}, mc, &mesh,
                                  &st->extraction);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "splintcore/blockout.h"
+#include "splintcore/distance.h"
 #include "splintcore/io.h"
 #include "common/shapes.h"
 #include "support/test_util.h"
@@ -375,6 +376,109 @@ TEST(Sweep, RegionGivesTheSameSurfaceInsideIt) {
   }
   EXPECT_GT(inner, 100u);
   EXPECT_EQ(missing, 0u);
+}
+
+}  // namespace
+}  // namespace splintcore
+
+namespace splintcore {
+namespace {
+
+using test::TestArena;
+
+// The independent undercut check: lines parallel to d through a grid of points in the plane
+// across d; on each, the parameters where it enters and leaves each solid (ray casting on the
+// BVH, a different code path from the sweep). The jaw leaves along +d; splint material beyond
+// the jaw's first point along d is in its way. Returns the longest such stretch on any line
+// and counts the lines that have one longer than `tolerance`.
+struct LockReport {
+  double longest = 0;
+  size_t locked_lines = 0;
+  size_t lines_through_jaw = 0;
+  std::vector<Vec3> locked_at;  // a point of each locked line (in the plane through center)
+};
+
+std::vector<double> crossings(const DistanceIndex& index, const Vec3& origin, const Vec3& d,
+                              double length) {
+  std::vector<double> ts;
+  double t = 0;
+  RayHit hit;
+  while (ray_intersect(index, origin + d * t, d, length - t, &hit)) {
+    ts.push_back(t + hit.t);
+    t += hit.t + 1e-7;
+  }
+  return ts;
+}
+
+LockReport lock_report(Arena& arena, const Mesh& splint, const Mesh& jaw, const Vec3& d,
+                       const Vec3& u, const Vec3& v, const Vec3& center, double half,
+                       uint32_t n, double tolerance) {
+  Context ctx(&arena);
+  DistanceIndex si, ji;
+  EXPECT_TRUE(build_distance_index(ctx, splint, DistanceIndexOptions{}, &si).is_ok());
+  EXPECT_TRUE(build_distance_index(ctx, jaw, DistanceIndexOptions{}, &ji).is_ok());
+  LockReport r;
+  const double reach = 100.0;
+  for (uint32_t i = 0; i < n; ++i) {
+    for (uint32_t j = 0; j < n; ++j) {
+      // Irrational-ish offsets keep lines off the meshes' edges.
+      const double a = -half + 2 * half * (i + 0.5 + 0.123 * std::sin(7.1 * i + j)) / n;
+      const double b = -half + 2 * half * (j + 0.5 + 0.137 * std::cos(3.3 * j + i)) / n;
+      const Vec3 origin = center + u * a + v * b - d * (reach / 2);
+      const std::vector<double> jt = crossings(ji, origin, d, reach);
+      if (jt.size() < 2) continue;
+      ++r.lines_through_jaw;
+      const double first_jaw = jt.front();
+      const std::vector<double> st = crossings(si, origin, d, reach);
+      double beyond = 0;
+      for (size_t k = 0; k + 1 < st.size(); k += 2) {
+        const double lo = std::fmax(st[k], first_jaw), hi = st[k + 1];
+        if (hi > lo) beyond += hi - lo;
+      }
+      r.longest = std::fmax(r.longest, beyond);
+      if (beyond > tolerance) {
+        ++r.locked_lines;
+        r.locked_at.push_back(center + u * a + v * b);
+      }
+    }
+  }
+  return r;
+}
+
+TEST(Blockout, IndependentCheckFindsTheUndercutBeforeAndNoneAfter) {
+  TestArena ta(size_t{1} << 30);
+  Context ctx(&ta.arena);
+  Mesh cone(&ta.arena);
+  frustum(&cone, 3.0, 5.0, 0.0, 8.0, 360);
+  for (Vec3& p : cone.vertices) ASSERT_TRUE(round_to_float32(&p));
+  const float lo[3] = {-7, -7, 4}, hi[3] = {7, 7, 10};
+  Mesh box = box_mesh(&ta.arena, lo, hi);
+  // The splint as the Boolean leaves it (box minus cone), then with the blockout.
+  Mesh imprint;
+  BooleanOptions bo;
+  SPLINTCORE_ASSERT_OK(mesh_boolean(ctx, box, cone, bo, &imprint, nullptr));
+  BlockoutOptions o;
+  o.sweep.direction = Vec3{0, 0, -1};
+  o.sweep.voxel = 0.1;
+  o.sweep.inset = 0.05;
+  Mesh blocked;
+  SPLINTCORE_ASSERT_OK(blockout(ctx, imprint, Span<const Mesh>(&cone, 1), o, &blocked));
+  const Vec3 d{0, 0, -1}, u{1, 0, 0}, v{0, 1, 0}, c{0, 0, 5};
+  const LockReport before = lock_report(ta.arena, imprint, cone, d, u, v, c, 6.0, 60, 1e-3);
+  const LockReport after = lock_report(ta.arena, blocked, cone, d, u, v, c, 6.0, 60, 1e-3);
+  std::printf("[ figures  ] undercut check, %zu lines through the cone: before %zu locked "
+              "(longest %.3f mm), after %zu (longest %.4f mm)\n",
+              before.lines_through_jaw, before.locked_lines, before.longest, after.locked_lines,
+              after.longest);
+  EXPECT_GT(before.locked_lines, 100u);
+  EXPECT_GT(before.longest, 3.0);
+  // After: what the inset leaves, on lines within the inset of the wall.
+  EXPECT_LT(after.locked_lines, before.locked_lines / 10);
+  // Every line still locked runs within the inset (plus the voxel error) of the wall.
+  for (const Vec3& p : after.locked_at) {
+    EXPECT_GT(std::sqrt(p.x * p.x + p.y * p.y), 5.0 - o.sweep.inset - 0.03) << p.x << " " << p.y;
+  }
+  EXPECT_EQ(after.lines_through_jaw, before.lines_through_jaw);
 }
 
 }  // namespace
