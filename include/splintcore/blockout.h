@@ -55,6 +55,11 @@ struct SweepOptions {
   // inset a little above that error keeps the two from meeting except where the swept
   // volume really leaves the jaw (the undercuts), at the price of leaving that much undercut.
   double inset = 0;
+  // With a region, leave out the caps that close the volume where the region cuts it (mesh
+  // variant only): an open surface whose border lies just outside the region's grid. What
+  // the Boolean needs when the region holds its A (B may be open with its border outside A),
+  // and the caps are most of the triangles when the region is a splint's bounds.
+  bool open_at_region = false;
   // false: the plain running minimum inside (for measuring the bias it has); true: the
   // extrapolated inside field described above.
   bool correct_bias = true;
@@ -70,6 +75,7 @@ struct SweepStats {
   uint64_t distance_evaluations = 0;    // column segment to triangle distances
   uint64_t inside_columns = 0;          // columns that met a jaw
   uint64_t corrected_samples = 0;       // inside samples given an extrapolated value
+  uint64_t cap_triangles_dropped = 0;   // open_at_region: the caps' triangles left out
   MarchingCubesStats extraction;
   Vec3 axis_u{}, axis_v{}, axis_w{};    // the grid's axes in the jaws' frame (axis_w = d)
 };

@@ -25,6 +25,7 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
   SweepOptions so = options.sweep;
   so.has_region = true;
   so.region = bounds;
+  so.open_at_region = true;  // the caps lie outside the splint: the Boolean takes an open B
   Mesh swept;
   Status s = sweep_volume_mesh(ctx, jaws, so, &swept, &st->sweep);
   if (!s.is_ok()) {

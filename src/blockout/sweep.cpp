@@ -20,7 +20,8 @@ namespace splintcore {
 namespace {
 
 constexpr uint32_t kRing = 5;          // raw layers kept: the output layer and two on each side
-constexpr double kBandVoxels = 2.5;    // band half-width in voxels (the correction reads 2 h out)
+constexpr double kBandVoxels = 2.1;    // band half-width in voxels (the correction reads 2 h out)
+constexpr uint32_t kMaxBands = 64;
 constexpr float kTinyPositive = 1.17549435e-38f;  // FLT_MIN: an outside distance that rounded to 0
 
 struct Frame {
@@ -148,6 +149,7 @@ struct Sweep {
   float* state = nullptr;      // nx * ny
   float* ring = nullptr;       // kRing * nx * ny; layer k at slot k % kRing
   uint32_t raw_done = 0;       // raw layers 0 .. raw_done - 1 are made
+  uint32_t bands = 1;          // bands of rows per layer (the executor's concurrency, x 4)
   SweepStats* stats = nullptr;
 };
 
@@ -155,24 +157,17 @@ inline double sample_coord(double origin, double spacing, int64_t i) {
   return origin + spacing * static_cast<double>(i);
 }
 
-// Makes raw layer k: advances the column state over the segment [w(k-1), w(k)].
-Status make_raw_layer(Sweep& s, uint32_t k) {
+struct ColumnCounts {
+  uint64_t segment_tests = 0;
+  uint64_t distance_evaluations = 0;
+  uint64_t inside_columns = 0;
+};
+
+// Advances the column state of rows [y_begin, y_end) over the segment [w_lo, w_hi] against
+// the active triangles. Rows are independent, so bands of rows may run at once.
+void sweep_rows(Sweep& s, double w_lo, double w_hi, int64_t y_begin, int64_t y_end,
+                ColumnCounts* counts) {
   const VolumeGrid& g = s.grid;
-  const double h = g.spacing.z;
-  const double w_hi = sample_coord(g.origin.z, h, k);
-  const double w_lo = sample_coord(g.origin.z, h, static_cast<int64_t>(k) - 1);
-  // Triangles that can come within the band of this segment.
-  while (s.next_tri < s.tris.size() && s.tri_wmin[s.next_tri] <= w_hi + s.band) {
-    if (!s.active.push_back(s.next_tri)) return s.ctx->arena->exhausted_status();
-    ++s.next_tri;
-  }
-  size_t kept = 0;
-  for (size_t n = 0; n < s.active.size(); ++n) {
-    const uint32_t t = s.active[n];
-    if (s.tri_wmax[t] < w_lo - s.band) continue;  // passed for good
-    s.active[kept++] = t;
-  }
-  s.active.shrink_size(kept);
   const double band2 = s.band * s.band;
   for (size_t n = 0; n < s.active.size(); ++n) {
     const Triangle& tri = s.tris[s.active[n]];
@@ -188,9 +183,10 @@ Status make_raw_layer(Sweep& s, uint32_t k) {
     const double fy0 = std::ceil((ymin - s.lattice.y) / g.spacing.y) - static_cast<double>(s.iy0);
     const double fy1 = std::floor((ymax - s.lattice.y) / g.spacing.y) - static_cast<double>(s.iy0);
     const int64_t x0 = fx0 < 0 ? 0 : static_cast<int64_t>(fx0);
-    const int64_t y0 = fy0 < 0 ? 0 : static_cast<int64_t>(fy0);
+    const int64_t y0 = fy0 < static_cast<double>(y_begin) ? y_begin : static_cast<int64_t>(fy0);
     const int64_t x1 = fx1 > g.nx - 1.0 ? g.nx - 1 : static_cast<int64_t>(fx1);
-    const int64_t y1 = fy1 > g.ny - 1.0 ? g.ny - 1 : static_cast<int64_t>(fy1);
+    const int64_t y1 = fy1 > static_cast<double>(y_end - 1) ? y_end - 1 : static_cast<int64_t>(fy1);
+    if (y0 > y1) continue;
     // A triangle seen edge-on along w (vertical) gets the general tests; the others the
     // cheaper column tests below.
     const bool vertical = orient2d(a.x, a.y, b.x, b.y, c.x, c.y) == 0;
@@ -201,15 +197,15 @@ Status make_raw_layer(Sweep& s, uint32_t k) {
         if (row[x] == 0.0f) continue;  // inside for good
         const double px = sample_coord(s.lattice.x, g.spacing.x, s.ix0 + x);
         const Vec3 p{px, py, w_lo}, q{px, py, w_hi};
-        ++s.stats->segment_tests;
+        ++counts->segment_tests;
         double d2 = 0;
         if (vertical) {
           if (segment_intersects_triangle(p, q, a, b, c)) {
             row[x] = 0.0f;
-            ++s.stats->inside_columns;
+            ++counts->inside_columns;
             continue;
           }
-          ++s.stats->distance_evaluations;
+          ++counts->distance_evaluations;
           d2 = segment_triangle_d2(p, q, a, b, c);
         } else {
           // The triangle faces against w (clockwise seen from +w): the column is in its
@@ -223,12 +219,12 @@ Status make_raw_layer(Sweep& s, uint32_t k) {
             // found at an earlier layer (the triangle is active from w_hi >= w_min - band).
             if (orient3d(a, b, c, q) >= 0) {
               row[x] = 0.0f;
-              ++s.stats->inside_columns;
+              ++counts->inside_columns;
               continue;
             }
             // Below the triangle: the distance along the column falls until w*, so the top
             // of the segment is the closest point.
-            ++s.stats->distance_evaluations;
+            ++counts->distance_evaluations;
             d2 = length_squared(q - closest_point_on_triangle(q, a, b, c));
           } else {
             // Outside the projection the closest approach of the whole vertical line is to an
@@ -253,7 +249,7 @@ Status make_raw_layer(Sweep& s, uint32_t k) {
               }
             }
             if (best >= band2) continue;
-            ++s.stats->distance_evaluations;
+            ++counts->distance_evaluations;
             if (best_w >= w_lo && best_w <= w_hi) {
               d2 = best;
             } else {
@@ -269,6 +265,42 @@ Status make_raw_layer(Sweep& s, uint32_t k) {
         }
       }
     }
+  }
+}
+
+// Makes raw layer k: advances the column state over the segment [w(k-1), w(k)].
+Status make_raw_layer(Sweep& s, uint32_t k) {
+  const VolumeGrid& g = s.grid;
+  const double h = g.spacing.z;
+  const double w_hi = sample_coord(g.origin.z, h, k);
+  const double w_lo = sample_coord(g.origin.z, h, static_cast<int64_t>(k) - 1);
+  // Triangles that can come within the band of this segment.
+  while (s.next_tri < s.tris.size() && s.tri_wmin[s.next_tri] <= w_hi + s.band) {
+    if (!s.active.push_back(s.next_tri)) return s.ctx->arena->exhausted_status();
+    ++s.next_tri;
+  }
+  size_t kept = 0;
+  for (size_t n = 0; n < s.active.size(); ++n) {
+    const uint32_t t = s.active[n];
+    if (s.tri_wmax[t] < w_lo - s.band) continue;  // passed for good
+    s.active[kept++] = t;
+  }
+  s.active.shrink_size(kept);
+  // Bands of rows on the executor: each band's columns are its own, and a minimum does
+  // not depend on the order it is taken in, so the state is the same for any thread count.
+  const uint32_t bands = s.bands;
+  ColumnCounts counts[kMaxBands];
+  auto band = [&](uint32_t i) {
+    const int64_t y_begin = static_cast<int64_t>(uint64_t{g.ny} * i / bands);
+    const int64_t y_end = static_cast<int64_t>(uint64_t{g.ny} * (i + 1) / bands);
+    counts[i] = ColumnCounts{};
+    sweep_rows(s, w_lo, w_hi, y_begin, y_end, &counts[i]);
+  };
+  parallel_for_each(s.ctx->executor, bands, band);
+  for (uint32_t i = 0; i < bands; ++i) {
+    s.stats->segment_tests += counts[i].segment_tests;
+    s.stats->distance_evaluations += counts[i].distance_evaluations;
+    s.stats->inside_columns += counts[i].inside_columns;
   }
   const size_t layer = size_t{g.nx} * g.ny;
   std::memcpy(s.ring + (k % kRing) * layer, s.state, layer * sizeof(float));
@@ -547,6 +579,13 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   s->active.bind(&arena);
   if (!s->active.reserve(nf < 4096 ? nf : 4096)) return arena.exhausted_status();
   s->ctx = &ctx;
+  {
+    const uint32_t workers = ctx.executor != nullptr ? ctx.executor->concurrency : 1;
+    uint64_t bands = workers <= 1 ? 1 : uint64_t{workers} * 4;
+    if (bands > kMaxBands) bands = kMaxBands;
+    if (bands > s->grid.ny) bands = s->grid.ny;
+    s->bands = static_cast<uint32_t>(bands);
+  }
   s->correct_bias = o.correct_bias;
   s->stats = stats;
   stats->nx = s->empty ? 0 : s->mesh_grid.nx;
@@ -557,6 +596,50 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   stats->axis_u = s->frame.u;
   stats->axis_v = s->frame.v;
   stats->axis_w = s->frame.w;
+  return Status::ok();
+}
+
+// Leaves out the triangles whose corners all lie beyond the extracted grid (the caps: their
+// vertices are on edges to samples beyond the border, kEdgeMargin of a voxel outside it) and
+// the vertices only they used. Kept triangles keep their order and are renumbered by first
+// use (as the extractor numbers them). The kept triangles are compacted in place; the kept
+// vertices go to a new array above (then `mesh` has its triangles allocated before its
+// vertices). Memory: 4 bytes per vertex (the renumbering, left in place) and the new vertices.
+Status drop_caps(const Sweep& s, Arena& arena, Mesh* mesh, SweepStats* st) {
+  const VolumeGrid& g = s.mesh_grid;
+  const Vec3 lo = g.origin;
+  const Vec3 hi{g.origin.x + g.spacing.x * (g.nx - 1.0), g.origin.y + g.spacing.y * (g.ny - 1.0),
+                g.origin.z + g.spacing.z * (g.nz - 1.0)};
+  auto beyond = [&](const Vec3& p) {
+    return p.x < lo.x || p.y < lo.y || p.z < lo.z || p.x > hi.x || p.y > hi.y || p.z > hi.z;
+  };
+  const size_t nt = mesh->triangles.size(), nv = mesh->vertices.size();
+  uint32_t* remap = arena.allocate_array<uint32_t>(nv);
+  if (nv > 0 && remap == nullptr) return arena.exhausted_status();
+  for (size_t i = 0; i < nv; ++i) remap[i] = ~uint32_t{0};
+  const Vec3* verts = mesh->vertices.data();
+  Triangle* tris = mesh->triangles.data();
+  size_t kept = 0;
+  uint32_t next = 0;
+  for (size_t t = 0; t < nt; ++t) {
+    const Triangle tri = tris[t];
+    if (beyond(verts[tri.v[0]]) && beyond(verts[tri.v[1]]) && beyond(verts[tri.v[2]])) continue;
+    Triangle out;
+    for (int k = 0; k < 3; ++k) {
+      uint32_t& id = remap[tri.v[k]];
+      if (id == ~uint32_t{0}) id = next++;
+      out.v[k] = id;
+    }
+    tris[kept++] = out;
+  }
+  Vec3* fresh = arena.allocate_array<Vec3>(next);
+  if (next > 0 && fresh == nullptr) return arena.exhausted_status();
+  for (size_t i = 0; i < nv; ++i) {
+    if (remap[i] != ~uint32_t{0}) fresh[remap[i]] = verts[i];
+  }
+  st->cap_triangles_dropped = nt - kept;
+  mesh->triangles.shrink_size(kept);
+  mesh->vertices.adopt(fresh, next, next);
   return Status::ok();
 }
 
@@ -617,8 +700,18 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
     out->bind(&arena);
     return status;
   }
+  bool vertices_first = true;  // as the extractor leaves them
+  if (options.open_at_region && options.has_region && !s.empty) {
+    status = drop_caps(s, arena, &mesh, st);
+    if (!status.is_ok()) {
+      arena.rewind(start);
+      out->bind(&arena);
+      return status;
+    }
+    vertices_first = false;
+  }
   for (Vec3& p : mesh.vertices) p = to_world(s.frame, p);
-  move_mesh_down(arena, start, mesh, out, /*vertices_first=*/true);
+  move_mesh_down(arena, start, mesh, out, vertices_first);
   return Status::ok();
 }
 

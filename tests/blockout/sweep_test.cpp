@@ -10,6 +10,7 @@
 #include "splintcore/blockout.h"
 #include "splintcore/distance.h"
 #include "splintcore/io.h"
+#include "splintcore/platform.h"
 #include "common/shapes.h"
 #include "support/test_util.h"
 
@@ -165,6 +166,33 @@ TEST(Sweep, SameBytesForEverySlabSize) {
     EXPECT_EQ(hex, first);
   }
 }
+
+#if defined(SPLINTCORE_WITH_PLATFORM)
+TEST(Sweep, SameBytesForEveryThreadCount) {
+  TestArena ta(size_t{256} << 20);
+  Mesh cone(&ta.arena);
+  frustum(&cone, 2.0, 3.0, 0.0, 4.0, 90);
+  std::string first;
+  for (unsigned threads : {1u, 2u, 3u, 8u}) {
+    SCOPED_TRACE(threads);
+    ThreadExecutor pool(threads);
+    ArenaScope scope(ta.arena);
+    Context ctx(&ta.arena, &pool.executor(), nullptr);
+    SweepOptions o;
+    o.direction = Vec3{0.1, 0.2, -1.0};
+    o.voxel = 0.2;
+    HashVisitor hv;
+    MarchingCubesVisitor v;
+    v.triangle = HashVisitor::triangle;
+    v.user = &hv;
+    SweepStats stats;
+    SPLINTCORE_ASSERT_OK(sweep_volume(ctx, Span<const Mesh>(&cone, 1), o, v, &stats));
+    const std::string hex = hv.hex();
+    if (first.empty()) first = hex;
+    EXPECT_EQ(hex, first);
+  }
+}
+#endif
 
 TEST(Sweep, AnyDirectionGivesAClosedSolidContainingTheJaw) {
   TestArena ta(size_t{256} << 20);
@@ -376,6 +404,45 @@ TEST(Sweep, RegionGivesTheSameSurfaceInsideIt) {
   }
   EXPECT_GT(inner, 100u);
   EXPECT_EQ(missing, 0u);
+
+  // Open at the region: the same surface without the caps; its border lies outside the
+  // region (what a Boolean with A inside the region needs).
+  SweepOptions open = r;
+  open.open_at_region = true;
+  Mesh cut(&ta.arena);
+  SweepStats open_stats;
+  SPLINTCORE_ASSERT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(&cone, 1), open, &cut, &open_stats));
+  EXPECT_GT(open_stats.cap_triangles_dropped, 0u);
+  EXPECT_EQ(cut.triangles.size() + open_stats.cap_triangles_dropped, part.triangles.size());
+  MeshReport report;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, cut, &report));
+  EXPECT_GT(report.boundary_edges, 0u);
+  EXPECT_EQ(report.nonmanifold_edges, 0u);
+  EXPECT_EQ(report.orientation_conflicts, 0u);
+  EXPECT_EQ(report.unreferenced_vertices, 0u);
+  // Every vertex on the border is outside the region's box.
+  std::vector<std::pair<uint64_t, int>> edges;
+  for (const Triangle& t : cut.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = t.v[k], b = t.v[(k + 1) % 3];
+      edges.push_back({(uint64_t{std::min(a, b)} << 32) | std::max(a, b), a < b ? 1 : -1});
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  size_t border = 0;
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i;
+    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+    if (j - i == 1) {
+      ++border;
+      for (uint32_t v : {static_cast<uint32_t>(edges[i].first >> 32),
+                         static_cast<uint32_t>(edges[i].first & 0xffffffffu)}) {
+        EXPECT_FALSE(r.region.contains(cut.vertices[v])) << v;
+      }
+    }
+    i = j;
+  }
+  EXPECT_EQ(border, report.boundary_edges);
 }
 
 }  // namespace
