@@ -55,6 +55,14 @@ struct SweepOptions {
   // inset a little above that error keeps the two from meeting except where the swept
   // volume really leaves the jaw (the undercuts), at the price of leaving that much undercut.
   double inset = 0;
+  // Morphological closing of the swept volume with a ball of this radius (mm; 0: none, else at
+  // least two voxels): dilation then erosion, which fills gaps narrower than twice the radius
+  // (between teeth) so that the splint has no thin fins reaching into them. Computed on the
+  // field: the dilation is {f <= r} (f is the exact distance outside); the erosion takes,
+  // for a sample in it, the distance to the dilation's complement as the least
+  // |p - q| - (f(q) - r) over samples q outside it (the ball around q of radius f(q) - r lies
+  // outside), searched within r + 2 voxels, layer by layer with a window of layers.
+  double closing_radius = 0;
   // With a region, leave out the caps that close the volume where the region cuts it (mesh
   // variant only): an open surface whose border lies just outside the region's grid. What
   // the Boolean needs when the region holds its A (B may be open with its border outside A),
@@ -76,13 +84,16 @@ struct SweepStats {
   uint64_t inside_columns = 0;          // columns that met a jaw
   uint64_t corrected_samples = 0;       // inside samples given an extrapolated value
   uint64_t cap_triangles_dropped = 0;   // open_at_region: the caps' triangles left out
+  uint64_t closing_samples = 0;         // samples the erosion searched around
+  uint64_t closed_samples = 0;          // samples outside the volume that the closing filled
   MarchingCubesStats extraction;
   Vec3 axis_u{}, axis_v{}, axis_w{};    // the grid's axes in the jaws' frame (axis_w = d)
 };
 
 // Arena bytes the sweep's own state takes for `jaws` (local vertex copies, sorted triangle
 // list, five layers of the field and one of the column state), without the extractor's
-// working set (marching_cubes_working_set) and output.
+// working set (marching_cubes_working_set) and output. A closing adds 2 m + 1 layers of the
+// field and 40 (2 m + 1)^3 bytes of search offsets, m = ceil(radius / voxel) + 2.
 uint64_t sweep_state_bytes(uint64_t vertex_count, uint64_t triangle_count, uint32_t nx,
                            uint32_t ny);
 

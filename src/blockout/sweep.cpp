@@ -149,6 +149,19 @@ struct Sweep {
   float* state = nullptr;      // nx * ny
   float* ring = nullptr;       // kRing * nx * ny; layer k at slot k % kRing
   uint32_t raw_done = 0;       // raw layers 0 .. raw_done - 1 are made
+  // Closing (closing_radius > 0): corrected layers in a ring of 2 m + 1, and the search's
+  // offsets sorted by length.
+  double closing_r = 0;
+  uint32_t m = 0;
+  float* cring = nullptr;
+  uint32_t corrected_done = 0;
+  struct Offset {
+    int16_t dx, dy, dz;
+    int16_t pad;
+    float length;  // mm
+  };
+  const Offset* offsets = nullptr;
+  uint32_t offset_count = 0;
   uint32_t bands = 1;          // bands of rows per layer (the executor's concurrency, x 4)
   SweepStats* stats = nullptr;
 };
@@ -373,17 +386,96 @@ void make_output_layer(Sweep& s, uint32_t k, float* out) {
   }
 }
 
+// The corrected layers up to `last` (inclusive), with the raw layers they need.
+Status advance(Sweep& s, uint32_t last, float* (*slot)(Sweep&, uint32_t)) {
+  while (s.corrected_done <= last) {
+    const uint32_t c = s.corrected_done;
+    const uint32_t need = c + 2 < s.grid.nz ? c + 2 : s.grid.nz - 1;
+    while (s.raw_done <= need) {
+      SPLINTCORE_RETURN_IF_ERROR(report_progress(*s.ctx, "sweep", s.raw_done, s.grid.nz));
+      SPLINTCORE_RETURN_IF_ERROR(make_raw_layer(s, s.raw_done));
+    }
+    make_output_layer(s, c, slot(s, c));
+    ++s.corrected_done;
+  }
+  return Status::ok();
+}
+
+float* closing_slot(Sweep& s, uint32_t c) {
+  return s.cring + (c % (2 * s.m + 1)) * (size_t{s.grid.nx} * s.grid.ny);
+}
+
+// The closed field of layer k: corrected layers k - m .. k + m are in the closing ring.
+void make_closed_layer(Sweep& s, uint32_t k, float* out) {
+  const VolumeGrid& g = s.grid;
+  const size_t layer = size_t{g.nx} * g.ny;
+  const uint32_t window = 2 * s.m + 1;
+  const float* here = s.cring + (k % window) * layer;
+  const double r = s.closing_r;
+  const double reach = s.band - r;  // f(q) - r is at most this (f is clamped to the band)
+  const int64_t nx = g.nx, ny = g.ny, nz = g.nz;
+  for (int64_t y = 0; y < ny; ++y) {
+    for (int64_t x = 0; x < nx; ++x) {
+      const size_t at = static_cast<size_t>(y) * g.nx + static_cast<size_t>(x);
+      const float fp = here[at];
+      if (!(fp > 0.0f)) {  // inside the swept volume: inside its closing too
+        out[at] = fp;
+        continue;
+      }
+      if (static_cast<double>(fp) > r) {  // outside the dilation: outside the closing
+        out[at] = static_cast<float>(static_cast<double>(fp) - r);
+        continue;
+      }
+      ++s.stats->closing_samples;
+      // Least |p - q| - (f(q) - r) over q outside the dilation; it is never below r - f(p)
+      // (f is 1-Lipschitz), so reaching that ends the search, as does an offset too long
+      // for any q to beat the best.
+      const double floor_dc = r - static_cast<double>(fp);
+      double best = HUGE_VAL;
+      for (uint32_t i = 0; i < s.offset_count; ++i) {
+        const auto& o = s.offsets[i];
+        const double len = static_cast<double>(o.length);
+        if (len - reach >= best) break;
+        const int64_t qx = x + o.dx, qy = y + o.dy, qz = static_cast<int64_t>(k) + o.dz;
+        if (qx < 0 || qy < 0 || qz < 0 || qx >= nx || qy >= ny || qz >= nz) continue;
+        const float fq = s.cring[(static_cast<uint64_t>(qz) % window) * layer +
+                                 static_cast<size_t>(qy) * g.nx + static_cast<size_t>(qx)];
+        if (!(static_cast<double>(fq) > r)) continue;
+        const double cand = len - (static_cast<double>(fq) - r);
+        if (cand < best) {
+          best = cand;
+          if (best <= floor_dc) break;
+        }
+      }
+      // Erosion field r - dist(p, outside the dilation); the closing is the swept volume
+      // or the eroded dilation, whichever holds p.
+      double e = best == HUGE_VAL ? -s.band : r - best;
+      if (e < -s.band) e = -s.band;
+      if (e < 0) ++s.stats->closed_samples;
+      const double v = e < static_cast<double>(fp) ? e : static_cast<double>(fp);
+      out[at] = v < 0 && static_cast<float>(v) == 0.0f ? -kTinyPositive : static_cast<float>(v);
+    }
+  }
+}
+
 Status fill_layers(void* user, uint32_t z_begin, uint32_t z_end, Span<float> out) {
   Sweep& s = *static_cast<Sweep*>(user);
   const size_t layer = size_t{s.grid.nx} * s.grid.ny;
   for (uint32_t z = z_begin; z < z_end; ++z) {
     const uint32_t k = z + s.k0;
-    const uint32_t need = k + 2 < s.grid.nz ? k + 2 : s.grid.nz - 1;
-    while (s.raw_done <= need) {
-      SPLINTCORE_RETURN_IF_ERROR(report_progress(*s.ctx, "sweep", s.raw_done, s.grid.nz));
-      SPLINTCORE_RETURN_IF_ERROR(make_raw_layer(s, s.raw_done));
+    float* dst = out.data() + size_t{z - z_begin} * layer;
+    if (s.m == 0) {
+      const uint32_t need = k + 2 < s.grid.nz ? k + 2 : s.grid.nz - 1;
+      while (s.raw_done <= need) {
+        SPLINTCORE_RETURN_IF_ERROR(report_progress(*s.ctx, "sweep", s.raw_done, s.grid.nz));
+        SPLINTCORE_RETURN_IF_ERROR(make_raw_layer(s, s.raw_done));
+      }
+      make_output_layer(s, k, dst);
+      continue;
     }
-    make_output_layer(s, k, out.data() + size_t{z - z_begin} * layer);
+    const uint32_t last = k + s.m < s.grid.nz ? k + s.m : s.grid.nz - 1;
+    SPLINTCORE_RETURN_IF_ERROR(advance(s, last, closing_slot));
+    make_closed_layer(s, k, dst);
   }
   return Status::ok();
 }
@@ -413,6 +505,12 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
     return make_error(StatusCode::kInvalidArgument,
                       "sweep: the voxel size must be > 0 and the extent >= 0 (voxel ", o.voxel,
                       " mm, extent ", o.extent, " mm)");
+  }
+  if (!(o.closing_radius == 0 ||
+        (o.closing_radius >= 2 * o.voxel && o.closing_radius <= 10 * o.voxel))) {
+    return make_error(StatusCode::kInvalidArgument, "sweep: the closing radius must be 0 or "
+                      "from 2 to 10 voxels (radius ", o.closing_radius, " mm, voxel ", o.voxel,
+                      " mm)");
   }
   if (!(o.inset >= 0) || !(o.inset < 2 * o.voxel)) {
     return make_error(StatusCode::kInvalidArgument, "sweep: the inset must be >= 0 and below two "
@@ -499,7 +597,9 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   // a region, its part of that in x and y, and from the jaws' near end to the region's far
   // end in w (the layers before the region are swept but not meshed).
   const double h = o.voxel;
-  const double band = kBandVoxels * h;
+  // The correction reads two samples out; the closing reads f(q) up to 2 r + 2 voxels.
+  const double band = o.closing_radius > 0 ? 2 * o.closing_radius + kBandVoxels * h
+                                           : kBandVoxels * h;
   const double margin = band + h;
   Vec3 lo = box.lo - Vec3{margin, margin, margin};
   Vec3 hi = box.hi + Vec3{margin, margin, o.extent + h};
@@ -571,6 +671,39 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   if (s->state == nullptr || s->ring == nullptr) return arena.exhausted_status();
   s->band = band;
   s->fband = static_cast<float>(band);
+  if (o.closing_radius > 0) {
+    // Offsets within r + 2 voxels, sorted by length (stable: ties keep the scan order).
+    const double reach = o.closing_radius + 2 * h;
+    const int64_t m = static_cast<int64_t>(std::ceil(reach / h));
+    s->m = static_cast<uint32_t>(m);
+    s->closing_r = o.closing_radius;
+    const uint64_t cube = static_cast<uint64_t>((2 * m + 1) * (2 * m + 1) * (2 * m + 1));
+    auto* offsets = arena.allocate_array<Sweep::Offset>(static_cast<size_t>(cube));
+    KeyIndex* by_length = arena.allocate_array<KeyIndex>(static_cast<size_t>(cube));
+    auto* ordered = arena.allocate_array<Sweep::Offset>(static_cast<size_t>(cube));
+    s->cring = arena.allocate_array<float>(static_cast<size_t>(layer) * (2 * s->m + 1));
+    if (offsets == nullptr || by_length == nullptr || ordered == nullptr || s->cring == nullptr) {
+      return arena.exhausted_status();
+    }
+    uint32_t n = 0;
+    for (int64_t dz = -m; dz <= m; ++dz) {
+      for (int64_t dy = -m; dy <= m; ++dy) {
+        for (int64_t dx = -m; dx <= m; ++dx) {
+          if (dx == 0 && dy == 0 && dz == 0) continue;
+          const double len = h * std::sqrt(static_cast<double>(dx * dx + dy * dy + dz * dz));
+          if (len > reach) continue;
+          offsets[n] = {static_cast<int16_t>(dx), static_cast<int16_t>(dy),
+                        static_cast<int16_t>(dz), 0, static_cast<float>(len)};
+          by_length[n] = {static_cast<uint64_t>(dx * dx + dy * dy + dz * dz), n, 0};
+          ++n;
+        }
+      }
+    }
+    SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena, Span<KeyIndex>(by_length, n)));
+    for (uint32_t i = 0; i < n; ++i) ordered[i] = offsets[by_length[i].index];
+    s->offsets = ordered;
+    s->offset_count = n;
+  }
   for (uint64_t i = 0; i < layer; ++i) s->state[i] = s->fband;
   s->vertices = Span<const Vec3>(local, vertex_count);
   s->tris = Span<const Triangle>(sorted, nf);
