@@ -96,17 +96,23 @@ struct MarchingCubesStats {
 };
 
 // Arena bytes of the sweep's working set with `layers` sample layers per fill call (buffer-mode
-// arena, alignment padding included):
-//   16 + align16(4 nx ny (layers + 1)) + align16(8 ceil((nx + 2) / 64) ny (layers + 1))
-//      + align16(40 (nx + 1)(ny + 1))
+// arena, alignment padding included) when its id pool is full size:
+//   16 + align16(4 nx ny (layers + 1)) + align16(8 W ny (layers + 1)) + 80 W (ny + 1)
+//      + align16(40 (nx + 1)(ny + 1)),   W = ceil((nx + 2) / 64)
 // (the samples of the slab plus the carried layer, and their inside bits, one bit per sample
-// with a clear bit beyond each end of a row; ten 32-bit edge ids per grid point of one
-// layer: three in-plane edges on each of the two layers of the current cells, four edges
-// leaving the lower layer upwards). 0 when the grid is empty or the size overflows.
+// with a clear bit beyond each end of a row; rank prefixes, one 64-bit count per 64 grid
+// points for each of ten kinds of edges: three in-plane kinds in each of the two sample planes
+// of the current cells, four leaving the lower plane upwards; and the id pool, where only
+// the edges the surface crosses get a 32-bit vertex id: ten per grid point is the most one
+// cell layer can need). With less free arena the pool takes what there is (the fixed part is
+// the minimum): the output is the same, and a layer that crosses more edges than the pool
+// holds stops the extraction with kArenaExhausted naming the bytes it needs. A closed surface
+// crosses far fewer edges than that (about its area in voxel faces per layer), so the fixed
+// part, some 4.2 bytes per grid point of a layer, is what a large grid needs.
 uint64_t marching_cubes_working_set(const VolumeGrid& grid, uint32_t layers);
 
 struct MarchingCubesMemory {
-  uint64_t minimum = 0;       // one layer per fill call: less than this cannot run
+  uint64_t minimum = 0;       // one layer per fill call, no id pool: less than this cannot run
   uint64_t comfortable = 0;   // min(nz, kMarchingCubesDefaultLayers) layers per fill call
   uint32_t comfortable_layers = 0;
 };

@@ -710,7 +710,9 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   s->tri_wmin = Span<const double>(wmin, nf);
   s->tri_wmax = Span<const double>(wmax, nf);
   s->active.bind(&arena);
-  if (!s->active.reserve(nf < 4096 ? nf : 4096)) return arena.exhausted_status();
+  // All of them at most, reserved now: the list must not grow during the extraction, whose
+  // id pool and output log take the arena above it.
+  if (!s->active.reserve(nf > 0 ? nf : 1)) return arena.exhausted_status();
   s->ctx = &ctx;
   {
     const uint32_t workers = ctx.executor != nullptr ? ctx.executor->concurrency : 1;
@@ -781,8 +783,8 @@ Status drop_caps(const Sweep& s, Arena& arena, Mesh* mesh, SweepStats* st) {
 uint64_t sweep_state_bytes(uint64_t vertex_count, uint64_t triangle_count, uint32_t nx,
                            uint32_t ny) {
   const uint64_t layer = uint64_t{nx} * ny;
-  return 24 * vertex_count + (12 + 16 + 12 + 8 + 8 + 16) * triangle_count +
-         4 * (kRing + 1) * layer + 4096 * 4 + 16 * 64;
+  return 24 * vertex_count + (12 + 16 + 12 + 8 + 8 + 4) * triangle_count +
+         4 * (kRing + 1) * layer + 16 * 64;
 }
 
 Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& options,

@@ -123,10 +123,12 @@ bool align_up(uint64_t v, uint64_t* out) {
 // at bits 0 and nx + 1.
 inline uint64_t bit_words(uint32_t nx) { return (uint64_t{nx} + 2 + 63) / 64; }
 
-// Bytes of the sample buffer (layers + 1, with each layer's inside bits) and of the edge
-// tables; false on overflow.
+// Bytes of the fixed part of the working set (the sample buffer of layers + 1 layers with
+// their inside bits, and the rank prefixes of ten kinds of edges: three in each of two
+// planes, four upward) and of a full id pool (ten ids per grid point: what a layer could need
+// at most); false on overflow.
 bool working_parts(const VolumeGrid& g, uint32_t layers, uint64_t* samples, uint64_t* edges) {
-  uint64_t layer = 0, s = 0, e = 0, pts = 0, bits = 0;
+  uint64_t layer = 0, s = 0, e = 0, pts = 0, bits = 0, prefix = 0;
   if (!checked_mul(g.nx, g.ny, &layer) || !checked_mul(layer, uint64_t{layers} + 1, &s) ||
       !checked_mul(s, 4, &s) || !align_up(s, &s)) {
     return false;
@@ -134,6 +136,10 @@ bool working_parts(const VolumeGrid& g, uint32_t layers, uint64_t* samples, uint
   if (!checked_mul(bit_words(g.nx) * 8, g.ny, &bits) ||
       !checked_mul(bits, uint64_t{layers} + 1, &bits) || !align_up(bits, &bits) ||
       !checked_add(s, bits, &s)) {
+    return false;
+  }
+  if (!checked_mul(bit_words(g.nx) * 8 * 10, uint64_t{g.ny} + 1, &prefix) ||
+      !checked_add(s, prefix, &s)) {
     return false;
   }
   if (!checked_mul(uint64_t{g.nx} + 1, uint64_t{g.ny} + 1, &pts) || !checked_mul(pts, 40, &e) ||
@@ -168,20 +174,71 @@ struct Corner {
   bool inside;  // real && value < iso
 };
 
+// The inside bits of one sample plane: row y (0 <= y < ny) at bits + y * words; null bits
+// for a plane beyond the grid (all outside).
+struct PlaneBits {
+  const uint64_t* bits = nullptr;
+  uint32_t ny = 0;
+  uint64_t words = 0;
+  uint64_t word(int64_t y, uint64_t w) const {
+    if (bits == nullptr || y < 0 || y >= static_cast<int64_t>(ny) || w >= words) return 0;
+    return bits[static_cast<uint64_t>(y) * words + w];
+  }
+  // Word w of the row shifted down by one bit: bit p holds sample p (bit p + 1 of the row).
+  uint64_t next(int64_t y, uint64_t w) const { return (word(y, w) >> 1) | (word(y, w + 1) << 63); }
+};
+
+// Which grid edges the surface crosses, from the inside bits (a bit differs at the two ends),
+// and their vertex ids, stored only for crossed edges. Edges are grouped in sets: the three
+// in-plane kinds (+x, +y, +x+y) of one sample plane, or the four kinds (+z, +x+z, +y+z,
+// +x+y+z) leaving a plane upwards. Point (px, py), px in 0 .. nx and py in 0 .. ny, is the
+// edge's lower sample (px - 1, py - 1); bit px of word row py. An edge's id slot is found by
+// rank: prefix[(kind * (ny + 1) + py) * words + w] counts the crossed edges before word w,
+// popcount counts those before the bit.
+struct EdgeSet {
+  uint64_t* prefix = nullptr;
+  uint32_t* ids = nullptr;
+  uint64_t count = 0;
+  uint64_t begin = 0;  // position of ids in the pool
+};
+
+// The crossed-edge word of kind `kind` at row py, word w. In a plane: lo is the plane (hi
+// unused). Upward: from plane lo to plane hi.
+inline uint64_t plane_word(const PlaneBits& p, unsigned kind, int64_t py, uint64_t w) {
+  const int64_t y = py - 1;
+  const uint64_t a = p.word(y, w);
+  switch (kind) {
+    case 0: return a ^ p.next(y, w);       // +x
+    case 1: return a ^ p.word(y + 1, w);   // +y
+    default: return a ^ p.next(y + 1, w);  // +x+y
+  }
+}
+inline uint64_t upward_word(const PlaneBits& lo, const PlaneBits& hi, unsigned kind, int64_t py,
+                            uint64_t w) {
+  const int64_t y = py - 1;
+  const uint64_t a = lo.word(y, w);
+  switch (kind) {
+    case 0: return a ^ hi.word(y, w);       // +z
+    case 1: return a ^ hi.next(y, w);       // +x+z
+    case 2: return a ^ hi.word(y + 1, w);   // +y+z
+    default: return a ^ hi.next(y + 1, w);  // +x+y+z
+  }
+}
+
 struct Sweep {
   const VolumeGrid* grid = nullptr;
   double iso = 0;
   const MarchingCubesVisitor* visitor = nullptr;
-  uint64_t points_per_layer = 0;  // (nx + 1)(ny + 1): lower endpoints -1 .. n-1
-  uint32_t* inplane_lo = nullptr;  // 3 per point: +x, +y, +x+y at z = cz
-  uint32_t* inplane_hi = nullptr;  // the same at z = cz + 1
-  uint32_t* upward = nullptr;      // 4 per point: +z, +x+z, +y+z, +x+y+z from z = cz
-  // The tables are never cleared: an id is current when it was made in the cell layer that
-  // owns the table (ids grow), i.e. at or above the first id of that layer.
-  uint64_t lo_first = 0;           // first id of the previous cell layer (owner of inplane_lo)
-  uint64_t hi_first = 0;           // first id of this cell layer (inplane_hi, upward)
+  uint64_t words = 0;            // bit words per row
+  PlaneBits lo_bits, hi_bits;    // sample planes cz and cz + 1 of the current cells
+  EdgeSet plane_lo, plane_hi, upward;
+  uint64_t* spare_prefix = nullptr;  // the prefix buffer the next plane set takes
+  uint32_t* pool = nullptr;      // vertex ids of the crossed edges of the three sets
+  uint64_t pool_size = 0;
+  uint64_t pool_next = 0;        // where the next set is placed
   uint64_t vertices = 0;
   uint64_t triangles = 0;
+  int64_t cz = 0;
 };
 
 inline Corner corner_at(const float* row, int64_t x, uint32_t nx, double iso) {
@@ -214,7 +271,7 @@ inline Vec3 edge_vertex(const Sweep& s, int64_t cx, int64_t cy, int64_t cz, unsi
 
 // One cell: corners[k] for cube corner k. Emits its tetrahedra's triangles.
 Status march_cell(Sweep& s, int64_t cx, int64_t cy, int64_t cz, const Corner corners[8]) {
-  const uint64_t row_points = uint64_t{s.grid->nx} + 1;
+  const uint64_t row_count = uint64_t{s.grid->ny} + 1;
   for (int tet = 0; tet < 6; ++tet) {
     const uint8_t* v = kTets[tet];
     unsigned m = 0;
@@ -233,19 +290,27 @@ Status march_cell(Sweep& s, int64_t cx, int64_t cy, int64_t cz, const Corner cor
         const unsigned d = u ^ w;
         const uint64_t px = static_cast<uint64_t>(cx + 1 + static_cast<int64_t>(u & 1u));
         const uint64_t py = static_cast<uint64_t>(cy + 1 + static_cast<int64_t>((u >> 1) & 1u));
-        const uint64_t point = py * row_points + px;
-        uint32_t* slot;
-        uint64_t first = s.hi_first;
+        const uint64_t w64 = px >> 6;
+        const uint64_t below = (uint64_t{1} << (px & 63)) - 1;
+        const EdgeSet* set;
+        unsigned kind;
+        uint64_t word;
         if (d & 4u) {
-          slot = &s.upward[point * 4 + (d & 3u)];
-        } else if (u & 4u) {
-          slot = &s.inplane_hi[point * 3 + d - 1];
+          set = &s.upward;
+          kind = d & 3u;
+          word = upward_word(s.lo_bits, s.hi_bits, kind, static_cast<int64_t>(py), w64);
         } else {
-          slot = &s.inplane_lo[point * 3 + d - 1];
-          first = s.lo_first;
+          set = (u & 4u) ? &s.plane_hi : &s.plane_lo;
+          kind = d - 1;
+          word = plane_word((u & 4u) ? s.hi_bits : s.lo_bits, kind, static_cast<int64_t>(py), w64);
         }
+        const uint64_t rank =
+            set->prefix[(kind * (row_count) + py) * s.words + w64] +
+            static_cast<uint64_t>(__builtin_popcountll(word & below));
+        SPLINTCORE_ASSERT(((word >> (px & 63)) & 1u) != 0 && rank < set->count);
+        uint32_t* slot = &set->ids[rank];
         p[k] = edge_vertex(s, cx, cy, cz, u, d, corners[u], corners[w]);
-        if (*slot == kNoVertex || *slot < first) {
+        if (*slot == kNoVertex) {
           if (s.vertices >= kNoVertex) {
             return make_error(StatusCode::kLimitExceeded, "marching cubes: more than ",
                               uint64_t{kNoVertex}, " vertices (32-bit vertex ids)");
@@ -319,17 +384,78 @@ void classify_layer(const float* layer, uint32_t nx, uint32_t ny, float threshol
 // their inside bits. Only cells whose eight corners are not all inside or all outside are
 // visited (found 64 at a time from the bits); they are visited in the same order as a full
 // scan would, so the output does not change.
+// Ranks the crossed edges of `kinds` kinds into set->prefix (word(kind, py, w) gives them).
+template <class WordFn>
+void rank_edges(const Sweep& s, EdgeSet* set, unsigned kinds, WordFn word) {
+  const uint64_t rows = uint64_t{s.grid->ny} + 1;
+  uint64_t n = 0;
+  for (unsigned kind = 0; kind < kinds; ++kind) {
+    for (uint64_t py = 0; py < rows; ++py) {
+      uint64_t* prefix = set->prefix + (kind * rows + py) * s.words;
+      for (uint64_t w = 0; w < s.words; ++w) {
+        prefix[w] = n;
+        n += static_cast<uint64_t>(__builtin_popcountll(word(kind, static_cast<int64_t>(py), w)));
+      }
+    }
+  }
+  set->count = n;
+}
+
+inline bool overlaps(uint64_t a, uint64_t n, const EdgeSet& e) {
+  return n > 0 && e.count > 0 && a < e.begin + e.count && e.begin < a + n;
+}
+
+// Places set's ids in the pool clear of the live sets, all kNoVertex.
+Status place_ids(Sweep& s, EdgeSet* set, const EdgeSet& keep1, const EdgeSet& keep2) {
+  const uint64_t n = set->count;
+  const uint64_t candidates[4] = {s.pool_next, 0, keep1.begin + keep1.count,
+                                  keep2.begin + keep2.count};
+  for (uint64_t at : candidates) {
+    if (at <= s.pool_size && n <= s.pool_size - at && !overlaps(at, n, keep1) &&
+        !overlaps(at, n, keep2)) {
+      set->begin = at;
+      set->ids = s.pool + at;
+      for (uint64_t i = 0; i < n; ++i) set->ids[i] = kNoVertex;
+      s.pool_next = at + n;
+      return Status::ok();
+    }
+  }
+  const uint64_t live = keep1.count + keep2.count;
+  return make_error(StatusCode::kArenaExhausted, "marching cubes: cell layer ", s.cz,
+                    " needs ids for ", n, " crossed grid edges beside the ", live,
+                    " still in use, and the id pool holds ", s.pool_size,
+                    " (4 bytes each); increase the memory cap by at least ",
+                    4 * (n + live > s.pool_size ? n + live - s.pool_size : n), " bytes");
+}
+
+// Cell layer cz: samples of layer cz in `lo`, of cz + 1 in `hi` (null: beyond the grid), and
+// their inside bits. Only cells whose eight corners are not all inside or all outside are
+// visited (found 64 at a time from the bits); they are visited in the same order as a full
+// scan would, so the output does not change.
 Status march_layer(Sweep& s, int64_t cz, const float* lo, const float* hi, const uint64_t* lo_bits,
                    const uint64_t* hi_bits) {
   const uint32_t nx = s.grid->nx, ny = s.grid->ny;
+  s.cz = cz;
+  s.lo_bits = PlaneBits{lo != nullptr ? lo_bits : nullptr, ny, s.words};
+  s.hi_bits = PlaneBits{hi != nullptr ? hi_bits : nullptr, ny, s.words};
   {
-    uint32_t* t = s.inplane_lo;
-    s.inplane_lo = s.inplane_hi;
-    s.inplane_hi = t;
-    s.lo_first = s.hi_first;
-    s.hi_first = s.vertices;
+    // The upper plane's edges become the lower's; the old lower's prefix buffer is reused.
+    uint64_t* free_prefix = s.plane_lo.prefix;
+    s.plane_lo = s.plane_hi;
+    s.plane_hi = EdgeSet{};
+    s.plane_hi.prefix = free_prefix;
+    const PlaneBits& h = s.hi_bits;
+    rank_edges(s, &s.plane_hi, 3, [&](unsigned kind, int64_t py, uint64_t w) {
+      return plane_word(h, kind, py, w);
+    });
+    SPLINTCORE_RETURN_IF_ERROR(place_ids(s, &s.plane_hi, s.plane_lo, EdgeSet{}));
+    const PlaneBits& l = s.lo_bits;
+    rank_edges(s, &s.upward, 4, [&](unsigned kind, int64_t py, uint64_t w) {
+      return upward_word(l, h, kind, py, w);
+    });
+    SPLINTCORE_RETURN_IF_ERROR(place_ids(s, &s.upward, s.plane_lo, s.plane_hi));
   }
-  const uint64_t words = bit_words(nx);
+  const uint64_t words = s.words;
   for (int64_t cy = -1; cy < static_cast<int64_t>(ny); ++cy) {
     // Rows (y, z) of the four columns: column c = dy + 2 dz holds corners k = x + 2c.
     const float* rows[4];
@@ -417,7 +543,11 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
   }
   SPLINTCORE_ASSERT(ctx.arena != nullptr);
   Arena& arena = *ctx.arena;
-  const uint64_t minimum = marching_cubes_working_set(grid, 1);
+  uint64_t minimum = 0;
+  {
+    uint64_t fixed = 0, pool = 0;
+    if (working_parts(grid, 1, &fixed, &pool)) minimum = fixed + kAlign;
+  }
   if (minimum == 0 || minimum > SIZE_MAX) {
     return make_error(StatusCode::kLimitExceeded, "marching cubes: a layer of ", grid.nx, " x ",
                       grid.ny, " samples is too large to address");
@@ -440,24 +570,39 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
   // Not rewound here: the mesh variant's log grows above the working set (callers rewind).
   const uint64_t layer_floats = uint64_t{grid.nx} * grid.ny;
   const uint64_t layer_words = bit_words(grid.nx) * grid.ny;
+  const uint64_t prefix_words = bit_words(grid.nx) * (uint64_t{grid.ny} + 1);
   float* samples = arena.allocate_array<float>(static_cast<size_t>(layer_floats * (layers + 1)));
   uint64_t* bits = samples == nullptr ? nullptr
                                       : arena.allocate_array<uint64_t>(
                                             static_cast<size_t>(layer_words * (layers + 1)));
-  uint32_t* edges = bits == nullptr
-                        ? nullptr
-                        : arena.allocate_array<uint32_t>(static_cast<size_t>(edge_bytes / 4));
-  if (edges == nullptr) return arena.exhausted_status();
+  uint64_t* prefix = bits == nullptr
+                         ? nullptr
+                         : arena.allocate_array<uint64_t>(static_cast<size_t>(prefix_words * 10));
+  if (prefix == nullptr) return arena.exhausted_status();
+  // The id pool: ten per grid point when the budget allows (no layer can need more), else
+  // what the budget leaves (a layer that needs more is a clean error naming the need).
+  uint64_t pool_ids = edge_bytes / 4;
+  {
+    const uint64_t now_free = arena.cap() > arena.used() ? arena.cap() - arena.used() : 0;
+    const uint64_t budget = now_free / share_divisor;
+    const uint64_t fit = budget > kAlign ? (budget - kAlign) / 4 : 0;
+    if (fit < pool_ids) pool_ids = fit;
+  }
+  uint32_t* pool = pool_ids == 0 ? nullptr
+                                 : arena.allocate_array<uint32_t>(static_cast<size_t>(pool_ids));
+  if (pool_ids > 0 && pool == nullptr) return arena.exhausted_status();
 
   Sweep s;
   s.grid = &grid;
   s.iso = options.iso;
   s.visitor = &visitor;
-  s.points_per_layer = (uint64_t{grid.nx} + 1) * (uint64_t{grid.ny} + 1);
-  s.inplane_lo = edges;
-  s.inplane_hi = edges + s.points_per_layer * 3;
-  s.upward = edges + s.points_per_layer * 6;
-  std::memset(edges, 0xff, static_cast<size_t>(s.points_per_layer * 10 * 4));
+  s.words = bit_words(grid.nx);
+  s.plane_lo.prefix = prefix;
+  s.plane_hi.prefix = prefix + prefix_words * 3;
+  s.upward.prefix = prefix + prefix_words * 6;
+  for (uint64_t i = 0; i < prefix_words * 10; ++i) prefix[i] = 0;
+  s.pool = pool;
+  s.pool_size = pool_ids;
 
   uint32_t fill_calls = 0;
   const int64_t nz = grid.nz;
@@ -594,7 +739,11 @@ Status marching_cubes_memory(const VolumeGrid& grid, MarchingCubesMemory* out) {
   if (grid.nx == 0 || grid.ny == 0 || grid.nz == 0) return check_grid(grid);
   const uint32_t layers =
       grid.nz < kMarchingCubesDefaultLayers ? grid.nz : kMarchingCubesDefaultLayers;
-  const uint64_t minimum = marching_cubes_working_set(grid, 1);
+  uint64_t minimum = 0;
+  {
+    uint64_t fixed = 0, pool = 0;
+    if (working_parts(grid, 1, &fixed, &pool)) minimum = fixed + kAlign;
+  }
   const uint64_t comfortable = marching_cubes_working_set(grid, layers);
   if (minimum == 0 || comfortable == 0) {
     return make_error(StatusCode::kLimitExceeded, "marching cubes: a grid of ", grid.nx, " x ",
