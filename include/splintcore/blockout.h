@@ -91,7 +91,8 @@ struct SweepStats {
 };
 
 // Arena bytes the sweep's own state takes for `jaws` (local vertex copies, sorted triangle
-// list, five layers of the field and one of the column state), without the extractor's
+// list, five layers of the raw field as 16-bit steps of band / 65534, the newest being the
+// column state: 10 bytes per column), without the extractor's
 // working set (marching_cubes_working_set) and output. A closing adds 2 m + 1 layers of the
 // field and 40 (2 m + 1)^3 bytes of search offsets, m = ceil(radius / voxel) + 2.
 uint64_t sweep_state_bytes(uint64_t vertex_count, uint64_t triangle_count, uint32_t nx,

@@ -137,6 +137,7 @@ struct Sweep {
   bool empty = false;          // the region misses the sweep: nothing to extract
   double band = 0;
   float fband = 0;
+  double step = 0;             // band / 65534: one unit of the stored distances
   bool correct_bias = true;
   // Jaws in the local frame.
   Span<const Vec3> vertices;   // all jaws, concatenated
@@ -146,8 +147,11 @@ struct Sweep {
   uint32_t next_tri = 0;
   ArenaArray<uint32_t> active;
   // Column state and raw layers.
-  float* state = nullptr;      // nx * ny
-  float* ring = nullptr;       // kRing * nx * ny; layer k at slot k % kRing
+  // Raw layers: the running minimum of each column, as distance / step rounded up (0: the
+  // column has met a jaw; kBeyondBand: at least the band). Layer k at slot k % kRing; the
+  // newest is the column state.
+  uint16_t* ring = nullptr;
+  uint16_t* state = nullptr;
   uint32_t raw_done = 0;       // raw layers 0 .. raw_done - 1 are made
   // Closing (closing_radius > 0): corrected layers in a ring of 2 m + 1, and the search's
   // offsets sorted by length.
@@ -165,6 +169,19 @@ struct Sweep {
   uint32_t bands = 1;          // bands of rows per layer (the executor's concurrency, x 4)
   SweepStats* stats = nullptr;
 };
+
+constexpr uint16_t kBeyondBand = 65535;
+
+// A distance in (0, band) as a count of steps, rounded up (so a minimum of counts is the count
+// of the minimum), at least 1 (0 marks inside); kBeyondBand from the band on.
+inline uint16_t quantize(const Sweep& s, double d) {
+  if (!(d < s.band)) return kBeyondBand;
+  const double q = std::ceil(d / s.step);
+  return q < 1 ? 1 : (q > 65534 ? 65534 : static_cast<uint16_t>(q));
+}
+inline float dequantize(const Sweep& s, uint16_t q) {
+  return q == kBeyondBand ? s.fband : static_cast<float>(static_cast<double>(q) * s.step);
+}
 
 inline double sample_coord(double origin, double spacing, int64_t i) {
   return origin + spacing * static_cast<double>(i);
@@ -205,16 +222,16 @@ void sweep_rows(Sweep& s, double w_lo, double w_hi, int64_t y_begin, int64_t y_e
     const bool vertical = orient2d(a.x, a.y, b.x, b.y, c.x, c.y) == 0;
     for (int64_t y = y0; y <= y1; ++y) {
       const double py = sample_coord(s.lattice.y, g.spacing.y, s.iy0 + y);
-      float* row = s.state + static_cast<size_t>(y) * g.nx;
+      uint16_t* row = s.state + static_cast<size_t>(y) * g.nx;
       for (int64_t x = x0; x <= x1; ++x) {
-        if (row[x] == 0.0f) continue;  // inside for good
+        if (row[x] == 0) continue;  // inside for good
         const double px = sample_coord(s.lattice.x, g.spacing.x, s.ix0 + x);
         const Vec3 p{px, py, w_lo}, q{px, py, w_hi};
         ++counts->segment_tests;
         double d2 = 0;
         if (vertical) {
           if (segment_intersects_triangle(p, q, a, b, c)) {
-            row[x] = 0.0f;
+            row[x] = 0;
             ++counts->inside_columns;
             continue;
           }
@@ -231,7 +248,7 @@ void sweep_rows(Sweep& s, double w_lo, double w_hi, int64_t y_begin, int64_t y_e
             // not strictly on the outer side (orient3d < 0 there). Crossings below w_lo were
             // found at an earlier layer (the triangle is active from w_hi >= w_min - band).
             if (orient3d(a, b, c, q) >= 0) {
-              row[x] = 0.0f;
+              row[x] = 0;
               ++counts->inside_columns;
               continue;
             }
@@ -272,9 +289,8 @@ void sweep_rows(Sweep& s, double w_lo, double w_hi, int64_t y_begin, int64_t y_e
           }
         }
         if (d2 < band2) {
-          float d = static_cast<float>(std::sqrt(d2));
-          if (d == 0.0f) d = kTinyPositive;
-          if (d < row[x]) row[x] = d;
+          const uint16_t steps = quantize(s, std::sqrt(d2));
+          if (steps < row[x]) row[x] = steps;
         }
       }
     }
@@ -287,6 +303,18 @@ Status make_raw_layer(Sweep& s, uint32_t k) {
   const double h = g.spacing.z;
   const double w_hi = sample_coord(g.origin.z, h, k);
   const double w_lo = sample_coord(g.origin.z, h, static_cast<int64_t>(k) - 1);
+  // The state is the newest raw layer: layer k starts as a copy of layer k - 1 (all beyond
+  // the band for the first) and takes the minimum in place.
+  {
+    const size_t layer = size_t{g.nx} * g.ny;
+    uint16_t* slot = s.ring + (k % kRing) * layer;
+    if (k == 0) {
+      for (size_t i = 0; i < layer; ++i) slot[i] = kBeyondBand;
+    } else {
+      std::memcpy(slot, s.ring + ((k - 1) % kRing) * layer, layer * sizeof(uint16_t));
+    }
+    s.state = slot;
+  }
   // Triangles that can come within the band of this segment.
   while (s.next_tri < s.tris.size() && s.tri_wmin[s.next_tri] <= w_hi + s.band) {
     if (!s.active.push_back(s.next_tri)) return s.ctx->arena->exhausted_status();
@@ -315,8 +343,6 @@ Status make_raw_layer(Sweep& s, uint32_t k) {
     s.stats->distance_evaluations += counts[i].distance_evaluations;
     s.stats->inside_columns += counts[i].inside_columns;
   }
-  const size_t layer = size_t{g.nx} * g.ny;
-  std::memcpy(s.ring + (k % kRing) * layer, s.state, layer * sizeof(float));
   s.raw_done = k + 1;
   return Status::ok();
 }
@@ -326,27 +352,29 @@ void make_output_layer(Sweep& s, uint32_t k, float* out) {
   const VolumeGrid& g = s.grid;
   const size_t layer = size_t{g.nx} * g.ny;
   // Raw layers k - 2 .. k + 2 (null: beyond the grid or not made).
-  const float* z[5];
+  const uint16_t* z[5];
   for (int dz = -2; dz <= 2; ++dz) {
     const int64_t kk = static_cast<int64_t>(k) + dz;
     z[dz + 2] = (kk < 0 || kk >= static_cast<int64_t>(s.raw_done))
                     ? nullptr
                     : s.ring + (static_cast<uint64_t>(kk) % kRing) * layer;
   }
-  const float* here = z[2];
-  std::memcpy(out, here, layer * sizeof(float));
+  const uint16_t* here = z[2];
   const float fband = s.fband;
   const int64_t nx = g.nx, ny = g.ny;
   for (int64_t y = 0; y < ny; ++y) {
     const size_t row = static_cast<size_t>(y) * g.nx;
     for (int64_t x = 0; x < nx; ++x) {
       const size_t at = row + static_cast<size_t>(x);
-      if (here[at] > 0.0f) continue;  // outside: the exact distance, as is
+      if (here[at] != 0) {  // outside: the exact distance, as is
+        out[at] = dequantize(s, here[at]);
+        continue;
+      }
       float value = -fband;
       if (s.correct_bias) {
         // Samples i + e and i + 2 e along each axis direction e (null pointer: beyond).
-        const float* near[6];
-        const float* far[6];
+        const uint16_t* near[6];
+        const uint16_t* far[6];
         const size_t sx = 1, sy = g.nx;
         near[0] = x + 1 < nx ? here + at + sx : nullptr;
         far[0] = x + 2 < nx ? here + at + 2 * sx : nullptr;
@@ -365,13 +393,15 @@ void make_output_layer(Sweep& s, uint32_t k, float* out) {
         bool found = false;
         for (int e = 0; e < 6; ++e) {
           if (near[e] == nullptr || far[e] == nullptr) continue;
-          const float f1 = *near[e], f2 = *far[e];
-          if (!(f1 > 0.0f) || !(f2 > f1) || !(f2 < fband)) continue;
-          const double slope = static_cast<double>(f2) - static_cast<double>(f1);
+          const uint16_t q1 = *near[e], q2 = *far[e];
+          if (q1 == 0 || !(q2 > q1) || q2 == kBeyondBand) continue;
+          const double f1 = static_cast<double>(dequantize(s, q1));
+          const double f2 = static_cast<double>(dequantize(s, q2));
+          const double slope = f2 - f1;
           if (!found || slope > best_slope) {
             found = true;
             best_slope = slope;
-            best = 2.0 * static_cast<double>(f1) - static_cast<double>(f2);
+            best = 2.0 * f1 - f2;
           }
         }
         if (found) {
@@ -663,14 +693,14 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   }
   uint64_t layer = 0, ring_bytes = 0;
   if (!checked_mul(uint64_t{s->grid.nx}, s->grid.ny, &layer) ||
-      !checked_mul(layer, 4 * (kRing + 1), &ring_bytes) || ring_bytes > SIZE_MAX) {
+      !checked_mul(layer, 2 * kRing, &ring_bytes) || ring_bytes > SIZE_MAX) {
     return make_error(StatusCode::kLimitExceeded, "sweep: the grid's cross-section is too large");
   }
-  s->state = arena.allocate_array<float>(static_cast<size_t>(layer));
-  s->ring = arena.allocate_array<float>(static_cast<size_t>(layer) * kRing);
-  if (s->state == nullptr || s->ring == nullptr) return arena.exhausted_status();
+  s->ring = arena.allocate_array<uint16_t>(static_cast<size_t>(layer) * kRing);
+  if (s->ring == nullptr) return arena.exhausted_status();
   s->band = band;
   s->fband = static_cast<float>(band);
+  s->step = band / 65534.0;
   if (o.closing_radius > 0) {
     // Offsets within r + 2 voxels, sorted by length (stable: ties keep the scan order).
     const double reach = o.closing_radius + 2 * h;
@@ -704,7 +734,6 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
     s->offsets = ordered;
     s->offset_count = n;
   }
-  for (uint64_t i = 0; i < layer; ++i) s->state[i] = s->fband;
   s->vertices = Span<const Vec3>(local, vertex_count);
   s->tris = Span<const Triangle>(sorted, nf);
   s->tri_wmin = Span<const double>(wmin, nf);
@@ -784,7 +813,7 @@ uint64_t sweep_state_bytes(uint64_t vertex_count, uint64_t triangle_count, uint3
                            uint32_t ny) {
   const uint64_t layer = uint64_t{nx} * ny;
   return 24 * vertex_count + (12 + 16 + 12 + 8 + 8 + 4) * triangle_count +
-         4 * (kRing + 1) * layer + 16 * 64;
+         2 * kRing * layer + 16 * 64;
 }
 
 Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& options,
