@@ -58,6 +58,148 @@ inline Vec3 ct_to_patient(const CtVolume& v, const Vec3& p) {
   return v.origin + ((a + b) + c);
 }
 
+
+// ---------------------------------------------------------------------------------------------
+// Readers: DICOM series (PS3.5 / PS3.10, uncompressed), NRRD (teem NRRD0001-0005, raw) and
+// MetaImage (.mha / .mhd, raw). No dependencies: bytes come through ByteSource, files a header
+// points to (NRRD "data file", MetaImage ElementDataFile, the files of a DICOM series) through
+// caller callbacks, so firmware can serve them from flash and a tool from disk.
+//
+// Memory: everything comes from ctx.arena. The voxels (2 bytes each) are the only thing left
+// there on success, at the position the arena's top had on entry; temporaries (a read chunk
+// of options.chunk_bytes; for DICOM 96 bytes per slice file) are taken above them and rewound.
+// The total is computed from the header (after the limits below are checked, with overflow
+// checks) and compared with the arena's free space before anything is allocated: a shortfall
+// is kArenaExhausted naming the bytes needed. Headers are parsed in a fixed 1 KiB stack window.
+// On error nothing is left in the arena and *out is untouched.
+//
+// Conversion: HU = slope * stored + intercept in double, in that order (no FMA), rounded to
+// nearest with halves away from zero, saturated to int16 (counted in CtVolume::saturated). NRRD
+// and MetaImage have no rescale (slope 1, intercept 0): their values are taken as HU.
+// Floating-point voxels that are NaN or infinite are kNonFinite naming the voxel index.
+//
+// Frames: the axes and origin are taken as the file states them, in the file's patient space
+// (DICOM: LPS; NRRD: its `space` field, MetaImage: its AnatomicalOrientation, both recorded in
+// CtInfo::space but NOT converted: a RAS file stays RAS).
+//
+// Trailing bytes: NRRD and MetaImage data (attached or detached) may be followed by more bytes,
+// which are ignored (both formats' reference readers read only what the header describes);
+// DICOM Pixel Data must hold exactly rows x columns x bytes per sample, plus at most one pad
+// byte to an even length; elements after Pixel Data are ignored.
+
+enum class CtFormat : uint8_t { kUnknown = 0, kDicom, kNrrd, kMetaImage };
+
+// "dicom", "nrrd", "metaimage", "unknown".
+const char* ct_format_name(CtFormat format);
+
+struct CtReadOptions {
+  uint32_t max_dimension = 4096;            // per axis (and DICOM files per series)
+  uint64_t max_voxels = uint64_t{1} << 31;  // nx * ny * nz
+  uint64_t max_header_bytes = 1u << 20;     // text headers and DICOM data before Pixel Data
+  size_t chunk_bytes = 64 * 1024;           // read buffer for voxel data, from the arena
+                                            // (at least 1024 is used)
+  double min_spacing = 1.0e-3;              // mm; smaller is an error ("wrong units?")
+  double max_spacing = 100.0;               // mm; larger is an error ("wrong units?")
+  // DICOM slice spacing must be uniform: each gap within max(tolerance_mm, relative x mean).
+  double slice_spacing_tolerance_mm = 0.01;
+  double slice_spacing_tolerance_relative = 0.01;
+  // Direction cosines: |length - 1| and |dot| of two axes at most this; DICOM slices must agree
+  // on orientation and pixel spacing within it too (per component / in mm).
+  double orientation_tolerance = 1.0e-4;
+};
+
+// What a reader found: for a tool to print.
+struct CtInfo {
+  CtFormat format = CtFormat::kUnknown;
+  uint32_t nx = 0, ny = 0, nz = 0;
+  Vec3 spacing{};
+  char stored_type[16] = {};        // "int16", "uint16", "int8", "uint8", "int32", "uint32",
+                                    // "float32", "float64"
+  uint8_t bits_stored = 0;          // DICOM Bits Stored; otherwise the type's width
+  bool big_endian = false;
+  double slope = 1.0;               // DICOM: of the first slice (each slice uses its own)
+  double intercept = 0.0;
+  bool rescale_varies = false;      // DICOM: slices had different slope or intercept
+  char transfer_syntax[65] = {};    // DICOM: of the series' file 0
+  char photometric[17] = {};        // DICOM: MONOCHROME1 or MONOCHROME2
+  char space[64] = {};              // NRRD `space`, MetaImage AnatomicalOrientation, DICOM "LPS"
+  uint32_t slice_count = 0;         // DICOM files, otherwise nz
+  bool detached = false;            // NRRD / MetaImage data in another file
+  uint64_t saturated = 0;
+};
+
+// Opens files named by a header (NRRD `data file`, MetaImage ElementDataFile). `name` is as
+// written in the header (relative names are the opener's business, e.g. relative to the
+// header's folder). open() fills *out and returns ok, or an error (e.g. kIoError naming the
+// file); close() is called once for every successful open(). At most one file is open at a time.
+struct CtFileOpener {
+  Status (*open)(void* user, const char* name, ByteSource* out) = nullptr;
+  void (*close)(void* user, ByteSource* source) = nullptr;
+  void* user = nullptr;
+};
+
+// The files of a DICOM series, opened by index 0..count-1 (in any order: slices are ordered by
+// position). Each file may be opened twice: once for its header, once for its pixels. At most
+// one is open at a time; close() is called once for every successful open().
+struct CtSeries {
+  uint32_t count = 0;
+  Status (*open)(void* user, uint32_t index, ByteSource* out) = nullptr;
+  void (*close)(void* user, uint32_t index, ByteSource* source) = nullptr;
+  void* user = nullptr;
+};
+
+// Files in memory (firmware flash, tests, fuzzers): the opener matches names exactly, the
+// series serves files[0..count). Holds the state of the one open file.
+struct CtMemoryFile {
+  const char* name = nullptr;
+  const uint8_t* data = nullptr;
+  uint64_t size = 0;
+};
+struct CtMemoryFiles {
+  const CtMemoryFile* files = nullptr;
+  uint32_t count = 0;
+  size_t max_chunk = 0;  // MemorySource::max_chunk of every opened file
+  MemorySource current{};
+};
+CtFileOpener ct_memory_opener(CtMemoryFiles* files);
+CtSeries ct_memory_series(CtMemoryFiles* files);
+
+// NRRD (attached .nrrd, or a detached .nhdr header whose data file comes through `opener`;
+// opener may be null for attached data). Fields: type (8/16/32-bit integers, float, double),
+// dimension 3, sizes, encoding raw, endian, space directions or spacings (neither: 1 mm, identity
+// axes), space origin, space, data file, byte skip (-1: data at the end, needs a known size),
+// line skip. Space directions give spacing = vector lengths and axes = normalised vectors.
+// Errors: kParseError (file and line), kUnsupported (encoding, type, dimension, LIST / pattern
+// data files), kLimitExceeded, kTruncated (byte offset and file), kNonFinite (voxel index),
+// kIoError, kArenaExhausted.
+Status read_nrrd(const Context& ctx, const ByteSource& source, const CtFileOpener* opener,
+                 const CtReadOptions& options, CtVolume* out, CtInfo* info);
+
+// MetaImage (.mha with ElementDataFile = LOCAL, or .mhd naming a data file opened through
+// `opener`). Keys: ObjectType Image, NDims 3, DimSize, ElementSpacing (or ElementSize),
+// Offset / Origin / Position, TransformMatrix / Rotation / Orientation (row k = direction of
+// axis k), ElementType MET_CHAR/UCHAR/SHORT/USHORT/INT/UINT/FLOAT/DOUBLE, BinaryData True,
+// BinaryDataByteOrderMSB / ElementByteOrderMSB, CompressedData (True: kUnsupported),
+// ElementNumberOfChannels 1, HeaderSize, AnatomicalOrientation, ElementDataFile (last key).
+// Errors as read_nrrd().
+Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFileOpener* opener,
+                      const CtReadOptions& options, CtVolume* out, CtInfo* info);
+
+// A DICOM series, one single-frame CT image per file: 128-byte preamble, "DICM", group 0002 in
+// explicit VR little endian; transfer syntax 1.2.840.10008.1.2 or 1.2.840.10008.1.2.1 (others:
+// kUnsupported "unsupported transfer syntax <UID>"). Sequences and items of defined or
+// undefined length are skipped (nesting bounded at 32, iteratively); only top-level elements
+// count. Slices are ordered by Image Position projected on the normal row x column; spacing
+// between slices must be uniform (CtReadOptions), positions distinct and along the normal (no
+// gantry tilt), and all slices must share size, orientation, pixel spacing and pixel format.
+// A single slice takes its z spacing from Spacing Between Slices or Slice Thickness.
+// Axes: axis_x = row direction (+column index), axis_y = column direction, axis_z = normal
+// pointing to increasing slice position; origin = position of the first slice.
+// Errors: kParseError (file, byte offset, tag), kUnsupported, kLimitExceeded, kTruncated,
+// kInvalidArgument (count 0), kIoError, kArenaExhausted.
+Status read_dicom_series(const Context& ctx, const CtSeries& series,
+                         const CtReadOptions& options, CtVolume* out, CtInfo* info);
+
 }  // namespace splintcore
 
 #endif  // SPLINTCORE_CT_H

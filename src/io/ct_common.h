@@ -1,0 +1,127 @@
+// Shared parts of the CT readers (src/io/ct_*.cpp): a windowed byte reader over a ByteSource,
+// text-header lines, locale-free number parsing, the arena budget check, and the voxel
+// conversion stored value -> HU (DICOM PS3.3 C.11.1.1.2 Modality LUT: HU = m * SV + b).
+#ifndef SPLINTCORE_SRC_IO_CT_COMMON_H
+#define SPLINTCORE_SRC_IO_CT_COMMON_H
+
+#include "splintcore/ct.h"
+
+namespace splintcore {
+namespace ct_detail {
+
+constexpr size_t kHeaderWindow = 1024;  // stack window for headers
+constexpr size_t kLineCapacity = 512;   // longest header line kept (longer lines: flagged)
+
+// A window over a ByteSource: buf[pos, end) holds unread bytes; base is the absolute offset of
+// buf[0]. The buffer is the caller's (a stack array for headers, an arena chunk for voxels).
+struct Reader {
+  const ByteSource* source = nullptr;
+  uint8_t* buf = nullptr;
+  size_t cap = 0;
+  size_t pos = 0;
+  size_t end = 0;
+  uint64_t base = 0;
+  bool at_eof = false;
+
+  void init(const ByteSource* s, uint8_t* buffer, size_t capacity) {
+    source = s; buf = buffer; cap = capacity; pos = end = 0; base = 0; at_eof = false;
+  }
+  uint64_t offset() const { return base + pos; }
+  size_t available() const { return end - pos; }
+  // Makes at least n (<= cap) bytes available unless the source ends first.
+  Status fill(size_t n);
+  // Moves the unread bytes into a new (larger) buffer.
+  void rebuffer(uint8_t* buffer, size_t capacity);
+  // Skips n bytes; kTruncated (with `what`) if the source ends first.
+  Status skip(uint64_t n, const char* what);
+  // Reads one text line (without "\n" or "\r\n") into line[0..kLineCapacity); *length is the
+  // kept length, *too_long set when the line was longer (the rest is consumed). *got_line false
+  // at the end of input. Lines count toward `budget` (kLimitExceeded when spent).
+  Status read_line(char* line, size_t* length, bool* too_long, bool* got_line,
+                   uint64_t* budget);
+};
+
+// Names the file on an error (source name when set).
+Status in_source(Status s, const ByteSource& source);
+
+// Text helpers (ASCII only, no locale).
+bool equal_nocase(const char* a, size_t an, const char* b);
+void trim(const char** text, size_t* length);
+// Parses a decimal number (optional sign, digits, point, exponent; no inf/nan/hex). The whole
+// text must be the number (after trimming spaces).
+bool parse_double(const char* text, size_t length, double* out);
+bool parse_i64(const char* text, size_t length, int64_t* out);
+// Splits on spaces/tabs (and on `extra`, e.g. ',' or '\\'), parsing up to `max` numbers;
+// *count is how many were found (fails on a bad number or more than max).
+bool parse_doubles(const char* text, size_t length, char extra, double* out, size_t max,
+                   size_t* count);
+
+// Checks the volume's size against the limits and computes the voxel bytes.
+Status check_size(uint64_t nx, uint64_t ny, uint64_t nz, const CtReadOptions& options,
+                  uint64_t* voxel_bytes);
+// Checks need (voxel bytes + temporaries, with 16 bytes of alignment per allocation) against
+// the arena's free space: kArenaExhausted naming it.
+Status check_budget(const Arena& arena, uint64_t voxel_bytes, uint64_t temporaries,
+                    uint32_t allocations);
+// Spacing sanity: finite, > 0, within [min_spacing, max_spacing].
+Status check_spacing(double value, const char* axis, const CtReadOptions& options);
+// Unit and orthogonal within tolerance; normalises the three in place.
+Status check_axes(Vec3* x, Vec3* y, Vec3* z, const CtReadOptions& options);
+
+// Voxel format of stored values.
+struct VoxelFormat {
+  uint8_t bytes = 2;        // 1, 2, 4 or 8
+  bool is_signed = true;
+  bool is_float = false;
+  bool big_endian = false;
+  uint8_t bits_stored = 0;  // integers: low bits kept (0: all), sign-extended when signed
+};
+
+// Fills info->stored_type from the format.
+void describe_type(const VoxelFormat& format, CtInfo* info);
+
+// Reads `count` stored values from the reader (refilling its buffer) and converts them to HU
+// into out[0..count). first_index numbers the voxels in kNonFinite messages; a short source is
+// kTruncated at the offset where it ended.
+Status convert_voxels(Reader& reader, const VoxelFormat& format, uint64_t count, double slope,
+                      double intercept, int16_t* out, uint64_t first_index,
+                      uint64_t* saturated);
+
+// HU of one value (exposed for tests): slope * v + intercept, rounded half away from zero,
+// saturated (sets *clamped).
+int16_t to_hu(double value, double slope, double intercept, bool* clamped);
+
+// Closes an opened file at scope exit.
+struct OpenedFile {
+  const CtFileOpener* opener = nullptr;
+  ByteSource source{};
+  bool open = false;
+  ~OpenedFile() {
+    if (open && opener->close != nullptr) opener->close(opener->user, &source);
+  }
+};
+
+// The arena chunk for voxel data: chunk_bytes rounded down to a multiple of 8, at least
+// kHeaderWindow (attached data already in the header window moves into it).
+size_t chunk_size(const CtReadOptions& options);
+
+// Voxel data of a text-header format (NRRD, MetaImage): attached (continuing `header`, which
+// is positioned right after the header) or detached (data_file opened through `opener`).
+struct RawData {
+  VoxelFormat format{};
+  uint32_t nx = 0, ny = 0, nz = 0;
+  const char* data_file = nullptr;  // null: attached
+  uint64_t line_skip = 0;           // lines skipped before byte_skip
+  int64_t byte_skip = 0;            // -1: the data ends the file (needs a known size)
+};
+
+// Checks limits and the arena budget, allocates the voxels (left in the arena on success:
+// *hu), reads and converts them; everything else is rewound. Errors name the data's file.
+Status read_raw_volume(const Context& ctx, Reader& header, const ByteSource& header_source,
+                       const CtFileOpener* opener, const RawData& data,
+                       const CtReadOptions& options, int16_t** hu, uint64_t* saturated);
+
+}  // namespace ct_detail
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_SRC_IO_CT_COMMON_H

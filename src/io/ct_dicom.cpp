@@ -1,0 +1,734 @@
+// DICOM series reader. Sources: DICOM PS3.10 section 7 (file format: 128-byte preamble,
+// "DICM", File Meta Information group 0002 in explicit VR little endian), PS3.5 sections 7.1
+// (data elements, explicit and implicit VR; the VRs with 32-bit lengths in table 7.1-1),
+// 7.5 (sequences and items of defined and undefined length), 8 (native pixel data) and A.1/A.2
+// (transfer syntaxes 1.2.840.10008.1.2 and 1.2.840.10008.1.2.1); PS3.3 C.7.6.2 (Image Plane:
+// Image Position / Orientation (Patient), Pixel Spacing = row spacing then column spacing),
+// C.7.6.3 (Image Pixel) and C.11.1.1.2 (Modality LUT: rescale slope and intercept).
+//
+// Two passes: headers of every file (up to Pixel Data, in a fixed stack window), then the
+// slices ordered by their position along the normal, pixels read into place.
+#include "io/ct_common.h"
+
+#include <cmath>
+
+namespace splintcore {
+
+using namespace ct_detail;
+
+namespace {
+
+constexpr uint32_t kUndefinedLength = 0xFFFFFFFFu;
+constexpr uint32_t kMaxValueBytes = 256;  // longest value of a tag this reader keeps
+constexpr int kMaxNesting = 32;
+
+constexpr uint32_t tag_of(uint32_t group, uint32_t element) { return (group << 16) | element; }
+constexpr uint32_t kTransferSyntax = tag_of(0x0002, 0x0010);
+constexpr uint32_t kSliceThickness = tag_of(0x0018, 0x0050);
+constexpr uint32_t kSpacingBetweenSlices = tag_of(0x0018, 0x0088);
+constexpr uint32_t kImagePosition = tag_of(0x0020, 0x0032);
+constexpr uint32_t kImageOrientation = tag_of(0x0020, 0x0037);
+constexpr uint32_t kSamplesPerPixel = tag_of(0x0028, 0x0002);
+constexpr uint32_t kPhotometric = tag_of(0x0028, 0x0004);
+constexpr uint32_t kNumberOfFrames = tag_of(0x0028, 0x0008);
+constexpr uint32_t kRows = tag_of(0x0028, 0x0010);
+constexpr uint32_t kColumns = tag_of(0x0028, 0x0011);
+constexpr uint32_t kPixelSpacing = tag_of(0x0028, 0x0030);
+constexpr uint32_t kBitsAllocated = tag_of(0x0028, 0x0100);
+constexpr uint32_t kBitsStored = tag_of(0x0028, 0x0101);
+constexpr uint32_t kHighBit = tag_of(0x0028, 0x0102);
+constexpr uint32_t kPixelRepresentation = tag_of(0x0028, 0x0103);
+constexpr uint32_t kRescaleIntercept = tag_of(0x0028, 0x1052);
+constexpr uint32_t kRescaleSlope = tag_of(0x0028, 0x1053);
+constexpr uint32_t kPixelData = tag_of(0x7FE0, 0x0010);
+
+inline uint16_t u16(const uint8_t* p) { return static_cast<uint16_t>(p[0] | (p[1] << 8)); }
+inline uint32_t u32(const uint8_t* p) {
+  return uint32_t{p[0]} | (uint32_t{p[1]} << 8) | (uint32_t{p[2]} << 16) | (uint32_t{p[3]} << 24);
+}
+
+// PS3.5 table 7.1-1: VRs whose explicit encoding has 2 reserved bytes and a 32-bit length.
+bool long_vr(uint8_t a, uint8_t b) {
+  static const char kLong[][3] = {"OB", "OD", "OF", "OL", "OV", "OW", "SQ", "SV",
+                                  "UC", "UN", "UR", "UT", "UV"};
+  for (const auto& v : kLong) {
+    if (a == static_cast<uint8_t>(v[0]) && b == static_cast<uint8_t>(v[1])) return true;
+  }
+  return false;
+}
+
+Status& append_tag(Status& s, uint32_t tag) {
+  static const char kHex[] = "0123456789ABCDEF";
+  char text[12];
+  text[0] = '(';
+  for (int i = 0; i < 4; ++i) text[1 + i] = kHex[(tag >> (28 - 4 * i)) & 0xF];
+  text[5] = ',';
+  for (int i = 0; i < 4; ++i) text[6 + i] = kHex[(tag >> (12 - 4 * i)) & 0xF];
+  text[10] = ')';
+  text[11] = '\0';
+  return s.append(text);
+}
+
+Status tag_error(StatusCode code, uint32_t tag, const char* name, const char* what,
+                 uint64_t offset) {
+  Status s = Status::error(code, "");
+  append_tag(s, tag).append(" ").append(name).append(": ").append(what);
+  s.at_byte(offset);
+  return s;
+}
+
+// What one file's header says.
+struct Header {
+  bool implicit = false;
+  char transfer_syntax[65] = {};
+  char photometric[17] = {};
+  uint32_t rows = 0, columns = 0;
+  uint32_t bits_allocated = 0, bits_stored = 0, high_bit = 0, pixel_representation = 0;
+  uint32_t samples = 1;
+  int64_t frames = 1;
+  bool have_rows = false, have_columns = false, have_bits_allocated = false;
+  bool have_bits_stored = false, have_high_bit = false, have_pixel_representation = false;
+  bool have_position = false, have_orientation = false, have_pixel_spacing = false;
+  double slope = 1.0, intercept = 0.0;
+  double pixel_spacing[2] = {0, 0};  // row spacing (between rows), column spacing
+  double position[3] = {0, 0, 0};
+  double orientation[6] = {0, 0, 0, 0, 0, 0};
+  double slice_thickness = 0, spacing_between = 0;
+  uint64_t pixel_offset = 0;
+  uint64_t pixel_length = 0;
+  bool have_pixels = false;
+};
+
+// One slice kept between the passes.
+struct SliceRecord {
+  double position[3];
+  double slope;
+  double intercept;
+  uint64_t pixel_offset;
+  uint32_t file;
+  uint32_t pad;
+};
+
+void copy_string(char* out, size_t cap, const uint8_t* v, uint32_t n) {
+  const char* text = reinterpret_cast<const char*>(v);
+  size_t len = n;
+  trim(&text, &len);
+  if (len >= cap) len = cap - 1;
+  std::memcpy(out, text, len);
+  out[len] = '\0';
+}
+
+// Interprets a kept top-level element (value at v, n bytes, element at byte `at`).
+Status take_value(Header* h, uint32_t tag, const uint8_t* v, uint32_t n, uint64_t at) {
+  auto us = [&](const char* name, uint32_t* out, bool* have) {
+    if (n != 2) return tag_error(StatusCode::kParseError, tag, name, "expected 2 bytes (US)", at);
+    *out = u16(v);
+    if (have != nullptr) *have = true;
+    return Status::ok();
+  };
+  auto ds = [&](const char* name, double* out, size_t wanted) {
+    size_t count = 0;
+    if (!parse_doubles(reinterpret_cast<const char*>(v), n, '\\', out, wanted, &count) ||
+        count != wanted) {
+      Status s = tag_error(StatusCode::kParseError, tag, name, "expected ", at);
+      s.append_u64(wanted);
+      s.append(" decimal number(s), got \"");
+      s.append(reinterpret_cast<const char*>(v), n < 64 ? n : 64);
+      s.append("\"");
+      return s;
+    }
+    return Status::ok();
+  };
+  switch (tag) {
+    case kSliceThickness: {
+      double t = 0;
+      if (n > 0 && ds("Slice Thickness", &t, 1).is_ok()) h->slice_thickness = t;
+      return Status::ok();  // informative only: used for a single slice when valid
+    }
+    case kSpacingBetweenSlices: {
+      double t = 0;
+      if (n > 0 && ds("Spacing Between Slices", &t, 1).is_ok()) h->spacing_between = t;
+      return Status::ok();
+    }
+    case kImagePosition:
+      h->have_position = true;
+      return ds("Image Position (Patient)", h->position, 3);
+    case kImageOrientation:
+      h->have_orientation = true;
+      return ds("Image Orientation (Patient)", h->orientation, 6);
+    case kPixelSpacing:
+      h->have_pixel_spacing = true;
+      return ds("Pixel Spacing", h->pixel_spacing, 2);
+    case kRescaleIntercept:
+      return ds("Rescale Intercept", &h->intercept, 1);
+    case kRescaleSlope:
+      return ds("Rescale Slope", &h->slope, 1);
+    case kSamplesPerPixel: return us("Samples per Pixel", &h->samples, nullptr);
+    case kRows: return us("Rows", &h->rows, &h->have_rows);
+    case kColumns: return us("Columns", &h->columns, &h->have_columns);
+    case kBitsAllocated: return us("Bits Allocated", &h->bits_allocated, &h->have_bits_allocated);
+    case kBitsStored: return us("Bits Stored", &h->bits_stored, &h->have_bits_stored);
+    case kHighBit: return us("High Bit", &h->high_bit, &h->have_high_bit);
+    case kPixelRepresentation:
+      return us("Pixel Representation", &h->pixel_representation,
+                &h->have_pixel_representation);
+    case kPhotometric:
+      copy_string(h->photometric, sizeof(h->photometric), v, n);
+      return Status::ok();
+    case kNumberOfFrames: {
+      int64_t f = 0;
+      if (!parse_i64(reinterpret_cast<const char*>(v), n, &f)) {
+        return tag_error(StatusCode::kParseError, tag, "Number of Frames", "not an integer", at);
+      }
+      h->frames = f;
+      return Status::ok();
+    }
+    default:
+      return Status::ok();
+  }
+}
+
+bool kept_tag(uint32_t tag) {
+  switch (tag) {
+    case kSliceThickness: case kSpacingBetweenSlices: case kImagePosition:
+    case kImageOrientation: case kPixelSpacing: case kRescaleIntercept: case kRescaleSlope:
+    case kSamplesPerPixel: case kRows: case kColumns: case kBitsAllocated: case kBitsStored:
+    case kHighBit: case kPixelRepresentation: case kPhotometric: case kNumberOfFrames:
+      return true;
+    default:
+      return false;
+  }
+}
+
+Status truncated(Reader& r, const char* where) {
+  return make_error(StatusCode::kTruncated, "file ends inside ", where).at_byte(r.base + r.end);
+}
+
+// Parses one file's header up to Pixel Data (the reader's window must hold >= 300 bytes).
+Status parse_header(Reader& r, const CtReadOptions& options, Header* h) {
+  SPLINTCORE_RETURN_IF_ERROR(r.fill(132));
+  if (r.available() < 132) return truncated(r, "the 128-byte preamble and \"DICM\"");
+  if (std::memcmp(r.buf + r.pos + 128, "DICM", 4) != 0) {
+    return make_error(StatusCode::kParseError,
+                      "not a DICOM file: no \"DICM\" after the 128-byte preamble")
+        .at_byte(128);
+  }
+  r.pos += 132;
+
+  // File Meta Information: explicit VR little endian, group 0002.
+  bool have_syntax = false;
+  for (;;) {
+    SPLINTCORE_RETURN_IF_ERROR(r.fill(12));
+    if (r.available() < 8) return truncated(r, "the file meta information");
+    const uint8_t* p = r.buf + r.pos;
+    if (u16(p) != 0x0002) break;
+    const uint64_t at = r.offset();
+    const uint32_t tag = tag_of(0x0002, u16(p + 2));
+    uint64_t length;
+    size_t header_bytes;
+    if (long_vr(p[4], p[5])) {
+      if (r.available() < 12) return truncated(r, "the file meta information");
+      length = u32(p + 8);
+      header_bytes = 12;
+    } else {
+      length = u16(p + 6);
+      header_bytes = 8;
+    }
+    if (length == kUndefinedLength) {
+      return tag_error(StatusCode::kParseError, tag, "meta element", "undefined length", at);
+    }
+    r.pos += header_bytes;
+    if (tag == kTransferSyntax) {
+      if (length > 64) {
+        return tag_error(StatusCode::kParseError, tag, "Transfer Syntax UID", "too long", at);
+      }
+      SPLINTCORE_RETURN_IF_ERROR(r.fill(static_cast<size_t>(length)));
+      if (r.available() < length) return truncated(r, "the Transfer Syntax UID");
+      copy_string(h->transfer_syntax, sizeof(h->transfer_syntax), r.buf + r.pos,
+                  static_cast<uint32_t>(length));
+      r.pos += static_cast<size_t>(length);
+      have_syntax = true;
+    } else {
+      SPLINTCORE_RETURN_IF_ERROR(r.skip(length, "the file meta information"));
+    }
+  }
+  if (!have_syntax) {
+    return make_error(StatusCode::kParseError, "missing (0002,0010) Transfer Syntax UID")
+        .at_byte(r.offset());
+  }
+  if (std::strcmp(h->transfer_syntax, "1.2.840.10008.1.2") == 0) {
+    h->implicit = true;
+  } else if (std::strcmp(h->transfer_syntax, "1.2.840.10008.1.2.1") == 0) {
+    h->implicit = false;
+  } else {
+    return make_error(StatusCode::kUnsupported, "unsupported transfer syntax ",
+                      h->transfer_syntax,
+                      " (only 1.2.840.10008.1.2 and 1.2.840.10008.1.2.1: uncompressed little "
+                      "endian)");
+  }
+
+  // The data set. Containers of undefined length are tracked on a bounded stack (no
+  // recursion); those of defined length are skipped whole. Only depth 0 is interpreted.
+  struct Level {
+    bool item;      // an item (else a sequence)
+    bool implicit;  // encoding inside (UN of undefined length is implicit VR, PS3.5 6.2.2)
+  };
+  Level stack[kMaxNesting];
+  int depth = 0;
+  for (;;) {
+    if (r.offset() > options.max_header_bytes) {
+      return make_error(StatusCode::kLimitExceeded, "no Pixel Data within the first ",
+                        options.max_header_bytes,
+                        " bytes (CtReadOptions::max_header_bytes)")
+          .at_byte(r.offset());
+    }
+    SPLINTCORE_RETURN_IF_ERROR(r.fill(12));
+    if (r.available() == 0 && depth == 0) {
+      return make_error(StatusCode::kParseError, "no (7FE0,0010) Pixel Data in the file")
+          .at_byte(r.offset());
+    }
+    if (r.available() < 8) return truncated(r, "a data element header");
+    const uint8_t* p = r.buf + r.pos;
+    const uint64_t at = r.offset();
+    const uint32_t group = u16(p);
+    const uint32_t tag = tag_of(group, u16(p + 2));
+    if (group == 0xFFFE) {
+      const uint32_t length = u32(p + 4);
+      r.pos += 8;
+      if (tag == tag_of(0xFFFE, 0xE000)) {
+        if (depth == 0 || stack[depth - 1].item) {
+          return tag_error(StatusCode::kParseError, tag, "Item", "outside a sequence", at);
+        }
+        if (length == kUndefinedLength) {
+          if (depth == kMaxNesting) {
+            return tag_error(StatusCode::kLimitExceeded, tag, "Item", "nested too deeply", at);
+          }
+          stack[depth] = Level{true, stack[depth - 1].implicit};
+          ++depth;
+        } else {
+          SPLINTCORE_RETURN_IF_ERROR(r.skip(length, "an item"));
+        }
+      } else if (tag == tag_of(0xFFFE, 0xE00D)) {
+        if (depth == 0 || !stack[depth - 1].item) {
+          return tag_error(StatusCode::kParseError, tag, "Item Delimitation",
+                           "outside an item of undefined length", at);
+        }
+        --depth;
+      } else if (tag == tag_of(0xFFFE, 0xE0DD)) {
+        if (depth == 0 || stack[depth - 1].item) {
+          return tag_error(StatusCode::kParseError, tag, "Sequence Delimitation",
+                           "outside a sequence of undefined length", at);
+        }
+        --depth;
+      } else {
+        return tag_error(StatusCode::kParseError, tag, "element", "unknown delimiter tag", at);
+      }
+      continue;
+    }
+    const bool implicit = depth > 0 ? stack[depth - 1].implicit : h->implicit;
+    uint32_t length;
+    bool is_sq = false, is_un = false;
+    if (implicit) {
+      length = u32(p + 4);
+      r.pos += 8;
+    } else {
+      const uint8_t a = p[4], b = p[5];
+      if (a < 'A' || a > 'Z' || b < 'A' || b > 'Z') {
+        return tag_error(StatusCode::kParseError, tag, "element", "invalid VR", at);
+      }
+      is_sq = a == 'S' && b == 'Q';
+      is_un = a == 'U' && b == 'N';
+      if (long_vr(a, b)) {
+        if (r.available() < 12) return truncated(r, "a data element header");
+        length = u32(p + 8);
+        r.pos += 12;
+      } else {
+        length = u16(p + 6);
+        r.pos += 8;
+      }
+    }
+    if (length == kUndefinedLength) {
+      if (depth == 0 && tag == kPixelData) {
+        return tag_error(StatusCode::kUnsupported, tag, "Pixel Data",
+                         "encapsulated (compressed) pixel data is not supported", at);
+      }
+      if (!implicit && !is_sq && !is_un) {
+        return tag_error(StatusCode::kParseError, tag, "element",
+                         "undefined length on a VR other than SQ or UN", at);
+      }
+      if (depth == kMaxNesting) {
+        return tag_error(StatusCode::kLimitExceeded, tag, "Sequence", "nested too deeply", at);
+      }
+      stack[depth] = Level{false, implicit || is_un};
+      ++depth;
+      continue;
+    }
+    if (depth == 0 && tag == kPixelData) {
+      h->pixel_offset = r.offset();
+      h->pixel_length = length;
+      h->have_pixels = true;
+      return Status::ok();
+    }
+    if (depth == 0 && kept_tag(tag) && !is_sq) {
+      if (length > kMaxValueBytes) {
+        Status s = tag_error(StatusCode::kParseError, tag, "element", "value of ", at);
+        s.append_u64(length);
+        s.append(" bytes is too long");
+        return s;
+      }
+      SPLINTCORE_RETURN_IF_ERROR(r.fill(length));
+      if (r.available() < length) return truncated(r, "a data element value");
+      SPLINTCORE_RETURN_IF_ERROR(take_value(h, tag, r.buf + r.pos, length, at));
+      r.pos += length;
+      continue;
+    }
+    SPLINTCORE_RETURN_IF_ERROR(r.skip(length, "a data element value"));
+  }
+}
+
+// Checks what a slice needs and that its pixels fit the file.
+Status check_header(const Header& h, const ByteSource& source) {
+  auto missing = [&](const char* what) {
+    return make_error(StatusCode::kParseError, "missing ", what);
+  };
+  if (!h.have_rows) return missing("(0028,0010) Rows");
+  if (!h.have_columns) return missing("(0028,0011) Columns");
+  if (!h.have_bits_allocated) return missing("(0028,0100) Bits Allocated");
+  if (!h.have_pixel_representation) return missing("(0028,0103) Pixel Representation");
+  if (!h.have_position) return missing("(0020,0032) Image Position (Patient)");
+  if (!h.have_orientation) return missing("(0020,0037) Image Orientation (Patient)");
+  if (!h.have_pixel_spacing) return missing("(0028,0030) Pixel Spacing");
+  if (h.photometric[0] == '\0') return missing("(0028,0004) Photometric Interpretation");
+  if (h.rows == 0 || h.columns == 0) {
+    return make_error(StatusCode::kParseError, "image of ", h.rows, " rows and ", h.columns,
+                      " columns is empty");
+  }
+  if (h.samples != 1) {
+    return make_error(StatusCode::kUnsupported, "Samples per Pixel is ", h.samples,
+                      ": only grey-scale (1) is supported");
+  }
+  if (std::strcmp(h.photometric, "MONOCHROME1") != 0 &&
+      std::strcmp(h.photometric, "MONOCHROME2") != 0) {
+    return make_error(StatusCode::kUnsupported, "Photometric Interpretation ", h.photometric,
+                      ": only MONOCHROME1 and MONOCHROME2 are supported");
+  }
+  if (h.frames != 1) {
+    return make_error(StatusCode::kUnsupported, "Number of Frames is ", h.frames,
+                      ": only single-frame images are supported");
+  }
+  if (h.bits_allocated != 8 && h.bits_allocated != 16) {
+    return make_error(StatusCode::kUnsupported, "Bits Allocated is ", h.bits_allocated,
+                      ": only 8 and 16 are supported");
+  }
+  const uint32_t stored = h.have_bits_stored ? h.bits_stored : h.bits_allocated;
+  if (stored == 0 || stored > h.bits_allocated) {
+    return make_error(StatusCode::kParseError, "Bits Stored is ", stored, " with Bits Allocated ",
+                      h.bits_allocated);
+  }
+  if (h.have_high_bit && h.high_bit != stored - 1) {
+    return make_error(StatusCode::kUnsupported, "High Bit is ", h.high_bit,
+                      ": only Bits Stored - 1 is supported");
+  }
+  if (h.pixel_representation > 1) {
+    return make_error(StatusCode::kParseError, "Pixel Representation is ",
+                      h.pixel_representation, " (0 unsigned or 1 signed)");
+  }
+  if (!is_finite(h.slope) || h.slope == 0.0) {
+    return make_error(StatusCode::kParseError, "Rescale Slope is ", h.slope,
+                      ": must be finite and non-zero");
+  }
+  const uint64_t needed = uint64_t{h.rows} * h.columns * (h.bits_allocated / 8);
+  if (h.pixel_length != needed && !(needed % 2 == 1 && h.pixel_length == needed + 1)) {
+    return make_error(StatusCode::kParseError, "Pixel Data has ", h.pixel_length,
+                      " bytes; rows x columns x bytes per pixel is ", needed)
+        .at_byte(h.pixel_offset);
+  }
+  if (source.size != kUnknownSize &&
+      (source.size < h.pixel_offset || source.size - h.pixel_offset < needed)) {
+    return make_error(StatusCode::kTruncated, "file ends inside Pixel Data (", needed,
+                      " bytes from byte ", h.pixel_offset, ", file size ", source.size, ")")
+        .at_byte(source.size);
+  }
+  return Status::ok();
+}
+
+// Opens file `index` of the series, parses its header, closes it.
+Status read_header(const CtSeries& series, uint32_t index, const CtReadOptions& options,
+                   Header* h, const char** name) {
+  ByteSource source;
+  SPLINTCORE_RETURN_IF_ERROR(series.open(series.user, index, &source));
+  *name = source.name;
+  uint8_t window[kHeaderWindow];
+  Reader r;
+  r.init(&source, window, sizeof(window));
+  Status s = parse_header(r, options, h);
+  if (s.is_ok()) s = check_header(*h, source);
+  if (series.close != nullptr) series.close(series.user, index, &source);
+  if (!s.is_ok()) {
+    s.at_index(index);
+    if (*name != nullptr) s.in_file(*name);
+  }
+  return s;
+}
+
+bool close_to(double a, double b, double tolerance) { return std::fabs(a - b) <= tolerance; }
+
+// Orders doubles as unsigned keys (negative values reversed).
+uint64_t order_key(double v) {
+  uint64_t bits;
+  std::memcpy(&bits, &v, sizeof(bits));
+  return (bits >> 63) != 0 ? ~bits : bits | (uint64_t{1} << 63);
+}
+
+}  // namespace
+
+Status read_dicom_series(const Context& ctx, const CtSeries& series,
+                         const CtReadOptions& options, CtVolume* out, CtInfo* info) {
+  Arena& arena = *ctx.arena;
+  if (series.count == 0 || series.open == nullptr) {
+    return make_error(StatusCode::kInvalidArgument, "the DICOM series has no files");
+  }
+  if (series.count > options.max_dimension) {
+    return make_error(StatusCode::kLimitExceeded, "the series has ", series.count,
+                      " files, more than the limit ", options.max_dimension,
+                      " (CtReadOptions::max_dimension)");
+  }
+  const uint32_t count = series.count;
+  Header first;
+  const char* first_name = nullptr;
+  SPLINTCORE_RETURN_IF_ERROR(read_header(series, 0, options, &first, &first_name));
+
+  uint64_t voxel_bytes = 0;
+  SPLINTCORE_RETURN_IF_ERROR(check_size(first.columns, first.rows, count, options, &voxel_bytes));
+  const size_t chunk = chunk_size(options);
+  const uint64_t temporaries =
+      uint64_t{count} * (sizeof(SliceRecord) + 2 * sizeof(KeyIndex)) + chunk;
+  SPLINTCORE_RETURN_IF_ERROR(check_budget(arena, voxel_bytes, temporaries, 4));
+
+  const Arena::Marker start = arena.mark();
+  int16_t* hu = arena.allocate_array<int16_t>(static_cast<size_t>(voxel_bytes / 2));
+  const Arena::Marker after_voxels = arena.mark();
+  SliceRecord* records = hu != nullptr ? arena.allocate_array<SliceRecord>(count) : nullptr;
+  KeyIndex* keys = records != nullptr ? arena.allocate_array<KeyIndex>(count) : nullptr;
+  KeyIndex* scratch = keys != nullptr ? arena.allocate_array<KeyIndex>(count) : nullptr;
+  uint8_t* buffer = scratch != nullptr ? arena.allocate_array<uint8_t>(chunk) : nullptr;
+  if (buffer == nullptr) {
+    Status s = arena.exhausted_status();
+    arena.rewind(start);
+    return s;
+  }
+  struct Rewind {
+    Arena& arena;
+    Arena::Marker marker;
+    bool active = true;
+    ~Rewind() {
+      if (active) arena.rewind(marker);
+    }
+  } rewind_on_error{arena, start};
+
+  // Pass 1: every header, checked against the first.
+  Vec3 row{first.orientation[0], first.orientation[1], first.orientation[2]};
+  Vec3 column{first.orientation[3], first.orientation[4], first.orientation[5]};
+  Vec3 normal = cross(row, column);
+  {
+    Status s = check_axes(&row, &column, &normal, options);
+    if (!s.is_ok()) {
+      Status e = make_error(s.code(), "(0020,0037) Image Orientation (Patient): ", s.message());
+      e.at_index(0);
+      if (first_name != nullptr) e.in_file(first_name);
+      return e;
+    }
+  }
+  bool rescale_varies = false;
+  for (uint32_t i = 0; i < count; ++i) {
+    Header h;
+    const char* name = first_name;
+    if (i == 0) {
+      h = first;
+    } else {
+      SPLINTCORE_RETURN_IF_ERROR(read_header(series, i, options, &h, &name));
+      const char* differs = nullptr;
+      const double tol = options.orientation_tolerance;
+      if (h.rows != first.rows || h.columns != first.columns) {
+        differs = "image size (Rows, Columns)";
+      } else if (h.bits_allocated != first.bits_allocated ||
+                 (h.have_bits_stored ? h.bits_stored : h.bits_allocated) !=
+                     (first.have_bits_stored ? first.bits_stored : first.bits_allocated) ||
+                 h.pixel_representation != first.pixel_representation) {
+        differs = "pixel format (Bits Allocated, Bits Stored, Pixel Representation)";
+      } else if (!close_to(h.pixel_spacing[0], first.pixel_spacing[0], tol) ||
+                 !close_to(h.pixel_spacing[1], first.pixel_spacing[1], tol)) {
+        differs = "Pixel Spacing";
+      } else {
+        for (int c = 0; c < 6; ++c) {
+          if (!close_to(h.orientation[c], first.orientation[c], tol)) {
+            differs = "Image Orientation (Patient)";
+          }
+        }
+      }
+      if (differs != nullptr) {
+        Status s = make_error(StatusCode::kUnsupported, "slice differs from the series' file 0 (",
+                              first_name != nullptr ? first_name : "?", ") in its ", differs);
+        s.at_index(i);
+        if (name != nullptr) s.in_file(name);
+        return s;
+      }
+      if (h.slope != first.slope || h.intercept != first.intercept) rescale_varies = true;
+    }
+    const Vec3 p{h.position[0], h.position[1], h.position[2]};
+    records[i] = SliceRecord{{p.x, p.y, p.z}, h.slope, h.intercept, h.pixel_offset, i, 0};
+    keys[i] = KeyIndex{order_key(dot(p, normal)), i, 0};
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read DICOM headers", i + 1, count));
+  }
+  radix_sort(Span<KeyIndex>(keys, count), Span<KeyIndex>(scratch, count));
+
+  // Geometry: distinct positions along the normal, no tilt, uniform spacing.
+  auto position = [&](uint32_t k) {
+    const SliceRecord& r = records[keys[k].index];
+    return Vec3{r.position[0], r.position[1], r.position[2]};
+  };
+  auto pair_error = [&](StatusCode code, uint32_t k, const char* text, double a, const char* t2,
+                        double b, const char* t3) {
+    Status e = make_error(code, text, "slices ", k, " and ", k + 1, " (series files ",
+                          keys[k].index, " and ", keys[k + 1].index, ") are ");
+    e.append_f64(a);
+    e.append(t2);
+    e.at_index(keys[k + 1].index);
+    if (t3 != nullptr) {
+      e.append_f64(b);
+      e.append(t3);
+    }
+    return e;
+  };
+  const Vec3 origin = position(0);
+  Vec3 spacing{first.pixel_spacing[1], first.pixel_spacing[0], 0.0};
+  const double d0 = dot(origin, normal);
+  if (count == 1) {
+    spacing.z = first.spacing_between > 0 ? first.spacing_between : first.slice_thickness;
+    if (!(spacing.z > 0)) {
+      Status s = make_error(StatusCode::kParseError,
+                            "a single slice needs (0018,0088) Spacing Between Slices or "
+                            "(0018,0050) Slice Thickness for its z spacing");
+      if (first_name != nullptr) s.in_file(first_name);
+      return s;
+    }
+  } else {
+    const double span = dot(position(count - 1), normal) - d0;
+    const double mean = span / static_cast<double>(count - 1);
+    const double allowed_gap =
+        options.slice_spacing_tolerance_mm > options.slice_spacing_tolerance_relative * mean
+            ? options.slice_spacing_tolerance_mm
+            : options.slice_spacing_tolerance_relative * mean;
+    double previous = d0;
+    for (uint32_t k = 0; k + 1 < count; ++k) {
+      const double next = dot(position(k + 1), normal);
+      if (!(next - previous >= options.min_spacing)) {
+        return pair_error(StatusCode::kParseError, k, "duplicate slice position: ",
+                          next - previous, " mm apart along the normal", 0, nullptr);
+      }
+      previous = next;
+    }
+    previous = d0;
+    for (uint32_t k = 0; k + 1 < count; ++k) {
+      const double next = dot(position(k + 1), normal);
+      const double gap = next - previous;
+      if (!(std::fabs(gap - mean) <= allowed_gap)) {
+        return pair_error(StatusCode::kUnsupported, k, "non-uniform slice spacing: ", gap,
+                          " mm apart, the mean spacing is ", mean, " mm");
+      }
+      previous = next;
+    }
+    for (uint32_t k = 1; k < count; ++k) {
+      const Vec3 delta = position(k) - origin;
+      const double along = dot(delta, normal);
+      const Vec3 in_plane = delta - normal * along;
+      const double offset = length(in_plane);
+      const double allowed =
+          options.slice_spacing_tolerance_mm > options.slice_spacing_tolerance_relative * along
+              ? options.slice_spacing_tolerance_mm
+              : options.slice_spacing_tolerance_relative * along;
+      if (!(offset <= allowed)) {
+        Status s = make_error(StatusCode::kUnsupported,
+                              "gantry tilt or sheared series: slice ", k, " (series file ",
+                              keys[k].index, ") lies ", offset,
+                              " mm off the normal through slice 0; only stacks along the "
+                              "normal are supported");
+        s.at_index(keys[k].index);
+        return s;
+      }
+    }
+    spacing.z = mean;
+  }
+  const char* axis_names[3] = {"x (Pixel Spacing, column spacing)",
+                               "y (Pixel Spacing, row spacing)", "z (between slices)"};
+  for (int a = 0; a < 3; ++a) {
+    Status s = check_spacing(spacing[a], axis_names[a], options);
+    if (!s.is_ok()) {
+      if (first_name != nullptr) s.in_file(first_name);
+      return s;
+    }
+  }
+
+  // Pass 2: pixels, slice by slice in position order.
+  VoxelFormat format;
+  format.bytes = static_cast<uint8_t>(first.bits_allocated / 8);
+  format.is_signed = first.pixel_representation == 1;
+  format.big_endian = false;
+  format.bits_stored = static_cast<uint8_t>(first.have_bits_stored ? first.bits_stored
+                                                                   : first.bits_allocated);
+  const uint64_t per_slice = uint64_t{first.rows} * first.columns;
+  uint64_t saturated = 0;
+  for (uint32_t k = 0; k < count; ++k) {
+    const SliceRecord& rec = records[keys[k].index];
+    ByteSource source;
+    SPLINTCORE_RETURN_IF_ERROR(series.open(series.user, rec.file, &source));
+    Reader r;
+    r.init(&source, buffer, chunk);
+    Status s = r.skip(rec.pixel_offset, "the header before Pixel Data");
+    if (s.is_ok()) {
+      s = convert_voxels(r, format, per_slice, rec.slope, rec.intercept, hu + k * per_slice,
+                         k * per_slice, &saturated);
+    }
+    const char* name = source.name;
+    if (series.close != nullptr) series.close(series.user, rec.file, &source);
+    if (!s.is_ok()) {
+      if (name != nullptr) s.in_file(name);
+      return s;
+    }
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read DICOM pixels", k + 1, count));
+  }
+
+  rewind_on_error.active = false;
+  arena.rewind(after_voxels);
+  out->nx = first.columns;
+  out->ny = first.rows;
+  out->nz = count;
+  out->spacing = spacing;
+  out->origin = origin;
+  out->axis_x = row;
+  out->axis_y = column;
+  out->axis_z = normal;
+  out->hu = hu;
+  out->saturated = saturated;
+  if (info != nullptr) {
+    CtInfo found;
+    found.format = CtFormat::kDicom;
+    found.nx = out->nx;
+    found.ny = out->ny;
+    found.nz = out->nz;
+    found.spacing = spacing;
+    describe_type(format, &found);
+    found.slope = records[keys[0].index].slope;
+    found.intercept = records[keys[0].index].intercept;
+    found.rescale_varies = rescale_varies;
+    std::memcpy(found.transfer_syntax, first.transfer_syntax, sizeof(found.transfer_syntax));
+    std::memcpy(found.photometric, first.photometric, sizeof(found.photometric));
+    std::memcpy(found.space, "LPS", 4);
+    found.slice_count = count;
+    found.saturated = saturated;
+    *info = found;
+  }
+  return Status::ok();
+}
+
+}  // namespace splintcore
