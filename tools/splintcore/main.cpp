@@ -12,6 +12,7 @@
 
 #include "../common/cli.h"
 #include "../common/phantom.h"
+#include "splintcore/blockout.h"
 #include "splintcore/boolean.h"
 #include "splintcore/core.h"
 #include "splintcore/design.h"
@@ -44,6 +45,10 @@ const char kUsage[] =
     "  phantom --triangles N -o DIR         synthetic maxilla.stl and mandible.stl\n"
     "  design CASE.json -o OUTDIR           the splint: jaws moved, base, base minus jaws,\n"
     "                                       printer check, splint.stl and report.json\n"
+    "  sweep JAW.stl... --direction X,Y,Z --voxel H -o OUT.stl   the jaws' swept volume\n"
+    "                                       (the blocked-out model), streamed to STL\n"
+    "  blockout SPLINT.stl JAW.stl... --direction X,Y,Z --voxel H -o OUT.stl\n"
+    "                                       interference elimination: splint minus it\n"
     "\n"
     "options of every command:\n"
     "  --help            this text for the command\n"
@@ -131,6 +136,35 @@ const char kDesignUsage[] =
     "elimination and CT input join when their issues land.\n"
     "Exit status: 0 splint written, 1 rejected (the message names the stage), 2 usage.\n";
 
+const char kSweepUsage[] =
+    "usage: splintcore sweep JAW.stl [JAW2.stl ...] --direction X,Y,Z --voxel H -o SWEPT.stl\n"
+    "                       [--extent E] [--close R] [--inset D] [--ascii] [--json]\n"
+    "                       [--memory-cap SIZE] [--threads N]\n"
+    "\n"
+    "The blocked-out (temporary) model of interference elimination (Chen et al. 2016): every\n"
+    "point the jaws pass through as they move along the direction (the splint's insertion\n"
+    "direction), kept E mm past the jaws' far end (default 0) and closed there. Sampled on a\n"
+    "grid of H mm voxels whose third axis is the direction, swept layer by layer with a 2-D\n"
+    "state (exact distance outside, extrapolated inside: no inward bias), optionally closed\n"
+    "morphologically with a ball of radius R mm (fills gaps narrower than 2R; R >= 2H), and\n"
+    "meshed by the tiled extractor straight into the STL file (never held whole), atomically.\n"
+    "--inset D extracts the surface D mm inside (0 <= D < 2H). The bytes are the same for any\n"
+    "memory cap that suffices and any thread count.\n";
+
+const char kBlockoutUsage[] =
+    "usage: splintcore blockout SPLINT.stl JAW.stl [JAW2.stl ...] --direction X,Y,Z --voxel H\n"
+    "                          -o OUT.stl [--close R] [--inset D] [--ascii] [--no-self-check]\n"
+    "                          [--json] [--memory-cap SIZE] [--threads N]\n"
+    "\n"
+    "Interference elimination: the splint minus the jaws' swept volume along the direction\n"
+    "(as `sweep`, cut to the splint's bounds), subtracted by the exact Boolean and checked\n"
+    "(closed, manifold, outward, float32, no self-intersection unless --no-self-check) before\n"
+    "it is written, atomically. The direction is the one the splint is seated along for these\n"
+    "jaws (for a wafer: the maxilla's is the mandible's reversed; run once per jaw). The swept\n"
+    "surface is taken --inset D mm inside (default H / 2): the splint already holds the jaw's\n"
+    "imprint, which the swept volume reproduces to within the voxel error, and the inset keeps\n"
+    "the two apart; at most D of undercut is left.\n";
+
 struct Options {
   bool help = false;
   bool json = false;
@@ -147,6 +181,12 @@ struct Options {
   uint64_t triangles = 0;
   bool self_check = true;
   std::vector<Vec3> translate_b;
+  Vec3 direction{0, 0, 1};
+  bool has_direction = false;
+  double voxel = 0;
+  double extent = 0;
+  double inset = -1;  // < 0: the command's default
+  double closing = 0;
 };
 
 // "X,Y,Z" -> a point; false when malformed or not finite.
@@ -251,6 +291,26 @@ int parse_options(int argc, char** argv, const char* usage, bool takes_output, O
         return usage_error("--translate-b needs X,Y,Z (three finite numbers, mm)", usage);
       }
       o->translate_b.push_back(d);
+    } else if (std::strcmp(a, "--direction") == 0) {
+      const char* v = value(a);
+      if (v == nullptr || !parse_point(v, &o->direction) || length(o->direction) == 0) {
+        return usage_error("--direction needs X,Y,Z (three finite numbers, not all 0)", usage);
+      }
+      o->has_direction = true;
+    } else if (std::strcmp(a, "--voxel") == 0 || std::strcmp(a, "--extent") == 0 ||
+               std::strcmp(a, "--inset") == 0 || std::strcmp(a, "--close") == 0) {
+      const char* v = value(a);
+      double x = 0;
+      const char* end = v == nullptr ? nullptr : v + std::strlen(v);
+      if (v == nullptr || std::from_chars(v, end, x).ptr != end || !is_finite(x) || x < 0) {
+        std::string m = std::string(a) + " needs a number of mm >= 0";
+        return usage_error(m.c_str(), usage);
+      }
+      double* field = a[2] == 'v' ? &o->voxel
+                      : a[2] == 'e' ? &o->extent
+                      : a[2] == 'i' ? &o->inset
+                                    : &o->closing;
+      *field = x;
     } else if (a[0] == '-' && a[1] != '\0') {
       std::string m = std::string("unknown option '") + a + "'";
       return usage_error(m.c_str(), usage);
@@ -1077,6 +1137,198 @@ int run_design(int argc, char** argv) {
   return kExitOk;
 }
 
+// Reads each file into its own mesh (in the arena, in order).
+Status read_mesh_files(const Context& ctx, const std::vector<const char*>& paths,
+                       std::vector<Mesh>* out) {
+  out->resize(paths.size());
+  for (size_t i = 0; i < paths.size(); ++i) {
+    (*out)[i].bind(ctx.arena);
+    StlInfo info;
+    SPLINTCORE_RETURN_IF_ERROR(read_mesh_file(ctx, paths[i], &(*out)[i], &info));
+  }
+  return Status::ok();
+}
+
+void add_sweep_stats(JsonObject* j, const SweepStats& st) {
+  j->add("grid", std::to_string(st.nx) + " x " + std::to_string(st.ny) + " x " +
+                     std::to_string(st.nz));
+  j->add("voxels", st.voxels);
+  j->add("preroll_layers", static_cast<uint64_t>(st.preroll_layers));
+  j->add("front_triangles", st.front_triangles);
+  j->add("segment_tests", st.segment_tests);
+  j->add("distance_evaluations", st.distance_evaluations);
+  j->add("inside_columns", st.inside_columns);
+  j->add("corrected_samples", st.corrected_samples);
+  j->add("closing_samples", st.closing_samples);
+  j->add("closed_samples", st.closed_samples);
+  j->add("layers_per_tile", static_cast<uint64_t>(st.extraction.layers_per_tile));
+  j->add("tiles", static_cast<uint64_t>(st.extraction.fill_calls));
+  j->add("extractor_working_set_bytes", st.extraction.working_set_bytes);
+}
+
+struct SweepToStl {
+  StlWriter* writer = nullptr;
+  static Status triangle(void* user, const Triangle&, const Vec3& a, const Vec3& b,
+                         const Vec3& c) {
+    return static_cast<SweepToStl*>(user)->writer->add(a, b, c);
+  }
+};
+
+int run_sweep_command(int argc, char** argv) {
+  Options o;
+  int early = parse_options(argc, argv, kSweepUsage, true, &o);
+  if (early >= 0) return early;
+  if (o.positional.empty()) return usage_error("sweep takes at least one JAW.stl", kSweepUsage);
+  if (o.output == nullptr) return usage_error("sweep needs -o SWEPT.stl", kSweepUsage);
+  if (!o.has_direction) return usage_error("sweep needs --direction X,Y,Z", kSweepUsage);
+  if (!(o.voxel > 0)) return usage_error("sweep needs --voxel H (mm, > 0)", kSweepUsage);
+  Run run(o);
+  if (!run.has_memory()) return no_memory(o, "sweep");
+  const Context& ctx = run.ctx;
+  std::vector<Mesh> jaws;
+  Status s = read_mesh_files(ctx, o.positional, &jaws);
+  if (!s.is_ok()) return rejected(o, "sweep", s, &run.arena);
+  const double t_read = monotonic_seconds();
+  AtomicFile file;
+  s = file.open(o.output);
+  if (!s.is_ok()) return rejected(o, "sweep", s, &run.arena);
+  StlWriter writer;
+  StlWriteOptions wo;
+  wo.format = o.ascii ? StlFormat::kAscii : StlFormat::kBinary;
+  s = writer.begin(ctx, file.sink(), wo, kUnknownSize);
+  if (!s.is_ok()) return rejected(o, "sweep", s, &run.arena);
+  SweepToStl to_stl{&writer};
+  MarchingCubesVisitor visitor;
+  visitor.triangle = SweepToStl::triangle;
+  visitor.user = &to_stl;
+  SweepOptions so;
+  so.direction = o.direction;
+  so.voxel = o.voxel;
+  so.extent = o.extent;
+  so.inset = o.inset < 0 ? 0 : o.inset;
+  so.closing_radius = o.closing;
+  SweepStats st;
+  s = sweep_volume(ctx, Span<const Mesh>(jaws.data(), jaws.size()), so, visitor, &st);
+  if (s.is_ok()) s = writer.finish();
+  if (s.is_ok()) s = file.commit();  // on any error ~AtomicFile removes the temporary file
+  if (!s.is_ok()) return rejected(o, "sweep", s, &run.arena);
+  const double t_end = monotonic_seconds();
+  uint64_t jaw_triangles = 0;
+  for (const Mesh& m : jaws) jaw_triangles += m.triangles.size();
+  if (o.json) {
+    JsonObject j;
+    j.add("command", "sweep");
+    j.add("output", o.output);
+    j.add_status(Status::ok());
+    j.add("jaw_files", static_cast<uint64_t>(jaws.size()));
+    j.add("jaw_triangles", jaw_triangles);
+    j.add("direction", st.axis_w);
+    j.add("voxel_mm", o.voxel);
+    j.add("extent_mm", o.extent);
+    j.add("inset_mm", so.inset);
+    j.add("closing_radius_mm", o.closing);
+    add_sweep_stats(&j, st);
+    j.add("triangles", writer.triangles_written());
+    j.add("bytes", writer.bytes_written());
+    j.add("read_s", t_read - run.start);
+    j.add("sweep_s", t_end - t_read);
+    j.add("time_s", t_end - run.start);
+    j.add("peak_arena_bytes", static_cast<uint64_t>(run.arena.high_water()));
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("jaws: %zu file(s), %llu triangles; direction (%.6g, %.6g, %.6g)\n", jaws.size(),
+                static_cast<unsigned long long>(jaw_triangles), st.axis_w.x, st.axis_w.y,
+                st.axis_w.z);
+    std::printf("grid: %u x %u x %u = %llu voxels of %.4g mm, %u tile(s) of %u layer(s)\n", st.nx,
+                st.ny, st.nz, static_cast<unsigned long long>(st.voxels), o.voxel,
+                st.extraction.fill_calls, st.extraction.layers_per_tile);
+    std::printf("swept volume: %llu triangles -> %s (%s STL)\n",
+                static_cast<unsigned long long>(writer.triangles_written()), o.output,
+                o.ascii ? "ascii" : "binary");
+    std::printf("time: read %.4f s, sweep %.4f s; peak arena %llu bytes\n", t_read - run.start,
+                t_end - t_read, static_cast<unsigned long long>(run.arena.high_water()));
+  }
+  return kExitOk;
+}
+
+int run_blockout_command(int argc, char** argv) {
+  Options o;
+  int early = parse_options(argc, argv, kBlockoutUsage, true, &o);
+  if (early >= 0) return early;
+  if (o.positional.size() < 2) {
+    return usage_error("blockout takes SPLINT.stl and at least one JAW.stl", kBlockoutUsage);
+  }
+  if (o.output == nullptr) return usage_error("blockout needs -o OUT.stl", kBlockoutUsage);
+  if (!o.has_direction) return usage_error("blockout needs --direction X,Y,Z", kBlockoutUsage);
+  if (!(o.voxel > 0)) return usage_error("blockout needs --voxel H (mm, > 0)", kBlockoutUsage);
+  Run run(o);
+  if (!run.has_memory()) return no_memory(o, "blockout");
+  const Context& ctx = run.ctx;
+  Mesh splint(&run.arena);
+  StlInfo info;
+  Status s = read_mesh_file(ctx, o.positional[0], &splint, &info);
+  if (!s.is_ok()) return rejected(o, "blockout", s, &run.arena);
+  std::vector<Mesh> jaws;
+  s = read_mesh_files(ctx, std::vector<const char*>(o.positional.begin() + 1, o.positional.end()),
+                      &jaws);
+  if (!s.is_ok()) return rejected(o, "blockout", s, &run.arena);
+  const double t_read = monotonic_seconds();
+  BlockoutOptions bo;
+  bo.sweep.direction = o.direction;
+  bo.sweep.voxel = o.voxel;
+  bo.sweep.inset = o.inset < 0 ? 0.5 * o.voxel : o.inset;
+  bo.sweep.closing_radius = o.closing;
+  bo.boolean.check_self_intersection = o.self_check;
+  Mesh out;
+  BlockoutStats st;
+  s = blockout(ctx, splint, Span<const Mesh>(jaws.data(), jaws.size()), bo, &out, &st);
+  if (!s.is_ok()) return rejected(o, "blockout", s, &run.arena);
+  const double t_op = monotonic_seconds();
+  MeshReport report;
+  s = check_mesh(ctx, out, &report);
+  if (s.is_ok()) s = write_atomically(ctx, out, o.output, o.ascii);
+  if (!s.is_ok()) return rejected(o, "blockout", s, &run.arena);
+  const double t_end = monotonic_seconds();
+  const double removed = mesh_volume(splint) - report.volume;
+  if (o.json) {
+    JsonObject j;
+    j.add("command", "blockout");
+    j.add("splint", o.positional[0]);
+    j.add("output", o.output);
+    j.add_status(Status::ok());
+    j.add("direction", st.sweep.axis_w);
+    j.add("voxel_mm", o.voxel);
+    j.add("inset_mm", bo.sweep.inset);
+    j.add("closing_radius_mm", o.closing);
+    add_sweep_stats(&j, st.sweep);
+    j.add("swept_triangles", st.swept_triangles);
+    j.add("cap_triangles_dropped", st.sweep.cap_triangles_dropped);
+    j.add("intersecting_pairs", st.boolean.intersecting_pairs);
+    j.add("removed_volume_mm3", removed);
+    add_mesh_report(&j, report);
+    j.add("valid_solid", report.is_valid_solid());
+    j.add("read_s", t_read - run.start);
+    j.add("blockout_s", t_op - t_read);
+    j.add("time_s", t_end - run.start);
+    j.add("peak_arena_bytes", static_cast<uint64_t>(run.arena.high_water()));
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("splint: %s, %zu triangles; jaws: %zu file(s)\n", o.positional[0],
+                splint.triangles.size(), jaws.size());
+    std::printf("swept volume: grid %u x %u x %u of %.4g mm (+%u layers before the splint), "
+                "%llu triangles in the splint's bounds\n",
+                st.sweep.nx, st.sweep.ny, st.sweep.nz, o.voxel, st.sweep.preroll_layers,
+                static_cast<unsigned long long>(st.swept_triangles));
+    std::printf("removed: %.4f mm^3 of interference (inset %.4g mm)\n", removed, bo.sweep.inset);
+    print_mesh_report(report);
+    std::printf("output: %s (%s STL)\n", o.output, o.ascii ? "ascii" : "binary");
+    std::printf("time: read %.4f s, blockout %.4f s, total %.4f s; peak arena %llu bytes\n",
+                t_read - run.start, t_op - t_read, t_end - run.start,
+                static_cast<unsigned long long>(run.arena.high_water()));
+  }
+  return kExitOk;
+}
+
 }  // namespace
 }  // namespace splintcore
 
@@ -1099,6 +1351,8 @@ int main(int argc, char** argv) {
   if (std::strcmp(command, "boolean") == 0) return run_boolean(argc - 2, argv + 2);
   if (std::strcmp(command, "phantom") == 0) return run_phantom(argc - 2, argv + 2);
   if (std::strcmp(command, "design") == 0) return run_design(argc - 2, argv + 2);
+  if (std::strcmp(command, "sweep") == 0) return run_sweep_command(argc - 2, argv + 2);
+  if (std::strcmp(command, "blockout") == 0) return run_blockout_command(argc - 2, argv + 2);
   std::fprintf(stderr, "splintcore: unknown command '%s'\n\n%s", command, kUsage);
   return cli::kExitUsage;
 }
