@@ -3,6 +3,7 @@
 #ifndef SPLINTCORE_DESIGN_H
 #define SPLINTCORE_DESIGN_H
 
+#include "splintcore/blockout.h"
 #include "splintcore/boolean.h"
 #include "splintcore/core.h"
 #include "splintcore/geometry.h"
@@ -33,6 +34,13 @@ struct CaseFile {
   // Later stages.
   Vec3 insertion_direction{0, 0, 1};
   bool has_insertion_direction = false;
+  // Interference elimination ("blockout" object; needs insertion_direction): each jaw's
+  // swept volume is subtracted, the maxilla's along the insertion direction, the mandible's
+  // along its reverse.
+  bool has_blockout = false;
+  double blockout_voxel = 0.1;     // mm
+  double blockout_inset = 0.05;    // mm (default: half the voxel)
+  double blockout_closing = 0;     // mm, 0: none
   const char* printer = "eden260";
   uint64_t memory_cap = 0;  // bytes; 0: the tool's default
   const char* output_splint = nullptr;
@@ -51,13 +59,18 @@ Status build_case_base(const Context& ctx, const CaseFile& c, Mesh* out, BaseRep
 
 // ---------------------------------------------------------------------------------------------
 // The design pipeline as far as it has landed: the jaws repositioned by the plan, the base from
-// the picks, the Boolean difference base minus jaws, the printer check. (Interference
-// elimination and CT reconstruction join when their issues land.)
+// the picks, the Boolean difference base minus jaws, interference elimination (when the case
+// has "blockout"), the printer check. (CT reconstruction joins when its issue lands.)
 
 struct DesignReport {
   uint64_t jaw_triangles = 0;   // all jaws together, as given
   BaseReport base;
   BooleanStats boolean;
+  // Interference elimination, when the case asks for it: per jaw in case order (at most 8).
+  static constexpr uint32_t kMaxBlockoutJaws = 8;
+  uint32_t blockout_jaws = 0;
+  BlockoutStats blockout[kMaxBlockoutJaws];
+  double blockout_removed_mm3[kMaxBlockoutJaws] = {};
   PrintCheck print;
   const char* printer = "";     // the profile used
 };
@@ -65,9 +78,10 @@ struct DesignReport {
 // The splint for case `c` from its jaws (jaws[i] is the mesh of c.jaws[i], as read: it is not
 // changed). Each jaw is moved by its transform and rounded to float32 (what a moved jaw's STL
 // holds; the Boolean keeps these bits), the base is built, the jaws are subtracted, and the
-// result is checked for the case's printer (not moved: it stays in the case's frame). `splint`
-// must be empty. Stage progress goes to ctx.progress ("design: jaws", "design: base",
-// "design: boolean", "design: printer"). Errors: those of the stages (naming the stage and,
+// result is checked for the case's printer (not moved: it stays in the case's frame). With
+// "blockout", each jaw's swept volume is subtracted after the Boolean (blockout.h; at most
+// kMaxBlockoutJaws jaws). `splint` must be empty. Stage progress goes to ctx.progress
+// ("design: jaws", "design: base", "design: boolean", "design: blockout", "design: printer"). Errors: those of the stages (naming the stage and,
 // for a jaw, its index and role), kInvalidArgument (jaw count differs from the case, unknown
 // printer), and kInvalidMesh when the result is not printable (require_printable's reason).
 Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* splint,

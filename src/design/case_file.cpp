@@ -138,7 +138,8 @@ Status parse_case(const Context& ctx, const char* text, size_t length, const cha
   const JsonValue& root = doc.root();
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(root, JsonType::kObject, "the case"));
   static const char* const kRootKeys[] = {"splintcore_case", "case_id", "units", "jaws", "base",
-                                          "insertion_direction", "printer", "memory_cap",
+                                          "insertion_direction", "blockout", "printer",
+                                          "memory_cap",
                                           "output", nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(root, kRootKeys, "the case"));
 
@@ -274,6 +275,32 @@ Status parse_case(const Context& ctx, const char* text, size_t length, const cha
   if (const JsonValue* d = doc.member(root, "insertion_direction")) {
     SPLINTCORE_RETURN_IF_ERROR(r.unit_vector(*d, "insertion_direction", &out->insertion_direction));
     out->has_insertion_direction = true;
+  }
+  if (const JsonValue* b = doc.member(root, "blockout")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*b, JsonType::kObject, "blockout"));
+    static const char* const kBlockoutKeys[] = {"voxel", "inset", "closing_radius", nullptr};
+    SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*b, kBlockoutKeys, "\"blockout\""));
+    if (!out->has_insertion_direction) {
+      return r.fail(*b, StatusCode::kInvalidArgument,
+                    "\"blockout\" needs \"insertion_direction\" (the splint is seated along it)");
+    }
+    out->has_blockout = true;
+    if (const JsonValue* bv = doc.member(*b, "voxel")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*bv, "voxel", 0.01, 1.0, &out->blockout_voxel));
+    }
+    out->blockout_inset = 0.5 * out->blockout_voxel;
+    if (const JsonValue* bi = doc.member(*b, "inset")) {
+      SPLINTCORE_RETURN_IF_ERROR(
+          r.number(*bi, "inset", 0.0, 1.99 * out->blockout_voxel, &out->blockout_inset));
+    }
+    if (const JsonValue* bc = doc.member(*b, "closing_radius")) {
+      SPLINTCORE_RETURN_IF_ERROR(
+          r.number(*bc, "closing_radius", 0.0, 10 * out->blockout_voxel, &out->blockout_closing));
+      if (out->blockout_closing != 0 && out->blockout_closing < 2 * out->blockout_voxel) {
+        return r.fail(*bc, StatusCode::kInvalidArgument,
+                      "\"closing_radius\" must be 0 or at least two voxels");
+      }
+    }
   }
   if (const JsonValue* p = doc.member(root, "printer")) {
     SPLINTCORE_RETURN_IF_ERROR(r.string(*p, "printer", &out->printer));

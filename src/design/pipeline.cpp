@@ -1,4 +1,6 @@
 // The design pipeline: jaws moved by the plan, base, Boolean difference, printer check.
+#include <cstring>
+
 #include "splintcore/design.h"
 
 namespace splintcore {
@@ -101,6 +103,43 @@ Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   if (!s.is_ok()) {
     arena.rewind(start);
     return stage_error(s, "boolean (base minus jaws)");
+  }
+  if (c.has_blockout) {
+    // Interference elimination, jaw by jaw: each jaw's part of B (its triangles, ids into all
+    // of B's vertices) swept along the direction it leaves the splint, and subtracted.
+    SPLINTCORE_RETURN_IF_ERROR(stage("design: blockout"));
+    if (jaws.size() > DesignReport::kMaxBlockoutJaws) {
+      arena.rewind(start);
+      return make_error(StatusCode::kLimitExceeded, "design: blockout takes at most ",
+                        DesignReport::kMaxBlockoutJaws, " jaws, the case has ", jaws.size());
+    }
+    size_t first_triangle = 0;
+    for (size_t j = 0; j < jaws.size(); ++j) {
+      Mesh jaw;
+      jaw.vertices.adopt(b.vertices.data(), b.vertices.size(), b.vertices.size());
+      jaw.triangles.adopt(b.triangles.data() + first_triangle, jaws[j].triangles.size(),
+                          jaws[j].triangles.size());
+      first_triangle += jaws[j].triangles.size();
+      const bool mandible = std::strcmp(c.jaws[j].role, "mandible") == 0;
+      BlockoutOptions bl;
+      bl.sweep.direction = mandible ? -c.insertion_direction : c.insertion_direction;
+      bl.sweep.voxel = c.blockout_voxel;
+      bl.sweep.inset = c.blockout_inset;
+      bl.sweep.closing_radius = c.blockout_closing;
+      Mesh blocked;
+      s = blockout(ctx, cut, Span<const Mesh>(&jaw, 1), bl, &blocked, &report->blockout[j]);
+      if (!s.is_ok()) {
+        arena.rewind(start);
+        Status e = stage_error(s, "blockout");
+        if (s.code() != StatusCode::kArenaExhausted && s.code() != StatusCode::kCancelled) {
+          e.append(" (jaw ").append_u64(j).append(", ").append(c.jaws[j].role).append(")");
+        }
+        return e;
+      }
+      report->blockout_removed_mm3[j] = mesh_volume(cut) - mesh_volume(blocked);
+      report->blockout_jaws = static_cast<uint32_t>(j + 1);
+      cut = blocked;  // the previous result stays below until the final move
+    }
   }
   SPLINTCORE_RETURN_IF_ERROR(stage("design: printer"));
   PrintCheckOptions pco;

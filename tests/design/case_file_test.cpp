@@ -888,3 +888,46 @@ TEST(CaseFileErrors, TwoJawsWithTheSameRole) {
 
 }  // namespace
 }  // namespace splintcore
+
+namespace splintcore {
+namespace {
+
+TEST(CaseFile, BlockoutTakesItsDefaultsAndChecksItsRanges) {
+  test::TestArena a(size_t{1} << 20);
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse(a.arena, CaseParts{}.text(), &c));
+  EXPECT_FALSE(c.has_blockout);
+  const std::string dir = "\"insertion_direction\": [0, 0, 1],\n";
+  SPLINTCORE_ASSERT_OK(parse(a.arena, with_root(dir + "\"blockout\": {},\n").text(), &c));
+  EXPECT_TRUE(c.has_blockout);
+  EXPECT_EQ(c.blockout_voxel, 0.1);
+  EXPECT_EQ(c.blockout_inset, 0.05);
+  EXPECT_EQ(c.blockout_closing, 0.0);
+  SPLINTCORE_ASSERT_OK(parse(
+      a.arena,
+      with_root(dir + "\"blockout\": {\"voxel\": 0.2, \"closing_radius\": 0.5},\n").text(), &c));
+  EXPECT_EQ(c.blockout_voxel, 0.2);
+  EXPECT_EQ(c.blockout_inset, 0.1);  // half the voxel
+  EXPECT_EQ(c.blockout_closing, 0.5);
+  // Errors name the key.
+  const char* bad[] = {
+      "\"blockout\": {},\n",                                   // no insertion direction
+      "\"insertion_direction\": [0, 0, 1], \"blockout\": {\"voxel\": 0},\n",
+      "\"insertion_direction\": [0, 0, 1], \"blockout\": {\"inset\": 0.2},\n",
+      "\"insertion_direction\": [0, 0, 1], \"blockout\": {\"closing_radius\": 0.1},\n",
+      "\"insertion_direction\": [0, 0, 1], \"blockout\": {\"radius\": 0.1},\n",
+      "\"insertion_direction\": [0, 0, 1], \"blockout\": [0.1],\n",
+  };
+  const char* names[] = {"insertion_direction", "voxel", "inset", "closing_radius", "radius",
+                         "blockout"};
+  for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); ++i) {
+    SCOPED_TRACE(bad[i]);
+    const Status s = parse(a.arena, with_root(bad[i]).text(), &c);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << test::format(s);
+    EXPECT_NE(std::string(s.message()).find(names[i]), std::string::npos) << s.message();
+    EXPECT_NE(s.line(), kNoPosition);
+  }
+}
+
+}  // namespace
+}  // namespace splintcore

@@ -133,3 +133,46 @@ TEST(DesignPipeline, ArenaExhaustionIsCleanAtEveryCapTried) {
 
 }  // namespace
 }  // namespace splintcore
+
+namespace splintcore {
+namespace {
+
+TEST(DesignPipeline, BlockoutRemovesInterferenceAndStaysPrintable) {
+  CaseAndJaws f;
+  ASSERT_TRUE(f.ok);
+  Mesh plain;
+  DesignReport r0;
+  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2),
+                                     &plain, &r0));
+  EXPECT_EQ(r0.blockout_jaws, 0u);
+  CaseFile c = f.c;
+  c.has_blockout = true;
+  c.blockout_voxel = 0.2;
+  c.blockout_inset = 0.1;
+  Mesh blocked;
+  DesignReport r;
+  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2),
+                                     &blocked, &r));
+  EXPECT_TRUE(r.print.printable);
+  ASSERT_EQ(r.blockout_jaws, 2u);
+  // The maxilla is swept along the insertion direction, the mandible along its reverse.
+  EXPECT_EQ(r.blockout[0].sweep.axis_w, c.insertion_direction);
+  EXPECT_EQ(r.blockout[1].sweep.axis_w, -c.insertion_direction);
+  double v_plain = 0, v_blocked = 0;
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(Context(&f.t.arena), plain, &v_plain));
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(Context(&f.t.arena), blocked, &v_blocked));
+  EXPECT_LE(v_blocked, v_plain);
+  EXPECT_NEAR(v_plain - v_blocked, r.blockout_removed_mm3[0] + r.blockout_removed_mm3[1], 1e-6);
+  // Run twice: the same bytes.
+  Mesh again;
+  DesignReport r2;
+  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2),
+                                     &again, &r2));
+  std::vector<uint8_t> a, b;
+  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(f.t.arena, blocked, StlFormat::kBinary, &a));
+  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(f.t.arena, again, StlFormat::kBinary, &b));
+  EXPECT_EQ(a, b);
+}
+
+}  // namespace
+}  // namespace splintcore
