@@ -181,5 +181,47 @@ check "missing jaw named" -- grep -q "mandible.stl" "$work/err"
 check "no splint after a failure" -- test ! -e "$work/design2/splint.stl"
 check "no report after a failure" -- test ! -e "$work/design2/report.json"
 
+# CT: the skull phantom in each format, then reconstruction of both jaws (issue 7).
+ctsize=(--size 120,110,80 --spacing 0.6,0.6,0.6)
+expect_exit 0 "ct-phantom --help" -- "$tool" ct-phantom --help
+expect_exit 2 "ct-phantom without --format" -- "$tool" ct-phantom -o "$work/ct.nrrd"
+expect_exit 2 "ct-phantom with a bad format" -- "$tool" ct-phantom -o "$work/ct.nrrd" --format png
+expect_exit 2 "ct-phantom with a bad size" -- "$tool" ct-phantom -o "$work/ct.nrrd" --format nrrd --size 10,10
+expect_exit 1 "ct-phantom too small for the jaws" -- "$tool" ct-phantom -o "$work/ct.nrrd" --format nrrd --size 40,40,40
+check "too small named" -- grep -q "the jaws need at least" "$work/err"
+expect_exit 0 "ct-phantom nrrd" -- "$tool" ct-phantom -o "$work/ct.nrrd" --format nrrd "${ctsize[@]}" --json
+check "ct-phantom --json" -- json_ok "$work/out"
+check "ct-phantom gives seeds" -- grep -q '"seed_maxilla":\[0,18,13' "$work/out"
+expect_exit 0 "ct-phantom mha" -- "$tool" ct-phantom -o "$work/ct.mha" --format mha "${ctsize[@]}" --noise 30 --no-streak --seed 5
+expect_exit 0 "ct-phantom dicom" -- "$tool" ct-phantom -o "$work/ctdcm" --format dicom "${ctsize[@]}"
+check "ct-phantom dicom wrote 80 slices" -- test "$(ls "$work/ctdcm" | wc -l)" -eq 80
+seeds=(--seed-maxilla 0,18,13 --seed-mandible 0,18,-13)
+expect_exit 0 "reconstruct --help" -- "$tool" reconstruct --help
+expect_exit 2 "reconstruct without seeds" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jaws"
+expect_exit 2 "reconstruct with a bad connectivity" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jaws" "${seeds[@]}" --connectivity 7
+expect_exit 2 "reconstruct with a bad plane" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jaws" "${seeds[@]}" --split-plane 0,0,0
+expect_exit 0 "reconstruct nrrd" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jaws" "${seeds[@]}" --json
+check "reconstruct --json" -- json_ok "$work/out"
+check "reconstruct separated the jaws" -- grep -q '"meets_other_region":true' "$work/out"
+check "reconstruct reports the peak arena" -- grep -q '"peak_arena_bytes":[1-9]' "$work/out"
+expect_exit 0 "the reconstructed maxilla is a printable solid" -- "$tool" check "$work/jaws/maxilla.stl"
+expect_exit 0 "the reconstructed mandible is a printable solid" -- "$tool" check "$work/jaws/mandible.stl"
+expect_exit 0 "reconstruct again, 26-connectivity" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jaws26" "${seeds[@]}" --connectivity 26 --threads 2
+expect_exit 0 "reconstruct nrrd again" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jaws2" "${seeds[@]}"
+check "reconstruct is deterministic" -- cmp -s "$work/jaws/maxilla.stl" "$work/jaws2/maxilla.stl"
+expect_exit 0 "reconstruct mha" -- "$tool" reconstruct "$work/ct.mha" -o "$work/jawsmha" "${seeds[@]}"
+expect_exit 0 "reconstruct dicom folder" -- "$tool" reconstruct "$work/ctdcm" -o "$work/jawsdcm" "${seeds[@]}" --hu-min 300 --hu-max 4000
+expect_exit 0 "reconstruct with a split plane" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jawsplane" "${seeds[@]}" --split-plane 0,0,0,0,0,1
+expect_exit 1 "reconstruct with the plane the wrong way" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jawsbad" "${seeds[@]}" --split-plane 0,0,0,0,0,-1
+check "wrong side named" -- grep -q "split plane's side" "$work/err"
+expect_exit 1 "reconstruct with a seed outside" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jawsbad" --seed-maxilla 0,18,13 --seed-mandible 0,18,99
+check "seed outside named" -- grep -q "outside the volume" "$work/err"
+expect_exit 1 "reconstruct with a seed in soft tissue" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jawsbad" --seed-maxilla 0,0,13 --seed-mandible 0,18,-13
+check "seed not in window named" -- grep -q "not in the HU window" "$work/err"
+expect_exit 1 "reconstruct under a 2M cap" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jawsbad" "${seeds[@]}" --memory-cap 2M --json
+check "cap failure is arena_exhausted" -- grep -q '"status":"arena_exhausted"' "$work/out"
+check "no jaw written after failures" -- test ! -e "$work/jawsbad/maxilla.stl"
+expect_exit 1 "reconstruct a missing volume" -- "$tool" reconstruct "$work/none.nrrd" -o "$work/jawsbad" "${seeds[@]}"
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "../common/cli.h"
+#include "../common/ct_phantom.h"
 #include "../common/phantom.h"
 #include "../common/realcase.h"
 #include "../common/shapes.h"
@@ -21,6 +22,9 @@
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
 #include "splintcore/platform.h"
+#include "splintcore/segment.h"
+#include "splintcore/remesh.h"
+#include "splintcore/volume.h"
 
 namespace splintcore {
 namespace {
@@ -466,6 +470,260 @@ void bench_boolean_realdata(Harness& h, Arena& arena, const std::string& dir) {
   arena.rewind(m);
 }
 
+// CT reconstruction at scan size (issue 7): a 512 x 512 x 300 skull phantom (0.3 mm voxels)
+// through threshold, competitive region growing and reconstruction of both jaws, in an arena
+// of a stated cap that also holds the volume (as the CT readers leave it).
+void bench_ct_reconstruct(Harness& h, Arena& arena) {
+  const char* name = "ct_reconstruct_512";
+  if (!h.wanted(name)) return;
+  constexpr uint64_t kCap = uint64_t{512} << 20;
+  const Arena::Marker outer = arena.mark();
+  void* slice = arena.allocate(static_cast<size_t>(kCap));
+  if (slice == nullptr) {
+    cli::print_error(arena.exhausted_status());
+    h.failed = true;
+    return;
+  }
+  {
+    Arena ct_arena(slice, static_cast<size_t>(kCap));
+    cli::CtPhantomOptions po;
+    po.nx = 512;
+    po.ny = 512;
+    po.nz = 300;
+    po.spacing = Vec3{0.3, 0.3, 0.3};
+    cli::CtPhantom phantom;
+    Status s = phantom.init(po);
+    CtVolume volume;
+    const double t0 = monotonic_seconds();
+    if (s.is_ok()) {
+      std::vector<int16_t> hu;
+      phantom.generate(&hu, &volume);
+      int16_t* in_arena = ct_arena.allocate_array<int16_t>(hu.size());
+      if (in_arena == nullptr) {
+        s = ct_arena.exhausted_status();
+      } else {
+        std::memcpy(in_arena, hu.data(), hu.size() * sizeof(int16_t));
+        volume.hu = in_arena;
+      }
+    }
+    if (!s.is_ok()) {
+      cli::print_error(s);
+      h.failed = true;
+      arena.rewind(outer);
+      return;
+    }
+    std::printf("# %s: phantom made in %.2f s (not timed below)\n", name, monotonic_seconds() - t0);
+    double stage[5] = {0, 0, 0, 0, 0};
+    uint64_t window = 0, triangles[2] = {0, 0}, voxels[2] = {0, 0};
+    uint32_t layers = 0;
+    // Time per progress stage ("threshold", "region growing", "reconstruct: region box",
+    // "marching cubes"), last run: where reconstruction's time goes.
+    struct Stages {
+      std::vector<std::string> names;
+      std::vector<double> seconds;
+      std::string current;
+      double since = 0;
+      static bool report(void* user, const char* stage, uint64_t, uint64_t) {
+        Stages* c = static_cast<Stages*>(user);
+        const double now = monotonic_seconds();
+        if (!c->current.empty()) {
+          size_t i = 0;
+          while (i < c->names.size() && c->names[i] != c->current) ++i;
+          if (i == c->names.size()) {
+            c->names.push_back(c->current);
+            c->seconds.push_back(0);
+          }
+          c->seconds[i] += now - c->since;
+        }
+        c->current = stage;
+        c->since = now;
+        return true;
+      }
+    } clock;
+    Progress progress;
+    progress.report = &Stages::report;
+    progress.user = &clock;
+    h.measure(name, volume.voxel_count(), ct_arena, [&](Arena& a) {
+      Context ctx(&a, nullptr, &progress);
+      clock.names.clear();
+      clock.seconds.clear();
+      clock.current.clear();
+      double t = monotonic_seconds();
+      auto lap = [&](int i) {
+        const double now = monotonic_seconds();
+        stage[i] = now - t;
+        t = now;
+      };
+      LabelVolume labels;
+      ThresholdStats ts;
+      SPLINTCORE_RETURN_IF_ERROR(
+          threshold_window(ctx, volume, HuWindow{300, 4000}, &labels, &ts));
+      lap(0);
+      RegionSeed seeds[2];
+      seeds[0].label = 1;
+      seeds[0].patient_mm = phantom.seed_maxilla();
+      seeds[1].label = 2;
+      seeds[1].patient_mm = phantom.seed_mandible();
+      RegionStats rs;
+      SPLINTCORE_RETURN_IF_ERROR(grow_regions(ctx, volume, Span<const RegionSeed>(seeds, 2),
+                                              RegionGrowOptions{}, &labels, &rs));
+      lap(1);
+      window = ts.in_window;
+      voxels[0] = rs.voxels[1];
+      voxels[1] = rs.voxels[2];
+      for (int jaw = 0; jaw < 2; ++jaw) {
+        ArenaScope scope(a);
+        Mesh mesh(&a);
+        ReconstructOptions ro;
+        ro.label = static_cast<uint8_t>(jaw + 1);
+        ReconstructStats st;
+        SPLINTCORE_RETURN_IF_ERROR(reconstruct_region(ctx, volume, labels, ro, &mesh, &st));
+        Stages::report(&clock, "reconstruct: returned", 0, 0);
+        triangles[jaw] = mesh.triangles.size();
+        layers = st.marching.layers_per_tile;
+        lap(2 + jaw);
+      }
+      return Status::ok();
+    });
+    std::printf("# %s: cap %llu bytes (the 150 MiB volume included, outside the peak above); "
+                "%llu window voxels; maxilla %llu voxels %llu triangles, mandible %llu voxels "
+                "%llu triangles; %u layers per slab\n",
+                name, static_cast<unsigned long long>(kCap), static_cast<unsigned long long>(window),
+                static_cast<unsigned long long>(voxels[0]),
+                static_cast<unsigned long long>(triangles[0]),
+                static_cast<unsigned long long>(voxels[1]),
+                static_cast<unsigned long long>(triangles[1]), layers);
+    std::printf("# %s stages (s, last run): threshold %.3f; region growing %.3f; reconstruct "
+                "maxilla %.3f; reconstruct mandible %.3f\n",
+                name, stage[0], stage[1], stage[2], stage[3]);
+    std::printf("# %s progress stages (s, last run, both jaws; a stage runs until the next "
+                "one's first report):",
+                name);
+    for (size_t i = 0; i < clock.names.size(); ++i) {
+      std::printf(" %s %.3f;", clock.names[i].c_str(), clock.seconds[i]);
+    }
+    std::printf("\n");
+  }
+  arena.rewind(outer);
+}
+
+// Smoothing and decimation at CT scale (issue 7): a marching-tetrahedra sphere (radius 30 mm,
+// 0.225 mm voxels: about 2,000,000 triangles) decimated to 100,000 triangles, and 10 Taubin
+// iterations on it, on one core; then the same on a torus.
+struct RemeshSphere {
+  Vec3 center;
+  double radius = 0, tube = 0;  // tube > 0: a torus (radius: its ring)
+  VolumeGrid grid;
+  static Status fill(void* user, uint32_t z0, uint32_t z1, Span<float> out) {
+    const RemeshSphere& s = *static_cast<const RemeshSphere*>(user);
+    size_t i = 0;
+    for (uint32_t z = z0; z < z1; ++z) {
+      for (uint32_t y = 0; y < s.grid.ny; ++y) {
+        for (uint32_t x = 0; x < s.grid.nx; ++x, ++i) {
+          const Vec3 q = s.grid.origin +
+                         Vec3{s.grid.spacing.x * x, s.grid.spacing.y * y, s.grid.spacing.z * z} -
+                         s.center;
+          double d;
+          if (s.tube > 0) {
+            const double ring = std::sqrt(q.x * q.x + q.y * q.y) - s.radius;
+            d = std::sqrt(ring * ring + q.z * q.z) - s.tube;
+          } else {
+            d = length(q) - s.radius;
+          }
+          out[i] = static_cast<float>(d);
+        }
+      }
+    }
+    return Status::ok();
+  }
+};
+
+void bench_remesh(Harness& h, Arena& arena) {
+  for (int shape = 0; shape < 2; ++shape) {
+    const std::string suffix = shape == 0 ? "_2m" : "_torus_2m";
+    const std::string dname = "decimate" + suffix, tname = "taubin" + suffix;
+    if (!h.wanted(dname.c_str()) && !h.wanted(tname.c_str())) continue;
+    const Arena::Marker m = arena.mark();
+    RemeshSphere s;
+    double extent_xy = 0, extent_z = 0, voxel = 0;
+    if (shape == 0) {
+      s.radius = 30.0;
+      voxel = 0.225;
+      extent_xy = extent_z = 2 * s.radius;
+    } else {
+      s.radius = 30.0;
+      s.tube = 8.0;
+      voxel = 0.206;
+      extent_xy = 2 * (s.radius + s.tube);
+      extent_z = 2 * s.tube;
+    }
+    s.grid.spacing = Vec3{voxel, voxel, voxel};
+    s.grid.nx = s.grid.ny = static_cast<uint32_t>(extent_xy / voxel) + 6;
+    s.grid.nz = static_cast<uint32_t>(extent_z / voxel) + 6;
+    s.grid.origin = Vec3{101.3, -40.7, 250.1};  // CT-like coordinates, off the origin
+    s.center = s.grid.origin + Vec3{voxel * s.grid.nx * 0.5 + 0.0137, voxel * s.grid.ny * 0.5 - 0.0211,
+                                    voxel * s.grid.nz * 0.5 + 0.0093};
+    Context ctx(&arena);
+    Mesh mesh(&arena);
+    LayerSource source;
+    source.fill = &RemeshSphere::fill;
+    source.user = &s;
+    const double t0 = monotonic_seconds();
+    Status st = marching_cubes_mesh(ctx, s.grid, source, MarchingCubesOptions{}, &mesh);
+    if (!st.is_ok()) {
+      cli::print_error(st);
+      h.failed = true;
+      arena.rewind(m);
+      return;
+    }
+    std::printf("# %s input: %zu triangles, %zu vertices (marching tetrahedra, %.1f s to make)\n",
+                suffix.c_str() + 1, mesh.triangles.size(), mesh.vertices.size(),
+                monotonic_seconds() - t0);
+    if (h.wanted(dname.c_str())) {
+      DecimateOptions options;
+      options.target_triangles = 100000;
+      DecimateStats stats;
+      Mesh out;
+      double volume = 0;
+      h.measure(dname.c_str(), mesh.triangles.size(), arena, [&](Arena& a) {
+        Context c(&a);
+        out.bind(&a);
+        Status r = decimate_qem(c, mesh, options, &out, &stats);
+        if (r.is_ok()) volume = mesh_volume(out);
+        return r;
+      });
+      std::printf("# %s: %llu triangles, %llu vertices, %llu collapses (refused: %llu link, %llu "
+                  "flip, %llu flat; %u rounds), max error %.4f mm, volume %.1f -> %.1f mm3, "
+                  "bound %llu bytes\n",
+                  dname.c_str(), static_cast<unsigned long long>(stats.output_triangles),
+                  static_cast<unsigned long long>(stats.output_vertices),
+                  static_cast<unsigned long long>(stats.collapses),
+                  static_cast<unsigned long long>(stats.rejected_link),
+                  static_cast<unsigned long long>(stats.rejected_flip),
+                  static_cast<unsigned long long>(stats.rejected_degenerate), stats.rounds,
+                  stats.max_error, mesh_volume(mesh), volume,
+                  static_cast<unsigned long long>(
+                      decimate_qem_bytes(mesh.vertices.size(), mesh.triangles.size())));
+    }
+    if (h.wanted(tname.c_str())) {
+      TaubinOptions options;
+      options.iterations = 10;
+      TaubinStats stats;
+      h.measure(tname.c_str(), mesh.triangles.size(), arena, [&](Arena& a) {
+        return taubin_smooth(Context(&a), &mesh, options, &stats);
+      });
+      std::printf("# %s: 10 iterations (lambda 0.5, mu -0.53), %llu edges, volume change of the "
+                  "last run %.3g mm3 (%.3g%%), bound %llu bytes\n",
+                  tname.c_str(), static_cast<unsigned long long>(stats.edges),
+                  stats.volume_after - stats.volume_before,
+                  100.0 * (stats.volume_after - stats.volume_before) / stats.volume_before,
+                  static_cast<unsigned long long>(
+                      taubin_smooth_bytes(mesh.vertices.size(), mesh.triangles.size())));
+    }
+    arena.rewind(m);
+  }
+}
+
 int run(int argc, char** argv) {
   Harness h;
   std::string realdata = "../shared/realdata/open-full-jaw-patient26";
@@ -504,6 +762,8 @@ int run(int argc, char** argv) {
     bench_boolean_phantom(h, arena, fixtures);
     bench_boolean_realdata(h, arena, realdata);
     bench_distance_sizes(h, arena);
+    bench_remesh(h, arena);
+    bench_ct_reconstruct(h, arena);
     // A torus of 2 x 521 x 521 = 542,882 triangles: the size of the paper's largest jaw.
     std::vector<uint8_t> torus = to_binary_stl(shapes::torus(521, 521, 30.0, 8.0));
     bench_stl(h, arena, "", torus);
