@@ -72,6 +72,7 @@ struct SweepOptions {
   // extrapolated inside field described above.
   bool correct_bias = true;
   uint32_t layers_per_tile = 0;  // slab size for the extractor (0: automatic); bytes unchanged
+  double edge_margin = kEdgeMargin;  // the extractor's (volume.h); the blockout uses 1/16
 };
 
 struct SweepStats {
@@ -126,13 +127,18 @@ struct BlockoutStats {
   SweepStats sweep;
   uint64_t swept_triangles = 0;  // the swept volume's mesh inside the splint's bounds
   BooleanStats boolean;
+  uint32_t attempts = 0;         // 1 + the retries with a deeper inset
+  double inset_used = 0;         // mm
 };
 
 // `out` = `splint` minus the part of the jaws' swept volume (sweep_volume above, direction =
 // the splint's insertion direction for these jaws) that lies in the splint's bounds. The swept
-// mesh is rounded to float32 (as the Boolean's B), then subtracted with mesh_boolean, whose
-// checks the result passes (closed, manifold, outward, float32-exact, optionally no
-// self-intersection). A splint the sweep does not reach comes back unchanged (copied).
+// mesh (extracted with an edge margin of 1/16, so no sliver folds in float32) is rounded to
+// float32 (as the Boolean's B), then subtracted with mesh_boolean, whose checks the result
+// passes (closed, manifold, outward, float32-exact, optionally no self-intersection). When
+// the Boolean meets a configuration it cannot resolve even with its own nudges of A, the swept
+// surface is taken again 1/64 voxel deeper, up to three times (BlockoutStats::attempts and
+// inset_used say what was used; the inset stays below two voxels). A splint the sweep does not reach comes back unchanged (copied).
 // For a wafer between two jaws call it once per jaw: the maxilla's direction is the
 // mandible's reversed. Memory: the sweep's state and extractor, the swept mesh, then the
 // Boolean's; only `out` stays (moved down to where the arena's top was). Errors: those of

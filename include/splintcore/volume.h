@@ -23,7 +23,8 @@
 //   (+x+y, +x+z, +y+z) and the body diagonal (+x+y+z)) between an inside and an outside
 //   sample. An edge is known by its lower endpoint and its direction. Its vertex is at
 //   t = (iso - f0) / (f1 - f0) in double from the lower endpoint (f0 there, f1 at the upper),
-//   clamped to [kEdgeMargin, 1 - kEdgeMargin] (so no vertex sits on a sample, and no triangle
+//   clamped to [m, 1 - m], m = options.edge_margin (default kEdgeMargin) (so no vertex sits
+//   on a sample, and no triangle
 //   has zero area even where samples equal iso), at
 //   origin[a] + spacing[a] * (i[a] + t * d[a]) per axis (d[a] = 0: origin[a] + spacing[a] * i[a],
 //   the sample position sample_sdf uses). Edges to a sample beyond the grid use t =
@@ -85,6 +86,11 @@ struct MarchingCubesOptions {
   // fit the free arena (all of it for streaming, a quarter of it for the mesh variant, which
   // needs the rest for its output). Clamped to nz. The output never depends on it.
   uint32_t layers_per_tile = 0;
+  // Vertices are kept at least this fraction of an edge away from its samples (and the
+  // closing caps this far beyond the border): kEdgeMargin up to 1/4. A larger margin moves
+  // vertices by at most that fraction of an edge and keeps triangles away from slivers that
+  // rounding to float32 would fold (the blockout uses 1/16).
+  double edge_margin = kEdgeMargin;
 };
 
 struct MarchingCubesStats {

@@ -22,51 +22,60 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
   if (bounds.empty()) {
     return make_error(StatusCode::kInvalidArgument, "blockout: the splint has no vertices");
   }
-  SweepOptions so = options.sweep;
-  so.has_region = true;
-  so.region = bounds;
-  so.open_at_region = true;  // the caps lie outside the splint: the Boolean takes an open B
-  Mesh swept;
-  Status s = sweep_volume_mesh(ctx, jaws, so, &swept, &st->sweep);
-  if (!s.is_ok()) {
-    arena.rewind(start);
-    out->bind(&arena);
-    return s;
-  }
-  st->swept_triangles = swept.triangles.size();
-  for (size_t i = 0; i < swept.vertices.size(); ++i) {
-    if (!round_to_float32(&swept.vertices[i])) {
-      arena.rewind(start);
-      out->bind(&arena);
-      return make_error(StatusCode::kLimitExceeded,
-                        "blockout: a vertex of the swept volume is beyond float32 range")
-          .at_index(i);
-    }
-  }
+  const int kAttempts = 4;
   Mesh result;
-  if (swept.triangles.empty()) {
-    // Nothing reaches the splint: a copy (the caller's splint stays theirs).
-    result.bind(&arena);
-    if (!result.triangles.resize(splint.triangles.size()) ||
-        !result.vertices.resize(splint.vertices.size())) {
-      arena.rewind(start);
-      out->bind(&arena);
-      return arena.exhausted_status();
+  Status s;
+  for (int attempt = 0; attempt < kAttempts; ++attempt) {
+    arena.rewind(start);
+    result = Mesh();
+    SweepOptions so = options.sweep;
+    so.has_region = true;
+    so.region = bounds;
+    so.open_at_region = true;  // the caps lie outside the splint: the Boolean takes an open B
+    if (so.edge_margin < 1.0 / 16) so.edge_margin = 1.0 / 16;
+    so.inset = options.sweep.inset + attempt * (options.sweep.voxel / 64);
+    if (attempt > 0 && !(so.inset < 2 * so.voxel)) break;
+    st->attempts = static_cast<uint32_t>(attempt + 1);
+    st->inset_used = so.inset;
+    Mesh swept;
+    s = sweep_volume_mesh(ctx, jaws, so, &swept, &st->sweep);
+    if (!s.is_ok()) break;
+    st->swept_triangles = swept.triangles.size();
+    for (size_t i = 0; i < swept.vertices.size() && s.is_ok(); ++i) {
+      if (!round_to_float32(&swept.vertices[i])) {
+        s = make_error(StatusCode::kLimitExceeded,
+                       "blockout: a vertex of the swept volume is beyond float32 range")
+                .at_index(i);
+      }
     }
-    for (size_t i = 0; i < splint.triangles.size(); ++i) result.triangles[i] = splint.triangles[i];
-    for (size_t i = 0; i < splint.vertices.size(); ++i) result.vertices[i] = splint.vertices[i];
-  } else {
+    if (!s.is_ok()) break;
+    if (swept.triangles.empty()) {
+      // Nothing reaches the splint: a copy (the caller's splint stays theirs).
+      result.bind(&arena);
+      if (!result.triangles.resize(splint.triangles.size()) ||
+          !result.vertices.resize(splint.vertices.size())) {
+        s = arena.exhausted_status();
+        break;
+      }
+      for (size_t i = 0; i < splint.triangles.size(); ++i) result.triangles[i] = splint.triangles[i];
+      for (size_t i = 0; i < splint.vertices.size(); ++i) result.vertices[i] = splint.vertices[i];
+      break;
+    }
     BooleanOptions bo = options.boolean;
     bo.op = BooleanOp::kDifference;
     s = mesh_boolean(ctx, splint, swept, bo, &result, &st->boolean);
-    if (!s.is_ok()) {
-      arena.rewind(start);
-      out->bind(&arena);
-      if (s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) return s;
-      Status e = make_error(s.code(), "blockout: ", s.message());
-      if (s.index() != kNoPosition) e.at_index(s.index());
-      return e;
+    if (s.is_ok() || s.code() == StatusCode::kArenaExhausted ||
+        s.code() == StatusCode::kCancelled || s.code() == StatusCode::kInvalidArgument) {
+      break;
     }
+  }
+  if (!s.is_ok()) {
+    arena.rewind(start);
+    out->bind(&arena);
+    if (s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) return s;
+    Status e = make_error(s.code(), "blockout: ", s.message());
+    if (s.index() != kNoPosition) e.at_index(s.index());
+    return e;
   }
   move_mesh_down(arena, start, result, out);
   return Status::ok();

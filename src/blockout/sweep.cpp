@@ -834,6 +834,7 @@ Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOption
   MarchingCubesOptions mc;
   mc.iso = -options.inset;
   mc.layers_per_tile = options.layers_per_tile;
+  mc.edge_margin = options.edge_margin;
   return marching_cubes(ctx, s.mesh_grid, LayerSource{fill_layers, &s}, mc, outer,
                         &st->extraction);
 }
@@ -856,6 +857,7 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
     MarchingCubesOptions mc;
     mc.iso = -options.inset;
     mc.layers_per_tile = options.layers_per_tile;
+    mc.edge_margin = options.edge_margin;
     status = marching_cubes_mesh(ctx, s.mesh_grid, LayerSource{fill_layers, &s}, mc, &mesh,
                                  &st->extraction);
   }

@@ -228,6 +228,7 @@ inline uint64_t upward_word(const PlaneBits& lo, const PlaneBits& hi, unsigned k
 struct Sweep {
   const VolumeGrid* grid = nullptr;
   double iso = 0;
+  double margin = kEdgeMargin;
   const MarchingCubesVisitor* visitor = nullptr;
   uint64_t words = 0;            // bit words per row
   PlaneBits lo_bits, hi_bits;    // sample planes cz and cz + 1 of the current cells
@@ -252,13 +253,13 @@ inline Vec3 edge_vertex(const Sweep& s, int64_t cx, int64_t cy, int64_t cz, unsi
                         unsigned d, const Corner& f0, const Corner& f1) {
   double t;
   if (!f0.real) {
-    t = 1.0 - kEdgeMargin;
+    t = 1.0 - s.margin;
   } else if (!f1.real) {
-    t = kEdgeMargin;
+    t = s.margin;
   } else {
     const double a = static_cast<double>(f0.value), b = static_cast<double>(f1.value);
     t = (s.iso - a) / (b - a);
-    t = t < kEdgeMargin ? kEdgeMargin : (t > 1.0 - kEdgeMargin ? 1.0 - kEdgeMargin : t);
+    t = t < s.margin ? s.margin : (t > 1.0 - s.margin ? 1.0 - s.margin : t);
   }
   const VolumeGrid& g = *s.grid;
   const double px = static_cast<double>(cx + static_cast<int64_t>(lo & 1u));
@@ -538,6 +539,10 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
   if (!is_finite(options.iso)) {
     return make_error(StatusCode::kInvalidArgument, "marching cubes: the iso value is not finite");
   }
+  if (!(options.edge_margin >= kEdgeMargin && options.edge_margin <= 0.25)) {
+    return make_error(StatusCode::kInvalidArgument, "marching cubes: the edge margin must be in [",
+                      kEdgeMargin, ", 0.25], not ", options.edge_margin);
+  }
   if (source.fill == nullptr) {
     return make_error(StatusCode::kInvalidArgument, "marching cubes: no layer source");
   }
@@ -595,6 +600,7 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
   Sweep s;
   s.grid = &grid;
   s.iso = options.iso;
+  s.margin = options.edge_margin;
   s.visitor = &visitor;
   s.words = bit_words(grid.nx);
   s.plane_lo.prefix = prefix;

@@ -15,6 +15,7 @@
 #include "../common/phantom.h"
 #include "../common/realcase.h"
 #include "../common/shapes.h"
+#include "splintcore/blockout.h"
 #include "splintcore/boolean.h"
 #include "splintcore/core.h"
 #include "splintcore/design.h"
@@ -724,6 +725,168 @@ void bench_remesh(Harness& h, Arena& arena) {
   }
 }
 
+// The extractor on a dense 512^3 grid (a sphere's distance, 0.4 n radius), one core, streamed
+// to a counter: voxels per second of the extraction itself. The field is computed once into
+// a table beforehand, so the fill is a copy (as flying edges' figures in ../shared/peers.md
+// exclude making the volume).
+void bench_marching_cubes(Harness& h, Arena& arena) {
+  const char* name = "marching_cubes_512";
+  if (!h.wanted(name)) return;
+  const uint32_t n = 512;
+  std::vector<float> field(size_t{n} * n * n);
+  const double c = n * 0.5, r = n * 0.4;
+  size_t i = 0;
+  for (uint32_t z = 0; z < n; ++z) {
+    for (uint32_t y = 0; y < n; ++y) {
+      for (uint32_t x = 0; x < n; ++x, ++i) {
+        const double dx = x - c + 0.13, dy = y - c - 0.21, dz = z - c + 0.07;
+        field[i] = static_cast<float>(std::sqrt(dx * dx + dy * dy + dz * dz) - r);
+      }
+    }
+  }
+  struct Table {
+    const float* data;
+    size_t layer;
+    static Status fill(void* user, uint32_t z0, uint32_t z1, Span<float> out) {
+      const Table& t = *static_cast<Table*>(user);
+      std::memcpy(out.data(), t.data + t.layer * z0, t.layer * (z1 - z0) * sizeof(float));
+      return Status::ok();
+    }
+  } table{field.data(), size_t{n} * n};
+  VolumeGrid grid;
+  grid.spacing = Vec3{1, 1, 1};
+  grid.nx = grid.ny = grid.nz = n;
+  uint64_t triangles = 0;
+  const Result r0 = h.measure(name, uint64_t{n} * n * n, arena, [&](Arena& a) {
+    Context ctx(&a);
+    MarchingCubesVisitor none;
+    MarchingCubesStats st;
+    Status s = marching_cubes(ctx, grid, LayerSource{Table::fill, &table}, MarchingCubesOptions{},
+                              none, &st);
+    triangles = st.triangles;
+    return s;
+  });
+  if (r0.median > 0) {
+    std::printf("# %s: %.0f M voxels/s (median), %llu triangles\n", name,
+                static_cast<double>(n) * n * n / r0.median / 1e6,
+                static_cast<unsigned long long>(triangles));
+  }
+}
+
+// The swept volume of both phantom jaws (87 k triangles each) along +z, streamed to a
+// counter, at 0.1 mm (and 0.05 mm under a 64 MiB cap: sweep_phantom_005_64m).
+void bench_sweep(Harness& h, Arena& arena) {
+  const bool fine = h.wanted("sweep_phantom_005_64m");
+  if (!h.wanted("sweep_phantom_01") && !fine) return;
+  Mesh jaws[2];
+  const Arena::Marker m = arena.mark();
+  for (int j = 0; j < 2; ++j) {
+    phantom::JawMesh jm;
+    phantom::PhantomOptions po;
+    po.target_triangles = 87000;
+    Status s = phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po,
+                                 &jm);
+    jaws[j].bind(&arena);
+    if (s.is_ok()) s = phantom::to_mesh(jm, &jaws[j]);
+    if (!s.is_ok()) {
+      cli::print_error(s);
+      h.failed = true;
+      arena.rewind(m);
+      return;
+    }
+  }
+  struct Counter {
+    uint64_t triangles = 0;
+    static Status triangle(void* user, const Triangle&, const Vec3&, const Vec3&, const Vec3&) {
+      ++static_cast<Counter*>(user)->triangles;
+      return Status::ok();
+    }
+  };
+  auto run = [&](const char* name, double voxel, uint64_t cap) {
+    if (!h.wanted(name)) return;
+    SweepOptions o;
+    o.direction = Vec3{0, 0, 1};
+    o.voxel = voxel;
+    o.extent = 30.0;  // about 50 mm tall in all, as issue 6's full-arch case
+    SweepStats st;
+    Counter count;
+    const Result r = h.measure(name, 0, arena, [&](Arena& a) {
+      // Within a capped slice of the arena, as a caller with that budget would run it.
+      void* slice = a.allocate(static_cast<size_t>(cap));
+      if (slice == nullptr) return a.exhausted_status();
+      Arena capped(slice, static_cast<size_t>(cap));
+      Context ctx(&capped);
+      MarchingCubesVisitor v;
+      v.triangle = Counter::triangle;
+      v.user = &count;
+      count.triangles = 0;
+      Status s = sweep_volume(ctx, Span<const Mesh>(jaws, 2), o, v, &st);
+      if (s.is_ok()) std::printf("# %s: cap peak %llu bytes\n", name,
+                                 static_cast<unsigned long long>(capped.high_water()));
+      return s;
+    });
+    if (r.median > 0) {
+      std::printf("# %s: %u x %u x %u = %.3f G voxels of %.2f mm, %llu triangles, %llu column "
+                  "tests\n",
+                  name, st.nx, st.ny, st.nz, static_cast<double>(st.voxels) / 1e9, voxel,
+                  static_cast<unsigned long long>(count.triangles),
+                  static_cast<unsigned long long>(st.segment_tests));
+    }
+  };
+  run("sweep_phantom_01", 0.1, uint64_t{1} << 30);
+  run("sweep_phantom_005_64m", 0.05, uint64_t{64} << 20);
+  arena.rewind(m);
+}
+
+// Interference elimination of the paper-scale splint (phantom jaws, 87 k triangles each):
+// design_splint with "blockout" at 0.1 mm, both jaws.
+void bench_blockout(Harness& h, Arena& arena, const std::string& fixtures) {
+  const char* name = "blockout_phantom_87k";
+  if (!h.wanted(name)) return;
+  const std::string path = fixtures + "/cases/paper_scale.json";
+  std::vector<uint8_t> text = read_whole(path);
+  if (text.empty()) return;
+  const Arena::Marker m = arena.mark();
+  Context ctx(&arena);
+  CaseFile c;
+  Status s = parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(),
+                        path.c_str(), &c);
+  Mesh jaws[2];
+  for (int j = 0; j < 2 && s.is_ok(); ++j) {
+    phantom::JawMesh jm;
+    phantom::PhantomOptions po;
+    po.target_triangles = 87000;
+    s = phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &jm);
+    jaws[j].bind(&arena);
+    if (s.is_ok()) s = phantom::to_mesh(jm, &jaws[j]);
+  }
+  if (!s.is_ok()) {
+    cli::print_error(s);
+    h.failed = true;
+    arena.rewind(m);
+    return;
+  }
+  c.has_blockout = true;
+  c.blockout_voxel = 0.1;
+  c.blockout_inset = 0.05;
+  DesignReport report;
+  uint64_t triangles = 0;
+  h.measure(name, 0, arena, [&](Arena& a) {
+    Mesh splint;
+    Status st = design_splint(Context(&a), c, Span<const Mesh>(jaws, 2), &splint, &report);
+    triangles = splint.triangles.size();
+    return st;
+  });
+  std::printf("# %s: splint %llu triangles; removed %.3f + %.3f mm^3; swept %llu + %llu "
+              "triangles; attempts %u + %u\n",
+              name, static_cast<unsigned long long>(triangles), report.blockout_removed_mm3[0],
+              report.blockout_removed_mm3[1],
+              static_cast<unsigned long long>(report.blockout[0].swept_triangles),
+              static_cast<unsigned long long>(report.blockout[1].swept_triangles),
+              report.blockout[0].attempts, report.blockout[1].attempts);
+  arena.rewind(m);
+}
+
 int run(int argc, char** argv) {
   Harness h;
   std::string realdata = "../shared/realdata/open-full-jaw-patient26";
@@ -764,6 +927,9 @@ int run(int argc, char** argv) {
     bench_distance_sizes(h, arena);
     bench_remesh(h, arena);
     bench_ct_reconstruct(h, arena);
+    bench_marching_cubes(h, arena);
+    bench_sweep(h, arena);
+    bench_blockout(h, arena, fixtures);
     // A torus of 2 x 521 x 521 = 542,882 triangles: the size of the paper's largest jaw.
     std::vector<uint8_t> torus = to_binary_stl(shapes::torus(521, 521, 30.0, 8.0));
     bench_stl(h, arena, "", torus);
