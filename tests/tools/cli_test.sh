@@ -160,6 +160,33 @@ check "tiny cap says arena exhausted" -- grep -qi "arena exhausted" "$work/err"
 check "no output after exhaustion" -- test ! -e "$work/small.stl"
 expect_exit 1 "boolean on a missing file" -- "$tool" boolean --difference "$work/base.stl" "$work/none.stl" -o "$work/none-out.stl"
 
+# Interference elimination (issue 6): the swept volume streamed to STL, and the splint minus it.
+expect_exit 0 "sweep --help" -- "$tool" sweep --help
+expect_exit 2 "sweep without --direction" -- "$tool" sweep "$work/maxilla.stl" --voxel 0.3 -o "$work/swept.stl"
+expect_exit 2 "sweep with a zero direction" -- "$tool" sweep "$work/maxilla.stl" --direction 0,0,0 --voxel 0.3 -o "$work/swept.stl"
+expect_exit 2 "sweep without --voxel" -- "$tool" sweep "$work/maxilla.stl" --direction 0,0,1 -o "$work/swept.stl"
+expect_exit 2 "sweep with a negative voxel" -- "$tool" sweep "$work/maxilla.stl" --direction 0,0,1 --voxel -1 -o "$work/swept.stl"
+expect_exit 1 "sweep with a closing below two voxels" -- "$tool" sweep "$work/maxilla.stl" --direction 0,0,1 --voxel 0.3 --close 0.4 -o "$work/swept.stl"
+check "closing radius named" -- grep -q "closing radius" "$work/err"
+expect_exit 0 "sweep" -- "$tool" sweep "$work/maxilla.stl" --direction 0,0,1 --voxel 0.3 --extent 1 -o "$work/swept.stl" --json
+check "sweep json is one object" -- json_ok "$work/out"
+check "sweep reports its grid" -- grep -q '"grid":"' "$work/out"
+expect_exit 0 "the swept volume is a printable solid" -- "$tool" check "$work/swept.stl"
+cp "$work/swept.stl" "$work/swept.first"
+expect_exit 0 "sweep again, 2 threads, 24M cap" -- "$tool" sweep "$work/maxilla.stl" --direction 0,0,1 --voxel 0.3 --extent 1 -o "$work/swept.stl" --threads 2 --memory-cap 24M
+check "sweep bytes are the same for threads and caps" -- cmp -s "$work/swept.stl" "$work/swept.first"
+expect_exit 0 "sweep with a closing, ascii" -- "$tool" sweep "$work/maxilla.stl" --direction 0.1,0,1 --voxel 0.3 --close 0.6 -o "$work/swept-closed.stl" --ascii
+expect_exit 0 "the closed swept volume is a printable solid" -- "$tool" check "$work/swept-closed.stl"
+expect_exit 1 "sweep under a 1M cap" -- "$tool" sweep "$work/maxilla.stl" --direction 0,0,1 --voxel 0.3 -o "$work/swept-small.stl" --memory-cap 1M
+check "no swept file after a failure" -- test ! -e "$work/swept-small.stl"
+expect_exit 2 "blockout with one input" -- "$tool" blockout "$work/cut.stl" --direction 0,0,1 --voxel 0.3 -o "$work/blocked.stl"
+expect_exit 0 "blockout" -- "$tool" blockout "$work/cut.stl" "$work/maxilla.stl" --direction 0,0,1 --voxel 0.3 -o "$work/blocked.stl" --json
+check "blockout json is one object" -- json_ok "$work/out"
+check "blockout removed a volume" -- grep -q '"removed_volume_mm3":' "$work/out"
+expect_exit 0 "the blocked-out splint is a printable solid" -- "$tool" check "$work/blocked.stl"
+expect_exit 1 "blockout of a missing jaw" -- "$tool" blockout "$work/cut.stl" "$work/none.stl" --direction 0,0,1 --voxel 0.3 -o "$work/blocked-none.stl"
+check "no blocked file after a failure" -- test ! -e "$work/blocked-none.stl"
+
 # The pipeline on the paper-scale case with the 6,000-triangle phantom jaws: the splint's bytes
 # are the Boolean golden's.
 mkdir -p "$work/case" "$work/design"
