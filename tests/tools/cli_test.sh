@@ -201,6 +201,13 @@ check "design splint has the golden bytes" -- grep -q "\"splint_sha256\":\"$gold
 check "report has the case hash" -- grep -q '"case_sha256":"[0-9a-f]\{64\}"' "$work/design/report.json"
 check "report has the stages" -- grep -q '"stage":"boolean"' "$work/design/report.json"
 expect_exit 0 "the designed splint is printable" -- "$tool" check "$work/design/splint.stl"
+# The same case with interference elimination ("blockout" added before "printer").
+sed 's/"printer":/"blockout": {"voxel": 0.3},\n  "printer":/' "$work/case/case.json" >"$work/case/blockout.json"
+mkdir -p "$work/design-blockout"
+expect_exit 0 "design with blockout" -- "$tool" design "$work/case/blockout.json" -o "$work/design-blockout"
+check "blockout reported per jaw" -- grep -q '"blockout":\[{"role":"maxilla"' "$work/design-blockout/report.json"
+check "blockout parameters reported" -- grep -q '"blockout_voxel_mm":0.3' "$work/design-blockout/report.json"
+expect_exit 0 "the blocked-out design is printable" -- "$tool" check "$work/design-blockout/splint.stl"
 rm "$work/case/mandible.stl"
 mkdir -p "$work/design2"
 expect_exit 1 "design with a missing jaw" -- "$tool" design "$work/case/case.json" -o "$work/design2"

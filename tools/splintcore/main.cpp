@@ -139,8 +139,9 @@ const char kDesignUsage[] =
     "output.splint) and OUTDIR/report.json (or output.report), each atomically. The report holds\n"
     "what an auditor needs to reproduce the run: library version, SHA-256 of the case and of\n"
     "every input, every parameter as used, each stage's time, the peak arena, each check, and\n"
-    "the splint's SHA-256. Progress goes to stderr when it is a terminal. Interference\n"
-    "elimination and CT input join when their issues land.\n"
+    "the splint's SHA-256. Progress goes to stderr when it is a terminal. With a \"blockout\"\n"
+    "object in the case, each jaw's interference (undercut) is removed after the Boolean\n"
+    "(see `splintcore blockout --help`), reported per jaw. CT input joins when its issue lands.\n"
     "Exit status: 0 splint written, 1 rejected (the message names the stage), 2 usage.\n";
 
 const char kSweepUsage[] =
@@ -1078,6 +1079,11 @@ int run_design(int argc, char** argv) {
   params.add("boolean_float32_output", true);
   params.add("boolean_max_nudges", static_cast<uint64_t>(BooleanOptions{}.max_nudges));
   if (c.has_insertion_direction) params.add("insertion_direction", c.insertion_direction);
+  if (c.has_blockout) {
+    params.add("blockout_voxel_mm", c.blockout_voxel);
+    params.add("blockout_inset_mm", c.blockout_inset);
+    params.add("blockout_closing_radius_mm", c.blockout_closing);
+  }
   j.add_raw("parameters", params.str());
   std::string stages = "[";
   for (size_t i = 0; i < clock.names.size(); ++i) {
@@ -1096,6 +1102,25 @@ int run_design(int argc, char** argv) {
   checks.add("boolean_intersection_points", report.boolean.intersection_points);
   checks.add("boolean_attempts", static_cast<uint64_t>(report.boolean.attempts));
   checks.add("boolean_nudge_mm", report.boolean.nudge);
+  if (report.blockout_jaws > 0) {
+    // Interference elimination, per jaw in case order.
+    std::string rows = "[";
+    for (uint32_t i = 0; i < report.blockout_jaws; ++i) {
+      const BlockoutStats& b = report.blockout[i];
+      JsonObject r;
+      r.add("role", c.jaws[i].role);
+      r.add("direction", b.sweep.axis_w);
+      r.add("grid", std::to_string(b.sweep.nx) + " x " + std::to_string(b.sweep.ny) + " x " +
+                        std::to_string(b.sweep.nz));
+      r.add("swept_triangles", b.swept_triangles);
+      r.add("intersecting_pairs", b.boolean.intersecting_pairs);
+      r.add("attempts", static_cast<uint64_t>(b.attempts));
+      r.add("inset_mm", b.inset_used);
+      r.add("removed_volume_mm3", report.blockout_removed_mm3[i]);
+      rows += (i > 0 ? "," : "") + r.str();
+    }
+    checks.add_raw("blockout", rows + "]");
+  }
   checks.add("self_intersection_free", true);
   checks.add("closed", report.print.mesh.closed());
   checks.add("edge_manifold", report.print.mesh.edge_manifold());
@@ -1131,6 +1156,13 @@ int run_design(int argc, char** argv) {
                 static_cast<unsigned long long>(report.boolean.intersecting_pairs),
                 static_cast<unsigned long long>(report.boolean.intersection_points),
                 report.boolean.attempts);
+    for (uint32_t i = 0; i < report.blockout_jaws; ++i) {
+      std::printf("blockout (%s): %.4f mm^3 of interference removed, %llu swept triangles, "
+                  "inset %.3g mm\n",
+                  c.jaws[i].role, report.blockout_removed_mm3[i],
+                  static_cast<unsigned long long>(report.blockout[i].swept_triangles),
+                  report.blockout[i].inset_used);
+    }
     std::printf("splint: %zu triangles, %.3f mm^3, closed, manifold, no self-intersection; "
                 "printable on %s (%s)\n",
                 splint.triangles.size(), report.print.mesh.volume, report.printer,
