@@ -243,6 +243,11 @@ expect_exit 0 "the reconstructed mandible is a printable solid" -- "$tool" check
 expect_exit 0 "reconstruct again, 26-connectivity" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jaws26" "${seeds[@]}" --connectivity 26 --threads 2
 expect_exit 0 "reconstruct nrrd again" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jaws2" "${seeds[@]}"
 check "reconstruct is deterministic" -- cmp -s "$work/jaws/maxilla.stl" "$work/jaws2/maxilla.stl"
+expect_exit 2 "reconstruct with a bad --decimate" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jawsbad" "${seeds[@]}" --decimate 2
+expect_exit 0 "reconstruct, smoothed and decimated" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jawsdec" "${seeds[@]}" --smooth 5 --decimate 20000 --json
+check "decimation reported" -- grep -q '"decimated_from_triangles":' "$work/out"
+check "at most 20000 triangles" -- python3 -c "import json,sys; r=json.load(open('$work/out')); sys.exit(0 if all(j['triangles'] <= 20000 for j in r['jaws']) else 1)"
+expect_exit 0 "the decimated maxilla is a printable solid" -- "$tool" check "$work/jawsdec/maxilla.stl"
 expect_exit 0 "reconstruct mha" -- "$tool" reconstruct "$work/ct.mha" -o "$work/jawsmha" "${seeds[@]}"
 expect_exit 0 "reconstruct dicom folder" -- "$tool" reconstruct "$work/ctdcm" -o "$work/jawsdcm" "${seeds[@]}" --hu-min 300 --hu-max 4000
 expect_exit 0 "reconstruct with a split plane" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jawsplane" "${seeds[@]}" --split-plane 0,0,0,0,0,1
