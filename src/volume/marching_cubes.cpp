@@ -364,9 +364,19 @@ float float_threshold(double iso) {
   return t;
 }
 
-// The inside bits of one sample layer (bit x + 1 of row y: sample (x, y) < iso).
-void classify_layer(const float* layer, uint32_t nx, uint32_t ny, float threshold, uint64_t* bits) {
+// The inside bits of one sample layer (bit x + 1 of row y: sample (x, y) < iso), in the same
+// pass as the finite check: returns the largest exponent field seen (0x7f800000 when some
+// sample is NaN or infinite; its bit is then meaningless and the caller stops).
+uint32_t classify_layer(const float* layer, uint32_t nx, uint32_t ny, float threshold,
+                        uint64_t* bits) {
   const uint64_t words = bit_words(nx);
+  uint32_t lane[4] = {0, 0, 0, 0};
+  auto exponent = [](const float* v, uint32_t* l) {
+    uint32_t w;
+    std::memcpy(&w, v, 4);
+    const uint32_t e = w & 0x7f800000u;
+    *l = *l > e ? *l : e;
+  };
   for (uint32_t y = 0; y < ny; ++y) {
     const float* row = layer + uint64_t{y} * nx;
     uint64_t* out = bits + uint64_t{y} * words;
@@ -383,11 +393,21 @@ void classify_layer(const float* layer, uint32_t nx, uint32_t ny, float threshol
         const uint64_t b2 = static_cast<uint64_t>(row[x + 2] < threshold);
         const uint64_t b3 = static_cast<uint64_t>(row[x + 3] < threshold);
         word |= (b0 | (b1 << 1) | (b2 << 2) | (b3 << 3)) << (x - x0);
+        exponent(row + x, &lane[0]);
+        exponent(row + x + 1, &lane[1]);
+        exponent(row + x + 2, &lane[2]);
+        exponent(row + x + 3, &lane[3]);
       }
-      for (; x < to; ++x) word |= static_cast<uint64_t>(row[x] < threshold) << (x - x0);
+      for (; x < to; ++x) {
+        word |= static_cast<uint64_t>(row[x] < threshold) << (x - x0);
+        exponent(row + x, &lane[0]);
+      }
       out[w] = word;
     }
   }
+  uint32_t top = lane[0];
+  for (int k = 1; k < 4; ++k) top = top > lane[k] ? top : lane[k];
+  return top;
 }
 
 // Cell layer cz: samples of layer cz in `lo`, of cz + 1 in `hi` (null: beyond the grid), and
@@ -630,31 +650,14 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
     SPLINTCORE_RETURN_IF_ERROR(source.fill(
         source.user, next_z, next_z + n, Span<float>(fresh, static_cast<size_t>(layer_floats * n))));
     ++fill_calls;
-    // A branch-free scan first (it vectorises); the position only when something is wrong.
-    uint32_t exponent_ones = 0;
-    {
-      // Four independent lanes: a non-finite float has all exponent bits set, so the lane's
-      // maximum of (bits & exponent mask) reaches the mask.
-      uint32_t lane[4] = {0, 0, 0, 0};
-      const uint64_t count = layer_floats * n;
-      uint64_t i = 0;
-      for (; i + 4 <= count; i += 4) {
-        uint32_t w[4];
-        std::memcpy(w, fresh + i, 16);
-        for (int k = 0; k < 4; ++k) {
-          const uint32_t e = w[k] & 0x7f800000u;
-          lane[k] = lane[k] > e ? lane[k] : e;
-        }
-      }
-      for (; i < count; ++i) {
-        uint32_t w;
-        std::memcpy(&w, fresh + i, 4);
-        const uint32_t e = w & 0x7f800000u;
-        lane[0] = lane[0] > e ? lane[0] : e;
-      }
-      for (int k = 0; k < 4; ++k) exponent_ones |= static_cast<uint32_t>(lane[k] == 0x7f800000u);
+    // Classified with the finite check in one pass; the position only when something is wrong.
+    uint32_t exponent_top = 0;
+    for (uint32_t j = 1; j <= n; ++j) {
+      const uint32_t e = classify_layer(samples + layer_floats * j, grid.nx, grid.ny, threshold,
+                                        bits + layer_words * j);
+      exponent_top = exponent_top > e ? exponent_top : e;
     }
-    for (uint64_t i = 0; exponent_ones != 0 && i < layer_floats * n; ++i) {
+    for (uint64_t i = 0; exponent_top == 0x7f800000u && i < layer_floats * n; ++i) {
       if (!is_finite(fresh[i])) {
         const uint64_t x = i % grid.nx, y = (i / grid.nx) % grid.ny;
         const uint64_t z = next_z + i / layer_floats;
@@ -662,10 +665,6 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
                           ") is not finite (NaN or infinity)")
             .at_index(z * layer_floats + i % layer_floats);
       }
-    }
-    for (uint32_t j = 1; j <= n; ++j) {
-      classify_layer(samples + layer_floats * j, grid.nx, grid.ny, threshold,
-                     bits + layer_words * j);
     }
     const int64_t first = static_cast<int64_t>(next_z) - 1;
     const int64_t last = static_cast<int64_t>(next_z) + n == nz ? nz - 1 : first + n - 1;
