@@ -9,6 +9,7 @@
 #include "splintcore/geometry.h"
 #include "splintcore/json.h"
 #include "splintcore/printer.h"
+#include "splintcore/segment.h"
 #include "splintcore/spline.h"
 
 namespace splintcore {
@@ -19,6 +20,9 @@ struct CaseJaw {
   const char* role = "";       // "maxilla" or "mandible"
   const char* mesh = nullptr;  // path, relative to the case file's folder
   RigidTransform transform;    // the surgical plan's repositioning (identity if not given)
+  // A jaw from the case's CT ("seed" instead of "mesh"): a point of it, patient mm.
+  bool has_seed = false;
+  Vec3 seed{};
 };
 
 // A parsed case. Strings and arrays live in the arena the case was parsed into.
@@ -41,6 +45,12 @@ struct CaseFile {
   double blockout_voxel = 0.1;     // mm
   double blockout_inset = 0.05;    // mm (default: half the voxel)
   double blockout_closing = 0;     // mm, 0: none
+  // The CT ("ct" object) the jaws given by "seed" are reconstructed from (segment.h).
+  const char* ct_volume = nullptr; // path (file or DICOM folder), relative to the case file
+  int32_t ct_hu_min = 300, ct_hu_max = 4000;
+  uint8_t ct_connectivity = 6;     // 6 or 26
+  uint32_t ct_smooth = 0;          // Taubin iterations (0: none)
+  uint64_t ct_decimate = 0;        // target triangles per jaw (0: none)
   const char* printer = "eden260";
   uint64_t memory_cap = 0;  // bytes; 0: the tool's default
   const char* output_splint = nullptr;
@@ -53,6 +63,30 @@ struct CaseFile {
 // kArenaExhausted.
 Status parse_case(const Context& ctx, const char* text, size_t length, const char* name,
                   CaseFile* out);
+
+// Jaws from CT: what reconstruct_case_jaws() did.
+struct CaseCtReport {
+  static constexpr uint32_t kMaxJaws = 8;
+  uint32_t jaws_reconstructed = 0;
+  ThresholdStats threshold;
+  RegionStats regions;
+  ReconstructStats jaws[kMaxJaws];  // per jaw in case order (those with a seed)
+  uint64_t triangles[kMaxJaws] = {};
+  double volume_mm3[kMaxJaws] = {};
+};
+
+// The jaws the case gives by "seed", reconstructed from `volume` (the case's "ct"): threshold
+// [ct_hu_min, ct_hu_max], competitive region growing from all seeds at once (label j + 1 for
+// jaw j), each region meshed (reconstruct_region), then ct_smooth Taubin iterations (clamped to
+// half the smallest voxel spacing) and decimation to ct_decimate triangles when asked, rounded
+// to float32 and checked closed and outward. jaws[j] (for jaws with a seed) must be empty and
+// receives the mesh; other entries are left alone. Only the meshes stay in the arena (moved
+// down over the labels and temporaries). Errors: those of the stages, prefixed with the
+// stage ("ct: region growing: ..."); kInvalidArgument (jaw count, a non-empty mesh);
+// kLimitExceeded (more than kMaxJaws jaws). On an error the arena is back where it was and the
+// reconstructed entries are empty.
+Status reconstruct_case_jaws(const Context& ctx, const CaseFile& c, const CtVolume& volume,
+                             Span<Mesh> jaws, CaseCtReport* report);
 
 // Picks -> lines -> base, as the case says. `out` must be empty.
 Status build_case_base(const Context& ctx, const CaseFile& c, Mesh* out, BaseReport* report);

@@ -138,7 +138,7 @@ Status parse_case(const Context& ctx, const char* text, size_t length, const cha
   const JsonValue& root = doc.root();
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(root, JsonType::kObject, "the case"));
   static const char* const kRootKeys[] = {"splintcore_case", "case_id", "units", "jaws", "base",
-                                          "insertion_direction", "blockout", "printer",
+                                          "insertion_direction", "blockout", "ct", "printer",
                                           "memory_cap",
                                           "output", nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(root, kRootKeys, "the case"));
@@ -181,7 +181,7 @@ Status parse_case(const Context& ctx, const char* text, size_t length, const cha
     SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*jaws, JsonType::kArray, "jaws"));
     CaseJaw* list = ctx.arena->allocate_array<CaseJaw>(jaws->child_count);
     if (list == nullptr && jaws->child_count > 0) return ctx.arena->exhausted_status();
-    static const char* const kJawKeys[] = {"role", "mesh", "transform", nullptr};
+    static const char* const kJawKeys[] = {"role", "mesh", "seed", "transform", nullptr};
     uint32_t i = 0;
     for (uint32_t k = jaws->first_child; k != kJsonNone; k = doc.at(k).next_sibling, ++i) {
       const JsonValue& j = doc.at(k);
@@ -190,15 +190,23 @@ Status parse_case(const Context& ctx, const char* text, size_t length, const cha
       CaseJaw jaw;
       const JsonValue* role = doc.member(j, "role");
       const JsonValue* mesh = doc.member(j, "mesh");
-      if (role == nullptr || mesh == nullptr) {
-        return r.fail(j, StatusCode::kInvalidArgument, "a jaw needs \"role\" and \"mesh\"");
+      const JsonValue* seed = doc.member(j, "seed");
+      if (role == nullptr || (mesh == nullptr) == (seed == nullptr)) {
+        return r.fail(j, StatusCode::kInvalidArgument,
+                      "a jaw needs \"role\" and either \"mesh\" (a file) or \"seed\" (a point "
+                      "of it in the case's \"ct\", mm)");
       }
       SPLINTCORE_RETURN_IF_ERROR(r.string(*role, "role", &jaw.role));
       if (std::strcmp(jaw.role, "maxilla") != 0 && std::strcmp(jaw.role, "mandible") != 0) {
         return r.fail(*role, StatusCode::kInvalidArgument,
                       "\"role\" must be \"maxilla\" or \"mandible\"");
       }
-      SPLINTCORE_RETURN_IF_ERROR(r.string(*mesh, "mesh", &jaw.mesh));
+      if (mesh != nullptr) {
+        SPLINTCORE_RETURN_IF_ERROR(r.string(*mesh, "mesh", &jaw.mesh));
+      } else {
+        SPLINTCORE_RETURN_IF_ERROR(r.vec3(*seed, "seed", &jaw.seed));
+        jaw.has_seed = true;
+      }
       if (const JsonValue* t = doc.member(j, "transform")) {
         SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*t, JsonType::kArray, "transform"));
         if (t->child_count != 16) {
@@ -275,6 +283,63 @@ Status parse_case(const Context& ctx, const char* text, size_t length, const cha
   if (const JsonValue* d = doc.member(root, "insertion_direction")) {
     SPLINTCORE_RETURN_IF_ERROR(r.unit_vector(*d, "insertion_direction", &out->insertion_direction));
     out->has_insertion_direction = true;
+  }
+  if (const JsonValue* ct = doc.member(root, "ct")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*ct, JsonType::kObject, "ct"));
+    static const char* const kCtKeys[] = {"volume", "hu_min", "hu_max", "connectivity", "smooth",
+                                          "decimate", nullptr};
+    SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*ct, kCtKeys, "\"ct\""));
+    const JsonValue* vol = doc.member(*ct, "volume");
+    if (vol == nullptr) {
+      return r.fail(*ct, StatusCode::kInvalidArgument,
+                    "\"ct\" needs \"volume\" (a .nrrd/.mha/.mhd file or a DICOM folder)");
+    }
+    SPLINTCORE_RETURN_IF_ERROR(r.string(*vol, "volume", &out->ct_volume));
+    double x = 0;
+    if (const JsonValue* e = doc.member(*ct, "hu_min")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "hu_min", -32768, 32767, &x));
+      out->ct_hu_min = static_cast<int32_t>(x);
+      if (static_cast<double>(out->ct_hu_min) != x) {
+        return r.fail(*e, StatusCode::kInvalidArgument, "\"hu_min\" must be an integer");
+      }
+    }
+    if (const JsonValue* e = doc.member(*ct, "hu_max")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "hu_max", -32768, 32767, &x));
+      out->ct_hu_max = static_cast<int32_t>(x);
+      if (static_cast<double>(out->ct_hu_max) != x) {
+        return r.fail(*e, StatusCode::kInvalidArgument, "\"hu_max\" must be an integer");
+      }
+    }
+    if (out->ct_hu_min > out->ct_hu_max) {
+      return r.fail(*ct, StatusCode::kInvalidArgument, "\"hu_min\" is above \"hu_max\"");
+    }
+    if (const JsonValue* e = doc.member(*ct, "connectivity")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "connectivity", 6, 26, &x));
+      if (x != 6 && x != 26) {
+        return r.fail(*e, StatusCode::kInvalidArgument, "\"connectivity\" must be 6 or 26");
+      }
+      out->ct_connectivity = static_cast<uint8_t>(x);
+    }
+    if (const JsonValue* e = doc.member(*ct, "smooth")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "smooth", 0, 1000, &x));
+      out->ct_smooth = static_cast<uint32_t>(x);
+      if (static_cast<double>(out->ct_smooth) != x) {
+        return r.fail(*e, StatusCode::kInvalidArgument, "\"smooth\" must be an integer");
+      }
+    }
+    if (const JsonValue* e = doc.member(*ct, "decimate")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "decimate", 4, 1e9, &x));
+      out->ct_decimate = static_cast<uint64_t>(x);
+      if (static_cast<double>(out->ct_decimate) != x) {
+        return r.fail(*e, StatusCode::kInvalidArgument, "\"decimate\" must be an integer");
+      }
+    }
+  }
+  for (const CaseJaw& jaw : out->jaws) {
+    if (jaw.has_seed && out->ct_volume == nullptr) {
+      return r.fail(root, StatusCode::kInvalidArgument, "a jaw is given by \"seed\" but the case "
+                    "has no \"ct\" to reconstruct it from");
+    }
   }
   if (const JsonValue* b = doc.member(root, "blockout")) {
     SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*b, JsonType::kObject, "blockout"));

@@ -425,8 +425,8 @@ TEST(CaseFile, JawTransformsAndOtherRootValues) {
 TEST(CaseFileErrors, UnknownKeysAtEveryLevel) {
   expect_invalid(with_root("  \"colour\": @\"red\",\n"),
                  {"unknown key \"colour\" in the case",
-                  "(allowed: splintcore_case case_id units jaws base insertion_direction printer "
-                  "memory_cap output)"});
+                  "(allowed: splintcore_case case_id units jaws base insertion_direction "
+                  "blockout ct printer memory_cap output)"});
   expect_invalid(with_base("    \"spacing\": @1,\n"),
                  {"unknown key \"spacing\" in \"base\"",
                   "(allowed: occlusal_normal spacing_mm corner_radius_mm corner_segments "
@@ -436,7 +436,7 @@ TEST(CaseFileErrors, UnknownKeysAtEveryLevel) {
                   "(allowed: position normal direction inner_length_mm outside_length_mm)"});
   expect_invalid(
       with_root("  \"jaws\": [{\"role\": \"maxilla\", \"mesh\": \"m.stl\", \"scale\": @2}],\n"),
-      {"unknown key \"scale\" in a jaw", "(allowed: role mesh transform)"});
+      {"unknown key \"scale\" in a jaw", "(allowed: role mesh seed transform)"});
   expect_invalid(with_root("  \"output\": {\"splint\": \"s.stl\", \"stl\": @\"x\"},\n"),
                  {"unknown key \"stl\" in \"output\"", "(allowed: splint report)"});
   // Keys are case-sensitive.
@@ -516,9 +516,9 @@ TEST(CaseFileErrors, MissingRequiredKeys) {
   expect_invalid(
       with_root(
           "  \"jaws\": [{\"role\": \"maxilla\", \"mesh\": \"m\"}, @{\"role\": \"mandible\"}],\n"),
-      {"a jaw needs \"role\" and \"mesh\""});
+      {"a jaw needs \"role\" and either \"mesh\""});
   expect_invalid(with_root("  \"jaws\": [@{\"mesh\": \"m.stl\"}],\n"),
-                 {"a jaw needs \"role\" and \"mesh\""});
+                 {"a jaw needs \"role\" and either \"mesh\""});
 }
 
 TEST(CaseFileErrors, VersionAndUnits) {
@@ -925,6 +925,58 @@ TEST(CaseFile, BlockoutTakesItsDefaultsAndChecksItsRanges) {
     const Status s = parse(a.arena, with_root(bad[i]).text(), &c);
     EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << test::format(s);
     EXPECT_NE(std::string(s.message()).find(names[i]), std::string::npos) << s.message();
+    EXPECT_NE(s.line(), kNoPosition);
+  }
+}
+
+}  // namespace
+}  // namespace splintcore
+
+namespace splintcore {
+namespace {
+
+TEST(CaseFile, JawsFromCtTakeSeedsAndTheCtObject) {
+  test::TestArena a(size_t{1} << 20);
+  CaseFile c;
+  const std::string ct = "\"ct\": {\"volume\": \"ct.nrrd\", \"hu_min\": 250, \"connectivity\": 26, "
+                         "\"smooth\": 5, \"decimate\": 40000},\n";
+  const std::string jaws = "\"jaws\": [{\"role\": \"maxilla\", \"seed\": [0, 18, 13]}, "
+                           "{\"role\": \"mandible\", \"mesh\": \"lower.stl\"}],\n";
+  SPLINTCORE_ASSERT_OK(parse(a.arena, with_root(jaws + ct).text(), &c));
+  ASSERT_EQ(c.jaws.size(), 2u);
+  EXPECT_TRUE(c.jaws[0].has_seed);
+  expect_vec(c.jaws[0].seed, 0, 18, 13);
+  EXPECT_FALSE(c.jaws[1].has_seed);
+  EXPECT_STREQ(c.jaws[1].mesh, "lower.stl");
+  EXPECT_STREQ(c.ct_volume, "ct.nrrd");
+  EXPECT_EQ(c.ct_hu_min, 250);
+  EXPECT_EQ(c.ct_hu_max, 4000);
+  EXPECT_EQ(c.ct_connectivity, 26u);
+  EXPECT_EQ(c.ct_smooth, 5u);
+  EXPECT_EQ(c.ct_decimate, 40000u);
+  // Errors name what is wrong, with a line.
+  const std::string seed_only = "\"jaws\": [{\"role\": \"maxilla\", \"seed\": [0, 18, 13]}],\n";
+  struct Bad {
+    std::string root;
+    const char* says;
+  } bad[] = {
+      {seed_only, "no \"ct\""},
+      {"\"jaws\": [{\"role\": \"maxilla\"}],\n", "either \"mesh\""},
+      {"\"jaws\": [{\"role\": \"maxilla\", \"mesh\": \"a.stl\", \"seed\": [0, 0, 0]}],\n",
+       "either \"mesh\""},
+      {seed_only + "\"ct\": {},\n", "needs \"volume\""},
+      {seed_only + "\"ct\": {\"volume\": \"v\", \"hu_min\": 5000, \"hu_max\": 400},\n",
+       "above \"hu_max\""},
+      {seed_only + "\"ct\": {\"volume\": \"v\", \"hu_min\": 2.5},\n", "integer"},
+      {seed_only + "\"ct\": {\"volume\": \"v\", \"connectivity\": 18},\n", "6 or 26"},
+      {seed_only + "\"ct\": {\"volume\": \"v\", \"decimate\": 2},\n", "decimate"},
+      {seed_only + "\"ct\": {\"volume\": \"v\", \"spacing\": 1},\n", "unknown key"},
+  };
+  for (const Bad& b : bad) {
+    SCOPED_TRACE(b.root);
+    const Status s = parse(a.arena, with_root(b.root).text(), &c);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << test::format(s);
+    EXPECT_NE(std::string(s.message()).find(b.says), std::string::npos) << s.message();
     EXPECT_NE(s.line(), kNoPosition);
   }
 }

@@ -260,6 +260,21 @@ check "seed not in window named" -- grep -q "not in the HU window" "$work/err"
 expect_exit 1 "reconstruct under a 2M cap" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jawsbad" "${seeds[@]}" --memory-cap 2M --json
 check "cap failure is arena_exhausted" -- grep -q '"status":"arena_exhausted"' "$work/out"
 check "no jaw written after failures" -- test ! -e "$work/jawsbad/maxilla.stl"
+# The whole method from CT: fixtures/cases/ct_phantom.json reconstructs both jaws from the
+# phantom volume (seeds instead of meshes), opens the bite, builds the base and cuts it.
+mkdir -p "$work/ctcase"
+cp "$fixtures/cases/ct_phantom.json" "$work/ctcase/case.json"
+cp "$work/ct.nrrd" "$work/ctcase/ct.nrrd"
+expect_exit 0 "design from CT" -- "$tool" design "$work/ctcase/case.json" -o "$work/ctcase/out"
+check "design from CT reports the voxels' hash" -- grep -q '"ct_voxels_sha256":"[0-9a-f]\{64\}"' "$work/ctcase/out/report.json"
+ctgolden=$(grep "design:ct_phantom-120x110x80" "$fixtures/golden.sha256" | cut -d' ' -f1)
+check "design from CT has the golden bytes" -- grep -q "\"splint_sha256\":\"$ctgolden\"" "$work/ctcase/out/report.json"
+expect_exit 0 "the splint from CT is printable" -- "$tool" check "$work/ctcase/out/splint.stl"
+rm "$work/ctcase/ct.nrrd"
+expect_exit 1 "design from a missing CT" -- "$tool" design "$work/ctcase/case.json" -o "$work/ctcase/out2"
+check "no splint without the CT" -- test ! -e "$work/ctcase/out2/splint.stl"
+expect_exit 1 "reconstruct a missing volume" -- "$tool" reconstruct "$work/none.nrrd" -o "$work/jawsbad" "${seeds[@]}"
+
 expect_exit 1 "reconstruct a missing volume" -- "$tool" reconstruct "$work/none.nrrd" -o "$work/jawsbad" "${seeds[@]}"
 
 echo "$passed passed, $failed failed"

@@ -977,6 +977,7 @@ int run_design(int argc, char** argv) {
   if (o.output == nullptr) return usage_error("design needs -o OUTDIR", kDesignUsage);
   Run run(o);
   if (!run.has_memory()) return no_memory(o, "design");
+  ::mkdir(o.output, 0777);  // an existing folder is fine; a failure shows when writing
   Arena& arena = run.arena;
   const double t0 = run.start;
   const std::string case_path = o.positional[0];
@@ -1003,7 +1004,15 @@ int run_design(int argc, char** argv) {
   // The jaws, as read (their bytes hashed for the report).
   std::vector<std::string> jaw_paths, jaw_hashes;
   std::vector<Mesh> jaws;
+  bool any_ct = false;
   for (const CaseJaw& j : c.jaws) {
+    if (j.has_seed) {  // reconstructed from the case's CT below
+      any_ct = true;
+      jaw_paths.emplace_back();
+      jaw_hashes.emplace_back();
+      jaws.emplace_back(&arena);
+      continue;
+    }
     const std::string path = j.mesh[0] == '/' ? std::string(j.mesh) : folder + j.mesh;
     std::vector<uint8_t> bytes;
     if (!cli::read_whole_file(path, &bytes)) {
@@ -1017,6 +1026,24 @@ int run_design(int argc, char** argv) {
     jaw_paths.push_back(path);
     jaw_hashes.push_back(hex_sha256(bytes.data(), bytes.size()));
     jaws.push_back(m);
+  }
+  // Jaws from CT: the volume read once, every seed grown in competition, each region meshed.
+  CaseCtReport ct_report;
+  CtInfo ct_info;
+  std::string ct_path, ct_hash;
+  if (any_ct) {
+    ct_path = c.ct_volume[0] == '/' ? std::string(c.ct_volume) : folder + c.ct_volume;
+    CtVolume volume;
+    s = cli::read_ct_path(ctx, ct_path, CtReadOptions{}, &volume, &ct_info);
+    if (!s.is_ok()) return rejected(o, "design", s, &arena);
+    ct_hash = hex_sha256(volume.hu, static_cast<size_t>(volume.voxel_count() * 2));
+    s = reconstruct_case_jaws(ctx, c, volume, Span<Mesh>(jaws.data(), jaws.size()), &ct_report);
+    if (!s.is_ok()) return rejected(o, "design", s, &arena);
+    for (size_t i = 0; i < c.jaws.size(); ++i) {
+      if (!c.jaws[i].has_seed) continue;
+      jaw_paths[i] = ct_path;
+      jaw_hashes[i] = ct_hash;
+    }
   }
   const double t_read = monotonic_seconds();
   Mesh splint;
@@ -1053,8 +1080,17 @@ int run_design(int argc, char** argv) {
   for (size_t i = 0; i < jaw_paths.size(); ++i) {
     JsonObject r;
     r.add("role", c.jaws[i].role);
-    r.add("mesh", jaw_paths[i]);
-    r.add("sha256", jaw_hashes[i]);
+    if (c.jaws[i].has_seed) {
+      // From CT: the hash is of the voxels as read (int16 HU, memory order).
+      r.add("ct", jaw_paths[i]);
+      r.add("ct_voxels_sha256", jaw_hashes[i]);
+      r.add("seed", c.jaws[i].seed);
+      r.add("region_voxels", ct_report.regions.voxels[i + 1]);
+      r.add("reconstructed_volume_mm3", ct_report.volume_mm3[i]);
+    } else {
+      r.add("mesh", jaw_paths[i]);
+      r.add("sha256", jaw_hashes[i]);
+    }
     r.add("triangles", static_cast<uint64_t>(jaws[i].triangles.size()));
     const RigidTransform& x = c.jaws[i].transform;
     std::string m = "[";
@@ -1081,6 +1117,15 @@ int run_design(int argc, char** argv) {
   params.add("boolean_float32_output", true);
   params.add("boolean_max_nudges", static_cast<uint64_t>(BooleanOptions{}.max_nudges));
   if (c.has_insertion_direction) params.add("insertion_direction", c.insertion_direction);
+  if (any_ct) {
+    params.add("ct_hu_min", static_cast<int64_t>(c.ct_hu_min));
+    params.add("ct_hu_max", static_cast<int64_t>(c.ct_hu_max));
+    params.add("ct_connectivity", static_cast<uint64_t>(c.ct_connectivity));
+    params.add("ct_smooth", static_cast<uint64_t>(c.ct_smooth));
+    params.add("ct_decimate", c.ct_decimate);
+    params.add("ct_size", std::to_string(ct_info.nx) + " x " + std::to_string(ct_info.ny) + " x " +
+                              std::to_string(ct_info.nz));
+  }
   if (c.has_blockout) {
     params.add("blockout_voxel_mm", c.blockout_voxel);
     params.add("blockout_inset_mm", c.blockout_inset);
