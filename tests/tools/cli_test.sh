@@ -275,7 +275,44 @@ expect_exit 1 "design from a missing CT" -- "$tool" design "$work/ctcase/case.js
 check "no splint without the CT" -- test ! -e "$work/ctcase/out2/splint.stl"
 expect_exit 1 "reconstruct a missing volume" -- "$tool" reconstruct "$work/none.nrrd" -o "$work/jawsbad" "${seeds[@]}"
 
-expect_exit 1 "reconstruct a missing volume" -- "$tool" reconstruct "$work/none.nrrd" -o "$work/jawsbad" "${seeds[@]}"
+# PLY and OBJ input, and `compare` (issue 8): surface deviation and the coloured PLY.
+cube_obj() {  # cube_obj FILE DZ: the cube [0,10]^2 x [DZ,DZ+10] as OBJ quads (outward)
+  local z0=$2 z1=$(($2 + 10))
+  printf '# cube\nv 0 0 %s\nv 10 0 %s\nv 10 10 %s\nv 0 10 %s\n' "$z0" "$z0" "$z0" "$z0" >"$1"
+  printf 'v 0 0 %s\nv 10 0 %s\nv 10 10 %s\nv 0 10 %s\n' "$z1" "$z1" "$z1" "$z1" >>"$1"
+  printf 'f 1 4 3 2\nf 5/1 6/1 7/1 8/1\nf 1//1 2//1 6//1 5//1\nf 2 3 7 6\nf -5 -1 -2 -6\nf 1 5 8 4\n' >>"$1"
+}
+cube_obj "$work/cube.obj" 0
+cube_obj "$work/cube_up.obj" 1
+printf 'ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float z\nelement face 6\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n10 0 0\n10 10 0\n0 10 0\n0 0 10\n10 0 10\n10 10 10\n0 10 10\n4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 1 2 6 5\n4 3 7 6 2\n4 0 4 7 3\n' >"$work/cube.ply"
+expect_exit 0 "an OBJ cube is a printable solid" -- "$tool" check "$work/cube.obj" --json
+check "OBJ check names the format" -- grep -q '"genus":0' "$work/out"
+expect_exit 0 "an ASCII PLY cube is a printable solid" -- "$tool" check "$work/cube.ply"
+check "PLY check says ply-ascii" -- grep -q "ply-ascii, 12 triangles" "$work/out"
+expect_exit 0 "convert OBJ to STL" -- "$tool" convert "$work/cube.obj" -o "$work/cube.stl"
+expect_exit 0 "compare --help" -- "$tool" compare --help
+check "compare --help mentions --ply" -- grep -q -- "--ply" "$work/out"
+expect_exit 2 "compare with one file" -- "$tool" compare "$work/cube.obj"
+expect_exit 2 "compare with a bad --range" -- "$tool" compare "$work/cube.obj" "$work/cube.ply" --range 0
+expect_exit 2 "compare --ply without a name" -- "$tool" compare "$work/cube.obj" "$work/cube.ply" --ply
+expect_exit 0 "compare OBJ, PLY and STL of one cube" -- "$tool" compare "$work/cube.obj" "$work/cube.ply" --json
+check "compare --json is one JSON object" -- json_ok "$work/out"
+check "same cube: Hausdorff 0" -- grep -q '"hausdorff_mm":0,' "$work/out"
+expect_exit 0 "compare STL and PLY" -- "$tool" compare "$work/cube.stl" "$work/cube.ply" --json
+check "STL and PLY: Hausdorff 0" -- grep -q '"hausdorff_mm":0,' "$work/out"
+expect_exit 0 "compare with a cube moved 1 mm, --ply" -- "$tool" compare "$work/cube.obj" "$work/cube_up.obj" --ply "$work/dev.ply" --json
+check "moved cube: mean 0.5, max 1, Hausdorff 1" -- grep -q '"a_to_b_mean_mm":0.5,"a_to_b_max_mm":1,.*"hausdorff_mm":1,' "$work/out"
+check "compare --ply wrote a binary PLY" -- grep -qa 'format binary_little_endian 1.0' "$work/dev.ply"
+expect_exit 0 "the coloured PLY reads back as a solid" -- "$tool" check "$work/dev.ply"
+expect_exit 0 "compare --ply again, 2 threads" -- "$tool" compare "$work/cube.obj" "$work/cube_up.obj" --ply "$work/dev2.ply" --threads 2
+check "compare --ply is deterministic" -- cmp -s "$work/dev.ply" "$work/dev2.ply"
+expect_exit 0 "compare the coloured PLY with its source" -- "$tool" compare "$work/dev.ply" "$work/cube.obj" --json
+check "round trip: Hausdorff 0" -- grep -q '"hausdorff_mm":0,' "$work/out"
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n' >"$work/bad.obj"
+expect_exit 1 "an OBJ face naming a missing vertex" -- "$tool" compare "$work/cube.obj" "$work/bad.obj" --ply "$work/bad.ply"
+check "the error names line and column" -- grep -q 'bad.obj:4:7' "$work/err"
+check "no PLY written after a failure" -- test ! -e "$work/bad.ply"
+expect_exit 1 "compare a missing file" -- "$tool" compare "$work/cube.obj" "$work/none.ply"
 
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -1,0 +1,294 @@
+// Private helpers of the PLY and OBJ readers (src/io/ply_read.cpp, src/io/obj_read.cpp): the
+// chunk window over a ByteSource, a line reader with line numbers, locale-free number parsing
+// (std::from_chars, as the STL ASCII reader does) and the mesh builder that checks every
+// vertex and leaves only the mesh in the arena.
+#ifndef SPLINTCORE_SRC_IO_MESH_TEXT_H
+#define SPLINTCORE_SRC_IO_MESH_TEXT_H
+
+#include <charconv>
+#include <system_error>
+
+#include "splintcore/io.h"
+#include "splintcore/mesh.h"
+#include "splintcore/mesh_io.h"
+
+namespace splintcore {
+namespace meshio {
+
+// A window over the source: buf[pos, end) holds unread bytes, `base` is the absolute offset
+// of buf[0].
+struct Reader {
+  const ByteSource* source = nullptr;
+  uint8_t* buf = nullptr;
+  size_t cap = 0;
+  size_t pos = 0;
+  size_t end = 0;
+  uint64_t base = 0;
+  bool at_eof = false;
+
+  uint64_t offset() const { return base + pos; }
+  size_t available() const { return end - pos; }
+
+  // Makes at least `n` bytes available unless the source ends first.
+  Status fill(size_t n) {
+    SPLINTCORE_ASSERT(n <= cap);
+    if (available() >= n || at_eof) return Status::ok();
+    if (pos > 0) {
+      std::memmove(buf, buf + pos, end - pos);
+      base += pos;
+      end -= pos;
+      pos = 0;
+    }
+    while (end < n && !at_eof) {
+      int64_t got = source->read(source->user, buf + end, cap - end);
+      if (got < 0) return make_error(StatusCode::kIoError, "read failed").at_byte(base + end);
+      if (static_cast<uint64_t>(got) > cap - end) {
+        return Status::error(StatusCode::kIoError, "byte source returned more than asked");
+      }
+      if (got == 0) at_eof = true;
+      end += static_cast<size_t>(got);
+    }
+    return Status::ok();
+  }
+};
+
+inline Status located(Status s, const ByteSource& source) {
+  if (!s.is_ok() && source.name != nullptr && s.file()[0] == '\0') s.in_file(source.name);
+  return s;
+}
+
+inline bool is_blank(uint8_t c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+
+// A real number token, locale-free. Only digits, sign, point and exponent are taken (from_chars
+// would also take "inf" and "nan", which are reported as kNonFinite); a leading '+' is allowed.
+// `as_float`: parsed as float32 (nearest), else as double. Returns kOk, kNonFinite or
+// kParseError (malformed or out of range).
+inline StatusCode parse_real(const char* first, const char* last, bool as_float, double* out) {
+  if (first == last) return StatusCode::kParseError;
+  if (*first == '+' && last - first > 1 && first[1] != '-' && first[1] != '+') ++first;
+  for (const char* p = first; p < last; ++p) {
+    const char c = *p;
+    const bool ok = (c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.' || c == 'e' ||
+                    c == 'E';
+    if (!ok) {
+      const char* q = (*first == '-' && last - first > 1) ? first + 1 : first;
+      const char n = static_cast<char>(*q | 0x20);
+      return (n == 'n' || n == 'i') ? StatusCode::kNonFinite : StatusCode::kParseError;
+    }
+  }
+  if (as_float) {
+    float f = 0;
+    auto r = std::from_chars(first, last, f, std::chars_format::general);
+    if (r.ec != std::errc() || r.ptr != last) return StatusCode::kParseError;
+    *out = static_cast<double>(f);
+  } else {
+    double d = 0;
+    auto r = std::from_chars(first, last, d, std::chars_format::general);
+    if (r.ec != std::errc() || r.ptr != last) return StatusCode::kParseError;
+    *out = d;
+  }
+  return StatusCode::kOk;
+}
+
+// A decimal integer token with an optional sign; false when malformed or beyond int64.
+inline bool parse_integer(const char* first, const char* last, int64_t* out) {
+  if (first != last && *first == '+' && last - first > 1 && first[1] != '-') ++first;
+  auto r = std::from_chars(first, last, *out, 10);
+  return r.ec == std::errc() && r.ptr == last && first != last;
+}
+
+// Lines of text from a Reader into a buffer of `cap` bytes (the line end is not kept; a '\r'
+// before it is dropped). Lines are numbered from 1.
+struct LineReader {
+  Reader* in = nullptr;
+  char* text = nullptr;
+  size_t cap = 0;
+  size_t length = 0;
+  uint64_t number = 0;       // of the line in `text`
+  uint64_t start_byte = 0;   // its offset in the input
+
+  // Reads the next line; *got = false at the end of the input (no more bytes at all).
+  // Errors: kLimitExceeded (a line longer than cap), kIoError.
+  Status next(bool* got) {
+    length = 0;
+    *got = false;
+    SPLINTCORE_RETURN_IF_ERROR(in->fill(1));
+    if (in->available() == 0) return Status::ok();
+    ++number;
+    start_byte = in->offset();
+    for (;;) {
+      if (in->available() == 0) {
+        SPLINTCORE_RETURN_IF_ERROR(in->fill(1));
+        if (in->available() == 0) break;
+      }
+      const uint8_t* p = in->buf + in->pos;
+      const size_t n = in->available();
+      const void* nl = std::memchr(p, '\n', n);
+      const size_t take = nl != nullptr ? static_cast<size_t>(static_cast<const uint8_t*>(nl) - p) : n;
+      if (take > cap - length) {
+        return make_error(StatusCode::kLimitExceeded, "line longer than ", cap,
+                          " bytes (the limit)")
+            .at_line(number, 1)
+            .at_byte(start_byte);
+      }
+      std::memcpy(text + length, p, take);
+      length += take;
+      in->pos += take;
+      if (nl != nullptr) {
+        ++in->pos;  // the '\n'
+        break;
+      }
+    }
+    if (length > 0 && text[length - 1] == '\r') --length;
+    *got = true;
+    return Status::ok();
+  }
+};
+
+// White-space separated tokens of one line, with 1-based columns.
+struct Tokens {
+  const char* text = nullptr;
+  size_t length = 0;
+  size_t pos = 0;
+  const char* token = nullptr;
+  size_t token_length = 0;
+  uint64_t column = 1;  // of the current token (or of the line end after the last)
+
+  Tokens(const char* t, size_t n) : text(t), length(n) {}
+
+  bool next() {
+    while (pos < length && is_blank(static_cast<uint8_t>(text[pos]))) ++pos;
+    column = pos + 1;
+    if (pos == length) {
+      token = text + pos;
+      token_length = 0;
+      return false;
+    }
+    const size_t start = pos;
+    while (pos < length && !is_blank(static_cast<uint8_t>(text[pos]))) ++pos;
+    token = text + start;
+    token_length = pos - start;
+    return true;
+  }
+  bool is(const char* word) const {
+    const size_t n = std::strlen(word);
+    return n == token_length && std::memcmp(token, word, n) == 0;
+  }
+};
+
+// "<what>, found '<token>'" at the token's line and column.
+inline Status token_error(StatusCode code, const LineReader& lines, const Tokens& t,
+                          const char* what) {
+  Status s = make_error(code, what);
+  if (t.token_length > 0) {
+    s.append(", found '");
+    s.append(t.token, t.token_length < 40 ? t.token_length : 40);
+    s.append("'");
+  } else {
+    s.append(", found the end of the line");
+  }
+  return s.at_line(lines.number, t.column);
+}
+
+// The mesh as it is read: vertices checked one by one, triangles appended; the two arrays may
+// grow in turn (OBJ interleaves them), so the builder remembers which one was (re)allocated
+// last, which move_mesh_down needs to know.
+struct MeshBuilder {
+  const Context* ctx = nullptr;
+  const MeshReadOptions* options = nullptr;
+  Mesh mesh;
+  bool triangles_last = false;  // the triangle array is the later allocation
+
+  MeshBuilder(const Context& c, const MeshReadOptions& o)
+      : ctx(&c), options(&o), mesh(c.arena) {}
+
+  // Vertex `index` with coordinates already rounded as asked. Errors name the vertex.
+  Status add_vertex(const Vec3& v, uint64_t index) {
+    const double m = options->max_abs_coordinate;
+    for (int a = 0; a < 3; ++a) {
+      if (!is_finite(v[a])) {
+        return make_error(StatusCode::kNonFinite, "vertex ", index,
+                          " has a non-finite coordinate (NaN or infinity)")
+            .at_index(index);
+      }
+    }
+    for (int a = 0; a < 3; ++a) {
+      if (v[a] > m || v[a] < -m) {
+        return make_error(StatusCode::kLimitExceeded, "vertex ", index, " has coordinate ", v[a],
+                          " mm, beyond the limit of +-", m, " mm (wrong units?)")
+            .at_index(index);
+      }
+    }
+    const size_t cap = mesh.vertices.capacity();
+    if (!mesh.vertices.push_back(v)) return ctx->arena->exhausted_status();
+    if (mesh.vertices.capacity() != cap) triangles_last = false;
+    return Status::ok();
+  }
+
+  Status add_triangle(uint32_t a, uint32_t b, uint32_t c, uint64_t face) {
+    if (mesh.triangles.size() >= options->max_triangles) {
+      return make_error(StatusCode::kLimitExceeded, "more than ", options->max_triangles,
+                        " triangles (the limit) after fan triangulation")
+          .at_index(face);
+    }
+    const size_t cap = mesh.triangles.capacity();
+    if (!mesh.triangles.push_back(Triangle{{a, b, c}})) return ctx->arena->exhausted_status();
+    if (mesh.triangles.capacity() != cap) triangles_last = true;
+    return Status::ok();
+  }
+
+  // Reserves room confirmed by the input's size (never a count from a header alone).
+  Status reserve(uint64_t vertices, uint64_t triangles) {
+    if (!mesh.vertices.reserve(static_cast<size_t>(vertices))) return ctx->arena->exhausted_status();
+    if (!mesh.triangles.reserve(static_cast<size_t>(triangles))) return ctx->arena->exhausted_status();
+    triangles_last = true;
+    return Status::ok();
+  }
+
+  // Moves the mesh down to `start` (over the read buffers), welding it first if asked.
+  Status finish(const Arena::Marker& start, Mesh* out) {
+    Arena& arena = *ctx->arena;
+    if (!options->weld) {
+      move_mesh_down(arena, start, mesh, out, /*vertices_first=*/triangles_last);
+      return Status::ok();
+    }
+    // Exact weld through the STL path: each triangle as float32 corners (exact, since the
+    // coordinates were rounded to float32), so PLY, OBJ and STL weld identically.
+    ArenaArray<SoupTriangle> soup(&arena);
+    if (!soup.resize(mesh.triangles.size())) return arena.exhausted_status();
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+      for (int k = 0; k < 3; ++k) {
+        const Vec3& v = mesh.vertices[mesh.triangles[t].v[k]];
+        for (int a = 0; a < 3; ++a) soup[t].p[k][a] = static_cast<float>(v[a]);
+      }
+    }
+    Mesh welded(&arena);
+    SPLINTCORE_RETURN_IF_ERROR(weld_exact(*ctx, soup.span(), &welded));
+    move_mesh_down(arena, start, welded, out);  // weld_exact allocates triangles first
+    return Status::ok();
+  }
+};
+
+// Checks the parts of MeshReadOptions every reader shares; also `out` must be empty.
+inline Status check_read_arguments(const ByteSource& source, const MeshReadOptions& options,
+                                   const Mesh* out, const char* who) {
+  if (source.read == nullptr) {
+    return make_error(StatusCode::kInvalidArgument, who, ": byte source has no read()");
+  }
+  if (out == nullptr || !out->vertices.empty() || !out->triangles.empty()) {
+    return make_error(StatusCode::kInvalidArgument, who, ": output mesh must be empty");
+  }
+  if (options.weld && !options.round_to_float32) {
+    return make_error(StatusCode::kInvalidArgument, who,
+                      ": weld needs round_to_float32 (it welds float32 corners)");
+  }
+  if (options.max_line_bytes < 64 || options.max_line_bytes > (size_t{1} << 20)) {
+    return make_error(StatusCode::kInvalidArgument, who, ": max_line_bytes must be 64..1048576");
+  }
+  return Status::ok();
+}
+
+}  // namespace meshio
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_SRC_IO_MESH_TEXT_H
