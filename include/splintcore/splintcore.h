@@ -1,0 +1,393 @@
+/* splintcore C API: the design pipeline (Chen et al. 2016, EasySplint) for C callers and
+ * firmware. Floor 8: implemented in src/capi/capi.cpp on the C++ API of every module.
+ *
+ * Plain C99. Rules that hold for every function here:
+ * - No function allocates: not the handles, not the results. All memory is the caller's:
+ *   a context lives in caller storage (SC_CONTEXT_BYTES), and everything else (meshes, cases,
+ *   read buffers, temporaries) comes from the context's arena, a caller buffer with a hard
+ *   cap. Running out is SC_ARENA_EXHAUSTED with a message naming the bytes needed.
+ * - Nothing throws or longjmps; every function that can fail returns an sc_status and keeps
+ *   the full status (message, file, line, byte offset, element index) in the context, readable
+ *   with sc_status_message() and sc_status_location() until the next call on that context.
+ * - No global mutable state except the assert handler (sc_set_assert_handler). Contexts are
+ *   independent: one context per thread, never one context from two threads at once.
+ * - Handles (sc_mesh, sc_case) live in the arena: valid until the arena is rewound past
+ *   them (sc_arena_rewind to an earlier mark, sc_arena_reset) or the context is destroyed.
+ * - Output bytes are deterministic: the same inputs give the same STL bytes on every compiler
+ *   and CPU the library is tested on.
+ * - Broken preconditions that a status cannot express (a handle that is not one) are not
+ *   checked; NULL pointers are (SC_INVALID_ARGUMENT).
+ */
+#ifndef SPLINTCORE_SPLINTCORE_H
+#define SPLINTCORE_SPLINTCORE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ------------------------------------------------------------------------------------------ */
+/* Status codes: the same values and meanings as splintcore::StatusCode (core.h). */
+
+typedef int sc_status;
+enum {
+  SC_OK = 0,
+  SC_INVALID_ARGUMENT = 1, /* a parameter is out of its documented range, or a NULL pointer */
+  SC_ARENA_EXHAUSTED = 2,  /* the arena is too small; the message says how much is needed */
+  SC_PARSE_ERROR = 3,      /* malformed input (line and column, or byte offset) */
+  SC_TRUNCATED = 4,        /* input ended early (byte offset) */
+  SC_NON_FINITE = 5,       /* NaN or infinity in input */
+  SC_LIMIT_EXCEEDED = 6,   /* input larger than a limit */
+  SC_IO_ERROR = 7,         /* the source or sink callback failed */
+  SC_INVALID_MESH = 8,     /* the mesh is not what the operation needs (open, non-manifold) */
+  SC_CANCELLED = 9,        /* the progress callback asked to stop */
+  SC_UNSUPPORTED = 10,     /* valid input that this version does not handle */
+  SC_INTERNAL = 11         /* a bug: please report it with the inputs */
+};
+
+/* Short stable name of a code ("arena_exhausted"); "unknown" for other values. Static text. */
+const char* sc_status_name(sc_status code);
+
+/* The library's version, "MAJOR.MINOR.PATCH". Static text. */
+const char* sc_library_version(void);
+
+/* Replaces the handler called on a broken precondition (a library bug or misuse that no
+ * status can express) before the library calls abort(). Process-wide: set it once at start-up,
+ * before any other call. NULL restores the default (stderr when hosted, nothing otherwise). */
+void sc_set_assert_handler(void (*handler)(const char* expression, const char* file, int line));
+
+/* ------------------------------------------------------------------------------------------ */
+/* Context: the arena, an optional progress callback and executor, and the last status. */
+
+typedef struct sc_context sc_context;
+
+/* Bytes of caller storage that always suffice for a context, any alignment included (the
+ * context aligns itself within the storage). sc_context_size() says the exact need. */
+#define SC_CONTEXT_BYTES 1024u
+
+/* The storage a context needs at `storage`'s alignment worst case (<= SC_CONTEXT_BYTES). */
+size_t sc_context_size(void);
+
+/* Builds a context in `storage` (storage_bytes >= sc_context_size(), any alignment) whose
+ * arena is `arena_buffer` (arena_bytes of it, any alignment: the arena aligns each block it
+ * hands out to 16 bytes, so up to 15 bytes at the start may go unused). Nothing else is used.
+ * Writes *out (a pointer into `storage`). Errors: SC_INVALID_ARGUMENT (NULL pointers, storage
+ * too small). Both buffers must outlive the context; storage and arena must not overlap. */
+sc_status sc_context_init(void* storage, size_t storage_bytes, void* arena_buffer,
+                          size_t arena_bytes, sc_context** out);
+
+/* Ends the context (the caller's buffers are then free to reuse). NULL is ignored. */
+void sc_context_destroy(sc_context* ctx);
+
+/* Progress and cancellation: `report` is called with a stage name ("design: boolean", ...) and
+ * done/total; returning 0 cancels (the operation returns SC_CANCELLED at its next check).
+ * NULL report: none. Reads nothing, never fails. */
+typedef int (*sc_progress_fn)(void* user, const char* stage, uint64_t done, uint64_t total);
+void sc_context_set_progress(sc_context* ctx, sc_progress_fn report, void* user);
+
+/* The caller's threads: run(self, count, task, task_context) must call task(task_context, i)
+ * exactly once for each i in [0, count) and return when all have finished. Results never
+ * depend on it (tasks write only their own slots). NULL run: serial, on the calling thread. */
+typedef void (*sc_task_fn)(void* task_context, uint32_t index);
+typedef void (*sc_executor_fn)(void* self, uint32_t count, sc_task_fn task, void* task_context);
+void sc_context_set_executor(sc_context* ctx, sc_executor_fn run, void* self,
+                             uint32_t concurrency);
+
+/* The last status of a call on this context (SC_OK after a success). */
+sc_status sc_last_status(const sc_context* ctx);
+
+/* The last status as a person reads it: "FILE:LINE:COL: byte B: element I: message" with the
+ * parts that are known ("ok" after a success). Writes at most `cap` bytes to `out`, always
+ * NUL-terminated when cap > 0; returns the length the full text has (snprintf-like), so
+ * truncation is detectable. No arena use. */
+size_t sc_status_message(const sc_context* ctx, char* out, size_t cap);
+
+/* Where the last error is; SC_NO_POSITION for parts not known. */
+#define SC_NO_POSITION UINT64_MAX
+typedef struct sc_location {
+  uint64_t byte_offset;
+  uint64_t line;
+  uint64_t column;
+  uint64_t index; /* element: triangle, vertex, jaw, ... */
+} sc_location;
+void sc_status_location(const sc_context* ctx, sc_location* out);
+
+/* ------------------------------------------------------------------------------------------ */
+/* The arena (a strict stack over the caller's buffer). */
+
+size_t sc_arena_used(const sc_context* ctx);       /* bytes handed out, padding included */
+size_t sc_arena_cap(const sc_context* ctx);        /* the buffer's size */
+size_t sc_arena_high_water(const sc_context* ctx); /* most bytes in use since init/reset */
+
+/* A point to come back to: everything allocated after it (handles included) is freed by
+ * sc_arena_rewind. Marks must be rewound in stack order. */
+typedef struct sc_arena_mark {
+  void* block;
+  size_t offset;
+  size_t used;
+} sc_arena_mark;
+sc_arena_mark sc_arena_mark_get(const sc_context* ctx);
+void sc_arena_rewind(sc_context* ctx, sc_arena_mark mark);
+
+/* Frees everything (every handle becomes invalid) and resets the high-water mark. */
+void sc_arena_reset(sc_context* ctx);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Byte I/O: callbacks, so data can be fed and drained in chunks, and memory buffers. */
+
+#define SC_UNKNOWN_SIZE UINT64_MAX
+
+/* Where bytes come from. read() copies up to `capacity` bytes into `buffer` and returns how
+ * many (0 at the end), or -1 on an I/O error. `size`: the total if known (lets readers reject
+ * a lying header before reading on), else SC_UNKNOWN_SIZE. `name` (may be NULL) is used in
+ * messages. */
+typedef struct sc_source {
+  int64_t (*read)(void* user, uint8_t* buffer, size_t capacity);
+  void* user;
+  uint64_t size;
+  const char* name;
+} sc_source;
+
+/* Where bytes go. write() returns nonzero on success. seek() (NULL: not seekable) moves the
+ * write position to an absolute offset, returning nonzero on success. */
+typedef struct sc_sink {
+  int (*write)(void* user, const uint8_t* data, size_t bytes);
+  int (*seek)(void* user, uint64_t offset);
+  void* user;
+  const char* name;
+} sc_sink;
+
+/* A source over bytes in memory; `state` (caller-held) must outlive the source. */
+typedef struct sc_memory_source_state {
+  const uint8_t* data;
+  uint64_t size;
+  uint64_t position;
+} sc_memory_source_state;
+sc_source sc_memory_source(sc_memory_source_state* state, const void* data, size_t size,
+                           const char* name);
+
+/* A sink into a caller buffer of fixed capacity (a write past it fails: SC_IO_ERROR from the
+ * writer). Seekable. `state->size` is the number of bytes written (the high-water mark). */
+typedef struct sc_memory_sink_state {
+  uint8_t* data;
+  uint64_t capacity;
+  uint64_t size;
+  uint64_t position;
+} sc_memory_sink_state;
+sc_sink sc_memory_sink(sc_memory_sink_state* state, void* buffer, size_t capacity,
+                       const char* name);
+
+/* SHA-256 (FIPS 180-4) of `bytes` bytes as 64 lower-case hex digits and a NUL. No arena. */
+void sc_sha256_hex(const void* data, size_t bytes, char out[65]);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Meshes: indexed triangle meshes (double vertices, counter-clockwise seen from outside) that
+ * live in the context's arena. */
+
+typedef struct sc_mesh sc_mesh;
+
+typedef struct sc_stl_read_options {
+  uint64_t max_triangles;      /* more is SC_LIMIT_EXCEEDED; default 100,000,000 */
+  double max_abs_coordinate;   /* mm; beyond is SC_LIMIT_EXCEEDED ("wrong units?"); 1e6 */
+  size_t chunk_bytes;          /* the read buffer, from the arena (freed before return) */
+} sc_stl_read_options;
+/* The defaults (as above, chunk_bytes 65,536). */
+sc_stl_read_options sc_stl_read_defaults(void);
+
+/* Reads an STL (binary or ASCII, detected) and welds corners with identical coordinates into
+ * a mesh. `options` NULL: defaults. The header's triangle count is never trusted. Arena: the
+ * mesh (about 24 bytes per vertex + 12 per triangle + 64 for the handle) stays; the read
+ * buffer and the triangle soup (36 bytes per triangle) and welding temporaries are freed
+ * before return. On error the arena is back where it was and *out is NULL.
+ * Errors: SC_TRUNCATED (byte offset), SC_PARSE_ERROR (byte offset or line), SC_NON_FINITE
+ * (names the triangle), SC_LIMIT_EXCEEDED, SC_IO_ERROR, SC_ARENA_EXHAUSTED,
+ * SC_INVALID_ARGUMENT (NULL pointers). */
+sc_status sc_mesh_read_stl(sc_context* ctx, const sc_source* source,
+                           const sc_stl_read_options* options, sc_mesh** out);
+
+/* A mesh from arrays: `vertices` holds 3 * vertex_count doubles (x, y, z), `triangles`
+ * 3 * triangle_count vertex ids. Copied into the arena (24 bytes per vertex, 12 per triangle,
+ * 64 for the handle). Errors: SC_INVALID_ARGUMENT (NULL arrays with non-zero counts, an id out
+ * of range: names the triangle), SC_NON_FINITE (names the vertex), SC_ARENA_EXHAUSTED. */
+sc_status sc_mesh_from_arrays(sc_context* ctx, const double* vertices, uint32_t vertex_count,
+                              const uint32_t* triangles, uint32_t triangle_count,
+                              sc_mesh** out);
+
+uint64_t sc_mesh_vertex_count(const sc_mesh* mesh);   /* 0 for NULL */
+uint64_t sc_mesh_triangle_count(const sc_mesh* mesh); /* 0 for NULL */
+
+/* Copies the vertices (3 doubles each) into `out`, which holds `capacity` doubles. No arena.
+ * Errors: SC_INVALID_ARGUMENT (NULL, capacity < 3 * vertex count: says how many needed). */
+sc_status sc_mesh_copy_vertices(sc_context* ctx, const sc_mesh* mesh, double* out,
+                                size_t capacity);
+/* Copies the triangles (3 vertex ids each) into `out`, which holds `capacity` ids. Same rules. */
+sc_status sc_mesh_copy_triangles(sc_context* ctx, const sc_mesh* mesh, uint32_t* out,
+                                 size_t capacity);
+
+/* Bytes of the binary STL of a mesh with `triangle_count` triangles (84 + 50 per triangle). */
+uint64_t sc_stl_binary_size(uint64_t triangle_count);
+
+typedef struct sc_stl_write_options {
+  int ascii;                /* nonzero: ASCII; 0: binary (the default) */
+  size_t buffer_bytes;      /* the write buffer, from the arena (> 0; default 64,000) */
+  const char* solid_name;   /* ASCII only: letters, digits, '_' '-' '.'; NULL: "splintcore" */
+} sc_stl_write_options;
+/* The defaults (binary, 64,000-byte buffer). */
+sc_stl_write_options sc_stl_write_defaults(void);
+
+/* Writes the mesh as STL to `sink`, streaming (`options` NULL: defaults). The bytes are
+ * deterministic: fixed header, float32 rounded to nearest, normals from the corners. Arena:
+ * the write buffer (options->buffer_bytes), freed before return. Errors: SC_IO_ERROR (the sink
+ * failed; names it), SC_ARENA_EXHAUSTED, SC_INVALID_ARGUMENT (NULL pointers, a zero buffer, a
+ * bad solid name). */
+sc_status sc_mesh_write_stl(sc_context* ctx, const sc_mesh* mesh, const sc_sink* sink,
+                            const sc_stl_write_options* options);
+
+/* What a mesh is (check_mesh of mesh.h). Flags are 0 or 1. */
+typedef struct sc_mesh_report {
+  uint64_t vertex_count;
+  uint64_t triangle_count;
+  uint64_t boundary_edges;        /* used by one triangle */
+  uint64_t nonmanifold_edges;     /* used by three or more */
+  uint64_t orientation_conflicts; /* edges used twice in the same direction */
+  uint64_t degenerate_triangles;  /* repeated ids or zero area (exact) */
+  uint64_t duplicate_triangles;
+  uint64_t shells;
+  int64_t genus;                  /* -1 unless closed and manifold */
+  double area_mm2;
+  double volume_mm3;              /* signed: > 0 when outward */
+  double bounds_min[3];
+  double bounds_max[3];
+  int closed;
+  int manifold;
+  int oriented;
+  int outward;
+  int valid_solid;                /* all of the above, no degenerate or duplicate triangle */
+} sc_mesh_report;
+
+/* Checks topology and measures. Arena: temporaries (about 64 bytes per triangle), freed before
+ * return. Errors: SC_ARENA_EXHAUSTED; SC_INVALID_MESH (a vertex id out of range: names the
+ * triangle); SC_INVALID_ARGUMENT (NULL). A mesh that is not a solid is no error: read the
+ * report, or call sc_mesh_require_solid. */
+sc_status sc_mesh_check(sc_context* ctx, const sc_mesh* mesh, sc_mesh_report* out);
+
+/* SC_OK when the mesh is a valid solid, else SC_INVALID_MESH with the first reason ("mesh is
+ * not closed: 12 boundary edges, first between vertices 4 and 9 (triangle 17)"). Arena and
+ * other errors as sc_mesh_check. */
+sc_status sc_mesh_require_solid(sc_context* ctx, const sc_mesh* mesh);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Mesh operations. Each result is a new mesh in the arena (the handle and the mesh stay,
+ * temporaries are freed before return; on error the arena is back where it was). */
+
+enum { SC_BOOLEAN_DIFFERENCE = 0, SC_BOOLEAN_UNION = 1, SC_BOOLEAN_INTERSECTION = 2 };
+
+/* The exact Boolean `op` of the solid `a` and the mesh `b` (boolean.h; float32 output, checked,
+ * self-intersection checked, up to 8 nudges of a). b's vertices must be float32 values (as read
+ * from STL). Arena: roughly 1 KB per triangle near the intersection plus the result.
+ * Errors: SC_INVALID_MESH, SC_NON_FINITE, SC_INVALID_ARGUMENT, SC_UNSUPPORTED,
+ * SC_ARENA_EXHAUSTED, SC_LIMIT_EXCEEDED, SC_CANCELLED, SC_INTERNAL. */
+sc_status sc_mesh_boolean(sc_context* ctx, const sc_mesh* a, const sc_mesh* b, int op,
+                          sc_mesh** out);
+
+/* The swept volume of the jaws along `direction` (blockout.h sweep_volume_mesh): a closed,
+ * outward mesh on a grid of `voxel` mm. Arena: the sweep's state (about 10 bytes per grid
+ * column times a few layers, plus the jaws' copies) and the result. Errors: SC_INVALID_ARGUMENT
+ * (zero or non-finite direction, voxel not > 0, no jaws), SC_LIMIT_EXCEEDED, SC_NON_FINITE,
+ * SC_ARENA_EXHAUSTED, SC_CANCELLED. */
+sc_status sc_sweep(sc_context* ctx, const sc_mesh* const* jaws, size_t jaw_count,
+                   const double direction[3], double voxel, sc_mesh** out);
+
+/* Interference elimination: `splint` minus the jaws' swept volume along `direction` (the
+ * direction the jaws move relative to the splint as it is taken off), on a grid of `voxel` mm,
+ * surface taken `inset` mm inside (0 <= inset < 2 voxel). Arena: the sweep's, then the
+ * Boolean's; only the result stays. Errors: those of sc_sweep and sc_mesh_boolean. */
+sc_status sc_blockout(sc_context* ctx, const sc_mesh* splint, const sc_mesh* const* jaws,
+                      size_t jaw_count, const double direction[3], double voxel, double inset,
+                      sc_mesh** out);
+
+/* ------------------------------------------------------------------------------------------ */
+/* The design pipeline: a case file (docs/case-format.md) and the jaw meshes it names. */
+
+typedef struct sc_case sc_case;
+
+/* Parses and validates a case file (strict: unknown keys, wrong types and out-of-range values
+ * are errors with line and column). `name` (may be NULL) is used in messages. Arena: the parsed
+ * document stays (a few times the text's size); on error the arena is back where it was and
+ * *out is NULL. Errors: SC_PARSE_ERROR, SC_INVALID_ARGUMENT, SC_LIMIT_EXCEEDED,
+ * SC_UNSUPPORTED (a newer format version), SC_ARENA_EXHAUSTED. */
+sc_status sc_case_parse(sc_context* ctx, const char* text, size_t length, const char* name,
+                        sc_case** out);
+
+const char* sc_case_id(const sc_case* c);                      /* "" for NULL */
+size_t sc_case_jaw_count(const sc_case* c);                    /* 0 for NULL */
+/* The jaw's role ("maxilla", "mandible") and mesh path as the case names it (relative to the
+ * case file's folder; NULL when it has none). NULL for an index out of range. */
+const char* sc_case_jaw_role(const sc_case* c, size_t index);
+const char* sc_case_jaw_mesh(const sc_case* c, size_t index);
+
+/* The parameters a caller may read and change after parsing. Flags are 0 or 1. */
+typedef struct sc_case_params {
+  double spacing_mm;               /* base: distance between sections (> 0) */
+  double corner_radius_mm;         /* base: rounding of the section corners (>= 0) */
+  uint32_t corner_segments;        /* 1, 2, 4, 8 or 16 */
+  int has_insertion_direction;
+  double insertion_direction[3];   /* finite, non-zero when has_insertion_direction */
+  int blockout;                    /* interference elimination on/off (needs the direction) */
+  double blockout_voxel_mm;        /* 0.01 .. 1 */
+  double blockout_inset_mm;        /* 0 .. 1.99 voxel */
+  double blockout_closing_mm;      /* 0, or 2 .. 10 voxel */
+  const char* printer;             /* a built-in profile name ("eden260"); static text */
+} sc_case_params;
+
+/* Reads the case's parameters into *out. */
+sc_status sc_case_get_params(sc_context* ctx, const sc_case* c, sc_case_params* out);
+/* Validates `params` with the case file's ranges and sets them. On error nothing changes.
+ * The printer name must stay valid while the case is used (a string literal or the value
+ * sc_case_get_params gave). No arena. Errors: SC_INVALID_ARGUMENT (naming the parameter). */
+sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* params);
+
+/* What a design gives. Flags are 0 or 1. */
+#define SC_MAX_BLOCKOUT_JAWS 8
+typedef struct sc_design_report {
+  uint64_t jaw_triangles;            /* all jaws together, as given */
+  uint64_t splint_triangles;
+  uint64_t splint_vertices;
+  double splint_volume_mm3;
+  uint32_t base_sections;
+  double base_volume_mm3;
+  uint64_t boolean_intersecting_pairs;
+  uint64_t boolean_intersection_points;
+  uint32_t boolean_attempts;         /* 1 + the nudges tried */
+  double boolean_nudge_mm[3];
+  uint32_t blockout_jaws;            /* jaws blocked out (0 without blockout) */
+  double blockout_removed_mm3[SC_MAX_BLOCKOUT_JAWS];
+  uint32_t blockout_attempts[SC_MAX_BLOCKOUT_JAWS];
+  int printable;
+  int fits;                          /* fits the tray as placed */
+  int fits_rotated;                  /* fits after a 90 degree turn about z */
+  double extent_mm[3];
+  uint64_t layers;
+  const char* printer;               /* the profile used (static text) */
+} sc_design_report;
+
+/* Designs the splint for `c` from `jaws` (jaws[i] is the mesh of the case's jaw i, as read; it
+ * is not changed): each jaw moved by the plan's transform, the base from the picks, the exact
+ * Boolean difference, interference elimination when the case asks for it, the printer check.
+ * `report` may be NULL. Arena: the pipeline's peak (the paper-scale case with two 6,000-
+ * triangle jaws: 10.3 MB, the jaws included; measure yours with sc_arena_high_water), of which
+ * the result and its handle stay; on error the arena is back where it was. Progress: "design: jaws", "design: base", "design: boolean",
+ * "design: blockout", "design: printer". Errors: those of the stages (naming the stage and,
+ * for a jaw, its index and role), SC_INVALID_ARGUMENT (the jaw count differs from the case's,
+ * more than SC_MAX_BLOCKOUT_JAWS jaws), SC_NON_FINITE, SC_LIMIT_EXCEEDED, SC_INVALID_MESH (the
+ * result is not printable: the reason), SC_ARENA_EXHAUSTED, SC_CANCELLED. */
+sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
+                    size_t jaw_count, sc_mesh** splint, sc_design_report* report);
+
+#ifdef __cplusplus
+}  /* extern "C" */
+#endif
+
+#endif /* SPLINTCORE_SPLINTCORE_H */
