@@ -39,6 +39,32 @@ constexpr uint8_t kTets[6][4] = {
     {0, 4, 7, 6},  // z y x (odd)
 };
 
+// The 19 edges of the Freudenthal cube (every pair of corners u < w with u's bits a subset of
+// w's: 19 of the 28 pairs), numbered 0..18 by (u, w) in order; other entries unused.
+constexpr int count_cell_edges() {
+  int n = 0;
+  for (unsigned u = 0; u < 8; ++u) {
+    for (unsigned w = 0; w < 8; ++w) n += (u != w && (u & w) == u) ? 1 : 0;
+  }
+  return n;
+}
+struct CellEdges {
+  uint8_t index[64];
+};
+constexpr CellEdges make_cell_edges() {
+  CellEdges t{};
+  uint8_t n = 0;
+  for (unsigned u = 0; u < 8; ++u) {
+    for (unsigned w = 0; w < 8; ++w) {
+      t.index[u * 8 + w] = (u != w && (u & w) == u) ? n++ : 0;
+    }
+  }
+  return t;
+}
+static_assert(count_cell_edges() == 19, "the Freudenthal cube has 19 edges");
+constexpr CellEdges kCellEdges = make_cell_edges();
+constexpr const uint8_t* kCellEdge = kCellEdges.index;
+
 struct TetCase {
   uint8_t triangles = 0;
   uint8_t edge[2][3][2] = {};  // per triangle corner: the two tetrahedron vertices (local)
@@ -282,6 +308,11 @@ inline Vec3 edge_vertex(const Sweep& s, int64_t cx, int64_t cy, int64_t cz, unsi
 // One cell: corners[k] for cube corner k. Emits its tetrahedra's triangles.
 Status march_cell(Sweep& s, int64_t cx, int64_t cy, int64_t cz, const Corner corners[8]) {
   const uint64_t row_count = uint64_t{s.grid->ny} + 1;
+  // The cell's edges (lower corner u, upper w: index u * 8 + w) met so far in this cell: the
+  // six tetrahedra share them, so each edge's id and position are found once per cell.
+  uint32_t known = 0;  // bit e of the 19 edges below: found
+  uint32_t ids[19];
+  Vec3 pos[19];
   for (int tet = 0; tet < 6; ++tet) {
     const uint8_t* v = kTets[tet];
     unsigned m = 0;
@@ -296,6 +327,12 @@ Status march_cell(Sweep& s, int64_t cx, int64_t cy, int64_t cz, const Corner cor
           const unsigned swap = u;
           u = w;
           w = swap;
+        }
+        const unsigned e = kCellEdge[u * 8 + w];
+        if ((known >> e) & 1u) {
+          p[k] = pos[e];
+          out.v[k] = ids[e];
+          continue;
         }
         const unsigned d = u ^ w;
         const uint64_t px = static_cast<uint64_t>(cx + 1 + static_cast<int64_t>(u & 1u));
@@ -331,6 +368,9 @@ Status march_cell(Sweep& s, int64_t cx, int64_t cy, int64_t cz, const Corner cor
           }
         }
         out.v[k] = *slot;
+        known |= 1u << e;
+        ids[e] = *slot;
+        pos[e] = p[k];
       }
       ++s.triangles;
       if (s.visitor->triangle != nullptr) {
