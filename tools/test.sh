@@ -8,6 +8,12 @@
 #   bash tools/test.sh gcc-O2     one job (gcc-O0 gcc-O2 clang-O0 clang-O2 asan core)
 # Optional jobs, not in the default list yet (cross builds run under qemu-user):
 #   bash tools/test.sh aarch64 armv7
+#   bash tools/test.sh fuzz        libFuzzer targets (clang): replay every corpus in
+#                                  fixtures/fuzz/, then run each target SPLINTCORE_FUZZ_SECONDS
+#                                  (default 60) one after the other (tests/fuzz/README.md)
+#   bash tools/test.sh lint        clang-tidy (.clang-tidy) and cppcheck over src/ include/
+#                                  tools/; any finding fails
+#   bash tools/test.sh coverage    llvm-cov line and branch coverage per file (tools/coverage.sh)
 #   They run the suite except the long randomised Boolean properties (BooleanRandom.Phantom*,
 #   about 8 min under qemu, run natively by the default jobs); SPLINTCORE_CROSS_FULL=1 runs all.
 set -u
@@ -115,6 +121,98 @@ core_job() {
   return 0
 }
 
+fuzz_job() {
+  # libFuzzer targets: build (clang, -fsanitize=fuzzer,address,undefined), replay every corpus
+  # (the fuzz.*.corpus tests), then fuzz each target for SPLINTCORE_FUZZ_SECONDS, one at a time.
+  # New inputs go to build/ci-fuzz/corpus/<target> (not into fixtures/); a crash leaves its
+  # input in build/ci-fuzz/artifacts/<target>/ and fails the job.
+  local dir=build/ci-fuzz seconds=${SPLINTCORE_FUZZ_SECONDS:-60}
+  echo "=== fuzz: clang++ -fsanitize=fuzzer,address,undefined, ${seconds}s per target"
+  ensure_packages clang || return 1
+  if ! cmake -S . -B "$dir" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+       -DSPLINTCORE_FUZZ=ON >"$dir.configure.log" 2>&1; then
+    mkdir -p "$dir"; cat "$dir.configure.log"; return 1
+  fi
+  local targets
+  # Every target the SPLINTCORE_FUZZ block declares (ours and the CT readers').
+  targets=$(sed -n 's/^ *foreach(splintcore_\(ct_\)\{0,1\}fuzz_name \(.*\))/\2/p' tests/CMakeLists.txt)
+  local t list=""
+  for t in $targets; do list="$list splintcore_fuzz_$t"; done
+  if ! cmake --build "$dir" -j "$par" --target $list >"$dir.build.log" 2>&1; then
+    tail -n 40 "$dir.build.log"; return 1
+  fi
+  local rc=0 log=$dir.ctest.log
+  (cd "$dir" && ctest --output-on-failure -R '^fuzz\.' --timeout 900) >"$log" 2>&1 || rc=1
+  grep -E "tests passed|tests failed|\*\*\*" "$log" | tail -n 15
+  local n failed
+  n=$(grep -oE "out of [0-9]+" "$log" | tail -n 1 | grep -oE "[0-9]+")
+  failed=$(grep -oE "[0-9]+ tests failed" "$log" | tail -n 1 | grep -oE "^[0-9]+")
+  total_passed=$((total_passed + ${n:-0} - ${failed:-0}))
+  total_failed=$((total_failed + ${failed:-0}))
+  for t in $targets; do
+    mkdir -p "$dir/corpus/$t" "$dir/artifacts/$t"
+    "$dir/tests/splintcore_fuzz_$t" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=2048 \
+      -print_final_stats=1 -artifact_prefix="$dir/artifacts/$t/" "$dir/corpus/$t" \
+      "fixtures/fuzz/$t" >"$dir/fuzz-$t.log" 2>&1
+    local frc=$?
+    printf 'fuzz %-10s %10s execs %6s exec/s  %s\n' "$t" \
+      "$(grep -oE '^stat::number_of_executed_units: [0-9]+' "$dir/fuzz-$t.log" | grep -oE '[0-9]+$')" \
+      "$(grep -oE '^stat::average_exec_per_sec: [0-9]+' "$dir/fuzz-$t.log" | grep -oE '[0-9]+$')" \
+      "$([ $frc -eq 0 ] && echo ok || echo "FAILED: see $dir/fuzz-$t.log")"
+    if [ $frc -ne 0 ]; then
+      rc=1; total_failed=$((total_failed + 1)); grep -E "^==|ERROR|SUMMARY" "$dir/fuzz-$t.log" | head -n 20
+    else
+      total_passed=$((total_passed + 1))
+    fi
+  done
+  return $rc
+}
+
+lint_job() {
+  # clang-tidy with the checked-in .clang-tidy, and cppcheck, over our own sources; a finding
+  # from either fails the job. compile_commands.json comes from a configure-only build dir.
+  local dir=build/ci-lint
+  echo "=== lint: clang-tidy (.clang-tidy) and cppcheck over src/ include/ tools/"
+  ensure_packages clang clang-tidy cppcheck || return 1
+  if ! cmake -S . -B "$dir" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=Release \
+       -DCMAKE_EXPORT_COMPILE_COMMANDS=ON >"$dir.configure.log" 2>&1; then
+    mkdir -p "$dir"; cat "$dir.configure.log"; return 1
+  fi
+  local files rc=0
+  files=$(ls src/*/*.cpp tools/common/*.cpp tools/splintcore/*.cpp tools/bench/*.cpp 2>/dev/null)
+  # Headers are checked through the sources that include them (HeaderFilterRegex).
+  if ! printf '%s\n' $files | xargs -P "$par" -n 4 clang-tidy -p "$dir" --quiet \
+       >"$dir.clang-tidy.log" 2>&1; then
+    rc=1
+  fi
+  if grep -qE "(warning|error):" "$dir.clang-tidy.log"; then
+    rc=1; grep -E "(warning|error):" "$dir.clang-tidy.log" | sort -u | head -n 40
+  fi
+  echo "clang-tidy: $(grep -cE "(warning|error):" "$dir.clang-tidy.log") findings in $(echo $files | wc -w) files"
+  # cppcheck: warnings, performance and portability (style is clang-tidy's and the reviewer's).
+  # Suppressions are listed in tools/cppcheck-suppressions.txt with a reason each.
+  if ! cppcheck --project="$dir/compile_commands.json" --enable=warning,performance,portability \
+       --inline-suppr --suppressions-list=tools/cppcheck-suppressions.txt --error-exitcode=1 \
+       --quiet -j "$par" -i "$dir" -i tests --template='{file}:{line}: {severity} ({id}): {message}' \
+       >"$dir.cppcheck.log" 2>&1; then
+    rc=1
+  fi
+  grep -vE "^$|^Checking|files checked" "$dir.cppcheck.log" | head -n 40
+  echo "cppcheck: $(grep -cE ": (error|warning|performance|portability) " "$dir.cppcheck.log") findings"
+  if [ $rc -eq 0 ]; then total_passed=$((total_passed + 1)); else total_failed=$((total_failed + 1)); fi
+  return $rc
+}
+
+coverage_job() {
+  echo "=== coverage: clang -fprofile-instr-generate -fcoverage-mapping, llvm-cov report"
+  ensure_packages clang llvm || return 1
+  if SPLINTCORE_JOBS="$par" bash tools/coverage.sh build/ci-coverage; then
+    total_passed=$((total_passed + 1))
+  else
+    total_failed=$((total_failed + 1)); return 1
+  fi
+}
+
 for job in $jobs; do
   case $job in
     gcc-O0) run_ctest_job "$job" g++ Debug ;;
@@ -123,6 +221,9 @@ for job in $jobs; do
     clang-O2) run_ctest_job "$job" clang++ Release ;;
     asan) run_ctest_job "$job" g++ RelWithDebInfo -DSPLINTCORE_SANITIZE=ON ;;
     core) core_job ;;
+    fuzz) fuzz_job ;;
+    lint) lint_job ;;
+    coverage) coverage_job ;;
     aarch64) cross_job "$job" cmake/toolchain-aarch64-linux-gnu.cmake aarch64-linux-gnu ;;
     armv7) cross_job "$job" cmake/toolchain-arm-linux-gnueabihf.cmake arm-linux-gnueabihf ;;
     *) echo "unknown job $job"; false ;;

@@ -60,7 +60,10 @@ struct CaseFile {
 // Parses and validates a case file (strict: unknown keys, wrong types, missing required keys
 // and out-of-range values are errors with line and column). `name` is used in messages.
 // Errors: kParseError, kInvalidArgument, kLimitExceeded, kUnsupported (a newer version),
-// kArenaExhausted.
+// kArenaExhausted. On failure the arena is rewound to where it was and *out is empty; on
+// success the parsed document stays in the arena (the CaseFile's strings point into it).
+// Output names ("output": "splint", "report") must be plain file names (is_plain_name, at
+// most 128 characters): a case cannot name a file outside the output folder.
 Status parse_case(const Context& ctx, const char* text, size_t length, const char* name,
                   CaseFile* out);
 
@@ -117,7 +120,9 @@ struct DesignReport {
 // kMaxBlockoutJaws jaws). `splint` must be empty. Stage progress goes to ctx.progress
 // ("design: jaws", "design: base", "design: boolean", "design: blockout", "design: printer"). Errors: those of the stages (naming the stage and,
 // for a jaw, its index and role), kInvalidArgument (jaw count differs from the case, unknown
-// printer), and kInvalidMesh when the result is not printable (require_printable's reason).
+// printer), kNonFinite (a jaw vertex that is NaN or infinite), kLimitExceeded (a jaw moved
+// beyond float32 range), and kInvalidMesh when the result is not printable
+// (require_printable's reason).
 Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* splint,
                      DesignReport* report);
 

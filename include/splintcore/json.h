@@ -50,7 +50,9 @@ struct JsonDocument {
   }
 };
 
-// Parses `text` (not necessarily NUL-terminated). The values and strings live in the arena.
+// Parses `text` (not necessarily NUL-terminated). The values and strings live in the arena
+// (length + 1 bytes of strings plus sizeof(JsonValue) per value, with growth); on failure the
+// arena is rewound to where it was.
 // Errors: kParseError (with line and column), kLimitExceeded, kArenaExhausted.
 Status parse_json(const Context& ctx, const char* text, size_t length, const JsonLimits& limits,
                   const char* name, JsonDocument* out);

@@ -686,7 +686,7 @@ Status BooleanRun::split_triangles() {
   const uint32_t base = in_.nva + in_.nvb;  // first intersection point's vertex id
   vstate_ = arena_.allocate_array<int8_t>(base);
   if (vstate_ == nullptr && base > 0) return arena_.exhausted_status();
-  std::memset(vstate_, 0, base);
+  if (base > 0) std::memset(vstate_, 0, base);
   // Records: two per hit, grouped by triangle (stable: hit order within a triangle).
   rec_ = arena_.allocate_array<Record>(size_t{2} * nh);
   order_ = arena_.allocate_array<KeyIndex>(size_t{2} * nh);
@@ -1037,7 +1037,7 @@ Status BooleanRun::flood(bool side_a) {
   uint8_t* cut = arena_.allocate_array<uint8_t>(nt);
   uint32_t* start = arena_.allocate_array<uint32_t>(size_t{nv} + 1);
   if ((cut == nullptr && nt > 0) || start == nullptr) return arena_.exhausted_status();
-  std::memset(cut, 0, nt);
+  if (nt > 0) std::memset(cut, 0, nt);
   for (size_t i = 0; i < 2 * hits_.size(); ++i) {
     const uint32_t t = static_cast<uint32_t>(order_[i].key);
     if (t >= toff && t - toff < nt) cut[t - toff] = 1;
@@ -1067,7 +1067,7 @@ Status BooleanRun::flood(bool side_a) {
   if (((fill == nullptr || queue == nullptr) && nv > 0) || (rows == nullptr && uses > 0)) {
     return arena_.exhausted_status();
   }
-  std::memcpy(fill, start, size_t{nv} * sizeof(uint32_t));
+  if (nv > 0) std::memcpy(fill, start, size_t{nv} * sizeof(uint32_t));
   for (uint32_t i = 0; i < count; ++i) {
     const uint32_t t = id(i);
     if (cut[t] != 0) continue;
@@ -1143,7 +1143,7 @@ Status BooleanRun::assemble(Mesh* result) {
   const uint32_t nv_all = base + static_cast<uint32_t>(points_.size());
   uint32_t* remap = arena_.allocate_array<uint32_t>(nv_all);
   if (remap == nullptr && nv_all > 0) return arena_.exhausted_status();
-  std::memset(remap, 0xff, size_t{nv_all} * sizeof(uint32_t));
+  if (nv_all > 0) std::memset(remap, 0xff, size_t{nv_all} * sizeof(uint32_t));
   // Visits the result's triangles in order (A's, then B's, each in input order, a cut triangle
   // replaced by its pieces): emit(v0, v1, v2) for each kept one.
   // Visits the result's triangles in order (A's, then B's near ones, each in input order, a
@@ -1244,7 +1244,7 @@ Status BooleanRun::run(Mesh* result) {
 // triangle (exact), positive volume; then, when asked, no self-intersection. Linear except for
 // the sort of the intersection points.
 Status BooleanRun::check_result(Mesh* result) {
-  if (result->triangles.size() == 0) return Status::ok();
+  if (result->triangles.empty()) return Status::ok();
   ArenaScope scope(arena_);
   const char* as = options_.float32_output ? " (as float32)" : "";
   const StatusCode fragile = options_.float32_output ? StatusCode::kUnsupported : StatusCode::kInternal;

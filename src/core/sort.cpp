@@ -51,7 +51,7 @@ void radix_sort(Span<uint64_t> items, Span<uint64_t> scratch) { lsd_radix_sort(i
 Status radix_sort(Arena& arena, Span<KeyIndex> items) {
   ArenaScope scope(arena);
   KeyIndex* scratch = arena.allocate_array<KeyIndex>(items.size());
-  if (scratch == nullptr && items.size() > 0) return arena.exhausted_status();
+  if (scratch == nullptr && !items.empty()) return arena.exhausted_status();
   radix_sort(items, Span<KeyIndex>(scratch, items.size()));
   return Status::ok();
 }

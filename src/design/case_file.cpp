@@ -125,11 +125,8 @@ Status parse_picks(const Reader& r, const JsonValue& list, const char* key, doub
   return Status::ok();
 }
 
-}  // namespace
-
-Status parse_case(const Context& ctx, const char* text, size_t length, const char* name,
-                  CaseFile* out) {
-  *out = CaseFile{};
+Status parse_case_document(const Context& ctx, const char* text, size_t length, const char* name,
+                           CaseFile* out) {
   JsonDocument doc;
   JsonLimits limits;
   limits.max_bytes = 16 << 20;
@@ -394,14 +391,39 @@ Status parse_case(const Context& ctx, const char* text, size_t length, const cha
     SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*o, JsonType::kObject, "output"));
     static const char* const kOutputKeys[] = {"splint", "report", nullptr};
     SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*o, kOutputKeys, "\"output\""));
+    // Output names are file names inside the output folder the user chose: a case from
+    // elsewhere must not be able to write outside it ("../x", "/etc/x").
+    static const char* const kOutputNameRule =
+        "\" must be a file name in the output folder: 1-128 letters, digits, '_', '-' or '.'";
     if (const JsonValue* s = doc.member(*o, "splint")) {
       SPLINTCORE_RETURN_IF_ERROR(r.string(*s, "splint", &out->output_splint));
+      if (!is_plain_name(out->output_splint, 128)) {
+        return r.fail(*s, StatusCode::kInvalidArgument, "\"splint", kOutputNameRule);
+      }
     }
     if (const JsonValue* s = doc.member(*o, "report")) {
       SPLINTCORE_RETURN_IF_ERROR(r.string(*s, "report", &out->output_report));
+      if (!is_plain_name(out->output_report, 128)) {
+        return r.fail(*s, StatusCode::kInvalidArgument, "\"report", kOutputNameRule);
+      }
     }
   }
   return Status::ok();
+}
+
+}  // namespace
+
+Status parse_case(const Context& ctx, const char* text, size_t length, const char* name,
+                  CaseFile* out) {
+  *out = CaseFile{};
+  // On failure nothing stays: the arena is rewound and *out is empty again.
+  const Arena::Marker start = ctx.arena->mark();
+  Status s = parse_case_document(ctx, text, length, name, out);
+  if (!s.is_ok()) {
+    ctx.arena->rewind(start);
+    *out = CaseFile{};
+  }
+  return s;
 }
 
 Status build_case_base(const Context& ctx, const CaseFile& c, Mesh* out, BaseReport* report) {

@@ -66,6 +66,13 @@ Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
     const uint32_t off = static_cast<uint32_t>(b.vertices.size());
     const uint32_t count = static_cast<uint32_t>(jaws[j].vertices.size());
     for (const Vec3& v : jaws[j].vertices) {
+      if (!is_finite(v)) {
+        arena.rewind(start);
+        return make_error(StatusCode::kNonFinite, "design: jaw ", j, " (", c.jaws[j].role,
+                          ") has a vertex that is not finite (NaN or infinity): vertex ",
+                          static_cast<uint64_t>(&v - jaws[j].vertices.begin()))
+            .at_index(j);
+      }
       Vec3 p = c.jaws[j].transform.apply_point(v);
       if (!round_to_float32(&p)) {
         arena.rewind(start);

@@ -25,6 +25,31 @@ inline uint64_t spread_bits(uint64_t v) {
   return v;
 }
 
+// In-place heap sort (Williams 1964): no memory, O(n log n) whatever the input, and with
+// unique keys the order is fixed (no dependence on the standard library's sort).
+template <class T, class Less>
+void heap_sort(T* a, size_t n, Less less) {
+  auto sift = [&](size_t root, size_t end) {
+    for (;;) {
+      size_t child = 2 * root + 1;
+      if (child >= end) return;
+      if (child + 1 < end && less(a[child], a[child + 1])) ++child;
+      if (!less(a[root], a[child])) return;
+      const T t = a[root];
+      a[root] = a[child];
+      a[child] = t;
+      root = child;
+    }
+  };
+  for (size_t i = n / 2; i-- > 0;) sift(i, n);
+  for (size_t end = n; end > 1; --end) {
+    const T t = a[0];
+    a[0] = a[end - 1];
+    a[end - 1] = t;
+    sift(0, end - 1);
+  }
+}
+
 // The float next to f towards -infinity (or +infinity), by its bits (finite f only; the
 // library call costs more than everything else in the bounds pass).
 inline float float_step(float f, bool up) {
@@ -319,19 +344,35 @@ Status build_distance_index(const Context& ctx, const Mesh& mesh,
     // to the larger; a manifold pair sets both neighbours. Any half-edge left without a
     // neighbour (boundary, non-manifold, or a pair used in the same direction) means the mesh
     // is not a closed oriented manifold.
+    // Each vertex's list is sorted by (end vertex, use), so the uses of an edge are counted
+    // by two binary searches: a vertex shared by d triangles costs O(d log d), not O(d^2)
+    // (hostile input: a fan of a million triangles, or a million copies of one triangle).
+    const auto by_end = [](const HalfEdge& x, const HalfEdge& y) {
+      return x.to != y.to ? x.to < y.to : x.use < y.use;
+    };
+    for (size_t i = 0; i < nv; ++i) heap_sort(lists + start[i], start[i + 1] - start[i], by_end);
+    // First index in [lo, hi) whose end vertex is >= to (or > to when `after`).
+    const auto search = [&](uint32_t lo, uint32_t hi, uint32_t to, bool after) {
+      while (lo < hi) {
+        const uint32_t mid = lo + (hi - lo) / 2;
+        if (lists[mid].to < to || (after && lists[mid].to == to)) {
+          lo = mid + 1;
+        } else {
+          hi = mid;
+        }
+      }
+      return lo;
+    };
     for (size_t i = 0; i < 3 * nt; ++i) neighbors[i] = kNoNeighbor;
     for (uint32_t t = 0; t < n; ++t) {
       for (uint32_t k = 0; k < 3; ++k) {
         const uint32_t a = tris[t].v[k], b = tris[t].v[(k + 1) % 3];
         if (a >= b) continue;
-        uint32_t same = 0, reverse = 0, other_use = 0;
-        for (uint32_t e = start[a]; e < start[a + 1]; ++e) same += lists[e].to == b;
-        for (uint32_t e = start[b]; e < start[b + 1]; ++e) {
-          if (lists[e].to == a) {
-            ++reverse;
-            other_use = lists[e].use;
-          }
-        }
+        const uint32_t same = search(start[a], start[a + 1], b, true) -
+                              search(start[a], start[a + 1], b, false);
+        const uint32_t first_reverse = search(start[b], start[b + 1], a, false);
+        const uint32_t reverse = search(start[b], start[b + 1], a, true) - first_reverse;
+        const uint32_t other_use = reverse > 0 ? lists[first_reverse].use : 0;
         if (same == 1 && reverse == 1) {
           neighbors[3 * size_t{t} + k] = other_use / 3;
           neighbors[other_use] = t;

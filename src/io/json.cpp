@@ -473,6 +473,7 @@ Status parse_json(const Context& ctx, const char* text, size_t length, const Jso
   p.name = name;
   // Decoded strings never exceed their source text, plus a NUL each: one pool of
   // length + 1 bytes is enough, and the value array then grows alone at the arena's top.
+  const Arena::Marker start = ctx.arena->mark();
   p.pool = ctx.arena->allocate_array<char>(length + 1);
   if (p.pool == nullptr) return ctx.arena->exhausted_status();
   ArenaArray<JsonValue> values(ctx.arena);
@@ -484,9 +485,15 @@ Status parse_json(const Context& ctx, const char* text, size_t length, const Jso
     p.line_start = 3;
   }
   uint32_t root = 0;
-  SPLINTCORE_RETURN_IF_ERROR(p.value(0, &root));
-  p.skip_space();
-  if (p.pos != p.size) return p.error("unexpected data after the JSON value");
+  Status s = p.value(0, &root);
+  if (s.is_ok()) {
+    p.skip_space();
+    if (p.pos != p.size) s = p.error("unexpected data after the JSON value");
+  }
+  if (!s.is_ok()) {
+    ctx.arena->rewind(start);  // a failed parse leaves nothing behind
+    return s;
+  }
   out->values = Span<const JsonValue>(values.data(), values.size());
   out->name = name;
   return Status::ok();

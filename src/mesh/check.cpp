@@ -180,7 +180,7 @@ Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report) {
   // Move the (a, b) keys next to the c keys' scratch: reuse the second half of items.
   KeyIndex* ab = items + tri_count;
   KeyIndex* sort_scratch = scratch + tri_count;  // 2 * tri_count spare entries remain
-  std::memcpy(ab, scratch, tri_count * sizeof(KeyIndex));
+  if (tri_count > 0) std::memcpy(ab, scratch, tri_count * sizeof(KeyIndex));
   radix_sort(Span<KeyIndex>(items, tri_count), Span<KeyIndex>(sort_scratch, tri_count));
   for (uint32_t t = 0; t < tri_count; ++t) {
     items[t].key = ab[items[t].index].key;  // re-key by (a, b), keeping the c order

@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# Line and branch coverage of the library by the unit tests (clang source-based coverage:
+# -fprofile-instr-generate -fcoverage-mapping, then llvm-profdata and llvm-cov).
+#   bash tools/coverage.sh [build-dir]          (default build/ci-coverage)
+#   SPLINTCORE_COVERAGE_FILTER='-Realdata|Meshlab' bash tools/coverage.sh   (gtest filter)
+# Prints llvm-cov's per-file report for src/ (lines, regions, branches), then the parsers'
+# figures on their own (issue 9 asks for >= 95% branch coverage of src/io/stl_read.cpp,
+# src/io/json.cpp and src/design/case_file.cpp). The HTML report is written to
+# <build-dir>/coverage-html. Exit status: that of the build and the test run (the figures are
+# reported, not enforced; SPLINTCORE_COVERAGE_MIN_BRANCH=95 makes the parsers' figure a gate).
+set -u
+cd "$(dirname "$0")/.."
+dir=${1:-build/ci-coverage}
+par=${SPLINTCORE_JOBS:-$(nproc)}
+llvm_profdata=$(command -v llvm-profdata || ls /usr/bin/llvm-profdata-* 2>/dev/null | tail -n 1)
+llvm_cov=$(command -v llvm-cov || ls /usr/bin/llvm-cov-* 2>/dev/null | tail -n 1)
+if [ -z "$llvm_profdata" ] || [ -z "$llvm_cov" ]; then
+  echo "coverage: llvm-profdata and llvm-cov are needed (apt-get install llvm)"; exit 1
+fi
+flags="-fprofile-instr-generate -fcoverage-mapping"
+cmake -S . -B "$dir" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=Debug \
+  -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="$flags" >"$dir.configure.log" 2>&1 \
+  || { cat "$dir.configure.log"; exit 1; }
+cmake --build "$dir" -j "$par" --target splintcore_tests >"$dir.build.log" 2>&1 \
+  || { tail -n 40 "$dir.build.log"; exit 1; }
+rm -f "$dir"/coverage-*.profraw
+# The long randomised properties and the MeshLab oracle add little line coverage and most of
+# the time; the filter can be widened.
+filter=${SPLINTCORE_COVERAGE_FILTER:--BooleanRandom.*:*Meshlab*:*MeshLab*}
+(cd "$dir" && LLVM_PROFILE_FILE="$PWD/coverage-%p.profraw" \
+   ./tests/splintcore_tests --gtest_filter="$filter" >coverage-tests.log 2>&1)
+rc=$?
+tail -n 3 "$dir/coverage-tests.log"
+"$llvm_profdata" merge -sparse "$dir"/coverage-*.profraw -o "$dir/coverage.profdata" || exit 1
+objects="$dir/tests/splintcore_tests"
+"$llvm_cov" report "$objects" -instr-profile="$dir/coverage.profdata" \
+  -show-branch-summary "$PWD/src" 2>/dev/null | sed "s|$PWD/||" | tee "$dir/coverage-report.txt"
+"$llvm_cov" show "$objects" -instr-profile="$dir/coverage.profdata" -format=html \
+  -output-dir="$dir/coverage-html" -show-branches=count "$PWD/src" >/dev/null 2>&1
+echo
+echo "parsers (lines, branches):"
+gate=0
+for f in src/io/stl_read.cpp src/io/json.cpp src/design/case_file.cpp; do
+  # llvm-cov report columns: Regions Missed Cover Functions Missed Executed Lines Missed Cover
+  # Branches Missed Cover.
+  # llvm-cov names files relative to the common prefix (src/): match either form.
+  line=$(grep -E "^(src/)?${f#src/} " "$dir/coverage-report.txt")
+  lines=$(echo "$line" | awk '{print $10}')
+  branches=$(echo "$line" | awk '{print $13}')
+  printf '  %-28s lines %8s  branches %8s\n' "$f" "$lines" "$branches"
+  if [ -n "${SPLINTCORE_COVERAGE_MIN_BRANCH:-}" ]; then
+    b=${branches%\%}
+    awk -v b="$b" -v m="$SPLINTCORE_COVERAGE_MIN_BRANCH" 'BEGIN { exit !(b + 0 < m + 0) }' && gate=1
+  fi
+done
+echo "HTML: $dir/coverage-html/index.html"
+[ "$rc" -eq 0 ] && [ "$gate" -eq 0 ]
