@@ -4,16 +4,17 @@
 # hashes must match in all four), with ASan+UBSan, and builds the core alone with
 # -fno-exceptions -fno-rtti and no platform layer, checking it pulls in no heap or exception
 # symbols.
-#   bash tools/test.sh            all jobs
-#   bash tools/test.sh gcc-O2     one job (gcc-O0 gcc-O2 clang-O0 clang-O2 asan core)
-# Optional jobs, not in the default list yet (cross builds run under qemu-user):
-#   bash tools/test.sh aarch64 armv7
+#   bash tools/test.sh            all default jobs
+#   bash tools/test.sh gcc-O2     one job (gcc-O0 gcc-O2 clang-O0 clang-O2 asan core lint fuzz)
+# The default list also runs (the fuzz job for 15 s per target):
 #   bash tools/test.sh fuzz        libFuzzer targets (clang): replay every corpus in
 #                                  fixtures/fuzz/, then run each target SPLINTCORE_FUZZ_SECONDS
 #                                  (default 60) one after the other (tests/fuzz/README.md)
 #   bash tools/test.sh lint        clang-tidy (.clang-tidy) and cppcheck over src/ include/
 #                                  tools/; any finding fails
+# Optional jobs, not in the default list (cross builds run under qemu-user, about 27 min):
 #   bash tools/test.sh coverage    llvm-cov line and branch coverage per file (tools/coverage.sh)
+#   bash tools/test.sh aarch64 armv7
 #   They run the suite except the long randomised Boolean properties (BooleanRandom.Phantom*,
 #   about 8 min under qemu, run natively by the default jobs); SPLINTCORE_CROSS_FULL=1 runs all.
 set -u
@@ -22,7 +23,12 @@ cd "$(dirname "$0")/.."
 ensure_packages g++ clang cmake make pkg-config python3 libgtest-dev meshlab xvfb xauth || exit 1
 
 mkdir -p build
-jobs=${*:-gcc-O0 gcc-O2 clang-O0 clang-O2 asan core}
+# The default list ends with static analysis and a short fuzz of every target (15 s each,
+# every corpus replayed); SPLINTCORE_FUZZ_SECONDS=3600 bash tools/test.sh fuzz runs them longer.
+if [ $# -eq 0 ]; then
+  export SPLINTCORE_FUZZ_SECONDS=${SPLINTCORE_FUZZ_SECONDS:-15}
+fi
+jobs=${*:-gcc-O0 gcc-O2 clang-O0 clang-O2 asan core lint fuzz}
 total_passed=0
 total_failed=0
 failed_jobs=""
@@ -128,7 +134,7 @@ fuzz_job() {
   # input in build/ci-fuzz/artifacts/<target>/ and fails the job.
   local dir=build/ci-fuzz seconds=${SPLINTCORE_FUZZ_SECONDS:-60}
   echo "=== fuzz: clang++ -fsanitize=fuzzer,address,undefined, ${seconds}s per target"
-  ensure_packages clang || return 1
+  ensure_packages clang libclang-rt-14-dev || return 1  # the libFuzzer and sanitizer runtimes
   if ! cmake -S . -B "$dir" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
        -DSPLINTCORE_FUZZ=ON >"$dir.configure.log" 2>&1; then
     mkdir -p "$dir"; cat "$dir.configure.log"; return 1

@@ -320,7 +320,7 @@ struct BinaryIn {
     }
     in->pos += n;
     switch (type) {
-      case kInt8: *i = static_cast<int8_t>(bits); break;
+      case kInt8: *i = static_cast<int64_t>(bits) - ((bits & 0x80u) != 0 ? 256 : 0); break;
       case kUInt8: *i = static_cast<int64_t>(bits); break;
       case kInt16: *i = static_cast<int16_t>(bits); break;
       case kUInt16: *i = static_cast<int64_t>(bits); break;
