@@ -55,6 +55,12 @@ struct SweepOptions {
   // inset a little above that error keeps the two from meeting except where the swept
   // volume really leaves the jaw (the undercuts), at the price of leaving that much undercut.
   double inset = 0;
+  // Extract the surface this far OUTSIDE the swept volume instead (mm, 0 <= offset <= 20
+  // voxels; with an offset the inset must be 0): the offset solid S + B(offset), a spacer
+  // between the jaw and the splint. Exact where it matters: outside S the field is the exact
+  // distance to S (to its closing, where a closing fills), so the surface is the true offset
+  // surface within the extractor's piecewise-linear error.
+  double offset = 0;
   // Morphological closing of the swept volume with a ball of this radius (mm; 0: none, else at
   // least two voxels): dilation then erosion, which fills gaps narrower than twice the radius
   // (between teeth) so that the splint has no thin fins reaching into them. Computed on the
@@ -127,8 +133,9 @@ struct BlockoutStats {
   SweepStats sweep;
   uint64_t swept_triangles = 0;  // the swept volume's mesh inside the splint's bounds
   BooleanStats boolean;
-  uint32_t attempts = 0;         // 1 + the retries with a deeper inset
+  uint32_t attempts = 0;         // 1 + the retries with a deeper inset (or larger offset)
   double inset_used = 0;         // mm
+  double offset_used = 0;        // mm (sweep.offset, as retried)
 };
 
 // `out` = `splint` minus the part of the jaws' swept volume (sweep_volume above, direction =
@@ -138,7 +145,8 @@ struct BlockoutStats {
 // passes (closed, manifold, outward, float32-exact, optionally no self-intersection). When
 // the Boolean meets a configuration it cannot resolve even with its own nudges of A, the swept
 // surface is taken again 1/64 voxel deeper, up to three times (BlockoutStats::attempts and
-// inset_used say what was used; the inset stays below two voxels). A splint the sweep does not reach comes back unchanged (copied).
+// inset_used say what was used; the inset stays below two voxels); with an offset (a spacer),
+// 1/64 voxel further out instead (offset_used). A splint the sweep does not reach comes back unchanged (copied).
 // For a wafer between two jaws call it once per jaw: the maxilla's direction is the
 // mandible's reversed. Memory: the sweep's state and extractor, the swept mesh, then the
 // Boolean's; only `out` stays (moved down to where the arena's top was). Errors: those of

@@ -45,6 +45,16 @@ struct CaseFile {
   double blockout_voxel = 0.1;     // mm
   double blockout_inset = 0.05;    // mm (default: half the voxel)
   double blockout_closing = 0;     // mm, 0: none
+  // The spacer between teeth and splint ("clearance", mm, 0: none): the splint's imprint is
+  // the offset surface of each jaw's swept volume at this distance (SweepOptions::offset)
+  // instead of the jaw's own triangles. Needs "blockout"; the inset is then 0.
+  double blockout_clearance = 0;
+  // The wall-thickness check ("min_thickness", mm; 0: not run): thin spots are reported
+  // (DesignReport::thickness), not refused.
+  double min_thickness = 0;
+  // "placement": "case" (false: the splint stays in the case's frame) or "tray" (true: the
+  // whole case is moved onto the printer's build tray first; DesignReport::tray_translation).
+  bool place_on_tray = false;
   // The CT ("ct" object) the jaws given by "seed" are reconstructed from (segment.h).
   const char* ct_volume = nullptr; // path (file or DICOM folder), relative to the case file
   int32_t ct_hu_min = 300, ct_hu_max = 4000;
@@ -91,13 +101,48 @@ struct CaseCtReport {
 Status reconstruct_case_jaws(const Context& ctx, const CaseFile& c, const CtVolume& volume,
                              Span<Mesh> jaws, CaseCtReport* report);
 
-// Picks -> lines -> base, as the case says. `out` must be empty.
+// Picks -> lines -> base, as the case says. `out` must be empty. Arena: the lines (88 bytes a
+// pick, left in place below the mesh) and at most splint_base_bound(). Errors: make_lines()'s
+// and build_splint_base()'s. On an error the arena is as it was and `out` is empty.
 Status build_case_base(const Context& ctx, const CaseFile& c, Mesh* out, BaseReport* report);
 
 // ---------------------------------------------------------------------------------------------
 // The design pipeline as far as it has landed: the jaws repositioned by the plan, the base from
 // the picks, the Boolean difference base minus jaws, interference elimination (when the case
 // has "blockout"), the printer check. (CT reconstruction joins when its issue lands.)
+
+// ---------------------------------------------------------------------------------------------
+// Wall thickness: the check a splint designer runs before printing.
+
+struct ThicknessSpot {
+  Vec3 position{};       // the thin triangle's centroid
+  double thickness = 0;  // mm
+  uint32_t triangle = 0;
+};
+
+struct ThicknessReport {
+  static constexpr uint32_t kMaxSpots = 8;
+  static constexpr double kSpotSpacing = 2.0;  // mm between reported spots
+  double min_required = 0;       // mm
+  uint64_t triangles_checked = 0;
+  uint64_t thin_triangles = 0;   // thickness below min_required
+  double thin_area_mm2 = 0;
+  double thinnest = 0;           // mm (min_required when nothing is thinner)
+  uint32_t spot_count = 0;       // the thinnest places, at least kSpotSpacing apart
+  ThicknessSpot spots[kMaxSpots];
+};
+
+// Local wall thickness of a closed, outward mesh: from each triangle's centroid a ray along
+// the inward normal (ray_intersect, distance.h) to the first surface it meets, measured up to
+// `min_thickness` (mm). Triangles thinner than that are counted with their area, and the
+// thinnest places are reported (thinnest first; ties by triangle id). Where a surface meets
+// another at a sharp edge the material is a thin wedge by nature (e.g. where a tooth's imprint
+// leaves the splint at a shallow angle): those count too, so read the spots, not only the
+// count. Arena: a distance index of the mesh (distance_index_bound) and 16 bytes per thin
+// triangle, all returned. Errors: kInvalidArgument (min_thickness not in (0, 1000]), those of
+// build_distance_index, kArenaExhausted, kCancelled (progress "thickness").
+Status check_wall_thickness(const Context& ctx, const Mesh& mesh, double min_thickness,
+                            ThicknessReport* report);
 
 struct DesignReport {
   uint64_t jaw_triangles = 0;   // all jaws together, as given
@@ -108,6 +153,15 @@ struct DesignReport {
   uint32_t blockout_jaws = 0;
   BlockoutStats blockout[kMaxBlockoutJaws];
   double blockout_removed_mm3[kMaxBlockoutJaws] = {};
+  // With a clearance the imprint is the swept volumes' offset surface: the Boolean base minus
+  // jaws is not run (the jaws lie inside what the blockout removes) and `boolean` stays zero.
+  bool imprint_offset = false;
+  bool thickness_checked = false;  // the case has "min_thickness"
+  ThicknessReport thickness;
+  // "placement": "tray": the case was moved by this translation (mm, a multiple of 1/64)
+  // before the design, so the splint comes out on the tray (centred, bottom at z = 0).
+  bool placed_on_tray = false;
+  Vec3 tray_translation{};
   PrintCheck print;
   const char* printer = "";     // the profile used
 };

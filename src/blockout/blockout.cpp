@@ -33,10 +33,16 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
     so.region = bounds;
     so.open_at_region = true;  // the caps lie outside the splint: the Boolean takes an open B
     if (so.edge_margin < 1.0 / 16) so.edge_margin = 1.0 / 16;
-    so.inset = options.sweep.inset + attempt * (options.sweep.voxel / 64);
-    if (attempt > 0 && !(so.inset < 2 * so.voxel)) break;
+    if (options.sweep.offset > 0) {
+      so.offset = options.sweep.offset + attempt * (options.sweep.voxel / 64);
+      if (attempt > 0 && !(so.offset <= 20 * so.voxel)) break;
+    } else {
+      so.inset = options.sweep.inset + attempt * (options.sweep.voxel / 64);
+      if (attempt > 0 && !(so.inset < 2 * so.voxel)) break;
+    }
     st->attempts = static_cast<uint32_t>(attempt + 1);
     st->inset_used = so.inset;
+    st->offset_used = so.offset;
     Mesh swept;
     s = sweep_volume_mesh(ctx, jaws, so, &swept, &st->sweep);
     if (!s.is_ok()) break;

@@ -452,8 +452,12 @@ void make_closed_layer(Sweep& s, uint32_t k, float* out) {
         out[at] = fp;
         continue;
       }
-      if (static_cast<double>(fp) > r) {  // outside the dilation: outside the closing
-        out[at] = static_cast<float>(static_cast<double>(fp) - r);
+      if (static_cast<double>(fp) > r) {
+        // Outside the dilation: outside the closing, which holds S, at most f from it. Taken
+        // as f: the closing's filled parts are at least r from here, so no edge of the zero
+        // (or inset) surface reads this value, and an offset surface (iso up to r) meets it
+        // only where the closing is S itself, whose exact distance f is.
+        out[at] = fp;
         continue;
       }
       ++s.stats->closing_samples;
@@ -546,6 +550,11 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
     return make_error(StatusCode::kInvalidArgument, "sweep: the inset must be >= 0 and below two "
                       "voxels (inset ", o.inset, " mm, voxel ", o.voxel, " mm)");
   }
+  if (!(o.offset >= 0) || !(o.offset <= 20 * o.voxel) || (o.offset > 0 && o.inset != 0)) {
+    return make_error(StatusCode::kInvalidArgument, "sweep: the offset must be from 0 to 20 "
+                      "voxels, with no inset (offset ", o.offset, " mm, inset ", o.inset,
+                      " mm, voxel ", o.voxel, " mm)");
+  }
   SPLINTCORE_RETURN_IF_ERROR(make_frame(o.direction, &s->frame));
   uint64_t vertex_count = 0, triangle_count = 0;
   for (const Mesh& m : jaws) {
@@ -558,7 +567,10 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   if (vertex_count >= (uint64_t{1} << 32) || triangle_count >= (uint64_t{1} << 32)) {
     return make_error(StatusCode::kLimitExceeded, "sweep: more than 2^32 - 1 vertices or triangles");
   }
-  Vec3* local = arena.allocate_array<Vec3>(vertex_count);
+  // Both below 2^32 now, so they fit a 32-bit size_t too.
+  const size_t vertex_total = static_cast<size_t>(vertex_count);
+  const size_t triangle_total = static_cast<size_t>(triangle_count);
+  Vec3* local = arena.allocate_array<Vec3>(vertex_total);
   if (local == nullptr) return arena.exhausted_status();
   Aabb box;
   {
@@ -578,7 +590,7 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   // Front and silhouette triangles (orient2d of the projection <= 0: the outward normal has
   // no component along w), with global vertex ids.
   ArenaArray<Triangle> front(&arena);
-  if (!front.reserve(triangle_count)) return arena.exhausted_status();
+  if (!front.reserve(triangle_total)) return arena.exhausted_status();
   {
     size_t base = 0;
     for (size_t j = 0; j < jaws.size(); ++j) {
@@ -627,9 +639,10 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   // a region, its part of that in x and y, and from the jaws' near end to the region's far
   // end in w (the layers before the region are swept but not meshed).
   const double h = o.voxel;
-  // The correction reads two samples out; the closing reads f(q) up to 2 r + 2 voxels.
-  const double band = o.closing_radius > 0 ? 2 * o.closing_radius + kBandVoxels * h
-                                           : kBandVoxels * h;
+  // The correction reads two samples out; the closing reads f(q) up to 2 r + 2 voxels; an
+  // offset surface needs the exact field two samples beyond it.
+  const double band = (o.closing_radius > 0 ? 2 * o.closing_radius : 0) + o.offset +
+                      kBandVoxels * h;
   const double margin = band + h;
   Vec3 lo = box.lo - Vec3{margin, margin, margin};
   Vec3 hi = box.hi + Vec3{margin, margin, o.extent + h};
@@ -734,7 +747,7 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
     s->offsets = ordered;
     s->offset_count = n;
   }
-  s->vertices = Span<const Vec3>(local, vertex_count);
+  s->vertices = Span<const Vec3>(local, vertex_total);
   s->tris = Span<const Triangle>(sorted, nf);
   s->tri_wmin = Span<const double>(wmin, nf);
   s->tri_wmax = Span<const double>(wmax, nf);
@@ -832,7 +845,7 @@ Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOption
   outer.user = &wv;
   if (s.empty) return Status::ok();
   MarchingCubesOptions mc;
-  mc.iso = -options.inset;
+  mc.iso = options.offset > 0 ? options.offset : -options.inset;
   mc.layers_per_tile = options.layers_per_tile;
   mc.edge_margin = options.edge_margin;
   return marching_cubes(ctx, s.mesh_grid, LayerSource{fill_layers, &s}, mc, outer,
@@ -855,7 +868,7 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
   Mesh mesh(&arena);
   if (status.is_ok() && !s.empty) {
     MarchingCubesOptions mc;
-    mc.iso = -options.inset;
+    mc.iso = options.offset > 0 ? options.offset : -options.inset;
     mc.layers_per_tile = options.layers_per_tile;
     mc.edge_margin = options.edge_margin;
     status = marching_cubes_mesh(ctx, s.mesh_grid, LayerSource{fill_layers, &s}, mc, &mesh,

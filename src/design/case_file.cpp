@@ -1,6 +1,8 @@
 // The case file: strict schema over the strict JSON parser (format: docs/case-format.md).
 // Every object rejects keys it does not know, every value is type- and range-checked, and
 // every error names the line and column of the offending value.
+#include <cstring>
+
 #include "splintcore/design.h"
 
 namespace splintcore {
@@ -136,7 +138,7 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(root, JsonType::kObject, "the case"));
   static const char* const kRootKeys[] = {"splintcore_case", "case_id", "units", "jaws", "base",
                                           "insertion_direction", "blockout", "ct", "printer",
-                                          "memory_cap",
+                                          "memory_cap", "min_thickness", "placement",
                                           "output", nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(root, kRootKeys, "the case"));
 
@@ -340,7 +342,8 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   }
   if (const JsonValue* b = doc.member(root, "blockout")) {
     SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*b, JsonType::kObject, "blockout"));
-    static const char* const kBlockoutKeys[] = {"voxel", "inset", "closing_radius", nullptr};
+    static const char* const kBlockoutKeys[] = {"voxel", "inset", "closing_radius", "clearance",
+                                                nullptr};
     SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*b, kBlockoutKeys, "\"blockout\""));
     if (!out->has_insertion_direction) {
       return r.fail(*b, StatusCode::kInvalidArgument,
@@ -350,10 +353,19 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
     if (const JsonValue* bv = doc.member(*b, "voxel")) {
       SPLINTCORE_RETURN_IF_ERROR(r.number(*bv, "voxel", 0.01, 1.0, &out->blockout_voxel));
     }
-    out->blockout_inset = 0.5 * out->blockout_voxel;
+    if (const JsonValue* bl = doc.member(*b, "clearance")) {
+      // The spacer: the offset surface of the swept volume (blockout.h, SweepOptions::offset).
+      const double cap = 20 * out->blockout_voxel < 2.0 ? 20 * out->blockout_voxel : 2.0;
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*bl, "clearance", 0.0, cap, &out->blockout_clearance));
+    }
+    out->blockout_inset = out->blockout_clearance > 0 ? 0 : 0.5 * out->blockout_voxel;
     if (const JsonValue* bi = doc.member(*b, "inset")) {
       SPLINTCORE_RETURN_IF_ERROR(
           r.number(*bi, "inset", 0.0, 1.99 * out->blockout_voxel, &out->blockout_inset));
+      if (out->blockout_inset > 0 && out->blockout_clearance > 0) {
+        return r.fail(*bi, StatusCode::kInvalidArgument, "\"inset\" and \"clearance\" exclude "
+                      "each other (a clearance takes the surface outside the swept volume)");
+      }
     }
     if (const JsonValue* bc = doc.member(*b, "closing_radius")) {
       SPLINTCORE_RETURN_IF_ERROR(
@@ -362,6 +374,20 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
         return r.fail(*bc, StatusCode::kInvalidArgument,
                       "\"closing_radius\" must be 0 or at least two voxels");
       }
+    }
+  }
+  if (const JsonValue* t = doc.member(root, "min_thickness")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*t, "min_thickness", 0.05, 20.0, &out->min_thickness));
+  }
+  if (const JsonValue* pl = doc.member(root, "placement")) {
+    const char* placement = "";
+    SPLINTCORE_RETURN_IF_ERROR(r.string(*pl, "placement", &placement));
+    if (std::strcmp(placement, "tray") == 0) {
+      out->place_on_tray = true;
+    } else if (std::strcmp(placement, "case") != 0) {
+      return r.fail(*pl, StatusCode::kInvalidArgument,
+                    "\"placement\" must be \"case\" (the splint stays in the case's frame) or "
+                    "\"tray\" (moved onto the printer's build tray)");
     }
   }
   if (const JsonValue* p = doc.member(root, "printer")) {
@@ -429,10 +455,14 @@ Status parse_case(const Context& ctx, const char* text, size_t length, const cha
 Status build_case_base(const Context& ctx, const CaseFile& c, Mesh* out, BaseReport* report) {
   // The lines are temporaries; the mesh must sit below them, so the lines are made first into
   // arena memory that is then left in place (a few KB), and the mesh grows above.
+  // On an error the arena goes back to its top at entry (`out` stays empty).
+  const Arena::Marker entry = ctx.arena->mark();
   ArenaArray<Line> upper(ctx.arena), lower(ctx.arena);
-  SPLINTCORE_RETURN_IF_ERROR(make_lines(ctx, c.upper, c.occlusal_normal, "upper", &upper));
-  SPLINTCORE_RETURN_IF_ERROR(make_lines(ctx, c.lower, c.occlusal_normal, "lower", &lower));
-  return build_splint_base(ctx, upper.span(), lower.span(), c.base, out, report);
+  Status s = make_lines(ctx, c.upper, c.occlusal_normal, "upper", &upper);
+  if (s.is_ok()) s = make_lines(ctx, c.lower, c.occlusal_normal, "lower", &lower);
+  if (s.is_ok()) s = build_splint_base(ctx, upper.span(), lower.span(), c.base, out, report);
+  if (!s.is_ok()) ctx.arena->rewind(entry);
+  return s;
 }
 
 }  // namespace splintcore

@@ -1,4 +1,5 @@
 // The design pipeline: jaws moved by the plan, base, Boolean difference, printer check.
+#include <cmath>
 #include <cstring>
 
 #include "splintcore/design.h"
@@ -14,26 +15,76 @@ Status stage_error(const Status& s, const char* stage) {
   return e;
 }
 
+// The case moved onto the printer's tray ("placement": "tray"): the base is built once in
+// the case's frame for its bounds, and the translation that centres them on the tray with the
+// bottom at z = 0 (rounded to 1/64 mm) is applied to the picks and composed with every jaw's
+// transform. The design then runs in the tray's frame, so the Boolean's float32 guarantees
+// hold for the placed splint itself (moving a finished float32 mesh would round its vertices
+// again and could fold its slivers). The copies live in the arena above its top at entry.
+Status case_on_tray(const Context& ctx, const CaseFile& c, const PrinterProfile& profile,
+                    CaseFile* out, Vec3* translation) {
+  Arena& arena = *ctx.arena;
+  Aabb box;
+  {
+    ArenaScope scope(arena);
+    Mesh probe(&arena);
+    BaseReport unused;
+    SPLINTCORE_RETURN_IF_ERROR(build_case_base(ctx, c, &probe, &unused));
+    for (const Vec3& p : probe.vertices) box.add(p);
+  }
+  const Vec3 centre = box.center();
+  const auto on_grid = [](double v) { return std::floor(v * 64 + 0.5) / 64; };
+  const Vec3 t{on_grid(profile.build_volume_mm.x * 0.5 - centre.x),
+               on_grid(profile.build_volume_mm.y * 0.5 - centre.y),
+               std::ceil(-box.lo.z * 64) / 64};  // bottom at z >= 0
+  *translation = t;
+  const RigidTransform move = RigidTransform::translation(t);
+  *out = c;
+  Pick* upper = arena.allocate_array<Pick>(c.upper.size());
+  Pick* lower = arena.allocate_array<Pick>(c.lower.size());
+  CaseJaw* jaws = arena.allocate_array<CaseJaw>(c.jaws.size());
+  if ((upper == nullptr && !c.upper.empty()) || (lower == nullptr && !c.lower.empty()) ||
+      (jaws == nullptr && !c.jaws.empty())) {
+    return arena.exhausted_status();
+  }
+  for (size_t i = 0; i < c.upper.size(); ++i) {
+    upper[i] = c.upper[i];
+    upper[i].position = move.apply_point(c.upper[i].position);
+  }
+  for (size_t i = 0; i < c.lower.size(); ++i) {
+    lower[i] = c.lower[i];
+    lower[i].position = move.apply_point(c.lower[i].position);
+  }
+  for (size_t j = 0; j < c.jaws.size(); ++j) {
+    jaws[j] = c.jaws[j];
+    jaws[j].transform = compose(move, c.jaws[j].transform);
+  }
+  out->upper = Span<const Pick>(upper, c.upper.size());
+  out->lower = Span<const Pick>(lower, c.lower.size());
+  out->jaws = Span<const CaseJaw>(jaws, c.jaws.size());
+  return Status::ok();
+}
+
 }  // namespace
 
-Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* splint,
+Status design_splint(const Context& ctx, const CaseFile& case_in, Span<const Mesh> jaws, Mesh* splint,
                      DesignReport* report) {
   Arena& arena = *ctx.arena;
   *report = DesignReport{};
   if (!splint->vertices.empty() || !splint->triangles.empty()) {
     return Status::error(StatusCode::kInvalidArgument, "design_splint: output mesh must be empty");
   }
-  if (jaws.size() != c.jaws.size()) {
-    return make_error(StatusCode::kInvalidArgument, "design: the case names ", c.jaws.size(),
+  if (jaws.size() != case_in.jaws.size()) {
+    return make_error(StatusCode::kInvalidArgument, "design: the case names ", case_in.jaws.size(),
                       " jaws but ", jaws.size(), " meshes were given");
   }
   if (jaws.empty()) {
     return Status::error(StatusCode::kInvalidArgument,
                          "design: the case has no jaws to subtract (\"jaws\" is empty)");
   }
-  const PrinterProfile* profile = find_printer_profile(c.printer);
+  const PrinterProfile* profile = find_printer_profile(case_in.printer);
   if (profile == nullptr) {
-    return make_error(StatusCode::kInvalidArgument, "design: unknown printer \"", c.printer,
+    return make_error(StatusCode::kInvalidArgument, "design: unknown printer \"", case_in.printer,
                       "\" (known: eden260)");
   }
   report->printer = profile->name;
@@ -44,6 +95,16 @@ Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
     if (!st.is_ok()) arena.rewind(start);
     return st;
   };
+  CaseFile on_tray;
+  if (case_in.place_on_tray) {
+    const Status st = case_on_tray(ctx, case_in, *profile, &on_tray, &report->tray_translation);
+    if (!st.is_ok()) {
+      arena.rewind(start);
+      return stage_error(st, "placement on the tray");
+    }
+    report->placed_on_tray = true;
+  }
+  const CaseFile& c = case_in.place_on_tray ? on_tray : case_in;
 
   // The jaws, moved and rounded, in one mesh (B of the Boolean).
   SPLINTCORE_RETURN_IF_ERROR(stage("design: jaws"));
@@ -63,6 +124,12 @@ Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
     return arena.exhausted_status();
   }
   for (size_t j = 0; j < jaws.size(); ++j) {
+    if (jaws[j].triangles.empty()) {
+      arena.rewind(start);
+      return make_error(StatusCode::kInvalidMesh, "design: jaw ", j, " (", c.jaws[j].role,
+                        ") is empty: it has no triangles")
+          .at_index(j);
+    }
     const uint32_t off = static_cast<uint32_t>(b.vertices.size());
     const uint32_t count = static_cast<uint32_t>(jaws[j].vertices.size());
     for (const Vec3& v : jaws[j].vertices) {
@@ -93,6 +160,48 @@ Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
     }
   }
 
+  // An inside-out jaw (its triangles facing inward) would be subtracted as its complement. A
+  // negative volume says so for a closed jaw; an open one (a scan) has no volume to go by.
+  {
+    size_t first = 0;
+    for (size_t j = 0; j < jaws.size(); ++j) {
+      Mesh part;
+      part.vertices.adopt(b.vertices.data(), b.vertices.size(), b.vertices.size());
+      part.triangles.adopt(b.triangles.data() + first, jaws[j].triangles.size(),
+                           jaws[j].triangles.size());
+      first += jaws[j].triangles.size();
+      if (!(mesh_volume(part) < 0)) continue;
+      // Closed and consistently oriented once turned over: then it is inside out.
+      const Arena::Marker before = arena.mark();
+      Mesh flipped(&arena);
+      Status closed = arena.exhausted_status();
+      if (flipped.triangles.resize(part.triangles.size())) {
+        for (size_t i = 0; i < part.triangles.size(); ++i) {
+          const Triangle& t = part.triangles[i];
+          flipped.triangles[i] = Triangle{{t.v[0], t.v[2], t.v[1]}};
+        }
+        Mesh view;
+        view.vertices.adopt(b.vertices.data(), b.vertices.size(), b.vertices.size());
+        view.triangles.adopt(flipped.triangles.data(), flipped.triangles.size(),
+                             flipped.triangles.size());
+        double volume = 0;
+        closed = check_closed_oriented(ctx, view, &volume);
+      }
+      arena.rewind(before);
+      if (closed.code() == StatusCode::kArenaExhausted) {
+        arena.rewind(start);
+        return closed;
+      }
+      if (closed.is_ok()) {
+        arena.rewind(start);
+        return make_error(StatusCode::kInvalidMesh, "design: jaw ", j, " (", c.jaws[j].role,
+                          ") is inside out: it is closed but its triangles face inward "
+                          "(volume ", mesh_volume(part), " mm^3); reverse their orientation")
+            .at_index(j);
+      }
+    }
+  }
+
   // The base, then the Boolean: the base's temporaries go, the base stays until the result is
   // moved down over everything.
   SPLINTCORE_RETURN_IF_ERROR(stage("design: base"));
@@ -102,14 +211,21 @@ Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
     arena.rewind(start);
     return stage_error(s, "base");
   }
-  SPLINTCORE_RETURN_IF_ERROR(stage("design: boolean"));
   Mesh cut;
-  BooleanOptions bo;
-  bo.op = BooleanOp::kDifference;
-  s = mesh_boolean(ctx, base, b, bo, &cut, &report->boolean);
-  if (!s.is_ok()) {
-    arena.rewind(start);
-    return stage_error(s, "boolean (base minus jaws)");
+  if (c.has_blockout && c.blockout_clearance > 0) {
+    // A spacer: the imprint is the swept volumes' offset surface, which holds each jaw, so
+    // subtracting the jaws themselves first would only cut what the blockout removes anyway.
+    report->imprint_offset = true;
+    cut = base;
+  } else {
+    SPLINTCORE_RETURN_IF_ERROR(stage("design: boolean"));
+    BooleanOptions bo;
+    bo.op = BooleanOp::kDifference;
+    s = mesh_boolean(ctx, base, b, bo, &cut, &report->boolean);
+    if (!s.is_ok()) {
+      arena.rewind(start);
+      return stage_error(s, "boolean (base minus jaws)");
+    }
   }
   if (c.has_blockout) {
     // Interference elimination, jaw by jaw: each jaw's part of B (its triangles, ids into all
@@ -133,6 +249,7 @@ Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
       bl.sweep.voxel = c.blockout_voxel;
       bl.sweep.inset = c.blockout_inset;
       bl.sweep.closing_radius = c.blockout_closing;
+      bl.sweep.offset = c.blockout_clearance;
       Mesh blocked;
       s = blockout(ctx, cut, Span<const Mesh>(&jaw, 1), bl, &blocked, &report->blockout[j]);
       if (!s.is_ok()) {
@@ -148,15 +265,25 @@ Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
       cut = blocked;  // the previous result stays below until the final move
     }
   }
+  if (c.min_thickness > 0) {
+    SPLINTCORE_RETURN_IF_ERROR(stage("design: thickness"));
+    s = check_wall_thickness(ctx, cut, c.min_thickness, &report->thickness);
+    if (!s.is_ok()) {
+      arena.rewind(start);
+      return stage_error(s, "thickness check");
+    }
+    report->thickness_checked = true;
+  }
   SPLINTCORE_RETURN_IF_ERROR(stage("design: printer"));
   PrintCheckOptions pco;
-  pco.place_on_tray = true;  // for the fit only: the splint itself stays in the case's frame
+  pco.place_on_tray = true;  // for the fit; the splint moves only with "placement": "tray"
   s = check_printable(ctx, cut, *profile, pco, &report->print);
   if (s.is_ok()) s = require_printable(report->print, *profile);
   if (!s.is_ok()) {
     arena.rewind(start);
     return stage_error(s, "printer check");
   }
+
   // The splint down over the jaws' copy and the base.
   move_mesh_down(arena, start, cut, splint);
   (void)report_progress(ctx, "design: done", 1, 1);  // the splint is made: too late to cancel

@@ -176,3 +176,222 @@ TEST(DesignPipeline, BlockoutRemovesInterferenceAndStaysPrintable) {
 
 }  // namespace
 }  // namespace splintcore
+
+// The designer's options: clearance (spacer), wall thickness, placement on the tray, and the
+// jaws checked one by one.
+#include "splintcore/distance.h"
+
+namespace splintcore {
+namespace {
+
+Mesh moved_jaw(Arena& arena, const Mesh& jaw, const RigidTransform& x) {
+  Mesh m(&arena);
+  for (const Vec3& v : jaw.vertices) {
+    Vec3 p = x.apply_point(v);
+    EXPECT_TRUE(round_to_float32(&p));
+    (void)m.vertices.push_back(p);
+  }
+  for (const Triangle& t : jaw.triangles) (void)m.triangles.push_back(t);
+  return m;
+}
+
+TEST(DesignOptions, ClearanceKeepsTheSpacerBetweenJawAndSplint) {
+  CaseAndJaws f;
+  ASSERT_TRUE(f.ok);
+  CaseFile c = f.c;
+  c.has_blockout = true;
+  c.blockout_voxel = 0.3;
+  c.blockout_inset = 0;
+  c.blockout_clearance = 0.6;
+  test::TestArena big{size_t{512} << 20};  // the swept surfaces' Booleans: about 100 MB
+  Mesh splint;
+  DesignReport r;
+  SPLINTCORE_ASSERT_OK(design_splint(Context(&big.arena), c, Span<const Mesh>(f.jaws, 2),
+                                     &splint, &r));
+  EXPECT_TRUE(r.imprint_offset);
+  EXPECT_EQ(r.boolean.intersecting_pairs, 0u);  // the jaws themselves are not subtracted
+  ASSERT_EQ(r.blockout_jaws, 2u);
+  EXPECT_EQ(r.blockout[0].offset_used, c.blockout_clearance);
+  EXPECT_TRUE(r.print.printable);
+  // Every splint vertex keeps the clearance from both jaws (within the extractor's
+  // piecewise-linear error), and the imprint comes that close: the spacer is there.
+  double nearest = HUGE_VAL;
+  for (int j = 0; j < 2; ++j) {
+    const Mesh jaw = moved_jaw(f.t.arena, f.jaws[j], c.jaws[j].transform);
+    DistanceIndex index;
+    SPLINTCORE_ASSERT_OK(build_distance_index(Context(&f.t.arena), jaw, {}, &index));
+    for (const Vec3& p : splint.vertices) {
+      ClosestPoint cp;
+      ASSERT_TRUE(closest_point(index, p, &cp));
+      nearest = std::min(nearest, cp.distance);
+    }
+  }
+  // The extractor interpolates the exact distance linearly along grid edges and keeps
+  // vertices 1/16 of an edge from samples: on the faceted 6k crowns (sharp edges, whose offset
+  // is a cylinder of radius c) that is within a quarter voxel here (0.362 mm for 0.4 at 0.2 mm voxels seen).
+  const double tolerance = 0.25 * c.blockout_voxel;
+  std::printf("[ figures  ] clearance %.3f mm at %.3f mm voxels: nearest splint vertex %.6f mm "
+              "from the jaws, %zu triangles\n", c.blockout_clearance, c.blockout_voxel, nearest,
+              splint.triangles.size());
+  EXPECT_GT(nearest, c.blockout_clearance - tolerance);
+  EXPECT_LT(nearest, c.blockout_clearance + tolerance);
+  // Without the clearance the imprint is the jaws' own surface: distance 0.
+  CaseFile plain = f.c;
+  Mesh tight;
+  DesignReport r0;
+  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), plain, Span<const Mesh>(f.jaws, 2),
+                                     &tight, &r0));
+  EXPECT_FALSE(r0.imprint_offset);
+  double v_clear = 0, v_tight = 0;
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(Context(&f.t.arena), splint, &v_clear));
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(Context(&f.t.arena), tight, &v_tight));
+  EXPECT_LT(v_clear, v_tight);  // the spacer takes material
+}
+
+Mesh box_mesh(Arena& arena, const Vec3& lo, const Vec3& hi) {
+  Mesh m(&arena);
+  for (int i = 0; i < 8; ++i) {
+    (void)m.vertices.push_back(Vec3{(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y,
+                                    (i & 4) ? hi.z : lo.z});
+  }
+  const uint32_t faces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4},
+                                 {1, 5, 4}, {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6},
+                                 {1, 3, 5}, {3, 7, 5}};
+  for (const auto& f : faces) (void)m.triangles.push_back(Triangle{{f[0], f[1], f[2]}});
+  return m;
+}
+
+TEST(DesignOptions, WallThicknessOfABoxIsItsSmallestSide) {
+  test::TestArena t{size_t{8} << 20};
+  Context ctx(&t.arena);
+  const Mesh box = box_mesh(t.arena, Vec3{0, 0, 0}, Vec3{10, 8, 2});
+  double volume = 0;
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, box, &volume));
+  ASSERT_EQ(volume, 160.0);
+  const size_t used = t.arena.used();
+  ThicknessReport r;
+  SPLINTCORE_ASSERT_OK(check_wall_thickness(ctx, box, 3.0, &r));
+  EXPECT_EQ(t.arena.used(), used);
+  EXPECT_EQ(r.triangles_checked, 12u);
+  EXPECT_EQ(r.thin_triangles, 4u);  // the top and the bottom: 2 mm apart
+  EXPECT_NEAR(r.thin_area_mm2, 160.0, 1e-9);
+  EXPECT_NEAR(r.thinnest, 2.0, 1e-9);
+  ASSERT_GE(r.spot_count, 1u);
+  EXPECT_NEAR(r.spots[0].thickness, 2.0, 1e-9);
+  // Reported spots are kSpotSpacing apart.
+  for (uint32_t i = 0; i < r.spot_count; ++i) {
+    for (uint32_t k = i + 1; k < r.spot_count; ++k) {
+      EXPECT_GE(length(r.spots[i].position - r.spots[k].position), ThicknessReport::kSpotSpacing);
+    }
+  }
+  SPLINTCORE_ASSERT_OK(check_wall_thickness(ctx, box, 1.5, &r));
+  EXPECT_EQ(r.thin_triangles, 0u);
+  EXPECT_EQ(r.thinnest, 1.5);
+  EXPECT_EQ(check_wall_thickness(ctx, box, 0, &r).code(), StatusCode::kInvalidArgument);
+  // 8 mm: the sides 8 mm apart are not thinner than 8; 10 mm apart neither.
+  SPLINTCORE_ASSERT_OK(check_wall_thickness(ctx, box, 9.0, &r));
+  EXPECT_EQ(r.thin_triangles, 8u);
+}
+
+TEST(DesignOptions, PlacementOnTheTrayMovesTheWholeDesign) {
+  CaseAndJaws f;
+  ASSERT_TRUE(f.ok);
+  Mesh here;
+  DesignReport r0;
+  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2),
+                                     &here, &r0));
+  CaseFile c = f.c;
+  c.place_on_tray = true;
+  Mesh placed;
+  DesignReport r;
+  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2),
+                                     &placed, &r));
+  ASSERT_TRUE(r.placed_on_tray);
+  const Vec3 t = r.tray_translation;
+  EXPECT_EQ(t.x * 64, std::floor(t.x * 64));  // on the 1/64 mm grid
+  const Aabb box = mesh_bounds(placed);
+  EXPECT_GE(box.lo.z, 0.0);
+  EXPECT_LT(box.lo.z, 1.0 / 64 + 1e-6);
+  EXPECT_NEAR(box.center().x, 255.0 / 2, 0.5);
+  EXPECT_NEAR(box.center().y, 252.0 / 2, 0.5);
+  EXPECT_TRUE(r.print.printable);
+  // The same splint, moved: volume and triangle count agree with the case-frame design.
+  double v_here = 0, v_placed = 0;
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(Context(&f.t.arena), here, &v_here));
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(Context(&f.t.arena), placed, &v_placed));
+  EXPECT_NEAR(v_placed, v_here, 1e-4 * v_here);
+  EXPECT_NEAR(static_cast<double>(placed.triangles.size()),
+              static_cast<double>(here.triangles.size()), 0.01 * here.triangles.size());
+  const Aabb box0 = mesh_bounds(here);
+  EXPECT_NEAR(box.lo.x - box0.lo.x, t.x, 1e-4);
+  EXPECT_NEAR(box.lo.z - box0.lo.z, t.z, 1e-4);
+}
+
+TEST(DesignOptions, EachJawIsCheckedAndNamed) {
+  CaseAndJaws f;
+  ASSERT_TRUE(f.ok);
+  Mesh splint;
+  DesignReport r;
+  // The mandible turned inside out.
+  Mesh flipped(&f.t.arena);
+  for (const Vec3& v : f.jaws[1].vertices) (void)flipped.vertices.push_back(v);
+  for (const Triangle& t : f.jaws[1].triangles) {
+    (void)flipped.triangles.push_back(Triangle{{t.v[0], t.v[2], t.v[1]}});
+  }
+  Mesh jaws[2] = {f.jaws[0], flipped};
+  const size_t used = f.t.arena.used();
+  Status s = design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(jaws, 2), &splint, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_NE(std::string(s.message()).find("jaw 1 (mandible) is inside out"), std::string::npos)
+      << s.message();
+  EXPECT_EQ(s.index(), 1u);
+  EXPECT_EQ(f.t.arena.used(), used);
+  // An empty maxilla.
+  Mesh empty(&f.t.arena);
+  Mesh jaws2[2] = {empty, f.jaws[1]};
+  s = design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(jaws2, 2), &splint, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_NE(std::string(s.message()).find("jaw 0 (maxilla) is empty"), std::string::npos)
+      << s.message();
+  EXPECT_EQ(f.t.arena.used(), used);
+}
+
+TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
+  test::TestArena t{size_t{8} << 20};
+  Context ctx(&t.arena);
+  const std::vector<uint8_t> text =
+      test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/cases/paper_scale.json");
+  std::string base(text.begin(), text.end());
+  const size_t at = base.rfind("\"printer\"");
+  ASSERT_NE(at, std::string::npos);
+  auto with = [&](const std::string& extra) {
+    return base.substr(0, at) + extra + ",\n  " + base.substr(at);
+  };
+  CaseFile c;
+  std::string ok = with("\"blockout\": {\"voxel\": 0.1, \"clearance\": 0.1}, \"min_thickness\": 1.5, "
+                        "\"placement\": \"tray\"");
+  SPLINTCORE_ASSERT_OK(parse_case(ctx, ok.data(), ok.size(), "ok", &c));
+  EXPECT_EQ(c.blockout_clearance, 0.1);
+  EXPECT_EQ(c.blockout_inset, 0.0);  // a clearance takes the surface outside
+  EXPECT_EQ(c.min_thickness, 1.5);
+  EXPECT_TRUE(c.place_on_tray);
+  const char* bad[] = {
+      "\"blockout\": {\"voxel\": 0.1, \"clearance\": 0.1, \"inset\": 0.05}",
+      "\"blockout\": {\"voxel\": 0.1, \"clearance\": 2.5}",
+      "\"min_thickness\": 0",
+      "\"placement\": \"floor\"",
+      "\"placement\": 1",
+  };
+  const char* expect[] = {"exclude each other", "clearance", "min_thickness", "\"placement\" must be",
+                          "placement"};
+  for (size_t i = 0; i < 5; ++i) {
+    const std::string s = with(bad[i]);
+    Status st = parse_case(ctx, s.data(), s.size(), "bad", &c);
+    EXPECT_EQ(st.code(), StatusCode::kInvalidArgument) << bad[i];
+    EXPECT_NE(std::string(st.message()).find(expect[i]), std::string::npos) << st.message();
+    EXPECT_GT(st.line(), 0u) << bad[i];
+  }
+}
+
+}  // namespace
+}  // namespace splintcore

@@ -8,6 +8,8 @@
 #include "phantom.h"
 
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 #include "splintcore/io.h"
 
@@ -536,6 +538,43 @@ Status stl_bytes(const JawMesh& jaw, std::vector<uint8_t>* out) {
   SPLINTCORE_RETURN_IF_ERROR(writer.finish());
   out->resize(static_cast<size_t>(sink.size));
   return Status::ok();
+}
+
+std::string case_json(const char* case_id) {
+  // fixtures/make_case_fixtures.py, arch(14, a, b, -0.18, z): phi from -0.18 to pi + 0.18.
+  auto picks = [](double a, double b, double z) {
+    std::string out;
+    for (int i = 0; i < 14; ++i) {
+      const double phi = -0.18 + (kPi + 0.36) * (static_cast<double>(i) / 13.0);
+      double sp = 0, cp = 0;
+      sin_cos(phi, &sp, &cp);
+      double nx = b * cp, ny = a * sp;
+      const double ln = std::sqrt(nx * nx + ny * ny);
+      nx /= ln;
+      ny /= ln;
+      char row[256];
+      std::snprintf(row, sizeof row,
+                    "%s\n        {\"position\": [%.4f, %.4f, %.4f], \"normal\": [%.4f, %.4f, %.4f]}",
+                    i > 0 ? "," : "", a * cp + 0.0, b * sp + 0.0, z, nx * 0.95 + 0.0,
+                    ny * 0.95 + 0.0, z > 0 ? -0.31 : 0.31);
+      out += row;
+    }
+    return out;
+  };
+  std::string j = "{\n  \"splintcore_case\": 1,\n  \"case_id\": \"";
+  j += case_id;
+  j += "\",\n  \"units\": \"mm\",\n  \"jaws\": [\n"
+       "    {\"role\": \"maxilla\", \"mesh\": \"maxilla.stl\"},\n"
+       "    {\"role\": \"mandible\", \"mesh\": \"mandible.stl\",\n"
+       "     \"transform\": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, -2.0, 0, 0, 0, 1]}\n  ],\n"
+       "  \"base\": {\n    \"occlusal_normal\": [0, 0, 1],\n    \"spacing_mm\": 0.42,\n"
+       "    \"inner_length_mm\": 4.0,\n    \"outside_length_mm\": 3.5,\n    \"upper\": [";
+  j += picks(kUpperA, kUpperB, 1.6);
+  j += "\n    ],\n    \"lower\": [";
+  j += picks(kLowerA, kLowerB, -1.6);
+  j += "\n    ]\n  },\n  \"insertion_direction\": [0, 0, 1],\n  \"printer\": \"eden260\",\n"
+       "  \"output\": {\"splint\": \"splint.stl\", \"report\": \"report.json\"}\n}\n";
+  return j;
 }
 
 }  // namespace phantom

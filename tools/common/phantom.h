@@ -48,6 +48,7 @@
 #define SPLINTCORE_TOOLS_PHANTOM_H
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "splintcore/core.h"
@@ -105,6 +106,12 @@ GridSize choose_grid(uint64_t target_triangles);
 // The binary STL bytes the library's StlWriter writes for the jaw (replaces *out).
 // Errors: those of StlWriter (none expected: it writes to memory).
 [[nodiscard]] Status stl_bytes(const JawMesh& jaw, std::vector<uint8_t>* out);
+
+// The case file that goes with the phantom jaws "maxilla.stl" and "mandible.stl" in one
+// folder: the picks, lines, opening and printer of fixtures/cases/paper_scale.json (14 picks
+// per list on the ellipses above, computed with this file's sin and cos and written with 4
+// decimals, as the fixture generator does), `case_id` as given. JSON text, newline-terminated.
+std::string case_json(const char* case_id);
 
 }  // namespace phantom
 }  // namespace splintcore

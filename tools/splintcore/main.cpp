@@ -135,7 +135,8 @@ const char kPhantomUsage[] =
     "14 big-end-up crowns with cusps each, one closed genus-0 shell per jaw, float32-exact), N\n"
     "triangles per jaw (2000..16000000, within 1%), in occlusion, in the frame of\n"
     "fixtures/cases/paper_scale.json: with that case's mandible transform (2 mm down) its base\n"
-    "cuts 1.3-1.5 mm into every crown. The bytes depend only on N.\n";
+    "cuts 1.3-1.5 mm into every crown. Also DIR/case.json, that case for these jaws (design\n"
+    "it with `splintcore design DIR/case.json -o OUT`). The bytes depend only on N.\n";
 
 const char kDesignUsage[] =
     "usage: splintcore design CASE.json -o OUTDIR [--json] [--memory-cap SIZE] [--threads N]\n"
@@ -885,6 +886,8 @@ int run_boolean(int argc, char** argv) {
   return kExitOk;
 }
 
+Status write_bytes_atomically(const std::string& path, const std::string& bytes);
+
 int run_phantom(int argc, char** argv) {
   Options o;
   int early = parse_options(argc, argv, kPhantomUsage, true, &o);
@@ -933,6 +936,15 @@ int run_phantom(int argc, char** argv) {
       std::printf("%s: %s, %zu triangles, %zu vertices, sha256 %s\n", names[j], path.c_str(),
                   jaw.triangles.size(), jaw.vertices.size(), hex);
     }
+  }
+  // The case that goes with them (the paper-scale picks): design it with
+  // `splintcore design DIR/case.json -o OUT`.
+  {
+    const std::string text = phantom::case_json(("phantom-" + std::to_string(o.triangles)).c_str());
+    const std::string path = std::string(o.output) + "/case.json";
+    Status s = write_bytes_atomically(path, text);
+    if (!s.is_ok()) return rejected(o, "phantom", s, nullptr);
+    if (!o.json) std::printf("case: %s\n", path.c_str());
   }
   if (o.json) {
     JsonObject j;
@@ -1154,7 +1166,10 @@ int run_design(int argc, char** argv) {
     params.add("blockout_voxel_mm", c.blockout_voxel);
     params.add("blockout_inset_mm", c.blockout_inset);
     params.add("blockout_closing_radius_mm", c.blockout_closing);
+    params.add("clearance_mm", c.blockout_clearance);
   }
+  if (c.min_thickness > 0) params.add("min_thickness_mm", c.min_thickness);
+  params.add("placement", c.place_on_tray ? "tray" : "case");
   j.add_raw("parameters", params.str());
   std::string stages = "[";
   for (size_t i = 0; i < clock.names.size(); ++i) {
@@ -1187,10 +1202,32 @@ int run_design(int argc, char** argv) {
       r.add("intersecting_pairs", b.boolean.intersecting_pairs);
       r.add("attempts", static_cast<uint64_t>(b.attempts));
       r.add("inset_mm", b.inset_used);
+      if (report.imprint_offset) r.add("clearance_mm", b.offset_used);
       r.add("removed_volume_mm3", report.blockout_removed_mm3[i]);
       rows += (i > 0 ? "," : "") + r.str();
     }
     checks.add_raw("blockout", rows + "]");
+  }
+  checks.add("imprint", report.imprint_offset ? "clearance offset of the swept volume"
+                                              : "jaw triangles");
+  if (report.thickness_checked) {
+    const ThicknessReport& t = report.thickness;
+    JsonObject r;
+    r.add("min_required_mm", t.min_required);
+    r.add("triangles_checked", t.triangles_checked);
+    r.add("thin_triangles", t.thin_triangles);
+    r.add("thin_area_mm2", t.thin_area_mm2);
+    r.add("thinnest_mm", t.thinnest);
+    std::string spots = "[";
+    for (uint32_t i = 0; i < t.spot_count; ++i) {
+      JsonObject sp;
+      sp.add("position", t.spots[i].position);
+      sp.add("thickness_mm", t.spots[i].thickness);
+      sp.add("triangle", static_cast<uint64_t>(t.spots[i].triangle));
+      spots += (i > 0 ? "," : "") + sp.str();
+    }
+    r.add_raw("thin_spots", spots + "]");
+    checks.add_raw("thickness", r.str());
   }
   checks.add("self_intersection_free", true);
   checks.add("closed", report.print.mesh.closed());
@@ -1201,6 +1238,8 @@ int run_design(int argc, char** argv) {
   checks.add("fits_tray_rotated", report.print.fits_rotated);
   checks.add("layers", report.print.layers);
   checks.add("printable", report.print.printable);
+  checks.add("placed_on_tray", report.placed_on_tray);
+  if (report.placed_on_tray) checks.add("tray_translation_mm", report.tray_translation);
   j.add_raw("checks", checks.str());
   JsonObject out;
   out.add("splint", splint_path);
@@ -1223,10 +1262,15 @@ int run_design(int argc, char** argv) {
                 case_path.c_str(), c.case_id, jaws.size(),
                 static_cast<unsigned long long>(report.jaw_triangles), report.base.sections,
                 c.upper.size(), c.lower.size());
-    std::printf("boolean: %llu crossing pairs, %llu intersection points, %u attempt(s)\n",
-                static_cast<unsigned long long>(report.boolean.intersecting_pairs),
-                static_cast<unsigned long long>(report.boolean.intersection_points),
-                report.boolean.attempts);
+    if (report.imprint_offset) {
+      std::printf("imprint: a %.3g mm clearance around each jaw's swept volume\n",
+                  c.blockout_clearance);
+    } else {
+      std::printf("boolean: %llu crossing pairs, %llu intersection points, %u attempt(s)\n",
+                  static_cast<unsigned long long>(report.boolean.intersecting_pairs),
+                  static_cast<unsigned long long>(report.boolean.intersection_points),
+                  report.boolean.attempts);
+    }
     for (uint32_t i = 0; i < report.blockout_jaws; ++i) {
       std::printf("blockout (%s): %.4f mm^3 of interference removed, %llu swept triangles, "
                   "inset %.3g mm\n",
@@ -1234,10 +1278,23 @@ int run_design(int argc, char** argv) {
                   static_cast<unsigned long long>(report.blockout[i].swept_triangles),
                   report.blockout[i].inset_used);
     }
+    if (report.thickness_checked) {
+      const ThicknessReport& t = report.thickness;
+      if (t.thin_triangles == 0) {
+        std::printf("thickness: no wall thinner than %.3g mm\n", t.min_required);
+      } else {
+        std::printf("thickness: %llu triangles (%.3f mm^2) thinner than %.3g mm; thinnest "
+                    "%.3f mm at (%.2f, %.2f, %.2f); %u spot(s) in report.json\n",
+                    static_cast<unsigned long long>(t.thin_triangles), t.thin_area_mm2,
+                    t.min_required, t.thinnest, t.spots[0].position.x, t.spots[0].position.y,
+                    t.spots[0].position.z, t.spot_count);
+      }
+    }
     std::printf("splint: %zu triangles, %.3f mm^3, closed, manifold, no self-intersection; "
-                "printable on %s (%s)\n",
+                "printable on %s (%s%s)\n",
                 splint.triangles.size(), report.print.mesh.volume, report.printer,
-                report.print.fits ? "fits the tray" : "fits turned 90 degrees");
+                report.print.fits ? "fits the tray" : "fits turned 90 degrees",
+                report.placed_on_tray ? ", placed on the tray" : "");
     std::printf("wrote %s (sha256 %s) and %s\n", splint_path.c_str(), splint_hash.c_str(),
                 report_path.c_str());
     std::printf("time: read %.3f s, design %.3f s, total %.3f s; peak arena %llu bytes\n",
