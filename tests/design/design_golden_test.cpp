@@ -1,0 +1,113 @@
+// Three full cases from fixtures/cases designed end to end with the phantom jaws of
+// `splintcore phantom --triangles 6000`: the written splint's SHA-256 is pinned in
+// fixtures/golden.sha256 (the same with g++ and clang++, -O0 and -O2, every CI job), and
+// MeshLab (meshlabserver, an independent implementation) confirms each written file is a
+// watertight two-manifold with our volume. The fourth full case, from CT, is pinned by
+// tests/tools/cli_test.sh (design:ct_phantom-120x110x80).
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "common/phantom.h"
+#include "splintcore/design.h"
+#include "support/meshlab.h"
+#include "support/test_util.h"
+
+namespace splintcore {
+namespace {
+
+std::string golden_of(const std::string& key) {
+  std::ifstream in(std::string(SPLINTCORE_FIXTURES_DIR) + "/golden.sha256");
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream f(line);
+    std::string h, k;
+    f >> h >> k;
+    if (k == key) return h;
+  }
+  return "";
+}
+
+struct Designed {
+  std::vector<uint8_t> stl;
+  DesignReport report;
+  double volume = 0;
+  size_t triangles = 0;
+};
+
+// Designs fixtures/cases/NAME with the 6,000-triangle phantom jaws; the binary STL bytes.
+void design_case(const char* name, Designed* out) {
+  test::TestArena t{size_t{768} << 20};
+  Context ctx(&t.arena);
+  const std::vector<uint8_t> text = test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) +
+                                                          "/cases/" + name);
+  ASSERT_FALSE(text.empty()) << name;
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(),
+                                  name, &c));
+  Mesh jaws[2];
+  for (int j = 0; j < 2; ++j) {
+    phantom::JawMesh m;
+    phantom::PhantomOptions po;
+    po.target_triangles = 6000;
+    SPLINTCORE_ASSERT_OK(
+        phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &m));
+    jaws[j].bind(&t.arena);
+    for (const Vec3& v : m.vertices) ASSERT_TRUE(jaws[j].vertices.push_back(v));
+    for (const Triangle& tr : m.triangles) ASSERT_TRUE(jaws[j].triangles.push_back(tr));
+  }
+  Mesh splint;
+  SPLINTCORE_ASSERT_OK(design_splint(ctx, c, Span<const Mesh>(jaws, 2), &splint, &out->report));
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, splint, &out->volume));
+  out->triangles = splint.triangles.size();
+  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(t.arena, splint, StlFormat::kBinary, &out->stl));
+}
+
+void expect_golden_and_meshlab(const char* name, const char* key, const Designed& d) {
+  const std::string hash = test::sha256_hex(d.stl.data(), d.stl.size());
+  const std::string want = golden_of(key);
+  EXPECT_EQ(hash, want) << "fixtures/golden.sha256 line, if the change is intended:\n"
+                        << hash << "  " << key;
+  std::printf("[ figures  ] %s: %zu triangles, %.4f mm^3, sha256 %s\n", name, d.triangles,
+              d.volume, hash.c_str());
+  if (!test::have_meshlab()) {
+    std::printf("[ skipped  ] MeshLab: meshlabserver/xvfb-run not installed\n");
+    return;
+  }
+  const std::string log = test::meshlab_log_of_bytes(d.stl);
+  EXPECT_NE(log.find("Mesh is two-manifold"), std::string::npos) << name << "\n" << log;
+  EXPECT_NE(log.find("Boundary Edges 0"), std::string::npos) << name << "\n" << log;
+  const double theirs = test::number_after(log, "Mesh Volume  is ");
+  EXPECT_NEAR(theirs, d.volume, 1e-5 * d.volume) << name;  // MeshLab sums in float
+}
+
+TEST(DesignGolden, PaperScaleCase) {
+  Designed d;
+  ASSERT_NO_FATAL_FAILURE(design_case("paper_scale.json", &d));
+  EXPECT_FALSE(d.report.placed_on_tray);
+  expect_golden_and_meshlab("paper_scale", "boolean:paper_scale-phantom6000", d);
+}
+
+TEST(DesignGolden, BlockoutRoundedOnTheTray) {
+  Designed d;
+  ASSERT_NO_FATAL_FAILURE(design_case("blockout.json", &d));
+  EXPECT_EQ(d.report.blockout_jaws, 2u);
+  EXPECT_TRUE(d.report.placed_on_tray);
+  EXPECT_TRUE(d.report.thickness_checked);
+  EXPECT_TRUE(d.report.print.printable);
+  expect_golden_and_meshlab("blockout", "design:blockout-phantom6000", d);
+}
+
+TEST(DesignGolden, SpacerOnTheTray) {
+  Designed d;
+  ASSERT_NO_FATAL_FAILURE(design_case("spacer.json", &d));
+  EXPECT_TRUE(d.report.imprint_offset);
+  EXPECT_TRUE(d.report.placed_on_tray);
+  EXPECT_TRUE(d.report.print.printable);
+  expect_golden_and_meshlab("spacer", "design:spacer-phantom6000", d);
+}
+
+}  // namespace
+}  // namespace splintcore
