@@ -906,10 +906,22 @@ int run(int argc, char** argv) {
       fixtures = argv[++i];
     } else if (a == "--memory-cap" && i + 1 < argc && cli::parse_size(argv[i + 1], &cap)) {
       ++i;
+    } else if (a == "--export-realcase" && i + 1 < argc) {
+      // The real case as a folder `splintcore design` takes (tools/bench/table1.sh).
+      realcase::RealCase rc;
+      std::string error;
+      if (!realcase::load(realdata, 2.0, 1.5, 6.0, &rc, &error) ||
+          !realcase::write_case_folder(rc, argv[i + 1], 0.5, &error)) {
+        std::fprintf(stderr, "splintcore-bench: %s\n", error.c_str());
+        return 1;
+      }
+      std::printf("%s/case.json\n", argv[i + 1]);
+      return 0;
     } else {
       std::fprintf(stderr,
                    "usage: splintcore-bench [--filter SUBSTRING] [--repeat N] "
-                   "[--realdata DIR] [--fixtures DIR] [--memory-cap SIZE]\n");
+                   "[--realdata DIR] [--fixtures DIR] [--memory-cap SIZE]\n"
+                   "       splintcore-bench [--realdata DIR] --export-realcase DIR\n");
       return a == "--help" ? 0 : 2;
     }
   }

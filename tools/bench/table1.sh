@@ -3,7 +3,8 @@
 # whole time), file in to file out, on phantom jaws of the paper's sizes: for each size,
 # `splintcore phantom` writes both jaws and their case (fixtures/cases/paper_scale.json's
 # picks), then `splintcore design CASE -o OUT --json` runs REPEAT times on one core; the
-# medians of report.json's figures are printed as a table. The paper's VTK tool took 7.6 s,
+# medians of report.json's figures are printed as a table; then the same for the real
+# dentition when ../shared/realdata is there. The paper's VTK tool took 7.6 s,
 # 33.9 s and 55.3 s for the Boolean alone at these sizes.
 #   bash tools/bench/table1.sh [TOOL] [REPEAT]     (TOOL: build/tools/splintcore)
 set -eu
@@ -13,10 +14,19 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 printf '| jaw triangles (both) | base | Boolean | design (all stages) | read | file to file | peak arena | splint triangles |\n'
 printf '|---|---|---|---|---|---|---|---|\n'
-for per_jaw in 43434 162122 271768; do
+# The real dentition (31 CBCT teeth, ../shared/realdata; its wafer fitted to the arch by
+# tools/common/realcase.h) when present.
+realdata=${SPLINTCORE_REALDATA:-../shared/realdata/open-full-jaw-patient26}
+sizes="43434 162122 271768"
+if [ -d "$realdata" ]; then sizes="$sizes real"; fi
+for per_jaw in $sizes; do
   dir=$work/p$per_jaw
   mkdir -p "$dir"
-  "$tool" phantom --triangles "$per_jaw" -o "$dir" >/dev/null
+  if [ "$per_jaw" = real ]; then
+    "$(dirname "$tool")/splintcore-bench" --realdata "$realdata" --export-realcase "$dir" >/dev/null
+  else
+    "$tool" phantom --triangles "$per_jaw" -o "$dir" >/dev/null
+  fi
   rows=""
   for i in $(seq "$repeat"); do
     rm -rf "$dir/out"

@@ -8,6 +8,7 @@
 #define SPLINTCORE_TOOLS_REALCASE_H
 
 #include <cstdio>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -145,6 +146,76 @@ inline Status wafer_mesh(Arena& arena, const RealCase& c, double spacing, Mesh* 
   params.spacing_mm = spacing;
   out->bind(&arena);
   return build_splint_base(ctx, upper.span(), lower.span(), params, out, report);
+}
+
+// The real case as a case folder for `splintcore design`: maxilla.stl (teeth 1-16) and
+// mandible.stl (17-32, already opened), each one binary STL of its teeth's shells, and
+// case.json with the picks (17 significant digits) and the wafer's spacing. False (with
+// *error) when a file cannot be written.
+inline bool write_case_folder(const RealCase& c, const std::string& dir, double spacing,
+                              std::string* error) {
+  for (int jaw = 0; jaw < 2; ++jaw) {
+    std::vector<uint8_t> bytes(84, 0);
+    uint32_t count = 0;
+    for (const Tooth& t : c.teeth) {
+      if ((t.number <= 16) != (jaw == 0)) continue;
+      for (const Triangle& tr : t.triangles) {
+        float f[12] = {};
+        for (int k = 0; k < 3; ++k) {
+          const Vec3& v = t.vertices[tr.v[k]];
+          f[3 + 3 * k] = static_cast<float>(v.x);
+          f[4 + 3 * k] = static_cast<float>(v.y);
+          f[5 + 3 * k] = static_cast<float>(v.z);
+        }
+        const size_t at = bytes.size();
+        bytes.resize(at + 50, 0);
+        std::memcpy(bytes.data() + at, f, sizeof f);
+        ++count;
+      }
+    }
+    std::memcpy(bytes.data() + 80, &count, 4);
+    const std::string path = dir + (jaw == 0 ? "/maxilla.stl" : "/mandible.stl");
+    FILE* out = std::fopen(path.c_str(), "wb");
+    if (out == nullptr || std::fwrite(bytes.data(), 1, bytes.size(), out) != bytes.size() ||
+        std::fclose(out) != 0) {
+      *error = "cannot write " + path;
+      return false;
+    }
+  }
+  auto picks = [](const std::vector<Pick>& list) {
+    std::string text;
+    for (size_t i = 0; i < list.size(); ++i) {
+      char row[320];
+      std::snprintf(row, sizeof row,
+                    "%s\n      {\"position\": [%.17g, %.17g, %.17g], \"inner_length_mm\": %.17g, "
+                    "\"outside_length_mm\": %.17g}",
+                    i > 0 ? "," : "", list[i].position.x, list[i].position.y, list[i].position.z,
+                    list[i].inner_length, list[i].outside_length);
+      text += row;
+    }
+    return text;
+  };
+  char head[256];
+  std::snprintf(head, sizeof head, "  \"base\": {\n    \"occlusal_normal\": [0, 0, 1],\n"
+                "    \"spacing_mm\": %.17g,\n    \"upper\": [", spacing);
+  std::string json =
+      "{\n  \"splintcore_case\": 1,\n  \"case_id\": \"realdata-patient26\",\n"
+      "  \"units\": \"mm\",\n  \"jaws\": [\n"
+      "    {\"role\": \"maxilla\", \"mesh\": \"maxilla.stl\"},\n"
+      "    {\"role\": \"mandible\", \"mesh\": \"mandible.stl\"}\n  ],\n";
+  json += head;
+  json += picks(c.upper) + "\n    ],\n    \"lower\": [" + picks(c.lower) + "\n    ]\n  },\n";
+  json += "  \"insertion_direction\": [0, 0, 1],\n  \"printer\": \"eden260\",\n"
+          "  \"memory_cap\": \"1G\",\n"
+          "  \"output\": {\"splint\": \"splint.stl\", \"report\": \"report.json\"}\n}\n";
+  const std::string path = dir + "/case.json";
+  FILE* out = std::fopen(path.c_str(), "wb");
+  if (out == nullptr || std::fwrite(json.data(), 1, json.size(), out) != json.size() ||
+      std::fclose(out) != 0) {
+    *error = "cannot write " + path;
+    return false;
+  }
+  return true;
 }
 
 }  // namespace realcase
