@@ -1,8 +1,11 @@
 # Bare-metal Cortex-M7 with its double-precision FPU (apt: gcc-arm-none-eabi
 # libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib). The core only: no OS, no threads,
 # no files, no exceptions, no RTTI:
-#   cmake -S . -B /tmp/x-m7 -DCMAKE_TOOLCHAIN_FILE=cmake/toolchain-cortex-m7.cmake \
+#   cmake -S . -B /tmp/x-m7 -DCMAKE_TOOLCHAIN_FILE=$PWD/cmake/toolchain-cortex-m7.cmake \
 #         -DSPLINTCORE_WITH_PLATFORM=OFF -DSPLINTCORE_BUILD_TESTS=OFF -DSPLINTCORE_BUILD_TOOLS=OFF
+# A whole image (start-up, linker script, semihosting) that runs under qemu-system-arm -M
+# mps2-an500: tools/firmware (docs/embedding.md; CI: bash tools/test.sh baremetal). An image
+# links with -nostartfiles and its own start-up; nano.specs below selects newlib-nano.
 set(CMAKE_SYSTEM_NAME Generic)
 set(CMAKE_SYSTEM_PROCESSOR arm)
 set(SPLINTCORE_CROSS_TRIPLE arm-none-eabi)

@@ -5,18 +5,27 @@
 # -fno-exceptions -fno-rtti and no platform layer, checking it pulls in no heap or exception
 # symbols.
 #   bash tools/test.sh            all default jobs
-#   bash tools/test.sh gcc-O2     one job (gcc-O0 gcc-O2 clang-O0 clang-O2 asan core lint fuzz)
+#   bash tools/test.sh gcc-O2     one job (gcc-O0 gcc-O2 clang-O0 clang-O2 asan core baremetal
+#                                 lint fuzz)
 # The default list also runs (the fuzz job for 15 s per target):
 #   bash tools/test.sh fuzz        libFuzzer targets (clang): replay every corpus in
 #                                  fixtures/fuzz/, then run each target SPLINTCORE_FUZZ_SECONDS
 #                                  (default 60) one after the other (tests/fuzz/README.md)
 #   bash tools/test.sh lint        clang-tidy (.clang-tidy) and cppcheck over src/ include/
 #                                  tools/; any finding fails
+#   bash tools/test.sh baremetal   the core for Cortex-M7 (arm-none-eabi, no platform layer),
+#                                  its link checked and sized per module, and the firmware
+#                                  example (tools/firmware) run under qemu-system-arm -M
+#                                  mps2-an500: its SHA-256 next to the x86-64 golden
+#                                  (docs/embedding.md; about 2.5 min from a clean build dir)
 # Optional jobs, not in the default list (cross builds run under qemu-user, about 27 min):
 #   bash tools/test.sh coverage    llvm-cov line and branch coverage per file (tools/coverage.sh)
 #   bash tools/test.sh aarch64 armv7
 #   They run the suite except the long randomised Boolean properties (BooleanRandom.Phantom*,
 #   about 8 min under qemu, run natively by the default jobs); SPLINTCORE_CROSS_FULL=1 runs all.
+#   bash tools/test.sh cross-golden   (or aarch64-golden, armv7-golden) only the golden-hash
+#   tests and the firmware example as a process, under qemu-user, with the table: target,
+#   tests passed, golden hashes equal, code size, peak arena.
 set -u
 cd "$(dirname "$0")/.."
 . tools/deps.sh
@@ -28,7 +37,7 @@ mkdir -p build
 if [ $# -eq 0 ]; then
   export SPLINTCORE_FUZZ_SECONDS=${SPLINTCORE_FUZZ_SECONDS:-15}
 fi
-jobs=${*:-gcc-O0 gcc-O2 clang-O0 clang-O2 asan core lint fuzz}
+jobs=${*:-gcc-O0 gcc-O2 clang-O0 clang-O2 asan core baremetal lint fuzz}
 total_passed=0
 total_failed=0
 failed_jobs=""
@@ -99,9 +108,178 @@ cross_job() {  # name toolchain-file cross-triple
   [ "$grc" -eq 0 ] || tail -n 60 "$glog"
   local sz
   sz=$("$triple-size" -t "$dir/libsplintcore.a" | tail -n 1 | awk '{print "text " $1 " data " $2 " bss " $3}')
-  cross_table="$cross_table$(printf '%-8s %-24s tests passed %4d/%-4d golden hashes equal: %-3s libsplintcore.a: %s' \
+  cross_table="$cross_table$(printf '%-14s %-22s tests passed %4d/%-4d golden hashes equal: %-3s libsplintcore.a: %s' \
     "$name" "$triple" $((n - failed)) "$n" "$golden" "$sz")"$'\n'
   [ "$rc" -eq 0 ] && [ "$grc" -eq 0 ]
+}
+
+# ---- bare metal, and the golden hashes on AArch64/ARMv7 (issue 10, docs/embedding.md) --------
+# The firmware example (tools/firmware) builds the paper-scale base, the design (base minus the
+# phantom jaws of `splintcore phantom --triangles 6000`) and the design with a coarse blockout,
+# streaming each as binary STL into SHA-256. Besides the board it is built as a Linux process
+# (hosted.c) against a libsplintcore.a already built for that CPU: x86-64 gives the reference
+# for the stage without a golden hash, and the cross jobs' peak arena figures.
+golden_hash() { grep -E " $1\$" fixtures/golden.sha256 | cut -d' ' -f1; }
+fw_field() {  # log stage field: a field of the example's "result <stage> ..." line
+  grep -E "^result $2 " "$1" 2>/dev/null | grep -oE " $3=[0-9a-f]+" | cut -d= -f2
+}
+
+build_firmware_twin() {  # cc cxx libsplintcore.a jaws-dir out
+  local cc=$1 cxx=$2 lib=$3 jaws=$4 out=$5
+  local defs=("-DSPLINTCORE_FIRMWARE_CASE=\"$PWD/fixtures/cases/paper_scale.json\""
+    -DSPLINTCORE_FIRMWARE_WITH_JAWS=1 "-DSPLINTCORE_FIRMWARE_MAXILLA=\"$jaws/maxilla.stl\""
+    "-DSPLINTCORE_FIRMWARE_MANDIBLE=\"$jaws/mandible.stl\"")
+  "$cc" -O2 -Wall -Wextra -Werror -c tools/firmware/hosted.c -o "$out.hosted.o" &&
+    "$cxx" -std=c++17 -O2 -Wall -Wextra -Werror -fno-exceptions -fno-rtti -ffp-contract=off \
+      -Iinclude "${defs[@]}" tools/firmware/main.cpp tools/firmware/assets.S "$out.hosted.o" \
+      "$lib" -pthread -o "$out"
+}
+
+# Compares the example's stages in `log` with the golden hashes (base, design) and with the
+# x86-64 run (blockout; no golden hash pins it). Prints one line per stage; sets fw_equal
+# (stages equal) and fw_peak (the largest arena high-water mark).
+fw_equal=0
+fw_peak=0
+compare_firmware_log() {  # label log [x86-log]
+  local label=$1 log=$2 x86=${3:-} stage h ref what peak
+  fw_equal=0
+  fw_peak=0
+  for stage in base design blockout; do
+    h=$(fw_field "$log" "$stage" sha256)
+    case $stage in
+      base) what="golden base:cases/paper_scale.json"; ref=$(golden_hash "base:cases/paper_scale.json") ;;
+      design) what="golden boolean:paper_scale-phantom6000"; ref=$(golden_hash "boolean:paper_scale-phantom6000") ;;
+      *) if [ "$log" = "$x86" ]; then what="x86-64 run (the reference)"; ref=$h
+         else what="x86-64 run"; ref=$( [ -n "$x86" ] && fw_field "$x86" "$stage" sha256); fi ;;
+    esac
+    peak=$(fw_field "$log" "$stage" arena_high_water)
+    [ -n "$peak" ] && [ "$peak" -gt "$fw_peak" ] && fw_peak=$peak
+    printf '%-10s %-9s %-64s %8s B  peak arena %9s B  %s: %s\n' "$label" "$stage" "${h:-(none)}" \
+      "$(fw_field "$log" "$stage" bytes)" "${peak:-?}" "$what" \
+      "$([ -z "$ref" ] && echo "no reference" || { [ "$h" = "$ref" ] && echo "equal" || echo "DIFFERENT ($ref)"; })"
+    if [ -n "$h" ] && [ "$h" = "$ref" ]; then fw_equal=$((fw_equal + 1)); fi
+  done
+}
+
+baremetal_job() {
+  local dir=build/ci-baremetal host=build/ci-baremetal-host t0=$SECONDS
+  echo "=== baremetal: Cortex-M7 core (cmake/toolchain-cortex-m7.cmake, -fno-exceptions -fno-rtti," \
+    "no platform layer), the firmware example under qemu-system-arm -M mps2-an500"
+  ensure_packages gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib \
+    binutils-arm-none-eabi qemu-system-arm g++ cmake python3 || return 1
+  # Host side: `splintcore phantom` writes the jaws the example embeds; the example as an
+  # x86-64 process is the reference for the blockout stage.
+  if ! cmake -S . -B "$host" -DCMAKE_BUILD_TYPE=Release -DSPLINTCORE_BUILD_TESTS=OFF \
+       >"$host.configure.log" 2>&1; then
+    mkdir -p "$host"; cat "$host.configure.log"; return 1
+  fi
+  cmake --build "$host" -j "$par" --target splintcore_tool >"$host.build.log" 2>&1 ||
+    { tail -n 40 "$host.build.log"; return 1; }
+  mkdir -p "$host/jaws"
+  "$host/tools/splintcore" phantom --triangles 6000 -o "$host/jaws" >"$host/jaws.log" 2>&1 ||
+    { cat "$host/jaws.log"; return 1; }
+  build_firmware_twin gcc g++ "$host/libsplintcore.a" "$PWD/$host/jaws" \
+    "$host/firmware_example" >"$host.example.log" 2>&1 || { cat "$host.example.log"; return 1; }
+  "$host/firmware_example" >"$host/firmware_example.log" 2>&1 ||
+    { cat "$host/firmware_example.log"; return 1; }
+  # The board: the core and the example, one image.
+  if ! cmake -S tools/firmware -B "$dir" -DCMAKE_TOOLCHAIN_FILE="$PWD/cmake/toolchain-cortex-m7.cmake" \
+       -DCMAKE_BUILD_TYPE=Release -DSPLINTCORE_FIRMWARE_JAWS_DIR="$PWD/$host/jaws" \
+       >"$dir.configure.log" 2>&1; then
+    mkdir -p "$dir"; cat "$dir.configure.log"; return 1
+  fi
+  cmake --build "$dir" -j "$par" >"$dir.build.log" 2>&1 || { tail -n 40 "$dir.build.log"; return 1; }
+  local elf=$dir/splintcore_firmware.elf lib=$dir/splintcore/libsplintcore.a rc=0
+  local build_seconds=$((SECONDS - t0))
+  # Link inspection: heap, exceptions, RTTI support and printf must not be referenced by the
+  # core, nor be anywhere in the image (the example's start-up has its own output and abort).
+  local forbidden='^(malloc|free|calloc|realloc|_(malloc|free|calloc|realloc)_r|_sbrk(_r)?|_Zn[wa].*|_Zd[la].*|__cxa_.*|_Unwind_.*|__gxx_personality.*|__aeabi_unwind_cpp_pr[0-9]|_?[a-z]*printf(_r)?|_?v?fi?printf(_r)?|_printf_[a-z]+|puts|fputs|__sinit)$'
+  local in_core in_image
+  in_core=$(arm-none-eabi-nm --undefined-only "$lib" | awk 'NF > 1 {print $NF}' | grep -E "$forbidden" | sort -u)
+  in_image=$(arm-none-eabi-nm "$elf" | awk '{print $NF}' | grep -E "$forbidden" | sort -u)
+  if [ -n "$in_core$in_image" ]; then
+    echo "forbidden symbols: core references: ${in_core:-none}; in the image: ${in_image:-none}"
+    rc=1
+  else
+    echo "link check: no malloc/free/operator new/delete, __cxa_*, _Unwind_*, personality or printf-family symbol referenced by libsplintcore.a or present in $elf"
+  fi
+  echo "core undefined symbols outside splintcore: $(arm-none-eabi-nm --undefined-only "$lib" | awk 'NF > 1 {print $NF}' | grep -vE '^_ZN?K?10splintcore' | sort -u | tr '\n' ' ')"
+  echo "code size per module (arm-none-eabi-size; bytes):"
+  python3 tools/firmware/size_report.py arm-none-eabi-size "$dir/splintcore/CMakeFiles/splintcore.dir" \
+    "$dir/splintcore_firmware.map" | tee "$dir/size.txt" | grep -v "^linked core text"
+  arm-none-eabi-size "$elf" | sed 's/^/image: /'
+  local t1=$SECONDS qlog=$dir/qemu.log
+  timeout 300 qemu-system-arm -M mps2-an500 -nographic -monitor none -serial none \
+    -semihosting-config enable=on,target=native -kernel "$elf" >"$qlog" 2>&1
+  local qrc=$?
+  local qemu_seconds=$((SECONDS - t1))
+  grep -E "^(splintcore|arena|stack|error|assert)" "$qlog"
+  [ $qrc -eq 0 ] || { echo "qemu-system-arm exited with $qrc"; tail -n 20 "$qlog"; rc=1; }
+  compare_firmware_log cortex-m7 "$qlog" "$host/firmware_example.log"
+  local m7_equal=$fw_equal m7_peak=$fw_peak
+  compare_firmware_log x86-64 "$host/firmware_example.log" "$host/firmware_example.log"
+  [ "$m7_equal" -eq 3 ] && [ "$fw_equal" -eq 3 ] || rc=1
+  echo "baremetal: build ${build_seconds}s, qemu ${qemu_seconds}s, total $((SECONDS - t0))s"
+  total_passed=$((total_passed + m7_equal + (rc == 0 ? 1 : 0)))
+  total_failed=$((total_failed + 3 - m7_equal + (rc == 0 ? 0 : 1)))
+  cross_table="$cross_table$(printf '%-14s %-22s tests passed %4d/%-4d golden hashes equal: %-3s code: core text %s B linked (%s B in libsplintcore.a)  peak arena %s B' \
+    baremetal "cortex-m7 mps2-an500" "$m7_equal" 3 "$([ "$m7_equal" -eq 3 ] && echo yes || echo no)" \
+    "$(sed -n 's/^linked core text //p' "$dir/size.txt")" \
+    "$(arm-none-eabi-size -t "$lib" | tail -n 1 | awk '{print $1}')" "$m7_peak")"$'\n'
+  return $rc
+}
+
+# Golden-only cross job: the golden-hash tests (cross_golden above) and the firmware example
+# as a process, under qemu-user; builds only the tests binary and the splintcore tool.
+cross_golden_job() {  # name toolchain-file cross-triple qemu
+  local name=$1 toolchain=$2 triple=$3 qemu=$4
+  local dir=build/ci-$name t0=$SECONDS
+  echo "=== $name: $toolchain, the golden-hash tests and the firmware example under $qemu"
+  ensure_packages "g++-$triple" qemu-user libgtest-dev || return 1
+  # SPLINTCORE_CROSS_WERROR=OFF: warnings do not stop the build (to see the hashes while a
+  # 32-bit conversion warning is being fixed); the default keeps -Werror.
+  if ! cmake -S . -B "$dir" -DCMAKE_TOOLCHAIN_FILE="$toolchain" -DCMAKE_BUILD_TYPE=Release \
+       -DSPLINTCORE_GTEST_SOURCE_DIR=/usr/src/googletest \
+       -DSPLINTCORE_WERROR="${SPLINTCORE_CROSS_WERROR:-ON}" >"$dir.configure.log" 2>&1; then
+    mkdir -p "$dir"; cat "$dir.configure.log"; return 1
+  fi
+  if ! cmake --build "$dir" -j "$par" --target splintcore_tests splintcore_tool \
+       >"$dir.build.log" 2>&1; then
+    tail -n 40 "$dir.build.log"
+    return 1
+  fi
+  local build_seconds=$((SECONDS - t0)) rc=0 glog=$dir.golden.log
+  (cd "$dir" && ctest --output-on-failure -j "$par" --timeout 900 -R "$cross_golden") >"$glog" 2>&1 || rc=1
+  grep -E "tests passed|tests failed|\*\*\*" "$glog" | tail -n 15
+  local n failed
+  n=$(grep -oE "out of [0-9]+" "$glog" | tail -n 1 | grep -oE "[0-9]+")
+  failed=$(grep -oE "[0-9]+ tests failed" "$glog" | tail -n 1 | grep -oE "^[0-9]+")
+  n=${n:-0}
+  failed=${failed:-0}
+  [ "$n" -ge 8 ] || rc=1  # every pinned-hash test ran (there are at least 8)
+  [ $rc -eq 0 ] || tail -n 60 "$glog"
+  mkdir -p "$dir/jaws"
+  local ex=$dir/firmware_example
+  if "$qemu" -L "/usr/$triple" "$dir/tools/splintcore" phantom --triangles 6000 -o "$dir/jaws" \
+       >"$dir/jaws.log" 2>&1 &&
+     build_firmware_twin "$triple-gcc" "$triple-g++" "$dir/libsplintcore.a" "$PWD/$dir/jaws" \
+       "$ex" >"$dir.example.log" 2>&1 &&
+     "$qemu" -L "/usr/$triple" "$ex" >"$ex.log" 2>&1; then
+    compare_firmware_log "$name" "$ex.log" build/ci-baremetal-host/firmware_example.log
+    # The blockout stage has no golden hash: without an x86-64 run (the baremetal job's) it is
+    # shown, not compared.
+    [ "$fw_equal" -ge 2 ] || rc=1
+  else
+    cat "$dir/jaws.log" "$dir.example.log" "$ex.log" 2>/dev/null | tail -n 30
+    fw_equal=0; fw_peak=0; rc=1
+  fi
+  total_passed=$((total_passed + n - failed + fw_equal))
+  total_failed=$((total_failed + failed + (rc == 0 ? 0 : 1)))
+  echo "$name: build ${build_seconds}s, total $((SECONDS - t0))s"
+  cross_table="$cross_table$(printf '%-14s %-22s tests passed %4d/%-4d golden hashes equal: %-3s code: libsplintcore.a text %s B  peak arena %s B' \
+    "$name" "$triple" $((n - failed)) "$n" "$([ $rc -eq 0 ] && echo yes || echo no)" \
+    "$("$triple-size" -t "$dir/libsplintcore.a" | tail -n 1 | awk '{print $1}')" "$fw_peak")"$'\n'
+  return $rc
 }
 
 core_job() {
@@ -232,13 +410,21 @@ for job in $jobs; do
     coverage) coverage_job ;;
     aarch64) cross_job "$job" cmake/toolchain-aarch64-linux-gnu.cmake aarch64-linux-gnu ;;
     armv7) cross_job "$job" cmake/toolchain-arm-linux-gnueabihf.cmake arm-linux-gnueabihf ;;
+    baremetal) baremetal_job ;;
+    aarch64-golden) cross_golden_job "$job" cmake/toolchain-aarch64-linux-gnu.cmake aarch64-linux-gnu qemu-aarch64 ;;
+    armv7-golden) cross_golden_job "$job" cmake/toolchain-arm-linux-gnueabihf.cmake arm-linux-gnueabihf qemu-arm ;;
+    cross-golden)
+      cross_golden_job aarch64-golden cmake/toolchain-aarch64-linux-gnu.cmake aarch64-linux-gnu qemu-aarch64
+      r1=$?
+      cross_golden_job armv7-golden cmake/toolchain-arm-linux-gnueabihf.cmake arm-linux-gnueabihf qemu-arm &&
+        [ $r1 -eq 0 ] ;;
     *) echo "unknown job $job"; false ;;
   esac || failed_jobs="$failed_jobs $job"
 done
 
 echo
 if [ -n "$cross_table" ]; then
-  echo "target   triple                   (x86-64 golden hashes: fixtures/golden.sha256 and the tests)"
+  echo "target         triple                 (x86-64 golden hashes: fixtures/golden.sha256 and the tests)"
   printf '%s' "$cross_table"
 fi
 if [ -n "$failed_jobs" ]; then
