@@ -423,7 +423,7 @@ void CtPhantom::generate(std::vector<int16_t>* hu, CtVolume* volume) const {
       const uint64_t row = (uint64_t{k} * options_.ny + j) * options_.nx;
       for (uint32_t i = 0; i < options_.nx; ++i) {
         const Vec3 q{options_.spacing.x * static_cast<double>(i) - centre_.x, y, z};
-        (*hu)[row + i] = to_hu(value(q, row + i, teeth.data(), static_cast<int>(teeth.size()),
+        (*hu)[static_cast<size_t>(row + i)] = to_hu(value(q, row + i, teeth.data(), static_cast<int>(teeth.size()),
                                      segments.data(), static_cast<int>(segments.size())));
       }
     }

@@ -70,7 +70,7 @@ Status write_bytes(const std::string& path, const std::vector<uint8_t>& head,
 std::vector<uint8_t> voxel_bytes(const CtVolume& v, bool big_endian) {
   const uint64_t n = v.voxel_count();
   std::vector<uint8_t> out(static_cast<size_t>(n * 2));
-  for (uint64_t i = 0; i < n; ++i) {
+  for (size_t i = 0; i < static_cast<size_t>(n); ++i) {  // n * 2 bytes fit: allocated above
     const uint16_t u = static_cast<uint16_t>(v.hu[i]);
     out[2 * i + (big_endian ? 1 : 0)] = static_cast<uint8_t>(u & 0xFF);
     out[2 * i + (big_endian ? 0 : 1)] = static_cast<uint8_t>(u >> 8);
@@ -335,8 +335,8 @@ Status write_dicom_series(const CtVolume& v, const std::string& folder,
     d.str(0x0028, 0x1052, "DS", std::to_string(intercept));
     d.str(0x0028, 0x1053, "DS", "1");
     std::vector<uint8_t> pixels(static_cast<size_t>(per_slice * 2));
-    const int16_t* slice = v.hu + k * per_slice;
-    for (uint64_t i = 0; i < per_slice; ++i) {
+    const int16_t* slice = v.hu + static_cast<size_t>(k * per_slice);
+    for (size_t i = 0; i < static_cast<size_t>(per_slice); ++i) {
       const uint16_t stored = static_cast<uint16_t>(static_cast<int32_t>(slice[i]) - intercept);
       pixels[2 * i] = static_cast<uint8_t>(stored & 0xFF);
       pixels[2 * i + 1] = static_cast<uint8_t>(stored >> 8);
