@@ -8,6 +8,7 @@
 #include "splintcore/core.h"
 #include "splintcore/geometry.h"
 #include "splintcore/json.h"
+#include "splintcore/label.h"
 #include "splintcore/printer.h"
 #include "splintcore/segment.h"
 #include "splintcore/spline.h"
@@ -55,6 +56,14 @@ struct CaseFile {
   // "placement": "case" (false: the splint stays in the case's frame) or "tray" (true: the
   // whole case is moved onto the printer's build tray first; DesignReport::tray_translation).
   bool place_on_tray = false;
+  // The case label ("label" object, label.h): text in the built-in stroke font, engraved into
+  // the outer (buccal) wall at the middle of the arch, or embossed on it.
+  bool has_label = false;
+  const char* label_text = "";
+  bool label_emboss = false;
+  double label_height = 2.5;   // mm, cap height
+  double label_stroke = 0.35;  // mm
+  double label_depth = 0.4;    // mm, engrave depth or emboss height
   // The CT ("ct" object) the jaws given by "seed" are reconstructed from (segment.h).
   const char* ct_volume = nullptr; // path (file or DICOM folder), relative to the case file
   int32_t ct_hu_min = 300, ct_hu_max = 4000;
@@ -156,6 +165,8 @@ struct DesignReport {
   // With a clearance the imprint is the swept volumes' offset surface: the Boolean base minus
   // jaws is not run (the jaws lie inside what the blockout removes) and `boolean` stays zero.
   bool imprint_offset = false;
+  bool labelled = false;           // the case has "label"
+  LabelStats label;
   bool thickness_checked = false;  // the case has "min_thickness"
   ThicknessReport thickness;
   // "placement": "tray": the case was moved by this translation (mm, a multiple of 1/64)

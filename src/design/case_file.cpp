@@ -139,7 +139,7 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   static const char* const kRootKeys[] = {"splintcore_case", "case_id", "units", "jaws", "base",
                                           "insertion_direction", "blockout", "ct", "printer",
                                           "memory_cap", "min_thickness", "placement",
-                                          "output", nullptr};
+                                          "label", "output", nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(root, kRootKeys, "the case"));
 
   const JsonValue* version = doc.member(root, "splintcore_case");
@@ -374,6 +374,38 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
         return r.fail(*bc, StatusCode::kInvalidArgument,
                       "\"closing_radius\" must be 0 or at least two voxels");
       }
+    }
+  }
+  if (const JsonValue* lb = doc.member(root, "label")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*lb, JsonType::kObject, "label"));
+    static const char* const kLabelKeys[] = {"text", "mode", "height_mm", "stroke_mm", "depth_mm",
+                                             nullptr};
+    SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*lb, kLabelKeys, "\"label\""));
+    const JsonValue* label_text = doc.member(*lb, "text");
+    if (label_text == nullptr) {
+      return r.fail(*lb, StatusCode::kInvalidArgument, "\"label\" needs \"text\" (the case id "
+                    "or any text of the stroke font: A-Z 0-9 space - _ . / # + ( ) :)");
+    }
+    SPLINTCORE_RETURN_IF_ERROR(r.string(*label_text, "text", &out->label_text));
+    out->has_label = true;
+    if (const JsonValue* m = doc.member(*lb, "mode")) {
+      const char* mode = "";
+      SPLINTCORE_RETURN_IF_ERROR(r.string(*m, "mode", &mode));
+      if (std::strcmp(mode, "emboss") == 0) {
+        out->label_emboss = true;
+      } else if (std::strcmp(mode, "engrave") != 0) {
+        return r.fail(*m, StatusCode::kInvalidArgument,
+                      "\"mode\" must be \"engrave\" (cut into the wall) or \"emboss\" (raised)");
+      }
+    }
+    if (const JsonValue* h = doc.member(*lb, "height_mm")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*h, "height_mm", 0.5, 20, &out->label_height));
+    }
+    if (const JsonValue* w = doc.member(*lb, "stroke_mm")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*w, "stroke_mm", 0.05, 5, &out->label_stroke));
+    }
+    if (const JsonValue* d = doc.member(*lb, "depth_mm")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*d, "depth_mm", 0.05, 5, &out->label_depth));
     }
   }
   if (const JsonValue* t = doc.member(root, "min_thickness")) {

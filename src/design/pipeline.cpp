@@ -265,6 +265,30 @@ Status design_splint(const Context& ctx, const CaseFile& case_in, Span<const Mes
       cut = blocked;  // the previous result stays below until the final move
     }
   }
+  if (c.has_label) {
+    // The label on the outer wall, placed from the base's lines (made as build_case_base
+    // makes them); the labelled splint's triangles come first, so the final move takes it.
+    SPLINTCORE_RETURN_IF_ERROR(stage("design: label"));
+    ArenaArray<Line> upper(&arena), lower(&arena);
+    s = make_lines(ctx, c.upper, c.occlusal_normal, "upper", &upper);
+    if (s.is_ok()) s = make_lines(ctx, c.lower, c.occlusal_normal, "lower", &lower);
+    LabelOptions lo;
+    lo.text = c.label_text;
+    lo.mode = c.label_emboss ? LabelMode::kEmboss : LabelMode::kEngrave;
+    lo.height_mm = c.label_height;
+    lo.stroke_width_mm = c.label_stroke;
+    lo.depth_mm = c.label_depth;
+    Mesh labelled;
+    if (s.is_ok()) {
+      s = apply_label(ctx, cut, upper.span(), lower.span(), lo, &labelled, &report->label);
+    }
+    if (!s.is_ok()) {
+      arena.rewind(start);
+      return stage_error(s, "design");
+    }
+    report->labelled = true;
+    cut = labelled;
+  }
   if (c.min_thickness > 0) {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: thickness"));
     s = check_wall_thickness(ctx, cut, c.min_thickness, &report->thickness);

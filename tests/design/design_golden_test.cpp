@@ -90,12 +90,14 @@ TEST(DesignGolden, PaperScaleCase) {
   expect_golden_and_meshlab("paper_scale", "boolean:paper_scale-phantom6000", d);
 }
 
-TEST(DesignGolden, BlockoutRoundedOnTheTray) {
+TEST(DesignGolden, BlockoutRoundedLabelledOnTheTray) {
   Designed d;
   ASSERT_NO_FATAL_FAILURE(design_case("blockout.json", &d));
   EXPECT_EQ(d.report.blockout_jaws, 2u);
   EXPECT_TRUE(d.report.placed_on_tray);
   EXPECT_TRUE(d.report.thickness_checked);
+  EXPECT_TRUE(d.report.labelled);
+  EXPECT_STREQ(d.report.label.text, "PHANTOM-01");
   EXPECT_TRUE(d.report.print.printable);
   expect_golden_and_meshlab("blockout", "design:blockout-phantom6000", d);
 }

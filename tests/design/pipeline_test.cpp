@@ -356,6 +356,39 @@ TEST(DesignOptions, EachJawIsCheckedAndNamed) {
   EXPECT_EQ(f.t.arena.used(), used);
 }
 
+TEST(DesignOptions, LabelIsEngravedOnTheDesignedSplint) {
+  CaseAndJaws f;
+  ASSERT_TRUE(f.ok);
+  Mesh plain;
+  DesignReport r0;
+  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2),
+                                     &plain, &r0));
+  CaseFile c = f.c;
+  c.has_label = true;
+  c.label_text = "case-7";
+  Mesh labelled;
+  DesignReport r;
+  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2),
+                                     &labelled, &r));
+  ASSERT_TRUE(r.labelled);
+  EXPECT_STREQ(r.label.text, "CASE-7");
+  EXPECT_EQ(r.label.glyphs, 6u);
+  EXPECT_TRUE(r.print.printable);
+  double v0 = 0, v1 = 0;
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(Context(&f.t.arena), plain, &v0));
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(Context(&f.t.arena), labelled, &v1));
+  // Engraved: material removed, about stroke length x width x depth (0.3x to 1.5x of it).
+  const double nominal = r.label.stroke_length_mm * c.label_stroke * c.label_depth;
+  EXPECT_GT(v0 - v1, 0.3 * nominal);
+  EXPECT_LT(v0 - v1, 1.5 * nominal);
+  // A character the font does not have is named.
+  c.label_text = "CASE%";
+  Mesh bad;
+  const Status s = design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &bad, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(s.message()).find("label"), std::string::npos) << s.message();
+}
+
 TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
   test::TestArena t{size_t{8} << 20};
   Context ctx(&t.arena);
@@ -369,8 +402,15 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
   };
   CaseFile c;
   std::string ok = with("\"blockout\": {\"voxel\": 0.1, \"clearance\": 0.1}, \"min_thickness\": 1.5, "
-                        "\"placement\": \"tray\"");
+                        "\"placement\": \"tray\", \"label\": {\"text\": \"AB-1\", \"mode\": "
+                        "\"emboss\", \"height_mm\": 2, \"stroke_mm\": 0.3, \"depth_mm\": 0.5}");
   SPLINTCORE_ASSERT_OK(parse_case(ctx, ok.data(), ok.size(), "ok", &c));
+  EXPECT_TRUE(c.has_label);
+  EXPECT_STREQ(c.label_text, "AB-1");
+  EXPECT_TRUE(c.label_emboss);
+  EXPECT_EQ(c.label_height, 2.0);
+  EXPECT_EQ(c.label_stroke, 0.3);
+  EXPECT_EQ(c.label_depth, 0.5);
   EXPECT_EQ(c.blockout_clearance, 0.1);
   EXPECT_EQ(c.blockout_inset, 0.0);  // a clearance takes the surface outside
   EXPECT_EQ(c.min_thickness, 1.5);
@@ -381,10 +421,15 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
       "\"min_thickness\": 0",
       "\"placement\": \"floor\"",
       "\"placement\": 1",
+      "\"label\": {\"mode\": \"engrave\"}",
+      "\"label\": {\"text\": \"X\", \"mode\": \"carve\"}",
+      "\"label\": {\"text\": \"X\", \"size\": 3}",
+      "\"label\": {\"text\": \"X\", \"depth_mm\": 9}",
   };
   const char* expect[] = {"exclude each other", "clearance", "min_thickness", "\"placement\" must be",
-                          "placement"};
-  for (size_t i = 0; i < 5; ++i) {
+                          "placement", "needs \"text\"", "\"mode\" must be", "unknown key \"size\"",
+                          "depth_mm"};
+  for (size_t i = 0; i < 9; ++i) {
     const std::string s = with(bad[i]);
     Status st = parse_case(ctx, s.data(), s.size(), "bad", &c);
     EXPECT_EQ(st.code(), StatusCode::kInvalidArgument) << bad[i];

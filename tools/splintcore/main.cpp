@@ -1169,6 +1169,13 @@ int run_design(int argc, char** argv) {
     params.add("clearance_mm", c.blockout_clearance);
   }
   if (c.min_thickness > 0) params.add("min_thickness_mm", c.min_thickness);
+  if (c.has_label) {
+    params.add("label_text", c.label_text);
+    params.add("label_mode", c.label_emboss ? "emboss" : "engrave");
+    params.add("label_height_mm", c.label_height);
+    params.add("label_stroke_mm", c.label_stroke);
+    params.add("label_depth_mm", c.label_depth);
+  }
   params.add("placement", c.place_on_tray ? "tray" : "case");
   j.add_raw("parameters", params.str());
   std::string stages = "[";
@@ -1210,6 +1217,17 @@ int run_design(int argc, char** argv) {
   }
   checks.add("imprint", report.imprint_offset ? "clearance offset of the swept volume"
                                               : "jaw triangles");
+  if (report.labelled) {
+    const LabelStats& l = report.label;
+    JsonObject r;
+    r.add("text", l.text);
+    r.add("glyphs", static_cast<uint64_t>(l.glyphs));
+    r.add("glyph_triangles", l.glyph_triangles);
+    r.add("text_length_mm", l.text_length_mm);
+    r.add("attempts", static_cast<uint64_t>(l.attempts));
+    if (l.glyphs > 0) r.add("first_glyph_at", l.placements[0].surface_point);
+    checks.add_raw("label", r.str());
+  }
   if (report.thickness_checked) {
     const ThicknessReport& t = report.thickness;
     JsonObject r;
@@ -1277,6 +1295,11 @@ int run_design(int argc, char** argv) {
                   c.jaws[i].role, report.blockout_removed_mm3[i],
                   static_cast<unsigned long long>(report.blockout[i].swept_triangles),
                   report.blockout[i].inset_used);
+    }
+    if (report.labelled) {
+      std::printf("label: \"%s\" %s, %u glyphs, %.1f mm long\n", report.label.text,
+                  c.label_emboss ? "embossed" : "engraved", report.label.glyphs,
+                  report.label.text_length_mm);
     }
     if (report.thickness_checked) {
       const ThicknessReport& t = report.thickness;
