@@ -276,7 +276,11 @@ TEST_F(Hostile, InvertedOrientation) {
   for (Triangle& t : j.triangles) std::swap(t.v[1], t.v[2]);
   Result d = design(maxilla(), j);
   Result b = boolean(j);
-  (void)d;
+  // The pipeline names it (SECURITY.md); the Boolean alone takes it as its complement.
+  EXPECT_EQ(d.outcome, Outcome::kError);
+  EXPECT_NE(std::string(d.status.message()).find("jaw 1 (mandible) is inside out"),
+            std::string::npos)
+      << format(d.status);
   (void)b;
 }
 
@@ -284,10 +288,15 @@ TEST_F(Hostile, EmptyJaws) {
   Jaw empty;
   Result d = design(maxilla(), empty);
   Result both = design(empty, empty);
-  // Documented outcome (SECURITY.md): an empty jaw subtracts nothing.
-  EXPECT_EQ(d.outcome, Outcome::kSplint) << format(d.status);
-  ASSERT_EQ(both.outcome, Outcome::kSplint) << format(both.status);
-  EXPECT_EQ(both.triangles, fixture().base.triangles.size());
+  // Documented outcome (SECURITY.md): the pipeline names an empty jaw (a file that held no
+  // triangles is a mistake, not a request for no imprint); the Boolean alone subtracts nothing.
+  EXPECT_EQ(d.outcome, Outcome::kError);
+  EXPECT_EQ(d.status.code(), StatusCode::kInvalidMesh);
+  EXPECT_NE(std::string(d.status.message()).find("jaw 1 (mandible) is empty"), std::string::npos)
+      << format(d.status);
+  EXPECT_EQ(both.outcome, Outcome::kError);
+  EXPECT_NE(std::string(both.status.message()).find("jaw 0 (maxilla) is empty"), std::string::npos)
+      << format(both.status);
   Result b = boolean(empty);
   if (b.outcome == Outcome::kSplint) {
     EXPECT_EQ(b.triangles, fixture().base.triangles.size());
