@@ -7,7 +7,8 @@
 // - Only the part of B near A is touched: B's vertices are tested once against A's box, and
 //   B's triangles whose corners all lie beyond one side of it are never split or classified
 //   (they are outside A). The rest are paired with A's triangles through a uniform grid over
-//   A (A is the small mesh: the splint base), with plane and edge-plane filters.
+//   A (A is the small mesh: the splint base), with plane and edge-plane filters (B's whole
+//   box against A's edge planes first); filters only skip pairs the exact tests would reject.
 // - Each candidate pair is decided by exact predicates (orient3d on the input coordinates,
 //   after filters that only answer when they are certain). An intersection point is named
 //   symbolically (an edge of one mesh and a triangle of the other) and computed once, so every

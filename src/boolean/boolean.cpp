@@ -3,6 +3,7 @@
 #include "splintcore/boolean.h"
 
 #include "boolean/cdt.h"
+#include "boolean/pair_filter.h"
 #include "core/union_find.h"
 #include "geometry/plane_filter.h"
 #include "splintcore/distance.h"
@@ -106,9 +107,18 @@ EdgePlanes edge_planes(const Vec3& a0, const Vec3& a1, const Vec3& a2) {
 }
 
 // pa, pb: the planes of ta and tb as filters (plane_filter of their corners in order); ea:
-// ta's edge planes.
+// ta's edge planes; bc, bext: the centre and extent of tb's box (for detail::box_beyond).
 PairResult intersect_pair(const Inputs& in, uint32_t ta, uint32_t tb, const PlaneFilter& pa,
-                          const EdgePlanes& ea, const PlaneFilter& pb, Hit* hit) {
+                          const EdgePlanes& ea, const PlaneFilter& pb, const Vec3& bc,
+                          const Vec3& bext, Hit* hit) {
+  // B's whole box strictly beyond one of A's edge planes: the triangles are disjoint, and the
+  // exact tests below would answer kNone too (a cheaper filter first, never a different
+  // answer).
+  for (int k = 0; k < 3; ++k) {
+    if (ea.inside[k] != 0 && detail::box_beyond(ea.plane[k], ea.inside[k], bc, bext)) {
+      return PairResult::kNone;
+    }
+  }
   uint32_t ga[3], gb[3];
   in.corners(ta, ga);
   in.corners(tb, gb);
@@ -432,24 +442,57 @@ Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double
   // plane's dominant axis: in each column of cells the plane spans one interval of that axis
   // (its values at the column's four corners bound it), widened by a hair and by twice the
   // reach (a plane moved by `reach` moves at most sqrt(3) reach along its dominant axis).
-  auto for_each_cell = [&](uint32_t t, auto&& visit) {
-    uint32_t lo[3], hi[3];
+  // The plane's value at each grid node is computed once (two rows of nodes at a time, in
+  // `row`): a column reads its four corners in the same order, so the cells are the same bits.
+  // Pass one stores each column's interval [k0, k1] (a byte each: dim <= 256) in `spans` and
+  // counts; pass two replays the intervals; both are temporaries, and the items are moved
+  // down over them at the end.
+  const Arena::Marker temporaries = arena.mark();
+  double* row = arena.allocate_array<double>(2 * 258);
+  if (row == nullptr) return arena.exhausted_status();
+  ArenaArray<uint8_t> spans(&arena);
+  auto axes = [&](uint32_t t, uint32_t lo[3], uint32_t hi[3], int* pw) {
     bp->cell_range(boxes[t], lo, hi);
     const Vec3& n = slabs[t].n;
     const double an[3] = {n.x < 0 ? -n.x : n.x, n.y < 0 ? -n.y : n.y, n.z < 0 ? -n.z : n.z};
-    const int w = (an[0] >= an[1] && an[0] >= an[2]) ? 0 : (an[1] >= an[2] ? 1 : 2);
+    *pw = (an[0] >= an[1] && an[0] >= an[2]) ? 0 : (an[1] >= an[2] ? 1 : 2);
+  };
+  auto count_cells = [&](uint32_t t) -> bool {
+    uint32_t lo[3], hi[3];
+    int w = 0;
+    axes(t, lo, hi, &w);
     const int u = (w + 1) % 3, v = (w + 2) % 3;
+    const Vec3& n = slabs[t].n;
+    const double d = slabs[t].d, nu = n[u], nv = n[v], nw = n[w];
+    const double lo_u = abox.lo[u], lo_v = abox.lo[v];
+    // row[0..]: nodes at u index idx[u], row[258..]: at idx[u] + 1; node j is v index lo[v] + j.
+    const uint32_t nodes_v = hi[v] - lo[v] + 2;
+    auto fill_row = [&](double* r, uint32_t iu) {
+      const double cu = lo_u + iu * h;
+      for (uint32_t j = 0; j < nodes_v; ++j) {
+        const double cv = lo_v + (lo[v] + j) * h;
+        r[j] = (d - nu * cu - nv * cv) / nw;
+      }
+    };
+    double* row0 = row;
+    double* row1 = row + 258;
+    fill_row(row0, lo[u]);
     uint32_t idx[3];
     for (idx[u] = lo[u]; idx[u] <= hi[u]; ++idx[u]) {
+      fill_row(row1, idx[u] + 1);
       for (idx[v] = lo[v]; idx[v] <= hi[v]; ++idx[v]) {
+        const uint32_t j = idx[v] - lo[v];
+        // Corners in the order (u, v), (u + 1, v), (u, v + 1), (u + 1, v + 1).
+        const double c0 = row0[j], c1 = row1[j], c2 = row0[j + 1], c3 = row1[j + 1];
         double wmin = HUGE_VAL, wmax = -HUGE_VAL;
-        for (int corner = 0; corner < 4; ++corner) {
-          const double cu = abox.lo[u] + (idx[u] + static_cast<uint32_t>(corner & 1)) * h;
-          const double cv = abox.lo[v] + (idx[v] + static_cast<uint32_t>(corner >> 1)) * h;
-          const double cw = (slabs[t].d - n[u] * cu - n[v] * cv) / n[w];
-          wmin = cw < wmin ? cw : wmin;
-          wmax = cw > wmax ? cw : wmax;
-        }
+        wmin = c0 < wmin ? c0 : wmin;
+        wmax = c0 > wmax ? c0 : wmax;
+        wmin = c1 < wmin ? c1 : wmin;
+        wmax = c1 > wmax ? c1 : wmax;
+        wmin = c2 < wmin ? c2 : wmin;
+        wmax = c2 > wmax ? c2 : wmax;
+        wmin = c3 < wmin ? c3 : wmin;
+        wmax = c3 > wmax ? c3 : wmax;
         const double pad = 1e-9 * ((wmin < 0 ? -wmin : wmin) + (wmax < 0 ? -wmax : wmax) + 1.0) +
                            1e-6 * h + 2.0 * reach;
         const double l = (wmin - pad - abox.lo[w]) * inv_h, r = (wmax + pad - abox.lo[w]) * inv_h;
@@ -457,18 +500,50 @@ Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double
         uint32_t k1 = r <= 0.0 ? 0u : (r >= dim[w] - 1.0 ? dim[w] - 1 : static_cast<uint32_t>(r));
         if (k0 < lo[w]) k0 = lo[w];
         if (k1 > hi[w]) k1 = hi[w];
+        if (!spans.push_back(static_cast<uint8_t>(k0)) ||
+            !spans.push_back(static_cast<uint8_t>(k1))) {
+          return false;
+        }
         for (idx[w] = k0; idx[w] <= k1; ++idx[w]) {
-          visit((size_t{idx[2]} * dim[1] + idx[1]) * dim[0] + idx[0]);
+          ++start[(size_t{idx[2]} * dim[1] + idx[1]) * dim[0] + idx[0] + 1];
+        }
+      }
+      double* swap = row0;
+      row0 = row1;
+      row1 = swap;
+    }
+    return true;
+  };
+  for (uint32_t t = 0; t < nta; ++t) {
+    if (!count_cells(t)) return arena.exhausted_status();
+  }
+  for (size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+  const size_t item_count = start[cells];
+  uint32_t* items = arena.allocate_array<uint32_t>(item_count);
+  if (items == nullptr && item_count > 0) return arena.exhausted_status();
+  size_t at = 0;
+  for (uint32_t t = 0; t < nta; ++t) {
+    uint32_t lo[3], hi[3];
+    int w = 0;
+    axes(t, lo, hi, &w);
+    const int u = (w + 1) % 3, v = (w + 2) % 3;
+    uint32_t idx[3];
+    for (idx[u] = lo[u]; idx[u] <= hi[u]; ++idx[u]) {
+      for (idx[v] = lo[v]; idx[v] <= hi[v]; ++idx[v]) {
+        const uint32_t k0 = spans[at], k1 = spans[at + 1];
+        at += 2;
+        for (idx[w] = k0; idx[w] <= k1; ++idx[w]) {
+          items[start[(size_t{idx[2]} * dim[1] + idx[1]) * dim[0] + idx[0]]++] = t;
         }
       }
     }
-  };
-  // Two passes over A: count, then fill.
-  for (uint32_t t = 0; t < nta; ++t) for_each_cell(t, [&](size_t c) { ++start[c + 1]; });
-  for (size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
-  uint32_t* items = arena.allocate_array<uint32_t>(start[cells]);
-  if (items == nullptr && start[cells] > 0) return arena.exhausted_status();
-  for (uint32_t t = 0; t < nta; ++t) for_each_cell(t, [&](size_t c) { items[start[c]++] = t; });
+  }
+  // The items down over the temporaries (a lower address: memmove).
+  arena.rewind(temporaries);
+  uint32_t* kept = arena.allocate_array<uint32_t>(item_count);
+  if (kept == nullptr && item_count > 0) return arena.exhausted_status();
+  if (item_count > 0) std::memmove(kept, items, item_count * sizeof(uint32_t));
+  items = kept;
   for (size_t c = cells; c > 0; --c) start[c] = start[c - 1];
   start[0] = 0;
   bp->start = start;
@@ -569,6 +644,8 @@ Status BooleanRun::find_hits() {
     bp_.cell_range(box, lo, hi);
     bool flat_checked = false;
     PlaneFilter pb{};
+    const Vec3 bc = (box.lo + box.hi) * 0.5;
+    const Vec3 bext = box.hi - box.lo;
     for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
       for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
         for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
@@ -590,7 +667,8 @@ Status BooleanRun::find_hits() {
               pb = plane_filter(vb[tri.v[0]], vb[tri.v[1]], vb[tri.v[2]]);
             }
             Hit hit;
-            const PairResult r = intersect_pair(in_, ta, in_.nta + t, filters[ta], edges[ta], pb, &hit);
+            const PairResult r =
+                intersect_pair(in_, ta, in_.nta + t, filters[ta], edges[ta], pb, bc, bext, &hit);
             if (r == PairResult::kDegenerate) return degenerate(ta, in_.nta + t);
             if (r == PairResult::kSegment && !hits_.push_back(hit)) {
               return arena_.exhausted_status();
@@ -664,6 +742,24 @@ Status BooleanRun::number_points() {
   if (np > 1) {
     KeyIndex* keys = arena_.allocate_array<KeyIndex>(np);
     if (keys == nullptr) return arena_.exhausted_status();
+    // First a cheaper look: sorted by x alone, equal points share a run of equal x; runs are
+    // a handful of points. Only when it finds a pair (or a run too long to compare pairwise)
+    // does the full lexicographic sort below run, so the pair named is the same as always.
+    for (uint32_t i = 0; i < np; ++i) keys[i] = KeyIndex{order_key(points_[i].p.x + 0.0), i, 0};
+    SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(keys, np)));
+    bool maybe = false;
+    for (uint32_t i = 0; i < np && !maybe;) {
+      uint32_t j = i + 1;
+      while (j < np && keys[j].key == keys[i].key) ++j;
+      if (j - i > 16) maybe = true;
+      for (uint32_t x = i; x < j && !maybe; ++x) {
+        for (uint32_t y = x + 1; y < j; ++y) {
+          if (points_[keys[x].index].p == points_[keys[y].index].p) maybe = true;
+        }
+      }
+      i = j;
+    }
+    if (!maybe) return Status::ok();
     for (int axis = 2; axis >= 0; --axis) {
       for (uint32_t i = 0; i < np; ++i) {
         const uint32_t id = axis == 2 ? i : keys[i].index;
@@ -927,17 +1023,31 @@ Status BooleanRun::split_triangles() {
     // The constraints, directed with the other solid's inside on their left, sorted by their
     // undirected key (for the classification below).
     KeyIndex* cons = arena_.allocate_array<KeyIndex>(nseg);
-    if (cons == nullptr) return arena_.exhausted_status();
+    uint32_t* cons_from = arena_.allocate_array<uint32_t>(nseg);  // by segment, in record order
+    if (cons == nullptr || cons_from == nullptr) return arena_.exhausted_status();
+    // `distinct`: no constraint repeats another or lies on the boundary, so the CDT's segment
+    // id on an edge names its record (boundary + r - g): the adjacency path below applies.
+    bool distinct = true;
     for (size_t r = g; r < g_end; ++r) {
       const Record& rc = rec[order[r].index];
       const uint32_t from = local(rc.from), to = local(rc.to);
       cons[r - g] = KeyIndex{edge_key(from, to), from, 0};
+      cons_from[r - g] = from;
       segs[ns++] = detail::CdtSegment{from, to};
+      if (from < boundary && to < boundary) {
+        const uint32_t gap = from < to ? to - from : from - to;
+        if (gap == 1 || gap == boundary - 1) distinct = false;
+      }
     }
     SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, cons, nseg));
+    for (size_t x = 1; x < nseg; ++x) {
+      if (cons[x].key == cons[x - 1].key) distinct = false;
+    }
     ArenaArray<detail::CdtTriangle> cdt_out(&arena_);
+    ArenaArray<detail::CdtAdjacency> adjacency(&arena_);
     Status s = detail::cdt(arena_, Span<const detail::CdtPoint>(pts, m),
-                           Span<const detail::CdtSegment>(segs, ns), boundary, &cdt_out);
+                           Span<const detail::CdtSegment>(segs, ns), boundary, &cdt_out,
+                           distinct ? &adjacency : nullptr);
     if (!s.is_ok()) {
       if (s.code() == StatusCode::kArenaExhausted) return s;
       return make_error(StatusCode::kUnsupported, "cannot re-triangulate triangle ",
@@ -945,25 +1055,50 @@ Status BooleanRun::split_triangles() {
                         " along its intersection (nearly degenerate contact): ", s.message())
           .at_index(t < in_.nta ? t : t - in_.nta);
     }
-    // Classify the pieces: half-edges matched by their undirected key; a constraint votes for
-    // the piece on its left (inside the other solid) and against the one on its right; other
-    // shared edges join pieces.
+    // Classify the pieces: a constraint votes for the piece on its left (inside the other
+    // solid) and against the one on its right; other shared edges join pieces. A piece with
+    // two constraint edges takes the vote of the one with the larger undirected key.
     const uint32_t k = static_cast<uint32_t>(cdt_out.size());
-    KeyIndex* half = arena_.allocate_array<KeyIndex>(size_t{3} * k);
     int8_t* vote = arena_.allocate_array<int8_t>(k);
     UnionFind uf;
-    if (half == nullptr || vote == nullptr || !uf.init(arena_, k)) {
-      return arena_.exhausted_status();
+    if (vote == nullptr || !uf.init(arena_, k)) return arena_.exhausted_status();
+    if (distinct) {
+      // From the CDT's own adjacency: the same votes and the same joined sets as matching
+      // half-edges by key (the path below), without sorting them.
+      for (uint32_t j = 0; j < k; ++j) {
+        vote[j] = 0;
+        uint64_t best = 0;
+        bool voted = false;
+        const detail::CdtTriangle& ct = cdt_out[j];
+        const detail::CdtAdjacency& adj = adjacency[j];
+        for (uint32_t e = 0; e < 3; ++e) {
+          const uint32_t seg = adj.seg[e];
+          if (seg == detail::kCdtNone) {
+            if (adj.nb[e] != detail::kCdtNone) uf.unite(j, adj.nb[e]);
+            continue;
+          }
+          if (seg < boundary) continue;
+          const uint64_t key = edge_key(ct.v[e], ct.v[(e + 1) % 3]);
+          if (!voted || key > best) {
+            best = key;
+            voted = true;
+            vote[j] = ct.v[e] == cons_from[seg - boundary] ? 1 : -1;
+          }
+        }
+      }
     }
-    for (uint32_t j = 0; j < k; ++j) {
+    // Otherwise half-edges matched by their undirected key.
+    KeyIndex* half = distinct ? nullptr : arena_.allocate_array<KeyIndex>(size_t{3} * k);
+    if (!distinct && half == nullptr && k > 0) return arena_.exhausted_status();
+    for (uint32_t j = 0; j < k && !distinct; ++j) {
       vote[j] = 0;
       for (uint32_t e = 0; e < 3; ++e) {
         half[3 * j + e] = KeyIndex{edge_key(cdt_out[j].v[e], cdt_out[j].v[(e + 1) % 3]), 3 * j + e, 0};
       }
     }
-    SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, half, size_t{3} * k));
+    if (!distinct) SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, half, size_t{3} * k));
     size_t ci = 0;
-    for (size_t a = 0; a < size_t{3} * k;) {
+    for (size_t a = 0; a < size_t{3} * k && !distinct;) {
       size_t b = a + 1;
       while (b < size_t{3} * k && half[b].key == half[a].key) ++b;
       while (ci < nseg && cons[ci].key < half[a].key) ++ci;
@@ -1249,15 +1384,18 @@ Status BooleanRun::check_result(Mesh* result) {
   const char* as = options_.float32_output ? " (as float32)" : "";
   const StatusCode fragile = options_.float32_output ? StatusCode::kUnsupported : StatusCode::kInternal;
   // A flat triangle can come from rounding (then A is nudged); anything else would be a bug
-  // (or, for the union, an open B).
-  const uint32_t flat = find_flat_triangle(*result);
-  if (flat != kNoTriangle) {
-    return make_error(fragile, "Boolean ", boolean_op_name(op_), " result has a flat triangle ",
-                      flat, as)
-        .at_index(flat);
-  }
+  // (or, for the union, an open B). check_closed_oriented scans for flat triangles itself, so
+  // the scan here runs only when it fails: the same answer as scanning first, one scan less.
   double volume = 0;
   Status s = check_closed_oriented(ctx_, *result, &volume);
+  if (!s.is_ok()) {
+    const uint32_t flat = find_flat_triangle(*result);
+    if (flat != kNoTriangle) {
+      return make_error(fragile, "Boolean ", boolean_op_name(op_), " result has a flat triangle ",
+                        flat, as)
+          .at_index(flat);
+    }
+  }
   if (s.code() == StatusCode::kArenaExhausted) return s;
   if (!s.is_ok()) {
     return make_error(op_ == BooleanOp::kUnion ? StatusCode::kInvalidMesh : StatusCode::kInternal,

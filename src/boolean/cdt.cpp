@@ -630,14 +630,16 @@ uint64_t cdt_bound(uint64_t point_count, uint64_t segment_count) {
   if (point_count > kMaxPoints) point_count = kMaxPoints;
   const Sizes z = sizes_for(point_count);
   constexpr uint64_t kSlack = 64;  // alignment padding per allocation, generously
-  return z.out * sizeof(CdtTriangle) + z.verts * sizeof(CdtPoint) + z.tris * sizeof(Tri) +
+  return z.out * (sizeof(CdtTriangle) + sizeof(CdtAdjacency)) + z.verts * sizeof(CdtPoint) +
+         z.tris * sizeof(Tri) +
          z.verts * sizeof(uint32_t) + 3 * z.tris * sizeof(uint32_t) + z.tris +
          z.edges * sizeof(EdgeKey) + point_count + 2 * point_count * sizeof(KeyIndex) +
          10 * kSlack;
 }
 
 Status cdt(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> segments,
-           uint32_t boundary_count, ArenaArray<CdtTriangle>* out) {
+           uint32_t boundary_count, ArenaArray<CdtTriangle>* out,
+           ArenaArray<CdtAdjacency>* adjacency) {
   SPLINTCORE_ASSERT(out != nullptr && out->arena() != nullptr);
   const size_t n_size = points.size();
   const size_t m = segments.size();
@@ -701,6 +703,17 @@ Status cdt(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> seg
                       " output triangles are more than this target can address");
   }
   if (!out->reserve(static_cast<size_t>(out_total))) return out->arena()->exhausted_status();
+  if (adjacency != nullptr) {
+    SPLINTCORE_ASSERT(adjacency->arena() != nullptr);
+    const uint64_t adjacency_total = uint64_t{adjacency->size()} + expected;
+    if (adjacency_total > SIZE_MAX) {
+      return make_error(StatusCode::kLimitExceeded, "cdt: ", adjacency_total,
+                        " output triangles are more than this target can address");
+    }
+    if (!adjacency->reserve(static_cast<size_t>(adjacency_total))) {
+      return adjacency->arena()->exhausted_status();
+    }
+  }
   ArenaScope scope(arena);
   // n <= kMaxPoints, so every count (at most 3 * (2n + 1)) fits a 32-bit size_t.
   static_assert(3 * (2 * kMaxPoints + 1) <= UINT32_MAX, "CDT counts must fit 32 bits");
@@ -851,6 +864,28 @@ Status cdt(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> seg
                         tri.v[2], " is not counter-clockwise");
     }
     if (!out->push_back(tri)) return out->arena()->exhausted_status();  // reserved: never
+  }
+  if (adjacency != nullptr) {
+    // Output index of each inside slot (the half-edge stack is free again), then per output
+    // triangle (rotated by k from its slot) the edge v[e] -> v[e + 1], which is the slot's
+    // edge opposite t.v[(k + e + 2) % 3].
+    uint32_t* index_of_slot = w.stack;
+    uint32_t count = 0;
+    for (uint32_t ti = 0; ti < w.tri_count; ++ti) {
+      index_of_slot[ti] = exterior[ti] != 0 ? kCdtNone : count++;
+    }
+    for (uint32_t ti = 0; ti < w.tri_count; ++ti) {
+      if (exterior[ti] != 0) continue;
+      const Tri& t = w.t[ti];
+      const uint32_t k = t.v[0] < t.v[1] ? (t.v[0] < t.v[2] ? 0 : 2) : (t.v[1] < t.v[2] ? 1 : 2);
+      CdtAdjacency a;
+      for (uint32_t e = 0; e < 3; ++e) {
+        const uint32_t o = (k + e + 2) % 3;
+        a.nb[e] = t.n[o] == kNone ? kCdtNone : index_of_slot[t.n[o]];
+        a.seg[e] = t.c[o] == kNone ? kCdtNone : t.c[o];
+      }
+      if (!adjacency->push_back(a)) return adjacency->arena()->exhausted_status();  // reserved
+    }
   }
   return Status::ok();
 }

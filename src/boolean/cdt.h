@@ -56,16 +56,31 @@ struct CdtTriangle {
   uint32_t v[3];  // point ids, counter-clockwise
 };
 
-// Bytes cdt() may take from the arena (output included) for n points and m segments, when
-// `out` is empty or is the last allocation of its arena (otherwise growing it copies it: add
-// its current size in bytes), counted as the arena's bytes handed out (a buffer-mode arena's
-// cap; a hooks-mode arena also pays its block headers). Depends on n only.
+constexpr uint32_t kCdtNone = 0xffffffffu;
+
+// Per output triangle (same index), for each of its edges v[e] -> v[e + 1]: the output
+// triangle on the other side (kCdtNone on the polygon's boundary) and the id of the segment
+// lying on that edge (for a repeated segment the first id given; kCdtNone when none does).
+struct CdtAdjacency {
+  uint32_t nb[3];
+  uint32_t seg[3];
+};
+
+// Bytes cdt() may take from the arena (output included, the adjacency too when asked for) for
+// n points and m segments, when `out` (and `adjacency`) are empty or are the last allocations
+// of their arena (otherwise growing them copies them: add their current size in bytes),
+// counted as the arena's bytes handed out (a buffer-mode arena's cap; a hooks-mode arena also
+// pays its block headers). Depends on n only.
 uint64_t cdt_bound(uint64_t point_count, uint64_t segment_count);
 
 // Appends the triangles to `out` (bound to an arena, possibly the same arena as the
-// temporaries: the output is reserved first so it never moves).
+// temporaries: the output is reserved first so it never moves). When `adjacency` is given
+// (bound to an arena, empty or not), it gets one CdtAdjacency per appended triangle, in the
+// same order, with neighbour indices counted from this call's first triangle; it is reserved
+// right after `out`. The triangles are the same with or without it.
 Status cdt(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> segments,
-           uint32_t boundary_count, ArenaArray<CdtTriangle>* out);
+           uint32_t boundary_count, ArenaArray<CdtTriangle>* out,
+           ArenaArray<CdtAdjacency>* adjacency = nullptr);
 
 }  // namespace detail
 }  // namespace splintcore

@@ -717,6 +717,61 @@ TEST(CdtRandom, BooleanLikeTriangles) {
   EXPECT_GT(constraints, 500);
 }
 
+// The adjacency the Boolean classifies its pieces with: for every edge of every triangle, the
+// neighbour is the one other triangle holding that edge reversed (none on the boundary), and
+// the segment is the first one with those two ends; the triangles are the same as without it.
+TEST(CdtRandom, AdjacencyMatchesTheTriangles) {
+  TestArena ta(16 << 20);
+  Rng rng(4242);
+  int cases = 0;
+  int64_t neighbours = 0, constrained = 0;
+  for (int c = 0; c < 400; ++c) {
+    const bool exact = c % 2 == 0;
+    const int per_edge = rng.small(0, 12), polylines = rng.small(0, 6), loops = rng.small(0, 2);
+    Input in = boolean_like(rng, per_edge, polylines, loops, exact);
+    if (in.boundary == 0) continue;
+    const RunResult plain = run(ta.arena, in);
+    if (!plain.status.is_ok()) continue;
+    ta.arena.reset();
+    ArenaArray<CdtTriangle> out(&ta.arena);
+    ArenaArray<detail::CdtAdjacency> adj(&ta.arena);
+    SPLINTCORE_ASSERT_OK(cdt(ta.arena, Span<const CdtPoint>(in.pts.data(), in.pts.size()),
+                             Span<const CdtSegment>(in.segs.data(), in.segs.size()), in.boundary,
+                             &out, &adj));
+    ASSERT_EQ(out.size(), plain.tris.size()) << "case " << c;
+    ASSERT_EQ(adj.size(), out.size()) << "case " << c;
+    const size_t k = out.size();
+    for (size_t j = 0; j < k; ++j) {
+      for (int v = 0; v < 3; ++v) ASSERT_EQ(out[j].v[v], plain.tris[j].v[v]) << "case " << c;
+    }
+    for (size_t j = 0; j < k; ++j) {
+      for (uint32_t e = 0; e < 3; ++e) {
+        const uint32_t a = out[j].v[e], b = out[j].v[(e + 1) % 3];
+        uint32_t twin = detail::kCdtNone;
+        for (size_t o = 0; o < k; ++o) {
+          for (uint32_t f = 0; f < 3; ++f) {
+            if (out[o].v[f] == b && out[o].v[(f + 1) % 3] == a) twin = static_cast<uint32_t>(o);
+          }
+        }
+        uint32_t seg = detail::kCdtNone;
+        for (size_t x = in.segs.size(); x-- > 0;) {
+          const CdtSegment& g = in.segs[x];
+          if ((g.a == a && g.b == b) || (g.a == b && g.b == a)) seg = static_cast<uint32_t>(x);
+        }
+        ASSERT_EQ(adj[j].nb[e], twin) << "case " << c << " triangle " << j << " edge " << e;
+        ASSERT_EQ(adj[j].seg[e], seg) << "case " << c << " triangle " << j << " edge " << e;
+        neighbours += twin != detail::kCdtNone ? 1 : 0;
+        constrained += seg != detail::kCdtNone && seg >= in.boundary ? 1 : 0;
+      }
+    }
+    ++cases;
+  }
+  ta.arena.reset();
+  EXPECT_GT(cases, 350);
+  EXPECT_GT(neighbours, 5000);
+  EXPECT_GT(constrained, 500);
+}
+
 TEST(CdtRandom, LargeInputs) {
   TestArena ta(64 << 20);
   Rng rng(5150);
