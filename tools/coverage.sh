@@ -4,10 +4,11 @@
 #   bash tools/coverage.sh [build-dir]          (default build/ci-coverage)
 #   SPLINTCORE_COVERAGE_FILTER='-Realdata|Meshlab' bash tools/coverage.sh   (gtest filter)
 # Prints llvm-cov's per-file report for src/ (lines, regions, branches), then the parsers'
-# figures on their own (issue 9 asks for >= 95% branch coverage of src/io/stl_read.cpp,
-# src/io/json.cpp and src/design/case_file.cpp). The HTML report is written to
-# <build-dir>/coverage-html. Exit status: that of the build and the test run (the figures are
-# reported, not enforced; SPLINTCORE_COVERAGE_MIN_BRANCH=95 makes the parsers' figure a gate).
+# figures on their own (issue 9 asks for >= 95% branch coverage of every parser of outside
+# bytes: JSON, the case schema, STL, PLY, OBJ, their shared text scanner, and the CT readers).
+# The HTML report is written to <build-dir>/coverage-html. Exit status: that of the build and
+# the test run; with SPLINTCORE_COVERAGE_MIN_BRANCH=95 (as tools/test.sh sets it) also 1 when a
+# parser is under that branch coverage (marked "LOW" in the table).
 set -u
 cd "$(dirname "$0")/.."
 dir=${1:-build/ci-coverage}
@@ -40,18 +41,25 @@ objects="$dir/tests/splintcore_tests"
 echo
 echo "parsers (lines, branches):"
 gate=0
-for f in src/io/stl_read.cpp src/io/json.cpp src/design/case_file.cpp; do
+for f in src/io/json.cpp src/design/case_file.cpp src/io/stl_read.cpp src/io/ply_read.cpp \
+         src/io/obj_read.cpp src/io/mesh_text.h src/io/ct_common.cpp src/io/ct_nrrd.cpp \
+         src/io/ct_metaimage.cpp src/io/ct_dicom.cpp; do
   # llvm-cov report columns: Regions Missed Cover Functions Missed Executed Lines Missed Cover
   # Branches Missed Cover.
   # llvm-cov names files relative to the common prefix (src/): match either form.
   line=$(grep -E "^(src/)?${f#src/} " "$dir/coverage-report.txt")
   lines=$(echo "$line" | awk '{print $10}')
   branches=$(echo "$line" | awk '{print $13}')
-  printf '  %-28s lines %8s  branches %8s\n' "$f" "$lines" "$branches"
+  low=""
   if [ -n "${SPLINTCORE_COVERAGE_MIN_BRANCH:-}" ]; then
     b=${branches%\%}
-    awk -v b="$b" -v m="$SPLINTCORE_COVERAGE_MIN_BRANCH" 'BEGIN { exit !(b + 0 < m + 0) }' && gate=1
+    if [ -z "$b" ] || awk -v b="$b" -v m="$SPLINTCORE_COVERAGE_MIN_BRANCH" \
+         'BEGIN { exit !(b + 0 < m + 0) }'; then
+      gate=1; low="  LOW (under ${SPLINTCORE_COVERAGE_MIN_BRANCH}%)"
+    fi
   fi
+  printf '  %-28s lines %8s  branches %8s%s\n' "$f" "$lines" "$branches" "$low"
 done
 echo "HTML: $dir/coverage-html/index.html"
+[ "$gate" -eq 0 ] || echo "coverage: a parser is under ${SPLINTCORE_COVERAGE_MIN_BRANCH}% branch coverage"
 [ "$rc" -eq 0 ] && [ "$gate" -eq 0 ]

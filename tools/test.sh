@@ -19,7 +19,10 @@
 #                                  mps2-an500: its SHA-256 next to the x86-64 golden
 #                                  (docs/embedding.md; about 2.5 min from a clean build dir)
 # Optional jobs, not in the default list (cross builds run under qemu-user, about 27 min):
-#   bash tools/test.sh coverage    llvm-cov line and branch coverage per file (tools/coverage.sh)
+#   bash tools/test.sh coverage    llvm-cov line and branch coverage per file (tools/coverage.sh);
+#                                  fails when a parser is under 95% branch coverage (from a
+#                                  clean build dir: 3.3 min of CPU, 20 min wall on the shared
+#                                  2-core machine, so not in the default list)
 #   bash tools/test.sh aarch64 armv7
 #   They run the suite except the long randomised Boolean properties (BooleanRandom.Phantom*,
 #   about 8 min under qemu, run natively by the default jobs); SPLINTCORE_CROSS_FULL=1 runs all.
@@ -388,9 +391,12 @@ lint_job() {
 }
 
 coverage_job() {
+  # Fails when a parser of outside bytes (JSON, case, STL, PLY, OBJ, the CT readers) is under
+  # SPLINTCORE_COVERAGE_MIN_BRANCH percent branch coverage (default 95, issue 9); prints the table.
   echo "=== coverage: clang -fprofile-instr-generate -fcoverage-mapping, llvm-cov report"
   ensure_packages clang llvm || return 1
-  if SPLINTCORE_JOBS="$par" bash tools/coverage.sh build/ci-coverage; then
+  if SPLINTCORE_JOBS="$par" SPLINTCORE_COVERAGE_MIN_BRANCH="${SPLINTCORE_COVERAGE_MIN_BRANCH:-95}" \
+       bash tools/coverage.sh build/ci-coverage; then
     total_passed=$((total_passed + 1))
   else
     total_failed=$((total_failed + 1)); return 1

@@ -80,11 +80,16 @@ struct StlInfo {
 // Reads triangles into `out` (appended). Never trusts the binary header's count: it must agree
 // with the bytes that follow (and with source.size when known, checked before reading on).
 // Errors (each with byte offset or line): kTruncated, kParseError, kNonFinite (names the
-// triangle), kLimitExceeded, kIoError, kArenaExhausted.
+// triangle), kLimitExceeded, kIoError, kArenaExhausted. Arena: the read buffer
+// (max(chunk_bytes, 4096)) and the triangles (36 bytes each, the array grown by half),
+// both left in place on success. On an error the arena is as it was and `out` holds what it
+// held before the call.
 Status read_stl(const Context& ctx, const ByteSource& source, const StlReadOptions& options,
                 ArenaArray<SoupTriangle>* out, StlInfo* info);
 
 // read_stl() then weld_exact(), leaving only the mesh in the arena (the soup is reclaimed).
+// `out` must be empty. Errors: read_stl()'s and weld_exact()'s. On an error the arena is as it
+// was and `out` is empty.
 Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlReadOptions& options,
                      Mesh* out, StlInfo* info);
 

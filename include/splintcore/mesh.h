@@ -37,13 +37,21 @@ uint64_t weld_exact_bound(uint64_t triangle_count);
 // coordinates become one vertex (-0.0 and +0.0 are the same). Vertex ids are given in order of
 // first appearance, so the result depends only on the soup, never on hashing. Triangles whose
 // corners weld together are kept (check_mesh() reports them as degenerate).
-// Errors: kArenaExhausted; kNonFinite (names the triangle); kLimitExceeded (> 2^32-1 corners).
+// Errors: kArenaExhausted; kNonFinite (names the triangle); kLimitExceeded (> 2^32-1 corners);
+// kInvalidArgument (`out` not empty); kCancelled. Arena: at most weld_exact_bound(); only the
+// mesh stays. On an error the arena is as it was (rewound to its top at entry) and `out` is
+// empty.
 Status weld_exact(const Context& ctx, Span<const SoupTriangle> soup, Mesh* out);
 
 // Welds corners closer than `tolerance` (max-norm, mm), order-independently: the connected
 // components of the "closer than tolerance" relation become one vertex, placed at the
 // component's lexicographically smallest corner. Permuting the soup's triangles permutes the
-// output triangles but never changes vertex positions.
+// output triangles but never changes vertex positions. `out` must be empty (bound to the
+// arena). Arena: the mesh stays; temporaries (sort keys, union-find, about 50 bytes a corner)
+// are returned before it finishes. Errors: kInvalidArgument (tolerance not > 0, `out` not
+// empty); kLimitExceeded (tolerance too small for the mesh's extent: more than 2^20 cells an
+// axis; > 2^32-1 corners); kNonFinite; kArenaExhausted; kCancelled. On an error the arena is
+// as it was and `out` is empty.
 Status weld_tolerance(const Context& ctx, Span<const SoupTriangle> soup, double tolerance,
                       Mesh* out);
 

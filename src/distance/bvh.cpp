@@ -105,10 +105,12 @@ uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,
   return kept + temps + 16 * 64;
 }
 
-Status build_distance_index(const Context& ctx, const Mesh& mesh,
-                            const DistanceIndexOptions& options, DistanceIndex* out) {
+namespace {
+
+// The body of build_distance_index (below), which undoes it on an error.
+Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceIndexOptions& options,
+                         DistanceIndex* out) {
   Arena& arena = *ctx.arena;
-  *out = DistanceIndex{};
   out->mesh = &mesh;
   const size_t nt = mesh.triangles.size();
   const size_t nv = mesh.vertices.size();
@@ -414,6 +416,21 @@ Status build_distance_index(const Context& ctx, const Mesh& mesh,
   out->vertex_normals = Span<const Vec3>(vnormals, nv);
   out->closed_manifold = closed_manifold;
   return Status::ok();
+}
+
+}  // namespace
+
+Status build_distance_index(const Context& ctx, const Mesh& mesh,
+                            const DistanceIndexOptions& options, DistanceIndex* out) {
+  *out = DistanceIndex{};
+  // On an error nothing stays: the arena goes back to its top at entry, *out is empty.
+  const Arena::Marker entry = ctx.arena->mark();
+  Status s = build_index_steps(ctx, mesh, options, out);
+  if (!s.is_ok()) {
+    ctx.arena->rewind(entry);
+    *out = DistanceIndex{};
+  }
+  return s;
 }
 
 }  // namespace splintcore

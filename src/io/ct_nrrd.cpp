@@ -112,7 +112,7 @@ Status read_nrrd(const Context& ctx, const ByteSource& source, const CtFileOpene
                              "header ends without the blank line before the data")
                       .at_byte(reader.offset()));
     }
-    if (len == 0 && !too_long) break;
+    if (len == 0) break;  // the blank line (a too long line is never empty)
     if (line[0] == '#') continue;
     size_t colon = 0;
     while (colon < len && line[colon] != ':') ++colon;
@@ -262,7 +262,7 @@ Status read_nrrd(const Context& ctx, const ByteSource& source, const CtFileOpene
   Vec3 spacing{spacings[0], spacings[1], spacings[2]};
   if (have_directions) {
     for (int a = 0; a < 3; ++a) {
-      if (!is_finite(directions[a])) return missing("space directions (finite)");
+      // parse_double takes finite numbers only, so the directions are finite.
       spacing[a] = length(directions[a]);
       if (spacing[a] > 0 && is_finite(spacing[a])) {
         axes[a] = Vec3{directions[a].x / spacing[a], directions[a].y / spacing[a],
@@ -284,13 +284,13 @@ Status read_nrrd(const Context& ctx, const ByteSource& source, const CtFileOpene
     line_no = geometry_line;
     return fail(axes_ok);
   }
-  if (!is_finite(origin)) return missing("space origin (finite)");
+  // The origin is finite: parse_double takes finite numbers only.
 
   RawData data;
   data.format = format;
-  data.nx = static_cast<uint32_t>(sizes[0] > 0xffffffffu ? 0xffffffffu : sizes[0]);
-  data.ny = static_cast<uint32_t>(sizes[1] > 0xffffffffu ? 0xffffffffu : sizes[1]);
-  data.nz = static_cast<uint32_t>(sizes[2] > 0xffffffffu ? 0xffffffffu : sizes[2]);
+  data.nx = static_cast<uint32_t>(sizes[0]);  // each checked to be 1..2^32-1 above
+  data.ny = static_cast<uint32_t>(sizes[1]);
+  data.nz = static_cast<uint32_t>(sizes[2]);
   data.data_file = data_file[0] != '\0' ? data_file : nullptr;
   data.line_skip = static_cast<uint64_t>(line_skip);
   data.byte_skip = byte_skip;

@@ -71,7 +71,8 @@ inline StatusCode parse_real(const char* first, const char* last, bool as_float,
     const bool ok = (c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.' || c == 'e' ||
                     c == 'E';
     if (!ok) {
-      const char* q = (*first == '-' && last - first > 1) ? first + 1 : first;
+      // A leading '-' is followed by the bad character, so first + 1 is in range.
+      const char* q = *first == '-' ? first + 1 : first;
       const char n = static_cast<char>(*q | 0x20);
       return (n == 'n' || n == 'i') ? StatusCode::kNonFinite : StatusCode::kParseError;
     }
@@ -94,7 +95,7 @@ inline StatusCode parse_real(const char* first, const char* last, bool as_float,
 inline bool parse_integer(const char* first, const char* last, int64_t* out) {
   if (first != last && *first == '+' && last - first > 1 && first[1] != '-') ++first;
   auto r = std::from_chars(first, last, *out, 10);
-  return r.ec == std::errc() && r.ptr == last && first != last;
+  return r.ec == std::errc() && r.ptr == last;  // from_chars fails on an empty range
 }
 
 // Lines of text from a Reader into a buffer of `cap` bytes (the line end is not kept; a '\r'

@@ -201,7 +201,8 @@ struct Tokenizer {
     return Status::ok();
   }
 
-  // Skips to the end of the line (the solid name), copying up to `cap - 1` bytes of it.
+  // Skips to the end of the line (the solid name), copying up to `cap - 1` bytes of it
+  // (`copy` null, or cap > 0).
   Status rest_of_line(char* copy, size_t cap) {
     size_t n = 0;
     bool leading = true;
@@ -219,7 +220,7 @@ struct Tokenizer {
         copy[n++] = static_cast<char>(c);
       }
     }
-    if (copy != nullptr && cap > 0) copy[n] = '\0';
+    if (copy != nullptr) copy[n] = '\0';  // callers give cap > 0 with a copy
     return Status::ok();
   }
 
@@ -384,7 +385,10 @@ Status read_stl(const Context& ctx, const ByteSource& source, const StlReadOptio
   }
   size_t chunk = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
   // The chunk buffer sits below the growing triangle array so that the array stays at the
-  // top of the arena and grows in place. It is not reclaimed here (read_stl_mesh does).
+  // top of the arena and grows in place. It is not reclaimed here on success (read_stl_mesh
+  // does); on an error the arena goes back to `entry` and `out` to what it held.
+  const Arena::Marker entry = ctx.arena->mark();
+  const ArenaArray<SoupTriangle> saved = *out;
   Reader in;
   in.source = &source;
   in.cap = chunk;
@@ -401,6 +405,10 @@ Status read_stl(const Context& ctx, const ByteSource& source, const StlReadOptio
     info->format = format;
     s = format == StlFormat::kAscii ? read_ascii(ctx, in, options, out, info)
                                     : read_binary(ctx, in, options, out, info);
+  }
+  if (!s.is_ok()) {
+    ctx.arena->rewind(entry);
+    *out = saved;
   }
   return located(s, source);
 }

@@ -83,11 +83,12 @@ uint64_t weld_exact_bound(uint64_t triangle_count) {
          corners * sizeof(Vec3) + 4 * 64;
 }
 
-Status weld_exact(const Context& ctx, Span<const SoupTriangle> soup, Mesh* out) {
+namespace {
+
+// The bodies of weld_exact and weld_tolerance; their public wrappers below check that `out` is
+// empty and, on an error, rewind the arena to where it was at entry and empty `out` again.
+Status weld_exact_steps(const Context& ctx, Span<const SoupTriangle> soup, Mesh* out) {
   Arena& arena = *ctx.arena;
-  if (!out->vertices.empty() || !out->triangles.empty()) {
-    return Status::error(StatusCode::kInvalidArgument, "weld_exact: output mesh must be empty");
-  }
   SPLINTCORE_RETURN_IF_ERROR(check_soup(soup));
   const size_t n = soup.size();
   if (n == 0) return Status::ok();
@@ -141,13 +142,9 @@ Status weld_exact(const Context& ctx, Span<const SoupTriangle> soup, Mesh* out) 
   return compact_vertices(arena, temp_start, positions, vertex_count, &out->vertices);
 }
 
-Status weld_tolerance(const Context& ctx, Span<const SoupTriangle> soup, double tolerance,
-                      Mesh* out) {
+Status weld_tolerance_steps(const Context& ctx, Span<const SoupTriangle> soup,
+                            double tolerance, Mesh* out) {
   Arena& arena = *ctx.arena;
-  if (!out->vertices.empty() || !out->triangles.empty()) {
-    return Status::error(StatusCode::kInvalidArgument,
-                         "weld_tolerance: output mesh must be empty");
-  }
   if (!is_finite(tolerance) || !(tolerance > 0.0)) {
     return make_error(StatusCode::kInvalidArgument, "weld tolerance must be > 0 mm, got ",
                       tolerance);
@@ -286,6 +283,39 @@ Status weld_tolerance(const Context& ctx, Span<const SoupTriangle> soup, double 
     positions[id_of_root[r]] = to_vec3(corners + 3 * size_t{best[r]});
   }
   return compact_vertices(arena, temp_start, positions, vertex_count, &out->vertices);
+}
+
+// A failed weld leaves nothing: the arena back at `entry`, `out` empty (as it was).
+Status undo_on_error(Status s, Arena& arena, const Arena::Marker& entry, const Mesh& saved,
+                     Mesh* out) {
+  if (!s.is_ok()) {
+    arena.rewind(entry);
+    *out = saved;
+  }
+  return s;
+}
+
+}  // namespace
+
+Status weld_exact(const Context& ctx, Span<const SoupTriangle> soup, Mesh* out) {
+  if (!out->vertices.empty() || !out->triangles.empty()) {
+    return Status::error(StatusCode::kInvalidArgument, "weld_exact: output mesh must be empty");
+  }
+  const Arena::Marker entry = ctx.arena->mark();
+  const Mesh saved = *out;
+  return undo_on_error(weld_exact_steps(ctx, soup, out), *ctx.arena, entry, saved, out);
+}
+
+Status weld_tolerance(const Context& ctx, Span<const SoupTriangle> soup, double tolerance,
+                      Mesh* out) {
+  if (!out->vertices.empty() || !out->triangles.empty()) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "weld_tolerance: output mesh must be empty");
+  }
+  const Arena::Marker entry = ctx.arena->mark();
+  const Mesh saved = *out;
+  return undo_on_error(weld_tolerance_steps(ctx, soup, tolerance, out), *ctx.arena, entry, saved,
+                       out);
 }
 
 }  // namespace splintcore

@@ -129,8 +129,10 @@ Vec3 polygon_normal(const Vec3* p, uint32_t n) {
 
 }  // namespace
 
-Status make_lines(const Context& ctx, Span<const Pick> picks, const Vec3& occlusal_normal,
-                  const char* list_name, ArenaArray<Line>* out) {
+namespace {
+
+Status make_lines_steps(const Context& ctx, Span<const Pick> picks, const Vec3& occlusal_normal,
+                        const char* list_name, ArenaArray<Line>* out) {
   const size_t n = picks.size();
   if (n < 2) {
     return make_error(StatusCode::kInvalidArgument, list_name, " list has ", n,
@@ -203,6 +205,21 @@ Status make_lines(const Context& ctx, Span<const Pick> picks, const Vec3& occlus
   return Status::ok();
 }
 
+}  // namespace
+
+Status make_lines(const Context& ctx, Span<const Pick> picks, const Vec3& occlusal_normal,
+                  const char* list_name, ArenaArray<Line>* out) {
+  // On an error the arena goes back to its top at entry and `out` to what it held.
+  const Arena::Marker entry = ctx.arena->mark();
+  const ArenaArray<Line> saved = *out;
+  Status s = make_lines_steps(ctx, picks, occlusal_normal, list_name, out);
+  if (!s.is_ok()) {
+    ctx.arena->rewind(entry);
+    *out = saved;
+  }
+  return s;
+}
+
 uint64_t splint_base_bound(uint64_t sections, uint32_t points_per_section) {
   const uint64_t v = sections * points_per_section;
   const uint64_t t = 2 * v;
@@ -210,13 +227,12 @@ uint64_t splint_base_bound(uint64_t sections, uint32_t points_per_section) {
          check_closed_oriented_bound(v, t) + find_self_intersections_bound(t) + 16 * 64;
 }
 
-Status build_splint_base(const Context& ctx, Span<const Line> upper, Span<const Line> lower,
-                         const BaseParams& params, Mesh* out, BaseReport* report) {
+namespace {
+
+// The body of build_splint_base (below), which checks `out` and undoes this on an error.
+Status build_base_steps(const Context& ctx, Span<const Line> upper, Span<const Line> lower,
+                        const BaseParams& params, Mesh* out, BaseReport* report) {
   Arena& arena = *ctx.arena;
-  *report = BaseReport{};
-  if (!out->vertices.empty() || !out->triangles.empty()) {
-    return Status::error(StatusCode::kInvalidArgument, "build_splint_base: output mesh must be empty");
-  }
   const size_t n = upper.size();
   if (n != lower.size()) {
     return make_error(StatusCode::kInvalidArgument, "upper and lower lists do not pair up: ", n,
@@ -456,6 +472,25 @@ Status build_splint_base(const Context& ctx, Span<const Line> upper, Span<const 
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "base", 4, 4));
   return Status::ok();
+}
+
+}  // namespace
+
+Status build_splint_base(const Context& ctx, Span<const Line> upper, Span<const Line> lower,
+                         const BaseParams& params, Mesh* out, BaseReport* report) {
+  *report = BaseReport{};
+  if (!out->vertices.empty() || !out->triangles.empty()) {
+    return Status::error(StatusCode::kInvalidArgument, "build_splint_base: output mesh must be empty");
+  }
+  // On an error nothing stays: the arena back at its top at entry, `out` empty.
+  const Arena::Marker entry = ctx.arena->mark();
+  const Mesh saved = *out;
+  Status s = build_base_steps(ctx, upper, lower, params, out, report);
+  if (!s.is_ok()) {
+    ctx.arena->rewind(entry);
+    *out = saved;
+  }
+  return s;
 }
 
 }  // namespace splintcore

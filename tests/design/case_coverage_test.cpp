@@ -253,5 +253,85 @@ TEST(CaseCoverage, EveryOptionalKeyIsRead) {
   EXPECT_EQ(c.memory_cap, 1048576u);
 }
 
+TEST(CaseCoverage, CtKeys) {
+  auto ct = [](const std::string& body) { return make_case("\"ct\": {" + body + "},"); };
+  const std::vector<Case> cases = {
+      {"hu_max fraction", ct(R"("volume": "v.nrrd", "hu_max": 400.5)"),
+       StatusCode::kInvalidArgument, "\"hu_max\" must be an integer"},
+      {"smooth fraction", ct(R"("volume": "v.nrrd", "smooth": 2.5)"),
+       StatusCode::kInvalidArgument, "\"smooth\" must be an integer"},
+      {"decimate fraction", ct(R"("volume": "v.nrrd", "decimate": 1000.5)"),
+       StatusCode::kInvalidArgument, "\"decimate\" must be an integer"},
+      {"connectivity 18", ct(R"("volume": "v.nrrd", "connectivity": 18)"),
+       StatusCode::kInvalidArgument, "\"connectivity\" must be 6 or 26"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    test::TestArena t(size_t{1} << 20);
+    CaseFile out;
+    Status s = parse_case(Context(&t.arena), c.text.data(), c.text.size(), "case.json", &out);
+    EXPECT_EQ(s.code(), c.code) << test::format(s);
+    EXPECT_NE(std::string(s.message()).find(c.fragment), std::string::npos) << s.message();
+    EXPECT_EQ(t.arena.used(), 0u);
+  }
+  // Accepted: 26-connectivity, smoothing, no decimation.
+  const std::string text = ct(R"("volume": "v.nrrd", "hu_min": -100, "hu_max": 2000,
+                                  "connectivity": 26, "smooth": 3)");
+  test::TestArena t(size_t{1} << 20);
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse_case(Context(&t.arena), text.data(), text.size(), "case.json", &c));
+  EXPECT_STREQ(c.ct_volume, "v.nrrd");
+  EXPECT_EQ(c.ct_hu_min, -100);
+  EXPECT_EQ(c.ct_connectivity, 26u);
+  EXPECT_EQ(c.ct_smooth, 3u);
+  EXPECT_EQ(c.ct_decimate, 0u);
+}
+
+TEST(CaseCoverage, OptionalPartsLeftOut) {
+  // An output with only the splint's name; a blockout without closing.
+  const std::string text = make_case(
+      R"("insertion_direction": [0, 0, 1], "blockout": {"voxel": 0.2, "closing_radius": 0},
+         "output": {"splint": "s.stl"},)");
+  test::TestArena t(size_t{1} << 20);
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse_case(Context(&t.arena), text.data(), text.size(), "case.json", &c));
+  EXPECT_STREQ(c.output_splint, "s.stl");
+  EXPECT_EQ(c.output_report, nullptr);
+  EXPECT_TRUE(c.has_blockout);
+  EXPECT_EQ(c.blockout_closing, 0.0);
+}
+
+TEST(CaseCoverage, BaseFailuresLeaveTheArenaAsItWas) {
+  // The upper picks, then the lower picks, then the base itself fail: nothing stays.
+  const std::string same_place = R"({"position": [0, 0, -1]}, {"position": [0, 0, -1]})";
+  const std::vector<std::pair<std::string, const char*>> cases = {
+      {make_case("", "", "", R"("upper": [{"position": [0, 0, 1]}, {"position": [0, 0, 1]}],
+                               "lower": [{"position": [0, 0, -1]}, {"position": [10, 0, -1]}])"),
+       "upper pick 1"},
+      {make_case("", "", "", R"("upper": [{"position": [0, 0, 1]}, {"position": [10, 0, 1]}],
+                               "lower": [)" + same_place + "]"),
+       "lower pick 1"},
+      {make_case("", "", R"("spacing_mm": 0.5, "inner_length_mm": 0.01, "outside_length_mm": 0.01,)",
+                 R"("upper": [{"position": [0, 0, 1]}, {"position": [10, 0, 1]}],
+                    "lower": [{"position": [0, 0, 1]}, {"position": [10, 0, 1]}])"),
+       ""},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.first);
+    test::TestArena t(size_t{16} << 20);
+    CaseFile cf;
+    SPLINTCORE_ASSERT_OK(
+        parse_case(Context(&t.arena), c.first.data(), c.first.size(), "case.json", &cf));
+    const size_t used = t.arena.used();
+    Mesh base(&t.arena);
+    BaseReport report;
+    Status s = build_case_base(Context(&t.arena), cf, &base, &report);
+    EXPECT_FALSE(s.is_ok());
+    EXPECT_NE(std::string(s.message()).find(c.second), std::string::npos) << s.message();
+    EXPECT_EQ(t.arena.used(), used);
+    EXPECT_TRUE(base.vertices.empty() && base.triangles.empty());
+  }
+}
+
 }  // namespace
 }  // namespace splintcore

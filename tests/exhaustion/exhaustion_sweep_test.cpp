@@ -13,20 +13,16 @@
 //    until the run succeeds): failures inside code that reuses memory below the high water;
 //    every block taken is given back, with its size (no leak, also under ASan).
 // Each failure must be kArenaExhausted with "need N bytes" text, leave the arena's top where
-// it was (all operations here clean up after themselves, except those documented below) and
-// leave the outputs empty; the success at the end must give the reference output.
-// The counts of failure points tried are printed (and checked to be > 0) per operation.
-//
-// Exceptions to "the top is back where it was, outputs empty" (is_tidy below): weld_exact,
-// weld_tolerance, read_stl, read_stl_mesh, build_case_base, make_lines/build_splint_base and
-// build_distance_index leave their partly grown outputs (and temporaries) above the caller's
-// mark on failure; their headers promise nothing else, so callers rewind to their own mark.
-// For them only the status is checked and the leftovers counted (printed). parse_json and
-// parse_case rewind (fixed in issue 9), as do the checks, the Boolean, marching cubes, the
-// printer check and design_splint.
+// it was (arena.used() equal to its value before the call: every public operation promises
+// "on an error the arena is as it was") and leave the outputs empty; the success at the end
+// must give the reference output. Operations that need an index (the distance queries) are
+// checked against the arena's top after the index was built.
+// The counts of failure points tried are printed (and checked to be > 0) per operation, with
+// the running total over the operations swept so far.
 
 #include <gtest/gtest.h>
 
+#include <charconv>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -42,6 +38,7 @@
 #include "splintcore/io.h"
 #include "splintcore/json.h"
 #include "splintcore/mesh.h"
+#include "splintcore/mesh_io.h"
 #include "splintcore/platform.h"
 #include "splintcore/printer.h"
 #include "splintcore/spline.h"
@@ -92,11 +89,8 @@ uint64_t need_of(const Status& s) {
 }
 
 // The failure's checks; returns the need (0 when the failure is not clean).
-// `tidy`: the operation documents that a failure rewinds the arena and leaves its outputs
-// empty; otherwise (see kUntidy below) only the status is checked and the leftovers counted.
-uint64_t g_untidy_failures = 0;
 uint64_t check_failure(const char* name, const OpRun& r, const Arena& arena, size_t used_before,
-                       const std::string& where, bool tidy = true) {
+                       const std::string& where) {
   EXPECT_EQ(r.status.code(), StatusCode::kArenaExhausted)
       << name << " " << where << ": " << format(r.status);
   uint64_t need = need_of(r.status);
@@ -110,12 +104,8 @@ uint64_t check_failure(const char* name, const OpRun& r, const Arena& arena, siz
   EXPECT_NE(std::string(r.status.message()).find(" bytes"), std::string::npos)
       << name << " " << where << ": " << r.status.message();
   EXPECT_GT(need, 0u) << name << " " << where << ": " << r.status.message();
-  if (tidy) {
-    EXPECT_EQ(arena.used(), used_before) << name << " " << where << ": the top moved";
-    EXPECT_TRUE(r.outputs_empty) << name << " " << where << ": partial output";
-  } else if (arena.used() != used_before || !r.outputs_empty) {
-    ++g_untidy_failures;
-  }
+  EXPECT_EQ(arena.used(), used_before) << name << " " << where << ": the top moved";
+  EXPECT_TRUE(r.outputs_empty) << name << " " << where << ": partial output";
   if (r.status.code() != StatusCode::kArenaExhausted) return 0;
   return need;
 }
@@ -169,23 +159,12 @@ void hook_release(void* user, void* pointer, size_t bytes) {
   std::free(pointer);
 }
 
-// Operations whose failures leave memory above the arena's top or a partial output (their
-// headers do not promise otherwise; reported in issue 9): the caller rewinds its own mark.
-bool is_tidy(const std::string& name) {
-  static const char* const kUntidy[] = {"weld_exact", "weld_tolerance", "read_stl (",
-                                        "read_stl_mesh", "build_case_base",
-                                        "make_lines + build_splint_base", "build_distance_index",
-                                        "index + ", nullptr};
-  for (const char* const* u = kUntidy; *u != nullptr; ++u) {
-    if (name.compare(0, std::strlen(*u), *u) == 0) return false;
-  }
-  return true;
-}
+// Failure points tried by every sweep run so far in this process (printed after each).
+Counts g_total;
+uint64_t g_operations = 0;
 
 Counts sweep(const char* name, const Operation& op, size_t reference_cap = size_t{256} << 20) {
   Counts counts;
-  const bool tidy = is_tidy(name);
-  g_untidy_failures = 0;
   uint64_t overstated = 0;  // failures whose need exceeded the reference run's high water
   // 1. The reference.
   std::vector<uint8_t> expected;
@@ -207,7 +186,7 @@ Counts sweep(const char* name, const Operation& op, size_t reference_cap = size_
       EXPECT_EQ(r.output, expected) << name << " cap " << cap << ": output differs";
       return uint64_t{0};
     }
-    const uint64_t n = check_failure(name, r, arena, 0, "cap " + std::to_string(cap), tidy);
+    const uint64_t n = check_failure(name, r, arena, 0, "cap " + std::to_string(cap));
     EXPECT_GT(n, cap) << name << " cap " << cap << ": a need within the cap";
     return n;
   };
@@ -231,7 +210,7 @@ Counts sweep(const char* name, const Operation& op, size_t reference_cap = size_
         EXPECT_EQ(r.output, expected) << name << " cap " << n - 1;
       } else {
         const uint64_t again =
-            check_failure(name, r, arena, 0, "cap " + std::to_string(n - 1), tidy);
+            check_failure(name, r, arena, 0, "cap " + std::to_string(n - 1));
         EXPECT_GE(again, n) << name << " cap " << n - 1 << ": " << r.status.message();
       }
     }
@@ -276,7 +255,7 @@ Counts sweep(const char* name, const Operation& op, size_t reference_cap = size_
       h.fail_at = h.requests + n;
       r = op(arena);
       if (!r.status.is_ok()) {
-        check_failure(name, r, arena, 16, "block " + std::to_string(n), tidy);
+        check_failure(name, r, arena, 16, "block " + std::to_string(n));
       }
     }
     EXPECT_EQ(h.allocations, h.releases) << name << " block " << n;
@@ -296,10 +275,16 @@ Counts sweep(const char* name, const Operation& op, size_t reference_cap = size_
               static_cast<unsigned long long>(counts.small_caps),
               overstated > 0 ? "  (need overstated " : "",
               overstated > 0 ? (std::to_string(overstated) + "x)").c_str() : "");
-  if (!tidy) {
-    std::printf("[ sweep    ] %-34s %llu failures left arena memory or a partial output\n", name,
-                static_cast<unsigned long long>(g_untidy_failures));
-  }
+  g_total.buffer_points += counts.buffer_points;
+  g_total.hook_points += counts.hook_points;
+  g_total.small_caps += counts.small_caps;
+  ++g_operations;
+  std::printf("[ sweep    ] total over %llu operations: buffer points %llu  hook points %llu  "
+              "small caps %llu\n",
+              static_cast<unsigned long long>(g_operations),
+              static_cast<unsigned long long>(g_total.buffer_points),
+              static_cast<unsigned long long>(g_total.hook_points),
+              static_cast<unsigned long long>(g_total.small_caps));
   return counts;
 }
 
@@ -452,6 +437,54 @@ TEST(ExhaustionSweep, Stl) {
   }
 }
 
+// Shortest round-trip text of a double (the torus's vertices are float32 values).
+std::string shortest(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof(buf), v);
+  return std::string(buf, r.ptr);
+}
+
+TEST(ExhaustionSweep, PlyAndObj) {
+  // The torus as an ASCII PLY and as an OBJ, read and welded (read_mesh: detection, then
+// read_ply or read_obj).
+  HeldMesh torus(torus_soup());
+  std::string ply = "ply\nformat ascii 1.0\nelement vertex " +
+                    std::to_string(torus.mesh.vertices.size()) +
+                    "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
+                    std::to_string(torus.mesh.triangles.size()) +
+                    "\nproperty list uchar int vertex_indices\nend_header\n";
+  std::string obj = "# torus\n";
+  for (const Vec3& v : torus.mesh.vertices) {
+    const std::string xyz = shortest(v.x) + " " + shortest(v.y) + " " +
+                            shortest(v.z);
+    ply += xyz + "\n";
+    obj += "v " + xyz + "\n";
+  }
+  for (const Triangle& t : torus.mesh.triangles) {
+    ply += "3 " + std::to_string(t.v[0]) + " " + std::to_string(t.v[1]) + " " +
+           std::to_string(t.v[2]) + "\n";
+    obj += "f " + std::to_string(t.v[0] + 1) + " " + std::to_string(t.v[1] + 1) + " " +
+           std::to_string(t.v[2] + 1) + "\n";
+  }
+  const std::vector<std::pair<const char*, const std::string*>> files = {
+      {"read_mesh (ASCII PLY, welded)", &ply}, {"read_mesh (OBJ, welded)", &obj}};
+  for (const auto& f : files) {
+    sweep(f.first, [&](Arena& a) {
+      OpRun r;
+      MemorySource ms{reinterpret_cast<const uint8_t*>(f.second->data()), f.second->size(), 0,
+                      0};
+      MeshReadOptions options;
+      options.weld = true;
+      options.chunk_bytes = 4096;  // refills
+      Mesh m(&a);
+      r.status = read_mesh(Context(&a), memory_source(&ms), options, &m, nullptr);
+      r.outputs_empty = mesh_empty(m);
+      if (r.status.is_ok()) append_mesh(&r.output, m);
+      return r;
+    });
+  }
+}
+
 TEST(ExhaustionSweep, JsonAndCase) {
   const std::vector<uint8_t> text = fixture("cases/paper_scale.json");
   ASSERT_FALSE(text.empty());
@@ -494,25 +527,29 @@ TEST(ExhaustionSweep, JsonAndCase) {
     if (r.status.is_ok()) append_mesh(&r.output, m);
     return r;
   });
-  sweep("make_lines + build_splint_base", [&](Arena& a) {
+  sweep("make_lines", [&](Arena& a) {
     OpRun r;
-    const Arena::Marker start = a.mark();
-    ArenaArray<Line> up(&a), lo(&a);
+    ArenaArray<Line> up(&a);
+    r.status = make_lines(Context(&a), c.upper, c.occlusal_normal, "upper", &up);
+    r.outputs_empty = up.empty();
+    if (r.status.is_ok()) append_bytes(&r.output, up.data(), up.size());
+    return r;
+  });
+  // The lines held outside the arena under test.
+  ArenaArray<Line> held_up(&held.arena), held_lo(&held.arena);
+  SPLINTCORE_ASSERT_OK(
+      make_lines(Context(&held.arena), c.upper, c.occlusal_normal, "upper", &held_up));
+  SPLINTCORE_ASSERT_OK(
+      make_lines(Context(&held.arena), c.lower, c.occlusal_normal, "lower", &held_lo));
+  sweep("build_splint_base (rounded corners)", [&](Arena& a) {
+    OpRun r;
     Mesh m(&a);
     BaseReport report;
-    r.status = make_lines(Context(&a), c.upper, c.occlusal_normal, "upper", &up);
-    if (r.status.is_ok()) r.status = make_lines(Context(&a), c.lower, c.occlusal_normal, "lower", &lo);
-    if (r.status.is_ok()) {
-      BaseParams p = c.base;
-      p.corner_radius_mm = 0.5;  // the rounded-corner path too
-      r.status = build_splint_base(Context(&a), up.span(), lo.span(), p, &m, &report);
-    }
+    BaseParams p = c.base;
+    p.corner_radius_mm = 0.5;  // the rounded-corner path too
+    r.status = build_splint_base(Context(&a), held_up.span(), held_lo.span(), p, &m, &report);
     r.outputs_empty = mesh_empty(m);
-    if (r.status.is_ok()) {
-      append_mesh(&r.output, m);
-    } else {
-      a.rewind(start);  // the lines are this test's temporaries
-    }
+    if (r.status.is_ok()) append_mesh(&r.output, m);
     return r;
   });
 }
@@ -536,9 +573,17 @@ TEST(ExhaustionSweep, DistanceAndVolume) {
     return r;
   });
   // Queries on an index that lives below the arena's top (built in the run, kept).
+  // A failed query must leave the arena's top where the index left it (checked here, since
+  // the sweep's own check sees the top after the test's rewind of the index).
+  size_t after_index = 0;
   auto with_index = [&](Arena& a, OpRun* r, DistanceIndex* index) {
     r->status = build_distance_index(Context(&a), torus.mesh, DistanceIndexOptions{}, index);
+    after_index = a.used();
     return r->status.is_ok();
+  };
+  auto query_failed = [&](Arena& a, const Arena::Marker& start, const char* name) {
+    EXPECT_EQ(a.used(), after_index) << name << ": the failed query moved the top";
+    a.rewind(start);
   };
   sweep("index + triangles_in_box", [&](Arena& a) {
     OpRun r;
@@ -554,7 +599,7 @@ TEST(ExhaustionSweep, DistanceAndVolume) {
     if (r.status.is_ok()) {
       append_bytes(&r.output, out.data(), out.size());
     } else {
-      a.rewind(start);
+      query_failed(a, start, "index + triangles_in_box");
     }
     return r;
   });
@@ -570,7 +615,7 @@ TEST(ExhaustionSweep, DistanceAndVolume) {
     if (r.status.is_ok()) {
       for (const ClosestPoint& p : results) append_bytes(&r.output, &p.distance, 1);
     } else {
-      a.rewind(start);
+      query_failed(a, start, "index + batch_closest_points");
     }
     return r;
   });
@@ -587,7 +632,7 @@ TEST(ExhaustionSweep, DistanceAndVolume) {
     if (r.status.is_ok()) {
       append_bytes(&r.output, results.data(), results.size());
     } else {
-      a.rewind(start);
+      query_failed(a, start, "index + batch_signed_distances");
     }
     return r;
   });
@@ -609,7 +654,7 @@ TEST(ExhaustionSweep, DistanceAndVolume) {
     if (r.status.is_ok()) {
       append_bytes(&r.output, values.data(), values.size());
     } else {
-      a.rewind(start);
+      query_failed(a, start, "index + sample_sdf");
     }
     return r;
   });

@@ -1,9 +1,11 @@
 // Branches of the STL reader (src/io/stl_read.cpp) the other tests do not reach (issue 9:
 // >= 95% branch coverage of the parsers, measured by tools/coverage.sh): sources that do not
 // know their size or name, every kind of white space, upper-case keywords, odd solid names,
-// every spelling of a non-finite number, long bad tokens, tiny chunk sizes, a non-empty output.
+// every spelling of a non-finite number, long bad tokens, tiny chunk sizes, a non-empty output,
+// an I/O error at every byte, cancellation, and failed reads that leave the output as it was.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -87,7 +89,7 @@ TEST(StlCoverage, AsciiNonFiniteSpellings) {
     Read r = read(text);
     EXPECT_EQ(r.status.code(), StatusCode::kNonFinite) << test::format(r.status);
   }
-  for (const char* word : {"ab", "-x", "x1", "1x", "-", "--1", "1e", "+-1", "0x10"}) {
+  for (const char* word : {"ab", "-x", "-xy", "x1", "1x", "-", "--1", "1e", "+-1", "0x10"}) {
     SCOPED_TRACE(word);
     const std::string text = replace_all(kTetra, "vertex 0 1 0", std::string("vertex 0 ") + word + " 0");
     Read r = read(text);
@@ -154,6 +156,132 @@ TEST(StlCoverage, MeshOutputMustBeEmpty) {
   ms.position = 0;
   s = read_stl_mesh(Context(&t.arena), memory_source(&ms), StlReadOptions{}, &other, nullptr);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << test::format(s);
+}
+
+// A source over `bytes` whose read fails (-1) once `fail_at` bytes have been handed out.
+struct FailingSource {
+  const std::string* bytes = nullptr;
+  size_t position = 0;
+  size_t fail_at = 0;
+  static int64_t read(void* user, uint8_t* buffer, size_t capacity) {
+    FailingSource* f = static_cast<FailingSource*>(user);
+    if (f->position >= f->fail_at) return -1;
+    size_t n = f->fail_at - f->position;
+    if (n > capacity) n = capacity;
+    std::memcpy(buffer, f->bytes->data() + f->position, n);
+    f->position += n;
+    return static_cast<int64_t>(n);
+  }
+};
+
+std::string big_ascii() {
+  std::string text = "solid big\n";
+  for (int i = 0; text.size() < 9000; ++i) {
+    text += " facet normal 0 0 1\n  outer loop\n   vertex " + std::to_string(i) +
+            " 0 0\n   vertex 0 1 0\n   vertex 1 0 0\n  endloop\n endfacet\n";
+  }
+  return text + "endsolid big\n";
+}
+
+TEST(StlCoverage, AnIoErrorAtEveryByte) {
+  std::vector<SoupTriangle> soup;
+  for (int i = 0; i < 200; ++i) {
+    const float x = static_cast<float>(i);
+    soup.push_back(SoupTriangle{{{x, 0, 0}, {x, 1, 0}, {x, 0, 1}}});
+  }
+  const std::vector<uint8_t> bin = test::binary_stl(soup);
+  const std::string binary(bin.begin(), bin.end());
+  const std::string ascii = big_ascii();
+  for (const std::string* bytes : {&binary, &ascii}) {
+    // The error surfaces at a refill: every byte offset of the first chunk, then a stride.
+    for (size_t at = 0; at < bytes->size(); at += at < 4200 ? 1 : 97) {
+      test::TestArena t(size_t{1} << 20);
+      ASSERT_NE(t.arena.allocate(16), nullptr);
+      FailingSource f{bytes, 0, at};
+      ByteSource source;
+      source.read = &FailingSource::read;
+      source.user = &f;
+      source.size = bytes->size();
+      source.name = "fails.stl";
+      StlReadOptions o;
+      o.chunk_bytes = 4096;
+      ArenaArray<SoupTriangle> out(&t.arena);
+      Status s = read_stl(Context(&t.arena), source, o, &out, nullptr);
+      ASSERT_EQ(s.code(), StatusCode::kIoError) << at << ": " << test::format(s);
+      EXPECT_STREQ(s.file(), "fails.stl");
+      EXPECT_EQ(t.arena.used(), 16u) << at;
+      EXPECT_TRUE(out.empty()) << at;
+    }
+  }
+}
+
+TEST(StlCoverage, FailedReadsLeaveTheOutputAsItWas) {
+  test::TestArena t(size_t{1} << 20);
+  ArenaArray<SoupTriangle> out(&t.arena);
+  ASSERT_TRUE(out.push_back(SoupTriangle{{{9, 9, 9}, {9, 9, 9}, {9, 9, 9}}}));
+  const size_t used = t.arena.used();
+  std::string bad = kTetra;
+  bad.replace(bad.find("endloop"), 7, "endlop");  // after the first triangle was appended
+  MemorySource ms{reinterpret_cast<const uint8_t*>(bad.data()), bad.size(), 0, 0};
+  Status s = read_stl(Context(&t.arena), memory_source(&ms, "bad.stl"), StlReadOptions{}, &out,
+                      nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kParseError) << test::format(s);
+  EXPECT_EQ(t.arena.used(), used);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].p[0][0], 9.0f);
+  // The same list then takes a good file.
+  MemorySource good{reinterpret_cast<const uint8_t*>(kTetra), std::strlen(kTetra), 0, 0};
+  SPLINTCORE_ASSERT_OK(read_stl(Context(&t.arena), memory_source(&good), StlReadOptions{}, &out,
+                                nullptr));
+  EXPECT_EQ(out.size(), 5u);
+}
+
+bool cancel_now(void*, const char*, uint64_t, uint64_t) { return false; }
+
+TEST(StlCoverage, CancelledAndForcedFormats) {
+  const std::vector<uint8_t> bin =
+      test::binary_stl({SoupTriangle{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}});
+  const std::string binary(bin.begin(), bin.end());
+  Progress progress;
+  progress.report = &cancel_now;
+  const std::string tetra = kTetra;
+  for (const std::string* file : {&binary, &tetra}) {
+    const std::string& bytes = *file;
+    test::TestArena t(size_t{1} << 20);
+    MemorySource ms{reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), 0, 0};
+    ArenaArray<SoupTriangle> out(&t.arena);
+    Status s = read_stl(Context(&t.arena, nullptr, &progress), memory_source(&ms),
+                        StlReadOptions{}, &out, nullptr);
+    EXPECT_EQ(s.code(), StatusCode::kCancelled) << test::format(s);
+    EXPECT_EQ(t.arena.used(), 0u);
+  }
+  // ASCII forced on text that does not start with "solid".
+  StlReadOptions ascii;
+  ascii.format = StlFormat::kAscii;
+  Read r = read(std::string(kTetra).substr(8), true, "t.stl", ascii);
+  EXPECT_EQ(r.status.code(), StatusCode::kParseError) << test::format(r.status);
+  EXPECT_NE(std::string(r.status.message()).find("'solid'"), std::string::npos)
+      << r.status.message();
+  // A number where a keyword is expected; a binary file whose header starts "sol1d".
+  r = read(replace_all(kTetra, " facet normal 0 -1 0", " 12345 normal 0 -1 0"));
+  EXPECT_EQ(r.status.code(), StatusCode::kParseError) << test::format(r.status);
+  EXPECT_NE(std::string(r.status.message()).find("expected 'facet' or 'endsolid'"),
+            std::string::npos)
+      << r.status.message();
+  EXPECT_EQ(r.status.line(), 9u);
+  std::string sol1d = binary;
+  sol1d.replace(0, 5, "sol1d");
+  r = read(sol1d);
+  SPLINTCORE_ASSERT_OK(r.status);
+  EXPECT_EQ(r.info.format, StlFormat::kBinary);
+  // A finite coordinate beyond the limit.
+  const std::vector<uint8_t> far =
+      test::binary_stl({SoupTriangle{{{0, 0, 0}, {2e6f, 0, 0}, {0, 1, 0}}}});
+  r = read(std::string(far.begin(), far.end()));
+  EXPECT_EQ(r.status.code(), StatusCode::kLimitExceeded) << test::format(r.status);
+  EXPECT_NE(std::string(r.status.message()).find("triangle 0 vertex 1 has coordinate 2e+06 mm, beyond the limit"),
+            std::string::npos)
+      << r.status.message();
 }
 
 }  // namespace

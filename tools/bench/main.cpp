@@ -88,9 +88,11 @@ std::vector<uint8_t> to_binary_stl(const std::vector<SoupTriangle>& soup) {
   return bytes;
 }
 
+// Empty when missing or over the mesh cap (cli::kMaxMeshBytes; the error is printed).
 std::vector<uint8_t> read_whole(const std::string& path) {
   std::vector<uint8_t> out;
-  if (!cli::read_whole_file(path, &out)) out.clear();
+  const Status s = cli::read_whole_file(path, cli::kMaxMeshBytes, &out);
+  if (s.code() == StatusCode::kLimitExceeded) cli::print_error(s);
   return out;
 }
 

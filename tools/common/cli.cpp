@@ -1,5 +1,8 @@
 #include "cli.h"
 
+#include <sys/stat.h>
+
+#include <cerrno>
 #include <charconv>
 #include <cstring>
 
@@ -72,16 +75,59 @@ void print_error(const Status& status) {
   std::fprintf(stderr, "splintcore: error: %s\n", text);
 }
 
-bool read_whole_file(const std::string& path, std::vector<uint8_t>* out) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) return false;
+Status read_whole_file(const std::string& path, uint64_t max_bytes, std::vector<uint8_t>* out) {
   out->clear();
-  uint8_t buffer[1 << 16];
+  // Regular files: the size from stat. Others (pipes): more than the limit arrived.
+  auto too_big = [&](uint64_t size, bool known) {
+    Status s = known ? make_error(StatusCode::kLimitExceeded, "file is ", size, " bytes,")
+                     : make_error(StatusCode::kLimitExceeded, "file is");
+    return s.append(" over the limit of ")
+        .append_u64(max_bytes)
+        .append(" bytes (--max-input-bytes raises it)")
+        .in_file(path.c_str());
+  };
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    return make_error(StatusCode::kIoError, "cannot open the file: ", std::strerror(errno))
+        .in_file(path.c_str());
+  }
+  if (S_ISDIR(st.st_mode)) {
+    return make_error(StatusCode::kUnsupported, "is a directory, not a file").in_file(path.c_str());
+  }
+  if (S_ISREG(st.st_mode) && static_cast<uint64_t>(st.st_size) > max_bytes) {
+    return too_big(static_cast<uint64_t>(st.st_size), true);
+  }
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) {
+    return make_error(StatusCode::kIoError, "cannot open the file: ", std::strerror(errno))
+        .in_file(path.c_str());
+  }
+  if (S_ISREG(st.st_mode)) out->reserve(static_cast<size_t>(st.st_size));
+  std::vector<uint8_t> buffer(size_t{1} << 16);
   size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) out->insert(out->end(), buffer, buffer + n);
-  const bool ok = std::ferror(f) == 0;
+  bool over = false;
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), f)) > 0) {
+    if (n > max_bytes - out->size()) {  // out->size() <= max_bytes here
+      over = true;
+      break;
+    }
+    out->insert(out->end(), buffer.data(), buffer.data() + n);
+  }
+  const bool failed = std::ferror(f) != 0;
   std::fclose(f);
-  return ok;
+  if (over) {
+    out->clear();
+    return too_big(0, false);
+  }
+  if (failed) {
+    out->clear();
+    return make_error(StatusCode::kIoError, "read failed").in_file(path.c_str());
+  }
+  return Status::ok();
+}
+
+bool read_whole_file(const std::string& path, std::vector<uint8_t>* out) {
+  return read_whole_file(path, kMaxMeshBytes, out).is_ok();
 }
 
 }  // namespace cli

@@ -46,7 +46,21 @@ class JsonObject {
 std::string json_escape(const char* text);
 std::string json_number(double value);
 
-// Reads a whole file into `out`; false when it cannot be opened or read.
+// Caps on the files the tools read whole into the heap (SECURITY.md, "Input limits"). A case
+// file is parsed whole (parse_case takes at most 16 MiB anyway); a mesh file is read whole only
+// where its bytes are hashed for a report (design's jaws); elsewhere meshes stream through the
+// arena. `--max-input-bytes SIZE` (base, design) replaces both caps.
+constexpr uint64_t kMaxCaseBytes = uint64_t{16} << 20;  // 16 MiB
+constexpr uint64_t kMaxMeshBytes = uint64_t{2} << 30;   // 2 GiB
+
+// Reads a whole file into `out` (replaced), refusing one over `max_bytes`: the size is checked
+// before anything is read (a regular file's size from stat), and again while reading (a pipe or
+// a file that grows). Errors, naming the file: kIoError (cannot open or read it), kUnsupported
+// (a directory), kLimitExceeded ("file is N bytes, over the limit of M bytes"). On an error
+// `out` is empty.
+Status read_whole_file(const std::string& path, uint64_t max_bytes, std::vector<uint8_t>* out);
+
+// The same with the mesh cap (kMaxMeshBytes); false on any error.
 bool read_whole_file(const std::string& path, std::vector<uint8_t>* out);
 
 // Prints "splintcore: <formatted status>" to stderr.
