@@ -6,12 +6,14 @@
 //
 // To regenerate after an intended change of output: SPLINTCORE_UPDATE_GOLDEN=1 ./splintcore_tests
 // --gtest_filter='Golden*' (then review the diff and say why in the commit).
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <map>
 #include <sstream>
 
 #include "splintcore/design.h"
+#include "splintcore/render.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -134,6 +136,94 @@ TEST(Golden, ConvertIsIdempotent) {
     SPLINTCORE_ASSERT_OK(test::mesh_from_bytes(t.arena, once, &b));
     SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(t.arena, b, StlFormat::kBinary, &twice));
     EXPECT_EQ(once, twice) << f;
+  }
+}
+
+// Preview renders (include/splintcore/render.h): the PNG bytes of two small scenes, pinned as
+// "render:<name>" like the meshes above: a translucent box over the torus in the four views
+// (flat shading, overlay blending), and the torus coloured by |z| (Gouraud, ramp, legend).
+bool append_bytes(void* user, const uint8_t* data, size_t bytes) {
+  auto* out = static_cast<std::vector<uint8_t>*>(user);
+  out->insert(out->end(), data, data + bytes);
+  return true;
+}
+
+std::string render_hash(bool scalars) {
+  test::TestArena t(64 << 20);
+  Mesh torus, box;
+  Status s = test::mesh_from_bytes(
+      t.arena, test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/stl/torus_binary.stl"),
+      &torus);
+  EXPECT_TRUE(s.is_ok()) << test::format(s);
+  s = test::mesh_from_bytes(
+      t.arena,
+      test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/stl/box_solid_header.stl"),
+      &box);
+  EXPECT_TRUE(s.is_ok()) << test::format(s);
+  std::vector<double> height(torus.vertices.size());
+  for (size_t i = 0; i < height.size(); ++i) height[i] = std::fabs(torus.vertices[i].z);
+  std::vector<RenderMesh> items(scalars ? 1 : 2);
+  RenderOptions o;
+  if (scalars) {
+    items[0].mesh = &torus;
+    items[0].scalars = height.data();
+    items[0].scalar_max = 1.5;
+    o.width = 200;
+    o.height = 160;
+    o.shading = RenderShading::kGouraud;
+    o.legend = true;
+  } else {
+    items[0].mesh = &box;
+    items[0].alpha = 150;
+    items[1].mesh = &torus;
+    o.width = 256;
+    o.height = 256;
+  }
+  RenderImage image;
+  s = render_meshes(Context(&t.arena), Span<const RenderMesh>(items.data(), items.size()), o,
+                    &image);
+  EXPECT_TRUE(s.is_ok()) << test::format(s);
+  std::vector<uint8_t> png;
+  ByteSink sink;
+  sink.write = &append_bytes;
+  sink.user = &png;
+  s = write_png(Context(&t.arena), image, sink);
+  EXPECT_TRUE(s.is_ok()) << test::format(s);
+  return test::sha256_hex(png.data(), png.size());
+}
+
+TEST(Golden, RenderedPreviewsMatchCommittedHashes) {
+  std::map<std::string, std::string> golden = load_golden();
+  const std::pair<std::string, std::string> fresh[] = {
+      {"render:torus+box-4views", render_hash(false)},
+      {"render:torus-height-ramp", render_hash(true)}};
+  if (std::getenv("SPLINTCORE_UPDATE_GOLDEN") != nullptr) {
+    // Replace or append this test's lines; every other line is kept as it is.
+    std::ifstream in(golden_path());
+    std::ostringstream text;
+    std::string line;
+    std::map<std::string, bool> written;
+    while (std::getline(in, line)) {
+      std::istringstream fields(line);
+      std::string hash, key;
+      fields >> hash >> key;
+      for (const auto& kv : fresh) {
+        if (line.empty() || line[0] == '#' || key != kv.first) continue;
+        line = kv.second + "  " + kv.first;
+        written[kv.first] = true;
+      }
+      text << line << "\n";
+    }
+    for (const auto& kv : fresh) {
+      if (!written[kv.first]) text << kv.second << "  " << kv.first << "\n";
+    }
+    in.close();
+    std::ofstream(golden_path()) << text.str();
+    return;
+  }
+  for (const auto& kv : fresh) {
+    ASSERT_TRUE(golden.count(kv.first)) << "no golden hash for " << kv.first;
+    EXPECT_EQ(kv.second, golden[kv.first]) << kv.first;
   }
 }
 

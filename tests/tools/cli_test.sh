@@ -314,5 +314,109 @@ check "the error names line and column" -- grep -q 'bad.obj:4:7' "$work/err"
 check "no PLY written after a failure" -- test ! -e "$work/bad.ply"
 expect_exit 1 "compare a missing file" -- "$tool" compare "$work/cube.obj" "$work/none.ply"
 
+# Input caps (issue 9): a case file over the cap (16M by default; a sparse 17M file here) is
+# refused before it is read, naming the file and its size, and nothing is written;
+# --max-input-bytes sets the cap for the case and for the jaw meshes design reads whole.
+mkdir -p "$work/caps/out"
+cp "$fixtures/cases/paper_scale.json" "$work/caps/big.json"
+truncate -s 17M "$work/caps/big.json"
+expect_exit 1 "design: a case file over the 16M cap" -- "$tool" design "$work/caps/big.json" -o "$work/caps/out"
+check "the cap error names the file, its size and the cap" -- grep -q "big.json: file is 17825792 bytes, over the limit of 16777216 bytes" "$work/err"
+check "nothing written after the case cap" -- test -z "$(ls -A "$work/caps/out")"
+expect_exit 1 "base: a case file over the 16M cap" -- "$tool" base "$work/caps/big.json" -o "$work/caps/out/base.stl"
+check "base names the file and the limit" -- grep -q "big.json: file is 17825792 bytes, over the limit of 16777216" "$work/err"
+check "no base after the case cap" -- test ! -e "$work/caps/out/base.stl"
+expect_exit 2 "--max-input-bytes needs a size" -- "$tool" design "$work/case/case.json" -o "$work/caps/out" --max-input-bytes lots
+expect_exit 1 "design: --max-input-bytes under the case's size" -- "$tool" design "$work/case/case.json" -o "$work/caps/out" --max-input-bytes 1K
+check "the case over --max-input-bytes is named" -- grep -q "case.json: file is [0-9]* bytes, over the limit of 1024 bytes" "$work/err"
+expect_exit 1 "design: a jaw mesh over --max-input-bytes" -- "$tool" design "$work/case/case.json" -o "$work/caps/out" --max-input-bytes 64K --json
+check "the jaw over the cap is named" -- grep -q "maxilla.stl: file is [0-9]* bytes, over the limit of 65536 bytes" "$work/err"
+check "--json says limit_exceeded" -- grep -q '"status":"limit_exceeded"' "$work/out"
+check "nothing written after the jaw cap" -- test -z "$(ls -A "$work/caps/out")"
+
+# render (issue 8): PNG previews from splintcore's own rasteriser and encoder.
+png_ok() {  # png_ok FILE [W H]: signature, chunk CRCs, IDAT inflates to H rows of 3W+1 bytes
+  [ "$(head -c 8 "$1" | od -An -tx1 | tr -d ' \n')" = "89504e470d0a1a0a" ] || return 1
+  command -v python3 >/dev/null 2>&1 || return 0
+  python3 -c '
+import struct, sys, zlib
+d = open(sys.argv[1], "rb").read()
+p, idat, w, h = 8, b"", 0, 0
+while p < len(d):
+    n, = struct.unpack(">I", d[p:p + 4])
+    t, body = d[p + 4:p + 8], d[p + 8:p + 8 + n]
+    assert zlib.crc32(t + body) & 0xffffffff == struct.unpack(">I", d[p + 8 + n:p + 12 + n])[0], t
+    if t == b"IHDR":
+        w, h = struct.unpack(">II", body[:8])
+    if t == b"IDAT":
+        idat += body
+    p += 12 + n
+assert t == b"IEND"
+raw = zlib.decompress(idat)
+assert len(raw) == h * (3 * w + 1), (len(raw), w, h)
+if len(sys.argv) > 2:
+    assert (w, h) == (int(sys.argv[2]), int(sys.argv[3])), (w, h)
+' "$@"
+}
+expect_exit 0 "render --help" -- "$tool" render --help
+check "render --help mentions --views" -- grep -q -- "--views" "$work/out"
+expect_exit 2 "render without -o" -- "$tool" render "$work/cube.obj"
+expect_exit 2 "render without a mesh" -- "$tool" render -o "$work/bad.png"
+expect_exit 2 "render with --size 0x10" -- "$tool" render "$work/cube.obj" -o "$work/bad.png" --size 0x10
+expect_exit 2 "render with --size 9000x10" -- "$tool" render "$work/cube.obj" -o "$work/bad.png" --size 9000x10
+expect_exit 2 "render with an unknown view" -- "$tool" render "$work/cube.obj" -o "$work/bad.png" --views front,side
+expect_exit 2 "render with an empty view" -- "$tool" render "$work/cube.obj" -o "$work/bad.png" --views front,
+expect_exit 2 "render with a bad --shading" -- "$tool" render "$work/cube.obj" -o "$work/bad.png" --shading phong
+check "no PNG after usage errors" -- test ! -e "$work/bad.png"
+expect_exit 0 "render two meshes" -- "$tool" render "$work/cube.obj" "$work/cube_up.obj" -o "$work/r.png" --size 200x150 --json
+check "render --json is one JSON object" -- json_ok "$work/out"
+check "render --json names the PNG's hash" -- grep -q '"png_sha256":"[0-9a-f]\{64\}"' "$work/out"
+check "render wrote a valid 200x150 PNG" -- png_ok "$work/r.png" 200 150
+expect_exit 0 "render again with 2 threads" -- "$tool" render "$work/cube.obj" "$work/cube_up.obj" -o "$work/r2.png" --size 200x150 --threads 2
+check "render is deterministic" -- cmp -s "$work/r.png" "$work/r2.png"
+expect_exit 0 "render one view, Gouraud" -- "$tool" render "$work/cube.ply" -o "$work/r3.png" --views iso --shading gouraud --size 64x64
+check "one view: a valid 64x64 PNG" -- png_ok "$work/r3.png" 64 64
+expect_exit 1 "render a broken mesh" -- "$tool" render "$work/bad.obj" -o "$work/bad.png"
+expect_exit 1 "render with a memory cap too small" -- "$tool" render "$work/cube.obj" -o "$work/bad.png" --memory-cap 1M --json
+check "render --json says arena_exhausted" -- grep -q '"status":"arena_exhausted"' "$work/out"
+check "no PNG after a failure" -- test ! -e "$work/bad.png"
+expect_exit 0 "compare --png" -- "$tool" compare "$work/cube.obj" "$work/cube_up.obj" --png "$work/dev.png" --json
+check "compare --png wrote a valid PNG" -- png_ok "$work/dev.png" 1024 1024
+check "compare --json names the PNG" -- grep -q '"png":".*dev.png","png_sha256":"[0-9a-f]\{64\}","png_range_mm":1' "$work/out"
+expect_exit 2 "compare --png without a name" -- "$tool" compare "$work/cube.obj" "$work/cube_up.obj" --png
+check "design wrote the preview" -- png_ok "$work/design/preview.png" 1024 1024
+check "the report names the preview" -- grep -q '"preview":".*preview.png","preview_sha256":"[0-9a-f]\{64\}"' "$work/design/report.json"
+check "no preview after a failed design" -- test ! -e "$work/design2/preview.png"
+mkdir -p "$work/case3" "$work/design3"  # (a test above removed $work/case's mandible)
+"$tool" phantom --triangles 6000 -o "$work/case3" >/dev/null
+cp "$fixtures/cases/paper_scale.json" "$work/case3/case.json"
+expect_exit 0 "design again" -- "$tool" design "$work/case3/case.json" -o "$work/design3"
+check "design prints where the preview is" -- grep -q "^preview: .*design3/preview.png" "$work/out"
+check "the preview is deterministic" -- cmp -s "$work/design/preview.png" "$work/design3/preview.png"
+
+# The designer's options through the command (issue 8): fixtures/cases/blockout.json
+# (blockout, rounded edges, an engraved label, the thickness check, on the tray) with the
+# phantom jaws; `phantom` writes the matching case.
+mkdir -p "$work/opts"
+expect_exit 0 "phantom for the options" -- "$tool" phantom --triangles 6000 -o "$work/opts"
+check "phantom writes its case" -- grep -q "^case: .*opts/case.json" "$work/out"
+expect_exit 0 "design the phantom's own case" -- "$tool" design "$work/opts/case.json" -o "$work/opts/plain"
+check "the phantom's case gives the paper-scale golden" -- grep -q "\"splint_sha256\":\"$(grep " boolean:paper_scale-phantom6000$" "$fixtures/golden.sha256" | cut -d' ' -f1)\"" "$work/opts/plain/report.json"
+cp "$fixtures/cases/blockout.json" "$work/opts/case.json"
+expect_exit 0 "design with every option" -- "$tool" design "$work/opts/case.json" -o "$work/opts/out"
+check "summary names the label" -- grep -q '^label: "PHANTOM-01" engraved, 10 glyphs' "$work/out"
+check "summary gives the thinnest wall" -- grep -q '^thickness: .* thinner than 1 mm; thinnest' "$work/out"
+check "summary says placed on the tray" -- grep -q 'placed on the tray)$' "$work/out"
+check "design with every option has the golden bytes" -- grep -q "\"splint_sha256\":\"$(grep " design:blockout-phantom6000$" "$fixtures/golden.sha256" | cut -d' ' -f1)\"" "$work/opts/out/report.json"
+check "report: the label" -- grep -q '"label":{"text":"PHANTOM-01","glyphs":10' "$work/opts/out/report.json"
+check "report: the thin spots" -- grep -q '"thin_spots":\[{"position":\[' "$work/opts/out/report.json"
+check "report: the tray translation" -- grep -q '"placed_on_tray":true,"tray_translation_mm":\[' "$work/opts/out/report.json"
+check "report: the parameters" -- grep -q '"min_thickness_mm":1,"label_text":"PHANTOM-01","label_mode":"engrave"' "$work/opts/out/report.json"
+expect_exit 0 "the splint on the tray is a printable solid as placed" -- "$tool" check "$work/opts/out/splint.stl" --no-place
+sed 's/"text": "PHANTOM-01"/"text": "50%"/' "$fixtures/cases/blockout.json" >"$work/opts/case.json"
+expect_exit 1 "a label the font cannot write" -- "$tool" design "$work/opts/case.json" -o "$work/opts/bad"
+check "the error names the character" -- grep -q "label.*'%'" "$work/err"
+check "no splint after the label error" -- test ! -e "$work/opts/bad/splint.stl"
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -7,6 +7,7 @@
 
 #include "cli.h"
 #include "splintcore/distance.h"
+#include "splintcore/render.h"
 
 namespace splintcore {
 namespace cli {
@@ -62,21 +63,7 @@ Status compare_meshes(const Context& ctx, const Mesh& a, const Mesh& b,
 }
 
 void distance_colour(double distance, double range, uint8_t rgb[3]) {
-  double t = range > 0 ? distance / range : 0;
-  if (!(t > 0)) t = 0;  // also NaN
-  if (t > 1) t = 1;
-  auto channel = [](double x) { return static_cast<uint8_t>(std::floor(255.0 * x + 0.5)); };
-  if (t < 0.5) {
-    const double u = 2 * t;
-    rgb[0] = 0;
-    rgb[1] = channel(u);
-    rgb[2] = channel(1 - u);
-  } else {
-    const double u = 2 * t - 1;
-    rgb[0] = channel(u);
-    rgb[1] = channel(1 - u);
-    rgb[2] = 0;
-  }
+  render_ramp_colour(distance, range, rgb);  // the preview's ramp (render.h): one definition
 }
 
 std::string distance_ply(const Mesh& mesh, const std::vector<double>& distances, double range) {

@@ -18,6 +18,7 @@
 #include "../common/ct_phantom.h"
 #include "../common/ct_write.h"
 #include "../common/phantom.h"
+#include "../common/preview.h"
 #include "splintcore/blockout.h"
 #include "splintcore/boolean.h"
 #include "splintcore/core.h"
@@ -61,6 +62,7 @@ const char kUsage[] =
     "  ct-phantom -o PATH --format F        synthetic skull CT (dicom, nrrd or mha)\n"
     "  reconstruct VOLUME -o OUTDIR ...     CT in, maxilla.stl and mandible.stl out\n"
     "  compare A.stl B.stl [--ply OUT.ply]  surface deviation (mean/max/RMS, Hausdorff)\n"
+    "  render MESH... -o PREVIEW.png        PNG preview: front, top, right and iso views\n"
     "\n"
     "options of every command:\n"
     "  --help            this text for the command\n"
@@ -93,13 +95,14 @@ const char kConvertUsage[] =
 
 const char kBaseUsage[] =
     "usage: splintcore base CASE.json -o BASE.stl [--ascii] [--json]\n"
-    "                      [--memory-cap SIZE] [--threads N]\n"
+    "                      [--memory-cap SIZE] [--threads N] [--max-input-bytes SIZE]\n"
     "\n"
     "Builds the initial splint base of the case (Chen et al. 2016): each pick becomes a line\n"
     "(inner and outside point), centripetal Catmull-Rom splines run through the line ends,\n"
     "and ruled surfaces between sections sampled at matched arc length form one closed solid.\n"
     "The base is checked (closed, manifold, outward, no self-intersection, as float32) before\n"
-    "it is written, atomically. The case format is in docs/case-format.md.\n";
+    "it is written, atomically. The case format is in docs/case-format.md.\n"
+    "--max-input-bytes SIZE refuses a larger case file (default 16M).\n";
 
 const char kDistanceUsage[] =
     "usage: splintcore distance MESH.stl --query X,Y,Z [--query X,Y,Z ...]\n"
@@ -140,6 +143,7 @@ const char kPhantomUsage[] =
 
 const char kDesignUsage[] =
     "usage: splintcore design CASE.json -o OUTDIR [--json] [--memory-cap SIZE] [--threads N]\n"
+    "                        [--max-input-bytes SIZE]\n"
     "\n"
     "Runs the method on a case file (docs/case-format.md): reads the jaws it names (paths\n"
     "relative to the case file), moves each by its transform (rounded to float32, as a moved\n"
@@ -151,6 +155,8 @@ const char kDesignUsage[] =
     "the splint's SHA-256. Progress goes to stderr when it is a terminal. With a \"blockout\"\n"
     "object in the case, each jaw's interference (undercut) is removed after the Boolean\n"
     "(see `splintcore blockout --help`), reported per jaw. CT input joins when its issue lands.\n"
+    "--max-input-bytes SIZE refuses a larger case or jaw file (defaults: 16M for the case,\n"
+    "2G for a jaw mesh).\n"
     "Exit status: 0 splint written, 1 rejected (the message names the stage), 2 usage.\n";
 
 const char kSweepUsage[] =
@@ -186,6 +192,7 @@ struct Options {
   bool help = false;
   bool json = false;
   uint64_t memory_cap = kDefaultMemoryCap;
+  uint64_t max_input_bytes = 0;  // 0: cli::kMaxCaseBytes for cases, cli::kMaxMeshBytes for meshes
   unsigned threads = 1;
   std::vector<const char*> positional;
   const char* output = nullptr;
@@ -251,6 +258,11 @@ int parse_options(int argc, char** argv, const char* usage, bool takes_output, O
       }
       if (o->memory_cap > (uint64_t{1} << 40)) {
         return usage_error("--memory-cap is over 1T", usage);
+      }
+    } else if (std::strcmp(a, "--max-input-bytes") == 0) {
+      const char* v = value(a);
+      if (v == nullptr || !cli::parse_size(v, &o->max_input_bytes) || o->max_input_bytes == 0) {
+        return usage_error("--max-input-bytes needs a size such as 16M, 2G or 1048576", usage);
       }
     } else if (std::strcmp(a, "--threads") == 0) {
       const char* v = value(a);
@@ -605,7 +617,8 @@ int run_base(int argc, char** argv) {
   const double t0 = run.start;
 
   Span<uint8_t> text;
-  Status s = read_file(arena, o.positional[0], 16 << 20, &text);
+  Status s = read_file(arena, o.positional[0],
+                       o.max_input_bytes != 0 ? o.max_input_bytes : cli::kMaxCaseBytes, &text);
   if (!s.is_ok()) return rejected(o, "base", s, &arena);
   CaseFile c;
   s = parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), o.positional[0], &c);
@@ -1016,12 +1029,11 @@ int run_design(int argc, char** argv) {
   const double t0 = run.start;
   const std::string case_path = o.positional[0];
   std::vector<uint8_t> case_bytes;
-  if (!cli::read_whole_file(case_path, &case_bytes)) {
-    return rejected(o, "design", Status::error(StatusCode::kIoError, "cannot read the case file")
-                                     .in_file(case_path.c_str()), &arena);
-  }
+  Status s = cli::read_whole_file(
+      case_path, o.max_input_bytes != 0 ? o.max_input_bytes : cli::kMaxCaseBytes, &case_bytes);
+  if (!s.is_ok()) return rejected(o, "design", s, &arena);
   CaseFile c;
-  Status s = parse_case(run.ctx, reinterpret_cast<const char*>(case_bytes.data()),
+  s = parse_case(run.ctx, reinterpret_cast<const char*>(case_bytes.data()),
                         case_bytes.size(), case_path.c_str(), &c);
   if (!s.is_ok()) return rejected(o, "design", s, &arena);
   const size_t slash = case_path.find_last_of('/');
@@ -1049,10 +1061,9 @@ int run_design(int argc, char** argv) {
     }
     const std::string path = j.mesh[0] == '/' ? std::string(j.mesh) : folder + j.mesh;
     std::vector<uint8_t> bytes;
-    if (!cli::read_whole_file(path, &bytes)) {
-      return rejected(o, "design", Status::error(StatusCode::kIoError, "cannot read the jaw mesh")
-                                       .in_file(path.c_str()), &arena);
-    }
+    s = cli::read_whole_file(
+        path, o.max_input_bytes != 0 ? o.max_input_bytes : cli::kMaxMeshBytes, &bytes);
+    if (!s.is_ok()) return rejected(o, "design", s, &arena);
     MemorySource ms{bytes.data(), bytes.size(), 0, 0};
     Mesh m;
     MeshReadOptions read_options;  // STL, PLY or OBJ (by content), welded as STL is
@@ -1103,6 +1114,30 @@ int run_design(int argc, char** argv) {
   const std::string splint_hash = hex_sha256(stl.data(), stl.size());
   s = write_bytes_atomically(splint_path, std::string(stl.begin(), stl.end()));
   if (!s.is_ok()) return rejected(o, "design", s, &arena);
+  // OUTDIR/preview.png: the splint on the jaws as the plan (and a tray placement) moved them.
+  // Not fatal: the splint is written; a preview that fails (e.g. a tight --memory-cap) is a
+  // warning and the report says why.
+  cli::PreviewInfo preview;
+  Status preview_status;
+  char preview_error[512] = "";
+  {
+    std::vector<const Mesh*> preview_jaws;
+    std::vector<RigidTransform> preview_moves;
+    for (size_t i = 0; i < jaws.size(); ++i) {
+      preview_jaws.push_back(&jaws[i]);
+      preview_moves.push_back(report.placed_on_tray
+                                  ? compose(report.print.placement, c.jaws[i].transform)
+                                  : c.jaws[i].transform);
+    }
+    preview_status = cli::write_preview(ctx, splint, preview_jaws, preview_moves,
+                                        out_dir + "/preview.png", 1024, 1024, &preview);
+    if (!preview_status.is_ok()) {
+      preview_status.format(preview_error, sizeof(preview_error));
+      std::fprintf(stderr, "splintcore: warning: no preview: %s\n", preview_error);
+    } else if (!o.json) {
+      std::printf("preview: %s\n", preview.path.c_str());
+    }
+  }
   const double t_end = monotonic_seconds();
 
   JsonObject j;
@@ -1262,6 +1297,13 @@ int run_design(int argc, char** argv) {
   JsonObject out;
   out.add("splint", splint_path);
   out.add("splint_sha256", splint_hash);
+  if (preview_status.is_ok()) {
+    out.add("preview", preview.path);
+    out.add("preview_sha256", preview.sha256);
+    out.add("preview_time_s", preview.render_seconds + preview.encode_seconds);
+  } else {
+    out.add("preview_error", preview_error);
+  }
   out.add("triangles", static_cast<uint64_t>(splint.triangles.size()));
   out.add("volume_mm3", report.print.mesh.volume);
   out.add("extent_mm", report.print.extent);
@@ -1932,7 +1974,7 @@ int run_blockout_command(int argc, char** argv) {
 }
 
 const char kCompareUsage[] =
-    "usage: splintcore compare A B [--ply OUT.ply] [--range MAX] [--json]\n"
+    "usage: splintcore compare A B [--ply OUT.ply] [--png OUT.png] [--range MAX] [--json]\n"
     "                         [--memory-cap SIZE] [--threads N]\n"
     "\n"
     "Surface deviation between two meshes (STL, PLY or OBJ), the accuracy measure of Chen et\n"
@@ -1941,17 +1983,23 @@ const char kCompareUsage[] =
     "and their symmetric maximum (the Hausdorff distance over the vertices). --ply writes A as\n"
     "binary PLY, atomically, with each vertex coloured on a blue-green-red ramp over [0, MAX]\n"
     "(default: the A-to-B maximum) and its distance as the 'quality' property. The figures and\n"
-    "the PLY bytes are the same for any thread count.\n";
+    "the PLY bytes are the same for any thread count. --png writes a 1024x1024 PNG of A in four\n"
+    "views (front, top, right, iso) coloured per pixel on the same ramp (blue 0, green MAX/2,\n"
+    "red MAX and beyond), with the ramp as a bar at the right edge (blue at the bottom).\n";
 
 int run_compare(int argc, char** argv) {
   // Its own options first; the rest go through parse_options.
   const char* ply = nullptr;
+  const char* png = nullptr;
   double range = -1;
   std::vector<char*> rest;
   for (int i = 0; i < argc; ++i) {
     if (std::strcmp(argv[i], "--ply") == 0) {
       if (i + 1 >= argc) return usage_error("--ply needs a file name", kCompareUsage);
       ply = argv[++i];
+    } else if (std::strcmp(argv[i], "--png") == 0) {
+      if (i + 1 >= argc) return usage_error("--png needs a file name", kCompareUsage);
+      png = argv[++i];
     } else if (std::strcmp(argv[i], "--range") == 0) {
       const char* v = i + 1 < argc ? argv[++i] : nullptr;
       const char* end = v == nullptr ? nullptr : v + std::strlen(v);
@@ -1987,6 +2035,11 @@ int run_compare(int argc, char** argv) {
     s = write_bytes_atomically(ply, cli::distance_ply(a, da, range));
     if (!s.is_ok()) return rejected(o, "compare", s, &arena);
   }
+  cli::PreviewInfo png_info;
+  if (png != nullptr) {  // identical meshes (range 0): all blue on a 1 mm ramp
+    s = cli::write_distance_png(ctx, a, da, range > 0 ? range : 1.0, png, 1024, 1024, &png_info);
+    if (!s.is_ok()) return rejected(o, "compare", s, &arena);
+  }
   const double seconds = monotonic_seconds() - t0;
   if (o.json) {
     JsonObject j;
@@ -2011,6 +2064,11 @@ int run_compare(int argc, char** argv) {
       j.add("ply", ply);
       j.add("range_mm", range);
     }
+    if (png != nullptr) {
+      j.add("png", png);
+      j.add("png_sha256", png_info.sha256);
+      j.add("png_range_mm", range > 0 ? range : 1.0);
+    }
     j.add("time_s", seconds);
     j.add("peak_arena_bytes", static_cast<uint64_t>(arena.high_water()));
     std::printf("%s\n", j.str().c_str());
@@ -2025,7 +2083,151 @@ int run_compare(int argc, char** argv) {
                 c.b_to_a.rms);
     std::printf("Hausdorff (symmetric max): %.6f mm\n", c.hausdorff);
     if (ply != nullptr) std::printf("ply: %s (colour range [0, %.6f] mm)\n", ply, range);
+    if (png != nullptr) {
+      std::printf("png: %s (colour range [0, %.6f] mm, blue to red)\n", png,
+                  range > 0 ? range : 1.0);
+    }
     std::printf("time: %.3f s, peak arena: %llu bytes\n", seconds,
+                static_cast<unsigned long long>(arena.high_water()));
+  }
+  return kExitOk;
+}
+
+
+// ---- render: PNG previews (issue 8) ----------------------------------------------------------
+const char kRenderUsage[] =
+    "usage: splintcore render MESH [MESH ...] -o PREVIEW.png [--size WxH] [--views LIST]\n"
+    "                        [--shading flat|gouraud] [--json] [--memory-cap SIZE] [--threads N]\n"
+    "\n"
+    "A PNG preview of meshes (STL, PLY or OBJ) drawn by splintcore's own rasteriser and PNG\n"
+    "encoder: the first mesh as the splint (opaque blue), the others as jaws (translucent\n"
+    "grey), in orthographic views tiled two per row: --views is a comma-separated list\n"
+    "of front, top, right and iso (default all four, in that order). --size is the whole image\n"
+    "(default 1024x1024, each side 1..8192). All views share one scale. --shading gouraud\n"
+    "interpolates vertex lighting (default flat). The file is written atomically; its bytes\n"
+    "depend only on the inputs and options (any --threads).\n";
+
+// "WxH" -> two sides of 1..kRenderMaxSide.
+bool parse_wxh(const char* text, uint32_t* w, uint32_t* h) {
+  const char* x = std::strchr(text, 'x');
+  if (x == nullptr) return false;
+  const char* end = text + std::strlen(text);
+  uint64_t a = 0, b = 0;
+  auto ra = std::from_chars(text, x, a);
+  auto rb = std::from_chars(x + 1, end, b);
+  if (ra.ec != std::errc() || ra.ptr != x || rb.ec != std::errc() || rb.ptr != end) return false;
+  if (a == 0 || b == 0 || a > kRenderMaxSide || b > kRenderMaxSide) return false;
+  *w = static_cast<uint32_t>(a);
+  *h = static_cast<uint32_t>(b);
+  return true;
+}
+
+int run_render(int argc, char** argv) {
+  RenderOptions ro;
+  std::vector<char*> rest;
+  for (int i = 0; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--size") == 0) {
+      if (i + 1 >= argc || !parse_wxh(argv[i + 1], &ro.width, &ro.height)) {
+        return usage_error("--size needs WxH, each side 1..8192 pixels", kRenderUsage);
+      }
+      ++i;
+    } else if (std::strcmp(argv[i], "--views") == 0) {
+      const char* v = i + 1 < argc ? argv[++i] : nullptr;
+      ro.view_count = 0;
+      bool ok = v != nullptr && *v != '\0';
+      while (ok && *v != '\0') {
+        const char* comma = std::strchr(v, ',');
+        const size_t n = comma != nullptr ? static_cast<size_t>(comma - v) : std::strlen(v);
+        ok = ro.view_count < kRenderMaxViews &&
+             parse_render_view(v, n, &ro.views[ro.view_count]);
+        ++ro.view_count;
+        v += n;
+        if (*v == ',') {
+          ++v;
+          ok = ok && *v != '\0';
+        }
+      }
+      if (!ok) {
+        return usage_error("--views needs a list of front, top, right, iso (at most 8)",
+                           kRenderUsage);
+      }
+    } else if (std::strcmp(argv[i], "--shading") == 0) {
+      const char* v = i + 1 < argc ? argv[++i] : nullptr;
+      if (v != nullptr && std::strcmp(v, "flat") == 0) {
+        ro.shading = RenderShading::kFlat;
+      } else if (v != nullptr && std::strcmp(v, "gouraud") == 0) {
+        ro.shading = RenderShading::kGouraud;
+      } else {
+        return usage_error("--shading takes flat or gouraud", kRenderUsage);
+      }
+    } else {
+      rest.push_back(argv[i]);
+    }
+  }
+  Options o;
+  int early = parse_options(static_cast<int>(rest.size()), rest.data(), kRenderUsage, true, &o);
+  if (early >= 0) return early;
+  if (o.positional.empty()) return usage_error("render takes at least one mesh file", kRenderUsage);
+  if (o.output == nullptr) return usage_error("render needs -o PREVIEW.png", kRenderUsage);
+  Run run(o);
+  if (!run.has_memory()) return no_memory(o, "render");
+  Arena& arena = run.arena;
+  const Context& ctx = run.ctx;
+  std::vector<Mesh> meshes(o.positional.size());
+  uint64_t triangles = 0;
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    meshes[i].bind(&arena);
+    Status s = read_mesh_file(ctx, o.positional[i], &meshes[i], nullptr);
+    if (!s.is_ok()) return rejected(o, "render", s, &arena);
+    triangles += meshes[i].triangles.size();
+  }
+  const double t_read = monotonic_seconds();
+  std::vector<RenderMesh> items;
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    RenderMesh m;
+    m.mesh = &meshes[i];
+    const uint8_t* rgb = i == 0 ? cli::kSplintRgb : cli::kJawRgb;
+    for (int k = 0; k < 3; ++k) m.rgb[k] = rgb[k];
+    m.alpha = i == 0 ? 255 : cli::kJawAlpha;
+    items.push_back(m);
+  }
+  cli::PreviewInfo info;
+  Status s = cli::write_png_file(ctx, items, ro, o.output, &info);
+  if (!s.is_ok()) return rejected(o, "render", s, &arena);
+  const double t_end = monotonic_seconds();
+  std::string views;
+  for (uint32_t v = 0; v < ro.view_count; ++v) {
+    views += std::string(v > 0 ? "," : "") + render_view_name(ro.views[v]);
+  }
+  if (o.json) {
+    JsonObject j;
+    j.add("command", "render");
+    j.add_status(Status::ok());
+    j.add("output", o.output);
+    j.add("png_sha256", info.sha256);
+    j.add("png_bytes", info.png_bytes);
+    j.add("width", static_cast<uint64_t>(info.width));
+    j.add("height", static_cast<uint64_t>(info.height));
+    j.add("views", views);
+    j.add("shading", ro.shading == RenderShading::kGouraud ? "gouraud" : "flat");
+    j.add("meshes", static_cast<uint64_t>(meshes.size()));
+    j.add("triangles", triangles);
+    j.add("pixels_per_mm", info.pixels_per_mm);
+    j.add("read_s", t_read - run.start);
+    j.add("render_s", info.render_seconds);
+    j.add("encode_s", info.encode_seconds);
+    j.add("time_s", t_end - run.start);
+    j.add("peak_arena_bytes", static_cast<uint64_t>(arena.high_water()));
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("render: %zu mesh(es), %llu triangles, views %s, %u x %u pixels, %.4g px/mm\n",
+                meshes.size(), static_cast<unsigned long long>(triangles), views.c_str(),
+                info.width, info.height, info.pixels_per_mm);
+    std::printf("wrote %s (%llu bytes, sha256 %s)\n", o.output,
+                static_cast<unsigned long long>(info.png_bytes), info.sha256.c_str());
+    std::printf("time: read %.3f s, render %.3f s, encode %.3f s, total %.3f s; peak arena %llu "
+                "bytes\n",
+                t_read - run.start, info.render_seconds, info.encode_seconds, t_end - run.start,
                 static_cast<unsigned long long>(arena.high_water()));
   }
   return kExitOk;
@@ -2058,6 +2260,7 @@ int main(int argc, char** argv) {
   if (std::strcmp(command, "ct-phantom") == 0) return run_ct_phantom(argc - 2, argv + 2);
   if (std::strcmp(command, "reconstruct") == 0) return run_reconstruct(argc - 2, argv + 2);
   if (std::strcmp(command, "compare") == 0) return run_compare(argc - 2, argv + 2);
+  if (std::strcmp(command, "render") == 0) return run_render(argc - 2, argv + 2);
   std::fprintf(stderr, "splintcore: unknown command '%s'\n\n%s", command, kUsage);
   return cli::kExitUsage;
 }

@@ -1,0 +1,60 @@
+// PNG previews for the command-line program (tool code: uses the standard library): the splint
+// on the jaws for `splintcore design` and `splintcore render`, and a mesh coloured by its
+// distance to another for `splintcore compare --png`. Drawing and encoding are the core's
+// (include/splintcore/render.h); this file picks the colours and writes the file atomically.
+#ifndef SPLINTCORE_TOOLS_PREVIEW_H
+#define SPLINTCORE_TOOLS_PREVIEW_H
+
+#include <string>
+#include <vector>
+
+#include "splintcore/core.h"
+#include "splintcore/mesh.h"
+#include "splintcore/render.h"
+
+namespace splintcore {
+namespace cli {
+
+// The preview's colours: the splint blue and opaque, the jaws grey and translucent (weight
+// kJawAlpha of 255), so the splint shows through the jaws in every view (from the top the
+// maxilla would hide it). Only the nearest translucent surface of a pixel is blended.
+constexpr uint8_t kSplintRgb[3] = {70, 140, 230};
+constexpr uint8_t kJawRgb[3] = {205, 200, 190};
+constexpr uint8_t kJawAlpha = 130;
+
+struct PreviewInfo {
+  std::string path;
+  std::string sha256;   // of the PNG bytes
+  uint64_t png_bytes = 0;
+  uint32_t width = 0, height = 0;
+  double pixels_per_mm = 0;
+  double render_seconds = 0;  // drawing
+  double encode_seconds = 0;  // PNG encoding
+};
+
+// Draws `meshes` with `options`, encodes the PNG and writes it to `path` atomically (nothing is
+// left at `path` on failure). Arena: at most render_bound() + png_bound(), all returned before
+// it finishes. Errors: those of render_meshes() and write_png(); kIoError naming the file.
+Status write_png_file(const Context& ctx, const std::vector<RenderMesh>& meshes,
+                      const RenderOptions& options, const std::string& path, PreviewInfo* info);
+
+// The design preview: `splint` (opaque blue) under `jaws` (translucent grey), four views (front, top,
+// right, iso) at width x height. `moves` is empty or one transform per jaw: the jaws are drawn
+// from copies moved by it (in ctx.arena, returned; 24 bytes a vertex and 12 a triangle more).
+// As write_png_file; kInvalidArgument when moves has another size than jaws.
+Status write_preview(const Context& ctx, const Mesh& splint, const std::vector<const Mesh*>& jaws,
+                     const std::vector<RigidTransform>& moves, const std::string& path,
+                     uint32_t width, uint32_t height, PreviewInfo* info);
+
+// `mesh` coloured per pixel by `distances` (one per vertex) on the blue-green-red ramp over
+// [0, range] (render_ramp_colour; range > 0), four views, with the ramp's legend bar at the
+// right edge (blue = 0 at the bottom, red = range and beyond at the top). As write_png_file.
+Status write_distance_png(const Context& ctx, const Mesh& mesh,
+                          const std::vector<double>& distances, double range,
+                          const std::string& path, uint32_t width, uint32_t height,
+                          PreviewInfo* info);
+
+}  // namespace cli
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_TOOLS_PREVIEW_H
