@@ -6,7 +6,7 @@
 # symbols.
 #   bash tools/test.sh            all default jobs
 #   bash tools/test.sh gcc-O2     one job (gcc-O0 gcc-O2 clang-O0 clang-O2 asan core baremetal
-#                                 lint fuzz)
+#                                 cross-golden lint fuzz)
 # The default list also runs (the fuzz job for 15 s per target):
 #   bash tools/test.sh fuzz        libFuzzer targets (clang): replay every corpus in
 #                                  fixtures/fuzz/, then run each target SPLINTCORE_FUZZ_SECONDS
@@ -18,6 +18,11 @@
 #                                  example (tools/firmware) run under qemu-system-arm -M
 #                                  mps2-an500: its SHA-256 next to the x86-64 golden
 #                                  (docs/embedding.md; about 2.5 min from a clean build dir)
+#   bash tools/test.sh cross-golden   (or aarch64-golden, armv7-golden) AArch64 and ARMv7 cross
+#                                  builds, the golden-hash tests (every pinned output) and the
+#                                  firmware example as a process under qemu-user, with the
+#                                  table: target, tests passed, golden hashes equal, code size,
+#                                  peak arena (about 4 min for both)
 # Optional jobs, not in the default list (cross builds run under qemu-user, about 27 min):
 #   bash tools/test.sh coverage    llvm-cov line and branch coverage per file (tools/coverage.sh);
 #                                  fails when a parser is under 95% branch coverage (from a
@@ -26,9 +31,6 @@
 #   bash tools/test.sh aarch64 armv7
 #   They run the suite except the long randomised Boolean properties (BooleanRandom.Phantom*,
 #   about 8 min under qemu, run natively by the default jobs); SPLINTCORE_CROSS_FULL=1 runs all.
-#   bash tools/test.sh cross-golden   (or aarch64-golden, armv7-golden) only the golden-hash
-#   tests and the firmware example as a process, under qemu-user, with the table: target,
-#   tests passed, golden hashes equal, code size, peak arena.
 set -u
 cd "$(dirname "$0")/.."
 . tools/deps.sh
@@ -40,7 +42,7 @@ mkdir -p build
 if [ $# -eq 0 ]; then
   export SPLINTCORE_FUZZ_SECONDS=${SPLINTCORE_FUZZ_SECONDS:-15}
 fi
-jobs=${*:-gcc-O0 gcc-O2 clang-O0 clang-O2 asan core baremetal lint fuzz}
+jobs=${*:-gcc-O0 gcc-O2 clang-O0 clang-O2 asan core baremetal cross-golden lint fuzz}
 total_passed=0
 total_failed=0
 failed_jobs=""
@@ -76,7 +78,7 @@ run_ctest_job() {  # name cxx build_type extra-cmake-args...
 
 cross_table=""
 # The golden-file tests (pinned SHA-256 of output bytes), run first on their own.
-cross_golden='^(Golden\.|BooleanGolden\.|Phantom\.BytesAreDeterministicAndPinned|MarchingCubes\.GoldenHashIsTheSameEverywhere|Sha256\.)'
+cross_golden='^(Golden\.|BooleanGolden\.|DesignGolden\.|CtGolden\.|Phantom\.BytesAreDeterministicAndPinned|MarchingCubes\.GoldenHashIsTheSameEverywhere|Sha256\.)'
 
 cross_job() {  # name toolchain-file cross-triple
   local name=$1 toolchain=$2 triple=$3
