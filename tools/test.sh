@@ -6,7 +6,7 @@
 # symbols.
 #   bash tools/test.sh            all default jobs
 #   bash tools/test.sh gcc-O2     one job (gcc-O0 gcc-O2 clang-O0 clang-O2 asan core baremetal
-#                                 cross-golden lint fuzz)
+#                                 cross-golden coverage lint fuzz)
 # The default list also runs (the fuzz job for 15 s per target):
 #   bash tools/test.sh fuzz        libFuzzer targets (clang): replay every corpus in
 #                                  fixtures/fuzz/, then run each target SPLINTCORE_FUZZ_SECONDS
@@ -23,11 +23,10 @@
 #                                  firmware example as a process under qemu-user, with the
 #                                  table: target, tests passed, golden hashes equal, code size,
 #                                  peak arena (about 4 min for both)
-# Optional jobs, not in the default list (cross builds run under qemu-user, about 27 min):
 #   bash tools/test.sh coverage    llvm-cov line and branch coverage per file (tools/coverage.sh);
-#                                  fails when a parser is under 95% branch coverage (from a
-#                                  clean build dir: 3.3 min of CPU, 20 min wall on the shared
-#                                  2-core machine, so not in the default list)
+#                                  fails when a parser is under 95% branch coverage (about 2-3
+#                                  min from a clean build dir on a quiet machine)
+# Optional jobs, not in the default list (cross builds run under qemu-user, about 27 min):
 #   bash tools/test.sh aarch64 armv7
 #   They run the suite except the long randomised Boolean properties (BooleanRandom.Phantom*,
 #   about 8 min under qemu, run natively by the default jobs); SPLINTCORE_CROSS_FULL=1 runs all.
@@ -42,7 +41,7 @@ mkdir -p build
 if [ $# -eq 0 ]; then
   export SPLINTCORE_FUZZ_SECONDS=${SPLINTCORE_FUZZ_SECONDS:-15}
 fi
-jobs=${*:-gcc-O0 gcc-O2 clang-O0 clang-O2 asan core baremetal cross-golden lint fuzz}
+jobs=${*:-gcc-O0 gcc-O2 clang-O0 clang-O2 asan core baremetal cross-golden coverage lint fuzz}
 total_passed=0
 total_failed=0
 failed_jobs=""

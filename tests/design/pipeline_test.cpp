@@ -415,6 +415,20 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
   EXPECT_EQ(c.blockout_inset, 0.0);  // a clearance takes the surface outside
   EXPECT_EQ(c.min_thickness, 1.5);
   EXPECT_TRUE(c.place_on_tray);
+  // The defaults said out loud; the clearance's cap is 20 voxels below 0.1 mm voxels, else 2 mm.
+  std::string plain = with("\"blockout\": {\"voxel\": 0.05, \"clearance\": 1.0, \"inset\": 0}, "
+                           "\"placement\": \"case\", \"label\": {\"text\": \"A\", \"mode\": "
+                           "\"engrave\"}");
+  SPLINTCORE_ASSERT_OK(parse_case(ctx, plain.data(), plain.size(), "plain", &c));
+  EXPECT_FALSE(c.place_on_tray);
+  EXPECT_FALSE(c.label_emboss);
+  EXPECT_EQ(c.blockout_clearance, 1.0);
+  std::string over = with("\"blockout\": {\"voxel\": 0.05, \"clearance\": 1.01}");
+  EXPECT_EQ(parse_case(ctx, over.data(), over.size(), "over", &c).code(),
+            StatusCode::kInvalidArgument);
+  std::string wide = with("\"blockout\": {\"voxel\": 0.2, \"clearance\": 2.0}");
+  SPLINTCORE_ASSERT_OK(parse_case(ctx, wide.data(), wide.size(), "wide", &c));
+  EXPECT_EQ(c.blockout_clearance, 2.0);
   const char* bad[] = {
       "\"blockout\": {\"voxel\": 0.1, \"clearance\": 0.1, \"inset\": 0.05}",
       "\"blockout\": {\"voxel\": 0.1, \"clearance\": 2.5}",
