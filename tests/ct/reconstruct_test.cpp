@@ -6,9 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -285,16 +283,7 @@ TEST(CtGolden, PhantomAndReconstructedJawsMatchTheCommittedHashes) {
     SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(ta.arena, mesh, StlFormat::kBinary, &bytes));
     hashes[names[j]] = test::sha256_hex(bytes.data(), bytes.size());
   }
-  std::map<std::string, std::string> golden;
-  std::ifstream in(std::string(SPLINTCORE_FIXTURES_DIR) + "/golden.sha256");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream fields(line);
-    std::string h, key;
-    fields >> h >> key;
-    golden[key] = h;
-  }
+  std::map<std::string, std::string> golden = test::golden_hashes();
   for (const auto& kv : hashes) {
     // To pin new bytes: copy these lines into fixtures/golden.sha256 (and say why).
     if (golden[kv.first] != kv.second) std::printf("%s  %s\n", kv.second.c_str(), kv.first.c_str());

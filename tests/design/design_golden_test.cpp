@@ -5,8 +5,6 @@
 // watertight two-manifold with our volume. The fourth full case, from CT, is pinned by
 // tests/tools/cli_test.sh (design:ct_phantom-120x110x80).
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -17,18 +15,6 @@
 
 namespace splintcore {
 namespace {
-
-std::string golden_of(const std::string& key) {
-  std::ifstream in(std::string(SPLINTCORE_FIXTURES_DIR) + "/golden.sha256");
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream f(line);
-    std::string h, k;
-    f >> h >> k;
-    if (k == key) return h;
-  }
-  return "";
-}
 
 struct Designed {
   std::vector<uint8_t> stl;
@@ -67,7 +53,7 @@ void design_case(const char* name, Designed* out) {
 
 void expect_golden_and_meshlab(const char* name, const char* key, const Designed& d) {
   const std::string hash = test::sha256_hex(d.stl.data(), d.stl.size());
-  const std::string want = golden_of(key);
+  const std::string want = test::golden_hash(key);
   EXPECT_EQ(hash, want) << "fixtures/golden.sha256 line, if the change is intended:\n"
                         << hash << "  " << key;
   std::printf("[ figures  ] %s: %zu triangles, %.4f mm^3, sha256 %s\n", name, d.triangles,

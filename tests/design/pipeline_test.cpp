@@ -2,9 +2,7 @@
 // gives the Boolean golden's bytes; bad calls are named errors; arena exhaustion is clean at
 // every cap tried; the jaws given are not changed.
 #include <cstring>
-#include <fstream>
 #include <map>
-#include <sstream>
 
 #include "common/phantom.h"
 #include "splintcore/design.h"
@@ -42,18 +40,6 @@ struct CaseAndJaws {
   }
 };
 
-std::string golden(const char* key) {
-  std::ifstream in(std::string(SPLINTCORE_FIXTURES_DIR) + "/golden.sha256");
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream f(line);
-    std::string h, k;
-    f >> h >> k;
-    if (k == key) return h;
-  }
-  return "";
-}
-
 TEST(DesignPipeline, PaperScaleCaseGivesTheGoldenSplint) {
   CaseAndJaws f;
   ASSERT_TRUE(f.ok);
@@ -69,7 +55,7 @@ TEST(DesignPipeline, PaperScaleCaseGivesTheGoldenSplint) {
   std::vector<uint8_t> bytes;
   SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(f.t.arena, splint, StlFormat::kBinary, &bytes));
   EXPECT_EQ(test::sha256_hex(bytes.data(), bytes.size()),
-            golden("boolean:paper_scale-phantom6000"));
+            test::golden_hash("boolean:paper_scale-phantom6000"));
   // The jaws given are read, not moved.
   EXPECT_EQ(test::sha256_hex(f.jaws[1].vertices.data(), f.jaws[1].vertices.size() * sizeof(Vec3)),
             before);

@@ -6,8 +6,11 @@
 
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <map>
 #include <memory>
 #include <new>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -140,6 +143,30 @@ inline bool file_exists(const std::string& path) {
   std::fclose(f);
   return true;
 }
+
+#ifdef SPLINTCORE_FIXTURES_DIR
+// fixtures/golden.sha256 as key -> hash (lines "HASH  KEY"; '#' lines and blank lines skipped).
+inline std::map<std::string, std::string> golden_hashes() {
+  std::map<std::string, std::string> out;
+  std::ifstream in(std::string(SPLINTCORE_FIXTURES_DIR) + "/golden.sha256");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    std::string hash, key;
+    fields >> hash >> key;
+    out[key] = hash;
+  }
+  return out;
+}
+
+// The committed hash of one key ("" when the key is not there).
+inline std::string golden_hash(const std::string& key) {
+  const std::map<std::string, std::string> all = golden_hashes();
+  const auto it = all.find(key);
+  return it == all.end() ? std::string() : it->second;
+}
+#endif
 
 }  // namespace test
 }  // namespace splintcore
