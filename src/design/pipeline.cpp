@@ -43,10 +43,9 @@ Status case_on_tray(const Context& ctx, const CaseFile& c, const PrinterProfile&
   Pick* upper = arena.allocate_array<Pick>(c.upper.size());
   Pick* lower = arena.allocate_array<Pick>(c.lower.size());
   CaseJaw* jaws = arena.allocate_array<CaseJaw>(c.jaws.size());
-  if ((upper == nullptr && !c.upper.empty()) || (lower == nullptr && !c.lower.empty()) ||
-      (jaws == nullptr && !c.jaws.empty())) {
-    return arena.exhausted_status();
-  }
+  // None of the lists is empty here (the base was built from the picks; design_splint
+  // refuses a case without jaws), so a null pointer means the arena is exhausted.
+  if (upper == nullptr || lower == nullptr || jaws == nullptr) return arena.exhausted_status();
   for (size_t i = 0; i < c.upper.size(); ++i) {
     upper[i] = c.upper[i];
     upper[i].position = move.apply_point(c.upper[i].position);

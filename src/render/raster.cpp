@@ -147,7 +147,10 @@ void draw_triangle(const Frame& f, const View& view, const Layer& layer, const R
     v[2] = t;
     area = -area;
   }
-  int64_t min_x = v[0].x, max_x = v[0].x, min_y = v[0].y, max_y = v[0].y;
+  int64_t min_x = v[0].x;
+  int64_t max_x = min_x;
+  int64_t min_y = v[0].y;
+  int64_t max_y = min_y;
   for (int k = 1; k < 3; ++k) {
     if (v[k].x < min_x) min_x = v[k].x;
     if (v[k].x > max_x) max_x = v[k].x;
@@ -418,6 +421,9 @@ Status render_meshes(const Context& ctx, Span<const RenderMesh> meshes,
 
   // Layout: tiles in columns x rows, a legend strip at the right when asked.
   const uint32_t view_count = options.view_count;
+  if (view_count == 0) {  // validate() refused it already; stated here for the divisions below
+    return Status::error(StatusCode::kInvalidArgument, "render: no views");
+  }
   uint32_t columns = options.columns != 0 ? options.columns : (view_count == 1 ? 1 : 2);
   if (columns > view_count) columns = view_count;
   const uint32_t rows = (view_count + columns - 1) / columns;

@@ -31,13 +31,13 @@ Status write_png_file(const Context& ctx, const std::vector<RenderMesh>& meshes,
                       const RenderOptions& options, const std::string& path, PreviewInfo* info) {
   std::vector<uint8_t> png;
   const double t0 = monotonic_seconds();
-  double t1 = t0;
+  double render_seconds = 0;
   RenderImage image;
   {
     ArenaScope scope(*ctx.arena);  // the image and the encoder's temporaries
     SPLINTCORE_RETURN_IF_ERROR(render_meshes(
         ctx, Span<const RenderMesh>(meshes.data(), meshes.size()), options, &image));
-    t1 = monotonic_seconds();
+    render_seconds = monotonic_seconds() - t0;
     ByteSink sink;
     sink.write = &vector_write;
     sink.user = &png;
@@ -59,8 +59,8 @@ Status write_png_file(const Context& ctx, const std::vector<RenderMesh>& meshes,
     info->width = image.width;
     info->height = image.height;
     info->pixels_per_mm = image.pixels_per_mm;
-    info->render_seconds = t1 - t0;
-    info->encode_seconds = t2 - t1;
+    info->render_seconds = render_seconds;
+    info->encode_seconds = t2 - t0 - render_seconds;
   }
   return Status::ok();
 }
