@@ -4,10 +4,14 @@
 //
 // The hierarchy is a bounding volume hierarchy, not an octree: for closest-point queries on a
 // triangle mesh a BVH bounds every triangle exactly once (an octree either duplicates
-// triangles that straddle cells or loosens its cells), it has exactly 2L - 1 nodes for L leaves
-// so its memory is known before building, and built over Morton-ordered leaves it takes one
-// radix sort and one bottom-up pass (no recursion, deterministic). Measured figures are in
-// the benchmark (splintcore-bench --filter distance).
+// triangles that straddle cells or loosens its cells), so its memory is known before building,
+// and built over Morton-ordered leaves it takes one radix sort and one bottom-up pass (no
+// recursion, deterministic). The binary tree that the Morton split gives is then collapsed
+// into a 4-wide one (every node holds the boxes of up to four children side by side): a query
+// tests four boxes from one cache line pair instead of walking two levels, which is what
+// bounds the cost of a closest-point query near a finely tessellated surface, where many
+// boxes lie almost as close as the answer. Measured figures are in the benchmark
+// (splintcore-bench --filter distance).
 //
 // Results never depend on the tree's shape or the traversal order: among equally close
 // triangles the smallest index wins, and sums (winding numbers) are taken in a fixed order.
@@ -20,19 +24,23 @@
 
 namespace splintcore {
 
-// A node: bounds (float, rounded outward so they always contain their triangles), then either
-// two children (count == 0: children at `index` and `index + 1`) or a leaf of `count`
-// triangles starting at `index` in the index's triangle order.
+// A node of the 4-wide hierarchy: child k has the box lo[axis][k] .. hi[axis][k] (float,
+// rounded outward so it always contains its triangles) and is either an inner node
+// (count[k] == 0: nodes[child[k]]), a leaf of count[k] triangles (1..16) starting at
+// order[child[k]], or absent (child[k] == kNoChild; its box is empty: lo = +inf, hi = -inf).
+// nodes[0] is the root; children always have larger indices than their parent.
 struct BvhNode {
-  float lo[3];
-  float hi[3];
-  uint32_t index;
-  uint32_t count;
+  float lo[3][4];
+  float hi[3][4];
+  uint32_t child[4];
+  uint8_t count[4];
 };
+constexpr uint32_t kNoChild = ~uint32_t{0};
 
-// Per node, for the fast winding number (Barill et al., "Fast winding numbers for soups and
-// clouds", SIGGRAPH 2018, first-order dipole term): the area-weighted normal sum, its centre,
-// and the radius of a ball around the centre that holds the node's triangles.
+// Per node (all the triangles below it), for the fast winding number (Barill et al., "Fast
+// winding numbers for soups and clouds", SIGGRAPH 2018, first-order dipole term): the
+// area-weighted normal sum, its centre, and the radius of a ball around the centre that holds
+// the node's triangles.
 struct BvhDipole {
   float center[3];
   float normal[3];
@@ -58,12 +66,12 @@ enum class SignMethod : uint8_t {
 };
 
 struct DistanceIndexOptions {
-  uint32_t leaf_size = 4;  // triangles per leaf, 1..16
+  uint32_t leaf_size = 4;  // triangles per leaf, 1..16 (0: the default, 4)
 };
 
 struct DistanceIndex {
   const Mesh* mesh = nullptr;
-  Span<const BvhNode> nodes;        // nodes[0] is the root
+  Span<const BvhNode> nodes;        // nodes[0] is the root (one node, all absent, when empty)
   Span<const BvhDipole> dipoles;    // per node
   Span<const uint32_t> order;       // triangle ids in leaf order
   Span<const uint32_t> neighbors;   // 3 per triangle: across edge k, or kNoNeighbor

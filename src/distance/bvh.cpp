@@ -1,10 +1,14 @@
 // Building the distance index: a BVH over Morton-ordered leaves, split top-down at the highest
 // differing Morton bit (Karras, "Maximizing parallelism in the construction of BVHs, octrees,
 // and k-d trees", HPG 2012; here sequential with an explicit stack), bounds and dipoles
-// bottom-up, edge neighbours by a radix sort of half-edges, and angle-weighted vertex
+// bottom-up, then collapsed into a 4-wide tree (each node takes its binary node's two
+// children and opens the largest of them until it holds four: the surface-area rule of Wald et
+// al., "Getting rid of packets", IRT 2008), edge neighbours from per-vertex half-edge lists,
+// and angle-weighted vertex
 // pseudonormals (Baerentzen and Aanaes, "Signed distance computation using the angle weighted
 // pseudonormal", IEEE TVCG 2005).
 #include <cmath>
+#include <cstring>
 
 #include "splintcore/distance.h"
 
@@ -13,6 +17,17 @@ namespace splintcore {
 namespace {
 
 constexpr uint32_t kMaxDepth = 128;
+constexpr uint32_t kDefaultLeaf = 4;
+
+// A node of the binary tree the Morton split gives (a temporary: the index keeps the 4-wide
+// tree collapsed from it). Children at index and index + 1 (count == 0), or a leaf of count
+// triangles from order[index].
+struct BinaryNode {
+  float lo[3];
+  float hi[3];
+  uint32_t index;
+  uint32_t count;
+};
 
 // Spreads the low 16 bits of v so that two zero bits follow each (for a 48-bit Morton code:
 // 65536 cells per axis, finer than any triangle here, and six radix passes instead of eight).
@@ -91,17 +106,21 @@ const char* feature_name(Feature feature) {
 
 uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,
                               const DistanceIndexOptions& options) {
-  const uint64_t leaf = options.leaf_size == 0 ? 4 : options.leaf_size;
+  const uint64_t leaf = options.leaf_size == 0 ? kDefaultLeaf : options.leaf_size;
   const uint64_t leaves = triangle_count == 0 ? 1 : (triangle_count + leaf - 1) / leaf;
-  const uint64_t nodes = 2 * leaves - 1;
-  const uint64_t kept = nodes * (sizeof(BvhNode) + sizeof(BvhDipole)) +
-                        triangle_count * (sizeof(uint32_t) * 4) + vertex_count * sizeof(Vec3);
-  // Temporaries (the larger stage): Morton keys and scratch, or the per-vertex half-edge
-  // lists.
-  const uint64_t morton = 2 * triangle_count * sizeof(uint64_t);
+  const uint64_t binary = 2 * leaves - 1;
+  // Every 4-wide node but an empty root is made from a distinct inner binary node.
+  const uint64_t wide = leaves > 1 ? leaves - 1 : 1;
+  const uint64_t per_node = sizeof(BvhNode) + sizeof(BvhDipole);
+  const uint64_t kept = wide * per_node + triangle_count * (sizeof(uint32_t) * 4) +
+                        vertex_count * sizeof(Vec3);
+  // Temporaries (the larger stage): the binary tree with its dipoles, Morton keys and scratch,
+  // and the 4-wide tree before it moves down; or the per-vertex half-edge lists.
+  const uint64_t tree = binary * (sizeof(BinaryNode) + sizeof(BvhDipole)) +
+                        2 * triangle_count * sizeof(uint64_t) + wide * per_node;
   const uint64_t lists = 3 * triangle_count * 2 * sizeof(uint32_t) +
                          (2 * vertex_count + 1) * sizeof(uint32_t);
-  const uint64_t temps = (morton > lists ? morton : lists) + kMaxDepth * 16;
+  const uint64_t temps = (tree > lists ? tree : lists) + kMaxDepth * 16;
   return kept + temps + 16 * 64;
 }
 
@@ -114,7 +133,7 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   out->mesh = &mesh;
   const size_t nt = mesh.triangles.size();
   const size_t nv = mesh.vertices.size();
-  const uint32_t leaf_size = options.leaf_size == 0 ? 4 : options.leaf_size;
+  const uint32_t leaf_size = options.leaf_size == 0 ? kDefaultLeaf : options.leaf_size;
   if (leaf_size > 16) {
     return make_error(StatusCode::kInvalidArgument, "leaf size must be 1..16, got ", leaf_size);
   }
@@ -140,16 +159,18 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   const uint32_t leaves = n == 0 ? 1 : (n + leaf_size - 1) / leaf_size;
   const uint32_t node_count = 2 * leaves - 1;
 
-  // What stays: nodes, dipoles, order, neighbours, vertex normals.
-  BvhNode* nodes = arena.allocate_array<BvhNode>(node_count);
-  BvhDipole* dipoles = arena.allocate_array<BvhDipole>(node_count);
+  // What stays: order, neighbours and vertex normals (here), the 4-wide nodes and their
+  // dipoles (moved down over the temporaries once the binary tree is collapsed).
   uint32_t* order = arena.allocate_array<uint32_t>(nt);
   uint32_t* neighbors = arena.allocate_array<uint32_t>(3 * nt);
   Vec3* vnormals = arena.allocate_array<Vec3>(nv);
-  if (nodes == nullptr || dipoles == nullptr || (nt > 0 && (order == nullptr || neighbors == nullptr)) ||
-      (nv > 0 && vnormals == nullptr)) {
+  if ((nt > 0 && (order == nullptr || neighbors == nullptr)) || (nv > 0 && vnormals == nullptr)) {
     return arena.exhausted_status();
   }
+  const Arena::Marker tree_temps = arena.mark();
+  BinaryNode* nodes = arena.allocate_array<BinaryNode>(node_count);
+  BvhDipole* dipoles = arena.allocate_array<BvhDipole>(node_count);
+  if (nodes == nullptr || dipoles == nullptr) return arena.exhausted_status();
   // 1. Morton order of the triangle centroids (keys live until the topology is built).
   {
   ArenaScope morton_temps(arena);
@@ -208,7 +229,7 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
     stack[top++] = Range{0, 0, leaves - 1};
     while (top > 0) {
       const Range r = stack[--top];
-      BvhNode& node = nodes[r.node];
+      BinaryNode& node = nodes[r.node];
       if (r.first == r.last) {
         const uint32_t begin = r.first * leaf_size;
         const uint32_t end = begin + leaf_size < n ? begin + leaf_size : n;
@@ -249,7 +270,7 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   // the node's own box.
   {
     for (uint32_t i = node_count; i-- > 0;) {
-      BvhNode& node = nodes[i];
+      BinaryNode& node = nodes[i];
       Aabb box;
       Vec3 wsum{}, nsum{};
       double asum = 0;
@@ -307,6 +328,102 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       dp.area = static_cast<float>(asum);
     }
   }
+  // 3b. Collapse into the 4-wide tree: each wide node takes its binary node's two children and
+  // opens the one with the largest box surface (the first on a tie) until it holds four or
+  // only leaves are left; wide nodes are numbered as they are made (parents first).
+  uint32_t wide_count = 1;
+  BvhNode* wide = nullptr;
+  BvhDipole* wide_dipoles = nullptr;
+  {
+    const uint32_t wide_max = leaves > 1 ? leaves - 1 : 1;
+    wide = arena.allocate_array<BvhNode>(wide_max);
+    wide_dipoles = arena.allocate_array<BvhDipole>(wide_max);
+    if (wide == nullptr || wide_dipoles == nullptr) return arena.exhausted_status();
+    const auto is_binary_leaf = [&](uint32_t b) { return nodes[b].count > 0 || nodes[b].index == 0; };
+    const auto area = [&](uint32_t b) {
+      const double x = static_cast<double>(nodes[b].hi[0]) - static_cast<double>(nodes[b].lo[0]);
+      const double y = static_cast<double>(nodes[b].hi[1]) - static_cast<double>(nodes[b].lo[1]);
+      const double z = static_cast<double>(nodes[b].hi[2]) - static_cast<double>(nodes[b].lo[2]);
+      return x * y + y * z + z * x;
+    };
+    const float inf = HUGE_VALF;
+    struct Pending {
+      uint32_t binary, wide;
+    };
+    Pending stack[4 * kMaxDepth];
+    uint32_t top = 0;
+    stack[top++] = Pending{0, 0};
+    while (top > 0) {
+      const Pending p = stack[--top];
+      uint32_t members[4];
+      uint32_t m = 0;
+      if (is_binary_leaf(p.binary)) {
+        if (nodes[p.binary].count > 0) members[m++] = p.binary;  // a root leaf (tiny mesh)
+      } else {
+        members[m++] = nodes[p.binary].index;
+        members[m++] = nodes[p.binary].index + 1;
+        while (m < 4) {
+          uint32_t open = m;
+          double largest = -1;
+          for (uint32_t k = 0; k < m; ++k) {
+            if (is_binary_leaf(members[k])) continue;
+            const double a = area(members[k]);
+            if (a > largest) {
+              largest = a;
+              open = k;
+            }
+          }
+          if (open == m) break;
+          const uint32_t first = nodes[members[open]].index;
+          for (uint32_t k = m; k > open + 1; --k) members[k] = members[k - 1];
+          members[open] = first;
+          members[open + 1] = first + 1;
+          ++m;
+        }
+      }
+      BvhNode& w = wide[p.wide];
+      for (uint32_t k = 0; k < 4; ++k) {
+        if (k >= m) {
+          for (int a = 0; a < 3; ++a) {
+            w.lo[a][k] = inf;
+            w.hi[a][k] = -inf;
+          }
+          w.child[k] = kNoChild;
+          w.count[k] = 0;
+          continue;
+        }
+        const BinaryNode& b = nodes[members[k]];
+        for (int a = 0; a < 3; ++a) {
+          w.lo[a][k] = b.lo[a];
+          w.hi[a][k] = b.hi[a];
+        }
+        if (is_binary_leaf(members[k])) {
+          w.child[k] = b.index;
+          w.count[k] = static_cast<uint8_t>(b.count);
+        } else {
+          if (top + 1 > 4 * kMaxDepth || wide_count >= wide_max) {
+            return Status::error(StatusCode::kInternal, "distance index: collapse out of bounds");
+          }
+          w.child[k] = wide_count;
+          w.count[k] = 0;
+          stack[top++] = Pending{members[k], wide_count++};
+        }
+      }
+      wide_dipoles[p.wide] = dipoles[p.binary];
+    }
+  }
+  // 3c. The wide tree down over the temporaries (it was allocated after them; the nodes move
+  // first, so no destination lies above bytes not yet copied).
+  const BvhNode* wide_src = wide;
+  const BvhDipole* wide_dipoles_src = wide_dipoles;
+  arena.rewind(tree_temps);
+  BvhNode* kept_nodes = arena.allocate_array<BvhNode>(wide_count);
+  SPLINTCORE_ASSERT(kept_nodes != nullptr);
+  std::memmove(static_cast<void*>(kept_nodes), wide_src, size_t{wide_count} * sizeof(BvhNode));
+  BvhDipole* kept_dipoles = arena.allocate_array<BvhDipole>(wide_count);
+  SPLINTCORE_ASSERT(kept_dipoles != nullptr);
+  std::memmove(static_cast<void*>(kept_dipoles), wide_dipoles_src,
+               size_t{wide_count} * sizeof(BvhDipole));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 2, 4));
 
   // 4. Edge neighbours through per-vertex lists of outgoing half-edges (counting sort by
@@ -346,14 +463,21 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
     // to the larger; a manifold pair sets both neighbours. Any half-edge left without a
     // neighbour (boundary, non-manifold, or a pair used in the same direction) means the mesh
     // is not a closed oriented manifold.
-    // Each vertex's list is sorted by (end vertex, use), so the uses of an edge are counted
-    // by two binary searches: a vertex shared by d triangles costs O(d log d), not O(d^2)
-    // (hostile input: a fan of a million triangles, or a million copies of one triangle).
+    // The uses of an edge are counted in the lists of its two vertices. A list holds its
+    // half-edges in triangle order (ascending use); a short one (the usual vertex: six) is
+    // scanned. A long one is sorted by (end vertex, use) and searched twice, so that a vertex
+    // shared by d triangles costs O(d log d), not O(d^2) (hostile input: a fan of a million
+    // triangles, or a million copies of one triangle). Either way the first use found is the
+    // smallest.
+    constexpr uint32_t kScan = 32;
     const auto by_end = [](const HalfEdge& x, const HalfEdge& y) {
       return x.to != y.to ? x.to < y.to : x.use < y.use;
     };
-    for (size_t i = 0; i < nv; ++i) heap_sort(lists + start[i], start[i + 1] - start[i], by_end);
-    // First index in [lo, hi) whose end vertex is >= to (or > to when `after`).
+    for (size_t i = 0; i < nv; ++i) {
+      const uint32_t degree = start[i + 1] - start[i];
+      if (degree > kScan) heap_sort(lists + start[i], degree, by_end);
+    }
+    // First index in [lo, hi) (sorted) whose end vertex is >= to (or > to when `after`).
     const auto search = [&](uint32_t lo, uint32_t hi, uint32_t to, bool after) {
       while (lo < hi) {
         const uint32_t mid = lo + (hi - lo) / 2;
@@ -365,16 +489,31 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       }
       return lo;
     };
+    // How many half-edges of vertex `from` end at `to`; *first gets the first one's use.
+    const auto uses = [&](uint32_t from, uint32_t to, uint32_t* first) {
+      const uint32_t lo = start[from], hi = start[from + 1];
+      uint32_t count = 0;
+      if (hi - lo <= kScan) {
+        for (uint32_t j = hi; j-- > lo;) {
+          if (lists[j].to != to) continue;
+          ++count;
+          *first = lists[j].use;
+        }
+        return count;
+      }
+      const uint32_t begin = search(lo, hi, to, false);
+      count = search(begin, hi, to, true) - begin;
+      if (count > 0) *first = lists[begin].use;
+      return count;
+    };
     for (size_t i = 0; i < 3 * nt; ++i) neighbors[i] = kNoNeighbor;
     for (uint32_t t = 0; t < n; ++t) {
       for (uint32_t k = 0; k < 3; ++k) {
         const uint32_t a = tris[t].v[k], b = tris[t].v[(k + 1) % 3];
         if (a >= b) continue;
-        const uint32_t same = search(start[a], start[a + 1], b, true) -
-                              search(start[a], start[a + 1], b, false);
-        const uint32_t first_reverse = search(start[b], start[b + 1], a, false);
-        const uint32_t reverse = search(start[b], start[b + 1], a, true) - first_reverse;
-        const uint32_t other_use = reverse > 0 ? lists[first_reverse].use : 0;
+        uint32_t own_use = 0, other_use = 0;
+        const uint32_t same = uses(a, b, &own_use);
+        const uint32_t reverse = uses(b, a, &other_use);
         if (same == 1 && reverse == 1) {
           neighbors[3 * size_t{t} + k] = other_use / 3;
           neighbors[other_use] = t;
@@ -409,8 +548,8 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 4, 4));
 
-  out->nodes = Span<const BvhNode>(nodes, node_count);
-  out->dipoles = Span<const BvhDipole>(dipoles, node_count);
+  out->nodes = Span<const BvhNode>(kept_nodes, wide_count);
+  out->dipoles = Span<const BvhDipole>(kept_dipoles, wide_count);
   out->order = Span<const uint32_t>(order, nt);
   out->neighbors = Span<const uint32_t>(neighbors, 3 * nt);
   out->vertex_normals = Span<const Vec3>(vnormals, nv);

@@ -13,29 +13,25 @@ namespace splintcore {
 
 namespace {
 
-constexpr uint32_t kStack = 128;
+// Traversal stacks: a 4-wide node pushes at most three children more than it pops, and the
+// tree is at most 128 levels deep (checked when it is built).
+constexpr uint32_t kStack = 3 * 128 + 4;
 constexpr double kFourPi = 12.566370614359172954;
 
-inline bool is_leaf(const BvhNode& n) { return n.count > 0 || n.index == 0; }
-
-inline double box_distance_squared(const BvhNode& n, const Vec3& q) {
-  double d2 = 0;
-  for (int a = 0; a < 3; ++a) {
-    const double lo = static_cast<double>(n.lo[a]), hi = static_cast<double>(n.hi[a]);
-    const double x = q[a];
-    const double d = x < lo ? lo - x : (x > hi ? x - hi : 0.0);
-    d2 += d * d;
+// Squared distances from q to the four child boxes of n (+inf for an absent child, whose box
+// is lo = +inf, hi = -inf: callers still skip it, since +inf passes an unbounded search).
+// Branch-free, so that the compiler can do the four at once.
+inline void child_distances(const BvhNode& n, const Vec3& q, double d2[4]) {
+  double dx[4], dy[4], dz[4];
+  for (int k = 0; k < 4; ++k) {
+    const double lx = static_cast<double>(n.lo[0][k]) - q.x, hx = q.x - static_cast<double>(n.hi[0][k]);
+    const double ly = static_cast<double>(n.lo[1][k]) - q.y, hy = q.y - static_cast<double>(n.hi[1][k]);
+    const double lz = static_cast<double>(n.lo[2][k]) - q.z, hz = q.z - static_cast<double>(n.hi[2][k]);
+    dx[k] = (lx > 0.0 ? lx : 0.0) + (hx > 0.0 ? hx : 0.0);
+    dy[k] = (ly > 0.0 ? ly : 0.0) + (hy > 0.0 ? hy : 0.0);
+    dz[k] = (lz > 0.0 ? lz : 0.0) + (hz > 0.0 ? hz : 0.0);
   }
-  return d2;
-}
-
-inline double box_centre_distance_squared(const BvhNode& n, const Vec3& q) {
-  double d2 = 0;
-  for (int a = 0; a < 3; ++a) {
-    const double c = 0.5 * (static_cast<double>(n.lo[a]) + static_cast<double>(n.hi[a]));
-    d2 += (c - q[a]) * (c - q[a]);
-  }
-  return d2;
+  for (int k = 0; k < 4; ++k) d2[k] = dx[k] * dx[k] + dy[k] * dy[k] + dz[k] * dz[k];
 }
 
 // a * b - c * d to about one ulp: Dekker's exact products (no FMA, so the same bits
@@ -174,18 +170,49 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
   bool found = false;
   uint32_t best_tri = 0;
   ClosestPoint best;
+  double best_d = std::sqrt(limit2);  // sqrt(best2), for the plane filter
   // Keeps triangle t when it is closer, or as close with a smaller id (so the answer never
-  // depends on the tree or the seed), and within the limit.
+  // depends on the tree or the seed), and within the limit. Two lower bounds of the distance
+  // skip most triangles first: the triangle's box, and its plane. Both are skipped only when
+  // clearly beyond the best (margins far above their rounding), so what they skip the exact
+  // routine would have rejected too.
   auto consider = [&](uint32_t t) {
     const Triangle& tri = mesh.triangles[t];
+    const Vec3 &a = v[tri.v[0]], &b = v[tri.v[1]], &c = v[tri.v[2]];
+    // Branch-free (each ?: below is one min or max instruction).
+    const auto gap = [](double x, double p0, double p1, double p2) {
+      const double lo01 = p1 < p0 ? p1 : p0, hi01 = p1 > p0 ? p1 : p0;
+      const double lo = p2 < lo01 ? p2 : lo01, hi = p2 > hi01 ? p2 : hi01;
+      const double below = lo - x, above = x - hi;
+      return (below > 0.0 ? below : 0.0) + (above > 0.0 ? above : 0.0);
+    };
+    const double gx = gap(q.x, a.x, b.x, c.x), gy = gap(q.y, a.y, b.y, c.y),
+                 gz = gap(q.z, a.z, b.z, c.z);
+    if (gx * gx + gy * gy + gz * gz > best2 * (1.0 + 0x1p-40)) return;
+    {
+      // The plane, on triangles whose normal is well conditioned (the angle at a above about
+      // 0.001 rad): then n = ab x ac is off by under 5e-13 |n| and pd by under
+      // 6e-13 |qa| |n|, which the margin of 2^-30 |qa|_1 covers with room to spare.
+      const Vec3 ab = b - a, ac = c - a;
+      const Vec3 n = cross(ab, ac);
+      const double n2 = dot(n, n);
+      if (n2 > dot(ab, ab) * dot(ac, ac) * 0x1p-20) {
+        const Vec3 qa = q - a;
+        const double pd = dot(qa, n);
+        const double m = std::fabs(qa.x) + std::fabs(qa.y) + std::fabs(qa.z);
+        const double reach = best_d + m * 0x1p-30;
+        if (pd * pd > reach * reach * n2) return;
+      }
+    }
     Vec3 p;
     Feature f;
     uint8_t fi;
-    closest_on_triangle(q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], &p, &f, &fi);
+    closest_on_triangle(q, a, b, c, &p, &f, &fi);
     const double d2 = length_squared(p - q);
     if (d2 > limit2) return;
     if (d2 < best2 || (d2 == best2 && (!found || t < best_tri))) {
       best2 = d2;
+      best_d = std::sqrt(d2);
       best_tri = t;
       found = true;
       best.point = p;
@@ -195,29 +222,39 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
     }
   };
   if (seed != kNoNeighbor) consider(seed);
-  uint32_t stack[kStack];
+  struct Entry {
+    uint32_t node;
+    double d2;
+  };
+  Entry stack[kStack];
   uint32_t top = 0;
-  stack[top++] = 0;
+  stack[top++] = Entry{0, 0.0};
   while (top > 0) {
-    const BvhNode& node = nodes[stack[--top]];
-    if (box_distance_squared(node, q) > best2) continue;
-    if (is_leaf(node)) {
-      for (uint32_t k = node.index; k < node.index + node.count; ++k) consider(index.order[k]);
-      continue;
+    const Entry e = stack[--top];
+    if (e.d2 > best2) continue;
+    const BvhNode& node = nodes[e.node];
+    double d2[4];
+    child_distances(node, q, d2);
+    // The children within reach, nearest first (ties in slot order): leaves tighten the bound
+    // before farther boxes are tested against it.
+    uint8_t by[4];
+    int m = 0;
+    for (int k = 0; k < 4; ++k) {
+      if (!(d2[k] <= best2) || node.child[k] == kNoChild) continue;
+      int j = m++;
+      for (; j > 0 && d2[by[j - 1]] > d2[k]; --j) by[j] = by[j - 1];
+      by[j] = static_cast<uint8_t>(k);
     }
-    // Visit the nearer child first (push it last).
-    const uint32_t c0 = node.index, c1 = node.index + 1;
-    const double d0 = box_distance_squared(nodes[c0], q), d1 = box_distance_squared(nodes[c1], q);
-    if (top + 2 > kStack) continue;  // cannot happen: depth is bounded at build time
-    // Nearer box first; when q is inside both (common near the top), the nearer box centre.
-    bool first0 = d0 < d1;
-    if (d0 == d1) first0 = box_centre_distance_squared(nodes[c0], q) <= box_centre_distance_squared(nodes[c1], q);
-    if (first0) {
-      if (d1 <= best2) stack[top++] = c1;
-      if (d0 <= best2) stack[top++] = c0;
-    } else {
-      if (d0 <= best2) stack[top++] = c0;
-      if (d1 <= best2) stack[top++] = c1;
+    for (int i = 0; i < m; ++i) {
+      const int k = by[i];
+      if (node.count[k] == 0 || !(d2[k] <= best2)) continue;
+      for (uint32_t j = node.child[k]; j < node.child[k] + node.count[k]; ++j) consider(index.order[j]);
+    }
+    for (int i = m; i-- > 0;) {
+      const int k = by[i];
+      if (node.count[k] != 0 || !(d2[k] <= best2)) continue;
+      if (top + 1 > kStack) continue;  // cannot happen: depth is bounded at build time
+      stack[top++] = Entry{node.child[k], d2[k]};
     }
   }
   if (!found) return false;
@@ -308,7 +345,7 @@ double winding_number(const DistanceIndex& index, const Vec3& q, double beta) {
   uint32_t stack[kStack];
   uint32_t top = 0;
   stack[top++] = 0;
-  // Fixed order (left child before right), so the sum is the same bits every time.
+  // Fixed order (slot order), so the sum is the same bits every time.
   while (top > 0) {
     const uint32_t i = stack[--top];
     const BvhNode& node = nodes[i];
@@ -327,15 +364,16 @@ double winding_number(const DistanceIndex& index, const Vec3& q, double beta) {
         continue;
       }
     }
-    if (is_leaf(node)) {
-      for (uint32_t k = node.index; k < node.index + node.count; ++k) {
-        const Triangle& tri = mesh.triangles[index.order[k]];
+    // Leaves exactly, in slot order; inner children pushed last first (popped in slot order).
+    for (int k = 0; k < 4; ++k) {
+      for (uint32_t j = node.child[k]; node.count[k] != 0 && j < node.child[k] + node.count[k]; ++j) {
+        const Triangle& tri = mesh.triangles[index.order[j]];
         sum += solid_angle(q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]);
       }
-      continue;
     }
-    stack[top++] = node.index + 1;
-    stack[top++] = node.index;
+    for (int k = 4; k-- > 0;) {
+      if (node.count[k] == 0 && node.child[k] != kNoChild && top < kStack) stack[top++] = node.child[k];
+    }
   }
   return sum / kFourPi;
 }
@@ -411,25 +449,33 @@ bool ray_intersect(const DistanceIndex& index, const Vec3& origin, const Vec3& d
   stack[top++] = 0;
   while (top > 0) {
     const BvhNode& node = nodes[stack[--top]];
-    // Slab test (inf/nan from zero direction components resolved conservatively).
-    double t0 = 0, t1 = best_t;
-    bool miss = false;
-    for (int a = 0; a < 3 && !miss; ++a) {
-      const double lo = static_cast<double>(node.lo[a]), hi = static_cast<double>(node.hi[a]);
-      if (direction[a] == 0.0) {
-        miss = origin[a] < lo || origin[a] > hi;
+    for (int k = 0; k < 4; ++k) {
+      if (node.child[k] == kNoChild) continue;
+      // Slab test (inf/nan from zero direction components resolved conservatively), with a
+      // relative margin of 2^-30: Moller-Trumbore's t can lie a little outside the triangle's
+      // own box (1e-14 relative for a ray through a vertex), and the smallest id among equal
+      // hits must not be pruned for it.
+      double t0 = 0, t1 = best_t;
+      bool miss = false;
+      for (int a = 0; a < 3 && !miss; ++a) {
+        const double lo = static_cast<double>(node.lo[a][k]), hi = static_cast<double>(node.hi[a][k]);
+        if (direction[a] == 0.0) {
+          miss = origin[a] < lo || origin[a] > hi;
+          continue;
+        }
+        double ta = (lo - origin[a]) * inv[a], tb = (hi - origin[a]) * inv[a];
+        if (ta > tb) { const double s = ta; ta = tb; tb = s; }
+        t0 = ta > t0 ? ta : t0;
+        t1 = tb < t1 ? tb : t1;
+        miss = t0 > t1 * (1 + 0x1p-30) + 1e-300;
+      }
+      if (miss) continue;
+      if (node.count[k] == 0) {
+        if (top < kStack) stack[top++] = node.child[k];
         continue;
       }
-      double ta = (lo - origin[a]) * inv[a], tb = (hi - origin[a]) * inv[a];
-      if (ta > tb) { const double s = ta; ta = tb; tb = s; }
-      t0 = ta > t0 ? ta : t0;
-      t1 = tb < t1 ? tb : t1;
-      miss = t0 > t1 * (1 + 4e-16) + 1e-300;
-    }
-    if (miss) continue;
-    if (is_leaf(node)) {
-      for (uint32_t k = node.index; k < node.index + node.count; ++k) {
-        const uint32_t t = index.order[k];
+      for (uint32_t j = node.child[k]; j < node.child[k] + node.count[k]; ++j) {
+        const uint32_t t = index.order[j];
         const Triangle& tri = mesh.triangles[t];
         const Vec3 &a = v[tri.v[0]], &b = v[tri.v[1]], &c = v[tri.v[2]];
         // Moller-Trumbore.
@@ -452,10 +498,7 @@ bool ray_intersect(const DistanceIndex& index, const Vec3& origin, const Vec3& d
           found = true;
         }
       }
-      continue;
     }
-    stack[top++] = node.index + 1;
-    stack[top++] = node.index;
   }
   if (!found) return false;
   out->t = best_t;
@@ -464,10 +507,11 @@ bool ray_intersect(const DistanceIndex& index, const Vec3& origin, const Vec3& d
 }
 
 namespace {
-inline bool node_overlaps(const BvhNode& node, const Aabb& box) {
-  return !(static_cast<double>(node.lo[0]) > box.hi.x || static_cast<double>(node.hi[0]) < box.lo.x ||
-           static_cast<double>(node.lo[1]) > box.hi.y || static_cast<double>(node.hi[1]) < box.lo.y ||
-           static_cast<double>(node.lo[2]) > box.hi.z || static_cast<double>(node.hi[2]) < box.lo.z);
+inline bool child_overlaps(const BvhNode& node, int k, const Aabb& box) {
+  return node.child[k] != kNoChild &&
+         !(static_cast<double>(node.lo[0][k]) > box.hi.x || static_cast<double>(node.hi[0][k]) < box.lo.x ||
+           static_cast<double>(node.lo[1][k]) > box.hi.y || static_cast<double>(node.hi[1][k]) < box.lo.y ||
+           static_cast<double>(node.lo[2][k]) > box.hi.z || static_cast<double>(node.hi[2][k]) < box.lo.z);
 }
 
 // Calls visit(triangle id) for every triangle in a leaf whose box overlaps `box`; stops when
@@ -479,15 +523,16 @@ void for_each_triangle_near(const DistanceIndex& index, const Aabb& box, Visit& 
   stack[top++] = 0;
   while (top > 0) {
     const BvhNode& node = index.nodes[stack[--top]];
-    if (!node_overlaps(node, box)) continue;
-    if (is_leaf(node)) {
-      for (uint32_t k = node.index; k < node.index + node.count; ++k) {
-        if (!visit(index.order[k])) return;
+    for (int k = 4; k-- > 0;) {
+      if (!child_overlaps(node, k, box)) continue;
+      if (node.count[k] == 0) {
+        if (top < kStack) stack[top++] = node.child[k];
+        continue;
       }
-      continue;
+      for (uint32_t j = node.child[k]; j < node.child[k] + node.count[k]; ++j) {
+        if (!visit(index.order[j])) return;
+      }
     }
-    stack[top++] = node.index + 1;
-    stack[top++] = node.index;
   }
 }
 }  // namespace
@@ -570,12 +615,19 @@ Status morton_batch(const Context& ctx, const DistanceIndex& index, Span<const V
   KeyIndex* keys = arena.allocate_array<KeyIndex>(chunk);
   KeyIndex* scratch = arena.allocate_array<KeyIndex>(chunk);
   if (keys == nullptr || scratch == nullptr) return arena.exhausted_status();
+  // The Morton grid spans the root's children.
   const BvhNode& root = index.nodes[0];
-  const Vec3 lo{static_cast<double>(root.lo[0]), static_cast<double>(root.lo[1]),
-                static_cast<double>(root.lo[2])};
+  Vec3 lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (int k = 0; k < 4; ++k) {
+    if (root.child[k] == kNoChild) continue;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = static_cast<double>(root.lo[a][k]) < lo[a] ? static_cast<double>(root.lo[a][k]) : lo[a];
+      hi[a] = static_cast<double>(root.hi[a][k]) > hi[a] ? static_cast<double>(root.hi[a][k]) : hi[a];
+    }
+  }
   double scale[3];
   for (int a = 0; a < 3; ++a) {
-    const double ext = static_cast<double>(root.hi[a]) - static_cast<double>(root.lo[a]);
+    const double ext = hi[a] - lo[a];
     scale[a] = ext > 0 ? 1023.0 / ext : 0.0;
   }
   for (size_t first = 0; first < n; first += kChunk) {
