@@ -1,10 +1,10 @@
 // Building the distance index: a BVH over Morton-ordered leaves, split top-down at the highest
 // differing Morton bit (Karras, "Maximizing parallelism in the construction of BVHs, octrees,
-// and k-d trees", HPG 2012; here sequential with an explicit stack), bounds and dipoles
-// bottom-up, then collapsed into a 4-wide tree (each node takes its binary node's two
-// children and opens the largest of them until it holds four: the surface-area rule of Wald et
-// al., "Getting rid of packets", IRT 2008), edge neighbours from per-vertex half-edge lists,
-// and angle-weighted vertex
+// and k-d trees", HPG 2012; here sequential with an explicit stack), four ways at a time: a
+// node splits its range, then splits its larger part again, until it has four children (the
+// 4-wide tree of Wald et al., "Getting rid of packets", IRT 2008, built directly rather than
+// collapsed from a binary one), bounds and dipoles bottom-up, edge neighbours from per-vertex
+// half-edge lists, and angle-weighted vertex
 // pseudonormals (Baerentzen and Aanaes, "Signed distance computation using the angle weighted
 // pseudonormal", IEEE TVCG 2005).
 #include <cmath>
@@ -19,15 +19,6 @@ namespace {
 constexpr uint32_t kMaxDepth = 128;
 constexpr uint32_t kDefaultLeaf = 4;
 
-// A node of the binary tree the Morton split gives (a temporary: the index keeps the 4-wide
-// tree collapsed from it). Children at index and index + 1 (count == 0), or a leaf of count
-// triangles from order[index].
-struct BinaryNode {
-  float lo[3];
-  float hi[3];
-  uint32_t index;
-  uint32_t count;
-};
 
 // Spreads the low 16 bits of v so that two zero bits follow each (for a 48-bit Morton code:
 // 65536 cells per axis, finer than any triangle here, and six radix passes instead of eight).
@@ -108,16 +99,14 @@ uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,
                               const DistanceIndexOptions& options) {
   const uint64_t leaf = options.leaf_size == 0 ? kDefaultLeaf : options.leaf_size;
   const uint64_t leaves = triangle_count == 0 ? 1 : (triangle_count + leaf - 1) / leaf;
-  const uint64_t binary = 2 * leaves - 1;
-  // Every 4-wide node but an empty root is made from a distinct inner binary node.
+  // Every node splits a range of at least two leaves (an empty or one-leaf mesh has a root).
   const uint64_t wide = leaves > 1 ? leaves - 1 : 1;
   const uint64_t per_node = sizeof(BvhNode) + sizeof(BvhDipole);
   const uint64_t kept = wide * per_node + triangle_count * (sizeof(uint32_t) * 4) +
                         vertex_count * sizeof(Vec3);
-  // Temporaries (the larger stage): the binary tree with its dipoles, Morton keys and scratch,
-  // and the 4-wide tree before it moves down; or the per-vertex half-edge lists.
-  const uint64_t tree = binary * (sizeof(BinaryNode) + sizeof(BvhDipole)) +
-                        2 * triangle_count * sizeof(uint64_t) + wide * per_node;
+  // Temporaries (the larger stage): Morton keys and scratch with the tree at its upper bound
+  // before it moves down, or the per-vertex half-edge lists.
+  const uint64_t tree = 2 * triangle_count * sizeof(uint64_t) + wide * per_node;
   const uint64_t lists = 3 * triangle_count * 2 * sizeof(uint32_t) +
                          (2 * vertex_count + 1) * sizeof(uint32_t);
   const uint64_t temps = (tree > lists ? tree : lists) + kMaxDepth * 16;
@@ -157,10 +146,9 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   }
   const uint32_t n = static_cast<uint32_t>(nt);
   const uint32_t leaves = n == 0 ? 1 : (n + leaf_size - 1) / leaf_size;
-  const uint32_t node_count = 2 * leaves - 1;
 
   // What stays: order, neighbours and vertex normals (here), the 4-wide nodes and their
-  // dipoles (moved down over the temporaries once the binary tree is collapsed).
+  // dipoles (moved down over the temporaries once the tree is built).
   uint32_t* order = arena.allocate_array<uint32_t>(nt);
   uint32_t* neighbors = arena.allocate_array<uint32_t>(3 * nt);
   Vec3* vnormals = arena.allocate_array<Vec3>(nv);
@@ -168,12 +156,15 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
     return arena.exhausted_status();
   }
   const Arena::Marker tree_temps = arena.mark();
-  BinaryNode* nodes = arena.allocate_array<BinaryNode>(node_count);
-  BvhDipole* dipoles = arena.allocate_array<BvhDipole>(node_count);
-  if (nodes == nullptr || dipoles == nullptr) return arena.exhausted_status();
+  // The wide nodes and their dipoles, at their upper bound (every wide node splits a range of
+  // at least two leaves, so there are at most leaves - 1 of them); moved down over the Morton
+  // keys once the tree is built.
+  const uint32_t wide_max = leaves > 1 ? leaves - 1 : 1;
+  BvhNode* nodes = nullptr;
+  BvhDipole* dipoles = nullptr;
+  uint32_t node_count = 1;
   // 1. Morton order of the triangle centroids (keys live until the topology is built).
   {
-  ArenaScope morton_temps(arena);
   Aabb centroids;
   for (uint32_t t = 0; t < n; ++t) {
     const Triangle& tri = tris[t];
@@ -187,7 +178,11 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   const uint32_t code_bits = (64 - id_bits) / 3 < 16 ? (64 - id_bits) / 3 : 16;
   uint64_t* keys = arena.allocate_array<uint64_t>(nt);
   uint64_t* scratch = arena.allocate_array<uint64_t>(nt);
-  if (nt > 0 && (keys == nullptr || scratch == nullptr)) return arena.exhausted_status();
+  nodes = arena.allocate_array<BvhNode>(wide_max);
+  dipoles = arena.allocate_array<BvhDipole>(wide_max);
+  if ((nt > 0 && (keys == nullptr || scratch == nullptr)) || nodes == nullptr || dipoles == nullptr) {
+    return arena.exhausted_status();
+  }
   {
     const Vec3 lo = centroids.lo;
     const Vec3 ext = centroids.extent();
@@ -214,69 +209,98 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 1, 4));
 
   // 2. Topology, top-down over leaf ranges. Leaf l holds order[l * leaf_size ...]; its code is
-  // its first triangle's. Children are allocated in pairs, so node 0 is the root and
-  // children always follow their parent: the reverse of creation order is bottom-up.
+  // its first triangle's. A wide node splits its range at the highest differing Morton bit,
+  // then splits the part with the most leaves again (the first on a tie) until it has four
+  // parts or only single leaves; a part of one leaf is a leaf child, a longer one a wide node.
+  // Nodes are numbered as they are made, so children follow their parent and the reverse of
+  // the numbering is bottom-up.
   {
     // A leaf's code is its first triangle's (the id bits only break ties among equal codes,
     // and splitting on them is as good as any other split there).
     auto leaf_code = [&](uint32_t l) { return n == 0 ? 0 : keys[size_t{l} * leaf_size]; };
+    // The last leaf of the first half of [first, last] (first < last).
+    auto split_point = [&](uint32_t first, uint32_t last) {
+      const uint64_t a = leaf_code(first), b = leaf_code(last);
+      if (a == b) return first + (last - first) / 2;
+      const int bit = highest_bit(a ^ b);
+      uint32_t lo = first, hi = last;  // find the last leaf with that bit clear
+      while (lo + 1 < hi) {
+        const uint32_t mid = lo + (hi - lo) / 2;
+        if (((leaf_code(mid) >> bit) & 1) == 0) lo = mid; else hi = mid;
+      }
+      return lo;
+    };
     struct Range {
       uint32_t node, first, last;  // leaves [first, last]
     };
-    Range stack[kMaxDepth];
+    const float inf = HUGE_VALF;
+    Range stack[3 * kMaxDepth + 4];
     uint32_t top = 0;
-    uint32_t next_node = 1;
     stack[top++] = Range{0, 0, leaves - 1};
     while (top > 0) {
       const Range r = stack[--top];
-      BinaryNode& node = nodes[r.node];
-      if (r.first == r.last) {
-        const uint32_t begin = r.first * leaf_size;
-        const uint32_t end = begin + leaf_size < n ? begin + leaf_size : n;
-        node.index = begin;
-        node.count = end - begin;  // 0 only for the empty mesh's root (index 0: never a parent)
-        continue;
-      }
-      // Split where the highest differing Morton bit changes; equal codes split in the middle.
-      uint32_t split;
-      const uint64_t a = leaf_code(r.first), b = leaf_code(r.last);
-      if (a == b) {
-        split = r.first + (r.last - r.first) / 2;
-      } else {
-        const int bit = highest_bit(a ^ b);
-        uint32_t lo = r.first, hi = r.last;  // find the last leaf with that bit clear
-        while (lo + 1 < hi) {
-          const uint32_t mid = lo + (hi - lo) / 2;
-          if (((leaf_code(mid) >> bit) & 1) == 0) lo = mid; else hi = mid;
+      uint32_t first[4] = {r.first, 0, 0, 0}, last[4] = {r.last, 0, 0, 0};
+      uint32_t parts = 1;
+      while (parts < 4) {
+        uint32_t widest = parts;
+        for (uint32_t k = 0; k < parts; ++k) {
+          if (last[k] > first[k] && (widest == parts || last[k] - first[k] > last[widest] - first[widest])) {
+            widest = k;
+          }
         }
-        split = lo;
+        if (widest == parts) break;
+        const uint32_t split = split_point(first[widest], last[widest]);
+        for (uint32_t k = parts; k > widest + 1; --k) {
+          first[k] = first[k - 1];
+          last[k] = last[k - 1];
+        }
+        first[widest + 1] = split + 1;
+        last[widest + 1] = last[widest];
+        last[widest] = split;
+        ++parts;
       }
-      node.index = next_node;
-      node.count = 0;
-      next_node += 2;
-      if (top + 2 > kMaxDepth) {
-        return Status::error(StatusCode::kInternal, "distance index: hierarchy too deep");
+      BvhNode& w = nodes[r.node];
+      for (uint32_t k = 0; k < 4; ++k) {
+        for (int a = 0; a < 3; ++a) {
+          w.lo[a][k] = inf;  // bounds come in step 3
+          w.hi[a][k] = -inf;
+        }
+        w.child[k] = kNoChild;
+        w.count[k] = 0;
+        if (k >= parts) continue;
+        if (first[k] == last[k]) {
+          const uint32_t begin = first[k] * leaf_size;
+          const uint32_t end = begin + leaf_size < n ? begin + leaf_size : n;
+          if (end == begin) continue;  // the empty mesh's root: no child at all
+          w.child[k] = begin;
+          w.count[k] = static_cast<uint8_t>(end - begin);
+          continue;
+        }
+        if (top + 1 > 3 * kMaxDepth + 4 || node_count >= wide_max) {
+          return Status::error(StatusCode::kInternal, "distance index: hierarchy too deep");
+        }
+        w.child[k] = node_count;
+        stack[top++] = Range{node_count++, first[k], last[k]};
       }
-      stack[top++] = Range{node.index + 1, split + 1, r.last};
-      stack[top++] = Range{node.index, r.first, split};
     }
-    SPLINTCORE_ASSERT(next_node == node_count);
   }
   }
 
   // 3. Bounds and dipoles, bottom-up (children have larger indices than their parent). A
-  // parent's dipole is summed from its children's (float) dipoles, so no per-node sums are
-  // kept aside: the far field is an approximation either way, and the radius is bounded from
-  // the node's own box.
-  {
-    for (uint32_t i = node_count; i-- > 0;) {
-      BinaryNode& node = nodes[i];
+  // leaf child's box and dipole sums come from its triangles, an inner child's from its node
+  // (its box is the union of that node's boxes, its dipole that node's, in float): the far
+  // field is an approximation either way, and the radius is bounded from the node's own box.
+  for (uint32_t i = node_count; i-- > 0;) {
+    BvhNode& node = nodes[i];
+    Aabb all;
+    Vec3 wsum{}, nsum{};
+    double asum = 0;
+    for (int k = 0; k < 4; ++k) {
+      if (node.child[k] == kNoChild) continue;
       Aabb box;
-      Vec3 wsum{}, nsum{};
-      double asum = 0;
-      if (node.count > 0 || node.index == 0) {  // a leaf (the empty mesh's root has count 0)
-        for (uint32_t k = node.index; k < node.index + node.count; ++k) {
-          const Triangle& tri = tris[order[k]];
+      if (node.count[k] > 0) {
+        for (uint32_t j = node.child[k]; j < node.child[k] + node.count[k]; ++j) {
+          const Triangle& tri = tris[order[j]];
           const Vec3 &p0 = v[tri.v[0]], &p1 = v[tri.v[1]], &p2 = v[tri.v[2]];
           box.add(p0);
           box.add(p1);
@@ -287,143 +311,65 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
           wsum = wsum + (p0 + p1 + p2) * (ar / 3.0);
           asum += ar;
         }
-      } else {
-        const uint32_t children[2] = {node.index, node.index + 1};
-        for (uint32_t c : children) {
-          box.add(Vec3{static_cast<double>(nodes[c].lo[0]), static_cast<double>(nodes[c].lo[1]),
-                       static_cast<double>(nodes[c].lo[2])});
-          box.add(Vec3{static_cast<double>(nodes[c].hi[0]), static_cast<double>(nodes[c].hi[1]),
-                       static_cast<double>(nodes[c].hi[2])});
-          const BvhDipole& cd = dipoles[c];
-          const double ca = static_cast<double>(cd.area);
-          nsum = nsum + Vec3{static_cast<double>(cd.normal[0]), static_cast<double>(cd.normal[1]),
-                             static_cast<double>(cd.normal[2])};
-          wsum = wsum + Vec3{static_cast<double>(cd.center[0]), static_cast<double>(cd.center[1]),
-                             static_cast<double>(cd.center[2])} * ca;
-          asum += ca;
-        }
-      }
-      if (box.empty()) box.add(Vec3{});
-      for (int a = 0; a < 3; ++a) {
-        node.lo[a] = float_down(box.lo[a]);
-        node.hi[a] = float_up(box.hi[a]);
-      }
-      const Vec3 center = asum > 0 ? wsum * (1.0 / asum) : box.center();
-      // Radius: the box's half diagonal plus the centre's offset from the box centre bounds
-      // the distance to every corner (triangle inequality), with one square root.
-      const Vec3 flo{static_cast<double>(node.lo[0]), static_cast<double>(node.lo[1]),
-                     static_cast<double>(node.lo[2])};
-      const Vec3 fhi{static_cast<double>(node.hi[0]), static_cast<double>(node.hi[1]),
-                     static_cast<double>(node.hi[2])};
-      const double reach = 0.5 * length(fhi - flo) + length((flo + fhi) * 0.5 - center);
-      BvhDipole& dp = dipoles[i];
-      for (int a = 0; a < 3; ++a) {
-        dp.center[a] = static_cast<float>(center[a]);
-        dp.normal[a] = static_cast<float>(nsum[a]);
-      }
-      // The float centre moved by up to half an ulp per axis: widen the radius for that.
-      const Vec3 fc{static_cast<double>(dp.center[0]), static_cast<double>(dp.center[1]),
-                    static_cast<double>(dp.center[2])};
-      dp.radius = float_up((reach + length(fc - center) * 2.0) * (1.0 + 1e-12));
-      dp.area = static_cast<float>(asum);
-    }
-  }
-  // 3b. Collapse into the 4-wide tree: each wide node takes its binary node's two children and
-  // opens the one with the largest box surface (the first on a tie) until it holds four or
-  // only leaves are left; wide nodes are numbered as they are made (parents first).
-  uint32_t wide_count = 1;
-  BvhNode* wide = nullptr;
-  BvhDipole* wide_dipoles = nullptr;
-  {
-    const uint32_t wide_max = leaves > 1 ? leaves - 1 : 1;
-    wide = arena.allocate_array<BvhNode>(wide_max);
-    wide_dipoles = arena.allocate_array<BvhDipole>(wide_max);
-    if (wide == nullptr || wide_dipoles == nullptr) return arena.exhausted_status();
-    const auto is_binary_leaf = [&](uint32_t b) { return nodes[b].count > 0 || nodes[b].index == 0; };
-    const auto area = [&](uint32_t b) {
-      const double x = static_cast<double>(nodes[b].hi[0]) - static_cast<double>(nodes[b].lo[0]);
-      const double y = static_cast<double>(nodes[b].hi[1]) - static_cast<double>(nodes[b].lo[1]);
-      const double z = static_cast<double>(nodes[b].hi[2]) - static_cast<double>(nodes[b].lo[2]);
-      return x * y + y * z + z * x;
-    };
-    const float inf = HUGE_VALF;
-    struct Pending {
-      uint32_t binary, wide;
-    };
-    Pending stack[4 * kMaxDepth];
-    uint32_t top = 0;
-    stack[top++] = Pending{0, 0};
-    while (top > 0) {
-      const Pending p = stack[--top];
-      uint32_t members[4];
-      uint32_t m = 0;
-      if (is_binary_leaf(p.binary)) {
-        if (nodes[p.binary].count > 0) members[m++] = p.binary;  // a root leaf (tiny mesh)
-      } else {
-        members[m++] = nodes[p.binary].index;
-        members[m++] = nodes[p.binary].index + 1;
-        while (m < 4) {
-          uint32_t open = m;
-          double largest = -1;
-          for (uint32_t k = 0; k < m; ++k) {
-            if (is_binary_leaf(members[k])) continue;
-            const double a = area(members[k]);
-            if (a > largest) {
-              largest = a;
-              open = k;
-            }
-          }
-          if (open == m) break;
-          const uint32_t first = nodes[members[open]].index;
-          for (uint32_t k = m; k > open + 1; --k) members[k] = members[k - 1];
-          members[open] = first;
-          members[open + 1] = first + 1;
-          ++m;
-        }
-      }
-      BvhNode& w = wide[p.wide];
-      for (uint32_t k = 0; k < 4; ++k) {
-        if (k >= m) {
-          for (int a = 0; a < 3; ++a) {
-            w.lo[a][k] = inf;
-            w.hi[a][k] = -inf;
-          }
-          w.child[k] = kNoChild;
-          w.count[k] = 0;
-          continue;
-        }
-        const BinaryNode& b = nodes[members[k]];
         for (int a = 0; a < 3; ++a) {
-          w.lo[a][k] = b.lo[a];
-          w.hi[a][k] = b.hi[a];
+          node.lo[a][k] = float_down(box.lo[a]);
+          node.hi[a][k] = float_up(box.hi[a]);
         }
-        if (is_binary_leaf(members[k])) {
-          w.child[k] = b.index;
-          w.count[k] = static_cast<uint8_t>(b.count);
-        } else {
-          if (top + 1 > 4 * kMaxDepth || wide_count >= wide_max) {
-            return Status::error(StatusCode::kInternal, "distance index: collapse out of bounds");
+      } else {
+        const BvhNode& c = nodes[node.child[k]];
+        float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF}, hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
+        for (int j = 0; j < 4; ++j) {
+          if (c.child[j] == kNoChild) continue;
+          for (int a = 0; a < 3; ++a) {
+            lo[a] = c.lo[a][j] < lo[a] ? c.lo[a][j] : lo[a];
+            hi[a] = c.hi[a][j] > hi[a] ? c.hi[a][j] : hi[a];
           }
-          w.child[k] = wide_count;
-          w.count[k] = 0;
-          stack[top++] = Pending{members[k], wide_count++};
         }
+        for (int a = 0; a < 3; ++a) {
+          node.lo[a][k] = lo[a];
+          node.hi[a][k] = hi[a];
+        }
+        const BvhDipole& cd = dipoles[node.child[k]];
+        const double ca = static_cast<double>(cd.area);
+        nsum = nsum + Vec3{static_cast<double>(cd.normal[0]), static_cast<double>(cd.normal[1]),
+                           static_cast<double>(cd.normal[2])};
+        wsum = wsum + Vec3{static_cast<double>(cd.center[0]), static_cast<double>(cd.center[1]),
+                           static_cast<double>(cd.center[2])} * ca;
+        asum += ca;
       }
-      wide_dipoles[p.wide] = dipoles[p.binary];
+      all.add(Vec3{static_cast<double>(node.lo[0][k]), static_cast<double>(node.lo[1][k]),
+                   static_cast<double>(node.lo[2][k])});
+      all.add(Vec3{static_cast<double>(node.hi[0][k]), static_cast<double>(node.hi[1][k]),
+                   static_cast<double>(node.hi[2][k])});
     }
+    if (all.empty()) all.add(Vec3{});
+    const Vec3 center = asum > 0 ? wsum * (1.0 / asum) : all.center();
+    // Radius: the box's half diagonal plus the centre's offset from the box centre bounds the
+    // distance to every corner (triangle inequality), with one square root.
+    const double reach = 0.5 * length(all.hi - all.lo) + length((all.lo + all.hi) * 0.5 - center);
+    BvhDipole& dp = dipoles[i];
+    for (int a = 0; a < 3; ++a) {
+      dp.center[a] = static_cast<float>(center[a]);
+      dp.normal[a] = static_cast<float>(nsum[a]);
+    }
+    // The float centre moved by up to half an ulp per axis: widen the radius for that.
+    const Vec3 fc{static_cast<double>(dp.center[0]), static_cast<double>(dp.center[1]),
+                  static_cast<double>(dp.center[2])};
+    dp.radius = float_up((reach + length(fc - center) * 2.0) * (1.0 + 1e-12));
+    dp.area = static_cast<float>(asum);
   }
-  // 3c. The wide tree down over the temporaries (it was allocated after them; the nodes move
-  // first, so no destination lies above bytes not yet copied).
-  const BvhNode* wide_src = wide;
-  const BvhDipole* wide_dipoles_src = wide_dipoles;
+  // The tree down over the Morton keys (it was allocated after them; the nodes move first, so
+  // no destination lies above bytes not yet copied).
+  const BvhNode* wide_src = nodes;
+  const BvhDipole* wide_dipoles_src = dipoles;
   arena.rewind(tree_temps);
-  BvhNode* kept_nodes = arena.allocate_array<BvhNode>(wide_count);
+  BvhNode* kept_nodes = arena.allocate_array<BvhNode>(node_count);
   SPLINTCORE_ASSERT(kept_nodes != nullptr);
-  std::memmove(static_cast<void*>(kept_nodes), wide_src, size_t{wide_count} * sizeof(BvhNode));
-  BvhDipole* kept_dipoles = arena.allocate_array<BvhDipole>(wide_count);
+  std::memmove(static_cast<void*>(kept_nodes), wide_src, size_t{node_count} * sizeof(BvhNode));
+  BvhDipole* kept_dipoles = arena.allocate_array<BvhDipole>(node_count);
   SPLINTCORE_ASSERT(kept_dipoles != nullptr);
   std::memmove(static_cast<void*>(kept_dipoles), wide_dipoles_src,
-               size_t{wide_count} * sizeof(BvhDipole));
+               size_t{node_count} * sizeof(BvhDipole));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 2, 4));
 
   // 4. Edge neighbours through per-vertex lists of outgoing half-edges (counting sort by
@@ -548,8 +494,8 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 4, 4));
 
-  out->nodes = Span<const BvhNode>(kept_nodes, wide_count);
-  out->dipoles = Span<const BvhDipole>(kept_dipoles, wide_count);
+  out->nodes = Span<const BvhNode>(kept_nodes, node_count);
+  out->dipoles = Span<const BvhDipole>(kept_dipoles, node_count);
   out->order = Span<const uint32_t>(order, nt);
   out->neighbors = Span<const uint32_t>(neighbors, 3 * nt);
   out->vertex_normals = Span<const Vec3>(vnormals, nv);

@@ -248,7 +248,9 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
     for (int i = 0; i < m; ++i) {
       const int k = by[i];
       if (node.count[k] == 0 || !(d2[k] <= best2)) continue;
-      for (uint32_t j = node.child[k]; j < node.child[k] + node.count[k]; ++j) consider(index.order[j]);
+      for (uint32_t j = node.child[k]; j < node.child[k] + node.count[k]; ++j) {
+        consider(index.order[j]);
+      }
     }
     for (int i = m; i-- > 0;) {
       const int k = by[i];
