@@ -8,9 +8,12 @@
 //   B's triangles whose corners all lie beyond one side of it are never split or classified
 //   (they are outside A). The rest are paired with A's triangles through a uniform grid over
 //   A (A is the small mesh: the splint base), with plane and edge-plane filters (B's whole
-//   box against A's edge planes first); filters only skip pairs the exact tests would reject.
+//   box against A's edge planes first, then B's corners against them in 2-D); filters only
+//   skip pairs the exact tests would reject.
 // - Each candidate pair is decided by exact predicates (orient3d on the input coordinates,
-//   after filters that only answer when they are certain). An intersection point is named
+//   after filters that only answer when they are certain; where the segment starts and ends
+//   takes at most four orient3d of an edge of one triangle against an edge of the other, each
+//   sign computed once). An intersection point is named
 //   symbolically (an edge of one mesh and a triangle of the other) and computed once, so every
 //   triangle that shares it gets the same vertex: the result has no cracks by construction.
 // - Each cut triangle is re-triangulated on its own plane (projected to 2-D along the normal's

@@ -804,29 +804,56 @@ Status cdt(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> seg
       w.stack[w.stack_size++] = nb;
     }
   }
-  for (uint32_t s = 0; s < static_cast<uint32_t>(m); ++s) {
-    const uint32_t a = segments[s].a;
-    const uint32_t b = segments[s].b;
-    uint32_t ti = 0;
-    uint32_t k = 0;
-    if (!find_edge(w, a, b, &ti, &k)) {
-      return make_error(StatusCode::kInternal, "cdt: segment ", s, " is not an edge");
-    }
+  // The segments against the exterior. First one pass over the slots: every marked edge is
+  // its segment, with no exterior triangle on its inner side (the left of a boundary segment,
+  // both sides of a constraint), and 2 m marked sides (so no segment repeats another and every
+  // one is an edge). Only when that does not hold does the per-segment walk below run; it
+  // finds the same problems and names the first one in segment order.
+  bool segments_fine = true;
+  uint64_t marked = 0;
+  for (uint32_t ti = 0; ti < w.tri_count && segments_fine; ++ti) {
     const Tri& t = w.t[ti];
-    const uint32_t nb = t.n[k];
-    if (s < boundary_count) {
-      // The triangle left of a -> b must be inside.
-      const uint32_t left = t.v[next3(k)] == a ? ti : nb;
-      if (exterior[left] != 0) {
-        return make_error(StatusCode::kInvalidArgument,
-                          "cdt: the boundary is not counter-clockwise (segment ", s, ", points ",
-                          a, "-", b, ", has the outside on its left)")
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t c = t.c[k];
+      if (c == kNone) continue;
+      ++marked;
+      const uint32_t x = t.v[next3(k)], y = t.v[prev3(k)];  // ti lies left of x -> y
+      const CdtSegment& g = segments[c];
+      if (g.a == x && g.b == y) {
+        segments_fine = exterior[ti] == 0;
+      } else if (g.a == y && g.b == x) {
+        segments_fine = c < boundary_count || exterior[ti] == 0;
+      } else {
+        segments_fine = false;
+      }
+      if (!segments_fine) break;
+    }
+  }
+  if (!segments_fine || marked != 2 * uint64_t{m}) {
+    for (uint32_t s = 0; s < static_cast<uint32_t>(m); ++s) {
+      const uint32_t a = segments[s].a;
+      const uint32_t b = segments[s].b;
+      uint32_t ti = 0;
+      uint32_t k = 0;
+      if (!find_edge(w, a, b, &ti, &k)) {
+        return make_error(StatusCode::kInternal, "cdt: segment ", s, " is not an edge");
+      }
+      const Tri& t = w.t[ti];
+      const uint32_t nb = t.n[k];
+      if (s < boundary_count) {
+        // The triangle left of a -> b must be inside.
+        const uint32_t left = t.v[next3(k)] == a ? ti : nb;
+        if (exterior[left] != 0) {
+          return make_error(StatusCode::kInvalidArgument,
+                            "cdt: the boundary is not counter-clockwise (segment ", s, ", points ",
+                            a, "-", b, ", has the outside on its left)")
+              .at_index(s);
+        }
+      } else if (t.c[k] >= boundary_count && (exterior[ti] != 0 || exterior[nb] != 0)) {
+        return make_error(StatusCode::kInvalidArgument, "cdt: constraint segment ", s,
+                          " (points ", a, "-", b, ") lies outside the boundary")
             .at_index(s);
       }
-    } else if (t.c[k] >= boundary_count && (exterior[ti] != 0 || exterior[nb] != 0)) {
-      return make_error(StatusCode::kInvalidArgument, "cdt: constraint segment ", s,
-                        " (points ", a, "-", b, ") lies outside the boundary")
-          .at_index(s);
     }
   }
   uint8_t* used = flags;
@@ -853,39 +880,52 @@ Status cdt(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> seg
                       expected);
   }
 
-  // ---- the output: slot order, each triangle starting at its smallest id.
+  // ---- the output: slot order, each triangle starting at its smallest id (written into the
+  // room reserved above; on an error `out` and `adjacency` are cut back to their sizes).
+  const size_t out_start = out->size();
+  const size_t adjacency_start = adjacency != nullptr ? adjacency->size() : 0;
+  if (!out->resize(out_start + static_cast<size_t>(expected))) {
+    return out->arena()->exhausted_status();  // reserved: never
+  }
+  CdtTriangle* out_tri = out->data() + out_start;
+  CdtAdjacency* out_adj = nullptr;
+  uint32_t* index_of_slot = w.stack;  // the half-edge stack is free again
+  if (adjacency != nullptr) {
+    if (!adjacency->resize(adjacency_start + static_cast<size_t>(expected))) {
+      out->shrink_size(out_start);
+      return adjacency->arena()->exhausted_status();  // reserved: never
+    }
+    out_adj = adjacency->data() + adjacency_start;
+    // Output index of each inside slot.
+    uint32_t count = 0;
+    for (uint32_t ti = 0; ti < w.tri_count; ++ti) {
+      index_of_slot[ti] = exterior[ti] != 0 ? kCdtNone : count++;
+    }
+  }
+  size_t produced = 0;
   for (uint32_t ti = 0; ti < w.tri_count; ++ti) {
     if (exterior[ti] != 0) continue;
     const Tri& t = w.t[ti];
     const uint32_t k = t.v[0] < t.v[1] ? (t.v[0] < t.v[2] ? 0 : 2) : (t.v[1] < t.v[2] ? 1 : 2);
     const CdtTriangle tri{{t.v[k], t.v[next3(k)], t.v[prev3(k)]}};
     if (orient(w, tri.v[0], tri.v[1], tri.v[2]) <= 0.0) {
+      out->shrink_size(out_start);
+      if (adjacency != nullptr) adjacency->shrink_size(adjacency_start);
       return make_error(StatusCode::kInternal, "cdt: triangle ", tri.v[0], "-", tri.v[1], "-",
                         tri.v[2], " is not counter-clockwise");
     }
-    if (!out->push_back(tri)) return out->arena()->exhausted_status();  // reserved: never
-  }
-  if (adjacency != nullptr) {
-    // Output index of each inside slot (the half-edge stack is free again), then per output
-    // triangle (rotated by k from its slot) the edge v[e] -> v[e + 1], which is the slot's
-    // edge opposite t.v[(k + e + 2) % 3].
-    uint32_t* index_of_slot = w.stack;
-    uint32_t count = 0;
-    for (uint32_t ti = 0; ti < w.tri_count; ++ti) {
-      index_of_slot[ti] = exterior[ti] != 0 ? kCdtNone : count++;
-    }
-    for (uint32_t ti = 0; ti < w.tri_count; ++ti) {
-      if (exterior[ti] != 0) continue;
-      const Tri& t = w.t[ti];
-      const uint32_t k = t.v[0] < t.v[1] ? (t.v[0] < t.v[2] ? 0 : 2) : (t.v[1] < t.v[2] ? 1 : 2);
-      CdtAdjacency a;
+    out_tri[produced] = tri;
+    if (out_adj != nullptr) {
+      // Per output triangle (rotated by k from its slot) the edge v[e] -> v[e + 1], which is
+      // the slot's edge opposite t.v[(k + e + 2) % 3].
+      CdtAdjacency& a = out_adj[produced];
       for (uint32_t e = 0; e < 3; ++e) {
         const uint32_t o = (k + e + 2) % 3;
         a.nb[e] = t.n[o] == kNone ? kCdtNone : index_of_slot[t.n[o]];
         a.seg[e] = t.c[o] == kNone ? kCdtNone : t.c[o];
       }
-      if (!adjacency->push_back(a)) return adjacency->arena()->exhausted_status();  // reserved
     }
+    ++produced;
   }
   return Status::ok();
 }

@@ -419,5 +419,35 @@ TEST(BooleanTest, EmptyBLeavesAAndHostileBIsNamed) {
   }
 }
 
+// The result check (a faster edge pairing first, check_closed_oriented only for the error):
+// an open B is fine for the difference when its border lies outside A, but the union keeps
+// that border, and the error names the first boundary edge as check_closed_oriented does.
+TEST(BooleanTest, ResultCheckNamesTheOpenEdgeOfAUnion) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  // A sphere through A's top face; its north cap (above z = 1.3) is outside A.
+  Mesh b = sphere_mesh(arena, 0.45, 6, 10, RigidTransform::translation({0.52, 0.47, 0.93}));
+  ASSERT_GT(b.vertices[b.triangles[0].v[1]].z, 1.2);
+  b.triangles[0] = b.triangles[b.triangles.size() - 1];
+  b.triangles.pop_back();
+  const Result d = run_op(arena, a, b, BooleanOp::kDifference, true);
+  ASSERT_TRUE(d.status.is_ok()) << test::format(d.status);
+  EXPECT_GT(d.volume, 0.5);
+  Mesh out;
+  ArenaScope scope(arena);
+  const Status u = mesh_boolean(Context(&arena), a, b, opts(BooleanOp::kUnion), &out, nullptr);
+  EXPECT_EQ(u.code(), StatusCode::kInvalidMesh) << test::format(u);
+  EXPECT_NE(std::string(u.message()).find("union result: mesh is not closed: a boundary edge"),
+            std::string::npos)
+      << u.message();
+  EXPECT_NE(u.index(), kNoPosition);
+  // The same B made whole again: the union passes the check.
+  Mesh whole = sphere_mesh(arena, 0.45, 6, 10, RigidTransform::translation({0.52, 0.47, 0.93}));
+  const Result w = run_op(arena, a, whole, BooleanOp::kUnion, true);
+  ASSERT_TRUE(w.status.is_ok()) << test::format(w.status);
+  EXPECT_GT(w.volume, 1.0);
+}
+
 }  // namespace
 }  // namespace splintcore
