@@ -43,10 +43,22 @@
 //   positive volume, and (check_self_intersection) no self-intersection, exactly. A failure
 //   is an error, never a silently broken mesh.
 //
-// B may hold several shells (one per tooth); they must not overlap each other inside A
-// (detected as an inconsistent classification: an error). B may be open (a scan) when its
-// border lies outside A. With float32 output B's vertices must be float32 values (as read from
-// STL; a moved jaw must be rounded first), since they are kept bit for bit.
+// B may hold several shells (one per tooth; shells are components through shared vertices),
+// which may overlap each other: B means the union of its shells. Shells that overlap where it
+// matters (their boxes meet inside A's box for the difference and the intersection, anywhere
+// for the union; then exactly: their triangles meet, touching included, or one lies inside
+// the other by winding number) are put in different groups, greedily in shell order, and the
+// groups are applied one corefinement pass each: A - B = ((A - G1) - G2) - ..., A + B =
+// ((A + G1) + G2) + ..., A * B = A * ((G1 + G2) + ...) (not A - (A - B), whose operands share
+// A's faces). With one group (no overlap where it matters) it is exactly one pass, the same
+// bytes as before groups existed. Intermediate results are checked closed and oriented, only
+// the final one for self-intersection; a nudge (below) of a later pass moves the previous
+// result (for the intersection's unions, the union of groups so far). For the intersection
+// with several groups the shells near A must be closed (they become the first operand of a
+// union). BooleanStats::shells, shell_groups and passes say what was done. B may be open (a
+// scan) when its border lies outside A. With float32 output B's vertices must be float32
+// values (as read from STL; a moved jaw must be rounded first), since they are kept bit for
+// bit.
 #ifndef SPLINTCORE_BOOLEAN_H
 #define SPLINTCORE_BOOLEAN_H
 
@@ -95,17 +107,33 @@ struct BooleanStats {
   uint64_t self_intersection_candidates = 0;  // pairs tested by the final check
   uint32_t attempts = 0;                      // 1 + the nudges tried
   Vec3 nudge{};                               // A's translation in the returned result
+  // B's shells (components through shared vertices), the groups of shells that overlap no
+  // other shell of their group where it matters, and the corefinement runs made (1 for one
+  // group; see mesh_boolean). With several passes the counts above are summed over the
+  // passes (attempts too); output_triangles and output_triangles_a are the final pass's (its
+  // first operand is the previous pass's result), nudge is the final pass's translation of it.
+  uint32_t shells = 0;
+  uint32_t shell_groups = 0;
+  uint32_t passes = 0;
 };
 
 // Computes options.op of the closed mesh A and the mesh B into `out` (empty).
 // A must be a valid solid (closed, edge-manifold, outward). Temporaries are returned before it
-// finishes; the result is moved down over them. Single-threaded (ctx.executor is not used yet),
-// so trivially the same at any thread count. Errors: kInvalidMesh (A is not a solid, a
-// degenerate triangle of B meets A, an index out of range: named), kNonFinite, kInvalidArgument
-// (B not float32 with float32 output), kUnsupported (a degenerate or float32-fragile contact
-// that no nudge resolved, overlapping shells of B: named), kArenaExhausted (the message says how
-// much was needed at that point), kLimitExceeded (more than 2^31 vertices or triangles),
-// kCancelled, kInternal (a result that fails its own check: please report it with the inputs).
+// finishes; the result is moved down over them; on an error the arena is as it was and *out
+// empty. Arena: finding B's shells takes about 9 bytes per vertex and 4 (8 when a shell's
+// triangles are not one run of B's) per triangle of B, plus, while two shells whose boxes
+// overlap are compared, at most about 130 bytes per triangle of theirs in the boxes' overlap;
+// all of it is returned before the one pass when there is one group. With several groups it
+// stays (with 4 more bytes per vertex of B) below the passes, and each pass also has the
+// previous result and one group's copy of its shells below it. Single-threaded (ctx.executor
+// is not used yet), so trivially the same at any thread count. Errors: kInvalidMesh (A is not
+// a solid, a degenerate triangle of B meets A, an index out of range: named; for the
+// intersection with overlapping shells also a group of them that is not a solid), kNonFinite,
+// kInvalidArgument (B not float32 with float32 output), kUnsupported (a degenerate or
+// float32-fragile contact that no nudge resolved: named), kArenaExhausted (the message says
+// how much was needed at that point), kLimitExceeded (more than 2^31 vertices or triangles),
+// kCancelled, kInternal (a result that fails its own check: please report it with the
+// inputs). An error of a pass when there are several says which pass ("pass 2 of 3").
 Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
                     const BooleanOptions& options, Mesh* out, BooleanStats* stats);
 

@@ -8,6 +8,7 @@
 // J. R. Shewchuk's predicates and error bounds (predicates.cpp) for every decision and filter.
 #include "splintcore/boolean.h"
 
+#include "boolean/boolean_internal.h"
 #include "boolean/cdt.h"
 #include "boolean/pair_filter.h"
 #include "core/union_find.h"
@@ -1561,8 +1562,8 @@ Status BooleanRun::check_result(Mesh* result) {
 
 }  // namespace
 
-Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
-                    const BooleanOptions& options, Mesh* out, BooleanStats* stats) {
+Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
+                           const BooleanOptions& options, Mesh* out, BooleanStats* stats) {
   Arena& arena = *ctx.arena;
   BooleanStats local{};
   if (stats == nullptr) stats = &local;

@@ -863,6 +863,9 @@ int run_boolean(int argc, char** argv) {
     j.add("winding_queries", st.winding_queries);
     j.add("attempts", static_cast<uint64_t>(st.attempts));
     j.add("nudge_mm", st.nudge);
+    j.add("b_shells", static_cast<uint64_t>(st.shells));
+    j.add("shell_groups", static_cast<uint64_t>(st.shell_groups));
+    j.add("passes", static_cast<uint64_t>(st.passes));
     j.add("self_intersection_checked", o.self_check);
     add_mesh_report(&j, report);
     j.add("valid_solid", report.is_valid_solid());

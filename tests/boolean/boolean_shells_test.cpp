@@ -1,0 +1,460 @@
+// Tests of B as the union of overlapping shells (src/boolean/shells.cpp, issue 5): boxes with
+// exact (dyadic) coordinates whose volumes are known by inclusion-exclusion, each result
+// checked closed, manifold, outward and free of self-intersections, and compared with the
+// same set computed a second way (the union of B's shells first); shells that overlap only
+// where it does not matter; nesting; three shells; determinism; the arena at every cap; the
+// real teeth when ../shared/realdata is present.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "common/realcase.h"
+#include "splintcore/boolean.h"
+#include "splintcore/mesh.h"
+#include "support/test_util.h"
+
+namespace splintcore {
+namespace {
+
+using test::TestArena;
+
+struct Box {
+  Vec3 lo, hi;
+};
+
+double box_volume(const Box& b) {
+  const double x = b.hi.x - b.lo.x, y = b.hi.y - b.lo.y, z = b.hi.z - b.lo.z;
+  return x > 0 && y > 0 && z > 0 ? x * y * z : 0.0;
+}
+
+Box meet(const Box& a, const Box& b) {
+  return Box{max_vec(a.lo, b.lo), min_vec(a.hi, b.hi)};
+}
+
+// |b0 u b1 u ... | by inclusion-exclusion over every subset.
+double union_volume(const std::vector<Box>& boxes) {
+  double total = 0;
+  const size_t n = boxes.size();
+  for (size_t mask = 1; mask < (size_t{1} << n); ++mask) {
+    Box m{{-1e300, -1e300, -1e300}, {1e300, 1e300, 1e300}};
+    int bits = 0;
+    for (size_t i = 0; i < n; ++i) {
+      if ((mask >> i & 1) == 0) continue;
+      m = meet(m, boxes[i]);
+      ++bits;
+    }
+    total += (bits % 2 == 1 ? 1.0 : -1.0) * box_volume(m);
+  }
+  return total;
+}
+
+// Appends a closed outward box shell to m.
+void add_box(const Box& b, Mesh* m) {
+  const uint32_t off = static_cast<uint32_t>(m->vertices.size());
+  for (int i = 0; i < 8; ++i) {
+    const Vec3 p{(i & 1) ? b.hi.x : b.lo.x, (i & 2) ? b.hi.y : b.lo.y, (i & 4) ? b.hi.z : b.lo.z};
+    ASSERT_TRUE(m->vertices.push_back(p));
+  }
+  const uint32_t f[12][3] = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                             {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  for (const auto& t : f) {
+    ASSERT_TRUE(m->triangles.push_back(Triangle{{t[0] + off, t[1] + off, t[2] + off}}));
+  }
+}
+
+Mesh boxes_mesh(Arena& arena, const std::vector<Box>& boxes) {
+  Mesh m(&arena);
+  for (const Box& b : boxes) add_box(b, &m);
+  return m;
+}
+
+struct Outcome {
+  Status status;
+  BooleanStats stats;
+  double volume = 0;
+  std::vector<uint8_t> bytes;  // vertices then triangles
+};
+
+// Runs the operation and checks what every result must be: a valid solid (closed,
+// edge-manifold, oriented, outward, nothing degenerate), no self-intersection.
+Outcome run(Arena& arena, const Mesh& a, const Mesh& b, BooleanOp op, bool float32 = false) {
+  ArenaScope scope(arena);
+  const size_t used = arena.used();
+  Outcome r;
+  BooleanOptions o;
+  o.op = op;
+  o.float32_output = float32;
+  Mesh out;
+  r.status = mesh_boolean(Context(&arena), a, b, o, &out, &r.stats);
+  if (!r.status.is_ok()) {
+    EXPECT_EQ(arena.used(), used) << "the arena is as it was after an error";
+    EXPECT_TRUE(out.triangles.empty() && out.vertices.empty());
+    return r;
+  }
+  MeshReport rep;
+  EXPECT_TRUE(check_mesh(Context(&arena), out, &rep).is_ok());
+  EXPECT_TRUE(rep.is_valid_solid()) << test::format(require_valid_solid(rep));
+  SelfIntersectionReport si;
+  EXPECT_TRUE(find_self_intersections(Context(&arena), out, 1, &si).is_ok());
+  EXPECT_FALSE(si.self_intersecting()) << si.first_a << " " << si.first_b;
+  r.volume = rep.volume;
+  const uint8_t* v = reinterpret_cast<const uint8_t*>(out.vertices.data());
+  const uint8_t* t = reinterpret_cast<const uint8_t*>(out.triangles.data());
+  r.bytes.assign(v, v + out.vertices.size() * sizeof(Vec3));
+  r.bytes.insert(r.bytes.end(), t, t + out.triangles.size() * sizeof(Triangle));
+  return r;
+}
+
+// B's shells united first (one shell), then op with A: the second way to the same set.
+Outcome second_way(Arena& arena, const Mesh& a, const std::vector<Box>& shells, BooleanOp op) {
+  ArenaScope scope(arena);
+  Mesh u(&arena);
+  add_box(shells[0], &u);
+  for (size_t i = 1; i < shells.size(); ++i) {
+    Mesh next = boxes_mesh(arena, {shells[i]});
+    BooleanOptions o;
+    o.op = BooleanOp::kUnion;
+    o.float32_output = false;
+    Mesh joined;
+    BooleanStats st;
+    const Status s = mesh_boolean(Context(&arena), u, next, o, &joined, &st);
+    EXPECT_TRUE(s.is_ok()) << test::format(s);
+    if (!s.is_ok()) return Outcome{s, {}, 0, {}};
+    EXPECT_EQ(st.passes, 1u);
+    u = joined;
+  }
+  Outcome r = run(arena, a, u, op);
+  EXPECT_EQ(r.stats.shells, 1u);
+  return r;
+}
+
+void expect_volume(double got, double want) {
+  EXPECT_NEAR(got / want, 1.0, 1e-9) << "got " << got << ", want " << want;
+}
+
+const Box kA{{0, 0, 0}, {4, 4, 4}};
+// Two boxes inside A that overlap each other (no face of one in a plane of the other's, none
+// in a plane of A's).
+const Box kB1{{0.515625, 0.578125, 0.546875}, {2.453125, 1.609375, 1.484375}};
+const Box kB2{{1.640625, 0.796875, 0.265625}, {3.421875, 1.734375, 1.203125}};
+
+TEST(BooleanShells, DifferenceOfTwoOverlappingBoxes) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = boxes_mesh(arena, {kA});
+  const Mesh b = boxes_mesh(arena, {kB1, kB2});
+  const Outcome r = run(arena, a, b, BooleanOp::kDifference);
+  ASSERT_TRUE(r.status.is_ok()) << test::format(r.status);
+  EXPECT_EQ(r.stats.shells, 2u);
+  EXPECT_EQ(r.stats.shell_groups, 2u);
+  EXPECT_EQ(r.stats.passes, 2u);
+  EXPECT_EQ(r.stats.attempts, 2u) << "no nudge: every contact is generic";
+  expect_volume(r.volume, 64.0 - union_volume({kB1, kB2}));
+  const Outcome w = second_way(arena, a, {kB1, kB2}, BooleanOp::kDifference);
+  ASSERT_TRUE(w.status.is_ok()) << test::format(w.status);
+  expect_volume(r.volume, w.volume);
+}
+
+TEST(BooleanShells, IntersectionOfTwoOverlappingBoxes) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = boxes_mesh(arena, {kA});
+  // B2 moved to cross A's face x = 4 (at y, z off A's face diagonals y = z, y = 4 - z).
+  const Box b2{{1.640625, 0.796875, 0.265625}, {5.234375, 1.734375, 1.203125}};
+  const Mesh b = boxes_mesh(arena, {kB1, b2});
+  const Outcome r = run(arena, a, b, BooleanOp::kIntersection);
+  ASSERT_TRUE(r.status.is_ok()) << test::format(r.status);
+  EXPECT_EQ(r.stats.shell_groups, 2u);
+  EXPECT_EQ(r.stats.passes, 2u);
+  EXPECT_EQ(r.stats.attempts, 2u);
+  expect_volume(r.volume, union_volume({kB1, meet(b2, kA)}));
+  const Outcome w = second_way(arena, a, {kB1, b2}, BooleanOp::kIntersection);
+  ASSERT_TRUE(w.status.is_ok()) << test::format(w.status);
+  expect_volume(r.volume, w.volume);
+  // |A - B| + |A * B| = |A|.
+  const Outcome d = run(arena, a, b, BooleanOp::kDifference);
+  ASSERT_TRUE(d.status.is_ok()) << test::format(d.status);
+  expect_volume(d.volume + r.volume, 64.0);
+}
+
+TEST(BooleanShells, UnionOfTwoOverlappingBoxes) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = boxes_mesh(arena, {kA});
+  // Both cross A's face x = 4 and overlap each other inside and outside A.
+  const Box b1{{3.265625, 1.140625, 1.640625}, {5.734375, 2.359375, 2.859375}};
+  const Box b2{{2.765625, 1.890625, 2.109375}, {6.484375, 3.109375, 3.390625}};
+  const Mesh b = boxes_mesh(arena, {b1, b2});
+  const Outcome r = run(arena, a, b, BooleanOp::kUnion);
+  ASSERT_TRUE(r.status.is_ok()) << test::format(r.status);
+  EXPECT_EQ(r.stats.shell_groups, 2u);
+  EXPECT_EQ(r.stats.passes, 2u);
+  EXPECT_EQ(r.stats.attempts, 2u);
+  expect_volume(r.volume, union_volume({kA, b1, b2}));
+  const Outcome w = second_way(arena, a, {b1, b2}, BooleanOp::kUnion);
+  ASSERT_TRUE(w.status.is_ok()) << test::format(w.status);
+  expect_volume(r.volume, w.volume);
+}
+
+TEST(BooleanShells, OneShellInsideAnother) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = boxes_mesh(arena, {kA});
+  const Box outer{{0.5, 0.75, 0.625}, {3.25, 3.5, 3.375}};
+  const Box inner{{1.125, 1.25, 1.375}, {2.25, 2.125, 2.625}};
+  for (const std::vector<Box>& order : {std::vector<Box>{outer, inner},
+                                        std::vector<Box>{inner, outer}}) {
+    const Mesh b = boxes_mesh(arena, order);
+    const Outcome d = run(arena, a, b, BooleanOp::kDifference);
+    ASSERT_TRUE(d.status.is_ok()) << test::format(d.status);
+    EXPECT_EQ(d.stats.shell_groups, 2u) << "nesting is an overlap (winding number)";
+    expect_volume(d.volume, 64.0 - box_volume(outer));
+    const Outcome i = run(arena, a, b, BooleanOp::kIntersection);
+    ASSERT_TRUE(i.status.is_ok()) << test::format(i.status);
+    expect_volume(i.volume, box_volume(outer));
+  }
+}
+
+TEST(BooleanShells, OverlapOnlyOutsideANeedsOnePassForTheDifference) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = boxes_mesh(arena, {kA});
+  const Box far1{{5.515625, 0.578125, 0.546875}, {7.453125, 1.609375, 1.484375}};
+  const Box far2{{6.640625, 0.796875, 0.265625}, {8.421875, 1.734375, 1.203125}};
+  const Mesh b = boxes_mesh(arena, {kB1, far1, far2});
+  const Outcome d = run(arena, a, b, BooleanOp::kDifference);
+  ASSERT_TRUE(d.status.is_ok()) << test::format(d.status);
+  EXPECT_EQ(d.stats.shells, 3u);
+  EXPECT_EQ(d.stats.shell_groups, 1u);
+  EXPECT_EQ(d.stats.passes, 1u);
+  expect_volume(d.volume, 64.0 - box_volume(kB1));
+  // One group is the single run, which culls the far shells: the same bytes as B without them
+  // (their vertices come after kB1's, so the output's numbering is the same).
+  const Outcome alone = run(arena, a, boxes_mesh(arena, {kB1}), BooleanOp::kDifference);
+  ASSERT_TRUE(alone.status.is_ok());
+  EXPECT_EQ(alone.stats.shells, 1u);
+  EXPECT_EQ(d.bytes, alone.bytes);
+  const Outcome i = run(arena, a, b, BooleanOp::kIntersection);
+  ASSERT_TRUE(i.status.is_ok()) << test::format(i.status);
+  EXPECT_EQ(i.stats.passes, 1u);
+  expect_volume(i.volume, box_volume(kB1));
+  // The union sees them: two groups.
+  const Outcome u = run(arena, a, b, BooleanOp::kUnion);
+  ASSERT_TRUE(u.status.is_ok()) << test::format(u.status);
+  EXPECT_EQ(u.stats.shell_groups, 2u);
+  expect_volume(u.volume, 64.0 + union_volume({far1, far2}));
+}
+
+TEST(BooleanShells, ThreeMutuallyOverlappingShells) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = boxes_mesh(arena, {kA});
+  const Box b3{{1.109375, 0.390625, 0.859375}, {3.078125, 1.328125, 1.921875}};
+  const Mesh b = boxes_mesh(arena, {kB1, kB2, b3});
+  const double vb = union_volume({kB1, kB2, b3});
+  const Outcome d = run(arena, a, b, BooleanOp::kDifference);
+  ASSERT_TRUE(d.status.is_ok()) << test::format(d.status);
+  EXPECT_EQ(d.stats.shell_groups, 3u);
+  EXPECT_EQ(d.stats.passes, 3u);
+  EXPECT_EQ(d.stats.attempts, 3u);
+  expect_volume(d.volume, 64.0 - vb);
+  const Outcome wd = second_way(arena, a, {kB1, kB2, b3}, BooleanOp::kDifference);
+  ASSERT_TRUE(wd.status.is_ok()) << test::format(wd.status);
+  expect_volume(d.volume, wd.volume);
+  const Outcome i = run(arena, a, b, BooleanOp::kIntersection);
+  ASSERT_TRUE(i.status.is_ok()) << test::format(i.status);
+  EXPECT_EQ(i.stats.passes, 3u);
+  expect_volume(i.volume, vb);
+  // A fourth shell apart from the others joins the first group.
+  const Box apart{{3.125, 3.125, 3.125}, {3.625, 3.375, 3.75}};
+  const Mesh b4 = boxes_mesh(arena, {kB1, kB2, b3, apart});
+  const Outcome d4 = run(arena, a, b4, BooleanOp::kDifference);
+  ASSERT_TRUE(d4.status.is_ok()) << test::format(d4.status);
+  EXPECT_EQ(d4.stats.shell_groups, 3u);
+  expect_volume(d4.volume, 64.0 - vb - box_volume(apart));
+}
+
+// A UV sphere (closed, outward) appended to m.
+void add_sphere(const Vec3& c, double r, int nlat, int nlon, Mesh* m) {
+  const double pi = 3.14159265358979323846;
+  const uint32_t off = static_cast<uint32_t>(m->vertices.size());
+  ASSERT_TRUE(m->vertices.push_back(c + Vec3{0, 0, r}));
+  for (int i = 1; i < nlat; ++i) {
+    const double th = pi * i / nlat;
+    for (int j = 0; j < nlon; ++j) {
+      const double ph = 2 * pi * j / nlon + 0.1 * i;
+      ASSERT_TRUE(m->vertices.push_back(
+          c + Vec3{r * std::sin(th) * std::cos(ph), r * std::sin(th) * std::sin(ph),
+                   r * std::cos(th)}));
+    }
+  }
+  const uint32_t south = off + static_cast<uint32_t>(1 + (nlat - 1) * nlon);
+  ASSERT_TRUE(m->vertices.push_back(c + Vec3{0, 0, -r}));
+  auto ring = [&](int i, int j) {
+    return off + static_cast<uint32_t>(1 + (i - 1) * nlon + ((j % nlon) + nlon) % nlon);
+  };
+  for (int j = 0; j < nlon; ++j) {
+    ASSERT_TRUE(m->triangles.push_back(Triangle{{off, ring(1, j), ring(1, j + 1)}}));
+  }
+  for (int i = 1; i + 1 < nlat; ++i) {
+    for (int j = 0; j < nlon; ++j) {
+      ASSERT_TRUE(m->triangles.push_back(Triangle{{ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)}}));
+      ASSERT_TRUE(m->triangles.push_back(Triangle{{ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)}}));
+    }
+  }
+  for (int j = 0; j < nlon; ++j) {
+    ASSERT_TRUE(m->triangles.push_back(Triangle{{south, ring(nlat - 1, j + 1), ring(nlat - 1, j)}}));
+  }
+}
+
+// Finely tessellated shells (their triangles are binned in a grid, not compared pair by pair):
+// two spheres that overlap, a third apart from both (told apart by a plane).
+TEST(BooleanShells, FineShellsOverlapAndApart) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = boxes_mesh(arena, {kA});
+  Mesh b(&arena);
+  add_sphere(Vec3{1.3, 1.6, 1.7}, 0.9, 24, 48, &b);
+  add_sphere(Vec3{2.4, 2.1, 2.2}, 0.8, 22, 44, &b);   // overlaps the first
+  add_sphere(Vec3{3.2, 0.75, 0.8}, 0.6, 16, 32, &b);  // apart from both
+  const Outcome d = run(arena, a, b, BooleanOp::kDifference);
+  ASSERT_TRUE(d.status.is_ok()) << test::format(d.status);
+  EXPECT_EQ(d.stats.shells, 3u);
+  EXPECT_EQ(d.stats.shell_groups, 2u);
+  // The second way: the two overlapping spheres united first, then the third appended.
+  ArenaScope scope(arena);
+  Mesh s1(&arena), s2(&arena), s3(&arena);
+  add_sphere(Vec3{1.3, 1.6, 1.7}, 0.9, 24, 48, &s1);
+  add_sphere(Vec3{2.4, 2.1, 2.2}, 0.8, 22, 44, &s2);
+  BooleanOptions o;
+  o.op = BooleanOp::kUnion;
+  o.float32_output = false;
+  Mesh u;
+  SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&arena), s1, s2, o, &u, nullptr));
+  Mesh joined(&arena);
+  for (const Vec3& p : u.vertices) ASSERT_TRUE(joined.vertices.push_back(p));
+  for (const Triangle& t : u.triangles) ASSERT_TRUE(joined.triangles.push_back(t));
+  add_sphere(Vec3{3.2, 0.75, 0.8}, 0.6, 16, 32, &joined);
+  const Outcome w = run(arena, a, joined, BooleanOp::kDifference);
+  ASSERT_TRUE(w.status.is_ok()) << test::format(w.status);
+  EXPECT_EQ(w.stats.shell_groups, 1u);
+  expect_volume(d.volume, w.volume);
+}
+
+TEST(BooleanShells, SameBytesEveryRunAndFloat32) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = boxes_mesh(arena, {kA});
+  const Box b3{{1.109375, 0.390625, 0.859375}, {3.078125, 1.328125, 1.921875}};
+  const Mesh b = boxes_mesh(arena, {kB1, kB2, b3});
+  for (BooleanOp op : {BooleanOp::kDifference, BooleanOp::kUnion, BooleanOp::kIntersection}) {
+    const Outcome first = run(arena, a, b, op, true);
+    ASSERT_TRUE(first.status.is_ok()) << test::format(first.status);
+    const Outcome again = run(arena, a, b, op, true);
+    ASSERT_TRUE(again.status.is_ok());
+    EXPECT_FALSE(first.bytes.empty());
+    EXPECT_EQ(first.bytes, again.bytes) << boolean_op_name(op);
+  }
+}
+
+// Every cap from nothing to enough: a clean kArenaExhausted (arena as at entry, output empty)
+// or the same bytes as with room to spare.
+TEST(BooleanShells, ArenaExhaustionIsCleanAtEveryCap) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = boxes_mesh(arena, {kA});
+  const Mesh b = boxes_mesh(arena, {kB1, kB2});
+  for (BooleanOp op : {BooleanOp::kDifference, BooleanOp::kIntersection}) {
+    const Outcome full = run(arena, a, b, op);
+    ASSERT_TRUE(full.status.is_ok());
+    std::vector<unsigned char> buffer(size_t{1} << 20);
+    size_t need = 0;
+    {
+      Arena probe(buffer.data(), buffer.size());
+      BooleanOptions o;
+      o.op = op;
+      o.float32_output = false;
+      Mesh out;
+      ASSERT_TRUE(mesh_boolean(Context(&probe), a, b, o, &out, nullptr).is_ok());
+      need = probe.high_water();
+    }
+    int exhausted = 0;
+    for (size_t cap = 0; cap <= need; cap += need / 97 + 1) {
+      Arena small(buffer.data(), cap);
+      BooleanOptions o;
+      o.op = op;
+      o.float32_output = false;
+      Mesh out;
+      BooleanStats st;
+      const Status s = mesh_boolean(Context(&small), a, b, o, &out, &st);
+      if (s.is_ok()) {
+        const Outcome r = run(arena, a, b, op);
+        EXPECT_EQ(r.bytes, full.bytes);
+        continue;
+      }
+      ++exhausted;
+      EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << test::format(s);
+      EXPECT_EQ(small.used(), 0u) << "cap " << cap;
+      EXPECT_TRUE(out.triangles.empty() && out.vertices.empty());
+    }
+    EXPECT_GT(exhausted, 50);
+  }
+}
+
+TEST(BooleanShells, AnErrorNamesThePass) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = boxes_mesh(arena, {kA});
+  Mesh b = boxes_mesh(arena, {kB1, kB2});
+  // The first shell opened: the union of the shells (the intersection's first step) needs it
+  // closed.
+  Mesh open(&arena);
+  for (const Vec3& v : b.vertices) ASSERT_TRUE(open.vertices.push_back(v));
+  for (size_t t = 1; t < b.triangles.size(); ++t) ASSERT_TRUE(open.triangles.push_back(b.triangles[t]));
+  const Outcome r = run(arena, a, open, BooleanOp::kIntersection);
+  ASSERT_FALSE(r.status.is_ok());
+  EXPECT_EQ(r.status.code(), StatusCode::kInvalidMesh);
+  EXPECT_NE(std::string(r.status.message()).find("pass 1 of 2"), std::string::npos)
+      << r.status.message();
+  EXPECT_EQ(r.stats.shell_groups, 2u);
+}
+
+// The real teeth: 31 closed shells against the wafer (as the benchmark: bite opened 2 mm,
+// crowns 1.5 mm into the wafer). Reports whether neighbouring teeth overlap near the wafer.
+TEST(BooleanShells, RealTeeth) {
+  const std::string dir = SPLINTCORE_REALDATA_DIR;
+  if (!test::file_exists(dir + "/maxilla/tooth_1.stl")) GTEST_SKIP() << "realdata not found";
+  realcase::RealCase rc;
+  std::string error;
+  ASSERT_TRUE(realcase::load(dir, 2.0, 1.5, 6.0, &rc, &error)) << error;
+  TestArena ta(size_t{1024} << 20);  // the union takes about 560 MB (untouched pages cost nothing)
+  Arena& arena = ta.arena;
+  Mesh teeth, wafer;
+  BaseReport br;
+  SPLINTCORE_ASSERT_OK(realcase::teeth_mesh(arena, rc, &teeth));
+  SPLINTCORE_ASSERT_OK(realcase::wafer_mesh(arena, rc, 0.5, &wafer, &br));
+  for (BooleanOp op : {BooleanOp::kDifference, BooleanOp::kUnion}) {
+    ArenaScope scope(arena);
+    BooleanOptions o;
+    o.op = op;
+    Mesh out;
+    BooleanStats st;
+    const Status s = mesh_boolean(Context(&arena), wafer, teeth, o, &out, &st);
+    ASSERT_TRUE(s.is_ok()) << test::format(s);
+    EXPECT_EQ(st.shells, 31u);
+    std::cout << "[ real     ] " << boolean_op_name(op) << ": " << st.shells << " shells, "
+              << st.shell_groups << " group(s), " << st.passes << " pass(es), "
+              << out.triangles.size() << " triangles\n";
+    MeshReport rep;
+    SPLINTCORE_ASSERT_OK(check_mesh(Context(&arena), out, &rep));
+    EXPECT_TRUE(rep.is_valid_solid()) << test::format(require_valid_solid(rep));
+  }
+}
+
+}  // namespace
+}  // namespace splintcore
