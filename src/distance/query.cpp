@@ -237,7 +237,7 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
     child_distances(node, q, d2);
     // The children within reach, nearest first (ties in slot order): leaves tighten the bound
     // before farther boxes are tested against it.
-    uint8_t by[4];
+    uint8_t by[4] = {0, 0, 0, 0};
     int m = 0;
     for (int k = 0; k < 4; ++k) {
       if (!(d2[k] <= best2) || node.child[k] == kNoChild) continue;
