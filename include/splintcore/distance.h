@@ -75,11 +75,20 @@ struct DistanceIndex {
   Span<const BvhDipole> dipoles;    // per node
   Span<const uint32_t> order;       // triangle ids in leaf order
   Span<const uint32_t> neighbors;   // 3 per triangle: across edge k, or kNoNeighbor
-  Span<const Vec3> vertex_normals;  // angle-weighted pseudonormals (not normalised)
+  // The corners at each vertex: vertex_uses[vertex_start[v] .. vertex_start[v + 1]) holds
+  // 3 t + k for every corner k of triangle t at v, in triangle order (vertex_pseudonormal).
+  Span<const uint32_t> vertex_start;  // vertex count + 1
+  Span<const uint32_t> vertex_uses;   // 3 per triangle
   bool closed_manifold = false;     // every edge has exactly two consistently oriented uses
 };
 
 constexpr uint32_t kNoNeighbor = ~uint32_t{0};
+
+// The angle-weighted pseudonormal of vertex v (Baerentzen and Aanaes 2005; not normalised):
+// the sum, over v's corners in triangle order, of the triangle's unit normal times its angle
+// there (flat triangles add nothing). Computed when asked, from vertex_uses: only a query whose
+// closest feature is a vertex needs one, and the build saves two atan2 a triangle.
+Vec3 vertex_pseudonormal(const DistanceIndex& index, uint32_t v);
 
 // Arena bytes build_distance_index() takes (all of it stays: it is the index).
 uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,

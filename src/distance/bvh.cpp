@@ -102,8 +102,8 @@ uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,
   // Every node splits a range of at least two leaves (an empty or one-leaf mesh has a root).
   const uint64_t wide = leaves > 1 ? leaves - 1 : 1;
   const uint64_t per_node = sizeof(BvhNode) + sizeof(BvhDipole);
-  const uint64_t kept = wide * per_node + triangle_count * (sizeof(uint32_t) * 4) +
-                        vertex_count * sizeof(Vec3);
+  const uint64_t kept = wide * per_node + triangle_count * (sizeof(uint32_t) * 7) +
+                        (vertex_count + 1) * sizeof(uint32_t);
   // Temporaries (the larger stage): Morton keys and scratch with the tree at its upper bound
   // before it moves down, or the per-vertex half-edge lists.
   const uint64_t tree = 2 * triangle_count * sizeof(uint64_t) + wide * per_node;
@@ -151,8 +151,10 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   // dipoles (moved down over the temporaries once the tree is built).
   uint32_t* order = arena.allocate_array<uint32_t>(nt);
   uint32_t* neighbors = arena.allocate_array<uint32_t>(3 * nt);
-  Vec3* vnormals = arena.allocate_array<Vec3>(nv);
-  if ((nt > 0 && (order == nullptr || neighbors == nullptr)) || (nv > 0 && vnormals == nullptr)) {
+  uint32_t* start = arena.allocate_array<uint32_t>(nv + 1);
+  uint32_t* vuses = arena.allocate_array<uint32_t>(3 * nt);
+  if ((nt > 0 && (order == nullptr || neighbors == nullptr || vuses == nullptr)) ||
+      start == nullptr) {
     return arena.exhausted_status();
   }
   const Arena::Marker tree_temps = arena.mark();
@@ -378,7 +380,6 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   bool closed_manifold = n > 0;
   {
     ArenaScope lists_scope(arena);
-    uint32_t* start = arena.allocate_array<uint32_t>(nv + 1);
     uint32_t* fill = arena.allocate_array<uint32_t>(nv);
     // The end vertex is kept with the use: reading it from the triangle instead halves this
     // memory but costs 10 ms at 543k triangles in random reads.
@@ -387,7 +388,7 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       uint32_t use;  // 3 * triangle + corner
     };
     HalfEdge* lists = arena.allocate_array<HalfEdge>(3 * nt);
-    if (start == nullptr || (nv > 0 && fill == nullptr) || (nt > 0 && lists == nullptr)) {
+    if ((nv > 0 && fill == nullptr) || (nt > 0 && lists == nullptr)) {
       return arena.exhausted_status();
     }
     for (size_t i = 0; i < nv; ++i) fill[i] = 0;
@@ -402,6 +403,7 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
     for (uint32_t t = 0; t < n; ++t) {
       for (uint32_t k = 0; k < 3; ++k) {
         const uint32_t a = tris[t].v[k];
+        vuses[start[a] + fill[a]] = 3 * t + k;  // kept, in triangle order
         lists[start[a] + fill[a]++] = HalfEdge{tris[t].v[(k + 1) % 3], 3 * t + k};
       }
     }
@@ -472,38 +474,51 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 3, 4));
 
-  // 5. Angle-weighted vertex pseudonormals (summed in triangle order).
-  for (size_t i = 0; i < nv; ++i) vnormals[i] = Vec3{};
-  for (uint32_t t = 0; t < n; ++t) {
-    const Triangle& tri = tris[t];
-    const Vec3 normal = cross(v[tri.v[1]] - v[tri.v[0]], v[tri.v[2]] - v[tri.v[0]]);
-    const double len = length(normal);
-    if (!(len > 0)) continue;
-    const Vec3 unit = normal * (1.0 / len);
-    // The angles of a triangle sum to pi: two atan2 calls give the third. At every corner
-    // the two edges' cross product has the length `len` (twice the area), so only the dot
-    // products differ.
-    const Vec3 &p0 = v[tri.v[0]], &p1 = v[tri.v[1]], &p2 = v[tri.v[2]];
-    const double a0 = deterministic_atan2(len, dot(p1 - p0, p2 - p0));
-    const double a1 = deterministic_atan2(len, dot(p2 - p1, p0 - p1));
-    double a2 = 3.14159265358979323846 - a0 - a1;
-    a2 = a2 < 0 ? 0 : a2;
-    vnormals[tri.v[0]] = vnormals[tri.v[0]] + unit * a0;
-    vnormals[tri.v[1]] = vnormals[tri.v[1]] + unit * a1;
-    vnormals[tri.v[2]] = vnormals[tri.v[2]] + unit * a2;
-  }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 4, 4));
 
   out->nodes = Span<const BvhNode>(kept_nodes, node_count);
   out->dipoles = Span<const BvhDipole>(kept_dipoles, node_count);
   out->order = Span<const uint32_t>(order, nt);
   out->neighbors = Span<const uint32_t>(neighbors, 3 * nt);
-  out->vertex_normals = Span<const Vec3>(vnormals, nv);
+  out->vertex_start = Span<const uint32_t>(start, nv + 1);
+  out->vertex_uses = Span<const uint32_t>(vuses, 3 * nt);
   out->closed_manifold = closed_manifold;
   return Status::ok();
 }
 
 }  // namespace
+
+Vec3 vertex_pseudonormal(const DistanceIndex& index, uint32_t vertex) {
+  const Mesh& mesh = *index.mesh;
+  const Vec3* v = mesh.vertices.data();
+  Vec3 sum{};
+  for (uint32_t j = index.vertex_start[vertex]; j < index.vertex_start[vertex + 1]; ++j) {
+    const uint32_t use = index.vertex_uses[j];
+    const Triangle& tri = mesh.triangles[use / 3];
+    const Vec3 normal = cross(v[tri.v[1]] - v[tri.v[0]], v[tri.v[2]] - v[tri.v[0]]);
+    const double len = length(normal);
+    if (!(len > 0)) continue;
+    const Vec3 unit = normal * (1.0 / len);
+    // The angles of a triangle sum to pi: two atan2 calls give the third. At every corner the
+    // two edges' cross product has the length `len` (twice the area), so only the dot
+    // products differ.
+    const Vec3 &p0 = v[tri.v[0]], &p1 = v[tri.v[1]], &p2 = v[tri.v[2]];
+    const uint32_t k = use % 3;
+    double angle;
+    if (k == 0) {
+      angle = deterministic_atan2(len, dot(p1 - p0, p2 - p0));
+    } else if (k == 1) {
+      angle = deterministic_atan2(len, dot(p2 - p1, p0 - p1));
+    } else {
+      const double a0 = deterministic_atan2(len, dot(p1 - p0, p2 - p0));
+      const double a1 = deterministic_atan2(len, dot(p2 - p1, p0 - p1));
+      angle = 3.14159265358979323846 - a0 - a1;
+      angle = angle < 0 ? 0 : angle;
+    }
+    sum = sum + unit * angle;
+  }
+  return sum;
+}
 
 Status build_distance_index(const Context& ctx, const Mesh& mesh,
                             const DistanceIndexOptions& options, DistanceIndex* out) {

@@ -410,7 +410,7 @@ void finish_signed(const DistanceIndex& index, const Vec3& q, SignMethod method,
         break;
       }
       case Feature::kVertex:
-        normal = index.vertex_normals[tri.v[cp.feature_index]];
+        normal = vertex_pseudonormal(index, tri.v[cp.feature_index]);
         break;
     }
     if (ok) {

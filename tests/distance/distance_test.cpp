@@ -960,7 +960,7 @@ TEST(DistanceSigned, PseudonormalAndWindingAgreeNextToEdgesAndVertices) {
     // At vertices the angle-weighted pseudonormal: the area-weighted sum can lie in a face's
     // plane (at the rim of a cone the base and side areas cancel in z exactly).
     for (uint32_t v = 0; v < m.vertices.size(); ++v) {
-      const Vec3& n = b->index.vertex_normals[v];
+      const Vec3 n = vertex_pseudonormal(b->index, v);
       sites.emplace_back(m.vertices[v], n * (1.0 / length(n)));
     }
     for (uint32_t t = 0; t < m.triangles.size(); ++t) {
@@ -1674,7 +1674,8 @@ IndexBytes snapshot(const DistanceIndex& x) {
   add(x.dipoles.data(), x.dipoles.size() * sizeof(BvhDipole));
   add(x.order.data(), x.order.size() * sizeof(uint32_t));
   add(x.neighbors.data(), x.neighbors.size() * sizeof(uint32_t));
-  add(x.vertex_normals.data(), x.vertex_normals.size() * sizeof(Vec3));
+  add(x.vertex_start.data(), x.vertex_start.size() * sizeof(uint32_t));
+  add(x.vertex_uses.data(), x.vertex_uses.size() * sizeof(uint32_t));
   s.closed = x.closed_manifold;
   return s;
 }
