@@ -27,19 +27,7 @@ const char* kCases[] = {"cases/paper_scale.json", "cases/rounded.json", "cases/u
 
 std::string golden_path() { return std::string(SPLINTCORE_FIXTURES_DIR) + "/golden.sha256"; }
 
-std::map<std::string, std::string> load_golden() {
-  std::map<std::string, std::string> out;
-  std::ifstream in(golden_path());
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream fields(line);
-    std::string hash, key;
-    fields >> hash >> key;
-    out[key] = hash;
-  }
-  return out;
-}
+std::map<std::string, std::string> load_golden() { return test::golden_hashes(); }
 
 std::string convert_hash(const std::string& fixture, StlFormat format) {
   test::TestArena t(64 << 20);

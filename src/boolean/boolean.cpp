@@ -324,12 +324,6 @@ Status sort_keys(Arena& arena, KeyIndex* items, size_t n) {
   return radix_sort(arena, Span<KeyIndex>(items, n));
 }
 
-inline uint64_t order_key(double v) {
-  uint64_t bits;
-  std::memcpy(&bits, &v, sizeof(bits));
-  return (bits >> 63) != 0 ? ~bits : bits | (uint64_t{1} << 63);
-}
-
 // A piece of a cut triangle.
 struct OutTri {
   uint32_t v[3];
@@ -641,11 +635,7 @@ Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double
     if (float32_output &&
         !(is_float32_exact(vb[tri.v[0]]) && is_float32_exact(vb[tri.v[1]]) &&
           is_float32_exact(vb[tri.v[2]]))) {
-      return make_error(StatusCode::kInvalidArgument, "triangle ", t,
-                        " of B has a vertex that is not a float32 value: for STL output B must "
-                        "be as read from STL (its vertices are kept bit for bit); turn "
-                        "float32_output off for double meshes")
-          .at_index(t);
+      return b_not_float32(t);
     }
     if (!bp->near_ids.push_back(t)) return arena.exhausted_status();
   }
@@ -1568,24 +1558,10 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
   BooleanStats local{};
   if (stats == nullptr) stats = &local;
   *stats = BooleanStats{};
-  if (!out->vertices.empty() || !out->triangles.empty()) {
-    return Status::error(StatusCode::kInvalidArgument, "mesh_boolean: output mesh must be empty");
-  }
-  const uint64_t nv = uint64_t{a.vertices.size()} + b.vertices.size();
-  const uint64_t nt = uint64_t{a.triangles.size()} + b.triangles.size();
-  if (nv >= (uint64_t{1} << 31) || nt >= (uint64_t{1} << 31)) {
-    return make_error(StatusCode::kLimitExceeded, "Boolean inputs too large for 32-bit ids: ", nv,
-                      " vertices, ", nt, " triangles");
-  }
-  // Attempt k > 0 runs with A translated by k * step * (1, 3, 7): step is 2^-16 mm (15 nm),
-  // or the float32 spacing of A's largest coordinate if that is coarser, so float32 vertices
-  // of A stay float32. B is never moved.
-  double max_abs = 0;
-  for (const Vec3& v : a.vertices) {
-    for (int k = 0; k < 3; ++k) max_abs = v[k] < 0 ? (-v[k] > max_abs ? -v[k] : max_abs) : (v[k] > max_abs ? v[k] : max_abs);
-  }
-  double step = 1.0 / 65536.0;
-  while (step * 8388608.0 <= max_abs && step < 1e300) step *= 2.0;  // ulp(max_abs) <= step
+  SPLINTCORE_RETURN_IF_ERROR(check_boolean_arguments(a, b, *out));
+  // Attempt k > 0 runs with A translated by k * step * (1, 3, 7) (nudge_step: float32
+  // vertices of A stay float32). B is never moved.
+  const double step = nudge_step(a);
   const Arena::Marker start = arena.mark();
   // What a nudge can move A by, with its float32 rounding: the broad phase covers all attempts.
   const double reach = (options.max_nudges + 1.0) * step * 8.0;

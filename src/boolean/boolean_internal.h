@@ -3,9 +3,57 @@
 #ifndef SPLINTCORE_SRC_BOOLEAN_BOOLEAN_INTERNAL_H
 #define SPLINTCORE_SRC_BOOLEAN_BOOLEAN_INTERNAL_H
 
+#include <cstring>
+
 #include "splintcore/boolean.h"
 
 namespace splintcore {
+
+// A double as an unsigned key that sorts in the same order (for the radix sorts).
+inline uint64_t order_key(double v) {
+  uint64_t bits;
+  std::memcpy(&bits, &v, sizeof(bits));
+  return (bits >> 63) != 0 ? ~bits : bits | (uint64_t{1} << 63);
+}
+
+// The step of A's nudges: 2^-16 mm (15 nm), or the float32 spacing of A's largest coordinate if
+// that is coarser, so that float32 vertices of A stay float32.
+inline double nudge_step(const Mesh& a) {
+  double max_abs = 0;
+  for (const Vec3& v : a.vertices) {
+    for (int k = 0; k < 3; ++k) {
+      const double m = v[k] < 0 ? -v[k] : v[k];
+      max_abs = m > max_abs ? m : max_abs;
+    }
+  }
+  double step = 1.0 / 65536.0;
+  while (step * 8388608.0 <= max_abs && step < 1e300) step *= 2.0;  // ulp(max_abs) <= step
+  return step;
+}
+
+// The checks every Boolean entry makes before anything else: an empty output mesh, and ids
+// that fit in 32 bits.
+inline Status check_boolean_arguments(const Mesh& a, const Mesh& b, const Mesh& out) {
+  if (!out.vertices.empty() || !out.triangles.empty()) {
+    return Status::error(StatusCode::kInvalidArgument, "mesh_boolean: output mesh must be empty");
+  }
+  const uint64_t nv = uint64_t{a.vertices.size()} + b.vertices.size();
+  const uint64_t nt = uint64_t{a.triangles.size()} + b.triangles.size();
+  if (nv >= (uint64_t{1} << 31) || nt >= (uint64_t{1} << 31)) {
+    return make_error(StatusCode::kLimitExceeded, "Boolean inputs too large for 32-bit ids: ", nv,
+                      " vertices, ", nt, " triangles");
+  }
+  return Status::ok();
+}
+
+// Triangle t of B has a vertex that is not a float32 value, with float32 output.
+inline Status b_not_float32(uint32_t t) {
+  return make_error(StatusCode::kInvalidArgument, "triangle ", t,
+                    " of B has a vertex that is not a float32 value: for STL output B must be "
+                    "as read from STL (its vertices are kept bit for bit); turn float32_output "
+                    "off for double meshes")
+      .at_index(t);
+}
 
 // options.op of the closed mesh A and the mesh B whose shells do not overlap each other where
 // it matters (inside A for the difference and the intersection, anywhere for the union), into

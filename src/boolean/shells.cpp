@@ -37,12 +37,6 @@ namespace {
 
 constexpr uint32_t kNone = ~uint32_t{0};
 
-inline uint64_t order_key(double v) {
-  uint64_t bits;
-  std::memcpy(&bits, &v, sizeof(bits));
-  return (bits >> 63) != 0 ? ~bits : bits | (uint64_t{1} << 63);
-}
-
 inline Aabb box_intersection(const Aabb& a, const Aabb& b) {
   Aabb r;
   r.lo = max_vec(a.lo, b.lo);
@@ -516,16 +510,7 @@ void add_stats(const BooleanStats& p, BooleanStats* total) {
 // The box that matters for the difference and the intersection: A's, widened by what a nudge
 // can move A (the single run's reach, with room to spare).
 Aabb region_of_a(const Mesh& a, uint32_t max_nudges) {
-  double max_abs = 0;
-  for (const Vec3& v : a.vertices) {
-    for (int k = 0; k < 3; ++k) {
-      const double m = v[k] < 0 ? -v[k] : v[k];
-      max_abs = m > max_abs ? m : max_abs;
-    }
-  }
-  double step = 1.0 / 65536.0;
-  while (step * 8388608.0 <= max_abs && step < 1e300) step *= 2.0;
-  const double reach = (max_nudges + 2.0) * step * 16.0;
+  const double reach = (max_nudges + 2.0) * nudge_step(a) * 16.0;
   Aabb box = mesh_bounds(a);
   box.lo = box.lo - Vec3{reach, reach, reach};
   box.hi = box.hi + Vec3{reach, reach, reach};
@@ -540,15 +525,7 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
   BooleanStats local{};
   if (stats == nullptr) stats = &local;
   *stats = BooleanStats{};
-  if (!out->vertices.empty() || !out->triangles.empty()) {
-    return Status::error(StatusCode::kInvalidArgument, "mesh_boolean: output mesh must be empty");
-  }
-  const uint64_t nv = uint64_t{a.vertices.size()} + b.vertices.size();
-  const uint64_t nt = uint64_t{a.triangles.size()} + b.triangles.size();
-  if (nv >= (uint64_t{1} << 31) || nt >= (uint64_t{1} << 31)) {
-    return make_error(StatusCode::kLimitExceeded, "Boolean inputs too large for 32-bit ids: ", nv,
-                      " vertices, ", nt, " triangles");
-  }
+  SPLINTCORE_RETURN_IF_ERROR(check_boolean_arguments(a, b, *out));
   const Arena::Marker start = arena.mark();
   auto fail = [&](Status s) {
     arena.rewind(start);
@@ -642,11 +619,7 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
         continue;
       }
       if (!triangle_box(b, t).overlaps(region)) continue;
-      return fail(make_error(StatusCode::kInvalidArgument, "triangle ", t,
-                             " of B has a vertex that is not a float32 value: for STL output B "
-                             "must be as read from STL (its vertices are kept bit for bit); turn "
-                             "float32_output off for double meshes")
-                      .at_index(t));
+      return fail(b_not_float32(t));
     }
   }
   // Layout: [shells][current result][group mesh][this pass's result]; each result is moved
