@@ -101,7 +101,8 @@ uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,
   const uint64_t leaves = triangle_count == 0 ? 1 : (triangle_count + leaf - 1) / leaf;
   // Every node splits a range of at least two leaves (an empty or one-leaf mesh has a root).
   const uint64_t wide = leaves > 1 ? leaves - 1 : 1;
-  const uint64_t per_node = sizeof(BvhNode) + sizeof(BvhDipole);
+  const uint64_t per_node =
+      sizeof(BvhNode) + sizeof(BvhDipole) + (options.oriented_boxes ? sizeof(BvhObb) : 0);
   const uint64_t kept = wide * per_node + triangle_count * (sizeof(uint32_t) * 7) +
                         (vertex_count + 1) * sizeof(uint32_t);
   // Temporaries (the larger stage): Morton keys and scratch with the tree at its upper bound
@@ -114,6 +115,101 @@ uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,
 }
 
 namespace {
+
+// The frame of a node whose area-weighted normal sum is `normal`: the unit normal and two
+// unit vectors orthogonal to it (Duff et al., "Building an orthonormal basis, revisited",
+// JCGT 2017: one division, no branch on the normal's direction), each rounded to float. False
+// when the normal sum vanishes (a closed or empty part: no preferred direction).
+bool normal_frame(const Vec3& normal, float axis[3][3]) {
+  const double len2 = dot(normal, normal);
+  if (!(len2 > 0)) return false;
+  const Vec3 n = normal * (1.0 / std::sqrt(len2));
+  const double s = n.z >= 0 ? 1.0 : -1.0;
+  const double a = -1.0 / (s + n.z);
+  const double b = n.x * n.y * a;
+  const Vec3 u{1.0 + s * n.x * n.x * a, s * b, -s * n.x};
+  const Vec3 w{b, s + n.y * n.y * a, -n.y};
+  const Vec3* frame[3] = {&n, &u, &w};
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) axis[i][j] = static_cast<float>((*frame[i])[j]);
+  }
+  return true;
+}
+
+inline Vec3 axis_of(const float a[3]) {
+  return Vec3{static_cast<double>(a[0]), static_cast<double>(a[1]), static_cast<double>(a[2])};
+}
+
+inline double abs_max(double a, double b) {
+  a = std::fabs(a);
+  b = std::fabs(b);
+  return a > b ? a : b;
+}
+
+// Child k's intervals in the frame `axis` (BvhObb), when child k is a leaf: its triangles'
+// corners suffice (the region is convex). Each projection is three products and two sums,
+// off by under 2^-50 |x|_inf; the margin 2^-46 (m + 1), m >= |x|_inf over the corners (from
+// the leaf's box), covers it before rounding outward.
+void leaf_intervals(const Mesh& mesh, const uint32_t* ids, uint32_t count, const float axis[3][3],
+                    double m, float lo[3], float hi[3]) {
+  const Vec3* v = mesh.vertices.data();
+  const Vec3 a[3] = {axis_of(axis[0]), axis_of(axis[1]), axis_of(axis[2])};
+  double l[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, h[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (uint32_t j = 0; j < count; ++j) {
+    const Triangle& tri = mesh.triangles[ids[j]];
+    for (int c = 0; c < 3; ++c) {
+      const Vec3& x = v[tri.v[c]];
+      for (int i = 0; i < 3; ++i) {
+        const double p = dot(a[i], x);
+        l[i] = p < l[i] ? p : l[i];
+        h[i] = p > h[i] ? p : h[i];
+      }
+    }
+  }
+  const double margin = (m + 1.0) * 0x1p-46;
+  for (int i = 0; i < 3; ++i) {
+    lo[i] = float_down(l[i] - margin);
+    hi[i] = float_up(h[i] + margin);
+  }
+}
+
+// Child k's intervals in the frame `axis`, when child k is inner node c (oriented boxes in
+// `o`, in c's own frame b; `m` >= every |coordinate| in child k's axis-aligned box). For a
+// parent axis a, a . x = sum_i alpha_i (b_i . x) + r . x exactly for any alpha_i, with
+// r = a - sum_i alpha_i b_i; alpha_i = a . b_i makes r as small as the axes' rounding (about
+// 1e-7), and |r . x| <= |r|_1 m. The rounding of r (under 2^-48 a component: |a|,
+// |alpha_i b_i| <= 1) and of the sums (each |alpha_i (b_i . x)| <= 2 m + 1, so 2^-46 (8 m + 4)
+// covers them) is added before rounding outward.
+void inner_intervals(const BvhNode& c, const BvhObb& o, const float axis[3][3], double m,
+                     float lo[3], float hi[3]) {
+  const Vec3 b[3] = {axis_of(o.axis[0]), axis_of(o.axis[1]), axis_of(o.axis[2])};
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 a = axis_of(axis[i]);
+    double alpha[3];
+    Vec3 r = a;
+    for (int j = 0; j < 3; ++j) {
+      alpha[j] = dot(a, b[j]);
+      r = r - b[j] * alpha[j];
+    }
+    const double r1 = std::fabs(r.x) + std::fabs(r.y) + std::fabs(r.z) + 3 * 0x1p-48;
+    const double margin = r1 * m * (1.0 + 0x1p-40) + (8.0 * m + 4.0) * 0x1p-46;
+    double l = HUGE_VAL, h = -HUGE_VAL;
+    for (int k = 0; k < 4; ++k) {
+      if (c.child[k] == kNoChild) continue;
+      double sum_lo = 0, sum_hi = 0;
+      for (int j = 0; j < 3; ++j) {
+        const double pl = alpha[j] * static_cast<double>(o.lo[j][k]);
+        const double ph = alpha[j] * static_cast<double>(o.hi[j][k]);
+        sum_lo += pl < ph ? pl : ph;
+        sum_hi += pl < ph ? ph : pl;
+      }
+      l = sum_lo < l ? sum_lo : l;
+      h = sum_hi > h ? sum_hi : h;
+    }
+    lo[i] = float_down(l - margin);
+    hi[i] = float_up(h + margin);
+  }
+}
 
 // The body of build_distance_index (below), which undoes it on an error.
 Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceIndexOptions& options,
@@ -164,6 +260,7 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   const uint32_t wide_max = leaves > 1 ? leaves - 1 : 1;
   BvhNode* nodes = nullptr;
   BvhDipole* dipoles = nullptr;
+  BvhObb* obbs = nullptr;
   uint32_t node_count = 1;
   // 1. Morton order of the triangle centroids (keys live until the topology is built).
   {
@@ -182,7 +279,9 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   uint64_t* scratch = arena.allocate_array<uint64_t>(nt);
   nodes = arena.allocate_array<BvhNode>(wide_max);
   dipoles = arena.allocate_array<BvhDipole>(wide_max);
-  if ((nt > 0 && (keys == nullptr || scratch == nullptr)) || nodes == nullptr || dipoles == nullptr) {
+  if (options.oriented_boxes) obbs = arena.allocate_array<BvhObb>(wide_max);
+  if ((nt > 0 && (keys == nullptr || scratch == nullptr)) || nodes == nullptr ||
+      dipoles == nullptr || (options.oriented_boxes && obbs == nullptr)) {
     return arena.exhausted_status();
   }
   {
@@ -359,11 +458,56 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
                   static_cast<double>(dp.center[2])};
     dp.radius = float_up((reach + length(fc - center) * 2.0) * (1.0 + 1e-12));
     dp.area = static_cast<float>(asum);
+    // The oriented boxes in the frame of the node's normal (the leaves' corners are in cache
+    // from the loop above), kept when their volumes sum to less than the axis-aligned ones.
+    if (obbs == nullptr) continue;
+    BvhObb& ob = obbs[i];
+    bool oriented = normal_frame(nsum, ob.axis);
+    if (oriented) {
+      double obb_volume = 0, box_volume = 0;
+      for (int k = 0; k < 4; ++k) {
+        float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF}, hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
+        if (node.child[k] != kNoChild) {
+          double m = 0;  // the largest |coordinate| in the child's box
+          for (int a = 0; a < 3; ++a) {
+            m = abs_max(m, abs_max(static_cast<double>(node.lo[a][k]),
+                                   static_cast<double>(node.hi[a][k])));
+          }
+          if (node.count[k] > 0) {
+            leaf_intervals(mesh, order + node.child[k], node.count[k], ob.axis, m, lo, hi);
+          } else {
+            inner_intervals(nodes[node.child[k]], obbs[node.child[k]], ob.axis, m, lo, hi);
+          }
+          double ov = 1, av = 1;
+          for (int a = 0; a < 3; ++a) {
+            ov *= static_cast<double>(hi[a]) - static_cast<double>(lo[a]);
+            av *= static_cast<double>(node.hi[a][k]) - static_cast<double>(node.lo[a][k]);
+          }
+          obb_volume += ov;
+          box_volume += av;
+        }
+        for (int a = 0; a < 3; ++a) {
+          ob.lo[a][k] = lo[a];
+          ob.hi[a][k] = hi[a];
+        }
+      }
+      oriented = obb_volume < box_volume;
+    }
+    if (!oriented) {
+      for (int a = 0; a < 3; ++a) {
+        for (int j = 0; j < 3; ++j) ob.axis[a][j] = a == j ? 1.0f : 0.0f;
+        for (int k = 0; k < 4; ++k) {
+          ob.lo[a][k] = node.lo[a][k];
+          ob.hi[a][k] = node.hi[a][k];
+        }
+      }
+    }
   }
   // The tree down over the Morton keys (it was allocated after them; the nodes move first, so
   // no destination lies above bytes not yet copied).
   const BvhNode* wide_src = nodes;
   const BvhDipole* wide_dipoles_src = dipoles;
+  const BvhObb* wide_obbs_src = obbs;
   arena.rewind(tree_temps);
   BvhNode* kept_nodes = arena.allocate_array<BvhNode>(node_count);
   SPLINTCORE_ASSERT(kept_nodes != nullptr);
@@ -372,6 +516,12 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   SPLINTCORE_ASSERT(kept_dipoles != nullptr);
   std::memmove(static_cast<void*>(kept_dipoles), wide_dipoles_src,
                size_t{node_count} * sizeof(BvhDipole));
+  BvhObb* kept_obbs = nullptr;
+  if (wide_obbs_src != nullptr) {
+    kept_obbs = arena.allocate_array<BvhObb>(node_count);
+    SPLINTCORE_ASSERT(kept_obbs != nullptr);
+    std::memmove(static_cast<void*>(kept_obbs), wide_obbs_src, size_t{node_count} * sizeof(BvhObb));
+  }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 2, 4));
 
   // 4. Edge neighbours through per-vertex lists of outgoing half-edges (counting sort by
@@ -478,6 +628,7 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
 
   out->nodes = Span<const BvhNode>(kept_nodes, node_count);
   out->dipoles = Span<const BvhDipole>(kept_dipoles, node_count);
+  out->obbs = Span<const BvhObb>(kept_obbs, kept_obbs != nullptr ? node_count : 0);
   out->order = Span<const uint32_t>(order, nt);
   out->neighbors = Span<const uint32_t>(neighbors, 3 * nt);
   out->vertex_start = Span<const uint32_t>(start, nv + 1);

@@ -18,20 +18,60 @@ namespace {
 constexpr uint32_t kStack = 3 * 128 + 4;
 constexpr double kFourPi = 12.566370614359172954;
 
-// Squared distances from q to the four child boxes of n (+inf for an absent child, whose box
-// is lo = +inf, hi = -inf: callers still skip it, since +inf passes an unbounded search).
-// Branch-free, so that the compiler can do the four at once.
-inline void child_distances(const BvhNode& n, const Vec3& q, double d2[4]) {
-  double dx[4], dy[4], dz[4];
-  for (int k = 0; k < 4; ++k) {
-    const double lx = static_cast<double>(n.lo[0][k]) - q.x, hx = q.x - static_cast<double>(n.hi[0][k]);
-    const double ly = static_cast<double>(n.lo[1][k]) - q.y, hy = q.y - static_cast<double>(n.hi[1][k]);
-    const double lz = static_cast<double>(n.lo[2][k]) - q.z, hz = q.z - static_cast<double>(n.hi[2][k]);
-    dx[k] = (lx > 0.0 ? lx : 0.0) + (hx > 0.0 ? hx : 0.0);
-    dy[k] = (ly > 0.0 ? ly : 0.0) + (hy > 0.0 ? hy : 0.0);
-    dz[k] = (lz > 0.0 ? lz : 0.0) + (hz > 0.0 ? hz : 0.0);
+// Squared distances from q (as float, `qf`) to the four axis-aligned child boxes of n, in
+// float (+inf for an absent child, whose box is lo = +inf, hi = -inf). Branch-free, so that
+// the compiler can do the four at once. Callers compare against reach_float(), whose margins
+// cover the rounding of q and of the gaps (the same as for the oriented boxes below, with
+// exact axes).
+inline void child_box_distances(const BvhNode& n, const float qf[3], float d2[4]) {
+  float g[3][4];
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 4; ++k) {
+      const float below = n.lo[i][k] - qf[i], above = qf[i] - n.hi[i][k];
+      g[i][k] = (below > 0.0f ? below : 0.0f) + (above > 0.0f ? above : 0.0f);
+    }
   }
-  for (int k = 0; k < 4; ++k) d2[k] = dx[k] * dx[k] + dy[k] * dy[k] + dz[k] * dz[k];
+  for (int k = 0; k < 4; ++k) d2[k] = g[0][k] * g[0][k] + g[1][k] * g[1][k] + g[2][k] * g[2][k];
+}
+
+// Squared distances from q to the four oriented child boxes of a node (BvhObb), in float, as
+// lower bounds: for x in child k, |q - x|^2 >= sum_i gap_i^2 / s where gap_i is the distance
+// of axis_i . q to [lo_i, hi_i] and s <= 1 + 2^-20 bounds the squared singular values of the
+// float axes (orthonormal to float rounding). An absent child (lo = +inf, hi = -inf) gets
+// +inf. q (as float, `qf`) is projected once per node; the four gaps are branch-free, so that
+// the compiler can do them at once. Callers compare against reach_float(), which covers s
+// and the rounding here.
+inline void child_obb_distances(const BvhObb& o, const float qf[3], float d2[4]) {
+  float p[3];
+  for (int i = 0; i < 3; ++i) p[i] = o.axis[i][0] * qf[0] + o.axis[i][1] * qf[1] + o.axis[i][2] * qf[2];
+  float g[3][4];
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 4; ++k) {
+      const float below = o.lo[i][k] - p[i], above = p[i] - o.hi[i][k];
+      g[i][k] = (below > 0.0f ? below : 0.0f) + (above > 0.0f ? above : 0.0f);
+    }
+  }
+  for (int k = 0; k < 4; ++k) d2[k] = g[0][k] * g[0][k] + g[1][k] * g[1][k] + g[2][k] * g[2][k];
+}
+
+// The largest value of child_obb_distances() for a box that may still hold a triangle as close
+// as best_d (within the 2^-40 relative slack of the triangle filters below), rounded up to
+// float. Rounding q to float moves it by up to 2^-24 |q|_inf a coordinate, and the three
+// float products and two sums of a projection add under 3 2^-24 sqrt(3) |q|_inf: each gap is
+// off by under 2^-21 |q|_inf plus 2^-24 of itself; the squares and their sum add 3 2^-24,
+// and the axes' 1 + 2^-20. The margins below (2^-19 (|q|_inf + 1) absolute, 2^-17 and
+// 2^-19 relative) cover all of it with room to spare.
+inline float reach_float(double best_d, double qmax) {
+  const double r = best_d * (1.0 + 0x1p-17) + (qmax + 1.0) * 0x1p-19;
+  const double r2 = r * r * (1.0 + 0x1p-19);
+  const float f = static_cast<float>(r2);
+  return static_cast<double>(f) < r2 ? std::nextafter(f, HUGE_VALF) : f;
+}
+
+inline double abs_max3(const Vec3& p) {
+  const double x = std::fabs(p.x), y = std::fabs(p.y), z = std::fabs(p.z);
+  const double xy = x > y ? x : y;
+  return xy > z ? xy : z;
 }
 
 // a * b - c * d to about one ulp: Dekker's exact products (no FMA, so the same bits
@@ -171,6 +211,14 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
   uint32_t best_tri = 0;
   ClosestPoint best;
   double best_d = std::sqrt(limit2);  // sqrt(best2), for the plane filter
+  // The boxes are tested in float against reach2 (reach_float: the best distance so far with
+  // margins for the float rounding), through the oriented boxes when the index has them.
+  const BvhObb* obbs = index.obbs.size() != 0 ? index.obbs.data() : nullptr;
+  const double qmax = abs_max3(q);
+  float reach2 = reach_float(best_d, qmax);
+  const float qf[3] = {static_cast<float>(q.x), static_cast<float>(q.y), static_cast<float>(q.z)};
+  // Beyond 2^100 (or not a number) float squares could overflow: no box is pruned then.
+  const bool prune = qmax < 0x1p100;
   // Keeps triangle t when it is closer, or as close with a smaller id (so the answer never
   // depends on the tree or the seed), and within the limit. Two lower bounds of the distance
   // skip most triangles first: the triangle's box, and its plane. Both are skipped only when
@@ -213,6 +261,7 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
     if (d2 < best2 || (d2 == best2 && (!found || t < best_tri))) {
       best2 = d2;
       best_d = std::sqrt(d2);
+      reach2 = reach_float(best_d, qmax);
       best_tri = t;
       found = true;
       best.point = p;
@@ -224,37 +273,43 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
   if (seed != kNoNeighbor) consider(seed);
   struct Entry {
     uint32_t node;
-    double d2;
+    float d2;
   };
   Entry stack[kStack];
   uint32_t top = 0;
-  stack[top++] = Entry{0, 0.0};
+  stack[top++] = Entry{0, 0.0f};
   while (top > 0) {
     const Entry e = stack[--top];
-    if (e.d2 > best2) continue;
+    if (e.d2 > reach2) continue;
     const BvhNode& node = nodes[e.node];
-    double d2[4];
-    child_distances(node, q, d2);
+    float d2[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    if (!prune) {
+      // every present child is visited
+    } else if (obbs != nullptr) {
+      child_obb_distances(obbs[e.node], qf, d2);
+    } else {
+      child_box_distances(node, qf, d2);
+    }
     // The children within reach, nearest first (ties in slot order): leaves tighten the bound
     // before farther boxes are tested against it.
     uint8_t by[4] = {0, 0, 0, 0};
     int m = 0;
     for (int k = 0; k < 4; ++k) {
-      if (!(d2[k] <= best2) || node.child[k] == kNoChild) continue;
+      if (!(d2[k] <= reach2) || node.child[k] == kNoChild) continue;
       int j = m++;
       for (; j > 0 && d2[by[j - 1]] > d2[k]; --j) by[j] = by[j - 1];
       by[j] = static_cast<uint8_t>(k);
     }
     for (int i = 0; i < m; ++i) {
       const int k = by[i];
-      if (node.count[k] == 0 || !(d2[k] <= best2)) continue;
+      if (node.count[k] == 0 || !(d2[k] <= reach2)) continue;
       for (uint32_t j = node.child[k]; j < node.child[k] + node.count[k]; ++j) {
         consider(index.order[j]);
       }
     }
     for (int i = m; i-- > 0;) {
       const int k = by[i];
-      if (node.count[k] != 0 || !(d2[k] <= best2)) continue;
+      if (node.count[k] != 0 || !(d2[k] <= reach2)) continue;
       if (top + 1 > kStack) continue;  // cannot happen: depth is bounded at build time
       stack[top++] = Entry{node.child[k], d2[k]};
     }

@@ -223,7 +223,7 @@ struct Built {
 Vec3 exact_normal(const Vec3& a, const Vec3& b, const Vec3& c);
 
 std::unique_ptr<Built> build(const Soup& soup, uint32_t leaf_size = 4,
-                             size_t arena_bytes = size_t{64} << 20) {
+                             size_t arena_bytes = size_t{64} << 20, bool oriented_boxes = false) {
   std::unique_ptr<Built> b(new Built);
   b->arena.reset(new TestArena(arena_bytes));
   Status s = test::mesh_from_soup(b->arena->arena, soup, &b->mesh);
@@ -231,6 +231,7 @@ std::unique_ptr<Built> build(const Soup& soup, uint32_t leaf_size = 4,
   Context ctx(&b->arena->arena);
   DistanceIndexOptions options;
   options.leaf_size = leaf_size;
+  options.oriented_boxes = oriented_boxes;
   s = build_distance_index(ctx, b->mesh, options, &b->index);
   EXPECT_TRUE(s.is_ok()) << test::format(s);
   double m = 1e-300;
@@ -617,18 +618,105 @@ TEST(DistanceClosest, MatchesBruteForceOnRandomAndClosedMeshes) {
   int total = 0;
   for (const auto& shape : shapes) {
     for (uint32_t leaf : {1u, 4u, 16u}) {
-      auto b = build(shape.second, leaf);
-      const auto q = query_points(b->mesh, rng, 60 * kEffort, 20 * kEffort);
-      int failures = 0;
-      for (const Vec3& p : q) {
-        failures += check_closest(*b, p, shape.first.c_str());
-        ++total;
-        if (failures > 5) break;
+      for (bool oriented : {false, true}) {
+        auto b = build(shape.second, leaf, size_t{64} << 20, oriented);
+        ASSERT_EQ(b->index.obbs.size(), oriented ? b->index.nodes.size() : 0u);
+        const auto q = query_points(b->mesh, rng, 60 * kEffort, 20 * kEffort);
+        int failures = 0;
+        for (const Vec3& p : q) {
+          failures += check_closest(*b, p, shape.first.c_str());
+          ++total;
+          if (failures > 5) break;
+        }
+        ASSERT_EQ(failures, 0) << shape.first << " leaf " << leaf << " oriented " << oriented;
       }
-      ASSERT_EQ(failures, 0) << shape.first << " leaf " << leaf;
     }
   }
-  EXPECT_GT(total, 2000 * kEffort / 4);
+  EXPECT_GT(total, 4000 * kEffort / 4);
+}
+
+// Query points far beyond float range (the boxes are tested in float): no box may be pruned
+// wrongly, with or without oriented boxes.
+TEST(DistanceClosest, QueriesBeyondFloatRangeMatchBruteForce) {
+  for (bool oriented : {false, true}) {
+    auto b = build(shapes::torus(24, 12, 10, 3), 4, size_t{64} << 20, oriented);
+    for (const Vec3& q : {Vec3{1e39, 2, 3}, Vec3{-3e38, 1e38, 7}, Vec3{1e150, -1e150, 1e149},
+                          Vec3{0x1p100, 0, 0}, Vec3{0x1p99, 1, 1}}) {
+      EXPECT_EQ(check_closest(*b, q, "far query"), 0) << q.x << " oriented " << oriented;
+    }
+  }
+}
+
+// The oriented boxes contain what they bound: every corner of every triangle below a child
+// projects into the child's intervals on the node's axes (checked in long double, well inside
+// the build's margins), and the axes are unit and orthogonal to float rounding. Both kinds of
+// child are checked: leaves (intervals from their corners) and inner nodes (intervals from
+// their own children's boxes).
+TEST(DistanceClosest, OrientedBoxesContainTheirTriangles) {
+  Rng rng(0x5eed0007);
+  std::vector<Soup> soups = {shapes::torus(40, 20, 5, 1), icosphere(3, 7.5, Vec3{1.25, -2.5, 30}),
+                             random_soup(rng, 200, 600, 4), cone(40, 4, 0, 9),
+                             icosphere(2, 0.3, Vec3{80, 40, 60})};
+  int oriented_nodes = 0, checked = 0;
+  for (const Soup& soup : soups) {
+    for (uint32_t leaf : {1u, 4u, 16u}) {
+      auto b = build(soup, leaf, size_t{64} << 20, true);
+      const DistanceIndex& x = b->index;
+      ASSERT_EQ(x.obbs.size(), x.nodes.size());
+      // The triangles below each node: the range of `order` its leaves cover.
+      std::vector<uint32_t> first(x.nodes.size(), ~0u), last(x.nodes.size(), 0);
+      for (size_t i = x.nodes.size(); i-- > 0;) {
+        const BvhNode& n = x.nodes[i];
+        for (int k = 0; k < 4; ++k) {
+          if (n.child[k] == kNoChild) continue;
+          const uint32_t f = n.count[k] > 0 ? n.child[k] : first[n.child[k]];
+          const uint32_t l = n.count[k] > 0 ? n.child[k] + n.count[k] : last[n.child[k]];
+          first[i] = std::min(first[i], f);
+          last[i] = std::max(last[i], l);
+        }
+      }
+      for (size_t i = 0; i < x.nodes.size(); ++i) {
+        const BvhNode& n = x.nodes[i];
+        const BvhObb& o = x.obbs[i];
+        bool identity = true;
+        for (int a = 0; a < 3; ++a) {
+          long double len2 = 0;
+          for (int j = 0; j < 3; ++j) {
+            identity = identity && o.axis[a][j] == (a == j ? 1.0f : 0.0f);
+            len2 += static_cast<long double>(o.axis[a][j]) * o.axis[a][j];
+            long double d = 0;
+            for (int c = 0; c < 3; ++c) d += static_cast<long double>(o.axis[a][c]) * o.axis[j][c];
+            if (j != a) {
+              EXPECT_LT(std::fabs(static_cast<double>(d)), 1e-6);
+            }
+          }
+          EXPECT_NEAR(static_cast<double>(len2), 1.0, 1e-6);
+        }
+        oriented_nodes += !identity;
+        for (int k = 0; k < 4; ++k) {
+          if (n.child[k] == kNoChild) continue;
+          const uint32_t f = n.count[k] > 0 ? n.child[k] : first[n.child[k]];
+          const uint32_t l = n.count[k] > 0 ? n.child[k] + n.count[k] : last[n.child[k]];
+          for (uint32_t j = f; j < l; ++j) {
+            const Triangle& t = b->mesh.triangles[x.order[j]];
+            for (int c = 0; c < 3; ++c) {
+              const Vec3& v = b->mesh.vertices[t.v[c]];
+              for (int a = 0; a < 3; ++a) {
+                const long double p = static_cast<long double>(o.axis[a][0]) * v.x +
+                                      static_cast<long double>(o.axis[a][1]) * v.y +
+                                      static_cast<long double>(o.axis[a][2]) * v.z;
+                ASSERT_GE(p, static_cast<long double>(o.lo[a][k])) << "node " << i << " child " << k;
+                ASSERT_LE(p, static_cast<long double>(o.hi[a][k])) << "node " << i << " child " << k;
+                ++checked;
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(oriented_nodes, 100);  // the frames are used, not all left at the world axes
+  EXPECT_GT(checked, 100000);
 }
 
 // Slivers found by the random soups (kept as regressions): Ericson's barycentric tests lose
@@ -1672,6 +1760,7 @@ IndexBytes snapshot(const DistanceIndex& x) {
   };
   add(x.nodes.data(), x.nodes.size() * sizeof(BvhNode));
   add(x.dipoles.data(), x.dipoles.size() * sizeof(BvhDipole));
+  add(x.obbs.data(), x.obbs.size() * sizeof(BvhObb));
   add(x.order.data(), x.order.size() * sizeof(uint32_t));
   add(x.neighbors.data(), x.neighbors.size() * sizeof(uint32_t));
   add(x.vertex_start.data(), x.vertex_start.size() * sizeof(uint32_t));
@@ -1690,8 +1779,10 @@ TEST(DistanceBuild, ArenaBoundCoversTheHighWater) {
     Mesh mesh;
     ASSERT_TRUE(test::mesh_from_soup(t.arena, soup, &mesh).is_ok());
     for (uint32_t leaf : {0u, 1u, 2u, 3u, 4u, 7u, 16u}) {
+     for (bool oriented : {false, true}) {
       DistanceIndexOptions options;
       options.leaf_size = leaf;
+      options.oriented_boxes = oriented;
       const Arena::Marker m = t.arena.mark();
       t.arena.reset_high_water();
       const size_t before = t.arena.used();
@@ -1700,8 +1791,9 @@ TEST(DistanceBuild, ArenaBoundCoversTheHighWater) {
       SPLINTCORE_ASSERT_OK(build_distance_index(ctx, mesh, options, &index));
       const uint64_t bound = distance_index_bound(mesh.vertices.size(), mesh.triangles.size(), options);
       EXPECT_GE(bound, t.arena.high_water() - before)
-          << mesh.triangles.size() << " triangles, leaf " << leaf;
+          << mesh.triangles.size() << " triangles, leaf " << leaf << " oriented " << oriented;
       t.arena.rewind(m);
+     }
     }
   }
 }
@@ -1709,14 +1801,17 @@ TEST(DistanceBuild, ArenaBoundCoversTheHighWater) {
 TEST(DistanceBuild, ArenaExhaustionLoop) {
   Rng rng(0x5eed0062);
   for (const Soup& soup : {icosphere(1, 2, Vec3{}), random_soup(rng, 40, 100, 2)}) {
+   for (bool oriented : {false, true}) {
+    DistanceIndexOptions options;
+    options.oriented_boxes = oriented;
     TestArena t;
     Mesh mesh;
     ASSERT_TRUE(test::mesh_from_soup(t.arena, soup, &mesh).is_ok());
     DistanceIndex want_index;
     Context big(&t.arena);
-    SPLINTCORE_ASSERT_OK(build_distance_index(big, mesh, DistanceIndexOptions{}, &want_index));
+    SPLINTCORE_ASSERT_OK(build_distance_index(big, mesh, options, &want_index));
     const IndexBytes want = snapshot(want_index);
-    const uint64_t bound = distance_index_bound(mesh.vertices.size(), mesh.triangles.size(), DistanceIndexOptions{});
+    const uint64_t bound = distance_index_bound(mesh.vertices.size(), mesh.triangles.size(), options);
     std::unique_ptr<unsigned char[]> buffer(new unsigned char[bound + 64]);
     const size_t step = 16;  // the index of 100 triangles takes a few kB: over 100 caps fail
     size_t cap = 0;
@@ -1726,7 +1821,7 @@ TEST(DistanceBuild, ArenaExhaustionLoop) {
       Arena arena(buffer.get(), cap);
       Context ctx(&arena);
       DistanceIndex index;
-      Status s = build_distance_index(ctx, mesh, DistanceIndexOptions{}, &index);
+      Status s = build_distance_index(ctx, mesh, options, &index);
       if (s.is_ok()) {
         const IndexBytes got = snapshot(index);
         EXPECT_EQ(got.bytes, want.bytes);
@@ -1739,6 +1834,7 @@ TEST(DistanceBuild, ArenaExhaustionLoop) {
     EXPECT_GT(failures, 100);
     std::printf("[ info ] %zu triangles: %d caps exhausted, first success at %zu bytes, bound %llu\n",
                 mesh.triangles.size(), failures, cap, static_cast<unsigned long long>(bound));
+   }
   }
 }
 
