@@ -273,7 +273,8 @@ uint32_t find_flat_triangle(const Mesh& mesh) {
 }
 
 uint64_t check_closed_oriented_bound(uint64_t vertex_count, uint64_t triangle_count) {
-  return (vertex_count + 1) * sizeof(uint32_t) + 3 * triangle_count * sizeof(uint64_t) + 64;
+  return (vertex_count + 1) * sizeof(uint32_t) + 3 * triangle_count * sizeof(uint64_t) +
+         vertex_count * sizeof(uint64_t) + 2 * 64;
 }
 
 Status check_closed_oriented(const Context& ctx, const Mesh& mesh, double* volume) {
@@ -297,10 +298,14 @@ Status check_closed_oriented(const Context& ctx, const Mesh& mesh, double* volum
   }
   ArenaScope scope(arena);
   // Half-edges bucketed by their smaller vertex: other end << 33 | forward << 32 | triangle.
+  // Per other end, its uses in the current bucket: forward in the low 32 bits, backward in
+  // the high (a good edge: exactly 2^32 + 1).
   uint32_t* start = arena.allocate_array<uint32_t>(size_t{nv} + 1);
   uint64_t* half = arena.allocate_array<uint64_t>(size_t{3} * nt);
-  if (start == nullptr || half == nullptr) return arena.exhausted_status();
+  uint64_t* tally = arena.allocate_array<uint64_t>(nv);
+  if (start == nullptr || half == nullptr || tally == nullptr) return arena.exhausted_status();
   std::memset(start, 0, (size_t{nv} + 1) * sizeof(uint32_t));
+  std::memset(tally, 0, size_t{nv} * sizeof(uint64_t));
   for (uint32_t t = 0; t < nt; ++t) {
     for (int k = 0; k < 3; ++k) {
       const uint32_t a = tris[t].v[k], b = tris[t].v[(k + 1) % 3];
@@ -317,16 +322,21 @@ Status check_closed_oriented(const Context& ctx, const Mesh& mesh, double* volum
   }
   for (uint32_t i = nv; i > 0; --i) start[i] = start[i - 1];
   start[0] = 0;
+  // Each bucket is tallied, then read in order: the first use of an edge reads its counts
+  // (and clears them), so the first half-edge of the first bad edge is the one reported;
+  // linear, however many triangles share a vertex.
+  constexpr uint64_t kOneEach = (uint64_t{1} << 32) | 1u;
   for (uint32_t lo = 0; lo < nv; ++lo) {
     for (uint32_t i = start[lo]; i < start[lo + 1]; ++i) {
-      const uint64_t hi = half[i] >> 33;
-      uint32_t uses = 0, forward = 0;
-      for (uint32_t j = start[lo]; j < start[lo + 1]; ++j) {
-        if ((half[j] >> 33) != hi) continue;
-        ++uses;
-        forward += static_cast<uint32_t>((half[j] >> 32) & 1u);
-      }
-      if (uses != 2 || forward != 1) {
+      tally[half[i] >> 33] += ((half[i] >> 32) & 1u) != 0 ? 1u : (uint64_t{1} << 32);
+    }
+    for (uint32_t i = start[lo]; i < start[lo + 1]; ++i) {
+      const uint32_t hi = static_cast<uint32_t>(half[i] >> 33);
+      const uint64_t count = tally[hi];
+      if (count == 0) continue;  // a later use of an edge already read (and good)
+      tally[hi] = 0;
+      const uint64_t forward = count & 0xffffffffu, uses = forward + (count >> 32);
+      if (count != kOneEach || lo == hi) {
         const uint32_t t = static_cast<uint32_t>(half[i]);
         const char* what = uses == 1 ? "not closed: a boundary edge"
                            : uses > 2 ? "not edge-manifold: an edge with 3 or more triangles"

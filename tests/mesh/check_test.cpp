@@ -141,5 +141,69 @@ TEST(CheckMesh, PropertyRandomBoxesStayValid) {
   }
 }
 
+
+// check_closed_oriented is linear however many triangles share a vertex: a bipyramid whose
+// apex (vertex 0, the first bucket) is in 100,000 triangles. Bucket-local pair counting took
+// (2 * 10^5)^2 steps there. Also: the first bad edge is the one named.
+TEST(CheckClosedOriented, HubVertexOfAHundredThousandTrianglesAndFirstBadEdge) {
+  const int n = 100000;
+  std::vector<SoupTriangle> soup;
+  const float apex[3] = {0, 0, 5}, bottom[3] = {0, 0, -5};
+  auto ring = [&](int i, float p[3]) {
+    // The ring's corners on a circle of radius 10 (angles from a fixed table, not libm).
+    const double t = 6.283185307179586 * static_cast<double>(i % n) / n;
+    // cos/sin by their Taylor series in double: only needs to be the same every run.
+    double c = 1, s = 0, term = 1;
+    for (int k = 1; k < 40; ++k) {
+      term *= t / k;
+      if (k % 4 == 1) s += term;
+      if (k % 4 == 2) c -= term;
+      if (k % 4 == 3) s -= term;
+      if (k % 4 == 0) c += term;
+    }
+    p[0] = static_cast<float>(10 * c);
+    p[1] = static_cast<float>(10 * s);
+    p[2] = 0;
+  };
+  for (int i = 0; i < n; ++i) {
+    float a[3], b[3];
+    ring(i, a);
+    ring(i + 1, b);
+    soup.push_back(shapes::soup_triangle(apex, a, b));
+    soup.push_back(shapes::soup_triangle(bottom, b, a));
+  }
+  TestArena t(size_t{256} << 20);
+  Mesh mesh;
+  ASSERT_TRUE(test::mesh_from_soup(t.arena, soup, &mesh).is_ok());
+  ASSERT_EQ(mesh.triangles.size(), size_t{2} * n);
+  Context ctx(&t.arena);
+  double volume = 0;
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, mesh, &volume));
+  EXPECT_NEAR(volume, 2.0 / 3.0 * 3.14159265358979 * 100 * 5, 0.01);
+
+  // Flipping top triangle 6 (apex, r3, r4) breaks its three edges; the one named is in the
+  // apex's bucket (vertex 0: the smallest), and the triangle named is the first (in triangle
+  // order) that uses it, as the quadratic version reported.
+  std::swap(mesh.triangles[6].v[1], mesh.triangles[6].v[2]);
+  ASSERT_EQ(mesh.triangles[6].v[0], 0u);
+  const Status s = check_closed_oriented(ctx, mesh, &volume);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_NE(std::strstr(s.message(), "not consistently oriented"), nullptr) << s.message();
+  const char* at = std::strstr(s.message(), "between vertices");
+  ASSERT_NE(at, nullptr) << s.message();
+  unsigned lo = 0, hi = 0, tri = 0;
+  ASSERT_EQ(std::sscanf(at, "between vertices %u and %u (triangle %u)", &lo, &hi, &tri), 3);
+  EXPECT_EQ(lo, 0u);
+  EXPECT_TRUE(hi == mesh.triangles[6].v[1] || hi == mesh.triangles[6].v[2]) << hi;
+  uint32_t first_user = ~0u;
+  for (uint32_t t = 0; t < mesh.triangles.size() && first_user == ~0u; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = mesh.triangles[t].v[k], b = mesh.triangles[t].v[(k + 1) % 3];
+      if (std::min(a, b) == lo && std::max(a, b) == hi) first_user = t;
+    }
+  }
+  EXPECT_EQ(tri, first_user);
+}
+
 }  // namespace
 }  // namespace splintcore
