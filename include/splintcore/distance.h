@@ -83,11 +83,13 @@ enum class SignMethod : uint8_t {
 };
 
 struct DistanceIndexOptions {
-  uint32_t leaf_size = 4;  // triangles per leaf, 1..16 (0: the default, 4)
-  // Oriented boxes (BvhObb) for closest-point and signed-distance queries: about 1.4 times the
-  // queries per second near a curved surface, for about 45% more build time and 16 bytes more
-  // a triangle (figures: splintcore-bench --filter closest_point). Worth it when an index
-  // answers many more queries than it has triangles (volume sampling); the answers are the
+  // Triangles per leaf, 1..16; 0: the default, 4, or 8 with oriented boxes.
+  uint32_t leaf_size = 0;
+  // Oriented boxes (BvhObb) for closest-point and signed-distance queries. With the default
+  // leaves (8), at 543k triangles: about 1.25 times the queries per second near a curved
+  // surface, for about 40% more build time and no more memory than the axis-aligned index
+  // with leaves of 4 (figures: splintcore-bench --filter 543k). Worth it when an index
+  // answers many more queries than it has triangles (volume sampling). The answers are the
   // same bits either way.
   bool oriented_boxes = false;
 };

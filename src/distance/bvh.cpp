@@ -17,7 +17,15 @@ namespace splintcore {
 namespace {
 
 constexpr uint32_t kMaxDepth = 128;
-constexpr uint32_t kDefaultLeaf = 4;
+
+// Triangles per leaf when the options leave it 0: 4, or 8 with oriented boxes, whose leaves
+// are thin enough that a query opens few of them, so larger leaves cost little and halve the
+// nodes (543k-triangle torus, probe of 1,000,000 batch queries: leaves of 4 answer about 10%
+// more queries than leaves of 8, for 25% more build time and 37% more memory).
+inline uint32_t leaf_size_of(const DistanceIndexOptions& options) {
+  if (options.leaf_size != 0) return options.leaf_size;
+  return options.oriented_boxes ? 8 : 4;
+}
 
 
 // Spreads the low 16 bits of v so that two zero bits follow each (for a 48-bit Morton code:
@@ -97,7 +105,7 @@ const char* feature_name(Feature feature) {
 
 uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,
                               const DistanceIndexOptions& options) {
-  const uint64_t leaf = options.leaf_size == 0 ? kDefaultLeaf : options.leaf_size;
+  const uint64_t leaf = leaf_size_of(options);
   const uint64_t leaves = triangle_count == 0 ? 1 : (triangle_count + leaf - 1) / leaf;
   // Every node splits a range of at least two leaves (an empty or one-leaf mesh has a root).
   const uint64_t wide = leaves > 1 ? leaves - 1 : 1;
@@ -218,7 +226,7 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   out->mesh = &mesh;
   const size_t nt = mesh.triangles.size();
   const size_t nv = mesh.vertices.size();
-  const uint32_t leaf_size = options.leaf_size == 0 ? kDefaultLeaf : options.leaf_size;
+  const uint32_t leaf_size = leaf_size_of(options);
   if (leaf_size > 16) {
     return make_error(StatusCode::kInvalidArgument, "leaf size must be 1..16, got ", leaf_size);
   }

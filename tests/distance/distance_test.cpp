@@ -617,7 +617,7 @@ TEST(DistanceClosest, MatchesBruteForceOnRandomAndClosedMeshes) {
   shapes.emplace_back("far sphere", icosphere(2, 0.3, Vec3{80, 40, 60}));
   int total = 0;
   for (const auto& shape : shapes) {
-    for (uint32_t leaf : {1u, 4u, 16u}) {
+    for (uint32_t leaf : {0u, 1u, 4u, 16u}) {
       for (bool oriented : {false, true}) {
         auto b = build(shape.second, leaf, size_t{64} << 20, oriented);
         ASSERT_EQ(b->index.obbs.size(), oriented ? b->index.nodes.size() : 0u);
@@ -659,7 +659,7 @@ TEST(DistanceClosest, OrientedBoxesContainTheirTriangles) {
                              icosphere(2, 0.3, Vec3{80, 40, 60})};
   int oriented_nodes = 0, checked = 0;
   for (const Soup& soup : soups) {
-    for (uint32_t leaf : {1u, 4u, 16u}) {
+    for (uint32_t leaf : {0u, 1u, 4u, 16u}) {
       auto b = build(soup, leaf, size_t{64} << 20, true);
       const DistanceIndex& x = b->index;
       ASSERT_EQ(x.obbs.size(), x.nodes.size());
