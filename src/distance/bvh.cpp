@@ -163,16 +163,22 @@ void leaf_intervals(const Mesh& mesh, const uint32_t* ids, uint32_t count, const
   const Vec3* v = mesh.vertices.data();
   const Vec3 a[3] = {axis_of(axis[0]), axis_of(axis[1]), axis_of(axis[2])};
   double l[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, h[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  // Neighbours in leaf order share corners: one already projected for the triangle before
+  // is skipped (the same bits again would change nothing).
+  uint32_t before[3] = {~0u, ~0u, ~0u};
   for (uint32_t j = 0; j < count; ++j) {
     const Triangle& tri = mesh.triangles[ids[j]];
     for (int c = 0; c < 3; ++c) {
-      const Vec3& x = v[tri.v[c]];
+      const uint32_t id = tri.v[c];
+      if (id == before[0] || id == before[1] || id == before[2]) continue;
+      const Vec3& x = v[id];
       for (int i = 0; i < 3; ++i) {
         const double p = dot(a[i], x);
         l[i] = p < l[i] ? p : l[i];
         h[i] = p > h[i] ? p : h[i];
       }
     }
+    for (int c = 0; c < 3; ++c) before[c] = tri.v[c];
   }
   const double margin = (m + 1.0) * 0x1p-46;
   for (int i = 0; i < 3; ++i) {
