@@ -80,12 +80,20 @@ inline float float_step(float f, bool up) {
   return f;
 }
 
-// Float bounds that contain the double value: rounded down for lo, up for hi.
+// Float bounds that contain the double value: rounded down for lo, up for hi (beyond float
+// range: the largest float or infinity, never an out-of-range conversion, which would be
+// undefined).
 inline float float_down(double x) {
+  constexpr double kMax = 3.4028234663852886e38;  // FLT_MAX
+  if (x > kMax) return static_cast<float>(kMax);
+  if (x < -kMax) return -HUGE_VALF;
   float f = static_cast<float>(x);
   return static_cast<double>(f) > x ? float_step(f, false) : f;
 }
 inline float float_up(double x) {
+  constexpr double kMax = 3.4028234663852886e38;  // FLT_MAX
+  if (x > kMax) return HUGE_VALF;
+  if (x < -kMax) return static_cast<float>(-kMax);
   float f = static_cast<float>(x);
   return static_cast<double>(f) < x ? float_step(f, true) : f;
 }

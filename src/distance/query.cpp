@@ -64,6 +64,8 @@ inline void child_obb_distances(const BvhObb& o, const float qf[3], float d2[4])
 inline float reach_float(double best_d, double qmax) {
   const double r = best_d * (1.0 + 0x1p-17) + (qmax + 1.0) * 0x1p-19;
   const double r2 = r * r * (1.0 + 0x1p-19);
+  // Beyond float range (or not a number): nothing is pruned (and no out-of-range conversion).
+  if (!(r2 <= 0x1p127)) return HUGE_VALF;
   const float f = static_cast<float>(r2);
   return static_cast<double>(f) < r2 ? std::nextafter(f, HUGE_VALF) : f;
 }
@@ -216,9 +218,11 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
   const BvhObb* obbs = index.obbs.size() != 0 ? index.obbs.data() : nullptr;
   const double qmax = abs_max3(q);
   float reach2 = reach_float(best_d, qmax);
-  const float qf[3] = {static_cast<float>(q.x), static_cast<float>(q.y), static_cast<float>(q.z)};
-  // Beyond 2^100 (or not a number) float squares could overflow: no box is pruned then.
+  // Beyond 2^100 (or not a number) float squares could overflow: no box is pruned then (and q
+  // is not converted: out of float range that would be undefined).
   const bool prune = qmax < 0x1p100;
+  const float qf[3] = {prune ? static_cast<float>(q.x) : 0.0f, prune ? static_cast<float>(q.y) : 0.0f,
+                       prune ? static_cast<float>(q.z) : 0.0f};
   // Keeps triangle t when it is closer, or as close with a smaller id (so the answer never
   // depends on the tree or the seed), and within the limit. Two lower bounds of the distance
   // skip most triangles first: the triangle's box, and its plane. Both are skipped only when
