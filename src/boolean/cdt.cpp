@@ -16,8 +16,14 @@
 //   L. P. Chew, "Constrained Delaunay triangulations", Algorithmica 4, 1989: a triangulation in
 //     which every unconstrained edge is locally Delaunay is the constrained Delaunay one.
 //   J. R. Shewchuk, predicates.cpp: every decision is an exact orient2d or incircle sign.
+//   G. H. Meisters, "Polygons have ears", Amer. Math. Monthly 82(6), 1975, and J. O'Rourke,
+//     "Computational Geometry in C", 2nd ed., 1998, section 1.6: ear clipping (the small path).
 //
-// Steps:
+// Inputs of up to 32 points whose polygon is star-shaped from the mean of its corners take the
+// small path ("the small path" below: the polygon ear-clipped, no super-triangle, no arena);
+// the others, and every input the small path finds an error in, the general path.
+//
+// Steps of the general path:
 //   1. Check the input (ids, closed boundary, coordinates), reserve the output, take the
 //      temporaries (all sized up front from the point count).
 //   2. A super-triangle whose corners are small multiples of a power of two R with
@@ -318,11 +324,15 @@ Status insert_point(Work& w, uint32_t pid, uint32_t start) {
 // ---- segment insertion ----------------------------------------------------------------------
 
 // A triangle holding the edge x-y, and the index of its third vertex. x must be an input
-// point: its star is closed (it lies strictly inside the super-triangle).
+// point. Its star is closed in the general path (it lies strictly inside the super-triangle);
+// in the small path (no super-triangle) a vertex on the polygon has an open star: the turn
+// counter-clockwise then ends at the polygon's edge, and the search goes on clockwise from
+// where it started.
 bool find_edge(const Work& w, uint32_t x, uint32_t y, uint32_t* tri, uint32_t* third) {
   const uint32_t first = w.vt[x];
   uint32_t ti = first;
-  for (uint32_t step = 0; step < w.tri_count; ++step) {
+  bool clockwise = false;
+  for (uint32_t step = 0; step < 2 * w.tri_count; ++step) {
     const Tri& t = w.t[ti];
     const uint32_t i = index_of(t, x);
     if (t.v[next3(i)] == y) {
@@ -335,8 +345,16 @@ bool find_edge(const Work& w, uint32_t x, uint32_t y, uint32_t* tri, uint32_t* t
       *third = next3(i);
       return true;
     }
-    ti = t.n[next3(i)];  // the next triangle counter-clockwise around x
-    if (ti == first || ti == kNone) return false;
+    // The next triangle counter-clockwise around x (clockwise on the way back).
+    ti = clockwise ? t.n[prev3(i)] : t.n[next3(i)];
+    if (ti == first) return false;
+    if (ti == kNone) {
+      if (clockwise) return false;
+      clockwise = true;
+      const Tri& f = w.t[first];
+      ti = f.n[prev3(index_of(f, x))];
+      if (ti == kNone) return false;
+    }
   }
   return false;
 }
@@ -425,13 +443,21 @@ void legalize_edges(Work& w) {
 }
 
 Status insert_segment(Work& w, uint32_t s, uint32_t a, uint32_t b) {
-  // 1. Around a: the edge a-b, or the triangle (a, p, q) whose open wedge at a holds b.
+  // 1. Around a: the edge a-b, or the triangle (a, p, q) whose open wedge at a holds b
+  // (counter-clockwise from vt[a]; when a's star is open, as on the small path's polygon, on
+  // clockwise from vt[a] once the turn reaches the polygon's edge).
   uint32_t ti = w.vt[a];
   uint32_t i = 0;
   uint32_t p = 0;
   uint32_t q = 0;
+  bool clockwise = false;
   for (uint32_t step = 0;; ++step) {
-    if (step > w.tri_count || ti == kNone) {
+    if (ti == kNone && !clockwise) {
+      clockwise = true;
+      const Tri& f = w.t[w.vt[a]];
+      ti = f.n[prev3(index_of(f, a))];
+    }
+    if (step > 2 * w.tri_count || ti == kNone) {
       return make_error(StatusCode::kInternal, "cdt: no way out of point ", a);
     }
     const Tri& t = w.t[ti];
@@ -447,7 +473,7 @@ Status insert_segment(Work& w, uint32_t s, uint32_t a, uint32_t b) {
     const double oq = orient(w, a, q, b);
     if (oq == 0.0 && ahead(w, a, q, b)) return on_segment_error(w, q, s, a, b);
     if (op > 0.0 && oq < 0.0) break;
-    ti = t.n[next3(i)];  // counter-clockwise around a
+    ti = clockwise ? t.n[prev3(i)] : t.n[next3(i)];  // counter-clockwise around a (or back)
   }
 
   // 2. Walk to b: the crossed edges, each (right end, left end) seen from a towards b.
@@ -614,6 +640,252 @@ void brio_order(Span<const CdtPoint> points, KeyIndex* keys, KeyIndex* scratch) 
   }
 }
 
+// ---- the output ----------------------------------------------------------------------------
+
+// Writes the slots not marked in `exterior` (nullptr: every slot), in slot order, each rotated
+// to start at its smallest id, into the room `out` (and `adjacency`) reserved for `expected`
+// more triangles; index_of_slot: tri_count entries of scratch. False, with `out` and
+// `adjacency` cut back to their sizes and *bad set, when a triangle is not counter-clockwise
+// (a bug: never in the tests).
+bool write_output(const Work& w, const uint8_t* exterior, uint32_t* index_of_slot,
+                  uint64_t expected, ArenaArray<CdtTriangle>* out,
+                  ArenaArray<CdtAdjacency>* adjacency, CdtTriangle* bad) {
+  // Every element below `expected` is written (or the sizes are cut back): the arrays take
+  // their new sizes over the reserved room without zeroing it first.
+  const size_t out_start = out->size();
+  const size_t adjacency_start = adjacency != nullptr ? adjacency->size() : 0;
+  SPLINTCORE_ASSERT(out->capacity() - out_start >= expected);  // reserved by the caller
+  out->adopt(out->data(), out_start + static_cast<size_t>(expected), out->capacity());
+  CdtTriangle* out_tri = out->data() + out_start;
+  CdtAdjacency* out_adj = nullptr;
+  if (adjacency != nullptr) {
+    SPLINTCORE_ASSERT(adjacency->capacity() - adjacency_start >= expected);
+    adjacency->adopt(adjacency->data(), adjacency_start + static_cast<size_t>(expected),
+                     adjacency->capacity());
+    out_adj = adjacency->data() + adjacency_start;
+    // Output index of each inside slot (without an exterior, the slot itself).
+    uint32_t count = 0;
+    for (uint32_t ti = 0; ti < w.tri_count && exterior != nullptr; ++ti) {
+      index_of_slot[ti] = exterior[ti] != 0 ? kCdtNone : count++;
+    }
+  }
+  // The slot's edge opposite t.v[kOpposite[k][e]] is edge e of the triangle rotated by k.
+  static constexpr uint8_t kOpposite[3][3] = {{2, 0, 1}, {0, 1, 2}, {1, 2, 0}};
+  size_t produced = 0;
+  for (uint32_t ti = 0; ti < w.tri_count; ++ti) {
+    if (exterior != nullptr && exterior[ti] != 0) continue;
+    const Tri& t = w.t[ti];
+    const uint32_t k = t.v[0] < t.v[1] ? (t.v[0] < t.v[2] ? 0 : 2) : (t.v[1] < t.v[2] ? 1 : 2);
+    const CdtTriangle tri{{t.v[k], t.v[next3(k)], t.v[prev3(k)]}};
+    if (orient(w, tri.v[0], tri.v[1], tri.v[2]) <= 0.0) {
+      out->shrink_size(out_start);
+      if (adjacency != nullptr) adjacency->shrink_size(adjacency_start);
+      *bad = tri;
+      return false;
+    }
+    out_tri[produced] = tri;
+    if (out_adj != nullptr) {
+      // Per output triangle (rotated by k from its slot) the edge v[e] -> v[e + 1], which is
+      // the slot's edge opposite t.v[(k + e + 2) % 3].
+      CdtAdjacency& a = out_adj[produced];
+      for (uint32_t e = 0; e < 3; ++e) {
+        const uint32_t o = kOpposite[k][e];  // (k + e + 2) % 3
+        const uint32_t nb = t.n[o];
+        a.nb[e] = nb == kNone ? kCdtNone : (exterior != nullptr ? index_of_slot[nb] : nb);
+        a.seg[e] = t.c[o] == kNone ? kCdtNone : t.c[o];
+      }
+    }
+    ++produced;
+  }
+  return true;
+}
+
+// ---- the small path ------------------------------------------------------------------------
+//
+// Up to kSmallMaxPoints points (the Boolean's cut triangles: 98% have 10 or fewer, nearly all
+// the rest fewer than 32), with all of its memory on the stack (4.7 KB). The general path
+// spends most of its time outside the polygon (the super-triangle's triangles, half of all,
+// each inserted point flipped against them, the flood of the exterior, the checks); this one
+// starts from a triangulation of the polygon:
+//   1. The polygon must be star-shaped from the mean O of its corners, winding once: every edge
+//      has O strictly on its left (orient2d), and going round, the sign of y - O.y changes
+//      exactly twice (the corners turn about O by less than pi at each step, so a turn once
+//      round changes it twice and k turns 2 k times). Such a polygon is simple and
+//      counter-clockwise (each ray from O meets it once). Otherwise: the general path.
+//   2. Ear clipping (G. H. Meisters, "Polygons have ears", Amer. Math. Monthly 82, 1975): a
+//      corner that turns strictly left and whose closed triangle holds no other corner that
+//      does not (only such a corner can lie in it: J. O'Rourke, "Computational Geometry in C",
+//      2nd ed., 1998, section 1.6); its diagonal is a new edge of the rest.
+//   3. Lawson flips of every edge until all are locally Delaunay: the constrained Delaunay
+//      triangulation of the polygon (Chew 1989).
+//   4. The other points, each located (walk, then a scan) and inserted with Lawson flips of
+//      the edges opposite it (the polygon's edges are never flipped: that keeps it constrained
+//      Delaunay); then the interior segments as in the general path (Sloan).
+// Anything the contract calls an error (a point outside or on the boundary, a duplicate,
+// crossing segments, ...) sends the input to the general path, which reports it. The result
+// is the constrained Delaunay triangulation of the same input, the same triangles as the
+// general path's but for ties (four cocircular points), in this path's slot order.
+
+constexpr uint32_t kSmallMaxPoints = 32;
+constexpr uint32_t kSmallMaxTris = 2 * kSmallMaxPoints;
+
+// True when it wrote the output (into the room reserved for `expected` more triangles); false
+// when the input is for the general path (nothing written then). The caller has checked ids,
+// coordinates and that the boundary closes; n <= kSmallMaxPoints.
+bool small_cdt(Span<const CdtPoint> points, Span<const CdtSegment> segments,
+               uint32_t boundary_count, uint64_t expected, ArenaArray<CdtTriangle>* out,
+               ArenaArray<CdtAdjacency>* adjacency) {
+  const uint32_t n = static_cast<uint32_t>(points.size());
+  const uint32_t m = static_cast<uint32_t>(segments.size());
+  const uint32_t b = boundary_count;
+  SPLINTCORE_ASSERT(n <= kSmallMaxPoints && b >= 3 && b <= n);
+  const CdtPoint* p = points.data();
+  uint8_t on_boundary[kSmallMaxPoints] = {};
+  uint32_t poly[kSmallMaxPoints];  // point id per boundary position
+  for (uint32_t s = 0; s < b; ++s) {
+    const uint32_t v = segments[s].a;
+    if (on_boundary[v] != 0) return false;  // not simple: the general path says so
+    on_boundary[v] = 1;
+    poly[s] = v;
+  }
+
+  // 1. Star-shaped from O, winding once.
+  double ox = 0.0, oy = 0.0;
+  for (uint32_t s = 0; s < b; ++s) {
+    ox += p[poly[s]].x;
+    oy += p[poly[s]].y;
+  }
+  ox = ox / b;
+  oy = oy / b;
+  // O enters orient2d: keep it in the coordinates' range (exact signs).
+  const double aox = ox < 0 ? -ox : ox, aoy = oy < 0 ? -oy : oy;
+  if ((ox != 0.0 && aox < kMinMagnitude) || (oy != 0.0 && aoy < kMinMagnitude)) return false;
+  int first_sign = 0, last_sign = 0, changes = 0;
+  for (uint32_t s = 0; s < b; ++s) {
+    const CdtPoint& u = p[poly[s]];
+    const CdtPoint& v = p[poly[s + 1 == b ? 0 : s + 1]];
+    if (orient2d(ox, oy, u.x, u.y, v.x, v.y) <= 0.0) return false;
+    const int sign = u.y > oy ? 1 : (u.y < oy ? -1 : 0);
+    if (sign == 0) continue;
+    if (last_sign != 0 && sign != last_sign) ++changes;
+    if (first_sign == 0) first_sign = sign;
+    last_sign = sign;
+  }
+  if (first_sign != last_sign) ++changes;  // round the corner from the last to the first
+  if (changes != 2) return false;
+
+  Tri tris[kSmallMaxTris];
+  uint32_t vt[kSmallMaxPoints];
+  uint32_t stack[3 * kSmallMaxTris];
+  uint8_t queued[kSmallMaxTris] = {};
+  EdgeKey queue[3 * kSmallMaxPoints + 3];
+  Work w;
+  w.p = p;
+  w.n = n;
+  w.t = tris;
+  w.tri_count = 0;
+  w.vt = vt;
+  w.stack = stack;
+  w.queued = queued;
+  w.queue = queue;
+  w.queue_cap = 3 * kSmallMaxPoints + 3;
+
+  // 2. Ear clipping. Per position: the neighbours on what is left, whether the corner turns
+  // strictly left, and the triangle outside the edge that starts there (kNone: a boundary
+  // segment, whose id is the position). A clipped triangle (u, v, w) has its diagonal w-u
+  // opposite v, at index 1, where the triangle clipped later across it links in.
+  // Zeroed although only the first b slots are read (cppcheck cannot see that).
+  uint32_t next_at[kSmallMaxPoints] = {}, prev_at[kSmallMaxPoints] = {}, outer[kSmallMaxPoints] = {};
+  uint8_t convex[kSmallMaxPoints] = {};
+  for (uint32_t s = 0; s < b; ++s) {
+    next_at[s] = s + 1 == b ? 0 : s + 1;
+    prev_at[s] = s == 0 ? b - 1 : s - 1;
+    outer[s] = kNone;
+  }
+  for (uint32_t s = 0; s < b; ++s) {
+    convex[s] = orient(w, poly[prev_at[s]], poly[s], poly[next_at[s]]) > 0.0 ? 1 : 0;
+  }
+  auto seg_of = [&](uint32_t at) { return outer[at] == kNone ? at : kNone; };
+  auto link_outer = [&](uint32_t at, uint32_t ti) {
+    if (outer[at] != kNone) tris[outer[at]].n[1] = ti;
+  };
+  uint32_t left = b;
+  uint32_t cur = 0;
+  while (left > 3) {
+    bool found = false;
+    for (uint32_t tries = 0; tries < left && !found; ++tries) {
+      if (convex[cur] != 0) {
+        const uint32_t u = prev_at[cur], x = next_at[cur];
+        found = true;
+        for (uint32_t o = next_at[x]; o != u && found; o = next_at[o]) {
+          if (convex[o] != 0) continue;
+          found = !(orient(w, poly[u], poly[cur], poly[o]) >= 0.0 &&
+                    orient(w, poly[cur], poly[x], poly[o]) >= 0.0 &&
+                    orient(w, poly[x], poly[u], poly[o]) >= 0.0);
+        }
+      }
+      if (!found) cur = next_at[cur];
+    }
+    if (!found) return false;  // never for a simple polygon
+    const uint32_t u = prev_at[cur], x = next_at[cur];
+    const uint32_t ti = w.tri_count++;
+    put(w, ti, poly[u], poly[cur], poly[x], outer[cur], kNone, outer[u], seg_of(cur), kNone,
+        seg_of(u));
+    link_outer(cur, ti);
+    link_outer(u, ti);
+    outer[u] = ti;
+    next_at[u] = x;
+    prev_at[x] = u;
+    --left;
+    convex[u] = orient(w, poly[prev_at[u]], poly[u], poly[x]) > 0.0 ? 1 : 0;
+    convex[x] = orient(w, poly[u], poly[x], poly[next_at[x]]) > 0.0 ? 1 : 0;
+    cur = x;
+  }
+  {
+    const uint32_t x = cur, y = next_at[x], z = next_at[y];
+    if (orient(w, poly[x], poly[y], poly[z]) <= 0.0) return false;  // never (simple polygon)
+    const uint32_t ti = w.tri_count++;
+    put(w, ti, poly[x], poly[y], poly[z], outer[y], outer[z], outer[x], seg_of(y), seg_of(z),
+        seg_of(x));
+    link_outer(x, ti);
+    link_outer(y, ti);
+    link_outer(z, ti);
+  }
+
+  // 3. Delaunay: every inner edge on the stack once (the diagonal of the ear that cut it off,
+  // at index 1; the last triangle has none of its own), then Lawson flips.
+  w.stack_size = 0;
+  for (uint32_t ti = 0; ti + 1 < w.tri_count; ++ti) push_half_edge(w, ti, 1);
+  legalize_edges(w);
+
+  // 4. The other points (their triangles stay inside the polygon: b - 2 + 2 per point in
+  // all), then the interior segments.
+  uint32_t last = 0;
+  for (uint32_t v = 0; v < n; ++v) {
+    if (on_boundary[v] != 0) continue;
+    uint32_t ti = 0;
+    uint32_t mask = 0;
+    if (!locate(w, v, last, &ti, &mask)) return false;  // outside the polygon
+    if (mask == 0) {
+      split_triangle(w, ti, v);
+    } else if (mask == 1 || mask == 2 || mask == 4) {
+      const uint32_t k = mask == 1 ? 0 : (mask == 2 ? 1 : 2);
+      if (w.t[ti].n[k] == kNone || w.t[ti].c[k] != kNone) return false;  // on the boundary
+      split_edge(w, ti, k, v);
+    } else {
+      return false;  // on a vertex: a duplicate
+    }
+    legalize_around(w, v);
+    last = w.vt[v];
+  }
+  for (uint32_t s = b; s < m; ++s) {
+    if (!insert_segment(w, s, segments[s].a, segments[s].b).is_ok()) return false;
+  }
+  if (w.tri_count != expected) return false;  // never: b + 2 i - 2 by construction
+  CdtTriangle bad{};
+  return write_output(w, nullptr, stack, expected, out, adjacency, &bad);
+}
+
 struct Sizes {
   uint64_t out;    // output triangles (upper bound)
   uint64_t tris;   // triangle capacity
@@ -637,9 +909,11 @@ uint64_t cdt_bound(uint64_t point_count, uint64_t segment_count) {
          10 * kSlack;
 }
 
-Status cdt(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> segments,
-           uint32_t boundary_count, ArenaArray<CdtTriangle>* out,
-           ArenaArray<CdtAdjacency>* adjacency) {
+namespace {
+
+Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> segments,
+                uint32_t boundary_count, ArenaArray<CdtTriangle>* out,
+                ArenaArray<CdtAdjacency>* adjacency, bool small_path) {
   SPLINTCORE_ASSERT(out != nullptr && out->arena() != nullptr);
   const size_t n_size = points.size();
   const size_t m = segments.size();
@@ -713,6 +987,12 @@ Status cdt(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> seg
     if (!adjacency->reserve(static_cast<size_t>(adjacency_total))) {
       return adjacency->arena()->exhausted_status();
     }
+  }
+  // Small inputs: the polygon first, without the super-triangle (or the general path below
+  // when the small path cannot take this input).
+  if (small_path && n <= kSmallMaxPoints &&
+      small_cdt(points, segments, boundary_count, expected, out, adjacency)) {
+    return Status::ok();
   }
   ArenaScope scope(arena);
   // n <= kMaxPoints, so every count (at most 3 * (2n + 1)) fits a 32-bit size_t.
@@ -880,54 +1160,29 @@ Status cdt(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> seg
                       expected);
   }
 
-  // ---- the output: slot order, each triangle starting at its smallest id (written into the
-  // room reserved above; on an error `out` and `adjacency` are cut back to their sizes).
-  const size_t out_start = out->size();
-  const size_t adjacency_start = adjacency != nullptr ? adjacency->size() : 0;
-  if (!out->resize(out_start + static_cast<size_t>(expected))) {
-    return out->arena()->exhausted_status();  // reserved: never
-  }
-  CdtTriangle* out_tri = out->data() + out_start;
-  CdtAdjacency* out_adj = nullptr;
-  uint32_t* index_of_slot = w.stack;  // the half-edge stack is free again
-  if (adjacency != nullptr) {
-    if (!adjacency->resize(adjacency_start + static_cast<size_t>(expected))) {
-      out->shrink_size(out_start);
-      return adjacency->arena()->exhausted_status();  // reserved: never
-    }
-    out_adj = adjacency->data() + adjacency_start;
-    // Output index of each inside slot.
-    uint32_t count = 0;
-    for (uint32_t ti = 0; ti < w.tri_count; ++ti) {
-      index_of_slot[ti] = exterior[ti] != 0 ? kCdtNone : count++;
-    }
-  }
-  size_t produced = 0;
-  for (uint32_t ti = 0; ti < w.tri_count; ++ti) {
-    if (exterior[ti] != 0) continue;
-    const Tri& t = w.t[ti];
-    const uint32_t k = t.v[0] < t.v[1] ? (t.v[0] < t.v[2] ? 0 : 2) : (t.v[1] < t.v[2] ? 1 : 2);
-    const CdtTriangle tri{{t.v[k], t.v[next3(k)], t.v[prev3(k)]}};
-    if (orient(w, tri.v[0], tri.v[1], tri.v[2]) <= 0.0) {
-      out->shrink_size(out_start);
-      if (adjacency != nullptr) adjacency->shrink_size(adjacency_start);
-      return make_error(StatusCode::kInternal, "cdt: triangle ", tri.v[0], "-", tri.v[1], "-",
-                        tri.v[2], " is not counter-clockwise");
-    }
-    out_tri[produced] = tri;
-    if (out_adj != nullptr) {
-      // Per output triangle (rotated by k from its slot) the edge v[e] -> v[e + 1], which is
-      // the slot's edge opposite t.v[(k + e + 2) % 3].
-      CdtAdjacency& a = out_adj[produced];
-      for (uint32_t e = 0; e < 3; ++e) {
-        const uint32_t o = (k + e + 2) % 3;
-        a.nb[e] = t.n[o] == kNone ? kCdtNone : index_of_slot[t.n[o]];
-        a.seg[e] = t.c[o] == kNone ? kCdtNone : t.c[o];
-      }
-    }
-    ++produced;
+  // ---- the output (written into the room reserved above).
+  // Slot order, each triangle starting at its smallest id; on an error `out` and `adjacency`
+  // are cut back to their sizes. The half-edge stack is free again: the slots' output indices.
+  CdtTriangle bad{};
+  if (!write_output(w, exterior, w.stack, expected, out, adjacency, &bad)) {
+    return make_error(StatusCode::kInternal, "cdt: triangle ", bad.v[0], "-", bad.v[1], "-",
+                      bad.v[2], " is not counter-clockwise");
   }
   return Status::ok();
+}
+
+}  // namespace
+
+Status cdt(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> segments,
+           uint32_t boundary_count, ArenaArray<CdtTriangle>* out,
+           ArenaArray<CdtAdjacency>* adjacency) {
+  return cdt_impl(arena, points, segments, boundary_count, out, adjacency, true);
+}
+
+Status cdt_general(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> segments,
+                   uint32_t boundary_count, ArenaArray<CdtTriangle>* out,
+                   ArenaArray<CdtAdjacency>* adjacency) {
+  return cdt_impl(arena, points, segments, boundary_count, out, adjacency, false);
 }
 
 }  // namespace detail

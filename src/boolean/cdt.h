@@ -16,6 +16,14 @@
 // rotated to start at its smallest id; the order of the triangles is the algorithm's (fixed
 // for a given input, on every compiler and platform).
 //
+// Two paths, chosen by the input alone (cdt.cpp): up to 32 points whose polygon is star-shaped
+// from the mean of its corners (the Boolean's cut triangles), the small path: the polygon
+// ear-clipped and flipped to Delaunay, then the other points and the segments; it takes no
+// temporaries from the arena (its work arrays, 4.7 KB, are on the stack). Everything else,
+// and every input the contract refuses, the general path (a super-triangle around all points).
+// Both give the constrained Delaunay triangles, so the same ones unless four points are
+// cocircular (a tie), each path in its own order.
+//
 // Decisions use the exact orient2d and incircle on the given coordinates, so the result is
 // valid for the coordinates as given (which the Boolean has already rounded). Coordinates must
 // be finite and 0 or of magnitude within [2^-200, 2^200] (incircle's exact range, with room
@@ -81,6 +89,12 @@ uint64_t cdt_bound(uint64_t point_count, uint64_t segment_count);
 Status cdt(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> segments,
            uint32_t boundary_count, ArenaArray<CdtTriangle>* out,
            ArenaArray<CdtAdjacency>* adjacency = nullptr);
+
+// cdt() on the general path only, whatever the input (the same contract, arena and errors):
+// for the tests that hold the small path against it.
+Status cdt_general(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> segments,
+                   uint32_t boundary_count, ArenaArray<CdtTriangle>* out,
+                   ArenaArray<CdtAdjacency>* adjacency = nullptr);
 
 }  // namespace detail
 }  // namespace splintcore
