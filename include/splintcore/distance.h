@@ -86,11 +86,12 @@ struct DistanceIndexOptions {
   // Triangles per leaf, 1..16; 0: the default, 4, or 8 with oriented boxes.
   uint32_t leaf_size = 0;
   // Oriented boxes (BvhObb) for closest-point and signed-distance queries. With the default
-  // leaves (8), at 543k triangles: about 1.25 times the queries per second near a curved
-  // surface, for about 40% more build time and no more memory than the axis-aligned index
-  // with leaves of 4 (figures: splintcore-bench --filter 543k). Worth it when an index
-  // answers many more queries than it has triangles (volume sampling). The answers are the
-  // same bits either way.
+  // leaves (8), on a finely tessellated curved surface of 543k triangles: 1.25 to 1.3 times
+  // the queries per second, for about 40% more build time and slightly less memory than the
+  // axis-aligned index with leaves of 4; on coarser meshes (87k) no gain, and on the real
+  // dentition (888k) 1.1 times the batch queries but fewer single ones (splintcore-bench
+  // --filter oriented). Worth it when an index answers many more queries than it has
+  // triangles (volume sampling). The answers are the same bits either way.
   bool oriented_boxes = false;
 };
 
