@@ -29,8 +29,9 @@
 //   about one glyph in 30 self-intersects); a failing glyph is sampled again with the next of
 //   4 grid phases. A fragile Boolean (kUnsupported, kInternal) samples the whole text again
 //   from the next phase. Deterministic: the same samplings in the same order everywhere.
-// - Glyphs must not touch (mesh_boolean takes several shells in B only when they do not
-//   overlap). Every triangle lies in the box of its vertices, so each glyph lies in the box
+// - Glyphs must not touch: mesh_boolean unites overlapping shells of B, but with one more
+//   corefinement pass per group of shells that overlap; apart, the whole text is cut in one
+//   pass. Every triangle lies in the box of its vertices, so each glyph lies in the box
 //   of its vertices in its own frame; the boxes are tested pairwise by the separating-axis
 //   theorem with a 1 um clearance. A conservative floating-point test, not an exact
 //   predicate: it only refuses, it never decides the output's shape.

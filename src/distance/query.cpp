@@ -18,40 +18,37 @@ namespace {
 constexpr uint32_t kStack = 3 * 128 + 4;
 constexpr double kFourPi = 12.566370614359172954;
 
-// Squared distances from q (as float, `qf`) to the four axis-aligned child boxes of n, in
-// float (+inf for an absent child, whose box is lo = +inf, hi = -inf). Branch-free, so that
-// the compiler can do the four at once. Callers compare against reach_float(), whose margins
-// cover the rounding of q and of the gaps (the same as for the oriented boxes below, with
-// exact axes).
-inline void child_box_distances(const BvhNode& n, const float qf[3], float d2[4]) {
+// Squared distances from x (three float coordinates) to four boxes [lo[i][k], hi[i][k]]
+// (+inf for an absent child, whose box is lo = +inf, hi = -inf). Branch-free, so that the
+// compiler can do the four at once.
+inline void box_distances(const float lo[3][4], const float hi[3][4], const float x[3],
+                          float d2[4]) {
   float g[3][4];
   for (int i = 0; i < 3; ++i) {
     for (int k = 0; k < 4; ++k) {
-      const float below = n.lo[i][k] - qf[i], above = qf[i] - n.hi[i][k];
+      const float below = lo[i][k] - x[i], above = x[i] - hi[i][k];
       g[i][k] = (below > 0.0f ? below : 0.0f) + (above > 0.0f ? above : 0.0f);
     }
   }
   for (int k = 0; k < 4; ++k) d2[k] = g[0][k] * g[0][k] + g[1][k] * g[1][k] + g[2][k] * g[2][k];
 }
 
+// Squared distances from q (as float, `qf`) to the four axis-aligned child boxes of n, in
+// float. Callers compare against reach_float(), whose margins cover the rounding of q and of
+// the gaps (the same as for the oriented boxes below, with exact axes).
+inline void child_box_distances(const BvhNode& n, const float qf[3], float d2[4]) {
+  box_distances(n.lo, n.hi, qf, d2);
+}
+
 // Squared distances from q to the four oriented child boxes of a node (BvhObb), in float, as
 // lower bounds: for x in child k, |q - x|^2 >= sum_i gap_i^2 / s where gap_i is the distance
 // of axis_i . q to [lo_i, hi_i] and s <= 1 + 2^-20 bounds the squared singular values of the
-// float axes (orthonormal to float rounding). An absent child (lo = +inf, hi = -inf) gets
-// +inf. q (as float, `qf`) is projected once per node; the four gaps are branch-free, so that
-// the compiler can do them at once. Callers compare against reach_float(), which covers s
-// and the rounding here.
+// float axes (orthonormal to float rounding). q (as float, `qf`) is projected once per node.
+// Callers compare against reach_float(), which covers s and the rounding here.
 inline void child_obb_distances(const BvhObb& o, const float qf[3], float d2[4]) {
   float p[3];
   for (int i = 0; i < 3; ++i) p[i] = o.axis[i][0] * qf[0] + o.axis[i][1] * qf[1] + o.axis[i][2] * qf[2];
-  float g[3][4];
-  for (int i = 0; i < 3; ++i) {
-    for (int k = 0; k < 4; ++k) {
-      const float below = o.lo[i][k] - p[i], above = p[i] - o.hi[i][k];
-      g[i][k] = (below > 0.0f ? below : 0.0f) + (above > 0.0f ? above : 0.0f);
-    }
-  }
-  for (int k = 0; k < 4; ++k) d2[k] = g[0][k] * g[0][k] + g[1][k] * g[1][k] + g[2][k] * g[2][k];
+  box_distances(o.lo, o.hi, p, d2);
 }
 
 // The largest value of child_obb_distances() for a box that may still hold a triangle as close
