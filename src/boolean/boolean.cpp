@@ -743,17 +743,38 @@ Status BooleanRun::number_points() {
   if ((items == nullptr || hit_points_ == nullptr) && n > 0) return arena_.exhausted_status();
   {
     ArenaScope scope(arena_);
-    // Lexicographic (edge, triangle) by two stable passes.
+    // Lexicographic (edge, triangle), ties in index order: stably by edge, then each run of
+    // one edge (the few triangles its line crosses) stably by triangle, by insertion. The same
+    // order as two stable passes (triangle, then edge), which remain for runs longer than 32.
+    auto tri_of = [&](uint32_t i) { return (i & 1) == 0 ? hits_[i / 2].start.tri : hits_[i / 2].end.tri; };
     for (size_t i = 0; i < n; ++i) {
       const Hit& h = hits_[i / 2];
-      items[i] = KeyIndex{(i & 1) == 0 ? h.start.tri : h.end.tri, static_cast<uint32_t>(i), 0};
+      items[i] = KeyIndex{(i & 1) == 0 ? h.start.edge : h.end.edge, static_cast<uint32_t>(i), 0};
     }
     SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(items, n)));
-    for (size_t i = 0; i < n; ++i) {
-      const Hit& h = hits_[items[i].index / 2];
-      items[i].key = (items[i].index & 1) == 0 ? h.start.edge : h.end.edge;
+    bool long_run = false;
+    for (size_t a = 0; a < n && !long_run;) {
+      size_t b = a + 1;
+      while (b < n && items[b].key == items[a].key) ++b;
+      if (b - a > 32) long_run = true;
+      for (size_t i = a + 1; i < b && !long_run; ++i) {
+        const KeyIndex x = items[i];
+        const uint32_t tx = tri_of(x.index);
+        size_t j = i;
+        for (; j > a && tri_of(items[j - 1].index) > tx; --j) items[j] = items[j - 1];
+        items[j] = x;
+      }
+      a = b;
     }
-    SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(items, n)));
+    if (long_run) {
+      for (size_t i = 0; i < n; ++i) items[i] = KeyIndex{tri_of(static_cast<uint32_t>(i)), static_cast<uint32_t>(i), 0};
+      SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(items, n)));
+      for (size_t i = 0; i < n; ++i) {
+        const Hit& h = hits_[items[i].index / 2];
+        items[i].key = (items[i].index & 1) == 0 ? h.start.edge : h.end.edge;
+      }
+      SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(items, n)));
+    }
   }
   // Count distinct points, then make them (the point array is sized exactly).
   size_t distinct = 0;
@@ -1192,6 +1213,8 @@ Status BooleanRun::split_triangles() {
       if (!tris_.push_back(OutTri{{vid[ct.v[0]], vid[ct.v[1]], vid[ct.v[2]]}, t, sj})) {
         return arena_.exhausted_status();
       }
+      // Most pieces have no corner of the triangle (only those do have a vertex id below base).
+      if (vid[ct.v[0]] >= base && vid[ct.v[1]] >= base && vid[ct.v[2]] >= base) continue;
       for (uint32_t e = 0; e < 3; ++e) {
         for (uint32_t x = 0; x < 3; ++x) {
           if (ct.v[x] == corner_at[e]) SPLINTCORE_RETURN_IF_ERROR(corner_state(c[e], sj));

@@ -213,6 +213,32 @@ TEST(BooleanTest, TwoShellsInB) {
   EXPECT_NEAR(i.volume, d1.volume + d2.volume, 1e-12);
 }
 
+// One edge of A (the box's edge along x) crosses the surfaces of many small spheres of B: 40
+// points on one edge of A take the two-pass numbering of the intersection points (runs of
+// one edge longer than 32), 20 the insertion path; both give valid results with the volume
+// identity.
+TEST(BooleanTest, AnEdgeCrossingManyTrianglesOfB) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {10, 1, 1}, RigidTransform{});
+  for (int count : {10, 20}) {
+    ArenaScope scope(arena);
+    Mesh b(&arena);
+    for (int i = 0; i < count; ++i) {
+      Mesh s = sphere_mesh(arena, 0.2, 6, 8, rotation(0.1 * i, 0.2, 0.3, {0.4 + 0.45 * i, 0.01, 0.02}));
+      append_mesh(s, &b);
+    }
+    Result d = run_op(arena, a, b, BooleanOp::kDifference, true);
+    ASSERT_TRUE(d.status.is_ok()) << count << ": " << test::format(d.status);
+    Result i = run_op(arena, a, b, BooleanOp::kIntersection, true);
+    ASSERT_TRUE(i.status.is_ok()) << count << ": " << test::format(i.status);
+    EXPECT_EQ(d.stats.attempts, 1u) << count;
+    EXPECT_GE(d.stats.intersection_points, 4u * count) << count;
+    EXPECT_NEAR((d.volume + i.volume) / 10.0, 1.0, 1e-12) << count;
+    EXPECT_GT(i.volume, 0.0) << count;
+  }
+}
+
 TEST(BooleanTest, CubeMinusRotatedCube) {
   TestArena ta;
   Arena& arena = ta.arena;
