@@ -423,18 +423,6 @@ PlaneSlab slab_of(const Vec3& a, const Vec3& b, const Vec3& c) {
   return p;
 }
 
-// False when the box lies strictly on one side of the plane (no triangle in it can cross).
-inline bool box_meets_plane(const PlaneSlab& p, const Aabb& box) {
-  const Vec3 c = (box.lo + box.hi) * 0.5;
-  const Vec3 h = (box.hi - box.lo) * 0.5;
-  const double r = (p.n.x < 0 ? -p.n.x : p.n.x) * h.x + (p.n.y < 0 ? -p.n.y : p.n.y) * h.y +
-                   (p.n.z < 0 ? -p.n.z : p.n.z) * h.z;
-  const double s = dot(p.n, c) - p.d;
-  const double as = s < 0 ? -s : s;
-  const double cm = (c.x < 0 ? -c.x : c.x) + (c.y < 0 ? -c.y : c.y) + (c.z < 0 ? -c.z : c.z);
-  return as <= r * (1.0 + 1e-12) + p.slack * (1.0 + cm);
-}
-
 // Candidate pairs through a uniform grid over A's box: each cell lists the triangles of A
 // whose box and plane meet it (A is the small mesh: the splint base). A triangle of B looks
 // only at the cells its box covers, so B's many triangles far from A's surface cost a few
@@ -647,12 +635,11 @@ Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double
 Status BooleanRun::find_hits() {
   const Mesh& b = *in_.b;
   const uint32_t nta = in_.nta;
-  PlaneSlab* slabs = arena_.allocate_array<PlaneSlab>(nta);
   PlaneFilter* filters = arena_.allocate_array<PlaneFilter>(nta);
   EdgePlanes* edges = arena_.allocate_array<EdgePlanes>(nta);
   Aabb* boxes = arena_.allocate_array<Aabb>(nta);
   uint32_t* stamp = arena_.allocate_array<uint32_t>(nta);
-  if (slabs == nullptr || filters == nullptr || edges == nullptr || boxes == nullptr ||
+  if (filters == nullptr || edges == nullptr || boxes == nullptr ||
       stamp == nullptr) {
     return arena_.exhausted_status();
   }
@@ -661,7 +648,6 @@ Status BooleanRun::find_hits() {
     const Vec3& p0 = in_.a->vertices[at.v[0]];
     const Vec3& p1 = in_.a->vertices[at.v[1]];
     const Vec3& p2 = in_.a->vertices[at.v[2]];
-    slabs[t] = slab_of(p0, p1, p2);
     filters[t] = plane_filter(p0, p1, p2);
     edges[t] = edge_planes(p0, p1, p2);
     boxes[t] = Aabb{};
@@ -703,7 +689,6 @@ Status BooleanRun::find_hits() {
             stamp[ta] = t;
             if (!boxes[ta].overlaps(box)) continue;
             ++st_.candidate_pairs;
-            if (!box_meets_plane(slabs[ta], box)) continue;
             if (!flat_checked) {
               if (collinear3d(vb[tri.v[0]], vb[tri.v[1]], vb[tri.v[2]])) {
                 return make_error(StatusCode::kInvalidMesh, "triangle ", t,
