@@ -55,6 +55,8 @@
 
 #include "boolean/cdt.h"
 
+#include <cmath>
+
 #include "splintcore/geometry.h"
 
 namespace splintcore {
@@ -70,8 +72,20 @@ constexpr uint64_t kMaxPoints = uint64_t{1} << 28;
 
 // Nonzero coordinates must lie in [2^-200, 2^200]: the super-triangle's corners reach 4 R
 // < 2^203, and incircle's exact range is [2^-216, 2^240] (predicates.cpp).
-constexpr double kMinMagnitude = 0x1p-200;
-constexpr double kMaxMagnitude = 0x1p200;
+constexpr double kMinMagnitude = 0x1p-200;  // and 2^200 above: coordinate_ok()
+
+// A coordinate in that range, or 0 (either sign), decided on the bit pattern: with the sign
+// bit cleared, the patterns of non-negative doubles order as their values, and infinity and
+// NaN lie above every finite one. (One unsigned compare does both bounds: below 2^-200 the
+// difference wraps round to a huge value.)
+inline bool coordinate_ok(double v) {
+  uint64_t bits = 0;
+  std::memcpy(&bits, &v, sizeof(bits));
+  constexpr uint64_t kMinBits = uint64_t{1023 - 200} << 52;  // 2^-200
+  constexpr uint64_t kMaxBits = uint64_t{1023 + 200} << 52;  // 2^200
+  const uint64_t mag = bits & ~(uint64_t{1} << 63);
+  return mag == 0 || mag - kMinBits <= kMaxBits - kMinBits;
+}
 
 // From this many points on, the insertion order is BRIO (below it the sort costs more than
 // it saves).
@@ -115,8 +129,36 @@ struct Work {
   uint32_t queue_size = 0;
 };
 
+// orient2d and incircle with their first filter inline (J. R. Shewchuk, "Adaptive precision
+// floating-point arithmetic and fast robust geometric predicates", 1997, section 4.2: the
+// stage A error bounds ccwerrboundA and iccerrboundA; the same computation, operation for
+// operation, as the start of orient2d and incircle in predicates.cpp). When the rounded
+// determinant clears the bound, its sign is exact and it is the very value the predicate
+// returns; otherwise the predicate itself decides. So every sign, and every value, is the
+// predicate's: only the call is saved on the clear cases (nearly all of the CDT's, whose
+// calls are most of its work at 3..20 points). Valid in the predicates' ranges (cdt.h).
+constexpr double kEps = 0x1p-53;  // half an ulp of 1
+constexpr double kCcwErrBoundA = (3.0 + 16.0 * kEps) * kEps;
+constexpr double kIccErrBoundA = (10.0 + 96.0 * kEps) * kEps;
+
+// |v| (std::fabs: one and-not of the sign bit, where the comparison costs a branch; for -0 it
+// gives +0 where predicates.cpp's gives -0, which moves no bound: both compare alike).
+inline double magnitude(double v) { return std::fabs(v); }
+
+inline double orient_filtered(const CdtPoint& a, const CdtPoint& b, const CdtPoint& c) {
+  const double detleft = (a.x - c.x) * (b.y - c.y);
+  const double detright = (a.y - c.y) * (b.x - c.x);
+  const double det = detleft - detright;
+  // orient2d's detsum: |detleft| + |detright| (it returns det at once when the signs differ or
+  // detleft is 0; then |det| >= detsum (1 - eps) clears the bound here too, or det is 0 and
+  // orient2d returns 0).
+  const double errbound = kCcwErrBoundA * (magnitude(detleft) + magnitude(detright));
+  if (det > errbound || -det > errbound) return det;
+  return orient2d(a.x, a.y, b.x, b.y, c.x, c.y);
+}
+
 inline double orient(const Work& w, uint32_t a, uint32_t b, uint32_t c) {
-  return orient2d(w.p[a].x, w.p[a].y, w.p[b].x, w.p[b].y, w.p[c].x, w.p[c].y);
+  return orient_filtered(w.p[a], w.p[b], w.p[c]);
 }
 
 // > 0 when point d is strictly inside the circumcircle of triangle t.
@@ -124,7 +166,30 @@ inline double in_circle(const Work& w, const Tri& t, uint32_t d) {
   const CdtPoint& a = w.p[t.v[0]];
   const CdtPoint& b = w.p[t.v[1]];
   const CdtPoint& c = w.p[t.v[2]];
-  return incircle(a.x, a.y, b.x, b.y, c.x, c.y, w.p[d].x, w.p[d].y);
+  const CdtPoint& e = w.p[d];
+  const double adx = a.x - e.x;
+  const double bdx = b.x - e.x;
+  const double cdx = c.x - e.x;
+  const double ady = a.y - e.y;
+  const double bdy = b.y - e.y;
+  const double cdy = c.y - e.y;
+  const double bdxcdy = bdx * cdy;
+  const double cdxbdy = cdx * bdy;
+  const double alift = adx * adx + ady * ady;
+  const double cdxady = cdx * ady;
+  const double adxcdy = adx * cdy;
+  const double blift = bdx * bdx + bdy * bdy;
+  const double adxbdy = adx * bdy;
+  const double bdxady = bdx * ady;
+  const double clift = cdx * cdx + cdy * cdy;
+  const double det = alift * (bdxcdy - cdxbdy) + blift * (cdxady - adxcdy) +
+                     clift * (adxbdy - bdxady);
+  const double permanent = (magnitude(bdxcdy) + magnitude(cdxbdy)) * alift +
+                           (magnitude(cdxady) + magnitude(adxcdy)) * blift +
+                           (magnitude(adxbdy) + magnitude(bdxady)) * clift;
+  const double errbound = kIccErrBoundA * permanent;
+  if (det > errbound || -det > errbound) return det;
+  return incircle(a.x, a.y, b.x, b.y, c.x, c.y, e.x, e.y);
 }
 
 void put(Work& w, uint32_t ti, uint32_t a, uint32_t b, uint32_t c, uint32_t na, uint32_t nb,
@@ -144,17 +209,17 @@ void put(Work& w, uint32_t ti, uint32_t a, uint32_t b, uint32_t c, uint32_t na, 
   w.vt[c] = ti;
 }
 
-// In triangle `ti` (when there is one), the edge running from x to y gets neighbour `nb`.
-void link(Work& w, uint32_t ti, uint32_t x, uint32_t y, uint32_t nb) {
+// In triangle `ti` (when there is one), the edge it shares with `old` (which ran from x to y
+// in ti) gets neighbour `nb` instead. Two triangles share at most one edge, so the edge is the
+// one whose neighbour is `old`; x and y only check it.
+void link(Work& w, uint32_t ti, uint32_t old, uint32_t x, uint32_t y, uint32_t nb) {
   if (ti == kNone) return;
   Tri& t = w.t[ti];
-  for (uint32_t k = 0; k < 3; ++k) {
-    if (t.v[next3(k)] == x && t.v[prev3(k)] == y) {
-      t.n[k] = nb;
-      return;
-    }
+  const uint32_t k = index_facing(t, old);
+  if (t.n[k] != old || t.v[next3(k)] != x || t.v[prev3(k)] != y) {
+    assert_failed("cdt: neighbour links out of step", __FILE__, __LINE__);
   }
-  assert_failed("cdt: neighbour links out of step", __FILE__, __LINE__);
+  t.n[k] = nb;
 }
 
 // Flips the edge opposite v[e] of triangle t1 (t1 = (r, p, q) from e, its neighbour (s, q, p)):
@@ -178,8 +243,8 @@ uint32_t flip(Work& w, uint32_t t1, uint32_t e) {
   // (s, q) = b opposite p.
   put(w, t1, r, p, s, b.n[j1], t2, a.n[e2], b.c[j1], kNone, a.c[e2]);
   put(w, t2, s, q, r, a.n[e1], t1, b.n[j2], a.c[e1], kNone, b.c[j2]);
-  link(w, b.n[j1], s, p, t1);
-  link(w, a.n[e1], r, q, t2);
+  link(w, b.n[j1], t2, s, p, t1);
+  link(w, a.n[e1], t1, r, q, t2);
   return t2;
 }
 
@@ -194,8 +259,8 @@ void split_triangle(Work& w, uint32_t ti, uint32_t pid) {
   put(w, ti, v1, v2, pid, tb, tc, t.n[0], kNone, kNone, t.c[0]);
   put(w, tb, v2, v0, pid, tc, ti, t.n[1], kNone, kNone, t.c[1]);
   put(w, tc, v0, v1, pid, ti, tb, t.n[2], kNone, kNone, t.c[2]);
-  link(w, t.n[1], v0, v2, tb);
-  link(w, t.n[2], v1, v0, tc);
+  link(w, t.n[1], ti, v0, v2, tb);
+  link(w, t.n[2], ti, v1, v0, tc);
   w.stack[w.stack_size++] = ti;
   w.stack[w.stack_size++] = tb;
   w.stack[w.stack_size++] = tc;
@@ -221,8 +286,8 @@ void split_edge(Work& w, uint32_t ti, uint32_t k, uint32_t pid) {
   put(w, t2, a2, a0, pid, ti, u2, n_a2a0, kNone, kNone, c_a2a0);
   put(w, ui, a1, d, pid, u2, ti, n_a1d, kNone, kNone, c_a1d);
   put(w, u2, d, a2, pid, t2, ui, n_da2, kNone, kNone, c_da2);
-  link(w, n_a2a0, a0, a2, t2);
-  link(w, n_da2, a2, d, u2);
+  link(w, n_a2a0, ti, a0, a2, t2);
+  link(w, n_da2, ui, a2, d, u2);
   w.stack[w.stack_size++] = ti;
   w.stack[w.stack_size++] = t2;
   w.stack[w.stack_size++] = ui;
@@ -257,24 +322,28 @@ bool locate(const Work& w, uint32_t pid, uint32_t start, uint32_t* tri, uint32_t
   for (uint32_t step = 0; step <= w.tri_count; ++step) {
     const Tri& t = w.t[ti];
     uint32_t mask = 0;
-    bool outside = false;
-    uint32_t next = kNone;
-    for (uint32_t k = 0; k < 3; ++k) {
-      // pid is strictly inside the edge the walk came through.
-      if (from != kNone && t.n[k] == from) continue;
-      const double o = orient(w, t.v[next3(k)], t.v[prev3(k)], pid);
-      if (o < 0.0) {
-        outside = true;
-        next = t.n[k];
-        break;
-      }
+    // Edge k (from a to b): true when pid is strictly outside it. The edge the walk came
+    // through is skipped: pid is strictly inside it. (Edges 0, 1, 2 in turn, written out.)
+    auto outside_edge = [&](uint32_t k, uint32_t a, uint32_t b) {
+      if (from != kNone && t.n[k] == from) return false;
+      const double o = orient(w, a, b, pid);
+      if (o < 0.0) return true;
       if (o == 0.0) mask |= 1u << k;
-    }
-    if (!outside) {
+      return false;
+    };
+    uint32_t exit_edge = 0;
+    if (outside_edge(0, t.v[1], t.v[2])) {
+      exit_edge = 0;
+    } else if (outside_edge(1, t.v[2], t.v[0])) {
+      exit_edge = 1;
+    } else if (outside_edge(2, t.v[0], t.v[1])) {
+      exit_edge = 2;
+    } else {
       *tri = ti;
       *zero_mask = mask;
       return true;
     }
+    const uint32_t next = t.n[exit_edge];
     if (next == kNone) break;  // out of the super-triangle: impossible, it holds every point
     from = ti;
     ti = next;
@@ -423,12 +492,21 @@ void push_triangle_edges(Work& w, uint32_t ti) {
 
 // Lawson flips of the unconstrained edges on the half-edge stack until all are locally
 // Delaunay (a flip puts the edges of both new triangles back on the stack).
+//
+// The new diagonal of the latest flip (edge 1 of both its triangles, flip()) is locally
+// Delaunay, strictly: with s strictly inside the circle through r, p, q, the determinant of
+// (r, p, s; q) and of (s, q, r; p) is that of (r, p, q; s) with its rows permuted oddly, so
+// both incircle signs are < 0 exactly. Until the next flip rewrites those two slots the edge
+// keeps its four points, and its test (no flip) is skipped: the same stack, the same flips.
 void legalize_edges(Work& w) {
+  uint32_t fresh1 = kNone;  // the latest flip's two triangles
+  uint32_t fresh2 = kNone;
   while (w.stack_size > 0) {
     const uint32_t he = w.stack[--w.stack_size];
     const uint32_t ti = he / 3;
     const uint32_t i = he % 3;
     w.queued[ti] = static_cast<uint8_t>(w.queued[ti] & ~(1u << i));
+    if (i == 1 && (ti == fresh1 || ti == fresh2)) continue;
     const Tri& t = w.t[ti];
     const uint32_t nb = t.n[i];
     if (nb == kNone || t.c[i] != kNone) continue;
@@ -438,11 +516,27 @@ void legalize_edges(Work& w) {
       const uint32_t t2 = flip(w, ti, i);
       push_triangle_edges(w, ti);
       push_triangle_edges(w, t2);
+      fresh1 = ti;
+      fresh2 = t2;
     }
   }
 }
 
 Status insert_segment(Work& w, uint32_t s, uint32_t a, uint32_t b) {
+  // 0. Already an edge (nearly always on the Boolean's cut triangles, whose segments are
+  // mostly Delaunay edges of their points): found by ids alone, no predicate. The search in 1
+  // would have marked the same edge: when a-b is an edge, no other neighbour of a lies on the
+  // ray from a through b (it would put b inside an edge) and no triangle's open wedge at a
+  // holds b, so it meets neither an error nor a break before it finds a-b; and marking either
+  // side of the edge marks both.
+  {
+    uint32_t tab = 0;
+    uint32_t third = 0;
+    if (find_edge(w, a, b, &tab, &third)) {
+      constrain(w, tab, third, s);
+      return Status::ok();
+    }
+  }
   // 1. Around a: the edge a-b, or the triangle (a, p, q) whose open wedge at a holds b
   // (counter-clockwise from vt[a]; when a's star is open, as on the small path's polygon, on
   // clockwise from vt[a] once the turn reaches the polygon's edge).
@@ -700,6 +794,43 @@ bool write_output(const Work& w, const uint8_t* exterior, uint32_t* index_of_slo
   return true;
 }
 
+// write_output() for the small path, whose slots are all inside: the same triangles, rotations
+// and adjacency (a neighbour's output index is its slot; kNone is kCdtNone), written into the
+// room reserved for them. Without write_output()'s orientation check: every triangle of the
+// small path is counter-clockwise by its construction, each step deciding on the exact
+// predicates: an ear's corner turns strictly left (orient2d > 0; the last triangle is
+// checked); a split point is strictly inside its triangle (three orient2d > 0) or strictly
+// inside an edge (orient2d = 0 there, > 0 on the other two); a Lawson flip has its fourth
+// point strictly inside the circumcircle (incircle > 0) and across the edge, which puts it
+// strictly left of both new edges; a Sloan flip checks both new triangles (orient2d > 0). The
+// property tests hold every result against the general path, which keeps the check.
+static_assert(kNone == kCdtNone, "the slots' kNone is the output's kCdtNone");
+void write_small_output(const Work& w, ArenaArray<CdtTriangle>* out,
+                        ArenaArray<CdtAdjacency>* adjacency) {
+  const size_t count = w.tri_count;
+  const size_t out_start = out->size();
+  SPLINTCORE_ASSERT(out->capacity() - out_start >= count);  // reserved by the caller
+  CdtTriangle* out_tri = out->data() + out_start;
+  CdtAdjacency* out_adj = nullptr;
+  if (adjacency != nullptr) {
+    SPLINTCORE_ASSERT(adjacency->capacity() - adjacency->size() >= count);
+    out_adj = adjacency->data() + adjacency->size();
+    adjacency->adopt(adjacency->data(), adjacency->size() + count, adjacency->capacity());
+  }
+  out->adopt(out->data(), out_start + count, out->capacity());
+  for (uint32_t ti = 0; ti < w.tri_count; ++ti) {
+    const Tri& t = w.t[ti];
+    const uint32_t k = t.v[0] < t.v[1] ? (t.v[0] < t.v[2] ? 0 : 2) : (t.v[1] < t.v[2] ? 1 : 2);
+    const uint32_t k1 = next3(k), k2 = prev3(k);
+    out_tri[ti] = CdtTriangle{{t.v[k], t.v[k1], t.v[k2]}};
+    // Rotated by k from its slot: the edge v[e] -> v[e + 1] is the slot's edge opposite
+    // t.v[(k + e + 2) % 3].
+    if (out_adj != nullptr) {
+      out_adj[ti] = CdtAdjacency{{t.n[k2], t.n[k], t.n[k1]}, {t.c[k2], t.c[k], t.c[k1]}};
+    }
+  }
+}
+
 // ---- the small path ------------------------------------------------------------------------
 //
 // Up to kSmallMaxPoints points (the Boolean's cut triangles: 98% have 10 or fewer, nearly all
@@ -740,10 +871,11 @@ bool small_cdt(Span<const CdtPoint> points, Span<const CdtSegment> segments,
   const uint32_t b = boundary_count;
   SPLINTCORE_ASSERT(n <= kSmallMaxPoints && b >= 3 && b <= n);
   const CdtPoint* p = points.data();
+  const CdtSegment* sg = segments.data();
   uint8_t on_boundary[kSmallMaxPoints] = {};
   uint32_t poly[kSmallMaxPoints];  // point id per boundary position
   for (uint32_t s = 0; s < b; ++s) {
-    const uint32_t v = segments[s].a;
+    const uint32_t v = sg[s].a;
     if (on_boundary[v] != 0) return false;  // not simple: the general path says so
     on_boundary[v] = 1;
     poly[s] = v;
@@ -760,11 +892,12 @@ bool small_cdt(Span<const CdtPoint> points, Span<const CdtSegment> segments,
   // O enters orient2d: keep it in the coordinates' range (exact signs).
   const double aox = ox < 0 ? -ox : ox, aoy = oy < 0 ? -oy : oy;
   if ((ox != 0.0 && aox < kMinMagnitude) || (oy != 0.0 && aoy < kMinMagnitude)) return false;
+  const CdtPoint centre{ox, oy};
   int first_sign = 0, last_sign = 0, changes = 0;
   for (uint32_t s = 0; s < b; ++s) {
     const CdtPoint& u = p[poly[s]];
     const CdtPoint& v = p[poly[s + 1 == b ? 0 : s + 1]];
-    if (orient2d(ox, oy, u.x, u.y, v.x, v.y) <= 0.0) return false;
+    if (orient_filtered(centre, u, v) <= 0.0) return false;
     const int sign = u.y > oy ? 1 : (u.y < oy ? -1 : 0);
     if (sign == 0) continue;
     if (last_sign != 0 && sign != last_sign) ++changes;
@@ -793,18 +926,30 @@ bool small_cdt(Span<const CdtPoint> points, Span<const CdtSegment> segments,
   // 2. Ear clipping. Per position: the neighbours on what is left, whether the corner turns
   // strictly left, and the triangle outside the edge that starts there (kNone: a boundary
   // segment, whose id is the position). A clipped triangle (u, v, w) has its diagonal w-u
-  // opposite v, at index 1, where the triangle clipped later across it links in.
-  // Zeroed although only the first b slots are read (cppcheck cannot see that).
-  uint32_t next_at[kSmallMaxPoints] = {}, prev_at[kSmallMaxPoints] = {}, outer[kSmallMaxPoints] = {};
-  uint8_t convex[kSmallMaxPoints] = {};
-  for (uint32_t s = 0; s < b; ++s) {
-    next_at[s] = s + 1 == b ? 0 : s + 1;
-    prev_at[s] = s == 0 ? b - 1 : s - 1;
-    outer[s] = kNone;
-  }
-  for (uint32_t s = 0; s < b; ++s) {
-    convex[s] = orient(w, poly[prev_at[s]], poly[s], poly[next_at[s]]) > 0.0 ? 1 : 0;
-  }
+  // opposite v, at index 1, where the triangle clipped later across it links in. A corner's
+  // turn is found when first asked for (2: not yet) and forgotten when its neighbours change:
+  // the same orient2d on the same points as computing every one up front and after each
+  // clip, without those never asked for (all of them for a triangle, b = 3). The test whether
+  // a corner o lies in an ear asks first about the ear's diagonal, which most corners are
+  // beyond (the three signs are the same whatever the order).
+  // Only the first b slots are written and read (not zeroed first: that cost more than the
+  // rest of this set-up at the usual 6 corners). A do-while: b >= 3 (cppcheck, which does not
+  // read the assertion above, then sees every slot read written).
+  uint32_t next_at[kSmallMaxPoints], prev_at[kSmallMaxPoints], outer[kSmallMaxPoints];
+  uint8_t convex[kSmallMaxPoints];
+  uint32_t pos = 0;
+  do {
+    next_at[pos] = pos + 1 == b ? 0 : pos + 1;
+    prev_at[pos] = pos == 0 ? b - 1 : pos - 1;
+    outer[pos] = kNone;
+    convex[pos] = 2;
+  } while (++pos < b);
+  auto turns_left = [&](uint32_t at) {
+    if (convex[at] == 2) {
+      convex[at] = orient(w, poly[prev_at[at]], poly[at], poly[next_at[at]]) > 0.0 ? 1 : 0;
+    }
+    return convex[at] != 0;
+  };
   auto seg_of = [&](uint32_t at) { return outer[at] == kNone ? at : kNone; };
   auto link_outer = [&](uint32_t at, uint32_t ti) {
     if (outer[at] != kNone) tris[outer[at]].n[1] = ti;
@@ -814,14 +959,14 @@ bool small_cdt(Span<const CdtPoint> points, Span<const CdtSegment> segments,
   while (left > 3) {
     bool found = false;
     for (uint32_t tries = 0; tries < left && !found; ++tries) {
-      if (convex[cur] != 0) {
+      if (turns_left(cur)) {
         const uint32_t u = prev_at[cur], x = next_at[cur];
         found = true;
         for (uint32_t o = next_at[x]; o != u && found; o = next_at[o]) {
-          if (convex[o] != 0) continue;
-          found = !(orient(w, poly[u], poly[cur], poly[o]) >= 0.0 &&
-                    orient(w, poly[cur], poly[x], poly[o]) >= 0.0 &&
-                    orient(w, poly[x], poly[u], poly[o]) >= 0.0);
+          if (turns_left(o)) continue;
+          found = !(orient(w, poly[x], poly[u], poly[o]) >= 0.0 &&
+                    orient(w, poly[u], poly[cur], poly[o]) >= 0.0 &&
+                    orient(w, poly[cur], poly[x], poly[o]) >= 0.0);
         }
       }
       if (!found) cur = next_at[cur];
@@ -837,13 +982,13 @@ bool small_cdt(Span<const CdtPoint> points, Span<const CdtSegment> segments,
     next_at[u] = x;
     prev_at[x] = u;
     --left;
-    convex[u] = orient(w, poly[prev_at[u]], poly[u], poly[x]) > 0.0 ? 1 : 0;
-    convex[x] = orient(w, poly[u], poly[x], poly[next_at[x]]) > 0.0 ? 1 : 0;
+    convex[u] = 2;
+    convex[x] = 2;
     cur = x;
   }
   {
-    const uint32_t x = cur, y = next_at[x], z = next_at[y];
-    if (orient(w, poly[x], poly[y], poly[z]) <= 0.0) return false;  // never (simple polygon)
+    const uint32_t x = cur, y = next_at[x], z = next_at[y];  // y turns from x to z
+    if (!turns_left(y)) return false;  // never (simple polygon)
     const uint32_t ti = w.tri_count++;
     put(w, ti, poly[x], poly[y], poly[z], outer[y], outer[z], outer[x], seg_of(y), seg_of(z),
         seg_of(x));
@@ -879,11 +1024,18 @@ bool small_cdt(Span<const CdtPoint> points, Span<const CdtSegment> segments,
     last = w.vt[v];
   }
   for (uint32_t s = b; s < m; ++s) {
-    if (!insert_segment(w, s, segments[s].a, segments[s].b).is_ok()) return false;
+    // Nearly always already an edge (insert_segment()'s step 0, without its Status).
+    uint32_t tab = 0;
+    uint32_t third = 0;
+    if (find_edge(w, sg[s].a, sg[s].b, &tab, &third)) {
+      constrain(w, tab, third, s);
+      continue;
+    }
+    if (!insert_segment(w, s, sg[s].a, sg[s].b).is_ok()) return false;
   }
   if (w.tri_count != expected) return false;  // never: b + 2 i - 2 by construction
-  CdtTriangle bad{};
-  return write_output(w, nullptr, stack, expected, out, adjacency, &bad);
+  write_small_output(w, out, adjacency);
+  return true;
 }
 
 struct Sizes {
@@ -934,20 +1086,18 @@ Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment
     return make_error(StatusCode::kInvalidArgument, "cdt: the boundary has ", boundary_count,
                       " segments but there are only ", n, " points: it repeats a point");
   }
+  const CdtPoint* pt = points.data();
   for (uint32_t i = 0; i < n; ++i) {
-    const double c[2] = {points[i].x, points[i].y};
-    for (double v : c) {
-      const double mag = v < 0 ? -v : v;
-      if (!is_finite(v) || (v != 0.0 && (mag < kMinMagnitude || mag > kMaxMagnitude))) {
-        return make_error(StatusCode::kInvalidArgument, "cdt: point ", i, " (", c[0], ", ",
-                          c[1], ") has a coordinate that is not finite or not 0 and not within "
-                          "[2^-200, 2^200] in magnitude")
-            .at_index(i);
-      }
+    if (!coordinate_ok(pt[i].x) || !coordinate_ok(pt[i].y)) {
+      return make_error(StatusCode::kInvalidArgument, "cdt: point ", i, " (", pt[i].x, ", ",
+                        pt[i].y, ") has a coordinate that is not finite or not 0 and not within "
+                        "[2^-200, 2^200] in magnitude")
+          .at_index(i);
     }
   }
+  const CdtSegment* sg = segments.data();
   for (size_t s = 0; s < m; ++s) {
-    const CdtSegment& g = segments[s];
+    const CdtSegment& g = sg[s];
     if (g.a >= n || g.b >= n) {
       return make_error(StatusCode::kInvalidArgument, "cdt: segment ", s, " (", g.a, "-", g.b,
                         ") refers to a point that does not exist (", n, " points)")
@@ -961,10 +1111,10 @@ Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment
   }
   for (uint32_t s = 0; s < boundary_count; ++s) {
     const uint32_t next = s + 1 == boundary_count ? 0 : s + 1;
-    if (segments[s].b != segments[next].a) {
+    if (sg[s].b != sg[next].a) {
       return make_error(StatusCode::kInvalidArgument, "cdt: the boundary is not closed: segment ",
-                        next, " starts at point ", segments[next].a, ", not where segment ", s,
-                        " ends (point ", segments[s].b, ")")
+                        next, " starts at point ", sg[next].a, ", not where segment ", s,
+                        " ends (point ", sg[s].b, ")")
           .at_index(next);
     }
   }

@@ -1130,5 +1130,89 @@ TEST(CdtSmall, OtherPolygonsTakeTheGeneralPath) {
             StatusCode::kInvalidArgument);
 }
 
+// The triangles and the adjacency, in their order, of both paths over the Boolean's kind of
+// input (and larger ones, which the small path hands on): pinned, so that work on the speed of
+// either path cannot change a single output byte unnoticed. The hash was taken before the
+// small path's predicate and set-up savings (issue #5) and must not move with them.
+uint64_t hash_adjacency(uint64_t h, const ArenaArray<detail::CdtAdjacency>& adj) {
+  for (const detail::CdtAdjacency& a : adj) {
+    for (uint32_t v : a.nb) h = hash_mix(h ^ (v + 0x9e3779b97f4a7c15ull));
+    for (uint32_t v : a.seg) h = hash_mix(h ^ (v + 0x7f4a7c159e3779b9ull));
+  }
+  return hash_mix(h ^ adj.size());
+}
+
+TEST(CdtSmall, OrderAndAdjacencyArePinned) {
+  TestArena ta(16 << 20);
+  Rng rng(9091);
+  uint64_t h = 0;
+  int cases = 0, small = 0, errors = 0;
+  for (int c = 0; c < 500; ++c) {
+    const int per_edge = rng.small(0, c % 5 == 0 ? 14 : 6), polylines = rng.small(0, 5);
+    const int loops = rng.small(0, 1);
+    const Input in = boolean_like(rng, per_edge, polylines, loops, c % 3 == 0);
+    if (in.boundary == 0) continue;
+    ++cases;
+    for (int general = 0; general < 2; ++general) {
+      ta.arena.reset();
+      ta.arena.reset_high_water();
+      ArenaArray<CdtTriangle> out(&ta.arena);
+      ArenaArray<detail::CdtAdjacency> adj(&ta.arena);
+      const Span<const CdtPoint> pts(in.pts.data(), in.pts.size());
+      const Span<const CdtSegment> segs(in.segs.data(), in.segs.size());
+      const Status s = general != 0
+                           ? detail::cdt_general(ta.arena, pts, segs, in.boundary, &out, &adj)
+                           : cdt(ta.arena, pts, segs, in.boundary, &out, &adj);
+      h = hash_mix(h ^ static_cast<uint64_t>(s.code()));
+      if (!s.is_ok()) {
+        ++errors;
+        continue;
+      }
+      ASSERT_EQ(adj.size(), out.size());
+      const std::vector<CdtTriangle> tris(out.begin(), out.end());
+      if (general == 0) {
+        ASSERT_EQ(verify(in, tris), "") << "case " << c << "\n" << describe(in);
+        const size_t reserved = out.capacity() * sizeof(CdtTriangle) +
+                                adj.capacity() * sizeof(detail::CdtAdjacency) + 128;
+        if (ta.arena.high_water() <= reserved) ++small;
+      }
+      h = hash_adjacency(hash_triangles(h, tris), adj);
+    }
+  }
+  ta.arena.reset();
+  std::printf("[   info   ] %d cases (%d on the small path, %d errors): hash 0x%016llx\n", cases,
+              small, errors, static_cast<unsigned long long>(h));
+  EXPECT_GT(cases, 400);
+  EXPECT_GT(small, cases / 2);
+  // Pinned: g++ and clang++, -O0 and -O2 must agree. Update on purpose only.
+  EXPECT_EQ(h, 0x458d2e397bcfc76dull);
+}
+
+// Coordinates are accepted on their bit pattern: 0 of either sign, and magnitudes from 2^-200
+// to 2^200 inclusive; the next double outside either end, subnormals, infinities and NaN are
+// refused (kInvalidArgument naming the point).
+TEST(Cdt, CoordinateRangeEnds) {
+  TestArena ta(1 << 20);
+  const double lo = std::ldexp(1.0, -200), hi = std::ldexp(1.0, 200);
+  const double inf = std::numeric_limits<double>::infinity();
+  const double accepted[] = {lo, hi, -lo, -hi, std::nextafter(lo, hi), std::nextafter(hi, 0.0)};
+  for (double v : accepted) {
+    // A right triangle with the tested value as its legs (a point of it on each axis, the
+    // third at the origin, and -0 too).
+    const Input in = polygon({{0.0, -0.0}, {v, 0.0}, {0.0, v}});  // counter-clockwise for v < 0 too
+    const RunResult r = run(ta.arena, in);
+    EXPECT_TRUE(r.status.is_ok()) << v << ": " << format(r.status);
+    EXPECT_EQ(r.tris.size(), 1u) << v;
+  }
+  const double refused[] = {std::nextafter(lo, 0.0), std::nextafter(hi, inf),
+                            -std::nextafter(hi, inf), std::numeric_limits<double>::denorm_min(),
+                            std::numeric_limits<double>::min(), inf, -inf,
+                            std::numeric_limits<double>::quiet_NaN()};
+  for (double v : refused) {
+    const Input in = polygon({{0, 0}, {4, 0}, {0, 4}}, {{1, 1}, {v, 1}});
+    expect_error(ta.arena, in, {"point 4", "not within [2^-200, 2^200]"});
+  }
+}
+
 }  // namespace
 }  // namespace splintcore
