@@ -6,6 +6,7 @@
 // hierarchical far field of Barill et al. 2018, ray and segment tests, box queries, batches
 // and the narrow-band volume sampler.
 #include <cmath>
+#include <cstring>
 
 #include "splintcore/distance.h"
 
@@ -18,26 +19,53 @@ namespace {
 constexpr uint32_t kStack = 3 * 128 + 4;
 constexpr double kFourPi = 12.566370614359172954;
 
+// Four and two lanes: GCC and Clang vector extensions (as in src/mesh/self_intersect.cpp), SSE2
+// on x86-64, NEON on AArch64, lowered to scalar code where there is neither (Cortex-M7). The
+// library is built with -fno-tree-slp-vectorize (cmake/SplintcoreFlags.cmake), so the
+// compiler would not pack these four-wide loops itself. Each lane does the operations the
+// scalar code would, in the same order, and -ffp-contract=off holds for vectors too: the
+// values are the same bits as scalar code's on every platform.
+typedef float Float4 __attribute__((vector_size(16)));
+typedef int32_t Mask4 __attribute__((vector_size(16)));
+typedef double Double2 __attribute__((vector_size(16)));
+typedef int64_t Mask2 __attribute__((vector_size(16)));
+
+inline Float4 load4(const float x[4]) {
+  Float4 r;
+  std::memcpy(&r, x, sizeof(r));
+  return r;
+}
+// x > 0 ? x : +0 in each lane, as the scalar filters compute it (not-a-number and -0 give +0).
+inline Float4 positive_part(Float4 x) {
+  return reinterpret_cast<Float4>((x > Float4{}) & reinterpret_cast<Mask4>(x));
+}
+inline Double2 positive_part(Double2 x) {
+  return reinterpret_cast<Double2>((x > Double2{}) & reinterpret_cast<Mask2>(x));
+}
+// The gap along one axis between x and the span of p0, p1, p2 (a triangle's box), in two lanes:
+// what consider() computes for one triangle (closest_within below).
+inline Double2 pair_gap(const Double2& x, const Double2& p0, const Double2& p1, const Double2& p2) {
+  const Double2 lo01 = p1 < p0 ? p1 : p0, hi01 = p1 > p0 ? p1 : p0;
+  const Double2 lo = p2 < lo01 ? p2 : lo01, hi = p2 > hi01 ? p2 : hi01;
+  return positive_part(lo - x) + positive_part(x - hi);
+}
+
 // Squared distances from x (three float coordinates) to four boxes [lo[i][k], hi[i][k]]
-// (+inf for an absent child, whose box is lo = +inf, hi = -inf). Branch-free, so that the
-// compiler can do the four at once.
-inline void box_distances(const float lo[3][4], const float hi[3][4], const float x[3],
-                          float d2[4]) {
-  float g[3][4];
-  for (int i = 0; i < 3; ++i) {
-    for (int k = 0; k < 4; ++k) {
-      const float below = lo[i][k] - x[i], above = x[i] - hi[i][k];
-      g[i][k] = (below > 0.0f ? below : 0.0f) + (above > 0.0f ? above : 0.0f);
-    }
-  }
-  for (int k = 0; k < 4; ++k) d2[k] = g[0][k] * g[0][k] + g[1][k] * g[1][k] + g[2][k] * g[2][k];
+// (+inf for an absent child, whose box is lo = +inf, hi = -inf), four lanes at once.
+inline Float4 box_distances(const float lo[3][4], const float hi[3][4], const float x[3]) {
+  const auto gap = [&](int i) {
+    const Float4 xi = {x[i], x[i], x[i], x[i]};
+    return positive_part(load4(lo[i]) - xi) + positive_part(xi - load4(hi[i]));
+  };
+  const Float4 g0 = gap(0), g1 = gap(1), g2 = gap(2);
+  return g0 * g0 + g1 * g1 + g2 * g2;
 }
 
 // Squared distances from q (as float, `qf`) to the four axis-aligned child boxes of n, in
 // float. Callers compare against reach_float(), whose margins cover the rounding of q and of
 // the gaps (the same as for the oriented boxes below, with exact axes).
-inline void child_box_distances(const BvhNode& n, const float qf[3], float d2[4]) {
-  box_distances(n.lo, n.hi, qf, d2);
+inline Float4 child_box_distances(const BvhNode& n, const float qf[3]) {
+  return box_distances(n.lo, n.hi, qf);
 }
 
 // Squared distances from q to the four oriented child boxes of a node (BvhObb), in float, as
@@ -45,10 +73,10 @@ inline void child_box_distances(const BvhNode& n, const float qf[3], float d2[4]
 // of axis_i . q to [lo_i, hi_i] and s <= 1 + 2^-20 bounds the squared singular values of the
 // float axes (orthonormal to float rounding). q (as float, `qf`) is projected once per node.
 // Callers compare against reach_float(), which covers s and the rounding here.
-inline void child_obb_distances(const BvhObb& o, const float qf[3], float d2[4]) {
+inline Float4 child_obb_distances(const BvhObb& o, const float qf[3]) {
   float p[3];
   for (int i = 0; i < 3; ++i) p[i] = o.axis[i][0] * qf[0] + o.axis[i][1] * qf[1] + o.axis[i][2] * qf[2];
-  box_distances(o.lo, o.hi, p, d2);
+  return box_distances(o.lo, o.hi, p);
 }
 
 // The largest value of child_obb_distances() for a box that may still hold a triangle as close
@@ -113,11 +141,10 @@ void closest_on_sliver(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& 
     *index = 0;
     return;
   }
-  const Vec3* v[3] = {&a, &b, &c};
+  // The three closed edges in turn (unrolled: k is a constant in each), the first of equal
+  // distances kept.
   double best = 0;
-  for (uint8_t k = 0; k < 3; ++k) {
-    const Vec3& v0 = *v[k];
-    const Vec3& v1 = *v[(k + 1) % 3];
+  const auto edge = [&](uint8_t k, const Vec3& v0, const Vec3& v1) {
     const Vec3 e = v1 - v0;
     const double num = dot(p - v0, e), den = dot(e, e);
     Vec3 q;
@@ -135,7 +162,10 @@ void closest_on_sliver(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& 
       best = d2;
       *out = q; *feature = f; *index = fi;
     }
-  }
+  };
+  edge(0, a, b);
+  edge(1, b, c);
+  edge(2, c, a);
 }
 
 // Closest point on triangle abc to p, with the feature (Ericson 5.1.5; slivers above).
@@ -225,19 +255,8 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
   // skip most triangles first: the triangle's box, and its plane. Both are skipped only when
   // clearly beyond the best (margins far above their rounding), so what they skip the exact
   // routine would have rejected too.
-  auto consider = [&](uint32_t t) {
-    const Triangle& tri = mesh.triangles[t];
-    const Vec3 &a = v[tri.v[0]], &b = v[tri.v[1]], &c = v[tri.v[2]];
-    // Branch-free (each ?: below is one min or max instruction).
-    const auto gap = [](double x, double p0, double p1, double p2) {
-      const double lo01 = p1 < p0 ? p1 : p0, hi01 = p1 > p0 ? p1 : p0;
-      const double lo = p2 < lo01 ? p2 : lo01, hi = p2 > hi01 ? p2 : hi01;
-      const double below = lo - x, above = x - hi;
-      return (below > 0.0 ? below : 0.0) + (above > 0.0 ? above : 0.0);
-    };
-    const double gx = gap(q.x, a.x, b.x, c.x), gy = gap(q.y, a.y, b.y, c.y),
-                 gz = gap(q.z, a.z, b.z, c.z);
-    if (gx * gx + gy * gy + gz * gz > best2 * (1.0 + 0x1p-40)) return;
+  // What follows the box filter (below): the plane filter, then the exact routine.
+  auto consider_near = [&](uint32_t t, const Vec3& a, const Vec3& b, const Vec3& c) {
     {
       // The plane, on triangles whose normal is well conditioned (the angle at a above about
       // 0.001 rad): then n = ab x ac is off by under 5e-13 |n| and pd by under
@@ -271,6 +290,44 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
       best.feature_index = fi;
     }
   };
+  auto consider = [&](uint32_t t) {
+    const Triangle& tri = mesh.triangles[t];
+    const Vec3 &a = v[tri.v[0]], &b = v[tri.v[1]], &c = v[tri.v[2]];
+    // Branch-free (each ?: below is one min or max instruction).
+    const auto gap = [](double x, double p0, double p1, double p2) {
+      const double lo01 = p1 < p0 ? p1 : p0, hi01 = p1 > p0 ? p1 : p0;
+      const double lo = p2 < lo01 ? p2 : lo01, hi = p2 > hi01 ? p2 : hi01;
+      const double below = lo - x, above = x - hi;
+      return (below > 0.0 ? below : 0.0) + (above > 0.0 ? above : 0.0);
+    };
+    const double gx = gap(q.x, a.x, b.x, c.x), gy = gap(q.y, a.y, b.y, c.y),
+                 gz = gap(q.z, a.z, b.z, c.z);
+    if (gx * gx + gy * gy + gz * gz > best2 * (1.0 + 0x1p-40)) return;
+    consider_near(t, a, b, c);
+  };
+  // consider() for the triangles order[first .. first + count) (a leaf), two at a time: the
+  // box gaps of a pair in two lanes (the same operations as consider(), the same bits), each
+  // compared with the best distance as it stands when its turn comes (after the first of the
+  // pair may have tightened it), as consider() would: the same triangles reach the plane
+  // filter and the exact routine, in the same order, as one consider() call after another.
+  const Triangle* tris = mesh.triangles.data();
+  const uint32_t* order = index.order.data();
+  const Double2 q2x = {q.x, q.x}, q2y = {q.y, q.y}, q2z = {q.z, q.z};
+  auto consider_leaf = [&](uint32_t first, uint32_t count) {
+    const uint32_t end = first + count;
+    for (uint32_t j = first; j < end; j += 2) {
+      const uint32_t t0 = order[j], t1 = j + 1 < end ? order[j + 1] : t0;
+      const Triangle &s0 = tris[t0], &s1 = tris[t1];
+      const Vec3 &a0 = v[s0.v[0]], &b0 = v[s0.v[1]], &c0 = v[s0.v[2]];
+      const Vec3 &a1 = v[s1.v[0]], &b1 = v[s1.v[1]], &c1 = v[s1.v[2]];
+      const Double2 gx = pair_gap(q2x, Double2{a0.x, a1.x}, Double2{b0.x, b1.x}, Double2{c0.x, c1.x});
+      const Double2 gy = pair_gap(q2y, Double2{a0.y, a1.y}, Double2{b0.y, b1.y}, Double2{c0.y, c1.y});
+      const Double2 gz = pair_gap(q2z, Double2{a0.z, a1.z}, Double2{b0.z, b1.z}, Double2{c0.z, c1.z});
+      const Double2 g2 = gx * gx + gy * gy + gz * gz;
+      if (!(g2[0] > best2 * (1.0 + 0x1p-40))) consider_near(t0, a0, b0, c0);
+      if (j + 1 < end && !(g2[1] > best2 * (1.0 + 0x1p-40))) consider_near(t1, a1, b1, c1);
+    }
+  };
   if (seed != kNoNeighbor) consider(seed);
   struct Entry {
     uint32_t node;
@@ -283,14 +340,10 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
     const Entry e = stack[--top];
     if (e.d2 > reach2) continue;
     const BvhNode& node = nodes[e.node];
-    float d2[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-    if (!prune) {
-      // every present child is visited
-    } else if (obbs != nullptr) {
-      child_obb_distances(obbs[e.node], qf, d2);
-    } else {
-      child_box_distances(node, qf, d2);
-    }
+    Float4 d2v{};  // !prune: every present child is visited
+    if (prune) d2v = obbs != nullptr ? child_obb_distances(obbs[e.node], qf) : child_box_distances(node, qf);
+    float d2[4];
+    std::memcpy(d2, &d2v, sizeof(d2));
     // The children within reach, nearest first (ties in slot order): leaves tighten the bound
     // before farther boxes are tested against it.
     uint8_t by[4] = {0, 0, 0, 0};
@@ -304,9 +357,7 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
     for (int i = 0; i < m; ++i) {
       const int k = by[i];
       if (node.count[k] == 0 || !(d2[k] <= reach2)) continue;
-      for (uint32_t j = node.child[k]; j < node.child[k] + node.count[k]; ++j) {
-        consider(index.order[j]);
-      }
+      consider_leaf(node.child[k], node.count[k]);
     }
     for (int i = m; i-- > 0;) {
       const int k = by[i];
@@ -657,6 +708,16 @@ Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aa
 namespace {
 constexpr uint32_t kBatch = 1024;  // queries per task
 
+// Bit i of x (10 bits) moved to bit 3 i (a Morton code's interleave, by masks).
+inline uint64_t spread10(uint64_t x) {
+  x &= 0x3ff;
+  x = (x | (x << 16)) & 0x30000ffu;
+  x = (x | (x << 8)) & 0x300f00fu;
+  x = (x | (x << 4)) & 0x30c30c3u;
+  x = (x | (x << 2)) & 0x9249249u;
+  return x;
+}
+
 // Batches are processed in Morton order of the queries, each seeded with the answer to the
 // one before it: nearby queries share nodes and triangles (cache) and start with a tight
 // bound. Results land at their own index, so the order changes nothing but the time.
@@ -697,8 +758,7 @@ Status morton_batch(const Context& ctx, const DistanceIndex& index, Span<const V
       for (int a = 0; a < 3; ++a) {
         double x = (q[a] - lo[a]) * scale[a];
         x = x < 0 || x != x ? 0 : (x > 1023.0 ? 1023.0 : x);
-        const uint64_t c = static_cast<uint64_t>(x);
-        for (int bit = 0; bit < 10; ++bit) code |= ((c >> bit) & 1) << (3 * bit + (2 - a));
+        code |= spread10(static_cast<uint64_t>(x)) << (2 - a);
       }
       keys[k] = KeyIndex{code, static_cast<uint32_t>(k), 0};
     }

@@ -635,6 +635,29 @@ TEST(DistanceClosest, MatchesBruteForceOnRandomAndClosedMeshes) {
   EXPECT_GT(total, 4000 * kEffort / 4);
 }
 
+// Leaves of odd sizes: closest_within() takes a leaf's box gaps two triangles at a time (two
+// lanes), so a leaf of 3, 5, 7 or 15 ends with a lone triangle in the first lane.
+TEST(DistanceClosest, OddLeafSizesMatchBruteForce) {
+  Rng rng(0x5eed0003);
+  const Soup soups[2] = {shapes::torus(24, 12, 10, 3), random_soup(rng, 80, 200, 6.0)};
+  int total = 0;
+  for (const Soup& soup : soups) {
+    for (uint32_t leaf : {3u, 5u, 7u, 15u}) {
+      for (bool oriented : {false, true}) {
+        auto b = build(soup, leaf, size_t{64} << 20, oriented);
+        int failures = 0;
+        for (const Vec3& p : query_points(b->mesh, rng, 40 * kEffort, 10 * kEffort)) {
+          failures += check_closest(*b, p, "odd leaves");
+          ++total;
+          if (failures > 5) break;
+        }
+        ASSERT_EQ(failures, 0) << "leaf " << leaf << " oriented " << oriented;
+      }
+    }
+  }
+  EXPECT_GT(total, 400 * kEffort);
+}
+
 // Query points far beyond float range (the boxes are tested in float): no box may be pruned
 // wrongly, with or without oriented boxes.
 TEST(DistanceClosest, QueriesBeyondFloatRangeMatchBruteForce) {
