@@ -57,6 +57,7 @@
 
 #include <cmath>
 
+#include "geometry/incircle_stage_a.h"
 #include "splintcore/geometry.h"
 
 namespace splintcore {
@@ -131,15 +132,15 @@ struct Work {
 
 // orient2d and incircle with their first filter inline (J. R. Shewchuk, "Adaptive precision
 // floating-point arithmetic and fast robust geometric predicates", 1997, section 4.2: the
-// stage A error bounds ccwerrboundA and iccerrboundA; the same computation, operation for
-// operation, as the start of orient2d and incircle in predicates.cpp). When the rounded
+// stage A error bounds ccwerrboundA and iccerrboundA; incircle's is the predicate's own
+// (incircle_stage_a.h), orient2d's the same computation, operation for operation, as the
+// start of orient2d in predicates.cpp, with |.| summed first). When the rounded
 // determinant clears the bound, its sign is exact and it is the very value the predicate
 // returns; otherwise the predicate itself decides. So every sign, and every value, is the
 // predicate's: only the call is saved on the clear cases (nearly all of the CDT's, whose
 // calls are most of its work at 3..20 points). Valid in the predicates' ranges (cdt.h).
 constexpr double kEps = 0x1p-53;  // half an ulp of 1
 constexpr double kCcwErrBoundA = (3.0 + 16.0 * kEps) * kEps;
-constexpr double kIccErrBoundA = (10.0 + 96.0 * kEps) * kEps;
 
 // |v| (std::fabs: one and-not of the sign bit, where the comparison costs a branch; for -0 it
 // gives +0 where predicates.cpp's gives -0, which moves no bound: both compare alike).
@@ -167,28 +168,9 @@ inline double in_circle(const Work& w, const Tri& t, uint32_t d) {
   const CdtPoint& b = w.p[t.v[1]];
   const CdtPoint& c = w.p[t.v[2]];
   const CdtPoint& e = w.p[d];
-  const double adx = a.x - e.x;
-  const double bdx = b.x - e.x;
-  const double cdx = c.x - e.x;
-  const double ady = a.y - e.y;
-  const double bdy = b.y - e.y;
-  const double cdy = c.y - e.y;
-  const double bdxcdy = bdx * cdy;
-  const double cdxbdy = cdx * bdy;
-  const double alift = adx * adx + ady * ady;
-  const double cdxady = cdx * ady;
-  const double adxcdy = adx * cdy;
-  const double blift = bdx * bdx + bdy * bdy;
-  const double adxbdy = adx * bdy;
-  const double bdxady = bdx * ady;
-  const double clift = cdx * cdx + cdy * cdy;
-  const double det = alift * (bdxcdy - cdxbdy) + blift * (cdxady - adxcdy) +
-                     clift * (adxbdy - bdxady);
-  const double permanent = (magnitude(bdxcdy) + magnitude(cdxbdy)) * alift +
-                           (magnitude(cdxady) + magnitude(adxcdy)) * blift +
-                           (magnitude(adxbdy) + magnitude(bdxady)) * clift;
-  const double errbound = kIccErrBoundA * permanent;
-  if (det > errbound || -det > errbound) return det;
+  const detail::IncircleStageA stage =
+      detail::incircle_stage_a(a.x, a.y, b.x, b.y, c.x, c.y, e.x, e.y);
+  if (stage.certain()) return stage.det;
   return incircle(a.x, a.y, b.x, b.y, c.x, c.y, e.x, e.y);
 }
 

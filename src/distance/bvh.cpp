@@ -12,6 +12,8 @@
 
 #include "splintcore/distance.h"
 
+#include "distance/morton.h"
+
 namespace splintcore {
 
 namespace {
@@ -28,16 +30,9 @@ inline uint32_t leaf_size_of(const DistanceIndexOptions& options) {
 }
 
 
-// Spreads the low 16 bits of v so that two zero bits follow each (for a 48-bit Morton code:
-// 65536 cells per axis, finer than any triangle here, and six radix passes instead of eight).
-inline uint64_t spread_bits(uint64_t v) {
-  v &= 0xffff;
-  v = (v | (v << 16)) & 0x0000ff0000ffull;
-  v = (v | (v << 8)) & 0x00f00f00f00full;
-  v = (v | (v << 4)) & 0x0c30c30c30c3ull;
-  v = (v | (v << 2)) & 0x249249249249ull;
-  return v;
-}
+// Morton codes of 16 bits an axis (detail::spread_bits, morton.h): 65536 cells per axis, finer
+// than any triangle here, and six radix passes instead of eight.
+using detail::spread_bits;
 
 // In-place heap sort (Williams 1964): no memory, O(n log n) whatever the input, and with
 // unique keys the order is fixed (no dependence on the standard library's sort).

@@ -10,6 +10,8 @@
 
 #include "splintcore/distance.h"
 
+#include "distance/morton.h"
+
 namespace splintcore {
 
 namespace {
@@ -708,15 +710,6 @@ Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aa
 namespace {
 constexpr uint32_t kBatch = 1024;  // queries per task
 
-// Bit i of x (10 bits) moved to bit 3 i (a Morton code's interleave, by masks).
-inline uint64_t spread10(uint64_t x) {
-  x &= 0x3ff;
-  x = (x | (x << 16)) & 0x30000ffu;
-  x = (x | (x << 8)) & 0x300f00fu;
-  x = (x | (x << 4)) & 0x30c30c3u;
-  x = (x | (x << 2)) & 0x9249249u;
-  return x;
-}
 
 // Batches are processed in Morton order of the queries, each seeded with the answer to the
 // one before it: nearby queries share nodes and triangles (cache) and start with a tight
@@ -758,7 +751,7 @@ Status morton_batch(const Context& ctx, const DistanceIndex& index, Span<const V
       for (int a = 0; a < 3; ++a) {
         double x = (q[a] - lo[a]) * scale[a];
         x = x < 0 || x != x ? 0 : (x > 1023.0 ? 1023.0 : x);
-        code |= spread10(static_cast<uint64_t>(x)) << (2 - a);
+        code |= detail::spread_bits(static_cast<uint64_t>(x)) << (2 - a);  // x <= 1023
       }
       keys[k] = KeyIndex{code, static_cast<uint32_t>(k), 0};
     }

@@ -49,6 +49,8 @@
 
 #include "splintcore/geometry.h"
 
+#include "geometry/incircle_stage_a.h"
+
 // Contraction into FMA is not only a matter of bit-identity here: it breaks Two-Sum, Split and
 // Two-Product (their round-off terms rely on every operation being rounded separately), and
 // the predicates then return wrong signs. The build passes -ffp-contract=off; these pragmas
@@ -78,7 +80,7 @@ constexpr double kCcwErrBoundA = (3.0 + 16.0 * kEpsilon) * kEpsilon;
 constexpr double kCcwErrBoundB = (2.0 + 12.0 * kEpsilon) * kEpsilon;
 constexpr double kO3dErrBoundA = (7.0 + 56.0 * kEpsilon) * kEpsilon;
 constexpr double kO3dErrBoundB = (3.0 + 28.0 * kEpsilon) * kEpsilon;
-constexpr double kIccErrBoundA = (10.0 + 96.0 * kEpsilon) * kEpsilon;
+// iccerrboundA: detail::kIncircleErrBoundA (incircle_stage_a.h, shared with the CDT).
 constexpr double kIccErrBoundB = (4.0 + 48.0 * kEpsilon) * kEpsilon;
 
 // ---- exact two-term operations (Section 2.3-2.5). x is the rounded result, y the exact
@@ -572,30 +574,9 @@ double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
 
 double incircle(double ax, double ay, double bx, double by, double cx, double cy, double dx,
                 double dy) {
-  const double adx = ax - dx;
-  const double bdx = bx - dx;
-  const double cdx = cx - dx;
-  const double ady = ay - dy;
-  const double bdy = by - dy;
-  const double cdy = cy - dy;
-
-  const double bdxcdy = bdx * cdy;
-  const double cdxbdy = cdx * bdy;
-  const double alift = adx * adx + ady * ady;
-  const double cdxady = cdx * ady;
-  const double adxcdy = adx * cdy;
-  const double blift = bdx * bdx + bdy * bdy;
-  const double adxbdy = adx * bdy;
-  const double bdxady = bdx * ady;
-  const double clift = cdx * cdx + cdy * cdy;
-
-  const double det = alift * (bdxcdy - cdxbdy) + blift * (cdxady - adxcdy) +
-                     clift * (adxbdy - bdxady);
-  const double permanent = (magnitude(bdxcdy) + magnitude(cdxbdy)) * alift +
-                           (magnitude(cdxady) + magnitude(adxcdy)) * blift +
-                           (magnitude(adxbdy) + magnitude(bdxady)) * clift;
-  const double errbound = kIccErrBoundA * permanent;
-  if (det > errbound || -det > errbound) return det;
+  const detail::IncircleStageA stage = detail::incircle_stage_a(ax, ay, bx, by, cx, cy, dx, dy);
+  if (stage.certain()) return stage.det;
+  const double permanent = stage.permanent;
   // A zero permanent: every term has an exactly zero factor (a lift is zero only when its
   // point equals d, a product only when a factor is zero, inside the range), so the
   // determinant is exactly 0. Common: d equal to one of a, b, c.
