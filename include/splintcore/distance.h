@@ -86,12 +86,13 @@ struct DistanceIndexOptions {
   // Triangles per leaf, 1..16; 0: the default, 4, or 8 with oriented boxes.
   uint32_t leaf_size = 0;
   // Oriented boxes (BvhObb) for closest-point and signed-distance queries. With the default
-  // leaves (8), on a finely tessellated curved surface of 543k triangles: 1.25 to 1.3 times
-  // the queries per second, for about 40% more build time and slightly less memory than the
-  // axis-aligned index with leaves of 4; on coarser meshes (87k) no gain, and on the real
-  // dentition (888k) 1.1 times the batch queries but fewer single ones (splintcore-bench
-  // --filter oriented). Worth it when an index answers many more queries than it has
-  // triangles (volume sampling). The answers are the same bits either way.
+  // leaves (8), on a finely tessellated curved surface of 543k triangles: about 1.2 times the
+  // batch queries per second (one query at a time about 0.9 times, since the axis-aligned
+  // boxes are tested four at once), for about 40% more build time and slightly less memory
+  // than the axis-aligned index with leaves of 4; on coarser meshes (87k) about the same, and
+  // on the real dentition (888k) 1.13 times the batch queries and no more single ones
+  // (splintcore-bench --filter closest_point). Worth it when an index answers many more
+  // queries than it has triangles (volume sampling). The answers are the same bits either way.
   bool oriented_boxes = false;
 };
 
