@@ -293,6 +293,9 @@ TEST(BooleanContact, PositionsOfHandCases) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// A triangle with non-collinear corners (the generators below draw until they get one).
+bool proper(const Vec3 t[3]) { return !collinear3d(t[0], t[1], t[2]); }
+
 // The exact rational oracle (small integer coordinates: everything fits in __int128).
 
 #ifdef __SIZEOF_INT128__
@@ -718,8 +721,6 @@ bool check_pair(const Vec3 a[3], const Vec3 b[3], Oracle* oracle) {
   ++oracle->checked;
   return true;
 }
-
-bool proper(const Vec3 t[3]) { return !collinear3d(t[0], t[1], t[2]); }
 
 // A random pair on the grid, in one of several modes that make degenerate contacts frequent.
 void random_pair(std::mt19937_64& rng, Vec3 a[3], Vec3 b[3]) {
