@@ -30,14 +30,30 @@
 //   never a guess.
 // - Input vertices are copied bit for bit; every other output vertex is an intersection point
 //   of an edge of one mesh with a triangle of the other (rounded to float32 for STL output).
-// - Degenerate contacts (a vertex exactly on the other surface, edges that cross exactly,
-//   coplanar overlapping triangles) and configurations that float32 rounding would break (two
-//   points rounded together, a flat or folded piece) are resolved by one defined rule: A (never
-//   B) is translated by a tiny fixed offset (BooleanOptions::max_nudges: k * 2^-16 mm *
+// - Degenerate contacts are the normal case (a vertex exactly on the other surface, edges that
+//   cross or overlap exactly, coplanar overlapping faces, touching without crossing) and are
+//   resolved exactly, by one rule: the pair's exact contact (a point, a segment, or the convex
+//   polygon of a coplanar overlap; every point named by the features that define it: an input
+//   vertex, an edge through a face, or two crossing edges, so every triangle that holds it gets
+//   the same vertex; a vertex of B on a vertex of A becomes A's) splits both triangles; each
+//   side of a contact segment is classified by orient3d against the other mesh's triangles
+//   that hold the segment (one plane, or the wedge of two at an edge, convex or reflex), and a
+//   piece that lies on the other surface is kept or dropped by whether the faces point the
+//   same way: the difference keeps A's pieces where they point opposite ways (B touches from
+//   outside) and drops both where they point the same way; the union keeps A's where the same,
+//   drops both where opposite; the intersection keeps A's where the same, drops both where
+//   opposite; B's such pieces are never kept. Input vertices on the other surface pass no
+//   state on when flooding. BooleanStats::degenerate_pairs counts these pairs. So cube minus
+//   cube with shared faces is exact (no film, no offset).
+// - What the exact rule cannot return, and configurations that float32 rounding would break
+//   (two points rounded together, a flat or folded piece), fall back to a second rule: A
+//   (never B) is translated by a tiny fixed offset (BooleanOptions::max_nudges: k * 2^-16 mm *
 //   (1, 3, 7), at most about 1 um) and the operation is run again; the offset used is in
-//   BooleanStats::nudge. With max_nudges = 0 they are kUnsupported errors naming the two
-//   triangles. Coplanar overlaps therefore leave a film as thin as the offset instead of being
-//   merged exactly (not yet handled by an exact coplanar rule).
+//   BooleanStats::nudge. The exact rule cannot return a result that is not an edge-manifold
+//   solid (two parts touching along an edge, e.g. the union of two boxes that share one edge
+//   only), nor contacts along an edge that more than two triangles of the other mesh share, nor
+//   (for B) a coplanar contact at an open border; each is a kUnsupported error first. With
+//   max_nudges = 0 they are returned as such, naming the triangles or the result's problem.
 // - The result is checked before it is returned: no two points rounded together, every edge
 //   used twice in opposite directions (closed, edge-manifold, oriented), no flat triangle,
 //   positive volume, and (check_self_intersection) no self-intersection, exactly. A failure
@@ -86,8 +102,9 @@ struct BooleanOptions {
   // Exact self-intersection check of the result (find_self_intersections): the final word
   // that the file is a valid solid. Costs about as much as the operation itself.
   bool check_self_intersection = true;
-  // A degenerate contact, or a result that rounding to float32 would break, is retried with
-  // A (never B) translated by k * step * (1, 3, 7) for k = 1..max_nudges, step = 2^-16 mm
+  // A degenerate contact that the exact rule cannot return (see the top: e.g. a result that
+  // is not an edge-manifold solid), or a result that rounding to float32 would break, is
+  // retried with A (never B) translated by k * step * (1, 3, 7) for k = 1..max_nudges, step = 2^-16 mm
   // (15 nm; coarser only when A's coordinates are beyond 256 mm, so that float32 vertices of
   // A stay float32): at most about 0.9 um with the default, far below a printer's 16 um
   // layer. The translation used is in BooleanStats::nudge. 0 turns it off.
@@ -98,6 +115,7 @@ struct BooleanStats {
   uint64_t near_b_triangles = 0;     // B triangles whose boxes meet A's box
   uint64_t candidate_pairs = 0;      // (A, B) triangle pairs whose boxes overlap
   uint64_t intersecting_pairs = 0;   // pairs that cross (one segment each)
+  uint64_t degenerate_pairs = 0;     // pairs that touch or overlap, resolved exactly
   uint64_t intersection_points = 0;  // distinct points shared by both meshes
   uint64_t cut_triangles_a = 0;
   uint64_t cut_triangles_b = 0;
@@ -129,8 +147,9 @@ struct BooleanStats {
 // is not used yet), so trivially the same at any thread count. Errors: kInvalidMesh (A is not
 // a solid, a degenerate triangle of B meets A, an index out of range: named; for the
 // intersection with overlapping shells also a group of them that is not a solid), kNonFinite,
-// kInvalidArgument (B not float32 with float32 output), kUnsupported (a degenerate or
-// float32-fragile contact that no nudge resolved: named), kArenaExhausted (the message says
+// kInvalidArgument (B not float32 with float32 output), kUnsupported (a degenerate
+// contact the exact rule cannot return, or a float32-fragile one, that no nudge resolved:
+// named), kArenaExhausted (the message says
 // how much was needed at that point), kLimitExceeded (more than 2^31 vertices or triangles),
 // kCancelled, kInternal (a result that fails its own check: please report it with the
 // inputs). An error of a pass when there are several says which pass ("pass 2 of 3").

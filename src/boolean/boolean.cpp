@@ -6,10 +6,17 @@
 // of one triangle against an edge of the other, as O. Devillers and P. Guigue, "Faster
 // triangle-triangle intersection tests", INRIA RR-4488, 2002 (at most four such signs a pair);
 // J. R. Shewchuk's predicates and error bounds (predicates.cpp) for every decision and filter.
+// Degenerate pairs (a corner on the other plane, edges meeting exactly, coplanar faces) take
+// their exact contact from contact.h and are split and classified by split_general: each side
+// of a contact segment against the other mesh's triangles that hold it (a plane, or the wedge
+// of two), as in the corefinement of S. Loriot et al. (CGAL, "Polygon Mesh Processing:
+// corefinement", coplanar faces kept by orientation), here with every decision an orient3d or
+// orient2d on input vertices.
 #include "splintcore/boolean.h"
 
 #include "boolean/boolean_internal.h"
 #include "boolean/cdt.h"
+#include "boolean/contact.h"
 #include "boolean/pair_filter.h"
 #include "core/union_find.h"
 #include "geometry/plane_filter.h"
@@ -70,6 +77,37 @@ struct Hit {
   uint32_t ta, tb;  // triangle ids (tb already offset by nta)
   PointKey start, end;
 };
+
+// A point of a degenerate contact, named by the features that define it (contact.h): an input
+// vertex (k1: its id), an edge of one mesh through a triangle of the other (k1: the edge key,
+// k2: the triangle id; the same name as a PointKey), or an edge of A crossing an edge of B (k1:
+// A's edge key, k2: B's edge key).
+enum DegPointKind : uint8_t { kDegVertex, kDegEdgeFace, kDegEdgeEdge };
+struct DegPoint {
+  uint64_t k1, k2;
+  uint8_t kind;
+};
+
+// One part of a degenerate contact between triangle `tri` and triangle `other` of the other
+// mesh, recorded for `tri`: a lone point (p[1] == p[0]) or a segment. A transversal segment
+// (the planes differ) runs from p[0] to p[1] along n_a x n_b, as intersect_triangles gives it;
+// a coplanar one (a side of the polygon of overlap, or a touching along edges) has no
+// direction that matters. loc_t and loc_o: where each end lies on `tri` and on `other`
+// (contact.h's Loc). id: the ends' vertex ids once the points are numbered.
+enum DegKind : uint8_t { kDegPointOnly, kDegTransversal, kDegCoplanar };
+struct DegRecord {
+  DegPoint p[2];
+  uint32_t tri, other;
+  uint32_t id[2];
+  uint8_t loc_t[2], loc_o[2];
+  uint8_t kind;
+};
+
+// Where a piece of a cut triangle lies against the other solid. The keep rules (keep()) take
+// pieces on the other surface (coplanar overlap) by whether the two faces point the same way.
+constexpr int8_t kStateNone = 0, kStateIn = 1, kStateOut = -1, kOnSame = 2, kOnOpposite = -2;
+// A vertex on the other surface (its state is not passed on by flooding).
+constexpr int8_t kVertexOn = 3;
 
 enum class PairResult { kNone, kSegment, kDegenerate };
 enum Through { kOut, kIn, kOnBoundary };
@@ -366,8 +404,18 @@ class BooleanRun {
 
  private:
   Status find_hits();
+  Status add_contact(uint32_t ta, uint32_t tb);
   Status number_points();
+  Status number_degenerate_points();
+  Status check_points_apart();
   Status split_triangles();
+  Status split_general(uint32_t t, const KeyIndex* proper, size_t np, const KeyIndex* dk,
+                       size_t nd);
+  int8_t side_state(uint32_t t, uint32_t r, const uint32_t* sheets, int nsheets) const;
+  int8_t on_state(uint32_t t, uint32_t sheet) const;
+  uint32_t canon(uint32_t v) const { return (alias_ != nullptr && v >= in_.nva && v < in_.nva + in_.nvb && alias_[v - in_.nva] != ~0u) ? alias_[v - in_.nva] : v; }
+  bool keep(int8_t state, bool is_a) const;
+  Status resolve_pending();
   Status classify();
   Status assemble(Mesh* result);
   Status check_result(Mesh* result);
@@ -391,8 +439,21 @@ class BooleanRun {
   Record* rec_ = nullptr;               // 2 per hit
   KeyIndex* order_ = nullptr;           // records sorted by triangle
   ArenaArray<OutTri> tris_;             // pieces of cut triangles, by triangle id
-  int8_t* vstate_ = nullptr;            // per input vertex: +1 inside the other, -1 outside
+  int8_t* vstate_ = nullptr;            // per input vertex: +1 inside the other, -1 outside,
+                                        // kVertexOn on the other surface
+  // Degenerate contacts, resolved exactly (add_contact): their records, sorted by triangle
+  // before the split; B's vertices that coincide with A's (alias_: the A vertex, or ~0u;
+  // allocated at the first one); per triangle (nta + ntb): kUncut, kDecided (has constraints),
+  // kPending (only lone points: its pieces take their state after flooding), and the state
+  // of a triangle whose corners all lie on the other surface (by winding number).
+  ArenaArray<DegRecord> deg_;
+  uint32_t* alias_ = nullptr;
+  uint8_t* tflag_ = nullptr;
+  int8_t* tstate_ = nullptr;
+  bool pending_ = false;
 };
+
+enum TriangleFlag : uint8_t { kUncut = 0, kDecided = 1, kPending = 2 };
 
 Status BooleanRun::degenerate(uint32_t ta, uint32_t tb) const {
   return make_error(StatusCode::kUnsupported,
@@ -635,6 +696,10 @@ Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double
 Status BooleanRun::find_hits() {
   const Mesh& b = *in_.b;
   const uint32_t nta = in_.nta;
+  const uint32_t nv_in = in_.nva + in_.nvb;
+  vstate_ = arena_.allocate_array<int8_t>(nv_in);
+  if (vstate_ == nullptr && nv_in > 0) return arena_.exhausted_status();
+  if (nv_in > 0) std::memset(vstate_, 0, nv_in);
   PlaneFilter* filters = arena_.allocate_array<PlaneFilter>(nta);
   EdgePlanes* edges = arena_.allocate_array<EdgePlanes>(nta);
   Aabb* boxes = arena_.allocate_array<Aabb>(nta);
@@ -663,6 +728,7 @@ Status BooleanRun::find_hits() {
   st_.near_b_triangles = bp_.near_ids.size();
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", 0, 1));
   hits_.bind(&arena_);
+  deg_.bind(&arena_);
   for (size_t ni = 0; ni < bp_.near_ids.size(); ++ni) {
     const uint32_t t = bp_.near_ids[ni];
     if ((ni & 65535u) == 0) {
@@ -708,7 +774,7 @@ Status BooleanRun::find_hits() {
             }
             Hit hit;
             const PairResult r = intersect_pair(in_, ta, in_.nta + t, filters[ta], ea, pb, &hit);
-            if (r == PairResult::kDegenerate) return degenerate(ta, in_.nta + t);
+            if (r == PairResult::kDegenerate) SPLINTCORE_RETURN_IF_ERROR(add_contact(ta, in_.nta + t));
             if (r == PairResult::kSegment && !hits_.push_back(hit)) {
               return arena_.exhausted_status();
             }
@@ -718,6 +784,197 @@ Status BooleanRun::find_hits() {
     }
   }
   st_.intersecting_pairs = hits_.size();
+  return Status::ok();
+}
+
+// A degenerate pair (a corner on the other plane, or edges meeting exactly): its exact contact
+// (contact.h) becomes records for both triangles. Input vertices on the other surface are
+// marked (kVertexOn); a vertex of B on a vertex of A becomes that vertex (alias_).
+Status BooleanRun::add_contact(uint32_t ta, uint32_t tb) {
+  using detail::Loc;
+  uint32_t ga[3], gb[3];
+  in_.corners(ta, ga);
+  in_.corners(tb, gb);
+  const Vec3 A[3] = {in_.vertex(ga[0]), in_.vertex(ga[1]), in_.vertex(ga[2])};
+  const Vec3 B[3] = {in_.vertex(gb[0]), in_.vertex(gb[1]), in_.vertex(gb[2])};
+  // The predicates are exact for coordinates 0 or of magnitude 2^-306 .. 2^338 (geometry.h);
+  // outside that (subnormal or astronomical coordinates) the contact is not decided here.
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const double x = A[i][k] < 0 ? -A[i][k] : A[i][k];
+      const double y = B[i][k] < 0 ? -B[i][k] : B[i][k];
+      if ((x != 0 && (x < 0x1p-300 || x > 0x1p330)) || (y != 0 && (y < 0x1p-300 || y > 0x1p330))) {
+        return degenerate(ta, tb);
+      }
+    }
+  }
+  detail::Contact c;
+  if (!detail::intersect_triangles(A, B, &c)) return degenerate(ta, tb);
+  if (c.kind == detail::ContactKind::kNone) return Status::ok();
+  ++st_.degenerate_pairs;
+  DegPoint name[6];
+  for (int i = 0; i < c.count; ++i) {
+    const detail::ContactPoint& cp = c.p[i];
+    DegPoint d{0, 0, kDegVertex};
+    const bool va = detail::loc_is_vertex(cp.on_a), vb = detail::loc_is_vertex(cp.on_b);
+    if (va) {
+      d.k1 = ga[detail::loc_index(cp.on_a)];
+      vstate_[d.k1] = kVertexOn;
+      if (vb) {
+        const uint32_t bv = gb[detail::loc_index(cp.on_b)];
+        vstate_[bv] = kVertexOn;
+        if (alias_ == nullptr) {
+          alias_ = arena_.allocate_array<uint32_t>(in_.nvb);
+          if (alias_ == nullptr) return arena_.exhausted_status();
+          std::memset(alias_, 0xff, size_t{in_.nvb} * sizeof(uint32_t));
+        }
+        uint32_t& al = alias_[bv - in_.nva];
+        if (al != ~0u && al != d.k1) {
+          return make_error(StatusCode::kUnsupported, "vertex ", bv - in_.nva,
+                            " of B lies on two vertices of A (", al, " and ", d.k1,
+                            "): A has coincident vertices")
+              .at_index(bv - in_.nva);
+        }
+        al = static_cast<uint32_t>(d.k1);
+      }
+    } else if (vb) {
+      d.k1 = gb[detail::loc_index(cp.on_b)];
+      vstate_[d.k1] = kVertexOn;
+    } else {
+      const int i0 = detail::loc_index(cp.on_a), j0 = detail::loc_index(cp.on_b);
+      if (cp.on_b == Loc::kFace) {
+        d = DegPoint{edge_key(ga[i0], ga[(i0 + 1) % 3]), tb, kDegEdgeFace};
+      } else if (cp.on_a == Loc::kFace) {
+        d = DegPoint{edge_key(gb[j0], gb[(j0 + 1) % 3]), ta, kDegEdgeFace};
+      } else {
+        d = DegPoint{edge_key(ga[i0], ga[(i0 + 1) % 3]), edge_key(gb[j0], gb[(j0 + 1) % 3]),
+                     kDegEdgeEdge};
+      }
+    }
+    name[i] = d;
+  }
+  auto record = [&](int i, int j, uint8_t kind) -> Status {
+    const detail::ContactPoint& p = c.p[i];
+    const detail::ContactPoint& q = c.p[j];
+    DegRecord ra{};
+    ra.p[0] = name[i];
+    ra.p[1] = name[j];
+    ra.tri = ta;
+    ra.other = tb;
+    ra.kind = kind;
+    DegRecord rb = ra;
+    rb.tri = tb;
+    rb.other = ta;
+    ra.loc_t[0] = static_cast<uint8_t>(p.on_a);
+    ra.loc_t[1] = static_cast<uint8_t>(q.on_a);
+    ra.loc_o[0] = static_cast<uint8_t>(p.on_b);
+    ra.loc_o[1] = static_cast<uint8_t>(q.on_b);
+    rb.loc_t[0] = ra.loc_o[0];
+    rb.loc_t[1] = ra.loc_o[1];
+    rb.loc_o[0] = ra.loc_t[0];
+    rb.loc_o[1] = ra.loc_t[1];
+    // A lone point at a corner of the triangle changes nothing there (flooding treats the
+    // corner as on the other surface).
+    if (kind != kDegPointOnly || !detail::loc_is_vertex(p.on_a)) {
+      if (!deg_.push_back(ra)) return arena_.exhausted_status();
+    }
+    if (kind != kDegPointOnly || !detail::loc_is_vertex(p.on_b)) {
+      if (!deg_.push_back(rb)) return arena_.exhausted_status();
+    }
+    return Status::ok();
+  };
+  switch (c.kind) {
+    case detail::ContactKind::kPoint:
+      return record(0, 0, kDegPointOnly);
+    case detail::ContactKind::kSegment:
+      return record(0, 1, c.coplanar ? kDegCoplanar : kDegTransversal);
+    case detail::ContactKind::kPolygon:
+      for (int i = 0; i < c.count; ++i) {
+        SPLINTCORE_RETURN_IF_ERROR(record(i, (i + 1) % c.count, kDegCoplanar));
+      }
+      return Status::ok();
+    case detail::ContactKind::kNone:
+      break;
+  }
+  return Status::ok();
+}
+
+// The points of the degenerate contacts get vertex ids: an input vertex its own (its alias for
+// B), an edge through a triangle the id of the same point of a crossing pair when there is one
+// (points_ is sorted by (edge, triangle) here), new points after the others otherwise, in
+// (kind, k1, k2) order, each computed once from its name.
+Status BooleanRun::number_degenerate_points() {
+  const size_t nd = deg_.size();
+  if (nd == 0) return Status::ok();
+  const uint32_t base = in_.nva + in_.nvb;
+  const size_t n0 = points_.size();
+  auto find_ef = [&](const DegPoint& d) -> uint32_t {
+    size_t lo = 0, hi = n0;
+    while (lo < hi) {
+      const size_t mid = (lo + hi) / 2;
+      const PointKey& k = points_[mid].key;
+      if (k.edge < d.k1 || (k.edge == d.k1 && k.tri < d.k2)) lo = mid + 1; else hi = mid;
+    }
+    return (lo < n0 && points_[lo].key.edge == d.k1 && points_[lo].key.tri == d.k2)
+               ? static_cast<uint32_t>(lo) : ~0u;
+  };
+  if (!points_.reserve(n0 + 2 * nd)) return arena_.exhausted_status();  // before the scope
+  ArenaScope scope(arena_);
+  // The ends that name new points, sorted (stable radix passes: k2, then k1, then kind).
+  KeyIndex* keys = arena_.allocate_array<KeyIndex>(2 * nd);
+  if (keys == nullptr) return arena_.exhausted_status();
+  size_t m = 0;
+  for (size_t r = 0; r < nd; ++r) {
+    DegRecord& rec = deg_[r];
+    for (int e = 0; e < 2; ++e) {
+      const DegPoint& d = rec.p[e];
+      if (d.kind == kDegVertex) {
+        rec.id[e] = static_cast<uint32_t>(d.k1);
+        continue;
+      }
+      if (d.kind == kDegEdgeFace) {
+        const uint32_t f = find_ef(d);
+        if (f != ~0u) {
+          rec.id[e] = base + f;
+          continue;
+        }
+      }
+      rec.id[e] = ~0u;
+      keys[m++] = KeyIndex{d.k2, static_cast<uint32_t>(2 * r + static_cast<size_t>(e)), 0};
+    }
+  }
+  auto point_of = [&](uint32_t i) -> const DegPoint& { return deg_[i / 2].p[i % 2]; };
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, keys, m));
+  for (size_t i = 0; i < m; ++i) keys[i].key = point_of(keys[i].index).k1;
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, keys, m));
+  for (size_t i = 0; i < m; ++i) keys[i].key = point_of(keys[i].index).kind;
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, keys, m));
+  uint64_t limit = 0;
+  if (!checked_add(uint64_t{base} + n0, m, &limit) || limit >= (uint64_t{1} << 31)) {
+    return make_error(StatusCode::kLimitExceeded, "too many vertices for 32-bit ids: ", limit);
+  }
+  const DegPoint* prev = nullptr;
+  for (size_t i = 0; i < m; ++i) {
+    const DegPoint& d = point_of(keys[i].index);
+    if (prev == nullptr || d.kind != prev->kind || d.k1 != prev->k1 || d.k2 != prev->k2) {
+      Point pt;
+      pt.s = 0;
+      if (d.kind == kDegEdgeFace) {
+        pt = make_point(in_, PointKey{d.k1, static_cast<uint32_t>(d.k2), 0});
+      } else {
+        const Vec3 ea[3] = {in_.vertex(key_hi(d.k1)), in_.vertex(key_lo(d.k1)), Vec3{}};
+        const Vec3 eb[3] = {in_.vertex(key_hi(d.k2)), in_.vertex(key_lo(d.k2)), Vec3{}};
+        pt.p = detail::contact_point_position(ea, eb, detail::ContactPoint{detail::Loc::kE0, detail::Loc::kE0});
+        pt.key = PointKey{d.k1, ~0u, 0};
+      }
+      if (options_.float32_output && !round_to_float32(&pt.p)) {
+        return make_error(StatusCode::kLimitExceeded, "intersection point beyond float32 range");
+      }
+      if (!points_.push_back(pt)) return arena_.exhausted_status();
+    }
+    deg_[keys[i].index / 2].id[keys[i].index % 2] = base + static_cast<uint32_t>(points_.size() - 1);
+    prev = &d;
+  }
   return Status::ok();
 }
 
@@ -792,11 +1049,18 @@ Status BooleanRun::number_points() {
     hit_points_[items[i].index] = static_cast<uint32_t>(points_.size() - 1);
     prev = k;
   }
+  return Status::ok();
+}
+
+// Two points rounded together would break the triangulations: found here, before any work
+// depends on them (the caller then nudges A and tries again).
+Status BooleanRun::check_points_apart() {
   st_.intersection_points = points_.size();
-  // Two points rounded together would break the triangulations: found here, before any work
-  // depends on them (the caller then nudges A and tries again).
   const char* as = options_.float32_output ? " (as float32)" : "";
-  const StatusCode fragile = options_.float32_output ? StatusCode::kUnsupported : StatusCode::kInternal;
+  // With exact contacts resolved, the result may not be a solid (parts that touch along an
+  // edge, points that coincide after rounding): unsupported, so that the nudge takes over.
+  const StatusCode fragile = (options_.float32_output || st_.degenerate_pairs > 0)
+                                 ? StatusCode::kUnsupported : StatusCode::kInternal;
   ArenaScope scope(arena_);
   const uint32_t np = static_cast<uint32_t>(points_.size());
   if (np > 1) {
@@ -837,12 +1101,386 @@ Status BooleanRun::number_points() {
   return Status::ok();
 }
 
+// Where the half-plane of triangle t beyond a contact line, on the side of t's corner r (off
+// the line), lies against the other solid: inside, outside, or on its surface (then whether
+// the faces point the same way). `sheets`: the other mesh's triangles that hold the line (one:
+// the line crosses its interior; two: the line lies along their shared edge, a wedge, convex
+// or reflex). Decided by orient3d on input vertices only. kStateNone when the configuration is
+// not one of these (the caller reports it).
+int8_t BooleanRun::side_state(uint32_t t, uint32_t r, const uint32_t* sheets, int nsheets) const {
+  const Vec3 p = in_.vertex(r);
+  uint32_t s1[3];
+  in_.corners(sheets[0], s1);
+  const Vec3 a0 = in_.vertex(s1[0]), a1 = in_.vertex(s1[1]), a2 = in_.vertex(s1[2]);
+  const int o1 = sign_of(orient3d(a0, a1, a2, p));  // +1: below s1's plane (the inside side)
+  if (nsheets == 1) return o1 > 0 ? kStateIn : (o1 < 0 ? kStateOut : on_state(t, sheets[0]));
+  if (nsheets != 2) return kStateNone;
+  uint32_t s2[3];
+  in_.corners(sheets[1], s2);
+  // The apexes: the corner of each sheet that the other does not share (exactly one each).
+  int apex1 = -1, apex2 = -1, shared = 0;
+  for (int i = 0; i < 3; ++i) {
+    const bool in2 = s1[i] == s2[0] || s1[i] == s2[1] || s1[i] == s2[2];
+    const bool in1 = s2[i] == s1[0] || s2[i] == s1[1] || s2[i] == s1[2];
+    if (!in2) apex1 = i;
+    if (!in1) apex2 = i;
+    shared += in2 ? 1 : 0;
+  }
+  if (shared != 2 || apex1 < 0 || apex2 < 0) return kStateNone;
+  const Vec3 b0 = in_.vertex(s2[0]), b1 = in_.vertex(s2[1]), b2 = in_.vertex(s2[2]);
+  const Vec3 c1 = in_.vertex(s1[apex1]), c2 = in_.vertex(s2[apex2]);
+  const int convex = sign_of(orient3d(a0, a1, a2, c2));  // +1 convex edge, -1 reflex, 0 flat
+  const int o2 = sign_of(orient3d(b0, b1, b2, p));
+  if (convex == 0) return o1 > 0 ? kStateIn : (o1 < 0 ? kStateOut : on_state(t, sheets[0]));
+  if (o1 == 0) {  // in s1's plane: on s1 itself, or on its continuation beyond the edge
+    if (o2 == sign_of(orient3d(b0, b1, b2, c1))) return on_state(t, sheets[0]);
+    return convex > 0 ? kStateOut : kStateIn;
+  }
+  if (o2 == 0) {
+    if (o1 == convex) return on_state(t, sheets[1]);
+    return convex > 0 ? kStateOut : kStateIn;
+  }
+  if (convex > 0) return (o1 > 0 && o2 > 0) ? kStateIn : kStateOut;
+  return (o1 > 0 || o2 > 0) ? kStateIn : kStateOut;
+}
+
+// Triangle t and `sheet` lie in one plane: do they face the same way? (orient2d of both on a
+// projection that keeps t proper, so it keeps the sheet proper too.)
+int8_t BooleanRun::on_state(uint32_t t, uint32_t sheet) const {
+  uint32_t g[3], h[3];
+  in_.corners(t, g);
+  in_.corners(sheet, h);
+  const Vec3 p0 = in_.vertex(g[0]), p1 = in_.vertex(g[1]), p2 = in_.vertex(g[2]);
+  const int w = projection_axis(p0, p1, p2);
+  if (w < 0) return kStateNone;
+  const int u = (w + 1) % 3, v = (w + 2) % 3;
+  const Vec3 q0 = in_.vertex(h[0]), q1 = in_.vertex(h[1]), q2 = in_.vertex(h[2]);
+  const int st = sign_of(orient2d(p0[u], p0[v], p1[u], p1[v], p2[u], p2[v]));
+  const int ss = sign_of(orient2d(q0[u], q0[v], q1[u], q1[v], q2[u], q2[v]));
+  if (st == 0 || ss == 0) return kStateNone;
+  return st == ss ? kOnSame : kOnOpposite;
+}
+
+bool BooleanRun::keep(int8_t state, bool is_a) const {
+  switch (state) {
+    case kStateIn: return is_a ? op_ == BooleanOp::kIntersection : op_ != BooleanOp::kUnion;
+    case kStateOut: return is_a ? op_ != BooleanOp::kIntersection : op_ == BooleanOp::kUnion;
+    case kOnSame: return is_a && op_ != BooleanOp::kDifference;
+    case kOnOpposite: return is_a && op_ == BooleanOp::kDifference;
+    default: return false;
+  }
+}
+
+// A cut triangle with degenerate contacts (besides any crossing segments): its points may be
+// input vertices of the other mesh, on its edges or inside; its constraints may lie along its
+// own edges; each side of a constraint has its own state (side_state), inside, outside or on
+// the other surface. A triangle with lone points only is split as well, its pieces pending
+// (their state comes from its corners after flooding).
+Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
+                                 const KeyIndex* dk, size_t nd) {
+  using detail::Loc;
+  ArenaScope scope(arena_);
+  const uint32_t base = in_.nva + in_.nvb;
+  const bool is_a = t < in_.nta;
+  const uint32_t tn = is_a ? t : t - in_.nta;
+  const char* which = is_a ? " of A" : " of B";
+  auto unsupported = [&](const char* what) {
+    return make_error(StatusCode::kUnsupported, "cannot split triangle ", tn, which,
+                      " along its exact contacts: ", what)
+        .at_index(tn);
+  };
+  uint32_t raw[3], c[3];
+  in_.corners(t, raw);
+  for (int k = 0; k < 3; ++k) c[k] = canon(raw[k]);
+  const Vec3 cv[3] = {in_.vertex(raw[0]), in_.vertex(raw[1]), in_.vertex(raw[2])};
+  auto coords = [&](uint32_t id) -> const Vec3& { return id < base ? in_.vertex(id) : points_[id - base].p; };
+  // 1. The points: id, where (edge 0..2, 3 inside), position along the edge.
+  struct GPoint {
+    uint32_t id, where;
+    double along;
+  };
+  const size_t cap = 2 * np + 2 * nd;
+  GPoint* gp = arena_.allocate_array<GPoint>(cap);
+  KeyIndex* ids = arena_.allocate_array<KeyIndex>(cap);
+  if (gp == nullptr || ids == nullptr) return arena_.exhausted_status();
+  size_t n = 0;
+  auto along_edge = [&](int k, const Vec3& p) {
+    const Vec3 d = cv[(k + 1) % 3] - cv[k];
+    const double ax = d.x < 0 ? -d.x : d.x, ay = d.y < 0 ? -d.y : d.y, az = d.z < 0 ? -d.z : d.z;
+    const int w = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
+    return d[w] > 0 ? p[w] - cv[k][w] : cv[k][w] - p[w];
+  };
+  auto add = [&](uint32_t id, int where) {
+    gp[n] = GPoint{id, static_cast<uint32_t>(where), where < 3 ? along_edge(where, coords(id)) : 0.0};
+    ids[n] = KeyIndex{id, static_cast<uint32_t>(n), 0};
+    ++n;
+  };
+  for (size_t i = 0; i < np; ++i) {
+    const Record& rc = rec_[proper[i].index];
+    for (int end = 0; end < 2; ++end) {
+      const uint32_t pid = end == 0 ? rc.from : rc.to;
+      const Point& pt = points_[pid];
+      int where = 3;
+      if (pt.key.tri != t) {
+        where = -1;
+        for (int e = 0; e < 3; ++e) {
+          if (edge_key(raw[e], raw[(e + 1) % 3]) == pt.key.edge) where = e;
+        }
+        if (where < 0) return make_error(StatusCode::kInternal, "boolean: intersection point ", pid, " is not on triangle ", t);
+      }
+      add(base + pid, where);
+    }
+  }
+  for (size_t i = 0; i < nd; ++i) {
+    const DegRecord& r = deg_[dk[i].index];
+    const int ends = r.kind == kDegPointOnly ? 1 : 2;
+    for (int e = 0; e < ends; ++e) {
+      const Loc l = static_cast<Loc>(r.loc_t[e]);
+      if (detail::loc_is_vertex(l)) continue;
+      add(canon(r.id[e]), detail::loc_is_edge(l) ? detail::loc_index(l) : 3);
+    }
+  }
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, ids, n));
+  // Distinct points, by id (the same id is the same point: it must lie in the same place).
+  GPoint* up = arena_.allocate_array<GPoint>(n + 1);
+  if (up == nullptr) return arena_.exhausted_status();
+  size_t nu = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const GPoint& q = gp[ids[i].index];
+    if (q.id == c[0] || q.id == c[1] || q.id == c[2]) return unsupported("a contact point named inside is one of its corners");
+    if (nu > 0 && up[nu - 1].id == q.id) {
+      if (up[nu - 1].where != q.where) return unsupported("a point found on two different places of it");
+      continue;
+    }
+    up[nu++] = q;
+  }
+  // 2. Boundary order: c0, edge 0's points, c1, edge 1's, c2, edge 2's; then the inside ones.
+  KeyIndex* by = arena_.allocate_array<KeyIndex>(nu);
+  detail::CdtPoint* pts = arena_.allocate_array<detail::CdtPoint>(nu + 3);
+  uint32_t* vid = arena_.allocate_array<uint32_t>(nu + 3);
+  uint32_t* local_of = arena_.allocate_array<uint32_t>(nu);  // by index in `up`
+  if (by == nullptr || pts == nullptr || vid == nullptr || local_of == nullptr) return arena_.exhausted_status();
+  for (size_t i = 0; i < nu; ++i) by[i] = KeyIndex{order_key(up[i].along), static_cast<uint32_t>(i), 0};
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, by, nu));
+  for (size_t i = 0; i < nu; ++i) by[i].key = up[by[i].index].where;
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, by, nu));
+  uint32_t m = 0;
+  uint32_t corner_at[3];
+  size_t i = 0;
+  for (uint32_t e = 0; e < 3; ++e) {
+    corner_at[e] = m;
+    vid[m++] = c[e];
+    for (; i < nu && by[i].key == e; ++i) {
+      local_of[by[i].index] = m;
+      vid[m++] = up[by[i].index].id;
+    }
+  }
+  const uint32_t boundary = m;
+  for (; i < nu; ++i) {
+    local_of[by[i].index] = m;
+    vid[m++] = up[by[i].index].id;
+  }
+  // Local index of a vertex id: a corner, or a point (binary search in `up`).
+  auto local = [&](uint32_t id) -> uint32_t {
+    for (int k = 0; k < 3; ++k) {
+      if (id == c[k]) return corner_at[k];
+    }
+    size_t lo = 0, hi = nu;
+    while (lo < hi) {
+      const size_t mid = (lo + hi) / 2;
+      if (up[mid].id < id) lo = mid + 1; else hi = mid;
+    }
+    return (lo < nu && up[lo].id == id) ? local_of[lo] : ~0u;
+  };
+  {
+    const Vec3 p0 = cv[0];
+    const Vec3 nrm = cross(cv[1] - p0, cv[2] - p0);
+    const double ax = nrm.x < 0 ? -nrm.x : nrm.x, ay = nrm.y < 0 ? -nrm.y : nrm.y, az = nrm.z < 0 ? -nrm.z : nrm.z;
+    const int axis = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
+    const bool flip = nrm[axis] < 0;
+    for (uint32_t j = 0; j < m; ++j) {
+      const Vec3& q = coords(vid[j]);
+      const double x = q[(axis + 1) % 3], y = q[(axis + 2) % 3];
+      pts[j] = flip ? detail::CdtPoint{y, x} : detail::CdtPoint{x, y};
+    }
+  }
+  // 3. Constraints with the states of their two sides: crossing segments (inside on the
+  // left), then the degenerate segments grouped by their two ends (the records of one line
+  // from its sheets, the other mesh's triangles that hold it).
+  struct Cons {
+    uint32_t from, to;
+    int8_t left, right;
+  };
+  Cons* cons = arena_.allocate_array<Cons>(np + nd);
+  KeyIndex* ckey = arena_.allocate_array<KeyIndex>(np + nd);
+  KeyIndex* dseg = arena_.allocate_array<KeyIndex>(nd + 1);
+  if (cons == nullptr || ckey == nullptr || dseg == nullptr) return arena_.exhausted_status();
+  uint32_t nc = 0;
+  for (size_t x = 0; x < np; ++x) {
+    const Record& rc = rec_[proper[x].index];
+    const uint32_t from = local(base + rc.from), to = local(base + rc.to);
+    if (from == ~0u || to == ~0u) return make_error(StatusCode::kInternal, "boolean: a segment end is not a point of triangle ", t);
+    cons[nc++] = Cons{from, to, kStateIn, kStateOut};
+  }
+  size_t ns = 0;
+  for (size_t x = 0; x < nd; ++x) {
+    const DegRecord& r = deg_[dk[x].index];
+    if (r.kind == kDegPointOnly) continue;
+    const uint32_t a = local(canon(r.id[0])), b = local(canon(r.id[1]));
+    if (a == ~0u || b == ~0u) return make_error(StatusCode::kInternal, "boolean: a contact end is not a point of triangle ", t);
+    if (a == b) return unsupported("a contact segment with both ends at one point");
+    dseg[ns++] = KeyIndex{edge_key(a, b), static_cast<uint32_t>(x), 0};
+  }
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, dseg, ns));
+  for (size_t g = 0; g < ns;) {
+    size_t g_end = g + 1;
+    while (g_end < ns && dseg[g_end].key == dseg[g].key) ++g_end;
+    uint32_t sheets[2];
+    int nsheets = 0;
+    const DegRecord* trans = nullptr;
+    for (size_t x = g; x < g_end; ++x) {
+      const DegRecord& r = deg_[dk[dseg[x].index].index];
+      bool seen = false;
+      for (int y = 0; y < nsheets; ++y) seen = seen || sheets[y] == r.other;
+      if (!seen) {
+        if (nsheets == 2) return unsupported("a contact line held by more than two triangles of the other mesh");
+        sheets[nsheets++] = r.other;
+      }
+      if (r.kind == kDegTransversal && trans == nullptr) trans = &r;
+    }
+    const DegRecord& first = deg_[dk[dseg[g].index].index];
+    const Loc l0 = static_cast<Loc>(first.loc_t[0]), l1 = static_cast<Loc>(first.loc_t[1]);
+    int on_edge = -1;
+    for (int k = 0; k < 3; ++k) {
+      if (detail::loc_on_closed_edge(l0, k) && detail::loc_on_closed_edge(l1, k)) on_edge = k;
+    }
+    Cons cn{key_hi(dseg[g].key), key_lo(dseg[g].key), kStateNone, kStateNone};
+    if (on_edge >= 0) {
+      // Along t's own edge: one side only, the one with t's third corner.
+      const int8_t s = side_state(t, raw[(on_edge + 2) % 3], sheets, nsheets);
+      cn.left = cn.right = s;
+    } else if (trans != nullptr) {
+      // Across t: its corners on each side, from the transversal sheet's plane (the segment
+      // runs along n_a x n_b: A's left is below B's plane, B's left above A's).
+      uint32_t o[3];
+      in_.corners(trans->other, o);
+      const Vec3 q0 = in_.vertex(o[0]), q1 = in_.vertex(o[1]), q2 = in_.vertex(o[2]);
+      const int left_sign = is_a ? 1 : -1;
+      uint32_t lc = ~0u, rc = ~0u;
+      for (int k = 0; k < 3; ++k) {
+        const int sd = sign_of(orient3d(q0, q1, q2, cv[k]));
+        if (sd == left_sign && lc == ~0u) lc = raw[k];
+        if (sd == -left_sign && rc == ~0u) rc = raw[k];
+      }
+      if (lc == ~0u || rc == ~0u) return unsupported("a contact segment across it without corners on both sides");
+      cn.from = local(canon(trans->id[0]));
+      cn.to = local(canon(trans->id[1]));
+      cn.left = side_state(t, lc, sheets, nsheets);
+      cn.right = side_state(t, rc, sheets, nsheets);
+    } else {
+      // Coplanar only, across t: two coplanar sheets (t lies on both sides).
+      if (nsheets != 2) return unsupported("a coplanar contact side inside it with one triangle of the other mesh (an open border?)");
+      cn.left = on_state(t, sheets[0]);
+      cn.right = on_state(t, sheets[1]);
+    }
+    if (cn.left == kStateNone || cn.right == kStateNone) return unsupported("a contact line whose sides could not be classified");
+    cons[nc++] = cn;
+    g = g_end;
+  }
+  // 4. Triangulate: the boundary, then the constraints (repeats of boundary edges allowed).
+  detail::CdtSegment* segs = arena_.allocate_array<detail::CdtSegment>(boundary + nc);
+  if (segs == nullptr) return arena_.exhausted_status();
+  uint32_t nseg = 0;
+  for (uint32_t j = 0; j < boundary; ++j) segs[nseg++] = detail::CdtSegment{j, (j + 1) % boundary};
+  for (uint32_t x = 0; x < nc; ++x) {
+    segs[nseg++] = detail::CdtSegment{cons[x].from, cons[x].to};
+    ckey[x] = KeyIndex{edge_key(cons[x].from, cons[x].to), x, 0};
+  }
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, ckey, nc));
+  for (uint32_t x = 1; x < nc; ++x) {
+    if (ckey[x].key == ckey[x - 1].key) return unsupported("a contact segment repeats a crossing segment");
+  }
+  ArenaArray<detail::CdtTriangle> out(&arena_);
+  Status s = detail::cdt(arena_, Span<const detail::CdtPoint>(pts, m),
+                         Span<const detail::CdtSegment>(segs, nseg), boundary, &out, nullptr);
+  if (!s.is_ok()) {
+    if (s.code() == StatusCode::kArenaExhausted) return s;
+    return make_error(StatusCode::kUnsupported, "cannot re-triangulate triangle ", tn, which,
+                      " along its exact contacts: ", s.message())
+        .at_index(tn);
+  }
+  // 5. Votes from constraint edges (a piece is left of its own counter-clockwise edges), pieces
+  // joined across other inside edges.
+  const uint32_t k = static_cast<uint32_t>(out.size());
+  int8_t* vote = arena_.allocate_array<int8_t>(k);
+  KeyIndex* half = arena_.allocate_array<KeyIndex>(size_t{3} * k);
+  UnionFind uf;
+  if (vote == nullptr || half == nullptr || !uf.init(arena_, k)) return arena_.exhausted_status();
+  for (uint32_t j = 0; j < k; ++j) {
+    vote[j] = kStateNone;
+    for (uint32_t e = 0; e < 3; ++e) {
+      half[3 * j + e] = KeyIndex{edge_key(out[j].v[e], out[j].v[(e + 1) % 3]), 3 * j + e, 0};
+    }
+  }
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, half, size_t{3} * k));
+  size_t ci = 0;
+  for (size_t a = 0; a < size_t{3} * k;) {
+    size_t b = a + 1;
+    while (b < size_t{3} * k && half[b].key == half[a].key) ++b;
+    while (ci < nc && ckey[ci].key < half[a].key) ++ci;
+    if (ci < nc && ckey[ci].key == half[a].key) {
+      const Cons& cn = cons[ckey[ci].index];
+      for (size_t x = a; x < b; ++x) {
+        const uint32_t j = half[x].index / 3, e = half[x].index % 3;
+        const int8_t v = out[j].v[e] == cn.from ? cn.left : cn.right;
+        if (vote[j] != kStateNone && vote[j] != v) return unsupported("a piece between two contacts that disagree");
+        vote[j] = v;
+      }
+    } else if (b - a == 2) {
+      uf.unite(half[a].index / 3, half[a + 1].index / 3);
+    }
+    a = b;
+  }
+  int8_t* state = arena_.allocate_array<int8_t>(k);
+  if (state == nullptr) return arena_.exhausted_status();
+  for (uint32_t j = 0; j < k; ++j) state[j] = kStateNone;
+  for (uint32_t j = 0; j < k; ++j) {
+    if (vote[j] == kStateNone) continue;
+    const uint32_t r = uf.find(j);
+    if (state[r] == kStateNone) {
+      state[r] = vote[j];
+    } else if (state[r] != vote[j]) {
+      return unsupported("inconsistent classification of its pieces");
+    }
+  }
+  tflag_[t] = nc > 0 ? kDecided : kPending;
+  if (nc == 0) pending_ = true;
+  for (uint32_t j = 0; j < k; ++j) {
+    const int8_t sj = state[uf.find(j)];
+    if (sj == kStateNone && nc > 0) {
+      return make_error(StatusCode::kInternal, "boolean: a piece of triangle ", t, " is not next to any contact");
+    }
+    const detail::CdtTriangle& ct = out[j];
+    if (!tris_.push_back(OutTri{{vid[ct.v[0]], vid[ct.v[1]], vid[ct.v[2]]}, t, sj})) {
+      return arena_.exhausted_status();
+    }
+    if (sj != kStateIn && sj != kStateOut) continue;
+    for (uint32_t e = 0; e < 3; ++e) {
+      for (uint32_t x = 0; x < 3; ++x) {
+        if (ct.v[x] != corner_at[e]) continue;
+        int8_t& vs = vstate_[c[e]];
+        if (vs == kVertexOn) continue;
+        if (vs != 0 && vs != sj) return inconsistent_vertex(c[e]);
+        vs = sj;
+      }
+    }
+  }
+  return Status::ok();
+}
+
 Status BooleanRun::split_triangles() {
   const uint32_t nh = static_cast<uint32_t>(hits_.size());
   const uint32_t base = in_.nva + in_.nvb;  // first intersection point's vertex id
-  vstate_ = arena_.allocate_array<int8_t>(base);
-  if (vstate_ == nullptr && base > 0) return arena_.exhausted_status();
-  if (base > 0) std::memset(vstate_, 0, base);
   // Records: two per hit, grouped by triangle (stable: hit order within a triangle).
   rec_ = arena_.allocate_array<Record>(size_t{2} * nh);
   order_ = arena_.allocate_array<KeyIndex>(size_t{2} * nh);
@@ -903,14 +1541,40 @@ Status BooleanRun::split_triangles() {
 
   // Room for the pieces: a triangle with r segments has at most 2r points, so at most
   // 3 + 2 * 2r - 2 pieces (b + 2i - 2 for b boundary and i inside points).
+  // Degenerate records by triangle (stable), and their triangles' flags.
+  const size_t nd = deg_.size();
+  KeyIndex* dorder = nullptr;
+  if (st_.degenerate_pairs > 0) {
+    const size_t ntri = size_t{in_.nta} + in_.ntb;
+    tflag_ = arena_.allocate_array<uint8_t>(ntri);
+    tstate_ = arena_.allocate_array<int8_t>(ntri);
+    dorder = arena_.allocate_array<KeyIndex>(nd + 1);
+    if (tflag_ == nullptr || tstate_ == nullptr || dorder == nullptr) return arena_.exhausted_status();
+    std::memset(tflag_, kUncut, ntri);
+    std::memset(tstate_, 0, ntri);
+    for (size_t r = 0; r < nd; ++r) dorder[r] = KeyIndex{deg_[r].tri, static_cast<uint32_t>(r), 0};
+    SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(dorder, nd)));
+  }
+  // The next triangle with records of either kind, and the ends of its two runs.
+  auto next_group = [&](size_t g, size_t d, size_t* g_end, size_t* d_end) -> uint32_t {
+    const uint64_t tg = g < size_t{2} * nh ? order[g].key : ~uint64_t{0};
+    const uint64_t td = d < nd ? dorder[d].key : ~uint64_t{0};
+    const uint64_t t = tg < td ? tg : td;
+    *g_end = g;
+    while (*g_end < size_t{2} * nh && order[*g_end].key == t) ++*g_end;
+    *d_end = d;
+    while (*d_end < nd && dorder[*d_end].key == t) ++*d_end;
+    return static_cast<uint32_t>(t);
+  };
   uint64_t total = 0;
   uint32_t cut_a = 0, cut_b = 0;
-  for (size_t g = 0; g < size_t{2} * nh;) {
-    size_t g_end = g + 1;
-    while (g_end < size_t{2} * nh && order[g_end].key == order[g].key) ++g_end;
-    total += 4 * (g_end - g) + 1;
-    if (order[g].key < in_.nta) ++cut_a; else ++cut_b;
+  for (size_t g = 0, d = 0; g < size_t{2} * nh || d < nd;) {
+    size_t g_end = 0, d_end = 0;
+    const uint32_t t = next_group(g, d, &g_end, &d_end);
+    total += d_end > d ? 4 * (g_end - g + d_end - d) + 3 : 4 * (g_end - g) + 1;
+    if (t < in_.nta) ++cut_a; else ++cut_b;
     g = g_end;
+    d = d_end;
   }
   st_.cut_triangles_a = cut_a;
   st_.cut_triangles_b = cut_b;
@@ -924,6 +1588,7 @@ Status BooleanRun::split_triangles() {
   // passes through an input vertex).
   auto corner_state = [&](uint32_t v, int8_t sj) -> Status {
     int8_t& vs = vstate_[v];
+    if (vs == kVertexOn) return Status::ok();  // on the other surface: no state to pass on
     if (vs != 0 && vs != sj) return inconsistent_vertex(v);
     vs = sj;
     return Status::ok();
@@ -946,12 +1611,18 @@ Status BooleanRun::split_triangles() {
   // Re-triangulate each cut triangle along its segments, classify its pieces (each piece lies
   // on one side of a segment; pieces joined by other edges share a side) and give its corners
   // their state.
-  for (size_t g = 0; g < size_t{2} * nh;) {
-    size_t g_end = g + 1;
-    while (g_end < size_t{2} * nh && order[g_end].key == order[g].key) ++g_end;
-    const uint32_t t = static_cast<uint32_t>(order[g].key);
+  for (size_t g = 0, d = 0; g < size_t{2} * nh || d < nd;) {
+    size_t g_end = 0, d_end = 0;
+    const uint32_t t = next_group(g, d, &g_end, &d_end);
     if ((g & 1023u) == 0) {
       SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: split", g, size_t{2} * nh));
+    }
+    if (tflag_ != nullptr) tflag_[t] = kDecided;
+    if (d_end > d) {
+      SPLINTCORE_RETURN_IF_ERROR(split_general(t, order + g, g_end - g, dorder + d, d_end - d));
+      g = g_end;
+      d = d_end;
+      continue;
     }
     uint32_t c[3];
     in_.corners(t, c);
@@ -1235,9 +1906,14 @@ Status BooleanRun::flood(bool side_a) {
   uint32_t* start = arena_.allocate_array<uint32_t>(size_t{nv} + 1);
   if ((cut == nullptr && nt > 0) || start == nullptr) return arena_.exhausted_status();
   if (nt > 0) std::memset(cut, 0, nt);
-  for (size_t i = 0; i < 2 * hits_.size(); ++i) {
-    const uint32_t t = static_cast<uint32_t>(order_[i].key);
-    if (t >= toff && t - toff < nt) cut[t - toff] = 1;
+  if (tflag_ != nullptr) {
+    // Triangles with pending pieces (lone contact points only) pass states on like uncut ones.
+    for (uint32_t t = 0; t < nt; ++t) cut[t] = tflag_[toff + t] == kDecided ? 1 : 0;
+  } else {
+    for (size_t i = 0; i < 2 * hits_.size(); ++i) {
+      const uint32_t t = static_cast<uint32_t>(order_[i].key);
+      if (t >= toff && t - toff < nt) cut[t - toff] = 1;
+    }
   }
   // The triangles that take part: all of A's, B's near ones; the uncut ones are flooded.
   const uint32_t count = side_a ? nt : static_cast<uint32_t>(bp_.near_ids.size());
@@ -1273,17 +1949,18 @@ Status BooleanRun::flood(bool side_a) {
   int8_t* vs = vstate_ + voff;
   uint32_t head = 0, tail = 0;
   for (uint32_t v = 0; v < nv; ++v) {
-    if (vs[v] != 0 && start[v + 1] > start[v]) queue[tail++] = v;
+    if (vs[v] != 0 && vs[v] != kVertexOn && start[v + 1] > start[v]) queue[tail++] = v;
   }
   auto spread = [&]() -> Status {
     while (head < tail) {
       const uint32_t v = queue[head++];
       for (uint32_t r = start[v]; r < start[v + 1]; ++r) {
         for (uint32_t w : mesh.triangles[rows[r]].v) {
-          if (vs[w] == 0) {
+          const int8_t x = vs[w];
+          if (x == 0) {
             vs[w] = vs[v];
             queue[tail++] = w;
-          } else if (vs[w] != vs[v]) {
+          } else if (x != vs[v] && x != kVertexOn) {  // on the other surface: passes nothing on
             return inconsistent_vertex(voff + w);
           }
         }
@@ -1299,7 +1976,17 @@ Status BooleanRun::flood(bool side_a) {
     const uint32_t t = id(i);
     if (cut[t] != 0) continue;
     const Triangle& tri = mesh.triangles[t];
-    if (vs[tri.v[0]] != 0) continue;
+    if (vs[tri.v[0]] == kStateIn || vs[tri.v[0]] == kStateOut) continue;
+    // Decided when a corner has a state; a corner without one (not on the other surface)
+    // takes the winding number; with every corner on the other surface the triangle does.
+    int first_free = -1;
+    bool decided = false;
+    for (int k = 0; k < 3; ++k) {
+      const int8_t x = vs[tri.v[k]];
+      if (x == kStateIn || x == kStateOut) decided = true;
+      if (x == 0 && first_free < 0) first_free = k;
+    }
+    if (decided || (first_free < 0 && tstate_ != nullptr && tstate_[toff + t] != 0)) continue;
     const Vec3 centroid = (mesh.vertices[tri.v[0]] + mesh.vertices[tri.v[1]] +
                            mesh.vertices[tri.v[2]]) * (1.0 / 3.0);
     double w = 0;
@@ -1319,8 +2006,16 @@ Status BooleanRun::flood(bool side_a) {
       w = winding_number(index_a_, centroid);
     }
     ++st_.winding_queries;
-    vs[tri.v[0]] = w >= 0.5 ? 1 : -1;
-    queue[tail++] = tri.v[0];
+    if (first_free < 0) {
+      if (tstate_ == nullptr) {
+        return make_error(StatusCode::kInternal, "boolean: triangle ", toff + t,
+                          " has every corner on the other surface but no contact");
+      }
+      tstate_[toff + t] = w >= 0.5 ? kStateIn : kStateOut;
+      continue;
+    }
+    vs[tri.v[first_free]] = w >= 0.5 ? 1 : -1;
+    queue[tail++] = tri.v[first_free];
     SPLINTCORE_RETURN_IF_ERROR(spread());
   }
   return Status::ok();
@@ -1328,14 +2023,53 @@ Status BooleanRun::flood(bool side_a) {
 
 Status BooleanRun::classify() {
   SPLINTCORE_RETURN_IF_ERROR(flood(true));
-  return flood(false);
+  SPLINTCORE_RETURN_IF_ERROR(flood(false));
+  return resolve_pending();
+}
+
+// The state of a triangle without constraints from its corners (those not on the other
+// surface, which agree), or from its winding number when every corner is on it. kStateNone
+// when neither is known.
+static int8_t corner_agreement(const int8_t* vstate, const int8_t* tstate, const uint32_t c[3],
+                               uint32_t t, bool* conflict) {
+  int8_t s = kStateNone;
+  *conflict = false;
+  for (int k = 0; k < 3; ++k) {
+    const int8_t x = vstate[c[k]];
+    if (x != kStateIn && x != kStateOut) continue;
+    if (s != kStateNone && s != x) *conflict = true;
+    s = x;
+  }
+  if (s == kStateNone && tstate != nullptr) s = tstate[t];
+  return s;
+}
+
+// Pieces of triangles with lone contact points only: the triangle's state, after flooding.
+Status BooleanRun::resolve_pending() {
+  if (!pending_) return Status::ok();
+  for (size_t i = 0; i < tris_.size(); ++i) {
+    OutTri& o = tris_[i];
+    if (o.state != kStateNone) continue;
+    uint32_t c[3];
+    in_.corners(o.src, c);
+    bool conflict = false;
+    o.state = corner_agreement(vstate_, tstate_, c, o.src, &conflict);
+    if (conflict) return inconsistent_vertex(c[0]);
+    if (o.state == kStateNone) {
+      return make_error(StatusCode::kInternal, "boolean: triangle ", o.src, " was left unclassified");
+    }
+  }
+  return Status::ok();
 }
 
 Status BooleanRun::assemble(Mesh* result) {
   // Which pieces stay: (inside the other?) per side and operation.
-  const bool keep_a_inside = op_ == BooleanOp::kIntersection;
-  const bool keep_b_inside = op_ != BooleanOp::kUnion;
   const bool reverse_b = op_ == BooleanOp::kDifference;
+  // keep(state, is_a) as a table: [is_a][state + 2].
+  bool keeps[2][5];
+  for (int side = 0; side < 2; ++side) {
+    for (int st = -2; st <= 2; ++st) keeps[side][st + 2] = keep(static_cast<int8_t>(st), side == 1);
+  }
   const uint32_t base = in_.nva + in_.nvb;
   const uint32_t nv_all = base + static_cast<uint32_t>(points_.size());
   uint32_t* remap = arena_.allocate_array<uint32_t>(nv_all);
@@ -1352,24 +2086,29 @@ Status BooleanRun::assemble(Mesh* result) {
     for (uint32_t i = 0; i < count; ++i) {
       const bool is_a = i < in_.nta;
       const uint32_t t = is_a ? i : in_.nta + bp_.near_ids[i - in_.nta];
-      const bool keep_inside = is_a ? keep_a_inside : keep_b_inside;
       const bool reverse = !is_a && reverse_b;
       if (piece < tris_.size() && tris_[piece].src == t) {
         for (; piece < tris_.size() && tris_[piece].src == t; ++piece) {
           const OutTri& o = tris_[piece];
-          if ((o.state > 0) != keep_inside) continue;
+          if (!keeps[is_a ? 1 : 0][o.state + 2]) continue;
           if (reverse) emit(o.v[0], o.v[2], o.v[1], is_a); else emit(o.v[0], o.v[1], o.v[2], is_a);
         }
         continue;
       }
       uint32_t c[3];
       in_.corners(t, c);
-      const int8_t s = vstate_[c[0]];
+      int8_t s = vstate_[c[0]];
       if (s == 0 || vstate_[c[1]] != s || vstate_[c[2]] != s) {
-        return make_error(StatusCode::kInternal, "boolean: triangle ", t,
-                          " was left unclassified");
+        // Corners on the other surface (degenerate contacts) carry no state.
+        bool conflict = false;
+        s = tstate_ != nullptr ? corner_agreement(vstate_, tstate_, c, t, &conflict) : kStateNone;
+        if (s == kStateNone || conflict || vstate_[c[0]] == 0 || vstate_[c[1]] == 0 ||
+            vstate_[c[2]] == 0) {
+          return make_error(StatusCode::kInternal, "boolean: triangle ", t,
+                            " was left unclassified");
+        }
       }
-      if ((s > 0) != keep_inside) continue;
+      if (!keeps[is_a ? 1 : 0][s + 2]) continue;
       if (reverse) emit(c[0], c[2], c[1], is_a); else emit(c[0], c[1], c[2], is_a);
     }
     if (op_ == BooleanOp::kUnion) {
@@ -1393,6 +2132,9 @@ Status BooleanRun::assemble(Mesh* result) {
   size_t k = 0;
   SPLINTCORE_RETURN_IF_ERROR(visit([&](uint32_t v0, uint32_t v1, uint32_t v2, bool) {
     uint32_t v[3] = {v0, v1, v2};
+    if (alias_ != nullptr) {
+      for (uint32_t& x : v) x = canon(x);
+    }
     for (uint32_t& x : v) {
       if (remap[x] == ~0u) remap[x] = nv++;
       x = remap[x];
@@ -1425,6 +2167,8 @@ Status BooleanRun::run(Mesh* result) {
   SPLINTCORE_RETURN_IF_ERROR(find_hits());
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: points", 0, 1));
   SPLINTCORE_RETURN_IF_ERROR(number_points());
+  SPLINTCORE_RETURN_IF_ERROR(number_degenerate_points());
+  SPLINTCORE_RETURN_IF_ERROR(check_points_apart());
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: split", 0, 1));
   SPLINTCORE_RETURN_IF_ERROR(split_triangles());
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: classify", 0, 1));
@@ -1510,7 +2254,10 @@ Status BooleanRun::check_result(Mesh* result) {
   if (result->triangles.empty()) return Status::ok();
   ArenaScope scope(arena_);
   const char* as = options_.float32_output ? " (as float32)" : "";
-  const StatusCode fragile = options_.float32_output ? StatusCode::kUnsupported : StatusCode::kInternal;
+  // With exact contacts resolved, the result may not be a solid (parts that touch along an
+  // edge, points that coincide after rounding): unsupported, so that the nudge takes over.
+  const StatusCode fragile = (options_.float32_output || st_.degenerate_pairs > 0)
+                                 ? StatusCode::kUnsupported : StatusCode::kInternal;
   // A flat triangle can come from rounding (then A is nudged); anything else would be a bug
   // (or, for the union, an open B). check_closed_oriented scans for flat triangles itself, so
   // the scan here runs only when it fails: the same answer as scanning first, one scan less.
@@ -1541,8 +2288,10 @@ Status BooleanRun::check_result(Mesh* result) {
   }
   if (s.code() == StatusCode::kArenaExhausted) return s;
   if (!s.is_ok()) {
-    return make_error(op_ == BooleanOp::kUnion ? StatusCode::kInvalidMesh : StatusCode::kInternal,
-                      "Boolean ", boolean_op_name(op_), " result", as, ": ", s.message())
+    const StatusCode code = st_.degenerate_pairs > 0 ? StatusCode::kUnsupported
+                            : (op_ == BooleanOp::kUnion ? StatusCode::kInvalidMesh : StatusCode::kInternal);
+    return make_error(code, "Boolean ", boolean_op_name(op_), " result", as,
+                      st_.degenerate_pairs > 0 ? " with exact contacts" : "", ": ", s.message())
         .at_index(s.index());
   }
   if (options_.check_self_intersection) {

@@ -496,6 +496,7 @@ void add_stats(const BooleanStats& p, BooleanStats* total) {
   total->near_b_triangles += p.near_b_triangles;
   total->candidate_pairs += p.candidate_pairs;
   total->intersecting_pairs += p.intersecting_pairs;
+  total->degenerate_pairs += p.degenerate_pairs;
   total->intersection_points += p.intersection_points;
   total->cut_triangles_a += p.cut_triangles_a;
   total->cut_triangles_b += p.cut_triangles_b;

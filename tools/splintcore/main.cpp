@@ -858,6 +858,7 @@ int run_boolean(int argc, char** argv) {
     j.add("near_b_triangles", st.near_b_triangles);
     j.add("candidate_pairs", st.candidate_pairs);
     j.add("intersecting_pairs", st.intersecting_pairs);
+    j.add("degenerate_pairs", st.degenerate_pairs);
     j.add("intersection_points", st.intersection_points);
     j.add("cut_triangles_a", st.cut_triangles_a);
     j.add("cut_triangles_b", st.cut_triangles_b);
@@ -881,10 +882,11 @@ int run_boolean(int argc, char** argv) {
                 o.positional[0], a.triangles.size(), o.positional.size() - 1,
                 static_cast<unsigned long long>(b_triangles),
                 static_cast<unsigned long long>(st.near_b_triangles));
-    std::printf("%s: %llu candidate pairs, %llu crossing, %llu intersection points, %llu + %llu "
-                "triangles cut, %u attempt(s)\n",
+    std::printf("%s: %llu candidate pairs, %llu crossing, %llu touching exactly, %llu "
+                "intersection points, %llu + %llu triangles cut, %u attempt(s)\n",
                 boolean_op_name(bo.op), static_cast<unsigned long long>(st.candidate_pairs),
                 static_cast<unsigned long long>(st.intersecting_pairs),
+                static_cast<unsigned long long>(st.degenerate_pairs),
                 static_cast<unsigned long long>(st.intersection_points),
                 static_cast<unsigned long long>(st.cut_triangles_a),
                 static_cast<unsigned long long>(st.cut_triangles_b), st.attempts);
@@ -1231,6 +1233,7 @@ int run_design(int argc, char** argv) {
   checks.add("base_sections", static_cast<uint64_t>(report.base.sections));
   checks.add("base_triangles_self_intersection_candidates", report.base.self_intersection_candidates);
   checks.add("boolean_intersecting_pairs", report.boolean.intersecting_pairs);
+  checks.add("boolean_degenerate_pairs", report.boolean.degenerate_pairs);
   checks.add("boolean_intersection_points", report.boolean.intersection_points);
   checks.add("boolean_attempts", static_cast<uint64_t>(report.boolean.attempts));
   checks.add("boolean_nudge_mm", report.boolean.nudge);
