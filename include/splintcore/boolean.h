@@ -130,6 +130,7 @@ struct BooleanStats {
   // group; see mesh_boolean). With several passes the counts above are summed over the
   // passes (attempts too); output_triangles and output_triangles_a are the final pass's (its
   // first operand is the previous pass's result), nudge is the final pass's translation of it.
+  // The difference stops early when nothing of A is left (then passes < shell_groups).
   uint32_t shells = 0;
   uint32_t shell_groups = 0;
   uint32_t passes = 0;

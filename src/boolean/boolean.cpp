@@ -1059,8 +1059,10 @@ Status BooleanRun::check_points_apart() {
   const char* as = options_.float32_output ? " (as float32)" : "";
   // With exact contacts resolved, the result may not be a solid (parts that touch along an
   // edge, points that coincide after rounding): unsupported, so that the nudge takes over.
-  const StatusCode fragile = (options_.float32_output || st_.degenerate_pairs > 0)
-                                 ? StatusCode::kUnsupported : StatusCode::kInternal;
+  // Two points that round together are a near-degeneracy, not a bug: a nudged A (attempts
+  // > 1), or in a later pass of several shell groups an A that holds the previous pass's
+  // rounded intersection points, meets B within a rounding error. The next nudge runs.
+  const StatusCode fragile = StatusCode::kUnsupported;
   ArenaScope scope(arena_);
   const uint32_t np = static_cast<uint32_t>(points_.size());
   if (np > 1) {
@@ -2098,7 +2100,7 @@ Status BooleanRun::assemble(Mesh* result) {
       uint32_t c[3];
       in_.corners(t, c);
       int8_t s = vstate_[c[0]];
-      if (s == 0 || vstate_[c[1]] != s || vstate_[c[2]] != s) {
+      if (s == 0 || s == kVertexOn || vstate_[c[1]] != s || vstate_[c[2]] != s) {
         // Corners on the other surface (degenerate contacts) carry no state.
         bool conflict = false;
         s = tstate_ != nullptr ? corner_agreement(vstate_, tstate_, c, t, &conflict) : kStateNone;
@@ -2159,6 +2161,13 @@ Status BooleanRun::run(Mesh* result) {
     Status s = check_closed_oriented(ctx_, *in_.a, nullptr);
     if (s.code() == StatusCode::kArenaExhausted) return s;
     if (!s.is_ok()) {
+      // A nudged A (in a later pass: the previous result, moved and rounded to float32) can
+      // lose a sliver to rounding: that attempt is unsupported and the next nudge runs.
+      if (st_.attempts > 1) {
+        return make_error(StatusCode::kUnsupported, "A moved by the nudge is not a solid: ",
+                          s.message())
+            .at_index(s.index());
+      }
       return make_error(StatusCode::kInvalidMesh, "A must be a solid: ", s.message())
           .at_index(s.index());
     }
@@ -2288,6 +2297,19 @@ Status BooleanRun::check_result(Mesh* result) {
   }
   if (s.code() == StatusCode::kArenaExhausted) return s;
   if (!s.is_ok()) {
+    // An open B whose border meets A (or lies inside it, perhaps after a nudge) leaves the
+    // result open: that is the input's fault (B's border must lie outside A), said as such.
+    if (op_ != BooleanOp::kUnion) {
+      bool b_paired = false;
+      const Status e = edges_paired(arena_, *in_.b, &b_paired);
+      if (e.code() == StatusCode::kArenaExhausted) return e;
+      if (e.is_ok() && !b_paired) {
+        return make_error(StatusCode::kInvalidMesh, "Boolean ", boolean_op_name(op_), " result",
+                          as, ": ", s.message(),
+                          " (B is open or not edge-manifold: its border must lie outside A)")
+            .at_index(s.index());
+      }
+    }
     const StatusCode code = st_.degenerate_pairs > 0 ? StatusCode::kUnsupported
                             : (op_ == BooleanOp::kUnion ? StatusCode::kInvalidMesh : StatusCode::kInternal);
     return make_error(code, "Boolean ", boolean_op_name(op_), " result", as,

@@ -640,6 +640,7 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
     first = &current;
     g = 1;
   }
+  uint32_t done = 0;
   for (uint32_t pass = 0; pass < passes; ++pass) {
     const bool last = pass + 1 == passes;
     Mesh operand;
@@ -678,12 +679,16 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
     move_mesh_down(arena, base, result, &moved);
     current = moved;
     first = &current;
+    done = pass + 1;
+    // Nothing is left of A: the later groups can only take from nothing (and an empty mesh
+    // is not a solid that a next pass could take as A).
+    if (options.op == BooleanOp::kDifference && current.triangles.empty()) break;
   }
   move_mesh_down(arena, start, current, out);
   *stats = total;
   stats->shells = shell_count;
   stats->shell_groups = groups;
-  stats->passes = passes;
+  stats->passes = done;
   return Status::ok();
 }
 

@@ -141,5 +141,41 @@ TEST(BooleanMeshLab, ImprintLiesOnTheJawWithin1e6mm) {
   EXPECT_EQ(measured, 3);
 }
 
+// The exact coplanar rule (no nudge, so no film): [0,1]^3 - [0.5,1.5] x [0,1] x [0,1], whose
+// faces share four planes, written as float32 STL, is watertight and two-manifold for MeshLab,
+// with the exact volume 0.5.
+TEST(BooleanMeshLab, CoplanarDifferenceIsWatertight) {
+  if (!test::have_meshlab()) GTEST_SKIP() << "meshlabserver/xvfb-run not installed";
+  test::TestArena t;
+  Arena& arena = t.arena;
+  auto box = [&](const Vec3& lo, const Vec3& hi) {
+    Mesh m(&arena);
+    for (int i = 0; i < 8; ++i) {
+      EXPECT_TRUE(m.vertices.push_back(
+          Vec3{(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z}));
+    }
+    const uint32_t f[12][3] = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                               {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+    for (const auto& tr : f) EXPECT_TRUE(m.triangles.push_back(Triangle{{tr[0], tr[1], tr[2]}}));
+    return m;
+  };
+  const Mesh a = box({0, 0, 0}, {1, 1, 1});
+  const Mesh b = box({0.5, 0, 0}, {1.5, 1, 1});
+  Mesh out;
+  BooleanStats st;
+  BooleanOptions o;  // float32, as written
+  o.max_nudges = 0;
+  SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&arena), a, b, o, &out, &st));
+  EXPECT_EQ(st.attempts, 1u);
+  ASSERT_GT(out.triangles.size(), 0u);
+  std::vector<uint8_t> bytes;
+  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(arena, out, StlFormat::kBinary, &bytes));
+  const std::string log = test::meshlab_log_of_bytes(bytes);
+  EXPECT_NE(log.find("Mesh is two-manifold"), std::string::npos) << log;
+  EXPECT_NE(log.find("Boundary Edges 0"), std::string::npos) << log;
+  EXPECT_NEAR(test::number_after(log, "Mesh Volume  is "), 0.5, 1e-5) << log;
+  EXPECT_EQ(mesh_volume(out), 0.5);
+}
+
 }  // namespace
 }  // namespace splintcore

@@ -160,6 +160,24 @@ TEST(BooleanShells, DifferenceOfTwoOverlappingBoxes) {
   expect_volume(r.volume, w.volume);
 }
 
+// The first group takes all of A: the difference is empty, and the passes stop there (a next
+// pass would have nothing to take from; it used to fail, an empty mesh being no solid).
+TEST(BooleanShells, DifferenceThatEmptiesAStopsEarly) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = boxes_mesh(arena, {kB1});
+  // Both shells hold A's box and overlap each other there.
+  const Mesh b = boxes_mesh(arena, {kA, Box{{0.25, 0.25, 0.25}, {5, 5, 5}}});
+  BooleanOptions o;
+  o.float32_output = false;
+  Mesh out;
+  BooleanStats st;
+  SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&arena), a, b, o, &out, &st));
+  EXPECT_EQ(st.shell_groups, 2u);
+  EXPECT_EQ(st.passes, 1u);
+  EXPECT_EQ(out.triangles.size(), 0u);
+}
+
 TEST(BooleanShells, IntersectionOfTwoOverlappingBoxes) {
   TestArena ta;
   Arena& arena = ta.arena;
