@@ -1095,8 +1095,28 @@ Status BooleanRun::check_points_apart() {
     }
     for (uint32_t i = 1; i < np; ++i) {
       if (points_[keys[i].index].p == points_[keys[i - 1].index].p) {
-        return make_error(fragile, "intersection points ", keys[i - 1].index, " and ",
-                          keys[i].index, " coincide", as);
+        // Named by what defines them: an edge (two vertex ids) of one mesh through a triangle
+        // of the other, or through an edge of the other.
+        auto named = [&](Status& st, const PointKey& k) {
+          const uint32_t u = key_hi(k.edge), v = key_lo(k.edge);
+          const bool of_a = u < in_.nva;
+          st.append("edge ").append_u64(of_a ? u : u - in_.nva).append("-");
+          st.append_u64(of_a ? v : v - in_.nva).append(of_a ? " of A" : " of B");
+          if (k.tri == ~0u) {
+            st.append(" across an edge of B");
+          } else {
+            const bool tri_a = k.tri < in_.nta;
+            st.append(" through triangle ").append_u64(tri_a ? k.tri : k.tri - in_.nta);
+            st.append(tri_a ? " of A" : " of B");
+          }
+        };
+        Status e = make_error(fragile, "intersection points ", keys[i - 1].index, " and ",
+                              keys[i].index, " coincide", as, ": ");
+        named(e, points_[keys[i - 1].index].key);
+        e.append(" and ");
+        named(e, points_[keys[i].index].key);
+        const uint32_t t = points_[keys[i].index].key.tri;
+        return t == ~0u ? e : e.at_index(t < in_.nta ? t : t - in_.nta);
       }
     }
   }
