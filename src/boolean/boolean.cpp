@@ -416,6 +416,7 @@ class BooleanRun {
   uint32_t canon(uint32_t v) const { return (alias_ != nullptr && v >= in_.nva && v < in_.nva + in_.nvb && alias_[v - in_.nva] != ~0u) ? alias_[v - in_.nva] : v; }
   bool keep(int8_t state, bool is_a) const;
   Status resolve_pending();
+  int8_t uncut_state(uint32_t t, const uint32_t c[3]) const;
   Status classify();
   Status assemble(Mesh* result);
   Status check_result(Mesh* result);
@@ -2066,6 +2067,16 @@ static int8_t corner_agreement(const int8_t* vstate, const int8_t* tstate, const
   return s;
 }
 
+// The state of an uncut triangle whose corners do not simply agree (some on the other
+// surface): from the others, or its winding number; kStateNone when unknown (a bug).
+int8_t BooleanRun::uncut_state(uint32_t t, const uint32_t c[3]) const {
+  if (tstate_ == nullptr) return kStateNone;
+  bool conflict = false;
+  const int8_t s = corner_agreement(vstate_, tstate_, c, t, &conflict);
+  if (conflict || vstate_[c[0]] == 0 || vstate_[c[1]] == 0 || vstate_[c[2]] == 0) return kStateNone;
+  return s;
+}
+
 // Pieces of triangles with lone contact points only: the triangle's state, after flooding.
 Status BooleanRun::resolve_pending() {
   if (!pending_) return Status::ok();
@@ -2109,10 +2120,11 @@ Status BooleanRun::assemble(Mesh* result) {
       const bool is_a = i < in_.nta;
       const uint32_t t = is_a ? i : in_.nta + bp_.near_ids[i - in_.nta];
       const bool reverse = !is_a && reverse_b;
+      const bool* keep_row = keeps[is_a ? 1 : 0];
       if (piece < tris_.size() && tris_[piece].src == t) {
         for (; piece < tris_.size() && tris_[piece].src == t; ++piece) {
           const OutTri& o = tris_[piece];
-          if (!keeps[is_a ? 1 : 0][o.state + 2]) continue;
+          if (!keep_row[o.state + 2]) continue;
           if (reverse) emit(o.v[0], o.v[2], o.v[1], is_a); else emit(o.v[0], o.v[1], o.v[2], is_a);
         }
         continue;
@@ -2121,16 +2133,13 @@ Status BooleanRun::assemble(Mesh* result) {
       in_.corners(t, c);
       int8_t s = vstate_[c[0]];
       if (s == 0 || s == kVertexOn || vstate_[c[1]] != s || vstate_[c[2]] != s) {
-        // Corners on the other surface (degenerate contacts) carry no state.
-        bool conflict = false;
-        s = tstate_ != nullptr ? corner_agreement(vstate_, tstate_, c, t, &conflict) : kStateNone;
-        if (s == kStateNone || conflict || vstate_[c[0]] == 0 || vstate_[c[1]] == 0 ||
-            vstate_[c[2]] == 0) {
+        s = uncut_state(t, c);  // corners on the other surface (degenerate contacts)
+        if (s == kStateNone) {
           return make_error(StatusCode::kInternal, "boolean: triangle ", t,
                             " was left unclassified");
         }
       }
-      if (!keeps[is_a ? 1 : 0][s + 2]) continue;
+      if (!keep_row[s + 2]) continue;
       if (reverse) emit(c[0], c[2], c[1], is_a); else emit(c[0], c[1], c[2], is_a);
     }
     if (op_ == BooleanOp::kUnion) {
