@@ -667,8 +667,9 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
       s.append_u64(pass + 1);
       s.append(" of ");
       s.append_u64(passes);
-      s.append(intersection && !last ? ": the union of B's overlapping shells)"
-                                     : ": a group of B's shells that do not overlap)");
+      s.append(intersection ? (last ? ": A and the union of B's overlapping shells)"
+                                    : ": the union of B's overlapping shells)")
+                            : ": a group of B's shells that do not overlap)");
       *stats = total;
       stats->shells = shell_count;
       stats->shell_groups = groups;
