@@ -362,6 +362,38 @@ Status sort_keys(Arena& arena, KeyIndex* items, size_t n) {
   return radix_sort(arena, Span<KeyIndex>(items, n));
 }
 
+// A cut triangle's points in the order its re-triangulation takes them: corner 0, edge 0's
+// points by position along it, corner 1, edge 1's, corner 2, edge 2's, then the inside ones.
+// where(i): the edge (0..2) point i lies on, 3 inside; along(i): its position on that edge;
+// id(i): its vertex id. Fills by[n] (temporary), vid[n + 3], local_of[n] (point i's place),
+// corner_at[3]; *count = n + 3, *boundary = the corners and edge points.
+template <class Where, class Along, class Id>
+Status order_points(Arena& arena, size_t n, const uint32_t c[3], Where where, Along along, Id id,
+                    KeyIndex* by, uint32_t* vid, uint32_t* local_of, uint32_t corner_at[3],
+                    uint32_t* count, uint32_t* boundary) {
+  for (size_t i = 0; i < n; ++i) by[i] = KeyIndex{order_key(along(i)), static_cast<uint32_t>(i), 0};
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena, by, n));
+  for (size_t i = 0; i < n; ++i) by[i].key = where(by[i].index);
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena, by, n));
+  uint32_t m = 0;
+  size_t i = 0;
+  for (uint32_t e = 0; e < 3; ++e) {
+    corner_at[e] = m;
+    vid[m++] = c[e];
+    for (; i < n && by[i].key == e; ++i) {
+      local_of[by[i].index] = m;
+      vid[m++] = id(by[i].index);
+    }
+  }
+  *boundary = m;
+  for (; i < n; ++i) {
+    local_of[by[i].index] = m;
+    vid[m++] = id(by[i].index);
+  }
+  *count = m;
+  return Status::ok();
+}
+
 // A piece of a cut triangle.
 struct OutTri {
   uint32_t v[3];
@@ -1283,26 +1315,11 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
   uint32_t* vid = arena_.allocate_array<uint32_t>(nu + 3);
   uint32_t* local_of = arena_.allocate_array<uint32_t>(nu);  // by index in `up`
   if (by == nullptr || pts == nullptr || vid == nullptr || local_of == nullptr) return arena_.exhausted_status();
-  for (size_t i = 0; i < nu; ++i) by[i] = KeyIndex{order_key(up[i].along), static_cast<uint32_t>(i), 0};
-  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, by, nu));
-  for (size_t i = 0; i < nu; ++i) by[i].key = up[by[i].index].where;
-  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, by, nu));
-  uint32_t m = 0;
+  uint32_t m = 0, boundary = 0;
   uint32_t corner_at[3];
-  size_t i = 0;
-  for (uint32_t e = 0; e < 3; ++e) {
-    corner_at[e] = m;
-    vid[m++] = c[e];
-    for (; i < nu && by[i].key == e; ++i) {
-      local_of[by[i].index] = m;
-      vid[m++] = up[by[i].index].id;
-    }
-  }
-  const uint32_t boundary = m;
-  for (; i < nu; ++i) {
-    local_of[by[i].index] = m;
-    vid[m++] = up[by[i].index].id;
-  }
+  SPLINTCORE_RETURN_IF_ERROR(order_points(
+      arena_, nu, c, [&](size_t x) { return up[x].where; }, [&](size_t x) { return up[x].along; },
+      [&](size_t x) { return up[x].id; }, by, vid, local_of, corner_at, &m, &boundary));
   // Local index of a vertex id: a corner, or a point (binary search in `up`).
   auto local = [&](uint32_t id) -> uint32_t {
     for (int k = 0; k < 3; ++k) {
@@ -1736,28 +1753,12 @@ Status BooleanRun::split_triangles() {
         segs == nullptr) {
       return arena_.exhausted_status();
     }
-    for (size_t i = 0; i < n; ++i) {
-      by[i] = KeyIndex{order_key(locals[i].along), static_cast<uint32_t>(i), 0};
-    }
-    SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, by, n));
-    for (size_t i = 0; i < n; ++i) by[i].key = locals[by[i].index].where;
-    SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, by, n));
-    uint32_t m = 0;
+    uint32_t m = 0, boundary = 0;
     uint32_t corner_at[3];
-    size_t i = 0;
-    for (uint32_t e = 0; e < 3; ++e) {
-      corner_at[e] = m;
-      vid[m++] = c[e];
-      for (; i < n && by[i].key == e; ++i) {
-        local_of[by[i].index] = m;
-        vid[m++] = base + locals[by[i].index].point;
-      }
-    }
-    const uint32_t boundary = m;
-    for (; i < n; ++i) {
-      local_of[by[i].index] = m;
-      vid[m++] = base + locals[by[i].index].point;
-    }
+    SPLINTCORE_RETURN_IF_ERROR(order_points(
+        arena_, n, c, [&](size_t x) { return locals[x].where; },
+        [&](size_t x) { return locals[x].along; }, [&](size_t x) { return base + locals[x].point; },
+        by, vid, local_of, corner_at, &m, &boundary));
     int axis = 2;
     bool flip = false;
     project(c, &axis, &flip);
