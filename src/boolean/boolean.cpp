@@ -490,10 +490,9 @@ enum TriangleFlag : uint8_t { kUncut = 0, kDecided = 1, kPending = 2 };
 
 Status BooleanRun::degenerate(uint32_t ta, uint32_t tb) const {
   return make_error(StatusCode::kUnsupported,
-                    "degenerate contact between triangle ", ta, " of A and triangle ",
-                    tb - in_.nta,
-                    " of B (a vertex on the other surface, edges crossing exactly, or coplanar "
-                    "overlap): not handled by this version; move B by a tiny offset")
+                    "contact between triangle ", ta, " of A and triangle ", tb - in_.nta,
+                    " of B not decided: a coordinate is outside the exact predicates' range "
+                    "(0, or 2^-300 .. 2^330 in magnitude)")
       .at_index(ta);
 }
 

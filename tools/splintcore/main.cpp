@@ -129,8 +129,10 @@ const char kBooleanUsage[] =
     "jaw's own triangles form the imprint, its vertices copied bit for bit. The result is\n"
     "checked as float32 (closed, manifold, outward, no vertex merged or triangle flattened by\n"
     "rounding, and, unless --no-self-check, no self-intersection) before it is written,\n"
-    "atomically. Exact degenerate contacts (a vertex on the other surface, coplanar overlap)\n"
-    "are rejected in this version, naming the triangles: move B by a tiny offset.\n";
+    "atomically. Exact degenerate contacts (a vertex on the other surface, edges crossing\n"
+    "exactly, coplanar faces) are resolved exactly; where the exact result is not a manifold\n"
+    "solid (e.g. parts touching along an edge), A is nudged by at most about 1 um and the\n"
+    "summary says so.\n";
 
 const char kPhantomUsage[] =
     "usage: splintcore phantom --triangles N -o DIR [--json]\n"
