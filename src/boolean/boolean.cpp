@@ -311,6 +311,28 @@ PairResult intersect_pair(const Inputs& in, uint32_t ta, uint32_t tb, const Plan
   return PairResult::kSegment;
 }
 
+// The plane a cut triangle is re-triangulated in: its projection along the dominant axis of
+// its normal, the two remaining coordinates swapped when that keeps it counter-clockwise. The
+// split paths (split_triangles, split_general) both use it, so the same triangle projects the
+// same way in either.
+struct Projection {
+  int axis = 2;
+  bool flip = false;
+};
+inline Projection projection_of(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
+  const Vec3 nrm = cross(p1 - p0, p2 - p0);
+  const double ax = nrm.x < 0 ? -nrm.x : nrm.x, ay = nrm.y < 0 ? -nrm.y : nrm.y,
+               az = nrm.z < 0 ? -nrm.z : nrm.z;
+  Projection pr;
+  pr.axis = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
+  pr.flip = nrm[pr.axis] < 0;
+  return pr;
+}
+inline detail::CdtPoint to_2d(const Vec3& q, const Projection& pr) {
+  const double x = q[(pr.axis + 1) % 3], y = q[(pr.axis + 2) % 3];
+  return pr.flip ? detail::CdtPoint{y, x} : detail::CdtPoint{x, y};
+}
+
 struct Point {
   Vec3 p;
   double s;  // parameter along the edge from its smaller vertex id
@@ -1332,16 +1354,8 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
     return (lo < nu && up[lo].id == id) ? local_of[lo] : ~0u;
   };
   {
-    const Vec3 p0 = cv[0];
-    const Vec3 nrm = cross(cv[1] - p0, cv[2] - p0);
-    const double ax = nrm.x < 0 ? -nrm.x : nrm.x, ay = nrm.y < 0 ? -nrm.y : nrm.y, az = nrm.z < 0 ? -nrm.z : nrm.z;
-    const int axis = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
-    const bool flip = nrm[axis] < 0;
-    for (uint32_t j = 0; j < m; ++j) {
-      const Vec3& q = coords(vid[j]);
-      const double x = q[(axis + 1) % 3], y = q[(axis + 2) % 3];
-      pts[j] = flip ? detail::CdtPoint{y, x} : detail::CdtPoint{x, y};
-    }
+    const Projection pr = projection_of(cv[0], cv[1], cv[2]);
+    for (uint32_t j = 0; j < m; ++j) pts[j] = to_2d(coords(vid[j]), pr);
   }
   // 3. Constraints with the states of their two sides: crossing segments (inside on the
   // left), then the degenerate segments grouped by their two ends (the records of one line
@@ -1632,19 +1646,11 @@ Status BooleanRun::split_triangles() {
     vs = sj;
     return Status::ok();
   };
-  // Projection of a cut triangle on the plane of its dominant normal axis, counter-clockwise.
-  auto project = [&](const uint32_t c[3], int* axis, bool* flip) {
-    const Vec3 p0 = in_.vertex(c[0]);
-    const Vec3 nrm = cross(in_.vertex(c[1]) - p0, in_.vertex(c[2]) - p0);
-    const double ax = nrm.x < 0 ? -nrm.x : nrm.x, ay = nrm.y < 0 ? -nrm.y : nrm.y,
-                 az = nrm.z < 0 ? -nrm.z : nrm.z;
-    *axis = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
-    *flip = nrm[*axis] < 0;
+  auto project = [&](const uint32_t c[3]) {
+    return projection_of(in_.vertex(c[0]), in_.vertex(c[1]), in_.vertex(c[2]));
   };
-  auto point_2d = [&](uint32_t id, int axis, bool flip) {
-    const Vec3& q = id < base ? in_.vertex(id) : points_[id - base].p;
-    const double x = q[(axis + 1) % 3], y = q[(axis + 2) % 3];
-    return flip ? detail::CdtPoint{y, x} : detail::CdtPoint{x, y};
+  auto point_2d = [&](uint32_t id, const Projection& pr) {
+    return to_2d(id < base ? in_.vertex(id) : points_[id - base].p, pr);
   };
 
   // Re-triangulate each cut triangle along its segments, classify its pieces (each piece lies
@@ -1699,13 +1705,11 @@ Status BooleanRun::split_triangles() {
         const uint32_t* quad = n1 == 3 ? two : one;
         const int8_t s3 = n1 == 3 ? s_one : static_cast<int8_t>(-s_one);
         const int8_t s4 = static_cast<int8_t>(-s3);
-        int axis = 2;
-        bool flip = false;
-        project(c, &axis, &flip);
+        const Projection pr = project(c);
         detail::CdtPoint q2[4];
-        for (int i = 0; i < 4; ++i) q2[i] = point_2d(quad[i], axis, flip);
-        const detail::CdtPoint t2[3] = {point_2d(tri3[0], axis, flip), point_2d(tri3[1], axis, flip),
-                                         point_2d(tri3[2], axis, flip)};
+        for (int i = 0; i < 4; ++i) q2[i] = point_2d(quad[i], pr);
+        const detail::CdtPoint t2[3] = {point_2d(tri3[0], pr), point_2d(tri3[1], pr),
+                                         point_2d(tri3[2], pr)};
         auto ccw = [](const detail::CdtPoint& a, const detail::CdtPoint& b2, const detail::CdtPoint& c2) {
           return orient2d(a.x, a.y, b2.x, b2.y, c2.x, c2.y) > 0;
         };
@@ -1758,10 +1762,8 @@ Status BooleanRun::split_triangles() {
         arena_, n, c, [&](size_t x) { return locals[x].where; },
         [&](size_t x) { return locals[x].along; }, [&](size_t x) { return base + locals[x].point; },
         by, vid, local_of, corner_at, &m, &boundary));
-    int axis = 2;
-    bool flip = false;
-    project(c, &axis, &flip);
-    for (uint32_t j = 0; j < m; ++j) pts[j] = point_2d(vid[j], axis, flip);
+    const Projection pr = project(c);
+    for (uint32_t j = 0; j < m; ++j) pts[j] = point_2d(vid[j], pr);
     uint32_t ns = 0;
     for (uint32_t j = 0; j < boundary; ++j) segs[ns++] = detail::CdtSegment{j, (j + 1) % boundary};
     // Constraint end points: find each point id among the sorted locals (binary search).

@@ -718,7 +718,7 @@ void brio_order(Span<const CdtPoint> points, KeyIndex* keys, KeyIndex* scratch) 
 
 // ---- the output ----------------------------------------------------------------------------
 
-// Writes the slots not marked in `exterior` (nullptr: every slot), in slot order, each rotated
+// Writes the slots not marked in `exterior`, in slot order, each rotated
 // to start at its smallest id, into the room `out` (and `adjacency`) reserved for `expected`
 // more triangles; index_of_slot: tri_count entries of scratch. False, with `out` and
 // `adjacency` cut back to their sizes and *bad set, when a triangle is not counter-clockwise
@@ -739,9 +739,9 @@ bool write_output(const Work& w, const uint8_t* exterior, uint32_t* index_of_slo
     adjacency->adopt(adjacency->data(), adjacency_start + static_cast<size_t>(expected),
                      adjacency->capacity());
     out_adj = adjacency->data() + adjacency_start;
-    // Output index of each inside slot (without an exterior, the slot itself).
+    // Output index of each inside slot.
     uint32_t count = 0;
-    for (uint32_t ti = 0; ti < w.tri_count && exterior != nullptr; ++ti) {
+    for (uint32_t ti = 0; ti < w.tri_count; ++ti) {
       index_of_slot[ti] = exterior[ti] != 0 ? kCdtNone : count++;
     }
   }
@@ -749,7 +749,7 @@ bool write_output(const Work& w, const uint8_t* exterior, uint32_t* index_of_slo
   static constexpr uint8_t kOpposite[3][3] = {{2, 0, 1}, {0, 1, 2}, {1, 2, 0}};
   size_t produced = 0;
   for (uint32_t ti = 0; ti < w.tri_count; ++ti) {
-    if (exterior != nullptr && exterior[ti] != 0) continue;
+    if (exterior[ti] != 0) continue;
     const Tri& t = w.t[ti];
     const uint32_t k = t.v[0] < t.v[1] ? (t.v[0] < t.v[2] ? 0 : 2) : (t.v[1] < t.v[2] ? 1 : 2);
     const CdtTriangle tri{{t.v[k], t.v[next3(k)], t.v[prev3(k)]}};
@@ -767,7 +767,7 @@ bool write_output(const Work& w, const uint8_t* exterior, uint32_t* index_of_slo
       for (uint32_t e = 0; e < 3; ++e) {
         const uint32_t o = kOpposite[k][e];  // (k + e + 2) % 3
         const uint32_t nb = t.n[o];
-        a.nb[e] = nb == kNone ? kCdtNone : (exterior != nullptr ? index_of_slot[nb] : nb);
+        a.nb[e] = nb == kNone ? kCdtNone : index_of_slot[nb];
         a.seg[e] = t.c[o] == kNone ? kCdtNone : t.c[o];
       }
     }
