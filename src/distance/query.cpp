@@ -831,11 +831,21 @@ Status sample_sdf(const Context& ctx, const DistanceIndex& index, const SdfGrid&
   }
   const double band = grid.band;
   const float fband = static_cast<float>(band);
+  // Beyond the band only the sign matters. On a closed mesh (closed_manifold: its winding
+  // number is 0 or 1 off the surface) it changes only across the surface, and a sample beyond
+  // the band lies farther than the spacing from it: so with a spacing of at most half the
+  // band, the segment from the previous sample of the row does not meet the surface, and the
+  // sample takes that one's sign. That sample lies more than half the band from the surface
+  // (else this one would be within the band), where its own sign is well decided. Only a
+  // row's first samples beyond the band then need the winding number (on open meshes, whose
+  // winding number varies off the surface, every sample beyond the band does).
+  const bool carry = index.closed_manifold && grid.spacing <= 0.5 * band;
   for (uint32_t z = z_begin; z < z_end; ++z) {
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance volume", z - z_begin, z_end - z_begin));
     auto row = [&](uint32_t y) {
       float* dst = out.data() + (uint64_t{z - z_begin} * grid.ny + y) * grid.nx;
       uint32_t seed = kNoNeighbor;
+      bool known = false, inside = false;  // the previous sample's sign
       for (uint32_t x = 0; x < grid.nx; ++x) {
         const Vec3 p = grid.origin + Vec3{grid.spacing * x, grid.spacing * y, grid.spacing * z};
         // Within the band the search bounded by the band finds the same closest point as an
@@ -845,13 +855,14 @@ Status sample_sdf(const Context& ctx, const DistanceIndex& index, const SdfGrid&
           seed = sd.closest.triangle;
           finish_signed(index, p, method, &sd);
           double d = sd.distance;
+          inside = d < 0;
           d = d > band ? band : (d < -band ? -band : d);
           dst[x] = static_cast<float>(d);
         } else {
-          // Beyond the band only the sign matters; the winding number gives it without a
-          // closest point.
-          dst[x] = winding_number(index, p) >= 0.5 ? -fband : fband;
+          if (!(carry && known)) inside = winding_number(index, p) >= 0.5;
+          dst[x] = inside ? -fband : fband;
         }
+        known = true;
       }
     };
     parallel_for_each(ctx.executor, grid.ny, row);

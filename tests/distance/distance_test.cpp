@@ -1645,6 +1645,80 @@ TEST(DistanceSdf, BoxGridMatchesTheClampedAnalyticSdf) {
   }
 }
 
+// Beyond the band a sample's sign on a closed mesh is carried along its row from the sample
+// before it (when the spacing is at most half the band); on open meshes, and with a coarser
+// spacing, every such sample takes the winding number. Either way every sample must be what
+// one query gives: the clamped signed distance within the band, the winding number's decision
+// beyond it. Closed meshes of several shells (a hollow ball, whose inner shell faces inward;
+// two tori apart) and an open one (a ball with its cap cut off across the rows, which
+// run along x: carried through the hole, an inside sign would reach the outside).
+TEST(DistanceSdf, SamplesBeyondTheBandTakeTheWindingNumbersSign) {
+  Soup hollow = icosphere(3, 2.5, Vec3{});
+  for (SoupTriangle t : icosphere(2, 1.5, Vec3{0.25, -0.125, 0.375})) {
+    std::swap(t.p[1], t.p[2]);
+    hollow.push_back(t);
+  }
+  Soup tori = shapes::torus(24, 12, 2.5, 0.75);
+  for (SoupTriangle t : shapes::torus(20, 10, 1.5, 0.5)) {
+    for (float* p : {t.p[0], t.p[1], t.p[2]}) {
+      p[0] += 5.0f;
+      p[1] += 0.5f;
+      p[2] += 0.25f;
+    }
+    tori.push_back(t);
+  }
+  Soup cut;
+  for (const SoupTriangle& t : icosphere(3, 2.5, Vec3{})) {
+    if ((t.p[0][0] + t.p[1][0] + t.p[2][0]) / 3 < 2.0f) cut.push_back(t);
+  }
+  const struct {
+    const char* name;
+    const Soup* soup;
+    bool closed;
+  } cases[] = {{"hollow ball", &hollow, true}, {"two tori", &tori, true}, {"cut ball", &cut, false}};
+  for (const auto& c : cases) {
+    auto b = build(*c.soup, 4);
+    ASSERT_EQ(b->index.closed_manifold, c.closed) << c.name;
+    const Aabb box = bounds_of(b->mesh);
+    for (double spacing : {0.2, 0.3}) {  // carried (closed meshes) or not: the band is 0.5
+      SdfGrid grid;
+      grid.origin = box.lo - Vec3{0.6, 0.6, 0.6};
+      grid.spacing = spacing;
+      grid.nx = static_cast<uint32_t>((box.hi.x - box.lo.x + 1.2) / spacing) + 1;
+      grid.ny = static_cast<uint32_t>((box.hi.y - box.lo.y + 1.2) / spacing) + 1;
+      grid.nz = static_cast<uint32_t>((box.hi.z - box.lo.z + 1.2) / spacing) + 1;
+      grid.band = 0.5;
+      std::vector<float> v(size_t{grid.nx} * grid.ny * grid.nz);
+      Context ctx(&b->arena->arena);
+      SPLINTCORE_ASSERT_OK(sample_sdf(ctx, b->index, grid, SignMethod::kAuto, 0, grid.nz,
+                                      Span<float>(v.data(), v.size())));
+      int beyond_inside = 0, beyond_outside = 0, within = 0;
+      for (uint32_t z = 0; z < grid.nz; ++z) {
+        for (uint32_t y = 0; y < grid.ny; ++y) {
+          for (uint32_t x = 0; x < grid.nx; ++x) {
+            const Vec3 p = grid.origin + Vec3{spacing * x, spacing * y, spacing * z};
+            const float got = v[(size_t{z} * grid.ny + y) * grid.nx + x];
+            SignedDistance sd;
+            ASSERT_TRUE(signed_distance(b->index, p, SignMethod::kAuto, &sd));
+            if (sd.closest.distance <= grid.band) {
+              ASSERT_EQ(got, static_cast<float>(std::max(-0.5, std::min(0.5, sd.distance))))
+                  << c.name << " " << x << " " << y << " " << z;
+              ++within;
+            } else {
+              const bool inside = winding_number(b->index, p) >= 0.5;
+              ASSERT_EQ(got, inside ? -0.5f : 0.5f) << c.name << " " << x << " " << y << " " << z;
+              ++(inside ? beyond_inside : beyond_outside);
+            }
+          }
+        }
+      }
+      EXPECT_GT(within, 1000) << c.name;
+      EXPECT_GT(beyond_inside, 50) << c.name;  // the shells' insides, the cut ball's inside
+      EXPECT_GT(beyond_outside, 1000) << c.name;
+    }
+  }
+}
+
 TEST(DistanceSdf, BadArgumentsAreInvalidArgument) {
   auto b = build(box_soup(Vec3{0, 0, 0}, Vec3{1, 1, 1}), 4);
   Context ctx(&b->arena->arena);

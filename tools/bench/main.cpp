@@ -205,8 +205,10 @@ void bench_distance(Harness& h, Arena& arena, const char* label, const Mesh& mes
   const std::string closest_name = std::string("closest_point") + label;
   const std::string batch_name = std::string("closest_point_batch") + label;
   const std::string signed_name = std::string("signed_distance") + label;
+  const std::string sdf_name = std::string("sdf_volume") + label;
   if (!h.wanted(build_name.c_str()) && !h.wanted(closest_name.c_str()) &&
-      !h.wanted(batch_name.c_str()) && !h.wanted(signed_name.c_str())) {
+      !h.wanted(batch_name.c_str()) && !h.wanted(signed_name.c_str()) &&
+      !h.wanted(sdf_name.c_str())) {
     return;
   }
   const size_t nt = mesh.triangles.size();
@@ -276,6 +278,33 @@ void bench_distance(Harness& h, Arena& arena, const char* label, const Mesh& mes
     });
     std::printf("# %s: %.0f queries/s (one thread, %s)\n", signed_name.c_str(),
                 static_cast<double>(queries.size()) / r.median,
+                index.closed_manifold ? "pseudonormals" : "winding numbers");
+  }
+  if (h.wanted(sdf_name.c_str())) {
+    // The narrow-band sampler as the tiled marching cubes calls it: every layer of a grid over
+    // the mesh's box and 1 mm around it, 0.5 mm apart, band 1 mm, one thread.
+    Aabb box;
+    for (const Vec3& p : mesh.vertices) box.add(p);
+    SdfGrid grid;
+    grid.spacing = 0.5;
+    grid.band = 1.0;
+    grid.origin = box.lo - Vec3{1, 1, 1};
+    grid.nx = static_cast<uint32_t>((box.hi.x - box.lo.x + 2) / grid.spacing) + 1;
+    grid.ny = static_cast<uint32_t>((box.hi.y - box.lo.y + 2) / grid.spacing) + 1;
+    grid.nz = static_cast<uint32_t>((box.hi.z - box.lo.z + 2) / grid.spacing) + 1;
+    std::vector<float> volume(size_t{grid.nx} * grid.ny * grid.nz);
+    const Span<float> out(volume.data(), volume.size());
+    Result r = h.measure(sdf_name.c_str(), volume.size(), arena, [&](Arena& a) {
+      Context c(&a);
+      return sample_sdf(c, index, grid, SignMethod::kAuto, 0, grid.nz, out);
+    });
+    size_t within = 0;
+    for (float d : volume) within += std::fabs(d) < 1.0f ? size_t{1} : size_t{0};
+    std::printf("# %s: %ux%ux%u samples, %zu within the band: %.0f samples/s, %.0f within the "
+                "band/s (one thread, %s)\n",
+                sdf_name.c_str(), grid.nx, grid.ny, grid.nz, within,
+                static_cast<double>(volume.size()) / r.median,
+                static_cast<double>(within) / r.median,
                 index.closed_manifold ? "pseudonormals" : "winding numbers");
   }
 }
