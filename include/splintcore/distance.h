@@ -142,8 +142,10 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
 
 // Generalised winding number of the mesh at q: 1 inside a closed outward mesh, 0 outside,
 // fractional near holes. `beta` >= 1 is the far-field accuracy (Barill et al.): a node is
-// replaced by its dipole when its distance exceeds beta times its radius; 0 sums every
-// triangle exactly (in leaf order).
+// replaced by its dipole when its distance exceeds beta times its radius, and a leaf by the
+// dipole of its triangles (summed when needed, about its box's centre) when its distance
+// exceeds 1.5 beta times its box's half diagonal (the box is looser than a node's ball);
+// 0 sums every triangle exactly (in leaf order).
 double winding_number(const DistanceIndex& index, const Vec3& q, double beta = 2.0);
 
 // Signed distance: negative inside. With kPseudonormal the sign is that of
