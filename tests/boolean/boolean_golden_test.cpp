@@ -69,6 +69,16 @@ void paper_scale_base(const Context& ctx, Mesh* base) {
   SPLINTCORE_ASSERT_OK(build_case_base(ctx, c, base, &r));
 }
 
+// a - b (the default options) into *out, and *out as binary STL appended to *stl: what each
+// golden below hashes.
+void difference_stl(const Context& ctx, test::TestArena& t, const Mesh& a, const Mesh& b, Mesh* out,
+                    BooleanStats* st, std::vector<uint8_t>* stl) {
+  SPLINTCORE_ASSERT_OK(mesh_boolean(ctx, a, b, BooleanOptions{}, out, st));
+  std::vector<uint8_t> bytes;
+  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(t.arena, *out, StlFormat::kBinary, &bytes));
+  stl->insert(stl->end(), bytes.begin(), bytes.end());
+}
+
 TEST(BooleanGolden, BaseMinusPhantomJawsMatchesTheCommittedHash) {
   test::TestArena t(size_t{128} << 20);
   Context ctx(&t.arena);
@@ -96,10 +106,10 @@ TEST(BooleanGolden, BaseMinusPhantomJawsMatchesTheCommittedHash) {
   }
   Mesh out;
   BooleanStats st;
-  SPLINTCORE_ASSERT_OK(mesh_boolean(ctx, base, jaws, BooleanOptions{}, &out, &st));
-  EXPECT_GT(st.intersecting_pairs, 0u);
   std::vector<uint8_t> bytes;
-  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(t.arena, out, StlFormat::kBinary, &bytes));
+  difference_stl(ctx, t, base, jaws, &out, &st, &bytes);
+  if (HasFatalFailure()) return;
+  EXPECT_GT(st.intersecting_pairs, 0u);
   const std::string hash = test::sha256_hex(bytes.data(), bytes.size());
 
   check_golden(kKey, hash, st);
@@ -146,11 +156,9 @@ TEST(BooleanGolden, ExactContactsMatchTheCommittedHash) {
   BooleanStats st;
   {
     Mesh out;
-    SPLINTCORE_ASSERT_OK(mesh_boolean(ctx, base, jaws, BooleanOptions{}, &out, &st));
+    difference_stl(ctx, t, base, jaws, &out, &st, &all);
+    if (HasFatalFailure()) return;
     EXPECT_GT(st.degenerate_pairs, 0u);
-    std::vector<uint8_t> bytes;
-    SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(t.arena, out, StlFormat::kBinary, &bytes));
-    all.insert(all.end(), bytes.begin(), bytes.end());
   }
   auto box = [&](const Vec3& lo, const Vec3& hi, Mesh* mesh) {
     const uint32_t off = static_cast<uint32_t>(mesh->vertices.size());
@@ -171,12 +179,10 @@ TEST(BooleanGolden, ExactContactsMatchTheCommittedHash) {
   {
     Mesh out;
     BooleanStats sb;
-    SPLINTCORE_ASSERT_OK(mesh_boolean(ctx, a, b, BooleanOptions{}, &out, &sb));
+    difference_stl(ctx, t, a, b, &out, &sb, &all);
+    if (HasFatalFailure()) return;
     EXPECT_EQ(sb.attempts, sb.passes);  // no nudge in any pass
     EXPECT_NEAR(mesh_volume(out), 0.4375, 1e-12);
-    std::vector<uint8_t> bytes;
-    SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(t.arena, out, StlFormat::kBinary, &bytes));
-    all.insert(all.end(), bytes.begin(), bytes.end());
   }
   check_golden("boolean:exact-contacts", test::sha256_hex(all.data(), all.size()), st);
 }
