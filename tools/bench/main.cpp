@@ -283,8 +283,7 @@ void bench_distance(Harness& h, Arena& arena, const char* label, const Mesh& mes
   if (h.wanted(sdf_name.c_str())) {
     // The narrow-band sampler as the tiled marching cubes calls it: every layer of a grid over
     // the mesh's box and 1 mm around it, 0.5 mm apart, band 1 mm, one thread.
-    Aabb box;
-    for (const Vec3& p : mesh.vertices) box.add(p);
+    const Aabb box = mesh_bounds(mesh);
     SdfGrid grid;
     grid.spacing = 0.5;
     grid.band = 1.0;
