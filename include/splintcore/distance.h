@@ -179,8 +179,16 @@ bool segment_intersects_mesh(const DistanceIndex& index, const Vec3& p, const Ve
 Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aabb& box,
                         ArenaArray<uint32_t>* out);
 
-// Closest points for many queries on the executor; results[i] is for queries[i] and is the
-// same for any thread count. Errors: kInvalidArgument (sizes differ), kCancelled.
+// Closest points for many queries on the executor; results[i] is for queries[i], bit for bit
+// what closest_point() (or signed_distance()) gives, at any thread count. Errors:
+// kInvalidArgument (sizes differ), kCancelled.
+// A batch of at least 4096 queries and half as many as the mesh has triangles, near enough
+// to the surface that a query meets few faces' regions (near a smooth surface: always), is
+// answered triangle by triangle (a closest point transform over the bucketed queries: 2.9 to
+// 3.9 times the queries per second of one tree search after another on tori of 87k to 543k
+// triangles, 1.4 to 1.6 times on the real dentition; splintcore-bench --filter
+// closest_point_batch); it takes about 46 bytes of arena a query, and where the arena does
+// not hold them, the tree answers in 2 MB.
 Status batch_closest_points(const Context& ctx, const DistanceIndex& index,
                             Span<const Vec3> queries, Span<ClosestPoint> results);
 Status batch_signed_distances(const Context& ctx, const DistanceIndex& index,

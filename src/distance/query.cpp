@@ -11,14 +11,15 @@
 #include "splintcore/distance.h"
 
 #include "distance/morton.h"
+#include "distance/query_internal.h"
 
 namespace splintcore {
 
 namespace {
 
-// Traversal stacks: a 4-wide node pushes at most three children more than it pops, and the
-// tree is at most 128 levels deep (checked when it is built).
-constexpr uint32_t kStack = 3 * 128 + 4;
+using detail::closest_within;
+using detail::settle_closest;
+constexpr uint32_t kStack = detail::kTraversalStack;
 constexpr double kFourPi = 12.566370614359172954;
 
 // Four and two lanes: GCC and Clang vector extensions (as in src/mesh/self_intersect.cpp), SSE2
@@ -228,11 +229,56 @@ void closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
   *index = 0;
 }
 
-// Closest point among triangles within sqrt(limit2) of q; false when none is. A seed triangle
-// (kNoNeighbor: none), e.g. the answer for a nearby query, starts the search with a tight
-// bound; the answer is the same with or without it (ties still go to the smallest id).
-bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, ClosestPoint* out,
-                    uint32_t seed = kNoNeighbor) {
+}  // namespace
+
+void detail::settle_closest(const DistanceIndex& index, const Vec3& q, double best2,
+                            ClosestPoint* best) {
+  const Mesh& mesh = *index.mesh;
+  const Vec3* v = mesh.vertices.data();
+  if (best2 > 0) {
+    // A point exactly on the surface comes out a rounding error (~1e-16 relative) away from
+    // it; decide exactly, so that it gets distance 0 (and signed distance +0, as documented).
+    const Triangle& tri = mesh.triangles[best->triangle];
+    const Vec3 &a = v[tri.v[0]], &b = v[tri.v[1]], &c = v[tri.v[2]];
+    const Vec3* corners[4] = {&q, &a, &b, &c};
+    double m = 0;
+    for (const Vec3* p : corners) {
+      for (int k = 0; k < 3; ++k) m = std::fabs((*p)[k]) > m ? std::fabs((*p)[k]) : m;
+    }
+    const double tiny = m * 0x1p-40;
+    int axis;
+    if (best2 <= tiny * tiny && orient3d(a, b, c, q) == 0 &&
+        (axis = projection_axis(a, b, c)) >= 0) {
+      const int u = (axis + 1) % 3, w = (axis + 2) % 3;
+      const int s[3] = {sign_of(orient2d(a[u], a[w], b[u], b[w], q[u], q[w])),
+                        sign_of(orient2d(b[u], b[w], c[u], c[w], q[u], q[w])),
+                        sign_of(orient2d(c[u], c[w], a[u], a[w], q[u], q[w]))};
+      if ((s[0] >= 0 && s[1] >= 0 && s[2] >= 0) || (s[0] <= 0 && s[1] <= 0 && s[2] <= 0)) {
+        best2 = 0;
+        best->point = q;
+        best->feature = Feature::kFace;
+        best->feature_index = 0;
+        for (uint8_t k = 0; k < 3; ++k) {
+          if (s[k] == 0 && s[(k + 2) % 3] == 0) {  // on edges k and k - 1: vertex k
+            best->point = v[tri.v[k]];
+            best->feature = Feature::kVertex;
+            best->feature_index = k;
+            break;
+          }
+          if (s[k] == 0) {
+            best->feature = Feature::kEdge;
+            best->feature_index = k;
+          }
+        }
+      }
+    }
+  }
+  best->distance = std::sqrt(best2);
+}
+
+// The tree search (declared in query_internal.h).
+bool detail::closest_within(const DistanceIndex& index, const Vec3& q, double limit2,
+                            ClosestPoint* out, uint32_t seed) {
   const Mesh& mesh = *index.mesh;
   if (mesh.triangles.size() == 0) return false;
   const Vec3* v = mesh.vertices.data();
@@ -369,48 +415,12 @@ bool closest_within(const DistanceIndex& index, const Vec3& q, double limit2, Cl
     }
   }
   if (!found) return false;
-  if (best2 > 0) {
-    // A point exactly on the surface comes out a rounding error (~1e-16 relative) away from
-    // it; decide exactly, so that it gets distance 0 (and signed distance +0, as documented).
-    const Triangle& tri = mesh.triangles[best_tri];
-    const Vec3 &a = v[tri.v[0]], &b = v[tri.v[1]], &c = v[tri.v[2]];
-    const Vec3* corners[4] = {&q, &a, &b, &c};
-    double m = 0;
-    for (const Vec3* p : corners) {
-      for (int k = 0; k < 3; ++k) m = std::fabs((*p)[k]) > m ? std::fabs((*p)[k]) : m;
-    }
-    const double tiny = m * 0x1p-40;
-    int axis;
-    if (best2 <= tiny * tiny && orient3d(a, b, c, q) == 0 &&
-        (axis = projection_axis(a, b, c)) >= 0) {
-      const int u = (axis + 1) % 3, w = (axis + 2) % 3;
-      const int s[3] = {sign_of(orient2d(a[u], a[w], b[u], b[w], q[u], q[w])),
-                        sign_of(orient2d(b[u], b[w], c[u], c[w], q[u], q[w])),
-                        sign_of(orient2d(c[u], c[w], a[u], a[w], q[u], q[w]))};
-      if ((s[0] >= 0 && s[1] >= 0 && s[2] >= 0) || (s[0] <= 0 && s[1] <= 0 && s[2] <= 0)) {
-        best2 = 0;
-        best.point = q;
-        best.feature = Feature::kFace;
-        best.feature_index = 0;
-        for (uint8_t k = 0; k < 3; ++k) {
-          if (s[k] == 0 && s[(k + 2) % 3] == 0) {  // on edges k and k - 1: vertex k
-            best.point = v[tri.v[k]];
-            best.feature = Feature::kVertex;
-            best.feature_index = k;
-            break;
-          }
-          if (s[k] == 0) {
-            best.feature = Feature::kEdge;
-            best.feature_index = k;
-          }
-        }
-      }
-    }
-  }
-  best.distance = std::sqrt(best2);
+  settle_closest(index, q, best2, &best);
   *out = best;
   return true;
 }
+
+namespace {
 
 // Solid angle of triangle abc seen from q (Van Oosterom and Strackee).
 double solid_angle(const Vec3& q, const Vec3& a0, const Vec3& b0, const Vec3& c0) {
@@ -645,6 +655,7 @@ bool ray_intersect(const DistanceIndex& index, const Vec3& origin, const Vec3& d
   return true;
 }
 
+
 namespace {
 inline bool child_overlaps(const BvhNode& node, int k, const Aabb& box) {
   return node.child[k] != kNoChild &&
@@ -808,6 +819,15 @@ Status batch_closest_points(const Context& ctx, const DistanceIndex& index,
     for (size_t k = 0; k < results.size(); ++k) results[k] = ClosestPoint{};
     return Status::ok();
   }
+  // Large batches: triangle by triangle over the bucketed queries (regions.cpp), the same
+  // answers.
+  bool used = false;
+  auto place = [](void* user, size_t at, const ClosestPoint& cp, bool found) {
+    static_cast<ClosestPoint*>(user)[at] = found ? cp : ClosestPoint{};
+  };
+  SPLINTCORE_RETURN_IF_ERROR(
+      detail::region_closest_points(ctx, index, queries, place, results.data(), &used));
+  if (used) return Status::ok();
   auto answer = [&](size_t at, uint32_t* seed) {
     ClosestPoint cp;
     if (closest_within(index, queries[at], HUGE_VAL, &cp, *seed)) {
@@ -830,6 +850,26 @@ Status batch_signed_distances(const Context& ctx, const DistanceIndex& index,
     for (size_t k = 0; k < results.size(); ++k) results[k] = HUGE_VAL;
     return Status::ok();
   }
+  struct Signs {
+    const DistanceIndex* index;
+    const Vec3* queries;
+    double* results;
+    SignMethod method;
+  } signs{&index, queries.data(), results.data(), method};
+  bool used = false;
+  auto place = [](void* user, size_t at, const ClosestPoint& cp, bool found) {
+    const Signs& g = *static_cast<const Signs*>(user);
+    if (!found) {
+      g.results[at] = HUGE_VAL;
+      return;
+    }
+    SignedDistance sd;
+    sd.closest = cp;
+    finish_signed(*g.index, g.queries[at], g.method, &sd);
+    g.results[at] = sd.distance;
+  };
+  SPLINTCORE_RETURN_IF_ERROR(detail::region_closest_points(ctx, index, queries, place, &signs, &used));
+  if (used) return Status::ok();
   auto answer = [&](size_t at, uint32_t* seed) {
     SignedDistance sd;
     if (closest_within(index, queries[at], HUGE_VAL, &sd.closest, *seed)) {

@@ -1595,6 +1595,104 @@ TEST(DistanceBatch, ManyQueriesAcrossChunks) {
   }
 }
 
+// Batches with at least 4096 queries and half as many as triangles take the region path
+// (regions.cpp), whose answers must be the tree's bit for bit: on soups with duplicate and
+// collinear triangles, open and closed meshes, sharp apexes, ties (a box and queries on a
+// lattice through its corners), queries on and near vertices, edges and faces, far ones
+// (beyond the band, which the tree answers) and non-finite ones; 1 and 3 threads.
+TEST(DistanceBatch, RegionPathSameBitsAsSingleQueries) {
+  Rng rng(0x5eed0052);
+  std::vector<std::pair<std::string, Soup>> shapes = query_shapes(rng);
+  shapes.emplace_back("fine torus", shapes::torus(96, 48, 10, 3));
+  shapes.emplace_back("cone", cone(40, 4, 0, 9));
+  shapes.emplace_back("far sphere", icosphere(3, 0.3, Vec3{80, 40, 60}));
+  Soup cut;
+  for (const SoupTriangle& t : icosphere(4, 2.5, Vec3{})) {
+    if ((t.p[0][0] + t.p[1][0] + t.p[2][0]) / 3 < 1.0f) cut.push_back(t);
+  }
+  shapes.emplace_back("cut ball", cut);
+  struct Stages {
+    bool regions = false;
+  };
+  Progress progress;
+  progress.report = [](void* user, const char* stage, uint64_t, uint64_t) {
+    if (std::strcmp(stage, "closest points, by regions") == 0) static_cast<Stages*>(user)->regions = true;
+    return true;
+  };
+  for (const auto& shape : shapes) {
+    auto b = build(shape.second, 4, size_t{256} << 20, shape.first == "torus");
+    const Mesh& m = b->mesh;
+    std::vector<Vec3> q = query_points(m, rng, 2000, 400);
+    // Near the surface: a point of a random triangle moved along a random direction.
+    const uint32_t nt = static_cast<uint32_t>(m.triangles.size());
+    for (int i = 0; i < 2000; ++i) {
+      const uint32_t t = rng.below(nt);
+      double u = rng.uniform(0, 1), w = rng.uniform(0, 1);
+      if (u + w > 1) {
+        u = 1 - u;
+        w = 1 - w;
+      }
+      const Vec3 p = corner(m, t, 0) + (corner(m, t, 1) - corner(m, t, 0)) * u + (corner(m, t, 2) - corner(m, t, 0)) * w;
+      q.push_back(p + rng.unit() * rng.uniform(0, 0.5));
+    }
+    // A lattice through the box's corners (and any shape's): exact ties.
+    const Aabb box = bounds_of(m);
+    const Vec3 step = box.extent() * 0.125;
+    for (int x = -2; x <= 10; ++x) {
+      for (int y = -2; y <= 10; ++y) {
+        for (int z = -2; z <= 10; z += 2) q.push_back(box.lo + Vec3{step.x * x, step.y * y, step.z * z});
+      }
+    }
+    q.push_back(Vec3{NAN, 0, 0});
+    q.push_back(Vec3{0, HUGE_VAL, 0});
+    q.push_back(box.hi + box.extent() * 50.0);
+    ASSERT_GE(q.size(), 4096u);
+    ASSERT_GE(q.size(), m.triangles.size() / 2) << shape.first;
+    std::vector<ClosestPoint> single(q.size());
+    std::vector<char> found(q.size());
+    for (size_t i = 0; i < q.size(); ++i) found[i] = closest_point(b->index, q[i], &single[i]);
+    for (unsigned threads : {1u, 3u}) {
+      ThreadExecutor pool(threads);
+      Stages stages;
+      progress.user = &stages;
+      Context ctx(&b->arena->arena, &pool.executor(), &progress);
+      std::vector<ClosestPoint> got(q.size());
+      SPLINTCORE_ASSERT_OK(batch_closest_points(ctx, b->index, Span<const Vec3>(q.data(), q.size()),
+                                                Span<ClosestPoint>(got.data(), got.size())));
+      EXPECT_TRUE(stages.regions) << shape.first;
+      int failures = 0;
+      for (size_t i = 0; i < q.size() && failures < 5; ++i) {
+        if (!found[i]) {
+          EXPECT_EQ(got[i].distance, 0.0);
+          continue;
+        }
+        const bool same = got[i].triangle == single[i].triangle && same_bits(got[i].distance, single[i].distance) &&
+                          same_bits(got[i].point, single[i].point) && got[i].feature == single[i].feature &&
+                          got[i].feature_index == single[i].feature_index;
+        if (!same) {
+          ++failures;
+          ADD_FAILURE() << shape.first << " threads " << threads << " query " << i << " (" << q[i].x << ", "
+                        << q[i].y << ", " << q[i].z << "): batch triangle " << got[i].triangle << " distance "
+                        << got[i].distance << ", single " << single[i].triangle << " " << single[i].distance;
+        }
+      }
+      ASSERT_EQ(failures, 0);
+      for (SignMethod method : {SignMethod::kPseudonormal, SignMethod::kWindingNumber}) {
+        // Winding numbers are slow to check one by one: once, on the open and imperfect meshes.
+        if (method == SignMethod::kWindingNumber && (threads != 1 || b->index.closed_manifold)) continue;
+        std::vector<double> d(q.size());
+        SPLINTCORE_ASSERT_OK(batch_signed_distances(ctx, b->index, Span<const Vec3>(q.data(), q.size()), method,
+                                                    Span<double>(d.data(), d.size())));
+        for (size_t i = 0; i < q.size(); i += method == SignMethod::kWindingNumber ? 5 : 1) {
+          SignedDistance sd;
+          const double want = signed_distance(b->index, q[i], method, &sd) ? sd.distance : HUGE_VAL;
+          ASSERT_TRUE(same_bits(d[i], want)) << shape.first << " method " << static_cast<int>(method) << " i " << i;
+        }
+      }
+    }
+  }
+}
+
 // =============================================================================================
 // 7. The narrow-band SDF sampler.
 
