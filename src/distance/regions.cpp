@@ -59,6 +59,8 @@ struct Region {
   uint32_t candidates[2] = {0, 0};
   uint32_t candidate_count = 0;
   uint32_t vertex = kNoNeighbor;
+  bool face = false;  // a prism: planes[3] is the top, n . x <= h0 + R
+  double h0 = 0;
 };
 
 // A triangle's unit normal and unit inward edge normals (m[k] for edge k, v[k] -> v[k+1]);
@@ -74,14 +76,21 @@ inline double max3(double a, double b, double c) {
   return ab > c ? ab : c;
 }
 
-Frame frame_of(const Vec3 p[3]) {
-  Frame f;
+// The unnormalised normal of triangle p, and whether all its angles' sines exceed 2^-10.
+inline bool well_shaped(const Vec3 p[3], Vec3* n, double* n2) {
   const Vec3 ab = p[1] - p[0], ac = p[2] - p[0], bc = p[2] - p[1];
-  const Vec3 n = cross(ab, ac);
-  const double n2 = dot(n, n);
+  *n = cross(ab, ac);
+  *n2 = dot(*n, *n);
   const double lab = dot(ab, ab), lac = dot(ac, ac), lbc = dot(bc, bc);
   // |n| = |ab| |ac| sin A = |ab| |bc| sin B = |ac| |bc| sin C.
-  if (!(n2 > max3(lab * lac, lab * lbc, lac * lbc) * 0x1p-20)) return f;
+  return *n2 > max3(lab * lac, lab * lbc, lac * lbc) * 0x1p-20;
+}
+
+Frame frame_of(const Vec3 p[3]) {
+  Frame f;
+  Vec3 n;
+  double n2 = 0;
+  if (!well_shaped(p, &n, &n2)) return f;
   f.n = n * (1.0 / std::sqrt(n2));
   for (int k = 0; k < 3; ++k) {
     const Vec3 m = cross(f.n, p[(k + 1) % 3] - p[k]);
@@ -94,36 +103,36 @@ Frame frame_of(const Vec3 p[3]) {
 // A convex polytope by its corners, each with the set of its planes (bits), clipped plane by
 // plane: a new corner where an edge (two corners sharing two planes) crosses the plane. Only
 // the corners are needed: their hull bounds the region for the bucket scan.
-// Its arrays are built once per task (Vec3 zeroes itself) and reused.
+// Two buffers, the current one and the one a clip writes; built once per task (Vec3 zeroes
+// itself) and reused.
 struct Hull {
-  Vec3 p[kMaxHull];
-  uint64_t planes[kMaxHull];
-  Vec3 kept[kMaxHull];
-  uint64_t kept_planes[kMaxHull];
+  Vec3 points[2][kMaxHull];
+  uint64_t planes[2][kMaxHull];
+  uint32_t current = 0;
   uint32_t n = 0;
   bool ok = true;
 
+  const Vec3& point(uint32_t i) const { return points[current][i]; }
   void cube(const Vec3& c, double r) {
+    current = 0;
     n = 0;
     ok = true;
     for (uint32_t i = 0; i < 8; ++i) {
-      p[n] = Vec3{(i & 1) ? c.x + r : c.x - r, (i & 2) ? c.y + r : c.y - r,
-                  (i & 4) ? c.z + r : c.z - r};
-      planes[n++] = (uint64_t{1} << ((i & 1) ? 1 : 0)) | (uint64_t{1} << ((i & 2) ? 3 : 2)) |
-                    (uint64_t{1} << ((i & 4) ? 5 : 4));
+      points[0][n] = Vec3{(i & 1) ? c.x + r : c.x - r, (i & 2) ? c.y + r : c.y - r,
+                          (i & 4) ? c.z + r : c.z - r};
+      planes[0][n++] = (uint64_t{1} << ((i & 1) ? 1 : 0)) | (uint64_t{1} << ((i & 2) ? 3 : 2)) |
+                       (uint64_t{1} << ((i & 4) ? 5 : 4));
     }
   }
   void clip(const Plane& plane, uint32_t bit) {
+    const Vec3* p = points[current];
+    const uint64_t* pl = planes[current];
+    Vec3* kept = points[current ^ 1];
+    uint64_t* kept_planes = planes[current ^ 1];
     double s[kMaxHull];
-    bool any_out = false;
-    for (uint32_t i = 0; i < n; ++i) {
-      s[i] = dot(plane.n, p[i]) - plane.off;
-      any_out = any_out || s[i] > 0;
-    }
-    if (!ok || !any_out) return;
-    uint32_t k = 0;
     uint8_t in[kMaxHull], out[kMaxHull];
-    uint32_t in_count = 0, out_count = 0;
+    uint32_t in_count = 0, out_count = 0, k = 0;
+    for (uint32_t i = 0; i < n; ++i) s[i] = dot(plane.n, p[i]) - plane.off;
     for (uint32_t i = 0; i < n; ++i) {
       if (s[i] > 0) {
         out[out_count++] = static_cast<uint8_t>(i);
@@ -131,13 +140,14 @@ struct Hull {
       }
       if (s[i] < 0) in[in_count++] = static_cast<uint8_t>(i);
       kept[k] = p[i];
-      kept_planes[k++] = planes[i] | (s[i] == 0 ? uint64_t{1} << bit : 0);
+      kept_planes[k++] = pl[i] | (s[i] == 0 ? uint64_t{1} << bit : 0);
     }
+    if (!ok || out_count == 0) return;
     for (uint32_t a = 0; a < in_count; ++a) {
       const uint32_t i = in[a];
       for (uint32_t c = 0; c < out_count; ++c) {
         const uint32_t j = out[c];
-        const uint64_t common = planes[i] & planes[j];
+        const uint64_t common = pl[i] & pl[j];
         if ((common & (common - 1)) == 0) continue;  // fewer than two planes: not an edge
         if (k == kMaxHull) {
           ok = false;
@@ -148,10 +158,7 @@ struct Hull {
       }
     }
     n = k;
-    for (uint32_t i = 0; i < k; ++i) {
-      p[i] = kept[i];
-      planes[i] = kept_planes[i];
-    }
+    current ^= 1;
   }
 };
 
@@ -160,6 +167,7 @@ struct Hull {
 struct Buckets {
   Vec3 lo{};
   double h = 1;
+  double inv_h = 1;  // 1 / h
   uint32_t dims[3] = {1, 1, 1};
   uint32_t* start = nullptr;
   Vec3* points = nullptr;
@@ -171,7 +179,7 @@ struct Buckets {
   // floor(), which is a library call without SSE4.1: the same for the non-negative values
   // it converts).
   uint32_t cell_along(double x, int axis) const {
-    const double c = (x - lo[axis]) / h;
+    const double c = (x - lo[axis]) * inv_h;
     if (!(c >= 1)) return 0;
     return c >= dims[axis] - 1.0 ? dims[axis] - 1 : static_cast<uint32_t>(c);
   }
@@ -204,6 +212,7 @@ struct TriangleRegions {
     g.count = 0;
     g.candidate_count = 0;
     g.vertex = kNoNeighbor;
+    g.face = false;
     return g;
   }
   void add_point(const Vec3& p) {
@@ -223,6 +232,7 @@ struct Scan {
   double band = 0;   // B
   double reach = 0;  // R = B + mu
   double mu = 0;
+  double slack = 0;  // over the rounding of a computed height or distance
 };
 
 void build_regions(const Scan& s, uint32_t t, TriangleRegions* out) {
@@ -263,6 +273,8 @@ void build_regions(const Scan& s, uint32_t t, TriangleRegions* out) {
     if (f.ok) {
       for (int k = 0; k < 3; ++k) g.planes[g.count++] = Plane{f.m[k] * -1.0, mu - dot(f.m[k], p[k])};
       const double h0 = dot(f.n, p[0]);
+      g.face = true;
+      g.h0 = h0;
       g.planes[g.count++] = Plane{f.n, h0 + r};
       g.planes[g.count++] = Plane{f.n * -1.0, r - h0};
       for (const Vec3& c : p) {
@@ -303,10 +315,14 @@ void build_regions(const Scan& s, uint32_t t, TriangleRegions* out) {
       g.candidates[g.candidate_count++] = t2;
       const Triangle& tri2 = mesh.triangles[t2];
       const Vec3 p2[3] = {v[tri2.v[0]], v[tri2.v[1]], v[tri2.v[2]]};
-      const Frame f2 = frame_of(p2);
-      int k2 = 0;
-      while (k2 < 2 && neighbors[3 * size_t{t2} + static_cast<size_t>(k2)] != t) ++k2;
-      if (f2.ok) sides[side_count++] = f2.m[k2];
+      // The neighbour's inward normal of this edge (it runs b -> a there): n2 x (a - b) / len,
+      // as frame_of() would give it.
+      Vec3 n2;
+      double n22 = 0;
+      if (well_shaped(p2, &n2, &n22)) {
+        const Vec3 m2 = cross(n2 * (1.0 / std::sqrt(n22)), a - b);
+        sides[side_count++] = m2 * (1.0 / length(m2));
+      }
     }
     for (int i = 0; i < side_count; ++i) g.planes[g.count++] = Plane{sides[i], dot(sides[i], a) + mu};
     // Its bounds: the square of side 2R across the edge (it holds the disc of radius R),
@@ -383,7 +399,7 @@ void build_regions(const Scan& s, uint32_t t, TriangleRegions* out) {
     hull.cube(c, r);
     for (uint32_t i = 0; i < g.count; ++i) hull.clip(g.planes[i], 6 + i);
     if (!hull.ok) hull.cube(c, r);
-    for (uint32_t i = 0; i < hull.n; ++i) tr.add_point(hull.p[i]);
+    for (uint32_t i = 0; i < hull.n; ++i) tr.add_point(hull.point(i));
   }
   tr.u0 -= mu;
   tr.u1 += mu;
@@ -456,6 +472,11 @@ void scan_triangle(const Scan& s, const TriangleRegions& tr, const uint32_t cell
           for (uint32_t i = 0; i < tr.count; ++i) {
             const Region& g = tr.regions[i];
             if (!inside(g, q)) continue;
+            if (g.face) {
+              // Its plane already lies farther than the best so far: it cannot win or tie.
+              const double h = std::fabs(dot(g.planes[3].n, q) - g.h0) - s.slack;
+              if (h > 0 && h * h > b.best2[j] + b.best2[j] * 0x1p-30) continue;
+            }
             if (g.vertex == kNoNeighbor) {
               for (uint32_t k = 0; k < g.candidate_count; ++k) {
                 offer(mesh, g.candidates[k], q, &b.best2[j], &b.best[j]);
@@ -518,6 +539,7 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
   s.mu = std::ldexp(1.0, exponent >= 0 ? (exponent + 2) / 3 : -((-exponent) / 3));
   s.mu = s.mu > (scale + band) * 0x1p-36 ? s.mu : (scale + band) * 0x1p-36;
   s.reach = band + s.mu;
+  s.slack = scale * 0x1p-40;
   // Queries farther than that from the mesh's box cannot have an answer within the band: the
   // tree answers them (they would only stretch the grid).
   Aabb near_box;
@@ -550,6 +572,7 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
     if (cells <= 2 * uint64_t{nu} + 1024) break;
     b.h *= 1.25;
   }
+  b.inv_h = 1.0 / b.h;
   const uint32_t tasks = ctx.executor != nullptr && ctx.executor->concurrency > 1
                              ? (ctx.executor->concurrency < b.dims[2] ? ctx.executor->concurrency : b.dims[2])
                              : 1;
