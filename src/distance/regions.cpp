@@ -132,8 +132,8 @@ struct Hull {
     double s[kMaxHull];
     uint8_t in[kMaxHull], out[kMaxHull];
     uint32_t in_count = 0, out_count = 0, k = 0;
-    for (uint32_t i = 0; i < n; ++i) s[i] = dot(plane.n, p[i]) - plane.off;
     for (uint32_t i = 0; i < n; ++i) {
+      s[i] = dot(plane.n, p[i]) - plane.off;
       if (s[i] > 0) {
         out[out_count++] = static_cast<uint8_t>(i);
         continue;
