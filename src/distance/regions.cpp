@@ -27,8 +27,15 @@
 //
 // B comes from a sample of the batch (the tree's distances for 256 queries); a query whose
 // best candidate lies beyond B is answered by the tree. Used when the batch has at least
-// half as many queries as the mesh has triangles, and the arena holds the buckets (about
-// 50 bytes a query); otherwise the tree answers all (query.cpp).
+// 4096 queries and half as many as the mesh has triangles, a query meets at most about 4
+// face regions (estimated: 2 B times the mesh's area over the volume the queries fill), and
+// the arena holds the buckets (about 46 bytes a query); otherwise the tree answers all
+// (query.cpp).
+//
+// Cost: the pass over the triangles (regions and their bounds, about 4k instructions a
+// triangle) and the scan (each triangle tests the queries of the cells its bounds cover,
+// about 30 instructions each, and the few inside its regions exactly); the queries' own
+// share is their bucketing and one or two exact point-triangle distances.
 #include <cmath>
 #include <new>
 
@@ -38,7 +45,6 @@ namespace splintcore {
 namespace {
 
 constexpr uint32_t kMaxPlanes = 24;     // a vertex with more neighbours keeps the first ones
-constexpr uint32_t kMaxHull = 64;       // corners of a clipped vertex cube
 constexpr size_t kMinQueries = 4096;    // smaller batches: the tree
 constexpr uint32_t kSample = 256;       // queries whose tree distances set the band
 constexpr uint32_t kRound = 1u << 15;   // triangles between progress reports
@@ -100,81 +106,63 @@ Frame frame_of(const Vec3 p[3]) {
   return f;
 }
 
-// A convex polytope by its corners, each with the set of its planes (bits), clipped plane by
-// plane: a new corner where an edge (two corners sharing two planes) crosses the plane. Only
-// the corners are needed: their hull bounds the region for the bucket scan.
-// Two buffers, the current one and the one a clip writes; built once per task (Vec3 zeroes
-// itself) and reused.
-struct Hull {
-  Vec3 points[2][kMaxHull];
-  uint64_t planes[2][kMaxHull];
-  uint32_t current = 0;
+// A convex polygon in the 2D coordinates of a plane, clipped by half-planes
+// cx x + cy y <= rhs (Sutherland-Hodgman: a new corner where an edge crosses the line, on
+// that edge). Each clip adds at most one corner; should rounding make it more than the room
+// left, the clip is skipped (the polygon stays a superset, which is all a bound needs).
+struct Polygon {
+  static constexpr uint32_t kCapacity = kMaxPlanes + 4;
+  double x[kCapacity];
+  double y[kCapacity];
   uint32_t n = 0;
-  bool ok = true;
 
-  const Vec3& point(uint32_t i) const { return points[current][i]; }
-  void cube(const Vec3& c, double r) {
-    current = 0;
-    n = 0;
-    ok = true;
-    for (uint32_t i = 0; i < 8; ++i) {
-      points[0][n] = Vec3{(i & 1) ? c.x + r : c.x - r, (i & 2) ? c.y + r : c.y - r,
-                          (i & 4) ? c.z + r : c.z - r};
-      planes[0][n++] = (uint64_t{1} << ((i & 1) ? 1 : 0)) | (uint64_t{1} << ((i & 2) ? 3 : 2)) |
-                       (uint64_t{1} << ((i & 4) ? 5 : 4));
-    }
+  void square(double r) {
+    x[0] = -r, y[0] = -r;
+    x[1] = r, y[1] = -r;
+    x[2] = r, y[2] = r;
+    x[3] = -r, y[3] = r;
+    n = 4;
   }
-  void clip(const Plane& plane, uint32_t bit) {
-    const Vec3* p = points[current];
-    const uint64_t* pl = planes[current];
-    Vec3* kept = points[current ^ 1];
-    uint64_t* kept_planes = planes[current ^ 1];
-    double s[kMaxHull];
-    uint8_t in[kMaxHull], out[kMaxHull];
-    uint32_t in_count = 0, out_count = 0, k = 0;
-    for (uint32_t i = 0; i < n; ++i) {
-      s[i] = dot(plane.n, p[i]) - plane.off;
-      if (s[i] > 0) {
-        out[out_count++] = static_cast<uint8_t>(i);
-        continue;
+  void clip(double cx, double cy, double rhs) {
+    double kx[kCapacity], ky[kCapacity];
+    uint32_t k = 0;
+    for (uint32_t j = 0; j < n; ++j) {
+      if (k + 2 > kCapacity) return;
+      const uint32_t jn = j + 1 < n ? j + 1 : 0;
+      const double s0 = cx * x[j] + cy * y[j] - rhs, s1 = cx * x[jn] + cy * y[jn] - rhs;
+      if (s0 <= 0) {
+        kx[k] = x[j];
+        ky[k++] = y[j];
       }
-      if (s[i] < 0) in[in_count++] = static_cast<uint8_t>(i);
-      kept[k] = p[i];
-      kept_planes[k++] = pl[i] | (s[i] == 0 ? uint64_t{1} << bit : 0);
-    }
-    if (!ok || out_count == 0) return;
-    for (uint32_t a = 0; a < in_count; ++a) {
-      const uint32_t i = in[a];
-      for (uint32_t c = 0; c < out_count; ++c) {
-        const uint32_t j = out[c];
-        const uint64_t common = pl[i] & pl[j];
-        if ((common & (common - 1)) == 0) continue;  // fewer than two planes: not an edge
-        if (k == kMaxHull) {
-          ok = false;
-          return;
-        }
-        kept[k] = p[i] + (p[j] - p[i]) * (s[i] / (s[i] - s[j]));
-        kept_planes[k++] = common | (uint64_t{1} << bit);
+      if ((s0 < 0 && s1 > 0) || (s0 > 0 && s1 < 0)) {
+        const double c = s0 / (s0 - s1);
+        kx[k] = x[j] + (x[jn] - x[j]) * c;
+        ky[k++] = y[j] + (y[jn] - y[j]) * c;
       }
     }
     n = k;
-    current ^= 1;
+    for (uint32_t j = 0; j < n; ++j) {
+      x[j] = kx[j];
+      y[j] = ky[j];
+    }
   }
 };
 
-// The queries in buckets: cell (x, y, z) of side h from lo holds points[start[c] ..
-// start[c + 1]) with c = x + dims[0] (y + dims[1] z); ids[] are their indices in the batch.
+// The queries in buckets: cell (x, y, z) of side h from lo holds points j in [start[c],
+// start[c + 1]) with c = x + dims[0] (y + dims[1] z); point j is at coords[3 j ..], and
+// ids[j] is its index in the batch.
 struct Buckets {
   Vec3 lo{};
   double h = 1;
   double inv_h = 1;  // 1 / h
   uint32_t dims[3] = {1, 1, 1};
   uint32_t* start = nullptr;
-  Vec3* points = nullptr;
+  double* coords = nullptr;  // x, y, z of each point (indexed by axis in the scan)
   uint32_t* ids = nullptr;
   double* best2 = nullptr;
   uint32_t* best = nullptr;
 
+  Vec3 point(size_t j) const { return Vec3{coords[3 * j], coords[3 * j + 1], coords[3 * j + 2]}; }
   // The cell index along `axis` of coordinate x, clamped to the grid (a conversion, not
   // floor(), which is a library call without SSE4.1: the same for the non-negative values
   // it converts).
@@ -192,28 +180,35 @@ inline bool usable(const Vec3& q) {
   return std::fabs(q.x) <= 0x1p40 && std::fabs(q.y) <= 0x1p40 && std::fabs(q.z) <= 0x1p40;
 }
 
-// One triangle's regions (those it owns: its face, its edges unless the neighbour across has a
-// smaller id, and each vertex whose first corner is its), and the bounds of their union for
-// the scan: a box in coordinates sheared along the scan direction `dir`.
-struct TriangleRegions {
-  Region regions[7];
-  uint32_t count = 0;
-  Hull hull;  // scratch for the vertex regions' bounds
-  int ax = 2, u = 0, w = 1;  // the scan walks cells along ax, the dominant axis of dir
-  double ru = 0, rw = 0;     // dir[u] / dir[ax], dir[w] / dir[ax]
-  // The sheared coordinates as dot products (no indexing in the loops): x[u] - x[ax] ru,
-  // x[w] - x[ax] rw, x[ax].
+// A box in coordinates sheared along a scan direction dir: the scan walks cells along ax,
+// the dominant axis of dir, and the coordinates are x[u] - x[ax] ru, x[w] - x[ax] rw, x[ax]
+// (ru = dir[u] / dir[ax], rw = dir[w] / dir[ax]), as dot products (no indexing in the loops).
+// Near a surface with normal dir, the box of a thin slab along it is as thin as the slab.
+struct ShearedBox {
+  int ax = 2, u = 0, w = 1;
+  double ru = 0, rw = 0;
   Vec3 cu{}, cw{}, cz{};
   double u0 = HUGE_VAL, u1 = -HUGE_VAL, w0 = HUGE_VAL, w1 = -HUGE_VAL, z0 = HUGE_VAL, z1 = -HUGE_VAL;
-  Aabb reach;  // the triangle's box grown by R: every region point within R of it lies here
+  Aabb reach;  // an axis-aligned box that holds everything the box must hold (it clips it)
 
-  Region& take() {
-    Region& g = regions[count++];
-    g.count = 0;
-    g.candidate_count = 0;
-    g.vertex = kNoNeighbor;
-    g.face = false;
-    return g;
+  // Empty, along dir (not zero).
+  void start(const Vec3& dir) {
+    ax = 0;
+    for (int k = 1; k < 3; ++k) ax = std::fabs(dir[k]) > std::fabs(dir[ax]) ? k : ax;
+    u = (ax + 1) % 3;
+    w = (ax + 2) % 3;
+    ru = dir[u] / dir[ax];
+    rw = dir[w] / dir[ax];
+    cu = Vec3{};
+    cu[u] = 1;
+    cu[ax] = -ru;
+    cw = Vec3{};
+    cw[w] = 1;
+    cw[ax] = -rw;
+    cz = Vec3{};
+    cz[ax] = 1;
+    u0 = w0 = z0 = HUGE_VAL;
+    u1 = w1 = z1 = -HUGE_VAL;
   }
   void add_point(const Vec3& p) {
     const double pu = dot(cu, p), pw = dot(cw, p), pz = dot(cz, p);
@@ -223,6 +218,63 @@ struct TriangleRegions {
     w1 = pw > w1 ? pw : w1;
     z0 = pz < z0 ? pz : z0;
     z1 = pz > z1 ? pz : z1;
+  }
+  // Adds segment ab swept by the offsets d[0 .. n): the box of a sum is the sum of the boxes
+  // (half the products of adding both ends of every offset).
+  void add_swept(const Vec3& a, const Vec3& b, const Vec3* d, uint32_t n) {
+    if (n == 0) return;
+    double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    for (uint32_t i = 0; i < n; ++i) {
+      const double p[3] = {dot(cu, d[i]), dot(cw, d[i]), dot(cz, d[i])};
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = p[k] < lo[k] ? p[k] : lo[k];
+        hi[k] = p[k] > hi[k] ? p[k] : hi[k];
+      }
+    }
+    const double pa[3] = {dot(cu, a), dot(cw, a), dot(cz, a)};
+    const double pb[3] = {dot(cu, b), dot(cw, b), dot(cz, b)};
+    double* const box_lo[3] = {&u0, &w0, &z0};
+    double* const box_hi[3] = {&u1, &w1, &z1};
+    for (int k = 0; k < 3; ++k) {
+      const double l = lo[k] + (pa[k] < pb[k] ? pa[k] : pb[k]);
+      const double h = hi[k] + (pa[k] > pb[k] ? pa[k] : pb[k]);
+      *box_lo[k] = l < *box_lo[k] ? l : *box_lo[k];
+      *box_hi[k] = h > *box_hi[k] ? h : *box_hi[k];
+    }
+  }
+  // Grown by m on every side (for the rounding of the points added), along ax within reach.
+  void grow(double m) {
+    u0 -= m;
+    u1 += m;
+    w0 -= m;
+    w1 += m;
+    z0 = (z0 - m > reach.lo[ax]) ? z0 - m : reach.lo[ax];
+    z1 = (z1 + m < reach.hi[ax]) ? z1 + m : reach.hi[ax];
+  }
+  // Whether point q (x, y, z) lies in the box: the sheared coordinates from the axes (two
+  // products, where the dot products take nine), and one branch for the six comparisons
+  // (about one query in ten passes a triangle's box).
+  bool contains(const double* q) const {
+    const double qz = q[ax], qu = q[u] - ru * qz, qw = q[w] - rw * qz;
+    return (qu >= u0) & (qu <= u1) & (qw >= w0) & (qw <= w1) & (qz >= z0) & (qz <= z1);
+  }
+};
+
+// One triangle's regions (those it owns: its face, its edges unless the neighbour across has a
+// smaller id, and each vertex whose first corner is its), and the bounds of their union for
+// the scan, sheared along the triangle's normal.
+struct TriangleRegions {
+  Region regions[7];
+  uint32_t count = 0;
+  ShearedBox box;
+
+  Region& take() {
+    Region& g = regions[count++];
+    g.count = 0;
+    g.candidate_count = 0;
+    g.vertex = kNoNeighbor;
+    g.face = false;
+    return g;
   }
 };
 
@@ -244,27 +296,24 @@ void build_regions(const Scan& s, uint32_t t, TriangleRegions* out) {
   const double mu = s.mu, r = s.reach;
   TriangleRegions& tr = *out;
   tr.count = 0;
-  tr.u0 = tr.z0 = tr.w0 = HUGE_VAL;
-  tr.u1 = tr.z1 = tr.w1 = -HUGE_VAL;
+  ShearedBox& sb = tr.box;
   const Vec3 dir = f.ok ? f.n : Vec3{0, 0, 1};
-  tr.ax = 0;
-  for (int k = 1; k < 3; ++k) tr.ax = std::fabs(dir[k]) > std::fabs(dir[tr.ax]) ? k : tr.ax;
-  tr.u = (tr.ax + 1) % 3;
-  tr.w = (tr.ax + 2) % 3;
-  tr.ru = dir[tr.u] / dir[tr.ax];
-  tr.rw = dir[tr.w] / dir[tr.ax];
-  tr.cu = Vec3{};
-  tr.cu[tr.u] = 1;
-  tr.cu[tr.ax] = -tr.ru;
-  tr.cw = Vec3{};
-  tr.cw[tr.w] = 1;
-  tr.cw[tr.ax] = -tr.rw;
-  tr.cz = Vec3{};
-  tr.cz[tr.ax] = 1;
+  sb.start(dir);
+  // Two unit vectors across dir (for the vertex regions' bounds).
+  Vec3 across[2];
+  {
+    int least = 0;
+    for (int k = 1; k < 3; ++k) least = std::fabs(dir[k]) < std::fabs(dir[least]) ? k : least;
+    Vec3 axis{};
+    axis[least] = 1;
+    const Vec3 a1 = cross(dir, axis);
+    across[0] = a1 * (1.0 / length(a1));
+    across[1] = cross(dir, across[0]);
+  }
   Aabb box;
   for (const Vec3& c : p) box.add(c);
-  tr.reach.lo = box.lo - Vec3{r + mu, r + mu, r + mu};
-  tr.reach.hi = box.hi + Vec3{r + mu, r + mu, r + mu};
+  sb.reach.lo = box.lo - Vec3{r + mu, r + mu, r + mu};
+  sb.reach.hi = box.hi + Vec3{r + mu, r + mu, r + mu};
 
   // The face: the prism, or for a thin triangle the box within R of it.
   {
@@ -277,20 +326,17 @@ void build_regions(const Scan& s, uint32_t t, TriangleRegions* out) {
       g.h0 = h0;
       g.planes[g.count++] = Plane{f.n, h0 + r};
       g.planes[g.count++] = Plane{f.n * -1.0, r - h0};
-      for (const Vec3& c : p) {
-        tr.add_point(c + f.n * r);
-        tr.add_point(c - f.n * r);
-      }
+      sb.add_swept(f.n * -r, f.n * r, p, 3);
     } else {
       for (int a = 0; a < 3; ++a) {
         Vec3 e{};
         e[a] = 1;
-        g.planes[g.count++] = Plane{e, tr.reach.hi[a]};
-        g.planes[g.count++] = Plane{e * -1.0, -tr.reach.lo[a]};
+        g.planes[g.count++] = Plane{e, sb.reach.hi[a]};
+        g.planes[g.count++] = Plane{e * -1.0, -sb.reach.lo[a]};
       }
       for (uint32_t i = 0; i < 8; ++i) {
-        tr.add_point(Vec3{(i & 1) ? tr.reach.hi.x : tr.reach.lo.x, (i & 2) ? tr.reach.hi.y : tr.reach.lo.y,
-                          (i & 4) ? tr.reach.hi.z : tr.reach.lo.z});
+        sb.add_point(Vec3{(i & 1) ? sb.reach.hi.x : sb.reach.lo.x, (i & 2) ? sb.reach.hi.y : sb.reach.lo.y,
+                          (i & 4) ? sb.reach.hi.z : sb.reach.lo.z});
       }
     }
   }
@@ -330,36 +376,12 @@ void build_regions(const Scan& s, uint32_t t, TriangleRegions* out) {
     Vec3 f1 = std::fabs(e.x) < 0.6 ? cross(e, Vec3{1, 0, 0}) : cross(e, Vec3{0, 1, 0});
     f1 = f1 * (1.0 / length(f1));
     const Vec3 f2v = cross(e, f1);
-    double px[8] = {-r, r, r, -r}, py[8] = {-r, -r, r, r};
-    int np = 4;
-    for (int i = 0; i < side_count; ++i) {
-      const double cx = dot(sides[i], f1), cy = dot(sides[i], f2v);
-      double qx[8], qy[8];
-      int nq = 0;
-      for (int j = 0; j < np; ++j) {
-        const int jn = j + 1 < np ? j + 1 : 0;
-        const double s0 = cx * px[j] + cy * py[j] - mu, s1 = cx * px[jn] + cy * py[jn] - mu;
-        if (s0 <= 0) {
-          qx[nq] = px[j];
-          qy[nq++] = py[j];
-        }
-        if ((s0 < 0 && s1 > 0) || (s0 > 0 && s1 < 0)) {
-          const double c = s0 / (s0 - s1);
-          qx[nq] = px[j] + (px[jn] - px[j]) * c;
-          qy[nq++] = py[j] + (py[jn] - py[j]) * c;
-        }
-      }
-      np = nq;
-      for (int j = 0; j < np; ++j) {
-        px[j] = qx[j];
-        py[j] = qy[j];
-      }
-    }
-    for (int j = 0; j < np; ++j) {
-      const Vec3 d = f1 * px[j] + f2v * py[j];
-      tr.add_point(a - e * mu + d);
-      tr.add_point(b + e * mu + d);
-    }
+    Polygon poly;
+    poly.square(r);
+    for (int i = 0; i < side_count; ++i) poly.clip(dot(sides[i], f1), dot(sides[i], f2v), mu);
+    Vec3 d[Polygon::kCapacity];
+    for (uint32_t j = 0; j < poly.n; ++j) d[j] = f1 * poly.x[j] + f2v * poly.y[j];
+    sb.add_swept(a - e * mu, b + e * mu, d, poly.n);
   }
   // The vertices it owns.
   const uint32_t* vstart = s.index->vertex_start.data();
@@ -393,27 +415,33 @@ void build_regions(const Scan& s, uint32_t t, TriangleRegions* out) {
       add(other.v[(corner + 1) % 3]);
       add(other.v[(corner + 2) % 3]);
     }
-    // Its bounds: the cube of side 2R about v clipped by the planes (three well-spread ones
-    // would bound it too, but near a flat vertex much more loosely: twice the time in all).
-    Hull& hull = tr.hull;
-    hull.cube(c, r);
-    for (uint32_t i = 0; i < g.count; ++i) hull.clip(g.planes[i], 6 + i);
-    if (!hull.ok) hull.cube(c, r);
-    for (uint32_t i = 0; i < hull.n; ++i) tr.add_point(hull.point(i));
+    // Its bounds. Only its points within R of v matter (a query farther than that from v
+    // has the vertex beyond the band). Such a point x = v + h a + s a1 + t a2 (a the scan
+    // direction, a1 and a2 across it; |h|, |s|, |t| <= R) meets each plane e . (x - v) <= mu
+    // only if s e.a1 + t e.a2 <= mu + R |e.a|: the square of side 2R clipped by those lines,
+    // swept along a from -R to R, holds them all. At a convex vertex (every e.a <= 0) the
+    // clipped square is the region's own section at h = R, which holds every lower one, so
+    // the bound is about as tight as the region's box; elsewhere the lines move out by at
+    // most R times the edges' tilt out of the triangle's plane.
+    Polygon poly;
+    poly.square(r);
+    for (uint32_t i = 0; i < g.count; ++i) {
+      const Vec3& e = g.planes[i].n;
+      poly.clip(dot(e, across[0]), dot(e, across[1]), mu + r * std::fabs(dot(e, dir)));
+    }
+    Vec3 d[Polygon::kCapacity];
+    for (uint32_t j = 0; j < poly.n; ++j) d[j] = across[0] * poly.x[j] + across[1] * poly.y[j];
+    sb.add_swept(c - dir * r, c + dir * r, d, poly.n);
   }
-  tr.u0 -= mu;
-  tr.u1 += mu;
-  tr.w0 -= mu;
-  tr.w1 += mu;
-  tr.z0 = (tr.z0 - mu > tr.reach.lo[tr.ax]) ? tr.z0 - mu : tr.reach.lo[tr.ax];
-  tr.z1 = (tr.z1 + mu < tr.reach.hi[tr.ax]) ? tr.z1 + mu : tr.reach.hi[tr.ax];
+  sb.grow(mu);
 }
 
+// Every plane tested, no early exit: whether a query is inside is hard to predict, and a
+// mispredicted branch costs more than the few products it would save.
 inline bool inside(const Region& g, const Vec3& q) {
-  for (uint32_t i = 0; i < g.count; ++i) {
-    if (dot(g.planes[i].n, q) > g.planes[i].off) return false;
-  }
-  return true;
+  bool in = true;
+  for (uint32_t i = 0; i < g.count; ++i) in &= dot(g.planes[i].n, q) <= g.planes[i].off;
+  return in;
 }
 
 inline void offer(const Mesh& mesh, uint32_t t, const Vec3& q, double* best2, uint32_t* best) {
@@ -427,68 +455,80 @@ inline void offer(const Mesh& mesh, uint32_t t, const Vec3& q, double* best2, ui
   }
 }
 
-// Offers a triangle's regions to the queries in the cells its bounds cover, among cells
-// [cell_lo[a], cell_hi[a]] along each axis a (a task's share).
-void scan_triangle(const Scan& s, const TriangleRegions& tr, const uint32_t cell_lo[3],
-                   const uint32_t cell_hi[3]) {
+// Offers the triangles of tr's regions that hold query j (at q).
+inline void offer_regions(const Scan& s, const TriangleRegions& tr, const Vec3& q, uint32_t j) {
   const Buckets& b = *s.buckets;
   const Mesh& mesh = *s.index->mesh;
-  const int ax = tr.ax, u = tr.u, w = tr.w;
+  for (uint32_t i = 0; i < tr.count; ++i) {
+    const Region& g = tr.regions[i];
+    if (!inside(g, q)) continue;
+    if (g.face) {
+      // Its plane already lies farther than the best so far: it cannot win or tie.
+      const double h = std::fabs(dot(g.planes[3].n, q) - g.h0) - s.slack;
+      if (h > 0 && h * h > b.best2[j] + b.best2[j] * 0x1p-30) continue;
+    }
+    if (g.vertex == kNoNeighbor) {
+      for (uint32_t k = 0; k < g.candidate_count; ++k) {
+        offer(mesh, g.candidates[k], q, &b.best2[j], &b.best[j]);
+      }
+    } else {
+      const uint32_t* vstart = s.index->vertex_start.data();
+      const uint32_t* vuses = s.index->vertex_uses.data();
+      for (uint32_t k = vstart[g.vertex]; k < vstart[g.vertex + 1]; ++k) {
+        offer(mesh, vuses[k] / 3, q, &b.best2[j], &b.best[j]);
+      }
+    }
+  }
+}
+
+// Calls visit(j) for every query j in box, among cells [cell_lo[a], cell_hi[a]] along each
+// axis a (a task's share): layer by layer along box.ax, each layer's cells by rows along x
+// (a row's queries are one run of the buckets).
+template <typename Visit>
+void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const uint32_t cell_hi[3],
+          Visit&& visit) {
+  const Buckets& b = *s.buckets;
+  const int ax = box.ax, u = box.u, w = box.w;
   const size_t stride[3] = {1, b.dims[0], static_cast<size_t>(b.dims[0]) * b.dims[1]};
-  uint32_t c0 = b.cell_along(tr.z0, ax), c1 = b.cell_along(tr.z1, ax);
+  uint32_t c0 = b.cell_along(box.z0, ax), c1 = b.cell_along(box.z1, ax);
   c0 = c0 > cell_lo[ax] ? c0 : cell_lo[ax];
   c1 = c1 < cell_hi[ax] ? c1 : cell_hi[ax];
   for (uint32_t zc = c0; zc <= c1; ++zc) {
     // The layer's span along ax (with mu for the rounding of the cell index), within the bounds.
     double za = b.lo[ax] + zc * b.h - s.mu, zb = b.lo[ax] + (zc + 1.0) * b.h + s.mu;
-    za = za > tr.z0 ? za : tr.z0;
-    zb = zb < tr.z1 ? zb : tr.z1;
+    za = za > box.z0 ? za : box.z0;
+    zb = zb < box.z1 ? zb : box.z1;
     if (za > zb) continue;
-    double xa = tr.u0 + (za * tr.ru < zb * tr.ru ? za * tr.ru : zb * tr.ru);
-    double xb = tr.u1 + (za * tr.ru > zb * tr.ru ? za * tr.ru : zb * tr.ru);
-    double ya = tr.w0 + (za * tr.rw < zb * tr.rw ? za * tr.rw : zb * tr.rw);
-    double yb = tr.w1 + (za * tr.rw > zb * tr.rw ? za * tr.rw : zb * tr.rw);
-    xa = xa > tr.reach.lo[u] ? xa : tr.reach.lo[u];
-    xb = xb < tr.reach.hi[u] ? xb : tr.reach.hi[u];
-    ya = ya > tr.reach.lo[w] ? ya : tr.reach.lo[w];
-    yb = yb < tr.reach.hi[w] ? yb : tr.reach.hi[w];
+    double xa = box.u0 + (za * box.ru < zb * box.ru ? za * box.ru : zb * box.ru);
+    double xb = box.u1 + (za * box.ru > zb * box.ru ? za * box.ru : zb * box.ru);
+    double ya = box.w0 + (za * box.rw < zb * box.rw ? za * box.rw : zb * box.rw);
+    double yb = box.w1 + (za * box.rw > zb * box.rw ? za * box.rw : zb * box.rw);
+    xa = xa > box.reach.lo[u] ? xa : box.reach.lo[u];
+    xb = xb < box.reach.hi[u] ? xb : box.reach.hi[u];
+    ya = ya > box.reach.lo[w] ? ya : box.reach.lo[w];
+    yb = yb < box.reach.hi[w] ? yb : box.reach.hi[w];
     if (xa > xb || ya > yb) continue;
-    uint32_t uc0 = b.cell_along(xa, u), uc1 = b.cell_along(xb, u);
-    uint32_t wc0 = b.cell_along(ya, w), wc1 = b.cell_along(yb, w);
-    uc0 = uc0 > cell_lo[u] ? uc0 : cell_lo[u];
-    uc1 = uc1 < cell_hi[u] ? uc1 : cell_hi[u];
-    wc0 = wc0 > cell_lo[w] ? wc0 : cell_lo[w];
-    wc1 = wc1 < cell_hi[w] ? wc1 : cell_hi[w];
-    for (uint32_t wc = wc0; wc <= wc1; ++wc) {
-      const size_t row = zc * stride[ax] + wc * stride[w];
-      for (uint32_t uc = uc0; uc <= uc1; ++uc) {
-        const size_t cell = row + uc * stride[u];
-        for (uint32_t j = b.start[cell]; j < b.start[cell + 1]; ++j) {
-          const Vec3& q = b.points[j];
-          const double qu = dot(tr.cu, q), qw = dot(tr.cw, q), qz = dot(tr.cz, q);
-          if (qu < tr.u0 || qu > tr.u1 || qw < tr.w0 || qw > tr.w1 || qz < tr.z0 || qz > tr.z1) {
-            continue;
-          }
-          for (uint32_t i = 0; i < tr.count; ++i) {
-            const Region& g = tr.regions[i];
-            if (!inside(g, q)) continue;
-            if (g.face) {
-              // Its plane already lies farther than the best so far: it cannot win or tie.
-              const double h = std::fabs(dot(g.planes[3].n, q) - g.h0) - s.slack;
-              if (h > 0 && h * h > b.best2[j] + b.best2[j] * 0x1p-30) continue;
-            }
-            if (g.vertex == kNoNeighbor) {
-              for (uint32_t k = 0; k < g.candidate_count; ++k) {
-                offer(mesh, g.candidates[k], q, &b.best2[j], &b.best[j]);
-              }
-            } else {
-              const uint32_t* vstart = s.index->vertex_start.data();
-              const uint32_t* vuses = s.index->vertex_uses.data();
-              for (uint32_t k = vstart[g.vertex]; k < vstart[g.vertex + 1]; ++k) {
-                offer(mesh, vuses[k] / 3, q, &b.best2[j], &b.best[j]);
-              }
-            }
-          }
+    uint32_t lo[3], hi[3];  // the cells along each axis
+    lo[ax] = hi[ax] = zc;
+    lo[u] = b.cell_along(xa, u);
+    hi[u] = b.cell_along(xb, u);
+    lo[w] = b.cell_along(ya, w);
+    hi[w] = b.cell_along(yb, w);
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = lo[a] > cell_lo[a] ? lo[a] : cell_lo[a];
+      hi[a] = hi[a] < cell_hi[a] ? hi[a] : cell_hi[a];
+    }
+    // The test's values in locals: visit() writes through pointers the compiler cannot tell
+    // from the box's, and would have them loaded again for every query.
+    const ShearedBox test = box;
+    const uint32_t* start = b.start;
+    const double* coords = b.coords;
+    for (uint32_t zi = lo[2]; zi <= hi[2]; ++zi) {
+      for (uint32_t yi = lo[1]; yi <= hi[1]; ++yi) {
+        const size_t row = yi * stride[1] + zi * stride[2];
+        const uint32_t end = start[row + hi[0] + 1];
+        for (uint32_t j = start[row + lo[0]]; j < end; ++j) {
+          if (test.contains(coords + 3 * size_t{j})) visit(j);
         }
       }
     }
@@ -579,12 +619,12 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
   b.start = arena.allocate_array<uint32_t>(static_cast<size_t>(cells) + 1);
-  b.points = arena.allocate_array<Vec3>(nu);
+  b.coords = arena.allocate_array<double>(3 * nu);
   b.ids = arena.allocate_array<uint32_t>(nu);
   b.best2 = arena.allocate_array<double>(nu);
   b.best = arena.allocate_array<uint32_t>(nu);
   TriangleRegions* scratch = arena.allocate_array<TriangleRegions>(tasks);
-  if (b.start == nullptr || b.points == nullptr || b.ids == nullptr || b.best2 == nullptr ||
+  if (b.start == nullptr || b.coords == nullptr || b.ids == nullptr || b.best2 == nullptr ||
       b.best == nullptr || scratch == nullptr) {
     return Status::ok();  // the tree answers, in the 2 MB it needs
   }
@@ -612,10 +652,15 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
   for (size_t i = 0; i < n; ++i) {
     if (!bucketed(queries[i])) continue;
     const uint32_t at = b.start[b.cell_of(queries[i])]++;
-    b.points[at] = queries[i];
+    b.coords[3 * size_t{at}] = queries[i].x;
+    b.coords[3 * size_t{at} + 1] = queries[i].y;
+    b.coords[3 * size_t{at} + 2] = queries[i].z;
     b.ids[at] = static_cast<uint32_t>(i);
-    b.best2[at] = HUGE_VAL;
-    b.best[at] = kNoNeighbor;
+  }
+  // (Apart from the placing above: its writes land anywhere, these in order.)
+  for (size_t j = 0; j < nu; ++j) {
+    b.best2[j] = HUGE_VAL;
+    b.best[j] = kNoNeighbor;
   }
   for (uint64_t c = cells; c > 0; --c) b.start[c] = b.start[c - 1];
   b.start[0] = 0;
@@ -648,7 +693,7 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
           continue;
         }
         build_regions(s, t, &tr);
-        scan_triangle(s, tr, cell_lo, cell_hi);
+        walk(s, tr.box, cell_lo, cell_hi, [&](uint32_t at) { offer_regions(s, tr, b.point(at), at); });
       }
     };
     parallel_for_each(ctx.executor, tasks, task);
@@ -664,7 +709,7 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
     const size_t first_query = static_cast<size_t>(i) * kChunk;
     const size_t e = first_query + kChunk < nu ? first_query + kChunk : nu;
     for (size_t j = first_query; j < e; ++j) {
-      const Vec3& q = b.points[j];
+      const Vec3 q = b.point(j);
       ClosestPoint cp;
       bool found = true;
       if (b.best[j] != kNoNeighbor && b.best2[j] <= band2) {
