@@ -38,6 +38,7 @@
 // share is their bucketing and one or two exact point-triangle distances.
 #include <cmath>
 #include <new>
+#include <type_traits>
 
 #include "distance/query_internal.h"
 
@@ -124,12 +125,19 @@ struct Polygon {
     n = 4;
   }
   void clip(double cx, double cy, double rhs) {
+    double side[kCapacity];
+    bool cut = false;
+    for (uint32_t j = 0; j < n; ++j) {
+      side[j] = cx * x[j] + cy * y[j] - rhs;
+      cut |= side[j] > 0;
+    }
+    if (!cut) return;
     double kx[kCapacity], ky[kCapacity];
     uint32_t k = 0;
     for (uint32_t j = 0; j < n; ++j) {
       if (k + 2 > kCapacity) return;
       const uint32_t jn = j + 1 < n ? j + 1 : 0;
-      const double s0 = cx * x[j] + cy * y[j] - rhs, s1 = cx * x[jn] + cy * y[jn] - rhs;
+      const double s0 = side[j], s1 = side[jn];
       if (s0 <= 0) {
         kx[k] = x[j];
         ky[k++] = y[j];
@@ -254,9 +262,12 @@ struct ShearedBox {
   // Whether point q (x, y, z) lies in the box: the sheared coordinates from the axes (two
   // products, where the dot products take nine), and one branch for the six comparisons
   // (about one query in ten passes a triangle's box).
+  // Without the test along ax (for a layer of cells inside the box's span there).
+  template <bool kAlongAx>
   bool contains(const double* q) const {
     const double qz = q[ax], qu = q[u] - ru * qz, qw = q[w] - rw * qz;
-    return (qu >= u0) & (qu <= u1) & (qw >= w0) & (qw <= w1) & (qz >= z0) & (qz <= z1);
+    const bool across = (qu >= u0) & (qu <= u1) & (qw >= w0) & (qw <= w1);
+    return kAlongAx ? across & (qz >= z0) & (qz <= z1) : across;
   }
 };
 
@@ -496,6 +507,8 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const
   for (uint32_t zc = c0; zc <= c1; ++zc) {
     // The layer's span along ax (with mu for the rounding of the cell index), within the bounds.
     double za = b.lo[ax] + zc * b.h - s.mu, zb = b.lo[ax] + (zc + 1.0) * b.h + s.mu;
+    // Every query of a layer within the span passes the test along ax.
+    const bool inner = za >= box.z0 && zb <= box.z1;
     za = za > box.z0 ? za : box.z0;
     zb = zb < box.z1 ? zb : box.z1;
     if (za > zb) continue;
@@ -523,14 +536,21 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const
     const ShearedBox test = box;
     const uint32_t* start = b.start;
     const double* coords = b.coords;
-    for (uint32_t zi = lo[2]; zi <= hi[2]; ++zi) {
-      for (uint32_t yi = lo[1]; yi <= hi[1]; ++yi) {
-        const size_t row = yi * stride[1] + zi * stride[2];
-        const uint32_t end = start[row + hi[0] + 1];
-        for (uint32_t j = start[row + lo[0]]; j < end; ++j) {
-          if (test.contains(coords + 3 * size_t{j})) visit(j);
+    const auto rows = [&](auto along_ax) {
+      for (uint32_t zi = lo[2]; zi <= hi[2]; ++zi) {
+        for (uint32_t yi = lo[1]; yi <= hi[1]; ++yi) {
+          const size_t row = yi * stride[1] + zi * stride[2];
+          const uint32_t end = start[row + hi[0] + 1];
+          for (uint32_t j = start[row + lo[0]]; j < end; ++j) {
+            if (test.contains<decltype(along_ax)::value>(coords + 3 * size_t{j})) visit(j);
+          }
         }
       }
+    };
+    if (inner) {
+      rows(std::false_type{});
+    } else {
+      rows(std::true_type{});
     }
   }
 }
