@@ -312,17 +312,6 @@ void build_regions(const Scan& s, uint32_t t, TriangleRegions* out) {
   ShearedBox& sb = tr.box;
   const Vec3 dir = f.ok ? f.n : Vec3{0, 0, 1};
   sb.start(dir);
-  // Two unit vectors across dir (for the vertex regions' bounds).
-  Vec3 across[2];
-  {
-    int least = 0;
-    for (int k = 1; k < 3; ++k) least = std::fabs(dir[k]) < std::fabs(dir[least]) ? k : least;
-    Vec3 axis{};
-    axis[least] = 1;
-    const Vec3 a1 = cross(dir, axis);
-    across[0] = a1 * (1.0 / length(a1));
-    across[1] = cross(dir, across[0]);
-  }
   Aabb box;
   for (const Vec3& c : p) box.add(c);
   sb.reach.lo = box.lo - Vec3{r + mu, r + mu, r + mu};
@@ -395,12 +384,24 @@ void build_regions(const Scan& s, uint32_t t, TriangleRegions* out) {
     sb.add_swept(a - e * mu, b + e * mu, poly.n,
                  [&](uint32_t j) { return f1 * poly.x[j] + f2v * poly.y[j]; });
   }
-  // The vertices it owns.
+  // The vertices it owns (about one triangle in two owns one).
   const uint32_t* vstart = s.index->vertex_start.data();
   const uint32_t* vuses = s.index->vertex_uses.data();
+  Vec3 across[2];  // two unit vectors across dir, for the bounds; set by the first vertex
+  bool have_across = false;
   for (int k = 0; k < 3; ++k) {
     const uint32_t vi = tri.v[k];
     if (vuses[vstart[vi]] / 3 != t) continue;
+    if (!have_across) {
+      int least = 0;
+      for (int a = 1; a < 3; ++a) least = std::fabs(dir[a]) < std::fabs(dir[least]) ? a : least;
+      Vec3 axis{};
+      axis[least] = 1;
+      const Vec3 a1 = cross(dir, axis);
+      across[0] = a1 * (1.0 / length(a1));
+      across[1] = cross(dir, across[0]);
+      have_across = true;
+    }
     Region& g = tr.take();
     g.vertex = vi;
     const Vec3& c = v[vi];
