@@ -22,16 +22,11 @@ using detail::settle_closest;
 constexpr uint32_t kStack = detail::kTraversalStack;
 constexpr double kFourPi = 12.566370614359172954;
 
-// Four and two lanes: GCC and Clang vector extensions (as in src/mesh/self_intersect.cpp), SSE2
-// on x86-64, NEON on AArch64, lowered to scalar code where there is neither (Cortex-M7). The
-// library is built with -fno-tree-slp-vectorize (cmake/SplintcoreFlags.cmake), so the
-// compiler would not pack these four-wide loops itself. Each lane does the operations the
-// scalar code would, in the same order, and -ffp-contract=off holds for vectors too: the
-// values are the same bits as scalar code's on every platform.
+// Four lanes of float (two of double: query_internal.h), GCC and Clang vector extensions.
 typedef float Float4 __attribute__((vector_size(16)));
 typedef int32_t Mask4 __attribute__((vector_size(16)));
-typedef double Double2 __attribute__((vector_size(16)));
-typedef int64_t Mask2 __attribute__((vector_size(16)));
+using detail::Double2;
+using detail::Mask2;
 
 inline Float4 load4(const float x[4]) {
   Float4 r;

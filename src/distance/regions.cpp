@@ -33,10 +33,11 @@
 // (query.cpp).
 //
 // Cost: the pass over the triangles (regions and their bounds, about 4k instructions a
-// triangle) and the scan (each triangle tests the queries of the cells its bounds cover,
-// about 30 instructions each, and the few inside its regions exactly); the queries' own
-// share is their bucketing and one or two exact point-triangle distances.
+// triangle) and the scan (each triangle tests the queries of the cells its bounds cover, two
+// at a time, about 23 instructions each, and the few inside its regions exactly); the
+// queries' own share is their bucketing and one or two exact point-triangle distances.
 #include <cmath>
+#include <cstring>
 #include <new>
 #include <type_traits>
 
@@ -44,6 +45,9 @@
 
 namespace splintcore {
 namespace {
+
+using detail::Double2;
+using detail::Mask2;
 
 constexpr uint32_t kMaxPlanes = 24;     // a vertex with more neighbours keeps the first ones
 constexpr size_t kMinQueries = 4096;    // smaller batches: the tree
@@ -157,20 +161,21 @@ struct Polygon {
 };
 
 // The queries in buckets: cell (x, y, z) of side h from lo holds points j in [start[c],
-// start[c + 1]) with c = x + dims[0] (y + dims[1] z); point j is at coords[3 j ..], and
-// ids[j] is its index in the batch.
+// start[c + 1]) with c = x + dims[0] (y + dims[1] z); point j is at (coord[0][j], coord[1][j],
+// coord[2][j]), and ids[j] is its index in the batch. Each axis array has one element more
+// than there are points (zero), which the scan's two-lane loads may read.
 struct Buckets {
   Vec3 lo{};
   double h = 1;
   double inv_h = 1;  // 1 / h
   uint32_t dims[3] = {1, 1, 1};
   uint32_t* start = nullptr;
-  double* coords = nullptr;  // x, y, z of each point (indexed by axis in the scan)
+  double* coord[3] = {nullptr, nullptr, nullptr};
   uint32_t* ids = nullptr;
   double* best2 = nullptr;
   uint32_t* best = nullptr;
 
-  Vec3 point(size_t j) const { return Vec3{coords[3 * j], coords[3 * j + 1], coords[3 * j + 2]}; }
+  Vec3 point(size_t j) const { return Vec3{coord[0][j], coord[1][j], coord[2][j]}; }
   // The cell index along `axis` of coordinate x, clamped to the grid (a conversion, not
   // floor(), which is a library call without SSE4.1: the same for the non-negative values
   // it converts).
@@ -260,16 +265,6 @@ struct ShearedBox {
     w1 += m;
     z0 = (z0 - m > reach.lo[ax]) ? z0 - m : reach.lo[ax];
     z1 = (z1 + m < reach.hi[ax]) ? z1 + m : reach.hi[ax];
-  }
-  // Whether point q (x, y, z) lies in the box: the sheared coordinates from the axes (two
-  // products, where the dot products take nine), and one branch for the six comparisons
-  // (about one query in ten passes a triangle's box).
-  // Without the test along ax (for a layer of cells inside the box's span there).
-  template <bool kAlongAx>
-  bool contains(const double* q) const {
-    const double qz = q[ax], qu = q[u] - ru * qz, qw = q[w] - rw * qz;
-    const bool across = (qu >= u0) & (qu <= u1) & (qw >= w0) & (qw <= w1);
-    return kAlongAx ? across & (qz >= z0) & (qz <= z1) : across;
   }
 };
 
@@ -493,15 +488,40 @@ inline void offer_regions(const Scan& s, const TriangleRegions& tr, const Vec3& 
   }
 }
 
+inline Double2 load2(const double* p) {
+  Double2 r;
+  std::memcpy(&r, p, sizeof(r));
+  return r;
+}
+
 // Calls visit(j) for every query j in box, among cells [cell_lo[a], cell_hi[a]] along each
 // axis a (a task's share): layer by layer along box.ax, each layer's cells by rows along x
-// (a row's queries are one run of the buckets).
+// (a row's queries are one run of the buckets). Two queries at a time: their sheared
+// coordinates from the axes (two products, where dot products take nine) and the box's
+// comparisons in two lanes; those inside go to a list without a branch (about one query in
+// ten passes a triangle's box, unpredictably), and visit() runs over the list.
 template <typename Visit>
 void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const uint32_t cell_hi[3],
           Visit&& visit) {
   const Buckets& b = *s.buckets;
   const int ax = box.ax, u = box.u, w = box.w;
   const size_t stride[3] = {1, b.dims[0], static_cast<size_t>(b.dims[0]) * b.dims[1]};
+  // The test's values in locals: visit() writes through pointers the compiler cannot tell
+  // from the box's, and would have them loaded again.
+  const double* const along_u = b.coord[u];
+  const double* const along_w = b.coord[w];
+  const double* const along_z = b.coord[ax];
+  const Double2 ru = {box.ru, box.ru}, rw = {box.rw, box.rw};
+  const Double2 u0 = {box.u0, box.u0}, u1 = {box.u1, box.u1}, w0 = {box.w0, box.w0}, w1 = {box.w1, box.w1};
+  const Double2 z0 = {box.z0, box.z0}, z1 = {box.z1, box.z1};
+  const uint32_t* const start = b.start;
+  constexpr uint32_t kHits = 256;
+  uint32_t hits[kHits];
+  uint32_t hit_count = 0;
+  const auto flush = [&]() {
+    for (uint32_t k = 0; k < hit_count; ++k) visit(hits[k]);
+    hit_count = 0;
+  };
   uint32_t c0 = b.cell_along(box.z0, ax), c1 = b.cell_along(box.z1, ax);
   c0 = c0 > cell_lo[ax] ? c0 : cell_lo[ax];
   c1 = c1 < cell_hi[ax] ? c1 : cell_hi[ax];
@@ -532,18 +552,21 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const
       lo[a] = lo[a] > cell_lo[a] ? lo[a] : cell_lo[a];
       hi[a] = hi[a] < cell_hi[a] ? hi[a] : cell_hi[a];
     }
-    // The test's values in locals: visit() writes through pointers the compiler cannot tell
-    // from the box's, and would have them loaded again for every query.
-    const ShearedBox test = box;
-    const uint32_t* start = b.start;
-    const double* coords = b.coords;
     const auto rows = [&](auto along_ax) {
       for (uint32_t zi = lo[2]; zi <= hi[2]; ++zi) {
         for (uint32_t yi = lo[1]; yi <= hi[1]; ++yi) {
           const size_t row = yi * stride[1] + zi * stride[2];
           const uint32_t end = start[row + hi[0] + 1];
-          for (uint32_t j = start[row + lo[0]]; j < end; ++j) {
-            if (test.contains<decltype(along_ax)::value>(coords + 3 * size_t{j})) visit(j);
+          for (uint32_t j = start[row + lo[0]]; j < end; j += 2) {
+            if (hit_count + 2 > kHits) flush();
+            const Double2 qz = load2(along_z + j);
+            const Double2 qu = load2(along_u + j) - ru * qz, qw = load2(along_w + j) - rw * qz;
+            Mask2 in = (qu >= u0) & (qu <= u1) & (qw >= w0) & (qw <= w1);
+            if (decltype(along_ax)::value) in &= (qz >= z0) & (qz <= z1);
+            hits[hit_count] = j;
+            hit_count += static_cast<uint32_t>(in[0] & 1);
+            hits[hit_count] = j + 1;
+            hit_count += static_cast<uint32_t>(in[1] & 1) & (j + 1 < end ? 1u : 0u);
           }
         }
       }
@@ -554,6 +577,7 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const
       rows(std::true_type{});
     }
   }
+  flush();
 }
 
 }  // namespace
@@ -640,12 +664,13 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
   b.start = arena.allocate_array<uint32_t>(static_cast<size_t>(cells) + 1);
-  b.coords = arena.allocate_array<double>(3 * nu);
+  for (double*& a : b.coord) a = arena.allocate_array<double>(nu + 1);
   b.ids = arena.allocate_array<uint32_t>(nu);
   b.best2 = arena.allocate_array<double>(nu);
   b.best = arena.allocate_array<uint32_t>(nu);
   TriangleRegions* scratch = arena.allocate_array<TriangleRegions>(tasks);
-  if (b.start == nullptr || b.coords == nullptr || b.ids == nullptr || b.best2 == nullptr ||
+  if (b.start == nullptr || b.coord[0] == nullptr || b.coord[1] == nullptr || b.coord[2] == nullptr ||
+      b.ids == nullptr || b.best2 == nullptr ||
       b.best == nullptr || scratch == nullptr) {
     return Status::ok();  // the tree answers, in the 2 MB it needs
   }
@@ -673,9 +698,7 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
   for (size_t i = 0; i < n; ++i) {
     if (!bucketed(queries[i])) continue;
     const uint32_t at = b.start[b.cell_of(queries[i])]++;
-    b.coords[3 * size_t{at}] = queries[i].x;
-    b.coords[3 * size_t{at} + 1] = queries[i].y;
-    b.coords[3 * size_t{at} + 2] = queries[i].z;
+    for (int a = 0; a < 3; ++a) b.coord[a][at] = queries[i][a];
     b.ids[at] = static_cast<uint32_t>(i);
   }
   // (Apart from the placing above: its writes land anywhere, these in order.)
@@ -683,6 +706,7 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
     b.best2[j] = HUGE_VAL;
     b.best[j] = kNoNeighbor;
   }
+  for (double* a : b.coord) a[nu] = 0;
   for (uint64_t c = cells; c > 0; --c) b.start[c] = b.start[c - 1];
   b.start[0] = 0;
 
