@@ -201,9 +201,10 @@ struct ShearedBox {
   int ax = 2, u = 0, w = 1;
   double ru = 0, rw = 0;
   Vec3 cu{}, cw{}, cz{};
-  double u0 = HUGE_VAL, u1 = -HUGE_VAL, w0 = HUGE_VAL, w1 = -HUGE_VAL, z0 = HUGE_VAL, z1 = -HUGE_VAL;
-  Aabb reach;  // an axis-aligned box that holds everything the box must hold (it clips it)
+  Aabb bounds;  // in the sheared coordinates: x along u, y along w, z along ax
+  Aabb reach;   // an axis-aligned box that holds everything the box must hold (it clips it)
 
+  Vec3 sheared(const Vec3& p) const { return Vec3{dot(cu, p), dot(cw, p), dot(cz, p)}; }
   // Empty, along dir (not zero).
   void start(const Vec3& dir) {
     ax = 0;
@@ -220,51 +221,28 @@ struct ShearedBox {
     cw[ax] = -rw;
     cz = Vec3{};
     cz[ax] = 1;
-    u0 = w0 = z0 = HUGE_VAL;
-    u1 = w1 = z1 = -HUGE_VAL;
+    bounds = Aabb{};
   }
-  void add_point(const Vec3& p) {
-    const double pu = dot(cu, p), pw = dot(cw, p), pz = dot(cz, p);
-    u0 = pu < u0 ? pu : u0;
-    u1 = pu > u1 ? pu : u1;
-    w0 = pw < w0 ? pw : w0;
-    w1 = pw > w1 ? pw : w1;
-    z0 = pz < z0 ? pz : z0;
-    z1 = pz > z1 ? pz : z1;
-  }
+  void add_point(const Vec3& p) { bounds.add(sheared(p)); }
   // Adds segment ab swept by the offsets offset(0) .. offset(n - 1): the box of a sum is the
   // sum of the boxes (half the products of adding both ends of every offset).
   template <typename Offset>
   void add_swept(const Vec3& a, const Vec3& b, uint32_t n, Offset&& offset) {
     if (n == 0) return;
-    double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-    for (uint32_t i = 0; i < n; ++i) {
-      const Vec3 d = offset(i);
-      const double p[3] = {dot(cu, d), dot(cw, d), dot(cz, d)};
-      for (int k = 0; k < 3; ++k) {
-        lo[k] = p[k] < lo[k] ? p[k] : lo[k];
-        hi[k] = p[k] > hi[k] ? p[k] : hi[k];
-      }
-    }
-    const double pa[3] = {dot(cu, a), dot(cw, a), dot(cz, a)};
-    const double pb[3] = {dot(cu, b), dot(cw, b), dot(cz, b)};
-    double* const box_lo[3] = {&u0, &w0, &z0};
-    double* const box_hi[3] = {&u1, &w1, &z1};
-    for (int k = 0; k < 3; ++k) {
-      const double l = lo[k] + (pa[k] < pb[k] ? pa[k] : pb[k]);
-      const double h = hi[k] + (pa[k] > pb[k] ? pa[k] : pb[k]);
-      *box_lo[k] = l < *box_lo[k] ? l : *box_lo[k];
-      *box_hi[k] = h > *box_hi[k] ? h : *box_hi[k];
-    }
+    Aabb sweep;
+    for (uint32_t i = 0; i < n; ++i) sweep.add(sheared(offset(i)));
+    const Vec3 pa = sheared(a), pb = sheared(b);
+    bounds.add(sweep.lo + min_vec(pa, pb));
+    bounds.add(sweep.hi + max_vec(pa, pb));
   }
   // Grown by m on every side (for the rounding of the points added), along ax within reach.
   void grow(double m) {
-    u0 -= m;
-    u1 += m;
-    w0 -= m;
-    w1 += m;
-    z0 = (z0 - m > reach.lo[ax]) ? z0 - m : reach.lo[ax];
-    z1 = (z1 + m < reach.hi[ax]) ? z1 + m : reach.hi[ax];
+    bounds.lo.x -= m;
+    bounds.hi.x += m;
+    bounds.lo.y -= m;
+    bounds.hi.y += m;
+    bounds.lo.z = (bounds.lo.z - m > reach.lo[ax]) ? bounds.lo.z - m : reach.lo[ax];
+    bounds.hi.z = (bounds.hi.z + m < reach.hi[ax]) ? bounds.hi.z + m : reach.hi[ax];
   }
 };
 
@@ -512,8 +490,9 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const
   const double* const along_w = b.coord[w];
   const double* const along_z = b.coord[ax];
   const Double2 ru = {box.ru, box.ru}, rw = {box.rw, box.rw};
-  const Double2 u0 = {box.u0, box.u0}, u1 = {box.u1, box.u1}, w0 = {box.w0, box.w0}, w1 = {box.w1, box.w1};
-  const Double2 z0 = {box.z0, box.z0}, z1 = {box.z1, box.z1};
+  const Vec3 &blo = box.bounds.lo, &bhi = box.bounds.hi;
+  const Double2 u0 = {blo.x, blo.x}, u1 = {bhi.x, bhi.x}, w0 = {blo.y, blo.y}, w1 = {bhi.y, bhi.y};
+  const Double2 z0 = {blo.z, blo.z}, z1 = {bhi.z, bhi.z};
   const uint32_t* const start = b.start;
   constexpr uint32_t kHits = 256;
   uint32_t hits[kHits];
@@ -522,21 +501,21 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const
     for (uint32_t k = 0; k < hit_count; ++k) visit(hits[k]);
     hit_count = 0;
   };
-  uint32_t c0 = b.cell_along(box.z0, ax), c1 = b.cell_along(box.z1, ax);
+  uint32_t c0 = b.cell_along(blo.z, ax), c1 = b.cell_along(bhi.z, ax);
   c0 = c0 > cell_lo[ax] ? c0 : cell_lo[ax];
   c1 = c1 < cell_hi[ax] ? c1 : cell_hi[ax];
   for (uint32_t zc = c0; zc <= c1; ++zc) {
     // The layer's span along ax (with mu for the rounding of the cell index), within the bounds.
     double za = b.lo[ax] + zc * b.h - s.mu, zb = b.lo[ax] + (zc + 1.0) * b.h + s.mu;
     // Every query of a layer within the span passes the test along ax.
-    const bool inner = za >= box.z0 && zb <= box.z1;
-    za = za > box.z0 ? za : box.z0;
-    zb = zb < box.z1 ? zb : box.z1;
+    const bool inner = za >= blo.z && zb <= bhi.z;
+    za = za > blo.z ? za : blo.z;
+    zb = zb < bhi.z ? zb : bhi.z;
     if (za > zb) continue;
-    double xa = box.u0 + (za * box.ru < zb * box.ru ? za * box.ru : zb * box.ru);
-    double xb = box.u1 + (za * box.ru > zb * box.ru ? za * box.ru : zb * box.ru);
-    double ya = box.w0 + (za * box.rw < zb * box.rw ? za * box.rw : zb * box.rw);
-    double yb = box.w1 + (za * box.rw > zb * box.rw ? za * box.rw : zb * box.rw);
+    double xa = blo.x + (za * box.ru < zb * box.ru ? za * box.ru : zb * box.ru);
+    double xb = bhi.x + (za * box.ru > zb * box.ru ? za * box.ru : zb * box.ru);
+    double ya = blo.y + (za * box.rw < zb * box.rw ? za * box.rw : zb * box.rw);
+    double yb = bhi.y + (za * box.rw > zb * box.rw ? za * box.rw : zb * box.rw);
     xa = xa > box.reach.lo[u] ? xa : box.reach.lo[u];
     xb = xb < box.reach.hi[u] ? xb : box.reach.hi[u];
     ya = ya > box.reach.lo[w] ? ya : box.reach.lo[w];
