@@ -504,33 +504,44 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const
   uint32_t c0 = b.cell_along(blo.z, ax), c1 = b.cell_along(bhi.z, ax);
   c0 = c0 > cell_lo[ax] ? c0 : cell_lo[ax];
   c1 = c1 < cell_hi[ax] ? c1 : cell_hi[ax];
+  // The layers' cells in cell units from the grid's corner (U = (x[u] - lo[u]) / h, and W, Z
+  // likewise), computed once: a point of the box has U - ru Z within [ulo, uhi], W - rw Z
+  // within [wlo, whi], Z within [zlo, zhi], and U, W within the reach. The margins m (mu in
+  // cells) cover the rounding of these values and of a query's cell index (about 2^-40 cells).
+  const double inv_h = b.inv_h, m = s.mu * inv_h;
+  const double lo_u = b.lo[u], lo_w = b.lo[w], lo_z = b.lo[ax];
+  const double ulo = (blo.x - lo_u + box.ru * lo_z) * inv_h - m, uhi = (bhi.x - lo_u + box.ru * lo_z) * inv_h + m;
+  const double wlo = (blo.y - lo_w + box.rw * lo_z) * inv_h - m, whi = (bhi.y - lo_w + box.rw * lo_z) * inv_h + m;
+  const double zlo = (blo.z - lo_z) * inv_h, zhi = (bhi.z - lo_z) * inv_h;
+  const double reach_ulo = (box.reach.lo[u] - lo_u) * inv_h - m, reach_uhi = (box.reach.hi[u] - lo_u) * inv_h + m;
+  const double reach_wlo = (box.reach.lo[w] - lo_w) * inv_h - m, reach_whi = (box.reach.hi[w] - lo_w) * inv_h + m;
+  // A cell index (as Buckets::cell_along: clamped to the grid), then to the task's share.
+  const auto cell = [](double c, uint32_t top, uint32_t share_lo, uint32_t share_hi) {
+    uint32_t i = !(c >= 1) ? 0 : c >= top ? top : static_cast<uint32_t>(c);
+    i = i > share_lo ? i : share_lo;
+    return i < share_hi ? i : share_hi;
+  };
+  const uint32_t top_u = b.dims[u] - 1, top_w = b.dims[w] - 1;
+  const uint32_t share_ulo = cell_lo[u], share_uhi = cell_hi[u], share_wlo = cell_lo[w], share_whi = cell_hi[w];
   for (uint32_t zc = c0; zc <= c1; ++zc) {
-    // The layer's span along ax (with mu for the rounding of the cell index), within the bounds.
-    double za = b.lo[ax] + zc * b.h - s.mu, zb = b.lo[ax] + (zc + 1.0) * b.h + s.mu;
+    // The layer's span along ax, within the bounds.
+    const double za = zc - m > zlo ? zc - m : zlo, zb = zc + 1.0 + m < zhi ? zc + 1.0 + m : zhi;
     // Every query of a layer within the span passes the test along ax.
-    const bool inner = za >= blo.z && zb <= bhi.z;
-    za = za > blo.z ? za : blo.z;
-    zb = zb < bhi.z ? zb : bhi.z;
-    if (za > zb) continue;
-    double xa = blo.x + (za * box.ru < zb * box.ru ? za * box.ru : zb * box.ru);
-    double xb = bhi.x + (za * box.ru > zb * box.ru ? za * box.ru : zb * box.ru);
-    double ya = blo.y + (za * box.rw < zb * box.rw ? za * box.rw : zb * box.rw);
-    double yb = bhi.y + (za * box.rw > zb * box.rw ? za * box.rw : zb * box.rw);
-    xa = xa > box.reach.lo[u] ? xa : box.reach.lo[u];
-    xb = xb < box.reach.hi[u] ? xb : box.reach.hi[u];
-    ya = ya > box.reach.lo[w] ? ya : box.reach.lo[w];
-    yb = yb < box.reach.hi[w] ? yb : box.reach.hi[w];
+    const bool inner = zc - m >= zlo && zc + 1.0 + m <= zhi;
+    const double ua = box.ru * za, ub = box.ru * zb, wa = box.rw * za, wb = box.rw * zb;
+    double xa = ulo + (ua < ub ? ua : ub), xb = uhi + (ua > ub ? ua : ub);
+    double ya = wlo + (wa < wb ? wa : wb), yb = whi + (wa > wb ? wa : wb);
+    xa = xa > reach_ulo ? xa : reach_ulo;
+    xb = xb < reach_uhi ? xb : reach_uhi;
+    ya = ya > reach_wlo ? ya : reach_wlo;
+    yb = yb < reach_whi ? yb : reach_whi;
     if (xa > xb || ya > yb) continue;
     uint32_t lo[3], hi[3];  // the cells along each axis
     lo[ax] = hi[ax] = zc;
-    lo[u] = b.cell_along(xa, u);
-    hi[u] = b.cell_along(xb, u);
-    lo[w] = b.cell_along(ya, w);
-    hi[w] = b.cell_along(yb, w);
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = lo[a] > cell_lo[a] ? lo[a] : cell_lo[a];
-      hi[a] = hi[a] < cell_hi[a] ? hi[a] : cell_hi[a];
-    }
+    lo[u] = cell(xa, top_u, share_ulo, share_uhi);
+    hi[u] = cell(xb, top_u, share_ulo, share_uhi);
+    lo[w] = cell(ya, top_w, share_wlo, share_whi);
+    hi[w] = cell(yb, top_w, share_wlo, share_whi);
     const auto rows = [&](auto along_ax) {
       for (uint32_t zi = lo[2]; zi <= hi[2]; ++zi) {
         for (uint32_t yi = lo[1]; yi <= hi[1]; ++yi) {
