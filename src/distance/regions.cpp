@@ -29,8 +29,8 @@
 // best candidate lies beyond B is answered by the tree. Used when the batch has at least
 // 4096 queries and half as many as the mesh has triangles, a query meets at most about 4
 // face regions (estimated: 2 B times the mesh's area over the volume the queries fill), and
-// the arena holds the buckets (about 46 bytes a query); otherwise the tree answers all
-// (query.cpp).
+// the arena holds the buckets (about 48 bytes a query, 56 while sorting them); otherwise the
+// tree answers all (query.cpp).
 //
 // Cost: the pass over the triangles (regions and their bounds, about 4k instructions a
 // triangle) and the scan (each triangle tests the queries of the cells its bounds cover, two
@@ -665,33 +665,53 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
     return Status::ok();  // the tree answers, in the 2 MB it needs
   }
   // Counting sort into the cells: start[c] counts, then (prefix) begins, then (placing) ends,
-  // then shifted back to begins.
-  for (uint64_t c = 0; c <= cells; ++c) b.start[c] = 0;
-  for (size_t i = 0; i < n; ++i) {
-    if (bucketed(queries[i])) ++b.start[b.cell_of(queries[i]) + 1];
+  // then shifted back to begins. First by slabs of 2^slab_shift cells (at most 1024 slabs):
+  // start[] (two cells a query) is far larger than a cache, and counting and placing the
+  // queries in their input order would touch it at random; a slab's counts lie together. The
+  // order within a cell is the input order either way.
+  int slab_shift = 0;
+  while ((cells >> slab_shift) >= 1024) ++slab_shift;
+  const uint32_t slabs = static_cast<uint32_t>(cells >> slab_shift) + 1;
+  {
+    ArenaScope sorting(arena);
+    uint32_t* slab_start = arena.allocate_array<uint32_t>(size_t{slabs} + 1);
+    uint64_t* by_slab = arena.allocate_array<uint64_t>(nu);  // cell << 32 | query index
+    if (slab_start == nullptr || by_slab == nullptr) return Status::ok();
+    for (uint32_t k = 0; k <= slabs; ++k) slab_start[k] = 0;
+    for (size_t i = 0; i < n; ++i) {
+      if (bucketed(queries[i])) ++slab_start[(b.cell_of(queries[i]) >> slab_shift) + 1];
+    }
+    for (uint32_t k = 0; k < slabs; ++k) slab_start[k + 1] += slab_start[k];
+    for (size_t i = 0; i < n; ++i) {
+      if (!bucketed(queries[i])) continue;
+      const uint64_t c = b.cell_of(queries[i]);
+      by_slab[slab_start[static_cast<size_t>(c >> slab_shift)]++] = (c << 32) | i;
+    }
+    for (uint64_t c = 0; c <= cells; ++c) b.start[c] = 0;
+    for (size_t j = 0; j < nu; ++j) ++b.start[static_cast<size_t>(by_slab[j] >> 32) + 1];
+    // Worth it? A query meets about (2 B x the mesh's area) / (the volume the queries fill)
+    // face regions: near a smooth surface about one; with a band as wide as a small or
+    // tangled mesh, every region covers most queries, and the tree is faster.
+    uint64_t filled = 0;
+    for (uint64_t c = 1; c <= cells; ++c) filled += b.start[c] != 0 ? 1 : 0;
+    double area = 0;
+    for (const Triangle& tri : mesh.triangles) {
+      const Vec3* v = mesh.vertices.data();
+      area += 0.5 * length(cross(v[tri.v[1]] - v[tri.v[0]], v[tri.v[2]] - v[tri.v[0]]));
+    }
+    if (2 * band * area > kMaxOverlap * static_cast<double>(filled) * b.h * b.h * b.h) return Status::ok();
+    for (uint64_t c = 0; c < cells; ++c) b.start[c + 1] += b.start[c];
+    for (size_t j = 0; j < nu; ++j) {
+      const uint32_t i = static_cast<uint32_t>(by_slab[j]);
+      const uint32_t at = b.start[static_cast<size_t>(by_slab[j] >> 32)]++;
+      for (int k = 0; k < 3; ++k) b.coord[k][at] = queries[i][k];
+      b.ids[at] = i;
+    }
   }
-  // Worth it? A query meets about (2 B x the mesh's area) / (the volume the queries fill)
-  // face regions: near a smooth surface about one; with a band as wide as a small or
-  // tangled mesh, every region covers most queries, and the tree is faster.
-  uint64_t filled = 0;
-  for (uint64_t c = 1; c <= cells; ++c) filled += b.start[c] != 0 ? 1 : 0;
-  double area = 0;
-  for (const Triangle& tri : mesh.triangles) {
-    const Vec3* v = mesh.vertices.data();
-    area += 0.5 * length(cross(v[tri.v[1]] - v[tri.v[0]], v[tri.v[2]] - v[tri.v[0]]));
-  }
-  if (2 * band * area > kMaxOverlap * static_cast<double>(filled) * b.h * b.h * b.h) return Status::ok();
   *used = true;
   for (uint32_t i = 0; i < tasks; ++i) new (&scratch[i]) TriangleRegions();
   s.buckets = &b;
-  for (uint64_t c = 0; c < cells; ++c) b.start[c + 1] += b.start[c];
-  for (size_t i = 0; i < n; ++i) {
-    if (!bucketed(queries[i])) continue;
-    const uint32_t at = b.start[b.cell_of(queries[i])]++;
-    for (int a = 0; a < 3; ++a) b.coord[a][at] = queries[i][a];
-    b.ids[at] = static_cast<uint32_t>(i);
-  }
-  // (Apart from the placing above: its writes land anywhere, these in order.)
+  // (Apart from the placing above, which writes a slab's cells at a time: these in order.)
   for (size_t j = 0; j < nu; ++j) {
     b.best2[j] = HUGE_VAL;
     b.best[j] = kNoNeighbor;
