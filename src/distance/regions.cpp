@@ -32,7 +32,7 @@
 // the arena holds the buckets (about 48 bytes a query, 56 while sorting them); otherwise the
 // tree answers all (query.cpp).
 //
-// Cost: the pass over the triangles (regions and their bounds, about 4k instructions a
+// Cost: the pass over the triangles (regions and their bounds, about 3.4k instructions a
 // triangle) and the scan (each triangle tests the queries of the cells its bounds cover, two
 // at a time, about 23 instructions each, and the few inside its regions exactly); the
 // queries' own share is their bucketing and one or two exact point-triangle distances.
@@ -346,16 +346,23 @@ void build_regions(const Scan& s, uint32_t t, TriangleRegions* out) {
       }
     }
     for (int i = 0; i < side_count; ++i) g.planes[g.count++] = Plane{sides[i], dot(sides[i], a) + mu};
-    // Its bounds: the square of side 2R across the edge (it holds the disc of radius R),
-    // clipped by the two sides, swept along the edge.
-    Vec3 f1 = std::fabs(e.x) < 0.6 ? cross(e, Vec3{1, 0, 0}) : cross(e, Vec3{0, 1, 0});
-    f1 = f1 * (1.0 / length(f1));
-    const Vec3 f2v = cross(e, f1);
-    Polygon poly;
-    poly.square(r);
-    for (int i = 0; i < side_count; ++i) poly.clip(dot(sides[i], f1), dot(sides[i], f2v), mu);
-    sb.add_swept(a - e * mu, b + e * mu, poly.n,
-                 [&](uint32_t j) { return f1 * poly.x[j] + f2v * poly.y[j]; });
+    // Its bounds (a thin triangle's face bounds already hold everything within R of it). A
+    // query that matters is a + s e + y, s in [-mu, len + mu], y across the edge with |y| <= R,
+    // so y = alpha n + beta o (o = -m, outward) with |alpha|, |beta| <= R. This triangle's side
+    // (m . y <= mu) gives beta >= -mu; the neighbour's, m2 = c o + d n with c > 0, gives
+    // beta c <= mu - alpha d <= mu + R |d|. The rectangle of those alpha and beta, swept
+    // along the edge, holds the region's points within R (about as tight as the sector
+    // itself: across the edge only beta's range counts, and it is the sector's).
+    if (f.ok) {
+      const Vec3 o = f.m[k] * -1.0;
+      double beta = r;
+      if (side_count == 2) {
+        const double c = dot(sides[1], o), d = std::fabs(dot(sides[1], f.n));
+        if (c > 0 && mu + r * d < r * c) beta = (mu + r * d) / c;
+      }
+      sb.add_swept(a - e * mu, b + e * mu, 4,
+                   [&](uint32_t i) { return f.n * ((i & 1) != 0 ? r : -r) + o * ((i & 2) != 0 ? beta : -mu); });
+    }
   }
   // The vertices it owns (about one triangle in two owns one).
   const uint32_t* vstart = s.index->vertex_start.data();
@@ -380,9 +387,8 @@ void build_regions(const Scan& s, uint32_t t, TriangleRegions* out) {
     const Vec3& c = v[vi];
     uint32_t seen[kMaxPlanes];
     uint32_t seen_count = 0;
-    // This triangle's two neighbours of v first: they reject most queries.
-    const auto add = [&](uint32_t wi) {
-      for (uint32_t i = 0; i < seen_count; ++i) {
+    const auto add = [&](uint32_t wi, bool search) {
+      for (uint32_t i = 0; search && i < seen_count; ++i) {
         if (seen[i] == wi) return;
       }
       if (seen_count == kMaxPlanes) return;
@@ -393,13 +399,13 @@ void build_regions(const Scan& s, uint32_t t, TriangleRegions* out) {
       const Vec3 e = d * (1.0 / len);
       g.planes[g.count++] = Plane{e, dot(e, c) + mu};
     };
-    add(tri.v[(k + 1) % 3]);
-    add(tri.v[(k + 2) % 3]);
+    // On a closed manifold each neighbour w follows v in exactly one triangle of the fan (the
+    // edge's use v -> w); elsewhere every neighbour, once.
     for (uint32_t j = vstart[vi]; j < vstart[vi + 1]; ++j) {
       const Triangle& other = mesh.triangles[vuses[j] / 3];
       const uint32_t corner = vuses[j] % 3;
-      add(other.v[(corner + 1) % 3]);
-      add(other.v[(corner + 2) % 3]);
+      add(other.v[(corner + 1) % 3], !s.index->closed_manifold);
+      if (!s.index->closed_manifold) add(other.v[(corner + 2) % 3], true);
     }
     // Its bounds. Only its points within R of v matter (a query farther than that from v
     // has the vertex beyond the band). Such a point x = v + h a + s a1 + t a2 (a the scan
