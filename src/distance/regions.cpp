@@ -427,14 +427,6 @@ void build_regions(const Scan& s, uint32_t t, TriangleRegions* out) {
   sb.grow(mu);
 }
 
-// Every plane tested, no early exit: whether a query is inside is hard to predict, and a
-// mispredicted branch costs more than the few products it would save.
-inline bool inside(const Region& g, const Vec3& q) {
-  bool in = true;
-  for (uint32_t i = 0; i < g.count; ++i) in &= dot(g.planes[i].n, q) <= g.planes[i].off;
-  return in;
-}
-
 inline void offer(const Mesh& mesh, uint32_t t, const Vec3& q, double* best2, uint32_t* best) {
   const Vec3* v = mesh.vertices.data();
   const Triangle& tri = mesh.triangles[t];
@@ -446,13 +438,13 @@ inline void offer(const Mesh& mesh, uint32_t t, const Vec3& q, double* best2, ui
   }
 }
 
-// Offers the triangles of tr's regions that hold query j (at q).
-inline void offer_regions(const Scan& s, const TriangleRegions& tr, const Vec3& q, uint32_t j) {
+// Offers query j (at q) the triangles of tr's regions in `holding` (bit i: region i).
+void offer_regions(const Scan& s, const TriangleRegions& tr, uint32_t holding, const Vec3& q, uint32_t j) {
   const Buckets& b = *s.buckets;
   const Mesh& mesh = *s.index->mesh;
-  for (uint32_t i = 0; i < tr.count; ++i) {
+  for (uint32_t i = 0; holding != 0; ++i, holding >>= 1) {
+    if ((holding & 1) == 0) continue;
     const Region& g = tr.regions[i];
-    if (!inside(g, q)) continue;
     if (g.face) {
       // Its plane already lies farther than the best so far: it cannot win or tie.
       const double h = std::fabs(dot(g.planes[3].n, q) - g.h0) - s.slack;
@@ -472,18 +464,48 @@ inline void offer_regions(const Scan& s, const TriangleRegions& tr, const Vec3& 
   }
 }
 
+// Offers the queries at[0 .. count) (bucket indices) the triangles of tr's regions that hold
+// them. Two queries at a time: each plane's dot product in two lanes, with dot()'s operations
+// in the same order (the same decisions, bit for bit), and every plane tested (whether a query
+// is inside is hard to predict: a mispredicted branch costs more than the products it would
+// save); then the offers, query by query, region by region as before.
+void offer_list(const Scan& s, const TriangleRegions& tr, const uint32_t* at, uint32_t count) {
+  const Buckets& b = *s.buckets;
+  const double* const cx = b.coord[0];
+  const double* const cy = b.coord[1];
+  const double* const cz = b.coord[2];
+  for (uint32_t k = 0; k < count; k += 2) {
+    const uint32_t j0 = at[k], j1 = k + 1 < count ? at[k + 1] : j0;
+    const Double2 x = {cx[j0], cx[j1]}, y = {cy[j0], cy[j1]}, z = {cz[j0], cz[j1]};
+    uint32_t in0 = 0, in1 = 0;
+    for (uint32_t i = 0; i < tr.count; ++i) {
+      const Region& g = tr.regions[i];
+      Mask2 in = ~Mask2{};
+      for (uint32_t p = 0; p < g.count; ++p) {
+        const Plane& h = g.planes[p];
+        const Double2 d = Double2{h.n.x, h.n.x} * x + Double2{h.n.y, h.n.y} * y + Double2{h.n.z, h.n.z} * z;
+        in &= d <= Double2{h.off, h.off};
+      }
+      in0 |= static_cast<uint32_t>(in[0] & 1) << i;
+      in1 |= static_cast<uint32_t>(in[1] & 1) << i;
+    }
+    if (in0 != 0) offer_regions(s, tr, in0, Vec3{x[0], y[0], z[0]}, j0);
+    if (in1 != 0 && k + 1 < count) offer_regions(s, tr, in1, Vec3{x[1], y[1], z[1]}, j1);
+  }
+}
+
 inline Double2 load2(const double* p) {
   Double2 r;
   std::memcpy(&r, p, sizeof(r));
   return r;
 }
 
-// Calls visit(j) for every query j in box, among cells [cell_lo[a], cell_hi[a]] along each
-// axis a (a task's share): layer by layer along box.ax, each layer's cells by rows along x
-// (a row's queries are one run of the buckets). Two queries at a time: their sheared
+// Calls visit(list, count) with the queries j in box, among cells [cell_lo[a], cell_hi[a]]
+// along each axis a (a task's share): layer by layer along box.ax, each layer's cells by rows
+// along x (a row's queries are one run of the buckets). Two queries at a time: their sheared
 // coordinates from the axes (two products, where dot products take nine) and the box's
-// comparisons in two lanes; those inside go to a list without a branch (about one query in
-// ten passes a triangle's box, unpredictably), and visit() runs over the list.
+// comparisons in two lanes; those inside go to the list without a branch (about one query in
+// ten passes a triangle's box, unpredictably).
 template <typename Visit>
 void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const uint32_t cell_hi[3],
           Visit&& visit) {
@@ -504,7 +526,7 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const
   uint32_t hits[kHits];
   uint32_t hit_count = 0;
   const auto flush = [&]() {
-    for (uint32_t k = 0; k < hit_count; ++k) visit(hits[k]);
+    visit(hits, hit_count);
     hit_count = 0;
   };
   uint32_t c0 = b.cell_along(blo.z, ax), c1 = b.cell_along(bhi.z, ax);
@@ -754,7 +776,8 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
           continue;
         }
         build_regions(s, t, &tr);
-        walk(s, tr.box, cell_lo, cell_hi, [&](uint32_t at) { offer_regions(s, tr, b.point(at), at); });
+        walk(s, tr.box, cell_lo, cell_hi,
+             [&](const uint32_t* at, uint32_t count) { offer_list(s, tr, at, count); });
       }
     };
     parallel_for_each(ctx.executor, tasks, task);
