@@ -545,7 +545,9 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const
   const double reach_wlo = (box.reach.lo[w] - lo_w) * inv_h - m, reach_whi = (box.reach.hi[w] - lo_w) * inv_h + m;
   // A cell index (as Buckets::cell_along: clamped to the grid), then to the task's share.
   const auto cell = [](double c, uint32_t top, uint32_t share_lo, uint32_t share_hi) {
-    uint32_t i = !(c >= 1) ? 0 : c >= top ? top : static_cast<uint32_t>(c);
+    c = c > 0 ? c : 0.0;  // (and not-a-number: 0)
+    c = c < top ? c : static_cast<double>(top);
+    uint32_t i = static_cast<uint32_t>(c);
     i = i > share_lo ? i : share_lo;
     return i < share_hi ? i : share_hi;
   };
