@@ -29,8 +29,8 @@
 // best candidate lies beyond B is answered by the tree. Used when the batch has at least
 // 4096 queries and half as many as the mesh has triangles, a query meets at most about 4
 // face regions (estimated: 2 B times the mesh's area over the volume the queries fill), and
-// the arena holds the buckets (about 48 bytes a query, 56 while sorting them); otherwise the
-// tree answers all (query.cpp).
+// the arena holds the buckets (about 48 bytes a query, 56 while sorting them, and 4 a
+// triangle); otherwise the tree answers all (query.cpp).
 //
 // Cost: the pass over the triangles (regions and their bounds, about 3.4k instructions a
 // triangle) and the scan (each triangle tests the queries of the cells its bounds cover, two
@@ -110,6 +110,29 @@ Frame frame_of(const Vec3 p[3]) {
     return m * (1.0 / length(m));
   };
   return Frame{unit, {inward(0), inward(1), inward(2)}, true};
+}
+
+// The triangle scanned together with t: the neighbour across t's longest edge when that edge
+// is the neighbour's longest too and the two lie in about the same plane (normals within 0.8
+// degrees, kPairCos), as the two halves of a planar quad; else kNoNeighbor. Symmetric (each
+// product's operands commute), so each of the two finds the other.
+uint32_t partner(const Mesh& mesh, const uint32_t* neighbors, uint32_t t) {
+  const Vec3* v = mesh.vertices.data();
+  Vec3 p[2][3];
+  const auto longest = [&](uint32_t u, Vec3 c[3]) -> uint32_t {
+    const Triangle& tri = mesh.triangles[u];
+    for (int k = 0; k < 3; ++k) c[k] = v[tri.v[k]];
+    const double l0 = length_squared(c[1] - c[0]), l1 = length_squared(c[2] - c[1]);
+    const double l2 = length_squared(c[0] - c[2]);
+    return l1 > l0 ? (l2 > l1 ? 2u : 1u) : (l2 > l0 ? 2u : 0u);
+  };
+  const uint32_t t2 = neighbors[3 * size_t{t} + longest(t, p[0])];
+  if (t2 == kNoNeighbor || t2 == t || neighbors[3 * size_t{t2} + longest(t2, p[1])] != t) return kNoNeighbor;
+  Vec3 n1, n2;
+  double s1 = 0, s2 = 0;
+  if (!well_shaped(p[0], &n1, &s1) || !well_shaped(p[1], &n2, &s2)) return kNoNeighbor;
+  const double d = dot(n1, n2);
+  return d > 0 && d * d > (kPairCos * kPairCos) * (s1 * s2) ? t2 : kNoNeighbor;
 }
 
 // A convex polygon in the 2D coordinates of a plane, clipped by half-planes
@@ -689,9 +712,10 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
   b.best2 = arena.allocate_array<double>(nu);
   b.best = arena.allocate_array<uint32_t>(nu);
   TriangleRegions* scratch = arena.allocate_array<TriangleRegions>(tasks);
+  uint32_t* position = arena.allocate_array<uint32_t>(nt);  // of each triangle in leaf order
   if (b.start == nullptr || b.coord[0] == nullptr || b.coord[1] == nullptr || b.coord[2] == nullptr ||
-      b.ids == nullptr || b.best2 == nullptr ||
-      b.best == nullptr || scratch == nullptr) {
+      b.ids == nullptr || b.best2 == nullptr || b.best == nullptr || scratch == nullptr ||
+      position == nullptr) {
     return Status::ok();  // the tree answers, in the 2 MB it needs
   }
   // Counting sort into the cells: start[c] counts, then (prefix) begins, then (placing) ends,
@@ -755,7 +779,9 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
   // is one task's), so tasks never share a query. A triangle whose regions cross a split is
   // scanned by each task it reaches. The answers do not depend on the split.
   const uint32_t* order = index.order.data();
+  const uint32_t* neighbors = index.neighbors.data();
   const uint32_t ntri = static_cast<uint32_t>(nt);
+  for (uint32_t j = 0; j < ntri; ++j) position[order[j]] = j;
   for (uint32_t first = 0; first < ntri; first += kRound) {
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, kStage, first, ntri + uint64_t{nu}));
     const uint32_t last = first + kRound < ntri ? first + kRound : ntri;
@@ -768,48 +794,40 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
       const double hi_z = tasks == 1 ? qbox.hi.z : b.lo.z + (cell_hi[2] + 1.0) * b.h + b.h;
       TriangleRegions& tr = scratch[i];
       const Vec3* v = mesh.vertices.data();
+      // Triangles beyond the reach of the share's queries are skipped.
+      const auto beyond = [&](uint32_t u) {
+        Aabb box;
+        for (uint32_t c : mesh.triangles[u].v) box.add(v[c]);
+        return box.lo.x - s.reach > qbox.hi.x || box.hi.x + s.reach < qbox.lo.x ||
+               box.lo.y - s.reach > qbox.hi.y || box.hi.y + s.reach < qbox.lo.y ||
+               box.lo.z - s.reach > hi_z || box.hi.z + s.reach < lo_z;
+      };
       for (uint32_t j = first; j < last; ++j) {
         const uint32_t t = order[j];
+        // With its partner (partner() above): one walk over their bounds, about those of
+        // one, instead of two, at the first of them in leaf order. Along their mean normal,
+        // within 0.41 degrees of each, so each prism of height 2R leans out of its box by at
+        // most R / 70.
+        const uint32_t t2 = partner(mesh, neighbors, t);
+        if (t2 != kNoNeighbor && position[t2] < j) continue;
+        if (beyond(t) && (t2 == kNoNeighbor || beyond(t2))) continue;
         const Triangle& tri = mesh.triangles[t];
         const Vec3 p[3] = {v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]};
-        Aabb box;
-        for (const Vec3& c : p) box.add(c);
-        if (box.lo.x - s.reach > qbox.hi.x || box.hi.x + s.reach < qbox.lo.x ||
-            box.lo.y - s.reach > qbox.hi.y || box.hi.y + s.reach < qbox.lo.y ||
-            box.lo.z - s.reach > hi_z || box.hi.z + s.reach < lo_z) {
-          continue;
-        }
         const Frame f = frame_of(p);
         Vec3 dir = f.ok ? f.n : Vec3{0, 0, 1};
-        // With the next triangle in leaf order when it shares an edge and lies in about the
-        // same plane (as the two halves of a planar quad): one walk over their bounds, about
-        // those of one, instead of two (the next one's cull test above is skipped: a walk
-        // that finds nothing costs little). Along their mean normal, within 0.41 degrees of
-        // each (kPairCos), so each prism of height 2R leans out of its box by at most R / 70.
-        uint32_t t2 = kNoNeighbor;
         Vec3 p2[3];
         Frame f2;
-        if (f.ok && j + 1 < last) {
-          const uint32_t next = order[j + 1];
-          const uint32_t* across = index.neighbors.data() + 3 * size_t{t};
-          if (across[0] == next || across[1] == next || across[2] == next) {
-            const Triangle& tri2 = mesh.triangles[next];
-            for (int k = 0; k < 3; ++k) p2[k] = v[tri2.v[k]];
-            f2 = frame_of(p2);
-            if (f2.ok && dot(f.n, f2.n) > kPairCos) {
-              t2 = next;
-              const Vec3 sum = f.n + f2.n;
-              dir = sum * (1.0 / length(sum));
-            }
-          }
+        if (t2 != kNoNeighbor) {
+          const Triangle& tri2 = mesh.triangles[t2];
+          for (int k = 0; k < 3; ++k) p2[k] = v[tri2.v[k]];
+          f2 = frame_of(p2);
+          const Vec3 sum = f.n + f2.n;
+          dir = sum * (1.0 / length(sum));
         }
         tr.count = 0;
         tr.box.start(dir);
         add_regions(s, t, p, f, dir, &tr);
-        if (t2 != kNoNeighbor) {
-          add_regions(s, t2, p2, f2, dir, &tr);
-          ++j;
-        }
+        if (t2 != kNoNeighbor) add_regions(s, t2, p2, f2, dir, &tr);
         tr.box.grow(s.mu);
         walk(s, tr.box, cell_lo, cell_hi,
              [&](const uint32_t* at, uint32_t count) { offer_list(s, tr, at, count); });
