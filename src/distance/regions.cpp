@@ -71,7 +71,8 @@ struct Region {
   uint32_t candidates[2] = {0, 0};
   uint32_t candidate_count = 0;
   uint32_t vertex = kNoNeighbor;
-  bool face = false;  // a prism: planes[3] is the top, n . x <= h0 + R
+  bool face = false;  // a prism over the triangle (its planes are the sides): at height
+  Vec3 n{};           // n . x - h0 above it
   double h0 = 0;
 };
 
@@ -320,11 +321,11 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
     g.candidates[g.candidate_count++] = t;
     if (f.ok) {
       for (int k = 0; k < 3; ++k) g.planes[g.count++] = Plane{f.m[k] * -1.0, mu - dot(f.m[k], p[k])};
-      const double h0 = dot(f.n, p[0]);
+      // Its height is not tested with the planes: the bounds hold it within about R (and a
+      // query above R is not offered the triangle once it has a closer one, offer_regions).
       g.face = true;
-      g.h0 = h0;
-      g.planes[g.count++] = Plane{f.n, h0 + r};
-      g.planes[g.count++] = Plane{f.n * -1.0, r - h0};
+      g.n = f.n;
+      g.h0 = dot(f.n, p[0]);
       sb.add_swept(f.n * -r, f.n * r, 3, [&](uint32_t i) { return p[i]; });
     } else {
       for (int a = 0; a < 3; ++a) {
@@ -470,7 +471,7 @@ void offer_regions(const Scan& s, const TriangleRegions& tr, uint32_t holding, c
     const Region& g = tr.regions[i];
     if (g.face) {
       // Its plane already lies farther than the best so far: it cannot win or tie.
-      const double h = std::fabs(dot(g.planes[3].n, q) - g.h0) - s.slack;
+      const double h = std::fabs(dot(g.n, q) - g.h0) - s.slack;
       if (h > 0 && h * h > b.best2[j] + b.best2[j] * 0x1p-30) continue;
     }
     if (g.vertex == kNoNeighbor) {
