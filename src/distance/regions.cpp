@@ -32,10 +32,11 @@
 // the arena holds the buckets (about 48 bytes a query, 56 while sorting them, and 4 a
 // triangle); otherwise the tree answers all (query.cpp).
 //
-// Cost: the pass over the triangles (regions and their bounds, about 3.4k instructions a
+// Cost: the pass over the triangles (regions and their bounds, about 3k instructions a
 // triangle) and the scan (each triangle tests the queries of the cells its bounds cover, two
-// at a time, about 23 instructions each, and the few inside its regions exactly); the
-// queries' own share is their bucketing and one or two exact point-triangle distances.
+// at a time, about 23 instructions each, and the few inside its regions exactly; the two
+// halves of a planar quad share one scan, partner()); the queries' own share is their
+// bucketing and one or two exact point-triangle distances.
 #include <cmath>
 #include <cstring>
 #include <new>
@@ -71,8 +72,8 @@ struct Region {
   uint32_t candidates[2] = {0, 0};
   uint32_t candidate_count = 0;
   uint32_t vertex = kNoNeighbor;
-  bool face = false;  // a prism over the triangle (its planes are the sides): at height
-  Vec3 n{};           // n . x - h0 above it
+  bool face = false;  // a prism over the triangle (its planes are the prism's sides)
+  Vec3 n{};           // a face's unit normal: a query q lies n . q - h0 above the triangle
   double h0 = 0;
 };
 
