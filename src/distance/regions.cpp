@@ -59,9 +59,13 @@ constexpr double kPairCos = 0.9999;     // neighbours scanned together: normals 
 // The progress stage (the tree's batches report "closest points" or "signed distances").
 constexpr const char* kStage = "closest points, by regions";
 
-struct Plane {  // the region lies in dot(n, x) <= off
-  Vec3 n;
-  double off;
+// The region lies in dot(n, x) <= off. Each value is held twice, as the two lanes that
+// offer_list() tests two queries with (broadcast once here, not for every pair of queries).
+struct Plane {
+  Double2 nx, ny, nz, off;
+  Plane() = default;
+  Plane(const Vec3& n, double o) : nx{n.x, n.x}, ny{n.y, n.y}, nz{n.z, n.z}, off{o, o} {}
+  Vec3 normal() const { return Vec3{nx[0], ny[0], nz[0]}; }
 };
 
 // A face, edge or vertex region: its planes, and the triangles it offers (a vertex region
@@ -143,11 +147,16 @@ uint32_t partner(const Mesh& mesh, const uint32_t* neighbors, uint32_t t) {
 // left, the clip is skipped (the polygon stays a superset, which is all a bound needs).
 struct Polygon {
   static constexpr uint32_t kCapacity = kMaxPlanes + 4;
-  double x[kCapacity];
-  double y[kCapacity];
+  double xs[2][kCapacity];  // the corners in xs[at], ys[at]; the clip writes the other pair
+  double ys[2][kCapacity];
+  uint32_t at = 0;
   uint32_t n = 0;
 
+  const double* x() const { return xs[at]; }
+  const double* y() const { return ys[at]; }
   void square(double r) {
+    double* x = xs[at];
+    double* y = ys[at];
     x[0] = -r, y[0] = -r;
     x[1] = r, y[1] = -r;
     x[2] = r, y[2] = r;
@@ -155,6 +164,8 @@ struct Polygon {
     n = 4;
   }
   void clip(double cx, double cy, double rhs) {
+    const double* x = xs[at];
+    const double* y = ys[at];
     double side[kCapacity];
     bool cut = false;
     for (uint32_t j = 0; j < n; ++j) {
@@ -162,7 +173,8 @@ struct Polygon {
       cut |= side[j] > 0;
     }
     if (!cut) return;
-    double kx[kCapacity], ky[kCapacity];
+    double* kx = xs[at ^ 1];
+    double* ky = ys[at ^ 1];
     uint32_t k = 0;
     for (uint32_t j = 0; j < n; ++j) {
       if (k + 2 > kCapacity) return;
@@ -179,17 +191,17 @@ struct Polygon {
       }
     }
     n = k;
-    for (uint32_t j = 0; j < n; ++j) {
-      x[j] = kx[j];
-      y[j] = ky[j];
-    }
+    at ^= 1;
   }
 };
 
 // The queries in buckets: cell (x, y, z) of side h from lo holds points j in [start[c],
 // start[c + 1]) with c = x + dims[0] (y + dims[1] z); point j is at (coord[0][j], coord[1][j],
-// coord[2][j]), and ids[j] is its index in the batch. Each axis array has one element more
-// than there are points (zero), which the scan's two-lane loads may read.
+// coord[2][j]), and ids[j] is its index in the batch. The axis arrays, best2 and best have
+// one element more than there are points (a point at zero, answered by no one): the scan
+// tests two queries at a time and keeps the second of a row's last pair when it is inside,
+// whether it is the next cell's query or that one (a triangle offered to a query whose
+// regions do not hold it changes nothing: the answer is the best of what it is offered).
 struct Buckets {
   Vec3 lo{};
   double h = 1;
@@ -444,11 +456,11 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
     Polygon poly;
     poly.square(r);
     for (uint32_t i = 0; i < g.count; ++i) {
-      const Vec3& e = g.planes[i].n;
+      const Vec3 e = g.planes[i].normal();
       poly.clip(dot(e, across[0]), dot(e, across[1]), mu + r * std::fabs(dot(e, dir)));
     }
     sb.add_swept(c - dir * r, c + dir * r, poly.n,
-                 [&](uint32_t j) { return across[0] * poly.x[j] + across[1] * poly.y[j]; });
+                 [&](uint32_t j) { return across[0] * poly.x()[j] + across[1] * poly.y()[j]; });
   }
 }
 
@@ -508,8 +520,7 @@ void offer_list(const Scan& s, const TriangleRegions& tr, const uint32_t* at, ui
       Mask2 in = ~Mask2{};
       for (uint32_t p = 0; p < g.count; ++p) {
         const Plane& h = g.planes[p];
-        const Double2 d = Double2{h.n.x, h.n.x} * x + Double2{h.n.y, h.n.y} * y + Double2{h.n.z, h.n.z} * z;
-        in &= d <= Double2{h.off, h.off};
+        in &= h.nx * x + h.ny * y + h.nz * z <= h.off;
       }
       in0 |= static_cast<uint32_t>(in[0] & 1) << i;
       in1 |= static_cast<uint32_t>(in[1] & 1) << i;
@@ -611,7 +622,7 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const
             hits[hit_count] = j;
             hit_count += static_cast<uint32_t>(in[0] & 1);
             hits[hit_count] = j + 1;
-            hit_count += static_cast<uint32_t>(in[1] & 1) & (j + 1 < end ? 1u : 0u);
+            hit_count += static_cast<uint32_t>(in[1] & 1);
           }
         }
       }
@@ -711,8 +722,8 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
   b.start = arena.allocate_array<uint32_t>(static_cast<size_t>(cells) + 1);
   for (double*& a : b.coord) a = arena.allocate_array<double>(nu + 1);
   b.ids = arena.allocate_array<uint32_t>(nu);
-  b.best2 = arena.allocate_array<double>(nu);
-  b.best = arena.allocate_array<uint32_t>(nu);
+  b.best2 = arena.allocate_array<double>(nu + 1);
+  b.best = arena.allocate_array<uint32_t>(nu + 1);
   TriangleRegions* scratch = arena.allocate_array<TriangleRegions>(tasks);
   uint32_t* position = arena.allocate_array<uint32_t>(nt);  // of each triangle in leaf order
   if (b.start == nullptr || b.coord[0] == nullptr || b.coord[1] == nullptr || b.coord[2] == nullptr ||
@@ -768,7 +779,7 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
   for (uint32_t i = 0; i < tasks; ++i) new (&scratch[i]) TriangleRegions();
   s.buckets = &b;
   // (Apart from the placing above, which writes a slab's cells at a time: these in order.)
-  for (size_t j = 0; j < nu; ++j) {
+  for (size_t j = 0; j <= nu; ++j) {
     b.best2[j] = HUGE_VAL;
     b.best[j] = kNoNeighbor;
   }
