@@ -187,9 +187,8 @@ Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aa
 // answered triangle by triangle (a closest point transform over the bucketed queries: 2.9 to
 // 3.9 times the queries per second of one tree search after another on tori of 87k to 543k
 // triangles, 1.4 to 1.6 times on the real dentition; splintcore-bench --filter
-// closest_point_batch); it takes about 48 bytes of arena a query (56 while they are sorted
-// into buckets) and 4 a triangle, and where the arena does not hold them, the tree answers in
-// 2 MB.
+// closest_point_batch); it takes about 65 bytes of arena a query and 4 a triangle, and where
+// the arena does not hold them, the tree answers in 2 MB.
 Status batch_closest_points(const Context& ctx, const DistanceIndex& index,
                             Span<const Vec3> queries, Span<ClosestPoint> results);
 Status batch_signed_distances(const Context& ctx, const DistanceIndex& index,

@@ -29,14 +29,15 @@
 // best candidate lies beyond B is answered by the tree. Used when the batch has at least
 // 4096 queries and half as many as the mesh has triangles, a query meets at most about 4
 // face regions (estimated: 2 B times the mesh's area over the volume the queries fill), and
-// the arena holds the buckets (about 48 bytes a query, 56 while sorting them, and 4 a
-// triangle); otherwise the tree answers all (query.cpp).
+// the arena holds the buckets (about 65 bytes a query, with the best candidate's point, and 4
+// a triangle); otherwise the tree answers all (query.cpp).
 //
 // Cost: the pass over the triangles (regions and their bounds, about 3k instructions a
 // triangle) and the scan (each triangle tests the queries of the cells its bounds cover, two
 // at a time, about 23 instructions each, and the few inside its regions exactly; the two
 // halves of a planar quad share one scan, partner()); the queries' own share is their
-// bucketing and one or two exact point-triangle distances.
+// bucketing and one or two exact point-triangle distances (the winner's point is kept, not
+// computed again).
 #include <cmath>
 #include <cstring>
 #include <new>
@@ -197,8 +198,12 @@ struct Polygon {
 
 // The queries in buckets: cell (x, y, z) of side h from lo holds points j in [start[c],
 // start[c + 1]) with c = x + dims[0] (y + dims[1] z); point j is at (coord[0][j], coord[1][j],
-// coord[2][j]), and ids[j] is its index in the batch. The axis arrays, best2 and best have
-// one element more than there are points (a point at zero, answered by no one): the scan
+// coord[2][j]), and ids[j] is its index in the batch. Its best candidate so far is triangle
+// best[j] (kNoNeighbor: none yet), whose closest point is best_point[j] (feature and index:
+// best_feature[j], Feature << 2 | index): finishing it computes nothing again, and its squared
+// distance is length_squared(best_point[j] - q), the bits offer() compared. The axis arrays
+// and the best ones have one element more than there are points (a point at zero, answered
+// by no one): the scan
 // tests two queries at a time and keeps the second of a row's last pair when it is inside,
 // whether it is the next cell's query or that one (a triangle offered to a query whose
 // regions do not hold it changes nothing: the answer is the best of what it is offered).
@@ -210,7 +215,8 @@ struct Buckets {
   uint32_t* start = nullptr;
   double* coord[3] = {nullptr, nullptr, nullptr};
   uint32_t* ids = nullptr;
-  double* best2 = nullptr;
+  Vec3* best_point = nullptr;
+  uint8_t* best_feature = nullptr;
   uint32_t* best = nullptr;
 
   Vec3 point(size_t j) const { return Vec3{coord[0][j], coord[1][j], coord[2][j]}; }
@@ -464,38 +470,62 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
   }
 }
 
-inline void offer(const Mesh& mesh, uint32_t t, const Vec3& q, double* best2, uint32_t* best) {
+// The squared distance of query j (at q) to its best candidate so far (none: infinity).
+inline double best_distance2(const Buckets& b, size_t j, const Vec3& q) {
+  return b.best[j] == kNoNeighbor ? HUGE_VAL : length_squared(b.best_point[j] - q);
+}
+
+// Offers triangle t to query j (at q, best so far at squared distance *best2).
+inline void offer(const Mesh& mesh, const Buckets& b, uint32_t t, const Vec3& q, size_t j, double* best2) {
   const Vec3* v = mesh.vertices.data();
   const Triangle& tri = mesh.triangles[t];
-  const Vec3 p = closest_point_on_triangle(q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]);
+  Feature feature;
+  uint8_t index;
+  const Vec3 p = closest_point_on_triangle(q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], &feature, &index);
   const double d2 = length_squared(p - q);
-  if (d2 < *best2 || (d2 == *best2 && t < *best)) {
+  if (d2 < *best2 || (d2 == *best2 && t < b.best[j])) {
     *best2 = d2;
-    *best = t;
+    b.best[j] = t;
+    b.best_point[j] = p;
+    b.best_feature[j] = static_cast<uint8_t>(static_cast<uint8_t>(feature) << 2 | index);
   }
 }
 
 // Offers query j (at q) the triangles of tr's regions in `holding` (bit i: region i).
+// A triangle already offered to the query here, or whose plane already lay beyond its best,
+// is not offered again (the face region and, within the margin, an edge region of the same
+// triangles often both hold it; a second offer changes nothing, and the best only shrinks).
 void offer_regions(const Scan& s, const TriangleRegions& tr, uint32_t holding, const Vec3& q, uint32_t j) {
   const Buckets& b = *s.buckets;
   const Mesh& mesh = *s.index->mesh;
+  uint32_t offered[4];
+  uint32_t offered_count = 0;
+  double best2 = best_distance2(b, j, q);
   for (uint32_t i = 0; holding != 0; ++i, holding >>= 1) {
     if ((holding & 1) == 0) continue;
     const Region& g = tr.regions[i];
     if (g.face) {
       // Its plane already lies farther than the best so far: it cannot win or tie.
       const double h = std::fabs(dot(g.n, q) - g.h0) - s.slack;
-      if (h > 0 && h * h > b.best2[j] + b.best2[j] * 0x1p-30) continue;
+      if (h > 0 && h * h > best2 + best2 * 0x1p-30) {
+        if (offered_count < 4) offered[offered_count++] = g.candidates[0];
+        continue;
+      }
     }
     if (g.vertex == kNoNeighbor) {
       for (uint32_t k = 0; k < g.candidate_count; ++k) {
-        offer(mesh, g.candidates[k], q, &b.best2[j], &b.best[j]);
+        const uint32_t t = g.candidates[k];
+        bool seen = false;
+        for (uint32_t m = 0; m < offered_count; ++m) seen |= offered[m] == t;
+        if (seen) continue;
+        if (offered_count < 4) offered[offered_count++] = t;
+        offer(mesh, b, t, q, j, &best2);
       }
     } else {
       const uint32_t* vstart = s.index->vertex_start.data();
       const uint32_t* vuses = s.index->vertex_uses.data();
       for (uint32_t k = vstart[g.vertex]; k < vstart[g.vertex + 1]; ++k) {
-        offer(mesh, vuses[k] / 3, q, &b.best2[j], &b.best[j]);
+        offer(mesh, b, vuses[k] / 3, q, j, &best2);
       }
     }
   }
@@ -722,12 +752,11 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
   b.start = arena.allocate_array<uint32_t>(static_cast<size_t>(cells) + 1);
   for (double*& a : b.coord) a = arena.allocate_array<double>(nu + 1);
   b.ids = arena.allocate_array<uint32_t>(nu);
-  b.best2 = arena.allocate_array<double>(nu + 1);
   b.best = arena.allocate_array<uint32_t>(nu + 1);
   TriangleRegions* scratch = arena.allocate_array<TriangleRegions>(tasks);
   uint32_t* position = arena.allocate_array<uint32_t>(nt);  // of each triangle in leaf order
   if (b.start == nullptr || b.coord[0] == nullptr || b.coord[1] == nullptr || b.coord[2] == nullptr ||
-      b.ids == nullptr || b.best2 == nullptr || b.best == nullptr || scratch == nullptr ||
+      b.ids == nullptr || b.best == nullptr || scratch == nullptr ||
       position == nullptr) {
     return Status::ok();  // the tree answers, in the 2 MB it needs
   }
@@ -775,14 +804,15 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
       b.ids[at] = i;
     }
   }
+  // The best points, in the memory the sort has just given back.
+  b.best_point = arena.allocate_array<Vec3>(nu + 1);
+  b.best_feature = arena.allocate_array<uint8_t>(nu + 1);
+  if (b.best_point == nullptr || b.best_feature == nullptr) return Status::ok();
   *used = true;
   for (uint32_t i = 0; i < tasks; ++i) new (&scratch[i]) TriangleRegions();
   s.buckets = &b;
   // (Apart from the placing above, which writes a slab's cells at a time: these in order.)
-  for (size_t j = 0; j <= nu; ++j) {
-    b.best2[j] = HUGE_VAL;
-    b.best[j] = kNoNeighbor;
-  }
+  for (size_t j = 0; j <= nu; ++j) b.best[j] = kNoNeighbor;
   for (double* a : b.coord) a[nu] = 0;
   for (uint64_t c = cells; c > 0; --c) b.start[c] = b.start[c - 1];
   b.start[0] = 0;
@@ -862,13 +892,13 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
       const Vec3 q = b.point(j);
       ClosestPoint cp;
       bool found = true;
-      if (b.best[j] != kNoNeighbor && b.best2[j] <= band2) {
-        const Triangle& tri = mesh.triangles[b.best[j]];
-        const Vec3* v = mesh.vertices.data();
+      const double best2 = best_distance2(b, j, q);
+      if (best2 <= band2) {
         cp.triangle = b.best[j];
-        cp.point = closest_point_on_triangle(q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], &cp.feature,
-                                             &cp.feature_index);
-        settle_closest(index, q, b.best2[j], &cp);
+        cp.point = b.best_point[j];
+        cp.feature = static_cast<Feature>(b.best_feature[j] >> 2);
+        cp.feature_index = static_cast<uint8_t>(b.best_feature[j] & 3);
+        settle_closest(index, q, best2, &cp);
       } else {
         found = closest_within(index, q, HUGE_VAL, &cp, b.best[j]);
       }
