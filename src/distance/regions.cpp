@@ -203,10 +203,10 @@ struct Polygon {
 // best_feature[j], Feature << 2 | index): finishing it computes nothing again, and its squared
 // distance is length_squared(best_point[j] - q), the bits offer() compared. The axis arrays
 // and the best ones have one element more than there are points (a point at zero, answered
-// by no one): the scan
-// tests two queries at a time and keeps the second of a row's last pair when it is inside,
-// whether it is the next cell's query or that one (a triangle offered to a query whose
-// regions do not hold it changes nothing: the answer is the best of what it is offered).
+// by no one): the scan tests two queries at a time and keeps the second of a row's last pair
+// when it is inside, whether it is the next cell's query or that one (a triangle offered to a
+// query whose regions do not hold it changes nothing: the answer is the best of what it is
+// offered).
 struct Buckets {
   Vec3 lo{};
   double h = 1;
