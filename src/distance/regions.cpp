@@ -276,6 +276,11 @@ struct ShearedBox {
     if (n == 0) return;
     Aabb sweep;
     for (uint32_t i = 0; i < n; ++i) sweep.add(sheared(offset(i)));
+    add_swept_box(a, b, sweep);
+  }
+  // The same, given the box of the sheared offsets (the map is linear: a caller whose offsets
+  // combine a few vectors shears those once).
+  void add_swept_box(const Vec3& a, const Vec3& b, const Aabb& sweep) {
     const Vec3 pa = sheared(a), pb = sheared(b);
     bounds.add(sweep.lo + min_vec(pa, pb));
     bounds.add(sweep.hi + max_vec(pa, pb));
@@ -404,14 +409,22 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
         const double c = dot(sides[1], o), d = std::fabs(dot(sides[1], f.n));
         if (c > 0 && mu + r * d < r * c) beta = (mu + r * d) / c;
       }
-      sb.add_swept(a - e * mu, b + e * mu, 4,
-                   [&](uint32_t i) { return f.n * ((i & 1) != 0 ? r : -r) + o * ((i & 2) != 0 ? beta : -mu); });
+      // The offsets +-R n + (beta or -mu) o, sheared: each axis's range from sn and so.
+      const Vec3 sn = sb.sheared(f.n), so = sb.sheared(o);
+      Aabb sweep;
+      for (int i = 0; i < 3; ++i) {
+        const double along_n = std::fabs(sn[i]) * r, beyond = so[i] * beta, inside = so[i] * -mu;
+        sweep.lo[i] = (beyond < inside ? beyond : inside) - along_n;
+        sweep.hi[i] = (beyond > inside ? beyond : inside) + along_n;
+      }
+      sb.add_swept_box(a - e * mu, b + e * mu, sweep);
     }
   }
   // The vertices it owns (about one triangle in two owns one).
   const uint32_t* vstart = s.index->vertex_start.data();
   const uint32_t* vuses = s.index->vertex_uses.data();
   Vec3 across[2];  // two unit vectors across dir, for the bounds; set by the first vertex
+  Vec3 sheared_across[2];
   bool have_across = false;
   for (int k = 0; k < 3; ++k) {
     const uint32_t vi = tri.v[k];
@@ -424,6 +437,8 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
       const Vec3 a1 = cross(dir, axis);
       across[0] = a1 * (1.0 / length(a1));
       across[1] = cross(dir, across[0]);
+      sheared_across[0] = sb.sheared(across[0]);
+      sheared_across[1] = sb.sheared(across[1]);
       have_across = true;
     }
     Region& g = tr.take();
@@ -465,8 +480,9 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
       const Vec3 e = g.planes[i].normal();
       poly.clip(dot(e, across[0]), dot(e, across[1]), mu + r * std::fabs(dot(e, dir)));
     }
-    sb.add_swept(c - dir * r, c + dir * r, poly.n,
-                 [&](uint32_t j) { return across[0] * poly.x()[j] + across[1] * poly.y()[j]; });
+    Aabb sweep;  // of the corners across[0] x + across[1] y, sheared
+    for (uint32_t j = 0; j < poly.n; ++j) sweep.add(sheared_across[0] * poly.x()[j] + sheared_across[1] * poly.y()[j]);
+    if (poly.n != 0) sb.add_swept_box(c - dir * r, c + dir * r, sweep);
   }
 }
 
