@@ -63,7 +63,7 @@ constexpr const char* kStage = "closest points, by regions";
 // The region lies in dot(n, x) <= off. Each value is held twice, as the two lanes that
 // offer_list() tests two queries with (broadcast once here, not for every pair of queries).
 struct Plane {
-  Double2 nx, ny, nz, off;
+  Double2 nx{}, ny{}, nz{}, off{};
   Plane() = default;
   Plane(const Vec3& n, double o) : nx{n.x, n.x}, ny{n.y, n.y}, nz{n.z, n.z}, off{o, o} {}
   Vec3 normal() const { return Vec3{nx[0], ny[0], nz[0]}; }
