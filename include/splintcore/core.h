@@ -442,6 +442,12 @@ void radix_sort(Span<KeyIndex> items, Span<KeyIndex> scratch);
 Status radix_sort(Arena& arena, Span<KeyIndex> items);
 // Plain 64-bit keys (half the memory traffic when a key and an index fit in 64 bits).
 void radix_sort(Span<uint64_t> items, Span<uint64_t> scratch);
+// Stable sort by bits [lo_bit, hi_bit) of each key alone (lo_bit < hi_bit <= 64): keys equal
+// there keep their input order, whatever their other bits. When the bits below lo_bit already
+// rise in input order (an index packed under a code), that is the order of the whole key, in
+// passes of up to 11 bits over the range only (four for a 42-bit code, not eight).
+void radix_sort_bits(Span<uint64_t> items, Span<uint64_t> scratch, unsigned lo_bit,
+                     unsigned hi_bit);
 
 // 64-bit mixer (splitmix64 finaliser): fixed on every platform.
 inline uint64_t hash_mix(uint64_t x) {

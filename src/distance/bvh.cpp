@@ -30,9 +30,9 @@ inline uint32_t leaf_size_of(const DistanceIndexOptions& options) {
 }
 
 
-// Morton codes of 16 bits an axis (detail::spread_bits, morton.h): 65536 cells per axis, finer
+// Morton codes of 16 bits an axis (detail::spread_bits_16, morton.h): 65536 cells per axis, finer
 // than any triangle here, and six radix passes instead of eight.
-using detail::spread_bits;
+using detail::spread_bits_16;
 
 // In-place heap sort (Williams 1964): no memory, O(n log n) whatever the input, and with
 // unique keys the order is fixed (no dependence on the standard library's sort).
@@ -317,10 +317,13 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
         q[a] = static_cast<uint64_t>(x);
       }
       const uint64_t code =
-          (spread_bits(q[0]) << 2) | (spread_bits(q[1]) << 1) | spread_bits(q[2]);
+          (spread_bits_16(q[0]) << 2) | (spread_bits_16(q[1]) << 1) | spread_bits_16(q[2]);
       keys[t] = (code << id_bits) | t;
     }
-    radix_sort(Span<uint64_t>(keys, nt), Span<uint64_t>(scratch, nt));
+    // The ids rise in input order, so a stable sort on the code bits alone gives the order
+    // of the whole key.
+    radix_sort_bits(Span<uint64_t>(keys, nt), Span<uint64_t>(scratch, nt), id_bits,
+                    id_bits + 3 * code_bits);
     const uint64_t id_mask = (uint64_t{1} << id_bits) - 1;
     for (uint32_t i = 0; i < n; ++i) order[i] = static_cast<uint32_t>(keys[i] & id_mask);
   }

@@ -21,6 +21,25 @@ inline uint64_t spread_bits(uint64_t v) {
   return v;
 }
 
+// The same by table, a byte at a time (bit i of the byte to bit 3 i of 24): two loads and an
+// or instead of four mask steps, for the index build's half a million keys.
+struct SpreadTable {
+  uint32_t byte[256];
+};
+constexpr SpreadTable make_spread_table() {
+  SpreadTable t{};
+  for (uint32_t b = 0; b < 256; ++b) {
+    uint32_t s = 0;
+    for (uint32_t i = 0; i < 8; ++i) s |= ((b >> i) & 1u) << (3 * i);
+    t.byte[b] = s;
+  }
+  return t;
+}
+inline uint64_t spread_bits_16(uint64_t v) {
+  static constexpr SpreadTable kTable = make_spread_table();
+  return uint64_t{kTable.byte[v & 0xff]} | (uint64_t{kTable.byte[(v >> 8) & 0xff]} << 24);
+}
+
 }  // namespace detail
 }  // namespace splintcore
 
