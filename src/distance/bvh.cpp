@@ -544,20 +544,24 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 2, 4));
 
-  // 4. Edge neighbours through per-vertex lists of outgoing half-edges (counting sort by
-  // start vertex, in triangle order): half-edge a->b is a manifold edge when a's list holds
-  // b once and b's list holds a once; the triangle of that reverse half-edge is the neighbour.
+  // 4. Edge neighbours from per-vertex lists of corners (counting sort by vertex, in triangle
+  // order). Half-edge a->b is a manifold edge when the mesh holds it once and b->a once; the
+  // triangle of b->a is the neighbour. Both counts are in a's list alone: a corner at a with
+  // next vertex b is a half-edge a->b, one with previous vertex b is the end of a half-edge
+  // b->a (one corner per half-edge either way), so each edge is settled from the list of its
+  // smaller vertex, read in cache, without a visit to the other vertex's list.
   bool closed_manifold = n > 0;
   {
     ArenaScope lists_scope(arena);
     uint32_t* fill = arena.allocate_array<uint32_t>(nv);
-    // The end vertex is kept with the use: reading it from the triangle instead halves this
-    // memory but costs 10 ms at 543k triangles in random reads.
-    struct HalfEdge {
-      uint32_t to;
-      uint32_t use;  // 3 * triangle + corner
+    // Next and previous vertex of each corner, beside vertex_uses (reading them from the
+    // triangles instead halves this memory but costs 10 ms at 543k triangles in random reads).
+    // A list longer than kScan (below) holds, instead, its next vertex and its use, sorted.
+    struct Corner {
+      uint32_t next;
+      uint32_t other;  // the previous vertex; in a long list, the use (3 * triangle + corner)
     };
-    HalfEdge* lists = arena.allocate_array<HalfEdge>(3 * nt);
+    Corner* lists = arena.allocate_array<Corner>(3 * nt);
     if ((nv > 0 && fill == nullptr) || (nt > 0 && lists == nullptr)) {
       return arena.exhausted_status();
     }
@@ -571,35 +575,34 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       fill[i] = 0;
     }
     for (uint32_t t = 0; t < n; ++t) {
+      const uint32_t c[3] = {tris[t].v[0], tris[t].v[1], tris[t].v[2]};
       for (uint32_t k = 0; k < 3; ++k) {
-        const uint32_t a = tris[t].v[k];
-        vuses[start[a] + fill[a]] = 3 * t + k;  // kept, in triangle order
-        lists[start[a] + fill[a]++] = HalfEdge{tris[t].v[(k + 1) % 3], 3 * t + k};
+        const uint32_t a = c[k];
+        const uint32_t j = start[a] + fill[a]++;
+        vuses[j] = 3 * t + k;  // kept, in triangle order
+        lists[j] = Corner{c[k == 2 ? 0 : k + 1], c[k == 0 ? 2 : k - 1]};
       }
     }
-    // Each undirected edge is examined once, from its half-edge that runs from the smaller id
-    // to the larger; a manifold pair sets both neighbours. Any half-edge left without a
-    // neighbour (boundary, non-manifold, or a pair used in the same direction) means the mesh
-    // is not a closed oriented manifold.
-    // The uses of an edge are counted in the lists of its two vertices. A list holds its
-    // half-edges in triangle order (ascending use); a short one (the usual vertex: six) is
-    // scanned. A long one is sorted by (end vertex, use) and searched twice, so that a vertex
-    // shared by d triangles costs O(d log d), not O(d^2) (hostile input: a fan of a million
-    // triangles, or a million copies of one triangle). Either way the first use found is the
-    // smallest.
+    // A list of up to kScan corners (the usual vertex: six) is scanned once for each of its
+    // edges. A longer one is sorted by (next vertex, use) and searched, so that a vertex shared
+    // by d triangles costs O(d log d), not O(d^2) (hostile input: a fan of a million
+    // triangles, or a million copies of one triangle); its edges' reverse half-edges are
+    // counted in the other vertex's list, by search or scan.
     constexpr uint32_t kScan = 32;
-    const auto by_end = [](const HalfEdge& x, const HalfEdge& y) {
-      return x.to != y.to ? x.to < y.to : x.use < y.use;
+    const auto by_next = [](const Corner& x, const Corner& y) {
+      return x.next != y.next ? x.next < y.next : x.other < y.other;
     };
     for (size_t i = 0; i < nv; ++i) {
       const uint32_t degree = start[i + 1] - start[i];
-      if (degree > kScan) heap_sort(lists + start[i], degree, by_end);
+      if (degree <= kScan) continue;
+      for (uint32_t j = start[i]; j < start[i + 1]; ++j) lists[j].other = vuses[j];
+      heap_sort(lists + start[i], degree, by_next);
     }
-    // First index in [lo, hi) (sorted) whose end vertex is >= to (or > to when `after`).
+    // First index in [lo, hi) (sorted) whose next vertex is >= to (or > to when `after`).
     const auto search = [&](uint32_t lo, uint32_t hi, uint32_t to, bool after) {
       while (lo < hi) {
         const uint32_t mid = lo + (hi - lo) / 2;
-        if (lists[mid].to < to || (after && lists[mid].to == to)) {
+        if (lists[mid].next < to || (after && lists[mid].next == to)) {
           lo = mid + 1;
         } else {
           hi = mid;
@@ -607,35 +610,59 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       }
       return lo;
     };
-    // How many half-edges of vertex `from` end at `to`; *first gets the first one's use.
-    const auto uses = [&](uint32_t from, uint32_t to, uint32_t* first) {
-      const uint32_t lo = start[from], hi = start[from + 1];
-      uint32_t count = 0;
-      if (hi - lo <= kScan) {
-        for (uint32_t j = hi; j-- > lo;) {
-          if (lists[j].to != to) continue;
-          ++count;
-          *first = lists[j].use;
-        }
-        return count;
-      }
-      const uint32_t begin = search(lo, hi, to, false);
-      count = search(begin, hi, to, true) - begin;
-      if (count > 0) *first = lists[begin].use;
-      return count;
+    // Sets both sides of a manifold edge, given the uses (3 * triangle + corner) that start
+    // its two half-edges.
+    const auto link = [&](uint32_t own, uint32_t reverse) {
+      neighbors[own] = reverse / 3;
+      neighbors[reverse] = own / 3;
     };
     for (size_t i = 0; i < 3 * nt; ++i) neighbors[i] = kNoNeighbor;
-    for (uint32_t t = 0; t < n; ++t) {
-      for (uint32_t k = 0; k < 3; ++k) {
-        const uint32_t a = tris[t].v[k], b = tris[t].v[(k + 1) % 3];
-        if (a >= b) continue;
-        uint32_t own_use = 0, other_use = 0;
-        const uint32_t same = uses(a, b, &own_use);
-        const uint32_t reverse = uses(b, a, &other_use);
-        if (same == 1 && reverse == 1) {
-          neighbors[3 * size_t{t} + k] = other_use / 3;
-          neighbors[other_use] = t;
+    for (uint32_t a = 0; a < nv; ++a) {
+      const uint32_t lo = start[a], hi = start[a + 1];
+      if (hi - lo <= kScan) {
+        // The corners whose edge a settles (b > a), gathered without a branch first: which
+        // of them qualify follows no pattern on real meshes.
+        uint32_t up[kScan];
+        uint32_t m = 0;
+        for (uint32_t j = lo; j < hi; ++j) {
+          up[m] = j;
+          m += lists[j].next > a ? 1u : 0u;
         }
+        for (uint32_t q = 0; q < m; ++q) {
+          const uint32_t j = up[q];
+          const uint32_t b = lists[j].next;
+          uint32_t same = 0, reverse = 0, at = 0;
+          for (uint32_t i = lo; i < hi; ++i) {
+            same += lists[i].next == b ? 1u : 0u;
+            const bool back = lists[i].other == b;
+            reverse += back ? 1u : 0u;
+            at = back ? i : at;
+          }
+          if (same != 1 || reverse != 1) continue;
+          // Corner `at` of a follows b in its triangle: b's corner, the one before, starts b->a.
+          const uint32_t use = vuses[at];
+          link(vuses[j], use - use % 3 + (use % 3 == 0 ? 2 : use % 3 - 1));
+        }
+        continue;
+      }
+      for (uint32_t j = lo; j < hi; ++j) {
+        const uint32_t b = lists[j].next;
+        if (b <= a || (j > lo && lists[j - 1].next == b)) continue;  // first of its run only
+        if (j + 1 < hi && lists[j + 1].next == b) continue;          // a->b more than once
+        const uint32_t blo = start[b], bhi = start[b + 1];
+        uint32_t reverse = 0, use = 0;
+        if (bhi - blo <= kScan) {
+          for (uint32_t i = blo; i < bhi; ++i) {
+            if (lists[i].next != a) continue;
+            ++reverse;
+            use = vuses[i];
+          }
+        } else {
+          const uint32_t begin = search(blo, bhi, a, false);
+          reverse = search(begin, bhi, a, true) - begin;
+          if (reverse > 0) use = lists[begin].other;
+        }
+        if (reverse == 1) link(lists[j].other, use);
       }
     }
     for (size_t i = 0; i < 3 * nt && closed_manifold; ++i) {

@@ -1947,6 +1947,108 @@ TEST(DistanceBuild, ClosedManifoldFlag) {
   EXPECT_FALSE(build(random_soup(rng, 20, 30, 1))->index.closed_manifold);
 }
 
+// Edge neighbours against brute force, on indexed meshes made to break them: few vertices
+// (an edge used from zero to several times, either way), corners repeated in a triangle (a->a,
+// a->b->a), and hubs of more than 32 corners (the sorted-list path: a hub's edges to small and
+// to other hub vertices). A half-edge a->b (a != b) has a neighbour when the mesh holds a->b
+// once and b->a once: the triangle of b->a.
+TEST(DistanceBuild, NeighboursMatchBruteForce) {
+  Rng rng(0x5eed0070);
+  uint32_t linked = 0, linked_long = 0;
+  for (int round = 0; round < 80; ++round) {
+    TestArena t(size_t{8} << 20);
+    Mesh mesh(&t.arena);
+    const uint32_t nv = 3 + rng.below(round < 40 ? 8 : 60);
+    for (uint32_t i = 0; i < nv; ++i) {
+      ASSERT_TRUE(mesh.vertices.push_back(rng.in_box(Vec3{-1, -1, -1}, Vec3{1, 1, 1})));
+    }
+    const uint32_t hubs = round % 4 == 0 ? 0 : 1 + rng.below(3);
+    const uint32_t nt = 1 + rng.below(round < 40 ? 30 : 400);
+    for (uint32_t k = 0; k < nt; ++k) {
+      Triangle tri;
+      const uint32_t shape = rng.below(10);
+      if (shape < 4 && hubs > 0) {
+        // A fan piece around a hub: (hub, i, i + 1), mostly manifold, with the other hubs
+        // among the rim.
+        const uint32_t i = rng.below(nv - 1);
+        tri = Triangle{{rng.below(hubs), i, i + 1}};
+      } else if (shape < 5) {
+        const uint32_t a = rng.below(nv), b = rng.below(nv);
+        tri = Triangle{{a, b, rng.below(2) == 0 ? a : b}};  // a repeated corner
+      } else {
+        tri = Triangle{{rng.below(nv), rng.below(nv), rng.below(nv)}};
+      }
+      if (rng.below(2) == 0) std::swap(tri.v[1], tri.v[2]);
+      ASSERT_TRUE(mesh.triangles.push_back(tri));
+    }
+    Context ctx(&t.arena);
+    DistanceIndex index;
+    SPLINTCORE_ASSERT_OK(build_distance_index(ctx, mesh, DistanceIndexOptions{}, &index));
+    const std::vector<Triangle> tris(mesh.triangles.begin(), mesh.triangles.end());
+    bool closed = !tris.empty();
+    const auto degree = [&](uint32_t v) {
+      return index.vertex_start[v + 1] - index.vertex_start[v];
+    };
+    for (uint32_t tt = 0; tt < tris.size(); ++tt) {
+      for (uint32_t k = 0; k < 3; ++k) {
+        const uint32_t a = tris[tt].v[k], b = tris[tt].v[(k + 1) % 3];
+        uint32_t same = 0, reverse = 0, other = kNoNeighbor;
+        for (uint32_t u = 0; u < tris.size(); ++u) {
+          for (uint32_t j = 0; j < 3; ++j) {
+            const uint32_t x = tris[u].v[j], y = tris[u].v[(j + 1) % 3];
+            if (x == a && y == b) ++same;
+            if (x == b && y == a) {
+              ++reverse;
+              other = u;
+            }
+          }
+        }
+        const uint32_t expected = a != b && same == 1 && reverse == 1 ? other : kNoNeighbor;
+        ASSERT_EQ(index.neighbors[3 * size_t{tt} + k], expected)
+            << "round " << round << ", triangle " << tt << ", edge " << k;
+        closed = closed && expected != kNoNeighbor;
+        if (expected == kNoNeighbor) continue;
+        ++linked;
+        if (degree(a) > 32 || degree(b) > 32) ++linked_long;
+      }
+    }
+    EXPECT_EQ(index.closed_manifold, closed) << "round " << round;
+  }
+  // The cases reach both paths: edges linked from short lists and from long ones.
+  EXPECT_GT(linked, 100u);
+  EXPECT_GT(linked_long, 10u);
+}
+
+// A closed mesh whose two poles have 100 corners each (the sorted-list path on both ends of
+// no edge, and on one end of 200): a closed manifold, every neighbour across the same edge.
+TEST(DistanceBuild, NeighboursAroundHighDegreePoles) {
+  TestArena t(size_t{8} << 20);
+  Mesh mesh(&t.arena);
+  const uint32_t n = 100;
+  ASSERT_TRUE(mesh.vertices.push_back(Vec3{0, 0, 1}));   // 0: top
+  ASSERT_TRUE(mesh.vertices.push_back(Vec3{0, 0, -1}));  // 1: bottom
+  for (uint32_t i = 0; i < n; ++i) {
+    const double a = 6.283185307179586 * i / n;
+    ASSERT_TRUE(mesh.vertices.push_back(Vec3{std::cos(a), std::sin(a), 0}));
+  }
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t p = 2 + i, q = 2 + (i + 1) % n;
+    ASSERT_TRUE(mesh.triangles.push_back(Triangle{{0, p, q}}));
+    ASSERT_TRUE(mesh.triangles.push_back(Triangle{{1, q, p}}));
+  }
+  Context ctx(&t.arena);
+  DistanceIndex index;
+  SPLINTCORE_ASSERT_OK(build_distance_index(ctx, mesh, DistanceIndexOptions{}, &index));
+  EXPECT_TRUE(index.closed_manifold);
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t top = 2 * i, bottom = 2 * i + 1;
+    EXPECT_EQ(index.neighbors[3 * top + 0], 2 * ((i + n - 1) % n));  // edge 0 -> p
+    EXPECT_EQ(index.neighbors[3 * top + 1], bottom);                // edge p -> q
+    EXPECT_EQ(index.neighbors[3 * top + 2], 2 * ((i + 1) % n));      // edge q -> 0
+    EXPECT_EQ(index.neighbors[3 * bottom + 1], top);
+  }
+}
+
 struct IndexBytes {
   std::vector<uint8_t> bytes;
   bool closed = false;
