@@ -124,9 +124,9 @@ uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,
 
 // Builds the index over `mesh` (which must outlive it and not change). Temporaries are
 // returned before it finishes. Errors: kArenaExhausted, kInvalidMesh (an index out of range,
-// a non-finite vertex), kLimitExceeded (more than 2^31 triangles), kCancelled,
-// kInvalidArgument (leaf size). Arena: at most distance_index_bound(). On an error the arena
-// is as it was and *out is empty.
+// a non-finite vertex), kLimitExceeded (more than (2^32 - 1) / 3 = 1,431,655,765 triangles:
+// corners are numbered in 32 bits), kCancelled, kInvalidArgument (leaf size). Arena: at most
+// distance_index_bound(). On an error the arena is as it was and *out is empty.
 Status build_distance_index(const Context& ctx, const Mesh& mesh,
                             const DistanceIndexOptions& options, DistanceIndex* out);
 

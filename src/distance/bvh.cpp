@@ -117,10 +117,9 @@ uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,
   const uint64_t kept = wide * per_node + triangle_count * (sizeof(uint32_t) * 7) +
                         (vertex_count + 1) * sizeof(uint32_t);
   // Temporaries (the larger stage): Morton keys and scratch with the tree at its upper bound
-  // before it moves down, or the per-vertex half-edge lists.
+  // before it moves down, or the per-vertex corner lists.
   const uint64_t tree = 2 * triangle_count * sizeof(uint64_t) + wide * per_node;
-  const uint64_t lists = 3 * triangle_count * 2 * sizeof(uint32_t) +
-                         (2 * vertex_count + 1) * sizeof(uint32_t);
+  const uint64_t lists = 3 * triangle_count * 2 * sizeof(uint32_t);
   const uint64_t temps = (tree > lists ? tree : lists) + kMaxDepth * 16;
   return kept + temps + 16 * 64;
 }
@@ -239,9 +238,11 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   if (leaf_size > 16) {
     return make_error(StatusCode::kInvalidArgument, "leaf size must be 1..16, got ", leaf_size);
   }
-  if (nt > (uint64_t{1} << 31)) {
-    return make_error(StatusCode::kLimitExceeded, "distance index: ", nt,
-                      " triangles, at most 2^31");
+  // Corners are numbered 3 * triangle + corner in 32 bits (vertex_uses, neighbours).
+  constexpr uint64_t kMaxTriangles = UINT32_MAX / 3;
+  if (nt > kMaxTriangles) {
+    return make_error(StatusCode::kLimitExceeded, "distance index: ", nt, " triangles, at most ",
+                      kMaxTriangles, " (corners are numbered in 32 bits)");
   }
   const Vec3* v = mesh.vertices.data();
   const Triangle* tris = mesh.triangles.data();
@@ -344,12 +345,16 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       const uint64_t a = leaf_code(first), b = leaf_code(last);
       if (a == b) return first + (last - first) / 2;
       const int bit = highest_bit(a ^ b);
-      uint32_t lo = first, hi = last;  // find the last leaf with that bit clear
-      while (lo + 1 < hi) {
-        const uint32_t mid = lo + (hi - lo) / 2;
-        if (((leaf_code(mid) >> bit) & 1) == 0) lo = mid; else hi = mid;
+      // The last leaf with that bit clear (first has it clear, last set): a binary search
+      // that narrows by halves without a branch on the bit (which side it goes is a coin
+      // toss). `base` has the bit clear, and the answer lies in [base, base + count).
+      uint32_t base = first, count = last - first;
+      while (count > 1) {
+        const uint32_t half = count / 2;
+        base = ((leaf_code(base + half) >> bit) & 1) == 0 ? base + half : base;
+        count -= half;
       }
-      return lo;
+      return base;
     };
     struct Range {
       uint32_t node, first, last;  // leaves [first, last]
@@ -550,10 +555,9 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   // next vertex b is a half-edge a->b, one with previous vertex b is the end of a half-edge
   // b->a (one corner per half-edge either way), so each edge is settled from the list of its
   // smaller vertex, read in cache, without a visit to the other vertex's list.
-  bool closed_manifold = n > 0;
+  bool closed_manifold = false;
   {
     ArenaScope lists_scope(arena);
-    uint32_t* fill = arena.allocate_array<uint32_t>(nv);
     // Next and previous vertex of each corner, beside vertex_uses (reading them from the
     // triangles instead halves this memory but costs 10 ms at 543k triangles in random reads).
     // A list longer than kScan (below) holds, instead, its next vertex and its use, sorted.
@@ -562,26 +566,31 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       uint32_t other;  // the previous vertex; in a long list, the use (3 * triangle + corner)
     };
     Corner* lists = arena.allocate_array<Corner>(3 * nt);
-    if ((nv > 0 && fill == nullptr) || (nt > 0 && lists == nullptr)) {
-      return arena.exhausted_status();
-    }
-    for (size_t i = 0; i < nv; ++i) fill[i] = 0;
+    if (nt > 0 && lists == nullptr) return arena.exhausted_status();
+    // Counting sort of the corners by vertex, with start[] as its own cursor: vertex a's
+    // corners are counted in start[a + 1], then start[a + 1] becomes where a's list begins and
+    // moves on with each corner placed, to end where a + 1's begins.
+    for (size_t i = 0; i <= nv; ++i) start[i] = 0;
     for (uint32_t t = 0; t < n; ++t) {
-      for (int k = 0; k < 3; ++k) ++fill[tris[t].v[k]];
+      for (int k = 0; k < 3; ++k) ++start[tris[t].v[k] + size_t{1}];
     }
-    start[0] = 0;
+    uint32_t sum = 0;
     for (size_t i = 0; i < nv; ++i) {
-      start[i + 1] = start[i] + fill[i];
-      fill[i] = 0;
+      const uint32_t count = start[i + 1];
+      start[i + 1] = sum;
+      sum += count;
     }
     for (uint32_t t = 0; t < n; ++t) {
-      const uint32_t c[3] = {tris[t].v[0], tris[t].v[1], tris[t].v[2]};
-      for (uint32_t k = 0; k < 3; ++k) {
-        const uint32_t a = c[k];
-        const uint32_t j = start[a] + fill[a]++;
-        vuses[j] = 3 * t + k;  // kept, in triangle order
-        lists[j] = Corner{c[k == 2 ? 0 : k + 1], c[k == 0 ? 2 : k - 1]};
-      }
+      const uint32_t c0 = tris[t].v[0], c1 = tris[t].v[1], c2 = tris[t].v[2];
+      uint32_t j = start[c0 + size_t{1}]++;
+      vuses[j] = 3 * t;  // kept, in triangle order
+      lists[j] = Corner{c1, c2};
+      j = start[c1 + size_t{1}]++;
+      vuses[j] = 3 * t + 1;
+      lists[j] = Corner{c2, c0};
+      j = start[c2 + size_t{1}]++;
+      vuses[j] = 3 * t + 2;
+      lists[j] = Corner{c0, c1};
     }
     // A list of up to kScan corners (the usual vertex: six) is scanned once for each of its
     // edges. A longer one is sorted by (next vertex, use) and searched, so that a vertex shared
@@ -612,9 +621,13 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
     };
     // Sets both sides of a manifold edge, given the uses (3 * triangle + corner) that start
     // its two half-edges.
+    // Each manifold edge is linked once (from its smaller vertex) and sets two slots no other
+    // edge sets, so the mesh is a closed oriented manifold when the links fill every slot.
+    uint64_t links = 0;
     const auto link = [&](uint32_t own, uint32_t reverse) {
       neighbors[own] = reverse / 3;
       neighbors[reverse] = own / 3;
+      ++links;
     };
     for (size_t i = 0; i < 3 * nt; ++i) neighbors[i] = kNoNeighbor;
     for (uint32_t a = 0; a < nv; ++a) {
@@ -665,9 +678,7 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
         if (reverse == 1) link(lists[j].other, use);
       }
     }
-    for (size_t i = 0; i < 3 * nt && closed_manifold; ++i) {
-      closed_manifold = neighbors[i] != kNoNeighbor;
-    }
+    closed_manifold = n > 0 && 2 * links == 3 * uint64_t{n};
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 3, 4));
 
