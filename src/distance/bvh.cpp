@@ -251,12 +251,17 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       return make_error(StatusCode::kInvalidMesh, "vertex ", i, " is not finite").at_index(i);
     }
   }
+  // The triangles' indices are checked in the pass that bounds their centroids (for the
+  // Morton codes, step 1).
+  Aabb centroids;
   for (size_t t = 0; t < nt; ++t) {
-    if (tris[t].v[0] >= nv || tris[t].v[1] >= nv || tris[t].v[2] >= nv) {
+    const Triangle& tri = tris[t];
+    if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) {
       return make_error(StatusCode::kInvalidMesh, "triangle ", t,
                         " refers to a vertex that does not exist")
           .at_index(t);
     }
+    centroids.add((v[tri.v[0]] + v[tri.v[1]] + v[tri.v[2]]) * (1.0 / 3.0));
   }
   const uint32_t n = static_cast<uint32_t>(nt);
   const uint32_t leaves = n == 0 ? 1 : (n + leaf_size - 1) / leaf_size;
@@ -282,11 +287,6 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   uint32_t node_count = 1;
   // 1. Morton order of the triangle centroids (keys live until the topology is built).
   {
-  Aabb centroids;
-  for (uint32_t t = 0; t < n; ++t) {
-    const Triangle& tri = tris[t];
-    centroids.add((v[tri.v[0]] + v[tri.v[1]] + v[tri.v[2]]) * (1.0 / 3.0));
-  }
   // Key = Morton code in the high bits, triangle id in the low bits: one 64-bit word per
   // triangle to sort (half the traffic of a key-index pair). The code gets 3 * code_bits bits,
   // code_bits = min(16, (64 - id bits) / 3): 16 up to 65,536 triangles ... 14 up to 4 million.
