@@ -184,10 +184,10 @@ Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aa
 // kInvalidArgument (sizes differ), kCancelled.
 // A batch of at least 4096 queries and half as many as the mesh has triangles, near enough
 // to the surface that a query meets few faces' regions (near a smooth surface: always), is
-// answered triangle by triangle (a closest point transform over the bucketed queries: 2.9 to
-// 3.9 times the queries per second of one tree search after another on tori of 87k to 543k
-// triangles, 1.4 to 1.6 times on the real dentition; splintcore-bench --filter
-// closest_point_batch); it takes about 65 bytes of arena a query and 4 a triangle, and where
+// answered triangle by triangle (a closest point transform over the bucketed queries: 13 to
+// 18 times the queries per second of one tree search after another on tori of 87k to 543k
+// triangles, about 11 times on the real dentition; splintcore-bench --filter closest_point);
+// it takes about 65 bytes of arena a query and 4 a triangle, and where
 // the arena does not hold them, the tree answers in 2 MB.
 Status batch_closest_points(const Context& ctx, const DistanceIndex& index,
                             Span<const Vec3> queries, Span<ClosestPoint> results);
