@@ -46,6 +46,28 @@ void lsd_radix_sort(Span<T> items, Span<T> scratch) {
 
 constexpr unsigned kMaxDigit = 11;
 
+// One stable scatter of from[0, n) into `to` by the digit (k >> shift) & mask: counts, their
+// running sums, then each key to its bucket's next slot. offsets[d] ends where bucket d ends.
+// False (and nothing moved) when every key has the same digit.
+bool scatter_digit(const uint64_t* from, uint64_t* to, size_t n, unsigned shift, uint64_t mask,
+                   uint32_t* offsets) {
+  const uint32_t buckets = static_cast<uint32_t>(mask) + 1;
+  for (uint32_t b = 0; b < buckets; ++b) offsets[b] = 0;
+  for (size_t i = 0; i < n; ++i) ++offsets[(from[i] >> shift) & mask];
+  if (offsets[(from[0] >> shift) & mask] == n) return false;
+  uint32_t sum = 0;
+  for (uint32_t b = 0; b < buckets; ++b) {
+    const uint32_t c = offsets[b];
+    offsets[b] = sum;
+    sum += c;
+  }
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t k = from[i];
+    to[offsets[(k >> shift) & mask]++] = k;
+  }
+  return true;
+}
+
 // Stable LSD passes over bits [lo_bit, hi_bit) of from[0, n), ping-ponging with `to`; returns
 // where the result is. Digits of equal width, at most 11 bits: the 2048 counts fit in 8 KiB
 // of stack.
@@ -56,21 +78,7 @@ uint64_t* lsd_bits(uint64_t* from, uint64_t* to, size_t n, unsigned lo_bit, unsi
   uint32_t offsets[1u << kMaxDigit];
   for (unsigned shift = lo_bit; shift < hi_bit; shift += width) {
     const unsigned w = hi_bit - shift < width ? hi_bit - shift : width;
-    const uint64_t mask = (uint64_t{1} << w) - 1;
-    const uint32_t buckets = uint32_t{1} << w;
-    for (uint32_t b = 0; b < buckets; ++b) offsets[b] = 0;
-    for (size_t i = 0; i < n; ++i) ++offsets[(from[i] >> shift) & mask];
-    if (offsets[(from[0] >> shift) & mask] == n) continue;  // one bucket: nothing to do
-    uint32_t sum = 0;
-    for (uint32_t b = 0; b < buckets; ++b) {
-      const uint32_t c = offsets[b];
-      offsets[b] = sum;
-      sum += c;
-    }
-    for (size_t i = 0; i < n; ++i) {
-      const uint64_t k = from[i];
-      to[offsets[(k >> shift) & mask]++] = k;
-    }
+    if (!scatter_digit(from, to, n, shift, (uint64_t{1} << w) - 1, offsets)) continue;
     uint64_t* t = from;
     from = to;
     to = t;
@@ -103,17 +111,11 @@ void radix_sort_bits(Span<uint64_t> items, Span<uint64_t> scratch, unsigned lo_b
   const uint64_t mask = (uint64_t{1} << top) - 1;
   const uint32_t buckets = uint32_t{1} << top;
   uint32_t ends[1u << kMaxDigit];
-  for (uint32_t k = 0; k < buckets; ++k) ends[k] = 0;
-  for (size_t i = 0; i < n; ++i) ++ends[(a[i] >> shift) & mask];
-  uint32_t sum = 0;
-  for (uint32_t k = 0; k < buckets; ++k) {
-    const uint32_t c = ends[k];
-    ends[k] = sum;
-    sum += c;
-  }
-  for (size_t i = 0; i < n; ++i) {
-    const uint64_t k = a[i];
-    b[ends[(k >> shift) & mask]++] = k;
+  if (!scatter_digit(a, b, n, shift, mask, ends)) {
+    // One top digit for all: the rest of the range, in place.
+    const uint64_t* result = lsd_bits(a, b, n, lo_bit, shift);
+    if (result != a) std::memcpy(static_cast<void*>(a), result, n * sizeof(uint64_t));
+    return;
   }
   // ends[k] is now where bucket k ends (and k + 1 begins).
   uint32_t begin = 0;
