@@ -620,9 +620,9 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       return lo;
     };
     // Sets both sides of a manifold edge, given the uses (3 * triangle + corner) that start
-    // its two half-edges.
-    // Each manifold edge is linked once (from its smaller vertex) and sets two slots no other
-    // edge sets, so the mesh is a closed oriented manifold when the links fill every slot.
+    // its two half-edges. Each manifold edge is linked once (from its smaller vertex) and sets
+    // two slots no other edge sets, so the mesh is a closed oriented manifold when the links
+    // fill every slot.
     uint64_t links = 0;
     const auto link = [&](uint32_t own, uint32_t reverse) {
       neighbors[own] = reverse / 3;
@@ -630,8 +630,10 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       ++links;
     };
     for (size_t i = 0; i < 3 * nt; ++i) neighbors[i] = kNoNeighbor;
-    for (uint32_t a = 0; a < nv; ++a) {
-      const uint32_t lo = start[a], hi = start[a + 1];
+    for (size_t vertex = 0; vertex < nv; ++vertex) {
+      // Ids fit in 32 bits (Triangle); a vertex past them is in no triangle: an empty list.
+      const uint32_t a = static_cast<uint32_t>(vertex);
+      const uint32_t lo = start[vertex], hi = start[vertex + 1];
       if (hi - lo <= kScan) {
         // The corners whose edge a settles (b > a), gathered without a branch first: which
         // of them qualify follows no pattern on real meshes.
