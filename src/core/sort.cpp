@@ -118,6 +118,7 @@ __attribute__((noinline)) void top_digit_first(uint64_t* a, uint64_t* b, size_t 
     begin = ends[k];
   }
 }
+
 }  // namespace
 
 void radix_sort_bits(Span<uint64_t> items, Span<uint64_t> scratch, unsigned lo_bit,

@@ -30,9 +30,9 @@ inline uint32_t leaf_size_of(const DistanceIndexOptions& options) {
 }
 
 
-// Morton codes of 16 bits an axis (detail::spread_bits_16, morton.h): 65536 cells per axis, finer
-// than any triangle here, and six radix passes instead of eight.
-using detail::spread_bits_16;
+// Morton codes of 16 bits an axis (detail::spread_bits, morton.h): 65536 cells per axis, finer
+// than any triangle here.
+using detail::spread_bits;
 
 // In-place heap sort (Williams 1964): no memory, O(n log n) whatever the input, and with
 // unique keys the order is fixed (no dependence on the standard library's sort).
@@ -318,7 +318,7 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
         q[a] = static_cast<uint64_t>(x);
       }
       const uint64_t code =
-          (spread_bits_16(q[0]) << 2) | (spread_bits_16(q[1]) << 1) | spread_bits_16(q[2]);
+          (spread_bits(q[0]) << 2) | (spread_bits(q[1]) << 1) | spread_bits(q[2]);
       keys[t] = (code << id_bits) | t;
     }
     // The ids rise in input order, so a stable sort on the code bits alone gives the order
