@@ -83,16 +83,16 @@ enum class SignMethod : uint8_t {
 };
 
 struct DistanceIndexOptions {
-  // Triangles per leaf, 1..16; 0: the default, 4, or 8 with oriented boxes.
+  // Triangles per leaf, 1..16; 0: the default, 8.
   uint32_t leaf_size = 0;
-  // Oriented boxes (BvhObb) for closest-point and signed-distance queries. With the default
-  // leaves (8), on a finely tessellated curved surface of 543k triangles: about 1.2 times the
-  // batch queries per second (one query at a time about 0.9 times, since the axis-aligned
-  // boxes are tested four at once), for about 40% more build time and slightly less memory
-  // than the axis-aligned index with leaves of 4; on coarser meshes (87k) about the same, and
-  // on the real dentition (888k) 1.13 times the batch queries and no more single ones
-  // (splintcore-bench --filter closest_point). Worth it when an index answers many more
-  // queries than it has triangles (volume sampling). The answers are the same bits either way.
+  // Oriented boxes (BvhObb) for closest-point and signed-distance queries. On finely
+  // tessellated curved surfaces of 324k and 543k triangles: one tree search after another about
+  // 1.25 times the queries per second (17% fewer instructions at 543k), for 40% more build
+  // instructions and 20% more index memory; on coarser ones (87k) and on the real dentition
+  // about the same. Large batches (at least half as many queries as triangles) go
+  // triangle by triangle and gain nothing (splintcore-bench --filter closest_point). Worth it
+  // when queries come one at a time or in small batches, as in volume sampling in a narrow band.
+  // The answers are the same bits either way.
   bool oriented_boxes = false;
 };
 
@@ -185,8 +185,8 @@ Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aa
 // A batch of at least 4096 queries and half as many as the mesh has triangles, near enough
 // to the surface that a query meets few faces' regions (near a smooth surface: always), is
 // answered triangle by triangle (a closest point transform over the bucketed queries: 13 to
-// 18 times the queries per second of one tree search after another on tori of 87k to 543k
-// triangles, about 11 times on the real dentition; splintcore-bench --filter closest_point);
+// 23 times the queries per second of one tree search after another on tori of 87k to 543k
+// triangles, about 13 times on the real dentition; splintcore-bench --filter closest_point);
 // it takes about 65 bytes of arena a query and 4 a triangle, and where
 // the arena does not hold them, the tree answers in 2 MB.
 Status batch_closest_points(const Context& ctx, const DistanceIndex& index,
