@@ -251,21 +251,6 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       return make_error(StatusCode::kInvalidMesh, "vertex ", i, " is not finite").at_index(i);
     }
   }
-  // The triangles' indices are checked in the pass that bounds their centroids (for the
-  // Morton codes, step 1).
-  Aabb centroids;
-  for (size_t t = 0; t < nt; ++t) {
-    const Triangle& tri = tris[t];
-    if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) {
-      return make_error(StatusCode::kInvalidMesh, "triangle ", t,
-                        " refers to a vertex that does not exist")
-          .at_index(t);
-    }
-    centroids.add((v[tri.v[0]] + v[tri.v[1]] + v[tri.v[2]]) * (1.0 / 3.0));
-  }
-  const uint32_t n = static_cast<uint32_t>(nt);
-  const uint32_t leaves = n == 0 ? 1 : (n + leaf_size - 1) / leaf_size;
-
   // What stays: order, neighbours and vertex normals (here), the 4-wide nodes and their
   // dipoles (moved down over the temporaries once the tree is built).
   uint32_t* order = arena.allocate_array<uint32_t>(nt);
@@ -276,6 +261,23 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       start == nullptr) {
     return arena.exhausted_status();
   }
+  for (size_t i = 0; i <= nv; ++i) start[i] = 0;
+  // The triangles' indices are checked in the pass that bounds their centroids (for the
+  // Morton codes, step 1), which also counts each vertex's corners (for its list, step 4).
+  Aabb centroids;
+  for (size_t t = 0; t < nt; ++t) {
+    const Triangle& tri = tris[t];
+    if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) {
+      return make_error(StatusCode::kInvalidMesh, "triangle ", t,
+                        " refers to a vertex that does not exist")
+          .at_index(t);
+    }
+    centroids.add((v[tri.v[0]] + v[tri.v[1]] + v[tri.v[2]]) * (1.0 / 3.0));
+    for (int k = 0; k < 3; ++k) ++start[tri.v[k] + size_t{1}];
+  }
+  const uint32_t n = static_cast<uint32_t>(nt);
+  const uint32_t leaves = n == 0 ? 1 : (n + leaf_size - 1) / leaf_size;
+
   const Arena::Marker tree_temps = arena.mark();
   // The wide nodes and their dipoles, at their upper bound (every wide node splits a range of
   // at least two leaves, so there are at most leaves - 1 of them); moved down over the Morton
@@ -568,12 +570,8 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
     Corner* lists = arena.allocate_array<Corner>(3 * nt);
     if (nt > 0 && lists == nullptr) return arena.exhausted_status();
     // Counting sort of the corners by vertex, with start[] as its own cursor: vertex a's
-    // corners are counted in start[a + 1], then start[a + 1] becomes where a's list begins and
-    // moves on with each corner placed, to end where a + 1's begins.
-    for (size_t i = 0; i <= nv; ++i) start[i] = 0;
-    for (uint32_t t = 0; t < n; ++t) {
-      for (int k = 0; k < 3; ++k) ++start[tris[t].v[k] + size_t{1}];
-    }
+    // corners were counted in start[a + 1] (above), then start[a + 1] becomes where a's list
+    // begins and moves on with each corner placed, to end where a + 1's begins.
     uint32_t sum = 0;
     for (size_t i = 0; i < nv; ++i) {
       const uint32_t count = start[i + 1];
