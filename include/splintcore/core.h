@@ -250,6 +250,17 @@ class Arena {
   alignas(16) unsigned char root_storage_[48];  // the Block header for buffer mode
 };
 
+// Bytes allocate_array<T>(count) can take from a buffer arena: the array and the alignment
+// padding before it (the top may sit anywhere). The sizing functions (`..._bound()`) add these
+// up, one term per allocation, so that a bound reads like the allocations it covers.
+// Saturates at UINT64_MAX.
+template <class T>
+constexpr uint64_t arena_array_bound(uint64_t count) {
+  constexpr uint64_t align =
+      alignof(T) > Arena::kDefaultAlignment ? alignof(T) : Arena::kDefaultAlignment;
+  return count > (UINT64_MAX - align) / sizeof(T) ? UINT64_MAX : count * sizeof(T) + align - 1;
+}
+
 // Rewinds the arena to where it was at construction (temporary work inside a function).
 class ArenaScope {
  public:

@@ -17,9 +17,12 @@ inline uint64_t edge_key(uint32_t a, uint32_t b) {
 }  // namespace
 
 uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count) {
+  // The referenced flags, the edge uses and their sort scratch, the union-find, and the
+  // per-shell vertex, edge and face counts: about 124 bytes a triangle.
   const uint64_t uses = 3 * triangle_count;
-  return 2 * uses * sizeof(KeyIndex) + triangle_count * sizeof(uint32_t) * 2 +
-         vertex_count + 8 * 64;
+  return arena_array_bound<uint8_t>(vertex_count) + 2 * arena_array_bound<KeyIndex>(uses) +
+         arena_array_bound<uint32_t>(triangle_count) +
+         3 * arena_array_bound<int64_t>(triangle_count);
 }
 
 Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report) {

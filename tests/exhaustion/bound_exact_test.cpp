@@ -1,0 +1,275 @@
+// The memory contract, tested as a firmware engineer would use it (issue 27): every sizing
+// function `<function>_bound()` is a true upper bound. Each function runs in an arena over a
+// buffer of exactly its bound (16-byte aligned, as the C API and TestArena give) on varied
+// inputs: tiny, degenerate, open, large, the phantom jaw and, when ../shared/realdata is there,
+// the real dentition (887,688 triangles). A run may fail on its input (an open mesh is not a
+// solid), but never with kArenaExhausted. On the large inputs the bound must also be useful:
+// the run's high water is at least a third of it (printed per case, need / bound).
+//
+// The model is meshoptimizer's tests, which allocate exactly meshopt_...Bound() bytes.
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "common/phantom.h"
+#include "common/realcase.h"
+#include "common/shapes.h"
+#include "splintcore/distance.h"
+#include "splintcore/mesh.h"
+#include "splintcore/remesh.h"
+#include "splintcore/render.h"
+#include "splintcore/spline.h"
+#include "support/test_util.h"
+
+namespace splintcore {
+namespace {
+
+using test::format;
+using test::TestArena;
+
+struct Input {
+  std::string name;
+  std::vector<SoupTriangle> soup;
+  bool large = false;  // the bound must be within 3x of the need
+};
+
+SoupTriangle tri(float ax, float ay, float az, float bx, float by, float bz, float cx, float cy,
+                 float cz) {
+  const float a[3] = {ax, ay, az}, b[3] = {bx, by, bz}, c[3] = {cx, cy, cz};
+  return shapes::soup_triangle(a, b, c);
+}
+
+std::vector<SoupTriangle> tetrahedron() {
+  return {tri(0, 0, 0, 0, 1, 0, 1, 0, 0), tri(0, 0, 0, 1, 0, 0, 0, 0, 1),
+          tri(0, 0, 0, 0, 0, 1, 0, 1, 0), tri(1, 0, 0, 0, 1, 0, 0, 0, 1)};
+}
+
+std::vector<Input> inputs() {
+  std::vector<Input> out;
+  out.push_back({"tetrahedron", tetrahedron()});
+  {
+    // Every fault check_mesh counts: a duplicate, a flat and a collapsed triangle, a fin on
+    // an edge (non-manifold), a flipped copy (orientation conflict) and a loose triangle.
+    std::vector<SoupTriangle> s = tetrahedron();
+    s.push_back(s[1]);
+    s.push_back(tri(0, 0, 0, 0.5f, 0, 0, 1, 0, 0));
+    s.push_back(tri(2, 2, 2, 2, 2, 2, 2, 2, 2));
+    s.push_back(tri(0, 0, 0, 1, 0, 0, 0.5f, -1, 0.5f));
+    s.push_back(tri(0, 1, 0, 0, 0, 0, 1, 0, 0));
+    s.push_back(tri(5, 5, 5, 6, 5, 5, 5, 6, 5));
+    out.push_back({"degenerate", s});
+  }
+  out.push_back({"one_triangle", {tri(0, 0, 0, 1, 0, 0, 0, 1, 0)}});
+  {
+    std::vector<SoupTriangle> s = shapes::torus(40, 20, 10.0, 3.0);
+    s.resize(s.size() - 37);  // open: a ragged hole
+    out.push_back({"open_torus", s});
+  }
+  out.push_back({"torus_87k", shapes::torus(360, 121, 20.0, 6.0), true});
+  {
+    phantom::PhantomOptions po;
+    po.target_triangles = 6000;
+    phantom::JawMesh jaw;
+    if (phantom::make_jaw(phantom::Jaw::kMaxilla, po, &jaw).is_ok()) {
+      std::vector<SoupTriangle> s;
+      for (const Triangle& t : jaw.triangles) {
+        SoupTriangle st;
+        for (int k = 0; k < 3; ++k) {
+          const Vec3& p = jaw.vertices[t.v[k]];
+          st.p[k][0] = static_cast<float>(p.x);
+          st.p[k][1] = static_cast<float>(p.y);
+          st.p[k][2] = static_cast<float>(p.z);
+        }
+        s.push_back(st);
+      }
+      out.push_back({"phantom_maxilla_6000", s, true});
+    }
+  }
+  realcase::RealCase rc;
+  std::string error;
+  if (realcase::load(SPLINTCORE_REALDATA_DIR, 0.0, 2.0, 8.0, &rc, &error)) {
+    std::vector<SoupTriangle> s;
+    for (const realcase::Tooth& t : rc.teeth) {
+      for (const Triangle& tr : t.triangles) {
+        SoupTriangle st;
+        for (int k = 0; k < 3; ++k) {
+          const Vec3& p = t.vertices[tr.v[k]];
+          st.p[k][0] = static_cast<float>(p.x);
+          st.p[k][1] = static_cast<float>(p.y);
+          st.p[k][2] = static_cast<float>(p.z);
+        }
+        s.push_back(st);
+      }
+    }
+    out.push_back({"real_dentition", s, true});
+  }
+  return out;
+}
+
+// Runs `run` in an arena of exactly `bound` bytes: it must not run out, and on a large input
+// it must need at least a third of the bound.
+template <class Run>
+void expect_fits(const Input& in, const char* function, uint64_t bound, Run run) {
+  SCOPED_TRACE(std::string(function) + " on " + in.name);
+  ASSERT_GT(bound, 0u);
+  TestArena ta(static_cast<size_t>(bound));
+  const Status s = run(ta.arena);
+  EXPECT_NE(s.code(), StatusCode::kArenaExhausted) << format(s) << " (bound " << bound << ")";
+  EXPECT_EQ(ta.arena.cap(), bound);
+  std::printf("%-22s %-28s bound %11llu need %11llu (%.2f)%s\n", function, in.name.c_str(),
+              static_cast<unsigned long long>(bound),
+              static_cast<unsigned long long>(ta.arena.high_water()),
+              static_cast<double>(ta.arena.high_water()) / static_cast<double>(bound),
+              s.is_ok() ? "" : (std::string("  [") + format(s) + "]").c_str());
+  if (in.large && s.is_ok()) {
+    EXPECT_GE(ta.arena.high_water() * 3, bound);
+  }
+}
+
+// The welded mesh of an input, in its own arena (outside the one under test).
+struct Welded {
+  TestArena storage{size_t{512} << 20};
+  Mesh mesh;
+  explicit Welded(const Input& in) {
+    mesh.bind(&storage.arena);
+    Status s = weld_exact(Context(&storage.arena),
+                          Span<const SoupTriangle>(in.soup.data(), in.soup.size()), &mesh);
+    EXPECT_TRUE(s.is_ok()) << format(s);
+  }
+  uint64_t v() const { return mesh.vertices.size(); }
+  uint64_t t() const { return mesh.triangles.size(); }
+};
+
+TEST(BoundExact, WeldExact) {
+  for (const Input& in : inputs()) {
+    expect_fits(in, "weld_exact", weld_exact_bound(in.soup.size()), [&](Arena& arena) {
+      Mesh out(&arena);
+      return weld_exact(Context(&arena), Span<const SoupTriangle>(in.soup.data(), in.soup.size()),
+                        &out);
+    });
+  }
+}
+
+TEST(BoundExact, CheckMesh) {
+  for (const Input& in : inputs()) {
+    Welded w(in);
+    expect_fits(in, "check_mesh", check_mesh_bound(w.v(), w.t()), [&](Arena& arena) {
+      MeshReport report;
+      return check_mesh(Context(&arena), w.mesh, &report);
+    });
+    expect_fits(in, "check_closed_oriented", check_closed_oriented_bound(w.v(), w.t()),
+                [&](Arena& arena) {
+                  double volume = 0;
+                  return check_closed_oriented(Context(&arena), w.mesh, &volume);
+                });
+  }
+}
+
+TEST(BoundExact, FindSelfIntersections) {
+  for (const Input& in : inputs()) {
+    Welded w(in);
+    for (uint64_t max_pairs : {uint64_t{0}, uint64_t{1}}) {
+      expect_fits(in, "find_self_intersections", find_self_intersections_bound(w.t()),
+                  [&](Arena& arena) {
+                    SelfIntersectionReport report;
+                    return find_self_intersections(Context(&arena), w.mesh, max_pairs, &report);
+                  });
+    }
+  }
+}
+
+TEST(BoundExact, BuildDistanceIndex) {
+  for (const Input& in : inputs()) {
+    Welded w(in);
+    for (uint32_t leaf : {0u, 1u, 16u}) {
+      for (bool oriented : {false, true}) {
+        DistanceIndexOptions options;
+        options.leaf_size = leaf;
+        options.oriented_boxes = oriented;
+        expect_fits(in, "build_distance_index", distance_index_bound(w.v(), w.t(), options),
+                    [&](Arena& arena) {
+                      DistanceIndex index;
+                      return build_distance_index(Context(&arena), w.mesh, options, &index);
+                    });
+      }
+    }
+  }
+}
+
+TEST(BoundExact, TaubinSmooth) {
+  for (const Input& in : inputs()) {
+    Welded w(in);
+    for (double clamp : {0.0, 0.05}) {
+      TaubinOptions options;
+      options.iterations = 2;
+      options.max_displacement = clamp;
+      expect_fits(in, "taubin_smooth", taubin_smooth_bound(w.v(), w.t()), [&](Arena& arena) {
+        return taubin_smooth(Context(&arena), &w.mesh, options);
+      });
+    }
+  }
+}
+
+TEST(BoundExact, DecimateQem) {
+  for (const Input& in : inputs()) {
+    Welded w(in);
+    DecimateOptions options;
+    options.target_triangles = w.t() / 2;
+    expect_fits(in, "decimate_qem", decimate_qem_bound(w.v(), w.t()), [&](Arena& arena) {
+      Mesh out(&arena);
+      return decimate_qem(Context(&arena), w.mesh, options, &out);
+    });
+  }
+}
+
+TEST(BoundExact, BuildSplintBase) {
+  // The paper-scale arch at three spacings; the bound takes the section count the report
+  // gives (the two-step contract: the count comes from the lines alone, see spline.h).
+  TestArena scratch;
+  Context sctx(&scratch.arena);
+  const Pick upper[] = {{{-20, -5, 10}}, {{-12, 12, 10}}, {{0, 18, 10}}, {{12, 12, 10}},
+                        {{20, -5, 10}}};
+  const Pick lower[] = {{{-20, -5, 5}}, {{-12, 12, 5}}, {{0, 18, 5}}, {{12, 12, 5}},
+                        {{20, -5, 5}}};
+  Pick up[5], lo[5];
+  for (int i = 0; i < 5; ++i) {
+    up[i] = upper[i];
+    lo[i] = lower[i];
+    up[i].inner_length = lo[i].inner_length = 4;
+    up[i].outside_length = lo[i].outside_length = 4;
+  }
+  ArenaArray<Line> ul(&scratch.arena), ll(&scratch.arena);
+  SPLINTCORE_ASSERT_OK(make_lines(sctx, Span<const Pick>(up, 5), Vec3{0, 0, 1}, "upper", &ul));
+  SPLINTCORE_ASSERT_OK(make_lines(sctx, Span<const Pick>(lo, 5), Vec3{0, 0, 1}, "lower", &ll));
+  for (double spacing : {2.0, 0.5, 0.1}) {
+    for (double radius : {0.0, 0.8}) {
+      BaseParams params;
+      params.spacing_mm = spacing;
+      params.corner_radius_mm = radius;
+      BaseReport report;
+      {
+        TestArena big;
+        Mesh out(&big.arena);
+        SPLINTCORE_ASSERT_OK(build_splint_base(Context(&big.arena), Span<const Line>(ul.data(), 5),
+                                               Span<const Line>(ll.data(), 5), params, &out,
+                                               &report));
+      }
+      Input in{"arch spacing " + std::to_string(spacing) + " radius " + std::to_string(radius),
+               {}, spacing < 1.0};
+      expect_fits(in, "build_splint_base",
+                  splint_base_bound(report.sections, report.points_per_section),
+                  [&](Arena& arena) {
+                    Mesh out(&arena);
+                    BaseReport r;
+                    return build_splint_base(Context(&arena), Span<const Line>(ul.data(), 5),
+                                             Span<const Line>(ll.data(), 5), params, &out, &r);
+                  });
+    }
+  }
+}
+
+}  // namespace
+}  // namespace splintcore
