@@ -100,9 +100,9 @@ struct SweepStats {
 // Arena bytes the sweep's own state takes for `jaws` (local vertex copies, sorted triangle
 // list, five layers of the raw field as 16-bit steps of band / 65534, the newest being the
 // column state: 10 bytes per column), without the extractor's
-// working set (marching_cubes_working_set) and output. A closing adds 2 m + 1 layers of the
+// working set (marching_cubes_bound) and output. A closing adds 2 m + 1 layers of the
 // field and 40 (2 m + 1)^3 bytes of search offsets, m = ceil(radius / voxel) + 2.
-uint64_t sweep_state_bytes(uint64_t vertex_count, uint64_t triangle_count, uint32_t nx,
+uint64_t sweep_state_bound(uint64_t vertex_count, uint64_t triangle_count, uint32_t nx,
                            uint32_t ny);
 
 // Streams the surface of the swept volume (outward, closed, in the jaws' frame) to `visitor`.

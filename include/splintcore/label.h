@@ -156,7 +156,7 @@ struct LabelStats {
 // bound to ctx.arena. Arena: while it runs, the splint's distance index
 // (distance_index_bound), the decimated glyphs twice (24 bytes a vertex, 12 a triangle: about
 // 600 triangles, 15 KB, a glyph at the defaults) and one glyph's extraction and decimation
-// (marching_cubes_mesh_bytes and decimate_qem_bytes of some 25,000 triangles: about 4 MB at
+// (marching_cubes_mesh_extra_bound and decimate_qem_bound of some 25,000 triangles: about 4 MB at
 // the defaults); only the mesh stays.
 // Progress: stage "label: glyphs", once per glyph.
 // Errors (messages start with "label: "): kInvalidArgument (empty text, more than

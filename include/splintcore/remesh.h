@@ -48,13 +48,13 @@ struct TaubinStats {
 // i.e. the 3 T undirected edge keys and their sort scratch, then the keys, the CSR adjacency
 // (offsets and both directions of every edge), the boundary flags, the Jacobi buffer and the
 // positions before smoothing (only when max_displacement > 0; counted always). 0 on overflow.
-uint64_t taubin_smooth_bytes(uint64_t vertex_count, uint64_t triangle_count);
+uint64_t taubin_smooth_bound(uint64_t vertex_count, uint64_t triangle_count);
 
 // Smooths mesh->vertices in place (triangles untouched). Any triangle mesh (open, or with
 // unreferenced vertices, which do not move); vertices without neighbours do not move.
 // Parallel over vertex blocks with ctx.executor (each task writes its own slots: the result
 // does not depend on the executor). Progress: stage "taubin smooth", once per iteration.
-// Memory: taubin_smooth_bytes(V, T) at most, from ctx.arena, all returned.
+// Memory: taubin_smooth_bound(V, T) at most, from ctx.arena, all returned.
 // Errors (the mesh is unchanged on every error but kCancelled, which leaves it part-smoothed,
 // as after a whole number of steps): kInvalidArgument (lambda, mu or max_displacement out of
 // range or not finite); kInvalidMesh (a triangle refers to a missing vertex: at_index names
@@ -128,7 +128,7 @@ struct DecimateStats {
 // input checks (half-edges bucketed by vertex) or the heap (8 bytes per edge, E = 3 T / 2), a
 // vertex remap and the output mesh (at most the input's size): 60 T + 156 V, about 140 bytes
 // per input triangle of a closed surface (V = T / 2). 0 on overflow.
-uint64_t decimate_qem_bytes(uint64_t vertex_count, uint64_t triangle_count);
+uint64_t decimate_qem_bound(uint64_t vertex_count, uint64_t triangle_count);
 
 // Decimates `mesh` (read only) into `out`, which must be empty and bound to ctx.arena: a new
 // compact mesh (only referenced vertices, numbered in order of first use by the triangles in

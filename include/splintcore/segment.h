@@ -55,7 +55,7 @@ struct ThresholdStats {
 
 // Arena bytes threshold_window() takes: the label volume, voxel_count bytes (plus alignment,
 // at most 16). 0 when the count overflows.
-uint64_t threshold_window_bytes(const CtVolume& volume);
+uint64_t threshold_window_bound(const CtVolume& volume);
 
 // Reads volume.hu; allocates out->labels (voxel_count bytes, from ctx.arena; kept) and writes
 // kLabelUnclaimed where lo <= HU <= hi, else kLabelBackground. Progress: stage "threshold",
@@ -131,11 +131,11 @@ struct RegionStats {
 // Arena bytes grow_regions() takes at most when `in_window` voxels are marked: the FIFO, 4
 // bytes per window voxel (each is queued at most once), plus 16 of alignment. It is returned
 // before grow_regions() returns. 0 when the size overflows.
-uint64_t grow_regions_bytes(uint64_t in_window);
+uint64_t grow_regions_bound(uint64_t in_window);
 
 // Reads volume (geometry only: seeds and plane are mapped with its origin, axes and spacing)
 // and labels (rewritten in place: claimed kLabelUnclaimed voxels get their label). Temporary
-// arena: grow_regions_bytes(number of kLabelUnclaimed voxels), returned before it finishes.
+// arena: grow_regions_bound(number of kLabelUnclaimed voxels), returned before it finishes.
 // Progress: stage "region growing", every 2^20 voxels claimed (done = claimed, total = window
 // voxels); cancelling returns kCancelled (the labels are then partly written).
 // Errors, each naming the seed (at_index: its position in `seeds`) and its voxel:
@@ -201,16 +201,16 @@ struct ReconstructStats {
 // Arena bytes reconstruct_region() takes at its peak for a region whose box (ReconstructStats)
 // has box_voxels[3] voxels per axis, with `layers` sample layers per slab (the working set of
 // volume.h, at most kMarchingCubesDefaultLayers when left to it) and a result of V vertices and
-// T triangles: marching_cubes_working_set() + marching_cubes_mesh_bytes(V, T) (the mesh itself,
+// T triangles: marching_cubes_bound() + marching_cubes_mesh_extra_bound(V, T) (the mesh itself,
 // 24 V + 12 T, stays). About 80 bytes per vertex plus 4 (layers + 1) + 40 bytes per voxel of
 // the box's cross-section. 0 when a size overflows.
-uint64_t reconstruct_region_bytes(const uint32_t box_voxels[3], uint32_t layers,
+uint64_t reconstruct_region_bound(const uint32_t box_voxels[3], uint32_t layers,
                                   uint64_t vertex_count, uint64_t triangle_count);
 
 // Reads volume (hu, geometry) and labels; appends nothing: `out` must be empty and bound to
 // ctx.arena; on success it holds the mesh (vertex ids and triangle order as marching_cubes
 // gives them), in patient mm. Arena: the mesh (kept) plus marching_cubes_mesh's peak (see
-// volume.h, and reconstruct_region_bytes); on an error the arena's top is back where it was
+// volume.h, and reconstruct_region_bound); on an error the arena's top is back where it was
 // and `out` is empty. Progress: stages "reconstruct: region box" (every 32 slices of the scan
 // for the region's box), "marching cubes" (marching_cubes'), then "reconstruct: patient
 // coordinates" once; cancelling returns kCancelled. Errors: kInvalidArgument (label outside

@@ -115,7 +115,7 @@ struct MarchingCubesStats {
 // holds stops the extraction with kArenaExhausted naming the bytes it needs. A closed surface
 // crosses far fewer edges than that (about its area in voxel faces per layer), so the fixed
 // part, some 4.2 bytes per grid point of a layer, is what a large grid needs.
-uint64_t marching_cubes_working_set(const VolumeGrid& grid, uint32_t layers);
+uint64_t marching_cubes_bound(const VolumeGrid& grid, uint32_t layers);
 
 struct MarchingCubesMemory {
   uint64_t minimum = 0;       // one layer per fill call, no id pool: less than this cannot run
@@ -130,7 +130,7 @@ Status marching_cubes_memory(const VolumeGrid& grid, MarchingCubesMemory* out);
 // most an eighth and 4 KiB of growth slack, then a copy of the triangles (12 T) while the log
 // is split into the mesh arrays; the final mesh keeps 24 V + 12 T. About 80 bytes per vertex
 // for a closed surface (T is about 2 V).
-uint64_t marching_cubes_mesh_bytes(uint64_t vertex_count, uint64_t triangle_count);
+uint64_t marching_cubes_mesh_extra_bound(uint64_t vertex_count, uint64_t triangle_count);
 
 // Streams the iso-surface of the field to `visitor`. Memory: the working set only (from
 // ctx.arena, returned before it finishes). Progress: stage "marching cubes", once per slab
@@ -148,7 +148,7 @@ Status marching_cubes(const Context& ctx, const VolumeGrid& grid, const LayerSou
 // triangles are exactly those marching_cubes() streams, in the same order. Only the mesh stays
 // in the arena (working set and log are reclaimed: the mesh starts where the arena's top was).
 // On any error the arena's top is back where it was and `out` is empty. Peak memory: the
-// working set plus marching_cubes_mesh_bytes(V, T). Errors: those of marching_cubes();
+// working set plus marching_cubes_mesh_extra_bound(V, T). Errors: those of marching_cubes();
 // kInvalidArgument when `out` is not empty.
 Status marching_cubes_mesh(const Context& ctx, const VolumeGrid& grid, const LayerSource& source,
                            const MarchingCubesOptions& options, Mesh* out,

@@ -822,7 +822,7 @@ Status drop_caps(const Sweep& s, Arena& arena, Mesh* mesh, SweepStats* st) {
 
 }  // namespace
 
-uint64_t sweep_state_bytes(uint64_t vertex_count, uint64_t triangle_count, uint32_t nx,
+uint64_t sweep_state_bound(uint64_t vertex_count, uint64_t triangle_count, uint32_t nx,
                            uint32_t ny) {
   const uint64_t layer = uint64_t{nx} * ny;
   return 24 * vertex_count + (12 + 16 + 12 + 8 + 8 + 4) * triangle_count +

@@ -49,15 +49,15 @@ struct RegionField {
 
 }  // namespace
 
-uint64_t reconstruct_region_bytes(const uint32_t box_voxels[3], uint32_t layers,
+uint64_t reconstruct_region_bound(const uint32_t box_voxels[3], uint32_t layers,
                                   uint64_t vertex_count, uint64_t triangle_count) {
   VolumeGrid grid;
   grid.spacing = Vec3{1, 1, 1};
   grid.nx = box_voxels[0];
   grid.ny = box_voxels[1];
   grid.nz = box_voxels[2];
-  const uint64_t work = marching_cubes_working_set(grid, layers);
-  const uint64_t mesh = marching_cubes_mesh_bytes(vertex_count, triangle_count);
+  const uint64_t work = marching_cubes_bound(grid, layers);
+  const uint64_t mesh = marching_cubes_mesh_extra_bound(vertex_count, triangle_count);
   uint64_t total = 0;
   if (work == 0 || mesh == 0 || !checked_add(work, mesh, &total)) return 0;
   return total;

@@ -9,7 +9,7 @@
 // zones). The rule and its tie-break are stated in segment.h.
 //
 // One FIFO queue of 32-bit voxel indices, each window voxel queued at most once: no recursion,
-// memory stated up front (grow_regions_bytes), output independent of any executor.
+// memory stated up front (grow_regions_bound), output independent of any executor.
 #include "splintcore/segment.h"
 
 namespace splintcore {
@@ -32,7 +32,7 @@ struct PlaneSide {
 
 }  // namespace
 
-uint64_t grow_regions_bytes(uint64_t in_window) {
+uint64_t grow_regions_bound(uint64_t in_window) {
   uint64_t bytes = 0;
   if (!checked_mul(in_window, 4, &bytes) || !checked_add(bytes, 16, &bytes)) return 0;
   return bytes;
@@ -108,7 +108,7 @@ Status grow_regions(const Context& ctx, const CtVolume& volume, Span<const Regio
   if (queue == nullptr) return ctx.arena->exhausted_status();
 
   RegionStats st;
-  st.queue_bytes = grow_regions_bytes(capacity);
+  st.queue_bytes = grow_regions_bound(capacity);
   uint64_t seed_voxels[kMaxRegionLabel + 1] = {};
   uint64_t tail = 0;
   // Seeds in label order, then in the order given: the FIFO's first layer.

@@ -11,7 +11,7 @@
 
 namespace splintcore {
 
-uint64_t threshold_window_bytes(const CtVolume& volume) {
+uint64_t threshold_window_bound(const CtVolume& volume) {
   const uint64_t n = volume.voxel_count();
   uint64_t bytes = 0;
   if (!checked_add(n, 16, &bytes)) return 0;

@@ -375,7 +375,7 @@ struct Decimator {
 
 }  // namespace
 
-uint64_t decimate_qem_bytes(uint64_t vertex_count, uint64_t triangle_count) {
+uint64_t decimate_qem_bound(uint64_t vertex_count, uint64_t triangle_count) {
   uint64_t half = 0, first = 0, validation = 0, rest = 0, total = 0;
   if (!checked_mul(triangle_count, 3, &half)) return 0;
   if (!add_alloc(&first, triangle_count, sizeof(Face)) ||

@@ -73,7 +73,7 @@ void step_block(void* context, uint32_t block) {
 
 }  // namespace
 
-uint64_t taubin_smooth_bytes(uint64_t vertex_count, uint64_t triangle_count) {
+uint64_t taubin_smooth_bound(uint64_t vertex_count, uint64_t triangle_count) {
   uint64_t keys = 0, sorting = 0, adjacency = 0, uses = 0, blocks = 0;
   if (!checked_mul(triangle_count, 3, &uses) || !add_alloc(&keys, uses, 8) ||
       !add_alloc(&sorting, uses, 8)) {

@@ -594,7 +594,7 @@ uint32_t choose_layers(const Arena& arena, const VolumeGrid& grid, uint32_t requ
   const uint32_t limit =
       grid.nz < kMarchingCubesDefaultLayers ? grid.nz : kMarchingCubesDefaultLayers;
   for (uint32_t k = 2; k <= limit; ++k) {
-    const uint64_t need = marching_cubes_working_set(grid, k);
+    const uint64_t need = marching_cubes_bound(grid, k);
     if (need == 0 || need > budget) break;
     best = k;
   }
@@ -779,7 +779,7 @@ Status log_triangle(void* user, const Triangle& t, const Vec3&, const Vec3&, con
 
 }  // namespace
 
-uint64_t marching_cubes_working_set(const VolumeGrid& grid, uint32_t layers) {
+uint64_t marching_cubes_bound(const VolumeGrid& grid, uint32_t layers) {
   if (grid.nx == 0 || grid.ny == 0 || layers == 0) return 0;
   uint64_t samples = 0, edges = 0, total = 0;
   if (!working_parts(grid, layers, &samples, &edges) || !checked_add(samples, edges, &total) ||
@@ -798,7 +798,7 @@ Status marching_cubes_memory(const VolumeGrid& grid, MarchingCubesMemory* out) {
     uint64_t fixed = 0, pool = 0;
     if (working_parts(grid, 1, &fixed, &pool)) minimum = fixed + kAlign;
   }
-  const uint64_t comfortable = marching_cubes_working_set(grid, layers);
+  const uint64_t comfortable = marching_cubes_bound(grid, layers);
   if (minimum == 0 || comfortable == 0) {
     return make_error(StatusCode::kLimitExceeded, "marching cubes: a grid of ", grid.nx, " x ",
                       grid.ny, " samples per layer overflows 64-bit sizes");
@@ -809,7 +809,7 @@ Status marching_cubes_memory(const VolumeGrid& grid, MarchingCubesMemory* out) {
   return Status::ok();
 }
 
-uint64_t marching_cubes_mesh_bytes(uint64_t vertex_count, uint64_t triangle_count) {
+uint64_t marching_cubes_mesh_extra_bound(uint64_t vertex_count, uint64_t triangle_count) {
   // The log (24 V + 12 T, with up to an eighth and 4 KiB of growth slack), the triangle copy
   // (12 T) and alignment padding.
   uint64_t v = 0, t = 0, log = 0, copy = 0, total = 0;

@@ -66,7 +66,7 @@ TEST(CtThreshold, MarksExactlyTheWindow) {
   for (size_t n = 0; n < 12; ++n) EXPECT_EQ(labels.labels[n], want[n]) << n;
   for (size_t n = 12; n < 24; ++n) EXPECT_EQ(labels.labels[n], 0) << n;
   EXPECT_EQ(stats.in_window, 4u);
-  EXPECT_LE(ta.arena.used(), threshold_window_bytes(sv.v));
+  EXPECT_LE(ta.arena.used(), threshold_window_bound(sv.v));
 
   // Windows reaching beyond the int16 range the voxels have.
   SPLINTCORE_ASSERT_OK(threshold_window(ctx, sv.v, HuWindow{4000, 100000}, &labels, &stats));
@@ -276,7 +276,7 @@ TEST(CtReconstruct, BlockIsAClosedOutwardSolid) {
   SPLINTCORE_ASSERT_OK(reconstruct_region(ctx, sv.v, labels, ro, &mesh, &rs));
   const uint32_t box[3] = {rs.box_hi[0] - rs.box_lo[0] + 1, rs.box_hi[1] - rs.box_lo[1] + 1,
                            rs.box_hi[2] - rs.box_lo[2] + 1};
-  const uint64_t bound = reconstruct_region_bytes(box, rs.marching.layers_per_tile,
+  const uint64_t bound = reconstruct_region_bound(box, rs.marching.layers_per_tile,
                                                   mesh.vertices.size(), mesh.triangles.size());
   EXPECT_GT(bound, 0u);
   EXPECT_LE(ta.arena.high_water() - before, bound);

@@ -344,7 +344,7 @@ TEST(TaubinSmooth, ErrorsLeaveTheMeshUnchanged) {
   EXPECT_EQ(hash_of(m), before);
   EXPECT_EQ(ta.arena.used(), used);
   // Exhaustion: every cap below the need fails cleanly with the mesh unchanged; the bound holds.
-  const uint64_t bound = taubin_smooth_bytes(h.vertices.size(), h.triangles.size());
+  const uint64_t bound = taubin_smooth_bound(h.vertices.size(), h.triangles.size());
   TaubinOptions clamp;
   clamp.max_displacement = 0.1;
   std::string reference;
@@ -544,7 +544,7 @@ TEST(DecimateQem, ExhaustionSweepFailsCleanlyThenMatches) {
   Mesh reference;
   SPLINTCORE_ASSERT_OK(decimate(big.arena, in, options, &reference));
   const std::string expected = hash_of(reference);
-  const uint64_t bound = decimate_qem_bytes(h.vertices.size(), h.triangles.size());
+  const uint64_t bound = decimate_qem_bound(h.vertices.size(), h.triangles.size());
   ASSERT_GT(bound, 0u);
   uint32_t failures = 0;
   for (uint64_t cap = 0;; cap += 1024) {

@@ -330,7 +330,7 @@ TEST(MarchingCubes, IdenticalOutputForEveryTileSizeAndCap) {
     // need plus a few minimum working sets always suffices.
     MarchingCubesMemory memory;
     SPLINTCORE_ASSERT_OK(marching_cubes_memory(fd.grid, &memory));
-    const uint64_t mesh_bytes = marching_cubes_mesh_bytes(reference_vertices, reference_triangles);
+    const uint64_t mesh_bytes = marching_cubes_mesh_extra_bound(reference_vertices, reference_triangles);
     for (uint64_t minimums : {1u, 2u, 4u, 8u, 64u}) {
       TestArena ta(static_cast<size_t>(mesh_bytes * 4 / 3 + memory.minimum * minimums));
       Mesh mesh;
@@ -345,7 +345,7 @@ TEST(MarchingCubes, IdenticalOutputForEveryTileSizeAndCap) {
     for (uint32_t k : {1u, 2u, 3u, 5u, 16u}) {
       SCOPED_TRACE(k);
       if (k > fd.grid.nz) continue;
-      const uint64_t cap = marching_cubes_working_set(fd.grid, k);
+      const uint64_t cap = marching_cubes_bound(fd.grid, k);
       TestArena ta(static_cast<size_t>(cap));
       Context ctx(&ta.arena);
       Collected c;
