@@ -71,7 +71,7 @@ struct CaseFile {
   uint32_t ct_smooth = 0;          // Taubin iterations (0: none)
   uint64_t ct_decimate = 0;        // target triangles per jaw (0: none)
   const char* printer = "eden260";
-  uint64_t memory_cap = 0;  // bytes; 0: the tool's default
+  uint64_t memory_cap = 0;  // bytes; 0: the tool's default (`splintcore design` sizes its arena by it)
   const char* output_splint = nullptr;
   const char* output_report = nullptr;
 };
@@ -116,9 +116,10 @@ Status reconstruct_case_jaws(const Context& ctx, const CaseFile& c, const CtVolu
 Status build_case_base(const Context& ctx, const CaseFile& c, Mesh* out, BaseReport* report);
 
 // ---------------------------------------------------------------------------------------------
-// The design pipeline as far as it has landed: the jaws repositioned by the plan, the base from
-// the picks, the Boolean difference base minus jaws, interference elimination (when the case
-// has "blockout"), the printer check. (CT reconstruction joins when its issue lands.)
+// The design pipeline: the jaws (meshes, or reconstructed from the case's CT) repositioned by
+// the plan, the base from the picks, the Boolean difference base minus jaws, interference
+// elimination or a spacer (when the case has "blockout"), the label, the wall-thickness check,
+// the printer check.
 
 // ---------------------------------------------------------------------------------------------
 // Wall thickness: the check a splint designer runs before printing.
@@ -180,10 +181,14 @@ struct DesignReport {
 // The splint for case `c` from its jaws (jaws[i] is the mesh of c.jaws[i], as read: it is not
 // changed). Each jaw is moved by its transform and rounded to float32 (what a moved jaw's STL
 // holds; the Boolean keeps these bits), the base is built, the jaws are subtracted, and the
-// result is checked for the case's printer (not moved: it stays in the case's frame). With
-// "blockout", each jaw's swept volume is subtracted after the Boolean (blockout.h; at most
-// kMaxBlockoutJaws jaws). `splint` must be empty. Stage progress goes to ctx.progress
-// ("design: jaws", "design: base", "design: boolean", "design: blockout", "design: printer"). Errors: those of the stages (naming the stage and,
+// result is checked for the case's printer. It stays in the case's frame, unless the case asks
+// for "placement": "tray": then the whole case is moved first (report->tray_translation) and
+// the splint comes out on the printer's tray. With "blockout", each jaw's swept volume is
+// subtracted after the Boolean (blockout.h; at most kMaxBlockoutJaws jaws). `splint` must be
+// empty. Stage progress goes to ctx.progress, in this order, each stage only when the case
+// asks for it: "design: jaws", "design: base", "design: boolean", "design: blockout",
+// "design: label", "design: thickness", "design: printer", then "design: done" (once the
+// splint is made, too late to cancel). Errors: those of the stages (naming the stage and,
 // for a jaw, its index and role), kInvalidArgument (jaw count differs from the case, unknown
 // printer), kNonFinite (a jaw vertex that is NaN or infinite), kLimitExceeded (a jaw moved
 // beyond float32 range), and kInvalidMesh when the result is not printable

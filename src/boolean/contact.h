@@ -1,6 +1,7 @@
 // splintcore boolean, internal: the exact intersection of two closed triangles, described
-// combinatorially (groundwork for the exact coplanar rule of issue #5: the Boolean will use it
-// instead of retrying with a nudged A when a contact is degenerate).
+// combinatorially. The Boolean (boolean.cpp) splits and classifies the triangles of a
+// degenerate (coplanar, edge-on-edge, vertex-on-face) contact with it, so such contacts are
+// resolved exactly; nudging A remains only for what rounding to float32 would merge.
 //
 // Every point of the result is named by the features of the two triangles that define it
 // (a corner, the open interior of an edge, the open interior of the face), never by rounded

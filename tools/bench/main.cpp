@@ -2,7 +2,10 @@
 // up, then --repeat times; one line per result:
 //   bench=NAME size=N median_s=T min_s=T max_s=T peak_arena_bytes=B
 // Lines starting with '#' are derived figures (rates) and notes.
+#include <sys/stat.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -739,7 +742,7 @@ void bench_remesh(Harness& h, Arena& arena) {
                   static_cast<unsigned long long>(stats.rejected_degenerate), stats.rounds,
                   stats.max_error, mesh_volume(mesh), volume,
                   static_cast<unsigned long long>(
-                      decimate_qem_bytes(mesh.vertices.size(), mesh.triangles.size())));
+                      decimate_qem_bound(mesh.vertices.size(), mesh.triangles.size())));
     }
     if (h.wanted(tname.c_str())) {
       TaubinOptions options;
@@ -754,7 +757,7 @@ void bench_remesh(Harness& h, Arena& arena) {
                   stats.volume_after - stats.volume_before,
                   100.0 * (stats.volume_after - stats.volume_before) / stats.volume_before,
                   static_cast<unsigned long long>(
-                      taubin_smooth_bytes(mesh.vertices.size(), mesh.triangles.size())));
+                      taubin_smooth_bound(mesh.vertices.size(), mesh.triangles.size())));
     }
     arena.rewind(m);
   }
@@ -945,6 +948,11 @@ int run(int argc, char** argv) {
       // The real case as a folder `splintcore design` takes (tools/bench/table1.sh).
       realcase::RealCase rc;
       std::string error;
+      if (::mkdir(argv[i + 1], 0777) != 0 && errno != EEXIST) {
+        std::fprintf(stderr, "splintcore-bench: cannot create %s: %s\n", argv[i + 1],
+                     std::strerror(errno));
+        return 1;
+      }
       if (!realcase::load(realdata, 2.0, 1.5, 6.0, &rc, &error) ||
           !realcase::write_case_folder(rc, argv[i + 1], 0.5, &error)) {
         std::fprintf(stderr, "splintcore-bench: %s\n", error.c_str());

@@ -157,7 +157,8 @@ const char kDesignUsage[] =
     "every input, every parameter as used, each stage's time, the peak arena, each check, and\n"
     "the splint's SHA-256. Progress goes to stderr when it is a terminal. With a \"blockout\"\n"
     "object in the case, each jaw's interference (undercut) is removed after the Boolean\n"
-    "(see `splintcore blockout --help`), reported per jaw. CT input joins when its issue lands.\n"
+    "(see `splintcore blockout --help`), reported per jaw. A jaw may instead come from the\n"
+    "case's CT volume (\"ct\" and a seed per jaw: see `splintcore reconstruct --help`).\n"
     "--max-input-bytes SIZE refuses a larger case or jaw file (defaults: 16M for the case,\n"
     "2G for a jaw mesh).\n"
     "Exit status: 0 splint written, 1 rejected (the message names the stage), 2 usage.\n";
@@ -195,6 +196,7 @@ struct Options {
   bool help = false;
   bool json = false;
   uint64_t memory_cap = kDefaultMemoryCap;
+  bool memory_cap_given = false;  // --memory-cap on the command line (it overrides a case's)
   uint64_t max_input_bytes = 0;  // 0: cli::kMaxCaseBytes for cases, cli::kMaxMeshBytes for meshes
   unsigned threads = 1;
   std::vector<const char*> positional;
@@ -262,6 +264,7 @@ int parse_options(int argc, char** argv, const char* usage, bool takes_output, O
       if (o->memory_cap > (uint64_t{1} << 40)) {
         return usage_error("--memory-cap is over 1T", usage);
       }
+      o->memory_cap_given = true;
     } else if (std::strcmp(a, "--max-input-bytes") == 0) {
       const char* v = value(a);
       if (v == nullptr || !cli::parse_size(v, &o->max_input_bytes) || o->max_input_bytes == 0) {
@@ -1030,16 +1033,31 @@ int run_design(int argc, char** argv) {
   if (early >= 0) return early;
   if (o.positional.size() != 1) return usage_error("design takes one case file", kDesignUsage);
   if (o.output == nullptr) return usage_error("design needs -o OUTDIR", kDesignUsage);
+  const std::string case_path = o.positional[0];
+  std::vector<uint8_t> case_bytes;
+  Status s = cli::read_whole_file(
+      case_path, o.max_input_bytes != 0 ? o.max_input_bytes : cli::kMaxCaseBytes, &case_bytes);
+  if (!s.is_ok()) return rejected(o, "design", s, nullptr);
+  // The memory cap: --memory-cap, else the case's "memory_cap", else the default. The case is
+  // parsed once in a scratch arena to learn it (the real parse below keeps its strings in the
+  // run's arena, whose size must be known first).
+  const char* cap_source = o.memory_cap_given ? "command line" : "default";
+  if (!o.memory_cap_given) {
+    std::vector<unsigned char> scratch(case_bytes.size() * 8 + (size_t{1} << 20));
+    Arena scratch_arena(scratch.data(), scratch.size());
+    CaseFile pre;
+    if (parse_case(Context(&scratch_arena), reinterpret_cast<const char*>(case_bytes.data()),
+                   case_bytes.size(), case_path.c_str(), &pre).is_ok() &&
+        pre.memory_cap != 0) {
+      o.memory_cap = pre.memory_cap;
+      cap_source = "case";
+    }
+  }
   Run run(o);
   if (!run.has_memory()) return no_memory(o, "design");
   ::mkdir(o.output, 0777);  // an existing folder is fine; a failure shows when writing
   Arena& arena = run.arena;
   const double t0 = run.start;
-  const std::string case_path = o.positional[0];
-  std::vector<uint8_t> case_bytes;
-  Status s = cli::read_whole_file(
-      case_path, o.max_input_bytes != 0 ? o.max_input_bytes : cli::kMaxCaseBytes, &case_bytes);
-  if (!s.is_ok()) return rejected(o, "design", s, &arena);
   CaseFile c;
   s = parse_case(run.ctx, reinterpret_cast<const char*>(case_bytes.data()),
                         case_bytes.size(), case_path.c_str(), &c);
@@ -1133,9 +1151,12 @@ int run_design(int argc, char** argv) {
     std::vector<RigidTransform> preview_moves;
     for (size_t i = 0; i < jaws.size(); ++i) {
       preview_jaws.push_back(&jaws[i]);
-      preview_moves.push_back(report.placed_on_tray
-                                  ? compose(report.print.placement, c.jaws[i].transform)
-                                  : c.jaws[i].transform);
+      // On the tray the whole case moved by tray_translation before the design: the jaws
+      // follow it, so the preview shows the fit where the splint is.
+      preview_moves.push_back(
+          report.placed_on_tray
+              ? compose(RigidTransform::translation(report.tray_translation), c.jaws[i].transform)
+              : c.jaws[i].transform);
     }
     preview_status = cli::write_preview(ctx, splint, preview_jaws, preview_moves,
                                         out_dir + "/preview.png", 1024, 1024, &preview);
@@ -1192,6 +1213,7 @@ int run_design(int argc, char** argv) {
   params.add("lower_picks", static_cast<uint64_t>(c.lower.size()));
   params.add("printer", report.printer);
   params.add("memory_cap_bytes", o.memory_cap);
+  params.add("memory_cap_from", cap_source);
   params.add("threads", static_cast<uint64_t>(o.threads));
   params.add("boolean_float32_output", true);
   params.add("boolean_max_nudges", static_cast<uint64_t>(BooleanOptions{}.max_nudges));
