@@ -395,7 +395,7 @@ coverage_job() {
   # Fails when a parser of outside bytes (JSON, case, STL, PLY, OBJ, the CT readers) is under
   # SPLINTCORE_COVERAGE_MIN_BRANCH percent branch coverage (default 95, issue 9); prints the table.
   echo "=== coverage: clang -fprofile-instr-generate -fcoverage-mapping, llvm-cov report"
-  ensure_packages clang llvm || return 1
+  ensure_packages clang llvm libclang-rt-14-dev || return 1  # the profile runtime (libclang_rt.profile)
   if SPLINTCORE_JOBS="$par" SPLINTCORE_COVERAGE_MIN_BRANCH="${SPLINTCORE_COVERAGE_MIN_BRANCH:-95}" \
        bash tools/coverage.sh build/ci-coverage; then
     total_passed=$((total_passed + 1))
