@@ -123,6 +123,9 @@ struct BooleanStats {
   uint64_t output_triangles = 0;
   uint64_t output_triangles_a = 0;   // the result's first triangles come from A, the rest from B
   uint64_t self_intersection_candidates = 0;  // pairs tested by the final check
+  // The returned result was checked exactly for self-intersections and has none
+  // (options.check_self_intersection; with several passes, the final pass's result).
+  bool self_intersection_checked = false;
   uint32_t attempts = 0;                      // 1 + the nudges tried
   Vec3 nudge{};                               // A's translation in the returned result
   // B's shells (components through shared vertices), the groups of shells that overlap no

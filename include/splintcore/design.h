@@ -30,6 +30,7 @@ struct CaseJaw {
 struct CaseFile {
   uint32_t version = 0;
   const char* case_id = "";
+  char sha256[65] = {};  // of the case file's text, 64 lower-case hex digits (parse_case)
   Span<const CaseJaw> jaws;
   // The base ("base" object).
   Vec3 occlusal_normal{0, 0, 1};
@@ -176,6 +177,12 @@ struct DesignReport {
   Vec3 tray_translation{};
   PrintCheck print;
   const char* printer = "";     // the profile used
+  // The splint as returned was checked exactly for self-intersections, and has none, by the
+  // last stage that made it: "boolean", "blockout" or "label" (its Boolean's final check);
+  // "" when no stage checked it (then self_intersection_checked is false).
+  bool self_intersection_checked = false;
+  const char* self_intersection_checked_by = "";
+  uint64_t self_intersection_candidates = 0;  // the pairs that check tested
 };
 
 // The splint for case `c` from its jaws (jaws[i] is the mesh of c.jaws[i], as read: it is not
@@ -195,6 +202,55 @@ struct DesignReport {
 // (require_printable's reason).
 Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* splint,
                      DesignReport* report);
+
+// ---------------------------------------------------------------------------------------------
+// The audit report (report.json): one writer for the command line and the C API.
+
+// What the library cannot know about a design: the files as the caller names them and the
+// hashes of their bytes. Every pointer may be null (that entry is left out).
+struct DesignReportFiles {
+  const char* case_path = nullptr;
+  Span<const char* const> jaw_paths;    // per jaw of the case, in case order (or empty)
+  Span<const char* const> jaw_sha256;   // of each jaw file's bytes (CT jaws: of the voxels)
+  const char* ct_path = nullptr;        // the case's CT, when a jaw came from it
+  uint32_t ct_size[3] = {0, 0, 0};      // its voxels per axis
+  const CaseCtReport* ct = nullptr;     // reconstruct_case_jaws' report, when it ran
+  const char* splint_path = nullptr;
+  const char* preview_path = nullptr;
+  const char* preview_sha256 = nullptr;
+  const char* preview_error = nullptr;  // why there is no preview
+};
+
+// One stage of the design as a caller's progress callback timed it.
+struct DesignStageTime {
+  const char* stage = "";
+  double seconds = 0;
+  uint64_t peak_arena_bytes = 0;
+};
+
+// How the run went: the only part of the report that may differ between two runs of the same
+// case with the same inputs (written last, as "run"). Null pointer: no "run" part.
+struct DesignRunInfo {
+  uint64_t memory_cap_bytes = 0;
+  const char* memory_cap_from = "";  // "case", "command line", "default", "caller"
+  uint32_t threads = 1;
+  Span<const DesignStageTime> stages;
+  double read_seconds = 0, design_seconds = 0, preview_seconds = 0, total_seconds = 0;
+  uint64_t peak_arena_bytes = 0;
+};
+
+// Writes the report of a design_splint() run as one compact JSON object to `sink`: the library
+// version, the case (id, SHA-256 of its text), the inputs (jaws, their transforms, triangle
+// counts), every parameter as used, the checks as recorded by the stages (report), the output
+// (the splint's SHA-256, computed here from the binary STL write_stl gives, its triangles,
+// volume and extent), then `run`. Every value comes from `c`, `report`, `splint`, `files` or
+// `run`; none is a constant. docs/report-format.md lists the keys. Arena: write_stl's buffer
+// (64,000 bytes), returned. Errors: kIoError (the sink failed), kArenaExhausted,
+// kInvalidArgument (jaws do not match the case).
+Status write_design_report(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                           const Mesh& splint, const DesignReport& report,
+                           const DesignReportFiles& files, const DesignRunInfo* run,
+                           const ByteSink& sink);
 
 }  // namespace splintcore
 

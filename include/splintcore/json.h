@@ -1,10 +1,14 @@
-// splintcore json: a strict JSON (RFC 8259) parser into the arena, for the case file.
-// Floor 4 (io). Bounded size and nesting depth; errors carry line and column; duplicate keys
-// are rejected; numbers are parsed exactly (correctly rounded, locale-free std::from_chars).
+// splintcore json: a strict JSON (RFC 8259) parser into the arena, for the case file, and a
+// streaming writer into a byte sink, for the audit report. Floor 4 (io). Parser: bounded size
+// and nesting depth; errors carry line and column; duplicate keys are rejected; numbers are
+// parsed exactly (correctly rounded, locale-free std::from_chars). Writer: compact, numbers
+// as the shortest text that reads back to the same double (std::to_chars), no heap.
 #ifndef SPLINTCORE_JSON_H
 #define SPLINTCORE_JSON_H
 
 #include "splintcore/core.h"
+#include "splintcore/geometry.h"
+#include "splintcore/io.h"
 
 namespace splintcore {
 
@@ -60,6 +64,58 @@ Status parse_json(const Context& ctx, const char* text, size_t length, const Jso
 // An error located at a value: "NAME:LINE:COL: message".
 Status json_error(const JsonDocument& doc, const JsonValue& at, StatusCode code,
                   const char* message);
+
+// ---------------------------------------------------------------------------------------------
+// The writer: compact JSON into a ByteSink through a 256-byte buffer of its own (no arena).
+// Inside an object every value takes a key; inside an array (and at the top) key is nullptr.
+// Strings are escaped as RFC 8259 asks (", \ and control characters; UTF-8 passes through);
+// a number that is not finite is written as null. The first failure (the sink refused bytes,
+// nesting deeper than 64 or unbalanced, a key where none belongs or none where one does) is
+// kept, later calls do nothing, and finish() returns it.
+class JsonWriter {
+ public:
+  explicit JsonWriter(const ByteSink& sink) : sink_(sink) {}
+  JsonWriter(const JsonWriter&) = delete;
+  JsonWriter& operator=(const JsonWriter&) = delete;
+
+  void begin_object(const char* key = nullptr);
+  void end_object();
+  void begin_array(const char* key = nullptr);
+  void end_array();
+  void add(const char* key, const char* value);  // nullptr: null
+  void add(const char* key, bool value);
+  void add(const char* key, uint64_t value);
+  void add(const char* key, int64_t value);
+  void add(const char* key, uint32_t value) { add(key, uint64_t{value}); }
+  void add(const char* key, int value) { add(key, int64_t{value}); }
+  void add(const char* key, double value);
+  void add(const char* key, const Vec3& value);  // [x, y, z]
+  void add_null(const char* key);
+
+  // Flushes the buffer; ok, or the first failure.
+  [[nodiscard]] Status finish();
+
+ private:
+  void open(const char* key, char bracket, bool object);
+  void close(char bracket, bool object);
+  void value_start(const char* key);
+  void put(const char* text, size_t length);
+  void put_char(char c) { put(&c, 1); }
+  void put_string(const char* text);
+  void put_number(double value);
+  void flush();
+  void fail(const char* what);
+
+  static constexpr uint32_t kMaxDepth = 64;
+  ByteSink sink_;
+  Status status_;
+  uint64_t object_bits_ = 0;  // bit d: the container at depth d + 1 is an object
+  uint64_t empty_bits_ = 0;   // bit d: it has no element yet
+  uint32_t depth_ = 0;
+  bool top_written_ = false;
+  size_t fill_ = 0;
+  char buffer_[256];
+};
 
 }  // namespace splintcore
 

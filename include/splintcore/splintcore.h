@@ -378,13 +378,38 @@ typedef struct sc_design_report {
  * Boolean difference, interference elimination when the case asks for it, the printer check.
  * `report` may be NULL. Arena: the pipeline's peak (the paper-scale case with two 6,000-
  * triangle jaws: 10.3 MB, the jaws included; measure yours with sc_arena_high_water), of which
- * the result and its handle stay; on error the arena is back where it was. Progress: "design: jaws", "design: base", "design: boolean",
- * "design: blockout", "design: printer". Errors: those of the stages (naming the stage and,
+ * the result, its handle and the design's record (for sc_design_write_report, a few KB)
+ * stay; on error the arena is back where it was. Progress: the stages of design_splint
+ * (design.h): "design: jaws", "design: base", "design: boolean", "design: blockout",
+ * "design: label", "design: thickness", "design: printer", "design: done". Errors: those of the stages (naming the stage and,
  * for a jaw, its index and role), SC_INVALID_ARGUMENT (the jaw count differs from the case's,
  * more than SC_MAX_BLOCKOUT_JAWS jaws), SC_NON_FINITE, SC_LIMIT_EXCEEDED, SC_INVALID_MESH (the
  * result is not printable: the reason), SC_ARENA_EXHAUSTED, SC_CANCELLED. */
 sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
                     size_t jaw_count, sc_mesh** splint, sc_design_report* report);
+
+/* What the audit report names that the library cannot know (every member may be NULL: that
+ * entry is left out). jaw_paths and jaw_sha256 hold jaw_count entries when given. */
+typedef struct sc_report_files {
+  const char* case_path;
+  const char* const* jaw_paths;   /* as the caller names the jaw files */
+  const char* const* jaw_sha256;  /* of each jaw file's bytes (sc_sha256_hex) */
+  const char* splint_path;
+  const char* preview_path;
+  const char* preview_sha256;
+} sc_report_files;
+
+/* Writes the audit report of the design that made `splint` (a handle from sc_design with this
+ * case and these jaws) to `sink`, as one JSON object (docs/report-format.md): the same bytes as
+ * `splintcore design` writes to report.json for the same case and the same names, less that
+ * file's last member, "run" (memory cap, threads, times: what differs from run to run).
+ * Every value comes from the design's recorded results; the splint's SHA-256 is computed here
+ * from the binary STL sc_mesh_write_stl gives. Arena: the STL writer's buffer (64,000 bytes),
+ * returned. Errors: SC_INVALID_ARGUMENT (a splint not from sc_design, jaw count), SC_IO_ERROR
+ * (the sink failed), SC_ARENA_EXHAUSTED. */
+sc_status sc_design_write_report(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
+                                 size_t jaw_count, const sc_mesh* splint,
+                                 const sc_report_files* files, const sc_sink* sink);
 
 #ifdef __cplusplus
 }  /* extern "C" */

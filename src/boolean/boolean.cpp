@@ -2356,6 +2356,7 @@ Status BooleanRun::check_result(Mesh* result) {
                         ": triangles ", si.first_a, " and ", si.first_b)
           .at_index(si.first_a);
     }
+    st_.self_intersection_checked = true;
   }
   return Status::ok();
 }

@@ -505,6 +505,7 @@ void add_stats(const BooleanStats& p, BooleanStats* total) {
   total->attempts += p.attempts;
   total->output_triangles = p.output_triangles;
   total->output_triangles_a = p.output_triangles_a;
+  total->self_intersection_checked = p.self_intersection_checked;  // the final pass's result
   total->nudge = p.nudge;
 }
 

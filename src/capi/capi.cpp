@@ -20,6 +20,7 @@ using namespace splintcore;
 // The opaque handles. A mesh handle is the Mesh itself; a case handle the CaseFile.
 struct sc_mesh {
   Mesh mesh;
+  const DesignReport* design = nullptr;  // sc_design's record of how it made this mesh
 };
 struct sc_case {
   CaseFile c;
@@ -717,12 +718,26 @@ sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaw
   Mesh local[SC_MAX_BLOCKOUT_JAWS];
   Status s = gather_meshes(jaws, jaw_count, "sc_design", local, SC_MAX_BLOCKOUT_JAWS);
   if (!s.is_ok()) return keep(ctx, s);
-  DesignReport r;
+  // The handle, then the design's record (kept for sc_design_write_report), then the mesh.
   const Context core = core_context(ctx);
-  const sc_status code = new_mesh(ctx, splint, [&](Mesh* m) {
-    return design_splint(core, c->c, Span<const Mesh>(local, jaw_count), m, &r);
-  });
-  if (code != SC_OK || report == nullptr) return code;
+  const Arena::Marker start = ctx->arena.mark();
+  sc_mesh* handle = place<sc_mesh>(ctx->arena);
+  DesignReport* record = place<DesignReport>(ctx->arena);
+  if (handle == nullptr || record == nullptr) {
+    const Status e = ctx->arena.exhausted_status();
+    ctx->arena.rewind(start);
+    return keep(ctx, e);
+  }
+  s = design_splint(core, c->c, Span<const Mesh>(local, jaw_count), &handle->mesh, record);
+  if (!s.is_ok()) {
+    ctx->arena.rewind(start);
+    return keep(ctx, s);
+  }
+  handle->design = record;
+  *splint = handle;
+  const sc_status code = keep(ctx, Status::ok());
+  if (report == nullptr) return code;
+  const DesignReport& r = *record;
   std::memset(report, 0, sizeof(*report));
   const Mesh& m = (*splint)->mesh;
   report->jaw_triangles = r.jaw_triangles;
@@ -751,6 +766,32 @@ sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaw
   report->layers = r.print.layers;
   report->printer = r.printer;
   return code;
+}
+
+sc_status sc_design_write_report(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
+                                 size_t jaw_count, const sc_mesh* splint,
+                                 const sc_report_files* files, const sc_sink* sink) {
+  if (ctx == nullptr || c == nullptr || splint == nullptr || sink == nullptr) {
+    return null_argument(ctx, "sc_design_write_report", "the case, the splint or the sink");
+  }
+  if (splint->design == nullptr) {
+    return keep(ctx, Status::error(StatusCode::kInvalidArgument,
+                                   "sc_design_write_report: the splint was not made by sc_design"));
+  }
+  Mesh local[SC_MAX_BLOCKOUT_JAWS];
+  Status s = gather_meshes(jaws, jaw_count, "sc_design_write_report", local, SC_MAX_BLOCKOUT_JAWS);
+  if (!s.is_ok()) return keep(ctx, s);
+  DesignReportFiles f;
+  if (files != nullptr) {
+    f.case_path = files->case_path;
+    if (files->jaw_paths != nullptr) f.jaw_paths = Span<const char* const>(files->jaw_paths, jaw_count);
+    if (files->jaw_sha256 != nullptr) f.jaw_sha256 = Span<const char* const>(files->jaw_sha256, jaw_count);
+    f.splint_path = files->splint_path;
+    f.preview_path = files->preview_path;
+    f.preview_sha256 = files->preview_sha256;
+  }
+  return keep(ctx, write_design_report(core_context(ctx), c->c, Span<const Mesh>(local, jaw_count),
+                                       splint->mesh, *splint->design, f, nullptr, core_sink(sink)));
 }
 
 }  // extern "C"

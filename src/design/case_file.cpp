@@ -480,7 +480,13 @@ Status parse_case(const Context& ctx, const char* text, size_t length, const cha
   if (!s.is_ok()) {
     ctx.arena->rewind(start);
     *out = CaseFile{};
+    return s;
   }
+  Sha256 hash;  // the report names the case by the hash of its bytes
+  hash.update(text, length);
+  uint8_t digest[32];
+  hash.finish(digest);
+  Sha256::to_hex(digest, out->sha256);
   return s;
 }
 

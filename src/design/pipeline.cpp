@@ -8,6 +8,14 @@ namespace splintcore {
 
 namespace {
 
+// Records which stage made the splint as it now is and whether its Boolean checked that mesh
+// for self-intersections (the report's check comes from here, not from a constant).
+void note_self_check(DesignReport* report, const BooleanStats& stats, const char* stage) {
+  report->self_intersection_checked = stats.self_intersection_checked;
+  report->self_intersection_checked_by = stats.self_intersection_checked ? stage : "";
+  report->self_intersection_candidates = stats.self_intersection_candidates;
+}
+
 Status stage_error(const Status& s, const char* stage) {
   if (s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) return s;
   Status e = make_error(s.code(), stage, ": ", s.message());
@@ -225,6 +233,7 @@ Status design_splint(const Context& ctx, const CaseFile& case_in, Span<const Mes
       arena.rewind(start);
       return stage_error(s, "boolean (base minus jaws)");
     }
+    note_self_check(report, report->boolean, "boolean");
   }
   if (c.has_blockout) {
     // Interference elimination, jaw by jaw: each jaw's part of B (its triangles, ids into all
@@ -261,6 +270,7 @@ Status design_splint(const Context& ctx, const CaseFile& case_in, Span<const Mes
       }
       report->blockout_removed_mm3[j] = mesh_volume(cut) - mesh_volume(blocked);
       report->blockout_jaws = static_cast<uint32_t>(j + 1);
+      note_self_check(report, report->blockout[j].boolean, "blockout");
       cut = blocked;  // the previous result stays below until the final move
     }
   }
@@ -286,6 +296,7 @@ Status design_splint(const Context& ctx, const CaseFile& case_in, Span<const Mes
       return stage_error(s, "design");
     }
     report->labelled = true;
+    note_self_check(report, report->label.boolean, "label");
     cut = labelled;
   }
   if (c.min_thickness > 0) {

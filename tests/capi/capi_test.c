@@ -692,6 +692,80 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
   for (i = 0; i < 2; ++i) free(jaw_bytes[i].data);
 }
 
+/* The report through the C API is report.json as `splintcore design` wrote it for the same
+ * case (cli_dir: its -o folder), less the "run" part: the same names given, the same bytes. */
+static void test_report_matches_cli(const char* jaws_dir, const char* cli_dir) {
+  Fixture f = open_fixture((size_t)96 << 20);
+  sc_case* c = NULL;
+  const sc_mesh* jaws[2] = {NULL, NULL};
+  sc_mesh* splint = NULL;
+  Bytes case_text = read_file(jaws_dir, "case.json");
+  Bytes cli = read_file(cli_dir, "report.json");
+  Bytes preview = read_file(cli_dir, "preview.png");
+  Bytes jaw_bytes[2] = {{NULL, 0}, {NULL, 0}};
+  char case_path[1024], jaw_path[2][1024], splint_path[1024], preview_path[1024];
+  char jaw_hash[2][65], preview_hash[65];
+  const char* jaw_paths[2];
+  const char* jaw_hashes[2];
+  sc_report_files files;
+  unsigned char* out = (unsigned char*)malloc((size_t)1 << 20);
+  sc_memory_sink_state state;
+  sc_sink sink;
+  const char* run;
+  size_t i, expected;
+
+  CHECK(case_text.data != NULL && cli.data != NULL && preview.data != NULL && out != NULL);
+  if (case_text.data == NULL || cli.data == NULL || preview.data == NULL || out == NULL) return;
+  /* The names as the command line formed them: the case path as given, the jaws beside it. */
+  snprintf(case_path, sizeof case_path, "%s/case.json", jaws_dir);
+  snprintf(splint_path, sizeof splint_path, "%s/splint.stl", cli_dir);
+  snprintf(preview_path, sizeof preview_path, "%s/preview.png", cli_dir);
+  sc_sha256_hex(preview.data, preview.size, preview_hash);
+  CHECK_OK(f.ctx, sc_case_parse(f.ctx, (const char*)case_text.data, case_text.size, case_path, &c));
+  if (c == NULL) return;
+  for (i = 0; i < 2; ++i) {
+    sc_mesh* m = NULL;
+    snprintf(jaw_path[i], sizeof jaw_path[i], "%s/%s", jaws_dir, sc_case_jaw_mesh(c, i));
+    jaw_bytes[i] = read_file(jaws_dir, sc_case_jaw_mesh(c, i));
+    if (jaw_bytes[i].data == NULL) return;
+    sc_sha256_hex(jaw_bytes[i].data, jaw_bytes[i].size, jaw_hash[i]);
+    CHECK_OK(f.ctx, read_mesh(f.ctx, &jaw_bytes[i], sc_case_jaw_mesh(c, i), &m));
+    jaws[i] = m;
+    jaw_paths[i] = jaw_path[i];
+    jaw_hashes[i] = jaw_hash[i];
+  }
+  CHECK_OK(f.ctx, sc_design(f.ctx, c, jaws, 2, &splint, NULL));
+  if (splint == NULL) return;
+  memset(&files, 0, sizeof files);
+  files.case_path = case_path;
+  files.jaw_paths = jaw_paths;
+  files.jaw_sha256 = jaw_hashes;
+  files.splint_path = splint_path;
+  files.preview_path = preview_path;
+  files.preview_sha256 = preview_hash;
+  sink = sc_memory_sink(&state, out, (size_t)1 << 20, "report");
+  CHECK_OK(f.ctx, sc_design_write_report(f.ctx, c, jaws, 2, splint, &files, &sink));
+  /* A splint that sc_design did not make has no record to report. */
+  CHECK(sc_design_write_report(f.ctx, c, jaws, 2, (const sc_mesh*)jaws[0], &files, &sink) ==
+        SC_INVALID_ARGUMENT);
+  cli.data[cli.size] = 0;
+  run = strstr((const char*)cli.data, ",\"run\":{");
+  CHECK(run != NULL);
+  if (run != NULL) {
+    expected = (size_t)(run - (const char*)cli.data);
+    CHECK(state.size == expected + 1);
+    CHECK(memcmp(out, cli.data, expected) == 0 && out[expected] == '}');
+    printf("report: %llu bytes through the C API, equal to report.json less its run part\n",
+           (unsigned long long)state.size);
+  }
+  close_fixture(&f);
+  for (i = 0; i < 2; ++i) free(jaw_bytes[i].data);
+  free(case_text.data);
+  free(cli.data);
+  free(preview.data);
+  free(out);
+}
+
 int main(int argc, char** argv) {
   Bytes torus, case_text;
   if (argc < 2) {
@@ -723,6 +797,7 @@ int main(int argc, char** argv) {
   test_case_params(&case_text);
   if (argc >= 3) {
     test_design(&case_text, argv[2]);
+    if (argc >= 4) test_report_matches_cli(argv[2], argv[3]);
   } else {
     printf("design skipped: no jaws folder given\n");
   }

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -17,10 +18,12 @@
 #include "common/phantom.h"
 #include "common/realcase.h"
 #include "common/shapes.h"
+#include "splintcore/ct.h"
 #include "splintcore/distance.h"
 #include "splintcore/mesh.h"
 #include "splintcore/remesh.h"
 #include "splintcore/render.h"
+#include "splintcore/segment.h"
 #include "splintcore/spline.h"
 #include "support/test_util.h"
 
@@ -267,6 +270,106 @@ TEST(BoundExact, BuildSplintBase) {
                     return build_splint_base(Context(&arena), Span<const Line>(ul.data(), 5),
                                              Span<const Line>(ll.data(), 5), params, &out, &r);
                   });
+    }
+  }
+}
+
+TEST(BoundExact, RenderAndPng) {
+  for (const Input& in : inputs()) {
+    Welded w(in);
+    for (uint32_t side : {1u, 64u, 640u}) {
+      // The mesh opaque and, drawn again, translucent with Gouraud shading: the bound's case.
+      RenderMesh items[2];
+      items[0].mesh = &w.mesh;
+      items[1].mesh = &w.mesh;
+      items[1].alpha = 100;
+      RenderOptions options;
+      options.width = side;
+      options.height = side;
+      options.view_count = side == 1 ? 1 : 4;
+      options.shading = RenderShading::kGouraud;
+      RenderImage image;
+      std::vector<uint8_t> kept;
+      expect_fits(in, "render_meshes",
+                  render_bound(side, side, 2 * w.v(), 2, options.view_count), [&](Arena& arena) {
+                    const Status s = render_meshes(Context(&arena),
+                                                   Span<const RenderMesh>(items, 2), options,
+                                                   &image);
+                    if (s.is_ok()) kept.assign(image.rgb, image.rgb + size_t{side} * side * 3);
+                    return s;
+                  });
+      if (kept.empty()) continue;
+      image.rgb = kept.data();
+      Input png_input{in.name + " " + std::to_string(side) + " px", {}, side == 640};
+      expect_fits(png_input, "write_png", png_bound(side, side), [&](Arena& arena) {
+        ByteSink discard;
+        discard.write = [](void*, const uint8_t*, size_t) { return true; };
+        return write_png(Context(&arena), image, discard);
+      });
+    }
+  }
+}
+
+// A CT-like volume: a block of bone (2000 HU) with a bump, in air, n voxels a side.
+struct BoneVolume {
+  std::vector<int16_t> hu;
+  CtVolume v;
+  explicit BoneVolume(uint32_t n) {
+    hu.assign(size_t{n} * n * n, -1000);
+    v.nx = v.ny = v.nz = n;
+    v.spacing = Vec3{0.3, 0.3, 0.3};
+    v.hu = hu.data();
+    for (uint32_t k = n / 4; k < 3 * n / 4; ++k) {
+      for (uint32_t j = n / 4; j < 3 * n / 4; ++j) {
+        for (uint32_t i = n / 4; i < 3 * n / 4 + (k % 5 == 0 ? n / 8 : 0); ++i) {
+          hu[(size_t{k} * n + j) * n + i] = 2000;
+        }
+      }
+    }
+  }
+};
+
+TEST(BoundExact, CtSegmentation) {
+  for (uint32_t n : {8u, 40u, 160u}) {
+    BoneVolume bone(n);
+    Input in{"bone cube " + std::to_string(n), {}, n == 160};
+    // Threshold, then grow from the centre, then mesh the region: each in exactly its bound,
+    // the inputs of the next made in an arena of their own.
+    expect_fits(in, "threshold_window", threshold_window_bound(bone.v), [&](Arena& arena) {
+      LabelVolume labels;
+      return threshold_window(Context(&arena), bone.v, HuWindow{}, &labels);
+    });
+    TestArena storage(size_t{64} << 20);
+    Context sctx(&storage.arena);
+    LabelVolume labels;
+    ThresholdStats ts;
+    SPLINTCORE_ASSERT_OK(threshold_window(sctx, bone.v, HuWindow{}, &labels, &ts));
+    RegionSeed seed;
+    seed.in_patient_mm = false;
+    seed.i = seed.j = seed.k = n / 2;
+    std::vector<uint8_t> before(labels.labels, labels.labels + labels.voxel_count());
+    expect_fits(in, "grow_regions", grow_regions_bound(ts.in_window), [&](Arena& arena) {
+      std::copy(before.begin(), before.end(), labels.labels);
+      return grow_regions(Context(&arena), bone.v, Span<const RegionSeed>(&seed, 1),
+                          RegionGrowOptions{}, &labels);
+    });
+    // The two-step contract: the box and the mesh's size from a first run, then the bound.
+    ReconstructStats rs;
+    {
+      Mesh probe(&storage.arena);
+      SPLINTCORE_ASSERT_OK(reconstruct_region(sctx, bone.v, labels, ReconstructOptions{}, &probe,
+                                              &rs));
+      const uint32_t box[3] = {rs.box_hi[0] - rs.box_lo[0] + 1, rs.box_hi[1] - rs.box_lo[1] + 1,
+                               rs.box_hi[2] - rs.box_lo[2] + 1};
+      const uint64_t bound = reconstruct_region_bound(box, rs.marching.layers_per_tile,
+                                                      probe.vertices.size(),
+                                                      probe.triangles.size());
+      expect_fits(in, "reconstruct_region", bound, [&](Arena& arena) {
+        Mesh out(&arena);
+        ReconstructOptions ro;
+        ro.layers_per_tile = rs.marching.layers_per_tile;
+        return reconstruct_region(Context(&arena), bone.v, labels, ro, &out);
+      });
     }
   }
 }

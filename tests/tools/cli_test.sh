@@ -413,6 +413,17 @@ check "report: the label" -- grep -q '"label":{"text":"PHANTOM-01","glyphs":10' 
 check "report: the thin spots" -- grep -q '"thin_spots":\[{"position":\[' "$work/opts/out/report.json"
 check "report: the tray translation" -- grep -q '"placed_on_tray":true,"tray_translation_mm":\[' "$work/opts/out/report.json"
 check "report: the parameters" -- grep -q '"min_thickness_mm":1,"label_text":"PHANTOM-01","label_mode":"engrave"' "$work/opts/out/report.json"
+check "report: the self-intersection check is the label's recorded one" -- grep -q '"self_intersection_free":true,"self_intersection_checked_by":"label","self_intersection_candidates":[1-9]' "$work/opts/out/report.json"
+check "report: the case's memory cap applied" -- grep -q '"memory_cap_bytes":536870912,"memory_cap_from":"case"' "$work/opts/out/report.json"
+# Every key of this full report is in docs/report-format.md (written as `key`).
+report_keys_documented() {
+  local key missing=""
+  for key in $(grep -oE '"[a-z_0-9]+":' "$1" | tr -d '":' | sort -u); do
+    grep -q "\`$key\`" "$fixtures/../docs/report-format.md" || missing="$missing $key"
+  done
+  [ -z "$missing" ] || { echo "not in docs/report-format.md:$missing"; return 1; }
+}
+check "report: every key is documented" -- report_keys_documented "$work/opts/out/report.json"
 expect_exit 0 "the splint on the tray is a printable solid as placed" -- "$tool" check "$work/opts/out/splint.stl" --no-place
 sed 's/"text": "PHANTOM-01"/"text": "50%"/' "$fixtures/cases/blockout.json" >"$work/opts/case.json"
 expect_exit 1 "a label the font cannot write" -- "$tool" design "$work/opts/case.json" -o "$work/opts/bad"

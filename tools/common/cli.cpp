@@ -36,6 +36,17 @@ std::string json_escape(const char* text) {
   return out + "\"";
 }
 
+ByteSink string_sink(std::string* out) {
+  ByteSink sink;
+  sink.write = [](void* user, const uint8_t* data, size_t bytes) {
+    static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), bytes);
+    return true;
+  };
+  sink.user = out;
+  sink.name = "memory";
+  return sink;
+}
+
 std::string json_number(double value) {
   if (!is_finite(value)) return "null";
   char buf[32];

@@ -9,6 +9,7 @@
 
 #include "splintcore/core.h"
 #include "splintcore/geometry.h"
+#include "splintcore/io.h"
 
 namespace splintcore {
 namespace cli {
@@ -45,6 +46,9 @@ class JsonObject {
 
 std::string json_escape(const char* text);
 std::string json_number(double value);
+
+// A sink that appends to `out` (tools only: it grows a std::string). Not seekable.
+ByteSink string_sink(std::string* out);
 
 // Caps on the files the tools read whole into the heap (SECURITY.md, "Input limits"). A case
 // file is parsed whole (parse_case takes at most 16 MiB anyway); a mesh file is read whole only

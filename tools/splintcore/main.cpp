@@ -1169,185 +1169,53 @@ int run_design(int argc, char** argv) {
   }
   const double t_end = monotonic_seconds();
 
-  JsonObject j;
-  j.add("command", "design");
-  j.add_status(Status::ok());
-  j.add("library_version", library_version());
-  j.add("case", case_path);
-  j.add("case_id", c.case_id);
-  j.add("case_sha256", hex_sha256(case_bytes.data(), case_bytes.size()));
-  std::string inputs = "[";
+  // report.json: the library's report (the C API writes the same bytes), this run's part last.
+  std::vector<const char*> path_list, hash_list;
   for (size_t i = 0; i < jaw_paths.size(); ++i) {
-    JsonObject r;
-    r.add("role", c.jaws[i].role);
-    if (c.jaws[i].has_seed) {
-      // From CT: the hash is of the voxels as read (int16 HU, memory order).
-      r.add("ct", jaw_paths[i]);
-      r.add("ct_voxels_sha256", jaw_hashes[i]);
-      r.add("seed", c.jaws[i].seed);
-      r.add("region_voxels", ct_report.regions.voxels[i + 1]);
-      r.add("reconstructed_volume_mm3", ct_report.volume_mm3[i]);
-    } else {
-      r.add("mesh", jaw_paths[i]);
-      r.add("sha256", jaw_hashes[i]);
-    }
-    r.add("triangles", static_cast<uint64_t>(jaws[i].triangles.size()));
-    const RigidTransform& x = c.jaws[i].transform;
-    std::string m = "[";
-    for (int row = 0; row < 3; ++row) {
-      for (int col = 0; col < 3; ++col) m += cli::json_number(x.r[row][col]) + ",";
-      m += cli::json_number(x.t[row]) + ",";
-    }
-    m += "0,0,0,1]";
-    r.add_raw("transform", m);
-    inputs += (i > 0 ? "," : "") + r.str();
+    path_list.push_back(jaw_paths[i].c_str());
+    hash_list.push_back(jaw_hashes[i].c_str());
   }
-  inputs += "]";
-  j.add_raw("inputs", inputs);
-  JsonObject params;
-  params.add("occlusal_normal", c.occlusal_normal);
-  params.add("spacing_mm", c.base.spacing_mm);
-  params.add("corner_radius_mm", c.base.corner_radius_mm);
-  params.add("corner_segments", static_cast<uint64_t>(c.base.corner_segments));
-  params.add("upper_picks", static_cast<uint64_t>(c.upper.size()));
-  params.add("lower_picks", static_cast<uint64_t>(c.lower.size()));
-  params.add("printer", report.printer);
-  params.add("memory_cap_bytes", o.memory_cap);
-  params.add("memory_cap_from", cap_source);
-  params.add("threads", static_cast<uint64_t>(o.threads));
-  params.add("boolean_float32_output", true);
-  params.add("boolean_max_nudges", static_cast<uint64_t>(BooleanOptions{}.max_nudges));
-  if (c.has_insertion_direction) params.add("insertion_direction", c.insertion_direction);
+  DesignReportFiles files;
+  files.case_path = case_path.c_str();
+  files.jaw_paths = Span<const char* const>(path_list.data(), path_list.size());
+  files.jaw_sha256 = Span<const char* const>(hash_list.data(), hash_list.size());
   if (any_ct) {
-    params.add("ct_hu_min", static_cast<int64_t>(c.ct_hu_min));
-    params.add("ct_hu_max", static_cast<int64_t>(c.ct_hu_max));
-    params.add("ct_connectivity", static_cast<uint64_t>(c.ct_connectivity));
-    params.add("ct_smooth", static_cast<uint64_t>(c.ct_smooth));
-    params.add("ct_decimate", c.ct_decimate);
-    params.add("ct_size", std::to_string(ct_info.nx) + " x " + std::to_string(ct_info.ny) + " x " +
-                              std::to_string(ct_info.nz));
+    files.ct_path = ct_path.c_str();
+    files.ct_size[0] = ct_info.nx;
+    files.ct_size[1] = ct_info.ny;
+    files.ct_size[2] = ct_info.nz;
+    files.ct = &ct_report;
   }
-  if (c.has_blockout) {
-    params.add("blockout_voxel_mm", c.blockout_voxel);
-    params.add("blockout_inset_mm", c.blockout_inset);
-    params.add("blockout_closing_radius_mm", c.blockout_closing);
-    params.add("clearance_mm", c.blockout_clearance);
-  }
-  if (c.min_thickness > 0) params.add("min_thickness_mm", c.min_thickness);
-  if (c.has_label) {
-    params.add("label_text", c.label_text);
-    params.add("label_mode", c.label_emboss ? "emboss" : "engrave");
-    params.add("label_height_mm", c.label_height);
-    params.add("label_stroke_mm", c.label_stroke);
-    params.add("label_depth_mm", c.label_depth);
-  }
-  params.add("placement", c.place_on_tray ? "tray" : "case");
-  j.add_raw("parameters", params.str());
-  std::string stages = "[";
-  for (size_t i = 0; i < clock.names.size(); ++i) {
-    JsonObject r;
-    r.add("stage", clock.names[i]);
-    r.add("time_s", clock.seconds[i]);
-    r.add("peak_arena_bytes", clock.peaks[i]);
-    stages += (i > 0 ? "," : "") + r.str();
-  }
-  stages += "]";
-  j.add_raw("stages", stages);
-  JsonObject checks;
-  checks.add("base_sections", static_cast<uint64_t>(report.base.sections));
-  checks.add("base_triangles_self_intersection_candidates", report.base.self_intersection_candidates);
-  checks.add("boolean_intersecting_pairs", report.boolean.intersecting_pairs);
-  checks.add("boolean_degenerate_pairs", report.boolean.degenerate_pairs);
-  checks.add("boolean_intersection_points", report.boolean.intersection_points);
-  checks.add("boolean_attempts", static_cast<uint64_t>(report.boolean.attempts));
-  checks.add("boolean_nudge_mm", report.boolean.nudge);
-  if (report.blockout_jaws > 0) {
-    // Interference elimination, per jaw in case order.
-    std::string rows = "[";
-    for (uint32_t i = 0; i < report.blockout_jaws; ++i) {
-      const BlockoutStats& b = report.blockout[i];
-      JsonObject r;
-      r.add("role", c.jaws[i].role);
-      r.add("direction", b.sweep.axis_w);
-      r.add("grid", std::to_string(b.sweep.nx) + " x " + std::to_string(b.sweep.ny) + " x " +
-                        std::to_string(b.sweep.nz));
-      r.add("swept_triangles", b.swept_triangles);
-      r.add("intersecting_pairs", b.boolean.intersecting_pairs);
-      r.add("attempts", static_cast<uint64_t>(b.attempts));
-      r.add("inset_mm", b.inset_used);
-      if (report.imprint_offset) r.add("clearance_mm", b.offset_used);
-      r.add("removed_volume_mm3", report.blockout_removed_mm3[i]);
-      rows += (i > 0 ? "," : "") + r.str();
-    }
-    checks.add_raw("blockout", rows + "]");
-  }
-  checks.add("imprint", report.imprint_offset ? "clearance offset of the swept volume"
-                                              : "jaw triangles");
-  if (report.labelled) {
-    const LabelStats& l = report.label;
-    JsonObject r;
-    r.add("text", l.text);
-    r.add("glyphs", static_cast<uint64_t>(l.glyphs));
-    r.add("glyph_triangles", l.glyph_triangles);
-    r.add("text_length_mm", l.text_length_mm);
-    r.add("attempts", static_cast<uint64_t>(l.attempts));
-    if (l.glyphs > 0) r.add("first_glyph_at", l.placements[0].surface_point);
-    checks.add_raw("label", r.str());
-  }
-  if (report.thickness_checked) {
-    const ThicknessReport& t = report.thickness;
-    JsonObject r;
-    r.add("min_required_mm", t.min_required);
-    r.add("triangles_checked", t.triangles_checked);
-    r.add("thin_triangles", t.thin_triangles);
-    r.add("thin_area_mm2", t.thin_area_mm2);
-    r.add("thinnest_mm", t.thinnest);
-    std::string spots = "[";
-    for (uint32_t i = 0; i < t.spot_count; ++i) {
-      JsonObject sp;
-      sp.add("position", t.spots[i].position);
-      sp.add("thickness_mm", t.spots[i].thickness);
-      sp.add("triangle", static_cast<uint64_t>(t.spots[i].triangle));
-      spots += (i > 0 ? "," : "") + sp.str();
-    }
-    r.add_raw("thin_spots", spots + "]");
-    checks.add_raw("thickness", r.str());
-  }
-  checks.add("self_intersection_free", true);
-  checks.add("closed", report.print.mesh.closed());
-  checks.add("edge_manifold", report.print.mesh.edge_manifold());
-  checks.add("outward", report.print.mesh.outward());
-  checks.add("shells", report.print.mesh.shells);
-  checks.add("fits_tray", report.print.fits);
-  checks.add("fits_tray_rotated", report.print.fits_rotated);
-  checks.add("layers", report.print.layers);
-  checks.add("printable", report.print.printable);
-  checks.add("placed_on_tray", report.placed_on_tray);
-  if (report.placed_on_tray) checks.add("tray_translation_mm", report.tray_translation);
-  j.add_raw("checks", checks.str());
-  JsonObject out;
-  out.add("splint", splint_path);
-  out.add("splint_sha256", splint_hash);
+  files.splint_path = splint_path.c_str();
   if (preview_status.is_ok()) {
-    out.add("preview", preview.path);
-    out.add("preview_sha256", preview.sha256);
-    out.add("preview_time_s", preview.render_seconds + preview.encode_seconds);
+    files.preview_path = preview.path.c_str();
+    files.preview_sha256 = preview.sha256.c_str();
   } else {
-    out.add("preview_error", preview_error);
+    files.preview_error = preview_error;
   }
-  out.add("triangles", static_cast<uint64_t>(splint.triangles.size()));
-  out.add("volume_mm3", report.print.mesh.volume);
-  out.add("extent_mm", report.print.extent);
-  j.add_raw("output", out.str());
-  j.add("read_s", t_read - t0);
-  j.add("design_s", t_design - t_read);
-  j.add("time_s", t_end - t0);
-  j.add("peak_arena_bytes", static_cast<uint64_t>(arena.high_water()));
-  s = write_bytes_atomically(report_path, j.str() + "\n");
+  std::vector<DesignStageTime> stage_times;
+  for (size_t i = 0; i < clock.names.size(); ++i) {
+    stage_times.push_back(DesignStageTime{clock.names[i].c_str(), clock.seconds[i], clock.peaks[i]});
+  }
+  DesignRunInfo run_info;
+  run_info.memory_cap_bytes = o.memory_cap;
+  run_info.memory_cap_from = cap_source;
+  run_info.threads = o.threads;
+  run_info.stages = Span<const DesignStageTime>(stage_times.data(), stage_times.size());
+  run_info.read_seconds = t_read - t0;
+  run_info.design_seconds = t_design - t_read;
+  run_info.preview_seconds = preview_status.is_ok() ? preview.render_seconds + preview.encode_seconds : 0;
+  run_info.total_seconds = t_end - t0;
+  run_info.peak_arena_bytes = arena.high_water();
+  std::string report_text;
+  s = write_design_report(ctx, c, Span<const Mesh>(jaws.data(), jaws.size()), splint, report,
+                          files, &run_info, cli::string_sink(&report_text));
+  if (!s.is_ok()) return rejected(o, "design", s, &arena);
+  s = write_bytes_atomically(report_path, report_text + "\n");
   if (!s.is_ok()) return rejected(o, "design", s, &arena);
 
   if (o.json) {
-    std::printf("%s\n", j.str().c_str());
+    std::printf("%s\n", report_text.c_str());
   } else {
     std::printf("case %s (%s): %zu jaw(s), %llu triangles; base %u sections, %zu + %zu picks\n",
                 case_path.c_str(), c.case_id, jaws.size(),

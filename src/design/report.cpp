@@ -1,0 +1,257 @@
+// The audit report of a design (design.h, write_design_report): what an auditor needs to
+// reproduce the run, every value from a recorded result. One writer serves the command line
+// (report.json) and the C API (sc_design_write_report), so both give the same bytes.
+#include "splintcore/blockout.h"
+#include "splintcore/boolean.h"
+#include "splintcore/design.h"
+#include "splintcore/io.h"
+#include "splintcore/json.h"
+
+namespace splintcore {
+
+namespace {
+
+// A sink that only hashes what it is given (the splint's STL bytes).
+bool hash_write(void* user, const uint8_t* data, size_t bytes) {
+  static_cast<Sha256*>(user)->update(data, bytes);
+  return true;
+}
+
+const char* at(Span<const char* const> list, size_t i) {
+  return i < list.size() ? list[i] : nullptr;
+}
+
+void write_transform(JsonWriter& w, const RigidTransform& x) {
+  w.begin_array("transform");
+  for (int row = 0; row < 3; ++row) {
+    for (int col = 0; col < 3; ++col) w.add(nullptr, x.r[row][col]);
+    w.add(nullptr, x.t[row]);
+  }
+  for (int k = 0; k < 3; ++k) w.add(nullptr, 0);
+  w.add(nullptr, 1);
+  w.end_array();
+}
+
+void write_inputs(JsonWriter& w, const CaseFile& c, Span<const Mesh> jaws,
+                  const DesignReportFiles& files) {
+  w.begin_array("inputs");
+  for (size_t i = 0; i < c.jaws.size(); ++i) {
+    const CaseJaw& jaw = c.jaws[i];
+    w.begin_object();
+    w.add("role", jaw.role);
+    if (jaw.has_seed) {
+      // From CT: the hash is of the voxels as read (int16 HU, memory order).
+      if (files.ct_path != nullptr) w.add("ct", files.ct_path);
+      if (at(files.jaw_sha256, i) != nullptr) w.add("ct_voxels_sha256", at(files.jaw_sha256, i));
+      w.add("seed", jaw.seed);
+      if (files.ct != nullptr) {
+        w.add("region_voxels", files.ct->regions.voxels[i + 1]);
+        w.add("reconstructed_volume_mm3", files.ct->volume_mm3[i]);
+      }
+    } else {
+      if (at(files.jaw_paths, i) != nullptr) w.add("mesh", at(files.jaw_paths, i));
+      if (at(files.jaw_sha256, i) != nullptr) w.add("sha256", at(files.jaw_sha256, i));
+    }
+    w.add("triangles", static_cast<uint64_t>(jaws[i].triangles.size()));
+    write_transform(w, jaw.transform);
+    w.end_object();
+  }
+  w.end_array();
+}
+
+void write_parameters(JsonWriter& w, const CaseFile& c, const DesignReport& report,
+                      const DesignReportFiles& files, bool any_ct) {
+  w.begin_object("parameters");
+  w.add("occlusal_normal", c.occlusal_normal);
+  w.add("spacing_mm", c.base.spacing_mm);
+  w.add("corner_radius_mm", c.base.corner_radius_mm);
+  w.add("corner_segments", c.base.corner_segments);
+  w.add("upper_picks", static_cast<uint64_t>(c.upper.size()));
+  w.add("lower_picks", static_cast<uint64_t>(c.lower.size()));
+  w.add("printer", report.printer);
+  w.add("boolean_float32_output", BooleanOptions{}.float32_output);
+  w.add("boolean_max_nudges", BooleanOptions{}.max_nudges);
+  if (c.has_insertion_direction) w.add("insertion_direction", c.insertion_direction);
+  if (any_ct) {
+    w.add("ct_hu_min", static_cast<int64_t>(c.ct_hu_min));
+    w.add("ct_hu_max", static_cast<int64_t>(c.ct_hu_max));
+    w.add("ct_connectivity", c.ct_connectivity);
+    w.add("ct_smooth", c.ct_smooth);
+    w.add("ct_decimate", c.ct_decimate);
+    w.begin_array("ct_size");
+    for (uint32_t n : files.ct_size) w.add(nullptr, n);
+    w.end_array();
+  }
+  if (c.has_blockout) {
+    w.add("blockout_voxel_mm", c.blockout_voxel);
+    w.add("blockout_inset_mm", c.blockout_inset);
+    w.add("blockout_closing_radius_mm", c.blockout_closing);
+    w.add("clearance_mm", c.blockout_clearance);
+  }
+  if (c.min_thickness > 0) w.add("min_thickness_mm", c.min_thickness);
+  if (c.has_label) {
+    w.add("label_text", c.label_text);
+    w.add("label_mode", c.label_emboss ? "emboss" : "engrave");
+    w.add("label_height_mm", c.label_height);
+    w.add("label_stroke_mm", c.label_stroke);
+    w.add("label_depth_mm", c.label_depth);
+  }
+  w.add("placement", c.place_on_tray ? "tray" : "case");
+  w.end_object();
+}
+
+void write_blockout(JsonWriter& w, const CaseFile& c, const DesignReport& report) {
+  // Interference elimination, per jaw in case order.
+  w.begin_array("blockout");
+  for (uint32_t i = 0; i < report.blockout_jaws; ++i) {
+    const BlockoutStats& b = report.blockout[i];
+    w.begin_object();
+    w.add("role", c.jaws[i].role);
+    w.add("direction", b.sweep.axis_w);
+    w.begin_array("grid");
+    w.add(nullptr, b.sweep.nx);
+    w.add(nullptr, b.sweep.ny);
+    w.add(nullptr, b.sweep.nz);
+    w.end_array();
+    w.add("swept_triangles", b.swept_triangles);
+    w.add("intersecting_pairs", b.boolean.intersecting_pairs);
+    w.add("attempts", b.attempts);
+    w.add("inset_mm", b.inset_used);
+    if (report.imprint_offset) w.add("clearance_mm", b.offset_used);
+    w.add("removed_volume_mm3", report.blockout_removed_mm3[i]);
+    w.end_object();
+  }
+  w.end_array();
+}
+
+void write_thickness(JsonWriter& w, const ThicknessReport& t) {
+  w.begin_object("thickness");
+  w.add("min_required_mm", t.min_required);
+  w.add("triangles_checked", t.triangles_checked);
+  w.add("thin_triangles", t.thin_triangles);
+  w.add("thin_area_mm2", t.thin_area_mm2);
+  w.add("thinnest_mm", t.thinnest);
+  w.begin_array("thin_spots");
+  for (uint32_t i = 0; i < t.spot_count; ++i) {
+    w.begin_object();
+    w.add("position", t.spots[i].position);
+    w.add("thickness_mm", t.spots[i].thickness);
+    w.add("triangle", t.spots[i].triangle);
+    w.end_object();
+  }
+  w.end_array();
+  w.end_object();
+}
+
+void write_checks(JsonWriter& w, const CaseFile& c, const DesignReport& report) {
+  w.begin_object("checks");
+  w.add("base_sections", report.base.sections);
+  w.add("base_triangles_self_intersection_candidates", report.base.self_intersection_candidates);
+  w.add("boolean_intersecting_pairs", report.boolean.intersecting_pairs);
+  w.add("boolean_degenerate_pairs", report.boolean.degenerate_pairs);
+  w.add("boolean_intersection_points", report.boolean.intersection_points);
+  w.add("boolean_attempts", report.boolean.attempts);
+  w.add("boolean_nudge_mm", report.boolean.nudge);
+  if (report.blockout_jaws > 0) write_blockout(w, c, report);
+  w.add("imprint", report.imprint_offset ? "clearance offset of the swept volume" : "jaw triangles");
+  if (report.labelled) {
+    const LabelStats& l = report.label;
+    w.begin_object("label");
+    w.add("text", l.text);
+    w.add("glyphs", l.glyphs);
+    w.add("glyph_triangles", l.glyph_triangles);
+    w.add("text_length_mm", l.text_length_mm);
+    w.add("attempts", l.attempts);
+    if (l.glyphs > 0) w.add("first_glyph_at", l.placements[0].surface_point);
+    w.end_object();
+  }
+  if (report.thickness_checked) write_thickness(w, report.thickness);
+  w.add("self_intersection_free", report.self_intersection_checked);
+  w.add("self_intersection_checked_by", report.self_intersection_checked_by);
+  w.add("self_intersection_candidates", report.self_intersection_candidates);
+  w.add("closed", report.print.mesh.closed());
+  w.add("edge_manifold", report.print.mesh.edge_manifold());
+  w.add("outward", report.print.mesh.outward());
+  w.add("shells", report.print.mesh.shells);
+  w.add("fits_tray", report.print.fits);
+  w.add("fits_tray_rotated", report.print.fits_rotated);
+  w.add("layers", report.print.layers);
+  w.add("printable", report.print.printable);
+  w.add("placed_on_tray", report.placed_on_tray);
+  if (report.placed_on_tray) w.add("tray_translation_mm", report.tray_translation);
+  w.end_object();
+}
+
+void write_run(JsonWriter& w, const DesignRunInfo& run) {
+  w.begin_object("run");
+  w.add("memory_cap_bytes", run.memory_cap_bytes);
+  w.add("memory_cap_from", run.memory_cap_from);
+  w.add("threads", run.threads);
+  w.begin_array("stages");
+  for (const DesignStageTime& s : run.stages) {
+    w.begin_object();
+    w.add("stage", s.stage);
+    w.add("time_s", s.seconds);
+    w.add("peak_arena_bytes", s.peak_arena_bytes);
+    w.end_object();
+  }
+  w.end_array();
+  w.add("read_s", run.read_seconds);
+  w.add("design_s", run.design_seconds);
+  w.add("preview_s", run.preview_seconds);
+  w.add("time_s", run.total_seconds);
+  w.add("peak_arena_bytes", run.peak_arena_bytes);
+  w.end_object();
+}
+
+}  // namespace
+
+Status write_design_report(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                           const Mesh& splint, const DesignReport& report,
+                           const DesignReportFiles& files, const DesignRunInfo* run,
+                           const ByteSink& sink) {
+  if (jaws.size() != c.jaws.size()) {
+    return make_error(StatusCode::kInvalidArgument, "design report: ", jaws.size(),
+                      " jaws for a case of ", c.jaws.size());
+  }
+  // The splint's SHA-256: of the bytes write_stl gives, which is what a caller writes.
+  Sha256 hash;
+  ByteSink hashing;
+  hashing.write = &hash_write;
+  hashing.user = &hash;
+  hashing.name = "the splint's hash";
+  SPLINTCORE_RETURN_IF_ERROR(write_stl(ctx, splint, hashing, StlWriteOptions{}));
+  uint8_t digest[32];
+  hash.finish(digest);
+  char splint_sha256[65];
+  Sha256::to_hex(digest, splint_sha256);
+  bool any_ct = false;
+  for (const CaseJaw& j : c.jaws) any_ct = any_ct || j.has_seed;
+
+  JsonWriter w(sink);
+  w.begin_object();
+  w.add("command", "design");
+  w.add("status", "ok");
+  w.add("library_version", library_version());
+  if (files.case_path != nullptr) w.add("case", files.case_path);
+  w.add("case_id", c.case_id);
+  w.add("case_sha256", c.sha256);
+  write_inputs(w, c, jaws, files);
+  write_parameters(w, c, report, files, any_ct);
+  write_checks(w, c, report);
+  w.begin_object("output");
+  if (files.splint_path != nullptr) w.add("splint", files.splint_path);
+  w.add("splint_sha256", splint_sha256);
+  if (files.preview_path != nullptr) w.add("preview", files.preview_path);
+  if (files.preview_sha256 != nullptr) w.add("preview_sha256", files.preview_sha256);
+  if (files.preview_error != nullptr) w.add("preview_error", files.preview_error);
+  w.add("triangles", static_cast<uint64_t>(splint.triangles.size()));
+  w.add("volume_mm3", report.print.mesh.volume);
+  w.add("extent_mm", report.print.extent);
+  w.end_object();
+  if (run != nullptr) write_run(w, *run);
+  w.end_object();
+  return w.finish();
+}
+
+}  // namespace splintcore
