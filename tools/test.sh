@@ -376,8 +376,11 @@ lint_job() {
   # clang-tidy with the checked-in .clang-tidy, and cppcheck, over our own sources; a finding
   # from either fails the job. compile_commands.json comes from a configure-only build dir.
   local dir=build/ci-lint
-  echo "=== lint: clang-tidy (.clang-tidy) and cppcheck over src/ include/ tools/"
-  ensure_packages clang clang-tidy cppcheck || return 1
+  echo "=== lint: the floors (tools/check_layers.py), clang-tidy (.clang-tidy) and cppcheck over src/ include/ tools/"
+  ensure_packages clang clang-tidy cppcheck python3 || return 1
+  local layers_rc=0 layers
+  layers=$(python3 tools/check_layers.py) || layers_rc=1
+  printf '%s\n' "$layers" | tail -n 12
   if ! cmake -S . -B "$dir" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=Release \
        -DCMAKE_EXPORT_COMPILE_COMMANDS=ON >"$dir.configure.log" 2>&1; then
     mkdir -p "$dir"; cat "$dir.configure.log"; return 1
@@ -403,6 +406,7 @@ lint_job() {
   fi
   grep -vE "^$|^Checking|files checked" "$dir.cppcheck.log" | head -n 40
   echo "cppcheck: $(grep -cE ": (error|warning|performance|portability) " "$dir.cppcheck.log") findings"
+  [ $layers_rc -eq 0 ] || rc=1
   if [ $rc -eq 0 ]; then total_passed=$((total_passed + 1)); else total_failed=$((total_failed + 1)); fi
   return $rc
 }

@@ -1,6 +1,5 @@
-// splintcore blockout: interference (undercut) elimination along an insertion direction
-// (Chen et al. 2016, "The Interference Elimination", Figs. 5-6). Floor 6: core, geometry,
-// mesh, distance, volume.
+// splintcore blockout: interference (undercut) elimination along an insertion direction (Chen et
+// al. 2016, "The Interference Elimination", Figs. 5-6).
 //
 // The swept volume of the jaws along the direction d is S = { p + t d : p in J, t >= 0 }: every
 // point a jaw passes through as it moves along d (the paper: each layer contains the layers

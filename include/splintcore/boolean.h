@@ -1,7 +1,7 @@
-// splintcore boolean: difference, union and intersection of triangle meshes by corefinement
-// (Chen et al. 2016, "The Boolean operation", Fig. 4): both meshes are split along their
-// intersection, the pieces are classified inside or outside the other solid, and the result is
-// assembled from the pieces an operation keeps. Floor 5: core, geometry, mesh, distance.
+// splintcore boolean: difference, union and intersection of triangle meshes by corefinement (Chen
+// et al. 2016, "The Boolean operation", Fig. 4): both meshes are split along their intersection,
+// the pieces are classified inside or outside the other solid, and the result is assembled from the
+// pieces an operation keeps.
 //
 // How it decides, and what it promises:
 // - Only the part of B near A is touched: B's vertices are tested once against A's box, and

@@ -1,5 +1,5 @@
 // splintcore core: status, arena, arena arrays, executor, progress, deterministic sort/hash,
-// SHA-256. Floor 1 of the library: everything else stands on these types.
+// SHA-256.
 //
 // Rules that hold for every function in splintcore:
 // - Nothing here or above calls new/malloc or throws. Memory comes from an Arena the caller

@@ -1,5 +1,4 @@
-// splintcore ct: CT volumes in Hounsfield units and their readers (DICOM series, NRRD,
-// MetaImage). Floor 4: core, geometry, io, volume.
+// splintcore ct: CT volumes in Hounsfield units and their readers (DICOM series, NRRD, MetaImage).
 //
 // The voxel data of a volume lives in the caller's arena; its size (2 bytes per voxel) is
 // known from the header and checked against the arena's cap before anything is allocated.

@@ -1,5 +1,5 @@
-// splintcore design: the case file (format in docs/case-format.md) and, as the issues land,
-// the whole design pipeline. Floor 7: the only module that knows the case file.
+// splintcore design: the case file (format in docs/case-format.md), the whole design pipeline
+// and its audit report (docs/report-format.md).
 #ifndef SPLINTCORE_DESIGN_H
 #define SPLINTCORE_DESIGN_H
 

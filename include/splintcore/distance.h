@@ -1,6 +1,5 @@
-// splintcore distance: the spatial engine the Boolean, the blockout and the accuracy reports
-// query (Chen et al. 2016, "Calculate the signed distance field"). Floor 4: core, geometry,
-// mesh.
+// splintcore distance: the spatial engine the Boolean, the blockout and the accuracy reports query
+// (Chen et al. 2016, "Calculate the signed distance field").
 //
 // The hierarchy is a bounding volume hierarchy, not an octree: for closest-point queries on a
 // triangle mesh a BVH bounds every triangle exactly once (an octree either duplicates

@@ -1,5 +1,4 @@
 // splintcore geometry: Vec3, axis-aligned boxes, rigid transforms and exact predicates.
-// Floor 2: depends only on core.h.
 #ifndef SPLINTCORE_GEOMETRY_H
 #define SPLINTCORE_GEOMETRY_H
 

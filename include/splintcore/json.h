@@ -1,8 +1,8 @@
 // splintcore json: a strict JSON (RFC 8259) parser into the arena, for the case file, and a
-// streaming writer into a byte sink, for the audit report. Floor 4 (io). Parser: bounded size
-// and nesting depth; errors carry line and column; duplicate keys are rejected; numbers are
-// parsed exactly (correctly rounded, locale-free std::from_chars). Writer: compact, numbers
-// as the shortest text that reads back to the same double (std::to_chars), no heap.
+// streaming writer into a byte sink, for the audit report. Parser: bounded size and nesting depth;
+// errors carry line and column; duplicate keys are rejected; numbers are parsed exactly (correctly
+// rounded, locale-free std::from_chars). Writer: compact, numbers as the shortest text that reads
+// back to the same double (std::to_chars), no heap.
 #ifndef SPLINTCORE_JSON_H
 #define SPLINTCORE_JSON_H
 

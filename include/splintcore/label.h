@@ -1,6 +1,5 @@
-// splintcore label: the case label, engraved into or embossed on the splint's outer (buccal)
-// wall in a built-in stroke font (issue 8, design options; the paper leaves the splint
-// unlabelled). Floor 7: core, geometry, mesh, spline, distance, volume, remesh, boolean.
+// splintcore label: the case label, engraved into or embossed on the splint's outer (buccal) wall
+// in a built-in stroke font (issue 8, design options; the paper leaves the splint unlabelled).
 //
 // What it makes, exactly:
 // - The font: our own single-line strokes on an integer grid, glyphs 0..4 units wide and

@@ -1,5 +1,5 @@
-// splintcore mesh: the one indexed triangle mesh type, welding of STL soup, topology checks
-// and measures. Floor 3: depends on core.h and geometry.h.
+// splintcore mesh: the one indexed triangle mesh type, welding of STL soup, topology checks and
+// measures.
 #ifndef SPLINTCORE_MESH_H
 #define SPLINTCORE_MESH_H
 

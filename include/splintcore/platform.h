@@ -1,6 +1,6 @@
-// splintcore platform: the hosted layer (files, atomic output, threads, clock). Floor 5.
-// Everything else takes byte sources, sinks and executors; a firmware build leaves this out
-// (CMake option SPLINTCORE_WITH_PLATFORM=OFF).
+// splintcore platform: the hosted layer (files, atomic output, threads, clock). Everything else
+// takes byte sources, sinks and executors; a firmware build leaves this out (CMake option
+// SPLINTCORE_WITH_PLATFORM=OFF).
 #ifndef SPLINTCORE_PLATFORM_H
 #define SPLINTCORE_PLATFORM_H
 

@@ -1,4 +1,4 @@
-// splintcore printer: printer profiles and the printability check. Floor 4.
+// splintcore printer: printer profiles and the printability check.
 #ifndef SPLINTCORE_PRINTER_H
 #define SPLINTCORE_PRINTER_H
 

@@ -1,6 +1,6 @@
 // splintcore remesh: Taubin smoothing and quadric-error-metric decimation of the meshes that
-// surface reconstruction makes (closed, manifold, outward, large: marching tetrahedra give
-// about twice the triangles of classic marching cubes). Floor 4: core, geometry, mesh.
+// surface reconstruction makes (closed, manifold, outward, large: marching tetrahedra give about
+// twice the triangles of classic marching cubes).
 //
 // Both are deterministic: the output bytes are a function of the input bytes and the options
 // only (never of the thread count, the arena's cap, pointers or hashing), on every compiler

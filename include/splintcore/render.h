@@ -1,7 +1,7 @@
 // splintcore render: a preview of meshes (the splint on the jaws, or a mesh coloured by a
-// per-vertex scalar such as its distance to another surface) from fixed standard views, drawn
-// by our own z-buffer rasteriser, and a PNG encoder (zlib/deflate, CRC-32, Adler-32) writing to
-// a ByteSink. Floor 4: depends on core.h, geometry.h, mesh.h and io.h.
+// per-vertex scalar such as its distance to another surface) from fixed standard views, drawn by
+// our own z-buffer rasteriser, and a PNG encoder (zlib/deflate, CRC-32, Adler-32) writing to a
+// ByteSink.
 //
 // Deterministic bytes: the views are fixed orthographic directions whose rotations need only
 // sqrt; vertices are snapped to a 1/256-pixel grid and covered by exact integer edge functions

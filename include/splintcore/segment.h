@@ -1,6 +1,6 @@
-// splintcore segment: CT segmentation (HU window), competitive region growing that separates
-// the maxilla from the mandible, and surface reconstruction of each region with the library's
-// one iso-surface extractor (volume.h). Floor 5: core, geometry, mesh, volume, ct.
+// splintcore segment: CT segmentation (HU window), competitive region growing that separates the
+// maxilla from the mandible, and surface reconstruction of each region with the library's one
+// iso-surface extractor (volume.h).
 //
 // Pipeline (Chen et al. 2016, section 2.1 "preprocessing"): threshold_window() marks the voxels
 // whose HU lie in a bone window; grow_regions() labels the marked voxels reachable from seed

@@ -1,7 +1,7 @@
 // splintcore spline: the initial splint base (Chen et al. 2016, "The Generation of the Initial
-// Splint", Figs. 1-3): picked points become Lines (inner point, outside point), the line ends
-// are interpolated by four splines, sampled at matched parameters, and joined by ruled
-// surfaces into one closed solid. Floor 4: depends on core, geometry and mesh.
+// Splint", Figs. 1-3): picked points become Lines (inner point, outside point), the line ends are
+// interpolated by four splines, sampled at matched parameters, and joined by ruled surfaces into
+// one closed solid.
 #ifndef SPLINTCORE_SPLINE_H
 #define SPLINTCORE_SPLINE_H
 

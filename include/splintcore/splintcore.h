@@ -1,5 +1,5 @@
 /* splintcore C API: the design pipeline (Chen et al. 2016, EasySplint) for C callers and
- * firmware. Floor 8: implemented in src/capi/capi.cpp on the C++ API of every module.
+ * firmware, implemented in src/capi/capi.cpp on the C++ API of every module.
  *
  * Plain C99. Rules that hold for every function here:
  * - No function allocates: not the handles, not the results. All memory is the caller's:

@@ -1,6 +1,5 @@
-// splintcore volume: scalar fields on regular grids and the tiled iso-surface extractor
-// ("marching cubes") that serves both CT reconstruction and the blockout. Floor 4: core,
-// geometry, mesh.
+// splintcore volume: scalar fields on regular grids and the tiled iso-surface extractor ("marching
+// cubes") that serves both CT reconstruction and the blockout.
 //
 // The field is never held whole: a LayerSource fills z-layers on demand (sample_sdf in
 // distance.h has this shape), and the grid is swept in slabs of z-layers that fit the caller's

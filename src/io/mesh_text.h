@@ -10,7 +10,6 @@
 
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
-#include "splintcore/mesh_io.h"
 
 namespace splintcore {
 namespace meshio {

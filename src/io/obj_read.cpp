@@ -4,12 +4,12 @@
 // (as kept at paulbourke.net/dataformats/obj): one statement per line, '#' comments; "v x y z
 // [w]" geometric vertices; "f v1 v2 v3 ..." faces whose corners are "v", "v/vt", "v//vn" or
 // "v/vt/vn", 1-based, a negative number counting back from the last vertex defined. Only
-// vertices and faces are kept; every other statement is skipped (mesh_io.h lists them).
+// vertices and faces are kept; every other statement is skipped (io.h lists them).
 // Decisions for input in the wild: after x y z up to three more numbers are taken and ignored
 // (a rational w, which scanners never use, or the per-vertex r g b that MeshLab and ZBrush
 // write); a corner must name a vertex defined before it (what the format's relative indices
 // assume, and what lets a face be checked when it is read); '\' line continuation is not
-// supported (a parse error where it matters). Faces are fan-triangulated (mesh_io.h).
+// supported (a parse error where it matters). Faces are fan-triangulated (io.h).
 #include "mesh_text.h"
 
 namespace splintcore {

@@ -6,7 +6,7 @@
 // "element <name> <count>" each followed by its "property <type> <name>" or "property list
 // <count type> <item type> <name>" lines, "end_header"), then the elements' records in header
 // order: ASCII one record per line, binary the properties packed in declared order and byte
-// order. Faces are fan-triangulated (mesh_io.h).
+// order. Faces are fan-triangulated (io.h).
 //
 // Hostile input: element counts are checked against the limits and, when the source knows its
 // size, against the smallest number of bytes their records can take, before anything is

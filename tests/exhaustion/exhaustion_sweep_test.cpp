@@ -38,7 +38,6 @@
 #include "splintcore/io.h"
 #include "splintcore/json.h"
 #include "splintcore/mesh.h"
-#include "splintcore/mesh_io.h"
 #include "splintcore/platform.h"
 #include "splintcore/printer.h"
 #include "splintcore/spline.h"

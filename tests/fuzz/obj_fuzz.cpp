@@ -16,7 +16,6 @@
 
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
-#include "splintcore/mesh_io.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace splintcore;

@@ -11,7 +11,6 @@
 
 #include "io/mesh_text.h"
 #include "splintcore/io.h"
-#include "splintcore/mesh_io.h"
 #include "support/test_util.h"
 
 namespace splintcore {

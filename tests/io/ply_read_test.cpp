@@ -16,7 +16,6 @@
 #include "splintcore/core.h"
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
-#include "splintcore/mesh_io.h"
 #include "support/test_util.h"
 
 namespace {

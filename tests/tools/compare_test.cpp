@@ -12,7 +12,7 @@
 #include "common/compare.h"
 #include "common/shapes.h"
 #include "splintcore/mesh.h"
-#include "splintcore/mesh_io.h"
+#include "splintcore/io.h"
 #include "splintcore/platform.h"
 #include "support/test_util.h"
 

@@ -1,5 +1,5 @@
 // CT volume writers (NRRD, MetaImage, DICOM series) for tests and the phantom tool. Formats as
-// read by src/io/ct_nrrd.cpp, ct_metaimage.cpp and ct_dicom.cpp (sources named there).
+// read by src/ct/ct_nrrd.cpp, ct_metaimage.cpp and ct_dicom.cpp (sources named there).
 #include "ct_write.h"
 
 #include <algorithm>

@@ -26,7 +26,6 @@
 #include "splintcore/distance.h"
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
-#include "splintcore/mesh_io.h"
 #include "splintcore/platform.h"
 #include "splintcore/printer.h"
 #include "splintcore/remesh.h"

@@ -1,4 +1,4 @@
-// The case label (src/design/label.cpp, stroke_font.cpp): the font's glyphs stay in their
+// The case label (src/label/label.cpp, stroke_font.cpp): the font's glyphs stay in their
 // cells; unsupported characters are named; engraving and embossing on the paper-scale base
 // give valid solids whose volume changes by about the strokes' volume; the text reads left to
 // right from outside whatever the pick order; the same bytes twice; clean arena exhaustion;

@@ -3,7 +3,7 @@
 // last, then (LOCAL) the raw voxels or the name of a data file. Only 3-D scalar, uncompressed
 // binary images; TransformMatrix row k is the direction of axis k (as ITK's MetaImageIO reads
 // it). Voxel data goes through read_raw_volume() (ct_common.h).
-#include "io/ct_common.h"
+#include "ct/ct_common.h"
 
 namespace splintcore {
 

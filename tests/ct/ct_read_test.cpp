@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "io/ct_common.h"
+#include "ct/ct_common.h"
 #include "splintcore/ct.h"
 #include "support/test_util.h"
 

@@ -2,7 +2,7 @@
 // http://teem.sourceforge.net/nrrd/format.html), magics NRRD0001 to NRRD0005. Only 3-D scalar
 // volumes with raw encoding; the header is parsed line by line in a fixed window; voxel data
 // goes through read_raw_volume() (ct_common.h).
-#include "io/ct_common.h"
+#include "ct/ct_common.h"
 
 namespace splintcore {
 

@@ -91,7 +91,7 @@ bool stroke_font_glyph(char c, StrokeGlyph* out) {
   g.character = source->character;
   g.width = source->width;
   g.advance = static_cast<uint8_t>(source->width + kStrokeFontGap);
-  // The table is constant and checked by the tests (tests/design/label_test.cpp): a malformed
+  // The table is constant and checked by the tests (tests/label/label_test.cpp): a malformed
   // entry is a programmer error.
   const char* p = source->strokes;
   while (*p != '\0') {

@@ -1,7 +1,7 @@
 // Shared parts of the CT readers: windowed reading, header text, numbers, budgets and the
 // stored value -> Hounsfield unit conversion of DICOM PS3.3 C.11.1.1.2 (Modality LUT,
 // HU = Rescale Slope * SV + Rescale Intercept), applied to all three formats.
-#include "io/ct_common.h"
+#include "ct/ct_common.h"
 
 #include <charconv>
 #include <cmath>

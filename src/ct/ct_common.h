@@ -1,8 +1,8 @@
 // Shared parts of the CT readers (src/io/ct_*.cpp): a windowed byte reader over a ByteSource,
 // text-header lines, locale-free number parsing, the arena budget check, and the voxel
 // conversion stored value -> HU (DICOM PS3.3 C.11.1.1.2 Modality LUT: HU = m * SV + b).
-#ifndef SPLINTCORE_SRC_IO_CT_COMMON_H
-#define SPLINTCORE_SRC_IO_CT_COMMON_H
+#ifndef SPLINTCORE_SRC_CT_CT_COMMON_H
+#define SPLINTCORE_SRC_CT_CT_COMMON_H
 
 #include "splintcore/ct.h"
 
@@ -124,4 +124,4 @@ Status read_raw_volume(const Context& ctx, Reader& header, const ByteSource& hea
 }  // namespace ct_detail
 }  // namespace splintcore
 
-#endif  // SPLINTCORE_SRC_IO_CT_COMMON_H
+#endif  // SPLINTCORE_SRC_CT_CT_COMMON_H

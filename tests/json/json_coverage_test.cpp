@@ -1,4 +1,4 @@
-// Every branch of the strict JSON parser (src/io/json.cpp), table-driven (issue 9 asks for
+// Every branch of the strict JSON parser (src/json/json.cpp), table-driven (issue 9 asks for
 // >= 95% branch coverage of the parsers; tools/coverage.sh measures it): each malformed input
 // gives the documented code with a message naming the problem, each valid one the value, and
 // a failed parse leaves the arena where it was.

@@ -1,5 +1,5 @@
 // Branches of the NRRD and MetaImage header parsers and of the readers' shared helpers
-// (src/io/ct_nrrd.cpp, src/io/ct_metaimage.cpp, src/io/ct_common.cpp) that the CT reader tests
+// (src/ct/ct_nrrd.cpp, src/ct/ct_metaimage.cpp, src/ct/ct_common.cpp) that the CT reader tests
 // do not reach (issue 9: >= 95% branch coverage of the parsers, measured by
 // tools/coverage.sh): every field's error, named with the file and the line, the accepted
 // spellings, and the helpers' limits (numbers, sizes, budgets, axes, voxel conversion, data
@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "io/ct_common.h"
+#include "ct/ct_common.h"
 #include "splintcore/ct.h"
 #include "support/test_util.h"
 

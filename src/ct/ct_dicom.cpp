@@ -8,7 +8,7 @@
 //
 // Two passes: headers of every file (up to Pixel Data, in a fixed stack window), then the
 // slices ordered by their position along the normal, pixels read into place.
-#include "io/ct_common.h"
+#include "ct/ct_common.h"
 
 #include <cmath>
 

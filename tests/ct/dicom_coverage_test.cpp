@@ -1,4 +1,4 @@
-// Branches of the DICOM series reader (src/io/ct_dicom.cpp) that the CT reader tests do not
+// Branches of the DICOM series reader (src/ct/ct_dicom.cpp) that the CT reader tests do not
 // reach (issue 9: >= 95% branch coverage of the parsers, measured by tools/coverage.sh): every
 // element-level error (VRs, lengths, delimiters, nesting), every header check, every way a
 // slice can differ from the first, and series whose files lose their names, have no close(),

@@ -1,5 +1,5 @@
-// Tests of Taubin smoothing (src/mesh/smooth.cpp) and quadric error decimation
-// (src/mesh/decimate.cpp) on marching-tetrahedra spheres and tori: validity (closed, manifold,
+// Tests of Taubin smoothing (src/remesh/smooth.cpp) and quadric error decimation
+// (src/remesh/decimate.cpp) on marching-tetrahedra spheres and tori: validity (closed, manifold,
 // oriented, outward, genus kept, no self-intersection), distance to the analytic surface,
 // volume, target counts, determinism, the arena exhaustion sweep and degenerate inputs.
 
