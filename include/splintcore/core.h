@@ -261,17 +261,26 @@ constexpr uint64_t arena_array_bound(uint64_t count) {
   return count > (UINT64_MAX - align) / sizeof(T) ? UINT64_MAX : count * sizeof(T) + align - 1;
 }
 
-// Rewinds the arena to where it was at construction (temporary work inside a function).
+// Rewinds the arena to where it was at construction when it goes out of scope, unless
+// commit() was called: temporary work inside a function, and the rule "on an error the arena
+// is as it was" without a rewind on every error path (after Jolt's scope guard). A function
+// that keeps a result commits once the result is in place.
 class ArenaScope {
  public:
   explicit ArenaScope(Arena& arena) : arena_(arena), marker_(arena.mark()) {}
-  ~ArenaScope() { arena_.rewind(marker_); }
+  ~ArenaScope() {
+    if (!committed_) arena_.rewind(marker_);
+  }
   ArenaScope(const ArenaScope&) = delete;
   ArenaScope& operator=(const ArenaScope&) = delete;
+
+  void commit() { committed_ = true; }
+  const Arena::Marker& start() const { return marker_; }
 
  private:
   Arena& arena_;
   Arena::Marker marker_;
+  bool committed_ = false;
 };
 
 // ---------------------------------------------------------------------------------------------

@@ -29,6 +29,17 @@ struct Mesh {
   void bind(Arena* arena) { vertices.bind(arena); triangles.bind(arena); }
 };
 
+// A mesh over arrays that something else owns, to pass a part of a mesh (e.g. one jaw's
+// triangles, with all the vertices they index) to a function that takes a Mesh. It is bound
+// to no arena, so it cannot grow; it is valid while the arrays are, and is for reading only.
+inline Mesh mesh_view(Span<const Vec3> vertices, Span<const Triangle> triangles) {
+  Mesh view;
+  view.vertices.adopt(const_cast<Vec3*>(vertices.data()), vertices.size(), vertices.size());
+  view.triangles.adopt(const_cast<Triangle*>(triangles.data()), triangles.size(),
+                       triangles.size());
+  return view;
+}
+
 // Bytes weld_exact() may take from the arena for `triangle_count` triangles, at most (outputs
 // and temporaries together; the temporaries are returned before it finishes).
 uint64_t weld_exact_bound(uint64_t triangle_count);
