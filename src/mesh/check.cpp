@@ -25,6 +25,178 @@ uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count) {
          3 * arena_array_bound<int64_t>(triangle_count);
 }
 
+namespace {
+
+// Indices in range, referenced vertices, degenerate triangles (repeated ids or exactly flat).
+Status check_indices(const Mesh& mesh, uint8_t* referenced, MeshReport* r) {
+  const uint64_t nv = mesh.vertices.size();
+  const Triangle* tris = mesh.triangles.data();
+  const Vec3* verts = mesh.vertices.data();
+  if (nv > 0) std::memset(referenced, 0, static_cast<size_t>(nv));
+  for (uint32_t t = 0; t < r->triangle_count; ++t) {
+    const uint32_t* v = tris[t].v;
+    for (int k = 0; k < 3; ++k) {
+      if (v[k] >= nv) {
+        return make_error(StatusCode::kInvalidMesh, "triangle ", t, " refers to vertex ", v[k],
+                          " but the mesh has ", nv, " vertices")
+            .at_index(t);
+      }
+      referenced[v[k]] = 1;
+    }
+    const bool degenerate = v[0] == v[1] || v[1] == v[2] || v[2] == v[0] ||
+                            collinear3d(verts[v[0]], verts[v[1]], verts[v[2]]);
+    if (degenerate) {
+      if (r->degenerate_triangles == 0) r->first_degenerate_triangle = t;
+      ++r->degenerate_triangles;
+    }
+  }
+  uint64_t referenced_count = 0;
+  for (uint64_t i = 0; i < nv; ++i) referenced_count += referenced[i];
+  r->unreferenced_vertices = nv - referenced_count;
+  return Status::ok();
+}
+
+// The edges: every side's key sorted so the uses of an edge are adjacent; one use is a
+// boundary edge, three or more non-manifold, two in the same direction an orientation
+// conflict. Triangles sharing an edge are united into shells. For the first offender of each
+// kind the one with the smallest triangle index is kept.
+void classify_edges(const Mesh& mesh, KeyIndex* items, KeyIndex* scratch, UnionFind* shells,
+                    MeshReport* r) {
+  const Triangle* tris = mesh.triangles.data();
+  const uint32_t tri_count = static_cast<uint32_t>(r->triangle_count);
+  const uint32_t uses = 3 * tri_count;
+  for (uint32_t t = 0; t < tri_count; ++t) {
+    for (uint32_t k = 0; k < 3; ++k) {
+      items[3 * t + k] = KeyIndex{edge_key(tris[t].v[k], tris[t].v[(k + 1) % 3]), 3 * t + k, 0};
+    }
+  }
+  radix_sort(Span<KeyIndex>(items, uses), Span<KeyIndex>(scratch, uses));
+  auto note = [&](EdgeRef* ref, uint64_t count, uint32_t key_hi, uint32_t key_lo, uint32_t tri) {
+    if (count == 0 || tri < ref->triangle) *ref = EdgeRef{key_hi, key_lo, tri};
+  };
+  // Directed use of side k of triangle t: v[k] -> v[k+1]. "Forward" when it runs a -> b.
+  auto forward = [&](uint32_t use, uint32_t a) { return tris[use / 3].v[use % 3] == a; };
+  uint32_t i = 0;
+  while (i < uses) {
+    uint32_t j = i + 1;
+    while (j < uses && items[j].key == items[i].key) ++j;
+    const uint32_t count = j - i;
+    const uint32_t a = static_cast<uint32_t>(items[i].key >> 32);
+    const uint32_t b = static_cast<uint32_t>(items[i].key);
+    uint32_t min_tri = UINT32_MAX;
+    for (uint32_t u = i; u < j; ++u) {
+      const uint32_t t = items[u].index / 3;
+      min_tri = t < min_tri ? t : min_tri;
+      shells->unite(items[i].index / 3, t);
+    }
+    ++r->edge_count;
+    if (count == 1) {
+      note(&r->first_boundary_edge, r->boundary_edges, a, b, min_tri);
+      ++r->boundary_edges;
+    } else if (count > 2) {
+      note(&r->first_nonmanifold_edge, r->nonmanifold_edges, a, b, min_tri);
+      ++r->nonmanifold_edges;
+    } else if (forward(items[i].index, a) == forward(items[i + 1].index, a)) {
+      note(&r->first_orientation_conflict, r->orientation_conflicts, a, b, min_tri);
+      ++r->orientation_conflicts;
+    }
+    i = j;
+  }
+}
+
+// Shells and Euler characteristic: distinct (shell, vertex) pairs, edges and faces counted per
+// shell (indexed by the shell's root triangle, in shell_v/e/f); the genus when every shell is
+// a closed orientable surface.
+void count_shells(const Mesh& mesh, KeyIndex* items, KeyIndex* scratch, UnionFind* shells,
+                  int64_t* shell_v, int64_t* shell_e, int64_t* shell_f, MeshReport* r) {
+  const Triangle* tris = mesh.triangles.data();
+  const uint32_t tri_count = static_cast<uint32_t>(r->triangle_count);
+  const uint32_t uses = 3 * tri_count;
+  // Keys: shell root in the high half, vertex in the low half.
+  for (uint32_t t = 0; t < tri_count; ++t) {
+    const uint64_t root = shells->find(t);
+    for (uint32_t k = 0; k < 3; ++k) {
+      items[3 * t + k] = KeyIndex{(root << 32) | tris[t].v[k], 0, 0};
+    }
+  }
+  radix_sort(Span<KeyIndex>(items, uses), Span<KeyIndex>(scratch, uses));
+  for (uint32_t t = 0; t < tri_count; ++t) shell_v[t] = shell_e[t] = shell_f[t] = 0;
+  int64_t total_v = 0;
+  for (uint32_t u = 0; u < uses; ++u) {
+    if (u == 0 || items[u].key != items[u - 1].key) {
+      ++shell_v[items[u].key >> 32];
+      ++total_v;
+    }
+  }
+  for (uint32_t t = 0; t < tri_count; ++t) ++shell_f[shells->find(t)];
+  // Edges per shell: each distinct edge counted once, at the shell of any triangle using it.
+  for (uint32_t t = 0; t < tri_count; ++t) {
+    for (uint32_t k = 0; k < 3; ++k) {
+      items[3 * t + k] = KeyIndex{edge_key(tris[t].v[k], tris[t].v[(k + 1) % 3]), t, 0};
+    }
+  }
+  radix_sort(Span<KeyIndex>(items, uses), Span<KeyIndex>(scratch, uses));
+  for (uint32_t u = 0; u < uses; ++u) {
+    if (u == 0 || items[u].key != items[u - 1].key) ++shell_e[shells->find(items[u].index)];
+  }
+  bool genus_defined = r->boundary_edges == 0 && r->nonmanifold_edges == 0 &&
+                       r->orientation_conflicts == 0 && tri_count > 0;
+  int64_t genus = 0;
+  for (uint32_t t = 0; t < tri_count; ++t) {
+    if (shells->find(t) != t) continue;
+    ++r->shells;
+    const int64_t chi = shell_v[t] - shell_e[t] + shell_f[t];
+    if (chi > 2 || (2 - chi) % 2 != 0) genus_defined = false;
+    genus += (2 - chi) / 2;
+  }
+  r->euler_characteristic = total_v - static_cast<int64_t>(r->edge_count) + int64_t{tri_count};
+  r->genus = genus_defined ? genus : -1;
+}
+
+// Duplicate triangles: the same vertex set. Sorted by the largest id, then (stable) by the
+// smallest two, so equal sets end up adjacent in triangle order. `items` and `scratch` hold
+// 3 T entries each (the edge pass's).
+void count_duplicates(const Mesh& mesh, KeyIndex* items, KeyIndex* scratch, MeshReport* r) {
+  const Triangle* tris = mesh.triangles.data();
+  const uint32_t tri_count = static_cast<uint32_t>(r->triangle_count);
+  for (uint32_t t = 0; t < tri_count; ++t) {
+    uint32_t a = tris[t].v[0], b = tris[t].v[1], c = tris[t].v[2];
+    if (a > b) { uint32_t s = a; a = b; b = s; }
+    if (b > c) { uint32_t s = b; b = c; c = s; }
+    if (a > b) { uint32_t s = a; a = b; b = s; }
+    items[t] = KeyIndex{c, t, 0};
+    scratch[t] = KeyIndex{(uint64_t{a} << 32) | b, t, 0};  // kept aside, looked up by t
+  }
+  // Move the (a, b) keys next to the c keys' scratch: reuse the second third of items.
+  KeyIndex* ab = items + tri_count;
+  KeyIndex* sort_scratch = scratch + tri_count;  // 2 * tri_count spare entries remain
+  if (tri_count > 0) std::memcpy(ab, scratch, tri_count * sizeof(KeyIndex));
+  radix_sort(Span<KeyIndex>(items, tri_count), Span<KeyIndex>(sort_scratch, tri_count));
+  for (uint32_t t = 0; t < tri_count; ++t) {
+    items[t].key = ab[items[t].index].key;  // re-key by (a, b), keeping the c order
+  }
+  radix_sort(Span<KeyIndex>(items, tri_count), Span<KeyIndex>(sort_scratch, tri_count));
+  // Now equal (a, b) are adjacent and ordered by c within; equal c must also be compared.
+  auto max_id = [&](uint32_t t) {
+    const uint32_t a = tris[t].v[0], b = tris[t].v[1], c = tris[t].v[2];
+    const uint32_t m = a > b ? a : b;
+    return m > c ? m : c;
+  };
+  bool have_dup = false;
+  for (uint32_t u = 1; u < tri_count; ++u) {
+    if (items[u].key == items[u - 1].key &&
+        max_id(items[u].index) == max_id(items[u - 1].index)) {
+      const uint32_t later =
+          items[u].index > items[u - 1].index ? items[u].index : items[u - 1].index;
+      if (!have_dup || later < r->first_duplicate_triangle) r->first_duplicate_triangle = later;
+      have_dup = true;
+      ++r->duplicate_triangles;
+    }
+  }
+}
+
+}  // namespace
+
 Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report) {
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
@@ -38,175 +210,32 @@ Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report) {
     return make_error(StatusCode::kLimitExceeded, "mesh too large to check: ", nt,
                       " triangles, ", nv, " vertices (32-bit ids)");
   }
-  const Triangle* tris = mesh.triangles.data();
-  const Vec3* verts = mesh.vertices.data();
   const uint32_t tri_count = static_cast<uint32_t>(nt);
-
-  // Indices in range, referenced vertices, degenerate triangles.
+  // The allocations check_mesh_bound() counts, in its order.
   uint8_t* referenced = arena.allocate_array<uint8_t>(static_cast<size_t>(nv));
   if (referenced == nullptr && nv > 0) return arena.exhausted_status();
-  if (nv > 0) std::memset(referenced, 0, static_cast<size_t>(nv));
-  for (uint32_t t = 0; t < tri_count; ++t) {
-    const uint32_t* v = tris[t].v;
-    for (int k = 0; k < 3; ++k) {
-      if (v[k] >= nv) {
-        return make_error(StatusCode::kInvalidMesh, "triangle ", t, " refers to vertex ", v[k],
-                          " but the mesh has ", nv, " vertices")
-            .at_index(t);
-      }
-      referenced[v[k]] = 1;
-    }
-    bool degenerate = v[0] == v[1] || v[1] == v[2] || v[2] == v[0] ||
-                      collinear3d(verts[v[0]], verts[v[1]], verts[v[2]]);
-    if (degenerate) {
-      if (r.degenerate_triangles == 0) r.first_degenerate_triangle = t;
-      ++r.degenerate_triangles;
-    }
-  }
-  uint64_t referenced_count = 0;
-  for (uint64_t i = 0; i < nv; ++i) referenced_count += referenced[i];
-  r.unreferenced_vertices = nv - referenced_count;
+  SPLINTCORE_RETURN_IF_ERROR(check_indices(mesh, referenced, &r));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 1, 4));
 
-  // Edges.
   const uint32_t uses = 3 * tri_count;
   KeyIndex* items = arena.allocate_array<KeyIndex>(uses);
   KeyIndex* scratch = arena.allocate_array<KeyIndex>(uses);
   if ((items == nullptr || scratch == nullptr) && uses > 0) return arena.exhausted_status();
-  for (uint32_t t = 0; t < tri_count; ++t) {
-    for (uint32_t k = 0; k < 3; ++k) {
-      items[3 * t + k] = KeyIndex{edge_key(tris[t].v[k], tris[t].v[(k + 1) % 3]), 3 * t + k, 0};
-    }
-  }
-  radix_sort(Span<KeyIndex>(items, uses), Span<KeyIndex>(scratch, uses));
-
   UnionFind shells;
   if (!shells.init(arena, tri_count)) return arena.exhausted_status();
-  // For the first offender of each kind we keep the one with the smallest triangle index.
-  auto note = [&](EdgeRef* ref, uint64_t count, uint32_t key_hi, uint32_t key_lo, uint32_t tri) {
-    if (count == 0 || tri < ref->triangle) *ref = EdgeRef{key_hi, key_lo, tri};
-  };
-  uint32_t i = 0;
-  while (i < uses) {
-    uint32_t j = i + 1;
-    while (j < uses && items[j].key == items[i].key) ++j;
-    const uint32_t count = j - i;
-    const uint32_t a = static_cast<uint32_t>(items[i].key >> 32);
-    const uint32_t b = static_cast<uint32_t>(items[i].key);
-    uint32_t min_tri = UINT32_MAX;
-    for (uint32_t u = i; u < j; ++u) {
-      uint32_t t = items[u].index / 3;
-      min_tri = t < min_tri ? t : min_tri;
-      shells.unite(items[i].index / 3, t);
-    }
-    ++r.edge_count;
-    if (count == 1) {
-      note(&r.first_boundary_edge, r.boundary_edges, a, b, min_tri);
-      ++r.boundary_edges;
-    } else if (count > 2) {
-      note(&r.first_nonmanifold_edge, r.nonmanifold_edges, a, b, min_tri);
-      ++r.nonmanifold_edges;
-    } else {
-      // Directed use of side k of triangle t: v[k] -> v[k+1]. "Forward" when it runs a -> b.
-      auto forward = [&](uint32_t use) {
-        const Triangle& tri = tris[use / 3];
-        return tri.v[use % 3] == a;
-      };
-      if (forward(items[i].index) == forward(items[i + 1].index)) {
-        note(&r.first_orientation_conflict, r.orientation_conflicts, a, b, min_tri);
-        ++r.orientation_conflicts;
-      }
-    }
-    i = j;
-  }
+  classify_edges(mesh, items, scratch, &shells, &r);
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 2, 4));
 
-  // Shells and Euler characteristic: count distinct (shell, vertex) pairs, edges and faces per
-  // shell. Keys: shell root in the high half, vertex in the low half.
-  for (uint32_t t = 0; t < tri_count; ++t) {
-    const uint64_t root = shells.find(t);
-    for (uint32_t k = 0; k < 3; ++k) {
-      items[3 * t + k] = KeyIndex{(root << 32) | tris[t].v[k], 0, 0};
-    }
-  }
-  radix_sort(Span<KeyIndex>(items, uses), Span<KeyIndex>(scratch, uses));
-  // Per-shell counters, indexed by the shell's root triangle.
   int64_t* shell_v = arena.allocate_array<int64_t>(tri_count);
   int64_t* shell_e = arena.allocate_array<int64_t>(tri_count);
   int64_t* shell_f = arena.allocate_array<int64_t>(tri_count);
   if ((shell_v == nullptr || shell_e == nullptr || shell_f == nullptr) && tri_count > 0) {
     return arena.exhausted_status();
   }
-  for (uint32_t t = 0; t < tri_count; ++t) shell_v[t] = shell_e[t] = shell_f[t] = 0;
-  int64_t total_v = 0;
-  for (uint32_t u = 0; u < uses; ++u) {
-    if (u == 0 || items[u].key != items[u - 1].key) {
-      ++shell_v[items[u].key >> 32];
-      ++total_v;
-    }
-  }
-  for (uint32_t t = 0; t < tri_count; ++t) ++shell_f[shells.find(t)];
-  // Edges per shell: each distinct edge counted once, at the shell of any triangle using it.
-  for (uint32_t t = 0; t < tri_count; ++t) {
-    for (uint32_t k = 0; k < 3; ++k) {
-      items[3 * t + k] = KeyIndex{edge_key(tris[t].v[k], tris[t].v[(k + 1) % 3]), t, 0};
-    }
-  }
-  radix_sort(Span<KeyIndex>(items, uses), Span<KeyIndex>(scratch, uses));
-  for (uint32_t u = 0; u < uses; ++u) {
-    if (u == 0 || items[u].key != items[u - 1].key) ++shell_e[shells.find(items[u].index)];
-  }
-  bool genus_defined = r.boundary_edges == 0 && r.nonmanifold_edges == 0 &&
-                       r.orientation_conflicts == 0 && tri_count > 0;
-  int64_t genus = 0;
-  for (uint32_t t = 0; t < tri_count; ++t) {
-    if (shells.find(t) != t) continue;
-    ++r.shells;
-    int64_t chi = shell_v[t] - shell_e[t] + shell_f[t];
-    if (chi > 2 || (2 - chi) % 2 != 0) genus_defined = false;
-    genus += (2 - chi) / 2;
-  }
-  r.euler_characteristic = total_v - static_cast<int64_t>(r.edge_count) + int64_t{tri_count};
-  r.genus = genus_defined ? genus : -1;
+  count_shells(mesh, items, scratch, &shells, shell_v, shell_e, shell_f, &r);
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 3, 4));
 
-  // Duplicate triangles: same vertex set. Sort by the largest id, then (stable) by the
-  // smallest two, so equal sets end up adjacent in triangle order.
-  for (uint32_t t = 0; t < tri_count; ++t) {
-    uint32_t a = tris[t].v[0], b = tris[t].v[1], c = tris[t].v[2];
-    if (a > b) { uint32_t s = a; a = b; b = s; }
-    if (b > c) { uint32_t s = b; b = c; c = s; }
-    if (a > b) { uint32_t s = a; a = b; b = s; }
-    items[t] = KeyIndex{c, t, 0};
-    scratch[t] = KeyIndex{(uint64_t{a} << 32) | b, t, 0};  // kept aside, looked up by t
-  }
-  // Move the (a, b) keys next to the c keys' scratch: reuse the second half of items.
-  KeyIndex* ab = items + tri_count;
-  KeyIndex* sort_scratch = scratch + tri_count;  // 2 * tri_count spare entries remain
-  if (tri_count > 0) std::memcpy(ab, scratch, tri_count * sizeof(KeyIndex));
-  radix_sort(Span<KeyIndex>(items, tri_count), Span<KeyIndex>(sort_scratch, tri_count));
-  for (uint32_t t = 0; t < tri_count; ++t) {
-    items[t].key = ab[items[t].index].key;  // re-key by (a, b), keeping the c order
-  }
-  radix_sort(Span<KeyIndex>(items, tri_count), Span<KeyIndex>(sort_scratch, tri_count));
-  // Now equal (a, b) are adjacent and ordered by c within; equal c must also be compared.
-  auto max_id = [&](uint32_t t) {
-    uint32_t a = tris[t].v[0], b = tris[t].v[1], c = tris[t].v[2];
-    uint32_t m = a > b ? a : b;
-    return m > c ? m : c;
-  };
-  bool have_dup = false;
-  for (uint32_t u = 1; u < tri_count; ++u) {
-    if (items[u].key == items[u - 1].key &&
-        max_id(items[u].index) == max_id(items[u - 1].index)) {
-      uint32_t later = items[u].index > items[u - 1].index ? items[u].index : items[u - 1].index;
-      if (!have_dup || later < r.first_duplicate_triangle) r.first_duplicate_triangle = later;
-      have_dup = true;
-      ++r.duplicate_triangles;
-    }
-  }
-
-  // Measures.
+  count_duplicates(mesh, items, scratch, &r);
   r.bounds = mesh_bounds(mesh);
   r.area = mesh_area(mesh);
   r.volume = mesh_volume(mesh);
