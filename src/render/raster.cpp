@@ -410,74 +410,50 @@ uint64_t render_bound(uint32_t width, uint32_t height, uint64_t total_vertices,
   return round16(total);
 }
 
-Status render_meshes(const Context& ctx, Span<const RenderMesh> meshes,
-                     const RenderOptions& options, RenderImage* out) {
-  SPLINTCORE_ASSERT(ctx.arena != nullptr && out != nullptr);
-  *out = RenderImage{};
-  SPLINTCORE_RETURN_IF_ERROR(validate(meshes, options));
-  Arena& arena = *ctx.arena;
-  const uint32_t width = options.width, height = options.height;
-  const size_t pixels = static_cast<size_t>(width) * height;  // <= 2^26: no overflow
+namespace {
 
-  // Layout: tiles in columns x rows, a legend strip at the right when asked.
+// Tiles in columns x rows, a legend strip at the right when asked.
+struct Layout {
+  uint32_t columns = 0, rows = 0, legend_width = 0, tile_w = 0, tile_h = 0;
+};
+
+Status lay_out(const RenderOptions& options, Layout* l) {
+  const uint32_t width = options.width, height = options.height;
   const uint32_t view_count = options.view_count;
   if (view_count == 0) {  // validate() refused it already; stated here for the divisions below
     return Status::error(StatusCode::kInvalidArgument, "render: no views");
   }
-  uint32_t columns = options.columns != 0 ? options.columns : (view_count == 1 ? 1 : 2);
-  if (columns > view_count) columns = view_count;
-  const uint32_t rows = (view_count + columns - 1) / columns;
-  uint32_t legend_width = 0;
+  l->columns = options.columns != 0 ? options.columns : (view_count == 1 ? 1 : 2);
+  if (l->columns > view_count) l->columns = view_count;
+  l->rows = (view_count + l->columns - 1) / l->columns;
   if (options.legend) {
-    legend_width = width / 48 > 8 ? width / 48 : 8;
-    if (legend_width >= width) legend_width = 0;
+    l->legend_width = width / 48 > 8 ? width / 48 : 8;
+    if (l->legend_width >= width) l->legend_width = 0;
   }
-  const uint32_t tile_w = (width - legend_width) / columns;
-  const uint32_t tile_h = height / rows;
-  if (tile_w == 0 || tile_h == 0) {
+  l->tile_w = (width - l->legend_width) / l->columns;
+  l->tile_h = height / l->rows;
+  if (l->tile_w == 0 || l->tile_h == 0) {
     return make_error(StatusCode::kInvalidArgument, "render size ", width, " x ", height,
-                      " is too small for ", view_count, " views in ", columns, " column(s)");
+                      " is too small for ", view_count, " views in ", l->columns, " column(s)");
   }
+  return Status::ok();
+}
 
-  // The output image, kept; everything after the scope's mark is temporary.
-  uint8_t* rgb = arena.allocate_array<uint8_t>(pixels * 3);
-  if (rgb == nullptr) return arena.exhausted_status();
-  for (size_t i = 0; i < pixels; ++i) std::memcpy(rgb + i * 3, options.background, 3);
-  ArenaScope scope(arena);
-
-  bool any_overlay = false;
-  for (const RenderMesh& item : meshes) any_overlay = any_overlay || item.alpha != 255;
-
-  Frame frame;
-  frame.options = &options;
-  frame.width = width;
-  frame.opaque.rgb = rgb;
-  frame.opaque.depth = arena.allocate_array<float>(pixels);
-  if (frame.opaque.depth == nullptr) return arena.exhausted_status();
-  if (any_overlay) {
-    frame.overlay.depth = arena.allocate_array<float>(pixels);
-    if (frame.overlay.depth == nullptr) return arena.exhausted_status();
-    frame.overlay.rgb = arena.allocate_array<uint8_t>(pixels * 3);
-    if (frame.overlay.rgb == nullptr) return arena.exhausted_status();
-    frame.overlay.alpha = arena.allocate_array<uint8_t>(pixels);
-    if (frame.overlay.alpha == nullptr) return arena.exhausted_status();
-    for (size_t i = 0; i < pixels; ++i) frame.overlay.depth[i] = kFarDepth;
-  }
-  for (size_t i = 0; i < pixels; ++i) frame.opaque.depth[i] = kFarDepth;
-
-  // Framing: each view's projected box of all vertices; one scale for all views.
+// Framing: each view's tile and its projected box of all vertices; one scale for all views.
+void frame_views(Span<const RenderMesh> meshes, const RenderOptions& options, const Layout& l,
+                 Frame* frame) {
   double scale = 0;
-  for (uint32_t vi = 0; vi < view_count; ++vi) {
-    View& view = frame.views[vi];
+  for (uint32_t vi = 0; vi < options.view_count; ++vi) {
+    View& view = frame->views[vi];
     view.basis = view_basis(options.views[vi]);
     view.light = view_light(view.basis);
-    const uint32_t col = vi % columns, row = vi / columns;
-    view.x0 = static_cast<int64_t>(col) * tile_w;
-    view.y0 = static_cast<int64_t>(row) * tile_h;
-    view.x1 = view.x0 + tile_w;
-    view.y1 = view.y0 + tile_h;
-    view.pixel_x = static_cast<double>(view.x0) + 0.5 * tile_w;
-    view.pixel_y = static_cast<double>(view.y0) + 0.5 * tile_h;
+    const uint32_t col = vi % l.columns, row = vi / l.columns;
+    view.x0 = static_cast<int64_t>(col) * l.tile_w;
+    view.y0 = static_cast<int64_t>(row) * l.tile_h;
+    view.x1 = view.x0 + l.tile_w;
+    view.y1 = view.y0 + l.tile_h;
+    view.pixel_x = static_cast<double>(view.x0) + 0.5 * l.tile_w;
+    view.pixel_y = static_cast<double>(view.y0) + 0.5 * l.tile_h;
     bool any = false;
     double lo_u = 0, hi_u = 0, lo_v = 0, hi_v = 0;
     for (const RenderMesh& item : meshes) {
@@ -496,39 +472,128 @@ Status render_meshes(const Context& ctx, Span<const RenderMesh> meshes,
     }
     view.centre_u = 0.5 * lo_u + 0.5 * hi_u;
     view.centre_v = 0.5 * lo_v + 0.5 * hi_v;
-    const double fits[2] = {hi_u - lo_u > 0 ? kMargin * tile_w / (hi_u - lo_u) : 0,
-                            hi_v - lo_v > 0 ? kMargin * tile_h / (hi_v - lo_v) : 0};
+    const double fits[2] = {hi_u - lo_u > 0 ? kMargin * l.tile_w / (hi_u - lo_u) : 0,
+                            hi_v - lo_v > 0 ? kMargin * l.tile_h / (hi_v - lo_v) : 0};
     for (double s : fits) {
       if (s > 0 && (scale == 0 || s < scale)) scale = s;
     }
   }
-  frame.scale = scale > 0 ? scale : 1;
+  frame->scale = scale > 0 ? scale : 1;
+}
 
-  // Gouraud: area-weighted vertex normals of every mesh (in triangle order).
+// Gouraud: area-weighted vertex normals of every mesh (in triangle order), from the arena.
+Status vertex_normals(Arena& arena, Span<const RenderMesh> meshes, const float*** out) {
+  const float** normals = arena.allocate_array<const float*>(meshes.size());
+  if (normals == nullptr) return arena.exhausted_status();
+  for (size_t m = 0; m < meshes.size(); ++m) {
+    const Mesh& mesh = *meshes[m].mesh;
+    const size_t n = mesh.vertices.size();
+    normals[m] = nullptr;
+    if (n == 0) continue;
+    float* nv = arena.allocate_array<float>(n * 3);
+    if (nv == nullptr) return arena.exhausted_status();
+    std::memset(nv, 0, n * 3 * sizeof(float));
+    for (const Triangle& t : mesh.triangles) {
+      const Vec3& p0 = mesh.vertices[t.v[0]];
+      const Vec3 c = cross(mesh.vertices[t.v[1]] - p0, mesh.vertices[t.v[2]] - p0);
+      for (int k = 0; k < 3; ++k) {
+        float* q = nv + static_cast<size_t>(t.v[k]) * 3;
+        q[0] += static_cast<float>(c.x);
+        q[1] += static_cast<float>(c.y);
+        q[2] += static_cast<float>(c.z);
+      }
+    }
+    normals[m] = nv;
+  }
+  *out = normals;
+  return Status::ok();
+}
+
+// Translucent surfaces in front of the opaque ones, blended over them.
+void blend_overlay(const Frame& frame, size_t pixels, uint8_t* rgb) {
+  for (size_t i = 0; i < pixels; ++i) {
+    if (frame.overlay.depth[i] < frame.opaque.depth[i]) {
+      const uint32_t alpha = frame.overlay.alpha[i];
+      for (size_t k = 0; k < 3; ++k) {
+        const uint32_t front = frame.overlay.rgb[i * 3 + k], back = rgb[i * 3 + k];
+        rgb[i * 3 + k] = static_cast<uint8_t>((front * alpha + back * (255 - alpha) + 127) / 255);
+      }
+    }
+  }
+}
+
+// Tile separators (light grey) and the legend.
+void draw_decorations(const Layout& l, uint32_t width, uint32_t height, uint8_t* rgb) {
+  const uint8_t kLine[3] = {210, 210, 210};
+  for (uint32_t col = 1; col < l.columns; ++col) {
+    const size_t x = static_cast<size_t>(col) * l.tile_w;
+    for (size_t y = 0; y < static_cast<size_t>(l.rows) * l.tile_h; ++y) {
+      std::memcpy(rgb + (y * width + x) * 3, kLine, 3);
+    }
+  }
+  for (uint32_t row = 1; row < l.rows; ++row) {
+    const size_t y = static_cast<size_t>(row) * l.tile_h;
+    for (size_t x = 0; x < static_cast<size_t>(l.columns) * l.tile_w; ++x) {
+      std::memcpy(rgb + (y * width + x) * 3, kLine, 3);
+    }
+  }
+  if (l.legend_width == 0) return;
+  const uint32_t bx0 = width - l.legend_width + 2, bx1 = width - 2;
+  const uint32_t by0 = height / 20, by1 = height - height / 20;  // [by0, by1)
+  const uint8_t kFrame[3] = {60, 60, 60};
+  for (uint32_t y = by0; y < by1; ++y) {
+    const double t = by1 - by0 > 1 ? static_cast<double>(by1 - 1 - y) / (by1 - by0 - 1) : 0;
+    uint8_t colour[3];
+    render_ramp_colour(t, 1.0, colour);
+    for (uint32_t x = bx0; x < bx1; ++x) {
+      const bool edge = x == bx0 || x + 1 == bx1 || y == by0 || y + 1 == by1;
+      std::memcpy(rgb + (static_cast<size_t>(y) * width + x) * 3, edge ? kFrame : colour, 3);
+    }
+  }
+}
+
+}  // namespace
+
+Status render_meshes(const Context& ctx, Span<const RenderMesh> meshes,
+                     const RenderOptions& options, RenderImage* out) {
+  SPLINTCORE_ASSERT(ctx.arena != nullptr && out != nullptr);
+  *out = RenderImage{};
+  SPLINTCORE_RETURN_IF_ERROR(validate(meshes, options));
+  Arena& arena = *ctx.arena;
+  const uint32_t width = options.width, height = options.height;
+  const size_t pixels = static_cast<size_t>(width) * height;  // <= 2^26: no overflow
+  Layout layout;
+  SPLINTCORE_RETURN_IF_ERROR(lay_out(options, &layout));
+  const uint32_t view_count = options.view_count;
+
+  // The output image, kept; everything after the scope's mark is temporary.
+  uint8_t* rgb = arena.allocate_array<uint8_t>(pixels * 3);
+  if (rgb == nullptr) return arena.exhausted_status();
+  for (size_t i = 0; i < pixels; ++i) std::memcpy(rgb + i * 3, options.background, 3);
+  ArenaScope scope(arena);
+
+  bool any_overlay = false;
+  for (const RenderMesh& item : meshes) any_overlay = any_overlay || item.alpha != 255;
+  Frame frame;
+  frame.options = &options;
+  frame.width = width;
+  frame.opaque.rgb = rgb;
+  frame.opaque.depth = arena.allocate_array<float>(pixels);
+  if (frame.opaque.depth == nullptr) return arena.exhausted_status();
+  if (any_overlay) {
+    frame.overlay.depth = arena.allocate_array<float>(pixels);
+    if (frame.overlay.depth == nullptr) return arena.exhausted_status();
+    frame.overlay.rgb = arena.allocate_array<uint8_t>(pixels * 3);
+    if (frame.overlay.rgb == nullptr) return arena.exhausted_status();
+    frame.overlay.alpha = arena.allocate_array<uint8_t>(pixels);
+    if (frame.overlay.alpha == nullptr) return arena.exhausted_status();
+    for (size_t i = 0; i < pixels; ++i) frame.overlay.depth[i] = kFarDepth;
+  }
+  for (size_t i = 0; i < pixels; ++i) frame.opaque.depth[i] = kFarDepth;
+  frame_views(meshes, options, layout, &frame);
   const float** normals = nullptr;
   if (options.shading == RenderShading::kGouraud && !meshes.empty()) {
-    normals = arena.allocate_array<const float*>(meshes.size());
-    if (normals == nullptr) return arena.exhausted_status();
-    for (size_t m = 0; m < meshes.size(); ++m) {
-      const Mesh& mesh = *meshes[m].mesh;
-      const size_t n = mesh.vertices.size();
-      normals[m] = nullptr;
-      if (n == 0) continue;
-      float* nv = arena.allocate_array<float>(n * 3);
-      if (nv == nullptr) return arena.exhausted_status();
-      std::memset(nv, 0, n * 3 * sizeof(float));
-      for (const Triangle& t : mesh.triangles) {
-        const Vec3& p0 = mesh.vertices[t.v[0]];
-        const Vec3 c = cross(mesh.vertices[t.v[1]] - p0, mesh.vertices[t.v[2]] - p0);
-        for (int k = 0; k < 3; ++k) {
-          float* q = nv + static_cast<size_t>(t.v[k]) * 3;
-          q[0] += static_cast<float>(c.x);
-          q[1] += static_cast<float>(c.y);
-          q[2] += static_cast<float>(c.z);
-        }
-      }
-      normals[m] = nv;
-    }
+    SPLINTCORE_RETURN_IF_ERROR(vertex_normals(arena, meshes, &normals));
   }
 
   // Meshes in order; the views of one mesh in parallel (disjoint tiles).
@@ -553,56 +618,16 @@ Status render_meshes(const Context& ctx, Span<const RenderMesh> meshes,
     parallel_for_each(ctx.executor, view_count, task);
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "render", meshes.size(), meshes.size()));
-
-  // Translucent surfaces in front of the opaque ones, blended over them.
-  if (any_overlay) {
-    for (size_t i = 0; i < pixels; ++i) {
-      if (frame.overlay.depth[i] < frame.opaque.depth[i]) {
-        const uint32_t alpha = frame.overlay.alpha[i];
-        for (size_t k = 0; k < 3; ++k) {
-          const uint32_t front = frame.overlay.rgb[i * 3 + k], back = rgb[i * 3 + k];
-          rgb[i * 3 + k] = static_cast<uint8_t>((front * alpha + back * (255 - alpha) + 127) / 255);
-        }
-      }
-    }
-  }
-
-  // Tile separators (light grey) and the legend.
-  const uint8_t kLine[3] = {210, 210, 210};
-  for (uint32_t col = 1; col < columns; ++col) {
-    const size_t x = static_cast<size_t>(col) * tile_w;
-    for (size_t y = 0; y < static_cast<size_t>(rows) * tile_h; ++y) {
-      std::memcpy(rgb + (y * width + x) * 3, kLine, 3);
-    }
-  }
-  for (uint32_t row = 1; row < rows; ++row) {
-    const size_t y = static_cast<size_t>(row) * tile_h;
-    for (size_t x = 0; x < static_cast<size_t>(columns) * tile_w; ++x) {
-      std::memcpy(rgb + (y * width + x) * 3, kLine, 3);
-    }
-  }
-  if (legend_width > 0) {
-    const uint32_t bx0 = width - legend_width + 2, bx1 = width - 2;
-    const uint32_t by0 = height / 20, by1 = height - height / 20;  // [by0, by1)
-    const uint8_t kFrame[3] = {60, 60, 60};
-    for (uint32_t y = by0; y < by1; ++y) {
-      const double t = by1 - by0 > 1 ? static_cast<double>(by1 - 1 - y) / (by1 - by0 - 1) : 0;
-      uint8_t colour[3];
-      render_ramp_colour(t, 1.0, colour);
-      for (uint32_t x = bx0; x < bx1; ++x) {
-        const bool edge = x == bx0 || x + 1 == bx1 || y == by0 || y + 1 == by1;
-        std::memcpy(rgb + (static_cast<size_t>(y) * width + x) * 3, edge ? kFrame : colour, 3);
-      }
-    }
-  }
+  if (any_overlay) blend_overlay(frame, pixels, rgb);
+  draw_decorations(layout, width, height, rgb);
 
   out->width = width;
   out->height = height;
   out->rgb = rgb;
   out->pixels_per_mm = frame.scale;
-  out->tile_width = tile_w;
-  out->tile_height = tile_h;
-  out->columns = columns;
+  out->tile_width = layout.tile_w;
+  out->tile_height = layout.tile_h;
+  out->columns = layout.columns;
   return Status::ok();
 }
 
