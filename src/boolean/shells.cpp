@@ -521,113 +521,92 @@ Aabb region_of_a(const Mesh& a, uint32_t max_nudges) {
 
 }  // namespace
 
-Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
-                    const BooleanOptions& options, Mesh* out, BooleanStats* stats) {
+namespace {
+
+// Which group each of B's shells goes in (kNone: it cannot matter: for all but the union,
+// a shell away from A's region) and how many groups there are. Shells whose boxes meet where
+// it matters are tested exactly; overlapping ones go in different groups, greedily in shell
+// order (the first group none of the earlier overlapping shells is in). The arrays stay in
+// the arena; one group when no two shells overlap.
+Status group_shells(const Context& ctx, const Mesh& b, const Shells& sh, const Aabb& region,
+                    bool everywhere, uint32_t** group_out, uint32_t* groups_out) {
   Arena& arena = *ctx.arena;
-  BooleanStats local{};
-  if (stats == nullptr) stats = &local;
-  *stats = BooleanStats{};
-  SPLINTCORE_RETURN_IF_ERROR(check_boolean_arguments(a, b, *out));
-  const Arena::Marker start = arena.mark();
-  auto fail = [&](Status s) {
-    arena.rewind(start);
-    return s;
-  };
-  // ---- B's shells, which overlap where it matters, and their groups.
-  Status s = report_progress(ctx, "boolean: shells", 0, 1);
-  if (!s.is_ok()) return s;
-  Shells sh;
-  bool usable = false;
-  s = find_shells(arena, b, &sh, &usable);
-  if (!s.is_ok()) return fail(s);
-  s = report_progress(ctx, "boolean: shell pairs", 0, 1);
-  if (!s.is_ok()) return fail(s);
-  const bool everywhere = options.op == BooleanOp::kUnion;
-  const Aabb region = region_of_a(a, options.max_nudges);
-  uint32_t* group = nullptr;
+  uint32_t* group = arena.allocate_array<uint32_t>(sh.count);
+  KeyIndex* order = arena.allocate_array<KeyIndex>(sh.count);
+  uint32_t* stamp = arena.allocate_array<uint32_t>(sh.count);
+  if (group == nullptr || order == nullptr || stamp == nullptr) return arena.exhausted_status();
+  uint32_t relevant = 0;
+  for (uint32_t i = 0; i < sh.count; ++i) {
+    const bool matters = everywhere || sh.box[i].overlaps(region);
+    group[i] = matters ? 0 : kNone;
+    if (matters) order[relevant++] = KeyIndex{order_key(sh.box[i].lo.x), i, 0};
+    stamp[i] = kNone;
+  }
+  SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena, Span<KeyIndex>(order, relevant)));
+  // Pairs whose boxes meet (where it matters), then the exact test: (j << 32 | i), i < j.
+  ArenaArray<uint64_t> conflicts(&arena);
+  for (uint32_t x = 0; x < relevant; ++x) {
+    const uint32_t i = order[x].index;
+    for (uint32_t y = x + 1; y < relevant && sh.box[order[y].index].lo.x <= sh.box[i].hi.x;
+         ++y) {
+      const uint32_t j = order[y].index;
+      if (!sh.box[i].overlaps(sh.box[j])) continue;
+      if (!everywhere && !box_intersection(sh.box[i], sh.box[j]).overlaps(region)) continue;
+      const uint64_t lo = i < j ? i : j, hi = i < j ? j : i;
+      bool overlap = false;
+      SPLINTCORE_RETURN_IF_ERROR(shells_overlap(ctx, b, sh, static_cast<uint32_t>(lo),
+                                                static_cast<uint32_t>(hi), &overlap));
+      if (overlap && !conflicts.push_back(hi << 32 | lo)) return arena.exhausted_status();
+    }
+  }
   uint32_t groups = 1;
-  if (usable && sh.count > 1) {
-    // Shells that can matter: all for the union; for the others those meeting A's box.
-    group = arena.allocate_array<uint32_t>(sh.count);
-    KeyIndex* order = arena.allocate_array<KeyIndex>(sh.count);
-    uint32_t* stamp = arena.allocate_array<uint32_t>(sh.count);
-    if (group == nullptr || order == nullptr || stamp == nullptr) {
-      return fail(arena.exhausted_status());
-    }
-    uint32_t relevant = 0;
-    for (uint32_t i = 0; i < sh.count; ++i) {
-      const bool matters = everywhere || sh.box[i].overlaps(region);
-      group[i] = matters ? 0 : kNone;
-      if (matters) order[relevant++] = KeyIndex{order_key(sh.box[i].lo.x), i, 0};
-      stamp[i] = kNone;
-    }
-    s = radix_sort(arena, Span<KeyIndex>(order, relevant));
-    if (!s.is_ok()) return fail(s);
-    // Pairs whose boxes meet (where it matters), then the exact test: (j << 32 | i), i < j.
-    ArenaArray<uint64_t> conflicts(&arena);
-    for (uint32_t x = 0; x < relevant; ++x) {
-      const uint32_t i = order[x].index;
-      for (uint32_t y = x + 1; y < relevant && sh.box[order[y].index].lo.x <= sh.box[i].hi.x;
-           ++y) {
-        const uint32_t j = order[y].index;
-        if (!sh.box[i].overlaps(sh.box[j])) continue;
-        if (!everywhere && !box_intersection(sh.box[i], sh.box[j]).overlaps(region)) continue;
-        bool overlap = false;
-        s = shells_overlap(ctx, b, sh, i < j ? i : j, i < j ? j : i, &overlap);
-        if (!s.is_ok()) return fail(s);
-        if (!overlap) continue;
-        const uint64_t lo = i < j ? i : j, hi = i < j ? j : i;
-        if (!conflicts.push_back(hi << 32 | lo)) return fail(arena.exhausted_status());
+  if (!conflicts.empty()) {
+    uint64_t* scratch = arena.allocate_array<uint64_t>(conflicts.size());
+    if (scratch == nullptr) return arena.exhausted_status();
+    radix_sort(Span<uint64_t>(conflicts.data(), conflicts.size()),
+               Span<uint64_t>(scratch, conflicts.size()));
+    size_t c = 0;
+    for (uint32_t j = 0; j < sh.count; ++j) {
+      if (group[j] == kNone) continue;
+      for (; c < conflicts.size() && (conflicts[c] >> 32) == j; ++c) {
+        stamp[group[static_cast<uint32_t>(conflicts[c])]] = j;
       }
-    }
-    if (!conflicts.empty()) {
-      uint64_t* scratch = arena.allocate_array<uint64_t>(conflicts.size());
-      if (scratch == nullptr) return fail(arena.exhausted_status());
-      radix_sort(Span<uint64_t>(conflicts.data(), conflicts.size()),
-                 Span<uint64_t>(scratch, conflicts.size()));
-      // Greedy, in shell order: the first group none of the earlier overlapping shells is in.
-      size_t c = 0;
-      for (uint32_t j = 0; j < sh.count; ++j) {
-        if (group[j] == kNone) continue;
-        for (; c < conflicts.size() && (conflicts[c] >> 32) == j; ++c) {
-          stamp[group[static_cast<uint32_t>(conflicts[c])]] = j;
-        }
-        uint32_t g = 0;
-        while (stamp[g] == j) ++g;
-        group[j] = g;
-        groups = g + 1 > groups ? g + 1 : groups;
-      }
+      uint32_t g = 0;
+      while (stamp[g] == j) ++g;
+      group[j] = g;
+      groups = g + 1 > groups ? g + 1 : groups;
     }
   }
-  const uint32_t shell_count = sh.count;
-  if (groups == 1) {
-    // Today's single run, byte for byte, with the arena as the caller gave it.
-    arena.rewind(start);
-    s = mesh_boolean_single(ctx, a, b, options, out, stats);
-    stats->shells = shell_count;
-    stats->shell_groups = 1;
-    stats->passes = 1;
-    return s;
-  }
-  // ---- Several groups: one run each, the result of one the first operand of the next.
-  // B's float32 requirement is checked here, on B itself, so that an error names B's own
-  // triangle (a pass sees a copy of one group, numbered anew).
-  if (options.float32_output) {
-    const Vec3* vb = b.vertices.data();
-    for (uint32_t t = 0; t < b.triangles.size(); ++t) {
-      const Triangle& tri = b.triangles[t];
-      if (is_float32_exact(vb[tri.v[0]]) && is_float32_exact(vb[tri.v[1]]) &&
-          is_float32_exact(vb[tri.v[2]])) {
-        continue;
-      }
-      if (!triangle_box(b, t).overlaps(region)) continue;
-      return fail(b_not_float32(t));
+  *group_out = group;
+  *groups_out = groups;
+  return Status::ok();
+}
+
+// B's float32 requirement, checked on B itself so that an error names B's own triangle (a
+// pass sees a copy of one group, numbered anew): only triangles near A's region matter.
+Status check_b_float32(const Mesh& b, const Aabb& region) {
+  const Vec3* vb = b.vertices.data();
+  for (uint32_t t = 0; t < b.triangles.size(); ++t) {
+    const Triangle& tri = b.triangles[t];
+    if (is_float32_exact(vb[tri.v[0]]) && is_float32_exact(vb[tri.v[1]]) &&
+        is_float32_exact(vb[tri.v[2]])) {
+      continue;
     }
+    if (triangle_box(b, t).overlaps(region)) return b_not_float32(t);
   }
-  // Layout: [shells][current result][group mesh][this pass's result]; each result is moved
-  // down over the previous one and the group.
+  return Status::ok();
+}
+
+// Several groups: one run each, the result of one the first operand of the next (for the
+// intersection: the union of the groups first, then A and that union). Arena layout:
+// [shells][current result][group mesh][this pass's result]; each result is moved down over
+// the previous one and the group; the last down to `start`, into *out.
+Status run_passes(const Context& ctx, const Mesh& a, const Mesh& b, const Shells& sh,
+                  const uint32_t* group, uint32_t groups, const BooleanOptions& options,
+                  const Arena::Marker& start, Mesh* out, BooleanStats* stats) {
+  Arena& arena = *ctx.arena;
   uint32_t* remap = arena.allocate_array<uint32_t>(b.vertices.size());
-  if (remap == nullptr && !b.vertices.empty()) return fail(arena.exhausted_status());
+  if (remap == nullptr && !b.vertices.empty()) return arena.exhausted_status();
   const Arena::Marker base = arena.mark();
   const bool intersection = options.op == BooleanOp::kIntersection;
   const uint32_t passes = groups;  // intersection: groups - 1 unions, then one intersection
@@ -636,8 +615,7 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
   const Mesh* first = &a;
   uint32_t g = 0;
   if (intersection) {
-    s = group_mesh(arena, b, sh, group, 0, remap, &current);
-    if (!s.is_ok()) return fail(s);
+    SPLINTCORE_RETURN_IF_ERROR(group_mesh(arena, b, sh, group, 0, remap, &current));
     first = &current;
     g = 1;
   }
@@ -648,12 +626,10 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
     const Mesh* second = &operand;
     BooleanOptions o = options;
     if (intersection && last) {
-      // A n (the union of the groups).
-      second = first;
+      second = first;  // A n (the union of the groups)
       first = &a;
     } else {
-      s = group_mesh(arena, b, sh, group, g++, remap, &operand);
-      if (!s.is_ok()) return fail(s);
+      SPLINTCORE_RETURN_IF_ERROR(group_mesh(arena, b, sh, group, g++, remap, &operand));
       if (intersection) o.op = BooleanOp::kUnion;
     }
     // Intermediate results are checked closed and oriented by the run; the exact
@@ -661,21 +637,16 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
     if (!last) o.check_self_intersection = false;
     Mesh result;
     BooleanStats ps;
-    s = mesh_boolean_single(ctx, *first, *second, o, &result, &ps);
+    Status s = mesh_boolean_single(ctx, *first, *second, o, &result, &ps);
     add_stats(ps, &total);
     if (!s.is_ok()) {
-      s.append(" (pass ");
-      s.append_u64(pass + 1);
-      s.append(" of ");
-      s.append_u64(passes);
+      s.append(" (pass ").append_u64(pass + 1).append(" of ").append_u64(passes);
       s.append(intersection ? (last ? ": A and the union of B's overlapping shells)"
                                     : ": the union of B's overlapping shells)")
                             : ": a group of B's shells that do not overlap)");
       *stats = total;
-      stats->shells = shell_count;
-      stats->shell_groups = groups;
       stats->passes = pass + 1;
-      return fail(s);
+      return s;
     }
     Mesh moved;
     move_mesh_down(arena, base, result, &moved);
@@ -688,10 +659,49 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
   }
   move_mesh_down(arena, start, current, out);
   *stats = total;
-  stats->shells = shell_count;
-  stats->shell_groups = groups;
   stats->passes = done;
   return Status::ok();
+}
+
+}  // namespace
+
+Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
+                    const BooleanOptions& options, Mesh* out, BooleanStats* stats) {
+  Arena& arena = *ctx.arena;
+  BooleanStats local{};
+  if (stats == nullptr) stats = &local;
+  *stats = BooleanStats{};
+  SPLINTCORE_RETURN_IF_ERROR(check_boolean_arguments(a, b, *out));
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "boolean: shells", 0, 1));
+  ArenaScope scope(arena);  // on any error the arena is as it was
+  // ---- B's shells, which overlap where it matters, and their groups.
+  Shells sh;
+  bool usable = false;
+  SPLINTCORE_RETURN_IF_ERROR(find_shells(arena, b, &sh, &usable));
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "boolean: shell pairs", 0, 1));
+  const Aabb region = region_of_a(a, options.max_nudges);
+  uint32_t* group = nullptr;
+  uint32_t groups = 1;
+  if (usable && sh.count > 1) {
+    SPLINTCORE_RETURN_IF_ERROR(group_shells(ctx, b, sh, region,
+                                            options.op == BooleanOp::kUnion, &group, &groups));
+  }
+  Status s;
+  if (groups == 1) {
+    // One run, with the arena as the caller gave it (it rewinds itself on an error).
+    arena.rewind(scope.start());
+    s = mesh_boolean_single(ctx, a, b, options, out, stats);
+    scope.commit();
+  } else if (options.float32_output && !(s = check_b_float32(b, region)).is_ok()) {
+    return s;
+  } else {
+    s = run_passes(ctx, a, b, sh, group, groups, options, scope.start(), out, stats);
+    if (s.is_ok()) scope.commit();
+  }
+  stats->shells = sh.count;
+  stats->shell_groups = groups;
+  if (groups == 1) stats->passes = 1;
+  return s;
 }
 
 }  // namespace splintcore
