@@ -216,6 +216,9 @@ struct DesignReportFiles {
   uint32_t ct_size[3] = {0, 0, 0};      // its voxels per axis
   const CaseCtReport* ct = nullptr;     // reconstruct_case_jaws' report, when it ran
   const char* splint_path = nullptr;
+  // The SHA-256 of the splint's binary STL as the caller wrote it (write_stl's bytes, 64 hex
+  // digits): saves hashing it twice. Null: the report writer computes it.
+  const char* splint_sha256 = nullptr;
   const char* preview_path = nullptr;
   const char* preview_sha256 = nullptr;
   const char* preview_error = nullptr;  // why there is no preview
@@ -242,10 +245,10 @@ struct DesignRunInfo {
 // Writes the report of a design_splint() run as one compact JSON object to `sink`: the library
 // version, the case (id, SHA-256 of its text), the inputs (jaws, their transforms, triangle
 // counts), every parameter as used, the checks as recorded by the stages (report), the output
-// (the splint's SHA-256, computed here from the binary STL write_stl gives, its triangles,
-// volume and extent), then `run`. Every value comes from `c`, `report`, `splint`, `files` or
+// (the splint's SHA-256 of the binary STL write_stl gives, computed here unless `files` has
+// it, its triangles, volume and extent), then `run`. Every value comes from `c`, `report`, `splint`, `files` or
 // `run`; none is a constant. docs/report-format.md lists the keys. Arena: write_stl's buffer
-// (64,000 bytes), returned. Errors: kIoError (the sink failed), kArenaExhausted,
+// (64,000 bytes, only when it hashes the splint), returned. Errors: kIoError (the sink failed), kArenaExhausted,
 // kInvalidArgument (jaws do not match the case).
 Status write_design_report(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                            const Mesh& splint, const DesignReport& report,

@@ -1,5 +1,5 @@
-// Private to src/boolean: the Boolean of A and B in one corefinement run (boolean.cpp), which
-// the public mesh_boolean (shells.cpp) calls once per group of B's shells that do not overlap.
+// Private to src/boolean: the Boolean of A and B in one corefinement run (assemble.cpp), which
+// the public mesh_boolean (boolean.cpp) calls once per group of B's shells that do not overlap.
 #ifndef SPLINTCORE_SRC_BOOLEAN_BOOLEAN_INTERNAL_H
 #define SPLINTCORE_SRC_BOOLEAN_BOOLEAN_INTERNAL_H
 

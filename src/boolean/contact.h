@@ -1,5 +1,5 @@
 // splintcore boolean, internal: the exact intersection of two closed triangles, described
-// combinatorially. The Boolean (boolean.cpp) splits and classifies the triangles of a
+// combinatorially. The Boolean (points.cpp, split.cpp) splits and classifies the triangles of a
 // degenerate (coplanar, edge-on-edge, vertex-on-face) contact with it, so such contacts are
 // resolved exactly; nudging A remains only for what rounding to float32 would merge.
 //
@@ -102,7 +102,7 @@ bool intersect_triangles(const Vec3 a[3], const Vec3 b[3], Contact* out);
 // - an edge (u, v) through a triangle's plane: u, v sorted lexicographically (x, then y, then
 //   z), the plane's corners sorted likewise (t0 < t1 < t2), n = (t1 - t0) x (t2 - t0),
 //   du = n . (u - t0), dv = n . (v - t0), s = du / (du - dv) clamped to [0, 1] (NaN to 0),
-//   p = u + (v - u) s (boolean.cpp's make_point formula). Each coordinate is within
+//   p = u + (v - u) s (points.cpp's make_point formula). Each coordinate is within
 //   32 eps (|t1 - t0| |t2 - t0| (|u - t0| + |v - t0|) |v - u| / |du - dv| + |u| + |v - u|)
 //   of the exact point (eps = 2^-53; |.| the Euclidean norm, |u| the largest |coordinate|):
 //   small unless the edge is nearly parallel to the plane;

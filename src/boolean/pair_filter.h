@@ -1,5 +1,5 @@
 // splintcore boolean, internal: a box filter for the Boolean's pair test (src/boolean/
-// boolean.cpp). A triangle of B whose whole bounding box lies strictly beyond one of the
+// points.cpp). A triangle of B whose whole bounding box lies strictly beyond one of the
 // planes through an edge of a triangle of A (plane_filter(p, q, p + n_A), the side A's third
 // corner is not on) cannot meet A, so the pair is rejected before any per-vertex or exact test.
 // It is only a filter: it answers "beyond" only when that is exactly true (tested in

@@ -215,16 +215,22 @@ Status write_design_report(const Context& ctx, const CaseFile& c, Span<const Mes
                       " jaws for a case of ", c.jaws.size());
   }
   // The splint's SHA-256: of the bytes write_stl gives, which is what a caller writes.
-  Sha256 hash;
-  ByteSink hashing;
-  hashing.write = &hash_write;
-  hashing.user = &hash;
-  hashing.name = "the splint's hash";
-  SPLINTCORE_RETURN_IF_ERROR(write_stl(ctx, splint, hashing, StlWriteOptions{}));
-  uint8_t digest[32];
-  hash.finish(digest);
-  char splint_sha256[65];
-  Sha256::to_hex(digest, splint_sha256);
+  char splint_sha256[65] = {};
+  if (files.splint_sha256 != nullptr) {
+    for (int i = 0; i < 64 && files.splint_sha256[i] != '\0'; ++i) {
+      splint_sha256[i] = files.splint_sha256[i];
+    }
+  } else {
+    Sha256 hash;
+    ByteSink hashing;
+    hashing.write = &hash_write;
+    hashing.user = &hash;
+    hashing.name = "the splint's hash";
+    SPLINTCORE_RETURN_IF_ERROR(write_stl(ctx, splint, hashing, StlWriteOptions{}));
+    uint8_t digest[32];
+    hash.finish(digest);
+    Sha256::to_hex(digest, splint_sha256);
+  }
   bool any_ct = false;
   for (const CaseJaw& j : c.jaws) any_ct = any_ct || j.has_seed;
 

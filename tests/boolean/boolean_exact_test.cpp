@@ -1,4 +1,4 @@
-// Tests of the exact rule for degenerate Boolean contacts (issue #5; src/boolean/boolean.cpp,
+// Tests of the exact rule for degenerate Boolean contacts (issue #5; src/boolean/points.cpp, split.cpp,
 // the rule as include/splintcore/boolean.h states it): coplanar overlapping faces, a vertex
 // exactly on the other surface and edges that cross exactly are resolved exactly, with no
 // nudge (stats.attempts == 1, stats.nudge == 0), and the volumes are the analytic ones. The

@@ -1,4 +1,4 @@
-// The randomised proof the Boolean owes the splint (src/boolean/boolean.cpp): more than 1,000
+// The randomised proof the Boolean owes the splint (src/boolean/boolean_run.h and its stage files): more than 1,000
 // random rigid motions of the paper_scale base (A, 2,612 triangles) against both phantom jaws
 // (B, tools/common/phantom.h, the mandible moved by the case's -2 mm), and 300 more of the real
 // patient's wafer against two of the real CBCT teeth when ../shared/realdata is present. About

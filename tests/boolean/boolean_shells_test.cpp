@@ -1,4 +1,4 @@
-// Tests of B as the union of overlapping shells (src/boolean/shells.cpp, issue 5): boxes with
+// Tests of B as the union of overlapping shells (src/boolean/boolean.cpp, issue 5): boxes with
 // exact (dyadic) coordinates whose volumes are known by inclusion-exclusion, each result
 // checked closed, manifold, outward and free of self-intersections, and compared with the
 // same set computed a second way (the union of B's shells first); shells that overlap only

@@ -1,4 +1,4 @@
-// Tests of the Boolean (src/boolean/boolean.cpp): analytic shapes in generic position, the
+// Tests of the Boolean (src/boolean/boolean_run.h and its stage files): analytic shapes in generic position, the
 // volume identities every corefinement must keep (|A - B| + |A * B| = |A|,
 // |A + B| = |A| + |B| - |A * B|), closed manifold outward output without self-intersections,
 // input vertices copied bit for bit and intersection points on both surfaces, degenerate

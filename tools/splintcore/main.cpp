@@ -1186,6 +1186,7 @@ int run_design(int argc, char** argv) {
     files.ct = &ct_report;
   }
   files.splint_path = splint_path.c_str();
+  files.splint_sha256 = splint_hash.c_str();  // of the bytes just written
   if (preview_status.is_ok()) {
     files.preview_path = preview.path.c_str();
     files.preview_sha256 = preview.sha256.c_str();

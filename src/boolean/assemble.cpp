@@ -1,0 +1,353 @@
+// The Boolean run, assembly: the pieces an operation keeps, welded into the result, the
+// result's checks (closed, oriented, float32, no self-intersection), and mesh_boolean_single,
+// one whole run with its nudges (boolean_run.h, boolean_internal.h).
+#include "boolean/boolean_run.h"
+
+namespace splintcore {
+namespace boolean_detail {
+
+Status BooleanRun::assemble(Mesh* result) {
+  // Which pieces stay: (inside the other?) per side and operation.
+  const bool reverse_b = op_ == BooleanOp::kDifference;
+  // keep(state, is_a) as a table: [is_a][state + 2].
+  bool keeps[2][5];
+  for (int side = 0; side < 2; ++side) {
+    for (int st = -2; st <= 2; ++st) keeps[side][st + 2] = keep(static_cast<int8_t>(st), side == 1);
+  }
+  const uint32_t base = in_.nva + in_.nvb;
+  const uint32_t nv_all = base + static_cast<uint32_t>(points_.size());
+  uint32_t* remap = arena_.allocate_array<uint32_t>(nv_all);
+  if (remap == nullptr && nv_all > 0) return arena_.exhausted_status();
+  if (nv_all > 0) std::memset(remap, 0xff, size_t{nv_all} * sizeof(uint32_t));
+  // Visits the result's triangles in order (A's, then B's, each in input order, a cut triangle
+  // replaced by its pieces): emit(v0, v1, v2) for each kept one.
+  // Visits the result's triangles in order (A's, then B's near ones, each in input order, a
+  // cut triangle replaced by its pieces; for the union B's far ones last): emit(v0, v1, v2)
+  // for each kept one.
+  auto visit = [&](auto&& emit) -> Status {
+    size_t piece = 0;
+    const uint32_t count = in_.nta + static_cast<uint32_t>(bp_.near_ids.size());
+    for (uint32_t i = 0; i < count; ++i) {
+      const bool is_a = i < in_.nta;
+      const uint32_t t = is_a ? i : in_.nta + bp_.near_ids[i - in_.nta];
+      const bool reverse = !is_a && reverse_b;
+      const bool* keep_row = keeps[is_a ? 1 : 0];
+      if (piece < tris_.size() && tris_[piece].src == t) {
+        for (; piece < tris_.size() && tris_[piece].src == t; ++piece) {
+          const OutTri& o = tris_[piece];
+          if (!keep_row[o.state + 2]) continue;
+          if (reverse) emit(o.v[0], o.v[2], o.v[1], is_a); else emit(o.v[0], o.v[1], o.v[2], is_a);
+        }
+        continue;
+      }
+      uint32_t c[3];
+      in_.corners(t, c);
+      int8_t s = vstate_[c[0]];
+      if (s == 0 || s == kVertexOn || vstate_[c[1]] != s || vstate_[c[2]] != s) {
+        s = uncut_state(t, c);  // corners on the other surface (degenerate contacts)
+        if (s == kStateNone) {
+          return make_error(StatusCode::kInternal, "boolean: triangle ", t,
+                            " was left unclassified");
+        }
+      }
+      if (!keep_row[s + 2]) continue;
+      if (reverse) emit(c[0], c[2], c[1], is_a); else emit(c[0], c[1], c[2], is_a);
+    }
+    if (op_ == BooleanOp::kUnion) {
+      for (uint32_t t = 0; t < in_.ntb; ++t) {
+        if (bp_.near_b[t] != 0) continue;
+        const Triangle& bt = in_.b->triangles[t];
+        emit(in_.nva + bt.v[0], in_.nva + bt.v[1], in_.nva + bt.v[2], false);
+      }
+    }
+    return Status::ok();
+  };
+  uint64_t kept = 0;
+  uint64_t kept_a = 0;
+  SPLINTCORE_RETURN_IF_ERROR(visit([&](uint32_t, uint32_t, uint32_t, bool is_a) {
+    ++kept;
+    kept_a += is_a ? 1 : 0;
+  }));
+  Triangle* out_t = arena_.allocate_array<Triangle>(static_cast<size_t>(kept));
+  if (out_t == nullptr && kept > 0) return arena_.exhausted_status();
+  uint32_t nv = 0;
+  size_t k = 0;
+  SPLINTCORE_RETURN_IF_ERROR(visit([&](uint32_t v0, uint32_t v1, uint32_t v2, bool) {
+    uint32_t v[3] = {v0, v1, v2};
+    if (alias_ != nullptr) {
+      for (uint32_t& x : v) x = canon(x);
+    }
+    for (uint32_t& x : v) {
+      if (remap[x] == ~0u) remap[x] = nv++;
+      x = remap[x];
+    }
+    out_t[k++] = Triangle{{v[0], v[1], v[2]}};
+  }));
+  Vec3* out_v = arena_.allocate_array<Vec3>(nv);
+  if (out_v == nullptr && nv > 0) return arena_.exhausted_status();
+  for (uint32_t v = 0; v < nv_all; ++v) {
+    if (remap[v] == ~0u) continue;
+    out_v[remap[v]] = v < base ? in_.vertex(v) : points_[v - base].p;
+  }
+  result->triangles.adopt(out_t, static_cast<size_t>(kept), static_cast<size_t>(kept));
+  result->vertices.adopt(out_v, nv, nv);
+  st_.output_triangles = kept;
+  st_.output_triangles_a = kept_a;
+  return Status::ok();
+}
+
+Status BooleanRun::run(Mesh* result) {
+  {
+    Status s = check_closed_oriented(ctx_, *in_.a, nullptr);
+    if (s.code() == StatusCode::kArenaExhausted) return s;
+    if (!s.is_ok()) {
+      // A nudged A (in a later pass: the previous result, moved and rounded to float32) can
+      // lose a sliver to rounding: that attempt is unsupported and the next nudge runs.
+      if (st_.attempts > 1) {
+        return make_error(StatusCode::kUnsupported, "A moved by the nudge is not a solid: ",
+                          s.message())
+            .at_index(s.index());
+      }
+      return make_error(StatusCode::kInvalidMesh, "A must be a solid: ", s.message())
+          .at_index(s.index());
+    }
+  }
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", 0, in_.ntb));
+  SPLINTCORE_RETURN_IF_ERROR(find_hits());
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: points", 0, 1));
+  SPLINTCORE_RETURN_IF_ERROR(number_points());
+  SPLINTCORE_RETURN_IF_ERROR(number_degenerate_points());
+  SPLINTCORE_RETURN_IF_ERROR(check_points_apart());
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: split", 0, 1));
+  SPLINTCORE_RETURN_IF_ERROR(split_triangles());
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: classify", 0, 1));
+  SPLINTCORE_RETURN_IF_ERROR(classify());
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: assemble", 0, 1));
+  SPLINTCORE_RETURN_IF_ERROR(assemble(result));
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: check", 0, 1));
+  SPLINTCORE_RETURN_IF_ERROR(check_result(result));
+  return report_progress(ctx_, "boolean: done", 1, 1);
+}
+
+// The same answer as the edge part of check_closed_oriented (every edge used by exactly two
+// triangles, in opposite directions; no triangle repeating a vertex), faster: half-edges
+// bucketed by their smaller vertex (other end << 1 | forward), and in each bucket the uses of
+// each other end counted in a per-vertex tally (forward uses in the low 32 bits, backward in
+// the high: exactly one of each is 2^32 + 1), read and cleared again. *paired is false when it
+// does not hold or a vertex id is out of range: the caller then runs check_closed_oriented,
+// which names the first offending edge as it always did. Arena: 12 nv + 12 nt bytes or so,
+// returned before it returns.
+Status edges_paired(Arena& arena, const Mesh& mesh, bool* paired) {
+  *paired = false;
+  const uint64_t nv64 = mesh.vertices.size(), nt64 = mesh.triangles.size();
+  if (nv64 >= (uint64_t{1} << 31) || nt64 >= (uint64_t{1} << 31)) return Status::ok();
+  const uint32_t nv = static_cast<uint32_t>(nv64), nt = static_cast<uint32_t>(nt64);
+  const Triangle* tris = mesh.triangles.data();
+  uint32_t largest = 0;
+  for (uint32_t t = 0; t < nt; ++t) {
+    const uint32_t a = tris[t].v[0], b = tris[t].v[1], c = tris[t].v[2];
+    const uint32_t m = a > b ? a : b;
+    largest = m > largest ? m : largest;
+    largest = c > largest ? c : largest;
+  }
+  if (nt > 0 && largest >= nv) return Status::ok();
+  ArenaScope scope(arena);
+  uint32_t* start = arena.allocate_array<uint32_t>(size_t{nv} + 1);
+  uint32_t* half = arena.allocate_array<uint32_t>(size_t{3} * nt);
+  uint64_t* tally = arena.allocate_array<uint64_t>(nv);
+  if (start == nullptr || (half == nullptr && nt > 0) || (tally == nullptr && nv > 0)) {
+    return arena.exhausted_status();
+  }
+  std::memset(start, 0, (size_t{nv} + 1) * sizeof(uint32_t));
+  if (nv > 0) std::memset(tally, 0, size_t{nv} * sizeof(uint64_t));
+  for (uint32_t t = 0; t < nt; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = tris[t].v[k], b = tris[t].v[k == 2 ? 0 : k + 1];
+      ++start[(a < b ? a : b) + 1];
+    }
+  }
+  for (uint32_t i = 0; i < nv; ++i) start[i + 1] += start[i];
+  for (uint32_t t = 0; t < nt; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = tris[t].v[k], b = tris[t].v[k == 2 ? 0 : k + 1];
+      const uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
+      half[start[lo]++] = (hi << 1) | (a < b ? 1u : 0u);
+    }
+  }
+  // start[lo] now ends bucket lo (and begins bucket lo + 1).
+  constexpr uint64_t kOneEach = (uint64_t{1} << 32) | 1u;
+  uint32_t begin = 0;
+  for (uint32_t lo = 0; lo < nv; ++lo) {
+    const uint32_t end = start[lo];
+    for (uint32_t i = begin; i < end; ++i) {
+      tally[half[i] >> 1] += (half[i] & 1u) != 0 ? 1u : (uint64_t{1} << 32);
+    }
+    // The first use of each other end reads its total (then clears it); later ones read 0.
+    for (uint32_t i = begin; i < end; ++i) {
+      const uint32_t hi = half[i] >> 1;
+      const uint64_t count = tally[hi];
+      if ((count != kOneEach && count != 0) || hi == lo) return Status::ok();
+      tally[hi] = 0;
+    }
+    begin = end;
+  }
+  *paired = true;
+  return Status::ok();
+}
+
+// The result as the file will hold it: no two intersection points rounded together, every
+// edge used exactly twice in opposite directions (closed, edge-manifold, oriented), no flat
+// triangle (exact), positive volume; then, when asked, no self-intersection. Linear except for
+// the sort of the intersection points.
+Status BooleanRun::check_result(Mesh* result) {
+  if (result->triangles.empty()) return Status::ok();
+  ArenaScope scope(arena_);
+  const char* as = options_.float32_output ? " (as float32)" : "";
+  // With exact contacts resolved, the result may not be a solid (parts that touch along an
+  // edge, points that coincide after rounding): unsupported, so that the nudge takes over.
+  const StatusCode fragile = (options_.float32_output || st_.degenerate_pairs > 0)
+                                 ? StatusCode::kUnsupported : StatusCode::kInternal;
+  // A flat triangle can come from rounding (then A is nudged); anything else would be a bug
+  // (or, for the union, an open B). check_closed_oriented scans for flat triangles itself, so
+  // the scan here runs only when it fails: the same answer as scanning first, one scan less.
+  // First the checks of check_closed_oriented with its edge part done by edges_paired (the
+  // same answer, faster); only when one fails (or edges_paired runs out of arena) does
+  // check_closed_oriented itself run, so every error, and the order of the checks, is as before.
+  bool paired = false;
+  {
+    const Status e = edges_paired(arena_, *result, &paired);
+    if (!e.is_ok()) {
+      if (e.code() != StatusCode::kArenaExhausted) return e;
+      arena_.forget_failure();  // check_closed_oriented's own request is the one to report
+      paired = false;
+    }
+  }
+  Status s;
+  if (!paired || find_flat_triangle(*result) != kNoTriangle || !(mesh_volume(*result) > 0)) {
+    double volume = 0;
+    s = check_closed_oriented(ctx_, *result, &volume);
+  }
+  if (!s.is_ok()) {
+    const uint32_t flat = find_flat_triangle(*result);
+    if (flat != kNoTriangle) {
+      return make_error(fragile, "Boolean ", boolean_op_name(op_), " result has a flat triangle ",
+                        flat, as)
+          .at_index(flat);
+    }
+  }
+  if (s.code() == StatusCode::kArenaExhausted) return s;
+  if (!s.is_ok()) {
+    // An open B whose border meets A (or lies inside it, perhaps after a nudge) leaves the
+    // result open: that is the input's fault (B's border must lie outside A), said as such.
+    if (op_ != BooleanOp::kUnion) {
+      bool b_paired = false;
+      const Status e = edges_paired(arena_, *in_.b, &b_paired);
+      if (e.code() == StatusCode::kArenaExhausted) return e;
+      if (e.is_ok() && !b_paired) {
+        return make_error(StatusCode::kInvalidMesh, "Boolean ", boolean_op_name(op_), " result",
+                          as, ": ", s.message(),
+                          " (B is open or not edge-manifold: its border must lie outside A)")
+            .at_index(s.index());
+      }
+    }
+    const StatusCode code = st_.degenerate_pairs > 0 ? StatusCode::kUnsupported
+                            : (op_ == BooleanOp::kUnion ? StatusCode::kInvalidMesh : StatusCode::kInternal);
+    return make_error(code, "Boolean ", boolean_op_name(op_), " result", as,
+                      st_.degenerate_pairs > 0 ? " with exact contacts" : "", ": ", s.message())
+        .at_index(s.index());
+  }
+  if (options_.check_self_intersection) {
+    SelfIntersectionReport si;
+    SPLINTCORE_RETURN_IF_ERROR(find_self_intersections(ctx_, *result, 1, &si));
+    st_.self_intersection_candidates = si.candidate_pairs;
+    if (si.self_intersecting()) {
+      return make_error(fragile, "Boolean ", boolean_op_name(op_), " result self-intersects", as,
+                        ": triangles ", si.first_a, " and ", si.first_b)
+          .at_index(si.first_a);
+    }
+    st_.self_intersection_checked = true;
+  }
+  return Status::ok();
+}
+
+}  // namespace boolean_detail
+
+Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
+                           const BooleanOptions& options, Mesh* out, BooleanStats* stats) {
+  using namespace boolean_detail;
+  Arena& arena = *ctx.arena;
+  BooleanStats local{};
+  if (stats == nullptr) stats = &local;
+  *stats = BooleanStats{};
+  SPLINTCORE_RETURN_IF_ERROR(check_boolean_arguments(a, b, *out));
+  // Attempt k > 0 runs with A translated by k * step * (1, 3, 7) (nudge_step: float32
+  // vertices of A stay float32). B is never moved.
+  const double step = nudge_step(a);
+  const Arena::Marker start = arena.mark();
+  // What a nudge can move A by, with its float32 rounding: the broad phase covers all attempts.
+  const double reach = (options.max_nudges + 1.0) * step * 8.0;
+  Broadphase bp;
+  Status s = report_progress(ctx, "boolean: grid", 0, 1);
+  if (s.is_ok()) s = build_broadphase(ctx, a, b, reach, options.float32_output, &bp);
+  if (!s.is_ok()) {
+    arena.rewind(start);
+    return s;
+  }
+  const Arena::Marker attempts_start = arena.mark();
+  Mesh result;
+  for (uint32_t attempt = 0; attempt <= options.max_nudges; ++attempt) {
+    *stats = BooleanStats{};
+    arena.rewind(attempts_start);
+    Mesh moved;
+    const Mesh* pa = &a;
+    // For STL output A is used as it will be written: rounded to float32 (a no-op for A read
+    // from STL), after the nudge (a nudge can carry a coordinate into a coarser binade).
+    if (attempt > 0 || options.float32_output) {
+      const Vec3 d{attempt * step, 3.0 * attempt * step, 7.0 * attempt * step};
+      moved.bind(&arena);
+      if (!moved.vertices.reserve(a.vertices.size()) || !moved.triangles.reserve(a.triangles.size())) {
+        s = arena.exhausted_status();
+        break;
+      }
+      bool in_range = true;
+      for (const Vec3& v : a.vertices) {
+        Vec3 p = v + d;
+        if (options.float32_output) in_range = round_to_float32(&p) && in_range;
+        (void)moved.vertices.push_back(p);
+      }
+      if (!in_range) {
+        s = Status::error(StatusCode::kLimitExceeded, "A has a coordinate beyond float32 range");
+        break;
+      }
+      for (const Triangle& t : a.triangles) (void)moved.triangles.push_back(t);
+      pa = &moved;
+      stats->nudge = d;
+    }
+    stats->attempts = attempt + 1;
+    Inputs in;
+    in.a = pa;
+    in.b = &b;
+    in.nva = static_cast<uint32_t>(a.vertices.size());
+    in.nvb = static_cast<uint32_t>(b.vertices.size());
+    in.nta = static_cast<uint32_t>(a.triangles.size());
+    in.ntb = static_cast<uint32_t>(b.triangles.size());
+    result = Mesh();
+    BooleanRun run(ctx, in, bp, options, stats);
+    s = run.run(&result);
+    if (s.code() != StatusCode::kUnsupported) break;
+  }
+  if (!s.is_ok()) {
+    arena.rewind(start);
+    if (s.code() == StatusCode::kUnsupported && options.max_nudges > 0) {
+      s.append(" (also with A moved by up to ");
+      s.append_u64(options.max_nudges);
+      s.append(" nudges)");
+    }
+    return s;
+  }
+  // The result down over the temporaries (its triangles were allocated before its vertices).
+  move_mesh_down(arena, start, result, out);
+  return Status::ok();
+}
+
+}  // namespace splintcore

@@ -1,0 +1,339 @@
+// Private to src/boolean: one corefinement run of the Boolean (BooleanRun) and what its stages
+// share. The stages, one file each: broadphase.cpp (candidate pairs through a grid over A),
+// points.cpp (exact pair tests, intersection points and degenerate contacts, numbered),
+// split.cpp (cut triangles re-triangulated by constrained Delaunay, cdt.cpp), classify.cpp
+// (pieces inside or outside the other solid: flooding, winding numbers), assemble.cpp (the
+// result, its checks, and mesh_boolean_single). The public entry, mesh_boolean (boolean.cpp),
+// groups B's shells and runs mesh_boolean_single once per group.
+//
+//
+// Sources: Chen et al. 2016 (EasySplint), "The Boolean operation"; the pair test orders the
+// crossing points along the line where the two planes meet by the signs of orient3d of an edge
+// of one triangle against an edge of the other, as O. Devillers and P. Guigue, "Faster
+// triangle-triangle intersection tests", INRIA RR-4488, 2002 (at most four such signs a pair);
+// J. R. Shewchuk's predicates and error bounds (predicates.cpp) for every decision and filter.
+// Degenerate pairs (a corner on the other plane, edges meeting exactly, coplanar faces) take
+// their exact contact from contact.h and are split and classified by split_general: each side
+// of a contact segment against the other mesh's triangles that hold it (a plane, or the wedge
+// of two), as in the corefinement of S. Loriot et al. (CGAL, "Polygon Mesh Processing:
+// corefinement", coplanar faces kept by orientation), here with every decision an orient3d or
+// orient2d on input vertices.
+#ifndef SPLINTCORE_SRC_BOOLEAN_BOOLEAN_RUN_H
+#define SPLINTCORE_SRC_BOOLEAN_BOOLEAN_RUN_H
+
+#include "boolean/boolean_internal.h"
+#include "boolean/cdt.h"
+#include "boolean/contact.h"
+#include "boolean/pair_filter.h"
+#include "core/union_find.h"
+#include "geometry/plane_filter.h"
+#include "splintcore/distance.h"
+#include "splintcore/boolean.h"
+
+namespace splintcore {
+namespace boolean_detail {
+
+// Ids: a vertex of A is its index, a vertex of B is nva + its index, intersection point p is
+// nva + nvb + p. A triangle of A is its index, a triangle of B is nta + its index.
+struct Inputs {
+  const Mesh* a = nullptr;
+  const Mesh* b = nullptr;
+  uint32_t nva = 0, nvb = 0, nta = 0, ntb = 0;
+
+  const Vec3& vertex(uint32_t g) const {
+    return g < nva ? a->vertices[g] : b->vertices[g - nva];
+  }
+  void corners(uint32_t tg, uint32_t out[3]) const {
+    if (tg < nta) {
+      const Triangle& t = a->triangles[tg];
+      out[0] = t.v[0]; out[1] = t.v[1]; out[2] = t.v[2];
+    } else {
+      const Triangle& t = b->triangles[tg - nta];
+      out[0] = nva + t.v[0]; out[1] = nva + t.v[1]; out[2] = nva + t.v[2];
+    }
+  }
+};
+
+inline uint64_t edge_key(uint32_t u, uint32_t v) {
+  return u < v ? (uint64_t{u} << 32) | v : (uint64_t{v} << 32) | u;
+}
+inline uint32_t key_lo(uint64_t k) { return static_cast<uint32_t>(k); }
+inline uint32_t key_hi(uint64_t k) { return static_cast<uint32_t>(k >> 32); }
+
+// A point where an edge (two vertex ids, smaller first) of one mesh crosses a triangle of the
+// other.
+struct PointKey {
+  uint64_t edge;
+  uint32_t tri;
+  uint32_t pad;
+};
+
+// One crossing pair: the segment runs from `start` to `end` along d = n_a x n_b, the direction
+// that has A's inside-B side on its left (seen from A's outside) and B's inside-A side on its
+// right (seen from B's outside).
+struct Hit {
+  uint32_t ta, tb;  // triangle ids (tb already offset by nta)
+  PointKey start, end;
+};
+
+// A point of a degenerate contact, named by the features that define it (contact.h): an input
+// vertex (k1: its id), an edge of one mesh through a triangle of the other (k1: the edge key,
+// k2: the triangle id; the same name as a PointKey), or an edge of A crossing an edge of B (k1:
+// A's edge key, k2: B's edge key).
+enum DegPointKind : uint8_t { kDegVertex, kDegEdgeFace, kDegEdgeEdge };
+struct DegPoint {
+  uint64_t k1, k2;
+  uint8_t kind;
+};
+
+// One part of a degenerate contact between triangle `tri` and triangle `other` of the other
+// mesh, recorded for `tri`: a lone point (p[1] == p[0]) or a segment. A transversal segment
+// (the planes differ) runs from p[0] to p[1] along n_a x n_b, as intersect_triangles gives it;
+// a coplanar one (a side of the polygon of overlap, or a touching along edges) has no
+// direction that matters. loc_t and loc_o: where each end lies on `tri` and on `other`
+// (contact.h's Loc). id: the ends' vertex ids once the points are numbered.
+enum DegKind : uint8_t { kDegPointOnly, kDegTransversal, kDegCoplanar };
+struct DegRecord {
+  DegPoint p[2];
+  uint32_t tri, other;
+  uint32_t id[2];
+  uint8_t loc_t[2], loc_o[2];
+  uint8_t kind;
+};
+
+// Where a piece of a cut triangle lies against the other solid. The keep rules (keep()) take
+// pieces on the other surface (coplanar overlap) by whether the two faces point the same way.
+constexpr int8_t kStateNone = 0, kStateIn = 1, kStateOut = -1, kOnSame = 2, kOnOpposite = -2;
+// A vertex on the other surface (its state is not passed on by flooding).
+constexpr int8_t kVertexOn = 3;
+
+enum class PairResult { kNone, kSegment, kDegenerate };
+enum Through { kOut, kIn, kOnBoundary };
+
+// Where the line of an edge that crosses a triangle's plane meets the triangle, from the signs
+// x, y of the line against the triangle's two edges that cross the other triangle's plane
+// (orient3d of the two edges, each in its own triangle's order). Both points lie on the line
+// L where the two planes meet, and the triangle meets L in the interval between its two
+// crossing edges, so the third edge's sign is implied (exact arithmetic, neither triangle
+// degenerate, no corner on the other plane): the point is inside when x and y agree, outside
+// when they differ, and on the boundary (a degenerate contact: edges crossing exactly) when
+// one is zero; the same answers as testing it against all three edges.
+inline Through through(int x, int y) {
+  if (x == 0 || y == 0) return kOnBoundary;
+  return x == y ? kIn : kOut;
+}
+
+inline int lone(const int s[3]) {
+  if (s[0] == s[1]) return 2;
+  if (s[0] == s[2]) return 1;
+  return 0;
+}
+
+// The three planes through A's edges that contain A's normal direction (as filters), each
+// with the side A's third corner is on: a triangle strictly beyond one of them cannot meet A; a
+// triangle strictly within all three crosses A's plane only inside A.
+// For single points the same test is done in 2-D, on the projection along the dominant axis
+// of A's normal: the planes through A's edges parallel to that axis separate just as well (the
+// third corner's side is found the same way, and A's plane meets the prism they bound in A
+// itself), and each side is one 2 x 2 determinant (side2 below).
+struct EdgePlanes {
+  PlaneFilter plane[3];
+  int inside[3];  // side of the third corner: +1 or -1; 0 when the filter could not tell
+  // The 2-D edges: coordinates u, v (the axes after the dropped one); per edge its start and
+  // its direction (q - p, rounded once), and the third corner's side (0: not certain).
+  int u = 0, v = 1;
+  double pu[3], pv[3], du[3], dv[3];
+  int inside2[3];
+};
+
+// The side of the point (x, y) of the projection against edge k of `e`: +1 left, -1 right,
+// 2 when the filter cannot tell. The determinant du (y - pv) - dv (x - pu) has the structure of
+// Shewchuk's orient2d (differences of inputs, rounded once each, two products and a
+// difference), so its rounding error is below (3 + 16 eps) eps (|du (y - pv)| + |dv (x - pu)|)
+// (ccwerrboundA, orient2d in predicates.cpp): 1e-15 times that sum leaves room to spare. A zero
+// sum is "cannot tell" (a filter, never the final word).
+inline int side2(const EdgePlanes& e, int k, double x, double y) {
+  const double l = e.du[k] * (y - e.pv[k]);
+  const double r = e.dv[k] * (x - e.pu[k]);
+  const double det = l - r;
+  const double bound = 1e-15 * ((l < 0 ? -l : l) + (r < 0 ? -r : r));
+  return det > bound ? 1 : (det < -bound ? -1 : 2);
+}
+
+// The plane a cut triangle is re-triangulated in: its projection along the dominant axis of
+// its normal, the two remaining coordinates swapped when that keeps it counter-clockwise. The
+// split paths (split_triangles, split_general) both use it, so the same triangle projects the
+// same way in either.
+struct Projection {
+  int axis = 2;
+  bool flip = false;
+};
+inline Projection projection_of(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
+  const Vec3 nrm = cross(p1 - p0, p2 - p0);
+  const double ax = nrm.x < 0 ? -nrm.x : nrm.x, ay = nrm.y < 0 ? -nrm.y : nrm.y,
+               az = nrm.z < 0 ? -nrm.z : nrm.z;
+  Projection pr;
+  pr.axis = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
+  pr.flip = nrm[pr.axis] < 0;
+  return pr;
+}
+inline detail::CdtPoint to_2d(const Vec3& q, const Projection& pr) {
+  const double x = q[(pr.axis + 1) % 3], y = q[(pr.axis + 2) % 3];
+  return pr.flip ? detail::CdtPoint{y, x} : detail::CdtPoint{x, y};
+}
+
+struct Point {
+  Vec3 p;
+  double s;  // parameter along the edge from its smaller vertex id
+  PointKey key;
+};
+
+// One side of a segment inside one cut triangle, directed so that the other solid's inside is
+// on its left, as seen from the triangle's outside.
+struct Record {
+  uint32_t tri;
+  uint32_t from, to;  // point ids
+  uint32_t hit;
+};
+
+// Stable sort of small KeyIndex arrays (insertion) or large ones (radix); points.cpp.
+Status sort_keys(Arena& arena, KeyIndex* items, size_t n);
+
+// A cut triangle's points in the order its re-triangulation takes them: corner 0, edge 0's
+// points by position along it, corner 1, edge 1's, corner 2, edge 2's, then the inside ones.
+// where(i): the edge (0..2) point i lies on, 3 inside; along(i): its position on that edge;
+// id(i): its vertex id. Fills by[n] (temporary), vid[n + 3], local_of[n] (point i's place),
+// corner_at[3]; *count = n + 3, *boundary = the corners and edge points.
+template <class Where, class Along, class Id>
+Status order_points(Arena& arena, size_t n, const uint32_t c[3], Where where, Along along, Id id,
+                    KeyIndex* by, uint32_t* vid, uint32_t* local_of, uint32_t corner_at[3],
+                    uint32_t* count, uint32_t* boundary) {
+  for (size_t i = 0; i < n; ++i) by[i] = KeyIndex{order_key(along(i)), static_cast<uint32_t>(i), 0};
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena, by, n));
+  for (size_t i = 0; i < n; ++i) by[i].key = where(by[i].index);
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena, by, n));
+  uint32_t m = 0;
+  size_t i = 0;
+  for (uint32_t e = 0; e < 3; ++e) {
+    corner_at[e] = m;
+    vid[m++] = c[e];
+    for (; i < n && by[i].key == e; ++i) {
+      local_of[by[i].index] = m;
+      vid[m++] = id(by[i].index);
+    }
+  }
+  *boundary = m;
+  for (; i < n; ++i) {
+    local_of[by[i].index] = m;
+    vid[m++] = id(by[i].index);
+  }
+  *count = m;
+  return Status::ok();
+}
+
+// A piece of a cut triangle.
+struct OutTri {
+  uint32_t v[3];
+  uint32_t src;   // the cut triangle's id
+  int8_t state;   // +1 inside the other solid, -1 outside
+};
+
+// The broad phase, computed once for all attempts: B's triangles near A's box (with their
+// validity checked) and a uniform grid over A's box whose cells list the triangles of A whose
+// box and plane meet them (A is the small mesh: the splint base). Everything is widened by
+// `reach`, the most a nudge (and its float32 rounding) can move A, so the candidates are a
+// superset for every attempt; the exact tests then use A as moved. Its memory stays until the
+// Boolean returns (the per-triangle planes of A, about 100 bytes a triangle, included).
+struct Broadphase {
+  Aabb abox;  // A's bounds widened by reach
+  double h = 1, inv_h = 1;
+  uint32_t dim[3] = {1, 1, 1};
+  uint32_t* start = nullptr;  // cell -> [start[c], start[c + 1]) in items
+  uint32_t* items = nullptr;
+  uint8_t* near_b = nullptr;  // per B triangle: its box meets abox
+  ArenaArray<uint32_t> near_ids;
+
+  void cell_range(const Aabb& box, uint32_t lo[3], uint32_t hi[3]) const {
+    for (int k = 0; k < 3; ++k) {
+      const double l = (box.lo[k] - abox.lo[k]) * inv_h, u = (box.hi[k] - abox.lo[k]) * inv_h;
+      lo[k] = l <= 0.0 ? 0u : (l >= dim[k] - 1.0 ? dim[k] - 1 : static_cast<uint32_t>(l));
+      hi[k] = u <= 0.0 ? 0u : (u >= dim[k] - 1.0 ? dim[k] - 1 : static_cast<uint32_t>(u));
+    }
+  }
+};
+
+class BooleanRun {
+ public:
+  BooleanRun(const Context& ctx, const Inputs& in, const Broadphase& bp,
+             const BooleanOptions& options, BooleanStats* stats)
+      : ctx_(ctx), arena_(*ctx.arena), in_(in), op_(options.op), options_(options),
+        st_(*stats), bp_(bp) {}
+
+  Status run(Mesh* result);
+
+ private:
+  Status find_hits();
+  Status add_contact(uint32_t ta, uint32_t tb);
+  Status number_points();
+  Status number_degenerate_points();
+  Status check_points_apart();
+  Status split_triangles();
+  Status split_general(uint32_t t, const KeyIndex* proper, size_t np, const KeyIndex* dk,
+                       size_t nd);
+  int8_t side_state(uint32_t t, uint32_t r, const uint32_t* sheets, int nsheets) const;
+  int8_t on_state(uint32_t t, uint32_t sheet) const;
+  uint32_t canon(uint32_t v) const { return (alias_ != nullptr && v >= in_.nva && v < in_.nva + in_.nvb && alias_[v - in_.nva] != ~0u) ? alias_[v - in_.nva] : v; }
+  bool keep(int8_t state, bool is_a) const;
+  Status resolve_pending();
+  int8_t uncut_state(uint32_t t, const uint32_t c[3]) const;
+  Status classify();
+  Status assemble(Mesh* result);
+  Status check_result(Mesh* result);
+  Status flood(bool side_a);
+  Status degenerate(uint32_t ta, uint32_t tb) const;
+  Status inconsistent_vertex(uint32_t v) const;
+
+  const Context& ctx_;
+  Arena& arena_;
+  Inputs in_;
+  BooleanOp op_;
+  BooleanOptions options_;
+  BooleanStats& st_;
+
+  DistanceIndex index_a_{};             // built when a part of B needs a winding number
+  bool have_a_index_ = false;
+  const Broadphase& bp_;                // near B triangles and A's grid (all attempts)
+  ArenaArray<Hit> hits_;
+  uint32_t* hit_points_ = nullptr;      // 2 per hit: start, end point ids
+  ArenaArray<Point> points_;
+  Record* rec_ = nullptr;               // 2 per hit
+  KeyIndex* order_ = nullptr;           // records sorted by triangle
+  ArenaArray<OutTri> tris_;             // pieces of cut triangles, by triangle id
+  int8_t* vstate_ = nullptr;            // per input vertex: +1 inside the other, -1 outside,
+                                        // kVertexOn on the other surface
+  // Degenerate contacts, resolved exactly (add_contact): their records, sorted by triangle
+  // before the split; B's vertices that coincide with A's (alias_: the A vertex, or ~0u;
+  // allocated at the first one); per triangle (nta + ntb): kUncut, kDecided (has constraints),
+  // kPending (only lone points: its pieces take their state after flooding), and the state
+  // of a triangle whose corners all lie on the other surface (by winding number).
+  ArenaArray<DegRecord> deg_;
+  uint32_t* alias_ = nullptr;
+  uint8_t* tflag_ = nullptr;
+  int8_t* tstate_ = nullptr;
+  bool pending_ = false;
+};
+
+enum TriangleFlag : uint8_t { kUncut = 0, kDecided = 1, kPending = 2 };
+
+// Defined in the stage files.
+EdgePlanes edge_planes(const Vec3& a0, const Vec3& a1, const Vec3& a2);
+PairResult intersect_pair(const Inputs& in, uint32_t ta, uint32_t tb, const PlaneFilter& pa,
+                          const EdgePlanes& ea, const PlaneFilter& pb, Hit* hit);
+Point make_point(const Inputs& in, const PointKey& key);
+Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double reach,
+                        bool float32_output, Broadphase* bp);
+
+}  // namespace boolean_detail
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_SRC_BOOLEAN_BOOLEAN_RUN_H

@@ -1,0 +1,637 @@
+// The Boolean run, intersection points: exact pair tests (intersect_pair), the crossing
+// segments and degenerate contacts found through the broad phase, their points named and
+// numbered (boolean_run.h).
+#include "boolean/boolean_run.h"
+
+namespace splintcore {
+namespace boolean_detail {
+
+EdgePlanes edge_planes(const Vec3& a0, const Vec3& a1, const Vec3& a2) {
+  const Vec3 corner[3] = {a0, a1, a2};
+  const Vec3 n = cross(a1 - a0, a2 - a0);
+  EdgePlanes e;
+  for (int k = 0; k < 3; ++k) {
+    const Vec3& p = corner[k];
+    const Vec3& q = corner[(k + 1) % 3];
+    e.plane[k] = plane_filter(p, q, p + n);
+    const int s = filtered_side(e.plane[k], corner[(k + 2) % 3]);
+    e.inside[k] = (s == 1 || s == -1) ? s : 0;
+  }
+  const double ax = n.x < 0 ? -n.x : n.x, ay = n.y < 0 ? -n.y : n.y, az = n.z < 0 ? -n.z : n.z;
+  const int w = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
+  e.u = (w + 1) % 3;
+  e.v = (w + 2) % 3;
+  for (int k = 0; k < 3; ++k) {
+    const Vec3& p = corner[k];
+    const Vec3& q = corner[(k + 1) % 3];
+    e.pu[k] = p[e.u];
+    e.pv[k] = p[e.v];
+    e.du[k] = q[e.u] - p[e.u];
+    e.dv[k] = q[e.v] - p[e.v];
+  }
+  for (int k = 0; k < 3; ++k) {
+    const Vec3& r = corner[(k + 2) % 3];
+    const int s = side2(e, k, r[e.u], r[e.v]);
+    e.inside2[k] = (s == 1 || s == -1) ? s : 0;
+  }
+  return e;
+}
+
+// pa, pb: the planes of ta and tb as filters (plane_filter of their corners in order); ea:
+// ta's edge planes. The caller has tested tb's whole box against ea's planes first
+// (detail::box_beyond): a box strictly beyond one means disjoint triangles, which the exact
+// tests below would answer kNone too (a cheaper filter first, never a different answer).
+PairResult intersect_pair(const Inputs& in, uint32_t ta, uint32_t tb, const PlaneFilter& pa,
+                          const EdgePlanes& ea, const PlaneFilter& pb, Hit* hit) {
+  uint32_t ga[3], gb[3];
+  in.corners(ta, ga);
+  in.corners(tb, gb);
+  const Vec3 A[3] = {in.vertex(ga[0]), in.vertex(ga[1]), in.vertex(ga[2])};
+  const Vec3 B[3] = {in.vertex(gb[0]), in.vertex(gb[1]), in.vertex(gb[2])};
+  // sa[i] > 0: A's corner i is below B's plane (on B's inside); sb likewise.
+  int sa[3], sb[3];
+  for (int j = 0; j < 3; ++j) sb[j] = -exact_side(pa, A[1], A[2], B[j]);
+  if (sb[0] == sb[1] && sb[1] == sb[2] && sb[0] != 0) return PairResult::kNone;
+  // B beyond one of A's edge prisms (2-D; a filter: only certain answers are used): disjoint,
+  // which the exact tests below would answer kNone too.
+  const double bu[3] = {B[0][ea.u], B[1][ea.u], B[2][ea.u]};
+  const double bv[3] = {B[0][ea.v], B[1][ea.v], B[2][ea.v]};
+  for (int k = 0; k < 3; ++k) {
+    if (ea.inside2[k] == 0) continue;
+    int j = 0;
+    while (j < 3 && side2(ea, k, bu[j], bv[j]) == -ea.inside2[k]) ++j;
+    if (j == 3) return PairResult::kNone;
+  }
+  // B strictly within all three of A's edge planes (3-D, the normal's direction: this test
+  // decides which pairs take the shortcut below, so it stays the one it always was; a pair it
+  // sends to the exact tests instead may find a degenerate contact there).
+  bool within = sb[0] != 0 && sb[1] != 0 && sb[2] != 0;
+  for (int k = 0; k < 3 && within; ++k) {
+    within = ea.inside[k] != 0;
+    for (int j = 0; j < 3 && within; ++j) within = filtered_side(ea.plane[k], B[j]) == ea.inside[k];
+  }
+  const int j0 = lone(sb);
+  // B's interval along d_b = n_b x n_a runs from its edge (b_j0, b_j0+1) to (b_j0+2, b_j0) when
+  // b_j0 is on A's inside (by symmetry with A's below), so along d it is reversed.
+  const uint64_t b_first = edge_key(gb[j0], gb[(j0 + 1) % 3]);
+  const uint64_t b_second = edge_key(gb[(j0 + 2) % 3], gb[j0]);
+  const uint64_t b_start = sb[j0] > 0 ? b_second : b_first;
+  const uint64_t b_end = sb[j0] > 0 ? b_first : b_second;
+  if (within) {
+    // Both of B's crossings of A's plane lie inside A: the segment is B's whole interval.
+    hit->start = PointKey{b_start, ta, 0};
+    hit->end = PointKey{b_end, ta, 0};
+    hit->ta = ta;
+    hit->tb = tb;
+    return PairResult::kSegment;
+  }
+  for (int i = 0; i < 3; ++i) sa[i] = -exact_side(pb, B[1], B[2], A[i]);
+  if (sa[0] == sa[1] && sa[1] == sa[2] && sa[0] != 0) return PairResult::kNone;
+  if (sa[0] == 0 || sa[1] == 0 || sa[2] == 0 || sb[0] == 0 || sb[1] == 0 || sb[2] == 0) {
+    return triangles_intersect(A[0], A[1], A[2], B[0], B[1], B[2]) ? PairResult::kDegenerate
+                                                                  : PairResult::kNone;
+  }
+  const int i0 = lone(sa);
+  // A's interval along d = n_a x n_b: from its edge (a_i0, a_i0+1) to its edge (a_i0+2, a_i0)
+  // when a_i0 is on the inside of B's plane, the other way round otherwise.
+  const uint64_t a_first = edge_key(ga[i0], ga[(i0 + 1) % 3]);
+  const uint64_t a_second = edge_key(ga[(i0 + 2) % 3], ga[i0]);
+  const uint64_t a_start = sa[i0] > 0 ? a_first : a_second;
+  const uint64_t a_end = sa[i0] > 0 ? a_second : a_first;
+
+  // The four crossing edges: A's first (a_i0 -> a_i0+1) and second (a_i0+2 -> a_i0), B's
+  // likewise, each in its triangle's order. Every answer below comes from the signs of the
+  // four tetrahedra (B edge, A edge), each computed at most once (orient3d is alternating, so
+  // the sign of (A edge, B edge) is the same number).
+  const int ia[2][2] = {{i0, (i0 + 1) % 3}, {(i0 + 2) % 3, i0}};
+  const int jb[2][2] = {{j0, (j0 + 1) % 3}, {(j0 + 2) % 3, j0}};
+  int memo[2][2] = {{2, 2}, {2, 2}};  // 2: not computed yet
+  auto tet = [&](int fb, int fa) {
+    int& m = memo[fb][fa];
+    if (m == 2) {
+      m = sign_of(orient3d(B[jb[fb][0]], B[jb[fb][1]], A[ia[fa][0]], A[ia[fa][1]]));
+    }
+    return m;
+  };
+  const int fa_start = sa[i0] > 0 ? 0 : 1;  // a_start is A's first crossing edge, or its second
+  const int fb_start = sb[j0] > 0 ? 1 : 0;
+  // Where B's edge fb meets A's plane, against A's triangle; A's edge fa against B's.
+  auto through_a = [&](int fb) { return through(tet(fb, 0), tet(fb, 1)); };
+  auto through_b = [&](int fa) { return through(tet(0, fa), tet(1, fa)); };
+  // The segment is [max(starts), min(ends)]: B's start is the later one exactly when it lies
+  // inside A's triangle, else A's start when it lies inside B's; likewise the ends. (B's ends
+  // first: B is the small mesh's triangle in the splint case, usually inside A's.)
+  bool have_start = false, have_end = false;
+  const Through bs = through_a(fb_start);
+  if (bs == kOnBoundary) return PairResult::kDegenerate;
+  if (bs == kIn) {
+    hit->start = PointKey{b_start, ta, 0};
+    have_start = true;
+  } else {
+    const Through as = through_b(fa_start);
+    if (as == kOnBoundary) return PairResult::kDegenerate;
+    if (as == kIn) {
+      hit->start = PointKey{a_start, tb, 0};
+      have_start = true;
+    }
+  }
+  const Through be = through_a(1 - fb_start);
+  if (be == kOnBoundary) return PairResult::kDegenerate;
+  if (be == kIn) {
+    hit->end = PointKey{b_end, ta, 0};
+    have_end = true;
+  } else {
+    const Through ae = through_b(1 - fa_start);
+    if (ae == kOnBoundary) return PairResult::kDegenerate;
+    if (ae == kIn) {
+      hit->end = PointKey{a_end, tb, 0};
+      have_end = true;
+    }
+  }
+  if (!have_start && !have_end) return PairResult::kNone;
+  if (have_start != have_end) return PairResult::kDegenerate;  // cannot happen exactly
+  hit->ta = ta;
+  hit->tb = tb;
+  return PairResult::kSegment;
+}
+
+// The exact crossing rounded once: the same key always gives the same bits.
+Point make_point(const Inputs& in, const PointKey& key) {
+  const Vec3 u = in.vertex(key_hi(key.edge));
+  const Vec3 v = in.vertex(key_lo(key.edge));
+  uint32_t g[3];
+  in.corners(key.tri, g);
+  const Vec3 t0 = in.vertex(g[0]);
+  const Vec3 n = cross(in.vertex(g[1]) - t0, in.vertex(g[2]) - t0);
+  const double du = dot(n, u - t0);
+  const double dv = dot(n, v - t0);
+  double s = du / (du - dv);
+  if (!(s > 0.0)) s = 0.0;
+  if (s > 1.0) s = 1.0;
+  Point pt;
+  pt.p = u + (v - u) * s;
+  pt.s = s;
+  pt.key = key;
+  return pt;
+}
+
+// Stable sort of small KeyIndex arrays (insertion) or large ones (radix).
+Status sort_keys(Arena& arena, KeyIndex* items, size_t n) {
+  if (n <= 48) {
+    for (size_t i = 1; i < n; ++i) {
+      const KeyIndex x = items[i];
+      size_t j = i;
+      while (j > 0 && items[j - 1].key > x.key) {
+        items[j] = items[j - 1];
+        --j;
+      }
+      items[j] = x;
+    }
+    return Status::ok();
+  }
+  return radix_sort(arena, Span<KeyIndex>(items, n));
+}
+
+Status BooleanRun::degenerate(uint32_t ta, uint32_t tb) const {
+  return make_error(StatusCode::kUnsupported,
+                    "contact between triangle ", ta, " of A and triangle ", tb - in_.nta,
+                    " of B not decided: a coordinate is outside the exact predicates' range "
+                    "(0, or 2^-300 .. 2^330 in magnitude)")
+      .at_index(ta);
+}
+
+// Candidate pairs through the broad phase's grid; each decided exactly (intersect_pair) with A
+// as this attempt has it.
+Status BooleanRun::find_hits() {
+  const Mesh& b = *in_.b;
+  const uint32_t nta = in_.nta;
+  const uint32_t nv_in = in_.nva + in_.nvb;
+  vstate_ = arena_.allocate_array<int8_t>(nv_in);
+  if (vstate_ == nullptr && nv_in > 0) return arena_.exhausted_status();
+  if (nv_in > 0) std::memset(vstate_, 0, nv_in);
+  PlaneFilter* filters = arena_.allocate_array<PlaneFilter>(nta);
+  EdgePlanes* edges = arena_.allocate_array<EdgePlanes>(nta);
+  Aabb* boxes = arena_.allocate_array<Aabb>(nta);
+  uint32_t* stamp = arena_.allocate_array<uint32_t>(nta);
+  if (filters == nullptr || edges == nullptr || boxes == nullptr ||
+      stamp == nullptr) {
+    return arena_.exhausted_status();
+  }
+  for (uint32_t t = 0; t < nta; ++t) {
+    const Triangle& at = in_.a->triangles[t];
+    const Vec3& p0 = in_.a->vertices[at.v[0]];
+    const Vec3& p1 = in_.a->vertices[at.v[1]];
+    const Vec3& p2 = in_.a->vertices[at.v[2]];
+    filters[t] = plane_filter(p0, p1, p2);
+    edges[t] = edge_planes(p0, p1, p2);
+    boxes[t] = Aabb{};
+    boxes[t].add(p0);
+    boxes[t].add(p1);
+    boxes[t].add(p2);
+    stamp[t] = ~0u;
+  }
+  const uint32_t* dim = bp_.dim;
+  const uint32_t* start = bp_.start;
+  const uint32_t* items = bp_.items;
+  const Vec3* vb = b.vertices.data();
+  st_.near_b_triangles = bp_.near_ids.size();
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", 0, 1));
+  hits_.bind(&arena_);
+  deg_.bind(&arena_);
+  for (size_t ni = 0; ni < bp_.near_ids.size(); ++ni) {
+    const uint32_t t = bp_.near_ids[ni];
+    if ((ni & 65535u) == 0) {
+      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", ni, bp_.near_ids.size()));
+    }
+    const Triangle& tri = b.triangles[t];
+    Aabb box;
+    box.add(vb[tri.v[0]]);
+    box.add(vb[tri.v[1]]);
+    box.add(vb[tri.v[2]]);
+    uint32_t lo[3], hi[3];
+    bp_.cell_range(box, lo, hi);
+    bool flat_checked = false;
+    PlaneFilter pb{};
+    const Vec3 bc = (box.lo + box.hi) * 0.5;
+    const Vec3 bext = box.hi - box.lo;
+    for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
+      for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
+        for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
+          const size_t c = (size_t{z} * dim[1] + y) * dim[0] + x;
+          for (uint32_t k = start[c]; k < start[c + 1]; ++k) {
+            const uint32_t ta = items[k];
+            if (stamp[ta] == t) continue;
+            stamp[ta] = t;
+            if (!boxes[ta].overlaps(box)) continue;
+            ++st_.candidate_pairs;
+            if (!flat_checked) {
+              if (collinear3d(vb[tri.v[0]], vb[tri.v[1]], vb[tri.v[2]])) {
+                return make_error(StatusCode::kInvalidMesh, "triangle ", t,
+                                  " of B is degenerate (zero area) and meets A near triangle ", ta)
+                    .at_index(t);
+              }
+              flat_checked = true;
+              pb = plane_filter(vb[tri.v[0]], vb[tri.v[1]], vb[tri.v[2]]);
+            }
+            // B's whole box strictly beyond one of A's edge planes: disjoint, which
+            // intersect_pair would answer kNone (tested here: it spares the call for most pairs).
+            const EdgePlanes& ea = edges[ta];
+            if ((ea.inside[0] != 0 && detail::box_beyond(ea.plane[0], ea.inside[0], bc, bext)) ||
+                (ea.inside[1] != 0 && detail::box_beyond(ea.plane[1], ea.inside[1], bc, bext)) ||
+                (ea.inside[2] != 0 && detail::box_beyond(ea.plane[2], ea.inside[2], bc, bext))) {
+              continue;
+            }
+            Hit hit;
+            const PairResult r = intersect_pair(in_, ta, in_.nta + t, filters[ta], ea, pb, &hit);
+            if (r == PairResult::kDegenerate) SPLINTCORE_RETURN_IF_ERROR(add_contact(ta, in_.nta + t));
+            if (r == PairResult::kSegment && !hits_.push_back(hit)) {
+              return arena_.exhausted_status();
+            }
+          }
+        }
+      }
+    }
+  }
+  st_.intersecting_pairs = hits_.size();
+  return Status::ok();
+}
+
+// A degenerate pair (a corner on the other plane, or edges meeting exactly): its exact contact
+// (contact.h) becomes records for both triangles. Input vertices on the other surface are
+// marked (kVertexOn); a vertex of B on a vertex of A becomes that vertex (alias_).
+Status BooleanRun::add_contact(uint32_t ta, uint32_t tb) {
+  using detail::Loc;
+  uint32_t ga[3], gb[3];
+  in_.corners(ta, ga);
+  in_.corners(tb, gb);
+  const Vec3 A[3] = {in_.vertex(ga[0]), in_.vertex(ga[1]), in_.vertex(ga[2])};
+  const Vec3 B[3] = {in_.vertex(gb[0]), in_.vertex(gb[1]), in_.vertex(gb[2])};
+  // The predicates are exact for coordinates 0 or of magnitude 2^-306 .. 2^338 (geometry.h);
+  // outside that (subnormal or astronomical coordinates) the contact is not decided here.
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const double x = A[i][k] < 0 ? -A[i][k] : A[i][k];
+      const double y = B[i][k] < 0 ? -B[i][k] : B[i][k];
+      if ((x != 0 && (x < 0x1p-300 || x > 0x1p330)) || (y != 0 && (y < 0x1p-300 || y > 0x1p330))) {
+        return degenerate(ta, tb);
+      }
+    }
+  }
+  detail::Contact c;
+  if (!detail::intersect_triangles(A, B, &c)) return degenerate(ta, tb);
+  if (c.kind == detail::ContactKind::kNone) return Status::ok();
+  ++st_.degenerate_pairs;
+  DegPoint name[6];
+  for (int i = 0; i < c.count; ++i) {
+    const detail::ContactPoint& cp = c.p[i];
+    DegPoint d{0, 0, kDegVertex};
+    const bool va = detail::loc_is_vertex(cp.on_a), vb = detail::loc_is_vertex(cp.on_b);
+    if (va) {
+      d.k1 = ga[detail::loc_index(cp.on_a)];
+      vstate_[d.k1] = kVertexOn;
+      if (vb) {
+        const uint32_t bv = gb[detail::loc_index(cp.on_b)];
+        vstate_[bv] = kVertexOn;
+        if (alias_ == nullptr) {
+          alias_ = arena_.allocate_array<uint32_t>(in_.nvb);
+          if (alias_ == nullptr) return arena_.exhausted_status();
+          std::memset(alias_, 0xff, size_t{in_.nvb} * sizeof(uint32_t));
+        }
+        uint32_t& al = alias_[bv - in_.nva];
+        if (al != ~0u && al != d.k1) {
+          return make_error(StatusCode::kUnsupported, "vertex ", bv - in_.nva,
+                            " of B lies on two vertices of A (", al, " and ", d.k1,
+                            "): A has coincident vertices")
+              .at_index(bv - in_.nva);
+        }
+        al = static_cast<uint32_t>(d.k1);
+      }
+    } else if (vb) {
+      d.k1 = gb[detail::loc_index(cp.on_b)];
+      vstate_[d.k1] = kVertexOn;
+    } else {
+      const int i0 = detail::loc_index(cp.on_a), j0 = detail::loc_index(cp.on_b);
+      if (cp.on_b == Loc::kFace) {
+        d = DegPoint{edge_key(ga[i0], ga[(i0 + 1) % 3]), tb, kDegEdgeFace};
+      } else if (cp.on_a == Loc::kFace) {
+        d = DegPoint{edge_key(gb[j0], gb[(j0 + 1) % 3]), ta, kDegEdgeFace};
+      } else {
+        d = DegPoint{edge_key(ga[i0], ga[(i0 + 1) % 3]), edge_key(gb[j0], gb[(j0 + 1) % 3]),
+                     kDegEdgeEdge};
+      }
+    }
+    name[i] = d;
+  }
+  auto record = [&](int i, int j, uint8_t kind) -> Status {
+    const detail::ContactPoint& p = c.p[i];
+    const detail::ContactPoint& q = c.p[j];
+    DegRecord ra{};
+    ra.p[0] = name[i];
+    ra.p[1] = name[j];
+    ra.tri = ta;
+    ra.other = tb;
+    ra.kind = kind;
+    DegRecord rb = ra;
+    rb.tri = tb;
+    rb.other = ta;
+    ra.loc_t[0] = static_cast<uint8_t>(p.on_a);
+    ra.loc_t[1] = static_cast<uint8_t>(q.on_a);
+    ra.loc_o[0] = static_cast<uint8_t>(p.on_b);
+    ra.loc_o[1] = static_cast<uint8_t>(q.on_b);
+    rb.loc_t[0] = ra.loc_o[0];
+    rb.loc_t[1] = ra.loc_o[1];
+    rb.loc_o[0] = ra.loc_t[0];
+    rb.loc_o[1] = ra.loc_t[1];
+    // A lone point at a corner of the triangle changes nothing there (flooding treats the
+    // corner as on the other surface).
+    if (kind != kDegPointOnly || !detail::loc_is_vertex(p.on_a)) {
+      if (!deg_.push_back(ra)) return arena_.exhausted_status();
+    }
+    if (kind != kDegPointOnly || !detail::loc_is_vertex(p.on_b)) {
+      if (!deg_.push_back(rb)) return arena_.exhausted_status();
+    }
+    return Status::ok();
+  };
+  switch (c.kind) {
+    case detail::ContactKind::kPoint:
+      return record(0, 0, kDegPointOnly);
+    case detail::ContactKind::kSegment:
+      return record(0, 1, c.coplanar ? kDegCoplanar : kDegTransversal);
+    case detail::ContactKind::kPolygon:
+      for (int i = 0; i < c.count; ++i) {
+        SPLINTCORE_RETURN_IF_ERROR(record(i, (i + 1) % c.count, kDegCoplanar));
+      }
+      return Status::ok();
+    case detail::ContactKind::kNone:
+      break;
+  }
+  return Status::ok();
+}
+
+// The points of the degenerate contacts get vertex ids: an input vertex its own (its alias for
+// B), an edge through a triangle the id of the same point of a crossing pair when there is one
+// (points_ is sorted by (edge, triangle) here), new points after the others otherwise, in
+// (kind, k1, k2) order, each computed once from its name.
+Status BooleanRun::number_degenerate_points() {
+  const size_t nd = deg_.size();
+  if (nd == 0) return Status::ok();
+  const uint32_t base = in_.nva + in_.nvb;
+  const size_t n0 = points_.size();
+  auto find_ef = [&](const DegPoint& d) -> uint32_t {
+    size_t lo = 0, hi = n0;
+    while (lo < hi) {
+      const size_t mid = (lo + hi) / 2;
+      const PointKey& k = points_[mid].key;
+      if (k.edge < d.k1 || (k.edge == d.k1 && k.tri < d.k2)) lo = mid + 1; else hi = mid;
+    }
+    return (lo < n0 && points_[lo].key.edge == d.k1 && points_[lo].key.tri == d.k2)
+               ? static_cast<uint32_t>(lo) : ~0u;
+  };
+  if (!points_.reserve(n0 + 2 * nd)) return arena_.exhausted_status();  // before the scope
+  ArenaScope scope(arena_);
+  // The ends that name new points, sorted (stable radix passes: k2, then k1, then kind).
+  KeyIndex* keys = arena_.allocate_array<KeyIndex>(2 * nd);
+  if (keys == nullptr) return arena_.exhausted_status();
+  size_t m = 0;
+  for (size_t r = 0; r < nd; ++r) {
+    DegRecord& rec = deg_[r];
+    for (int e = 0; e < 2; ++e) {
+      const DegPoint& d = rec.p[e];
+      if (d.kind == kDegVertex) {
+        rec.id[e] = static_cast<uint32_t>(d.k1);
+        continue;
+      }
+      if (d.kind == kDegEdgeFace) {
+        const uint32_t f = find_ef(d);
+        if (f != ~0u) {
+          rec.id[e] = base + f;
+          continue;
+        }
+      }
+      rec.id[e] = ~0u;
+      keys[m++] = KeyIndex{d.k2, static_cast<uint32_t>(2 * r + static_cast<size_t>(e)), 0};
+    }
+  }
+  auto point_of = [&](uint32_t i) -> const DegPoint& { return deg_[i / 2].p[i % 2]; };
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, keys, m));
+  for (size_t i = 0; i < m; ++i) keys[i].key = point_of(keys[i].index).k1;
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, keys, m));
+  for (size_t i = 0; i < m; ++i) keys[i].key = point_of(keys[i].index).kind;
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, keys, m));
+  uint64_t limit = 0;
+  if (!checked_add(uint64_t{base} + n0, m, &limit) || limit >= (uint64_t{1} << 31)) {
+    return make_error(StatusCode::kLimitExceeded, "too many vertices for 32-bit ids: ", limit);
+  }
+  const DegPoint* prev = nullptr;
+  for (size_t i = 0; i < m; ++i) {
+    const DegPoint& d = point_of(keys[i].index);
+    if (prev == nullptr || d.kind != prev->kind || d.k1 != prev->k1 || d.k2 != prev->k2) {
+      Point pt;
+      pt.s = 0;
+      if (d.kind == kDegEdgeFace) {
+        pt = make_point(in_, PointKey{d.k1, static_cast<uint32_t>(d.k2), 0});
+      } else {
+        const Vec3 ea[3] = {in_.vertex(key_hi(d.k1)), in_.vertex(key_lo(d.k1)), Vec3{}};
+        const Vec3 eb[3] = {in_.vertex(key_hi(d.k2)), in_.vertex(key_lo(d.k2)), Vec3{}};
+        pt.p = detail::contact_point_position(ea, eb, detail::ContactPoint{detail::Loc::kE0, detail::Loc::kE0});
+        pt.key = PointKey{d.k1, ~0u, 0};
+      }
+      if (options_.float32_output && !round_to_float32(&pt.p)) {
+        return make_error(StatusCode::kLimitExceeded, "intersection point beyond float32 range");
+      }
+      if (!points_.push_back(pt)) return arena_.exhausted_status();
+    }
+    deg_[keys[i].index / 2].id[keys[i].index % 2] = base + static_cast<uint32_t>(points_.size() - 1);
+    prev = &d;
+  }
+  return Status::ok();
+}
+
+Status BooleanRun::number_points() {
+  const size_t n = hits_.size() * 2;
+  KeyIndex* items = arena_.allocate_array<KeyIndex>(n);
+  hit_points_ = arena_.allocate_array<uint32_t>(n);
+  if ((items == nullptr || hit_points_ == nullptr) && n > 0) return arena_.exhausted_status();
+  {
+    ArenaScope scope(arena_);
+    // Lexicographic (edge, triangle), ties in index order: stably by edge, then each run of
+    // one edge (the few triangles its line crosses) stably by triangle, by insertion. The same
+    // order as two stable passes (triangle, then edge), which remain for runs longer than 32.
+    auto tri_of = [&](uint32_t i) { return (i & 1) == 0 ? hits_[i / 2].start.tri : hits_[i / 2].end.tri; };
+    for (size_t i = 0; i < n; ++i) {
+      const Hit& h = hits_[i / 2];
+      items[i] = KeyIndex{(i & 1) == 0 ? h.start.edge : h.end.edge, static_cast<uint32_t>(i), 0};
+    }
+    SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(items, n)));
+    bool long_run = false;
+    for (size_t a = 0; a < n && !long_run;) {
+      size_t b = a + 1;
+      while (b < n && items[b].key == items[a].key) ++b;
+      if (b - a > 32) long_run = true;
+      for (size_t i = a + 1; i < b && !long_run; ++i) {
+        const KeyIndex x = items[i];
+        const uint32_t tx = tri_of(x.index);
+        size_t j = i;
+        for (; j > a && tri_of(items[j - 1].index) > tx; --j) items[j] = items[j - 1];
+        items[j] = x;
+      }
+      a = b;
+    }
+    if (long_run) {
+      for (size_t i = 0; i < n; ++i) items[i] = KeyIndex{tri_of(static_cast<uint32_t>(i)), static_cast<uint32_t>(i), 0};
+      SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(items, n)));
+      for (size_t i = 0; i < n; ++i) {
+        const Hit& h = hits_[items[i].index / 2];
+        items[i].key = (items[i].index & 1) == 0 ? h.start.edge : h.end.edge;
+      }
+      SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(items, n)));
+    }
+  }
+  // Count distinct points, then make them (the point array is sized exactly).
+  size_t distinct = 0;
+  const PointKey* prev = nullptr;
+  for (size_t i = 0; i < n; ++i) {
+    const Hit& h = hits_[items[i].index / 2];
+    const PointKey* k = (items[i].index & 1) == 0 ? &h.start : &h.end;
+    if (prev == nullptr || k->edge != prev->edge || k->tri != prev->tri) ++distinct;
+    prev = k;
+  }
+  uint64_t limit = 0;
+  if (!checked_add(uint64_t{in_.nva} + in_.nvb, distinct, &limit) || limit >= (uint64_t{1} << 31)) {
+    return make_error(StatusCode::kLimitExceeded, "too many vertices for 32-bit ids: ", limit);
+  }
+  points_.bind(&arena_);
+  if (!points_.reserve(distinct)) return arena_.exhausted_status();
+  prev = nullptr;
+  for (size_t i = 0; i < n; ++i) {
+    const Hit& h = hits_[items[i].index / 2];
+    const PointKey* k = (items[i].index & 1) == 0 ? &h.start : &h.end;
+    if (prev == nullptr || k->edge != prev->edge || k->tri != prev->tri) {
+      // Rounded to float32 here, before any triangle is re-triangulated, when the result is
+      // for STL: the triangulations are then valid for the coordinates the file will hold.
+      Point pt = make_point(in_, *k);
+      if (options_.float32_output && !round_to_float32(&pt.p)) {
+        return make_error(StatusCode::kLimitExceeded, "intersection point beyond float32 range");
+      }
+      if (!points_.push_back(pt)) return arena_.exhausted_status();
+    }
+    hit_points_[items[i].index] = static_cast<uint32_t>(points_.size() - 1);
+    prev = k;
+  }
+  return Status::ok();
+}
+
+// Two points rounded together would break the triangulations: found here, before any work
+// depends on them (the caller then nudges A and tries again).
+Status BooleanRun::check_points_apart() {
+  st_.intersection_points = points_.size();
+  const char* as = options_.float32_output ? " (as float32)" : "";
+  // With exact contacts resolved, the result may not be a solid (parts that touch along an
+  // edge, points that coincide after rounding): unsupported, so that the nudge takes over.
+  // Two points that round together are a near-degeneracy, not a bug: a nudged A (attempts
+  // > 1), or in a later pass of several shell groups an A that holds the previous pass's
+  // rounded intersection points, meets B within a rounding error. The next nudge runs.
+  const StatusCode fragile = StatusCode::kUnsupported;
+  ArenaScope scope(arena_);
+  const uint32_t np = static_cast<uint32_t>(points_.size());
+  if (np > 1) {
+    KeyIndex* keys = arena_.allocate_array<KeyIndex>(np);
+    if (keys == nullptr) return arena_.exhausted_status();
+    // First a cheaper look: sorted by x alone, equal points share a run of equal x; runs are
+    // a handful of points. Only when it finds a pair (or a run too long to compare pairwise)
+    // does the full lexicographic sort below run, so the pair named is the same as always.
+    for (uint32_t i = 0; i < np; ++i) keys[i] = KeyIndex{order_key(points_[i].p.x + 0.0), i, 0};
+    SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(keys, np)));
+    bool maybe = false;
+    for (uint32_t i = 0; i < np && !maybe;) {
+      uint32_t j = i + 1;
+      while (j < np && keys[j].key == keys[i].key) ++j;
+      if (j - i > 16) maybe = true;
+      for (uint32_t x = i; x < j && !maybe; ++x) {
+        for (uint32_t y = x + 1; y < j; ++y) {
+          if (points_[keys[x].index].p == points_[keys[y].index].p) maybe = true;
+        }
+      }
+      i = j;
+    }
+    if (!maybe) return Status::ok();
+    for (int axis = 2; axis >= 0; --axis) {
+      for (uint32_t i = 0; i < np; ++i) {
+        const uint32_t id = axis == 2 ? i : keys[i].index;
+        keys[i] = KeyIndex{order_key(points_[id].p[axis] + 0.0), id, 0};
+      }
+      SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(keys, np)));
+    }
+    for (uint32_t i = 1; i < np; ++i) {
+      if (points_[keys[i].index].p == points_[keys[i - 1].index].p) {
+        // Named by what defines them: an edge (two vertex ids) of one mesh through a triangle
+        // of the other, or through an edge of the other.
+        auto named = [&](Status& st, const PointKey& k) {
+          const uint32_t u = key_hi(k.edge), v = key_lo(k.edge);
+          const bool of_a = u < in_.nva;
+          st.append("edge ").append_u64(of_a ? u : u - in_.nva).append("-");
+          st.append_u64(of_a ? v : v - in_.nva).append(of_a ? " of A" : " of B");
+          if (k.tri == ~0u) {
+            st.append(" across an edge of B");
+          } else {
+            const bool tri_a = k.tri < in_.nta;
+            st.append(" through triangle ").append_u64(tri_a ? k.tri : k.tri - in_.nta);
+            st.append(tri_a ? " of A" : " of B");
+          }
+        };
+        Status e = make_error(fragile, "intersection points ", keys[i - 1].index, " and ",
+                              keys[i].index, " coincide", as, ": ");
+        named(e, points_[keys[i - 1].index].key);
+        e.append(" and ");
+        named(e, points_[keys[i].index].key);
+        const uint32_t t = points_[keys[i].index].key.tri;
+        return t == ~0u ? e : e.at_index(t < in_.nta ? t : t - in_.nta);
+      }
+    }
+  }
+  return Status::ok();
+}
+
+}  // namespace boolean_detail
+
+}  // namespace splintcore
