@@ -19,8 +19,8 @@
 namespace splintcore {
 namespace {
 
-const char* kFixtures[] = {"stl/torus_binary.stl",  "stl/box_solid_header.stl",
-                           "stl/tetra_ascii.stl",   "stl/open_box_ascii.stl",
+const char* kFixtures[] = {"stl/torus_binary.stl",   "stl/box_solid_header.stl",
+                           "stl/tetra_ascii.stl",    "stl/open_box_ascii.stl",
                            "stl/inside_out_box.stl", "stl/too_large_box.stl"};
 
 const char* kCases[] = {"cases/paper_scale.json", "cases/rounded.json", "cases/uneven.json"};
@@ -31,8 +31,8 @@ std::map<std::string, std::string> load_golden() { return test::golden_hashes();
 
 std::string convert_hash(const std::string& fixture, StlFormat format) {
   test::TestArena t(64 << 20);
-  std::vector<uint8_t> bytes = test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/" +
-                                                     fixture);
+  std::vector<uint8_t> bytes =
+      test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/" + fixture);
   EXPECT_FALSE(bytes.empty()) << fixture;
   Mesh mesh;
   Status s = test::mesh_from_bytes(t.arena, bytes, &mesh);
@@ -51,8 +51,8 @@ std::string base_hash(const std::string& fixture, size_t* triangles) {
   EXPECT_FALSE(text.empty()) << fixture;
   Context ctx(&t.arena);
   CaseFile c;
-  Status s = parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(),
-                        fixture.c_str(), &c);
+  Status s =
+      parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), fixture.c_str(), &c);
   EXPECT_TRUE(s.is_ok()) << test::format(s);
   Mesh m(&t.arena);
   BaseReport r;
@@ -68,7 +68,8 @@ std::string base_hash(const std::string& fixture, size_t* triangles) {
 TEST(Golden, ConvertedFixturesMatchCommittedHashes) {
   std::map<std::string, std::string> golden = load_golden();
   std::ostringstream fresh;
-  fresh << "# SHA-256 of `splintcore convert` output for each fixture (see tests/golden_test.cpp)\n";
+  fresh
+      << "# SHA-256 of `splintcore convert` output for each fixture (see tests/golden_test.cpp)\n";
   for (const char* f : kFixtures) {
     for (StlFormat format : {StlFormat::kBinary, StlFormat::kAscii}) {
       std::string key = std::string(format == StlFormat::kBinary ? "binary:" : "ascii:") + f;
@@ -140,7 +141,8 @@ std::string render_hash(bool scalars) {
   test::TestArena t(64 << 20);
   Mesh torus, box;
   Status s = test::mesh_from_bytes(
-      t.arena, test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/stl/torus_binary.stl"),
+      t.arena,
+      test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/stl/torus_binary.stl"),
       &torus);
   EXPECT_TRUE(s.is_ok()) << test::format(s);
   s = test::mesh_from_bytes(

@@ -1,8 +1,8 @@
 // MeshLab (meshlabserver) as an oracle independent of our own checks: our written STL must be
 // two-manifold and watertight for MeshLab too, with the same genus and volume. Skips when
 // meshlabserver or xvfb-run is not installed (the README's test command installs both).
-#include "splintcore/design.h"
 #include "support/meshlab.h"
+#include "splintcore/design.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -17,8 +17,8 @@ TEST(MeshLab, ConvertedFixturesAreWatertightTwoManifoldWithOurVolume) {
   struct Case {
     const char* fixture;
     int genus;
-  } cases[] = {{"stl/torus_binary.stl", 1}, {"stl/box_solid_header.stl", 0},
-               {"stl/tetra_ascii.stl", 0}};
+  } cases[] = {
+      {"stl/torus_binary.stl", 1}, {"stl/box_solid_header.stl", 0}, {"stl/tetra_ascii.stl", 0}};
   for (const Case& c : cases) {
     test::TestArena t(64 << 20);
     Mesh mesh;
@@ -39,14 +39,15 @@ TEST(MeshLab, ConvertedFixturesAreWatertightTwoManifoldWithOurVolume) {
 
 TEST(MeshLab, CaseBasesAreWatertightTwoManifold) {
   if (!have_meshlab()) GTEST_SKIP() << "meshlabserver/xvfb-run not installed";
-  for (const char* fixture : {"cases/paper_scale.json", "cases/rounded.json", "cases/uneven.json"}) {
+  for (const char* fixture :
+       {"cases/paper_scale.json", "cases/rounded.json", "cases/uneven.json"}) {
     test::TestArena t(64 << 20);
     std::vector<uint8_t> text =
         test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/" + fixture);
     Context ctx(&t.arena);
     CaseFile c;
-    SPLINTCORE_ASSERT_OK(parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(),
-                                    fixture, &c));
+    SPLINTCORE_ASSERT_OK(
+        parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), fixture, &c));
     Mesh m(&t.arena);
     BaseReport r;
     SPLINTCORE_ASSERT_OK(build_case_base(ctx, c, &m, &r));

@@ -24,7 +24,8 @@ TEST(RealData, EveryToothIsAClosedOutwardGenusZeroSolid) {
     MeshReport r;
     Context ctx(&t.arena);
     SPLINTCORE_ASSERT_OK(check_mesh(ctx, mesh, &r));
-    EXPECT_TRUE(r.is_valid_solid()) << "tooth " << tooth << ": " << test::format(require_valid_solid(r));
+    EXPECT_TRUE(r.is_valid_solid())
+        << "tooth " << tooth << ": " << test::format(require_valid_solid(r));
     EXPECT_EQ(r.genus, 0) << tooth;
     EXPECT_EQ(r.shells, 1u) << tooth;
     // SOURCES.md: volumes 199.5 - 891.5 mm^3.

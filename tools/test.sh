@@ -376,11 +376,21 @@ lint_job() {
   # clang-tidy with the checked-in .clang-tidy, and cppcheck, over our own sources; a finding
   # from either fails the job. compile_commands.json comes from a configure-only build dir.
   local dir=build/ci-lint
-  echo "=== lint: the floors (tools/check_layers.py), function lengths (tools/function_sizes.py), clang-tidy (.clang-tidy) and cppcheck over src/ include/ tools/"
-  ensure_packages clang clang-tidy cppcheck python3 universal-ctags || return 1
+  echo "=== lint: the floors (tools/check_layers.py), the layout (clang-format), function lengths (tools/function_sizes.py), clang-tidy (.clang-tidy) and cppcheck over src/ include/ tools/"
+  ensure_packages clang clang-tidy clang-format cppcheck python3 universal-ctags || return 1
   local layers_rc=0 layers
   layers=$(python3 tools/check_layers.py) || layers_rc=1
   printf '%s\n' "$layers" | tail -n 12
+  # The layout: every C and C++ file of ours as clang-format (.clang-format) writes it.
+  local unformatted
+  unformatted=$(git ls-files '*.cpp' '*.h' '*.c' | grep -E '^(src|include|tools|tests)/' |
+    xargs clang-format --dry-run 2>&1 | grep -oE '^[^:]+:[0-9]+:[0-9]+: (warning|error)' |
+    cut -d: -f1 | sort -u)
+  if [ -n "$unformatted" ]; then
+    echo "not as clang-format writes them (clang-format -i FILE):" $unformatted; layers_rc=1
+  else
+    echo "clang-format: every file as .clang-format lays it out"
+  fi
   # Function lengths (issue 27): none over 150 lines but those tools/function_sizes.allow
   # lists (they may only shrink), and the share of lines in functions over 100 lines may only
   # fall (the goal is 25%).

@@ -38,7 +38,7 @@ struct SweepOptions {
   // splint's insertion direction. Any non-zero finite vector; it is normalised. For the
   // paper's big-end-up cone blocked out along its axis (a cylinder results) it points down.
   Vec3 direction{0, 0, 1};
-  double voxel = 0.1;       // mm, the grid spacing
+  double voxel = 0.1;  // mm, the grid spacing
   // How far beyond the jaws' far end (largest p . d) the swept volume is kept, mm; it is closed
   // there by a flat cap. 0: a cap just past the jaws.
   double extent = 0;
@@ -76,24 +76,24 @@ struct SweepOptions {
   // false: the plain running minimum inside (for measuring the bias it has); true: the
   // extrapolated inside field described above.
   bool correct_bias = true;
-  uint32_t layers_per_tile = 0;  // slab size for the extractor (0: automatic); bytes unchanged
+  uint32_t layers_per_tile = 0;      // slab size for the extractor (0: automatic); bytes unchanged
   double edge_margin = kEdgeMargin;  // the extractor's (volume.h); the blockout uses 1/16
 };
 
 struct SweepStats {
-  uint32_t nx = 0, ny = 0, nz = 0;      // the extracted grid (z along the direction)
-  uint32_t preroll_layers = 0;          // layers swept before the region's first (not meshed)
-  uint64_t voxels = 0;                  // nx * ny * nz
-  uint64_t front_triangles = 0;         // triangles facing against or across d (the rest skip)
-  uint64_t segment_tests = 0;           // column segment against triangle: exact tests
-  uint64_t distance_evaluations = 0;    // column segment to triangle distances
-  uint64_t inside_columns = 0;          // columns that met a jaw
-  uint64_t corrected_samples = 0;       // inside samples given an extrapolated value
-  uint64_t cap_triangles_dropped = 0;   // open_at_region: the caps' triangles left out
-  uint64_t closing_samples = 0;         // samples the erosion searched around
-  uint64_t closed_samples = 0;          // samples outside the volume that the closing filled
+  uint32_t nx = 0, ny = 0, nz = 0;     // the extracted grid (z along the direction)
+  uint32_t preroll_layers = 0;         // layers swept before the region's first (not meshed)
+  uint64_t voxels = 0;                 // nx * ny * nz
+  uint64_t front_triangles = 0;        // triangles facing against or across d (the rest skip)
+  uint64_t segment_tests = 0;          // column segment against triangle: exact tests
+  uint64_t distance_evaluations = 0;   // column segment to triangle distances
+  uint64_t inside_columns = 0;         // columns that met a jaw
+  uint64_t corrected_samples = 0;      // inside samples given an extrapolated value
+  uint64_t cap_triangles_dropped = 0;  // open_at_region: the caps' triangles left out
+  uint64_t closing_samples = 0;        // samples the erosion searched around
+  uint64_t closed_samples = 0;         // samples outside the volume that the closing filled
   MarchingCubesStats extraction;
-  Vec3 axis_u{}, axis_v{}, axis_w{};    // the grid's axes in the jaws' frame (axis_w = d)
+  Vec3 axis_u{}, axis_v{}, axis_w{};  // the grid's axes in the jaws' frame (axis_w = d)
 };
 
 // Arena bytes the sweep's own state takes for `jaws` (local vertex copies, sorted triangle
@@ -109,9 +109,9 @@ uint64_t sweep_state_bound(uint64_t vertex_count, uint64_t triangle_count, uint3
 // any triangle counts), but a closed, outward mesh is what makes S the solid the paper means.
 // An empty result (a region that misses the jaws' shadow) is no error: nothing is streamed.
 // Errors: kInvalidArgument (a zero or non-finite direction, voxel not > 0, negative extent, no
-// triangles, an empty or non-finite region), kLimitExceeded (a grid above 2^31 samples per axis or 2^62 in all), kNonFinite
-// (a vertex), kArenaExhausted (naming the need), kCancelled, those of marching_cubes().
-// Progress: "sweep" per layer, then the extractor's.
+// triangles, an empty or non-finite region), kLimitExceeded (a grid above 2^31 samples per axis or
+// 2^62 in all), kNonFinite (a vertex), kArenaExhausted (naming the need), kCancelled, those of
+// marching_cubes(). Progress: "sweep" per layer, then the extractor's.
 Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& options,
                     const MarchingCubesVisitor& visitor, SweepStats* stats = nullptr);
 
@@ -132,9 +132,9 @@ struct BlockoutStats {
   SweepStats sweep;
   uint64_t swept_triangles = 0;  // the swept volume's mesh inside the splint's bounds
   BooleanStats boolean;
-  uint32_t attempts = 0;         // 1 + the retries with a deeper inset (or larger offset)
-  double inset_used = 0;         // mm
-  double offset_used = 0;        // mm (sweep.offset, as retried)
+  uint32_t attempts = 0;   // 1 + the retries with a deeper inset (or larger offset)
+  double inset_used = 0;   // mm
+  double offset_used = 0;  // mm (sweep.offset, as retried)
 };
 
 // `out` = `splint` minus the part of the jaws' swept volume (sweep_volume above, direction =
@@ -145,9 +145,9 @@ struct BlockoutStats {
 // the Boolean meets a configuration it cannot resolve even with its own nudges of A, the swept
 // surface is taken again 1/64 voxel deeper, up to three times (BlockoutStats::attempts and
 // inset_used say what was used; the inset stays below two voxels); with an offset (a spacer),
-// 1/64 voxel further out instead (offset_used). A splint the sweep does not reach comes back unchanged (copied).
-// For a wafer between two jaws call it once per jaw: the maxilla's direction is the
-// mandible's reversed. Memory: the sweep's state and extractor, the swept mesh, then the
+// 1/64 voxel further out instead (offset_used). A splint the sweep does not reach comes back
+// unchanged (copied). For a wafer between two jaws call it once per jaw: the maxilla's direction is
+// the mandible's reversed. Memory: the sweep's state and extractor, the swept mesh, then the
 // Boolean's; only `out` stays (moved down to where the arena's top was). Errors: those of
 // sweep_volume_mesh and mesh_boolean (the latter prefixed "blockout:"), kInvalidArgument (out
 // not empty), kLimitExceeded (a swept vertex beyond float32 range).

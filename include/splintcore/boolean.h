@@ -104,10 +104,10 @@ struct BooleanOptions {
   bool check_self_intersection = true;
   // A degenerate contact that the exact rule cannot return (see the top: e.g. a result that
   // is not an edge-manifold solid), or a result that rounding to float32 would break, is
-  // retried with A (never B) translated by k * step * (1, 3, 7) for k = 1..max_nudges, step = 2^-16 mm
-  // (15 nm; coarser only when A's coordinates are beyond 256 mm, so that float32 vertices of
-  // A stay float32): at most about 0.9 um with the default, far below a printer's 16 um
-  // layer. The translation used is in BooleanStats::nudge. 0 turns it off.
+  // retried with A (never B) translated by k * step * (1, 3, 7) for k = 1..max_nudges, step = 2^-16
+  // mm (15 nm; coarser only when A's coordinates are beyond 256 mm, so that float32 vertices of A
+  // stay float32): at most about 0.9 um with the default, far below a printer's 16 um layer. The
+  // translation used is in BooleanStats::nudge. 0 turns it off.
   uint32_t max_nudges = 8;
 };
 
@@ -119,15 +119,15 @@ struct BooleanStats {
   uint64_t intersection_points = 0;  // distinct points shared by both meshes
   uint64_t cut_triangles_a = 0;
   uint64_t cut_triangles_b = 0;
-  uint64_t winding_queries = 0;      // parts without a cut, classified by winding number
+  uint64_t winding_queries = 0;  // parts without a cut, classified by winding number
   uint64_t output_triangles = 0;
-  uint64_t output_triangles_a = 0;   // the result's first triangles come from A, the rest from B
+  uint64_t output_triangles_a = 0;  // the result's first triangles come from A, the rest from B
   uint64_t self_intersection_candidates = 0;  // pairs tested by the final check
   // The returned result was checked exactly for self-intersections and has none
   // (options.check_self_intersection; with several passes, the final pass's result).
   bool self_intersection_checked = false;
-  uint32_t attempts = 0;                      // 1 + the nudges tried
-  Vec3 nudge{};                               // A's translation in the returned result
+  uint32_t attempts = 0;  // 1 + the nudges tried
+  Vec3 nudge{};           // A's translation in the returned result
   // B's shells (components through shared vertices), the groups of shells that overlap no
   // other shell of their group where it matters, and the corefinement runs made (1 for one
   // group; see mesh_boolean). With several passes the counts above are summed over the
@@ -157,8 +157,8 @@ struct BooleanStats {
 // how much was needed at that point), kLimitExceeded (more than 2^31 vertices or triangles),
 // kCancelled, kInternal (a result that fails its own check: please report it with the
 // inputs). An error of a pass when there are several says which pass ("pass 2 of 3").
-Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
-                    const BooleanOptions& options, Mesh* out, BooleanStats* stats);
+Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b, const BooleanOptions& options,
+                    Mesh* out, BooleanStats* stats);
 
 }  // namespace splintcore
 

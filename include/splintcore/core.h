@@ -64,7 +64,10 @@ class [[nodiscard]] Status {
 
   // Ok. Only the first byte of each text buffer is set: a Status is made on every return,
   // so constructing one must not touch 400 bytes.
-  Status() { message_[0] = '\0'; file_[0] = '\0'; }
+  Status() {
+    message_[0] = '\0';
+    file_[0] = '\0';
+  }
   static Status ok() { return Status(); }
   static Status error(StatusCode code, const char* message);
 
@@ -79,11 +82,19 @@ class [[nodiscard]] Status {
 
   // Where the problem is. Each returns *this so they chain on a returned error.
   Status& in_file(const char* name);
-  Status& at_byte(uint64_t offset) { byte_offset_ = offset; return *this; }
-  Status& at_line(uint64_t line, uint64_t column = kNoPosition) {
-    line_ = line; column_ = column; return *this;
+  Status& at_byte(uint64_t offset) {
+    byte_offset_ = offset;
+    return *this;
   }
-  Status& at_index(uint64_t index) { index_ = index; return *this; }
+  Status& at_line(uint64_t line, uint64_t column = kNoPosition) {
+    line_ = line;
+    column_ = column;
+    return *this;
+  }
+  Status& at_index(uint64_t index) {
+    index_ = index;
+    return *this;
+  }
 
   // Appends to the message (truncated at capacity, always NUL-terminated).
   Status& append(const char* text);
@@ -132,9 +143,9 @@ Status make_error(StatusCode code, const Parts&... parts) {
   return s;
 }
 
-#define SPLINTCORE_RETURN_IF_ERROR(expr)            \
-  do {                                              \
-    ::splintcore::Status splintcore_status_ = (expr); \
+#define SPLINTCORE_RETURN_IF_ERROR(expr)                        \
+  do {                                                          \
+    ::splintcore::Status splintcore_status_ = (expr);           \
     if (!splintcore_status_.is_ok()) return splintcore_status_; \
   } while (0)
 
@@ -214,7 +225,7 @@ class Arena {
   void rewind(const Marker& marker);  // frees everything allocated after mark()
   void reset();                       // rewind to empty
 
-  size_t used() const { return used_; }        // bytes handed out (with alignment padding)
+  size_t used() const { return used_; }  // bytes handed out (with alignment padding)
   size_t cap() const { return cap_; }
   size_t high_water() const { return high_water_; }
   void reset_high_water() { high_water_ = used_; }
@@ -297,7 +308,10 @@ class Span {
   T* data() const { return data_; }
   size_t size() const { return size_; }
   bool empty() const { return size_ == 0; }
-  T& operator[](size_t i) const { SPLINTCORE_ASSERT(i < size_); return data_[i]; }
+  T& operator[](size_t i) const {
+    SPLINTCORE_ASSERT(i < size_);
+    return data_[i];
+  }
   T* begin() const { return data_; }
   T* end() const { return data_ + size_; }
   Span subspan(size_t offset, size_t count) const {
@@ -323,7 +337,11 @@ class ArenaArray {
   ArenaArray() = default;
   explicit ArenaArray(Arena* arena) : arena_(arena) {}
 
-  void bind(Arena* arena) { arena_ = arena; data_ = nullptr; size_ = capacity_ = 0; }
+  void bind(Arena* arena) {
+    arena_ = arena;
+    data_ = nullptr;
+    size_ = capacity_ = 0;
+  }
   Arena* arena() const { return arena_; }
 
   [[nodiscard]] bool reserve(size_t n) {
@@ -345,18 +363,33 @@ class ArenaArray {
     data_[size_++] = value;
     return true;
   }
-  void pop_back() { SPLINTCORE_ASSERT(size_ > 0); --size_; }
+  void pop_back() {
+    SPLINTCORE_ASSERT(size_ > 0);
+    --size_;
+  }
   void clear() { size_ = 0; }
-  void shrink_size(size_t n) { SPLINTCORE_ASSERT(n <= size_); size_ = n; }
+  void shrink_size(size_t n) {
+    SPLINTCORE_ASSERT(n <= size_);
+    size_ = n;
+  }
 
   T* data() { return data_; }
   const T* data() const { return data_; }
   size_t size() const { return size_; }
   size_t capacity() const { return capacity_; }
   bool empty() const { return size_ == 0; }
-  T& operator[](size_t i) { SPLINTCORE_ASSERT(i < size_); return data_[i]; }
-  const T& operator[](size_t i) const { SPLINTCORE_ASSERT(i < size_); return data_[i]; }
-  T& back() { SPLINTCORE_ASSERT(size_ > 0); return data_[size_ - 1]; }
+  T& operator[](size_t i) {
+    SPLINTCORE_ASSERT(i < size_);
+    return data_[i];
+  }
+  const T& operator[](size_t i) const {
+    SPLINTCORE_ASSERT(i < size_);
+    return data_[i];
+  }
+  T& back() {
+    SPLINTCORE_ASSERT(size_ > 0);
+    return data_[size_ - 1];
+  }
   T* begin() { return data_; }
   T* end() { return data_ + size_; }
   const T* begin() const { return data_; }
@@ -366,7 +399,9 @@ class ArenaArray {
 
   // Points the array at memory already holding `size` elements (used when compacting).
   void adopt(T* data, size_t size, size_t capacity) {
-    data_ = data; size_ = size; capacity_ = capacity;
+    data_ = data;
+    size_ = size;
+    capacity_ = capacity;
   }
 
  private:
@@ -380,8 +415,7 @@ class ArenaArray {
   }
   bool try_capacity(size_t n) {
     if (n > SIZE_MAX / sizeof(T)) return false;
-    if (data_ != nullptr &&
-        arena_->try_extend(data_, capacity_ * sizeof(T), n * sizeof(T))) {
+    if (data_ != nullptr && arena_->try_extend(data_, capacity_ * sizeof(T), n * sizeof(T))) {
       capacity_ = n;
       return true;
     }
@@ -420,8 +454,8 @@ void parallel_for(const Executor* executor, uint32_t count, TaskFunction task, v
 template <class F>
 void parallel_for_each(const Executor* executor, uint32_t count, F& function) {
   parallel_for(
-      executor, count,
-      [](void* context, uint32_t index) { (*static_cast<F*>(context))(index); }, &function);
+      executor, count, [](void* context, uint32_t index) { (*static_cast<F*>(context))(index); },
+      &function);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -21,12 +21,12 @@ namespace splintcore {
 // `saturated` counts voxels that were clamped.
 struct CtVolume {
   uint32_t nx = 0, ny = 0, nz = 0;
-  Vec3 spacing{};                  // mm between voxel centres along x, y, z; each > 0
-  Vec3 origin{};                   // patient position of voxel (0, 0, 0), mm
-  Vec3 axis_x{1, 0, 0};            // unit directions of +i, +j, +k in patient space:
-  Vec3 axis_y{0, 1, 0};            // orthonormal (readers check it; a right-handed frame is
-  Vec3 axis_z{0, 0, 1};            // not required: axis_z follows the slice order)
-  int16_t* hu = nullptr;           // nx * ny * nz values in the arena
+  Vec3 spacing{};         // mm between voxel centres along x, y, z; each > 0
+  Vec3 origin{};          // patient position of voxel (0, 0, 0), mm
+  Vec3 axis_x{1, 0, 0};   // unit directions of +i, +j, +k in patient space:
+  Vec3 axis_y{0, 1, 0};   // orthonormal (readers check it; a right-handed frame is
+  Vec3 axis_z{0, 0, 1};   // not required: axis_z follows the slice order)
+  int16_t* hu = nullptr;  // nx * ny * nz values in the arena
   uint64_t saturated = 0;
 
   uint64_t voxel_count() const { return uint64_t{nx} * ny * nz; }
@@ -56,7 +56,6 @@ inline Vec3 ct_to_patient(const CtVolume& v, const Vec3& p) {
   const Vec3 c = v.axis_z * p.z;
   return v.origin + ((a + b) + c);
 }
-
 
 // ---------------------------------------------------------------------------------------------
 // Readers: DICOM series (PS3.5 / PS3.10, uncompressed), NRRD (teem NRRD0001-0005, raw) and
@@ -112,18 +111,18 @@ struct CtInfo {
   CtFormat format = CtFormat::kUnknown;
   uint32_t nx = 0, ny = 0, nz = 0;
   Vec3 spacing{};
-  char stored_type[16] = {};        // "int16", "uint16", "int8", "uint8", "int32", "uint32",
-                                    // "float32", "float64"
-  uint8_t bits_stored = 0;          // DICOM Bits Stored; otherwise the type's width
+  char stored_type[16] = {};  // "int16", "uint16", "int8", "uint8", "int32", "uint32",
+                              // "float32", "float64"
+  uint8_t bits_stored = 0;    // DICOM Bits Stored; otherwise the type's width
   bool big_endian = false;
-  double slope = 1.0;               // DICOM: of the first slice (each slice uses its own)
+  double slope = 1.0;  // DICOM: of the first slice (each slice uses its own)
   double intercept = 0.0;
-  bool rescale_varies = false;      // DICOM: slices had different slope or intercept
-  char transfer_syntax[65] = {};    // DICOM: of the series' file 0
-  char photometric[17] = {};        // DICOM: MONOCHROME1 or MONOCHROME2
-  char space[64] = {};              // NRRD `space`, MetaImage AnatomicalOrientation, DICOM "LPS"
-  uint32_t slice_count = 0;         // DICOM files, otherwise nz
-  bool detached = false;            // NRRD / MetaImage data in another file
+  bool rescale_varies = false;    // DICOM: slices had different slope or intercept
+  char transfer_syntax[65] = {};  // DICOM: of the series' file 0
+  char photometric[17] = {};      // DICOM: MONOCHROME1 or MONOCHROME2
+  char space[64] = {};            // NRRD `space`, MetaImage AnatomicalOrientation, DICOM "LPS"
+  uint32_t slice_count = 0;       // DICOM files, otherwise nz
+  bool detached = false;          // NRRD / MetaImage data in another file
   uint64_t saturated = 0;
 };
 
@@ -196,8 +195,8 @@ Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFile
 // pointing to increasing slice position; origin = position of the first slice.
 // Errors: kParseError (file, byte offset, tag), kUnsupported, kLimitExceeded, kTruncated,
 // kInvalidArgument (count 0), kIoError, kArenaExhausted.
-Status read_dicom_series(const Context& ctx, const CtSeries& series,
-                         const CtReadOptions& options, CtVolume* out, CtInfo* info);
+Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtReadOptions& options,
+                         CtVolume* out, CtInfo* info);
 
 }  // namespace splintcore
 

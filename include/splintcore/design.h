@@ -44,9 +44,9 @@ struct CaseFile {
   // swept volume is subtracted, the maxilla's along the insertion direction, the mandible's
   // along its reverse.
   bool has_blockout = false;
-  double blockout_voxel = 0.1;     // mm
-  double blockout_inset = 0.05;    // mm (default: half the voxel)
-  double blockout_closing = 0;     // mm, 0: none
+  double blockout_voxel = 0.1;   // mm
+  double blockout_inset = 0.05;  // mm (default: half the voxel)
+  double blockout_closing = 0;   // mm, 0: none
   // The spacer between teeth and splint ("clearance", mm, 0: none): the splint's imprint is
   // the offset surface of each jaw's swept volume at this distance (SweepOptions::offset)
   // instead of the jaw's own triangles. Needs "blockout"; the inset is then 0.
@@ -66,13 +66,14 @@ struct CaseFile {
   double label_stroke = 0.35;  // mm
   double label_depth = 0.4;    // mm, engrave depth or emboss height
   // The CT ("ct" object) the jaws given by "seed" are reconstructed from (segment.h).
-  const char* ct_volume = nullptr; // path (file or DICOM folder), relative to the case file
+  const char* ct_volume = nullptr;  // path (file or DICOM folder), relative to the case file
   int32_t ct_hu_min = 300, ct_hu_max = 4000;
-  uint8_t ct_connectivity = 6;     // 6 or 26
-  uint32_t ct_smooth = 0;          // Taubin iterations (0: none)
-  uint64_t ct_decimate = 0;        // target triangles per jaw (0: none)
+  uint8_t ct_connectivity = 6;  // 6 or 26
+  uint32_t ct_smooth = 0;       // Taubin iterations (0: none)
+  uint64_t ct_decimate = 0;     // target triangles per jaw (0: none)
   const char* printer = "eden260";
-  uint64_t memory_cap = 0;  // bytes; 0: the tool's default (`splintcore design` sizes its arena by it)
+  uint64_t memory_cap =
+      0;  // bytes; 0: the tool's default (`splintcore design` sizes its arena by it)
   const char* output_splint = nullptr;
   const char* output_report = nullptr;
 };
@@ -134,12 +135,12 @@ struct ThicknessSpot {
 struct ThicknessReport {
   static constexpr uint32_t kMaxSpots = 8;
   static constexpr double kSpotSpacing = 2.0;  // mm between reported spots
-  double min_required = 0;       // mm
+  double min_required = 0;                     // mm
   uint64_t triangles_checked = 0;
-  uint64_t thin_triangles = 0;   // thickness below min_required
+  uint64_t thin_triangles = 0;  // thickness below min_required
   double thin_area_mm2 = 0;
-  double thinnest = 0;           // mm (min_required when nothing is thinner)
-  uint32_t spot_count = 0;       // the thinnest places, at least kSpotSpacing apart
+  double thinnest = 0;      // mm (min_required when nothing is thinner)
+  uint32_t spot_count = 0;  // the thinnest places, at least kSpotSpacing apart
   ThicknessSpot spots[kMaxSpots];
 };
 
@@ -156,7 +157,7 @@ Status check_wall_thickness(const Context& ctx, const Mesh& mesh, double min_thi
                             ThicknessReport* report);
 
 struct DesignReport {
-  uint64_t jaw_triangles = 0;   // all jaws together, as given
+  uint64_t jaw_triangles = 0;  // all jaws together, as given
   BaseReport base;
   BooleanStats boolean;
   // Interference elimination, when the case asks for it: per jaw in case order (at most 8).
@@ -167,7 +168,7 @@ struct DesignReport {
   // With a clearance the imprint is the swept volumes' offset surface: the Boolean base minus
   // jaws is not run (the jaws lie inside what the blockout removes) and `boolean` stays zero.
   bool imprint_offset = false;
-  bool labelled = false;           // the case has "label"
+  bool labelled = false;  // the case has "label"
   LabelStats label;
   bool thickness_checked = false;  // the case has "min_thickness"
   ThicknessReport thickness;
@@ -176,7 +177,7 @@ struct DesignReport {
   bool placed_on_tray = false;
   Vec3 tray_translation{};
   PrintCheck print;
-  const char* printer = "";     // the profile used
+  const char* printer = "";  // the profile used
   // The splint as returned was checked exactly for self-intersections, and has none, by the
   // last stage that made it: "boolean", "blockout" or "label" (its Boolean's final check);
   // "" when no stage checked it (then self_intersection_checked is false).
@@ -210,11 +211,11 @@ Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
 // hashes of their bytes. Every pointer may be null (that entry is left out).
 struct DesignReportFiles {
   const char* case_path = nullptr;
-  Span<const char* const> jaw_paths;    // per jaw of the case, in case order (or empty)
-  Span<const char* const> jaw_sha256;   // of each jaw file's bytes (CT jaws: of the voxels)
-  const char* ct_path = nullptr;        // the case's CT, when a jaw came from it
-  uint32_t ct_size[3] = {0, 0, 0};      // its voxels per axis
-  const CaseCtReport* ct = nullptr;     // reconstruct_case_jaws' report, when it ran
+  Span<const char* const> jaw_paths;   // per jaw of the case, in case order (or empty)
+  Span<const char* const> jaw_sha256;  // of each jaw file's bytes (CT jaws: of the voxels)
+  const char* ct_path = nullptr;       // the case's CT, when a jaw came from it
+  uint32_t ct_size[3] = {0, 0, 0};     // its voxels per axis
+  const CaseCtReport* ct = nullptr;    // reconstruct_case_jaws' report, when it ran
   const char* splint_path = nullptr;
   // The SHA-256 of the splint's binary STL as the caller wrote it (write_stl's bytes, 64 hex
   // digits): saves hashing it twice. Null: the report writer computes it.
@@ -246,10 +247,10 @@ struct DesignRunInfo {
 // version, the case (id, SHA-256 of its text), the inputs (jaws, their transforms, triangle
 // counts), every parameter as used, the checks as recorded by the stages (report), the output
 // (the splint's SHA-256 of the binary STL write_stl gives, computed here unless `files` has
-// it, its triangles, volume and extent), then `run`. Every value comes from `c`, `report`, `splint`, `files` or
-// `run`; none is a constant. docs/report-format.md lists the keys. Arena: write_stl's buffer
-// (64,000 bytes, only when it hashes the splint), returned. Errors: kIoError (the sink failed), kArenaExhausted,
-// kInvalidArgument (jaws do not match the case).
+// it, its triangles, volume and extent), then `run`. Every value comes from `c`, `report`,
+// `splint`, `files` or `run`; none is a constant. docs/report-format.md lists the keys. Arena:
+// write_stl's buffer (64,000 bytes, only when it hashes the splint), returned. Errors: kIoError
+// (the sink failed), kArenaExhausted, kInvalidArgument (jaws do not match the case).
 Status write_design_report(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                            const Mesh& splint, const DesignReport& report,
                            const DesignReportFiles& files, const DesignRunInfo* run,

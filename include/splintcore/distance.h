@@ -69,10 +69,10 @@ const char* feature_name(Feature feature);
 
 struct ClosestPoint {
   Vec3 point{};
-  double distance = 0;           // unsigned, mm
+  double distance = 0;  // unsigned, mm
   uint32_t triangle = 0;
   Feature feature = Feature::kFace;
-  uint8_t feature_index = 0;     // edge k runs v[k] -> v[k+1]; vertex k is v[k]
+  uint8_t feature_index = 0;  // edge k runs v[k] -> v[k+1]; vertex k is v[k]
 };
 
 enum class SignMethod : uint8_t {
@@ -97,16 +97,16 @@ struct DistanceIndexOptions {
 
 struct DistanceIndex {
   const Mesh* mesh = nullptr;
-  Span<const BvhNode> nodes;        // nodes[0] is the root (one node, all absent, when empty)
-  Span<const BvhDipole> dipoles;    // per node
-  Span<const BvhObb> obbs;          // per node, or empty (DistanceIndexOptions::oriented_boxes)
-  Span<const uint32_t> order;       // triangle ids in leaf order
-  Span<const uint32_t> neighbors;   // 3 per triangle: across edge k, or kNoNeighbor
+  Span<const BvhNode> nodes;       // nodes[0] is the root (one node, all absent, when empty)
+  Span<const BvhDipole> dipoles;   // per node
+  Span<const BvhObb> obbs;         // per node, or empty (DistanceIndexOptions::oriented_boxes)
+  Span<const uint32_t> order;      // triangle ids in leaf order
+  Span<const uint32_t> neighbors;  // 3 per triangle: across edge k, or kNoNeighbor
   // The corners at each vertex: vertex_uses[vertex_start[v] .. vertex_start[v + 1]) holds
   // 3 t + k for every corner k of triangle t at v, in triangle order (vertex_pseudonormal).
   Span<const uint32_t> vertex_start;  // vertex count + 1
   Span<const uint32_t> vertex_uses;   // 3 per triangle
-  bool closed_manifold = false;     // every edge has exactly two consistently oriented uses
+  bool closed_manifold = false;       // every edge has exactly two consistently oriented uses
 };
 
 constexpr uint32_t kNoNeighbor = ~uint32_t{0};
@@ -152,8 +152,8 @@ double winding_number(const DistanceIndex& index, const Vec3& q, double beta = 2
 // the winding number is >= 0.5. Points on the surface get +0. kAuto picks as documented.
 struct SignedDistance {
   ClosestPoint closest;
-  double distance = 0;       // signed
-  double winding = 0;        // when computed (kWindingNumber), else 0
+  double distance = 0;  // signed
+  double winding = 0;   // when computed (kWindingNumber), else 0
   SignMethod method = SignMethod::kAuto;
 };
 bool signed_distance(const DistanceIndex& index, const Vec3& q, SignMethod method,
@@ -197,10 +197,10 @@ Status batch_signed_distances(const Context& ctx, const DistanceIndex& index,
 // Narrow-band signed distance volume, sampled slab by slab for the tiled marching cubes.
 
 struct SdfGrid {
-  Vec3 origin{};        // position of sample (0, 0, 0)
-  double spacing = 0;   // mm between samples
+  Vec3 origin{};       // position of sample (0, 0, 0)
+  double spacing = 0;  // mm between samples
   uint32_t nx = 0, ny = 0, nz = 0;
-  double band = 0;      // |distance| beyond band is clamped to +-band (cheaper: pruned queries)
+  double band = 0;  // |distance| beyond band is clamped to +-band (cheaper: pruned queries)
 };
 
 // Samples z-layers [z_begin, z_end) into out (x fastest, then y, then z; nx * ny per layer),

@@ -87,17 +87,22 @@ struct Aabb {
   Vec3 hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
 
   bool empty() const { return lo.x > hi.x || lo.y > hi.y || lo.z > hi.z; }
-  void add(const Vec3& p) { lo = min_vec(lo, p); hi = max_vec(hi, p); }
-  void add(const Aabb& b) { lo = min_vec(lo, b.lo); hi = max_vec(hi, b.hi); }
+  void add(const Vec3& p) {
+    lo = min_vec(lo, p);
+    hi = max_vec(hi, p);
+  }
+  void add(const Aabb& b) {
+    lo = min_vec(lo, b.lo);
+    hi = max_vec(hi, b.hi);
+  }
   Vec3 extent() const { return empty() ? Vec3{} : hi - lo; }
   Vec3 center() const { return empty() ? Vec3{} : (lo + hi) * 0.5; }
   bool overlaps(const Aabb& b) const {
-    return lo.x <= b.hi.x && b.lo.x <= hi.x && lo.y <= b.hi.y && b.lo.y <= hi.y &&
-           lo.z <= b.hi.z && b.lo.z <= hi.z;
+    return lo.x <= b.hi.x && b.lo.x <= hi.x && lo.y <= b.hi.y && b.lo.y <= hi.y && lo.z <= b.hi.z &&
+           b.lo.z <= hi.z;
   }
   bool contains(const Vec3& p) const {
-    return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z &&
-           p.z <= hi.z;
+    return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
   }
 };
 
@@ -185,8 +190,8 @@ bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, co
                                  const Vec3& c);
 
 // Do the closed triangles abc and def meet (touching counts)?
-bool triangles_intersect(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
-                         const Vec3& e, const Vec3& f);
+bool triangles_intersect(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, const Vec3& e,
+                         const Vec3& f);
 
 // The same two tests when the caller already knows the points are coplanar (exactly): they
 // skip the orient3d calls that would find it out again.

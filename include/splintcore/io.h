@@ -62,9 +62,9 @@ enum class StlFormat : uint8_t { kAuto, kBinary, kAscii };
 
 struct StlReadOptions {
   StlFormat format = StlFormat::kAuto;
-  uint64_t max_triangles = 100'000'000;   // larger inputs are kLimitExceeded
-  double max_abs_coordinate = 1.0e6;      // mm; beyond is kLimitExceeded ("wrong units?")
-  size_t chunk_bytes = 64 * 1024;         // read buffer, from the arena
+  uint64_t max_triangles = 100'000'000;  // larger inputs are kLimitExceeded
+  double max_abs_coordinate = 1.0e6;     // mm; beyond is kLimitExceeded ("wrong units?")
+  size_t chunk_bytes = 64 * 1024;        // read buffer, from the arena
 };
 
 struct StlInfo {
@@ -103,9 +103,9 @@ Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlRead
 // degenerate). ASCII numbers use the shortest form that reads back to the same float32.
 
 struct StlWriteOptions {
-  StlFormat format = StlFormat::kBinary;   // kAuto means binary
-  size_t buffer_bytes = 64 * 1000;         // from the arena
-  const char* solid_name = "splintcore";   // ASCII only; letters, digits, '_' '-' '.'
+  StlFormat format = StlFormat::kBinary;  // kAuto means binary
+  size_t buffer_bytes = 64 * 1000;        // from the arena
+  const char* solid_name = "splintcore";  // ASCII only; letters, digits, '_' '-' '.'
 };
 
 constexpr char kStlBinaryHeader[] = "splintcore binary STL";  // padded with spaces to 80 bytes

@@ -49,9 +49,7 @@ struct JsonDocument {
   // Member of an object by key, or nullptr.
   const JsonValue* member(const JsonValue& object, const char* key) const;
   // Index of a value in values (for walking children).
-  uint32_t index_of(const JsonValue& v) const {
-    return static_cast<uint32_t>(&v - values.data());
-  }
+  uint32_t index_of(const JsonValue& v) const { return static_cast<uint32_t>(&v - values.data()); }
 };
 
 // Parses `text` (not necessarily NUL-terminated). The values and strings live in the arena

@@ -65,10 +65,10 @@ struct StrokeFontPoint {
 
 // One glyph: stroke s runs through points [s == 0 ? 0 : stroke_end[s - 1], stroke_end[s]).
 struct StrokeGlyph {
-  char character = 0;       // as stored (upper case)
-  uint8_t width = 0;        // grid units: every point has 0 <= x <= width
-  uint8_t advance = 0;      // width + kStrokeFontGap
-  uint8_t stroke_count = 0; // 0 only for the space
+  char character = 0;        // as stored (upper case)
+  uint8_t width = 0;         // grid units: every point has 0 <= x <= width
+  uint8_t advance = 0;       // width + kStrokeFontGap
+  uint8_t stroke_count = 0;  // 0 only for the space
   uint8_t point_count = 0;
   StrokeFontPoint points[kStrokeGlyphMaxPoints];
   uint8_t stroke_end[kStrokeGlyphMaxStrokes] = {};
@@ -98,13 +98,13 @@ enum class LabelPlacement : uint8_t {
 };
 
 struct LabelOptions {
-  const char* text = "";               // 1..kLabelMaxCharacters font characters
+  const char* text = "";  // 1..kLabelMaxCharacters font characters
   LabelMode mode = LabelMode::kEngrave;
-  double height_mm = 2.5;              // cap height, 0.5..20
-  double stroke_width_mm = 0.35;       // > 0, at most height / 4 (the cell gap stays open)
-  double depth_mm = 0.4;               // engrave depth or emboss height, > 0, at most 5
-  double voxel_mm = 0;                 // meshing grid; 0: stroke width / 4; else in
-                                       // [stroke width / 32, stroke width / 2]
+  double height_mm = 2.5;         // cap height, 0.5..20
+  double stroke_width_mm = 0.35;  // > 0, at most height / 4 (the cell gap stays open)
+  double depth_mm = 0.4;          // engrave depth or emboss height, > 0, at most 5
+  double voxel_mm = 0;            // meshing grid; 0: stroke width / 4; else in
+                                  // [stroke width / 32, stroke width / 2]
   // Automatic placement: the wall must be at least height + stroke width + 2 margin high
   // between the upper and the lower outside curves, and the text at least one margin from
   // the arch's ends. 0..5 mm.
@@ -122,26 +122,26 @@ struct LabelGlyphPlacement {
   // Automatic: arc length of the glyph's centre along the wall's mid curve from the first
   // pick (mm). Explicit: the centre's offset along u from `position`.
   double arc_mm = 0;
-  Vec3 surface_point{};          // the frame's origin (c = 0): where the ray met the splint
-  Vec3 u{}, up{}, n{};           // reading direction, up, outward normal (unit)
-  double wall_height_mm = 0;     // automatic: the outer wall's height there (else 0)
-  uint64_t triangles = 0;        // of this glyph's mesh
+  Vec3 surface_point{};       // the frame's origin (c = 0): where the ray met the splint
+  Vec3 u{}, up{}, n{};        // reading direction, up, outward normal (unit)
+  double wall_height_mm = 0;  // automatic: the outer wall's height there (else 0)
+  uint64_t triangles = 0;     // of this glyph's mesh
 };
 
 struct LabelStats {
   char text[kLabelMaxCharacters + 1] = {};  // the text as written (upper case)
-  uint32_t characters = 0;       // characters of the text, spaces included
-  uint32_t glyphs = 0;           // meshed glyphs (spaces have none)
+  uint32_t characters = 0;                  // characters of the text, spaces included
+  uint32_t glyphs = 0;                      // meshed glyphs (spaces have none)
   uint64_t glyph_vertices = 0;
-  uint64_t glyph_triangles = 0;  // after decimation (what the Boolean gets)
+  uint64_t glyph_triangles = 0;    // after decimation (what the Boolean gets)
   uint64_t marched_triangles = 0;  // extracted before decimation (all samplings)
-  uint32_t attempts = 0;         // samplings of the glyphs tried (1 + the retries)
+  uint32_t attempts = 0;           // samplings of the glyphs tried (1 + the retries)
   uint32_t glyph_resamplings = 0;  // single glyphs sampled again (invalid after decimation)
-  double text_length_mm = 0;     // along the row, first stroke edge to last
-  double stroke_length_mm = 0;   // total length of the strokes written (dots count 0)
-  double voxel_mm = 0;           // what was used
+  double text_length_mm = 0;       // along the row, first stroke edge to last
+  double stroke_length_mm = 0;     // total length of the strokes written (dots count 0)
+  double voxel_mm = 0;             // what was used
   LabelGlyphPlacement placements[kLabelMaxCharacters];  // one per meshed glyph, in text order
-  BooleanStats boolean;          // apply_label only
+  BooleanStats boolean;                                 // apply_label only
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -165,8 +165,8 @@ struct LabelStats {
 // short for the text, or a glyph's ray misses the splint; glyphs that would touch);
 // kInvalidMesh (the splint has no triangles; a distance-index error); kLimitExceeded (a glyph
 // grid above 2^24 samples; a coordinate beyond float32); kUnsupported (no attempt gave a valid
-// glyph mesh: the last reason); kInternal (a bug); kArenaExhausted; kCancelled. On an error the arena is back where it was
-// and `out` is empty. `stats` may be null.
+// glyph mesh: the last reason); kInternal (a bug); kArenaExhausted; kCancelled. On an error the
+// arena is back where it was and `out` is empty. `stats` may be null.
 Status build_label_mesh(const Context& ctx, const Mesh& splint, Span<const Line> upper,
                         Span<const Line> lower, const LabelOptions& options, Mesh* out,
                         LabelStats* stats);

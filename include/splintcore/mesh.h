@@ -26,7 +26,10 @@ struct Mesh {
 
   Mesh() = default;
   explicit Mesh(Arena* arena) : vertices(arena), triangles(arena) {}
-  void bind(Arena* arena) { vertices.bind(arena); triangles.bind(arena); }
+  void bind(Arena* arena) {
+    vertices.bind(arena);
+    triangles.bind(arena);
+  }
 };
 
 // A mesh over arrays that something else owns, to pass a part of a mesh (e.g. one jaw's
@@ -35,8 +38,7 @@ struct Mesh {
 inline Mesh mesh_view(Span<const Vec3> vertices, Span<const Triangle> triangles) {
   Mesh view;
   view.vertices.adopt(const_cast<Vec3*>(vertices.data()), vertices.size(), vertices.size());
-  view.triangles.adopt(const_cast<Triangle*>(triangles.data()), triangles.size(),
-                       triangles.size());
+  view.triangles.adopt(const_cast<Triangle*>(triangles.data()), triangles.size(), triangles.size());
   return view;
 }
 
@@ -70,25 +72,25 @@ Status weld_tolerance(const Context& ctx, Span<const SoupTriangle> soup, double 
 // Checks and measures.
 
 struct EdgeRef {
-  uint32_t v0 = 0, v1 = 0;   // vertex ids (v0 < v1)
-  uint32_t triangle = 0;     // one triangle using the edge
+  uint32_t v0 = 0, v1 = 0;  // vertex ids (v0 < v1)
+  uint32_t triangle = 0;    // one triangle using the edge
 };
 
 struct MeshReport {
   uint64_t vertex_count = 0;
   uint64_t triangle_count = 0;
   uint64_t unreferenced_vertices = 0;
-  uint64_t edge_count = 0;               // distinct undirected edges
-  uint64_t boundary_edges = 0;           // used by one triangle
-  uint64_t nonmanifold_edges = 0;        // used by three or more
-  uint64_t orientation_conflicts = 0;    // used twice in the same direction
-  uint64_t degenerate_triangles = 0;     // repeated vertex ids or zero area (exact)
-  uint64_t duplicate_triangles = 0;      // same vertex set as an earlier triangle
-  uint64_t shells = 0;                   // components connected through edges
-  int64_t euler_characteristic = 0;      // V - E + F over referenced vertices
-  int64_t genus = -1;                    // sum over shells, when closed and edge-manifold
-  double area = 0.0;                     // mm^2
-  double volume = 0.0;                   // signed, mm^3 (> 0 when outward)
+  uint64_t edge_count = 0;             // distinct undirected edges
+  uint64_t boundary_edges = 0;         // used by one triangle
+  uint64_t nonmanifold_edges = 0;      // used by three or more
+  uint64_t orientation_conflicts = 0;  // used twice in the same direction
+  uint64_t degenerate_triangles = 0;   // repeated vertex ids or zero area (exact)
+  uint64_t duplicate_triangles = 0;    // same vertex set as an earlier triangle
+  uint64_t shells = 0;                 // components connected through edges
+  int64_t euler_characteristic = 0;    // V - E + F over referenced vertices
+  int64_t genus = -1;                  // sum over shells, when closed and edge-manifold
+  double area = 0.0;                   // mm^2
+  double volume = 0.0;                 // signed, mm^3 (> 0 when outward)
   Aabb bounds;
 
   // The first offender of each kind (index order), for error messages.
@@ -104,8 +106,8 @@ struct MeshReport {
   bool outward() const { return volume > 0.0; }
   // Closed, manifold, consistently oriented, outward, nothing degenerate or duplicated.
   bool is_valid_solid() const {
-    return closed() && edge_manifold() && oriented() && outward() &&
-           degenerate_triangles == 0 && duplicate_triangles == 0;
+    return closed() && edge_manifold() && oriented() && outward() && degenerate_triangles == 0 &&
+           duplicate_triangles == 0;
   }
 };
 
@@ -148,7 +150,7 @@ double mesh_volume(const Mesh& mesh);
 // (check_mesh reports them).
 
 struct SelfIntersectionReport {
-  uint64_t intersecting_pairs = 0;   // counted up to max_pairs (then it stops)
+  uint64_t intersecting_pairs = 0;    // counted up to max_pairs (then it stops)
   uint32_t first_a = 0, first_b = 0;  // the smallest pair (a < b) found, when any
   // Pairs of non-degenerate triangles kept by the broad phase, examined before stopping: those
   // whose 14-DOPs (quantized and slightly widened) overlap; whose boxes overlap, when a

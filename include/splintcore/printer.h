@@ -12,9 +12,9 @@ namespace splintcore {
 struct PrinterProfile {
   const char* name = "";
   const char* description = "";
-  Vec3 build_volume_mm{};        // usable tray x, y and build height z
+  Vec3 build_volume_mm{};  // usable tray x, y and build height z
   double layer_thickness_mm = 0;
-  double min_wall_mm = 0;        // the thinnest wall the process makes reliably (advisory)
+  double min_wall_mm = 0;  // the thinnest wall the process makes reliably (advisory)
 };
 
 // Stratasys Eden260-class PolyJet: tray 255 x 252 mm, 200 mm high, 16 um layers.
@@ -30,13 +30,13 @@ struct PrintCheckOptions {
 
 struct PrintCheck {
   MeshReport mesh;
-  Vec3 extent{};                 // of the part, mm
-  bool fits = false;             // within the tray (with margins) as placed
-  bool fits_rotated = false;     // fits after a 90 degree turn about z (when !fits)
-  RigidTransform placement;      // to put the part on the tray (identity when not placing)
-  uint64_t layers = 0;           // ceil(height / layer thickness)
-  bool units_suspect = false;    // extent under 1 mm or over 1 m: probably metres or microns
-  bool printable = false;        // valid solid and fits (possibly rotated)
+  Vec3 extent{};               // of the part, mm
+  bool fits = false;           // within the tray (with margins) as placed
+  bool fits_rotated = false;   // fits after a 90 degree turn about z (when !fits)
+  RigidTransform placement;    // to put the part on the tray (identity when not placing)
+  uint64_t layers = 0;         // ceil(height / layer thickness)
+  bool units_suspect = false;  // extent under 1 mm or over 1 m: probably metres or microns
+  bool printable = false;      // valid solid and fits (possibly rotated)
 };
 
 // Checks a mesh against a profile. Returns ok when the check ran (read `printable`), or an

@@ -38,7 +38,7 @@ struct TaubinOptions {
 struct TaubinStats {
   double volume_before = 0.0;  // mesh_volume() before and after (mm^3; signed)
   double volume_after = 0.0;
-  uint64_t edges = 0;             // distinct undirected edges
+  uint64_t edges = 0;              // distinct undirected edges
   uint64_t boundary_vertices = 0;  // vertices on boundary edges
   uint64_t clamped = 0;            // vertex moves cut back by max_displacement, all steps
 };
@@ -146,8 +146,8 @@ uint64_t decimate_qem_bound(uint64_t vertex_count, uint64_t triangle_count);
 // than one fan: the message names the vertices, at_index the triangle); kNonFinite (a vertex,
 // at_index: its id); kLimitExceeded (more than 2^32 - 2 vertices or 2^30 triangles);
 // kArenaExhausted; kCancelled.
-Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions& options,
-                    Mesh* out, DecimateStats* stats = nullptr);
+Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions& options, Mesh* out,
+                    DecimateStats* stats = nullptr);
 
 }  // namespace splintcore
 

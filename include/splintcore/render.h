@@ -90,8 +90,8 @@ struct RenderImage {
 // render_bound() = 15*w*h + 12*total_vertices + 16*view_count*total_vertices + 32*mesh_count
 // + 112, rounded up to 16 (translucency and Gouraud assumed; `total_vertices` is the sum over
 // the meshes, which also bounds the largest; UINT64_MAX on overflow).
-uint64_t render_bound(uint32_t width, uint32_t height, uint64_t total_vertices,
-                      uint32_t mesh_count, uint32_t view_count);
+uint64_t render_bound(uint32_t width, uint32_t height, uint64_t total_vertices, uint32_t mesh_count,
+                      uint32_t view_count);
 
 // Draws `meshes` (in order) into `out->rgb`, allocated from ctx.arena (kept; temporaries are
 // returned before it finishes). Reads the meshes, writes *out. The scene is framed once for

@@ -45,7 +45,7 @@ struct LabelVolume {
 // Threshold segmentation.
 
 struct HuWindow {
-  int32_t lo = 300;   // a voxel is in the window when lo <= HU <= hi
+  int32_t lo = 300;  // a voxel is in the window when lo <= HU <= hi
   int32_t hi = 4000;
 };
 
@@ -97,7 +97,7 @@ enum class Connectivity : uint8_t { k6 = 6, k26 = 26 };
 // A seed: a voxel index (i, j, k), or a point in patient mm (when `in_patient_mm`), rounded to
 // the voxel whose centre is nearest in each axis of the volume's own frame.
 struct RegionSeed {
-  uint8_t label = 1;        // 1..kMaxRegionLabel
+  uint8_t label = 1;  // 1..kMaxRegionLabel
   bool in_patient_mm = true;
   Vec3 patient_mm{};
   uint32_t i = 0, j = 0, k = 0;
@@ -105,7 +105,7 @@ struct RegionSeed {
 
 struct SplitPlane {
   Vec3 point{};
-  Vec3 normal{0, 0, 1};     // need not be unit; must not be zero
+  Vec3 normal{0, 0, 1};  // need not be unit; must not be zero
   uint8_t label_negative = 1;
   uint8_t label_positive = 2;
 };
@@ -116,16 +116,16 @@ struct RegionGrowOptions {
 };
 
 struct RegionStats {
-  uint64_t voxels[kMaxRegionLabel + 1] = {};   // voxels claimed per label
+  uint64_t voxels[kMaxRegionLabel + 1] = {};  // voxels claimed per label
   // Per label: a claimed voxel lies on the volume's border (the region may continue beyond the
   // scan: a warning, not an error).
   bool touches_border[kMaxRegionLabel + 1] = {};
   // Per label: a claimed voxel is a neighbour of another region's voxel (the regions met: the
   // competition, or the plane, decided where one ends).
   bool meets_other_region[kMaxRegionLabel + 1] = {};
-  uint64_t unclaimed = 0;        // window voxels no seed reached (left kLabelUnclaimed)
-  uint32_t layers = 0;           // breadth-first layers (the largest distance in steps, + 1)
-  uint64_t queue_bytes = 0;      // arena bytes the queue took
+  uint64_t unclaimed = 0;    // window voxels no seed reached (left kLabelUnclaimed)
+  uint32_t layers = 0;       // breadth-first layers (the largest distance in steps, + 1)
+  uint64_t queue_bytes = 0;  // arena bytes the queue took
 };
 
 // Arena bytes grow_regions() takes at most when `in_window` voxels are marked: the FIFO, 4
@@ -182,13 +182,13 @@ Status seed_voxel(const CtVolume& volume, const RegionSeed& seed, uint32_t* i, u
 
 struct ReconstructOptions {
   uint8_t label = 1;
-  int32_t hu_lo = 300;              // the window's lower bound used for segmentation
-  uint32_t layers_per_tile = 0;     // for marching_cubes (0: its default); never changes output
-  bool round_to_float32 = true;     // STL holds float32; the Boolean wants float32-exact jaws
+  int32_t hu_lo = 300;           // the window's lower bound used for segmentation
+  uint32_t layers_per_tile = 0;  // for marching_cubes (0: its default); never changes output
+  bool round_to_float32 = true;  // STL holds float32; the Boolean wants float32-exact jaws
 };
 
 struct ReconstructStats {
-  uint32_t box_lo[3] = {0, 0, 0};   // the voxel box extracted (inclusive), per axis
+  uint32_t box_lo[3] = {0, 0, 0};  // the voxel box extracted (inclusive), per axis
   uint32_t box_hi[3] = {0, 0, 0};
   uint64_t region_voxels = 0;
   MarchingCubesStats marching{};

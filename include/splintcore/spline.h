@@ -41,8 +41,8 @@ Vec3 catmull_rom_point(const CatmullRomSegment& segment, double u);
 // list's picks, seen in the occlusal plane.
 struct Pick {
   Vec3 position{};
-  Vec3 normal{};           // zero when not given
-  Vec3 direction{};        // zero when not given
+  Vec3 normal{};              // zero when not given
+  Vec3 direction{};           // zero when not given
   double inner_length = 0;    // mm, from the pick towards the inside (lingual)
   double outside_length = 0;  // mm, from the pick towards the outside (buccal)
 };
@@ -69,18 +69,18 @@ Status make_lines(const Context& ctx, Span<const Pick> picks, const Vec3& occlus
 // The base solid.
 
 struct BaseParams {
-  double spacing_mm = 0.5;       // target distance between sections along the longest curve
-  double corner_radius_mm = 0;   // rounds the four section corners (0: sharp)
-  uint32_t corner_segments = 4;  // arc segments per rounded corner: 1, 2, 4, 8 or 16
-  bool snap_to_float32 = true;   // round vertices to float32 (what STL stores) before checks
+  double spacing_mm = 0.5;              // target distance between sections along the longest curve
+  double corner_radius_mm = 0;          // rounds the four section corners (0: sharp)
+  uint32_t corner_segments = 4;         // arc segments per rounded corner: 1, 2, 4, 8 or 16
+  bool snap_to_float32 = true;          // round vertices to float32 (what STL stores) before checks
   bool check_self_intersection = true;  // exact check of the output (the guarantee)
 };
 
 struct BaseReport {
-  uint32_t sections = 0;          // cross-sections along the arch
+  uint32_t sections = 0;  // cross-sections along the arch
   uint32_t points_per_section = 0;
   uint64_t self_intersection_candidates = 0;
-  double volume = 0;              // mm^3
+  double volume = 0;  // mm^3
 };
 
 // Bytes build_splint_base() may use for `sections` sections (outputs included).

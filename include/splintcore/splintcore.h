@@ -92,8 +92,7 @@ void sc_context_set_progress(sc_context* ctx, sc_progress_fn report, void* user)
  * depend on it (tasks write only their own slots). NULL run: serial, on the calling thread. */
 typedef void (*sc_task_fn)(void* task_context, uint32_t index);
 typedef void (*sc_executor_fn)(void* self, uint32_t count, sc_task_fn task, void* task_context);
-void sc_context_set_executor(sc_context* ctx, sc_executor_fn run, void* self,
-                             uint32_t concurrency);
+void sc_context_set_executor(sc_context* ctx, sc_executor_fn run, void* self, uint32_t concurrency);
 
 /* The last status of a call on this context (SC_OK after a success). */
 sc_status sc_last_status(const sc_context* ctx);
@@ -189,9 +188,9 @@ void sc_sha256_hex(const void* data, size_t bytes, char out[65]);
 typedef struct sc_mesh sc_mesh;
 
 typedef struct sc_stl_read_options {
-  uint64_t max_triangles;      /* more is SC_LIMIT_EXCEEDED; default 100,000,000 */
-  double max_abs_coordinate;   /* mm; beyond is SC_LIMIT_EXCEEDED ("wrong units?"); 1e6 */
-  size_t chunk_bytes;          /* the read buffer, from the arena (freed before return) */
+  uint64_t max_triangles;    /* more is SC_LIMIT_EXCEEDED; default 100,000,000 */
+  double max_abs_coordinate; /* mm; beyond is SC_LIMIT_EXCEEDED ("wrong units?"); 1e6 */
+  size_t chunk_bytes;        /* the read buffer, from the arena (freed before return) */
 } sc_stl_read_options;
 /* The defaults (as above, chunk_bytes 65,536). */
 sc_stl_read_options sc_stl_read_defaults(void);
@@ -212,16 +211,14 @@ sc_status sc_mesh_read_stl(sc_context* ctx, const sc_source* source,
  * 64 for the handle). Errors: SC_INVALID_ARGUMENT (NULL arrays with non-zero counts, an id out
  * of range: names the triangle), SC_NON_FINITE (names the vertex), SC_ARENA_EXHAUSTED. */
 sc_status sc_mesh_from_arrays(sc_context* ctx, const double* vertices, uint32_t vertex_count,
-                              const uint32_t* triangles, uint32_t triangle_count,
-                              sc_mesh** out);
+                              const uint32_t* triangles, uint32_t triangle_count, sc_mesh** out);
 
 uint64_t sc_mesh_vertex_count(const sc_mesh* mesh);   /* 0 for NULL */
 uint64_t sc_mesh_triangle_count(const sc_mesh* mesh); /* 0 for NULL */
 
 /* Copies the vertices (3 doubles each) into `out`, which holds `capacity` doubles. No arena.
  * Errors: SC_INVALID_ARGUMENT (NULL, capacity < 3 * vertex count: says how many needed). */
-sc_status sc_mesh_copy_vertices(sc_context* ctx, const sc_mesh* mesh, double* out,
-                                size_t capacity);
+sc_status sc_mesh_copy_vertices(sc_context* ctx, const sc_mesh* mesh, double* out, size_t capacity);
 /* Copies the triangles (3 vertex ids each) into `out`, which holds `capacity` ids. Same rules. */
 sc_status sc_mesh_copy_triangles(sc_context* ctx, const sc_mesh* mesh, uint32_t* out,
                                  size_t capacity);
@@ -230,9 +227,9 @@ sc_status sc_mesh_copy_triangles(sc_context* ctx, const sc_mesh* mesh, uint32_t*
 uint64_t sc_stl_binary_size(uint64_t triangle_count);
 
 typedef struct sc_stl_write_options {
-  int ascii;                /* nonzero: ASCII; 0: binary (the default) */
-  size_t buffer_bytes;      /* the write buffer, from the arena (> 0; default 64,000) */
-  const char* solid_name;   /* ASCII only: letters, digits, '_' '-' '.'; NULL: "splintcore" */
+  int ascii;              /* nonzero: ASCII; 0: binary (the default) */
+  size_t buffer_bytes;    /* the write buffer, from the arena (> 0; default 64,000) */
+  const char* solid_name; /* ASCII only: letters, digits, '_' '-' '.'; NULL: "splintcore" */
 } sc_stl_write_options;
 /* The defaults (binary, 64,000-byte buffer). */
 sc_stl_write_options sc_stl_write_defaults(void);
@@ -255,16 +252,16 @@ typedef struct sc_mesh_report {
   uint64_t degenerate_triangles;  /* repeated ids or zero area (exact) */
   uint64_t duplicate_triangles;
   uint64_t shells;
-  int64_t genus;                  /* -1 unless closed and manifold */
+  int64_t genus; /* -1 unless closed and manifold */
   double area_mm2;
-  double volume_mm3;              /* signed: > 0 when outward */
+  double volume_mm3; /* signed: > 0 when outward */
   double bounds_min[3];
   double bounds_max[3];
   int closed;
   int manifold;
   int oriented;
   int outward;
-  int valid_solid;                /* all of the above, no degenerate or duplicate triangle */
+  int valid_solid; /* all of the above, no degenerate or duplicate triangle */
 } sc_mesh_report;
 
 /* Checks topology and measures. Arena: temporaries (about 64 bytes per triangle), freed before
@@ -321,8 +318,8 @@ typedef struct sc_case sc_case;
 sc_status sc_case_parse(sc_context* ctx, const char* text, size_t length, const char* name,
                         sc_case** out);
 
-const char* sc_case_id(const sc_case* c);                      /* "" for NULL */
-size_t sc_case_jaw_count(const sc_case* c);                    /* 0 for NULL */
+const char* sc_case_id(const sc_case* c);   /* "" for NULL */
+size_t sc_case_jaw_count(const sc_case* c); /* 0 for NULL */
 /* The jaw's role ("maxilla", "mandible") and mesh path as the case names it (relative to the
  * case file's folder; NULL when it has none). NULL for an index out of range. */
 const char* sc_case_jaw_role(const sc_case* c, size_t index);
@@ -330,16 +327,16 @@ const char* sc_case_jaw_mesh(const sc_case* c, size_t index);
 
 /* The parameters a caller may read and change after parsing. Flags are 0 or 1. */
 typedef struct sc_case_params {
-  double spacing_mm;               /* base: distance between sections (> 0) */
-  double corner_radius_mm;         /* base: rounding of the section corners (>= 0) */
-  uint32_t corner_segments;        /* 1, 2, 4, 8 or 16 */
+  double spacing_mm;        /* base: distance between sections (> 0) */
+  double corner_radius_mm;  /* base: rounding of the section corners (>= 0) */
+  uint32_t corner_segments; /* 1, 2, 4, 8 or 16 */
   int has_insertion_direction;
-  double insertion_direction[3];   /* finite, non-zero when has_insertion_direction */
-  int blockout;                    /* interference elimination on/off (needs the direction) */
-  double blockout_voxel_mm;        /* 0.01 .. 1 */
-  double blockout_inset_mm;        /* 0 .. 1.99 voxel */
-  double blockout_closing_mm;      /* 0, or 2 .. 10 voxel */
-  const char* printer;             /* a built-in profile name ("eden260"); static text */
+  double insertion_direction[3]; /* finite, non-zero when has_insertion_direction */
+  int blockout;                  /* interference elimination on/off (needs the direction) */
+  double blockout_voxel_mm;      /* 0.01 .. 1 */
+  double blockout_inset_mm;      /* 0 .. 1.99 voxel */
+  double blockout_closing_mm;    /* 0, or 2 .. 10 voxel */
+  const char* printer;           /* a built-in profile name ("eden260"); static text */
 } sc_case_params;
 
 /* Reads the case's parameters into *out. */
@@ -352,7 +349,7 @@ sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* 
 /* What a design gives. Flags are 0 or 1. */
 #define SC_MAX_BLOCKOUT_JAWS 8
 typedef struct sc_design_report {
-  uint64_t jaw_triangles;            /* all jaws together, as given */
+  uint64_t jaw_triangles; /* all jaws together, as given */
   uint64_t splint_triangles;
   uint64_t splint_vertices;
   double splint_volume_mm3;
@@ -360,17 +357,17 @@ typedef struct sc_design_report {
   double base_volume_mm3;
   uint64_t boolean_intersecting_pairs;
   uint64_t boolean_intersection_points;
-  uint32_t boolean_attempts;         /* 1 + the nudges tried */
+  uint32_t boolean_attempts; /* 1 + the nudges tried */
   double boolean_nudge_mm[3];
-  uint32_t blockout_jaws;            /* jaws blocked out (0 without blockout) */
+  uint32_t blockout_jaws; /* jaws blocked out (0 without blockout) */
   double blockout_removed_mm3[SC_MAX_BLOCKOUT_JAWS];
   uint32_t blockout_attempts[SC_MAX_BLOCKOUT_JAWS];
   int printable;
-  int fits;                          /* fits the tray as placed */
-  int fits_rotated;                  /* fits after a 90 degree turn about z */
+  int fits;         /* fits the tray as placed */
+  int fits_rotated; /* fits after a 90 degree turn about z */
   double extent_mm[3];
   uint64_t layers;
-  const char* printer;               /* the profile used (static text) */
+  const char* printer; /* the profile used (static text) */
 } sc_design_report;
 
 /* Designs the splint for `c` from `jaws` (jaws[i] is the mesh of the case's jaw i, as read; it
@@ -381,19 +378,19 @@ typedef struct sc_design_report {
  * the result, its handle and the design's record (for sc_design_write_report, a few KB)
  * stay; on error the arena is back where it was. Progress: the stages of design_splint
  * (design.h): "design: jaws", "design: base", "design: boolean", "design: blockout",
- * "design: label", "design: thickness", "design: printer", "design: done". Errors: those of the stages (naming the stage and,
- * for a jaw, its index and role), SC_INVALID_ARGUMENT (the jaw count differs from the case's,
- * more than SC_MAX_BLOCKOUT_JAWS jaws), SC_NON_FINITE, SC_LIMIT_EXCEEDED, SC_INVALID_MESH (the
- * result is not printable: the reason), SC_ARENA_EXHAUSTED, SC_CANCELLED. */
-sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
-                    size_t jaw_count, sc_mesh** splint, sc_design_report* report);
+ * "design: label", "design: thickness", "design: printer", "design: done". Errors: those of the
+ * stages (naming the stage and, for a jaw, its index and role), SC_INVALID_ARGUMENT (the jaw count
+ * differs from the case's, more than SC_MAX_BLOCKOUT_JAWS jaws), SC_NON_FINITE, SC_LIMIT_EXCEEDED,
+ * SC_INVALID_MESH (the result is not printable: the reason), SC_ARENA_EXHAUSTED, SC_CANCELLED. */
+sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws, size_t jaw_count,
+                    sc_mesh** splint, sc_design_report* report);
 
 /* What the audit report names that the library cannot know (every member may be NULL: that
  * entry is left out). jaw_paths and jaw_sha256 hold jaw_count entries when given. */
 typedef struct sc_report_files {
   const char* case_path;
-  const char* const* jaw_paths;   /* as the caller names the jaw files */
-  const char* const* jaw_sha256;  /* of each jaw file's bytes (sc_sha256_hex) */
+  const char* const* jaw_paths;  /* as the caller names the jaw files */
+  const char* const* jaw_sha256; /* of each jaw file's bytes (sc_sha256_hex) */
   const char* splint_path;
   const char* preview_path;
   const char* preview_sha256;
@@ -412,7 +409,7 @@ sc_status sc_design_write_report(sc_context* ctx, const sc_case* c, const sc_mes
                                  const sc_report_files* files, const sc_sink* sink);
 
 #ifdef __cplusplus
-}  /* extern "C" */
+} /* extern "C" */
 #endif
 
 #endif /* SPLINTCORE_SPLINTCORE_H */

@@ -95,7 +95,7 @@ struct MarchingCubesOptions {
 struct MarchingCubesStats {
   uint64_t vertices = 0;
   uint64_t triangles = 0;
-  uint32_t layers_per_tile = 0;    // what was used
+  uint32_t layers_per_tile = 0;  // what was used
   uint32_t fill_calls = 0;
   uint64_t working_set_bytes = 0;  // arena bytes held during the sweep (mesh output aside)
 };
@@ -117,8 +117,8 @@ struct MarchingCubesStats {
 uint64_t marching_cubes_bound(const VolumeGrid& grid, uint32_t layers);
 
 struct MarchingCubesMemory {
-  uint64_t minimum = 0;       // one layer per fill call, no id pool: less than this cannot run
-  uint64_t comfortable = 0;   // min(nz, kMarchingCubesDefaultLayers) layers per fill call
+  uint64_t minimum = 0;      // one layer per fill call, no id pool: less than this cannot run
+  uint64_t comfortable = 0;  // min(nz, kMarchingCubesDefaultLayers) layers per fill call
   uint32_t comfortable_layers = 0;
 };
 // Errors: kInvalidArgument (an empty grid), kLimitExceeded (sizes overflow 64 bits).

@@ -63,7 +63,8 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
         s = arena.exhausted_status();
         break;
       }
-      for (size_t i = 0; i < splint.triangles.size(); ++i) result.triangles[i] = splint.triangles[i];
+      for (size_t i = 0; i < splint.triangles.size(); ++i)
+        result.triangles[i] = splint.triangles[i];
       for (size_t i = 0; i < splint.vertices.size(); ++i) result.vertices[i] = splint.vertices[i];
       break;
     }

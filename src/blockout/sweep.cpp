@@ -19,8 +19,8 @@ namespace splintcore {
 
 namespace {
 
-constexpr uint32_t kRing = 5;          // raw layers kept: the output layer and two on each side
-constexpr double kBandVoxels = 2.1;    // band half-width in voxels (the correction reads 2 h out)
+constexpr uint32_t kRing = 5;        // raw layers kept: the output layer and two on each side
+constexpr double kBandVoxels = 2.1;  // band half-width in voxels (the correction reads 2 h out)
 constexpr uint32_t kMaxBands = 64;
 constexpr float kTinyPositive = 1.17549435e-38f;  // FLT_MIN: an outside distance that rounded to 0
 
@@ -41,12 +41,18 @@ Status make_frame(const Vec3& d, Frame* f) {
   const int nonzero = (d.x != 0) + (d.y != 0) + (d.z != 0);
   if (nonzero == 1) {
     const Vec3 x{1, 0, 0}, y{0, 1, 0}, z{0, 0, 1};
-    if (d.x > 0) *f = {y, z, x};
-    else if (d.x < 0) *f = {z, y, -x};
-    else if (d.y > 0) *f = {z, x, y};
-    else if (d.y < 0) *f = {x, z, -y};
-    else if (d.z > 0) *f = {x, y, z};
-    else *f = {x, -y, -z};
+    if (d.x > 0)
+      *f = {y, z, x};
+    else if (d.x < 0)
+      *f = {z, y, -x};
+    else if (d.y > 0)
+      *f = {z, x, y};
+    else if (d.y < 0)
+      *f = {x, z, -y};
+    else if (d.z > 0)
+      *f = {x, y, z};
+    else
+      *f = {x, -y, -z};
     return Status::ok();
   }
   const Vec3 w = d * (1.0 / std::sqrt(n2));
@@ -62,7 +68,9 @@ Status make_frame(const Vec3& d, Frame* f) {
   return Status::ok();
 }
 
-inline Vec3 to_local(const Frame& f, const Vec3& p) { return {dot(f.u, p), dot(f.v, p), dot(f.w, p)}; }
+inline Vec3 to_local(const Frame& f, const Vec3& p) {
+  return {dot(f.u, p), dot(f.v, p), dot(f.w, p)};
+}
 inline Vec3 to_world(const Frame& f, const Vec3& p) {
   const Vec3 a = f.u * p.x;
   const Vec3 b = f.v * p.y;
@@ -126,22 +134,22 @@ inline uint64_t double_key(double v) {
 struct Sweep {
   const Context* ctx = nullptr;
   Frame frame;
-  VolumeGrid grid;             // local frame: z along the direction; the whole sweep
-  VolumeGrid mesh_grid;        // the part extracted: layers k0 .. k0 + mesh_grid.nz - 1
+  VolumeGrid grid;       // local frame: z along the direction; the whole sweep
+  VolumeGrid mesh_grid;  // the part extracted: layers k0 .. k0 + mesh_grid.nz - 1
   uint32_t k0 = 0;
   // Samples sit on one lattice whatever the region: sample (x, y) of the grid is lattice
   // point (ix0 + x, iy0 + y), its coordinates computed from the lattice's origin, so a region
   // sees exactly the field values of the whole sweep.
   Vec3 lattice{};
   int64_t ix0 = 0, iy0 = 0;
-  bool empty = false;          // the region misses the sweep: nothing to extract
+  bool empty = false;  // the region misses the sweep: nothing to extract
   double band = 0;
   float fband = 0;
-  double step = 0;             // band / 65534: one unit of the stored distances
+  double step = 0;  // band / 65534: one unit of the stored distances
   bool correct_bias = true;
   // Jaws in the local frame.
-  Span<const Vec3> vertices;   // all jaws, concatenated
-  Span<const Triangle> tris;   // front and silhouette triangles (global vertex ids), by w-min
+  Span<const Vec3> vertices;  // all jaws, concatenated
+  Span<const Triangle> tris;  // front and silhouette triangles (global vertex ids), by w-min
   Span<const double> tri_wmin;
   Span<const double> tri_wmax;
   uint32_t next_tri = 0;
@@ -152,7 +160,7 @@ struct Sweep {
   // newest is the column state.
   uint16_t* ring = nullptr;
   uint16_t* state = nullptr;
-  uint32_t raw_done = 0;       // raw layers 0 .. raw_done - 1 are made
+  uint32_t raw_done = 0;  // raw layers 0 .. raw_done - 1 are made
   // Closing (closing_radius > 0): corrected layers in a ring of 2 m + 1, and the search's
   // offsets sorted by length.
   double closing_r = 0;
@@ -166,7 +174,7 @@ struct Sweep {
   };
   const Offset* offsets = nullptr;
   uint32_t offset_count = 0;
-  uint32_t bands = 1;          // bands of rows per layer (the executor's concurrency, x 4)
+  uint32_t bands = 1;  // bands of rows per layer (the executor's concurrency, x 4)
   SweepStats* stats = nullptr;
 };
 
@@ -542,18 +550,22 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   }
   if (!(o.closing_radius == 0 ||
         (o.closing_radius >= 2 * o.voxel && o.closing_radius <= 10 * o.voxel))) {
-    return make_error(StatusCode::kInvalidArgument, "sweep: the closing radius must be 0 or "
-                      "from 2 to 10 voxels (radius ", o.closing_radius, " mm, voxel ", o.voxel,
-                      " mm)");
+    return make_error(StatusCode::kInvalidArgument,
+                      "sweep: the closing radius must be 0 or "
+                      "from 2 to 10 voxels (radius ",
+                      o.closing_radius, " mm, voxel ", o.voxel, " mm)");
   }
   if (!(o.inset >= 0) || !(o.inset < 2 * o.voxel)) {
-    return make_error(StatusCode::kInvalidArgument, "sweep: the inset must be >= 0 and below two "
-                      "voxels (inset ", o.inset, " mm, voxel ", o.voxel, " mm)");
+    return make_error(StatusCode::kInvalidArgument,
+                      "sweep: the inset must be >= 0 and below two "
+                      "voxels (inset ",
+                      o.inset, " mm, voxel ", o.voxel, " mm)");
   }
   if (!(o.offset >= 0) || !(o.offset <= 20 * o.voxel) || (o.offset > 0 && o.inset != 0)) {
-    return make_error(StatusCode::kInvalidArgument, "sweep: the offset must be from 0 to 20 "
-                      "voxels, with no inset (offset ", o.offset, " mm, inset ", o.inset,
-                      " mm, voxel ", o.voxel, " mm)");
+    return make_error(StatusCode::kInvalidArgument,
+                      "sweep: the offset must be from 0 to 20 "
+                      "voxels, with no inset (offset ",
+                      o.offset, " mm, inset ", o.inset, " mm, voxel ", o.voxel, " mm)");
   }
   SPLINTCORE_RETURN_IF_ERROR(make_frame(o.direction, &s->frame));
   uint64_t vertex_count = 0, triangle_count = 0;
@@ -565,7 +577,8 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
     return make_error(StatusCode::kInvalidArgument, "sweep: the jaws have no triangles");
   }
   if (vertex_count >= (uint64_t{1} << 32) || triangle_count >= (uint64_t{1} << 32)) {
-    return make_error(StatusCode::kLimitExceeded, "sweep: more than 2^32 - 1 vertices or triangles");
+    return make_error(StatusCode::kLimitExceeded,
+                      "sweep: more than 2^32 - 1 vertices or triangles");
   }
   // Both below 2^32 now, so they fit a 32-bit size_t too.
   const size_t vertex_total = static_cast<size_t>(vertex_count);
@@ -641,8 +654,8 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   const double h = o.voxel;
   // The correction reads two samples out; the closing reads f(q) up to 2 r + 2 voxels; an
   // offset surface needs the exact field two samples beyond it.
-  const double band = (o.closing_radius > 0 ? 2 * o.closing_radius : 0) + o.offset +
-                      kBandVoxels * h;
+  const double band =
+      (o.closing_radius > 0 ? 2 * o.closing_radius : 0) + o.offset + kBandVoxels * h;
   const double margin = band + h;
   Vec3 lo = box.lo - Vec3{margin, margin, margin};
   Vec3 hi = box.hi + Vec3{margin, margin, o.extent + h};
@@ -825,8 +838,8 @@ Status drop_caps(const Sweep& s, Arena& arena, Mesh* mesh, SweepStats* st) {
 uint64_t sweep_state_bound(uint64_t vertex_count, uint64_t triangle_count, uint32_t nx,
                            uint32_t ny) {
   const uint64_t layer = uint64_t{nx} * ny;
-  return 24 * vertex_count + (12 + 16 + 12 + 8 + 8 + 4) * triangle_count +
-         2 * kRing * layer + 16 * 64;
+  return 24 * vertex_count + (12 + 16 + 12 + 8 + 8 + 4) * triangle_count + 2 * kRing * layer +
+         16 * 64;
 }
 
 Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& options,
@@ -848,8 +861,7 @@ Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOption
   mc.iso = options.offset > 0 ? options.offset : -options.inset;
   mc.layers_per_tile = options.layers_per_tile;
   mc.edge_margin = options.edge_margin;
-  return marching_cubes(ctx, s.mesh_grid, LayerSource{fill_layers, &s}, mc, outer,
-                        &st->extraction);
+  return marching_cubes(ctx, s.mesh_grid, LayerSource{fill_layers, &s}, mc, outer, &st->extraction);
 }
 
 Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& options,

@@ -36,7 +36,10 @@ Status BooleanRun::assemble(Mesh* result) {
         for (; piece < tris_.size() && tris_[piece].src == t; ++piece) {
           const OutTri& o = tris_[piece];
           if (!keep_row[o.state + 2]) continue;
-          if (reverse) emit(o.v[0], o.v[2], o.v[1], is_a); else emit(o.v[0], o.v[1], o.v[2], is_a);
+          if (reverse)
+            emit(o.v[0], o.v[2], o.v[1], is_a);
+          else
+            emit(o.v[0], o.v[1], o.v[2], is_a);
         }
         continue;
       }
@@ -51,7 +54,10 @@ Status BooleanRun::assemble(Mesh* result) {
         }
       }
       if (!keep_row[s + 2]) continue;
-      if (reverse) emit(c[0], c[2], c[1], is_a); else emit(c[0], c[1], c[2], is_a);
+      if (reverse)
+        emit(c[0], c[2], c[1], is_a);
+      else
+        emit(c[0], c[1], c[2], is_a);
     }
     if (op_ == BooleanOp::kUnion) {
       for (uint32_t t = 0; t < in_.ntb; ++t) {
@@ -104,8 +110,8 @@ Status BooleanRun::run(Mesh* result) {
       // A nudged A (in a later pass: the previous result, moved and rounded to float32) can
       // lose a sliver to rounding: that attempt is unsupported and the next nudge runs.
       if (st_.attempts > 1) {
-        return make_error(StatusCode::kUnsupported, "A moved by the nudge is not a solid: ",
-                          s.message())
+        return make_error(StatusCode::kUnsupported,
+                          "A moved by the nudge is not a solid: ", s.message())
             .at_index(s.index());
       }
       return make_error(StatusCode::kInvalidMesh, "A must be a solid: ", s.message())
@@ -206,7 +212,8 @@ Status BooleanRun::check_result(Mesh* result) {
   // With exact contacts resolved, the result may not be a solid (parts that touch along an
   // edge, points that coincide after rounding): unsupported, so that the nudge takes over.
   const StatusCode fragile = (options_.float32_output || st_.degenerate_pairs > 0)
-                                 ? StatusCode::kUnsupported : StatusCode::kInternal;
+                                 ? StatusCode::kUnsupported
+                                 : StatusCode::kInternal;
   // A flat triangle can come from rounding (then A is nudged); anything else would be a bug
   // (or, for the union, an open B). check_closed_oriented scans for flat triangles itself, so
   // the scan here runs only when it fails: the same answer as scanning first, one scan less.
@@ -244,14 +251,16 @@ Status BooleanRun::check_result(Mesh* result) {
       const Status e = edges_paired(arena_, *in_.b, &b_paired);
       if (e.code() == StatusCode::kArenaExhausted) return e;
       if (e.is_ok() && !b_paired) {
-        return make_error(StatusCode::kInvalidMesh, "Boolean ", boolean_op_name(op_), " result",
-                          as, ": ", s.message(),
+        return make_error(StatusCode::kInvalidMesh, "Boolean ", boolean_op_name(op_), " result", as,
+                          ": ", s.message(),
                           " (B is open or not edge-manifold: its border must lie outside A)")
             .at_index(s.index());
       }
     }
-    const StatusCode code = st_.degenerate_pairs > 0 ? StatusCode::kUnsupported
-                            : (op_ == BooleanOp::kUnion ? StatusCode::kInvalidMesh : StatusCode::kInternal);
+    const StatusCode code =
+        st_.degenerate_pairs > 0
+            ? StatusCode::kUnsupported
+            : (op_ == BooleanOp::kUnion ? StatusCode::kInvalidMesh : StatusCode::kInternal);
     return make_error(code, "Boolean ", boolean_op_name(op_), " result", as,
                       st_.degenerate_pairs > 0 ? " with exact contacts" : "", ": ", s.message())
         .at_index(s.index());
@@ -305,7 +314,8 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
     if (attempt > 0 || options.float32_output) {
       const Vec3 d{attempt * step, 3.0 * attempt * step, 7.0 * attempt * step};
       moved.bind(&arena);
-      if (!moved.vertices.reserve(a.vertices.size()) || !moved.triangles.reserve(a.triangles.size())) {
+      if (!moved.vertices.reserve(a.vertices.size()) ||
+          !moved.triangles.reserve(a.triangles.size())) {
         s = arena.exhausted_status();
         break;
       }

@@ -69,7 +69,7 @@ struct Shells {
   uint32_t* tris = nullptr;        // null: the triangles of shell s are start[s]..start[s+1]
   uint32_t* vstart = nullptr;      // shell -> [vstart[s], vstart[s + 1]) in verts
   uint32_t* verts = nullptr;
-  uint8_t* outcode = nullptr;      // per vertex of B: scratch for triangles_in_region
+  uint8_t* outcode = nullptr;  // per vertex of B: scratch for triangles_in_region
   Aabb* box = nullptr;
 };
 
@@ -203,9 +203,9 @@ Status triangles_in_region(Arena& arena, const Mesh& b, const Shells& sh, uint32
   for (uint32_t i = sh.vstart[s]; i < sh.vstart[s + 1]; ++i) {
     const uint32_t v = sh.verts[i];
     const Vec3& p = vb[v];
-    oc[v] = static_cast<uint8_t>(
-        (p.x < region.lo.x ? 1 : 0) | (p.x > region.hi.x ? 2 : 0) | (p.y < region.lo.y ? 4 : 0) |
-        (p.y > region.hi.y ? 8 : 0) | (p.z < region.lo.z ? 16 : 0) | (p.z > region.hi.z ? 32 : 0));
+    oc[v] = static_cast<uint8_t>((p.x < region.lo.x ? 1 : 0) | (p.x > region.hi.x ? 2 : 0) |
+                                 (p.y < region.lo.y ? 4 : 0) | (p.y > region.hi.y ? 8 : 0) |
+                                 (p.z < region.lo.z ? 16 : 0) | (p.z > region.hi.z ? 32 : 0));
   }
   uint32_t k = 0;
   for (uint32_t i = sh.start[s]; i < sh.start[s + 1]; ++i) {
@@ -477,8 +477,8 @@ Status shells_overlap(const Context& ctx, const Mesh& b, const Shells& sh, uint3
 }
 
 // A group's shells as one mesh: its vertices and triangles in B's order.
-Status group_mesh(Arena& arena, const Mesh& b, const Shells& sh, const uint32_t* group,
-                  uint32_t g, uint32_t* remap, Mesh* out) {
+Status group_mesh(Arena& arena, const Mesh& b, const Shells& sh, const uint32_t* group, uint32_t g,
+                  uint32_t* remap, Mesh* out) {
   const uint32_t nv = static_cast<uint32_t>(b.vertices.size());
   const uint32_t nt = static_cast<uint32_t>(b.triangles.size());
   uint32_t count_v = 0, count_t = 0;
@@ -494,8 +494,7 @@ Status group_mesh(Arena& arena, const Mesh& b, const Shells& sh, const uint32_t*
   for (uint32_t t = 0; t < nt; ++t) {
     if (group[sh.tri_shell[t]] != g) continue;
     const Triangle& tri = b.triangles[t];
-    (void)out->triangles.push_back(
-        Triangle{{remap[tri.v[0]], remap[tri.v[1]], remap[tri.v[2]]}});
+    (void)out->triangles.push_back(Triangle{{remap[tri.v[0]], remap[tri.v[1]], remap[tri.v[2]]}});
   }
   for (uint32_t v = 0; v < nv; ++v) {
     if (remap[v] != kNone) (void)out->vertices.push_back(b.vertices[v]);
@@ -558,8 +557,7 @@ Status group_shells(const Context& ctx, const Mesh& b, const Shells& sh, const A
   ArenaArray<uint64_t> conflicts(&arena);
   for (uint32_t x = 0; x < relevant; ++x) {
     const uint32_t i = order[x].index;
-    for (uint32_t y = x + 1; y < relevant && sh.box[order[y].index].lo.x <= sh.box[i].hi.x;
-         ++y) {
+    for (uint32_t y = x + 1; y < relevant && sh.box[order[y].index].lo.x <= sh.box[i].hi.x; ++y) {
       const uint32_t j = order[y].index;
       if (!sh.box[i].overlaps(sh.box[j])) continue;
       if (!everywhere && !box_intersection(sh.box[i], sh.box[j]).overlaps(region)) continue;
@@ -676,8 +674,8 @@ Status run_passes(const Context& ctx, const Mesh& a, const Mesh& b, const Shells
 
 }  // namespace
 
-Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
-                    const BooleanOptions& options, Mesh* out, BooleanStats* stats) {
+Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b, const BooleanOptions& options,
+                    Mesh* out, BooleanStats* stats) {
   Arena& arena = *ctx.arena;
   BooleanStats local{};
   if (stats == nullptr) stats = &local;
@@ -694,8 +692,8 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b,
   uint32_t* group = nullptr;
   uint32_t groups = 1;
   if (usable && sh.count > 1) {
-    SPLINTCORE_RETURN_IF_ERROR(group_shells(ctx, b, sh, region,
-                                            options.op == BooleanOp::kUnion, &group, &groups));
+    SPLINTCORE_RETURN_IF_ERROR(
+        group_shells(ctx, b, sh, region, options.op == BooleanOp::kUnion, &group, &groups));
   }
   Status s;
   if (groups == 1) {

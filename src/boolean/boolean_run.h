@@ -27,8 +27,8 @@
 #include "boolean/pair_filter.h"
 #include "core/union_find.h"
 #include "geometry/plane_filter.h"
-#include "splintcore/distance.h"
 #include "splintcore/boolean.h"
+#include "splintcore/distance.h"
 
 namespace splintcore {
 namespace boolean_detail {
@@ -40,16 +40,18 @@ struct Inputs {
   const Mesh* b = nullptr;
   uint32_t nva = 0, nvb = 0, nta = 0, ntb = 0;
 
-  const Vec3& vertex(uint32_t g) const {
-    return g < nva ? a->vertices[g] : b->vertices[g - nva];
-  }
+  const Vec3& vertex(uint32_t g) const { return g < nva ? a->vertices[g] : b->vertices[g - nva]; }
   void corners(uint32_t tg, uint32_t out[3]) const {
     if (tg < nta) {
       const Triangle& t = a->triangles[tg];
-      out[0] = t.v[0]; out[1] = t.v[1]; out[2] = t.v[2];
+      out[0] = t.v[0];
+      out[1] = t.v[1];
+      out[2] = t.v[2];
     } else {
       const Triangle& t = b->triangles[tg - nta];
-      out[0] = nva + t.v[0]; out[1] = nva + t.v[1]; out[2] = nva + t.v[2];
+      out[0] = nva + t.v[0];
+      out[1] = nva + t.v[1];
+      out[2] = nva + t.v[2];
     }
   }
 };
@@ -234,8 +236,8 @@ Status order_points(Arena& arena, size_t n, const uint32_t c[3], Where where, Al
 // A piece of a cut triangle.
 struct OutTri {
   uint32_t v[3];
-  uint32_t src;   // the cut triangle's id
-  int8_t state;   // +1 inside the other solid, -1 outside
+  uint32_t src;  // the cut triangle's id
+  int8_t state;  // +1 inside the other solid, -1 outside
 };
 
 // The broad phase, computed once for all attempts: B's triangles near A's box (with their
@@ -266,8 +268,13 @@ class BooleanRun {
  public:
   BooleanRun(const Context& ctx, const Inputs& in, const Broadphase& bp,
              const BooleanOptions& options, BooleanStats* stats)
-      : ctx_(ctx), arena_(*ctx.arena), in_(in), op_(options.op), options_(options),
-        st_(*stats), bp_(bp) {}
+      : ctx_(ctx),
+        arena_(*ctx.arena),
+        in_(in),
+        op_(options.op),
+        options_(options),
+        st_(*stats),
+        bp_(bp) {}
 
   Status run(Mesh* result);
 
@@ -282,7 +289,12 @@ class BooleanRun {
                        size_t nd);
   int8_t side_state(uint32_t t, uint32_t r, const uint32_t* sheets, int nsheets) const;
   int8_t on_state(uint32_t t, uint32_t sheet) const;
-  uint32_t canon(uint32_t v) const { return (alias_ != nullptr && v >= in_.nva && v < in_.nva + in_.nvb && alias_[v - in_.nva] != ~0u) ? alias_[v - in_.nva] : v; }
+  uint32_t canon(uint32_t v) const {
+    return (alias_ != nullptr && v >= in_.nva && v < in_.nva + in_.nvb &&
+            alias_[v - in_.nva] != ~0u)
+               ? alias_[v - in_.nva]
+               : v;
+  }
   bool keep(int8_t state, bool is_a) const;
   Status resolve_pending();
   int8_t uncut_state(uint32_t t, const uint32_t c[3]) const;
@@ -300,17 +312,17 @@ class BooleanRun {
   BooleanOptions options_;
   BooleanStats& st_;
 
-  DistanceIndex index_a_{};             // built when a part of B needs a winding number
+  DistanceIndex index_a_{};  // built when a part of B needs a winding number
   bool have_a_index_ = false;
-  const Broadphase& bp_;                // near B triangles and A's grid (all attempts)
+  const Broadphase& bp_;  // near B triangles and A's grid (all attempts)
   ArenaArray<Hit> hits_;
-  uint32_t* hit_points_ = nullptr;      // 2 per hit: start, end point ids
+  uint32_t* hit_points_ = nullptr;  // 2 per hit: start, end point ids
   ArenaArray<Point> points_;
-  Record* rec_ = nullptr;               // 2 per hit
-  KeyIndex* order_ = nullptr;           // records sorted by triangle
-  ArenaArray<OutTri> tris_;             // pieces of cut triangles, by triangle id
-  int8_t* vstate_ = nullptr;            // per input vertex: +1 inside the other, -1 outside,
-                                        // kVertexOn on the other surface
+  Record* rec_ = nullptr;      // 2 per hit
+  KeyIndex* order_ = nullptr;  // records sorted by triangle
+  ArenaArray<OutTri> tris_;    // pieces of cut triangles, by triangle id
+  int8_t* vstate_ = nullptr;   // per input vertex: +1 inside the other, -1 outside,
+                               // kVertexOn on the other surface
   // Degenerate contacts, resolved exactly (add_contact): their records, sorted by triangle
   // before the split; B's vertices that coincide with A's (alias_: the A vertex, or ~0u;
   // allocated at the first one); per triangle (nta + ntb): kUncut, kDecided (has constraints),

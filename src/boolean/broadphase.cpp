@@ -19,8 +19,8 @@ PlaneSlab slab_of(const Vec3& a, const Vec3& b, const Vec3& c) {
   p.n = cross(b - a, c - a);
   p.d = dot(p.n, a);
   const double m = (a.x < 0 ? -a.x : a.x) + (a.y < 0 ? -a.y : a.y) + (a.z < 0 ? -a.z : a.z);
-  const double n1 = (p.n.x < 0 ? -p.n.x : p.n.x) + (p.n.y < 0 ? -p.n.y : p.n.y) +
-                    (p.n.z < 0 ? -p.n.z : p.n.z);
+  const double n1 =
+      (p.n.x < 0 ? -p.n.x : p.n.x) + (p.n.y < 0 ? -p.n.y : p.n.y) + (p.n.z < 0 ? -p.n.z : p.n.z);
   p.slack = 1e-9 * n1 * (m + 1.0);
   return p;
 }
@@ -201,10 +201,10 @@ Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double
   const Vec3* vb = b.vertices.data();
   for (uint32_t v = 0; v < nvb; ++v) {
     const Vec3& p = vb[v];
-    outcode[v] = static_cast<uint8_t>(
-        (p.x < abox.lo.x ? 1 : 0) | (p.x > abox.hi.x ? 2 : 0) | (p.y < abox.lo.y ? 4 : 0) |
-        (p.y > abox.hi.y ? 8 : 0) | (p.z < abox.lo.z ? 16 : 0) | (p.z > abox.hi.z ? 32 : 0) |
-        (is_finite(p) ? 0 : 64));
+    outcode[v] = static_cast<uint8_t>((p.x < abox.lo.x ? 1 : 0) | (p.x > abox.hi.x ? 2 : 0) |
+                                      (p.y < abox.lo.y ? 4 : 0) | (p.y > abox.hi.y ? 8 : 0) |
+                                      (p.z < abox.lo.z ? 16 : 0) | (p.z > abox.hi.z ? 32 : 0) |
+                                      (is_finite(p) ? 0 : 64));
   }
   bp->near_ids.bind(&arena);
   for (uint32_t t = 0; t < ntb; ++t) {
@@ -216,15 +216,15 @@ Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double
     }
     const uint32_t o0 = outcode[tri.v[0]], o1 = outcode[tri.v[1]], o2 = outcode[tri.v[2]];
     if (((o0 | o1 | o2) & 64u) != 0) {
-      return make_error(StatusCode::kNonFinite, "triangle ", t, " of B has a vertex that is not finite")
+      return make_error(StatusCode::kNonFinite, "triangle ", t,
+                        " of B has a vertex that is not finite")
           .at_index(t);
     }
     const bool is_near = ((o0 & o1 & o2) & 63u) == 0;
     bp->near_b[t] = is_near ? 1 : 0;
     if (!is_near) continue;
-    if (float32_output &&
-        !(is_float32_exact(vb[tri.v[0]]) && is_float32_exact(vb[tri.v[1]]) &&
-          is_float32_exact(vb[tri.v[2]]))) {
+    if (float32_output && !(is_float32_exact(vb[tri.v[0]]) && is_float32_exact(vb[tri.v[1]]) &&
+                            is_float32_exact(vb[tri.v[2]]))) {
       return b_not_float32(t);
     }
     if (!bp->near_ids.push_back(t)) return arena.exhausted_status();

@@ -120,7 +120,7 @@ struct Work {
   uint32_t n = 0;
   Tri* t = nullptr;
   uint32_t tri_count = 0;
-  uint32_t* vt = nullptr;  // a triangle holding each vertex
+  uint32_t* vt = nullptr;     // a triangle holding each vertex
   uint32_t* stack = nullptr;  // 3 * triangle capacity entries
   uint32_t stack_size = 0;
   uint8_t* queued = nullptr;  // per triangle: bit i set while half-edge (t, i) is on the stack
@@ -364,8 +364,8 @@ Status insert_point(Work& w, uint32_t pid, uint32_t start) {
     const uint32_t other = w.t[ti].v[k];
     const uint32_t lo = other < pid ? other : pid;
     const uint32_t hi = other < pid ? pid : other;
-    return make_error(StatusCode::kInvalidArgument, "cdt: points ", lo, " and ", hi,
-                      " coincide (", w.p[pid].x, ", ", w.p[pid].y, ")")
+    return make_error(StatusCode::kInvalidArgument, "cdt: points ", lo, " and ", hi, " coincide (",
+                      w.p[pid].x, ", ", w.p[pid].y, ")")
         .at_index(hi);
   }
   legalize_around(w, pid);
@@ -616,8 +616,7 @@ Status insert_segment(Work& w, uint32_t s, uint32_t a, uint32_t b) {
     } else {
       enqueue(w, edge.a, edge.b);
       if (++idle > w.queue_size) {
-        return make_error(StatusCode::kInternal, "cdt: no flippable edge inserting segment ",
-                          s);
+        return make_error(StatusCode::kInternal, "cdt: no flippable edge inserting segment ", s);
       }
     }
   }
@@ -970,7 +969,7 @@ bool small_cdt(Span<const CdtPoint> points, Span<const CdtSegment> segments,
   }
   {
     const uint32_t x = cur, y = next_at[x], z = next_at[y];  // y turns from x to z
-    if (!turns_left(y)) return false;  // never (simple polygon)
+    if (!turns_left(y)) return false;                        // never (simple polygon)
     const uint32_t ti = w.tri_count++;
     put(w, ti, poly[x], poly[y], poly[z], outer[y], outer[z], outer[x], seg_of(y), seg_of(z),
         seg_of(x));
@@ -1037,9 +1036,8 @@ uint64_t cdt_bound(uint64_t point_count, uint64_t segment_count) {
   const Sizes z = sizes_for(point_count);
   constexpr uint64_t kSlack = 64;  // alignment padding per allocation, generously
   return z.out * (sizeof(CdtTriangle) + sizeof(CdtAdjacency)) + z.verts * sizeof(CdtPoint) +
-         z.tris * sizeof(Tri) +
-         z.verts * sizeof(uint32_t) + 3 * z.tris * sizeof(uint32_t) + z.tris +
-         z.edges * sizeof(EdgeKey) + point_count + 2 * point_count * sizeof(KeyIndex) +
+         z.tris * sizeof(Tri) + z.verts * sizeof(uint32_t) + 3 * z.tris * sizeof(uint32_t) +
+         z.tris + z.edges * sizeof(EdgeKey) + point_count + 2 * point_count * sizeof(KeyIndex) +
          10 * kSlack;
 }
 
@@ -1072,7 +1070,8 @@ Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment
   for (uint32_t i = 0; i < n; ++i) {
     if (!coordinate_ok(pt[i].x) || !coordinate_ok(pt[i].y)) {
       return make_error(StatusCode::kInvalidArgument, "cdt: point ", i, " (", pt[i].x, ", ",
-                        pt[i].y, ") has a coordinate that is not finite or not 0 and not within "
+                        pt[i].y,
+                        ") has a coordinate that is not finite or not 0 and not within "
                         "[2^-200, 2^200] in magnitude")
           .at_index(i);
     }
@@ -1155,8 +1154,8 @@ Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment
   for (uint32_t s = 0; s < boundary_count; ++s) {
     const uint32_t v = segments[s].a;
     if (flags[v] != 0) {
-      return make_error(StatusCode::kInvalidArgument, "cdt: the boundary is not simple: point ",
-                        v, " appears twice on it")
+      return make_error(StatusCode::kInvalidArgument, "cdt: the boundary is not simple: point ", v,
+                        " appears twice on it")
           .at_index(v);
     }
     flags[v] = 1;
@@ -1262,8 +1261,8 @@ Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment
               .at_index(s);
         }
       } else if (t.c[k] >= boundary_count && (exterior[ti] != 0 || exterior[nb] != 0)) {
-        return make_error(StatusCode::kInvalidArgument, "cdt: constraint segment ", s,
-                          " (points ", a, "-", b, ") lies outside the boundary")
+        return make_error(StatusCode::kInvalidArgument, "cdt: constraint segment ", s, " (points ",
+                          a, "-", b, ") lies outside the boundary")
             .at_index(s);
       }
     }

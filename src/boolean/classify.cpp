@@ -9,8 +9,8 @@ namespace boolean_detail {
 Status BooleanRun::inconsistent_vertex(uint32_t v) const {
   const bool is_a = v < in_.nva;
   return make_error(StatusCode::kUnsupported,
-                    "inconsistent inside/outside classification at vertex ",
-                    is_a ? v : v - in_.nva, is_a ? " of A" : " of B",
+                    "inconsistent inside/outside classification at vertex ", is_a ? v : v - in_.nva,
+                    is_a ? " of A" : " of B",
                     " (overlapping shells in B, or a nearly degenerate contact)")
       .at_index(is_a ? v : v - in_.nva);
 }
@@ -111,8 +111,8 @@ Status BooleanRun::flood(bool side_a) {
       if (x == 0 && first_free < 0) first_free = k;
     }
     if (decided || (first_free < 0 && tstate_ != nullptr && tstate_[toff + t] != 0)) continue;
-    const Vec3 centroid = (mesh.vertices[tri.v[0]] + mesh.vertices[tri.v[1]] +
-                           mesh.vertices[tri.v[2]]) * (1.0 / 3.0);
+    const Vec3 centroid =
+        (mesh.vertices[tri.v[0]] + mesh.vertices[tri.v[1]] + mesh.vertices[tri.v[2]]) * (1.0 / 3.0);
     double w = 0;
     if (side_a) {
       if (!have_b) {
@@ -190,7 +190,8 @@ Status BooleanRun::resolve_pending() {
     o.state = corner_agreement(vstate_, tstate_, c, o.src, &conflict);
     if (conflict) return inconsistent_vertex(c[0]);
     if (o.state == kStateNone) {
-      return make_error(StatusCode::kInternal, "boolean: triangle ", o.src, " was left unclassified");
+      return make_error(StatusCode::kInternal, "boolean: triangle ", o.src,
+                        " was left unclassified");
     }
   }
   return Status::ok();

@@ -170,16 +170,14 @@ void transversal_contact(const Vec3 a[3], const Vec3 b[3], const int sa[3], cons
     if (e == 1 && a_end == a_start) break;
     const Loc on_b = feature_on(a, sa, a_ends[e], b);
     if (on_b == kOutside) continue;
-    add_candidate(c, &n, ContactPoint{a_ends[e], on_b}, a_ends[e] == a_start,
-                  a_ends[e] == a_end);
+    add_candidate(c, &n, ContactPoint{a_ends[e], on_b}, a_ends[e] == a_start, a_ends[e] == a_end);
   }
   const Loc b_ends[2] = {b_start, b_end};
   for (int e = 0; e < 2; ++e) {
     if (e == 1 && b_end == b_start) break;
     const Loc on_a = feature_on(b, sb, b_ends[e], a);
     if (on_a == kOutside) continue;
-    add_candidate(c, &n, ContactPoint{on_a, b_ends[e]}, b_ends[e] == b_start,
-                  b_ends[e] == b_end);
+    add_candidate(c, &n, ContactPoint{on_a, b_ends[e]}, b_ends[e] == b_start, b_ends[e] == b_end);
   }
   SPLINTCORE_ASSERT(n <= 2);
   if (n == 0) return;

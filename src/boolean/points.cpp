@@ -89,7 +89,7 @@ PairResult intersect_pair(const Inputs& in, uint32_t ta, uint32_t tb, const Plan
   if (sa[0] == sa[1] && sa[1] == sa[2] && sa[0] != 0) return PairResult::kNone;
   if (sa[0] == 0 || sa[1] == 0 || sa[2] == 0 || sb[0] == 0 || sb[1] == 0 || sb[2] == 0) {
     return triangles_intersect(A[0], A[1], A[2], B[0], B[1], B[2]) ? PairResult::kDegenerate
-                                                                  : PairResult::kNone;
+                                                                   : PairResult::kNone;
   }
   const int i0 = lone(sa);
   // A's interval along d = n_a x n_b: from its edge (a_i0, a_i0+1) to its edge (a_i0+2, a_i0)
@@ -193,8 +193,8 @@ Status sort_keys(Arena& arena, KeyIndex* items, size_t n) {
 }
 
 Status BooleanRun::degenerate(uint32_t ta, uint32_t tb) const {
-  return make_error(StatusCode::kUnsupported,
-                    "contact between triangle ", ta, " of A and triangle ", tb - in_.nta,
+  return make_error(StatusCode::kUnsupported, "contact between triangle ", ta,
+                    " of A and triangle ", tb - in_.nta,
                     " of B not decided: a coordinate is outside the exact predicates' range "
                     "(0, or 2^-300 .. 2^330 in magnitude)")
       .at_index(ta);
@@ -213,8 +213,7 @@ Status BooleanRun::find_hits() {
   EdgePlanes* edges = arena_.allocate_array<EdgePlanes>(nta);
   Aabb* boxes = arena_.allocate_array<Aabb>(nta);
   uint32_t* stamp = arena_.allocate_array<uint32_t>(nta);
-  if (filters == nullptr || edges == nullptr || boxes == nullptr ||
-      stamp == nullptr) {
+  if (filters == nullptr || edges == nullptr || boxes == nullptr || stamp == nullptr) {
     return arena_.exhausted_status();
   }
   for (uint32_t t = 0; t < nta; ++t) {
@@ -283,7 +282,8 @@ Status BooleanRun::find_hits() {
             }
             Hit hit;
             const PairResult r = intersect_pair(in_, ta, in_.nta + t, filters[ta], ea, pb, &hit);
-            if (r == PairResult::kDegenerate) SPLINTCORE_RETURN_IF_ERROR(add_contact(ta, in_.nta + t));
+            if (r == PairResult::kDegenerate)
+              SPLINTCORE_RETURN_IF_ERROR(add_contact(ta, in_.nta + t));
             if (r == PairResult::kSegment && !hits_.push_back(hit)) {
               return arena_.exhausted_status();
             }
@@ -393,8 +393,7 @@ Status BooleanRun::add_contact(uint32_t ta, uint32_t tb) {
     return Status::ok();
   };
   switch (c.kind) {
-    case detail::ContactKind::kPoint:
-      return record(0, 0, kDegPointOnly);
+    case detail::ContactKind::kPoint: return record(0, 0, kDegPointOnly);
     case detail::ContactKind::kSegment:
       return record(0, 1, c.coplanar ? kDegCoplanar : kDegTransversal);
     case detail::ContactKind::kPolygon:
@@ -402,8 +401,7 @@ Status BooleanRun::add_contact(uint32_t ta, uint32_t tb) {
         SPLINTCORE_RETURN_IF_ERROR(record(i, (i + 1) % c.count, kDegCoplanar));
       }
       return Status::ok();
-    case detail::ContactKind::kNone:
-      break;
+    case detail::ContactKind::kNone: break;
   }
   return Status::ok();
 }
@@ -422,10 +420,14 @@ Status BooleanRun::number_degenerate_points() {
     while (lo < hi) {
       const size_t mid = (lo + hi) / 2;
       const PointKey& k = points_[mid].key;
-      if (k.edge < d.k1 || (k.edge == d.k1 && k.tri < d.k2)) lo = mid + 1; else hi = mid;
+      if (k.edge < d.k1 || (k.edge == d.k1 && k.tri < d.k2))
+        lo = mid + 1;
+      else
+        hi = mid;
     }
     return (lo < n0 && points_[lo].key.edge == d.k1 && points_[lo].key.tri == d.k2)
-               ? static_cast<uint32_t>(lo) : ~0u;
+               ? static_cast<uint32_t>(lo)
+               : ~0u;
   };
   if (!points_.reserve(n0 + 2 * nd)) return arena_.exhausted_status();  // before the scope
   ArenaScope scope(arena_);
@@ -473,7 +475,8 @@ Status BooleanRun::number_degenerate_points() {
       } else {
         const Vec3 ea[3] = {in_.vertex(key_hi(d.k1)), in_.vertex(key_lo(d.k1)), Vec3{}};
         const Vec3 eb[3] = {in_.vertex(key_hi(d.k2)), in_.vertex(key_lo(d.k2)), Vec3{}};
-        pt.p = detail::contact_point_position(ea, eb, detail::ContactPoint{detail::Loc::kE0, detail::Loc::kE0});
+        pt.p = detail::contact_point_position(
+            ea, eb, detail::ContactPoint{detail::Loc::kE0, detail::Loc::kE0});
         pt.key = PointKey{d.k1, ~0u, 0};
       }
       if (options_.float32_output && !round_to_float32(&pt.p)) {
@@ -481,7 +484,8 @@ Status BooleanRun::number_degenerate_points() {
       }
       if (!points_.push_back(pt)) return arena_.exhausted_status();
     }
-    deg_[keys[i].index / 2].id[keys[i].index % 2] = base + static_cast<uint32_t>(points_.size() - 1);
+    deg_[keys[i].index / 2].id[keys[i].index % 2] =
+        base + static_cast<uint32_t>(points_.size() - 1);
     prev = &d;
   }
   return Status::ok();
@@ -497,7 +501,9 @@ Status BooleanRun::number_points() {
     // Lexicographic (edge, triangle), ties in index order: stably by edge, then each run of
     // one edge (the few triangles its line crosses) stably by triangle, by insertion. The same
     // order as two stable passes (triangle, then edge), which remain for runs longer than 32.
-    auto tri_of = [&](uint32_t i) { return (i & 1) == 0 ? hits_[i / 2].start.tri : hits_[i / 2].end.tri; };
+    auto tri_of = [&](uint32_t i) {
+      return (i & 1) == 0 ? hits_[i / 2].start.tri : hits_[i / 2].end.tri;
+    };
     for (size_t i = 0; i < n; ++i) {
       const Hit& h = hits_[i / 2];
       items[i] = KeyIndex{(i & 1) == 0 ? h.start.edge : h.end.edge, static_cast<uint32_t>(i), 0};
@@ -518,7 +524,8 @@ Status BooleanRun::number_points() {
       a = b;
     }
     if (long_run) {
-      for (size_t i = 0; i < n; ++i) items[i] = KeyIndex{tri_of(static_cast<uint32_t>(i)), static_cast<uint32_t>(i), 0};
+      for (size_t i = 0; i < n; ++i)
+        items[i] = KeyIndex{tri_of(static_cast<uint32_t>(i)), static_cast<uint32_t>(i), 0};
       SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(items, n)));
       for (size_t i = 0; i < n; ++i) {
         const Hit& h = hits_[items[i].index / 2];

@@ -81,8 +81,8 @@ bool BooleanRun::keep(int8_t state, bool is_a) const {
 // own edges; each side of a constraint has its own state (side_state), inside, outside or on
 // the other surface. A triangle with lone points only is split as well, its pieces pending
 // (their state comes from its corners after flooding).
-Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
-                                 const KeyIndex* dk, size_t nd) {
+Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np, const KeyIndex* dk,
+                                 size_t nd) {
   using detail::Loc;
   ArenaScope scope(arena_);
   const uint32_t base = in_.nva + in_.nvb;
@@ -98,7 +98,9 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
   in_.corners(t, raw);
   for (int k = 0; k < 3; ++k) c[k] = canon(raw[k]);
   const Vec3 cv[3] = {in_.vertex(raw[0]), in_.vertex(raw[1]), in_.vertex(raw[2])};
-  auto coords = [&](uint32_t id) -> const Vec3& { return id < base ? in_.vertex(id) : points_[id - base].p; };
+  auto coords = [&](uint32_t id) -> const Vec3& {
+    return id < base ? in_.vertex(id) : points_[id - base].p;
+  };
   // 1. The points: id, where (edge 0..2, 3 inside), position along the edge.
   struct GPoint {
     uint32_t id, where;
@@ -116,7 +118,8 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
     return d[w] > 0 ? p[w] - cv[k][w] : cv[k][w] - p[w];
   };
   auto add = [&](uint32_t id, int where) {
-    gp[n] = GPoint{id, static_cast<uint32_t>(where), where < 3 ? along_edge(where, coords(id)) : 0.0};
+    gp[n] =
+        GPoint{id, static_cast<uint32_t>(where), where < 3 ? along_edge(where, coords(id)) : 0.0};
     ids[n] = KeyIndex{id, static_cast<uint32_t>(n), 0};
     ++n;
   };
@@ -131,7 +134,9 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
         for (int e = 0; e < 3; ++e) {
           if (edge_key(raw[e], raw[(e + 1) % 3]) == pt.key.edge) where = e;
         }
-        if (where < 0) return make_error(StatusCode::kInternal, "boolean: intersection point ", pid, " is not on triangle ", t);
+        if (where < 0)
+          return make_error(StatusCode::kInternal, "boolean: intersection point ", pid,
+                            " is not on triangle ", t);
       }
       add(base + pid, where);
     }
@@ -152,9 +157,11 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
   size_t nu = 0;
   for (size_t i = 0; i < n; ++i) {
     const GPoint& q = gp[ids[i].index];
-    if (q.id == c[0] || q.id == c[1] || q.id == c[2]) return unsupported("a contact point named inside is one of its corners");
+    if (q.id == c[0] || q.id == c[1] || q.id == c[2])
+      return unsupported("a contact point named inside is one of its corners");
     if (nu > 0 && up[nu - 1].id == q.id) {
-      if (up[nu - 1].where != q.where) return unsupported("a point found on two different places of it");
+      if (up[nu - 1].where != q.where)
+        return unsupported("a point found on two different places of it");
       continue;
     }
     up[nu++] = q;
@@ -164,7 +171,8 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
   detail::CdtPoint* pts = arena_.allocate_array<detail::CdtPoint>(nu + 3);
   uint32_t* vid = arena_.allocate_array<uint32_t>(nu + 3);
   uint32_t* local_of = arena_.allocate_array<uint32_t>(nu);  // by index in `up`
-  if (by == nullptr || pts == nullptr || vid == nullptr || local_of == nullptr) return arena_.exhausted_status();
+  if (by == nullptr || pts == nullptr || vid == nullptr || local_of == nullptr)
+    return arena_.exhausted_status();
   uint32_t m = 0, boundary = 0;
   uint32_t corner_at[3];
   SPLINTCORE_RETURN_IF_ERROR(order_points(
@@ -178,7 +186,10 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
     size_t lo = 0, hi = nu;
     while (lo < hi) {
       const size_t mid = (lo + hi) / 2;
-      if (up[mid].id < id) lo = mid + 1; else hi = mid;
+      if (up[mid].id < id)
+        lo = mid + 1;
+      else
+        hi = mid;
     }
     return (lo < nu && up[lo].id == id) ? local_of[lo] : ~0u;
   };
@@ -201,7 +212,9 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
   for (size_t x = 0; x < np; ++x) {
     const Record& rc = rec_[proper[x].index];
     const uint32_t from = local(base + rc.from), to = local(base + rc.to);
-    if (from == ~0u || to == ~0u) return make_error(StatusCode::kInternal, "boolean: a segment end is not a point of triangle ", t);
+    if (from == ~0u || to == ~0u)
+      return make_error(StatusCode::kInternal, "boolean: a segment end is not a point of triangle ",
+                        t);
     cons[nc++] = Cons{from, to, kStateIn, kStateOut};
   }
   size_t ns = 0;
@@ -209,7 +222,9 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
     const DegRecord& r = deg_[dk[x].index];
     if (r.kind == kDegPointOnly) continue;
     const uint32_t a = local(canon(r.id[0])), b = local(canon(r.id[1]));
-    if (a == ~0u || b == ~0u) return make_error(StatusCode::kInternal, "boolean: a contact end is not a point of triangle ", t);
+    if (a == ~0u || b == ~0u)
+      return make_error(StatusCode::kInternal, "boolean: a contact end is not a point of triangle ",
+                        t);
     if (a == b) return unsupported("a contact segment with both ends at one point");
     dseg[ns++] = KeyIndex{edge_key(a, b), static_cast<uint32_t>(x), 0};
   }
@@ -225,7 +240,8 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
       bool seen = false;
       for (int y = 0; y < nsheets; ++y) seen = seen || sheets[y] == r.other;
       if (!seen) {
-        if (nsheets == 2) return unsupported("a contact line held by more than two triangles of the other mesh");
+        if (nsheets == 2)
+          return unsupported("a contact line held by more than two triangles of the other mesh");
         sheets[nsheets++] = r.other;
       }
       if (r.kind == kDegTransversal && trans == nullptr) trans = &r;
@@ -254,18 +270,23 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
         if (sd == left_sign && lc == ~0u) lc = raw[k];
         if (sd == -left_sign && rc == ~0u) rc = raw[k];
       }
-      if (lc == ~0u || rc == ~0u) return unsupported("a contact segment across it without corners on both sides");
+      if (lc == ~0u || rc == ~0u)
+        return unsupported("a contact segment across it without corners on both sides");
       cn.from = local(canon(trans->id[0]));
       cn.to = local(canon(trans->id[1]));
       cn.left = side_state(t, lc, sheets, nsheets);
       cn.right = side_state(t, rc, sheets, nsheets);
     } else {
       // Coplanar only, across t: two coplanar sheets (t lies on both sides).
-      if (nsheets != 2) return unsupported("a coplanar contact side inside it with one triangle of the other mesh (an open border?)");
+      if (nsheets != 2)
+        return unsupported(
+            "a coplanar contact side inside it with one triangle of the other mesh (an open "
+            "border?)");
       cn.left = on_state(t, sheets[0]);
       cn.right = on_state(t, sheets[1]);
     }
-    if (cn.left == kStateNone || cn.right == kStateNone) return unsupported("a contact line whose sides could not be classified");
+    if (cn.left == kStateNone || cn.right == kStateNone)
+      return unsupported("a contact line whose sides could not be classified");
     cons[nc++] = cn;
     g = g_end;
   }
@@ -280,7 +301,8 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
   }
   SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, ckey, nc));
   for (uint32_t x = 1; x < nc; ++x) {
-    if (ckey[x].key == ckey[x - 1].key) return unsupported("a contact segment repeats a crossing segment");
+    if (ckey[x].key == ckey[x - 1].key)
+      return unsupported("a contact segment repeats a crossing segment");
   }
   ArenaArray<detail::CdtTriangle> out(&arena_);
   Status s = detail::cdt(arena_, Span<const detail::CdtPoint>(pts, m),
@@ -315,7 +337,8 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
       for (size_t x = a; x < b; ++x) {
         const uint32_t j = half[x].index / 3, e = half[x].index % 3;
         const int8_t v = out[j].v[e] == cn.from ? cn.left : cn.right;
-        if (vote[j] != kStateNone && vote[j] != v) return unsupported("a piece between two contacts that disagree");
+        if (vote[j] != kStateNone && vote[j] != v)
+          return unsupported("a piece between two contacts that disagree");
         vote[j] = v;
       }
     } else if (b - a == 2) {
@@ -340,7 +363,8 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np,
   for (uint32_t j = 0; j < k; ++j) {
     const int8_t sj = state[uf.find(j)];
     if (sj == kStateNone && nc > 0) {
-      return make_error(StatusCode::kInternal, "boolean: a piece of triangle ", t, " is not next to any contact");
+      return make_error(StatusCode::kInternal, "boolean: a piece of triangle ", t,
+                        " is not next to any contact");
     }
     const detail::CdtTriangle& ct = out[j];
     if (!tris_.push_back(OutTri{{vid[ct.v[0]], vid[ct.v[1]], vid[ct.v[2]]}, t, sj})) {
@@ -431,7 +455,8 @@ Status BooleanRun::split_triangles() {
     tflag_ = arena_.allocate_array<uint8_t>(ntri);
     tstate_ = arena_.allocate_array<int8_t>(ntri);
     dorder = arena_.allocate_array<KeyIndex>(nd + 1);
-    if (tflag_ == nullptr || tstate_ == nullptr || dorder == nullptr) return arena_.exhausted_status();
+    if (tflag_ == nullptr || tstate_ == nullptr || dorder == nullptr)
+      return arena_.exhausted_status();
     std::memset(tflag_, kUncut, ntri);
     std::memset(tstate_, 0, ntri);
     for (size_t r = 0; r < nd; ++r) dorder[r] = KeyIndex{deg_[r].tri, static_cast<uint32_t>(r), 0};
@@ -454,7 +479,10 @@ Status BooleanRun::split_triangles() {
     size_t g_end = 0, d_end = 0;
     const uint32_t t = next_group(g, d, &g_end, &d_end);
     total += d_end > d ? 4 * (g_end - g + d_end - d) + 3 : 4 * (g_end - g) + 1;
-    if (t < in_.nta) ++cut_a; else ++cut_b;
+    if (t < in_.nta)
+      ++cut_a;
+    else
+      ++cut_b;
     g = g_end;
     d = d_end;
   }
@@ -518,8 +546,14 @@ Status BooleanRun::split_triangles() {
         int m = 0, at_from = 0, at_to = 0;
         for (int e = 0; e < 3; ++e) {
           poly[m++] = c[e];
-          if (e == ef) { at_from = m; poly[m++] = base + rc.from; }
-          if (e == et) { at_to = m; poly[m++] = base + rc.to; }
+          if (e == ef) {
+            at_from = m;
+            poly[m++] = base + rc.from;
+          }
+          if (e == et) {
+            at_to = m;
+            poly[m++] = base + rc.to;
+          }
         }
         // Part one runs from the lower chord end to the higher one, part two on from there.
         const int x = at_from < at_to ? at_from : at_to, y = at_from < at_to ? at_to : at_from;
@@ -538,16 +572,17 @@ Status BooleanRun::split_triangles() {
         detail::CdtPoint q2[4];
         for (int i = 0; i < 4; ++i) q2[i] = point_2d(quad[i], pr);
         const detail::CdtPoint t2[3] = {point_2d(tri3[0], pr), point_2d(tri3[1], pr),
-                                         point_2d(tri3[2], pr)};
-        auto ccw = [](const detail::CdtPoint& a, const detail::CdtPoint& b2, const detail::CdtPoint& c2) {
+                                        point_2d(tri3[2], pr)};
+        auto ccw = [](const detail::CdtPoint& a, const detail::CdtPoint& b2,
+                      const detail::CdtPoint& c2) {
           return orient2d(a.x, a.y, b2.x, b2.y, c2.x, c2.y) > 0;
         };
         // Diagonal 0-2 unless quad[3] is inside the circle of 0, 1, 2 (then 1-3).
-        const bool d13 = incircle(q2[0].x, q2[0].y, q2[1].x, q2[1].y, q2[2].x, q2[2].y, q2[3].x,
-                                  q2[3].y) > 0;
+        const bool d13 =
+            incircle(q2[0].x, q2[0].y, q2[1].x, q2[1].y, q2[2].x, q2[2].y, q2[3].x, q2[3].y) > 0;
         const int qa[2][3] = {{0, 1, 2}, {0, 2, 3}};
         const int qb[2][3] = {{0, 1, 3}, {1, 2, 3}};
-        const int (*qs)[3] = d13 ? qb : qa;
+        const int(*qs)[3] = d13 ? qb : qa;
         if (ccw(t2[0], t2[1], t2[2]) && ccw(q2[qs[0][0]], q2[qs[0][1]], q2[qs[0][2]]) &&
             ccw(q2[qs[1][0]], q2[qs[1][1]], q2[qs[1][2]])) {
           if (!tris_.push_back(OutTri{{tri3[0], tri3[1], tri3[2]}, t, s3})) {
@@ -600,7 +635,10 @@ Status BooleanRun::split_triangles() {
       size_t lo = 0, hi = n;
       while (hi - lo > 1) {
         const size_t mid = (lo + hi) / 2;
-        if (locals[mid].point <= pid) lo = mid; else hi = mid;
+        if (locals[mid].point <= pid)
+          lo = mid;
+        else
+          hi = mid;
       }
       SPLINTCORE_ASSERT(locals[lo].point == pid);
       return local_of[lo];
@@ -678,7 +716,8 @@ Status BooleanRun::split_triangles() {
     for (uint32_t j = 0; j < k && !distinct; ++j) {
       vote[j] = 0;
       for (uint32_t e = 0; e < 3; ++e) {
-        half[3 * j + e] = KeyIndex{edge_key(cdt_out[j].v[e], cdt_out[j].v[(e + 1) % 3]), 3 * j + e, 0};
+        half[3 * j + e] =
+            KeyIndex{edge_key(cdt_out[j].v[e], cdt_out[j].v[(e + 1) % 3]), 3 * j + e, 0};
       }
     }
     if (!distinct) SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, half, size_t{3} * k));

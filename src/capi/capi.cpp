@@ -147,8 +147,8 @@ Status gather_meshes(const sc_mesh* const* jaws, size_t count, const char* funct
   }
   for (size_t i = 0; i < count; ++i) {
     if (jaws[i] == nullptr) {
-      return make_error(StatusCode::kInvalidArgument, function, ": mesh ",
-                        static_cast<uint64_t>(i), " is NULL")
+      return make_error(StatusCode::kInvalidArgument, function, ": mesh ", static_cast<uint64_t>(i),
+                        " is NULL")
           .at_index(i);
     }
     out[i] = jaws[i]->mesh;
@@ -223,7 +223,6 @@ Status check_params(const sc_case_params& p, const PrinterProfile** profile) {
   }
   return Status::ok();
 }
-
 
 }  // namespace
 
@@ -407,8 +406,7 @@ sc_status sc_mesh_read_stl(sc_context* ctx, const sc_source* source,
 }
 
 sc_status sc_mesh_from_arrays(sc_context* ctx, const double* vertices, uint32_t vertex_count,
-                              const uint32_t* triangles, uint32_t triangle_count,
-                              sc_mesh** out) {
+                              const uint32_t* triangles, uint32_t triangle_count, sc_mesh** out) {
   if (ctx == nullptr || out == nullptr) return null_argument(ctx, "sc_mesh_from_arrays", "out");
   *out = nullptr;
   if ((vertices == nullptr && vertex_count > 0) || (triangles == nullptr && triangle_count > 0)) {
@@ -418,7 +416,8 @@ sc_status sc_mesh_from_arrays(sc_context* ctx, const double* vertices, uint32_t 
     const double* q = vertices + 3 * static_cast<size_t>(i);
     if (!is_finite(Vec3(q[0], q[1], q[2]))) {
       return keep(ctx, make_error(StatusCode::kNonFinite, "sc_mesh_from_arrays: vertex ", i,
-                                  " is not finite").at_index(i));
+                                  " is not finite")
+                           .at_index(i));
     }
   }
   for (uint32_t t = 0; t < triangle_count; ++t) {
@@ -426,7 +425,8 @@ sc_status sc_mesh_from_arrays(sc_context* ctx, const double* vertices, uint32_t 
       const uint32_t id = triangles[3 * size_t{t} + static_cast<size_t>(k)];
       if (id >= vertex_count) {
         return keep(ctx, make_error(StatusCode::kInvalidArgument, "sc_mesh_from_arrays: triangle ",
-                                    t, " uses vertex ", id, " of ", vertex_count).at_index(t));
+                                    t, " uses vertex ", id, " of ", vertex_count)
+                             .at_index(t));
       }
     }
   }
@@ -463,10 +463,10 @@ sc_status sc_mesh_copy_vertices(sc_context* ctx, const sc_mesh* mesh, double* ou
   }
   const size_t n = mesh->mesh.vertices.size();
   if (capacity / 3 < n) {
-    return keep(ctx, make_error(StatusCode::kInvalidArgument, "sc_mesh_copy_vertices: the output ",
-                                "holds ", static_cast<uint64_t>(capacity), " doubles, ",
-                                static_cast<uint64_t>(n), " vertices need ",
-                                static_cast<uint64_t>(n) * 3));
+    return keep(
+        ctx, make_error(StatusCode::kInvalidArgument, "sc_mesh_copy_vertices: the output ",
+                        "holds ", static_cast<uint64_t>(capacity), " doubles, ",
+                        static_cast<uint64_t>(n), " vertices need ", static_cast<uint64_t>(n) * 3));
   }
   for (size_t i = 0; i < n; ++i) {
     const Vec3& p = mesh->mesh.vertices[i];
@@ -709,8 +709,8 @@ sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* 
   return keep(ctx, Status::ok());
 }
 
-sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
-                    size_t jaw_count, sc_mesh** splint, sc_design_report* report) {
+sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws, size_t jaw_count,
+                    sc_mesh** splint, sc_design_report* report) {
   if (ctx == nullptr || c == nullptr || splint == nullptr) {
     return null_argument(ctx, "sc_design", "the case or the output");
   }
@@ -784,8 +784,10 @@ sc_status sc_design_write_report(sc_context* ctx, const sc_case* c, const sc_mes
   DesignReportFiles f;
   if (files != nullptr) {
     f.case_path = files->case_path;
-    if (files->jaw_paths != nullptr) f.jaw_paths = Span<const char* const>(files->jaw_paths, jaw_count);
-    if (files->jaw_sha256 != nullptr) f.jaw_sha256 = Span<const char* const>(files->jaw_sha256, jaw_count);
+    if (files->jaw_paths != nullptr)
+      f.jaw_paths = Span<const char* const>(files->jaw_paths, jaw_count);
+    if (files->jaw_sha256 != nullptr)
+      f.jaw_sha256 = Span<const char* const>(files->jaw_sha256, jaw_count);
     f.splint_path = files->splint_path;
     f.preview_path = files->preview_path;
     f.preview_sha256 = files->preview_sha256;

@@ -9,14 +9,13 @@ namespace splintcore {
 // Every block starts with this header; the payload follows it. In buffer mode the one block
 // is described by root_storage_ and its payload is the caller's buffer.
 struct Arena::Block {
-  Block* previous;   // the block below this one in the stack
-  Block* next;       // a cached block above (after a rewind), reused before asking the hooks
+  Block* previous;  // the block below this one in the stack
+  Block* next;      // a cached block above (after a rewind), reused before asking the hooks
   unsigned char* payload;
   size_t payload_bytes;
   size_t used_before;  // arena bytes in use below this block's payload
   size_t total_bytes;  // what the hooks handed out (0 for the caller's buffer)
 };
-
 
 namespace {
 constexpr size_t kHeaderBytes = 64;  // header rounded up so payloads stay 64-byte aligned
@@ -35,7 +34,9 @@ Arena::Arena(void* buffer, size_t bytes) : cap_(bytes) {
 }
 
 Arena::Arena(const AllocatorHooks& hooks, size_t cap, size_t block_bytes)
-    : cap_(cap), block_bytes_(block_bytes < 4096 ? 4096 : block_bytes), hooks_(hooks),
+    : cap_(cap),
+      block_bytes_(block_bytes < 4096 ? 4096 : block_bytes),
+      hooks_(hooks),
       owns_blocks_(true) {
   SPLINTCORE_ASSERT(hooks.allocate != nullptr && hooks.release != nullptr);
   // An empty root block so current_ is never null.

@@ -99,8 +99,8 @@ void lsd_to(uint64_t* from, uint64_t* other, size_t n, unsigned lo_bit, unsigned
 // across megabytes (543k Morton keys of 42 bits: 10.3 ms in four LSD passes, 6.4 ms this way).
 // The top digit takes what is left over whole 11-bit digits, 6 to 11 bits. Not inlined: its
 // 8 KiB of bucket ends stay off the stack of small sorts (the firmware's high water).
-__attribute__((noinline)) void top_digit_first(uint64_t* a, uint64_t* b, size_t n,
-                                               unsigned lo_bit, unsigned hi_bit) {
+__attribute__((noinline)) void top_digit_first(uint64_t* a, uint64_t* b, size_t n, unsigned lo_bit,
+                                               unsigned hi_bit) {
   const unsigned bits = hi_bit - lo_bit;
   unsigned top = bits - kMaxDigit * ((bits - 6) / kMaxDigit);
   top = top > kMaxDigit ? kMaxDigit : top;

@@ -27,8 +27,7 @@ Status memory_open(void* user, const char* name, ByteSource* out) {
       return Status::ok();
     }
   }
-  return make_error(StatusCode::kIoError, "cannot open \"", name, "\": no such file")
-      .in_file(name);
+  return make_error(StatusCode::kIoError, "cannot open \"", name, "\": no such file").in_file(name);
 }
 void memory_close(void* user, ByteSource* source) {
   (void)source;
@@ -40,8 +39,8 @@ Status memory_open_index(void* user, uint32_t index, ByteSource* out) {
     return make_error(StatusCode::kIoError, "no file ", index, " in the series");
   }
   m->current = MemorySource{m->files[index].data, m->files[index].size, 0, m->max_chunk};
-  *out = memory_source(&m->current, m->files[index].name != nullptr ? m->files[index].name
-                                                                    : "memory");
+  *out =
+      memory_source(&m->current, m->files[index].name != nullptr ? m->files[index].name : "memory");
   return Status::ok();
 }
 void memory_close_index(void* user, uint32_t index, ByteSource* source) {
@@ -171,9 +170,11 @@ bool equal_nocase(const char* a, size_t an, const char* b) {
 void trim(const char** text, size_t* length) {
   const char* t = *text;
   size_t n = *length;
-  while (n > 0 && (t[0] == ' ' || t[0] == '\t' || t[0] == '\0')) { ++t; --n; }
-  while (n > 0 && (t[n - 1] == ' ' || t[n - 1] == '\t' || t[n - 1] == '\0' ||
-                   t[n - 1] == '\r')) {
+  while (n > 0 && (t[0] == ' ' || t[0] == '\t' || t[0] == '\0')) {
+    ++t;
+    --n;
+  }
+  while (n > 0 && (t[n - 1] == ' ' || t[n - 1] == '\t' || t[n - 1] == '\0' || t[n - 1] == '\r')) {
     --n;
   }
   *text = t;
@@ -190,8 +191,8 @@ bool parse_double(const char* text, size_t length, double* out) {
   }
   for (size_t i = 0; i < length; ++i) {
     const char c = text[i];
-    const bool ok = (c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.' || c == 'e' ||
-                    c == 'E';
+    const bool ok =
+        (c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.' || c == 'e' || c == 'E';
     if (!ok) return false;
   }
   double v = 0;
@@ -203,7 +204,10 @@ bool parse_double(const char* text, size_t length, double* out) {
 
 bool parse_i64(const char* text, size_t length, int64_t* out) {
   trim(&text, &length);
-  if (length > 0 && text[0] == '+') { ++text; --length; }
+  if (length > 0 && text[0] == '+') {
+    ++text;
+    --length;
+  }
   if (length == 0 || length > 24) return false;
   int64_t v = 0;
   auto r = std::from_chars(text, text + length, v, 10);
@@ -281,8 +285,8 @@ Status check_budget(const Arena& arena, uint64_t voxel_bytes, uint64_t temporari
     if (!checked_add(arena.used(), need, &total)) total = ~uint64_t{0};
     return make_error(StatusCode::kArenaExhausted, "arena exhausted: reading the volume needs ",
                       need, " bytes (", voxel_bytes, " for the voxels), ", free_bytes,
-                      " are free (cap ", arena.cap(),
-                      "); increase the memory cap to at least ", total, " bytes");
+                      " are free (cap ", arena.cap(), "); increase the memory cap to at least ",
+                      total, " bytes");
   }
   return Status::ok();
 }
@@ -315,16 +319,15 @@ Status check_axes(Vec3* x, Vec3* y, Vec3* z, const CtReadOptions& options) {
       }
       const double len = length(*axes[a]);
       if (!(std::fabs(len - 1.0) <= tol)) {
-        return make_error(StatusCode::kParseError, "direction of axis ", names[a],
-                          " has length ", len, ", not 1 (tolerance ", tol, ")");
+        return make_error(StatusCode::kParseError, "direction of axis ", names[a], " has length ",
+                          len, ", not 1 (tolerance ", tol, ")");
       }
       continue;
     }
     const double d = dot(*axes[a], *axes[b]);
     if (!(std::fabs(d) <= tol)) {
-      return make_error(StatusCode::kParseError, "directions of axes ", names[a], " and ",
-                        names[b], " are not orthogonal (dot product ", d, ", tolerance ", tol,
-                        ")");
+      return make_error(StatusCode::kParseError, "directions of axes ", names[a], " and ", names[b],
+                        " are not orthogonal (dot product ", d, ", tolerance ", tol, ")");
     }
   }
   for (int a = 0; a < 3; ++a) {
@@ -364,8 +367,14 @@ int16_t to_hu(double value, double slope, double intercept, bool* clamped) {
     return -32768;
   }
   const double r = std::round(v);  // halves away from zero; exact, the same everywhere
-  if (r > 32767.0) { *clamped = true; return 32767; }
-  if (r < -32768.0) { *clamped = true; return -32768; }
+  if (r > 32767.0) {
+    *clamped = true;
+    return 32767;
+  }
+  if (r < -32768.0) {
+    *clamped = true;
+    return -32768;
+  }
   return static_cast<int16_t>(static_cast<int32_t>(r));
 }
 
@@ -382,8 +391,7 @@ inline uint64_t load(const uint8_t* p, unsigned bytes, bool big_endian) {
 }  // namespace
 
 Status convert_voxels(Reader& reader, const VoxelFormat& f, uint64_t count, double slope,
-                      double intercept, int16_t* out, uint64_t first_index,
-                      uint64_t* saturated) {
+                      double intercept, int16_t* out, uint64_t first_index, uint64_t* saturated) {
   const unsigned bytes = f.bytes;
   const unsigned width = bytes * 8;
   const unsigned bits = (f.bits_stored != 0 && f.bits_stored < width) ? f.bits_stored : width;
@@ -402,8 +410,8 @@ Status convert_voxels(Reader& reader, const VoxelFormat& f, uint64_t count, doub
     uint64_t n = reader.available() / bytes;
     if (n > count - done) n = count - done;
     if (n == 0) {
-      return make_error(StatusCode::kTruncated, "voxel data ends early: ", count - done,
-                        " of ", count, " values missing")
+      return make_error(StatusCode::kTruncated, "voxel data ends early: ", count - done, " of ",
+                        count, " values missing")
           .at_byte(reader.base + reader.end);
     }
     const uint8_t* p = reader.buf + reader.pos;
@@ -412,11 +420,17 @@ Status convert_voxels(Reader& reader, const VoxelFormat& f, uint64_t count, doub
       // The common case (16-bit little endian, no scaling): the same results, faster.
       for (uint64_t k = 0; k < n; ++k) {
         const uint32_t u = uint32_t{p[2 * k]} | (uint32_t{p[2 * k + 1]} << 8);
-        const int64_t value = f.is_signed ? static_cast<int64_t>(static_cast<int16_t>(u))
-                                          : static_cast<int64_t>(u);
+        const int64_t value =
+            f.is_signed ? static_cast<int64_t>(static_cast<int16_t>(u)) : static_cast<int64_t>(u);
         int64_t h = value + int_intercept;
-        if (h > 32767) { h = 32767; ++clamped_count; }
-        if (h < -32768) { h = -32768; ++clamped_count; }
+        if (h > 32767) {
+          h = 32767;
+          ++clamped_count;
+        }
+        if (h < -32768) {
+          h = -32768;
+          ++clamped_count;
+        }
         o[k] = static_cast<int16_t>(h);
       }
       reader.pos += static_cast<size_t>(n * 2);
@@ -461,8 +475,14 @@ Status convert_voxels(Reader& reader, const VoxelFormat& f, uint64_t count, doub
       }
       if (integer_path) {
         int64_t h = value + int_intercept;
-        if (h > 32767) { h = 32767; ++clamped_count; }
-        if (h < -32768) { h = -32768; ++clamped_count; }
+        if (h > 32767) {
+          h = 32767;
+          ++clamped_count;
+        }
+        if (h < -32768) {
+          h = -32768;
+          ++clamped_count;
+        }
         o[k] = static_cast<int16_t>(h);
       } else {
         bool c = false;
@@ -493,8 +513,7 @@ Status read_raw_volume(const Context& ctx, Reader& header, const ByteSource& hea
   const uint64_t voxels = voxel_bytes / 2;
   uint64_t data_bytes = 0;
   if (!checked_mul(voxels, data.format.bytes, &data_bytes)) {
-    return in_source(make_error(StatusCode::kLimitExceeded, "voxel data too large"),
-                     header_source);
+    return in_source(make_error(StatusCode::kLimitExceeded, "voxel data too large"), header_source);
   }
   // Attached data shorter than the header says: a truncation, told before any allocation.
   if (data.data_file == nullptr && header_source.size != kUnknownSize) {
@@ -533,8 +552,8 @@ Status read_raw_volume(const Context& ctx, Reader& header, const ByteSource& hea
   if (data.data_file != nullptr) {
     if (opener == nullptr || opener->open == nullptr) {
       arena.rewind(start);
-      return in_source(make_error(StatusCode::kInvalidArgument, "the data is in \"",
-                                  data.data_file, "\" but no file opener was given"),
+      return in_source(make_error(StatusCode::kInvalidArgument, "the data is in \"", data.data_file,
+                                  "\" but no file opener was given"),
                        header_source);
     }
     opened.opener = opener;
@@ -574,8 +593,7 @@ Status read_raw_volume(const Context& ctx, Reader& header, const ByteSource& hea
     if (source->size == kUnknownSize) {
       s = make_error(StatusCode::kUnsupported,
                      "byte skip -1 needs the data file's size, which its source does not know");
-    } else if (source->size < reader->offset() ||
-               source->size - reader->offset() < data_bytes) {
+    } else if (source->size < reader->offset() || source->size - reader->offset() < data_bytes) {
       s = make_error(StatusCode::kTruncated, "the voxel data needs ", data_bytes,
                      " bytes, the file has ", source->size)
               .at_byte(source->size);
@@ -588,8 +606,8 @@ Status read_raw_volume(const Context& ctx, Reader& header, const ByteSource& hea
   if (s.is_ok()) s = reader->skip(skip, "the bytes skipped before the voxel data");
   if (s.is_ok() && source->size != kUnknownSize &&
       (source->size < reader->offset() || source->size - reader->offset() < data_bytes)) {
-    s = make_error(StatusCode::kTruncated, "the voxel data needs ", data_bytes,
-                   " bytes from byte ", reader->offset(), ", the file has only ", source->size)
+    s = make_error(StatusCode::kTruncated, "the voxel data needs ", data_bytes, " bytes from byte ",
+                   reader->offset(), ", the file has only ", source->size)
             .at_byte(source->size);
   }
   uint64_t clamped = 0;

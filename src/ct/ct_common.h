@@ -24,7 +24,12 @@ struct Reader {
   bool at_eof = false;
 
   void init(const ByteSource* s, uint8_t* buffer, size_t capacity) {
-    source = s; buf = buffer; cap = capacity; pos = end = 0; base = 0; at_eof = false;
+    source = s;
+    buf = buffer;
+    cap = capacity;
+    pos = end = 0;
+    base = 0;
+    at_eof = false;
   }
   uint64_t offset() const { return base + pos; }
   size_t available() const { return end - pos; }
@@ -37,8 +42,7 @@ struct Reader {
   // Reads one text line (without "\n" or "\r\n") into line[0..kLineCapacity); *length is the
   // kept length, *too_long set when the line was longer (the rest is consumed). *got_line false
   // at the end of input. Lines count toward `budget` (kLimitExceeded when spent).
-  Status read_line(char* line, size_t* length, bool* too_long, bool* got_line,
-                   uint64_t* budget);
+  Status read_line(char* line, size_t* length, bool* too_long, bool* got_line, uint64_t* budget);
 };
 
 // Names the file on an error (source name when set).
@@ -70,7 +74,7 @@ Status check_axes(Vec3* x, Vec3* y, Vec3* z, const CtReadOptions& options);
 
 // Voxel format of stored values.
 struct VoxelFormat {
-  uint8_t bytes = 2;        // 1, 2, 4 or 8
+  uint8_t bytes = 2;  // 1, 2, 4 or 8
   bool is_signed = true;
   bool is_float = false;
   bool big_endian = false;
@@ -84,8 +88,7 @@ void describe_type(const VoxelFormat& format, CtInfo* info);
 // into out[0..count). first_index numbers the voxels in kNonFinite messages; a short source is
 // kTruncated at the offset where it ended.
 Status convert_voxels(Reader& reader, const VoxelFormat& format, uint64_t count, double slope,
-                      double intercept, int16_t* out, uint64_t first_index,
-                      uint64_t* saturated);
+                      double intercept, int16_t* out, uint64_t first_index, uint64_t* saturated);
 
 // HU of one value (exposed for tests): slope * v + intercept, rounded half away from zero,
 // saturated (sets *clamped).

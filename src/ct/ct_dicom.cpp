@@ -49,8 +49,8 @@ inline uint32_t u32(const uint8_t* p) {
 
 // PS3.5 table 7.1-1: VRs whose explicit encoding has 2 reserved bytes and a 32-bit length.
 bool long_vr(uint8_t a, uint8_t b) {
-  static const char kLong[][3] = {"OB", "OD", "OF", "OL", "OV", "OW", "SQ", "SV",
-                                  "UC", "UN", "UR", "UT", "UV"};
+  static const char kLong[][3] = {"OB", "OD", "OF", "OL", "OV", "OW", "SQ",
+                                  "SV", "UC", "UN", "UR", "UT", "UV"};
   for (const auto& v : kLong) {
     if (a == static_cast<uint8_t>(v[0]) && b == static_cast<uint8_t>(v[1])) return true;
   }
@@ -159,10 +159,8 @@ Status take_value(Header* h, uint32_t tag, const uint8_t* v, uint32_t n, uint64_
     case kPixelSpacing:
       h->have_pixel_spacing = true;
       return ds("Pixel Spacing", h->pixel_spacing, 2);
-    case kRescaleIntercept:
-      return ds("Rescale Intercept", &h->intercept, 1);
-    case kRescaleSlope:
-      return ds("Rescale Slope", &h->slope, 1);
+    case kRescaleIntercept: return ds("Rescale Intercept", &h->intercept, 1);
+    case kRescaleSlope: return ds("Rescale Slope", &h->slope, 1);
     case kSamplesPerPixel: return us("Samples per Pixel", &h->samples, nullptr);
     case kRows: return us("Rows", &h->rows, &h->have_rows);
     case kColumns: return us("Columns", &h->columns, &h->have_columns);
@@ -170,8 +168,7 @@ Status take_value(Header* h, uint32_t tag, const uint8_t* v, uint32_t n, uint64_
     case kBitsStored: return us("Bits Stored", &h->bits_stored, &h->have_bits_stored);
     case kHighBit: return us("High Bit", &h->high_bit, &h->have_high_bit);
     case kPixelRepresentation:
-      return us("Pixel Representation", &h->pixel_representation,
-                &h->have_pixel_representation);
+      return us("Pixel Representation", &h->pixel_representation, &h->have_pixel_representation);
     case kPhotometric:
       copy_string(h->photometric, sizeof(h->photometric), v, n);
       return Status::ok();
@@ -183,20 +180,29 @@ Status take_value(Header* h, uint32_t tag, const uint8_t* v, uint32_t n, uint64_
       h->frames = f;
       return Status::ok();
     }
-    default:
-      return Status::ok();
+    default: return Status::ok();
   }
 }
 
 bool kept_tag(uint32_t tag) {
   switch (tag) {
-    case kSliceThickness: case kSpacingBetweenSlices: case kImagePosition:
-    case kImageOrientation: case kPixelSpacing: case kRescaleIntercept: case kRescaleSlope:
-    case kSamplesPerPixel: case kRows: case kColumns: case kBitsAllocated: case kBitsStored:
-    case kHighBit: case kPixelRepresentation: case kPhotometric: case kNumberOfFrames:
-      return true;
-    default:
-      return false;
+    case kSliceThickness:
+    case kSpacingBetweenSlices:
+    case kImagePosition:
+    case kImageOrientation:
+    case kPixelSpacing:
+    case kRescaleIntercept:
+    case kRescaleSlope:
+    case kSamplesPerPixel:
+    case kRows:
+    case kColumns:
+    case kBitsAllocated:
+    case kBitsStored:
+    case kHighBit:
+    case kPixelRepresentation:
+    case kPhotometric:
+    case kNumberOfFrames: return true;
+    default: return false;
   }
 }
 
@@ -261,8 +267,7 @@ Status parse_header(Reader& r, const CtReadOptions& options, Header* h) {
   } else if (std::strcmp(h->transfer_syntax, "1.2.840.10008.1.2.1") == 0) {
     h->implicit = false;
   } else {
-    return make_error(StatusCode::kUnsupported, "unsupported transfer syntax ",
-                      h->transfer_syntax,
+    return make_error(StatusCode::kUnsupported, "unsupported transfer syntax ", h->transfer_syntax,
                       " (only 1.2.840.10008.1.2 and 1.2.840.10008.1.2.1: uncompressed little "
                       "endian)");
   }
@@ -278,8 +283,7 @@ Status parse_header(Reader& r, const CtReadOptions& options, Header* h) {
   for (;;) {
     if (r.offset() > options.max_header_bytes) {
       return make_error(StatusCode::kLimitExceeded, "no Pixel Data within the first ",
-                        options.max_header_bytes,
-                        " bytes (CtReadOptions::max_header_bytes)")
+                        options.max_header_bytes, " bytes (CtReadOptions::max_header_bytes)")
           .at_byte(r.offset());
     }
     SPLINTCORE_RETURN_IF_ERROR(r.fill(12));
@@ -430,8 +434,8 @@ Status check_header(const Header& h, const ByteSource& source) {
                       ": only Bits Stored - 1 is supported");
   }
   if (h.pixel_representation > 1) {
-    return make_error(StatusCode::kParseError, "Pixel Representation is ",
-                      h.pixel_representation, " (0 unsigned or 1 signed)");
+    return make_error(StatusCode::kParseError, "Pixel Representation is ", h.pixel_representation,
+                      " (0 unsigned or 1 signed)");
   }
   if (!is_finite(h.slope) || h.slope == 0.0) {
     return make_error(StatusCode::kParseError, "Rescale Slope is ", h.slope,
@@ -453,8 +457,8 @@ Status check_header(const Header& h, const ByteSource& source) {
 }
 
 // Opens file `index` of the series, parses its header, closes it.
-Status read_header(const CtSeries& series, uint32_t index, const CtReadOptions& options,
-                   Header* h, const char** name) {
+Status read_header(const CtSeries& series, uint32_t index, const CtReadOptions& options, Header* h,
+                   const char** name) {
   ByteSource source;
   SPLINTCORE_RETURN_IF_ERROR(series.open(series.user, index, &source));
   *name = source.name;
@@ -482,8 +486,8 @@ uint64_t order_key(double v) {
 
 }  // namespace
 
-Status read_dicom_series(const Context& ctx, const CtSeries& series,
-                         const CtReadOptions& options, CtVolume* out, CtInfo* info) {
+Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtReadOptions& options,
+                         CtVolume* out, CtInfo* info) {
   Arena& arena = *ctx.arena;
   if (series.count == 0 || series.open == nullptr) {
     return make_error(StatusCode::kInvalidArgument, "the DICOM series has no files");
@@ -623,8 +627,8 @@ Status read_dicom_series(const Context& ctx, const CtSeries& series,
     for (uint32_t k = 0; k + 1 < count; ++k) {
       const double next = dot(position(k + 1), normal);
       if (!(next - previous >= options.min_spacing)) {
-        return pair_error(StatusCode::kParseError, k, "duplicate slice position: ",
-                          next - previous, " mm apart along the normal", 0, nullptr);
+        return pair_error(StatusCode::kParseError, k, "duplicate slice position: ", next - previous,
+                          " mm apart along the normal", 0, nullptr);
       }
       previous = next;
     }
@@ -648,9 +652,8 @@ Status read_dicom_series(const Context& ctx, const CtSeries& series,
               ? options.slice_spacing_tolerance_mm
               : options.slice_spacing_tolerance_relative * along;
       if (!(offset <= allowed)) {
-        Status s = make_error(StatusCode::kUnsupported,
-                              "gantry tilt or sheared series: slice ", k, " (series file ",
-                              keys[k].index, ") lies ", offset,
+        Status s = make_error(StatusCode::kUnsupported, "gantry tilt or sheared series: slice ", k,
+                              " (series file ", keys[k].index, ") lies ", offset,
                               " mm off the normal through slice 0; only stacks along the "
                               "normal are supported");
         s.at_index(keys[k].index);
@@ -674,8 +677,8 @@ Status read_dicom_series(const Context& ctx, const CtSeries& series,
   format.bytes = static_cast<uint8_t>(first.bits_allocated / 8);
   format.is_signed = first.pixel_representation == 1;
   format.big_endian = false;
-  format.bits_stored = static_cast<uint8_t>(first.have_bits_stored ? first.bits_stored
-                                                                   : first.bits_allocated);
+  format.bits_stored =
+      static_cast<uint8_t>(first.have_bits_stored ? first.bits_stored : first.bits_allocated);
   const uint64_t per_slice = uint64_t{first.rows} * first.columns;
   uint64_t saturated = 0;
   for (uint32_t k = 0; k < count; ++k) {

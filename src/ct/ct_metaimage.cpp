@@ -18,10 +18,9 @@ struct TypeName {
   bool is_float;
 };
 constexpr TypeName kTypes[] = {
-    {"MET_CHAR", 1, true, false},   {"MET_UCHAR", 1, false, false},
-    {"MET_SHORT", 2, true, false},  {"MET_USHORT", 2, false, false},
-    {"MET_INT", 4, true, false},    {"MET_UINT", 4, false, false},
-    {"MET_FLOAT", 4, true, true},   {"MET_DOUBLE", 8, true, true},
+    {"MET_CHAR", 1, true, false},    {"MET_UCHAR", 1, false, false}, {"MET_SHORT", 2, true, false},
+    {"MET_USHORT", 2, false, false}, {"MET_INT", 4, true, false},    {"MET_UINT", 4, false, false},
+    {"MET_FLOAT", 4, true, true},    {"MET_DOUBLE", 8, true, true},
 };
 
 bool parse_bool(const char* v, size_t n, bool* out) {
@@ -71,9 +70,9 @@ Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFile
     ++line_no;
     if (!s.is_ok()) return fail(s);
     if (!got) {
-      return fail(make_error(StatusCode::kTruncated,
-                             "header ends without ElementDataFile (the last key)")
-                      .at_byte(reader.offset()));
+      return fail(
+          make_error(StatusCode::kTruncated, "header ends without ElementDataFile (the last key)")
+              .at_byte(reader.offset()));
     }
     if (too_long) {
       return fail(make_error(StatusCode::kParseError, "line longer than ", kLineCapacity - 1,
@@ -97,8 +96,7 @@ Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFile
     };
     auto numbers = [&](double* out_values, size_t wanted) {
       size_t count = 0;
-      return parse_doubles(value, value_len, '\0', out_values, wanted, &count) &&
-             count == wanted;
+      return parse_doubles(value, value_len, '\0', out_values, wanted, &count) && count == wanted;
     };
     if (is("ObjectType")) {
       if (!equal_nocase(value, value_len, "Image")) {
@@ -111,15 +109,14 @@ Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFile
       int64_t d = 0;
       if (!parse_i64(value, value_len, &d)) return bad("NDims");
       if (d != 3) {
-        return fail(make_error(StatusCode::kUnsupported, "NDims ", d,
-                               ": only 3-D volumes are supported"));
+        return fail(
+            make_error(StatusCode::kUnsupported, "NDims ", d, ": only 3-D volumes are supported"));
       }
       have_ndims = true;
     } else if (is("DimSize")) {
       if (!numbers(dims, 3)) return bad("DimSize (three integers)");
       for (double d : dims) {
-        if (!(d >= 1 && d <= 4294967295.0) ||
-            d != static_cast<double>(static_cast<uint64_t>(d))) {
+        if (!(d >= 1 && d <= 4294967295.0) || d != static_cast<double>(static_cast<uint64_t>(d))) {
           return bad("DimSize (three positive integers)");
         }
       }
@@ -172,8 +169,8 @@ Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFile
       bool compressed = false;
       if (!parse_bool(value, value_len, &compressed)) return bad("CompressedData");
       if (compressed) {
-        return fail(make_error(StatusCode::kUnsupported,
-                               "compressed MetaImage data is not supported"));
+        return fail(
+            make_error(StatusCode::kUnsupported, "compressed MetaImage data is not supported"));
       }
     } else if (is("HeaderSize")) {
       if (!parse_i64(value, value_len, &header_size) || header_size < -1) {
@@ -198,8 +195,8 @@ Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFile
   }
 
   auto missing = [&](const char* what) {
-    return fail(make_error(StatusCode::kParseError, "missing key ", what,
-                           " before ElementDataFile"));
+    return fail(
+        make_error(StatusCode::kParseError, "missing key ", what, " before ElementDataFile"));
   };
   if (!have_object) return missing("ObjectType");
   if (!have_ndims) return missing("NDims");

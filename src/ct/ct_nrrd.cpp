@@ -17,20 +17,34 @@ struct TypeName {
   bool is_float;
 };
 constexpr TypeName kTypes[] = {
-    {"signed char", 1, true, false},      {"int8", 1, true, false},
-    {"int8_t", 1, true, false},           {"uchar", 1, false, false},
-    {"unsigned char", 1, false, false},   {"uint8", 1, false, false},
-    {"uint8_t", 1, false, false},         {"short", 2, true, false},
-    {"short int", 2, true, false},        {"signed short", 2, true, false},
-    {"signed short int", 2, true, false}, {"int16", 2, true, false},
-    {"int16_t", 2, true, false},          {"ushort", 2, false, false},
-    {"unsigned short", 2, false, false},  {"unsigned short int", 2, false, false},
-    {"uint16", 2, false, false},          {"uint16_t", 2, false, false},
-    {"int", 4, true, false},              {"signed int", 4, true, false},
-    {"int32", 4, true, false},            {"int32_t", 4, true, false},
-    {"uint", 4, false, false},            {"unsigned int", 4, false, false},
-    {"uint32", 4, false, false},          {"uint32_t", 4, false, false},
-    {"float", 4, true, true},             {"double", 8, true, true},
+    {"signed char", 1, true, false},
+    {"int8", 1, true, false},
+    {"int8_t", 1, true, false},
+    {"uchar", 1, false, false},
+    {"unsigned char", 1, false, false},
+    {"uint8", 1, false, false},
+    {"uint8_t", 1, false, false},
+    {"short", 2, true, false},
+    {"short int", 2, true, false},
+    {"signed short", 2, true, false},
+    {"signed short int", 2, true, false},
+    {"int16", 2, true, false},
+    {"int16_t", 2, true, false},
+    {"ushort", 2, false, false},
+    {"unsigned short", 2, false, false},
+    {"unsigned short int", 2, false, false},
+    {"uint16", 2, false, false},
+    {"uint16_t", 2, false, false},
+    {"int", 4, true, false},
+    {"signed int", 4, true, false},
+    {"int32", 4, true, false},
+    {"int32_t", 4, true, false},
+    {"uint", 4, false, false},
+    {"unsigned int", 4, false, false},
+    {"uint32", 4, false, false},
+    {"uint32_t", 4, false, false},
+    {"float", 4, true, true},
+    {"double", 8, true, true},
 };
 
 bool starts_with(const char* text, size_t length, const char* prefix) {
@@ -81,11 +95,10 @@ Status read_nrrd(const Context& ctx, const ByteSource& source, const CtFileOpene
 
   size_t len = 0;
   bool too_long = false, got = false;
-  SPLINTCORE_RETURN_IF_ERROR(in_source(reader.read_line(line, &len, &too_long, &got, &budget),
-                                       source));
+  SPLINTCORE_RETURN_IF_ERROR(
+      in_source(reader.read_line(line, &len, &too_long, &got, &budget), source));
   line_no = 1;
-  if (!got || len != 8 || !starts_with(line, len, "NRRD000") || line[7] < '1' ||
-      line[7] > '5') {
+  if (!got || len != 8 || !starts_with(line, len, "NRRD000") || line[7] < '1' || line[7] > '5') {
     return fail(make_error(StatusCode::kParseError,
                            "not a NRRD file: the first line must be NRRD0001 to NRRD0005"));
   }
@@ -108,9 +121,9 @@ Status read_nrrd(const Context& ctx, const ByteSource& source, const CtFileOpene
     if (!s.is_ok()) return fail(s);
     if (!got) {
       if (data_file[0] != '\0') break;  // a detached header may end at its end of file
-      return fail(make_error(StatusCode::kTruncated,
-                             "header ends without the blank line before the data")
-                      .at_byte(reader.offset()));
+      return fail(
+          make_error(StatusCode::kTruncated, "header ends without the blank line before the data")
+              .at_byte(reader.offset()));
     }
     if (len == 0) break;  // the blank line (a too long line is never empty)
     if (line[0] == '#') continue;
@@ -121,8 +134,8 @@ Status read_nrrd(const Context& ctx, const ByteSource& source, const CtFileOpene
       return fail(make_error(StatusCode::kParseError, "expected \"field: value\""));
     }
     if (too_long) {
-      return fail(make_error(StatusCode::kParseError, "line longer than ",
-                             kLineCapacity - 1, " characters"));
+      return fail(make_error(StatusCode::kParseError, "line longer than ", kLineCapacity - 1,
+                             " characters"));
     }
     const char* field = line;
     size_t field_len = colon;
@@ -132,8 +145,8 @@ Status read_nrrd(const Context& ctx, const ByteSource& source, const CtFileOpene
     trim(&value, &value_len);
     auto is = [&](const char* name) { return equal_nocase(field, field_len, name); };
     auto bad = [&](const char* what) {
-      return fail(make_error(StatusCode::kParseError, "bad ", what, " \"").append(value,
-                                                                                value_len)
+      return fail(make_error(StatusCode::kParseError, "bad ", what, " \"")
+                      .append(value, value_len)
                       .append("\""));
     };
     if (is("type")) {
@@ -170,8 +183,8 @@ Status read_nrrd(const Context& ctx, const ByteSource& source, const CtFileOpene
                         .append("\""));
       }
       for (int a = 0; a < 3; ++a) {
-        if (!(v[a] >= 1 && v[a] <= 4294967295.0) || v[a] != static_cast<double>(
-                                                               static_cast<uint64_t>(v[a]))) {
+        if (!(v[a] >= 1 && v[a] <= 4294967295.0) ||
+            v[a] != static_cast<double>(static_cast<uint64_t>(v[a]))) {
           return bad("sizes");
         }
         sizes[a] = static_cast<uint64_t>(v[a]);
@@ -181,12 +194,9 @@ Status read_nrrd(const Context& ctx, const ByteSource& source, const CtFileOpene
       if (equal_nocase(value, value_len, "raw")) {
         have_encoding = true;
       } else if (equal_nocase(value, value_len, "gzip") || equal_nocase(value, value_len, "gz") ||
-                 equal_nocase(value, value_len, "bzip2") ||
-                 equal_nocase(value, value_len, "bz2") ||
-                 equal_nocase(value, value_len, "ascii") ||
-                 equal_nocase(value, value_len, "txt") ||
-                 equal_nocase(value, value_len, "text") ||
-                 equal_nocase(value, value_len, "hex") ||
+                 equal_nocase(value, value_len, "bzip2") || equal_nocase(value, value_len, "bz2") ||
+                 equal_nocase(value, value_len, "ascii") || equal_nocase(value, value_len, "txt") ||
+                 equal_nocase(value, value_len, "text") || equal_nocase(value, value_len, "hex") ||
                  equal_nocase(value, value_len, "zstd")) {
         return fail(make_error(StatusCode::kUnsupported, "encoding \"")
                         .append(value, value_len)
@@ -229,12 +239,11 @@ Status read_nrrd(const Context& ctx, const ByteSource& source, const CtFileOpene
       int64_t d = 0;
       if (!parse_i64(value, value_len, &d)) return bad("space dimension");
       if (d != 3) {
-        return fail(make_error(StatusCode::kUnsupported, "space dimension ", d,
-                               ": only 3 is supported"));
+        return fail(
+            make_error(StatusCode::kUnsupported, "space dimension ", d, ": only 3 is supported"));
       }
     } else if (is("data file") || is("datafile")) {
-      if (starts_with(value, value_len, "LIST") ||
-          std::memchr(value, '%', value_len) != nullptr) {
+      if (starts_with(value, value_len, "LIST") || std::memchr(value, '%', value_len) != nullptr) {
         return fail(make_error(StatusCode::kUnsupported, "data file \"")
                         .append(value, value_len)
                         .append("\": LIST and pattern forms are not supported (one file only)"));

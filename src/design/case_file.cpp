@@ -25,7 +25,8 @@ struct Reader {
     for (uint32_t k = object.first_child; k != kJsonNone; k = doc->at(k).next_sibling) {
       const JsonValue& member = doc->at(k);
       bool ok = false;
-      for (const char* const* a = allowed; *a != nullptr; ++a) ok = ok || std::strcmp(*a, member.key) == 0;
+      for (const char* const* a = allowed; *a != nullptr; ++a)
+        ok = ok || std::strcmp(*a, member.key) == 0;
       if (!ok) {
         Status s = json_error(*doc, member, StatusCode::kInvalidArgument, "unknown key \"");
         s.append(member.key).append("\" in ").append(what).append(" (allowed:");
@@ -39,7 +40,10 @@ struct Reader {
   Status expect_type(const JsonValue& v, JsonType type, const char* key) const {
     if (v.type == type) return Status::ok();
     Status s = json_error(*doc, v, StatusCode::kInvalidArgument, "\"");
-    return s.append(key).append("\" must be ").append(json_type_name(type)).append(", not ")
+    return s.append(key)
+        .append("\" must be ")
+        .append(json_type_name(type))
+        .append(", not ")
         .append(json_type_name(v.type));
   }
 
@@ -47,8 +51,14 @@ struct Reader {
     SPLINTCORE_RETURN_IF_ERROR(expect_type(v, JsonType::kNumber, key));
     if (!(v.number >= lo && v.number <= hi)) {
       Status s = json_error(*doc, v, StatusCode::kInvalidArgument, "\"");
-      return s.append(key).append("\" is ").append_f64(v.number).append(", outside [")
-          .append_f64(lo).append(", ").append_f64(hi).append("]");
+      return s.append(key)
+          .append("\" is ")
+          .append_f64(v.number)
+          .append(", outside [")
+          .append_f64(lo)
+          .append(", ")
+          .append_f64(hi)
+          .append("]");
     }
     *out = v.number;
     return Status::ok();
@@ -94,8 +104,8 @@ Status parse_picks(const Reader& r, const JsonValue& list, const char* key, doub
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(list, JsonType::kArray, key));
   Pick* picks = r.arena->allocate_array<Pick>(list.child_count);
   if (picks == nullptr && list.child_count > 0) return r.arena->exhausted_status();
-  static const char* const kPickKeys[] = {"position", "normal", "direction", "inner_length_mm",
-                                          "outside_length_mm", nullptr};
+  static const char* const kPickKeys[] = {
+      "position", "normal", "direction", "inner_length_mm", "outside_length_mm", nullptr};
   uint32_t i = 0;
   for (uint32_t k = list.first_child; k != kJsonNone; k = r.doc->at(k).next_sibling, ++i) {
     const JsonValue& p = r.doc->at(k);
@@ -136,10 +146,10 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   Reader r{&doc, ctx.arena};
   const JsonValue& root = doc.root();
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(root, JsonType::kObject, "the case"));
-  static const char* const kRootKeys[] = {"splintcore_case", "case_id", "units", "jaws", "base",
-                                          "insertion_direction", "blockout", "ct", "printer",
-                                          "memory_cap", "min_thickness", "placement",
-                                          "label", "output", nullptr};
+  static const char* const kRootKeys[] = {
+      "splintcore_case",     "case_id",   "units", "jaws",    "base",
+      "insertion_direction", "blockout",  "ct",    "printer", "memory_cap",
+      "min_thickness",       "placement", "label", "output",  nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(root, kRootKeys, "the case"));
 
   const JsonValue* version = doc.member(root, "splintcore_case");
@@ -237,9 +247,9 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   const JsonValue* base = doc.member(root, "base");
   if (base == nullptr) return r.fail(root, StatusCode::kInvalidArgument, "no \"base\" object");
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*base, JsonType::kObject, "base"));
-  static const char* const kBaseKeys[] = {"occlusal_normal", "spacing_mm", "corner_radius_mm",
-                                          "corner_segments", "inner_length_mm",
-                                          "outside_length_mm", "upper", "lower", nullptr};
+  static const char* const kBaseKeys[] = {"occlusal_normal", "spacing_mm",      "corner_radius_mm",
+                                          "corner_segments", "inner_length_mm", "outside_length_mm",
+                                          "upper",           "lower",           nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*base, kBaseKeys, "\"base\""));
   if (const JsonValue* o = doc.member(*base, "occlusal_normal")) {
     SPLINTCORE_RETURN_IF_ERROR(r.unit_vector(*o, "occlusal_normal", &out->occlusal_normal));
@@ -248,14 +258,16 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
     SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "spacing_mm", 0.01, 50, &out->base.spacing_mm));
   }
   if (const JsonValue* s = doc.member(*base, "corner_radius_mm")) {
-    SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "corner_radius_mm", 0, 20, &out->base.corner_radius_mm));
+    SPLINTCORE_RETURN_IF_ERROR(
+        r.number(*s, "corner_radius_mm", 0, 20, &out->base.corner_radius_mm));
   }
   if (const JsonValue* s = doc.member(*base, "corner_segments")) {
     double segs = 0;
     SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "corner_segments", 1, 16, &segs));
     uint32_t u = static_cast<uint32_t>(segs);
     if (static_cast<double>(u) != segs || (u & (u - 1)) != 0) {
-      return r.fail(*s, StatusCode::kInvalidArgument, "\"corner_segments\" must be 1, 2, 4, 8 or 16");
+      return r.fail(*s, StatusCode::kInvalidArgument,
+                    "\"corner_segments\" must be 1, 2, 4, 8 or 16");
     }
     out->base.corner_segments = u;
   }
@@ -269,13 +281,19 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   const JsonValue* upper = doc.member(*base, "upper");
   const JsonValue* lower = doc.member(*base, "lower");
   if (upper == nullptr || lower == nullptr) {
-    return r.fail(*base, StatusCode::kInvalidArgument, "\"base\" needs \"upper\" and \"lower\" pick lists");
+    return r.fail(*base, StatusCode::kInvalidArgument,
+                  "\"base\" needs \"upper\" and \"lower\" pick lists");
   }
-  SPLINTCORE_RETURN_IF_ERROR(parse_picks(r, *upper, "upper", inner_default, outside_default, &out->upper));
-  SPLINTCORE_RETURN_IF_ERROR(parse_picks(r, *lower, "lower", inner_default, outside_default, &out->lower));
+  SPLINTCORE_RETURN_IF_ERROR(
+      parse_picks(r, *upper, "upper", inner_default, outside_default, &out->upper));
+  SPLINTCORE_RETURN_IF_ERROR(
+      parse_picks(r, *lower, "lower", inner_default, outside_default, &out->lower));
   if (out->upper.size() != out->lower.size()) {
-    Status s = r.fail(*lower, StatusCode::kInvalidArgument, "upper and lower pick lists do not pair up: ");
-    return s.append_u64(out->upper.size()).append(" upper, ").append_u64(out->lower.size())
+    Status s =
+        r.fail(*lower, StatusCode::kInvalidArgument, "upper and lower pick lists do not pair up: ");
+    return s.append_u64(out->upper.size())
+        .append(" upper, ")
+        .append_u64(out->lower.size())
         .append(" lower (the i-th upper pick pairs with the i-th lower pick)");
   }
 
@@ -285,8 +303,8 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   }
   if (const JsonValue* ct = doc.member(root, "ct")) {
     SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*ct, JsonType::kObject, "ct"));
-    static const char* const kCtKeys[] = {"volume", "hu_min", "hu_max", "connectivity", "smooth",
-                                          "decimate", nullptr};
+    static const char* const kCtKeys[] = {"volume", "hu_min",   "hu_max", "connectivity",
+                                          "smooth", "decimate", nullptr};
     SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*ct, kCtKeys, "\"ct\""));
     const JsonValue* vol = doc.member(*ct, "volume");
     if (vol == nullptr) {
@@ -336,7 +354,8 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   }
   for (const CaseJaw& jaw : out->jaws) {
     if (jaw.has_seed && out->ct_volume == nullptr) {
-      return r.fail(root, StatusCode::kInvalidArgument, "a jaw is given by \"seed\" but the case "
+      return r.fail(root, StatusCode::kInvalidArgument,
+                    "a jaw is given by \"seed\" but the case "
                     "has no \"ct\" to reconstruct it from");
     }
   }
@@ -363,7 +382,8 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
       SPLINTCORE_RETURN_IF_ERROR(
           r.number(*bi, "inset", 0.0, 1.99 * out->blockout_voxel, &out->blockout_inset));
       if (out->blockout_inset > 0 && out->blockout_clearance > 0) {
-        return r.fail(*bi, StatusCode::kInvalidArgument, "\"inset\" and \"clearance\" exclude "
+        return r.fail(*bi, StatusCode::kInvalidArgument,
+                      "\"inset\" and \"clearance\" exclude "
                       "each other (a clearance takes the surface outside the swept volume)");
       }
     }
@@ -378,12 +398,13 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   }
   if (const JsonValue* lb = doc.member(root, "label")) {
     SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*lb, JsonType::kObject, "label"));
-    static const char* const kLabelKeys[] = {"text", "mode", "height_mm", "stroke_mm", "depth_mm",
-                                             nullptr};
+    static const char* const kLabelKeys[] = {"text",      "mode",     "height_mm",
+                                             "stroke_mm", "depth_mm", nullptr};
     SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*lb, kLabelKeys, "\"label\""));
     const JsonValue* label_text = doc.member(*lb, "text");
     if (label_text == nullptr) {
-      return r.fail(*lb, StatusCode::kInvalidArgument, "\"label\" needs \"text\" (the case id "
+      return r.fail(*lb, StatusCode::kInvalidArgument,
+                    "\"label\" needs \"text\" (the case id "
                     "or any text of the stroke font: A-Z 0-9 space - _ . / # + ( ) :)");
     }
     SPLINTCORE_RETURN_IF_ERROR(r.string(*label_text, "text", &out->label_text));

@@ -55,9 +55,10 @@ Status reconstruct_case_jaws(const Context& ctx, const CaseFile& c, const CtVolu
   s = grow_regions(ctx, volume, Span<const RegionSeed>(seeds, seed_count), go, &labels,
                    &report->regions);
   if (!s.is_ok()) return fail(s, "region growing");
-  const double h = volume.spacing.x < volume.spacing.y
-                       ? (volume.spacing.x < volume.spacing.z ? volume.spacing.x : volume.spacing.z)
-                       : (volume.spacing.y < volume.spacing.z ? volume.spacing.y : volume.spacing.z);
+  const double h =
+      volume.spacing.x < volume.spacing.y
+          ? (volume.spacing.x < volume.spacing.z ? volume.spacing.x : volume.spacing.z)
+          : (volume.spacing.y < volume.spacing.z ? volume.spacing.y : volume.spacing.z);
   bool vertices_first[CaseCtReport::kMaxJaws] = {};
   for (size_t j = 0; j < c.jaws.size(); ++j) {
     if (!c.jaws[j].has_seed) continue;

@@ -159,7 +159,8 @@ Status refuse_inside_out_jaws(const Context& ctx, const CaseFile& c, Span<const 
     if (closed.is_ok()) {
       return make_error(StatusCode::kInvalidMesh, "design: jaw ", j, " (", c.jaws[j].role,
                         ") is inside out: it is closed but its triangles face inward "
-                        "(volume ", mesh_volume(part), " mm^3); reverse their orientation")
+                        "(volume ",
+                        mesh_volume(part), " mm^3); reverse their orientation")
           .at_index(j);
     }
   }
@@ -185,8 +186,8 @@ Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
     bl.sweep.closing_radius = c.blockout_closing;
     bl.sweep.offset = c.blockout_clearance;
     Mesh blocked;
-    const Status s = blockout(ctx, *cut, Span<const Mesh>(&jaw, 1), bl, &blocked,
-                              &report->blockout[j]);
+    const Status s =
+        blockout(ctx, *cut, Span<const Mesh>(&jaw, 1), bl, &blocked, &report->blockout[j]);
     if (!s.is_ok()) {
       Status e = stage_error(s, "blockout");
       if (s.code() != StatusCode::kArenaExhausted && s.code() != StatusCode::kCancelled) {
@@ -206,10 +207,10 @@ Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
 // them); the labelled splint's triangles come first, so the final move takes it.
 Status label_splint(const Context& ctx, const CaseFile& c, Mesh* cut, DesignReport* report) {
   ArenaArray<Line> upper(ctx.arena), lower(ctx.arena);
-  SPLINTCORE_RETURN_IF_ERROR(stage_error(
-      make_lines(ctx, c.upper, c.occlusal_normal, "upper", &upper), "design"));
-  SPLINTCORE_RETURN_IF_ERROR(stage_error(
-      make_lines(ctx, c.lower, c.occlusal_normal, "lower", &lower), "design"));
+  SPLINTCORE_RETURN_IF_ERROR(
+      stage_error(make_lines(ctx, c.upper, c.occlusal_normal, "upper", &upper), "design"));
+  SPLINTCORE_RETURN_IF_ERROR(
+      stage_error(make_lines(ctx, c.lower, c.occlusal_normal, "lower", &lower), "design"));
   LabelOptions lo;
   lo.text = c.label_text;
   lo.mode = c.label_emboss ? LabelMode::kEmboss : LabelMode::kEngrave;
@@ -218,8 +219,7 @@ Status label_splint(const Context& ctx, const CaseFile& c, Mesh* cut, DesignRepo
   lo.depth_mm = c.label_depth;
   Mesh labelled;
   SPLINTCORE_RETURN_IF_ERROR(stage_error(
-      apply_label(ctx, *cut, upper.span(), lower.span(), lo, &labelled, &report->label),
-      "design"));
+      apply_label(ctx, *cut, upper.span(), lower.span(), lo, &labelled, &report->label), "design"));
   report->labelled = true;
   note_self_check(report, report->label.boolean, "label");
   *cut = labelled;
@@ -261,9 +261,9 @@ Status design_splint(const Context& ctx, const CaseFile& case_in, Span<const Mes
   const auto stage = [&](const char* name) { return report_progress(ctx, name, 0, 1); };
   CaseFile on_tray;
   if (case_in.place_on_tray) {
-    SPLINTCORE_RETURN_IF_ERROR(stage_error(
-        case_on_tray(ctx, case_in, *profile, &on_tray, &report->tray_translation),
-        "placement on the tray"));
+    SPLINTCORE_RETURN_IF_ERROR(
+        stage_error(case_on_tray(ctx, case_in, *profile, &on_tray, &report->tray_translation),
+                    "placement on the tray"));
     report->placed_on_tray = true;
   }
   const CaseFile& c = case_in.place_on_tray ? on_tray : case_in;

@@ -153,7 +153,8 @@ void write_checks(JsonWriter& w, const CaseFile& c, const DesignReport& report) 
   w.add("boolean_attempts", report.boolean.attempts);
   w.add("boolean_nudge_mm", report.boolean.nudge);
   if (report.blockout_jaws > 0) write_blockout(w, c, report);
-  w.add("imprint", report.imprint_offset ? "clearance offset of the swept volume" : "jaw triangles");
+  w.add("imprint",
+        report.imprint_offset ? "clearance offset of the swept volume" : "jaw triangles");
   if (report.labelled) {
     const LabelStats& l = report.label;
     w.begin_object("label");

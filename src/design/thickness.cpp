@@ -25,8 +25,10 @@ Status check_wall_thickness(const Context& ctx, const Mesh& mesh, double min_thi
   *report = ThicknessReport{};
   report->min_required = min_thickness;
   if (!(min_thickness > 0) || !(min_thickness <= 1e3)) {
-    return make_error(StatusCode::kInvalidArgument, "thickness: the minimum must be in (0, 1000] "
-                      "mm (", min_thickness, ")");
+    return make_error(StatusCode::kInvalidArgument,
+                      "thickness: the minimum must be in (0, 1000] "
+                      "mm (",
+                      min_thickness, ")");
   }
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);  // the index and the list of thin triangles are temporaries
@@ -69,8 +71,8 @@ Status check_wall_thickness(const Context& ctx, const Mesh& mesh, double min_thi
   for (const KeyIndex& k : thin) {
     if (report->spot_count == ThicknessReport::kMaxSpots) break;
     const Triangle& t = mesh.triangles[k.index];
-    const Vec3 p = (mesh.vertices[t.v[0]] + mesh.vertices[t.v[1]] + mesh.vertices[t.v[2]]) *
-                   (1.0 / 3.0);
+    const Vec3 p =
+        (mesh.vertices[t.v[0]] + mesh.vertices[t.v[1]] + mesh.vertices[t.v[2]]) * (1.0 / 3.0);
     bool near = false;
     for (uint32_t s = 0; s < report->spot_count && !near; ++s) {
       near = length_squared(report->spots[s].position - p) < spacing2;

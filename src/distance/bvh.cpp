@@ -29,7 +29,6 @@ inline uint32_t leaf_size_of(const DistanceIndexOptions& options) {
   return options.leaf_size != 0 ? options.leaf_size : 8;
 }
 
-
 // Morton codes of 16 bits an axis (detail::spread_bits, morton.h): 65536 cells per axis, finer
 // than any triangle here.
 using detail::spread_bits;
@@ -289,129 +288,130 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   uint32_t node_count = 1;
   // 1. Morton order of the triangle centroids (keys live until the topology is built).
   {
-  // Key = Morton code in the high bits, triangle id in the low bits: one 64-bit word per
-  // triangle to sort (half the traffic of a key-index pair). The code gets 3 * code_bits bits,
-  // code_bits = min(16, (64 - id bits) / 3): 16 up to 65,536 triangles ... 14 up to 4 million.
-  uint32_t id_bits = 1;
-  while (id_bits < 32 && (uint64_t{1} << id_bits) < nt) ++id_bits;
-  const uint32_t code_bits = (64 - id_bits) / 3 < 16 ? (64 - id_bits) / 3 : 16;
-  uint64_t* keys = arena.allocate_array<uint64_t>(nt);
-  uint64_t* scratch = arena.allocate_array<uint64_t>(nt);
-  nodes = arena.allocate_array<BvhNode>(wide_max);
-  dipoles = arena.allocate_array<BvhDipole>(wide_max);
-  if (options.oriented_boxes) obbs = arena.allocate_array<BvhObb>(wide_max);
-  if ((nt > 0 && (keys == nullptr || scratch == nullptr)) || nodes == nullptr ||
-      dipoles == nullptr || (options.oriented_boxes && obbs == nullptr)) {
-    return arena.exhausted_status();
-  }
-  {
-    const Vec3 lo = centroids.lo;
-    const Vec3 ext = centroids.extent();
-    const double cells = static_cast<double>((uint64_t{1} << code_bits) - 1);
-    const double scale[3] = {ext.x > 0 ? cells / ext.x : 0.0, ext.y > 0 ? cells / ext.y : 0.0,
-                             ext.z > 0 ? cells / ext.z : 0.0};
-    for (uint32_t t = 0; t < n; ++t) {
-      const Triangle& tri = tris[t];
-      const Vec3 c = (v[tri.v[0]] + v[tri.v[1]] + v[tri.v[2]]) * (1.0 / 3.0);
-      uint64_t q[3];
-      for (int a = 0; a < 3; ++a) {
-        double x = (c[a] - lo[a]) * scale[a];
-        x = x < 0 ? 0 : (x > cells ? cells : x);
-        q[a] = static_cast<uint64_t>(x);
-      }
-      const uint64_t code =
-          (spread_bits(q[0]) << 2) | (spread_bits(q[1]) << 1) | spread_bits(q[2]);
-      keys[t] = (code << id_bits) | t;
+    // Key = Morton code in the high bits, triangle id in the low bits: one 64-bit word per
+    // triangle to sort (half the traffic of a key-index pair). The code gets 3 * code_bits bits,
+    // code_bits = min(16, (64 - id bits) / 3): 16 up to 65,536 triangles ... 14 up to 4 million.
+    uint32_t id_bits = 1;
+    while (id_bits < 32 && (uint64_t{1} << id_bits) < nt) ++id_bits;
+    const uint32_t code_bits = (64 - id_bits) / 3 < 16 ? (64 - id_bits) / 3 : 16;
+    uint64_t* keys = arena.allocate_array<uint64_t>(nt);
+    uint64_t* scratch = arena.allocate_array<uint64_t>(nt);
+    nodes = arena.allocate_array<BvhNode>(wide_max);
+    dipoles = arena.allocate_array<BvhDipole>(wide_max);
+    if (options.oriented_boxes) obbs = arena.allocate_array<BvhObb>(wide_max);
+    if ((nt > 0 && (keys == nullptr || scratch == nullptr)) || nodes == nullptr ||
+        dipoles == nullptr || (options.oriented_boxes && obbs == nullptr)) {
+      return arena.exhausted_status();
     }
-    // The ids rise in input order, so a stable sort on the code bits alone gives the order
-    // of the whole key.
-    radix_sort_bits(Span<uint64_t>(keys, nt), Span<uint64_t>(scratch, nt), id_bits,
-                    id_bits + 3 * code_bits);
-    const uint64_t id_mask = (uint64_t{1} << id_bits) - 1;
-    for (uint32_t i = 0; i < n; ++i) order[i] = static_cast<uint32_t>(keys[i] & id_mask);
-  }
-  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 1, 4));
-
-  // 2. Topology, top-down over leaf ranges. Leaf l holds order[l * leaf_size ...]; its code is
-  // its first triangle's. A wide node splits its range at the highest differing Morton bit,
-  // then splits the part with the most leaves again (the first on a tie) until it has four
-  // parts or only single leaves; a part of one leaf is a leaf child, a longer one a wide node.
-  // Nodes are numbered as they are made, so children follow their parent and the reverse of
-  // the numbering is bottom-up.
-  {
-    // A leaf's code is its first triangle's (the id bits only break ties among equal codes,
-    // and splitting on them is as good as any other split there).
-    auto leaf_code = [&](uint32_t l) { return n == 0 ? 0 : keys[size_t{l} * leaf_size]; };
-    // The last leaf of the first half of [first, last] (first < last).
-    auto split_point = [&](uint32_t first, uint32_t last) {
-      const uint64_t a = leaf_code(first), b = leaf_code(last);
-      if (a == b) return first + (last - first) / 2;
-      const int bit = highest_bit(a ^ b);
-      // The last leaf with that bit clear (first has it clear, last set): a binary search
-      // that narrows by halves without a branch on the bit (which side it goes is a coin
-      // toss). `base` has the bit clear, and the answer lies in [base, base + count).
-      uint32_t base = first, count = last - first;
-      while (count > 1) {
-        const uint32_t half = count / 2;
-        base = ((leaf_code(base + half) >> bit) & 1) == 0 ? base + half : base;
-        count -= half;
-      }
-      return base;
-    };
-    struct Range {
-      uint32_t node, first, last;  // leaves [first, last]
-    };
-    const float inf = HUGE_VALF;
-    Range stack[3 * kMaxDepth + 4];
-    uint32_t top = 0;
-    stack[top++] = Range{0, 0, leaves - 1};
-    while (top > 0) {
-      const Range r = stack[--top];
-      uint32_t first[4] = {r.first, 0, 0, 0}, last[4] = {r.last, 0, 0, 0};
-      uint32_t parts = 1;
-      while (parts < 4) {
-        uint32_t widest = parts;
-        for (uint32_t k = 0; k < parts; ++k) {
-          if (last[k] > first[k] && (widest == parts || last[k] - first[k] > last[widest] - first[widest])) {
-            widest = k;
-          }
-        }
-        if (widest == parts) break;
-        const uint32_t split = split_point(first[widest], last[widest]);
-        for (uint32_t k = parts; k > widest + 1; --k) {
-          first[k] = first[k - 1];
-          last[k] = last[k - 1];
-        }
-        first[widest + 1] = split + 1;
-        last[widest + 1] = last[widest];
-        last[widest] = split;
-        ++parts;
-      }
-      BvhNode& w = nodes[r.node];
-      for (uint32_t k = 0; k < 4; ++k) {
+    {
+      const Vec3 lo = centroids.lo;
+      const Vec3 ext = centroids.extent();
+      const double cells = static_cast<double>((uint64_t{1} << code_bits) - 1);
+      const double scale[3] = {ext.x > 0 ? cells / ext.x : 0.0, ext.y > 0 ? cells / ext.y : 0.0,
+                               ext.z > 0 ? cells / ext.z : 0.0};
+      for (uint32_t t = 0; t < n; ++t) {
+        const Triangle& tri = tris[t];
+        const Vec3 c = (v[tri.v[0]] + v[tri.v[1]] + v[tri.v[2]]) * (1.0 / 3.0);
+        uint64_t q[3];
         for (int a = 0; a < 3; ++a) {
-          w.lo[a][k] = inf;  // bounds come in step 3
-          w.hi[a][k] = -inf;
+          double x = (c[a] - lo[a]) * scale[a];
+          x = x < 0 ? 0 : (x > cells ? cells : x);
+          q[a] = static_cast<uint64_t>(x);
         }
-        w.child[k] = kNoChild;
-        w.count[k] = 0;
-        if (k >= parts) continue;
-        if (first[k] == last[k]) {
-          const uint32_t begin = first[k] * leaf_size;
-          const uint32_t end = begin + leaf_size < n ? begin + leaf_size : n;
-          if (end == begin) continue;  // the empty mesh's root: no child at all
-          w.child[k] = begin;
-          w.count[k] = static_cast<uint8_t>(end - begin);
-          continue;
+        const uint64_t code =
+            (spread_bits(q[0]) << 2) | (spread_bits(q[1]) << 1) | spread_bits(q[2]);
+        keys[t] = (code << id_bits) | t;
+      }
+      // The ids rise in input order, so a stable sort on the code bits alone gives the order
+      // of the whole key.
+      radix_sort_bits(Span<uint64_t>(keys, nt), Span<uint64_t>(scratch, nt), id_bits,
+                      id_bits + 3 * code_bits);
+      const uint64_t id_mask = (uint64_t{1} << id_bits) - 1;
+      for (uint32_t i = 0; i < n; ++i) order[i] = static_cast<uint32_t>(keys[i] & id_mask);
+    }
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 1, 4));
+
+    // 2. Topology, top-down over leaf ranges. Leaf l holds order[l * leaf_size ...]; its code is
+    // its first triangle's. A wide node splits its range at the highest differing Morton bit,
+    // then splits the part with the most leaves again (the first on a tie) until it has four
+    // parts or only single leaves; a part of one leaf is a leaf child, a longer one a wide node.
+    // Nodes are numbered as they are made, so children follow their parent and the reverse of
+    // the numbering is bottom-up.
+    {
+      // A leaf's code is its first triangle's (the id bits only break ties among equal codes,
+      // and splitting on them is as good as any other split there).
+      auto leaf_code = [&](uint32_t l) { return n == 0 ? 0 : keys[size_t{l} * leaf_size]; };
+      // The last leaf of the first half of [first, last] (first < last).
+      auto split_point = [&](uint32_t first, uint32_t last) {
+        const uint64_t a = leaf_code(first), b = leaf_code(last);
+        if (a == b) return first + (last - first) / 2;
+        const int bit = highest_bit(a ^ b);
+        // The last leaf with that bit clear (first has it clear, last set): a binary search
+        // that narrows by halves without a branch on the bit (which side it goes is a coin
+        // toss). `base` has the bit clear, and the answer lies in [base, base + count).
+        uint32_t base = first, count = last - first;
+        while (count > 1) {
+          const uint32_t half = count / 2;
+          base = ((leaf_code(base + half) >> bit) & 1) == 0 ? base + half : base;
+          count -= half;
         }
-        if (top + 1 > 3 * kMaxDepth + 4 || node_count >= wide_max) {
-          return Status::error(StatusCode::kInternal, "distance index: hierarchy too deep");
+        return base;
+      };
+      struct Range {
+        uint32_t node, first, last;  // leaves [first, last]
+      };
+      const float inf = HUGE_VALF;
+      Range stack[3 * kMaxDepth + 4];
+      uint32_t top = 0;
+      stack[top++] = Range{0, 0, leaves - 1};
+      while (top > 0) {
+        const Range r = stack[--top];
+        uint32_t first[4] = {r.first, 0, 0, 0}, last[4] = {r.last, 0, 0, 0};
+        uint32_t parts = 1;
+        while (parts < 4) {
+          uint32_t widest = parts;
+          for (uint32_t k = 0; k < parts; ++k) {
+            if (last[k] > first[k] &&
+                (widest == parts || last[k] - first[k] > last[widest] - first[widest])) {
+              widest = k;
+            }
+          }
+          if (widest == parts) break;
+          const uint32_t split = split_point(first[widest], last[widest]);
+          for (uint32_t k = parts; k > widest + 1; --k) {
+            first[k] = first[k - 1];
+            last[k] = last[k - 1];
+          }
+          first[widest + 1] = split + 1;
+          last[widest + 1] = last[widest];
+          last[widest] = split;
+          ++parts;
         }
-        w.child[k] = node_count;
-        stack[top++] = Range{node_count++, first[k], last[k]};
+        BvhNode& w = nodes[r.node];
+        for (uint32_t k = 0; k < 4; ++k) {
+          for (int a = 0; a < 3; ++a) {
+            w.lo[a][k] = inf;  // bounds come in step 3
+            w.hi[a][k] = -inf;
+          }
+          w.child[k] = kNoChild;
+          w.count[k] = 0;
+          if (k >= parts) continue;
+          if (first[k] == last[k]) {
+            const uint32_t begin = first[k] * leaf_size;
+            const uint32_t end = begin + leaf_size < n ? begin + leaf_size : n;
+            if (end == begin) continue;  // the empty mesh's root: no child at all
+            w.child[k] = begin;
+            w.count[k] = static_cast<uint8_t>(end - begin);
+            continue;
+          }
+          if (top + 1 > 3 * kMaxDepth + 4 || node_count >= wide_max) {
+            return Status::error(StatusCode::kInternal, "distance index: hierarchy too deep");
+          }
+          w.child[k] = node_count;
+          stack[top++] = Range{node_count++, first[k], last[k]};
+        }
       }
     }
-  }
   }
 
   // 3. Bounds and dipoles, bottom-up (children have larger indices than their parent). A
@@ -445,7 +445,8 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
         }
       } else {
         const BvhNode& c = nodes[node.child[k]];
-        float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF}, hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
+        float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF},
+              hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
         for (int j = 0; j < 4; ++j) {
           if (c.child[j] == kNoChild) continue;
           for (int a = 0; a < 3; ++a) {
@@ -462,7 +463,8 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
         nsum = nsum + Vec3{static_cast<double>(cd.normal[0]), static_cast<double>(cd.normal[1]),
                            static_cast<double>(cd.normal[2])};
         wsum = wsum + Vec3{static_cast<double>(cd.center[0]), static_cast<double>(cd.center[1]),
-                           static_cast<double>(cd.center[2])} * ca;
+                           static_cast<double>(cd.center[2])} *
+                          ca;
         asum += ca;
       }
       all.add(Vec3{static_cast<double>(node.lo[0][k]), static_cast<double>(node.lo[1][k]),
@@ -493,12 +495,13 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
     if (oriented) {
       double obb_volume = 0, box_volume = 0;
       for (int k = 0; k < 4; ++k) {
-        float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF}, hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
+        float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF},
+              hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
         if (node.child[k] != kNoChild) {
           double m = 0;  // the largest |coordinate| in the child's box
           for (int a = 0; a < 3; ++a) {
-            m = abs_max(m, abs_max(static_cast<double>(node.lo[a][k]),
-                                   static_cast<double>(node.hi[a][k])));
+            m = abs_max(
+                m, abs_max(static_cast<double>(node.lo[a][k]), static_cast<double>(node.hi[a][k])));
           }
           if (node.count[k] > 0) {
             leaf_intervals(mesh, order + node.child[k], node.count[k], ob.axis, m, lo, hi);

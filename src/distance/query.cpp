@@ -73,7 +73,8 @@ inline Float4 child_box_distances(const BvhNode& n, const float qf[3]) {
 // Callers compare against reach_float(), which covers s and the rounding here.
 inline Float4 child_obb_distances(const BvhObb& o, const float qf[3]) {
   float p[3];
-  for (int i = 0; i < 3; ++i) p[i] = o.axis[i][0] * qf[0] + o.axis[i][1] * qf[1] + o.axis[i][2] * qf[2];
+  for (int i = 0; i < 3; ++i)
+    p[i] = o.axis[i][0] * qf[0] + o.axis[i][1] * qf[1] + o.axis[i][2] * qf[2];
   return box_distances(o.lo, o.hi, p);
 }
 
@@ -149,16 +150,24 @@ void closest_on_sliver(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& 
     Feature f;
     uint8_t fi;
     if (num <= 0 || den == 0) {
-      q = v0; f = Feature::kVertex; fi = k;
+      q = v0;
+      f = Feature::kVertex;
+      fi = k;
     } else if (num >= den) {
-      q = v1; f = Feature::kVertex; fi = static_cast<uint8_t>((k + 1) % 3);
+      q = v1;
+      f = Feature::kVertex;
+      fi = static_cast<uint8_t>((k + 1) % 3);
     } else {
-      q = v0 + e * (num / den); f = Feature::kEdge; fi = k;
+      q = v0 + e * (num / den);
+      f = Feature::kEdge;
+      fi = k;
     }
     const double d2 = length_squared(p - q);
     if (k == 0 || d2 < best) {
       best = d2;
-      *out = q; *feature = f; *index = fi;
+      *out = q;
+      *feature = f;
+      *index = fi;
     }
   };
   edge(0, a, b);
@@ -172,13 +181,17 @@ void closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
   const Vec3 ab = b - a, ac = c - a, ap = p - a;
   const double d1 = dot(ab, ap), d2 = dot(ac, ap);
   if (d1 <= 0 && d2 <= 0) {
-    *out = a; *feature = Feature::kVertex; *index = 0;
+    *out = a;
+    *feature = Feature::kVertex;
+    *index = 0;
     return;
   }
   const Vec3 bp = p - b;
   const double d3 = dot(ab, bp), d4 = dot(ac, bp);
   if (d3 >= 0 && d4 <= d3) {
-    *out = b; *feature = Feature::kVertex; *index = 1;
+    *out = b;
+    *feature = Feature::kVertex;
+    *index = 1;
     return;
   }
   {
@@ -196,25 +209,33 @@ void closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
   const double vc = d1 * d4 - d3 * d2;
   if (vc <= 0 && d1 >= 0 && d3 <= 0) {
     const double t = d1 / (d1 - d3);
-    *out = a + ab * t; *feature = Feature::kEdge; *index = 0;
+    *out = a + ab * t;
+    *feature = Feature::kEdge;
+    *index = 0;
     return;
   }
   const Vec3 cp = p - c;
   const double d5 = dot(ab, cp), d6 = dot(ac, cp);
   if (d6 >= 0 && d5 <= d6) {
-    *out = c; *feature = Feature::kVertex; *index = 2;
+    *out = c;
+    *feature = Feature::kVertex;
+    *index = 2;
     return;
   }
   const double vb = d5 * d2 - d1 * d6;
   if (vb <= 0 && d2 >= 0 && d6 <= 0) {
     const double t = d2 / (d2 - d6);
-    *out = a + ac * t; *feature = Feature::kEdge; *index = 2;  // edge c -> a
+    *out = a + ac * t;
+    *feature = Feature::kEdge;
+    *index = 2;  // edge c -> a
     return;
   }
   const double va = d3 * d6 - d5 * d4;
   if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
     const double t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    *out = b + (c - b) * t; *feature = Feature::kEdge; *index = 1;
+    *out = b + (c - b) * t;
+    *feature = Feature::kEdge;
+    *index = 1;
     return;
   }
   const double denom = 1.0 / (va + vb + vc);
@@ -291,7 +312,8 @@ bool detail::closest_within(const DistanceIndex& index, const Vec3& q, double li
   // Beyond 2^100 (or not a number) float squares could overflow: no box is pruned then (and q
   // is not converted: out of float range that would be undefined).
   const bool prune = qmax < 0x1p100;
-  const float qf[3] = {prune ? static_cast<float>(q.x) : 0.0f, prune ? static_cast<float>(q.y) : 0.0f,
+  const float qf[3] = {prune ? static_cast<float>(q.x) : 0.0f,
+                       prune ? static_cast<float>(q.y) : 0.0f,
                        prune ? static_cast<float>(q.z) : 0.0f};
   // Keeps triangle t when it is closer, or as close with a smaller id (so the answer never
   // depends on the tree or the seed), and within the limit. Two lower bounds of the distance
@@ -363,9 +385,12 @@ bool detail::closest_within(const DistanceIndex& index, const Vec3& q, double li
       const Triangle &s0 = tris[t0], &s1 = tris[t1];
       const Vec3 &a0 = v[s0.v[0]], &b0 = v[s0.v[1]], &c0 = v[s0.v[2]];
       const Vec3 &a1 = v[s1.v[0]], &b1 = v[s1.v[1]], &c1 = v[s1.v[2]];
-      const Double2 gx = pair_gap(q2x, Double2{a0.x, a1.x}, Double2{b0.x, b1.x}, Double2{c0.x, c1.x});
-      const Double2 gy = pair_gap(q2y, Double2{a0.y, a1.y}, Double2{b0.y, b1.y}, Double2{c0.y, c1.y});
-      const Double2 gz = pair_gap(q2z, Double2{a0.z, a1.z}, Double2{b0.z, b1.z}, Double2{c0.z, c1.z});
+      const Double2 gx =
+          pair_gap(q2x, Double2{a0.x, a1.x}, Double2{b0.x, b1.x}, Double2{c0.x, c1.x});
+      const Double2 gy =
+          pair_gap(q2y, Double2{a0.y, a1.y}, Double2{b0.y, b1.y}, Double2{c0.y, c1.y});
+      const Double2 gz =
+          pair_gap(q2z, Double2{a0.z, a1.z}, Double2{b0.z, b1.z}, Double2{c0.z, c1.z});
       const Double2 g2 = gx * gx + gy * gy + gz * gz;
       if (!(g2[0] > best2 * (1.0 + 0x1p-40))) consider_near(t0, a0, b0, c0);
       if (j + 1 < end && !(g2[1] > best2 * (1.0 + 0x1p-40))) consider_near(t1, a1, b1, c1);
@@ -384,7 +409,8 @@ bool detail::closest_within(const DistanceIndex& index, const Vec3& q, double li
     if (e.d2 > reach2) continue;
     const BvhNode& node = nodes[e.node];
     Float4 d2v{};  // !prune: every present child is visited
-    if (prune) d2v = obbs != nullptr ? child_obb_distances(obbs[e.node], qf) : child_box_distances(node, qf);
+    if (prune)
+      d2v = obbs != nullptr ? child_obb_distances(obbs[e.node], qf) : child_box_distances(node, qf);
     float d2[4];
     std::memcpy(d2, &d2v, sizeof(d2));
     // The children within reach, nearest first (ties in slot order): leaves tighten the bound
@@ -492,7 +518,8 @@ double winding_number(const DistanceIndex& index, const Vec3& q, double beta) {
       if (beta > 0) {
         Vec3 c, half;
         for (int a = 0; a < 3; ++a) {
-          const double lo = static_cast<double>(node.lo[a][k]), hi = static_cast<double>(node.hi[a][k]);
+          const double lo = static_cast<double>(node.lo[a][k]),
+                       hi = static_cast<double>(node.hi[a][k]);
           c[a] = 0.5 * (lo + hi);
           half[a] = 0.5 * (hi - lo);
         }
@@ -516,7 +543,8 @@ double winding_number(const DistanceIndex& index, const Vec3& q, double beta) {
       }
     }
     for (int k = 4; k-- > 0;) {
-      if (node.count[k] == 0 && node.child[k] != kNoChild && top < kStack) stack[top++] = node.child[k];
+      if (node.count[k] == 0 && node.child[k] != kNoChild && top < kStack)
+        stack[top++] = node.child[k];
     }
   }
   return sum / kFourPi;
@@ -542,18 +570,14 @@ void finish_signed(const DistanceIndex& index, const Vec3& q, SignMethod method,
     Vec3 normal;
     bool ok = true;
     switch (cp.feature) {
-      case Feature::kFace:
-        normal = face_normal(mesh, cp.triangle);
-        break;
+      case Feature::kFace: normal = face_normal(mesh, cp.triangle); break;
       case Feature::kEdge: {
         const uint32_t other = index.neighbors[3 * size_t{cp.triangle} + cp.feature_index];
         ok = other != kNoNeighbor;
         if (ok) normal = face_normal(mesh, cp.triangle) + face_normal(mesh, other);
         break;
       }
-      case Feature::kVertex:
-        normal = vertex_pseudonormal(index, tri.v[cp.feature_index]);
-        break;
+      case Feature::kVertex: normal = vertex_pseudonormal(index, tri.v[cp.feature_index]); break;
     }
     if (ok) {
       inside = dot(q - cp.point, normal) < 0.0;
@@ -602,13 +626,18 @@ bool ray_intersect(const DistanceIndex& index, const Vec3& origin, const Vec3& d
       double t0 = 0, t1 = best_t;
       bool miss = false;
       for (int a = 0; a < 3 && !miss; ++a) {
-        const double lo = static_cast<double>(node.lo[a][k]), hi = static_cast<double>(node.hi[a][k]);
+        const double lo = static_cast<double>(node.lo[a][k]),
+                     hi = static_cast<double>(node.hi[a][k]);
         if (direction[a] == 0.0) {
           miss = origin[a] < lo || origin[a] > hi;
           continue;
         }
         double ta = (lo - origin[a]) * inv[a], tb = (hi - origin[a]) * inv[a];
-        if (ta > tb) { const double s = ta; ta = tb; tb = s; }
+        if (ta > tb) {
+          const double s = ta;
+          ta = tb;
+          tb = s;
+        }
         t0 = ta > t0 ? ta : t0;
         t1 = tb < t1 ? tb : t1;
         miss = t0 > t1 * (1 + 0x1p-30) + 1e-300;
@@ -650,13 +679,14 @@ bool ray_intersect(const DistanceIndex& index, const Vec3& origin, const Vec3& d
   return true;
 }
 
-
 namespace {
 inline bool child_overlaps(const BvhNode& node, int k, const Aabb& box) {
-  return node.child[k] != kNoChild &&
-         !(static_cast<double>(node.lo[0][k]) > box.hi.x || static_cast<double>(node.hi[0][k]) < box.lo.x ||
-           static_cast<double>(node.lo[1][k]) > box.hi.y || static_cast<double>(node.hi[1][k]) < box.lo.y ||
-           static_cast<double>(node.lo[2][k]) > box.hi.z || static_cast<double>(node.hi[2][k]) < box.lo.z);
+  return node.child[k] != kNoChild && !(static_cast<double>(node.lo[0][k]) > box.hi.x ||
+                                        static_cast<double>(node.hi[0][k]) < box.lo.x ||
+                                        static_cast<double>(node.lo[1][k]) > box.hi.y ||
+                                        static_cast<double>(node.hi[1][k]) < box.lo.y ||
+                                        static_cast<double>(node.lo[2][k]) > box.hi.z ||
+                                        static_cast<double>(node.hi[2][k]) < box.lo.z);
 }
 
 // Calls visit(triangle id) for every triangle in a leaf whose box overlaps `box`; stops when
@@ -744,7 +774,6 @@ Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aa
 namespace {
 constexpr uint32_t kBatch = 1024;  // queries per task
 
-
 // Batches are processed in Morton order of the queries, each seeded with the answer to the
 // one before it: nearby queries share nodes and triangles (cache) and start with a tight
 // bound. Results land at their own index, so the order changes nothing but the time.
@@ -767,8 +796,10 @@ Status morton_batch(const Context& ctx, const DistanceIndex& index, Span<const V
   for (int k = 0; k < 4; ++k) {
     if (root.child[k] == kNoChild) continue;
     for (int a = 0; a < 3; ++a) {
-      lo[a] = static_cast<double>(root.lo[a][k]) < lo[a] ? static_cast<double>(root.lo[a][k]) : lo[a];
-      hi[a] = static_cast<double>(root.hi[a][k]) > hi[a] ? static_cast<double>(root.hi[a][k]) : hi[a];
+      lo[a] =
+          static_cast<double>(root.lo[a][k]) < lo[a] ? static_cast<double>(root.lo[a][k]) : lo[a];
+      hi[a] =
+          static_cast<double>(root.hi[a][k]) > hi[a] ? static_cast<double>(root.hi[a][k]) : hi[a];
     }
   }
   double scale[3];
@@ -863,7 +894,8 @@ Status batch_signed_distances(const Context& ctx, const DistanceIndex& index,
     finish_signed(*g.index, g.queries[at], g.method, &sd);
     g.results[at] = sd.distance;
   };
-  SPLINTCORE_RETURN_IF_ERROR(detail::region_closest_points(ctx, index, queries, place, &signs, &used));
+  SPLINTCORE_RETURN_IF_ERROR(
+      detail::region_closest_points(ctx, index, queries, place, &signs, &used));
   if (used) return Status::ok();
   auto answer = [&](size_t at, uint32_t* seed) {
     SignedDistance sd;
@@ -904,7 +936,8 @@ Status sample_sdf(const Context& ctx, const DistanceIndex& index, const SdfGrid&
   // winding number varies off the surface, every sample beyond the band does).
   const bool carry = index.closed_manifold && grid.spacing <= 0.5 * band;
   for (uint32_t z = z_begin; z < z_end; ++z) {
-    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance volume", z - z_begin, z_end - z_begin));
+    SPLINTCORE_RETURN_IF_ERROR(
+        report_progress(ctx, "distance volume", z - z_begin, z_end - z_begin));
     auto row = [&](uint32_t y) {
       float* dst = out.data() + (uint64_t{z - z_begin} * grid.ny + y) * grid.nx;
       uint32_t seed = kNoNeighbor;

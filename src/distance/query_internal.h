@@ -40,8 +40,7 @@ void settle_closest(const DistanceIndex& index, const Vec3& q, double best2, Clo
 // tree should answer instead.
 using RegionAnswer = void (*)(void* user, size_t at, const ClosestPoint& cp, bool found);
 Status region_closest_points(const Context& ctx, const DistanceIndex& index,
-                             Span<const Vec3> queries, RegionAnswer answer, void* user,
-                             bool* used);
+                             Span<const Vec3> queries, RegionAnswer answer, void* user, bool* used);
 
 }  // namespace detail
 }  // namespace splintcore

@@ -51,12 +51,12 @@ namespace {
 using detail::Double2;
 using detail::Mask2;
 
-constexpr uint32_t kMaxPlanes = 24;     // a vertex with more neighbours keeps the first ones
-constexpr size_t kMinQueries = 4096;    // smaller batches: the tree
-constexpr uint32_t kSample = 256;       // queries whose tree distances set the band
-constexpr uint32_t kRound = 1u << 15;   // triangles between progress reports
-constexpr double kMaxOverlap = 4;       // face regions about a query, at most (estimated)
-constexpr double kPairCos = 0.9999;     // neighbours scanned together: normals within 0.8 deg
+constexpr uint32_t kMaxPlanes = 24;    // a vertex with more neighbours keeps the first ones
+constexpr size_t kMinQueries = 4096;   // smaller batches: the tree
+constexpr uint32_t kSample = 256;      // queries whose tree distances set the band
+constexpr uint32_t kRound = 1u << 15;  // triangles between progress reports
+constexpr double kMaxOverlap = 4;      // face regions about a query, at most (estimated)
+constexpr double kPairCos = 0.9999;    // neighbours scanned together: normals within 0.8 deg
 // The progress stage (the tree's batches report "closest points" or "signed distances").
 constexpr const char* kStage = "closest points, by regions";
 
@@ -134,7 +134,8 @@ uint32_t partner(const Mesh& mesh, const uint32_t* neighbors, uint32_t t) {
     return l1 > l0 ? (l2 > l1 ? 2u : 1u) : (l2 > l0 ? 2u : 0u);
   };
   const uint32_t t2 = neighbors[3 * size_t{t} + longest(t, p[0])];
-  if (t2 == kNoNeighbor || t2 == t || neighbors[3 * size_t{t2} + longest(t2, p[1])] != t) return kNoNeighbor;
+  if (t2 == kNoNeighbor || t2 == t || neighbors[3 * size_t{t2} + longest(t2, p[1])] != t)
+    return kNoNeighbor;
   Vec3 n1, n2;
   double s1 = 0, s2 = 0;
   if (!well_shaped(p[0], &n1, &s1) || !well_shaped(p[1], &n2, &s2)) return kNoNeighbor;
@@ -229,7 +230,8 @@ struct Buckets {
     return c >= dims[axis] - 1.0 ? dims[axis] - 1 : static_cast<uint32_t>(c);
   }
   size_t cell_of(const Vec3& q) const {
-    return cell_along(q.x, 0) + size_t{dims[0]} * (cell_along(q.y, 1) + size_t{dims[1]} * cell_along(q.z, 2));
+    return cell_along(q.x, 0) +
+           size_t{dims[0]} * (cell_along(q.y, 1) + size_t{dims[1]} * cell_along(q.z, 2));
   }
 };
 
@@ -344,7 +346,8 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
     Region& g = tr.take();
     g.candidates[g.candidate_count++] = t;
     if (f.ok) {
-      for (int k = 0; k < 3; ++k) g.planes[g.count++] = Plane{f.m[k] * -1.0, mu - dot(f.m[k], p[k])};
+      for (int k = 0; k < 3; ++k)
+        g.planes[g.count++] = Plane{f.m[k] * -1.0, mu - dot(f.m[k], p[k])};
       // Its height is not tested with the planes: the bounds hold it within about R (and a
       // query above R is not offered the triangle once it has a closer one, offer_regions).
       g.face = true;
@@ -394,7 +397,8 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
         sides[side_count++] = m2 * (1.0 / length(m2));
       }
     }
-    for (int i = 0; i < side_count; ++i) g.planes[g.count++] = Plane{sides[i], dot(sides[i], a) + mu};
+    for (int i = 0; i < side_count; ++i)
+      g.planes[g.count++] = Plane{sides[i], dot(sides[i], a) + mu};
     // Its bounds (a thin triangle's face bounds already hold everything within R of it). A
     // query that matters is a + s e + y, s in [-mu, len + mu], y across the edge with |y| <= R,
     // so y = alpha n + beta o (o = -m, outward) with |alpha|, |beta| <= R. This triangle's side
@@ -481,7 +485,8 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
       poly.clip(dot(e, across[0]), dot(e, across[1]), mu + r * std::fabs(dot(e, dir)));
     }
     Aabb sweep;  // of the corners across[0] x + across[1] y, sheared
-    for (uint32_t j = 0; j < poly.n; ++j) sweep.add(sheared_across[0] * poly.x()[j] + sheared_across[1] * poly.y()[j]);
+    for (uint32_t j = 0; j < poly.n; ++j)
+      sweep.add(sheared_across[0] * poly.x()[j] + sheared_across[1] * poly.y()[j]);
     if (poly.n != 0) sb.add_swept_box(c - dir * r, c + dir * r, sweep);
   }
 }
@@ -492,12 +497,14 @@ inline double best_distance2(const Buckets& b, size_t j, const Vec3& q) {
 }
 
 // Offers triangle t to query j (at q, best so far at squared distance *best2).
-inline void offer(const Mesh& mesh, const Buckets& b, uint32_t t, const Vec3& q, size_t j, double* best2) {
+inline void offer(const Mesh& mesh, const Buckets& b, uint32_t t, const Vec3& q, size_t j,
+                  double* best2) {
   const Vec3* v = mesh.vertices.data();
   const Triangle& tri = mesh.triangles[t];
   Feature feature;
   uint8_t index;
-  const Vec3 p = closest_point_on_triangle(q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], &feature, &index);
+  const Vec3 p =
+      closest_point_on_triangle(q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], &feature, &index);
   const double d2 = length_squared(p - q);
   if (d2 < *best2 || (d2 == *best2 && t < b.best[j])) {
     *best2 = d2;
@@ -511,7 +518,8 @@ inline void offer(const Mesh& mesh, const Buckets& b, uint32_t t, const Vec3& q,
 // A triangle already offered to the query here, or whose plane already lay beyond its best,
 // is not offered again (the face region and, within the margin, an edge region of the same
 // triangles often both hold it; a second offer changes nothing, and the best only shrinks).
-void offer_regions(const Scan& s, const TriangleRegions& tr, uint32_t holding, const Vec3& q, uint32_t j) {
+void offer_regions(const Scan& s, const TriangleRegions& tr, uint32_t holding, const Vec3& q,
+                   uint32_t j) {
   const Buckets& b = *s.buckets;
   const Mesh& mesh = *s.index->mesh;
   uint32_t offered[4];
@@ -589,8 +597,8 @@ inline Double2 load2(const double* p) {
 // comparisons in two lanes; those inside go to the list without a branch (about one query in
 // ten passes a triangle's box, unpredictably).
 template <typename Visit>
-void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const uint32_t cell_hi[3],
-          Visit&& visit) {
+void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3],
+          const uint32_t cell_hi[3], Visit&& visit) {
   const Buckets& b = *s.buckets;
   const int ax = box.ax, u = box.u, w = box.w;
   const size_t stride[3] = {1, b.dims[0], static_cast<size_t>(b.dims[0]) * b.dims[1]};
@@ -620,11 +628,15 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const
   // cells) cover the rounding of these values and of a query's cell index (about 2^-40 cells).
   const double inv_h = b.inv_h, m = s.mu * inv_h;
   const double lo_u = b.lo[u], lo_w = b.lo[w], lo_z = b.lo[ax];
-  const double ulo = (blo.x - lo_u + box.ru * lo_z) * inv_h - m, uhi = (bhi.x - lo_u + box.ru * lo_z) * inv_h + m;
-  const double wlo = (blo.y - lo_w + box.rw * lo_z) * inv_h - m, whi = (bhi.y - lo_w + box.rw * lo_z) * inv_h + m;
+  const double ulo = (blo.x - lo_u + box.ru * lo_z) * inv_h - m,
+               uhi = (bhi.x - lo_u + box.ru * lo_z) * inv_h + m;
+  const double wlo = (blo.y - lo_w + box.rw * lo_z) * inv_h - m,
+               whi = (bhi.y - lo_w + box.rw * lo_z) * inv_h + m;
   const double zlo = (blo.z - lo_z) * inv_h, zhi = (bhi.z - lo_z) * inv_h;
-  const double reach_ulo = (box.reach.lo[u] - lo_u) * inv_h - m, reach_uhi = (box.reach.hi[u] - lo_u) * inv_h + m;
-  const double reach_wlo = (box.reach.lo[w] - lo_w) * inv_h - m, reach_whi = (box.reach.hi[w] - lo_w) * inv_h + m;
+  const double reach_ulo = (box.reach.lo[u] - lo_u) * inv_h - m,
+               reach_uhi = (box.reach.hi[u] - lo_u) * inv_h + m;
+  const double reach_wlo = (box.reach.lo[w] - lo_w) * inv_h - m,
+               reach_whi = (box.reach.hi[w] - lo_w) * inv_h + m;
   // A cell index (as Buckets::cell_along: clamped to the grid), then to the task's share.
   const auto cell = [](double c, uint32_t top, uint32_t share_lo, uint32_t share_hi) {
     c = c > 0 ? c : 0.0;  // (and not-a-number: 0)
@@ -634,7 +646,8 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3], const
     return i < share_hi ? i : share_hi;
   };
   const uint32_t top_u = b.dims[u] - 1, top_w = b.dims[w] - 1;
-  const uint32_t share_ulo = cell_lo[u], share_uhi = cell_hi[u], share_wlo = cell_lo[w], share_whi = cell_hi[w];
+  const uint32_t share_ulo = cell_lo[u], share_uhi = cell_hi[u], share_wlo = cell_lo[w],
+                 share_whi = cell_hi[w];
   for (uint32_t zc = c0; zc <= c1; ++zc) {
     // The layer's span along ax, within the bounds.
     const double za = zc - m > zlo ? zc - m : zlo, zb = zc + 1.0 + m < zhi ? zc + 1.0 + m : zhi;
@@ -760,9 +773,10 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
     b.h *= 1.25;
   }
   b.inv_h = 1.0 / b.h;
-  const uint32_t tasks = ctx.executor != nullptr && ctx.executor->concurrency > 1
-                             ? (ctx.executor->concurrency < b.dims[2] ? ctx.executor->concurrency : b.dims[2])
-                             : 1;
+  const uint32_t tasks =
+      ctx.executor != nullptr && ctx.executor->concurrency > 1
+          ? (ctx.executor->concurrency < b.dims[2] ? ctx.executor->concurrency : b.dims[2])
+          : 1;
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
   b.start = arena.allocate_array<uint32_t>(static_cast<size_t>(cells) + 1);
@@ -771,8 +785,8 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
   b.best = arena.allocate_array<uint32_t>(nu + 1);
   TriangleRegions* scratch = arena.allocate_array<TriangleRegions>(tasks);
   uint32_t* position = arena.allocate_array<uint32_t>(nt);  // of each triangle in leaf order
-  if (b.start == nullptr || b.coord[0] == nullptr || b.coord[1] == nullptr || b.coord[2] == nullptr ||
-      b.ids == nullptr || b.best == nullptr || scratch == nullptr ||
+  if (b.start == nullptr || b.coord[0] == nullptr || b.coord[1] == nullptr ||
+      b.coord[2] == nullptr || b.ids == nullptr || b.best == nullptr || scratch == nullptr ||
       position == nullptr) {
     return Status::ok();  // the tree answers, in the 2 MB it needs
   }
@@ -811,7 +825,8 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
       const Vec3* v = mesh.vertices.data();
       area += 0.5 * length(cross(v[tri.v[1]] - v[tri.v[0]], v[tri.v[2]] - v[tri.v[0]]));
     }
-    if (2 * band * area > kMaxOverlap * static_cast<double>(filled) * b.h * b.h * b.h) return Status::ok();
+    if (2 * band * area > kMaxOverlap * static_cast<double>(filled) * b.h * b.h * b.h)
+      return Status::ok();
     for (uint64_t c = 0; c < cells; ++c) b.start[c + 1] += b.start[c];
     for (size_t j = 0; j < nu; ++j) {
       const uint32_t i = static_cast<uint32_t>(by_slab[j]);
@@ -845,9 +860,11 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, kStage, first, ntri + uint64_t{nu}));
     const uint32_t last = first + kRound < ntri ? first + kRound : ntri;
     auto task = [&](uint32_t i) {
-      const uint32_t cell_lo[3] = {0, 0, static_cast<uint32_t>(static_cast<uint64_t>(b.dims[2]) * i / tasks)};
-      const uint32_t cell_hi[3] = {b.dims[0] - 1, b.dims[1] - 1,
-                                   static_cast<uint32_t>(static_cast<uint64_t>(b.dims[2]) * (i + 1) / tasks) - 1};
+      const uint32_t cell_lo[3] = {
+          0, 0, static_cast<uint32_t>(static_cast<uint64_t>(b.dims[2]) * i / tasks)};
+      const uint32_t cell_hi[3] = {
+          b.dims[0] - 1, b.dims[1] - 1,
+          static_cast<uint32_t>(static_cast<uint64_t>(b.dims[2]) * (i + 1) / tasks) - 1};
       // The share's z span, for skipping triangles that cannot reach it.
       const double lo_z = tasks == 1 ? qbox.lo.z : b.lo.z + cell_lo[2] * b.h - b.h;
       const double hi_z = tasks == 1 ? qbox.hi.z : b.lo.z + (cell_hi[2] + 1.0) * b.h + b.h;

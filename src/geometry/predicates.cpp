@@ -179,8 +179,7 @@ inline double magnitude(double v) { return v < 0.0 ? -v : v; }
 // h = e + f with zero elimination (Fast-Expansion-Sum, Theorem 13: needs round-to-even and
 // strongly nonoverlapping inputs, which every producer in this file gives). h must hold
 // elen + flen components; elen, flen >= 1. Returns the length of h (>= 1).
-int fast_expansion_sum_zeroelim(int elen, const double* e, int flen, const double* f,
-                                double* h) {
+int fast_expansion_sum_zeroelim(int elen, const double* e, int flen, const double* f, double* h) {
   // Merge e and f by magnitude, taking the smaller head each time (never reads past an end).
   int ei = 0;
   int fi = 0;
@@ -300,9 +299,7 @@ double orient2d_adapt(double ax, double ay, double bx, double by, double cx, dou
 // ---- orient3d stage B and the exact evaluation.
 
 // x of point p times y of point q minus x of q times y of p, exactly.
-void minor_xy(const Vec3& p, const Vec3& q, double out[4]) {
-  two_by_two(p.x, q.y, q.x, p.y, out);
-}
+void minor_xy(const Vec3& p, const Vec3& q, double out[4]) { two_by_two(p.x, q.y, q.x, p.y, out); }
 
 // det[p 1; q 1; r 1] over the x, y columns: m(p,q) + m(q,r) + m(r,p) with m as above;
 // the three minors are passed in, the last one given as (p,r) and subtracted when
@@ -450,8 +447,8 @@ int lift_scale(int elen, const double* e, double x, double y, bool negative, dou
 // columns from the lift column turns it into the determinant of the differences that
 // incircle() evaluates). Expansion along the lift column:
 //   l(a) M(b,c,d) - l(b) M(a,c,d) + l(c) M(a,b,d) - l(d) M(a,b,c).
-double incircle_exact(double ax, double ay, double bx, double by, double cx, double cy,
-                      double dx, double dy) {
+double incircle_exact(double ax, double ay, double bx, double by, double cx, double cy, double dx,
+                      double dy) {
   const Vec3 a{ax, ay, 0.0};
   const Vec3 b{bx, by, 0.0};
   const Vec3 c{cx, cy, 0.0};
@@ -475,8 +472,8 @@ double incircle_exact(double ax, double ay, double bx, double by, double cx, dou
   return det[det_len - 1];
 }
 
-double incircle_adapt(double ax, double ay, double bx, double by, double cx, double cy,
-                      double dx, double dy, double permanent) {
+double incircle_adapt(double ax, double ay, double bx, double by, double cx, double cy, double dx,
+                      double dy, double permanent) {
   const double adx = ax - dx;
   const double bdx = bx - dx;
   const double cdx = cx - dx;
@@ -558,8 +555,7 @@ double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   const double adxbdy = adx * bdy;
   const double bdxady = bdx * ady;
 
-  const double det =
-      adz * (bdxcdy - cdxbdy) + bdz * (cdxady - adxcdy) + cdz * (adxbdy - bdxady);
+  const double det = adz * (bdxcdy - cdxbdy) + bdz * (cdxady - adxcdy) + cdz * (adxbdy - bdxady);
   const double permanent = (magnitude(bdxcdy) + magnitude(cdxbdy)) * magnitude(adz) +
                            (magnitude(cdxady) + magnitude(adxcdy)) * magnitude(bdz) +
                            (magnitude(adxbdy) + magnitude(bdxady)) * magnitude(cdz);

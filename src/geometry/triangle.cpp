@@ -72,9 +72,13 @@ int projection_axis(const Vec3& a, const Vec3& b, const Vec3& c) {
   double ax = n.x < 0 ? -n.x : n.x, ay = n.y < 0 ? -n.y : n.y, az = n.z < 0 ? -n.z : n.z;
   int order[3] = {2, 0, 1};
   if (ax >= ay && ax >= az) {
-    order[0] = 0; order[1] = 1; order[2] = 2;
+    order[0] = 0;
+    order[1] = 1;
+    order[2] = 2;
   } else if (ay >= az) {
-    order[0] = 1; order[1] = 2; order[2] = 0;
+    order[0] = 1;
+    order[1] = 2;
+    order[2] = 0;
   }
   for (int axis : order) {
     if (o2(drop(a, axis), drop(b, axis), drop(c, axis)) != 0) return axis;
@@ -125,8 +129,8 @@ bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, co
   return segment_meets(p, q, sp, sq, a, b, c);
 }
 
-bool triangles_intersect(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
-                         const Vec3& e, const Vec3& f) {
+bool triangles_intersect(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, const Vec3& e,
+                         const Vec3& f) {
   // Quick rejection: def strictly on one side of abc's plane, or abc of def's.
   const int sd = sign_of(orient3d(a, b, c, d));
   const int se = sign_of(orient3d(a, b, c, e));

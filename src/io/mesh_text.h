@@ -56,7 +56,9 @@ inline Status located(Status s, const ByteSource& source) {
   return s;
 }
 
-inline bool is_blank(uint8_t c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+inline bool is_blank(uint8_t c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v';
+}
 
 // A real number token, locale-free. Only digits, sign, point and exponent are taken (from_chars
 // would also take "inf" and "nan", which are reported as kNonFinite); a leading '+' is allowed.
@@ -67,8 +69,8 @@ inline StatusCode parse_real(const char* first, const char* last, bool as_float,
   if (*first == '+' && last - first > 1 && first[1] != '-' && first[1] != '+') ++first;
   for (const char* p = first; p < last; ++p) {
     const char c = *p;
-    const bool ok = (c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.' || c == 'e' ||
-                    c == 'E';
+    const bool ok =
+        (c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.' || c == 'e' || c == 'E';
     if (!ok) {
       // A leading '-' is followed by the bad character, so first + 1 is in range.
       const char* q = *first == '-' ? first + 1 : first;
@@ -104,8 +106,8 @@ struct LineReader {
   char* text = nullptr;
   size_t cap = 0;
   size_t length = 0;
-  uint64_t number = 0;       // of the line in `text`
-  uint64_t start_byte = 0;   // its offset in the input
+  uint64_t number = 0;      // of the line in `text`
+  uint64_t start_byte = 0;  // its offset in the input
 
   // Reads the next line; *got = false at the end of the input (no more bytes at all).
   // Errors: kLimitExceeded (a line longer than cap), kIoError.
@@ -124,7 +126,8 @@ struct LineReader {
       const uint8_t* p = in->buf + in->pos;
       const size_t n = in->available();
       const void* nl = std::memchr(p, '\n', n);
-      const size_t take = nl != nullptr ? static_cast<size_t>(static_cast<const uint8_t*>(nl) - p) : n;
+      const size_t take =
+          nl != nullptr ? static_cast<size_t>(static_cast<const uint8_t*>(nl) - p) : n;
       if (take > cap - length) {
         return make_error(StatusCode::kLimitExceeded, "line longer than ", cap,
                           " bytes (the limit)")
@@ -199,8 +202,7 @@ struct MeshBuilder {
   Mesh mesh;
   bool triangles_last = false;  // the triangle array is the later allocation
 
-  MeshBuilder(const Context& c, const MeshReadOptions& o)
-      : ctx(&c), options(&o), mesh(c.arena) {}
+  MeshBuilder(const Context& c, const MeshReadOptions& o) : ctx(&c), options(&o), mesh(c.arena) {}
 
   // Vertex `index` with coordinates already rounded as asked. Errors name the vertex.
   Status add_vertex(const Vec3& v, uint64_t index) {
@@ -239,8 +241,10 @@ struct MeshBuilder {
 
   // Reserves room confirmed by the input's size (never a count from a header alone).
   Status reserve(uint64_t vertices, uint64_t triangles) {
-    if (!mesh.vertices.reserve(static_cast<size_t>(vertices))) return ctx->arena->exhausted_status();
-    if (!mesh.triangles.reserve(static_cast<size_t>(triangles))) return ctx->arena->exhausted_status();
+    if (!mesh.vertices.reserve(static_cast<size_t>(vertices)))
+      return ctx->arena->exhausted_status();
+    if (!mesh.triangles.reserve(static_cast<size_t>(triangles)))
+      return ctx->arena->exhausted_status();
     triangles_last = true;
     return Status::ok();
   }

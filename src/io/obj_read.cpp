@@ -19,8 +19,8 @@ namespace {
 using meshio::LineReader;
 using meshio::MeshBuilder;
 using meshio::Reader;
-using meshio::Tokens;
 using meshio::token_error;
+using meshio::Tokens;
 
 // One corner "v[/vt[/vn]]" or "v//vn": the vertex number, the others checked to be integers.
 bool parse_corner(const char* first, const char* last, int64_t* vertex) {
@@ -65,7 +65,8 @@ Status read_obj_located(const Context& ctx, const ByteSource& source,
     return s;
   }
   info->format = MeshFormat::kObj;
-  const uint64_t max_vertices = options.max_vertices < 0xffffffffu ? options.max_vertices : 0xffffffffu;
+  const uint64_t max_vertices =
+      options.max_vertices < 0xffffffffu ? options.max_vertices : 0xffffffffu;
   MeshBuilder builder(ctx, options);
   uint64_t faces = 0;
   Status s;
@@ -232,8 +233,8 @@ bool looks_obj(const uint8_t* p, size_t n) {
     size_t j = i;
     while (j < n && p[j] != ' ' && p[j] != '\t' && p[j] != '\r' && p[j] != '\n') ++j;
     if (j == n) return false;  // a keyword cut off by the peek window
-    static const char* const kKeywords[] = {"v", "vn", "vt", "vp", "f", "o", "g", "s",
-                                            "usemtl", "mtllib"};
+    static const char* const kKeywords[] = {"v", "vn", "vt", "vp",     "f",
+                                            "o", "g",  "s",  "usemtl", "mtllib"};
     for (const char* k : kKeywords) {
       if (std::strlen(k) == j - i && std::memcmp(p + i, k, j - i) == 0) return true;
     }

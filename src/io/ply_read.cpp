@@ -21,14 +21,24 @@ namespace {
 using meshio::LineReader;
 using meshio::MeshBuilder;
 using meshio::Reader;
-using meshio::Tokens;
 using meshio::token_error;
+using meshio::Tokens;
 
 constexpr size_t kMaxElements = 32;
 constexpr size_t kMaxProperties = 256;  // over all elements
 constexpr size_t kNameBytes = 32;
 
-enum Type : uint8_t { kNone = 0, kInt8, kUInt8, kInt16, kUInt16, kInt32, kUInt32, kFloat32, kFloat64 };
+enum Type : uint8_t {
+  kNone = 0,
+  kInt8,
+  kUInt8,
+  kInt16,
+  kUInt16,
+  kInt32,
+  kUInt32,
+  kFloat32,
+  kFloat64
+};
 
 constexpr uint8_t kTypeBytes[] = {0, 1, 1, 2, 2, 4, 4, 4, 8};
 
@@ -36,12 +46,11 @@ Type parse_type(const Tokens& t) {
   static const struct {
     const char* name;
     Type type;
-  } kNames[] = {{"char", kInt8},     {"int8", kInt8},       {"uchar", kUInt8},
-                {"uint8", kUInt8},   {"short", kInt16},     {"int16", kInt16},
-                {"ushort", kUInt16}, {"uint16", kUInt16},   {"int", kInt32},
-                {"int32", kInt32},   {"uint", kUInt32},     {"uint32", kUInt32},
-                {"float", kFloat32}, {"float32", kFloat32}, {"double", kFloat64},
-                {"float64", kFloat64}};
+  } kNames[] = {
+      {"char", kInt8},     {"int8", kInt8},       {"uchar", kUInt8},    {"uint8", kUInt8},
+      {"short", kInt16},   {"int16", kInt16},     {"ushort", kUInt16},  {"uint16", kUInt16},
+      {"int", kInt32},     {"int32", kInt32},     {"uint", kUInt32},    {"uint32", kUInt32},
+      {"float", kFloat32}, {"float32", kFloat32}, {"double", kFloat64}, {"float64", kFloat64}};
   for (const auto& n : kNames) {
     if (t.is(n.name)) return n.type;
   }
@@ -103,7 +112,9 @@ Status parse_header(LineReader& lines, Header* h) {
     if (!t.next()) continue;  // a blank line
     if (t.is("comment") || t.is("obj_info")) continue;
     if (t.is("end_header")) {
-      if (t.next()) return token_error(StatusCode::kParseError, lines, t, "expected nothing after 'end_header'");
+      if (t.next())
+        return token_error(StatusCode::kParseError, lines, t,
+                           "expected nothing after 'end_header'");
       break;
     }
     if (t.is("format")) {
@@ -122,8 +133,11 @@ Status parse_header(LineReader& lines, Header* h) {
                            "expected ascii, binary_little_endian or binary_big_endian");
       }
       t.next();
-      if (!t.is("1.0")) return token_error(StatusCode::kUnsupported, lines, t, "expected format version 1.0");
-      if (t.next()) return token_error(StatusCode::kParseError, lines, t, "expected the end of the format line");
+      if (!t.is("1.0"))
+        return token_error(StatusCode::kUnsupported, lines, t, "expected format version 1.0");
+      if (t.next())
+        return token_error(StatusCode::kParseError, lines, t,
+                           "expected the end of the format line");
       continue;
     }
     if (h->format == MeshFormat::kUnknown) {
@@ -134,7 +148,8 @@ Status parse_header(LineReader& lines, Header* h) {
         return token_error(StatusCode::kLimitExceeded, lines, t, "more than 32 elements");
       }
       Element& e = h->elements[h->element_count];
-      if (!t.next()) return token_error(StatusCode::kParseError, lines, t, "expected an element name");
+      if (!t.next())
+        return token_error(StatusCode::kParseError, lines, t, "expected an element name");
       copy_name(e.name, t);
       if (t.is("vertex")) e.kind = kVertex;
       if (t.is("face")) e.kind = kFace;
@@ -146,7 +161,9 @@ Status parse_header(LineReader& lines, Header* h) {
       if (!meshio::parse_integer(t.token, t.token + t.token_length, &count) || count < 0) {
         return token_error(StatusCode::kParseError, lines, t, "expected an element count");
       }
-      if (t.next()) return token_error(StatusCode::kParseError, lines, t, "expected the end of the element line");
+      if (t.next())
+        return token_error(StatusCode::kParseError, lines, t,
+                           "expected the end of the element line");
       e.count = static_cast<uint64_t>(count);
       e.first = h->property_count;
       if (e.kind == kVertex) h->vertex = static_cast<int>(h->element_count);
@@ -167,32 +184,40 @@ Status parse_header(LineReader& lines, Header* h) {
       if (t.is("list")) {
         t.next();
         p.count_type = parse_type(t);
-        if (p.count_type == kNone) return token_error(StatusCode::kParseError, lines, t, "expected a list count type");
+        if (p.count_type == kNone)
+          return token_error(StatusCode::kParseError, lines, t, "expected a list count type");
         t.next();
       }
       p.type = parse_type(t);
-      if (p.type == kNone) return token_error(StatusCode::kParseError, lines, t, "expected a property type");
-      if (!t.next()) return token_error(StatusCode::kParseError, lines, t, "expected a property name");
+      if (p.type == kNone)
+        return token_error(StatusCode::kParseError, lines, t, "expected a property type");
+      if (!t.next())
+        return token_error(StatusCode::kParseError, lines, t, "expected a property name");
       if (e.kind == kVertex && p.count_type == kNone) {
         if (t.is("x")) p.role = kX;
         if (t.is("y")) p.role = kY;
         if (t.is("z")) p.role = kZ;
       }
-      if (e.kind == kFace && p.count_type != kNone && (t.is("vertex_indices") || t.is("vertex_index"))) {
+      if (e.kind == kFace && p.count_type != kNone &&
+          (t.is("vertex_indices") || t.is("vertex_index"))) {
         p.role = kIndices;
       }
       if (p.count_type != kNone && !is_integer_type(p.count_type)) {
-        return token_error(StatusCode::kUnsupported, lines, t, "list count type is not an integer type for list");
+        return token_error(StatusCode::kUnsupported, lines, t,
+                           "list count type is not an integer type for list");
       }
       if (p.role == kIndices && !is_integer_type(p.type)) {
-        return token_error(StatusCode::kUnsupported, lines, t, "vertex indices of a non-integer type in list");
+        return token_error(StatusCode::kUnsupported, lines, t,
+                           "vertex indices of a non-integer type in list");
       }
       for (uint32_t i = e.first; i < h->property_count; ++i) {
         if (p.role != kSkip && h->properties[i].role == p.role) {
           return token_error(StatusCode::kParseError, lines, t, "second property of this name");
         }
       }
-      if (t.next()) return token_error(StatusCode::kParseError, lines, t, "expected the end of the property line");
+      if (t.next())
+        return token_error(StatusCode::kParseError, lines, t,
+                           "expected the end of the property line");
       h->properties[h->property_count++] = p;
       ++e.properties;
       continue;
@@ -200,7 +225,8 @@ Status parse_header(LineReader& lines, Header* h) {
     return token_error(StatusCode::kParseError, lines, t, "expected a PLY header keyword");
   }
   if (h->format == MeshFormat::kUnknown) {
-    return make_error(StatusCode::kParseError, "PLY header has no 'format' line").at_line(lines.number, 1);
+    return make_error(StatusCode::kParseError, "PLY header has no 'format' line")
+        .at_line(lines.number, 1);
   }
   if (h->vertex < 0) {
     return make_error(StatusCode::kParseError, "PLY header declares no 'vertex' element")
@@ -263,7 +289,8 @@ struct Body {
   // Rounds (when asked and in range: a value beyond the limit is kept so the error shows it).
   double coordinate(double v) const {
     const double m = options->max_abs_coordinate;
-    if (options->round_to_float32 && v <= m && v >= -m) return static_cast<double>(static_cast<float>(v));
+    if (options->round_to_float32 && v <= m && v >= -m)
+      return static_cast<double>(static_cast<float>(v));
     return v;
   }
 
@@ -370,7 +397,9 @@ Status read_binary_body(Body& body, Reader& in) {
   for (uint32_t ei = 0; ei < h.element_count; ++ei) {
     const Element& e = h.elements[ei];
     for (uint64_t r = 0; r < e.count; ++r) {
-      if ((r & 0xffff) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(*body.ctx, "read", in.offset(), in.source->size));
+      if ((r & 0xffff) == 0)
+        SPLINTCORE_RETURN_IF_ERROR(
+            report_progress(*body.ctx, "read", in.offset(), in.source->size));
       const uint64_t record_byte = in.offset();
       Vec3 v;
       for (uint32_t pi = e.first; pi < e.first + e.properties; ++pi) {
@@ -425,8 +454,8 @@ Status read_binary_body(Body& body, Reader& in) {
 Status ascii_value(const LineReader& lines, Tokens& t, uint8_t type, bool as_float, int64_t* i,
                    double* d, const Element& e, uint64_t record) {
   if (!t.next()) {
-    Status s = make_error(StatusCode::kParseError, "too few values on the line of ", e.name, " ",
-                          record);
+    Status s =
+        make_error(StatusCode::kParseError, "too few values on the line of ", e.name, " ", record);
     return s.at_line(lines.number, t.column).at_index(record);
   }
   const char* first = t.token;
@@ -435,7 +464,8 @@ Status ascii_value(const LineReader& lines, Tokens& t, uint8_t type, bool as_flo
     static const int64_t kLo[] = {0, -128, 0, -32768, 0, -2147483647 - 1, 0};
     static const int64_t kHi[] = {0, 127, 255, 32767, 65535, 2147483647, 4294967295};
     if (!meshio::parse_integer(first, last, i) || *i < kLo[type] || *i > kHi[type]) {
-      return token_error(StatusCode::kParseError, lines, t, "expected an integer of the declared type")
+      return token_error(StatusCode::kParseError, lines, t,
+                         "expected an integer of the declared type")
           .at_index(record);
     }
     *d = static_cast<double>(*i);
@@ -458,7 +488,8 @@ Status read_ascii_body(Body& body, LineReader& lines) {
     const Element& e = h.elements[ei];
     for (uint64_t r = 0; r < e.count; ++r) {
       if ((r & 0xffff) == 0) {
-        SPLINTCORE_RETURN_IF_ERROR(report_progress(*body.ctx, "read", lines.in->offset(), lines.in->source->size));
+        SPLINTCORE_RETURN_IF_ERROR(
+            report_progress(*body.ctx, "read", lines.in->offset(), lines.in->source->size));
       }
       // The record's line (blank lines are skipped).
       for (;;) {
@@ -499,15 +530,16 @@ Status read_ascii_body(Body& body, LineReader& lines) {
         if (p.role != kIndices) {
           for (int64_t k = 0; k < n; ++k) {
             if (!t.next()) {
-              return make_error(StatusCode::kParseError, "list of ", n, " items has fewer on the line of ",
-                                e.name, " ", r)
+              return make_error(StatusCode::kParseError, "list of ", n,
+                                " items has fewer on the line of ", e.name, " ", r)
                   .at_line(lines.number, t.column)
                   .at_index(r);
             }
           }
           continue;
         }
-        if (n < 3) return face_too_small(r, static_cast<uint64_t>(n)).at_line(lines.number, t.column);
+        if (n < 3)
+          return face_too_small(r, static_cast<uint64_t>(n)).at_line(lines.number, t.column);
         Fan fan;
         for (int64_t k = 0; k < n; ++k) {
           SPLINTCORE_RETURN_IF_ERROR(ascii_value(lines, t, p.type, false, &i, &d, e, r));
@@ -516,7 +548,8 @@ Status read_ascii_body(Body& body, LineReader& lines) {
         }
       }
       if (t.next()) {
-        return token_error(StatusCode::kParseError, lines, t, "more values than the element declares")
+        return token_error(StatusCode::kParseError, lines, t,
+                           "more values than the element declares")
             .at_index(r);
       }
       if (e.kind == kVertex) {
@@ -530,7 +563,8 @@ Status read_ascii_body(Body& body, LineReader& lines) {
     if (!got) break;
     Tokens t(lines.text, lines.length);
     if (t.next()) {
-      return token_error(StatusCode::kParseError, lines, t, "ASCII PLY has data after its last element");
+      return token_error(StatusCode::kParseError, lines, t,
+                         "ASCII PLY has data after its last element");
     }
   }
   return Status::ok();
@@ -563,7 +597,8 @@ Status read_ply_located(const Context& ctx, const ByteSource& source,
   const bool binary = h.format != MeshFormat::kPlyAscii;
   const uint64_t header_bytes = in.offset();
   const Element& ve = h.elements[h.vertex];
-  const uint64_t max_vertices = options.max_vertices < 0xffffffffu ? options.max_vertices : 0xffffffffu;
+  const uint64_t max_vertices =
+      options.max_vertices < 0xffffffffu ? options.max_vertices : 0xffffffffu;
   const uint64_t faces = h.face >= 0 ? h.elements[h.face].count : 0;
   if (ve.count > max_vertices) {
     arena.rewind(start);
@@ -582,7 +617,8 @@ Status read_ply_located(const Context& ctx, const ByteSource& source,
   bool overflow = false;
   for (uint32_t ei = 0; ei < h.element_count; ++ei) {
     uint64_t bytes = 0;
-    overflow = overflow || !checked_mul(h.elements[ei].count, min_record_bytes(h, h.elements[ei], binary), &bytes);
+    overflow = overflow || !checked_mul(h.elements[ei].count,
+                                        min_record_bytes(h, h.elements[ei], binary), &bytes);
     overflow = overflow || !checked_add(least, bytes, &least);
   }
   const uint64_t size = source.size;

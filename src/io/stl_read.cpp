@@ -190,8 +190,8 @@ struct Tokenizer {
             .at_byte(in->offset());
       }
       if (length == kMaxTokenBytes) {
-        return make_error(StatusCode::kParseError, "ASCII STL token longer than ",
-                          kMaxTokenBytes, " characters")
+        return make_error(StatusCode::kParseError, "ASCII STL token longer than ", kMaxTokenBytes,
+                          " characters")
             .at_line(token_line, token_column);
       }
       token[length++] = static_cast<char>(c);
@@ -262,8 +262,8 @@ struct Tokenizer {
   Status expect(const char* keyword) {
     SPLINTCORE_RETURN_IF_ERROR(next());
     if (is(keyword)) return Status::ok();
-    return error_here(length == 0 ? StatusCode::kTruncated : StatusCode::kParseError,
-                      "expected '", keyword, "'");
+    return error_here(length == 0 ? StatusCode::kTruncated : StatusCode::kParseError, "expected '",
+                      keyword, "'");
   }
 
   Status number(float* value) {
@@ -276,14 +276,12 @@ struct Tokenizer {
     // Only digits, sign, point and exponent: from_chars would also take "inf" and "nan".
     for (const char* p = first; p < last; ++p) {
       char c = *p;
-      bool ok = (c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.' || c == 'e' ||
-                c == 'E';
+      bool ok = (c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.' || c == 'e' || c == 'E';
       if (!ok) {
         bool named = (last - first >= 3) &&
-                     ((first[0] == 'n' || first[0] == 'N' || first[0] == 'i' ||
-                       first[0] == 'I') ||
-                      (first[0] == '-' && (first[1] == 'n' || first[1] == 'i' ||
-                                           first[1] == 'N' || first[1] == 'I')));
+                     ((first[0] == 'n' || first[0] == 'N' || first[0] == 'i' || first[0] == 'I') ||
+                      (first[0] == '-' &&
+                       (first[1] == 'n' || first[1] == 'i' || first[1] == 'N' || first[1] == 'I')));
         return error_here(named ? StatusCode::kNonFinite : StatusCode::kParseError,
                           named ? "non-finite number (NaN or infinity)" : "expected a number");
       }
@@ -311,12 +309,13 @@ Status read_ascii(const Context& ctx, Reader& in, const StlReadOptions& options,
     if (tok.is("endsolid")) {
       SPLINTCORE_RETURN_IF_ERROR(tok.rest_of_line(nullptr, 0));
       SPLINTCORE_RETURN_IF_ERROR(tok.next());
-      if (tok.length == 0) break;            // end of input
-      if (tok.is("solid")) {                 // several solids in one file: read them all
+      if (tok.length == 0) break;  // end of input
+      if (tok.is("solid")) {       // several solids in one file: read them all
         SPLINTCORE_RETURN_IF_ERROR(tok.rest_of_line(nullptr, 0));
         continue;
       }
-      return tok.error_here(StatusCode::kParseError, "expected 'solid' or the end after 'endsolid'");
+      return tok.error_here(StatusCode::kParseError,
+                            "expected 'solid' or the end after 'endsolid'");
     }
     if (!tok.is("facet")) {
       return tok.error_here(tok.length == 0 ? StatusCode::kTruncated : StatusCode::kParseError,

@@ -1,8 +1,8 @@
 // Streaming STL writer. Triangles are encoded into a fixed buffer and handed to the sink when
 // it fills, so a mesh never needs to exist whole. The bytes are a pure function of the
 // triangles given (see io.h for the rounding and normal rules).
-#include <charconv>
 #include <cfloat>
+#include <charconv>
 
 #include "splintcore/io.h"
 

@@ -142,10 +142,14 @@ struct Parser {
     for (int i = 0; i < 4; ++i) {
       char c = text[pos + static_cast<size_t>(i)];
       uint32_t d;
-      if (c >= '0' && c <= '9') d = static_cast<uint32_t>(c - '0');
-      else if (c >= 'a' && c <= 'f') d = static_cast<uint32_t>(c - 'a' + 10);
-      else if (c >= 'A' && c <= 'F') d = static_cast<uint32_t>(c - 'A' + 10);
-      else return false;
+      if (c >= '0' && c <= '9')
+        d = static_cast<uint32_t>(c - '0');
+      else if (c >= 'a' && c <= 'f')
+        d = static_cast<uint32_t>(c - 'a' + 10);
+      else if (c >= 'A' && c <= 'F')
+        d = static_cast<uint32_t>(c - 'A' + 10);
+      else
+        return false;
       v = v * 16 + d;
     }
     pos += 4;
@@ -200,24 +204,29 @@ struct Parser {
             put_utf8(cp);
             break;
           }
-          default:
-            return error_at(escape_at, "invalid escape");
+          default: return error_at(escape_at, "invalid escape");
         }
         continue;
       }
       // Raw UTF-8: validate the sequence (shortest form, no surrogates, <= U+10FFFF).
-      size_t n = c < 0x80 ? 1 : (c >= 0xc2 && c <= 0xdf) ? 2 : (c >= 0xe0 && c <= 0xef) ? 3
-                 : (c >= 0xf0 && c <= 0xf4) ? 4 : 0;
+      size_t n = c < 0x80                   ? 1
+                 : (c >= 0xc2 && c <= 0xdf) ? 2
+                 : (c >= 0xe0 && c <= 0xef) ? 3
+                 : (c >= 0xf0 && c <= 0xf4) ? 4
+                                            : 0;
       if (n == 0 || size - pos < n) return error("invalid UTF-8 in string");
       for (size_t k = 1; k < n; ++k) {
-        if ((static_cast<uint8_t>(text[pos + k]) & 0xc0) != 0x80) return error("invalid UTF-8 in string");
+        if ((static_cast<uint8_t>(text[pos + k]) & 0xc0) != 0x80)
+          return error("invalid UTF-8 in string");
       }
       if (n == 3) {
         uint8_t c1 = static_cast<uint8_t>(text[pos + 1]);
-        if ((c == 0xe0 && c1 < 0xa0) || (c == 0xed && c1 >= 0xa0)) return error("invalid UTF-8 in string");
+        if ((c == 0xe0 && c1 < 0xa0) || (c == 0xed && c1 >= 0xa0))
+          return error("invalid UTF-8 in string");
       } else if (n == 4) {
         uint8_t c1 = static_cast<uint8_t>(text[pos + 1]);
-        if ((c == 0xf0 && c1 < 0x90) || (c == 0xf4 && c1 >= 0x90)) return error("invalid UTF-8 in string");
+        if ((c == 0xf0 && c1 < 0x90) || (c == 0xf4 && c1 >= 0x90))
+          return error("invalid UTF-8 in string");
       }
       std::memcpy(pool + pool_used, text + pos, n);
       pool_used += n;
@@ -239,7 +248,8 @@ struct Parser {
     if (pos < size && text[pos] == '-') ++pos;
     if (pos < size && text[pos] == '0') {
       ++pos;
-      if (pos < size && text[pos] >= '0' && text[pos] <= '9') return error("leading zero in number");
+      if (pos < size && text[pos] >= '0' && text[pos] <= '9')
+        return error("leading zero in number");
     } else if (digits() == 0) {
       return error_found("a digit");
     }
@@ -351,8 +361,7 @@ struct Parser {
     const char c = text[pos];
     if (c == '{' || c == '[') {
       if (depth >= limits.max_depth) {
-        return make_error(StatusCode::kLimitExceeded, "JSON nesting deeper than ",
-                          limits.max_depth)
+        return make_error(StatusCode::kLimitExceeded, "JSON nesting deeper than ", limits.max_depth)
             .at_line(line, column())
             .in_file(name);
       }

@@ -47,12 +47,12 @@ namespace splintcore {
 
 namespace {
 
-constexpr uint32_t kArcSamples = 32;        // chords per pick interval in the arc table
-constexpr double kRayStart = 5.0;           // mm outside the wall's mid curve
-constexpr double kRayLength = 10.0;         // mm
-constexpr double kEngraveAbove = 1.0;       // mm the engraving solid reaches out of the wall
-constexpr double kEmbossBelow = 0.3;        // mm the embossed solid reaches into the wall
-constexpr double kGlyphClearance = 1e-3;    // mm between the boxes of two glyphs
+constexpr uint32_t kArcSamples = 32;      // chords per pick interval in the arc table
+constexpr double kRayStart = 5.0;         // mm outside the wall's mid curve
+constexpr double kRayLength = 10.0;       // mm
+constexpr double kEngraveAbove = 1.0;     // mm the engraving solid reaches out of the wall
+constexpr double kEmbossBelow = 0.3;      // mm the embossed solid reaches into the wall
+constexpr double kGlyphClearance = 1e-3;  // mm between the boxes of two glyphs
 constexpr double kEdgeMarginFraction = 1.0 / 16;
 constexpr uint64_t kMaxGlyphSamples = uint64_t{1} << 24;
 // Decimation keeps the glyphs within this fraction of a voxel of the extracted surface.
@@ -188,8 +188,8 @@ Status arch_frame(const Arch& arch, double s, Frame* f) {
   const Vec3 upv = wall - f->tangent * dot(wall, f->tangent);
   f->wall = length(upv);
   if (!(length_squared(f->tangent) > 0.0) || !(f->wall > 0.0)) {
-    return make_error(StatusCode::kInvalidArgument, "label: the outer wall is degenerate at ",
-                      s, " mm along the arch (pick interval ", i, ")")
+    return make_error(StatusCode::kInvalidArgument, "label: the outer wall is degenerate at ", s,
+                      " mm along the arch (pick interval ", i, ")")
         .at_index(i);
   }
   f->up = upv * (1.0 / f->wall);
@@ -208,10 +208,10 @@ struct Segment2 {
 };
 
 struct GlyphJob {
-  Vec3 origin{}, u{}, up{}, n{};     // the frame (origin: the wall point)
+  Vec3 origin{}, u{}, up{}, n{};  // the frame (origin: the wall point)
   uint32_t first_segment = 0, segment_count = 0;
-  VolumeGrid grid;                   // local coordinates (a, b, c)
-  Aabb local_box;                    // of the mesh's vertices (pass 1)
+  VolumeGrid grid;  // local coordinates (a, b, c)
+  Aabb local_box;   // of the mesh's vertices (pass 1)
   uint64_t vertices = 0, triangles = 0;
 };
 
@@ -293,8 +293,9 @@ Status char_error(const char* text, size_t index) {
   } else {
     e.append("byte ").append_u64(c);
   }
-  e.append(" at index ").append_u64(index).append(
-      " is not in the label font (it has A-Z, a-z, 0-9, space and - _ . / # + ( ) :)");
+  e.append(" at index ")
+      .append_u64(index)
+      .append(" is not in the label font (it has A-Z, a-z, 0-9, space and - _ . / # + ( ) :)");
   e.at_index(index);
   return e;
 }
@@ -308,9 +309,9 @@ Status check_options(const LabelOptions& o, double* voxel) {
   }
   if (!(is_finite(o.stroke_width_mm) && o.stroke_width_mm > 0.0 &&
         o.stroke_width_mm <= o.height_mm / 4)) {
-    return make_error(StatusCode::kInvalidArgument, "label: stroke width ", o.stroke_width_mm,
-                      " mm is out of range (above 0, at most a quarter of the height: ",
-                      o.height_mm / 4, " mm)");
+    return make_error(
+        StatusCode::kInvalidArgument, "label: stroke width ", o.stroke_width_mm,
+        " mm is out of range (above 0, at most a quarter of the height: ", o.height_mm / 4, " mm)");
   }
   if (!(is_finite(o.depth_mm) && o.depth_mm > 0.0 && o.depth_mm <= 5.0)) {
     return make_error(StatusCode::kInvalidArgument, "label: depth ", o.depth_mm,
@@ -383,8 +384,8 @@ Status build_glyphs(const Context& ctx, const Mesh& splint, Span<const Line> upp
   SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, splint, DistanceIndexOptions{}, &index));
   Arch arch;
   double sign = 1.0;
-  const double needed_wall = options.height_mm + options.stroke_width_mm +
-                             2 * options.wall_margin_mm;
+  const double needed_wall =
+      options.height_mm + options.stroke_width_mm + 2 * options.wall_margin_mm;
   Frame fixed;
   if (options.placement == LabelPlacement::kAutomatic) {
     SPLINTCORE_RETURN_IF_ERROR(prepare_arch(arena, upper, lower, &arch));
@@ -458,9 +459,8 @@ Status build_glyphs(const Context& ctx, const Mesh& splint, Span<const Line> upp
     RayHit hit;
     if (!ray_intersect(index, f.point + f.n * kRayStart, -f.n, kRayLength, &hit)) {
       return make_error(StatusCode::kInvalidArgument,
-                        "label: the text does not fit on the outer wall: the ray for character ",
-                        i, " meets no part of the splint within ", kRayStart,
-                        " mm of its centre")
+                        "label: the text does not fit on the outer wall: the ray for character ", i,
+                        " meets no part of the splint within ", kRayStart, " mm of its centre")
           .at_index(i);
     }
     job.origin = f.point + f.n * (kRayStart - hit.t);
@@ -624,8 +624,8 @@ Status build_glyphs(const Context& ctx, const Mesh& splint, Span<const Line> upp
       if (!boxes_apart(jobs[a], jobs[b], kGlyphClearance)) {
         const char ca[2] = {st->placements[a].character, '\0'};
         const char cb[2] = {st->placements[b].character, '\0'};
-        return make_error(StatusCode::kInvalidArgument, "label: glyphs ", a, " ('", ca,
-                          "') and ", b, " ('", cb,
+        return make_error(StatusCode::kInvalidArgument, "label: glyphs ", a, " ('", ca, "') and ",
+                          b, " ('", cb,
                           "') would touch; the wall bends too sharply for this text: use a "
                           "smaller height or stroke width")
             .at_index(a);
@@ -635,9 +635,9 @@ Status build_glyphs(const Context& ctx, const Mesh& splint, Span<const Line> upp
 
   // One mesh (vertices first), above the blocks; the caller moves it down over them.
   Vec3* vertices = arena.allocate_array<Vec3>(static_cast<size_t>(total_vertices));
-  Triangle* triangles =
-      vertices == nullptr ? nullptr
-                          : arena.allocate_array<Triangle>(static_cast<size_t>(total_triangles));
+  Triangle* triangles = vertices == nullptr
+                            ? nullptr
+                            : arena.allocate_array<Triangle>(static_cast<size_t>(total_triangles));
   if (vertices == nullptr || triangles == nullptr) return arena.exhausted_status();
   uint64_t v_at = 0, t_at = 0;
   for (uint32_t k = 0; k < job_count; ++k) {
@@ -749,8 +749,8 @@ Status apply_label(const Context& ctx, const Mesh& splint, Span<const Line> uppe
     // flat quads of the base's wall): the next attempt samples the glyphs elsewhere.
     if (s.code() != StatusCode::kUnsupported && s.code() != StatusCode::kInternal) {
       s = make_error(s.code(), "label: boolean (splint ",
-                     options.mode == LabelMode::kEngrave ? "minus" : "plus", " glyphs): ",
-                     s.message());
+                     options.mode == LabelMode::kEngrave ? "minus" : "plus",
+                     " glyphs): ", s.message());
       break;
     }
     s = make_error(s.code(), "label: boolean (splint ",

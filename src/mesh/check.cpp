@@ -161,9 +161,21 @@ void count_duplicates(const Mesh& mesh, KeyIndex* items, KeyIndex* scratch, Mesh
   const uint32_t tri_count = static_cast<uint32_t>(r->triangle_count);
   for (uint32_t t = 0; t < tri_count; ++t) {
     uint32_t a = tris[t].v[0], b = tris[t].v[1], c = tris[t].v[2];
-    if (a > b) { uint32_t s = a; a = b; b = s; }
-    if (b > c) { uint32_t s = b; b = c; c = s; }
-    if (a > b) { uint32_t s = a; a = b; b = s; }
+    if (a > b) {
+      uint32_t s = a;
+      a = b;
+      b = s;
+    }
+    if (b > c) {
+      uint32_t s = b;
+      b = c;
+      c = s;
+    }
+    if (a > b) {
+      uint32_t s = a;
+      a = b;
+      b = s;
+    }
     items[t] = KeyIndex{c, t, 0};
     scratch[t] = KeyIndex{(uint64_t{a} << 32) | b, t, 0};  // kept aside, looked up by t
   }
@@ -184,8 +196,7 @@ void count_duplicates(const Mesh& mesh, KeyIndex* items, KeyIndex* scratch, Mesh
   };
   bool have_dup = false;
   for (uint32_t u = 1; u < tri_count; ++u) {
-    if (items[u].key == items[u - 1].key &&
-        max_id(items[u].index) == max_id(items[u - 1].index)) {
+    if (items[u].key == items[u - 1].key && max_id(items[u].index) == max_id(items[u - 1].index)) {
       const uint32_t later =
           items[u].index > items[u - 1].index ? items[u].index : items[u - 1].index;
       if (!have_dup || later < r->first_duplicate_triangle) r->first_duplicate_triangle = later;
@@ -207,8 +218,8 @@ Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report) {
   r.vertex_count = nv;
   r.triangle_count = nt;
   if (nt > (uint64_t{UINT32_MAX} - 1) / 3 || nv > UINT32_MAX) {
-    return make_error(StatusCode::kLimitExceeded, "mesh too large to check: ", nt,
-                      " triangles, ", nv, " vertices (32-bit ids)");
+    return make_error(StatusCode::kLimitExceeded, "mesh too large to check: ", nt, " triangles, ",
+                      nv, " vertices (32-bit ids)");
   }
   const uint32_t tri_count = static_cast<uint32_t>(nt);
   // The allocations check_mesh_bound() counts, in its order.
@@ -249,25 +260,25 @@ Status require_valid_solid(const MeshReport& r) {
   }
   if (r.boundary_edges > 0) {
     return make_error(StatusCode::kInvalidMesh, "mesh is not closed: ", r.boundary_edges,
-                      " boundary edges, first between vertices ", r.first_boundary_edge.v0,
-                      " and ", r.first_boundary_edge.v1, " (triangle ",
-                      r.first_boundary_edge.triangle, ")")
+                      " boundary edges, first between vertices ", r.first_boundary_edge.v0, " and ",
+                      r.first_boundary_edge.v1, " (triangle ", r.first_boundary_edge.triangle, ")")
         .at_index(r.first_boundary_edge.triangle);
   }
   if (r.nonmanifold_edges > 0) {
-    return make_error(StatusCode::kInvalidMesh, "mesh is not edge-manifold: ",
-                      r.nonmanifold_edges, " edges shared by 3 or more triangles, first between "
-                      "vertices ", r.first_nonmanifold_edge.v0, " and ",
-                      r.first_nonmanifold_edge.v1, " (triangle ",
-                      r.first_nonmanifold_edge.triangle, ")")
+    return make_error(StatusCode::kInvalidMesh, "mesh is not edge-manifold: ", r.nonmanifold_edges,
+                      " edges shared by 3 or more triangles, first between "
+                      "vertices ",
+                      r.first_nonmanifold_edge.v0, " and ", r.first_nonmanifold_edge.v1,
+                      " (triangle ", r.first_nonmanifold_edge.triangle, ")")
         .at_index(r.first_nonmanifold_edge.triangle);
   }
   if (r.orientation_conflicts > 0) {
-    return make_error(StatusCode::kInvalidMesh, "mesh is not consistently oriented: ",
-                      r.orientation_conflicts, " edges used twice in the same direction, first "
-                      "between vertices ", r.first_orientation_conflict.v0, " and ",
-                      r.first_orientation_conflict.v1, " (triangle ",
-                      r.first_orientation_conflict.triangle, ")")
+    return make_error(StatusCode::kInvalidMesh,
+                      "mesh is not consistently oriented: ", r.orientation_conflicts,
+                      " edges used twice in the same direction, first "
+                      "between vertices ",
+                      r.first_orientation_conflict.v0, " and ", r.first_orientation_conflict.v1,
+                      " (triangle ", r.first_orientation_conflict.triangle, ")")
         .at_index(r.first_orientation_conflict.triangle);
   }
   if (r.degenerate_triangles > 0) {
@@ -314,8 +325,8 @@ Status check_closed_oriented(const Context& ctx, const Mesh& mesh, double* volum
   const uint64_t nv64 = mesh.vertices.size(), nt64 = mesh.triangles.size();
   if (nt64 == 0) return Status::error(StatusCode::kInvalidMesh, "mesh is empty");
   if (nv64 >= (uint64_t{1} << 31) || nt64 >= (uint64_t{1} << 31)) {
-    return make_error(StatusCode::kLimitExceeded, "mesh too large to check: ", nt64,
-                      " triangles, ", nv64, " vertices");
+    return make_error(StatusCode::kLimitExceeded, "mesh too large to check: ", nt64, " triangles, ",
+                      nv64, " vertices");
   }
   const uint32_t nv = static_cast<uint32_t>(nv64), nt = static_cast<uint32_t>(nt64);
   const Triangle* tris = mesh.triangles.data();
@@ -370,7 +381,7 @@ Status check_closed_oriented(const Context& ctx, const Mesh& mesh, double* volum
       const uint64_t forward = count & 0xffffffffu, uses = forward + (count >> 32);
       if (count != kOneEach || lo == hi) {
         const uint32_t t = static_cast<uint32_t>(half[i]);
-        const char* what = uses == 1 ? "not closed: a boundary edge"
+        const char* what = uses == 1  ? "not closed: a boundary edge"
                            : uses > 2 ? "not edge-manifold: an edge with 3 or more triangles"
                                       : (lo == hi ? "degenerate: a triangle repeats a vertex"
                                                   : "not consistently oriented: an edge used twice "

@@ -44,7 +44,9 @@ using Plane = PlaneFilter;
 constexpr double kPlaneFilter = kPlaneFilterBound;
 inline Plane plane_of(const Vec3& a, const Vec3& b, const Vec3& c) { return plane_filter(a, b, c); }
 enum Side : int { kBelow = -1, kOn = 0, kAbove = 1, kUnknown = 2 };
-inline Side side_of(const Plane& p, const Vec3& x) { return static_cast<Side>(filtered_side(p, x)); }
+inline Side side_of(const Plane& p, const Vec3& x) {
+  return static_cast<Side>(filtered_side(p, x));
+}
 
 // All strictly on one side (certain), all exactly on the plane, or neither.
 enum Spread { kSeparated, kCoplanar, kMixed };
@@ -151,13 +153,14 @@ bool folded_onto(int axis, const Vec3& a, const Vec3& b, const Vec3& c, const Ve
   if (axis < 0) return false;
   const P2 pa = drop(a, axis), pb = drop(b, axis), pc = drop(c, axis), pd = drop(d, axis);
   return sign_of(orient2d(pa.x, pa.y, pb.x, pb.y, pc.x, pc.y)) *
-             sign_of(orient2d(pa.x, pa.y, pb.x, pb.y, pd.x, pd.y)) > 0;
+             sign_of(orient2d(pa.x, pa.y, pb.x, pb.y, pd.x, pd.y)) >
+         0;
 }
 
 // Does the edge pq meet triangle abc (whose plane is pl)? `filters`: whether the 2D filter may
 // be used (its bound needs coordinates within the predicates' range).
-inline bool edge_meets(const Plane& pl, const Vec3& p, const Vec3& q, const Vec3& a,
-                       const Vec3& b, const Vec3& c, bool filters) {
+inline bool edge_meets(const Plane& pl, const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
+                       const Vec3& c, bool filters) {
   const Vec3 pts[2] = {p, q};
   switch (spread(pl, pts, 2)) {
     case kSeparated: return false;
@@ -171,8 +174,8 @@ inline bool edge_meets(const Plane& pl, const Vec3& p, const Vec3& q, const Vec3
 // Do triangles s and t conflict, given the vertex ids they share? The planes let the common
 // cases be decided by the filters; whatever they cannot decide goes to the exact tests.
 // `filters`: whether the 2D filter may be used too (coordinates within the range).
-bool conflict(const Vec3* v, const Triangle& s, const Triangle& t, const Plane& ps,
-              const Plane& pt, bool filters) {
+bool conflict(const Vec3* v, const Triangle& s, const Triangle& t, const Plane& ps, const Plane& pt,
+              bool filters) {
   int shared = 0;
   int s_at[3] = {-1, -1, -1};  // for each corner of s, the matching corner of t
   for (int i = 0; i < 3; ++i) {
@@ -221,10 +224,11 @@ bool conflict(const Vec3* v, const Triangle& s, const Triangle& t, const Plane& 
   return edge_meets(pt, s1, s2, d, e, f, filters) || edge_meets(ps, t1, t2, a, b, c, filters);
 }
 
-// ---- four and eight lanes ------------------------------------------------------------------------
-// GCC and Clang vector extensions (the library builds with either: see core.h's overflow
-// builtins), SSE2 on x86-64, NEON on AArch64. Every use is an exact integer comparison or bit
-// operation: the lanes give the same answers as scalar code would, on every platform.
+// ---- four and eight lanes
+// ------------------------------------------------------------------------ GCC and Clang vector
+// extensions (the library builds with either: see core.h's overflow builtins), SSE2 on x86-64, NEON
+// on AArch64. Every use is an exact integer comparison or bit operation: the lanes give the same
+// answers as scalar code would, on every platform.
 typedef int16_t Lanes8 __attribute__((vector_size(16)));
 typedef uint32_t Ids4 __attribute__((vector_size(16)));
 typedef int32_t Mask4 __attribute__((vector_size(16)));
@@ -263,10 +267,11 @@ inline int bit_count(uint32_t x) {  // (no popcount instruction in the x86-64 ba
   return static_cast<int>((((x + (x >> 4)) & 0x0f0f0f0fu) * 0x01010101u) >> 24);
 }
 
-// ---- bounding volumes ------------------------------------------------------------------------------
-// The 14-DOP: the extent of a triangle along the seven directions x, y, z, x + y + z,
-// x + y - z, x - y + z, -x + y + z, quantized to 16-bit integers so that one comparison of
-// eight lanes tests them all (the eighth lane is the same for every DOP and always overlaps).
+// ---- bounding volumes
+// ------------------------------------------------------------------------------ The 14-DOP: the
+// extent of a triangle along the seven directions x, y, z, x + y + z, x + y - z, x - y + z, -x + y
+// + z, quantized to 16-bit integers so that one comparison of eight lanes tests them all (the
+// eighth lane is the same for every DOP and always overlaps).
 //
 // Sound: if two triangles share a point q, then along each direction u their exact extents
 // both contain u . q, so the larger minimum is at most the smaller maximum. The computed
@@ -291,7 +296,7 @@ inline bool dops_overlap(const Dop& a, const Dop& b) {
 }
 
 inline Dop dop_union(const Dop& a, const Dop& b) {
-  const Lanes8 lo_less = b.lo < a.lo, hi_more = b.hi > a.hi;
+  const Lanes8 lo_less = b.lo<a.lo, hi_more = b.hi> a.hi;
   return Dop{(b.lo & lo_less) | (a.lo & ~lo_less), (b.hi & hi_more) | (a.hi & ~hi_more)};
 }
 
@@ -370,21 +375,21 @@ inline Dop triangle_dop(const Dop& a, const Dop& b, const Dop& c) {
 // a valid separating axis. When neither triangle's ready direction separates them, the others
 // (the normal and the other two edges') are tried, computed then.
 struct Item {
-  Triangle tri;       // (with the id: 16 bytes)
+  Triangle tri;  // (with the id: 16 bytes)
   uint32_t id;
-  uint32_t cleared;   // bit k: corner k's vertex has a cleared star (see below)
-  uint32_t longest;   // the longest edge: from corner `longest` to the next
-  double m[3];        // its in-plane normal
-  double lo, hi;      // the extent along m, widened
-  Vec3 n;             // (b - a) x (c - a)
-  Vec3 nabs;          // the magnitudes of its terms (see Plane)
+  uint32_t cleared;  // bit k: corner k's vertex has a cleared star (see below)
+  uint32_t longest;  // the longest edge: from corner `longest` to the next
+  double m[3];       // its in-plane normal
+  double lo, hi;     // the extent along m, widened
+  Vec3 n;            // (b - a) x (c - a)
+  Vec3 nabs;         // the magnitudes of its terms (see Plane)
 };
 
 // The extent of the triangle abc along m, widened (error: per unit of |m|_1, see above).
-inline void extent_along(const Vec3& m, const Vec3& a, const Vec3& b, const Vec3& c,
-                         double error, double* lo, double* hi) {
-  const double margin = 2.0 * error * (std::fabs(m.x) + std::fabs(m.y) + std::fabs(m.z)) +
-                        0x1p-1000;
+inline void extent_along(const Vec3& m, const Vec3& a, const Vec3& b, const Vec3& c, double error,
+                         double* lo, double* hi) {
+  const double margin =
+      2.0 * error * (std::fabs(m.x) + std::fabs(m.y) + std::fabs(m.z)) + 0x1p-1000;
   const double da = dot(m, a), db = dot(m, b), dc = dot(m, c);
   const double l = da < db ? da : db, h = da > db ? da : db;
   *lo = (l < dc ? l : dc) - margin;
@@ -419,8 +424,8 @@ inline bool beyond(const Vec3& m, double lo, double hi, const Vec3& p, const Vec
 
 // Are the corners p, q, r of another triangle certainly beyond the triangle of s (corners a,
 // b, c) along one of its directions other than the ready one?
-bool beyond_other_axes(const Item& s, const Vec3& a, const Vec3& b, const Vec3& c,
-                       const Vec3& p, const Vec3& q, const Vec3& r, double error) {
+bool beyond_other_axes(const Item& s, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& p,
+                       const Vec3& q, const Vec3& r, double error) {
   const Vec3 corner[3] = {a, b, c};
   double lo, hi;
   for (uint32_t k = 0; k < 3; ++k) {
@@ -439,8 +444,8 @@ inline uint32_t shared_corners(const Item& s, const Item& t) {
   Ids4 tv;  // t's three ids and its triangle id (masked off below)
   std::memcpy(&tv, &t.tri, sizeof(tv));
   const uint32_t s0 = s.tri.v[0], s1 = s.tri.v[1], s2 = s.tri.v[2];
-  const Mask4 eq = (tv == Ids4{s0, s0, s0, s0}) | (tv == Ids4{s1, s1, s1, s1}) |
-                   (tv == Ids4{s2, s2, s2, s2});
+  const Mask4 eq =
+      (tv == Ids4{s0, s0, s0, s0}) | (tv == Ids4{s1, s1, s1, s1}) | (tv == Ids4{s2, s2, s2, s2});
   return lane_bits(eq, Mask4{0, 0, 0, 0}) & 7u;
 }
 
@@ -518,8 +523,7 @@ inline uint32_t equal_lanes(const uint32_t* ids, uint32_t groups, uint32_t x) {
 
 // Is the star of vertex o (items `star`: every non-degenerate triangle using o) certainly
 // embedded?
-bool star_embedded(const Vec3* v, const Item* items, uint32_t o, const uint32_t* star,
-                   uint32_t k) {
+bool star_embedded(const Vec3* v, const Item* items, uint32_t o, const uint32_t* star, uint32_t k) {
   if (k < 3 || k > kMaxStar) return false;
   // Each triangle as (o, from, to), in its winding; the lanes past k hold o, which is
   // neither (the triangles are not degenerate).
@@ -562,11 +566,11 @@ bool star_embedded(const Vec3* v, const Item* items, uint32_t o, const uint32_t*
   return fan_turns_once(scaled_to_unit_max(d), items, star, e, k);
 }
 
-// ---- the hierarchy --------------------------------------------------------------------------------
-// Nodes in preorder (the left child of node i is i + 1) over ranges of the triangles in
-// Morton order, split where the highest differing Morton bit changes (Karras); leaves of at
-// most eight triangles, stored lane by lane so that one triangle is tested against a whole
-// leaf at once.
+// ---- the hierarchy
+// -------------------------------------------------------------------------------- Nodes in
+// preorder (the left child of node i is i + 1) over ranges of the triangles in Morton order, split
+// where the highest differing Morton bit changes (Karras); leaves of at most eight triangles,
+// stored lane by lane so that one triangle is tested against a whole leaf at once.
 constexpr uint32_t kLeafSize = 8;
 // Each split either takes one of the 30 bits of the Morton code or halves a range of equal
 // codes (at most 32 times for 2^32 triangles): the height stays below 64.
@@ -577,14 +581,14 @@ struct Node {
   uint32_t right;  // 0 for a leaf
   uint32_t begin;  // the items below: begin .. begin + count - 1
   uint32_t count;
-  uint32_t leaf;   // for a leaf
+  uint32_t leaf;  // for a leaf
 };
 
 // A leaf, lane j holding item first + j; empty lanes never overlap anything.
 struct alignas(16) Leaf {
   int16_t lo[kAxes][8];  // axis k of the eight triangles
   int16_t hi[kAxes][8];
-  uint32_t ids[3][8];    // corner k's vertex id
+  uint32_t ids[3][8];  // corner k's vertex id
   uint32_t first;
   uint32_t count;
 };
@@ -648,7 +652,8 @@ inline uint64_t spread_bits(uint32_t x) {
   return r;
 }
 
-// ---- the two passes ---------------------------------------------------------------------------------
+// ---- the two passes
+// ---------------------------------------------------------------------------------
 
 // The tally both passes keep.
 struct Tally {
@@ -722,7 +727,8 @@ Status sweep(const Context& ctx, const Vec3* v, const Triangle* tris, size_t nt,
   Dop* dops = filters ? arena.allocate_array<Dop>(nt) : nullptr;
   SweepBox* boxes = arena.allocate_array<SweepBox>(nt);
   if ((order == nullptr || scratch == nullptr || planes == nullptr || boxes == nullptr ||
-       (filters && dops == nullptr)) && nt > 0) {
+       (filters && dops == nullptr)) &&
+      nt > 0) {
     return arena.exhausted_status();
   }
   for (size_t t = 0; t < nt; ++t) {
@@ -784,8 +790,8 @@ Status sweep(const Context& ctx, const Vec3* v, const Triangle* tris, size_t nt,
 // The hierarchy pass: every pair of non-skipped triangles whose DOPs overlap, counted all, or
 // stopped (*stopped set) once tally->max_pairs is reached. Needs coordinates within the range
 // (radius >= 0), nv <= 3 nt (the memory bound) and nv < 2^32 - 1 (UINT32_MAX is no vertex id).
-Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triangle* tris,
-                      size_t nt, double radius, const Grid& grid, Tally* tally, bool* stopped) {
+Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triangle* tris, size_t nt,
+                      double radius, const Grid& grid, Tally* tally, bool* stopped) {
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
   *stopped = false;
@@ -851,8 +857,8 @@ Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triang
     // start[i] is now the end of vertex i's list, the start of vertex i + 1's.
     uint32_t begin = 0;
     for (size_t i = 0; i < nv; ++i) {
-      cleared[i] = star_embedded(v, items, static_cast<uint32_t>(i), list + begin,
-                                 start[i] - begin);
+      cleared[i] =
+          star_embedded(v, items, static_cast<uint32_t>(i), list + begin, start[i] - begin);
       begin = start[i];
     }
     for (uint32_t i = 0; i < kept; ++i) {
@@ -953,8 +959,7 @@ Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triang
     } else if ((shared & t.cleared) != 0) {
       return false;  // part of a cleared star
     }
-    if (!conflict(v, s.tri, t.tri, Plane{v[s0], s.n, s.nabs}, Plane{v[t0], t.n, t.nabs},
-                  true)) {
+    if (!conflict(v, s.tri, t.tri, Plane{v[s0], s.n, s.nabs}, Plane{v[t0], t.n, t.nabs}, true)) {
       return false;
     }
     return tally->add(s.id, t.id);
@@ -1044,8 +1049,8 @@ uint64_t find_self_intersections_bound(uint64_t triangle_count) {
   // The hierarchy pass: keys and scratch, the vertices' DOPs (at most 3n vertices), the items,
   // their DOPs, the nodes (at most 2n - 1), the leaves (at most n), then the star lists.
   const uint64_t stars = (3 * n + 1) * sizeof(uint32_t) + 3 * n * sizeof(uint32_t) + 3 * n;
-  const uint64_t tree = n * (2 * sizeof(uint64_t) + 3 * sizeof(Dop) + sizeof(Item) +
-                             sizeof(Dop) + 2 * sizeof(Node) + sizeof(Leaf)) +
+  const uint64_t tree = n * (2 * sizeof(uint64_t) + 3 * sizeof(Dop) + sizeof(Item) + sizeof(Dop) +
+                             2 * sizeof(Node) + sizeof(Leaf)) +
                         stars + 10 * 64;
   // The sweep: keys, planes, DOPs, boxes.
   const uint64_t sweep_bytes =

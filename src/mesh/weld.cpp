@@ -45,9 +45,8 @@ uint64_t table_size_for(uint64_t corners) {
 
 Status check_soup(Span<const SoupTriangle> soup) {
   if (soup.size() > (uint64_t{UINT32_MAX} - 1) / 3) {
-    return make_error(StatusCode::kLimitExceeded, "mesh has ", soup.size(),
-                      " triangles; at most ", (uint64_t{UINT32_MAX} - 1) / 3,
-                      " are supported (32-bit vertex ids)");
+    return make_error(StatusCode::kLimitExceeded, "mesh has ", soup.size(), " triangles; at most ",
+                      (uint64_t{UINT32_MAX} - 1) / 3, " are supported (32-bit vertex ids)");
   }
   for (size_t t = 0; t < soup.size(); ++t) {
     for (int k = 0; k < 3; ++k) {
@@ -65,8 +64,8 @@ Status check_soup(Span<const SoupTriangle> soup) {
 
 // Copies the `count` vertices at `source` into a fresh arena allocation made after rewinding to
 // `marker` (the temporaries between are dropped), and points `out` at it.
-Status compact_vertices(Arena& arena, const Arena::Marker& marker, const Vec3* source,
-                        size_t count, ArenaArray<Vec3>* out) {
+Status compact_vertices(Arena& arena, const Arena::Marker& marker, const Vec3* source, size_t count,
+                        ArenaArray<Vec3>* out) {
   arena.rewind(marker);
   Vec3* target = arena.allocate_array<Vec3>(count);
   if (target == nullptr && count > 0) return arena.exhausted_status();  // cannot happen: it fit
@@ -142,8 +141,8 @@ Status weld_exact_steps(const Context& ctx, Span<const SoupTriangle> soup, Mesh*
   return compact_vertices(arena, temp_start, positions, vertex_count, &out->vertices);
 }
 
-Status weld_tolerance_steps(const Context& ctx, Span<const SoupTriangle> soup,
-                            double tolerance, Mesh* out) {
+Status weld_tolerance_steps(const Context& ctx, Span<const SoupTriangle> soup, double tolerance,
+                            Mesh* out) {
   Arena& arena = *ctx.arena;
   if (!is_finite(tolerance) || !(tolerance > 0.0)) {
     return make_error(StatusCode::kInvalidArgument, "weld tolerance must be > 0 mm, got ",
@@ -204,7 +203,10 @@ Status weld_tolerance_steps(const Context& ctx, Span<const SoupTriangle> soup,
     uint32_t a = 0, b = corner_count;
     while (a < b) {
       uint32_t m = a + (b - a) / 2;
-      if (items[m].key < key) a = m + 1; else b = m;
+      if (items[m].key < key)
+        a = m + 1;
+      else
+        b = m;
     }
     *begin = a;
     uint32_t e = a;
@@ -213,10 +215,9 @@ Status weld_tolerance_steps(const Context& ctx, Span<const SoupTriangle> soup,
   };
   // For each cell run, compare with itself and the 13 neighbours that come after it in key
   // order (the other 13 see this cell as their forward neighbour).
-  static const int kForward[13][3] = {{1, -1, -1}, {1, -1, 0}, {1, -1, 1}, {1, 0, -1},
-                                      {1, 0, 0},   {1, 0, 1},  {1, 1, -1}, {1, 1, 0},
-                                      {1, 1, 1},   {0, 1, -1}, {0, 1, 0},  {0, 1, 1},
-                                      {0, 0, 1}};
+  static const int kForward[13][3] = {{1, -1, -1}, {1, -1, 0}, {1, -1, 1}, {1, 0, -1}, {1, 0, 0},
+                                      {1, 0, 1},   {1, 1, -1}, {1, 1, 0},  {1, 1, 1},  {0, 1, -1},
+                                      {0, 1, 0},   {0, 1, 1},  {0, 0, 1}};
   uint32_t run_begin = 0;
   while (run_begin < corner_count) {
     uint32_t run_end = run_begin;
@@ -230,10 +231,10 @@ Status weld_tolerance_steps(const Context& ctx, Span<const SoupTriangle> soup,
     // Two cells join when any pair across them is within tolerance; one pair is enough.
     for (const auto& d : kForward) {
       uint32_t nb = 0;
-      uint32_t ne = find_run(cell_key(cx + static_cast<uint64_t>(d[0]),
-                                      cy + static_cast<uint64_t>(d[1]),
-                                      cz + static_cast<uint64_t>(d[2])),
-                             &nb);
+      uint32_t ne =
+          find_run(cell_key(cx + static_cast<uint64_t>(d[0]), cy + static_cast<uint64_t>(d[1]),
+                            cz + static_cast<uint64_t>(d[2])),
+                   &nb);
       bool joined = false;
       for (uint32_t i = run_begin; i < run_end && !joined; ++i) {
         for (uint32_t j = nb; j < ne && !joined; ++j) {
@@ -309,8 +310,7 @@ Status weld_exact(const Context& ctx, Span<const SoupTriangle> soup, Mesh* out) 
 Status weld_tolerance(const Context& ctx, Span<const SoupTriangle> soup, double tolerance,
                       Mesh* out) {
   if (!out->vertices.empty() || !out->triangles.empty()) {
-    return Status::error(StatusCode::kInvalidArgument,
-                         "weld_tolerance: output mesh must be empty");
+    return Status::error(StatusCode::kInvalidArgument, "weld_tolerance: output mesh must be empty");
   }
   const Arena::Marker entry = ctx.arena->mark();
   const Mesh saved = *out;

@@ -91,8 +91,8 @@ Status AtomicFile::open(const char* path) {
     return make_error(StatusCode::kInvalidArgument, "output path is empty or too long");
   }
   std::memcpy(path_, path, n + 1);
-  std::snprintf(temp_path_, sizeof(temp_path_), "%s.tmp-%ld-%u", path,
-                static_cast<long>(getpid()), g_temp_counter.fetch_add(1));
+  std::snprintf(temp_path_, sizeof(temp_path_), "%s.tmp-%ld-%u", path, static_cast<long>(getpid()),
+                g_temp_counter.fetch_add(1));
   // O_EXCL: never write through a name something else already uses.
   int fd = ::open(temp_path_, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) return errno_error("cannot create temporary output file", temp_path_);
@@ -168,7 +168,9 @@ Status read_file(Arena& arena, const char* path, uint64_t max_bytes, Span<uint8_
     int64_t n = src.read(src.user, data + got, static_cast<size_t>(src.size - got));
     if (n < 0) return make_error(StatusCode::kIoError, "read failed").in_file(path).at_byte(got);
     if (n == 0) {
-      return make_error(StatusCode::kTruncated, "file shrank while reading").in_file(path).at_byte(got);
+      return make_error(StatusCode::kTruncated, "file shrank while reading")
+          .in_file(path)
+          .at_byte(got);
     }
     got += static_cast<uint64_t>(n);
   }

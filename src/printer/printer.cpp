@@ -47,14 +47,12 @@ Status check_printable(const Context& ctx, const Mesh& mesh, const PrinterProfil
   const Vec3 room{profile.build_volume_mm.x - 2 * margin, profile.build_volume_mm.y - 2 * margin,
                   profile.build_volume_mm.z};
   out->fits = !box.empty() && e.x <= room.x && e.y <= room.y && e.z <= room.z;
-  out->fits_rotated = !out->fits && !box.empty() && e.y <= room.x && e.x <= room.y &&
-                      e.z <= room.z;
+  out->fits_rotated = !out->fits && !box.empty() && e.y <= room.x && e.x <= room.y && e.z <= room.z;
   if (options.place_on_tray && !box.empty()) {
     // Centre on the tray in x and y, bottom on the tray (z = 0).
     Vec3 c = box.center();
-    out->placement = RigidTransform::translation(
-        Vec3{profile.build_volume_mm.x * 0.5 - c.x, profile.build_volume_mm.y * 0.5 - c.y,
-             -box.lo.z});
+    out->placement = RigidTransform::translation(Vec3{
+        profile.build_volume_mm.x * 0.5 - c.x, profile.build_volume_mm.y * 0.5 - c.y, -box.lo.z});
   }
   out->layers = layers_for(e.z, profile.layer_thickness_mm);
   const double longest = e.x > e.y ? (e.x > e.z ? e.x : e.z) : (e.y > e.z ? e.y : e.z);

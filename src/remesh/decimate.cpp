@@ -51,10 +51,17 @@ struct Quadric {
 };
 
 inline void add_to(Quadric* q, const Quadric& r) {
-  q->a00 += r.a00; q->a01 += r.a01; q->a02 += r.a02;
-  q->a11 += r.a11; q->a12 += r.a12; q->a22 += r.a22;
-  q->b0 += r.b0; q->b1 += r.b1; q->b2 += r.b2;
-  q->c += r.c; q->w += r.w;
+  q->a00 += r.a00;
+  q->a01 += r.a01;
+  q->a02 += r.a02;
+  q->a11 += r.a11;
+  q->a12 += r.a12;
+  q->a22 += r.a22;
+  q->b0 += r.b0;
+  q->b1 += r.b1;
+  q->b2 += r.b2;
+  q->c += r.c;
+  q->w += r.w;
 }
 
 inline Quadric sum_of(const Quadric& q, const Quadric& r) {
@@ -68,8 +75,8 @@ inline double evaluate(const Quadric& q, const Vec3& p) {
   const double ax = q.a00 * p.x + q.a01 * p.y + q.a02 * p.z;
   const double ay = q.a01 * p.x + q.a11 * p.y + q.a12 * p.z;
   const double az = q.a02 * p.x + q.a12 * p.y + q.a22 * p.z;
-  const double e = (p.x * ax + p.y * ay + p.z * az) + 2.0 * (q.b0 * p.x + q.b1 * p.y + q.b2 * p.z) +
-                   q.c;
+  const double e =
+      (p.x * ax + p.y * ay + p.z * az) + 2.0 * (q.b0 * p.x + q.b1 * p.y + q.b2 * p.z) + q.c;
   return e > 0.0 ? e : 0.0;
 }
 
@@ -381,8 +388,7 @@ uint64_t decimate_qem_bound(uint64_t vertex_count, uint64_t triangle_count) {
   if (!add_alloc(&first, triangle_count, sizeof(Face)) ||
       !add_alloc(&first, vertex_count, sizeof(VertexData)) || !add_alloc(&first, 3, 16) ||
       !add_alloc(&validation, vertex_count + 1, 4) || !add_alloc(&validation, half, 4) ||
-      !add_alloc(&rest, half / 2 + 8, sizeof(uint64_t)) ||
-      !add_alloc(&rest, vertex_count, 4) ||
+      !add_alloc(&rest, half / 2 + 8, sizeof(uint64_t)) || !add_alloc(&rest, vertex_count, 4) ||
       !add_alloc(&rest, triangle_count, sizeof(Triangle)) ||
       !add_alloc(&rest, vertex_count, sizeof(Vec3))) {
     return 0;
@@ -391,8 +397,8 @@ uint64_t decimate_qem_bound(uint64_t vertex_count, uint64_t triangle_count) {
   return total;
 }
 
-Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions& options,
-                    Mesh* out, DecimateStats* stats) {
+Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions& options, Mesh* out,
+                    DecimateStats* stats) {
   SPLINTCORE_ASSERT(ctx.arena != nullptr && out != nullptr);
   SPLINTCORE_ASSERT(out->vertices.arena() == ctx.arena && out->triangles.arena() == ctx.arena);
   if (!out->vertices.empty() || !out->triangles.empty()) {
@@ -516,9 +522,10 @@ Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions&
         ++steps;
       } while (e != h0 && steps <= degree);
       if (steps != degree) {
-        return fail(make_error(StatusCode::kInvalidMesh, "decimate_qem: mesh is not "
-                               "vertex-manifold: the triangles around vertex ", i,
-                               " form more than one fan (triangle ", h0 / 3, ")")
+        return fail(make_error(StatusCode::kInvalidMesh,
+                               "decimate_qem: mesh is not "
+                               "vertex-manifold: the triangles around vertex ",
+                               i, " form more than one fan (triangle ", h0 / 3, ")")
                         .at_index(h0 / 3));
       }
     }
@@ -561,10 +568,17 @@ Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions&
     const double area = 0.5 * len;
     const Vec3 un{n.x / len, n.y / len, n.z / len};
     const double off = -dot(un, a);
-    const Quadric q{area * un.x * un.x, area * un.x * un.y, area * un.x * un.z,
-                    area * un.y * un.y, area * un.y * un.z, area * un.z * un.z,
-                    area * un.x * off,  area * un.y * off,  area * un.z * off,
-                    area * off * off,   area};
+    const Quadric q{area * un.x * un.x,
+                    area * un.x * un.y,
+                    area * un.x * un.z,
+                    area * un.y * un.y,
+                    area * un.y * un.z,
+                    area * un.z * un.z,
+                    area * un.x * off,
+                    area * un.y * off,
+                    area * un.z * off,
+                    area * off * off,
+                    area};
     for (uint32_t k : d.tri[t].v) add_to(&d.vx[k].quadric, q);
   }
   // Every edge in the heap (by its smaller half-edge), then heapified.

@@ -29,8 +29,8 @@ bool add_alloc(uint64_t* total, uint64_t count, uint64_t size) {
 struct StepJob {
   const uint32_t* offsets;
   const uint32_t* neighbours;
-  const uint8_t* fixed;     // boundary vertices that must not move (nullptr: none)
-  const Vec3* original;     // positions before smoothing (nullptr: no clamp)
+  const uint8_t* fixed;  // boundary vertices that must not move (nullptr: none)
+  const Vec3* original;  // positions before smoothing (nullptr: no clamp)
   const Vec3* from;
   Vec3* to;
   double factor;
@@ -202,8 +202,16 @@ Status taubin_smooth(const Context& ctx, Mesh* mesh, const TaubinOptions& option
   if (original != nullptr) std::memcpy(static_cast<void*>(original), verts, nv * sizeof(Vec3));
   std::memset(clamped, 0, blocks * sizeof(uint64_t));
 
-  StepJob job{offsets, neighbours, options.fix_boundary ? fixed : nullptr, original, verts,
-              buffer, options.lambda, options.max_displacement, nv, clamped};
+  StepJob job{offsets,
+              neighbours,
+              options.fix_boundary ? fixed : nullptr,
+              original,
+              verts,
+              buffer,
+              options.lambda,
+              options.max_displacement,
+              nv,
+              clamped};
   for (uint32_t it = 0; it < options.iterations; ++it) {
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "taubin smooth", it, options.iterations));
     job.from = verts;

@@ -28,7 +28,7 @@ struct CrcTable {
 };
 constexpr CrcTable kCrc;
 
-constexpr size_t kOutCapacity = 65536;   // bytes of one IDAT chunk's data
+constexpr size_t kOutCapacity = 65536;  // bytes of one IDAT chunk's data
 constexpr uint32_t kHashBits = 16;
 constexpr uint32_t kWindow = 32768;
 constexpr uint32_t kMaxChain = 64;
@@ -40,8 +40,8 @@ const uint16_t kLengthBase[29] = {3,  4,  5,  6,  7,  8,  9,  10, 11,  13,  15, 
                                   31, 35, 43, 51, 59, 67, 83, 99, 115, 131, 163, 195, 227, 258};
 const uint8_t kLengthExtra[29] = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2,
                                   2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0};
-const uint16_t kDistBase[30] = {1,    2,    3,    4,    5,    7,     9,     13,    17,  25,
-                                33,   49,   65,   97,   129,  193,   257,   385,   513, 769,
+const uint16_t kDistBase[30] = {1,    2,    3,    4,    5,    7,    9,    13,    17,    25,
+                                33,   49,   65,   97,   129,  193,  257,  385,   513,   769,
                                 1025, 1537, 2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577};
 const uint8_t kDistExtra[30] = {0, 0, 0, 0, 1, 1, 2, 2,  3,  3,  4,  4,  5,  5,  6,
                                 6, 7, 7, 8, 8, 9, 9, 10, 10, 11, 11, 12, 12, 13, 13};
@@ -171,8 +171,7 @@ uint32_t hash3(const uint8_t* p) {
 }
 
 // One fixed-Huffman block holding the whole stream (deflate puts no limit on a block's size).
-Status deflate_fixed(const uint8_t* data, size_t size, int32_t* head, int32_t* prev,
-                     BitWriter& w) {
+Status deflate_fixed(const uint8_t* data, size_t size, int32_t* head, int32_t* prev, BitWriter& w) {
   FixedCodes codes;
   make_fixed_codes(&codes);
   for (size_t i = 0; i < (size_t{1} << kHashBits); ++i) head[i] = -1;
@@ -298,8 +297,10 @@ uint64_t png_bound(uint32_t width, uint32_t height) {
     return UINT64_MAX;
   }
   uint64_t total = 0;
-  if (!checked_add(rows, 16 + (uint64_t{1} << kHashBits) * 4 + uint64_t{kWindow} * 4 + 32 +
-                             kOutCapacity + 16, &total)) {
+  if (!checked_add(
+          rows,
+          16 + (uint64_t{1} << kHashBits) * 4 + uint64_t{kWindow} * 4 + 32 + kOutCapacity + 16,
+          &total)) {
     return UINT64_MAX;
   }
   return total;
@@ -319,8 +320,8 @@ Status write_png(const Context& ctx, const RenderImage& image, const ByteSink& s
   const size_t stride = row_bytes + 1;
   const size_t size = stride * h;  // <= 8192 * 24577: no overflow
   uint8_t* filtered = arena.allocate_array<uint8_t>(size);
-  int32_t* head = filtered != nullptr ? arena.allocate_array<int32_t>(size_t{1} << kHashBits)
-                                      : nullptr;
+  int32_t* head =
+      filtered != nullptr ? arena.allocate_array<int32_t>(size_t{1} << kHashBits) : nullptr;
   int32_t* prev = head != nullptr ? arena.allocate_array<int32_t>(kWindow) : nullptr;
   uint8_t* out = prev != nullptr ? arena.allocate_array<uint8_t>(kOutCapacity) : nullptr;
   if (out == nullptr) return arena.exhausted_status();
@@ -358,8 +359,8 @@ Status write_png(const Context& ctx, const RenderImage& image, const ByteSink& s
   ihdr[12] = 0;  // no interlace
   SPLINTCORE_RETURN_IF_ERROR(write_chunk(sink, "IHDR", ihdr, sizeof(ihdr)));
   static const char kText[] = "Software\0splintcore";
-  SPLINTCORE_RETURN_IF_ERROR(write_chunk(sink, "tEXt", reinterpret_cast<const uint8_t*>(kText),
-                                         sizeof(kText) - 1));
+  SPLINTCORE_RETURN_IF_ERROR(
+      write_chunk(sink, "tEXt", reinterpret_cast<const uint8_t*>(kText), sizeof(kText) - 1));
 
   BitWriter bits(sink, out);
   SPLINTCORE_RETURN_IF_ERROR(bits.put(0x78, 8));  // CMF: deflate, 32 KiB window

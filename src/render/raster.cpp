@@ -23,7 +23,7 @@ namespace {
 constexpr int64_t kSubpixel = 256;  // fixed-point grid: 1/256 pixel
 constexpr double kAmbient = 0.3;
 constexpr double kDiffuse = 0.7;
-constexpr double kMargin = 0.9;     // the scene fills 90% of a tile's shorter fit
+constexpr double kMargin = 0.9;  // the scene fills 90% of a tile's shorter fit
 constexpr float kFarDepth = 3.0e38f;
 
 struct Basis {
@@ -37,8 +37,7 @@ Basis view_basis(RenderView view) {
     case RenderView::kTop: return {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
     case RenderView::kRight: return {{0, 1, 0}, {0, 0, 1}, {1, 0, 0}};
     case RenderView::kIso:
-    default:
-      return {{-s2, s2, 0}, {-s6, -s6, 2 * s6}, {s3, s3, s3}};
+    default: return {{-s2, s2, 0}, {-s6, -s6, 2 * s6}, {s3, s3, s3}};
   }
 }
 
@@ -76,8 +75,8 @@ int64_t floor_div(int64_t a, int64_t b) {  // b > 0
 struct View {
   Basis basis;
   Vec3 light;
-  double centre_u = 0, centre_v = 0;  // the scene's projected box centre (mm)
-  double pixel_x = 0, pixel_y = 0;    // the tile's centre (pixels, image coordinates)
+  double centre_u = 0, centre_v = 0;       // the scene's projected box centre (mm)
+  double pixel_x = 0, pixel_y = 0;         // the tile's centre (pixels, image coordinates)
   int64_t x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // tile pixels [x0, x1) x [y0, y1)
 };
 
@@ -312,7 +311,8 @@ Status validate(Span<const RenderMesh> meshes, const RenderOptions& o) {
     for (size_t v = 0; v < vertex_count; ++v) {
       if (!is_finite(mesh.vertices[v])) {
         return make_error(StatusCode::kNonFinite, "render mesh ", m, ": vertex ", v,
-                          " is not finite").at_index(v);
+                          " is not finite")
+            .at_index(v);
       }
     }
     for (size_t t = 0; t < mesh.triangles.size(); ++t) {
@@ -320,20 +320,21 @@ Status validate(Span<const RenderMesh> meshes, const RenderOptions& o) {
       for (int k = 0; k < 3; ++k) {
         if (tri.v[k] >= vertex_count) {
           return make_error(StatusCode::kInvalidMesh, "render mesh ", m, ": triangle ", t,
-                            " names vertex ", tri.v[k], " of ", vertex_count).at_index(t);
+                            " names vertex ", tri.v[k], " of ", vertex_count)
+              .at_index(t);
         }
       }
     }
     if (item.scalars != nullptr) {
       if (!is_finite(item.scalar_max) || !(item.scalar_max > 0)) {
         return make_error(StatusCode::kInvalidArgument, "render mesh ", m,
-                          ": the scalar range must be a finite number > 0, got ",
-                          item.scalar_max);
+                          ": the scalar range must be a finite number > 0, got ", item.scalar_max);
       }
       for (size_t v = 0; v < vertex_count; ++v) {
         if (!is_finite(item.scalars[v])) {
-          return make_error(StatusCode::kNonFinite, "render mesh ", m, ": the scalar of vertex ",
-                            v, " is not finite").at_index(v);
+          return make_error(StatusCode::kNonFinite, "render mesh ", m, ": the scalar of vertex ", v,
+                            " is not finite")
+              .at_index(v);
         }
       }
     }
@@ -386,8 +387,8 @@ void render_ramp_colour(double value, double max, uint8_t rgb[3]) {
   }
 }
 
-uint64_t render_bound(uint32_t width, uint32_t height, uint64_t total_vertices,
-                      uint32_t mesh_count, uint32_t view_count) {
+uint64_t render_bound(uint32_t width, uint32_t height, uint64_t total_vertices, uint32_t mesh_count,
+                      uint32_t view_count) {
   uint64_t pixels = 0, total = 0, part = 0;
   if (!checked_mul(width, height, &pixels)) return UINT64_MAX;
   // Image 3, depth 4, translucent depth 4, colour 3 and weight 1: 15 bytes a pixel, five
@@ -607,8 +608,8 @@ Status render_meshes(const Context& ctx, Span<const RenderMesh> meshes,
     const size_t vertex_count = meshes[m].mesh->vertices.size();
     uint64_t projections = 0;
     if (!checked_mul(vertex_count, view_count, &projections) || projections > SIZE_MAX) {
-      return make_error(StatusCode::kArenaExhausted, "render: ", vertex_count,
-                        " vertices in ", view_count, " views do not fit in memory");
+      return make_error(StatusCode::kArenaExhausted, "render: ", vertex_count, " vertices in ",
+                        view_count, " views do not fit in memory");
     }
     if (projections > 0) {
       job.projected = arena.allocate_array<Projected>(static_cast<size_t>(projections));

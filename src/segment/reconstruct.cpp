@@ -19,8 +19,8 @@ struct RegionField {
   const CtVolume* volume = nullptr;
   const uint8_t* labels = nullptr;
   uint8_t label = 0;
-  float centre = 0.0f;          // lo - 0.5: exact in float (|lo| < 2^23)
-  uint32_t lo[3] = {0, 0, 0};   // the box's first voxel
+  float centre = 0.0f;         // lo - 0.5: exact in float (|lo| < 2^23)
+  uint32_t lo[3] = {0, 0, 0};  // the box's first voxel
   uint32_t size[3] = {0, 0, 0};
 
   static Status fill(void* user, uint32_t z_begin, uint32_t z_end, Span<float> out) {
@@ -68,8 +68,8 @@ Status reconstruct_region(const Context& ctx, const CtVolume& volume, const Labe
   const uint8_t label = options.label;
   if (label == 0 || label > kMaxRegionLabel) {
     return make_error(StatusCode::kInvalidArgument, "reconstruct: label ",
-                      static_cast<uint32_t>(label), " is not a region label (1..",
-                      kMaxRegionLabel, ")");
+                      static_cast<uint32_t>(label), " is not a region label (1..", kMaxRegionLabel,
+                      ")");
   }
   if (labels.labels == nullptr || volume.hu == nullptr || labels.nx != volume.nx ||
       labels.ny != volume.ny || labels.nz != volume.nz || volume.voxel_count() == 0) {

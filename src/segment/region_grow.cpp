@@ -43,8 +43,8 @@ Status grow_regions(const Context& ctx, const CtVolume& volume, Span<const Regio
   if (labels == nullptr || labels->labels == nullptr || labels->nx != volume.nx ||
       labels->ny != volume.ny || labels->nz != volume.nz || volume.voxel_count() == 0) {
     return make_error(StatusCode::kInvalidArgument,
-                      "region growing: the label volume does not match the CT volume (",
-                      volume.nx, " x ", volume.ny, " x ", volume.nz, ")");
+                      "region growing: the label volume does not match the CT volume (", volume.nx,
+                      " x ", volume.ny, " x ", volume.nz, ")");
   }
   if (seeds.empty()) {
     return make_error(StatusCode::kInvalidArgument, "region growing needs at least one seed");
@@ -72,8 +72,7 @@ Status grow_regions(const Context& ctx, const CtVolume& volume, Span<const Regio
         pl.label_negative == 0 || pl.label_positive > kMaxRegionLabel ||
         pl.label_negative > kMaxRegionLabel) {
       return make_error(StatusCode::kInvalidArgument,
-                        "split plane: its two labels must differ and lie in 1..",
-                        kMaxRegionLabel);
+                        "split plane: its two labels must differ and lie in 1..", kMaxRegionLabel);
     }
     side.enabled = true;
     side.plane = pl;
@@ -96,8 +95,7 @@ Status grow_regions(const Context& ctx, const CtVolume& volume, Span<const Regio
   for (size_t s = 0; s < seeds.size(); ++s) {
     if (seeds[s].label == 0 || seeds[s].label > kMaxRegionLabel) {
       return make_error(StatusCode::kInvalidArgument, "seed ", s, " has label ",
-                        static_cast<uint32_t>(seeds[s].label), "; labels are 1..",
-                        kMaxRegionLabel)
+                        static_cast<uint32_t>(seeds[s].label), "; labels are 1..", kMaxRegionLabel)
           .at_index(s);
     }
   }
@@ -136,8 +134,7 @@ Status grow_regions(const Context& ctx, const CtVolume& volume, Span<const Regio
       if (now != kLabelUnclaimed) {
         return make_error(StatusCode::kInvalidArgument, "seed ", s, " (label ",
                           static_cast<uint32_t>(label), ") at voxel (", i, ", ", j, ", ", k,
-                          ") is in the same voxel as a seed of label ",
-                          static_cast<uint32_t>(now))
+                          ") is in the same voxel as a seed of label ", static_cast<uint32_t>(now))
             .at_index(s);
       }
       if (!side.allows(volume, label, i, j, k)) {

@@ -105,9 +105,9 @@ Status seed_voxel(const CtVolume& volume, const RegionSeed& seed, uint32_t* i, u
     const uint32_t c[3] = {seed.i, seed.j, seed.k};
     for (int a = 0; a < 3; ++a) {
       if (c[a] >= n[a]) {
-        return make_error(StatusCode::kInvalidArgument, "seed voxel (", seed.i, ", ", seed.j,
-                          ", ", seed.k, ") is outside the volume of ", volume.nx, " x ",
-                          volume.ny, " x ", volume.nz, " voxels");
+        return make_error(StatusCode::kInvalidArgument, "seed voxel (", seed.i, ", ", seed.j, ", ",
+                          seed.k, ") is outside the volume of ", volume.nx, " x ", volume.ny, " x ",
+                          volume.nz, " voxels");
       }
     }
     *i = seed.i;

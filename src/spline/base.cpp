@@ -21,7 +21,7 @@ namespace splintcore {
 
 namespace {
 
-constexpr uint32_t kArcSamples = 32;   // arc-length table resolution per pick interval
+constexpr uint32_t kArcSamples = 32;  // arc-length table resolution per pick interval
 constexpr uint64_t kMaxSections = 1u << 20;
 
 bool finite_vec(const Vec3& v) { return is_finite(v); }
@@ -41,8 +41,7 @@ Status pick_error(const char* list, size_t index, const char* what) {
 
 // The four curves of the base, in section order.
 enum Curve { kUpperInner = 0, kUpperOutside = 1, kLowerOutside = 2, kLowerInner = 3 };
-const char* const kCurveNames[4] = {"upper inner", "upper outside", "lower outside",
-                                    "lower inner"};
+const char* const kCurveNames[4] = {"upper inner", "upper outside", "lower outside", "lower inner"};
 
 const Vec3& line_end(Span<const Line> upper, Span<const Line> lower, int curve, size_t i) {
   switch (curve) {
@@ -103,8 +102,8 @@ Status round_corner(const Vec3& prev, const Vec3& q, const Vec3& next, double ra
   const double tangent_distance = radius * std::sqrt((1.0 + c) / (1.0 - c));
   if (tangent_distance > 0.5 * lp || tangent_distance > 0.5 * ln) {
     return make_error(StatusCode::kInvalidArgument, "corner radius ", radius,
-                      " mm is too large for section ", section, " (corner ", corner,
-                      " would need ", tangent_distance, " mm of each side)");
+                      " mm is too large for section ", section, " (corner ", corner, " would need ",
+                      tangent_distance, " mm of each side)");
   }
   const double center_distance = radius / std::sqrt((1.0 - c) * 0.5);
   const Vec3 center = q + normalized(u + w) * center_distance;
@@ -125,7 +124,6 @@ Vec3 polygon_normal(const Vec3* p, uint32_t n) {
   for (uint32_t i = 0; i < n; ++i) sum = sum + cross(p[i], p[(i + 1) % n]);
   return sum;
 }
-
 
 }  // namespace
 
@@ -169,7 +167,8 @@ Status make_lines_steps(const Context& ctx, Span<const Pick> picks, const Vec3& 
     const Vec3& b = picks[i + 1 < n ? i + 1 : n - 1].position;
     return normalized(in_plane(cross(b - a, o), o));
   };
-  for (size_t i = 0; i < n; ++i) side += dot(perpendicular(i), in_plane(picks[i].position - centroid, o));
+  for (size_t i = 0; i < n; ++i)
+    side += dot(perpendicular(i), in_plane(picks[i].position - centroid, o));
   const double sign = side < 0.0 ? -1.0 : 1.0;
 
   if (!out->reserve(out->size() + n)) return ctx.arena->exhausted_status();
@@ -182,15 +181,17 @@ Status make_lines_steps(const Context& ctx, Span<const Pick> picks, const Vec3& 
     } else if (length(p.normal) > 0.0) {
       const Vec3 projected = in_plane(normalized(p.normal), o);
       if (!(length(projected) > 1e-6)) {
-        return pick_error(list_name, i, "normal is parallel to the occlusal normal: no direction "
-                                        "in the occlusal plane (give \"direction\")");
+        return pick_error(list_name, i,
+                          "normal is parallel to the occlusal normal: no direction "
+                          "in the occlusal plane (give \"direction\")");
       }
       d = normalized(projected);
       if (dot(d, outward) < 0.0) d = -d;
     } else {
       if (!(length(outward) > 0.0)) {
-        return pick_error(list_name, i, "no direction: the arch tangent is along the occlusal "
-                                        "normal (give \"direction\" or \"normal\")");
+        return pick_error(list_name, i,
+                          "no direction: the arch tangent is along the occlusal "
+                          "normal (give \"direction\" or \"normal\")");
       }
       d = outward;
     }
@@ -236,14 +237,17 @@ Status build_base_steps(const Context& ctx, Span<const Line> upper, Span<const L
   const size_t n = upper.size();
   if (n != lower.size()) {
     return make_error(StatusCode::kInvalidArgument, "upper and lower lists do not pair up: ", n,
-                      " upper picks, ", lower.size(), " lower picks (the i-th upper pick pairs "
+                      " upper picks, ", lower.size(),
+                      " lower picks (the i-th upper pick pairs "
                       "with the i-th lower pick)");
   }
   if (n < 2) {
-    return make_error(StatusCode::kInvalidArgument, "the base needs at least 2 picks per list, got ", n);
+    return make_error(StatusCode::kInvalidArgument,
+                      "the base needs at least 2 picks per list, got ", n);
   }
   if (!is_finite(params.spacing_mm) || !(params.spacing_mm > 0.0)) {
-    return make_error(StatusCode::kInvalidArgument, "spacing must be > 0 mm, got ", params.spacing_mm);
+    return make_error(StatusCode::kInvalidArgument, "spacing must be > 0 mm, got ",
+                      params.spacing_mm);
   }
   const double radius = params.corner_radius_mm;
   const uint32_t segs = params.corner_segments;
@@ -251,18 +255,20 @@ Status build_base_steps(const Context& ctx, Span<const Line> upper, Span<const L
     return make_error(StatusCode::kInvalidArgument, "corner radius must be >= 0 mm, got ", radius);
   }
   if (radius > 0.0 && (segs == 0 || segs > 16 || (segs & (segs - 1)) != 0)) {
-    return make_error(StatusCode::kInvalidArgument, "corner segments must be 1, 2, 4, 8 or 16, got ",
-                      segs);
+    return make_error(StatusCode::kInvalidArgument,
+                      "corner segments must be 1, 2, 4, 8 or 16, got ", segs);
   }
   for (size_t i = 0; i < n; ++i) {
     for (int c = 0; c < 4; ++c) {
       if (!finite_vec(line_end(upper, lower, c, i))) {
         return make_error(StatusCode::kInvalidArgument, kCurveNames[c], " end of pick ", i,
-                          " is not finite").at_index(i);
+                          " is not finite")
+            .at_index(i);
       }
       if (i + 1 < n && line_end(upper, lower, c, i) == line_end(upper, lower, c, i + 1)) {
         return make_error(StatusCode::kInvalidArgument, kCurveNames[c], " ends of picks ", i,
-                          " and ", i + 1, " coincide").at_index(i);
+                          " and ", i + 1, " coincide")
+            .at_index(i);
       }
     }
   }
@@ -348,7 +354,8 @@ Status build_base_steps(const Context& ctx, Span<const Line> upper, Span<const L
     const Vec3 normal = polygon_normal(q, 4);
     const Vec3* qa = corners + 4 * size_t{k > 0 ? k - 1 : k};
     const Vec3* qb = corners + 4 * size_t{k + 1 < S ? k + 1 : k};
-    const Vec3 tangent = (qb[0] + qb[1] + qb[2] + qb[3]) * 0.25 - (qa[0] + qa[1] + qa[2] + qa[3]) * 0.25;
+    const Vec3 tangent =
+        (qb[0] + qb[1] + qb[2] + qb[3]) * 0.25 - (qa[0] + qa[1] + qa[2] + qa[3]) * 0.25;
     const double turn = dot(normal, tangent);
     const double scale = length(normal) * length(tangent);
     if (!(scale > 0.0) || !(turn > 1e-9 * scale || turn < -1e-9 * scale)) {
@@ -376,9 +383,9 @@ Status build_base_steps(const Context& ctx, Span<const Line> upper, Span<const L
     Vec3* sec = verts + size_t{k} * P;
     for (int c = 0; c < 4; ++c) {
       if (radius > 0.0) {
-        SPLINTCORE_RETURN_IF_ERROR(round_corner(q[(c + 3) % 4], q[c], q[(c + 1) % 4], radius,
-                                                segs, sec + static_cast<size_t>(c) * corner_points,
-                                                k, c));
+        SPLINTCORE_RETURN_IF_ERROR(round_corner(q[(c + 3) % 4], q[c], q[(c + 1) % 4], radius, segs,
+                                                sec + static_cast<size_t>(c) * corner_points, k,
+                                                c));
       } else {
         sec[c] = q[c];
       }
@@ -439,12 +446,15 @@ Status build_base_steps(const Context& ctx, Span<const Line> upper, Span<const L
     if (valid.code() == StatusCode::kArenaExhausted) return valid;
     if (!valid.is_ok()) {
       const uint64_t bad = valid.index();
-      Status s = make_error(StatusCode::kInvalidArgument, "splint base is not a valid solid: ",
-                            valid.message());
+      Status s = make_error(StatusCode::kInvalidArgument,
+                            "splint base is not a valid solid: ", valid.message());
       if (bad != kNoPosition && bad < 2 * uint64_t{S - 1} * P) {
         const uint32_t k = static_cast<uint32_t>(bad / (2 * P));
-        s.append(" (between picks ").append_u64(interval_of[k]).append(" and ")
-            .append_u64(interval_of[k] + 1).append(")");
+        s.append(" (between picks ")
+            .append_u64(interval_of[k])
+            .append(" and ")
+            .append_u64(interval_of[k] + 1)
+            .append(")");
         s.at_index(interval_of[k]);
       }
       return s;
@@ -480,7 +490,8 @@ Status build_splint_base(const Context& ctx, Span<const Line> upper, Span<const 
                          const BaseParams& params, Mesh* out, BaseReport* report) {
   *report = BaseReport{};
   if (!out->vertices.empty() || !out->triangles.empty()) {
-    return Status::error(StatusCode::kInvalidArgument, "build_splint_base: output mesh must be empty");
+    return Status::error(StatusCode::kInvalidArgument,
+                         "build_splint_base: output mesh must be empty");
   }
   // On an error nothing stays: the arena back at its top at entry, `out` empty.
   const Arena::Marker entry = ctx.arena->mark();

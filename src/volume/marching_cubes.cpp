@@ -265,13 +265,13 @@ struct Sweep {
   double iso = 0;
   double margin = kEdgeMargin;
   const MarchingCubesVisitor* visitor = nullptr;
-  uint64_t words = 0;            // bit words per row
-  PlaneBits lo_bits, hi_bits;    // sample planes cz and cz + 1 of the current cells
+  uint64_t words = 0;          // bit words per row
+  PlaneBits lo_bits, hi_bits;  // sample planes cz and cz + 1 of the current cells
   EdgeSet plane_lo, plane_hi, upward;
   uint64_t* spare_prefix = nullptr;  // the prefix buffer the next plane set takes
-  uint32_t* pool = nullptr;      // vertex ids of the crossed edges of the three sets
+  uint32_t* pool = nullptr;          // vertex ids of the crossed edges of the three sets
   uint64_t pool_size = 0;
-  uint64_t pool_next = 0;        // where the next set is placed
+  uint64_t pool_next = 0;  // where the next set is placed
   uint64_t vertices = 0;
   uint64_t triangles = 0;
   int64_t cz = 0;
@@ -284,8 +284,8 @@ inline Corner corner_at(const float* row, int64_t x, uint32_t nx, double iso) {
 }
 
 // The vertex on the edge from corner `lo` to corner `hi` of cell (cx, cy, cz).
-inline Vec3 edge_vertex(const Sweep& s, int64_t cx, int64_t cy, int64_t cz, unsigned lo,
-                        unsigned d, const Corner& f0, const Corner& f1) {
+inline Vec3 edge_vertex(const Sweep& s, int64_t cx, int64_t cy, int64_t cz, unsigned lo, unsigned d,
+                        const Corner& f0, const Corner& f1) {
   double t;
   if (!f0.real) {
     t = 1.0 - s.margin;
@@ -352,8 +352,7 @@ Status march_cell(Sweep& s, int64_t cx, int64_t cy, int64_t cz, const Corner cor
           word = plane_word((u & 4u) ? s.hi_bits : s.lo_bits, kind, static_cast<int64_t>(py), w64);
         }
         const uint64_t rank =
-            set->prefix[(kind * (row_count) + py) * s.words + w64] +
-            popcount64(word & below);
+            set->prefix[(kind * (row_count) + py) * s.words + w64] + popcount64(word & below);
         SPLINTCORE_ASSERT(((word >> (px & 63)) & 1u) != 0 && rank < set->count);
         uint32_t* slot = &set->ids[rank];
         p[k] = edge_vertex(s, cx, cy, cz, u, d, corners[u], corners[w]);
@@ -387,7 +386,7 @@ float float_threshold(double iso) {
   constexpr double kMaxFloat = 3.4028234663852886e38;
   if (iso > kMaxFloat) return HUGE_VALF;    // every finite sample is below
   if (iso < -kMaxFloat) return -HUGE_VALF;  // none is
-  float t = static_cast<float>(iso);  // nearest
+  float t = static_cast<float>(iso);        // nearest
   if (static_cast<double>(t) < iso) {
     uint32_t bits;
     std::memcpy(&bits, &t, 4);
@@ -515,9 +514,8 @@ Status march_layer(Sweep& s, int64_t cz, const float* lo, const float* hi, const
     s.plane_hi = EdgeSet{};
     s.plane_hi.prefix = free_prefix;
     const PlaneBits& h = s.hi_bits;
-    rank_edges(s, &s.plane_hi, 3, [&](unsigned kind, int64_t py, uint64_t w) {
-      return plane_word(h, kind, py, w);
-    });
+    rank_edges(s, &s.plane_hi, 3,
+               [&](unsigned kind, int64_t py, uint64_t w) { return plane_word(h, kind, py, w); });
     SPLINTCORE_RETURN_IF_ERROR(place_ids(s, &s.plane_hi, s.plane_lo, EdgeSet{}));
     const PlaneBits& l = s.lo_bits;
     rank_edges(s, &s.upward, 4, [&](unsigned kind, int64_t py, uint64_t w) {
@@ -631,9 +629,9 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
     uint64_t total = 0;
     if (!checked_add(arena.used(), minimum, &total)) total = UINT64_MAX;
     return make_error(StatusCode::kArenaExhausted, "marching cubes: needs at least ", minimum,
-                      " bytes of free arena for one layer of ", grid.nx, " x ", grid.ny,
-                      " cells, ", free_bytes, " are free (cap ", arena.cap(), ", in use ",
-                      arena.used(), "); increase the memory cap to at least ", total, " bytes");
+                      " bytes of free arena for one layer of ", grid.nx, " x ", grid.ny, " cells, ",
+                      free_bytes, " are free (cap ", arena.cap(), ", in use ", arena.used(),
+                      "); increase the memory cap to at least ", total, " bytes");
   }
   const uint32_t layers = choose_layers(arena, grid, options.layers_per_tile, share_divisor);
   uint64_t sample_bytes = 0, edge_bytes = 0;
@@ -646,9 +644,10 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
   const uint64_t layer_words = bit_words(grid.nx) * grid.ny;
   const uint64_t prefix_words = bit_words(grid.nx) * (uint64_t{grid.ny} + 1);
   float* samples = arena.allocate_array<float>(static_cast<size_t>(layer_floats * (layers + 1)));
-  uint64_t* bits = samples == nullptr ? nullptr
-                                      : arena.allocate_array<uint64_t>(
-                                            static_cast<size_t>(layer_words * (layers + 1)));
+  uint64_t* bits =
+      samples == nullptr
+          ? nullptr
+          : arena.allocate_array<uint64_t>(static_cast<size_t>(layer_words * (layers + 1)));
   uint64_t* prefix = bits == nullptr
                          ? nullptr
                          : arena.allocate_array<uint64_t>(static_cast<size_t>(prefix_words * 10));
@@ -662,8 +661,8 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
     const uint64_t fit = budget > kAlign ? (budget - kAlign) / 4 : 0;
     if (fit < pool_ids) pool_ids = fit;
   }
-  uint32_t* pool = pool_ids == 0 ? nullptr
-                                 : arena.allocate_array<uint32_t>(static_cast<size_t>(pool_ids));
+  uint32_t* pool =
+      pool_ids == 0 ? nullptr : arena.allocate_array<uint32_t>(static_cast<size_t>(pool_ids));
   if (pool_ids > 0 && pool == nullptr) return arena.exhausted_status();
 
   Sweep s;
@@ -687,8 +686,9 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
     const uint32_t n = grid.nz - next_z < layers ? grid.nz - next_z : layers;
     // Slot j of the buffer holds sample layer next_z - 1 + j (slot 0: carried from the last slab).
     float* fresh = samples + layer_floats;
-    SPLINTCORE_RETURN_IF_ERROR(source.fill(
-        source.user, next_z, next_z + n, Span<float>(fresh, static_cast<size_t>(layer_floats * n))));
+    SPLINTCORE_RETURN_IF_ERROR(
+        source.fill(source.user, next_z, next_z + n,
+                    Span<float>(fresh, static_cast<size_t>(layer_floats * n))));
     ++fill_calls;
     // Classified with the finite check in one pass; the position only when something is wrong.
     uint32_t exponent_top = 0;

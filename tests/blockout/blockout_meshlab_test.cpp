@@ -22,10 +22,10 @@ struct Case {
 
   Case() {
     Context ctx(&t.arena);
-    std::vector<uint8_t> text = test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) +
-                                                      "/cases/paper_scale.json");
-    if (!parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), "paper_scale",
-                    &c).is_ok()) {
+    std::vector<uint8_t> text =
+        test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/cases/paper_scale.json");
+    if (!parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), "paper_scale", &c)
+             .is_ok()) {
       return;
     }
     for (int j = 0; j < 2; ++j) {

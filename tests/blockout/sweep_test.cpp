@@ -7,11 +7,11 @@
 #include <string>
 #include <vector>
 
+#include "common/shapes.h"
 #include "splintcore/blockout.h"
 #include "splintcore/distance.h"
 #include "splintcore/io.h"
 #include "splintcore/platform.h"
-#include "common/shapes.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -92,12 +92,13 @@ TEST(Sweep, ConeBecomesTheCylinderOfItsTopRadius) {
       SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, swept, &volume));
       EXPECT_GT(volume, 0);
       const Errors e = cylinder_errors(swept, 5.0);
-      std::printf("[ figures  ] cone sweep, voxel %.2f mm, %s: mean %.5f mm, max %.5f mm over %zu "
-                  "vertices; %llu segment tests, %llu distances, %llu corrected\n",
-                  h, correct ? "extrapolated inside" : "plain inside", e.mean, e.max, e.count,
-                  static_cast<unsigned long long>(stats.segment_tests),
-                  static_cast<unsigned long long>(stats.distance_evaluations),
-                  static_cast<unsigned long long>(stats.corrected_samples));
+      std::printf(
+          "[ figures  ] cone sweep, voxel %.2f mm, %s: mean %.5f mm, max %.5f mm over %zu "
+          "vertices; %llu segment tests, %llu distances, %llu corrected\n",
+          h, correct ? "extrapolated inside" : "plain inside", e.mean, e.max, e.count,
+          static_cast<unsigned long long>(stats.segment_tests),
+          static_cast<unsigned long long>(stats.distance_evaluations),
+          static_cast<unsigned long long>(stats.corrected_samples));
       ASSERT_GT(e.count, 100u);
       if (correct) {
         // The target of issue 6: under 0.01 mm mean at 0.1 mm voxels.
@@ -112,8 +113,7 @@ TEST(Sweep, ConeBecomesTheCylinderOfItsTopRadius) {
 struct HashVisitor {
   Sha256 sha;
   uint64_t triangles = 0;
-  static Status triangle(void* user, const Triangle&, const Vec3& a, const Vec3& b,
-                         const Vec3& c) {
+  static Status triangle(void* user, const Triangle&, const Vec3& a, const Vec3& b, const Vec3& c) {
     HashVisitor& h = *static_cast<HashVisitor*>(user);
     h.sha.update(&a, sizeof(Vec3));
     h.sha.update(&b, sizeof(Vec3));
@@ -296,7 +296,8 @@ Mesh box_mesh(Arena* arena, const float lo[3], const float hi[3]) {
   Mesh m(arena);
   Context ctx(arena);
   const std::vector<SoupTriangle> soup = shapes::box(lo, hi);
-  SPLINTCORE_ASSERT(weld_exact(ctx, Span<const SoupTriangle>(soup.data(), soup.size()), &m).is_ok());
+  SPLINTCORE_ASSERT(
+      weld_exact(ctx, Span<const SoupTriangle>(soup.data(), soup.size()), &m).is_ok());
   return m;
 }
 
@@ -325,10 +326,11 @@ TEST(Blockout, UndercutOfABigEndUpConeIsRemoved) {
   const double expected = 14.0 * 14.0 * 6.0 - disc * 4.0;
   // The cavity's wall is the swept surface: within its measured error (0.0012 mm mean at
   // 0.1 mm voxels) over the wall's area (2 pi 5 x 4 = 126 mm^2), and the cap of the cone's top.
-  std::printf("[ figures  ] blockout of the cone: volume %.4f mm^3, expected %.4f; swept mesh %llu "
-              "triangles, result %zu triangles\n",
-              volume, expected, static_cast<unsigned long long>(stats.swept_triangles),
-              out.triangles.size());
+  std::printf(
+      "[ figures  ] blockout of the cone: volume %.4f mm^3, expected %.4f; swept mesh %llu "
+      "triangles, result %zu triangles\n",
+      volume, expected, static_cast<unsigned long long>(stats.swept_triangles),
+      out.triangles.size());
   EXPECT_NEAR(volume, expected, 126.0 * 0.005);
   // No material left inside the radius-5 cylinder between z = 4 and 8: every vertex of the
   // result there is on its wall (r >= 5 - error).
@@ -478,8 +480,8 @@ std::vector<double> crossings(const DistanceIndex& index, const Vec3& origin, co
 }
 
 LockReport lock_report(Arena& arena, const Mesh& splint, const Mesh& jaw, const Vec3& d,
-                       const Vec3& u, const Vec3& v, const Vec3& center, double half,
-                       uint32_t n, double tolerance) {
+                       const Vec3& u, const Vec3& v, const Vec3& center, double half, uint32_t n,
+                       double tolerance) {
   Context ctx(&arena);
   DistanceIndex si, ji;
   EXPECT_TRUE(build_distance_index(ctx, splint, DistanceIndexOptions{}, &si).is_ok());
@@ -533,10 +535,11 @@ TEST(Blockout, IndependentCheckFindsTheUndercutBeforeAndNoneAfter) {
   const Vec3 d{0, 0, -1}, u{1, 0, 0}, v{0, 1, 0}, c{0, 0, 5};
   const LockReport before = lock_report(ta.arena, imprint, cone, d, u, v, c, 6.0, 60, 1e-3);
   const LockReport after = lock_report(ta.arena, blocked, cone, d, u, v, c, 6.0, 60, 1e-3);
-  std::printf("[ figures  ] undercut check, %zu lines through the cone: before %zu locked "
-              "(longest %.3f mm), after %zu (longest %.4f mm)\n",
-              before.lines_through_jaw, before.locked_lines, before.longest, after.locked_lines,
-              after.longest);
+  std::printf(
+      "[ figures  ] undercut check, %zu lines through the cone: before %zu locked "
+      "(longest %.3f mm), after %zu (longest %.4f mm)\n",
+      before.lines_through_jaw, before.locked_lines, before.longest, after.locked_lines,
+      after.longest);
   EXPECT_GT(before.locked_lines, 100u);
   EXPECT_GT(before.longest, 3.0);
   // After: what the inset leaves, on lines within the inset of the wall.
@@ -573,7 +576,8 @@ TEST(Sweep, ClosingFillsAGapNarrowerThanItsDiameter) {
       const std::vector<SoupTriangle> part = shapes::box(lo, hi);
       soup.insert(soup.end(), part.begin(), part.end());
     }
-    SPLINTCORE_ASSERT_OK(weld_exact(ctx, Span<const SoupTriangle>(soup.data(), soup.size()), &teeth));
+    SPLINTCORE_ASSERT_OK(
+        weld_exact(ctx, Span<const SoupTriangle>(soup.data(), soup.size()), &teeth));
   }
   auto inside = [&](const Mesh& m, const Vec3& p) {
     DistanceIndex index;
@@ -587,9 +591,11 @@ TEST(Sweep, ClosingFillsAGapNarrowerThanItsDiameter) {
   o.extent = 1.0;
   Mesh open_gap(&ta.arena), closed(&ta.arena);
   SweepStats plain_stats, closed_stats;
-  SPLINTCORE_ASSERT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(&teeth, 1), o, &open_gap, &plain_stats));
+  SPLINTCORE_ASSERT_OK(
+      sweep_volume_mesh(ctx, Span<const Mesh>(&teeth, 1), o, &open_gap, &plain_stats));
   o.closing_radius = 0.3;
-  SPLINTCORE_ASSERT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(&teeth, 1), o, &closed, &closed_stats));
+  SPLINTCORE_ASSERT_OK(
+      sweep_volume_mesh(ctx, Span<const Mesh>(&teeth, 1), o, &closed, &closed_stats));
   double v_open = 0, v_closed = 0;
   SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, open_gap, &v_open));
   SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, closed, &v_closed));
@@ -600,10 +606,11 @@ TEST(Sweep, ClosingFillsAGapNarrowerThanItsDiameter) {
   EXPECT_FALSE(inside(closed, beside));
   // The gap's volume (0.3 x 3 x 4 mm, less what stays open where it meets the outside) is
   // added, and little else: convex parts are unchanged by a closing.
-  std::printf("[ figures  ] closing r 0.3 mm: volume %.3f -> %.3f mm^3 (gap 0.3 x 3 x 4 = 3.6); "
-              "%llu samples searched, %llu filled\n",
-              v_open, v_closed, static_cast<unsigned long long>(closed_stats.closing_samples),
-              static_cast<unsigned long long>(closed_stats.closed_samples));
+  std::printf(
+      "[ figures  ] closing r 0.3 mm: volume %.3f -> %.3f mm^3 (gap 0.3 x 3 x 4 = 3.6); "
+      "%llu samples searched, %llu filled\n",
+      v_open, v_closed, static_cast<unsigned long long>(closed_stats.closing_samples),
+      static_cast<unsigned long long>(closed_stats.closed_samples));
   EXPECT_GT(v_closed - v_open, 2.5);
   EXPECT_LT(v_closed - v_open, 4.0);
 }

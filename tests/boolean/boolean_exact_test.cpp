@@ -1,6 +1,6 @@
-// Tests of the exact rule for degenerate Boolean contacts (issue #5; src/boolean/points.cpp, split.cpp,
-// the rule as include/splintcore/boolean.h states it): coplanar overlapping faces, a vertex
-// exactly on the other surface and edges that cross exactly are resolved exactly, with no
+// Tests of the exact rule for degenerate Boolean contacts (issue #5; src/boolean/points.cpp,
+// split.cpp, the rule as include/splintcore/boolean.h states it): coplanar overlapping faces, a
+// vertex exactly on the other surface and edges that cross exactly are resolved exactly, with no
 // nudge (stats.attempts == 1, stats.nudge == 0), and the volumes are the analytic ones. The
 // coplanar pieces follow one fixed rule: the difference keeps A's pieces where the faces are
 // opposite (B touching from outside), the union and the intersection keep A's pieces where

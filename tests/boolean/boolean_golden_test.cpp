@@ -60,11 +60,11 @@ void check_golden(const char* key, const std::string& hash, const BooleanStats& 
 
 // The base of fixtures/cases/paper_scale.json.
 void paper_scale_base(const Context& ctx, Mesh* base) {
-  std::vector<uint8_t> text = test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) +
-                                                    "/cases/paper_scale.json");
+  std::vector<uint8_t> text =
+      test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/cases/paper_scale.json");
   CaseFile c;
-  SPLINTCORE_ASSERT_OK(parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(),
-                                  "paper_scale", &c));
+  SPLINTCORE_ASSERT_OK(
+      parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), "paper_scale", &c));
   BaseReport r;
   SPLINTCORE_ASSERT_OK(build_case_base(ctx, c, base, &r));
 }
@@ -101,7 +101,8 @@ TEST(BooleanGolden, BaseMinusPhantomJawsMatchesTheCommittedHash) {
       ASSERT_TRUE(jaws.vertices.push_back(v));
     }
     for (const Triangle& tr : m.triangles) {
-      ASSERT_TRUE(jaws.triangles.push_back(Triangle{{tr.v[0] + off, tr.v[1] + off, tr.v[2] + off}}));
+      ASSERT_TRUE(
+          jaws.triangles.push_back(Triangle{{tr.v[0] + off, tr.v[1] + off, tr.v[2] + off}}));
     }
   }
   Mesh out;

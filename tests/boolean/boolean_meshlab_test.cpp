@@ -4,11 +4,11 @@
 // MeshLab's Hausdorff distance from the imprint to the jaw is below 1e-6 mm.
 //
 // MeshLab computes in float and prints six decimals, so the imprint and the jaw are measured
-// around one crown at a time (the imprint within 2 mm of a point, the jaw's triangles that reach within 3 mm),
-// moved to the origin and scaled from mm to um: MeshLab's own noise (the jaw against itself,
-// printed too) is then a few 1e-4 um, and six decimals resolve 1e-6 um. The result is computed in double for this
-// (float32_output off): the intersection points are then the exact crossings rounded once to
-// double, and what is measured is the method, not STL's float32 grid.
+// around one crown at a time (the imprint within 2 mm of a point, the jaw's triangles that reach
+// within 3 mm), moved to the origin and scaled from mm to um: MeshLab's own noise (the jaw against
+// itself, printed too) is then a few 1e-4 um, and six decimals resolve 1e-6 um. The result is
+// computed in double for this (float32_output off): the intersection points are then the exact
+// crossings rounded once to double, and what is measured is the method, not STL's float32 grid.
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -30,11 +30,11 @@ struct Fixture {
 
   Fixture() {
     Context ctx(&t.arena);
-    std::vector<uint8_t> text = test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) +
-                                                      "/cases/paper_scale.json");
+    std::vector<uint8_t> text =
+        test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/cases/paper_scale.json");
     CaseFile c;
-    if (!parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), "paper_scale",
-                    &c).is_ok()) {
+    if (!parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), "paper_scale", &c)
+             .is_ok()) {
       return;
     }
     base.bind(&t.arena);
@@ -120,8 +120,8 @@ TEST(BooleanMeshLab, ImprintLiesOnTheJawWithin1e6mm) {
     size_t n_imprint = 0, n_jaw = 0;
     const std::string imprint = test::temp_file(
         region_stl(out, first_b, out.triangles.size(), inner, false, centre, 1000.0, &n_imprint));
-    const std::string jaw =
-        test::temp_file(region_stl(f.jaw, 0, f.jaw.triangles.size(), outer, true, centre, 1000.0, &n_jaw));
+    const std::string jaw = test::temp_file(
+        region_stl(f.jaw, 0, f.jaw.triangles.size(), outer, true, centre, 1000.0, &n_jaw));
     ASSERT_GE(n_imprint, 5u);
     const std::string log = test::meshlab_log({imprint, jaw}, script);
     // The jaw against itself shows MeshLab's own noise at this scale.
@@ -132,9 +132,10 @@ TEST(BooleanMeshLab, ImprintLiesOnTheJawWithin1e6mm) {
     const double mean_um = test::number_after(log, "mean : ");
     const double noise_um = test::number_after(self, "max ");
     ASSERT_FALSE(std::isnan(max_um)) << log;
-    std::printf("crown at %.3f %.3f %.3f: %zu imprint triangles, Hausdorff max %.6f um, mean "
-                "%.6f um (MeshLab's noise %.6f um)\n",
-                centre.x, centre.y, centre.z, n_imprint, max_um, mean_um, noise_um);
+    std::printf(
+        "crown at %.3f %.3f %.3f: %zu imprint triangles, Hausdorff max %.6f um, mean "
+        "%.6f um (MeshLab's noise %.6f um)\n",
+        centre.x, centre.y, centre.z, n_imprint, max_um, mean_um, noise_um);
     EXPECT_LT(max_um, 1e-3) << log;  // 1e-6 mm
     ++measured;
   }

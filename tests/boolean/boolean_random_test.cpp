@@ -1,8 +1,8 @@
-// The randomised proof the Boolean owes the splint (src/boolean/boolean_run.h and its stage files): more than 1,000
-// random rigid motions of the paper_scale base (A, 2,612 triangles) against both phantom jaws
-// (B, tools/common/phantom.h, the mandible moved by the case's -2 mm), and 300 more of the real
-// patient's wafer against two of the real CBCT teeth when ../shared/realdata is present. About
-// 40% of the cases are exact contacts: a base face plane through a jaw vertex, or a base
+// The randomised proof the Boolean owes the splint (src/boolean/boolean_run.h and its stage files):
+// more than 1,000 random rigid motions of the paper_scale base (A, 2,612 triangles) against both
+// phantom jaws (B, tools/common/phantom.h, the mandible moved by the case's -2 mm), and 300 more of
+// the real patient's wafer against two of the real CBCT teeth when ../shared/realdata is present.
+// About 40% of the cases are exact contacts: a base face plane through a jaw vertex, or a base
 // vertex on a jaw vertex, where the Boolean must nudge A and still succeed, or answer
 // kUnsupported naming the triangles (at most 2% of the cases).
 //
@@ -53,7 +53,6 @@ constexpr uint32_t kCaseDivisor = 1;
 #else
 constexpr uint32_t kCaseDivisor = 4;
 #endif
-
 
 using test::TestArena;
 
@@ -125,7 +124,7 @@ struct Scene {
   const Mesh* base = nullptr;  // float32-exact, valid solid
   const Mesh* jaws = nullptr;  // float32-exact
   VertexSet jaw_set;
-  Vec3 centre;                 // rotations are about the arch's centre (the base's box centre)
+  Vec3 centre;  // rotations are about the arch's centre (the base's box centre)
   // Face-plane contacts (only when every base vertex lies on one of two planes z = top, z =
   // bottom): jaw vertices whose z is within kMaxShift of a face.
   bool flat_faces = false;
@@ -319,17 +318,17 @@ struct Tally {
   uint64_t cases = 0;
   uint64_t contacts = 0;
   uint64_t unsupported = 0;
-  uint64_t nudged = 0;           // cases where an operation needed attempts > 1
+  uint64_t nudged = 0;  // cases where an operation needed attempts > 1
   uint64_t self_checked = 0;
-  uint64_t redraws = 0;          // motions drawn again (contact out of reach, invalid base)
+  uint64_t redraws = 0;  // motions drawn again (contact out of reach, invalid base)
   uint64_t float32_cases = 0;
   uint64_t float32_unsupported = 0;
   uint64_t float32_nudged = 0;
   uint64_t float32_different_nudges = 0;  // identity not comparable: A moved differently
   uint64_t intersection_points = 0;
   double min_rel = HUGE_VAL, max_rel = -HUGE_VAL;  // (vd + vi - va) / va, double output
-  double float32_max_rel = 0;                       // |...| with float32 output
-  double float32_max_bound_use = 0;                 // |error| / allowed, float32 output
+  double float32_max_rel = 0;                      // |...| with float32 output
+  double float32_max_bound_use = 0;                // |error| / allowed, float32 output
 
   void add(const Tally& o) {
     cases += o.cases;
@@ -452,8 +451,8 @@ OpResult run_op(const Context& ctx, const Scene& s, const Mesh& a, const Boolean
     if (corners > 0) res.moved_area += triangle_area(out, t) * corners / 3.0;
   }
 
-  res.self_checked = self_check || (self_check_if_nudged && (res.stats.attempts > 1 ||
-                                                             res.stats.degenerate_pairs > 0));
+  res.self_checked = self_check || (self_check_if_nudged &&
+                                    (res.stats.attempts > 1 || res.stats.degenerate_pairs > 0));
   if (res.self_checked) {
     SelfIntersectionReport si;
     const Status found = find_self_intersections(ctx, out, 1, &si);
@@ -470,7 +469,7 @@ struct Plan {
   const char* name = "";
   uint64_t seed = 0;
   uint32_t cases = 0;
-  double contact_share = 0;   // of the cases, drawn per case
+  double contact_share = 0;       // of the cases, drawn per case
   double face_plane_share = 0.5;  // of the contacts, when the base has flat faces
 };
 
@@ -482,7 +481,7 @@ void run_case(const Context& ctx, const Scene& s, const Plan& plan, uint32_t ind
   Contact contact = Contact::kNone;
   if (unit(rng) < plan.contact_share) {
     contact = (s.flat_faces && unit(rng) < plan.face_plane_share) ? Contact::kFacePlane
-                                                                   : Contact::kVertexOnVertex;
+                                                                  : Contact::kVertexOnVertex;
   }
   Mesh a(&arena);
   Motion m;
@@ -491,8 +490,8 @@ void run_case(const Context& ctx, const Scene& s, const Plan& plan, uint32_t ind
     drawn = draw_motion(ctx, s, contact, rng, &m, &a);
     if (!drawn) ++tally->redraws;
   }
-  const std::string where = std::string(s.name) + " seed " + std::to_string(plan.seed) + " case " +
-                            std::to_string(index);
+  const std::string where =
+      std::string(s.name) + " seed " + std::to_string(plan.seed) + " case " + std::to_string(index);
   ASSERT_TRUE(drawn) << where << ": no valid " << contact_name(contact) << " motion in 200 draws";
   const std::string full = where + " (" + describe(m) + ")";
   ++tally->cases;
@@ -584,10 +583,10 @@ void run_plan(const Scene& s, const Plan& plan) {
   for (const Tally& t : tallies) all.add(t);
   std::printf(
       "[ summary  ] %s: %" PRIu64 " cases (%" PRIu64 " exact contacts, %" PRIu64
-      " redraws), %" PRIu64 " unsupported, %" PRIu64 " nudged, %" PRIu64
-      " self-checked, %" PRIu64 " intersection points; relative volume error min %.3g max %.3g; "
-      "float32 output: %" PRIu64 " cases, %" PRIu64 " unsupported, %" PRIu64
-      " nudged, %" PRIu64 " nudged differently, max relative error %.3g (%.3g of its bound)\n",
+      " redraws), %" PRIu64 " unsupported, %" PRIu64 " nudged, %" PRIu64 " self-checked, %" PRIu64
+      " intersection points; relative volume error min %.3g max %.3g; "
+      "float32 output: %" PRIu64 " cases, %" PRIu64 " unsupported, %" PRIu64 " nudged, %" PRIu64
+      " nudged differently, max relative error %.3g (%.3g of its bound)\n",
       plan.name, all.cases, all.contacts, all.redraws, all.unsupported, all.nudged,
       all.self_checked, all.intersection_points, all.min_rel, all.max_rel, all.float32_cases,
       all.float32_unsupported, all.float32_nudged, all.float32_different_nudges,
@@ -788,8 +787,8 @@ TEST(BooleanRandom, RegressionNudgeAcrossAPowerOfTwoStaysFloat32) {
   EXPECT_GT(st.attempts, 1u);
   std::string listed;
   EXPECT_EQ(count_not_float32(out, &listed), 0u)
-      << "after " << st.attempts << " attempts, nudge (" << st.nudge.x << ", " << st.nudge.y
-      << ", " << st.nudge.z << "):" << listed;
+      << "after " << st.attempts << " attempts, nudge (" << st.nudge.x << ", " << st.nudge.y << ", "
+      << st.nudge.z << "):" << listed;
 }
 
 // ---- the real teeth -----------------------------------------------------------------------------

@@ -32,9 +32,7 @@ double box_volume(const Box& b) {
   return x > 0 && y > 0 && z > 0 ? x * y * z : 0.0;
 }
 
-Box meet(const Box& a, const Box& b) {
-  return Box{max_vec(a.lo, b.lo), min_vec(a.hi, b.hi)};
-}
+Box meet(const Box& a, const Box& b) { return Box{max_vec(a.lo, b.lo), min_vec(a.hi, b.hi)}; }
 
 // |b0 u b1 u ... | by inclusion-exclusion over every subset.
 double union_volume(const std::vector<Box>& boxes) {
@@ -225,8 +223,8 @@ TEST(BooleanShells, OneShellInsideAnother) {
   const Mesh a = boxes_mesh(arena, {kA});
   const Box outer{{0.5, 0.75, 0.625}, {3.25, 3.5, 3.375}};
   const Box inner{{1.125, 1.25, 1.375}, {2.25, 2.125, 2.625}};
-  for (const std::vector<Box>& order : {std::vector<Box>{outer, inner},
-                                        std::vector<Box>{inner, outer}}) {
+  for (const std::vector<Box>& order :
+       {std::vector<Box>{outer, inner}, std::vector<Box>{inner, outer}}) {
     const Mesh b = boxes_mesh(arena, order);
     const Outcome d = run(arena, a, b, BooleanOp::kDifference);
     ASSERT_TRUE(d.status.is_ok()) << test::format(d.status);
@@ -306,9 +304,9 @@ void add_sphere(const Vec3& c, double r, int nlat, int nlon, Mesh* m) {
     const double th = pi * i / nlat;
     for (int j = 0; j < nlon; ++j) {
       const double ph = 2 * pi * j / nlon + 0.1 * i;
-      ASSERT_TRUE(m->vertices.push_back(
-          c + Vec3{r * std::sin(th) * std::cos(ph), r * std::sin(th) * std::sin(ph),
-                   r * std::cos(th)}));
+      ASSERT_TRUE(
+          m->vertices.push_back(c + Vec3{r * std::sin(th) * std::cos(ph),
+                                         r * std::sin(th) * std::sin(ph), r * std::cos(th)}));
     }
   }
   const uint32_t south = off + static_cast<uint32_t>(1 + (nlat - 1) * nlon);
@@ -321,12 +319,15 @@ void add_sphere(const Vec3& c, double r, int nlat, int nlon, Mesh* m) {
   }
   for (int i = 1; i + 1 < nlat; ++i) {
     for (int j = 0; j < nlon; ++j) {
-      ASSERT_TRUE(m->triangles.push_back(Triangle{{ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)}}));
-      ASSERT_TRUE(m->triangles.push_back(Triangle{{ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)}}));
+      ASSERT_TRUE(
+          m->triangles.push_back(Triangle{{ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)}}));
+      ASSERT_TRUE(
+          m->triangles.push_back(Triangle{{ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)}}));
     }
   }
   for (int j = 0; j < nlon; ++j) {
-    ASSERT_TRUE(m->triangles.push_back(Triangle{{south, ring(nlat - 1, j + 1), ring(nlat - 1, j)}}));
+    ASSERT_TRUE(
+        m->triangles.push_back(Triangle{{south, ring(nlat - 1, j + 1), ring(nlat - 1, j)}}));
   }
 }
 
@@ -433,7 +434,8 @@ TEST(BooleanShells, AnErrorNamesThePass) {
   // closed.
   Mesh open(&arena);
   for (const Vec3& v : b.vertices) ASSERT_TRUE(open.vertices.push_back(v));
-  for (size_t t = 1; t < b.triangles.size(); ++t) ASSERT_TRUE(open.triangles.push_back(b.triangles[t]));
+  for (size_t t = 1; t < b.triangles.size(); ++t)
+    ASSERT_TRUE(open.triangles.push_back(b.triangles[t]));
   const Outcome r = run(arena, a, open, BooleanOp::kIntersection);
   ASSERT_FALSE(r.status.is_ok());
   EXPECT_EQ(r.status.code(), StatusCode::kInvalidMesh);

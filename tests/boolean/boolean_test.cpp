@@ -1,8 +1,8 @@
-// Tests of the Boolean (src/boolean/boolean_run.h and its stage files): analytic shapes in generic position, the
-// volume identities every corefinement must keep (|A - B| + |A * B| = |A|,
-// |A + B| = |A| + |B| - |A * B|), closed manifold outward output without self-intersections,
-// input vertices copied bit for bit and intersection points on both surfaces, degenerate
-// contacts reported (not guessed), determinism and arena exhaustion.
+// Tests of the Boolean (src/boolean/boolean_run.h and its stage files): analytic shapes in generic
+// position, the volume identities every corefinement must keep (|A - B| + |A * B| = |A|, |A + B| =
+// |A| + |B| - |A * B|), closed manifold outward output without self-intersections, input vertices
+// copied bit for bit and intersection points on both surfaces, degenerate contacts reported (not
+// guessed), determinism and arena exhaustion.
 //
 // Random streams are std::mt19937_64 with fixed seeds.
 
@@ -31,9 +31,15 @@ RigidTransform rotation(double ax, double ay, double az, const Vec3& t) {
   const double cx = std::cos(ax), sx = std::sin(ax), cy = std::cos(ay), sy = std::sin(ay),
                cz = std::cos(az), sz = std::sin(az);
   RigidTransform x;
-  x.r[0][0] = cz * cy; x.r[0][1] = cz * sy * sx - sz * cx; x.r[0][2] = cz * sy * cx + sz * sx;
-  x.r[1][0] = sz * cy; x.r[1][1] = sz * sy * sx + cz * cx; x.r[1][2] = sz * sy * cx - cz * sx;
-  x.r[2][0] = -sy;     x.r[2][1] = cy * sx;                x.r[2][2] = cy * cx;
+  x.r[0][0] = cz * cy;
+  x.r[0][1] = cz * sy * sx - sz * cx;
+  x.r[0][2] = cz * sy * cx + sz * sx;
+  x.r[1][0] = sz * cy;
+  x.r[1][1] = sz * sy * sx + cz * cx;
+  x.r[1][2] = sz * sy * cx - cz * sx;
+  x.r[2][0] = -sy;
+  x.r[2][1] = cy * sx;
+  x.r[2][2] = cy * cx;
   x.t = t;
   return x;
 }
@@ -57,9 +63,8 @@ Mesh sphere_mesh(Arena& arena, double r, int nlat, int nlon, const RigidTransfor
     const double th = kPi * i / nlat;
     for (int j = 0; j < nlon; ++j) {
       const double ph = 2 * kPi * j / nlon;
-      EXPECT_TRUE(m.vertices.push_back(
-          x.apply_point(Vec3{r * std::sin(th) * std::cos(ph), r * std::sin(th) * std::sin(ph),
-                             r * std::cos(th)})));
+      EXPECT_TRUE(m.vertices.push_back(x.apply_point(Vec3{
+          r * std::sin(th) * std::cos(ph), r * std::sin(th) * std::sin(ph), r * std::cos(th)})));
     }
   }
   const uint32_t south = static_cast<uint32_t>(m.vertices.size());
@@ -72,8 +77,10 @@ Mesh sphere_mesh(Arena& arena, double r, int nlat, int nlon, const RigidTransfor
   }
   for (int i = 1; i + 1 < nlat; ++i) {
     for (int j = 0; j < nlon; ++j) {
-      EXPECT_TRUE(m.triangles.push_back(Triangle{{ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)}}));
-      EXPECT_TRUE(m.triangles.push_back(Triangle{{ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)}}));
+      EXPECT_TRUE(
+          m.triangles.push_back(Triangle{{ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)}}));
+      EXPECT_TRUE(
+          m.triangles.push_back(Triangle{{ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)}}));
     }
   }
   for (int j = 0; j < nlon; ++j) {
@@ -126,13 +133,14 @@ Result run_op(Arena& arena, const Mesh& a, const Mesh& b, BooleanOp op, bool exp
   }
   const MeshReport r = report_of(arena, out);
   if (op != BooleanOp::kUnion) {
-    EXPECT_TRUE(r.is_valid_solid()) << boolean_op_name(op) << ": " << test::format(require_valid_solid(r));
+    EXPECT_TRUE(r.is_valid_solid())
+        << boolean_op_name(op) << ": " << test::format(require_valid_solid(r));
   }
   res.volume = r.volume;
   SelfIntersectionReport si;
   EXPECT_TRUE(find_self_intersections(Context(&arena), out, 1, &si).is_ok());
-  EXPECT_FALSE(si.self_intersecting()) << boolean_op_name(op) << " pair " << si.first_a << " "
-                                       << si.first_b;
+  EXPECT_FALSE(si.self_intersecting())
+      << boolean_op_name(op) << " pair " << si.first_a << " " << si.first_b;
   return res;
 }
 
@@ -225,7 +233,8 @@ TEST(BooleanTest, AnEdgeCrossingManyTrianglesOfB) {
     ArenaScope scope(arena);
     Mesh b(&arena);
     for (int i = 0; i < count; ++i) {
-      Mesh s = sphere_mesh(arena, 0.2, 6, 8, rotation(0.1 * i, 0.2, 0.3, {0.4 + 0.45 * i, 0.01, 0.02}));
+      Mesh s =
+          sphere_mesh(arena, 0.2, 6, 8, rotation(0.1 * i, 0.2, 0.3, {0.4 + 0.45 * i, 0.01, 0.02}));
       append_mesh(s, &b);
     }
     Result d = run_op(arena, a, b, BooleanOp::kDifference, true);
@@ -304,7 +313,8 @@ TEST(BooleanTest, OutputVerticesAreInputVerticesOrOnBothSurfaces) {
   Mesh b = sphere_mesh(arena, 0.6, 14, 28, rotation(0.3, 0.2, 0.1, {0.9, 0.4, 0.6}));
   Mesh out;
   BooleanStats st;
-  SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&arena), a, b, opts(BooleanOp::kDifference), &out, &st));
+  SPLINTCORE_ASSERT_OK(
+      mesh_boolean(Context(&arena), a, b, opts(BooleanOp::kDifference), &out, &st));
   DistanceIndex ia, ib;
   SPLINTCORE_ASSERT_OK(build_distance_index(Context(&arena), a, DistanceIndexOptions{}, &ia));
   SPLINTCORE_ASSERT_OK(build_distance_index(Context(&arena), b, DistanceIndexOptions{}, &ib));
@@ -335,7 +345,8 @@ TEST(BooleanTest, RandomPlacementsKeepTheVolumeIdentities) {
   int done = 0, unsupported = 0;
   for (int c = 0; c < 150; ++c) {
     ArenaScope scope(arena);
-    const RigidTransform x = rotation(angle(rng), angle(rng), angle(rng), {pos(rng), pos(rng), pos(rng)});
+    const RigidTransform x =
+        rotation(angle(rng), angle(rng), angle(rng), {pos(rng), pos(rng), pos(rng)});
     const double r = rad(rng);
     Mesh b = (c % 2 == 0) ? sphere_mesh(arena, r, 6 + c % 7, 10 + c % 9, x)
                           : box_mesh(arena, {-r, -r, -r}, {r, r, 1.5 * r}, x);
@@ -365,11 +376,15 @@ TEST(BooleanTest, SameBytesEveryRun) {
   for (int run = 0; run < 2; ++run) {
     ArenaScope scope(arena);
     Mesh out;
-    SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&arena), a, b, opts(BooleanOp::kDifference), &out, nullptr));
+    SPLINTCORE_ASSERT_OK(
+        mesh_boolean(Context(&arena), a, b, opts(BooleanOp::kDifference), &out, nullptr));
     const std::string h =
         test::sha256_hex(out.vertices.data(), out.vertices.size() * sizeof(Vec3)) +
         test::sha256_hex(out.triangles.data(), out.triangles.size() * sizeof(Triangle));
-    if (run == 0) first = h; else EXPECT_EQ(h, first);
+    if (run == 0)
+      first = h;
+    else
+      EXPECT_EQ(h, first);
   }
 }
 
@@ -383,7 +398,8 @@ TEST(BooleanTest, ArenaExhaustionIsCleanAtEveryCap) {
     std::vector<unsigned char> big(size_t{8} << 20);
     Arena probe(big.data(), big.size());
     Mesh out;
-    SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&probe), a, b, opts(BooleanOp::kDifference), &out, nullptr));
+    SPLINTCORE_ASSERT_OK(
+        mesh_boolean(Context(&probe), a, b, opts(BooleanOp::kDifference), &out, nullptr));
     need = probe.high_water();
   }
   int failures = 0;
@@ -400,7 +416,8 @@ TEST(BooleanTest, ArenaExhaustionIsCleanAtEveryCap) {
   std::vector<unsigned char> buf(need);
   Arena exact(buf.data(), need);
   Mesh out;
-  SPLINTCORE_EXPECT_OK(mesh_boolean(Context(&exact), a, b, opts(BooleanOp::kDifference), &out, nullptr));
+  SPLINTCORE_EXPECT_OK(
+      mesh_boolean(Context(&exact), a, b, opts(BooleanOp::kDifference), &out, nullptr));
   EXPECT_GT(failures, 100);
 }
 

@@ -94,8 +94,7 @@ bool on_segment(const CdtPoint& p, const CdtPoint& q, const CdtPoint& x) {
 }
 
 // Closed segments p1p2 and p3p4 meet.
-bool segments_meet(const CdtPoint& p1, const CdtPoint& p2, const CdtPoint& p3,
-                   const CdtPoint& p4) {
+bool segments_meet(const CdtPoint& p1, const CdtPoint& p2, const CdtPoint& p3, const CdtPoint& p4) {
   const int d1 = sign_of(orient(p3, p4, p1)), d2 = sign_of(orient(p3, p4, p2));
   const int d3 = sign_of(orient(p1, p2, p3)), d4 = sign_of(orient(p1, p2, p4));
   if (d1 * d2 < 0 && d3 * d4 < 0) return true;
@@ -184,11 +183,11 @@ bool segment_fits(const Input& in, uint32_t a, uint32_t b) {
   const CdtPoint& u = in.pts[(a + nb - 1) % nb];
   const CdtPoint& w = in.pts[(a + 1) % nb];
   const double corner = orient(u, pa, w);
-  const double ow = orient(pa, w, pb);  // > 0: b left of a->w
-  const double ou = orient(pa, u, pb);  // < 0: b right of a->u
-  if (corner > 0) return ow > 0 && ou < 0;  // convex corner: inside the wedge w..u
+  const double ow = orient(pa, w, pb);           // > 0: b left of a->w
+  const double ou = orient(pa, u, pb);           // < 0: b right of a->u
+  if (corner > 0) return ow > 0 && ou < 0;       // convex corner: inside the wedge w..u
   if (corner < 0) return !(ou >= 0 && ow <= 0);  // reflex: outside the convex exterior wedge
-  return ow > 0;  // straight: the half-plane left of u->a->w
+  return ow > 0;                                 // straight: the half-plane left of u->a->w
 }
 
 // Adds a point if it is strictly inside, new, and on no segment.
@@ -368,7 +367,8 @@ void add_interior(Rng& rng, Input& in, int points, int segment_tries, double gri
     lo_y = std::min(lo_y, p.y);
     hi_y = std::max(hi_y, p.y);
   }
-  for (int i = 0; i < points * 4 && in.pts.size() < in.boundary + static_cast<size_t>(points); ++i) {
+  for (int i = 0; i < points * 4 && in.pts.size() < in.boundary + static_cast<size_t>(points);
+       ++i) {
     CdtPoint p{rng.uniform(lo_x, hi_x), rng.uniform(lo_y, hi_y)};
     if (grid != 0.0) p = {round_to(p.x, grid), round_to(p.y, grid)};
     add_point(in, p);
@@ -453,10 +453,10 @@ Input boolean_like(Rng& rng, int per_edge, int polylines, int loops, bool exact)
   // Closed loops: small polygons around interior points.
   for (int i = 0; i < loops; ++i) {
     const double f0 = rng.uniform(0.1, 0.8), f1 = rng.uniform(0.1, 0.9 - f0);
-    const CdtPoint centre{c[0].x * (exact ? k : 1) * (1 - f0 - f1) +
-                              c[1].x * (exact ? k : 1) * f0 + c[2].x * (exact ? k : 1) * f1,
-                          c[0].y * (exact ? k : 1) * (1 - f0 - f1) +
-                              c[1].y * (exact ? k : 1) * f0 + c[2].y * (exact ? k : 1) * f1};
+    const CdtPoint centre{c[0].x * (exact ? k : 1) * (1 - f0 - f1) + c[1].x * (exact ? k : 1) * f0 +
+                              c[2].x * (exact ? k : 1) * f1,
+                          c[0].y * (exact ? k : 1) * (1 - f0 - f1) + c[1].y * (exact ? k : 1) * f0 +
+                              c[2].y * (exact ? k : 1) * f1};
     const int sides = rng.small(3, 6);
     const double radius = rng.uniform(0.5, 4.0) * (exact ? k : 1);
     Input trial = in;
@@ -535,7 +535,8 @@ TEST(Cdt, TriangleWithCollinearEdgePointsAndCuts) {
   TestArena ta(1 << 20);
   std::vector<CdtPoint> boundary;
   for (int i = 0; i < 12; ++i) boundary.push_back({static_cast<double>(i), 0});
-  for (int i = 0; i < 12; ++i) boundary.push_back({static_cast<double>(12 - i), static_cast<double>(i)});
+  for (int i = 0; i < 12; ++i)
+    boundary.push_back({static_cast<double>(12 - i), static_cast<double>(i)});
   for (int i = 0; i < 12; ++i) boundary.push_back({0, static_cast<double>(12 - i)});
   Input in = polygon(boundary);
   const uint32_t b = in.boundary;  // 36
@@ -573,8 +574,8 @@ TEST(Cdt, HangingEdgeCavity) {
   // pseudo-polygon re-triangulation). Also with u-v constrained (it must survive).
   TestArena ta(1 << 20);
   for (int constrained = 0; constrained < 2; ++constrained) {
-    Input in = polygon({{7, -100}, {20, 0}, {7, 100}, {-20, 0}},
-                       {{0, 0}, {5, 0}, {10, 1}, {10, -1}});
+    Input in =
+        polygon({{7, -100}, {20, 0}, {7, 100}, {-20, 0}}, {{0, 0}, {5, 0}, {10, 1}, {10, -1}});
     if (constrained != 0) in.segs.push_back({4, 5});
     in.segs.push_back({2, 0});
     expect_valid(ta.arena, in, constrained != 0 ? "hanging constrained edge" : "hanging edge");
@@ -604,13 +605,16 @@ TEST(Cdt, GridPolygonsAreHeavilyDegenerate) {
     const int w = rng.small(2, 12), h = rng.small(2, 12);
     std::vector<CdtPoint> boundary;
     for (int x = 0; x < w; ++x) boundary.push_back({static_cast<double>(x), 0});
-    for (int y = 0; y < h; ++y) boundary.push_back({static_cast<double>(w), static_cast<double>(y)});
-    for (int x = w; x > 0; --x) boundary.push_back({static_cast<double>(x), static_cast<double>(h)});
+    for (int y = 0; y < h; ++y)
+      boundary.push_back({static_cast<double>(w), static_cast<double>(y)});
+    for (int x = w; x > 0; --x)
+      boundary.push_back({static_cast<double>(x), static_cast<double>(h)});
     for (int y = h; y > 0; --y) boundary.push_back({0, static_cast<double>(y)});
     Input in = polygon(boundary);
     for (int x = 1; x < w; ++x) {
       for (int y = 1; y < h; ++y) {
-        if (rng.small(0, 2) != 0) in.pts.push_back({static_cast<double>(x), static_cast<double>(y)});
+        if (rng.small(0, 2) != 0)
+          in.pts.push_back({static_cast<double>(x), static_cast<double>(y)});
       }
     }
     const uint32_t n = static_cast<uint32_t>(in.pts.size());
@@ -636,8 +640,7 @@ TEST(CdtRandom, PolygonsWithRandomConstraints) {
   for (int c = 0; c < 400; ++c) {
     const int kind = c % 4;  // convex, star, convex on a grid, star on a grid
     const double grid = kind >= 2 ? 1.0 : 0.0;
-    const std::vector<CdtPoint> boundary =
-        star_polygon(rng, rng.small(3, 40), kind % 2 == 0, grid);
+    const std::vector<CdtPoint> boundary = star_polygon(rng, rng.small(3, 40), kind % 2 == 0, grid);
     if (boundary.empty()) continue;
     Input in = polygon(boundary);
     const int points = rng.small(0, 40), segment_tries = rng.small(0, 20);
@@ -679,8 +682,8 @@ TEST(CdtRandom, ConstraintsFromATriangulation) {
       }
     }
     for (const auto& e : edges) {
-      if (rng.coin()) in.segs.push_back({rng.coin() ? e.first : e.second,
-                                         rng.coin() ? e.second : e.first});
+      if (rng.coin())
+        in.segs.push_back({rng.coin() ? e.first : e.second, rng.coin() ? e.second : e.first});
     }
     // Keep only well-formed ones (the coin flips above may have made a-a).
     std::vector<CdtSegment> kept(in.segs.begin(), in.segs.begin() + in.boundary);
@@ -891,21 +894,21 @@ TEST(Cdt, ArenaExhaustionAndBound) {
     big.arena.reset_high_water();
     ArenaArray<CdtTriangle> out(&big.arena);
     SPLINTCORE_ASSERT_OK(cdt(big.arena, Span<const CdtPoint>(in.pts.data(), in.pts.size()),
-                             Span<const CdtSegment>(in.segs.data(), in.segs.size()),
-                             in.boundary, &out));
+                             Span<const CdtSegment>(in.segs.data(), in.segs.size()), in.boundary,
+                             &out));
     const size_t need = big.arena.high_water();
     std::vector<CdtTriangle> reference(out.begin(), out.end());
     EXPECT_LE(need, bound) << "cdt_bound is too small";
     // Caps below the need fail cleanly, the need and the bound succeed with the same output
     // (output in the same arena as the temporaries).
     const size_t step = need > 4000 ? need / 400 : 1;
-    for (size_t cap = 0; cap <= need; cap += (cap + step > need && cap < need) ? need - cap : step) {
+    for (size_t cap = 0; cap <= need;
+         cap += (cap + step > need && cap < need) ? need - cap : step) {
       std::vector<unsigned char> buffer(cap + 1);
       Arena arena(cap == 0 ? nullptr : buffer.data(), cap);
       ArenaArray<CdtTriangle> o(&arena);
       const Status s = cdt(arena, Span<const CdtPoint>(in.pts.data(), in.pts.size()),
-                           Span<const CdtSegment>(in.segs.data(), in.segs.size()), in.boundary,
-                           &o);
+                           Span<const CdtSegment>(in.segs.data(), in.segs.size()), in.boundary, &o);
       if (cap < need) {
         ASSERT_EQ(s.code(), StatusCode::kArenaExhausted) << cap << " " << format(s);
         EXPECT_NE(std::string(s.message()).find("increase the memory cap"), std::string::npos);
@@ -921,8 +924,8 @@ TEST(Cdt, ArenaExhaustionAndBound) {
     Arena arena(buffer.data(), buffer.size());
     ArenaArray<CdtTriangle> o(&arena);
     SPLINTCORE_EXPECT_OK(cdt(arena, Span<const CdtPoint>(in.pts.data(), in.pts.size()),
-                             Span<const CdtSegment>(in.segs.data(), in.segs.size()),
-                             in.boundary, &o));
+                             Span<const CdtSegment>(in.segs.data(), in.segs.size()), in.boundary,
+                             &o));
   }
 }
 
@@ -975,8 +978,8 @@ TEST(Cdt, Timing) {
   TestArena ta(64 << 20);
   Rng rng(2718);
   // A 10-point case: a triangle with 4 edge points and a cut through 3 interior points.
-  Input small = polygon({{0, 0}, {3, 0}, {6, 0}, {9, 0}, {6, 3}, {3, 6}, {0, 9}},
-                        {{2, 1}, {3, 2}, {4, 3}});
+  Input small =
+      polygon({{0, 0}, {3, 0}, {6, 0}, {9, 0}, {6, 3}, {3, 6}, {0, 9}}, {{2, 1}, {3, 2}, {4, 3}});
   small.segs.push_back({1, 7});
   small.segs.push_back({7, 8});
   small.segs.push_back({8, 9});
@@ -995,9 +998,9 @@ TEST(Cdt, Timing) {
     for (int i = 0; i < reps; ++i) {
       ta.arena.reset();
       ArenaArray<CdtTriangle> out(&ta.arena);
-      const Status s = cdt(ta.arena, Span<const CdtPoint>(in.pts.data(), in.pts.size()),
-                           Span<const CdtSegment>(in.segs.data(), in.segs.size()), in.boundary,
-                           &out);
+      const Status s =
+          cdt(ta.arena, Span<const CdtPoint>(in.pts.data(), in.pts.size()),
+              Span<const CdtSegment>(in.segs.data(), in.segs.size()), in.boundary, &out);
       if (!s.is_ok()) return -1.0;
     }
     const auto stop = std::chrono::steady_clock::now();
@@ -1005,14 +1008,13 @@ TEST(Cdt, Timing) {
   };
   const double small_us = time_it(small, 20000);
   const double large_us = time_it(large, 20);
-  std::printf("[   info   ] cdt: %zu points, %zu segments: %.2f us; %zu points, %zu segments: "
-              "%.0f us\n",
-              small.pts.size(), small.segs.size(), small_us, large.pts.size(), large.segs.size(),
-              large_us);
+  std::printf(
+      "[   info   ] cdt: %zu points, %zu segments: %.2f us; %zu points, %zu segments: "
+      "%.0f us\n",
+      small.pts.size(), small.segs.size(), small_us, large.pts.size(), large.segs.size(), large_us);
   EXPECT_GT(small_us, 0.0);
   EXPECT_GT(large_us, 0.0);
 }
-
 
 // ---- the small path (up to 32 points: the polygon ear-clipped, no super-triangle) -----------
 
@@ -1070,16 +1072,16 @@ TEST(CdtSmall, SameTrianglesAsTheGeneralPath) {
     ASSERT_TRUE(fast.result.status.is_ok()) << format(fast.result.status) << "\n" << describe(in);
     ASSERT_TRUE(general.result.status.is_ok()) << format(general.result.status);
     ASSERT_EQ(verify(in, fast.result.tris), "") << "case " << c << "\n" << describe(in);
-    ASSERT_TRUE(same_triangles(fast.result.tris, general.result.tris))
-        << "case " << c << "\n" << describe(in);
+    ASSERT_TRUE(same_triangles(fast.result.tris, general.result.tris)) << "case " << c << "\n"
+                                                                       << describe(in);
     EXPECT_FALSE(general.no_temporaries);
     if (fast.no_temporaries) {
       ++small;
       if (in.pts.size() > in.boundary) ++with_inside;
     }
   }
-  std::printf("[   info   ] %d cases, %d on the small path (%d with inside points)\n", cases,
-              small, with_inside);
+  std::printf("[   info   ] %d cases, %d on the small path (%d with inside points)\n", cases, small,
+              with_inside);
   EXPECT_GT(cases, 400);
   EXPECT_GT(small, cases * 9 / 10);
   EXPECT_GT(with_inside, 100);
@@ -1090,8 +1092,8 @@ TEST(CdtSmall, SameTrianglesAsTheGeneralPath) {
 // input the contract refuses, with the general path's message (Cdt.InputErrorsNameTheIds).
 TEST(CdtSmall, OtherPolygonsTakeTheGeneralPath) {
   TestArena ta(1 << 20);
-  const Input u = polygon({{0, 0}, {6, 0}, {6, 6}, {4, 6}, {4, 1}, {2, 1}, {2, 6}, {0, 6}},
-                          {{1, 3}, {5, 2.5}});
+  const Input u =
+      polygon({{0, 0}, {6, 0}, {6, 6}, {4, 6}, {4, 1}, {2, 1}, {2, 6}, {0, 6}}, {{1, 3}, {5, 2.5}});
   const PathResult fast = run_measured(ta.arena, u, false);
   const PathResult general = run_measured(ta.arena, u, true);
   ASSERT_TRUE(fast.result.status.is_ok()) << format(fast.result.status);
@@ -1099,8 +1101,8 @@ TEST(CdtSmall, OtherPolygonsTakeTheGeneralPath) {
   EXPECT_FALSE(fast.no_temporaries);
   ASSERT_EQ(fast.result.tris.size(), general.result.tris.size());
   for (size_t i = 0; i < fast.result.tris.size(); ++i) {
-    EXPECT_TRUE(std::equal(fast.result.tris[i].v, fast.result.tris[i].v + 3,
-                           general.result.tris[i].v));
+    EXPECT_TRUE(
+        std::equal(fast.result.tris[i].v, fast.result.tris[i].v + 3, general.result.tris[i].v));
   }
   // A convex polygon with a point inside and a cut: the small path, a valid result.
   Input square = polygon({{0, 0}, {4, 0}, {4, 4}, {0, 4}}, {{1, 2}});
@@ -1204,9 +1206,13 @@ TEST(Cdt, CoordinateRangeEnds) {
     EXPECT_TRUE(r.status.is_ok()) << v << ": " << format(r.status);
     EXPECT_EQ(r.tris.size(), 1u) << v;
   }
-  const double refused[] = {std::nextafter(lo, 0.0), std::nextafter(hi, inf),
-                            -std::nextafter(hi, inf), std::numeric_limits<double>::denorm_min(),
-                            std::numeric_limits<double>::min(), inf, -inf,
+  const double refused[] = {std::nextafter(lo, 0.0),
+                            std::nextafter(hi, inf),
+                            -std::nextafter(hi, inf),
+                            std::numeric_limits<double>::denorm_min(),
+                            std::numeric_limits<double>::min(),
+                            inf,
+                            -inf,
                             std::numeric_limits<double>::quiet_NaN()};
   for (double v : refused) {
     const Input in = polygon({{0, 0}, {4, 0}, {0, 4}}, {{1, 1}, {v, 1}});

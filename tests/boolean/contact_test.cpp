@@ -27,11 +27,11 @@ namespace splintcore {
 namespace {
 
 using detail::Contact;
+using detail::contact_point_position;
 using detail::ContactKind;
 using detail::ContactPoint;
-using detail::Loc;
-using detail::contact_point_position;
 using detail::intersect_triangles;
+using detail::Loc;
 using detail::loc_index;
 using detail::loc_is_edge;
 using detail::loc_is_vertex;
@@ -113,7 +113,8 @@ Loc rename(Loc l, const int perm[3]) {
   if (loc_is_vertex(l)) return static_cast<Loc>(inv[k]);
   const int x = inv[k], y = inv[(k + 1) % 3];
   for (int e = 0; e < 3; ++e) {
-    if ((e == x && (e + 1) % 3 == y) || (e == y && (e + 1) % 3 == x)) return static_cast<Loc>(3 + e);
+    if ((e == x && (e + 1) % 3 == y) || (e == y && (e + 1) % 3 == x))
+      return static_cast<Loc>(3 + e);
   }
   return F;
 }
@@ -226,11 +227,10 @@ TEST(BooleanContact, CoplanarPolygons) {
   // Star of David: six proper edge crossings.
   const Vec3 a[3] = {{-4, -2, 0}, {4, -2, 0}, {0, 4, 0}};
   const Vec3 b[3] = {{-4, 2, 0}, {0, -4, 0}, {4, 2, 0}};
-  expect_contact(a, b,
-                 {ContactKind::kPolygon,
-                  true,
-                  {{E0, E0}, {E0, E1}, {E1, E1}, {E1, E2}, {E2, E2}, {E2, E0}}},
-                 "hexagon");
+  expect_contact(
+      a, b,
+      {ContactKind::kPolygon, true, {{E0, E0}, {E0, E1}, {E1, E1}, {E1, E2}, {E2, E2}, {E2, E0}}},
+      "hexagon");
   // A quadrilateral: B's corner b0 inside A, A's corner a1 inside B... (1,1) (5,1) (1,5):
   // a1 = (4,0) is outside; B cut by A's edge 1: corners b0, (3,1) = (E1,E0), (1,3) = (E1,E2).
   const Vec3 cut[3] = {{1, 1, 0}, {5, 1, 0}, {1, 5, 0}};
@@ -411,7 +411,7 @@ int exact_loc(const IV t[3], const QP& q) {
   }
   if (zeros == 0) return static_cast<int>(F);
   if (zeros == 1) return 3 + (zero + 1) % 3;  // lambda_i = 0: on the edge opposite corner i
-  return nonzero;                              // two zeros: at the remaining corner
+  return nonzero;                             // two zeros: at the remaining corner
 }
 
 // A n plane(other) as points (corners on it, edge crossings).
@@ -540,12 +540,14 @@ bool check_pair(const Vec3 a[3], const Vec3 b[3], Oracle* oracle) {
     if (!ca.empty() && !cb.empty()) {
       auto lo = [&](const std::vector<QP>& v) {
         QP m = v[0];
-        for (const QP& q : v) if (compare_along(d, q, m) < 0) m = q;
+        for (const QP& q : v)
+          if (compare_along(d, q, m) < 0) m = q;
         return m;
       };
       auto hi = [&](const std::vector<QP>& v) {
         QP m = v[0];
-        for (const QP& q : v) if (compare_along(d, q, m) > 0) m = q;
+        for (const QP& q : v)
+          if (compare_along(d, q, m) > 0) m = q;
         return m;
       };
       QP s = lo(ca), e = hi(ca);
@@ -558,9 +560,9 @@ bool check_pair(const Vec3 a[3], const Vec3 b[3], Oracle* oracle) {
     }
     bool same = want.size() == pts.size();
     for (size_t i = 0; same && i < want.size(); ++i) same = want[i] == pts[i];
-    const ContactKind kind = want.empty() ? ContactKind::kNone
-                                          : (want.size() == 1 ? ContactKind::kPoint
-                                                              : ContactKind::kSegment);
+    const ContactKind kind = want.empty()
+                                 ? ContactKind::kNone
+                                 : (want.size() == 1 ? ContactKind::kPoint : ContactKind::kSegment);
     if (!same || kind != c.kind) {
       ADD_FAILURE() << "oracle wants " << want.size() << " points in order along d: " << what;
       return false;
@@ -568,9 +570,7 @@ bool check_pair(const Vec3 a[3], const Vec3 b[3], Oracle* oracle) {
   } else {
     // Project along an axis that keeps A proper; clip A by B's three closed half-planes.
     int w = 0;
-    auto proj = [&](const IV& v, int axis) {
-      return Q2{v[(axis + 1) % 3], v[(axis + 2) % 3], 1};
-    };
+    auto proj = [&](const IV& v, int axis) { return Q2{v[(axis + 1) % 3], v[(axis + 2) % 3], 1}; };
     while (w < 3 && orient_q(proj(x.a[0], w), proj(x.a[1], w), proj(x.a[2], w)) == 0) ++w;
     const Q2 pb[3] = {proj(x.b[0], w), proj(x.b[1], w), proj(x.b[2], w)};
     const int sigma_b = orient_q(pb[0], pb[1], pb[2]);
@@ -586,8 +586,8 @@ bool check_pair(const Vec3 a[3], const Vec3 b[3], Oracle* oracle) {
         if (vp >= 0) outp.push_back(p);
         if ((vp > 0 && vq < 0) || (vp < 0 && vq > 0)) {
           // (vp/pd * q - vq/qd * p) / (vp/pd - vq/qd)
-          outp.push_back(reduce2(vp * q.x - vq * p.x, vp * q.y - vq * p.y,
-                                 vp * q.den - vq * p.den));
+          outp.push_back(
+              reduce2(vp * q.x - vq * p.x, vp * q.y - vq * p.y, vp * q.den - vq * p.den));
         }
       }
       poly = outp;
@@ -635,8 +635,7 @@ bool check_pair(const Vec3 a[3], const Vec3 b[3], Oracle* oracle) {
         for (int k = 0; k < 3; ++k) {
           const IV e = x.a[(k + 1) % 3] - x.a[k];
           const IV seg = pts[1].num * pts[0].den - pts[0].num * pts[1].den;
-          if (is_zero(icross(e, seg)) && idot(e, seg) > 0 &&
-              exact_loc(x.a, pts[0]) != kOutside) {
+          if (is_zero(icross(e, seg)) && idot(e, seg) > 0 && exact_loc(x.a, pts[0]) != kOutside) {
             const int l0 = exact_loc(x.a, pts[0]), l1 = exact_loc(x.a, pts[1]);
             auto on_edge = [&](int l) { return l == k || l == (k + 1) % 3 || l == 3 + k; };
             along = along || (on_edge(l0) && on_edge(l1));
@@ -672,7 +671,8 @@ bool check_pair(const Vec3 a[3], const Vec3 b[3], Oracle* oracle) {
         size_t shift = 0;
         while (shift < cyc.size() && !(cyc[shift] == got[0])) ++shift;
         same = shift < cyc.size();
-        for (size_t i = 0; same && i < got.size(); ++i) same = cyc[(shift + i) % cyc.size()] == got[i];
+        for (size_t i = 0; same && i < got.size(); ++i)
+          same = cyc[(shift + i) % cyc.size()] == got[i];
       }
       if (!same || orient_q(got[0], got[1], got[2]) != sigma_a) {
         ADD_FAILURE() << "coplanar oracle wants a polygon of " << cyc.size() << ": " << what;
@@ -757,9 +757,7 @@ void random_pair(std::mt19937_64& rng, Vec3 a[3], Vec3 b[3]) {
     for (int j = 0; j < 3; ++j) {
       switch (mode) {
         case 0:
-        case 1:
-          b[j] = point(mode == 1 ? -4 : -2, mode == 1 ? 4 : 2);
-          break;
+        case 1: b[j] = point(mode == 1 ? -4 : -2, mode == 1 ? 4 : 2); break;
         case 2:  // one corner of A (at a random place), the others random
         case 3:  // two corners of A
           b[j] = point(-2, 2);
@@ -798,11 +796,11 @@ TEST(BooleanContact, ExactOracleOnTheGrid) {
     random_pair(rng, a, b);
     if (!check_pair(a, b, &oracle) || !check_pair(b, a, &oracle)) {
       ++failures;
-      ADD_FAILURE() << "pair " << n << ": A (" << a[0].x << "," << a[0].y << "," << a[0].z
-                    << ") (" << a[1].x << "," << a[1].y << "," << a[1].z << ") (" << a[2].x
-                    << "," << a[2].y << "," << a[2].z << ")  B (" << b[0].x << "," << b[0].y
-                    << "," << b[0].z << ") (" << b[1].x << "," << b[1].y << "," << b[1].z
-                    << ") (" << b[2].x << "," << b[2].y << "," << b[2].z << ")";
+      ADD_FAILURE() << "pair " << n << ": A (" << a[0].x << "," << a[0].y << "," << a[0].z << ") ("
+                    << a[1].x << "," << a[1].y << "," << a[1].z << ") (" << a[2].x << "," << a[2].y
+                    << "," << a[2].z << ")  B (" << b[0].x << "," << b[0].y << "," << b[0].z
+                    << ") (" << b[1].x << "," << b[1].y << "," << b[1].z << ") (" << b[2].x << ","
+                    << b[2].y << "," << b[2].z << ")";
     }
   }
   std::printf("[ contact  ] %ld oracle checks (pairs in both orders)\n", oracle.checked);
@@ -898,7 +896,8 @@ TEST(BooleanContact, SwapPermuteAndMapProperties) {
     const Vec3 pa[3] = {a[perm[0]], a[perm[1]], a[perm[2]]};
     const Contact p = run(pa, b);
     Contact want = x;
-    for (int i = 0; i < 3; ++i) want.side_b[i] = static_cast<int8_t>(x.side_b[i] * (perm[1] == (perm[0] + 1) % 3 ? 1 : -1));
+    for (int i = 0; i < 3; ++i)
+      want.side_b[i] = static_cast<int8_t>(x.side_b[i] * (perm[1] == (perm[0] + 1) % 3 ? 1 : -1));
     for (int i = 0; i < 3; ++i) want.side_a[i] = x.side_a[perm[i]];
     for (int i = 0; i < x.count; ++i) want.p[i].on_a = rename(x.p[i].on_a, perm);
     const bool odd = perm[1] != (perm[0] + 1) % 3;  // reverses n_a
@@ -910,8 +909,8 @@ TEST(BooleanContact, SwapPermuteAndMapProperties) {
     }
     if (!same_contact(p, want)) {
       ++failures;
-      ADD_FAILURE() << "corner permutation " << perm[0] << perm[1] << perm[2] << ": "
-                    << describe(x) << " vs " << describe(p);
+      ADD_FAILURE() << "corner permutation " << perm[0] << perm[1] << perm[2] << ": " << describe(x)
+                    << " vs " << describe(p);
     }
     // Positions depend only on the features named: the same bits after the permutation.
     for (int i = 0; i < x.count && p.kind == x.kind; ++i) {
@@ -993,7 +992,8 @@ long double norm_l(const Vec3& v) {
   return std::sqrt(x * x + y * y + z * z);
 }
 long double max_abs(const Vec3& v) {
-  return std::max({std::fabs(static_cast<long double>(v.x)), std::fabs(static_cast<long double>(v.y)),
+  return std::max({std::fabs(static_cast<long double>(v.x)),
+                   std::fabs(static_cast<long double>(v.y)),
                    std::fabs(static_cast<long double>(v.z))});
 }
 
@@ -1032,8 +1032,10 @@ long double documented_bound(const Vec3 a[3], const Vec3 b[3], const ContactPoin
   };
   const Vec3 f = flat(w - r), gu = flat(u - r), gv = flat(v - r);
   const int k1 = (drop + 1) % 3, k2 = (drop + 2) % 3;
-  const long double du = static_cast<long double>(f[k1]) * gu[k2] - static_cast<long double>(f[k2]) * gu[k1];
-  const long double dv = static_cast<long double>(f[k1]) * gv[k2] - static_cast<long double>(f[k2]) * gv[k1];
+  const long double du =
+      static_cast<long double>(f[k1]) * gu[k2] - static_cast<long double>(f[k2]) * gu[k1];
+  const long double dv =
+      static_cast<long double>(f[k1]) * gv[k2] - static_cast<long double>(f[k2]) * gv[k1];
   return 32 * eps *
          (norm_l(f) * (norm_l(gu) + norm_l(gv)) * norm_l(flat(v - u)) / std::fabs(du - dv) +
           max_abs(u) + norm_l(v - u));
@@ -1075,8 +1077,8 @@ TEST(BooleanContact, PositionsWithinTheDocumentedBound) {
         err = std::max(err, std::fabs(static_cast<long double>(got[k]) - want));
       }
       if (loc_is_vertex(c.p[i].on_a) || loc_is_vertex(c.p[i].on_b)) {
-        const Vec3 corner = loc_is_vertex(c.p[i].on_a) ? ma[loc_index(c.p[i].on_a)]
-                                                       : mb[loc_index(c.p[i].on_b)];
+        const Vec3 corner =
+            loc_is_vertex(c.p[i].on_a) ? ma[loc_index(c.p[i].on_a)] : mb[loc_index(c.p[i].on_b)];
         EXPECT_EQ(std::memcmp(&got, &corner, sizeof(got)), 0);
         continue;
       }

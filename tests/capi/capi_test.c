@@ -42,13 +42,13 @@ void free(void* p) { __libc_free(p); }
 /* ---- a tiny checker ------------------------------------------------------------------------ */
 static int g_checks = 0;
 static int g_failures = 0;
-#define CHECK(cond)                                                         \
-  do {                                                                      \
-    ++g_checks;                                                             \
-    if (!(cond)) {                                                          \
-      ++g_failures;                                                         \
+#define CHECK(cond)                                                            \
+  do {                                                                         \
+    ++g_checks;                                                                \
+    if (!(cond)) {                                                             \
+      ++g_failures;                                                            \
       fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond); \
-    }                                                                       \
+    }                                                                          \
   } while (0)
 #define CHECK_OK(ctx, expr)                                                 \
   do {                                                                      \
@@ -214,8 +214,10 @@ static void test_round_trip(const Bytes* torus) {
   unsigned char* out1 = (unsigned char*)malloc(stl_size);
   unsigned char* out2 = (unsigned char*)malloc(stl_size);
   unsigned char* ascii = (unsigned char*)malloc((size_t)1 << 20);
-  double *va = (double*)malloc(sizeof(double) * 3 * 2000), *vb = (double*)malloc(sizeof(double) * 3 * 2000);
-  uint32_t *ta = (uint32_t*)malloc(sizeof(uint32_t) * 3 * 2304), *tb = (uint32_t*)malloc(sizeof(uint32_t) * 3 * 2304);
+  double *va = (double*)malloc(sizeof(double) * 3 * 2000),
+         *vb = (double*)malloc(sizeof(double) * 3 * 2000);
+  uint32_t *ta = (uint32_t*)malloc(sizeof(uint32_t) * 3 * 2304),
+           *tb = (uint32_t*)malloc(sizeof(uint32_t) * 3 * 2304);
   sc_memory_sink_state s1, s2, s3;
   sc_sink k1 = sc_memory_sink(&s1, out1, stl_size, "out1");
   sc_sink k2 = sc_memory_sink(&s2, out2, stl_size, "out2");
@@ -277,7 +279,13 @@ static void test_round_trip(const Bytes* torus) {
   sc_arena_rewind(f.ctx, mark);
   CHECK(sc_arena_used(f.ctx) == mark.used);
   g_counting = 0;
-  free(out1); free(out2); free(ascii); free(va); free(vb); free(ta); free(tb);
+  free(out1);
+  free(out2);
+  free(ascii);
+  free(va);
+  free(vb);
+  free(ta);
+  free(tb);
   close_fixture(&f);
 }
 
@@ -468,8 +476,7 @@ static void serial_run(void* self, uint32_t count, sc_task_fn task, void* task_c
 
 /* The design at caps below its need: each run either succeeds or fails with
  * SC_ARENA_EXHAUSTED (the jaws may not fit either), the arena back where the call found it. */
-static void test_design_exhaustion(const Bytes* case_text, const Bytes jaw_bytes[2],
-                                   size_t need) {
+static void test_design_exhaustion(const Bytes* case_text, const Bytes jaw_bytes[2], size_t need) {
   size_t cap;
   int tried = 0, exhausted = 0, succeeded = 0;
   for (cap = need / 4; cap <= need + need / 8; cap += need / 16) {
@@ -650,9 +657,10 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
   read_golden("boolean:paper_scale-phantom6000", golden);
   CHECK(strlen(golden) == 64);
   CHECK(strcmp(hash, golden) == 0);
-  printf("design: %llu triangles, %.3f mm^3, printable %d, arena high water %llu bytes, sha256 %s\n",
-         (unsigned long long)report.splint_triangles, report.splint_volume_mm3, report.printable,
-         (unsigned long long)high_water, hash);
+  printf(
+      "design: %llu triangles, %.3f mm^3, printable %d, arena high water %llu bytes, sha256 %s\n",
+      (unsigned long long)report.splint_triangles, report.splint_volume_mm3, report.printable,
+      (unsigned long long)high_water, hash);
   printf("executor tasks run: %lu\n", g_tasks);
   free(stl);
 

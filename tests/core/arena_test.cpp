@@ -49,7 +49,7 @@ TEST(Arena, FailedRequestsInARowAddUpUntilASuccessOrRewind) {
   Arena::Marker m = arena.mark();
   EXPECT_EQ(arena.allocate(200, 16), nullptr);  // needs 112 + 200
   EXPECT_EQ(arena.last_need(), 312u);
-  EXPECT_NE(arena.allocate(48, 16), nullptr);   // fits: a success starts a new count
+  EXPECT_NE(arena.allocate(48, 16), nullptr);  // fits: a success starts a new count
   arena.rewind(m);
   EXPECT_EQ(arena.allocate(300, 16), nullptr);
   EXPECT_EQ(arena.last_need(), 112u + 300u);
@@ -92,7 +92,7 @@ TEST(Arena, ExtendGrowsOnlyTheTopAllocation) {
   EXPECT_EQ(arena.used(), 64u);
   void* b = arena.allocate(16);
   ASSERT_NE(b, nullptr);
-  EXPECT_FALSE(arena.try_extend(a, 64, 80));  // a is no longer on top
+  EXPECT_FALSE(arena.try_extend(a, 64, 80));       // a is no longer on top
   EXPECT_TRUE(arena.try_extend(b, 16, 256 - 64));  // exactly to the end of the buffer
   EXPECT_EQ(arena.used(), 256u);
   EXPECT_FALSE(arena.try_extend(b, 256 - 64, 256 - 63));

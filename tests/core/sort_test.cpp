@@ -55,25 +55,24 @@ TEST(RadixSort, BitRangeMatchesStableSortByThoseBits) {
     unsigned used;  // random bits in the range, from its bottom (few: many equal keys)
   };
   const Case cases[] = {
-      {0, 0, 64, 64},        {1, 3, 9, 6},          {2, 0, 1, 1},          {1000, 20, 62, 42},
-      {5000, 0, 64, 64},     {5000, 7, 19, 5},      {70000, 20, 62, 42},   {70000, 20, 62, 30},
-      {70000, 0, 64, 64},    {100000, 17, 45, 28},  {100000, 17, 44, 27},  {100000, 32, 64, 3},
-      {131072, 1, 64, 63},   {66000, 30, 63, 33},
+      {0, 0, 64, 64},      {1, 3, 9, 6},         {2, 0, 1, 1},         {1000, 20, 62, 42},
+      {5000, 0, 64, 64},   {5000, 7, 19, 5},     {70000, 20, 62, 42},  {70000, 20, 62, 30},
+      {70000, 0, 64, 64},  {100000, 17, 45, 28}, {100000, 17, 44, 27}, {100000, 32, 64, 3},
+      {131072, 1, 64, 63}, {66000, 30, 63, 33},
   };
   for (const Case& c : cases) {
     std::vector<uint64_t> items(c.n);
     const uint64_t range_mask =
         (c.hi - c.lo == 64 ? ~uint64_t{0} : ((uint64_t{1} << (c.hi - c.lo)) - 1)) << c.lo;
-    const uint64_t used_mask =
-        (c.used == 64 ? ~uint64_t{0} : ((uint64_t{1} << c.used) - 1)) << c.lo;
+    const uint64_t used_mask = (c.used == 64 ? ~uint64_t{0} : ((uint64_t{1} << c.used) - 1))
+                               << c.lo;
     for (uint64_t& k : items) {
       const uint64_t r = rng();
       k = (rng() & ~range_mask) | (r & used_mask);
     }
     std::vector<uint64_t> expected = items;
-    std::stable_sort(expected.begin(), expected.end(), [&](uint64_t a, uint64_t b) {
-      return (a & range_mask) < (b & range_mask);
-    });
+    std::stable_sort(expected.begin(), expected.end(),
+                     [&](uint64_t a, uint64_t b) { return (a & range_mask) < (b & range_mask); });
     std::vector<uint64_t> scratch(c.n);
     radix_sort_bits(Span<uint64_t>(items.data(), c.n), Span<uint64_t>(scratch.data(), c.n), c.lo,
                     c.hi);

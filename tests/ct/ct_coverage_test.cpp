@@ -38,9 +38,10 @@ CtRead read_ct(Kind kind, const std::string& text, const std::vector<CtMemoryFil
   CtFileOpener opener = ct_memory_opener(&memory);
   CtRead r;
   CtInfo* info = with_info ? &r.info : nullptr;
-  r.status = kind == Kind::kNrrd
-                 ? read_nrrd(Context(&arena->arena), source, &opener, options, &r.volume, info)
-                 : read_metaimage(Context(&arena->arena), source, &opener, options, &r.volume, info);
+  r.status =
+      kind == Kind::kNrrd
+          ? read_nrrd(Context(&arena->arena), source, &opener, options, &r.volume, info)
+          : read_metaimage(Context(&arena->arena), source, &opener, options, &r.volume, info);
   if (!r.status.is_ok()) {
     EXPECT_EQ(arena->arena.used(), 0u) << "a failed read left memory";
   }
@@ -70,19 +71,22 @@ void expect_cases(Kind kind, const std::vector<HeaderCase>& cases) {
 
 // ---- NRRD -----------------------------------------------------------------------------------
 
-const char kNrrdFields[] = "type: short\ndimension: 3\nsizes: 2 1 1\nencoding: raw\nendian: little\n";
+const char kNrrdFields[] =
+    "type: short\ndimension: 3\nsizes: 2 1 1\nencoding: raw\nendian: little\n";
 std::string nrrd(const std::string& extra, const std::string& fields = kNrrdFields) {
   return "NRRD0004\n" + fields + extra + "\n" + std::string(4, '\0');
 }
 
 TEST(CtNrrdCoverage, FirstLine) {
-  expect_cases(Kind::kNrrd, {
-      {"empty", "", StatusCode::kParseError, "the first line must be NRRD0001 to NRRD0005", 1},
-      {"long", "NRRD00041\n", StatusCode::kParseError, "must be NRRD0001", 1},
-      {"other magic", "NRRX0004\n", StatusCode::kParseError, "must be NRRD0001", 1},
-      {"version 0", "NRRD0000\n", StatusCode::kParseError, "must be NRRD0001", 1},
-      {"version 6", "NRRD0006\n", StatusCode::kParseError, "must be NRRD0001", 1},
-  });
+  expect_cases(
+      Kind::kNrrd,
+      {
+          {"empty", "", StatusCode::kParseError, "the first line must be NRRD0001 to NRRD0005", 1},
+          {"long", "NRRD00041\n", StatusCode::kParseError, "must be NRRD0001", 1},
+          {"other magic", "NRRX0004\n", StatusCode::kParseError, "must be NRRD0001", 1},
+          {"version 0", "NRRD0000\n", StatusCode::kParseError, "must be NRRD0001", 1},
+          {"version 6", "NRRD0006\n", StatusCode::kParseError, "must be NRRD0001", 1},
+      });
 }
 
 TEST(CtNrrdCoverage, FieldErrors) {
@@ -120,8 +124,8 @@ TEST(CtNrrdCoverage, FieldErrors) {
        "bad space origin", 7},
       {"space origin unclosed", nrrd("space origin: (1,2,3\n"), StatusCode::kParseError,
        "bad space origin", 7},
-      {"space origin two vectors", nrrd("space origin: (1,2,3) (4,5,6)\n"),
-       StatusCode::kParseError, "bad space origin", 7},
+      {"space origin two vectors", nrrd("space origin: (1,2,3) (4,5,6)\n"), StatusCode::kParseError,
+       "bad space origin", 7},
       {"directions two", nrrd("space directions: (1,0,0)\t(0,1,0)\n"), StatusCode::kParseError,
        "space directions: expected three vectors", 7},
       {"directions overflow", nrrd("space directions: (1e300,1e300,0) (0,1,0) (0,0,1)\n"),
@@ -133,7 +137,8 @@ TEST(CtNrrdCoverage, FieldErrors) {
       {"missing encoding", nrrd("", "type: short\ndimension: 3\nsizes: 2 1 1\nendian: little\n"),
        StatusCode::kParseError, "missing field \"encoding\"", 0},
   };
-  for (const char* encoding : {"gzip", "gz", "bzip2", "bz2", "ascii", "txt", "text", "hex", "zstd"}) {
+  for (const char* encoding :
+       {"gzip", "gz", "bzip2", "bz2", "ascii", "txt", "text", "hex", "zstd"}) {
     cases.push_back({encoding,
                      nrrd("", std::string("type: short\ndimension: 3\nsizes: 2 1 1\nencoding: ") +
                                   encoding + "\n"),
@@ -174,7 +179,8 @@ TEST(CtNrrdCoverage, AcceptedSpellings) {
 
 // ---- MetaImage ----------------------------------------------------------------------------
 
-const char kMetaKeys[] = "ObjectType = Image\nNDims = 3\nDimSize = 2 1 1\nElementType = MET_SHORT\n";
+const char kMetaKeys[] =
+    "ObjectType = Image\nNDims = 3\nDimSize = 2 1 1\nElementType = MET_SHORT\n";
 std::string meta(const std::string& extra, const std::string& keys = kMetaKeys,
                  const std::string& last = "BinaryData = True\nElementDataFile = LOCAL\n") {
   return keys + extra + last + std::string(4, '\0');
@@ -217,8 +223,8 @@ TEST(CtMetaImageCoverage, KeyErrors) {
        StatusCode::kParseError, "missing key NDims", 0},
       {"missing type", meta("", "ObjectType = Image\nNDims = 3\nDimSize = 2 1 1\n"),
        StatusCode::kParseError, "missing key ElementType", 0},
-      {"missing binary", meta("", kMetaKeys, "ElementDataFile = LOCAL\n"),
-       StatusCode::kUnsupported, "only binary MetaImage data is supported", 0},
+      {"missing binary", meta("", kMetaKeys, "ElementDataFile = LOCAL\n"), StatusCode::kUnsupported,
+       "only binary MetaImage data is supported", 0},
       {"binary false", meta("", kMetaKeys, "BinaryData = 0\nElementDataFile = LOCAL\n"),
        StatusCode::kUnsupported, "only binary MetaImage data is supported", 0},
   };
@@ -233,8 +239,9 @@ TEST(CtMetaImageCoverage, AcceptedSpellings) {
   const std::string text = meta(
       "\n   \n = 5\nElementSize = 3 3 3\nElementSpacing = 0.5 0.5 2\nElementSize = 7 7 7\n"
       "Offset = 1 2 3\nTransformMatrix = 1 0 0 0 1 0 0 0 1\nAnatomicalOrientation = " +
-          orientation + "\nElementNumberOfChannels = 1\nCompressedData = false\n"
-                        "ElementByteOrderMSB = 0\n",
+          orientation +
+          "\nElementNumberOfChannels = 1\nCompressedData = false\n"
+          "ElementByteOrderMSB = 0\n",
       kMetaKeys, "BinaryData = 1\nElementDataFile = LOCAL\n");
   CtRead r = read_ct(Kind::kMeta, text);
   SPLINTCORE_ASSERT_OK(r.status);
@@ -243,8 +250,8 @@ TEST(CtMetaImageCoverage, AcceptedSpellings) {
   EXPECT_EQ(r.volume.origin.z, 3.0);
   EXPECT_EQ(std::string(r.info.space), orientation.substr(0, 63));
   // Without an info to fill; "true" spelled out.
-  r = read_ct(Kind::kMeta, meta("", kMetaKeys, "BinaryData = true\nElementDataFile = LOCAL\n"),
-              {}, CtReadOptions{}, false);
+  r = read_ct(Kind::kMeta, meta("", kMetaKeys, "BinaryData = true\nElementDataFile = LOCAL\n"), {},
+              CtReadOptions{}, false);
   SPLINTCORE_EXPECT_OK(r.status);
   // A header over the byte budget.
   CtReadOptions small;
@@ -447,10 +454,10 @@ TEST(CtCommonCoverage, TypesAndHu) {
     bool is_signed, is_float;
     const char* name;
   };
-  const Named named[] = {{4, true, true, "float32"},  {8, true, true, "float64"},
-                         {1, true, false, "int8"},    {1, false, false, "uint8"},
-                         {2, true, false, "int16"},   {2, false, false, "uint16"},
-                         {4, true, false, "int32"},   {4, false, false, "uint32"}};
+  const Named named[] = {{4, true, true, "float32"}, {8, true, true, "float64"},
+                         {1, true, false, "int8"},   {1, false, false, "uint8"},
+                         {2, true, false, "int16"},  {2, false, false, "uint16"},
+                         {4, true, false, "int32"},  {4, false, false, "uint32"}};
   for (const Named& n : named) {
     VoxelFormat f;
     f.bytes = n.bytes;
@@ -497,8 +504,8 @@ TEST(CtCommonCoverage, VoxelConversion) {
   uint64_t saturated = 0;
   VoxelFormat f64;  // 64-bit signed integers: through the double path
   f64.bytes = 8;
-  SPLINTCORE_ASSERT_OK(convert(le_bytes(~uint64_t{0}, 8) + le_bytes(40000, 8), f64, 2, 1, 0, &hu,
-                               &saturated));
+  SPLINTCORE_ASSERT_OK(
+      convert(le_bytes(~uint64_t{0}, 8) + le_bytes(40000, 8), f64, 2, 1, 0, &hu, &saturated));
   EXPECT_EQ(hu, (std::vector<int16_t>{-1, 32767}));
   EXPECT_EQ(saturated, 1u);
   VoxelFormat d;  // doubles, one infinite
@@ -521,8 +528,8 @@ TEST(CtCommonCoverage, VoxelConversion) {
   // 16-bit little endian, the fast path: clamped both ways by the intercept.
   VoxelFormat u16;
   u16.is_signed = false;
-  SPLINTCORE_ASSERT_OK(convert(le_bytes(65535, 2) + le_bytes(0, 2), u16, 2, 1, -40000, &hu,
-                               &saturated));
+  SPLINTCORE_ASSERT_OK(
+      convert(le_bytes(65535, 2) + le_bytes(0, 2), u16, 2, 1, -40000, &hu, &saturated));
   EXPECT_EQ(hu, (std::vector<int16_t>{25535, -32768}));
   EXPECT_EQ(saturated, 1u);
   SPLINTCORE_ASSERT_OK(convert(le_bytes(65535, 2), u16, 1, 1, 0, &hu, &saturated));
@@ -576,8 +583,8 @@ RawRun raw_volume(const RawData& data, const CtFileOpener* opener, Arena* arena 
   int16_t* hu = nullptr;
   uint64_t saturated = 0;
   RawRun r;
-  r.status = read_raw_volume(Context(&a), header, header_source, opener, data, options, &hu,
-                             &saturated);
+  r.status =
+      read_raw_volume(Context(&a), header, header_source, opener, data, options, &hu, &saturated);
   if (r.status.is_ok()) {
     r.hu.assign(hu, hu + uint64_t{data.nx} * data.ny * data.nz);
   } else {
@@ -645,7 +652,8 @@ TEST(CtCommonCoverage, RawVolumeDataFiles) {
   file.size = 5;  // less than what the line skip read
   r = raw_volume(data, &opener);
   EXPECT_EQ(r.status.code(), StatusCode::kTruncated);
-  EXPECT_NE(std::strstr(r.status.message(), "the voxel data needs 4 bytes, the file has 5"), nullptr);
+  EXPECT_NE(std::strstr(r.status.message(), "the voxel data needs 4 bytes, the file has 5"),
+            nullptr);
   file.size = 11;
   r = raw_volume(data, &opener);
   EXPECT_EQ(r.status.code(), StatusCode::kTruncated);
@@ -694,12 +702,12 @@ struct FailNth {
   static void* allocate(void* user, size_t bytes) {
     FailNth* f = static_cast<FailNth*>(user);
     if (f->calls++ == f->fail_at) return nullptr;
-    return ::operator new(bytes, std::align_val_t{16});
+    return ::operator new (bytes, std::align_val_t{16});
   }
   static void release(void* user, void* pointer, size_t bytes) {
     (void)user;
     (void)bytes;
-    ::operator delete(pointer, std::align_val_t{16});
+    ::operator delete (pointer, std::align_val_t{16});
   }
 };
 

@@ -180,8 +180,9 @@ TEST(CtNrrd, ReadsBytesFloatsAndInts) {
     expect_vec(r.volume.spacing, Vec3{1, 1, 1});  // no spacing given: 1 mm
   }
   {
-    std::string h = "NRRD0004\ntype: float\ndimension: 3\nsizes: 5 1 1\nspacings: 1 1 2\n"
-                    "endian: little\nencoding: raw\n\n";
+    std::string h =
+        "NRRD0004\ntype: float\ndimension: 3\nsizes: 5 1 1\nspacings: 1 1 2\n"
+        "endian: little\nencoding: raw\n\n";
     Result r = read_format(CtFormat::kNrrd, cat(h, le_f32({2.5f, -2.5f, 1e6f, -1e9f, 0.4f})));
     ASSERT_TRUE(r.status.is_ok()) << message(r.status);
     EXPECT_EQ(r.hu, (std::vector<int>{3, -3, 32767, -32768, 0}));
@@ -189,8 +190,9 @@ TEST(CtNrrd, ReadsBytesFloatsAndInts) {
     EXPECT_EQ(r.volume.spacing.z, 2.0);
   }
   {
-    std::string h = "NRRD0004\ntype: int32\ndimension: 3\nsizes: 2 1 1\n"
-                    "endian: little\nencoding: raw\n\n";
+    std::string h =
+        "NRRD0004\ntype: int32\ndimension: 3\nsizes: 2 1 1\n"
+        "endian: little\nencoding: raw\n\n";
     std::vector<uint8_t> d = {0x00, 0x00, 0x01, 0x00, 0xFF, 0xFF, 0xFF, 0xFF};
     Result r = read_format(CtFormat::kNrrd, cat(h, d));
     ASSERT_TRUE(r.status.is_ok()) << message(r.status);
@@ -199,8 +201,9 @@ TEST(CtNrrd, ReadsBytesFloatsAndInts) {
 }
 
 TEST(CtNrrd, NonFiniteFloatNamesTheVoxel) {
-  std::string h = "NRRD0004\ntype: float\ndimension: 3\nsizes: 3 1 1\n"
-                  "endian: little\nencoding: raw\n\n";
+  std::string h =
+      "NRRD0004\ntype: float\ndimension: 3\nsizes: 3 1 1\n"
+      "endian: little\nencoding: raw\n\n";
   Result r = read_format(CtFormat::kNrrd, cat(h, le_f32({1.0f, 2.0f, std::nanf("")})));
   EXPECT_EQ(r.status.code(), StatusCode::kNonFinite);
   EXPECT_EQ(r.status.index(), 2u);
@@ -221,8 +224,9 @@ TEST(CtNrrd, ReadsDetachedDataWithSkips) {
   EXPECT_TRUE(r.info.detached);
 
   // byte skip -1: the data ends the file.
-  std::string h2 = "NRRD0004\ntype: short\ndimension: 3\nsizes: 2 2 1\nendian: little\n"
-                   "encoding: raw\ndata file: end.raw\nbyte skip: -1\n";
+  std::string h2 =
+      "NRRD0004\ntype: short\ndimension: 3\nsizes: 2 2 1\nendian: little\n"
+      "encoding: raw\ndata file: end.raw\nbyte skip: -1\n";
   std::vector<uint8_t> raw2 = test::to_bytes("some header of another program");
   raw2.insert(raw2.end(), values.begin(), values.end());
   std::vector<CtMemoryFile> files2 = {{"end.raw", raw2.data(), raw2.size()}};
@@ -286,8 +290,8 @@ TEST(CtNrrd, LyingSizesAndOverflowingDimensions) {
   // More voxels than bytes: truncated before anything is allocated.
   TestArena arena(size_t{1} << 20);
   std::string lying = replace(kNrrdHeader, "sizes: 2 3 4", "sizes: 200 300 4");
-  Result r = read_format(CtFormat::kNrrd, cat(lying, le16(ramp(24, 0, 1))), {}, 0,
-                         CtReadOptions{}, &arena.arena);
+  Result r = read_format(CtFormat::kNrrd, cat(lying, le16(ramp(24, 0, 1))), {}, 0, CtReadOptions{},
+                         &arena.arena);
   EXPECT_EQ(r.status.code(), StatusCode::kTruncated) << message(r.status);
   EXPECT_EQ(arena.arena.high_water(), 0u);
 
@@ -310,8 +314,7 @@ TEST(CtNrrd, ArenaTooSmallFailsBeforeAllocating) {
   TestArena small(20000);
   Result r = read_format(CtFormat::kNrrd, bytes, {}, 0, CtReadOptions{}, &small.arena);
   EXPECT_EQ(r.status.code(), StatusCode::kArenaExhausted);
-  EXPECT_NE(message(r.status).find("32768 for the voxels"), std::string::npos)
-      << message(r.status);
+  EXPECT_NE(message(r.status).find("32768 for the voxels"), std::string::npos) << message(r.status);
   EXPECT_EQ(small.arena.high_water(), 0u);
   // Enough: only the voxels stay in the arena.
   TestArena enough(32768 + 65536 + 64);
@@ -366,7 +369,8 @@ TEST(CtMetaImage, ReadsInlineShortsWithTransform) {
 }
 
 TEST(CtMetaImage, ReadsBigEndianFloatAndDetachedWithHeaderSize) {
-  std::string h = replace(kMhaHeader, "BinaryDataByteOrderMSB = False", "ElementByteOrderMSB = True");
+  std::string h =
+      replace(kMhaHeader, "BinaryDataByteOrderMSB = False", "ElementByteOrderMSB = True");
   h = replace(h, "MET_SHORT", "MET_USHORT");
   Result r = read_format(CtFormat::kMetaImage, cat(h, be16(ramp(12, 0, 1000))));
   ASSERT_TRUE(r.status.is_ok()) << message(r.status);
@@ -393,18 +397,17 @@ TEST(CtMetaImage, RejectsUnsupportedAndBadHeaders) {
     const char* text;
   };
   const Case cases[] = {
-      {"CompressedData = False", "CompressedData = True", StatusCode::kUnsupported,
-       "compressed"},
+      {"CompressedData = False", "CompressedData = True", StatusCode::kUnsupported, "compressed"},
       {"ElementDataFile = LOCAL", "ElementDataFile = LIST", StatusCode::kUnsupported, "LIST"},
       {"ElementDataFile = LOCAL", "ElementDataFile = s%03d.raw 1 2 1", StatusCode::kUnsupported,
        "pattern"},
       {"NDims = 3", "NDims = 2", StatusCode::kUnsupported, "NDims 2"},
       {"MET_SHORT", "MET_LONG_LONG", StatusCode::kUnsupported, "ElementType"},
       {"BinaryData = True", "BinaryData = False", StatusCode::kUnsupported, "binary"},
-      {"ElementSpacing = 0.3 0.4 1.25", "ElementSpacing = 0.3 -0.4 1.25",
-       StatusCode::kParseError, "spacing along y"},
-      {"ElementSpacing = 0.3 0.4 1.25", "ElementSpacing = 300 0.4 1.25",
-       StatusCode::kParseError, "wrong units?"},
+      {"ElementSpacing = 0.3 0.4 1.25", "ElementSpacing = 0.3 -0.4 1.25", StatusCode::kParseError,
+       "spacing along y"},
+      {"ElementSpacing = 0.3 0.4 1.25", "ElementSpacing = 300 0.4 1.25", StatusCode::kParseError,
+       "wrong units?"},
       {"TransformMatrix = 0 1 0 1 0 0 0 0 -1", "TransformMatrix = 0 1 0 1 0 0 0 0 -2",
        StatusCode::kParseError, "length"},
       {"DimSize = 3 2 2\n", "", StatusCode::kParseError, "DimSize"},
@@ -453,7 +456,7 @@ struct DicomSpec {
   bool sequences = false;        // add skipped sequences (defined/undefined, UN)
   int nesting = 0;               // > 0: undefined-length sequences nested this deep
   bool encapsulated = false;
-  std::vector<uint32_t> omit;    // tags left out
+  std::vector<uint32_t> omit;  // tags left out
 };
 
 struct DicomWriter {
@@ -589,8 +592,7 @@ struct SeriesResult {
 };
 
 SeriesResult read_series(const std::vector<std::vector<uint8_t>>& files, size_t max_chunk = 0,
-                         const CtReadOptions& options = CtReadOptions{},
-                         Arena* arena = nullptr) {
+                         const CtReadOptions& options = CtReadOptions{}, Arena* arena = nullptr) {
   static TestArena* shared = new TestArena(size_t{16} << 20);
   Arena& a = arena != nullptr ? *arena : shared->arena;
   if (arena == nullptr) a.reset();
@@ -639,8 +641,7 @@ TEST(CtDicom, OrdersSlicesByPositionNotByFile) {
     expect_vec(r.volume.spacing, Vec3{0.25, 0.5, 3});
     expect_vec(r.volume.origin, Vec3{10, -20, -1});
     expect_vec(r.volume.axis_z, Vec3{0, 0, 1});
-    EXPECT_STREQ(r.info.transfer_syntax,
-                 implicit ? "1.2.840.10008.1.2" : "1.2.840.10008.1.2.1");
+    EXPECT_STREQ(r.info.transfer_syntax, implicit ? "1.2.840.10008.1.2" : "1.2.840.10008.1.2.1");
     EXPECT_EQ(r.info.slice_count, 3u);
     EXPECT_STREQ(r.info.photometric, "MONOCHROME2");
   }
@@ -741,8 +742,8 @@ TEST(CtDicom, SkipsSequencesOfDefinedAndUndefinedLength) {
 }
 
 TEST(CtDicom, UnsupportedTransferSyntaxes) {
-  for (const char* uid : {"1.2.840.10008.1.2.4.50", "1.2.840.10008.1.2.5",
-                          "1.2.840.10008.1.2.1.99", "1.2.840.10008.1.2.2"}) {
+  for (const char* uid : {"1.2.840.10008.1.2.4.50", "1.2.840.10008.1.2.5", "1.2.840.10008.1.2.1.99",
+                          "1.2.840.10008.1.2.2"}) {
     DicomSpec s = slice(0, 0);
     s.syntax = uid;
     SeriesResult r = read_series({dicom_file(s)});
@@ -814,16 +815,11 @@ TEST(CtDicom, MissingAndBadTags) {
     uint32_t tag;
     const char* text;
   };
-  const Case cases[] = {{0x00280010, "(0028,0010) Rows"},
-                        {0x00280011, "(0028,0011) Columns"},
-                        {0x00280100, "Bits Allocated"},
-                        {0x00280103, "Pixel Representation"},
-                        {0x00200032, "Image Position"},
-                        {0x00200037, "Image Orientation"},
-                        {0x00280030, "Pixel Spacing"},
-                        {0x00280004, "Photometric"},
-                        {0x7FE00010, "Pixel Data"},
-                        {0x00020010, "Transfer Syntax"}};
+  const Case cases[] = {{0x00280010, "(0028,0010) Rows"}, {0x00280011, "(0028,0011) Columns"},
+                        {0x00280100, "Bits Allocated"},   {0x00280103, "Pixel Representation"},
+                        {0x00200032, "Image Position"},   {0x00200037, "Image Orientation"},
+                        {0x00280030, "Pixel Spacing"},    {0x00280004, "Photometric"},
+                        {0x7FE00010, "Pixel Data"},       {0x00020010, "Transfer Syntax"}};
   for (const Case& c : cases) {
     DicomSpec s = slice(0, 0);
     s.thickness = "1";
@@ -888,8 +884,7 @@ TEST(CtDicom, RowsAndColumnsOverflowAndArenaTooSmall) {
   TestArena small(20000);
   r = read_series(files, 0, CtReadOptions{}, &small.arena);
   EXPECT_EQ(r.status.code(), StatusCode::kArenaExhausted);
-  EXPECT_NE(message(r.status).find("24576 for the voxels"), std::string::npos)
-      << message(r.status);
+  EXPECT_NE(message(r.status).find("24576 for the voxels"), std::string::npos) << message(r.status);
   EXPECT_EQ(small.arena.high_water(), 0u);
   TestArena enough(24576 + 65536 + 1024);
   r = read_series(files, 0, CtReadOptions{}, &enough.arena);

@@ -158,9 +158,9 @@ std::vector<uint8_t> file(const std::vector<El>& els, bool implicit = false,
     w.b.insert(w.b.end(), meta->begin(), meta->end());
   } else {
     w.element({tag(0x0002, 0x0001), "OB", {0, 1}}, false);
-    w.element({tag(0x0002, 0x0010), "UI",
-               text(implicit ? "1.2.840.10008.1.2" : "1.2.840.10008.1.2.1")},
-              false);
+    w.element(
+        {tag(0x0002, 0x0010), "UI", text(implicit ? "1.2.840.10008.1.2" : "1.2.840.10008.1.2.1")},
+        false);
   }
   for (const El& e : els) w.element(e, implicit);
   return w.b;
@@ -182,9 +182,9 @@ struct Series {
     if (index >= s->files.size()) return Status::error(StatusCode::kIoError, "no such file");
     s->opens.resize(s->files.size());
     const bool again = s->opens[index]++ > 0;
-    const std::vector<uint8_t>& f =
-        again && index < s->second.size() && !s->second[index].empty() ? s->second[index]
-                                                                        : s->files[index];
+    const std::vector<uint8_t>& f = again && index < s->second.size() && !s->second[index].empty()
+                                        ? s->second[index]
+                                        : s->files[index];
     s->current = MemorySource{f.data(), f.size(), 0, 0};
     *out = memory_source(&s->current, s->null_names ? nullptr : s->names[index].c_str());
     out->name = s->null_names ? nullptr : s->names[index].c_str();
@@ -301,15 +301,14 @@ TEST(DicomCoverage, ElementsAndContainers) {
        StatusCode::kParseError, "undefined length"},
       {"transfer syntax too long", file(slice(0), false, &long_syntax.b), StatusCode::kParseError,
        "Transfer Syntax UID: too long"},
-      {"item outside a sequence",
-       with([&](std::vector<El>* e) { raw_before(e, kRows, item); }), StatusCode::kParseError,
-       "Item: outside a sequence"},
+      {"item outside a sequence", with([&](std::vector<El>* e) { raw_before(e, kRows, item); }),
+       StatusCode::kParseError, "Item: outside a sequence"},
       {"item in an item", with([&](std::vector<El>* e) { raw_before(e, kRows, item_in_item); }),
        StatusCode::kParseError, "Item: outside a sequence"},
-      {"items nested too deeply", with([&](std::vector<El>* e) { raw_before(e, kRows, deep_item); }),
+      {"items nested too deeply",
+       with([&](std::vector<El>* e) { raw_before(e, kRows, deep_item); }),
        StatusCode::kLimitExceeded, "Item: nested too deeply"},
-      {"sequences nested too deeply",
-       with([&](std::vector<El>* e) {
+      {"sequences nested too deeply", with([&](std::vector<El>* e) {
          std::vector<uint8_t> more = deep;
          const std::vector<uint8_t> sq = long_header(tag(0x0008, 0x1140), "SQ", 0xFFFFFFFFu);
          more.insert(more.end(), sq.begin(), sq.end());
@@ -334,8 +333,7 @@ TEST(DicomCoverage, ElementsAndContainers) {
       {"VR first byte high", bad_vr("aS"), StatusCode::kParseError, "invalid VR"},
       {"VR second byte low", bad_vr("S\x01"), StatusCode::kParseError, "invalid VR"},
       {"VR second byte high", bad_vr("Sh"), StatusCode::kParseError, "invalid VR"},
-      {"undefined length OB",
-       with([&](std::vector<El>* e) {
+      {"undefined length OB", with([&](std::vector<El>* e) {
          raw_before(e, kRows, long_header(tag(0x0009, 0x0010), "OB", 0xFFFFFFFFu));
        }),
        StatusCode::kParseError, "undefined length on a VR other than SQ or UN"},
@@ -344,18 +342,21 @@ TEST(DicomCoverage, ElementsAndContainers) {
          raw_before(e, kRows, long_value);
        }),
        StatusCode::kParseError, "value of 300 bytes is too long"},
-      {"Rows of 4 bytes", with([&](std::vector<El>* e) { put(e, {kRows, "UL", {2, 0, 0, 0}}); }),
+      {"Rows of 4 bytes", with([&](std::vector<El>* e) {
+         put(e, {kRows, "UL", {2, 0, 0, 0}});
+       }),
        StatusCode::kParseError, "(0028,0010) Rows: expected 2 bytes (US)"},
-      {"position not numbers",
-       with([&](std::vector<El>* e) { put(e, {tag(0x0020, 0x0032), "DS", text("a\\b\\c")}); }),
+      {"position not numbers", with([&](std::vector<El>* e) {
+         put(e, {tag(0x0020, 0x0032), "DS", text("a\\b\\c")});
+       }),
        StatusCode::kParseError, "expected 3 decimal number(s), got \"a\\b\\c"},
-      {"position long and short",
-       with([&](std::vector<El>* e) {
+      {"position long and short", with([&](std::vector<El>* e) {
          put(e, {tag(0x0020, 0x0032), "DS", text("1\\2\\3\\" + std::string(70, '4'))});
        }),
        StatusCode::kParseError, "expected 3 decimal number(s)"},
-      {"frames not a number",
-       with([&](std::vector<El>* e) { put(e, {tag(0x0028, 0x0008), "IS", text("x")}); }),
+      {"frames not a number", with([&](std::vector<El>* e) {
+         put(e, {tag(0x0028, 0x0008), "IS", text("x")});
+       }),
        StatusCode::kParseError, "Number of Frames: not an integer"},
   };
   expect_files(cases);
@@ -370,8 +371,7 @@ TEST(DicomCoverage, ElementsAndContainers) {
 TEST(DicomCoverage, HeaderChecks) {
   const uint32_t kRows = tag(0x0028, 0x0010), kColumns = tag(0x0028, 0x0011);
   const std::vector<FileCase> cases = {
-      {"long photometric",
-       with([](std::vector<El>* e) {
+      {"long photometric", with([](std::vector<El>* e) {
          put(e, {tag(0x0028, 0x0004), "CS", text("MONOCHROME2_AND_MORE_TEXT")});
        }),
        StatusCode::kUnsupported, "Photometric Interpretation MONOCHROME2_AND_: only"},
@@ -385,18 +385,29 @@ TEST(DicomCoverage, HeaderChecks) {
          put(e, {tag(0x7FE0, 0x0010), "OW", {}});
        }),
        StatusCode::kParseError, "image of 2 rows and 0 columns is empty"},
-      {"two samples", with([](std::vector<El>* e) { put(e, {tag(0x0028, 0x0002), "US", us(2)}); }),
+      {"two samples", with([](std::vector<El>* e) {
+         put(e, {tag(0x0028, 0x0002), "US", us(2)});
+       }),
        StatusCode::kUnsupported, "Samples per Pixel is 2"},
-      {"bits stored 0", with([](std::vector<El>* e) { put(e, {tag(0x0028, 0x0101), "US", us(0)}); }),
+      {"bits stored 0", with([](std::vector<El>* e) {
+         put(e, {tag(0x0028, 0x0101), "US", us(0)});
+       }),
        StatusCode::kParseError, "Bits Stored is 0 with Bits Allocated 16"},
-      {"bits stored 17", with([](std::vector<El>* e) { put(e, {tag(0x0028, 0x0101), "US", us(17)}); }),
+      {"bits stored 17", with([](std::vector<El>* e) {
+         put(e, {tag(0x0028, 0x0101), "US", us(17)});
+       }),
        StatusCode::kParseError, "Bits Stored is 17 with Bits Allocated 16"},
-      {"high bit", with([](std::vector<El>* e) { put(e, {tag(0x0028, 0x0102), "US", us(11)}); }),
+      {"high bit", with([](std::vector<El>* e) {
+         put(e, {tag(0x0028, 0x0102), "US", us(11)});
+       }),
        StatusCode::kUnsupported, "High Bit is 11: only Bits Stored - 1"},
-      {"pixel representation 2",
-       with([](std::vector<El>* e) { put(e, {tag(0x0028, 0x0103), "US", us(2)}); }),
+      {"pixel representation 2", with([](std::vector<El>* e) {
+         put(e, {tag(0x0028, 0x0103), "US", us(2)});
+       }),
        StatusCode::kParseError, "Pixel Representation is 2"},
-      {"slope 0", with([](std::vector<El>* e) { put(e, {tag(0x0028, 0x1053), "DS", text("0")}); }),
+      {"slope 0", with([](std::vector<El>* e) {
+         put(e, {tag(0x0028, 0x1053), "DS", text("0")});
+       }),
        StatusCode::kParseError, "Rescale Slope is 0: must be finite and non-zero"},
   };
   expect_files(cases);
@@ -405,7 +416,8 @@ TEST(DicomCoverage, HeaderChecks) {
   cut.resize(cut.size() - 3);
   SeriesRead r = read_one(cut);
   EXPECT_EQ(r.status.code(), StatusCode::kTruncated);
-  EXPECT_TRUE(has(r.status, "file ends inside Pixel Data (12 bytes from byte")) << r.status.message();
+  EXPECT_TRUE(has(r.status, "file ends inside Pixel Data (12 bytes from byte"))
+      << r.status.message();
   Series unknown;
   unknown.files = {file(slice(0))};
   unknown.unknown_size = true;
@@ -481,37 +493,61 @@ TEST(DicomCoverage, SlicesThatDiffer) {
     const char* what;
   };
   const std::vector<Differ> cases = {
-      {"rows", [](std::vector<El>* e) {
+      {"rows",
+       [](std::vector<El>* e) {
          put(e, {tag(0x0028, 0x0010), "US", us(1)});
          put(e, {tag(0x7FE0, 0x0010), "OW", pixels16(3, 0)});
-       }, "image size"},
-      {"columns", [](std::vector<El>* e) {
+       },
+       "image size"},
+      {"columns",
+       [](std::vector<El>* e) {
          put(e, {tag(0x0028, 0x0011), "US", us(1)});
          put(e, {tag(0x7FE0, 0x0010), "OW", pixels16(2, 0)});
-       }, "image size"},
-      {"bits allocated", [](std::vector<El>* e) {
+       },
+       "image size"},
+      {"bits allocated",
+       [](std::vector<El>* e) {
          put(e, {tag(0x0028, 0x0100), "US", us(8)});
          put(e, {tag(0x0028, 0x0101), "US", us(8)});
          put(e, {tag(0x7FE0, 0x0010), "OB", std::vector<uint8_t>(6, 1)});
-       }, "pixel format"},
-      {"bits stored", [](std::vector<El>* e) { put(e, {tag(0x0028, 0x0101), "US", us(12)}); },
+       },
        "pixel format"},
-      {"bits stored absent", [](std::vector<El>* e) {
+      {"bits stored",
+       [](std::vector<El>* e) {
+         put(e, {tag(0x0028, 0x0101), "US", us(12)});
+       },
+       "pixel format"},
+      {"bits stored absent",
+       [](std::vector<El>* e) {
          drop(e, tag(0x0028, 0x0101));
          put(e, {tag(0x0028, 0x0100), "US", us(16)});
-       }, ""},  // absent means Bits Allocated: the same format
-      {"representation", [](std::vector<El>* e) { put(e, {tag(0x0028, 0x0103), "US", us(0)}); },
+       },
+       ""},  // absent means Bits Allocated: the same format
+      {"representation",
+       [](std::vector<El>* e) {
+         put(e, {tag(0x0028, 0x0103), "US", us(0)});
+       },
        "pixel format"},
-      {"row spacing", [](std::vector<El>* e) {
+      {"row spacing",
+       [](std::vector<El>* e) {
          put(e, {tag(0x0028, 0x0030), "DS", text("0.6\\0.25")});
-       }, "Pixel Spacing"},
-      {"orientation", [](std::vector<El>* e) {
+       },
+       "Pixel Spacing"},
+      {"orientation",
+       [](std::vector<El>* e) {
          put(e, {tag(0x0020, 0x0037), "DS", text("0\\1\\0\\1\\0\\0")});
-       }, "Image Orientation (Patient)"},
-      {"slope", [](std::vector<El>* e) { put(e, {tag(0x0028, 0x1053), "DS", text("2")}); }, ""},
-      {"intercept", [](std::vector<El>* e) {
+       },
+       "Image Orientation (Patient)"},
+      {"slope",
+       [](std::vector<El>* e) {
+         put(e, {tag(0x0028, 0x1053), "DS", text("2")});
+       },
+       ""},
+      {"intercept",
+       [](std::vector<El>* e) {
          put(e, {tag(0x0028, 0x1052), "DS", text("-1000")});
-       }, ""},
+       },
+       ""},
   };
   for (const Differ& c : cases) {
     SCOPED_TRACE(c.name);
@@ -551,8 +587,11 @@ TEST(DicomCoverage, SourcesWithoutNamesOrClose) {
   drop(&thin, tag(0x0018, 0x0050));
   std::vector<El> wide = slice(0);
   put(&wide, {tag(0x0028, 0x0030), "DS", text("500\\500")});
-  const std::vector<std::vector<std::vector<uint8_t>>> series = {
-      {file(skew)}, {file(slice(0)), file(other)}, {file(thin)}, {file(wide)}, {file(slice(0), true)}};
+  const std::vector<std::vector<std::vector<uint8_t>>> series = {{file(skew)},
+                                                                 {file(slice(0)), file(other)},
+                                                                 {file(thin)},
+                                                                 {file(wide)},
+                                                                 {file(slice(0), true)}};
   const char* fragments[] = {"orthogonal", "in its Pixel Spacing", "a single slice needs",
                              "wrong units?", "orthogonal"};
   for (size_t i = 0; i < series.size(); ++i) {
@@ -611,10 +650,10 @@ struct FailNth {
   static void* allocate(void* user, size_t bytes) {
     FailNth* f = static_cast<FailNth*>(user);
     if (f->calls++ == f->fail_at) return nullptr;
-    return ::operator new(bytes, std::align_val_t{16});
+    return ::operator new (bytes, std::align_val_t{16});
   }
   static void release(void*, void* pointer, size_t) {
-    ::operator delete(pointer, std::align_val_t{16});
+    ::operator delete (pointer, std::align_val_t{16});
   }
 };
 

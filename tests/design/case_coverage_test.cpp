@@ -24,8 +24,8 @@ std::string make_case(const std::string& root_extra = "", const std::string& jaw
       R"("upper": [{"position": [0, 0, 1]}, {"position": [10, 0, 1]}],
          "lower": [{"position": [0, 0, -1]}, {"position": [10, 0, -1]}])";
   return std::string("{\"splintcore_case\": 1, \"case_id\": \"c-1\", \"units\": \"mm\",") +
-         " \"jaws\": " + (jaws.empty() ? default_jaws : jaws) + "," + root_extra +
-         " \"base\": {" + base_extra + (picks.empty() ? default_picks : picks) + "}}";
+         " \"jaws\": " + (jaws.empty() ? default_jaws : jaws) + "," + root_extra + " \"base\": {" +
+         base_extra + (picks.empty() ? default_picks : picks) + "}}";
 }
 
 struct Case {
@@ -61,8 +61,8 @@ TEST(CaseCoverage, EveryErrorIsNamed) {
        "non-empty string"},
       {"case id not plain", R"({"splintcore_case": 1, "case_id": "a/b"})",
        StatusCode::kInvalidArgument, "\"case_id\" must be 1-64"},
-      {"case id nul", R"({"splintcore_case": 1, "case_id": "a\u0000"})",
-       StatusCode::kParseError, "not allowed"},
+      {"case id nul", R"({"splintcore_case": 1, "case_id": "a\u0000"})", StatusCode::kParseError,
+       "not allowed"},
       {"jaws not array", make_case("", "{}"), StatusCode::kInvalidArgument,
        "\"jaws\" must be array"},
       {"jaw not object", make_case("", "[1]"), StatusCode::kInvalidArgument,
@@ -84,16 +84,13 @@ TEST(CaseCoverage, EveryErrorIsNamed) {
       {"transform count",
        make_case("", R"([{"role": "maxilla", "mesh": "a", "transform": [1, 0, 0]}])"),
        StatusCode::kInvalidArgument, "16 numbers"},
-      {"transform value",
-       make_case("", R"([{"role": "maxilla", "mesh": "a",
+      {"transform value", make_case("", R"([{"role": "maxilla", "mesh": "a",
                           "transform": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,"x"]}])"),
        StatusCode::kInvalidArgument, "must be number"},
-      {"transform range",
-       make_case("", R"([{"role": "maxilla", "mesh": "a",
+      {"transform range", make_case("", R"([{"role": "maxilla", "mesh": "a",
                           "transform": [1,0,0,0, 0,1,0,0, 0,0,1,1e7, 0,0,0,1]}])"),
        StatusCode::kInvalidArgument, "outside"},
-      {"transform not rigid",
-       make_case("", R"([{"role": "maxilla", "mesh": "a",
+      {"transform not rigid", make_case("", R"([{"role": "maxilla", "mesh": "a",
                           "transform": [2,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]}])"),
        StatusCode::kInvalidArgument, "\"transform\": "},
       {"two maxillae",
@@ -108,12 +105,12 @@ TEST(CaseCoverage, EveryErrorIsNamed) {
        StatusCode::kInvalidArgument, "must not be the zero vector"},
       {"occlusal count", make_case("", "", R"("occlusal_normal": [0, 1],)"),
        StatusCode::kInvalidArgument, "needs 3 numbers, has 2"},
-      {"occlusal type", make_case("", "", R"("occlusal_normal": 1,)"),
-       StatusCode::kInvalidArgument, "must be array"},
+      {"occlusal type", make_case("", "", R"("occlusal_normal": 1,)"), StatusCode::kInvalidArgument,
+       "must be array"},
       {"spacing small", make_case("", "", R"("spacing_mm": 0,)"), StatusCode::kInvalidArgument,
        "\"spacing_mm\" is 0, outside [0.01, 50]"},
-      {"spacing nan-ish", make_case("", "", R"("spacing_mm": null,)"),
-       StatusCode::kInvalidArgument, "must be number, not null"},
+      {"spacing nan-ish", make_case("", "", R"("spacing_mm": null,)"), StatusCode::kInvalidArgument,
+       "must be number, not null"},
       {"corner radius", make_case("", "", R"("corner_radius_mm": 21,)"),
        StatusCode::kInvalidArgument, "corner_radius_mm"},
       {"corner segments 3", make_case("", "", R"("corner_segments": 3,)"),
@@ -122,8 +119,8 @@ TEST(CaseCoverage, EveryErrorIsNamed) {
        StatusCode::kInvalidArgument, "1, 2, 4, 8 or 16"},
       {"corner segments 32", make_case("", "", R"("corner_segments": 32,)"),
        StatusCode::kInvalidArgument, "outside"},
-      {"inner length", make_case("", "", R"("inner_length_mm": -1,)"),
-       StatusCode::kInvalidArgument, "inner_length_mm"},
+      {"inner length", make_case("", "", R"("inner_length_mm": -1,)"), StatusCode::kInvalidArgument,
+       "inner_length_mm"},
       {"outside length", make_case("", "", R"("outside_length_mm": 101,)"),
        StatusCode::kInvalidArgument, "outside_length_mm"},
       {"no upper", make_case("", "", "", R"("lower": [])"), StatusCode::kInvalidArgument,
@@ -140,7 +137,8 @@ TEST(CaseCoverage, EveryErrorIsNamed) {
        StatusCode::kInvalidArgument, "pick without \"position\" in \"upper\""},
       {"pick position range", make_case("", "", "", picks(R"({"position": [0,0,2e6]})")),
        StatusCode::kInvalidArgument, "\"position\" is"},
-      {"pick zero normal", make_case("", "", "", picks(R"({"position": [0,0,1], "normal": [0,0,0]})")),
+      {"pick zero normal",
+       make_case("", "", "", picks(R"({"position": [0,0,1], "normal": [0,0,0]})")),
        StatusCode::kInvalidArgument, "\"normal\" must not be the zero vector"},
       {"pick zero direction",
        make_case("", "", "", picks(R"({"position": [0,0,1], "direction": [0,0,0]})")),
@@ -151,8 +149,7 @@ TEST(CaseCoverage, EveryErrorIsNamed) {
       {"pick outside length",
        make_case("", "", "", picks(R"({"position": [0,0,1], "outside_length_mm": -2})")),
        StatusCode::kInvalidArgument, "outside_length_mm"},
-      {"lower pick error",
-       make_case("", "", "", R"("upper": [], "lower": [{"position": 1}])"),
+      {"lower pick error", make_case("", "", "", R"("upper": [], "lower": [{"position": 1}])"),
        StatusCode::kInvalidArgument, "\"position\" must be array"},
       {"unpaired", make_case("", "", "", R"("upper": [{"position": [0,0,1]}], "lower": [])"),
        StatusCode::kInvalidArgument, "do not pair up: 1 upper, 0 lower"},
@@ -162,18 +159,20 @@ TEST(CaseCoverage, EveryErrorIsNamed) {
        StatusCode::kInvalidArgument, "\"blockout\" must be object"},
       {"blockout unknown", make_case(R"("insertion_direction": [0,0,1], "blockout": {"q": 1},)"),
        StatusCode::kInvalidArgument, "unknown key \"q\""},
-      {"blockout without direction", make_case(R"("blockout": {},)"),
-       StatusCode::kInvalidArgument, "needs \"insertion_direction\""},
+      {"blockout without direction", make_case(R"("blockout": {},)"), StatusCode::kInvalidArgument,
+       "needs \"insertion_direction\""},
       {"blockout voxel", make_case(R"("insertion_direction": [0,0,1], "blockout": {"voxel": 2},)"),
        StatusCode::kInvalidArgument, "\"voxel\""},
       {"blockout inset",
        make_case(R"("insertion_direction": [0,0,1], "blockout": {"voxel": 0.1, "inset": 0.5},)"),
        StatusCode::kInvalidArgument, "\"inset\""},
       {"blockout closing range",
-       make_case(R"("insertion_direction": [0,0,1], "blockout": {"voxel": 0.1, "closing_radius": 5},)"),
+       make_case(
+           R"("insertion_direction": [0,0,1], "blockout": {"voxel": 0.1, "closing_radius": 5},)"),
        StatusCode::kInvalidArgument, "\"closing_radius\""},
       {"blockout closing small",
-       make_case(R"("insertion_direction": [0,0,1], "blockout": {"voxel": 0.1, "closing_radius": 0.1},)"),
+       make_case(
+           R"("insertion_direction": [0,0,1], "blockout": {"voxel": 0.1, "closing_radius": 0.1},)"),
        StatusCode::kInvalidArgument, "0 or at least two voxels"},
       {"printer type", make_case(R"("printer": 1,)"), StatusCode::kInvalidArgument,
        "\"printer\" must be string"},
@@ -185,14 +184,14 @@ TEST(CaseCoverage, EveryErrorIsNamed) {
        "must be a string such as"},
       {"memory cap range", make_case(R"("memory_cap": 0,)"), StatusCode::kInvalidArgument,
        "outside"},
-      {"memory cap fraction", make_case(R"("memory_cap": 1000.5,)"),
-       StatusCode::kInvalidArgument, "whole number of bytes"},
+      {"memory cap fraction", make_case(R"("memory_cap": 1000.5,)"), StatusCode::kInvalidArgument,
+       "whole number of bytes"},
       {"output type", make_case(R"("output": [],)"), StatusCode::kInvalidArgument,
        "\"output\" must be object"},
       {"output unknown", make_case(R"("output": {"mesh": "a"},)"), StatusCode::kInvalidArgument,
        "unknown key \"mesh\" in \"output\""},
-      {"output splint type", make_case(R"("output": {"splint": 1},)"),
-       StatusCode::kInvalidArgument, "\"splint\" must be string"},
+      {"output splint type", make_case(R"("output": {"splint": 1},)"), StatusCode::kInvalidArgument,
+       "\"splint\" must be string"},
       {"output splint path", make_case(R"("output": {"splint": "../../etc/x.stl"},)"),
        StatusCode::kInvalidArgument, "\"splint\" must be a file name in the output folder"},
       {"output splint absolute", make_case(R"("output": {"splint": "/tmp/x.stl"},)"),
@@ -210,8 +209,8 @@ TEST(CaseCoverage, EveryErrorIsNamed) {
     CaseFile out;
     Status s = parse_case(Context(&t.arena), c.text.data(), c.text.size(), "case.json", &out);
     EXPECT_EQ(s.code(), c.code) << test::format(s) << "\n" << c.text;
-    EXPECT_NE(std::string(s.message()).find(c.fragment), std::string::npos)
-        << s.message() << "\n" << c.text;
+    EXPECT_NE(std::string(s.message()).find(c.fragment), std::string::npos) << s.message() << "\n"
+                                                                            << c.text;
     EXPECT_STREQ(s.file(), "case.json");
     EXPECT_EQ(t.arena.used(), used) << "a failed parse left memory in the arena";
     EXPECT_TRUE(out.jaws.empty() && out.upper.empty() && out.lower.empty());
@@ -248,8 +247,7 @@ TEST(CaseCoverage, EveryOptionalKeyIsRead) {
   EXPECT_EQ(c.lower[0].outside_length, 2.5);
   // A memory cap as a byte count.
   const std::string bytes = make_case(R"("memory_cap": 1048576,)");
-  SPLINTCORE_ASSERT_OK(
-      parse_case(Context(&t.arena), bytes.data(), bytes.size(), "case.json", &c));
+  SPLINTCORE_ASSERT_OK(parse_case(Context(&t.arena), bytes.data(), bytes.size(), "case.json", &c));
   EXPECT_EQ(c.memory_cap, 1048576u);
 }
 
@@ -258,8 +256,8 @@ TEST(CaseCoverage, CtKeys) {
   const std::vector<Case> cases = {
       {"hu_max fraction", ct(R"("volume": "v.nrrd", "hu_max": 400.5)"),
        StatusCode::kInvalidArgument, "\"hu_max\" must be an integer"},
-      {"smooth fraction", ct(R"("volume": "v.nrrd", "smooth": 2.5)"),
-       StatusCode::kInvalidArgument, "\"smooth\" must be an integer"},
+      {"smooth fraction", ct(R"("volume": "v.nrrd", "smooth": 2.5)"), StatusCode::kInvalidArgument,
+       "\"smooth\" must be an integer"},
       {"decimate fraction", ct(R"("volume": "v.nrrd", "decimate": 1000.5)"),
        StatusCode::kInvalidArgument, "\"decimate\" must be an integer"},
       {"connectivity 18", ct(R"("volume": "v.nrrd", "connectivity": 18)"),
@@ -308,10 +306,13 @@ TEST(CaseCoverage, BaseFailuresLeaveTheArenaAsItWas) {
       {make_case("", "", "", R"("upper": [{"position": [0, 0, 1]}, {"position": [0, 0, 1]}],
                                "lower": [{"position": [0, 0, -1]}, {"position": [10, 0, -1]}])"),
        "upper pick 1"},
-      {make_case("", "", "", R"("upper": [{"position": [0, 0, 1]}, {"position": [10, 0, 1]}],
-                               "lower": [)" + same_place + "]"),
+      {make_case("", "", "",
+                 R"("upper": [{"position": [0, 0, 1]}, {"position": [10, 0, 1]}],
+                               "lower": [)" +
+                     same_place + "]"),
        "lower pick 1"},
-      {make_case("", "", R"("spacing_mm": 0.5, "inner_length_mm": 0.01, "outside_length_mm": 0.01,)",
+      {make_case("", "",
+                 R"("spacing_mm": 0.5, "inner_length_mm": 0.01, "outside_length_mm": 0.01,)",
                  R"("upper": [{"position": [0, 0, 1]}, {"position": [10, 0, 1]}],
                     "lower": [{"position": [0, 0, 1]}, {"position": [10, 0, 1]}])"),
        ""},

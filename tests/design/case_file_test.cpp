@@ -904,22 +904,22 @@ TEST(CaseFile, BlockoutTakesItsDefaultsAndChecksItsRanges) {
   EXPECT_EQ(c.blockout_inset, 0.05);
   EXPECT_EQ(c.blockout_closing, 0.0);
   SPLINTCORE_ASSERT_OK(parse(
-      a.arena,
-      with_root(dir + "\"blockout\": {\"voxel\": 0.2, \"closing_radius\": 0.5},\n").text(), &c));
+      a.arena, with_root(dir + "\"blockout\": {\"voxel\": 0.2, \"closing_radius\": 0.5},\n").text(),
+      &c));
   EXPECT_EQ(c.blockout_voxel, 0.2);
   EXPECT_EQ(c.blockout_inset, 0.1);  // half the voxel
   EXPECT_EQ(c.blockout_closing, 0.5);
   // Errors name the key.
   const char* bad[] = {
-      "\"blockout\": {},\n",                                   // no insertion direction
+      "\"blockout\": {},\n",  // no insertion direction
       "\"insertion_direction\": [0, 0, 1], \"blockout\": {\"voxel\": 0},\n",
       "\"insertion_direction\": [0, 0, 1], \"blockout\": {\"inset\": 0.2},\n",
       "\"insertion_direction\": [0, 0, 1], \"blockout\": {\"closing_radius\": 0.1},\n",
       "\"insertion_direction\": [0, 0, 1], \"blockout\": {\"radius\": 0.1},\n",
       "\"insertion_direction\": [0, 0, 1], \"blockout\": [0.1],\n",
   };
-  const char* names[] = {"insertion_direction", "voxel", "inset", "closing_radius", "radius",
-                         "blockout"};
+  const char* names[] = {"insertion_direction", "voxel",  "inset",
+                         "closing_radius",      "radius", "blockout"};
   for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); ++i) {
     SCOPED_TRACE(bad[i]);
     const Status s = parse(a.arena, with_root(bad[i]).text(), &c);
@@ -938,10 +938,12 @@ namespace {
 TEST(CaseFile, JawsFromCtTakeSeedsAndTheCtObject) {
   test::TestArena a(size_t{1} << 20);
   CaseFile c;
-  const std::string ct = "\"ct\": {\"volume\": \"ct.nrrd\", \"hu_min\": 250, \"connectivity\": 26, "
-                         "\"smooth\": 5, \"decimate\": 40000},\n";
-  const std::string jaws = "\"jaws\": [{\"role\": \"maxilla\", \"seed\": [0, 18, 13]}, "
-                           "{\"role\": \"mandible\", \"mesh\": \"lower.stl\"}],\n";
+  const std::string ct =
+      "\"ct\": {\"volume\": \"ct.nrrd\", \"hu_min\": 250, \"connectivity\": 26, "
+      "\"smooth\": 5, \"decimate\": 40000},\n";
+  const std::string jaws =
+      "\"jaws\": [{\"role\": \"maxilla\", \"seed\": [0, 18, 13]}, "
+      "{\"role\": \"mandible\", \"mesh\": \"lower.stl\"}],\n";
   SPLINTCORE_ASSERT_OK(parse(a.arena, with_root(jaws + ct).text(), &c));
   ASSERT_EQ(c.jaws.size(), 2u);
   EXPECT_TRUE(c.jaws[0].has_seed);

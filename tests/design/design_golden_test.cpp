@@ -27,12 +27,12 @@ struct Designed {
 void design_case(const char* name, Designed* out) {
   test::TestArena t{size_t{768} << 20};
   Context ctx(&t.arena);
-  const std::vector<uint8_t> text = test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) +
-                                                          "/cases/" + name);
+  const std::vector<uint8_t> text =
+      test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/cases/" + name);
   ASSERT_FALSE(text.empty()) << name;
   CaseFile c;
-  SPLINTCORE_ASSERT_OK(parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(),
-                                  name, &c));
+  SPLINTCORE_ASSERT_OK(
+      parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), name, &c));
   Mesh jaws[2];
   for (int j = 0; j < 2; ++j) {
     phantom::JawMesh m;
@@ -56,8 +56,8 @@ void expect_golden_and_meshlab(const char* name, const char* key, const Designed
   const std::string want = test::golden_hash(key);
   EXPECT_EQ(hash, want) << "fixtures/golden.sha256 line, if the change is intended:\n"
                         << hash << "  " << key;
-  std::printf("[ figures  ] %s: %zu triangles, %.4f mm^3, sha256 %s\n", name, d.triangles,
-              d.volume, hash.c_str());
+  std::printf("[ figures  ] %s: %zu triangles, %.4f mm^3, sha256 %s\n", name, d.triangles, d.volume,
+              hash.c_str());
   if (!test::have_meshlab()) {
     std::printf("[ skipped  ] MeshLab: meshlabserver/xvfb-run not installed\n");
     return;

@@ -35,8 +35,8 @@ struct Fixture {
     const std::vector<uint8_t> text =
         test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/cases/paper_scale.json");
     Context ctx(&held.arena);
-    if (!parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), "paper_scale",
-                    &c).is_ok()) {
+    if (!parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), "paper_scale", &c)
+             .is_ok()) {
       return;
     }
     base.bind(&held.arena);
@@ -118,8 +118,9 @@ void check_result(const char* what, Arena& arena, size_t used_before, const Stat
                   const Mesh& out, Result* r) {
   r->status = s;
   std::printf("[ outcome  ] %s: %s\n", what,
-              s.is_ok() ? ("a solid of " + std::to_string(out.triangles.size()) + " triangles").c_str()
-                        : format(s).c_str());
+              s.is_ok()
+                  ? ("a solid of " + std::to_string(out.triangles.size()) + " triangles").c_str()
+                  : format(s).c_str());
   if (!s.is_ok()) {
     r->outcome = Outcome::kError;
     EXPECT_NE(s.code(), StatusCode::kInternal) << what << ": " << format(s);
@@ -274,7 +275,8 @@ TEST_F(Hostile, SelfIntersectingJaw) {
   EXPECT_EQ(b.outcome, Outcome::kError);
   EXPECT_TRUE(mentions(b.status, "float32")) << format(b.status);
   for (Vec3& v : j.vertices) {
-    v = Vec3{static_cast<double>(static_cast<float>(v.x)), static_cast<double>(static_cast<float>(v.y)),
+    v = Vec3{static_cast<double>(static_cast<float>(v.x)),
+             static_cast<double>(static_cast<float>(v.y)),
              static_cast<double>(static_cast<float>(v.z))};
   }
   Result rounded = boolean(j);

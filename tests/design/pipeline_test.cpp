@@ -20,8 +20,8 @@ struct CaseAndJaws {
     Context ctx(&t.arena);
     static std::vector<uint8_t> text;
     text = test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/cases/paper_scale.json");
-    if (!parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), "paper_scale",
-                    &c).is_ok()) {
+    if (!parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), "paper_scale", &c)
+             .is_ok()) {
       return;
     }
     for (int j = 0; j < 2; ++j) {
@@ -43,12 +43,12 @@ struct CaseAndJaws {
 TEST(DesignPipeline, PaperScaleCaseGivesTheGoldenSplint) {
   CaseAndJaws f;
   ASSERT_TRUE(f.ok);
-  const std::string before = test::sha256_hex(f.jaws[1].vertices.data(),
-                                              f.jaws[1].vertices.size() * sizeof(Vec3));
+  const std::string before =
+      test::sha256_hex(f.jaws[1].vertices.data(), f.jaws[1].vertices.size() * sizeof(Vec3));
   Mesh splint;
   DesignReport r;
-  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2),
-                                     &splint, &r));
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2), &splint, &r));
   EXPECT_TRUE(r.print.printable);
   EXPECT_EQ(r.jaw_triangles, 12000u);
   EXPECT_GT(r.boolean.intersecting_pairs, 0u);
@@ -97,8 +97,8 @@ TEST(DesignPipeline, ArenaExhaustionIsCleanAtEveryCapTried) {
     Arena probe(big.data(), big.size());
     Mesh splint;
     DesignReport r;
-    SPLINTCORE_ASSERT_OK(design_splint(Context(&probe), f.c, Span<const Mesh>(f.jaws, 2),
-                                       &splint, &r));
+    SPLINTCORE_ASSERT_OK(
+        design_splint(Context(&probe), f.c, Span<const Mesh>(f.jaws, 2), &splint, &r));
     need = probe.high_water();
   }
   int tried = 0;
@@ -117,7 +117,8 @@ TEST(DesignPipeline, ArenaExhaustionIsCleanAtEveryCapTried) {
   Arena exact(buf.data(), need);
   Mesh splint;
   DesignReport r;
-  SPLINTCORE_EXPECT_OK(design_splint(Context(&exact), f.c, Span<const Mesh>(f.jaws, 2), &splint, &r));
+  SPLINTCORE_EXPECT_OK(
+      design_splint(Context(&exact), f.c, Span<const Mesh>(f.jaws, 2), &splint, &r));
   EXPECT_GE(tried, 40);
 }
 
@@ -132,8 +133,8 @@ TEST(DesignPipeline, BlockoutRemovesInterferenceAndStaysPrintable) {
   ASSERT_TRUE(f.ok);
   Mesh plain;
   DesignReport r0;
-  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2),
-                                     &plain, &r0));
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2), &plain, &r0));
   EXPECT_EQ(r0.blockout_jaws, 0u);
   CaseFile c = f.c;
   c.has_blockout = true;
@@ -141,8 +142,8 @@ TEST(DesignPipeline, BlockoutRemovesInterferenceAndStaysPrintable) {
   c.blockout_inset = 0.1;
   Mesh blocked;
   DesignReport r;
-  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2),
-                                     &blocked, &r));
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &blocked, &r));
   EXPECT_TRUE(r.print.printable);
   ASSERT_EQ(r.blockout_jaws, 2u);
   // The maxilla is swept along the insertion direction, the mandible along its reverse.
@@ -156,8 +157,8 @@ TEST(DesignPipeline, BlockoutRemovesInterferenceAndStaysPrintable) {
   // Run twice: the same bytes.
   Mesh again;
   DesignReport r2;
-  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2),
-                                     &again, &r2));
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &again, &r2));
   std::vector<uint8_t> a, b;
   SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(f.t.arena, blocked, StlFormat::kBinary, &a));
   SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(f.t.arena, again, StlFormat::kBinary, &b));
@@ -196,8 +197,8 @@ TEST(DesignOptions, ClearanceKeepsTheSpacerBetweenJawAndSplint) {
   test::TestArena big{size_t{512} << 20};  // the swept surfaces' Booleans: about 100 MB
   Mesh splint;
   DesignReport r;
-  SPLINTCORE_ASSERT_OK(design_splint(Context(&big.arena), c, Span<const Mesh>(f.jaws, 2),
-                                     &splint, &r));
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&big.arena), c, Span<const Mesh>(f.jaws, 2), &splint, &r));
   EXPECT_TRUE(r.imprint_offset);
   EXPECT_EQ(r.boolean.intersecting_pairs, 0u);  // the jaws themselves are not subtracted
   ASSERT_EQ(r.blockout_jaws, 2u);
@@ -218,19 +219,21 @@ TEST(DesignOptions, ClearanceKeepsTheSpacerBetweenJawAndSplint) {
   }
   // The extractor interpolates the exact distance linearly along grid edges and keeps
   // vertices 1/16 of an edge from samples: on the faceted 6k crowns (sharp edges, whose offset
-  // is a cylinder of radius c) that is within a quarter voxel here (0.362 mm for 0.4 at 0.2 mm voxels seen).
+  // is a cylinder of radius c) that is within a quarter voxel here (0.362 mm for 0.4 at 0.2 mm
+  // voxels seen).
   const double tolerance = 0.25 * c.blockout_voxel;
-  std::printf("[ figures  ] clearance %.3f mm at %.3f mm voxels: nearest splint vertex %.6f mm "
-              "from the jaws, %zu triangles\n", c.blockout_clearance, c.blockout_voxel, nearest,
-              splint.triangles.size());
+  std::printf(
+      "[ figures  ] clearance %.3f mm at %.3f mm voxels: nearest splint vertex %.6f mm "
+      "from the jaws, %zu triangles\n",
+      c.blockout_clearance, c.blockout_voxel, nearest, splint.triangles.size());
   EXPECT_GT(nearest, c.blockout_clearance - tolerance);
   EXPECT_LT(nearest, c.blockout_clearance + tolerance);
   // Without the clearance the imprint is the jaws' own surface: distance 0.
   CaseFile plain = f.c;
   Mesh tight;
   DesignReport r0;
-  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), plain, Span<const Mesh>(f.jaws, 2),
-                                     &tight, &r0));
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), plain, Span<const Mesh>(f.jaws, 2), &tight, &r0));
   EXPECT_FALSE(r0.imprint_offset);
   double v_clear = 0, v_tight = 0;
   SPLINTCORE_ASSERT_OK(check_closed_oriented(Context(&f.t.arena), splint, &v_clear));
@@ -241,12 +244,11 @@ TEST(DesignOptions, ClearanceKeepsTheSpacerBetweenJawAndSplint) {
 Mesh box_mesh(Arena& arena, const Vec3& lo, const Vec3& hi) {
   Mesh m(&arena);
   for (int i = 0; i < 8; ++i) {
-    (void)m.vertices.push_back(Vec3{(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y,
-                                    (i & 4) ? hi.z : lo.z});
+    (void)m.vertices.push_back(
+        Vec3{(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z});
   }
-  const uint32_t faces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4},
-                                 {1, 5, 4}, {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6},
-                                 {1, 3, 5}, {3, 7, 5}};
+  const uint32_t faces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                                 {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
   for (const auto& f : faces) (void)m.triangles.push_back(Triangle{{f[0], f[1], f[2]}});
   return m;
 }
@@ -288,14 +290,14 @@ TEST(DesignOptions, PlacementOnTheTrayMovesTheWholeDesign) {
   ASSERT_TRUE(f.ok);
   Mesh here;
   DesignReport r0;
-  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2),
-                                     &here, &r0));
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2), &here, &r0));
   CaseFile c = f.c;
   c.place_on_tray = true;
   Mesh placed;
   DesignReport r;
-  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2),
-                                     &placed, &r));
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &placed, &r));
   ASSERT_TRUE(r.placed_on_tray);
   const Vec3 t = r.tray_translation;
   EXPECT_EQ(t.x * 64, std::floor(t.x * 64));  // on the 1/64 mm grid
@@ -351,15 +353,15 @@ TEST(DesignOptions, LabelIsEngravedOnTheDesignedSplint) {
   ASSERT_TRUE(f.ok);
   Mesh plain;
   DesignReport r0;
-  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2),
-                                     &plain, &r0));
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2), &plain, &r0));
   CaseFile c = f.c;
   c.has_label = true;
   c.label_text = "case-7";
   Mesh labelled;
   DesignReport r;
-  SPLINTCORE_ASSERT_OK(design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2),
-                                     &labelled, &r));
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &labelled, &r));
   ASSERT_TRUE(r.labelled);
   EXPECT_STREQ(r.label.text, "CASE-7");
   EXPECT_EQ(r.label.glyphs, 6u);
@@ -391,9 +393,10 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
     return base.substr(0, at) + extra + ",\n  " + base.substr(at);
   };
   CaseFile c;
-  std::string ok = with("\"blockout\": {\"voxel\": 0.1, \"clearance\": 0.1}, \"min_thickness\": 1.5, "
-                        "\"placement\": \"tray\", \"label\": {\"text\": \"AB-1\", \"mode\": "
-                        "\"emboss\", \"height_mm\": 2, \"stroke_mm\": 0.3, \"depth_mm\": 0.5}");
+  std::string ok = with(
+      "\"blockout\": {\"voxel\": 0.1, \"clearance\": 0.1}, \"min_thickness\": 1.5, "
+      "\"placement\": \"tray\", \"label\": {\"text\": \"AB-1\", \"mode\": "
+      "\"emboss\", \"height_mm\": 2, \"stroke_mm\": 0.3, \"depth_mm\": 0.5}");
   SPLINTCORE_ASSERT_OK(parse_case(ctx, ok.data(), ok.size(), "ok", &c));
   EXPECT_TRUE(c.has_label);
   EXPECT_STREQ(c.label_text, "AB-1");
@@ -406,9 +409,10 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
   EXPECT_EQ(c.min_thickness, 1.5);
   EXPECT_TRUE(c.place_on_tray);
   // The defaults said out loud; the clearance's cap is 20 voxels below 0.1 mm voxels, else 2 mm.
-  std::string plain = with("\"blockout\": {\"voxel\": 0.05, \"clearance\": 1.0, \"inset\": 0}, "
-                           "\"placement\": \"case\", \"label\": {\"text\": \"A\", \"mode\": "
-                           "\"engrave\"}");
+  std::string plain = with(
+      "\"blockout\": {\"voxel\": 0.05, \"clearance\": 1.0, \"inset\": 0}, "
+      "\"placement\": \"case\", \"label\": {\"text\": \"A\", \"mode\": "
+      "\"engrave\"}");
   SPLINTCORE_ASSERT_OK(parse_case(ctx, plain.data(), plain.size(), "plain", &c));
   EXPECT_FALSE(c.place_on_tray);
   EXPECT_FALSE(c.label_emboss);
@@ -430,8 +434,14 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
       "\"label\": {\"text\": \"X\", \"size\": 3}",
       "\"label\": {\"text\": \"X\", \"depth_mm\": 9}",
   };
-  const char* expect[] = {"exclude each other", "clearance", "min_thickness", "\"placement\" must be",
-                          "placement", "needs \"text\"", "\"mode\" must be", "unknown key \"size\"",
+  const char* expect[] = {"exclude each other",
+                          "clearance",
+                          "min_thickness",
+                          "\"placement\" must be",
+                          "placement",
+                          "needs \"text\"",
+                          "\"mode\" must be",
+                          "unknown key \"size\"",
                           "depth_mm"};
   for (size_t i = 0; i < 9; ++i) {
     const std::string s = with(bad[i]);

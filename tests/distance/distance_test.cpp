@@ -107,14 +107,13 @@ Soup soup_from_indexed(const std::vector<Vec3>& v, const std::vector<std::array<
 // Icosahedron subdivided `levels` times, corners on the sphere then rounded to float.
 Soup icosphere(int levels, double radius, const Vec3& center) {
   const double g = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Vec3> v = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0},
-                         {0, -1, g}, {0, 1, g}, {0, -1, -g}, {0, 1, -g},
-                         {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+  std::vector<Vec3> v = {{-1, g, 0},  {1, g, 0},  {-1, -g, 0}, {1, -g, 0}, {0, -1, g},  {0, 1, g},
+                         {0, -1, -g}, {0, 1, -g}, {g, 0, -1},  {g, 0, 1},  {-g, 0, -1}, {-g, 0, 1}};
   for (Vec3& p : v) p = p * (1.0 / length(p));
   std::vector<std::array<uint32_t, 3>> f = {
-      {0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+      {0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
       {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-      {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+      {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (int s = 0; s < levels; ++s) {
     std::map<std::pair<uint32_t, uint32_t>, uint32_t> mids;
     auto mid = [&](uint32_t a, uint32_t b) {
@@ -187,8 +186,8 @@ Soup box_soup(const Vec3& lo, const Vec3& hi) {
 Soup random_soup(Rng& rng, uint32_t corners, uint32_t triangles, double extent) {
   std::vector<Vec3> pool;
   for (uint32_t i = 0; i < corners; ++i) {
-    pool.push_back(to_float(rng.in_box(Vec3{-extent, -extent, -extent},
-                                       Vec3{extent, extent, extent})));
+    pool.push_back(
+        to_float(rng.in_box(Vec3{-extent, -extent, -extent}, Vec3{extent, extent, extent})));
   }
   std::vector<std::array<uint32_t, 3>> f;
   while (f.size() < triangles) {
@@ -240,8 +239,8 @@ std::unique_ptr<Built> build(const Soup& soup, uint32_t leaf_size = 4,
   }
   b->scale = m;
   for (const Triangle& t : b->mesh.triangles) {
-    b->normals.push_back(exact_normal(b->mesh.vertices[t.v[0]], b->mesh.vertices[t.v[1]],
-                                      b->mesh.vertices[t.v[2]]));
+    b->normals.push_back(
+        exact_normal(b->mesh.vertices[t.v[0]], b->mesh.vertices[t.v[1]], b->mesh.vertices[t.v[2]]));
   }
   return b;
 }
@@ -385,16 +384,24 @@ void ref_sliver(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, Vec3
     Feature f;
     uint8_t fi;
     if (num <= 0 || den == 0) {
-      q = v0; f = Feature::kVertex; fi = k;
+      q = v0;
+      f = Feature::kVertex;
+      fi = k;
     } else if (num >= den) {
-      q = v1; f = Feature::kVertex; fi = static_cast<uint8_t>((k + 1) % 3);
+      q = v1;
+      f = Feature::kVertex;
+      fi = static_cast<uint8_t>((k + 1) % 3);
     } else {
-      q = v0 + e * (num / den); f = Feature::kEdge; fi = k;
+      q = v0 + e * (num / den);
+      f = Feature::kEdge;
+      fi = k;
     }
     const double d2 = length_squared(p - q);
     if (k == 0 || d2 < best) {
       best = d2;
-      *out = q; *feature = f; *index = fi;
+      *out = q;
+      *feature = f;
+      *index = fi;
     }
   }
 }
@@ -412,10 +419,20 @@ void ericson(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, Vec3* o
              Feature* feature, uint8_t* index) {
   const Vec3 ab = b - a, ac = c - a, ap = p - a;
   const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) { *out = a; *feature = Feature::kVertex; *index = 0; return; }
+  if (d1 <= 0 && d2 <= 0) {
+    *out = a;
+    *feature = Feature::kVertex;
+    *index = 0;
+    return;
+  }
   const Vec3 bp = p - b;
   const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) { *out = b; *feature = Feature::kVertex; *index = 1; return; }
+  if (d3 >= 0 && d4 <= d3) {
+    *out = b;
+    *feature = Feature::kVertex;
+    *index = 1;
+    return;
+  }
   if (is_sliver(a, b, c)) {
     ref_sliver(p, a, b, c, out, feature, index);
     return;
@@ -423,22 +440,33 @@ void ericson(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, Vec3* o
   const double vc = d1 * d4 - d3 * d2;
   if (vc <= 0 && d1 >= 0 && d3 <= 0) {
     const double t = d1 / (d1 - d3);
-    *out = a + ab * t; *feature = Feature::kEdge; *index = 0;
+    *out = a + ab * t;
+    *feature = Feature::kEdge;
+    *index = 0;
     return;
   }
   const Vec3 cp = p - c;
   const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) { *out = c; *feature = Feature::kVertex; *index = 2; return; }
+  if (d6 >= 0 && d5 <= d6) {
+    *out = c;
+    *feature = Feature::kVertex;
+    *index = 2;
+    return;
+  }
   const double vb = d5 * d2 - d1 * d6;
   if (vb <= 0 && d2 >= 0 && d6 <= 0) {
     const double t = d2 / (d2 - d6);
-    *out = a + ac * t; *feature = Feature::kEdge; *index = 2;
+    *out = a + ac * t;
+    *feature = Feature::kEdge;
+    *index = 2;
     return;
   }
   const double va = d3 * d6 - d5 * d4;
   if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
     const double t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    *out = b + (c - b) * t; *feature = Feature::kEdge; *index = 1;
+    *out = b + (c - b) * t;
+    *feature = Feature::kEdge;
+    *index = 1;
     return;
   }
   const double denom = 1.0 / (va + vb + vc);
@@ -490,7 +518,8 @@ bool reference_closest(const Mesh& m, const Vec3& q, ClosestPoint* out) {
     big = std::max(big, std::max(std::fabs(p->x), std::max(std::fabs(p->y), std::fabs(p->z))));
   }
   int s[3];
-  if (best2 > 0 && best2 <= (big * 0x1p-40) * (big * 0x1p-40) && exactly_on_triangle(q, a, b, c, s)) {
+  if (best2 > 0 && best2 <= (big * 0x1p-40) * (big * 0x1p-40) &&
+      exactly_on_triangle(q, a, b, c, s)) {
     best2 = 0;
     out->point = q;
     out->feature = Feature::kFace;
@@ -535,7 +564,8 @@ int check_closest(const Built& b, const Vec3& q, const char* what) {
   }
   // Independent distance.
   const double d = oracle_distance(b, q);
-  const double qs = std::max(b.scale, std::max(std::fabs(q.x), std::max(std::fabs(q.y), std::fabs(q.z))));
+  const double qs =
+      std::max(b.scale, std::max(std::fabs(q.x), std::max(std::fabs(q.y), std::fabs(q.z))));
   if (!(std::fabs(cp.distance - d) <= 1e-12 * d + 1e-14 * qs)) {
     ADD_FAILURE() << what << ": distance " << cp.distance << " vs oracle " << d;
     ++failures;
@@ -606,7 +636,8 @@ TEST(DistanceClosest, MatchesBruteForceOnRandomAndClosedMeshes) {
   std::vector<std::pair<std::string, Soup>> shapes;
   for (int i = 0; i < 3; ++i) {
     shapes.emplace_back("random soup " + std::to_string(i),
-                        random_soup(rng, 40 + 60 * static_cast<uint32_t>(i), 60 + 150 * static_cast<uint32_t>(i), 5.0 * (i + 1)));
+                        random_soup(rng, 40 + 60 * static_cast<uint32_t>(i),
+                                    60 + 150 * static_cast<uint32_t>(i), 5.0 * (i + 1)));
   }
   shapes.emplace_back("torus", shapes::torus(24, 12, 10, 3));
   shapes.emplace_back("icosphere", icosphere(3, 7.5, Vec3{1.25, -2.5, 30}));
@@ -728,8 +759,10 @@ TEST(DistanceClosest, OrientedBoxesContainTheirTriangles) {
                 const long double p = static_cast<long double>(o.axis[a][0]) * v.x +
                                       static_cast<long double>(o.axis[a][1]) * v.y +
                                       static_cast<long double>(o.axis[a][2]) * v.z;
-                ASSERT_GE(p, static_cast<long double>(o.lo[a][k])) << "node " << i << " child " << k;
-                ASSERT_LE(p, static_cast<long double>(o.hi[a][k])) << "node " << i << " child " << k;
+                ASSERT_GE(p, static_cast<long double>(o.lo[a][k]))
+                    << "node " << i << " child " << k;
+                ASSERT_LE(p, static_cast<long double>(o.hi[a][k]))
+                    << "node " << i << " child " << k;
                 ++checked;
               }
             }
@@ -782,7 +815,8 @@ TEST(DistanceClosest, PointsExactlyOnTheSurfaceAreAtDistanceZero) {
       exact_zero += cp.distance == 0;
       ++n;
       // Points on the surface get +0 with every method.
-      for (SignMethod method : {SignMethod::kPseudonormal, SignMethod::kWindingNumber, SignMethod::kAuto}) {
+      for (SignMethod method :
+           {SignMethod::kPseudonormal, SignMethod::kWindingNumber, SignMethod::kAuto}) {
         SignedDistance sd;
         ASSERT_TRUE(signed_distance(b->index, q, method, &sd));
         EXPECT_TRUE(sd.distance == 0 && !std::signbit(sd.distance)) << sd.distance;
@@ -915,7 +949,8 @@ TEST(DistanceSigned, BoxMatchesTheAnalyticSdfEverywhereWithEveryMethod) {
       for (double z : axis[2]) q.push_back(Vec3{x, y, z});
     }
   }
-  for (int i = 0; i < 500 * kEffort; ++i) q.push_back(rng.in_box(lo - Vec3{2, 2, 2}, hi + Vec3{2, 2, 2}));
+  for (int i = 0; i < 500 * kEffort; ++i)
+    q.push_back(rng.in_box(lo - Vec3{2, 2, 2}, hi + Vec3{2, 2, 2}));
   // Random points exactly on the faces (float coordinates in the face).
   for (int i = 0; i < 200 * kEffort; ++i) {
     Vec3 p = to_float(rng.in_box(lo, hi));
@@ -926,7 +961,8 @@ TEST(DistanceSigned, BoxMatchesTheAnalyticSdfEverywhereWithEveryMethod) {
   for (uint32_t leaf : {1u, 4u}) {
     auto b = build(box_soup(lo, hi), leaf);
     ASSERT_TRUE(b->index.closed_manifold);
-    for (SignMethod method : {SignMethod::kPseudonormal, SignMethod::kWindingNumber, SignMethod::kAuto}) {
+    for (SignMethod method :
+         {SignMethod::kPseudonormal, SignMethod::kWindingNumber, SignMethod::kAuto}) {
       int failures = 0;
       for (const Vec3& p : q) {
         const double want = box_sdf(p, lo, hi);
@@ -1011,8 +1047,10 @@ struct CurvedCase {
 
 std::vector<CurvedCase> curved_cases() {
   std::vector<CurvedCase> c;
-  c.push_back({"sphere", icosphere(3, 6, Vec3{1, 2, 3}), Analytic{Analytic::kSphere, Vec3{1, 2, 3}, 6, 0, 0}});
-  c.push_back({"torus", shapes::torus(48, 24, 10, 3), Analytic{Analytic::kTorus, Vec3{}, 10, 3, 0}});
+  c.push_back({"sphere", icosphere(3, 6, Vec3{1, 2, 3}),
+               Analytic{Analytic::kSphere, Vec3{1, 2, 3}, 6, 0, 0}});
+  c.push_back(
+      {"torus", shapes::torus(48, 24, 10, 3), Analytic{Analytic::kTorus, Vec3{}, 10, 3, 0}});
   c.push_back({"cone", cone(64, 5, 0, 8), Analytic{Analytic::kCone, Vec3{}, 5, 0, 8}});
   c.push_back({"frustum", cone(48, 5, 2, 7), Analytic{Analytic::kCone, Vec3{}, 5, 2, 7}});
   return c;
@@ -1041,7 +1079,8 @@ TEST(DistanceSigned, CurvedMeshesHaveTheAnalyticSignOffTheShell) {
       ++checked;
       inside += want < 0;
       const double unsigned_distance = oracle_distance(*b, p);
-      for (SignMethod method : {SignMethod::kPseudonormal, SignMethod::kWindingNumber, SignMethod::kAuto}) {
+      for (SignMethod method :
+           {SignMethod::kPseudonormal, SignMethod::kWindingNumber, SignMethod::kAuto}) {
         SignedDistance sd;
         ASSERT_TRUE(signed_distance(b->index, p, method, &sd));
         ASSERT_EQ(sd.distance < 0, want < 0)
@@ -1080,7 +1119,8 @@ TEST(DistanceSigned, PseudonormalAndWindingAgreeNextToEdgesAndVertices) {
         ASSERT_NE(other, kNoNeighbor);
         if (other < t) continue;  // each edge once
         const Vec3 n = fnormal[t] + fnormal[other];
-        sites.emplace_back((corner(m, t, k) + corner(m, t, (k + 1) % 3)) * 0.5, n * (1.0 / length(n)));
+        sites.emplace_back((corner(m, t, k) + corner(m, t, (k + 1) % 3)) * 0.5,
+                           n * (1.0 / length(n)));
       }
     }
     const double eps[] = {1e-6, 1e-5, 1e-4, 1e-3};
@@ -1091,14 +1131,15 @@ TEST(DistanceSigned, PseudonormalAndWindingAgreeNextToEdgesAndVertices) {
         SignedDistance pn, wn;
         ASSERT_TRUE(signed_distance(b->index, q, SignMethod::kPseudonormal, &pn));
         ASSERT_TRUE(signed_distance(b->index, q, SignMethod::kWindingNumber, &wn));
-        ASSERT_EQ(pn.distance < 0, wn.distance < 0) << c.name << " site " << i << " sign " << sign
-                                                    << " winding " << wn.winding;
+        ASSERT_EQ(pn.distance < 0, wn.distance < 0)
+            << c.name << " site " << i << " sign " << sign << " winding " << wn.winding;
         // The truth: the exact winding number (0 or 1 off a closed surface). The offset
         // direction is not always the side it lands on (at the rim of a cone, -normal leaves
         // through the base), so that is only counted.
         if ((pn.distance < 0) != (sign < 0) || i % (8 * stride) == 0) {
           const double exact = winding_number(b->index, q, 0);
-          ASSERT_LT(std::min(std::fabs(exact), std::fabs(exact - 1)), 1e-6) << c.name << " site " << i;
+          ASSERT_LT(std::min(std::fabs(exact), std::fabs(exact - 1)), 1e-6)
+              << c.name << " site " << i;
           ASSERT_EQ(pn.distance < 0, exact >= 0.5) << c.name << " site " << i;
         }
         ASSERT_GT(std::fabs(pn.distance), 0.0);
@@ -1109,8 +1150,10 @@ TEST(DistanceSigned, PseudonormalAndWindingAgreeNextToEdgesAndVertices) {
   }
   EXPECT_GT(points, 5000 / (kEffort == 4 ? 1 : 3));
   EXPECT_LT(against, points / 20);
-  std::printf("[ info ] %d points next to vertices and edges, %d landed on the other side of "
-              "their offset\n", points, against);
+  std::printf(
+      "[ info ] %d points next to vertices and edges, %d landed on the other side of "
+      "their offset\n",
+      points, against);
 }
 
 // =============================================================================================
@@ -1135,9 +1178,10 @@ TEST(DistanceWinding, HierarchicalMatchesExactOnClosedMeshes) {
       EXPECT_LT(std::fabs(we), 1e-9);
       // Anywhere around the mesh, including near the surface: the decision is the same, and
       // the exact value is 0 or 1.
-      const Vec3 p = i % 2 ? rng.in_box(box.lo - box.extent() * 0.2, box.hi + box.extent() * 0.2)
-                           : b->mesh.vertices[rng.below(static_cast<uint32_t>(b->mesh.vertices.size()))] +
-                                 rng.unit() * std::pow(10.0, -rng.uniform(1, 6));
+      const Vec3 p =
+          i % 2 ? rng.in_box(box.lo - box.extent() * 0.2, box.hi + box.extent() * 0.2)
+                : b->mesh.vertices[rng.below(static_cast<uint32_t>(b->mesh.vertices.size()))] +
+                      rng.unit() * std::pow(10.0, -rng.uniform(1, 6));
       const double e = winding_number(b->index, p, 0), h = winding_number(b->index, p, 2);
       ASSERT_LT(std::min(std::fabs(e), std::fabs(e - 1)), 1e-9) << c.name;
       ASSERT_EQ(e >= 0.5, h >= 0.5) << c.name << " exact " << e << " hierarchical " << h;
@@ -1170,7 +1214,8 @@ TEST(DistanceWinding, SphereWithAHole) {
   int in = 0, out = 0;
   for (int i = 0; i < 200 * kEffort; ++i) {
     const Vec3 p = i % 3 == 0 ? rng.unit() * (0.7 * R * rng.uniform())
-                              : rng.in_box(Vec3{-1.5 * R, -1.5 * R, -1.5 * R}, Vec3{1.5 * R, 1.5 * R, 1.5 * R});
+                              : rng.in_box(Vec3{-1.5 * R, -1.5 * R, -1.5 * R},
+                                           Vec3{1.5 * R, 1.5 * R, 1.5 * R});
     const double r = length(p);
     const bool well_inside = r < 0.6 * R && p.z < 0.5 * R;
     const bool well_outside = r > 1.3 * R;
@@ -1269,9 +1314,10 @@ TEST(DistanceWinding, RealHalfArchWithHoles) {
     max_out = std::max(max_out, w);
     EXPECT_LT(w, 0.5);
   }
-  std::printf("[ info ] half-arch: %u triangles (%zu open), %zu inside points (min w %.3f), %zu "
-              "outside (max w %.3f)\n",
-              nt, open.triangles.size(), inside.size(), min_in, outside.size(), max_out);
+  std::printf(
+      "[ info ] half-arch: %u triangles (%zu open), %zu inside points (min w %.3f), %zu "
+      "outside (max w %.3f)\n",
+      nt, open.triangles.size(), inside.size(), min_in, outside.size(), max_out);
 }
 
 // =============================================================================================
@@ -1322,7 +1368,8 @@ bool segments_meet_2d(const double* a, const double* b, const double* c, const d
   return (d1 == 0 && on_segment_2d(c, d, a)) || (d2 == 0 && on_segment_2d(c, d, b)) ||
          (d3 == 0 && on_segment_2d(a, b, c)) || (d4 == 0 && on_segment_2d(a, b, d));
 }
-bool exact_segment_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
+bool exact_segment_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
+                            const Vec3& c) {
   const int sp = o3(a, b, c, p), sq = o3(a, b, c, q);
   if (sp * sq > 0) return false;
   if (sp != 0 || sq != 0) {
@@ -1390,7 +1437,10 @@ TEST(DistanceRay, MatchesBruteForce) {
         double t_max = HUGE_VAL;
         switch (i % 5) {
           case 0: d = rng.unit(); break;
-          case 1: d = rng.unit() * 3.5; t_max = rng.uniform(0, 10); break;
+          case 1:
+            d = rng.unit() * 3.5;
+            t_max = rng.uniform(0, 10);
+            break;
           case 2: {  // exactly at a vertex
             const uint32_t t = rng.below(static_cast<uint32_t>(m.triangles.size()));
             d = corner(m, t, 0) - o;
@@ -1454,10 +1504,16 @@ TEST(DistanceSegment, MatchesExactBruteForce) {
       switch (i % 6) {
         case 0: q = rng.in_box(box.lo - pad, box.hi + pad); break;
         case 1: q = p + rng.unit() * 0.2; break;
-        case 2: q = a; break;                                    // ends on a vertex
-        case 3: q = (a + bb) * 0.5; break;                       // ends on an edge
-        case 4: p = bb * 2.0 - a; q = a * 2.0 - bb; break;       // along an edge (coplanar)
-        default: p = (a + bb) * 0.5; q = c * 2.0 - (a + bb) * 0.5; break;  // across the face, in its plane
+        case 2: q = a; break;               // ends on a vertex
+        case 3: q = (a + bb) * 0.5; break;  // ends on an edge
+        case 4:
+          p = bb * 2.0 - a;
+          q = a * 2.0 - bb;
+          break;  // along an edge (coplanar)
+        default:
+          p = (a + bb) * 0.5;
+          q = c * 2.0 - (a + bb) * 0.5;
+          break;  // across the face, in its plane
       }
       uint32_t lib = 0, want = 0;
       const bool hl = segment_intersects_mesh(b->index, p, q, &lib);
@@ -1526,11 +1582,13 @@ TEST(DistanceBatch, SameBitsAsSingleQueriesOnAnyThreadCount) {
     std::vector<char> found(q.size());
     for (size_t i = 0; i < q.size(); ++i) found[i] = closest_point(b->index, q[i], &single[i]);
     std::vector<double> sd_single[3];
-    const SignMethod methods[3] = {SignMethod::kAuto, SignMethod::kPseudonormal, SignMethod::kWindingNumber};
+    const SignMethod methods[3] = {SignMethod::kAuto, SignMethod::kPseudonormal,
+                                   SignMethod::kWindingNumber};
     for (int mth = 0; mth < 3; ++mth) {
       for (const Vec3& p : q) {
         SignedDistance sd;
-        sd_single[mth].push_back(signed_distance(b->index, p, methods[mth], &sd) ? sd.distance : HUGE_VAL);
+        sd_single[mth].push_back(signed_distance(b->index, p, methods[mth], &sd) ? sd.distance
+                                                                                 : HUGE_VAL);
       }
     }
     for (unsigned threads : {0u, 1u, 2u, 4u}) {
@@ -1544,7 +1602,8 @@ TEST(DistanceBatch, SameBitsAsSingleQueriesOnAnyThreadCount) {
           EXPECT_EQ(got[i].distance, 0.0);  // ClosestPoint{}
           continue;
         }
-        ASSERT_EQ(got[i].triangle, single[i].triangle) << shape.first << " threads " << threads << " i " << i;
+        ASSERT_EQ(got[i].triangle, single[i].triangle)
+            << shape.first << " threads " << threads << " i " << i;
         ASSERT_TRUE(same_bits(got[i].distance, single[i].distance));
         ASSERT_TRUE(same_bits(got[i].point, single[i].point));
         ASSERT_EQ(got[i].feature, single[i].feature);
@@ -1552,20 +1611,24 @@ TEST(DistanceBatch, SameBitsAsSingleQueriesOnAnyThreadCount) {
       }
       for (int mth = 0; mth < 3; ++mth) {
         std::vector<double> d(q.size());
-        SPLINTCORE_ASSERT_OK(batch_signed_distances(ctx, b->index, Span<const Vec3>(q.data(), q.size()),
-                                                    methods[mth], Span<double>(d.data(), d.size())));
+        SPLINTCORE_ASSERT_OK(
+            batch_signed_distances(ctx, b->index, Span<const Vec3>(q.data(), q.size()),
+                                   methods[mth], Span<double>(d.data(), d.size())));
         ASSERT_EQ(std::memcmp(d.data(), sd_single[mth].data(), d.size() * sizeof(double)), 0)
             << shape.first << " threads " << threads << " method " << mth;
       }
       // Size mismatch.
       std::vector<ClosestPoint> small(1);
       EXPECT_EQ(batch_closest_points(ctx, b->index, Span<const Vec3>(q.data(), q.size()),
-                                     Span<ClosestPoint>(small.data(), small.size())).code(),
+                                     Span<ClosestPoint>(small.data(), small.size()))
+                    .code(),
                 StatusCode::kInvalidArgument);
       std::vector<double> small_d(1);
-      EXPECT_EQ(batch_signed_distances(ctx, b->index, Span<const Vec3>(q.data(), q.size()), SignMethod::kAuto,
-                                       Span<double>(small_d.data(), small_d.size())).code(),
-                StatusCode::kInvalidArgument);
+      EXPECT_EQ(
+          batch_signed_distances(ctx, b->index, Span<const Vec3>(q.data(), q.size()),
+                                 SignMethod::kAuto, Span<double>(small_d.data(), small_d.size()))
+              .code(),
+          StatusCode::kInvalidArgument);
     }
   }
 }
@@ -1579,9 +1642,12 @@ TEST(DistanceBatch, ManyQueriesAcrossChunks) {
   for (Vec3& p : q) p = rng.in_box(Vec3{-6, -6, -2}, Vec3{6, 6, 2});
   std::vector<ClosestPoint> r1(n), r4(n);
   ThreadExecutor one(1), four(4);
-  Context c1(&b->arena->arena, &one.executor(), nullptr), c4(&b->arena->arena, &four.executor(), nullptr);
-  SPLINTCORE_ASSERT_OK(batch_closest_points(c1, b->index, Span<const Vec3>(q.data(), n), Span<ClosestPoint>(r1.data(), n)));
-  SPLINTCORE_ASSERT_OK(batch_closest_points(c4, b->index, Span<const Vec3>(q.data(), n), Span<ClosestPoint>(r4.data(), n)));
+  Context c1(&b->arena->arena, &one.executor(), nullptr),
+      c4(&b->arena->arena, &four.executor(), nullptr);
+  SPLINTCORE_ASSERT_OK(batch_closest_points(c1, b->index, Span<const Vec3>(q.data(), n),
+                                            Span<ClosestPoint>(r1.data(), n)));
+  SPLINTCORE_ASSERT_OK(batch_closest_points(c4, b->index, Span<const Vec3>(q.data(), n),
+                                            Span<ClosestPoint>(r4.data(), n)));
   for (size_t i = 0; i < n; i += (i < 1000 || i > n - 1000) ? 1 : 97) {
     ClosestPoint s;
     ASSERT_TRUE(closest_point(b->index, q[i], &s));
@@ -1619,7 +1685,8 @@ TEST(DistanceBatch, RegionPathSameBitsAsSingleQueries) {
   };
   Progress progress;
   progress.report = [](void* user, const char* stage, uint64_t, uint64_t) {
-    if (std::strcmp(stage, "closest points, by regions") == 0) static_cast<Stages*>(user)->regions = true;
+    if (std::strcmp(stage, "closest points, by regions") == 0)
+      static_cast<Stages*>(user)->regions = true;
     return true;
   };
   for (const auto& shape : shapes) {
@@ -1635,7 +1702,8 @@ TEST(DistanceBatch, RegionPathSameBitsAsSingleQueries) {
         u = 1 - u;
         w = 1 - w;
       }
-      const Vec3 p = corner(m, t, 0) + (corner(m, t, 1) - corner(m, t, 0)) * u + (corner(m, t, 2) - corner(m, t, 0)) * w;
+      const Vec3 p = corner(m, t, 0) + (corner(m, t, 1) - corner(m, t, 0)) * u +
+                     (corner(m, t, 2) - corner(m, t, 0)) * w;
       const Vec3 direction = rng.unit();  // two statements: the same draws with every compiler
       q.push_back(p + direction * rng.uniform(0, 0.5));
     }
@@ -1644,7 +1712,8 @@ TEST(DistanceBatch, RegionPathSameBitsAsSingleQueries) {
     const Vec3 step = box.extent() * 0.125;
     for (int x = -2; x <= 10; ++x) {
       for (int y = -2; y <= 10; ++y) {
-        for (int z = -2; z <= 10; z += 2) q.push_back(box.lo + Vec3{step.x * x, step.y * y, step.z * z});
+        for (int z = -2; z <= 10; z += 2)
+          q.push_back(box.lo + Vec3{step.x * x, step.y * y, step.z * z});
       }
     }
     q.push_back(Vec3{NAN, 0, 0});
@@ -1670,27 +1739,33 @@ TEST(DistanceBatch, RegionPathSameBitsAsSingleQueries) {
           EXPECT_EQ(got[i].distance, 0.0);
           continue;
         }
-        const bool same = got[i].triangle == single[i].triangle && same_bits(got[i].distance, single[i].distance) &&
-                          same_bits(got[i].point, single[i].point) && got[i].feature == single[i].feature &&
+        const bool same = got[i].triangle == single[i].triangle &&
+                          same_bits(got[i].distance, single[i].distance) &&
+                          same_bits(got[i].point, single[i].point) &&
+                          got[i].feature == single[i].feature &&
                           got[i].feature_index == single[i].feature_index;
         if (!same) {
           ++failures;
-          ADD_FAILURE() << shape.first << " threads " << threads << " query " << i << " (" << q[i].x << ", "
-                        << q[i].y << ", " << q[i].z << "): batch triangle " << got[i].triangle << " distance "
-                        << got[i].distance << ", single " << single[i].triangle << " " << single[i].distance;
+          ADD_FAILURE() << shape.first << " threads " << threads << " query " << i << " (" << q[i].x
+                        << ", " << q[i].y << ", " << q[i].z << "): batch triangle "
+                        << got[i].triangle << " distance " << got[i].distance << ", single "
+                        << single[i].triangle << " " << single[i].distance;
         }
       }
       ASSERT_EQ(failures, 0);
       for (SignMethod method : {SignMethod::kPseudonormal, SignMethod::kWindingNumber}) {
         // Winding numbers are slow to check one by one: once, on the open and imperfect meshes.
-        if (method == SignMethod::kWindingNumber && (threads != 1 || b->index.closed_manifold)) continue;
+        if (method == SignMethod::kWindingNumber && (threads != 1 || b->index.closed_manifold))
+          continue;
         std::vector<double> d(q.size());
-        SPLINTCORE_ASSERT_OK(batch_signed_distances(ctx, b->index, Span<const Vec3>(q.data(), q.size()), method,
+        SPLINTCORE_ASSERT_OK(batch_signed_distances(ctx, b->index,
+                                                    Span<const Vec3>(q.data(), q.size()), method,
                                                     Span<double>(d.data(), d.size())));
         for (size_t i = 0; i < q.size(); i += method == SignMethod::kWindingNumber ? 5 : 1) {
           SignedDistance sd;
           const double want = signed_distance(b->index, q[i], method, &sd) ? sd.distance : HUGE_VAL;
-          ASSERT_TRUE(same_bits(d[i], want)) << shape.first << " method " << static_cast<int>(method) << " i " << i;
+          ASSERT_TRUE(same_bits(d[i], want))
+              << shape.first << " method " << static_cast<int>(method) << " i " << i;
         }
       }
     }
@@ -1712,11 +1787,15 @@ TEST(DistanceSdf, BoxGridMatchesTheClampedAnalyticSdf) {
   grid.band = 0.5;
   const size_t layer = size_t{grid.nx} * grid.ny;
   ThreadExecutor one(1), three(3);
-  Context c1(&b->arena->arena, &one.executor(), nullptr), c3(&b->arena->arena, &three.executor(), nullptr);
-  for (SignMethod method : {SignMethod::kAuto, SignMethod::kPseudonormal, SignMethod::kWindingNumber}) {
+  Context c1(&b->arena->arena, &one.executor(), nullptr),
+      c3(&b->arena->arena, &three.executor(), nullptr);
+  for (SignMethod method :
+       {SignMethod::kAuto, SignMethod::kPseudonormal, SignMethod::kWindingNumber}) {
     std::vector<float> v1(layer * grid.nz), v3(layer * grid.nz);
-    SPLINTCORE_ASSERT_OK(sample_sdf(c1, b->index, grid, method, 0, grid.nz, Span<float>(v1.data(), v1.size())));
-    SPLINTCORE_ASSERT_OK(sample_sdf(c3, b->index, grid, method, 0, grid.nz, Span<float>(v3.data(), v3.size())));
+    SPLINTCORE_ASSERT_OK(
+        sample_sdf(c1, b->index, grid, method, 0, grid.nz, Span<float>(v1.data(), v1.size())));
+    SPLINTCORE_ASSERT_OK(
+        sample_sdf(c3, b->index, grid, method, 0, grid.nz, Span<float>(v3.data(), v3.size())));
     ASSERT_EQ(std::memcmp(v1.data(), v3.data(), v1.size() * sizeof(float)), 0);
     int beyond = 0, surface = 0;
     for (uint32_t z = 0; z < grid.nz; ++z) {
@@ -1741,7 +1820,8 @@ TEST(DistanceSdf, BoxGridMatchesTheClampedAnalyticSdf) {
     // A slab of layers is the same as those layers of the whole.
     const uint32_t z0 = 5, z1 = 11;
     std::vector<float> part(layer * (z1 - z0));
-    SPLINTCORE_ASSERT_OK(sample_sdf(c3, b->index, grid, method, z0, z1, Span<float>(part.data(), part.size())));
+    SPLINTCORE_ASSERT_OK(
+        sample_sdf(c3, b->index, grid, method, z0, z1, Span<float>(part.data(), part.size())));
     EXPECT_EQ(std::memcmp(part.data(), v1.data() + layer * z0, part.size() * sizeof(float)), 0);
     SPLINTCORE_EXPECT_OK(sample_sdf(c1, b->index, grid, method, 7, 7, Span<float>()));
   }
@@ -1777,7 +1857,8 @@ TEST(DistanceSdf, SamplesBeyondTheBandTakeTheWindingNumbersSign) {
     const char* name;
     const Soup* soup;
     bool closed;
-  } cases[] = {{"hollow ball", &hollow, true}, {"two tori", &tori, true}, {"cut ball", &cut, false}};
+  } cases[] = {
+      {"hollow ball", &hollow, true}, {"two tori", &tori, true}, {"cut ball", &cut, false}};
   for (const auto& c : cases) {
     auto b = build(*c.soup, 4);
     ASSERT_EQ(b->index.closed_manifold, c.closed) << c.name;
@@ -1884,17 +1965,20 @@ TEST(DistanceBuild, EmptyMesh) {
   std::vector<Vec3> q(3, Vec3{1, 1, 1});
   std::vector<ClosestPoint> r(3);
   r[1].distance = 5;
-  SPLINTCORE_ASSERT_OK(batch_closest_points(ctx, index, Span<const Vec3>(q.data(), 3), Span<ClosestPoint>(r.data(), 3)));
+  SPLINTCORE_ASSERT_OK(batch_closest_points(ctx, index, Span<const Vec3>(q.data(), 3),
+                                            Span<ClosestPoint>(r.data(), 3)));
   EXPECT_EQ(r[1].distance, 0.0);
   std::vector<double> d(3);
-  SPLINTCORE_ASSERT_OK(batch_signed_distances(ctx, index, Span<const Vec3>(q.data(), 3), SignMethod::kAuto, Span<double>(d.data(), 3)));
+  SPLINTCORE_ASSERT_OK(batch_signed_distances(ctx, index, Span<const Vec3>(q.data(), 3),
+                                              SignMethod::kAuto, Span<double>(d.data(), 3)));
   EXPECT_EQ(d[0], HUGE_VAL);
   SdfGrid g;
   g.spacing = 1;
   g.nx = g.ny = g.nz = 2;
   g.band = 0.5;
   std::vector<float> v(8);
-  SPLINTCORE_ASSERT_OK(sample_sdf(ctx, index, g, SignMethod::kAuto, 0, 2, Span<float>(v.data(), 8)));
+  SPLINTCORE_ASSERT_OK(
+      sample_sdf(ctx, index, g, SignMethod::kAuto, 0, 2, Span<float>(v.data(), 8)));
   for (float x : v) EXPECT_EQ(x, 0.5f);
   // A mesh with vertices and no triangles is empty too.
   ASSERT_TRUE(mesh.vertices.push_back(Vec3{1, 2, 3}));
@@ -1928,12 +2012,14 @@ TEST(DistanceBuild, BadMeshesAndOptions) {
   Progress stop;
   stop.report = [](void*, const char*, uint64_t, uint64_t) { return false; };
   Context cancelled(&t.arena, nullptr, &stop);
-  EXPECT_EQ(build_distance_index(cancelled, mesh, DistanceIndexOptions{}, &index).code(), StatusCode::kCancelled);
+  EXPECT_EQ(build_distance_index(cancelled, mesh, DistanceIndexOptions{}, &index).code(),
+            StatusCode::kCancelled);
 }
 
 TEST(DistanceBuild, ClosedManifoldFlag) {
   Rng rng(0x5eed0060);
-  for (const CurvedCase& c : curved_cases()) EXPECT_TRUE(build(c.soup)->index.closed_manifold) << c.name;
+  for (const CurvedCase& c : curved_cases())
+    EXPECT_TRUE(build(c.soup)->index.closed_manifold) << c.name;
   EXPECT_TRUE(build(box_soup(Vec3{0, 0, 0}, Vec3{1, 2, 3}))->index.closed_manifold);
   Soup s = icosphere(1, 1, Vec3{});
   Soup open(s.begin() + 1, s.end());
@@ -2043,7 +2129,7 @@ TEST(DistanceBuild, NeighboursAroundHighDegreePoles) {
   for (uint32_t i = 0; i < n; ++i) {
     const uint32_t top = 2 * i, bottom = 2 * i + 1;
     EXPECT_EQ(index.neighbors[3 * top + 0], 2 * ((i + n - 1) % n));  // edge 0 -> p
-    EXPECT_EQ(index.neighbors[3 * top + 1], bottom);                // edge p -> q
+    EXPECT_EQ(index.neighbors[3 * top + 1], bottom);                 // edge p -> q
     EXPECT_EQ(index.neighbors[3 * top + 2], 2 * ((i + 1) % n));      // edge q -> 0
     EXPECT_EQ(index.neighbors[3 * bottom + 1], top);
   }
@@ -2072,29 +2158,35 @@ IndexBytes snapshot(const DistanceIndex& x) {
 
 TEST(DistanceBuild, ArenaBoundCoversTheHighWater) {
   Rng rng(0x5eed0061);
-  std::vector<Soup> soups = {Soup{}, box_soup(Vec3{0, 0, 0}, Vec3{1, 1, 1}), icosphere(0, 1, Vec3{}),
-                             icosphere(2, 1, Vec3{}), icosphere(4, 1, Vec3{}), shapes::torus(40, 20, 5, 1),
-                             random_soup(rng, 50, 333, 2), random_soup(rng, 500, 3001, 2)};
+  std::vector<Soup> soups = {Soup{},
+                             box_soup(Vec3{0, 0, 0}, Vec3{1, 1, 1}),
+                             icosphere(0, 1, Vec3{}),
+                             icosphere(2, 1, Vec3{}),
+                             icosphere(4, 1, Vec3{}),
+                             shapes::torus(40, 20, 5, 1),
+                             random_soup(rng, 50, 333, 2),
+                             random_soup(rng, 500, 3001, 2)};
   for (const Soup& soup : soups) {
     TestArena t;
     Mesh mesh;
     ASSERT_TRUE(test::mesh_from_soup(t.arena, soup, &mesh).is_ok());
     for (uint32_t leaf : {0u, 1u, 2u, 3u, 4u, 7u, 16u}) {
-     for (bool oriented : {false, true}) {
-      DistanceIndexOptions options;
-      options.leaf_size = leaf;
-      options.oriented_boxes = oriented;
-      const Arena::Marker m = t.arena.mark();
-      t.arena.reset_high_water();
-      const size_t before = t.arena.used();
-      Context ctx(&t.arena);
-      DistanceIndex index;
-      SPLINTCORE_ASSERT_OK(build_distance_index(ctx, mesh, options, &index));
-      const uint64_t bound = distance_index_bound(mesh.vertices.size(), mesh.triangles.size(), options);
-      EXPECT_GE(bound, t.arena.high_water() - before)
-          << mesh.triangles.size() << " triangles, leaf " << leaf << " oriented " << oriented;
-      t.arena.rewind(m);
-     }
+      for (bool oriented : {false, true}) {
+        DistanceIndexOptions options;
+        options.leaf_size = leaf;
+        options.oriented_boxes = oriented;
+        const Arena::Marker m = t.arena.mark();
+        t.arena.reset_high_water();
+        const size_t before = t.arena.used();
+        Context ctx(&t.arena);
+        DistanceIndex index;
+        SPLINTCORE_ASSERT_OK(build_distance_index(ctx, mesh, options, &index));
+        const uint64_t bound =
+            distance_index_bound(mesh.vertices.size(), mesh.triangles.size(), options);
+        EXPECT_GE(bound, t.arena.high_water() - before)
+            << mesh.triangles.size() << " triangles, leaf " << leaf << " oriented " << oriented;
+        t.arena.rewind(m);
+      }
     }
   }
 }
@@ -2102,40 +2194,42 @@ TEST(DistanceBuild, ArenaBoundCoversTheHighWater) {
 TEST(DistanceBuild, ArenaExhaustionLoop) {
   Rng rng(0x5eed0062);
   for (const Soup& soup : {icosphere(1, 2, Vec3{}), random_soup(rng, 40, 100, 2)}) {
-   for (bool oriented : {false, true}) {
-    DistanceIndexOptions options;
-    options.oriented_boxes = oriented;
-    TestArena t;
-    Mesh mesh;
-    ASSERT_TRUE(test::mesh_from_soup(t.arena, soup, &mesh).is_ok());
-    DistanceIndex want_index;
-    Context big(&t.arena);
-    SPLINTCORE_ASSERT_OK(build_distance_index(big, mesh, options, &want_index));
-    const IndexBytes want = snapshot(want_index);
-    const uint64_t bound = distance_index_bound(mesh.vertices.size(), mesh.triangles.size(), options);
-    std::unique_ptr<unsigned char[]> buffer(new unsigned char[bound + 64]);
-    const size_t step = 16;  // the index of 100 triangles takes a few kB: over 100 caps fail
-    size_t cap = 0;
-    int failures = 0;
-    for (;; cap += step) {
-      ASSERT_LE(cap, bound + 64) << "no success within the bound";
-      Arena arena(buffer.get(), cap);
-      Context ctx(&arena);
-      DistanceIndex index;
-      Status s = build_distance_index(ctx, mesh, options, &index);
-      if (s.is_ok()) {
-        const IndexBytes got = snapshot(index);
-        EXPECT_EQ(got.bytes, want.bytes);
-        EXPECT_EQ(got.closed, want.closed);
-        break;
+    for (bool oriented : {false, true}) {
+      DistanceIndexOptions options;
+      options.oriented_boxes = oriented;
+      TestArena t;
+      Mesh mesh;
+      ASSERT_TRUE(test::mesh_from_soup(t.arena, soup, &mesh).is_ok());
+      DistanceIndex want_index;
+      Context big(&t.arena);
+      SPLINTCORE_ASSERT_OK(build_distance_index(big, mesh, options, &want_index));
+      const IndexBytes want = snapshot(want_index);
+      const uint64_t bound =
+          distance_index_bound(mesh.vertices.size(), mesh.triangles.size(), options);
+      std::unique_ptr<unsigned char[]> buffer(new unsigned char[bound + 64]);
+      const size_t step = 16;  // the index of 100 triangles takes a few kB: over 100 caps fail
+      size_t cap = 0;
+      int failures = 0;
+      for (;; cap += step) {
+        ASSERT_LE(cap, bound + 64) << "no success within the bound";
+        Arena arena(buffer.get(), cap);
+        Context ctx(&arena);
+        DistanceIndex index;
+        Status s = build_distance_index(ctx, mesh, options, &index);
+        if (s.is_ok()) {
+          const IndexBytes got = snapshot(index);
+          EXPECT_EQ(got.bytes, want.bytes);
+          EXPECT_EQ(got.closed, want.closed);
+          break;
+        }
+        ASSERT_EQ(s.code(), StatusCode::kArenaExhausted) << cap << ": " << test::format(s);
+        ++failures;
       }
-      ASSERT_EQ(s.code(), StatusCode::kArenaExhausted) << cap << ": " << test::format(s);
-      ++failures;
+      EXPECT_GT(failures, 100);
+      std::printf(
+          "[ info ] %zu triangles: %d caps exhausted, first success at %zu bytes, bound %llu\n",
+          mesh.triangles.size(), failures, cap, static_cast<unsigned long long>(bound));
     }
-    EXPECT_GT(failures, 100);
-    std::printf("[ info ] %zu triangles: %d caps exhausted, first success at %zu bytes, bound %llu\n",
-                mesh.triangles.size(), failures, cap, static_cast<unsigned long long>(bound));
-   }
   }
 }
 

@@ -209,9 +209,8 @@ TEST(BoundExact, TaubinSmooth) {
       TaubinOptions options;
       options.iterations = 2;
       options.max_displacement = clamp;
-      expect_fits(in, "taubin_smooth", taubin_smooth_bound(w.v(), w.t()), [&](Arena& arena) {
-        return taubin_smooth(Context(&arena), &w.mesh, options);
-      });
+      expect_fits(in, "taubin_smooth", taubin_smooth_bound(w.v(), w.t()),
+                  [&](Arena& arena) { return taubin_smooth(Context(&arena), &w.mesh, options); });
     }
   }
 }
@@ -233,10 +232,9 @@ TEST(BoundExact, BuildSplintBase) {
   // gives (the two-step contract: the count comes from the lines alone, see spline.h).
   TestArena scratch;
   Context sctx(&scratch.arena);
-  const Pick upper[] = {{{-20, -5, 10}}, {{-12, 12, 10}}, {{0, 18, 10}}, {{12, 12, 10}},
-                        {{20, -5, 10}}};
-  const Pick lower[] = {{{-20, -5, 5}}, {{-12, 12, 5}}, {{0, 18, 5}}, {{12, 12, 5}},
-                        {{20, -5, 5}}};
+  const Pick upper[] = {
+      {{-20, -5, 10}}, {{-12, 12, 10}}, {{0, 18, 10}}, {{12, 12, 10}}, {{20, -5, 10}}};
+  const Pick lower[] = {{{-20, -5, 5}}, {{-12, 12, 5}}, {{0, 18, 5}}, {{12, 12, 5}}, {{20, -5, 5}}};
   Pick up[5], lo[5];
   for (int i = 0; i < 5; ++i) {
     up[i] = upper[i];
@@ -261,10 +259,10 @@ TEST(BoundExact, BuildSplintBase) {
                                                &report));
       }
       Input in{"arch spacing " + std::to_string(spacing) + " radius " + std::to_string(radius),
-               {}, spacing < 1.0};
+               {},
+               spacing < 1.0};
       expect_fits(in, "build_splint_base",
-                  splint_base_bound(report.sections, report.points_per_section),
-                  [&](Arena& arena) {
+                  splint_base_bound(report.sections, report.points_per_section), [&](Arena& arena) {
                     Mesh out(&arena);
                     BaseReport r;
                     return build_splint_base(Context(&arena), Span<const Line>(ul.data(), 5),
@@ -290,11 +288,10 @@ TEST(BoundExact, RenderAndPng) {
       options.shading = RenderShading::kGouraud;
       RenderImage image;
       std::vector<uint8_t> kept;
-      expect_fits(in, "render_meshes",
-                  render_bound(side, side, 2 * w.v(), 2, options.view_count), [&](Arena& arena) {
-                    const Status s = render_meshes(Context(&arena),
-                                                   Span<const RenderMesh>(items, 2), options,
-                                                   &image);
+      expect_fits(in, "render_meshes", render_bound(side, side, 2 * w.v(), 2, options.view_count),
+                  [&](Arena& arena) {
+                    const Status s = render_meshes(
+                        Context(&arena), Span<const RenderMesh>(items, 2), options, &image);
                     if (s.is_ok()) kept.assign(image.rgb, image.rgb + size_t{side} * side * 3);
                     return s;
                   });
@@ -357,13 +354,12 @@ TEST(BoundExact, CtSegmentation) {
     ReconstructStats rs;
     {
       Mesh probe(&storage.arena);
-      SPLINTCORE_ASSERT_OK(reconstruct_region(sctx, bone.v, labels, ReconstructOptions{}, &probe,
-                                              &rs));
+      SPLINTCORE_ASSERT_OK(
+          reconstruct_region(sctx, bone.v, labels, ReconstructOptions{}, &probe, &rs));
       const uint32_t box[3] = {rs.box_hi[0] - rs.box_lo[0] + 1, rs.box_hi[1] - rs.box_lo[1] + 1,
                                rs.box_hi[2] - rs.box_lo[2] + 1};
-      const uint64_t bound = reconstruct_region_bound(box, rs.marching.layers_per_tile,
-                                                      probe.vertices.size(),
-                                                      probe.triangles.size());
+      const uint64_t bound = reconstruct_region_bound(
+          box, rs.marching.layers_per_tile, probe.vertices.size(), probe.triangles.size());
       expect_fits(in, "reconstruct_region", bound, [&](Arena& arena) {
         Mesh out(&arena);
         ReconstructOptions ro;

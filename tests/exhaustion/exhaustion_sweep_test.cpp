@@ -208,14 +208,13 @@ Counts sweep(const char* name, const Operation& op, size_t reference_cap = size_
         // Growth that falls back to the exact size can fit below the unconstrained high water.
         EXPECT_EQ(r.output, expected) << name << " cap " << n - 1;
       } else {
-        const uint64_t again =
-            check_failure(name, r, arena, 0, "cap " + std::to_string(n - 1));
+        const uint64_t again = check_failure(name, r, arena, 0, "cap " + std::to_string(n - 1));
         EXPECT_GE(again, n) << name << " cap " << n - 1 << ": " << r.status.message();
       }
     }
     if (n <= cap) {
-      ADD_FAILURE() << name << ": need " << n << " at cap " << cap << " (reference need "
-                    << need << ")";
+      ADD_FAILURE() << name << ": need " << n << " at cap " << cap << " (reference need " << need
+                    << ")";
       if (++bad > 3) break;
       cap = need;
       continue;
@@ -267,23 +266,25 @@ Counts sweep(const char* name, const Operation& op, size_t reference_cap = size_
     ++counts.hook_points;
   }
   EXPECT_GT(counts.buffer_points + counts.small_caps, 0u) << name;
-  std::printf("[ sweep    ] %-34s need %9zu B  buffer points %4llu  hook points %4llu  "
-              "small caps %3llu%s%s\n",
-              name, need, static_cast<unsigned long long>(counts.buffer_points),
-              static_cast<unsigned long long>(counts.hook_points),
-              static_cast<unsigned long long>(counts.small_caps),
-              overstated > 0 ? "  (need overstated " : "",
-              overstated > 0 ? (std::to_string(overstated) + "x)").c_str() : "");
+  std::printf(
+      "[ sweep    ] %-34s need %9zu B  buffer points %4llu  hook points %4llu  "
+      "small caps %3llu%s%s\n",
+      name, need, static_cast<unsigned long long>(counts.buffer_points),
+      static_cast<unsigned long long>(counts.hook_points),
+      static_cast<unsigned long long>(counts.small_caps),
+      overstated > 0 ? "  (need overstated " : "",
+      overstated > 0 ? (std::to_string(overstated) + "x)").c_str() : "");
   g_total.buffer_points += counts.buffer_points;
   g_total.hook_points += counts.hook_points;
   g_total.small_caps += counts.small_caps;
   ++g_operations;
-  std::printf("[ sweep    ] total over %llu operations: buffer points %llu  hook points %llu  "
-              "small caps %llu\n",
-              static_cast<unsigned long long>(g_operations),
-              static_cast<unsigned long long>(g_total.buffer_points),
-              static_cast<unsigned long long>(g_total.hook_points),
-              static_cast<unsigned long long>(g_total.small_caps));
+  std::printf(
+      "[ sweep    ] total over %llu operations: buffer points %llu  hook points %llu  "
+      "small caps %llu\n",
+      static_cast<unsigned long long>(g_operations),
+      static_cast<unsigned long long>(g_total.buffer_points),
+      static_cast<unsigned long long>(g_total.hook_points),
+      static_cast<unsigned long long>(g_total.small_caps));
   return counts;
 }
 
@@ -340,8 +341,8 @@ TEST(ExhaustionSweep, Mesh) {
     if (r.status.is_ok()) {
       EXPECT_TRUE(report.is_valid_solid());
       EXPECT_EQ(report.genus, 1);
-      const uint64_t f[] = {report.edge_count, report.shells,
-                            static_cast<uint64_t>(report.genus), report.boundary_edges};
+      const uint64_t f[] = {report.edge_count, report.shells, static_cast<uint64_t>(report.genus),
+                            report.boundary_edges};
       append_bytes(&r.output, f, 4);
       append_bytes(&r.output, &report.volume, 1);
     }
@@ -418,21 +419,20 @@ TEST(ExhaustionSweep, Stl) {
   }
   HeldMesh torus(torus_soup());
   for (StlFormat format : {StlFormat::kBinary, StlFormat::kAscii}) {
-    sweep(format == StlFormat::kBinary ? "write_stl (binary)" : "write_stl (ASCII)",
-          [&](Arena& a) {
-            OpRun r;
-            std::vector<uint8_t> out(size_t{256} << 10);
-            MemorySink sink{out.data(), out.size(), 0, 0};
-            StlWriteOptions wo;
-            wo.format = format;
-            wo.buffer_bytes = 4096;
-            r.status = write_stl(Context(&a), torus.mesh, memory_sink(&sink), wo);
-            // A failed writer has written nothing (the buffer is taken before any byte).
-            r.outputs_empty = sink.size == 0;
-            out.resize(static_cast<size_t>(sink.size));
-            r.output = out;
-            return r;
-          });
+    sweep(format == StlFormat::kBinary ? "write_stl (binary)" : "write_stl (ASCII)", [&](Arena& a) {
+      OpRun r;
+      std::vector<uint8_t> out(size_t{256} << 10);
+      MemorySink sink{out.data(), out.size(), 0, 0};
+      StlWriteOptions wo;
+      wo.format = format;
+      wo.buffer_bytes = 4096;
+      r.status = write_stl(Context(&a), torus.mesh, memory_sink(&sink), wo);
+      // A failed writer has written nothing (the buffer is taken before any byte).
+      r.outputs_empty = sink.size == 0;
+      out.resize(static_cast<size_t>(sink.size));
+      r.output = out;
+      return r;
+    });
   }
 }
 
@@ -445,7 +445,7 @@ std::string shortest(double v) {
 
 TEST(ExhaustionSweep, PlyAndObj) {
   // The torus as an ASCII PLY and as an OBJ, read and welded (read_mesh: detection, then
-// read_ply or read_obj).
+  // read_ply or read_obj).
   HeldMesh torus(torus_soup());
   std::string ply = "ply\nformat ascii 1.0\nelement vertex " +
                     std::to_string(torus.mesh.vertices.size()) +
@@ -454,8 +454,7 @@ TEST(ExhaustionSweep, PlyAndObj) {
                     "\nproperty list uchar int vertex_indices\nend_header\n";
   std::string obj = "# torus\n";
   for (const Vec3& v : torus.mesh.vertices) {
-    const std::string xyz = shortest(v.x) + " " + shortest(v.y) + " " +
-                            shortest(v.z);
+    const std::string xyz = shortest(v.x) + " " + shortest(v.y) + " " + shortest(v.z);
     ply += xyz + "\n";
     obj += "v " + xyz + "\n";
   }
@@ -470,8 +469,7 @@ TEST(ExhaustionSweep, PlyAndObj) {
   for (const auto& f : files) {
     sweep(f.first, [&](Arena& a) {
       OpRun r;
-      MemorySource ms{reinterpret_cast<const uint8_t*>(f.second->data()), f.second->size(), 0,
-                      0};
+      MemorySource ms{reinterpret_cast<const uint8_t*>(f.second->data()), f.second->size(), 0, 0};
       MeshReadOptions options;
       options.weld = true;
       options.chunk_bytes = 4096;  // refills
@@ -608,9 +606,9 @@ TEST(ExhaustionSweep, DistanceAndVolume) {
     DistanceIndex index;
     if (!with_index(a, &r, &index)) return r;
     std::vector<ClosestPoint> results(queries.size());
-    r.status = batch_closest_points(Context(&a), index,
-                                    Span<const Vec3>(queries.data(), queries.size()),
-                                    Span<ClosestPoint>(results.data(), results.size()));
+    r.status =
+        batch_closest_points(Context(&a), index, Span<const Vec3>(queries.data(), queries.size()),
+                             Span<ClosestPoint>(results.data(), results.size()));
     if (r.status.is_ok()) {
       for (const ClosestPoint& p : results) append_bytes(&r.output, &p.distance, 1);
     } else {
@@ -624,10 +622,9 @@ TEST(ExhaustionSweep, DistanceAndVolume) {
     DistanceIndex index;
     if (!with_index(a, &r, &index)) return r;
     std::vector<double> results(queries.size());
-    r.status = batch_signed_distances(Context(&a), index,
-                                      Span<const Vec3>(queries.data(), queries.size()),
-                                      SignMethod::kWindingNumber,
-                                      Span<double>(results.data(), results.size()));
+    r.status = batch_signed_distances(
+        Context(&a), index, Span<const Vec3>(queries.data(), queries.size()),
+        SignMethod::kWindingNumber, Span<double>(results.data(), results.size()));
     if (r.status.is_ok()) {
       append_bytes(&r.output, results.data(), results.size());
     } else {
@@ -743,8 +740,8 @@ TEST(ExhaustionSweep, BooleanPrinterAndDesign) {
   sweep("check_printable", [&](Arena& a) {
     OpRun r;
     PrintCheck check;
-    r.status = check_printable(Context(&a), torus.mesh, eden260_profile(), PrintCheckOptions{},
-                               &check);
+    r.status =
+        check_printable(Context(&a), torus.mesh, eden260_profile(), PrintCheckOptions{}, &check);
     if (r.status.is_ok()) {
       append_bytes(&r.output, &check.layers, 1);
       append_bytes(&r.output, &check.extent, 1);

@@ -34,8 +34,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   };
   CtVolume volume;
   CtInfo info;
-  Status s =
-      read_metaimage(ctx, memory_source(&ms, "fuzz.mha"), &opener, options, &volume, &info);
+  Status s = read_metaimage(ctx, memory_source(&ms, "fuzz.mha"), &opener, options, &volume, &info);
   fuzz::check(s, arena, volume, options);
   return 0;
 }

@@ -14,8 +14,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   Arena arena(memory, sizeof(memory));
   Context ctx(&arena);
   JsonDocument doc;
-  Status s = parse_json(ctx, reinterpret_cast<const char*>(data), size, JsonLimits{}, "fuzz",
-                        &doc);
+  Status s = parse_json(ctx, reinterpret_cast<const char*>(data), size, JsonLimits{}, "fuzz", &doc);
   if (!s.is_ok()) {
     if (s.code() == StatusCode::kOk || s.message()[0] == '\0') std::abort();  // an error says what
     return 0;
@@ -42,6 +41,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
   }
   char text[512];
-  (void)json_error(doc, doc.root(), StatusCode::kInvalidArgument, "fuzz").format(text, sizeof(text));
+  (void)json_error(doc, doc.root(), StatusCode::kInvalidArgument, "fuzz")
+      .format(text, sizeof(text));
   return 0;
 }

@@ -90,9 +90,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const Vec3& b = back.vertices[i];
     if (!(a.x == b.x && a.y == b.y && a.z == b.z)) std::abort();
   }
-  if (!mesh.triangles.empty() &&
-      std::memcmp(mesh.triangles.data(), back.triangles.data(),
-                  mesh.triangles.size() * sizeof(Triangle)) != 0) {
+  if (!mesh.triangles.empty() && std::memcmp(mesh.triangles.data(), back.triangles.data(),
+                                             mesh.triangles.size() * sizeof(Triangle)) != 0) {
     std::abort();
   }
   return 0;

@@ -24,8 +24,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   MemorySource ms{data, size, 0, chunk};
   StlReadOptions options;
   options.max_triangles = 20000;
-  options.format = (mode & 3) == 1 ? StlFormat::kBinary
-                   : (mode & 3) == 2 ? StlFormat::kAscii : StlFormat::kAuto;
+  options.format = (mode & 3) == 1   ? StlFormat::kBinary
+                   : (mode & 3) == 2 ? StlFormat::kAscii
+                                     : StlFormat::kAuto;
   if ((mode & 3) == 3) options.chunk_bytes = 1024;  // the smallest buffers: refills everywhere
   // The soup, welded two ways.
   ArenaArray<SoupTriangle> soup(&arena);

@@ -132,8 +132,8 @@ Vec3 random_point(Rng& rng, Range r) {
 
 // x moved by k ulps (k > 0 up, k < 0 down).
 double ulps(double x, int k) {
-  const double toward = k > 0 ? std::numeric_limits<double>::infinity()
-                              : -std::numeric_limits<double>::infinity();
+  const double toward =
+      k > 0 ? std::numeric_limits<double>::infinity() : -std::numeric_limits<double>::infinity();
   for (int i = 0; i < (k > 0 ? k : -k); ++i) x = std::nextafter(x, toward);
   return x;
 }
@@ -195,8 +195,8 @@ int check2d(Tally& t, double ax, double ay, double bx, double by, double cx, dou
   if (naive_orient2d_sign(ax, ay, bx, by, cx, cy) != expected) ++t.naive_wrong;
   if (got != expected && ++t.wrong <= 5) {
     ADD_FAILURE() << t.name << ": orient2d(" << hex(ax) << ", " << hex(ay) << ", " << hex(bx)
-                  << ", " << hex(by) << ", " << hex(cx) << ", " << hex(cy) << ") has sign "
-                  << got << ", exact sign " << expected;
+                  << ", " << hex(by) << ", " << hex(cx) << ", " << hex(cy) << ") has sign " << got
+                  << ", exact sign " << expected;
   }
   return expected;
 }
@@ -208,8 +208,8 @@ int check3d(Tally& t, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d
   if (expected == 0) ++t.zeros;
   if (naive_orient3d_sign(a, b, c, d) != expected) ++t.naive_wrong;
   if (got != expected && ++t.wrong <= 5) {
-    ADD_FAILURE() << t.name << ": orient3d(" << hex(a) << ", " << hex(b) << ", " << hex(c)
-                  << ", " << hex(d) << ") has sign " << got << ", exact sign " << expected;
+    ADD_FAILURE() << t.name << ": orient3d(" << hex(a) << ", " << hex(b) << ", " << hex(c) << ", "
+                  << hex(d) << ") has sign " << got << ", exact sign " << expected;
   }
   return expected;
 }
@@ -261,9 +261,15 @@ TEST(ExactOracle, BigIntMatchesInt64AndAlgebra) {
 
 TEST(ExactOracle, DecomposeIsExactAndOrderPreserving) {
   Rng rng(12);
-  const double specials[] = {0.0, -0.0, 1.0, -1.0, 0.5, std::numeric_limits<double>::min(),
+  const double specials[] = {0.0,
+                             -0.0,
+                             1.0,
+                             -1.0,
+                             0.5,
+                             std::numeric_limits<double>::min(),
                              std::numeric_limits<double>::denorm_min(),
-                             std::numeric_limits<double>::max(), -std::numeric_limits<double>::max()};
+                             std::numeric_limits<double>::max(),
+                             -std::numeric_limits<double>::max()};
   for (double v : specials) {
     const splintcore_test::DyadicParts p = splintcore_test::decompose(v);
     EXPECT_EQ(std::ldexp(static_cast<double>(p.mantissa), p.exponent), v) << hex(v);
@@ -309,9 +315,9 @@ TEST(Predicates, SimpleExactCases) {
   EXPECT_EQ(orient3d(o, ex, ey, Vec3{0.3, 0.7, 0}), 0.0);
   EXPECT_EQ(orient3d(Vec3{1, 2, 3}, Vec3{4, 5, 6}, Vec3{7, 8, 9}, Vec3{-1, 0.5, 2}), 0.0);
   EXPECT_EQ(orient3d(ex, ex, ey, Vec3{5, 5, 5}), 0.0);
-  EXPECT_EQ(orient3d(Vec3{0.1, 0.2, 0.3}, Vec3{0.1, 0.2, 0.3}, Vec3{0.1, 0.2, 0.3},
-                     Vec3{0.1, 0.2, 0.3}),
-            0.0);
+  EXPECT_EQ(
+      orient3d(Vec3{0.1, 0.2, 0.3}, Vec3{0.1, 0.2, 0.3}, Vec3{0.1, 0.2, 0.3}, Vec3{0.1, 0.2, 0.3}),
+      0.0);
   // Points of the plane x + y + z = 1 written in decimal: after rounding to binary they are
   // only nearly coplanar, so the sign is whatever the oracle says.
   const Vec3 p{0.1, 0.2, 0.7};
@@ -493,9 +499,7 @@ TEST(Predicates, Orient2dExactlyDegenerateIsZero) {
   // 2^16, so it is itself a float32, and the points are exactly collinear.
   Tally floats("orient2d exactly collinear float32");
   for (int i = 0; i < 30000; ++i) {
-    auto f = [&rng]() {
-      return rng.dyadic(-2047, 2047, -8, 0);
-    };
+    auto f = [&rng]() { return rng.dyadic(-2047, 2047, -8, 0); };
     const double ax = f(), ay = f(), dx = f(), dy = f();
     double c[6];
     for (int j = 0; j < 3; ++j) {
@@ -680,9 +684,7 @@ TEST(Predicates, Orient3dExactlyDegenerateIsZero) {
   // multiples of 2^-8 below 2^15, so float32 values themselves.
   Tally floats("orient3d exactly coplanar float32");
   for (int n = 0; n < 30000; ++n) {
-    auto f = [&rng]() {
-      return rng.dyadic(-1023, 1023, -8, 0);
-    };
+    auto f = [&rng]() { return rng.dyadic(-1023, 1023, -8, 0); };
     const Vec3 a{f(), f(), f()};
     const Vec3 u{f(), f(), f()};
     const Vec3 v{f(), f(), f()};
@@ -896,16 +898,13 @@ TEST(Predicates, Collinear3dExactAndPerturbed) {
       for (Vec3& q : p) q = (a + coordinate(n % 6 == 0 ? 1 : 50) * d) * scale;
     } else {
       // float32 points on a line (as in Orient2dExactlyDegenerateIsZero).
-      auto f = [&rng]() {
-        return rng.dyadic(-2047, 2047, -8, 0);
-      };
+      auto f = [&rng]() { return rng.dyadic(-2047, 2047, -8, 0); };
       const Vec3 a{f(), f(), f()};
       const Vec3 d{f(), f(), f()};
       for (Vec3& q : p) q = a + static_cast<double>(rng.small(-16, 16)) * d;
     }
     ASSERT_TRUE(exact_collinear3d(p[0], p[1], p[2]));
-    ASSERT_TRUE(collinear3d(p[0], p[1], p[2]))
-        << hex(p[0]) << " " << hex(p[1]) << " " << hex(p[2]);
+    ASSERT_TRUE(collinear3d(p[0], p[1], p[2])) << hex(p[0]) << " " << hex(p[1]) << " " << hex(p[2]);
     ASSERT_TRUE(collinear3d(p[2], p[0], p[1]));
     ++exact_cases;
 
@@ -916,8 +915,8 @@ TEST(Predicates, Collinear3dExactAndPerturbed) {
     const int which = rng.small(0, 2);
     const int axis = rng.small(0, 2);
     const double old = q[which][axis];
-    q[which][axis] = old != 0.0 ? ulps(old, rng.coin() ? 1 : -1)
-                                : (rng.coin() ? 0x1p-40 : -0x1p-40);
+    q[which][axis] =
+        old != 0.0 ? ulps(old, rng.coin() ? 1 : -1) : (rng.coin() ? 0x1p-40 : -0x1p-40);
     const bool expected = exact_collinear3d(q[0], q[1], q[2]);
     ASSERT_EQ(collinear3d(q[0], q[1], q[2]), expected)
         << hex(q[0]) << " " << hex(q[1]) << " " << hex(q[2]);
@@ -941,10 +940,11 @@ TEST(Predicates, Collinear3dExactAndPerturbed) {
         << hex(a) << " " << hex(b) << " " << hex(c);
     ++other_cases;
   }
-  std::printf("[   info   ] collinear3d: %lld exactly collinear, %lld one-ulp perturbed (%lld not "
-              "collinear), %lld near/random\n",
-              static_cast<long long>(exact_cases), static_cast<long long>(perturbed_cases),
-              static_cast<long long>(perturbed_false), static_cast<long long>(other_cases));
+  std::printf(
+      "[   info   ] collinear3d: %lld exactly collinear, %lld one-ulp perturbed (%lld not "
+      "collinear), %lld near/random\n",
+      static_cast<long long>(exact_cases), static_cast<long long>(perturbed_cases),
+      static_cast<long long>(perturbed_false), static_cast<long long>(other_cases));
   EXPECT_GT(perturbed_false, perturbed_cases / 2);
 }
 
@@ -952,8 +952,8 @@ TEST(Predicates, Collinear3dExactAndPerturbed) {
 
 // Sign of det[a - d, |a - d|^2; b - d, |b - d|^2; c - d, |c - d|^2], exactly (the oracle for
 // incircle: the coordinates on one common integer scale, then integer arithmetic).
-int exact_incircle_sign(double ax, double ay, double bx, double by, double cx, double cy,
-                        double dx, double dy) {
+int exact_incircle_sign(double ax, double ay, double bx, double by, double cx, double cy, double dx,
+                        double dy) {
   const double v[8] = {ax, ay, bx, by, cx, cy, dx, dy};
   const std::vector<BigInt> n = to_common_scale(v, 8);
   const BigInt adx = n[0] - n[6], ady = n[1] - n[7];
@@ -967,8 +967,8 @@ int exact_incircle_sign(double ax, double ay, double bx, double by, double cx, d
   return det.sign();
 }
 
-int naive_incircle_sign(double ax, double ay, double bx, double by, double cx, double cy,
-                        double dx, double dy) {
+int naive_incircle_sign(double ax, double ay, double bx, double by, double cx, double cy, double dx,
+                        double dy) {
   const double adx = ax - dx, ady = ay - dy, bdx = bx - dx, bdy = by - dy;
   const double cdx = cx - dx, cdy = cy - dy;
   return sign_of((adx * adx + ady * ady) * (bdx * cdy - bdy * cdx) +
@@ -990,10 +990,10 @@ int check_incircle(Tally& t, const Circle4& q) {
     ++t.naive_wrong;
   }
   if (got != expected && ++t.wrong <= 5) {
-    ADD_FAILURE() << t.name << ": incircle(" << hex(a->x) << ", " << hex(a->y) << ", "
-                  << hex(b->x) << ", " << hex(b->y) << ", " << hex(c->x) << ", " << hex(c->y)
-                  << ", " << hex(d->x) << ", " << hex(d->y) << ") has sign " << got
-                  << ", exact sign " << expected;
+    ADD_FAILURE() << t.name << ": incircle(" << hex(a->x) << ", " << hex(a->y) << ", " << hex(b->x)
+                  << ", " << hex(b->y) << ", " << hex(c->x) << ", " << hex(c->y) << ", "
+                  << hex(d->x) << ", " << hex(d->y) << ") has sign " << got << ", exact sign "
+                  << expected;
   }
   return expected;
 }
@@ -1042,12 +1042,12 @@ TEST(Predicates, IncircleSimpleExactCases) {
   // A Pythagorean circle (radius 5) moved and scaled by powers of two: exactly cocircular.
   for (int e = -200; e <= 200; e += 25) {
     const double s = std::ldexp(1.0, e);
-    EXPECT_EQ(incircle((7 + 3) * s, (11 + 4) * s, (7 - 4) * s, (11 + 3) * s, (7 - 5) * s,
-                       11 * s, (7 + 4) * s, (11 - 3) * s),
+    EXPECT_EQ(incircle((7 + 3) * s, (11 + 4) * s, (7 - 4) * s, (11 + 3) * s, (7 - 5) * s, 11 * s,
+                       (7 + 4) * s, (11 - 3) * s),
               0.0)
         << e;
-    EXPECT_GT(incircle((7 + 3) * s, (11 + 4) * s, (7 - 4) * s, (11 + 3) * s, (7 - 5) * s,
-                       11 * s, (7 + 4) * s, (11 - 2) * s),
+    EXPECT_GT(incircle((7 + 3) * s, (11 + 4) * s, (7 - 4) * s, (11 + 3) * s, (7 - 5) * s, 11 * s,
+                       (7 + 4) * s, (11 - 2) * s),
               0.0)
         << e;
   }
@@ -1145,15 +1145,15 @@ TEST(Predicates, IncircleExactlyCocircularIsZero) {
     if (i % 3 == 0) std::swap(q.p[1], q.p[2]);
     const int expected = check_incircle(rect, q);
     ASSERT_EQ(expected, 0);
-    ASSERT_EQ(incircle(q.p[0].x, q.p[0].y, q.p[1].x, q.p[1].y, q.p[2].x, q.p[2].y, q.p[3].x,
-                       q.p[3].y),
-              0.0);
+    ASSERT_EQ(
+        incircle(q.p[0].x, q.p[0].y, q.p[1].x, q.p[1].y, q.p[2].x, q.p[2].y, q.p[3].x, q.p[3].y),
+        0.0);
   }
   // Integer points of x^2 + y^2 = 25 (and 65^2), moved to an integer centre and scaled.
-  const int p5[12][2] = {{5, 0}, {4, 3}, {3, 4}, {0, 5}, {-3, 4}, {-4, 3},
+  const int p5[12][2] = {{5, 0},  {4, 3},   {3, 4},   {0, 5},  {-3, 4}, {-4, 3},
                          {-5, 0}, {-4, -3}, {-3, -4}, {0, -5}, {3, -4}, {4, -3}};
-  const int p65[8][2] = {{65, 0}, {63, 16}, {60, 25}, {56, 33}, {52, 39}, {39, 52}, {33, 56},
-                         {16, 63}};
+  const int p65[8][2] = {{65, 0},  {63, 16}, {60, 25}, {56, 33},
+                         {52, 39}, {39, 52}, {33, 56}, {16, 63}};
   for (int i = 0; i < 20000; ++i) {
     const double scale = std::ldexp(1.0, rng.small(-150, 150));
     const double cx = static_cast<double>(rng.small(-1000, 1000));
@@ -1262,8 +1262,8 @@ TEST(Predicates, IncircleResultBitsArePinned) {
     for (size_t i = 0; i < 64; i += 3) {
       for (size_t j = 0; j < 64; j += 3) {
         q.p[3] = {xs[i], ys[j]};
-        h = fold(h, incircle(q.p[0].x, q.p[0].y, q.p[1].x, q.p[1].y, q.p[2].x, q.p[2].y,
-                             q.p[3].x, q.p[3].y));
+        h = fold(h, incircle(q.p[0].x, q.p[0].y, q.p[1].x, q.p[1].y, q.p[2].x, q.p[2].y, q.p[3].x,
+                             q.p[3].y));
       }
     }
   }

@@ -47,11 +47,11 @@ TEST(Float32, ExactnessIsDecidedOnTheBits) {
   EXPECT_TRUE(is_float32_exact(1.5));
   EXPECT_TRUE(is_float32_exact(static_cast<double>(0.1f)));
   EXPECT_FALSE(is_float32_exact(0.1));
-  EXPECT_TRUE(is_float32_exact(std::ldexp(1.0, -149)));   // the smallest float32 subnormal
+  EXPECT_TRUE(is_float32_exact(std::ldexp(1.0, -149)));  // the smallest float32 subnormal
   EXPECT_FALSE(is_float32_exact(std::ldexp(1.0, -150)));
   EXPECT_TRUE(is_float32_exact(std::ldexp(3.0, -149)));
   EXPECT_FALSE(is_float32_exact(std::ldexp(3.0, -150)));
-  EXPECT_TRUE(is_float32_exact(3.4028234663852886e38));   // FLT_MAX
+  EXPECT_TRUE(is_float32_exact(3.4028234663852886e38));  // FLT_MAX
   EXPECT_FALSE(is_float32_exact(std::ldexp(1.0, 128)));
   EXPECT_FALSE(is_float32_exact(1.0 + std::ldexp(1.0, -24)));
   EXPECT_TRUE(is_float32_exact(1.0 + std::ldexp(1.0, -23)));

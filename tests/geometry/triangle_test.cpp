@@ -400,8 +400,8 @@ bool use_int128(const Scaled& s, Arithmetic arithmetic) {
 bool fits_int128(const Vec3* p, size_t n) { return use_int128(scale(p, n), Arithmetic::kAuto); }
 
 // Do the closed triangles abc and def meet? Both must be non-degenerate.
-bool triangles_meet_with(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
-                         const Vec3& e, const Vec3& f, Info* info, Arithmetic arithmetic) {
+bool triangles_meet_with(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, const Vec3& e,
+                         const Vec3& f, Info* info, Arithmetic arithmetic) {
   const Vec3 in[6] = {a, b, c, d, e, f};
   if (info != nullptr) *info = Info{};
   if (boxes_apart(in, 3, in + 3, 3)) {
@@ -517,8 +517,8 @@ class Rng {
 // for nonzero coordinates of magnitude at least 2^-306 only (no subnormals).
 double ulps(double x, int k) {
   if (x == 0.0) return std::ldexp(static_cast<double>(k), -300);
-  const double toward = k > 0 ? std::numeric_limits<double>::infinity()
-                              : -std::numeric_limits<double>::infinity();
+  const double toward =
+      k > 0 ? std::numeric_limits<double>::infinity() : -std::numeric_limits<double>::infinity();
   for (int i = 0; i < (k > 0 ? k : -k); ++i) x = std::nextafter(x, toward);
   return x;
 }
@@ -605,8 +605,8 @@ bool check_tt(Tally& t, const Vec3* s, const Vec3* r) {
 bool check_st(Tally& t, const Vec3& p, const Vec3& q, const Vec3* tri) {
   const Vec3 &a = tri[0], &b = tri[1], &c = tri[2];
   oracle::Info info;
-  const bool expected = oracle::segment_meets_triangle_with(p, q, a, b, c, &info,
-                                                            oracle::Arithmetic::kAuto);
+  const bool expected =
+      oracle::segment_meets_triangle_with(p, q, a, b, c, &info, oracle::Arithmetic::kAuto);
   ++t.cases;
   if (expected) ++t.meet;
   if (info.coplanar) ++t.coplanar;
@@ -618,9 +618,8 @@ bool check_st(Tally& t, const Vec3& p, const Vec3& q, const Vec3* tri) {
     if (got[k] != expected) {
       if (++t.wrong <= 5) {
         ADD_FAILURE() << t.name << ": segment_intersects_triangle (argument order " << k
-                      << ") says " << got[k] << ", oracle " << expected << " for segment "
-                      << hex(p) << " " << hex(q) << " triangle " << hex(a) << " " << hex(b)
-                      << " " << hex(c);
+                      << ") says " << got[k] << ", oracle " << expected << " for segment " << hex(p)
+                      << " " << hex(q) << " triangle " << hex(a) << " " << hex(b) << " " << hex(c);
       }
       break;
     }
@@ -670,11 +669,13 @@ void expect_clean(const Tally& t) {
 
 // ---- random inputs ---------------------------------------------------------------------------
 
-enum class Kind {
-  kInt3, kSlab, kInt12, kFloat32, kDyadic, kInt12Times2p200, kFloat32Times2pm200
-};
-constexpr Kind kAllKinds[] = {Kind::kInt3,    Kind::kSlab,   Kind::kInt12,
-                              Kind::kFloat32, Kind::kDyadic, Kind::kInt12Times2p200,
+enum class Kind { kInt3, kSlab, kInt12, kFloat32, kDyadic, kInt12Times2p200, kFloat32Times2pm200 };
+constexpr Kind kAllKinds[] = {Kind::kInt3,
+                              Kind::kSlab,
+                              Kind::kInt12,
+                              Kind::kFloat32,
+                              Kind::kDyadic,
+                              Kind::kInt12Times2p200,
                               Kind::kFloat32Times2pm200};
 
 const char* kind_name(Kind k) {
@@ -749,38 +750,38 @@ TEST(TriangleOracle, HandCheckedCases) {
   auto meets = [&](Vec3 d, Vec3 e, Vec3 f) {
     return oracle::triangles_meet(t[0], t[1], t[2], d, e, f);
   };
-  EXPECT_TRUE(meets(o, x, y));                                     // the same triangle
-  EXPECT_TRUE(meets({0, 0, 0}, {-1, 0, 1}, {0, -1, 1}));           // a shared vertex only
-  EXPECT_TRUE(meets({1, 1, 0}, {1, 1, 5}, {2, 3, 5}));             // a vertex on the face
-  EXPECT_FALSE(meets({1, 1, 1}, {1, 1, 5}, {2, 3, 5}));            // just above it
-  EXPECT_TRUE(meets({2, 0, 0}, {2, -1, 3}, {2, 1, 3}));            // a vertex on an edge
-  EXPECT_TRUE(meets({1, 1, -1}, {1, 1, 1}, {9, 9, 0}));            // an edge through the face
-  EXPECT_TRUE(meets({2, -1, -1}, {2, 1, 1}, {2, -5, 3}));          // edge through edge (2,0,0)
-  EXPECT_FALSE(meets({2, -1, -1}, {2, -1, 1}, {2, -5, 3}));        // edge passing beside it
-  EXPECT_FALSE(meets({0, 0, 1}, {4, 0, 1}, {0, 4, 1}));            // parallel planes
-  EXPECT_TRUE(meets({1, 1, 0}, {5, 1, 0}, {1, 5, 0}));             // coplanar overlap
-  EXPECT_TRUE(meets({4, 0, 0}, {5, 0, 0}, {4, 1, 0}));             // coplanar, vertex touch
-  EXPECT_TRUE(meets({2, 2, 0}, {5, 2, 0}, {2, 5, 0}));             // coplanar, vertex on edge
-  EXPECT_TRUE(meets({3, 1, 0}, {1, 3, 0}, {5, 5, 0}));             // coplanar, edge on edge
-  EXPECT_FALSE(meets({3, 2, 0}, {2, 3, 0}, {5, 5, 0}));            // coplanar, just outside
-  EXPECT_FALSE(meets({5, 0, 0}, {6, 0, 0}, {5, 1, 0}));            // coplanar, disjoint
-  EXPECT_TRUE(meets({-1, -1, 0}, {9, -1, 0}, {-1, 9, 0}));         // coplanar, containing
-  EXPECT_TRUE(meets({1, 1, 0}, {1, 1, 1}, {1, 2, 0}));             // coplanar edge in face
-  EXPECT_FALSE(meets({-1, 2, -1}, {-1, 2, 1}, {-3, 2, 0}));        // beside, planes crossing
+  EXPECT_TRUE(meets(o, x, y));                               // the same triangle
+  EXPECT_TRUE(meets({0, 0, 0}, {-1, 0, 1}, {0, -1, 1}));     // a shared vertex only
+  EXPECT_TRUE(meets({1, 1, 0}, {1, 1, 5}, {2, 3, 5}));       // a vertex on the face
+  EXPECT_FALSE(meets({1, 1, 1}, {1, 1, 5}, {2, 3, 5}));      // just above it
+  EXPECT_TRUE(meets({2, 0, 0}, {2, -1, 3}, {2, 1, 3}));      // a vertex on an edge
+  EXPECT_TRUE(meets({1, 1, -1}, {1, 1, 1}, {9, 9, 0}));      // an edge through the face
+  EXPECT_TRUE(meets({2, -1, -1}, {2, 1, 1}, {2, -5, 3}));    // edge through edge (2,0,0)
+  EXPECT_FALSE(meets({2, -1, -1}, {2, -1, 1}, {2, -5, 3}));  // edge passing beside it
+  EXPECT_FALSE(meets({0, 0, 1}, {4, 0, 1}, {0, 4, 1}));      // parallel planes
+  EXPECT_TRUE(meets({1, 1, 0}, {5, 1, 0}, {1, 5, 0}));       // coplanar overlap
+  EXPECT_TRUE(meets({4, 0, 0}, {5, 0, 0}, {4, 1, 0}));       // coplanar, vertex touch
+  EXPECT_TRUE(meets({2, 2, 0}, {5, 2, 0}, {2, 5, 0}));       // coplanar, vertex on edge
+  EXPECT_TRUE(meets({3, 1, 0}, {1, 3, 0}, {5, 5, 0}));       // coplanar, edge on edge
+  EXPECT_FALSE(meets({3, 2, 0}, {2, 3, 0}, {5, 5, 0}));      // coplanar, just outside
+  EXPECT_FALSE(meets({5, 0, 0}, {6, 0, 0}, {5, 1, 0}));      // coplanar, disjoint
+  EXPECT_TRUE(meets({-1, -1, 0}, {9, -1, 0}, {-1, 9, 0}));   // coplanar, containing
+  EXPECT_TRUE(meets({1, 1, 0}, {1, 1, 1}, {1, 2, 0}));       // coplanar edge in face
+  EXPECT_FALSE(meets({-1, 2, -1}, {-1, 2, 1}, {-3, 2, 0}));  // beside, planes crossing
 
   auto seg = [&](Vec3 p, Vec3 q) { return oracle::segment_meets_triangle(p, q, o, x, y); };
-  EXPECT_TRUE(seg({1, 1, -1}, {1, 1, 1}));   // through the face
-  EXPECT_TRUE(seg({1, 1, 0}, {1, 1, 1}));    // ending on the face
-  EXPECT_FALSE(seg({1, 1, 1}, {1, 1, 2}));   // above
-  EXPECT_TRUE(seg({2, 2, -1}, {2, 2, 1}));   // through the hypotenuse
-  EXPECT_FALSE(seg({3, 2, -1}, {3, 2, 1}));  // beside it
-  EXPECT_TRUE(seg({4, 0, 5}, {4, 0, -5}));   // through a vertex
-  EXPECT_TRUE(seg({-1, 1, 0}, {5, 1, 0}));   // coplanar, across
-  EXPECT_TRUE(seg({-1, 0, 0}, {0, 0, 0}));   // coplanar, touching a vertex
-  EXPECT_FALSE(seg({-1, 0, 0}, {-1, 3, 0})); // coplanar, beside
-  EXPECT_TRUE(seg({1, 1, 0}, {1, 1, 0}));    // a point in the face
-  EXPECT_FALSE(seg({1, 1, 1}, {1, 1, 1}));   // a point above it
-  EXPECT_FALSE(seg({1, 1, 1}, {9, 1, 1}));   // parallel, above
+  EXPECT_TRUE(seg({1, 1, -1}, {1, 1, 1}));    // through the face
+  EXPECT_TRUE(seg({1, 1, 0}, {1, 1, 1}));     // ending on the face
+  EXPECT_FALSE(seg({1, 1, 1}, {1, 1, 2}));    // above
+  EXPECT_TRUE(seg({2, 2, -1}, {2, 2, 1}));    // through the hypotenuse
+  EXPECT_FALSE(seg({3, 2, -1}, {3, 2, 1}));   // beside it
+  EXPECT_TRUE(seg({4, 0, 5}, {4, 0, -5}));    // through a vertex
+  EXPECT_TRUE(seg({-1, 1, 0}, {5, 1, 0}));    // coplanar, across
+  EXPECT_TRUE(seg({-1, 0, 0}, {0, 0, 0}));    // coplanar, touching a vertex
+  EXPECT_FALSE(seg({-1, 0, 0}, {-1, 3, 0}));  // coplanar, beside
+  EXPECT_TRUE(seg({1, 1, 0}, {1, 1, 0}));     // a point in the face
+  EXPECT_FALSE(seg({1, 1, 1}, {1, 1, 1}));    // a point above it
+  EXPECT_FALSE(seg({1, 1, 1}, {9, 1, 1}));    // parallel, above
 
   EXPECT_TRUE(oracle::same_side_of_line(o, x, y, {1, 1, 0}));
   EXPECT_FALSE(oracle::same_side_of_line(o, x, y, {1, -1, 0}));
@@ -827,8 +828,8 @@ TEST(TriangleOracle, ConsistentWithItsSegmentTest) {
     meet += tt;
     coplanar += info.coplanar;
     coplanar_meet += info.coplanar && tt;
-    ASSERT_EQ(tt, parts) << hex(s[0]) << hex(s[1]) << hex(s[2]) << " / " << hex(r[0])
-                         << hex(r[1]) << hex(r[2]);
+    ASSERT_EQ(tt, parts) << hex(s[0]) << hex(s[1]) << hex(s[2]) << " / " << hex(r[0]) << hex(r[1])
+                         << hex(r[2]);
     // Symmetric in the triangles and their vertex order.
     ASSERT_EQ(tt, oracle::triangles_meet(r[2], r[0], r[1], s[1], s[0], s[2]));
   }
@@ -1046,7 +1047,8 @@ TEST(TrianglesIntersect, ExactlyCoplanarPairs) {
     } while (degenerate(r));
     bool exact = true;
     for (const Vec3* t : {s, r}) {
-      for (int j = 0; j < 3; ++j) exact = exact && splintcore_test::exact_sum_is(t[j].x, t[j].y, t[j].z);
+      for (int j = 0; j < 3; ++j)
+        exact = exact && splintcore_test::exact_sum_is(t[j].x, t[j].y, t[j].z);
     }
     if (!exact) continue;
     ASSERT_EQ(exact_orient3d_sign(s[0], s[1], s[2], r[0]), 0);

@@ -199,7 +199,8 @@ Data make_data() {
   EXPECT_TRUE(s.is_ok());
   s = splintcore::test::mesh_to_bytes(arena.arena, mesh, StlFormat::kAscii, &d.ascii);
   EXPECT_TRUE(s.is_ok());
-  d.truncated.assign(d.ascii.begin(), d.ascii.begin() + static_cast<std::ptrdiff_t>(d.ascii.size() / 2));
+  d.truncated.assign(d.ascii.begin(),
+                     d.ascii.begin() + static_cast<std::ptrdiff_t>(d.ascii.size() / 2));
   return d;
 }
 
@@ -342,12 +343,12 @@ TEST(AllocFreeTest, CoreCallsDoNotAllocate) {
   EXPECT_TRUE(report.is_valid_solid());
   EXPECT_EQ(binary_written, d.binary.size());
   EXPECT_EQ(ascii_written, d.ascii.size());
-  EXPECT_TRUE(std::equal(ascii_out.begin(), ascii_out.begin() + static_cast<std::ptrdiff_t>(ascii_written),
+  EXPECT_TRUE(std::equal(ascii_out.begin(),
+                         ascii_out.begin() + static_cast<std::ptrdiff_t>(ascii_written),
                          d.ascii.begin()));
   EXPECT_EQ(soup_triangles, d.soup.size());
   EXPECT_EQ(tolerance_vertices, 24u * 16u);
-  EXPECT_EQ(std::string(hex),
-            splintcore::test::sha256_hex(binary_out.data(), binary_written));
+  EXPECT_EQ(std::string(hex), splintcore::test::sha256_hex(binary_out.data(), binary_written));
   for (size_t i = 1; i < items.size(); ++i) ASSERT_LE(items[i - 1].key, items[i].key);
 }
 

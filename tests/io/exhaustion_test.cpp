@@ -21,8 +21,8 @@
 
 namespace {
 
-using splintcore::Arena;
 using splintcore::AllocatorHooks;
+using splintcore::Arena;
 using splintcore::Context;
 using splintcore::MemorySink;
 using splintcore::MemorySource;
@@ -386,8 +386,8 @@ TEST(IoExhaustionTest, HooksArenaGivesTheSameMeshAsABuffer) {
           StlReadOptions options;
           options.chunk_bytes = chunk_bytes;
           Mesh mesh;
-          SPLINTCORE_ASSERT_OK(splintcore::read_stl_mesh(
-              ctx, splintcore::memory_source(&ms), options, &mesh, nullptr));
+          SPLINTCORE_ASSERT_OK(splintcore::read_stl_mesh(ctx, splintcore::memory_source(&ms),
+                                                         options, &mesh, nullptr));
           ASSERT_EQ(mesh.vertices.size(), reference.vertices.size());
           ASSERT_EQ(mesh.triangles.size(), reference.triangles.size());
           EXPECT_EQ(std::memcmp(mesh.vertices.data(), reference.vertices.data(),

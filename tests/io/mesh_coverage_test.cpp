@@ -54,10 +54,10 @@ bool has(const Status& s, const char* fragment) {
   return std::strstr(s.message(), fragment) != nullptr;
 }
 
-#define EXPECT_ERROR(reading, code_, fragment)                                             \
-  do {                                                                                     \
-    EXPECT_EQ((reading).status.code(), (code_)) << test::format((reading).status);         \
-    EXPECT_TRUE(has((reading).status, (fragment))) << test::format((reading).status);      \
+#define EXPECT_ERROR(reading, code_, fragment)                                        \
+  do {                                                                                \
+    EXPECT_EQ((reading).status.code(), (code_)) << test::format((reading).status);    \
+    EXPECT_TRUE(has((reading).status, (fragment))) << test::format((reading).status); \
   } while (0)
 
 const char kPlyHead[] = "ply\nformat ascii 1.0\n";
@@ -85,10 +85,10 @@ TEST(MeshTextCoverage, NumbersAndIntegers) {
   EXPECT_EQ(real("1E+2", false), StatusCode::kOk);
   EXPECT_EQ(d, 100.0);
   EXPECT_EQ(real("1e-1", true), StatusCode::kOk);
-  EXPECT_EQ(d, static_cast<double>(0.1f));  // rounded to float32
-  EXPECT_EQ(real("1-2", true), StatusCode::kParseError);   // stops early
+  EXPECT_EQ(d, static_cast<double>(0.1f));                // rounded to float32
+  EXPECT_EQ(real("1-2", true), StatusCode::kParseError);  // stops early
   EXPECT_EQ(real("1-2", false), StatusCode::kParseError);
-  EXPECT_EQ(real("e5", false), StatusCode::kParseError);   // no digits
+  EXPECT_EQ(real("e5", false), StatusCode::kParseError);  // no digits
   EXPECT_EQ(real("-inf", true), StatusCode::kNonFinite);
   EXPECT_EQ(real("NaN", false), StatusCode::kNonFinite);
   EXPECT_EQ(real("-x", false), StatusCode::kParseError);
@@ -169,19 +169,22 @@ TEST(MeshTextCoverage, BlanksLongTokensAndUnnamedSources) {
 // Every cap from 0 up to what the read needs (in 8-byte steps): each failure is a clean
 // kArenaExhausted (arena back, no mesh: checked by run()), and the first success is the mesh.
 TEST(MeshTextCoverage, EveryCapFailsCleanlyUntilTheReadFits) {
-  const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
-  const std::string ply =
-      ascii_ply("element vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
-                "element face 4\nproperty list uchar int vertex_indices\n",
-                "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n");
+  const std::string obj =
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
+  const std::string ply = ascii_ply(
+      "element vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 4\nproperty list uchar int vertex_indices\n",
+      "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n");
   struct Input {
     ReadFn fn;
     const std::string* bytes;
     bool weld;
     uint64_t size;
   };
-  const Input inputs[] = {{&read_obj, &obj, false, 0},  {&read_obj, &obj, true, 0},
-                          {&read_ply, &ply, false, 0},  {&read_ply, &ply, true, 0},
+  const Input inputs[] = {{&read_obj, &obj, false, 0},
+                          {&read_obj, &obj, true, 0},
+                          {&read_ply, &ply, false, 0},
+                          {&read_ply, &ply, true, 0},
                           {&read_ply, &ply, false, kUnknownSize}};
   for (const Input& in : inputs) {
     MeshReadOptions o;
@@ -275,7 +278,7 @@ TEST(MeshDetectCoverage, ContentThenName) {
   EXPECT_EQ(detect("ply"), MeshFormat::kStlBinary);  // too short for "ply\n"
   EXPECT_EQ(detect(" \t\r\nSOLID x\n"), MeshFormat::kStlAscii);
   EXPECT_EQ(detect("solid\tx\r\n"), MeshFormat::kStlAscii);
-  EXPECT_EQ(detect("solid x\x7f"), MeshFormat::kStlBinary);     // not printable
+  EXPECT_EQ(detect("solid x\x7f"), MeshFormat::kStlBinary);  // not printable
   EXPECT_EQ(detect(std::string("solid x\x80", 9)), MeshFormat::kStlBinary);
   EXPECT_EQ(detect("sol"), MeshFormat::kStlBinary);
   EXPECT_EQ(detect("solix"), MeshFormat::kStlBinary);
@@ -283,9 +286,9 @@ TEST(MeshDetectCoverage, ContentThenName) {
   EXPECT_EQ(detect("\n\r\tv\t1 2 3\n"), MeshFormat::kObj);
   EXPECT_EQ(detect("mtllib\ra.mtl\n"), MeshFormat::kObj);
   EXPECT_EQ(detect("usemtl\nx"), MeshFormat::kObj);
-  EXPECT_EQ(detect("vertex 1 2 3\n"), MeshFormat::kStlBinary);  // not an OBJ keyword
-  EXPECT_EQ(detect("v"), MeshFormat::kStlBinary);               // cut off by the window
-  EXPECT_EQ(detect(" \n\t"), MeshFormat::kStlBinary);           // only blanks
+  EXPECT_EQ(detect("vertex 1 2 3\n"), MeshFormat::kStlBinary);           // not an OBJ keyword
+  EXPECT_EQ(detect("v"), MeshFormat::kStlBinary);                        // cut off by the window
+  EXPECT_EQ(detect(" \n\t"), MeshFormat::kStlBinary);                    // only blanks
   EXPECT_EQ(detect(std::string("v 1\x01", 4)), MeshFormat::kStlBinary);  // control byte
   EXPECT_EQ(detect("v 1\x7f"), MeshFormat::kStlBinary);
   EXPECT_EQ(detect(std::string(4, '\0'), "a.PLY"), MeshFormat::kPlyAscii);
@@ -320,8 +323,9 @@ TEST(MeshDetectCoverage, ReadMeshSourcesAndPaths) {
   // An ASCII STL through read_mesh, longer than the 1024-byte peek.
   std::string stl = "solid t\n";
   while (stl.size() < 2000) {
-    stl += " facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n"
-           "   vertex 0 1 0\n  endloop\n endfacet\n";
+    stl +=
+        " facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n"
+        "   vertex 0 1 0\n  endloop\n endfacet\n";
   }
   stl += "endsolid t\n";
   Reading r = run(&read_mesh, stl);
@@ -351,8 +355,8 @@ TEST(PlyCoverage, HeaderErrors) {
   std::string many_properties = "element vertex 0\n";
   for (int i = 0; i < 257; ++i) many_properties += "property float p" + std::to_string(i) + "\n";
   const std::vector<PlyCase> cases = {
-      {"text after end_header", "ply\nformat ascii 1.0\nend_header x\n",
-       StatusCode::kParseError, "expected nothing after 'end_header', found 'x'", 3},
+      {"text after end_header", "ply\nformat ascii 1.0\nend_header x\n", StatusCode::kParseError,
+       "expected nothing after 'end_header', found 'x'", 3},
       {"second format", "ply\nformat ascii 1.0\nformat ascii 1.0\n", StatusCode::kParseError,
        "second 'format' line", 3},
       {"format line too long", "ply\nformat ascii 1.0 x\n", StatusCode::kParseError,
@@ -369,14 +373,16 @@ TEST(PlyCoverage, HeaderErrors) {
        "more than 256 properties", 260},
       {"property line too long", ascii_ply("element vertex 0\nproperty float x y\n", ""),
        StatusCode::kParseError, "expected the end of the property line", 4},
-      {"float list count", ascii_ply("element face 0\nproperty list float int vertex_indices\n", ""),
+      {"float list count",
+       ascii_ply("element face 0\nproperty list float int vertex_indices\n", ""),
        StatusCode::kUnsupported, "list count type is not an integer", 4},
-      {"double list count", ascii_ply("element face 0\nproperty list double int vertex_indices\n", ""),
+      {"double list count",
+       ascii_ply("element face 0\nproperty list double int vertex_indices\n", ""),
        StatusCode::kUnsupported, "list count type is not an integer", 4},
       {"float indices", ascii_ply("element face 0\nproperty list uchar float vertex_index\n", ""),
        StatusCode::kUnsupported, "vertex indices of a non-integer type", 4},
-      {"no format", "ply\nend_header\n", StatusCode::kParseError,
-       "PLY header has no 'format' line", 2},
+      {"no format", "ply\nend_header\n", StatusCode::kParseError, "PLY header has no 'format' line",
+       2},
       {"no x", ascii_ply("element vertex 0\nproperty float y\nproperty float z\n", ""),
        StatusCode::kParseError, "lacks one of the scalar properties x, y, z", 6},
       {"no y", ascii_ply("element vertex 0\nproperty float x\nproperty float z\n", ""),
@@ -393,9 +399,9 @@ TEST(PlyCoverage, HeaderErrors) {
 TEST(PlyCoverage, HeaderOddsThatAreAccepted) {
   // Blank header lines, a long element name (kept to 31 characters in messages), obj_info.
   const std::string long_name(50, 'n');
-  const std::string text = std::string("ply\n\nformat ascii 1.0\n   \nobj_info x\n") +
-                           "element " + long_name + " 1\nproperty uchar a\n" + kXyzFace +
-                           "end_header\n7\n" + kTriangleBody;
+  const std::string text = std::string("ply\n\nformat ascii 1.0\n   \nobj_info x\n") + "element " +
+                           long_name + " 1\nproperty uchar a\n" + kXyzFace + "end_header\n7\n" +
+                           kTriangleBody;
   Reading r = run(&read_ply, text);
   SPLINTCORE_EXPECT_OK(r.status);
   EXPECT_EQ(r.triangles, 1u);
@@ -403,16 +409,16 @@ TEST(PlyCoverage, HeaderOddsThatAreAccepted) {
   r = run(&read_ply, std::string("ply\nformat ascii 1.0\nelement ") + long_name +
                          " 1\nproperty list uchar uchar a\n" + kXyzFace + "end_header\n3 1\n" +
                          kTriangleBody);
-  EXPECT_ERROR(r, StatusCode::kParseError,
-               ("list of 3 items has fewer on the line of " + long_name.substr(0, 31) + " 0").c_str());
+  EXPECT_ERROR(
+      r, StatusCode::kParseError,
+      ("list of 3 items has fewer on the line of " + long_name.substr(0, 31) + " 0").c_str());
   EXPECT_FALSE(has(r.status, long_name.substr(0, 32).c_str()));
   EXPECT_EQ(r.status.line(), 12u);
 }
 
 // ---- PLY bodies ---------------------------------------------------------------------------
 
-std::string binary_ply(const std::string& properties, const std::string& body,
-                       bool big = false) {
+std::string binary_ply(const std::string& properties, const std::string& body, bool big = false) {
   return std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
          " 1.0\n" + properties + "end_header\n" + body;
 }
@@ -434,21 +440,23 @@ std::string bin_triangle_vertices() {
 
 TEST(PlyCoverage, BinaryIntegerTypes) {
   // int8 counts, int16 and int32 indices.
-  Reading r = run(&read_ply, binary_ply(std::string(kBinVertices) +
-                                            "element face 2\nproperty list char short vertex_indices\n"
-                                            "element edge 1\nproperty list int8 int junk\n",
-                                        bin_triangle_vertices() + le(3, 1) + le(0, 2) + le(1, 2) +
-                                            le(2, 2) + le(3, 1) + le(2, 2) + le(1, 2) + le(0, 2) +
-                                            le(2, 1) + le(5, 4) + le(6, 4)));
+  Reading r =
+      run(&read_ply, binary_ply(std::string(kBinVertices) +
+                                    "element face 2\nproperty list char short vertex_indices\n"
+                                    "element edge 1\nproperty list int8 int junk\n",
+                                bin_triangle_vertices() + le(3, 1) + le(0, 2) + le(1, 2) +
+                                    le(2, 2) + le(3, 1) + le(2, 2) + le(1, 2) + le(0, 2) +
+                                    le(2, 1) + le(5, 4) + le(6, 4)));
   SPLINTCORE_EXPECT_OK(r.status);
   EXPECT_EQ(r.triangles, 2u);
-  r = run(&read_ply, binary_ply(std::string(kBinVertices) +
-                                    "element face 1\nproperty list uint8 int32 vertex_indices\n",
-                                bin_triangle_vertices() + le(3, 1) + le(0, 4) + le(1, 4) + le(2, 4)));
+  r = run(&read_ply,
+          binary_ply(std::string(kBinVertices) +
+                         "element face 1\nproperty list uint8 int32 vertex_indices\n",
+                     bin_triangle_vertices() + le(3, 1) + le(0, 4) + le(1, 4) + le(2, 4)));
   SPLINTCORE_EXPECT_OK(r.status);
   // A negative int8 list count.
-  const std::string header = std::string(kBinVertices) +
-                             "element face 1\nproperty list char int vertex_indices\n";
+  const std::string header =
+      std::string(kBinVertices) + "element face 1\nproperty list char int vertex_indices\n";
   r = run(&read_ply, binary_ply(header, bin_triangle_vertices() + le(0xff, 1) + le(0, 12)));
   EXPECT_ERROR(r, StatusCode::kParseError, "face 0 has a list of -1 items");
   EXPECT_EQ(r.status.index(), 0u);
@@ -479,7 +487,8 @@ TEST(PlyCoverage, AsciiValuesAndLines) {
   EXPECT_EQ(r.positions[0].x, static_cast<double>(0.1f));
   EXPECT_EQ(r.positions[0].y, 0.1);
   // Integer values out of their type, or not integers.
-  const std::string xyz = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+  const std::string xyz =
+      "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
   r = run(&read_ply, ascii_ply(xyz + "element face 1\nproperty list uchar int vertex_indices\n",
                                "0 0 0\n1 0 0\n0 1 0\n-1 0 1 2\n"));
   EXPECT_ERROR(r, StatusCode::kParseError, "expected an integer of the declared type, found '-1'");

@@ -71,29 +71,29 @@ std::vector<std::vector<uint32_t>> triangles_of(const Result& r) {
 }
 
 const char kCube[] =
-    "# a unit cube as a scanner might export it\n"   // 1
-    "mtllib cube.mtl\n"                              // 2
-    "o cube\n"                                       // 3
-    "v 0 0 0\n"                                      // 4  vertex 1
-    "v 1 0 0 1.0\n"                                  // 5  2 (w)
-    "v 1 1 0 0.5 0.5 0.5\n"                          // 6  3 (r g b)
-    "v 0 1 0\n"                                      // 7  4
-    "vt 0 0\n"                                       // 8
-    "vn 0 0 -1\n"                                    // 9
-    "g bottom\n"                                     // 10
-    "usemtl gum\n"                                   // 11
-    "s off\n"                                        // 12
-    "f 1 4 3 2\n"                                    // 13 quad: two triangles
-    "v 0 0 1\n"                                      // 14 5
-    "v\t1 0 1\n"                                     // 15 6
-    "v 1 1 1\n"                                      // 16 7
-    "v 0 1 1\n"                                      // 17 8
-    "f 5/1 6/1 7/1 8/1 # top\n"                      // 18
-    "f 1//1 2//1 6//1 5//1\n"                        // 19
-    "f 2/1/1 3/1/1 7/1/1 6/1/1\n"                    // 20
-    "f -5/1 -1/1 -2/1 -6/1\n"                        // 21 3 8 7 4... relative: 4 8 7 3
-    "f -8 -4 -1 -5\r\n"                              // 22 1 5 8 4
-    "l 1 2\n";                                       // 23
+    "# a unit cube as a scanner might export it\n"  // 1
+    "mtllib cube.mtl\n"                             // 2
+    "o cube\n"                                      // 3
+    "v 0 0 0\n"                                     // 4  vertex 1
+    "v 1 0 0 1.0\n"                                 // 5  2 (w)
+    "v 1 1 0 0.5 0.5 0.5\n"                         // 6  3 (r g b)
+    "v 0 1 0\n"                                     // 7  4
+    "vt 0 0\n"                                      // 8
+    "vn 0 0 -1\n"                                   // 9
+    "g bottom\n"                                    // 10
+    "usemtl gum\n"                                  // 11
+    "s off\n"                                       // 12
+    "f 1 4 3 2\n"                                   // 13 quad: two triangles
+    "v 0 0 1\n"                                     // 14 5
+    "v\t1 0 1\n"                                    // 15 6
+    "v 1 1 1\n"                                     // 16 7
+    "v 0 1 1\n"                                     // 17 8
+    "f 5/1 6/1 7/1 8/1 # top\n"                     // 18
+    "f 1//1 2//1 6//1 5//1\n"                       // 19
+    "f 2/1/1 3/1/1 7/1/1 6/1/1\n"                   // 20
+    "f -5/1 -1/1 -2/1 -6/1\n"                       // 21 3 8 7 4... relative: 4 8 7 3
+    "f -8 -4 -1 -5\r\n"                             // 22 1 5 8 4
+    "l 1 2\n";                                      // 23
 
 TEST(ObjRead, FormsNegativeIndicesAndFans) {
   Result r = read(kCube);
@@ -101,9 +101,9 @@ TEST(ObjRead, FormsNegativeIndicesAndFans) {
   ASSERT_EQ(r.vertices.size(), 8u);
   EXPECT_EQ(r.vertices[5].x, 1.0);
   EXPECT_EQ(r.vertices[5].z, 1.0);
-  const std::vector<std::vector<uint32_t>> expected = {
-      {0, 3, 2}, {0, 2, 1}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
-      {1, 2, 6}, {1, 6, 5}, {3, 7, 6}, {3, 6, 2}, {0, 4, 7}, {0, 7, 3}};
+  const std::vector<std::vector<uint32_t>> expected = {{0, 3, 2}, {0, 2, 1}, {4, 5, 6}, {4, 6, 7},
+                                                       {0, 1, 5}, {0, 5, 4}, {1, 2, 6}, {1, 6, 5},
+                                                       {3, 7, 6}, {3, 6, 2}, {0, 4, 7}, {0, 7, 3}};
   EXPECT_EQ(triangles_of(r), expected);
   EXPECT_EQ(r.info.format, MeshFormat::kObj);
   EXPECT_EQ(r.info.faces, 6u);
@@ -115,8 +115,8 @@ TEST(ObjRead, FormsNegativeIndicesAndFans) {
   Context ctx(&arena);
   MemorySource ms{reinterpret_cast<const uint8_t*>(kCube), std::strlen(kCube), 0, 0};
   Mesh mesh;
-  SPLINTCORE_ASSERT_OK(splintcore::read_obj(ctx, splintcore::memory_source(&ms), MeshReadOptions{},
-                                            &mesh, nullptr));
+  SPLINTCORE_ASSERT_OK(
+      splintcore::read_obj(ctx, splintcore::memory_source(&ms), MeshReadOptions{}, &mesh, nullptr));
   splintcore::MeshReport report;
   SPLINTCORE_ASSERT_OK(splintcore::check_mesh(ctx, mesh, &report));
   EXPECT_TRUE(report.is_valid_solid());
@@ -131,9 +131,9 @@ TEST(ObjRead, ChunkingAndUnknownSizeDoNotMatter) {
       ASSERT_TRUE(r.status.is_ok()) << format(r.status);
       EXPECT_EQ(triangles_of(r), triangles_of(whole));
       ASSERT_EQ(r.vertices.size(), whole.vertices.size());
-      EXPECT_EQ(std::memcmp(r.vertices.data(), whole.vertices.data(),
-                            r.vertices.size() * sizeof(Vec3)),
-                0);
+      EXPECT_EQ(
+          std::memcmp(r.vertices.data(), whole.vertices.data(), r.vertices.size() * sizeof(Vec3)),
+          0);
     }
   }
 }

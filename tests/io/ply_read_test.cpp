@@ -54,8 +54,8 @@ struct Result {
   std::vector<Vec3> vertices;
   std::vector<Triangle> triangles;
   MeshReadInfo info;
-  size_t arena_after = 0;   // used() after the call, relative to before
-  size_t arena_peak = 0;    // high water during the call, relative to before
+  size_t arena_after = 0;  // used() after the call, relative to before
+  size_t arena_peak = 0;   // high water during the call, relative to before
 };
 
 Result read(const std::string& bytes, const Params& p = Params{}) {
@@ -97,37 +97,37 @@ bool same_vertices(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
 }
 
 // The reference mesh of most tests: a square (two triangles by fan) and a triangle on top.
-const std::vector<Vec3> kVertices = {{0, 0, 0}, {1.5, 0, 0}, {1.5, 2.25, 0}, {0, 2.25, 0},
-                                     {0.75, 1.125, -3.5}};
+const std::vector<Vec3> kVertices = {
+    {0, 0, 0}, {1.5, 0, 0}, {1.5, 2.25, 0}, {0, 2.25, 0}, {0.75, 1.125, -3.5}};
 const std::vector<std::vector<uint32_t>> kTriangles = {{0, 1, 2}, {0, 2, 3}, {1, 2, 4}};
 
 const char kAscii[] =
-    "ply\n"                                            // 1
-    "format ascii 1.0\n"                               // 2
-    "comment made by hand\n"                           // 3
-    "obj_info scanner test\n"                          // 4
-    "element vertex 5\n"                               // 5
-    "property float x\n"                               // 6
-    "property float y\n"                               // 7
-    "property float z\n"                               // 8
-    "property float nx\n"                              // 9
-    "property uchar red\n"                             // 10
-    "property list uchar int texture\n"                // 11
-    "element edge 1\n"                                 // 12
-    "property int vertex1\n"                           // 13
-    "property int vertex2\n"                           // 14
-    "element face 2\n"                                 // 15
-    "property uchar flags\n"                           // 16
-    "property list uchar int vertex_indices\n"         // 17
-    "end_header\n"                                     // 18
-    "0 0 0 1 255 0\n"                                  // 19
-    "1.5 0 0 1 255 2 7 8\n"                            // 20
-    "1.5 2.25 0 1 255 0\n"                             // 21
-    "0 2.25 0 1 0 0\n"                                 // 22
-    "0.75 1.125 -3.5 nan 3 0\n"                        // 23 (nan in a skipped property)
-    "0 1\n"                                            // 24
-    "9 4 0 1 2 3\n"                                    // 25
-    "0 3 1 2 4\n";                                     // 26
+    "ply\n"                                     // 1
+    "format ascii 1.0\n"                        // 2
+    "comment made by hand\n"                    // 3
+    "obj_info scanner test\n"                   // 4
+    "element vertex 5\n"                        // 5
+    "property float x\n"                        // 6
+    "property float y\n"                        // 7
+    "property float z\n"                        // 8
+    "property float nx\n"                       // 9
+    "property uchar red\n"                      // 10
+    "property list uchar int texture\n"         // 11
+    "element edge 1\n"                          // 12
+    "property int vertex1\n"                    // 13
+    "property int vertex2\n"                    // 14
+    "element face 2\n"                          // 15
+    "property uchar flags\n"                    // 16
+    "property list uchar int vertex_indices\n"  // 17
+    "end_header\n"                              // 18
+    "0 0 0 1 255 0\n"                           // 19
+    "1.5 0 0 1 255 2 7 8\n"                     // 20
+    "1.5 2.25 0 1 255 0\n"                      // 21
+    "0 2.25 0 1 0 0\n"                          // 22
+    "0.75 1.125 -3.5 nan 3 0\n"                 // 23 (nan in a skipped property)
+    "0 1\n"                                     // 24
+    "9 4 0 1 2 3\n"                             // 25
+    "0 3 1 2 4\n";                              // 26
 
 // A binary file of the same mesh: every scalar type appears once.
 enum class Endian { kLittle, kBig };
@@ -158,10 +158,15 @@ std::string binary_ply(Endian endian, bool xyz_double = false, int64_t face_inde
   w.bytes = std::string("ply\nformat ") +
             (endian == Endian::kLittle ? "binary_little_endian" : "binary_big_endian") +
             " 1.0\ncomment binary\nelement vertex 5\n"
-            "property char c\nproperty " + (xyz_double ? "double" : "float") + " x\n"
-            "property uint8 u\nproperty " + (xyz_double ? "float64" : "float32") + " y\n"
+            "property char c\nproperty " +
+            (xyz_double ? "double" : "float") +
+            " x\n"
+            "property uint8 u\nproperty " +
+            (xyz_double ? "float64" : "float32") +
+            " y\n"
             "property short s\nproperty ushort us\nproperty " +
-            (xyz_double ? "double" : "float") + " z\n"
+            (xyz_double ? "double" : "float") +
+            " z\n"
             "property int i\nproperty uint ui\nproperty double d\n"
             "property list ushort float tex\n"
             "element material 2\nproperty list uint uchar name\n"
@@ -169,16 +174,25 @@ std::string binary_ply(Endian endian, bool xyz_double = false, int64_t face_inde
             "end_header\n";
   for (size_t v = 0; v < kVertices.size(); ++v) {
     w.raw(static_cast<uint8_t>(-3), 1);
-    if (xyz_double) w.f64(kVertices[v].x); else w.f32(static_cast<float>(kVertices[v].x));
+    if (xyz_double)
+      w.f64(kVertices[v].x);
+    else
+      w.f32(static_cast<float>(kVertices[v].x));
     w.raw(200, 1);
-    if (xyz_double) w.f64(kVertices[v].y); else w.f32(static_cast<float>(kVertices[v].y));
+    if (xyz_double)
+      w.f64(kVertices[v].y);
+    else
+      w.f32(static_cast<float>(kVertices[v].y));
     w.raw(0xfffe, 2);
     w.raw(65535, 2);
-    if (xyz_double) w.f64(kVertices[v].z); else w.f32(static_cast<float>(kVertices[v].z));
+    if (xyz_double)
+      w.f64(kVertices[v].z);
+    else
+      w.f32(static_cast<float>(kVertices[v].z));
     w.raw(0xffffffff, 4);
     w.raw(123456, 4);
     w.f64(std::numeric_limits<double>::quiet_NaN());  // skipped: never checked
-    w.raw(v, 2);                                       // a list of v floats
+    w.raw(v, 2);                                      // a list of v floats
     for (size_t k = 0; k < v; ++k) w.f32(0.5f);
   }
   w.raw(3, 4);
@@ -252,9 +266,10 @@ TEST(PlyRead, Float32RoundingAndExactDoubles) {
   EXPECT_EQ(r.vertices[0].x, 0.1);
   EXPECT_EQ(r.vertices[0].z, 0.3);
   // Binary double kept exactly without rounding, rounded with.
-  BinaryWriter w{Endian::kLittle, "ply\nformat binary_little_endian 1.0\nelement vertex 1\n"
-                                  "property double x\nproperty double y\nproperty double z\n"
-                                  "end_header\n"};
+  BinaryWriter w{Endian::kLittle,
+                 "ply\nformat binary_little_endian 1.0\nelement vertex 1\n"
+                 "property double x\nproperty double y\nproperty double z\n"
+                 "end_header\n"};
   w.f64(0.1);
   w.f64(-0.2);
   w.f64(1e-300);
@@ -290,8 +305,8 @@ TEST(PlyRead, EveryTruncationIsACleanError) {
   const std::string files[] = {kAscii, binary_ply(Endian::kLittle), binary_ply(Endian::kBig)};
   for (const std::string& f : files) {
     // The ASCII file's last byte is its final newline, which a file may leave out.
-    const size_t valid_from = f[0] == 'p' && f.find("ascii") != std::string::npos ? f.size() - 1
-                                                                                   : f.size();
+    const size_t valid_from =
+        f[0] == 'p' && f.find("ascii") != std::string::npos ? f.size() - 1 : f.size();
     for (size_t n = 0; n < valid_from; ++n) {
       for (bool known : {true, false}) {
         Params p;
@@ -350,10 +365,13 @@ TEST(PlyRead, AbsurdCounts) {
   EXPECT_EQ(r.status.code(), StatusCode::kLimitExceeded) << format(r.status);
   Params p;
   p.options.max_triangles = 10;
-  r = read(head + "3" + props + "element face 11\nproperty list uchar int vertex_indices\nend_header\n", p);
+  r = read(
+      head + "3" + props + "element face 11\nproperty list uchar int vertex_indices\nend_header\n",
+      p);
   EXPECT_EQ(r.status.code(), StatusCode::kLimitExceeded) << format(r.status);
   // A count whose byte size overflows 64 bits.
-  r = read(head + "1" + props + "element junk 9223372036854775807\nproperty double a\n"
+  r = read(head + "1" + props +
+           "element junk 9223372036854775807\nproperty double a\n"
            "property double b\nend_header\n");
   EXPECT_EQ(r.status.code(), StatusCode::kTruncated) << format(r.status);
   EXPECT_NE(std::string(r.status.message()).find("2^64"), std::string::npos);
@@ -362,9 +380,10 @@ TEST(PlyRead, AbsurdCounts) {
   r = read(head + "99999999999999999999999" + props + "end_header\n");
   EXPECT_EQ(r.status.code(), StatusCode::kParseError);
   // A list claiming 4 billion items in a stream of unknown size: truncated, no allocation.
-  BinaryWriter w{Endian::kLittle, "ply\nformat binary_little_endian 1.0\nelement vertex 0\n"
-                                  "property float x\nproperty float y\nproperty float z\n"
-                                  "element blob 1\nproperty list uint double data\nend_header\n"};
+  BinaryWriter w{Endian::kLittle,
+                 "ply\nformat binary_little_endian 1.0\nelement vertex 0\n"
+                 "property float x\nproperty float y\nproperty float z\n"
+                 "element blob 1\nproperty list uint double data\nend_header\n"};
   w.raw(0xffffffffu, 4);
   w.f64(1);
   p = Params{};
@@ -431,7 +450,10 @@ TEST(PlyRead, NonFiniteAndOutOfRangeCoordinates) {
     const size_t base = dbl ? 48 : 36;
     const size_t z_at = header + 2 * base + 4 + (dbl ? 22 : 14);  // record 2's z
     BinaryWriter w{Endian::kLittle, ""};
-    if (dbl) w.f64(1e300); else w.f32(std::numeric_limits<float>::quiet_NaN());
+    if (dbl)
+      w.f64(1e300);
+    else
+      w.f32(std::numeric_limits<float>::quiet_NaN());
     bin.replace(z_at, w.bytes.size(), w.bytes);
     r = read(bin);
     EXPECT_EQ(r.status.code(), dbl ? StatusCode::kLimitExceeded : StatusCode::kNonFinite)

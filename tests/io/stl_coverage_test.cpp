@@ -82,16 +82,18 @@ TEST(StlCoverage, AsciiWhiteSpaceCaseAndNames) {
 }
 
 TEST(StlCoverage, AsciiNonFiniteSpellings) {
-  for (const char* word : {"nan", "NaN", "-nan", "-NAN", "inf", "-inf", "Inf", "-Infinity",
-                           "INF", "-Inf"}) {
+  for (const char* word :
+       {"nan", "NaN", "-nan", "-NAN", "inf", "-inf", "Inf", "-Infinity", "INF", "-Inf"}) {
     SCOPED_TRACE(word);
-    const std::string text = replace_all(kTetra, "vertex 0 1 0", std::string("vertex 0 ") + word + " 0");
+    const std::string text =
+        replace_all(kTetra, "vertex 0 1 0", std::string("vertex 0 ") + word + " 0");
     Read r = read(text);
     EXPECT_EQ(r.status.code(), StatusCode::kNonFinite) << test::format(r.status);
   }
   for (const char* word : {"ab", "-x", "-xy", "x1", "1x", "-", "--1", "1e", "+-1", "0x10"}) {
     SCOPED_TRACE(word);
-    const std::string text = replace_all(kTetra, "vertex 0 1 0", std::string("vertex 0 ") + word + " 0");
+    const std::string text =
+        replace_all(kTetra, "vertex 0 1 0", std::string("vertex 0 ") + word + " 0");
     Read r = read(text);
     EXPECT_EQ(r.status.code(), StatusCode::kParseError) << test::format(r.status);
   }
@@ -112,8 +114,9 @@ TEST(StlCoverage, LongUnexpectedTokensAreCut) {
 }
 
 TEST(StlCoverage, SourcesWithoutSizeOrName) {
-  const std::vector<uint8_t> bin = test::binary_stl(
-      {SoupTriangle{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}, SoupTriangle{{{0, 0, 0}, {0, 1, 0}, {0, 0, 1}}}});
+  const std::vector<uint8_t> bin =
+      test::binary_stl({SoupTriangle{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}},
+                        SoupTriangle{{{0, 0, 0}, {0, 1, 0}, {0, 0, 1}}}});
   const std::string bytes(bin.begin(), bin.end());
   // Size unknown: nothing is reserved, the triangles grow as they arrive.
   Read r = read(bytes, false, nullptr);
@@ -223,16 +226,16 @@ TEST(StlCoverage, FailedReadsLeaveTheOutputAsItWas) {
   std::string bad = kTetra;
   bad.replace(bad.find("endloop"), 7, "endlop");  // after the first triangle was appended
   MemorySource ms{reinterpret_cast<const uint8_t*>(bad.data()), bad.size(), 0, 0};
-  Status s = read_stl(Context(&t.arena), memory_source(&ms, "bad.stl"), StlReadOptions{}, &out,
-                      nullptr);
+  Status s =
+      read_stl(Context(&t.arena), memory_source(&ms, "bad.stl"), StlReadOptions{}, &out, nullptr);
   EXPECT_EQ(s.code(), StatusCode::kParseError) << test::format(s);
   EXPECT_EQ(t.arena.used(), used);
   ASSERT_EQ(out.size(), 1u);
   EXPECT_EQ(out[0].p[0][0], 9.0f);
   // The same list then takes a good file.
   MemorySource good{reinterpret_cast<const uint8_t*>(kTetra), std::strlen(kTetra), 0, 0};
-  SPLINTCORE_ASSERT_OK(read_stl(Context(&t.arena), memory_source(&good), StlReadOptions{}, &out,
-                                nullptr));
+  SPLINTCORE_ASSERT_OK(
+      read_stl(Context(&t.arena), memory_source(&good), StlReadOptions{}, &out, nullptr));
   EXPECT_EQ(out.size(), 5u);
 }
 
@@ -250,8 +253,8 @@ TEST(StlCoverage, CancelledAndForcedFormats) {
     test::TestArena t(size_t{1} << 20);
     MemorySource ms{reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), 0, 0};
     ArenaArray<SoupTriangle> out(&t.arena);
-    Status s = read_stl(Context(&t.arena, nullptr, &progress), memory_source(&ms),
-                        StlReadOptions{}, &out, nullptr);
+    Status s = read_stl(Context(&t.arena, nullptr, &progress), memory_source(&ms), StlReadOptions{},
+                        &out, nullptr);
     EXPECT_EQ(s.code(), StatusCode::kCancelled) << test::format(s);
     EXPECT_EQ(t.arena.used(), 0u);
   }
@@ -279,7 +282,8 @@ TEST(StlCoverage, CancelledAndForcedFormats) {
       test::binary_stl({SoupTriangle{{{0, 0, 0}, {2e6f, 0, 0}, {0, 1, 0}}}});
   r = read(std::string(far.begin(), far.end()));
   EXPECT_EQ(r.status.code(), StatusCode::kLimitExceeded) << test::format(r.status);
-  EXPECT_NE(std::string(r.status.message()).find("triangle 0 vertex 1 has coordinate 2e+06 mm, beyond the limit"),
+  EXPECT_NE(std::string(r.status.message())
+                .find("triangle 0 vertex 1 has coordinate 2e+06 mm, beyond the limit"),
             std::string::npos)
       << r.status.message();
 }

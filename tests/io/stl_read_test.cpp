@@ -51,8 +51,8 @@ Arena& shared_arena() {
 }
 
 struct ReadParams {
-  size_t max_chunk = 0;     // MemorySource.max_chunk
-  bool size_known = true;   // false: ByteSource.size = kUnknownSize (a stream)
+  size_t max_chunk = 0;    // MemorySource.max_chunk
+  bool size_known = true;  // false: ByteSource.size = kUnknownSize (a stream)
   StlReadOptions options{};
 };
 
@@ -128,15 +128,15 @@ std::vector<SoupTriangle> test_box() { return splintcore::shapes::box(kLo, kHi);
 
 // A one-facet ASCII file; line numbers are given next to each line.
 const char kOneFacet[] =
-    "solid t\n"               // 1
-    "facet normal 0 0 1\n"    // 2
-    " outer loop\n"           // 3
-    "  vertex 0 0 0\n"        // 4
-    "  vertex 1 0 0\n"        // 5
-    "  vertex 0 1 0\n"        // 6
-    " endloop\n"              // 7
-    "endfacet\n"              // 8
-    "endsolid t\n";           // 9
+    "solid t\n"             // 1
+    "facet normal 0 0 1\n"  // 2
+    " outer loop\n"         // 3
+    "  vertex 0 0 0\n"      // 4
+    "  vertex 1 0 0\n"      // 5
+    "  vertex 0 1 0\n"      // 6
+    " endloop\n"            // 7
+    "endfacet\n"            // 8
+    "endsolid t\n";         // 9
 
 std::string replace_once(std::string s, const std::string& from, const std::string& to) {
   size_t at = s.find(from);
@@ -335,8 +335,8 @@ TEST(StlReadTest, AsciiExplicitPlusSignsAndExponents) {
 TEST(StlReadTest, AsciiSignsThatAreNotNumbersAreRejected) {
   for (const char* bad : {"+-1", "-+1", "++1", "--1", "+", "-", "1e", "1e+", ".", "e5", "1-2"}) {
     SCOPED_TRACE(bad);
-    ReadResult r = read_text(replace_once(kOneFacet, "vertex 1 0 0", std::string("vertex ") +
-                                                                         bad + " 0 0"));
+    ReadResult r =
+        read_text(replace_once(kOneFacet, "vertex 1 0 0", std::string("vertex ") + bad + " 0 0"));
     EXPECT_EQ(r.status.code(), StatusCode::kParseError) << format(r.status);
     EXPECT_EQ(r.status.line(), 5u);
     EXPECT_EQ(r.status.column(), 10u);
@@ -351,8 +351,7 @@ TEST(StlReadTest, AsciiCrlfLineEndings) {
   EXPECT_STREQ(r.info.header, "crlf");  // no '\r' in the name
   // Line numbers still count '\n': an error on line 5 is reported as line 5.
   std::string text = ascii_stl(box, "crlf", "\r\n");
-  text = replace_once(text, "outer loop\r\n      vertex -1.5",
-                      "outer loop\r\n      vertxe -1.5");
+  text = replace_once(text, "outer loop\r\n      vertex -1.5", "outer loop\r\n      vertxe -1.5");
   r = read_text(text);
   EXPECT_EQ(r.status.code(), StatusCode::kParseError);
   EXPECT_EQ(r.status.line(), 4u);
@@ -377,8 +376,8 @@ TEST(StlReadTest, AsciiEmptySolid) {
   Arena& arena = shared_arena();
   ArenaScope scope(arena);
   Mesh mesh;
-  SPLINTCORE_EXPECT_OK(splintcore::test::mesh_from_bytes(arena, to_bytes("solid x\nendsolid x\n"),
-                                                         &mesh));
+  SPLINTCORE_EXPECT_OK(
+      splintcore::test::mesh_from_bytes(arena, to_bytes("solid x\nendsolid x\n"), &mesh));
   EXPECT_EQ(mesh.vertices.size(), 0u);
   EXPECT_EQ(mesh.triangles.size(), 0u);
 }
@@ -423,10 +422,11 @@ TEST(StlReadTest, ChunkedSourcesGiveTheSameTriangles) {
     ASSERT_TRUE(reference.status.is_ok()) << format(reference.status);
     ASSERT_TRUE(same_soup(reference.soup, torus));
     for (size_t chunk_bytes : {size_t{4096}, size_t{64} * 1024}) {
-      for (size_t max_chunk : {size_t{1}, size_t{2}, size_t{3}, size_t{7}, size_t{50}, size_t{4096}}) {
+      for (size_t max_chunk :
+           {size_t{1}, size_t{2}, size_t{3}, size_t{7}, size_t{50}, size_t{4096}}) {
         for (bool size_known : {true, false}) {
-          SCOPED_TRACE("file " + std::to_string(f) + " chunk_bytes " +
-                       std::to_string(chunk_bytes) + " max_chunk " + std::to_string(max_chunk) +
+          SCOPED_TRACE("file " + std::to_string(f) + " chunk_bytes " + std::to_string(chunk_bytes) +
+                       " max_chunk " + std::to_string(max_chunk) +
                        (size_known ? " sized" : " stream"));
           ReadParams p;
           p.max_chunk = max_chunk;
@@ -447,7 +447,8 @@ TEST(StlReadTest, ChunkedSourcesGiveTheSameTriangles) {
 
 // ---- truncation at every byte offset ----------------------------------------------------------
 
-void check_binary_prefixes(const std::vector<uint8_t>& full, const std::vector<SoupTriangle>& soup) {
+void check_binary_prefixes(const std::vector<uint8_t>& full,
+                           const std::vector<SoupTriangle>& soup) {
   for (size_t max_chunk : {size_t{0}, size_t{7}}) {
     for (bool size_known : {true, false}) {
       for (size_t n = 0; n <= full.size(); ++n) {
@@ -531,7 +532,8 @@ void check_ascii_prefixes(const std::string& full, size_t triangles) {
       if (last == ' ' || last == '\n' || last == '\r') {
         EXPECT_EQ(code, StatusCode::kTruncated) << format(r.status);
       }
-      const uint64_t lines = 1 + static_cast<uint64_t>(std::count(prefix.begin(), prefix.end(), '\n'));
+      const uint64_t lines =
+          1 + static_cast<uint64_t>(std::count(prefix.begin(), prefix.end(), '\n'));
       ASSERT_NE(r.status.line(), kNoPosition) << format(r.status);
       EXPECT_GE(r.status.line(), 1u);
       EXPECT_LE(r.status.line(), lines) << format(r.status);
@@ -539,7 +541,8 @@ void check_ascii_prefixes(const std::string& full, size_t triangles) {
       EXPECT_GE(r.status.column(), 1u);
       if (code == StatusCode::kTruncated) {
         // The end of the input is where the next token should have been.
-        const size_t line_start = prefix.rfind('\n') == std::string::npos ? 0 : prefix.rfind('\n') + 1;
+        const size_t line_start =
+            prefix.rfind('\n') == std::string::npos ? 0 : prefix.rfind('\n') + 1;
         EXPECT_EQ(r.status.line(), lines) << format(r.status);
         EXPECT_EQ(r.status.column(), n - line_start + 1) << format(r.status);
       }
@@ -661,7 +664,12 @@ TEST(StlReadTest, AsciiCountOverLimit) {
 TEST(StlReadTest, BinaryNonFiniteCoordinates) {
   const float kNan = std::numeric_limits<float>::quiet_NaN();
   const float kInf = std::numeric_limits<float>::infinity();
-  struct Case { size_t triangle; int corner; int axis; float value; };
+  struct Case {
+    size_t triangle;
+    int corner;
+    int axis;
+    float value;
+  };
   const Case cases[] = {{5, 1, 1, kNan}, {0, 2, 0, kInf}, {11, 0, 2, -kInf}, {3, 2, 2, -kNan}};
   for (const Case& c : cases) {
     SCOPED_TRACE(c.triangle);
@@ -673,7 +681,8 @@ TEST(StlReadTest, BinaryNonFiniteCoordinates) {
       ReadResult r = read_bytes(binary_stl(box), p);
       EXPECT_EQ(r.status.code(), StatusCode::kNonFinite) << format(r.status);
       EXPECT_EQ(r.status.index(), c.triangle);
-      EXPECT_EQ(r.status.byte_offset(), 84u + 50u * c.triangle + 12u + 12u * static_cast<unsigned>(c.corner));
+      EXPECT_EQ(r.status.byte_offset(),
+                84u + 50u * c.triangle + 12u + 12u * static_cast<unsigned>(c.corner));
       EXPECT_TRUE(message_has(r.status, "triangle " + std::to_string(c.triangle)))
           << format(r.status);
     }
@@ -688,8 +697,8 @@ TEST(StlReadTest, BinaryNonFiniteCoordinates) {
 TEST(StlReadTest, AsciiNonFiniteText) {
   for (const char* bad : {"nan", "NaN", "-nan", "inf", "-inf", "+inf", "INF", "infinity", "+NAN"}) {
     SCOPED_TRACE(bad);
-    ReadResult r = read_text(replace_once(kOneFacet, "vertex 0 1 0",
-                                          std::string("vertex 0 ") + bad + " 0"));
+    ReadResult r =
+        read_text(replace_once(kOneFacet, "vertex 0 1 0", std::string("vertex 0 ") + bad + " 0"));
     EXPECT_EQ(r.status.code(), StatusCode::kNonFinite) << format(r.status);
     EXPECT_EQ(r.status.line(), 6u);
     EXPECT_EQ(r.status.column(), 12u);
@@ -762,10 +771,10 @@ TEST(StlReadTest, AsciiSyntaxErrorsAreLocated) {
        "expected 'endloop', found 'endfacet'"},
       {"missing endfacet", replace_once(good, "endfacet\n", ""), StatusCode::kParseError, 8, 1,
        "expected 'endfacet', found 'endsolid'"},
-      {"1.2.3", replace_once(good, "vertex 1 0 0", "vertex 1.2.3 0 0"), StatusCode::kParseError,
-       5, 10, "1.2.3"},
-      {"two vertices only", replace_once(good, "  vertex 0 1 0\n", ""), StatusCode::kParseError,
-       6, 2, "expected 'vertex', found 'endloop'"},
+      {"1.2.3", replace_once(good, "vertex 1 0 0", "vertex 1.2.3 0 0"), StatusCode::kParseError, 5,
+       10, "1.2.3"},
+      {"two vertices only", replace_once(good, "  vertex 0 1 0\n", ""), StatusCode::kParseError, 6,
+       2, "expected 'vertex', found 'endloop'"},
       {"four numbers", replace_once(good, "vertex 0 1 0", "vertex 0 1 0 0"),
        StatusCode::kParseError, 6, 16, "expected 'endloop'"},
       {"long token", replace_once(good, "vertex 1 0 0", "vertex 1 " + long_token + " 0"),
@@ -786,9 +795,8 @@ TEST(StlReadTest, AsciiSyntaxErrorsAreLocated) {
     EXPECT_TRUE(message_has(r.status, c.message)) << format(r.status);
     EXPECT_STREQ(r.status.file(), "test.stl");
     // The formatted message leads with FILE:LINE:COL.
-    EXPECT_EQ(format(r.status).rfind("test.stl:" + std::to_string(c.line) + ":" +
-                                         std::to_string(c.column) + ":",
-                                     0),
+    EXPECT_EQ(format(r.status).rfind(
+                  "test.stl:" + std::to_string(c.line) + ":" + std::to_string(c.column) + ":", 0),
               0u)
         << format(r.status);
   }
@@ -810,7 +818,8 @@ TEST(StlReadTest, AsciiNonTextByte) {
   forced.options.format = StlFormat::kAscii;
   for (char bad : {'\x01', '\x7f', '\xc3', '\0'}) {
     SCOPED_TRACE(static_cast<int>(static_cast<unsigned char>(bad)));
-    std::string text = replace_once(kOneFacet, "vertex 0 1 0", std::string("vertex 0 1") + bad + " 0");
+    std::string text =
+        replace_once(kOneFacet, "vertex 0 1 0", std::string("vertex 0 1") + bad + " 0");
     ReadResult r = read_text(text, forced);
     EXPECT_EQ(r.status.code(), StatusCode::kParseError) << format(r.status);
     EXPECT_EQ(r.status.line(), 6u);
@@ -826,7 +835,8 @@ TEST(StlReadTest, AsciiNonTextByte) {
   size_t at = text.find("vertex", 1100);
   ASSERT_NE(at, std::string::npos);
   text.insert(at + 6, 1, '\x02');  // "vertex\x02"
-  uint64_t line = 1 + static_cast<uint64_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+  uint64_t line = 1 + static_cast<uint64_t>(std::count(
+                          text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
   ReadResult r = read_text(text);
   EXPECT_EQ(r.info.format, StlFormat::kAscii);
   EXPECT_EQ(r.status.code(), StatusCode::kParseError) << format(r.status);
@@ -877,7 +887,7 @@ TEST(StlReadTest, SignedZerosWeldToOneVertex) {
 
 struct FlakySource {
   MemorySource inner;
-  uint64_t fail_at = 0;  // read() fails once this many bytes have been delivered
+  uint64_t fail_at = 0;   // read() fails once this many bytes have been delivered
   bool overfill = false;  // return more than asked
 };
 
@@ -916,8 +926,8 @@ TEST(StlReadTest, FailingSourceGivesIoError) {
       EXPECT_EQ(s.code(), StatusCode::kIoError) << format(s);
       EXPECT_EQ(s.byte_offset(), fail_at) << format(s);
       EXPECT_STREQ(s.file(), "flaky.stl");
-      FlakySource g{{reinterpret_cast<const uint8_t*>(ascii.data()), ascii.size(), 0, 100},
-                    fail_at, false};
+      FlakySource g{
+          {reinterpret_cast<const uint8_t*>(ascii.data()), ascii.size(), 0, 100}, fail_at, false};
       s = read_flaky(&g, size_known);
       EXPECT_EQ(s.code(), StatusCode::kIoError) << format(s);
     }

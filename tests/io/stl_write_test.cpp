@@ -81,7 +81,8 @@ struct Output {
   }
   ByteSink sink() { return splintcore::memory_sink(&state, "out.stl"); }
   std::vector<uint8_t> bytes() const {
-    return std::vector<uint8_t>(buffer.begin(), buffer.begin() + static_cast<std::ptrdiff_t>(state.size));
+    return std::vector<uint8_t>(buffer.begin(),
+                                buffer.begin() + static_cast<std::ptrdiff_t>(state.size));
   }
 };
 
@@ -139,8 +140,8 @@ Status read_back(const std::vector<uint8_t>& bytes, std::vector<SoupTriangle>* s
   StlReadOptions options;
   options.max_abs_coordinate = std::numeric_limits<double>::infinity();
   ArenaArray<SoupTriangle> out(&arena);
-  Status s = splintcore::read_stl(ctx, splintcore::memory_source(&ms, "back.stl"), options, &out,
-                                  nullptr);
+  Status s =
+      splintcore::read_stl(ctx, splintcore::memory_source(&ms, "back.stl"), options, &out, nullptr);
   soup->assign(out.begin(), out.end());
   return s;
 }
@@ -179,13 +180,13 @@ uint32_t written_bits(float f) {
 
 TEST(StlWriteTest, BinaryLayout) {
   const double nz = -0.0;
-  const double tie_even = 1.0 + std::ldexp(1.0, -24);      // halfway: rounds down to 1
+  const double tie_even = 1.0 + std::ldexp(1.0, -24);       // halfway: rounds down to 1
   const double tie_odd = 1.0 + 3.0 * std::ldexp(1.0, -24);  // halfway: rounds up to 1 + 2^-22
   const std::vector<Tri> tris = {
       {{0.1, 0.2, 0.3}, {1.7, -0.4, 2.2}, {-3.3, 5.5, 0.01}},
-      {{nz, nz, nz}, {nz, 1.0, nz}, {1.0, nz, nz}},               // normal (0, 0, -1)
-      {{1.0, 2.0, 3.0}, {1.0, 2.0, 3.0}, {1.0, 2.0, 3.0}},         // a point
-      {{0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}, {2.0, 2.0, 2.0}},         // collinear
+      {{nz, nz, nz}, {nz, 1.0, nz}, {1.0, nz, nz}},         // normal (0, 0, -1)
+      {{1.0, 2.0, 3.0}, {1.0, 2.0, 3.0}, {1.0, 2.0, 3.0}},  // a point
+      {{0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}, {2.0, 2.0, 2.0}},  // collinear
       {{tie_even, tie_odd, 0.0}, {2.0, 0.0, 0.0}, {0.0, 2.0, 0.0}},
   };
   std::vector<uint8_t> bytes;
@@ -230,7 +231,7 @@ TEST(StlWriteTest, BinaryLayout) {
     for (size_t a = 0; a < 3; ++a) EXPECT_EQ(load_u32(bytes, 84 + 50 * t + 4 * a), 0u);
   }
   const size_t r4 = 84 + 50 * 4;
-  EXPECT_EQ(load_f32(bytes, r4 + 12), 1.0f);                           // ties to even: down
+  EXPECT_EQ(load_f32(bytes, r4 + 12), 1.0f);                          // ties to even: down
   EXPECT_EQ(load_f32(bytes, r4 + 16), 1.0f + std::ldexp(1.0f, -22));  // ties to even: up
   // No negative zero anywhere in the float fields.
   for (size_t t = 0; t < tris.size(); ++t) {
@@ -254,7 +255,8 @@ TEST(StlWriteTest, NormalsOfAKnownMesh) {
     float n[3], centre[3] = {0, 0, 0};
     for (size_t a = 0; a < 3; ++a) n[a] = load_f32(bytes, 84 + 50 * t + 4 * a);
     for (size_t k = 0; k < 3; ++k) {
-      for (size_t a = 0; a < 3; ++a) centre[a] += load_f32(bytes, 84 + 50 * t + 12 + 12 * k + 4 * a) / 3.0f;
+      for (size_t a = 0; a < 3; ++a)
+        centre[a] += load_f32(bytes, 84 + 50 * t + 12 + 12 * k + 4 * a) / 3.0f;
     }
     int nonzero = 0;
     for (size_t a = 0; a < 3; ++a) {
@@ -336,7 +338,8 @@ std::vector<Tri> random_tris(uint64_t seed, size_t count) {
   // Extremes.
   const double kMax = static_cast<double>(FLT_MAX);
   const double kMinSub = static_cast<double>(std::numeric_limits<float>::denorm_min());
-  tris.push_back({{kMax, -kMax, kMinSub}, {-kMinSub, 0.0, -0.0},
+  tris.push_back({{kMax, -kMax, kMinSub},
+                  {-kMinSub, 0.0, -0.0},
                   {static_cast<double>(FLT_MIN), -static_cast<double>(FLT_MIN), kMax}});
   return tris;
 }
@@ -345,7 +348,8 @@ TEST(StlWriteTest, RoundTripIsBitExact) {
   for (uint64_t seed : {uint64_t{1}, uint64_t{2}, uint64_t{20240601}}) {
     const std::vector<Tri> tris = random_tris(seed, 400);
     for (StlFormat f : {StlFormat::kBinary, StlFormat::kAscii}) {
-      SCOPED_TRACE("seed " + std::to_string(seed) + (f == StlFormat::kAscii ? " ascii" : " binary"));
+      SCOPED_TRACE("seed " + std::to_string(seed) +
+                   (f == StlFormat::kAscii ? " ascii" : " binary"));
       Arena& arena = shared_arena();
       ArenaScope scope(arena);
       Mesh mesh;
@@ -384,8 +388,8 @@ TEST(StlWriteTest, RoundTripIsBitExact) {
 }
 
 TEST(StlWriteTest, AsciiUsesShortestForm) {
-  const std::vector<Tri> tris = {{{0.1, 1.0 / 3.0, 1e-45}, {100.0, -2.5, 3.4028234663852886e38},
-                                  {1e10, 123456.789, 0.0}}};
+  const std::vector<Tri> tris = {
+      {{0.1, 1.0 / 3.0, 1e-45}, {100.0, -2.5, 3.4028234663852886e38}, {1e10, 123456.789, 0.0}}};
   std::vector<uint8_t> bytes;
   SPLINTCORE_ASSERT_OK(write_tris(tris, with_format(StlFormat::kAscii), 1, &bytes));
   const std::string text(bytes.begin(), bytes.end());
@@ -490,7 +494,8 @@ TEST(StlWriteTest, UnknownCountNeedsASeekableSinkForBinaryOnly) {
   Context ctx(&arena);
   splintcore::HashSink hs;
   StlWriter w;
-  Status s = w.begin(ctx, splintcore::hash_sink(&hs), with_format(StlFormat::kBinary), kUnknownSize);
+  Status s =
+      w.begin(ctx, splintcore::hash_sink(&hs), with_format(StlFormat::kBinary), kUnknownSize);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << format(s);
   EXPECT_TRUE(std::string(s.message()).find("seekable") != std::string::npos) << format(s);
   Output out;
@@ -558,7 +563,7 @@ TEST(StlWriteTest, CountMismatches) {
 }
 
 struct FailingSink {
-  uint64_t accept = 0;   // bytes accepted before write() starts failing
+  uint64_t accept = 0;  // bytes accepted before write() starts failing
   uint64_t written = 0;
   bool seek_ok = true;
 };
@@ -693,8 +698,8 @@ TEST(StlWriteTest, AsciiSolidName) {
     EXPECT_EQ(back.size(), tris.size());
   }
   const std::string too_long(65, 'n');
-  const char* bad_names[] = {"", "two words", "semi;colon", "tab\there", "new\nline", "slash/",
-                             "caf\xc3\xa9", too_long.c_str(), nullptr};
+  const char* bad_names[] = {"",       "two words",   "semi;colon",     "tab\there", "new\nline",
+                             "slash/", "caf\xc3\xa9", too_long.c_str(), nullptr};
   Arena& arena = shared_arena();
   ArenaScope scope(arena);
   Context ctx(&arena);

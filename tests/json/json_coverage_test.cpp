@@ -212,7 +212,7 @@ TEST(JsonCoverage, ValidDocuments) {
   Status e = json_error(doc, doc.root(), StatusCode::kInvalidArgument, "bad");
   EXPECT_EQ(e.line(), 1u);
   EXPECT_STREQ(e.file(), "doc.json");
-  const JsonType types[] = {JsonType::kNull, JsonType::kBool, JsonType::kNumber,
+  const JsonType types[] = {JsonType::kNull,   JsonType::kBool,  JsonType::kNumber,
                             JsonType::kString, JsonType::kArray, JsonType::kObject};
   for (JsonType type : types) EXPECT_STRNE(json_type_name(type), "");
   EXPECT_STREQ(json_type_name(JsonType::kArray), "array");

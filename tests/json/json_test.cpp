@@ -63,9 +63,7 @@ Status parse(Arena& arena, const std::string& text, JsonDocument* doc,
   return parse_json(ctx, t.bytes.get(), t.size, limits, name, doc);
 }
 
-std::string str(const JsonValue& v) {
-  return std::string(v.string, v.length);
-}
+std::string str(const JsonValue& v) { return std::string(v.string, v.length); }
 
 // Parses `text` and expects it to be a single string value with these decoded bytes.
 void expect_string(const std::string& text, const std::string& expected) {
@@ -1020,7 +1018,7 @@ TEST(JsonExhaustion, HooksArenaGivesBackEveryBlock) {
   hooks.user = &counter;
   hooks.allocate = [](void* user, size_t bytes) -> void* {
     static_cast<Counter*>(user)->live += 1;
-    return ::operator new(bytes, std::align_val_t{16});
+    return ::operator new (bytes, std::align_val_t{16});
   };
   hooks.release = [](void* user, void* p, size_t) {
     static_cast<Counter*>(user)->live -= 1;

@@ -66,8 +66,8 @@ TEST(JsonWriter, WritesCompactJson) {
   // The library's strict parser reads it back, numbers to the same bits.
   TestArena ta(1 << 20);
   JsonDocument doc;
-  SPLINTCORE_ASSERT_OK(parse_json(Context(&ta.arena), s.text.data(), s.text.size(), JsonLimits{},
-                                  "written", &doc));
+  SPLINTCORE_ASSERT_OK(
+      parse_json(Context(&ta.arena), s.text.data(), s.text.size(), JsonLimits{}, "written", &doc));
   EXPECT_EQ(doc.member(doc.root(), "third")->number, 1.0 / 3.0);
   EXPECT_STREQ(doc.member(doc.root(), "text")->string, "a\"b\\c\n\x01 \xc3\xa9");
 }
@@ -99,10 +99,30 @@ TEST(JsonWriter, MisuseIsReportedByFinish) {
   expect_error([](JsonWriter&) {}, "nothing written");
   expect_error([](JsonWriter& w) { w.end_array(); }, "close without an open");
   expect_error([](JsonWriter& w) { w.add("k", 1); }, "key at the top level");
-  expect_error([](JsonWriter& w) { w.add(nullptr, 1); w.add(nullptr, 2); }, "second value");
-  expect_error([](JsonWriter& w) { w.begin_object(); w.add(nullptr, 1); }, "without a key");
-  expect_error([](JsonWriter& w) { w.begin_array(); w.add("k", 1); }, "key in an array");
-  expect_error([](JsonWriter& w) { w.begin_array(); w.end_object(); }, "out of order");
+  expect_error(
+      [](JsonWriter& w) {
+        w.add(nullptr, 1);
+        w.add(nullptr, 2);
+      },
+      "second value");
+  expect_error(
+      [](JsonWriter& w) {
+        w.begin_object();
+        w.add(nullptr, 1);
+      },
+      "without a key");
+  expect_error(
+      [](JsonWriter& w) {
+        w.begin_array();
+        w.add("k", 1);
+      },
+      "key in an array");
+  expect_error(
+      [](JsonWriter& w) {
+        w.begin_array();
+        w.end_object();
+      },
+      "out of order");
   expect_error(
       [](JsonWriter& w) {
         for (int i = 0; i < 65; ++i) w.begin_array();

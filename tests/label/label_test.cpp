@@ -31,8 +31,8 @@ struct Fixture {
     Context ctx(&t.arena);
     static std::vector<uint8_t> text;
     text = test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/cases/paper_scale.json");
-    if (!parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), "paper_scale",
-                    &c).is_ok()) {
+    if (!parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), "paper_scale", &c)
+             .is_ok()) {
       return;
     }
     upper.bind(&t.arena);
@@ -78,7 +78,8 @@ struct Labelled {
 };
 
 Labelled run(TestArena& t, const LabelOptions& o, bool apply = true,
-             Span<const Line> upper = Span<const Line>(), Span<const Line> lower = Span<const Line>()) {
+             Span<const Line> upper = Span<const Line>(),
+             Span<const Line> lower = Span<const Line>()) {
   Fixture& f = fixture();
   if (upper.empty()) {
     upper = f.upper.span();
@@ -152,7 +153,8 @@ TEST(LabelFont, EveryCharacterHasStrokesInItsCell) {
     }
   }
   StrokeGlyph g;
-  for (char c : std::string("%@!?*=,;\"'<>[]{}|\\~`$&^")) EXPECT_FALSE(stroke_font_glyph(c, &g)) << c;
+  for (char c : std::string("%@!?*=,;\"'<>[]{}|\\~`$&^"))
+    EXPECT_FALSE(stroke_font_glyph(c, &g)) << c;
   EXPECT_FALSE(stroke_font_glyph('\0', &g));
   EXPECT_FALSE(stroke_font_glyph(static_cast<char>(0xc3), &g));
 }
@@ -265,8 +267,7 @@ TEST(LabelTest, RayThatMissesTheSplintIsAnError) {
   o.up = Vec3{0, 0, 1};
   Labelled l = run(t, o);
   EXPECT_EQ(l.status.code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(std::string(l.status.message()).find("meets no part of the splint"),
-            std::string::npos)
+  EXPECT_NE(std::string(l.status.message()).find("meets no part of the splint"), std::string::npos)
       << l.status.message();
   EXPECT_EQ(t.arena.used(), 0u);
 }
@@ -483,7 +484,8 @@ TEST(LabelTest, ArenaExhaustionIsCleanAtEveryCapTried) {
         EXPECT_FALSE(apply) << "cap " << cap << " of " << need;  // the glyphs alone need less
         continue;
       }
-      ASSERT_EQ(l.status.code(), StatusCode::kArenaExhausted) << cap << " " << test::format(l.status);
+      ASSERT_EQ(l.status.code(), StatusCode::kArenaExhausted)
+          << cap << " " << test::format(l.status);
       EXPECT_NE(std::string(l.status.message()).find("need"), std::string::npos);
       EXPECT_EQ(t.arena.used(), 0u) << "cap " << cap;
       EXPECT_TRUE(l.mesh.vertices.empty() && l.mesh.triangles.empty());

@@ -141,7 +141,6 @@ TEST(CheckMesh, PropertyRandomBoxesStayValid) {
   }
 }
 
-
 // check_closed_oriented is linear however many triangles share a vertex: a bipyramid whose
 // apex (vertex 0, the first bucket) is in 100,000 triangles. Bucket-local pair counting took
 // (2 * 10^5)^2 steps there. Also: the first bad edge is the one named.

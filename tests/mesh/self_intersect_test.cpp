@@ -29,11 +29,11 @@ using splintcore_test::exact_collinear3d;
 using splintcore_test::exact_orient3d_sign;
 using test::TestArena;
 namespace oracle = splintcore_test::tri_oracle;
-using brute::Brute;
-using brute::brute_force;
-using brute::brute_conflict;
-using brute::skipped;
 using brute::box_of;
+using brute::Brute;
+using brute::brute_conflict;
+using brute::brute_force;
+using brute::skipped;
 
 #if defined(__OPTIMIZE__)
 constexpr int kRandomDivisor = 1;
@@ -150,8 +150,8 @@ void expect_original_order(const Mesh& mesh, uint64_t k, const char* what) {
 }
 
 // The candidate count is at least what the broad phase must keep, at most every pair.
-void expect_plausible_candidates(const SelfIntersectionReport& r, const Mesh& mesh,
-                                 const Brute& b, const char* what) {
+void expect_plausible_candidates(const SelfIntersectionReport& r, const Mesh& mesh, const Brute& b,
+                                 const char* what) {
   uint64_t all = 0;
   EXPECT_GE(r.candidate_pairs, required_candidates(mesh, b, &all)) << what;
   EXPECT_LE(r.candidate_pairs, all) << what;
@@ -403,44 +403,47 @@ TEST(SelfIntersection, TrianglesSharingAnEdge) {
 TEST(SelfIntersection, TrianglesSharingOneVertex) {
   const Vec3 o{0, 0, 0};
   // Coplanar wedges that overlap.
-  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {4, 4, 0}, {4, 2, 0}, {0, 4, 0}},
-                     {{{0, 1, 2}}, {{0, 3, 4}}}), 1u);
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {4, 4, 0}, {4, 2, 0}, {0, 4, 0}}, {{{0, 1, 2}}, {{0, 3, 4}}}),
+            1u);
   // Coplanar wedges along one ray (they share a segment from o).
-  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {4, 4, 0}, {2, 2, 0}, {0, 4, 0}},
-                     {{{0, 1, 2}}, {{0, 3, 4}}}), 1u);
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {4, 4, 0}, {2, 2, 0}, {0, 4, 0}}, {{{0, 1, 2}}, {{0, 3, 4}}}),
+            1u);
   // One wedge inside the other.
-  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {1, 1, 0}, {1, 2, 0}},
-                     {{{0, 1, 2}}, {{0, 3, 4}}}), 1u);
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {1, 1, 0}, {1, 2, 0}}, {{{0, 1, 2}}, {{0, 3, 4}}}),
+            1u);
   // Coplanar wedges meeting only at o.
-  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}, {-4, 4, 0}},
-                     {{{0, 1, 2}}, {{0, 3, 4}}}), 0u);
-  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {4, 4, 0}, {-4, 0, 0}, {-4, -4, 0}},
-                     {{{0, 1, 2}}, {{0, 3, 4}}}), 0u);  // vertical angles
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}, {-4, 4, 0}}, {{{0, 1, 2}}, {{0, 3, 4}}}),
+            0u);
+  EXPECT_EQ(
+      pairs_of({o, {4, 0, 0}, {4, 4, 0}, {-4, 0, 0}, {-4, -4, 0}}, {{{0, 1, 2}}, {{0, 3, 4}}}),
+      0u);  // vertical angles
   // Not coplanar: meeting only at o.
-  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {0, 0, 4}, {-4, -4, 4}},
-                     {{{0, 1, 2}}, {{0, 3, 4}}}), 0u);
-  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {-1, -1, 1}, {-1, -1, -1}},
-                     {{{0, 1, 2}}, {{0, 3, 4}}}), 0u);  // through o's outside
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {0, 0, 4}, {-4, -4, 4}}, {{{0, 1, 2}}, {{0, 3, 4}}}),
+            0u);
+  EXPECT_EQ(
+      pairs_of({o, {4, 0, 0}, {0, 4, 0}, {-1, -1, 1}, {-1, -1, -1}}, {{{0, 1, 2}}, {{0, 3, 4}}}),
+      0u);  // through o's outside
   // Not coplanar: the far edge of one pierces the other, or just touches it.
-  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {1, 1, 1}, {1, 1, -1}},
-                     {{{0, 1, 2}}, {{0, 3, 4}}}), 1u);
-  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {1, 1, 0}, {1, 1, 5}},
-                     {{{0, 1, 2}}, {{0, 3, 4}}}), 1u);  // vertex on the face
-  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {2, 2, 0}, {2, 2, 5}},
-                     {{{0, 1, 2}}, {{0, 3, 4}}}), 1u);  // on the far edge
-  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {2, 2, 0x1p-50}, {2, 2, 5}},
-                     {{{0, 1, 2}}, {{0, 3, 4}}}), 0u);  // just above it
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {1, 1, 1}, {1, 1, -1}}, {{{0, 1, 2}}, {{0, 3, 4}}}),
+            1u);
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {1, 1, 0}, {1, 1, 5}}, {{{0, 1, 2}}, {{0, 3, 4}}}),
+            1u);  // vertex on the face
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {2, 2, 0}, {2, 2, 5}}, {{{0, 1, 2}}, {{0, 3, 4}}}),
+            1u);  // on the far edge
+  EXPECT_EQ(
+      pairs_of({o, {4, 0, 0}, {0, 4, 0}, {2, 2, 0x1p-50}, {2, 2, 5}}, {{{0, 1, 2}}, {{0, 3, 4}}}),
+      0u);  // just above it
   // A vertex of one at another vertex position of the other (different id): a second contact.
-  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {4, 0, 0}, {0, 0, 4}},
-                     {{{0, 1, 2}}, {{0, 3, 4}}}), 1u);
+  EXPECT_EQ(pairs_of({o, {4, 0, 0}, {0, 4, 0}, {4, 0, 0}, {0, 0, 4}}, {{{0, 1, 2}}, {{0, 3, 4}}}),
+            1u);
 }
 
 // ---- random small meshes against the brute force -----------------------------------------------
 
 struct RandomMeshStats {
   int64_t meshes = 0, triangles = 0, skipped = 0, pairs = 0, meshes_with_pairs = 0;
-  int64_t by_shared[4] = {0, 0, 0, 0};       // conflicting pairs by shared ids
-  int64_t tested_shared[4] = {0, 0, 0, 0};   // candidate pairs by shared ids
+  int64_t by_shared[4] = {0, 0, 0, 0};      // conflicting pairs by shared ids
+  int64_t tested_shared[4] = {0, 0, 0, 0};  // candidate pairs by shared ids
 };
 
 Vec3 pool_point(std::mt19937_64& rng, int kind) {
@@ -621,7 +624,8 @@ TEST(SelfIntersection, RandomSmallMeshesMatchBruteForce) {
   EXPECT_LT(st.meshes_with_pairs, st.meshes * 19 / 20);
 }
 
-// ---- vertex stars, large meshes, the sweep ---------------------------------------------------------
+// ---- vertex stars, large meshes, the sweep
+// ---------------------------------------------------------
 
 // A fan of eight triangles around the origin whose rim turns twice around it along the four
 // axis directions (radius 1 on the first turn, 2 on the second): its star is a closed,
@@ -725,8 +729,8 @@ TEST(SelfIntersection, HierarchyAndSweepAgree) {
   TestArena t;
   std::vector<SoupTriangle> boxes = box_soup(0, 0, 0, 2, 2, 2);
   for (const SoupTriangle& q : box_soup(1, 1, 1, 3, 3, 3)) boxes.push_back(q);
-  const std::vector<std::vector<SoupTriangle>> soups = {
-      shapes::torus(32, 16, 10, 3), octasphere(12, 4.0), boxes};
+  const std::vector<std::vector<SoupTriangle>> soups = {shapes::torus(32, 16, 10, 3),
+                                                        octasphere(12, 4.0), boxes};
   for (const auto& soup : soups) {
     Mesh mesh = welded(t, soup);
     const SelfIntersectionReport h = run(mesh);
@@ -757,7 +761,8 @@ TEST(SelfIntersection, CoordinatesBeyondTheFiltersRangeTakeTheBoxSweep) {
   expect_original_order(mesh, 1, "scaled boxes");
 }
 
-// ---- max_pairs, arena, errors --------------------------------------------------------------------
+// ---- max_pairs, arena, errors
+// --------------------------------------------------------------------
 
 TEST(SelfIntersection, MaxPairsStopsEarly) {
   TestArena t;

@@ -80,8 +80,8 @@ TEST(WeldTolerance, OrderIndependentPositions) {
   TestArena t1;
   Context c1(&t1.arena);
   Mesh m1(&t1.arena);
-  SPLINTCORE_ASSERT_OK(weld_tolerance(c1, Span<const SoupTriangle>(soup.data(), soup.size()),
-                                      1e-3, &m1));
+  SPLINTCORE_ASSERT_OK(
+      weld_tolerance(c1, Span<const SoupTriangle>(soup.data(), soup.size()), 1e-3, &m1));
   EXPECT_EQ(m1.vertices.size(), 24u * 16u);
   MeshReport r;
   SPLINTCORE_ASSERT_OK(check_mesh(c1, m1, &r));
@@ -96,8 +96,8 @@ TEST(WeldTolerance, OrderIndependentPositions) {
   TestArena t2;
   Context c2(&t2.arena);
   Mesh m2(&t2.arena);
-  SPLINTCORE_ASSERT_OK(weld_tolerance(
-      c2, Span<const SoupTriangle>(shuffled.data(), shuffled.size()), 1e-3, &m2));
+  SPLINTCORE_ASSERT_OK(
+      weld_tolerance(c2, Span<const SoupTriangle>(shuffled.data(), shuffled.size()), 1e-3, &m2));
   ASSERT_EQ(m2.vertices.size(), m1.vertices.size());
   for (size_t i = 0; i < perm.size(); ++i) {
     for (int k = 0; k < 3; ++k) {

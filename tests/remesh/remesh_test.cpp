@@ -7,8 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -39,7 +39,9 @@ struct Shape {
     const double ring = std::sqrt(q.x * q.x + q.y * q.y) - a;
     return std::sqrt(ring * ring + q.z * q.z) - b;
   }
-  double volume() const { return is_torus ? 2 * kPi * kPi * a * b * b : 4.0 / 3.0 * kPi * a * a * a; }
+  double volume() const {
+    return is_torus ? 2 * kPi * kPi * a * b * b : 4.0 / 3.0 * kPi * a * a * a;
+  }
 };
 
 Status fill_shape(void* user, uint32_t z_begin, uint32_t z_end, Span<float> out) {
@@ -48,8 +50,8 @@ Status fill_shape(void* user, uint32_t z_begin, uint32_t z_end, Span<float> out)
   for (uint32_t z = z_begin; z < z_end; ++z) {
     for (uint32_t y = 0; y < s.grid.ny; ++y) {
       for (uint32_t x = 0; x < s.grid.nx; ++x, ++i) {
-        const Vec3 p = s.grid.origin + Vec3{s.grid.spacing.x * x, s.grid.spacing.y * y,
-                                            s.grid.spacing.z * z};
+        const Vec3 p =
+            s.grid.origin + Vec3{s.grid.spacing.x * x, s.grid.spacing.y * y, s.grid.spacing.z * z};
         out[i] = static_cast<float>(s.sdf(p));
       }
     }

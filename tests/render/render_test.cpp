@@ -79,14 +79,14 @@ int decode(Bits& in, const Huffman& h) {
   return -1;
 }
 
-const int kLBase[29] = {3, 4, 5, 6, 7, 8, 9, 10, 11, 13, 15, 17, 19, 23, 27,
+const int kLBase[29] = {3,  4,  5,  6,  7,  8,  9,  10, 11,  13,  15,  17,  19,  23, 27,
                         31, 35, 43, 51, 59, 67, 83, 99, 115, 131, 163, 195, 227, 258};
 const int kLExtra[29] = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2,
                          2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0};
-const int kDBase[30] = {1, 2, 3, 4, 5, 7, 9, 13, 17, 25, 33, 49, 65, 97, 129,
-                        193, 257, 385, 513, 769, 1025, 1537, 2049, 3073, 4097, 6145, 8193, 12289,
-                        16385, 24577};
-const int kDExtra[30] = {0, 0, 0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6,
+const int kDBase[30] = {1,    2,    3,    4,    5,    7,    9,    13,    17,    25,
+                        33,   49,   65,   97,   129,  193,  257,  385,   513,   769,
+                        1025, 1537, 2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577};
+const int kDExtra[30] = {0, 0, 0, 0, 1, 1, 2, 2,  3,  3,  4,  4,  5,  5,  6,
                          6, 7, 7, 8, 8, 9, 9, 10, 10, 11, 11, 12, 12, 13, 13};
 
 bool codes(Bits& in, const Huffman& lit, const Huffman& dist, std::vector<uint8_t>* out) {
@@ -227,8 +227,9 @@ uint32_t slow_crc32(const uint8_t* p, size_t n) {  // bitwise, not the library's
         return ::testing::AssertionFailure() << "not 8-bit RGB, deflate, no interlace";
       }
     }
-    if (type == "IDAT") idat.insert(idat.end(), png.begin() + static_cast<long>(p + 8),
-                                    png.begin() + static_cast<long>(p + 8 + n));
+    if (type == "IDAT")
+      idat.insert(idat.end(), png.begin() + static_cast<long>(p + 8),
+                  png.begin() + static_cast<long>(p + 8 + n));
     order.push_back(type);
     p += 12 + n;
   }
@@ -240,8 +241,8 @@ uint32_t slow_crc32(const uint8_t* p, size_t n) {  // bitwise, not the library's
   if (!zlib_inflate(idat, &raw)) return ::testing::AssertionFailure() << "IDAT does not inflate";
   const size_t stride = static_cast<size_t>(*w) * 3 + 1;
   if (raw.size() != stride * *h) {
-    return ::testing::AssertionFailure() << "inflated " << raw.size() << " bytes, expected "
-                                         << stride * *h;
+    return ::testing::AssertionFailure()
+           << "inflated " << raw.size() << " bytes, expected " << stride * *h;
   }
   rgb->assign(static_cast<size_t>(*w) * *h * 3, 0);
   const size_t row = stride - 1;
@@ -444,8 +445,7 @@ TEST(Render, CubeSilhouettesMatchTheAnalyticProjections) {
       o.view_count = 1;
       o.shading = shading;
       RenderImage image;
-      SPLINTCORE_ASSERT_OK(
-          draw(t.arena, &item, 1, o, &image));
+      SPLINTCORE_ASSERT_OK(draw(t.arena, &item, 1, o, &image));
       ASSERT_GT(image.pixels_per_mm, 0);
       const double s = image.pixels_per_mm;
       const double expected = c.area_mm2 * s * s;
@@ -565,7 +565,7 @@ TEST(Render, ScalarsFollowTheRampAndTheLegendIsDrawn) {
   EXPECT_EQ(centre[2], 0);
   const uint8_t* bar_top = image.rgb + (6 * 120 + 116) * 3;
   const uint8_t* bar_bottom = image.rgb + (93 * 120 + 116) * 3;
-  EXPECT_GT(bar_top[0], 240);    // red at the top
+  EXPECT_GT(bar_top[0], 240);     // red at the top
   EXPECT_GT(bar_bottom[2], 240);  // blue at the bottom
 }
 

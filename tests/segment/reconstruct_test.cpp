@@ -66,9 +66,9 @@ void run_pipeline(const CtPhantom& phantom, const CtVolume& volume, uint32_t lay
 }
 
 struct Accuracy {
-  double mean_own = 0, max_own = 0;   // |SDF of its own jaw| at the vertices, mm
-  double min_other = HUGE_VAL;        // smallest SDF of the other jaw at the vertices, mm
-  uint64_t closer_to_other = 0;       // vertices nearer the other jaw's surface than their own
+  double mean_own = 0, max_own = 0;  // |SDF of its own jaw| at the vertices, mm
+  double min_other = HUGE_VAL;       // smallest SDF of the other jaw at the vertices, mm
+  uint64_t closer_to_other = 0;      // vertices nearer the other jaw's surface than their own
 };
 
 Accuracy measure(const CtPhantom& phantom, const std::vector<Vec3>& vertices, int jaw) {
@@ -109,15 +109,15 @@ void check_phantom(const CtPhantomOptions& po, const char* name) {
   const char* jaw_names[2] = {"maxilla", "mandible"};
   for (int j = 0; j < 2; ++j) {
     const Accuracy a = measure(phantom, jaws.vertices[j], j);
-    std::printf("%s %s: %llu triangles, volume %.1f mm^3, mean |sdf| %.4f mm = %.3f voxel, "
-                "max %.3f mm = %.2f voxel, other jaw's sdf >= %.3f mm, %llu of %zu vertices "
-                "nearer the other jaw\n",
-                name, jaw_names[j], static_cast<unsigned long long>(jaws.triangle_count[j]),
-                jaws.volume[j], a.mean_own, a.mean_own / voxel, a.max_own, a.max_own / voxel,
-                a.min_other, static_cast<unsigned long long>(a.closer_to_other),
-                jaws.vertices[j].size());
+    std::printf(
+        "%s %s: %llu triangles, volume %.1f mm^3, mean |sdf| %.4f mm = %.3f voxel, "
+        "max %.3f mm = %.2f voxel, other jaw's sdf >= %.3f mm, %llu of %zu vertices "
+        "nearer the other jaw\n",
+        name, jaw_names[j], static_cast<unsigned long long>(jaws.triangle_count[j]), jaws.volume[j],
+        a.mean_own, a.mean_own / voxel, a.max_own, a.max_own / voxel, a.min_other,
+        static_cast<unsigned long long>(a.closer_to_other), jaws.vertices[j].size());
     ::testing::Test::RecordProperty(std::string(name) + "_" + jaw_names[j] + "_mean_sdf_voxels",
-                   std::to_string(a.mean_own / voxel));
+                                    std::to_string(a.mean_own / voxel));
     EXPECT_LT(a.mean_own, 0.25 * voxel) << name << " " << jaw_names[j];
     EXPECT_LT(a.max_own, 2.0 * voxel) << name << " " << jaw_names[j];
     // Separation: no vertex of one jaw lies inside the other by more than half the largest
@@ -244,7 +244,6 @@ TEST(CtPhantom, SeedsAndContacts) {
   EXPECT_TRUE(both);
 }
 
-
 // Golden bytes (fixtures/golden.sha256; the same from g++ and clang++, -O0 and -O2): the voxels
 // of a small phantom, and the binary STL of each jaw reconstructed from it.
 TEST(CtGolden, PhantomAndReconstructedJawsMatchTheCommittedHashes) {
@@ -269,8 +268,8 @@ TEST(CtGolden, PhantomAndReconstructedJawsMatchTheCommittedHashes) {
   seeds[0].patient_mm = phantom.seed_maxilla();
   seeds[1].label = 2;
   seeds[1].patient_mm = phantom.seed_mandible();
-  SPLINTCORE_ASSERT_OK(grow_regions(ctx, volume, Span<const RegionSeed>(seeds, 2),
-                                    RegionGrowOptions{}, &labels));
+  SPLINTCORE_ASSERT_OK(
+      grow_regions(ctx, volume, Span<const RegionSeed>(seeds, 2), RegionGrowOptions{}, &labels));
   const char* names[2] = {"reconstruct:ct-phantom-100x92x64-maxilla",
                           "reconstruct:ct-phantom-100x92x64-mandible"};
   for (int j = 0; j < 2; ++j) {

@@ -112,8 +112,8 @@ TEST(CtRegionGrow, SixAndTwentySixConnectivityOnADiagonalPair) {
     RegionGrowOptions options;
     options.connectivity = c == 0 ? Connectivity::k6 : Connectivity::k26;
     RegionStats stats;
-    SPLINTCORE_ASSERT_OK(grow_regions(ctx, sv.v, Span<const RegionSeed>(&seed, 1), options,
-                                      &labels, &stats));
+    SPLINTCORE_ASSERT_OK(
+        grow_regions(ctx, sv.v, Span<const RegionSeed>(&seed, 1), options, &labels, &stats));
     EXPECT_EQ(label_at(labels, 0, 0, 0), 1);
     EXPECT_EQ(label_at(labels, 1, 0, 0), 1);
     EXPECT_EQ(label_at(labels, 2, 1, 1), c == 0 ? kLabelUnclaimed : 1);
@@ -141,8 +141,8 @@ TEST(CtRegionGrow, CompetitiveGrowthSplitsTouchingBlocks) {
       RegionGrowOptions options;
       options.connectivity = c == 0 ? Connectivity::k6 : Connectivity::k26;
       RegionStats stats;
-      SPLINTCORE_ASSERT_OK(grow_regions(ctx, sv.v, Span<const RegionSeed>(seeds, 2), options,
-                                        &labels, &stats));
+      SPLINTCORE_ASSERT_OK(
+          grow_regions(ctx, sv.v, Span<const RegionSeed>(seeds, 2), options, &labels, &stats));
       // Seed 1 at z = 0, seed 2 at z = top: on the axis a voxel at z is z steps from seed 1
       // and top - z from seed 2 (with 26-connectivity too: the block is 3 voxels wide, the
       // z distance dominates). top = 8: z = 4 is a tie (label 1).
@@ -195,8 +195,8 @@ TEST(CtRegionGrow, SplitPlaneAssignsBySide) {
   RegionSeed seeds2[2] = {a, b};
   seeds2[1].patient_mm = Vec3{12, 22, 39};
   RegionStats stats;
-  SPLINTCORE_ASSERT_OK(grow_regions(ctx, sv.v, Span<const RegionSeed>(seeds2, 2), options,
-                                    &labels, &stats));
+  SPLINTCORE_ASSERT_OK(
+      grow_regions(ctx, sv.v, Span<const RegionSeed>(seeds2, 2), options, &labels, &stats));
   for (uint32_t k = 0; k <= 9; ++k) {
     EXPECT_EQ(label_at(labels, 3, 1, k), k <= 6 ? 1 : 2) << k;
   }
@@ -265,8 +265,8 @@ TEST(CtReconstruct, BlockIsAClosedOutwardSolid) {
   LabelVolume labels;
   SPLINTCORE_ASSERT_OK(threshold_window(ctx, sv.v, HuWindow{300, 4000}, &labels));
   const RegionSeed seed = voxel_seed(3, 3, 3, 3);
-  SPLINTCORE_ASSERT_OK(grow_regions(ctx, sv.v, Span<const RegionSeed>(&seed, 1),
-                                    RegionGrowOptions{}, &labels));
+  SPLINTCORE_ASSERT_OK(
+      grow_regions(ctx, sv.v, Span<const RegionSeed>(&seed, 1), RegionGrowOptions{}, &labels));
   Mesh mesh(&ta.arena);
   ReconstructOptions ro;
   ro.label = 3;
@@ -311,8 +311,8 @@ TEST(CtReconstruct, TouchingRegionsShareTheirInterface) {
   LabelVolume labels;
   SPLINTCORE_ASSERT_OK(threshold_window(ctx, sv.v, HuWindow{300, 4000}, &labels));
   const RegionSeed seeds[2] = {voxel_seed(1, 2, 2, 1), voxel_seed(2, 2, 2, 10)};
-  SPLINTCORE_ASSERT_OK(grow_regions(ctx, sv.v, Span<const RegionSeed>(seeds, 2),
-                                    RegionGrowOptions{}, &labels));
+  SPLINTCORE_ASSERT_OK(
+      grow_regions(ctx, sv.v, Span<const RegionSeed>(seeds, 2), RegionGrowOptions{}, &labels));
   double volumes[3] = {0, 0, 0};
   for (uint8_t l = 1; l <= 2; ++l) {
     Mesh mesh(&ta.arena);
@@ -337,8 +337,8 @@ TEST(CtReconstruct, TouchingRegionsShareTheirInterface) {
     // The merged block as one region.
     LabelVolume one;
     SPLINTCORE_ASSERT_OK(threshold_window(ctx, sv.v, HuWindow{300, 4000}, &one));
-    SPLINTCORE_ASSERT_OK(grow_regions(ctx, sv.v, Span<const RegionSeed>(seeds, 1),
-                                      RegionGrowOptions{}, &one));
+    SPLINTCORE_ASSERT_OK(
+        grow_regions(ctx, sv.v, Span<const RegionSeed>(seeds, 1), RegionGrowOptions{}, &one));
     Mesh mesh(&ta.arena);
     ReconstructOptions ro;
     ro.round_to_float32 = false;
@@ -369,8 +369,7 @@ TEST(CtSegment, ArenaExhaustionSweep) {
     Status s = threshold_window(ctx, sv.v, HuWindow{300, 4000}, &labels);
     if (s.is_ok()) {
       used_before = ta.arena.used();
-      s = grow_regions(ctx, sv.v, Span<const RegionSeed>(seeds, 2), RegionGrowOptions{},
-                       &labels);
+      s = grow_regions(ctx, sv.v, Span<const RegionSeed>(seeds, 2), RegionGrowOptions{}, &labels);
     }
     Mesh mesh(&ta.arena);
     if (s.is_ok()) {
@@ -401,7 +400,6 @@ TEST(CtSegment, ArenaExhaustionSweep) {
   }
   EXPECT_GT(first_ok, 0u);
 }
-
 
 // Each stage checks the progress callback and stops with kCancelled when it says so; a
 // cancelled reconstruction leaves the arena and the mesh as they were.

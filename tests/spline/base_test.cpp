@@ -145,8 +145,9 @@ TEST(SplintBase, NormalsAreProjectedOntoTheOcclusalPlaneAndTurnedOutward) {
   }
   Context ctx(&t.arena);
   ArenaArray<Line> lines(&t.arena);
-  ASSERT_TRUE(make_lines(ctx, Span<const Pick>(up.data(), up.size()), Vec3{0, 0, 1}, "upper",
-                         &lines).is_ok());
+  ASSERT_TRUE(
+      make_lines(ctx, Span<const Pick>(up.data(), up.size()), Vec3{0, 0, 1}, "upper", &lines)
+          .is_ok());
   for (const Line& l : lines) {
     EXPECT_EQ(l.direction.z, 0.0);
     EXPECT_NEAR(std::fabs(l.direction.y), 1.0, 1e-15);
@@ -257,7 +258,8 @@ TEST(SplintBase, ArenaExhaustionIsCleanAtEveryCap) {
     Context ctx(&arena);
     ArenaArray<Line> ul(&arena), ll(&arena);
     Status s = make_lines(ctx, Span<const Pick>(up.data(), up.size()), Vec3{0, 0, 1}, "upper", &ul);
-    if (s.is_ok()) s = make_lines(ctx, Span<const Pick>(lo.data(), lo.size()), Vec3{0, 0, 1}, "lower", &ll);
+    if (s.is_ok())
+      s = make_lines(ctx, Span<const Pick>(lo.data(), lo.size()), Vec3{0, 0, 1}, "lower", &ll);
     Mesh m(&arena);
     BaseReport r;
     if (s.is_ok()) s = build_splint_base(ctx, ul.span(), ll.span(), BaseParams{}, &m, &r);
@@ -340,8 +342,8 @@ TEST(SplintBase, BruteForceOracleSeesAnInjectedIntersection) {
 }
 
 TEST(SplintBase, DeterministicAcrossRunsAndThreadCounts) {
-  std::vector<uint8_t> text = test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) +
-                                                    "/cases/uneven.json");
+  std::vector<uint8_t> text =
+      test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/cases/uneven.json");
   std::vector<uint8_t> first;
   for (unsigned threads : {1u, 2u, 4u}) {
     TestArena t;

@@ -241,8 +241,7 @@ inline std::vector<BigInt> to_common_scale(const double* values, size_t count) {
 }
 
 // Sign of (a - c) x (b - c) = (ax - cx)(by - cy) - (ay - cy)(bx - cx), exactly.
-inline int exact_orient2d_sign(double ax, double ay, double bx, double by, double cx,
-                               double cy) {
+inline int exact_orient2d_sign(double ax, double ay, double bx, double by, double cx, double cy) {
   const double v[6] = {ax, ay, bx, by, cx, cy};
   const std::vector<BigInt> n = to_common_scale(v, 6);
   const BigInt acx = n[0] - n[4];
@@ -260,8 +259,8 @@ int exact_orient3d_sign(const P& a, const P& b, const P& c, const P& d) {
   const BigInt adx = n[0] - n[9], ady = n[1] - n[10], adz = n[2] - n[11];
   const BigInt bdx = n[3] - n[9], bdy = n[4] - n[10], bdz = n[5] - n[11];
   const BigInt cdx = n[6] - n[9], cdy = n[7] - n[10], cdz = n[8] - n[11];
-  const BigInt det = adx * (bdy * cdz - bdz * cdy) - ady * (bdx * cdz - bdz * cdx) +
-                     adz * (bdx * cdy - bdy * cdx);
+  const BigInt det =
+      adx * (bdy * cdz - bdz * cdy) - ady * (bdx * cdz - bdz * cdx) + adz * (bdx * cdy - bdy * cdx);
   return det.sign();
 }
 

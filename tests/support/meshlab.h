@@ -18,8 +18,9 @@ namespace splintcore {
 namespace test {
 
 inline bool have_meshlab() {
-  return std::system("command -v meshlabserver >/dev/null 2>&1 && "
-                     "command -v xvfb-run >/dev/null 2>&1") == 0;
+  return std::system(
+             "command -v meshlabserver >/dev/null 2>&1 && "
+             "command -v xvfb-run >/dev/null 2>&1") == 0;
 }
 
 // Runs the filter script on the input meshes (layers in order) and returns MeshLab's log.
@@ -53,8 +54,7 @@ inline std::string temp_file(const std::vector<uint8_t>& bytes, const char* suff
 inline std::string meshlab_log_of_bytes(const std::vector<uint8_t>& bytes) {
   const std::string path = temp_file(bytes);
   if (path.empty()) return "";
-  std::string log =
-      meshlab_log({path}, std::string(SPLINTCORE_FIXTURES_DIR) + "/meshlab/topo.mlx");
+  std::string log = meshlab_log({path}, std::string(SPLINTCORE_FIXTURES_DIR) + "/meshlab/topo.mlx");
   std::remove(path.c_str());
   return log;
 }

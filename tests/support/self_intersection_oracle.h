@@ -15,9 +15,9 @@
 // arithmetic, never the library's predicates. Triangles must be non-degenerate.
 namespace splintcore_test {
 namespace tri_oracle {
-bool triangles_meet(const splintcore::Vec3& a, const splintcore::Vec3& b,
-                    const splintcore::Vec3& c, const splintcore::Vec3& d,
-                    const splintcore::Vec3& e, const splintcore::Vec3& f);
+bool triangles_meet(const splintcore::Vec3& a, const splintcore::Vec3& b, const splintcore::Vec3& c,
+                    const splintcore::Vec3& d, const splintcore::Vec3& e,
+                    const splintcore::Vec3& f);
 bool segment_meets_triangle(const splintcore::Vec3& p, const splintcore::Vec3& q,
                             const splintcore::Vec3& a, const splintcore::Vec3& b,
                             const splintcore::Vec3& c);

@@ -49,15 +49,15 @@ inline std::string format(const Status& s) {
   return text;
 }
 
-#define SPLINTCORE_EXPECT_OK(expr)                                             \
-  do {                                                                         \
-    ::splintcore::Status st_ = (expr);                                         \
-    EXPECT_TRUE(st_.is_ok()) << ::splintcore::test::format(st_);               \
+#define SPLINTCORE_EXPECT_OK(expr)                               \
+  do {                                                           \
+    ::splintcore::Status st_ = (expr);                           \
+    EXPECT_TRUE(st_.is_ok()) << ::splintcore::test::format(st_); \
   } while (0)
-#define SPLINTCORE_ASSERT_OK(expr)                                             \
-  do {                                                                         \
-    ::splintcore::Status st_ = (expr);                                         \
-    ASSERT_TRUE(st_.is_ok()) << ::splintcore::test::format(st_);               \
+#define SPLINTCORE_ASSERT_OK(expr)                               \
+  do {                                                           \
+    ::splintcore::Status st_ = (expr);                           \
+    ASSERT_TRUE(st_.is_ok()) << ::splintcore::test::format(st_); \
   } while (0)
 
 inline void put_u32(std::vector<uint8_t>& out, size_t at, uint32_t v) {

@@ -11,8 +11,8 @@
 
 #include "common/compare.h"
 #include "common/shapes.h"
-#include "splintcore/mesh.h"
 #include "splintcore/io.h"
+#include "splintcore/mesh.h"
 #include "splintcore/platform.h"
 #include "support/test_util.h"
 
@@ -65,15 +65,24 @@ TEST(Compare, BoxAgainstMovedBox) {
 TEST(Compare, ColourRamp) {
   uint8_t rgb[3];
   cli::distance_colour(0, 2, rgb);
-  EXPECT_EQ(rgb[0], 0); EXPECT_EQ(rgb[1], 0); EXPECT_EQ(rgb[2], 255);
+  EXPECT_EQ(rgb[0], 0);
+  EXPECT_EQ(rgb[1], 0);
+  EXPECT_EQ(rgb[2], 255);
   cli::distance_colour(1, 2, rgb);
-  EXPECT_EQ(rgb[0], 0); EXPECT_EQ(rgb[1], 255); EXPECT_EQ(rgb[2], 0);
+  EXPECT_EQ(rgb[0], 0);
+  EXPECT_EQ(rgb[1], 255);
+  EXPECT_EQ(rgb[2], 0);
   cli::distance_colour(2, 2, rgb);
-  EXPECT_EQ(rgb[0], 255); EXPECT_EQ(rgb[1], 0); EXPECT_EQ(rgb[2], 0);
+  EXPECT_EQ(rgb[0], 255);
+  EXPECT_EQ(rgb[1], 0);
+  EXPECT_EQ(rgb[2], 0);
   cli::distance_colour(7, 2, rgb);  // beyond the range: red
-  EXPECT_EQ(rgb[0], 255); EXPECT_EQ(rgb[2], 0);
+  EXPECT_EQ(rgb[0], 255);
+  EXPECT_EQ(rgb[2], 0);
   cli::distance_colour(0.5, 2, rgb);  // a quarter: half way from blue to green
-  EXPECT_EQ(rgb[0], 0); EXPECT_EQ(rgb[1], 128); EXPECT_EQ(rgb[2], 128);
+  EXPECT_EQ(rgb[0], 0);
+  EXPECT_EQ(rgb[1], 128);
+  EXPECT_EQ(rgb[2], 128);
   cli::distance_colour(1, 0, rgb);  // no range: blue
   EXPECT_EQ(rgb[2], 255);
 }
@@ -82,8 +91,8 @@ TEST(Compare, ColouredPlyReadsBack) {
   test::TestArena t(size_t{64} << 20);
   const std::vector<SoupTriangle> soup = shapes::torus(24, 12, 20.0, 5.0);
   Mesh a(&t.arena);
-  SPLINTCORE_ASSERT_OK(weld_exact(Context(&t.arena),
-                                  Span<const SoupTriangle>(soup.data(), soup.size()), &a));
+  SPLINTCORE_ASSERT_OK(
+      weld_exact(Context(&t.arena), Span<const SoupTriangle>(soup.data(), soup.size()), &a));
   std::vector<double> d(a.vertices.size());
   for (size_t i = 0; i < d.size(); ++i) d[i] = 0.01 * static_cast<double>(i);
   const std::string ply = cli::distance_ply(a, d, 1.0);
@@ -93,17 +102,19 @@ TEST(Compare, ColouredPlyReadsBack) {
   MemorySource ms{reinterpret_cast<const uint8_t*>(ply.data()), ply.size(), 0, 0};
   Mesh back;
   MeshReadInfo info;
-  SPLINTCORE_ASSERT_OK(read_mesh(Context(&t.arena), memory_source(&ms, "out.ply"),
-                                 MeshReadOptions{}, &back, &info));
+  SPLINTCORE_ASSERT_OK(
+      read_mesh(Context(&t.arena), memory_source(&ms, "out.ply"), MeshReadOptions{}, &back, &info));
   EXPECT_EQ(info.format, MeshFormat::kPlyBinaryLittleEndian);
   ASSERT_EQ(back.vertices.size(), a.vertices.size());
   ASSERT_EQ(back.triangles.size(), a.triangles.size());
   for (size_t i = 0; i < a.vertices.size(); ++i) {  // == : -0 is written as +0
     EXPECT_TRUE(back.vertices[i].x == a.vertices[i].x && back.vertices[i].y == a.vertices[i].y &&
-                back.vertices[i].z == a.vertices[i].z) << i;
+                back.vertices[i].z == a.vertices[i].z)
+        << i;
   }
-  EXPECT_EQ(std::memcmp(back.triangles.data(), a.triangles.data(),
-                        a.triangles.size() * sizeof(Triangle)), 0);
+  EXPECT_EQ(
+      std::memcmp(back.triangles.data(), a.triangles.data(), a.triangles.size() * sizeof(Triangle)),
+      0);
   // The quality of vertex 7 is its distance as float32, right after its colour.
   float q;
   std::memcpy(&q, ply.data() + header + 19 * 7 + 15, 4);

@@ -146,51 +146,50 @@ TEST(CtWrite, DicomSeriesRoundTripsAndIsOrderedByPosition) {
   test::TestArena arena(size_t{4} << 20);
   int variant = 0;
   for (bool left_handed : {false, true})
-  for (bool implicit : {false, true}) {
-    Phantom p(left_handed);
-    for (bool is_signed : {false, true}) {
-      TempDir dir(("dicom" + std::to_string(variant++)).c_str());
-      CtWriteOptions o;
-      o.dicom_implicit_vr = implicit;
-      o.dicom_signed = is_signed;
-      const std::string folder = dir / "series";
-      SPLINTCORE_ASSERT_OK(cli::write_dicom_series(p.v, folder, o));
-      std::vector<std::string> files;
-      SPLINTCORE_ASSERT_OK(cli::list_dicom_folder(folder, &files));
-      ASSERT_EQ(files.size(), 3u);
-      CtVolume back;
-      CtInfo info;
-      SPLINTCORE_ASSERT_OK(read_back(arena.arena, folder, &back, &info));
-      if (left_handed) {
-        expect_same_in_patient_space(p.v, back, 1e-9);
-        EXPECT_NEAR(back.axis_z.x, 1.0, 1e-15);  // row x column
-      } else {
-        expect_same(p.v, back, 1e-12);
-      }
-      EXPECT_EQ(info.format, CtFormat::kDicom);
-      EXPECT_STREQ(info.transfer_syntax,
-                   implicit ? "1.2.840.10008.1.2" : "1.2.840.10008.1.2.1");
-      EXPECT_STREQ(info.stored_type, is_signed ? "int16" : "uint16");
-      EXPECT_EQ(info.intercept, is_signed ? 0.0 : -32768.0);  // min HU is -32768
+    for (bool implicit : {false, true}) {
+      Phantom p(left_handed);
+      for (bool is_signed : {false, true}) {
+        TempDir dir(("dicom" + std::to_string(variant++)).c_str());
+        CtWriteOptions o;
+        o.dicom_implicit_vr = implicit;
+        o.dicom_signed = is_signed;
+        const std::string folder = dir / "series";
+        SPLINTCORE_ASSERT_OK(cli::write_dicom_series(p.v, folder, o));
+        std::vector<std::string> files;
+        SPLINTCORE_ASSERT_OK(cli::list_dicom_folder(folder, &files));
+        ASSERT_EQ(files.size(), 3u);
+        CtVolume back;
+        CtInfo info;
+        SPLINTCORE_ASSERT_OK(read_back(arena.arena, folder, &back, &info));
+        if (left_handed) {
+          expect_same_in_patient_space(p.v, back, 1e-9);
+          EXPECT_NEAR(back.axis_z.x, 1.0, 1e-15);  // row x column
+        } else {
+          expect_same(p.v, back, 1e-12);
+        }
+        EXPECT_EQ(info.format, CtFormat::kDicom);
+        EXPECT_STREQ(info.transfer_syntax, implicit ? "1.2.840.10008.1.2" : "1.2.840.10008.1.2.1");
+        EXPECT_STREQ(info.stored_type, is_signed ? "int16" : "uint16");
+        EXPECT_EQ(info.intercept, is_signed ? 0.0 : -32768.0);  // min HU is -32768
 
-      // The file names are not in slice order: reading the files in name order as a series of
-      // one file each gives origins that are not increasing along axis_z.
-      std::vector<double> along;
-      for (const std::string& f : files) {
-        std::vector<uint8_t> bytes = test::read_file_bytes(f);
-        CtMemoryFile m{"one.dcm", bytes.data(), bytes.size()};
-        CtMemoryFiles mf{&m, 1, 0, {}};
-        CtVolume one;
-        arena.arena.reset();
-        Context ctx(&arena.arena);
-        SPLINTCORE_ASSERT_OK(
-            read_dicom_series(ctx, ct_memory_series(&mf), CtReadOptions{}, &one, nullptr));
-        along.push_back(dot(one.origin, p.v.axis_z));
+        // The file names are not in slice order: reading the files in name order as a series of
+        // one file each gives origins that are not increasing along axis_z.
+        std::vector<double> along;
+        for (const std::string& f : files) {
+          std::vector<uint8_t> bytes = test::read_file_bytes(f);
+          CtMemoryFile m{"one.dcm", bytes.data(), bytes.size()};
+          CtMemoryFiles mf{&m, 1, 0, {}};
+          CtVolume one;
+          arena.arena.reset();
+          Context ctx(&arena.arena);
+          SPLINTCORE_ASSERT_OK(
+              read_dicom_series(ctx, ct_memory_series(&mf), CtReadOptions{}, &one, nullptr));
+          along.push_back(dot(one.origin, p.v.axis_z));
+        }
+        EXPECT_FALSE(along[0] < along[1] && along[1] < along[2]);
+        EXPECT_FALSE(along[0] > along[1] && along[1] > along[2]);
       }
-      EXPECT_FALSE(along[0] < along[1] && along[1] < along[2]);
-      EXPECT_FALSE(along[0] > along[1] && along[1] > along[2]);
     }
-  }
 }
 
 TEST(CtWrite, DicomWriterRefusesAFolderWithOtherFiles) {
@@ -198,7 +197,10 @@ TEST(CtWrite, DicomWriterRefusesAFolderWithOtherFiles) {
   TempDir dir("dicom_stale");
   const std::string folder = dir / "series";
   fs::create_directories(folder);
-  { std::FILE* f = std::fopen((dir / "series/old.dcm").c_str(), "wb"); std::fclose(f); }
+  {
+    std::FILE* f = std::fopen((dir / "series/old.dcm").c_str(), "wb");
+    std::fclose(f);
+  }
   Status s = cli::write_dicom_series(p.v, folder, CtWriteOptions{});
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(test::format(s).find("old.dcm"), std::string::npos);
@@ -234,8 +236,7 @@ TEST(CtFiles, FormatOfPathAndErrors) {
   test::TestArena arena(1 << 20);
   CtVolume v;
   EXPECT_EQ(read_back(arena.arena, dir / "a.dcm", &v, nullptr).code(), StatusCode::kUnsupported);
-  EXPECT_EQ(read_back(arena.arena, dir / "missing.nrrd", &v, nullptr).code(),
-            StatusCode::kIoError);
+  EXPECT_EQ(read_back(arena.arena, dir / "missing.nrrd", &v, nullptr).code(), StatusCode::kIoError);
   EXPECT_EQ(read_back(arena.arena, dir.path.string(), &v, nullptr).code(),
             StatusCode::kInvalidArgument);  // an empty folder
   // A detached header whose data file is missing names the data file.

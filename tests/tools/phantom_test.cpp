@@ -172,8 +172,8 @@ struct CaseBase {
 };
 
 void build_paper_scale_base(CaseBase* b) {
-  const std::vector<uint8_t> text = test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) +
-                                                          "/cases/paper_scale.json");
+  const std::vector<uint8_t> text =
+      test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/cases/paper_scale.json");
   ASSERT_FALSE(text.empty());
   Context ctx(&b->arena.arena);
   SPLINTCORE_ASSERT_OK(parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(),
@@ -266,8 +266,8 @@ TEST(Phantom, CrownsHaveBuccalAndLingualUndercutsInsideTheBase) {
       // Buccal faces look away from the arch's middle (the origin is inside the arch), lingual
       // faces towards it.
       const Vec3 mid = (a + b + c) * (1.0 / 3.0);
-      const double side = (n.x * mid.x + n.y * mid.y) /
-                          (std::sqrt(n.x * n.x + n.y * n.y) * std::sqrt(mid.x * mid.x + mid.y * mid.y));
+      const double side = (n.x * mid.x + n.y * mid.y) / (std::sqrt(n.x * n.x + n.y * n.y) *
+                                                         std::sqrt(mid.x * mid.x + mid.y * mid.y));
       if (side > 0.5) ++buccal[tooth];
       if (side < -0.5) ++lingual[tooth];
     }

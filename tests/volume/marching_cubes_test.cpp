@@ -90,8 +90,8 @@ Field sphere(double r, uint32_t cells) {
   fd.grid.nx = fd.grid.ny = fd.grid.nz = n;
   fd.grid.origin = Vec3{-1.3, 2.1, -0.7};
   const double h = fd.grid.spacing.x;
-  fd.center = fd.grid.origin + Vec3{h * n * 0.5 + 0.137 * h, h * n * 0.5 - 0.211 * h,
-                                    h * n * 0.5 + 0.093 * h};
+  fd.center = fd.grid.origin +
+              Vec3{h * n * 0.5 + 0.137 * h, h * n * 0.5 - 0.211 * h, h * n * 0.5 + 0.093 * h};
   return fd;
 }
 
@@ -219,7 +219,8 @@ TEST(MarchingCubes, SphereIsClosedManifoldGenusZeroAndAccurate) {
     // Every vertex within a small fraction of a voxel of the sphere (linear interpolation of
     // the distance along an edge of length <= sqrt(3) h errs by about h^2 / r).
     double worst = 0;
-    for (const Vec3& p : mesh.vertices) worst = std::fmax(worst, std::fabs(length(p - fd.center) - r));
+    for (const Vec3& p : mesh.vertices)
+      worst = std::fmax(worst, std::fabs(length(p - fd.center) - r));
     EXPECT_LT(worst, 0.5 * h);
     // (at most L^2 / (8 r) for an edge of length L: 3 h^2 / (8 r) on the body diagonal).
     EXPECT_LT(worst, 0.38 * h * h / r);
@@ -244,7 +245,8 @@ TEST(MarchingCubes, AnisotropicSpacingIsAccurate) {
   SPLINTCORE_ASSERT_OK(run_mesh(ta.arena, fd, 0, &mesh));
   expect_valid_solid(mesh, 0);
   double worst = 0;
-  for (const Vec3& p : mesh.vertices) worst = std::fmax(worst, std::fabs(length(p - fd.center) - r));
+  for (const Vec3& p : mesh.vertices)
+    worst = std::fmax(worst, std::fabs(length(p - fd.center) - r));
   // Chordal error of the longest edge (the body diagonal, about 0.757 mm): L^2 / (8 r).
   const double l2 = 0.3 * 0.3 + 0.35 * 0.35 + 0.6 * 0.6;
   EXPECT_LT(worst, l2 / (8 * r) + 1e-6);
@@ -330,7 +332,8 @@ TEST(MarchingCubes, IdenticalOutputForEveryTileSizeAndCap) {
     // need plus a few minimum working sets always suffices.
     MarchingCubesMemory memory;
     SPLINTCORE_ASSERT_OK(marching_cubes_memory(fd.grid, &memory));
-    const uint64_t mesh_bytes = marching_cubes_mesh_extra_bound(reference_vertices, reference_triangles);
+    const uint64_t mesh_bytes =
+        marching_cubes_mesh_extra_bound(reference_vertices, reference_triangles);
     for (uint64_t minimums : {1u, 2u, 4u, 8u, 64u}) {
       TestArena ta(static_cast<size_t>(mesh_bytes * 4 / 3 + memory.minimum * minimums));
       Mesh mesh;
@@ -338,8 +341,8 @@ TEST(MarchingCubes, IdenticalOutputForEveryTileSizeAndCap) {
       SPLINTCORE_ASSERT_OK(run_mesh(ta.arena, fd, 0, &mesh, &stats));
       EXPECT_EQ(mesh_hash(mesh), reference);
       EXPECT_LE(ta.arena.high_water(), stats.working_set_bytes + mesh_bytes);
-      EXPECT_EQ(ta.arena.used(), mesh.vertices.size() * sizeof(Vec3) +
-                                     mesh.triangles.size() * sizeof(Triangle));
+      EXPECT_EQ(ta.arena.used(),
+                mesh.vertices.size() * sizeof(Vec3) + mesh.triangles.size() * sizeof(Triangle));
     }
     // Streaming under a cap of exactly the working set of k layers picks k layers.
     for (uint32_t k : {1u, 2u, 3u, 5u, 16u}) {
@@ -360,9 +363,9 @@ TEST(MarchingCubes, IdenticalOutputForEveryTileSizeAndCap) {
       EXPECT_EQ(stats.layers_per_tile, k);
       EXPECT_EQ(stats.working_set_bytes + 16, cap);
       EXPECT_EQ(ta.arena.used(), 0u);
-      EXPECT_EQ(arrays_hash(c.vertices.data(), c.vertices.size(), c.triangles.data(),
-                            c.triangles.size()),
-                reference);
+      EXPECT_EQ(
+          arrays_hash(c.vertices.data(), c.vertices.size(), c.triangles.data(), c.triangles.size()),
+          reference);
     }
   }
 }
@@ -408,8 +411,8 @@ TEST(MarchingCubes, CapBelowMinimumIsACleanError) {
     TestArena big(size_t{64} << 20);
     Context ctx(&big.arena);
     HashVisitorState hv;
-    SPLINTCORE_ASSERT_OK(marching_cubes(ctx, fd.grid, source_of(&fd), MarchingCubesOptions{},
-                                        hash_visitor(&hv)));
+    SPLINTCORE_ASSERT_OK(
+        marching_cubes(ctx, fd.grid, source_of(&fd), MarchingCubesOptions{}, hash_visitor(&hv)));
     reference = hv.hex();
   }
   for (size_t offset : {size_t{0}, size_t{1}, size_t{8}, size_t{15}}) {
@@ -425,8 +428,8 @@ TEST(MarchingCubes, CapBelowMinimumIsACleanError) {
       Context ctx(&exact.arena);
       HashVisitorState hv;
       MarchingCubesStats stats;
-      const Status run = marching_cubes(ctx, fd.grid, source_of(&fd),
-                                        MarchingCubesOptions{}, hash_visitor(&hv), &stats);
+      const Status run = marching_cubes(ctx, fd.grid, source_of(&fd), MarchingCubesOptions{},
+                                        hash_visitor(&hv), &stats);
       EXPECT_EQ(exact.arena.used(), offset);
       if (run.is_ok()) {
         EXPECT_EQ(hv.hex(), reference);
@@ -448,8 +451,8 @@ TEST(MarchingCubes, CapBelowMinimumIsACleanError) {
   TestArena short_arena(static_cast<size_t>(memory.minimum - 1));
   Context ctx(&short_arena.arena);
   fd.calls = 0;
-  Status st2 = marching_cubes(ctx, fd.grid, source_of(&fd), MarchingCubesOptions{},
-                              MarchingCubesVisitor{});
+  Status st2 =
+      marching_cubes(ctx, fd.grid, source_of(&fd), MarchingCubesOptions{}, MarchingCubesVisitor{});
   EXPECT_EQ(st2.code(), StatusCode::kArenaExhausted);
   EXPECT_EQ(fd.calls, 0u);
   EXPECT_EQ(short_arena.arena.used(), 0u);
@@ -609,8 +612,8 @@ TEST(MarchingCubes, StreamingYieldsExactlyTheMeshTriangles) {
     ASSERT_EQ(c.vertices.size(), mesh.vertices.size());
     ASSERT_EQ(c.triangles.size(), mesh.triangles.size());
     EXPECT_EQ(stats.triangles, mesh.triangles.size());
-    EXPECT_EQ(0, std::memcmp(c.vertices.data(), mesh.vertices.data(),
-                             c.vertices.size() * sizeof(Vec3)));
+    EXPECT_EQ(
+        0, std::memcmp(c.vertices.data(), mesh.vertices.data(), c.vertices.size() * sizeof(Vec3)));
     EXPECT_EQ(0, std::memcmp(c.triangles.data(), mesh.triangles.data(),
                              c.triangles.size() * sizeof(Triangle)));
     for (size_t t = 0; t < c.triangles.size(); ++t) {
@@ -643,10 +646,10 @@ TEST(MarchingCubes, IsoBetweenTwoFloatsClassifiesExactly) {
     return st;
   };
   uint64_t t_mid = 0, t_all = 0, t_none = 0, t_huge = 0;
-  SPLINTCORE_ASSERT_OK(inside_count(0.1, &t_mid));          // two separate inside samples
-  SPLINTCORE_ASSERT_OK(inside_count(0.10000001, &t_all));   // all three: one blob
-  SPLINTCORE_ASSERT_OK(inside_count(-1e39, &t_none));       // below every float: nothing
-  SPLINTCORE_ASSERT_OK(inside_count(1e39, &t_huge));        // above every float: all inside
+  SPLINTCORE_ASSERT_OK(inside_count(0.1, &t_mid));         // two separate inside samples
+  SPLINTCORE_ASSERT_OK(inside_count(0.10000001, &t_all));  // all three: one blob
+  SPLINTCORE_ASSERT_OK(inside_count(-1e39, &t_none));      // below every float: nothing
+  SPLINTCORE_ASSERT_OK(inside_count(1e39, &t_huge));       // above every float: all inside
   EXPECT_GT(t_mid, 0u);
   EXPECT_GT(t_all, 0u);
   EXPECT_NE(t_mid, t_all);
@@ -790,9 +793,9 @@ TEST(MarchingCubes, ErrorsAreCleanAndLeaveNoOutput) {
     // A non-empty output mesh.
     Mesh mesh(&ta.arena);
     ASSERT_TRUE(mesh.vertices.push_back(Vec3{}));
-    EXPECT_EQ(marching_cubes_mesh(ctx, fd.grid, source_of(&fd), MarchingCubesOptions{}, &mesh)
-                  .code(),
-              StatusCode::kInvalidArgument);
+    EXPECT_EQ(
+        marching_cubes_mesh(ctx, fd.grid, source_of(&fd), MarchingCubesOptions{}, &mesh).code(),
+        StatusCode::kInvalidArgument);
   }
 }
 

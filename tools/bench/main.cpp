@@ -26,8 +26,8 @@
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
 #include "splintcore/platform.h"
-#include "splintcore/segment.h"
 #include "splintcore/remesh.h"
+#include "splintcore/segment.h"
 #include "splintcore/volume.h"
 
 namespace splintcore {
@@ -170,8 +170,8 @@ void bench_base(Harness& h, Arena& arena, const std::string& fixtures) {
   }
   Context ctx(&arena);
   CaseFile c;
-  Status s = parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(),
-                        path.c_str(), &c);
+  Status s =
+      parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), path.c_str(), &c);
   if (!s.is_ok()) {
     cli::print_error(s);
     h.failed = true;
@@ -302,12 +302,12 @@ void bench_distance(Harness& h, Arena& arena, const char* label, const Mesh& mes
     });
     size_t within = 0;
     for (float d : volume) within += std::fabs(d) < 1.0f ? size_t{1} : size_t{0};
-    std::printf("# %s: %ux%ux%u samples, %zu within the band: %.0f samples/s, %.0f within the "
-                "band/s (one thread, %s)\n",
-                sdf_name.c_str(), grid.nx, grid.ny, grid.nz, within,
-                static_cast<double>(volume.size()) / r.median,
-                static_cast<double>(within) / r.median,
-                index.closed_manifold ? "pseudonormals" : "winding numbers");
+    std::printf(
+        "# %s: %ux%ux%u samples, %zu within the band: %.0f samples/s, %.0f within the "
+        "band/s (one thread, %s)\n",
+        sdf_name.c_str(), grid.nx, grid.ny, grid.nz, within,
+        static_cast<double>(volume.size()) / r.median, static_cast<double>(within) / r.median,
+        index.closed_manifold ? "pseudonormals" : "winding numbers");
   }
 }
 
@@ -388,8 +388,8 @@ void bench_boolean_phantom(Harness& h, Arena& arena, const std::string& fixtures
   CaseFile c;
   Mesh base(&arena);
   BaseReport br;
-  Status s = parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(),
-                        path.c_str(), &c);
+  Status s =
+      parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), path.c_str(), &c);
   if (s.is_ok()) s = build_case_base(ctx, c, &base, &br);
   const uint64_t sizes[3] = {86866, 324246, 543530};
   const char* names[3] = {"boolean_phantom_87k", "boolean_phantom_324k", "boolean_phantom_543k"};
@@ -440,13 +440,14 @@ void bench_boolean_phantom(Harness& h, Arena& arena, const std::string& fixtures
       });
       clock.print(name.c_str());
     }
-    std::printf("# %s: base %zu triangles, jaws %zu triangles (%llu near), %llu crossing pairs "
-                "of %llu candidates, output %llu triangles, volume %.6f mm3\n",
-                names[i], base.triangles.size(), jaws.triangles.size(),
-                static_cast<unsigned long long>(st.near_b_triangles),
-                static_cast<unsigned long long>(st.intersecting_pairs),
-                static_cast<unsigned long long>(st.candidate_pairs),
-                static_cast<unsigned long long>(out_tris), volume);
+    std::printf(
+        "# %s: base %zu triangles, jaws %zu triangles (%llu near), %llu crossing pairs "
+        "of %llu candidates, output %llu triangles, volume %.6f mm3\n",
+        names[i], base.triangles.size(), jaws.triangles.size(),
+        static_cast<unsigned long long>(st.near_b_triangles),
+        static_cast<unsigned long long>(st.intersecting_pairs),
+        static_cast<unsigned long long>(st.candidate_pairs),
+        static_cast<unsigned long long>(out_tris), volume);
     arena.rewind(mj);
   }
   if (!s.is_ok()) {
@@ -498,14 +499,15 @@ void bench_boolean_realdata(Harness& h, Arena& arena, const std::string& dir) {
     });
     clock.print(name);
   }
-  std::printf("# boolean_realdata: wafer %zu triangles, teeth %zu triangles (%llu near), %llu "
-              "crossing pairs of %llu candidates, %llu points, output %llu triangles, volume %.6f mm3\n",
-              wafer.triangles.size(), teeth.triangles.size(),
-              static_cast<unsigned long long>(st.near_b_triangles),
-              static_cast<unsigned long long>(st.intersecting_pairs),
-              static_cast<unsigned long long>(st.candidate_pairs),
-              static_cast<unsigned long long>(st.intersection_points),
-              static_cast<unsigned long long>(out_tris), volume);
+  std::printf(
+      "# boolean_realdata: wafer %zu triangles, teeth %zu triangles (%llu near), %llu "
+      "crossing pairs of %llu candidates, %llu points, output %llu triangles, volume %.6f mm3\n",
+      wafer.triangles.size(), teeth.triangles.size(),
+      static_cast<unsigned long long>(st.near_b_triangles),
+      static_cast<unsigned long long>(st.intersecting_pairs),
+      static_cast<unsigned long long>(st.candidate_pairs),
+      static_cast<unsigned long long>(st.intersection_points),
+      static_cast<unsigned long long>(out_tris), volume);
   arena.rewind(m);
 }
 
@@ -595,8 +597,7 @@ void bench_ct_reconstruct(Harness& h, Arena& arena) {
       };
       LabelVolume labels;
       ThresholdStats ts;
-      SPLINTCORE_RETURN_IF_ERROR(
-          threshold_window(ctx, volume, HuWindow{300, 4000}, &labels, &ts));
+      SPLINTCORE_RETURN_IF_ERROR(threshold_window(ctx, volume, HuWindow{300, 4000}, &labels, &ts));
       lap(0);
       RegionSeed seeds[2];
       seeds[0].label = 1;
@@ -624,20 +625,22 @@ void bench_ct_reconstruct(Harness& h, Arena& arena) {
       }
       return Status::ok();
     });
-    std::printf("# %s: cap %llu bytes (the 150 MiB volume included, outside the peak above); "
-                "%llu window voxels; maxilla %llu voxels %llu triangles, mandible %llu voxels "
-                "%llu triangles; %u layers per slab\n",
-                name, static_cast<unsigned long long>(kCap), static_cast<unsigned long long>(window),
-                static_cast<unsigned long long>(voxels[0]),
-                static_cast<unsigned long long>(triangles[0]),
-                static_cast<unsigned long long>(voxels[1]),
-                static_cast<unsigned long long>(triangles[1]), layers);
-    std::printf("# %s stages (s, last run): threshold %.3f; region growing %.3f; reconstruct "
-                "maxilla %.3f; reconstruct mandible %.3f\n",
-                name, stage[0], stage[1], stage[2], stage[3]);
-    std::printf("# %s progress stages (s, last run, both jaws; a stage runs until the next "
-                "one's first report):",
-                name);
+    std::printf(
+        "# %s: cap %llu bytes (the 150 MiB volume included, outside the peak above); "
+        "%llu window voxels; maxilla %llu voxels %llu triangles, mandible %llu voxels "
+        "%llu triangles; %u layers per slab\n",
+        name, static_cast<unsigned long long>(kCap), static_cast<unsigned long long>(window),
+        static_cast<unsigned long long>(voxels[0]), static_cast<unsigned long long>(triangles[0]),
+        static_cast<unsigned long long>(voxels[1]), static_cast<unsigned long long>(triangles[1]),
+        layers);
+    std::printf(
+        "# %s stages (s, last run): threshold %.3f; region growing %.3f; reconstruct "
+        "maxilla %.3f; reconstruct mandible %.3f\n",
+        name, stage[0], stage[1], stage[2], stage[3]);
+    std::printf(
+        "# %s progress stages (s, last run, both jaws; a stage runs until the next "
+        "one's first report):",
+        name);
     for (size_t i = 0; i < clock.names.size(); ++i) {
       std::printf(" %s %.3f;", clock.names[i].c_str(), clock.seconds[i]);
     }
@@ -700,8 +703,9 @@ void bench_remesh(Harness& h, Arena& arena) {
     s.grid.nx = s.grid.ny = static_cast<uint32_t>(extent_xy / voxel) + 6;
     s.grid.nz = static_cast<uint32_t>(extent_z / voxel) + 6;
     s.grid.origin = Vec3{101.3, -40.7, 250.1};  // CT-like coordinates, off the origin
-    s.center = s.grid.origin + Vec3{voxel * s.grid.nx * 0.5 + 0.0137, voxel * s.grid.ny * 0.5 - 0.0211,
-                                    voxel * s.grid.nz * 0.5 + 0.0093};
+    s.center =
+        s.grid.origin + Vec3{voxel * s.grid.nx * 0.5 + 0.0137, voxel * s.grid.ny * 0.5 - 0.0211,
+                             voxel * s.grid.nz * 0.5 + 0.0093};
     Context ctx(&arena);
     Mesh mesh(&arena);
     LayerSource source;
@@ -731,33 +735,34 @@ void bench_remesh(Harness& h, Arena& arena) {
         if (r.is_ok()) volume = mesh_volume(out);
         return r;
       });
-      std::printf("# %s: %llu triangles, %llu vertices, %llu collapses (refused: %llu link, %llu "
-                  "flip, %llu flat; %u rounds), max error %.4f mm, volume %.1f -> %.1f mm3, "
-                  "bound %llu bytes\n",
-                  dname.c_str(), static_cast<unsigned long long>(stats.output_triangles),
-                  static_cast<unsigned long long>(stats.output_vertices),
-                  static_cast<unsigned long long>(stats.collapses),
-                  static_cast<unsigned long long>(stats.rejected_link),
-                  static_cast<unsigned long long>(stats.rejected_flip),
-                  static_cast<unsigned long long>(stats.rejected_degenerate), stats.rounds,
-                  stats.max_error, mesh_volume(mesh), volume,
-                  static_cast<unsigned long long>(
-                      decimate_qem_bound(mesh.vertices.size(), mesh.triangles.size())));
+      std::printf(
+          "# %s: %llu triangles, %llu vertices, %llu collapses (refused: %llu link, %llu "
+          "flip, %llu flat; %u rounds), max error %.4f mm, volume %.1f -> %.1f mm3, "
+          "bound %llu bytes\n",
+          dname.c_str(), static_cast<unsigned long long>(stats.output_triangles),
+          static_cast<unsigned long long>(stats.output_vertices),
+          static_cast<unsigned long long>(stats.collapses),
+          static_cast<unsigned long long>(stats.rejected_link),
+          static_cast<unsigned long long>(stats.rejected_flip),
+          static_cast<unsigned long long>(stats.rejected_degenerate), stats.rounds, stats.max_error,
+          mesh_volume(mesh), volume,
+          static_cast<unsigned long long>(
+              decimate_qem_bound(mesh.vertices.size(), mesh.triangles.size())));
     }
     if (h.wanted(tname.c_str())) {
       TaubinOptions options;
       options.iterations = 10;
       TaubinStats stats;
-      h.measure(tname.c_str(), mesh.triangles.size(), arena, [&](Arena& a) {
-        return taubin_smooth(Context(&a), &mesh, options, &stats);
-      });
-      std::printf("# %s: 10 iterations (lambda 0.5, mu -0.53), %llu edges, volume change of the "
-                  "last run %.3g mm3 (%.3g%%), bound %llu bytes\n",
-                  tname.c_str(), static_cast<unsigned long long>(stats.edges),
-                  stats.volume_after - stats.volume_before,
-                  100.0 * (stats.volume_after - stats.volume_before) / stats.volume_before,
-                  static_cast<unsigned long long>(
-                      taubin_smooth_bound(mesh.vertices.size(), mesh.triangles.size())));
+      h.measure(tname.c_str(), mesh.triangles.size(), arena,
+                [&](Arena& a) { return taubin_smooth(Context(&a), &mesh, options, &stats); });
+      std::printf(
+          "# %s: 10 iterations (lambda 0.5, mu -0.53), %llu edges, volume change of the "
+          "last run %.3g mm3 (%.3g%%), bound %llu bytes\n",
+          tname.c_str(), static_cast<unsigned long long>(stats.edges),
+          stats.volume_after - stats.volume_before,
+          100.0 * (stats.volume_after - stats.volume_before) / stats.volume_before,
+          static_cast<unsigned long long>(
+              taubin_smooth_bound(mesh.vertices.size(), mesh.triangles.size())));
     }
     arena.rewind(m);
   }
@@ -822,8 +827,8 @@ void bench_sweep(Harness& h, Arena& arena) {
     phantom::JawMesh jm;
     phantom::PhantomOptions po;
     po.target_triangles = 87000;
-    Status s = phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po,
-                                 &jm);
+    Status s =
+        phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &jm);
     jaws[j].bind(&arena);
     if (s.is_ok()) s = phantom::to_mesh(jm, &jaws[j]);
     if (!s.is_ok()) {
@@ -859,16 +864,18 @@ void bench_sweep(Harness& h, Arena& arena) {
       v.user = &count;
       count.triangles = 0;
       Status s = sweep_volume(ctx, Span<const Mesh>(jaws, 2), o, v, &st);
-      if (s.is_ok()) std::printf("# %s: cap peak %llu bytes\n", name,
-                                 static_cast<unsigned long long>(capped.high_water()));
+      if (s.is_ok())
+        std::printf("# %s: cap peak %llu bytes\n", name,
+                    static_cast<unsigned long long>(capped.high_water()));
       return s;
     });
     if (r.median > 0) {
-      std::printf("# %s: %u x %u x %u = %.3f G voxels of %.2f mm, %llu triangles, %llu column "
-                  "tests\n",
-                  name, st.nx, st.ny, st.nz, static_cast<double>(st.voxels) / 1e9, voxel,
-                  static_cast<unsigned long long>(count.triangles),
-                  static_cast<unsigned long long>(st.segment_tests));
+      std::printf(
+          "# %s: %u x %u x %u = %.3f G voxels of %.2f mm, %llu triangles, %llu column "
+          "tests\n",
+          name, st.nx, st.ny, st.nz, static_cast<double>(st.voxels) / 1e9, voxel,
+          static_cast<unsigned long long>(count.triangles),
+          static_cast<unsigned long long>(st.segment_tests));
     }
   };
   run("sweep_phantom_01", 0.1, uint64_t{1} << 30);
@@ -887,8 +894,8 @@ void bench_blockout(Harness& h, Arena& arena, const std::string& fixtures) {
   const Arena::Marker m = arena.mark();
   Context ctx(&arena);
   CaseFile c;
-  Status s = parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(),
-                        path.c_str(), &c);
+  Status s =
+      parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), path.c_str(), &c);
   Mesh jaws[2];
   for (int j = 0; j < 2 && s.is_ok(); ++j) {
     phantom::JawMesh jm;
@@ -915,13 +922,14 @@ void bench_blockout(Harness& h, Arena& arena, const std::string& fixtures) {
     triangles = splint.triangles.size();
     return st;
   });
-  std::printf("# %s: splint %llu triangles; removed %.3f + %.3f mm^3; swept %llu + %llu "
-              "triangles; attempts %u + %u\n",
-              name, static_cast<unsigned long long>(triangles), report.blockout_removed_mm3[0],
-              report.blockout_removed_mm3[1],
-              static_cast<unsigned long long>(report.blockout[0].swept_triangles),
-              static_cast<unsigned long long>(report.blockout[1].swept_triangles),
-              report.blockout[0].attempts, report.blockout[1].attempts);
+  std::printf(
+      "# %s: splint %llu triangles; removed %.3f + %.3f mm^3; swept %llu + %llu "
+      "triangles; attempts %u + %u\n",
+      name, static_cast<unsigned long long>(triangles), report.blockout_removed_mm3[0],
+      report.blockout_removed_mm3[1],
+      static_cast<unsigned long long>(report.blockout[0].swept_triangles),
+      static_cast<unsigned long long>(report.blockout[1].swept_triangles),
+      report.blockout[0].attempts, report.blockout[1].attempts);
   arena.rewind(m);
 }
 
@@ -994,8 +1002,8 @@ int run(int argc, char** argv) {
     uint32_t count = 0;
     for (int tooth = 1; tooth <= 32; ++tooth) {
       std::string dir = tooth <= 16 ? "/maxilla/" : "/mandible/";
-      std::vector<uint8_t> one = read_whole(realdata + dir + "tooth_" + std::to_string(tooth) +
-                                            ".stl");
+      std::vector<uint8_t> one =
+          read_whole(realdata + dir + "tooth_" + std::to_string(tooth) + ".stl");
       if (one.size() < 84) continue;
       if (all.empty()) all.assign(84, 0);
       all.insert(all.end(), one.begin() + 84, one.end());

@@ -58,16 +58,34 @@ void JsonObject::key(const char* k) {
   if (!body_.empty()) body_ += ",";
   body_ += json_escape(k) + ":";
 }
-void JsonObject::add(const char* k, const char* value) { key(k); body_ += json_escape(value); }
-void JsonObject::add(const char* k, bool value) { key(k); body_ += value ? "true" : "false"; }
-void JsonObject::add(const char* k, uint64_t value) { key(k); body_ += std::to_string(value); }
-void JsonObject::add(const char* k, int64_t value) { key(k); body_ += std::to_string(value); }
-void JsonObject::add(const char* k, double value) { key(k); body_ += json_number(value); }
+void JsonObject::add(const char* k, const char* value) {
+  key(k);
+  body_ += json_escape(value);
+}
+void JsonObject::add(const char* k, bool value) {
+  key(k);
+  body_ += value ? "true" : "false";
+}
+void JsonObject::add(const char* k, uint64_t value) {
+  key(k);
+  body_ += std::to_string(value);
+}
+void JsonObject::add(const char* k, int64_t value) {
+  key(k);
+  body_ += std::to_string(value);
+}
+void JsonObject::add(const char* k, double value) {
+  key(k);
+  body_ += json_number(value);
+}
 void JsonObject::add(const char* k, const Vec3& v) {
   key(k);
   body_ += "[" + json_number(v.x) + "," + json_number(v.y) + "," + json_number(v.z) + "]";
 }
-void JsonObject::add_raw(const char* k, const std::string& json) { key(k); body_ += json; }
+void JsonObject::add_raw(const char* k, const std::string& json) {
+  key(k);
+  body_ += json;
+}
 
 void JsonObject::add_status(const Status& s) {
   add("status", status_code_name(s.code()));

@@ -97,8 +97,8 @@ Status list_dicom_folder(const std::string& folder, std::vector<std::string>* fi
   }
   std::sort(files->begin(), files->end());  // names are distinct: a total order
   if (files->empty()) {
-    return make_error(StatusCode::kInvalidArgument, "folder ", folder.c_str(),
-                      " holds no files").in_file(folder.c_str());
+    return make_error(StatusCode::kInvalidArgument, "folder ", folder.c_str(), " holds no files")
+        .in_file(folder.c_str());
   }
   return Status::ok();
 }
@@ -111,8 +111,8 @@ Status read_ct_path(const Context& ctx, const std::string& path, const CtReadOpt
     SPLINTCORE_RETURN_IF_ERROR(list_dicom_folder(path, &series.paths));
     if (series.paths.size() > options.max_dimension) {
       return make_error(StatusCode::kLimitExceeded, "folder ", path.c_str(), " holds ",
-                        series.paths.size(), " files, more than the limit ",
-                        options.max_dimension, " (CtReadOptions::max_dimension)")
+                        series.paths.size(), " files, more than the limit ", options.max_dimension,
+                        " (CtReadOptions::max_dimension)")
           .in_file(path.c_str());
     }
     CtSeries s;

@@ -18,13 +18,13 @@ namespace cli {
 
 namespace {
 
-constexpr double kArchApexY = 18.0;   // y = kArchApexY - kArchDepth (x / kArchHalfWidth)^2
+constexpr double kArchApexY = 18.0;  // y = kArchApexY - kArchDepth (x / kArchHalfWidth)^2
 constexpr double kArchDepth = 40.0;
 constexpr double kArchHalfWidth = 26.0;
-constexpr int kArchPoints = 241;      // polyline over x in [-30, 30], 0.25 mm apart
+constexpr int kArchPoints = 241;  // polyline over x in [-30, 30], 0.25 mm apart
 constexpr double kArchXMax = 30.0;
 
-constexpr double kBoneZ = 13.0;       // bone slab centres at z = +-13
+constexpr double kBoneZ = 13.0;  // bone slab centres at z = +-13
 constexpr double kBoneHalfWidth = 5.5;
 constexpr double kBoneHalfHeight = 4.0;
 constexpr double kBoneRounding = 1.5;
@@ -116,8 +116,8 @@ Status CtPhantom::init(const CtPhantomOptions& o) {
   const uint32_t n[3] = {o.nx, o.ny, o.nz};
   for (int a = 0; a < 3; ++a) {
     if (n[a] == 0 || n[a] > 2048) {
-      return make_error(StatusCode::kInvalidArgument, "ct phantom: size ", o.nx, " x ", o.ny,
-                        " x ", o.nz, ": each must be 1..2048");
+      return make_error(StatusCode::kInvalidArgument, "ct phantom: size ", o.nx, " x ", o.ny, " x ",
+                        o.nz, ": each must be 1..2048");
     }
     if (!(o.spacing[a] >= 0.05 && o.spacing[a] <= 5.0)) {
       return make_error(StatusCode::kInvalidArgument, "ct phantom: spacing ", o.spacing[a],
@@ -148,8 +148,8 @@ Status CtPhantom::init(const CtPhantomOptions& o) {
   min_spacing_ = o.spacing.x;
   if (o.spacing.y < min_spacing_) min_spacing_ = o.spacing.y;
   if (o.spacing.z < min_spacing_) min_spacing_ = o.spacing.z;
-  diag_ = std::sqrt(o.spacing.x * o.spacing.x + o.spacing.y * o.spacing.y +
-                    o.spacing.z * o.spacing.z);
+  diag_ =
+      std::sqrt(o.spacing.x * o.spacing.x + o.spacing.y * o.spacing.y + o.spacing.z * o.spacing.z);
   centre_hu_ = static_cast<double>(o.threshold_hu) - 0.5;
   slope_ = (centre_hu_ - kSoftTissueHu) / diag_;
   centre_ = Vec3{o.spacing.x * (static_cast<double>(o.nx) - 1.0) * 0.5,
@@ -244,21 +244,18 @@ Status CtPhantom::init(const CtPhantomOptions& o) {
   for (const Segment& g : segments_) anatomy.add(g.box);
   const double extent[3] = {2.0 * centre_.x, 2.0 * centre_.y, 2.0 * centre_.z};
   for (int a = 0; a < 3; ++a) {
-    const double need = (anatomy.hi[a] > -anatomy.lo[a] ? anatomy.hi[a] : -anatomy.lo[a]) +
-                        2.0 * o.spacing[a];
+    const double need =
+        (anatomy.hi[a] > -anatomy.lo[a] ? anatomy.hi[a] : -anatomy.lo[a]) + 2.0 * o.spacing[a];
     if (!(need <= centre_[a])) {
-      return make_error(StatusCode::kInvalidArgument, "ct phantom: the volume is ", extent[0],
-                        " x ", extent[1], " x ", extent[2],
-                        " mm between voxel centres; the jaws need at least ",
-                        2.0 * ((anatomy.hi.x > -anatomy.lo.x ? anatomy.hi.x : -anatomy.lo.x) +
-                               2.0 * o.spacing.x),
-                        " x ",
-                        2.0 * ((anatomy.hi.y > -anatomy.lo.y ? anatomy.hi.y : -anatomy.lo.y) +
-                               2.0 * o.spacing.y),
-                        " x ",
-                        2.0 * ((anatomy.hi.z > -anatomy.lo.z ? anatomy.hi.z : -anatomy.lo.z) +
-                               2.0 * o.spacing.z),
-                        " mm (axis ", a, ")");
+      return make_error(
+          StatusCode::kInvalidArgument, "ct phantom: the volume is ", extent[0], " x ", extent[1],
+          " x ", extent[2], " mm between voxel centres; the jaws need at least ",
+          2.0 * ((anatomy.hi.x > -anatomy.lo.x ? anatomy.hi.x : -anatomy.lo.x) + 2.0 * o.spacing.x),
+          " x ",
+          2.0 * ((anatomy.hi.y > -anatomy.lo.y ? anatomy.hi.y : -anatomy.lo.y) + 2.0 * o.spacing.y),
+          " x ",
+          2.0 * ((anatomy.hi.z > -anatomy.lo.z ? anatomy.hi.z : -anatomy.lo.z) + 2.0 * o.spacing.z),
+          " mm (axis ", a, ")");
     }
   }
   return Status::ok();
@@ -423,8 +420,9 @@ void CtPhantom::generate(std::vector<int16_t>* hu, CtVolume* volume) const {
       const uint64_t row = (uint64_t{k} * options_.ny + j) * options_.nx;
       for (uint32_t i = 0; i < options_.nx; ++i) {
         const Vec3 q{options_.spacing.x * static_cast<double>(i) - centre_.x, y, z};
-        (*hu)[static_cast<size_t>(row + i)] = to_hu(value(q, row + i, teeth.data(), static_cast<int>(teeth.size()),
-                                     segments.data(), static_cast<int>(segments.size())));
+        (*hu)[static_cast<size_t>(row + i)] =
+            to_hu(value(q, row + i, teeth.data(), static_cast<int>(teeth.size()), segments.data(),
+                        static_cast<int>(segments.size())));
       }
     }
   }

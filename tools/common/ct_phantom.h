@@ -51,11 +51,11 @@ namespace cli {
 
 struct CtPhantomOptions {
   uint32_t nx = 160, ny = 160, nz = 100;
-  Vec3 spacing{0.5, 0.5, 0.5};   // mm; may differ per axis
-  double noise_hu = 20.0;        // standard deviation of the noise, HU (0: none)
+  Vec3 spacing{0.5, 0.5, 0.5};  // mm; may differ per axis
+  double noise_hu = 20.0;       // standard deviation of the noise, HU (0: none)
   bool streak = true;
   uint64_t seed = 1;
-  int32_t threshold_hu = 300;    // the threshold the ramp is centred on (T above)
+  int32_t threshold_hu = 300;  // the threshold the ramp is centred on (T above)
   // The volume's orientation in patient space (orthonormal). The origin is chosen so that the
   // anatomy's centre is at the patient origin (0, 0, 0).
   Vec3 axis_x{1, 0, 0};
@@ -94,13 +94,13 @@ class CtPhantom {
 
  private:
   struct RoundCone {
-    Vec3 a, b;       // sphere centres (crown, root)
-    double r1, r2;   // radii (crown, root)
-    Aabb box;        // of the solid
+    Vec3 a, b;      // sphere centres (crown, root)
+    double r1, r2;  // radii (crown, root)
+    Aabb box;       // of the solid
   };
   struct Segment {
     double x0, y0, x1, y1;
-    Aabb box;        // of the swept slab part (both jaws' z ranges not included)
+    Aabb box;  // of the swept slab part (both jaws' z ranges not included)
   };
   Vec3 to_anatomy(const Vec3& patient) const;
   static double round_cone(const RoundCone& c, const Vec3& p);
@@ -113,7 +113,7 @@ class CtPhantom {
 
   CtPhantomOptions options_;
   CtVolume header_;
-  Vec3 centre_;                 // anatomy centre in the voxel-local frame
+  Vec3 centre_;  // anatomy centre in the voxel-local frame
   double diag_ = 0, min_spacing_ = 0, slope_ = 0, centre_hu_ = 0;
   RoundCone teeth_[2 * kCtPhantomTeethPerJaw];  // upper 0..13, lower 14..27
   std::vector<Segment> segments_;               // the arch polyline under the bone

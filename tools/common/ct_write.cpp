@@ -78,7 +78,9 @@ std::vector<uint8_t> voxel_bytes(const CtVolume& v, bool big_endian) {
   return out;
 }
 
-std::vector<uint8_t> bytes_of(const std::string& s) { return std::vector<uint8_t>(s.begin(), s.end()); }
+std::vector<uint8_t> bytes_of(const std::string& s) {
+  return std::vector<uint8_t>(s.begin(), s.end());
+}
 
 std::string vec3(const Vec3& v, const char* sep) {
   return num(v.x) + sep + num(v.y) + sep + num(v.z);
@@ -98,13 +100,13 @@ Status write_nrrd(const CtVolume& v, const std::string& path, const CtWriteOptio
   SPLINTCORE_RETURN_IF_ERROR(check_volume(v));
   const bool detached = ends_with(path, ".nhdr");
   if (!detached && !ends_with(path, ".nrrd")) {
-    return make_error(StatusCode::kInvalidArgument, "NRRD output must end in .nrrd or .nhdr: ",
-                      path.c_str());
+    return make_error(StatusCode::kInvalidArgument,
+                      "NRRD output must end in .nrrd or .nhdr: ", path.c_str());
   }
   std::string h = "NRRD0004\n# written by splintcore\ntype: int16\ndimension: 3\n";
   h += "space: " + options.space + "\n";
-  h += "sizes: " + std::to_string(v.nx) + " " + std::to_string(v.ny) + " " +
-       std::to_string(v.nz) + "\n";
+  h += "sizes: " + std::to_string(v.nx) + " " + std::to_string(v.ny) + " " + std::to_string(v.nz) +
+       "\n";
   h += "space directions: (" + vec3(v.axis_x * v.spacing.x, ",") + ") (" +
        vec3(v.axis_y * v.spacing.y, ",") + ") (" + vec3(v.axis_z * v.spacing.z, ",") + ")\n";
   h += "kinds: domain domain domain\n";
@@ -123,17 +125,17 @@ Status write_nrrd(const CtVolume& v, const std::string& path, const CtWriteOptio
   return write_bytes(path, bytes_of(h), &data);
 }
 
-Status write_metaimage(const CtVolume& v, const std::string& path,
-                       const CtWriteOptions& options) {
+Status write_metaimage(const CtVolume& v, const std::string& path, const CtWriteOptions& options) {
   (void)options;
   SPLINTCORE_RETURN_IF_ERROR(check_volume(v));
   const bool detached = ends_with(path, ".mhd");
   if (!detached && !ends_with(path, ".mha")) {
-    return make_error(StatusCode::kInvalidArgument, "MetaImage output must end in .mha or .mhd: ",
-                      path.c_str());
+    return make_error(StatusCode::kInvalidArgument,
+                      "MetaImage output must end in .mha or .mhd: ", path.c_str());
   }
-  std::string h = "ObjectType = Image\nNDims = 3\nBinaryData = True\n"
-                  "BinaryDataByteOrderMSB = False\nCompressedData = False\n";
+  std::string h =
+      "ObjectType = Image\nNDims = 3\nBinaryData = True\n"
+      "BinaryDataByteOrderMSB = False\nCompressedData = False\n";
   h += "TransformMatrix = " + vec3(v.axis_x, " ") + " " + vec3(v.axis_y, " ") + " " +
        vec3(v.axis_z, " ") + "\n";
   h += "Offset = " + vec3(v.origin, " ") + "\n";
@@ -264,8 +266,8 @@ Status write_dicom_series(const CtVolume& v, const std::string& folder,
   Sha256 sha;
   sha.update(v.hu, static_cast<size_t>(count * 2));
   const double geometry[15] = {v.spacing.x, v.spacing.y, v.spacing.z, v.origin.x, v.origin.y,
-                               v.origin.z, v.axis_x.x, v.axis_x.y, v.axis_x.z, v.axis_y.x,
-                               v.axis_y.y, v.axis_y.z, v.axis_z.x, v.axis_z.y, v.axis_z.z};
+                               v.origin.z,  v.axis_x.x,  v.axis_x.y,  v.axis_x.z, v.axis_y.x,
+                               v.axis_y.y,  v.axis_y.z,  v.axis_z.x,  v.axis_z.y, v.axis_z.z};
   sha.update(geometry, sizeof(geometry));
   const uint32_t dims[3] = {v.nx, v.ny, v.nz};
   sha.update(dims, sizeof(dims));
@@ -277,9 +279,9 @@ Status write_dicom_series(const CtVolume& v, const std::string& folder,
   const std::string sop_class = "1.2.840.10008.5.1.4.1.1.2";  // CT Image Storage
   const std::string syntax =
       options.dicom_implicit_vr ? "1.2.840.10008.1.2" : "1.2.840.10008.1.2.1";
-  const std::string orientation = ds(v.axis_x.x) + "\\" + ds(v.axis_x.y) + "\\" +
-                                  ds(v.axis_x.z) + "\\" + ds(v.axis_y.x) + "\\" +
-                                  ds(v.axis_y.y) + "\\" + ds(v.axis_y.z);
+  const std::string orientation = ds(v.axis_x.x) + "\\" + ds(v.axis_x.y) + "\\" + ds(v.axis_x.z) +
+                                  "\\" + ds(v.axis_y.x) + "\\" + ds(v.axis_y.y) + "\\" +
+                                  ds(v.axis_y.z);
   const uint64_t per_slice = uint64_t{v.nx} * v.ny;
 
   for (uint32_t k = 0; k < n; ++k) {
@@ -343,8 +345,8 @@ Status write_dicom_series(const CtVolume& v, const std::string& folder,
     }
     d.element(0x7FE0, 0x0010, "OW", pixels.data(), pixels.size(), 0);
     file.b.insert(file.b.end(), d.b.begin(), d.b.end());
-    SPLINTCORE_RETURN_IF_ERROR(write_bytes((fs::path(folder) / names[k]).string(), file.b,
-                                           nullptr));
+    SPLINTCORE_RETURN_IF_ERROR(
+        write_bytes((fs::path(folder) / names[k]).string(), file.b, nullptr));
   }
   return Status::ok();
 }

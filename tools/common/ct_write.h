@@ -17,8 +17,8 @@ namespace splintcore {
 namespace cli {
 
 struct CtWriteOptions {
-  bool big_endian = false;          // NRRD only (MetaImage and DICOM are little endian here)
-  bool dicom_implicit_vr = false;   // DICOM: implicit VR LE (1.2.840.10008.1.2) or explicit
+  bool big_endian = false;         // NRRD only (MetaImage and DICOM are little endian here)
+  bool dicom_implicit_vr = false;  // DICOM: implicit VR LE (1.2.840.10008.1.2) or explicit
   // DICOM stored values: false = unsigned 16-bit with Rescale Intercept min(-1024, min HU)
   // (slope 1); true = signed 16-bit, intercept 0. Either way the HU round-trip exactly.
   bool dicom_signed = false;

@@ -26,11 +26,11 @@ constexpr double kPi = 3.141592653589793;
 constexpr double kHalfPi = 1.5707963267948966;
 
 // ---- the case (fixtures/make_case_fixtures.py, paper_scale.json) -----------------------------
-constexpr double kUpperA = 25.0, kUpperB = 42.0;   // upper picks: (a cos t, b sin t, +1.6)
-constexpr double kLowerA = 24.0, kLowerB = 40.5;   // lower picks: (a cos t, b sin t, -1.6)
-constexpr double kPickT0 = -0.18;                  // picks at t in [kPickT0, pi - kPickT0]
-constexpr double kBaseFace = 1.6;                  // base faces at z = +-1.6 (after transforms)
-constexpr double kMandibleShift = -2.0;            // the mandible's transform (z translation)
+constexpr double kUpperA = 25.0, kUpperB = 42.0;  // upper picks: (a cos t, b sin t, +1.6)
+constexpr double kLowerA = 24.0, kLowerB = 40.5;  // lower picks: (a cos t, b sin t, -1.6)
+constexpr double kPickT0 = -0.18;                 // picks at t in [kPickT0, pi - kPickT0]
+constexpr double kBaseFace = 1.6;                 // base faces at z = +-1.6 (after transforms)
+constexpr double kMandibleShift = -2.0;           // the mandible's transform (z translation)
 constexpr double kInnerLength = 4.0, kOutsideLength = 3.5;
 constexpr double kTowardsOther = 0.35;  // crowns follow the wafer's walls at about 1/3 depth
 
@@ -42,12 +42,12 @@ constexpr double kCrownSlotFraction = 0.86;  // crown length / slot length (the 
 // ---- the section, in (p, q): p outward across the arch, q towards the occlusal side, q = 0 on
 // the base face the crown meets, q > 0 inside the base --------------------------------------
 constexpr double kGumCenterQ = -6.0;
-constexpr double kGumHalfWidth = 5.0;    // across the arch
-constexpr double kGumHalfHeight = 3.5;   // gum top at q = -2.5
-constexpr double kPolarCenterQ = -7.5;   // O: further from the crowns than the gum's centre
+constexpr double kGumHalfWidth = 5.0;   // across the arch
+constexpr double kGumHalfHeight = 3.5;  // gum top at q = -2.5
+constexpr double kPolarCenterQ = -7.5;  // O: further from the crowns than the gum's centre
 constexpr double kCrownHalfAngle = 0.3490658503988659;  // 20 degrees, seen from O
-constexpr double kCrownCore = 0.88;      // normalised |sigma|, |tau| where the crown walls start
-constexpr double kCuspHeight = 0.45;     // cusp tips above the fossae
+constexpr double kCrownCore = 0.88;   // normalised |sigma|, |tau| where the crown walls start
+constexpr double kCuspHeight = 0.45;  // cusp tips above the fossae
 constexpr double kReferenceDepth = 1.45;
 
 // The coarsest grid: enough for every crown to have a few sections and ring vertices.
@@ -87,10 +87,22 @@ void sin_cos(double x, double* s, double* c) {
   pc = -0.5 + r2 * pc;
   pc = 1.0 + r2 * pc;
   switch (static_cast<uint64_t>(k) & 3u) {
-    case 0: *s = ps; *c = pc; break;
-    case 1: *s = pc; *c = -ps; break;
-    case 2: *s = -ps; *c = -pc; break;
-    default: *s = -pc; *c = ps; break;
+    case 0:
+      *s = ps;
+      *c = pc;
+      break;
+    case 1:
+      *s = pc;
+      *c = -ps;
+      break;
+    case 2:
+      *s = -ps;
+      *c = -pc;
+      break;
+    default:
+      *s = -pc;
+      *c = ps;
+      break;
   }
 }
 
@@ -107,12 +119,12 @@ double smoothstep(double t) { return t * t * (3.0 - 2.0 * t); }
 // ---- the jaws --------------------------------------------------------------------------------
 
 struct JawShape {
-  double a = 0, b = 0;      // the path's ellipse (before the inward offset)
-  double offset = 0;        // along the outward normal (negative: inward)
-  double z_face = 0;        // z of q = 0, in the jaw's own frame (occlusion)
-  double z_sign = 0;        // z = z_face + z_sign * q
-  bool reverse = false;     // winding reversed (the mandible's section is mirrored in z)
-  uint32_t salt = 0;        // varies the cusp depths between the jaws
+  double a = 0, b = 0;   // the path's ellipse (before the inward offset)
+  double offset = 0;     // along the outward normal (negative: inward)
+  double z_face = 0;     // z of q = 0, in the jaw's own frame (occlusion)
+  double z_sign = 0;     // z = z_face + z_sign * q
+  bool reverse = false;  // winding reversed (the mandible's section is mirrored in z)
+  uint32_t salt = 0;     // varies the cusp depths between the jaws
 };
 
 JawShape jaw_shape(Jaw jaw) {
@@ -175,9 +187,9 @@ double tooth_depth(uint32_t tooth, uint32_t salt) {
 }
 
 struct Cusp {
-  double sigma, tau;   // centre in normalised crown coordinates
+  double sigma, tau;  // centre in normalised crown coordinates
   double r_sigma, r_tau;
-  double height;       // above the fossa
+  double height;  // above the fossa
 };
 
 // The cusps of a tooth; tau > 0 is buccal (outward). The first cusp is the highest.
@@ -194,12 +206,8 @@ uint32_t tooth_cusps(ToothKind kind, Cusp cusps[4]) {
       cusps[0] = {0.0, 0.42, 0.55, 0.45, h};
       cusps[1] = {0.0, -0.42, 0.55, 0.45, lower};
       return 2;
-    case ToothKind::kCanine:
-      cusps[0] = {0.0, 0.1, 0.7, 0.6, h};
-      return 1;
-    default:
-      cusps[0] = {0.0, 0.15, 0.9, 0.35, h};
-      return 1;
+    case ToothKind::kCanine: cusps[0] = {0.0, 0.1, 0.7, 0.6, h}; return 1;
+    default: cusps[0] = {0.0, 0.15, 0.9, 0.35, h}; return 1;
   }
 }
 
@@ -256,8 +264,8 @@ double gum_radius(double sa, double ca) {
 struct RingAngle {
   double alpha = 0;
   double sin_a = 0, cos_a = 0;
-  double gum = 0;   // gum radius
-  double tau = 0;   // alpha / crown half angle
+  double gum = 0;  // gum radius
+  double tau = 0;  // alpha / crown half angle
 };
 
 RingAngle ring_angle(double alpha) {
@@ -452,8 +460,8 @@ Status make_jaw(Jaw jaw, const PhantomOptions& options, JawMesh* out) {
   PathPoint first{}, last{};
   for (uint32_t i = 0; i < nu; ++i) {
     const double target_len = arch.back() * static_cast<double>(i) / (nu - 1);
-    const double t = i + 1 == nu ? kPi - kTubeT0 : invert_table(arch, kTubeT0, arch_step,
-                                                                  target_len, &search);
+    const double t =
+        i + 1 == nu ? kPi - kTubeT0 : invert_table(arch, kTubeT0, arch_step, target_len, &search);
     const PathPoint p = path_point(shape, t);
     if (i == 0) first = p;
     last = p;
@@ -553,10 +561,11 @@ std::string case_json(const char* case_id) {
       nx /= ln;
       ny /= ln;
       char row[256];
-      std::snprintf(row, sizeof row,
-                    "%s\n        {\"position\": [%.4f, %.4f, %.4f], \"normal\": [%.4f, %.4f, %.4f]}",
-                    i > 0 ? "," : "", a * cp + 0.0, b * sp + 0.0, z, nx * 0.95 + 0.0,
-                    ny * 0.95 + 0.0, z > 0 ? -0.31 : 0.31);
+      std::snprintf(
+          row, sizeof row,
+          "%s\n        {\"position\": [%.4f, %.4f, %.4f], \"normal\": [%.4f, %.4f, %.4f]}",
+          i > 0 ? "," : "", a * cp + 0.0, b * sp + 0.0, z, nx * 0.95 + 0.0, ny * 0.95 + 0.0,
+          z > 0 ? -0.31 : 0.31);
       out += row;
     }
     return out;

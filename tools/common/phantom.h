@@ -70,18 +70,18 @@ struct PhantomOptions {
 };
 
 struct JawMesh {
-  std::vector<Vec3> vertices;        // float32-exact, pairwise distinct
-  std::vector<Triangle> triangles;   // counter-clockwise seen from outside
+  std::vector<Vec3> vertices;       // float32-exact, pairwise distinct
+  std::vector<Triangle> triangles;  // counter-clockwise seen from outside
   // Per vertex: the tooth (0..13 along the arch, from the +x end) whose crown moved it, or
   // kGumLabel (gum ridge, end-cap centres).
   std::vector<uint8_t> vertex_tooth;
-  uint32_t sections = 0;             // rings along the arch
-  uint32_t ring_size = 0;            // vertices per ring
+  uint32_t sections = 0;   // rings along the arch
+  uint32_t ring_size = 0;  // vertices per ring
   // Designed depth (mm) of each crown's deepest cusp tip below the base face it meets
   // (sampled vertices are at most this deep).
   double tooth_depth_mm[kTeethPerJaw] = {};
-  double min_path_radius_mm = 0;     // smallest radius of curvature of the sweep path
-  double max_concave_reach_mm = 0;   // largest reach of a section towards the path's concave side
+  double min_path_radius_mm = 0;    // smallest radius of curvature of the sweep path
+  double max_concave_reach_mm = 0;  // largest reach of a section towards the path's concave side
 };
 
 // The grid make_jaw() uses for a target: sections * ring_size * 2 triangles.

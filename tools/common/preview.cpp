@@ -35,8 +35,8 @@ Status write_png_file(const Context& ctx, const std::vector<RenderMesh>& meshes,
   RenderImage image;
   {
     ArenaScope scope(*ctx.arena);  // the image and the encoder's temporaries
-    SPLINTCORE_RETURN_IF_ERROR(render_meshes(
-        ctx, Span<const RenderMesh>(meshes.data(), meshes.size()), options, &image));
+    SPLINTCORE_RETURN_IF_ERROR(
+        render_meshes(ctx, Span<const RenderMesh>(meshes.data(), meshes.size()), options, &image));
     render_seconds = monotonic_seconds() - t0;
     ByteSink sink;
     sink.write = &vector_write;
@@ -69,8 +69,8 @@ Status write_preview(const Context& ctx, const Mesh& splint, const std::vector<c
                      const std::vector<RigidTransform>& moves, const std::string& path,
                      uint32_t width, uint32_t height, PreviewInfo* info) {
   if (!moves.empty() && moves.size() != jaws.size()) {
-    return make_error(StatusCode::kInvalidArgument, "preview: ", moves.size(),
-                      " transforms for ", jaws.size(), " jaws");
+    return make_error(StatusCode::kInvalidArgument, "preview: ", moves.size(), " transforms for ",
+                      jaws.size(), " jaws");
   }
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);  // the moved copies

@@ -24,7 +24,7 @@ constexpr uint8_t kJawAlpha = 130;
 
 struct PreviewInfo {
   std::string path;
-  std::string sha256;   // of the PNG bytes
+  std::string sha256;  // of the PNG bytes
   uint64_t png_bytes = 0;
   uint32_t width = 0, height = 0;
   double pixels_per_mm = 0;
@@ -38,8 +38,8 @@ struct PreviewInfo {
 Status write_png_file(const Context& ctx, const std::vector<RenderMesh>& meshes,
                       const RenderOptions& options, const std::string& path, PreviewInfo* info);
 
-// The design preview: `splint` (opaque blue) under `jaws` (translucent grey), four views (front, top,
-// right, iso) at width x height. `moves` is empty or one transform per jaw: the jaws are drawn
+// The design preview: `splint` (opaque blue) under `jaws` (translucent grey), four views (front,
+// top, right, iso) at width x height. `moves` is empty or one transform per jaw: the jaws are drawn
 // from copies moved by it (in ctx.arena, returned; 24 bytes a vertex and 12 a triangle more).
 // As write_png_file; kInvalidArgument when moves has another size than jaws.
 Status write_preview(const Context& ctx, const Mesh& splint, const std::vector<const Mesh*>& jaws,

@@ -57,8 +57,8 @@ inline bool read_tooth(const std::string& path, Tooth* t, std::string* error) {
 
 // dir: .../open-full-jaw-patient26. opening: mm the mandible moves down (-z). depth: mm the
 // crown tips bite into the wafer. reach: inner and outside line lengths (mm).
-inline bool load(const std::string& dir, double opening, double depth, double reach,
-                 RealCase* out, std::string* error) {
+inline bool load(const std::string& dir, double opening, double depth, double reach, RealCase* out,
+                 std::string* error) {
   out->teeth.clear();
   for (int number = 1; number <= 32; ++number) {
     if (number == 16) continue;  // absent in the source
@@ -79,7 +79,8 @@ inline bool load(const std::string& dir, double opening, double depth, double re
       if (t.number != number) continue;
       const bool upper = number <= 16;
       double best = upper ? 1e300 : -1e300;
-      for (const Vec3& v : t.vertices) best = upper ? (v.z < best ? v.z : best) : (v.z > best ? v.z : best);
+      for (const Vec3& v : t.vertices)
+        best = upper ? (v.z < best ? v.z : best) : (v.z > best ? v.z : best);
       Vec3 sum{};
       double count = 0;
       for (const Vec3& v : t.vertices) {
@@ -138,10 +139,10 @@ inline Status wafer_mesh(Arena& arena, const RealCase& c, double spacing, Mesh* 
   const Context ctx(&arena);
   ArenaArray<Line> upper(&arena), lower(&arena);
   const Vec3 up{0, 0, 1};
-  SPLINTCORE_RETURN_IF_ERROR(make_lines(ctx, Span<const Pick>(c.upper.data(), c.upper.size()), up,
-                                        "upper", &upper));
-  SPLINTCORE_RETURN_IF_ERROR(make_lines(ctx, Span<const Pick>(c.lower.data(), c.lower.size()), up,
-                                        "lower", &lower));
+  SPLINTCORE_RETURN_IF_ERROR(
+      make_lines(ctx, Span<const Pick>(c.upper.data(), c.upper.size()), up, "upper", &upper));
+  SPLINTCORE_RETURN_IF_ERROR(
+      make_lines(ctx, Span<const Pick>(c.lower.data(), c.lower.size()), up, "lower", &lower));
   BaseParams params;
   params.spacing_mm = spacing;
   out->bind(&arena);
@@ -196,8 +197,10 @@ inline bool write_case_folder(const RealCase& c, const std::string& dir, double 
     return text;
   };
   char head[256];
-  std::snprintf(head, sizeof head, "  \"base\": {\n    \"occlusal_normal\": [0, 0, 1],\n"
-                "    \"spacing_mm\": %.17g,\n    \"upper\": [", spacing);
+  std::snprintf(head, sizeof head,
+                "  \"base\": {\n    \"occlusal_normal\": [0, 0, 1],\n"
+                "    \"spacing_mm\": %.17g,\n    \"upper\": [",
+                spacing);
   std::string json =
       "{\n  \"splintcore_case\": 1,\n  \"case_id\": \"realdata-patient26\",\n"
       "  \"units\": \"mm\",\n  \"jaws\": [\n"
@@ -205,9 +208,10 @@ inline bool write_case_folder(const RealCase& c, const std::string& dir, double 
       "    {\"role\": \"mandible\", \"mesh\": \"mandible.stl\"}\n  ],\n";
   json += head;
   json += picks(c.upper) + "\n    ],\n    \"lower\": [" + picks(c.lower) + "\n    ]\n  },\n";
-  json += "  \"insertion_direction\": [0, 0, 1],\n  \"printer\": \"eden260\",\n"
-          "  \"memory_cap\": \"1G\",\n"
-          "  \"output\": {\"splint\": \"splint.stl\", \"report\": \"report.json\"}\n}\n";
+  json +=
+      "  \"insertion_direction\": [0, 0, 1],\n  \"printer\": \"eden260\",\n"
+      "  \"memory_cap\": \"1G\",\n"
+      "  \"output\": {\"splint\": \"splint.stl\", \"report\": \"report.json\"}\n}\n";
   const std::string path = dir + "/case.json";
   FILE* out = std::fopen(path.c_str(), "wb");
   if (out == nullptr || std::fwrite(json.data(), 1, json.size(), out) != json.size() ||

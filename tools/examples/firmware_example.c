@@ -32,16 +32,15 @@ static unsigned char g_context_storage[SC_CONTEXT_BYTES];
 static unsigned char g_output[1024];
 
 /* A 10 mm cube, 12 outward triangles, as ASCII STL (facet normals are recomputed on read). */
-#define FACET(a, b, c) \
+#define FACET(a, b, c)                                                                \
   " facet normal 0 0 0\n  outer loop\n   vertex " a "\n   vertex " b "\n   vertex " c \
   "\n  endloop\n endfacet\n"
-static const char kCubeStl[] =
-    "solid cube\n"
-    FACET("0 0 0", "0 10 0", "10 10 0") FACET("0 0 0", "10 10 0", "10 0 0")      /* z = 0 */
+static const char kCubeStl[] = "solid cube\n" FACET("0 0 0", "0 10 0", "10 10 0")
+    FACET("0 0 0", "10 10 0", "10 0 0")                                           /* z = 0 */
     FACET("0 0 10", "10 0 10", "10 10 10") FACET("0 0 10", "10 10 10", "0 10 10") /* z = 10 */
-    FACET("0 0 0", "10 0 0", "10 0 10") FACET("0 0 0", "10 0 10", "0 0 10")      /* y = 0 */
+    FACET("0 0 0", "10 0 0", "10 0 10") FACET("0 0 0", "10 0 10", "0 0 10")       /* y = 0 */
     FACET("0 10 0", "0 10 10", "10 10 10") FACET("0 10 0", "10 10 10", "10 10 0") /* y = 10 */
-    FACET("0 0 0", "0 0 10", "0 10 10") FACET("0 0 0", "0 10 10", "0 10 0")      /* x = 0 */
+    FACET("0 0 0", "0 0 10", "0 10 10") FACET("0 0 0", "0 10 10", "0 10 0")       /* x = 0 */
     FACET("10 0 0", "10 10 0", "10 10 10") FACET("10 0 0", "10 10 10", "10 0 10") /* x = 10 */
     "endsolid cube\n";
 
@@ -64,8 +63,8 @@ int main(void) {
   sc_mesh_report report;
   char hash[65];
 
-  if (sc_context_init(g_context_storage, sizeof g_context_storage, g_arena, sizeof g_arena,
-                      &ctx) != SC_OK) {
+  if (sc_context_init(g_context_storage, sizeof g_context_storage, g_arena, sizeof g_arena, &ctx) !=
+      SC_OK) {
     printf("context storage too small: need %u bytes\n", (unsigned)sc_context_size());
     return 1;
   }
@@ -77,8 +76,8 @@ int main(void) {
   in = sc_memory_source(&in_state, kCubeStl, sizeof kCubeStl - 1, "cube.stl");
   if (sc_mesh_read_stl(ctx, &in, &read_options, &cube) != SC_OK) return fail(ctx, "read");
   if (sc_mesh_check(ctx, cube, &report) != SC_OK) return fail(ctx, "check");
-  printf("read cube.stl: %llu vertices, %llu triangles\n",
-         (unsigned long long)report.vertex_count, (unsigned long long)report.triangle_count);
+  printf("read cube.stl: %llu vertices, %llu triangles\n", (unsigned long long)report.vertex_count,
+         (unsigned long long)report.triangle_count);
   printf("check: closed %d, manifold %d, outward %d, valid solid %d, volume %.3f mm^3\n",
          report.closed, report.manifold, report.outward, report.valid_solid, report.volume_mm3);
   if (report.valid_solid != 1 || report.volume_mm3 != 1000.0) {

@@ -89,7 +89,10 @@ __attribute__((section(".vectors"), used)) static const void* const g_vectors[16
     (const void*)fw_mem_manage_handler,
     (const void*)fw_bus_fault_handler,
     (const void*)fw_usage_fault_handler,
-    0, 0, 0, 0,
+    0,
+    0,
+    0,
+    0,
     (const void*)fw_default_handler, /* SVCall */
     (const void*)fw_default_handler, /* DebugMonitor */
     0,

@@ -10,7 +10,10 @@ static unsigned char g_arena[SPLINTCORE_FIRMWARE_ARENA_BYTES] __attribute__((ali
 
 unsigned char* fw_arena(void) { return g_arena; }
 size_t fw_arena_bytes(void) { return sizeof g_arena; }
-void fw_write(const char* text) { fputs(text, stdout); fflush(stdout); }
+void fw_write(const char* text) {
+  fputs(text, stdout);
+  fflush(stdout);
+}
 void fw_exit(int code) { exit(code == 0 ? 0 : 1); }
 size_t fw_stack_high_water(void) { return 0; }
 

@@ -80,14 +80,27 @@ class TextLine {
 int fail(const char* stage, const Status& s) {
   char message[512];
   s.format(message, sizeof message);
-  TextLine().text("error ").text(stage).text(": ").text(status_code_name(s.code())).text(": ")
-      .text(message).print();
+  TextLine()
+      .text("error ")
+      .text(stage)
+      .text(": ")
+      .text(status_code_name(s.code()))
+      .text(": ")
+      .text(message)
+      .print();
   return 1;
 }
 
 void on_assert(const char* expression, const char* file, int line) {
-  TextLine().text("assertion failed: ").text(expression).text(" (").text(file).text(":")
-      .u64(static_cast<uint64_t>(line)).text(")").print();
+  TextLine()
+      .text("assertion failed: ")
+      .text(expression)
+      .text(" (")
+      .text(file)
+      .text(":")
+      .u64(static_cast<uint64_t>(line))
+      .text(")")
+      .print();
   fw_exit(2);
 }
 
@@ -140,10 +153,24 @@ Status stream_and_report(const Context& ctx, const char* stage, const Mesh& mesh
   out.sha.finish(digest);
   char hex[65];
   Sha256::to_hex(digest, hex);
-  TextLine().text("result ").text(stage).text(" sha256=").text(hex).text(" bytes=").u64(out.bytes)
-      .text(" triangles=").u64(mesh.triangles.size()).text(" vertices=")
-      .u64(mesh.vertices.size()).text(" arena_high_water=").u64(ctx.arena->high_water())
-      .text(" chunks=").u64(out.chunks).text(" largest_chunk=").u64(out.largest_chunk).print();
+  TextLine()
+      .text("result ")
+      .text(stage)
+      .text(" sha256=")
+      .text(hex)
+      .text(" bytes=")
+      .u64(out.bytes)
+      .text(" triangles=")
+      .u64(mesh.triangles.size())
+      .text(" vertices=")
+      .u64(mesh.vertices.size())
+      .text(" arena_high_water=")
+      .u64(ctx.arena->high_water())
+      .text(" chunks=")
+      .u64(out.chunks)
+      .text(" largest_chunk=")
+      .u64(out.largest_chunk)
+      .print();
   return Status::ok();
 }
 
@@ -158,13 +185,27 @@ Status run_base(Arena& arena, const Progress& progress) {
   Context ctx(&arena, nullptr, &progress);
   CaseFile c;
   SPLINTCORE_RETURN_IF_ERROR(parse_builtin_case(ctx, &c));
-  TextLine().text("case ").text(c.case_id).text(": ").u64(c.upper.size()).text(" upper and ")
-      .u64(c.lower.size()).text(" lower picks, ").u64(c.jaws.size()).text(" jaws").print();
+  TextLine()
+      .text("case ")
+      .text(c.case_id)
+      .text(": ")
+      .u64(c.upper.size())
+      .text(" upper and ")
+      .u64(c.lower.size())
+      .text(" lower picks, ")
+      .u64(c.jaws.size())
+      .text(" jaws")
+      .print();
   Mesh base(&arena);
   BaseReport report;
   SPLINTCORE_RETURN_IF_ERROR(build_case_base(ctx, c, &base, &report));
-  TextLine().text("base: ").u64(report.sections).text(" sections of ")
-      .u64(report.points_per_section).text(" points").print();
+  TextLine()
+      .text("base: ")
+      .u64(report.sections)
+      .text(" sections of ")
+      .u64(report.points_per_section)
+      .text(" points")
+      .print();
   return stream_and_report(ctx, "base", base);
 }
 
@@ -200,18 +241,36 @@ Status run_design(Arena& arena, const Progress& progress, const char* stage,
     StlInfo info;
     SPLINTCORE_RETURN_IF_ERROR(
         read_stl_mesh(ctx, memory_source(&state, names[j]), options, &jaws[j], &info));
-    TextLine().text("jaw ").text(names[j]).text(": ").u64(sizes[j]).text(" bytes, ")
-        .u64(jaws[j].triangles.size()).text(" triangles, ").u64(jaws[j].vertices.size())
-        .text(" vertices").print();
+    TextLine()
+        .text("jaw ")
+        .text(names[j])
+        .text(": ")
+        .u64(sizes[j])
+        .text(" bytes, ")
+        .u64(jaws[j].triangles.size())
+        .text(" triangles, ")
+        .u64(jaws[j].vertices.size())
+        .text(" vertices")
+        .print();
   }
   const size_t jaws_used = arena.used();
   Mesh splint(&arena);
   DesignReport report;
   SPLINTCORE_RETURN_IF_ERROR(design_splint(ctx, c, Span<const Mesh>(jaws, 2), &splint, &report));
-  TextLine().text(stage).text(": printable ").u64(report.print.printable ? 1 : 0).text(", ")
-      .u64(report.boolean.intersecting_pairs).text(" intersecting pairs, boolean attempts ")
-      .u64(report.boolean.attempts).text(", blocked-out jaws ").u64(report.blockout_jaws)
-      .text(", case and jaws in arena ").u64(jaws_used).text(" bytes").print();
+  TextLine()
+      .text(stage)
+      .text(": printable ")
+      .u64(report.print.printable ? 1 : 0)
+      .text(", ")
+      .u64(report.boolean.intersecting_pairs)
+      .text(" intersecting pairs, boolean attempts ")
+      .u64(report.boolean.attempts)
+      .text(", blocked-out jaws ")
+      .u64(report.blockout_jaws)
+      .text(", case and jaws in arena ")
+      .u64(jaws_used)
+      .text(" bytes")
+      .print();
   if (!report.print.printable) {
     return make_error(StatusCode::kInvalidMesh, stage, ": the splint is not printable");
   }
@@ -223,8 +282,12 @@ Status run_design(Arena& arena, const Progress& progress, const char* stage,
 
 extern "C" int firmware_main(void) {
   set_assert_handler(on_assert);
-  TextLine().text("splintcore ").text(library_version()).text(" firmware example on ")
-      .text(fw_platform_name()).print();
+  TextLine()
+      .text("splintcore ")
+      .text(library_version())
+      .text(" firmware example on ")
+      .text(fw_platform_name())
+      .print();
   TextLine().text("arena ").u64(fw_arena_bytes()).text(" bytes (static)").print();
   Arena arena(fw_arena(), fw_arena_bytes());
   const char* last_stage = nullptr;

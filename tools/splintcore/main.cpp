@@ -196,7 +196,7 @@ struct Options {
   bool json = false;
   uint64_t memory_cap = kDefaultMemoryCap;
   bool memory_cap_given = false;  // --memory-cap on the command line (it overrides a case's)
-  uint64_t max_input_bytes = 0;  // 0: cli::kMaxCaseBytes for cases, cli::kMaxMeshBytes for meshes
+  uint64_t max_input_bytes = 0;   // 0: cli::kMaxCaseBytes for cases, cli::kMaxMeshBytes for meshes
   unsigned threads = 1;
   std::vector<const char*> positional;
   const char* output = nullptr;
@@ -340,7 +340,7 @@ int parse_options(int argc, char** argv, const char* usage, bool takes_output, O
         std::string m = std::string(a) + " needs a number of mm >= 0";
         return usage_error(m.c_str(), usage);
       }
-      double* field = a[2] == 'v' ? &o->voxel
+      double* field = a[2] == 'v'   ? &o->voxel
                       : a[2] == 'e' ? &o->extent
                       : a[2] == 'i' ? &o->inset
                                     : &o->closing;
@@ -400,8 +400,8 @@ Status read_mesh_file(const Context& ctx, const char* path, Mesh* mesh, StlInfo*
   SPLINTCORE_RETURN_IF_ERROR(read_mesh(ctx, file.source(), options, mesh, &read));
   if (info != nullptr) {
     *info = StlInfo{};
-    const bool text = read.format == MeshFormat::kStlAscii || read.format == MeshFormat::kPlyAscii ||
-                      read.format == MeshFormat::kObj;
+    const bool text = read.format == MeshFormat::kStlAscii ||
+                      read.format == MeshFormat::kPlyAscii || read.format == MeshFormat::kObj;
     info->format = text ? StlFormat::kAscii : StlFormat::kBinary;
     info->triangles = read.triangles;
     info->bytes = read.bytes;
@@ -455,16 +455,15 @@ void print_mesh_report(const MeshReport& r) {
   std::printf("edge-manifold: %s (%llu edges with 3+ triangles)\n",
               r.edge_manifold() ? "yes" : "no",
               static_cast<unsigned long long>(r.nonmanifold_edges));
-  std::printf("consistently oriented: %s (%llu conflicting edges)\n",
-              r.oriented() ? "yes" : "no",
+  std::printf("consistently oriented: %s (%llu conflicting edges)\n", r.oriented() ? "yes" : "no",
               static_cast<unsigned long long>(r.orientation_conflicts));
   std::printf("outward: %s\n", r.outward() ? "yes" : "no");
   std::printf("degenerate triangles: %llu, duplicate triangles: %llu\n",
               static_cast<unsigned long long>(r.degenerate_triangles),
               static_cast<unsigned long long>(r.duplicate_triangles));
   std::printf("area: %.6f mm^2, volume: %.6f mm^3\n", r.area, r.volume);
-  std::printf("bounds: [%.6f, %.6f, %.6f] - [%.6f, %.6f, %.6f] mm\n", r.bounds.lo.x,
-              r.bounds.lo.y, r.bounds.lo.z, r.bounds.hi.x, r.bounds.hi.y, r.bounds.hi.z);
+  std::printf("bounds: [%.6f, %.6f, %.6f] - [%.6f, %.6f, %.6f] mm\n", r.bounds.lo.x, r.bounds.lo.y,
+              r.bounds.lo.z, r.bounds.hi.x, r.bounds.hi.y, r.bounds.hi.z);
 }
 
 const char* format_name(StlFormat f) {
@@ -485,9 +484,10 @@ int rejected(const Options& o, const char* command, const Status& s, Arena* aren
 }
 
 int no_memory(const Options& o, const char* command) {
-  return rejected(o, command, make_error(StatusCode::kArenaExhausted,
-                                         "cannot reserve the memory cap of ", o.memory_cap,
-                                         " bytes"), nullptr);
+  return rejected(o, command,
+                  make_error(StatusCode::kArenaExhausted, "cannot reserve the memory cap of ",
+                             o.memory_cap, " bytes"),
+                  nullptr);
 }
 
 int run_check(int argc, char** argv) {
@@ -540,8 +540,8 @@ int run_check(int argc, char** argv) {
     j.add("peak_arena_bytes", static_cast<uint64_t>(arena.high_water()));
     std::printf("%s\n", j.str().c_str());
   } else {
-    std::printf("input: %s (%s, %llu triangles, %llu bytes)\n", o.positional[0],
-                info.header, static_cast<unsigned long long>(info.triangles),
+    std::printf("input: %s (%s, %llu triangles, %llu bytes)\n", o.positional[0], info.header,
+                static_cast<unsigned long long>(info.triangles),
                 static_cast<unsigned long long>(info.bytes));
     print_mesh_report(pc.mesh);
     std::printf("printer: %s: extent %.3f x %.3f x %.3f mm, %s, %llu layers\n", profile->name,
@@ -665,9 +665,10 @@ int run_base(int argc, char** argv) {
     std::printf("base: %u sections x %u points: %zu vertices, %zu triangles, %.3f mm^3\n",
                 report.sections, report.points_per_section, base.vertices.size(),
                 base.triangles.size(), report.volume);
-    std::printf("checked: closed, edge-manifold, outward, no self-intersection (%llu candidate "
-                "pairs tested)\n",
-                static_cast<unsigned long long>(report.self_intersection_candidates));
+    std::printf(
+        "checked: closed, edge-manifold, outward, no self-intersection (%llu candidate "
+        "pairs tested)\n",
+        static_cast<unsigned long long>(report.self_intersection_candidates));
     std::printf("output: %s (%s STL)\n", o.output, o.ascii ? "ascii" : "binary");
     std::printf("time: build %.4f s, total %.4f s, peak arena: %llu bytes\n", t_build - t_parse,
                 t_end - t0, static_cast<unsigned long long>(arena.high_water()));
@@ -680,7 +681,8 @@ int run_distance(int argc, char** argv) {
   int early = parse_options(argc, argv, kDistanceUsage, false, &o);
   if (early >= 0) return early;
   if (o.positional.size() != 1) return usage_error("distance takes one mesh file", kDistanceUsage);
-  if (o.queries.empty()) return usage_error("distance needs at least one --query X,Y,Z", kDistanceUsage);
+  if (o.queries.empty())
+    return usage_error("distance needs at least one --query X,Y,Z", kDistanceUsage);
   Run run(o);
   if (!run.has_memory()) return no_memory(o, "distance");
   Arena& arena = run.arena;
@@ -692,8 +694,9 @@ int run_distance(int argc, char** argv) {
   Status s = read_mesh_file(ctx, o.positional[0], &mesh, &info);
   if (!s.is_ok()) return rejected(o, "distance", s, &arena);
   if (mesh.triangles.size() == 0) {
-    return rejected(o, "distance", Status::error(StatusCode::kInvalidMesh, "mesh is empty")
-                                       .in_file(o.positional[0]), &arena);
+    return rejected(
+        o, "distance",
+        Status::error(StatusCode::kInvalidMesh, "mesh is empty").in_file(o.positional[0]), &arena);
   }
   const size_t before = arena.used();
   DistanceIndex index;
@@ -707,7 +710,8 @@ int run_distance(int argc, char** argv) {
     const Vec3& q = o.queries[i];
     SignedDistance sd;
     signed_distance(index, q, o.sign, &sd);
-    const double w = sd.method == SignMethod::kWindingNumber ? sd.winding : winding_number(index, q);
+    const double w =
+        sd.method == SignMethod::kWindingNumber ? sd.winding : winding_number(index, q);
     const char* method = sd.method == SignMethod::kPseudonormal ? "pseudonormal" : "winding";
     if (o.json) {
       JsonObject r;
@@ -723,11 +727,12 @@ int run_distance(int argc, char** argv) {
       r.add("sign_method", method);
       rows += (i > 0 ? "," : "") + r.str();
     } else {
-      std::printf("query %.6g,%.6g,%.6g: closest %.9g,%.9g,%.9g on triangle %u (%s %u), "
-                  "distance %.9g, signed %.9g (%s), winding number %.6f\n",
-                  q.x, q.y, q.z, sd.closest.point.x, sd.closest.point.y, sd.closest.point.z,
-                  sd.closest.triangle, feature_name(sd.closest.feature),
-                  sd.closest.feature_index, sd.closest.distance, sd.distance, method, w);
+      std::printf(
+          "query %.6g,%.6g,%.6g: closest %.9g,%.9g,%.9g on triangle %u (%s %u), "
+          "distance %.9g, signed %.9g (%s), winding number %.6f\n",
+          q.x, q.y, q.z, sd.closest.point.x, sd.closest.point.y, sd.closest.point.z,
+          sd.closest.triangle, feature_name(sd.closest.feature), sd.closest.feature_index,
+          sd.closest.distance, sd.distance, method, w);
     }
   }
   rows += "]";
@@ -747,11 +752,12 @@ int run_distance(int argc, char** argv) {
     j.add("peak_arena_bytes", static_cast<uint64_t>(arena.high_water()));
     std::printf("%s\n", j.str().c_str());
   } else {
-    std::printf("index: %zu triangles, %zu nodes, %zu bytes, %s; built in %.4f s; peak arena "
-                "%llu bytes\n",
-                mesh.triangles.size(), index.nodes.size(), index_bytes,
-                index.closed_manifold ? "closed manifold" : "open or non-manifold",
-                t_build - t0, static_cast<unsigned long long>(arena.high_water()));
+    std::printf(
+        "index: %zu triangles, %zu nodes, %zu bytes, %s; built in %.4f s; peak arena "
+        "%llu bytes\n",
+        mesh.triangles.size(), index.nodes.size(), index_bytes,
+        index.closed_manifold ? "closed manifold" : "open or non-manifold", t_build - t0,
+        static_cast<unsigned long long>(arena.high_water()));
   }
   return kExitOk;
 }
@@ -763,7 +769,8 @@ int run_boolean(int argc, char** argv) {
   if (o.boolean_op < 0) {
     return usage_error("boolean needs --difference, --union or --intersection", kBooleanUsage);
   }
-  if (o.positional.size() < 2) return usage_error("boolean takes A.stl and at least one B.stl", kBooleanUsage);
+  if (o.positional.size() < 2)
+    return usage_error("boolean takes A.stl and at least one B.stl", kBooleanUsage);
   if (o.output == nullptr) return usage_error("boolean needs -o OUT.stl", kBooleanUsage);
   if (o.translate_b.size() > 1 && o.translate_b.size() != o.positional.size() - 1) {
     return usage_error("--translate-b: give it once, or once per B file", kBooleanUsage);
@@ -786,19 +793,23 @@ int run_boolean(int argc, char** argv) {
     s = read_mesh_file(ctx, o.positional[f], &part, &info);
     if (!s.is_ok()) return rejected(o, "boolean", s, &arena);
     if (b.vertices.size() + part.vertices.size() >= (size_t{1} << 31)) {
-      return rejected(o, "boolean", Status::error(StatusCode::kLimitExceeded, "B is too large")
-                                        .in_file(o.positional[f]), &arena);
+      return rejected(
+          o, "boolean",
+          Status::error(StatusCode::kLimitExceeded, "B is too large").in_file(o.positional[f]),
+          &arena);
     }
-    const Vec3 d = o.translate_b.empty() ? Vec3{}
-                                         : o.translate_b[o.translate_b.size() == 1 ? 0 : f - 1];
+    const Vec3 d =
+        o.translate_b.empty() ? Vec3{} : o.translate_b[o.translate_b.size() == 1 ? 0 : f - 1];
     // A moved jaw is rounded to float32, as its own STL would hold it: the Boolean keeps B's
     // vertices bit for bit, so they must be what the output file can store.
     for (Vec3& v : part.vertices) {
       v = v + d;
       if (!round_to_float32(&v)) {
-        return rejected(o, "boolean", Status::error(StatusCode::kLimitExceeded,
-                                                    "a translated vertex is beyond float32 range")
-                                          .in_file(o.positional[f]), &arena);
+        return rejected(
+            o, "boolean",
+            Status::error(StatusCode::kLimitExceeded, "a translated vertex is beyond float32 range")
+                .in_file(o.positional[f]),
+            &arena);
       }
     }
     if (f == 1) {
@@ -836,8 +847,10 @@ int run_boolean(int argc, char** argv) {
     if (!s.is_ok()) return rejected(o, "boolean", s, &arena);
     if (si.self_intersecting()) {
       return rejected(o, "boolean",
-                      make_error(StatusCode::kUnsupported, "the result self-intersects as float32: "
-                                 "triangles ", si.first_a, " and ", si.first_b, "; nothing written"),
+                      make_error(StatusCode::kUnsupported,
+                                 "the result self-intersects as float32: "
+                                 "triangles ",
+                                 si.first_a, " and ", si.first_b, "; nothing written"),
                       &arena);
     }
   }
@@ -886,25 +899,29 @@ int run_boolean(int argc, char** argv) {
                 o.positional[0], a.triangles.size(), o.positional.size() - 1,
                 static_cast<unsigned long long>(b_triangles),
                 static_cast<unsigned long long>(st.near_b_triangles));
-    std::printf("%s: %llu candidate pairs, %llu crossing, %llu touching exactly, %llu "
-                "intersection points, %llu + %llu triangles cut, %u attempt(s)\n",
-                boolean_op_name(bo.op), static_cast<unsigned long long>(st.candidate_pairs),
-                static_cast<unsigned long long>(st.intersecting_pairs),
-                static_cast<unsigned long long>(st.degenerate_pairs),
-                static_cast<unsigned long long>(st.intersection_points),
-                static_cast<unsigned long long>(st.cut_triangles_a),
-                static_cast<unsigned long long>(st.cut_triangles_b), st.attempts);
+    std::printf(
+        "%s: %llu candidate pairs, %llu crossing, %llu touching exactly, %llu "
+        "intersection points, %llu + %llu triangles cut, %u attempt(s)\n",
+        boolean_op_name(bo.op), static_cast<unsigned long long>(st.candidate_pairs),
+        static_cast<unsigned long long>(st.intersecting_pairs),
+        static_cast<unsigned long long>(st.degenerate_pairs),
+        static_cast<unsigned long long>(st.intersection_points),
+        static_cast<unsigned long long>(st.cut_triangles_a),
+        static_cast<unsigned long long>(st.cut_triangles_b), st.attempts);
     if (st.attempts > 1) {
-      std::printf("A was nudged by (%.3g, %.3g, %.3g) mm out of a degenerate or float32-fragile "
-                  "configuration\n", st.nudge.x, st.nudge.y, st.nudge.z);
+      std::printf(
+          "A was nudged by (%.3g, %.3g, %.3g) mm out of a degenerate or float32-fragile "
+          "configuration\n",
+          st.nudge.x, st.nudge.y, st.nudge.z);
     }
     print_mesh_report(report);
     std::printf("self-intersection: %s\n", o.self_check ? "none (exact check)" : "not checked");
     std::printf("output: %s (%s STL)\n", o.output, o.ascii ? "ascii" : "binary");
-    std::printf("time: read %.4f s, boolean %.4f s, check %.4f s, total %.4f s; peak arena %llu "
-                "bytes\n",
-                t_read - t0, t_op - t_read, t_check - t_op, t_end - t0,
-                static_cast<unsigned long long>(arena.high_water()));
+    std::printf(
+        "time: read %.4f s, boolean %.4f s, check %.4f s, total %.4f s; peak arena %llu "
+        "bytes\n",
+        t_read - t0, t_op - t_read, t_check - t_op, t_end - t0,
+        static_cast<unsigned long long>(arena.high_water()));
   }
   return kExitOk;
 }
@@ -927,7 +944,8 @@ int run_phantom(int argc, char** argv) {
     phantom::JawMesh jaw;
     phantom::PhantomOptions po;
     po.target_triangles = o.triangles;
-    Status s = phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &jaw);
+    Status s =
+        phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &jaw);
     std::vector<uint8_t> bytes;
     if (s.is_ok()) s = phantom::stl_bytes(jaw, &bytes);
     const std::string path = std::string(o.output) + "/" + names[j] + ".stl";
@@ -1046,7 +1064,8 @@ int run_design(int argc, char** argv) {
     Arena scratch_arena(scratch.data(), scratch.size());
     CaseFile pre;
     if (parse_case(Context(&scratch_arena), reinterpret_cast<const char*>(case_bytes.data()),
-                   case_bytes.size(), case_path.c_str(), &pre).is_ok() &&
+                   case_bytes.size(), case_path.c_str(), &pre)
+            .is_ok() &&
         pre.memory_cap != 0) {
       o.memory_cap = pre.memory_cap;
       cap_source = "case";
@@ -1058,8 +1077,8 @@ int run_design(int argc, char** argv) {
   Arena& arena = run.arena;
   const double t0 = run.start;
   CaseFile c;
-  s = parse_case(run.ctx, reinterpret_cast<const char*>(case_bytes.data()),
-                        case_bytes.size(), case_path.c_str(), &c);
+  s = parse_case(run.ctx, reinterpret_cast<const char*>(case_bytes.data()), case_bytes.size(),
+                 case_path.c_str(), &c);
   if (!s.is_ok()) return rejected(o, "design", s, &arena);
   const size_t slash = case_path.find_last_of('/');
   const std::string folder = slash == std::string::npos ? "" : case_path.substr(0, slash + 1);
@@ -1086,8 +1105,8 @@ int run_design(int argc, char** argv) {
     }
     const std::string path = j.mesh[0] == '/' ? std::string(j.mesh) : folder + j.mesh;
     std::vector<uint8_t> bytes;
-    s = cli::read_whole_file(
-        path, o.max_input_bytes != 0 ? o.max_input_bytes : cli::kMaxMeshBytes, &bytes);
+    s = cli::read_whole_file(path, o.max_input_bytes != 0 ? o.max_input_bytes : cli::kMaxMeshBytes,
+                             &bytes);
     if (!s.is_ok()) return rejected(o, "design", s, &arena);
     MemorySource ms{bytes.data(), bytes.size(), 0, 0};
     Mesh m;
@@ -1195,7 +1214,8 @@ int run_design(int argc, char** argv) {
   }
   std::vector<DesignStageTime> stage_times;
   for (size_t i = 0; i < clock.names.size(); ++i) {
-    stage_times.push_back(DesignStageTime{clock.names[i].c_str(), clock.seconds[i], clock.peaks[i]});
+    stage_times.push_back(
+        DesignStageTime{clock.names[i].c_str(), clock.seconds[i], clock.peaks[i]});
   }
   DesignRunInfo run_info;
   run_info.memory_cap_bytes = o.memory_cap;
@@ -1204,12 +1224,13 @@ int run_design(int argc, char** argv) {
   run_info.stages = Span<const DesignStageTime>(stage_times.data(), stage_times.size());
   run_info.read_seconds = t_read - t0;
   run_info.design_seconds = t_design - t_read;
-  run_info.preview_seconds = preview_status.is_ok() ? preview.render_seconds + preview.encode_seconds : 0;
+  run_info.preview_seconds =
+      preview_status.is_ok() ? preview.render_seconds + preview.encode_seconds : 0;
   run_info.total_seconds = t_end - t0;
   run_info.peak_arena_bytes = arena.high_water();
   std::string report_text;
-  s = write_design_report(ctx, c, Span<const Mesh>(jaws.data(), jaws.size()), splint, report,
-                          files, &run_info, cli::string_sink(&report_text));
+  s = write_design_report(ctx, c, Span<const Mesh>(jaws.data(), jaws.size()), splint, report, files,
+                          &run_info, cli::string_sink(&report_text));
   if (!s.is_ok()) return rejected(o, "design", s, &arena);
   s = write_bytes_atomically(report_path, report_text + "\n");
   if (!s.is_ok()) return rejected(o, "design", s, &arena);
@@ -1231,11 +1252,12 @@ int run_design(int argc, char** argv) {
                   report.boolean.attempts);
     }
     for (uint32_t i = 0; i < report.blockout_jaws; ++i) {
-      std::printf("blockout (%s): %.4f mm^3 of interference removed, %llu swept triangles, "
-                  "inset %.3g mm\n",
-                  c.jaws[i].role, report.blockout_removed_mm3[i],
-                  static_cast<unsigned long long>(report.blockout[i].swept_triangles),
-                  report.blockout[i].inset_used);
+      std::printf(
+          "blockout (%s): %.4f mm^3 of interference removed, %llu swept triangles, "
+          "inset %.3g mm\n",
+          c.jaws[i].role, report.blockout_removed_mm3[i],
+          static_cast<unsigned long long>(report.blockout[i].swept_triangles),
+          report.blockout[i].inset_used);
     }
     if (report.labelled) {
       std::printf("label: \"%s\" %s, %u glyphs, %.1f mm long\n", report.label.text,
@@ -1247,18 +1269,20 @@ int run_design(int argc, char** argv) {
       if (t.thin_triangles == 0) {
         std::printf("thickness: no wall thinner than %.3g mm\n", t.min_required);
       } else {
-        std::printf("thickness: %llu triangles (%.3f mm^2) thinner than %.3g mm; thinnest "
-                    "%.3f mm at (%.2f, %.2f, %.2f); %u spot(s) in report.json\n",
-                    static_cast<unsigned long long>(t.thin_triangles), t.thin_area_mm2,
-                    t.min_required, t.thinnest, t.spots[0].position.x, t.spots[0].position.y,
-                    t.spots[0].position.z, t.spot_count);
+        std::printf(
+            "thickness: %llu triangles (%.3f mm^2) thinner than %.3g mm; thinnest "
+            "%.3f mm at (%.2f, %.2f, %.2f); %u spot(s) in report.json\n",
+            static_cast<unsigned long long>(t.thin_triangles), t.thin_area_mm2, t.min_required,
+            t.thinnest, t.spots[0].position.x, t.spots[0].position.y, t.spots[0].position.z,
+            t.spot_count);
       }
     }
-    std::printf("splint: %zu triangles, %.3f mm^3, closed, manifold, no self-intersection; "
-                "printable on %s (%s%s)\n",
-                splint.triangles.size(), report.print.mesh.volume, report.printer,
-                report.print.fits ? "fits the tray" : "fits turned 90 degrees",
-                report.placed_on_tray ? ", placed on the tray" : "");
+    std::printf(
+        "splint: %zu triangles, %.3f mm^3, closed, manifold, no self-intersection; "
+        "printable on %s (%s%s)\n",
+        splint.triangles.size(), report.print.mesh.volume, report.printer,
+        report.print.fits ? "fits the tray" : "fits turned 90 degrees",
+        report.placed_on_tray ? ", placed on the tray" : "");
     std::printf("wrote %s (sha256 %s) and %s\n", splint_path.c_str(), splint_hash.c_str(),
                 report_path.c_str());
     std::printf("time: read %.3f s, design %.3f s, total %.3f s; peak arena %llu bytes\n",
@@ -1340,8 +1364,8 @@ struct CtOptions {
   bool has_plane = false;
   SplitPlane plane;
   bool keep_double = false;
-  uint32_t smooth = 0;     // Taubin iterations (0: none)
-  uint64_t decimate = 0;   // target triangles per jaw (0: none)
+  uint32_t smooth = 0;    // Taubin iterations (0: none)
+  uint64_t decimate = 0;  // target triangles per jaw (0: none)
 };
 
 // Returns -1 to go on (with `rest` holding the other arguments), or an exit code.
@@ -1384,8 +1408,8 @@ int take_ct_options(int argc, char** argv, const char* usage, bool phantom, CtOp
       }
       (std::strcmp(a, "--hu-min") == 0 ? c->hu_min : c->hu_max) = value;
       ++i;
-    } else if (!phantom && (std::strcmp(a, "--seed-maxilla") == 0 ||
-                            std::strcmp(a, "--seed-mandible") == 0)) {
+    } else if (!phantom &&
+               (std::strcmp(a, "--seed-maxilla") == 0 || std::strcmp(a, "--seed-mandible") == 0)) {
       const int jaw = std::strcmp(a, "--seed-maxilla") == 0 ? 0 : 1;
       if (v == nullptr || !parse_point(v, &c->seeds[jaw])) return bad("a seed needs X,Y,Z (mm)");
       c->has_seed[jaw] = true;
@@ -1493,12 +1517,13 @@ int run_ct_phantom(int argc, char** argv) {
     std::printf("%s\n", j.str().c_str());
   } else {
     const Vec3 a = phantom.seed_maxilla(), b = phantom.seed_mandible();
-    std::printf("%s: %u x %u x %u voxels (%s), voxels sha256 %s\n"
-                "seeds: --seed-maxilla %s,%s,%s --seed-mandible %s,%s,%s\n",
-                o.output, volume.nx, volume.ny, volume.nz, c.format, voxels_sha.c_str(),
-                cli::json_number(a.x).c_str(), cli::json_number(a.y).c_str(),
-                cli::json_number(a.z).c_str(), cli::json_number(b.x).c_str(),
-                cli::json_number(b.y).c_str(), cli::json_number(b.z).c_str());
+    std::printf(
+        "%s: %u x %u x %u voxels (%s), voxels sha256 %s\n"
+        "seeds: --seed-maxilla %s,%s,%s --seed-mandible %s,%s,%s\n",
+        o.output, volume.nx, volume.ny, volume.nz, c.format, voxels_sha.c_str(),
+        cli::json_number(a.x).c_str(), cli::json_number(a.y).c_str(), cli::json_number(a.z).c_str(),
+        cli::json_number(b.x).c_str(), cli::json_number(b.y).c_str(),
+        cli::json_number(b.z).c_str());
   }
   return kExitOk;
 }
@@ -1516,8 +1541,7 @@ int run_reconstruct(int argc, char** argv) {
   }
   if (o.output == nullptr) return usage_error("reconstruct needs -o OUTDIR", kReconstructUsage);
   if (!c.has_seed[0] || !c.has_seed[1]) {
-    return usage_error("reconstruct needs --seed-maxilla and --seed-mandible",
-                       kReconstructUsage);
+    return usage_error("reconstruct needs --seed-maxilla and --seed-mandible", kReconstructUsage);
   }
   if (c.hu_min > c.hu_max) return usage_error("--hu-min is above --hu-max", kReconstructUsage);
   Run run(o);
@@ -1611,8 +1635,7 @@ int run_reconstruct(int argc, char** argv) {
     if (rs.touches_border[l]) {
       warnings += std::string(warnings.empty() ? "" : ",") + "\"" + names[jaw] +
                   " touches the volume's border: it may continue beyond the scan\"";
-      std::fprintf(stderr, "splintcore: warning: the %s touches the volume's border\n",
-                   names[jaw]);
+      std::fprintf(stderr, "splintcore: warning: the %s touches the volume's border\n", names[jaw]);
     }
     JsonObject r;
     r.add("jaw", names[jaw]);
@@ -1620,11 +1643,10 @@ int run_reconstruct(int argc, char** argv) {
     r.add("voxels", rs.voxels[l]);
     r.add("meets_other_region", rs.meets_other_region[l]);
     r.add("touches_border", rs.touches_border[l]);
-    r.add_raw("box_voxels", "[" + std::to_string(st.box_lo[0]) + "," +
-                                std::to_string(st.box_lo[1]) + "," + std::to_string(st.box_lo[2]) +
-                                "," + std::to_string(st.box_hi[0]) + "," +
-                                std::to_string(st.box_hi[1]) + "," +
-                                std::to_string(st.box_hi[2]) + "]");
+    r.add_raw("box_voxels",
+              "[" + std::to_string(st.box_lo[0]) + "," + std::to_string(st.box_lo[1]) + "," +
+                  std::to_string(st.box_lo[2]) + "," + std::to_string(st.box_hi[0]) + "," +
+                  std::to_string(st.box_hi[1]) + "," + std::to_string(st.box_hi[2]) + "]");
     r.add("vertices", static_cast<uint64_t>(mesh.vertices.size()));
     r.add("triangles", static_cast<uint64_t>(mesh.triangles.size()));
     r.add("volume_mm3", mesh_vol);
@@ -1663,8 +1685,8 @@ int run_reconstruct(int argc, char** argv) {
     j.add_raw("warnings", "[" + warnings + "]");
     std::string times;
     for (const auto& st : stages) {
-      times += (times.empty() ? "" : ",") + std::string("\"") + st.first + "\":" +
-               cli::json_number(st.second);
+      times += (times.empty() ? "" : ",") + std::string("\"") + st.first +
+               "\":" + cli::json_number(st.second);
     }
     j.add_raw("stage_s", "{" + times + "}");
     j.add("time_s", monotonic_seconds() - run.start);
@@ -1693,8 +1715,8 @@ Status read_mesh_files(const Context& ctx, const std::vector<const char*>& paths
 }
 
 void add_sweep_stats(JsonObject* j, const SweepStats& st) {
-  j->add("grid", std::to_string(st.nx) + " x " + std::to_string(st.ny) + " x " +
-                     std::to_string(st.nz));
+  j->add("grid",
+         std::to_string(st.nx) + " x " + std::to_string(st.ny) + " x " + std::to_string(st.nz));
   j->add("voxels", st.voxels);
   j->add("preroll_layers", static_cast<uint64_t>(st.preroll_layers));
   j->add("front_triangles", st.front_triangles);
@@ -1711,8 +1733,7 @@ void add_sweep_stats(JsonObject* j, const SweepStats& st) {
 
 struct SweepToStl {
   StlWriter* writer = nullptr;
-  static Status triangle(void* user, const Triangle&, const Vec3& a, const Vec3& b,
-                         const Vec3& c) {
+  static Status triangle(void* user, const Triangle&, const Vec3& a, const Vec3& b, const Vec3& c) {
     return static_cast<SweepToStl*>(user)->writer->add(a, b, c);
   }
 };
@@ -1858,10 +1879,11 @@ int run_blockout_command(int argc, char** argv) {
   } else {
     std::printf("splint: %s, %zu triangles; jaws: %zu file(s)\n", o.positional[0],
                 splint.triangles.size(), jaws.size());
-    std::printf("swept volume: grid %u x %u x %u of %.4g mm (+%u layers before the splint), "
-                "%llu triangles in the splint's bounds\n",
-                st.sweep.nx, st.sweep.ny, st.sweep.nz, o.voxel, st.sweep.preroll_layers,
-                static_cast<unsigned long long>(st.swept_triangles));
+    std::printf(
+        "swept volume: grid %u x %u x %u of %.4g mm (+%u layers before the splint), "
+        "%llu triangles in the splint's bounds\n",
+        st.sweep.nx, st.sweep.ny, st.sweep.nz, o.voxel, st.sweep.preroll_layers,
+        static_cast<unsigned long long>(st.swept_triangles));
     std::printf("removed: %.4f mm^3 of interference (inset %.4g mm)\n", removed, bo.sweep.inset);
     print_mesh_report(report);
     std::printf("output: %s (%s STL)\n", o.output, o.ascii ? "ascii" : "binary");
@@ -1992,7 +2014,6 @@ int run_compare(int argc, char** argv) {
   return kExitOk;
 }
 
-
 // ---- render: PNG previews (issue 8) ----------------------------------------------------------
 const char kRenderUsage[] =
     "usage: splintcore render MESH [MESH ...] -o PREVIEW.png [--size WxH] [--views LIST]\n"
@@ -2037,8 +2058,7 @@ int run_render(int argc, char** argv) {
       while (ok && *v != '\0') {
         const char* comma = std::strchr(v, ',');
         const size_t n = comma != nullptr ? static_cast<size_t>(comma - v) : std::strlen(v);
-        ok = ro.view_count < kRenderMaxViews &&
-             parse_render_view(v, n, &ro.views[ro.view_count]);
+        ok = ro.view_count < kRenderMaxViews && parse_render_view(v, n, &ro.views[ro.view_count]);
         ++ro.view_count;
         v += n;
         if (*v == ',') {
@@ -2124,10 +2144,11 @@ int run_render(int argc, char** argv) {
                 info.width, info.height, info.pixels_per_mm);
     std::printf("wrote %s (%llu bytes, sha256 %s)\n", o.output,
                 static_cast<unsigned long long>(info.png_bytes), info.sha256.c_str());
-    std::printf("time: read %.3f s, render %.3f s, encode %.3f s, total %.3f s; peak arena %llu "
-                "bytes\n",
-                t_read - run.start, info.render_seconds, info.encode_seconds, t_end - run.start,
-                static_cast<unsigned long long>(arena.high_water()));
+    std::printf(
+        "time: read %.3f s, render %.3f s, encode %.3f s, total %.3f s; peak arena %llu "
+        "bytes\n",
+        t_read - run.start, info.render_seconds, info.encode_seconds, t_end - run.start,
+        static_cast<unsigned long long>(arena.high_water()));
   }
   return kExitOk;
 }
