@@ -18,8 +18,12 @@
 #include "common/phantom.h"
 #include "common/realcase.h"
 #include "common/shapes.h"
+#include "splintcore/blockout.h"
+#include "splintcore/boolean.h"
 #include "splintcore/ct.h"
+#include "splintcore/design.h"
 #include "splintcore/distance.h"
+#include "splintcore/label.h"
 #include "splintcore/mesh.h"
 #include "splintcore/remesh.h"
 #include "splintcore/render.h"
@@ -368,6 +372,103 @@ TEST(BoundExact, CtSegmentation) {
       });
     }
   }
+}
+
+// The two-step contract of the functions without an a-priori bound (embedding.md): a first
+// run in any arena large enough gives the need, the arena's high water; the same input then
+// runs in exactly that many bytes, and fails cleanly in one byte less. Allocation depends on
+// the input alone, so the need measured once (on a workstation) holds on the device.
+template <class Run>
+void expect_two_step(const char* function, const char* input, Run run) {
+  SCOPED_TRACE(std::string(function) + " on " + input);
+  uint64_t need = 0;
+  {
+    TestArena big(size_t{1} << 30);
+    SPLINTCORE_ASSERT_OK(run(big.arena));
+    need = big.arena.high_water();
+  }
+  {
+    TestArena exact(static_cast<size_t>(need));
+    SPLINTCORE_EXPECT_OK(run(exact.arena));
+    EXPECT_EQ(exact.arena.high_water(), need);
+  }
+  {
+    TestArena short_by_one(static_cast<size_t>(need - 1));
+    const Status s = run(short_by_one.arena);
+    EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << format(s);
+    EXPECT_EQ(short_by_one.arena.used(), 0u) << "the arena is as it was";
+  }
+  std::printf("%-22s %-34s need %11llu bytes, exactly enough\n", function, input,
+              static_cast<unsigned long long>(need));
+}
+
+// The paper-scale case (fixtures/cases/paper_scale.json or blockout.json) and two phantom jaws
+// of 6,000 triangles, in an arena of their own.
+struct PhantomCase {
+  TestArena storage{size_t{128} << 20};
+  std::vector<uint8_t> text;
+  CaseFile c;
+  Mesh jaws[2];
+  explicit PhantomCase(const char* case_name) {
+    Context ctx(&storage.arena);
+    text = test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/cases/" + case_name);
+    EXPECT_TRUE(
+        parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), case_name, &c)
+            .is_ok());
+    for (int j = 0; j < 2; ++j) {
+      phantom::JawMesh m;
+      phantom::PhantomOptions po;
+      po.target_triangles = 6000;
+      EXPECT_TRUE(
+          phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &m)
+              .is_ok());
+      jaws[j].bind(&storage.arena);
+      for (const Vec3& v : m.vertices) (void)jaws[j].vertices.push_back(v);
+      for (const Triangle& tr : m.triangles) (void)jaws[j].triangles.push_back(tr);
+    }
+  }
+};
+
+TEST(BoundTwoStep, DesignBooleanBlockoutLabel) {
+  for (const char* name : {"paper_scale.json", "blockout.json"}) {
+    PhantomCase pc(name);
+    expect_two_step("design_splint", name, [&](Arena& arena) {
+      Mesh splint(&arena);
+      DesignReport report;
+      return design_splint(Context(&arena), pc.c, Span<const Mesh>(pc.jaws, 2), &splint, &report);
+    });
+  }
+  // The stages on their own: the base minus the maxilla, its blockout, a label on it.
+  PhantomCase pc("paper_scale.json");
+  Context sctx(&pc.storage.arena);
+  Mesh base(&pc.storage.arena);
+  BaseReport br;
+  SPLINTCORE_ASSERT_OK(build_case_base(sctx, pc.c, &base, &br));
+  Mesh cut(&pc.storage.arena);
+  BooleanOptions bo;
+  SPLINTCORE_ASSERT_OK(mesh_boolean(sctx, base, pc.jaws[0], bo, &cut, nullptr));
+  expect_two_step("mesh_boolean", "base - phantom maxilla", [&](Arena& arena) {
+    Mesh out(&arena);
+    return mesh_boolean(Context(&arena), base, pc.jaws[0], bo, &out, nullptr);
+  });
+  BlockoutOptions bl;
+  bl.sweep.direction = Vec3{0, 0, 1};
+  bl.sweep.voxel = 0.3;
+  bl.sweep.inset = 0.15;
+  expect_two_step("blockout", "cut, phantom maxilla, 0.3 mm", [&](Arena& arena) {
+    Mesh out(&arena);
+    return blockout(Context(&arena), cut, Span<const Mesh>(&pc.jaws[0], 1), bl, &out);
+  });
+  ArenaArray<Line> upper(&pc.storage.arena), lower(&pc.storage.arena);
+  SPLINTCORE_ASSERT_OK(make_lines(sctx, pc.c.upper, pc.c.occlusal_normal, "upper", &upper));
+  SPLINTCORE_ASSERT_OK(make_lines(sctx, pc.c.lower, pc.c.occlusal_normal, "lower", &lower));
+  LabelOptions lo;
+  lo.text = "CASE-27";
+  expect_two_step("apply_label", "cut, \"CASE-27\"", [&](Arena& arena) {
+    Mesh out(&arena);
+    LabelStats stats;
+    return apply_label(Context(&arena), cut, upper.span(), lower.span(), lo, &out, &stats);
+  });
 }
 
 }  // namespace
