@@ -430,5 +430,13 @@ expect_exit 1 "a label the font cannot write" -- "$tool" design "$work/opts/case
 check "the error names the character" -- grep -q "label.*'%'" "$work/err"
 check "no splint after the label error" -- test ! -e "$work/opts/bad/splint.stl"
 
+# One command table (tools/splintcore/main.cpp): --help lists it, every command's --help
+# starts with its usage line, and the README shows the same commands with no option their
+# --help lacks.
+if command -v python3 >/dev/null 2>&1; then
+  check "the command table, --help and the README agree" -- \
+    python3 "$(dirname "$0")/cli_commands.py" "$tool" "$fixtures/../README.md"
+fi
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

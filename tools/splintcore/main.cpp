@@ -41,27 +41,9 @@ using cli::kExitUsage;
 
 constexpr uint64_t kDefaultMemoryCap = uint64_t{1} << 30;
 
-const char kUsage[] =
-    "usage: splintcore <command> [options]\n"
-    "\n"
-    "commands:\n"
-    "  check IN.stl [--printer eden260]     check a mesh is a printable solid\n"
-    "  convert IN.stl -o OUT.stl [--ascii]  read, weld, check and rewrite an STL\n"
-    "  base CASE.json -o BASE.stl           build the initial splint base from the picks\n"
-    "  distance MESH.stl --query X,Y,Z ...  closest point, signed distance, winding number\n"
-    "  boolean --difference A.stl B.stl... -o OUT.stl   splint base minus jaws (or --union,\n"
-    "                                       --intersection)\n"
-    "  phantom --triangles N -o DIR         synthetic maxilla.stl and mandible.stl\n"
-    "  design CASE.json -o OUTDIR           the splint: jaws moved, base, base minus jaws,\n"
-    "                                       printer check, splint.stl and report.json\n"
-    "  sweep JAW.stl... --direction X,Y,Z --voxel H -o OUT.stl   the jaws' swept volume\n"
-    "                                       (the blocked-out model), streamed to STL\n"
-    "  blockout SPLINT.stl JAW.stl... --direction X,Y,Z --voxel H -o OUT.stl\n"
-    "                                       interference elimination: splint minus it\n"
-    "  ct-phantom -o PATH --format F        synthetic skull CT (dicom, nrrd or mha)\n"
-    "  reconstruct VOLUME -o OUTDIR ...     CT in, maxilla.stl and mandible.stl out\n"
-    "  compare A.stl B.stl [--ply OUT.ply]  surface deviation (mean/max/RMS, Hausdorff)\n"
-    "  render MESH... -o PREVIEW.png        PNG preview: front, top, right and iso views\n"
+// The general text of `splintcore --help`; the list of commands comes from kCommands.
+const char kUsageHead[] = "usage: splintcore <command> [options]\n\ncommands:\n";
+const char kUsageTail[] =
     "\n"
     "options of every command:\n"
     "  --help            this text for the command\n"
@@ -2153,34 +2135,58 @@ int run_render(int argc, char** argv) {
   return kExitOk;
 }
 
+// The commands, in the order `splintcore --help` lists them: the one table the dispatch, the
+// help text and the tests (tests/tools/cli_test.sh: README and --help agree with it) read.
+struct Command {
+  const char* name;
+  int (*run)(int argc, char** argv);
+  const char* usage;    // its --help text, starting "usage: splintcore NAME"
+  const char* summary;  // one line for `splintcore --help`
+};
+
+const Command kCommands[] = {
+    {"check", run_check, kCheckUsage, "check a mesh is a printable solid"},
+    {"convert", run_convert, kConvertUsage, "read, weld, check and rewrite an STL"},
+    {"base", run_base, kBaseUsage, "build the initial splint base from the picks"},
+    {"distance", run_distance, kDistanceUsage, "closest point, signed distance, winding number"},
+    {"boolean", run_boolean, kBooleanUsage, "splint base minus jaws (or --union, --intersection)"},
+    {"phantom", run_phantom, kPhantomUsage, "synthetic maxilla.stl, mandible.stl and case.json"},
+    {"design", run_design, kDesignUsage,
+     "the splint from a case: splint.stl, report.json, preview.png"},
+    {"sweep", run_sweep_command, kSweepUsage, "the jaws' swept volume (the blocked-out model)"},
+    {"blockout", run_blockout_command, kBlockoutUsage,
+     "interference elimination: splint minus the swept volume"},
+    {"ct-phantom", run_ct_phantom, kCtPhantomUsage, "synthetic skull CT (dicom, nrrd or mha)"},
+    {"reconstruct", run_reconstruct, kReconstructUsage, "CT in, maxilla.stl and mandible.stl out"},
+    {"compare", run_compare, kCompareUsage, "surface deviation (mean/max/RMS, Hausdorff)"},
+    {"render", run_render, kRenderUsage, "PNG preview: front, top, right and iso views"},
+};
+
+void print_usage(std::FILE* out) {
+  std::fputs(kUsageHead, out);
+  for (const Command& c : kCommands) std::fprintf(out, "  %-12s %s\n", c.name, c.summary);
+  std::fputs(kUsageTail, out);
+}
+
 }  // namespace
 }  // namespace splintcore
 
 int main(int argc, char** argv) {
   using namespace splintcore;
   if (argc < 2) {
-    std::fputs(kUsage, stderr);
+    print_usage(stderr);
     return cli::kExitUsage;
   }
   const char* command = argv[1];
   if (std::strcmp(command, "--help") == 0 || std::strcmp(command, "-h") == 0 ||
       std::strcmp(command, "help") == 0) {
-    std::fputs(kUsage, stdout);
+    print_usage(stdout);
     return cli::kExitOk;
   }
-  if (std::strcmp(command, "check") == 0) return run_check(argc - 2, argv + 2);
-  if (std::strcmp(command, "convert") == 0) return run_convert(argc - 2, argv + 2);
-  if (std::strcmp(command, "base") == 0) return run_base(argc - 2, argv + 2);
-  if (std::strcmp(command, "distance") == 0) return run_distance(argc - 2, argv + 2);
-  if (std::strcmp(command, "boolean") == 0) return run_boolean(argc - 2, argv + 2);
-  if (std::strcmp(command, "phantom") == 0) return run_phantom(argc - 2, argv + 2);
-  if (std::strcmp(command, "design") == 0) return run_design(argc - 2, argv + 2);
-  if (std::strcmp(command, "sweep") == 0) return run_sweep_command(argc - 2, argv + 2);
-  if (std::strcmp(command, "blockout") == 0) return run_blockout_command(argc - 2, argv + 2);
-  if (std::strcmp(command, "ct-phantom") == 0) return run_ct_phantom(argc - 2, argv + 2);
-  if (std::strcmp(command, "reconstruct") == 0) return run_reconstruct(argc - 2, argv + 2);
-  if (std::strcmp(command, "compare") == 0) return run_compare(argc - 2, argv + 2);
-  if (std::strcmp(command, "render") == 0) return run_render(argc - 2, argv + 2);
-  std::fprintf(stderr, "splintcore: unknown command '%s'\n\n%s", command, kUsage);
+  for (const Command& c : kCommands) {
+    if (std::strcmp(command, c.name) == 0) return c.run(argc - 2, argv + 2);
+  }
+  std::fprintf(stderr, "splintcore: unknown command '%s'\n\n", command);
+  print_usage(stderr);
   return cli::kExitUsage;
 }
