@@ -112,6 +112,25 @@ struct CaseCtReport {
 Status reconstruct_case_jaws(const Context& ctx, const CaseFile& c, const CtVolume& volume,
                              Span<Mesh> jaws, CaseCtReport* report);
 
+// The case file's numbers: one table of their places, units, ranges and defaults. The parser,
+// the C API (sc_case_set_params) and docs/case-format.md (its "Numbers" table, which a test
+// compares with this one) take them from here.
+struct CaseNumber {
+  const char* key;           // where it stands in the file: "base.spacing_mm"
+  const char* unit;          // "mm", "HU", "voxels", "iterations", "triangles", "bytes", ""
+  double lo, hi;             // the range, inclusive; in blockout voxels when per_voxel
+  bool per_voxel;            // lo and hi are multiples of "blockout.voxel"
+  double max_mm;             // with per_voxel: also at most this many mm (0: no such cap)
+  bool integer;              // a whole number
+  const char* default_text;  // the default as the documentation states it
+  const char* rule;          // a further rule ("" when none)
+};
+Span<const CaseNumber> case_numbers();
+// The entry for `key` ("base.spacing_mm"), or nullptr.
+const CaseNumber* find_case_number(const char* key);
+// The number's range in the file's units for a blockout voxel of `voxel` mm.
+void case_number_range(const CaseNumber& n, double voxel, double* lo, double* hi);
+
 // Picks -> lines -> base, as the case says. `out` must be empty. Arena: the lines (88 bytes a
 // pick, left in place below the mesh) and at most splint_base_bound(). Errors: make_lines()'s
 // and build_splint_base()'s. On an error the arena is as it was and `out` is empty.

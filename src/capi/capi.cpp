@@ -176,8 +176,13 @@ Vec3 vec(const double d[3]) { return Vec3(d[0], d[1], d[2]); }
 
 constexpr size_t kMaxOperationMeshes = 8;
 
-// The case file's ranges (src/design/case_file.cpp), so a set case is one a file could say.
-Status check_range(const char* name, double value, double lo, double hi) {
+// The case file's ranges (case_numbers(), design.h), so a set case is one a file could say.
+// `key`: the number's place in the case file; `voxel`: the blockout voxel (per-voxel ranges).
+Status check_range(const char* name, double value, const char* key, double voxel = 0) {
+  const CaseNumber* n = find_case_number(key);
+  SPLINTCORE_ASSERT(n != nullptr);
+  double lo = 0, hi = 0;
+  case_number_range(*n, voxel, &lo, &hi);
   if (!(value >= lo && value <= hi)) {  // NaN fails too
     return make_error(StatusCode::kInvalidArgument, "sc_case_set_params: ", name, " is ", value,
                       ", must be in [", lo, ", ", hi, "]");
@@ -186,8 +191,9 @@ Status check_range(const char* name, double value, double lo, double hi) {
 }
 
 Status check_params(const sc_case_params& p, const PrinterProfile** profile) {
-  SPLINTCORE_RETURN_IF_ERROR(check_range("spacing_mm", p.spacing_mm, 0.01, 50));
-  SPLINTCORE_RETURN_IF_ERROR(check_range("corner_radius_mm", p.corner_radius_mm, 0, 20));
+  SPLINTCORE_RETURN_IF_ERROR(check_range("spacing_mm", p.spacing_mm, "base.spacing_mm"));
+  SPLINTCORE_RETURN_IF_ERROR(
+      check_range("corner_radius_mm", p.corner_radius_mm, "base.corner_radius_mm"));
   const uint32_t s = p.corner_segments;
   if (s != 1 && s != 2 && s != 4 && s != 8 && s != 16) {
     return make_error(StatusCode::kInvalidArgument, "sc_case_set_params: corner_segments is ", s,
@@ -207,10 +213,11 @@ Status check_params(const sc_case_params& p, const PrinterProfile** profile) {
                         "seated along it)");
     }
     const double v = p.blockout_voxel_mm;
-    SPLINTCORE_RETURN_IF_ERROR(check_range("blockout_voxel_mm", v, 0.01, 1.0));
-    SPLINTCORE_RETURN_IF_ERROR(check_range("blockout_inset_mm", p.blockout_inset_mm, 0, 1.99 * v));
+    SPLINTCORE_RETURN_IF_ERROR(check_range("blockout_voxel_mm", v, "blockout.voxel"));
     SPLINTCORE_RETURN_IF_ERROR(
-        check_range("blockout_closing_mm", p.blockout_closing_mm, 0, 10 * v));
+        check_range("blockout_inset_mm", p.blockout_inset_mm, "blockout.inset", v));
+    SPLINTCORE_RETURN_IF_ERROR(
+        check_range("blockout_closing_mm", p.blockout_closing_mm, "blockout.closing_radius", v));
     if (p.blockout_closing_mm != 0 && p.blockout_closing_mm < 2 * v) {
       return make_error(StatusCode::kInvalidArgument, "sc_case_set_params: blockout_closing_mm is ",
                         p.blockout_closing_mm, ", must be 0 or at least two voxels (", 2 * v, ")");

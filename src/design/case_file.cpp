@@ -9,6 +9,43 @@ namespace splintcore {
 
 namespace {
 
+constexpr double kNoCap = 0;
+const CaseNumber kCaseNumbers[] = {
+    {"splintcore_case", "", 1, 1e6, false, kNoCap, true, "required", "the format version: 1"},
+    {"jaws[].transform", "mm", -1e6, 1e6, false, kNoCap, false, "identity",
+     "each of the 16 entries; rigid (see Jaw)"},
+    {"base.spacing_mm", "mm", 0.01, 50, false, kNoCap, false, "0.5", ""},
+    {"base.corner_radius_mm", "mm", 0, 20, false, kNoCap, false, "0", ""},
+    {"base.corner_segments", "", 1, 16, false, kNoCap, true, "4", "1, 2, 4, 8 or 16"},
+    {"base.inner_length_mm", "mm", 0, 100, false, kNoCap, false, "3", ""},
+    {"base.outside_length_mm", "mm", 0, 100, false, kNoCap, false, "3", ""},
+    {"pick.inner_length_mm", "mm", 0, 100, false, kNoCap, false, "the base's", ""},
+    {"pick.outside_length_mm", "mm", 0, 100, false, kNoCap, false, "the base's", ""},
+    {"ct.hu_min", "HU", -32768, 32767, false, kNoCap, true, "300", "at most hu_max"},
+    {"ct.hu_max", "HU", -32768, 32767, false, kNoCap, true, "4000", ""},
+    {"ct.connectivity", "", 6, 26, false, kNoCap, true, "6", "6 or 26"},
+    {"ct.smooth", "iterations", 0, 1000, false, kNoCap, true, "0", ""},
+    {"ct.decimate", "triangles", 4, 1e9, false, kNoCap, true, "none", ""},
+    {"blockout.voxel", "mm", 0.01, 1, false, kNoCap, false, "0.1", ""},
+    {"blockout.inset", "mm", 0, 1.99, true, kNoCap, false, "half the voxel (0 with clearance)",
+     "not with clearance"},
+    {"blockout.closing_radius", "mm", 0, 10, true, kNoCap, false, "0",
+     "0 or at least 2 voxels"},
+    {"blockout.clearance", "mm", 0, 20, true, 2.0, false, "0", ""},
+    {"label.height_mm", "mm", 0.5, 20, false, kNoCap, false, "2.5", ""},
+    {"label.stroke_mm", "mm", 0.05, 5, false, kNoCap, false, "0.35", ""},
+    {"label.depth_mm", "mm", 0.05, 5, false, kNoCap, false, "0.4", ""},
+    {"min_thickness", "mm", 0.05, 20, false, kNoCap, false, "not checked", ""},
+    {"memory_cap", "bytes", 1, 1099511627776.0, false, kNoCap, true, "the tool's (1G)",
+     "or a string such as \"256M\""},
+};
+
+const CaseNumber& number_spec(const char* key) {
+  const CaseNumber* n = find_case_number(key);
+  SPLINTCORE_ASSERT(n != nullptr);
+  return *n;
+}
+
 struct Reader {
   const JsonDocument* doc;
   Arena* arena;
@@ -62,6 +99,16 @@ struct Reader {
     }
     *out = v.number;
     return Status::ok();
+  }
+
+  // A number of the table (kCaseNumbers), named in messages by its last key; `voxel` scales
+  // a per-voxel range.
+  Status number(const JsonValue& v, const char* path, double voxel, double* out) const {
+    const CaseNumber& n = number_spec(path);
+    const char* dot = std::strrchr(n.key, '.');
+    double lo = 0, hi = 0;
+    case_number_range(n, voxel, &lo, &hi);
+    return number(v, dot != nullptr ? dot + 1 : n.key, lo, hi, out);
   }
 
   Status vec3(const JsonValue& v, const char* key, Vec3* out) const {
@@ -126,10 +173,10 @@ Status parse_picks(const Reader& r, const JsonValue& list, const char* key, doub
       SPLINTCORE_RETURN_IF_ERROR(r.unit_vector(*v, "direction", &pick.direction));
     }
     if (const JsonValue* v = r.doc->member(p, "inner_length_mm")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*v, "inner_length_mm", 0, 100, &pick.inner_length));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*v, "pick.inner_length_mm", 0, &pick.inner_length));
     }
     if (const JsonValue* v = r.doc->member(p, "outside_length_mm")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*v, "outside_length_mm", 0, 100, &pick.outside_length));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*v, "pick.outside_length_mm", 0, &pick.outside_length));
     }
     picks[i] = pick;
   }
@@ -158,7 +205,7 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
                   "not a splintcore case file: no \"splintcore_case\" version key");
   }
   double v = 0;
-  SPLINTCORE_RETURN_IF_ERROR(r.number(*version, "splintcore_case", 1, 1e6, &v));
+  SPLINTCORE_RETURN_IF_ERROR(r.number(*version, "splintcore_case", 0, &v));
   if (v != static_cast<double>(static_cast<uint32_t>(v))) {
     return r.fail(*version, StatusCode::kInvalidArgument, "\"splintcore_case\" must be an integer");
   }
@@ -225,7 +272,7 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
         double m[16];
         uint32_t e = t->first_child;
         for (int a = 0; a < 16; ++a, e = doc.at(e).next_sibling) {
-          SPLINTCORE_RETURN_IF_ERROR(r.number(doc.at(e), "transform", -1e6, 1e6, &m[a]));
+          SPLINTCORE_RETURN_IF_ERROR(r.number(doc.at(e), "jaws[].transform", 0, &m[a]));
         }
         Status s = rigid_from_matrix(m, 1e-6, &jaw.transform);
         if (!s.is_ok()) {
@@ -255,15 +302,15 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
     SPLINTCORE_RETURN_IF_ERROR(r.unit_vector(*o, "occlusal_normal", &out->occlusal_normal));
   }
   if (const JsonValue* s = doc.member(*base, "spacing_mm")) {
-    SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "spacing_mm", 0.01, 50, &out->base.spacing_mm));
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "base.spacing_mm", 0, &out->base.spacing_mm));
   }
   if (const JsonValue* s = doc.member(*base, "corner_radius_mm")) {
     SPLINTCORE_RETURN_IF_ERROR(
-        r.number(*s, "corner_radius_mm", 0, 20, &out->base.corner_radius_mm));
+        r.number(*s, "base.corner_radius_mm", 0, &out->base.corner_radius_mm));
   }
   if (const JsonValue* s = doc.member(*base, "corner_segments")) {
     double segs = 0;
-    SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "corner_segments", 1, 16, &segs));
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "base.corner_segments", 0, &segs));
     uint32_t u = static_cast<uint32_t>(segs);
     if (static_cast<double>(u) != segs || (u & (u - 1)) != 0) {
       return r.fail(*s, StatusCode::kInvalidArgument,
@@ -273,10 +320,10 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   }
   double inner_default = 3.0, outside_default = 3.0;
   if (const JsonValue* s = doc.member(*base, "inner_length_mm")) {
-    SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "inner_length_mm", 0, 100, &inner_default));
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "base.inner_length_mm", 0, &inner_default));
   }
   if (const JsonValue* s = doc.member(*base, "outside_length_mm")) {
-    SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "outside_length_mm", 0, 100, &outside_default));
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "base.outside_length_mm", 0, &outside_default));
   }
   const JsonValue* upper = doc.member(*base, "upper");
   const JsonValue* lower = doc.member(*base, "lower");
@@ -314,14 +361,14 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
     SPLINTCORE_RETURN_IF_ERROR(r.string(*vol, "volume", &out->ct_volume));
     double x = 0;
     if (const JsonValue* e = doc.member(*ct, "hu_min")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "hu_min", -32768, 32767, &x));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.hu_min", 0, &x));
       out->ct_hu_min = static_cast<int32_t>(x);
       if (static_cast<double>(out->ct_hu_min) != x) {
         return r.fail(*e, StatusCode::kInvalidArgument, "\"hu_min\" must be an integer");
       }
     }
     if (const JsonValue* e = doc.member(*ct, "hu_max")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "hu_max", -32768, 32767, &x));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.hu_max", 0, &x));
       out->ct_hu_max = static_cast<int32_t>(x);
       if (static_cast<double>(out->ct_hu_max) != x) {
         return r.fail(*e, StatusCode::kInvalidArgument, "\"hu_max\" must be an integer");
@@ -331,21 +378,21 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
       return r.fail(*ct, StatusCode::kInvalidArgument, "\"hu_min\" is above \"hu_max\"");
     }
     if (const JsonValue* e = doc.member(*ct, "connectivity")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "connectivity", 6, 26, &x));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.connectivity", 0, &x));
       if (x != 6 && x != 26) {
         return r.fail(*e, StatusCode::kInvalidArgument, "\"connectivity\" must be 6 or 26");
       }
       out->ct_connectivity = static_cast<uint8_t>(x);
     }
     if (const JsonValue* e = doc.member(*ct, "smooth")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "smooth", 0, 1000, &x));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.smooth", 0, &x));
       out->ct_smooth = static_cast<uint32_t>(x);
       if (static_cast<double>(out->ct_smooth) != x) {
         return r.fail(*e, StatusCode::kInvalidArgument, "\"smooth\" must be an integer");
       }
     }
     if (const JsonValue* e = doc.member(*ct, "decimate")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "decimate", 4, 1e9, &x));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.decimate", 0, &x));
       out->ct_decimate = static_cast<uint64_t>(x);
       if (static_cast<double>(out->ct_decimate) != x) {
         return r.fail(*e, StatusCode::kInvalidArgument, "\"decimate\" must be an integer");
@@ -370,17 +417,17 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
     }
     out->has_blockout = true;
     if (const JsonValue* bv = doc.member(*b, "voxel")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*bv, "voxel", 0.01, 1.0, &out->blockout_voxel));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*bv, "blockout.voxel", 0, &out->blockout_voxel));
     }
     if (const JsonValue* bl = doc.member(*b, "clearance")) {
       // The spacer: the offset surface of the swept volume (blockout.h, SweepOptions::offset).
-      const double cap = 20 * out->blockout_voxel < 2.0 ? 20 * out->blockout_voxel : 2.0;
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*bl, "clearance", 0.0, cap, &out->blockout_clearance));
+      SPLINTCORE_RETURN_IF_ERROR(
+          r.number(*bl, "blockout.clearance", out->blockout_voxel, &out->blockout_clearance));
     }
     out->blockout_inset = out->blockout_clearance > 0 ? 0 : 0.5 * out->blockout_voxel;
     if (const JsonValue* bi = doc.member(*b, "inset")) {
       SPLINTCORE_RETURN_IF_ERROR(
-          r.number(*bi, "inset", 0.0, 1.99 * out->blockout_voxel, &out->blockout_inset));
+          r.number(*bi, "blockout.inset", out->blockout_voxel, &out->blockout_inset));
       if (out->blockout_inset > 0 && out->blockout_clearance > 0) {
         return r.fail(*bi, StatusCode::kInvalidArgument,
                       "\"inset\" and \"clearance\" exclude "
@@ -389,7 +436,7 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
     }
     if (const JsonValue* bc = doc.member(*b, "closing_radius")) {
       SPLINTCORE_RETURN_IF_ERROR(
-          r.number(*bc, "closing_radius", 0.0, 10 * out->blockout_voxel, &out->blockout_closing));
+          r.number(*bc, "blockout.closing_radius", out->blockout_voxel, &out->blockout_closing));
       if (out->blockout_closing != 0 && out->blockout_closing < 2 * out->blockout_voxel) {
         return r.fail(*bc, StatusCode::kInvalidArgument,
                       "\"closing_radius\" must be 0 or at least two voxels");
@@ -420,17 +467,17 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
       }
     }
     if (const JsonValue* h = doc.member(*lb, "height_mm")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*h, "height_mm", 0.5, 20, &out->label_height));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*h, "label.height_mm", 0, &out->label_height));
     }
     if (const JsonValue* w = doc.member(*lb, "stroke_mm")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*w, "stroke_mm", 0.05, 5, &out->label_stroke));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*w, "label.stroke_mm", 0, &out->label_stroke));
     }
     if (const JsonValue* d = doc.member(*lb, "depth_mm")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*d, "depth_mm", 0.05, 5, &out->label_depth));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*d, "label.depth_mm", 0, &out->label_depth));
     }
   }
   if (const JsonValue* t = doc.member(root, "min_thickness")) {
-    SPLINTCORE_RETURN_IF_ERROR(r.number(*t, "min_thickness", 0.05, 20.0, &out->min_thickness));
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*t, "min_thickness", 0, &out->min_thickness));
   }
   if (const JsonValue* pl = doc.member(root, "placement")) {
     const char* placement = "";
@@ -457,7 +504,7 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
                     "\"memory_cap\" must be a string such as \"256M\" or a number of bytes");
     } else {
       double bytes = 0;
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*m, "memory_cap", 1, 1099511627776.0, &bytes));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*m, "memory_cap", 0, &bytes));
       // A fraction of a byte is a mistake in the file: refused, not silently cut off.
       if (bytes != static_cast<double>(static_cast<uint64_t>(bytes))) {
         return r.fail(*m, StatusCode::kInvalidArgument,
@@ -491,6 +538,23 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
 }
 
 }  // namespace
+
+Span<const CaseNumber> case_numbers() {
+  return Span<const CaseNumber>(kCaseNumbers, sizeof(kCaseNumbers) / sizeof(kCaseNumbers[0]));
+}
+
+const CaseNumber* find_case_number(const char* key) {
+  for (const CaseNumber& n : kCaseNumbers) {
+    if (std::strcmp(n.key, key) == 0) return &n;
+  }
+  return nullptr;
+}
+
+void case_number_range(const CaseNumber& n, double voxel, double* lo, double* hi) {
+  *lo = n.per_voxel ? n.lo * voxel : n.lo;
+  *hi = n.per_voxel ? n.hi * voxel : n.hi;
+  if (n.per_voxel && n.max_mm > 0 && *hi > n.max_mm) *hi = n.max_mm;
+}
 
 Status parse_case(const Context& ctx, const char* text, size_t length, const char* name,
                   CaseFile* out) {

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <charconv>
 #include <cstdint>
 #include <cstring>
 #include <initializer_list>
@@ -981,6 +982,62 @@ TEST(CaseFile, JawsFromCtTakeSeedsAndTheCtObject) {
     EXPECT_NE(std::string(s.message()).find(b.says), std::string::npos) << s.message();
     EXPECT_NE(s.line(), kNoPosition);
   }
+}
+
+}  // namespace
+}  // namespace splintcore
+
+namespace splintcore {
+namespace {
+
+// docs/case-format.md's "Numbers" table is this table (design.h, case_numbers()), written as
+// below: the doc, the parser and the C API cannot disagree on a range.
+std::string case_numbers_markdown() {
+  auto num = [](double v) {
+    char text[32];
+    const auto r = std::to_chars(text, text + sizeof(text), v);
+    return std::string(text, r.ptr);
+  };
+  std::string out = "| key | unit | range | default | also |\n|---|---|---|---|---|\n";
+  for (const CaseNumber& n : case_numbers()) {
+    std::string range = num(n.lo) + " to " + num(n.hi) + (n.per_voxel ? " voxels" : "");
+    if (n.max_mm > 0) range += ", at most " + num(n.max_mm) + " mm";
+    if (n.integer) range += ", whole";
+    out += "| `" + std::string(n.key) + "` | " + n.unit + " | " + range + " | " + n.default_text +
+           " | " + n.rule + " |\n";
+  }
+  return out;
+}
+
+TEST(CaseNumbers, DocumentedTableIsTheLibrarys) {
+  const std::vector<uint8_t> bytes =
+      test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/../docs/case-format.md");
+  const std::string doc(bytes.begin(), bytes.end());
+  const std::string begin = "<!-- case numbers: begin (tests/design/case_file_test.cpp) -->\n";
+  const std::string end = "<!-- case numbers: end -->";
+  const size_t b = doc.find(begin), e = doc.find(end);
+  ASSERT_NE(b, std::string::npos);
+  ASSERT_NE(e, std::string::npos);
+  const std::string expected = case_numbers_markdown();
+  EXPECT_EQ(doc.substr(b + begin.size(), e - b - begin.size()), expected)
+      << "docs/case-format.md's table should read:\n"
+      << expected;
+}
+
+TEST(CaseNumbers, EveryNumberIsFoundAndItsRangeHolds) {
+  for (const CaseNumber& n : case_numbers()) {
+    EXPECT_EQ(find_case_number(n.key), &n);
+    double lo = 0, hi = 0;
+    case_number_range(n, 0.1, &lo, &hi);
+    EXPECT_LE(lo, hi) << n.key;
+  }
+  EXPECT_EQ(find_case_number("base.no_such_number"), nullptr);
+  // A per-voxel range with a cap in mm: the clearance, 20 voxels but at most 2 mm.
+  double lo = 0, hi = 0;
+  case_number_range(*find_case_number("blockout.clearance"), 0.05, &lo, &hi);
+  EXPECT_EQ(hi, 1.0);
+  case_number_range(*find_case_number("blockout.clearance"), 0.5, &lo, &hi);
+  EXPECT_EQ(hi, 2.0);
 }
 
 }  // namespace
