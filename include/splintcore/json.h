@@ -112,7 +112,7 @@ class JsonWriter {
   uint32_t depth_ = 0;
   bool top_written_ = false;
   size_t fill_ = 0;
-  char buffer_[256];
+  char buffer_[256] = {};
 };
 
 }  // namespace splintcore

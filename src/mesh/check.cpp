@@ -231,7 +231,7 @@ Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report) {
   const uint32_t uses = 3 * tri_count;
   KeyIndex* items = arena.allocate_array<KeyIndex>(uses);
   KeyIndex* scratch = arena.allocate_array<KeyIndex>(uses);
-  if ((items == nullptr || scratch == nullptr) && uses > 0) return arena.exhausted_status();
+  if ((items == nullptr || scratch == nullptr) && tri_count > 0) return arena.exhausted_status();
   UnionFind shells;
   if (!shells.init(arena, tri_count)) return arena.exhausted_status();
   classify_edges(mesh, items, scratch, &shells, &r);
