@@ -54,6 +54,19 @@ std::vector<SoupTriangle> tetrahedron() {
           tri(0, 0, 0, 0, 0, 1, 0, 1, 0), tri(1, 0, 0, 0, 1, 0, 0, 0, 1)};
 }
 
+// The triangles of an indexed mesh appended to a soup (float32 corners, as STL holds them).
+void append_soup(const std::vector<Vec3>& vertices, const std::vector<Triangle>& triangles,
+                 std::vector<SoupTriangle>* soup) {
+  for (const Triangle& t : triangles) {
+    SoupTriangle st;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& p = vertices[t.v[k]];
+      for (int a = 0; a < 3; ++a) st.p[k][a] = static_cast<float>(p[a]);
+    }
+    soup->push_back(st);
+  }
+}
+
 std::vector<Input> inputs() {
   std::vector<Input> out;
   out.push_back({"tetrahedron", tetrahedron()});
@@ -82,16 +95,7 @@ std::vector<Input> inputs() {
     phantom::JawMesh jaw;
     if (phantom::make_jaw(phantom::Jaw::kMaxilla, po, &jaw).is_ok()) {
       std::vector<SoupTriangle> s;
-      for (const Triangle& t : jaw.triangles) {
-        SoupTriangle st;
-        for (int k = 0; k < 3; ++k) {
-          const Vec3& p = jaw.vertices[t.v[k]];
-          st.p[k][0] = static_cast<float>(p.x);
-          st.p[k][1] = static_cast<float>(p.y);
-          st.p[k][2] = static_cast<float>(p.z);
-        }
-        s.push_back(st);
-      }
+      append_soup(jaw.vertices, jaw.triangles, &s);
       out.push_back({"phantom_maxilla_6000", s, true});
     }
   }
@@ -99,18 +103,7 @@ std::vector<Input> inputs() {
   std::string error;
   if (realcase::load(SPLINTCORE_REALDATA_DIR, 0.0, 2.0, 8.0, &rc, &error)) {
     std::vector<SoupTriangle> s;
-    for (const realcase::Tooth& t : rc.teeth) {
-      for (const Triangle& tr : t.triangles) {
-        SoupTriangle st;
-        for (int k = 0; k < 3; ++k) {
-          const Vec3& p = t.vertices[tr.v[k]];
-          st.p[k][0] = static_cast<float>(p.x);
-          st.p[k][1] = static_cast<float>(p.y);
-          st.p[k][2] = static_cast<float>(p.z);
-        }
-        s.push_back(st);
-      }
-    }
+    for (const realcase::Tooth& t : rc.teeth) append_soup(t.vertices, t.triangles, &s);
     out.push_back({"real_dentition", s, true});
   }
   return out;
