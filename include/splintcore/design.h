@@ -42,15 +42,12 @@ struct CaseFile {
   bool has_insertion_direction = false;
   // Interference elimination ("blockout" object; needs insertion_direction): each jaw's
   // swept volume is subtracted, the maxilla's along the insertion direction, the mandible's
-  // along its reverse.
+  // along its reverse (design_splint sets blockout.direction per jaw). The case sets voxel,
+  // inset (default: half the voxel), closing_radius and offset: the spacer between teeth
+  // and splint ("clearance", mm, 0: none), with which the splint's imprint is the offset
+  // surface of each jaw's swept volume instead of the jaw's own triangles (the inset is then 0).
   bool has_blockout = false;
-  double blockout_voxel = 0.1;   // mm
-  double blockout_inset = 0.05;  // mm (default: half the voxel)
-  double blockout_closing = 0;   // mm, 0: none
-  // The spacer between teeth and splint ("clearance", mm, 0: none): the splint's imprint is
-  // the offset surface of each jaw's swept volume at this distance (SweepOptions::offset)
-  // instead of the jaw's own triangles. Needs "blockout"; the inset is then 0.
-  double blockout_clearance = 0;
+  SweepOptions blockout;
   // The wall-thickness check ("min_thickness", mm; 0: not run): thin spots are reported
   // (DesignReport::thickness), not refused.
   double min_thickness = 0;
@@ -58,19 +55,16 @@ struct CaseFile {
   // whole case is moved onto the printer's build tray first; DesignReport::tray_translation).
   bool place_on_tray = false;
   // The case label ("label" object, label.h): text in the built-in stroke font, engraved into
-  // the outer (buccal) wall at the middle of the arch, or embossed on it.
+  // the outer (buccal) wall at the middle of the arch, or embossed on it. The case sets text,
+  // mode, height_mm, stroke_width_mm and depth_mm; the rest are LabelOptions' defaults.
   bool has_label = false;
-  const char* label_text = "";
-  bool label_emboss = false;
-  double label_height = 2.5;   // mm, cap height
-  double label_stroke = 0.35;  // mm
-  double label_depth = 0.4;    // mm, engrave depth or emboss height
+  LabelOptions label;
   // The CT ("ct" object) the jaws given by "seed" are reconstructed from (segment.h).
   const char* ct_volume = nullptr;  // path (file or DICOM folder), relative to the case file
-  int32_t ct_hu_min = 300, ct_hu_max = 4000;
-  uint8_t ct_connectivity = 6;  // 6 or 26
-  uint32_t ct_smooth = 0;       // Taubin iterations (0: none)
-  uint64_t ct_decimate = 0;     // target triangles per jaw (0: none)
+  HuWindow ct_window;               // [300, 4000] HU by default
+  uint8_t ct_connectivity = 6;      // 6 or 26
+  uint32_t ct_smooth = 0;           // Taubin iterations (0: none)
+  uint64_t ct_decimate = 0;         // target triangles per jaw (0: none)
   const char* printer = "eden260";
   uint64_t memory_cap =
       0;  // bytes; 0: the tool's default (`splintcore design` sizes its arena by it)

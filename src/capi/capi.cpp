@@ -686,9 +686,9 @@ sc_status sc_case_get_params(sc_context* ctx, const sc_case* c, sc_case_params* 
   out->insertion_direction[1] = f.insertion_direction.y;
   out->insertion_direction[2] = f.insertion_direction.z;
   out->blockout = f.has_blockout ? 1 : 0;
-  out->blockout_voxel_mm = f.blockout_voxel;
-  out->blockout_inset_mm = f.blockout_inset;
-  out->blockout_closing_mm = f.blockout_closing;
+  out->blockout_voxel_mm = f.blockout.voxel;
+  out->blockout_inset_mm = f.blockout.inset;
+  out->blockout_closing_mm = f.blockout.closing_radius;
   out->printer = f.printer;
   return keep(ctx, Status::ok());
 }
@@ -708,9 +708,9 @@ sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* 
   if (f.has_insertion_direction) f.insertion_direction = vec(params->insertion_direction);
   f.has_blockout = params->blockout != 0;
   if (f.has_blockout) {
-    f.blockout_voxel = params->blockout_voxel_mm;
-    f.blockout_inset = params->blockout_inset_mm;
-    f.blockout_closing = params->blockout_closing_mm;
+    f.blockout.voxel = params->blockout_voxel_mm;
+    f.blockout.inset = params->blockout_inset_mm;
+    f.blockout.closing_radius = params->blockout_closing_mm;
   }
   f.printer = profile->name;  // static text: the caller's string need not outlive the case
   return keep(ctx, Status::ok());

@@ -29,8 +29,7 @@ const CaseNumber kCaseNumbers[] = {
     {"blockout.voxel", "mm", 0.01, 1, false, kNoCap, false, "0.1", ""},
     {"blockout.inset", "mm", 0, 1.99, true, kNoCap, false, "half the voxel (0 with clearance)",
      "not with clearance"},
-    {"blockout.closing_radius", "mm", 0, 10, true, kNoCap, false, "0",
-     "0 or at least 2 voxels"},
+    {"blockout.closing_radius", "mm", 0, 10, true, kNoCap, false, "0", "0 or at least 2 voxels"},
     {"blockout.clearance", "mm", 0, 20, true, 2.0, false, "0", ""},
     {"label.height_mm", "mm", 0.5, 20, false, kNoCap, false, "2.5", ""},
     {"label.stroke_mm", "mm", 0.05, 5, false, kNoCap, false, "0.35", ""},
@@ -362,19 +361,19 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
     double x = 0;
     if (const JsonValue* e = doc.member(*ct, "hu_min")) {
       SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.hu_min", 0, &x));
-      out->ct_hu_min = static_cast<int32_t>(x);
-      if (static_cast<double>(out->ct_hu_min) != x) {
+      out->ct_window.lo = static_cast<int32_t>(x);
+      if (static_cast<double>(out->ct_window.lo) != x) {
         return r.fail(*e, StatusCode::kInvalidArgument, "\"hu_min\" must be an integer");
       }
     }
     if (const JsonValue* e = doc.member(*ct, "hu_max")) {
       SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.hu_max", 0, &x));
-      out->ct_hu_max = static_cast<int32_t>(x);
-      if (static_cast<double>(out->ct_hu_max) != x) {
+      out->ct_window.hi = static_cast<int32_t>(x);
+      if (static_cast<double>(out->ct_window.hi) != x) {
         return r.fail(*e, StatusCode::kInvalidArgument, "\"hu_max\" must be an integer");
       }
     }
-    if (out->ct_hu_min > out->ct_hu_max) {
+    if (out->ct_window.lo > out->ct_window.hi) {
       return r.fail(*ct, StatusCode::kInvalidArgument, "\"hu_min\" is above \"hu_max\"");
     }
     if (const JsonValue* e = doc.member(*ct, "connectivity")) {
@@ -417,27 +416,28 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
     }
     out->has_blockout = true;
     if (const JsonValue* bv = doc.member(*b, "voxel")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*bv, "blockout.voxel", 0, &out->blockout_voxel));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*bv, "blockout.voxel", 0, &out->blockout.voxel));
     }
     if (const JsonValue* bl = doc.member(*b, "clearance")) {
       // The spacer: the offset surface of the swept volume (blockout.h, SweepOptions::offset).
       SPLINTCORE_RETURN_IF_ERROR(
-          r.number(*bl, "blockout.clearance", out->blockout_voxel, &out->blockout_clearance));
+          r.number(*bl, "blockout.clearance", out->blockout.voxel, &out->blockout.offset));
     }
-    out->blockout_inset = out->blockout_clearance > 0 ? 0 : 0.5 * out->blockout_voxel;
+    out->blockout.inset = out->blockout.offset > 0 ? 0 : 0.5 * out->blockout.voxel;
     if (const JsonValue* bi = doc.member(*b, "inset")) {
       SPLINTCORE_RETURN_IF_ERROR(
-          r.number(*bi, "blockout.inset", out->blockout_voxel, &out->blockout_inset));
-      if (out->blockout_inset > 0 && out->blockout_clearance > 0) {
+          r.number(*bi, "blockout.inset", out->blockout.voxel, &out->blockout.inset));
+      if (out->blockout.inset > 0 && out->blockout.offset > 0) {
         return r.fail(*bi, StatusCode::kInvalidArgument,
                       "\"inset\" and \"clearance\" exclude "
                       "each other (a clearance takes the surface outside the swept volume)");
       }
     }
     if (const JsonValue* bc = doc.member(*b, "closing_radius")) {
-      SPLINTCORE_RETURN_IF_ERROR(
-          r.number(*bc, "blockout.closing_radius", out->blockout_voxel, &out->blockout_closing));
-      if (out->blockout_closing != 0 && out->blockout_closing < 2 * out->blockout_voxel) {
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*bc, "blockout.closing_radius", out->blockout.voxel,
+                                          &out->blockout.closing_radius));
+      if (out->blockout.closing_radius != 0 &&
+          out->blockout.closing_radius < 2 * out->blockout.voxel) {
         return r.fail(*bc, StatusCode::kInvalidArgument,
                       "\"closing_radius\" must be 0 or at least two voxels");
       }
@@ -454,26 +454,26 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
                     "\"label\" needs \"text\" (the case id "
                     "or any text of the stroke font: A-Z 0-9 space - _ . / # + ( ) :)");
     }
-    SPLINTCORE_RETURN_IF_ERROR(r.string(*label_text, "text", &out->label_text));
+    SPLINTCORE_RETURN_IF_ERROR(r.string(*label_text, "text", &out->label.text));
     out->has_label = true;
     if (const JsonValue* m = doc.member(*lb, "mode")) {
       const char* mode = "";
       SPLINTCORE_RETURN_IF_ERROR(r.string(*m, "mode", &mode));
       if (std::strcmp(mode, "emboss") == 0) {
-        out->label_emboss = true;
+        out->label.mode = LabelMode::kEmboss;
       } else if (std::strcmp(mode, "engrave") != 0) {
         return r.fail(*m, StatusCode::kInvalidArgument,
                       "\"mode\" must be \"engrave\" (cut into the wall) or \"emboss\" (raised)");
       }
     }
     if (const JsonValue* h = doc.member(*lb, "height_mm")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*h, "label.height_mm", 0, &out->label_height));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*h, "label.height_mm", 0, &out->label.height_mm));
     }
     if (const JsonValue* w = doc.member(*lb, "stroke_mm")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*w, "label.stroke_mm", 0, &out->label_stroke));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*w, "label.stroke_mm", 0, &out->label.stroke_width_mm));
     }
     if (const JsonValue* d = doc.member(*lb, "depth_mm")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*d, "label.depth_mm", 0, &out->label_depth));
+      SPLINTCORE_RETURN_IF_ERROR(r.number(*d, "label.depth_mm", 0, &out->label.depth_mm));
     }
   }
   if (const JsonValue* t = doc.member(root, "min_thickness")) {

@@ -47,8 +47,7 @@ Status reconstruct_case_jaws(const Context& ctx, const CaseFile& c, const CtVolu
     return e;
   };
   LabelVolume labels;
-  Status s = threshold_window(ctx, volume, HuWindow{c.ct_hu_min, c.ct_hu_max}, &labels,
-                              &report->threshold);
+  Status s = threshold_window(ctx, volume, c.ct_window, &labels, &report->threshold);
   if (!s.is_ok()) return fail(s, "threshold");
   RegionGrowOptions go;
   go.connectivity = c.ct_connectivity == 26 ? Connectivity::k26 : Connectivity::k6;
@@ -64,7 +63,7 @@ Status reconstruct_case_jaws(const Context& ctx, const CaseFile& c, const CtVolu
     if (!c.jaws[j].has_seed) continue;
     ReconstructOptions ro;
     ro.label = static_cast<uint8_t>(j + 1);
-    ro.hu_lo = c.ct_hu_min;
+    ro.hu_lo = c.ct_window.lo;
     ro.round_to_float32 = c.ct_smooth == 0 && c.ct_decimate == 0;
     Mesh mesh(&arena);
     s = reconstruct_region(ctx, volume, labels, ro, &mesh, &report->jaws[j]);

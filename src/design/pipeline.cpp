@@ -180,11 +180,8 @@ Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
     const Mesh jaw = jaw_part(b, jaws, j);
     const bool mandible = std::strcmp(c.jaws[j].role, "mandible") == 0;
     BlockoutOptions bl;
+    bl.sweep = c.blockout;  // voxel, inset, closing radius, offset as the case gives them
     bl.sweep.direction = mandible ? -c.insertion_direction : c.insertion_direction;
-    bl.sweep.voxel = c.blockout_voxel;
-    bl.sweep.inset = c.blockout_inset;
-    bl.sweep.closing_radius = c.blockout_closing;
-    bl.sweep.offset = c.blockout_clearance;
     Mesh blocked;
     const Status s =
         blockout(ctx, *cut, Span<const Mesh>(&jaw, 1), bl, &blocked, &report->blockout[j]);
@@ -211,12 +208,7 @@ Status label_splint(const Context& ctx, const CaseFile& c, Mesh* cut, DesignRepo
       stage_error(make_lines(ctx, c.upper, c.occlusal_normal, "upper", &upper), "design"));
   SPLINTCORE_RETURN_IF_ERROR(
       stage_error(make_lines(ctx, c.lower, c.occlusal_normal, "lower", &lower), "design"));
-  LabelOptions lo;
-  lo.text = c.label_text;
-  lo.mode = c.label_emboss ? LabelMode::kEmboss : LabelMode::kEngrave;
-  lo.height_mm = c.label_height;
-  lo.stroke_width_mm = c.label_stroke;
-  lo.depth_mm = c.label_depth;
+  const LabelOptions& lo = c.label;
   Mesh labelled;
   SPLINTCORE_RETURN_IF_ERROR(stage_error(
       apply_label(ctx, *cut, upper.span(), lower.span(), lo, &labelled, &report->label), "design"));
@@ -280,7 +272,7 @@ Status design_splint(const Context& ctx, const CaseFile& case_in, Span<const Mes
   Mesh base(&arena);
   SPLINTCORE_RETURN_IF_ERROR(stage_error(build_case_base(ctx, c, &base, &report->base), "base"));
   Mesh cut;
-  if (c.has_blockout && c.blockout_clearance > 0) {
+  if (c.has_blockout && c.blockout.offset > 0) {
     // A spacer: the imprint is the swept volumes' offset surface, which holds each jaw, so
     // subtracting the jaws themselves first would only cut what the blockout removes anyway.
     report->imprint_offset = true;

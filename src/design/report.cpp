@@ -73,8 +73,8 @@ void write_parameters(JsonWriter& w, const CaseFile& c, const DesignReport& repo
   w.add("boolean_max_nudges", BooleanOptions{}.max_nudges);
   if (c.has_insertion_direction) w.add("insertion_direction", c.insertion_direction);
   if (any_ct) {
-    w.add("ct_hu_min", static_cast<int64_t>(c.ct_hu_min));
-    w.add("ct_hu_max", static_cast<int64_t>(c.ct_hu_max));
+    w.add("ct_hu_min", static_cast<int64_t>(c.ct_window.lo));
+    w.add("ct_hu_max", static_cast<int64_t>(c.ct_window.hi));
     w.add("ct_connectivity", c.ct_connectivity);
     w.add("ct_smooth", c.ct_smooth);
     w.add("ct_decimate", c.ct_decimate);
@@ -83,18 +83,18 @@ void write_parameters(JsonWriter& w, const CaseFile& c, const DesignReport& repo
     w.end_array();
   }
   if (c.has_blockout) {
-    w.add("blockout_voxel_mm", c.blockout_voxel);
-    w.add("blockout_inset_mm", c.blockout_inset);
-    w.add("blockout_closing_radius_mm", c.blockout_closing);
-    w.add("clearance_mm", c.blockout_clearance);
+    w.add("blockout_voxel_mm", c.blockout.voxel);
+    w.add("blockout_inset_mm", c.blockout.inset);
+    w.add("blockout_closing_radius_mm", c.blockout.closing_radius);
+    w.add("clearance_mm", c.blockout.offset);
   }
   if (c.min_thickness > 0) w.add("min_thickness_mm", c.min_thickness);
   if (c.has_label) {
-    w.add("label_text", c.label_text);
-    w.add("label_mode", c.label_emboss ? "emboss" : "engrave");
-    w.add("label_height_mm", c.label_height);
-    w.add("label_stroke_mm", c.label_stroke);
-    w.add("label_depth_mm", c.label_depth);
+    w.add("label_text", c.label.text);
+    w.add("label_mode", c.label.mode == LabelMode::kEmboss ? "emboss" : "engrave");
+    w.add("label_height_mm", c.label.height_mm);
+    w.add("label_stroke_mm", c.label.stroke_width_mm);
+    w.add("label_depth_mm", c.label.depth_mm);
   }
   w.add("placement", c.place_on_tray ? "tray" : "case");
   w.end_object();

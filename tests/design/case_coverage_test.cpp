@@ -279,7 +279,7 @@ TEST(CaseCoverage, CtKeys) {
   CaseFile c;
   SPLINTCORE_ASSERT_OK(parse_case(Context(&t.arena), text.data(), text.size(), "case.json", &c));
   EXPECT_STREQ(c.ct_volume, "v.nrrd");
-  EXPECT_EQ(c.ct_hu_min, -100);
+  EXPECT_EQ(c.ct_window.lo, -100);
   EXPECT_EQ(c.ct_connectivity, 26u);
   EXPECT_EQ(c.ct_smooth, 3u);
   EXPECT_EQ(c.ct_decimate, 0u);
@@ -296,7 +296,7 @@ TEST(CaseCoverage, OptionalPartsLeftOut) {
   EXPECT_STREQ(c.output_splint, "s.stl");
   EXPECT_EQ(c.output_report, nullptr);
   EXPECT_TRUE(c.has_blockout);
-  EXPECT_EQ(c.blockout_closing, 0.0);
+  EXPECT_EQ(c.blockout.closing_radius, 0.0);
 }
 
 TEST(CaseCoverage, BaseFailuresLeaveTheArenaAsItWas) {

@@ -901,15 +901,15 @@ TEST(CaseFile, BlockoutTakesItsDefaultsAndChecksItsRanges) {
   const std::string dir = "\"insertion_direction\": [0, 0, 1],\n";
   SPLINTCORE_ASSERT_OK(parse(a.arena, with_root(dir + "\"blockout\": {},\n").text(), &c));
   EXPECT_TRUE(c.has_blockout);
-  EXPECT_EQ(c.blockout_voxel, 0.1);
-  EXPECT_EQ(c.blockout_inset, 0.05);
-  EXPECT_EQ(c.blockout_closing, 0.0);
+  EXPECT_EQ(c.blockout.voxel, 0.1);
+  EXPECT_EQ(c.blockout.inset, 0.05);
+  EXPECT_EQ(c.blockout.closing_radius, 0.0);
   SPLINTCORE_ASSERT_OK(parse(
       a.arena, with_root(dir + "\"blockout\": {\"voxel\": 0.2, \"closing_radius\": 0.5},\n").text(),
       &c));
-  EXPECT_EQ(c.blockout_voxel, 0.2);
-  EXPECT_EQ(c.blockout_inset, 0.1);  // half the voxel
-  EXPECT_EQ(c.blockout_closing, 0.5);
+  EXPECT_EQ(c.blockout.voxel, 0.2);
+  EXPECT_EQ(c.blockout.inset, 0.1);  // half the voxel
+  EXPECT_EQ(c.blockout.closing_radius, 0.5);
   // Errors name the key.
   const char* bad[] = {
       "\"blockout\": {},\n",  // no insertion direction
@@ -952,8 +952,8 @@ TEST(CaseFile, JawsFromCtTakeSeedsAndTheCtObject) {
   EXPECT_FALSE(c.jaws[1].has_seed);
   EXPECT_STREQ(c.jaws[1].mesh, "lower.stl");
   EXPECT_STREQ(c.ct_volume, "ct.nrrd");
-  EXPECT_EQ(c.ct_hu_min, 250);
-  EXPECT_EQ(c.ct_hu_max, 4000);
+  EXPECT_EQ(c.ct_window.lo, 250);
+  EXPECT_EQ(c.ct_window.hi, 4000);
   EXPECT_EQ(c.ct_connectivity, 26u);
   EXPECT_EQ(c.ct_smooth, 5u);
   EXPECT_EQ(c.ct_decimate, 40000u);

@@ -138,8 +138,8 @@ TEST(DesignPipeline, BlockoutRemovesInterferenceAndStaysPrintable) {
   EXPECT_EQ(r0.blockout_jaws, 0u);
   CaseFile c = f.c;
   c.has_blockout = true;
-  c.blockout_voxel = 0.2;
-  c.blockout_inset = 0.1;
+  c.blockout.voxel = 0.2;
+  c.blockout.inset = 0.1;
   Mesh blocked;
   DesignReport r;
   SPLINTCORE_ASSERT_OK(
@@ -191,9 +191,9 @@ TEST(DesignOptions, ClearanceKeepsTheSpacerBetweenJawAndSplint) {
   ASSERT_TRUE(f.ok);
   CaseFile c = f.c;
   c.has_blockout = true;
-  c.blockout_voxel = 0.3;
-  c.blockout_inset = 0;
-  c.blockout_clearance = 0.6;
+  c.blockout.voxel = 0.3;
+  c.blockout.inset = 0;
+  c.blockout.offset = 0.6;
   test::TestArena big{size_t{512} << 20};  // the swept surfaces' Booleans: about 100 MB
   Mesh splint;
   DesignReport r;
@@ -202,7 +202,7 @@ TEST(DesignOptions, ClearanceKeepsTheSpacerBetweenJawAndSplint) {
   EXPECT_TRUE(r.imprint_offset);
   EXPECT_EQ(r.boolean.intersecting_pairs, 0u);  // the jaws themselves are not subtracted
   ASSERT_EQ(r.blockout_jaws, 2u);
-  EXPECT_EQ(r.blockout[0].offset_used, c.blockout_clearance);
+  EXPECT_EQ(r.blockout[0].offset_used, c.blockout.offset);
   EXPECT_TRUE(r.print.printable);
   // Every splint vertex keeps the clearance from both jaws (within the extractor's
   // piecewise-linear error), and the imprint comes that close: the spacer is there.
@@ -221,13 +221,13 @@ TEST(DesignOptions, ClearanceKeepsTheSpacerBetweenJawAndSplint) {
   // vertices 1/16 of an edge from samples: on the faceted 6k crowns (sharp edges, whose offset
   // is a cylinder of radius c) that is within a quarter voxel here (0.362 mm for 0.4 at 0.2 mm
   // voxels seen).
-  const double tolerance = 0.25 * c.blockout_voxel;
+  const double tolerance = 0.25 * c.blockout.voxel;
   std::printf(
       "[ figures  ] clearance %.3f mm at %.3f mm voxels: nearest splint vertex %.6f mm "
       "from the jaws, %zu triangles\n",
-      c.blockout_clearance, c.blockout_voxel, nearest, splint.triangles.size());
-  EXPECT_GT(nearest, c.blockout_clearance - tolerance);
-  EXPECT_LT(nearest, c.blockout_clearance + tolerance);
+      c.blockout.offset, c.blockout.voxel, nearest, splint.triangles.size());
+  EXPECT_GT(nearest, c.blockout.offset - tolerance);
+  EXPECT_LT(nearest, c.blockout.offset + tolerance);
   // Without the clearance the imprint is the jaws' own surface: distance 0.
   CaseFile plain = f.c;
   Mesh tight;
@@ -357,7 +357,7 @@ TEST(DesignOptions, LabelIsEngravedOnTheDesignedSplint) {
       design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2), &plain, &r0));
   CaseFile c = f.c;
   c.has_label = true;
-  c.label_text = "case-7";
+  c.label.text = "case-7";
   Mesh labelled;
   DesignReport r;
   SPLINTCORE_ASSERT_OK(
@@ -370,11 +370,11 @@ TEST(DesignOptions, LabelIsEngravedOnTheDesignedSplint) {
   SPLINTCORE_ASSERT_OK(check_closed_oriented(Context(&f.t.arena), plain, &v0));
   SPLINTCORE_ASSERT_OK(check_closed_oriented(Context(&f.t.arena), labelled, &v1));
   // Engraved: material removed, about stroke length x width x depth (0.3x to 1.5x of it).
-  const double nominal = r.label.stroke_length_mm * c.label_stroke * c.label_depth;
+  const double nominal = r.label.stroke_length_mm * c.label.stroke_width_mm * c.label.depth_mm;
   EXPECT_GT(v0 - v1, 0.3 * nominal);
   EXPECT_LT(v0 - v1, 1.5 * nominal);
   // A character the font does not have is named.
-  c.label_text = "CASE%";
+  c.label.text = "CASE%";
   Mesh bad;
   const Status s = design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &bad, &r);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
@@ -399,13 +399,13 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
       "\"emboss\", \"height_mm\": 2, \"stroke_mm\": 0.3, \"depth_mm\": 0.5}");
   SPLINTCORE_ASSERT_OK(parse_case(ctx, ok.data(), ok.size(), "ok", &c));
   EXPECT_TRUE(c.has_label);
-  EXPECT_STREQ(c.label_text, "AB-1");
-  EXPECT_TRUE(c.label_emboss);
-  EXPECT_EQ(c.label_height, 2.0);
-  EXPECT_EQ(c.label_stroke, 0.3);
-  EXPECT_EQ(c.label_depth, 0.5);
-  EXPECT_EQ(c.blockout_clearance, 0.1);
-  EXPECT_EQ(c.blockout_inset, 0.0);  // a clearance takes the surface outside
+  EXPECT_STREQ(c.label.text, "AB-1");
+  EXPECT_EQ(c.label.mode, LabelMode::kEmboss);
+  EXPECT_EQ(c.label.height_mm, 2.0);
+  EXPECT_EQ(c.label.stroke_width_mm, 0.3);
+  EXPECT_EQ(c.label.depth_mm, 0.5);
+  EXPECT_EQ(c.blockout.offset, 0.1);
+  EXPECT_EQ(c.blockout.inset, 0.0);  // a clearance takes the surface outside
   EXPECT_EQ(c.min_thickness, 1.5);
   EXPECT_TRUE(c.place_on_tray);
   // The defaults said out loud; the clearance's cap is 20 voxels below 0.1 mm voxels, else 2 mm.
@@ -415,14 +415,14 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
       "\"engrave\"}");
   SPLINTCORE_ASSERT_OK(parse_case(ctx, plain.data(), plain.size(), "plain", &c));
   EXPECT_FALSE(c.place_on_tray);
-  EXPECT_FALSE(c.label_emboss);
-  EXPECT_EQ(c.blockout_clearance, 1.0);
+  EXPECT_EQ(c.label.mode, LabelMode::kEngrave);
+  EXPECT_EQ(c.blockout.offset, 1.0);
   std::string over = with("\"blockout\": {\"voxel\": 0.05, \"clearance\": 1.01}");
   EXPECT_EQ(parse_case(ctx, over.data(), over.size(), "over", &c).code(),
             StatusCode::kInvalidArgument);
   std::string wide = with("\"blockout\": {\"voxel\": 0.2, \"clearance\": 2.0}");
   SPLINTCORE_ASSERT_OK(parse_case(ctx, wide.data(), wide.size(), "wide", &c));
-  EXPECT_EQ(c.blockout_clearance, 2.0);
+  EXPECT_EQ(c.blockout.offset, 2.0);
   const char* bad[] = {
       "\"blockout\": {\"voxel\": 0.1, \"clearance\": 0.1, \"inset\": 0.05}",
       "\"blockout\": {\"voxel\": 0.1, \"clearance\": 2.5}",

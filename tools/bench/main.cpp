@@ -912,8 +912,8 @@ void bench_blockout(Harness& h, Arena& arena, const std::string& fixtures) {
     return;
   }
   c.has_blockout = true;
-  c.blockout_voxel = 0.1;
-  c.blockout_inset = 0.05;
+  c.blockout.voxel = 0.1;
+  c.blockout.inset = 0.05;
   DesignReport report;
   uint64_t triangles = 0;
   h.measure(name, 0, arena, [&](Arena& a) {

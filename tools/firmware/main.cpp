@@ -224,9 +224,9 @@ Status run_design(Arena& arena, const Progress& progress, const char* stage,
   SPLINTCORE_RETURN_IF_ERROR(parse_builtin_case(ctx, &c));
   if (blockout_voxel > 0) {
     c.has_blockout = true;
-    c.blockout_voxel = blockout_voxel;
-    c.blockout_inset = blockout_voxel / 2;
-    c.blockout_closing = 0;
+    c.blockout.voxel = blockout_voxel;
+    c.blockout.inset = blockout_voxel / 2;
+    c.blockout.closing_radius = 0;
   }
   Mesh jaws[2] = {Mesh(&arena), Mesh(&arena)};
   const uint8_t* data[2] = {fw_maxilla_stl, fw_mandible_stl};

@@ -1226,7 +1226,7 @@ int run_design(int argc, char** argv) {
                 c.upper.size(), c.lower.size());
     if (report.imprint_offset) {
       std::printf("imprint: a %.3g mm clearance around each jaw's swept volume\n",
-                  c.blockout_clearance);
+                  c.blockout.offset);
     } else {
       std::printf("boolean: %llu crossing pairs, %llu intersection points, %u attempt(s)\n",
                   static_cast<unsigned long long>(report.boolean.intersecting_pairs),
@@ -1243,7 +1243,7 @@ int run_design(int argc, char** argv) {
     }
     if (report.labelled) {
       std::printf("label: \"%s\" %s, %u glyphs, %.1f mm long\n", report.label.text,
-                  c.label_emboss ? "embossed" : "engraved", report.label.glyphs,
+                  c.label.mode == LabelMode::kEmboss ? "embossed" : "engraved", report.label.glyphs,
                   report.label.text_length_mm);
     }
     if (report.thickness_checked) {
