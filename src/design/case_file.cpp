@@ -183,113 +183,70 @@ Status parse_picks(const Reader& r, const JsonValue& list, const char* key, doub
   return Status::ok();
 }
 
-Status parse_case_document(const Context& ctx, const char* text, size_t length, const char* name,
-                           CaseFile* out) {
-  JsonDocument doc;
-  JsonLimits limits;
-  limits.max_bytes = 16 << 20;
-  SPLINTCORE_RETURN_IF_ERROR(parse_json(ctx, text, length, limits, name, &doc));
-  Reader r{&doc, ctx.arena};
-  const JsonValue& root = doc.root();
-  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(root, JsonType::kObject, "the case"));
-  static const char* const kRootKeys[] = {
-      "splintcore_case",     "case_id",   "units", "jaws",    "base",
-      "insertion_direction", "blockout",  "ct",    "printer", "memory_cap",
-      "min_thickness",       "placement", "label", "output",  nullptr};
-  SPLINTCORE_RETURN_IF_ERROR(r.known_keys(root, kRootKeys, "the case"));
-
-  const JsonValue* version = doc.member(root, "splintcore_case");
-  if (version == nullptr) {
-    return r.fail(root, StatusCode::kInvalidArgument,
-                  "not a splintcore case file: no \"splintcore_case\" version key");
-  }
-  double v = 0;
-  SPLINTCORE_RETURN_IF_ERROR(r.number(*version, "splintcore_case", 0, &v));
-  if (v != static_cast<double>(static_cast<uint32_t>(v))) {
-    return r.fail(*version, StatusCode::kInvalidArgument, "\"splintcore_case\" must be an integer");
-  }
-  if (v > kCaseFormatVersion) {
-    return make_error(StatusCode::kUnsupported, "case format version ", static_cast<uint64_t>(v),
-                      " is newer than this splintcore reads (", kCaseFormatVersion, ")")
-        .at_line(version->line, version->column)
-        .in_file(name);
-  }
-  out->version = static_cast<uint32_t>(v);
-
-  if (const JsonValue* id = doc.member(root, "case_id")) {
-    SPLINTCORE_RETURN_IF_ERROR(r.string(*id, "case_id", &out->case_id));
-    if (!is_plain_name(out->case_id, 64)) {
-      return r.fail(*id, StatusCode::kInvalidArgument,
-                    "\"case_id\" must be 1-64 letters, digits, '_', '-' or '.'");
+// The jaws ("jaws": role, mesh or seed, transform).
+Status parse_jaws(const Reader& r, const JsonValue* jaws, CaseFile* out) {
+  const JsonDocument& doc = *r.doc;
+  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*jaws, JsonType::kArray, "jaws"));
+  CaseJaw* list = r.arena->allocate_array<CaseJaw>(jaws->child_count);
+  if (list == nullptr && jaws->child_count > 0) return r.arena->exhausted_status();
+  static const char* const kJawKeys[] = {"role", "mesh", "seed", "transform", nullptr};
+  uint32_t i = 0;
+  for (uint32_t k = jaws->first_child; k != kJsonNone; k = doc.at(k).next_sibling, ++i) {
+    const JsonValue& j = doc.at(k);
+    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(j, JsonType::kObject, "jaws"));
+    SPLINTCORE_RETURN_IF_ERROR(r.known_keys(j, kJawKeys, "a jaw"));
+    CaseJaw jaw;
+    const JsonValue* role = doc.member(j, "role");
+    const JsonValue* mesh = doc.member(j, "mesh");
+    const JsonValue* seed = doc.member(j, "seed");
+    if (role == nullptr || (mesh == nullptr) == (seed == nullptr)) {
+      return r.fail(j, StatusCode::kInvalidArgument,
+                    "a jaw needs \"role\" and either \"mesh\" (a file) or \"seed\" (a point "
+                    "of it in the case's \"ct\", mm)");
     }
-  }
-  if (const JsonValue* units = doc.member(root, "units")) {
-    const char* u = nullptr;
-    SPLINTCORE_RETURN_IF_ERROR(r.string(*units, "units", &u));
-    if (std::strcmp(u, "mm") != 0) {
-      return r.fail(*units, StatusCode::kInvalidArgument, "\"units\" must be \"mm\" (got \"", u,
-                    "\"): convert the meshes and the case to millimetres");
+    SPLINTCORE_RETURN_IF_ERROR(r.string(*role, "role", &jaw.role));
+    if (std::strcmp(jaw.role, "maxilla") != 0 && std::strcmp(jaw.role, "mandible") != 0) {
+      return r.fail(*role, StatusCode::kInvalidArgument,
+                    "\"role\" must be \"maxilla\" or \"mandible\"");
     }
-  }
-
-  if (const JsonValue* jaws = doc.member(root, "jaws")) {
-    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*jaws, JsonType::kArray, "jaws"));
-    CaseJaw* list = ctx.arena->allocate_array<CaseJaw>(jaws->child_count);
-    if (list == nullptr && jaws->child_count > 0) return ctx.arena->exhausted_status();
-    static const char* const kJawKeys[] = {"role", "mesh", "seed", "transform", nullptr};
-    uint32_t i = 0;
-    for (uint32_t k = jaws->first_child; k != kJsonNone; k = doc.at(k).next_sibling, ++i) {
-      const JsonValue& j = doc.at(k);
-      SPLINTCORE_RETURN_IF_ERROR(r.expect_type(j, JsonType::kObject, "jaws"));
-      SPLINTCORE_RETURN_IF_ERROR(r.known_keys(j, kJawKeys, "a jaw"));
-      CaseJaw jaw;
-      const JsonValue* role = doc.member(j, "role");
-      const JsonValue* mesh = doc.member(j, "mesh");
-      const JsonValue* seed = doc.member(j, "seed");
-      if (role == nullptr || (mesh == nullptr) == (seed == nullptr)) {
-        return r.fail(j, StatusCode::kInvalidArgument,
-                      "a jaw needs \"role\" and either \"mesh\" (a file) or \"seed\" (a point "
-                      "of it in the case's \"ct\", mm)");
-      }
-      SPLINTCORE_RETURN_IF_ERROR(r.string(*role, "role", &jaw.role));
-      if (std::strcmp(jaw.role, "maxilla") != 0 && std::strcmp(jaw.role, "mandible") != 0) {
-        return r.fail(*role, StatusCode::kInvalidArgument,
-                      "\"role\" must be \"maxilla\" or \"mandible\"");
-      }
-      if (mesh != nullptr) {
-        SPLINTCORE_RETURN_IF_ERROR(r.string(*mesh, "mesh", &jaw.mesh));
-      } else {
-        SPLINTCORE_RETURN_IF_ERROR(r.vec3(*seed, "seed", &jaw.seed));
-        jaw.has_seed = true;
-      }
-      if (const JsonValue* t = doc.member(j, "transform")) {
-        SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*t, JsonType::kArray, "transform"));
-        if (t->child_count != 16) {
-          return r.fail(*t, StatusCode::kInvalidArgument,
-                        "\"transform\" needs 16 numbers (a row-major 4x4 matrix)");
-        }
-        double m[16];
-        uint32_t e = t->first_child;
-        for (int a = 0; a < 16; ++a, e = doc.at(e).next_sibling) {
-          SPLINTCORE_RETURN_IF_ERROR(r.number(doc.at(e), "jaws[].transform", 0, &m[a]));
-        }
-        Status s = rigid_from_matrix(m, 1e-6, &jaw.transform);
-        if (!s.is_ok()) {
-          Status located = json_error(doc, *t, s.code(), "\"transform\": ");
-          return located.append(s.message());
-        }
-      }
-      for (uint32_t e = 0; e < i; ++e) {
-        if (std::strcmp(list[e].role, jaw.role) == 0) {
-          return r.fail(*role, StatusCode::kInvalidArgument, "two jaws with the role \"", jaw.role,
-                        "\"");
-        }
-      }
-      list[i] = jaw;
+    if (mesh != nullptr) {
+      SPLINTCORE_RETURN_IF_ERROR(r.string(*mesh, "mesh", &jaw.mesh));
+    } else {
+      SPLINTCORE_RETURN_IF_ERROR(r.vec3(*seed, "seed", &jaw.seed));
+      jaw.has_seed = true;
     }
-    out->jaws = Span<const CaseJaw>(list, jaws->child_count);
+    if (const JsonValue* t = doc.member(j, "transform")) {
+      SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*t, JsonType::kArray, "transform"));
+      if (t->child_count != 16) {
+        return r.fail(*t, StatusCode::kInvalidArgument,
+                      "\"transform\" needs 16 numbers (a row-major 4x4 matrix)");
+      }
+      double m[16];
+      uint32_t e = t->first_child;
+      for (int a = 0; a < 16; ++a, e = doc.at(e).next_sibling) {
+        SPLINTCORE_RETURN_IF_ERROR(r.number(doc.at(e), "jaws[].transform", 0, &m[a]));
+      }
+      Status s = rigid_from_matrix(m, 1e-6, &jaw.transform);
+      if (!s.is_ok()) {
+        Status located = json_error(doc, *t, s.code(), "\"transform\": ");
+        return located.append(s.message());
+      }
+    }
+    for (uint32_t e = 0; e < i; ++e) {
+      if (std::strcmp(list[e].role, jaw.role) == 0) {
+        return r.fail(*role, StatusCode::kInvalidArgument, "two jaws with the role \"", jaw.role,
+                      "\"");
+      }
+    }
+    list[i] = jaw;
   }
+  out->jaws = Span<const CaseJaw>(list, jaws->child_count);
+  return Status::ok();
+}
 
+// The base ("base": the occlusal normal, spacing, corners, default line lengths, the picks).
+Status parse_base(const Reader& r, const JsonValue& root, CaseFile* out) {
+  const JsonDocument& doc = *r.doc;
   const JsonValue* base = doc.member(root, "base");
   if (base == nullptr) return r.fail(root, StatusCode::kInvalidArgument, "no \"base\" object");
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*base, JsonType::kObject, "base"));
@@ -342,61 +299,252 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
         .append_u64(out->lower.size())
         .append(" lower (the i-th upper pick pairs with the i-th lower pick)");
   }
+  return Status::ok();
+}
+
+// The CT the seeded jaws come from ("ct").
+Status parse_ct(const Reader& r, const JsonValue* ct, CaseFile* out) {
+  const JsonDocument& doc = *r.doc;
+  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*ct, JsonType::kObject, "ct"));
+  static const char* const kCtKeys[] = {"volume", "hu_min",   "hu_max", "connectivity",
+                                        "smooth", "decimate", nullptr};
+  SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*ct, kCtKeys, "\"ct\""));
+  const JsonValue* vol = doc.member(*ct, "volume");
+  if (vol == nullptr) {
+    return r.fail(*ct, StatusCode::kInvalidArgument,
+                  "\"ct\" needs \"volume\" (a .nrrd/.mha/.mhd file or a DICOM folder)");
+  }
+  SPLINTCORE_RETURN_IF_ERROR(r.string(*vol, "volume", &out->ct_volume));
+  double x = 0;
+  if (const JsonValue* e = doc.member(*ct, "hu_min")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.hu_min", 0, &x));
+    out->ct_window.lo = static_cast<int32_t>(x);
+    if (static_cast<double>(out->ct_window.lo) != x) {
+      return r.fail(*e, StatusCode::kInvalidArgument, "\"hu_min\" must be an integer");
+    }
+  }
+  if (const JsonValue* e = doc.member(*ct, "hu_max")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.hu_max", 0, &x));
+    out->ct_window.hi = static_cast<int32_t>(x);
+    if (static_cast<double>(out->ct_window.hi) != x) {
+      return r.fail(*e, StatusCode::kInvalidArgument, "\"hu_max\" must be an integer");
+    }
+  }
+  if (out->ct_window.lo > out->ct_window.hi) {
+    return r.fail(*ct, StatusCode::kInvalidArgument, "\"hu_min\" is above \"hu_max\"");
+  }
+  if (const JsonValue* e = doc.member(*ct, "connectivity")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.connectivity", 0, &x));
+    if (x != 6 && x != 26) {
+      return r.fail(*e, StatusCode::kInvalidArgument, "\"connectivity\" must be 6 or 26");
+    }
+    out->ct_connectivity = static_cast<uint8_t>(x);
+  }
+  if (const JsonValue* e = doc.member(*ct, "smooth")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.smooth", 0, &x));
+    out->ct_smooth = static_cast<uint32_t>(x);
+    if (static_cast<double>(out->ct_smooth) != x) {
+      return r.fail(*e, StatusCode::kInvalidArgument, "\"smooth\" must be an integer");
+    }
+  }
+  if (const JsonValue* e = doc.member(*ct, "decimate")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.decimate", 0, &x));
+    out->ct_decimate = static_cast<uint64_t>(x);
+    if (static_cast<double>(out->ct_decimate) != x) {
+      return r.fail(*e, StatusCode::kInvalidArgument, "\"decimate\" must be an integer");
+    }
+  }
+  return Status::ok();
+}
+
+// Interference elimination ("blockout"; needs insertion_direction).
+Status parse_blockout(const Reader& r, const JsonValue* b, CaseFile* out) {
+  const JsonDocument& doc = *r.doc;
+  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*b, JsonType::kObject, "blockout"));
+  static const char* const kBlockoutKeys[] = {"voxel", "inset", "closing_radius", "clearance",
+                                              nullptr};
+  SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*b, kBlockoutKeys, "\"blockout\""));
+  if (!out->has_insertion_direction) {
+    return r.fail(*b, StatusCode::kInvalidArgument,
+                  "\"blockout\" needs \"insertion_direction\" (the splint is seated along it)");
+  }
+  out->has_blockout = true;
+  if (const JsonValue* bv = doc.member(*b, "voxel")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*bv, "blockout.voxel", 0, &out->blockout.voxel));
+  }
+  if (const JsonValue* bl = doc.member(*b, "clearance")) {
+    // The spacer: the offset surface of the swept volume (blockout.h, SweepOptions::offset).
+    SPLINTCORE_RETURN_IF_ERROR(
+        r.number(*bl, "blockout.clearance", out->blockout.voxel, &out->blockout.offset));
+  }
+  out->blockout.inset = out->blockout.offset > 0 ? 0 : 0.5 * out->blockout.voxel;
+  if (const JsonValue* bi = doc.member(*b, "inset")) {
+    SPLINTCORE_RETURN_IF_ERROR(
+        r.number(*bi, "blockout.inset", out->blockout.voxel, &out->blockout.inset));
+    if (out->blockout.inset > 0 && out->blockout.offset > 0) {
+      return r.fail(*bi, StatusCode::kInvalidArgument,
+                    "\"inset\" and \"clearance\" exclude "
+                    "each other (a clearance takes the surface outside the swept volume)");
+    }
+  }
+  if (const JsonValue* bc = doc.member(*b, "closing_radius")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*bc, "blockout.closing_radius", out->blockout.voxel,
+                                        &out->blockout.closing_radius));
+    if (out->blockout.closing_radius != 0 &&
+        out->blockout.closing_radius < 2 * out->blockout.voxel) {
+      return r.fail(*bc, StatusCode::kInvalidArgument,
+                    "\"closing_radius\" must be 0 or at least two voxels");
+    }
+  }
+  return Status::ok();
+}
+
+// The label ("label").
+Status parse_label(const Reader& r, const JsonValue* lb, CaseFile* out) {
+  const JsonDocument& doc = *r.doc;
+  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*lb, JsonType::kObject, "label"));
+  static const char* const kLabelKeys[] = {"text",      "mode",     "height_mm",
+                                           "stroke_mm", "depth_mm", nullptr};
+  SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*lb, kLabelKeys, "\"label\""));
+  const JsonValue* label_text = doc.member(*lb, "text");
+  if (label_text == nullptr) {
+    return r.fail(*lb, StatusCode::kInvalidArgument,
+                  "\"label\" needs \"text\" (the case id "
+                  "or any text of the stroke font: A-Z 0-9 space - _ . / # + ( ) :)");
+  }
+  SPLINTCORE_RETURN_IF_ERROR(r.string(*label_text, "text", &out->label.text));
+  out->has_label = true;
+  if (const JsonValue* m = doc.member(*lb, "mode")) {
+    const char* mode = "";
+    SPLINTCORE_RETURN_IF_ERROR(r.string(*m, "mode", &mode));
+    if (std::strcmp(mode, "emboss") == 0) {
+      out->label.mode = LabelMode::kEmboss;
+    } else if (std::strcmp(mode, "engrave") != 0) {
+      return r.fail(*m, StatusCode::kInvalidArgument,
+                    "\"mode\" must be \"engrave\" (cut into the wall) or \"emboss\" (raised)");
+    }
+  }
+  if (const JsonValue* h = doc.member(*lb, "height_mm")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*h, "label.height_mm", 0, &out->label.height_mm));
+  }
+  if (const JsonValue* w = doc.member(*lb, "stroke_mm")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*w, "label.stroke_mm", 0, &out->label.stroke_width_mm));
+  }
+  if (const JsonValue* d = doc.member(*lb, "depth_mm")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*d, "label.depth_mm", 0, &out->label.depth_mm));
+  }
+  return Status::ok();
+}
+
+// The memory cap ("memory_cap": "256M" or a byte count).
+Status parse_memory_cap(const Reader& r, const JsonValue* m, CaseFile* out) {
+  if (m->type == JsonType::kString) {
+    if (!parse_byte_size(m->string, &out->memory_cap) || out->memory_cap == 0) {
+      return r.fail(*m, StatusCode::kInvalidArgument,
+                    "\"memory_cap\" must be a size such as \"256M\", \"2G\" or a byte count");
+    }
+  } else if (m->type != JsonType::kNumber) {
+    return r.fail(*m, StatusCode::kInvalidArgument,
+                  "\"memory_cap\" must be a string such as \"256M\" or a number of bytes");
+  } else {
+    double bytes = 0;
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*m, "memory_cap", 0, &bytes));
+    // A fraction of a byte is a mistake in the file: refused, not silently cut off.
+    if (bytes != static_cast<double>(static_cast<uint64_t>(bytes))) {
+      return r.fail(*m, StatusCode::kInvalidArgument,
+                    "\"memory_cap\" must be a whole number of bytes");
+    }
+    out->memory_cap = static_cast<uint64_t>(bytes);
+  }
+  return Status::ok();
+}
+
+// The output names ("output").
+Status parse_output(const Reader& r, const JsonValue* o, CaseFile* out) {
+  const JsonDocument& doc = *r.doc;
+  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*o, JsonType::kObject, "output"));
+  static const char* const kOutputKeys[] = {"splint", "report", nullptr};
+  SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*o, kOutputKeys, "\"output\""));
+  // Output names are file names inside the output folder the user chose: a case from
+  // elsewhere must not be able to write outside it ("../x", "/etc/x").
+  static const char* const kOutputNameRule =
+      "\" must be a file name in the output folder: 1-128 letters, digits, '_', '-' or '.'";
+  if (const JsonValue* s = doc.member(*o, "splint")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.string(*s, "splint", &out->output_splint));
+    if (!is_plain_name(out->output_splint, 128)) {
+      return r.fail(*s, StatusCode::kInvalidArgument, "\"splint", kOutputNameRule);
+    }
+  }
+  if (const JsonValue* s = doc.member(*o, "report")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.string(*s, "report", &out->output_report));
+    if (!is_plain_name(out->output_report, 128)) {
+      return r.fail(*s, StatusCode::kInvalidArgument, "\"report", kOutputNameRule);
+    }
+  }
+  return Status::ok();
+}
+
+Status parse_case_document(const Context& ctx, const char* text, size_t length, const char* name,
+                           CaseFile* out) {
+  JsonDocument doc;
+  JsonLimits limits;
+  limits.max_bytes = 16 << 20;
+  SPLINTCORE_RETURN_IF_ERROR(parse_json(ctx, text, length, limits, name, &doc));
+  Reader r{&doc, ctx.arena};
+  const JsonValue& root = doc.root();
+  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(root, JsonType::kObject, "the case"));
+  static const char* const kRootKeys[] = {
+      "splintcore_case",     "case_id",   "units", "jaws",    "base",
+      "insertion_direction", "blockout",  "ct",    "printer", "memory_cap",
+      "min_thickness",       "placement", "label", "output",  nullptr};
+  SPLINTCORE_RETURN_IF_ERROR(r.known_keys(root, kRootKeys, "the case"));
+
+  const JsonValue* version = doc.member(root, "splintcore_case");
+  if (version == nullptr) {
+    return r.fail(root, StatusCode::kInvalidArgument,
+                  "not a splintcore case file: no \"splintcore_case\" version key");
+  }
+  double v = 0;
+  SPLINTCORE_RETURN_IF_ERROR(r.number(*version, "splintcore_case", 0, &v));
+  if (v != static_cast<double>(static_cast<uint32_t>(v))) {
+    return r.fail(*version, StatusCode::kInvalidArgument, "\"splintcore_case\" must be an integer");
+  }
+  if (v > kCaseFormatVersion) {
+    return make_error(StatusCode::kUnsupported, "case format version ", static_cast<uint64_t>(v),
+                      " is newer than this splintcore reads (", kCaseFormatVersion, ")")
+        .at_line(version->line, version->column)
+        .in_file(name);
+  }
+  out->version = static_cast<uint32_t>(v);
+
+  if (const JsonValue* id = doc.member(root, "case_id")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.string(*id, "case_id", &out->case_id));
+    if (!is_plain_name(out->case_id, 64)) {
+      return r.fail(*id, StatusCode::kInvalidArgument,
+                    "\"case_id\" must be 1-64 letters, digits, '_', '-' or '.'");
+    }
+  }
+  if (const JsonValue* units = doc.member(root, "units")) {
+    const char* u = nullptr;
+    SPLINTCORE_RETURN_IF_ERROR(r.string(*units, "units", &u));
+    if (std::strcmp(u, "mm") != 0) {
+      return r.fail(*units, StatusCode::kInvalidArgument, "\"units\" must be \"mm\" (got \"", u,
+                    "\"): convert the meshes and the case to millimetres");
+    }
+  }
+
+  if (const JsonValue* jaws = doc.member(root, "jaws")) {
+    SPLINTCORE_RETURN_IF_ERROR(parse_jaws(r, jaws, out));
+  }
+
+  SPLINTCORE_RETURN_IF_ERROR(parse_base(r, root, out));
 
   if (const JsonValue* d = doc.member(root, "insertion_direction")) {
     SPLINTCORE_RETURN_IF_ERROR(r.unit_vector(*d, "insertion_direction", &out->insertion_direction));
     out->has_insertion_direction = true;
   }
   if (const JsonValue* ct = doc.member(root, "ct")) {
-    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*ct, JsonType::kObject, "ct"));
-    static const char* const kCtKeys[] = {"volume", "hu_min",   "hu_max", "connectivity",
-                                          "smooth", "decimate", nullptr};
-    SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*ct, kCtKeys, "\"ct\""));
-    const JsonValue* vol = doc.member(*ct, "volume");
-    if (vol == nullptr) {
-      return r.fail(*ct, StatusCode::kInvalidArgument,
-                    "\"ct\" needs \"volume\" (a .nrrd/.mha/.mhd file or a DICOM folder)");
-    }
-    SPLINTCORE_RETURN_IF_ERROR(r.string(*vol, "volume", &out->ct_volume));
-    double x = 0;
-    if (const JsonValue* e = doc.member(*ct, "hu_min")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.hu_min", 0, &x));
-      out->ct_window.lo = static_cast<int32_t>(x);
-      if (static_cast<double>(out->ct_window.lo) != x) {
-        return r.fail(*e, StatusCode::kInvalidArgument, "\"hu_min\" must be an integer");
-      }
-    }
-    if (const JsonValue* e = doc.member(*ct, "hu_max")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.hu_max", 0, &x));
-      out->ct_window.hi = static_cast<int32_t>(x);
-      if (static_cast<double>(out->ct_window.hi) != x) {
-        return r.fail(*e, StatusCode::kInvalidArgument, "\"hu_max\" must be an integer");
-      }
-    }
-    if (out->ct_window.lo > out->ct_window.hi) {
-      return r.fail(*ct, StatusCode::kInvalidArgument, "\"hu_min\" is above \"hu_max\"");
-    }
-    if (const JsonValue* e = doc.member(*ct, "connectivity")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.connectivity", 0, &x));
-      if (x != 6 && x != 26) {
-        return r.fail(*e, StatusCode::kInvalidArgument, "\"connectivity\" must be 6 or 26");
-      }
-      out->ct_connectivity = static_cast<uint8_t>(x);
-    }
-    if (const JsonValue* e = doc.member(*ct, "smooth")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.smooth", 0, &x));
-      out->ct_smooth = static_cast<uint32_t>(x);
-      if (static_cast<double>(out->ct_smooth) != x) {
-        return r.fail(*e, StatusCode::kInvalidArgument, "\"smooth\" must be an integer");
-      }
-    }
-    if (const JsonValue* e = doc.member(*ct, "decimate")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.decimate", 0, &x));
-      out->ct_decimate = static_cast<uint64_t>(x);
-      if (static_cast<double>(out->ct_decimate) != x) {
-        return r.fail(*e, StatusCode::kInvalidArgument, "\"decimate\" must be an integer");
-      }
-    }
+    SPLINTCORE_RETURN_IF_ERROR(parse_ct(r, ct, out));
   }
   for (const CaseJaw& jaw : out->jaws) {
     if (jaw.has_seed && out->ct_volume == nullptr) {
@@ -406,75 +554,10 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
     }
   }
   if (const JsonValue* b = doc.member(root, "blockout")) {
-    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*b, JsonType::kObject, "blockout"));
-    static const char* const kBlockoutKeys[] = {"voxel", "inset", "closing_radius", "clearance",
-                                                nullptr};
-    SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*b, kBlockoutKeys, "\"blockout\""));
-    if (!out->has_insertion_direction) {
-      return r.fail(*b, StatusCode::kInvalidArgument,
-                    "\"blockout\" needs \"insertion_direction\" (the splint is seated along it)");
-    }
-    out->has_blockout = true;
-    if (const JsonValue* bv = doc.member(*b, "voxel")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*bv, "blockout.voxel", 0, &out->blockout.voxel));
-    }
-    if (const JsonValue* bl = doc.member(*b, "clearance")) {
-      // The spacer: the offset surface of the swept volume (blockout.h, SweepOptions::offset).
-      SPLINTCORE_RETURN_IF_ERROR(
-          r.number(*bl, "blockout.clearance", out->blockout.voxel, &out->blockout.offset));
-    }
-    out->blockout.inset = out->blockout.offset > 0 ? 0 : 0.5 * out->blockout.voxel;
-    if (const JsonValue* bi = doc.member(*b, "inset")) {
-      SPLINTCORE_RETURN_IF_ERROR(
-          r.number(*bi, "blockout.inset", out->blockout.voxel, &out->blockout.inset));
-      if (out->blockout.inset > 0 && out->blockout.offset > 0) {
-        return r.fail(*bi, StatusCode::kInvalidArgument,
-                      "\"inset\" and \"clearance\" exclude "
-                      "each other (a clearance takes the surface outside the swept volume)");
-      }
-    }
-    if (const JsonValue* bc = doc.member(*b, "closing_radius")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*bc, "blockout.closing_radius", out->blockout.voxel,
-                                          &out->blockout.closing_radius));
-      if (out->blockout.closing_radius != 0 &&
-          out->blockout.closing_radius < 2 * out->blockout.voxel) {
-        return r.fail(*bc, StatusCode::kInvalidArgument,
-                      "\"closing_radius\" must be 0 or at least two voxels");
-      }
-    }
+    SPLINTCORE_RETURN_IF_ERROR(parse_blockout(r, b, out));
   }
   if (const JsonValue* lb = doc.member(root, "label")) {
-    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*lb, JsonType::kObject, "label"));
-    static const char* const kLabelKeys[] = {"text",      "mode",     "height_mm",
-                                             "stroke_mm", "depth_mm", nullptr};
-    SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*lb, kLabelKeys, "\"label\""));
-    const JsonValue* label_text = doc.member(*lb, "text");
-    if (label_text == nullptr) {
-      return r.fail(*lb, StatusCode::kInvalidArgument,
-                    "\"label\" needs \"text\" (the case id "
-                    "or any text of the stroke font: A-Z 0-9 space - _ . / # + ( ) :)");
-    }
-    SPLINTCORE_RETURN_IF_ERROR(r.string(*label_text, "text", &out->label.text));
-    out->has_label = true;
-    if (const JsonValue* m = doc.member(*lb, "mode")) {
-      const char* mode = "";
-      SPLINTCORE_RETURN_IF_ERROR(r.string(*m, "mode", &mode));
-      if (std::strcmp(mode, "emboss") == 0) {
-        out->label.mode = LabelMode::kEmboss;
-      } else if (std::strcmp(mode, "engrave") != 0) {
-        return r.fail(*m, StatusCode::kInvalidArgument,
-                      "\"mode\" must be \"engrave\" (cut into the wall) or \"emboss\" (raised)");
-      }
-    }
-    if (const JsonValue* h = doc.member(*lb, "height_mm")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*h, "label.height_mm", 0, &out->label.height_mm));
-    }
-    if (const JsonValue* w = doc.member(*lb, "stroke_mm")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*w, "label.stroke_mm", 0, &out->label.stroke_width_mm));
-    }
-    if (const JsonValue* d = doc.member(*lb, "depth_mm")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*d, "label.depth_mm", 0, &out->label.depth_mm));
-    }
+    SPLINTCORE_RETURN_IF_ERROR(parse_label(r, lb, out));
   }
   if (const JsonValue* t = doc.member(root, "min_thickness")) {
     SPLINTCORE_RETURN_IF_ERROR(r.number(*t, "min_thickness", 0, &out->min_thickness));
@@ -494,45 +577,10 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
     SPLINTCORE_RETURN_IF_ERROR(r.string(*p, "printer", &out->printer));
   }
   if (const JsonValue* m = doc.member(root, "memory_cap")) {
-    if (m->type == JsonType::kString) {
-      if (!parse_byte_size(m->string, &out->memory_cap) || out->memory_cap == 0) {
-        return r.fail(*m, StatusCode::kInvalidArgument,
-                      "\"memory_cap\" must be a size such as \"256M\", \"2G\" or a byte count");
-      }
-    } else if (m->type != JsonType::kNumber) {
-      return r.fail(*m, StatusCode::kInvalidArgument,
-                    "\"memory_cap\" must be a string such as \"256M\" or a number of bytes");
-    } else {
-      double bytes = 0;
-      SPLINTCORE_RETURN_IF_ERROR(r.number(*m, "memory_cap", 0, &bytes));
-      // A fraction of a byte is a mistake in the file: refused, not silently cut off.
-      if (bytes != static_cast<double>(static_cast<uint64_t>(bytes))) {
-        return r.fail(*m, StatusCode::kInvalidArgument,
-                      "\"memory_cap\" must be a whole number of bytes");
-      }
-      out->memory_cap = static_cast<uint64_t>(bytes);
-    }
+    SPLINTCORE_RETURN_IF_ERROR(parse_memory_cap(r, m, out));
   }
   if (const JsonValue* o = doc.member(root, "output")) {
-    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*o, JsonType::kObject, "output"));
-    static const char* const kOutputKeys[] = {"splint", "report", nullptr};
-    SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*o, kOutputKeys, "\"output\""));
-    // Output names are file names inside the output folder the user chose: a case from
-    // elsewhere must not be able to write outside it ("../x", "/etc/x").
-    static const char* const kOutputNameRule =
-        "\" must be a file name in the output folder: 1-128 letters, digits, '_', '-' or '.'";
-    if (const JsonValue* s = doc.member(*o, "splint")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.string(*s, "splint", &out->output_splint));
-      if (!is_plain_name(out->output_splint, 128)) {
-        return r.fail(*s, StatusCode::kInvalidArgument, "\"splint", kOutputNameRule);
-      }
-    }
-    if (const JsonValue* s = doc.member(*o, "report")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.string(*s, "report", &out->output_report));
-      if (!is_plain_name(out->output_report, 128)) {
-        return r.fail(*s, StatusCode::kInvalidArgument, "\"report", kOutputNameRule);
-      }
-    }
+    SPLINTCORE_RETURN_IF_ERROR(parse_output(r, o, out));
   }
   return Status::ok();
 }
