@@ -84,14 +84,10 @@ enum class SignMethod : uint8_t {
 struct DistanceIndexOptions {
   // Triangles per leaf, 1..16; 0: the default, 8.
   uint32_t leaf_size = 0;
-  // Oriented boxes (BvhObb) for closest-point and signed-distance queries. On finely
-  // tessellated curved surfaces of 324k and 543k triangles: one tree search after another about
-  // 1.25 times the queries per second (17% fewer instructions at 543k), for 40% more build
-  // instructions and 20% more index memory; on coarser ones (87k) and on the real dentition
-  // about the same. Large batches (at least half as many queries as triangles) go
-  // triangle by triangle and gain nothing (splintcore-bench --filter closest_point). Worth it
-  // when queries come one at a time or in small batches, as in volume sampling in a narrow band.
-  // The answers are the same bits either way.
+  // Oriented boxes (BvhObb) for closest-point and signed-distance queries: worth it when
+  // queries come one at a time or in small batches on finely tessellated curved surfaces,
+  // for a slower build and a larger index (measurements: docs/architecture.md). The answers
+  // are the same bits either way.
   bool oriented_boxes = false;
 };
 
