@@ -3,61 +3,18 @@
 // the pieces are classified inside or outside the other solid, and the result is assembled from the
 // pieces an operation keeps.
 //
-// How it decides, and what it promises:
-// - Only the part of B near A is touched: B's vertices are tested once against A's box, and
-//   B's triangles whose corners all lie beyond one side of it are never split or classified
-//   (they are outside A). The rest are paired with A's triangles through a uniform grid over
-//   A (A is the small mesh: the splint base), with plane and edge-plane filters (B's whole
-//   box against A's edge planes first, then B's corners against them in 2-D); filters only
-//   skip pairs the exact tests would reject.
-// - Each candidate pair is decided by exact predicates (orient3d on the input coordinates,
-//   after filters that only answer when they are certain; where the segment starts and ends
-//   takes at most four orient3d of an edge of one triangle against an edge of the other, each
-//   sign computed once). An intersection point is named
-//   symbolically (an edge of one mesh and a triangle of the other) and computed once, so every
-//   triangle that shares it gets the same vertex: the result has no cracks by construction.
-// - Each cut triangle is re-triangulated on its own plane (projected to 2-D along the normal's
-//   dominant axis; one chord: a triangle and a Delaunay-split quadrilateral; otherwise a
-//   constrained Delaunay triangulation with exact orient2d/incircle) along its intersection
-//   segments, so the two meshes share every intersection edge. With float32 output the
-//   points are rounded to float32 BEFORE this, so the triangulations are valid for the
-//   coordinates the STL will hold.
-// - Classification: each piece lies on a known side of the segment it touches (the direction
-//   of a segment is fixed by the same exact predicates), pieces of one triangle joined by
-//   other edges share their side, and the corners of cut triangles pass their side to the
-//   uncut triangles by flooding through each mesh; a part no cut reaches (a whole shell) gets
-//   one generalised winding number of the other mesh. Two answers that disagree are an error,
-//   never a guess.
-// - Input vertices are copied bit for bit; every other output vertex is an intersection point
-//   of an edge of one mesh with a triangle of the other (rounded to float32 for STL output).
-// - Degenerate contacts are the normal case (a vertex exactly on the other surface, edges that
-//   cross or overlap exactly, coplanar overlapping faces, touching without crossing) and are
-//   resolved exactly, by one rule: the pair's exact contact (a point, a segment, or the convex
-//   polygon of a coplanar overlap; every point named by the features that define it: an input
-//   vertex, an edge through a face, or two crossing edges, so every triangle that holds it gets
-//   the same vertex; a vertex of B on a vertex of A becomes A's) splits both triangles; each
-//   side of a contact segment is classified by orient3d against the other mesh's triangles
-//   that hold the segment (one plane, or the wedge of two at an edge, convex or reflex), and a
-//   piece that lies on the other surface is kept or dropped by whether the faces point the
-//   same way: the difference keeps A's pieces where they point opposite ways (B touches from
-//   outside) and drops both where they point the same way; the union keeps A's where the same,
-//   drops both where opposite; the intersection keeps A's where the same, drops both where
-//   opposite; B's such pieces are never kept. Input vertices on the other surface pass no
-//   state on when flooding. BooleanStats::degenerate_pairs counts these pairs. So cube minus
-//   cube with shared faces is exact (no film, no offset).
-// - What the exact rule cannot return, and configurations that float32 rounding would break
-//   (two points rounded together, a flat or folded piece), fall back to a second rule: A
-//   (never B) is translated by a tiny fixed offset (BooleanOptions::max_nudges: k * 2^-16 mm *
-//   (1, 3, 7), at most about 1 um) and the operation is run again; the offset used is in
-//   BooleanStats::nudge. The exact rule cannot return a result that is not an edge-manifold
-//   solid (two parts touching along an edge, e.g. the union of two boxes that share one edge
-//   only), nor contacts along an edge that more than two triangles of the other mesh share, nor
-//   (for B) a coplanar contact at an open border; each is a kUnsupported error first. With
-//   max_nudges = 0 they are returned as such, naming the triangles or the result's problem.
-// - The result is checked before it is returned: no two points rounded together, every edge
-//   used twice in opposite directions (closed, edge-manifold, oriented), no flat triangle,
-//   positive volume, and (check_self_intersection) no self-intersection, exactly. A failure
-//   is an error, never a silently broken mesh.
+// What it promises (how it decides, stage by stage: docs/architecture.md, "The Boolean"):
+// - every geometric decision is an exact predicate on the input coordinates; intersection
+//   points are named by the features that define them, so the two meshes share every
+//   intersection edge and the result has no cracks by construction;
+// - input vertices are copied bit for bit; every other vertex is an intersection point
+//   (rounded to float32 before the re-triangulation, with float32 output);
+// - degenerate contacts (a vertex on the other surface, edges meeting exactly, coplanar faces)
+//   are resolved exactly; what the exact rule cannot return falls back to translating A (never
+//   B) by at most about 1 um (BooleanOptions::max_nudges, BooleanStats::nudge);
+// - the result is checked (closed, edge-manifold, oriented, nothing flat or merged by
+//   rounding, positive volume, and with check_self_intersection no self-intersection,
+//   exactly) before it is returned: a failure is an error, never a silently broken mesh.
 //
 // B may hold several shells (one per tooth; shells are components through shared vertices),
 // which may overlap each other: B means the union of its shells. Shells that overlap where it
