@@ -11,7 +11,9 @@
 #   bash tools/test.sh fuzz        libFuzzer targets (clang): replay every corpus in
 #                                  fixtures/fuzz/, then run each target SPLINTCORE_FUZZ_SECONDS
 #                                  (default 60) one after the other (tests/fuzz/README.md)
-#   bash tools/test.sh lint        clang-tidy (.clang-tidy) and cppcheck over src/ include/
+#   bash tools/test.sh lint        the floors (tools/check_layers.py), the layout
+#                                  (clang-format), function lengths (tools/function_sizes.py),
+#                                  clang-tidy (.clang-tidy) and cppcheck over src/ include/
 #                                  tools/; any finding fails
 #   bash tools/test.sh baremetal   the core for Cortex-M7 (arm-none-eabi, no platform layer),
 #                                  its link checked and sized per module, and the firmware
