@@ -276,7 +276,7 @@ sc_status sc_mesh_check(sc_context* ctx, const sc_mesh* mesh, sc_mesh_report* ou
 sc_status sc_mesh_require_solid(sc_context* ctx, const sc_mesh* mesh);
 
 /* ------------------------------------------------------------------------------------------ */
-/* Mesh operations. Each result is a new mesh in the arena (the handle and the mesh stay,
+/* Mesh operations. Each result is a mesh of its own in the arena (the handle and the mesh stay,
  * temporaries are freed before return; on error the arena is back where it was). */
 
 enum { SC_BOOLEAN_DIFFERENCE = 0, SC_BOOLEAN_UNION = 1, SC_BOOLEAN_INTERSECTION = 2 };
