@@ -111,7 +111,9 @@ uint64_t sweep_state_bound(uint64_t vertex_count, uint64_t triangle_count, uint3
 // Errors: kInvalidArgument (a zero or non-finite direction, voxel not > 0, negative extent, no
 // triangles, an empty or non-finite region), kLimitExceeded (a grid above 2^31 samples per axis or
 // 2^62 in all), kNonFinite (a vertex), kArenaExhausted (naming the need), kCancelled, those of
-// marching_cubes(). Progress: "sweep" per layer, then the extractor's.
+// marching_cubes(). Progress: "sweep" per layer, then the extractor's. Arena: the sweep's state
+// (sweep_state_bound) and the extractor's working set, returned; the grid comes from the jaws,
+// so the need is known by the two-step contract (a first run's high water, docs/embedding.md).
 Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& options,
                     const MarchingCubesVisitor& visitor, SweepStats* stats = nullptr);
 

@@ -220,6 +220,9 @@ class Arena {
 
   // Grows the most recent allocation in place (it must end at the top of the arena).
   [[nodiscard]] bool try_extend(void* pointer, size_t old_bytes, size_t new_bytes);
+  // Gives back the end of the top allocation (new_bytes <= old_bytes): false, and nothing
+  // changes, when `pointer` is not the top allocation.
+  bool try_shrink(void* pointer, size_t old_bytes, size_t new_bytes);
 
   Marker mark() const;
   void rewind(const Marker& marker);  // frees everything allocated after mark()
@@ -396,6 +399,14 @@ class ArenaArray {
   const T* end() const { return data_ + size_; }
   Span<T> span() { return Span<T>(data_, size_); }
   Span<const T> span() const { return Span<const T>(data_, size_); }
+
+  // Returns the unused capacity to the arena when the array is its top allocation (a grown
+  // array's spare half, before the next stage allocates above it).
+  void shrink_to_fit() {
+    if (data_ != nullptr && arena_->try_shrink(data_, capacity_ * sizeof(T), size_ * sizeof(T))) {
+      capacity_ = size_;
+    }
+  }
 
   // Points the array at memory already holding `size` elements (used when compacting).
   void adopt(T* data, size_t size, size_t capacity) {

@@ -195,6 +195,10 @@ Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFile
 // pointing to increasing slice position; origin = position of the first slice.
 // Errors: kParseError (file, byte offset, tag), kUnsupported, kLimitExceeded, kTruncated,
 // kInvalidArgument (count 0), kIoError, kArenaExhausted.
+// Arena (all three readers): the voxels (2 bytes each) stay; the read buffer and, for DICOM,
+// the slice table are returned. Before reading voxels each reader checks that they and its
+// temporaries fit, and otherwise says how much it needs. The need of a file is the high water
+// of a first read (the two-step contract, docs/embedding.md): it then reads in exactly that.
 Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtReadOptions& options,
                          CtVolume* out, CtInfo* info);
 

@@ -79,6 +79,8 @@ struct CaseFile {
 // success the parsed document stays in the arena (the CaseFile's strings point into it).
 // Output names ("output": "splint", "report") must be plain file names (is_plain_name, at
 // most 128 characters): a case cannot name a file outside the output folder.
+// Arena: at most parse_case_bound(length), of which the document and the lists stay.
+uint64_t parse_case_bound(uint64_t length);
 Status parse_case(const Context& ctx, const char* text, size_t length, const char* name,
                   CaseFile* out);
 
@@ -126,8 +128,11 @@ const CaseNumber* find_case_number(const char* key);
 void case_number_range(const CaseNumber& n, double voxel, double* lo, double* hi);
 
 // Picks -> lines -> base, as the case says. `out` must be empty. Arena: the lines (88 bytes a
-// pick, left in place below the mesh) and at most splint_base_bound(). Errors: make_lines()'s
-// and build_splint_base()'s. On an error the arena is as it was and `out` is empty.
+// pick, left in place below the mesh) and at most splint_base_bound(): together
+// case_base_bound(), which takes the section count of a first run (BaseReport, as
+// splint_base_bound() does). Errors: make_lines()'s and build_splint_base()'s. On an error the
+// arena is as it was and `out` is empty.
+uint64_t case_base_bound(const CaseFile& c, uint64_t sections, uint32_t points_per_section);
 Status build_case_base(const Context& ctx, const CaseFile& c, Mesh* out, BaseReport* report);
 
 // ---------------------------------------------------------------------------------------------
@@ -164,8 +169,10 @@ struct ThicknessReport {
 // another at a sharp edge the material is a thin wedge by nature (e.g. where a tooth's imprint
 // leaves the splint at a shallow angle): those count too, so read the spots, not only the
 // count. Arena: a distance index of the mesh (distance_index_bound) and 16 bytes per thin
-// triangle, all returned. Errors: kInvalidArgument (min_thickness not in (0, 1000]), those of
+// triangle and as much again to sort them, at most check_wall_thickness_bound(V, T), all
+// returned. Errors: kInvalidArgument (min_thickness not in (0, 1000]), those of
 // build_distance_index, kArenaExhausted, kCancelled (progress "thickness").
+uint64_t check_wall_thickness_bound(uint64_t vertex_count, uint64_t triangle_count);
 Status check_wall_thickness(const Context& ctx, const Mesh& mesh, double min_thickness,
                             ThicknessReport* report);
 

@@ -91,6 +91,13 @@ Status read_stl(const Context& ctx, const ByteSource& source, const StlReadOptio
 // read_stl() then weld_exact(), leaving only the mesh in the arena (the soup is reclaimed).
 // `out` must be empty. Errors: read_stl()'s and weld_exact()'s. On an error the arena is as it
 // was and `out` is empty.
+//
+// Sizing, from the input's length in bytes (a file's size): no STL of `bytes` bytes holds more
+// than bytes / 50 triangles (a binary one holds (bytes - 84) / 50; an ASCII facet takes at
+// least 85 bytes). read_stl_bound() covers read_stl() into an empty array (the read buffer and
+// the triangles), read_stl_mesh_bound() read_stl_mesh() (and read_mesh() on an STL).
+uint64_t read_stl_bound(uint64_t bytes, const StlReadOptions& options);
+uint64_t read_stl_mesh_bound(uint64_t bytes, const StlReadOptions& options);
 Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlReadOptions& options,
                      Mesh* out, StlInfo* info);
 
@@ -166,7 +173,9 @@ Status write_stl(const Context& ctx, const Mesh& mesh, const ByteSink& sink,
 //   and 12 per triangle. While reading, at most the buffers plus, when the source size is
 //   unknown or vertex and face records interleave (OBJ), up to about three times the final
 //   mesh (arrays grow by half again). With options.weld, plus weld_exact_bound(triangles)
-//   and a 36-byte-per-triangle soup.
+//   and a 36-byte-per-triangle soup. There is no a-priori bound: the need of a file is the
+//   arena's high water after a first read (the two-step contract, docs/embedding.md), and the
+//   same file then reads in exactly that many bytes.
 // - Never trusts a count: PLY element counts are checked against the limits, and (when the
 //   source knows its size) against the bytes present, before anything is reserved.
 // - Errors: kParseError (line and column for text, byte offset for binary PLY), kTruncated

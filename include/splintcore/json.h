@@ -53,9 +53,10 @@ struct JsonDocument {
 };
 
 // Parses `text` (not necessarily NUL-terminated). The values and strings live in the arena
-// (length + 1 bytes of strings plus sizeof(JsonValue) per value, with growth); on failure the
-// arena is rewound to where it was.
+// (length + 1 bytes of strings plus sizeof(JsonValue) per value, with growth): at most
+// parse_json_bound(length, limits). On failure the arena is rewound to where it was.
 // Errors: kParseError (with line and column), kLimitExceeded, kArenaExhausted.
+uint64_t parse_json_bound(uint64_t length, const JsonLimits& limits);
 Status parse_json(const Context& ctx, const char* text, size_t length, const JsonLimits& limits,
                   const char* name, JsonDocument* out);
 

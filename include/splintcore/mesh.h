@@ -60,11 +60,12 @@ Status weld_exact(const Context& ctx, Span<const SoupTriangle> soup, Mesh* out);
 // components of the "closer than tolerance" relation become one vertex, placed at the
 // component's lexicographically smallest corner. Permuting the soup's triangles permutes the
 // output triangles but never changes vertex positions. `out` must be empty (bound to the
-// arena). Arena: the mesh stays; temporaries (sort keys, union-find, about 50 bytes a corner)
-// are returned before it finishes. Errors: kInvalidArgument (tolerance not > 0, `out` not
-// empty); kLimitExceeded (tolerance too small for the mesh's extent: more than 2^20 cells an
-// axis; > 2^32-1 corners); kNonFinite; kArenaExhausted; kCancelled. On an error the arena is
-// as it was and `out` is empty.
+// arena). Arena: at most weld_tolerance_bound(); the mesh stays, temporaries (sort keys,
+// union-find, about 50 bytes a corner) are returned before it finishes. Errors: kInvalidArgument
+// (tolerance not > 0, `out` not empty); kLimitExceeded (tolerance too small for the mesh's extent:
+// more than 2^20 cells an axis; > 2^32-1 corners); kNonFinite; kArenaExhausted; kCancelled. On an
+// error the arena is as it was and `out` is empty.
+uint64_t weld_tolerance_bound(uint64_t triangle_count);
 Status weld_tolerance(const Context& ctx, Span<const SoupTriangle> soup, double tolerance,
                       Mesh* out);
 

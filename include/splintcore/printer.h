@@ -40,7 +40,9 @@ struct PrintCheck {
 };
 
 // Checks a mesh against a profile. Returns ok when the check ran (read `printable`), or an
-// error when it could not (kArenaExhausted, kInvalidMesh for out-of-range indices).
+// error when it could not (kArenaExhausted, kInvalidMesh for out-of-range indices). Arena:
+// check_mesh()'s temporaries, at most check_printable_bound(V, T), all returned.
+uint64_t check_printable_bound(uint64_t vertex_count, uint64_t triangle_count);
 Status check_printable(const Context& ctx, const Mesh& mesh, const PrinterProfile& profile,
                        const PrintCheckOptions& options, PrintCheck* out);
 

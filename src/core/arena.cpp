@@ -163,6 +163,16 @@ bool Arena::try_extend(void* pointer, size_t old_bytes, size_t new_bytes) {
   return true;
 }
 
+bool Arena::try_shrink(void* pointer, size_t old_bytes, size_t new_bytes) {
+  unsigned char* p = static_cast<unsigned char*>(pointer);
+  if (current_->payload == nullptr || p < current_->payload || new_bytes > old_bytes) return false;
+  const size_t start = static_cast<size_t>(p - current_->payload);
+  if (start + old_bytes != offset_) return false;  // not the top allocation
+  offset_ = start + new_bytes;
+  used_ = current_->used_before + offset_;
+  return true;
+}
+
 Arena::Marker Arena::mark() const {
   Marker m;
   m.block = current_;

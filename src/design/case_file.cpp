@@ -484,12 +484,16 @@ Status parse_output(const Reader& r, const JsonValue* o, CaseFile* out) {
   return Status::ok();
 }
 
+JsonLimits case_json_limits() {
+  JsonLimits limits;
+  limits.max_bytes = 16 << 20;
+  return limits;
+}
+
 Status parse_case_document(const Context& ctx, const char* text, size_t length, const char* name,
                            CaseFile* out) {
   JsonDocument doc;
-  JsonLimits limits;
-  limits.max_bytes = 16 << 20;
-  SPLINTCORE_RETURN_IF_ERROR(parse_json(ctx, text, length, limits, name, &doc));
+  SPLINTCORE_RETURN_IF_ERROR(parse_json(ctx, text, length, case_json_limits(), name, &doc));
   Reader r{&doc, ctx.arena};
   const JsonValue& root = doc.root();
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(root, JsonType::kObject, "the case"));
@@ -604,6 +608,17 @@ void case_number_range(const CaseNumber& n, double voxel, double* lo, double* hi
   if (n.per_voxel && n.max_mm > 0 && *hi > n.max_mm) *hi = n.max_mm;
 }
 
+// The document, then the two pick lists and the jaws. Each entry of those arrays is a value of
+// the document, so together they hold at most as many entries as parse_json_bound() counts
+// values (its reasoning, json.cpp), each entry at most the larger of a Pick and a CaseJaw.
+uint64_t parse_case_bound(uint64_t length) {
+  const JsonLimits limits = case_json_limits();
+  uint64_t values = (length + 1 + limits.max_depth) / 2 + 1;
+  if (values > limits.max_values) values = limits.max_values;
+  constexpr uint64_t kEntry = sizeof(Pick) > sizeof(CaseJaw) ? sizeof(Pick) : sizeof(CaseJaw);
+  return parse_json_bound(length, limits) + values * kEntry + 3 * (Arena::kDefaultAlignment - 1);
+}
+
 Status parse_case(const Context& ctx, const char* text, size_t length, const char* name,
                   CaseFile* out) {
   *out = CaseFile{};
@@ -621,6 +636,11 @@ Status parse_case(const Context& ctx, const char* text, size_t length, const cha
   hash.finish(digest);
   Sha256::to_hex(digest, out->sha256);
   return s;
+}
+
+uint64_t case_base_bound(const CaseFile& c, uint64_t sections, uint32_t points_per_section) {
+  return arena_array_bound<Line>(c.upper.size()) + arena_array_bound<Line>(c.lower.size()) +
+         splint_base_bound(sections, points_per_section);
 }
 
 Status build_case_base(const Context& ctx, const CaseFile& c, Mesh* out, BaseReport* report) {

@@ -19,6 +19,12 @@ uint64_t order_key(double t) {
 
 }  // namespace
 
+// The index, then the thin triangles (every one at worst) and the radix sort's scratch.
+uint64_t check_wall_thickness_bound(uint64_t vertex_count, uint64_t triangle_count) {
+  return distance_index_bound(vertex_count, triangle_count, DistanceIndexOptions{}) +
+         2 * arena_array_bound<KeyIndex>(triangle_count);
+}
+
 Status check_wall_thickness(const Context& ctx, const Mesh& mesh, double min_thickness,
                             ThicknessReport* report) {
   SPLINTCORE_ASSERT(ctx.arena != nullptr && report != nullptr);

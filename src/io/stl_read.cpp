@@ -425,6 +425,7 @@ Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlRead
     arena.rewind(start);
     return s;
   }
+  soup.shrink_to_fit();  // an ASCII soup grown by half again: the spare room is the weld's
   Mesh welded(&arena);
   s = weld_exact(ctx, soup.span(), &welded);
   if (!s.is_ok()) {
@@ -434,6 +435,15 @@ Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlRead
   // The mesh down over the soup and the read buffer (weld_exact allocates triangles first).
   move_mesh_down(arena, start, welded, out);
   return Status::ok();
+}
+
+uint64_t read_stl_bound(uint64_t bytes, const StlReadOptions& options) {
+  const size_t chunk = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
+  return arena_array_bound<uint8_t>(chunk) + arena_array_bound<SoupTriangle>(bytes / 50);
+}
+
+uint64_t read_stl_mesh_bound(uint64_t bytes, const StlReadOptions& options) {
+  return read_stl_bound(bytes, options) + weld_exact_bound(bytes / 50);
 }
 
 }  // namespace splintcore

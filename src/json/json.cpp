@@ -466,6 +466,17 @@ Status json_error(const JsonDocument& doc, const JsonValue& at, StatusCode code,
   return s;
 }
 
+// The string pool, then the values. Every value but the root follows its own '[', ',' or ':'
+// and takes at least one byte of its own; a '[' can be both an array's first byte and its first
+// element's separator, but a complete array then closes with a ']' that is neither, and at
+// most max_depth arrays are open when the text ends. So 2 * values <= length + 1 + max_depth.
+uint64_t parse_json_bound(uint64_t length, const JsonLimits& limits) {
+  const uint64_t depth = limits.max_depth > kDepthCeiling ? kDepthCeiling : limits.max_depth;
+  uint64_t values = (length + 1 + depth) / 2 + 1;
+  if (values > limits.max_values) values = limits.max_values;
+  return arena_array_bound<char>(length + 1) + arena_array_bound<JsonValue>(values);
+}
+
 Status parse_json(const Context& ctx, const char* text, size_t length, const JsonLimits& limits,
                   const char* name, JsonDocument* out) {
   if (length > limits.max_bytes) {

@@ -82,6 +82,17 @@ uint64_t weld_exact_bound(uint64_t triangle_count) {
          corners * sizeof(Vec3) + 4 * 64;
 }
 
+// The triangles, the sort keys, then either the radix sort's scratch (returned) or the
+// union-find, the two per-corner tables and the positions (at most one per corner); the
+// vertices are then copied down over the temporaries.
+uint64_t weld_tolerance_bound(uint64_t triangle_count) {
+  const uint64_t corners = 3 * triangle_count;
+  const uint64_t sort = arena_array_bound<KeyIndex>(corners);
+  const uint64_t sets = 3 * arena_array_bound<uint32_t>(corners) + arena_array_bound<Vec3>(corners);
+  return arena_array_bound<Triangle>(triangle_count) + arena_array_bound<KeyIndex>(corners) +
+         (sort > sets ? sort : sets);
+}
+
 namespace {
 
 // The bodies of weld_exact and weld_tolerance; their public wrappers below check that `out` is

@@ -31,6 +31,10 @@ const PrinterProfile* find_printer_profile(const char* name) {
   return nullptr;
 }
 
+uint64_t check_printable_bound(uint64_t vertex_count, uint64_t triangle_count) {
+  return check_mesh_bound(vertex_count, triangle_count);  // the mesh check is all it allocates
+}
+
 Status check_printable(const Context& ctx, const Mesh& mesh, const PrinterProfile& profile,
                        const PrintCheckOptions& options, PrintCheck* out) {
   *out = PrintCheck{};

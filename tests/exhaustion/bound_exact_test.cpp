@@ -18,6 +18,7 @@
 #include "common/phantom.h"
 #include "common/realcase.h"
 #include "common/shapes.h"
+#include "exhaustion/bound_util.h"
 #include "splintcore/blockout.h"
 #include "splintcore/boolean.h"
 #include "splintcore/ct.h"
@@ -25,6 +26,7 @@
 #include "splintcore/distance.h"
 #include "splintcore/label.h"
 #include "splintcore/mesh.h"
+#include "splintcore/printer.h"
 #include "splintcore/remesh.h"
 #include "splintcore/render.h"
 #include "splintcore/segment.h"
@@ -36,112 +38,7 @@ namespace {
 
 using test::format;
 using test::TestArena;
-
-struct Input {
-  std::string name;
-  std::vector<SoupTriangle> soup;
-  bool large = false;  // the bound must be within 3x of the need
-};
-
-SoupTriangle tri(float ax, float ay, float az, float bx, float by, float bz, float cx, float cy,
-                 float cz) {
-  const float a[3] = {ax, ay, az}, b[3] = {bx, by, bz}, c[3] = {cx, cy, cz};
-  return shapes::soup_triangle(a, b, c);
-}
-
-std::vector<SoupTriangle> tetrahedron() {
-  return {tri(0, 0, 0, 0, 1, 0, 1, 0, 0), tri(0, 0, 0, 1, 0, 0, 0, 0, 1),
-          tri(0, 0, 0, 0, 0, 1, 0, 1, 0), tri(1, 0, 0, 0, 1, 0, 0, 0, 1)};
-}
-
-// The triangles of an indexed mesh appended to a soup (float32 corners, as STL holds them).
-void append_soup(const std::vector<Vec3>& vertices, const std::vector<Triangle>& triangles,
-                 std::vector<SoupTriangle>* soup) {
-  for (const Triangle& t : triangles) {
-    SoupTriangle st;
-    for (int k = 0; k < 3; ++k) {
-      const Vec3& p = vertices[t.v[k]];
-      for (int a = 0; a < 3; ++a) st.p[k][a] = static_cast<float>(p[a]);
-    }
-    soup->push_back(st);
-  }
-}
-
-std::vector<Input> inputs() {
-  std::vector<Input> out;
-  out.push_back({"tetrahedron", tetrahedron()});
-  {
-    // Every fault check_mesh counts: a duplicate, a flat and a collapsed triangle, a fin on
-    // an edge (non-manifold), a flipped copy (orientation conflict) and a loose triangle.
-    std::vector<SoupTriangle> s = tetrahedron();
-    s.push_back(s[1]);
-    s.push_back(tri(0, 0, 0, 0.5f, 0, 0, 1, 0, 0));
-    s.push_back(tri(2, 2, 2, 2, 2, 2, 2, 2, 2));
-    s.push_back(tri(0, 0, 0, 1, 0, 0, 0.5f, -1, 0.5f));
-    s.push_back(tri(0, 1, 0, 0, 0, 0, 1, 0, 0));
-    s.push_back(tri(5, 5, 5, 6, 5, 5, 5, 6, 5));
-    out.push_back({"degenerate", s});
-  }
-  out.push_back({"one_triangle", {tri(0, 0, 0, 1, 0, 0, 0, 1, 0)}});
-  {
-    std::vector<SoupTriangle> s = shapes::torus(40, 20, 10.0, 3.0);
-    s.resize(s.size() - 37);  // open: a ragged hole
-    out.push_back({"open_torus", s});
-  }
-  out.push_back({"torus_87k", shapes::torus(360, 121, 20.0, 6.0), true});
-  {
-    phantom::PhantomOptions po;
-    po.target_triangles = 6000;
-    phantom::JawMesh jaw;
-    if (phantom::make_jaw(phantom::Jaw::kMaxilla, po, &jaw).is_ok()) {
-      std::vector<SoupTriangle> s;
-      append_soup(jaw.vertices, jaw.triangles, &s);
-      out.push_back({"phantom_maxilla_6000", s, true});
-    }
-  }
-  realcase::RealCase rc;
-  std::string error;
-  if (realcase::load(SPLINTCORE_REALDATA_DIR, 0.0, 2.0, 8.0, &rc, &error)) {
-    std::vector<SoupTriangle> s;
-    for (const realcase::Tooth& t : rc.teeth) append_soup(t.vertices, t.triangles, &s);
-    out.push_back({"real_dentition", s, true});
-  }
-  return out;
-}
-
-// Runs `run` in an arena of exactly `bound` bytes: it must not run out, and on a large input
-// it must need at least a third of the bound.
-template <class Run>
-void expect_fits(const Input& in, const char* function, uint64_t bound, Run run) {
-  SCOPED_TRACE(std::string(function) + " on " + in.name);
-  ASSERT_GT(bound, 0u);
-  TestArena ta(static_cast<size_t>(bound));
-  const Status s = run(ta.arena);
-  EXPECT_NE(s.code(), StatusCode::kArenaExhausted) << format(s) << " (bound " << bound << ")";
-  EXPECT_EQ(ta.arena.cap(), bound);
-  std::printf("%-22s %-28s bound %11llu need %11llu (%.2f)%s\n", function, in.name.c_str(),
-              static_cast<unsigned long long>(bound),
-              static_cast<unsigned long long>(ta.arena.high_water()),
-              static_cast<double>(ta.arena.high_water()) / static_cast<double>(bound),
-              s.is_ok() ? "" : (std::string("  [") + format(s) + "]").c_str());
-  if (in.large && s.is_ok()) {
-    EXPECT_GE(ta.arena.high_water() * 3, bound);
-  }
-}
-
-// The welded mesh of an input, in its own arena (outside the one under test).
-struct Welded {
-  TestArena storage{size_t{512} << 20};
-  Mesh mesh;
-  explicit Welded(const Input& in) {
-    mesh.bind(&storage.arena);
-    Status s = weld_exact(Context(&storage.arena),
-                          Span<const SoupTriangle>(in.soup.data(), in.soup.size()), &mesh);
-    EXPECT_TRUE(s.is_ok()) << format(s);
-  }
-  uint64_t v() const { return mesh.vertices.size(); }
-  uint64_t t() const { return mesh.triangles.size(); }
-};
+using namespace bound_test;
 
 TEST(BoundExact, WeldExact) {
   for (const Input& in : inputs()) {
@@ -150,6 +47,40 @@ TEST(BoundExact, WeldExact) {
       return weld_exact(Context(&arena), Span<const SoupTriangle>(in.soup.data(), in.soup.size()),
                         &out);
     });
+  }
+}
+
+TEST(BoundExact, WeldTolerance) {
+  for (const Input& in : inputs()) {
+    for (double tolerance : {1e-4, 0.05}) {
+      expect_fits(in, "weld_tolerance", weld_tolerance_bound(in.soup.size()), [&](Arena& arena) {
+        Mesh out(&arena);
+        return weld_tolerance(Context(&arena),
+                              Span<const SoupTriangle>(in.soup.data(), in.soup.size()), tolerance,
+                              &out);
+      });
+    }
+  }
+}
+
+TEST(BoundExact, CheckPrintableAndWallThickness) {
+  for (const Input& in : inputs()) {
+    Welded w(in);
+    expect_fits(in, "check_printable", check_printable_bound(w.v(), w.t()), [&](Arena& arena) {
+      PrintCheck check;
+      return check_printable(Context(&arena), w.mesh, eden260_profile(), PrintCheckOptions{},
+                             &check);
+    });
+    // 0.2 mm: a few thin triangles; 50 mm: every triangle thin (the largest list).
+    for (double min_thickness : {0.2, 50.0}) {
+      Input unchecked = in;
+      unchecked.large = in.large && min_thickness > 1.0;
+      expect_fits(unchecked, "check_wall_thickness", check_wall_thickness_bound(w.v(), w.t()),
+                  [&](Arena& arena) {
+                    ThicknessReport report;
+                    return check_wall_thickness(Context(&arena), w.mesh, min_thickness, &report);
+                  });
+    }
   }
 }
 
@@ -367,34 +298,6 @@ TEST(BoundExact, CtSegmentation) {
   }
 }
 
-// The two-step contract of the functions without an a-priori bound (embedding.md): a first
-// run in any arena large enough gives the need, the arena's high water; the same input then
-// runs in exactly that many bytes, and fails cleanly in one byte less. Allocation depends on
-// the input alone, so the need measured once (on a workstation) holds on the device.
-template <class Run>
-void expect_two_step(const char* function, const char* input, Run run) {
-  SCOPED_TRACE(std::string(function) + " on " + input);
-  uint64_t need = 0;
-  {
-    TestArena big(size_t{1} << 30);
-    SPLINTCORE_ASSERT_OK(run(big.arena));
-    need = big.arena.high_water();
-  }
-  {
-    TestArena exact(static_cast<size_t>(need));
-    SPLINTCORE_EXPECT_OK(run(exact.arena));
-    EXPECT_EQ(exact.arena.high_water(), need);
-  }
-  {
-    TestArena short_by_one(static_cast<size_t>(need - 1));
-    const Status s = run(short_by_one.arena);
-    EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << format(s);
-    EXPECT_EQ(short_by_one.arena.used(), 0u) << "the arena is as it was";
-  }
-  std::printf("%-22s %-34s need %11llu bytes, exactly enough\n", function, input,
-              static_cast<unsigned long long>(need));
-}
-
 // The paper-scale case (fixtures/cases/paper_scale.json or blockout.json) and two phantom jaws
 // of 6,000 triangles, in an arena of their own.
 struct PhantomCase {
@@ -462,6 +365,51 @@ TEST(BoundTwoStep, DesignBooleanBlockoutLabel) {
     LabelStats stats;
     return apply_label(Context(&arena), cut, upper.span(), lower.span(), lo, &out, &stats);
   });
+}
+
+// Every fixture case's base, in exactly case_base_bound() (the section count from a first run).
+TEST(BoundExact, CaseBase) {
+  for (const char* name : {"paper_scale.json", "blockout.json", "rounded.json", "spacer.json",
+                           "uneven.json", "ct_phantom.json"}) {
+    PhantomCase pc(name);
+    if (pc.c.upper.empty()) continue;  // a case without picks has no base to build
+    BaseReport first;
+    {
+      TestArena big;
+      Mesh out(&big.arena);
+      SPLINTCORE_ASSERT_OK(build_case_base(Context(&big.arena), pc.c, &out, &first));
+    }
+    Input in{name, {}, true};
+    expect_fits(in, "build_case_base",
+                case_base_bound(pc.c, first.sections, first.points_per_section), [&](Arena& arena) {
+                  Mesh out(&arena);
+                  BaseReport report;
+                  return build_case_base(Context(&arena), pc.c, &out, &report);
+                });
+  }
+}
+
+// The swept volume (blockout.h) has the two-step contract: its grid and surface come from the
+// jaws. Plain, with an inset, as a spacer (offset) and closed, on the phantom maxilla.
+TEST(BoundTwoStep, SweepVolume) {
+  PhantomCase pc("paper_scale.json");
+  SweepOptions plain;
+  plain.direction = Vec3{0, 0, 1};
+  plain.voxel = 0.5;
+  SweepOptions inset = plain, offset = plain, closed = plain;
+  inset.inset = 0.25;
+  offset.offset = 0.5;
+  closed.closing_radius = 1.0;
+  const SweepOptions* options[] = {&plain, &inset, &offset, &closed};
+  const char* names[] = {"phantom maxilla, 0.5 mm", "inset 0.25 mm", "offset 0.5 mm",
+                         "closing 1 mm"};
+  for (int i = 0; i < 4; ++i) {
+    expect_two_step("sweep_volume_mesh", names[i], [&](Arena& arena) {
+      Mesh out(&arena);
+      return sweep_volume_mesh(Context(&arena), Span<const Mesh>(&pc.jaws[0], 1), *options[i],
+                               &out);
+    });
+  }
 }
 
 }  // namespace
