@@ -156,18 +156,16 @@ Status gather_meshes(const sc_mesh* const* jaws, size_t count, const char* funct
   return Status::ok();
 }
 
-// Runs `make(mesh)` for a new mesh handle; on failure rewinds the arena and leaves *out NULL.
+// Runs `make(mesh)` for a new mesh handle; on failure the arena is as it was and *out NULL.
 template <class F>
 sc_status new_mesh(sc_context* ctx, sc_mesh** out, F make) {
   *out = nullptr;
-  const Arena::Marker start = ctx->arena.mark();
+  ArenaScope scope(ctx->arena);
   sc_mesh* handle = place<sc_mesh>(ctx->arena);
   if (handle == nullptr) return keep(ctx, ctx->arena.exhausted_status());
-  Status s = make(&handle->mesh);
-  if (!s.is_ok()) {
-    ctx->arena.rewind(start);
-    return keep(ctx, s);
-  }
+  const Status s = make(&handle->mesh);
+  if (!s.is_ok()) return keep(ctx, s);
+  scope.commit();
   *out = handle;
   return keep(ctx, Status::ok());
 }
@@ -649,15 +647,13 @@ sc_status sc_case_parse(sc_context* ctx, const char* text, size_t length, const 
     return null_argument(ctx, "sc_case_parse", "the text or the output");
   }
   *out = nullptr;
-  const Arena::Marker start = ctx->arena.mark();
+  ArenaScope scope(ctx->arena);
   sc_case* handle = place<sc_case>(ctx->arena);
   if (handle == nullptr) return keep(ctx, ctx->arena.exhausted_status());
   const Status s = parse_case(core_context(ctx), text != nullptr ? text : "", length,
                               name != nullptr ? name : "case", &handle->c);
-  if (!s.is_ok()) {
-    ctx->arena.rewind(start);
-    return keep(ctx, s);
-  }
+  if (!s.is_ok()) return keep(ctx, s);
+  scope.commit();
   *out = handle;
   return keep(ctx, Status::ok());
 }
@@ -727,22 +723,14 @@ sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaw
   if (!s.is_ok()) return keep(ctx, s);
   // The handle, then the design's record (kept for sc_design_write_report), then the mesh.
   const Context core = core_context(ctx);
-  const Arena::Marker start = ctx->arena.mark();
-  sc_mesh* handle = place<sc_mesh>(ctx->arena);
-  DesignReport* record = place<DesignReport>(ctx->arena);
-  if (handle == nullptr || record == nullptr) {
-    const Status e = ctx->arena.exhausted_status();
-    ctx->arena.rewind(start);
-    return keep(ctx, e);
-  }
-  s = design_splint(core, c->c, Span<const Mesh>(local, jaw_count), &handle->mesh, record);
-  if (!s.is_ok()) {
-    ctx->arena.rewind(start);
-    return keep(ctx, s);
-  }
-  handle->design = record;
-  *splint = handle;
-  const sc_status code = keep(ctx, Status::ok());
+  DesignReport* record = nullptr;
+  const sc_status code = new_mesh(ctx, splint, [&](Mesh* m) {
+    record = place<DesignReport>(ctx->arena);
+    if (record == nullptr) return ctx->arena.exhausted_status();
+    return design_splint(core, c->c, Span<const Mesh>(local, jaw_count), m, record);
+  });
+  if (code != SC_OK) return code;
+  (*splint)->design = record;
   if (report == nullptr) return code;
   const DesignReport& r = *record;
   std::memset(report, 0, sizeof(*report));

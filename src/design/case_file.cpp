@@ -623,13 +623,13 @@ Status parse_case(const Context& ctx, const char* text, size_t length, const cha
                   CaseFile* out) {
   *out = CaseFile{};
   // On failure nothing stays: the arena is rewound and *out is empty again.
-  const Arena::Marker start = ctx.arena->mark();
+  ArenaScope scope(*ctx.arena);
   Status s = parse_case_document(ctx, text, length, name, out);
   if (!s.is_ok()) {
-    ctx.arena->rewind(start);
     *out = CaseFile{};
     return s;
   }
+  scope.commit();
   Sha256 hash;  // the report names the case by the hash of its bytes
   hash.update(text, length);
   uint8_t digest[32];
@@ -647,13 +647,14 @@ Status build_case_base(const Context& ctx, const CaseFile& c, Mesh* out, BaseRep
   // The lines are temporaries; the mesh must sit below them, so the lines are made first into
   // arena memory that is then left in place (a few KB), and the mesh grows above.
   // On an error the arena goes back to its top at entry (`out` stays empty).
-  const Arena::Marker entry = ctx.arena->mark();
+  ArenaScope scope(*ctx.arena);
   ArenaArray<Line> upper(ctx.arena), lower(ctx.arena);
-  Status s = make_lines(ctx, c.upper, c.occlusal_normal, "upper", &upper);
-  if (s.is_ok()) s = make_lines(ctx, c.lower, c.occlusal_normal, "lower", &lower);
-  if (s.is_ok()) s = build_splint_base(ctx, upper.span(), lower.span(), c.base, out, report);
-  if (!s.is_ok()) ctx.arena->rewind(entry);
-  return s;
+  SPLINTCORE_RETURN_IF_ERROR(make_lines(ctx, c.upper, c.occlusal_normal, "upper", &upper));
+  SPLINTCORE_RETURN_IF_ERROR(make_lines(ctx, c.lower, c.occlusal_normal, "lower", &lower));
+  SPLINTCORE_RETURN_IF_ERROR(
+      build_splint_base(ctx, upper.span(), lower.span(), c.base, out, report));
+  scope.commit();
+  return Status::ok();
 }
 
 }  // namespace splintcore

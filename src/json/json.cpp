@@ -493,7 +493,7 @@ Status parse_json(const Context& ctx, const char* text, size_t length, const Jso
   p.name = name;
   // Decoded strings never exceed their source text, plus a NUL each: one pool of
   // length + 1 bytes is enough, and the value array then grows alone at the arena's top.
-  const Arena::Marker start = ctx.arena->mark();
+  ArenaScope scope(*ctx.arena);  // a failed parse leaves nothing behind
   p.pool = ctx.arena->allocate_array<char>(length + 1);
   if (p.pool == nullptr) return ctx.arena->exhausted_status();
   ArenaArray<JsonValue> values(ctx.arena);
@@ -510,10 +510,8 @@ Status parse_json(const Context& ctx, const char* text, size_t length, const Jso
     p.skip_space();
     if (p.pos != p.size) s = p.error("unexpected data after the JSON value");
   }
-  if (!s.is_ok()) {
-    ctx.arena->rewind(start);  // a failed parse leaves nothing behind
-    return s;
-  }
+  if (!s.is_ok()) return s;
+  scope.commit();
   out->values = Span<const JsonValue>(values.data(), values.size());
   out->name = name;
   return Status::ok();

@@ -297,11 +297,11 @@ Status weld_tolerance_steps(const Context& ctx, Span<const SoupTriangle> soup, d
   return compact_vertices(arena, temp_start, positions, vertex_count, &out->vertices);
 }
 
-// A failed weld leaves nothing: the arena back at `entry`, `out` empty (as it was).
-Status undo_on_error(Status s, Arena& arena, const Arena::Marker& entry, const Mesh& saved,
-                     Mesh* out) {
-  if (!s.is_ok()) {
-    arena.rewind(entry);
+// A failed weld leaves nothing: the arena as it was (the caller's scope), `out` empty.
+Status undo_on_error(Status s, ArenaScope& scope, const Mesh& saved, Mesh* out) {
+  if (s.is_ok()) {
+    scope.commit();
+  } else {
     *out = saved;
   }
   return s;
@@ -313,9 +313,9 @@ Status weld_exact(const Context& ctx, Span<const SoupTriangle> soup, Mesh* out) 
   if (!out->vertices.empty() || !out->triangles.empty()) {
     return Status::error(StatusCode::kInvalidArgument, "weld_exact: output mesh must be empty");
   }
-  const Arena::Marker entry = ctx.arena->mark();
+  ArenaScope scope(*ctx.arena);
   const Mesh saved = *out;
-  return undo_on_error(weld_exact_steps(ctx, soup, out), *ctx.arena, entry, saved, out);
+  return undo_on_error(weld_exact_steps(ctx, soup, out), scope, saved, out);
 }
 
 Status weld_tolerance(const Context& ctx, Span<const SoupTriangle> soup, double tolerance,
@@ -323,10 +323,9 @@ Status weld_tolerance(const Context& ctx, Span<const SoupTriangle> soup, double 
   if (!out->vertices.empty() || !out->triangles.empty()) {
     return Status::error(StatusCode::kInvalidArgument, "weld_tolerance: output mesh must be empty");
   }
-  const Arena::Marker entry = ctx.arena->mark();
+  ArenaScope scope(*ctx.arena);
   const Mesh saved = *out;
-  return undo_on_error(weld_tolerance_steps(ctx, soup, tolerance, out), *ctx.arena, entry, saved,
-                       out);
+  return undo_on_error(weld_tolerance_steps(ctx, soup, tolerance, out), scope, saved, out);
 }
 
 }  // namespace splintcore
