@@ -1,43 +1,20 @@
 // splintcore label: the case label, engraved into or embossed on the splint's outer (buccal) wall
 // in a built-in stroke font (issue 8, design options; the paper leaves the splint unlabelled).
 //
-// What it makes, exactly:
 // - The font: our own single-line strokes on an integer grid, glyphs 0..4 units wide and
 //   0..6 high (6 = the cap height), advance = width + kStrokeFontGap units. A-Z (lower case is
 //   folded to upper), 0-9, space and - _ . / # + ( ) :. A stroke of one point is a dot.
-// - Each glyph is a solid in its own frame (a along u, the reading direction; b along up;
-//   c along n, the outward normal; c = 0 at the wall): the stroke polylines thickened to the
-//   stroke width in (a, b), extruded over [c_lo, c_hi] in c: [-depth, +1 mm] to engrave,
-//   [-0.3 mm, +depth] to emboss. It is the zero level of the signed field
-//     f = max(distance in (a, b) to the strokes - width / 2, c - c_hi, c_lo - c),
-//   sampled on a voxel grid around the glyph and meshed by marching_cubes_mesh (volume.h:
-//   closed, manifold, outward by construction), mapped to world coordinates, rounded to
-//   float32 (the Boolean keeps B's vertices bit for bit, and STL holds float32), then
-//   decimated (decimate_qem, remesh.h, error at most voxel / 24) and rounded again: the flat
-//   stroke walls become a few large triangles. Why: small glyph triangles crossing the
-//   nearly flat quads of the base's wall put three intersection points within a few float32
-//   ulps of a line, which the Boolean must refuse (kUnsupported, whatever A's nudge); large
-//   ones do not. Each glyph's mesh is checked as B must be (closed, oriented, no flat
-//   triangle, no self-intersection, exactly; QEM does not promise the last) and sampled again
-//   with its grid shifted by 1/2, 1/4, 3/4 of a voxel when it fails (at most 4 samplings;
-//   LabelStats::glyph_resamplings). If the Boolean still fails on a fragile contact, the
-//   whole text is sampled again from the next phase (at most 4 attempts; LabelStats::attempts).
-// - Automatic placement follows the arch: the wall's mid curve M through
-//   (upper[i].outside + lower[i].outside) / 2 (centripetal Catmull-Rom, spline.h), measured
-//   by arc length; the text is centred on the curve's middle by arc length, and each glyph
-//   gets its own frame at its arc position (planar glyphs, the row follows the arch): up = the
-//   wall direction (upper outside curve minus lower outside curve there, made perpendicular
-//   to the tangent), n = the normal away from the inner points, u = up x n: the text reads
-//   left to right seen from outside, whatever the order of the picks. The frame's origin is
-//   where a ray from P + 5 n along -n (P on M) first meets the splint: depth is measured from
-//   the real wall.
-// - Explicit placement: one frame for the whole row (position, outward normal, up); each
-//   glyph's origin is again the ray's hit from its centre + 5 n along -n.
-// - Glyphs never touch: the gap between cells is checked on the meshes, not assumed (the
-//   boxes of the glyphs' vertices in their frames, tested pairwise by separating axes).
-//
-// Only + - * / and sqrt reach the output (no trigonometry), every loop runs in a fixed order,
-// and the Boolean is the exact one of boolean.h: the same bytes on every platform.
+// - Each glyph is a closed solid: the strokes thickened to the stroke width and extruded
+//   through the wall ([-depth, +1 mm] to engrave, [-0.3 mm, +depth] to emboss), subtracted
+//   from or added to the splint by the exact Boolean (boolean.h). How a glyph is meshed and
+//   why (a sampled field, marching tetrahedra, QEM, resampling on a fragile contact):
+//   docs/architecture.md, "The label: how a glyph is made".
+// - Automatic placement follows the arch: centred on the wall's mid curve by arc length, each
+//   glyph in its own frame (up = the wall direction, n = outward), reading left to right seen
+//   from outside; depth is measured from the real wall (a ray's first hit). Explicit
+//   placement: one frame for the whole row. Glyphs never touch (checked on the meshes).
+// - Only + - * / and sqrt reach the output (no trigonometry), every loop runs in a fixed
+//   order, and the Boolean is the exact one: the same bytes on every platform.
 #ifndef SPLINTCORE_LABEL_H
 #define SPLINTCORE_LABEL_H
 

@@ -6,13 +6,9 @@
 // memory cap. Output is a mesh in the arena or a stream of vertices and triangles (e.g. into
 // an StlWriter).
 //
-// Algorithm: marching TETRAHEDRA on the Freudenthal (Kuhn) subdivision of every cube into six
-// tetrahedra around its main diagonal (0,0,0)-(1,1,1). The subdivision is the same in every
-// cube, so it is a triangulation of the whole grid (each cube face is split by the diagonal
-// from its lower corner, the same from both sides): there is no ambiguous case, and the
-// surface is the level set of the piecewise-linear interpolant, a closed 2-manifold. Chosen
-// over cube tables with a face rule because it is provably hole-free and manifold with a
-// 16-case table, at the price of about twice the triangles of classic marching cubes.
+// Algorithm: marching tetrahedra on the Freudenthal subdivision of every cube: a closed
+// 2-manifold with no ambiguous case (why it was chosen over marching cubes:
+// docs/architecture.md, "The extractor: marching tetrahedra").
 //
 // Conventions (what the output is, exactly):
 // - Inside is field < iso; a sample equal to iso (or above) is OUTSIDE. Samples beyond the
