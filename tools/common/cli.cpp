@@ -1,5 +1,7 @@
 #include "cli.h"
 
+#include "splintcore/json.h"
+
 #include <sys/stat.h>
 
 #include <cerrno>
@@ -18,23 +20,22 @@ bool parse_unsigned(const char* text, uint64_t* out) {
 
 bool parse_size(const char* text, uint64_t* out) { return parse_byte_size(text, out); }
 
-std::string json_escape(const char* text) {
-  std::string out = "\"";
-  for (const char* p = text; p != nullptr && *p != '\0'; ++p) {
-    unsigned char c = static_cast<unsigned char>(*p);
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += static_cast<char>(c);
-    } else if (c < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-      out += buf;
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
-  return out + "\"";
+namespace {
+
+// One value as the library's JsonWriter writes it (json.h): the CLI's objects and report.json
+// share one escaping and one number format.
+template <class T>
+std::string json_value(const T& value) {
+  std::string out;
+  JsonWriter w(string_sink(&out));
+  w.add(nullptr, value);
+  (void)w.finish();  // a string sink never refuses bytes
+  return out;
 }
+
+}  // namespace
+
+std::string json_escape(const char* text) { return json_value(text != nullptr ? text : ""); }
 
 ByteSink string_sink(std::string* out) {
   ByteSink sink;
@@ -47,12 +48,7 @@ ByteSink string_sink(std::string* out) {
   return sink;
 }
 
-std::string json_number(double value) {
-  if (!is_finite(value)) return "null";
-  char buf[32];
-  auto r = std::to_chars(buf, buf + sizeof(buf), value);
-  return std::string(buf, r.ptr);
-}
+std::string json_number(double value) { return json_value(value); }
 
 void JsonObject::key(const char* k) {
   if (!body_.empty()) body_ += ",";
@@ -64,23 +60,23 @@ void JsonObject::add(const char* k, const char* value) {
 }
 void JsonObject::add(const char* k, bool value) {
   key(k);
-  body_ += value ? "true" : "false";
+  body_ += json_value(value);
 }
 void JsonObject::add(const char* k, uint64_t value) {
   key(k);
-  body_ += std::to_string(value);
+  body_ += json_value(value);
 }
 void JsonObject::add(const char* k, int64_t value) {
   key(k);
-  body_ += std::to_string(value);
+  body_ += json_value(value);
 }
 void JsonObject::add(const char* k, double value) {
   key(k);
-  body_ += json_number(value);
+  body_ += json_value(value);
 }
 void JsonObject::add(const char* k, const Vec3& v) {
   key(k);
-  body_ += "[" + json_number(v.x) + "," + json_number(v.y) + "," + json_number(v.z) + "]";
+  body_ += json_value(v);
 }
 void JsonObject::add_raw(const char* k, const std::string& json) {
   key(k);
