@@ -325,49 +325,43 @@ struct Scan {
   double slack = 0;  // over the rounding of a computed height or distance
 };
 
-// Adds triangle t's regions (corners p, frame f) to out, and their bounds to out->box, started
-// along the scan direction dir (a unit vector; its normal, or about it).
-void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, const Vec3& dir,
-                 TriangleRegions* out) {
+// The face region of triangle t (corners p, frame f) into tr, and its bounds into tr.box:
+// the prism, or for a thin triangle the box `reach` (within R of it).
+void add_face_region(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, const Aabb& reach,
+                     TriangleRegions* tr) {
+  const double mu = s.mu, r = s.reach;
+  Region& g = tr->take();
+  g.candidates[g.candidate_count++] = t;
+  if (f.ok) {
+    for (int k = 0; k < 3; ++k) g.planes[g.count++] = Plane{f.m[k] * -1.0, mu - dot(f.m[k], p[k])};
+    // Its height is not tested with the planes: the bounds hold it within about R (and a
+    // query above R is not offered the triangle once it has a closer one, offer_regions).
+    g.face = true;
+    g.n = f.n;
+    g.h0 = dot(f.n, p[0]);
+    tr->box.add_swept(f.n * -r, f.n * r, 3, [&](uint32_t i) { return p[i]; });
+    return;
+  }
+  for (int a = 0; a < 3; ++a) {
+    Vec3 e{};
+    e[a] = 1;
+    g.planes[g.count++] = Plane{e, reach.hi[a]};
+    g.planes[g.count++] = Plane{e * -1.0, -reach.lo[a]};
+  }
+  for (uint32_t i = 0; i < 8; ++i) {
+    tr->box.add_point(Vec3{(i & 1) ? reach.hi.x : reach.lo.x, (i & 2) ? reach.hi.y : reach.lo.y,
+                           (i & 4) ? reach.hi.z : reach.lo.z});
+  }
+}
+
+// The edge regions triangle t owns (those whose neighbour across has no smaller id) into tr,
+// and their bounds into tr.box.
+void add_edge_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f,
+                      TriangleRegions* tr) {
   const Mesh& mesh = *s.index->mesh;
   const Vec3* v = mesh.vertices.data();
-  const Triangle& tri = mesh.triangles[t];
   const double mu = s.mu, r = s.reach;
-  TriangleRegions& tr = *out;
-  ShearedBox& sb = tr.box;
-  Aabb reach;  // this triangle's
-  for (int k = 0; k < 3; ++k) reach.add(p[k]);
-  reach.lo = reach.lo - Vec3{r + mu, r + mu, r + mu};
-  reach.hi = reach.hi + Vec3{r + mu, r + mu, r + mu};
-  sb.reach.add(reach);
-
-  // The face: the prism, or for a thin triangle the box within R of it.
-  {
-    Region& g = tr.take();
-    g.candidates[g.candidate_count++] = t;
-    if (f.ok) {
-      for (int k = 0; k < 3; ++k)
-        g.planes[g.count++] = Plane{f.m[k] * -1.0, mu - dot(f.m[k], p[k])};
-      // Its height is not tested with the planes: the bounds hold it within about R (and a
-      // query above R is not offered the triangle once it has a closer one, offer_regions).
-      g.face = true;
-      g.n = f.n;
-      g.h0 = dot(f.n, p[0]);
-      sb.add_swept(f.n * -r, f.n * r, 3, [&](uint32_t i) { return p[i]; });
-    } else {
-      for (int a = 0; a < 3; ++a) {
-        Vec3 e{};
-        e[a] = 1;
-        g.planes[g.count++] = Plane{e, reach.hi[a]};
-        g.planes[g.count++] = Plane{e * -1.0, -reach.lo[a]};
-      }
-      for (uint32_t i = 0; i < 8; ++i) {
-        sb.add_point(Vec3{(i & 1) ? reach.hi.x : reach.lo.x, (i & 2) ? reach.hi.y : reach.lo.y,
-                          (i & 4) ? reach.hi.z : reach.lo.z});
-      }
-    }
-  }
-  // The edges it owns.
+  ShearedBox& sb = tr->box;
   const uint32_t* neighbors = s.index->neighbors.data();
   for (int k = 0; k < 3; ++k) {
     uint32_t t2 = neighbors[3 * size_t{t} + static_cast<size_t>(k)];
@@ -377,7 +371,7 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
     const double len = length(b - a);
     if (!(len > 0)) continue;  // its points are its vertex's
     const Vec3 e = (b - a) * (1.0 / len);
-    Region& g = tr.take();
+    Region& g = tr->take();
     g.candidates[g.candidate_count++] = t;
     g.planes[g.count++] = Plane{e * -1.0, mu - dot(e, a)};
     g.planes[g.count++] = Plane{e, dot(e, a) + len + mu};
@@ -424,7 +418,16 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
       sb.add_swept_box(a - e * mu, b + e * mu, sweep);
     }
   }
-  // The vertices it owns (about one triangle in two owns one).
+}
+
+// The vertex regions triangle t owns (each vertex whose first corner is its; about one
+// triangle in two owns one) into tr, and their bounds, swept along dir, into tr.box.
+void add_vertex_regions(const Scan& s, uint32_t t, const Vec3& dir, TriangleRegions* tr) {
+  const Mesh& mesh = *s.index->mesh;
+  const Vec3* v = mesh.vertices.data();
+  const Triangle& tri = mesh.triangles[t];
+  const double mu = s.mu, r = s.reach;
+  ShearedBox& sb = tr->box;
   const uint32_t* vstart = s.index->vertex_start.data();
   const uint32_t* vuses = s.index->vertex_uses.data();
   Vec3 across[2];  // two unit vectors across dir, for the bounds; set by the first vertex
@@ -445,7 +448,7 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
       sheared_across[1] = sb.sheared(across[1]);
       have_across = true;
     }
-    Region& g = tr.take();
+    Region& g = tr->take();
     g.vertex = vi;
     const Vec3& c = v[vi];
     uint32_t seen[kMaxPlanes];
@@ -489,6 +492,21 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
       sweep.add(sheared_across[0] * poly.x()[j] + sheared_across[1] * poly.y()[j]);
     if (poly.n != 0) sb.add_swept_box(c - dir * r, c + dir * r, sweep);
   }
+}
+
+// Adds triangle t's regions (corners p, frame f) to out, and their bounds to out->box, started
+// along the scan direction dir (a unit vector; its normal, or about it).
+void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, const Vec3& dir,
+                 TriangleRegions* out) {
+  const double mu = s.mu, r = s.reach;
+  Aabb reach;  // this triangle's
+  for (int k = 0; k < 3; ++k) reach.add(p[k]);
+  reach.lo = reach.lo - Vec3{r + mu, r + mu, r + mu};
+  reach.hi = reach.hi + Vec3{r + mu, r + mu, r + mu};
+  out->box.reach.add(reach);
+  add_face_region(s, t, p, f, reach, out);
+  add_edge_regions(s, t, p, f, out);
+  add_vertex_regions(s, t, dir, out);
 }
 
 // The squared distance of query j (at q) to its best candidate so far (none: infinity).
