@@ -736,10 +736,11 @@ Status build_distance_index(const Context& ctx, const Mesh& mesh,
                             const DistanceIndexOptions& options, DistanceIndex* out) {
   *out = DistanceIndex{};
   // On an error nothing stays: the arena goes back to its top at entry, *out is empty.
-  const Arena::Marker entry = ctx.arena->mark();
+  ArenaScope entry(*ctx.arena);
   Status s = build_index_steps(ctx, mesh, options, out);
-  if (!s.is_ok()) {
-    ctx.arena->rewind(entry);
+  if (s.is_ok()) {
+    entry.commit();
+  } else {
     *out = DistanceIndex{};
   }
   return s;
