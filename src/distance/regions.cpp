@@ -745,10 +745,11 @@ struct RegionBatch {
 
   bool bucketed(const Vec3& q) const { return usable(q) && near_box.contains(q); }
 
-  // The tree's distance for kSample usable queries spread over the batch: the largest unless
-  // it exceeds four times the median (then the far ones would make every region long).
+  // The tree's distance for kSample of the usable_count (>= kSample) usable queries, spread
+  // over the batch: the largest unless it exceeds four times the median (then the far ones
+  // would make every region long).
   double sampled_band(size_t usable_count) const {
-    double sample[kSample];
+    double sample[kSample] = {};  // (zeroed for cppcheck only: all kSample are set below)
     uint32_t sampled = 0;
     const size_t step = usable_count / kSample > 0 ? usable_count / kSample : 1;
     for (size_t i = 0, seen = 0; i < n && sampled < kSample; ++i) {
