@@ -717,13 +717,13 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3],
 }
 
 // region_closest_points (below), stage by stage. Each stage that returns false leaves the
-// batch to the tree.
+// batch to the tree. (The queries come in as a parameter, and the loops over them count in
+// locals: as members they would be loaded again after every store to the buckets.)
 struct RegionBatch {
   const Context& ctx;
   const DistanceIndex& index;
   const Mesh& mesh;
-  Span<const Vec3> queries;
-  size_t n, nt;
+  size_t nt;
   Scan s;
   Aabb mbox;      // the mesh's
   Aabb near_box;  // the queries beyond it cannot have an answer within the band
@@ -735,12 +735,10 @@ struct RegionBatch {
   TriangleRegions* scratch = nullptr;  // one for each task
   uint32_t* position = nullptr;        // of each triangle in leaf order
 
-  RegionBatch(const Context& context, const DistanceIndex& distance_index, Span<const Vec3> qs)
+  RegionBatch(const Context& context, const DistanceIndex& distance_index)
       : ctx(context),
         index(distance_index),
         mesh(*distance_index.mesh),
-        queries(qs),
-        n(qs.size()),
         nt(distance_index.mesh->triangles.size()) {}
 
   bool bucketed(const Vec3& q) const { return usable(q) && near_box.contains(q); }
@@ -748,7 +746,8 @@ struct RegionBatch {
   // The tree's distance for kSample of the usable_count (>= kSample) usable queries, spread
   // over the batch: the largest unless it exceeds four times the median (then the far ones
   // would make every region long).
-  double sampled_band(size_t usable_count) const {
+  double sampled_band(Span<const Vec3> queries, size_t usable_count) const {
+    const size_t n = queries.size();
     double sample[kSample] = {};  // (zeroed for cppcheck only: all kSample are set below)
     uint32_t sampled = 0;
     const size_t step = usable_count / kSample > 0 ? usable_count / kSample : 1;
@@ -767,7 +766,8 @@ struct RegionBatch {
   }
 
   // The band B and the margin mu (s), when the batch is large enough.
-  bool choose_band() {
+  bool choose_band(Span<const Vec3> queries) {
+    const size_t n = queries.size();
     if (nt == 0 || n < kMinQueries || n < nt / 2 || n >= (size_t{1} << 31)) return false;
     size_t usable_count = 0;
     for (size_t i = 0; i < n; ++i) usable_count += usable(queries[i]) ? size_t{1} : size_t{0};
@@ -775,7 +775,7 @@ struct RegionBatch {
     mbox = mesh_bounds(mesh);
     double scale = 0;  // of the coordinates: the mesh's, and the queries' within the band of it
     for (int a = 0; a < 3; ++a) scale = max3(scale, std::fabs(mbox.lo[a]), std::fabs(mbox.hi[a]));
-    double band = sampled_band(usable_count);
+    double band = sampled_band(queries, usable_count);
     band = band * (1.0 + 1.0 / 16) + scale * 0x1p-30;
     scale += band;
     s.index = &index;
@@ -793,14 +793,19 @@ struct RegionBatch {
 
   // The queries to bucket: those within the reach of the mesh's box (the tree answers the
   // others: they would only stretch the grid).
-  bool gather_near() {
+  bool gather_near(Span<const Vec3> queries) {
     near_box.lo = mbox.lo - Vec3{s.reach, s.reach, s.reach};
     near_box.hi = mbox.hi + Vec3{s.reach, s.reach, s.reach};
-    for (size_t i = 0; i < n; ++i) {
-      if (!usable(queries[i]) || !near_box.contains(queries[i])) continue;
-      qbox.add(queries[i]);
-      ++nu;
+    const Aabb near = near_box;
+    Aabb box;
+    size_t count = 0;
+    for (size_t i = 0; i < queries.size(); ++i) {
+      if (!usable(queries[i]) || !near.contains(queries[i])) continue;
+      box.add(queries[i]);
+      ++count;
     }
+    qbox = box;
+    nu = count;
     return nu >= kMinQueries;
   }
 
@@ -860,7 +865,8 @@ struct RegionBatch {
   // most 1024 slabs): start[] (two cells a query) is far larger than a cache, and counting
   // and placing the queries in their input order would touch it at random; a slab's counts
   // lie together. The order within a cell is the input order either way.
-  bool bucket_queries(Arena& arena) {
+  bool bucket_queries(Arena& arena, Span<const Vec3> queries) {
+    const size_t n = queries.size();
     int slab_shift = 0;
     while ((cells >> slab_shift) >= 1024) ++slab_shift;
     const uint32_t slabs = static_cast<uint32_t>(cells >> slab_shift) + 1;
@@ -982,7 +988,7 @@ struct RegionBatch {
 
   // The answers: a query whose best candidate lies within the band has the tree's answer;
   // the others (and the unusable ones) ask the tree.
-  void answer_all(RegionAnswer answer, void* user) {
+  void answer_all(Span<const Vec3> queries, RegionAnswer answer, void* user) {
     const double band2 = s.band * s.band;
     constexpr uint32_t kChunk = 1024;
     const uint32_t chunks = static_cast<uint32_t>((nu + kChunk - 1) / kChunk);
@@ -1007,7 +1013,7 @@ struct RegionBatch {
       }
     };
     parallel_for_each(ctx.executor, chunks, finish);
-    for (size_t i = 0; i < n; ++i) {
+    for (size_t i = 0; i < queries.size(); ++i) {
       if (bucketed(queries[i])) continue;
       ClosestPoint cp;
       const bool found = closest_within(index, queries[i], HUGE_VAL, &cp);
@@ -1022,18 +1028,19 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
                                      Span<const Vec3> queries, RegionAnswer answer, void* user,
                                      bool* used) {
   *used = false;
-  RegionBatch batch(ctx, index, queries);
-  if (!batch.choose_band() || !batch.gather_near()) return Status::ok();
+  RegionBatch batch(ctx, index);
+  if (!batch.choose_band(queries) || !batch.gather_near(queries)) return Status::ok();
   batch.size_grid();
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
-  if (!batch.allocate(arena) || !batch.bucket_queries(arena) || !batch.allocate_best(arena)) {
+  if (!batch.allocate(arena) || !batch.bucket_queries(arena, queries) ||
+      !batch.allocate_best(arena)) {
     return Status::ok();
   }
   *used = true;
   batch.prepare_scan();
   SPLINTCORE_RETURN_IF_ERROR(batch.scan());
-  batch.answer_all(answer, user);
+  batch.answer_all(queries, answer, user);
   return Status::ok();
 }
 
