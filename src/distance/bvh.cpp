@@ -226,75 +226,138 @@ void inner_intervals(const BvhNode& c, const BvhObb& o, const float axis[3][3], 
   }
 }
 
-// The body of build_distance_index (below), which undoes it on an error.
-Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceIndexOptions& options,
-                         DistanceIndex* out) {
-  Arena& arena = *ctx.arena;
-  out->mesh = &mesh;
-  const size_t nt = mesh.triangles.size();
-  const size_t nv = mesh.vertices.size();
-  const uint32_t leaf_size = leaf_size_of(options);
-  if (leaf_size > 16) {
-    return make_error(StatusCode::kInvalidArgument, "leaf size must be 1..16, got ", leaf_size);
-  }
-  // Corners are numbered 3 * triangle + corner in 32 bits (vertex_uses, neighbours).
-  constexpr uint64_t kMaxTriangles = UINT32_MAX / 3;
-  if (nt > kMaxTriangles) {
-    return make_error(StatusCode::kLimitExceeded, "distance index: ", nt, " triangles, at most ",
-                      kMaxTriangles, " (corners are numbered in 32 bits)");
-  }
-  const Vec3* v = mesh.vertices.data();
-  const Triangle* tris = mesh.triangles.data();
-  for (size_t i = 0; i < nv; ++i) {
-    if (!is_finite(v[i])) {
-      return make_error(StatusCode::kInvalidMesh, "vertex ", i, " is not finite").at_index(i);
-    }
-  }
-  // What stays: order, neighbours and vertex normals (here), the 4-wide nodes and their
-  // dipoles (moved down over the temporaries once the tree is built).
-  uint32_t* order = arena.allocate_array<uint32_t>(nt);
-  uint32_t* neighbors = arena.allocate_array<uint32_t>(3 * nt);
-  uint32_t* start = arena.allocate_array<uint32_t>(nv + 1);
-  uint32_t* vuses = arena.allocate_array<uint32_t>(3 * nt);
-  if ((nt > 0 && (order == nullptr || neighbors == nullptr || vuses == nullptr)) ||
-      start == nullptr) {
-    return arena.exhausted_status();
-  }
-  for (size_t i = 0; i <= nv; ++i) start[i] = 0;
-  // The triangles' indices are checked in the pass that bounds their centroids (for the
-  // Morton codes, step 1), which also counts each vertex's corners (for its list, step 4).
-  Aabb centroids;
-  for (size_t t = 0; t < nt; ++t) {
-    const Triangle& tri = tris[t];
-    if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) {
-      return make_error(StatusCode::kInvalidMesh, "triangle ", t,
-                        " refers to a vertex that does not exist")
-          .at_index(t);
-    }
-    centroids.add((v[tri.v[0]] + v[tri.v[1]] + v[tri.v[2]]) * (1.0 / 3.0));
-    for (int k = 0; k < 3; ++k) ++start[tri.v[k] + size_t{1}];
-  }
-  const uint32_t n = static_cast<uint32_t>(nt);
-  const uint32_t leaves = n == 0 ? 1 : (n + leaf_size - 1) / leaf_size;
+// A corner in the per-vertex lists of the edge-neighbour step: the next and previous vertex of
+// each corner, beside vertex_uses (reading them from the triangles instead halves this memory
+// but costs 10 ms at 543k triangles in random reads). A list longer than kScan (below) holds,
+// instead, its next vertex and its use, sorted.
+struct Corner {
+  uint32_t next;
+  uint32_t other;  // the previous vertex; in a long list, the use (3 * triangle + corner)
+};
 
-  const Arena::Marker tree_temps = arena.mark();
-  // The wide nodes and their dipoles, at their upper bound (every wide node splits a range of
-  // at least two leaves, so there are at most leaves - 1 of them); moved down over the Morton
-  // keys once the tree is built.
-  const uint32_t wide_max = leaves > 1 ? leaves - 1 : 1;
+// A list of up to kScan corners (the usual vertex: six) is scanned once for each of its
+// edges. A longer one is sorted by (next vertex, use) and searched, so that a vertex shared
+// by d triangles costs O(d log d), not O(d^2) (hostile input: a fan of a million
+// triangles, or a million copies of one triangle); its edges' reverse half-edges are
+// counted in the other vertex's list, by search or scan.
+constexpr uint32_t kScan = 32;
+
+// First index in [lo, hi) of a sorted list whose next vertex is >= to (or > to when `after`).
+inline uint32_t search_next(const Corner* lists, uint32_t lo, uint32_t hi, uint32_t to,
+                            bool after) {
+  while (lo < hi) {
+    const uint32_t mid = lo + (hi - lo) / 2;
+    if (lists[mid].next < to || (after && lists[mid].next == to)) {
+      lo = mid + 1;
+    } else {
+      hi = mid;
+    }
+  }
+  return lo;
+}
+
+// The area-weighted sums of a node's dipole (BvhDipole), over its children.
+struct DipoleSums {
+  Vec3 wsum{};  // centroids times areas
+  Vec3 nsum{};  // area-weighted normals
+  double asum = 0;
+};
+
+// build_index_steps (below), stage by stage. What stays: order, neighbours and the per-vertex
+// corner lists (for the vertex normals), allocated first; the 4-wide nodes and their dipoles,
+// moved down over the temporaries once the tree is built.
+struct IndexBuild {
+  Arena& arena;
+  const Mesh& mesh;
+  const DistanceIndexOptions& options;
+  const Vec3* v;
+  const Triangle* tris;
+  size_t nt, nv;
+  uint32_t n = 0;  // nt, once it is known to fit
+  uint32_t leaf_size;
+  uint32_t leaves = 1;
+  uint32_t wide_max = 1;  // the wide nodes' upper bound
+  uint32_t* order = nullptr;
+  uint32_t* neighbors = nullptr;
+  uint32_t* start = nullptr;
+  uint32_t* vuses = nullptr;
+  Aabb centroids;
+  uint64_t* keys = nullptr;  // Morton code << id_bits | triangle, sorted (a temporary)
   BvhNode* nodes = nullptr;
   BvhDipole* dipoles = nullptr;
   BvhObb* obbs = nullptr;
   uint32_t node_count = 1;
-  // 1. Morton order of the triangle centroids (keys live until the topology is built).
-  {
+  bool closed_manifold = false;
+
+  IndexBuild(Arena& a, const Mesh& m, const DistanceIndexOptions& o)
+      : arena(a),
+        mesh(m),
+        options(o),
+        v(m.vertices.data()),
+        tris(m.triangles.data()),
+        nt(m.triangles.size()),
+        nv(m.vertices.size()),
+        leaf_size(leaf_size_of(o)) {}
+
+  Status check_input() const {
+    if (leaf_size > 16) {
+      return make_error(StatusCode::kInvalidArgument, "leaf size must be 1..16, got ", leaf_size);
+    }
+    // Corners are numbered 3 * triangle + corner in 32 bits (vertex_uses, neighbours).
+    constexpr uint64_t kMaxTriangles = UINT32_MAX / 3;
+    if (nt > kMaxTriangles) {
+      return make_error(StatusCode::kLimitExceeded, "distance index: ", nt, " triangles, at most ",
+                        kMaxTriangles, " (corners are numbered in 32 bits)");
+    }
+    for (size_t i = 0; i < nv; ++i) {
+      if (!is_finite(v[i])) {
+        return make_error(StatusCode::kInvalidMesh, "vertex ", i, " is not finite").at_index(i);
+      }
+    }
+    return Status::ok();
+  }
+
+  // The arrays that stay (order, neighbours, the per-vertex lists), then one pass over the
+  // triangles: their indices checked, their centroids bounded (for the Morton codes, step 1)
+  // and each vertex's corners counted (for its list, step 4).
+  Status scan_triangles() {
+    order = arena.allocate_array<uint32_t>(nt);
+    neighbors = arena.allocate_array<uint32_t>(3 * nt);
+    start = arena.allocate_array<uint32_t>(nv + 1);
+    vuses = arena.allocate_array<uint32_t>(3 * nt);
+    if ((nt > 0 && (order == nullptr || neighbors == nullptr || vuses == nullptr)) ||
+        start == nullptr) {
+      return arena.exhausted_status();
+    }
+    for (size_t i = 0; i <= nv; ++i) start[i] = 0;
+    for (size_t t = 0; t < nt; ++t) {
+      const Triangle& tri = tris[t];
+      if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) {
+        return make_error(StatusCode::kInvalidMesh, "triangle ", t,
+                          " refers to a vertex that does not exist")
+            .at_index(t);
+      }
+      centroids.add((v[tri.v[0]] + v[tri.v[1]] + v[tri.v[2]]) * (1.0 / 3.0));
+      for (int k = 0; k < 3; ++k) ++start[tri.v[k] + size_t{1}];
+    }
+    n = static_cast<uint32_t>(nt);
+    leaves = n == 0 ? 1 : (n + leaf_size - 1) / leaf_size;
+    // Every wide node splits a range of at least two leaves, so there are at most leaves - 1.
+    wide_max = leaves > 1 ? leaves - 1 : 1;
+    return Status::ok();
+  }
+
+  // 1. Morton order of the triangle centroids (keys live until the topology is built), and
+  // the wide nodes and their dipoles at their upper bound, after the keys.
+  Status morton_order() {
     // Key = Morton code in the high bits, triangle id in the low bits: one 64-bit word per
-    // triangle to sort (half the traffic of a key-index pair). The code gets 3 * code_bits bits,
-    // code_bits = min(16, (64 - id bits) / 3): 16 up to 65,536 triangles ... 14 up to 4 million.
+    // triangle to sort (half the traffic of a key-index pair). The code gets 3 * code_bits
+    // bits, code_bits = min(16, (64 - id bits) / 3): 16 up to 65,536 triangles ... 14 up to 4
+    // million.
     uint32_t id_bits = 1;
     while (id_bits < 32 && (uint64_t{1} << id_bits) < nt) ++id_bits;
     const uint32_t code_bits = (64 - id_bits) / 3 < 16 ? (64 - id_bits) / 3 : 16;
-    uint64_t* keys = arena.allocate_array<uint64_t>(nt);
+    keys = arena.allocate_array<uint64_t>(nt);
     uint64_t* scratch = arena.allocate_array<uint64_t>(nt);
     nodes = arena.allocate_array<BvhNode>(wide_max);
     dipoles = arena.allocate_array<BvhDipole>(wide_max);
@@ -303,193 +366,197 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
         dipoles == nullptr || (options.oriented_boxes && obbs == nullptr)) {
       return arena.exhausted_status();
     }
-    {
-      const Vec3 lo = centroids.lo;
-      const Vec3 ext = centroids.extent();
-      const double cells = static_cast<double>((uint64_t{1} << code_bits) - 1);
-      const double scale[3] = {ext.x > 0 ? cells / ext.x : 0.0, ext.y > 0 ? cells / ext.y : 0.0,
-                               ext.z > 0 ? cells / ext.z : 0.0};
-      for (uint32_t t = 0; t < n; ++t) {
-        const Triangle& tri = tris[t];
-        const Vec3 c = (v[tri.v[0]] + v[tri.v[1]] + v[tri.v[2]]) * (1.0 / 3.0);
-        uint64_t q[3];
-        for (int a = 0; a < 3; ++a) {
-          double x = (c[a] - lo[a]) * scale[a];
-          x = x < 0 ? 0 : (x > cells ? cells : x);
-          q[a] = static_cast<uint64_t>(x);
-        }
-        const uint64_t code =
-            (spread_bits(q[0]) << 2) | (spread_bits(q[1]) << 1) | spread_bits(q[2]);
-        keys[t] = (code << id_bits) | t;
+    const Vec3 lo = centroids.lo;
+    const Vec3 ext = centroids.extent();
+    const double cells = static_cast<double>((uint64_t{1} << code_bits) - 1);
+    const double scale[3] = {ext.x > 0 ? cells / ext.x : 0.0, ext.y > 0 ? cells / ext.y : 0.0,
+                             ext.z > 0 ? cells / ext.z : 0.0};
+    for (uint32_t t = 0; t < n; ++t) {
+      const Triangle& tri = tris[t];
+      const Vec3 c = (v[tri.v[0]] + v[tri.v[1]] + v[tri.v[2]]) * (1.0 / 3.0);
+      uint64_t q[3];
+      for (int a = 0; a < 3; ++a) {
+        double x = (c[a] - lo[a]) * scale[a];
+        x = x < 0 ? 0 : (x > cells ? cells : x);
+        q[a] = static_cast<uint64_t>(x);
       }
-      // The ids rise in input order, so a stable sort on the code bits alone gives the order
-      // of the whole key.
-      radix_sort_bits(Span<uint64_t>(keys, nt), Span<uint64_t>(scratch, nt), id_bits,
-                      id_bits + 3 * code_bits);
-      const uint64_t id_mask = (uint64_t{1} << id_bits) - 1;
-      for (uint32_t i = 0; i < n; ++i) order[i] = static_cast<uint32_t>(keys[i] & id_mask);
+      const uint64_t code = (spread_bits(q[0]) << 2) | (spread_bits(q[1]) << 1) | spread_bits(q[2]);
+      keys[t] = (code << id_bits) | t;
     }
-    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 1, 4));
+    // The ids rise in input order, so a stable sort on the code bits alone gives the order
+    // of the whole key.
+    radix_sort_bits(Span<uint64_t>(keys, nt), Span<uint64_t>(scratch, nt), id_bits,
+                    id_bits + 3 * code_bits);
+    const uint64_t id_mask = (uint64_t{1} << id_bits) - 1;
+    for (uint32_t i = 0; i < n; ++i) order[i] = static_cast<uint32_t>(keys[i] & id_mask);
+    return Status::ok();
+  }
 
-    // 2. Topology, top-down over leaf ranges. Leaf l holds order[l * leaf_size ...]; its code is
-    // its first triangle's. A wide node splits its range at the highest differing Morton bit,
-    // then splits the part with the most leaves again (the first on a tie) until it has four
-    // parts or only single leaves; a part of one leaf is a leaf child, a longer one a wide node.
-    // Nodes are numbered as they are made, so children follow their parent and the reverse of
-    // the numbering is bottom-up.
-    {
-      // A leaf's code is its first triangle's (the id bits only break ties among equal codes,
-      // and splitting on them is as good as any other split there).
-      auto leaf_code = [&](uint32_t l) { return n == 0 ? 0 : keys[size_t{l} * leaf_size]; };
-      // The last leaf of the first half of [first, last] (first < last).
-      auto split_point = [&](uint32_t first, uint32_t last) {
-        const uint64_t a = leaf_code(first), b = leaf_code(last);
-        if (a == b) return first + (last - first) / 2;
-        const int bit = highest_bit(a ^ b);
-        // The last leaf with that bit clear (first has it clear, last set): a binary search
-        // that narrows by halves without a branch on the bit (which side it goes is a coin
-        // toss). `base` has the bit clear, and the answer lies in [base, base + count).
-        uint32_t base = first, count = last - first;
-        while (count > 1) {
-          const uint32_t half = count / 2;
-          base = ((leaf_code(base + half) >> bit) & 1) == 0 ? base + half : base;
-          count -= half;
-        }
-        return base;
-      };
-      struct Range {
-        uint32_t node, first, last;  // leaves [first, last]
-      };
-      const float inf = HUGE_VALF;
-      Range stack[3 * kMaxDepth + 4];
-      uint32_t top = 0;
-      stack[top++] = Range{0, 0, leaves - 1};
-      while (top > 0) {
-        const Range r = stack[--top];
-        uint32_t first[4] = {r.first, 0, 0, 0}, last[4] = {r.last, 0, 0, 0};
-        uint32_t parts = 1;
-        while (parts < 4) {
-          uint32_t widest = parts;
-          for (uint32_t k = 0; k < parts; ++k) {
-            if (last[k] > first[k] &&
-                (widest == parts || last[k] - first[k] > last[widest] - first[widest])) {
-              widest = k;
-            }
-          }
-          if (widest == parts) break;
-          const uint32_t split = split_point(first[widest], last[widest]);
-          for (uint32_t k = parts; k > widest + 1; --k) {
-            first[k] = first[k - 1];
-            last[k] = last[k - 1];
-          }
-          first[widest + 1] = split + 1;
-          last[widest + 1] = last[widest];
-          last[widest] = split;
-          ++parts;
-        }
-        BvhNode& w = nodes[r.node];
-        for (uint32_t k = 0; k < 4; ++k) {
-          for (int a = 0; a < 3; ++a) {
-            w.lo[a][k] = inf;  // bounds come in step 3
-            w.hi[a][k] = -inf;
-          }
-          w.child[k] = kNoChild;
-          w.count[k] = 0;
-          if (k >= parts) continue;
-          if (first[k] == last[k]) {
-            const uint32_t begin = first[k] * leaf_size;
-            const uint32_t end = begin + leaf_size < n ? begin + leaf_size : n;
-            if (end == begin) continue;  // the empty mesh's root: no child at all
-            w.child[k] = begin;
-            w.count[k] = static_cast<uint8_t>(end - begin);
-            continue;
-          }
-          if (top + 1 > 3 * kMaxDepth + 4 || node_count >= wide_max) {
-            return Status::error(StatusCode::kInternal, "distance index: hierarchy too deep");
-          }
-          w.child[k] = node_count;
-          stack[top++] = Range{node_count++, first[k], last[k]};
+  // A leaf's code is its first triangle's (the id bits only break ties among equal codes,
+  // and splitting on them is as good as any other split there).
+  uint64_t leaf_code(uint32_t l) const { return n == 0 ? 0 : keys[size_t{l} * leaf_size]; }
+
+  // The last leaf of the first half of [first, last] (first < last).
+  uint32_t split_point(uint32_t first, uint32_t last) const {
+    const uint64_t a = leaf_code(first), b = leaf_code(last);
+    if (a == b) return first + (last - first) / 2;
+    const int bit = highest_bit(a ^ b);
+    // The last leaf with that bit clear (first has it clear, last set): a binary search
+    // that narrows by halves without a branch on the bit (which side it goes is a coin
+    // toss). `base` has the bit clear, and the answer lies in [base, base + count).
+    uint32_t base = first, count = last - first;
+    while (count > 1) {
+      const uint32_t half = count / 2;
+      base = ((leaf_code(base + half) >> bit) & 1) == 0 ? base + half : base;
+      count -= half;
+    }
+    return base;
+  }
+
+  // Splits the leaves [first[0], last[0]] into parts [first[k], last[k]]: at the highest
+  // differing Morton bit, then the part with the most leaves (the first on a tie) again, until
+  // there are four parts or only single leaves. Returns the number of parts.
+  uint32_t split_four(uint32_t first[4], uint32_t last[4]) const {
+    uint32_t parts = 1;
+    while (parts < 4) {
+      uint32_t widest = parts;
+      for (uint32_t k = 0; k < parts; ++k) {
+        if (last[k] > first[k] &&
+            (widest == parts || last[k] - first[k] > last[widest] - first[widest])) {
+          widest = k;
         }
       }
+      if (widest == parts) break;
+      const uint32_t split = split_point(first[widest], last[widest]);
+      for (uint32_t k = parts; k > widest + 1; --k) {
+        first[k] = first[k - 1];
+        last[k] = last[k - 1];
+      }
+      first[widest + 1] = split + 1;
+      last[widest + 1] = last[widest];
+      last[widest] = split;
+      ++parts;
+    }
+    return parts;
+  }
+
+  // 2. Topology, top-down over leaf ranges. Leaf l holds order[l * leaf_size ...]; its code is
+  // its first triangle's. A wide node splits its range at the highest differing Morton bit,
+  // then splits the part with the most leaves again (the first on a tie) until it has four
+  // parts or only single leaves; a part of one leaf is a leaf child, a longer one a wide node.
+  // Nodes are numbered as they are made, so children follow their parent and the reverse of
+  // the numbering is bottom-up.
+  Status build_topology() {
+    struct Range {
+      uint32_t node, first, last;  // leaves [first, last]
+    };
+    const float inf = HUGE_VALF;
+    Range stack[3 * kMaxDepth + 4];
+    uint32_t top = 0;
+    stack[top++] = Range{0, 0, leaves - 1};
+    while (top > 0) {
+      const Range r = stack[--top];
+      uint32_t first[4] = {r.first, 0, 0, 0}, last[4] = {r.last, 0, 0, 0};
+      const uint32_t parts = split_four(first, last);
+      BvhNode& w = nodes[r.node];
+      for (uint32_t k = 0; k < 4; ++k) {
+        for (int a = 0; a < 3; ++a) {
+          w.lo[a][k] = inf;  // bounds come in step 3
+          w.hi[a][k] = -inf;
+        }
+        w.child[k] = kNoChild;
+        w.count[k] = 0;
+        if (k >= parts) continue;
+        if (first[k] == last[k]) {
+          const uint32_t begin = first[k] * leaf_size;
+          const uint32_t end = begin + leaf_size < n ? begin + leaf_size : n;
+          if (end == begin) continue;  // the empty mesh's root: no child at all
+          w.child[k] = begin;
+          w.count[k] = static_cast<uint8_t>(end - begin);
+          continue;
+        }
+        if (top + 1 > 3 * kMaxDepth + 4 || node_count >= wide_max) {
+          return Status::error(StatusCode::kInternal, "distance index: hierarchy too deep");
+        }
+        w.child[k] = node_count;
+        stack[top++] = Range{node_count++, first[k], last[k]};
+      }
+    }
+    return Status::ok();
+  }
+
+  // Child k of `node`, a leaf: its box and dipole sums from its triangles.
+  void leaf_child_bounds(BvhNode& node, int k, DipoleSums* sums) const {
+    Aabb box;
+    for (uint32_t j = node.child[k]; j < node.child[k] + node.count[k]; ++j) {
+      const Triangle& tri = tris[order[j]];
+      const Vec3 &p0 = v[tri.v[0]], &p1 = v[tri.v[1]], &p2 = v[tri.v[2]];
+      box.add(p0);
+      box.add(p1);
+      box.add(p2);
+      const Vec3 an = cross(p1 - p0, p2 - p0) * 0.5;
+      const double ar = length(an);
+      sums->nsum = sums->nsum + an;
+      sums->wsum = sums->wsum + (p0 + p1 + p2) * (ar / 3.0);
+      sums->asum += ar;
+    }
+    for (int a = 0; a < 3; ++a) {
+      node.lo[a][k] = float_down(box.lo[a]);
+      node.hi[a][k] = float_up(box.hi[a]);
     }
   }
 
-  // 3. Bounds and dipoles, bottom-up (children have larger indices than their parent). A
-  // leaf child's box and dipole sums come from its triangles, an inner child's from its node
-  // (its box is the union of that node's boxes, its dipole that node's, in float): the far
-  // field is an approximation either way, and the radius is bounded from the node's own box.
-  for (uint32_t i = node_count; i-- > 0;) {
-    BvhNode& node = nodes[i];
-    Aabb all;
-    Vec3 wsum{}, nsum{};
-    double asum = 0;
-    for (int k = 0; k < 4; ++k) {
-      if (node.child[k] == kNoChild) continue;
-      Aabb box;
-      if (node.count[k] > 0) {
-        for (uint32_t j = node.child[k]; j < node.child[k] + node.count[k]; ++j) {
-          const Triangle& tri = tris[order[j]];
-          const Vec3 &p0 = v[tri.v[0]], &p1 = v[tri.v[1]], &p2 = v[tri.v[2]];
-          box.add(p0);
-          box.add(p1);
-          box.add(p2);
-          const Vec3 an = cross(p1 - p0, p2 - p0) * 0.5;
-          const double ar = length(an);
-          nsum = nsum + an;
-          wsum = wsum + (p0 + p1 + p2) * (ar / 3.0);
-          asum += ar;
-        }
-        for (int a = 0; a < 3; ++a) {
-          node.lo[a][k] = float_down(box.lo[a]);
-          node.hi[a][k] = float_up(box.hi[a]);
-        }
-      } else {
-        const BvhNode& c = nodes[node.child[k]];
-        float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF},
-              hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
-        for (int j = 0; j < 4; ++j) {
-          if (c.child[j] == kNoChild) continue;
-          for (int a = 0; a < 3; ++a) {
-            lo[a] = c.lo[a][j] < lo[a] ? c.lo[a][j] : lo[a];
-            hi[a] = c.hi[a][j] > hi[a] ? c.hi[a][j] : hi[a];
-          }
-        }
-        for (int a = 0; a < 3; ++a) {
-          node.lo[a][k] = lo[a];
-          node.hi[a][k] = hi[a];
-        }
-        const BvhDipole& cd = dipoles[node.child[k]];
-        const double ca = static_cast<double>(cd.area);
-        nsum = nsum + Vec3{static_cast<double>(cd.normal[0]), static_cast<double>(cd.normal[1]),
-                           static_cast<double>(cd.normal[2])};
-        wsum = wsum + Vec3{static_cast<double>(cd.center[0]), static_cast<double>(cd.center[1]),
-                           static_cast<double>(cd.center[2])} *
-                          ca;
-        asum += ca;
+  // Child k of `node`, an inner node: its box the union of that node's boxes, its dipole that
+  // node's, in float.
+  void inner_child_bounds(BvhNode& node, int k, DipoleSums* sums) const {
+    const BvhNode& c = nodes[node.child[k]];
+    float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF}, hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
+    for (int j = 0; j < 4; ++j) {
+      if (c.child[j] == kNoChild) continue;
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = c.lo[a][j] < lo[a] ? c.lo[a][j] : lo[a];
+        hi[a] = c.hi[a][j] > hi[a] ? c.hi[a][j] : hi[a];
       }
-      all.add(Vec3{static_cast<double>(node.lo[0][k]), static_cast<double>(node.lo[1][k]),
-                   static_cast<double>(node.lo[2][k])});
-      all.add(Vec3{static_cast<double>(node.hi[0][k]), static_cast<double>(node.hi[1][k]),
-                   static_cast<double>(node.hi[2][k])});
     }
+    for (int a = 0; a < 3; ++a) {
+      node.lo[a][k] = lo[a];
+      node.hi[a][k] = hi[a];
+    }
+    const BvhDipole& cd = dipoles[node.child[k]];
+    const double ca = static_cast<double>(cd.area);
+    sums->nsum =
+        sums->nsum + Vec3{static_cast<double>(cd.normal[0]), static_cast<double>(cd.normal[1]),
+                          static_cast<double>(cd.normal[2])};
+    sums->wsum =
+        sums->wsum + Vec3{static_cast<double>(cd.center[0]), static_cast<double>(cd.center[1]),
+                          static_cast<double>(cd.center[2])} *
+                         ca;
+    sums->asum += ca;
+  }
+
+  // Node i's dipole from its children's sums; `all` is the union of its boxes.
+  void set_dipole(uint32_t i, Aabb all, const DipoleSums& sums) {
     if (all.empty()) all.add(Vec3{});
-    const Vec3 center = asum > 0 ? wsum * (1.0 / asum) : all.center();
+    const Vec3 center = sums.asum > 0 ? sums.wsum * (1.0 / sums.asum) : all.center();
     // Radius: the box's half diagonal plus the centre's offset from the box centre bounds the
     // distance to every corner (triangle inequality), with one square root.
     const double reach = 0.5 * length(all.hi - all.lo) + length((all.lo + all.hi) * 0.5 - center);
     BvhDipole& dp = dipoles[i];
     for (int a = 0; a < 3; ++a) {
       dp.center[a] = static_cast<float>(center[a]);
-      dp.normal[a] = static_cast<float>(nsum[a]);
+      dp.normal[a] = static_cast<float>(sums.nsum[a]);
     }
     // The float centre moved by up to half an ulp per axis: widen the radius for that.
     const Vec3 fc{static_cast<double>(dp.center[0]), static_cast<double>(dp.center[1]),
                   static_cast<double>(dp.center[2])};
     dp.radius = float_up((reach + length(fc - center) * 2.0) * (1.0 + 1e-12));
-    dp.area = static_cast<float>(asum);
-    // The oriented boxes in the frame of the node's normal (the leaves' corners are in cache
-    // from the loop above), kept when their volumes sum to less than the axis-aligned ones.
-    if (obbs == nullptr) continue;
+    dp.area = static_cast<float>(sums.asum);
+  }
+
+  // Node i's oriented boxes in the frame of its normal sum (the leaves' corners are in cache
+  // from its bounds), kept when their volumes sum to less than the axis-aligned ones.
+  void set_oriented_boxes(uint32_t i, const Vec3& nsum) {
+    const BvhNode& node = nodes[i];
     BvhObb& ob = obbs[i];
     bool oriented = normal_frame(nsum, ob.axis);
     if (oriented) {
@@ -533,48 +600,62 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       }
     }
   }
-  // The tree down over the Morton keys (it was allocated after them; the nodes move first, so
-  // no destination lies above bytes not yet copied).
-  const BvhNode* wide_src = nodes;
-  const BvhDipole* wide_dipoles_src = dipoles;
-  const BvhObb* wide_obbs_src = obbs;
-  arena.rewind(tree_temps);
-  BvhNode* kept_nodes = arena.allocate_array<BvhNode>(node_count);
-  SPLINTCORE_ASSERT(kept_nodes != nullptr);
-  std::memmove(static_cast<void*>(kept_nodes), wide_src, size_t{node_count} * sizeof(BvhNode));
-  BvhDipole* kept_dipoles = arena.allocate_array<BvhDipole>(node_count);
-  SPLINTCORE_ASSERT(kept_dipoles != nullptr);
-  std::memmove(static_cast<void*>(kept_dipoles), wide_dipoles_src,
-               size_t{node_count} * sizeof(BvhDipole));
-  BvhObb* kept_obbs = nullptr;
-  if (wide_obbs_src != nullptr) {
-    kept_obbs = arena.allocate_array<BvhObb>(node_count);
-    SPLINTCORE_ASSERT(kept_obbs != nullptr);
-    std::memmove(static_cast<void*>(kept_obbs), wide_obbs_src, size_t{node_count} * sizeof(BvhObb));
-  }
-  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 2, 4));
 
-  // 4. Edge neighbours from per-vertex lists of corners (counting sort by vertex, in triangle
-  // order). Half-edge a->b is a manifold edge when the mesh holds it once and b->a once; the
-  // triangle of b->a is the neighbour. Both counts are in a's list alone: a corner at a with
-  // next vertex b is a half-edge a->b, one with previous vertex b is the end of a half-edge
-  // b->a (one corner per half-edge either way), so each edge is settled from the list of its
-  // smaller vertex, read in cache, without a visit to the other vertex's list.
-  bool closed_manifold = false;
-  {
-    ArenaScope lists_scope(arena);
-    // Next and previous vertex of each corner, beside vertex_uses (reading them from the
-    // triangles instead halves this memory but costs 10 ms at 543k triangles in random reads).
-    // A list longer than kScan (below) holds, instead, its next vertex and its use, sorted.
-    struct Corner {
-      uint32_t next;
-      uint32_t other;  // the previous vertex; in a long list, the use (3 * triangle + corner)
-    };
-    Corner* lists = arena.allocate_array<Corner>(3 * nt);
-    if (nt > 0 && lists == nullptr) return arena.exhausted_status();
-    // Counting sort of the corners by vertex, with start[] as its own cursor: vertex a's
-    // corners were counted in start[a + 1] (above), then start[a + 1] becomes where a's list
-    // begins and moves on with each corner placed, to end where a + 1's begins.
+  // 3. Bounds and dipoles, bottom-up (children have larger indices than their parent). A
+  // leaf child's box and dipole sums come from its triangles, an inner child's from its node
+  // (its box is the union of that node's boxes, its dipole that node's, in float): the far
+  // field is an approximation either way, and the radius is bounded from the node's own box.
+  void bound_nodes() {
+    for (uint32_t i = node_count; i-- > 0;) {
+      BvhNode& node = nodes[i];
+      Aabb all;
+      DipoleSums sums;
+      for (int k = 0; k < 4; ++k) {
+        if (node.child[k] == kNoChild) continue;
+        if (node.count[k] > 0) {
+          leaf_child_bounds(node, k, &sums);
+        } else {
+          inner_child_bounds(node, k, &sums);
+        }
+        all.add(Vec3{static_cast<double>(node.lo[0][k]), static_cast<double>(node.lo[1][k]),
+                     static_cast<double>(node.lo[2][k])});
+        all.add(Vec3{static_cast<double>(node.hi[0][k]), static_cast<double>(node.hi[1][k]),
+                     static_cast<double>(node.hi[2][k])});
+      }
+      set_dipole(i, all, sums);
+      if (obbs != nullptr) set_oriented_boxes(i, sums.nsum);
+    }
+  }
+
+  // The tree down over the Morton keys at `temps` (it was allocated after them; the nodes
+  // move first, so no destination lies above bytes not yet copied; rewound bytes stay
+  // readable, Arena).
+  void move_tree_down(const Arena::Marker& temps) {
+    const BvhNode* wide_src = nodes;
+    const BvhDipole* wide_dipoles_src = dipoles;
+    const BvhObb* wide_obbs_src = obbs;
+    arena.rewind(temps);
+    nodes = arena.allocate_array<BvhNode>(node_count);
+    SPLINTCORE_ASSERT(nodes != nullptr);
+    std::memmove(static_cast<void*>(nodes), wide_src, size_t{node_count} * sizeof(BvhNode));
+    dipoles = arena.allocate_array<BvhDipole>(node_count);
+    SPLINTCORE_ASSERT(dipoles != nullptr);
+    std::memmove(static_cast<void*>(dipoles), wide_dipoles_src,
+                 size_t{node_count} * sizeof(BvhDipole));
+    obbs = nullptr;
+    if (wide_obbs_src != nullptr) {
+      obbs = arena.allocate_array<BvhObb>(node_count);
+      SPLINTCORE_ASSERT(obbs != nullptr);
+      std::memmove(static_cast<void*>(obbs), wide_obbs_src, size_t{node_count} * sizeof(BvhObb));
+    }
+  }
+
+  // Counting sort of the corners by vertex into vuses (kept, in triangle order) and `lists`,
+  // with start[] as its own cursor: vertex a's corners were counted in start[a + 1]
+  // (scan_triangles), then start[a + 1] becomes where a's list begins and moves on with each
+  // corner placed, to end where a + 1's begins. Then the lists longer than kScan sorted by
+  // (next vertex, use).
+  void sort_corners(Corner* lists) {
     uint32_t sum = 0;
     for (size_t i = 0; i < nv; ++i) {
       const uint32_t count = start[i + 1];
@@ -593,12 +674,6 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       vuses[j] = 3 * t + 2;
       lists[j] = Corner{c0, c1};
     }
-    // A list of up to kScan corners (the usual vertex: six) is scanned once for each of its
-    // edges. A longer one is sorted by (next vertex, use) and searched, so that a vertex shared
-    // by d triangles costs O(d log d), not O(d^2) (hostile input: a fan of a million
-    // triangles, or a million copies of one triangle); its edges' reverse half-edges are
-    // counted in the other vertex's list, by search or scan.
-    constexpr uint32_t kScan = 32;
     const auto by_next = [](const Corner& x, const Corner& y) {
       return x.next != y.next ? x.next < y.next : x.other < y.other;
     };
@@ -608,18 +683,19 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       for (uint32_t j = start[i]; j < start[i + 1]; ++j) lists[j].other = vuses[j];
       heap_sort(lists + start[i], degree, by_next);
     }
-    // First index in [lo, hi) (sorted) whose next vertex is >= to (or > to when `after`).
-    const auto search = [&](uint32_t lo, uint32_t hi, uint32_t to, bool after) {
-      while (lo < hi) {
-        const uint32_t mid = lo + (hi - lo) / 2;
-        if (lists[mid].next < to || (after && lists[mid].next == to)) {
-          lo = mid + 1;
-        } else {
-          hi = mid;
-        }
-      }
-      return lo;
-    };
+  }
+
+  // 4. Edge neighbours from per-vertex lists of corners (counting sort by vertex, in triangle
+  // order). Half-edge a->b is a manifold edge when the mesh holds it once and b->a once; the
+  // triangle of b->a is the neighbour. Both counts are in a's list alone: a corner at a with
+  // next vertex b is a half-edge a->b, one with previous vertex b is the end of a half-edge
+  // b->a (one corner per half-edge either way), so each edge is settled from the list of its
+  // smaller vertex, read in cache, without a visit to the other vertex's list.
+  Status link_neighbours() {
+    ArenaScope lists_scope(arena);
+    Corner* lists = arena.allocate_array<Corner>(3 * nt);
+    if (nt > 0 && lists == nullptr) return arena.exhausted_status();
+    sort_corners(lists);
     // Sets both sides of a manifold edge, given the uses (3 * triangle + corner) that start
     // its two half-edges. Each manifold edge is linked once (from its smaller vertex) and sets
     // two slots no other edge sets, so the mesh is a closed oriented manifold when the links
@@ -636,65 +712,100 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
       const uint32_t a = static_cast<uint32_t>(vertex);
       const uint32_t lo = start[vertex], hi = start[vertex + 1];
       if (hi - lo <= kScan) {
-        // The corners whose edge a settles (b > a), gathered without a branch first: which
-        // of them qualify follows no pattern on real meshes.
-        uint32_t up[kScan];
-        uint32_t m = 0;
-        for (uint32_t j = lo; j < hi; ++j) {
-          up[m] = j;
-          m += lists[j].next > a ? 1u : 0u;
-        }
-        for (uint32_t q = 0; q < m; ++q) {
-          const uint32_t j = up[q];
-          const uint32_t b = lists[j].next;
-          uint32_t same = 0, reverse = 0, at = 0;
-          for (uint32_t i = lo; i < hi; ++i) {
-            same += lists[i].next == b ? 1u : 0u;
-            const bool back = lists[i].other == b;
-            reverse += back ? 1u : 0u;
-            at = back ? i : at;
-          }
-          if (same != 1 || reverse != 1) continue;
-          // Corner `at` of a follows b in its triangle: b's corner, the one before, starts b->a.
-          const uint32_t use = vuses[at];
-          link(vuses[j], use - use % 3 + (use % 3 == 0 ? 2 : use % 3 - 1));
-        }
-        continue;
-      }
-      for (uint32_t j = lo; j < hi; ++j) {
-        const uint32_t b = lists[j].next;
-        if (b <= a || (j > lo && lists[j - 1].next == b)) continue;  // first of its run only
-        if (j + 1 < hi && lists[j + 1].next == b) continue;          // a->b more than once
-        const uint32_t blo = start[b], bhi = start[b + 1];
-        uint32_t reverse = 0, use = 0;
-        if (bhi - blo <= kScan) {
-          for (uint32_t i = blo; i < bhi; ++i) {
-            if (lists[i].next != a) continue;
-            ++reverse;
-            use = vuses[i];
-          }
-        } else {
-          const uint32_t begin = search(blo, bhi, a, false);
-          reverse = search(begin, bhi, a, true) - begin;
-          if (reverse > 0) use = lists[begin].other;
-        }
-        if (reverse == 1) link(lists[j].other, use);
+        link_short_list(lists, a, lo, hi, link);
+      } else {
+        link_long_list(lists, a, lo, hi, link);
       }
     }
     closed_manifold = n > 0 && 2 * links == 3 * uint64_t{n};
+    return Status::ok();
   }
+
+  // The edges vertex a settles (b > a) from its list lists[lo, hi) of at most kScan corners.
+  template <class Link>
+  void link_short_list(const Corner* lists, uint32_t a, uint32_t lo, uint32_t hi,
+                       const Link& link) const {
+    // The corners whose edge a settles, gathered without a branch first: which of them
+    // qualify follows no pattern on real meshes.
+    uint32_t up[kScan];
+    uint32_t m = 0;
+    for (uint32_t j = lo; j < hi; ++j) {
+      up[m] = j;
+      m += lists[j].next > a ? 1u : 0u;
+    }
+    for (uint32_t q = 0; q < m; ++q) {
+      const uint32_t j = up[q];
+      const uint32_t b = lists[j].next;
+      uint32_t same = 0, reverse = 0, at = 0;
+      for (uint32_t i = lo; i < hi; ++i) {
+        same += lists[i].next == b ? 1u : 0u;
+        const bool back = lists[i].other == b;
+        reverse += back ? 1u : 0u;
+        at = back ? i : at;
+      }
+      if (same != 1 || reverse != 1) continue;
+      // Corner `at` of a follows b in its triangle: b's corner, the one before, starts b->a.
+      const uint32_t use = vuses[at];
+      link(vuses[j], use - use % 3 + (use % 3 == 0 ? 2 : use % 3 - 1));
+    }
+  }
+
+  // The same from a sorted list lists[lo, hi) longer than kScan: each run of one next vertex
+  // b > a, with the reverse half-edges counted in b's list.
+  template <class Link>
+  void link_long_list(const Corner* lists, uint32_t a, uint32_t lo, uint32_t hi,
+                      const Link& link) const {
+    for (uint32_t j = lo; j < hi; ++j) {
+      const uint32_t b = lists[j].next;
+      if (b <= a || (j > lo && lists[j - 1].next == b)) continue;  // first of its run only
+      if (j + 1 < hi && lists[j + 1].next == b) continue;          // a->b more than once
+      const uint32_t blo = start[b], bhi = start[b + 1];
+      uint32_t reverse = 0, use = 0;
+      if (bhi - blo <= kScan) {
+        for (uint32_t i = blo; i < bhi; ++i) {
+          if (lists[i].next != a) continue;
+          ++reverse;
+          use = vuses[i];
+        }
+      } else {
+        const uint32_t begin = search_next(lists, blo, bhi, a, false);
+        reverse = search_next(lists, begin, bhi, a, true) - begin;
+        if (reverse > 0) use = lists[begin].other;
+      }
+      if (reverse == 1) link(lists[j].other, use);
+    }
+  }
+
+  void publish(DistanceIndex* out) const {
+    out->nodes = Span<const BvhNode>(nodes, node_count);
+    out->dipoles = Span<const BvhDipole>(dipoles, node_count);
+    out->obbs = Span<const BvhObb>(obbs, obbs != nullptr ? node_count : 0);
+    out->order = Span<const uint32_t>(order, nt);
+    out->neighbors = Span<const uint32_t>(neighbors, 3 * nt);
+    out->vertex_start = Span<const uint32_t>(start, nv + 1);
+    out->vertex_uses = Span<const uint32_t>(vuses, 3 * nt);
+    out->closed_manifold = closed_manifold;
+  }
+};
+
+// The body of build_distance_index (below), which undoes it on an error.
+Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceIndexOptions& options,
+                         DistanceIndex* out) {
+  out->mesh = &mesh;
+  IndexBuild build(*ctx.arena, mesh, options);
+  SPLINTCORE_RETURN_IF_ERROR(build.check_input());
+  SPLINTCORE_RETURN_IF_ERROR(build.scan_triangles());
+  const Arena::Marker tree_temps = ctx.arena->mark();
+  SPLINTCORE_RETURN_IF_ERROR(build.morton_order());
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 1, 4));
+  SPLINTCORE_RETURN_IF_ERROR(build.build_topology());
+  build.bound_nodes();
+  build.move_tree_down(tree_temps);
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 2, 4));
+  SPLINTCORE_RETURN_IF_ERROR(build.link_neighbours());
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 3, 4));
-
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 4, 4));
-
-  out->nodes = Span<const BvhNode>(kept_nodes, node_count);
-  out->dipoles = Span<const BvhDipole>(kept_dipoles, node_count);
-  out->obbs = Span<const BvhObb>(kept_obbs, kept_obbs != nullptr ? node_count : 0);
-  out->order = Span<const uint32_t>(order, nt);
-  out->neighbors = Span<const uint32_t>(neighbors, 3 * nt);
-  out->vertex_start = Span<const uint32_t>(start, nv + 1);
-  out->vertex_uses = Span<const uint32_t>(vuses, 3 * nt);
-  out->closed_manifold = closed_manifold;
+  build.publish(out);
   return Status::ok();
 }
 
@@ -736,10 +847,11 @@ Status build_distance_index(const Context& ctx, const Mesh& mesh,
                             const DistanceIndexOptions& options, DistanceIndex* out) {
   *out = DistanceIndex{};
   // On an error nothing stays: the arena goes back to its top at entry, *out is empty.
-  const Arena::Marker entry = ctx.arena->mark();
+  ArenaScope entry(*ctx.arena);
   Status s = build_index_steps(ctx, mesh, options, out);
-  if (!s.is_ok()) {
-    ctx.arena->rewind(entry);
+  if (s.is_ok()) {
+    entry.commit();
+  } else {
     *out = DistanceIndex{};
   }
   return s;

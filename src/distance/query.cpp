@@ -292,36 +292,50 @@ void detail::settle_closest(const DistanceIndex& index, const Vec3& q, double be
   best->distance = std::sqrt(best2);
 }
 
-// The tree search (declared in query_internal.h).
-bool detail::closest_within(const DistanceIndex& index, const Vec3& q, double limit2,
-                            ClosestPoint* out, uint32_t seed) {
-  const Mesh& mesh = *index.mesh;
-  if (mesh.triangles.size() == 0) return false;
-  const Vec3* v = mesh.vertices.data();
-  const BvhNode* nodes = index.nodes.data();
-  double best2 = limit2;
+namespace {
+
+// One tree search of closest_within(): the query, the best triangle so far and the bounds it
+// sets. A triangle is kept when it is closer, or as close with a smaller id (so the answer
+// never depends on the tree or the seed), and within the limit. Two lower bounds of the
+// distance skip most triangles first: the triangle's box, and its plane. Both are skipped only
+// when clearly beyond the best (margins far above their rounding), so what they skip the exact
+// routine would have rejected too.
+struct ClosestSearch {
+  const Mesh& mesh;
+  const Vec3* v;
+  const Triangle* tris;
+  const uint32_t* order;
+  const Vec3 q;
+  const double limit2;
+  double best2;   // limit2 until a triangle is found
+  double best_d;  // sqrt(best2), for the plane filter
+  const double qmax;
+  // The boxes are tested in float against reach2 (reach_float: the best distance so far with
+  // margins for the float rounding).
+  float reach2;
   bool found = false;
   uint32_t best_tri = 0;
   ClosestPoint best;
-  double best_d = std::sqrt(limit2);  // sqrt(best2), for the plane filter
-  // The boxes are tested in float against reach2 (reach_float: the best distance so far with
-  // margins for the float rounding), through the oriented boxes when the index has them.
-  const BvhObb* obbs = index.obbs.size() != 0 ? index.obbs.data() : nullptr;
-  const double qmax = abs_max3(q);
-  float reach2 = reach_float(best_d, qmax);
-  // Beyond 2^100 (or not a number) float squares could overflow: no box is pruned then (and q
-  // is not converted: out of float range that would be undefined).
-  const bool prune = qmax < 0x1p100;
-  const float qf[3] = {prune ? static_cast<float>(q.x) : 0.0f,
-                       prune ? static_cast<float>(q.y) : 0.0f,
-                       prune ? static_cast<float>(q.z) : 0.0f};
-  // Keeps triangle t when it is closer, or as close with a smaller id (so the answer never
-  // depends on the tree or the seed), and within the limit. Two lower bounds of the distance
-  // skip most triangles first: the triangle's box, and its plane. Both are skipped only when
-  // clearly beyond the best (margins far above their rounding), so what they skip the exact
-  // routine would have rejected too.
-  // What follows the box filter (below): the plane filter, then the exact routine.
-  auto consider_near = [&](uint32_t t, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Double2 q2x, q2y, q2z;  // q in both lanes, for consider_leaf()
+
+  ClosestSearch(const DistanceIndex& index, const Vec3& query, double limit)
+      : mesh(*index.mesh),
+        v(index.mesh->vertices.data()),
+        tris(index.mesh->triangles.data()),
+        order(index.order.data()),
+        q(query),
+        limit2(limit),
+        best2(limit),
+        best_d(std::sqrt(limit)),
+        qmax(abs_max3(query)),
+        reach2(reach_float(best_d, qmax)),
+        q2x{query.x, query.x},
+        q2y{query.y, query.y},
+        q2z{query.z, query.z} {}
+
+  // What follows the box filter (consider(), consider_leaf()): the plane filter, then the
+  // exact routine.
+  void consider_near(uint32_t t, const Vec3& a, const Vec3& b, const Vec3& c) {
     {
       // The plane, on triangles whose normal is well conditioned (the angle at a above about
       // 0.001 rad): then n = ab x ac is off by under 5e-13 |n| and pd by under
@@ -354,8 +368,10 @@ bool detail::closest_within(const DistanceIndex& index, const Vec3& q, double li
       best.feature = f;
       best.feature_index = fi;
     }
-  };
-  auto consider = [&](uint32_t t) {
+  }
+
+  // Triangle t, behind the filter of its box.
+  void consider(uint32_t t) {
     const Triangle& tri = mesh.triangles[t];
     const Vec3 &a = v[tri.v[0]], &b = v[tri.v[1]], &c = v[tri.v[2]];
     // Branch-free (each ?: below is one min or max instruction).
@@ -369,16 +385,14 @@ bool detail::closest_within(const DistanceIndex& index, const Vec3& q, double li
                  gz = gap(q.z, a.z, b.z, c.z);
     if (gx * gx + gy * gy + gz * gz > best2 * (1.0 + 0x1p-40)) return;
     consider_near(t, a, b, c);
-  };
+  }
+
   // consider() for the triangles order[first .. first + count) (a leaf), two at a time: the
   // box gaps of a pair in two lanes (the same operations as consider(), the same bits), each
   // compared with the best distance as it stands when its turn comes (after the first of the
   // pair may have tightened it), as consider() would: the same triangles reach the plane
   // filter and the exact routine, in the same order, as one consider() call after another.
-  const Triangle* tris = mesh.triangles.data();
-  const uint32_t* order = index.order.data();
-  const Double2 q2x = {q.x, q.x}, q2y = {q.y, q.y}, q2z = {q.z, q.z};
-  auto consider_leaf = [&](uint32_t first, uint32_t count) {
+  void consider_leaf(uint32_t first, uint32_t count) {
     const uint32_t end = first + count;
     for (uint32_t j = first; j < end; j += 2) {
       const uint32_t t0 = order[j], t1 = j + 1 < end ? order[j + 1] : t0;
@@ -395,49 +409,73 @@ bool detail::closest_within(const DistanceIndex& index, const Vec3& q, double li
       if (!(g2[0] > best2 * (1.0 + 0x1p-40))) consider_near(t0, a0, b0, c0);
       if (j + 1 < end && !(g2[1] > best2 * (1.0 + 0x1p-40))) consider_near(t1, a1, b1, c1);
     }
-  };
-  if (seed != kNoNeighbor) consider(seed);
-  struct Entry {
-    uint32_t node;
-    float d2;
-  };
-  Entry stack[kStack];
-  uint32_t top = 0;
-  stack[top++] = Entry{0, 0.0f};
-  while (top > 0) {
-    const Entry e = stack[--top];
-    if (e.d2 > reach2) continue;
-    const BvhNode& node = nodes[e.node];
-    Float4 d2v{};  // !prune: every present child is visited
-    if (prune)
-      d2v = obbs != nullptr ? child_obb_distances(obbs[e.node], qf) : child_box_distances(node, qf);
-    float d2[4];
-    std::memcpy(d2, &d2v, sizeof(d2));
-    // The children within reach, nearest first (ties in slot order): leaves tighten the bound
-    // before farther boxes are tested against it.
-    uint8_t by[4] = {0, 0, 0, 0};
-    int m = 0;
-    for (int k = 0; k < 4; ++k) {
-      if (!(d2[k] <= reach2) || node.child[k] == kNoChild) continue;
-      int j = m++;
-      for (; j > 0 && d2[by[j - 1]] > d2[k]; --j) by[j] = by[j - 1];
-      by[j] = static_cast<uint8_t>(k);
-    }
-    for (int i = 0; i < m; ++i) {
-      const int k = by[i];
-      if (node.count[k] == 0 || !(d2[k] <= reach2)) continue;
-      consider_leaf(node.child[k], node.count[k]);
-    }
-    for (int i = m; i-- > 0;) {
-      const int k = by[i];
-      if (node.count[k] != 0 || !(d2[k] <= reach2)) continue;
-      if (top + 1 > kStack) continue;  // cannot happen: depth is bounded at build time
-      stack[top++] = Entry{node.child[k], d2[k]};
+  }
+
+  // The tree, depth first from the root, through the oriented boxes when the index has them.
+  void descend(const DistanceIndex& index) {
+    const BvhNode* nodes = index.nodes.data();
+    const BvhObb* obbs = index.obbs.size() != 0 ? index.obbs.data() : nullptr;
+    // Beyond 2^100 (or not a number) float squares could overflow: no box is pruned then (and
+    // q is not converted: out of float range that would be undefined).
+    const bool prune = qmax < 0x1p100;
+    const float qf[3] = {prune ? static_cast<float>(q.x) : 0.0f,
+                         prune ? static_cast<float>(q.y) : 0.0f,
+                         prune ? static_cast<float>(q.z) : 0.0f};
+    struct Entry {
+      uint32_t node;
+      float d2;
+    };
+    Entry stack[kStack];
+    uint32_t top = 0;
+    stack[top++] = Entry{0, 0.0f};
+    while (top > 0) {
+      const Entry e = stack[--top];
+      if (e.d2 > reach2) continue;
+      const BvhNode& node = nodes[e.node];
+      Float4 d2v{};  // !prune: every present child is visited
+      if (prune) {
+        d2v =
+            obbs != nullptr ? child_obb_distances(obbs[e.node], qf) : child_box_distances(node, qf);
+      }
+      float d2[4];
+      std::memcpy(d2, &d2v, sizeof(d2));
+      // The children within reach, nearest first (ties in slot order): leaves tighten the
+      // bound before farther boxes are tested against it.
+      uint8_t by[4] = {0, 0, 0, 0};
+      int m = 0;
+      for (int k = 0; k < 4; ++k) {
+        if (!(d2[k] <= reach2) || node.child[k] == kNoChild) continue;
+        int j = m++;
+        for (; j > 0 && d2[by[j - 1]] > d2[k]; --j) by[j] = by[j - 1];
+        by[j] = static_cast<uint8_t>(k);
+      }
+      for (int i = 0; i < m; ++i) {
+        const int k = by[i];
+        if (node.count[k] == 0 || !(d2[k] <= reach2)) continue;
+        consider_leaf(node.child[k], node.count[k]);
+      }
+      for (int i = m; i-- > 0;) {
+        const int k = by[i];
+        if (node.count[k] != 0 || !(d2[k] <= reach2)) continue;
+        if (top + 1 > kStack) continue;  // cannot happen: depth is bounded at build time
+        stack[top++] = Entry{node.child[k], d2[k]};
+      }
     }
   }
-  if (!found) return false;
-  settle_closest(index, q, best2, &best);
-  *out = best;
+};
+
+}  // namespace
+
+// The tree search (declared in query_internal.h).
+bool detail::closest_within(const DistanceIndex& index, const Vec3& q, double limit2,
+                            ClosestPoint* out, uint32_t seed) {
+  if (index.mesh->triangles.size() == 0) return false;
+  ClosestSearch search(index, q, limit2);
+  if (seed != kNoNeighbor) search.consider(seed);
+  search.descend(index);
+  if (!search.found) return false;
+  settle_closest(index, q, search.best2, &search.best);
+  *out = search.best;
   return true;
 }
 

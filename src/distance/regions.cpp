@@ -48,8 +48,11 @@
 namespace splintcore {
 namespace {
 
+using detail::closest_within;
 using detail::Double2;
 using detail::Mask2;
+using detail::RegionAnswer;
+using detail::settle_closest;
 
 constexpr uint32_t kMaxPlanes = 24;    // a vertex with more neighbours keeps the first ones
 constexpr size_t kMinQueries = 4096;   // smaller batches: the tree
@@ -325,49 +328,43 @@ struct Scan {
   double slack = 0;  // over the rounding of a computed height or distance
 };
 
-// Adds triangle t's regions (corners p, frame f) to out, and their bounds to out->box, started
-// along the scan direction dir (a unit vector; its normal, or about it).
-void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, const Vec3& dir,
-                 TriangleRegions* out) {
+// The face region of triangle t (corners p, frame f) into tr, and its bounds into tr.box:
+// the prism, or for a thin triangle the box `reach` (within R of it).
+void add_face_region(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, const Aabb& reach,
+                     TriangleRegions* tr) {
+  const double mu = s.mu, r = s.reach;
+  Region& g = tr->take();
+  g.candidates[g.candidate_count++] = t;
+  if (f.ok) {
+    for (int k = 0; k < 3; ++k) g.planes[g.count++] = Plane{f.m[k] * -1.0, mu - dot(f.m[k], p[k])};
+    // Its height is not tested with the planes: the bounds hold it within about R (and a
+    // query above R is not offered the triangle once it has a closer one, offer_regions).
+    g.face = true;
+    g.n = f.n;
+    g.h0 = dot(f.n, p[0]);
+    tr->box.add_swept(f.n * -r, f.n * r, 3, [&](uint32_t i) { return p[i]; });
+    return;
+  }
+  for (int a = 0; a < 3; ++a) {
+    Vec3 e{};
+    e[a] = 1;
+    g.planes[g.count++] = Plane{e, reach.hi[a]};
+    g.planes[g.count++] = Plane{e * -1.0, -reach.lo[a]};
+  }
+  for (uint32_t i = 0; i < 8; ++i) {
+    tr->box.add_point(Vec3{(i & 1) ? reach.hi.x : reach.lo.x, (i & 2) ? reach.hi.y : reach.lo.y,
+                           (i & 4) ? reach.hi.z : reach.lo.z});
+  }
+}
+
+// The edge regions triangle t owns (those whose neighbour across has no smaller id) into tr,
+// and their bounds into tr.box.
+void add_edge_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f,
+                      TriangleRegions* tr) {
   const Mesh& mesh = *s.index->mesh;
   const Vec3* v = mesh.vertices.data();
-  const Triangle& tri = mesh.triangles[t];
   const double mu = s.mu, r = s.reach;
-  TriangleRegions& tr = *out;
-  ShearedBox& sb = tr.box;
-  Aabb reach;  // this triangle's
-  for (int k = 0; k < 3; ++k) reach.add(p[k]);
-  reach.lo = reach.lo - Vec3{r + mu, r + mu, r + mu};
-  reach.hi = reach.hi + Vec3{r + mu, r + mu, r + mu};
-  sb.reach.add(reach);
-
-  // The face: the prism, or for a thin triangle the box within R of it.
-  {
-    Region& g = tr.take();
-    g.candidates[g.candidate_count++] = t;
-    if (f.ok) {
-      for (int k = 0; k < 3; ++k)
-        g.planes[g.count++] = Plane{f.m[k] * -1.0, mu - dot(f.m[k], p[k])};
-      // Its height is not tested with the planes: the bounds hold it within about R (and a
-      // query above R is not offered the triangle once it has a closer one, offer_regions).
-      g.face = true;
-      g.n = f.n;
-      g.h0 = dot(f.n, p[0]);
-      sb.add_swept(f.n * -r, f.n * r, 3, [&](uint32_t i) { return p[i]; });
-    } else {
-      for (int a = 0; a < 3; ++a) {
-        Vec3 e{};
-        e[a] = 1;
-        g.planes[g.count++] = Plane{e, reach.hi[a]};
-        g.planes[g.count++] = Plane{e * -1.0, -reach.lo[a]};
-      }
-      for (uint32_t i = 0; i < 8; ++i) {
-        sb.add_point(Vec3{(i & 1) ? reach.hi.x : reach.lo.x, (i & 2) ? reach.hi.y : reach.lo.y,
-                          (i & 4) ? reach.hi.z : reach.lo.z});
-      }
-    }
-  }
-  // The edges it owns.
+  ShearedBox& sb = tr->box;
   const uint32_t* neighbors = s.index->neighbors.data();
   for (int k = 0; k < 3; ++k) {
     uint32_t t2 = neighbors[3 * size_t{t} + static_cast<size_t>(k)];
@@ -377,7 +374,7 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
     const double len = length(b - a);
     if (!(len > 0)) continue;  // its points are its vertex's
     const Vec3 e = (b - a) * (1.0 / len);
-    Region& g = tr.take();
+    Region& g = tr->take();
     g.candidates[g.candidate_count++] = t;
     g.planes[g.count++] = Plane{e * -1.0, mu - dot(e, a)};
     g.planes[g.count++] = Plane{e, dot(e, a) + len + mu};
@@ -424,7 +421,16 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
       sb.add_swept_box(a - e * mu, b + e * mu, sweep);
     }
   }
-  // The vertices it owns (about one triangle in two owns one).
+}
+
+// The vertex regions triangle t owns (each vertex whose first corner is its; about one
+// triangle in two owns one) into tr, and their bounds, swept along dir, into tr.box.
+void add_vertex_regions(const Scan& s, uint32_t t, const Vec3& dir, TriangleRegions* tr) {
+  const Mesh& mesh = *s.index->mesh;
+  const Vec3* v = mesh.vertices.data();
+  const Triangle& tri = mesh.triangles[t];
+  const double mu = s.mu, r = s.reach;
+  ShearedBox& sb = tr->box;
   const uint32_t* vstart = s.index->vertex_start.data();
   const uint32_t* vuses = s.index->vertex_uses.data();
   Vec3 across[2];  // two unit vectors across dir, for the bounds; set by the first vertex
@@ -445,7 +451,7 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
       sheared_across[1] = sb.sheared(across[1]);
       have_across = true;
     }
-    Region& g = tr.take();
+    Region& g = tr->take();
     g.vertex = vi;
     const Vec3& c = v[vi];
     uint32_t seen[kMaxPlanes];
@@ -489,6 +495,21 @@ void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, con
       sweep.add(sheared_across[0] * poly.x()[j] + sheared_across[1] * poly.y()[j]);
     if (poly.n != 0) sb.add_swept_box(c - dir * r, c + dir * r, sweep);
   }
+}
+
+// Adds triangle t's regions (corners p, frame f) to out, and their bounds to out->box, started
+// along the scan direction dir (a unit vector; its normal, or about it).
+void add_regions(const Scan& s, uint32_t t, const Vec3 p[3], const Frame& f, const Vec3& dir,
+                 TriangleRegions* out) {
+  const double mu = s.mu, r = s.reach;
+  Aabb reach;  // this triangle's
+  for (int k = 0; k < 3; ++k) reach.add(p[k]);
+  reach.lo = reach.lo - Vec3{r + mu, r + mu, r + mu};
+  reach.hi = reach.hi + Vec3{r + mu, r + mu, r + mu};
+  out->box.reach.add(reach);
+  add_face_region(s, t, p, f, reach, out);
+  add_edge_regions(s, t, p, f, out);
+  add_vertex_regions(s, t, dir, out);
 }
 
 // The squared distance of query j (at q) to its best candidate so far (none: infinity).
@@ -695,114 +716,164 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3],
   flush();
 }
 
-}  // namespace
-
-Status detail::region_closest_points(const Context& ctx, const DistanceIndex& index,
-                                     Span<const Vec3> queries, RegionAnswer answer, void* user,
-                                     bool* used) {
-  *used = false;
-  const Mesh& mesh = *index.mesh;
-  const size_t n = queries.size(), nt = mesh.triangles.size();
-  if (nt == 0 || n < kMinQueries || n < nt / 2 || n >= (size_t{1} << 31)) return Status::ok();
-  // The band: from the tree's distances of kSample queries spread over the batch, the largest
-  // unless it exceeds four times the median (then the far ones would make every region long).
-  size_t usable_count = 0;
-  for (size_t i = 0; i < n; ++i) usable_count += usable(queries[i]) ? size_t{1} : size_t{0};
-  if (usable_count < kMinQueries) return Status::ok();
-  double sample[kSample];
-  uint32_t sampled = 0;
-  const size_t step = usable_count / kSample > 0 ? usable_count / kSample : 1;
-  for (size_t i = 0, seen = 0; i < n && sampled < kSample; ++i) {
-    if (!usable(queries[i])) continue;
-    if (seen++ % step != 0) continue;
-    ClosestPoint cp;
-    double d = 0;
-    if (closest_within(index, queries[i], HUGE_VAL, &cp)) d = cp.distance;
-    uint32_t j = sampled++;
-    for (; j > 0 && sample[j - 1] > d; --j) sample[j] = sample[j - 1];
-    sample[j] = d;
-  }
-  const double median = sample[sampled / 2], largest = sample[sampled - 1];
-  const Aabb mbox = mesh_bounds(mesh);
-  double scale = 0;  // of the coordinates: the mesh's, and the queries' within the band of it
-  for (int a = 0; a < 3; ++a) scale = max3(scale, std::fabs(mbox.lo[a]), std::fabs(mbox.hi[a]));
-  double band = largest < 4 * median ? largest : 4 * median;
-  band = band * (1.0 + 1.0 / 16) + scale * 0x1p-30;
-  scale += band;
+// region_closest_points (below), stage by stage. Each stage that returns false leaves the
+// batch to the tree. (The queries come in as a parameter, and the loops over them count in
+// locals: as members they would be loaded again after every store to the buckets.)
+struct RegionBatch {
+  const Context& ctx;
+  const DistanceIndex& index;
+  const Mesh& mesh;
+  size_t nt;
   Scan s;
-  s.index = &index;
-  s.band = band;
-  // The margin (see the top of the file): mu^3 >= B^2 (scale + B) 2^-32, as a power of two
-  // (exact, no cube root from the library), and far above the rounding of the region tests.
-  int exponent = 0;
-  (void)std::frexp(band * band * (scale + band) * 0x1p-32, &exponent);
-  s.mu = std::ldexp(1.0, exponent >= 0 ? (exponent + 2) / 3 : -((-exponent) / 3));
-  s.mu = s.mu > (scale + band) * 0x1p-36 ? s.mu : (scale + band) * 0x1p-36;
-  s.reach = band + s.mu;
-  s.slack = scale * 0x1p-40;
-  // Queries farther than that from the mesh's box cannot have an answer within the band: the
-  // tree answers them (they would only stretch the grid).
-  Aabb near_box;
-  near_box.lo = mbox.lo - Vec3{s.reach, s.reach, s.reach};
-  near_box.hi = mbox.hi + Vec3{s.reach, s.reach, s.reach};
-  size_t nu = 0;
-  Aabb qbox;
-  for (size_t i = 0; i < n; ++i) {
-    if (!usable(queries[i]) || !near_box.contains(queries[i])) continue;
-    qbox.add(queries[i]);
-    ++nu;
+  Aabb mbox;      // the mesh's
+  Aabb near_box;  // the queries beyond it cannot have an answer within the band
+  Aabb qbox;      // of the bucketed queries
+  size_t nu = 0;  // the bucketed queries
+  Buckets b;
+  uint64_t cells = 0;
+  uint32_t tasks = 1;
+  TriangleRegions* scratch = nullptr;  // one for each task
+  uint32_t* position = nullptr;        // of each triangle in leaf order
+
+  RegionBatch(const Context& context, const DistanceIndex& distance_index)
+      : ctx(context),
+        index(distance_index),
+        mesh(*distance_index.mesh),
+        nt(distance_index.mesh->triangles.size()) {}
+
+  bool bucketed(const Vec3& q) const { return usable(q) && near_box.contains(q); }
+
+  // The tree's distance for kSample of the usable_count (>= kSample) usable queries, spread
+  // over the batch: the largest unless it exceeds four times the median (then the far ones
+  // would make every region long).
+  double sampled_band(Span<const Vec3> queries, size_t usable_count) const {
+    const size_t n = queries.size();
+    double sample[kSample] = {};  // (zeroed for cppcheck only: all kSample are set below)
+    uint32_t sampled = 0;
+    const size_t step = usable_count / kSample > 0 ? usable_count / kSample : 1;
+    for (size_t i = 0, seen = 0; i < n && sampled < kSample; ++i) {
+      if (!usable(queries[i])) continue;
+      if (seen++ % step != 0) continue;
+      ClosestPoint cp;
+      double d = 0;
+      if (closest_within(index, queries[i], HUGE_VAL, &cp)) d = cp.distance;
+      uint32_t j = sampled++;
+      for (; j > 0 && sample[j - 1] > d; --j) sample[j] = sample[j - 1];
+      sample[j] = d;
+    }
+    const double median = sample[sampled / 2], largest = sample[sampled - 1];
+    return largest < 4 * median ? largest : 4 * median;
   }
-  if (nu < kMinQueries) return Status::ok();
-  const auto bucketed = [&](const Vec3& q) { return usable(q) && near_box.contains(q); };
+
+  // The band B and the margin mu (s), when the batch is large enough.
+  bool choose_band(Span<const Vec3> queries) {
+    const size_t n = queries.size();
+    if (nt == 0 || n < kMinQueries || n < nt / 2 || n >= (size_t{1} << 31)) return false;
+    size_t usable_count = 0;
+    for (size_t i = 0; i < n; ++i) usable_count += usable(queries[i]) ? size_t{1} : size_t{0};
+    if (usable_count < kMinQueries) return false;
+    mbox = mesh_bounds(mesh);
+    double scale = 0;  // of the coordinates: the mesh's, and the queries' within the band of it
+    for (int a = 0; a < 3; ++a) scale = max3(scale, std::fabs(mbox.lo[a]), std::fabs(mbox.hi[a]));
+    double band = sampled_band(queries, usable_count);
+    band = band * (1.0 + 1.0 / 16) + scale * 0x1p-30;
+    scale += band;
+    s.index = &index;
+    s.band = band;
+    // The margin (see the top of the file): mu^3 >= B^2 (scale + B) 2^-32, as a power of two
+    // (exact, no cube root from the library), and far above the rounding of the region tests.
+    int exponent = 0;
+    (void)std::frexp(band * band * (scale + band) * 0x1p-32, &exponent);
+    s.mu = std::ldexp(1.0, exponent >= 0 ? (exponent + 2) / 3 : -((-exponent) / 3));
+    s.mu = s.mu > (scale + band) * 0x1p-36 ? s.mu : (scale + band) * 0x1p-36;
+    s.reach = band + s.mu;
+    s.slack = scale * 0x1p-40;
+    return true;
+  }
+
+  // The queries to bucket: those within the reach of the mesh's box (the tree answers the
+  // others: they would only stretch the grid).
+  bool gather_near(Span<const Vec3> queries) {
+    near_box.lo = mbox.lo - Vec3{s.reach, s.reach, s.reach};
+    near_box.hi = mbox.hi + Vec3{s.reach, s.reach, s.reach};
+    const Aabb near = near_box;
+    Aabb box;
+    size_t count = 0;
+    for (size_t i = 0; i < queries.size(); ++i) {
+      if (!usable(queries[i]) || !near.contains(queries[i])) continue;
+      box.add(queries[i]);
+      ++count;
+    }
+    qbox = box;
+    nu = count;
+    return nu >= kMinQueries;
+  }
 
   // The grid: cells about the size that holds two queries each were they spread over the box,
-  // at most 2 nu + 1024 cells.
-  Buckets b;
-  b.lo = qbox.lo;
-  Vec3 ext = qbox.hi - qbox.lo;
-  const double widest = max3(ext.x, ext.y, ext.z);
-  b.h = widest > 0 ? widest * 0x1p-12 : 1.0;
-  uint64_t cells = 0;
-  for (;;) {
-    cells = 1;
-    for (int a = 0; a < 3; ++a) {
-      b.dims[a] = static_cast<uint32_t>(std::floor(ext[a] / b.h)) + 1;
-      cells *= b.dims[a];
+  // at most 2 nu + 1024 cells; and the tasks, one for each thread (at most one a layer).
+  void size_grid() {
+    b.lo = qbox.lo;
+    Vec3 ext = qbox.hi - qbox.lo;
+    const double widest = max3(ext.x, ext.y, ext.z);
+    b.h = widest > 0 ? widest * 0x1p-12 : 1.0;
+    for (;;) {
+      cells = 1;
+      for (int a = 0; a < 3; ++a) {
+        b.dims[a] = static_cast<uint32_t>(std::floor(ext[a] / b.h)) + 1;
+        cells *= b.dims[a];
+      }
+      if (cells <= 2 * uint64_t{nu} + 1024) break;
+      b.h *= 1.25;
     }
-    if (cells <= 2 * uint64_t{nu} + 1024) break;
-    b.h *= 1.25;
+    b.inv_h = 1.0 / b.h;
+    tasks = ctx.executor != nullptr && ctx.executor->concurrency > 1
+                ? (ctx.executor->concurrency < b.dims[2] ? ctx.executor->concurrency : b.dims[2])
+                : 1;
   }
-  b.inv_h = 1.0 / b.h;
-  const uint32_t tasks =
-      ctx.executor != nullptr && ctx.executor->concurrency > 1
-          ? (ctx.executor->concurrency < b.dims[2] ? ctx.executor->concurrency : b.dims[2])
-          : 1;
-  Arena& arena = *ctx.arena;
-  ArenaScope scope(arena);
-  b.start = arena.allocate_array<uint32_t>(static_cast<size_t>(cells) + 1);
-  for (double*& a : b.coord) a = arena.allocate_array<double>(nu + 1);
-  b.ids = arena.allocate_array<uint32_t>(nu);
-  b.best = arena.allocate_array<uint32_t>(nu + 1);
-  TriangleRegions* scratch = arena.allocate_array<TriangleRegions>(tasks);
-  uint32_t* position = arena.allocate_array<uint32_t>(nt);  // of each triangle in leaf order
-  if (b.start == nullptr || b.coord[0] == nullptr || b.coord[1] == nullptr ||
-      b.coord[2] == nullptr || b.ids == nullptr || b.best == nullptr || scratch == nullptr ||
-      position == nullptr) {
-    return Status::ok();  // the tree answers, in the 2 MB it needs
+
+  // The buckets' arrays, the tasks' scratch and the triangles' positions. False when the
+  // arena cannot hold them: the tree answers, in the 2 MB it needs.
+  bool allocate(Arena& arena) {
+    b.start = arena.allocate_array<uint32_t>(static_cast<size_t>(cells) + 1);
+    for (double*& a : b.coord) a = arena.allocate_array<double>(nu + 1);
+    b.ids = arena.allocate_array<uint32_t>(nu);
+    b.best = arena.allocate_array<uint32_t>(nu + 1);
+    scratch = arena.allocate_array<TriangleRegions>(tasks);
+    position = arena.allocate_array<uint32_t>(nt);
+    return b.start != nullptr && b.coord[0] != nullptr && b.coord[1] != nullptr &&
+           b.coord[2] != nullptr && b.ids != nullptr && b.best != nullptr && scratch != nullptr &&
+           position != nullptr;
   }
+
+  // Worth it? A query meets about (2 B x the mesh's area) / (the volume the queries fill)
+  // face regions: near a smooth surface about one; with a band as wide as a small or
+  // tangled mesh, every region covers most queries, and the tree is faster. Reads the counts
+  // in b.start.
+  bool few_overlaps() const {
+    uint64_t filled = 0;
+    for (uint64_t c = 1; c <= cells; ++c) filled += b.start[c] != 0 ? 1 : 0;
+    double area = 0;
+    for (const Triangle& tri : mesh.triangles) {
+      const Vec3* v = mesh.vertices.data();
+      area += 0.5 * length(cross(v[tri.v[1]] - v[tri.v[0]], v[tri.v[2]] - v[tri.v[0]]));
+    }
+    return !(2 * s.band * area > kMaxOverlap * static_cast<double>(filled) * b.h * b.h * b.h);
+  }
+
   // Counting sort into the cells: start[c] counts, then (prefix) begins, then (placing) ends,
-  // then shifted back to begins. First by slabs of 2^slab_shift cells (at most 1024 slabs):
-  // start[] (two cells a query) is far larger than a cache, and counting and placing the
-  // queries in their input order would touch it at random; a slab's counts lie together. The
-  // order within a cell is the input order either way.
-  int slab_shift = 0;
-  while ((cells >> slab_shift) >= 1024) ++slab_shift;
-  const uint32_t slabs = static_cast<uint32_t>(cells >> slab_shift) + 1;
-  {
+  // then shifted back to begins (prepare_scan). First by slabs of 2^slab_shift cells (at
+  // most 1024 slabs): start[] (two cells a query) is far larger than a cache, and counting
+  // and placing the queries in their input order would touch it at random; a slab's counts
+  // lie together. The order within a cell is the input order either way.
+  bool bucket_queries(Arena& arena, Span<const Vec3> queries) {
+    const size_t n = queries.size();
+    int slab_shift = 0;
+    while ((cells >> slab_shift) >= 1024) ++slab_shift;
+    const uint32_t slabs = static_cast<uint32_t>(cells >> slab_shift) + 1;
     ArenaScope sorting(arena);
     uint32_t* slab_start = arena.allocate_array<uint32_t>(size_t{slabs} + 1);
     uint64_t* by_slab = arena.allocate_array<uint64_t>(nu);  // cell << 32 | query index
-    if (slab_start == nullptr || by_slab == nullptr) return Status::ok();
+    if (slab_start == nullptr || by_slab == nullptr) return false;
     for (uint32_t k = 0; k <= slabs; ++k) slab_start[k] = 0;
     for (size_t i = 0; i < n; ++i) {
       if (bucketed(queries[i])) ++slab_start[(b.cell_of(queries[i]) >> slab_shift) + 1];
@@ -815,18 +886,7 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
     }
     for (uint64_t c = 0; c <= cells; ++c) b.start[c] = 0;
     for (size_t j = 0; j < nu; ++j) ++b.start[static_cast<size_t>(by_slab[j] >> 32) + 1];
-    // Worth it? A query meets about (2 B x the mesh's area) / (the volume the queries fill)
-    // face regions: near a smooth surface about one; with a band as wide as a small or
-    // tangled mesh, every region covers most queries, and the tree is faster.
-    uint64_t filled = 0;
-    for (uint64_t c = 1; c <= cells; ++c) filled += b.start[c] != 0 ? 1 : 0;
-    double area = 0;
-    for (const Triangle& tri : mesh.triangles) {
-      const Vec3* v = mesh.vertices.data();
-      area += 0.5 * length(cross(v[tri.v[1]] - v[tri.v[0]], v[tri.v[2]] - v[tri.v[0]]));
-    }
-    if (2 * band * area > kMaxOverlap * static_cast<double>(filled) * b.h * b.h * b.h)
-      return Status::ok();
+    if (!few_overlaps()) return false;
     for (uint64_t c = 0; c < cells; ++c) b.start[c + 1] += b.start[c];
     for (size_t j = 0; j < nu; ++j) {
       const uint32_t i = static_cast<uint32_t>(by_slab[j]);
@@ -834,117 +894,153 @@ Status detail::region_closest_points(const Context& ctx, const DistanceIndex& in
       for (int k = 0; k < 3; ++k) b.coord[k][at] = queries[i][k];
       b.ids[at] = i;
     }
+    return true;
   }
+
   // The best points, in the memory the sort has just given back.
-  b.best_point = arena.allocate_array<Vec3>(nu + 1);
-  b.best_feature = arena.allocate_array<uint8_t>(nu + 1);
-  if (b.best_point == nullptr || b.best_feature == nullptr) return Status::ok();
-  *used = true;
-  for (uint32_t i = 0; i < tasks; ++i) new (&scratch[i]) TriangleRegions();
-  s.buckets = &b;
-  // (Apart from the placing above, which writes a slab's cells at a time: these in order.)
-  for (size_t j = 0; j <= nu; ++j) b.best[j] = kNoNeighbor;
-  for (double* a : b.coord) a[nu] = 0;
-  for (uint64_t c = cells; c > 0; --c) b.start[c] = b.start[c - 1];
-  b.start[0] = 0;
+  bool allocate_best(Arena& arena) {
+    b.best_point = arena.allocate_array<Vec3>(nu + 1);
+    b.best_feature = arena.allocate_array<uint8_t>(nu + 1);
+    return b.best_point != nullptr && b.best_feature != nullptr;
+  }
+
+  void prepare_scan() {
+    for (uint32_t i = 0; i < tasks; ++i) new (&scratch[i]) TriangleRegions();
+    s.buckets = &b;
+    // (Apart from the placing above, which writes a slab's cells at a time: these in order.)
+    for (size_t j = 0; j <= nu; ++j) b.best[j] = kNoNeighbor;
+    for (double* a : b.coord) a[nu] = 0;
+    for (uint64_t c = cells; c > 0; --c) b.start[c] = b.start[c - 1];
+    b.start[0] = 0;
+  }
+
+  // Task i's share of the round: triangles order[first, last), on the layers along z from
+  // cell_lo[2] to cell_hi[2].
+  void scan_share(uint32_t i, uint32_t first, uint32_t last) {
+    const uint32_t* order = index.order.data();
+    const uint32_t* neighbors = index.neighbors.data();
+    const uint32_t cell_lo[3] = {
+        0, 0, static_cast<uint32_t>(static_cast<uint64_t>(b.dims[2]) * i / tasks)};
+    const uint32_t cell_hi[3] = {
+        b.dims[0] - 1, b.dims[1] - 1,
+        static_cast<uint32_t>(static_cast<uint64_t>(b.dims[2]) * (i + 1) / tasks) - 1};
+    // The share's z span, for skipping triangles that cannot reach it.
+    const double lo_z = tasks == 1 ? qbox.lo.z : b.lo.z + cell_lo[2] * b.h - b.h;
+    const double hi_z = tasks == 1 ? qbox.hi.z : b.lo.z + (cell_hi[2] + 1.0) * b.h + b.h;
+    TriangleRegions& tr = scratch[i];
+    const Vec3* v = mesh.vertices.data();
+    // Triangles beyond the reach of the share's queries are skipped.
+    const auto beyond = [&](uint32_t u) {
+      Aabb box;
+      for (uint32_t c : mesh.triangles[u].v) box.add(v[c]);
+      return box.lo.x - s.reach > qbox.hi.x || box.hi.x + s.reach < qbox.lo.x ||
+             box.lo.y - s.reach > qbox.hi.y || box.hi.y + s.reach < qbox.lo.y ||
+             box.lo.z - s.reach > hi_z || box.hi.z + s.reach < lo_z;
+    };
+    for (uint32_t j = first; j < last; ++j) {
+      const uint32_t t = order[j];
+      // With its partner (partner() above): one walk over their bounds, about those of
+      // one, instead of two, at the first of them in leaf order. Along their mean normal,
+      // within 0.41 degrees of each, so each prism of height 2R leans out of its box by at
+      // most R / 70.
+      const uint32_t t2 = partner(mesh, neighbors, t);
+      if (t2 != kNoNeighbor && position[t2] < j) continue;
+      if (beyond(t) && (t2 == kNoNeighbor || beyond(t2))) continue;
+      const Triangle& tri = mesh.triangles[t];
+      const Vec3 p[3] = {v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]};
+      const Frame f = frame_of(p);
+      Vec3 dir = f.ok ? f.n : Vec3{0, 0, 1};
+      Vec3 p2[3];
+      Frame f2;
+      if (t2 != kNoNeighbor) {
+        const Triangle& tri2 = mesh.triangles[t2];
+        for (int k = 0; k < 3; ++k) p2[k] = v[tri2.v[k]];
+        f2 = frame_of(p2);
+        const Vec3 sum = f.n + f2.n;
+        dir = sum * (1.0 / length(sum));
+      }
+      tr.count = 0;
+      tr.box.start(dir);
+      add_regions(s, t, p, f, dir, &tr);
+      if (t2 != kNoNeighbor) add_regions(s, t2, p2, f2, dir, &tr);
+      tr.box.grow(s.mu);
+      walk(s, tr.box, cell_lo, cell_hi,
+           [&](const uint32_t* at, uint32_t count) { offer_list(s, tr, at, count); });
+    }
+  }
 
   // The scan: triangles in leaf order (neighbours one after another), in rounds between
   // progress reports; within a round the layers along z are split among the tasks (each cell
   // is one task's), so tasks never share a query. A triangle whose regions cross a split is
   // scanned by each task it reaches. The answers do not depend on the split.
-  const uint32_t* order = index.order.data();
-  const uint32_t* neighbors = index.neighbors.data();
-  const uint32_t ntri = static_cast<uint32_t>(nt);
-  for (uint32_t j = 0; j < ntri; ++j) position[order[j]] = j;
-  for (uint32_t first = 0; first < ntri; first += kRound) {
-    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, kStage, first, ntri + uint64_t{nu}));
-    const uint32_t last = first + kRound < ntri ? first + kRound : ntri;
-    auto task = [&](uint32_t i) {
-      const uint32_t cell_lo[3] = {
-          0, 0, static_cast<uint32_t>(static_cast<uint64_t>(b.dims[2]) * i / tasks)};
-      const uint32_t cell_hi[3] = {
-          b.dims[0] - 1, b.dims[1] - 1,
-          static_cast<uint32_t>(static_cast<uint64_t>(b.dims[2]) * (i + 1) / tasks) - 1};
-      // The share's z span, for skipping triangles that cannot reach it.
-      const double lo_z = tasks == 1 ? qbox.lo.z : b.lo.z + cell_lo[2] * b.h - b.h;
-      const double hi_z = tasks == 1 ? qbox.hi.z : b.lo.z + (cell_hi[2] + 1.0) * b.h + b.h;
-      TriangleRegions& tr = scratch[i];
-      const Vec3* v = mesh.vertices.data();
-      // Triangles beyond the reach of the share's queries are skipped.
-      const auto beyond = [&](uint32_t u) {
-        Aabb box;
-        for (uint32_t c : mesh.triangles[u].v) box.add(v[c]);
-        return box.lo.x - s.reach > qbox.hi.x || box.hi.x + s.reach < qbox.lo.x ||
-               box.lo.y - s.reach > qbox.hi.y || box.hi.y + s.reach < qbox.lo.y ||
-               box.lo.z - s.reach > hi_z || box.hi.z + s.reach < lo_z;
-      };
-      for (uint32_t j = first; j < last; ++j) {
-        const uint32_t t = order[j];
-        // With its partner (partner() above): one walk over their bounds, about those of
-        // one, instead of two, at the first of them in leaf order. Along their mean normal,
-        // within 0.41 degrees of each, so each prism of height 2R leans out of its box by at
-        // most R / 70.
-        const uint32_t t2 = partner(mesh, neighbors, t);
-        if (t2 != kNoNeighbor && position[t2] < j) continue;
-        if (beyond(t) && (t2 == kNoNeighbor || beyond(t2))) continue;
-        const Triangle& tri = mesh.triangles[t];
-        const Vec3 p[3] = {v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]};
-        const Frame f = frame_of(p);
-        Vec3 dir = f.ok ? f.n : Vec3{0, 0, 1};
-        Vec3 p2[3];
-        Frame f2;
-        if (t2 != kNoNeighbor) {
-          const Triangle& tri2 = mesh.triangles[t2];
-          for (int k = 0; k < 3; ++k) p2[k] = v[tri2.v[k]];
-          f2 = frame_of(p2);
-          const Vec3 sum = f.n + f2.n;
-          dir = sum * (1.0 / length(sum));
-        }
-        tr.count = 0;
-        tr.box.start(dir);
-        add_regions(s, t, p, f, dir, &tr);
-        if (t2 != kNoNeighbor) add_regions(s, t2, p2, f2, dir, &tr);
-        tr.box.grow(s.mu);
-        walk(s, tr.box, cell_lo, cell_hi,
-             [&](const uint32_t* at, uint32_t count) { offer_list(s, tr, at, count); });
-      }
-    };
-    parallel_for_each(ctx.executor, tasks, task);
+  Status scan() {
+    const uint32_t* order = index.order.data();
+    const uint32_t ntri = static_cast<uint32_t>(nt);
+    for (uint32_t j = 0; j < ntri; ++j) position[order[j]] = j;
+    for (uint32_t first = 0; first < ntri; first += kRound) {
+      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, kStage, first, ntri + uint64_t{nu}));
+      const uint32_t last = first + kRound < ntri ? first + kRound : ntri;
+      auto task = [&](uint32_t i) { scan_share(i, first, last); };
+      parallel_for_each(ctx.executor, tasks, task);
+    }
+    return report_progress(ctx, kStage, ntri, ntri + uint64_t{nu});
   }
-  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, kStage, ntri, ntri + uint64_t{nu}));
 
   // The answers: a query whose best candidate lies within the band has the tree's answer;
   // the others (and the unusable ones) ask the tree.
-  const double band2 = band * band;
-  constexpr uint32_t kChunk = 1024;
-  const uint32_t chunks = static_cast<uint32_t>((nu + kChunk - 1) / kChunk);
-  auto finish = [&](uint32_t i) {
-    const size_t first_query = static_cast<size_t>(i) * kChunk;
-    const size_t e = first_query + kChunk < nu ? first_query + kChunk : nu;
-    for (size_t j = first_query; j < e; ++j) {
-      const Vec3 q = b.point(j);
-      ClosestPoint cp;
-      bool found = true;
-      const double best2 = best_distance2(b, j, q);
-      if (best2 <= band2) {
-        cp.triangle = b.best[j];
-        cp.point = b.best_point[j];
-        cp.feature = static_cast<Feature>(b.best_feature[j] >> 2);
-        cp.feature_index = static_cast<uint8_t>(b.best_feature[j] & 3);
-        settle_closest(index, q, best2, &cp);
-      } else {
-        found = closest_within(index, q, HUGE_VAL, &cp, b.best[j]);
+  void answer_all(Span<const Vec3> queries, RegionAnswer answer, void* user) {
+    const double band2 = s.band * s.band;
+    constexpr uint32_t kChunk = 1024;
+    const uint32_t chunks = static_cast<uint32_t>((nu + kChunk - 1) / kChunk);
+    auto finish = [&](uint32_t i) {
+      const size_t first_query = static_cast<size_t>(i) * kChunk;
+      const size_t e = first_query + kChunk < nu ? first_query + kChunk : nu;
+      for (size_t j = first_query; j < e; ++j) {
+        const Vec3 q = b.point(j);
+        ClosestPoint cp;
+        bool found = true;
+        const double best2 = best_distance2(b, j, q);
+        if (best2 <= band2) {
+          cp.triangle = b.best[j];
+          cp.point = b.best_point[j];
+          cp.feature = static_cast<Feature>(b.best_feature[j] >> 2);
+          cp.feature_index = static_cast<uint8_t>(b.best_feature[j] & 3);
+          settle_closest(index, q, best2, &cp);
+        } else {
+          found = closest_within(index, q, HUGE_VAL, &cp, b.best[j]);
+        }
+        answer(user, b.ids[j], cp, found);
       }
-      answer(user, b.ids[j], cp, found);
+    };
+    parallel_for_each(ctx.executor, chunks, finish);
+    for (size_t i = 0; i < queries.size(); ++i) {
+      if (bucketed(queries[i])) continue;
+      ClosestPoint cp;
+      const bool found = closest_within(index, queries[i], HUGE_VAL, &cp);
+      answer(user, i, cp, found);
     }
-  };
-  parallel_for_each(ctx.executor, chunks, finish);
-  for (size_t i = 0; i < n; ++i) {
-    if (bucketed(queries[i])) continue;
-    ClosestPoint cp;
-    const bool found = closest_within(index, queries[i], HUGE_VAL, &cp);
-    answer(user, i, cp, found);
   }
+};
+
+}  // namespace
+
+Status detail::region_closest_points(const Context& ctx, const DistanceIndex& index,
+                                     Span<const Vec3> queries, RegionAnswer answer, void* user,
+                                     bool* used) {
+  *used = false;
+  RegionBatch batch(ctx, index);
+  if (!batch.choose_band(queries) || !batch.gather_near(queries)) return Status::ok();
+  batch.size_grid();
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);
+  if (!batch.allocate(arena) || !batch.bucket_queries(arena, queries) ||
+      !batch.allocate_best(arena)) {
+    return Status::ok();
+  }
+  *used = true;
+  batch.prepare_scan();
+  SPLINTCORE_RETURN_IF_ERROR(batch.scan());
+  batch.answer_all(queries, answer, user);
   return Status::ok();
 }
 

@@ -787,58 +787,83 @@ Status sweep(const Context& ctx, const Vec3* v, const Triangle* tris, size_t nt,
   return Status::ok();
 }
 
-// The hierarchy pass: every pair of non-skipped triangles whose DOPs overlap, counted all, or
-// stopped (*stopped set) once tally->max_pairs is reached. Needs coordinates within the range
-// (radius >= 0), nv <= 3 nt (the memory bound) and nv < 2^32 - 1 (UINT32_MAX is no vertex id).
-Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triangle* tris, size_t nt,
-                      double radius, const Grid& grid, Tally* tally, bool* stopped) {
-  Arena& arena = *ctx.arena;
-  ArenaScope scope(arena);
-  *stopped = false;
-  SPLINTCORE_ASSERT(nv <= 3 * nt && nv < UINT32_MAX);
+// The hierarchy pass (hierarchy_pass() below) stage by stage: the kept triangles as items in
+// Morton order, their DOPs, the tree over them, and the pairs it finds.
+struct HierarchyPass {
+  Arena& arena;
+  const Vec3* v;
+  size_t nv;
+  const Triangle* tris;
+  size_t nt;
+  const Grid& grid;
+  Tally* tally;
+  double error = 0;           // of the separating directions (fill_item)
+  Dop* vd = nullptr;          // the vertices' DOPs
+  uint64_t* order = nullptr;  // the kept triangles: Morton code << 32 | triangle id, sorted
+  uint32_t kept = 0;
+  Item* items = nullptr;  // in Morton order
+  Dop* item_dops = nullptr;
+  Node* nodes = nullptr;
+  Leaf* leaves = nullptr;
+  uint32_t node_count = 0, leaf_count = 0;
+  uint64_t candidates = 0;  // pairs whose DOPs overlap
+
+  HierarchyPass(Arena& a, const Vec3* vertices, size_t vertex_count, const Triangle* triangles,
+                size_t triangle_count, const Grid& quantization, Tally* counts)
+      : arena(a),
+        v(vertices),
+        nv(vertex_count),
+        tris(triangles),
+        nt(triangle_count),
+        grid(quantization),
+        tally(counts) {}
 
   // 1. The vertices' DOPs; the kept triangles' Morton codes (of the middle of their quantized
   // x, y, z extents, in bits 32..61 above the triangle id), sorted.
-  uint64_t* order = arena.allocate_array<uint64_t>(nt);
-  uint64_t* scratch = arena.allocate_array<uint64_t>(nt);
-  Dop* vd = arena.allocate_array<Dop>(nv);
-  if (((order == nullptr || scratch == nullptr) && nt > 0) || (vd == nullptr && nv > 0)) {
-    return arena.exhausted_status();
-  }
-  for (size_t i = 0; i < nv; ++i) vd[i] = point_dop(grid, v[i]);
-  uint32_t kept = 0;
-  for (size_t t = 0; t < nt; ++t) {
-    const Triangle& tri = tris[t];
-    if (skipped(v, tri, true)) continue;
-    const Dop d = triangle_dop(vd[tri.v[0]], vd[tri.v[1]], vd[tri.v[2]]);
-    uint64_t code = 0;
-    for (int k = 0; k < 3; ++k) {  // centres in 0 .. 65535, 10 bits each
-      const uint32_t c = static_cast<uint32_t>((d.lo[k] + d.hi[k]) / 2 + 32768);
-      code |= spread_bits(c >> 6) << (2 - k);
+  Status sort_triangles() {
+    order = arena.allocate_array<uint64_t>(nt);
+    uint64_t* scratch = arena.allocate_array<uint64_t>(nt);
+    vd = arena.allocate_array<Dop>(nv);
+    if (((order == nullptr || scratch == nullptr) && nt > 0) || (vd == nullptr && nv > 0)) {
+      return arena.exhausted_status();
     }
-    order[kept++] = code << 32 | t;
+    for (size_t i = 0; i < nv; ++i) vd[i] = point_dop(grid, v[i]);
+    for (size_t t = 0; t < nt; ++t) {
+      const Triangle& tri = tris[t];
+      if (skipped(v, tri, true)) continue;
+      const Dop d = triangle_dop(vd[tri.v[0]], vd[tri.v[1]], vd[tri.v[2]]);
+      uint64_t code = 0;
+      for (int k = 0; k < 3; ++k) {  // centres in 0 .. 65535, 10 bits each
+        const uint32_t c = static_cast<uint32_t>((d.lo[k] + d.hi[k]) / 2 + 32768);
+        code |= spread_bits(c >> 6) << (2 - k);
+      }
+      order[kept++] = code << 32 | t;
+    }
+    if (kept != 0) order = sort_morton(order, scratch, kept);
+    return Status::ok();
   }
-  if (kept == 0) return Status::ok();
-  order = sort_morton(order, scratch, kept);
 
-  // 2. The items and their DOPs in Morton order.
-  Item* items = arena.allocate_array<Item>(kept);
-  Dop* item_dops = arena.allocate_array<Dop>(kept);
-  Node* nodes = arena.allocate_array<Node>(2 * size_t{kept} - 1);
-  Leaf* leaves = arena.allocate_array<Leaf>(kept);  // at most one a triangle
-  if (items == nullptr || item_dops == nullptr || nodes == nullptr || leaves == nullptr) {
-    return arena.exhausted_status();
-  }
-  const double error = 1e-15 * radius;  // above 3 eps R, generously
-  for (uint32_t i = 0; i < kept; ++i) {
-    const uint32_t t = static_cast<uint32_t>(order[i]);
-    const Triangle& tri = tris[t];
-    fill_item(v, tri, t, error, &items[i]);
-    item_dops[i] = triangle_dop(vd[tri.v[0]], vd[tri.v[1]], vd[tri.v[2]]);
+  // 2. The items and their DOPs in Morton order (and the memory for the tree).
+  Status make_items(double radius) {
+    items = arena.allocate_array<Item>(kept);
+    item_dops = arena.allocate_array<Dop>(kept);
+    nodes = arena.allocate_array<Node>(2 * size_t{kept} - 1);
+    leaves = arena.allocate_array<Leaf>(kept);  // at most one a triangle
+    if (items == nullptr || item_dops == nullptr || nodes == nullptr || leaves == nullptr) {
+      return arena.exhausted_status();
+    }
+    error = 1e-15 * radius;  // above 3 eps R, generously
+    for (uint32_t i = 0; i < kept; ++i) {
+      const uint32_t t = static_cast<uint32_t>(order[i]);
+      const Triangle& tri = tris[t];
+      fill_item(v, tri, t, error, &items[i]);
+      item_dops[i] = triangle_dop(vd[tri.v[0]], vd[tri.v[1]], vd[tri.v[2]]);
+    }
+    return Status::ok();
   }
 
   // 3. Stars: per-vertex lists of items by counting sort, then each star checked.
-  {
+  Status clear_stars() {
     ArenaScope star_scope(arena);
     uint32_t* start = arena.allocate_array<uint32_t>(nv + 1);
     uint32_t* list = arena.allocate_array<uint32_t>(3 * size_t{kept});
@@ -866,13 +891,58 @@ Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triang
       items[i].cleared = (cleared[tri.v[0]] ? 1u : 0u) | (cleared[tri.v[1]] ? 2u : 0u) |
                          (cleared[tri.v[2]] ? 4u : 0u);
     }
+    return Status::ok();
+  }
+
+  // Node `node` as the leaf of items begin .. begin + count - 1 (count <= kLeafSize).
+  void fill_leaf(Node& node, uint32_t begin, uint32_t count) {
+    node.leaf = leaf_count;
+    Leaf& leaf = leaves[leaf_count++];
+    leaf.first = begin;
+    leaf.count = count;
+    for (int k = 0; k < kAxes; ++k) {
+      for (uint32_t j = 0; j < kLeafSize; ++j) {
+        leaf.lo[k][j] = INT16_MAX;  // empty lanes: never overlap
+        leaf.hi[k][j] = INT16_MIN;
+      }
+    }
+    for (uint32_t j = 0; j < kLeafSize; ++j) {
+      for (int k = 0; k < 3; ++k) leaf.ids[k][j] = 0;
+    }
+    node.dop = item_dops[begin];
+    for (uint32_t j = 0; j < count; ++j) {
+      const Dop& d = item_dops[begin + j];
+      node.dop = dop_union(node.dop, d);
+      for (int k = 0; k < kAxes; ++k) {
+        leaf.lo[k][j] = d.lo[k];
+        leaf.hi[k][j] = d.hi[k];
+      }
+      for (int k = 0; k < 3; ++k) leaf.ids[k][j] = items[begin + j].tri.v[k];
+    }
+  }
+
+  // The size of the first half of items begin .. begin + count - 1: where the highest
+  // differing Morton bit changes (equal codes: in the middle).
+  uint32_t split_point(uint32_t begin, uint32_t count) const {
+    const uint64_t first = order[begin] >> 32, last = order[begin + count - 1] >> 32;
+    if (first == last) return count / 2;
+    const uint64_t bit = uint64_t{1} << (63 - __builtin_clzll(first ^ last));
+    uint32_t without = 0, with = count - 1;  // the bit: clear at without, set at with
+    while (without + 1 < with) {
+      const uint32_t mid = without + (with - without) / 2;
+      if (((order[begin + mid] >> 32) & bit) == 0) {
+        without = mid;
+      } else {
+        with = mid;
+      }
+    }
+    return with;
   }
 
   // 4. Build: preorder, with an explicit stack of ranges (and the parent waiting for its
   // right child), leaves filled as they come; bounds bottom-up (children come after their
   // parent).
-  uint32_t node_count = 0, leaf_count = 0;
-  {
+  void build_tree() {
     struct Pending {
       uint32_t begin, count, parent;  // parent: UINT32_MAX for the root or a left child
     };
@@ -888,47 +958,10 @@ Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triang
       node.count = p.count;
       node.right = 0;
       if (p.count <= kLeafSize) {
-        node.leaf = leaf_count;
-        Leaf& leaf = leaves[leaf_count++];
-        leaf.first = p.begin;
-        leaf.count = p.count;
-        for (int k = 0; k < kAxes; ++k) {
-          for (uint32_t j = 0; j < kLeafSize; ++j) {
-            leaf.lo[k][j] = INT16_MAX;  // empty lanes: never overlap
-            leaf.hi[k][j] = INT16_MIN;
-          }
-        }
-        for (uint32_t j = 0; j < kLeafSize; ++j) {
-          for (int k = 0; k < 3; ++k) leaf.ids[k][j] = 0;
-        }
-        node.dop = item_dops[p.begin];
-        for (uint32_t j = 0; j < p.count; ++j) {
-          const Dop& d = item_dops[p.begin + j];
-          node.dop = dop_union(node.dop, d);
-          for (int k = 0; k < kAxes; ++k) {
-            leaf.lo[k][j] = d.lo[k];
-            leaf.hi[k][j] = d.hi[k];
-          }
-          for (int k = 0; k < 3; ++k) leaf.ids[k][j] = items[p.begin + j].tri.v[k];
-        }
+        fill_leaf(node, p.begin, p.count);
         continue;
       }
-      // Split where the highest differing Morton bit changes (equal codes: in the middle).
-      const uint64_t first = order[p.begin] >> 32, last = order[p.begin + p.count - 1] >> 32;
-      uint32_t half = p.count / 2;
-      if (first != last) {
-        const uint64_t bit = uint64_t{1} << (63 - __builtin_clzll(first ^ last));
-        uint32_t without = 0, with = p.count - 1;  // the bit: clear at without, set at with
-        while (without + 1 < with) {
-          const uint32_t mid = without + (with - without) / 2;
-          if (((order[p.begin + mid] >> 32) & bit) == 0) {
-            without = mid;
-          } else {
-            with = mid;
-          }
-        }
-        half = with;
-      }
+      const uint32_t half = split_point(p.begin, p.count);
       SPLINTCORE_ASSERT(top + 2 <= kMaxHeight + 2);
       stack[top++] = Pending{p.begin + half, p.count - half, index};
       stack[top++] = Pending{p.begin, half, UINT32_MAX};
@@ -939,10 +972,9 @@ Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triang
     }
   }
 
-  // 5. Pairs whose DOPs overlap: sharing a cleared vertex, no conflict; sharing none, the
-  // separating directions first; the rest to the exact tests.
-  uint64_t candidates = 0;
-  auto test_pair = [&](uint32_t i, uint32_t j) {
+  // Items i and j, whose DOPs overlap: sharing a cleared vertex, no conflict; sharing none,
+  // the separating directions first; the rest to the exact tests. True when the tally is full.
+  bool test_pair(uint32_t i, uint32_t j) {
     const Item& s = items[i];
     const Item& t = items[j];
     const uint32_t shared = shared_corners(s, t);  // of t
@@ -963,11 +995,12 @@ Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triang
       return false;
     }
     return tally->add(s.id, t.id);
-  };
+  }
+
   // The pairs of two leaves (the same leaf: i < j) whose DOPs overlap: one triangle of a
   // against all of b at once; those that share a cleared vertex dropped (their stars are
-  // embedded), the rest decided one by one.
-  auto leaf_pairs = [&](const Leaf& a, const Leaf& b, bool same) {
+  // embedded), the rest decided one by one. True when the tally is full.
+  bool leaf_pairs(const Leaf& a, const Leaf& b, bool same) {
     const uint32_t valid = (1u << b.count) - 1;
     for (uint32_t i = 0; i < a.count; ++i) {
       const uint32_t lanes = same ? valid & ~((2u << i) - 1) : valid;
@@ -988,58 +1021,78 @@ Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triang
       }
     }
     return false;
-  };
+  }
 
-  // Traversal of the hierarchy against itself: (i, i) stands for the pairs within node i,
+  // 5. Traversal of the hierarchy against itself: (i, i) stands for the pairs within node i,
   // (i, j) for those between two nodes whose DOPs overlap. Depth first: each step goes one
   // level down in one of the two nodes and leaves at most two pairs pending, so the stack
-  // never holds more than 4 * height + 1.
-  struct PairOfNodes {
-    uint32_t a, b;
-  };
-  constexpr int kMaxStack = 4 * kMaxHeight + 8;
-  PairOfNodes stack[kMaxStack];
-  int top = 0;
-  stack[top++] = PairOfNodes{0, 0};
-  uint64_t steps = 0;
-  uint32_t done = 0;  // triangles whose leaf is done with itself (for progress)
-  bool stop = false;
-  while (top > 0 && !stop) {
-    if ((++steps & 0xffff) == 0) {
-      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "self-intersection", done, nt));
-    }
-    const PairOfNodes p = stack[--top];
-    const Node& na = nodes[p.a];
-    const Node& nb = nodes[p.b];
-    SPLINTCORE_ASSERT(top + 3 <= kMaxStack);
-    if (p.a == p.b) {
-      if (na.right == 0) {
-        stop = leaf_pairs(leaves[na.leaf], leaves[na.leaf], true);
-        done += na.count;
+  // never holds more than 4 * height + 1. Sets *stopped when the tally is full.
+  Status traverse(const Context& ctx, bool* stopped) {
+    struct PairOfNodes {
+      uint32_t a, b;
+    };
+    constexpr int kMaxStack = 4 * kMaxHeight + 8;
+    PairOfNodes stack[kMaxStack];
+    int top = 0;
+    stack[top++] = PairOfNodes{0, 0};
+    uint64_t steps = 0;
+    uint32_t done = 0;  // triangles whose leaf is done with itself (for progress)
+    bool stop = false;
+    while (top > 0 && !stop) {
+      if ((++steps & 0xffff) == 0) {
+        SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "self-intersection", done, nt));
+      }
+      const PairOfNodes p = stack[--top];
+      const Node& na = nodes[p.a];
+      const Node& nb = nodes[p.b];
+      SPLINTCORE_ASSERT(top + 3 <= kMaxStack);
+      if (p.a == p.b) {
+        if (na.right == 0) {
+          stop = leaf_pairs(leaves[na.leaf], leaves[na.leaf], true);
+          done += na.count;
+          continue;
+        }
+        const uint32_t l = p.a + 1, r = na.right;
+        if (dops_overlap(nodes[l].dop, nodes[r].dop)) stack[top++] = PairOfNodes{l, r};
+        stack[top++] = PairOfNodes{r, r};
+        stack[top++] = PairOfNodes{l, l};
         continue;
       }
-      const uint32_t l = p.a + 1, r = na.right;
-      if (dops_overlap(nodes[l].dop, nodes[r].dop)) stack[top++] = PairOfNodes{l, r};
-      stack[top++] = PairOfNodes{r, r};
-      stack[top++] = PairOfNodes{l, l};
-      continue;
+      if (na.right == 0 && nb.right == 0) {
+        stop = leaf_pairs(leaves[na.leaf], leaves[nb.leaf], false);
+        continue;
+      }
+      // Open the larger node.
+      const bool open_a = nb.right == 0 || (na.right != 0 && na.count >= nb.count);
+      const uint32_t keep = open_a ? p.b : p.a;
+      const uint32_t open = open_a ? p.a : p.b;
+      const Dop& other = nodes[keep].dop;
+      const uint32_t l = open + 1, r = nodes[open].right;
+      if (dops_overlap(nodes[r].dop, other)) stack[top++] = PairOfNodes{r, keep};
+      if (dops_overlap(nodes[l].dop, other)) stack[top++] = PairOfNodes{l, keep};
     }
-    if (na.right == 0 && nb.right == 0) {
-      stop = leaf_pairs(leaves[na.leaf], leaves[nb.leaf], false);
-      continue;
-    }
-    // Open the larger node.
-    const bool open_a = nb.right == 0 || (na.right != 0 && na.count >= nb.count);
-    const uint32_t keep = open_a ? p.b : p.a;
-    const uint32_t open = open_a ? p.a : p.b;
-    const Dop& other = nodes[keep].dop;
-    const uint32_t l = open + 1, r = nodes[open].right;
-    if (dops_overlap(nodes[r].dop, other)) stack[top++] = PairOfNodes{r, keep};
-    if (dops_overlap(nodes[l].dop, other)) stack[top++] = PairOfNodes{l, keep};
+    tally->report->candidate_pairs += candidates;
+    *stopped = stop;
+    return Status::ok();
   }
-  tally->report->candidate_pairs += candidates;
-  *stopped = stop;
-  return Status::ok();
+};
+
+// The hierarchy pass: every pair of non-skipped triangles whose DOPs overlap, counted all, or
+// stopped (*stopped set) once tally->max_pairs is reached. Needs coordinates within the range
+// (radius >= 0), nv <= 3 nt (the memory bound) and nv < 2^32 - 1 (UINT32_MAX is no vertex id).
+Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triangle* tris, size_t nt,
+                      double radius, const Grid& grid, Tally* tally, bool* stopped) {
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);
+  *stopped = false;
+  SPLINTCORE_ASSERT(nv <= 3 * nt && nv < UINT32_MAX);
+  HierarchyPass pass(arena, v, nv, tris, nt, grid, tally);
+  SPLINTCORE_RETURN_IF_ERROR(pass.sort_triangles());
+  if (pass.kept == 0) return Status::ok();
+  SPLINTCORE_RETURN_IF_ERROR(pass.make_items(radius));
+  SPLINTCORE_RETURN_IF_ERROR(pass.clear_stars());
+  pass.build_tree();
+  return pass.traverse(ctx, stopped);
 }
 
 }  // namespace
