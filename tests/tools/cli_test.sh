@@ -54,6 +54,19 @@ expect_exit 2 "bad threads" -- "$tool" check "$fixtures/stl/torus_binary.stl" --
 expect_exit 2 "unknown printer" -- "$tool" check "$fixtures/stl/torus_binary.stl" --printer nope
 expect_exit 2 "unknown option" -- "$tool" convert "$fixtures/stl/torus_binary.stl" --frob
 expect_exit 2 "convert without -o" -- "$tool" convert "$fixtures/stl/torus_binary.stl"
+# One option parser (issue 27): a command takes its own options and those of every command;
+# another command's option is unknown, a missing value is named, and a usage error shows the
+# command's options as --help does.
+expect_exit 2 "another command's option" -- "$tool" convert "$fixtures/stl/torus_binary.stl" -o "$work/x.stl" --query 1,2,3
+check "it is named unknown" -- grep -q "^splintcore: unknown option '--query'$" "$work/err"
+check "the usage error lists the command's options" -- grep -q "^  --ascii  *write ASCII STL" "$work/err"
+check "nothing written after a usage error" -- test ! -e "$work/x.stl"
+expect_exit 2 "a missing value" -- "$tool" check "$fixtures/stl/torus_binary.stl" --printer
+check "the missing value is named" -- grep -q "^splintcore: --printer needs a name$" "$work/err"
+expect_exit 0 "--output is -o" -- "$tool" convert "$fixtures/stl/torus_binary.stl" --output "$work/x.stl"
+check "--output wrote the file" -- test -s "$work/x.stl"
+expect_exit 0 "check -h" -- "$tool" check -h
+check "check --help lists its options" -- grep -q "^  --no-place  " "$work/out"
 
 expect_exit 0 "check printable torus" -- "$tool" check "$fixtures/stl/torus_binary.stl"
 check "human summary says printable" -- grep -q "printable: yes" "$work/out"

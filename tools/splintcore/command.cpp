@@ -1,0 +1,145 @@
+#include "command.h"
+
+#include <cstdlib>
+
+namespace splintcore {
+namespace tool {
+
+std::vector<OptionSpec> common_options(CommonArgs* a) {
+  return {
+      flag("--help", &a->help, "this text for the command").or_as("-h"),
+      flag("--json", &a->json, "one JSON object on stdout with every figure"),
+      memory_cap("--memory-cap", &a->memory_cap, "arena cap, e.g. 64M or 2G (default 1G)",
+                 "--memory-cap needs a size such as 64M, 2G or 1048576")
+          .marks(&a->memory_cap_given),
+      count("--threads", "N", &a->threads, 1, 64,
+            "worker threads (default 1; results are identical for any N)",
+            "--threads needs a number from 1 to 64"),
+  };
+}
+
+OptionSpec output_option(const char* value_name, const char** target, const char* help) {
+  return text("-o", value_name, target, help, "-o needs a file name").or_as("--output");
+}
+
+CommandLine::CommandLine(const Command& command, CommonArgs* common, std::vector<OptionSpec> own)
+    : command_(command), common_(common), specs_(std::move(own)) {
+  for (const OptionSpec& s : common_options(common)) specs_.push_back(s);
+}
+
+int CommandLine::parse(int argc, char** argv) {
+  std::string error;
+  if (!parse_options(specs_, argc, argv, &common_->positional, &error)) return usage_error(error);
+  if (common_->help) {
+    print_help(stdout);
+    return kExitOk;
+  }
+  return -1;
+}
+
+int CommandLine::usage_error(const std::string& message) const {
+  std::fprintf(stderr, "splintcore: %s\n\n", message.c_str());
+  print_help(stderr);
+  return kExitUsage;
+}
+
+void CommandLine::print_help(std::FILE* out) const {
+  std::fputs(command_.usage, out);
+  std::fputs("\noptions:\n", out);
+  print_options(out, specs_);
+}
+
+RunMemory::RunMemory(uint64_t cap) {
+  const uint64_t rounded = (cap + 15) / 16 * 16;
+  buffer = std::aligned_alloc(16, static_cast<size_t>(rounded));
+}
+
+RunMemory::~RunMemory() { std::free(buffer); }
+
+int rejected(const CommonArgs& args, const char* command, const Status& s, const Arena* arena) {
+  cli::print_error(s);
+  if (args.json) {
+    JsonObject j;
+    j.add("command", command);
+    j.add_status(s);
+    if (arena != nullptr) j.add("peak_arena_bytes", static_cast<uint64_t>(arena->high_water()));
+    print_json(j);
+  }
+  return kExitRejected;
+}
+
+Run::Run(const Command& c, const CommonArgs& a)
+    : command(c.name),
+      args(a),
+      memory(a.memory_cap),
+      arena(memory.buffer, memory.buffer != nullptr ? static_cast<size_t>(a.memory_cap) : 0),
+      threads(static_cast<unsigned>(a.threads)),
+      ctx(&arena, &threads.executor(), nullptr),
+      start(monotonic_seconds()) {}
+
+int Run::no_memory() const {
+  return rejected(args, command,
+                  make_error(StatusCode::kArenaExhausted, "cannot reserve the memory cap of ",
+                             args.memory_cap, " bytes"),
+                  nullptr);
+}
+
+void add_mesh_report(JsonObject* j, const MeshReport& r) {
+  j->add("vertices", r.vertex_count);
+  j->add("triangles", r.triangle_count);
+  j->add("edges", r.edge_count);
+  j->add("boundary_edges", r.boundary_edges);
+  j->add("nonmanifold_edges", r.nonmanifold_edges);
+  j->add("orientation_conflicts", r.orientation_conflicts);
+  j->add("degenerate_triangles", r.degenerate_triangles);
+  j->add("duplicate_triangles", r.duplicate_triangles);
+  j->add("unreferenced_vertices", r.unreferenced_vertices);
+  j->add("shells", r.shells);
+  j->add("euler_characteristic", r.euler_characteristic);
+  j->add("genus", r.genus);
+  j->add("closed", r.closed());
+  j->add("edge_manifold", r.edge_manifold());
+  j->add("oriented", r.oriented());
+  j->add("outward", r.outward());
+  j->add("area_mm2", r.area);
+  j->add("volume_mm3", r.volume);
+  j->add("bounds_min_mm", r.bounds.lo);
+  j->add("bounds_max_mm", r.bounds.hi);
+}
+
+void print_mesh_report(const MeshReport& r) {
+  std::printf("mesh: %llu vertices, %llu triangles, %llu edges, %llu shell(s), genus %lld\n",
+              static_cast<unsigned long long>(r.vertex_count),
+              static_cast<unsigned long long>(r.triangle_count),
+              static_cast<unsigned long long>(r.edge_count),
+              static_cast<unsigned long long>(r.shells), static_cast<long long>(r.genus));
+  std::printf("closed: %s (%llu boundary edges)\n", r.closed() ? "yes" : "no",
+              static_cast<unsigned long long>(r.boundary_edges));
+  std::printf("edge-manifold: %s (%llu edges with 3+ triangles)\n",
+              r.edge_manifold() ? "yes" : "no",
+              static_cast<unsigned long long>(r.nonmanifold_edges));
+  std::printf("consistently oriented: %s (%llu conflicting edges)\n", r.oriented() ? "yes" : "no",
+              static_cast<unsigned long long>(r.orientation_conflicts));
+  std::printf("outward: %s\n", r.outward() ? "yes" : "no");
+  std::printf("degenerate triangles: %llu, duplicate triangles: %llu\n",
+              static_cast<unsigned long long>(r.degenerate_triangles),
+              static_cast<unsigned long long>(r.duplicate_triangles));
+  std::printf("area: %.6f mm^2, volume: %.6f mm^3\n", r.area, r.volume);
+  std::printf("bounds: [%.6f, %.6f, %.6f] - [%.6f, %.6f, %.6f] mm\n", r.bounds.lo.x, r.bounds.lo.y,
+              r.bounds.lo.z, r.bounds.hi.x, r.bounds.hi.y, r.bounds.hi.z);
+}
+
+std::string hex_sha256(const void* data, size_t size) {
+  Sha256 sha;
+  sha.update(data, size);
+  uint8_t digest[32];
+  sha.finish(digest);
+  char hex[65];
+  Sha256::to_hex(digest, hex);
+  return hex;
+}
+
+void print_json(const JsonObject& j) { std::printf("%s\n", j.str().c_str()); }
+
+}  // namespace tool
+}  // namespace splintcore

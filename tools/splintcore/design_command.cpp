@@ -1,0 +1,367 @@
+// `splintcore design`: the whole method on a case file, with the report an auditor needs.
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "../common/ct_files.h"
+#include "../common/preview.h"
+#include "command.h"
+#include "files.h"
+#include "splintcore/design.h"
+
+namespace splintcore {
+namespace tool {
+
+namespace {
+
+struct DesignArgs {
+  CommonArgs common;
+  const char* output = nullptr;
+  uint64_t max_input_bytes = 0;  // 0: cli::kMaxCaseBytes for the case, kMaxMeshBytes for jaws
+};
+
+// `design`'s options, in the order its --help lists them.
+std::vector<OptionSpec> design_options(DesignArgs* a) {
+  return {
+      output_option("OUTDIR", &a->output, "the folder to write into"),
+      size("--max-input-bytes", "SIZE", &a->max_input_bytes,
+           "refuse a larger case or jaw file (default 16M, 2G for a jaw)",
+           "--max-input-bytes needs a size such as 16M, 2G or 1048576"),
+  };
+}
+
+// Stage times and peak arena per stage from the progress callback (tools only: the clock).
+struct DesignClock {
+  Arena* arena = nullptr;
+  bool print = false;
+  std::vector<std::string> names;
+  std::vector<double> seconds;
+  std::vector<uint64_t> peaks;
+  std::string current;
+  double since = 0;
+  static bool report(void* user, const char* stage, uint64_t, uint64_t) {
+    DesignClock* c = static_cast<DesignClock*>(user);
+    if (std::strncmp(stage, "design: ", 8) != 0 || c->current == stage) return true;
+    const double now = monotonic_seconds();
+    if (!c->current.empty()) {
+      c->names.push_back(c->current.substr(8));
+      c->seconds.push_back(now - c->since);
+      c->peaks.push_back(c->arena->high_water());
+      if (c->print) std::fprintf(stderr, " %.3f s\n", now - c->since);
+    }
+    c->current = stage;
+    c->since = now;
+    if (c->print && c->current != "design: done") std::fprintf(stderr, "%s...", stage + 8);
+    return true;
+  }
+};
+
+// The memory cap: --memory-cap, else the case's "memory_cap", else the default. The case is
+// parsed once in a scratch arena to learn it (the real parse keeps its strings in the run's
+// arena, whose size must be known first). Returns where the cap came from.
+const char* choose_memory_cap(const std::vector<uint8_t>& case_bytes, const char* case_path,
+                              CommonArgs* common) {
+  if (common->memory_cap_given) return "command line";
+  std::vector<unsigned char> scratch(case_bytes.size() * 8 + (size_t{1} << 20));
+  Arena scratch_arena(scratch.data(), scratch.size());
+  CaseFile pre;
+  if (parse_case(Context(&scratch_arena), reinterpret_cast<const char*>(case_bytes.data()),
+                 case_bytes.size(), case_path, &pre)
+          .is_ok() &&
+      pre.memory_cap != 0) {
+    common->memory_cap = pre.memory_cap;
+    return "case";
+  }
+  return "default";
+}
+
+// One run of `design`: the stages in order, sharing what they read and make.
+class Design {
+ public:
+  Design(Run& run, const DesignArgs& args, const std::vector<uint8_t>& case_bytes,
+         const char* cap_source)
+      : run_(run),
+        args_(args),
+        case_path_(args.common.positional[0]),
+        case_bytes_(case_bytes),
+        cap_source_(cap_source),
+        ctx_(&run.arena, &run.threads.executor(), &progress_) {
+    clock_.arena = &run.arena;
+    clock_.print = isatty(2) != 0 && !args.common.json;
+    progress_.report = &DesignClock::report;
+    progress_.user = &clock_;
+  }
+
+  int run();
+
+ private:
+  Status read_jaws();
+  Status reconstruct_ct_jaws();
+  Status write_splint();
+  void write_preview();
+  Status write_report();
+  void print_summary() const;
+
+  Run& run_;
+  const DesignArgs& args_;
+  const std::string case_path_;
+  const std::vector<uint8_t>& case_bytes_;
+  const char* cap_source_;
+  DesignClock clock_;
+  Progress progress_;
+  const Context ctx_;  // the run's, with the clock as progress
+  CaseFile c_;
+  std::string folder_;  // of the case file: jaw paths are relative to it
+
+  // The jaws, as read (their bytes hashed for the report); those from CT, reconstructed.
+  std::vector<std::string> jaw_paths_, jaw_hashes_;
+  std::vector<Mesh> jaws_;
+  bool any_ct_ = false;
+  CaseCtReport ct_report_;
+  CtInfo ct_info_;
+  std::string ct_path_, ct_hash_;
+
+  Mesh splint_;
+  DesignReport report_;
+  std::string splint_path_, report_path_, splint_hash_, report_text_;
+  cli::PreviewInfo preview_;
+  Status preview_status_;
+  char preview_error_[512] = "";
+  double t_read_ = 0, t_design_ = 0, t_end_ = 0;
+};
+
+int Design::run() {
+  Status s = parse_case(run_.ctx, reinterpret_cast<const char*>(case_bytes_.data()),
+                        case_bytes_.size(), case_path_.c_str(), &c_);
+  if (!s.is_ok()) return run_.reject(s);
+  const size_t slash = case_path_.find_last_of('/');
+  folder_ = slash == std::string::npos ? "" : case_path_.substr(0, slash + 1);
+  s = read_jaws();
+  if (s.is_ok() && any_ct_) s = reconstruct_ct_jaws();
+  if (!s.is_ok()) return run_.reject(s);
+  t_read_ = monotonic_seconds();
+  s = design_splint(ctx_, c_, Span<const Mesh>(jaws_.data(), jaws_.size()), &splint_, &report_);
+  if (clock_.print && !s.is_ok()) std::fprintf(stderr, " failed\n");
+  if (!s.is_ok()) return run_.reject(s.in_file(case_path_.c_str()));
+  t_design_ = monotonic_seconds();
+  s = write_splint();
+  if (!s.is_ok()) return run_.reject(s);
+  write_preview();
+  t_end_ = monotonic_seconds();
+  s = write_report();
+  if (!s.is_ok()) return run_.reject(s);
+  if (args_.common.json) {
+    std::printf("%s\n", report_text_.c_str());
+  } else {
+    print_summary();
+  }
+  return kExitOk;
+}
+
+Status Design::read_jaws() {
+  const uint64_t limit = args_.max_input_bytes != 0 ? args_.max_input_bytes : cli::kMaxMeshBytes;
+  for (const CaseJaw& j : c_.jaws) {
+    if (j.has_seed) {  // reconstructed from the case's CT (reconstruct_ct_jaws)
+      any_ct_ = true;
+      jaw_paths_.emplace_back();
+      jaw_hashes_.emplace_back();
+      jaws_.emplace_back(&run_.arena);
+      continue;
+    }
+    const std::string path = j.mesh[0] == '/' ? std::string(j.mesh) : folder_ + j.mesh;
+    Mesh m;  // STL, PLY or OBJ (by content), welded as STL is
+    MeshFileInfo info;
+    SPLINTCORE_RETURN_IF_ERROR(read_mesh_file(ctx_, path.c_str(), limit, true, &m, &info));
+    jaw_paths_.push_back(path);
+    jaw_hashes_.push_back(info.sha256);
+    jaws_.push_back(m);
+  }
+  return Status::ok();
+}
+
+// Jaws from CT: the volume read once, every seed grown in competition, each region meshed.
+Status Design::reconstruct_ct_jaws() {
+  ct_path_ = c_.ct_volume[0] == '/' ? std::string(c_.ct_volume) : folder_ + c_.ct_volume;
+  CtVolume volume;
+  SPLINTCORE_RETURN_IF_ERROR(
+      cli::read_ct_path(ctx_, ct_path_, CtReadOptions{}, &volume, &ct_info_));
+  ct_hash_ = hex_sha256(volume.hu, static_cast<size_t>(volume.voxel_count() * 2));
+  SPLINTCORE_RETURN_IF_ERROR(
+      reconstruct_case_jaws(ctx_, c_, volume, Span<Mesh>(jaws_.data(), jaws_.size()), &ct_report_));
+  for (size_t i = 0; i < c_.jaws.size(); ++i) {
+    if (!c_.jaws[i].has_seed) continue;
+    jaw_paths_[i] = ct_path_;
+    jaw_hashes_[i] = ct_hash_;
+  }
+  return Status::ok();
+}
+
+// The splint's bytes: hashed, then written atomically.
+Status Design::write_splint() {
+  std::vector<uint8_t> stl(84 + 50 * splint_.triangles.size());
+  MemorySink sink{stl.data(), stl.size(), 0, 0};
+  SPLINTCORE_RETURN_IF_ERROR(write_stl(ctx_, splint_, memory_sink(&sink), StlWriteOptions{}));
+  stl.resize(static_cast<size_t>(sink.size));
+  const std::string out_dir = args_.output;
+  splint_path_ = out_dir + "/" + (c_.output_splint != nullptr ? c_.output_splint : "splint.stl");
+  report_path_ = out_dir + "/" + (c_.output_report != nullptr ? c_.output_report : "report.json");
+  splint_hash_ = hex_sha256(stl.data(), stl.size());
+  return write_bytes_atomically(splint_path_, stl.data(), stl.size());
+}
+
+// OUTDIR/preview.png: the splint on the jaws as the plan (and a tray placement) moved them.
+// Not fatal: the splint is written; a preview that fails (e.g. a tight --memory-cap) is a
+// warning and the report says why.
+void Design::write_preview() {
+  std::vector<const Mesh*> preview_jaws;
+  std::vector<RigidTransform> preview_moves;
+  for (size_t i = 0; i < jaws_.size(); ++i) {
+    preview_jaws.push_back(&jaws_[i]);
+    // On the tray the whole case moved by tray_translation before the design: the jaws
+    // follow it, so the preview shows the fit where the splint is.
+    preview_moves.push_back(
+        report_.placed_on_tray
+            ? compose(RigidTransform::translation(report_.tray_translation), c_.jaws[i].transform)
+            : c_.jaws[i].transform);
+  }
+  preview_status_ =
+      cli::write_preview(ctx_, splint_, preview_jaws, preview_moves,
+                         std::string(args_.output) + "/preview.png", 1024, 1024, &preview_);
+  if (!preview_status_.is_ok()) {
+    preview_status_.format(preview_error_, sizeof(preview_error_));
+    std::fprintf(stderr, "splintcore: warning: no preview: %s\n", preview_error_);
+  } else if (!args_.common.json) {
+    std::printf("preview: %s\n", preview_.path.c_str());
+  }
+}
+
+// report.json: the library's report (the C API writes the same bytes), this run's part last.
+Status Design::write_report() {
+  std::vector<const char*> path_list, hash_list;
+  for (size_t i = 0; i < jaw_paths_.size(); ++i) {
+    path_list.push_back(jaw_paths_[i].c_str());
+    hash_list.push_back(jaw_hashes_[i].c_str());
+  }
+  DesignReportFiles files;
+  files.case_path = case_path_.c_str();
+  files.jaw_paths = Span<const char* const>(path_list.data(), path_list.size());
+  files.jaw_sha256 = Span<const char* const>(hash_list.data(), hash_list.size());
+  if (any_ct_) {
+    files.ct_path = ct_path_.c_str();
+    files.ct_size[0] = ct_info_.nx;
+    files.ct_size[1] = ct_info_.ny;
+    files.ct_size[2] = ct_info_.nz;
+    files.ct = &ct_report_;
+  }
+  files.splint_path = splint_path_.c_str();
+  files.splint_sha256 = splint_hash_.c_str();  // of the bytes just written
+  if (preview_status_.is_ok()) {
+    files.preview_path = preview_.path.c_str();
+    files.preview_sha256 = preview_.sha256.c_str();
+  } else {
+    files.preview_error = preview_error_;
+  }
+  std::vector<DesignStageTime> stage_times;
+  for (size_t i = 0; i < clock_.names.size(); ++i) {
+    stage_times.push_back(
+        DesignStageTime{clock_.names[i].c_str(), clock_.seconds[i], clock_.peaks[i]});
+  }
+  const double t0 = run_.start;
+  DesignRunInfo run_info;
+  run_info.memory_cap_bytes = args_.common.memory_cap;
+  run_info.memory_cap_from = cap_source_;
+  run_info.threads = static_cast<uint32_t>(args_.common.threads);
+  run_info.stages = Span<const DesignStageTime>(stage_times.data(), stage_times.size());
+  run_info.read_seconds = t_read_ - t0;
+  run_info.design_seconds = t_design_ - t_read_;
+  run_info.preview_seconds =
+      preview_status_.is_ok() ? preview_.render_seconds + preview_.encode_seconds : 0;
+  run_info.total_seconds = t_end_ - t0;
+  run_info.peak_arena_bytes = run_.peak_arena();
+  SPLINTCORE_RETURN_IF_ERROR(
+      write_design_report(ctx_, c_, Span<const Mesh>(jaws_.data(), jaws_.size()), splint_, report_,
+                          files, &run_info, cli::string_sink(&report_text_)));
+  return write_bytes_atomically(report_path_, report_text_ + "\n");
+}
+
+void Design::print_summary() const {
+  const DesignReport& report = report_;
+  std::printf("case %s (%s): %zu jaw(s), %llu triangles; base %u sections, %zu + %zu picks\n",
+              case_path_.c_str(), c_.case_id, jaws_.size(),
+              static_cast<unsigned long long>(report.jaw_triangles), report.base.sections,
+              c_.upper.size(), c_.lower.size());
+  if (report.imprint_offset) {
+    std::printf("imprint: a %.3g mm clearance around each jaw's swept volume\n",
+                c_.blockout.offset);
+  } else {
+    std::printf("boolean: %llu crossing pairs, %llu intersection points, %u attempt(s)\n",
+                static_cast<unsigned long long>(report.boolean.intersecting_pairs),
+                static_cast<unsigned long long>(report.boolean.intersection_points),
+                report.boolean.attempts);
+  }
+  for (uint32_t i = 0; i < report.blockout_jaws; ++i) {
+    std::printf(
+        "blockout (%s): %.4f mm^3 of interference removed, %llu swept triangles, "
+        "inset %.3g mm\n",
+        c_.jaws[i].role, report.blockout_removed_mm3[i],
+        static_cast<unsigned long long>(report.blockout[i].swept_triangles),
+        report.blockout[i].inset_used);
+  }
+  if (report.labelled) {
+    std::printf("label: \"%s\" %s, %u glyphs, %.1f mm long\n", report.label.text,
+                c_.label.mode == LabelMode::kEmboss ? "embossed" : "engraved", report.label.glyphs,
+                report.label.text_length_mm);
+  }
+  if (report.thickness_checked) {
+    const ThicknessReport& t = report.thickness;
+    if (t.thin_triangles == 0) {
+      std::printf("thickness: no wall thinner than %.3g mm\n", t.min_required);
+    } else {
+      std::printf(
+          "thickness: %llu triangles (%.3f mm^2) thinner than %.3g mm; thinnest "
+          "%.3f mm at (%.2f, %.2f, %.2f); %u spot(s) in report.json\n",
+          static_cast<unsigned long long>(t.thin_triangles), t.thin_area_mm2, t.min_required,
+          t.thinnest, t.spots[0].position.x, t.spots[0].position.y, t.spots[0].position.z,
+          t.spot_count);
+    }
+  }
+  std::printf(
+      "splint: %zu triangles, %.3f mm^3, closed, manifold, no self-intersection; "
+      "printable on %s (%s%s)\n",
+      splint_.triangles.size(), report.print.mesh.volume, report.printer,
+      report.print.fits ? "fits the tray" : "fits turned 90 degrees",
+      report.placed_on_tray ? ", placed on the tray" : "");
+  std::printf("wrote %s (sha256 %s) and %s\n", splint_path_.c_str(), splint_hash_.c_str(),
+              report_path_.c_str());
+  std::printf("time: read %.3f s, design %.3f s, total %.3f s; peak arena %llu bytes\n",
+              t_read_ - run_.start, t_design_ - t_read_, t_end_ - run_.start,
+              static_cast<unsigned long long>(run_.peak_arena()));
+}
+
+}  // namespace
+
+int run_design(const Command& command, int argc, char** argv) {
+  DesignArgs a;
+  CommandLine line(command, &a.common, design_options(&a));
+  const int early = line.parse(argc, argv);
+  if (early >= 0) return early;
+  if (a.common.positional.size() != 1) return line.usage_error("design takes one case file");
+  if (a.output == nullptr) return line.usage_error("design needs -o OUTDIR");
+  const char* case_path = a.common.positional[0];
+  std::vector<uint8_t> case_bytes;
+  const Status s = read_whole_input(
+      case_path, a.max_input_bytes != 0 ? a.max_input_bytes : cli::kMaxCaseBytes, &case_bytes);
+  if (!s.is_ok()) return rejected(a.common, command.name, s, nullptr);
+  const char* cap_source = choose_memory_cap(case_bytes, case_path, &a.common);
+  Run run(command, a.common);
+  if (!run.has_memory()) return run.no_memory();
+  ::mkdir(a.output, 0777);  // an existing folder is fine; a failure shows when writing
+  Design design(run, a, case_bytes, cap_source);
+  return design.run();
+}
+
+}  // namespace tool
+}  // namespace splintcore

@@ -1,0 +1,141 @@
+#include "files.h"
+
+namespace splintcore {
+namespace tool {
+
+Status InputFile::open(const char* path, uint64_t max_bytes) {
+  path_ = path;
+  max_bytes_ = max_bytes;
+  count_ = 0;
+  over_limit_ = false;
+  SPLINTCORE_RETURN_IF_ERROR(file_.open(path));
+  inner_ = file_.source();
+  if (inner_.size != kUnknownSize && inner_.size > max_bytes) {
+    file_.close();
+    return limit_status(inner_.size);
+  }
+  return Status::ok();
+}
+
+Status InputFile::limit_status(uint64_t size) const {
+  Status s = size != kUnknownSize
+                 ? make_error(StatusCode::kLimitExceeded, "file is ", size, " bytes,")
+                 : make_error(StatusCode::kLimitExceeded, "file is");
+  return s.append(" over the limit of ")
+      .append_u64(max_bytes_)
+      .append(" bytes (--max-input-bytes raises it)")
+      .in_file(path_.c_str());
+}
+
+int64_t InputFile::read(void* user, uint8_t* buffer, size_t capacity) {
+  InputFile* self = static_cast<InputFile*>(user);
+  const int64_t n = self->inner_.read(self->inner_.user, buffer, capacity);
+  if (n <= 0) return n;
+  if (static_cast<uint64_t>(n) > self->max_bytes_ - self->count_) {  // count_ <= max_bytes_
+    self->over_limit_ = true;
+    return -1;
+  }
+  self->count_ += static_cast<uint64_t>(n);
+  if (self->sha_ != nullptr) self->sha_->update(buffer, static_cast<size_t>(n));
+  return n;
+}
+
+ByteSource InputFile::source() {
+  ByteSource s = inner_;
+  s.read = &InputFile::read;
+  s.user = this;
+  return s;
+}
+
+Status InputFile::read_all(std::vector<uint8_t>* out) {
+  out->clear();
+  if (inner_.size != kUnknownSize) out->reserve(static_cast<size_t>(inner_.size));
+  std::vector<uint8_t> buffer(size_t{1} << 16);
+  int64_t n = 0;
+  while ((n = read(this, buffer.data(), buffer.size())) > 0) {
+    out->insert(out->end(), buffer.data(), buffer.data() + n);
+  }
+  if (n < 0) {
+    out->clear();
+    if (over_limit_) return limit_status(kUnknownSize);
+    return make_error(StatusCode::kIoError, "read failed").in_file(path_.c_str());
+  }
+  return Status::ok();
+}
+
+Status InputFile::read_rest() {
+  uint8_t buffer[4096];
+  int64_t n = 0;
+  while ((n = read(this, buffer, sizeof(buffer))) > 0) {
+  }
+  if (n == 0) return Status::ok();
+  if (over_limit_) return limit_status(kUnknownSize);
+  return make_error(StatusCode::kIoError, "read failed").in_file(path_.c_str());
+}
+
+Status read_mesh_file(const Context& ctx, const char* path, uint64_t max_bytes, bool hash,
+                      Mesh* mesh, MeshFileInfo* info) {
+  InputFile file;
+  SPLINTCORE_RETURN_IF_ERROR(file.open(path, max_bytes));
+  Sha256 sha;
+  if (hash) file.hash_into(&sha);
+  MeshReadOptions options;
+  options.weld = true;
+  MeshReadInfo read;
+  Status s = read_mesh(ctx, file.source(), options, mesh, &read);
+  if (s.is_ok() && hash) s = file.read_rest();
+  if (file.went_over_limit()) return file.limit_status(kUnknownSize);
+  SPLINTCORE_RETURN_IF_ERROR(s);
+  if (info != nullptr) {
+    info->format = read.format;
+    info->triangles = read.triangles;
+    info->bytes = read.bytes;
+    if (hash) {
+      uint8_t digest[32];
+      sha.finish(digest);
+      char hex[65];
+      Sha256::to_hex(digest, hex);
+      info->sha256 = hex;
+    }
+  }
+  return Status::ok();
+}
+
+Status read_whole_input(const char* path, uint64_t max_bytes, std::vector<uint8_t>* out) {
+  out->clear();
+  InputFile file;
+  SPLINTCORE_RETURN_IF_ERROR(file.open(path, max_bytes));
+  return file.read_all(out);
+}
+
+const char* encoding_name(MeshFormat format) {
+  const bool text = format == MeshFormat::kStlAscii || format == MeshFormat::kPlyAscii ||
+                    format == MeshFormat::kObj;
+  return text ? "ascii" : "binary";
+}
+
+Status write_mesh_atomically(const Context& ctx, const Mesh& mesh, const char* path, bool ascii) {
+  AtomicFile out;
+  SPLINTCORE_RETURN_IF_ERROR(out.open(path));
+  StlWriteOptions wo;
+  wo.format = ascii ? StlFormat::kAscii : StlFormat::kBinary;
+  SPLINTCORE_RETURN_IF_ERROR(write_stl(ctx, mesh, out.sink(), wo));  // ~AtomicFile cleans up
+  return out.commit();
+}
+
+Status write_bytes_atomically(const std::string& path, const void* data, size_t size) {
+  AtomicFile file;
+  SPLINTCORE_RETURN_IF_ERROR(file.open(path.c_str()));
+  ByteSink sink = file.sink();
+  if (!sink.write(sink.user, static_cast<const uint8_t*>(data), size)) {
+    return Status::error(StatusCode::kIoError, "cannot write").in_file(path.c_str());
+  }
+  return file.commit();
+}
+
+Status write_bytes_atomically(const std::string& path, const std::string& bytes) {
+  return write_bytes_atomically(path, bytes.data(), bytes.size());
+}
+
+}  // namespace tool
+}  // namespace splintcore

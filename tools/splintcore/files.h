@@ -1,0 +1,84 @@
+// The splintcore program's files (issue 27): one way to read an input file, one way to write an
+// output file.
+#ifndef SPLINTCORE_TOOLS_SPLINTCORE_FILES_H
+#define SPLINTCORE_TOOLS_SPLINTCORE_FILES_H
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "splintcore/core.h"
+#include "splintcore/io.h"
+#include "splintcore/mesh.h"
+#include "splintcore/platform.h"
+
+namespace splintcore {
+namespace tool {
+
+constexpr uint64_t kNoInputLimit = UINT64_MAX;
+
+// An input file, opened through the library's FileSource. Every command reads its input files
+// through it (meshes stream from source() into the library's read_mesh, case files are read
+// whole), so a missing, unreadable or oversized file gets the same message everywhere. A
+// regular file larger than `max_bytes` is refused before anything is read; a pipe or device
+// is counted as it is read.
+class InputFile {
+ public:
+  Status open(const char* path, uint64_t max_bytes = kNoInputLimit);
+  // Every byte read through source() (or read by read_rest) also goes to `sha`.
+  void hash_into(Sha256* sha) { sha_ = sha; }
+  // The file as a ByteSource (its name: the path).
+  ByteSource source();
+  // Reads the rest of the file into `out` (replaced).
+  Status read_all(std::vector<uint8_t>* out);
+  // Reads what a reader left unread (bytes after a binary STL's triangles), for the hash.
+  Status read_rest();
+  // A read through source() that failed because the file grew past the limit: the status to
+  // report instead of the reader's "read failed".
+  bool went_over_limit() const { return over_limit_; }
+  Status limit_status(uint64_t size) const;
+
+ private:
+  static int64_t read(void* user, uint8_t* buffer, size_t capacity);
+
+  FileSource file_;
+  ByteSource inner_;
+  std::string path_;
+  uint64_t max_bytes_ = kNoInputLimit;
+  uint64_t count_ = 0;
+  Sha256* sha_ = nullptr;
+  bool over_limit_ = false;
+};
+
+// What reading a mesh file found.
+struct MeshFileInfo {
+  MeshFormat format = MeshFormat::kStlBinary;
+  uint64_t triangles = 0;  // in the file
+  uint64_t bytes = 0;      // read by the reader
+  std::string sha256;      // of the whole file, when asked for
+};
+
+// Reads a mesh file (STL binary or ASCII, PLY, OBJ: by content, then extension) into a mesh
+// welded exactly (read_mesh with weld: PLY and OBJ meshes hold the same vertices as their STL
+// would). `info` may be null; with `hash`, info->sha256 is the file's SHA-256.
+Status read_mesh_file(const Context& ctx, const char* path, uint64_t max_bytes, bool hash,
+                      Mesh* mesh, MeshFileInfo* info);
+
+// Reads a whole file (a case) into `out`.
+Status read_whole_input(const char* path, uint64_t max_bytes, std::vector<uint8_t>* out);
+
+// "ascii" for the text formats (STL ASCII, PLY ASCII, OBJ), else "binary".
+const char* encoding_name(MeshFormat format);
+
+// Writes a mesh as STL through the streaming writer into a temporary file renamed over `path`
+// only when everything succeeded.
+Status write_mesh_atomically(const Context& ctx, const Mesh& mesh, const char* path, bool ascii);
+
+// Writes bytes the same way.
+Status write_bytes_atomically(const std::string& path, const void* data, size_t size);
+Status write_bytes_atomically(const std::string& path, const std::string& bytes);
+
+}  // namespace tool
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_TOOLS_SPLINTCORE_FILES_H

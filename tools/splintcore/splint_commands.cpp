@@ -1,0 +1,405 @@
+// The commands that build a splint step by step: base, boolean, and the synthetic jaws they are
+// tried on (phantom).
+#include <string>
+#include <vector>
+
+#include "../common/phantom.h"
+#include "command.h"
+#include "files.h"
+#include "splintcore/boolean.h"
+#include "splintcore/design.h"
+
+namespace splintcore {
+namespace tool {
+
+namespace {
+
+// ---- base -------------------------------------------------------------------------------------
+
+struct BaseArgs {
+  CommonArgs common;
+  const char* output = nullptr;
+  bool ascii = false;
+  uint64_t max_input_bytes = cli::kMaxCaseBytes;
+};
+
+// `base`'s options, in the order its --help lists them.
+std::vector<OptionSpec> base_options(BaseArgs* a) {
+  return {
+      output_option("BASE.stl", &a->output, "the STL to write"),
+      flag("--ascii", &a->ascii, "write ASCII STL (default binary)"),
+      size("--max-input-bytes", "SIZE", &a->max_input_bytes,
+           "refuse a larger case file (default 16M)",
+           "--max-input-bytes needs a size such as 16M, 2G or 1048576"),
+  };
+}
+
+struct BaseResult {
+  BaseReport report;
+  double t_parse = 0, t_build = 0, t_end = 0;
+};
+
+void print_base_report(const Run& run, const BaseArgs& a, const CaseFile& c, const Mesh& base,
+                       const BaseResult& r) {
+  const BaseReport& report = r.report;
+  const double t0 = run.start;
+  if (a.common.json) {
+    JsonObject j;
+    j.add("command", "base");
+    j.add("case", a.common.positional[0]);
+    j.add("case_id", c.case_id);
+    j.add("output", a.output);
+    j.add_status(Status::ok());
+    j.add("upper_picks", static_cast<uint64_t>(c.upper.size()));
+    j.add("lower_picks", static_cast<uint64_t>(c.lower.size()));
+    j.add("sections", report.sections);
+    j.add("points_per_section", report.points_per_section);
+    j.add("vertices", static_cast<uint64_t>(base.vertices.size()));
+    j.add("triangles", static_cast<uint64_t>(base.triangles.size()));
+    j.add("volume_mm3", report.volume);
+    j.add("self_intersection_candidates", report.self_intersection_candidates);
+    j.add("parse_s", r.t_parse - t0);
+    j.add("build_s", r.t_build - r.t_parse);
+    j.add("time_s", r.t_end - t0);
+    j.add("peak_arena_bytes", run.peak_arena());
+    print_json(j);
+    return;
+  }
+  std::printf("case: %s (%s), %zu upper and %zu lower picks\n", a.common.positional[0], c.case_id,
+              c.upper.size(), c.lower.size());
+  std::printf("base: %u sections x %u points: %zu vertices, %zu triangles, %.3f mm^3\n",
+              report.sections, report.points_per_section, base.vertices.size(),
+              base.triangles.size(), report.volume);
+  std::printf(
+      "checked: closed, edge-manifold, outward, no self-intersection (%llu candidate "
+      "pairs tested)\n",
+      static_cast<unsigned long long>(report.self_intersection_candidates));
+  std::printf("output: %s (%s STL)\n", a.output, a.ascii ? "ascii" : "binary");
+  std::printf("time: build %.4f s, total %.4f s, peak arena: %llu bytes\n", r.t_build - r.t_parse,
+              r.t_end - t0, static_cast<unsigned long long>(run.peak_arena()));
+}
+
+// ---- boolean ----------------------------------------------------------------------------------
+
+struct BooleanArgs {
+  CommonArgs common;
+  int op = -1;  // kBooleanOps
+  const char* output = nullptr;
+  std::vector<Vec3> translate_b;
+  bool ascii = false;
+  bool self_check = true;
+};
+
+constexpr BooleanOp kBooleanOps[] = {BooleanOp::kDifference, BooleanOp::kUnion,
+                                     BooleanOp::kIntersection};
+
+// `boolean`'s options, in the order its --help lists them.
+std::vector<OptionSpec> boolean_options(BooleanArgs* a) {
+  const char* one = "give one of --difference, --union, --intersection";
+  return {
+      one_of("--difference", &a->op, 0, "A minus B", one),
+      one_of("--union", &a->op, 1, "A or B", one),
+      one_of("--intersection", &a->op, 2, "A and B", one),
+      output_option("OUT.stl", &a->output, "the STL to write"),
+      point_list("--translate-b", "X,Y,Z", &a->translate_b,
+                 "move B, mm: once for every B file, or once per B file",
+                 "--translate-b needs X,Y,Z (three finite numbers, mm)"),
+      flag("--ascii", &a->ascii, "write ASCII STL (default binary)"),
+      clear_flag("--no-self-check", &a->self_check, "skip the self-intersection check"),
+  };
+}
+
+// B: the shells of every file after A, in order, in one mesh, each file moved by its
+// --translate-b.
+Status read_b(Run& run, const BooleanArgs& a, Mesh* b) {
+  Arena& arena = run.arena;
+  const std::vector<const char*>& files = a.common.positional;
+  for (size_t f = 1; f < files.size(); ++f) {
+    const Arena::Marker mark = arena.mark();
+    Mesh part(&arena);
+    SPLINTCORE_RETURN_IF_ERROR(
+        read_mesh_file(run.ctx, files[f], kNoInputLimit, false, &part, nullptr));
+    if (b->vertices.size() + part.vertices.size() >= (size_t{1} << 31)) {
+      return Status::error(StatusCode::kLimitExceeded, "B is too large").in_file(files[f]);
+    }
+    const std::vector<Vec3>& moves = a.translate_b;
+    const Vec3 d = moves.empty() ? Vec3{} : moves[moves.size() == 1 ? 0 : f - 1];
+    // A moved jaw is rounded to float32, as its own STL would hold it: the Boolean keeps B's
+    // vertices bit for bit, so they must be what the output file can store.
+    for (Vec3& v : part.vertices) {
+      v = v + d;
+      if (!round_to_float32(&v)) {
+        return Status::error(StatusCode::kLimitExceeded,
+                             "a translated vertex is beyond float32 range")
+            .in_file(files[f]);
+      }
+    }
+    if (f == 1) {
+      *b = part;  // the first file's arrays stay where they are
+      continue;
+    }
+    // Later files: copy after B's arrays (which then grow in place or move up).
+    const uint32_t off = static_cast<uint32_t>(b->vertices.size());
+    std::vector<Vec3> vs(part.vertices.begin(), part.vertices.end());
+    std::vector<Triangle> ts(part.triangles.begin(), part.triangles.end());
+    arena.rewind(mark);
+    for (const Vec3& v : vs) {
+      if (!b->vertices.push_back(v)) return arena.exhausted_status();
+    }
+    for (const Triangle& t : ts) {
+      if (!b->triangles.push_back(Triangle{{t.v[0] + off, t.v[1] + off, t.v[2] + off}})) {
+        return arena.exhausted_status();
+      }
+    }
+  }
+  return Status::ok();
+}
+
+struct BooleanResult {
+  uint64_t a_triangles = 0, b_triangles = 0;
+  BooleanStats st;
+  MeshReport report;
+  double t_read = 0, t_op = 0, t_check = 0, t_end = 0;
+};
+
+void print_boolean_json(const Run& run, const BooleanArgs& a, const BooleanResult& r) {
+  const BooleanStats& st = r.st;
+  const double t0 = run.start;
+  JsonObject j;
+  j.add("command", "boolean");
+  j.add("operation", boolean_op_name(kBooleanOps[a.op]));
+  j.add("a", a.common.positional[0]);
+  j.add("output", a.output);
+  j.add_status(Status::ok());
+  j.add("a_triangles", r.a_triangles);
+  j.add("b_triangles", r.b_triangles);
+  j.add("near_b_triangles", st.near_b_triangles);
+  j.add("candidate_pairs", st.candidate_pairs);
+  j.add("intersecting_pairs", st.intersecting_pairs);
+  j.add("degenerate_pairs", st.degenerate_pairs);
+  j.add("intersection_points", st.intersection_points);
+  j.add("cut_triangles_a", st.cut_triangles_a);
+  j.add("cut_triangles_b", st.cut_triangles_b);
+  j.add("winding_queries", st.winding_queries);
+  j.add("attempts", static_cast<uint64_t>(st.attempts));
+  j.add("nudge_mm", st.nudge);
+  j.add("b_shells", static_cast<uint64_t>(st.shells));
+  j.add("shell_groups", static_cast<uint64_t>(st.shell_groups));
+  j.add("passes", static_cast<uint64_t>(st.passes));
+  j.add("self_intersection_checked", a.self_check);
+  add_mesh_report(&j, r.report);
+  j.add("valid_solid", r.report.is_valid_solid());
+  j.add("read_s", r.t_read - t0);
+  j.add("boolean_s", r.t_op - r.t_read);
+  j.add("self_check_s", r.t_check - r.t_op);
+  j.add("time_s", r.t_end - t0);
+  j.add("peak_arena_bytes", run.peak_arena());
+  print_json(j);
+}
+
+void print_boolean_text(const Run& run, const BooleanArgs& a, const BooleanResult& r) {
+  const BooleanStats& st = r.st;
+  const double t0 = run.start;
+  std::printf("A: %s, %llu triangles; B: %zu file(s), %llu triangles (%llu near A)\n",
+              a.common.positional[0], static_cast<unsigned long long>(r.a_triangles),
+              a.common.positional.size() - 1, static_cast<unsigned long long>(r.b_triangles),
+              static_cast<unsigned long long>(st.near_b_triangles));
+  std::printf(
+      "%s: %llu candidate pairs, %llu crossing, %llu touching exactly, %llu "
+      "intersection points, %llu + %llu triangles cut, %u attempt(s)\n",
+      boolean_op_name(kBooleanOps[a.op]), static_cast<unsigned long long>(st.candidate_pairs),
+      static_cast<unsigned long long>(st.intersecting_pairs),
+      static_cast<unsigned long long>(st.degenerate_pairs),
+      static_cast<unsigned long long>(st.intersection_points),
+      static_cast<unsigned long long>(st.cut_triangles_a),
+      static_cast<unsigned long long>(st.cut_triangles_b), st.attempts);
+  if (st.attempts > 1) {
+    std::printf(
+        "A was nudged by (%.3g, %.3g, %.3g) mm out of a degenerate or float32-fragile "
+        "configuration\n",
+        st.nudge.x, st.nudge.y, st.nudge.z);
+  }
+  print_mesh_report(r.report);
+  std::printf("self-intersection: %s\n", a.self_check ? "none (exact check)" : "not checked");
+  std::printf("output: %s (%s STL)\n", a.output, a.ascii ? "ascii" : "binary");
+  std::printf(
+      "time: read %.4f s, boolean %.4f s, check %.4f s, total %.4f s; peak arena %llu "
+      "bytes\n",
+      r.t_read - t0, r.t_op - r.t_read, r.t_check - r.t_op, r.t_end - t0,
+      static_cast<unsigned long long>(run.peak_arena()));
+}
+
+// The Boolean's result, checked for self-intersections as float32 unless --no-self-check.
+Status check_self_intersection(const Context& ctx, const Mesh& out) {
+  SelfIntersectionReport si;
+  SPLINTCORE_RETURN_IF_ERROR(find_self_intersections(ctx, out, 1, &si));
+  if (si.self_intersecting()) {
+    return make_error(StatusCode::kUnsupported,
+                      "the result self-intersects as float32: "
+                      "triangles ",
+                      si.first_a, " and ", si.first_b, "; nothing written");
+  }
+  return Status::ok();
+}
+
+// ---- phantom ----------------------------------------------------------------------------------
+
+struct PhantomArgs {
+  CommonArgs common;
+  uint64_t triangles = 0;
+  const char* output = nullptr;
+};
+
+// `phantom`'s options, in the order its --help lists them.
+std::vector<OptionSpec> phantom_options(PhantomArgs* a) {
+  return {
+      count("--triangles", "N", &a->triangles, 0, UINT64_MAX, "triangles per jaw, 2000..16000000",
+            "--triangles needs a count"),
+      output_option("DIR", &a->output, "the folder to write into"),
+  };
+}
+
+// Writes DIR/NAME.stl for one jaw; `row` gets its JSON object or its summary is printed.
+Status write_phantom_jaw(const PhantomArgs& a, int index, std::string* row) {
+  const char* names[2] = {"maxilla", "mandible"};
+  phantom::JawMesh jaw;
+  phantom::PhantomOptions po;
+  po.target_triangles = a.triangles;
+  const phantom::Jaw which = index == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible;
+  SPLINTCORE_RETURN_IF_ERROR(phantom::make_jaw(which, po, &jaw));
+  std::vector<uint8_t> bytes;
+  SPLINTCORE_RETURN_IF_ERROR(phantom::stl_bytes(jaw, &bytes));
+  const std::string path = std::string(a.output) + "/" + names[index] + ".stl";
+  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(path, bytes.data(), bytes.size()));
+  const std::string hex = hex_sha256(bytes.data(), bytes.size());
+  if (a.common.json) {
+    JsonObject r;
+    r.add("jaw", names[index]);
+    r.add("file", path.c_str());
+    r.add("triangles", static_cast<uint64_t>(jaw.triangles.size()));
+    r.add("vertices", static_cast<uint64_t>(jaw.vertices.size()));
+    r.add("sha256", hex);
+    *row = r.str();
+  } else {
+    std::printf("%s: %s, %zu triangles, %zu vertices, sha256 %s\n", names[index], path.c_str(),
+                jaw.triangles.size(), jaw.vertices.size(), hex.c_str());
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+int run_base(const Command& command, int argc, char** argv) {
+  BaseArgs a;
+  CommandLine line(command, &a.common, base_options(&a));
+  const int early = line.parse(argc, argv);
+  if (early >= 0) return early;
+  if (a.common.positional.size() != 1) return line.usage_error("base takes one case file");
+  if (a.output == nullptr) return line.usage_error("base needs -o BASE.stl");
+  const char* case_path = a.common.positional[0];
+  Run run(command, a.common);
+  if (!run.has_memory()) return run.no_memory();
+
+  std::vector<uint8_t> text;
+  Status s = read_whole_input(case_path, a.max_input_bytes, &text);
+  if (!s.is_ok()) return run.reject(s);
+  CaseFile c;
+  s = parse_case(run.ctx, reinterpret_cast<const char*>(text.data()), text.size(), case_path, &c);
+  if (!s.is_ok()) return run.reject(s);
+  BaseResult r;
+  r.t_parse = monotonic_seconds();
+  Mesh base(&run.arena);
+  s = build_case_base(run.ctx, c, &base, &r.report);
+  if (!s.is_ok()) return run.reject(s.in_file(case_path));
+  r.t_build = monotonic_seconds();
+  s = write_mesh_atomically(run.ctx, base, a.output, a.ascii);
+  if (!s.is_ok()) return run.reject(s);
+  r.t_end = monotonic_seconds();
+  print_base_report(run, a, c, base, r);
+  return kExitOk;
+}
+
+int run_boolean(const Command& command, int argc, char** argv) {
+  BooleanArgs a;
+  CommandLine line(command, &a.common, boolean_options(&a));
+  const int early = line.parse(argc, argv);
+  if (early >= 0) return early;
+  const size_t files = a.common.positional.size();
+  if (a.op < 0) return line.usage_error("boolean needs --difference, --union or --intersection");
+  if (files < 2) return line.usage_error("boolean takes A.stl and at least one B.stl");
+  if (a.output == nullptr) return line.usage_error("boolean needs -o OUT.stl");
+  if (a.translate_b.size() > 1 && a.translate_b.size() != files - 1) {
+    return line.usage_error("--translate-b: give it once, or once per B file");
+  }
+  Run run(command, a.common);
+  if (!run.has_memory()) return run.no_memory();
+
+  Mesh ma(&run.arena), mb(&run.arena);
+  Status s = read_mesh_file(run.ctx, a.common.positional[0], kNoInputLimit, false, &ma, nullptr);
+  if (s.is_ok()) s = read_b(run, a, &mb);
+  if (!s.is_ok()) return run.reject(s);
+  BooleanResult r;
+  r.t_read = monotonic_seconds();
+  BooleanOptions bo;
+  bo.op = kBooleanOps[a.op];
+  bo.check_self_intersection = false;  // timed separately below
+  Mesh out;
+  s = mesh_boolean(run.ctx, ma, mb, bo, &out, &r.st);
+  if (!s.is_ok()) return run.reject(s);
+  r.t_op = monotonic_seconds();
+  if (a.self_check) s = check_self_intersection(run.ctx, out);
+  if (!s.is_ok()) return run.reject(s);
+  r.t_check = monotonic_seconds();
+  s = check_mesh(run.ctx, out, &r.report);
+  if (s.is_ok()) s = write_mesh_atomically(run.ctx, out, a.output, a.ascii);
+  if (!s.is_ok()) return run.reject(s);
+  r.t_end = monotonic_seconds();
+  r.a_triangles = ma.triangles.size();
+  r.b_triangles = mb.triangles.size();
+  if (a.common.json) {
+    print_boolean_json(run, a, r);
+  } else {
+    print_boolean_text(run, a, r);
+  }
+  return kExitOk;
+}
+
+int run_phantom(const Command& command, int argc, char** argv) {
+  PhantomArgs a;
+  CommandLine line(command, &a.common, phantom_options(&a));
+  const int early = line.parse(argc, argv);
+  if (early >= 0) return early;
+  if (!a.common.positional.empty()) return line.usage_error("phantom takes no input file");
+  if (a.output == nullptr) return line.usage_error("phantom needs -o DIR");
+  if (a.triangles < phantom::kMinTriangles || a.triangles > phantom::kMaxTriangles) {
+    return line.usage_error("--triangles must be 2000..16000000");
+  }
+  const double t0 = monotonic_seconds();
+  std::string rows;
+  for (int j = 0; j < 2; ++j) {
+    std::string row;
+    const Status s = write_phantom_jaw(a, j, &row);
+    if (!s.is_ok()) return rejected(a.common, command.name, s, nullptr);
+    if (a.common.json) rows += (j > 0 ? "," : "") + row;
+  }
+  // The case that goes with them (the paper-scale picks): design it with
+  // `splintcore design DIR/case.json -o OUT`.
+  const std::string text = phantom::case_json(("phantom-" + std::to_string(a.triangles)).c_str());
+  const std::string path = std::string(a.output) + "/case.json";
+  const Status s = write_bytes_atomically(path, text);
+  if (!s.is_ok()) return rejected(a.common, command.name, s, nullptr);
+  if (!a.common.json) {
+    std::printf("case: %s\n", path.c_str());
+    return kExitOk;
+  }
+  JsonObject j;
+  j.add("command", "phantom");
+  j.add_status(Status::ok());
+  j.add_raw("jaws", "[" + rows + "]");
+  j.add("time_s", monotonic_seconds() - t0);
+  print_json(j);
+  return kExitOk;
+}
+
+}  // namespace tool
+}  // namespace splintcore
