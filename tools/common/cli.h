@@ -50,10 +50,10 @@ std::string json_number(double value);
 // A sink that appends to `out` (tools only: it grows a std::string). Not seekable.
 ByteSink string_sink(std::string* out);
 
-// Caps on the files the tools read whole into the heap (SECURITY.md, "Input limits"). A case
-// file is parsed whole (parse_case takes at most 16 MiB anyway); a mesh file is read whole only
-// where its bytes are hashed for a report (design's jaws); elsewhere meshes stream through the
-// arena. `--max-input-bytes SIZE` (base, design) replaces both caps.
+// Caps on input files (SECURITY.md, "Input limits"). A case file is read whole and parsed
+// (parse_case takes at most 16 MiB anyway); design's jaws stream through the reader, hashed on
+// the way, and are refused before reading when over kMaxMeshBytes (splintcore-bench reads whole
+// files under the same cap). `--max-input-bytes SIZE` (base, design) replaces both caps.
 constexpr uint64_t kMaxCaseBytes = uint64_t{16} << 20;  // 16 MiB
 constexpr uint64_t kMaxMeshBytes = uint64_t{2} << 30;   // 2 GiB
 
