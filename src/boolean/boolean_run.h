@@ -284,9 +284,23 @@ class BooleanRun {
   Status number_points();
   Status number_degenerate_points();
   Status check_points_apart();
+  // split.cpp: the records grouped by triangle, then each cut triangle split by the fast path
+  // (one segment edge to edge), by CutSplit (crossing segments only) or by ContactSplit
+  // (split_general: degenerate contacts too), each a struct with one method per stage.
+  struct CutSplit;
+  struct ContactSplit;
   Status split_triangles();
+  Status sort_records_by_triangle();
+  Status sort_contacts_by_triangle(KeyIndex** dorder);
+  Status split_single_crossing(uint32_t t, const uint32_t c[3], const Record& rc, bool* done);
+  Status split_cut(uint32_t t, const uint32_t c[3], const KeyIndex* recs, size_t nseg);
   Status split_general(uint32_t t, const KeyIndex* proper, size_t np, const KeyIndex* dk,
                        size_t nd);
+  // Where vertex id `id` lies: an input vertex, or an intersection point (ids from nva + nvb).
+  const Vec3& position(uint32_t id) const {
+    const uint32_t base = in_.nva + in_.nvb;
+    return id < base ? in_.vertex(id) : points_[id - base].p;
+  }
   int8_t side_state(uint32_t t, uint32_t r, const uint32_t* sheets, int nsheets) const;
   int8_t on_state(uint32_t t, uint32_t sheet) const;
   uint32_t canon(uint32_t v) const {
