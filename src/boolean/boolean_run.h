@@ -315,6 +315,7 @@ class BooleanRun {
   Status classify();
   Status assemble(Mesh* result);
   Status check_result(Mesh* result);
+  struct FloodSide;  // classify.cpp: one mesh's flood, one method per stage
   Status flood(bool side_a);
   Status degenerate(uint32_t ta, uint32_t tb) const;
   Status inconsistent_vertex(uint32_t v) const;
