@@ -281,6 +281,11 @@ class BooleanRun {
  private:
   Status find_hits();
   Status add_contact(uint32_t ta, uint32_t tb);
+  Status name_contact_point(const detail::ContactPoint& cp, const uint32_t ga[3],
+                            const uint32_t gb[3], uint32_t ta, uint32_t tb, DegPoint* name);
+  Status alias_b_vertex(uint32_t bv, uint32_t av);
+  Status record_contact(const detail::Contact& c, const DegPoint name[6], int i, int j,
+                        uint8_t kind, uint32_t ta, uint32_t tb);
   Status number_points();
   Status number_degenerate_points();
   Status check_points_apart();
