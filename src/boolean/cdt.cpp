@@ -1159,11 +1159,11 @@ Status reserve_output(uint64_t expected, ArenaArray<CdtTriangle>* out,
   return Status::ok();
 }
 
-// The temporaries (all sized up front from the point count): `*pts` the points and room for
-// the super-triangle's corners (w->p), and `*flags`, n bytes: the boundary's points marked 1,
-// each checked to appear once.
+// The temporaries (all sized up front from the point count): the points and after them the
+// super-triangle's corners (w->p; see step 2), and `*flags`, n bytes: the boundary's points
+// marked 1, each checked to appear once.
 Status take_temporaries(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> segments,
-                        uint32_t boundary_count, Work* w, CdtPoint** pts, uint8_t** flags) {
+                        uint32_t boundary_count, Work* w, uint8_t** flags) {
   const uint32_t n = static_cast<uint32_t>(points.size());
   // n <= kMaxPoints, so every count (at most 3 * (2n + 1)) fits a 32-bit size_t.
   static_assert(3 * (2 * kMaxPoints + 1) <= UINT32_MAX, "CDT counts must fit 32 bits");
@@ -1185,9 +1185,12 @@ Status take_temporaries(Arena& arena, Span<const CdtPoint> points, Span<const Cd
     return arena.exhausted_status();
   }
   w->p = p;
-  *pts = p;
   w->queue_cap = static_cast<uint32_t>(z.edges);
   std::memcpy(static_cast<void*>(p), points.data(), points.size() * sizeof(CdtPoint));
+  const double r = frame_scale(points);
+  p[n] = CdtPoint{-4.0 * r, -2.0 * r};
+  p[n + 1] = CdtPoint{4.0 * r, -2.0 * r};
+  p[n + 2] = CdtPoint{0.0, 4.0 * r};
   std::memset(w->queued, 0, z.tris);
   std::memset(f, 0, n);
   *flags = f;
@@ -1203,17 +1206,13 @@ Status take_temporaries(Arena& arena, Span<const CdtPoint> points, Span<const Cd
   return Status::ok();
 }
 
-// 2. The super-triangle (its corners into pts[n..n + 2]), then the points: BRIO order from
+// 2. The super-triangle (its corners are points n..n + 2), then the points: BRIO order from
 // kBrioMin points on, otherwise the boundary in order, then the others (those not marked in
 // `flags`).
-Status insert_points(Arena& arena, Work& w, CdtPoint* pts, Span<const CdtPoint> points,
+Status insert_points(Arena& arena, Work& w, Span<const CdtPoint> points,
                      Span<const CdtSegment> segments, uint32_t boundary_count,
                      const uint8_t* flags) {
   const uint32_t n = w.n;
-  const double r = frame_scale(points);
-  pts[n] = CdtPoint{-4.0 * r, -2.0 * r};
-  pts[n + 1] = CdtPoint{4.0 * r, -2.0 * r};
-  pts[n + 2] = CdtPoint{0.0, 4.0 * r};
   w.tri_count = 1;
   put(w, 0, n, n + 1, n + 2, kNone, kNone, kNone, kNone, kNone, kNone);
   uint32_t last = 0;
@@ -1355,11 +1354,9 @@ Status general_cdt(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegm
                    ArenaArray<CdtAdjacency>* adjacency) {
   ArenaScope scope(arena);
   Work w;
-  CdtPoint* pts = nullptr;
   uint8_t* flags = nullptr;
-  SPLINTCORE_RETURN_IF_ERROR(
-      take_temporaries(arena, points, segments, boundary_count, &w, &pts, &flags));
-  SPLINTCORE_RETURN_IF_ERROR(insert_points(arena, w, pts, points, segments, boundary_count, flags));
+  SPLINTCORE_RETURN_IF_ERROR(take_temporaries(arena, points, segments, boundary_count, &w, &flags));
+  SPLINTCORE_RETURN_IF_ERROR(insert_points(arena, w, points, segments, boundary_count, flags));
   SPLINTCORE_ASSERT(w.tri_count == sizes_for(w.n).tris);
   // 3. The segments, boundary first (so boundary edges carry boundary ids).
   for (uint32_t s = 0; s < static_cast<uint32_t>(segments.size()); ++s) {

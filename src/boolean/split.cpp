@@ -97,10 +97,10 @@ bool joined_states(UnionFind& uf, const int8_t* vote, uint32_t k, int8_t* state)
 // Gives input vertex v (a corner of a cut triangle) state sj; false when it has the other one
 // (all pieces at a corner agree: no segment passes through an input vertex).
 inline bool set_corner_state(int8_t* vstate, uint32_t v, int8_t sj) {
-  int8_t& vs = vstate[v];
+  const int8_t vs = vstate[v];
   if (vs == kVertexOn) return true;  // on the other surface: no state to pass on
   if (vs != 0 && vs != sj) return false;
-  vs = sj;
+  vstate[v] = sj;
   return true;
 }
 
@@ -371,6 +371,7 @@ Status BooleanRun::ContactSplit::add_constraints() {
 // One contact line: `line`, its records (the same two ends, from each of its sheets).
 Status BooleanRun::ContactSplit::contact_line(const KeyIndex* line, size_t count, Cons* cn) const {
   using detail::Loc;
+  SPLINTCORE_ASSERT(count > 0);
   uint32_t sheets[2];
   int nsheets = 0;
   const DegRecord* trans = nullptr;
