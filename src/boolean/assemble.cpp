@@ -292,16 +292,13 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
   // Attempt k > 0 runs with A translated by k * step * (1, 3, 7) (nudge_step: float32
   // vertices of A stay float32). B is never moved.
   const double step = nudge_step(a);
-  const Arena::Marker start = arena.mark();
+  ArenaScope scope(arena);  // on an error the arena is as it was
   // What a nudge can move A by, with its float32 rounding: the broad phase covers all attempts.
   const double reach = (options.max_nudges + 1.0) * step * 8.0;
   Broadphase bp;
   Status s = report_progress(ctx, "boolean: grid", 0, 1);
   if (s.is_ok()) s = build_broadphase(ctx, a, b, reach, options.float32_output, &bp);
-  if (!s.is_ok()) {
-    arena.rewind(start);
-    return s;
-  }
+  if (!s.is_ok()) return s;
   const Arena::Marker attempts_start = arena.mark();
   Mesh result;
   for (uint32_t attempt = 0; attempt <= options.max_nudges; ++attempt) {
@@ -347,7 +344,6 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
     if (s.code() != StatusCode::kUnsupported) break;
   }
   if (!s.is_ok()) {
-    arena.rewind(start);
     if (s.code() == StatusCode::kUnsupported && options.max_nudges > 0) {
       s.append(" (also with A moved by up to ");
       s.append_u64(options.max_nudges);
@@ -356,7 +352,8 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
     return s;
   }
   // The result down over the temporaries (its triangles were allocated before its vertices).
-  move_mesh_down(arena, start, result, out);
+  move_mesh_down(arena, scope.start(), result, out);
+  scope.commit();
   return Status::ok();
 }
 

@@ -262,27 +262,40 @@ bool regions_apart(const Mesh& b, const RegionTriangles& ri, const RegionTriangl
   return max_i + margin < min_j - margin;
 }
 
-// Do the surfaces of shells i and j meet (exactly; touching counts)? Only their triangles
-// whose boxes meet both shells' boxes can: j's are binned in a uniform grid over that region
-// (about two cells a triangle, power-of-two cells so every platform picks the same grid), and
-// each of i's looks at the cells its box covers. The answer (whether any pair meets) does not
-// depend on the grid.
-Status surfaces_meet(const Context& ctx, const Mesh& b, const Shells& sh, uint32_t i, uint32_t j,
-                     bool* meet) {
-  *meet = false;
-  Arena& arena = *ctx.arena;
-  ArenaScope scope(arena);
-  const Aabb region = box_intersection(sh.box[i], sh.box[j]);
-  RegionTriangles ri, rj;
-  SPLINTCORE_RETURN_IF_ERROR(triangles_in_region(arena, b, sh, i, region, &ri));
-  if (ri.n == 0) return Status::ok();
-  SPLINTCORE_RETURN_IF_ERROR(triangles_in_region(arena, b, sh, j, region, &rj));
-  if (rj.n == 0) return Status::ok();
-  if (regions_apart(b, ri, rj)) return Status::ok();
-  // The grid: about two cells a triangle of j (power-of-two cells, so every platform picks the
-  // same grid), at most 128 a side; coarser (doubling the cell) while j's triangles would take
-  // more than 16 cells each on average (a coarse shell against a fine one), down to one cell.
-  const Vec3 ext = region.extent();
+// A uniform grid over the overlap of two shells' boxes, for the triangles of one of them.
+struct RegionGrid {
+  Aabb region;
+  Vec3 ext;
+  double h = 1.0;
+  double inv_h = 1.0;
+  uint32_t dim[3] = {1, 1, 1};
+
+  void set_cells() {
+    for (int k = 0; k < 3; ++k) {
+      const double cells = ext[k] / h;
+      dim[k] = cells < 1.0 ? 1u : (cells >= 128.0 ? 128u : static_cast<uint32_t>(cells) + 1u);
+    }
+    inv_h = 1.0 / h;
+  }
+  void range(const Aabb& box, uint32_t lo[3], uint32_t hi[3]) const {
+    for (int k = 0; k < 3; ++k) {
+      const double l = (box.lo[k] - region.lo[k]) * inv_h, u = (box.hi[k] - region.lo[k]) * inv_h;
+      lo[k] = l <= 0.0 ? 0u : (l >= dim[k] - 1.0 ? dim[k] - 1 : static_cast<uint32_t>(l));
+      hi[k] = u <= 0.0 ? 0u : (u >= dim[k] - 1.0 ? dim[k] - 1 : static_cast<uint32_t>(u));
+    }
+  }
+  size_t cells() const { return size_t{dim[0]} * dim[1] * dim[2]; }
+};
+
+// The grid for rj's triangles: about two cells a triangle of j (power-of-two cells, so every
+// platform picks the same grid), at most 128 a side; coarser (doubling the cell) while j's
+// triangles would take more than 16 cells each on average (a coarse shell against a fine
+// one), down to one cell. *uses: the cells rj's boxes cover, summed.
+RegionGrid region_grid(const Aabb& region, const RegionTriangles& rj, uint64_t* uses) {
+  RegionGrid g;
+  g.region = region;
+  g.ext = region.extent();
+  const Vec3& ext = g.ext;
   const double volume = (ext.x + 1e-9) * (ext.y + 1e-9) * (ext.z + 1e-9);
   const double target = 2.0 * rj.n + 8.0;
   double h = 1.0;
@@ -291,35 +304,27 @@ Status surfaces_meet(const Context& ctx, const Mesh& b, const Shells& sh, uint32
   for (int k = 0; k < 3; ++k) {
     if (ext[k] / h > 128.0) h = ext[k] / 128.0;
   }
-  uint32_t dim[3];
-  double inv_h = 1.0;
-  auto set_grid = [&]() {
-    for (int k = 0; k < 3; ++k) {
-      const double cells = ext[k] / h;
-      dim[k] = cells < 1.0 ? 1u : (cells >= 128.0 ? 128u : static_cast<uint32_t>(cells) + 1u);
-    }
-    inv_h = 1.0 / h;
-  };
-  auto range = [&](const Aabb& box, uint32_t lo[3], uint32_t hi[3]) {
-    for (int k = 0; k < 3; ++k) {
-      const double l = (box.lo[k] - region.lo[k]) * inv_h, u = (box.hi[k] - region.lo[k]) * inv_h;
-      lo[k] = l <= 0.0 ? 0u : (l >= dim[k] - 1.0 ? dim[k] - 1 : static_cast<uint32_t>(l));
-      hi[k] = u <= 0.0 ? 0u : (u >= dim[k] - 1.0 ? dim[k] - 1 : static_cast<uint32_t>(u));
-    }
-  };
-  uint64_t uses = 0;
+  g.h = h;
   for (;;) {
-    set_grid();
-    uses = 0;
+    g.set_cells();
+    *uses = 0;
     for (uint32_t k = 0; k < rj.n; ++k) {
       uint32_t lo[3], hi[3];
-      range(rj.boxes[k], lo, hi);
-      uses += uint64_t{hi[0] - lo[0] + 1} * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
+      g.range(rj.boxes[k], lo, hi);
+      *uses += uint64_t{hi[0] - lo[0] + 1} * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
     }
-    if (uses <= 16 * uint64_t{rj.n} + 64 || (dim[0] == 1 && dim[1] == 1 && dim[2] == 1)) break;
-    h *= 2.0;
+    if (*uses <= 16 * uint64_t{rj.n} + 64 || (g.dim[0] == 1 && g.dim[1] == 1 && g.dim[2] == 1)) {
+      return g;
+    }
+    g.h *= 2.0;
   }
-  const size_t cells = size_t{dim[0]} * dim[1] * dim[2];
+}
+
+// rj's triangles binned in the grid's cells (two passes: count, then fill). After the fill,
+// start[c] is the end of cell c (and the start of cell c + 1). `seen`: rj.n entries, ~0u.
+Status bin_triangles(Arena& arena, const RegionGrid& g, const RegionTriangles& rj, uint64_t uses,
+                     uint32_t** start_out, uint32_t** items_out, uint32_t** seen_out) {
+  const size_t cells = g.cells();
   uint32_t* start = arena.allocate_array<uint32_t>(cells + 1);
   uint32_t* seen = arena.allocate_array<uint32_t>(rj.n);
   uint32_t* items = arena.allocate_array<uint32_t>(static_cast<size_t>(uses));
@@ -329,11 +334,11 @@ Status surfaces_meet(const Context& ctx, const Mesh& b, const Shells& sh, uint32
   for (int pass = 0; pass < 2; ++pass) {
     for (uint32_t k = 0; k < rj.n; ++k) {
       uint32_t lo[3], hi[3];
-      range(rj.boxes[k], lo, hi);
+      g.range(rj.boxes[k], lo, hi);
       for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
         for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
           for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
-            const size_t c = (size_t{z} * dim[1] + y) * dim[0] + x;
+            const size_t c = (size_t{z} * g.dim[1] + y) * g.dim[0] + x;
             if (pass == 0) {
               ++start[c + 1];
             } else {
@@ -347,38 +352,66 @@ Status surfaces_meet(const Context& ctx, const Mesh& b, const Shells& sh, uint32
       for (size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
     }
   }
+  *start_out = start;
+  *items_out = items;
+  *seen_out = seen;
+  return Status::ok();
+}
+
+// Does triangle ki of ri meet triangle kj of rj (exactly; touching counts)? A filter first
+// (only certain sides count): one triangle strictly on one side of the other's plane cannot
+// meet it.
+bool pair_meets(const Mesh& b, const RegionTriangles& ri, uint32_t ki, const RegionTriangles& rj,
+                uint32_t kj) {
   const Vec3* v = b.vertices.data();
-  // A filter first (only certain sides count): one triangle strictly on one side of the
-  // other's plane cannot meet it.
   auto apart = [&](const Triangle& p, const Triangle& q) {
     const PlaneFilter pl = plane_filter(v[p.v[0]], v[p.v[1]], v[p.v[2]]);
     const int s0 = filtered_side(pl, v[q.v[0]]);
     return (s0 == 1 || s0 == -1) && filtered_side(pl, v[q.v[1]]) == s0 &&
            filtered_side(pl, v[q.v[2]]) == s0;
   };
-  auto pair_meets = [&](uint32_t ki, uint32_t kj) {
-    if (!ri.boxes[ki].overlaps(rj.boxes[kj])) return false;
-    const Triangle& s = b.triangles[ri.ids[ki]];
-    const Triangle& t = b.triangles[rj.ids[kj]];
-    if (apart(s, t) || apart(t, s)) return false;
-    return triangles_intersect(v[s.v[0]], v[s.v[1]], v[s.v[2]], v[t.v[0]], v[t.v[1]], v[t.v[2]]);
-  };
-  // After the fill, start[c] is the end of cell c (and the start of cell c + 1).
+  if (!ri.boxes[ki].overlaps(rj.boxes[kj])) return false;
+  const Triangle& s = b.triangles[ri.ids[ki]];
+  const Triangle& t = b.triangles[rj.ids[kj]];
+  if (apart(s, t) || apart(t, s)) return false;
+  return triangles_intersect(v[s.v[0]], v[s.v[1]], v[s.v[2]], v[t.v[0]], v[t.v[1]], v[t.v[2]]);
+}
+
+// Do the surfaces of shells i and j meet (exactly; touching counts)? Only their triangles
+// whose boxes meet both shells' boxes can: j's are binned in a uniform grid over that region
+// (region_grid), and each of i's looks at the cells its box covers. The answer (whether any
+// pair meets) does not depend on the grid.
+Status surfaces_meet(const Context& ctx, const Mesh& b, const Shells& sh, uint32_t i, uint32_t j,
+                     bool* meet) {
+  *meet = false;
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);
+  const Aabb region = box_intersection(sh.box[i], sh.box[j]);
+  RegionTriangles ri, rj;
+  SPLINTCORE_RETURN_IF_ERROR(triangles_in_region(arena, b, sh, i, region, &ri));
+  if (ri.n == 0) return Status::ok();
+  SPLINTCORE_RETURN_IF_ERROR(triangles_in_region(arena, b, sh, j, region, &rj));
+  if (rj.n == 0) return Status::ok();
+  if (regions_apart(b, ri, rj)) return Status::ok();
+  uint64_t uses = 0;
+  const RegionGrid g = region_grid(region, rj, &uses);
+  uint32_t *start = nullptr, *items = nullptr, *seen = nullptr;
+  SPLINTCORE_RETURN_IF_ERROR(bin_triangles(arena, g, rj, uses, &start, &items, &seen));
   for (uint32_t k = 0; k < ri.n; ++k) {
     if ((k & 0xfffu) == 0xfffu) {
       SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "boolean: shell pairs", 0, 1));
     }
     uint32_t lo[3], hi[3];
-    range(ri.boxes[k], lo, hi);
+    g.range(ri.boxes[k], lo, hi);
     for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
       for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
         for (uint32_t xx = lo[0]; xx <= hi[0]; ++xx) {
-          const size_t c = (size_t{z} * dim[1] + y) * dim[0] + xx;
+          const size_t c = (size_t{z} * g.dim[1] + y) * g.dim[0] + xx;
           for (uint32_t e = c == 0 ? 0 : start[c - 1]; e < start[c]; ++e) {
             const uint32_t m = items[e];
             if (seen[m] == k) continue;
             seen[m] = k;
-            if (pair_meets(k, m)) {
+            if (pair_meets(b, ri, k, rj, m)) {
               *meet = true;
               return Status::ok();
             }

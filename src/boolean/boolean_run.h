@@ -281,12 +281,31 @@ class BooleanRun {
  private:
   Status find_hits();
   Status add_contact(uint32_t ta, uint32_t tb);
+  Status name_contact_point(const detail::ContactPoint& cp, const uint32_t ga[3],
+                            const uint32_t gb[3], uint32_t ta, uint32_t tb, DegPoint* name);
+  Status alias_b_vertex(uint32_t bv, uint32_t av);
+  Status record_contact(const detail::Contact& c, const DegPoint name[6], int i, int j,
+                        uint8_t kind, uint32_t ta, uint32_t tb);
   Status number_points();
   Status number_degenerate_points();
   Status check_points_apart();
+  // split.cpp: the records grouped by triangle, then each cut triangle split by the fast path
+  // (one segment edge to edge), by CutSplit (crossing segments only) or by ContactSplit
+  // (split_general: degenerate contacts too), each a struct with one method per stage.
+  struct CutSplit;
+  struct ContactSplit;
   Status split_triangles();
+  Status sort_records_by_triangle();
+  Status sort_contacts_by_triangle(KeyIndex** dorder);
+  Status split_single_crossing(uint32_t t, const uint32_t c[3], const Record& rc, bool* done);
+  Status split_cut(uint32_t t, const uint32_t c[3], const KeyIndex* recs, size_t nseg);
   Status split_general(uint32_t t, const KeyIndex* proper, size_t np, const KeyIndex* dk,
                        size_t nd);
+  // Where vertex id `id` lies: an input vertex, or an intersection point (ids from nva + nvb).
+  const Vec3& position(uint32_t id) const {
+    const uint32_t base = in_.nva + in_.nvb;
+    return id < base ? in_.vertex(id) : points_[id - base].p;
+  }
   int8_t side_state(uint32_t t, uint32_t r, const uint32_t* sheets, int nsheets) const;
   int8_t on_state(uint32_t t, uint32_t sheet) const;
   uint32_t canon(uint32_t v) const {
@@ -301,6 +320,7 @@ class BooleanRun {
   Status classify();
   Status assemble(Mesh* result);
   Status check_result(Mesh* result);
+  struct FloodSide;  // classify.cpp: one mesh's flood, one method per stage
   Status flood(bool side_a);
   Status degenerate(uint32_t ta, uint32_t tb) const;
   Status inconsistent_vertex(uint32_t v) const;

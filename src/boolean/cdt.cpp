@@ -504,28 +504,17 @@ void legalize_edges(Work& w) {
   }
 }
 
-Status insert_segment(Work& w, uint32_t s, uint32_t a, uint32_t b) {
-  // 0. Already an edge (nearly always on the Boolean's cut triangles, whose segments are
-  // mostly Delaunay edges of their points): found by ids alone, no predicate. The search in 1
-  // would have marked the same edge: when a-b is an edge, no other neighbour of a lies on the
-  // ray from a through b (it would put b inside an edge) and no triangle's open wedge at a
-  // holds b, so it meets neither an error nor a break before it finds a-b; and marking either
-  // side of the edge marks both.
-  {
-    uint32_t tab = 0;
-    uint32_t third = 0;
-    if (find_edge(w, a, b, &tab, &third)) {
-      constrain(w, tab, third, s);
-      return Status::ok();
-    }
-  }
-  // 1. Around a: the edge a-b, or the triangle (a, p, q) whose open wedge at a holds b
-  // (counter-clockwise from vt[a]; when a's star is open, as on the small path's polygon, on
-  // clockwise from vt[a] once the turn reaches the polygon's edge).
+// Where the walk along a-b starts: the triangle ti = (a, p, q), a at index i, whose open wedge
+// at a holds b.
+struct Wedge {
+  uint32_t ti, i, p, q;
+};
+
+// 1. Around a: the edge a-b (then marked, and *done set), or the triangle (a, p, q) whose open
+// wedge at a holds b (counter-clockwise from vt[a]; when a's star is open, as on the small
+// path's polygon, on clockwise from vt[a] once the turn reaches the polygon's edge).
+Status find_wedge(Work& w, uint32_t s, uint32_t a, uint32_t b, Wedge* wedge, bool* done) {
   uint32_t ti = w.vt[a];
-  uint32_t i = 0;
-  uint32_t p = 0;
-  uint32_t q = 0;
   bool clockwise = false;
   for (uint32_t step = 0;; ++step) {
     if (ti == kNone && !clockwise) {
@@ -537,26 +526,35 @@ Status insert_segment(Work& w, uint32_t s, uint32_t a, uint32_t b) {
       return make_error(StatusCode::kInternal, "cdt: no way out of point ", a);
     }
     const Tri& t = w.t[ti];
-    i = index_of(t, a);
-    p = t.v[next3(i)];
-    q = t.v[prev3(i)];
+    const uint32_t i = index_of(t, a);
+    const uint32_t p = t.v[next3(i)];
+    const uint32_t q = t.v[prev3(i)];
     if (p == b || q == b) {
       constrain(w, ti, p == b ? prev3(i) : next3(i), s);
+      *done = true;
       return Status::ok();
     }
     const double op = orient(w, a, p, b);
     if (op == 0.0 && ahead(w, a, p, b)) return on_segment_error(w, p, s, a, b);
     const double oq = orient(w, a, q, b);
     if (oq == 0.0 && ahead(w, a, q, b)) return on_segment_error(w, q, s, a, b);
-    if (op > 0.0 && oq < 0.0) break;
+    if (op > 0.0 && oq < 0.0) {
+      *wedge = Wedge{ti, i, p, q};
+      return Status::ok();
+    }
     ti = clockwise ? t.n[prev3(i)] : t.n[next3(i)];  // counter-clockwise around a (or back)
   }
+}
 
-  // 2. Walk to b: the crossed edges, each (right end, left end) seen from a towards b.
+// 2. Walk to b from `start`: the crossed edges onto the queue, each (right end, left end) seen
+// from a towards b.
+Status queue_crossed_edges(Work& w, uint32_t s, uint32_t a, uint32_t b, const Wedge& start) {
   w.queue_head = 0;
   w.queue_size = 0;
-  uint32_t cur = ti;
-  uint32_t e = i;  // the edge p-q of cur, cur running p -> q
+  uint32_t cur = start.ti;
+  uint32_t e = start.i;  // the edge p-q of cur, cur running p -> q
+  uint32_t p = start.p;
+  uint32_t q = start.q;
   for (uint32_t step = 0;; ++step) {
     const Tri& t = w.t[cur];
     if (t.c[e] != kNone) return crossing_error(s, t.c[e]);
@@ -568,7 +566,7 @@ Status insert_segment(Work& w, uint32_t s, uint32_t a, uint32_t b) {
     const Tri& u = w.t[nb];
     const uint32_t k = index_facing(u, cur);  // u = (x, q, p) from k
     const uint32_t x = u.v[k];
-    if (x == b) break;
+    if (x == b) return Status::ok();
     const double o = orient(w, a, b, x);
     if (o == 0.0) return on_segment_error(w, x, s, a, b);
     if (o < 0.0) {
@@ -580,9 +578,11 @@ Status insert_segment(Work& w, uint32_t s, uint32_t a, uint32_t b) {
     }
     cur = nb;
   }
+}
 
-  // 3. Flip the crossed edges away (Sloan): one whose quadrilateral is strictly convex is
-  // flipped, and its new diagonal queued again if it still crosses; otherwise it waits.
+// 3. Flip the crossed edges away (Sloan): one whose quadrilateral is strictly convex is
+// flipped, and its new diagonal queued again if it still crosses; otherwise it waits.
+Status flip_crossed_edges(Work& w, uint32_t s, uint32_t a, uint32_t b) {
   const uint64_t crossed = w.queue_size;
   const uint64_t flip_cap = 4 * crossed * crossed + 64;
   uint64_t flips = 0;
@@ -620,10 +620,29 @@ Status insert_segment(Work& w, uint32_t s, uint32_t a, uint32_t b) {
       }
     }
   }
+  return Status::ok();
+}
 
-  // 4. Mark a-b, then restore the Delaunay property around it.
+Status insert_segment(Work& w, uint32_t s, uint32_t a, uint32_t b) {
+  // 0. Already an edge (nearly always on the Boolean's cut triangles, whose segments are
+  // mostly Delaunay edges of their points): found by ids alone, no predicate. The search in 1
+  // would have marked the same edge: when a-b is an edge, no other neighbour of a lies on the
+  // ray from a through b (it would put b inside an edge) and no triangle's open wedge at a
+  // holds b, so it meets neither an error nor a break before it finds a-b; and marking either
+  // side of the edge marks both.
   uint32_t tab = 0;
   uint32_t third = 0;
+  if (find_edge(w, a, b, &tab, &third)) {
+    constrain(w, tab, third, s);
+    return Status::ok();
+  }
+  Wedge wedge{};
+  bool done = false;
+  SPLINTCORE_RETURN_IF_ERROR(find_wedge(w, s, a, b, &wedge, &done));
+  if (done) return Status::ok();
+  SPLINTCORE_RETURN_IF_ERROR(queue_crossed_edges(w, s, a, b, wedge));
+  SPLINTCORE_RETURN_IF_ERROR(flip_crossed_edges(w, s, a, b));
+  // 4. Mark a-b, then restore the Delaunay property around it.
   if (!find_edge(w, a, b, &tab, &third)) {
     return make_error(StatusCode::kInternal, "cdt: segment ", s, " missing after its flips");
   }
@@ -841,28 +860,9 @@ void write_small_output(const Work& w, ArenaArray<CdtTriangle>* out,
 constexpr uint32_t kSmallMaxPoints = 32;
 constexpr uint32_t kSmallMaxTris = 2 * kSmallMaxPoints;
 
-// True when it wrote the output (into the room reserved for `expected` more triangles); false
-// when the input is for the general path (nothing written then). The caller has checked ids,
-// coordinates and that the boundary closes; n <= kSmallMaxPoints.
-bool small_cdt(Span<const CdtPoint> points, Span<const CdtSegment> segments,
-               uint32_t boundary_count, uint64_t expected, ArenaArray<CdtTriangle>* out,
-               ArenaArray<CdtAdjacency>* adjacency) {
-  const uint32_t n = static_cast<uint32_t>(points.size());
-  const uint32_t m = static_cast<uint32_t>(segments.size());
-  const uint32_t b = boundary_count;
-  SPLINTCORE_ASSERT(n <= kSmallMaxPoints && b >= 3 && b <= n);
-  const CdtPoint* p = points.data();
-  const CdtSegment* sg = segments.data();
-  uint8_t on_boundary[kSmallMaxPoints] = {};
-  uint32_t poly[kSmallMaxPoints];  // point id per boundary position
-  for (uint32_t s = 0; s < b; ++s) {
-    const uint32_t v = sg[s].a;
-    if (on_boundary[v] != 0) return false;  // not simple: the general path says so
-    on_boundary[v] = 1;
-    poly[s] = v;
-  }
-
-  // 1. Star-shaped from O, winding once.
+// 1. Star-shaped from O, the mean of its corners, winding once (see above); poly: the b
+// corners' point ids in boundary order.
+bool star_shaped(const CdtPoint* p, const uint32_t* poly, uint32_t b) {
   double ox = 0.0, oy = 0.0;
   for (uint32_t s = 0; s < b; ++s) {
     ox += p[poly[s]].x;
@@ -886,36 +886,22 @@ bool small_cdt(Span<const CdtPoint> points, Span<const CdtSegment> segments,
     last_sign = sign;
   }
   if (first_sign != last_sign) ++changes;  // round the corner from the last to the first
-  if (changes != 2) return false;
+  return changes == 2;
+}
 
-  Tri tris[kSmallMaxTris];
-  uint32_t vt[kSmallMaxPoints];
-  uint32_t stack[3 * kSmallMaxTris];
-  uint8_t queued[kSmallMaxTris] = {};
-  EdgeKey queue[3 * kSmallMaxPoints + 3];
-  Work w;
-  w.p = p;
-  w.n = n;
-  w.t = tris;
-  w.tri_count = 0;
-  w.vt = vt;
-  w.stack = stack;
-  w.queued = queued;
-  w.queue = queue;
-  w.queue_cap = 3 * kSmallMaxPoints + 3;
-
-  // 2. Ear clipping. Per position: the neighbours on what is left, whether the corner turns
-  // strictly left, and the triangle outside the edge that starts there (kNone: a boundary
-  // segment, whose id is the position). A clipped triangle (u, v, w) has its diagonal w-u
-  // opposite v, at index 1, where the triangle clipped later across it links in. A corner's
-  // turn is found when first asked for (2: not yet) and forgotten when its neighbours change:
-  // the same orient2d on the same points as computing every one up front and after each
-  // clip, without those never asked for (all of them for a triangle, b = 3). The test whether
-  // a corner o lies in an ear asks first about the ear's diagonal, which most corners are
-  // beyond (the three signs are the same whatever the order).
-  // Only the first b slots are written and read (not zeroed first: that cost more than the
-  // rest of this set-up at the usual 6 corners). A do-while: b >= 3 (cppcheck, which does not
-  // read the assertion above, then sees every slot read written).
+// 2. Ear clipping. Per position: the neighbours on what is left, whether the corner turns
+// strictly left, and the triangle outside the edge that starts there (kNone: a boundary
+// segment, whose id is the position). A clipped triangle (u, v, w) has its diagonal w-u
+// opposite v, at index 1, where the triangle clipped later across it links in. A corner's
+// turn is found when first asked for (2: not yet) and forgotten when its neighbours change:
+// the same orient2d on the same points as computing every one up front and after each
+// clip, without those never asked for (all of them for a triangle, b = 3). The test whether
+// a corner o lies in an ear asks first about the ear's diagonal, which most corners are
+// beyond (the three signs are the same whatever the order).
+// Only the first b slots are written and read (not zeroed first: that cost more than the
+// rest of this set-up at the usual 6 corners). A do-while: b >= 3 (cppcheck, which does not
+// read small_cdt's assertion, then sees every slot read written).
+bool clip_ears(Work& w, const uint32_t* poly, uint32_t b) {
   uint32_t next_at[kSmallMaxPoints], prev_at[kSmallMaxPoints], outer[kSmallMaxPoints];
   uint8_t convex[kSmallMaxPoints];
   uint32_t pos = 0;
@@ -933,7 +919,7 @@ bool small_cdt(Span<const CdtPoint> points, Span<const CdtSegment> segments,
   };
   auto seg_of = [&](uint32_t at) { return outer[at] == kNone ? at : kNone; };
   auto link_outer = [&](uint32_t at, uint32_t ti) {
-    if (outer[at] != kNone) tris[outer[at]].n[1] = ti;
+    if (outer[at] != kNone) w.t[outer[at]].n[1] = ti;
   };
   uint32_t left = b;
   uint32_t cur = 0;
@@ -977,15 +963,14 @@ bool small_cdt(Span<const CdtPoint> points, Span<const CdtSegment> segments,
     link_outer(y, ti);
     link_outer(z, ti);
   }
+  return true;
+}
 
-  // 3. Delaunay: every inner edge on the stack once (the diagonal of the ear that cut it off,
-  // at index 1; the last triangle has none of its own), then Lawson flips.
-  w.stack_size = 0;
-  for (uint32_t ti = 0; ti + 1 < w.tri_count; ++ti) push_half_edge(w, ti, 1);
-  legalize_edges(w);
-
-  // 4. The other points (their triangles stay inside the polygon: b - 2 + 2 per point in
-  // all), then the interior segments.
+// 4. The other points (their triangles stay inside the polygon: b - 2 + 2 per point in
+// all), then the interior segments.
+bool insert_interior(Work& w, const uint8_t* on_boundary, const CdtSegment* sg, uint32_t b,
+                     uint32_t m) {
+  const uint32_t n = w.n;
   uint32_t last = 0;
   for (uint32_t v = 0; v < n; ++v) {
     if (on_boundary[v] != 0) continue;
@@ -1014,6 +999,53 @@ bool small_cdt(Span<const CdtPoint> points, Span<const CdtSegment> segments,
     }
     if (!insert_segment(w, s, sg[s].a, sg[s].b).is_ok()) return false;
   }
+  return true;
+}
+
+// True when it wrote the output (into the room reserved for `expected` more triangles); false
+// when the input is for the general path (nothing written then). The caller has checked ids,
+// coordinates and that the boundary closes; n <= kSmallMaxPoints.
+bool small_cdt(Span<const CdtPoint> points, Span<const CdtSegment> segments,
+               uint32_t boundary_count, uint64_t expected, ArenaArray<CdtTriangle>* out,
+               ArenaArray<CdtAdjacency>* adjacency) {
+  const uint32_t n = static_cast<uint32_t>(points.size());
+  const uint32_t m = static_cast<uint32_t>(segments.size());
+  const uint32_t b = boundary_count;
+  SPLINTCORE_ASSERT(n <= kSmallMaxPoints && b >= 3 && b <= n);
+  const CdtPoint* p = points.data();
+  const CdtSegment* sg = segments.data();
+  uint8_t on_boundary[kSmallMaxPoints] = {};
+  uint32_t poly[kSmallMaxPoints];  // point id per boundary position
+  for (uint32_t s = 0; s < b; ++s) {
+    const uint32_t v = sg[s].a;
+    if (on_boundary[v] != 0) return false;  // not simple: the general path says so
+    on_boundary[v] = 1;
+    poly[s] = v;
+  }
+  if (!star_shaped(p, poly, b)) return false;
+  // Its memory, on the stack.
+  Tri tris[kSmallMaxTris];
+  uint32_t vt[kSmallMaxPoints];
+  uint32_t stack[3 * kSmallMaxTris];
+  uint8_t queued[kSmallMaxTris] = {};
+  EdgeKey queue[3 * kSmallMaxPoints + 3];
+  Work w;
+  w.p = p;
+  w.n = n;
+  w.t = tris;
+  w.tri_count = 0;
+  w.vt = vt;
+  w.stack = stack;
+  w.queued = queued;
+  w.queue = queue;
+  w.queue_cap = 3 * kSmallMaxPoints + 3;
+  if (!clip_ears(w, poly, b)) return false;
+  // 3. Delaunay: every inner edge on the stack once (the diagonal of the ear that cut it off,
+  // at index 1; the last triangle has none of its own), then Lawson flips.
+  w.stack_size = 0;
+  for (uint32_t ti = 0; ti + 1 < w.tri_count; ++ti) push_half_edge(w, ti, 1);
+  legalize_edges(w);
+  if (!insert_interior(w, on_boundary, sg, b, m)) return false;
   if (w.tri_count != expected) return false;  // never: b + 2 i - 2 by construction
   write_small_output(w, out, adjacency);
   return true;
@@ -1043,13 +1075,14 @@ uint64_t cdt_bound(uint64_t point_count, uint64_t segment_count) {
 
 namespace {
 
-Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> segments,
-                uint32_t boundary_count, ArenaArray<CdtTriangle>* out,
-                ArenaArray<CdtAdjacency>* adjacency, bool small_path) {
-  SPLINTCORE_ASSERT(out != nullptr && out->arena() != nullptr);
+// ---- the general path, step by step -----------------------------------------------------------
+
+// 1. The input, checked before any memory is taken: counts, coordinates, segment ids, a closed
+// boundary.
+Status check_input(Span<const CdtPoint> points, Span<const CdtSegment> segments,
+                   uint32_t boundary_count) {
   const size_t n_size = points.size();
   const size_t m = segments.size();
-  // ---- 1. the input, checked before any memory is taken.
   if (n_size > kMaxPoints) {
     return make_error(StatusCode::kInvalidArgument, "cdt: ", n_size,
                       " points, more than the limit ", kMaxPoints);
@@ -1099,9 +1132,13 @@ Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment
           .at_index(next);
     }
   }
+  return Status::ok();
+}
 
-  // ---- the output first (it must survive the temporaries), then the temporaries.
-  const uint64_t expected = 2 * uint64_t{n} - boundary_count - 2;  // b + 2 i - 2
+// The output's room for the `expected` triangles, taken first (it must survive the
+// temporaries).
+Status reserve_output(uint64_t expected, ArenaArray<CdtTriangle>* out,
+                      ArenaArray<CdtAdjacency>* adjacency) {
   const uint64_t out_total = uint64_t{out->size()} + expected;
   if (out_total > SIZE_MAX) {  // 32-bit targets: fail, never wrap
     return make_error(StatusCode::kLimitExceeded, "cdt: ", out_total,
@@ -1119,13 +1156,15 @@ Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment
       return adjacency->arena()->exhausted_status();
     }
   }
-  // Small inputs: the polygon first, without the super-triangle (or the general path below
-  // when the small path cannot take this input).
-  if (small_path && n <= kSmallMaxPoints &&
-      small_cdt(points, segments, boundary_count, expected, out, adjacency)) {
-    return Status::ok();
-  }
-  ArenaScope scope(arena);
+  return Status::ok();
+}
+
+// The temporaries (all sized up front from the point count): the points and after them the
+// super-triangle's corners (w->p; see step 2), and `*flags`, n bytes: the boundary's points
+// marked 1, each checked to appear once.
+Status take_temporaries(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> segments,
+                        uint32_t boundary_count, Work* w, uint8_t** flags) {
+  const uint32_t n = static_cast<uint32_t>(points.size());
   // n <= kMaxPoints, so every count (at most 3 * (2n + 1)) fits a 32-bit size_t.
   static_assert(3 * (2 * kMaxPoints + 1) <= UINT32_MAX, "CDT counts must fit 32 bits");
   const Sizes z64 = sizes_for(n);
@@ -1133,39 +1172,47 @@ Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment
     size_t tris, verts, edges;
   } z = {static_cast<size_t>(z64.tris), static_cast<size_t>(z64.verts),
          static_cast<size_t>(z64.edges)};
-  Work w;
-  w.n = n;
-  CdtPoint* pts = arena.allocate_array<CdtPoint>(z.verts);
-  w.t = arena.allocate_array<Tri>(z.tris);
-  w.vt = arena.allocate_array<uint32_t>(z.verts);
-  w.stack = arena.allocate_array<uint32_t>(3 * z.tris);
-  w.queued = arena.allocate_array<uint8_t>(z.tris);
-  w.queue = arena.allocate_array<EdgeKey>(z.edges);
-  uint8_t* flags = arena.allocate_array<uint8_t>(n);
-  if (pts == nullptr || w.t == nullptr || w.vt == nullptr || w.stack == nullptr ||
-      w.queued == nullptr || w.queue == nullptr || flags == nullptr) {
+  w->n = n;
+  CdtPoint* p = arena.allocate_array<CdtPoint>(z.verts);
+  w->t = arena.allocate_array<Tri>(z.tris);
+  w->vt = arena.allocate_array<uint32_t>(z.verts);
+  w->stack = arena.allocate_array<uint32_t>(3 * z.tris);
+  w->queued = arena.allocate_array<uint8_t>(z.tris);
+  w->queue = arena.allocate_array<EdgeKey>(z.edges);
+  uint8_t* f = arena.allocate_array<uint8_t>(n);
+  if (p == nullptr || w->t == nullptr || w->vt == nullptr || w->stack == nullptr ||
+      w->queued == nullptr || w->queue == nullptr || f == nullptr) {
     return arena.exhausted_status();
   }
-  w.p = pts;
-  w.queue_cap = static_cast<uint32_t>(z.edges);
-  std::memcpy(static_cast<void*>(pts), points.data(), n_size * sizeof(CdtPoint));
-  std::memset(w.queued, 0, z.tris);
-  std::memset(flags, 0, n);
+  w->p = p;
+  w->queue_cap = static_cast<uint32_t>(z.edges);
+  std::memcpy(static_cast<void*>(p), points.data(), points.size() * sizeof(CdtPoint));
+  const double r = frame_scale(points);
+  p[n] = CdtPoint{-4.0 * r, -2.0 * r};
+  p[n + 1] = CdtPoint{4.0 * r, -2.0 * r};
+  p[n + 2] = CdtPoint{0.0, 4.0 * r};
+  std::memset(w->queued, 0, z.tris);
+  std::memset(f, 0, n);
+  *flags = f;
   for (uint32_t s = 0; s < boundary_count; ++s) {
     const uint32_t v = segments[s].a;
-    if (flags[v] != 0) {
+    if (f[v] != 0) {
       return make_error(StatusCode::kInvalidArgument, "cdt: the boundary is not simple: point ", v,
                         " appears twice on it")
           .at_index(v);
     }
-    flags[v] = 1;
+    f[v] = 1;
   }
+  return Status::ok();
+}
 
-  // ---- 2. the super-triangle, then the points (boundary in order, then the others).
-  const double r = frame_scale(points);
-  pts[n] = CdtPoint{-4.0 * r, -2.0 * r};
-  pts[n + 1] = CdtPoint{4.0 * r, -2.0 * r};
-  pts[n + 2] = CdtPoint{0.0, 4.0 * r};
+// 2. The super-triangle (its corners are points n..n + 2), then the points: BRIO order from
+// kBrioMin points on, otherwise the boundary in order, then the others (those not marked in
+// `flags`).
+Status insert_points(Arena& arena, Work& w, Span<const CdtPoint> points,
+                     Span<const CdtSegment> segments, uint32_t boundary_count,
+                     const uint8_t* flags) {
+  const uint32_t n = w.n;
   w.tri_count = 1;
   put(w, 0, n, n + 1, n + 2, kNone, kNone, kNone, kNone, kNone, kNone);
   uint32_t last = 0;
@@ -1179,29 +1226,26 @@ Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment
       SPLINTCORE_RETURN_IF_ERROR(insert_point(w, v, last));
       last = w.vt[v];
     }
-  } else {
-    for (uint32_t s = 0; s < boundary_count; ++s) {
-      const uint32_t v = segments[s].a;
-      SPLINTCORE_RETURN_IF_ERROR(insert_point(w, v, last));
-      last = w.vt[v];
-    }
-    for (uint32_t v = 0; v < n; ++v) {
-      if (flags[v] != 0) continue;
-      SPLINTCORE_RETURN_IF_ERROR(insert_point(w, v, last));
-      last = w.vt[v];
-    }
+    return Status::ok();
   }
-  SPLINTCORE_ASSERT(w.tri_count == z.tris);
-
-  // ---- 3. the segments, boundary first (so boundary edges carry boundary ids).
-  for (uint32_t s = 0; s < static_cast<uint32_t>(m); ++s) {
-    SPLINTCORE_RETURN_IF_ERROR(insert_segment(w, s, segments[s].a, segments[s].b));
+  for (uint32_t s = 0; s < boundary_count; ++s) {
+    const uint32_t v = segments[s].a;
+    SPLINTCORE_RETURN_IF_ERROR(insert_point(w, v, last));
+    last = w.vt[v];
   }
+  for (uint32_t v = 0; v < n; ++v) {
+    if (flags[v] != 0) continue;
+    SPLINTCORE_RETURN_IF_ERROR(insert_point(w, v, last));
+    last = w.vt[v];
+  }
+  return Status::ok();
+}
 
-  // ---- 4. the exterior: flood fill from the super-triangle, stopped by boundary segments.
-  uint8_t* exterior = w.queued;  // the half-edge stack is empty: its flags are free
-  std::memset(exterior, 0, z.tris);
-  const uint32_t seed = w.vt[n];
+// 4. The exterior: flood fill from the super-triangle, stopped by boundary segments
+// (`exterior`: a byte per triangle of the capacity, zeroed here).
+void flood_exterior(Work& w, uint32_t boundary_count, uint8_t* exterior) {
+  std::memset(exterior, 0, static_cast<size_t>(sizes_for(w.n).tris));
+  const uint32_t seed = w.vt[w.n];
   exterior[seed] = 1;
   w.stack_size = 0;
   w.stack[w.stack_size++] = seed;
@@ -1215,11 +1259,16 @@ Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment
       w.stack[w.stack_size++] = nb;
     }
   }
-  // The segments against the exterior. First one pass over the slots: every marked edge is
-  // its segment, with no exterior triangle on its inner side (the left of a boundary segment,
-  // both sides of a constraint), and 2 m marked sides (so no segment repeats another and every
-  // one is an edge). Only when that does not hold does the per-segment walk below run; it
-  // finds the same problems and names the first one in segment order.
+}
+
+// The segments against the exterior. First one pass over the slots: every marked edge is
+// its segment, with no exterior triangle on its inner side (the left of a boundary segment,
+// both sides of a constraint), and 2 m marked sides (so no segment repeats another and every
+// one is an edge). Only when that does not hold does the per-segment walk below run; it
+// finds the same problems and names the first one in segment order.
+Status check_segments(const Work& w, Span<const CdtSegment> segments, uint32_t boundary_count,
+                      const uint8_t* exterior) {
+  const uint32_t m = static_cast<uint32_t>(segments.size());
   bool segments_fine = true;
   uint64_t marked = 0;
   for (uint32_t ti = 0; ti < w.tri_count && segments_fine; ++ti) {
@@ -1240,34 +1289,39 @@ Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment
       if (!segments_fine) break;
     }
   }
-  if (!segments_fine || marked != 2 * uint64_t{m}) {
-    for (uint32_t s = 0; s < static_cast<uint32_t>(m); ++s) {
-      const uint32_t a = segments[s].a;
-      const uint32_t b = segments[s].b;
-      uint32_t ti = 0;
-      uint32_t k = 0;
-      if (!find_edge(w, a, b, &ti, &k)) {
-        return make_error(StatusCode::kInternal, "cdt: segment ", s, " is not an edge");
-      }
-      const Tri& t = w.t[ti];
-      const uint32_t nb = t.n[k];
-      if (s < boundary_count) {
-        // The triangle left of a -> b must be inside.
-        const uint32_t left = t.v[next3(k)] == a ? ti : nb;
-        if (exterior[left] != 0) {
-          return make_error(StatusCode::kInvalidArgument,
-                            "cdt: the boundary is not counter-clockwise (segment ", s, ", points ",
-                            a, "-", b, ", has the outside on its left)")
-              .at_index(s);
-        }
-      } else if (t.c[k] >= boundary_count && (exterior[ti] != 0 || exterior[nb] != 0)) {
-        return make_error(StatusCode::kInvalidArgument, "cdt: constraint segment ", s, " (points ",
-                          a, "-", b, ") lies outside the boundary")
+  if (segments_fine && marked == 2 * uint64_t{m}) return Status::ok();
+  for (uint32_t s = 0; s < m; ++s) {
+    const uint32_t a = segments[s].a;
+    const uint32_t b = segments[s].b;
+    uint32_t ti = 0;
+    uint32_t k = 0;
+    if (!find_edge(w, a, b, &ti, &k)) {
+      return make_error(StatusCode::kInternal, "cdt: segment ", s, " is not an edge");
+    }
+    const Tri& t = w.t[ti];
+    const uint32_t nb = t.n[k];
+    if (s < boundary_count) {
+      // The triangle left of a -> b must be inside.
+      const uint32_t left = t.v[next3(k)] == a ? ti : nb;
+      if (exterior[left] != 0) {
+        return make_error(StatusCode::kInvalidArgument,
+                          "cdt: the boundary is not counter-clockwise (segment ", s, ", points ", a,
+                          "-", b, ", has the outside on its left)")
             .at_index(s);
       }
+    } else if (t.c[k] >= boundary_count && (exterior[ti] != 0 || exterior[nb] != 0)) {
+      return make_error(StatusCode::kInvalidArgument, "cdt: constraint segment ", s, " (points ", a,
+                        "-", b, ") lies outside the boundary")
+          .at_index(s);
     }
   }
-  uint8_t* used = flags;
+  return Status::ok();
+}
+
+// Every point is a corner of an inside triangle, no corner of the frame is, and there are
+// `expected` of them (`used`: n bytes of scratch).
+Status check_inside(const Work& w, const uint8_t* exterior, uint8_t* used, uint64_t expected) {
+  const uint32_t n = w.n;
   std::memset(used, 0, n);
   uint64_t inside = 0;
   for (uint32_t ti = 0; ti < w.tri_count; ++ti) {
@@ -1281,8 +1335,8 @@ Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment
   }
   for (uint32_t v = 0; v < n; ++v) {
     if (used[v] == 0) {
-      return make_error(StatusCode::kInvalidArgument, "cdt: point ", v, " (", pts[v].x, ", ",
-                        pts[v].y, ") lies outside the boundary")
+      return make_error(StatusCode::kInvalidArgument, "cdt: point ", v, " (", w.p[v].x, ", ",
+                        w.p[v].y, ") lies outside the boundary")
           .at_index(v);
     }
   }
@@ -1290,16 +1344,54 @@ Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment
     return make_error(StatusCode::kInternal, "cdt: ", inside, " triangles inside, expected ",
                       expected);
   }
+  return Status::ok();
+}
 
-  // ---- the output (written into the room reserved above).
-  // Slot order, each triangle starting at its smallest id; on an error `out` and `adjacency`
-  // are cut back to their sizes. The half-edge stack is free again: the slots' output indices.
+// Steps 1 to 4 of the general path (the top of the file), after check_input and
+// reserve_output; its temporaries are given back before it returns.
+Status general_cdt(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> segments,
+                   uint32_t boundary_count, uint64_t expected, ArenaArray<CdtTriangle>* out,
+                   ArenaArray<CdtAdjacency>* adjacency) {
+  ArenaScope scope(arena);
+  Work w;
+  uint8_t* flags = nullptr;
+  SPLINTCORE_RETURN_IF_ERROR(take_temporaries(arena, points, segments, boundary_count, &w, &flags));
+  SPLINTCORE_RETURN_IF_ERROR(insert_points(arena, w, points, segments, boundary_count, flags));
+  SPLINTCORE_ASSERT(w.tri_count == sizes_for(w.n).tris);
+  // 3. The segments, boundary first (so boundary edges carry boundary ids).
+  for (uint32_t s = 0; s < static_cast<uint32_t>(segments.size()); ++s) {
+    SPLINTCORE_RETURN_IF_ERROR(insert_segment(w, s, segments[s].a, segments[s].b));
+  }
+  uint8_t* exterior = w.queued;  // the half-edge stack is empty: its flags are free
+  flood_exterior(w, boundary_count, exterior);
+  SPLINTCORE_RETURN_IF_ERROR(check_segments(w, segments, boundary_count, exterior));
+  SPLINTCORE_RETURN_IF_ERROR(check_inside(w, exterior, flags, expected));
+  // The output, written into the room reserved for it: slot order, each triangle starting at
+  // its smallest id; on an error `out` and `adjacency` are cut back to their sizes. The
+  // half-edge stack is free again: the slots' output indices.
   CdtTriangle bad{};
   if (!write_output(w, exterior, w.stack, expected, out, adjacency, &bad)) {
     return make_error(StatusCode::kInternal, "cdt: triangle ", bad.v[0], "-", bad.v[1], "-",
                       bad.v[2], " is not counter-clockwise");
   }
   return Status::ok();
+}
+
+Status cdt_impl(Arena& arena, Span<const CdtPoint> points, Span<const CdtSegment> segments,
+                uint32_t boundary_count, ArenaArray<CdtTriangle>* out,
+                ArenaArray<CdtAdjacency>* adjacency, bool small_path) {
+  SPLINTCORE_ASSERT(out != nullptr && out->arena() != nullptr);
+  SPLINTCORE_RETURN_IF_ERROR(check_input(points, segments, boundary_count));
+  const uint32_t n = static_cast<uint32_t>(points.size());
+  const uint64_t expected = 2 * uint64_t{n} - boundary_count - 2;  // b + 2 i - 2
+  SPLINTCORE_RETURN_IF_ERROR(reserve_output(expected, out, adjacency));
+  // Small inputs: the polygon first, without the super-triangle (or the general path below
+  // when the small path cannot take this input).
+  if (small_path && n <= kSmallMaxPoints &&
+      small_cdt(points, segments, boundary_count, expected, out, adjacency)) {
+    return Status::ok();
+  }
+  return general_cdt(arena, points, segments, boundary_count, expected, out, adjacency);
 }
 
 }  // namespace

@@ -15,34 +15,65 @@ Status BooleanRun::inconsistent_vertex(uint32_t v) const {
       .at_index(is_a ? v : v - in_.nva);
 }
 
-// Vertex states spread from the corners of cut triangles across the uncut triangles of one
-// mesh (an uncut triangle does not cross the other surface, so its three corners agree);
-// a part no cut triangle reaches gets one winding number.
-Status BooleanRun::flood(bool side_a) {
-  ArenaScope scope(arena_);
-  const Mesh& mesh = side_a ? *in_.a : *in_.b;
-  const uint32_t voff = side_a ? 0 : in_.nva;
-  const uint32_t toff = side_a ? 0 : in_.nta;
-  const uint32_t nv = side_a ? in_.nva : in_.nvb;
-  const uint32_t nt = side_a ? in_.nta : in_.ntb;
-  // Cut flags per triangle from the sorted groups.
-  uint8_t* cut = arena_.allocate_array<uint8_t>(nt);
-  uint32_t* start = arena_.allocate_array<uint32_t>(size_t{nv} + 1);
-  if ((cut == nullptr && nt > 0) || start == nullptr) return arena_.exhausted_status();
+// One mesh's flood (flood()): its cut flags, its vertex -> uncut triangles rows (compressed),
+// the queue of vertices whose state passes on; one method per stage.
+struct BooleanRun::FloodSide {
+  FloodSide(BooleanRun& r, bool a_side)
+      : run(r),
+        arena(r.arena_),
+        side_a(a_side),
+        mesh(a_side ? *r.in_.a : *r.in_.b),
+        voff(a_side ? 0 : r.in_.nva),
+        toff(a_side ? 0 : r.in_.nta),
+        nv(a_side ? r.in_.nva : r.in_.nvb),
+        nt(a_side ? r.in_.nta : r.in_.ntb),
+        // The triangles that take part: all of A's, B's near ones; the uncut ones are flooded.
+        count(a_side ? nt : static_cast<uint32_t>(r.bp_.near_ids.size())),
+        vs(r.vstate_ + voff) {}
+
+  uint32_t id(uint32_t i) const { return side_a ? i : run.bp_.near_ids[i]; }
+  Status mark_cut();
+  Status build_rows();
+  void seed();
+  Status spread();
+  Status winding_number(const Vec3& q, double* w);
+  Status parts_without_cut();
+
+  BooleanRun& run;
+  Arena& arena;
+  const bool side_a;
+  const Mesh& mesh;
+  const uint32_t voff, toff, nv, nt, count;
+  int8_t* const vs;  // the mesh's vertex states
+  uint8_t* cut = nullptr;
+  uint32_t* start = nullptr;  // vertex v's uncut triangles: rows[start[v] .. start[v + 1])
+  uint32_t* rows = nullptr;
+  uint32_t* queue = nullptr;
+  uint32_t head = 0, tail = 0;
+  DistanceIndex index_b{};  // A's side: B's index, built at its first winding number
+  bool have_b = false;
+};
+
+// Cut flags per triangle from the sorted groups.
+Status BooleanRun::FloodSide::mark_cut() {
+  cut = arena.allocate_array<uint8_t>(nt);
+  start = arena.allocate_array<uint32_t>(size_t{nv} + 1);
+  if ((cut == nullptr && nt > 0) || start == nullptr) return arena.exhausted_status();
   if (nt > 0) std::memset(cut, 0, nt);
-  if (tflag_ != nullptr) {
+  if (run.tflag_ != nullptr) {
     // Triangles with pending pieces (lone contact points only) pass states on like uncut ones.
-    for (uint32_t t = 0; t < nt; ++t) cut[t] = tflag_[toff + t] == kDecided ? 1 : 0;
+    for (uint32_t t = 0; t < nt; ++t) cut[t] = run.tflag_[toff + t] == kDecided ? 1 : 0;
   } else {
-    for (size_t i = 0; i < 2 * hits_.size(); ++i) {
-      const uint32_t t = static_cast<uint32_t>(order_[i].key);
+    for (size_t i = 0; i < 2 * run.hits_.size(); ++i) {
+      const uint32_t t = static_cast<uint32_t>(run.order_[i].key);
       if (t >= toff && t - toff < nt) cut[t - toff] = 1;
     }
   }
-  // The triangles that take part: all of A's, B's near ones; the uncut ones are flooded.
-  const uint32_t count = side_a ? nt : static_cast<uint32_t>(bp_.near_ids.size());
-  auto id = [&](uint32_t i) { return side_a ? i : bp_.near_ids[i]; };
-  // Vertex -> uncut triangles (compressed rows).
+  return Status::ok();
+}
+
+// Vertex -> uncut triangles (compressed rows), and the queue's memory.
+Status BooleanRun::FloodSide::build_rows() {
   std::memset(start, 0, (size_t{nv} + 1) * sizeof(uint32_t));
   uint64_t uses = 0;
   for (uint32_t i = 0; i < count; ++i) {
@@ -58,11 +89,11 @@ Status BooleanRun::flood(bool side_a) {
     return Status::error(StatusCode::kLimitExceeded,
                          "boolean: more than 4294967295 vertex uses in one mesh");
   }
-  uint32_t* fill = arena_.allocate_array<uint32_t>(nv);
-  uint32_t* rows = arena_.allocate_array<uint32_t>(static_cast<size_t>(uses));
-  uint32_t* queue = arena_.allocate_array<uint32_t>(nv);
+  uint32_t* fill = arena.allocate_array<uint32_t>(nv);
+  rows = arena.allocate_array<uint32_t>(static_cast<size_t>(uses));
+  queue = arena.allocate_array<uint32_t>(nv);
   if (((fill == nullptr || queue == nullptr) && nv > 0) || (rows == nullptr && uses > 0)) {
-    return arena_.exhausted_status();
+    return arena.exhausted_status();
   }
   if (nv > 0) std::memcpy(fill, start, size_t{nv} * sizeof(uint32_t));
   for (uint32_t i = 0; i < count; ++i) {
@@ -70,32 +101,69 @@ Status BooleanRun::flood(bool side_a) {
     if (cut[t] != 0) continue;
     for (uint32_t v : mesh.triangles[t].v) rows[fill[v]++] = t;
   }
-  int8_t* vs = vstate_ + voff;
-  uint32_t head = 0, tail = 0;
+  return Status::ok();
+}
+
+// The queue starts with every vertex that has a state to pass on and an uncut triangle.
+void BooleanRun::FloodSide::seed() {
   for (uint32_t v = 0; v < nv; ++v) {
     if (vs[v] != 0 && vs[v] != kVertexOn && start[v + 1] > start[v]) queue[tail++] = v;
   }
-  auto spread = [&]() -> Status {
-    while (head < tail) {
-      const uint32_t v = queue[head++];
-      for (uint32_t r = start[v]; r < start[v + 1]; ++r) {
-        for (uint32_t w : mesh.triangles[rows[r]].v) {
-          const int8_t x = vs[w];
-          if (x == 0) {
-            vs[w] = vs[v];
-            queue[tail++] = w;
-          } else if (x != vs[v] && x != kVertexOn) {  // on the other surface: passes nothing on
-            return inconsistent_vertex(voff + w);
-          }
+}
+
+// Each queued vertex passes its state to the corners of its uncut triangles.
+Status BooleanRun::FloodSide::spread() {
+  // In locals: a state is a byte, which may alias anything, so members would be read again
+  // after each one.
+  int8_t* const state = vs;
+  const uint32_t* const first = start;
+  const uint32_t* const row = rows;
+  uint32_t* const q = queue;
+  const Triangle* const tris = mesh.triangles.data();
+  uint32_t h = head, t = tail;
+  while (h < t) {
+    const uint32_t v = q[h++];
+    for (uint32_t r = first[v]; r < first[v + 1]; ++r) {
+      for (uint32_t w : tris[row[r]].v) {
+        const int8_t x = state[w];
+        if (x == 0) {
+          state[w] = state[v];
+          q[t++] = w;
+        } else if (x != state[v] && x != kVertexOn) {  // on the other surface: passes nothing on
+          return run.inconsistent_vertex(voff + w);
         }
       }
     }
-    return Status::ok();
-  };
-  SPLINTCORE_RETURN_IF_ERROR(spread());
-  // Parts without a cut: one winding number of the other mesh each.
-  DistanceIndex index_b{};
-  bool have_b = false;
+  }
+  head = h;
+  tail = t;
+  return Status::ok();
+}
+
+// The other mesh's winding number at q (its index built at the first query).
+Status BooleanRun::FloodSide::winding_number(const Vec3& q, double* w) {
+  if (side_a) {
+    if (!have_b) {
+      SPLINTCORE_RETURN_IF_ERROR(
+          build_distance_index(run.ctx_, *run.in_.b, DistanceIndexOptions{}, &index_b));
+      have_b = true;
+    }
+    *w = splintcore::winding_number(index_b, q);
+  } else {
+    if (!run.have_a_index_) {
+      SPLINTCORE_RETURN_IF_ERROR(
+          build_distance_index(run.ctx_, *run.in_.a, DistanceIndexOptions{}, &run.index_a_));
+      run.have_a_index_ = true;
+    }
+    *w = splintcore::winding_number(run.index_a_, q);
+  }
+  ++run.st_.winding_queries;
+  return Status::ok();
+}
+
+// Parts without a cut: one winding number of the other mesh each, at the centroid of their
+// first undecided triangle, then flooded from there.
+Status BooleanRun::FloodSide::parts_without_cut() {
   for (uint32_t i = 0; i < count; ++i) {
     const uint32_t t = id(i);
     if (cut[t] != 0) continue;
@@ -110,32 +178,19 @@ Status BooleanRun::flood(bool side_a) {
       if (x == kStateIn || x == kStateOut) decided = true;
       if (x == 0 && first_free < 0) first_free = k;
     }
-    if (decided || (first_free < 0 && tstate_ != nullptr && tstate_[toff + t] != 0)) continue;
+    if (decided || (first_free < 0 && run.tstate_ != nullptr && run.tstate_[toff + t] != 0)) {
+      continue;
+    }
     const Vec3 centroid =
         (mesh.vertices[tri.v[0]] + mesh.vertices[tri.v[1]] + mesh.vertices[tri.v[2]]) * (1.0 / 3.0);
     double w = 0;
-    if (side_a) {
-      if (!have_b) {
-        SPLINTCORE_RETURN_IF_ERROR(
-            build_distance_index(ctx_, *in_.b, DistanceIndexOptions{}, &index_b));
-        have_b = true;
-      }
-      w = winding_number(index_b, centroid);
-    } else {
-      if (!have_a_index_) {
-        SPLINTCORE_RETURN_IF_ERROR(
-            build_distance_index(ctx_, *in_.a, DistanceIndexOptions{}, &index_a_));
-        have_a_index_ = true;
-      }
-      w = winding_number(index_a_, centroid);
-    }
-    ++st_.winding_queries;
+    SPLINTCORE_RETURN_IF_ERROR(winding_number(centroid, &w));
     if (first_free < 0) {
-      if (tstate_ == nullptr) {
+      if (run.tstate_ == nullptr) {
         return make_error(StatusCode::kInternal, "boolean: triangle ", toff + t,
                           " has every corner on the other surface but no contact");
       }
-      tstate_[toff + t] = w >= 0.5 ? kStateIn : kStateOut;
+      run.tstate_[toff + t] = w >= 0.5 ? kStateIn : kStateOut;
       continue;
     }
     vs[tri.v[first_free]] = w >= 0.5 ? 1 : -1;
@@ -143,6 +198,19 @@ Status BooleanRun::flood(bool side_a) {
     SPLINTCORE_RETURN_IF_ERROR(spread());
   }
   return Status::ok();
+}
+
+// Vertex states spread from the corners of cut triangles across the uncut triangles of one
+// mesh (an uncut triangle does not cross the other surface, so its three corners agree);
+// a part no cut triangle reaches gets one winding number.
+Status BooleanRun::flood(bool side_a) {
+  ArenaScope scope(arena_);
+  FloodSide f(*this, side_a);
+  SPLINTCORE_RETURN_IF_ERROR(f.mark_cut());
+  SPLINTCORE_RETURN_IF_ERROR(f.build_rows());
+  f.seed();
+  SPLINTCORE_RETURN_IF_ERROR(f.spread());
+  return f.parts_without_cut();
 }
 
 Status BooleanRun::classify() {

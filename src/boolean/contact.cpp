@@ -197,49 +197,16 @@ void transversal_contact(const Vec3 a[3], const Vec3 b[3], const int sa[3], cons
   out->p[1] = c[1 - first].p;
 }
 
-// Coplanar triangles (see the top of the file). B' is b re-indexed to run the same way round
-// as a: corner i of B' is corner perm[i] of b, edge m of B' is edge emap[m] of b.
-void coplanar_contact(const Vec3 a[3], const Vec3 b[3], Contact* out) {
-  const Projection pr = projection_of(a);
-  const int sigma_b = orient2(pr, b[0], b[1], b[2]);
-  SPLINTCORE_ASSERT(sigma_b != 0);  // same plane, so the projection keeps b proper too
-  const bool reversed = sigma_b != pr.sigma;
-  const int perm[3] = {0, reversed ? 2 : 1, reversed ? 1 : 2};
-  const int emap[3] = {reversed ? 2 : 0, 1, reversed ? 0 : 2};
-  const Vec3 bp[3] = {b[perm[0]], b[perm[1]], b[perm[2]]};
-  // la[k][j]: B' corner j against A's edge k; lb[m][i]: A's corner i against B' edge m
-  // (+1 on the triangle's side).
+// Coplanar triangles A and B' (B re-indexed to run the same way round as A), each against the
+// other's edge lines: la[k][j], B' corner j against A's edge k; lb[m][i], A's corner i against
+// B' edge m (+1 on the triangle's side).
+struct CoplanarSides {
   int la[3][3], lb[3][3];
-  for (int k = 0; k < 3; ++k) {
-    for (int j = 0; j < 3; ++j) {
-      la[k][j] = pr.sigma * orient2(pr, a[k], a[(k + 1) % 3], bp[j]);
-      lb[k][j] = pr.sigma * orient2(pr, bp[k], bp[(k + 1) % 3], a[j]);
-    }
-  }
-  ContactPoint c[12];  // B' names until the end
-  int n = 0;
-  for (int i = 0; i < 3; ++i) {
-    const int l[3] = {lb[0][i], lb[1][i], lb[2][i]};
-    const Loc on_b = loc_from_sides(l);
-    if (on_b != kOutside) c[n++] = ContactPoint{vertex_loc(i), on_b};
-  }
-  for (int j = 0; j < 3; ++j) {
-    const int l[3] = {la[0][j], la[1][j], la[2][j]};
-    const Loc on_a = loc_from_sides(l);
-    if (on_a != kOutside && !loc_is_vertex(on_a)) c[n++] = ContactPoint{on_a, vertex_loc(j)};
-  }
-  for (int k = 0; k < 3; ++k) {
-    for (int m = 0; m < 3; ++m) {
-      if (la[k][m] * la[k][(m + 1) % 3] == -1 && lb[m][k] * lb[m][(k + 1) % 3] == -1) {
-        c[n++] = ContactPoint{edge_loc(k), edge_loc(m)};
-      }
-    }
-  }
-  SPLINTCORE_ASSERT(n <= 6);
+
   // Order of two points of the result on A's closed edge k (side 0) or B''s edge k (side 1):
   // 0 at the edge's first corner, 3 at its last, 1 or 2 for a point of the other triangle
   // (the start or the end of that triangle's interval along the edge's line).
-  auto key = [&](int side, int k, const ContactPoint& p) {
+  int key(int side, int k, const ContactPoint& p) const {
     const Loc own = side == 0 ? p.on_a : p.on_b;
     if (own == vertex_loc(k)) return 0;
     if (own == vertex_loc((k + 1) % 3)) return 3;
@@ -251,7 +218,84 @@ void coplanar_contact(const Vec3 a[3], const Vec3 b[3], Contact* out) {
     SPLINTCORE_ASSERT(meets && (other == start || other == end));
     (void)meets;
     return other == start ? 1 : 2;
-  };
+  }
+};
+
+// The corners of the polygon A n B' (in B' names), unordered: A's corners in closed B', B''s
+// corners in closed A but not on a corner of A, and the proper crossings of an edge of A with
+// an edge of B'. Returns their number (at most 6).
+int polygon_corners(const CoplanarSides& sd, ContactPoint c[12]) {
+  int n = 0;
+  for (int i = 0; i < 3; ++i) {
+    const int l[3] = {sd.lb[0][i], sd.lb[1][i], sd.lb[2][i]};
+    const Loc on_b = loc_from_sides(l);
+    if (on_b != kOutside) c[n++] = ContactPoint{vertex_loc(i), on_b};
+  }
+  for (int j = 0; j < 3; ++j) {
+    const int l[3] = {sd.la[0][j], sd.la[1][j], sd.la[2][j]};
+    const Loc on_a = loc_from_sides(l);
+    if (on_a != kOutside && !loc_is_vertex(on_a)) c[n++] = ContactPoint{on_a, vertex_loc(j)};
+  }
+  for (int k = 0; k < 3; ++k) {
+    for (int m = 0; m < 3; ++m) {
+      if (sd.la[k][m] * sd.la[k][(m + 1) % 3] == -1 && sd.lb[m][k] * sd.lb[m][(k + 1) % 3] == -1) {
+        c[n++] = ContactPoint{edge_loc(k), edge_loc(m)};
+      }
+    }
+  }
+  SPLINTCORE_ASSERT(n <= 6);
+  return n;
+}
+
+// The n >= 3 corners c of the polygon in order. Each boundary edge of the polygon runs along
+// an edge of A or of B', in that edge's direction (the polygon lies on the left of both): link
+// its two corners.
+void order_polygon(const CoplanarSides& sd, const ContactPoint* c, int n, ContactPoint* ordered) {
+  int next[6] = {-1, -1, -1, -1, -1, -1};
+  for (int side = 0; side < 2; ++side) {
+    for (int k = 0; k < 3; ++k) {
+      int on[2] = {-1, -1};
+      int count = 0;
+      for (int i = 0; i < n; ++i) {
+        if (loc_on_closed_edge(side == 0 ? c[i].on_a : c[i].on_b, k)) {
+          SPLINTCORE_ASSERT(count < 2);  // a convex polygon has at most 2 corners on a line
+          on[count++] = i;
+        }
+      }
+      if (count < 2) continue;
+      const bool swap = sd.key(side, k, c[on[0]]) > sd.key(side, k, c[on[1]]);
+      const int from = on[swap ? 1 : 0], to = on[swap ? 0 : 1];
+      SPLINTCORE_ASSERT(next[from] == -1 || next[from] == to);
+      next[from] = to;
+    }
+  }
+  int at = 0;
+  for (int i = 0; i < n; ++i) {
+    ordered[i] = c[at];
+    at = next[at];
+    SPLINTCORE_ASSERT(at >= 0 && (at == 0) == (i == n - 1));
+  }
+}
+
+// Coplanar triangles (see the top of the file). B' is b re-indexed to run the same way round
+// as a: corner i of B' is corner perm[i] of b, edge m of B' is edge emap[m] of b.
+void coplanar_contact(const Vec3 a[3], const Vec3 b[3], Contact* out) {
+  const Projection pr = projection_of(a);
+  const int sigma_b = orient2(pr, b[0], b[1], b[2]);
+  SPLINTCORE_ASSERT(sigma_b != 0);  // same plane, so the projection keeps b proper too
+  const bool reversed = sigma_b != pr.sigma;
+  const int perm[3] = {0, reversed ? 2 : 1, reversed ? 1 : 2};
+  const int emap[3] = {reversed ? 2 : 0, 1, reversed ? 0 : 2};
+  const Vec3 bp[3] = {b[perm[0]], b[perm[1]], b[perm[2]]};
+  CoplanarSides sd;
+  for (int k = 0; k < 3; ++k) {
+    for (int j = 0; j < 3; ++j) {
+      sd.la[k][j] = pr.sigma * orient2(pr, a[k], a[(k + 1) % 3], bp[j]);
+      sd.lb[k][j] = pr.sigma * orient2(pr, bp[k], bp[(k + 1) % 3], a[j]);
+    }
+  }
+  ContactPoint c[12];  // B' names until the end
+  const int n = polygon_corners(sd, c);
   ContactPoint ordered[6];
   if (n == 1) {
     ordered[0] = c[0];
@@ -260,36 +304,11 @@ void coplanar_contact(const Vec3 a[3], const Vec3 b[3], Contact* out) {
     int k = 0;
     while (k < 3 && !(loc_on_closed_edge(c[0].on_a, k) && loc_on_closed_edge(c[1].on_a, k))) ++k;
     SPLINTCORE_ASSERT(k < 3);
-    const bool swap = key(0, k, c[0]) > key(0, k, c[1]);
+    const bool swap = sd.key(0, k, c[0]) > sd.key(0, k, c[1]);
     ordered[0] = c[swap ? 1 : 0];
     ordered[1] = c[swap ? 0 : 1];
   } else if (n >= 3) {
-    // Each boundary edge of the polygon runs along an edge of A or of B', in that edge's
-    // direction (the polygon lies on the left of both): link its two corners.
-    int next[6] = {-1, -1, -1, -1, -1, -1};
-    for (int side = 0; side < 2; ++side) {
-      for (int k = 0; k < 3; ++k) {
-        int on[2] = {-1, -1};
-        int count = 0;
-        for (int i = 0; i < n; ++i) {
-          if (loc_on_closed_edge(side == 0 ? c[i].on_a : c[i].on_b, k)) {
-            SPLINTCORE_ASSERT(count < 2);  // a convex polygon has at most 2 corners on a line
-            on[count++] = i;
-          }
-        }
-        if (count < 2) continue;
-        const bool swap = key(side, k, c[on[0]]) > key(side, k, c[on[1]]);
-        const int from = on[swap ? 1 : 0], to = on[swap ? 0 : 1];
-        SPLINTCORE_ASSERT(next[from] == -1 || next[from] == to);
-        next[from] = to;
-      }
-    }
-    int at = 0;
-    for (int i = 0; i < n; ++i) {
-      ordered[i] = c[at];
-      at = next[at];
-      SPLINTCORE_ASSERT(at >= 0 && (at == 0) == (i == n - 1));
-    }
+    order_polygon(sd, c, n, ordered);
   }
   out->kind = n == 0 ? ContactKind::kNone
                      : (n == 1 ? ContactKind::kPoint

@@ -37,6 +37,103 @@ EdgePlanes edge_planes(const Vec3& a0, const Vec3& a1, const Vec3& a2) {
   return e;
 }
 
+namespace {
+
+// B beyond one of A's edge prisms (2-D; a filter: only certain answers are used): disjoint,
+// which the exact tests would answer kNone too.
+inline bool beyond_edge_prism(const EdgePlanes& ea, const Vec3 B[3]) {
+  const double bu[3] = {B[0][ea.u], B[1][ea.u], B[2][ea.u]};
+  const double bv[3] = {B[0][ea.v], B[1][ea.v], B[2][ea.v]};
+  for (int k = 0; k < 3; ++k) {
+    if (ea.inside2[k] == 0) continue;
+    int j = 0;
+    while (j < 3 && side2(ea, k, bu[j], bv[j]) == -ea.inside2[k]) ++j;
+    if (j == 3) return true;
+  }
+  return false;
+}
+
+// B strictly within all three of A's edge planes (3-D, the normal's direction: this test
+// decides which pairs take the shortcut in intersect_pair, so it stays the one it always was;
+// a pair it sends to the exact tests instead may find a degenerate contact there). sb: B's
+// corners against A's plane.
+inline bool within_edge_planes(const EdgePlanes& ea, const Vec3 B[3], const int sb[3]) {
+  bool within = sb[0] != 0 && sb[1] != 0 && sb[2] != 0;
+  for (int k = 0; k < 3 && within; ++k) {
+    within = ea.inside[k] != 0;
+    for (int j = 0; j < 3 && within; ++j) within = filtered_side(ea.plane[k], B[j]) == ea.inside[k];
+  }
+  return within;
+}
+
+// The ends of A's and B's intervals along d = n_a x n_b (the keys of the edges they lie on).
+struct Intervals {
+  uint64_t a_start, a_end, b_start, b_end;
+};
+
+// The segment of a crossing pair with no corner on the other plane: i0 (j0) is A's (B's) lone
+// corner, on B's (A's) inside when a_inside (b_inside). The four crossing edges: A's first
+// (a_i0 -> a_i0+1) and second (a_i0+2 -> a_i0), B's likewise, each in its triangle's order.
+// Every answer below comes from the signs of the four tetrahedra (B edge, A edge), each
+// computed at most once (orient3d is alternating, so the sign of (A edge, B edge) is the same
+// number). Fills *hit when the pair crosses (kSegment).
+inline PairResult order_crossings(const Vec3 A[3], const Vec3 B[3], int i0, int j0, bool a_inside,
+                                  bool b_inside, const Intervals& iv, uint32_t ta, uint32_t tb,
+                                  Hit* hit) {
+  const int ia[2][2] = {{i0, (i0 + 1) % 3}, {(i0 + 2) % 3, i0}};
+  const int jb[2][2] = {{j0, (j0 + 1) % 3}, {(j0 + 2) % 3, j0}};
+  int memo[2][2] = {{2, 2}, {2, 2}};  // 2: not computed yet
+  auto tet = [&](int fb, int fa) {
+    int& m = memo[fb][fa];
+    if (m == 2) {
+      m = sign_of(orient3d(B[jb[fb][0]], B[jb[fb][1]], A[ia[fa][0]], A[ia[fa][1]]));
+    }
+    return m;
+  };
+  const int fa_start = a_inside ? 0 : 1;  // a_start is A's first crossing edge, or its second
+  const int fb_start = b_inside ? 1 : 0;
+  // Where B's edge fb meets A's plane, against A's triangle; A's edge fa against B's.
+  auto through_a = [&](int fb) { return through(tet(fb, 0), tet(fb, 1)); };
+  auto through_b = [&](int fa) { return through(tet(0, fa), tet(1, fa)); };
+  // The segment is [max(starts), min(ends)]: B's start is the later one exactly when it lies
+  // inside A's triangle, else A's start when it lies inside B's; likewise the ends. (B's ends
+  // first: B is the small mesh's triangle in the splint case, usually inside A's.)
+  bool have_start = false, have_end = false;
+  const Through bs = through_a(fb_start);
+  if (bs == kOnBoundary) return PairResult::kDegenerate;
+  if (bs == kIn) {
+    hit->start = PointKey{iv.b_start, ta, 0};
+    have_start = true;
+  } else {
+    const Through as = through_b(fa_start);
+    if (as == kOnBoundary) return PairResult::kDegenerate;
+    if (as == kIn) {
+      hit->start = PointKey{iv.a_start, tb, 0};
+      have_start = true;
+    }
+  }
+  const Through be = through_a(1 - fb_start);
+  if (be == kOnBoundary) return PairResult::kDegenerate;
+  if (be == kIn) {
+    hit->end = PointKey{iv.b_end, ta, 0};
+    have_end = true;
+  } else {
+    const Through ae = through_b(1 - fa_start);
+    if (ae == kOnBoundary) return PairResult::kDegenerate;
+    if (ae == kIn) {
+      hit->end = PointKey{iv.a_end, tb, 0};
+      have_end = true;
+    }
+  }
+  if (!have_start && !have_end) return PairResult::kNone;
+  if (have_start != have_end) return PairResult::kDegenerate;  // cannot happen exactly
+  hit->ta = ta;
+  hit->tb = tb;
+  return PairResult::kSegment;
+}
+
+}  // namespace
+
 // pa, pb: the planes of ta and tb as filters (plane_filter of their corners in order); ea:
 // ta's edge planes. The caller has tested tb's whole box against ea's planes first
 // (detail::box_beyond): a box strictly beyond one means disjoint triangles, which the exact
@@ -52,35 +149,20 @@ PairResult intersect_pair(const Inputs& in, uint32_t ta, uint32_t tb, const Plan
   int sa[3], sb[3];
   for (int j = 0; j < 3; ++j) sb[j] = -exact_side(pa, A[1], A[2], B[j]);
   if (sb[0] == sb[1] && sb[1] == sb[2] && sb[0] != 0) return PairResult::kNone;
-  // B beyond one of A's edge prisms (2-D; a filter: only certain answers are used): disjoint,
-  // which the exact tests below would answer kNone too.
-  const double bu[3] = {B[0][ea.u], B[1][ea.u], B[2][ea.u]};
-  const double bv[3] = {B[0][ea.v], B[1][ea.v], B[2][ea.v]};
-  for (int k = 0; k < 3; ++k) {
-    if (ea.inside2[k] == 0) continue;
-    int j = 0;
-    while (j < 3 && side2(ea, k, bu[j], bv[j]) == -ea.inside2[k]) ++j;
-    if (j == 3) return PairResult::kNone;
-  }
-  // B strictly within all three of A's edge planes (3-D, the normal's direction: this test
-  // decides which pairs take the shortcut below, so it stays the one it always was; a pair it
-  // sends to the exact tests instead may find a degenerate contact there).
-  bool within = sb[0] != 0 && sb[1] != 0 && sb[2] != 0;
-  for (int k = 0; k < 3 && within; ++k) {
-    within = ea.inside[k] != 0;
-    for (int j = 0; j < 3 && within; ++j) within = filtered_side(ea.plane[k], B[j]) == ea.inside[k];
-  }
+  if (beyond_edge_prism(ea, B)) return PairResult::kNone;
+  const bool within = within_edge_planes(ea, B, sb);
   const int j0 = lone(sb);
+  Intervals iv;
   // B's interval along d_b = n_b x n_a runs from its edge (b_j0, b_j0+1) to (b_j0+2, b_j0) when
   // b_j0 is on A's inside (by symmetry with A's below), so along d it is reversed.
   const uint64_t b_first = edge_key(gb[j0], gb[(j0 + 1) % 3]);
   const uint64_t b_second = edge_key(gb[(j0 + 2) % 3], gb[j0]);
-  const uint64_t b_start = sb[j0] > 0 ? b_second : b_first;
-  const uint64_t b_end = sb[j0] > 0 ? b_first : b_second;
+  iv.b_start = sb[j0] > 0 ? b_second : b_first;
+  iv.b_end = sb[j0] > 0 ? b_first : b_second;
   if (within) {
     // Both of B's crossings of A's plane lie inside A: the segment is B's whole interval.
-    hit->start = PointKey{b_start, ta, 0};
-    hit->end = PointKey{b_end, ta, 0};
+    hit->start = PointKey{iv.b_start, ta, 0};
+    hit->end = PointKey{iv.b_end, ta, 0};
     hit->ta = ta;
     hit->tb = tb;
     return PairResult::kSegment;
@@ -96,63 +178,9 @@ PairResult intersect_pair(const Inputs& in, uint32_t ta, uint32_t tb, const Plan
   // when a_i0 is on the inside of B's plane, the other way round otherwise.
   const uint64_t a_first = edge_key(ga[i0], ga[(i0 + 1) % 3]);
   const uint64_t a_second = edge_key(ga[(i0 + 2) % 3], ga[i0]);
-  const uint64_t a_start = sa[i0] > 0 ? a_first : a_second;
-  const uint64_t a_end = sa[i0] > 0 ? a_second : a_first;
-
-  // The four crossing edges: A's first (a_i0 -> a_i0+1) and second (a_i0+2 -> a_i0), B's
-  // likewise, each in its triangle's order. Every answer below comes from the signs of the
-  // four tetrahedra (B edge, A edge), each computed at most once (orient3d is alternating, so
-  // the sign of (A edge, B edge) is the same number).
-  const int ia[2][2] = {{i0, (i0 + 1) % 3}, {(i0 + 2) % 3, i0}};
-  const int jb[2][2] = {{j0, (j0 + 1) % 3}, {(j0 + 2) % 3, j0}};
-  int memo[2][2] = {{2, 2}, {2, 2}};  // 2: not computed yet
-  auto tet = [&](int fb, int fa) {
-    int& m = memo[fb][fa];
-    if (m == 2) {
-      m = sign_of(orient3d(B[jb[fb][0]], B[jb[fb][1]], A[ia[fa][0]], A[ia[fa][1]]));
-    }
-    return m;
-  };
-  const int fa_start = sa[i0] > 0 ? 0 : 1;  // a_start is A's first crossing edge, or its second
-  const int fb_start = sb[j0] > 0 ? 1 : 0;
-  // Where B's edge fb meets A's plane, against A's triangle; A's edge fa against B's.
-  auto through_a = [&](int fb) { return through(tet(fb, 0), tet(fb, 1)); };
-  auto through_b = [&](int fa) { return through(tet(0, fa), tet(1, fa)); };
-  // The segment is [max(starts), min(ends)]: B's start is the later one exactly when it lies
-  // inside A's triangle, else A's start when it lies inside B's; likewise the ends. (B's ends
-  // first: B is the small mesh's triangle in the splint case, usually inside A's.)
-  bool have_start = false, have_end = false;
-  const Through bs = through_a(fb_start);
-  if (bs == kOnBoundary) return PairResult::kDegenerate;
-  if (bs == kIn) {
-    hit->start = PointKey{b_start, ta, 0};
-    have_start = true;
-  } else {
-    const Through as = through_b(fa_start);
-    if (as == kOnBoundary) return PairResult::kDegenerate;
-    if (as == kIn) {
-      hit->start = PointKey{a_start, tb, 0};
-      have_start = true;
-    }
-  }
-  const Through be = through_a(1 - fb_start);
-  if (be == kOnBoundary) return PairResult::kDegenerate;
-  if (be == kIn) {
-    hit->end = PointKey{b_end, ta, 0};
-    have_end = true;
-  } else {
-    const Through ae = through_b(1 - fa_start);
-    if (ae == kOnBoundary) return PairResult::kDegenerate;
-    if (ae == kIn) {
-      hit->end = PointKey{a_end, tb, 0};
-      have_end = true;
-    }
-  }
-  if (!have_start && !have_end) return PairResult::kNone;
-  if (have_start != have_end) return PairResult::kDegenerate;  // cannot happen exactly
-  hit->ta = ta;
-  hit->tb = tb;
-  return PairResult::kSegment;
+  iv.a_start = sa[i0] > 0 ? a_first : a_second;
+  iv.a_end = sa[i0] > 0 ? a_second : a_first;
+  return order_crossings(A, B, i0, j0, sa[i0] > 0, sb[j0] > 0, iv, ta, tb, hit);
 }
 
 // The exact crossing rounded once: the same key always gives the same bits.
@@ -296,109 +324,137 @@ Status BooleanRun::find_hits() {
   return Status::ok();
 }
 
-// A degenerate pair (a corner on the other plane, or edges meeting exactly): its exact contact
-// (contact.h) becomes records for both triangles. Input vertices on the other surface are
-// marked (kVertexOn); a vertex of B on a vertex of A becomes that vertex (alias_).
-Status BooleanRun::add_contact(uint32_t ta, uint32_t tb) {
-  using detail::Loc;
-  uint32_t ga[3], gb[3];
-  in_.corners(ta, ga);
-  in_.corners(tb, gb);
-  const Vec3 A[3] = {in_.vertex(ga[0]), in_.vertex(ga[1]), in_.vertex(ga[2])};
-  const Vec3 B[3] = {in_.vertex(gb[0]), in_.vertex(gb[1]), in_.vertex(gb[2])};
-  // The predicates are exact for coordinates 0 or of magnitude 2^-306 .. 2^338 (geometry.h);
-  // outside that (subnormal or astronomical coordinates) the contact is not decided here.
+namespace {
+
+// The predicates are exact for coordinates 0 or of magnitude 2^-306 .. 2^338 (geometry.h);
+// outside that (subnormal or astronomical coordinates) the contact is not decided here.
+bool within_exact_range(const Vec3 A[3], const Vec3 B[3]) {
   for (int i = 0; i < 3; ++i) {
     for (int k = 0; k < 3; ++k) {
       const double x = A[i][k] < 0 ? -A[i][k] : A[i][k];
       const double y = B[i][k] < 0 ? -B[i][k] : B[i][k];
       if ((x != 0 && (x < 0x1p-300 || x > 0x1p330)) || (y != 0 && (y < 0x1p-300 || y > 0x1p330))) {
-        return degenerate(ta, tb);
+        return false;
       }
     }
   }
+  return true;
+}
+
+}  // namespace
+
+// Vertex bv of B lies on vertex av of A: bv becomes av (alias_, allocated at the first one).
+Status BooleanRun::alias_b_vertex(uint32_t bv, uint32_t av) {
+  if (alias_ == nullptr) {
+    alias_ = arena_.allocate_array<uint32_t>(in_.nvb);
+    if (alias_ == nullptr) return arena_.exhausted_status();
+    std::memset(alias_, 0xff, size_t{in_.nvb} * sizeof(uint32_t));
+  }
+  uint32_t& al = alias_[bv - in_.nva];
+  if (al != ~0u && al != av) {
+    return make_error(StatusCode::kUnsupported, "vertex ", bv - in_.nva,
+                      " of B lies on two vertices of A (", al, " and ", av,
+                      "): A has coincident vertices")
+        .at_index(bv - in_.nva);
+  }
+  al = av;
+  return Status::ok();
+}
+
+// The name of contact point cp between triangles ta (corners ga) and tb (corners gb) (DegPoint);
+// an input vertex on the other surface is marked kVertexOn.
+Status BooleanRun::name_contact_point(const detail::ContactPoint& cp, const uint32_t ga[3],
+                                      const uint32_t gb[3], uint32_t ta, uint32_t tb,
+                                      DegPoint* name) {
+  using detail::Loc;
+  DegPoint d{0, 0, kDegVertex};
+  const bool va = detail::loc_is_vertex(cp.on_a), vb = detail::loc_is_vertex(cp.on_b);
+  if (va) {
+    d.k1 = ga[detail::loc_index(cp.on_a)];
+    vstate_[d.k1] = kVertexOn;
+    if (vb) {
+      const uint32_t bv = gb[detail::loc_index(cp.on_b)];
+      vstate_[bv] = kVertexOn;
+      SPLINTCORE_RETURN_IF_ERROR(alias_b_vertex(bv, static_cast<uint32_t>(d.k1)));
+    }
+  } else if (vb) {
+    d.k1 = gb[detail::loc_index(cp.on_b)];
+    vstate_[d.k1] = kVertexOn;
+  } else {
+    const int i0 = detail::loc_index(cp.on_a), j0 = detail::loc_index(cp.on_b);
+    if (cp.on_b == Loc::kFace) {
+      d = DegPoint{edge_key(ga[i0], ga[(i0 + 1) % 3]), tb, kDegEdgeFace};
+    } else if (cp.on_a == Loc::kFace) {
+      d = DegPoint{edge_key(gb[j0], gb[(j0 + 1) % 3]), ta, kDegEdgeFace};
+    } else {
+      d = DegPoint{edge_key(ga[i0], ga[(i0 + 1) % 3]), edge_key(gb[j0], gb[(j0 + 1) % 3]),
+                   kDegEdgeEdge};
+    }
+  }
+  *name = d;
+  return Status::ok();
+}
+
+// The part of contact c from its point i to its point j (a lone point when i == j), recorded
+// for ta and for tb.
+Status BooleanRun::record_contact(const detail::Contact& c, const DegPoint name[6], int i, int j,
+                                  uint8_t kind, uint32_t ta, uint32_t tb) {
+  const detail::ContactPoint& p = c.p[i];
+  const detail::ContactPoint& q = c.p[j];
+  DegRecord ra{};
+  ra.p[0] = name[i];
+  ra.p[1] = name[j];
+  ra.tri = ta;
+  ra.other = tb;
+  ra.kind = kind;
+  DegRecord rb = ra;
+  rb.tri = tb;
+  rb.other = ta;
+  ra.loc_t[0] = static_cast<uint8_t>(p.on_a);
+  ra.loc_t[1] = static_cast<uint8_t>(q.on_a);
+  ra.loc_o[0] = static_cast<uint8_t>(p.on_b);
+  ra.loc_o[1] = static_cast<uint8_t>(q.on_b);
+  rb.loc_t[0] = ra.loc_o[0];
+  rb.loc_t[1] = ra.loc_o[1];
+  rb.loc_o[0] = ra.loc_t[0];
+  rb.loc_o[1] = ra.loc_t[1];
+  // A lone point at a corner of the triangle changes nothing there (flooding treats the
+  // corner as on the other surface).
+  if (kind != kDegPointOnly || !detail::loc_is_vertex(p.on_a)) {
+    if (!deg_.push_back(ra)) return arena_.exhausted_status();
+  }
+  if (kind != kDegPointOnly || !detail::loc_is_vertex(p.on_b)) {
+    if (!deg_.push_back(rb)) return arena_.exhausted_status();
+  }
+  return Status::ok();
+}
+
+// A degenerate pair (a corner on the other plane, or edges meeting exactly): its exact contact
+// (contact.h) becomes records for both triangles. Input vertices on the other surface are
+// marked (kVertexOn); a vertex of B on a vertex of A becomes that vertex (alias_).
+Status BooleanRun::add_contact(uint32_t ta, uint32_t tb) {
+  uint32_t ga[3], gb[3];
+  in_.corners(ta, ga);
+  in_.corners(tb, gb);
+  const Vec3 A[3] = {in_.vertex(ga[0]), in_.vertex(ga[1]), in_.vertex(ga[2])};
+  const Vec3 B[3] = {in_.vertex(gb[0]), in_.vertex(gb[1]), in_.vertex(gb[2])};
+  if (!within_exact_range(A, B)) return degenerate(ta, tb);
   detail::Contact c;
   if (!detail::intersect_triangles(A, B, &c)) return degenerate(ta, tb);
   if (c.kind == detail::ContactKind::kNone) return Status::ok();
   ++st_.degenerate_pairs;
   DegPoint name[6];
   for (int i = 0; i < c.count; ++i) {
-    const detail::ContactPoint& cp = c.p[i];
-    DegPoint d{0, 0, kDegVertex};
-    const bool va = detail::loc_is_vertex(cp.on_a), vb = detail::loc_is_vertex(cp.on_b);
-    if (va) {
-      d.k1 = ga[detail::loc_index(cp.on_a)];
-      vstate_[d.k1] = kVertexOn;
-      if (vb) {
-        const uint32_t bv = gb[detail::loc_index(cp.on_b)];
-        vstate_[bv] = kVertexOn;
-        if (alias_ == nullptr) {
-          alias_ = arena_.allocate_array<uint32_t>(in_.nvb);
-          if (alias_ == nullptr) return arena_.exhausted_status();
-          std::memset(alias_, 0xff, size_t{in_.nvb} * sizeof(uint32_t));
-        }
-        uint32_t& al = alias_[bv - in_.nva];
-        if (al != ~0u && al != d.k1) {
-          return make_error(StatusCode::kUnsupported, "vertex ", bv - in_.nva,
-                            " of B lies on two vertices of A (", al, " and ", d.k1,
-                            "): A has coincident vertices")
-              .at_index(bv - in_.nva);
-        }
-        al = static_cast<uint32_t>(d.k1);
-      }
-    } else if (vb) {
-      d.k1 = gb[detail::loc_index(cp.on_b)];
-      vstate_[d.k1] = kVertexOn;
-    } else {
-      const int i0 = detail::loc_index(cp.on_a), j0 = detail::loc_index(cp.on_b);
-      if (cp.on_b == Loc::kFace) {
-        d = DegPoint{edge_key(ga[i0], ga[(i0 + 1) % 3]), tb, kDegEdgeFace};
-      } else if (cp.on_a == Loc::kFace) {
-        d = DegPoint{edge_key(gb[j0], gb[(j0 + 1) % 3]), ta, kDegEdgeFace};
-      } else {
-        d = DegPoint{edge_key(ga[i0], ga[(i0 + 1) % 3]), edge_key(gb[j0], gb[(j0 + 1) % 3]),
-                     kDegEdgeEdge};
-      }
-    }
-    name[i] = d;
+    SPLINTCORE_RETURN_IF_ERROR(name_contact_point(c.p[i], ga, gb, ta, tb, &name[i]));
   }
-  auto record = [&](int i, int j, uint8_t kind) -> Status {
-    const detail::ContactPoint& p = c.p[i];
-    const detail::ContactPoint& q = c.p[j];
-    DegRecord ra{};
-    ra.p[0] = name[i];
-    ra.p[1] = name[j];
-    ra.tri = ta;
-    ra.other = tb;
-    ra.kind = kind;
-    DegRecord rb = ra;
-    rb.tri = tb;
-    rb.other = ta;
-    ra.loc_t[0] = static_cast<uint8_t>(p.on_a);
-    ra.loc_t[1] = static_cast<uint8_t>(q.on_a);
-    ra.loc_o[0] = static_cast<uint8_t>(p.on_b);
-    ra.loc_o[1] = static_cast<uint8_t>(q.on_b);
-    rb.loc_t[0] = ra.loc_o[0];
-    rb.loc_t[1] = ra.loc_o[1];
-    rb.loc_o[0] = ra.loc_t[0];
-    rb.loc_o[1] = ra.loc_t[1];
-    // A lone point at a corner of the triangle changes nothing there (flooding treats the
-    // corner as on the other surface).
-    if (kind != kDegPointOnly || !detail::loc_is_vertex(p.on_a)) {
-      if (!deg_.push_back(ra)) return arena_.exhausted_status();
-    }
-    if (kind != kDegPointOnly || !detail::loc_is_vertex(p.on_b)) {
-      if (!deg_.push_back(rb)) return arena_.exhausted_status();
-    }
-    return Status::ok();
-  };
   switch (c.kind) {
-    case detail::ContactKind::kPoint: return record(0, 0, kDegPointOnly);
+    case detail::ContactKind::kPoint: return record_contact(c, name, 0, 0, kDegPointOnly, ta, tb);
     case detail::ContactKind::kSegment:
-      return record(0, 1, c.coplanar ? kDegCoplanar : kDegTransversal);
+      return record_contact(c, name, 0, 1, c.coplanar ? kDegCoplanar : kDegTransversal, ta, tb);
     case detail::ContactKind::kPolygon:
       for (int i = 0; i < c.count; ++i) {
-        SPLINTCORE_RETURN_IF_ERROR(record(i, (i + 1) % c.count, kDegCoplanar));
+        SPLINTCORE_RETURN_IF_ERROR(
+            record_contact(c, name, i, (i + 1) % c.count, kDegCoplanar, ta, tb));
       }
       return Status::ok();
     case detail::ContactKind::kNone: break;

@@ -76,58 +76,184 @@ bool BooleanRun::keep(int8_t state, bool is_a) const {
   }
 }
 
+namespace {
+
+// Each set of pieces joined across unconstrained edges (uf) takes the vote of its members,
+// kept at its root in `state` (kStateNone: no member voted); false when two members disagree.
+bool joined_states(UnionFind& uf, const int8_t* vote, uint32_t k, int8_t* state) {
+  for (uint32_t j = 0; j < k; ++j) state[j] = kStateNone;
+  for (uint32_t j = 0; j < k; ++j) {
+    if (vote[j] == kStateNone) continue;
+    const uint32_t r = uf.find(j);
+    if (state[r] == kStateNone) {
+      state[r] = vote[j];
+    } else if (state[r] != vote[j]) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// Gives input vertex v (a corner of a cut triangle) state sj; false when it has the other one
+// (all pieces at a corner agree: no segment passes through an input vertex).
+inline bool set_corner_state(int8_t* vstate, uint32_t v, int8_t sj) {
+  const int8_t vs = vstate[v];
+  if (vs == kVertexOn) return true;  // on the other surface: no state to pass on
+  if (vs != 0 && vs != sj) return false;
+  vstate[v] = sj;
+  return true;
+}
+
+// The corners c of the cut triangle (at local indices corner_at) that `piece` has take its
+// state sj; returns the first corner that has the other state (~0u: none).
+inline uint32_t pass_state_to_corners(int8_t* vstate, const detail::CdtTriangle& piece,
+                                      const uint32_t corner_at[3], const uint32_t c[3], int8_t sj) {
+  for (uint32_t e = 0; e < 3; ++e) {
+    for (uint32_t x = 0; x < 3; ++x) {
+      if (piece.v[x] == corner_at[e] && !set_corner_state(vstate, c[e], sj)) return c[e];
+    }
+  }
+  return ~0u;
+}
+
+}  // namespace
+
+// ---- A cut triangle with degenerate contacts ------------------------------------------------
+
 // A cut triangle with degenerate contacts (besides any crossing segments): its points may be
 // input vertices of the other mesh, on its edges or inside; its constraints may lie along its
 // own edges; each side of a constraint has its own state (side_state), inside, outside or on
 // the other surface. A triangle with lone points only is split as well, its pieces pending
-// (their state comes from its corners after flooding).
-Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np, const KeyIndex* dk,
-                                 size_t nd) {
-  using detail::Loc;
-  ArenaScope scope(arena_);
-  const uint32_t base = in_.nva + in_.nvb;
-  const bool is_a = t < in_.nta;
-  const uint32_t tn = is_a ? t : t - in_.nta;
-  const char* which = is_a ? " of A" : " of B";
-  auto unsupported = [&](const char* what) {
-    return make_error(StatusCode::kUnsupported, "cannot split triangle ", tn, which,
-                      " along its exact contacts: ", what)
-        .at_index(tn);
-  };
-  uint32_t raw[3], c[3];
-  in_.corners(t, raw);
-  for (int k = 0; k < 3; ++k) c[k] = canon(raw[k]);
-  const Vec3 cv[3] = {in_.vertex(raw[0]), in_.vertex(raw[1]), in_.vertex(raw[2])};
-  auto coords = [&](uint32_t id) -> const Vec3& {
-    return id < base ? in_.vertex(id) : points_[id - base].p;
-  };
-  // 1. The points: id, where (edge 0..2, 3 inside), position along the edge.
+// (their state comes from its corners after flooding). The stages, in order:
+//   1. the points: id, where (edge 0..2, 3 inside), position along the edge; distinct by id;
+//   2. the boundary order (order_points) and the projection;
+//   3. the constraints with the states of their two sides;
+//   4. the constrained Delaunay triangulation;
+//   5. the pieces' states: votes from constraint edges, pieces joined across the others.
+struct BooleanRun::ContactSplit {
   struct GPoint {
     uint32_t id, where;
     double along;
   };
-  const size_t cap = 2 * np + 2 * nd;
-  GPoint* gp = arena_.allocate_array<GPoint>(cap);
-  KeyIndex* ids = arena_.allocate_array<KeyIndex>(cap);
-  if (gp == nullptr || ids == nullptr) return arena_.exhausted_status();
+  struct Cons {
+    uint32_t from, to;
+    int8_t left, right;
+  };
+
+  ContactSplit(BooleanRun& r, uint32_t tri, const KeyIndex* proper_records, size_t proper_count,
+               const KeyIndex* contact_records, size_t contact_count)
+      : run(r),
+        arena(r.arena_),
+        t(tri),
+        proper(proper_records),
+        np(proper_count),
+        dk(contact_records),
+        nd(contact_count),
+        base(r.in_.nva + r.in_.nvb),
+        is_a(tri < r.in_.nta),
+        tn(is_a ? tri : tri - r.in_.nta),
+        which(is_a ? " of A" : " of B"),
+        out(&r.arena_) {
+    r.in_.corners(t, raw);
+    for (int k = 0; k < 3; ++k) c[k] = r.canon(raw[k]);
+    for (int k = 0; k < 3; ++k) cv[k] = r.in_.vertex(raw[k]);
+  }
+
+  Status unsupported(const char* what) const {
+    return make_error(StatusCode::kUnsupported, "cannot split triangle ", tn, which,
+                      " along its exact contacts: ", what)
+        .at_index(tn);
+  }
+  double along_edge(int k, const Vec3& p) const;
+  void add_point(uint32_t id, int where);
+  Status gather_points();
+  Status distinct_points();
+  Status order_and_project();
+  uint32_t local(uint32_t id) const;
+  Status add_constraints();
+  Status contact_line(const KeyIndex* line, size_t count, Cons* cn) const;
+  Status sides_across(const DegRecord& trans, const uint32_t sheets[2], int nsheets,
+                      Cons* cn) const;
+  Status triangulate();
+  Status vote_pieces();
+  Status emit_pieces();
+
+  BooleanRun& run;
+  Arena& arena;
+  const uint32_t t;
+  const KeyIndex* proper;  // its crossing records
+  const size_t np;
+  const KeyIndex* dk;  // its degenerate records
+  const size_t nd;
+  const uint32_t base;
+  const bool is_a;
+  const uint32_t tn;  // t's index in its own mesh
+  const char* which;
+  uint32_t raw[3], c[3];  // its corners, and as canon() names them
+  Vec3 cv[3];
+  // 1.
+  GPoint* gp = nullptr;
+  KeyIndex* ids = nullptr;
   size_t n = 0;
-  auto along_edge = [&](int k, const Vec3& p) {
-    const Vec3 d = cv[(k + 1) % 3] - cv[k];
-    const double ax = d.x < 0 ? -d.x : d.x, ay = d.y < 0 ? -d.y : d.y, az = d.z < 0 ? -d.z : d.z;
-    const int w = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
-    return d[w] > 0 ? p[w] - cv[k][w] : cv[k][w] - p[w];
-  };
-  auto add = [&](uint32_t id, int where) {
-    gp[n] =
-        GPoint{id, static_cast<uint32_t>(where), where < 3 ? along_edge(where, coords(id)) : 0.0};
-    ids[n] = KeyIndex{id, static_cast<uint32_t>(n), 0};
-    ++n;
-  };
+  GPoint* up = nullptr;  // distinct, by id
+  size_t nu = 0;
+  // 2.
+  detail::CdtPoint* pts = nullptr;
+  uint32_t* vid = nullptr;
+  uint32_t* local_of = nullptr;  // by index in `up`
+  uint32_t m = 0, boundary = 0;
+  uint32_t corner_at[3] = {};
+  // 3.
+  Cons* cons = nullptr;
+  KeyIndex* ckey = nullptr;
+  uint32_t nc = 0;
+  // 4.
+  detail::CdtSegment* segs = nullptr;
+  ArenaArray<detail::CdtTriangle> out;
+  // 5.
+  int8_t* vote = nullptr;
+  UnionFind uf;
+};
+
+Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np, const KeyIndex* dk,
+                                 size_t nd) {
+  ArenaScope scope(arena_);
+  ContactSplit s(*this, t, proper, np, dk, nd);
+  SPLINTCORE_RETURN_IF_ERROR(s.gather_points());
+  SPLINTCORE_RETURN_IF_ERROR(s.distinct_points());
+  SPLINTCORE_RETURN_IF_ERROR(s.order_and_project());
+  SPLINTCORE_RETURN_IF_ERROR(s.add_constraints());
+  SPLINTCORE_RETURN_IF_ERROR(s.triangulate());
+  SPLINTCORE_RETURN_IF_ERROR(s.vote_pieces());
+  return s.emit_pieces();
+}
+
+double BooleanRun::ContactSplit::along_edge(int k, const Vec3& p) const {
+  const Vec3 d = cv[(k + 1) % 3] - cv[k];
+  const double ax = d.x < 0 ? -d.x : d.x, ay = d.y < 0 ? -d.y : d.y, az = d.z < 0 ? -d.z : d.z;
+  const int w = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
+  return d[w] > 0 ? p[w] - cv[k][w] : cv[k][w] - p[w];
+}
+
+void BooleanRun::ContactSplit::add_point(uint32_t id, int where) {
+  gp[n] = GPoint{id, static_cast<uint32_t>(where),
+                 where < 3 ? along_edge(where, run.position(id)) : 0.0};
+  ids[n] = KeyIndex{id, static_cast<uint32_t>(n), 0};
+  ++n;
+}
+
+// 1. The points: the ends of the crossing segments and of the contacts (but t's corners).
+Status BooleanRun::ContactSplit::gather_points() {
+  using detail::Loc;
+  const size_t cap = 2 * np + 2 * nd;
+  gp = arena.allocate_array<GPoint>(cap);
+  ids = arena.allocate_array<KeyIndex>(cap);
+  if (gp == nullptr || ids == nullptr) return arena.exhausted_status();
   for (size_t i = 0; i < np; ++i) {
-    const Record& rc = rec_[proper[i].index];
+    const Record& rc = run.rec_[proper[i].index];
     for (int end = 0; end < 2; ++end) {
       const uint32_t pid = end == 0 ? rc.from : rc.to;
-      const Point& pt = points_[pid];
+      const Point& pt = run.points_[pid];
       int where = 3;
       if (pt.key.tri != t) {
         where = -1;
@@ -138,23 +264,27 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np, 
           return make_error(StatusCode::kInternal, "boolean: intersection point ", pid,
                             " is not on triangle ", t);
       }
-      add(base + pid, where);
+      add_point(base + pid, where);
     }
   }
   for (size_t i = 0; i < nd; ++i) {
-    const DegRecord& r = deg_[dk[i].index];
+    const DegRecord& r = run.deg_[dk[i].index];
     const int ends = r.kind == kDegPointOnly ? 1 : 2;
     for (int e = 0; e < ends; ++e) {
       const Loc l = static_cast<Loc>(r.loc_t[e]);
       if (detail::loc_is_vertex(l)) continue;
-      add(canon(r.id[e]), detail::loc_is_edge(l) ? detail::loc_index(l) : 3);
+      add_point(run.canon(r.id[e]), detail::loc_is_edge(l) ? detail::loc_index(l) : 3);
     }
   }
-  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, ids, n));
-  // Distinct points, by id (the same id is the same point: it must lie in the same place).
-  GPoint* up = arena_.allocate_array<GPoint>(n + 1);
-  if (up == nullptr) return arena_.exhausted_status();
-  size_t nu = 0;
+  return Status::ok();
+}
+
+// Distinct points, by id (the same id is the same point: it must lie in the same place).
+Status BooleanRun::ContactSplit::distinct_points() {
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena, ids, n));
+  up = arena.allocate_array<GPoint>(n + 1);
+  if (up == nullptr) return arena.exhausted_status();
+  nu = 0;
   for (size_t i = 0; i < n; ++i) {
     const GPoint& q = gp[ids[i].index];
     if (q.id == c[0] || q.id == c[1] || q.id == c[2])
@@ -166,51 +296,51 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np, 
     }
     up[nu++] = q;
   }
-  // 2. Boundary order: c0, edge 0's points, c1, edge 1's, c2, edge 2's; then the inside ones.
-  KeyIndex* by = arena_.allocate_array<KeyIndex>(nu);
-  detail::CdtPoint* pts = arena_.allocate_array<detail::CdtPoint>(nu + 3);
-  uint32_t* vid = arena_.allocate_array<uint32_t>(nu + 3);
-  uint32_t* local_of = arena_.allocate_array<uint32_t>(nu);  // by index in `up`
+  return Status::ok();
+}
+
+// 2. Boundary order: c0, edge 0's points, c1, edge 1's, c2, edge 2's; then the inside ones.
+Status BooleanRun::ContactSplit::order_and_project() {
+  KeyIndex* by = arena.allocate_array<KeyIndex>(nu);
+  pts = arena.allocate_array<detail::CdtPoint>(nu + 3);
+  vid = arena.allocate_array<uint32_t>(nu + 3);
+  local_of = arena.allocate_array<uint32_t>(nu);
   if (by == nullptr || pts == nullptr || vid == nullptr || local_of == nullptr)
-    return arena_.exhausted_status();
-  uint32_t m = 0, boundary = 0;
-  uint32_t corner_at[3];
+    return arena.exhausted_status();
   SPLINTCORE_RETURN_IF_ERROR(order_points(
-      arena_, nu, c, [&](size_t x) { return up[x].where; }, [&](size_t x) { return up[x].along; },
+      arena, nu, c, [&](size_t x) { return up[x].where; }, [&](size_t x) { return up[x].along; },
       [&](size_t x) { return up[x].id; }, by, vid, local_of, corner_at, &m, &boundary));
-  // Local index of a vertex id: a corner, or a point (binary search in `up`).
-  auto local = [&](uint32_t id) -> uint32_t {
-    for (int k = 0; k < 3; ++k) {
-      if (id == c[k]) return corner_at[k];
-    }
-    size_t lo = 0, hi = nu;
-    while (lo < hi) {
-      const size_t mid = (lo + hi) / 2;
-      if (up[mid].id < id)
-        lo = mid + 1;
-      else
-        hi = mid;
-    }
-    return (lo < nu && up[lo].id == id) ? local_of[lo] : ~0u;
-  };
-  {
-    const Projection pr = projection_of(cv[0], cv[1], cv[2]);
-    for (uint32_t j = 0; j < m; ++j) pts[j] = to_2d(coords(vid[j]), pr);
+  const Projection pr = projection_of(cv[0], cv[1], cv[2]);
+  for (uint32_t j = 0; j < m; ++j) pts[j] = to_2d(run.position(vid[j]), pr);
+  return Status::ok();
+}
+
+// Local index of a vertex id: a corner, or a point (binary search in `up`); ~0u when neither.
+inline uint32_t BooleanRun::ContactSplit::local(uint32_t id) const {
+  for (int k = 0; k < 3; ++k) {
+    if (id == c[k]) return corner_at[k];
   }
-  // 3. Constraints with the states of their two sides: crossing segments (inside on the
-  // left), then the degenerate segments grouped by their two ends (the records of one line
-  // from its sheets, the other mesh's triangles that hold it).
-  struct Cons {
-    uint32_t from, to;
-    int8_t left, right;
-  };
-  Cons* cons = arena_.allocate_array<Cons>(np + nd);
-  KeyIndex* ckey = arena_.allocate_array<KeyIndex>(np + nd);
-  KeyIndex* dseg = arena_.allocate_array<KeyIndex>(nd + 1);
-  if (cons == nullptr || ckey == nullptr || dseg == nullptr) return arena_.exhausted_status();
-  uint32_t nc = 0;
+  size_t lo = 0, hi = nu;
+  while (lo < hi) {
+    const size_t mid = (lo + hi) / 2;
+    if (up[mid].id < id)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return (lo < nu && up[lo].id == id) ? local_of[lo] : ~0u;
+}
+
+// 3. Constraints with the states of their two sides: crossing segments (inside on the
+// left), then the degenerate segments grouped by their two ends (the records of one line
+// from its sheets, the other mesh's triangles that hold it).
+Status BooleanRun::ContactSplit::add_constraints() {
+  cons = arena.allocate_array<Cons>(np + nd);
+  ckey = arena.allocate_array<KeyIndex>(np + nd);
+  KeyIndex* dseg = arena.allocate_array<KeyIndex>(nd + 1);
+  if (cons == nullptr || ckey == nullptr || dseg == nullptr) return arena.exhausted_status();
   for (size_t x = 0; x < np; ++x) {
-    const Record& rc = rec_[proper[x].index];
+    const Record& rc = run.rec_[proper[x].index];
     const uint32_t from = local(base + rc.from), to = local(base + rc.to);
     if (from == ~0u || to == ~0u)
       return make_error(StatusCode::kInternal, "boolean: a segment end is not a point of triangle ",
@@ -219,93 +349,110 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np, 
   }
   size_t ns = 0;
   for (size_t x = 0; x < nd; ++x) {
-    const DegRecord& r = deg_[dk[x].index];
+    const DegRecord& r = run.deg_[dk[x].index];
     if (r.kind == kDegPointOnly) continue;
-    const uint32_t a = local(canon(r.id[0])), b = local(canon(r.id[1]));
+    const uint32_t a = local(run.canon(r.id[0])), b = local(run.canon(r.id[1]));
     if (a == ~0u || b == ~0u)
       return make_error(StatusCode::kInternal, "boolean: a contact end is not a point of triangle ",
                         t);
     if (a == b) return unsupported("a contact segment with both ends at one point");
     dseg[ns++] = KeyIndex{edge_key(a, b), static_cast<uint32_t>(x), 0};
   }
-  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, dseg, ns));
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena, dseg, ns));
   for (size_t g = 0; g < ns;) {
     size_t g_end = g + 1;
     while (g_end < ns && dseg[g_end].key == dseg[g].key) ++g_end;
-    uint32_t sheets[2];
-    int nsheets = 0;
-    const DegRecord* trans = nullptr;
-    for (size_t x = g; x < g_end; ++x) {
-      const DegRecord& r = deg_[dk[dseg[x].index].index];
-      bool seen = false;
-      for (int y = 0; y < nsheets; ++y) seen = seen || sheets[y] == r.other;
-      if (!seen) {
-        if (nsheets == 2)
-          return unsupported("a contact line held by more than two triangles of the other mesh");
-        sheets[nsheets++] = r.other;
-      }
-      if (r.kind == kDegTransversal && trans == nullptr) trans = &r;
-    }
-    const DegRecord& first = deg_[dk[dseg[g].index].index];
-    const Loc l0 = static_cast<Loc>(first.loc_t[0]), l1 = static_cast<Loc>(first.loc_t[1]);
-    int on_edge = -1;
-    for (int k = 0; k < 3; ++k) {
-      if (detail::loc_on_closed_edge(l0, k) && detail::loc_on_closed_edge(l1, k)) on_edge = k;
-    }
-    Cons cn{key_hi(dseg[g].key), key_lo(dseg[g].key), kStateNone, kStateNone};
-    if (on_edge >= 0) {
-      // Along t's own edge: one side only, the one with t's third corner.
-      const int8_t s = side_state(t, raw[(on_edge + 2) % 3], sheets, nsheets);
-      cn.left = cn.right = s;
-    } else if (trans != nullptr) {
-      // Across t: its corners on each side, from the transversal sheet's plane (the segment
-      // runs along n_a x n_b: A's left is below B's plane, B's left above A's).
-      uint32_t o[3];
-      in_.corners(trans->other, o);
-      const Vec3 q0 = in_.vertex(o[0]), q1 = in_.vertex(o[1]), q2 = in_.vertex(o[2]);
-      const int left_sign = is_a ? 1 : -1;
-      uint32_t lc = ~0u, rc = ~0u;
-      for (int k = 0; k < 3; ++k) {
-        const int sd = sign_of(orient3d(q0, q1, q2, cv[k]));
-        if (sd == left_sign && lc == ~0u) lc = raw[k];
-        if (sd == -left_sign && rc == ~0u) rc = raw[k];
-      }
-      if (lc == ~0u || rc == ~0u)
-        return unsupported("a contact segment across it without corners on both sides");
-      cn.from = local(canon(trans->id[0]));
-      cn.to = local(canon(trans->id[1]));
-      cn.left = side_state(t, lc, sheets, nsheets);
-      cn.right = side_state(t, rc, sheets, nsheets);
-    } else {
-      // Coplanar only, across t: two coplanar sheets (t lies on both sides).
-      if (nsheets != 2)
-        return unsupported(
-            "a coplanar contact side inside it with one triangle of the other mesh (an open "
-            "border?)");
-      cn.left = on_state(t, sheets[0]);
-      cn.right = on_state(t, sheets[1]);
-    }
-    if (cn.left == kStateNone || cn.right == kStateNone)
-      return unsupported("a contact line whose sides could not be classified");
-    cons[nc++] = cn;
+    SPLINTCORE_RETURN_IF_ERROR(contact_line(dseg + g, g_end - g, &cons[nc++]));
     g = g_end;
   }
-  // 4. Triangulate: the boundary, then the constraints (repeats of boundary edges allowed).
-  detail::CdtSegment* segs = arena_.allocate_array<detail::CdtSegment>(boundary + nc);
-  if (segs == nullptr) return arena_.exhausted_status();
+  return Status::ok();
+}
+
+// One contact line: `line`, its records (the same two ends, from each of its sheets).
+Status BooleanRun::ContactSplit::contact_line(const KeyIndex* line, size_t count, Cons* cn) const {
+  using detail::Loc;
+  SPLINTCORE_ASSERT(count > 0);
+  uint32_t sheets[2];
+  int nsheets = 0;
+  const DegRecord* trans = nullptr;
+  for (size_t x = 0; x < count; ++x) {
+    const DegRecord& r = run.deg_[dk[line[x].index].index];
+    bool seen = false;
+    for (int y = 0; y < nsheets; ++y) seen = seen || sheets[y] == r.other;
+    if (!seen) {
+      if (nsheets == 2)
+        return unsupported("a contact line held by more than two triangles of the other mesh");
+      sheets[nsheets++] = r.other;
+    }
+    if (r.kind == kDegTransversal && trans == nullptr) trans = &r;
+  }
+  const DegRecord& first = run.deg_[dk[line[0].index].index];
+  const Loc l0 = static_cast<Loc>(first.loc_t[0]), l1 = static_cast<Loc>(first.loc_t[1]);
+  int on_edge = -1;
+  for (int k = 0; k < 3; ++k) {
+    if (detail::loc_on_closed_edge(l0, k) && detail::loc_on_closed_edge(l1, k)) on_edge = k;
+  }
+  *cn = Cons{key_hi(line[0].key), key_lo(line[0].key), kStateNone, kStateNone};
+  if (on_edge >= 0) {
+    // Along t's own edge: one side only, the one with t's third corner.
+    const int8_t s = run.side_state(t, raw[(on_edge + 2) % 3], sheets, nsheets);
+    cn->left = cn->right = s;
+  } else if (trans != nullptr) {
+    SPLINTCORE_RETURN_IF_ERROR(sides_across(*trans, sheets, nsheets, cn));
+  } else {
+    // Coplanar only, across t: two coplanar sheets (t lies on both sides).
+    if (nsheets != 2)
+      return unsupported(
+          "a coplanar contact side inside it with one triangle of the other mesh (an open "
+          "border?)");
+    cn->left = run.on_state(t, sheets[0]);
+    cn->right = run.on_state(t, sheets[1]);
+  }
+  if (cn->left == kStateNone || cn->right == kStateNone)
+    return unsupported("a contact line whose sides could not be classified");
+  return Status::ok();
+}
+
+// A contact line across t with a transversal record `trans`: t's corners on each side, from
+// the transversal sheet's plane (the segment runs along n_a x n_b: A's left is below B's
+// plane, B's left above A's).
+Status BooleanRun::ContactSplit::sides_across(const DegRecord& trans, const uint32_t sheets[2],
+                                              int nsheets, Cons* cn) const {
+  uint32_t o[3];
+  run.in_.corners(trans.other, o);
+  const Vec3 q0 = run.in_.vertex(o[0]), q1 = run.in_.vertex(o[1]), q2 = run.in_.vertex(o[2]);
+  const int left_sign = is_a ? 1 : -1;
+  uint32_t lc = ~0u, rc = ~0u;
+  for (int k = 0; k < 3; ++k) {
+    const int sd = sign_of(orient3d(q0, q1, q2, cv[k]));
+    if (sd == left_sign && lc == ~0u) lc = raw[k];
+    if (sd == -left_sign && rc == ~0u) rc = raw[k];
+  }
+  if (lc == ~0u || rc == ~0u)
+    return unsupported("a contact segment across it without corners on both sides");
+  cn->from = local(run.canon(trans.id[0]));
+  cn->to = local(run.canon(trans.id[1]));
+  cn->left = run.side_state(t, lc, sheets, nsheets);
+  cn->right = run.side_state(t, rc, sheets, nsheets);
+  return Status::ok();
+}
+
+// 4. Triangulate: the boundary, then the constraints (repeats of boundary edges allowed).
+Status BooleanRun::ContactSplit::triangulate() {
+  segs = arena.allocate_array<detail::CdtSegment>(boundary + nc);
+  if (segs == nullptr) return arena.exhausted_status();
   uint32_t nseg = 0;
   for (uint32_t j = 0; j < boundary; ++j) segs[nseg++] = detail::CdtSegment{j, (j + 1) % boundary};
   for (uint32_t x = 0; x < nc; ++x) {
     segs[nseg++] = detail::CdtSegment{cons[x].from, cons[x].to};
     ckey[x] = KeyIndex{edge_key(cons[x].from, cons[x].to), x, 0};
   }
-  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, ckey, nc));
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena, ckey, nc));
   for (uint32_t x = 1; x < nc; ++x) {
     if (ckey[x].key == ckey[x - 1].key)
       return unsupported("a contact segment repeats a crossing segment");
   }
-  ArenaArray<detail::CdtTriangle> out(&arena_);
-  Status s = detail::cdt(arena_, Span<const detail::CdtPoint>(pts, m),
+  Status s = detail::cdt(arena, Span<const detail::CdtPoint>(pts, m),
                          Span<const detail::CdtSegment>(segs, nseg), boundary, &out, nullptr);
   if (!s.is_ok()) {
     if (s.code() == StatusCode::kArenaExhausted) return s;
@@ -313,20 +460,23 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np, 
                       " along its exact contacts: ", s.message())
         .at_index(tn);
   }
-  // 5. Votes from constraint edges (a piece is left of its own counter-clockwise edges), pieces
-  // joined across other inside edges.
+  return Status::ok();
+}
+
+// 5. Votes from constraint edges (a piece is left of its own counter-clockwise edges), pieces
+// joined across other inside edges.
+Status BooleanRun::ContactSplit::vote_pieces() {
   const uint32_t k = static_cast<uint32_t>(out.size());
-  int8_t* vote = arena_.allocate_array<int8_t>(k);
-  KeyIndex* half = arena_.allocate_array<KeyIndex>(size_t{3} * k);
-  UnionFind uf;
-  if (vote == nullptr || half == nullptr || !uf.init(arena_, k)) return arena_.exhausted_status();
+  vote = arena.allocate_array<int8_t>(k);
+  KeyIndex* half = arena.allocate_array<KeyIndex>(size_t{3} * k);
+  if (vote == nullptr || half == nullptr || !uf.init(arena, k)) return arena.exhausted_status();
   for (uint32_t j = 0; j < k; ++j) {
     vote[j] = kStateNone;
     for (uint32_t e = 0; e < 3; ++e) {
       half[3 * j + e] = KeyIndex{edge_key(out[j].v[e], out[j].v[(e + 1) % 3]), 3 * j + e, 0};
     }
   }
-  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, half, size_t{3} * k));
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena, half, size_t{3} * k));
   size_t ci = 0;
   for (size_t a = 0; a < size_t{3} * k;) {
     size_t b = a + 1;
@@ -346,20 +496,18 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np, 
     }
     a = b;
   }
-  int8_t* state = arena_.allocate_array<int8_t>(k);
-  if (state == nullptr) return arena_.exhausted_status();
-  for (uint32_t j = 0; j < k; ++j) state[j] = kStateNone;
-  for (uint32_t j = 0; j < k; ++j) {
-    if (vote[j] == kStateNone) continue;
-    const uint32_t r = uf.find(j);
-    if (state[r] == kStateNone) {
-      state[r] = vote[j];
-    } else if (state[r] != vote[j]) {
-      return unsupported("inconsistent classification of its pieces");
-    }
-  }
-  tflag_[t] = nc > 0 ? kDecided : kPending;
-  if (nc == 0) pending_ = true;
+  return Status::ok();
+}
+
+// The pieces with their states, and the states of t's corners from the decided ones.
+Status BooleanRun::ContactSplit::emit_pieces() {
+  const uint32_t k = static_cast<uint32_t>(out.size());
+  int8_t* state = arena.allocate_array<int8_t>(k);
+  if (state == nullptr) return arena.exhausted_status();
+  if (!joined_states(uf, vote, k, state))
+    return unsupported("inconsistent classification of its pieces");
+  run.tflag_[t] = nc > 0 ? kDecided : kPending;
+  if (nc == 0) run.pending_ = true;
   for (uint32_t j = 0; j < k; ++j) {
     const int8_t sj = state[uf.find(j)];
     if (sj == kStateNone && nc > 0) {
@@ -367,125 +515,506 @@ Status BooleanRun::split_general(uint32_t t, const KeyIndex* proper, size_t np, 
                         " is not next to any contact");
     }
     const detail::CdtTriangle& ct = out[j];
-    if (!tris_.push_back(OutTri{{vid[ct.v[0]], vid[ct.v[1]], vid[ct.v[2]]}, t, sj})) {
-      return arena_.exhausted_status();
+    if (!run.tris_.push_back(OutTri{{vid[ct.v[0]], vid[ct.v[1]], vid[ct.v[2]]}, t, sj})) {
+      return arena.exhausted_status();
     }
     if (sj != kStateIn && sj != kStateOut) continue;
-    for (uint32_t e = 0; e < 3; ++e) {
-      for (uint32_t x = 0; x < 3; ++x) {
-        if (ct.v[x] != corner_at[e]) continue;
-        int8_t& vs = vstate_[c[e]];
-        if (vs == kVertexOn) continue;
-        if (vs != 0 && vs != sj) return inconsistent_vertex(c[e]);
-        vs = sj;
-      }
-    }
+    const uint32_t bad = pass_state_to_corners(run.vstate_, ct, corner_at, c, sj);
+    if (bad != ~0u) return run.inconsistent_vertex(bad);
   }
   return Status::ok();
 }
 
-Status BooleanRun::split_triangles() {
-  const uint32_t nh = static_cast<uint32_t>(hits_.size());
-  const uint32_t base = in_.nva + in_.nvb;  // first intersection point's vertex id
-  // Records: two per hit, grouped by triangle (stable: hit order within a triangle).
-  rec_ = arena_.allocate_array<Record>(size_t{2} * nh);
-  order_ = arena_.allocate_array<KeyIndex>(size_t{2} * nh);
-  if ((rec_ == nullptr || order_ == nullptr) && nh > 0) return arena_.exhausted_status();
-  Record* rec = rec_;
-  KeyIndex* order = order_;
-  for (uint32_t h = 0; h < nh; ++h) {
-    const uint32_t p = hit_points_[2 * h], q = hit_points_[2 * h + 1];
-    rec[2 * h] = Record{hits_[h].ta, p, q, h};
-    rec[2 * h + 1] = Record{hits_[h].tb, q, p, h};
-    order[2 * h] = KeyIndex{hits_[h].ta, 2 * h, 0};
-    order[2 * h + 1] = KeyIndex{hits_[h].tb, 2 * h + 1, 0};
-  }
-  SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(order, size_t{2} * nh)));
+// ---- A cut triangle with crossing segments only ---------------------------------------------
 
-  // Per cut triangle: its distinct points, each on an edge (0..2, with the position along it)
-  // or inside (3).
+// One cut triangle with crossing segments only, re-triangulated along them (split_cut): its
+// distinct points, their boundary order and projection, the constraints, the constrained
+// Delaunay triangulation, the pieces' votes and states.
+struct BooleanRun::CutSplit {
+  // A distinct point: on an edge (0..2, with the position along it) or inside (3).
   struct Local {
     uint32_t point;
     uint32_t where;
     double along;
   };
-  auto gather = [&](size_t g, size_t g_end, ArenaArray<Local>* locals) -> Status {
-    const uint32_t t = static_cast<uint32_t>(order[g].key);
-    uint32_t c[3];
-    in_.corners(t, c);
-    const size_t k = 2 * (g_end - g);
-    KeyIndex* ids = arena_.allocate_array<KeyIndex>(k);
-    if (ids == nullptr) return arena_.exhausted_status();
-    for (size_t i = g; i < g_end; ++i) {
-      const Record& r = rec[order[i].index];
-      ids[2 * (i - g)] = KeyIndex{r.from, 0, 0};
-      ids[2 * (i - g) + 1] = KeyIndex{r.to, 0, 0};
-    }
-    SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, ids, k));
-    if (!locals->reserve(k)) return arena_.exhausted_status();
-    for (size_t i = 0; i < k; ++i) {
-      if (i > 0 && ids[i].key == ids[i - 1].key) continue;
-      const uint32_t pid = static_cast<uint32_t>(ids[i].key);
-      const Point& pt = points_[pid];
-      Local l{pid, 3, 0.0};
-      if (pt.key.tri != t) {
-        const uint32_t u = key_hi(pt.key.edge), v = key_lo(pt.key.edge);
-        for (uint32_t e = 0; e < 3; ++e) {
-          const uint32_t x = c[e], y = c[(e + 1) % 3];
-          if (x == u && y == v) l = Local{pid, e, pt.s};
-          if (x == v && y == u) l = Local{pid, e, -pt.s};
-        }
-        if (l.where == 3) {
-          return make_error(StatusCode::kInternal, "boolean: intersection point ", pid,
-                            " is not on triangle ", t);
-        }
-      }
-      if (!locals->push_back(l)) return arena_.exhausted_status();
-    }
-    return Status::ok();
-  };
 
-  // Room for the pieces: a triangle with r segments has at most 2r points, so at most
-  // 3 + 2 * 2r - 2 pieces (b + 2i - 2 for b boundary and i inside points).
-  // Degenerate records by triangle (stable), and their triangles' flags.
-  const size_t nd = deg_.size();
-  KeyIndex* dorder = nullptr;
-  if (st_.degenerate_pairs > 0) {
-    const size_t ntri = size_t{in_.nta} + in_.ntb;
-    tflag_ = arena_.allocate_array<uint8_t>(ntri);
-    tstate_ = arena_.allocate_array<int8_t>(ntri);
-    dorder = arena_.allocate_array<KeyIndex>(nd + 1);
-    if (tflag_ == nullptr || tstate_ == nullptr || dorder == nullptr)
-      return arena_.exhausted_status();
-    std::memset(tflag_, kUncut, ntri);
-    std::memset(tstate_, 0, ntri);
-    for (size_t r = 0; r < nd; ++r) dorder[r] = KeyIndex{deg_[r].tri, static_cast<uint32_t>(r), 0};
-    SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(dorder, nd)));
+  CutSplit(BooleanRun& r, uint32_t tri, const uint32_t corners[3], const KeyIndex* records,
+           size_t count)
+      : run(r),
+        arena(r.arena_),
+        t(tri),
+        c{corners[0], corners[1], corners[2]},
+        recs(records),
+        nseg(count),
+        base(r.in_.nva + r.in_.nvb),
+        locals(&r.arena_),
+        cdt_out(&r.arena_),
+        adjacency(&r.arena_) {}
+
+  Status gather_points();
+  Status order_and_project();
+  uint32_t local(uint32_t pid) const;
+  Status add_constraints();
+  Status triangulate();
+  Status vote_pieces();
+  void vote_by_adjacency();
+  Status vote_by_half_edges();
+  Status emit_pieces();
+
+  BooleanRun& run;
+  Arena& arena;
+  const uint32_t t;
+  const uint32_t c[3];
+  const KeyIndex* recs;  // its records (rec_ indices), in record order
+  const size_t nseg;
+  const uint32_t base;  // first intersection point's vertex id
+  ArenaArray<Local> locals;
+  detail::CdtPoint* pts = nullptr;
+  uint32_t* vid = nullptr;
+  uint32_t* local_of = nullptr;  // by index in `locals`
+  detail::CdtSegment* segs = nullptr;
+  uint32_t m = 0, boundary = 0, ns = 0;
+  uint32_t corner_at[3] = {};
+  KeyIndex* cons = nullptr;
+  uint32_t* cons_from = nullptr;  // by segment, in record order
+  bool distinct = true;
+  ArenaArray<detail::CdtTriangle> cdt_out;
+  ArenaArray<detail::CdtAdjacency> adjacency;
+  int8_t* vote = nullptr;
+  UnionFind uf;
+};
+
+// Re-triangulates cut triangle t along its segments, classifies its pieces (each piece lies on
+// one side of a segment; pieces joined by other edges share a side) and gives its corners
+// their state.
+Status BooleanRun::split_cut(uint32_t t, const uint32_t c[3], const KeyIndex* recs, size_t nseg) {
+  ArenaScope scope(arena_);
+  CutSplit s(*this, t, c, recs, nseg);
+  SPLINTCORE_RETURN_IF_ERROR(s.gather_points());
+  SPLINTCORE_RETURN_IF_ERROR(s.order_and_project());
+  SPLINTCORE_RETURN_IF_ERROR(s.add_constraints());
+  SPLINTCORE_RETURN_IF_ERROR(s.triangulate());
+  SPLINTCORE_RETURN_IF_ERROR(s.vote_pieces());
+  return s.emit_pieces();
+}
+
+// The triangle's distinct points, each on an edge (0..2, with the position along it) or
+// inside (3), sorted by point id.
+Status BooleanRun::CutSplit::gather_points() {
+  const size_t k = 2 * nseg;
+  KeyIndex* ids = arena.allocate_array<KeyIndex>(k);
+  if (ids == nullptr) return arena.exhausted_status();
+  for (size_t i = 0; i < nseg; ++i) {
+    const Record& r = run.rec_[recs[i].index];
+    ids[2 * i] = KeyIndex{r.from, 0, 0};
+    ids[2 * i + 1] = KeyIndex{r.to, 0, 0};
   }
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena, ids, k));
+  if (!locals.reserve(k)) return arena.exhausted_status();
+  for (size_t i = 0; i < k; ++i) {
+    if (i > 0 && ids[i].key == ids[i - 1].key) continue;
+    const uint32_t pid = static_cast<uint32_t>(ids[i].key);
+    const Point& pt = run.points_[pid];
+    Local l{pid, 3, 0.0};
+    if (pt.key.tri != t) {
+      const uint32_t u = key_hi(pt.key.edge), v = key_lo(pt.key.edge);
+      for (uint32_t e = 0; e < 3; ++e) {
+        const uint32_t x = c[e], y = c[(e + 1) % 3];
+        if (x == u && y == v) l = Local{pid, e, pt.s};
+        if (x == v && y == u) l = Local{pid, e, -pt.s};
+      }
+      if (l.where == 3) {
+        return make_error(StatusCode::kInternal, "boolean: intersection point ", pid,
+                          " is not on triangle ", t);
+      }
+    }
+    if (!locals.push_back(l)) return arena.exhausted_status();
+  }
+  return Status::ok();
+}
+
+// Boundary order: c0, edge 0's points from c0, c1, edge 1's points, c2, edge 2's points,
+// then the inside points. Sort by position along the edge, then stably by edge. Then the
+// points projected, and the boundary's segments.
+Status BooleanRun::CutSplit::order_and_project() {
+  const size_t n = locals.size();
+  KeyIndex* by = arena.allocate_array<KeyIndex>(n);
+  pts = arena.allocate_array<detail::CdtPoint>(n + 3);
+  vid = arena.allocate_array<uint32_t>(n + 3);
+  local_of = arena.allocate_array<uint32_t>(n);
+  segs = arena.allocate_array<detail::CdtSegment>(n + 3 + nseg);
+  if (by == nullptr || pts == nullptr || vid == nullptr || local_of == nullptr || segs == nullptr) {
+    return arena.exhausted_status();
+  }
+  SPLINTCORE_RETURN_IF_ERROR(order_points(
+      arena, n, c, [&](size_t x) { return locals[x].where; },
+      [&](size_t x) { return locals[x].along; }, [&](size_t x) { return base + locals[x].point; },
+      by, vid, local_of, corner_at, &m, &boundary));
+  const Projection pr =
+      projection_of(run.in_.vertex(c[0]), run.in_.vertex(c[1]), run.in_.vertex(c[2]));
+  for (uint32_t j = 0; j < m; ++j) pts[j] = to_2d(run.position(vid[j]), pr);
+  for (uint32_t j = 0; j < boundary; ++j) segs[ns++] = detail::CdtSegment{j, (j + 1) % boundary};
+  return Status::ok();
+}
+
+// A constraint end point's local index: the point id found among the sorted locals (binary
+// search).
+inline uint32_t BooleanRun::CutSplit::local(uint32_t pid) const {
+  size_t lo = 0, hi = locals.size();
+  while (hi - lo > 1) {
+    const size_t mid = (lo + hi) / 2;
+    if (locals[mid].point <= pid)
+      lo = mid;
+    else
+      hi = mid;
+  }
+  SPLINTCORE_ASSERT(locals[lo].point == pid);
+  return local_of[lo];
+}
+
+// The constraints, directed with the other solid's inside on their left, sorted by their
+// undirected key (for the classification).
+Status BooleanRun::CutSplit::add_constraints() {
+  cons = arena.allocate_array<KeyIndex>(nseg);
+  cons_from = arena.allocate_array<uint32_t>(nseg);
+  if (cons == nullptr || cons_from == nullptr) return arena.exhausted_status();
+  // `distinct`: no constraint repeats another or lies on the boundary, so the CDT's segment
+  // id on an edge names its record (boundary + its index in recs): the adjacency path applies.
+  for (size_t r = 0; r < nseg; ++r) {
+    const Record& rc = run.rec_[recs[r].index];
+    const uint32_t from = local(rc.from), to = local(rc.to);
+    cons[r] = KeyIndex{edge_key(from, to), from, 0};
+    cons_from[r] = from;
+    segs[ns++] = detail::CdtSegment{from, to};
+    if (from < boundary && to < boundary) {
+      const uint32_t gap = from < to ? to - from : from - to;
+      if (gap == 1 || gap == boundary - 1) distinct = false;
+    }
+  }
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena, cons, nseg));
+  for (size_t x = 1; x < nseg; ++x) {
+    if (cons[x].key == cons[x - 1].key) distinct = false;
+  }
+  return Status::ok();
+}
+
+Status BooleanRun::CutSplit::triangulate() {
+  Status s = detail::cdt(arena, Span<const detail::CdtPoint>(pts, m),
+                         Span<const detail::CdtSegment>(segs, ns), boundary, &cdt_out,
+                         distinct ? &adjacency : nullptr);
+  if (!s.is_ok()) {
+    if (s.code() == StatusCode::kArenaExhausted) return s;
+    const uint32_t nta = run.in_.nta;
+    return make_error(StatusCode::kUnsupported, "cannot re-triangulate triangle ",
+                      t < nta ? t : t - nta, t < nta ? " of A" : " of B",
+                      " along its intersection (nearly degenerate contact): ", s.message())
+        .at_index(t < nta ? t : t - nta);
+  }
+  return Status::ok();
+}
+
+// Classify the pieces: a constraint votes for the piece on its left (inside the other
+// solid) and against the one on its right; other shared edges join pieces. A piece with
+// two constraint edges takes the vote of the one with the larger undirected key.
+Status BooleanRun::CutSplit::vote_pieces() {
+  const uint32_t k = static_cast<uint32_t>(cdt_out.size());
+  vote = arena.allocate_array<int8_t>(k);
+  if (vote == nullptr || !uf.init(arena, k)) return arena.exhausted_status();
+  if (!distinct) return vote_by_half_edges();
+  vote_by_adjacency();
+  return Status::ok();
+}
+
+// From the CDT's own adjacency: the same votes and the same joined sets as matching
+// half-edges by key (vote_by_half_edges), without sorting them.
+void BooleanRun::CutSplit::vote_by_adjacency() {
+  // In locals: a vote is a byte, which may alias anything, so members would be read again
+  // after each one.
+  const uint32_t k = static_cast<uint32_t>(cdt_out.size());
+  const detail::CdtTriangle* const pieces = cdt_out.data();
+  const detail::CdtAdjacency* const adjacent = adjacency.data();
+  const uint32_t* const from = cons_from;
+  const uint32_t b = boundary;
+  int8_t* const votes = vote;
+  for (uint32_t j = 0; j < k; ++j) {
+    votes[j] = 0;
+    uint64_t best = 0;
+    bool voted = false;
+    const detail::CdtTriangle& ct = pieces[j];
+    const detail::CdtAdjacency& adj = adjacent[j];
+    for (uint32_t e = 0; e < 3; ++e) {
+      const uint32_t seg = adj.seg[e];
+      if (seg == detail::kCdtNone) {
+        if (adj.nb[e] != detail::kCdtNone) uf.unite(j, adj.nb[e]);
+        continue;
+      }
+      if (seg < b) continue;
+      const uint64_t key = edge_key(ct.v[e], ct.v[(e + 1) % 3]);
+      if (!voted || key > best) {
+        best = key;
+        voted = true;
+        votes[j] = ct.v[e] == from[seg - b] ? 1 : -1;
+      }
+    }
+  }
+}
+
+// Half-edges matched by their undirected key.
+Status BooleanRun::CutSplit::vote_by_half_edges() {
+  const uint32_t k = static_cast<uint32_t>(cdt_out.size());
+  KeyIndex* half = arena.allocate_array<KeyIndex>(size_t{3} * k);
+  if (half == nullptr && k > 0) return arena.exhausted_status();
+  for (uint32_t j = 0; j < k; ++j) {
+    vote[j] = 0;
+    for (uint32_t e = 0; e < 3; ++e) {
+      half[3 * j + e] =
+          KeyIndex{edge_key(cdt_out[j].v[e], cdt_out[j].v[(e + 1) % 3]), 3 * j + e, 0};
+    }
+  }
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena, half, size_t{3} * k));
+  size_t ci = 0;
+  for (size_t a = 0; a < size_t{3} * k;) {
+    size_t b = a + 1;
+    while (b < size_t{3} * k && half[b].key == half[a].key) ++b;
+    while (ci < nseg && cons[ci].key < half[a].key) ++ci;
+    if (ci < nseg && cons[ci].key == half[a].key) {
+      for (size_t x = a; x < b; ++x) {
+        const uint32_t j = half[x].index / 3, e = half[x].index % 3;
+        vote[j] = cdt_out[j].v[e] == cons[ci].index ? 1 : -1;
+      }
+    } else if (b - a == 2) {
+      uf.unite(half[a].index / 3, half[a + 1].index / 3);
+    }
+    a = b;
+  }
+  return Status::ok();
+}
+
+// The pieces with the states of their joined sets, and the states of t's corners.
+Status BooleanRun::CutSplit::emit_pieces() {
+  const uint32_t k = static_cast<uint32_t>(cdt_out.size());
+  int8_t* state = arena.allocate_array<int8_t>(k);
+  if (state == nullptr) return arena.exhausted_status();
+  if (!joined_states(uf, vote, k, state)) {
+    const uint32_t nta = run.in_.nta;
+    return make_error(StatusCode::kUnsupported,
+                      "inconsistent inside/outside classification in triangle ",
+                      t < nta ? t : t - nta, t < nta ? " of A" : " of B",
+                      " (overlapping shells in B, or a nearly degenerate contact)")
+        .at_index(t < nta ? t : t - nta);
+  }
+  for (uint32_t j = 0; j < k; ++j) {
+    const int8_t sj = state[uf.find(j)];
+    if (sj == 0) {
+      return make_error(StatusCode::kInternal, "boolean: a piece of triangle ", t,
+                        " is not next to any intersection segment");
+    }
+    const detail::CdtTriangle& ct = cdt_out[j];
+    if (!run.tris_.push_back(OutTri{{vid[ct.v[0]], vid[ct.v[1]], vid[ct.v[2]]}, t, sj})) {
+      return arena.exhausted_status();
+    }
+    // Most pieces have no corner of the triangle (only those do have a vertex id below base).
+    if (vid[ct.v[0]] >= base && vid[ct.v[1]] >= base && vid[ct.v[2]] >= base) continue;
+    const uint32_t bad = pass_state_to_corners(run.vstate_, ct, corner_at, c, sj);
+    if (bad != ~0u) return run.inconsistent_vertex(bad);
+  }
+  return Status::ok();
+}
+
+// ---- The fast path: one segment from an edge to another -------------------------------------
+
+namespace {
+
+// The two parts of the pentagon c0 [e0] c1 [e1] c2 [e2] that the chord between its two points,
+// `from` on edge ef and `to` on edge et (vertex ids), cuts it into: a triangle and a
+// quadrilateral, each in the pentagon's order. Returns the triangle's state (the record's
+// inside is left of from -> to).
+int8_t pentagon_parts(const uint32_t c[3], int ef, uint32_t from, int et, uint32_t to,
+                      uint32_t tri3[3], uint32_t quad[4]) {
+  uint32_t poly[5];
+  int m = 0, at_from = 0, at_to = 0;
+  for (int e = 0; e < 3; ++e) {
+    poly[m++] = c[e];
+    if (e == ef) {
+      at_from = m;
+      poly[m++] = from;
+    }
+    if (e == et) {
+      at_to = m;
+      poly[m++] = to;
+    }
+  }
+  // Part one runs from the lower chord end to the higher one, part two on from there.
+  const int x = at_from < at_to ? at_from : at_to, y = at_from < at_to ? at_to : at_from;
+  uint32_t one[4], two[4];
+  int n1 = 0, n2 = 0;
+  for (int i = x; i <= y; ++i) one[n1++] = poly[i];
+  for (int i = y; i != x; i = (i + 1) % 5) two[n2++] = poly[i];
+  two[n2++] = poly[x];
+  // Part one lies left of poly[y] -> poly[x]; the record's inside is left of from -> to.
+  const int8_t s_one = poly[x] == from ? -1 : 1;
+  const uint32_t* t3 = n1 == 3 ? one : two;
+  const uint32_t* q4 = n1 == 3 ? two : one;
+  for (int i = 0; i < 3; ++i) tri3[i] = t3[i];
+  for (int i = 0; i < 4; ++i) quad[i] = q4[i];
+  return n1 == 3 ? s_one : static_cast<int8_t>(-s_one);
+}
+
+inline bool ccw(const detail::CdtPoint& a, const detail::CdtPoint& b, const detail::CdtPoint& c) {
+  return orient2d(a.x, a.y, b.x, b.y, c.x, c.y) > 0;
+}
+
+}  // namespace
+
+// Fast path: one segment from an edge to another edge (most of B's cut triangles): a
+// triangle on one side, a quadrilateral split by its Delaunay diagonal on the other. *done
+// false (nothing written) when the segment does not run edge to edge or a piece would not be
+// counter-clockwise once projected: split_cut takes the triangle then.
+Status BooleanRun::split_single_crossing(uint32_t t, const uint32_t c[3], const Record& rc,
+                                         bool* done) {
+  *done = false;
+  const uint32_t base = in_.nva + in_.nvb;
+  const Point& pf = points_[rc.from];
+  const Point& pt = points_[rc.to];
+  int ef = -1, et = -1;
+  for (int e = 0; e < 3; ++e) {
+    const uint64_t k = edge_key(c[e], c[(e + 1) % 3]);
+    if (pf.key.tri != t && pf.key.edge == k) ef = e;
+    if (pt.key.tri != t && pt.key.edge == k) et = e;
+  }
+  if (ef < 0 || et < 0 || ef == et) return Status::ok();
+  uint32_t tri3[3], quad[4];
+  const int8_t s3 = pentagon_parts(c, ef, base + rc.from, et, base + rc.to, tri3, quad);
+  const int8_t s4 = static_cast<int8_t>(-s3);
+  const Projection pr = projection_of(in_.vertex(c[0]), in_.vertex(c[1]), in_.vertex(c[2]));
+  detail::CdtPoint q2[4];
+  for (int i = 0; i < 4; ++i) q2[i] = to_2d(position(quad[i]), pr);
+  const detail::CdtPoint t2[3] = {to_2d(position(tri3[0]), pr), to_2d(position(tri3[1]), pr),
+                                  to_2d(position(tri3[2]), pr)};
+  // Diagonal 0-2 unless quad[3] is inside the circle of 0, 1, 2 (then 1-3).
+  const bool d13 =
+      incircle(q2[0].x, q2[0].y, q2[1].x, q2[1].y, q2[2].x, q2[2].y, q2[3].x, q2[3].y) > 0;
+  const int qa[2][3] = {{0, 1, 2}, {0, 2, 3}};
+  const int qb[2][3] = {{0, 1, 3}, {1, 2, 3}};
+  const int(*qs)[3] = d13 ? qb : qa;
+  if (!(ccw(t2[0], t2[1], t2[2]) && ccw(q2[qs[0][0]], q2[qs[0][1]], q2[qs[0][2]]) &&
+        ccw(q2[qs[1][0]], q2[qs[1][1]], q2[qs[1][2]]))) {
+    return Status::ok();
+  }
+  if (!tris_.push_back(OutTri{{tri3[0], tri3[1], tri3[2]}, t, s3})) {
+    return arena_.exhausted_status();
+  }
+  for (int k = 0; k < 2; ++k) {
+    if (!tris_.push_back(OutTri{{quad[qs[k][0]], quad[qs[k][1]], quad[qs[k][2]]}, t, s4})) {
+      return arena_.exhausted_status();
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (tri3[i] < base && !set_corner_state(vstate_, tri3[i], s3)) {
+      return inconsistent_vertex(tri3[i]);
+    }
+  }
+  for (int i = 0; i < 4; ++i) {
+    if (quad[i] < base && !set_corner_state(vstate_, quad[i], s4)) {
+      return inconsistent_vertex(quad[i]);
+    }
+  }
+  *done = true;
+  return Status::ok();
+}
+
+// ---- The cut triangles, in order ------------------------------------------------------------
+
+// Records: two per hit, one for each of its triangles, grouped by triangle (stable: hit order
+// within a triangle).
+Status BooleanRun::sort_records_by_triangle() {
+  const uint32_t nh = static_cast<uint32_t>(hits_.size());
+  rec_ = arena_.allocate_array<Record>(size_t{2} * nh);
+  order_ = arena_.allocate_array<KeyIndex>(size_t{2} * nh);
+  if ((rec_ == nullptr || order_ == nullptr) && nh > 0) return arena_.exhausted_status();
+  for (uint32_t h = 0; h < nh; ++h) {
+    const uint32_t p = hit_points_[2 * h], q = hit_points_[2 * h + 1];
+    rec_[2 * h] = Record{hits_[h].ta, p, q, h};
+    rec_[2 * h + 1] = Record{hits_[h].tb, q, p, h};
+    order_[2 * h] = KeyIndex{hits_[h].ta, 2 * h, 0};
+    order_[2 * h + 1] = KeyIndex{hits_[h].tb, 2 * h + 1, 0};
+  }
+  return radix_sort(arena_, Span<KeyIndex>(order_, size_t{2} * nh));
+}
+
+// Degenerate records by triangle (stable), and their triangles' flags (*dorder stays null
+// when there are none).
+Status BooleanRun::sort_contacts_by_triangle(KeyIndex** dorder) {
+  if (st_.degenerate_pairs == 0) return Status::ok();
+  const size_t nd = deg_.size();
+  const size_t ntri = size_t{in_.nta} + in_.ntb;
+  tflag_ = arena_.allocate_array<uint8_t>(ntri);
+  tstate_ = arena_.allocate_array<int8_t>(ntri);
+  KeyIndex* d = arena_.allocate_array<KeyIndex>(nd + 1);
+  if (tflag_ == nullptr || tstate_ == nullptr || d == nullptr) return arena_.exhausted_status();
+  std::memset(tflag_, kUncut, ntri);
+  std::memset(tstate_, 0, ntri);
+  for (size_t r = 0; r < nd; ++r) d[r] = KeyIndex{deg_[r].tri, static_cast<uint32_t>(r), 0};
+  *dorder = d;
+  return radix_sort(arena_, Span<KeyIndex>(d, nd));
+}
+
+namespace {
+
+// The cut triangles in id order: each with its run of crossing records (`order`, sorted by
+// triangle) and its run of degenerate records (`dorder`), either run possibly empty.
+struct TriangleGroups {
+  const KeyIndex* order;
+  size_t n;
+  const KeyIndex* dorder;
+  size_t nd;
+
+  bool more(size_t g, size_t d) const { return g < n || d < nd; }
   // The next triangle with records of either kind, and the ends of its two runs.
-  auto next_group = [&](size_t g, size_t d, size_t* g_end, size_t* d_end) -> uint32_t {
-    const uint64_t tg = g < size_t{2} * nh ? order[g].key : ~uint64_t{0};
+  uint32_t next(size_t g, size_t d, size_t* g_end, size_t* d_end) const {
+    const uint64_t tg = g < n ? order[g].key : ~uint64_t{0};
     const uint64_t td = d < nd ? dorder[d].key : ~uint64_t{0};
     const uint64_t t = tg < td ? tg : td;
     *g_end = g;
-    while (*g_end < size_t{2} * nh && order[*g_end].key == t) ++*g_end;
+    while (*g_end < n && order[*g_end].key == t) ++*g_end;
     *d_end = d;
     while (*d_end < nd && dorder[*d_end].key == t) ++*d_end;
     return static_cast<uint32_t>(t);
-  };
+  }
+};
+
+// Room for the pieces: a triangle with r segments has at most 2r points, so at most
+// 3 + 2 * 2r - 2 pieces (b + 2i - 2 for b boundary and i inside points); one with degenerate
+// records 4 per record and 3. Counts the cut triangles of A and of B on the way.
+uint64_t piece_room(const TriangleGroups& groups, uint32_t nta, uint32_t* cut_a, uint32_t* cut_b) {
   uint64_t total = 0;
-  uint32_t cut_a = 0, cut_b = 0;
-  for (size_t g = 0, d = 0; g < size_t{2} * nh || d < nd;) {
+  for (size_t g = 0, d = 0; groups.more(g, d);) {
     size_t g_end = 0, d_end = 0;
-    const uint32_t t = next_group(g, d, &g_end, &d_end);
+    const uint32_t t = groups.next(g, d, &g_end, &d_end);
     total += d_end > d ? 4 * (g_end - g + d_end - d) + 3 : 4 * (g_end - g) + 1;
-    if (t < in_.nta)
-      ++cut_a;
+    if (t < nta)
+      ++*cut_a;
     else
-      ++cut_b;
+      ++*cut_b;
     g = g_end;
     d = d_end;
   }
+  return total;
+}
+
+}  // namespace
+
+// Each cut triangle re-triangulated along its segments and contacts, its pieces classified
+// and its corners given their state: by the fast path when it can, otherwise by split_cut, or
+// by split_general when it has degenerate contacts.
+Status BooleanRun::split_triangles() {
+  SPLINTCORE_RETURN_IF_ERROR(sort_records_by_triangle());
+  KeyIndex* dorder = nullptr;
+  SPLINTCORE_RETURN_IF_ERROR(sort_contacts_by_triangle(&dorder));
+  const size_t n = size_t{2} * hits_.size();
+  const TriangleGroups groups{order_, n, dorder, deg_.size()};
+  uint32_t cut_a = 0, cut_b = 0;
+  const uint64_t total = piece_room(groups, in_.nta, &cut_a, &cut_b);
   st_.cut_triangles_a = cut_a;
   st_.cut_triangles_b = cut_b;
   if (total >= (uint64_t{1} << 31)) {
@@ -494,283 +1023,26 @@ Status BooleanRun::split_triangles() {
   tris_.bind(&arena_);
   if (!tris_.reserve(static_cast<size_t>(total))) return arena_.exhausted_status();
 
-  // Sets the state of a corner of a cut triangle (all pieces at a corner agree: no segment
-  // passes through an input vertex).
-  auto corner_state = [&](uint32_t v, int8_t sj) -> Status {
-    int8_t& vs = vstate_[v];
-    if (vs == kVertexOn) return Status::ok();  // on the other surface: no state to pass on
-    if (vs != 0 && vs != sj) return inconsistent_vertex(v);
-    vs = sj;
-    return Status::ok();
-  };
-  auto project = [&](const uint32_t c[3]) {
-    return projection_of(in_.vertex(c[0]), in_.vertex(c[1]), in_.vertex(c[2]));
-  };
-  auto point_2d = [&](uint32_t id, const Projection& pr) {
-    return to_2d(id < base ? in_.vertex(id) : points_[id - base].p, pr);
-  };
-
-  // Re-triangulate each cut triangle along its segments, classify its pieces (each piece lies
-  // on one side of a segment; pieces joined by other edges share a side) and give its corners
-  // their state.
-  for (size_t g = 0, d = 0; g < size_t{2} * nh || d < nd;) {
+  for (size_t g = 0, d = 0; groups.more(g, d);) {
     size_t g_end = 0, d_end = 0;
-    const uint32_t t = next_group(g, d, &g_end, &d_end);
+    const uint32_t t = groups.next(g, d, &g_end, &d_end);
     if ((g & 1023u) == 0) {
-      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: split", g, size_t{2} * nh));
+      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: split", g, n));
     }
     if (tflag_ != nullptr) tflag_[t] = kDecided;
     if (d_end > d) {
-      SPLINTCORE_RETURN_IF_ERROR(split_general(t, order + g, g_end - g, dorder + d, d_end - d));
-      g = g_end;
-      d = d_end;
-      continue;
-    }
-    uint32_t c[3];
-    in_.corners(t, c);
-    // Fast path: one segment from an edge to another edge (most of B's cut triangles): a
-    // triangle on one side, a quadrilateral split by its Delaunay diagonal on the other.
-    if (g_end - g == 1) {
-      const Record& rc = rec[order[g].index];
-      const Point& pf = points_[rc.from];
-      const Point& pt = points_[rc.to];
-      int ef = -1, et = -1;
-      for (int e = 0; e < 3; ++e) {
-        const uint64_t k = edge_key(c[e], c[(e + 1) % 3]);
-        if (pf.key.tri != t && pf.key.edge == k) ef = e;
-        if (pt.key.tri != t && pt.key.edge == k) et = e;
+      SPLINTCORE_RETURN_IF_ERROR(split_general(t, order_ + g, g_end - g, dorder + d, d_end - d));
+    } else {
+      uint32_t c[3];
+      in_.corners(t, c);
+      bool done = false;
+      if (g_end - g == 1) {
+        SPLINTCORE_RETURN_IF_ERROR(split_single_crossing(t, c, rec_[order_[g].index], &done));
       }
-      if (ef >= 0 && et >= 0 && ef != et) {
-        // The pentagon c0 [e0] c1 [e1] c2 [e2] and the chord between its two points.
-        uint32_t poly[5];
-        int m = 0, at_from = 0, at_to = 0;
-        for (int e = 0; e < 3; ++e) {
-          poly[m++] = c[e];
-          if (e == ef) {
-            at_from = m;
-            poly[m++] = base + rc.from;
-          }
-          if (e == et) {
-            at_to = m;
-            poly[m++] = base + rc.to;
-          }
-        }
-        // Part one runs from the lower chord end to the higher one, part two on from there.
-        const int x = at_from < at_to ? at_from : at_to, y = at_from < at_to ? at_to : at_from;
-        uint32_t one[4], two[4];
-        int n1 = 0, n2 = 0;
-        for (int i = x; i <= y; ++i) one[n1++] = poly[i];
-        for (int i = y; i != x; i = (i + 1) % 5) two[n2++] = poly[i];
-        two[n2++] = poly[x];
-        // Part one lies left of poly[y] -> poly[x]; the record's inside is left of from -> to.
-        const int8_t s_one = poly[x] == base + rc.from ? -1 : 1;
-        const uint32_t* tri3 = n1 == 3 ? one : two;
-        const uint32_t* quad = n1 == 3 ? two : one;
-        const int8_t s3 = n1 == 3 ? s_one : static_cast<int8_t>(-s_one);
-        const int8_t s4 = static_cast<int8_t>(-s3);
-        const Projection pr = project(c);
-        detail::CdtPoint q2[4];
-        for (int i = 0; i < 4; ++i) q2[i] = point_2d(quad[i], pr);
-        const detail::CdtPoint t2[3] = {point_2d(tri3[0], pr), point_2d(tri3[1], pr),
-                                        point_2d(tri3[2], pr)};
-        auto ccw = [](const detail::CdtPoint& a, const detail::CdtPoint& b2,
-                      const detail::CdtPoint& c2) {
-          return orient2d(a.x, a.y, b2.x, b2.y, c2.x, c2.y) > 0;
-        };
-        // Diagonal 0-2 unless quad[3] is inside the circle of 0, 1, 2 (then 1-3).
-        const bool d13 =
-            incircle(q2[0].x, q2[0].y, q2[1].x, q2[1].y, q2[2].x, q2[2].y, q2[3].x, q2[3].y) > 0;
-        const int qa[2][3] = {{0, 1, 2}, {0, 2, 3}};
-        const int qb[2][3] = {{0, 1, 3}, {1, 2, 3}};
-        const int(*qs)[3] = d13 ? qb : qa;
-        if (ccw(t2[0], t2[1], t2[2]) && ccw(q2[qs[0][0]], q2[qs[0][1]], q2[qs[0][2]]) &&
-            ccw(q2[qs[1][0]], q2[qs[1][1]], q2[qs[1][2]])) {
-          if (!tris_.push_back(OutTri{{tri3[0], tri3[1], tri3[2]}, t, s3})) {
-            return arena_.exhausted_status();
-          }
-          for (int k = 0; k < 2; ++k) {
-            if (!tris_.push_back(OutTri{{quad[qs[k][0]], quad[qs[k][1]], quad[qs[k][2]]}, t, s4})) {
-              return arena_.exhausted_status();
-            }
-          }
-          for (int i = 0; i < 3; ++i) {
-            if (tri3[i] < base) SPLINTCORE_RETURN_IF_ERROR(corner_state(tri3[i], s3));
-          }
-          for (int i = 0; i < 4; ++i) {
-            if (quad[i] < base) SPLINTCORE_RETURN_IF_ERROR(corner_state(quad[i], s4));
-          }
-          g = g_end;
-          continue;
-        }
-      }
-    }
-    ArenaScope scope(arena_);
-    ArenaArray<Local> locals(&arena_);
-    SPLINTCORE_RETURN_IF_ERROR(gather(g, g_end, &locals));
-    const size_t n = locals.size();
-    const size_t nseg = g_end - g;
-    // Boundary order: c0, edge 0's points from c0, c1, edge 1's points, c2, edge 2's points,
-    // then the inside points. Sort by position along the edge, then stably by edge.
-    KeyIndex* by = arena_.allocate_array<KeyIndex>(n);
-    detail::CdtPoint* pts = arena_.allocate_array<detail::CdtPoint>(n + 3);
-    uint32_t* vid = arena_.allocate_array<uint32_t>(n + 3);
-    uint32_t* local_of = arena_.allocate_array<uint32_t>(n);  // by index in `locals`
-    detail::CdtSegment* segs = arena_.allocate_array<detail::CdtSegment>(n + 3 + nseg);
-    if (by == nullptr || pts == nullptr || vid == nullptr || local_of == nullptr ||
-        segs == nullptr) {
-      return arena_.exhausted_status();
-    }
-    uint32_t m = 0, boundary = 0;
-    uint32_t corner_at[3];
-    SPLINTCORE_RETURN_IF_ERROR(order_points(
-        arena_, n, c, [&](size_t x) { return locals[x].where; },
-        [&](size_t x) { return locals[x].along; }, [&](size_t x) { return base + locals[x].point; },
-        by, vid, local_of, corner_at, &m, &boundary));
-    const Projection pr = project(c);
-    for (uint32_t j = 0; j < m; ++j) pts[j] = point_2d(vid[j], pr);
-    uint32_t ns = 0;
-    for (uint32_t j = 0; j < boundary; ++j) segs[ns++] = detail::CdtSegment{j, (j + 1) % boundary};
-    // Constraint end points: find each point id among the sorted locals (binary search).
-    auto local = [&](uint32_t pid) {
-      size_t lo = 0, hi = n;
-      while (hi - lo > 1) {
-        const size_t mid = (lo + hi) / 2;
-        if (locals[mid].point <= pid)
-          lo = mid;
-        else
-          hi = mid;
-      }
-      SPLINTCORE_ASSERT(locals[lo].point == pid);
-      return local_of[lo];
-    };
-    // The constraints, directed with the other solid's inside on their left, sorted by their
-    // undirected key (for the classification below).
-    KeyIndex* cons = arena_.allocate_array<KeyIndex>(nseg);
-    uint32_t* cons_from = arena_.allocate_array<uint32_t>(nseg);  // by segment, in record order
-    if (cons == nullptr || cons_from == nullptr) return arena_.exhausted_status();
-    // `distinct`: no constraint repeats another or lies on the boundary, so the CDT's segment
-    // id on an edge names its record (boundary + r - g): the adjacency path below applies.
-    bool distinct = true;
-    for (size_t r = g; r < g_end; ++r) {
-      const Record& rc = rec[order[r].index];
-      const uint32_t from = local(rc.from), to = local(rc.to);
-      cons[r - g] = KeyIndex{edge_key(from, to), from, 0};
-      cons_from[r - g] = from;
-      segs[ns++] = detail::CdtSegment{from, to};
-      if (from < boundary && to < boundary) {
-        const uint32_t gap = from < to ? to - from : from - to;
-        if (gap == 1 || gap == boundary - 1) distinct = false;
-      }
-    }
-    SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, cons, nseg));
-    for (size_t x = 1; x < nseg; ++x) {
-      if (cons[x].key == cons[x - 1].key) distinct = false;
-    }
-    ArenaArray<detail::CdtTriangle> cdt_out(&arena_);
-    ArenaArray<detail::CdtAdjacency> adjacency(&arena_);
-    Status s = detail::cdt(arena_, Span<const detail::CdtPoint>(pts, m),
-                           Span<const detail::CdtSegment>(segs, ns), boundary, &cdt_out,
-                           distinct ? &adjacency : nullptr);
-    if (!s.is_ok()) {
-      if (s.code() == StatusCode::kArenaExhausted) return s;
-      return make_error(StatusCode::kUnsupported, "cannot re-triangulate triangle ",
-                        t < in_.nta ? t : t - in_.nta, t < in_.nta ? " of A" : " of B",
-                        " along its intersection (nearly degenerate contact): ", s.message())
-          .at_index(t < in_.nta ? t : t - in_.nta);
-    }
-    // Classify the pieces: a constraint votes for the piece on its left (inside the other
-    // solid) and against the one on its right; other shared edges join pieces. A piece with
-    // two constraint edges takes the vote of the one with the larger undirected key.
-    const uint32_t k = static_cast<uint32_t>(cdt_out.size());
-    int8_t* vote = arena_.allocate_array<int8_t>(k);
-    UnionFind uf;
-    if (vote == nullptr || !uf.init(arena_, k)) return arena_.exhausted_status();
-    if (distinct) {
-      // From the CDT's own adjacency: the same votes and the same joined sets as matching
-      // half-edges by key (the path below), without sorting them.
-      for (uint32_t j = 0; j < k; ++j) {
-        vote[j] = 0;
-        uint64_t best = 0;
-        bool voted = false;
-        const detail::CdtTriangle& ct = cdt_out[j];
-        const detail::CdtAdjacency& adj = adjacency[j];
-        for (uint32_t e = 0; e < 3; ++e) {
-          const uint32_t seg = adj.seg[e];
-          if (seg == detail::kCdtNone) {
-            if (adj.nb[e] != detail::kCdtNone) uf.unite(j, adj.nb[e]);
-            continue;
-          }
-          if (seg < boundary) continue;
-          const uint64_t key = edge_key(ct.v[e], ct.v[(e + 1) % 3]);
-          if (!voted || key > best) {
-            best = key;
-            voted = true;
-            vote[j] = ct.v[e] == cons_from[seg - boundary] ? 1 : -1;
-          }
-        }
-      }
-    }
-    // Otherwise half-edges matched by their undirected key.
-    KeyIndex* half = distinct ? nullptr : arena_.allocate_array<KeyIndex>(size_t{3} * k);
-    if (!distinct && half == nullptr && k > 0) return arena_.exhausted_status();
-    for (uint32_t j = 0; j < k && !distinct; ++j) {
-      vote[j] = 0;
-      for (uint32_t e = 0; e < 3; ++e) {
-        half[3 * j + e] =
-            KeyIndex{edge_key(cdt_out[j].v[e], cdt_out[j].v[(e + 1) % 3]), 3 * j + e, 0};
-      }
-    }
-    if (!distinct) SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, half, size_t{3} * k));
-    size_t ci = 0;
-    for (size_t a = 0; a < size_t{3} * k && !distinct;) {
-      size_t b = a + 1;
-      while (b < size_t{3} * k && half[b].key == half[a].key) ++b;
-      while (ci < nseg && cons[ci].key < half[a].key) ++ci;
-      if (ci < nseg && cons[ci].key == half[a].key) {
-        for (size_t x = a; x < b; ++x) {
-          const uint32_t j = half[x].index / 3, e = half[x].index % 3;
-          vote[j] = cdt_out[j].v[e] == cons[ci].index ? 1 : -1;
-        }
-      } else if (b - a == 2) {
-        uf.unite(half[a].index / 3, half[a + 1].index / 3);
-      }
-      a = b;
-    }
-    int8_t* state = arena_.allocate_array<int8_t>(k);
-    if (state == nullptr) return arena_.exhausted_status();
-    for (uint32_t j = 0; j < k; ++j) state[j] = 0;
-    for (uint32_t j = 0; j < k; ++j) {
-      if (vote[j] == 0) continue;
-      const uint32_t r = uf.find(j);
-      if (state[r] == 0) {
-        state[r] = vote[j];
-      } else if (state[r] != vote[j]) {
-        return make_error(StatusCode::kUnsupported,
-                          "inconsistent inside/outside classification in triangle ",
-                          t < in_.nta ? t : t - in_.nta, t < in_.nta ? " of A" : " of B",
-                          " (overlapping shells in B, or a nearly degenerate contact)")
-            .at_index(t < in_.nta ? t : t - in_.nta);
-      }
-    }
-    for (uint32_t j = 0; j < k; ++j) {
-      const int8_t sj = state[uf.find(j)];
-      if (sj == 0) {
-        return make_error(StatusCode::kInternal, "boolean: a piece of triangle ", t,
-                          " is not next to any intersection segment");
-      }
-      const detail::CdtTriangle& ct = cdt_out[j];
-      if (!tris_.push_back(OutTri{{vid[ct.v[0]], vid[ct.v[1]], vid[ct.v[2]]}, t, sj})) {
-        return arena_.exhausted_status();
-      }
-      // Most pieces have no corner of the triangle (only those do have a vertex id below base).
-      if (vid[ct.v[0]] >= base && vid[ct.v[1]] >= base && vid[ct.v[2]] >= base) continue;
-      for (uint32_t e = 0; e < 3; ++e) {
-        for (uint32_t x = 0; x < 3; ++x) {
-          if (ct.v[x] == corner_at[e]) SPLINTCORE_RETURN_IF_ERROR(corner_state(c[e], sj));
-        }
-      }
+      if (!done) SPLINTCORE_RETURN_IF_ERROR(split_cut(t, c, order_ + g, g_end - g));
     }
     g = g_end;
+    d = d_end;
   }
   return Status::ok();
 }
