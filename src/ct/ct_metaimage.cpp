@@ -56,7 +56,7 @@ struct Entry {
 struct MetaImageHeader {
   const ByteSource& source;
   uint8_t window[kHeaderWindow];
-  char line[kLineCapacity];
+  char line[kLineCapacity] = {};
   Reader reader;
   uint64_t budget;
   uint64_t line_no = 0;

@@ -94,7 +94,7 @@ struct Field {
 struct NrrdHeader {
   const ByteSource& source;
   uint8_t window[kHeaderWindow];
-  char line[kLineCapacity];
+  char line[kLineCapacity] = {};
   Reader reader;
   uint64_t budget;
   uint64_t line_no = 0;
