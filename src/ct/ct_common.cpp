@@ -382,6 +382,7 @@ int16_t to_hu(double value, double slope, double intercept, bool* clamped) {
 }
 
 namespace {
+
 inline uint64_t load(const uint8_t* p, unsigned bytes, bool big_endian) {
   uint64_t v = 0;
   if (big_endian) {
@@ -391,6 +392,30 @@ inline uint64_t load(const uint8_t* p, unsigned bytes, bool big_endian) {
   }
   return v;
 }
+
+// The common case (16-bit little endian, no scaling): the same results as the general loop of
+// convert_voxels(), faster. Returns how many values were clamped.
+uint64_t convert_plain_le16(const uint8_t* p, uint64_t n, bool is_signed, int64_t int_intercept,
+                            int16_t* o) {
+  uint64_t clamped_count = 0;
+  for (uint64_t k = 0; k < n; ++k) {
+    const uint32_t u = uint32_t{p[2 * k]} | (uint32_t{p[2 * k + 1]} << 8);
+    const int64_t value =
+        is_signed ? static_cast<int64_t>(static_cast<int16_t>(u)) : static_cast<int64_t>(u);
+    int64_t h = value + int_intercept;
+    if (h > 32767) {
+      h = 32767;
+      ++clamped_count;
+    }
+    if (h < -32768) {
+      h = -32768;
+      ++clamped_count;
+    }
+    o[k] = static_cast<int16_t>(h);
+  }
+  return clamped_count;
+}
+
 }  // namespace
 
 Status convert_voxels(Reader& reader, const VoxelFormat& f, uint64_t count, double slope,
@@ -420,22 +445,7 @@ Status convert_voxels(Reader& reader, const VoxelFormat& f, uint64_t count, doub
     const uint8_t* p = reader.buf + reader.pos;
     int16_t* o = out + done;
     if (integer_path && bytes == 2 && bits == 16 && !f.big_endian) {
-      // The common case (16-bit little endian, no scaling): the same results, faster.
-      for (uint64_t k = 0; k < n; ++k) {
-        const uint32_t u = uint32_t{p[2 * k]} | (uint32_t{p[2 * k + 1]} << 8);
-        const int64_t value =
-            f.is_signed ? static_cast<int64_t>(static_cast<int16_t>(u)) : static_cast<int64_t>(u);
-        int64_t h = value + int_intercept;
-        if (h > 32767) {
-          h = 32767;
-          ++clamped_count;
-        }
-        if (h < -32768) {
-          h = -32768;
-          ++clamped_count;
-        }
-        o[k] = static_cast<int16_t>(h);
-      }
+      clamped_count += convert_plain_le16(p, n, f.is_signed, int_intercept, o);
       reader.pos += static_cast<size_t>(n * 2);
       done += n;
       continue;
@@ -506,124 +516,188 @@ size_t chunk_size(const CtReadOptions& options) {
   return c < kHeaderWindow ? kHeaderWindow : c;
 }
 
-Status read_raw_volume(const Context& ctx, Reader& header, const ByteSource& header_source,
-                       const CtFileOpener* opener, const RawData& data,
-                       const CtReadOptions& options, int16_t** hu, uint64_t* saturated) {
-  Arena& arena = *ctx.arena;
+namespace {
+
+// The volume's size against the limits: *voxels and the *data_bytes they take in the file.
+// Attached data shorter than the header says is a truncation, told before any allocation.
+Status check_raw_size(const Reader& header, const ByteSource& header_source, const RawData& data,
+                      const CtReadOptions& options, uint64_t* voxels, uint64_t* data_bytes) {
   uint64_t voxel_bytes = 0;
   SPLINTCORE_RETURN_IF_ERROR(
       in_source(check_size(data.nx, data.ny, data.nz, options, &voxel_bytes), header_source));
-  const uint64_t voxels = voxel_bytes / 2;
-  uint64_t data_bytes = 0;
-  if (!checked_mul(voxels, data.format.bytes, &data_bytes)) {
+  *voxels = voxel_bytes / 2;
+  if (!checked_mul(*voxels, data.format.bytes, data_bytes)) {
     return in_source(make_error(StatusCode::kLimitExceeded, "voxel data too large"), header_source);
   }
-  // Attached data shorter than the header says: a truncation, told before any allocation.
   if (data.data_file == nullptr && header_source.size != kUnknownSize) {
     uint64_t end = 0;
-    if (!checked_add(header.offset(), data_bytes, &end) || end > header_source.size) {
-      return in_source(make_error(StatusCode::kTruncated, "the voxel data needs ", data_bytes,
+    if (!checked_add(header.offset(), *data_bytes, &end) || end > header_source.size) {
+      return in_source(make_error(StatusCode::kTruncated, "the voxel data needs ", *data_bytes,
                                   " bytes from byte ", header.offset(), ", the file has only ",
                                   header_source.size)
                            .at_byte(header_source.size),
                        header_source);
     }
   }
-  const size_t chunk = chunk_size(options);
-  SPLINTCORE_RETURN_IF_ERROR(check_budget(arena, voxel_bytes, chunk, 2));
+  return Status::ok();
+}
 
-  const Arena::Marker start = arena.mark();
-  int16_t* voxels_out = arena.allocate_array<int16_t>(static_cast<size_t>(voxels));
-  if (voxels_out == nullptr) {
-    Status s = arena.exhausted_status();
-    arena.rewind(start);
-    return s;
-  }
-  const Arena::Marker after_voxels = arena.mark();
-  uint8_t* buffer = arena.allocate_array<uint8_t>(chunk);
-  if (buffer == nullptr) {
-    Status s = arena.exhausted_status();
-    arena.rewind(start);
-    return s;
-  }
-
+// Where the voxel data is read from: the header's own reader (attached data, moved into the
+// chunk) or the data file, opened through the opener (closed when this goes out of scope).
+struct DataInput {
   OpenedFile opened;
   Reader detached;
-  Reader* reader = &header;
-  const ByteSource* source = &header_source;
-  Status s;
-  if (data.data_file != nullptr) {
+  Reader* reader = nullptr;
+  const ByteSource* source = nullptr;
+
+  Status open(Reader& header, const ByteSource& header_source, const CtFileOpener* opener,
+              const char* data_file, uint8_t* chunk, size_t chunk_bytes) {
+    if (data_file == nullptr) {
+      header.rebuffer(chunk, chunk_bytes);
+      reader = &header;
+      source = &header_source;
+      return Status::ok();
+    }
     if (opener == nullptr || opener->open == nullptr) {
-      arena.rewind(start);
-      return in_source(make_error(StatusCode::kInvalidArgument, "the data is in \"", data.data_file,
+      return in_source(make_error(StatusCode::kInvalidArgument, "the data is in \"", data_file,
                                   "\" but no file opener was given"),
                        header_source);
     }
     opened.opener = opener;
-    s = opener->open(opener->user, data.data_file, &opened.source);
+    Status s = opener->open(opener->user, data_file, &opened.source);
     if (!s.is_ok()) {
-      arena.rewind(start);
-      if (s.file()[0] == '\0') s.in_file(data.data_file);
+      if (s.file()[0] == '\0') s.in_file(data_file);
       return s;
     }
     opened.open = true;
-    if (opened.source.name == nullptr) opened.source.name = data.data_file;
-    detached.init(&opened.source, buffer, chunk);
+    if (opened.source.name == nullptr) opened.source.name = data_file;
+    detached.init(&opened.source, chunk, chunk_bytes);
     reader = &detached;
     source = &opened.source;
-  } else {
-    header.rebuffer(buffer, chunk);
+    return Status::ok();
   }
+};
 
-  // line skip, then byte skip (-1: the data is the last data_bytes of the file).
-  for (uint64_t l = 0; l < data.line_skip && s.is_ok(); ++l) {
+// True when fewer than `data_bytes` bytes follow the reader's position in a file of known size.
+bool data_cut_short(const ByteSource& source, const Reader& reader, uint64_t data_bytes) {
+  return source.size != kUnknownSize &&
+         (source.size < reader.offset() || source.size - reader.offset() < data_bytes);
+}
+
+// Line skip, then byte skip (-1: the data is the last data_bytes of the file); then the data
+// must fit in what is left of a file of known size.
+Status skip_to_voxels(Reader& reader, const ByteSource& source, const RawData& data,
+                      uint64_t data_bytes) {
+  for (uint64_t l = 0; l < data.line_skip; ++l) {
     for (;;) {
-      if (reader->available() == 0) {
-        s = reader->fill(1);
-        if (!s.is_ok()) break;
-        if (reader->available() == 0) {
-          s = make_error(StatusCode::kTruncated, "file ends while skipping line ", l + 1, " of ",
-                         data.line_skip, " (line skip)")
-                  .at_byte(reader->offset());
-          break;
+      if (reader.available() == 0) {
+        SPLINTCORE_RETURN_IF_ERROR(reader.fill(1));
+        if (reader.available() == 0) {
+          return make_error(StatusCode::kTruncated, "file ends while skipping line ", l + 1, " of ",
+                            data.line_skip, " (line skip)")
+              .at_byte(reader.offset());
         }
       }
-      if (reader->buf[reader->pos++] == '\n') break;
+      if (reader.buf[reader.pos++] == '\n') break;
     }
   }
   uint64_t skip = 0;
-  if (s.is_ok() && data.byte_skip == -1) {
-    if (source->size == kUnknownSize) {
-      s = make_error(StatusCode::kUnsupported,
-                     "byte skip -1 needs the data file's size, which its source does not know");
-    } else if (source->size < reader->offset() || source->size - reader->offset() < data_bytes) {
-      s = make_error(StatusCode::kTruncated, "the voxel data needs ", data_bytes,
-                     " bytes, the file has ", source->size)
-              .at_byte(source->size);
-    } else {
-      skip = source->size - reader->offset() - data_bytes;
+  if (data.byte_skip == -1) {
+    if (source.size == kUnknownSize) {
+      return make_error(StatusCode::kUnsupported,
+                        "byte skip -1 needs the data file's size, which its source does not know");
     }
-  } else if (s.is_ok()) {
+    if (data_cut_short(source, reader, data_bytes)) {
+      return make_error(StatusCode::kTruncated, "the voxel data needs ", data_bytes,
+                        " bytes, the file has ", source.size)
+          .at_byte(source.size);
+    }
+    skip = source.size - reader.offset() - data_bytes;
+  } else {
     skip = static_cast<uint64_t>(data.byte_skip);
   }
-  if (s.is_ok()) s = reader->skip(skip, "the bytes skipped before the voxel data");
-  if (s.is_ok() && source->size != kUnknownSize &&
-      (source->size < reader->offset() || source->size - reader->offset() < data_bytes)) {
-    s = make_error(StatusCode::kTruncated, "the voxel data needs ", data_bytes, " bytes from byte ",
-                   reader->offset(), ", the file has only ", source->size)
-            .at_byte(source->size);
+  SPLINTCORE_RETURN_IF_ERROR(reader.skip(skip, "the bytes skipped before the voxel data"));
+  if (data_cut_short(source, reader, data_bytes)) {
+    return make_error(StatusCode::kTruncated, "the voxel data needs ", data_bytes,
+                      " bytes from byte ", reader.offset(), ", the file has only ", source.size)
+        .at_byte(source.size);
   }
+  return Status::ok();
+}
+
+}  // namespace
+
+Status read_raw_volume(const Context& ctx, Reader& header, const ByteSource& header_source,
+                       const CtFileOpener* opener, const RawData& data,
+                       const CtReadOptions& options, int16_t** hu, uint64_t* saturated) {
+  Arena& arena = *ctx.arena;
+  uint64_t voxels = 0, data_bytes = 0;
+  SPLINTCORE_RETURN_IF_ERROR(
+      check_raw_size(header, header_source, data, options, &voxels, &data_bytes));
+  const size_t chunk = chunk_size(options);
+  SPLINTCORE_RETURN_IF_ERROR(check_budget(arena, voxels * 2, chunk, 2));
+
+  DataInput input;          // declared first: a data file is closed after the arena is rewound
+  ArenaScope scope(arena);  // on an error the arena is as it was
+  int16_t* voxels_out = arena.allocate_array<int16_t>(static_cast<size_t>(voxels));
+  if (voxels_out == nullptr) return arena.exhausted_status();
+  ArenaScope chunk_scope(arena);  // the read chunk is a temporary, also on success
+  uint8_t* buffer = arena.allocate_array<uint8_t>(chunk);
+  if (buffer == nullptr) return arena.exhausted_status();
+  SPLINTCORE_RETURN_IF_ERROR(
+      input.open(header, header_source, opener, data.data_file, buffer, chunk));
+
   uint64_t clamped = 0;
+  Status s = skip_to_voxels(*input.reader, *input.source, data, data_bytes);
   if (s.is_ok()) {
-    s = convert_voxels(*reader, data.format, voxels, 1.0, 0.0, voxels_out, 0, &clamped);
+    s = convert_voxels(*input.reader, data.format, voxels, 1.0, 0.0, voxels_out, 0, &clamped);
   }
-  if (!s.is_ok()) {
-    arena.rewind(start);
-    return in_source(s, *source);
-  }
-  arena.rewind(after_voxels);
+  if (!s.is_ok()) return in_source(s, *input.source);
+  scope.commit();
   *hu = voxels_out;
   *saturated = clamped;
+  return Status::ok();
+}
+
+Status read_text_volume(const Context& ctx, Reader& header, const ByteSource& header_source,
+                        const CtFileOpener* opener, const CtReadOptions& options,
+                        const TextVolume& volume, CtInfo found, CtVolume* out, CtInfo* info) {
+  Vec3 axes[3] = {volume.axes[0], volume.axes[1], volume.axes[2]};
+  const char* names[3] = {"x", "y", "z"};
+  Status s;
+  for (int a = 0; a < 3 && s.is_ok(); ++a) s = check_spacing(volume.spacing[a], names[a], options);
+  if (s.is_ok()) s = check_axes(&axes[0], &axes[1], &axes[2], options);
+  if (!s.is_ok()) {
+    s.at_line(volume.geometry_line);
+    return in_source(s, header_source);
+  }
+
+  const RawData& data = volume.data;
+  int16_t* hu = nullptr;
+  uint64_t saturated = 0;
+  SPLINTCORE_RETURN_IF_ERROR(
+      read_raw_volume(ctx, header, header_source, opener, data, options, &hu, &saturated));
+  out->nx = data.nx;
+  out->ny = data.ny;
+  out->nz = data.nz;
+  out->spacing = volume.spacing;
+  out->origin = volume.origin;
+  out->axis_x = axes[0];
+  out->axis_y = axes[1];
+  out->axis_z = axes[2];
+  out->hu = hu;
+  out->saturated = saturated;
+  if (info != nullptr) {
+    found.nx = data.nx;
+    found.ny = data.ny;
+    found.nz = data.nz;
+    found.spacing = volume.spacing;
+    describe_type(data.format, &found);
+    found.slice_count = data.nz;
+    found.detached = data.data_file != nullptr;
+    found.saturated = saturated;
+    *info = found;
+  }
   return Status::ok();
 }
 

@@ -124,6 +124,22 @@ Status read_raw_volume(const Context& ctx, Reader& header, const ByteSource& hea
                        const CtFileOpener* opener, const RawData& data,
                        const CtReadOptions& options, int16_t** hu, uint64_t* saturated);
 
+// What a text header (NRRD, MetaImage) describes: the voxel data and the geometry.
+struct TextVolume {
+  RawData data{};
+  Vec3 spacing{1, 1, 1};
+  Vec3 origin{0, 0, 0};
+  Vec3 axes[3] = {Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 0, 1}};
+  uint64_t geometry_line = kNoPosition;  // the header line spacing and axes errors name
+};
+
+// The end of a text-header read: checks the spacing and the axes (normalising the axes), reads
+// the voxels (read_raw_volume), then fills *out and, when info is not null, *info (`found`,
+// which holds what the header said, completed with the size and the stored type).
+Status read_text_volume(const Context& ctx, Reader& header, const ByteSource& header_source,
+                        const CtFileOpener* opener, const CtReadOptions& options,
+                        const TextVolume& volume, CtInfo found, CtVolume* out, CtInfo* info);
+
 }  // namespace ct_detail
 }  // namespace splintcore
 

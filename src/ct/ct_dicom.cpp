@@ -210,8 +210,9 @@ Status truncated(Reader& r, const char* where) {
   return make_error(StatusCode::kTruncated, "file ends inside ", where).at_byte(r.base + r.end);
 }
 
-// Parses one file's header up to Pixel Data (the reader's window must hold >= 300 bytes).
-Status parse_header(Reader& r, const CtReadOptions& options, Header* h) {
+// The 128-byte preamble, "DICM", then the File Meta Information (explicit VR little endian,
+// group 0002), of which the Transfer Syntax UID is kept: it says how the data set is encoded.
+Status read_file_meta(Reader& r, Header* h) {
   SPLINTCORE_RETURN_IF_ERROR(r.fill(132));
   if (r.available() < 132) return truncated(r, "the 128-byte preamble and \"DICM\"");
   if (std::memcmp(r.buf + r.pos + 128, "DICM", 4) != 0) {
@@ -221,7 +222,6 @@ Status parse_header(Reader& r, const CtReadOptions& options, Header* h) {
   }
   r.pos += 132;
 
-  // File Meta Information: explicit VR little endian, group 0002.
   bool have_syntax = false;
   for (;;) {
     SPLINTCORE_RETURN_IF_ERROR(r.fill(12));
@@ -271,123 +271,176 @@ Status parse_header(Reader& r, const CtReadOptions& options, Header* h) {
                       " (only 1.2.840.10008.1.2 and 1.2.840.10008.1.2.1: uncompressed little "
                       "endian)");
   }
+  return Status::ok();
+}
 
-  // The data set. Containers of undefined length are tracked on a bounded stack (no
-  // recursion); those of defined length are skipped whole. Only depth 0 is interpreted.
+// A data element's value length and VR (explicit VR only: implicit VR says neither SQ nor UN).
+struct ElementHeader {
+  uint32_t length = 0;
+  bool is_sq = false;
+  bool is_un = false;
+};
+
+// Reads the VR (explicit) and the length following the tag at p, and moves past them.
+Status read_element_header(Reader& r, const uint8_t* p, uint32_t tag, uint64_t at, bool implicit,
+                           ElementHeader* e) {
+  if (implicit) {
+    e->length = u32(p + 4);
+    r.pos += 8;
+    return Status::ok();
+  }
+  const uint8_t a = p[4], b = p[5];
+  if (a < 'A' || a > 'Z' || b < 'A' || b > 'Z') {
+    return tag_error(StatusCode::kParseError, tag, "element", "invalid VR", at);
+  }
+  e->is_sq = a == 'S' && b == 'Q';
+  e->is_un = a == 'U' && b == 'N';
+  if (long_vr(a, b)) {
+    if (r.available() < 12) return truncated(r, "a data element header");
+    e->length = u32(p + 8);
+    r.pos += 12;
+  } else {
+    e->length = u16(p + 6);
+    r.pos += 8;
+  }
+  return Status::ok();
+}
+
+// The data set, up to Pixel Data. Containers of undefined length are tracked on a bounded
+// stack (no recursion); those of defined length are skipped whole. Only depth 0 is interpreted.
+class DataSetWalk {
+ public:
+  DataSetWalk(Reader& r, const CtReadOptions& options, Header* h)
+      : r_(r), options_(options), h_(h) {}
+
+  Status run() {
+    for (;;) {
+      if (r_.offset() > options_.max_header_bytes) {
+        return make_error(StatusCode::kLimitExceeded, "no Pixel Data within the first ",
+                          options_.max_header_bytes, " bytes (CtReadOptions::max_header_bytes)")
+            .at_byte(r_.offset());
+      }
+      SPLINTCORE_RETURN_IF_ERROR(r_.fill(12));
+      if (r_.available() == 0 && depth_ == 0) {
+        return make_error(StatusCode::kParseError, "no (7FE0,0010) Pixel Data in the file")
+            .at_byte(r_.offset());
+      }
+      if (r_.available() < 8) return truncated(r_, "a data element header");
+      const uint8_t* p = r_.buf + r_.pos;
+      const uint64_t at = r_.offset();
+      const uint32_t group = u16(p);
+      const uint32_t tag = tag_of(group, u16(p + 2));
+      if (group == 0xFFFE) {
+        const uint32_t length = u32(p + 4);
+        r_.pos += 8;
+        SPLINTCORE_RETURN_IF_ERROR(delimiter(tag, length, at));
+        continue;
+      }
+      const bool implicit = depth_ > 0 ? stack_[depth_ - 1].implicit : h_->implicit;
+      ElementHeader e;
+      SPLINTCORE_RETURN_IF_ERROR(read_element_header(r_, p, tag, at, implicit, &e));
+      if (e.length == kUndefinedLength) {
+        SPLINTCORE_RETURN_IF_ERROR(open_sequence(tag, implicit, e, at));
+        continue;
+      }
+      if (depth_ == 0 && tag == kPixelData) {
+        h_->pixel_offset = r_.offset();
+        h_->pixel_length = e.length;
+        h_->have_pixels = true;
+        return Status::ok();
+      }
+      if (depth_ == 0 && kept_tag(tag) && !e.is_sq) {
+        SPLINTCORE_RETURN_IF_ERROR(keep_value(tag, e.length, at));
+        continue;
+      }
+      SPLINTCORE_RETURN_IF_ERROR(r_.skip(e.length, "a data element value"));
+    }
+  }
+
+ private:
   struct Level {
     bool item;      // an item (else a sequence)
     bool implicit;  // encoding inside (UN of undefined length is implicit VR, PS3.5 6.2.2)
   };
-  Level stack[kMaxNesting];
-  int depth = 0;
-  for (;;) {
-    if (r.offset() > options.max_header_bytes) {
-      return make_error(StatusCode::kLimitExceeded, "no Pixel Data within the first ",
-                        options.max_header_bytes, " bytes (CtReadOptions::max_header_bytes)")
-          .at_byte(r.offset());
-    }
-    SPLINTCORE_RETURN_IF_ERROR(r.fill(12));
-    if (r.available() == 0 && depth == 0) {
-      return make_error(StatusCode::kParseError, "no (7FE0,0010) Pixel Data in the file")
-          .at_byte(r.offset());
-    }
-    if (r.available() < 8) return truncated(r, "a data element header");
-    const uint8_t* p = r.buf + r.pos;
-    const uint64_t at = r.offset();
-    const uint32_t group = u16(p);
-    const uint32_t tag = tag_of(group, u16(p + 2));
-    if (group == 0xFFFE) {
-      const uint32_t length = u32(p + 4);
-      r.pos += 8;
-      if (tag == tag_of(0xFFFE, 0xE000)) {
-        if (depth == 0 || stack[depth - 1].item) {
-          return tag_error(StatusCode::kParseError, tag, "Item", "outside a sequence", at);
-        }
-        if (length == kUndefinedLength) {
-          if (depth == kMaxNesting) {
-            return tag_error(StatusCode::kLimitExceeded, tag, "Item", "nested too deeply", at);
-          }
-          stack[depth] = Level{true, stack[depth - 1].implicit};
-          ++depth;
-        } else {
-          SPLINTCORE_RETURN_IF_ERROR(r.skip(length, "an item"));
-        }
-      } else if (tag == tag_of(0xFFFE, 0xE00D)) {
-        if (depth == 0 || !stack[depth - 1].item) {
-          return tag_error(StatusCode::kParseError, tag, "Item Delimitation",
-                           "outside an item of undefined length", at);
-        }
-        --depth;
-      } else if (tag == tag_of(0xFFFE, 0xE0DD)) {
-        if (depth == 0 || stack[depth - 1].item) {
-          return tag_error(StatusCode::kParseError, tag, "Sequence Delimitation",
-                           "outside a sequence of undefined length", at);
-        }
-        --depth;
-      } else {
-        return tag_error(StatusCode::kParseError, tag, "element", "unknown delimiter tag", at);
+
+  // Item, Item Delimitation and Sequence Delimitation (group FFFE).
+  Status delimiter(uint32_t tag, uint32_t length, uint64_t at) {
+    if (tag == tag_of(0xFFFE, 0xE000)) {
+      if (depth_ == 0 || stack_[depth_ - 1].item) {
+        return tag_error(StatusCode::kParseError, tag, "Item", "outside a sequence", at);
       }
-      continue;
-    }
-    const bool implicit = depth > 0 ? stack[depth - 1].implicit : h->implicit;
-    uint32_t length;
-    bool is_sq = false, is_un = false;
-    if (implicit) {
-      length = u32(p + 4);
-      r.pos += 8;
-    } else {
-      const uint8_t a = p[4], b = p[5];
-      if (a < 'A' || a > 'Z' || b < 'A' || b > 'Z') {
-        return tag_error(StatusCode::kParseError, tag, "element", "invalid VR", at);
+      if (length != kUndefinedLength) return r_.skip(length, "an item");
+      if (depth_ == kMaxNesting) {
+        return tag_error(StatusCode::kLimitExceeded, tag, "Item", "nested too deeply", at);
       }
-      is_sq = a == 'S' && b == 'Q';
-      is_un = a == 'U' && b == 'N';
-      if (long_vr(a, b)) {
-        if (r.available() < 12) return truncated(r, "a data element header");
-        length = u32(p + 8);
-        r.pos += 12;
-      } else {
-        length = u16(p + 6);
-        r.pos += 8;
-      }
-    }
-    if (length == kUndefinedLength) {
-      if (depth == 0 && tag == kPixelData) {
-        return tag_error(StatusCode::kUnsupported, tag, "Pixel Data",
-                         "encapsulated (compressed) pixel data is not supported", at);
-      }
-      if (!implicit && !is_sq && !is_un) {
-        return tag_error(StatusCode::kParseError, tag, "element",
-                         "undefined length on a VR other than SQ or UN", at);
-      }
-      if (depth == kMaxNesting) {
-        return tag_error(StatusCode::kLimitExceeded, tag, "Sequence", "nested too deeply", at);
-      }
-      stack[depth] = Level{false, implicit || is_un};
-      ++depth;
-      continue;
-    }
-    if (depth == 0 && tag == kPixelData) {
-      h->pixel_offset = r.offset();
-      h->pixel_length = length;
-      h->have_pixels = true;
+      stack_[depth_] = Level{true, stack_[depth_ - 1].implicit};
+      ++depth_;
       return Status::ok();
     }
-    if (depth == 0 && kept_tag(tag) && !is_sq) {
-      if (length > kMaxValueBytes) {
-        Status s = tag_error(StatusCode::kParseError, tag, "element", "value of ", at);
-        s.append_u64(length);
-        s.append(" bytes is too long");
-        return s;
+    if (tag == tag_of(0xFFFE, 0xE00D)) {
+      if (depth_ == 0 || !stack_[depth_ - 1].item) {
+        return tag_error(StatusCode::kParseError, tag, "Item Delimitation",
+                         "outside an item of undefined length", at);
       }
-      SPLINTCORE_RETURN_IF_ERROR(r.fill(length));
-      if (r.available() < length) return truncated(r, "a data element value");
-      SPLINTCORE_RETURN_IF_ERROR(take_value(h, tag, r.buf + r.pos, length, at));
-      r.pos += length;
-      continue;
+      --depth_;
+      return Status::ok();
     }
-    SPLINTCORE_RETURN_IF_ERROR(r.skip(length, "a data element value"));
+    if (tag == tag_of(0xFFFE, 0xE0DD)) {
+      if (depth_ == 0 || stack_[depth_ - 1].item) {
+        return tag_error(StatusCode::kParseError, tag, "Sequence Delimitation",
+                         "outside a sequence of undefined length", at);
+      }
+      --depth_;
+      return Status::ok();
+    }
+    return tag_error(StatusCode::kParseError, tag, "element", "unknown delimiter tag", at);
   }
+
+  // An element of undefined length: a sequence (SQ, or UN or any element in implicit VR).
+  Status open_sequence(uint32_t tag, bool implicit, const ElementHeader& e, uint64_t at) {
+    if (depth_ == 0 && tag == kPixelData) {
+      return tag_error(StatusCode::kUnsupported, tag, "Pixel Data",
+                       "encapsulated (compressed) pixel data is not supported", at);
+    }
+    if (!implicit && !e.is_sq && !e.is_un) {
+      return tag_error(StatusCode::kParseError, tag, "element",
+                       "undefined length on a VR other than SQ or UN", at);
+    }
+    if (depth_ == kMaxNesting) {
+      return tag_error(StatusCode::kLimitExceeded, tag, "Sequence", "nested too deeply", at);
+    }
+    stack_[depth_] = Level{false, implicit || e.is_un};
+    ++depth_;
+    return Status::ok();
+  }
+
+  // The value of a top-level element this reader keeps (kept_tag()).
+  Status keep_value(uint32_t tag, uint32_t length, uint64_t at) {
+    if (length > kMaxValueBytes) {
+      Status s = tag_error(StatusCode::kParseError, tag, "element", "value of ", at);
+      s.append_u64(length);
+      s.append(" bytes is too long");
+      return s;
+    }
+    SPLINTCORE_RETURN_IF_ERROR(r_.fill(length));
+    if (r_.available() < length) return truncated(r_, "a data element value");
+    SPLINTCORE_RETURN_IF_ERROR(take_value(h_, tag, r_.buf + r_.pos, length, at));
+    r_.pos += length;
+    return Status::ok();
+  }
+
+  Reader& r_;
+  const CtReadOptions& options_;
+  Header* h_;
+  Level stack_[kMaxNesting] = {};
+  int depth_ = 0;
+};
+
+// Parses one file's header up to Pixel Data (the reader's window must hold >= 300 bytes).
+Status parse_header(Reader& r, const CtReadOptions& options, Header* h) {
+  SPLINTCORE_RETURN_IF_ERROR(read_file_meta(r, h));
+  DataSetWalk walk(r, options, h);
+  return walk.run();
 }
 
 // Checks what a slice needs and that its pixels fit the file.
@@ -484,57 +537,76 @@ uint64_t order_key(double v) {
   return (bits >> 63) != 0 ? ~bits : bits | (uint64_t{1} << 63);
 }
 
-}  // namespace
+// Bits Stored, which defaults to Bits Allocated.
+uint32_t bits_stored(const Header& h) {
+  return h.have_bits_stored ? h.bits_stored : h.bits_allocated;
+}
 
-Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtReadOptions& options,
-                         CtVolume* out, CtInfo* info) {
-  Arena& arena = *ctx.arena;
-  if (series.count == 0 || series.open == nullptr) {
-    return make_error(StatusCode::kInvalidArgument, "the DICOM series has no files");
+// What of a slice's header differs from the series' file 0 (first), or nullptr: all slices
+// share size, pixel format, pixel spacing and orientation (these two within `tolerance`).
+const char* difference(const Header& h, const Header& first, double tolerance) {
+  if (h.rows != first.rows || h.columns != first.columns) return "image size (Rows, Columns)";
+  if (h.bits_allocated != first.bits_allocated || bits_stored(h) != bits_stored(first) ||
+      h.pixel_representation != first.pixel_representation) {
+    return "pixel format (Bits Allocated, Bits Stored, Pixel Representation)";
   }
-  if (series.count > options.max_dimension) {
-    return make_error(StatusCode::kLimitExceeded, "the series has ", series.count,
-                      " files, more than the limit ", options.max_dimension,
-                      " (CtReadOptions::max_dimension)");
+  if (!close_to(h.pixel_spacing[0], first.pixel_spacing[0], tolerance) ||
+      !close_to(h.pixel_spacing[1], first.pixel_spacing[1], tolerance)) {
+    return "Pixel Spacing";
   }
-  const uint32_t count = series.count;
+  for (int c = 0; c < 6; ++c) {
+    if (!close_to(h.orientation[c], first.orientation[c], tolerance)) {
+      return "Image Orientation (Patient)";
+    }
+  }
+  return nullptr;
+}
+
+// How far slice positions may stray at distance x: max(tolerance_mm, relative * x).
+double allowed_deviation(const CtReadOptions& options, double x) {
+  return options.slice_spacing_tolerance_mm > options.slice_spacing_tolerance_relative * x
+             ? options.slice_spacing_tolerance_mm
+             : options.slice_spacing_tolerance_relative * x;
+}
+
+// The stages of read_dicom_series(), sharing the series, its file 0's header, the arrays kept
+// between the two passes and the geometry.
+struct SeriesReader {
+  const Context& ctx;
+  const CtSeries& series;
+  const CtReadOptions& options;
+  uint32_t count = 0;
   Header first;
   const char* first_name = nullptr;
-  SPLINTCORE_RETURN_IF_ERROR(read_header(series, 0, options, &first, &first_name));
+  // In the arena: the volume, then the temporaries.
+  int16_t* hu = nullptr;
+  SliceRecord* records = nullptr;  // of series file i
+  KeyIndex* keys = nullptr;        // position along the normal; sorted after pass 1
+  KeyIndex* scratch = nullptr;
+  uint8_t* buffer = nullptr;  // the read chunk
+  size_t chunk = 0;
+  // The frame (from file 0's orientation), origin and spacing.
+  Vec3 row, column, normal;
+  Vec3 origin, spacing;
+  bool rescale_varies = false;
 
-  uint64_t voxel_bytes = 0;
-  SPLINTCORE_RETURN_IF_ERROR(check_size(first.columns, first.rows, count, options, &voxel_bytes));
-  const size_t chunk = chunk_size(options);
-  const uint64_t temporaries =
-      uint64_t{count} * (sizeof(SliceRecord) + 2 * sizeof(KeyIndex)) + chunk;
-  SPLINTCORE_RETURN_IF_ERROR(check_budget(arena, voxel_bytes, temporaries, 4));
+  SeriesReader(const Context& c, const CtSeries& s, const CtReadOptions& o)
+      : ctx(c), series(s), options(o), count(s.count) {}
 
-  const Arena::Marker start = arena.mark();
-  int16_t* hu = arena.allocate_array<int16_t>(static_cast<size_t>(voxel_bytes / 2));
-  const Arena::Marker after_voxels = arena.mark();
-  SliceRecord* records = hu != nullptr ? arena.allocate_array<SliceRecord>(count) : nullptr;
-  KeyIndex* keys = records != nullptr ? arena.allocate_array<KeyIndex>(count) : nullptr;
-  KeyIndex* scratch = keys != nullptr ? arena.allocate_array<KeyIndex>(count) : nullptr;
-  uint8_t* buffer = scratch != nullptr ? arena.allocate_array<uint8_t>(chunk) : nullptr;
-  if (buffer == nullptr) {
-    Status s = arena.exhausted_status();
-    arena.rewind(start);
-    return s;
+  // The arrays between the passes and the read chunk (hu is allocated before).
+  bool allocate_temporaries(Arena& arena) {
+    records = arena.allocate_array<SliceRecord>(count);
+    keys = records != nullptr ? arena.allocate_array<KeyIndex>(count) : nullptr;
+    scratch = keys != nullptr ? arena.allocate_array<KeyIndex>(count) : nullptr;
+    buffer = scratch != nullptr ? arena.allocate_array<uint8_t>(chunk) : nullptr;
+    return buffer != nullptr;
   }
-  struct Rewind {
-    Arena& arena;
-    Arena::Marker marker;
-    bool active = true;
-    ~Rewind() {
-      if (active) arena.rewind(marker);
-    }
-  } rewind_on_error{arena, start};
 
-  // Pass 1: every header, checked against the first.
-  Vec3 row{first.orientation[0], first.orientation[1], first.orientation[2]};
-  Vec3 column{first.orientation[3], first.orientation[4], first.orientation[5]};
-  Vec3 normal = cross(row, column);
-  {
+  // The axes: row and column directions of file 0, and their cross product.
+  Status set_frame() {
+    row = Vec3{first.orientation[0], first.orientation[1], first.orientation[2]};
+    column = Vec3{first.orientation[3], first.orientation[4], first.orientation[5]};
+    normal = cross(row, column);
     Status s = check_axes(&row, &column, &normal, options);
     if (!s.is_ok()) {
       Status e = make_error(s.code(), "(0020,0037) Image Orientation (Patient): ", s.message());
@@ -542,57 +614,46 @@ Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtRea
       if (first_name != nullptr) e.in_file(first_name);
       return e;
     }
+    return Status::ok();
   }
-  bool rescale_varies = false;
-  for (uint32_t i = 0; i < count; ++i) {
-    Header h;
-    const char* name = first_name;
-    if (i == 0) {
-      h = first;
-    } else {
-      SPLINTCORE_RETURN_IF_ERROR(read_header(series, i, options, &h, &name));
-      const char* differs = nullptr;
-      const double tol = options.orientation_tolerance;
-      if (h.rows != first.rows || h.columns != first.columns) {
-        differs = "image size (Rows, Columns)";
-      } else if (h.bits_allocated != first.bits_allocated ||
-                 (h.have_bits_stored ? h.bits_stored : h.bits_allocated) !=
-                     (first.have_bits_stored ? first.bits_stored : first.bits_allocated) ||
-                 h.pixel_representation != first.pixel_representation) {
-        differs = "pixel format (Bits Allocated, Bits Stored, Pixel Representation)";
-      } else if (!close_to(h.pixel_spacing[0], first.pixel_spacing[0], tol) ||
-                 !close_to(h.pixel_spacing[1], first.pixel_spacing[1], tol)) {
-        differs = "Pixel Spacing";
-      } else {
-        for (int c = 0; c < 6; ++c) {
-          if (!close_to(h.orientation[c], first.orientation[c], tol)) {
-            differs = "Image Orientation (Patient)";
-          }
-        }
-      }
-      if (differs != nullptr) {
-        Status s = make_error(StatusCode::kUnsupported, "slice differs from the series' file 0 (",
-                              first_name != nullptr ? first_name : "?", ") in its ", differs);
-        s.at_index(i);
-        if (name != nullptr) s.in_file(name);
-        return s;
-      }
-      if (h.slope != first.slope || h.intercept != first.intercept) rescale_varies = true;
-    }
-    const Vec3 p{h.position[0], h.position[1], h.position[2]};
-    records[i] = SliceRecord{{p.x, p.y, p.z}, h.slope, h.intercept, h.pixel_offset, i, 0};
-    keys[i] = KeyIndex{order_key(dot(p, normal)), i, 0};
-    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read DICOM headers", i + 1, count));
-  }
-  radix_sort(Span<KeyIndex>(keys, count), Span<KeyIndex>(scratch, count));
 
-  // Geometry: distinct positions along the normal, no tilt, uniform spacing.
-  auto position = [&](uint32_t k) {
+  // Pass 1: every header, checked against file 0's; then the slices in position order.
+  Status read_headers() {
+    for (uint32_t i = 0; i < count; ++i) {
+      Header h;
+      const char* name = first_name;
+      if (i == 0) {
+        h = first;
+      } else {
+        SPLINTCORE_RETURN_IF_ERROR(read_header(series, i, options, &h, &name));
+        const char* differs = difference(h, first, options.orientation_tolerance);
+        if (differs != nullptr) {
+          Status s = make_error(StatusCode::kUnsupported, "slice differs from the series' file 0 (",
+                                first_name != nullptr ? first_name : "?", ") in its ", differs);
+          s.at_index(i);
+          if (name != nullptr) s.in_file(name);
+          return s;
+        }
+        if (h.slope != first.slope || h.intercept != first.intercept) rescale_varies = true;
+      }
+      const Vec3 p{h.position[0], h.position[1], h.position[2]};
+      records[i] = SliceRecord{{p.x, p.y, p.z}, h.slope, h.intercept, h.pixel_offset, i, 0};
+      keys[i] = KeyIndex{order_key(dot(p, normal)), i, 0};
+      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read DICOM headers", i + 1, count));
+    }
+    radix_sort(Span<KeyIndex>(keys, count), Span<KeyIndex>(scratch, count));
+    return Status::ok();
+  }
+
+  // Position of slice k (in position order).
+  Vec3 position(uint32_t k) const {
     const SliceRecord& r = records[keys[k].index];
     return Vec3{r.position[0], r.position[1], r.position[2]};
-  };
-  auto pair_error = [&](StatusCode code, uint32_t k, const char* text, double a, const char* t2,
-                        double b, const char* t3) {
+  }
+
+  // "<text>slices k and k + 1 (series files i and j) are <a><t2>[<b><t3>]", at file j.
+  Status pair_error(StatusCode code, uint32_t k, const char* text, double a, const char* t2,
+                    double b, const char* t3) const {
     Status e = make_error(code, text, "slices ", k, " and ", k + 1, " (series files ",
                           keys[k].index, " and ", keys[k + 1].index, ") are ");
     e.append_f64(a);
@@ -603,26 +664,12 @@ Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtRea
       e.append(t3);
     }
     return e;
-  };
-  const Vec3 origin = position(0);
-  Vec3 spacing{first.pixel_spacing[1], first.pixel_spacing[0], 0.0};
-  const double d0 = dot(origin, normal);
-  if (count == 1) {
-    spacing.z = first.spacing_between > 0 ? first.spacing_between : first.slice_thickness;
-    if (!(spacing.z > 0)) {
-      Status s = make_error(StatusCode::kParseError,
-                            "a single slice needs (0018,0088) Spacing Between Slices or "
-                            "(0018,0050) Slice Thickness for its z spacing");
-      if (first_name != nullptr) s.in_file(first_name);
-      return s;
-    }
-  } else {
-    const double span = dot(position(count - 1), normal) - d0;
-    const double mean = span / static_cast<double>(count - 1);
-    const double allowed_gap =
-        options.slice_spacing_tolerance_mm > options.slice_spacing_tolerance_relative * mean
-            ? options.slice_spacing_tolerance_mm
-            : options.slice_spacing_tolerance_relative * mean;
+  }
+
+  // Consecutive slices: distinct positions along the normal, each gap within the tolerance of
+  // the mean gap.
+  Status check_gaps(double d0, double mean) const {
+    const double allowed_gap = allowed_deviation(options, mean);
     double previous = d0;
     for (uint32_t k = 0; k + 1 < count; ++k) {
       const double next = dot(position(k + 1), normal);
@@ -642,16 +689,17 @@ Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtRea
       }
       previous = next;
     }
+    return Status::ok();
+  }
+
+  // Every slice on the normal through slice 0: no gantry tilt, no shear.
+  Status check_on_normal() const {
     for (uint32_t k = 1; k < count; ++k) {
       const Vec3 delta = position(k) - origin;
       const double along = dot(delta, normal);
       const Vec3 in_plane = delta - normal * along;
       const double offset = length(in_plane);
-      const double allowed =
-          options.slice_spacing_tolerance_mm > options.slice_spacing_tolerance_relative * along
-              ? options.slice_spacing_tolerance_mm
-              : options.slice_spacing_tolerance_relative * along;
-      if (!(offset <= allowed)) {
+      if (!(offset <= allowed_deviation(options, along))) {
         Status s = make_error(StatusCode::kUnsupported, "gantry tilt or sheared series: slice ", k,
                               " (series file ", keys[k].index, ") lies ", offset,
                               " mm off the normal through slice 0; only stacks along the "
@@ -660,60 +708,70 @@ Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtRea
         return s;
       }
     }
-    spacing.z = mean;
-  }
-  const char* axis_names[3] = {"x (Pixel Spacing, column spacing)",
-                               "y (Pixel Spacing, row spacing)", "z (between slices)"};
-  for (int a = 0; a < 3; ++a) {
-    Status s = check_spacing(spacing[a], axis_names[a], options);
-    if (!s.is_ok()) {
-      if (first_name != nullptr) s.in_file(first_name);
-      return s;
-    }
+    return Status::ok();
   }
 
-  // Pass 2: pixels, slice by slice in position order.
-  VoxelFormat format;
-  format.bytes = static_cast<uint8_t>(first.bits_allocated / 8);
-  format.is_signed = first.pixel_representation == 1;
-  format.big_endian = false;
-  format.bits_stored =
-      static_cast<uint8_t>(first.have_bits_stored ? first.bits_stored : first.bits_allocated);
-  const uint64_t per_slice = uint64_t{first.rows} * first.columns;
-  uint64_t saturated = 0;
-  for (uint32_t k = 0; k < count; ++k) {
-    const SliceRecord& rec = records[keys[k].index];
-    ByteSource source;
-    SPLINTCORE_RETURN_IF_ERROR(series.open(series.user, rec.file, &source));
-    Reader r;
-    r.init(&source, buffer, chunk);
-    Status s = r.skip(rec.pixel_offset, "the header before Pixel Data");
-    if (s.is_ok()) {
-      s = convert_voxels(r, format, per_slice, rec.slope, rec.intercept, hu + k * per_slice,
-                         k * per_slice, &saturated);
+  // The spacing between slices: the mean gap of a uniform stack along the normal; a single
+  // slice takes Spacing Between Slices, else Slice Thickness.
+  Status slice_spacing(double* z) const {
+    if (count == 1) {
+      *z = first.spacing_between > 0 ? first.spacing_between : first.slice_thickness;
+      if (!(*z > 0)) {
+        Status s = make_error(StatusCode::kParseError,
+                              "a single slice needs (0018,0088) Spacing Between Slices or "
+                              "(0018,0050) Slice Thickness for its z spacing");
+        if (first_name != nullptr) s.in_file(first_name);
+        return s;
+      }
+      return Status::ok();
     }
-    const char* name = source.name;
-    if (series.close != nullptr) series.close(series.user, rec.file, &source);
-    if (!s.is_ok()) {
-      if (name != nullptr) s.in_file(name);
-      return s;
-    }
-    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read DICOM pixels", k + 1, count));
+    const double d0 = dot(origin, normal);
+    const double span = dot(position(count - 1), normal) - d0;
+    const double mean = span / static_cast<double>(count - 1);
+    SPLINTCORE_RETURN_IF_ERROR(check_gaps(d0, mean));
+    SPLINTCORE_RETURN_IF_ERROR(check_on_normal());
+    *z = mean;
+    return Status::ok();
   }
 
-  rewind_on_error.active = false;
-  arena.rewind(after_voxels);
-  out->nx = first.columns;
-  out->ny = first.rows;
-  out->nz = count;
-  out->spacing = spacing;
-  out->origin = origin;
-  out->axis_x = row;
-  out->axis_y = column;
-  out->axis_z = normal;
-  out->hu = hu;
-  out->saturated = saturated;
-  if (info != nullptr) {
+  // Origin (slice 0's position) and spacing: Pixel Spacing is row spacing, then column spacing.
+  Status set_geometry() {
+    origin = position(0);
+    spacing = Vec3{first.pixel_spacing[1], first.pixel_spacing[0], 0.0};
+    SPLINTCORE_RETURN_IF_ERROR(slice_spacing(&spacing.z));
+    const char* axis_names[3] = {"x (Pixel Spacing, column spacing)",
+                                 "y (Pixel Spacing, row spacing)", "z (between slices)"};
+    for (int a = 0; a < 3; ++a) {
+      Status s = check_spacing(spacing[a], axis_names[a], options);
+      if (!s.is_ok()) {
+        if (first_name != nullptr) s.in_file(first_name);
+        return s;
+      }
+    }
+    return Status::ok();
+  }
+
+  VoxelFormat pixel_format() const {
+    VoxelFormat format;
+    format.bytes = static_cast<uint8_t>(first.bits_allocated / 8);
+    format.is_signed = first.pixel_representation == 1;
+    format.big_endian = false;
+    format.bits_stored = static_cast<uint8_t>(bits_stored(first));
+    return format;
+  }
+
+  void store(const VoxelFormat& format, uint64_t saturated, CtVolume* out, CtInfo* info) const {
+    out->nx = first.columns;
+    out->ny = first.rows;
+    out->nz = count;
+    out->spacing = spacing;
+    out->origin = origin;
+    out->axis_x = row;
+    out->axis_y = column;
+    out->axis_z = normal;
+    out->hu = hu;
+    out->saturated = saturated;
+    if (info == nullptr) return;
     CtInfo found;
     found.format = CtFormat::kDicom;
     found.nx = out->nx;
@@ -731,6 +789,74 @@ Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtRea
     found.saturated = saturated;
     *info = found;
   }
+};
+
+// Pass 2: the pixels, slice by slice in position order, each with its own rescale. Not a
+// SeriesReader method: cppcheck 2.10 takes a Reader local to a method for a non-local one
+// (a false danglingLifetime on r.init(&source, ...)).
+Status read_pixels(const SeriesReader& sr, const VoxelFormat& format, uint64_t* saturated) {
+  const uint64_t per_slice = uint64_t{sr.first.rows} * sr.first.columns;
+  for (uint32_t k = 0; k < sr.count; ++k) {
+    const SliceRecord& rec = sr.records[sr.keys[k].index];
+    ByteSource source;
+    SPLINTCORE_RETURN_IF_ERROR(sr.series.open(sr.series.user, rec.file, &source));
+    Reader r;
+    r.init(&source, sr.buffer, sr.chunk);
+    Status s = r.skip(rec.pixel_offset, "the header before Pixel Data");
+    if (s.is_ok()) {
+      s = convert_voxels(r, format, per_slice, rec.slope, rec.intercept, sr.hu + k * per_slice,
+                         k * per_slice, saturated);
+    }
+    const char* name = source.name;
+    if (sr.series.close != nullptr) sr.series.close(sr.series.user, rec.file, &source);
+    if (!s.is_ok()) {
+      if (name != nullptr) s.in_file(name);
+      return s;
+    }
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(sr.ctx, "read DICOM pixels", k + 1, sr.count));
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtReadOptions& options,
+                         CtVolume* out, CtInfo* info) {
+  Arena& arena = *ctx.arena;
+  if (series.count == 0 || series.open == nullptr) {
+    return make_error(StatusCode::kInvalidArgument, "the DICOM series has no files");
+  }
+  if (series.count > options.max_dimension) {
+    return make_error(StatusCode::kLimitExceeded, "the series has ", series.count,
+                      " files, more than the limit ", options.max_dimension,
+                      " (CtReadOptions::max_dimension)");
+  }
+  SeriesReader reader(ctx, series, options);
+  const uint32_t count = series.count;
+  const Header& first = reader.first;
+  SPLINTCORE_RETURN_IF_ERROR(read_header(series, 0, options, &reader.first, &reader.first_name));
+
+  uint64_t voxel_bytes = 0;
+  SPLINTCORE_RETURN_IF_ERROR(check_size(first.columns, first.rows, count, options, &voxel_bytes));
+  reader.chunk = chunk_size(options);
+  const uint64_t temporaries =
+      uint64_t{count} * (sizeof(SliceRecord) + 2 * sizeof(KeyIndex)) + reader.chunk;
+  SPLINTCORE_RETURN_IF_ERROR(check_budget(arena, voxel_bytes, temporaries, 4));
+
+  ArenaScope scope(arena);  // on an error the arena is as it was
+  reader.hu = arena.allocate_array<int16_t>(static_cast<size_t>(voxel_bytes / 2));
+  if (reader.hu == nullptr) return arena.exhausted_status();
+  ArenaScope temporaries_scope(arena);  // rewound also on success: only the voxels stay
+  if (!reader.allocate_temporaries(arena)) return arena.exhausted_status();
+
+  SPLINTCORE_RETURN_IF_ERROR(reader.set_frame());
+  SPLINTCORE_RETURN_IF_ERROR(reader.read_headers());
+  SPLINTCORE_RETURN_IF_ERROR(reader.set_geometry());
+  const VoxelFormat format = reader.pixel_format();
+  uint64_t saturated = 0;
+  SPLINTCORE_RETURN_IF_ERROR(read_pixels(reader, format, &saturated));
+  scope.commit();
+  reader.store(format, saturated, out, info);
   return Status::ok();
 }
 

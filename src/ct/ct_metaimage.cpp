@@ -2,7 +2,7 @@
 // https://itk.org/Wiki/ITK/MetaIO/Documentation): "Key = Value" header lines, ElementDataFile
 // last, then (LOCAL) the raw voxels or the name of a data file. Only 3-D scalar, uncompressed
 // binary images; TransformMatrix row k is the direction of axis k (as ITK's MetaImageIO reads
-// it). Voxel data goes through read_raw_volume() (ct_common.h).
+// it). Voxel data goes through read_text_volume() (ct_common.h).
 #include "ct/ct_common.h"
 
 namespace splintcore {
@@ -35,233 +35,312 @@ bool parse_bool(const char* v, size_t n, bool* out) {
   return false;
 }
 
-}  // namespace
+// One "Key = Value" line, both parts trimmed.
+struct Entry {
+  const char* key;
+  size_t key_length;
+  const char* value;
+  size_t value_length;
 
-Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFileOpener* opener,
-                      const CtReadOptions& options, CtVolume* out, CtInfo* info) {
+  bool is(const char* name) const { return equal_nocase(key, key_length, name); }
+  bool value_is(const char* v) const { return equal_nocase(value, value_length, v); }
+  // Exactly `wanted` numbers.
+  bool numbers(double* out, size_t wanted) const {
+    size_t count = 0;
+    return parse_doubles(value, value_length, '\0', out, wanted, &count) && count == wanted;
+  }
+};
+
+// The header, read a line at a time in a fixed window up to ElementDataFile (the last key),
+// each key taken by its own method. Errors name the line.
+struct MetaImageHeader {
+  const ByteSource& source;
   uint8_t window[kHeaderWindow];
-  char line[kLineCapacity];
-  char data_file[kLineCapacity] = {};
+  char line[kLineCapacity] = {};
   Reader reader;
-  reader.init(&source, window, sizeof(window));
-  uint64_t budget = options.max_header_bytes;
+  uint64_t budget;
   uint64_t line_no = 0;
-  auto fail = [&](Status s) {
-    s.at_line(line_no);
-    return in_source(s, source);
-  };
 
+  // What the keys said.
   bool have_object = false, have_ndims = false, have_dims = false, have_type = false;
   bool binary = false, have_binary = false, have_spacing = false;
+  bool have_data_file = false;  // ElementDataFile was read: the header ends there
   VoxelFormat format;
   double dims[3] = {0, 0, 0};
-  double spacing_v[3] = {1, 1, 1};
+  double spacing[3] = {1, 1, 1};
   double matrix[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   double offset[3] = {0, 0, 0};
   int64_t header_size = 0;
   uint64_t geometry_line = kNoPosition;
+  char data_file[kLineCapacity] = {};
   CtInfo found;
-  found.format = CtFormat::kMetaImage;
 
-  for (;;) {
-    size_t len = 0;
-    bool too_long = false, got = false;
-    Status s = reader.read_line(line, &len, &too_long, &got, &budget);
-    ++line_no;
-    if (!s.is_ok()) return fail(s);
-    if (!got) {
+  MetaImageHeader(const ByteSource& s, const CtReadOptions& options)
+      : source(s), budget(options.max_header_bytes) {
+    reader.init(&source, window, sizeof(window));
+    found.format = CtFormat::kMetaImage;
+  }
+  MetaImageHeader(const MetaImageHeader&) = delete;
+  MetaImageHeader& operator=(const MetaImageHeader&) = delete;
+
+  Status fail(Status s) const {
+    s.at_line(line_no);
+    return in_source(s, source);
+  }
+  Status bad(const Entry& e, const char* what) const {
+    return fail(make_error(StatusCode::kParseError, "bad ", what, " \"")
+                    .append(e.value, e.value_length)
+                    .append("\""));
+  }
+
+  // The key lines, up to ElementDataFile (the data, when LOCAL, starts right after it).
+  Status read_keys() {
+    while (!have_data_file) {
+      size_t len = 0;
+      bool too_long = false, got = false;
+      Status s = reader.read_line(line, &len, &too_long, &got, &budget);
+      ++line_no;
+      if (!s.is_ok()) return fail(s);
+      if (!got) {
+        return fail(
+            make_error(StatusCode::kTruncated, "header ends without ElementDataFile (the last key)")
+                .at_byte(reader.offset()));
+      }
+      if (too_long) {
+        return fail(make_error(StatusCode::kParseError, "line longer than ", kLineCapacity - 1,
+                               " characters"));
+      }
+      size_t eq = 0;
+      while (eq < len && line[eq] != '=') ++eq;
+      Entry e{line, eq, nullptr, 0};
+      trim(&e.key, &e.key_length);
+      if (e.key_length == 0 && eq == len) continue;  // blank line
+      if (eq == len) return fail(make_error(StatusCode::kParseError, "expected \"Key = Value\""));
+      e.value = line + eq + 1;
+      e.value_length = len - eq - 1;
+      trim(&e.value, &e.value_length);
+      SPLINTCORE_RETURN_IF_ERROR(take(e));
+    }
+    return Status::ok();
+  }
+
+  // One key, by name. Other keys (Comment, CenterOfRotation, ElementMin, Modality, ...) are
+  // ignored.
+  Status take(const Entry& e) {
+    using Take = Status (MetaImageHeader::*)(const Entry&);
+    static constexpr struct {
+      const char* key;
+      Take take;
+    } kKeys[] = {
+        {"ObjectType", &MetaImageHeader::take_object_type},
+        {"NDims", &MetaImageHeader::take_ndims},
+        {"DimSize", &MetaImageHeader::take_dim_size},
+        {"ElementSpacing", &MetaImageHeader::take_spacing},
+        {"ElementSize", &MetaImageHeader::take_element_size},
+        {"Offset", &MetaImageHeader::take_offset},
+        {"Origin", &MetaImageHeader::take_offset},
+        {"Position", &MetaImageHeader::take_offset},
+        {"TransformMatrix", &MetaImageHeader::take_matrix},
+        {"Rotation", &MetaImageHeader::take_matrix},
+        {"Orientation", &MetaImageHeader::take_matrix},
+        {"AnatomicalOrientation", &MetaImageHeader::take_anatomical_orientation},
+        {"ElementType", &MetaImageHeader::take_element_type},
+        {"ElementNumberOfChannels", &MetaImageHeader::take_channels},
+        {"BinaryData", &MetaImageHeader::take_binary_data},
+        {"BinaryDataByteOrderMSB", &MetaImageHeader::take_byte_order},
+        {"ElementByteOrderMSB", &MetaImageHeader::take_byte_order},
+        {"CompressedData", &MetaImageHeader::take_compressed_data},
+        {"HeaderSize", &MetaImageHeader::take_header_size},
+        {"ElementDataFile", &MetaImageHeader::take_data_file},
+    };
+    for (const auto& key : kKeys) {
+      if (e.is(key.key)) return (this->*key.take)(e);
+    }
+    return Status::ok();
+  }
+
+  Status take_object_type(const Entry& e) {
+    if (!e.value_is("Image")) {
+      return fail(make_error(StatusCode::kUnsupported, "ObjectType \"")
+                      .append(e.value, e.value_length)
+                      .append("\": only Image is supported"));
+    }
+    have_object = true;
+    return Status::ok();
+  }
+
+  Status take_ndims(const Entry& e) {
+    int64_t d = 0;
+    if (!parse_i64(e.value, e.value_length, &d)) return bad(e, "NDims");
+    if (d != 3) {
       return fail(
-          make_error(StatusCode::kTruncated, "header ends without ElementDataFile (the last key)")
-              .at_byte(reader.offset()));
+          make_error(StatusCode::kUnsupported, "NDims ", d, ": only 3-D volumes are supported"));
     }
-    if (too_long) {
-      return fail(make_error(StatusCode::kParseError, "line longer than ", kLineCapacity - 1,
-                             " characters"));
+    have_ndims = true;
+    return Status::ok();
+  }
+
+  Status take_dim_size(const Entry& e) {
+    if (!e.numbers(dims, 3)) return bad(e, "DimSize (three integers)");
+    for (double d : dims) {
+      if (!(d >= 1 && d <= 4294967295.0) || d != static_cast<double>(static_cast<uint64_t>(d))) {
+        return bad(e, "DimSize (three positive integers)");
+      }
     }
-    const char* key = line;
-    size_t eq = 0;
-    while (eq < len && line[eq] != '=') ++eq;
-    size_t key_len = eq;
-    trim(&key, &key_len);
-    if (key_len == 0 && eq == len) continue;  // blank line
-    if (eq == len) return fail(make_error(StatusCode::kParseError, "expected \"Key = Value\""));
-    const char* value = line + eq + 1;
-    size_t value_len = len - eq - 1;
-    trim(&value, &value_len);
-    auto is = [&](const char* name) { return equal_nocase(key, key_len, name); };
-    auto bad = [&](const char* what) {
-      return fail(make_error(StatusCode::kParseError, "bad ", what, " \"")
-                      .append(value, value_len)
-                      .append("\""));
+    have_dims = true;
+    return Status::ok();
+  }
+
+  // ElementSpacing, or ElementSize while no ElementSpacing was given.
+  Status take_spacing(const Entry& e) {
+    if (!e.numbers(spacing, 3)) return bad(e, "element spacing (three numbers)");
+    if (e.is("ElementSpacing")) have_spacing = true;
+    geometry_line = line_no;
+    return Status::ok();
+  }
+
+  Status take_element_size(const Entry& e) { return have_spacing ? Status::ok() : take_spacing(e); }
+
+  Status take_offset(const Entry& e) {
+    if (!e.numbers(offset, 3)) return bad(e, "origin (three numbers)");
+    return Status::ok();
+  }
+
+  Status take_matrix(const Entry& e) {
+    if (!e.numbers(matrix, 9)) return bad(e, "direction matrix (nine numbers)");
+    if (geometry_line == kNoPosition) geometry_line = line_no;
+    return Status::ok();
+  }
+
+  Status take_anatomical_orientation(const Entry& e) {
+    size_t n = e.value_length < sizeof(found.space) - 1 ? e.value_length : sizeof(found.space) - 1;
+    std::memcpy(found.space, e.value, n);
+    found.space[n] = '\0';
+    return Status::ok();
+  }
+
+  Status take_element_type(const Entry& e) {
+    for (const TypeName& t : kTypes) {
+      if (e.value_is(t.name)) {
+        format.bytes = t.bytes;
+        format.is_signed = t.is_signed;
+        format.is_float = t.is_float;
+        have_type = true;
+        return Status::ok();
+      }
+    }
+    return fail(make_error(StatusCode::kUnsupported, "ElementType \"")
+                    .append(e.value, e.value_length)
+                    .append("\" is not supported (MET_CHAR/UCHAR/SHORT/USHORT/INT/UINT/"
+                            "FLOAT/DOUBLE)"));
+  }
+
+  Status take_channels(const Entry& e) {
+    int64_t c = 0;
+    if (!parse_i64(e.value, e.value_length, &c)) return bad(e, "ElementNumberOfChannels");
+    if (c != 1) {
+      return fail(make_error(StatusCode::kUnsupported, "ElementNumberOfChannels ", c,
+                             ": only scalar volumes are supported"));
+    }
+    return Status::ok();
+  }
+
+  Status take_binary_data(const Entry& e) {
+    if (!parse_bool(e.value, e.value_length, &binary)) return bad(e, "BinaryData (True or False)");
+    have_binary = true;
+    return Status::ok();
+  }
+
+  Status take_byte_order(const Entry& e) {
+    bool msb = false;
+    if (!parse_bool(e.value, e.value_length, &msb)) return bad(e, "byte order (True or False)");
+    format.big_endian = msb;
+    return Status::ok();
+  }
+
+  Status take_compressed_data(const Entry& e) {
+    bool compressed = false;
+    if (!parse_bool(e.value, e.value_length, &compressed)) return bad(e, "CompressedData");
+    if (compressed) {
+      return fail(
+          make_error(StatusCode::kUnsupported, "compressed MetaImage data is not supported"));
+    }
+    return Status::ok();
+  }
+
+  Status take_header_size(const Entry& e) {
+    if (!parse_i64(e.value, e.value_length, &header_size) || header_size < -1) {
+      return bad(e, "HeaderSize");
+    }
+    return Status::ok();
+  }
+
+  Status take_data_file(const Entry& e) {
+    if (e.value_length == 0) return bad(e, "ElementDataFile");
+    if (e.value_is("LOCAL")) {
+      data_file[0] = '\0';
+    } else if ((e.value_length >= 4 && equal_nocase(e.value, 4, "LIST")) ||
+               std::memchr(e.value, '%', e.value_length) != nullptr) {
+      return fail(make_error(StatusCode::kUnsupported, "ElementDataFile \"")
+                      .append(e.value, e.value_length)
+                      .append("\": LIST and pattern forms are not supported (one file only)"));
+    } else {
+      std::memcpy(data_file, e.value, e.value_length);
+      data_file[e.value_length] = '\0';
+    }
+    have_data_file = true;
+    return Status::ok();
+  }
+
+  // The keys every volume needs (errors name the ElementDataFile line).
+  Status check_required() const {
+    auto missing = [&](const char* what) {
+      return fail(
+          make_error(StatusCode::kParseError, "missing key ", what, " before ElementDataFile"));
     };
-    auto numbers = [&](double* out_values, size_t wanted) {
-      size_t count = 0;
-      return parse_doubles(value, value_len, '\0', out_values, wanted, &count) && count == wanted;
-    };
-    if (is("ObjectType")) {
-      if (!equal_nocase(value, value_len, "Image")) {
-        return fail(make_error(StatusCode::kUnsupported, "ObjectType \"")
-                        .append(value, value_len)
-                        .append("\": only Image is supported"));
-      }
-      have_object = true;
-    } else if (is("NDims")) {
-      int64_t d = 0;
-      if (!parse_i64(value, value_len, &d)) return bad("NDims");
-      if (d != 3) {
-        return fail(
-            make_error(StatusCode::kUnsupported, "NDims ", d, ": only 3-D volumes are supported"));
-      }
-      have_ndims = true;
-    } else if (is("DimSize")) {
-      if (!numbers(dims, 3)) return bad("DimSize (three integers)");
-      for (double d : dims) {
-        if (!(d >= 1 && d <= 4294967295.0) || d != static_cast<double>(static_cast<uint64_t>(d))) {
-          return bad("DimSize (three positive integers)");
-        }
-      }
-      have_dims = true;
-    } else if (is("ElementSpacing") || (is("ElementSize") && !have_spacing)) {
-      if (!numbers(spacing_v, 3)) return bad("element spacing (three numbers)");
-      if (is("ElementSpacing")) have_spacing = true;
-      geometry_line = line_no;
-    } else if (is("Offset") || is("Origin") || is("Position")) {
-      if (!numbers(offset, 3)) return bad("origin (three numbers)");
-    } else if (is("TransformMatrix") || is("Rotation") || is("Orientation")) {
-      if (!numbers(matrix, 9)) return bad("direction matrix (nine numbers)");
-      if (geometry_line == kNoPosition) geometry_line = line_no;
-    } else if (is("AnatomicalOrientation")) {
-      size_t n = value_len < sizeof(found.space) - 1 ? value_len : sizeof(found.space) - 1;
-      std::memcpy(found.space, value, n);
-      found.space[n] = '\0';
-    } else if (is("ElementType")) {
-      bool ok = false;
-      for (const TypeName& t : kTypes) {
-        if (equal_nocase(value, value_len, t.name)) {
-          format.bytes = t.bytes;
-          format.is_signed = t.is_signed;
-          format.is_float = t.is_float;
-          ok = true;
-        }
-      }
-      if (!ok) {
-        return fail(make_error(StatusCode::kUnsupported, "ElementType \"")
-                        .append(value, value_len)
-                        .append("\" is not supported (MET_CHAR/UCHAR/SHORT/USHORT/INT/UINT/"
-                                "FLOAT/DOUBLE)"));
-      }
-      have_type = true;
-    } else if (is("ElementNumberOfChannels")) {
-      int64_t c = 0;
-      if (!parse_i64(value, value_len, &c)) return bad("ElementNumberOfChannels");
-      if (c != 1) {
-        return fail(make_error(StatusCode::kUnsupported, "ElementNumberOfChannels ", c,
-                               ": only scalar volumes are supported"));
-      }
-    } else if (is("BinaryData")) {
-      if (!parse_bool(value, value_len, &binary)) return bad("BinaryData (True or False)");
-      have_binary = true;
-    } else if (is("BinaryDataByteOrderMSB") || is("ElementByteOrderMSB")) {
-      bool msb = false;
-      if (!parse_bool(value, value_len, &msb)) return bad("byte order (True or False)");
-      format.big_endian = msb;
-    } else if (is("CompressedData")) {
-      bool compressed = false;
-      if (!parse_bool(value, value_len, &compressed)) return bad("CompressedData");
-      if (compressed) {
-        return fail(
-            make_error(StatusCode::kUnsupported, "compressed MetaImage data is not supported"));
-      }
-    } else if (is("HeaderSize")) {
-      if (!parse_i64(value, value_len, &header_size) || header_size < -1) {
-        return bad("HeaderSize");
-      }
-    } else if (is("ElementDataFile")) {
-      if (value_len == 0) return bad("ElementDataFile");
-      if (equal_nocase(value, value_len, "LOCAL")) {
-        data_file[0] = '\0';
-      } else if ((value_len >= 4 && equal_nocase(value, 4, "LIST")) ||
-                 std::memchr(value, '%', value_len) != nullptr) {
-        return fail(make_error(StatusCode::kUnsupported, "ElementDataFile \"")
-                        .append(value, value_len)
-                        .append("\": LIST and pattern forms are not supported (one file only)"));
-      } else {
-        std::memcpy(data_file, value, value_len);
-        data_file[value_len] = '\0';
-      }
-      break;  // the data (LOCAL) starts right after this line
+    if (!have_object) return missing("ObjectType");
+    if (!have_ndims) return missing("NDims");
+    if (!have_dims) return missing("DimSize");
+    if (!have_type) return missing("ElementType");
+    if (!have_binary || !binary) {
+      return fail(make_error(StatusCode::kUnsupported,
+                             "only binary MetaImage data is supported (BinaryData = True)"));
     }
-    // Other keys (Comment, CenterOfRotation, ElementMin, Modality, ...) are ignored.
-  }
-
-  auto missing = [&](const char* what) {
-    return fail(
-        make_error(StatusCode::kParseError, "missing key ", what, " before ElementDataFile"));
-  };
-  if (!have_object) return missing("ObjectType");
-  if (!have_ndims) return missing("NDims");
-  if (!have_dims) return missing("DimSize");
-  if (!have_type) return missing("ElementType");
-  if (!have_binary || !binary) {
-    return fail(make_error(StatusCode::kUnsupported,
-                           "only binary MetaImage data is supported (BinaryData = True)"));
-  }
-  if (data_file[0] == '\0' && header_size != 0) {
-    return fail(make_error(StatusCode::kUnsupported,
-                           "HeaderSize is only supported with a separate data file"));
-  }
-
-  Vec3 spacing{spacing_v[0], spacing_v[1], spacing_v[2]};
-  Vec3 axes[3] = {Vec3{matrix[0], matrix[1], matrix[2]}, Vec3{matrix[3], matrix[4], matrix[5]},
-                  Vec3{matrix[6], matrix[7], matrix[8]}};
-  const char* names[3] = {"x", "y", "z"};
-  for (int a = 0; a < 3; ++a) {
-    Status sp = check_spacing(spacing[a], names[a], options);
-    if (!sp.is_ok()) {
-      line_no = geometry_line;
-      return fail(sp);
+    if (data_file[0] == '\0' && header_size != 0) {
+      return fail(make_error(StatusCode::kUnsupported,
+                             "HeaderSize is only supported with a separate data file"));
     }
-  }
-  Status axes_ok = check_axes(&axes[0], &axes[1], &axes[2], options);
-  if (!axes_ok.is_ok()) {
-    line_no = geometry_line;
-    return fail(axes_ok);
+    return Status::ok();
   }
 
-  RawData data;
-  data.format = format;
-  data.nx = static_cast<uint32_t>(dims[0]);
-  data.ny = static_cast<uint32_t>(dims[1]);
-  data.nz = static_cast<uint32_t>(dims[2]);
-  data.data_file = data_file[0] != '\0' ? data_file : nullptr;
-  data.byte_skip = header_size;
-  int16_t* hu = nullptr;
-  uint64_t saturated = 0;
-  SPLINTCORE_RETURN_IF_ERROR(
-      read_raw_volume(ctx, reader, source, opener, data, options, &hu, &saturated));
-
-  out->nx = data.nx;
-  out->ny = data.ny;
-  out->nz = data.nz;
-  out->spacing = spacing;
-  out->origin = Vec3{offset[0], offset[1], offset[2]};
-  out->axis_x = axes[0];
-  out->axis_y = axes[1];
-  out->axis_z = axes[2];
-  out->hu = hu;
-  out->saturated = saturated;
-  if (info != nullptr) {
-    found.nx = data.nx;
-    found.ny = data.ny;
-    found.nz = data.nz;
-    found.spacing = spacing;
-    describe_type(format, &found);
-    found.slice_count = data.nz;
-    found.detached = data.data_file != nullptr;
-    found.saturated = saturated;
-    *info = found;
+  // The volume the keys describe: TransformMatrix row k is the direction of axis k.
+  TextVolume volume() const {
+    TextVolume v;
+    v.spacing = Vec3{spacing[0], spacing[1], spacing[2]};
+    v.origin = Vec3{offset[0], offset[1], offset[2]};
+    for (int a = 0; a < 3; ++a) {
+      v.axes[a] = Vec3{matrix[3 * a], matrix[3 * a + 1], matrix[3 * a + 2]};
+    }
+    v.geometry_line = geometry_line;
+    v.data.format = format;
+    v.data.nx = static_cast<uint32_t>(dims[0]);
+    v.data.ny = static_cast<uint32_t>(dims[1]);
+    v.data.nz = static_cast<uint32_t>(dims[2]);
+    v.data.data_file = data_file[0] != '\0' ? data_file : nullptr;
+    v.data.byte_skip = header_size;
+    return v;
   }
-  return Status::ok();
+};
+
+}  // namespace
+
+Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFileOpener* opener,
+                      const CtReadOptions& options, CtVolume* out, CtInfo* info) {
+  MetaImageHeader header(source, options);
+  SPLINTCORE_RETURN_IF_ERROR(header.read_keys());
+  SPLINTCORE_RETURN_IF_ERROR(header.check_required());
+  return read_text_volume(ctx, header.reader, source, opener, options, header.volume(),
+                          header.found, out, info);
 }
 
 }  // namespace splintcore

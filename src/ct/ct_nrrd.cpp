@@ -1,7 +1,7 @@
 // NRRD reader: "NRRD: Nearly Raw Raster Data", file format definition (teem project,
 // http://teem.sourceforge.net/nrrd/format.html), magics NRRD0001 to NRRD0005. Only 3-D scalar
 // volumes with raw encoding; the header is parsed line by line in a fixed window; voxel data
-// goes through read_raw_volume() (ct_common.h).
+// goes through read_text_volume() (ct_common.h).
 #include "ct/ct_common.h"
 
 namespace splintcore {
@@ -77,34 +77,31 @@ void copy_text(char* out, size_t cap, const char* text, size_t length) {
   out[length] = '\0';
 }
 
-}  // namespace
+// One "field: value" line, both parts trimmed.
+struct Field {
+  const char* name;
+  size_t name_length;
+  const char* value;
+  size_t value_length;
 
-Status read_nrrd(const Context& ctx, const ByteSource& source, const CtFileOpener* opener,
-                 const CtReadOptions& options, CtVolume* out, CtInfo* info) {
+  bool is(const char* n) const { return equal_nocase(name, name_length, n); }
+  bool value_is(const char* v) const { return equal_nocase(value, value_length, v); }
+};
+
+// The header, read a line at a time in a fixed window: the magic line, then "field: value"
+// lines up to the blank line before the data (or the end of a detached header), each taken
+// by its own method. Errors name the line.
+struct NrrdHeader {
+  const ByteSource& source;
   uint8_t window[kHeaderWindow];
-  char line[kLineCapacity];
-  char data_file[kLineCapacity] = {};
+  char line[kLineCapacity] = {};
   Reader reader;
-  reader.init(&source, window, sizeof(window));
-  uint64_t budget = options.max_header_bytes;
+  uint64_t budget;
   uint64_t line_no = 0;
-  auto fail = [&](Status s) {
-    s.at_line(line_no);
-    return in_source(s, source);
-  };
 
-  size_t len = 0;
-  bool too_long = false, got = false;
-  SPLINTCORE_RETURN_IF_ERROR(
-      in_source(reader.read_line(line, &len, &too_long, &got, &budget), source));
-  line_no = 1;
-  if (!got || len != 8 || !starts_with(line, len, "NRRD000") || line[7] < '1' || line[7] > '5') {
-    return fail(make_error(StatusCode::kParseError,
-                           "not a NRRD file: the first line must be NRRD0001 to NRRD0005"));
-  }
-
+  // What the fields said.
   bool have_type = false, have_dimension = false, have_sizes = false, have_encoding = false;
-  bool have_endian = false, have_directions = false, have_spacings = false;
+  bool have_endian = false, have_directions = false;
   VoxelFormat format;
   uint64_t sizes[3] = {0, 0, 0};
   Vec3 directions[3];
@@ -112,224 +109,297 @@ Status read_nrrd(const Context& ctx, const ByteSource& source, const CtFileOpene
   Vec3 origin{0, 0, 0};
   int64_t byte_skip = 0, line_skip = 0;
   uint64_t geometry_line = kNoPosition;
+  char data_file[kLineCapacity] = {};
   CtInfo found;
-  found.format = CtFormat::kNrrd;
 
-  for (;;) {
-    Status s = reader.read_line(line, &len, &too_long, &got, &budget);
-    ++line_no;
-    if (!s.is_ok()) return fail(s);
-    if (!got) {
-      if (data_file[0] != '\0') break;  // a detached header may end at its end of file
-      return fail(
-          make_error(StatusCode::kTruncated, "header ends without the blank line before the data")
-              .at_byte(reader.offset()));
+  NrrdHeader(const ByteSource& s, const CtReadOptions& options)
+      : source(s), budget(options.max_header_bytes) {
+    reader.init(&source, window, sizeof(window));
+    found.format = CtFormat::kNrrd;
+  }
+  NrrdHeader(const NrrdHeader&) = delete;
+  NrrdHeader& operator=(const NrrdHeader&) = delete;
+
+  Status fail(Status s) const {
+    s.at_line(line_no);
+    return in_source(s, source);
+  }
+  Status bad(const Field& f, const char* what) const {
+    return fail(make_error(StatusCode::kParseError, "bad ", what, " \"")
+                    .append(f.value, f.value_length)
+                    .append("\""));
+  }
+
+  // The first line: NRRD0001 to NRRD0005.
+  Status read_magic() {
+    size_t len = 0;
+    bool too_long = false, got = false;
+    SPLINTCORE_RETURN_IF_ERROR(
+        in_source(reader.read_line(line, &len, &too_long, &got, &budget), source));
+    line_no = 1;
+    if (!got || len != 8 || !starts_with(line, len, "NRRD000") || line[7] < '1' || line[7] > '5') {
+      return fail(make_error(StatusCode::kParseError,
+                             "not a NRRD file: the first line must be NRRD0001 to NRRD0005"));
     }
-    if (len == 0) break;  // the blank line (a too long line is never empty)
-    if (line[0] == '#') continue;
-    size_t colon = 0;
-    while (colon < len && line[colon] != ':') ++colon;
-    if (colon + 1 < len && line[colon + 1] == '=') continue;  // key:=value pair
-    if (colon == len) {
-      return fail(make_error(StatusCode::kParseError, "expected \"field: value\""));
-    }
-    if (too_long) {
-      return fail(make_error(StatusCode::kParseError, "line longer than ", kLineCapacity - 1,
-                             " characters"));
-    }
-    const char* field = line;
-    size_t field_len = colon;
-    trim(&field, &field_len);
-    const char* value = line + colon + 1;
-    size_t value_len = len - colon - 1;
-    trim(&value, &value_len);
-    auto is = [&](const char* name) { return equal_nocase(field, field_len, name); };
-    auto bad = [&](const char* what) {
-      return fail(make_error(StatusCode::kParseError, "bad ", what, " \"")
-                      .append(value, value_len)
-                      .append("\""));
-    };
-    if (is("type")) {
-      bool ok = false;
-      for (const TypeName& t : kTypes) {
-        if (equal_nocase(value, value_len, t.name)) {
-          format.bytes = t.bytes;
-          format.is_signed = t.is_signed;
-          format.is_float = t.is_float;
-          ok = true;
-          break;
-        }
-      }
-      if (!ok) {
-        return fail(make_error(StatusCode::kUnsupported, "voxel type \"")
-                        .append(value, value_len)
-                        .append("\" is not supported (8, 16 and 32-bit integers, float, double)"));
-      }
-      have_type = true;
-    } else if (is("dimension")) {
-      int64_t d = 0;
-      if (!parse_i64(value, value_len, &d)) return bad("dimension");
-      if (d != 3) {
-        return fail(make_error(StatusCode::kUnsupported, "dimension ", d,
-                               ": only 3-D scalar volumes are supported"));
-      }
-      have_dimension = true;
-    } else if (is("sizes")) {
-      double v[4];
-      size_t count = 0;
-      if (!parse_doubles(value, value_len, '\0', v, 4, &count) || count != 3) {
-        return fail(make_error(StatusCode::kParseError, "sizes: expected 3 integers, got \"")
-                        .append(value, value_len)
-                        .append("\""));
-      }
-      for (int a = 0; a < 3; ++a) {
-        if (!(v[a] >= 1 && v[a] <= 4294967295.0) ||
-            v[a] != static_cast<double>(static_cast<uint64_t>(v[a]))) {
-          return bad("sizes");
-        }
-        sizes[a] = static_cast<uint64_t>(v[a]);
-      }
-      have_sizes = true;
-    } else if (is("encoding")) {
-      if (equal_nocase(value, value_len, "raw")) {
-        have_encoding = true;
-      } else if (equal_nocase(value, value_len, "gzip") || equal_nocase(value, value_len, "gz") ||
-                 equal_nocase(value, value_len, "bzip2") || equal_nocase(value, value_len, "bz2") ||
-                 equal_nocase(value, value_len, "ascii") || equal_nocase(value, value_len, "txt") ||
-                 equal_nocase(value, value_len, "text") || equal_nocase(value, value_len, "hex") ||
-                 equal_nocase(value, value_len, "zstd")) {
-        return fail(make_error(StatusCode::kUnsupported, "encoding \"")
-                        .append(value, value_len)
-                        .append("\" is not supported (only raw)"));
-      } else {
-        return bad("encoding");
-      }
-    } else if (is("endian")) {
-      if (equal_nocase(value, value_len, "little")) {
-        format.big_endian = false;
-      } else if (equal_nocase(value, value_len, "big")) {
-        format.big_endian = true;
-      } else {
-        return bad("endian (little or big)");
-      }
-      have_endian = true;
-    } else if (is("space directions")) {
-      if (!parse_vectors(value, value_len, directions, 3)) {
-        return fail(make_error(StatusCode::kParseError,
-                               "space directions: expected three vectors (x,y,z), got \"")
-                        .append(value, value_len)
-                        .append("\" (\"none\" axes are not supported)"));
-      }
-      have_directions = true;
-      geometry_line = line_no;
-    } else if (is("spacings")) {
-      size_t count = 0;
-      if (!parse_doubles(value, value_len, '\0', spacings, 3, &count) || count != 3) {
-        return bad("spacings (three numbers)");
-      }
-      have_spacings = true;
-      if (!have_directions) geometry_line = line_no;
-    } else if (is("space origin")) {
-      Vec3 o[1];
-      if (!parse_vectors(value, value_len, o, 1)) return bad("space origin (x,y,z)");
-      origin = o[0];
-    } else if (is("space")) {
-      copy_text(found.space, sizeof(found.space), value, value_len);
-    } else if (is("space dimension")) {
-      int64_t d = 0;
-      if (!parse_i64(value, value_len, &d)) return bad("space dimension");
-      if (d != 3) {
+    return Status::ok();
+  }
+
+  // The field lines, up to the blank line before the data.
+  Status read_fields() {
+    for (;;) {
+      size_t len = 0;
+      bool too_long = false, got = false;
+      Status s = reader.read_line(line, &len, &too_long, &got, &budget);
+      ++line_no;
+      if (!s.is_ok()) return fail(s);
+      if (!got) {
+        if (data_file[0] != '\0') return Status::ok();  // a detached header may end at its end
         return fail(
-            make_error(StatusCode::kUnsupported, "space dimension ", d, ": only 3 is supported"));
+            make_error(StatusCode::kTruncated, "header ends without the blank line before the data")
+                .at_byte(reader.offset()));
       }
-    } else if (is("data file") || is("datafile")) {
-      if (starts_with(value, value_len, "LIST") || std::memchr(value, '%', value_len) != nullptr) {
-        return fail(make_error(StatusCode::kUnsupported, "data file \"")
-                        .append(value, value_len)
-                        .append("\": LIST and pattern forms are not supported (one file only)"));
+      if (len == 0) return Status::ok();  // the blank line (a too long line is never empty)
+      if (line[0] == '#') continue;
+      size_t colon = 0;
+      while (colon < len && line[colon] != ':') ++colon;
+      if (colon + 1 < len && line[colon + 1] == '=') continue;  // key:=value pair
+      if (colon == len) {
+        return fail(make_error(StatusCode::kParseError, "expected \"field: value\""));
       }
-      if (value_len == 0) return bad("data file");
-      copy_text(data_file, sizeof(data_file), value, value_len);
-    } else if (is("byte skip") || is("byteskip")) {
-      if (!parse_i64(value, value_len, &byte_skip) || byte_skip < -1) return bad("byte skip");
-    } else if (is("line skip") || is("lineskip")) {
-      if (!parse_i64(value, value_len, &line_skip) || line_skip < 0) return bad("line skip");
+      if (too_long) {
+        return fail(make_error(StatusCode::kParseError, "line longer than ", kLineCapacity - 1,
+                               " characters"));
+      }
+      Field f{line, colon, line + colon + 1, len - colon - 1};
+      trim(&f.name, &f.name_length);
+      trim(&f.value, &f.value_length);
+      SPLINTCORE_RETURN_IF_ERROR(take(f));
     }
-    // Other fields (kinds, centerings, units, content, measurement frame, ...) are ignored.
   }
 
-  auto missing = [&](const char* what) {
-    return fail(make_error(StatusCode::kParseError, "missing field \"", what, "\""));
-  };
-  if (!have_type) return missing("type");
-  if (!have_dimension) return missing("dimension");
-  if (!have_sizes) return missing("sizes");
-  if (!have_encoding) return missing("encoding");
-  if (format.bytes > 1 && !have_endian) return missing("endian");
+  // One field, by name. Other fields (kinds, centerings, units, content, measurement frame,
+  // ...) are ignored.
+  Status take(const Field& f) {
+    using Take = Status (NrrdHeader::*)(const Field&);
+    static constexpr struct {
+      const char* name;
+      Take take;
+    } kFields[] = {
+        {"type", &NrrdHeader::take_type},
+        {"dimension", &NrrdHeader::take_dimension},
+        {"sizes", &NrrdHeader::take_sizes},
+        {"encoding", &NrrdHeader::take_encoding},
+        {"endian", &NrrdHeader::take_endian},
+        {"space directions", &NrrdHeader::take_directions},
+        {"spacings", &NrrdHeader::take_spacings},
+        {"space origin", &NrrdHeader::take_origin},
+        {"space", &NrrdHeader::take_space},
+        {"space dimension", &NrrdHeader::take_space_dimension},
+        {"data file", &NrrdHeader::take_data_file},
+        {"datafile", &NrrdHeader::take_data_file},
+        {"byte skip", &NrrdHeader::take_byte_skip},
+        {"byteskip", &NrrdHeader::take_byte_skip},
+        {"line skip", &NrrdHeader::take_line_skip},
+        {"lineskip", &NrrdHeader::take_line_skip},
+    };
+    for (const auto& field : kFields) {
+      if (f.is(field.name)) return (this->*field.take)(f);
+    }
+    return Status::ok();
+  }
 
-  Vec3 axes[3] = {Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 0, 1}};
-  Vec3 spacing{spacings[0], spacings[1], spacings[2]};
-  if (have_directions) {
+  Status take_type(const Field& f) {
+    for (const TypeName& t : kTypes) {
+      if (f.value_is(t.name)) {
+        format.bytes = t.bytes;
+        format.is_signed = t.is_signed;
+        format.is_float = t.is_float;
+        have_type = true;
+        return Status::ok();
+      }
+    }
+    return fail(make_error(StatusCode::kUnsupported, "voxel type \"")
+                    .append(f.value, f.value_length)
+                    .append("\" is not supported (8, 16 and 32-bit integers, float, double)"));
+  }
+
+  Status take_dimension(const Field& f) {
+    int64_t d = 0;
+    if (!parse_i64(f.value, f.value_length, &d)) return bad(f, "dimension");
+    if (d != 3) {
+      return fail(make_error(StatusCode::kUnsupported, "dimension ", d,
+                             ": only 3-D scalar volumes are supported"));
+    }
+    have_dimension = true;
+    return Status::ok();
+  }
+
+  Status take_sizes(const Field& f) {
+    double v[4];
+    size_t count = 0;
+    if (!parse_doubles(f.value, f.value_length, '\0', v, 4, &count) || count != 3) {
+      return fail(make_error(StatusCode::kParseError, "sizes: expected 3 integers, got \"")
+                      .append(f.value, f.value_length)
+                      .append("\""));
+    }
     for (int a = 0; a < 3; ++a) {
-      // parse_double takes finite numbers only, so the directions are finite.
-      spacing[a] = length(directions[a]);
-      if (spacing[a] > 0 && is_finite(spacing[a])) {
-        axes[a] = Vec3{directions[a].x / spacing[a], directions[a].y / spacing[a],
-                       directions[a].z / spacing[a]};
+      if (!(v[a] >= 1 && v[a] <= 4294967295.0) ||
+          v[a] != static_cast<double>(static_cast<uint64_t>(v[a]))) {
+        return bad(f, "sizes");
+      }
+      sizes[a] = static_cast<uint64_t>(v[a]);
+    }
+    have_sizes = true;
+    return Status::ok();
+  }
+
+  Status take_encoding(const Field& f) {
+    if (f.value_is("raw")) {
+      have_encoding = true;
+      return Status::ok();
+    }
+    if (f.value_is("gzip") || f.value_is("gz") || f.value_is("bzip2") || f.value_is("bz2") ||
+        f.value_is("ascii") || f.value_is("txt") || f.value_is("text") || f.value_is("hex") ||
+        f.value_is("zstd")) {
+      return fail(make_error(StatusCode::kUnsupported, "encoding \"")
+                      .append(f.value, f.value_length)
+                      .append("\" is not supported (only raw)"));
+    }
+    return bad(f, "encoding");
+  }
+
+  Status take_endian(const Field& f) {
+    if (f.value_is("little")) {
+      format.big_endian = false;
+    } else if (f.value_is("big")) {
+      format.big_endian = true;
+    } else {
+      return bad(f, "endian (little or big)");
+    }
+    have_endian = true;
+    return Status::ok();
+  }
+
+  Status take_directions(const Field& f) {
+    if (!parse_vectors(f.value, f.value_length, directions, 3)) {
+      return fail(make_error(StatusCode::kParseError,
+                             "space directions: expected three vectors (x,y,z), got \"")
+                      .append(f.value, f.value_length)
+                      .append("\" (\"none\" axes are not supported)"));
+    }
+    have_directions = true;
+    geometry_line = line_no;
+    return Status::ok();
+  }
+
+  Status take_spacings(const Field& f) {
+    size_t count = 0;
+    if (!parse_doubles(f.value, f.value_length, '\0', spacings, 3, &count) || count != 3) {
+      return bad(f, "spacings (three numbers)");
+    }
+    if (!have_directions) geometry_line = line_no;
+    return Status::ok();
+  }
+
+  Status take_origin(const Field& f) {
+    Vec3 o[1];
+    if (!parse_vectors(f.value, f.value_length, o, 1)) return bad(f, "space origin (x,y,z)");
+    origin = o[0];
+    return Status::ok();
+  }
+
+  Status take_space(const Field& f) {
+    copy_text(found.space, sizeof(found.space), f.value, f.value_length);
+    return Status::ok();
+  }
+
+  Status take_space_dimension(const Field& f) {
+    int64_t d = 0;
+    if (!parse_i64(f.value, f.value_length, &d)) return bad(f, "space dimension");
+    if (d != 3) {
+      return fail(
+          make_error(StatusCode::kUnsupported, "space dimension ", d, ": only 3 is supported"));
+    }
+    return Status::ok();
+  }
+
+  Status take_data_file(const Field& f) {
+    if (starts_with(f.value, f.value_length, "LIST") ||
+        std::memchr(f.value, '%', f.value_length) != nullptr) {
+      return fail(make_error(StatusCode::kUnsupported, "data file \"")
+                      .append(f.value, f.value_length)
+                      .append("\": LIST and pattern forms are not supported (one file only)"));
+    }
+    if (f.value_length == 0) return bad(f, "data file");
+    copy_text(data_file, sizeof(data_file), f.value, f.value_length);
+    return Status::ok();
+  }
+
+  Status take_byte_skip(const Field& f) {
+    if (!parse_i64(f.value, f.value_length, &byte_skip) || byte_skip < -1) {
+      return bad(f, "byte skip");
+    }
+    return Status::ok();
+  }
+
+  Status take_line_skip(const Field& f) {
+    if (!parse_i64(f.value, f.value_length, &line_skip) || line_skip < 0) {
+      return bad(f, "line skip");
+    }
+    return Status::ok();
+  }
+
+  // The fields every volume needs (errors name the line that ended the header).
+  Status check_required() const {
+    auto missing = [&](const char* what) {
+      return fail(make_error(StatusCode::kParseError, "missing field \"", what, "\""));
+    };
+    if (!have_type) return missing("type");
+    if (!have_dimension) return missing("dimension");
+    if (!have_sizes) return missing("sizes");
+    if (!have_encoding) return missing("encoding");
+    if (format.bytes > 1 && !have_endian) return missing("endian");
+    return Status::ok();
+  }
+
+  // The volume the fields describe. Space directions give the spacing (their lengths) and the
+  // axes (normalised); without them, the spacings (default 1 mm) and identity axes.
+  TextVolume volume() const {
+    TextVolume v;
+    v.spacing = Vec3{spacings[0], spacings[1], spacings[2]};
+    if (have_directions) {
+      for (int a = 0; a < 3; ++a) {
+        // parse_double takes finite numbers only, so the directions are finite.
+        v.spacing[a] = length(directions[a]);
+        if (v.spacing[a] > 0 && is_finite(v.spacing[a])) {
+          v.axes[a] = Vec3{directions[a].x / v.spacing[a], directions[a].y / v.spacing[a],
+                           directions[a].z / v.spacing[a]};
+        }
       }
     }
+    v.origin = origin;  // finite: parse_double takes finite numbers only
+    v.geometry_line = geometry_line;
+    v.data.format = format;
+    v.data.nx = static_cast<uint32_t>(sizes[0]);  // each checked to be 1..2^32-1
+    v.data.ny = static_cast<uint32_t>(sizes[1]);
+    v.data.nz = static_cast<uint32_t>(sizes[2]);
+    v.data.data_file = data_file[0] != '\0' ? data_file : nullptr;
+    v.data.line_skip = static_cast<uint64_t>(line_skip);
+    v.data.byte_skip = byte_skip;
+    return v;
   }
-  (void)have_spacings;
-  const char* names[3] = {"x", "y", "z"};
-  for (int a = 0; a < 3; ++a) {
-    Status sp = check_spacing(spacing[a], names[a], options);
-    if (!sp.is_ok()) {
-      line_no = geometry_line;
-      return fail(sp);
-    }
-  }
-  Status axes_ok = check_axes(&axes[0], &axes[1], &axes[2], options);
-  if (!axes_ok.is_ok()) {
-    line_no = geometry_line;
-    return fail(axes_ok);
-  }
-  // The origin is finite: parse_double takes finite numbers only.
+};
 
-  RawData data;
-  data.format = format;
-  data.nx = static_cast<uint32_t>(sizes[0]);  // each checked to be 1..2^32-1 above
-  data.ny = static_cast<uint32_t>(sizes[1]);
-  data.nz = static_cast<uint32_t>(sizes[2]);
-  data.data_file = data_file[0] != '\0' ? data_file : nullptr;
-  data.line_skip = static_cast<uint64_t>(line_skip);
-  data.byte_skip = byte_skip;
-  int16_t* hu = nullptr;
-  uint64_t saturated = 0;
-  SPLINTCORE_RETURN_IF_ERROR(
-      read_raw_volume(ctx, reader, source, opener, data, options, &hu, &saturated));
+}  // namespace
 
-  out->nx = data.nx;
-  out->ny = data.ny;
-  out->nz = data.nz;
-  out->spacing = spacing;
-  out->origin = origin;
-  out->axis_x = axes[0];
-  out->axis_y = axes[1];
-  out->axis_z = axes[2];
-  out->hu = hu;
-  out->saturated = saturated;
-  if (info != nullptr) {
-    found.nx = data.nx;
-    found.ny = data.ny;
-    found.nz = data.nz;
-    found.spacing = spacing;
-    describe_type(format, &found);
-    found.slice_count = data.nz;
-    found.detached = data.data_file != nullptr;
-    found.saturated = saturated;
-    *info = found;
-  }
-  return Status::ok();
+Status read_nrrd(const Context& ctx, const ByteSource& source, const CtFileOpener* opener,
+                 const CtReadOptions& options, CtVolume* out, CtInfo* info) {
+  NrrdHeader header(source, options);
+  SPLINTCORE_RETURN_IF_ERROR(header.read_magic());
+  SPLINTCORE_RETURN_IF_ERROR(header.read_fields());
+  SPLINTCORE_RETURN_IF_ERROR(header.check_required());
+  return read_text_volume(ctx, header.reader, source, opener, options, header.volume(),
+                          header.found, out, info);
 }
 
 }  // namespace splintcore

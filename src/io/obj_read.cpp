@@ -47,10 +47,100 @@ bool parse_corner(const char* first, const char* last, int64_t* vertex) {
   return true;
 }
 
+// The statements this reader keeps, 'v' and 'f', each read from its line's tokens into the
+// mesh. Errors name the line (and the column of the token at fault) and the vertex or face.
+struct ObjStatements {
+  const LineReader& lines;
+  const MeshReadOptions& options;
+  MeshBuilder& builder;
+  uint64_t max_vertices = 0;
+  uint64_t faces = 0;  // read so far
+
+  ObjStatements(const LineReader& l, const MeshReadOptions& o, MeshBuilder& b)
+      : lines(l), options(o), builder(b) {
+    max_vertices = options.max_vertices < 0xffffffffu ? options.max_vertices : 0xffffffffu;
+  }
+
+  // "v x y z" and up to three more numbers, which are ignored (t is at "v").
+  Status vertex(Tokens& t) {
+    const uint64_t index = builder.mesh.vertices.size();
+    if (index >= max_vertices) {
+      return make_error(StatusCode::kLimitExceeded, "OBJ has more than ", max_vertices,
+                        " vertices (the limit)")
+          .at_line(lines.number, 1)
+          .at_index(index);
+    }
+    double xyz[6] = {0, 0, 0, 0, 0, 0};
+    int n = 0;
+    while (t.next() && t.token[0] != '#') {
+      if (n == 6) {
+        return token_error(StatusCode::kParseError, lines, t, "more than 6 numbers on a 'v' line")
+            .at_index(index);
+      }
+      const StatusCode code =
+          meshio::parse_real(t.token, t.token + t.token_length, options.round_to_float32, &xyz[n]);
+      if (code == StatusCode::kNonFinite && n < 3) {
+        return token_error(code, lines, t, "vertex has a non-finite coordinate (NaN or infinity)")
+            .at_index(index);
+      }
+      if (code != StatusCode::kOk && (n < 3 || code != StatusCode::kNonFinite)) {
+        return token_error(StatusCode::kParseError, lines, t, "expected a number").at_index(index);
+      }
+      ++n;
+    }
+    if (n < 3) {
+      return token_error(StatusCode::kParseError, lines, t, "a 'v' line needs x, y and z")
+          .at_index(index);
+    }
+    Status s = builder.add_vertex(Vec3(xyz[0], xyz[1], xyz[2]), index);
+    if (!s.is_ok()) s.at_line(lines.number, 1);
+    return s;
+  }
+
+  // "f" and at least three corners, fan-triangulated (t is at "f").
+  Status face(Tokens& t) {
+    const uint64_t defined = builder.mesh.vertices.size();
+    uint32_t first = 0, previous = 0;
+    uint64_t corners = 0;
+    while (t.next() && t.token[0] != '#') {
+      int64_t v = 0;
+      if (!parse_corner(t.token, t.token + t.token_length, &v)) {
+        return token_error(StatusCode::kParseError, lines, t,
+                           "expected a face corner v, v/vt, v//vn or v/vt/vn")
+            .at_index(faces);
+      }
+      // 1-based, or counting back from the last vertex defined (-1 is the last).
+      const int64_t zero_based = v > 0 ? v - 1 : static_cast<int64_t>(defined) + v;
+      if (v == 0 || zero_based < 0 || static_cast<uint64_t>(zero_based) >= defined) {
+        Status e = make_error(StatusCode::kParseError, "face ", faces, " names vertex ", v, " but ",
+                              defined, " vertices are defined before it");
+        return e.at_line(lines.number, t.column).at_index(faces);
+      }
+      const uint32_t id = static_cast<uint32_t>(zero_based);
+      if (corners == 0) {
+        first = id;
+      } else if (corners >= 2) {
+        Status s = builder.add_triangle(first, previous, id, faces);
+        if (!s.is_ok()) return s.at_line(lines.number, t.column);
+      }
+      previous = id;
+      ++corners;
+    }
+    if (corners < 3) {
+      return make_error(StatusCode::kParseError, "face ", faces, " has ", corners,
+                        " vertices; a polygon needs at least 3")
+          .at_line(lines.number, 1)
+          .at_index(faces);
+    }
+    ++faces;
+    return Status::ok();
+  }
+};
+
 Status read_obj_located(const Context& ctx, const ByteSource& source,
                         const MeshReadOptions& options, Mesh* out, MeshReadInfo* info) {
   Arena& arena = *ctx.arena;
-  const Arena::Marker start = arena.mark();
+  ArenaScope scope(arena);  // on an error the arena is as it was
   Reader in;
   in.source = &source;
   in.cap = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
@@ -59,119 +149,33 @@ Status read_obj_located(const Context& ctx, const ByteSource& source,
   lines.in = &in;
   lines.cap = options.max_line_bytes;
   lines.text = arena.allocate_array<char>(lines.cap);
-  if (in.buf == nullptr || lines.text == nullptr) {
-    Status s = arena.exhausted_status();
-    arena.rewind(start);
-    return s;
-  }
+  if (in.buf == nullptr || lines.text == nullptr) return arena.exhausted_status();
   info->format = MeshFormat::kObj;
-  const uint64_t max_vertices =
-      options.max_vertices < 0xffffffffu ? options.max_vertices : 0xffffffffu;
   MeshBuilder builder(ctx, options);
-  uint64_t faces = 0;
-  Status s;
+  ObjStatements obj(lines, options, builder);
   for (;;) {
     bool got = false;
-    s = lines.next(&got);
-    if (!s.is_ok() || !got) break;
+    SPLINTCORE_RETURN_IF_ERROR(lines.next(&got));
+    if (!got) break;
     if ((lines.number & 0xffff) == 0) {
-      s = report_progress(ctx, "read", in.offset(), source.size);
-      if (!s.is_ok()) break;
+      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read", in.offset(), source.size));
     }
     Tokens t(lines.text, lines.length);
     if (!t.next() || t.token[0] == '#') continue;
     if (t.is("v")) {
-      const uint64_t index = builder.mesh.vertices.size();
-      if (index >= max_vertices) {
-        s = make_error(StatusCode::kLimitExceeded, "OBJ has more than ", max_vertices,
-                       " vertices (the limit)")
-                .at_line(lines.number, 1)
-                .at_index(index);
-        break;
-      }
-      double xyz[6] = {0, 0, 0, 0, 0, 0};
-      int n = 0;
-      while (s.is_ok() && t.next() && t.token[0] != '#') {
-        if (n == 6) {
-          s = token_error(StatusCode::kParseError, lines, t, "more than 6 numbers on a 'v' line")
-                  .at_index(index);
-          break;
-        }
-        const StatusCode code = meshio::parse_real(t.token, t.token + t.token_length,
-                                                   options.round_to_float32, &xyz[n]);
-        if (code == StatusCode::kNonFinite && n < 3) {
-          s = token_error(code, lines, t, "vertex has a non-finite coordinate (NaN or infinity)")
-                  .at_index(index);
-        } else if (code != StatusCode::kOk && (n < 3 || code != StatusCode::kNonFinite)) {
-          s = token_error(StatusCode::kParseError, lines, t, "expected a number").at_index(index);
-        }
-        ++n;
-      }
-      if (!s.is_ok()) break;
-      if (n < 3) {
-        s = token_error(StatusCode::kParseError, lines, t, "a 'v' line needs x, y and z")
-                .at_index(index);
-        break;
-      }
-      s = builder.add_vertex(Vec3(xyz[0], xyz[1], xyz[2]), index);
-      if (!s.is_ok()) {
-        s.at_line(lines.number, 1);
-        break;
-      }
-      continue;
-    }
-    if (t.is("f")) {
-      const uint64_t defined = builder.mesh.vertices.size();
-      uint32_t first = 0, previous = 0;
-      uint64_t corners = 0;
-      while (s.is_ok() && t.next() && t.token[0] != '#') {
-        int64_t v = 0;
-        if (!parse_corner(t.token, t.token + t.token_length, &v)) {
-          s = token_error(StatusCode::kParseError, lines, t,
-                          "expected a face corner v, v/vt, v//vn or v/vt/vn")
-                  .at_index(faces);
-          break;
-        }
-        // 1-based, or counting back from the last vertex defined (-1 is the last).
-        const int64_t zero_based = v > 0 ? v - 1 : static_cast<int64_t>(defined) + v;
-        if (v == 0 || zero_based < 0 || static_cast<uint64_t>(zero_based) >= defined) {
-          Status e = make_error(StatusCode::kParseError, "face ", faces, " names vertex ", v,
-                                " but ", defined, " vertices are defined before it");
-          s = e.at_line(lines.number, t.column).at_index(faces);
-          break;
-        }
-        const uint32_t id = static_cast<uint32_t>(zero_based);
-        if (corners == 0) {
-          first = id;
-        } else if (corners >= 2) {
-          s = builder.add_triangle(first, previous, id, faces);
-          if (!s.is_ok()) s.at_line(lines.number, t.column);
-        }
-        previous = id;
-        ++corners;
-      }
-      if (!s.is_ok()) break;
-      if (corners < 3) {
-        s = make_error(StatusCode::kParseError, "face ", faces, " has ", corners,
-                       " vertices; a polygon needs at least 3")
-                .at_line(lines.number, 1)
-                .at_index(faces);
-        break;
-      }
-      ++faces;
-      continue;
+      SPLINTCORE_RETURN_IF_ERROR(obj.vertex(t));
+    } else if (t.is("f")) {
+      SPLINTCORE_RETURN_IF_ERROR(obj.face(t));
     }
     // Every other statement (vn vt vp g o s usemtl mtllib l p ...) is skipped.
   }
-  if (s.is_ok()) {
-    info->vertices = builder.mesh.vertices.size();
-    info->faces = faces;
-    info->triangles = builder.mesh.triangles.size();
-    info->bytes = in.offset();
-    s = builder.finish(start, out);
-  }
-  if (!s.is_ok()) arena.rewind(start);
-  return s;
+  info->vertices = builder.mesh.vertices.size();
+  info->faces = obj.faces;
+  info->triangles = builder.mesh.triangles.size();
+  info->bytes = in.offset();
+  SPLINTCORE_RETURN_IF_ERROR(builder.finish(scope.start(), out));
+  scope.commit();
+  return Status::ok();
 }
 
 }  // namespace

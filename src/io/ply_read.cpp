@@ -93,6 +93,144 @@ void copy_name(char* dst, const Tokens& t) {
   dst[n] = '\0';
 }
 
+// "format <ascii|binary_little_endian|binary_big_endian> 1.0" (t is at "format").
+Status read_format(const LineReader& lines, Tokens& t, Header* h) {
+  if (h->format != MeshFormat::kUnknown) {
+    return token_error(StatusCode::kParseError, lines, t, "second 'format' line");
+  }
+  t.next();
+  if (t.is("ascii")) {
+    h->format = MeshFormat::kPlyAscii;
+  } else if (t.is("binary_little_endian")) {
+    h->format = MeshFormat::kPlyBinaryLittleEndian;
+  } else if (t.is("binary_big_endian")) {
+    h->format = MeshFormat::kPlyBinaryBigEndian;
+  } else {
+    return token_error(StatusCode::kParseError, lines, t,
+                       "expected ascii, binary_little_endian or binary_big_endian");
+  }
+  t.next();
+  if (!t.is("1.0"))
+    return token_error(StatusCode::kUnsupported, lines, t, "expected format version 1.0");
+  if (t.next())
+    return token_error(StatusCode::kParseError, lines, t, "expected the end of the format line");
+  return Status::ok();
+}
+
+// "element <name> <count>" (t is at "element").
+Status read_element(const LineReader& lines, Tokens& t, Header* h) {
+  if (h->element_count == kMaxElements) {
+    return token_error(StatusCode::kLimitExceeded, lines, t, "more than 32 elements");
+  }
+  Element& e = h->elements[h->element_count];
+  if (!t.next()) return token_error(StatusCode::kParseError, lines, t, "expected an element name");
+  copy_name(e.name, t);
+  if (t.is("vertex")) e.kind = kVertex;
+  if (t.is("face")) e.kind = kFace;
+  if ((e.kind == kVertex && h->vertex >= 0) || (e.kind == kFace && h->face >= 0)) {
+    return token_error(StatusCode::kParseError, lines, t, "second element of this name");
+  }
+  t.next();
+  int64_t count = -1;
+  if (!meshio::parse_integer(t.token, t.token + t.token_length, &count) || count < 0) {
+    return token_error(StatusCode::kParseError, lines, t, "expected an element count");
+  }
+  if (t.next())
+    return token_error(StatusCode::kParseError, lines, t, "expected the end of the element line");
+  e.count = static_cast<uint64_t>(count);
+  e.first = h->property_count;
+  if (e.kind == kVertex) h->vertex = static_cast<int>(h->element_count);
+  if (e.kind == kFace) h->face = static_cast<int>(h->element_count);
+  ++h->element_count;
+  return Status::ok();
+}
+
+// "property <type> <name>" or "property list <count type> <item type> <name>" of the last
+// element (t is at "property"): the vertex's x, y, z and the face's index list get their roles.
+Status read_property(const LineReader& lines, Tokens& t, Header* h) {
+  if (h->element_count == 0) {
+    return token_error(StatusCode::kParseError, lines, t, "property before any element");
+  }
+  if (h->property_count == kMaxProperties) {
+    return token_error(StatusCode::kLimitExceeded, lines, t, "more than 256 properties");
+  }
+  Element& e = h->elements[h->element_count - 1];
+  Property p;
+  t.next();
+  if (t.is("list")) {
+    t.next();
+    p.count_type = parse_type(t);
+    if (p.count_type == kNone)
+      return token_error(StatusCode::kParseError, lines, t, "expected a list count type");
+    t.next();
+  }
+  p.type = parse_type(t);
+  if (p.type == kNone)
+    return token_error(StatusCode::kParseError, lines, t, "expected a property type");
+  if (!t.next()) return token_error(StatusCode::kParseError, lines, t, "expected a property name");
+  if (e.kind == kVertex && p.count_type == kNone) {
+    if (t.is("x")) p.role = kX;
+    if (t.is("y")) p.role = kY;
+    if (t.is("z")) p.role = kZ;
+  }
+  if (e.kind == kFace && p.count_type != kNone &&
+      (t.is("vertex_indices") || t.is("vertex_index"))) {
+    p.role = kIndices;
+  }
+  if (p.count_type != kNone && !is_integer_type(p.count_type)) {
+    return token_error(StatusCode::kUnsupported, lines, t,
+                       "list count type is not an integer type for list");
+  }
+  if (p.role == kIndices && !is_integer_type(p.type)) {
+    return token_error(StatusCode::kUnsupported, lines, t,
+                       "vertex indices of a non-integer type in list");
+  }
+  for (uint32_t i = e.first; i < h->property_count; ++i) {
+    if (p.role != kSkip && h->properties[i].role == p.role) {
+      return token_error(StatusCode::kParseError, lines, t, "second property of this name");
+    }
+  }
+  if (t.next())
+    return token_error(StatusCode::kParseError, lines, t, "expected the end of the property line");
+  h->properties[h->property_count++] = p;
+  ++e.properties;
+  return Status::ok();
+}
+
+// What the body needs from a complete header: a format, a vertex element with x, y and z, and
+// a face element (if any) with its index list. Errors name the 'end_header' line.
+Status check_header(const LineReader& lines, const Header& h) {
+  if (h.format == MeshFormat::kUnknown) {
+    return make_error(StatusCode::kParseError, "PLY header has no 'format' line")
+        .at_line(lines.number, 1);
+  }
+  if (h.vertex < 0) {
+    return make_error(StatusCode::kParseError, "PLY header declares no 'vertex' element")
+        .at_line(lines.number, 1);
+  }
+  const Element& v = h.elements[h.vertex];
+  bool has[4] = {false, false, false, false};
+  for (uint32_t i = v.first; i < v.first + v.properties; ++i) has[h.properties[i].role] = true;
+  if (!has[kX] || !has[kY] || !has[kZ]) {
+    return make_error(StatusCode::kParseError,
+                      "PLY vertex element lacks one of the scalar properties x, y, z")
+        .at_line(lines.number, 1);
+  }
+  if (h.face >= 0) {
+    const Element& f = h.elements[h.face];
+    bool indices = false;
+    for (uint32_t i = f.first; i < f.first + f.properties; ++i) {
+      indices = indices || h.properties[i].role == kIndices;
+    }
+    if (!indices) {
+      return make_error(StatusCode::kParseError,
+                        "PLY face element has no list property vertex_indices (or vertex_index)")
+          .at_line(lines.number, 1);
+    }
+  }
+  return Status::ok();
+}
+
 Status parse_header(LineReader& lines, Header* h) {
   bool got = false;
   SPLINTCORE_RETURN_IF_ERROR(lines.next(&got));
@@ -118,141 +256,23 @@ Status parse_header(LineReader& lines, Header* h) {
       break;
     }
     if (t.is("format")) {
-      if (h->format != MeshFormat::kUnknown) {
-        return token_error(StatusCode::kParseError, lines, t, "second 'format' line");
-      }
-      t.next();
-      if (t.is("ascii")) {
-        h->format = MeshFormat::kPlyAscii;
-      } else if (t.is("binary_little_endian")) {
-        h->format = MeshFormat::kPlyBinaryLittleEndian;
-      } else if (t.is("binary_big_endian")) {
-        h->format = MeshFormat::kPlyBinaryBigEndian;
-      } else {
-        return token_error(StatusCode::kParseError, lines, t,
-                           "expected ascii, binary_little_endian or binary_big_endian");
-      }
-      t.next();
-      if (!t.is("1.0"))
-        return token_error(StatusCode::kUnsupported, lines, t, "expected format version 1.0");
-      if (t.next())
-        return token_error(StatusCode::kParseError, lines, t,
-                           "expected the end of the format line");
+      SPLINTCORE_RETURN_IF_ERROR(read_format(lines, t, h));
       continue;
     }
     if (h->format == MeshFormat::kUnknown) {
       return token_error(StatusCode::kParseError, lines, t, "expected the 'format' line first");
     }
     if (t.is("element")) {
-      if (h->element_count == kMaxElements) {
-        return token_error(StatusCode::kLimitExceeded, lines, t, "more than 32 elements");
-      }
-      Element& e = h->elements[h->element_count];
-      if (!t.next())
-        return token_error(StatusCode::kParseError, lines, t, "expected an element name");
-      copy_name(e.name, t);
-      if (t.is("vertex")) e.kind = kVertex;
-      if (t.is("face")) e.kind = kFace;
-      if ((e.kind == kVertex && h->vertex >= 0) || (e.kind == kFace && h->face >= 0)) {
-        return token_error(StatusCode::kParseError, lines, t, "second element of this name");
-      }
-      t.next();
-      int64_t count = -1;
-      if (!meshio::parse_integer(t.token, t.token + t.token_length, &count) || count < 0) {
-        return token_error(StatusCode::kParseError, lines, t, "expected an element count");
-      }
-      if (t.next())
-        return token_error(StatusCode::kParseError, lines, t,
-                           "expected the end of the element line");
-      e.count = static_cast<uint64_t>(count);
-      e.first = h->property_count;
-      if (e.kind == kVertex) h->vertex = static_cast<int>(h->element_count);
-      if (e.kind == kFace) h->face = static_cast<int>(h->element_count);
-      ++h->element_count;
+      SPLINTCORE_RETURN_IF_ERROR(read_element(lines, t, h));
       continue;
     }
     if (t.is("property")) {
-      if (h->element_count == 0) {
-        return token_error(StatusCode::kParseError, lines, t, "property before any element");
-      }
-      if (h->property_count == kMaxProperties) {
-        return token_error(StatusCode::kLimitExceeded, lines, t, "more than 256 properties");
-      }
-      Element& e = h->elements[h->element_count - 1];
-      Property p;
-      t.next();
-      if (t.is("list")) {
-        t.next();
-        p.count_type = parse_type(t);
-        if (p.count_type == kNone)
-          return token_error(StatusCode::kParseError, lines, t, "expected a list count type");
-        t.next();
-      }
-      p.type = parse_type(t);
-      if (p.type == kNone)
-        return token_error(StatusCode::kParseError, lines, t, "expected a property type");
-      if (!t.next())
-        return token_error(StatusCode::kParseError, lines, t, "expected a property name");
-      if (e.kind == kVertex && p.count_type == kNone) {
-        if (t.is("x")) p.role = kX;
-        if (t.is("y")) p.role = kY;
-        if (t.is("z")) p.role = kZ;
-      }
-      if (e.kind == kFace && p.count_type != kNone &&
-          (t.is("vertex_indices") || t.is("vertex_index"))) {
-        p.role = kIndices;
-      }
-      if (p.count_type != kNone && !is_integer_type(p.count_type)) {
-        return token_error(StatusCode::kUnsupported, lines, t,
-                           "list count type is not an integer type for list");
-      }
-      if (p.role == kIndices && !is_integer_type(p.type)) {
-        return token_error(StatusCode::kUnsupported, lines, t,
-                           "vertex indices of a non-integer type in list");
-      }
-      for (uint32_t i = e.first; i < h->property_count; ++i) {
-        if (p.role != kSkip && h->properties[i].role == p.role) {
-          return token_error(StatusCode::kParseError, lines, t, "second property of this name");
-        }
-      }
-      if (t.next())
-        return token_error(StatusCode::kParseError, lines, t,
-                           "expected the end of the property line");
-      h->properties[h->property_count++] = p;
-      ++e.properties;
+      SPLINTCORE_RETURN_IF_ERROR(read_property(lines, t, h));
       continue;
     }
     return token_error(StatusCode::kParseError, lines, t, "expected a PLY header keyword");
   }
-  if (h->format == MeshFormat::kUnknown) {
-    return make_error(StatusCode::kParseError, "PLY header has no 'format' line")
-        .at_line(lines.number, 1);
-  }
-  if (h->vertex < 0) {
-    return make_error(StatusCode::kParseError, "PLY header declares no 'vertex' element")
-        .at_line(lines.number, 1);
-  }
-  const Element& v = h->elements[h->vertex];
-  bool has[4] = {false, false, false, false};
-  for (uint32_t i = v.first; i < v.first + v.properties; ++i) has[h->properties[i].role] = true;
-  if (!has[kX] || !has[kY] || !has[kZ]) {
-    return make_error(StatusCode::kParseError,
-                      "PLY vertex element lacks one of the scalar properties x, y, z")
-        .at_line(lines.number, 1);
-  }
-  if (h->face >= 0) {
-    const Element& f = h->elements[h->face];
-    bool indices = false;
-    for (uint32_t i = f.first; i < f.first + f.properties; ++i) {
-      indices = indices || h->properties[i].role == kIndices;
-    }
-    if (!indices) {
-      return make_error(StatusCode::kParseError,
-                        "PLY face element has no list property vertex_indices (or vertex_index)")
-          .at_line(lines.number, 1);
-    }
-  }
-  return Status::ok();
+  return check_header(lines, *h);
 }
 
 // The fewest bytes a record of `e` can take: binary, its scalars and list counts (a face's
@@ -570,49 +590,25 @@ Status read_ascii_body(Body& body, LineReader& lines) {
   return Status::ok();
 }
 
-Status read_ply_located(const Context& ctx, const ByteSource& source,
-                        const MeshReadOptions& options, Mesh* out, MeshReadInfo* info) {
-  Arena& arena = *ctx.arena;
-  const Arena::Marker start = arena.mark();
-  Reader in;
-  in.source = &source;
-  in.cap = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
-  in.buf = arena.allocate_array<uint8_t>(in.cap);
-  LineReader lines;
-  lines.in = &in;
-  lines.cap = options.max_line_bytes;
-  lines.text = arena.allocate_array<char>(lines.cap);
-  if (in.buf == nullptr || lines.text == nullptr) {
-    Status s = arena.exhausted_status();
-    arena.rewind(start);
-    return s;
-  }
-  Header h;
-  Status s = parse_header(lines, &h);
-  if (!s.is_ok()) {
-    arena.rewind(start);
-    return s;
-  }
-  info->format = h.format;
-  const bool binary = h.format != MeshFormat::kPlyAscii;
-  const uint64_t header_bytes = in.offset();
-  const Element& ve = h.elements[h.vertex];
+// The element counts against the limits and, when the source knows its size, against the
+// fewest bytes their records can take: checked before anything is reserved.
+Status check_counts(const Header& h, const ByteSource& source, const MeshReadOptions& options,
+                    uint64_t header_bytes) {
   const uint64_t max_vertices =
       options.max_vertices < 0xffffffffu ? options.max_vertices : 0xffffffffu;
+  const uint64_t vertices = h.elements[h.vertex].count;
   const uint64_t faces = h.face >= 0 ? h.elements[h.face].count : 0;
-  if (ve.count > max_vertices) {
-    arena.rewind(start);
-    return make_error(StatusCode::kLimitExceeded, "PLY declares ", ve.count,
+  if (vertices > max_vertices) {
+    return make_error(StatusCode::kLimitExceeded, "PLY declares ", vertices,
                       " vertices, over the limit of ", max_vertices)
         .at_byte(header_bytes);
   }
   if (faces > options.max_triangles) {
-    arena.rewind(start);
     return make_error(StatusCode::kLimitExceeded, "PLY declares ", faces,
                       " faces, over the limit of ", options.max_triangles, " triangles")
         .at_byte(header_bytes);
   }
-  // The counts against the bytes present, before reserving anything.
+  const bool binary = h.format != MeshFormat::kPlyAscii;
   uint64_t least = 0;
   bool overflow = false;
   for (uint32_t ei = 0; ei < h.element_count; ++ei) {
@@ -623,7 +619,6 @@ Status read_ply_located(const Context& ctx, const ByteSource& source,
   }
   const uint64_t size = source.size;
   if (overflow || (size != kUnknownSize && (size < header_bytes || least > size - header_bytes))) {
-    arena.rewind(start);
     Status e = make_error(StatusCode::kTruncated, "PLY header declares elements needing at least ");
     if (overflow) {
       e.append("2^64");
@@ -638,30 +633,46 @@ Status read_ply_located(const Context& ctx, const ByteSource& source,
     }
     return e.at_byte(size != kUnknownSize ? size : header_bytes);
   }
+  return Status::ok();
+}
+
+Status read_ply_located(const Context& ctx, const ByteSource& source,
+                        const MeshReadOptions& options, Mesh* out, MeshReadInfo* info) {
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);  // on an error the arena is as it was
+  Reader in;
+  in.source = &source;
+  in.cap = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
+  in.buf = arena.allocate_array<uint8_t>(in.cap);
+  LineReader lines;
+  lines.in = &in;
+  lines.cap = options.max_line_bytes;
+  lines.text = arena.allocate_array<char>(lines.cap);
+  if (in.buf == nullptr || lines.text == nullptr) return arena.exhausted_status();
+  Header h;
+  SPLINTCORE_RETURN_IF_ERROR(parse_header(lines, &h));
+  info->format = h.format;
+  const uint64_t header_bytes = in.offset();
+  SPLINTCORE_RETURN_IF_ERROR(check_counts(h, source, options, header_bytes));
+  const Element& ve = h.elements[h.vertex];
+  const uint64_t faces = h.face >= 0 ? h.elements[h.face].count : 0;
   MeshBuilder builder(ctx, options);
-  if (size != kUnknownSize) {
-    s = builder.reserve(ve.count, faces);
-    if (!s.is_ok()) {
-      arena.rewind(start);
-      return s;
-    }
-  }
+  if (source.size != kUnknownSize) SPLINTCORE_RETURN_IF_ERROR(builder.reserve(ve.count, faces));
   Body body;
   body.ctx = &ctx;
   body.options = &options;
   body.header = &h;
   body.mesh = &builder;
   body.vertex_count = ve.count;
-  s = binary ? read_binary_body(body, in) : read_ascii_body(body, lines);
-  if (s.is_ok()) {
-    info->vertices = builder.mesh.vertices.size();
-    info->faces = faces;
-    info->triangles = builder.mesh.triangles.size();
-    info->bytes = in.offset();
-    s = builder.finish(start, out);
-  }
-  if (!s.is_ok()) arena.rewind(start);
-  return s;
+  const bool binary = h.format != MeshFormat::kPlyAscii;
+  SPLINTCORE_RETURN_IF_ERROR(binary ? read_binary_body(body, in) : read_ascii_body(body, lines));
+  info->vertices = builder.mesh.vertices.size();
+  info->faces = faces;
+  info->triangles = builder.mesh.triangles.size();
+  info->bytes = in.offset();
+  SPLINTCORE_RETURN_IF_ERROR(builder.finish(scope.start(), out));
+  scope.commit();
+  return Status::ok();
 }
 
 }  // namespace

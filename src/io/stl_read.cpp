@@ -418,22 +418,16 @@ Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlRead
   if (!out->vertices.empty() || !out->triangles.empty()) {
     return Status::error(StatusCode::kInvalidArgument, "read_stl_mesh: output mesh must be empty");
   }
-  const Arena::Marker start = arena.mark();
+  ArenaScope scope(arena);  // on an error the arena is as it was
   ArenaArray<SoupTriangle> soup(&arena);
-  Status s = read_stl(ctx, source, options, &soup, info);
-  if (!s.is_ok()) {
-    arena.rewind(start);
-    return s;
-  }
+  SPLINTCORE_RETURN_IF_ERROR(read_stl(ctx, source, options, &soup, info));
   soup.shrink_to_fit();  // an ASCII soup grown by half again: the spare room is the weld's
   Mesh welded(&arena);
-  s = weld_exact(ctx, soup.span(), &welded);
-  if (!s.is_ok()) {
-    arena.rewind(start);
-    return located(s, source);
-  }
+  Status s = weld_exact(ctx, soup.span(), &welded);
+  if (!s.is_ok()) return located(s, source);
   // The mesh down over the soup and the read buffer (weld_exact allocates triangles first).
-  move_mesh_down(arena, start, welded, out);
+  move_mesh_down(arena, scope.start(), welded, out);
+  scope.commit();
   return Status::ok();
 }
 
