@@ -152,6 +152,163 @@ Status weld_exact_steps(const Context& ctx, Span<const SoupTriangle> soup, Mesh*
   return compact_vertices(arena, temp_start, positions, vertex_count, &out->vertices);
 }
 
+// The stages of weld_tolerance: the corners' grid cells, sorted; cells joined by union-find;
+// then one vertex per component at its smallest corner.
+struct ToleranceWeld {
+  ToleranceWeld(Arena& a, const float* c, uint32_t count, double t)
+      : arena(a), corners(c), corner_count(count), tolerance(t) {}
+
+  Arena& arena;
+  const float* corners;
+  uint32_t corner_count;
+  double tolerance;
+  double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL};
+  KeyIndex* items = nullptr;  // (cell key, corner), sorted by key
+  UnionFind sets;
+
+  double coordinate(uint32_t c, int a) const {
+    return static_cast<double>(corners[3 * size_t{c} + static_cast<size_t>(a)]);
+  }
+  static uint64_t cell_key(uint64_t cx, uint64_t cy, uint64_t cz) {
+    return (cx << 42) | (cy << 21) | cz;
+  }
+  uint64_t cell_of(uint32_t c, int a) const {
+    return static_cast<uint64_t>((coordinate(c, a) - lo[a]) / tolerance) + 1;  // >= 1: room for -1
+  }
+  bool within(uint32_t a, uint32_t b) const {
+    for (int k = 0; k < 3; ++k) {
+      const double d = coordinate(a, k) - coordinate(b, k);
+      if (d > tolerance || d < -tolerance) return false;
+    }
+    return true;
+  }
+  // Lexicographic order of two corners' positions.
+  bool less(uint32_t a, uint32_t b) const {
+    for (int k = 0; k < 3; ++k) {
+      const float fa = corners[3 * size_t{a} + static_cast<size_t>(k)];
+      const float fb = corners[3 * size_t{b} + static_cast<size_t>(k)];
+      if (fa < fb) return true;
+      if (fb < fa) return false;
+    }
+    return false;
+  }
+
+  // Cells must fit in 21 bits per axis after offsetting, for a 63-bit key.
+  Status check_extent() {
+    double hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    for (uint32_t c = 0; c < corner_count; ++c) {
+      for (int a = 0; a < 3; ++a) {
+        const double x = coordinate(c, a);
+        lo[a] = x < lo[a] ? x : lo[a];
+        hi[a] = x > hi[a] ? x : hi[a];
+      }
+    }
+    for (int a = 0; a < 3; ++a) {
+      if (corner_count > 0 && (hi[a] - lo[a]) / tolerance > double{(1 << 20) - 2}) {
+        return make_error(StatusCode::kLimitExceeded, "weld tolerance ", tolerance,
+                          " mm is too small for a mesh ", hi[a] - lo[a],
+                          " mm across (at most 2^20 cells per axis)");
+      }
+    }
+    return Status::ok();
+  }
+
+  Status sort_cells() {
+    items = arena.allocate_array<KeyIndex>(corner_count);
+    if (items == nullptr && corner_count > 0) return arena.exhausted_status();
+    for (uint32_t c = 0; c < corner_count; ++c) {
+      items[c] = KeyIndex{cell_key(cell_of(c, 0), cell_of(c, 1), cell_of(c, 2)), c, 0};
+    }
+    return radix_sort(arena, Span<KeyIndex>(items, corner_count));
+  }
+
+  // The run of items with `key` by binary search: [*begin, returned end).
+  uint32_t find_run(uint64_t key, uint32_t* begin) const {
+    uint32_t a = 0, b = corner_count;
+    while (a < b) {
+      const uint32_t m = a + (b - a) / 2;
+      if (items[m].key < key)
+        a = m + 1;
+      else
+        b = m;
+    }
+    *begin = a;
+    uint32_t e = a;
+    while (e < corner_count && items[e].key == key) ++e;
+    return e;
+  }
+
+  // For each cell run, unite it with itself and with the 13 neighbours that come after it in
+  // key order (the other 13 see this cell as their forward neighbour).
+  void join_cells() {
+    static const int kForward[13][3] = {{1, -1, -1}, {1, -1, 0}, {1, -1, 1}, {1, 0, -1}, {1, 0, 0},
+                                        {1, 0, 1},   {1, 1, -1}, {1, 1, 0},  {1, 1, 1},  {0, 1, -1},
+                                        {0, 1, 0},   {0, 1, 1},  {0, 0, 1}};
+    uint32_t run_begin = 0;
+    while (run_begin < corner_count) {
+      uint32_t run_end = run_begin;
+      while (run_end < corner_count && items[run_end].key == items[run_begin].key) ++run_end;
+      const uint64_t key = items[run_begin].key;
+      const uint64_t cx = key >> 42, cy = (key >> 21) & 0x1fffff, cz = key & 0x1fffff;
+      // Corners in one cell are less than `tolerance` apart on every axis: one component.
+      for (uint32_t i = run_begin + 1; i < run_end; ++i) {
+        sets.unite(items[run_begin].index, items[i].index);
+      }
+      // Two cells join when any pair across them is within tolerance; one pair is enough.
+      for (const auto& d : kForward) {
+        uint32_t nb = 0;
+        const uint32_t ne =
+            find_run(cell_key(cx + static_cast<uint64_t>(d[0]), cy + static_cast<uint64_t>(d[1]),
+                              cz + static_cast<uint64_t>(d[2])),
+                     &nb);
+        join_runs(run_begin, run_end, nb, ne);
+      }
+      run_begin = run_end;
+    }
+  }
+  void join_runs(uint32_t begin, uint32_t end, uint32_t nb, uint32_t ne) {
+    for (uint32_t i = begin; i < end; ++i) {
+      for (uint32_t j = nb; j < ne; ++j) {
+        if (within(items[i].index, items[j].index)) {
+          sets.unite(items[i].index, items[j].index);
+          return;
+        }
+      }
+    }
+  }
+
+  // Representative corner of each component: the lexicographically smallest position; vertex
+  // ids by first use in corner order.
+  Status number_vertices(Triangle* tris, const Arena::Marker& temp_start, Mesh* out) {
+    uint32_t* best = arena.allocate_array<uint32_t>(corner_count);
+    uint32_t* id_of_root = arena.allocate_array<uint32_t>(corner_count);
+    if ((best == nullptr || id_of_root == nullptr) && corner_count > 0) {
+      return arena.exhausted_status();
+    }
+    for (uint32_t c = 0; c < corner_count; ++c) {
+      best[c] = c;
+      id_of_root[c] = UINT32_MAX;
+    }
+    for (uint32_t c = 0; c < corner_count; ++c) {
+      const uint32_t r = sets.find(c);
+      if (less(c, best[r])) best[r] = c;
+    }
+    uint32_t vertex_count = 0;
+    for (uint32_t c = 0; c < corner_count; ++c) {
+      const uint32_t r = sets.find(c);
+      if (id_of_root[r] == UINT32_MAX) id_of_root[r] = vertex_count++;
+      tris[c / 3].v[c % 3] = id_of_root[r];
+    }
+    Vec3* positions = arena.allocate_array<Vec3>(vertex_count);
+    if (positions == nullptr && vertex_count > 0) return arena.exhausted_status();
+    for (uint32_t c = 0; c < corner_count; ++c) {
+      const uint32_t r = sets.find(c);
+      positions[id_of_root[r]] = to_vec3(corners + 3 * size_t{best[r]});
+    }
+    return compact_vertices(arena, temp_start, positions, vertex_count, &out->vertices);
+  }
+};
+
 Status weld_tolerance_steps(const Context& ctx, Span<const SoupTriangle> soup, double tolerance,
                             Mesh* out) {
   Arena& arena = *ctx.arena;
@@ -162,139 +319,14 @@ Status weld_tolerance_steps(const Context& ctx, Span<const SoupTriangle> soup, d
   SPLINTCORE_RETURN_IF_ERROR(check_soup(soup));
   const size_t n = soup.size();
   if (n == 0) return Status::ok();
-  const uint32_t corner_count = static_cast<uint32_t>(3 * n);
-  const float* corners = &soup.data()[0].p[0][0];
-  // Cells must fit in 21 bits per axis after offsetting, for a 63-bit key.
-  double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL};
-  double hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-  for (uint32_t c = 0; c < corner_count; ++c) {
-    for (int a = 0; a < 3; ++a) {
-      double x = static_cast<double>(corners[3 * size_t{c} + static_cast<size_t>(a)]);
-      lo[a] = x < lo[a] ? x : lo[a];
-      hi[a] = x > hi[a] ? x : hi[a];
-    }
-  }
-  for (int a = 0; a < 3; ++a) {
-    if (corner_count > 0 && (hi[a] - lo[a]) / tolerance > double{(1 << 20) - 2}) {
-      return make_error(StatusCode::kLimitExceeded, "weld tolerance ", tolerance,
-                        " mm is too small for a mesh ", hi[a] - lo[a],
-                        " mm across (at most 2^20 cells per axis)");
-    }
-  }
+  ToleranceWeld weld(arena, &soup.data()[0].p[0][0], static_cast<uint32_t>(3 * n), tolerance);
+  SPLINTCORE_RETURN_IF_ERROR(weld.check_extent());
   if (!out->triangles.resize(n)) return arena.exhausted_status();
   const Arena::Marker temp_start = arena.mark();
-
-  auto cell_of = [&](uint32_t c, int a) -> uint64_t {
-    double x = static_cast<double>(corners[3 * size_t{c} + static_cast<size_t>(a)]);
-    return static_cast<uint64_t>((x - lo[a]) / tolerance) + 1;  // >= 1, leaves room for -1
-  };
-  auto cell_key = [](uint64_t cx, uint64_t cy, uint64_t cz) -> uint64_t {
-    return (cx << 42) | (cy << 21) | cz;
-  };
-
-  KeyIndex* items = arena.allocate_array<KeyIndex>(corner_count);
-  if (items == nullptr && corner_count > 0) return arena.exhausted_status();
-  for (uint32_t c = 0; c < corner_count; ++c) {
-    items[c] = KeyIndex{cell_key(cell_of(c, 0), cell_of(c, 1), cell_of(c, 2)), c, 0};
-  }
-  SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena, Span<KeyIndex>(items, corner_count)));
-
-  UnionFind sets;
-  if (!sets.init(arena, corner_count)) return arena.exhausted_status();
-  auto within = [&](uint32_t a, uint32_t b) {
-    for (int k = 0; k < 3; ++k) {
-      double d = static_cast<double>(corners[3 * size_t{a} + static_cast<size_t>(k)]) -
-                 static_cast<double>(corners[3 * size_t{b} + static_cast<size_t>(k)]);
-      if (d > tolerance || d < -tolerance) return false;
-    }
-    return true;
-  };
-  // Finds the run of items with `key` by binary search (items are sorted by key).
-  auto find_run = [&](uint64_t key, uint32_t* begin) -> uint32_t {
-    uint32_t a = 0, b = corner_count;
-    while (a < b) {
-      uint32_t m = a + (b - a) / 2;
-      if (items[m].key < key)
-        a = m + 1;
-      else
-        b = m;
-    }
-    *begin = a;
-    uint32_t e = a;
-    while (e < corner_count && items[e].key == key) ++e;
-    return e;
-  };
-  // For each cell run, compare with itself and the 13 neighbours that come after it in key
-  // order (the other 13 see this cell as their forward neighbour).
-  static const int kForward[13][3] = {{1, -1, -1}, {1, -1, 0}, {1, -1, 1}, {1, 0, -1}, {1, 0, 0},
-                                      {1, 0, 1},   {1, 1, -1}, {1, 1, 0},  {1, 1, 1},  {0, 1, -1},
-                                      {0, 1, 0},   {0, 1, 1},  {0, 0, 1}};
-  uint32_t run_begin = 0;
-  while (run_begin < corner_count) {
-    uint32_t run_end = run_begin;
-    while (run_end < corner_count && items[run_end].key == items[run_begin].key) ++run_end;
-    const uint64_t key = items[run_begin].key;
-    const uint64_t cx = key >> 42, cy = (key >> 21) & 0x1fffff, cz = key & 0x1fffff;
-    // Corners in one cell are less than `tolerance` apart on every axis: one component.
-    for (uint32_t i = run_begin + 1; i < run_end; ++i) {
-      sets.unite(items[run_begin].index, items[i].index);
-    }
-    // Two cells join when any pair across them is within tolerance; one pair is enough.
-    for (const auto& d : kForward) {
-      uint32_t nb = 0;
-      uint32_t ne =
-          find_run(cell_key(cx + static_cast<uint64_t>(d[0]), cy + static_cast<uint64_t>(d[1]),
-                            cz + static_cast<uint64_t>(d[2])),
-                   &nb);
-      bool joined = false;
-      for (uint32_t i = run_begin; i < run_end && !joined; ++i) {
-        for (uint32_t j = nb; j < ne && !joined; ++j) {
-          if (within(items[i].index, items[j].index)) {
-            sets.unite(items[i].index, items[j].index);
-            joined = true;
-          }
-        }
-      }
-    }
-    run_begin = run_end;
-  }
-  // Representative corner of each component: the lexicographically smallest position.
-  uint32_t* best = arena.allocate_array<uint32_t>(corner_count);
-  uint32_t* id_of_root = arena.allocate_array<uint32_t>(corner_count);
-  if ((best == nullptr || id_of_root == nullptr) && corner_count > 0) {
-    return arena.exhausted_status();
-  }
-  auto less = [&](uint32_t a, uint32_t b) {
-    for (int k = 0; k < 3; ++k) {
-      float fa = corners[3 * size_t{a} + static_cast<size_t>(k)];
-      float fb = corners[3 * size_t{b} + static_cast<size_t>(k)];
-      if (fa < fb) return true;
-      if (fb < fa) return false;
-    }
-    return false;
-  };
-  for (uint32_t c = 0; c < corner_count; ++c) {
-    best[c] = c;
-    id_of_root[c] = UINT32_MAX;
-  }
-  for (uint32_t c = 0; c < corner_count; ++c) {
-    uint32_t r = sets.find(c);
-    if (less(c, best[r])) best[r] = c;
-  }
-  uint32_t vertex_count = 0;
-  Triangle* tris = out->triangles.data();
-  for (uint32_t c = 0; c < corner_count; ++c) {
-    uint32_t r = sets.find(c);
-    if (id_of_root[r] == UINT32_MAX) id_of_root[r] = vertex_count++;
-    tris[c / 3].v[c % 3] = id_of_root[r];
-  }
-  Vec3* positions = arena.allocate_array<Vec3>(vertex_count);
-  if (positions == nullptr && vertex_count > 0) return arena.exhausted_status();
-  for (uint32_t c = 0; c < corner_count; ++c) {
-    uint32_t r = sets.find(c);
-    positions[id_of_root[r]] = to_vec3(corners + 3 * size_t{best[r]});
-  }
-  return compact_vertices(arena, temp_start, positions, vertex_count, &out->vertices);
+  SPLINTCORE_RETURN_IF_ERROR(weld.sort_cells());
+  if (!weld.sets.init(arena, weld.corner_count)) return arena.exhausted_status();
+  weld.join_cells();
+  return weld.number_vertices(out->triangles.data(), temp_start, out);
 }
 
 // A failed weld leaves nothing: the arena as it was (the caller's scope), `out` empty.
