@@ -640,21 +640,25 @@ Status check_free_arena(const Arena& arena, const VolumeGrid& grid) {
   return Status::ok();
 }
 
-// The sample buffer of a slab: slot j holds sample layer next_z - 1 + j (slot 0: carried
-// from the last slab), with the layers' inside bits.
+// The working set of a sweep. The slab's sample buffer: slot j holds sample layer
+// next_z - 1 + j (slot 0: carried from the last slab), with the layers' inside bits; the
+// rank prefixes of the three edge sets; the id pool.
 struct Slab {
   float* samples = nullptr;
   uint64_t* bits = nullptr;
   uint64_t layer_floats = 0;  // samples per layer
   uint64_t layer_words = 0;   // bit words per layer
+  uint64_t* prefix = nullptr;
+  uint64_t prefix_words = 0;  // per edge kind
+  uint32_t* pool = nullptr;
+  uint64_t pool_ids = 0;
 };
 
-// Allocates the working set: the slab (`layers` + 1 layers), the edge sets' prefix buffers
-// (in s) and the id pool: ten ids per grid point when the budget allows (no layer can need
-// more), else what the budget leaves (a layer that needs more is a clean error naming the
-// need).
+// Allocates the working set: the slab (`layers` + 1 layers), the prefix buffers (zeroed) and
+// the id pool: ten ids per grid point when the budget allows (no layer can need more), else
+// what the budget leaves (a layer that needs more is a clean error naming the need).
 Status allocate_working_set(Arena& arena, const VolumeGrid& grid, uint32_t layers,
-                            uint64_t edge_bytes, uint64_t share_divisor, Slab* slab, Sweep* s) {
+                            uint64_t edge_bytes, uint64_t share_divisor, Slab* slab) {
   slab->layer_floats = uint64_t{grid.nx} * grid.ny;
   slab->layer_words = bit_words(grid.nx) * grid.ny;
   const uint64_t prefix_words = bit_words(grid.nx) * (uint64_t{grid.ny} + 1);
@@ -678,12 +682,11 @@ Status allocate_working_set(Arena& arena, const VolumeGrid& grid, uint32_t layer
   uint32_t* pool =
       pool_ids == 0 ? nullptr : arena.allocate_array<uint32_t>(static_cast<size_t>(pool_ids));
   if (pool_ids > 0 && pool == nullptr) return arena.exhausted_status();
-  s->plane_lo.prefix = prefix;
-  s->plane_hi.prefix = prefix + prefix_words * 3;
-  s->upward.prefix = prefix + prefix_words * 6;
   for (uint64_t i = 0; i < prefix_words * 10; ++i) prefix[i] = 0;
-  s->pool = pool;
-  s->pool_size = pool_ids;
+  slab->prefix = prefix;
+  slab->prefix_words = prefix_words;
+  slab->pool = pool;
+  slab->pool_ids = pool_ids;
   return Status::ok();
 }
 
@@ -747,15 +750,20 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
                       " layers is too large to address");
   }
   // Not rewound here: the mesh variant's log grows above the working set (callers rewind).
+  Slab slab;
+  SPLINTCORE_RETURN_IF_ERROR(
+      allocate_working_set(arena, grid, layers, edge_bytes, share_divisor, &slab));
   Sweep s;
   s.grid = &grid;
   s.iso = options.iso;
   s.margin = options.edge_margin;
   s.visitor = &visitor;
   s.words = bit_words(grid.nx);
-  Slab slab;
-  SPLINTCORE_RETURN_IF_ERROR(
-      allocate_working_set(arena, grid, layers, edge_bytes, share_divisor, &slab, &s));
+  s.plane_lo.prefix = slab.prefix;
+  s.plane_hi.prefix = slab.prefix + slab.prefix_words * 3;
+  s.upward.prefix = slab.prefix + slab.prefix_words * 6;
+  s.pool = slab.pool;
+  s.pool_size = slab.pool_ids;
 
   uint32_t fill_calls = 0;
   const float threshold = float_threshold(options.iso);
