@@ -14,7 +14,6 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
   BlockoutStats* st = stats != nullptr ? stats : &local;
   *st = BlockoutStats{};
   Arena& arena = *ctx.arena;
-  const Arena::Marker start = arena.mark();
   out->bind(&arena);
 
   Aabb bounds;
@@ -22,11 +21,12 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
   if (bounds.empty()) {
     return make_error(StatusCode::kInvalidArgument, "blockout: the splint has no vertices");
   }
+  ArenaScope scope(arena);  // on an error the arena is as it was
   const int kAttempts = 4;
   Mesh result;
   Status s;
   for (int attempt = 0; attempt < kAttempts; ++attempt) {
-    arena.rewind(start);
+    arena.rewind(scope.start());
     result = Mesh();
     SweepOptions so = options.sweep;
     so.has_region = true;
@@ -77,14 +77,14 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
     }
   }
   if (!s.is_ok()) {
-    arena.rewind(start);
     out->bind(&arena);
     if (s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) return s;
     Status e = make_error(s.code(), "blockout: ", s.message());
     if (s.index() != kNoPosition) e.at_index(s.index());
     return e;
   }
-  move_mesh_down(arena, start, result, out);
+  move_mesh_down(arena, scope.start(), result, out);
+  scope.commit();
   return Status::ok();
 }
 

@@ -539,10 +539,8 @@ Status world_triangle(void* user, const Triangle& t, const Vec3& a, const Vec3& 
                            to_world(*w.frame, c));
 }
 
-// Everything before the extraction: frame, local jaws, sorted front triangles, grid, state.
-Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o, Sweep* s,
-               SweepStats* stats) {
-  Arena& arena = *ctx.arena;
+// The options' ranges, checked before anything is allocated.
+Status check_sweep_options(const SweepOptions& o) {
   if (!(o.voxel > 0) || !is_finite(o.voxel) || !(o.extent >= 0) || !is_finite(o.extent)) {
     return make_error(StatusCode::kInvalidArgument,
                       "sweep: the voxel size must be > 0 and the extent >= 0 (voxel ", o.voxel,
@@ -567,7 +565,13 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
                       "voxels, with no inset (offset ",
                       o.offset, " mm, inset ", o.inset, " mm, voxel ", o.voxel, " mm)");
   }
-  SPLINTCORE_RETURN_IF_ERROR(make_frame(o.direction, &s->frame));
+  return Status::ok();
+}
+
+// The jaws' vertices in the local frame, all jaws concatenated (s->vertices), their box, and
+// the jaws' triangle count.
+Status jaws_in_frame(Arena& arena, Span<const Mesh> jaws, Sweep* s, Aabb* box,
+                     size_t* triangle_total) {
   uint64_t vertex_count = 0, triangle_count = 0;
   for (const Mesh& m : jaws) {
     vertex_count += m.vertices.size();
@@ -582,52 +586,55 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   }
   // Both below 2^32 now, so they fit a 32-bit size_t too.
   const size_t vertex_total = static_cast<size_t>(vertex_count);
-  const size_t triangle_total = static_cast<size_t>(triangle_count);
+  *triangle_total = static_cast<size_t>(triangle_count);
   Vec3* local = arena.allocate_array<Vec3>(vertex_total);
   if (local == nullptr) return arena.exhausted_status();
-  Aabb box;
-  {
-    size_t at = 0;
-    for (size_t j = 0; j < jaws.size(); ++j) {
-      for (size_t i = 0; i < jaws[j].vertices.size(); ++i, ++at) {
-        const Vec3& p = jaws[j].vertices[i];
-        if (!is_finite(p)) {
-          return make_error(StatusCode::kNonFinite, "sweep: jaw ", j, " has a non-finite vertex")
-              .at_index(i);
-        }
-        local[at] = to_local(s->frame, p);
-        box.add(local[at]);
+  size_t at = 0;
+  for (size_t j = 0; j < jaws.size(); ++j) {
+    for (size_t i = 0; i < jaws[j].vertices.size(); ++i, ++at) {
+      const Vec3& p = jaws[j].vertices[i];
+      if (!is_finite(p)) {
+        return make_error(StatusCode::kNonFinite, "sweep: jaw ", j, " has a non-finite vertex")
+            .at_index(i);
       }
+      local[at] = to_local(s->frame, p);
+      box->add(local[at]);
     }
   }
-  // Front and silhouette triangles (orient2d of the projection <= 0: the outward normal has
-  // no component along w), with global vertex ids.
-  ArenaArray<Triangle> front(&arena);
-  if (!front.reserve(triangle_total)) return arena.exhausted_status();
-  {
-    size_t base = 0;
-    for (size_t j = 0; j < jaws.size(); ++j) {
-      const Mesh& m = jaws[j];
-      for (size_t t = 0; t < m.triangles.size(); ++t) {
-        Triangle g;
-        for (int k = 0; k < 3; ++k) {
-          if (m.triangles[t].v[k] >= m.vertices.size()) {
-            return make_error(StatusCode::kInvalidMesh, "sweep: jaw ", j, " triangle ", t,
-                              " has a vertex id out of range")
-                .at_index(t);
-          }
-          g.v[k] = static_cast<uint32_t>(base + m.triangles[t].v[k]);
+  s->vertices = Span<const Vec3>(local, vertex_total);
+  return Status::ok();
+}
+
+// Front and silhouette triangles (orient2d of the projection <= 0: the outward normal has
+// no component along w), with global vertex ids.
+Status select_front(Span<const Mesh> jaws, const Vec3* local, ArenaArray<Triangle>* front) {
+  size_t base = 0;
+  for (size_t j = 0; j < jaws.size(); ++j) {
+    const Mesh& m = jaws[j];
+    for (size_t t = 0; t < m.triangles.size(); ++t) {
+      Triangle g;
+      for (int k = 0; k < 3; ++k) {
+        if (m.triangles[t].v[k] >= m.vertices.size()) {
+          return make_error(StatusCode::kInvalidMesh, "sweep: jaw ", j, " triangle ", t,
+                            " has a vertex id out of range")
+              .at_index(t);
         }
-        const Vec3& a = local[g.v[0]];
-        const Vec3& b = local[g.v[1]];
-        const Vec3& c = local[g.v[2]];
-        if (orient2d(a.x, a.y, b.x, b.y, c.x, c.y) <= 0) (void)front.push_back(g);
+        g.v[k] = static_cast<uint32_t>(base + m.triangles[t].v[k]);
       }
-      base += m.vertices.size();
+      const Vec3& a = local[g.v[0]];
+      const Vec3& b = local[g.v[1]];
+      const Vec3& c = local[g.v[2]];
+      if (orient2d(a.x, a.y, b.x, b.y, c.x, c.y) <= 0) (void)front->push_back(g);
     }
+    base += m.vertices.size();
   }
-  stats->front_triangles = front.size();
-  // Sort by w-min (stable radix sort: ties keep input order).
+  return Status::ok();
+}
+
+// The front triangles sorted by w-min (stable radix sort: ties keep input order), with their
+// w ranges: s->tris, s->tri_wmin, s->tri_wmax.
+Status sort_front(Arena& arena, const ArenaArray<Triangle>& front, Sweep* s) {
+  const Vec3* local = s->vertices.data();
   const size_t nf = front.size();
   KeyIndex* keys = arena.allocate_array<KeyIndex>(nf);
   Triangle* sorted = arena.allocate_array<Triangle>(nf);
@@ -648,46 +655,60 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
     wmin[t] = std::fmin(local[g.v[0]].z, std::fmin(local[g.v[1]].z, local[g.v[2]].z));
     wmax[t] = std::fmax(local[g.v[0]].z, std::fmax(local[g.v[1]].z, local[g.v[2]].z));
   }
-  // The grid: the jaws' box, a band and a voxel around it, to `extent` past the far end; with
-  // a region, its part of that in x and y, and from the jaws' near end to the region's far
-  // end in w (the layers before the region are swept but not meshed).
+  s->tris = Span<const Triangle>(sorted, nf);
+  s->tri_wmin = Span<const double>(wmin, nf);
+  s->tri_wmax = Span<const double>(wmax, nf);
+  return Status::ok();
+}
+
+// With a region: the grid's box [*lo, *hi] cut to the region's (padded) box in the local
+// frame, on the lattice of the whole sweep (s->lattice, s->ix0, s->iy0), and *mesh_lo_w moved
+// to the region's near end; s->empty when nothing is left.
+Status fit_region(const SweepOptions& o, double h, Sweep* s, Vec3* lo, Vec3* hi,
+                  double* mesh_lo_w) {
+  if (o.region.empty() || !is_finite(o.region.lo) || !is_finite(o.region.hi)) {
+    return make_error(StatusCode::kInvalidArgument, "sweep: the region is empty or not finite");
+  }
+  Aabb r;  // the region's box in the local frame (its eight corners)
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 corner{(c & 1) ? o.region.hi.x : o.region.lo.x,
+                      (c & 2) ? o.region.hi.y : o.region.lo.y,
+                      (c & 4) ? o.region.hi.z : o.region.lo.z};
+    r.add(to_local(s->frame, corner));
+  }
+  const double pad = 2 * h;
+  // The first lattice column at or below the region's (padded) start; the end is cut
+  // to the region below.
+  const double fx = std::floor((r.lo.x - pad - lo->x) / h);
+  const double fy = std::floor((r.lo.y - pad - lo->y) / h);
+  if (fx > 0 && fx < 2147483648.0) s->ix0 = static_cast<int64_t>(fx);
+  if (fy > 0 && fy < 2147483648.0) s->iy0 = static_cast<int64_t>(fy);
+  s->lattice = *lo;
+  lo->x = lo->x + h * static_cast<double>(s->ix0);
+  lo->y = lo->y + h * static_cast<double>(s->iy0);
+  hi->x = std::fmin(hi->x, r.hi.x + pad);
+  hi->y = std::fmin(hi->y, r.hi.y + pad);
+  hi->z = r.hi.z + pad;
+  *mesh_lo_w = r.lo.z - pad;
+  if (!(lo->x <= hi->x && lo->y <= hi->y && lo->z <= hi->z)) s->empty = true;
+  return Status::ok();
+}
+
+// The grid: the jaws' box, a band and a voxel around it, to `extent` past the far end; with
+// a region, its part of that in x and y, and from the jaws' near end to the region's far
+// end in w (the layers before the region are swept but not meshed). Sets s->grid,
+// s->mesh_grid, s->k0 (and s->empty); *band: the band's half-width.
+Status lay_grid(const SweepOptions& o, const Aabb& box, Sweep* s, double* band) {
   const double h = o.voxel;
   // The correction reads two samples out; the closing reads f(q) up to 2 r + 2 voxels; an
   // offset surface needs the exact field two samples beyond it.
-  const double band =
-      (o.closing_radius > 0 ? 2 * o.closing_radius : 0) + o.offset + kBandVoxels * h;
-  const double margin = band + h;
+  *band = (o.closing_radius > 0 ? 2 * o.closing_radius : 0) + o.offset + kBandVoxels * h;
+  const double margin = *band + h;
   Vec3 lo = box.lo - Vec3{margin, margin, margin};
   Vec3 hi = box.hi + Vec3{margin, margin, o.extent + h};
   double mesh_lo_w = lo.z;
   s->lattice = lo;
-  if (o.has_region) {
-    if (o.region.empty() || !is_finite(o.region.lo) || !is_finite(o.region.hi)) {
-      return make_error(StatusCode::kInvalidArgument, "sweep: the region is empty or not finite");
-    }
-    Aabb r;  // the region's box in the local frame (its eight corners)
-    for (int c = 0; c < 8; ++c) {
-      const Vec3 corner{(c & 1) ? o.region.hi.x : o.region.lo.x,
-                        (c & 2) ? o.region.hi.y : o.region.lo.y,
-                        (c & 4) ? o.region.hi.z : o.region.lo.z};
-      r.add(to_local(s->frame, corner));
-    }
-    const double pad = 2 * h;
-    // The first lattice column at or below the region's (padded) start; the end is cut
-    // to the region below.
-    const double fx = std::floor((r.lo.x - pad - lo.x) / h);
-    const double fy = std::floor((r.lo.y - pad - lo.y) / h);
-    if (fx > 0 && fx < 2147483648.0) s->ix0 = static_cast<int64_t>(fx);
-    if (fy > 0 && fy < 2147483648.0) s->iy0 = static_cast<int64_t>(fy);
-    s->lattice = lo;
-    lo.x = lo.x + h * static_cast<double>(s->ix0);
-    lo.y = lo.y + h * static_cast<double>(s->iy0);
-    hi.x = std::fmin(hi.x, r.hi.x + pad);
-    hi.y = std::fmin(hi.y, r.hi.y + pad);
-    hi.z = r.hi.z + pad;
-    mesh_lo_w = r.lo.z - pad;
-    if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) s->empty = true;
-  }
+  if (o.has_region) SPLINTCORE_RETURN_IF_ERROR(fit_region(o, h, s, &lo, &hi, &mesh_lo_w));
   double counts[3] = {1, 1, 1};
   for (int a = 0; a < 3 && !s->empty; ++a) {
     counts[a] = std::floor((hi[a] - lo[a]) / h) + 1.0;
@@ -709,6 +730,62 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   s->mesh_grid = s->grid;
   s->mesh_grid.origin.z = lo.z + h * static_cast<double>(s->k0);
   s->mesh_grid.nz = s->empty ? 0 : s->grid.nz - s->k0;
+  return Status::ok();
+}
+
+// The closing's state: offsets within r + 2 voxels, sorted by length (stable: ties keep the
+// scan order), and the ring of corrected layers (`layer` samples each).
+Status prepare_closing(Arena& arena, const SweepOptions& o, uint64_t layer, Sweep* s) {
+  const double h = o.voxel;
+  const double reach = o.closing_radius + 2 * h;
+  const int64_t m = static_cast<int64_t>(std::ceil(reach / h));
+  s->m = static_cast<uint32_t>(m);
+  s->closing_r = o.closing_radius;
+  const uint64_t cube = static_cast<uint64_t>((2 * m + 1) * (2 * m + 1) * (2 * m + 1));
+  auto* offsets = arena.allocate_array<Sweep::Offset>(static_cast<size_t>(cube));
+  KeyIndex* by_length = arena.allocate_array<KeyIndex>(static_cast<size_t>(cube));
+  auto* ordered = arena.allocate_array<Sweep::Offset>(static_cast<size_t>(cube));
+  s->cring = arena.allocate_array<float>(static_cast<size_t>(layer) * (2 * s->m + 1));
+  if (offsets == nullptr || by_length == nullptr || ordered == nullptr || s->cring == nullptr) {
+    return arena.exhausted_status();
+  }
+  uint32_t n = 0;
+  for (int64_t dz = -m; dz <= m; ++dz) {
+    for (int64_t dy = -m; dy <= m; ++dy) {
+      for (int64_t dx = -m; dx <= m; ++dx) {
+        if (dx == 0 && dy == 0 && dz == 0) continue;
+        const double len = h * std::sqrt(static_cast<double>(dx * dx + dy * dy + dz * dz));
+        if (len > reach) continue;
+        offsets[n] = {static_cast<int16_t>(dx), static_cast<int16_t>(dy), static_cast<int16_t>(dz),
+                      0, static_cast<float>(len)};
+        by_length[n] = {static_cast<uint64_t>(dx * dx + dy * dy + dz * dz), n, 0};
+        ++n;
+      }
+    }
+  }
+  SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena, Span<KeyIndex>(by_length, n)));
+  for (uint32_t i = 0; i < n; ++i) ordered[i] = offsets[by_length[i].index];
+  s->offsets = ordered;
+  s->offset_count = n;
+  return Status::ok();
+}
+
+// Everything before the extraction: frame, local jaws, sorted front triangles, grid, state.
+Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o, Sweep* s,
+               SweepStats* stats) {
+  Arena& arena = *ctx.arena;
+  SPLINTCORE_RETURN_IF_ERROR(check_sweep_options(o));
+  SPLINTCORE_RETURN_IF_ERROR(make_frame(o.direction, &s->frame));
+  Aabb box;
+  size_t triangle_total = 0;
+  SPLINTCORE_RETURN_IF_ERROR(jaws_in_frame(arena, jaws, s, &box, &triangle_total));
+  ArenaArray<Triangle> front(&arena);
+  if (!front.reserve(triangle_total)) return arena.exhausted_status();
+  SPLINTCORE_RETURN_IF_ERROR(select_front(jaws, s->vertices.data(), &front));
+  stats->front_triangles = front.size();
+  SPLINTCORE_RETURN_IF_ERROR(sort_front(arena, front, s));
+  double band = 0;
+  SPLINTCORE_RETURN_IF_ERROR(lay_grid(o, box, s, &band));
   if (s->empty) {
     s->ctx = &ctx;
     s->stats = stats;
@@ -727,46 +804,11 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   s->band = band;
   s->fband = static_cast<float>(band);
   s->step = band / 65534.0;
-  if (o.closing_radius > 0) {
-    // Offsets within r + 2 voxels, sorted by length (stable: ties keep the scan order).
-    const double reach = o.closing_radius + 2 * h;
-    const int64_t m = static_cast<int64_t>(std::ceil(reach / h));
-    s->m = static_cast<uint32_t>(m);
-    s->closing_r = o.closing_radius;
-    const uint64_t cube = static_cast<uint64_t>((2 * m + 1) * (2 * m + 1) * (2 * m + 1));
-    auto* offsets = arena.allocate_array<Sweep::Offset>(static_cast<size_t>(cube));
-    KeyIndex* by_length = arena.allocate_array<KeyIndex>(static_cast<size_t>(cube));
-    auto* ordered = arena.allocate_array<Sweep::Offset>(static_cast<size_t>(cube));
-    s->cring = arena.allocate_array<float>(static_cast<size_t>(layer) * (2 * s->m + 1));
-    if (offsets == nullptr || by_length == nullptr || ordered == nullptr || s->cring == nullptr) {
-      return arena.exhausted_status();
-    }
-    uint32_t n = 0;
-    for (int64_t dz = -m; dz <= m; ++dz) {
-      for (int64_t dy = -m; dy <= m; ++dy) {
-        for (int64_t dx = -m; dx <= m; ++dx) {
-          if (dx == 0 && dy == 0 && dz == 0) continue;
-          const double len = h * std::sqrt(static_cast<double>(dx * dx + dy * dy + dz * dz));
-          if (len > reach) continue;
-          offsets[n] = {static_cast<int16_t>(dx), static_cast<int16_t>(dy),
-                        static_cast<int16_t>(dz), 0, static_cast<float>(len)};
-          by_length[n] = {static_cast<uint64_t>(dx * dx + dy * dy + dz * dz), n, 0};
-          ++n;
-        }
-      }
-    }
-    SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena, Span<KeyIndex>(by_length, n)));
-    for (uint32_t i = 0; i < n; ++i) ordered[i] = offsets[by_length[i].index];
-    s->offsets = ordered;
-    s->offset_count = n;
-  }
-  s->vertices = Span<const Vec3>(local, vertex_total);
-  s->tris = Span<const Triangle>(sorted, nf);
-  s->tri_wmin = Span<const double>(wmin, nf);
-  s->tri_wmax = Span<const double>(wmax, nf);
+  if (o.closing_radius > 0) SPLINTCORE_RETURN_IF_ERROR(prepare_closing(arena, o, layer, s));
   s->active.bind(&arena);
   // All of them at most, reserved now: the list must not grow during the extraction, whose
   // id pool and output log take the arena above it.
+  const size_t nf = s->tris.size();
   if (!s->active.reserve(nf > 0 ? nf : 1)) return arena.exhausted_status();
   s->ctx = &ctx;
   {
@@ -778,11 +820,11 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   }
   s->correct_bias = o.correct_bias;
   s->stats = stats;
-  stats->nx = s->empty ? 0 : s->mesh_grid.nx;
-  stats->ny = s->empty ? 0 : s->mesh_grid.ny;
+  stats->nx = s->mesh_grid.nx;
+  stats->ny = s->mesh_grid.ny;
   stats->nz = s->mesh_grid.nz;
-  stats->preroll_layers = s->empty ? 0 : s->k0;
-  stats->voxels = s->empty ? 0 : layer * s->mesh_grid.nz;
+  stats->preroll_layers = s->k0;
+  stats->voxels = layer * s->mesh_grid.nz;
   stats->axis_u = s->frame.u;
   stats->axis_v = s->frame.v;
   stats->axis_w = s->frame.w;
@@ -871,7 +913,7 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
     return make_error(StatusCode::kInvalidArgument, "sweep: the output mesh must be empty");
   }
   Arena& arena = *ctx.arena;
-  const Arena::Marker start = arena.mark();
+  ArenaScope scope(arena);  // on an error the arena is as it was
   SweepStats local_stats;
   SweepStats* st = stats != nullptr ? stats : &local_stats;
   *st = SweepStats{};
@@ -887,7 +929,6 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
                                  &st->extraction);
   }
   if (!status.is_ok()) {
-    arena.rewind(start);
     out->bind(&arena);
     return status;
   }
@@ -895,14 +936,14 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
   if (options.open_at_region && options.has_region && !s.empty) {
     status = drop_caps(s, arena, &mesh, st);
     if (!status.is_ok()) {
-      arena.rewind(start);
       out->bind(&arena);
       return status;
     }
     vertices_first = false;
   }
   for (Vec3& p : mesh.vertices) p = to_world(s.frame, p);
-  move_mesh_down(arena, start, mesh, out, vertices_first);
+  move_mesh_down(arena, scope.start(), mesh, out, vertices_first);
+  scope.commit();
   return Status::ok();
 }
 

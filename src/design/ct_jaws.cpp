@@ -8,11 +8,19 @@
 
 namespace splintcore {
 
-Status reconstruct_case_jaws(const Context& ctx, const CaseFile& c, const CtVolume& volume,
-                             Span<Mesh> jaws, CaseCtReport* report) {
-  SPLINTCORE_ASSERT(ctx.arena != nullptr && report != nullptr);
-  *report = CaseCtReport{};
-  Arena& arena = *ctx.arena;
+namespace {
+
+// A stage's error as reconstruct_case_jaws reports it ("ct: <stage>: ..."); running out of
+// memory and a cancel pass as they are.
+Status stage_error(const Status& s, const char* stage) {
+  if (s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) return s;
+  Status e = make_error(s.code(), "ct: ", stage, ": ", s.message());
+  if (s.index() != kNoPosition) e.at_index(s.index());
+  return e;
+}
+
+// The seeds of the jaws that have one (label j + 1 for jaw j), whose meshes must be empty.
+Status collect_seeds(const CaseFile& c, Span<Mesh> jaws, RegionSeed* seeds, uint32_t* seed_count) {
   if (jaws.size() != c.jaws.size()) {
     return make_error(StatusCode::kInvalidArgument, "ct jaws: the case names ", c.jaws.size(),
                       " jaws but ", jaws.size(), " meshes were given");
@@ -21,94 +29,123 @@ Status reconstruct_case_jaws(const Context& ctx, const CaseFile& c, const CtVolu
     return make_error(StatusCode::kLimitExceeded, "ct jaws: at most ", CaseCtReport::kMaxJaws,
                       " jaws");
   }
-  RegionSeed seeds[CaseCtReport::kMaxJaws];
-  uint32_t seed_count = 0;
   for (size_t j = 0; j < c.jaws.size(); ++j) {
     if (!c.jaws[j].has_seed) continue;
     if (!jaws[j].vertices.empty() || !jaws[j].triangles.empty()) {
       return make_error(StatusCode::kInvalidArgument, "ct jaws: the mesh for jaw ", j,
                         " must be empty (it is reconstructed)");
     }
-    seeds[seed_count].label = static_cast<uint8_t>(j + 1);
-    seeds[seed_count].in_patient_mm = true;
-    seeds[seed_count].patient_mm = c.jaws[j].seed;
-    ++seed_count;
+    RegionSeed& seed = seeds[*seed_count];
+    seed.label = static_cast<uint8_t>(j + 1);
+    seed.in_patient_mm = true;
+    seed.patient_mm = c.jaws[j].seed;
+    ++*seed_count;
   }
-  if (seed_count == 0) return Status::ok();
-  const Arena::Marker start = arena.mark();
-  auto fail = [&](const Status& s, const char* stage) {
-    arena.rewind(start);
-    for (size_t j = 0; j < jaws.size(); ++j) {
-      if (c.jaws[j].has_seed) jaws[j] = Mesh();
-    }
-    if (s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) return s;
-    Status e = make_error(s.code(), "ct: ", stage, ": ", s.message());
-    if (s.index() != kNoPosition) e.at_index(s.index());
-    return e;
-  };
-  LabelVolume labels;
-  Status s = threshold_window(ctx, volume, c.ct_window, &labels, &report->threshold);
-  if (!s.is_ok()) return fail(s, "threshold");
-  RegionGrowOptions go;
-  go.connectivity = c.ct_connectivity == 26 ? Connectivity::k26 : Connectivity::k6;
-  s = grow_regions(ctx, volume, Span<const RegionSeed>(seeds, seed_count), go, &labels,
-                   &report->regions);
-  if (!s.is_ok()) return fail(s, "region growing");
+  return Status::ok();
+}
+
+// Jaw j out of the labelled volume: reconstructed, smoothed and decimated as the case asks,
+// in float32, checked; *vertices_first says which of its arrays was allocated first.
+Status reconstruct_jaw(const Context& ctx, const CaseFile& c, const CtVolume& volume,
+                       const LabelVolume& labels, size_t j, Mesh* out, CaseCtReport* report,
+                       bool* vertices_first) {
+  Arena& arena = *ctx.arena;
   const double h =
       volume.spacing.x < volume.spacing.y
           ? (volume.spacing.x < volume.spacing.z ? volume.spacing.x : volume.spacing.z)
           : (volume.spacing.y < volume.spacing.z ? volume.spacing.y : volume.spacing.z);
-  bool vertices_first[CaseCtReport::kMaxJaws] = {};
-  for (size_t j = 0; j < c.jaws.size(); ++j) {
-    if (!c.jaws[j].has_seed) continue;
-    ReconstructOptions ro;
-    ro.label = static_cast<uint8_t>(j + 1);
-    ro.hu_lo = c.ct_window.lo;
-    ro.round_to_float32 = c.ct_smooth == 0 && c.ct_decimate == 0;
-    Mesh mesh(&arena);
-    s = reconstruct_region(ctx, volume, labels, ro, &mesh, &report->jaws[j]);
-    if (!s.is_ok()) return fail(s, "reconstruct");
-    vertices_first[j] = true;  // as the extractor leaves a mesh
-    if (c.ct_smooth > 0) {
-      TaubinOptions to;
-      to.iterations = c.ct_smooth;
-      to.max_displacement = 0.5 * h;
-      s = taubin_smooth(ctx, &mesh, to, nullptr);
-      if (!s.is_ok()) return fail(s, "smooth");
-    }
-    if (c.ct_decimate > 0 && mesh.triangles.size() > c.ct_decimate) {
-      Mesh fewer(&arena);
-      DecimateOptions dopt;
-      dopt.target_triangles = c.ct_decimate;
-      s = decimate_qem(ctx, mesh, dopt, &fewer, nullptr);
-      if (!s.is_ok()) return fail(s, "decimate");
-      mesh = fewer;
-      vertices_first[j] = false;  // as move_mesh_down leaves it
-    }
-    if (!ro.round_to_float32) {
-      for (size_t i = 0; i < mesh.vertices.size(); ++i) {
-        if (!round_to_float32(&mesh.vertices[i])) {
-          return fail(make_error(StatusCode::kNonFinite, "a vertex is beyond float32").at_index(i),
-                      "reconstruct");
-        }
+  ReconstructOptions ro;
+  ro.label = static_cast<uint8_t>(j + 1);
+  ro.hu_lo = c.ct_window.lo;
+  ro.round_to_float32 = c.ct_smooth == 0 && c.ct_decimate == 0;
+  Mesh mesh(&arena);
+  Status s = reconstruct_region(ctx, volume, labels, ro, &mesh, &report->jaws[j]);
+  if (!s.is_ok()) return stage_error(s, "reconstruct");
+  *vertices_first = true;  // as the extractor leaves a mesh
+  if (c.ct_smooth > 0) {
+    TaubinOptions to;
+    to.iterations = c.ct_smooth;
+    to.max_displacement = 0.5 * h;
+    s = taubin_smooth(ctx, &mesh, to, nullptr);
+    if (!s.is_ok()) return stage_error(s, "smooth");
+  }
+  if (c.ct_decimate > 0 && mesh.triangles.size() > c.ct_decimate) {
+    Mesh fewer(&arena);
+    DecimateOptions dopt;
+    dopt.target_triangles = c.ct_decimate;
+    s = decimate_qem(ctx, mesh, dopt, &fewer, nullptr);
+    if (!s.is_ok()) return stage_error(s, "decimate");
+    mesh = fewer;
+    *vertices_first = false;  // as move_mesh_down leaves it
+  }
+  if (!ro.round_to_float32) {
+    for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+      if (!round_to_float32(&mesh.vertices[i])) {
+        return stage_error(
+            make_error(StatusCode::kNonFinite, "a vertex is beyond float32").at_index(i),
+            "reconstruct");
       }
     }
-    double volume_mm3 = 0;
-    s = check_closed_oriented(ctx, mesh, &volume_mm3);
-    if (!s.is_ok()) return fail(s, "reconstructed jaw check");
-    report->volume_mm3[j] = volume_mm3;
-    report->triangles[j] = mesh.triangles.size();
-    jaws[j] = mesh;
+  }
+  double volume_mm3 = 0;
+  s = check_closed_oriented(ctx, mesh, &volume_mm3);
+  if (!s.is_ok()) return stage_error(s, "reconstructed jaw check");
+  report->volume_mm3[j] = volume_mm3;
+  report->triangles[j] = mesh.triangles.size();
+  *out = mesh;
+  return Status::ok();
+}
+
+// Threshold, region growing from the seeds, then every seeded jaw (above the labels).
+Status reconstruct_seeded(const Context& ctx, const CaseFile& c, const CtVolume& volume,
+                          Span<const RegionSeed> seeds, Span<Mesh> jaws, CaseCtReport* report,
+                          bool* vertices_first) {
+  LabelVolume labels;
+  Status s = threshold_window(ctx, volume, c.ct_window, &labels, &report->threshold);
+  if (!s.is_ok()) return stage_error(s, "threshold");
+  RegionGrowOptions go;
+  go.connectivity = c.ct_connectivity == 26 ? Connectivity::k26 : Connectivity::k6;
+  s = grow_regions(ctx, volume, seeds, go, &labels, &report->regions);
+  if (!s.is_ok()) return stage_error(s, "region growing");
+  for (size_t j = 0; j < c.jaws.size(); ++j) {
+    if (!c.jaws[j].has_seed) continue;
+    SPLINTCORE_RETURN_IF_ERROR(
+        reconstruct_jaw(ctx, c, volume, labels, j, &jaws[j], report, &vertices_first[j]));
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+Status reconstruct_case_jaws(const Context& ctx, const CaseFile& c, const CtVolume& volume,
+                             Span<Mesh> jaws, CaseCtReport* report) {
+  SPLINTCORE_ASSERT(ctx.arena != nullptr && report != nullptr);
+  *report = CaseCtReport{};
+  Arena& arena = *ctx.arena;
+  RegionSeed seeds[CaseCtReport::kMaxJaws];
+  uint32_t seed_count = 0;
+  SPLINTCORE_RETURN_IF_ERROR(collect_seeds(c, jaws, seeds, &seed_count));
+  if (seed_count == 0) return Status::ok();
+  ArenaScope scope(arena);  // on an error the arena is as it was and the jaws' meshes empty
+  bool vertices_first[CaseCtReport::kMaxJaws] = {};
+  const Status s = reconstruct_seeded(ctx, c, volume, Span<const RegionSeed>(seeds, seed_count),
+                                      jaws, report, vertices_first);
+  if (!s.is_ok()) {
+    for (size_t j = 0; j < jaws.size(); ++j) {
+      if (c.jaws[j].has_seed) jaws[j] = Mesh();
+    }
+    return s;
   }
   // Only the meshes stay: each moved down in turn over the labels and the temporaries (each
   // destination lies below its source; move_mesh_down copies the first-allocated array first).
-  Arena::Marker to = start;
+  Arena::Marker to = scope.start();
   for (size_t j = 0; j < jaws.size(); ++j) {
     if (!c.jaws[j].has_seed) continue;
     const Mesh src = jaws[j];
     move_mesh_down(arena, to, src, &jaws[j], vertices_first[j]);
     to = arena.mark();
   }
+  scope.commit();
   report->jaws_reconstructed = seed_count;
   return Status::ok();
 }

@@ -336,70 +336,110 @@ Status check_options(const LabelOptions& o, double* voxel) {
   return Status::ok();
 }
 
-// Everything of build_label_mesh except the clean-up on errors: the mesh ends above the
-// distance index, and *vertices_first says which array was allocated first.
-Status build_glyphs(const Context& ctx, const Mesh& splint, Span<const Line> upper,
-                    Span<const Line> lower, const LabelOptions& options, uint32_t attempt,
-                    Mesh* mesh, LabelStats* st) {
-  Arena& arena = *ctx.arena;
+// The final check of the joined glyphs: what the Boolean needs of B, checked here so that a
+// failure can try another phase: a closed, oriented solid without flat triangles and without
+// self-intersections (exact).
+Status check_glyph_mesh(const Context& ctx, const Mesh& mesh) {
+  double volume = 0;
+  Status s = check_closed_oriented(ctx, mesh, &volume);
+  if (!s.is_ok()) {
+    if (s.code() == StatusCode::kArenaExhausted) return s;
+    return make_error(StatusCode::kUnsupported,
+                      "label: the glyph mesh is not a valid solid after rounding to float32 (",
+                      s.message(), ")");
+  }
+  SelfIntersectionReport sir;
+  SPLINTCORE_RETURN_IF_ERROR(find_self_intersections(ctx, mesh, 1, &sir));
+  if (sir.self_intersecting()) {
+    return make_error(StatusCode::kUnsupported, "label: the glyph mesh self-intersects ",
+                      "(triangles ", sir.first_a, " and ", sir.first_b, ")");
+  }
+  return Status::ok();
+}
+
+// The state of one build_glyphs call (below), with one method per stage, run in this order:
+// the text, its place, the glyphs' frames and grids, their meshes, the joined mesh.
+struct GlyphBuilder {
+  GlyphBuilder(const Context& c, const LabelOptions& o, uint32_t a, LabelStats* s)
+      : ctx(c), arena(*c.arena), options(o), attempt(a), st(s) {}
+
+  const Context& ctx;
+  Arena& arena;
+  const LabelOptions& options;
+  uint32_t attempt;
+  LabelStats* st;
   double voxel = 0;
-  SPLINTCORE_RETURN_IF_ERROR(check_options(options, &voxel));
-  st->voxel_mm = voxel;
 
-  // The text.
-  const char* text = options.text != nullptr ? options.text : "";
+  // The text (read_text).
   size_t length_chars = 0;
-  while (length_chars <= kLabelMaxCharacters && text[length_chars] != '\0') ++length_chars;
-  if (length_chars == 0) {
-    return Status::error(StatusCode::kInvalidArgument, "label: the text is empty");
-  }
-  if (length_chars > kLabelMaxCharacters) {
-    return make_error(StatusCode::kInvalidArgument, "label: the text is longer than ",
-                      kLabelMaxCharacters, " characters");
-  }
   StrokeGlyph glyphs[kLabelMaxCharacters];
-  uint32_t cell_left[kLabelMaxCharacters];  // grid units from the text's left edge
-  uint32_t cursor = 0, meshed = 0;
-  for (size_t i = 0; i < length_chars; ++i) {
-    if (!stroke_font_glyph(text[i], &glyphs[i])) return char_error(text, i);
-    st->text[i] = glyphs[i].character;
-    cell_left[i] = cursor;
-    cursor += glyphs[i].advance;
-    if (glyphs[i].stroke_count > 0) ++meshed;
-  }
-  st->characters = static_cast<uint32_t>(length_chars);
-  if (meshed == 0) {
-    return Status::error(StatusCode::kInvalidArgument, "label: the text has nothing to write");
-  }
-  const double scale = options.height_mm / kStrokeFontHeight;  // mm per grid unit
-  const double half_width = options.stroke_width_mm / 2;
-  const double text_units = static_cast<double>(cursor - kStrokeFontGap);
-  st->text_length_mm = text_units * scale + options.stroke_width_mm;
-  if (splint.triangles.empty()) {
-    return Status::error(StatusCode::kInvalidMesh, "label: the splint has no triangles");
-  }
+  uint32_t cell_left[kLabelMaxCharacters] = {};  // grid units from the text's left edge
+  double scale = 0;                              // mm per grid unit
+  double half_width = 0;                         // mm, half a stroke
+  double text_units = 0;                         // the text's width in grid units
 
-  // The splint's index (for the rays) and, for automatic placement, the arch.
+  // Its place (place_text): the splint's index (for the rays) and the arch or the fixed frame.
   DistanceIndex index;
-  SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, splint, DistanceIndexOptions{}, &index));
   Arch arch;
   double sign = 1.0;
-  const double needed_wall =
-      options.height_mm + options.stroke_width_mm + 2 * options.wall_margin_mm;
   Frame fixed;
-  if (options.placement == LabelPlacement::kAutomatic) {
-    SPLINTCORE_RETURN_IF_ERROR(prepare_arch(arena, upper, lower, &arch));
-    const double half_text = st->text_length_mm / 2 + options.wall_margin_mm;
-    if (!(arch.total / 2 >= half_text)) {
-      return make_error(StatusCode::kInvalidArgument,
-                        "label: the text does not fit on the outer wall: it is ",
-                        st->text_length_mm, " mm long (", options.wall_margin_mm,
-                        " mm margin each end), the wall's mid curve ", arch.total, " mm");
+
+  // The glyphs (lay_out_glyphs, mesh_glyphs).
+  double c_lo = 0, c_hi = 0;
+  GlyphJob* jobs = nullptr;
+  Segment2* segments = nullptr;
+  uint32_t segment_count = 0, job_count = 0;
+  double stroke_length = 0;
+  Mesh* blocks = nullptr;
+  uint64_t total_vertices = 0, total_triangles = 0;
+
+  static constexpr uint32_t kMaxSegments = kLabelMaxCharacters * kStrokeGlyphMaxPoints;
+
+  Status read_text() {
+    const char* text = options.text != nullptr ? options.text : "";
+    while (length_chars <= kLabelMaxCharacters && text[length_chars] != '\0') ++length_chars;
+    if (length_chars == 0) {
+      return Status::error(StatusCode::kInvalidArgument, "label: the text is empty");
     }
-    Frame middle;
-    SPLINTCORE_RETURN_IF_ERROR(arch_frame(arch, arch.total / 2, &middle));
-    sign = dot(middle.u, middle.tangent) > 0.0 ? 1.0 : -1.0;
-  } else {
+    if (length_chars > kLabelMaxCharacters) {
+      return make_error(StatusCode::kInvalidArgument, "label: the text is longer than ",
+                        kLabelMaxCharacters, " characters");
+    }
+    uint32_t cursor = 0, meshed = 0;
+    for (size_t i = 0; i < length_chars; ++i) {
+      if (!stroke_font_glyph(text[i], &glyphs[i])) return char_error(text, i);
+      st->text[i] = glyphs[i].character;
+      cell_left[i] = cursor;
+      cursor += glyphs[i].advance;
+      if (glyphs[i].stroke_count > 0) ++meshed;
+    }
+    st->characters = static_cast<uint32_t>(length_chars);
+    if (meshed == 0) {
+      return Status::error(StatusCode::kInvalidArgument, "label: the text has nothing to write");
+    }
+    scale = options.height_mm / kStrokeFontHeight;
+    half_width = options.stroke_width_mm / 2;
+    text_units = static_cast<double>(cursor - kStrokeFontGap);
+    st->text_length_mm = text_units * scale + options.stroke_width_mm;
+    return Status::ok();
+  }
+
+  Status place_text(const Mesh& splint, Span<const Line> upper, Span<const Line> lower) {
+    SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, splint, DistanceIndexOptions{}, &index));
+    if (options.placement == LabelPlacement::kAutomatic) {
+      SPLINTCORE_RETURN_IF_ERROR(prepare_arch(arena, upper, lower, &arch));
+      const double half_text = st->text_length_mm / 2 + options.wall_margin_mm;
+      if (!(arch.total / 2 >= half_text)) {
+        return make_error(StatusCode::kInvalidArgument,
+                          "label: the text does not fit on the outer wall: it is ",
+                          st->text_length_mm, " mm long (", options.wall_margin_mm,
+                          " mm margin each end), the wall's mid curve ", arch.total, " mm");
+      }
+      Frame middle;
+      SPLINTCORE_RETURN_IF_ERROR(arch_frame(arch, arch.total / 2, &middle));
+      sign = dot(middle.u, middle.tangent) > 0.0 ? 1.0 : -1.0;
+      return Status::ok();
+    }
     fixed.n = normalized(options.normal);
     const Vec3 upv = options.up - fixed.n * dot(options.up, fixed.n);
     if (!is_finite(options.position) || !is_finite(options.normal) || !is_finite(options.up) ||
@@ -410,30 +450,42 @@ Status build_glyphs(const Context& ctx, const Mesh& splint, Span<const Line> upp
     }
     fixed.up = normalized(upv);
     fixed.u = cross(fixed.up, fixed.n);
+    return Status::ok();
   }
 
   // Frames and fields, glyph by glyph.
-  const double c_lo = options.mode == LabelMode::kEngrave ? -options.depth_mm : -kEmbossBelow;
-  const double c_hi = options.mode == LabelMode::kEngrave ? kEngraveAbove : options.depth_mm;
-  // Jobs and segments are temporaries in the arena (below the mesh, which moves down).
-  constexpr uint32_t kMaxSegments = kLabelMaxCharacters * kStrokeGlyphMaxPoints;
-  GlyphJob* jobs = arena.allocate_array<GlyphJob>(kLabelMaxCharacters);
-  Segment2* segments = arena.allocate_array<Segment2>(kMaxSegments);
-  if (jobs == nullptr || segments == nullptr) return arena.exhausted_status();
-  for (uint32_t k = 0; k < kLabelMaxCharacters; ++k) jobs[k] = GlyphJob{};
-  uint32_t segment_count = 0;
-  uint32_t job_count = 0;
-  double stroke_length = 0;
-  for (size_t i = 0; i < length_chars; ++i) {
+  Status lay_out_glyphs() {
+    c_lo = options.mode == LabelMode::kEngrave ? -options.depth_mm : -kEmbossBelow;
+    c_hi = options.mode == LabelMode::kEngrave ? kEngraveAbove : options.depth_mm;
+    // Jobs and segments are temporaries in the arena (below the mesh, which moves down).
+    jobs = arena.allocate_array<GlyphJob>(kLabelMaxCharacters);
+    segments = arena.allocate_array<Segment2>(kMaxSegments);
+    if (jobs == nullptr || segments == nullptr) return arena.exhausted_status();
+    for (uint32_t k = 0; k < kLabelMaxCharacters; ++k) jobs[k] = GlyphJob{};
+    for (size_t i = 0; i < length_chars; ++i) {
+      if (glyphs[i].stroke_count == 0) continue;
+      GlyphJob& job = jobs[job_count];
+      SPLINTCORE_RETURN_IF_ERROR(place_glyph(i, &job));
+      const Aabb strokes = add_strokes(glyphs[i], &job);
+      SPLINTCORE_RETURN_IF_ERROR(size_grid(i, strokes, &job));
+      ++job_count;
+    }
+    st->glyphs = job_count;
+    st->stroke_length_mm = stroke_length;
+    return Status::ok();
+  }
+
+  // Character i's frame at its place along the text, and the wall point its ray meets.
+  Status place_glyph(size_t i, GlyphJob* job) {
     const StrokeGlyph& g = glyphs[i];
-    if (g.stroke_count == 0) continue;
-    GlyphJob& job = jobs[job_count];
     LabelGlyphPlacement& place = st->placements[job_count];
     place.character = g.character;
     const double offset =
         (static_cast<double>(cell_left[i]) + 0.5 * g.width - 0.5 * text_units) * scale;
     Frame f;
     if (options.placement == LabelPlacement::kAutomatic) {
+      const double needed_wall =
+          options.height_mm + options.stroke_width_mm + 2 * options.wall_margin_mm;
       const double s = arch.total / 2 + sign * offset;
       SPLINTCORE_RETURN_IF_ERROR(arch_frame(arch, s, &f));
       place.arc_mm = s;
@@ -463,17 +515,20 @@ Status build_glyphs(const Context& ctx, const Mesh& splint, Span<const Line> upp
                         " meets no part of the splint within ", kRayStart, " mm of its centre")
           .at_index(i);
     }
-    job.origin = f.point + f.n * (kRayStart - hit.t);
-    job.u = f.u;
-    job.up = f.up;
-    job.n = f.n;
-    place.surface_point = job.origin;
+    job->origin = f.point + f.n * (kRayStart - hit.t);
+    job->u = f.u;
+    job->up = f.up;
+    job->n = f.n;
+    place.surface_point = job->origin;
     place.u = f.u;
     place.up = f.up;
     place.n = f.n;
+    return Status::ok();
+  }
 
-    // Strokes in the frame (a, b), the glyph's cell centred on the origin.
-    job.first_segment = segment_count;
+  // Strokes in the frame (a, b), the glyph's cell centred on the origin; returns their box.
+  Aabb add_strokes(const StrokeGlyph& g, GlyphJob* job) {
+    job->first_segment = segment_count;
     Aabb strokes;
     uint32_t first = 0;
     for (uint32_t s = 0; s < g.stroke_count; ++s) {
@@ -496,11 +551,16 @@ Status build_glyphs(const Context& ctx, const Mesh& splint, Span<const Line> upp
       }
       first = end;
     }
-    job.segment_count = segment_count - job.first_segment;
+    job->segment_count = segment_count - job->first_segment;
+    return strokes;
+  }
+
+  // Character i's sampling grid: the strokes' box with a stroke and two voxels around it.
+  Status size_grid(size_t i, const Aabb& strokes, GlyphJob* job) const {
     const double pad = half_width + 2 * voxel;
-    // Unshifted; each sampling shifts it by a phase (below).
-    job.grid.origin = Vec3{strokes.lo.x - pad, strokes.lo.y - pad, c_lo - 2 * voxel};
-    job.grid.spacing = Vec3{voxel, voxel, voxel};
+    // Unshifted; each sampling shifts it by a phase (mesh_glyph).
+    job->grid.origin = Vec3{strokes.lo.x - pad, strokes.lo.y - pad, c_lo - 2 * voxel};
+    job->grid.spacing = Vec3{voxel, voxel, voxel};
     const double extent[3] = {strokes.hi.x - strokes.lo.x + 2 * pad,
                               strokes.hi.y - strokes.lo.y + 2 * pad, c_hi - c_lo + 4 * voxel};
     uint64_t samples = 1;
@@ -519,26 +579,34 @@ Status build_glyphs(const Context& ctx, const Mesh& splint, Span<const Line> upp
                         " samples at voxel ", voxel, " mm; at most ", kMaxGlyphSamples)
           .at_index(i);
     }
-    job.grid.nx = counts[0];
-    job.grid.ny = counts[1];
-    job.grid.nz = counts[2];
-    ++job_count;
+    job->grid.nx = counts[0];
+    job->grid.ny = counts[1];
+    job->grid.nz = counts[2];
+    return Status::ok();
   }
-  st->glyphs = job_count;
-  st->stroke_length_mm = stroke_length;
-
-  MarchingCubesOptions mco;
-  mco.edge_margin = kEdgeMarginFraction;
-  DecimateOptions dopt;
-  dopt.max_error = voxel * kDecimateErrorFraction;
 
   // Glyph by glyph: extract (local frame), map to world and round, decimate, round again;
   // each glyph's mesh is moved down onto the previous one's (blocks), the temporaries go.
-  Mesh* blocks = arena.allocate_array<Mesh>(job_count);
-  if (blocks == nullptr) return arena.exhausted_status();
-  uint64_t total_vertices = 0, total_triangles = 0;
-  for (uint32_t k = 0; k < job_count; ++k) {
-    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "label: glyphs", k, job_count));
+  Status mesh_glyphs() {
+    MarchingCubesOptions mco;
+    mco.edge_margin = kEdgeMarginFraction;
+    DecimateOptions dopt;
+    dopt.max_error = voxel * kDecimateErrorFraction;
+    blocks = arena.allocate_array<Mesh>(job_count);
+    if (blocks == nullptr) return arena.exhausted_status();
+    for (uint32_t k = 0; k < job_count; ++k) {
+      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "label: glyphs", k, job_count));
+      SPLINTCORE_RETURN_IF_ERROR(mesh_glyph(k, mco, dopt));
+    }
+    if (total_vertices >= (uint64_t{1} << 31) || total_triangles >= (uint64_t{1} << 31)) {
+      return make_error(StatusCode::kLimitExceeded, "label: the glyphs have ", total_triangles,
+                        " triangles; at most 2^31");
+    }
+    return Status::ok();
+  }
+
+  // Glyph k into blocks[k], at the arena's top at entry.
+  Status mesh_glyph(uint32_t k, const MarchingCubesOptions& mco, const DecimateOptions& dopt) {
     GlyphJob& job = jobs[k];
     FieldSource fs;
     fs.segments = segments + job.first_segment;
@@ -548,7 +616,6 @@ Status build_glyphs(const Context& ctx, const Mesh& splint, Span<const Line> upp
     fs.c_lo = c_lo;
     fs.c_hi = c_hi;
     const Arena::Marker glyph_start = arena.mark();
-    const char character[2] = {st->placements[k].character, '\0'};
     // A glyph whose decimated mesh is not a valid solid (QEM does not promise that it does not
     // self-intersect) is sampled again with the next phase; the attempt's phase comes first.
     Mesh small;
@@ -558,51 +625,8 @@ Status build_glyphs(const Context& ctx, const Mesh& splint, Span<const Line> upp
       if (sampling > 0) ++st->glyph_resamplings;
       const double phase = kAttemptPhase[(attempt + sampling) % kLabelAttempts] * voxel;
       fs.grid.origin = job.grid.origin - Vec3{phase, phase * 0.375, phase * 0.6875};
-      Mesh raw(&arena);
-      SPLINTCORE_RETURN_IF_ERROR(
-          marching_cubes_mesh(ctx, fs.grid, LayerSource{fill_glyph, &fs}, mco, &raw));
-      st->marched_triangles += raw.triangles.size();
-      for (Vec3& p : raw.vertices) {
-        p = job.origin + job.u * p.x + job.up * p.y + job.n * p.z;
-        if (!round_to_float32(&p)) {
-          return Status::error(StatusCode::kLimitExceeded,
-                               "label: a glyph vertex is beyond float32 range");
-        }
-      }
-      small = Mesh(&arena);
-      s = decimate_qem(ctx, raw, dopt, &small);
-      if (s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) return s;
-      if (!s.is_ok()) {
-        s = make_error(StatusCode::kUnsupported, "label: glyph ", k, " ('", character,
-                       "'): decimation: ", s.message());
-        continue;
-      }
-      job.local_box = Aabb();
-      for (Vec3& p : small.vertices) {
-        if (!round_to_float32(&p)) {
-          return Status::error(StatusCode::kLimitExceeded,
-                               "label: a glyph vertex is beyond float32 range");
-        }
-        const Vec3 d = p - job.origin;
-        job.local_box.add(Vec3{dot(d, job.u), dot(d, job.up), dot(d, job.n)});
-      }
-      double volume = 0;
-      s = check_closed_oriented(ctx, small, &volume);
-      if (s.code() == StatusCode::kArenaExhausted) return s;
-      if (!s.is_ok()) {
-        s = make_error(StatusCode::kUnsupported, "label: glyph ", k, " ('", character,
-                       "') is not a valid solid after rounding to float32: ", s.message());
-        continue;
-      }
-      SelfIntersectionReport sir;
-      SPLINTCORE_RETURN_IF_ERROR(find_self_intersections(ctx, small, 1, &sir));
-      if (sir.self_intersecting()) {
-        s = make_error(StatusCode::kUnsupported, "label: glyph ", k, " ('", character,
-                       "') self-intersects after decimation (triangles ", sir.first_a, " and ",
-                       sir.first_b, ")");
-        continue;
-      }
-      break;
+      SPLINTCORE_RETURN_IF_ERROR(sample_glyph(k, &fs, mco, dopt, &small, &s));
+      if (s.is_ok()) break;
     }
     if (!s.is_ok()) return s;
     move_mesh_down(arena, glyph_start, small, &blocks[k]);  // decimate_qem: triangles first
@@ -614,64 +638,124 @@ Status build_glyphs(const Context& ctx, const Mesh& splint, Span<const Line> upp
     if (job.triangles == 0) {
       return make_error(StatusCode::kInternal, "label: glyph ", k, " has an empty mesh");
     }
+    return Status::ok();
   }
-  if (total_vertices >= (uint64_t{1} << 31) || total_triangles >= (uint64_t{1} << 31)) {
-    return make_error(StatusCode::kLimitExceeded, "label: the glyphs have ", total_triangles,
-                      " triangles; at most 2^31");
-  }
-  for (uint32_t a = 0; a < job_count; ++a) {
-    for (uint32_t b = a + 1; b < job_count; ++b) {
-      if (!boxes_apart(jobs[a], jobs[b], kGlyphClearance)) {
-        const char ca[2] = {st->placements[a].character, '\0'};
-        const char cb[2] = {st->placements[b].character, '\0'};
-        return make_error(StatusCode::kInvalidArgument, "label: glyphs ", a, " ('", ca, "') and ",
-                          b, " ('", cb,
-                          "') would touch; the wall bends too sharply for this text: use a "
-                          "smaller height or stroke width")
-            .at_index(a);
+
+  // One sampling of glyph k on fs's grid: the decimated mesh in *small, its box in the job,
+  // and in *verdict why it is no valid solid (ok when it is one). An error returned ends the
+  // label (memory, a cancel, float32 range).
+  Status sample_glyph(uint32_t k, FieldSource* fs, const MarchingCubesOptions& mco,
+                      const DecimateOptions& dopt, Mesh* small, Status* verdict) {
+    GlyphJob& job = jobs[k];
+    const char character[2] = {st->placements[k].character, '\0'};
+    Mesh raw(&arena);
+    SPLINTCORE_RETURN_IF_ERROR(
+        marching_cubes_mesh(ctx, fs->grid, LayerSource{fill_glyph, fs}, mco, &raw));
+    st->marched_triangles += raw.triangles.size();
+    for (Vec3& p : raw.vertices) {
+      p = job.origin + job.u * p.x + job.up * p.y + job.n * p.z;
+      if (!round_to_float32(&p)) {
+        return Status::error(StatusCode::kLimitExceeded,
+                             "label: a glyph vertex is beyond float32 range");
       }
     }
+    *small = Mesh(&arena);
+    Status& s = *verdict;
+    s = decimate_qem(ctx, raw, dopt, small);
+    if (s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) return s;
+    if (!s.is_ok()) {
+      s = make_error(StatusCode::kUnsupported, "label: glyph ", k, " ('", character,
+                     "'): decimation: ", s.message());
+      return Status::ok();
+    }
+    job.local_box = Aabb();
+    for (Vec3& p : small->vertices) {
+      if (!round_to_float32(&p)) {
+        return Status::error(StatusCode::kLimitExceeded,
+                             "label: a glyph vertex is beyond float32 range");
+      }
+      const Vec3 d = p - job.origin;
+      job.local_box.add(Vec3{dot(d, job.u), dot(d, job.up), dot(d, job.n)});
+    }
+    double volume = 0;
+    s = check_closed_oriented(ctx, *small, &volume);
+    if (s.code() == StatusCode::kArenaExhausted) return s;
+    if (!s.is_ok()) {
+      s = make_error(StatusCode::kUnsupported, "label: glyph ", k, " ('", character,
+                     "') is not a valid solid after rounding to float32: ", s.message());
+      return Status::ok();
+    }
+    SelfIntersectionReport sir;
+    SPLINTCORE_RETURN_IF_ERROR(find_self_intersections(ctx, *small, 1, &sir));
+    if (sir.self_intersecting()) {
+      s = make_error(StatusCode::kUnsupported, "label: glyph ", k, " ('", character,
+                     "') self-intersects after decimation (triangles ", sir.first_a, " and ",
+                     sir.first_b, ")");
+    }
+    return Status::ok();
+  }
+
+  Status check_glyphs_apart() const {
+    for (uint32_t a = 0; a < job_count; ++a) {
+      for (uint32_t b = a + 1; b < job_count; ++b) {
+        if (!boxes_apart(jobs[a], jobs[b], kGlyphClearance)) {
+          const char ca[2] = {st->placements[a].character, '\0'};
+          const char cb[2] = {st->placements[b].character, '\0'};
+          return make_error(StatusCode::kInvalidArgument, "label: glyphs ", a, " ('", ca, "') and ",
+                            b, " ('", cb,
+                            "') would touch; the wall bends too sharply for this text: use a "
+                            "smaller height or stroke width")
+              .at_index(a);
+        }
+      }
+    }
+    return Status::ok();
   }
 
   // One mesh (vertices first), above the blocks; the caller moves it down over them.
-  Vec3* vertices = arena.allocate_array<Vec3>(static_cast<size_t>(total_vertices));
-  Triangle* triangles = vertices == nullptr
-                            ? nullptr
+  Status join_glyphs(Mesh* mesh) {
+    Vec3* vertices = arena.allocate_array<Vec3>(static_cast<size_t>(total_vertices));
+    Triangle* triangles =
+        vertices == nullptr ? nullptr
                             : arena.allocate_array<Triangle>(static_cast<size_t>(total_triangles));
-  if (vertices == nullptr || triangles == nullptr) return arena.exhausted_status();
-  uint64_t v_at = 0, t_at = 0;
-  for (uint32_t k = 0; k < job_count; ++k) {
-    const uint32_t base = static_cast<uint32_t>(v_at);
-    for (const Vec3& p : blocks[k].vertices) vertices[v_at++] = p;
-    for (const Triangle& t : blocks[k].triangles) {
-      triangles[t_at++] = Triangle{{t.v[0] + base, t.v[1] + base, t.v[2] + base}};
+    if (vertices == nullptr || triangles == nullptr) return arena.exhausted_status();
+    uint64_t v_at = 0, t_at = 0;
+    for (uint32_t k = 0; k < job_count; ++k) {
+      const uint32_t base = static_cast<uint32_t>(v_at);
+      for (const Vec3& p : blocks[k].vertices) vertices[v_at++] = p;
+      for (const Triangle& t : blocks[k].triangles) {
+        triangles[t_at++] = Triangle{{t.v[0] + base, t.v[1] + base, t.v[2] + base}};
+      }
     }
+    mesh->bind(&arena);
+    mesh->vertices.adopt(vertices, static_cast<size_t>(total_vertices),
+                         static_cast<size_t>(total_vertices));
+    mesh->triangles.adopt(triangles, static_cast<size_t>(total_triangles),
+                          static_cast<size_t>(total_triangles));
+    st->glyph_vertices = total_vertices;
+    st->glyph_triangles = total_triangles;
+    return Status::ok();
   }
-  mesh->bind(&arena);
-  mesh->vertices.adopt(vertices, static_cast<size_t>(total_vertices),
-                       static_cast<size_t>(total_vertices));
-  mesh->triangles.adopt(triangles, static_cast<size_t>(total_triangles),
-                        static_cast<size_t>(total_triangles));
-  st->glyph_vertices = total_vertices;
-  st->glyph_triangles = total_triangles;
+};
 
-  // What the Boolean needs of B, checked here so that a failure can try another phase: a
-  // closed, oriented solid without flat triangles and without self-intersections (exact).
-  double volume = 0;
-  Status s = check_closed_oriented(ctx, *mesh, &volume);
-  if (!s.is_ok()) {
-    if (s.code() == StatusCode::kArenaExhausted) return s;
-    return make_error(StatusCode::kUnsupported,
-                      "label: the glyph mesh is not a valid solid after rounding to float32 (",
-                      s.message(), ")");
+// Everything of build_label_mesh except the clean-up on errors: the mesh ends above the
+// distance index, its vertices allocated before its triangles.
+Status build_glyphs(const Context& ctx, const Mesh& splint, Span<const Line> upper,
+                    Span<const Line> lower, const LabelOptions& options, uint32_t attempt,
+                    Mesh* mesh, LabelStats* st) {
+  GlyphBuilder b(ctx, options, attempt, st);
+  SPLINTCORE_RETURN_IF_ERROR(check_options(options, &b.voxel));
+  st->voxel_mm = b.voxel;
+  SPLINTCORE_RETURN_IF_ERROR(b.read_text());
+  if (splint.triangles.empty()) {
+    return Status::error(StatusCode::kInvalidMesh, "label: the splint has no triangles");
   }
-  SelfIntersectionReport sir;
-  SPLINTCORE_RETURN_IF_ERROR(find_self_intersections(ctx, *mesh, 1, &sir));
-  if (sir.self_intersecting()) {
-    return make_error(StatusCode::kUnsupported, "label: the glyph mesh self-intersects ",
-                      "(triangles ", sir.first_a, " and ", sir.first_b, ")");
-  }
-  return Status::ok();
+  SPLINTCORE_RETURN_IF_ERROR(b.place_text(splint, upper, lower));
+  SPLINTCORE_RETURN_IF_ERROR(b.lay_out_glyphs());
+  SPLINTCORE_RETURN_IF_ERROR(b.mesh_glyphs());
+  SPLINTCORE_RETURN_IF_ERROR(b.check_glyphs_apart());
+  SPLINTCORE_RETURN_IF_ERROR(b.join_glyphs(mesh));
+  return check_glyph_mesh(ctx, *mesh);
 }
 
 // One attempt of build_label_mesh: only the mesh stays (moved down to the arena's top at
@@ -680,17 +764,17 @@ Status build_attempt(const Context& ctx, const Mesh& splint, Span<const Line> up
                      Span<const Line> lower, const LabelOptions& options, uint32_t attempt,
                      Mesh* out, LabelStats* st) {
   Arena& arena = *ctx.arena;
-  const Arena::Marker start = arena.mark();
+  ArenaScope scope(arena);
   *st = LabelStats{};
   st->attempts = attempt + 1;
   Mesh mesh;
   const Status s = build_glyphs(ctx, splint, upper, lower, options, attempt, &mesh, st);
   if (!s.is_ok()) {
-    arena.rewind(start);
     out->bind(&arena);
     return s;
   }
-  move_mesh_down(arena, start, mesh, out, /*vertices_first=*/true);
+  move_mesh_down(arena, scope.start(), mesh, out, /*vertices_first=*/true);
+  scope.commit();
   return Status::ok();
 }
 
@@ -727,12 +811,12 @@ Status apply_label(const Context& ctx, const Mesh& splint, Span<const Line> uppe
   LabelStats local;
   LabelStats* st = stats != nullptr ? stats : &local;
   Arena& arena = *ctx.arena;
-  const Arena::Marker start = arena.mark();
+  ArenaScope scope(arena);  // on an error the arena is as it was
   BooleanOptions bo;
   bo.op = options.mode == LabelMode::kEngrave ? BooleanOp::kDifference : BooleanOp::kUnion;
   Status s;
   for (uint32_t attempt = 0; attempt < kLabelAttempts; ++attempt) {
-    arena.rewind(start);
+    arena.rewind(scope.start());
     Mesh glyphs;
     s = build_attempt(ctx, splint, upper, lower, options, attempt, &glyphs, st);
     if (s.code() == StatusCode::kUnsupported) continue;
@@ -741,7 +825,8 @@ Status apply_label(const Context& ctx, const Mesh& splint, Span<const Line> uppe
     s = mesh_boolean(ctx, splint, glyphs, bo, &result, &st->boolean);
     if (s.is_ok()) {
       // The result down over the glyphs (mesh_boolean allocates its triangles first).
-      move_mesh_down(arena, start, result, out);
+      move_mesh_down(arena, scope.start(), result, out);
+      scope.commit();
       return Status::ok();
     }
     if (s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) break;
@@ -757,7 +842,6 @@ Status apply_label(const Context& ctx, const Mesh& splint, Span<const Line> uppe
                    options.mode == LabelMode::kEngrave ? "minus" : "plus", " glyphs, ",
                    kLabelAttempts, " samplings of the glyphs): ", s.message());
   }
-  arena.rewind(start);
   out->bind(&arena);
   return s;
 }

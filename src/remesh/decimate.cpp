@@ -378,30 +378,237 @@ struct Decimator {
       e = next_out(e);
     } while (e != y0);
   }
+
+  // Twins: half-edges bucketed by origin; a -> b pairs with the one b -> a. The buckets are
+  // temporaries.
+  Status link_twins(Arena& arena) {
+    ArenaScope buckets(arena);
+    const uint32_t half = 3 * nt;
+    uint32_t* first = arena.allocate_array<uint32_t>(size_t{nv} + 1);
+    uint32_t* out_edges = arena.allocate_array<uint32_t>(half);
+    if (first == nullptr || out_edges == nullptr) return arena.exhausted_status();
+    std::memset(first, 0, (size_t{nv} + 1) * sizeof(uint32_t));
+    for (uint32_t h = 0; h < half; ++h) ++first[origin(h) + 1];
+    for (uint32_t i = 0; i < nv; ++i) first[i + 1] += first[i];
+    for (uint32_t h = 0; h < half; ++h) out_edges[first[origin(h)]++] = h;
+    for (uint32_t i = nv; i > 0; --i) first[i] = first[i - 1];
+    first[0] = 0;
+    for (uint32_t h = 0; h < half; ++h) {
+      const uint32_t a = origin(h), b = dest(h);
+      uint32_t same = 0, opposite = 0, match = kNone;
+      for (uint32_t i = first[a]; i < first[a + 1]; ++i) same += dest(out_edges[i]) == b;
+      for (uint32_t i = first[b]; i < first[b + 1]; ++i) {
+        if (dest(out_edges[i]) == a) {
+          ++opposite;
+          match = out_edges[i];
+        }
+      }
+      if (same != 1 || opposite != 1) {
+        const char* what = opposite == 0 ? "is not closed: a boundary edge (open meshes are "
+                                           "not supported)"
+                           : same + opposite > 2 ? "is not edge-manifold or not consistently "
+                                                   "oriented: an edge used by more than two "
+                                                   "triangles or twice in one direction"
+                                                 : "is not consistently oriented";
+        return make_error(StatusCode::kInvalidMesh, "decimate_qem: mesh ", what,
+                          " between vertices ", a, " and ", b, " (triangle ", h / 3, ")")
+            .at_index(h / 3);
+      }
+      twin(h) = match;
+    }
+    return link_fans(first, out_edges);
+  }
+
+  // One fan per vertex: its head, one of the half-edges out of it (first[i] .. first[i + 1]
+  // in out_edges), whose next_out walk must come round through all of them.
+  Status link_fans(const uint32_t* first, const uint32_t* out_edges) {
+    for (uint32_t i = 0; i < nv; ++i) {
+      const uint32_t degree = first[i + 1] - first[i];
+      if (degree == 0) {
+        vx[i].head = kNone;
+        continue;
+      }
+      const uint32_t h0 = out_edges[first[i]];
+      vx[i].head = h0;
+      uint32_t steps = 0, e = h0;
+      do {
+        e = next_out(e);
+        ++steps;
+      } while (e != h0 && steps <= degree);
+      if (steps != degree) {
+        return make_error(StatusCode::kInvalidMesh,
+                          "decimate_qem: mesh is not "
+                          "vertex-manifold: the triangles around vertex ",
+                          i, " form more than one fan (triangle ", h0 / 3, ")")
+            .at_index(h0 / 3);
+      }
+    }
+    return Status::ok();
+  }
+
+  // Positions, valences, the centre and the plane quadrics.
+  void init_vertices(const Vec3* in_verts) {
+    for (uint32_t i = 0; i < nv; ++i) {
+      VertexData& x = vx[i];
+      std::memset(static_cast<void*>(&x.quadric), 0, sizeof(Quadric));
+      x.pos = in_verts[i];
+      x.valence = 0;
+      x.stamp = 0;
+      x.pad = 0;
+    }
+    for (uint32_t h = 0; h < 3 * nt; ++h) ++vx[origin(h)].valence;
+    {
+      Aabb box;
+      for (uint32_t t = 0; t < nt; ++t) {
+        for (uint32_t k : tri[t].v) box.add(in_verts[k]);
+      }
+      center = box.center();
+    }
+    // Plane quadrics, weighted by area, summed in triangle order.
+    for (uint32_t t = 0; t < nt; ++t) {
+      const Vec3 a = in_verts[tri[t].v[0]] - center;
+      const Vec3 b = in_verts[tri[t].v[1]] - center;
+      const Vec3 c = in_verts[tri[t].v[2]] - center;
+      const Vec3 n = cross(b - a, c - a);
+      const double len = length(n);
+      if (!(len > 0.0)) continue;
+      const double area = 0.5 * len;
+      const Vec3 un{n.x / len, n.y / len, n.z / len};
+      const double off = -dot(un, a);
+      const Quadric q{area * un.x * un.x,
+                      area * un.x * un.y,
+                      area * un.x * un.z,
+                      area * un.y * un.y,
+                      area * un.y * un.z,
+                      area * un.z * un.z,
+                      area * un.x * off,
+                      area * un.y * off,
+                      area * un.z * off,
+                      area * off * off,
+                      area};
+      for (uint32_t k : tri[t].v) add_to(&vx[k].quadric, q);
+    }
+  }
+
+  // Every edge in the heap (by its smaller half-edge), then heapified.
+  void fill_heap() {
+    for (uint32_t h = 0; h < 3 * nt; ++h) {
+      if (h < twin(h)) {
+        Vec3 unused;
+        heap.items[heap.size] = heap_entry(cost(h, &unused), h);
+        heap.pos(h) = heap.size++;
+      } else {
+        heap.pos(h) = kNone;
+      }
+    }
+    heap.heapify();
+  }
+
+  // The greedy loop: the cheapest edge that passes check() collapses, until at most
+  // options.target_triangles are left, the cheapest error is above options.max_error or no
+  // edge passes. *live: the triangles left; the counters go to *stats.
+  Status collapse_edges(const Context& ctx, const DecimateOptions& options, uint64_t* live_left,
+                        DecimateStats* stats) {
+    DecimateStats local = *stats;
+    const uint32_t half = 3 * nt;
+    const uint64_t target = options.target_triangles;
+    const double limit = options.max_error * options.max_error;
+    uint64_t live = nt;
+    uint32_t parked = 0;
+    uint64_t collapses_at_round = 0;
+    double max_key = 0.0;
+    // Puts the refused edges back (with fresh keys) when there has been a collapse since the
+    // last time; false when there is nothing new to try.
+    auto another_round = [&]() {
+      if (parked == 0 || local.collapses == collapses_at_round) return false;
+      collapses_at_round = local.collapses;
+      ++local.rounds;
+      for (uint32_t e = 0; e < half; ++e) {
+        if (heap.pos(e) != kParked) continue;
+        Vec3 unused;
+        heap.place(heap.size++, heap_entry(cost(e, &unused), e));
+      }
+      parked = 0;
+      heap.heapify();
+      return true;
+    };
+    while (live > target) {
+      if (heap.size == 0) {
+        if (another_round()) continue;
+        local.stop = DecimateStop::kNoValidCollapse;
+        break;
+      }
+      const uint32_t h = entry_id(heap.items[0]);
+      Vec3 p;
+      const double key = cost(h, &p);
+      SPLINTCORE_ASSERT(heap_entry(key, h) == heap.items[0]);  // keys are kept exact
+      if (limit > 0.0 && key > limit) {  // the smallest error left is too large
+        if (another_round()) continue;
+        local.stop = DecimateStop::kErrorLimit;
+        break;
+      }
+      heap.remove(h);
+      const int verdict = check(h, p);
+      if (verdict != 0) {
+        heap.pos(h) = kParked;
+        ++parked;
+        if (verdict == 1) ++local.rejected_link;
+        if (verdict == 2) ++local.rejected_flip;
+        if (verdict == 3) ++local.rejected_degenerate;
+        continue;
+      }
+      collapse(h, p, &parked);
+      live -= 2;
+      ++local.collapses;
+      if (key > max_key) max_key = key;
+      if (local.collapses % kProgressEvery == 0) {
+        SPLINTCORE_RETURN_IF_ERROR(
+            report_progress(ctx, "decimate", 2 * local.collapses, nt - target));
+      }
+    }
+    local.max_error = std::sqrt(max_key);
+    *stats = local;
+    *live_left = live;
+    return report_progress(ctx, "decimate", nt - live, nt - live);
+  }
+
+  // The compact output above the work: the live triangles in order, their vertices numbered
+  // by first use (triangles allocated first, as move_mesh_down needs).
+  Status compact(Arena& arena, uint64_t live, Mesh* result) const {
+    uint32_t* remap = arena.allocate_array<uint32_t>(nv);
+    if (remap == nullptr) return arena.exhausted_status();
+    for (uint32_t i = 0; i < nv; ++i) remap[i] = kNone;
+    uint32_t out_v = 0;
+    for (uint32_t t = 0; t < nt; ++t) {
+      if (tri[t].v[0] == kNone) continue;
+      for (uint32_t k : tri[t].v) {
+        if (remap[k] == kNone) remap[k] = out_v++;
+      }
+    }
+    const uint32_t out_t = static_cast<uint32_t>(live);
+    Triangle* res_t = arena.allocate_array<Triangle>(out_t);
+    Vec3* res_v = arena.allocate_array<Vec3>(out_v);
+    if (res_t == nullptr || res_v == nullptr) return arena.exhausted_status();
+    uint32_t w = 0;
+    for (uint32_t t = 0; t < nt; ++t) {
+      if (tri[t].v[0] == kNone) continue;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = tri[t].v[k];
+        res_t[w].v[k] = remap[v];
+        res_v[remap[v]] = vx[v].pos;
+      }
+      ++w;
+    }
+    SPLINTCORE_ASSERT(w == out_t);
+    result->triangles.adopt(res_t, out_t, out_t);
+    result->vertices.adopt(res_v, out_v, out_v);
+    return Status::ok();
+  }
 };
 
-}  // namespace
-
-uint64_t decimate_qem_bound(uint64_t vertex_count, uint64_t triangle_count) {
-  uint64_t half = 0, first = 0, validation = 0, rest = 0, total = 0;
-  if (!checked_mul(triangle_count, 3, &half)) return 0;
-  if (!add_alloc(&first, triangle_count, sizeof(Face)) ||
-      !add_alloc(&first, vertex_count, sizeof(VertexData)) || !add_alloc(&first, 3, 16) ||
-      !add_alloc(&validation, vertex_count + 1, 4) || !add_alloc(&validation, half, 4) ||
-      !add_alloc(&rest, half / 2 + 8, sizeof(uint64_t)) || !add_alloc(&rest, vertex_count, 4) ||
-      !add_alloc(&rest, triangle_count, sizeof(Triangle)) ||
-      !add_alloc(&rest, vertex_count, sizeof(Vec3))) {
-    return 0;
-  }
-  if (!checked_add(first, validation > rest ? validation : rest, &total)) return 0;
-  return total;
-}
-
-Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions& options, Mesh* out,
-                    DecimateStats* stats) {
-  SPLINTCORE_ASSERT(ctx.arena != nullptr && out != nullptr);
-  SPLINTCORE_ASSERT(out->vertices.arena() == ctx.arena && out->triangles.arena() == ctx.arena);
-  if (!out->vertices.empty() || !out->triangles.empty()) {
+// The checks of decimate_qem's arguments (no memory needed).
+Status check_decimate_input(const Mesh& mesh, const DecimateOptions& options, const Mesh& out) {
+  if (!out.vertices.empty() || !out.triangles.empty()) {
     return make_error(StatusCode::kInvalidArgument, "decimate_qem: the output mesh must be empty");
   }
   if (!is_finite(options.max_error) || !(options.max_error >= 0.0)) {
@@ -421,9 +628,6 @@ Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions&
   const uint32_t nv = static_cast<uint32_t>(nv64), nt = static_cast<uint32_t>(nt64);
   const Triangle* in_tris = mesh.triangles.data();
   const Vec3* in_verts = mesh.vertices.data();
-  DecimateStats local;
-  local.input_vertices = nv;
-  local.input_triangles = nt;
   for (uint32_t t = 0; t < nt; ++t) {
     const uint32_t* v = in_tris[t].v;
     for (int k = 0; k < 3; ++k) {
@@ -446,93 +650,59 @@ Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions&
           .at_index(i);
     }
   }
+  return Status::ok();
+}
+
+}  // namespace
+
+uint64_t decimate_qem_bound(uint64_t vertex_count, uint64_t triangle_count) {
+  uint64_t half = 0, first = 0, validation = 0, rest = 0, total = 0;
+  if (!checked_mul(triangle_count, 3, &half)) return 0;
+  if (!add_alloc(&first, triangle_count, sizeof(Face)) ||
+      !add_alloc(&first, vertex_count, sizeof(VertexData)) || !add_alloc(&first, 3, 16) ||
+      !add_alloc(&validation, vertex_count + 1, 4) || !add_alloc(&validation, half, 4) ||
+      !add_alloc(&rest, half / 2 + 8, sizeof(uint64_t)) || !add_alloc(&rest, vertex_count, 4) ||
+      !add_alloc(&rest, triangle_count, sizeof(Triangle)) ||
+      !add_alloc(&rest, vertex_count, sizeof(Vec3))) {
+    return 0;
+  }
+  if (!checked_add(first, validation > rest ? validation : rest, &total)) return 0;
+  return total;
+}
+
+Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions& options, Mesh* out,
+                    DecimateStats* stats) {
+  SPLINTCORE_ASSERT(ctx.arena != nullptr && out != nullptr);
+  SPLINTCORE_ASSERT(out->vertices.arena() == ctx.arena && out->triangles.arena() == ctx.arena);
+  SPLINTCORE_RETURN_IF_ERROR(check_decimate_input(mesh, options, *out));
+  const uint32_t nv = static_cast<uint32_t>(mesh.vertices.size());
+  const uint32_t nt = static_cast<uint32_t>(mesh.triangles.size());
+  const Triangle* in_tris = mesh.triangles.data();
+  DecimateStats local;
+  local.input_vertices = nv;
+  local.input_triangles = nt;
   if (nt == 0) {
     if (stats != nullptr) *stats = local;
     return Status::ok();
   }
 
   Arena& arena = *ctx.arena;
-  const Arena::Marker start = arena.mark();
-  auto fail = [&](Status s) {
-    arena.rewind(start);
-    return s;
-  };
-  const uint32_t half = 3 * nt;
+  ArenaScope scope(arena);  // on an error the arena is as it was
   Decimator d;
   d.nv = nv;
   d.nt = nt;
   d.tri = arena.allocate_array<Face>(nt);
   d.vx = arena.allocate_array<VertexData>(nv);
-  if (d.tri == nullptr || (d.vx == nullptr && nv > 0)) {
-    return fail(arena.exhausted_status());
-  }
+  if (d.tri == nullptr || (d.vx == nullptr && nv > 0)) return arena.exhausted_status();
   for (uint32_t t = 0; t < nt; ++t) {
     d.tri[t] = Face{{in_tris[t].v[0], in_tris[t].v[1], in_tris[t].v[2]},
                     {kNone, kNone, kNone},
                     {kNone, kNone, kNone}};
   }
-
-  // Twins: half-edges bucketed by origin; a -> b pairs with the one b -> a.
-  {
-    const Arena::Marker before = arena.mark();
-    uint32_t* first = arena.allocate_array<uint32_t>(size_t{nv} + 1);
-    uint32_t* out_edges = arena.allocate_array<uint32_t>(half);
-    if (first == nullptr || out_edges == nullptr) return fail(arena.exhausted_status());
-    std::memset(first, 0, (size_t{nv} + 1) * sizeof(uint32_t));
-    for (uint32_t h = 0; h < half; ++h) ++first[d.origin(h) + 1];
-    for (uint32_t i = 0; i < nv; ++i) first[i + 1] += first[i];
-    for (uint32_t h = 0; h < half; ++h) out_edges[first[d.origin(h)]++] = h;
-    for (uint32_t i = nv; i > 0; --i) first[i] = first[i - 1];
-    first[0] = 0;
-    for (uint32_t h = 0; h < half; ++h) {
-      const uint32_t a = d.origin(h), b = d.dest(h);
-      uint32_t same = 0, opposite = 0, match = kNone;
-      for (uint32_t i = first[a]; i < first[a + 1]; ++i) same += d.dest(out_edges[i]) == b;
-      for (uint32_t i = first[b]; i < first[b + 1]; ++i) {
-        if (d.dest(out_edges[i]) == a) {
-          ++opposite;
-          match = out_edges[i];
-        }
-      }
-      if (same != 1 || opposite != 1) {
-        const char* what = opposite == 0 ? "is not closed: a boundary edge (open meshes are "
-                                           "not supported)"
-                           : same + opposite > 2 ? "is not edge-manifold or not consistently "
-                                                   "oriented: an edge used by more than two "
-                                                   "triangles or twice in one direction"
-                                                 : "is not consistently oriented";
-        return fail(make_error(StatusCode::kInvalidMesh, "decimate_qem: mesh ", what,
-                               " between vertices ", a, " and ", b, " (triangle ", h / 3, ")")
-                        .at_index(h / 3));
-      }
-      d.twin(h) = match;
-    }
-    // One fan per vertex.
-    for (uint32_t i = 0; i < nv; ++i) {
-      const uint32_t degree = first[i + 1] - first[i];
-      if (degree == 0) {
-        d.vx[i].head = kNone;
-        continue;
-      }
-      const uint32_t h0 = out_edges[first[i]];
-      d.vx[i].head = h0;
-      uint32_t steps = 0, e = h0;
-      do {
-        e = d.next_out(e);
-        ++steps;
-      } while (e != h0 && steps <= degree);
-      if (steps != degree) {
-        return fail(make_error(StatusCode::kInvalidMesh,
-                               "decimate_qem: mesh is not "
-                               "vertex-manifold: the triangles around vertex ",
-                               i, " form more than one fan (triangle ", h0 / 3, ")")
-                        .at_index(h0 / 3));
-      }
-    }
-    arena.rewind(before);
-  }
+  SPLINTCORE_RETURN_IF_ERROR(d.link_twins(arena));
 
   d.heap.faces = d.tri;
+  const uint32_t half = 3 * nt;
   uint64_t* heap_memory = arena.allocate_array<uint64_t>(half / 2 + 8);
   if (heap_memory != nullptr) {
     // Index 1 at the start of a cache line (speed only).
@@ -540,152 +710,19 @@ Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions&
     while ((reinterpret_cast<uintptr_t>(heap_memory + skip + 1) & 63u) != 0) ++skip;
     d.heap.items = heap_memory + skip;
   }
-  if (d.heap.items == nullptr) return fail(arena.exhausted_status());
-  for (uint32_t i = 0; i < nv; ++i) {
-    VertexData& x = d.vx[i];
-    std::memset(static_cast<void*>(&x.quadric), 0, sizeof(Quadric));
-    x.pos = in_verts[i];
-    x.valence = 0;
-    x.stamp = 0;
-    x.pad = 0;
-  }
-  for (uint32_t h = 0; h < half; ++h) ++d.vx[d.origin(h)].valence;
-  {
-    Aabb box;
-    for (uint32_t t = 0; t < nt; ++t) {
-      for (uint32_t k : d.tri[t].v) box.add(in_verts[k]);
-    }
-    d.center = box.center();
-  }
-  // Plane quadrics, weighted by area, summed in triangle order.
-  for (uint32_t t = 0; t < nt; ++t) {
-    const Vec3 a = in_verts[d.tri[t].v[0]] - d.center;
-    const Vec3 b = in_verts[d.tri[t].v[1]] - d.center;
-    const Vec3 c = in_verts[d.tri[t].v[2]] - d.center;
-    const Vec3 n = cross(b - a, c - a);
-    const double len = length(n);
-    if (!(len > 0.0)) continue;
-    const double area = 0.5 * len;
-    const Vec3 un{n.x / len, n.y / len, n.z / len};
-    const double off = -dot(un, a);
-    const Quadric q{area * un.x * un.x,
-                    area * un.x * un.y,
-                    area * un.x * un.z,
-                    area * un.y * un.y,
-                    area * un.y * un.z,
-                    area * un.z * un.z,
-                    area * un.x * off,
-                    area * un.y * off,
-                    area * un.z * off,
-                    area * off * off,
-                    area};
-    for (uint32_t k : d.tri[t].v) add_to(&d.vx[k].quadric, q);
-  }
-  // Every edge in the heap (by its smaller half-edge), then heapified.
-  for (uint32_t h = 0; h < half; ++h) {
-    if (h < d.twin(h)) {
-      Vec3 unused;
-      d.heap.items[d.heap.size] = heap_entry(d.cost(h, &unused), h);
-      d.heap.pos(h) = d.heap.size++;
-    } else {
-      d.heap.pos(h) = kNone;
-    }
-  }
-  d.heap.heapify();
+  if (d.heap.items == nullptr) return arena.exhausted_status();
+  d.init_vertices(mesh.vertices.data());
+  d.fill_heap();
 
-  const uint64_t target = options.target_triangles;
-  const double limit = options.max_error * options.max_error;
   uint64_t live = nt;
-  uint32_t parked = 0;
-  uint64_t collapses_at_round = 0;
-  double max_key = 0.0;
-  // Puts the refused edges back (with fresh keys) when there has been a collapse since the
-  // last time; false when there is nothing new to try.
-  auto another_round = [&]() {
-    if (parked == 0 || local.collapses == collapses_at_round) return false;
-    collapses_at_round = local.collapses;
-    ++local.rounds;
-    for (uint32_t e = 0; e < half; ++e) {
-      if (d.heap.pos(e) != kParked) continue;
-      Vec3 unused;
-      d.heap.place(d.heap.size++, heap_entry(d.cost(e, &unused), e));
-    }
-    parked = 0;
-    d.heap.heapify();
-    return true;
-  };
-  while (live > target) {
-    if (d.heap.size == 0) {
-      if (another_round()) continue;
-      local.stop = DecimateStop::kNoValidCollapse;
-      break;
-    }
-    const uint32_t h = entry_id(d.heap.items[0]);
-    Vec3 p;
-    const double key = d.cost(h, &p);
-    SPLINTCORE_ASSERT(heap_entry(key, h) == d.heap.items[0]);  // keys are kept exact
-    if (limit > 0.0 && key > limit) {  // the smallest error left is too large
-      if (another_round()) continue;
-      local.stop = DecimateStop::kErrorLimit;
-      break;
-    }
-    d.heap.remove(h);
-    const int verdict = d.check(h, p);
-    if (verdict != 0) {
-      d.heap.pos(h) = kParked;
-      ++parked;
-      if (verdict == 1) ++local.rejected_link;
-      if (verdict == 2) ++local.rejected_flip;
-      if (verdict == 3) ++local.rejected_degenerate;
-      continue;
-    }
-    d.collapse(h, p, &parked);
-    live -= 2;
-    ++local.collapses;
-    if (key > max_key) max_key = key;
-    if (local.collapses % kProgressEvery == 0) {
-      Status s = report_progress(ctx, "decimate", 2 * local.collapses, nt - target);
-      if (!s.is_ok()) return fail(s);
-    }
-  }
-  local.max_error = std::sqrt(max_key);
-  {
-    Status s = report_progress(ctx, "decimate", nt - live, nt - live);
-    if (!s.is_ok()) return fail(s);
-  }
-
+  SPLINTCORE_RETURN_IF_ERROR(d.collapse_edges(ctx, options, &live, &local));
   // The compact output above the work, then moved down to where the top was.
-  uint32_t* remap = arena.allocate_array<uint32_t>(nv);
-  if (remap == nullptr) return fail(arena.exhausted_status());
-  for (uint32_t i = 0; i < nv; ++i) remap[i] = kNone;
-  uint32_t out_v = 0;
-  for (uint32_t t = 0; t < nt; ++t) {
-    if (d.tri[t].v[0] == kNone) continue;
-    for (uint32_t k : d.tri[t].v) {
-      if (remap[k] == kNone) remap[k] = out_v++;
-    }
-  }
-  const uint32_t out_t = static_cast<uint32_t>(live);
-  Triangle* res_t = arena.allocate_array<Triangle>(out_t);
-  Vec3* res_v = arena.allocate_array<Vec3>(out_v);
-  if (res_t == nullptr || res_v == nullptr) return fail(arena.exhausted_status());
-  uint32_t w = 0;
-  for (uint32_t t = 0; t < nt; ++t) {
-    if (d.tri[t].v[0] == kNone) continue;
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t v = d.tri[t].v[k];
-      res_t[w].v[k] = remap[v];
-      res_v[remap[v]] = d.vx[v].pos;
-    }
-    ++w;
-  }
-  SPLINTCORE_ASSERT(w == out_t);
   Mesh result(&arena);
-  result.triangles.adopt(res_t, out_t, out_t);
-  result.vertices.adopt(res_v, out_v, out_v);
-  move_mesh_down(arena, start, result, out);
-  local.output_vertices = out_v;
-  local.output_triangles = out_t;
+  SPLINTCORE_RETURN_IF_ERROR(d.compact(arena, live, &result));
+  move_mesh_down(arena, scope.start(), result, out);
+  scope.commit();
+  local.output_vertices = out->vertices.size();
+  local.output_triangles = out->triangles.size();
   if (stats != nullptr) *stats = local;
   return Status::ok();
 }

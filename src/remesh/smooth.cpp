@@ -71,6 +71,124 @@ void step_block(void* context, uint32_t block) {
   job.clamped[block] += clamped;
 }
 
+// The checks of taubin_smooth's arguments (no memory needed).
+Status check_taubin_input(const Mesh& mesh, const TaubinOptions& options) {
+  if (!is_finite(options.lambda) || !(options.lambda > 0.0) || !(options.lambda <= 1.0)) {
+    return make_error(StatusCode::kInvalidArgument, "taubin_smooth: lambda must be in (0, 1], not ",
+                      options.lambda);
+  }
+  if (!is_finite(options.mu) || !(options.mu >= -1.0) || !(options.mu <= 0.0)) {
+    return make_error(StatusCode::kInvalidArgument, "taubin_smooth: mu must be in [-1, 0], not ",
+                      options.mu);
+  }
+  if (!is_finite(options.max_displacement) || !(options.max_displacement >= 0.0)) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "taubin_smooth: max_displacement must be a finite distance >= 0 mm, not ",
+                      options.max_displacement);
+  }
+  const uint64_t nv64 = mesh.vertices.size(), nt64 = mesh.triangles.size();
+  if (nv64 > UINT32_MAX - 1 || nt64 > (uint64_t{1} << 30)) {
+    return make_error(StatusCode::kLimitExceeded, "taubin_smooth: mesh too large: ", nt64,
+                      " triangles, ", nv64, " vertices (at most 2^30 and 2^32 - 2)");
+  }
+  const uint32_t nv = static_cast<uint32_t>(nv64), nt = static_cast<uint32_t>(nt64);
+  const Triangle* tris = mesh.triangles.data();
+  const Vec3* verts = mesh.vertices.data();
+  for (uint32_t t = 0; t < nt; ++t) {
+    for (uint32_t k : tris[t].v) {
+      if (k >= nv) {
+        return make_error(StatusCode::kInvalidMesh, "taubin_smooth: triangle ", t,
+                          " refers to vertex ", k, " but the mesh has ", nv, " vertices")
+            .at_index(t);
+      }
+    }
+  }
+  for (uint32_t i = 0; i < nv; ++i) {
+    if (!is_finite(verts[i])) {
+      return make_error(StatusCode::kNonFinite, "taubin_smooth: vertex ", i,
+                        " has a coordinate that is NaN or infinite")
+          .at_index(i);
+    }
+  }
+  return Status::ok();
+}
+
+// The mesh's edges as CSR lists: the neighbours of vertex i are neighbours[offsets[i] ..
+// offsets[i + 1]), in increasing id order; fixed[i] is 1 on the boundary.
+struct Adjacency {
+  uint8_t* fixed = nullptr;
+  uint32_t* offsets = nullptr;
+  uint32_t* neighbours = nullptr;
+  uint32_t edges = 0;
+};
+
+// Undirected edge keys of the triangles' sides, sorted (the sort's scratch goes back right
+// after it): *keys holds *key_count of them, room for 3 nt.
+Status sorted_edge_keys(Arena& arena, const Triangle* tris, uint32_t nt, uint64_t** keys_out,
+                        uint32_t* key_count) {
+  const uint32_t uses = 3 * nt;
+  uint64_t* keys = arena.allocate_array<uint64_t>(uses);
+  if (keys == nullptr) return arena.exhausted_status();
+  uint32_t count = 0;
+  for (uint32_t t = 0; t < nt; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = tris[t].v[k], b = tris[t].v[(k + 1) % 3];
+      if (a == b) continue;  // a repeated id is no edge
+      keys[count++] = a < b ? (uint64_t{a} << 32) | b : (uint64_t{b} << 32) | a;
+    }
+  }
+  {
+    ArenaScope scratch_scope(arena);
+    uint64_t* scratch = arena.allocate_array<uint64_t>(uses);
+    if (scratch == nullptr) return arena.exhausted_status();
+    radix_sort(Span<uint64_t>(keys, count), Span<uint64_t>(scratch, count));
+  }
+  *keys_out = keys;
+  *key_count = count;
+  return Status::ok();
+}
+
+// The adjacency of a mesh of nv vertices: distinct keys are the edges, a key used once is a
+// boundary edge. Filled in key order, so each list comes out in increasing neighbour id.
+Status build_adjacency(Arena& arena, const Triangle* tris, uint32_t nt, uint32_t nv,
+                       Adjacency* adj) {
+  uint64_t* keys = nullptr;
+  uint32_t key_count = 0;
+  SPLINTCORE_RETURN_IF_ERROR(sorted_edge_keys(arena, tris, nt, &keys, &key_count));
+  uint8_t* fixed = arena.allocate_array<uint8_t>(nv);
+  uint32_t* offsets = arena.allocate_array<uint32_t>(size_t{nv} + 1);
+  if (fixed == nullptr || offsets == nullptr) return arena.exhausted_status();
+  std::memset(fixed, 0, nv);
+  std::memset(offsets, 0, (size_t{nv} + 1) * sizeof(uint32_t));
+  // Distinct edges in place; boundary vertices; degrees.
+  uint32_t edges = 0;
+  for (uint32_t i = 0; i < key_count;) {
+    uint32_t j = i + 1;
+    while (j < key_count && keys[j] == keys[i]) ++j;
+    const uint32_t a = static_cast<uint32_t>(keys[i] >> 32), b = static_cast<uint32_t>(keys[i]);
+    if (j - i == 1) fixed[a] = fixed[b] = 1;
+    ++offsets[a + 1];
+    ++offsets[b + 1];
+    keys[edges++] = keys[i];
+    i = j;
+  }
+  for (uint32_t i = 0; i < nv; ++i) offsets[i + 1] += offsets[i];
+  uint32_t* neighbours = arena.allocate_array<uint32_t>(size_t{2} * edges);
+  if (neighbours == nullptr) return arena.exhausted_status();
+  for (uint32_t e = 0; e < edges; ++e) {
+    const uint32_t a = static_cast<uint32_t>(keys[e] >> 32), b = static_cast<uint32_t>(keys[e]);
+    neighbours[offsets[a]++] = b;
+    neighbours[offsets[b]++] = a;
+  }
+  for (uint32_t i = nv; i > 0; --i) offsets[i] = offsets[i - 1];
+  offsets[0] = 0;
+  adj->fixed = fixed;
+  adj->offsets = offsets;
+  adj->neighbours = neighbours;
+  adj->edges = edges;
+  return Status::ok();
+}
+
 }  // namespace
 
 uint64_t taubin_smooth_bound(uint64_t vertex_count, uint64_t triangle_count) {
@@ -95,43 +213,10 @@ uint64_t taubin_smooth_bound(uint64_t vertex_count, uint64_t triangle_count) {
 Status taubin_smooth(const Context& ctx, Mesh* mesh, const TaubinOptions& options,
                      TaubinStats* stats) {
   SPLINTCORE_ASSERT(ctx.arena != nullptr && mesh != nullptr);
-  if (!is_finite(options.lambda) || !(options.lambda > 0.0) || !(options.lambda <= 1.0)) {
-    return make_error(StatusCode::kInvalidArgument, "taubin_smooth: lambda must be in (0, 1], not ",
-                      options.lambda);
-  }
-  if (!is_finite(options.mu) || !(options.mu >= -1.0) || !(options.mu <= 0.0)) {
-    return make_error(StatusCode::kInvalidArgument, "taubin_smooth: mu must be in [-1, 0], not ",
-                      options.mu);
-  }
-  if (!is_finite(options.max_displacement) || !(options.max_displacement >= 0.0)) {
-    return make_error(StatusCode::kInvalidArgument,
-                      "taubin_smooth: max_displacement must be a finite distance >= 0 mm, not ",
-                      options.max_displacement);
-  }
-  const uint64_t nv64 = mesh->vertices.size(), nt64 = mesh->triangles.size();
-  if (nv64 > UINT32_MAX - 1 || nt64 > (uint64_t{1} << 30)) {
-    return make_error(StatusCode::kLimitExceeded, "taubin_smooth: mesh too large: ", nt64,
-                      " triangles, ", nv64, " vertices (at most 2^30 and 2^32 - 2)");
-  }
-  const uint32_t nv = static_cast<uint32_t>(nv64), nt = static_cast<uint32_t>(nt64);
-  const Triangle* tris = mesh->triangles.data();
+  SPLINTCORE_RETURN_IF_ERROR(check_taubin_input(*mesh, options));
+  const uint32_t nv = static_cast<uint32_t>(mesh->vertices.size());
+  const uint32_t nt = static_cast<uint32_t>(mesh->triangles.size());
   Vec3* verts = mesh->vertices.data();
-  for (uint32_t t = 0; t < nt; ++t) {
-    for (uint32_t k : tris[t].v) {
-      if (k >= nv) {
-        return make_error(StatusCode::kInvalidMesh, "taubin_smooth: triangle ", t,
-                          " refers to vertex ", k, " but the mesh has ", nv, " vertices")
-            .at_index(t);
-      }
-    }
-  }
-  for (uint32_t i = 0; i < nv; ++i) {
-    if (!is_finite(verts[i])) {
-      return make_error(StatusCode::kNonFinite, "taubin_smooth: vertex ", i,
-                        " has a coordinate that is NaN or infinite")
-          .at_index(i);
-    }
-  }
   TaubinStats local;
   local.volume_before = mesh_volume(*mesh);
   local.volume_after = local.volume_before;
@@ -140,55 +225,10 @@ Status taubin_smooth(const Context& ctx, Mesh* mesh, const TaubinOptions& option
 
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
-  // Undirected edge keys, sorted (the scratch goes back right after the sort).
-  const uint32_t uses = 3 * nt;
-  uint64_t* keys = arena.allocate_array<uint64_t>(uses);
-  if (keys == nullptr) return arena.exhausted_status();
-  uint32_t key_count = 0;
-  for (uint32_t t = 0; t < nt; ++t) {
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t a = tris[t].v[k], b = tris[t].v[(k + 1) % 3];
-      if (a == b) continue;  // a repeated id is no edge
-      keys[key_count++] = a < b ? (uint64_t{a} << 32) | b : (uint64_t{b} << 32) | a;
-    }
-  }
-  {
-    const Arena::Marker before_scratch = arena.mark();
-    uint64_t* scratch = arena.allocate_array<uint64_t>(uses);
-    if (scratch == nullptr) return arena.exhausted_status();
-    radix_sort(Span<uint64_t>(keys, key_count), Span<uint64_t>(scratch, key_count));
-    arena.rewind(before_scratch);
-  }
-  uint8_t* fixed = arena.allocate_array<uint8_t>(nv);
-  uint32_t* offsets = arena.allocate_array<uint32_t>(size_t{nv} + 1);
-  if (fixed == nullptr || offsets == nullptr) return arena.exhausted_status();
-  std::memset(fixed, 0, nv);
-  std::memset(offsets, 0, (size_t{nv} + 1) * sizeof(uint32_t));
-  // Distinct edges in place; boundary vertices; degrees.
-  uint32_t edges = 0;
-  for (uint32_t i = 0; i < key_count;) {
-    uint32_t j = i + 1;
-    while (j < key_count && keys[j] == keys[i]) ++j;
-    const uint32_t a = static_cast<uint32_t>(keys[i] >> 32), b = static_cast<uint32_t>(keys[i]);
-    if (j - i == 1) fixed[a] = fixed[b] = 1;
-    ++offsets[a + 1];
-    ++offsets[b + 1];
-    keys[edges++] = keys[i];
-    i = j;
-  }
-  for (uint32_t i = 0; i < nv; ++i) offsets[i + 1] += offsets[i];
-  uint32_t* neighbours = arena.allocate_array<uint32_t>(size_t{2} * edges);
-  if (neighbours == nullptr) return arena.exhausted_status();
-  // Filled in key order: each list comes out in increasing neighbour id.
-  for (uint32_t e = 0; e < edges; ++e) {
-    const uint32_t a = static_cast<uint32_t>(keys[e] >> 32), b = static_cast<uint32_t>(keys[e]);
-    neighbours[offsets[a]++] = b;
-    neighbours[offsets[b]++] = a;
-  }
-  for (uint32_t i = nv; i > 0; --i) offsets[i] = offsets[i - 1];
-  offsets[0] = 0;
-  for (uint32_t i = 0; i < nv; ++i) local.boundary_vertices += fixed[i];
-  local.edges = edges;
+  Adjacency adj;
+  SPLINTCORE_RETURN_IF_ERROR(build_adjacency(arena, mesh->triangles.data(), nt, nv, &adj));
+  for (uint32_t i = 0; i < nv; ++i) local.boundary_vertices += adj.fixed[i];
+  local.edges = adj.edges;
 
   Vec3* buffer = arena.allocate_array<Vec3>(nv);
   Vec3* original = nullptr;
@@ -202,9 +242,9 @@ Status taubin_smooth(const Context& ctx, Mesh* mesh, const TaubinOptions& option
   if (original != nullptr) std::memcpy(static_cast<void*>(original), verts, nv * sizeof(Vec3));
   std::memset(clamped, 0, blocks * sizeof(uint64_t));
 
-  StepJob job{offsets,
-              neighbours,
-              options.fix_boundary ? fixed : nullptr,
+  StepJob job{adj.offsets,
+              adj.neighbours,
+              options.fix_boundary ? adj.fixed : nullptr,
               original,
               verts,
               buffer,

@@ -47,24 +47,9 @@ struct RegionField {
   }
 };
 
-}  // namespace
-
-uint64_t reconstruct_region_bound(const uint32_t box_voxels[3], uint32_t layers,
-                                  uint64_t vertex_count, uint64_t triangle_count) {
-  VolumeGrid grid;
-  grid.spacing = Vec3{1, 1, 1};
-  grid.nx = box_voxels[0];
-  grid.ny = box_voxels[1];
-  grid.nz = box_voxels[2];
-  const uint64_t work = marching_cubes_bound(grid, layers);
-  const uint64_t mesh = marching_cubes_mesh_extra_bound(vertex_count, triangle_count);
-  uint64_t total = 0;
-  if (work == 0 || mesh == 0 || !checked_add(work, mesh, &total)) return 0;
-  return total;
-}
-
-Status reconstruct_region(const Context& ctx, const CtVolume& volume, const LabelVolume& labels,
-                          const ReconstructOptions& options, Mesh* out, ReconstructStats* stats) {
+// The checks of reconstruct_region's arguments (no memory needed).
+Status check_reconstruct_input(const CtVolume& volume, const LabelVolume& labels,
+                               const ReconstructOptions& options, const Mesh* out) {
   const uint8_t label = options.label;
   if (label == 0 || label > kMaxRegionLabel) {
     return make_error(StatusCode::kInvalidArgument, "reconstruct: label ",
@@ -84,12 +69,14 @@ Status reconstruct_region(const Context& ctx, const CtVolume& volume, const Labe
   if (out == nullptr || !out->vertices.empty() || !out->triangles.empty()) {
     return make_error(StatusCode::kInvalidArgument, "reconstruct: the output mesh must be empty");
   }
+  return Status::ok();
+}
 
-  // The region's box, in one pass over the labels.
-  const uint32_t nx = volume.nx, ny = volume.ny, nz = volume.nz;
-  uint32_t lo[3] = {nx, ny, nz};
-  uint32_t hi[3] = {0, 0, 0};
-  uint64_t count = 0;
+// The box [lo, hi] of the voxels labelled `label`, and their *count, in one pass over the
+// labels.
+Status find_region_box(const Context& ctx, const LabelVolume& labels, uint8_t label, uint32_t lo[3],
+                       uint32_t hi[3], uint64_t* count) {
+  const uint32_t nx = labels.nx, ny = labels.ny, nz = labels.nz;
   for (uint32_t k = 0; k < nz; ++k) {
     if ((k & 31u) == 0) {
       SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "reconstruct: region box", k, nz));
@@ -107,7 +94,7 @@ Status reconstruct_region(const Context& ctx, const CtVolume& volume, const Labe
         }
       }
       if (in_row == 0) continue;
-      count += in_row;
+      *count += in_row;
       if (first < lo[0]) lo[0] = first;
       if (last > hi[0]) hi[0] = last;
       if (j < lo[1]) lo[1] = j;
@@ -116,12 +103,68 @@ Status reconstruct_region(const Context& ctx, const CtVolume& volume, const Labe
       if (k > hi[2]) hi[2] = k;
     }
   }
+  return Status::ok();
+}
+
+// Into patient coordinates, then (optionally) float32: in place, vertex by vertex. Axes
+// that make a left-handed frame (slice order reversed) mirror the mesh, which would turn it
+// inside out: then every triangle's winding is reversed (its first corner kept). The axes are
+// orthonormal (the readers check), so the determinant is +-1 and its sign is never in doubt.
+Status to_patient_coordinates(const CtVolume& volume, bool to_float32, Mesh* mesh) {
+  const Vec3& ax = volume.axis_x;
+  const Vec3& ay = volume.axis_y;
+  const Vec3& az = volume.axis_z;
+  const double det = ax.x * (ay.y * az.z - ay.z * az.y) - ax.y * (ay.x * az.z - ay.z * az.x) +
+                     ax.z * (ay.x * az.y - ay.y * az.x);
+  if (det < 0.0) {
+    for (Triangle& t : mesh->triangles) {
+      const uint32_t b = t.v[1];
+      t.v[1] = t.v[2];
+      t.v[2] = b;
+    }
+  }
+  for (size_t v = 0; v < mesh->vertices.size(); ++v) {
+    Vec3 p = ct_to_patient(volume, mesh->vertices[v]);
+    if (to_float32 && !round_to_float32(&p)) {
+      return make_error(StatusCode::kNonFinite, "reconstruct: vertex ", v,
+                        " is beyond float32's range in patient coordinates")
+          .at_index(v);
+    }
+    mesh->vertices[v] = p;
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+uint64_t reconstruct_region_bound(const uint32_t box_voxels[3], uint32_t layers,
+                                  uint64_t vertex_count, uint64_t triangle_count) {
+  VolumeGrid grid;
+  grid.spacing = Vec3{1, 1, 1};
+  grid.nx = box_voxels[0];
+  grid.ny = box_voxels[1];
+  grid.nz = box_voxels[2];
+  const uint64_t work = marching_cubes_bound(grid, layers);
+  const uint64_t mesh = marching_cubes_mesh_extra_bound(vertex_count, triangle_count);
+  uint64_t total = 0;
+  if (work == 0 || mesh == 0 || !checked_add(work, mesh, &total)) return 0;
+  return total;
+}
+
+Status reconstruct_region(const Context& ctx, const CtVolume& volume, const LabelVolume& labels,
+                          const ReconstructOptions& options, Mesh* out, ReconstructStats* stats) {
+  SPLINTCORE_RETURN_IF_ERROR(check_reconstruct_input(volume, labels, options, out));
+  const uint8_t label = options.label;
+  uint32_t lo[3] = {volume.nx, volume.ny, volume.nz};
+  uint32_t hi[3] = {0, 0, 0};
+  uint64_t count = 0;
+  SPLINTCORE_RETURN_IF_ERROR(find_region_box(ctx, labels, label, lo, hi, &count));
   if (count == 0) {
     return make_error(StatusCode::kInvalidArgument, "reconstruct: region ",
                       static_cast<uint32_t>(label), " is empty (no voxel has that label)");
   }
   // One voxel of margin (the outside samples the surface interpolates to), within the volume.
-  const uint32_t n[3] = {nx, ny, nz};
+  const uint32_t n[3] = {volume.nx, volume.ny, volume.nz};
   RegionField field;
   field.volume = &volume;
   field.labels = labels.labels;
@@ -153,45 +196,16 @@ Status reconstruct_region(const Context& ctx, const CtVolume& volume, const Labe
   mo.iso = 0.0;
   mo.layers_per_tile = options.layers_per_tile;
   MarchingCubesStats ms;
-  const Arena::Marker before = ctx.arena->mark();
+  ArenaScope scope(*ctx.arena);  // on an error the arena is as it was and `out` empty
   SPLINTCORE_RETURN_IF_ERROR(marching_cubes_mesh(ctx, grid, source, mo, out, &ms));
-  {
-    Status s = report_progress(ctx, "reconstruct: patient coordinates", 0, 1);
-    if (!s.is_ok()) {
-      out->bind(ctx.arena);
-      ctx.arena->rewind(before);
-      return s;
-    }
+  Status s = report_progress(ctx, "reconstruct: patient coordinates", 0, 1);
+  if (s.is_ok()) s = to_patient_coordinates(volume, options.round_to_float32, out);
+  if (!s.is_ok()) {
+    out->bind(ctx.arena);
+    return s;
   }
-
-  // Into patient coordinates, then (optionally) float32: in place, vertex by vertex. Axes
-  // that make a left-handed frame (slice order reversed) mirror the mesh, which would turn it
-  // inside out: then every triangle's winding is reversed (its first corner kept). The axes are
-  // orthonormal (the readers check), so the determinant is +-1 and its sign is never in doubt.
-  const Vec3& ax = volume.axis_x;
-  const Vec3& ay = volume.axis_y;
-  const Vec3& az = volume.axis_z;
-  const double det = ax.x * (ay.y * az.z - ay.z * az.y) - ax.y * (ay.x * az.z - ay.z * az.x) +
-                     ax.z * (ay.x * az.y - ay.y * az.x);
-  if (det < 0.0) {
-    for (Triangle& t : out->triangles) {
-      const uint32_t b = t.v[1];
-      t.v[1] = t.v[2];
-      t.v[2] = b;
-    }
-  }
+  scope.commit();
   uint32_t flat = 0;
-  for (size_t v = 0; v < out->vertices.size(); ++v) {
-    Vec3 p = ct_to_patient(volume, out->vertices[v]);
-    if (options.round_to_float32 && !round_to_float32(&p)) {
-      out->bind(ctx.arena);
-      ctx.arena->rewind(before);
-      return make_error(StatusCode::kNonFinite, "reconstruct: vertex ", v,
-                        " is beyond float32's range in patient coordinates")
-          .at_index(v);
-    }
-    out->vertices[v] = p;
-  }
   if (options.round_to_float32 && find_flat_triangle(*out) != kNoTriangle) flat = 1;
   if (stats != nullptr) {
     stats->region_voxels = count;

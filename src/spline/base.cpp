@@ -211,11 +211,12 @@ Status make_lines_steps(const Context& ctx, Span<const Pick> picks, const Vec3& 
 Status make_lines(const Context& ctx, Span<const Pick> picks, const Vec3& occlusal_normal,
                   const char* list_name, ArenaArray<Line>* out) {
   // On an error the arena goes back to its top at entry and `out` to what it held.
-  const Arena::Marker entry = ctx.arena->mark();
+  ArenaScope scope(*ctx.arena);
   const ArenaArray<Line> saved = *out;
   Status s = make_lines_steps(ctx, picks, occlusal_normal, list_name, out);
-  if (!s.is_ok()) {
-    ctx.arena->rewind(entry);
+  if (s.is_ok()) {
+    scope.commit();
+  } else {
     *out = saved;
   }
   return s;
@@ -230,10 +231,8 @@ uint64_t splint_base_bound(uint64_t sections, uint32_t points_per_section) {
 
 namespace {
 
-// The body of build_splint_base (below), which checks `out` and undoes this on an error.
-Status build_base_steps(const Context& ctx, Span<const Line> upper, Span<const Line> lower,
-                        const BaseParams& params, Mesh* out, BaseReport* report) {
-  Arena& arena = *ctx.arena;
+// The checks of build_splint_base's arguments (no memory needed).
+Status check_base_input(Span<const Line> upper, Span<const Line> lower, const BaseParams& params) {
   const size_t n = upper.size();
   if (n != lower.size()) {
     return make_error(StatusCode::kInvalidArgument, "upper and lower lists do not pair up: ", n,
@@ -272,13 +271,40 @@ Status build_base_steps(const Context& ctx, Span<const Line> upper, Span<const L
       }
     }
   }
-  const uint32_t corner_points = radius > 0.0 ? segs + 1 : 1;
-  const uint32_t P = 4 * corner_points;
+  return Status::ok();
+}
 
-  // Sections per pick interval: enough that no curve's samples are further apart than spacing.
-  // Fills the four curves' control points and arc-length tables of interval i on the way.
-  auto interval_tables = [&](size_t i, Vec3 p[4][4], double cum[4][kArcSamples + 1],
-                             uint32_t* count) -> Status {
+// The state of one build_base_steps call (below), with one method per stage, run in this
+// order: the sections' corners, the section polygons, the ruled surfaces, the checks.
+struct BaseBuilder {
+  BaseBuilder(Span<const Line> u, Span<const Line> l, const BaseParams& p)
+      : upper(u),
+        lower(l),
+        params(p),
+        n(u.size()),
+        radius(p.corner_radius_mm),
+        segs(p.corner_segments),
+        corner_points(radius > 0.0 ? segs + 1 : 1),
+        P(4 * corner_points) {}
+
+  Span<const Line> upper, lower;
+  const BaseParams& params;
+  size_t n;                         // picks per list
+  double radius;                    // of the corner fillets
+  uint32_t segs;                    // arc segments per rounded corner
+  uint32_t corner_points;           // points per corner in a section
+  uint32_t P;                       // points per section
+  uint32_t S = 0;                   // sections
+  uint32_t* interval_of = nullptr;  // section -> pick interval
+  Vec3* corners = nullptr;          // the four line-end curves, four per section
+
+  uint64_t triangle_count() const { return 2 * uint64_t{S - 1} * P + 2 * uint64_t{P - 2}; }
+
+  // Sections per pick interval: enough that no curve's samples are further apart than
+  // spacing. Fills the four curves' control points and arc-length tables of interval i on the
+  // way.
+  Status interval_tables(size_t i, Vec3 p[4][4], double cum[4][kArcSamples + 1],
+                         uint32_t* count) const {
     double longest = 0.0;
     for (int c = 0; c < 4; ++c) {
       segment_controls(upper, lower, c, i, p[c]);
@@ -292,38 +318,30 @@ Status build_base_steps(const Context& ctx, Span<const Line> upper, Span<const L
     }
     *count = m < 1.0 ? 1u : static_cast<uint32_t>(m);
     return Status::ok();
-  };
-  auto sections_between = [&](size_t i, uint32_t* count) -> Status {
-    Vec3 p[4][4];
-    double cum[4][kArcSamples + 1];
-    return interval_tables(i, p, cum, count);
-  };
-  uint64_t sections = 1;
-  for (size_t i = 0; i + 1 < n; ++i) {
-    uint32_t m = 0;
-    SPLINTCORE_RETURN_IF_ERROR(sections_between(i, &m));
-    sections += m;
-    if (sections > kMaxSections) {
-      return make_error(StatusCode::kLimitExceeded, "more than ", kMaxSections,
-                        " sections: spacing ", params.spacing_mm, " mm is too fine");
-    }
   }
-  const uint32_t S = static_cast<uint32_t>(sections);
-  report->sections = S;
-  report->points_per_section = P;
 
-  // The outputs first, so that the temporaries above them can be dropped at the end.
-  Mesh& mesh = *out;
-  const uint64_t tri_count = 2 * uint64_t{S - 1} * P + 2 * uint64_t{P - 2};
-  if (!mesh.vertices.resize(size_t{S} * P) ||
-      !mesh.triangles.resize(static_cast<size_t>(tri_count))) {
-    return arena.exhausted_status();
+  Status count_sections() {
+    uint64_t sections = 1;
+    for (size_t i = 0; i + 1 < n; ++i) {
+      uint32_t m = 0;
+      Vec3 p[4][4];
+      double cum[4][kArcSamples + 1];
+      SPLINTCORE_RETURN_IF_ERROR(interval_tables(i, p, cum, &m));
+      sections += m;
+      if (sections > kMaxSections) {
+        return make_error(StatusCode::kLimitExceeded, "more than ", kMaxSections,
+                          " sections: spacing ", params.spacing_mm, " mm is too fine");
+      }
+    }
+    S = static_cast<uint32_t>(sections);
+    return Status::ok();
   }
-  ArenaScope temps(arena);
-  uint32_t* interval_of = arena.allocate_array<uint32_t>(S);  // section -> pick interval
-  Vec3* corners = arena.allocate_array<Vec3>(size_t{4} * S);  // the four line-end curves
-  if (interval_of == nullptr || corners == nullptr) return arena.exhausted_status();
-  {
+
+  // The four corners of every section, at matched arc-length fractions of each interval.
+  Status sample_corners(Arena& arena) {
+    interval_of = arena.allocate_array<uint32_t>(S);
+    corners = arena.allocate_array<Vec3>(size_t{4} * S);
+    if (interval_of == nullptr || corners == nullptr) return arena.exhausted_status();
     uint32_t k = 0;
     for (size_t i = 0; i + 1 < n; ++i) {
       uint32_t m = 0;
@@ -343,104 +361,115 @@ Status build_base_steps(const Context& ctx, Span<const Line> upper, Span<const L
       corners[4 * size_t{k} + static_cast<size_t>(c)] = line_end(upper, lower, c, n - 1);
     }
     interval_of[k] = static_cast<uint32_t>(n - 2);
+    return Status::ok();
   }
-  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "base", 1, 4));
 
   // Every section must turn the same way around the arch: a section whose upper and lower
   // lines, or inner and outside curves, have crossed is turned over.
-  double first_turn = 0.0;
-  for (uint32_t k = 0; k < S; ++k) {
-    const Vec3* q = corners + 4 * size_t{k};
-    const Vec3 normal = polygon_normal(q, 4);
-    const Vec3* qa = corners + 4 * size_t{k > 0 ? k - 1 : k};
-    const Vec3* qb = corners + 4 * size_t{k + 1 < S ? k + 1 : k};
-    const Vec3 tangent =
-        (qb[0] + qb[1] + qb[2] + qb[3]) * 0.25 - (qa[0] + qa[1] + qa[2] + qa[3]) * 0.25;
-    const double turn = dot(normal, tangent);
-    const double scale = length(normal) * length(tangent);
-    if (!(scale > 0.0) || !(turn > 1e-9 * scale || turn < -1e-9 * scale)) {
-      return make_error(StatusCode::kInvalidArgument, "section ", k, " between picks ",
-                        interval_of[k], " and ", interval_of[k] + 1,
-                        " is flat or lies along the arch: the upper and lower lines coincide "
-                        "or the lines run along the arch")
-          .at_index(interval_of[k]);
+  Status check_turns() const {
+    double first_turn = 0.0;
+    for (uint32_t k = 0; k < S; ++k) {
+      const Vec3* q = corners + 4 * size_t{k};
+      const Vec3 normal = polygon_normal(q, 4);
+      const Vec3* qa = corners + 4 * size_t{k > 0 ? k - 1 : k};
+      const Vec3* qb = corners + 4 * size_t{k + 1 < S ? k + 1 : k};
+      const Vec3 tangent =
+          (qb[0] + qb[1] + qb[2] + qb[3]) * 0.25 - (qa[0] + qa[1] + qa[2] + qa[3]) * 0.25;
+      const double turn = dot(normal, tangent);
+      const double scale = length(normal) * length(tangent);
+      if (!(scale > 0.0) || !(turn > 1e-9 * scale || turn < -1e-9 * scale)) {
+        return make_error(StatusCode::kInvalidArgument, "section ", k, " between picks ",
+                          interval_of[k], " and ", interval_of[k] + 1,
+                          " is flat or lies along the arch: the upper and lower lines coincide "
+                          "or the lines run along the arch")
+            .at_index(interval_of[k]);
+      }
+      if (k == 0) {
+        first_turn = turn;
+      } else if ((turn > 0.0) != (first_turn > 0.0)) {
+        return make_error(StatusCode::kInvalidArgument, "the lines fold between picks ",
+                          interval_of[k], " and ", interval_of[k] + 1,
+                          ": the section turns over (inner and outside curves, or upper and "
+                          "lower lines, cross)")
+            .at_index(interval_of[k]);
+      }
     }
-    if (k == 0) {
-      first_turn = turn;
-    } else if ((turn > 0.0) != (first_turn > 0.0)) {
-      return make_error(StatusCode::kInvalidArgument, "the lines fold between picks ",
-                        interval_of[k], " and ", interval_of[k] + 1,
-                        ": the section turns over (inner and outside curves, or upper and lower "
-                        "lines, cross)")
-          .at_index(interval_of[k]);
-    }
+    return Status::ok();
   }
 
   // Section polygons (rounded corners) into the output vertices.
-  Vec3* verts = mesh.vertices.data();
-  for (uint32_t k = 0; k < S; ++k) {
-    const Vec3* q = corners + 4 * size_t{k};
-    Vec3* sec = verts + size_t{k} * P;
-    for (int c = 0; c < 4; ++c) {
-      if (radius > 0.0) {
-        SPLINTCORE_RETURN_IF_ERROR(round_corner(q[(c + 3) % 4], q[c], q[(c + 1) % 4], radius, segs,
-                                                sec + static_cast<size_t>(c) * corner_points, k,
-                                                c));
-      } else {
-        sec[c] = q[c];
+  Status make_sections(Vec3* verts) const {
+    for (uint32_t k = 0; k < S; ++k) {
+      const Vec3* q = corners + 4 * size_t{k};
+      Vec3* sec = verts + size_t{k} * P;
+      for (int c = 0; c < 4; ++c) {
+        if (radius > 0.0) {
+          SPLINTCORE_RETURN_IF_ERROR(
+              round_corner(q[(c + 3) % 4], q[c], q[(c + 1) % 4], radius, segs,
+                           sec + static_cast<size_t>(c) * corner_points, k, c));
+        } else {
+          sec[c] = q[c];
+        }
       }
-    }
-    if (params.snap_to_float32) {
-      for (uint32_t j = 0; j < P; ++j) {
-        if (!round_to_float32(&sec[j])) {
-          return make_error(StatusCode::kLimitExceeded, "section ", k, " is beyond float32 range");
+      if (params.snap_to_float32) {
+        for (uint32_t j = 0; j < P; ++j) {
+          if (!round_to_float32(&sec[j])) {
+            return make_error(StatusCode::kLimitExceeded, "section ", k,
+                              " is beyond float32 range");
+          }
         }
       }
     }
+    return Status::ok();
   }
+
   // The caps are fans from the first point; they need convex end sections.
-  const uint32_t ends[2] = {0u, S - 1};
-  for (uint32_t k : ends) {
-    const Vec3* sec = verts + size_t{k} * P;
-    const Vec3 normal = polygon_normal(sec, P);
+  Status check_end_sections(const Vec3* verts) const {
+    const uint32_t ends[2] = {0u, S - 1};
+    for (uint32_t k : ends) {
+      const Vec3* sec = verts + size_t{k} * P;
+      const Vec3 normal = polygon_normal(sec, P);
+      for (uint32_t j = 1; j + 1 < P; ++j) {
+        if (!(dot(cross(sec[j] - sec[0], sec[j + 1] - sec[0]), normal) > 0.0)) {
+          return make_error(StatusCode::kInvalidArgument, "the end section at pick ",
+                            k == 0 ? 0 : n - 1, " is not convex: cannot close the base there")
+              .at_index(k == 0 ? 0 : n - 1);
+        }
+      }
+    }
+    return Status::ok();
+  }
+
+  // Ruled surfaces between consecutive sections, then the two caps, wound outward.
+  void stitch(Mesh* mesh) const {
+    Triangle* tris = mesh->triangles.data();
+    size_t t = 0;
+    for (uint32_t k = 0; k + 1 < S; ++k) {
+      for (uint32_t j = 0; j < P; ++j) {
+        const uint32_t a = k * P + j, b = k * P + (j + 1) % P;
+        const uint32_t c = (k + 1) * P + (j + 1) % P, d = (k + 1) * P + j;
+        tris[t++] = Triangle{{a, b, c}};
+        tris[t++] = Triangle{{a, c, d}};
+      }
+    }
+    const uint32_t last = (S - 1) * P;
     for (uint32_t j = 1; j + 1 < P; ++j) {
-      if (!(dot(cross(sec[j] - sec[0], sec[j + 1] - sec[0]), normal) > 0.0)) {
-        return make_error(StatusCode::kInvalidArgument, "the end section at pick ",
-                          k == 0 ? 0 : n - 1, " is not convex: cannot close the base there")
-            .at_index(k == 0 ? 0 : n - 1);
+      tris[t++] = Triangle{{0, j + 1, j}};
+      tris[t++] = Triangle{{last, last + j, last + j + 1}};
+    }
+    SPLINTCORE_ASSERT(t == triangle_count());
+    // Outward: the winding above depends on which way the sections turn; flip if inward.
+    if (mesh_volume(*mesh) < 0.0) {
+      for (size_t i = 0; i < t; ++i) {
+        uint32_t s = tris[i].v[1];
+        tris[i].v[1] = tris[i].v[2];
+        tris[i].v[2] = s;
       }
     }
   }
 
-  // Ruled surfaces between consecutive sections, then the two caps.
-  Triangle* tris = mesh.triangles.data();
-  size_t t = 0;
-  for (uint32_t k = 0; k + 1 < S; ++k) {
-    for (uint32_t j = 0; j < P; ++j) {
-      const uint32_t a = k * P + j, b = k * P + (j + 1) % P;
-      const uint32_t c = (k + 1) * P + (j + 1) % P, d = (k + 1) * P + j;
-      tris[t++] = Triangle{{a, b, c}};
-      tris[t++] = Triangle{{a, c, d}};
-    }
-  }
-  const uint32_t last = (S - 1) * P;
-  for (uint32_t j = 1; j + 1 < P; ++j) {
-    tris[t++] = Triangle{{0, j + 1, j}};
-    tris[t++] = Triangle{{last, last + j, last + j + 1}};
-  }
-  SPLINTCORE_ASSERT(t == tri_count);
-  // Outward: the winding above depends on which way the sections turn; flip if inward.
-  if (mesh_volume(mesh) < 0.0) {
-    for (size_t i = 0; i < t; ++i) {
-      uint32_t s = tris[i].v[1];
-      tris[i].v[1] = tris[i].v[2];
-      tris[i].v[2] = s;
-    }
-  }
-  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "base", 2, 4));
-
-  // The guarantee: a valid solid, as written, without self-intersection.
-  {
+  // The guarantee, first part: a valid solid, as written; a failure names its pick interval.
+  Status check_solid(const Context& ctx, const Mesh& mesh, BaseReport* report) const {
     double volume = 0;
     Status valid = check_closed_oriented(ctx, mesh, &volume);
     if (valid.code() == StatusCode::kArenaExhausted) return valid;
@@ -460,9 +489,11 @@ Status build_base_steps(const Context& ctx, Span<const Line> upper, Span<const L
       return s;
     }
     report->volume = volume;
+    return Status::ok();
   }
-  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "base", 3, 4));
-  if (params.check_self_intersection) {
+
+  // The guarantee, second part: no self-intersection (exact); a failure names the intervals.
+  Status check_self_intersection(const Context& ctx, const Mesh& mesh, BaseReport* report) const {
     SelfIntersectionReport si;
     SPLINTCORE_RETURN_IF_ERROR(find_self_intersections(ctx, mesh, 1, &si));
     report->self_intersection_candidates = si.candidate_pairs;
@@ -479,6 +510,38 @@ Status build_base_steps(const Context& ctx, Span<const Line> upper, Span<const L
                         "); the lines fold or the curves cross there")
           .at_index(ia);
     }
+    return Status::ok();
+  }
+};
+
+// The body of build_splint_base (below), which checks `out` and undoes this on an error.
+Status build_base_steps(const Context& ctx, Span<const Line> upper, Span<const Line> lower,
+                        const BaseParams& params, Mesh* out, BaseReport* report) {
+  Arena& arena = *ctx.arena;
+  SPLINTCORE_RETURN_IF_ERROR(check_base_input(upper, lower, params));
+  BaseBuilder b(upper, lower, params);
+  SPLINTCORE_RETURN_IF_ERROR(b.count_sections());
+  report->sections = b.S;
+  report->points_per_section = b.P;
+
+  // The outputs first, so that the temporaries above them can be dropped at the end.
+  Mesh& mesh = *out;
+  if (!mesh.vertices.resize(size_t{b.S} * b.P) ||
+      !mesh.triangles.resize(static_cast<size_t>(b.triangle_count()))) {
+    return arena.exhausted_status();
+  }
+  ArenaScope temps(arena);
+  SPLINTCORE_RETURN_IF_ERROR(b.sample_corners(arena));
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "base", 1, 4));
+  SPLINTCORE_RETURN_IF_ERROR(b.check_turns());
+  SPLINTCORE_RETURN_IF_ERROR(b.make_sections(mesh.vertices.data()));
+  SPLINTCORE_RETURN_IF_ERROR(b.check_end_sections(mesh.vertices.data()));
+  b.stitch(&mesh);
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "base", 2, 4));
+  SPLINTCORE_RETURN_IF_ERROR(b.check_solid(ctx, mesh, report));
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "base", 3, 4));
+  if (params.check_self_intersection) {
+    SPLINTCORE_RETURN_IF_ERROR(b.check_self_intersection(ctx, mesh, report));
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "base", 4, 4));
   return Status::ok();
@@ -494,11 +557,12 @@ Status build_splint_base(const Context& ctx, Span<const Line> upper, Span<const 
                          "build_splint_base: output mesh must be empty");
   }
   // On an error nothing stays: the arena back at its top at entry, `out` empty.
-  const Arena::Marker entry = ctx.arena->mark();
+  ArenaScope scope(*ctx.arena);
   const Mesh saved = *out;
   Status s = build_base_steps(ctx, upper, lower, params, out, report);
-  if (!s.is_ok()) {
-    ctx.arena->rewind(entry);
+  if (s.is_ok()) {
+    scope.commit();
+  } else {
     *out = saved;
   }
   return s;

@@ -599,9 +599,9 @@ uint32_t choose_layers(const Arena& arena, const VolumeGrid& grid, uint32_t requ
   return best;
 }
 
-Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& source,
-                 const MarchingCubesOptions& options, const MarchingCubesVisitor& visitor,
-                 uint64_t share_divisor, MarchingCubesStats* stats) {
+// The checks of a sweep's arguments (no memory needed).
+Status check_sweep_input(const VolumeGrid& grid, const LayerSource& source,
+                         const MarchingCubesOptions& options) {
   SPLINTCORE_RETURN_IF_ERROR(check_grid(grid));
   if (!is_finite(options.iso)) {
     return make_error(StatusCode::kInvalidArgument, "marching cubes: the iso value is not finite");
@@ -613,8 +613,12 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
   if (source.fill == nullptr) {
     return make_error(StatusCode::kInvalidArgument, "marching cubes: no layer source");
   }
-  SPLINTCORE_ASSERT(ctx.arena != nullptr);
-  Arena& arena = *ctx.arena;
+  return Status::ok();
+}
+
+// The least free arena a sweep can run in (one layer per slab, no id pool), or an error that
+// names it.
+Status check_free_arena(const Arena& arena, const VolumeGrid& grid) {
   uint64_t minimum = 0;
   {
     uint64_t fixed = 0, pool = 0;
@@ -633,27 +637,41 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
                       free_bytes, " are free (cap ", arena.cap(), ", in use ", arena.used(),
                       "); increase the memory cap to at least ", total, " bytes");
   }
-  const uint32_t layers = choose_layers(arena, grid, options.layers_per_tile, share_divisor);
-  uint64_t sample_bytes = 0, edge_bytes = 0;
-  if (!working_parts(grid, layers, &sample_bytes, &edge_bytes) || sample_bytes > SIZE_MAX) {
-    return make_error(StatusCode::kLimitExceeded, "marching cubes: a slab of ", layers,
-                      " layers is too large to address");
-  }
-  // Not rewound here: the mesh variant's log grows above the working set (callers rewind).
-  const uint64_t layer_floats = uint64_t{grid.nx} * grid.ny;
-  const uint64_t layer_words = bit_words(grid.nx) * grid.ny;
+  return Status::ok();
+}
+
+// The working set of a sweep. The slab's sample buffer: slot j holds sample layer
+// next_z - 1 + j (slot 0: carried from the last slab), with the layers' inside bits; the
+// rank prefixes of the three edge sets; the id pool.
+struct Slab {
+  float* samples = nullptr;
+  uint64_t* bits = nullptr;
+  uint64_t layer_floats = 0;  // samples per layer
+  uint64_t layer_words = 0;   // bit words per layer
+  uint64_t* prefix = nullptr;
+  uint64_t prefix_words = 0;  // per edge kind
+  uint32_t* pool = nullptr;
+  uint64_t pool_ids = 0;
+};
+
+// Allocates the working set: the slab (`layers` + 1 layers), the prefix buffers (zeroed) and
+// the id pool: ten ids per grid point when the budget allows (no layer can need more), else
+// what the budget leaves (a layer that needs more is a clean error naming the need).
+Status allocate_working_set(Arena& arena, const VolumeGrid& grid, uint32_t layers,
+                            uint64_t edge_bytes, uint64_t share_divisor, Slab* slab) {
+  slab->layer_floats = uint64_t{grid.nx} * grid.ny;
+  slab->layer_words = bit_words(grid.nx) * grid.ny;
   const uint64_t prefix_words = bit_words(grid.nx) * (uint64_t{grid.ny} + 1);
-  float* samples = arena.allocate_array<float>(static_cast<size_t>(layer_floats * (layers + 1)));
-  uint64_t* bits =
-      samples == nullptr
+  slab->samples =
+      arena.allocate_array<float>(static_cast<size_t>(slab->layer_floats * (layers + 1)));
+  slab->bits =
+      slab->samples == nullptr
           ? nullptr
-          : arena.allocate_array<uint64_t>(static_cast<size_t>(layer_words * (layers + 1)));
-  uint64_t* prefix = bits == nullptr
+          : arena.allocate_array<uint64_t>(static_cast<size_t>(slab->layer_words * (layers + 1)));
+  uint64_t* prefix = slab->bits == nullptr
                          ? nullptr
                          : arena.allocate_array<uint64_t>(static_cast<size_t>(prefix_words * 10));
   if (prefix == nullptr) return arena.exhausted_status();
-  // The id pool: ten per grid point when the budget allows (no layer can need more), else
-  // what the budget leaves (a layer that needs more is a clean error naming the need).
   uint64_t pool_ids = edge_bytes / 4;
   {
     const uint64_t now_free = arena.cap() > arena.used() ? arena.cap() - arena.used() : 0;
@@ -664,60 +682,97 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
   uint32_t* pool =
       pool_ids == 0 ? nullptr : arena.allocate_array<uint32_t>(static_cast<size_t>(pool_ids));
   if (pool_ids > 0 && pool == nullptr) return arena.exhausted_status();
+  for (uint64_t i = 0; i < prefix_words * 10; ++i) prefix[i] = 0;
+  slab->prefix = prefix;
+  slab->prefix_words = prefix_words;
+  slab->pool = pool;
+  slab->pool_ids = pool_ids;
+  return Status::ok();
+}
 
+// Fills slots 1 .. n of the slab with sample layers next_z .. next_z + n - 1 and classifies
+// them, with the finite check in one pass (the position only when something is wrong).
+Status fill_slab(const LayerSource& source, const VolumeGrid& grid, float threshold,
+                 uint32_t next_z, uint32_t n, const Slab& slab) {
+  const uint64_t layer_floats = slab.layer_floats;
+  float* fresh = slab.samples + layer_floats;
+  SPLINTCORE_RETURN_IF_ERROR(source.fill(
+      source.user, next_z, next_z + n, Span<float>(fresh, static_cast<size_t>(layer_floats * n))));
+  uint32_t exponent_top = 0;
+  for (uint32_t j = 1; j <= n; ++j) {
+    const uint32_t e = classify_layer(slab.samples + layer_floats * j, grid.nx, grid.ny, threshold,
+                                      slab.bits + slab.layer_words * j);
+    exponent_top = exponent_top > e ? exponent_top : e;
+  }
+  for (uint64_t i = 0; exponent_top == 0x7f800000u && i < layer_floats * n; ++i) {
+    if (!is_finite(fresh[i])) {
+      const uint64_t x = i % grid.nx, y = (i / grid.nx) % grid.ny;
+      const uint64_t z = next_z + i / layer_floats;
+      return make_error(StatusCode::kNonFinite, "marching cubes: sample (", x, ", ", y, ", ", z,
+                        ") is not finite (NaN or infinity)")
+          .at_index(z * layer_floats + i % layer_floats);
+    }
+  }
+  return Status::ok();
+}
+
+// Marches the cell layers of a filled slab (from next_z - 1, the layer below the slab's
+// first, up to its last, or the grid's last), then carries its top layer to slot 0.
+Status march_slab(Sweep& s, uint32_t next_z, uint32_t n, const Slab& slab) {
+  const int64_t nz = s.grid->nz;
+  const uint64_t layer_floats = slab.layer_floats, layer_words = slab.layer_words;
+  const int64_t first = static_cast<int64_t>(next_z) - 1;
+  const int64_t last = static_cast<int64_t>(next_z) + n == nz ? nz - 1 : first + n - 1;
+  for (int64_t cz = first; cz <= last; ++cz) {
+    const int64_t slot = cz - first;  // layer cz is in slot cz - (next_z - 1)
+    const float* lo = cz < 0 ? nullptr : slab.samples + static_cast<uint64_t>(slot) * layer_floats;
+    const float* hi =
+        cz + 1 >= nz ? nullptr : slab.samples + static_cast<uint64_t>(slot + 1) * layer_floats;
+    const uint64_t* lo_bits = slab.bits + static_cast<uint64_t>(slot) * layer_words;
+    SPLINTCORE_RETURN_IF_ERROR(march_layer(s, cz, lo, hi, lo_bits, lo_bits + layer_words));
+  }
+  std::memcpy(slab.samples, slab.samples + layer_floats * n, static_cast<size_t>(layer_floats * 4));
+  std::memcpy(slab.bits, slab.bits + layer_words * n, static_cast<size_t>(layer_words * 8));
+  return Status::ok();
+}
+
+Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& source,
+                 const MarchingCubesOptions& options, const MarchingCubesVisitor& visitor,
+                 uint64_t share_divisor, MarchingCubesStats* stats) {
+  SPLINTCORE_RETURN_IF_ERROR(check_sweep_input(grid, source, options));
+  SPLINTCORE_ASSERT(ctx.arena != nullptr);
+  Arena& arena = *ctx.arena;
+  SPLINTCORE_RETURN_IF_ERROR(check_free_arena(arena, grid));
+  const uint32_t layers = choose_layers(arena, grid, options.layers_per_tile, share_divisor);
+  uint64_t sample_bytes = 0, edge_bytes = 0;
+  if (!working_parts(grid, layers, &sample_bytes, &edge_bytes) || sample_bytes > SIZE_MAX) {
+    return make_error(StatusCode::kLimitExceeded, "marching cubes: a slab of ", layers,
+                      " layers is too large to address");
+  }
+  // Not rewound here: the mesh variant's log grows above the working set (callers rewind).
+  Slab slab;
+  SPLINTCORE_RETURN_IF_ERROR(
+      allocate_working_set(arena, grid, layers, edge_bytes, share_divisor, &slab));
   Sweep s;
   s.grid = &grid;
   s.iso = options.iso;
   s.margin = options.edge_margin;
   s.visitor = &visitor;
   s.words = bit_words(grid.nx);
-  s.plane_lo.prefix = prefix;
-  s.plane_hi.prefix = prefix + prefix_words * 3;
-  s.upward.prefix = prefix + prefix_words * 6;
-  for (uint64_t i = 0; i < prefix_words * 10; ++i) prefix[i] = 0;
-  s.pool = pool;
-  s.pool_size = pool_ids;
+  s.plane_lo.prefix = slab.prefix;
+  s.plane_hi.prefix = slab.prefix + slab.prefix_words * 3;
+  s.upward.prefix = slab.prefix + slab.prefix_words * 6;
+  s.pool = slab.pool;
+  s.pool_size = slab.pool_ids;
 
   uint32_t fill_calls = 0;
-  const int64_t nz = grid.nz;
   const float threshold = float_threshold(options.iso);
   for (uint32_t next_z = 0; next_z < grid.nz;) {
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "marching cubes", next_z, grid.nz));
     const uint32_t n = grid.nz - next_z < layers ? grid.nz - next_z : layers;
-    // Slot j of the buffer holds sample layer next_z - 1 + j (slot 0: carried from the last slab).
-    float* fresh = samples + layer_floats;
-    SPLINTCORE_RETURN_IF_ERROR(
-        source.fill(source.user, next_z, next_z + n,
-                    Span<float>(fresh, static_cast<size_t>(layer_floats * n))));
+    SPLINTCORE_RETURN_IF_ERROR(fill_slab(source, grid, threshold, next_z, n, slab));
     ++fill_calls;
-    // Classified with the finite check in one pass; the position only when something is wrong.
-    uint32_t exponent_top = 0;
-    for (uint32_t j = 1; j <= n; ++j) {
-      const uint32_t e = classify_layer(samples + layer_floats * j, grid.nx, grid.ny, threshold,
-                                        bits + layer_words * j);
-      exponent_top = exponent_top > e ? exponent_top : e;
-    }
-    for (uint64_t i = 0; exponent_top == 0x7f800000u && i < layer_floats * n; ++i) {
-      if (!is_finite(fresh[i])) {
-        const uint64_t x = i % grid.nx, y = (i / grid.nx) % grid.ny;
-        const uint64_t z = next_z + i / layer_floats;
-        return make_error(StatusCode::kNonFinite, "marching cubes: sample (", x, ", ", y, ", ", z,
-                          ") is not finite (NaN or infinity)")
-            .at_index(z * layer_floats + i % layer_floats);
-      }
-    }
-    const int64_t first = static_cast<int64_t>(next_z) - 1;
-    const int64_t last = static_cast<int64_t>(next_z) + n == nz ? nz - 1 : first + n - 1;
-    for (int64_t cz = first; cz <= last; ++cz) {
-      const int64_t slot = cz - first;  // layer cz is in slot cz - (next_z - 1)
-      const float* lo = cz < 0 ? nullptr : samples + static_cast<uint64_t>(slot) * layer_floats;
-      const float* hi =
-          cz + 1 >= nz ? nullptr : samples + static_cast<uint64_t>(slot + 1) * layer_floats;
-      const uint64_t* lo_bits = bits + static_cast<uint64_t>(slot) * layer_words;
-      SPLINTCORE_RETURN_IF_ERROR(march_layer(s, cz, lo, hi, lo_bits, lo_bits + layer_words));
-    }
-    std::memcpy(samples, samples + layer_floats * n, static_cast<size_t>(layer_floats * 4));
-    std::memcpy(bits, bits + layer_words * n, static_cast<size_t>(layer_words * 8));
+    SPLINTCORE_RETURN_IF_ERROR(march_slab(s, next_z, n, slab));
     next_z += n;
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "marching cubes", grid.nz, grid.nz));
@@ -839,7 +894,7 @@ Status marching_cubes_mesh(const Context& ctx, const VolumeGrid& grid, const Lay
                       "marching_cubes_mesh: the output mesh must be empty");
   }
   Arena& arena = *ctx.arena;
-  const Arena::Marker start = arena.mark();
+  ArenaScope scope(arena);  // on an error, or with no triangles, the arena is as it was
   // The log sits above the working set, which run_sweep allocates first: it is bound now and
   // first grows inside the sweep. Both are dropped by the rewind below; their bytes stay
   // readable (an arena never clears them) while the mesh is moved down over them.
@@ -850,15 +905,10 @@ Status marching_cubes_mesh(const Context& ctx, const VolumeGrid& grid, const Lay
   visitor.triangle = log_triangle;
   visitor.user = &log;
   MarchingCubesStats local;
-  Status st = run_sweep(ctx, grid, source, options, visitor, 4, &local);
-  if (!st.is_ok()) {
-    arena.rewind(start);
-    return st;
-  }
+  SPLINTCORE_RETURN_IF_ERROR(run_sweep(ctx, grid, source, options, visitor, 4, &local));
   SPLINTCORE_ASSERT(log.vertices == local.vertices && log.triangles == local.triangles);
   const uint64_t vertex_count = log.vertices, triangle_count = log.triangles;
   if (triangle_count == 0) {
-    arena.rewind(start);
     if (stats != nullptr) *stats = local;
     return Status::ok();
   }
@@ -866,11 +916,7 @@ Status marching_cubes_mesh(const Context& ctx, const VolumeGrid& grid, const Lay
   // the copy is above it).
   const uint32_t* words = log.words.data();
   Triangle* tris = arena.allocate_array<Triangle>(static_cast<size_t>(triangle_count));
-  if (tris == nullptr) {
-    st = arena.exhausted_status();
-    arena.rewind(start);
-    return st;
-  }
+  if (tris == nullptr) return arena.exhausted_status();
   {
     size_t at = 0;
     uint64_t seen = 0;
@@ -884,13 +930,9 @@ Status marching_cubes_mesh(const Context& ctx, const VolumeGrid& grid, const Lay
   }
   // Vertices down to where the arena's top was: each destination is at or below its source
   // (the log starts at or above it and holds more than the vertices before any record).
-  arena.rewind(start);
+  arena.rewind(scope.start());
   Vec3* verts = arena.allocate_array<Vec3>(static_cast<size_t>(vertex_count));
-  if (verts == nullptr) {
-    st = arena.exhausted_status();
-    arena.rewind(start);
-    return st;
-  }
+  if (verts == nullptr) return arena.exhausted_status();
   {
     size_t at = 0;
     uint64_t seen = 0;
@@ -905,15 +947,12 @@ Status marching_cubes_mesh(const Context& ctx, const VolumeGrid& grid, const Lay
     }
   }
   Triangle* final_tris = arena.allocate_array<Triangle>(static_cast<size_t>(triangle_count));
-  if (final_tris == nullptr) {
-    st = arena.exhausted_status();
-    arena.rewind(start);
-    return st;
-  }
+  if (final_tris == nullptr) return arena.exhausted_status();
   std::memmove(static_cast<void*>(final_tris), tris, static_cast<size_t>(triangle_count) * 12);
   out->vertices.adopt(verts, static_cast<size_t>(vertex_count), static_cast<size_t>(vertex_count));
   out->triangles.adopt(final_tris, static_cast<size_t>(triangle_count),
                        static_cast<size_t>(triangle_count));
+  scope.commit();
   if (stats != nullptr) *stats = local;
   return Status::ok();
 }
