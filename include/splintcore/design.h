@@ -10,6 +10,7 @@
 #include "splintcore/json.h"
 #include "splintcore/label.h"
 #include "splintcore/printer.h"
+#include "splintcore/remesh.h"
 #include "splintcore/segment.h"
 #include "splintcore/spline.h"
 
@@ -62,9 +63,9 @@ struct CaseFile {
   // The CT ("ct" object) the jaws given by "seed" are reconstructed from (segment.h).
   const char* ct_volume = nullptr;  // path (file or DICOM folder), relative to the case file
   HuWindow ct_window;               // [300, 4000] HU by default
-  uint8_t ct_connectivity = 6;      // 6 or 26
-  uint32_t ct_smooth = 0;           // Taubin iterations (0: none)
-  uint64_t ct_decimate = 0;         // target triangles per jaw (0: none)
+  RegionGrowOptions ct_grow;        // connectivity 6 (the default) or 26; no split plane
+  TaubinOptions ct_smooth{0};       // iterations (0: none); max_displacement: see below
+  DecimateOptions ct_decimate;      // target_triangles per jaw (0: none)
   const char* printer = "eden260";
   uint64_t memory_cap =
       0;  // bytes; 0: the tool's default (`splintcore design` sizes its arena by it)
@@ -97,11 +98,11 @@ struct CaseCtReport {
 
 // The jaws the case gives by "seed", reconstructed from `volume` (the case's "ct"): threshold
 // [ct_hu_min, ct_hu_max], competitive region growing from all seeds at once (label j + 1 for
-// jaw j), each region meshed (reconstruct_region), then ct_smooth Taubin iterations (clamped to
-// half the smallest voxel spacing) and decimation to ct_decimate triangles when asked, rounded
-// to float32 and checked closed and outward. jaws[j] (for jaws with a seed) must be empty and
-// receives the mesh; other entries are left alone. Only the meshes stay in the arena (moved
-// down over the labels and temporaries). Errors: those of the stages, prefixed with the
+// jaw j), each region meshed (reconstruct_region), then ct_smooth.iterations Taubin iterations
+// (clamped to half the smallest voxel spacing) and decimation to ct_decimate.target_triangles when
+// asked, rounded to float32 and checked closed and outward. jaws[j] (for jaws with a seed) must be
+// empty and receives the mesh; other entries are left alone. Only the meshes stay in the arena
+// (moved down over the labels and temporaries). Errors: those of the stages, prefixed with the
 // stage ("ct: region growing: ..."); kInvalidArgument (jaw count, a non-empty mesh);
 // kLimitExceeded (more than kMaxJaws jaws). On an error the arena is back where it was and the
 // reconstructed entries are empty.

@@ -338,19 +338,19 @@ Status parse_ct(const Reader& r, const JsonValue* ct, CaseFile* out) {
     if (x != 6 && x != 26) {
       return r.fail(*e, StatusCode::kInvalidArgument, "\"connectivity\" must be 6 or 26");
     }
-    out->ct_connectivity = static_cast<uint8_t>(x);
+    out->ct_grow.connectivity = x == 26 ? Connectivity::k26 : Connectivity::k6;
   }
   if (const JsonValue* e = doc.member(*ct, "smooth")) {
     SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.smooth", 0, &x));
-    out->ct_smooth = static_cast<uint32_t>(x);
-    if (static_cast<double>(out->ct_smooth) != x) {
+    out->ct_smooth.iterations = static_cast<uint32_t>(x);
+    if (static_cast<double>(out->ct_smooth.iterations) != x) {
       return r.fail(*e, StatusCode::kInvalidArgument, "\"smooth\" must be an integer");
     }
   }
   if (const JsonValue* e = doc.member(*ct, "decimate")) {
     SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.decimate", 0, &x));
-    out->ct_decimate = static_cast<uint64_t>(x);
-    if (static_cast<double>(out->ct_decimate) != x) {
+    out->ct_decimate.target_triangles = static_cast<uint64_t>(x);
+    if (static_cast<double>(out->ct_decimate.target_triangles) != x) {
       return r.fail(*e, StatusCode::kInvalidArgument, "\"decimate\" must be an integer");
     }
   }

@@ -57,23 +57,21 @@ Status reconstruct_jaw(const Context& ctx, const CaseFile& c, const CtVolume& vo
   ReconstructOptions ro;
   ro.label = static_cast<uint8_t>(j + 1);
   ro.hu_lo = c.ct_window.lo;
-  ro.round_to_float32 = c.ct_smooth == 0 && c.ct_decimate == 0;
+  ro.round_to_float32 = c.ct_smooth.iterations == 0 && c.ct_decimate.target_triangles == 0;
   Mesh mesh(&arena);
   Status s = reconstruct_region(ctx, volume, labels, ro, &mesh, &report->jaws[j]);
   if (!s.is_ok()) return stage_error(s, "reconstruct");
   *vertices_first = true;  // as the extractor leaves a mesh
-  if (c.ct_smooth > 0) {
-    TaubinOptions to;
-    to.iterations = c.ct_smooth;
-    to.max_displacement = 0.5 * h;
+  if (c.ct_smooth.iterations > 0) {
+    TaubinOptions to = c.ct_smooth;
+    to.max_displacement = 0.5 * h;  // a CT surface may not drift by more than half a voxel
     s = taubin_smooth(ctx, &mesh, to, nullptr);
     if (!s.is_ok()) return stage_error(s, "smooth");
   }
-  if (c.ct_decimate > 0 && mesh.triangles.size() > c.ct_decimate) {
+  if (c.ct_decimate.target_triangles > 0 &&
+      mesh.triangles.size() > c.ct_decimate.target_triangles) {
     Mesh fewer(&arena);
-    DecimateOptions dopt;
-    dopt.target_triangles = c.ct_decimate;
-    s = decimate_qem(ctx, mesh, dopt, &fewer, nullptr);
+    s = decimate_qem(ctx, mesh, c.ct_decimate, &fewer, nullptr);
     if (!s.is_ok()) return stage_error(s, "decimate");
     mesh = fewer;
     *vertices_first = false;  // as move_mesh_down leaves it
@@ -103,9 +101,7 @@ Status reconstruct_seeded(const Context& ctx, const CaseFile& c, const CtVolume&
   LabelVolume labels;
   Status s = threshold_window(ctx, volume, c.ct_window, &labels, &report->threshold);
   if (!s.is_ok()) return stage_error(s, "threshold");
-  RegionGrowOptions go;
-  go.connectivity = c.ct_connectivity == 26 ? Connectivity::k26 : Connectivity::k6;
-  s = grow_regions(ctx, volume, seeds, go, &labels, &report->regions);
+  s = grow_regions(ctx, volume, seeds, c.ct_grow, &labels, &report->regions);
   if (!s.is_ok()) return stage_error(s, "region growing");
   for (size_t j = 0; j < c.jaws.size(); ++j) {
     if (!c.jaws[j].has_seed) continue;

@@ -75,9 +75,9 @@ void write_parameters(JsonWriter& w, const CaseFile& c, const DesignReport& repo
   if (any_ct) {
     w.add("ct_hu_min", static_cast<int64_t>(c.ct_window.lo));
     w.add("ct_hu_max", static_cast<int64_t>(c.ct_window.hi));
-    w.add("ct_connectivity", c.ct_connectivity);
-    w.add("ct_smooth", c.ct_smooth);
-    w.add("ct_decimate", c.ct_decimate);
+    w.add("ct_connectivity", c.ct_grow.connectivity == Connectivity::k26 ? 26 : 6);
+    w.add("ct_smooth", c.ct_smooth.iterations);
+    w.add("ct_decimate", c.ct_decimate.target_triangles);
     w.begin_array("ct_size");
     for (uint32_t n : files.ct_size) w.add(nullptr, n);
     w.end_array();

@@ -280,9 +280,9 @@ TEST(CaseCoverage, CtKeys) {
   SPLINTCORE_ASSERT_OK(parse_case(Context(&t.arena), text.data(), text.size(), "case.json", &c));
   EXPECT_STREQ(c.ct_volume, "v.nrrd");
   EXPECT_EQ(c.ct_window.lo, -100);
-  EXPECT_EQ(c.ct_connectivity, 26u);
-  EXPECT_EQ(c.ct_smooth, 3u);
-  EXPECT_EQ(c.ct_decimate, 0u);
+  EXPECT_EQ(c.ct_grow.connectivity, Connectivity::k26);
+  EXPECT_EQ(c.ct_smooth.iterations, 3u);
+  EXPECT_EQ(c.ct_decimate.target_triangles, 0u);
 }
 
 TEST(CaseCoverage, OptionalPartsLeftOut) {

@@ -954,9 +954,9 @@ TEST(CaseFile, JawsFromCtTakeSeedsAndTheCtObject) {
   EXPECT_STREQ(c.ct_volume, "ct.nrrd");
   EXPECT_EQ(c.ct_window.lo, 250);
   EXPECT_EQ(c.ct_window.hi, 4000);
-  EXPECT_EQ(c.ct_connectivity, 26u);
-  EXPECT_EQ(c.ct_smooth, 5u);
-  EXPECT_EQ(c.ct_decimate, 40000u);
+  EXPECT_EQ(c.ct_grow.connectivity, Connectivity::k26);
+  EXPECT_EQ(c.ct_smooth.iterations, 5u);
+  EXPECT_EQ(c.ct_decimate.target_triangles, 40000u);
   // Errors name what is wrong, with a line.
   const std::string seed_only = "\"jaws\": [{\"role\": \"maxilla\", \"seed\": [0, 18, 13]}],\n";
   struct Bad {
