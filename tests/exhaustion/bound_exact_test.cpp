@@ -363,6 +363,11 @@ TEST(BoundTwoStep, DesignBooleanBlockoutLabel) {
   SPLINTCORE_ASSERT_OK(make_lines(sctx, pc.c.lower, pc.c.occlusal_normal, "lower", &lower));
   LabelOptions lo;
   lo.text = "CASE-27";
+  expect_two_step("build_label_mesh", "cut, \"CASE-27\"", [&](Arena& arena) {
+    Mesh out(&arena);
+    LabelStats stats;
+    return build_label_mesh(Context(&arena), cut, upper.span(), lower.span(), lo, &out, &stats);
+  });
   expect_two_step("apply_label", "cut, \"CASE-27\"", [&](Arena& arena) {
     Mesh out(&arena);
     LabelStats stats;

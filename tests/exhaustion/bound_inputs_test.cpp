@@ -260,5 +260,42 @@ TEST(BoundTwoStep, ReadCt) {
   fs::remove_all(dir, ec);
 }
 
+// The case's jaws from its CT (design.h): the two-step contract, on the CT phantom the
+// fixture case ct_phantom.json is made for (its seeds), at 1 mm, with and without the case's
+// smoothing and decimation.
+TEST(BoundTwoStep, ReconstructCaseJaws) {
+  cli::CtPhantomOptions po;
+  po.nx = 96;
+  po.ny = 96;
+  po.nz = 60;
+  po.spacing = Vec3{1.0, 1.0, 1.0};
+  po.noise_hu = 0;
+  cli::CtPhantom phantom;
+  SPLINTCORE_ASSERT_OK(phantom.init(po));
+  std::vector<int16_t> hu;
+  CtVolume volume;
+  phantom.generate(&hu, &volume);
+  TestArena storage;
+  const std::vector<uint8_t> text =
+      test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/cases/ct_phantom.json");
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse_case(Context(&storage.arena),
+                                  reinterpret_cast<const char*>(text.data()), text.size(),
+                                  "ct_phantom.json", &c));
+  for (int variant = 0; variant < 2; ++variant) {
+    CaseFile cv = c;
+    cv.ct_smooth.iterations = variant == 0 ? 0 : 3;
+    cv.ct_decimate.target_triangles = variant == 0 ? 0 : 4000;
+    expect_two_step("reconstruct_case_jaws",
+                    variant == 0 ? "CT phantom 1 mm" : "CT phantom 1 mm, smoothed, decimated",
+                    [&](Arena& arena) {
+                      Mesh jaws[2] = {Mesh(&arena), Mesh(&arena)};
+                      CaseCtReport report;
+                      return reconstruct_case_jaws(Context(&arena), cv, volume, Span<Mesh>(jaws, 2),
+                                                   &report);
+                    });
+  }
+}
+
 }  // namespace
 }  // namespace splintcore
