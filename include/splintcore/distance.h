@@ -103,6 +103,9 @@ struct DistanceIndex {
   Span<const uint32_t> vertex_start;  // vertex count + 1
   Span<const uint32_t> vertex_uses;   // 3 per triangle
   bool closed_manifold = false;       // every edge has exactly two consistently oriented uses
+  // Inner nodes on the longest path from the root to a leaf (the root counts: 1 when all its
+  // children are leaves); what sizes the stacks of traversals that descend two trees at once.
+  uint32_t depth = 0;
 };
 
 constexpr uint32_t kNoNeighbor = ~uint32_t{0};

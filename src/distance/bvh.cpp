@@ -287,6 +287,7 @@ struct IndexBuild {
   BvhDipole* dipoles = nullptr;
   BvhObb* obbs = nullptr;
   uint32_t node_count = 1;
+  uint32_t depth = 0;
   bool closed_manifold = false;
 
   IndexBuild(Arena& a, const Mesh& m, const DistanceIndexOptions& o)
@@ -449,13 +450,15 @@ struct IndexBuild {
   Status build_topology() {
     struct Range {
       uint32_t node, first, last;  // leaves [first, last]
+      uint32_t depth;              // of the node: the root is 1
     };
     const float inf = HUGE_VALF;
     Range stack[3 * kMaxDepth + 4];
     uint32_t top = 0;
-    stack[top++] = Range{0, 0, leaves - 1};
+    stack[top++] = Range{0, 0, leaves - 1, 1};
     while (top > 0) {
       const Range r = stack[--top];
+      if (r.depth > depth) depth = r.depth;
       uint32_t first[4] = {r.first, 0, 0, 0}, last[4] = {r.last, 0, 0, 0};
       const uint32_t parts = split_four(first, last);
       BvhNode& w = nodes[r.node];
@@ -479,7 +482,7 @@ struct IndexBuild {
           return Status::error(StatusCode::kInternal, "distance index: hierarchy too deep");
         }
         w.child[k] = node_count;
-        stack[top++] = Range{node_count++, first[k], last[k]};
+        stack[top++] = Range{node_count++, first[k], last[k], r.depth + 1};
       }
     }
     return Status::ok();
@@ -785,6 +788,7 @@ struct IndexBuild {
     out->vertex_start = Span<const uint32_t>(start, nv + 1);
     out->vertex_uses = Span<const uint32_t>(vuses, 3 * nt);
     out->closed_manifold = closed_manifold;
+    out->depth = depth;
   }
 };
 
