@@ -138,6 +138,15 @@ bool closest_point(const DistanceIndex& index, const Vec3& q, ClosestPoint* out)
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
                                Feature* feature = nullptr, uint8_t* index = nullptr);
 
+// The distance between the closed triangles a0a1a2 and b0b1b2, with a closest pair of points
+// (pa on the first, pb on the second; either may be null). 0, with a common point in both,
+// when they meet: decided exactly by triangles_intersect (geometry.h) and, for a degenerate
+// triangle, by segment_intersects_triangle on its edges. Otherwise the least of the six
+// vertex-triangle distances (closest_point_on_triangle) and the nine edge-edge distances
+// (Ericson 5.1.9), the first of equal ones in that order; about 1e-15 relative.
+double triangle_pair_distance(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0,
+                              const Vec3& b1, const Vec3& b2, Vec3* pa, Vec3* pb);
+
 // Generalised winding number of the mesh at q: 1 inside a closed outward mesh, 0 outside,
 // fractional near holes. `beta` >= 1 is the far-field accuracy (Barill et al.): a node is
 // replaced by its dipole when its distance exceeds beta times its radius, and a leaf by the
@@ -191,6 +200,39 @@ Status batch_closest_points(const Context& ctx, const DistanceIndex& index,
                             Span<const Vec3> queries, Span<ClosestPoint> results);
 Status batch_signed_distances(const Context& ctx, const DistanceIndex& index,
                               Span<const Vec3> queries, SignMethod method, Span<double> results);
+
+// ---------------------------------------------------------------------------------------------
+// The closest pair between two meshes, the second moved by a translation: the bite opening of
+// the automatic outline (conservative advancement: the mandible moves until the gap is X) and
+// hinge-axis autorotation call it many times on the same two indexes.
+
+// The closest pair of points between mesh A and mesh B moved by `offset_b` (B's points are
+// p + offset_b, rounded as such).
+struct MeshPairDistance {
+  double distance = 0;  // +infinity when no pair lies within max_distance (or a mesh is empty)
+  Vec3 point_a{};       // on triangle_a
+  Vec3 point_b{};       // on triangle_b, in B's moved position
+  uint32_t triangle_a = 0, triangle_b = 0;
+  bool intersecting = false;  // the two triangles meet (exactly): distance 0
+};
+
+// Arena bytes mesh_pair_distance() takes (its traversal stack, returned before it does):
+// 384 (15 (a.depth + b.depth) + 1) plus alignment, a few tens of kilobytes.
+uint64_t mesh_pair_distance_bound(const DistanceIndex& a, const DistanceIndex& b);
+
+// The least triangle_pair_distance() between a triangle of A and one of B moved by offset_b:
+// 0 when the surfaces meet (exactly, triangles_intersect on the moved triangles; the meshes
+// may interpenetrate). A dual traversal of the two 4-wide hierarchies, B's float boxes shifted
+// in double, pruning a pair of boxes only when its distance exceeds the best so far (by a
+// margin that covers rounding), so every triangle pair that could tie is examined and the
+// result is the same bits whatever the trees' shapes (leaf size, oriented boxes) and order:
+// the least (squared distance, triangle_a, triangle_b). Pairs with a squared distance above
+// max_distance^2 are not reported (+infinity: the true minimum). Heavily interpenetrating
+// meshes are slow (every pair of touching boxes is examined for the smallest meeting pair).
+// Errors: kInvalidArgument (offset not finite, max_distance negative or not a number),
+// kArenaExhausted. An empty mesh gives distance +infinity and OK.
+Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
+                          const Vec3& offset_b, double max_distance, MeshPairDistance* out);
 
 // ---------------------------------------------------------------------------------------------
 // Narrow-band signed distance volume, sampled slab by slab for the tiled marching cubes.

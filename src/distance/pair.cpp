@@ -1,0 +1,409 @@
+// The closest pair between two triangle meshes, the second translated: a simultaneous descent
+// of the two distance indexes' 4-wide hierarchies with box-box distance bounds (Larsen,
+// Gottschalk, Lin and Manocha, "Fast distance queries with rectangular swept sphere volumes",
+// ICRA 2000, section 4), and the triangle-triangle distance as the least of the vertex-face and
+// edge-edge distances (Ericson, "Real-Time Collision Detection", 2005, 5.1.5 and 5.1.9), with
+// meeting triangles decided exactly (Shewchuk's orient3d, geometry.h).
+#include <cmath>
+
+#include "splintcore/distance.h"
+
+namespace splintcore {
+
+namespace {
+
+inline double clamp01(double t) { return t < 0 ? 0 : (t > 1 ? 1 : t); }
+
+// p0 + (p1 - p0) s, with the endpoints themselves at s = 0 and 1 (no rounding there).
+inline Vec3 along(const Vec3& p0, const Vec3& p1, const Vec3& d, double s) {
+  return s == 0 ? p0 : (s == 1 ? p1 : p0 + d * s);
+}
+
+// Closest points of the closed segments p0p1 and q0q1 (Ericson 5.1.9): the squared distance.
+// Parallel segments (denominator 0) start from s = 0 and clamp from there, which reaches a
+// closest pair; nearly parallel ones lose accuracy in s only along a direction in which the
+// distance barely changes (the error in the squared distance is of order eps^2 / sin^2).
+double segment_closest(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, Vec3* cp,
+                       Vec3* cq) {
+  const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+  const double a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r);
+  double s = 0, t = 0;
+  if (a > 0 && e > 0) {
+    const double b = dot(d1, d2), c = dot(d1, r);
+    const double denom = a * e - b * b;
+    s = denom > 0 ? clamp01((b * f - c * e) / denom) : 0.0;
+    t = (b * s + f) / e;
+    if (t < 0) {
+      t = 0;
+      s = clamp01(-c / a);
+    } else if (t > 1) {
+      t = 1;
+      s = clamp01((b - c) / a);
+    }
+  } else if (a > 0) {
+    s = clamp01(-dot(d1, r) / a);
+  } else if (e > 0) {
+    t = clamp01(f / e);
+  }
+  *cp = along(p0, p1, d1, s);
+  *cq = along(q0, q1, d2, t);
+  return length_squared(*cp - *cq);
+}
+
+// The squared distance of two triangles that do not meet, and a closest pair: the least of the
+// six vertex-triangle and nine edge-edge distances, the first of equal ones in that order.
+double separated_pair_d2(const Vec3 a[3], const Vec3 b[3], Vec3* pa, Vec3* pb) {
+  double best = HUGE_VAL;
+  const auto keep = [&](double d2, const Vec3& x, const Vec3& y) {
+    if (d2 < best) {
+      best = d2;
+      *pa = x;
+      *pb = y;
+    }
+  };
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 q = closest_point_on_triangle(a[i], b[0], b[1], b[2]);
+    keep(length_squared(a[i] - q), a[i], q);
+  }
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 q = closest_point_on_triangle(b[i], a[0], a[1], a[2]);
+    keep(length_squared(q - b[i]), q, b[i]);
+  }
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      Vec3 x, y;
+      const double d2 = segment_closest(a[i], a[(i + 1) % 3], b[j], b[(j + 1) % 3], &x, &y);
+      keep(d2, x, y);
+    }
+  }
+  return best;
+}
+
+// Does an edge of the degenerate (collinear) triangle d meet the triangle t? (A point-like
+// edge is tested as a point.)
+bool degenerate_meets(const Vec3 d[3], const Vec3 t[3]) {
+  for (int i = 0; i < 3; ++i) {
+    if (segment_intersects_triangle(d[i], d[(i + 1) % 3], t[0], t[1], t[2])) return true;
+  }
+  return false;
+}
+
+// Do the closed triangles meet? Exact: triangles_intersect, which leaves degenerate triangles
+// to its caller; one degenerate triangle meets the other where one of its edges does. (Two
+// degenerate ones are left to their computed distance.)
+bool triangles_meet(const Vec3 a[3], const Vec3 b[3]) {
+  if (triangles_intersect(a[0], a[1], a[2], b[0], b[1], b[2])) return true;
+  const bool da = collinear3d(a[0], a[1], a[2]), db = collinear3d(b[0], b[1], b[2]);
+  if (da == db) return false;
+  return da ? degenerate_meets(a, b) : degenerate_meets(b, a);
+}
+
+// Where the segment pq crosses the triangle t's plane, when it meets t and is not in its plane.
+bool edge_crossing(const Vec3& p, const Vec3& q, const Vec3 t[3], Vec3* x) {
+  if (!segment_intersects_triangle(p, q, t[0], t[1], t[2])) return false;
+  const double op = orient3d(t[0], t[1], t[2], p), oq = orient3d(t[0], t[1], t[2], q);
+  if (op == 0 && oq == 0) return false;
+  // op and oq do not have the same strict sign: the segment meets the plane.
+  *x = along(p, q, q - p, clamp01(op / (op - oq)));
+  return true;
+}
+
+// A point of meeting triangles a and b (to rounding): where an edge of one crosses the other,
+// or for coplanar triangles the closest pair's point on a (a vertex inside the other or two
+// crossing edges: distance 0 to rounding).
+Vec3 common_point(const Vec3 a[3], const Vec3 b[3]) {
+  Vec3 x;
+  for (int i = 0; i < 3; ++i) {
+    if (edge_crossing(a[i], a[(i + 1) % 3], b, &x)) return x;
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (edge_crossing(b[i], b[(i + 1) % 3], a, &x)) return x;
+  }
+  Vec3 y;
+  (void)separated_pair_d2(a, b, &x, &y);
+  return x;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The traversal.
+
+constexpr uint8_t kRootSlot = 4;  // an item that is the whole root node
+
+// A pair of items to examine: item = child `slot` of node `node` (or the root node), a leaf
+// or an inner node of its tree. lb2: the squared distance of their boxes, as computed.
+struct PairEntry {
+  uint32_t node_a, node_b;
+  uint8_t slot_a, slot_b;
+  double lb2;
+};
+
+struct TriangleBox {
+  Vec3 p[3];
+  Vec3 lo, hi;
+};
+
+inline void load_triangle(const Mesh& mesh, uint32_t t, const Vec3& shift, TriangleBox* out) {
+  const Triangle& tri = mesh.triangles[t];
+  for (int k = 0; k < 3; ++k) out->p[k] = mesh.vertices[tri.v[k]] + shift;
+  out->lo = min_vec(min_vec(out->p[0], out->p[1]), out->p[2]);
+  out->hi = max_vec(max_vec(out->p[0], out->p[1]), out->p[2]);
+}
+
+// Squared distance between the boxes [alo, ahi] and [blo, bhi] as computed (the caller's
+// margin covers the rounding).
+inline double box_gap2(const double alo[3], const double ahi[3], const double blo[3],
+                       const double bhi[3]) {
+  double sum = 0;
+  for (int i = 0; i < 3; ++i) {
+    const double g = blo[i] > ahi[i] ? blo[i] - ahi[i] : (alo[i] > bhi[i] ? alo[i] - bhi[i] : 0);
+    sum += g * g;
+  }
+  return sum;
+}
+
+struct PairSearch {
+  const DistanceIndex* index[2] = {nullptr, nullptr};
+  Vec3 shift[2];
+  PairEntry* stack = nullptr;
+  uint64_t top = 0, capacity = 0;
+  // The best pair so far by (best2, triangle a, triangle b); before any, best2 is the limit.
+  double best2 = HUGE_VAL;
+  bool found = false, meet = false;
+  uint32_t best_a = 0, best_b = 0;
+  double slack = 0;          // absolute rounding margin (mm)
+  double reach2 = HUGE_VAL;  // boxes farther than this (squared, as computed) are pruned
+
+  // reach2 from best2: a pair of boxes whose computed distance is at most reach may hold a
+  // pair whose computed distance is at most best. Box gaps round by a few ulps; a triangle
+  // pair's computed distance is that of two points within rounding of the triangles (off by a
+  // few ulps of the coordinates): 2^-19 relative and 2^-30 (|x|_max + 1) absolute cover both
+  // with a wide berth, and prune nothing that matters.
+  void update_reach() {
+    if (!(best2 < HUGE_VAL)) {
+      reach2 = HUGE_VAL;
+      return;
+    }
+    const double r = (std::sqrt(best2) + slack) * (1.0 + 0x1p-19);
+    reach2 = r * r;
+  }
+
+  // The box of an item (not the root) in double, shifted for B.
+  void item_box(int side, uint32_t node, uint8_t slot, double lo[3], double hi[3]) const {
+    const BvhNode& n = index[side]->nodes[node];
+    for (int i = 0; i < 3; ++i) {
+      lo[i] = static_cast<double>(n.lo[i][slot]) + shift[side][i];
+      hi[i] = static_cast<double>(n.hi[i][slot]) + shift[side][i];
+    }
+  }
+
+  bool is_leaf(int side, uint32_t node, uint8_t slot) const {
+    return slot != kRootSlot && index[side]->nodes[node].count[slot] != 0;
+  }
+
+  void consider(uint32_t ta, uint32_t tb, const TriangleBox& x, const TriangleBox& y);
+  void leaf_pair(const PairEntry& e);
+  bool expand(const PairEntry& e);
+};
+
+inline bool pair_less(uint32_t a0, uint32_t b0, uint32_t a1, uint32_t b1) {
+  return a0 < a1 || (a0 == a1 && b0 < b1);
+}
+
+// Triangle ta of A against tb of B (moved), boxes within reach.
+void PairSearch::consider(uint32_t ta, uint32_t tb, const TriangleBox& x, const TriangleBox& y) {
+  const bool smaller = !found || pair_less(ta, tb, best_a, best_b);
+  // Meeting is worth testing only if (0, ta, tb) would win, and possible only if the boxes
+  // overlap (exactly: these are the moved coordinates themselves).
+  if ((best2 > 0 || smaller) && x.lo.x <= y.hi.x && y.lo.x <= x.hi.x && x.lo.y <= y.hi.y &&
+      y.lo.y <= x.hi.y && x.lo.z <= y.hi.z && y.lo.z <= x.hi.z && triangles_meet(x.p, y.p)) {
+    best2 = 0;
+    found = meet = true;
+    best_a = ta;
+    best_b = tb;
+    update_reach();
+    return;
+  }
+  Vec3 pa, pb;
+  const double d2 = separated_pair_d2(x.p, y.p, &pa, &pb);
+  if (d2 < best2 || (d2 == best2 && smaller)) {
+    best2 = d2;
+    found = true;
+    meet = false;
+    best_a = ta;
+    best_b = tb;
+    update_reach();
+  }
+}
+
+// Every triangle pair of two leaves whose boxes are within reach.
+void PairSearch::leaf_pair(const PairEntry& e) {
+  const BvhNode& na = index[0]->nodes[e.node_a];
+  const BvhNode& nb = index[1]->nodes[e.node_b];
+  const uint32_t a_first = na.child[e.slot_a], a_count = na.count[e.slot_a];
+  const uint32_t b_first = nb.child[e.slot_b], b_count = nb.count[e.slot_b];
+  TriangleBox bs[16];
+  for (uint32_t j = 0; j < b_count; ++j) {
+    load_triangle(*index[1]->mesh, index[1]->order[b_first + j], shift[1], &bs[j]);
+  }
+  for (uint32_t i = 0; i < a_count; ++i) {
+    const uint32_t ta = index[0]->order[a_first + i];
+    TriangleBox x;
+    load_triangle(*index[0]->mesh, ta, shift[0], &x);
+    for (uint32_t j = 0; j < b_count; ++j) {
+      const double alo[3] = {x.lo.x, x.lo.y, x.lo.z}, ahi[3] = {x.hi.x, x.hi.y, x.hi.z};
+      const double blo[3] = {bs[j].lo.x, bs[j].lo.y, bs[j].lo.z};
+      const double bhi[3] = {bs[j].hi.x, bs[j].hi.y, bs[j].hi.z};
+      if (box_gap2(alo, ahi, blo, bhi) > reach2) continue;
+      consider(ta, index[1]->order[b_first + j], x, bs[j]);
+    }
+  }
+}
+
+// Replaces an entry with at least one inner item by the pairs of its items' children (an
+// inner item stands for its node's children, a leaf for itself) within reach, the nearest on
+// top. False when the stack is full (a depth field that does not match the tree).
+bool PairSearch::expand(const PairEntry& e) {
+  uint32_t nodes[2][4];
+  uint8_t slots[2][4];
+  uint32_t counts[2] = {0, 0};
+  const uint32_t parent[2] = {e.node_a, e.node_b};
+  const uint8_t slot[2] = {e.slot_a, e.slot_b};
+  for (int s = 0; s < 2; ++s) {
+    if (is_leaf(s, parent[s], slot[s])) {
+      nodes[s][0] = parent[s];
+      slots[s][0] = slot[s];
+      counts[s] = 1;
+      continue;
+    }
+    const uint32_t n = slot[s] == kRootSlot ? 0 : index[s]->nodes[parent[s]].child[slot[s]];
+    for (uint8_t k = 0; k < 4; ++k) {
+      if (index[s]->nodes[n].child[k] == kNoChild) continue;
+      nodes[s][counts[s]] = n;
+      slots[s][counts[s]++] = k;
+    }
+  }
+  PairEntry found_pairs[16];
+  uint32_t m = 0;
+  double blo[4][3], bhi[4][3];
+  for (uint32_t j = 0; j < counts[1]; ++j) item_box(1, nodes[1][j], slots[1][j], blo[j], bhi[j]);
+  for (uint32_t i = 0; i < counts[0]; ++i) {
+    double alo[3], ahi[3];
+    item_box(0, nodes[0][i], slots[0][i], alo, ahi);
+    for (uint32_t j = 0; j < counts[1]; ++j) {
+      const double lb2 = box_gap2(alo, ahi, blo[j], bhi[j]);
+      if (lb2 > reach2) continue;
+      // Insertion by decreasing distance: the nearest pair is pushed last, popped first.
+      uint32_t at = m++;
+      while (at > 0 && found_pairs[at - 1].lb2 < lb2) {
+        found_pairs[at] = found_pairs[at - 1];
+        --at;
+      }
+      found_pairs[at] = PairEntry{nodes[0][i], nodes[1][j], slots[0][i], slots[1][j], lb2};
+    }
+  }
+  if (top + m > capacity) return false;
+  for (uint32_t k = 0; k < m; ++k) stack[top++] = found_pairs[k];
+  return true;
+}
+
+inline uint64_t stack_entries(const DistanceIndex& a, const DistanceIndex& b) {
+  // Each expansion pops one pair and pushes at most 16, and goes one level down in at least one
+  // tree: a chain of expansions is at most a.depth + b.depth long.
+  return 15 * (uint64_t{a.depth} + b.depth) + 1;
+}
+
+// The largest coordinate magnitude of a tree's root boxes, shifted.
+double root_magnitude(const DistanceIndex& index, const Vec3& shift) {
+  const BvhNode& root = index.nodes[0];
+  double m = 0;
+  for (int k = 0; k < 4; ++k) {
+    if (root.child[k] == kNoChild) continue;
+    for (int i = 0; i < 3; ++i) {
+      const double lo = std::fabs(static_cast<double>(root.lo[i][k]) + shift[i]);
+      const double hi = std::fabs(static_cast<double>(root.hi[i][k]) + shift[i]);
+      m = lo > m ? lo : m;
+      m = hi > m ? hi : m;
+    }
+  }
+  return m;
+}
+
+// The closest pair's points, recomputed from its two triangles as triangle_pair_distance()
+// does (the same bits).
+void finish(const PairSearch& s, MeshPairDistance* out) {
+  TriangleBox x, y;
+  load_triangle(*s.index[0]->mesh, s.best_a, s.shift[0], &x);
+  load_triangle(*s.index[1]->mesh, s.best_b, s.shift[1], &y);
+  out->triangle_a = s.best_a;
+  out->triangle_b = s.best_b;
+  out->intersecting = s.meet;
+  if (s.meet) {
+    out->distance = 0;
+    out->point_a = out->point_b = common_point(x.p, y.p);
+    return;
+  }
+  (void)separated_pair_d2(x.p, y.p, &out->point_a, &out->point_b);
+  out->distance = std::sqrt(s.best2);
+}
+
+}  // namespace
+
+double triangle_pair_distance(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0,
+                              const Vec3& b1, const Vec3& b2, Vec3* pa, Vec3* pb) {
+  const Vec3 a[3] = {a0, a1, a2}, b[3] = {b0, b1, b2};
+  Vec3 x, y;
+  double d = 0;
+  if (triangles_meet(a, b)) {
+    x = y = common_point(a, b);
+  } else {
+    d = std::sqrt(separated_pair_d2(a, b, &x, &y));
+  }
+  if (pa != nullptr) *pa = x;
+  if (pb != nullptr) *pb = y;
+  return d;
+}
+
+uint64_t mesh_pair_distance_bound(const DistanceIndex& a, const DistanceIndex& b) {
+  return arena_array_bound<PairEntry>(stack_entries(a, b));
+}
+
+Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
+                          const Vec3& offset_b, double max_distance, MeshPairDistance* out) {
+  *out = MeshPairDistance{};
+  out->distance = HUGE_VAL;
+  if (!is_finite(offset_b)) {
+    return Status::error(StatusCode::kInvalidArgument, "mesh pair distance: offset not finite");
+  }
+  if (!(max_distance >= 0)) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "mesh pair distance: max_distance must be >= 0 (+inf for no limit)");
+  }
+  if (a.mesh->triangles.size() == 0 || b.mesh->triangles.size() == 0) return Status::ok();
+  ArenaScope scope(*ctx.arena);
+  PairSearch s;
+  s.capacity = stack_entries(a, b);
+  s.stack = ctx.arena->allocate_array<PairEntry>(s.capacity);
+  if (s.stack == nullptr) return ctx.arena->exhausted_status();
+  s.index[0] = &a;
+  s.index[1] = &b;
+  s.shift[1] = offset_b;
+  const double ma = root_magnitude(a, s.shift[0]), mb = root_magnitude(b, s.shift[1]);
+  s.slack = ((ma > mb ? ma : mb) + 1.0) * 0x1p-30;
+  s.best2 = max_distance * max_distance;
+  s.update_reach();
+  s.stack[s.top++] = PairEntry{0, 0, kRootSlot, kRootSlot, 0.0};
+  while (s.top > 0) {
+    const PairEntry e = s.stack[--s.top];
+    if (e.lb2 > s.reach2) continue;
+    if (s.is_leaf(0, e.node_a, e.slot_a) && s.is_leaf(1, e.node_b, e.slot_b)) {
+      s.leaf_pair(e);
+    } else if (!s.expand(e)) {
+      return Status::error(StatusCode::kInternal,
+                           "mesh pair distance: the index's depth does not match its tree");
+    }
+  }
+  if (s.found) finish(s, out);
+  return Status::ok();
+}
+
+}  // namespace splintcore
