@@ -334,6 +334,86 @@ void bench_distance_sizes(Harness& h, Arena& arena) {
   }
 }
 
+// The closest pair between the upper and the lower jaw at a few bite openings (the mandible
+// moved down by `gap` mm): one mesh_pair_distance() call per measurement, on the phantom jaws
+// (87 k triangles each) and on the real dentition's two arches when present.
+void bench_pair_jaws(Harness& h, Arena& arena, const char* label, const Mesh& upper,
+                     const Mesh& lower) {
+  const Arena::Marker m = arena.mark();
+  const Context ctx(&arena);
+  DistanceIndex iu, il;
+  Status s = build_distance_index(ctx, upper, DistanceIndexOptions{}, &iu);
+  if (s.is_ok()) s = build_distance_index(ctx, lower, DistanceIndexOptions{}, &il);
+  if (!s.is_ok()) {
+    cli::print_error(s);
+    h.failed = true;
+    arena.rewind(m);
+    return;
+  }
+  for (double gap : {0.5, 2.0, 5.0}) {
+    char name[96];
+    std::snprintf(name, sizeof(name), "mesh_pair_distance%s_open%.1f", label, gap);
+    MeshPairDistance r;
+    h.measure(name, upper.triangles.size() + lower.triangles.size(), arena, [&](Arena& a) {
+      return mesh_pair_distance(Context(&a), iu, il, Vec3{0, 0, -gap}, HUGE_VAL, &r);
+    });
+    std::printf("# %s: distance %.6f mm (triangles %u, %u)%s\n", name, r.distance, r.triangle_a,
+                r.triangle_b, r.intersecting ? " intersecting" : "");
+  }
+  arena.rewind(m);
+}
+
+void bench_mesh_pair_distance(Harness& h, Arena& arena, const std::string& realdata) {
+  if (!h.wanted("mesh_pair_distance")) return;
+  const Arena::Marker m = arena.mark();
+  Mesh jaws[2];
+  for (int j = 0; j < 2; ++j) {
+    phantom::JawMesh jm;
+    phantom::PhantomOptions po;
+    po.target_triangles = 87000;
+    Status s =
+        phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &jm);
+    jaws[j].bind(&arena);
+    if (s.is_ok()) s = phantom::to_mesh(jm, &jaws[j]);
+    if (!s.is_ok()) {
+      cli::print_error(s);
+      h.failed = true;
+      arena.rewind(m);
+      return;
+    }
+  }
+  bench_pair_jaws(h, arena, "_phantom", jaws[0], jaws[1]);
+  arena.rewind(m);
+  realcase::RealCase rc;
+  std::string error;
+  if (!realcase::load(realdata, 0.0, 1.5, 6.0, &rc, &error)) {
+    std::printf("# realdata not found (%s): mesh_pair_distance_realdata skipped\n", error.c_str());
+    return;
+  }
+  for (int j = 0; j < 2; ++j) {
+    jaws[j] = Mesh();
+    jaws[j].bind(&arena);
+    for (const realcase::Tooth& t : rc.teeth) {
+      if ((t.number <= 16) != (j == 0)) continue;
+      const uint32_t base = static_cast<uint32_t>(jaws[j].vertices.size());
+      bool ok = true;
+      for (const Vec3& v : t.vertices) ok = ok && jaws[j].vertices.push_back(v);
+      for (const Triangle& tr : t.triangles) {
+        ok = ok && jaws[j].triangles.push_back(
+                       Triangle{{tr.v[0] + base, tr.v[1] + base, tr.v[2] + base}});
+      }
+      if (!ok) {
+        cli::print_error(arena.exhausted_status());
+        h.failed = true;
+        arena.rewind(m);
+        return;
+      }
+    }
+  }
+  bench_pair_jaws(h, arena, "_realdata", jaws[0], jaws[1]);
+  arena.rewind(m);
+}
+
 // Stage times from the progress callback: the time from one stage's first report to the
 // next stage's, summed over the runs (printed per run).
 struct StageClock {
@@ -988,6 +1068,7 @@ int run(int argc, char** argv) {
     bench_boolean_phantom(h, arena, fixtures);
     bench_boolean_realdata(h, arena, realdata);
     bench_distance_sizes(h, arena);
+    bench_mesh_pair_distance(h, arena, realdata);
     bench_remesh(h, arena);
     bench_ct_reconstruct(h, arena);
     bench_marching_cubes(h, arena);
