@@ -9,6 +9,7 @@
 #include "splintcore/geometry.h"
 #include "splintcore/json.h"
 #include "splintcore/label.h"
+#include "splintcore/outline.h"
 #include "splintcore/printer.h"
 #include "splintcore/remesh.h"
 #include "splintcore/segment.h"
@@ -38,6 +39,12 @@ struct CaseFile {
   BaseParams base;
   Span<const Pick> upper;
   Span<const Pick> lower;
+  // The automatic outline ("base": {"auto": {...}} instead of "upper" and "lower"): design
+  // computes the picks, the occlusal normal, the bite opening (a move of the mandible composed
+  // after its transform) and, unless the case gives one, the insertion direction (outline.h,
+  // resolve_case_outline).
+  bool has_auto_outline = false;
+  OutlineOptions outline;
   // Later stages.
   Vec3 insertion_direction{0, 0, 1};
   bool has_insertion_direction = false;
@@ -136,6 +143,25 @@ void case_number_range(const CaseNumber& n, double voxel, double* lo, double* hi
 uint64_t case_base_bound(const CaseFile& c, uint64_t sections, uint32_t points_per_section);
 Status build_case_base(const Context& ctx, const CaseFile& c, Mesh* out, BaseReport* report);
 
+// The automatic outline of a case with "base": {"auto": ...}: the maxilla and the mandible
+// (exactly one of each) moved by their transforms and rounded to float32 as design_splint
+// moves them, then compute_outline(). *resolved is the case with everything the outline
+// decided written in: the picks, the occlusal normal, the mandible's transform composed with
+// the bite opening's move, the insertion direction (the occlusal normal, unless the case gives
+// one); has_auto_outline is false in it, so designing it gives the same splint. `outline`
+// receives the report and the arch (may be null). The resolved lists stay in the arena, the
+// rest is returned. Errors: compute_outline()'s, prefixed "outline: "; kInvalidArgument (not
+// an auto case, not one maxilla and one mandible, jaw count differs from the case).
+Status resolve_case_outline(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                            CaseFile* resolved, Outline* outline);
+
+// Writes `c` as a case file (format version 1, every key it uses, numbers as the shortest text
+// that reads back to the same double), so that parse_case() of the text gives back `c`'s
+// values and designing it gives the same splint. An auto case is written with its "auto"
+// object; a resolved one with its picks (each with position, direction and both lengths).
+// Errors: kIoError (the sink failed).
+Status write_case(const CaseFile& c, const ByteSink& sink);
+
 // ---------------------------------------------------------------------------------------------
 // The design pipeline: the jaws (meshes, or reconstructed from the case's CT) repositioned by
 // the plan, the base from the picks, the Boolean difference base minus jaws, interference
@@ -179,6 +205,9 @@ Status check_wall_thickness(const Context& ctx, const Mesh& mesh, double min_thi
 
 struct DesignReport {
   uint64_t jaw_triangles = 0;  // all jaws together, as given
+  // The case's "auto" outline, when it had one (resolve_case_outline).
+  bool outlined = false;
+  OutlineReport outline;
   BaseReport base;
   BooleanStats boolean;
   // Interference elimination, when the case asks for it: per jaw in case order (at most 8).
@@ -243,7 +272,8 @@ struct DesignReportFiles {
   const char* splint_sha256 = nullptr;
   const char* preview_path = nullptr;
   const char* preview_sha256 = nullptr;
-  const char* preview_error = nullptr;  // why there is no preview
+  const char* preview_error = nullptr;       // why there is no preview
+  const char* resolved_case_path = nullptr;  // where the automatic outline's case was written
 };
 
 // One stage of the design as a caller's progress callback timed it.

@@ -19,6 +19,11 @@ const CaseNumber kCaseNumbers[] = {
     {"base.corner_segments", "", 1, 16, false, kNoCap, true, "4", "1, 2, 4, 8 or 16"},
     {"base.inner_length_mm", "mm", 0, 100, false, kNoCap, false, "3", ""},
     {"base.outside_length_mm", "mm", 0, 100, false, kNoCap, false, "3", ""},
+    {"base.auto.indentation_depth_mm", "mm", 0.1, 5, false, kNoCap, false, "2", ""},
+    {"base.auto.overhang_mm", "mm", 0, 10, false, kNoCap, false, "2", ""},
+    {"base.auto.pick_spacing_mm", "mm", 2, 20, false, kNoCap, false, "4", ""},
+    {"base.auto.bite_opening_mm", "mm", 0.1, 10, false, kNoCap, false, "none (the jaws as given)",
+     ""},
     {"pick.inner_length_mm", "mm", 0, 100, false, kNoCap, false, "the base's", ""},
     {"pick.outside_length_mm", "mm", 0, 100, false, kNoCap, false, "the base's", ""},
     {"ct.hu_min", "HU", -32768, 32767, false, kNoCap, true, "300", "at most hu_max"},
@@ -244,16 +249,58 @@ Status parse_jaws(const Reader& r, const JsonValue* jaws, CaseFile* out) {
   return Status::ok();
 }
 
+// The automatic outline ("base": {"auto": {...}}, outline.h).
+Status parse_auto(const Reader& r, const JsonValue& a, CaseFile* out) {
+  const JsonDocument& doc = *r.doc;
+  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(a, JsonType::kObject, "auto"));
+  static const char* const kAutoKeys[] = {"indentation_depth_mm", "overhang_mm", "pick_spacing_mm",
+                                          "bite_opening_mm", nullptr};
+  SPLINTCORE_RETURN_IF_ERROR(r.known_keys(a, kAutoKeys, "\"auto\""));
+  OutlineOptions& o = out->outline;
+  if (const JsonValue* v = doc.member(a, "indentation_depth_mm")) {
+    SPLINTCORE_RETURN_IF_ERROR(
+        r.number(*v, "base.auto.indentation_depth_mm", 0, &o.indentation_depth_mm));
+  }
+  if (const JsonValue* v = doc.member(a, "overhang_mm")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*v, "base.auto.overhang_mm", 0, &o.overhang_mm));
+  }
+  if (const JsonValue* v = doc.member(a, "pick_spacing_mm")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*v, "base.auto.pick_spacing_mm", 0, &o.pick_spacing_mm));
+  }
+  if (const JsonValue* v = doc.member(a, "bite_opening_mm")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*v, "base.auto.bite_opening_mm", 0, &o.bite_opening_mm));
+    o.has_bite_opening = true;
+  }
+  out->has_auto_outline = true;
+  return Status::ok();
+}
+
 // The base ("base": the occlusal normal, spacing, corners, default line lengths, the picks).
 Status parse_base(const Reader& r, const JsonValue& root, CaseFile* out) {
   const JsonDocument& doc = *r.doc;
   const JsonValue* base = doc.member(root, "base");
   if (base == nullptr) return r.fail(root, StatusCode::kInvalidArgument, "no \"base\" object");
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*base, JsonType::kObject, "base"));
-  static const char* const kBaseKeys[] = {"occlusal_normal", "spacing_mm",      "corner_radius_mm",
-                                          "corner_segments", "inner_length_mm", "outside_length_mm",
-                                          "upper",           "lower",           nullptr};
+  static const char* const kBaseKeys[] = {"occlusal_normal",
+                                          "spacing_mm",
+                                          "corner_radius_mm",
+                                          "corner_segments",
+                                          "inner_length_mm",
+                                          "outside_length_mm",
+                                          "upper",
+                                          "lower",
+                                          "auto",
+                                          nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*base, kBaseKeys, "\"base\""));
+  if (const JsonValue* a = doc.member(*base, "auto")) {
+    if (doc.member(*base, "upper") != nullptr || doc.member(*base, "lower") != nullptr ||
+        doc.member(*base, "occlusal_normal") != nullptr) {
+      return r.fail(*a, StatusCode::kInvalidArgument,
+                    "\"auto\" finds the picks and the occlusal normal: give either \"auto\" or "
+                    "\"upper\" and \"lower\" (and \"occlusal_normal\")");
+    }
+    SPLINTCORE_RETURN_IF_ERROR(parse_auto(r, *a, out));
+  }
   if (const JsonValue* o = doc.member(*base, "occlusal_normal")) {
     SPLINTCORE_RETURN_IF_ERROR(r.unit_vector(*o, "occlusal_normal", &out->occlusal_normal));
   }
@@ -281,11 +328,12 @@ Status parse_base(const Reader& r, const JsonValue& root, CaseFile* out) {
   if (const JsonValue* s = doc.member(*base, "outside_length_mm")) {
     SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "base.outside_length_mm", 0, &outside_default));
   }
+  if (out->has_auto_outline) return Status::ok();
   const JsonValue* upper = doc.member(*base, "upper");
   const JsonValue* lower = doc.member(*base, "lower");
   if (upper == nullptr || lower == nullptr) {
     return r.fail(*base, StatusCode::kInvalidArgument,
-                  "\"base\" needs \"upper\" and \"lower\" pick lists");
+                  "\"base\" needs \"upper\" and \"lower\" pick lists, or \"auto\"");
   }
   SPLINTCORE_RETURN_IF_ERROR(
       parse_picks(r, *upper, "upper", inner_default, outside_default, &out->upper));
@@ -364,9 +412,10 @@ Status parse_blockout(const Reader& r, const JsonValue* b, CaseFile* out) {
   static const char* const kBlockoutKeys[] = {"voxel", "inset", "closing_radius", "clearance",
                                               nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*b, kBlockoutKeys, "\"blockout\""));
-  if (!out->has_insertion_direction) {
+  if (!out->has_insertion_direction && !out->has_auto_outline) {
     return r.fail(*b, StatusCode::kInvalidArgument,
-                  "\"blockout\" needs \"insertion_direction\" (the splint is seated along it)");
+                  "\"blockout\" needs \"insertion_direction\" (the splint is seated along it) "
+                  "or the automatic outline");
   }
   out->has_blockout = true;
   if (const JsonValue* bv = doc.member(*b, "voxel")) {

@@ -242,15 +242,24 @@ Status check_design_inputs(const CaseFile& c, Span<const Mesh> jaws, const Mesh&
 
 }  // namespace
 
-Status design_splint(const Context& ctx, const CaseFile& case_in, Span<const Mesh> jaws,
+Status design_splint(const Context& ctx, const CaseFile& case_given, Span<const Mesh> jaws,
                      Mesh* splint, DesignReport* report) {
   Arena& arena = *ctx.arena;
   *report = DesignReport{};
   const PrinterProfile* profile = nullptr;
-  SPLINTCORE_RETURN_IF_ERROR(check_design_inputs(case_in, jaws, *splint, &profile));
+  SPLINTCORE_RETURN_IF_ERROR(check_design_inputs(case_given, jaws, *splint, &profile));
   report->printer = profile->name;
   ArenaScope scope(arena);  // every error, a cancel included, leaves the arena as it was
   const auto stage = [&](const char* name) { return report_progress(ctx, name, 0, 1); };
+  CaseFile outlined;
+  if (case_given.has_auto_outline) {
+    SPLINTCORE_RETURN_IF_ERROR(stage("design: outline"));
+    Outline o;
+    SPLINTCORE_RETURN_IF_ERROR(resolve_case_outline(ctx, case_given, jaws, &outlined, &o));
+    report->outlined = true;
+    report->outline = o.report;
+  }
+  const CaseFile& case_in = case_given.has_auto_outline ? outlined : case_given;
   CaseFile on_tray;
   if (case_in.place_on_tray) {
     SPLINTCORE_RETURN_IF_ERROR(

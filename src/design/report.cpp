@@ -124,6 +124,29 @@ void write_blockout(JsonWriter& w, const CaseFile& c, const DesignReport& report
   w.end_array();
 }
 
+// The automatic outline: what it found and how it moved the mandible.
+void write_outline(JsonWriter& w, const OutlineReport& o, const DesignReportFiles& files) {
+  w.begin_object("outline");
+  if (files.resolved_case_path != nullptr) w.add("resolved_case", files.resolved_case_path);
+  w.add("occlusal_normal", o.occlusal_normal);
+  w.add("anterior", o.anterior);
+  w.add("gap_as_given_mm", o.gap_as_given);
+  w.add("jaws_intersect_as_given", o.jaws_intersect);
+  w.add("bite_opened", o.opened);
+  if (o.opened) {
+    w.add("mandible_translation_mm", o.mandible_translation);
+    w.add("opening_steps", o.opening_steps);
+  }
+  w.add("opening_mm", o.opening);
+  w.add("picks_per_jaw", o.picks);
+  w.add("arch_length_mm", o.arch_length_mm);
+  w.add("wafer_min_mm", o.min_wafer_mm);
+  w.add("wafer_max_mm", o.max_wafer_mm);
+  w.add("occlusal_columns_maxilla", o.cells_upper);
+  w.add("occlusal_columns_mandible", o.cells_lower);
+  w.end_object();
+}
+
 void write_thickness(JsonWriter& w, const ThicknessReport& t) {
   w.begin_object("thickness");
   w.add("min_required_mm", t.min_required);
@@ -245,6 +268,7 @@ Status write_design_report(const Context& ctx, const CaseFile& c, Span<const Mes
   w.add("case_sha256", c.sha256);
   write_inputs(w, c, jaws, files);
   write_parameters(w, c, report, files, any_ct);
+  if (report.outlined) write_outline(w, report.outline, files);
   write_checks(w, c, report);
   w.begin_object("output");
   if (files.splint_path != nullptr) w.add("splint", files.splint_path);

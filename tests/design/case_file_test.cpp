@@ -431,7 +431,7 @@ TEST(CaseFileErrors, UnknownKeysAtEveryLevel) {
   expect_invalid(with_base("    \"spacing\": @1,\n"),
                  {"unknown key \"spacing\" in \"base\"",
                   "(allowed: occlusal_normal spacing_mm corner_radius_mm corner_segments "
-                  "inner_length_mm outside_length_mm upper lower)"});
+                  "inner_length_mm outside_length_mm upper lower auto)"});
   expect_invalid(with_pick(", \"colour\": @[1]"),
                  {"unknown key \"colour\" in a pick",
                   "(allowed: position normal direction inner_length_mm outside_length_mm)"});

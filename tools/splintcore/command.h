@@ -41,6 +41,7 @@ int run_base(const Command& command, int argc, char** argv);
 int run_boolean(const Command& command, int argc, char** argv);
 int run_phantom(const Command& command, int argc, char** argv);
 int run_design(const Command& command, int argc, char** argv);
+int run_outline(const Command& command, int argc, char** argv);
 int run_sweep(const Command& command, int argc, char** argv);
 int run_blockout(const Command& command, int argc, char** argv);
 int run_ct_phantom(const Command& command, int argc, char** argv);

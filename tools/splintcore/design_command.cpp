@@ -2,6 +2,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <climits>
+#include <cstdlib>
+
 #include <cstring>
 #include <string>
 #include <vector>
@@ -19,7 +22,8 @@ namespace {
 
 struct DesignArgs {
   CommonArgs common;
-  const char* output = nullptr;
+  bool outline_only = false;     // `splintcore outline`: the resolved case, no design
+  const char* output = nullptr;  // OUTDIR, or the resolved case's path (outline_only)
   uint64_t max_input_bytes = 0;  // 0: cli::kMaxCaseBytes for the case, kMaxMeshBytes for jaws
 };
 
@@ -100,6 +104,9 @@ class Design {
  private:
   Status read_jaws();
   Status reconstruct_ct_jaws();
+  Status resolve_outline();
+  Status write_resolved_case(const std::string& path);
+  void print_outline() const;
   Status write_splint();
   void write_preview();
   Status write_report();
@@ -124,6 +131,11 @@ class Design {
   CtInfo ct_info_;
   std::string ct_path_, ct_hash_;
 
+  // The automatic outline, when the case asks for it: c_ becomes the resolved case.
+  bool outlined_ = false;
+  Outline outline_;
+  std::string resolved_path_;
+
   Mesh splint_;
   DesignReport report_;
   std::string splint_path_, report_path_, splint_hash_, report_text_;
@@ -143,9 +155,25 @@ int Design::run() {
   if (s.is_ok() && any_ct_) s = reconstruct_ct_jaws();
   if (!s.is_ok()) return run_.reject(s);
   t_read_ = monotonic_seconds();
+  if (c_.has_auto_outline) {
+    s = resolve_outline();
+    if (!s.is_ok()) return run_.reject(s.in_file(case_path_.c_str()));
+    if (args_.outline_only) {
+      print_outline();
+      return kExitOk;
+    }
+  } else if (args_.outline_only) {
+    return run_.reject(Status::error(StatusCode::kInvalidArgument,
+                                     "outline: the case gives its picks (no \"auto\" in \"base\")")
+                           .in_file(case_path_.c_str()));
+  }
   s = design_splint(ctx_, c_, Span<const Mesh>(jaws_.data(), jaws_.size()), &splint_, &report_);
   if (clock_.print && !s.is_ok()) std::fprintf(stderr, " failed\n");
   if (!s.is_ok()) return run_.reject(s.in_file(case_path_.c_str()));
+  if (outlined_) {
+    report_.outlined = true;
+    report_.outline = outline_.report;
+  }
   t_design_ = monotonic_seconds();
   s = write_splint();
   if (!s.is_ok()) return run_.reject(s);
@@ -197,6 +225,78 @@ Status Design::reconstruct_ct_jaws() {
     jaw_hashes_[i] = ct_hash_;
   }
   return Status::ok();
+}
+
+// The automatic outline: the case resolved (picks, opening, direction), written as a case a
+// person can edit and design again (OUTDIR/case.resolved.json, or outline's -o), and designed.
+Status Design::resolve_outline() {
+  CaseFile resolved;
+  SPLINTCORE_RETURN_IF_ERROR(resolve_case_outline(
+      ctx_, c_, Span<const Mesh>(jaws_.data(), jaws_.size()), &resolved, &outline_));
+  c_ = resolved;
+  outlined_ = true;
+  resolved_path_ = args_.outline_only ? std::string(args_.output)
+                                      : std::string(args_.output) + "/case.resolved.json";
+  return write_resolved_case(resolved_path_);
+}
+
+// The file names in the resolved case: as the case gives them when it is written into the
+// case's own folder, else absolute, so the written case finds the same files.
+Status Design::write_resolved_case(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  const std::string out_folder = slash == std::string::npos ? "." : path.substr(0, slash);
+  const std::string in_folder = folder_.empty() ? "." : folder_;
+  char a[PATH_MAX], b[PATH_MAX];
+  const bool same = ::realpath(out_folder.c_str(), a) != nullptr &&
+                    ::realpath(in_folder.c_str(), b) != nullptr && std::strcmp(a, b) == 0;
+  CaseFile written = c_;
+  std::vector<CaseJaw> jaws(c_.jaws.begin(), c_.jaws.end());
+  std::vector<std::string> names;
+  names.reserve(jaws.size() + 1);
+  auto absolute = [&](const char* name) -> const char* {
+    if (same || name == nullptr || name[0] == '/') return name;
+    char full[PATH_MAX];
+    names.push_back(::realpath((folder_ + name).c_str(), full) != nullptr ? full : folder_ + name);
+    return names.back().c_str();
+  };
+  for (CaseJaw& j : jaws) j.mesh = absolute(j.mesh);
+  written.jaws = Span<const CaseJaw>(jaws.data(), jaws.size());
+  written.ct_volume = absolute(c_.ct_volume);
+  std::string text;
+  SPLINTCORE_RETURN_IF_ERROR(write_case(written, cli::string_sink(&text)));
+  return write_bytes_atomically(path, text + "\n");
+}
+
+void Design::print_outline() const {
+  const OutlineReport& o = outline_.report;
+  if (args_.common.json) {
+    cli::JsonObject j;
+    j.add("command", "outline");
+    j.add("status", "ok");
+    j.add("case", case_path_.c_str());
+    j.add("resolved_case", resolved_path_.c_str());
+    j.add("occlusal_normal", o.occlusal_normal);
+    j.add("gap_as_given_mm", o.gap_as_given);
+    j.add("bite_opened", o.opened);
+    j.add("mandible_translation_mm", o.mandible_translation);
+    j.add("opening_mm", o.opening);
+    j.add("picks_per_jaw", static_cast<uint64_t>(o.picks));
+    j.add("arch_length_mm", o.arch_length_mm);
+    j.add("wafer_min_mm", o.min_wafer_mm);
+    j.add("wafer_max_mm", o.max_wafer_mm);
+    std::printf("%s\n", j.str().c_str());
+    return;
+  }
+  std::printf("occlusal normal (%.4f, %.4f, %.4f); jaws %.3f mm apart as given%s\n",
+              o.occlusal_normal.x, o.occlusal_normal.y, o.occlusal_normal.z, o.gap_as_given,
+              o.jaws_intersect ? " (they interpenetrate)" : "");
+  if (o.opened) {
+    std::printf("bite opened to %.6f mm: mandible moved (%.4f, %.4f, %.4f) mm\n", o.opening,
+                o.mandible_translation.x, o.mandible_translation.y, o.mandible_translation.z);
+  }
+  std::printf("arch %.1f mm, %u picks per jaw, wafer %.2f to %.2f mm thick\n", o.arch_length_mm,
+              o.picks, o.min_wafer_mm, o.max_wafer_mm);
+  std::printf("wrote %s\n", resolved_path_.c_str());
 }
 
 // The splint's bytes: hashed, then written atomically.
@@ -257,6 +357,7 @@ Status Design::write_report() {
     files.ct = &ct_report_;
   }
   files.splint_path = splint_path_.c_str();
+  if (outlined_) files.resolved_case_path = resolved_path_.c_str();
   files.splint_sha256 = splint_hash_.c_str();  // of the bytes just written
   if (preview_status_.is_ok()) {
     files.preview_path = preview_.path.c_str();
@@ -341,15 +442,18 @@ void Design::print_summary() const {
               static_cast<unsigned long long>(run_.peak_arena()));
 }
 
-}  // namespace
-
-int run_design(const Command& command, int argc, char** argv) {
+// `design` and `outline` (outline_only) share the reading and the resolving.
+int run_design_or_outline(const Command& command, int argc, char** argv, bool outline_only) {
   DesignArgs a;
+  a.outline_only = outline_only;
   CommandLine line(command, &a.common, design_options(&a));
   const int early = line.parse(argc, argv);
   if (early >= 0) return early;
-  if (a.common.positional.size() != 1) return line.usage_error("design takes one case file");
-  if (a.output == nullptr) return line.usage_error("design needs -o OUTDIR");
+  if (a.common.positional.size() != 1) return line.usage_error("takes one case file");
+  if (a.output == nullptr) {
+    return line.usage_error(outline_only ? "outline needs -o RESOLVED.json"
+                                         : "design needs -o OUTDIR");
+  }
   const char* case_path = a.common.positional[0];
   std::vector<uint8_t> case_bytes;
   const Status s = read_whole_input(
@@ -358,9 +462,19 @@ int run_design(const Command& command, int argc, char** argv) {
   const char* cap_source = choose_memory_cap(case_bytes, case_path, &a.common);
   Run run(command, a.common);
   if (!run.has_memory()) return run.no_memory();
-  ::mkdir(a.output, 0777);  // an existing folder is fine; a failure shows when writing
+  if (!outline_only) ::mkdir(a.output, 0777);  // an existing folder is fine
   Design design(run, a, case_bytes, cap_source);
   return design.run();
+}
+
+}  // namespace
+
+int run_design(const Command& command, int argc, char** argv) {
+  return run_design_or_outline(command, argc, argv, false);
+}
+
+int run_outline(const Command& command, int argc, char** argv) {
+  return run_design_or_outline(command, argc, argv, true);
 }
 
 }  // namespace tool

@@ -94,6 +94,18 @@ const char kPhantomUsage[] =
     "cuts 1.3-1.5 mm into every crown. Also DIR/case.json, that case for these jaws (design\n"
     "it with `splintcore design DIR/case.json -o OUT`). The bytes depend only on N.\n";
 
+const char kOutlineUsage[] =
+    "usage: splintcore outline CASE.json -o RESOLVED.json [--json] [--memory-cap SIZE]\n"
+    "                         [--threads N] [--max-input-bytes SIZE]\n"
+    "\n"
+    "The automatic outline of a case whose base is {\"auto\": {...}} (docs/case-format.md),\n"
+    "without designing: finds the occlusal plane, the dental arch, the picks with their\n"
+    "directions and lengths, the wafer's heights for the indentation depth and, with\n"
+    "\"bite_opening_mm\", the mandible's move; writes them as a complete case with explicit\n"
+    "picks to RESOLVED.json (atomically). Edit a pick and design that file: it gives the same\n"
+    "splint as the auto case when left as written. Jaw paths stay as the case gives them when\n"
+    "RESOLVED.json is in the case's folder, else they are written absolute.\n";
+
 const char kDesignUsage[] =
     "usage: splintcore design CASE.json -o OUTDIR [--json] [--memory-cap SIZE] [--threads N]\n"
     "                        [--max-input-bytes SIZE]\n"
@@ -210,6 +222,7 @@ const Command kCommands[] = {
     {"distance", run_distance, kDistanceUsage, "closest point, signed distance, winding number"},
     {"boolean", run_boolean, kBooleanUsage, "splint base minus jaws (or --union, --intersection)"},
     {"phantom", run_phantom, kPhantomUsage, "synthetic maxilla.stl, mandible.stl and case.json"},
+    {"outline", run_outline, kOutlineUsage, "the automatic outline as a case with explicit picks"},
     {"design", run_design, kDesignUsage,
      "the splint from a case: splint.stl, report.json, preview.png"},
     {"sweep", run_sweep, kSweepUsage, "the jaws' swept volume (the blocked-out model)"},

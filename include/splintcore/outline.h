@@ -1,0 +1,81 @@
+// splintcore outline: the splint's picks from the two jaws themselves (issue 28). From a
+// maxilla and a mandible in any frame: the occlusal plane and the side each arch faces, the
+// dental arch (cusp tips and fossae seen from the other jaw), paired picks along it with
+// buccal directions and line lengths from the arch's width, the wafer's surfaces set so the
+// teeth sink a chosen depth into it, and, when asked, the bite opened to an exact distance.
+// The method and its limits are in docs/architecture.md ("The automatic outline").
+#ifndef SPLINTCORE_OUTLINE_H
+#define SPLINTCORE_OUTLINE_H
+
+#include "splintcore/core.h"
+#include "splintcore/distance.h"
+#include "splintcore/geometry.h"
+#include "splintcore/mesh.h"
+#include "splintcore/spline.h"
+
+namespace splintcore {
+
+// The most picks per jaw and arch points compute_outline() gives.
+constexpr size_t kMaxOutlinePicks = 256;
+constexpr size_t kMaxOutlineArchPoints = 1024;
+
+struct OutlineOptions {
+  // How deep the deepest cusp of each arch sinks into the wafer (mm, (0, 5]); every tooth of
+  // the span sinks at least half as deep where the occlusal surfaces allow it.
+  double indentation_depth_mm = 2.0;
+  // The wafer reaches this far past the buccal and lingual extent of the occlusal surfaces
+  // (mm, [0, 10]): 2 mm covers the cusps' outer slopes, so a tooth seats in a full-depth
+  // imprint, and leaves a wall about as thick as the printer's strongest thin feature.
+  double overhang_mm = 2.0;
+  // Distance between picks along the arch (mm, [2, 20]).
+  double pick_spacing_mm = 4.0;
+  // Move the mandible along the occlusal normal until the smallest distance between the jaws
+  // is exactly bite_opening_mm (mm, [0.1, 10]); without it the jaws must already be apart.
+  bool has_bite_opening = false;
+  double bite_opening_mm = 0;
+  // Jaws farther apart than this (mm) are refused: no wafer bridges them.
+  double max_gap_mm = 10.0;
+};
+
+struct OutlineReport {
+  Vec3 occlusal_normal{};       // unit, from the mandible towards the maxilla
+  Vec3 anterior{};              // unit, in the occlusal plane, towards the incisors
+  double gap_as_given = 0;      // smallest distance between the jaws as given, mm
+  bool jaws_intersect = false;  // as given
+  bool opened = false;          // the mandible was moved (has_bite_opening)
+  Vec3 mandible_translation{};  // the move: along -occlusal_normal (or +, to close a gap)
+  double opening = 0;           // smallest distance after the move, mm
+  uint32_t opening_steps = 0;   // conservative-advancement steps
+  uint32_t picks = 0;           // per jaw
+  double arch_length_mm = 0;    // along the arch, end to end, before the overhang
+  double min_wafer_mm = 0;      // the thinnest section, top to bottom
+  double max_wafer_mm = 0;
+  uint64_t cells_upper = 0, cells_lower = 0;  // occlusal cells found per jaw
+};
+
+struct Outline {
+  Span<const Pick> upper;  // picks of the wafer's top face (the maxilla's side)
+  Span<const Pick> lower;  // and of its bottom face, paired with `upper`
+  Span<const Vec3> arch;   // the arch's centre line in the occlusal plane (preview)
+  OutlineReport report;
+};
+
+// Bytes compute_outline() needs for jaws of these sizes, at most (the picks and the arch
+// stay; everything else is returned).
+uint64_t compute_outline_bound(uint64_t maxilla_vertices, uint64_t maxilla_triangles,
+                               uint64_t mandible_vertices, uint64_t mandible_triangles);
+
+// The picks for a splint between `maxilla` and `mandible` (closed or open meshes, in any frame,
+// the mandible where the plan puts it). Each pick carries its direction (unit, buccal) and
+// both line lengths, so make_lines() uses them as they are; upper and lower picks pair up.
+// Errors (kInvalidArgument unless said): an empty or non-finite jaw (kInvalidMesh,
+// kNonFinite), jaws that do not face each other, no occlusal surfaces found, an arch too
+// short, jaws touching or interpenetrating without has_bite_opening, jaws farther apart than
+// max_gap_mm, options out of range; kArenaExhausted; kCancelled (progress "outline").
+// On an error the arena is as it was.
+Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mandible,
+                       const OutlineOptions& options, Outline* out);
+
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_OUTLINE_H

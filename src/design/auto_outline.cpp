@@ -1,0 +1,250 @@
+// The automatic outline of a case (resolve_case_outline) and the case writer (write_case) that
+// saves what it resolved as a case a person can read, edit and design again (design.h).
+#include <cstring>
+
+#include "splintcore/design.h"
+
+namespace splintcore {
+
+namespace {
+
+// The jaw of `role` (its index), or an error when the case has none or several.
+Status find_role(const CaseFile& c, const char* role, size_t* index) {
+  size_t found = 0, count = 0;
+  for (size_t j = 0; j < c.jaws.size(); ++j) {
+    if (std::strcmp(c.jaws[j].role, role) != 0) continue;
+    found = j;
+    ++count;
+  }
+  if (count != 1) {
+    return make_error(StatusCode::kInvalidArgument, "outline: the automatic outline needs one ",
+                      role, " and one ", std::strcmp(role, "maxilla") == 0 ? "mandible" : "maxilla",
+                      "; the case has ", count, " ", role, count == 1 ? "" : "s");
+  }
+  *index = found;
+  return Status::ok();
+}
+
+// Jaw j moved by its transform and rounded to float32, as design_splint's gather moves it.
+Status moved_jaw(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, size_t j,
+                 Mesh* out) {
+  out->bind(ctx.arena);
+  const Mesh& m = jaws[j];
+  if (!out->vertices.reserve(m.vertices.size())) return ctx.arena->exhausted_status();
+  for (const Vec3& v : m.vertices) {
+    if (!is_finite(v)) {
+      return make_error(StatusCode::kNonFinite, "outline: jaw ", j, " (", c.jaws[j].role,
+                        ") has a vertex that is not finite (NaN or infinity)")
+          .at_index(j);
+    }
+    Vec3 p = c.jaws[j].transform.apply_point(v);
+    if (!round_to_float32(&p)) {
+      return make_error(StatusCode::kLimitExceeded, "outline: jaw ", j, " (", c.jaws[j].role,
+                        ") moved beyond float32 range")
+          .at_index(j);
+    }
+    (void)out->vertices.push_back(p);
+  }
+  out->triangles.adopt(const_cast<Triangle*>(m.triangles.span().data()), m.triangles.size(),
+                       m.triangles.size());
+  return Status::ok();
+}
+
+template <class T>
+T* copy_down(Arena& arena, Span<const T> from) {
+  T* to = arena.allocate_array<T>(from.size());
+  if (to != nullptr) {
+    for (size_t i = 0; i < from.size(); ++i) to[i] = from[i];
+  }
+  return to;
+}
+
+}  // namespace
+
+Status resolve_case_outline(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                            CaseFile* resolved, Outline* outline) {
+  if (!c.has_auto_outline) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "outline: the case gives its picks (no \"auto\" in \"base\")");
+  }
+  if (jaws.size() != c.jaws.size()) {
+    return make_error(StatusCode::kInvalidArgument, "outline: the case names ", c.jaws.size(),
+                      " jaws but ", jaws.size(), " meshes were given");
+  }
+  size_t up = 0, low = 0;
+  SPLINTCORE_RETURN_IF_ERROR(find_role(c, "maxilla", &up));
+  SPLINTCORE_RETURN_IF_ERROR(find_role(c, "mandible", &low));
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);
+  // The results' room first, below the moved jaws and the outline's work.
+  Pick* upper = arena.allocate_array<Pick>(kMaxOutlinePicks);
+  Pick* lower = arena.allocate_array<Pick>(kMaxOutlinePicks);
+  Vec3* arch = arena.allocate_array<Vec3>(kMaxOutlineArchPoints);
+  CaseJaw* case_jaws = arena.allocate_array<CaseJaw>(c.jaws.size());
+  if (upper == nullptr || lower == nullptr || arch == nullptr || case_jaws == nullptr) {
+    return arena.exhausted_status();
+  }
+  Outline o;
+  {
+    ArenaScope work(arena);
+    Mesh maxilla, mandible;
+    SPLINTCORE_RETURN_IF_ERROR(moved_jaw(ctx, c, jaws, up, &maxilla));
+    SPLINTCORE_RETURN_IF_ERROR(moved_jaw(ctx, c, jaws, low, &mandible));
+    SPLINTCORE_RETURN_IF_ERROR(compute_outline(ctx, maxilla, mandible, c.outline, &o));
+    for (size_t i = 0; i < o.upper.size(); ++i) {
+      upper[i] = o.upper[i];
+      lower[i] = o.lower[i];
+    }
+    for (size_t i = 0; i < o.arch.size(); ++i) arch[i] = o.arch[i];
+  }
+  *resolved = c;
+  resolved->has_auto_outline = false;
+  resolved->upper = Span<const Pick>(upper, o.upper.size());
+  resolved->lower = Span<const Pick>(lower, o.lower.size());
+  resolved->occlusal_normal = o.report.occlusal_normal;
+  if (!c.has_insertion_direction) {
+    resolved->insertion_direction = o.report.occlusal_normal;
+    resolved->has_insertion_direction = true;
+  }
+  for (size_t j = 0; j < c.jaws.size(); ++j) {
+    case_jaws[j] = c.jaws[j];
+    if (j == low && o.report.opened) {
+      case_jaws[j].transform =
+          compose(RigidTransform::translation(o.report.mandible_translation), c.jaws[j].transform);
+    }
+  }
+  resolved->jaws = Span<const CaseJaw>(case_jaws, c.jaws.size());
+  if (outline != nullptr) {
+    *outline = o;
+    outline->upper = resolved->upper;
+    outline->lower = resolved->lower;
+    outline->arch = Span<const Vec3>(arch, o.arch.size());
+  }
+  scope.commit();
+  return Status::ok();
+}
+
+namespace {
+
+void write_transform(JsonWriter& w, const RigidTransform& t) {
+  w.begin_array("transform");
+  const double row_t[3] = {t.t.x, t.t.y, t.t.z};
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 3; ++k) w.add(nullptr, t.r[i][k]);
+    w.add(nullptr, row_t[i]);
+  }
+  for (int k = 0; k < 4; ++k) w.add(nullptr, k == 3 ? 1.0 : 0.0);
+  w.end_array();
+}
+
+void write_jaws(JsonWriter& w, const CaseFile& c) {
+  w.begin_array("jaws");
+  for (const CaseJaw& j : c.jaws) {
+    w.begin_object();
+    w.add("role", j.role);
+    if (j.has_seed) {
+      w.add("seed", j.seed);
+    } else {
+      w.add("mesh", j.mesh);
+    }
+    write_transform(w, j.transform);
+    w.end_object();
+  }
+  w.end_array();
+}
+
+void write_picks(JsonWriter& w, const char* key, Span<const Pick> picks) {
+  w.begin_array(key);
+  for (const Pick& p : picks) {
+    w.begin_object();
+    w.add("position", p.position);
+    if (length(p.normal) > 0) w.add("normal", p.normal);
+    if (length(p.direction) > 0) w.add("direction", p.direction);
+    w.add("inner_length_mm", p.inner_length);
+    w.add("outside_length_mm", p.outside_length);
+    w.end_object();
+  }
+  w.end_array();
+}
+
+void write_base(JsonWriter& w, const CaseFile& c) {
+  w.begin_object("base");
+  w.add("spacing_mm", c.base.spacing_mm);
+  w.add("corner_radius_mm", c.base.corner_radius_mm);
+  w.add("corner_segments", c.base.corner_segments);
+  if (c.has_auto_outline) {
+    const OutlineOptions& o = c.outline;
+    w.begin_object("auto");
+    w.add("indentation_depth_mm", o.indentation_depth_mm);
+    w.add("overhang_mm", o.overhang_mm);
+    w.add("pick_spacing_mm", o.pick_spacing_mm);
+    if (o.has_bite_opening) w.add("bite_opening_mm", o.bite_opening_mm);
+    w.end_object();
+  } else {
+    w.add("occlusal_normal", c.occlusal_normal);
+    write_picks(w, "upper", c.upper);
+    write_picks(w, "lower", c.lower);
+  }
+  w.end_object();
+}
+
+void write_later_stages(JsonWriter& w, const CaseFile& c) {
+  if (c.has_insertion_direction) w.add("insertion_direction", c.insertion_direction);
+  if (c.has_blockout) {
+    w.begin_object("blockout");
+    w.add("voxel", c.blockout.voxel);
+    if (c.blockout.offset > 0) {
+      w.add("clearance", c.blockout.offset);
+    } else {
+      w.add("inset", c.blockout.inset);
+    }
+    w.add("closing_radius", c.blockout.closing_radius);
+    w.end_object();
+  }
+  if (c.ct_volume != nullptr) {
+    w.begin_object("ct");
+    w.add("volume", c.ct_volume);
+    w.add("hu_min", int64_t{c.ct_window.lo});
+    w.add("hu_max", int64_t{c.ct_window.hi});
+    w.add("connectivity", c.ct_grow.connectivity == Connectivity::k26 ? 26 : 6);
+    w.add("smooth", c.ct_smooth.iterations);
+    if (c.ct_decimate.target_triangles > 0) w.add("decimate", c.ct_decimate.target_triangles);
+    w.end_object();
+  }
+  if (c.has_label) {
+    w.begin_object("label");
+    w.add("text", c.label.text);
+    w.add("mode", c.label.mode == LabelMode::kEmboss ? "emboss" : "engrave");
+    w.add("height_mm", c.label.height_mm);
+    w.add("stroke_mm", c.label.stroke_width_mm);
+    w.add("depth_mm", c.label.depth_mm);
+    w.end_object();
+  }
+  if (c.min_thickness > 0) w.add("min_thickness", c.min_thickness);
+  w.add("placement", c.place_on_tray ? "tray" : "case");
+  w.add("printer", c.printer);
+  if (c.memory_cap > 0) w.add("memory_cap", c.memory_cap);
+  if (c.output_splint != nullptr || c.output_report != nullptr) {
+    w.begin_object("output");
+    if (c.output_splint != nullptr) w.add("splint", c.output_splint);
+    if (c.output_report != nullptr) w.add("report", c.output_report);
+    w.end_object();
+  }
+}
+
+}  // namespace
+
+Status write_case(const CaseFile& c, const ByteSink& sink) {
+  JsonWriter w(sink);
+  w.begin_object();
+  w.add("splintcore_case", kCaseFormatVersion);
+  if (c.case_id[0] != '\0') w.add("case_id", c.case_id);
+  w.add("units", "mm");
+  write_jaws(w, c);
+  write_base(w, c);
+  write_later_stages(w, c);
+  w.end_object();
+  return w.finish();
+}
+
+}  // namespace splintcore

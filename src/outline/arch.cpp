@@ -1,0 +1,485 @@
+// The dental arch and the picks of the automatic outline (outline.h): the occlusal columns of
+// both jaws, a first centre line through them by sectors around their centre, a second one by
+// the mean offset across the arch along the first, and paired picks at even steps along it,
+// as wide as the occlusal surfaces plus the overhang, as high as the teeth sink into the wafer.
+#include <algorithm>
+#include <cmath>
+
+#include "outline_internal.h"
+
+namespace splintcore {
+namespace outline_detail {
+
+namespace {
+
+// A polyline in the plane with its arc lengths; the first and last segments go on as rays.
+struct Polyline {
+  const double* x = nullptr;
+  const double* y = nullptr;
+  const double* s = nullptr;  // arc length at each point
+  size_t n = 0;
+};
+
+// Pseudo-angle of (x, y) in [0, 4): monotone in the angle, exact quadrant steps, no atan2.
+double pseudo_angle(double x, double y) {
+  if (y >= 0) return x >= 0 ? (x + y > 0 ? y / (x + y) : 0) : 1 - x / (y - x);
+  return x < 0 ? 2 - y / (-x - y) : 3 + x / (x - y);
+}
+
+// The point of the polyline nearest (px, py): its arc length s and signed offset o (positive
+// to the left of the direction of travel).
+void project(const Polyline& p, double px, double py, double* s, double* o) {
+  double best = HUGE_VAL;
+  for (size_t k = 0; k + 1 < p.n; ++k) {
+    const double dx = p.x[k + 1] - p.x[k], dy = p.y[k + 1] - p.y[k];
+    const double len2 = dx * dx + dy * dy;
+    double t = ((px - p.x[k]) * dx + (py - p.y[k]) * dy) / len2;
+    // Past the ends the line goes on straight, but only so far: a ray that reached across
+    // the arch's open back would take the other side's points.
+    const double reach = kMaxReachMm / std::sqrt(len2);
+    t = k > 0 && t < 0 ? 0 : (t < -reach ? -reach : t);
+    t = k + 2 < p.n && t > 1 ? 1 : (t > 1 + reach ? 1 + reach : t);
+    const double qx = p.x[k] + t * dx, qy = p.y[k] + t * dy;
+    const double d2 = (px - qx) * (px - qx) + (py - qy) * (py - qy);
+    if (d2 < best) {
+      best = d2;
+      const double len = std::sqrt(len2);
+      *s = p.s[k] + t * len;
+      *o = (dx * (py - qy) - dy * (px - qx)) / len;
+    }
+  }
+}
+
+// The polyline's point at arc length s (extended along the end segments).
+void place_at(const Polyline& p, double s, double* x, double* y) {
+  size_t k = 0;
+  while (k + 2 < p.n && s > p.s[k + 1]) ++k;
+  const double t = (s - p.s[k]) / (p.s[k + 1] - p.s[k]);
+  *x = p.x[k] + t * (p.x[k + 1] - p.x[k]);
+  *y = p.y[k] + t * (p.y[k + 1] - p.y[k]);
+}
+
+// The point at s and the unit left normal of the chord over kTangentMm around it.
+void point_at(const Polyline& p, double s, double* x, double* y, double* lx, double* ly) {
+  place_at(p, s, x, y);
+  double ax, ay, bx, by;
+  place_at(p, s - 0.5 * kTangentMm, &ax, &ay);
+  place_at(p, s + 0.5 * kTangentMm, &bx, &by);
+  const double len = std::sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay));
+  *lx = -(by - ay) / len;
+  *ly = (bx - ax) / len;
+}
+
+Status allocate(Arena& arena, size_t n, double** a, double** b, double** c) {
+  *a = arena.allocate_array<double>(n);
+  *b = arena.allocate_array<double>(n);
+  *c = arena.allocate_array<double>(n);
+  return *a != nullptr && *b != nullptr && *c != nullptr ? Status::ok() : arena.exhausted_status();
+}
+
+// The occlusal columns of both jaws: those within kOcclusalBandMm of the jaw's tips (the
+// hundredth lowest distance from the plane), as ArchPoints.
+Status occlusal_points(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3& lower_offset,
+                       const Frame& f, const Grid& g, const Plane& plane,
+                       ArenaArray<ArchPoint>* out, uint64_t counts[2]) {
+  const size_t cells = static_cast<size_t>(g.nx) * g.ny;
+  double* r = arena.allocate_array<double>(cells);
+  if (r == nullptr) return arena.exhausted_status();
+  for (uint32_t jaw = 0; jaw < 2; ++jaw) {
+    const Mesh& m = jaw == 0 ? upper : lower;
+    const Vec3 offset = jaw == 0 ? Vec3{} : lower_offset;
+    size_t used = 0;
+    for (size_t i = 0; i < cells; ++i) {
+      if (g.tip[jaw][i] == kNoTip) continue;
+      const Vec3 p = m.vertices[g.tip[jaw][i]] + offset;
+      const double above = g.h[jaw][i] - plane.at(dot(p, f.e1) - g.cx, dot(p, f.e2) - g.cy);
+      r[used++] = jaw == 0 ? above : -above;
+    }
+    if (used < kMinOcclusalCells) {
+      return make_error(StatusCode::kInvalidArgument, "outline: no teeth found on the ",
+                        jaw == 0 ? "maxilla" : "mandible", ": it shows the other jaw only ", used,
+                        " columns of 0.5 mm");
+    }
+    std::nth_element(r, r + used / 100, r + used);
+    const double limit = r[used / 100] + kOcclusalBandMm;
+    counts[jaw] = 0;
+    for (size_t i = 0; i < cells; ++i) {
+      if (g.tip[jaw][i] == kNoTip) continue;
+      const Vec3 p = m.vertices[g.tip[jaw][i]] + offset;
+      ArchPoint a;
+      a.x = dot(p, f.e1);
+      a.y = dot(p, f.e2);
+      a.h = g.h[jaw][i];
+      a.jaw = jaw;
+      const double above = a.h - plane.at(a.x - g.cx, a.y - g.cy);
+      if ((jaw == 0 ? above : -above) > limit) continue;
+      if (!out->push_back(a)) return arena.exhausted_status();
+      ++counts[jaw];
+    }
+  }
+  return Status::ok();
+}
+
+// The first centre line: the mean of the points in each of kSectors pseudo-angle sectors
+// around their centre, from the sector after the widest empty run (the arch's open back) all
+// the way round.
+Status sector_line(Arena& arena, Span<const ArchPoint> pts, Polyline* line) {
+  double cx = 0, cy = 0;
+  for (const ArchPoint& a : pts) {
+    cx += a.x;
+    cy += a.y;
+  }
+  cx /= static_cast<double>(pts.size());
+  cy /= static_cast<double>(pts.size());
+  double *sx = nullptr, *sy = nullptr, *count = nullptr;
+  SPLINTCORE_RETURN_IF_ERROR(allocate(arena, kSectors, &sx, &sy, &count));
+  std::fill(sx, sx + kSectors, 0.0);
+  std::fill(sy, sy + kSectors, 0.0);
+  std::fill(count, count + kSectors, 0.0);
+  for (const ArchPoint& a : pts) {
+    const double t = pseudo_angle(a.x - cx, a.y - cy) * (kSectors / 4.0);
+    uint32_t k = static_cast<uint32_t>(t);
+    k = k >= kSectors ? kSectors - 1 : k;
+    sx[k] += a.x;
+    sy[k] += a.y;
+    count[k] += 1;
+  }
+  // The widest run of empty sectors, circularly; the first such run wins a tie.
+  uint32_t best_start = 0, best_len = 0;
+  for (uint32_t start = 0; start < kSectors; ++start) {
+    if (count[start] != 0 || count[(start + kSectors - 1) % kSectors] == 0) continue;
+    uint32_t len = 0;
+    while (len < kSectors && count[(start + len) % kSectors] == 0) ++len;
+    if (len > best_len) {
+      best_len = len;
+      best_start = start;
+    }
+  }
+  if (best_len == 0) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "outline: no dental arch: the occlusal surfaces surround their centre "
+                         "(no open back)");
+  }
+  double *x = nullptr, *y = nullptr, *s = nullptr;
+  SPLINTCORE_RETURN_IF_ERROR(allocate(arena, kSectors, &x, &y, &s));
+  size_t n = 0;
+  for (uint32_t j = 0; j < kSectors; ++j) {
+    const uint32_t k = (best_start + best_len + j) % kSectors;
+    if (count[k] == 0) continue;
+    x[n] = sx[k] / count[k];
+    y[n] = sy[k] / count[k];
+    s[n] = n == 0 ? 0
+                  : s[n - 1] + std::sqrt((x[n] - x[n - 1]) * (x[n] - x[n - 1]) +
+                                         (y[n] - y[n - 1]) * (y[n] - y[n - 1]));
+    if (n > 0 && !(s[n] > s[n - 1])) continue;  // same place as the previous: skip
+    ++n;
+  }
+  if (n < 4) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "outline: the arch is too short: the teeth "
+                      "fill only ",
+                      n, " of ", kSectors, " sectors around their centre");
+  }
+  *line = Polyline{x, y, s, n};
+  return Status::ok();
+}
+
+// The ends of a centre line curl towards the side where the last points are (past the end,
+// the points that project onto it are those on the inner side of its bend, and their mean
+// pulls the next line further in). So the last kEndTrimMm at each end go, and the next
+// kEndChordMm become one straight segment: the line then goes on past its ends along the
+// arch's direction there, and the next pass's bins past the ends hold both sides' points.
+// The turn of the line at point i: the cosine between the chords of kTurnBins bins before
+// and after it (1 where it cannot be measured).
+double turn_cosine(const Polyline& p, size_t i) {
+  if (i < kTurnBins || i + kTurnBins >= p.n) return 1;
+  const double ax = p.x[i] - p.x[i - kTurnBins], ay = p.y[i] - p.y[i - kTurnBins];
+  const double bx = p.x[i + kTurnBins] - p.x[i], by = p.y[i + kTurnBins] - p.y[i];
+  const double la = std::sqrt(ax * ax + ay * ay), lb = std::sqrt(bx * bx + by * by);
+  return la > 0 && lb > 0 ? (ax * bx + ay * by) / (la * lb) : 1;
+}
+
+Polyline straighten_ends(const Polyline& whole) {
+  // A dental arch turns at most about 15 degrees in 3 mm (a canine's radius of 12 mm or
+  // more); from the middle outwards the line is cut where it turns by more than 45: there it
+  // folds back into the points at its end.
+  Polyline p = whole;
+  const size_t middle = p.n / 2;
+  size_t first = 0, last = p.n - 1;
+  for (size_t i = middle; i + 1 < p.n; ++i) {
+    if (turn_cosine(p, i) < kMaxTurnCosine) {
+      last = i;
+      break;
+    }
+  }
+  for (size_t i = middle; i > 0; --i) {
+    if (turn_cosine(p, i) < kMaxTurnCosine) {
+      first = i;
+      break;
+    }
+  }
+  p = Polyline{p.x + first, p.y + first, p.s + first, last - first + 1};
+  const double start = p.s[0];
+  double* shift = const_cast<double*>(p.s);
+  for (size_t i = 0; i < p.n; ++i) shift[i] -= start;
+  const double length = p.s[p.n - 1];
+  if (length < 2 * (kEndTrimMm + kEndChordMm) + 4 * kBinMm) return p;
+  size_t i0 = 0, i1 = p.n - 1;
+  while (p.s[i0] < kEndTrimMm) ++i0;
+  while (p.s[i1] > length - kEndTrimMm) --i1;
+  size_t j0 = i0 + 1, j1 = i1 - 1;
+  while (p.s[j0] < p.s[i0] + kEndChordMm) ++j0;
+  while (p.s[j1] > p.s[i1] - kEndChordMm) --j1;
+  double* x = const_cast<double*>(p.x);
+  double* y = const_cast<double*>(p.y);
+  double* s = const_cast<double*>(p.s);
+  size_t n = 0;
+  auto keep = [&](size_t i) {
+    x[n] = x[i];
+    y[n] = y[i];
+    ++n;
+  };
+  keep(i0);
+  for (size_t i = j0; i <= j1; ++i) keep(i);
+  keep(i1);
+  s[0] = 0;
+  for (size_t i = 1; i < n; ++i) {
+    s[i] = s[i - 1] +
+           std::sqrt((x[i] - x[i - 1]) * (x[i] - x[i - 1]) + (y[i] - y[i - 1]) * (y[i] - y[i - 1]));
+  }
+  return Polyline{x, y, s, n};
+}
+
+// Local linear regression of v over s at s0 (triangular weights of half-width h, times w):
+// unbiased at the ends of the data, where a plain moving average pulls inward.
+double local_linear(const double* s, const double* v, const double* w, size_t n, double s0,
+                    double h) {
+  double s0w = 0, s1 = 0, s2 = 0, t0 = 0, t1 = 0;
+  for (size_t j = 0; j < n; ++j) {
+    const double d = s[j] - s0;
+    const double k = 1 - std::fabs(d) / h;
+    if (!(k > 0)) continue;
+    const double kw = k * w[j];
+    s0w += kw;
+    s1 += kw * d;
+    s2 += kw * d * d;
+    t0 += kw * v[j];
+    t1 += kw * d * v[j];
+  }
+  const double det = s0w * s2 - s1 * s1;
+  if (!(det > 1e-12 * s0w * s0w)) return t0 / s0w;  // one point or all at one place
+  return (s2 * t0 - s1 * t1) / det;
+}
+
+// A centre line along `prev`: the points' mean place in each kBinMm bin along it, smoothed by
+// local linear regression over kSmoothMm along the arch, sampled at every bin from the first
+// to the last one with points.
+Status smooth_line(Arena& arena, Span<ArchPoint> pts, const Polyline& prev, Polyline* line) {
+  double s_lo = HUGE_VAL, s_hi = -HUGE_VAL;
+  for (ArchPoint& a : pts) {
+    project(prev, a.x, a.y, &a.s, &a.o);
+    s_lo = std::min(s_lo, a.s);
+    s_hi = std::max(s_hi, a.s);
+  }
+  const double origin = std::floor(s_lo / kBinMm) * kBinMm;
+  const size_t bins = static_cast<size_t>((s_hi - origin) / kBinMm) + 1;
+  if (bins > kMaxArchPoints) {
+    return make_error(StatusCode::kInvalidArgument, "outline: the arch is ", s_hi - s_lo,
+                      " mm long (at most ", kMaxArchPoints, "): these are not two dental arches");
+  }
+  double *sx = nullptr, *sy = nullptr, *count = nullptr;
+  SPLINTCORE_RETURN_IF_ERROR(allocate(arena, bins, &sx, &sy, &count));
+  std::fill(sx, sx + bins, 0.0);
+  std::fill(sy, sy + bins, 0.0);
+  std::fill(count, count + bins, 0.0);
+  for (const ArchPoint& a : pts) {
+    size_t b = static_cast<size_t>((a.s - origin) / kBinMm);
+    b = b >= bins ? bins - 1 : b;
+    sx[b] += a.x;
+    sy[b] += a.y;
+    count[b] += 1;
+  }
+  double *bs = nullptr, *unused = nullptr, *unused2 = nullptr;
+  SPLINTCORE_RETURN_IF_ERROR(allocate(arena, bins, &bs, &unused, &unused2));
+  size_t first = bins, last = 0;
+  for (size_t b = 0; b < bins; ++b) {
+    bs[b] = origin + (static_cast<double>(b) + 0.5) * kBinMm;
+    if (count[b] == 0) continue;
+    sx[b] /= count[b];
+    sy[b] /= count[b];
+    first = std::min(first, b);
+    last = b;
+  }
+  double *x = nullptr, *y = nullptr, *s = nullptr;
+  SPLINTCORE_RETURN_IF_ERROR(allocate(arena, bins, &x, &y, &s));
+  size_t n = 0;
+  for (size_t b = first; b <= last && first < bins; ++b) {
+    x[n] = local_linear(bs, sx, count, bins, bs[b], kSmoothMm);
+    y[n] = local_linear(bs, sy, count, bins, bs[b], kSmoothMm);
+    s[n] = n == 0 ? 0
+                  : s[n - 1] + std::sqrt((x[n] - x[n - 1]) * (x[n] - x[n - 1]) +
+                                         (y[n] - y[n - 1]) * (y[n] - y[n - 1]));
+    if (n > 0 && !(s[n] > s[n - 1])) continue;
+    ++n;
+  }
+  if (n < 4) {
+    return make_error(StatusCode::kInvalidArgument, "outline: the arch is too short: ", n,
+                      " mm of it hold occlusal surfaces");
+  }
+  *line = straighten_ends(Polyline{x, y, s, n});
+  return Status::ok();
+}
+
+// Per pick: the lowest maxilla and highest mandible height and the lingual and buccal extent
+// of the points within one step along the arch; NaN where no point is.
+struct PickData {
+  double h[2];
+  double lingual, buccal;
+};
+
+void gather_pick(Span<const ArchPoint> pts, double s, double window, double side, PickData* d) {
+  d->h[0] = HUGE_VAL;
+  d->h[1] = -HUGE_VAL;
+  d->lingual = -HUGE_VAL;
+  d->buccal = -HUGE_VAL;
+  for (const ArchPoint& a : pts) {
+    if (std::fabs(a.s - s) > window) continue;
+    if (a.jaw == 0) {
+      d->h[0] = std::min(d->h[0], a.h);
+    } else {
+      d->h[1] = std::max(d->h[1], a.h);
+    }
+    d->buccal = std::max(d->buccal, a.o * side);
+    d->lingual = std::max(d->lingual, -a.o * side);
+  }
+  if (d->h[0] == HUGE_VAL) d->h[0] = NAN;
+  if (d->h[1] == -HUGE_VAL) d->h[1] = NAN;
+  if (d->buccal == -HUGE_VAL) d->buccal = d->lingual = NAN;
+}
+
+// Fills the NaN entries of v[0..n) (stride `stride` doubles) by linear interpolation between
+// the nearest known ones, or the nearest known one at the ends. False when none is known.
+bool fill_gaps(double* v, size_t n, size_t stride) {
+  size_t prev = n;
+  for (size_t i = 0; i < n; ++i) {
+    if (std::isnan(v[i * stride])) continue;
+    if (prev == n) {
+      for (size_t j = 0; j < i; ++j) v[j * stride] = v[i * stride];
+    } else {
+      for (size_t j = prev + 1; j < i; ++j) {
+        const double t = static_cast<double>(j - prev) / static_cast<double>(i - prev);
+        v[j * stride] = v[prev * stride] + t * (v[i * stride] - v[prev * stride]);
+      }
+    }
+    prev = i;
+  }
+  if (prev == n) return false;
+  for (size_t j = prev + 1; j < n; ++j) v[j * stride] = v[prev * stride];
+  return true;
+}
+
+}  // namespace
+
+Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
+                      const Vec3& lower_offset, const Frame& f, const Grid& g, const Plane& plane,
+                      const OutlineOptions& options, const OutlineBuffers& buffers, Outline* out) {
+  Arena& arena = *ctx.arena;
+  ArenaArray<ArchPoint> pts(&arena);
+  uint64_t counts[2] = {0, 0};
+  SPLINTCORE_RETURN_IF_ERROR(
+      occlusal_points(arena, upper, lower, lower_offset, f, g, plane, &pts, counts));
+  out->report.cells_upper = counts[0];
+  out->report.cells_lower = counts[1];
+  Polyline first, arch;
+  SPLINTCORE_RETURN_IF_ERROR(sector_line(arena, pts.span(), &first));
+  arch = first;
+  for (int pass = 0; pass < kSmoothPasses; ++pass) {
+    Polyline next;
+    SPLINTCORE_RETURN_IF_ERROR(smooth_line(arena, pts.span(), arch, &next));
+    arch = next;
+  }
+  double s_lo = HUGE_VAL, s_hi = -HUGE_VAL, cx = 0, cy = 0;
+  for (ArchPoint& a : pts) {
+    project(arch, a.x, a.y, &a.s, &a.o);
+    s_lo = std::min(s_lo, a.s);
+    s_hi = std::max(s_hi, a.s);
+    cx += a.x;
+    cy += a.y;
+  }
+  cx /= static_cast<double>(pts.size());
+  cy /= static_cast<double>(pts.size());
+  out->report.arch_length_mm = s_hi - s_lo;
+  if (s_hi - s_lo < kMinArchMm) {
+    return make_error(StatusCode::kInvalidArgument, "outline: the arch is too short: ", s_hi - s_lo,
+                      " mm end to end (at least ", kMinArchMm, ")");
+  }
+  const double start = s_lo - options.overhang_mm, end = s_hi + options.overhang_mm;
+  const size_t n = static_cast<size_t>(std::ceil((end - start) / options.pick_spacing_mm)) + 1;
+  const double step = (end - start) / static_cast<double>(n - 1);
+  // The buccal side: the left normal's side if, over the picks, it faces away from the centre.
+  double side = 0;
+  for (size_t i = 0; i < n; ++i) {
+    double x, y, lx, ly;
+    point_at(arch, start + step * static_cast<double>(i), &x, &y, &lx, &ly);
+    side += lx * (x - cx) + ly * (y - cy);
+  }
+  side = side < 0 ? -1.0 : 1.0;
+  if (n > kMaxPicks) {
+    return make_error(StatusCode::kInvalidArgument, "outline: the arch is ", end - start,
+                      " mm long: more than ", kMaxPicks, " picks at ", options.pick_spacing_mm,
+                      " mm apart");
+  }
+  PickData* data = arena.allocate_array<PickData>(n);
+  if (data == nullptr) return arena.exhausted_status();
+  Pick* up = buffers.upper;
+  Pick* lo = buffers.lower;
+  Vec3* line = buffers.arch;
+  for (size_t i = 0; i < n; ++i) {
+    gather_pick(pts.span(), start + step * static_cast<double>(i), step, side, &data[i]);
+  }
+  const size_t stride = sizeof(PickData) / sizeof(double);
+  if (!fill_gaps(&data[0].h[0], n, stride) || !fill_gaps(&data[0].h[1], n, stride) ||
+      !fill_gaps(&data[0].lingual, n, stride) || !fill_gaps(&data[0].buccal, n, stride)) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "outline: a jaw shows no occlusal surface along the arch");
+  }
+  const double depth = options.indentation_depth_mm;
+  out->report.min_wafer_mm = HUGE_VAL;
+  out->report.max_wafer_mm = 0;
+  for (size_t i = 0; i < n; ++i) {
+    double x, y, lx, ly;
+    point_at(arch, start + step * static_cast<double>(i), &x, &y, &lx, &ly);
+    const double top = data[i].h[0] + depth, bottom = data[i].h[1] - depth;
+    const double wafer = top - bottom;
+    if (!(wafer >= kMinWaferMm)) {
+      return make_error(StatusCode::kInvalidArgument, "outline: the wafer would be ", wafer,
+                        " mm thick at pick ", i, " (at least ", kMinWaferMm,
+                        "): the jaws are too close there; open the bite (\"bite_opening_mm\") "
+                        "or indent less")
+          .at_index(i);
+    }
+    out->report.min_wafer_mm = std::min(out->report.min_wafer_mm, wafer);
+    out->report.max_wafer_mm = std::max(out->report.max_wafer_mm, wafer);
+    const Vec3 flat = f.e1 * x + f.e2 * y;
+    const Vec3 buccal = (f.e1 * lx + f.e2 * ly) * side;
+    for (int jaw = 0; jaw < 2; ++jaw) {
+      Pick& p = jaw == 0 ? up[i] : lo[i];
+      p.position = flat + f.n * (jaw == 0 ? top : bottom);
+      p.direction = buccal;
+      p.inner_length = std::max(data[i].lingual, 0.0) + options.overhang_mm;
+      p.outside_length = std::max(data[i].buccal, 0.0) + options.overhang_mm;
+    }
+  }
+  for (size_t i = 0; i < arch.n; ++i) {
+    line[i] =
+        f.e1 * arch.x[i] + f.e2 * arch.y[i] + f.n * plane.at(arch.x[i] - g.cx, arch.y[i] - g.cy);
+  }
+  out->upper = Span<const Pick>(up, n);
+  out->lower = Span<const Pick>(lo, n);
+  out->arch = Span<const Vec3>(line, arch.n);
+  out->report.picks = static_cast<uint32_t>(n);
+  return Status::ok();
+}
+
+}  // namespace outline_detail
+}  // namespace splintcore

@@ -1,0 +1,214 @@
+// The occlusal frame and the height grids of the automatic outline (outline.h): the plane the
+// two arches meet in, fitted to where they face each other, and per jaw the surface each
+// column of a 0.5 mm lattice shows the other jaw.
+#include <cmath>
+
+#include "outline_internal.h"
+
+namespace splintcore {
+namespace outline_detail {
+
+namespace {
+
+Vec3 unit(const Vec3& v) { return v * (1.0 / length(v)); }
+
+Vec3 mesh_centroid(const Mesh& m, const Vec3& offset) {
+  Vec3 sum{};
+  for (const Vec3& v : m.vertices) sum = sum + v;
+  return sum * (1.0 / static_cast<double>(m.vertices.size())) + offset;
+}
+
+// An in-plane axis perpendicular to n, from n alone (for the first, provisional frame).
+Vec3 any_perpendicular(const Vec3& n) {
+  const Vec3 a = std::fabs(n.x) <= std::fabs(n.y) && std::fabs(n.x) <= std::fabs(n.z)
+                     ? Vec3{1, 0, 0}
+                 : std::fabs(n.y) <= std::fabs(n.z) ? Vec3{0, 1, 0}
+                                                    : Vec3{0, 0, 1};
+  return unit(cross(n, a));
+}
+
+// Solves the 3 x 3 system m x = r by Cramer's rule; false when singular.
+bool solve3(const double m[3][3], const double r[3], double x[3]) {
+  auto det = [](const double a[3][3]) {
+    return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+           a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+           a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+  };
+  const double d = det(m);
+  if (!(std::fabs(d) > 0)) return false;
+  for (int k = 0; k < 3; ++k) {
+    double a[3][3];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) a[i][j] = j == k ? r[i] : m[i][j];
+    x[k] = det(a) / d;
+  }
+  return true;
+}
+
+}  // namespace
+
+void complete_frame(const Vec3& n, const Vec3& anterior_hint, Frame* f) {
+  f->n = n;
+  Vec3 e1 = anterior_hint - n * dot(anterior_hint, n);
+  f->e1 = length(e1) > 0 ? unit(e1) : any_perpendicular(n);
+  f->e2 = cross(n, f->e1);
+}
+
+bool centroid_axis(const Mesh& upper, const Mesh& lower, const Vec3& lower_offset, Vec3* n) {
+  const Vec3 d = mesh_centroid(upper, Vec3{}) - mesh_centroid(lower, lower_offset);
+  if (!(length(d) > 1.0)) return false;
+  *n = unit(d);
+  return true;
+}
+
+// The mean of the unit vectors from the centre to every vertex, in the plane: a dental arch
+// is open at the back, so this points to the front. Continuous in the data (no vertex is
+// chosen), so the lattice it orients moves with the jaws.
+Vec3 anterior_axis(const Mesh& upper, const Mesh& lower, const Vec3& lower_offset, const Frame& f) {
+  const Vec3 c = (mesh_centroid(upper, Vec3{}) + mesh_centroid(lower, lower_offset)) * 0.5;
+  double sx = 0, sy = 0;
+  auto add = [&](const Mesh& m, const Vec3& offset) {
+    for (const Vec3& v : m.vertices) {
+      const Vec3 p = v + offset - c;
+      const double x = dot(p, f.e1), y = dot(p, f.e2);
+      const double r = std::sqrt(x * x + y * y);
+      if (r > 0) {
+        sx += x / r;
+        sy += y / r;
+      }
+    }
+  };
+  add(upper, Vec3{});
+  add(lower, lower_offset);
+  const double count = static_cast<double>(upper.vertices.size() + lower.vertices.size());
+  return (f.e1 * sx + f.e2 * sy) * (1.0 / count);
+}
+
+Status build_grid(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3& lower_offset,
+                  const Frame& f, Grid* g) {
+  double x_lo = HUGE_VAL, x_hi = -HUGE_VAL, y_lo = HUGE_VAL, y_hi = -HUGE_VAL, cx = 0, cy = 0;
+  auto extent = [&](const Mesh& m, const Vec3& offset) {
+    for (const Vec3& v : m.vertices) {
+      const double x = dot(v + offset, f.e1), y = dot(v + offset, f.e2);
+      x_lo = x < x_lo ? x : x_lo;
+      x_hi = x > x_hi ? x : x_hi;
+      y_lo = y < y_lo ? y : y_lo;
+      y_hi = y > y_hi ? y : y_hi;
+      cx += x;
+      cy += y;
+    }
+  };
+  extent(upper, Vec3{});
+  extent(lower, lower_offset);
+  const double count = static_cast<double>(upper.vertices.size() + lower.vertices.size());
+  if (x_hi - x_lo > kMaxSpanMm || y_hi - y_lo > kMaxSpanMm) {
+    return make_error(StatusCode::kInvalidArgument, "outline: the jaws span ", x_hi - x_lo, " x ",
+                      y_hi - y_lo, " mm in the occlusal plane; at most ", kMaxSpanMm,
+                      " (wrong units?)");
+  }
+  // The lattice's origin is the vertices' centroid, so it moves with the jaws.
+  g->cx = cx / count;
+  g->cy = cy / count;
+  g->ix0 = static_cast<int64_t>(std::floor((x_lo - g->cx) / kCellMm));
+  g->iy0 = static_cast<int64_t>(std::floor((y_lo - g->cy) / kCellMm));
+  g->nx = static_cast<uint32_t>(static_cast<int64_t>(std::floor((x_hi - g->cx) / kCellMm)) -
+                                g->ix0 + 1);
+  g->ny = static_cast<uint32_t>(static_cast<int64_t>(std::floor((y_hi - g->cy) / kCellMm)) -
+                                g->iy0 + 1);
+  const size_t cells = static_cast<size_t>(g->nx) * g->ny;
+  for (int jaw = 0; jaw < 2; ++jaw) {
+    g->h[jaw] = arena.allocate_array<double>(cells);
+    g->tip[jaw] = arena.allocate_array<uint32_t>(cells);
+    if (g->h[jaw] == nullptr || g->tip[jaw] == nullptr) return arena.exhausted_status();
+  }
+  fill_heights(upper, Vec3{}, f, 0, g);
+  fill_heights(lower, lower_offset, f, 1, g);
+  return Status::ok();
+}
+
+// Jaw 0 (the maxilla) shows the mandible its lowest point of each column, jaw 1 its highest.
+void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g) {
+  const size_t cells = static_cast<size_t>(g->nx) * g->ny;
+  const double none = jaw == 0 ? HUGE_VAL : -HUGE_VAL;
+  for (size_t i = 0; i < cells; ++i) {
+    g->h[jaw][i] = none;
+    g->tip[jaw][i] = kNoTip;
+  }
+  for (size_t k = 0; k < m.vertices.size(); ++k) {
+    const Vec3 p = m.vertices[k] + offset;
+    const size_t cell = g->cell_of(dot(p, f.e1), dot(p, f.e2));
+    const double h = dot(p, f.n);
+    double& best = g->h[jaw][cell];
+    if (jaw == 0 ? h < best : h > best) {
+      best = h;
+      g->tip[jaw][cell] = static_cast<uint32_t>(k);
+    }
+  }
+}
+
+bool fit_contact_plane(const Grid& g, Plane* plane, uint64_t* contact_cells) {
+  const size_t cells = static_cast<size_t>(g.nx) * g.ny;
+  double gap_min = HUGE_VAL;
+  for (size_t i = 0; i < cells; ++i) {
+    if (g.tip[0][i] == kNoTip || g.tip[1][i] == kNoTip) continue;
+    const double gap = g.h[0][i] - g.h[1][i];
+    gap_min = gap < gap_min ? gap : gap_min;
+  }
+  double m[3][3] = {}, r[3] = {};
+  uint64_t used = 0;
+  for (size_t i = 0; i < cells; ++i) {
+    if (g.tip[0][i] == kNoTip || g.tip[1][i] == kNoTip) continue;
+    if (g.h[0][i] - g.h[1][i] > gap_min + kContactBandMm) continue;
+    double x = 0, y = 0;
+    g.cell_centre(i, &x, &y);
+    const double row[3] = {1, x, y};
+    const double mid = 0.5 * (g.h[0][i] + g.h[1][i]);
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b) m[a][b] += row[a] * row[b];
+      r[a] += row[a] * mid;
+    }
+    ++used;
+  }
+  *contact_cells = used;
+  double x[3];
+  if (used < kMinContactCells || !solve3(m, r, x)) return false;
+  plane->a = x[0];
+  plane->b = x[1];
+  plane->c = x[2];
+  return true;
+}
+
+Status find_frame(Arena& arena, const Mesh& upper, const Mesh& lower, Frame* f, Grid* g,
+                  Plane* plane) {
+  Vec3 n;
+  if (!centroid_axis(upper, lower, Vec3{}, &n)) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "outline: the jaws do not face each other: their centres are less "
+                         "than 1 mm apart");
+  }
+  for (int round = 0; round < kFrameRounds; ++round) {
+    Frame provisional;
+    complete_frame(n, any_perpendicular(n), &provisional);
+    complete_frame(n, anterior_axis(upper, lower, Vec3{}, provisional), f);
+    ArenaScope scope(arena);
+    SPLINTCORE_RETURN_IF_ERROR(build_grid(arena, upper, lower, Vec3{}, *f, g));
+    uint64_t contact = 0;
+    if (!fit_contact_plane(*g, plane, &contact)) {
+      return make_error(StatusCode::kInvalidArgument,
+                        "outline: the jaws do not face each other: only ", contact,
+                        " columns of 0.5 mm see both the maxilla and the mandible across the "
+                        "occlusal plane (at least ",
+                        kMinContactCells, ")");
+    }
+    if (round + 1 == kFrameRounds) {
+      scope.commit();
+      break;
+    }
+    const Vec3 tilted = n - f->e1 * plane->b - f->e2 * plane->c;
+    n = unit(tilted);
+  }
+  return Status::ok();
+}
+
+}  // namespace outline_detail
+}  // namespace splintcore

@@ -1,0 +1,215 @@
+// compute_outline (outline.h): the frame, the bite opening, the arch and the picks.
+#include <cmath>
+
+#include "outline_internal.h"
+
+namespace splintcore {
+
+using namespace outline_detail;
+
+namespace {
+
+constexpr uint32_t kMaxAdvanceSteps = 100;
+constexpr uint32_t kBisections = 80;
+constexpr double kOpeningTolerance = 1e-9;  // mm
+// mesh_pair_distance_bound() for any two indexes: 384 (15 (a.depth + b.depth) + 1) bytes, and
+// a 4-wide tree over 32-bit Morton leaves is at most 32 deep.
+constexpr uint64_t kPairStackBound = 384 * (15 * 64 + 1) + 64;
+
+Status check_options(const OutlineOptions& o) {
+  auto in = [](double v, double lo, double hi) { return v >= lo && v <= hi; };
+  if (!(o.indentation_depth_mm > 0 && o.indentation_depth_mm <= 5)) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "outline: indentation_depth_mm must be in (0, 5], not ",
+                      o.indentation_depth_mm);
+  }
+  if (!in(o.overhang_mm, 0, 10)) {
+    return make_error(StatusCode::kInvalidArgument, "outline: overhang_mm must be in [0, 10], not ",
+                      o.overhang_mm);
+  }
+  if (!in(o.pick_spacing_mm, 2, 20)) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "outline: pick_spacing_mm must be in [2, 20], not ", o.pick_spacing_mm);
+  }
+  if (o.has_bite_opening && !in(o.bite_opening_mm, 0.1, 10)) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "outline: bite_opening_mm must be in [0.1, 10], not ", o.bite_opening_mm);
+  }
+  if (!in(o.max_gap_mm, 0.1, 50)) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "outline: max_gap_mm must be in [0.1, 50], not ", o.max_gap_mm);
+  }
+  return Status::ok();
+}
+
+Status check_jaw(const Mesh& m, const char* name) {
+  if (m.triangles.empty() || m.vertices.empty()) {
+    return make_error(StatusCode::kInvalidMesh, "outline: the ", name, " is empty");
+  }
+  for (size_t i = 0; i < m.vertices.size(); ++i) {
+    if (!is_finite(m.vertices[i])) {
+      return make_error(StatusCode::kNonFinite, "outline: the ", name,
+                        " has a vertex that is not "
+                        "finite (NaN or infinity): vertex ",
+                        i)
+          .at_index(i);
+    }
+  }
+  for (size_t i = 0; i < m.triangles.size(); ++i) {
+    const Triangle& t = m.triangles[i];
+    const size_t n = m.vertices.size();
+    if (t.v[0] >= n || t.v[1] >= n || t.v[2] >= n) {
+      return make_error(StatusCode::kInvalidMesh, "outline: the ", name, "'s triangle ", i,
+                        " refers to a vertex that does not exist")
+          .at_index(i);
+    }
+  }
+  return Status::ok();
+}
+
+// The mandible's move along -n that makes the smallest distance between the jaws exactly the
+// opening asked: conservative advancement (a move by delta changes the distance by at most
+// delta, so stepping by the distance still missing never overshoots), then bisection if it
+// has not converged. Without an opening asked, the jaws must already be apart.
+struct Opener {
+  const Context& ctx;
+  const DistanceIndex& upper;
+  const DistanceIndex& lower;
+  Vec3 n;
+  Status distance(double t, MeshPairDistance* d) const {
+    return mesh_pair_distance(ctx, upper, lower, n * (-t), HUGE_VAL, d);
+  }
+};
+
+Status advance(const Opener& op, double target, double d0, double* t_out, double* d_out,
+               uint32_t* steps) {
+  double t = 0, d = d0;
+  MeshPairDistance pair;
+  *steps = 0;
+  while (*steps < kMaxAdvanceSteps && std::fabs(d - target) > kOpeningTolerance) {
+    t += d == 0 ? target : target - d;
+    SPLINTCORE_RETURN_IF_ERROR(op.distance(t, &pair));
+    d = pair.distance;
+    ++*steps;
+  }
+  if (std::fabs(d - target) > kOpeningTolerance && d < target) {
+    // Slow convergence (a contact sliding almost along the move): bracket and bisect.
+    double lo = t, hi = t + (target - d);
+    for (uint32_t k = 0; k < 64; ++k) {
+      SPLINTCORE_RETURN_IF_ERROR(op.distance(hi, &pair));
+      if (pair.distance >= target) break;
+      lo = hi;
+      hi += target;
+    }
+    for (uint32_t k = 0; k < kBisections && hi - lo > 1e-12; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      SPLINTCORE_RETURN_IF_ERROR(op.distance(mid, &pair));
+      (pair.distance < target ? lo : hi) = mid;
+      ++*steps;
+    }
+    t = hi;
+    SPLINTCORE_RETURN_IF_ERROR(op.distance(t, &pair));
+    d = pair.distance;
+  }
+  *t_out = t;
+  *d_out = d;
+  return Status::ok();
+}
+
+Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
+                 const OutlineOptions& o, Vec3* offset, OutlineReport* r) {
+  ArenaScope scope(*ctx.arena);  // the indexes go when done
+  DistanceIndex upper, lower;
+  SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, maxilla, DistanceIndexOptions{}, &upper));
+  SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, mandible, DistanceIndexOptions{}, &lower));
+  const Opener op{ctx, upper, lower, f.n};
+  MeshPairDistance d0;
+  SPLINTCORE_RETURN_IF_ERROR(op.distance(0, &d0));
+  r->gap_as_given = d0.distance;
+  r->jaws_intersect = d0.intersecting;
+  if (d0.distance > o.max_gap_mm) {
+    return make_error(StatusCode::kInvalidArgument, "outline: the jaws are already ", d0.distance,
+                      " mm apart (maxilla triangle ", d0.triangle_a, ", mandible triangle ",
+                      d0.triangle_b, "); a wafer bridges at most ", o.max_gap_mm, " mm");
+  }
+  *offset = Vec3{};
+  r->opening = d0.distance;
+  if (!o.has_bite_opening) {
+    if (d0.distance > 0) return Status::ok();
+    return make_error(StatusCode::kInvalidArgument, "outline: the jaws ",
+                      d0.intersecting ? "interpenetrate" : "touch", " as given (maxilla triangle ",
+                      d0.triangle_a, ", mandible triangle ", d0.triangle_b,
+                      "): open the bite with \"bite_opening_mm\" (e.g. 2)");
+  }
+  double t = 0, d = 0;
+  SPLINTCORE_RETURN_IF_ERROR(
+      advance(op, o.bite_opening_mm, d0.distance, &t, &d, &r->opening_steps));
+  *offset = f.n * (-t);
+  r->opened = true;
+  r->mandible_translation = *offset;
+  r->opening = d;
+  return Status::ok();
+}
+
+}  // namespace
+
+uint64_t compute_outline_bound(uint64_t maxilla_vertices, uint64_t maxilla_triangles,
+                               uint64_t mandible_vertices, uint64_t mandible_triangles) {
+  const uint64_t side = static_cast<uint64_t>(kMaxSpanMm / kCellMm) + 2;
+  const uint64_t cells = side * side;
+  uint64_t points = maxilla_vertices + mandible_vertices;
+  points = points < 2 * cells ? points : 2 * cells;
+  const uint64_t buffers =
+      2 * arena_array_bound<Pick>(kMaxPicks) + arena_array_bound<Vec3>(kMaxArchPoints);
+  const uint64_t grid = 2 * (arena_array_bound<double>(cells) + arena_array_bound<uint32_t>(cells));
+  const uint64_t arch = arena_array_bound<double>(cells) + arena_array_bound<ArchPoint>(points) +
+                        6 * arena_array_bound<double>(kSectors) +
+                        6 * arena_array_bound<double>(2 * points + 16) +
+                        arena_array_bound<double>(4 * kMaxPicks);
+  const DistanceIndexOptions io;
+  const uint64_t opening = distance_index_bound(maxilla_vertices, maxilla_triangles, io) +
+                           distance_index_bound(mandible_vertices, mandible_triangles, io) +
+                           kPairStackBound;
+  const uint64_t after_frame = opening > arch ? opening : arch;
+  return buffers + grid + after_frame;
+}
+
+Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mandible,
+                       const OutlineOptions& options, Outline* out) {
+  *out = Outline{};
+  SPLINTCORE_RETURN_IF_ERROR(check_options(options));
+  SPLINTCORE_RETURN_IF_ERROR(check_jaw(maxilla, "maxilla"));
+  SPLINTCORE_RETURN_IF_ERROR(check_jaw(mandible, "mandible"));
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);
+  OutlineBuffers buffers;
+  buffers.upper = arena.allocate_array<Pick>(kMaxPicks);
+  buffers.lower = arena.allocate_array<Pick>(kMaxPicks);
+  buffers.arch = arena.allocate_array<Vec3>(kMaxArchPoints);
+  if (buffers.upper == nullptr || buffers.lower == nullptr || buffers.arch == nullptr) {
+    return arena.exhausted_status();
+  }
+  {
+    ArenaScope work(arena);  // the grid, the indexes and the points go when done
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 0, 3));
+    Frame f;
+    Grid g;
+    Plane plane;
+    SPLINTCORE_RETURN_IF_ERROR(find_frame(arena, maxilla, mandible, &f, &g, &plane));
+    out->report.occlusal_normal = f.n;
+    out->report.anterior = f.e1;
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 1, 3));
+    Vec3 offset;
+    SPLINTCORE_RETURN_IF_ERROR(
+        open_bite(ctx, maxilla, mandible, f, options, &offset, &out->report));
+    // The move is along n: the columns stay; only the mandible's heights change.
+    if (out->report.opened) fill_heights(mandible, offset, f, 1, &g);
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 2, 3));
+    SPLINTCORE_RETURN_IF_ERROR(
+        arch_and_picks(ctx, maxilla, mandible, offset, f, g, plane, options, buffers, out));
+  }
+  scope.commit();
+  return report_progress(ctx, "outline", 3, 3);
+}
+
+}  // namespace splintcore

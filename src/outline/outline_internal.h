@@ -1,0 +1,105 @@
+// The automatic outline's parts (outline.h), shared by its files only.
+#ifndef SPLINTCORE_SRC_OUTLINE_INTERNAL_H
+#define SPLINTCORE_SRC_OUTLINE_INTERNAL_H
+
+#include <cmath>
+
+#include "splintcore/outline.h"
+
+namespace splintcore {
+namespace outline_detail {
+
+constexpr double kCellMm = 0.5;            // the lattice's columns
+constexpr double kMaxSpanMm = 250.0;       // the jaws' extent in the plane, at most
+constexpr double kContactBandMm = 3.0;     // columns within this of the closest fit the plane
+constexpr uint64_t kMinContactCells = 20;  // columns that see both jaws, at least
+constexpr int kFrameRounds = 3;            // plane fits (each tilts the normal)
+constexpr double kOcclusalBandMm = 3.5;    // an occlusal column: this near the jaw's tips
+constexpr uint64_t kMinOcclusalCells = 20;
+constexpr uint32_t kSectors = 128;         // around the arch's centre (pseudo-angle)
+constexpr double kBinMm = 1.0;             // along the arch, for its centre line
+constexpr double kSmoothMm = 10.0;         // half-width of the centre line's smoothing
+constexpr double kMaxReachMm = 8.0;        // how far the centre line goes on past its ends
+constexpr size_t kTurnBins = 3;            // straighten_ends: the chords it compares
+constexpr double kMaxTurnCosine = 0.7071;  // cos 45 degrees
+constexpr double kEndTrimMm = 3.0;         // straighten_ends (arch.cpp)
+constexpr double kEndChordMm = 5.0;
+constexpr int kSmoothPasses = 4;    // project, bin, smooth: each pass
+constexpr double kTangentMm = 8.0;  // chord for the arch's direction at a pick
+constexpr double kMinArchMm = 20.0;
+constexpr double kMinWaferMm = 1.0;                       // top to bottom, at every pick
+constexpr size_t kMaxPicks = kMaxOutlinePicks;            // per jaw
+constexpr size_t kMaxArchPoints = kMaxOutlineArchPoints;  // kBinMm bins along the arch
+constexpr uint32_t kNoTip = ~uint32_t{0};
+
+// n: from the mandible towards the maxilla; e1 towards the front; e2 = n x e1.
+struct Frame {
+  Vec3 n{0, 0, 1}, e1{1, 0, 0}, e2{0, 1, 0};
+};
+
+// A lattice of kCellMm columns along n over the plane (e1, e2), origin at the vertices'
+// centroid (cx, cy). Per jaw and column: the height (along n) of the vertex the column shows
+// the other jaw (0: the maxilla's lowest, 1: the mandible's highest) and its index.
+struct Grid {
+  double cx = 0, cy = 0;
+  int64_t ix0 = 0, iy0 = 0;
+  uint32_t nx = 0, ny = 0;
+  double* h[2] = {nullptr, nullptr};
+  uint32_t* tip[2] = {nullptr, nullptr};
+
+  size_t cell_of(double x, double y) const {
+    int64_t ix = static_cast<int64_t>(std::floor((x - cx) / kCellMm)) - ix0;
+    int64_t iy = static_cast<int64_t>(std::floor((y - cy) / kCellMm)) - iy0;
+    ix = ix < 0 ? 0 : (ix >= nx ? nx - 1 : ix);
+    iy = iy < 0 ? 0 : (iy >= ny ? ny - 1 : iy);
+    return static_cast<size_t>(iy) * nx + static_cast<size_t>(ix);
+  }
+  // The column's centre relative to (cx, cy).
+  void cell_centre(size_t i, double* x, double* y) const {
+    *x = (static_cast<double>(ix0 + static_cast<int64_t>(i % nx)) + 0.5) * kCellMm;
+    *y = (static_cast<double>(iy0 + static_cast<int64_t>(i / nx)) + 0.5) * kCellMm;
+  }
+};
+
+// Height a + b x + c y over the plane, x and y relative to the grid's (cx, cy).
+struct Plane {
+  double a = 0, b = 0, c = 0;
+  double at(double x, double y) const { return a + b * x + c * y; }
+};
+
+void complete_frame(const Vec3& n, const Vec3& anterior_hint, Frame* f);
+bool centroid_axis(const Mesh& upper, const Mesh& lower, const Vec3& lower_offset, Vec3* n);
+Vec3 anterior_axis(const Mesh& upper, const Mesh& lower, const Vec3& lower_offset, const Frame& f);
+Status build_grid(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3& lower_offset,
+                  const Frame& f, Grid* g);
+void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g);
+bool fit_contact_plane(const Grid& g, Plane* plane, uint64_t* contact_cells);
+// The frame (three plane fits) and the grid and plane of the last, left in the arena.
+Status find_frame(Arena& arena, const Mesh& upper, const Mesh& lower, Frame* f, Grid* g,
+                  Plane* plane);
+
+// An occlusal column's shown vertex: its place in the plane (absolute x along e1, y along
+// e2), its height along n, the jaw, and where it projects on the arch (s along it, o across,
+// positive buccal).
+struct ArchPoint {
+  double x = 0, y = 0, h = 0;
+  double s = 0, o = 0;
+  uint32_t jaw = 0;
+};
+
+// Where the results go: kMaxPicks picks per jaw, kMaxArchPoints arch points.
+struct OutlineBuffers {
+  Pick* upper = nullptr;
+  Pick* lower = nullptr;
+  Vec3* arch = nullptr;
+};
+
+// The arch and the picks from the grids (arch.cpp). `lower_offset`: the mandible's move.
+Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
+                      const Vec3& lower_offset, const Frame& f, const Grid& g, const Plane& plane,
+                      const OutlineOptions& options, const OutlineBuffers& buffers, Outline* out);
+
+}  // namespace outline_detail
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_SRC_OUTLINE_INTERNAL_H
