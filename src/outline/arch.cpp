@@ -77,23 +77,35 @@ Status allocate(Arena& arena, size_t n, double** a, double** b, double** c) {
   return *a != nullptr && *b != nullptr && *c != nullptr ? Status::ok() : arena.exhausted_status();
 }
 
-// The occlusal columns of both jaws: those within kOcclusalBandMm of the jaw's tips (the
-// hundredth lowest distance from the plane), as ArchPoints.
+// The occlusal surfaces of both jaws: the columns within kOcclusalBandMm of the jaw's tips (the
+// hundredth lowest distance from the plane) as ArchPoints in `cells` (their extremes set the
+// picks' heights and widths), and the vertices within the same band in `line` (every k-th in
+// index order, at most kLinePoints a jaw: the centre line's points). The line takes vertices,
+// not columns, so that it moves with the jaws: which vertex a column shows can change with a
+// rounding when the jaws move, which vertices lie in the band only where one lies on its edge.
 Status occlusal_points(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3& lower_offset,
                        const Frame& f, const Grid& g, const Plane& plane,
-                       ArenaArray<ArchPoint>* out, uint64_t counts[2]) {
+                       ArenaArray<ArchPoint>* cells_out, ArenaArray<ArchPoint>* line,
+                       uint64_t counts[2]) {
   const size_t cells = static_cast<size_t>(g.nx) * g.ny;
   double* r = arena.allocate_array<double>(cells);
   if (r == nullptr) return arena.exhausted_status();
   for (uint32_t jaw = 0; jaw < 2; ++jaw) {
     const Mesh& m = jaw == 0 ? upper : lower;
     const Vec3 offset = jaw == 0 ? Vec3{} : lower_offset;
+    // Distance from the plane towards the jaw's own side (>= about 0 at the tips).
+    auto depth_of = [&](const Vec3& p, double* x, double* y, double* h) {
+      *x = dot(p, f.e1);
+      *y = dot(p, f.e2);
+      *h = dot(p, f.n);
+      const double above = *h - plane.at(*x - g.cx, *y - g.cy);
+      return jaw == 0 ? above : -above;
+    };
     size_t used = 0;
     for (size_t i = 0; i < cells; ++i) {
       if (g.tip[jaw][i] == kNoTip) continue;
-      const Vec3 p = m.vertices[g.tip[jaw][i]] + offset;
-      const double above = g.h[jaw][i] - plane.at(dot(p, f.e1) - g.cx, dot(p, f.e2) - g.cy);
-      r[used++] = jaw == 0 ? above : -above;
+      double x, y, h;
+      r[used++] = depth_of(m.vertices[g.tip[jaw][i]] + offset, &x, &y, &h);
     }
     if (used < kMinOcclusalCells) {
       return make_error(StatusCode::kInvalidArgument, "outline: no teeth found on the ",
@@ -105,16 +117,25 @@ Status occlusal_points(Arena& arena, const Mesh& upper, const Mesh& lower, const
     counts[jaw] = 0;
     for (size_t i = 0; i < cells; ++i) {
       if (g.tip[jaw][i] == kNoTip) continue;
-      const Vec3 p = m.vertices[g.tip[jaw][i]] + offset;
       ArchPoint a;
-      a.x = dot(p, f.e1);
-      a.y = dot(p, f.e2);
-      a.h = g.h[jaw][i];
       a.jaw = jaw;
-      const double above = a.h - plane.at(a.x - g.cx, a.y - g.cy);
-      if ((jaw == 0 ? above : -above) > limit) continue;
-      if (!out->push_back(a)) return arena.exhausted_status();
+      if (depth_of(m.vertices[g.tip[jaw][i]] + offset, &a.x, &a.y, &a.h) > limit) continue;
+      if (!cells_out->push_back(a)) return arena.exhausted_status();
       ++counts[jaw];
+    }
+    size_t in_band = 0;
+    for (const Vec3& v : m.vertices) {
+      double x, y, h;
+      if (depth_of(v + offset, &x, &y, &h) <= limit) ++in_band;
+    }
+    const size_t every = in_band / kLinePoints + 1;
+    size_t seen = 0;
+    for (const Vec3& v : m.vertices) {
+      ArchPoint a;
+      a.jaw = jaw;
+      if (depth_of(v + offset, &a.x, &a.y, &a.h) > limit) continue;
+      if (seen++ % every != 0) continue;
+      if (!line->push_back(a)) return arena.exhausted_status();
     }
   }
   return Status::ok();
@@ -384,30 +405,33 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
                       const Vec3& lower_offset, const Frame& f, const Grid& g, const Plane& plane,
                       const OutlineOptions& options, const OutlineBuffers& buffers, Outline* out) {
   Arena& arena = *ctx.arena;
-  ArenaArray<ArchPoint> pts(&arena);
+  ArenaArray<ArchPoint> pts(&arena), line_pts(&arena);
   uint64_t counts[2] = {0, 0};
   SPLINTCORE_RETURN_IF_ERROR(
-      occlusal_points(arena, upper, lower, lower_offset, f, g, plane, &pts, counts));
+      occlusal_points(arena, upper, lower, lower_offset, f, g, plane, &pts, &line_pts, counts));
   out->report.cells_upper = counts[0];
   out->report.cells_lower = counts[1];
   Polyline first, arch;
-  SPLINTCORE_RETURN_IF_ERROR(sector_line(arena, pts.span(), &first));
+  SPLINTCORE_RETURN_IF_ERROR(sector_line(arena, line_pts.span(), &first));
   arch = first;
   for (int pass = 0; pass < kSmoothPasses; ++pass) {
     Polyline next;
-    SPLINTCORE_RETURN_IF_ERROR(smooth_line(arena, pts.span(), arch, &next));
+    SPLINTCORE_RETURN_IF_ERROR(smooth_line(arena, line_pts.span(), arch, &next));
     arch = next;
   }
+  // The ends and the centre from the band's vertices (they move with the jaws; see
+  // occlusal_points), the columns' places along the arch for the picks' windows.
   double s_lo = HUGE_VAL, s_hi = -HUGE_VAL, cx = 0, cy = 0;
-  for (ArchPoint& a : pts) {
+  for (ArchPoint& a : line_pts) {
     project(arch, a.x, a.y, &a.s, &a.o);
     s_lo = std::min(s_lo, a.s);
     s_hi = std::max(s_hi, a.s);
     cx += a.x;
     cy += a.y;
   }
-  cx /= static_cast<double>(pts.size());
-  cy /= static_cast<double>(pts.size());
+  cx /= static_cast<double>(line_pts.size());
+  cy /= static_cast<double>(line_pts.size());
+  for (ArchPoint& a : pts) project(arch, a.x, a.y, &a.s, &a.o);
   out->report.arch_length_mm = s_hi - s_lo;
   if (s_hi - s_lo < kMinArchMm) {
     return make_error(StatusCode::kInvalidArgument, "outline: the arch is too short: ", s_hi - s_lo,

@@ -12,6 +12,7 @@ namespace {
 constexpr uint32_t kMaxAdvanceSteps = 100;
 constexpr uint32_t kBisections = 80;
 constexpr double kOpeningTolerance = 1e-9;  // mm
+constexpr double kNearReachMm = 1.0;        // open_bite's first band
 // mesh_pair_distance_bound() for any two indexes: 384 (15 (a.depth + b.depth) + 1) bytes, and
 // a 4-wide tree over 32-bit Morton leaves is at most 32 deep.
 constexpr uint64_t kPairStackBound = 384 * (15 * 64 + 1) + 64;
@@ -116,21 +117,89 @@ Status advance(const Opener& op, double target, double d0, double* t_out, double
   return Status::ok();
 }
 
+// The part of each jaw that can come within `reach` of the other while the mandible moves
+// along n away from the maxilla (or back towards it by at most `reach`): a pair of points at
+// most `reach` apart differs by at most that much in height along n, so the maxilla's
+// triangles lower than the mandible's top plus 2 reach, and the mandible's higher than the
+// maxilla's bottom minus 2 reach, hold every such pair. ids[k]: the jaw's triangle of view
+// triangle k.
+struct JawBand {
+  Mesh view;
+  uint32_t* ids = nullptr;
+};
+
+Status jaw_band(Arena& arena, const Mesh& m, const Vec3& n, bool upper, double bound,
+                JawBand* out) {
+  size_t kept = 0;
+  auto keeps = [&](const Triangle& t) {
+    const double h0 = dot(m.vertices[t.v[0]], n), h1 = dot(m.vertices[t.v[1]], n),
+                 h2 = dot(m.vertices[t.v[2]], n);
+    return upper ? std::fmin(h0, std::fmin(h1, h2)) <= bound
+                 : std::fmax(h0, std::fmax(h1, h2)) >= bound;
+  };
+  for (const Triangle& t : m.triangles) {
+    if (keeps(t)) ++kept;
+  }
+  Triangle* tris = arena.allocate_array<Triangle>(kept > 0 ? kept : 1);
+  out->ids = arena.allocate_array<uint32_t>(kept > 0 ? kept : 1);
+  if (tris == nullptr || out->ids == nullptr) return arena.exhausted_status();
+  size_t k = 0;
+  for (size_t i = 0; i < m.triangles.size(); ++i) {
+    if (!keeps(m.triangles[i])) continue;
+    tris[k] = m.triangles[i];
+    out->ids[k++] = static_cast<uint32_t>(i);
+  }
+  out->view = mesh_view(m.vertices.span(), Span<const Triangle>(tris, kept));
+  return Status::ok();
+}
+
+// The smallest distance between the jaws (the mandible moved by -t n) exactly for every t the
+// opening visits, when it is at most `reach` (else some value above `reach`).
+struct BandedOpener {
+  JawBand upper, lower;
+  DistanceIndex upper_index, lower_index;
+};
+
+Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Vec3& n,
+                     double reach, BandedOpener* b) {
+  double low_u = HUGE_VAL, high_l = -HUGE_VAL;
+  for (const Vec3& v : maxilla.vertices) low_u = std::fmin(low_u, dot(v, n));
+  for (const Vec3& v : mandible.vertices) high_l = std::fmax(high_l, dot(v, n));
+  SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, maxilla, n, true, high_l + 2 * reach, &b->upper));
+  SPLINTCORE_RETURN_IF_ERROR(
+      jaw_band(*ctx.arena, mandible, n, false, low_u - 2 * reach, &b->lower));
+  SPLINTCORE_RETURN_IF_ERROR(
+      build_distance_index(ctx, b->upper.view, DistanceIndexOptions{}, &b->upper_index));
+  return build_distance_index(ctx, b->lower.view, DistanceIndexOptions{}, &b->lower_index);
+}
+
 Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
                  const OutlineOptions& o, Vec3* offset, OutlineReport* r) {
-  ArenaScope scope(*ctx.arena);  // the indexes go when done
-  DistanceIndex upper, lower;
-  SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, maxilla, DistanceIndexOptions{}, &upper));
-  SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, mandible, DistanceIndexOptions{}, &lower));
-  const Opener op{ctx, upper, lower, f.n};
+  ArenaScope scope(*ctx.arena);  // the bands and their indexes go when done
+  // Near reach first (the jaws as scanned touch): exact up to it. Farther apart, again with
+  // the reach of the largest gap accepted.
+  const double target = o.has_bite_opening ? o.bite_opening_mm : 0.0;
+  double reach = std::fmax(target, kNearReachMm);
+  BandedOpener b;
+  SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f.n, reach, &b));
   MeshPairDistance d0;
-  SPLINTCORE_RETURN_IF_ERROR(op.distance(0, &d0));
+  const Opener near{ctx, b.upper_index, b.lower_index, f.n};
+  SPLINTCORE_RETURN_IF_ERROR(near.distance(0, &d0));
+  if (d0.distance > reach) {
+    ctx.arena->rewind(scope.start());
+    reach = o.max_gap_mm + target;
+    SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f.n, reach, &b));
+    const Opener far{ctx, b.upper_index, b.lower_index, f.n};
+    SPLINTCORE_RETURN_IF_ERROR(far.distance(0, &d0));
+  }
+  const Opener op{ctx, b.upper_index, b.lower_index, f.n};
+  const uint32_t tri_u = d0.distance <= reach ? b.upper.ids[d0.triangle_a] : 0;
+  const uint32_t tri_l = d0.distance <= reach ? b.lower.ids[d0.triangle_b] : 0;
   r->gap_as_given = d0.distance;
   r->jaws_intersect = d0.intersecting;
   if (d0.distance > o.max_gap_mm) {
-    return make_error(StatusCode::kInvalidArgument, "outline: the jaws are already ", d0.distance,
-                      " mm apart (maxilla triangle ", d0.triangle_a, ", mandible triangle ",
-                      d0.triangle_b, "); a wafer bridges at most ", o.max_gap_mm, " mm");
+    return make_error(StatusCode::kInvalidArgument, "outline: the jaws are more than ",
+                      o.max_gap_mm, " mm apart; a wafer bridges at most that");
   }
   *offset = Vec3{};
   r->opening = d0.distance;
@@ -138,7 +207,7 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
     if (d0.distance > 0) return Status::ok();
     return make_error(StatusCode::kInvalidArgument, "outline: the jaws ",
                       d0.intersecting ? "interpenetrate" : "touch", " as given (maxilla triangle ",
-                      d0.triangle_a, ", mandible triangle ", d0.triangle_b,
+                      tri_u, ", mandible triangle ", tri_l,
                       "): open the bite with \"bite_opening_mm\" (e.g. 2)");
   }
   double t = 0, d = 0;

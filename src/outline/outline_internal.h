@@ -16,6 +16,7 @@ constexpr uint64_t kMinContactCells = 20;  // columns that see both jaws, at lea
 constexpr int kFrameRounds = 3;            // plane fits (each tilts the normal)
 constexpr double kOcclusalBandMm = 3.5;    // an occlusal column: this near the jaw's tips
 constexpr uint64_t kMinOcclusalCells = 20;
+constexpr size_t kLinePoints = 16384;      // band vertices per jaw for the centre line, at most
 constexpr uint32_t kSectors = 128;         // around the arch's centre (pseudo-angle)
 constexpr double kBinMm = 1.0;             // along the arch, for its centre line
 constexpr double kSmoothMm = 10.0;         // half-width of the centre line's smoothing
