@@ -161,6 +161,12 @@ inline double box_gap2(const double alo[3], const double ahi[3], const double bl
   return sum;
 }
 
+inline double box_gap2(const Vec3& alo, const Vec3& ahi, const double blo[3],
+                       const double bhi[3]) {
+  const double a_lo[3] = {alo.x, alo.y, alo.z}, a_hi[3] = {ahi.x, ahi.y, ahi.z};
+  return box_gap2(a_lo, a_hi, blo, bhi);
+}
+
 struct PairSearch {
   const DistanceIndex* index[2] = {nullptr, nullptr};
   Vec3 shift[2];
@@ -235,26 +241,41 @@ void PairSearch::consider(uint32_t ta, uint32_t tb, const TriangleBox& x, const 
   }
 }
 
-// Every triangle pair of two leaves whose boxes are within reach.
+// Every triangle pair of two leaves whose boxes are within reach. A triangle is kept only if
+// its box is within reach of the other leaf's box (which holds the other triangles' boxes:
+// rounding is monotone, so its computed gap is no larger), and A's triangles face the box of
+// B's kept ones: the same pairs reach consider() as when testing all of them, for a fraction
+// of the box tests and none of the pairs of far triangles.
 void PairSearch::leaf_pair(const PairEntry& e) {
   const BvhNode& na = index[0]->nodes[e.node_a];
   const BvhNode& nb = index[1]->nodes[e.node_b];
   const uint32_t a_first = na.child[e.slot_a], a_count = na.count[e.slot_a];
   const uint32_t b_first = nb.child[e.slot_b], b_count = nb.count[e.slot_b];
+  double alo[3], ahi[3];
+  item_box(0, e.node_a, e.slot_a, alo, ahi);
   TriangleBox bs[16];
+  uint32_t b_ids[16], kept = 0;
+  Vec3 b_lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, b_hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
   for (uint32_t j = 0; j < b_count; ++j) {
-    load_triangle(*index[1]->mesh, index[1]->order[b_first + j], shift[1], &bs[j]);
+    const uint32_t tb = index[1]->order[b_first + j];
+    load_triangle(*index[1]->mesh, tb, shift[1], &bs[kept]);
+    if (box_gap2(bs[kept].lo, bs[kept].hi, alo, ahi) > reach2) continue;
+    b_lo = min_vec(b_lo, bs[kept].lo);
+    b_hi = max_vec(b_hi, bs[kept].hi);
+    b_ids[kept++] = tb;
   }
+  if (kept == 0) return;
+  const double blo[3] = {b_lo.x, b_lo.y, b_lo.z}, bhi[3] = {b_hi.x, b_hi.y, b_hi.z};
   for (uint32_t i = 0; i < a_count; ++i) {
     const uint32_t ta = index[0]->order[a_first + i];
     TriangleBox x;
     load_triangle(*index[0]->mesh, ta, shift[0], &x);
-    for (uint32_t j = 0; j < b_count; ++j) {
-      const double alo[3] = {x.lo.x, x.lo.y, x.lo.z}, ahi[3] = {x.hi.x, x.hi.y, x.hi.z};
-      const double blo[3] = {bs[j].lo.x, bs[j].lo.y, bs[j].lo.z};
-      const double bhi[3] = {bs[j].hi.x, bs[j].hi.y, bs[j].hi.z};
-      if (box_gap2(alo, ahi, blo, bhi) > reach2) continue;
-      consider(ta, index[1]->order[b_first + j], x, bs[j]);
+    if (box_gap2(x.lo, x.hi, blo, bhi) > reach2) continue;
+    for (uint32_t j = 0; j < kept; ++j) {
+      const double ylo[3] = {bs[j].lo.x, bs[j].lo.y, bs[j].lo.z};
+      const double yhi[3] = {bs[j].hi.x, bs[j].hi.y, bs[j].hi.z};
+      if (box_gap2(x.lo, x.hi, ylo, yhi) > reach2) continue;
+      consider(ta, b_ids[j], x, bs[j]);
     }
   }
 }
