@@ -161,8 +161,7 @@ inline double box_gap2(const double alo[3], const double ahi[3], const double bl
   return sum;
 }
 
-inline double box_gap2(const Vec3& alo, const Vec3& ahi, const double blo[3],
-                       const double bhi[3]) {
+inline double box_gap2(const Vec3& alo, const Vec3& ahi, const double blo[3], const double bhi[3]) {
   const double a_lo[3] = {alo.x, alo.y, alo.z}, a_hi[3] = {ahi.x, ahi.y, ahi.z};
   return box_gap2(a_lo, a_hi, blo, bhi);
 }
