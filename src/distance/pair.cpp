@@ -166,6 +166,24 @@ inline double box_gap2(const Vec3& alo, const Vec3& ahi, const double blo[3], co
   return box_gap2(a_lo, a_hi, blo, bhi);
 }
 
+// A lower bound on the distance between triangles t and o (to rounding): how far o's corners
+// all lie on one side of t's plane, along t's (computed, unnormalised) normal u. Exact for any
+// u, the bound's own rounding is that of a few dot products of u with coordinates at most M in
+// magnitude: under 32 eps M, far below the caller's margin 2^-40 (M + 1) when M <= 2^200 (no
+// overflow). 0 for a degenerate t or corners on both sides.
+inline double separation(const Vec3 t[3], const Vec3 o[3]) {
+  const Vec3 u = cross(t[1] - t[0], t[2] - t[0]);
+  const double norm = std::sqrt(dot(u, u));
+  if (!(norm > 0x1p-500)) return 0;  // degenerate, or a normal too short to divide by
+  const double c = dot(u, t[0]);
+  const double v0 = dot(u, o[0]) - c, v1 = dot(u, o[1]) - c, v2 = dot(u, o[2]) - c;
+  if (v0 > 0 && v1 > 0 && v2 > 0)
+    return (v0 < v1 ? (v0 < v2 ? v0 : v2) : (v1 < v2 ? v1 : v2)) / norm;
+  if (v0 < 0 && v1 < 0 && v2 < 0)
+    return -(v0 > v1 ? (v0 > v2 ? v0 : v2) : (v1 > v2 ? v1 : v2)) / norm;
+  return 0;
+}
+
 struct PairSearch {
   const DistanceIndex* index[2] = {nullptr, nullptr};
   Vec3 shift[2];
@@ -177,6 +195,10 @@ struct PairSearch {
   uint32_t best_a = 0, best_b = 0;
   double slack = 0;          // absolute rounding margin (mm)
   double reach2 = HUGE_VAL;  // boxes farther than this (squared, as computed) are pruned
+  double reach = HUGE_VAL;   // its square root (rounded up): for separations along a normal
+  // Bounds the rounding of a computed separation along a triangle's normal (see separation());
+  // +inf when the coordinates are so large that the products could overflow: no such test.
+  double separation_margin = HUGE_VAL;
 
   // reach2 from best2: a pair of boxes whose computed distance is at most reach may hold a
   // pair whose computed distance is at most best. Box gaps round by a few ulps; a triangle
@@ -185,11 +207,11 @@ struct PairSearch {
   // with a wide berth, and prune nothing that matters.
   void update_reach() {
     if (!(best2 < HUGE_VAL)) {
-      reach2 = HUGE_VAL;
+      reach2 = reach = HUGE_VAL;
       return;
     }
-    const double r = (std::sqrt(best2) + slack) * (1.0 + 0x1p-19);
-    reach2 = r * r;
+    reach = (std::sqrt(best2) + slack) * (1.0 + 0x1p-19);
+    reach2 = reach * reach;
   }
 
   // The box of an item (not the root) in double, shifted for B.
@@ -217,6 +239,15 @@ inline bool pair_less(uint32_t a0, uint32_t b0, uint32_t a1, uint32_t b1) {
 // Triangle ta of A against tb of B (moved), boxes within reach.
 void PairSearch::consider(uint32_t ta, uint32_t tb, const TriangleBox& x, const TriangleBox& y) {
   const bool smaller = !found || pair_less(ta, tb, best_a, best_b);
+  // At distance 0 only a smaller pair can win (and only by meeting or by a distance of 0).
+  if (best2 == 0 && !smaller) return;
+  // Triangles whose planes keep them apart by more than reach: their computed distance exceeds
+  // best2 (the reasoning of update_reach()), and they do not meet. Near-parallel surfaces
+  // leave many such pairs within reach of each other's boxes.
+  if (separation(x.p, y.p) - separation_margin > reach ||
+      separation(y.p, x.p) - separation_margin > reach) {
+    return;
+  }
   // Meeting is worth testing only if (0, ta, tb) would win, and possible only if the boxes
   // overlap (exactly: these are the moved coordinates themselves).
   if ((best2 > 0 || smaller) && x.lo.x <= y.hi.x && y.lo.x <= x.hi.x && x.lo.y <= y.hi.y &&
@@ -408,7 +439,9 @@ Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const Dist
   s.index[1] = &b;
   s.shift[1] = offset_b;
   const double ma = root_magnitude(a, s.shift[0]), mb = root_magnitude(b, s.shift[1]);
-  s.slack = ((ma > mb ? ma : mb) + 1.0) * 0x1p-30;
+  const double magnitude = ma > mb ? ma : mb;
+  s.slack = (magnitude + 1.0) * 0x1p-30;
+  if (magnitude <= 0x1p200) s.separation_margin = (magnitude + 1.0) * 0x1p-40;
   s.best2 = max_distance * max_distance;
   s.update_reach();
   s.stack[s.top++] = PairEntry{0, 0, kRootSlot, kRootSlot, 0.0};
