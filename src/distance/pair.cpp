@@ -137,6 +137,10 @@ struct PairEntry {
   double lb2;
 };
 
+// The best-first queue's capacity: enough for the pairs within reach of two dentitions' trees
+// at any opening measured, a few tens of kilobytes.
+constexpr uint32_t kHeapEntries = 2048;
+
 struct TriangleBox {
   Vec3 p[3];
   Vec3 lo, hi;
@@ -189,6 +193,8 @@ struct PairSearch {
   Vec3 shift[2];
   PairEntry* stack = nullptr;
   uint64_t top = 0, capacity = 0;
+  PairEntry* heap = nullptr;  // kHeapEntries
+  uint32_t heap_size = 0;
   // The best pair so far by (best2, triangle a, triangle b); before any, best2 is the limit.
   double best2 = HUGE_VAL;
   bool found = false, meet = false;
@@ -229,7 +235,11 @@ struct PairSearch {
 
   void consider(uint32_t ta, uint32_t tb, const TriangleBox& x, const TriangleBox& y);
   void leaf_pair(const PairEntry& e);
-  bool expand(const PairEntry& e);
+  uint32_t children(const PairEntry& e, PairEntry found_pairs[16]) const;
+  bool depth_first(const PairEntry& first);
+  void heap_push(const PairEntry& e);
+  PairEntry heap_pop();
+  bool run();
 };
 
 inline bool pair_less(uint32_t a0, uint32_t b0, uint32_t a1, uint32_t b1) {
@@ -310,10 +320,9 @@ void PairSearch::leaf_pair(const PairEntry& e) {
   }
 }
 
-// Replaces an entry with at least one inner item by the pairs of its items' children (an
-// inner item stands for its node's children, a leaf for itself) within reach, the nearest on
-// top. False when the stack is full (a depth field that does not match the tree).
-bool PairSearch::expand(const PairEntry& e) {
+// The pairs of an entry's items' children (an inner item stands for its node's children, a
+// leaf for itself) within reach, at most 16, by decreasing box distance: their number.
+uint32_t PairSearch::children(const PairEntry& e, PairEntry found_pairs[16]) const {
   uint32_t nodes[2][4];
   uint8_t slots[2][4];
   uint32_t counts[2] = {0, 0};
@@ -333,7 +342,6 @@ bool PairSearch::expand(const PairEntry& e) {
       slots[s][counts[s]++] = k;
     }
   }
-  PairEntry found_pairs[16];
   uint32_t m = 0;
   double blo[4][3], bhi[4][3];
   for (uint32_t j = 0; j < counts[1]; ++j) item_box(1, nodes[1][j], slots[1][j], blo[j], bhi[j]);
@@ -343,7 +351,6 @@ bool PairSearch::expand(const PairEntry& e) {
     for (uint32_t j = 0; j < counts[1]; ++j) {
       const double lb2 = box_gap2(alo, ahi, blo[j], bhi[j]);
       if (lb2 > reach2) continue;
-      // Insertion by decreasing distance: the nearest pair is pushed last, popped first.
       uint32_t at = m++;
       while (at > 0 && found_pairs[at - 1].lb2 < lb2) {
         found_pairs[at] = found_pairs[at - 1];
@@ -352,8 +359,76 @@ bool PairSearch::expand(const PairEntry& e) {
       found_pairs[at] = PairEntry{nodes[0][i], nodes[1][j], slots[0][i], slots[1][j], lb2};
     }
   }
-  if (top + m > capacity) return false;
-  for (uint32_t k = 0; k < m; ++k) stack[top++] = found_pairs[k];
+  return m;
+}
+
+// Examines the entry and every pair below it within reach, depth first (the nearest child
+// pair first). False when the stack is full (a depth field that does not match the tree).
+bool PairSearch::depth_first(const PairEntry& first) {
+  stack[top++] = first;
+  while (top > 0) {
+    const PairEntry e = stack[--top];
+    if (e.lb2 > reach2) continue;
+    if (is_leaf(0, e.node_a, e.slot_a) && is_leaf(1, e.node_b, e.slot_b)) {
+      leaf_pair(e);
+      continue;
+    }
+    PairEntry found_pairs[16];
+    const uint32_t m = children(e, found_pairs);
+    if (top + m > capacity) return false;
+    for (uint32_t k = 0; k < m; ++k) stack[top++] = found_pairs[k];  // the nearest on top
+  }
+  return true;
+}
+
+inline bool heap_before(const PairEntry& x, const PairEntry& y) { return x.lb2 < y.lb2; }
+
+void PairSearch::heap_push(const PairEntry& e) {
+  uint32_t at = heap_size++;
+  while (at > 0 && heap_before(e, heap[(at - 1) / 2])) {
+    heap[at] = heap[(at - 1) / 2];
+    at = (at - 1) / 2;
+  }
+  heap[at] = e;
+}
+
+PairEntry PairSearch::heap_pop() {
+  const PairEntry top_entry = heap[0], last = heap[--heap_size];
+  uint32_t at = 0;
+  for (;;) {
+    uint32_t child = 2 * at + 1;
+    if (child >= heap_size) break;
+    if (child + 1 < heap_size && heap_before(heap[child + 1], heap[child])) ++child;
+    if (!heap_before(heap[child], last)) break;
+    heap[at] = heap[child];
+    at = child;
+  }
+  if (heap_size > 0) heap[at] = last;
+  return top_entry;
+}
+
+// Best first: the pair of least box distance next, so that the best, and with it the reach,
+// shrinks as early as it can. The heap is bounded: a pair that finds it full is examined depth
+// first at once (the answer does not depend on the order, only the work does).
+bool PairSearch::run() {
+  heap_push(PairEntry{0, 0, kRootSlot, kRootSlot, 0.0});
+  while (heap_size > 0) {
+    const PairEntry e = heap_pop();
+    if (e.lb2 > reach2) break;  // and so are all the others
+    if (is_leaf(0, e.node_a, e.slot_a) && is_leaf(1, e.node_b, e.slot_b)) {
+      leaf_pair(e);
+      continue;
+    }
+    PairEntry found_pairs[16];
+    const uint32_t m = children(e, found_pairs);
+    for (uint32_t k = m; k-- > 0;) {
+      if (heap_size < kHeapEntries) {
+        heap_push(found_pairs[k]);
+      } else if (!depth_first(found_pairs[k])) {
+        return false;
+      }
+    }
+  }
   return true;
 }
 
@@ -415,7 +490,8 @@ double triangle_pair_distance(const Vec3& a0, const Vec3& a1, const Vec3& a2, co
 }
 
 uint64_t mesh_pair_distance_bound(const DistanceIndex& a, const DistanceIndex& b) {
-  return arena_array_bound<PairEntry>(stack_entries(a, b));
+  return arena_array_bound<PairEntry>(stack_entries(a, b)) +
+         arena_array_bound<PairEntry>(kHeapEntries);
 }
 
 Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
@@ -434,7 +510,8 @@ Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const Dist
   PairSearch s;
   s.capacity = stack_entries(a, b);
   s.stack = ctx.arena->allocate_array<PairEntry>(s.capacity);
-  if (s.stack == nullptr) return ctx.arena->exhausted_status();
+  s.heap = ctx.arena->allocate_array<PairEntry>(kHeapEntries);
+  if (s.stack == nullptr || s.heap == nullptr) return ctx.arena->exhausted_status();
   s.index[0] = &a;
   s.index[1] = &b;
   s.shift[1] = offset_b;
@@ -444,16 +521,9 @@ Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const Dist
   if (magnitude <= 0x1p200) s.separation_margin = (magnitude + 1.0) * 0x1p-40;
   s.best2 = max_distance * max_distance;
   s.update_reach();
-  s.stack[s.top++] = PairEntry{0, 0, kRootSlot, kRootSlot, 0.0};
-  while (s.top > 0) {
-    const PairEntry e = s.stack[--s.top];
-    if (e.lb2 > s.reach2) continue;
-    if (s.is_leaf(0, e.node_a, e.slot_a) && s.is_leaf(1, e.node_b, e.slot_b)) {
-      s.leaf_pair(e);
-    } else if (!s.expand(e)) {
-      return Status::error(StatusCode::kInternal,
-                           "mesh pair distance: the index's depth does not match its tree");
-    }
+  if (!s.run()) {
+    return Status::error(StatusCode::kInternal,
+                         "mesh pair distance: the index's depth does not match its tree");
   }
   if (s.found) finish(s, out);
   return Status::ok();
