@@ -130,12 +130,30 @@ Vec3 common_point(const Vec3 a[3], const Vec3 b[3]) {
 constexpr uint8_t kRootSlot = 4;  // an item that is the whole root node
 
 // A pair of items to examine: item = child `slot` of node `node` (or the root node), a leaf
-// or an inner node of its tree. lb2: the squared distance of their boxes, as computed.
+// or an inner node of its tree. lb2: the squared distance of their boxes, as computed (what
+// prunes); centre2: that of their centres, which only orders pairs of equal lb2 (overlapping
+// boxes above all), the likelier nearer first.
 struct PairEntry {
   uint32_t node_a, node_b;
   uint8_t slot_a, slot_b;
+  float centre2;
   double lb2;
 };
+
+// Examined before y: nearer boxes, then nearer centres.
+inline bool pair_before(const PairEntry& x, const PairEntry& y) {
+  return x.lb2 < y.lb2 || (x.lb2 == y.lb2 && x.centre2 < y.centre2);
+}
+
+inline float centre_gap2(const double alo[3], const double ahi[3], const double blo[3],
+                         const double bhi[3]) {
+  double sum = 0;
+  for (int i = 0; i < 3; ++i) {
+    const double g = (alo[i] + ahi[i]) - (blo[i] + bhi[i]);
+    sum += g * g;
+  }
+  return static_cast<float>(sum * 0.25);
+}
 
 // The best-first queue's capacity: enough for the pairs within reach of two dentitions' trees
 // at any opening measured, a few tens of kilobytes.
@@ -351,12 +369,15 @@ uint32_t PairSearch::children(const PairEntry& e, PairEntry found_pairs[16]) con
     for (uint32_t j = 0; j < counts[1]; ++j) {
       const double lb2 = box_gap2(alo, ahi, blo[j], bhi[j]);
       if (lb2 > reach2) continue;
+      const PairEntry p{
+          nodes[0][i], nodes[1][j], slots[0][i], slots[1][j], centre_gap2(alo, ahi, blo[j], bhi[j]),
+          lb2};
       uint32_t at = m++;
-      while (at > 0 && found_pairs[at - 1].lb2 < lb2) {
+      while (at > 0 && pair_before(found_pairs[at - 1], p)) {
         found_pairs[at] = found_pairs[at - 1];
         --at;
       }
-      found_pairs[at] = PairEntry{nodes[0][i], nodes[1][j], slots[0][i], slots[1][j], lb2};
+      found_pairs[at] = p;
     }
   }
   return m;
@@ -381,11 +402,9 @@ bool PairSearch::depth_first(const PairEntry& first) {
   return true;
 }
 
-inline bool heap_before(const PairEntry& x, const PairEntry& y) { return x.lb2 < y.lb2; }
-
 void PairSearch::heap_push(const PairEntry& e) {
   uint32_t at = heap_size++;
-  while (at > 0 && heap_before(e, heap[(at - 1) / 2])) {
+  while (at > 0 && pair_before(e, heap[(at - 1) / 2])) {
     heap[at] = heap[(at - 1) / 2];
     at = (at - 1) / 2;
   }
@@ -398,8 +417,8 @@ PairEntry PairSearch::heap_pop() {
   for (;;) {
     uint32_t child = 2 * at + 1;
     if (child >= heap_size) break;
-    if (child + 1 < heap_size && heap_before(heap[child + 1], heap[child])) ++child;
-    if (!heap_before(heap[child], last)) break;
+    if (child + 1 < heap_size && pair_before(heap[child + 1], heap[child])) ++child;
+    if (!pair_before(heap[child], last)) break;
     heap[at] = heap[child];
     at = child;
   }
@@ -411,7 +430,7 @@ PairEntry PairSearch::heap_pop() {
 // shrinks as early as it can. The heap is bounded: a pair that finds it full is examined depth
 // first at once (the answer does not depend on the order, only the work does).
 bool PairSearch::run() {
-  heap_push(PairEntry{0, 0, kRootSlot, kRootSlot, 0.0});
+  heap_push(PairEntry{0, 0, kRootSlot, kRootSlot, 0.0f, 0.0});
   while (heap_size > 0) {
     const PairEntry e = heap_pop();
     if (e.lb2 > reach2) break;  // and so are all the others
