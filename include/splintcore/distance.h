@@ -216,17 +216,19 @@ struct MeshPairDistance {
   bool intersecting = false;  // the two triangles meet (exactly): distance 0
 };
 
-// Arena bytes mesh_pair_distance() takes (its traversal stack, returned before it does):
-// 384 (15 (a.depth + b.depth) + 1) plus alignment, a few tens of kilobytes.
+// Arena bytes mesh_pair_distance() takes (its best-first heap of 2048 box pairs and its
+// depth-first stack of 15 (a.depth + b.depth) + 1, 24 bytes each, returned before it does):
+// plus alignment, a few tens of kilobytes.
 uint64_t mesh_pair_distance_bound(const DistanceIndex& a, const DistanceIndex& b);
 
 // The least triangle_pair_distance() between a triangle of A and one of B moved by offset_b:
 // 0 when the surfaces meet (exactly, triangles_intersect on the moved triangles; the meshes
-// may interpenetrate). A dual traversal of the two 4-wide hierarchies, B's float boxes shifted
-// in double, pruning a pair of boxes only when its distance exceeds the best so far (by a
-// margin that covers rounding), so every triangle pair that could tie is examined and the
-// result is the same bits whatever the trees' shapes (leaf size, oriented boxes) and order:
-// the least (squared distance, triangle_a, triangle_b). Pairs with a squared distance above
+// may interpenetrate). A dual traversal of the two 4-wide hierarchies, best first (nearest box
+// pair next), B's float boxes shifted in double, pruning a pair of boxes, or of triangles (by
+// their boxes or by a separation along one's normal), only when its distance exceeds the best
+// so far (by a margin that covers rounding), so every triangle pair that could tie is examined and
+// the result is the same bits whatever the trees' shapes (leaf size, oriented boxes) and order: the
+// least (squared distance, triangle_a, triangle_b). Pairs with a squared distance above
 // max_distance^2 are not reported (+infinity: the true minimum). Heavily interpenetrating
 // meshes are slow (every pair of touching boxes is examined for the smallest meeting pair).
 // Errors: kInvalidArgument (offset not finite, max_distance negative or not a number),

@@ -130,12 +130,34 @@ Vec3 common_point(const Vec3 a[3], const Vec3 b[3]) {
 constexpr uint8_t kRootSlot = 4;  // an item that is the whole root node
 
 // A pair of items to examine: item = child `slot` of node `node` (or the root node), a leaf
-// or an inner node of its tree. lb2: the squared distance of their boxes, as computed.
+// or an inner node of its tree. lb2: the squared distance of their boxes, as computed (what
+// prunes); centre2: that of their centres, which only orders pairs of equal lb2 (overlapping
+// boxes above all), the likelier nearer first.
 struct PairEntry {
   uint32_t node_a, node_b;
   uint8_t slot_a, slot_b;
+  float centre2;
   double lb2;
 };
+
+// Examined before y: nearer boxes, then nearer centres.
+inline bool pair_before(const PairEntry& x, const PairEntry& y) {
+  return x.lb2 < y.lb2 || (x.lb2 == y.lb2 && x.centre2 < y.centre2);
+}
+
+inline float centre_gap2(const double alo[3], const double ahi[3], const double blo[3],
+                         const double bhi[3]) {
+  double sum = 0;
+  for (int i = 0; i < 3; ++i) {
+    const double g = (alo[i] + ahi[i]) - (blo[i] + bhi[i]);
+    sum += g * g;
+  }
+  return static_cast<float>(sum * 0.25);
+}
+
+// The best-first queue's capacity: enough for the pairs within reach of two dentitions' trees
+// at any opening measured, a few tens of kilobytes.
+constexpr uint32_t kHeapEntries = 2048;
 
 struct TriangleBox {
   Vec3 p[3];
@@ -161,17 +183,46 @@ inline double box_gap2(const double alo[3], const double ahi[3], const double bl
   return sum;
 }
 
+inline double box_gap2(const Vec3& alo, const Vec3& ahi, const double blo[3], const double bhi[3]) {
+  const double a_lo[3] = {alo.x, alo.y, alo.z}, a_hi[3] = {ahi.x, ahi.y, ahi.z};
+  return box_gap2(a_lo, a_hi, blo, bhi);
+}
+
+// A lower bound on the distance between triangles t and o (to rounding): how far o's corners
+// all lie on one side of t's plane, along t's (computed, unnormalised) normal u. Exact for any
+// u, the bound's own rounding is that of a few dot products of u with coordinates at most M in
+// magnitude: under 32 eps M, far below the caller's margin 2^-40 (M + 1) when M <= 2^200 (no
+// overflow). 0 for a degenerate t or corners on both sides.
+inline double separation(const Vec3 t[3], const Vec3 o[3]) {
+  const Vec3 u = cross(t[1] - t[0], t[2] - t[0]);
+  const double norm = std::sqrt(dot(u, u));
+  if (!(norm > 0x1p-500)) return 0;  // degenerate, or a normal too short to divide by
+  const double c = dot(u, t[0]);
+  const double v0 = dot(u, o[0]) - c, v1 = dot(u, o[1]) - c, v2 = dot(u, o[2]) - c;
+  if (v0 > 0 && v1 > 0 && v2 > 0)
+    return (v0 < v1 ? (v0 < v2 ? v0 : v2) : (v1 < v2 ? v1 : v2)) / norm;
+  if (v0 < 0 && v1 < 0 && v2 < 0)
+    return -(v0 > v1 ? (v0 > v2 ? v0 : v2) : (v1 > v2 ? v1 : v2)) / norm;
+  return 0;
+}
+
 struct PairSearch {
   const DistanceIndex* index[2] = {nullptr, nullptr};
   Vec3 shift[2];
   PairEntry* stack = nullptr;
   uint64_t top = 0, capacity = 0;
+  PairEntry* heap = nullptr;  // kHeapEntries
+  uint32_t heap_size = 0;
   // The best pair so far by (best2, triangle a, triangle b); before any, best2 is the limit.
   double best2 = HUGE_VAL;
   bool found = false, meet = false;
   uint32_t best_a = 0, best_b = 0;
   double slack = 0;          // absolute rounding margin (mm)
   double reach2 = HUGE_VAL;  // boxes farther than this (squared, as computed) are pruned
+  double reach = HUGE_VAL;   // its square root (rounded up): for separations along a normal
+  // Bounds the rounding of a computed separation along a triangle's normal (see separation());
+  // +inf when the coordinates are so large that the products could overflow: no such test.
+  double separation_margin = HUGE_VAL;
 
   // reach2 from best2: a pair of boxes whose computed distance is at most reach may hold a
   // pair whose computed distance is at most best. Box gaps round by a few ulps; a triangle
@@ -180,11 +231,11 @@ struct PairSearch {
   // with a wide berth, and prune nothing that matters.
   void update_reach() {
     if (!(best2 < HUGE_VAL)) {
-      reach2 = HUGE_VAL;
+      reach2 = reach = HUGE_VAL;
       return;
     }
-    const double r = (std::sqrt(best2) + slack) * (1.0 + 0x1p-19);
-    reach2 = r * r;
+    reach = (std::sqrt(best2) + slack) * (1.0 + 0x1p-19);
+    reach2 = reach * reach;
   }
 
   // The box of an item (not the root) in double, shifted for B.
@@ -202,7 +253,11 @@ struct PairSearch {
 
   void consider(uint32_t ta, uint32_t tb, const TriangleBox& x, const TriangleBox& y);
   void leaf_pair(const PairEntry& e);
-  bool expand(const PairEntry& e);
+  uint32_t children(const PairEntry& e, PairEntry found_pairs[16]) const;
+  bool depth_first(const PairEntry& first);
+  void heap_push(const PairEntry& e);
+  PairEntry heap_pop();
+  bool run();
 };
 
 inline bool pair_less(uint32_t a0, uint32_t b0, uint32_t a1, uint32_t b1) {
@@ -212,6 +267,15 @@ inline bool pair_less(uint32_t a0, uint32_t b0, uint32_t a1, uint32_t b1) {
 // Triangle ta of A against tb of B (moved), boxes within reach.
 void PairSearch::consider(uint32_t ta, uint32_t tb, const TriangleBox& x, const TriangleBox& y) {
   const bool smaller = !found || pair_less(ta, tb, best_a, best_b);
+  // At distance 0 only a smaller pair can win (and only by meeting or by a distance of 0).
+  if (best2 == 0 && !smaller) return;
+  // Triangles whose planes keep them apart by more than reach: their computed distance exceeds
+  // best2 (the reasoning of update_reach()), and they do not meet. Near-parallel surfaces
+  // leave many such pairs within reach of each other's boxes.
+  if (separation(x.p, y.p) - separation_margin > reach ||
+      separation(y.p, x.p) - separation_margin > reach) {
+    return;
+  }
   // Meeting is worth testing only if (0, ta, tb) would win, and possible only if the boxes
   // overlap (exactly: these are the moved coordinates themselves).
   if ((best2 > 0 || smaller) && x.lo.x <= y.hi.x && y.lo.x <= x.hi.x && x.lo.y <= y.hi.y &&
@@ -235,34 +299,48 @@ void PairSearch::consider(uint32_t ta, uint32_t tb, const TriangleBox& x, const 
   }
 }
 
-// Every triangle pair of two leaves whose boxes are within reach.
+// Every triangle pair of two leaves whose boxes are within reach. A triangle is kept only if
+// its box is within reach of the other leaf's box (which holds the other triangles' boxes:
+// rounding is monotone, so its computed gap is no larger), and A's triangles face the box of
+// B's kept ones: the same pairs reach consider() as when testing all of them, for a fraction
+// of the box tests and none of the pairs of far triangles.
 void PairSearch::leaf_pair(const PairEntry& e) {
   const BvhNode& na = index[0]->nodes[e.node_a];
   const BvhNode& nb = index[1]->nodes[e.node_b];
   const uint32_t a_first = na.child[e.slot_a], a_count = na.count[e.slot_a];
   const uint32_t b_first = nb.child[e.slot_b], b_count = nb.count[e.slot_b];
+  double alo[3], ahi[3];
+  item_box(0, e.node_a, e.slot_a, alo, ahi);
   TriangleBox bs[16];
+  uint32_t b_ids[16], kept = 0;
+  Vec3 b_lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, b_hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
   for (uint32_t j = 0; j < b_count; ++j) {
-    load_triangle(*index[1]->mesh, index[1]->order[b_first + j], shift[1], &bs[j]);
+    const uint32_t tb = index[1]->order[b_first + j];
+    load_triangle(*index[1]->mesh, tb, shift[1], &bs[kept]);
+    if (box_gap2(bs[kept].lo, bs[kept].hi, alo, ahi) > reach2) continue;
+    b_lo = min_vec(b_lo, bs[kept].lo);
+    b_hi = max_vec(b_hi, bs[kept].hi);
+    b_ids[kept++] = tb;
   }
+  if (kept == 0) return;
+  const double blo[3] = {b_lo.x, b_lo.y, b_lo.z}, bhi[3] = {b_hi.x, b_hi.y, b_hi.z};
   for (uint32_t i = 0; i < a_count; ++i) {
     const uint32_t ta = index[0]->order[a_first + i];
     TriangleBox x;
     load_triangle(*index[0]->mesh, ta, shift[0], &x);
-    for (uint32_t j = 0; j < b_count; ++j) {
-      const double alo[3] = {x.lo.x, x.lo.y, x.lo.z}, ahi[3] = {x.hi.x, x.hi.y, x.hi.z};
-      const double blo[3] = {bs[j].lo.x, bs[j].lo.y, bs[j].lo.z};
-      const double bhi[3] = {bs[j].hi.x, bs[j].hi.y, bs[j].hi.z};
-      if (box_gap2(alo, ahi, blo, bhi) > reach2) continue;
-      consider(ta, index[1]->order[b_first + j], x, bs[j]);
+    if (box_gap2(x.lo, x.hi, blo, bhi) > reach2) continue;
+    for (uint32_t j = 0; j < kept; ++j) {
+      const double ylo[3] = {bs[j].lo.x, bs[j].lo.y, bs[j].lo.z};
+      const double yhi[3] = {bs[j].hi.x, bs[j].hi.y, bs[j].hi.z};
+      if (box_gap2(x.lo, x.hi, ylo, yhi) > reach2) continue;
+      consider(ta, b_ids[j], x, bs[j]);
     }
   }
 }
 
-// Replaces an entry with at least one inner item by the pairs of its items' children (an
-// inner item stands for its node's children, a leaf for itself) within reach, the nearest on
-// top. False when the stack is full (a depth field that does not match the tree).
-bool PairSearch::expand(const PairEntry& e) {
+// The pairs of an entry's items' children (an inner item stands for its node's children, a
+// leaf for itself) within reach, at most 16, by decreasing box distance: their number.
+uint32_t PairSearch::children(const PairEntry& e, PairEntry found_pairs[16]) const {
   uint32_t nodes[2][4];
   uint8_t slots[2][4];
   uint32_t counts[2] = {0, 0};
@@ -282,7 +360,6 @@ bool PairSearch::expand(const PairEntry& e) {
       slots[s][counts[s]++] = k;
     }
   }
-  PairEntry found_pairs[16];
   uint32_t m = 0;
   double blo[4][3], bhi[4][3];
   for (uint32_t j = 0; j < counts[1]; ++j) item_box(1, nodes[1][j], slots[1][j], blo[j], bhi[j]);
@@ -292,17 +369,85 @@ bool PairSearch::expand(const PairEntry& e) {
     for (uint32_t j = 0; j < counts[1]; ++j) {
       const double lb2 = box_gap2(alo, ahi, blo[j], bhi[j]);
       if (lb2 > reach2) continue;
-      // Insertion by decreasing distance: the nearest pair is pushed last, popped first.
+      const PairEntry p{
+          nodes[0][i], nodes[1][j], slots[0][i], slots[1][j], centre_gap2(alo, ahi, blo[j], bhi[j]),
+          lb2};
       uint32_t at = m++;
-      while (at > 0 && found_pairs[at - 1].lb2 < lb2) {
+      while (at > 0 && pair_before(found_pairs[at - 1], p)) {
         found_pairs[at] = found_pairs[at - 1];
         --at;
       }
-      found_pairs[at] = PairEntry{nodes[0][i], nodes[1][j], slots[0][i], slots[1][j], lb2};
+      found_pairs[at] = p;
     }
   }
-  if (top + m > capacity) return false;
-  for (uint32_t k = 0; k < m; ++k) stack[top++] = found_pairs[k];
+  return m;
+}
+
+// Examines the entry and every pair below it within reach, depth first (the nearest child
+// pair first). False when the stack is full (a depth field that does not match the tree).
+bool PairSearch::depth_first(const PairEntry& first) {
+  stack[top++] = first;
+  while (top > 0) {
+    const PairEntry e = stack[--top];
+    if (e.lb2 > reach2) continue;
+    if (is_leaf(0, e.node_a, e.slot_a) && is_leaf(1, e.node_b, e.slot_b)) {
+      leaf_pair(e);
+      continue;
+    }
+    PairEntry found_pairs[16];
+    const uint32_t m = children(e, found_pairs);
+    if (top + m > capacity) return false;
+    for (uint32_t k = 0; k < m; ++k) stack[top++] = found_pairs[k];  // the nearest on top
+  }
+  return true;
+}
+
+void PairSearch::heap_push(const PairEntry& e) {
+  uint32_t at = heap_size++;
+  while (at > 0 && pair_before(e, heap[(at - 1) / 2])) {
+    heap[at] = heap[(at - 1) / 2];
+    at = (at - 1) / 2;
+  }
+  heap[at] = e;
+}
+
+PairEntry PairSearch::heap_pop() {
+  const PairEntry top_entry = heap[0], last = heap[--heap_size];
+  uint32_t at = 0;
+  for (;;) {
+    uint32_t child = 2 * at + 1;
+    if (child >= heap_size) break;
+    if (child + 1 < heap_size && pair_before(heap[child + 1], heap[child])) ++child;
+    if (!pair_before(heap[child], last)) break;
+    heap[at] = heap[child];
+    at = child;
+  }
+  if (heap_size > 0) heap[at] = last;
+  return top_entry;
+}
+
+// Best first: the pair of least box distance next, so that the best, and with it the reach,
+// shrinks as early as it can. The heap is bounded: a pair that finds it full is examined depth
+// first at once (the answer does not depend on the order, only the work does).
+bool PairSearch::run() {
+  heap_push(PairEntry{0, 0, kRootSlot, kRootSlot, 0.0f, 0.0});
+  while (heap_size > 0) {
+    const PairEntry e = heap_pop();
+    if (e.lb2 > reach2) break;  // and so are all the others
+    if (is_leaf(0, e.node_a, e.slot_a) && is_leaf(1, e.node_b, e.slot_b)) {
+      leaf_pair(e);
+      continue;
+    }
+    PairEntry found_pairs[16];
+    const uint32_t m = children(e, found_pairs);
+    for (uint32_t k = m; k-- > 0;) {
+      if (heap_size < kHeapEntries) {
+        heap_push(found_pairs[k]);
+      } else if (!depth_first(found_pairs[k])) {
+        return false;
+      }
+    }
+  }
   return true;
 }
 
@@ -364,7 +509,8 @@ double triangle_pair_distance(const Vec3& a0, const Vec3& a1, const Vec3& a2, co
 }
 
 uint64_t mesh_pair_distance_bound(const DistanceIndex& a, const DistanceIndex& b) {
-  return arena_array_bound<PairEntry>(stack_entries(a, b));
+  return arena_array_bound<PairEntry>(stack_entries(a, b)) +
+         arena_array_bound<PairEntry>(kHeapEntries);
 }
 
 Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
@@ -383,24 +529,20 @@ Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const Dist
   PairSearch s;
   s.capacity = stack_entries(a, b);
   s.stack = ctx.arena->allocate_array<PairEntry>(s.capacity);
-  if (s.stack == nullptr) return ctx.arena->exhausted_status();
+  s.heap = ctx.arena->allocate_array<PairEntry>(kHeapEntries);
+  if (s.stack == nullptr || s.heap == nullptr) return ctx.arena->exhausted_status();
   s.index[0] = &a;
   s.index[1] = &b;
   s.shift[1] = offset_b;
   const double ma = root_magnitude(a, s.shift[0]), mb = root_magnitude(b, s.shift[1]);
-  s.slack = ((ma > mb ? ma : mb) + 1.0) * 0x1p-30;
+  const double magnitude = ma > mb ? ma : mb;
+  s.slack = (magnitude + 1.0) * 0x1p-30;
+  if (magnitude <= 0x1p200) s.separation_margin = (magnitude + 1.0) * 0x1p-40;
   s.best2 = max_distance * max_distance;
   s.update_reach();
-  s.stack[s.top++] = PairEntry{0, 0, kRootSlot, kRootSlot, 0.0};
-  while (s.top > 0) {
-    const PairEntry e = s.stack[--s.top];
-    if (e.lb2 > s.reach2) continue;
-    if (s.is_leaf(0, e.node_a, e.slot_a) && s.is_leaf(1, e.node_b, e.slot_b)) {
-      s.leaf_pair(e);
-    } else if (!s.expand(e)) {
-      return Status::error(StatusCode::kInternal,
-                           "mesh pair distance: the index's depth does not match its tree");
-    }
+  if (!s.run()) {
+    return Status::error(StatusCode::kInternal,
+                         "mesh pair distance: the index's depth does not match its tree");
   }
   if (s.found) finish(s, out);
   return Status::ok();

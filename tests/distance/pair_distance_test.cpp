@@ -493,6 +493,102 @@ TEST(MeshPairDistance, RunsInExactlyItsBound) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Dense near-parallel surfaces (what the bite opening measures): every pruning of the search
+// (boxes, triangles against the other leaf, separation along a normal, best first) must leave
+// the answer of an exhaustive search with the library's own per-pair routine.
+
+// A wavy height field z = base + h(x, y), n x n cells of `cell` mm, vertices jittered: dense
+// triangles tilted every way by a few degrees.
+Soup wavy_grid(uint32_t n, double cell, double base, double phase, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> jitter(-0.1 * cell, 0.1 * cell);
+  std::vector<Vec3> p;
+  for (uint32_t i = 0; i <= n; ++i) {
+    for (uint32_t j = 0; j <= n; ++j) {
+      const double x = i * cell + jitter(rng), y = j * cell + jitter(rng);
+      p.push_back({x, y, base + 0.15 * std::sin(0.9 * x + phase) * std::cos(0.7 * y - phase)});
+    }
+  }
+  Soup out;
+  const auto tri = [&](uint32_t a, uint32_t b, uint32_t c) {
+    SoupTriangle t;
+    const uint32_t id[3] = {a, b, c};
+    for (int k = 0; k < 3; ++k) {
+      for (int d = 0; d < 3; ++d) t.p[k][d] = static_cast<float>(p[id[k]][d]);
+    }
+    out.push_back(t);
+  };
+  for (uint32_t i = 0; i < n; ++i) {
+    for (uint32_t j = 0; j < n; ++j) {
+      const uint32_t v = i * (n + 1) + j;
+      tri(v, v + n + 1, v + n + 2);
+      tri(v, v + n + 2, v + 1);
+    }
+  }
+  return out;
+}
+
+struct ExhaustiveResult {
+  double d2 = HUGE_VAL, d = HUGE_VAL;
+  uint32_t ta = 0, tb = 0;
+  Vec3 pa, pb;
+};
+
+// The least (squared distance, triangle a, triangle b) over every pair, by
+// triangle_pair_distance() (the squared distance being that of its two points, 0 for meeting
+// triangles: the key the library orders by), skipping only pairs whose boxes are farther apart
+// than the best by a wide margin.
+ExhaustiveResult exhaustive(const Mesh& a, const Mesh& b, const Vec3& offset) {
+  const std::vector<TriangleCorners> x = corners_of(a, Vec3{}), y = corners_of(b, offset);
+  ExhaustiveResult r;
+  for (uint32_t i = 0; i < x.size(); ++i) {
+    for (uint32_t j = 0; j < y.size(); ++j) {
+      if (r.d2 < HUGE_VAL && box_gap2(x[i], y[j]) > r.d2 * (1 + 1e-6) + 1e-12) continue;
+      Vec3 pa, pb;
+      const double d = triangle_pair_distance(x[i].p[0], x[i].p[1], x[i].p[2], y[j].p[0], y[j].p[1],
+                                              y[j].p[2], &pa, &pb);
+      const double d2 = d == 0 ? 0 : length_squared(pa - pb);
+      if (d2 < r.d2) r = ExhaustiveResult{d2, d, i, j, pa, pb};
+    }
+  }
+  return r;
+}
+
+TEST(MeshPairDistance, DenseNearParallelSurfacesMatchExhaustiveSearch) {
+  test::TestArena t(size_t{64} << 20);
+  Built a, b, a1, b16;
+  build(t, wavy_grid(22, 0.25, 0, 0, 7), 0, false, &a);
+  build(t, wavy_grid(20, 0.27, 0.35, 1.3, 8), 0, false, &b);
+  build(t, wavy_grid(22, 0.25, 0, 0, 7), 1, true, &a1);
+  build(t, wavy_grid(20, 0.27, 0.35, 1.3, 8), 16, false, &b16);
+  int meeting = 0, apart = 0;
+  // B above A: far, near, grazing, touching at the crests and interpenetrating.
+  for (const double dz : {1.5, 0.6, 0.2, 0.05, 0.01, 0.0, -0.05, -0.2, -0.35}) {
+    for (const Vec3 lateral : {Vec3{0, 0, 0}, Vec3{0.61, -0.37, 0}, Vec3{-1.1, 0.9, 0}}) {
+      const Vec3 off = lateral + Vec3{0, 0, dz};
+      SCOPED_TRACE(testing::Message() << "offset " << off.x << " " << off.y << " " << off.z);
+      const ExhaustiveResult e = exhaustive(a.mesh, b.mesh, off);
+      for (const MeshPairDistance& r : {run_pair(a, b, off), run_pair(a1, b16, off)}) {
+        EXPECT_EQ(std::memcmp(&r.distance, &e.d, sizeof(double)), 0) << r.distance << " " << e.d;
+        EXPECT_EQ(r.triangle_a, e.ta);
+        EXPECT_EQ(r.triangle_b, e.tb);
+        EXPECT_EQ(r.point_a, e.pa);
+        EXPECT_EQ(r.point_b, e.pb);
+        EXPECT_EQ(r.intersecting, e.d == 0);
+      }
+      // A limit just above and just below the answer (e.d squared may round below e.d2).
+      if (e.d > 0) {
+        EXPECT_EQ(run_pair(a, b, off, e.d * (1 + 1e-12)).triangle_a, e.ta);
+        EXPECT_EQ(run_pair(a, b, off, e.d * (1 - 1e-9)).distance, HUGE_VAL);
+      }
+      ++(e.d == 0 ? meeting : apart);
+    }
+  }
+  EXPECT_GE(meeting, 4);
+  EXPECT_GE(apart, 12);
+}
+
+// ---------------------------------------------------------------------------------------------
 // The real dentition: upper teeth against the lower teeth moved 3 mm down.
 
 TEST(MeshPairDistance, RealDentitionMatchesRestrictedBruteForce) {
