@@ -28,7 +28,7 @@ struct OutlineOptions {
   // imprint, and leaves a wall about as thick as the printer's strongest thin feature.
   double overhang_mm = 2.0;
   // Distance between picks along the arch (mm, [2, 20]).
-  double pick_spacing_mm = 4.0;
+  double pick_spacing_mm = 3.0;
   // Move the mandible along the occlusal normal until the smallest distance between the jaws
   // is exactly bite_opening_mm (mm, [0.1, 10]); without it the jaws must already be apart.
   bool has_bite_opening = false;

@@ -21,7 +21,7 @@ const CaseNumber kCaseNumbers[] = {
     {"base.outside_length_mm", "mm", 0, 100, false, kNoCap, false, "3", ""},
     {"base.auto.indentation_depth_mm", "mm", 0.1, 5, false, kNoCap, false, "2", ""},
     {"base.auto.overhang_mm", "mm", 0, 10, false, kNoCap, false, "2", ""},
-    {"base.auto.pick_spacing_mm", "mm", 2, 20, false, kNoCap, false, "4", ""},
+    {"base.auto.pick_spacing_mm", "mm", 2, 20, false, kNoCap, false, "3", ""},
     {"base.auto.bite_opening_mm", "mm", 0.1, 10, false, kNoCap, false, "none (the jaws as given)",
      ""},
     {"pick.inner_length_mm", "mm", 0, 100, false, kNoCap, false, "the base's", ""},

@@ -351,30 +351,48 @@ Status smooth_line(Arena& arena, Span<ArchPoint> pts, const Polyline& prev, Poly
   return Status::ok();
 }
 
-// Per pick: the lowest maxilla and highest mandible height and the lingual and buccal extent
-// of the points within one step along the arch; NaN where no point is.
+// Per pick: the lowest maxilla and highest mandible height within a step and half a molar
+// along the arch, and the lingual and buccal extent of the points within a step; NaN where no
+// point is. The heights' reach: the face between two picks follows the spline through their
+// heights, so over a tooth it rises no higher than its tip plus the depth only if every pick
+// whose spline passes over the tooth sees the tooth's tip: half a molar and a step away at
+// most. A narrower reach would let the face climb over a tooth towards a higher neighbour and
+// sink that tooth deeper than asked.
 struct PickData {
-  double h[2];
+  double h[2];       // within a step and half a molar: the bound on the face
+  double near_h[2];  // within half a step: the tooth under the pick
   double lingual, buccal;
 };
 
-void gather_pick(Span<const ArchPoint> pts, double s, double window, double side, PickData* d) {
-  d->h[0] = HUGE_VAL;
-  d->h[1] = -HUGE_VAL;
+void gather_pick(Span<const ArchPoint> pts, double s, double step, double side, PickData* d) {
+  d->h[0] = d->near_h[0] = HUGE_VAL;
+  d->h[1] = d->near_h[1] = -HUGE_VAL;
   d->lingual = -HUGE_VAL;
   d->buccal = -HUGE_VAL;
   for (const ArchPoint& a : pts) {
-    if (std::fabs(a.s - s) > window) continue;
-    if (a.jaw == 0) {
-      d->h[0] = std::min(d->h[0], a.h);
-    } else {
-      d->h[1] = std::max(d->h[1], a.h);
+    const double along = std::fabs(a.s - s);
+    if (along <= step + kToothHalfMm) {
+      if (a.jaw == 0) {
+        d->h[0] = std::min(d->h[0], a.h);
+      } else {
+        d->h[1] = std::max(d->h[1], a.h);
+      }
     }
+    if (along <= 0.5 * step) {
+      if (a.jaw == 0) {
+        d->near_h[0] = std::min(d->near_h[0], a.h);
+      } else {
+        d->near_h[1] = std::max(d->near_h[1], a.h);
+      }
+    }
+    if (along > step) continue;
     d->buccal = std::max(d->buccal, a.o * side);
     d->lingual = std::max(d->lingual, -a.o * side);
   }
   if (d->h[0] == HUGE_VAL) d->h[0] = NAN;
   if (d->h[1] == -HUGE_VAL) d->h[1] = NAN;
+  if (d->near_h[0] == HUGE_VAL) d->near_h[0] = NAN;
+  if (d->near_h[1] == -HUGE_VAL) d->near_h[1] = NAN;
   if (d->buccal == -HUGE_VAL) d->buccal = d->lingual = NAN;
 }
 
@@ -463,6 +481,7 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
   }
   const size_t stride = sizeof(PickData) / sizeof(double);
   if (!fill_gaps(&data[0].h[0], n, stride) || !fill_gaps(&data[0].h[1], n, stride) ||
+      !fill_gaps(&data[0].near_h[0], n, stride) || !fill_gaps(&data[0].near_h[1], n, stride) ||
       !fill_gaps(&data[0].lingual, n, stride) || !fill_gaps(&data[0].buccal, n, stride)) {
     return Status::error(StatusCode::kInvalidArgument,
                          "outline: a jaw shows no occlusal surface along the arch");
@@ -473,7 +492,10 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
   for (size_t i = 0; i < n; ++i) {
     double x, y, lx, ly;
     point_at(arch, start + step * static_cast<double>(i), &x, &y, &lx, &ly);
-    const double top = data[i].h[0] + depth, bottom = data[i].h[1] - depth;
+    // The face: the depth below (above) the tooth under the pick, but never deeper than the
+    // depth and kDeepSlackMm into any tooth within the bound's reach.
+    const double top = std::min(data[i].near_h[0] + depth, data[i].h[0] + depth + kDeepSlackMm);
+    const double bottom = std::max(data[i].near_h[1] - depth, data[i].h[1] - depth - kDeepSlackMm);
     const double wafer = top - bottom;
     if (!(wafer >= kMinWaferMm)) {
       return make_error(StatusCode::kInvalidArgument, "outline: the wafer would be ", wafer,

@@ -28,8 +28,10 @@ constexpr double kEndChordMm = 5.0;
 constexpr int kSmoothPasses = 4;    // project, bin, smooth: each pass
 constexpr double kTangentMm = 8.0;  // chord for the arch's direction at a pick
 constexpr double kMinArchMm = 20.0;
-constexpr double kMinWaferMm = 1.0;                       // top to bottom, at every pick
-constexpr size_t kMaxPicks = kMaxOutlinePicks;            // per jaw
+constexpr double kDeepSlackMm = 0.2;            // a tooth sinks at most this much deeper than asked
+constexpr double kToothHalfMm = 5.5;            // half a molar's length along the arch
+constexpr double kMinWaferMm = 1.0;             // top to bottom, at every pick
+constexpr size_t kMaxPicks = kMaxOutlinePicks;  // per jaw
 constexpr size_t kMaxArchPoints = kMaxOutlineArchPoints;  // kBinMm bins along the arch
 constexpr uint32_t kNoTip = ~uint32_t{0};
 
