@@ -35,6 +35,9 @@ struct OutlineOptions {
   double bite_opening_mm = 0;
   // Jaws farther apart than this (mm) are refused: no wafer bridges them.
   double max_gap_mm = 10.0;
+  // The insertion direction: the occlusal normal, or (survey) the direction within 15 degrees
+  // of it along which the teeth leave the least undercut in the wafer (both volumes reported).
+  bool survey = false;
 };
 
 struct OutlineReport {
@@ -51,6 +54,11 @@ struct OutlineReport {
   double min_wafer_mm = 0;      // the thinnest section, top to bottom
   double max_wafer_mm = 0;
   uint64_t cells_upper = 0, cells_lower = 0;  // occlusal cells found per jaw
+  Vec3 insertion_direction{};                 // the occlusal normal, or the survey's choice
+  bool surveyed = false;
+  uint32_t survey_directions = 0;  // directions tried
+  double undercut_plain_mm3 = 0;   // along the occlusal normal (surveyed only)
+  double undercut_chosen_mm3 = 0;  // along the chosen direction (surveyed only)
 };
 
 struct Outline {

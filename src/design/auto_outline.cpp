@@ -103,7 +103,7 @@ Status resolve_case_outline(const Context& ctx, const CaseFile& c, Span<const Me
   resolved->lower = Span<const Pick>(lower, o.lower.size());
   resolved->occlusal_normal = o.report.occlusal_normal;
   if (!c.has_insertion_direction) {
-    resolved->insertion_direction = o.report.occlusal_normal;
+    resolved->insertion_direction = o.report.insertion_direction;
     resolved->has_insertion_direction = true;
   }
   for (size_t j = 0; j < c.jaws.size(); ++j) {
@@ -179,6 +179,7 @@ void write_base(JsonWriter& w, const CaseFile& c) {
     w.add("overhang_mm", o.overhang_mm);
     w.add("pick_spacing_mm", o.pick_spacing_mm);
     if (o.has_bite_opening) w.add("bite_opening_mm", o.bite_opening_mm);
+    if (o.survey) w.add("survey", true);
     w.end_object();
   } else {
     w.add("occlusal_normal", c.occlusal_normal);

@@ -254,7 +254,7 @@ Status parse_auto(const Reader& r, const JsonValue& a, CaseFile* out) {
   const JsonDocument& doc = *r.doc;
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(a, JsonType::kObject, "auto"));
   static const char* const kAutoKeys[] = {"indentation_depth_mm", "overhang_mm", "pick_spacing_mm",
-                                          "bite_opening_mm", nullptr};
+                                          "bite_opening_mm",      "survey",      nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(a, kAutoKeys, "\"auto\""));
   OutlineOptions& o = out->outline;
   if (const JsonValue* v = doc.member(a, "indentation_depth_mm")) {
@@ -270,6 +270,12 @@ Status parse_auto(const Reader& r, const JsonValue& a, CaseFile* out) {
   if (const JsonValue* v = doc.member(a, "bite_opening_mm")) {
     SPLINTCORE_RETURN_IF_ERROR(r.number(*v, "base.auto.bite_opening_mm", 0, &o.bite_opening_mm));
     o.has_bite_opening = true;
+  }
+  if (const JsonValue* v = doc.member(a, "survey")) {
+    if (v->type != JsonType::kBool) {
+      return r.fail(*v, StatusCode::kInvalidArgument, "\"survey\" must be true or false");
+    }
+    o.survey = v->boolean;
   }
   out->has_auto_outline = true;
   return Status::ok();
@@ -593,6 +599,11 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   SPLINTCORE_RETURN_IF_ERROR(parse_base(r, root, out));
 
   if (const JsonValue* d = doc.member(root, "insertion_direction")) {
+    if (out->outline.survey) {
+      return r.fail(*d, StatusCode::kInvalidArgument,
+                    "\"insertion_direction\" and \"auto\": {\"survey\": true} both choose the "
+                    "direction: give one of them");
+    }
     SPLINTCORE_RETURN_IF_ERROR(r.unit_vector(*d, "insertion_direction", &out->insertion_direction));
     out->has_insertion_direction = true;
   }

@@ -144,6 +144,13 @@ void write_outline(JsonWriter& w, const OutlineReport& o, const DesignReportFile
   w.add("wafer_max_mm", o.max_wafer_mm);
   w.add("occlusal_columns_maxilla", o.cells_upper);
   w.add("occlusal_columns_mandible", o.cells_lower);
+  w.add("insertion_direction", o.insertion_direction);
+  w.add("surveyed", o.surveyed);
+  if (o.surveyed) {
+    w.add("survey_directions", o.survey_directions);
+    w.add("undercut_occlusal_normal_mm3", o.undercut_plain_mm3);
+    w.add("undercut_chosen_mm3", o.undercut_chosen_mm3);
+  }
   w.end_object();
 }
 

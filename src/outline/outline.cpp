@@ -276,6 +276,12 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 2, 3));
     SPLINTCORE_RETURN_IF_ERROR(
         arch_and_picks(ctx, maxilla, mandible, offset, f, g, plane, options, buffers, out));
+    out->report.insertion_direction = f.n;
+    if (options.survey) {
+      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 3, 4));
+      SPLINTCORE_RETURN_IF_ERROR(survey_direction(ctx, maxilla, mandible, offset, f, out->upper,
+                                                  out->lower, &out->report));
+    }
   }
   scope.commit();
   return report_progress(ctx, "outline", 3, 3);

@@ -102,6 +102,12 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
                       const Vec3& lower_offset, const Frame& f, const Grid& g, const Plane& plane,
                       const OutlineOptions& options, const OutlineBuffers& buffers, Outline* out);
 
+// The insertion direction with the least undercut within 15 degrees of n (survey.cpp): fills
+// r's insertion_direction, surveyed, survey_directions and both undercut volumes.
+Status survey_direction(const Context& ctx, const Mesh& maxilla, const Mesh& mandible,
+                        const Vec3& lower_offset, const Frame& f, Span<const Pick> upper,
+                        Span<const Pick> lower, OutlineReport* r);
+
 }  // namespace outline_detail
 }  // namespace splintcore
 

@@ -447,6 +447,52 @@ TEST(Outline, PicksMoveWithTheJaws) {
   }
 }
 
+// The survey: within 15 degrees of the occlusal normal, a direction with less undercut than
+// the normal's, and the blockout (an independent measure: the swept volume's voxels, not
+// rays) removes less along it than along the normal.
+TEST(Outline, SurveyChoosesLessUndercut) {
+  PhantomJaws p(24000);
+  test::TestArena t{size_t{768} << 20};
+  const Context ctx(&t.arena);
+  Mesh jaws[2];
+  copy_mesh(p.jaw[0], t.arena, &jaws[0], RigidTransform{});
+  copy_mesh(p.jaw[1], t.arena, &jaws[1], RigidTransform{});
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse(
+      t.arena,
+      auto_case("\"survey\": true", -2.0, ", \"blockout\": {\"voxel\": 0.3, \"inset\": 0}"), &c));
+  CaseFile resolved;
+  Outline o;
+  SPLINTCORE_ASSERT_OK(resolve_case_outline(ctx, c, Span<const Mesh>(jaws, 2), &resolved, &o));
+  const OutlineReport& r = o.report;
+  EXPECT_TRUE(r.surveyed);
+  EXPECT_GE(r.survey_directions, 20u);
+  EXPECT_GT(r.undercut_plain_mm3, 0.0);
+  EXPECT_LT(r.undercut_chosen_mm3, r.undercut_plain_mm3);
+  EXPECT_GE(dot(r.insertion_direction, r.occlusal_normal), std::cos(15.0 * M_PI / 180) - 1e-12);
+  EXPECT_EQ(resolved.insertion_direction, r.insertion_direction);
+#ifndef __OPTIMIZE__
+  GTEST_SKIP() << "the blockout comparison runs in optimised builds (two blockouts)";
+#endif
+  double removed[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    ArenaScope scope(t.arena);
+    CaseFile explicit_case = resolved;
+    explicit_case.insertion_direction = k == 0 ? r.occlusal_normal : r.insertion_direction;
+    Mesh splint;
+    DesignReport dr;
+    SPLINTCORE_ASSERT_OK(
+        design_splint(ctx, explicit_case, Span<const Mesh>(jaws, 2), &splint, &dr));
+    EXPECT_TRUE(dr.print.printable);
+    removed[k] = dr.blockout_removed_mm3[0] + dr.blockout_removed_mm3[1];
+  }
+  std::printf(
+      "undercut (rays): normal %.3f mm^3, chosen %.3f; blockout removed: normal %.3f, "
+      "chosen %.3f\n",
+      r.undercut_plain_mm3, r.undercut_chosen_mm3, removed[0], removed[1]);
+  EXPECT_LT(removed[1], removed[0]);
+}
+
 // A closed 20 mm cube from `corner`, each face a grid of 0.25 mm squares (two triangles each).
 void block(Arena& arena, const Vec3& corner, Mesh* out) {
   const int n = 80;
