@@ -68,10 +68,9 @@ struct Outline {
   OutlineReport report;
 };
 
-// Bytes compute_outline() needs for jaws of these sizes, at most (the picks and the arch
-// stay; everything else is returned).
-uint64_t compute_outline_bound(uint64_t maxilla_vertices, uint64_t maxilla_triangles,
-                               uint64_t mandible_vertices, uint64_t mandible_triangles);
+// Bytes compute_outline() needs for these jaws, at most (from their sizes and extent; the
+// picks and the arch stay, everything else is returned).
+uint64_t compute_outline_bound(const Mesh& maxilla, const Mesh& mandible);
 
 // The picks for a splint between `maxilla` and `mandible` (closed or open meshes, in any frame,
 // the mandible where the plan puts it). Each pick carries its direction (unit, buccal) and

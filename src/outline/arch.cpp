@@ -90,6 +90,14 @@ Status occlusal_points(Arena& arena, const Mesh& upper, const Mesh& lower, const
   const size_t cells = static_cast<size_t>(g.nx) * g.ny;
   double* r = arena.allocate_array<double>(cells);
   if (r == nullptr) return arena.exhausted_status();
+  // Room for every shown column and kLinePoints vertices a jaw, reserved once (no growth).
+  size_t shown = 0;
+  for (uint32_t jaw = 0; jaw < 2; ++jaw) {
+    for (size_t i = 0; i < cells; ++i) shown += g.tip[jaw][i] == kNoTip ? 0 : 1;
+  }
+  if (!cells_out->reserve(shown) || !line->reserve(2 * (kLinePoints + 1))) {
+    return arena.exhausted_status();
+  }
   for (uint32_t jaw = 0; jaw < 2; ++jaw) {
     const Mesh& m = jaw == 0 ? upper : lower;
     const Vec3 offset = jaw == 0 ? Vec3{} : lower_offset;
@@ -512,8 +520,10 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
       Pick& p = jaw == 0 ? up[i] : lo[i];
       p.position = flat + f.n * (jaw == 0 ? top : bottom);
       p.direction = buccal;
-      p.inner_length = std::max(data[i].lingual, 0.0) + options.overhang_mm;
-      p.outside_length = std::max(data[i].buccal, 0.0) + options.overhang_mm;
+      p.inner_length =
+          std::min(std::max(data[i].lingual, 0.0), kMaxReachAcrossMm) + options.overhang_mm;
+      p.outside_length =
+          std::min(std::max(data[i].buccal, 0.0), kMaxReachAcrossMm) + options.overhang_mm;
     }
   }
   for (size_t i = 0; i < arch.n; ++i) {

@@ -13,9 +13,10 @@ constexpr uint32_t kMaxAdvanceSteps = 100;
 constexpr uint32_t kBisections = 80;
 constexpr double kOpeningTolerance = 1e-9;  // mm
 constexpr double kNearReachMm = 1.0;        // open_bite's first band
-// mesh_pair_distance_bound() for any two indexes: 384 (15 (a.depth + b.depth) + 1) bytes, and
-// a 4-wide tree over 32-bit Morton leaves is at most 32 deep.
-constexpr uint64_t kPairStackBound = 384 * (15 * 64 + 1) + 64;
+// At least mesh_pair_distance_bound() for any two indexes: 24-byte entries, a heap of 2048 and
+// a stack of 15 (a.depth + b.depth) + 1, where a 4-wide tree over 32-bit Morton leaves is at
+// most 32 deep; and their alignment.
+constexpr uint64_t kPairStackBound = 24 * (2048 + 15 * 64 + 1) + 2 * 64;
 
 Status check_options(const OutlineOptions& o) {
   auto in = [](double v, double lo, double hi) { return v >= lo && v <= hi; };
@@ -222,24 +223,48 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
 
 }  // namespace
 
-uint64_t compute_outline_bound(uint64_t maxilla_vertices, uint64_t maxilla_triangles,
-                               uint64_t mandible_vertices, uint64_t mandible_triangles) {
-  const uint64_t side = static_cast<uint64_t>(kMaxSpanMm / kCellMm) + 2;
+uint64_t compute_outline_bound(const Mesh& maxilla, const Mesh& mandible) {
+  const uint64_t maxilla_vertices = maxilla.vertices.size(),
+                 maxilla_triangles = maxilla.triangles.size();
+  const uint64_t mandible_vertices = mandible.vertices.size(),
+                 mandible_triangles = mandible.triangles.size();
+  // The lattice spans the jaws' extent in a plane, at most their box's diagonal (and
+  // kMaxSpanMm); the survey's columns the picks' lines: the picks lie within an overhang
+  // (at most 10 mm) of the jaws, the lines reach kMaxReachAcrossMm and an overhang further.
+  Aabb box;
+  for (const Vec3& v : maxilla.vertices) box.add(v);
+  for (const Vec3& v : mandible.vertices) box.add(v);
+  double span = box.empty() ? 0 : length(box.hi - box.lo);
+  span = is_finite(span) && span < kMaxSpanMm ? span : kMaxSpanMm;
+  const uint64_t side = static_cast<uint64_t>(span / kCellMm) + 2;
   const uint64_t cells = side * side;
-  uint64_t points = maxilla_vertices + mandible_vertices;
-  points = points < 2 * cells ? points : 2 * cells;
+  const uint64_t column_side =
+      static_cast<uint64_t>((span + 2 * (kMaxReachAcrossMm + 10 + 10)) / kCellMm) + 2;
+  const uint64_t columns = column_side * column_side;
   const uint64_t buffers =
       2 * arena_array_bound<Pick>(kMaxPicks) + arena_array_bound<Vec3>(kMaxArchPoints);
   const uint64_t grid = 2 * (arena_array_bound<double>(cells) + arena_array_bound<uint32_t>(cells));
-  const uint64_t arch = arena_array_bound<double>(cells) + arena_array_bound<ArchPoint>(points) +
-                        6 * arena_array_bound<double>(kSectors) +
-                        6 * arena_array_bound<double>(2 * points + 16) +
-                        arena_array_bound<double>(4 * kMaxPicks);
+  // A jaw's band (a copy of its kept triangles, their ids) and its distance index.
   const DistanceIndexOptions io;
-  const uint64_t opening = distance_index_bound(maxilla_vertices, maxilla_triangles, io) +
-                           distance_index_bound(mandible_vertices, mandible_triangles, io) +
-                           kPairStackBound;
-  const uint64_t after_frame = opening > arch ? opening : arch;
+  const auto band = [&](uint64_t v, uint64_t t) {
+    return arena_array_bound<Triangle>(t) + arena_array_bound<uint32_t>(t) +
+           distance_index_bound(v, t, io);
+  };
+  const uint64_t jaws =
+      band(maxilla_vertices, maxilla_triangles) + band(mandible_vertices, mandible_triangles);
+  const uint64_t opening = jaws + kPairStackBound;
+  // The arch: the columns' distances and points, the band's vertices (both reserved once),
+  // the sectors, each pass's line, the picks' data.
+  const uint64_t points = 2 * cells;
+  const uint64_t line_points = 2 * (kLinePoints + 1);
+  const uint64_t arch =
+      arena_array_bound<double>(cells) + 3 * arena_array_bound<ArchPoint>(points) +
+      3 * arena_array_bound<ArchPoint>(line_points) + 6 * arena_array_bound<double>(kSectors) +
+      (kSmoothPasses + 1) * 9 * arena_array_bound<double>(kMaxArchPoints + 1) +
+      arena_array_bound<double>(6 * kMaxPicks);
+  // The survey, after the arch: its columns (reserved once) and the jaws' slabs.
+  const uint64_t survey = arena_array_bound<double>(4 * columns) + jaws;
+  const uint64_t after_frame = opening > arch + survey ? opening : arch + survey;
   return buffers + grid + after_frame;
 }
 

@@ -28,6 +28,7 @@ constexpr double kEndChordMm = 5.0;
 constexpr int kSmoothPasses = 4;    // project, bin, smooth: each pass
 constexpr double kTangentMm = 8.0;  // chord for the arch's direction at a pick
 constexpr double kMinArchMm = 20.0;
+constexpr double kMaxReachAcrossMm = 20.0;  // a line's reach past the centre line, at most
 constexpr double kDeepSlackMm = 0.2;            // a tooth sinks at most this much deeper than asked
 constexpr double kToothHalfMm = 5.5;            // half a molar's length along the arch
 constexpr double kMinWaferMm = 1.0;             // top to bottom, at every pick

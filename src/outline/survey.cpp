@@ -114,34 +114,40 @@ Status footprint(Arena& arena, const Frame& f, Span<const Pick> upper, Span<cons
   auto side = [](double ax, double ay, double bx, double by, double x, double y) {
     return (bx - ax) * (y - ay) - (by - ay) * (x - ax);
   };
-  for (double j = j0; j <= j1; j += 1) {
-    for (double i = i0; i <= i1; i += 1) {
-      const double x = cx + i * kSurveyCellMm, y = cy + j * kSurveyCellMm;
-      for (size_t q = 0; q + 1 < upper.size(); ++q) {
-        const Vec3 a = corner(q, false), b = corner(q, true), c = corner(q + 1, true),
-                   d = corner(q + 1, false);
-        const double s1 = side(px(a), py(a), px(b), py(b), x, y),
-                     s2 = side(px(b), py(b), px(c), py(c), x, y),
-                     s3 = side(px(c), py(c), px(d), py(d), x, y),
-                     s4 = side(px(d), py(d), px(a), py(a), x, y);
-        const bool in = (s1 >= 0 && s2 >= 0 && s3 >= 0 && s4 >= 0) ||
-                        (s1 <= 0 && s2 <= 0 && s3 <= 0 && s4 <= 0);
-        if (!in) continue;
-        // Where between the two picks: along the segment joining them.
-        const Vec3 p0 = upper[q].position, p1 = upper[q + 1].position;
-        const double dx = px(p1) - px(p0), dy = py(p1) - py(p0);
-        double w = ((x - px(p0)) * dx + (y - py(p0)) * dy) / (dx * dx + dy * dy);
-        w = w < 0 ? 0 : (w > 1 ? 1 : w);
-        Column col;
-        col.x = x;
-        col.y = y;
-        col.top = dot(p0, f.n) + w * (dot(p1, f.n) - dot(p0, f.n));
-        col.bottom = dot(lower[q].position, f.n) +
-                     w * (dot(lower[q + 1].position, f.n) - dot(lower[q].position, f.n));
-        if (!out->push_back(col)) return arena.exhausted_status();
-        break;
+  // Twice: count, then fill the exact room.
+  for (int pass = 0; pass < 2; ++pass) {
+    size_t count = 0;
+    for (double j = j0; j <= j1; j += 1) {
+      for (double i = i0; i <= i1; i += 1) {
+        const double x = cx + i * kSurveyCellMm, y = cy + j * kSurveyCellMm;
+        for (size_t q = 0; q + 1 < upper.size(); ++q) {
+          const Vec3 a = corner(q, false), b = corner(q, true), c = corner(q + 1, true),
+                     d = corner(q + 1, false);
+          const double s1 = side(px(a), py(a), px(b), py(b), x, y),
+                       s2 = side(px(b), py(b), px(c), py(c), x, y),
+                       s3 = side(px(c), py(c), px(d), py(d), x, y),
+                       s4 = side(px(d), py(d), px(a), py(a), x, y);
+          const bool in = (s1 >= 0 && s2 >= 0 && s3 >= 0 && s4 >= 0) ||
+                          (s1 <= 0 && s2 <= 0 && s3 <= 0 && s4 <= 0);
+          if (!in) continue;
+          // Where between the two picks: along the segment joining them.
+          const Vec3 p0 = upper[q].position, p1 = upper[q + 1].position;
+          const double dx = px(p1) - px(p0), dy = py(p1) - py(p0);
+          double w = ((x - px(p0)) * dx + (y - py(p0)) * dy) / (dx * dx + dy * dy);
+          w = w < 0 ? 0 : (w > 1 ? 1 : w);
+          Column col;
+          col.x = x;
+          col.y = y;
+          col.top = dot(p0, f.n) + w * (dot(p1, f.n) - dot(p0, f.n));
+          col.bottom = dot(lower[q].position, f.n) +
+                       w * (dot(lower[q + 1].position, f.n) - dot(lower[q].position, f.n));
+          ++count;
+          if (pass == 1) (void)out->push_back(col);
+          break;
+        }
       }
     }
+    if (pass == 0 && !out->reserve(count)) return arena.exhausted_status();
   }
   return Status::ok();
 }

@@ -493,6 +493,47 @@ TEST(Outline, SurveyChoosesLessUndercut) {
   EXPECT_LT(removed[1], removed[0]);
 }
 
+// The memory contract: compute_outline runs in an arena of exactly compute_outline_bound()
+// bytes, and in exactly the high water of a first run (one byte less fails cleanly).
+TEST(Outline, RunsInItsBoundAndInItsMeasuredNeed) {
+  PhantomJaws p(24000);
+  test::TestArena store{size_t{64} << 20};
+  Mesh jaws[2];
+  copy_mesh(p.jaw[0], store.arena, &jaws[0], RigidTransform{});
+  copy_mesh(p.jaw[1], store.arena, &jaws[1], RigidTransform{});
+  OutlineOptions opened;
+  opened.has_bite_opening = true;
+  opened.bite_opening_mm = 2;
+  OutlineOptions surveyed = opened;
+  surveyed.survey = true;
+  for (const OutlineOptions& options : {opened, surveyed}) {
+    const uint64_t bound = compute_outline_bound(jaws[0], jaws[1]);
+    uint64_t need = 0;
+    {
+      test::TestArena exact{static_cast<size_t>(bound)};
+      Outline o;
+      SPLINTCORE_ASSERT_OK(compute_outline(Context(&exact.arena), jaws[0], jaws[1], options, &o));
+      need = exact.arena.high_water();
+      std::printf("compute_outline%s: bound %llu, need %llu (%.2f)\n",
+                  options.survey ? " (survey)" : "", static_cast<unsigned long long>(bound),
+                  static_cast<unsigned long long>(need),
+                  static_cast<double>(need) / static_cast<double>(bound));
+    }
+    {
+      test::TestArena exact{static_cast<size_t>(need)};
+      Outline o;
+      SPLINTCORE_EXPECT_OK(compute_outline(Context(&exact.arena), jaws[0], jaws[1], options, &o));
+    }
+    {
+      test::TestArena short_by_one{static_cast<size_t>(need - 1)};
+      Outline o;
+      const Status s = compute_outline(Context(&short_by_one.arena), jaws[0], jaws[1], options, &o);
+      EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << test::format(s);
+      EXPECT_EQ(short_by_one.arena.used(), 0u);
+    }
+  }
+}
+
 // A closed 20 mm cube from `corner`, each face a grid of 0.25 mm squares (two triangles each).
 void block(Arena& arena, const Vec3& corner, Mesh* out) {
   const int n = 80;
