@@ -107,19 +107,20 @@ Status footprint(Arena& arena, const Frame& f, Span<const Pick> upper, Span<cons
   // The lattice's origin: the picks' centroid (it moves with the jaws).
   cx /= static_cast<double>(upper.size());
   cy /= static_cast<double>(upper.size());
-  const double i0 = std::floor((x_lo - cx) / kSurveyCellMm),
-               i1 = std::ceil((x_hi - cx) / kSurveyCellMm);
-  const double j0 = std::floor((y_lo - cy) / kSurveyCellMm),
-               j1 = std::ceil((y_hi - cy) / kSurveyCellMm);
+  const int64_t i0 = static_cast<int64_t>(std::floor((x_lo - cx) / kSurveyCellMm));
+  const int64_t i1 = static_cast<int64_t>(std::ceil((x_hi - cx) / kSurveyCellMm));
+  const int64_t j0 = static_cast<int64_t>(std::floor((y_lo - cy) / kSurveyCellMm));
+  const int64_t j1 = static_cast<int64_t>(std::ceil((y_hi - cy) / kSurveyCellMm));
   auto side = [](double ax, double ay, double bx, double by, double x, double y) {
     return (bx - ax) * (y - ay) - (by - ay) * (x - ax);
   };
   // Twice: count, then fill the exact room.
   for (int pass = 0; pass < 2; ++pass) {
     size_t count = 0;
-    for (double j = j0; j <= j1; j += 1) {
-      for (double i = i0; i <= i1; i += 1) {
-        const double x = cx + i * kSurveyCellMm, y = cy + j * kSurveyCellMm;
+    for (int64_t j = j0; j <= j1; ++j) {
+      for (int64_t i = i0; i <= i1; ++i) {
+        const double x = cx + static_cast<double>(i) * kSurveyCellMm;
+        const double y = cy + static_cast<double>(j) * kSurveyCellMm;
         for (size_t q = 0; q + 1 < upper.size(); ++q) {
           const Vec3 a = corner(q, false), b = corner(q, true), c = corner(q + 1, true),
                      d = corner(q + 1, false);
