@@ -408,12 +408,12 @@ typedef struct sc_outline_report {
  * the case gives one), and the arch (sc_case_arch_point); it is no longer an auto case, and
  * sc_design of it gives the same splint bytes as sc_design of `c`. `report` may be NULL.
  * Arena: the jaws' moved copies and the outline's work (a few times the jaws' size; measure
- * with sc_arena_high_water), all returned; the handle and its lists (about 40 KB) stay. On
- * error the arena is back where it was and *resolved is NULL. Progress: "outline".
- * Errors: SC_INVALID_ARGUMENT (not an auto case, the jaw count differs from the case's, not
- * one maxilla and one mandible, jaws that do not face each other, no occlusal surfaces, jaws
- * touching or interpenetrating without a bite opening, or too far apart: the message says
- * which, prefixed "outline: "), SC_INVALID_MESH, SC_NON_FINITE, SC_ARENA_EXHAUSTED,
+ * with sc_arena_high_water), all returned; the handle and its lists (about 70 KB: room for 256
+ * picks a jaw and 1,024 arch points) stay. On error the arena is back where it was and *resolved is
+ * NULL. Progress: "outline". Errors: SC_INVALID_ARGUMENT (not an auto case, the jaw count differs
+ * from the case's, not one maxilla and one mandible, jaws that do not face each other, no occlusal
+ * surfaces, jaws touching or interpenetrating without a bite opening, or too far apart: the message
+ * says which, prefixed "outline: "), SC_INVALID_MESH, SC_NON_FINITE, SC_ARENA_EXHAUSTED,
  * SC_CANCELLED. */
 sc_status sc_outline(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
                      size_t jaw_count, sc_case** resolved, sc_outline_report* report);
