@@ -413,7 +413,8 @@ typedef struct sc_outline_report {
  * NULL. Progress: "outline". Errors: SC_INVALID_ARGUMENT (not an auto case, the jaw count differs
  * from the case's, not one maxilla and one mandible, jaws that do not face each other, no occlusal
  * surfaces, jaws touching or interpenetrating without a bite opening, or too far apart: the message
- * says which, prefixed "outline: "), SC_INVALID_MESH, SC_NON_FINITE, SC_ARENA_EXHAUSTED,
+ * says which, prefixed "outline: "), SC_INVALID_MESH, SC_NON_FINITE, SC_LIMIT_EXCEEDED (a jaw moved
+ * beyond float32 range), SC_ARENA_EXHAUSTED,
  * SC_CANCELLED. */
 sc_status sc_outline(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
                      size_t jaw_count, sc_case** resolved, sc_outline_report* report);
