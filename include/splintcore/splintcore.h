@@ -337,6 +337,16 @@ typedef struct sc_case_params {
   double blockout_inset_mm;      /* 0 .. 1.99 voxel */
   double blockout_closing_mm;    /* 0, or 2 .. 10 voxel */
   const char* printer;           /* a built-in profile name ("eden260"); static text */
+  /* The automatic outline ("base": {"auto": {...}}, docs/case-format.md): the picks, the
+   * occlusal normal, the bite opening and (unless given) the insertion direction are computed
+   * from the jaws by sc_design and sc_outline. The options are checked only when auto_outline
+   * is set. Turning it off needs the case to have picks (one from sc_outline has). */
+  int auto_outline;
+  double auto_indentation_depth_mm; /* 0.1 .. 5: how deep the deepest cusp sinks in the wafer */
+  double auto_overhang_mm;          /* 0 .. 10: the wafer past the occlusal surfaces */
+  double auto_pick_spacing_mm;      /* 2 .. 20: between picks along the arch */
+  int auto_has_bite_opening;        /* move the mandible until the jaws are this far apart */
+  double auto_bite_opening_mm;      /* 0.1 .. 10 when auto_has_bite_opening */
 } sc_case_params;
 
 /* Reads the case's parameters into *out. */
@@ -345,6 +355,69 @@ sc_status sc_case_get_params(sc_context* ctx, const sc_case* c, sc_case_params* 
  * The printer name must stay valid while the case is used (a string literal or the value
  * sc_case_get_params gave). No arena. Errors: SC_INVALID_ARGUMENT (naming the parameter). */
 sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* params);
+
+/* Writes the case as a case file (JSON, format version 1; write_case of design.h) to `sink`:
+ * every key it uses, numbers as the shortest text that reads back to the same double, so that
+ * sc_case_parse of the bytes gives the same values and sc_design the same splint. An auto case
+ * is written with its "auto" object, a resolved one (sc_outline) with its picks. Jaw mesh paths
+ * are written as the case names them (relative to the case file's folder). No arena.
+ * Errors: SC_IO_ERROR (the sink failed; names it), SC_INVALID_ARGUMENT (NULL pointers). */
+sc_status sc_case_write(sc_context* ctx, const sc_case* c, const sc_sink* sink);
+
+/* The picks of a case: those it gives, or, for a case from sc_outline, those computed (0 for
+ * an auto case, whose picks exist only once resolved). `which`: SC_PICKS_UPPER (the wafer's
+ * top face, the maxilla's side) or SC_PICKS_LOWER (its bottom face); upper and lower pair up
+ * by index. 0 for NULL or another `which`. */
+enum { SC_PICKS_UPPER = 0, SC_PICKS_LOWER = 1 };
+size_t sc_case_pick_count(const sc_case* c, int which);
+/* Reads pick `index`: its position (mm, case frame), its unit buccal direction (zero when
+ * the case gives none), and the lengths of its line towards the inside and the outside (mm).
+ * Any output pointer may be NULL. Returns 1, or 0 (nothing written) for NULL, an unknown
+ * `which` or an index out of range. No arena. */
+int sc_case_pick(const sc_case* c, int which, size_t index, double position[3], double direction[3],
+                 double* inner_mm, double* outside_mm);
+/* The dental arch's centre line (a polyline in the occlusal plane, mm) of a case from
+ * sc_outline, for display; 0 points for any other case. sc_case_arch_point returns 1, or 0 for
+ * NULL or an index out of range. */
+size_t sc_case_arch_count(const sc_case* c);
+int sc_case_arch_point(const sc_case* c, size_t index, double point[3]);
+
+/* What the automatic outline found (OutlineReport of outline.h). Flags are 0 or 1. */
+typedef struct sc_outline_report {
+  double occlusal_normal[3];         /* unit, from the mandible towards the maxilla */
+  double anterior[3];                /* unit, in the occlusal plane, towards the incisors */
+  double gap_as_given_mm;            /* smallest distance between the jaws as given */
+  int jaws_intersect;                /* as given */
+  int opened;                        /* the mandible was moved (bite opening asked) */
+  double mandible_translation_mm[3]; /* the move (zero unless opened) */
+  double opening_mm;                 /* smallest distance after the move */
+  uint32_t opening_steps;            /* conservative-advancement steps */
+  uint32_t picks;                    /* per jaw */
+  double arch_length_mm;             /* along the arch, end to end, before the overhang */
+  double wafer_min_mm;               /* the thinnest section, top to bottom */
+  double wafer_max_mm;
+  uint64_t occlusal_columns_maxilla; /* occlusal cells found per jaw */
+  uint64_t occlusal_columns_mandible;
+} sc_outline_report;
+
+/* The automatic outline of an auto case (resolve_case_outline of design.h): `jaws` are the
+ * meshes of the case's jaws as read (one maxilla and one mandible; moved by the case's
+ * transforms here, not changed). *resolved is a new case handle with everything the outline
+ * decided written in: the picks (sc_case_pick), the occlusal normal, the mandible's transform
+ * composed with the bite opening's move, the insertion direction (the occlusal normal unless
+ * the case gives one), and the arch (sc_case_arch_point); it is no longer an auto case, and
+ * sc_design of it gives the same splint bytes as sc_design of `c`. `report` may be NULL.
+ * Arena: the jaws' moved copies and the outline's work (a few times the jaws' size; measure
+ * with sc_arena_high_water), all returned; the handle and its lists (about 70 KB: room for 256
+ * picks a jaw and 1,024 arch points) stay. On error the arena is back where it was and *resolved is
+ * NULL. Progress: "outline". Errors: SC_INVALID_ARGUMENT (not an auto case, the jaw count differs
+ * from the case's, not one maxilla and one mandible, jaws that do not face each other, no occlusal
+ * surfaces, jaws touching or interpenetrating without a bite opening, or too far apart: the message
+ * says which, prefixed "outline: "), SC_INVALID_MESH, SC_NON_FINITE, SC_LIMIT_EXCEEDED (a jaw moved
+ * beyond float32 range), SC_ARENA_EXHAUSTED,
+ * SC_CANCELLED. */
+sc_status sc_outline(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
+                     size_t jaw_count, sc_case** resolved, sc_outline_report* report);
 
 /* What a design gives. Flags are 0 or 1. */
 #define SC_MAX_BLOCKOUT_JAWS 8
@@ -368,11 +441,15 @@ typedef struct sc_design_report {
   double extent_mm[3];
   uint64_t layers;
   const char* printer; /* the profile used (static text) */
+  int outlined;        /* an auto case: the picks were computed first (sc_outline's) */
 } sc_design_report;
 
 /* Designs the splint for `c` from `jaws` (jaws[i] is the mesh of the case's jaw i, as read; it
  * is not changed): each jaw moved by the plan's transform, the base from the picks, the exact
  * Boolean difference, interference elimination when the case asks for it, the printer check.
+ * An auto case is resolved first as sc_outline does (stage "design: outline"; the report's
+ * `outlined` is 1 and sc_design_write_report writes the "outline" object); the splint is the
+ * one sc_design of sc_outline's resolved case gives, byte for byte.
  * `report` may be NULL. Arena: the pipeline's peak (the paper-scale case with two 6,000-
  * triangle jaws: 10.3 MB, the jaws included; measure yours with sc_arena_high_water), of which
  * the result, its handle and the design's record (for sc_design_write_report, a few KB)

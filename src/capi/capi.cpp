@@ -24,6 +24,7 @@ struct sc_mesh {
 };
 struct sc_case {
   CaseFile c;
+  Span<const Vec3> arch;  // the outline's arch (sc_outline's resolved cases), for display
 };
 
 struct sc_context {
@@ -188,6 +189,21 @@ Status check_range(const char* name, double value, const char* key, double voxel
   return Status::ok();
 }
 
+// The automatic outline's options (checked when auto_outline is set).
+Status check_auto_params(const sc_case_params& p) {
+  SPLINTCORE_RETURN_IF_ERROR(check_range("auto_indentation_depth_mm", p.auto_indentation_depth_mm,
+                                         "base.auto.indentation_depth_mm"));
+  SPLINTCORE_RETURN_IF_ERROR(
+      check_range("auto_overhang_mm", p.auto_overhang_mm, "base.auto.overhang_mm"));
+  SPLINTCORE_RETURN_IF_ERROR(
+      check_range("auto_pick_spacing_mm", p.auto_pick_spacing_mm, "base.auto.pick_spacing_mm"));
+  if (p.auto_has_bite_opening != 0) {
+    SPLINTCORE_RETURN_IF_ERROR(
+        check_range("auto_bite_opening_mm", p.auto_bite_opening_mm, "base.auto.bite_opening_mm"));
+  }
+  return Status::ok();
+}
+
 Status check_params(const sc_case_params& p, const PrinterProfile** profile) {
   SPLINTCORE_RETURN_IF_ERROR(check_range("spacing_mm", p.spacing_mm, "base.spacing_mm"));
   SPLINTCORE_RETURN_IF_ERROR(
@@ -205,10 +221,10 @@ Status check_params(const sc_case_params& p, const PrinterProfile** profile) {
     }
   }
   if (p.blockout != 0) {
-    if (p.has_insertion_direction == 0) {
+    if (p.has_insertion_direction == 0 && p.auto_outline == 0) {
       return make_error(StatusCode::kInvalidArgument,
                         "sc_case_set_params: blockout needs insertion_direction (the splint is "
-                        "seated along it)");
+                        "seated along it) or the automatic outline");
     }
     const double v = p.blockout_voxel_mm;
     SPLINTCORE_RETURN_IF_ERROR(check_range("blockout_voxel_mm", v, "blockout.voxel"));
@@ -221,12 +237,45 @@ Status check_params(const sc_case_params& p, const PrinterProfile** profile) {
                         p.blockout_closing_mm, ", must be 0 or at least two voxels (", 2 * v, ")");
     }
   }
+  if (p.auto_outline != 0) SPLINTCORE_RETURN_IF_ERROR(check_auto_params(p));
   *profile = p.printer != nullptr ? find_printer_profile(p.printer) : nullptr;
   if (*profile == nullptr) {
     return make_error(StatusCode::kInvalidArgument, "sc_case_set_params: unknown printer \"",
                       p.printer != nullptr ? p.printer : "(NULL)", "\"");
   }
   return Status::ok();
+}
+
+// The case's upper or lower picks, or nullptr (NULL case, unknown `which`).
+const Span<const Pick>* case_picks(const sc_case* c, int which) {
+  if (c == nullptr) return nullptr;
+  if (which == SC_PICKS_UPPER) return &c->c.upper;
+  if (which == SC_PICKS_LOWER) return &c->c.lower;
+  return nullptr;
+}
+
+void put(const Vec3& v, double out[3]) {
+  out[0] = v.x;
+  out[1] = v.y;
+  out[2] = v.z;
+}
+
+void copy_outline_report(const OutlineReport& o, sc_outline_report* out) {
+  std::memset(out, 0, sizeof(*out));
+  put(o.occlusal_normal, out->occlusal_normal);
+  put(o.anterior, out->anterior);
+  out->gap_as_given_mm = o.gap_as_given;
+  out->jaws_intersect = o.jaws_intersect ? 1 : 0;
+  out->opened = o.opened ? 1 : 0;
+  put(o.mandible_translation, out->mandible_translation_mm);
+  out->opening_mm = o.opening;
+  out->opening_steps = o.opening_steps;
+  out->picks = o.picks;
+  out->arch_length_mm = o.arch_length_mm;
+  out->wafer_min_mm = o.min_wafer_mm;
+  out->wafer_max_mm = o.max_wafer_mm;
+  out->occlusal_columns_maxilla = o.cells_upper;
+  out->occlusal_columns_mandible = o.cells_lower;
 }
 
 }  // namespace
@@ -686,6 +735,12 @@ sc_status sc_case_get_params(sc_context* ctx, const sc_case* c, sc_case_params* 
   out->blockout_inset_mm = f.blockout.inset;
   out->blockout_closing_mm = f.blockout.closing_radius;
   out->printer = f.printer;
+  out->auto_outline = f.has_auto_outline ? 1 : 0;
+  out->auto_indentation_depth_mm = f.outline.indentation_depth_mm;
+  out->auto_overhang_mm = f.outline.overhang_mm;
+  out->auto_pick_spacing_mm = f.outline.pick_spacing_mm;
+  out->auto_has_bite_opening = f.outline.has_bite_opening ? 1 : 0;
+  out->auto_bite_opening_mm = f.outline.bite_opening_mm;
   return keep(ctx, Status::ok());
 }
 
@@ -697,6 +752,11 @@ sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* 
   const Status s = check_params(*params, &profile);
   if (!s.is_ok()) return keep(ctx, s);
   CaseFile& f = c->c;
+  if (params->auto_outline == 0 && (f.upper.empty() || f.lower.empty())) {
+    return keep(ctx, Status::error(StatusCode::kInvalidArgument,
+                                   "sc_case_set_params: auto_outline is off but the case has no "
+                                   "picks (resolve it with sc_outline first)"));
+  }
   f.base.spacing_mm = params->spacing_mm;
   f.base.corner_radius_mm = params->corner_radius_mm;
   f.base.corner_segments = params->corner_segments;
@@ -709,6 +769,69 @@ sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* 
     f.blockout.closing_radius = params->blockout_closing_mm;
   }
   f.printer = profile->name;  // static text: the caller's string need not outlive the case
+  f.has_auto_outline = params->auto_outline != 0;
+  if (f.has_auto_outline) {
+    f.outline.indentation_depth_mm = params->auto_indentation_depth_mm;
+    f.outline.overhang_mm = params->auto_overhang_mm;
+    f.outline.pick_spacing_mm = params->auto_pick_spacing_mm;
+    f.outline.has_bite_opening = params->auto_has_bite_opening != 0;
+    f.outline.bite_opening_mm = f.outline.has_bite_opening ? params->auto_bite_opening_mm : 0;
+  }
+  return keep(ctx, Status::ok());
+}
+
+sc_status sc_case_write(sc_context* ctx, const sc_case* c, const sc_sink* sink) {
+  if (ctx == nullptr || c == nullptr || sink == nullptr || sink->write == nullptr) {
+    return null_argument(ctx, "sc_case_write", "the case, the sink or its write function");
+  }
+  return keep(ctx, write_case(c->c, core_sink(sink)));
+}
+
+size_t sc_case_pick_count(const sc_case* c, int which) {
+  const Span<const Pick>* picks = case_picks(c, which);
+  return picks == nullptr ? 0 : picks->size();
+}
+
+int sc_case_pick(const sc_case* c, int which, size_t index, double position[3], double direction[3],
+                 double* inner_mm, double* outside_mm) {
+  const Span<const Pick>* picks = case_picks(c, which);
+  if (picks == nullptr || index >= picks->size()) return 0;
+  const Pick& p = (*picks)[index];
+  if (position != nullptr) put(p.position, position);
+  if (direction != nullptr) put(p.direction, direction);
+  if (inner_mm != nullptr) *inner_mm = p.inner_length;
+  if (outside_mm != nullptr) *outside_mm = p.outside_length;
+  return 1;
+}
+
+size_t sc_case_arch_count(const sc_case* c) { return c == nullptr ? 0 : c->arch.size(); }
+
+int sc_case_arch_point(const sc_case* c, size_t index, double point[3]) {
+  if (c == nullptr || point == nullptr || index >= c->arch.size()) return 0;
+  put(c->arch[index], point);
+  return 1;
+}
+
+sc_status sc_outline(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
+                     size_t jaw_count, sc_case** resolved, sc_outline_report* report) {
+  if (ctx == nullptr || c == nullptr || resolved == nullptr) {
+    return null_argument(ctx, "sc_outline", "the case or the output");
+  }
+  *resolved = nullptr;
+  Mesh local[SC_MAX_BLOCKOUT_JAWS];
+  const Status g = gather_meshes(jaws, jaw_count, "sc_outline", local, SC_MAX_BLOCKOUT_JAWS);
+  if (!g.is_ok()) return keep(ctx, g);
+  ArenaScope scope(ctx->arena);
+  sc_case* handle = place<sc_case>(ctx->arena);
+  if (handle == nullptr) return keep(ctx, ctx->arena.exhausted_status());
+  Outline o;
+  const Status s = resolve_case_outline(core_context(ctx), c->c, Span<const Mesh>(local, jaw_count),
+                                        &handle->c, &o);
+  if (!s.is_ok()) return keep(ctx, s);
+  handle->arch = o.arch;
+  scope.commit();
+  *resolved = handle;
+  if (report != nullptr) copy_outline_report(o.report, report);
   return keep(ctx, Status::ok());
 }
 
@@ -760,6 +883,7 @@ sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaw
   report->extent_mm[2] = r.print.extent.z;
   report->layers = r.print.layers;
   report->printer = r.printer;
+  report->outlined = r.outlined ? 1 : 0;
   return code;
 }
 

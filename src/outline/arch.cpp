@@ -518,6 +518,7 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
     const Vec3 buccal = (f.e1 * lx + f.e2 * ly) * side;
     for (int jaw = 0; jaw < 2; ++jaw) {
       Pick& p = jaw == 0 ? up[i] : lo[i];
+      p = Pick{};  // the buffers are raw arena memory: no normal (zero) unless set
       p.position = flat + f.n * (jaw == 0 ? top : bottom);
       p.direction = buccal;
       p.inner_length =

@@ -2,7 +2,9 @@
  * STL round trips through memory, mesh checks, errors with their location, the exact Boolean,
  * the sweep, case parameters, and the whole design of fixtures/cases/paper_scale.json with the
  * 6,000-triangle phantom jaws (written by `splintcore phantom` as a ctest fixture), whose bytes
- * must be the golden splint's. With glibc, malloc/calloc/realloc are counted while sc_
+ * must be the golden splint's; the automatic outline (sc_outline, the resolved case's picks,
+ * sc_case_write) on the same jaws, whose auto, resolved and re-read cases design to the same
+ * bytes. With glibc, malloc/calloc/realloc are counted while sc_
  * functions run: the count must stay zero.
  *
  * usage: splintcore_capi_test FIXTURES_DIR [JAWS_DIR]   (no JAWS_DIR: the design is skipped)
@@ -774,6 +776,187 @@ static void test_report_matches_cli(const char* jaws_dir, const char* cli_dir) {
   free(out);
 }
 
+/* The phantom's case with the automatic outline instead of its picks. */
+static const char kAutoCase[] =
+    "{\"splintcore_case\": 1, \"case_id\": \"phantom-auto\", \"units\": \"mm\",\n"
+    " \"jaws\": [{\"role\": \"maxilla\", \"mesh\": \"maxilla.stl\"},\n"
+    "          {\"role\": \"mandible\", \"mesh\": \"mandible.stl\",\n"
+    "           \"transform\": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, -2.0, 0, 0, 0, 1]}],\n"
+    " \"base\": {\"spacing_mm\": 0.42, \"auto\": {}},\n"
+    " \"printer\": \"eden260\"}\n";
+
+/* The splint's binary STL hashed (the bytes are the splint). */
+static void splint_hash(sc_context* ctx, const sc_mesh* splint, char out[65]) {
+  const size_t cap = (size_t)sc_stl_binary_size(sc_mesh_triangle_count(splint));
+  unsigned char* stl = (unsigned char*)malloc(cap);
+  sc_memory_sink_state state;
+  sc_sink sink = sc_memory_sink(&state, stl, cap, "splint.stl");
+  out[0] = '\0';
+  g_counting = 1;
+  CHECK_OK(ctx, sc_mesh_write_stl(ctx, splint, &sink, NULL));
+  g_counting = 0;
+  sc_sha256_hex(stl, (size_t)state.size, out);
+  free(stl);
+}
+
+/* The auto case's parameters: read, refused out of range, not switched off without picks. */
+static void test_auto_params(sc_context* ctx, sc_case* c) {
+  sc_case_params p, q;
+  char text[512];
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &p));
+  CHECK(p.auto_outline == 1 && p.has_insertion_direction == 0);
+  CHECK(p.auto_indentation_depth_mm == 2.0 && p.auto_overhang_mm == 2.0);
+  CHECK(p.auto_pick_spacing_mm == 3.0 && p.auto_has_bite_opening == 0);
+  q = p;
+  q.auto_pick_spacing_mm = 1.0;
+  CHECK(sc_case_set_params(ctx, c, &q) == SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "auto_pick_spacing_mm"));
+  q = p;
+  q.auto_has_bite_opening = 1;
+  q.auto_bite_opening_mm = 20;
+  CHECK(sc_case_set_params(ctx, c, &q) == SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "auto_bite_opening_mm"));
+  q = p;
+  q.auto_outline = 0;
+  CHECK(sc_case_set_params(ctx, c, &q) == SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "no picks"));
+  CHECK(sc_case_pick_count(c, SC_PICKS_UPPER) == 0 && sc_case_arch_count(c) == 0);
+  /* A valid change sticks (and is set back). */
+  q = p;
+  q.auto_overhang_mm = 1.5;
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &q));
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &q));
+  CHECK(q.auto_overhang_mm == 1.5);
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &p));
+}
+
+/* The resolved case's picks and arch, and the case written and read back with the same picks. */
+static void test_resolved_case(sc_context* ctx, const sc_case* resolved, const sc_outline_report* r,
+                               sc_case** reread) {
+  double pos[3], dir[3], inner = 0, outside = 0, pos2[3], dir2[3], inner2 = 0, outside2 = 0;
+  size_t i, n = sc_case_pick_count(resolved, SC_PICKS_UPPER), bad = 0;
+  unsigned char* text = (unsigned char*)malloc((size_t)1 << 20);
+  sc_memory_sink_state state;
+  sc_sink sink = sc_memory_sink(&state, text, (size_t)1 << 20, "resolved.json");
+  sc_case_params p;
+  CHECK(n == r->picks && n >= 10);
+  CHECK(sc_case_pick_count(resolved, SC_PICKS_LOWER) == n);
+  CHECK(sc_case_pick_count(resolved, 7) == 0);
+  CHECK(sc_case_pick(resolved, SC_PICKS_UPPER, n, pos, dir, &inner, &outside) == 0);
+  CHECK(sc_case_pick(resolved, SC_PICKS_LOWER, 0, NULL, NULL, NULL, NULL) == 1);
+  CHECK(sc_case_arch_count(resolved) >= 2);
+  CHECK(sc_case_arch_point(resolved, 0, pos) == 1);
+  CHECK(sc_case_arch_point(resolved, sc_case_arch_count(resolved), pos) == 0);
+  CHECK_OK(ctx, sc_case_get_params(ctx, resolved, &p));
+  CHECK(p.auto_outline == 0 && p.has_insertion_direction == 1);
+  g_counting = 1;
+  CHECK_OK(ctx, sc_case_write(ctx, resolved, &sink));
+  g_counting = 0;
+  CHECK(state.size > 100 && contains((const char*)text, "\"upper\""));
+  CHECK_OK(ctx, sc_case_parse(ctx, (const char*)text, (size_t)state.size, "resolved.json", reread));
+  if (*reread != NULL) {
+    CHECK(sc_case_pick_count(*reread, SC_PICKS_UPPER) == n);
+    for (i = 0; i < n; ++i) {
+      int which;
+      for (which = SC_PICKS_UPPER; which <= SC_PICKS_LOWER; ++which) {
+        sc_case_pick(resolved, which, i, pos, dir, &inner, &outside);
+        sc_case_pick(*reread, which, i, pos2, dir2, &inner2, &outside2);
+        if (memcmp(pos, pos2, sizeof pos) != 0 || memcmp(dir, dir2, sizeof dir) != 0 ||
+            inner != inner2 || outside != outside2 || !(inner > 0 && outside > 0)) {
+          ++bad;
+        }
+      }
+    }
+    CHECK(bad == 0);
+  }
+  free(text);
+}
+
+/* The automatic outline: sc_outline's report and resolved case, its errors, and the designs
+ * of the auto case, the resolved case and the resolved case written and read back, which
+ * must be the same splint bytes; the report of the auto design has the "outline" object. */
+static void test_outline(const char* jaws_dir) {
+  Fixture f = open_fixture((size_t)96 << 20);
+  sc_case *c = NULL, *resolved = NULL, *reread = NULL;
+  const sc_mesh* jaws[2] = {NULL, NULL};
+  sc_mesh *auto_splint = NULL, *resolved_splint = NULL, *reread_splint = NULL;
+  sc_outline_report r;
+  sc_design_report d;
+  Bytes jaw_bytes[2] = {{NULL, 0}, {NULL, 0}};
+  char text[512], h_auto[65], h_resolved[65], h_reread[65];
+  unsigned char* json = (unsigned char*)malloc((size_t)1 << 20);
+  sc_memory_sink_state state;
+  sc_sink sink = sc_memory_sink(&state, json, (size_t)1 << 20, "report");
+  sc_arena_mark mark;
+  size_t i;
+
+  CHECK_OK(f.ctx, sc_case_parse(f.ctx, kAutoCase, sizeof kAutoCase - 1, "auto.json", &c));
+  if (c == NULL) return;
+  for (i = 0; i < 2; ++i) {
+    sc_mesh* m = NULL;
+    jaw_bytes[i] = read_file(jaws_dir, sc_case_jaw_mesh(c, i));
+    if (jaw_bytes[i].data == NULL) return;
+    CHECK_OK(f.ctx, read_mesh(f.ctx, &jaw_bytes[i], sc_case_jaw_mesh(c, i), &m));
+    jaws[i] = m;
+  }
+  test_auto_params(f.ctx, c);
+  /* Errors: one jaw only, a case with its picks; the arena back where it was. */
+  mark = sc_arena_mark_get(f.ctx);
+  resolved = (sc_case*)&f;
+  CHECK(sc_outline(f.ctx, c, jaws, 1, &resolved, &r) == SC_INVALID_ARGUMENT);
+  CHECK(resolved == NULL && sc_arena_used(f.ctx) == mark.used);
+  last_message(f.ctx, text, sizeof text);
+  CHECK(contains(text, "outline") && contains(text, "2 jaws") && contains(text, "1 meshes"));
+  printf("outline with one jaw: %s\n", text);
+  CHECK(sc_outline(f.ctx, c, jaws, 2, NULL, &r) == SC_INVALID_ARGUMENT);
+
+  g_counting = 1;
+  CHECK_OK(f.ctx, sc_outline(f.ctx, c, jaws, 2, &resolved, &r));
+  g_counting = 0;
+  if (resolved == NULL) return;
+  CHECK(r.occlusal_normal[2] > 0.99 && r.anterior[1] > 0.9);
+  CHECK(r.jaws_intersect == 0 && r.opened == 0 && r.gap_as_given_mm > 0);
+  CHECK(r.arch_length_mm > 20 && r.wafer_min_mm > 0 && r.wafer_max_mm >= r.wafer_min_mm);
+  CHECK(r.occlusal_columns_maxilla > 0 && r.occlusal_columns_mandible > 0);
+  printf("outline: %u picks per jaw, arch %.2f mm, wafer %.3f..%.3f mm, gap %.3f mm\n", r.picks,
+         r.arch_length_mm, r.wafer_min_mm, r.wafer_max_mm, r.gap_as_given_mm);
+  {
+    sc_case* again = NULL; /* a resolved case is no auto case */
+    CHECK(sc_outline(f.ctx, resolved, jaws, 2, &again, NULL) == SC_INVALID_ARGUMENT);
+    last_message(f.ctx, text, sizeof text);
+    CHECK(contains(text, "auto"));
+  }
+  test_resolved_case(f.ctx, resolved, &r, &reread);
+
+  g_counting = 1;
+  CHECK_OK(f.ctx, sc_design(f.ctx, c, jaws, 2, &auto_splint, &d));
+  g_counting = 0;
+  if (auto_splint == NULL) return;
+  CHECK(d.outlined == 1 && d.printable == 1);
+  splint_hash(f.ctx, auto_splint, h_auto);
+  CHECK_OK(f.ctx, sc_design_write_report(f.ctx, c, jaws, 2, auto_splint, NULL, &sink));
+  json[state.size < ((size_t)1 << 20) ? state.size : 0] = 0;
+  CHECK(contains((const char*)json, "\"outline\":{\"occlusal_normal\""));
+  CHECK(contains((const char*)json, "\"picks_per_jaw\""));
+  CHECK_OK(f.ctx, sc_design(f.ctx, resolved, jaws, 2, &resolved_splint, &d));
+  CHECK(d.outlined == 0);
+  if (resolved_splint != NULL) splint_hash(f.ctx, resolved_splint, h_resolved);
+  CHECK(resolved_splint != NULL && strcmp(h_auto, h_resolved) == 0);
+  if (reread != NULL) {
+    CHECK_OK(f.ctx, sc_design(f.ctx, reread, jaws, 2, &reread_splint, NULL));
+    if (reread_splint != NULL) splint_hash(f.ctx, reread_splint, h_reread);
+    CHECK(reread_splint != NULL && strcmp(h_auto, h_reread) == 0);
+  }
+  printf("auto design: %llu triangles, sha256 %s (the resolved case's too)\n",
+         (unsigned long long)sc_mesh_triangle_count(auto_splint), h_auto);
+  close_fixture(&f);
+  for (i = 0; i < 2; ++i) free(jaw_bytes[i].data);
+  free(json);
+}
+
 int main(int argc, char** argv) {
   Bytes torus, case_text;
   if (argc < 2) {
@@ -805,6 +988,7 @@ int main(int argc, char** argv) {
   test_case_params(&case_text);
   if (argc >= 3) {
     test_design(&case_text, argv[2]);
+    test_outline(argv[2]);
     if (argc >= 4) test_report_matches_cli(argv[2], argv[3]);
   } else {
     printf("design skipped: no jaws folder given\n");

@@ -25,18 +25,125 @@ std::string sha256_hex(const std::vector<uint8_t>& bytes) {
   return hex;
 }
 
-}  // namespace
+// Adds a closed, thin square bar from a to b (half-width w) to `m`'s vertex and triangle lists.
+void add_bar(const Vec3& a, const Vec3& b, double w, std::vector<Vec3>* v,
+             std::vector<Triangle>* t) {
+  const Vec3 d = b - a;
+  const double len = length(d);
+  if (!(len > 1e-9)) return;
+  const Vec3 u = d * (1.0 / len);
+  const Vec3 ref = u.z * u.z < 0.5 ? Vec3(0, 0, 1) : Vec3(1, 0, 0);
+  Vec3 e1 = cross(u, ref);
+  e1 = e1 * (w / length(e1));
+  const Vec3 e2 = cross(u, e1);  // |e2| = w
+  const uint32_t base = static_cast<uint32_t>(v->size());
+  const Vec3 ring[4] = {e1 + e2, e2 - e1, Vec3(0, 0, 0) - e1 - e2, e1 - e2};
+  for (const Vec3& r : ring) v->push_back(a + r);
+  for (const Vec3& r : ring) v->push_back(b + r);
+  for (uint32_t k = 0; k < 4; ++k) {
+    const uint32_t n = (k + 1) % 4;
+    t->push_back(Triangle{{base + k, base + n, base + 4 + n}});
+    t->push_back(Triangle{{base + k, base + 4 + n, base + 4 + k}});
+  }
+  t->push_back(Triangle{{base, base + 2, base + 1}});
+  t->push_back(Triangle{{base, base + 3, base + 2}});
+  t->push_back(Triangle{{base + 4, base + 5, base + 6}});
+  t->push_back(Triangle{{base + 4, base + 6, base + 7}});
+}
 
-Status write_png_file(const Context& ctx, const std::vector<RenderMesh>& meshes,
-                      const RenderOptions& options, const std::string& path, PreviewInfo* info) {
+// Adds an octahedron of radius r at c.
+void add_octahedron(const Vec3& c, double r, std::vector<Vec3>* v, std::vector<Triangle>* t) {
+  const uint32_t b = static_cast<uint32_t>(v->size());
+  const Vec3 tips[6] = {Vec3(r, 0, 0),  Vec3(0, r, 0), Vec3(-r, 0, 0),
+                        Vec3(0, -r, 0), Vec3(0, 0, r), Vec3(0, 0, -r)};
+  for (const Vec3& p : tips) v->push_back(c + p);
+  for (uint32_t k = 0; k < 4; ++k) {
+    const uint32_t n = (k + 1) % 4;
+    t->push_back(Triangle{{b + k, b + n, b + 4}});
+    t->push_back(Triangle{{b + n, b + k, b + 5}});
+  }
+}
+
+constexpr double kMarkRadius = 0.6;  // mm: the picks' octahedra
+constexpr double kBarWidth = 0.15;   // mm: half the bars' width
+
+// The marks as one mesh in `arena`.
+Status marks_mesh(Arena& arena, const PreviewMarks& marks, Mesh* out) {
+  std::vector<Vec3> vertices;
+  std::vector<Triangle> triangles;
+  std::vector<Vec3>* v = &vertices;
+  std::vector<Triangle>* t = &triangles;
+  for (const Span<const Pick>* side : {&marks.upper, &marks.lower}) {
+    for (const Pick& p : *side) {
+      const Vec3 at = marks.move.apply_point(p.position);
+      const Vec3 d = marks.move.apply_vector(p.direction);
+      add_octahedron(at, kMarkRadius, v, t);
+      add_bar(at - d * p.inner_length, at + d * p.outside_length, kBarWidth, v, t);
+    }
+  }
+  for (size_t i = 1; i < marks.arch.size(); ++i) {
+    add_bar(marks.move.apply_point(marks.arch[i - 1]), marks.move.apply_point(marks.arch[i]),
+            kBarWidth, v, t);
+  }
+  *out = Mesh(&arena);
+  if (!out->vertices.resize(vertices.size()) || !out->triangles.resize(triangles.size())) {
+    return arena.exhausted_status();
+  }
+  for (size_t i = 0; i < vertices.size(); ++i) out->vertices[i] = vertices[i];
+  for (size_t i = 0; i < triangles.size(); ++i) out->triangles[i] = triangles[i];
+  return Status::ok();
+}
+
+// Draws the scene, then (with marks) the marks alone in the same framing, copied over it.
+// `scene[0]` is the splint; the rest are translucent jaws.
+Status render_with_marks(const Context& ctx, const std::vector<RenderMesh>& scene,
+                         const Mesh* marks, const RenderOptions& options, RenderImage* image) {
+  std::vector<RenderMesh> first = scene;
+  Mesh frame_only;  // the marks' vertices without triangles: the same framing in both passes
+  if (marks != nullptr) {
+    frame_only.vertices = marks->vertices;
+    RenderMesh f;
+    f.mesh = &frame_only;
+    first.push_back(f);
+  }
+  SPLINTCORE_RETURN_IF_ERROR(
+      render_meshes(ctx, Span<const RenderMesh>(first.data(), first.size()), options, image));
+  if (marks == nullptr) return Status::ok();
+  std::vector<RenderMesh> second;
+  RenderMesh m;
+  m.mesh = marks;
+  for (int k = 0; k < 3; ++k) m.rgb[k] = kMarkRgb[k];
+  second.push_back(m);
+  for (RenderMesh r : scene) {
+    r.alpha = 0;  // translucent with weight 0: framed, never seen, hides nothing
+    second.push_back(r);
+  }
+  RenderOptions o = options;
+  for (int k = 0; k < 3; ++k) o.background[k] = 0;
+  ArenaScope scope(*ctx.arena);
+  RenderImage marked;
+  SPLINTCORE_RETURN_IF_ERROR(
+      render_meshes(ctx, Span<const RenderMesh>(second.data(), second.size()), o, &marked));
+  // The marks' pixels are the red ones (green and blue 0, on black): tile lines are grey.
+  const size_t pixels = static_cast<size_t>(image->width) * image->height;
+  for (size_t i = 0; i < pixels; ++i) {
+    const uint8_t* q = marked.rgb + 3 * i;
+    if (q[0] != 0 && q[1] == 0 && q[2] == 0) std::memcpy(image->rgb + 3 * i, q, 3);
+  }
+  return Status::ok();
+}
+
+// write_png_file with marks drawn over the scene (render_with_marks; marks may be null).
+Status write_marked_png_file(const Context& ctx, const std::vector<RenderMesh>& meshes,
+                             const Mesh* marks, const RenderOptions& options,
+                             const std::string& path, PreviewInfo* info) {
   std::vector<uint8_t> png;
   const double t0 = monotonic_seconds();
   double render_seconds = 0;
   RenderImage image;
   {
     ArenaScope scope(*ctx.arena);  // the image and the encoder's temporaries
-    SPLINTCORE_RETURN_IF_ERROR(
-        render_meshes(ctx, Span<const RenderMesh>(meshes.data(), meshes.size()), options, &image));
+    SPLINTCORE_RETURN_IF_ERROR(render_with_marks(ctx, meshes, marks, options, &image));
     render_seconds = monotonic_seconds() - t0;
     ByteSink sink;
     sink.write = &vector_write;
@@ -65,9 +172,17 @@ Status write_png_file(const Context& ctx, const std::vector<RenderMesh>& meshes,
   return Status::ok();
 }
 
+}  // namespace
+
+Status write_png_file(const Context& ctx, const std::vector<RenderMesh>& meshes,
+                      const RenderOptions& options, const std::string& path, PreviewInfo* info) {
+  return write_marked_png_file(ctx, meshes, nullptr, options, path, info);
+}
+
 Status write_preview(const Context& ctx, const Mesh& splint, const std::vector<const Mesh*>& jaws,
                      const std::vector<RigidTransform>& moves, const std::string& path,
-                     uint32_t width, uint32_t height, PreviewInfo* info) {
+                     uint32_t width, uint32_t height, PreviewInfo* info,
+                     const PreviewMarks* marks) {
   if (!moves.empty() && moves.size() != jaws.size()) {
     return make_error(StatusCode::kInvalidArgument, "preview: ", moves.size(), " transforms for ",
                       jaws.size(), " jaws");
@@ -105,7 +220,10 @@ Status write_preview(const Context& ctx, const Mesh& splint, const std::vector<c
   RenderOptions options;
   options.width = width;
   options.height = height;
-  return write_png_file(ctx, meshes, options, path, info);
+  if (marks == nullptr) return write_png_file(ctx, meshes, options, path, info);
+  Mesh mark_mesh;
+  SPLINTCORE_RETURN_IF_ERROR(marks_mesh(arena, *marks, &mark_mesh));
+  return write_marked_png_file(ctx, meshes, &mark_mesh, options, path, info);
 }
 
 Status write_distance_png(const Context& ctx, const Mesh& mesh,

@@ -11,6 +11,7 @@
 #include "splintcore/core.h"
 #include "splintcore/mesh.h"
 #include "splintcore/render.h"
+#include "splintcore/spline.h"
 
 namespace splintcore {
 namespace cli {
@@ -38,13 +39,28 @@ struct PreviewInfo {
 Status write_png_file(const Context& ctx, const std::vector<RenderMesh>& meshes,
                       const RenderOptions& options, const std::string& path, PreviewInfo* info);
 
+// The automatic outline's picks and arch (outline.h), drawn over the design preview in
+// kMarkRgb: a small octahedron at each pick, a thin bar along its line from the inner to the
+// outside end, thin bars along the arch's polyline. `move` is applied to all of them (the tray
+// placement). Spans point at the caller's data.
+constexpr uint8_t kMarkRgb[3] = {235, 0, 0};
+struct PreviewMarks {
+  Span<const Pick> upper, lower;
+  Span<const Vec3> arch;
+  RigidTransform move;
+};
+
 // The design preview: `splint` (opaque blue) under `jaws` (translucent grey), four views (front,
 // top, right, iso) at width x height. `moves` is empty or one transform per jaw: the jaws are drawn
 // from copies moved by it (in ctx.arena, returned; 24 bytes a vertex and 12 a triangle more).
 // As write_png_file; kInvalidArgument when moves has another size than jaws.
+// With `marks` (may be null) the picks and the arch are drawn over everything, seen through
+// the splint and the jaws: the scene is drawn a second time with the marks opaque and the rest
+// invisible (translucent, weight 0: the same framing), and the marks' pixels are copied over.
 Status write_preview(const Context& ctx, const Mesh& splint, const std::vector<const Mesh*>& jaws,
                      const std::vector<RigidTransform>& moves, const std::string& path,
-                     uint32_t width, uint32_t height, PreviewInfo* info);
+                     uint32_t width, uint32_t height, PreviewInfo* info,
+                     const PreviewMarks* marks = nullptr);
 
 // `mesh` coloured per pixel by `distances` (one per vertex) on the blue-green-red ramp over
 // [0, range] (render_ramp_colour; range > 0), four views, with the ramp's legend bar at the

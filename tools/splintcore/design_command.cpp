@@ -312,7 +312,8 @@ Status Design::write_splint() {
   return write_bytes_atomically(splint_path_, stl.data(), stl.size());
 }
 
-// OUTDIR/preview.png: the splint on the jaws as the plan (and a tray placement) moved them.
+// OUTDIR/preview.png: the splint on the jaws as the plan (and a tray placement) moved them;
+// for an auto case, the outline's picks and arch over them (cli::PreviewMarks).
 // Not fatal: the splint is written; a preview that fails (e.g. a tight --memory-cap) is a
 // warning and the report says why.
 void Design::write_preview() {
@@ -327,9 +328,15 @@ void Design::write_preview() {
             ? compose(RigidTransform::translation(report_.tray_translation), c_.jaws[i].transform)
             : c_.jaws[i].transform);
   }
-  preview_status_ =
-      cli::write_preview(ctx_, splint_, preview_jaws, preview_moves,
-                         std::string(args_.output) + "/preview.png", 1024, 1024, &preview_);
+  // An auto case: its picks and arch drawn over the splint and the jaws.
+  cli::PreviewMarks marks;
+  marks.upper = outline_.upper;
+  marks.lower = outline_.lower;
+  marks.arch = outline_.arch;
+  if (report_.placed_on_tray) marks.move = RigidTransform::translation(report_.tray_translation);
+  preview_status_ = cli::write_preview(ctx_, splint_, preview_jaws, preview_moves,
+                                       std::string(args_.output) + "/preview.png", 1024, 1024,
+                                       &preview_, outlined_ ? &marks : nullptr);
   if (!preview_status_.is_ok()) {
     preview_status_.format(preview_error_, sizeof(preview_error_));
     std::fprintf(stderr, "splintcore: warning: no preview: %s\n", preview_error_);
