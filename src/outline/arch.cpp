@@ -4,6 +4,7 @@
 // as wide as the occlusal surfaces plus the overhang, as high as the teeth sink into the wafer.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "outline_internal.h"
 
@@ -397,11 +398,11 @@ void gather_pick(Span<const ArchPoint> pts, double s, double step, double side, 
     d->buccal = std::max(d->buccal, a.o * side);
     d->lingual = std::max(d->lingual, -a.o * side);
   }
-  if (d->h[0] == HUGE_VAL) d->h[0] = NAN;
-  if (d->h[1] == -HUGE_VAL) d->h[1] = NAN;
-  if (d->near_h[0] == HUGE_VAL) d->near_h[0] = NAN;
-  if (d->near_h[1] == -HUGE_VAL) d->near_h[1] = NAN;
-  if (d->buccal == -HUGE_VAL) d->buccal = d->lingual = NAN;
+  if (d->h[0] == HUGE_VAL) d->h[0] = std::numeric_limits<double>::quiet_NaN();
+  if (d->h[1] == -HUGE_VAL) d->h[1] = std::numeric_limits<double>::quiet_NaN();
+  if (d->near_h[0] == HUGE_VAL) d->near_h[0] = std::numeric_limits<double>::quiet_NaN();
+  if (d->near_h[1] == -HUGE_VAL) d->near_h[1] = std::numeric_limits<double>::quiet_NaN();
+  if (d->buccal == -HUGE_VAL) d->buccal = d->lingual = std::numeric_limits<double>::quiet_NaN();
 }
 
 // Fills the NaN entries of v[0..n) (stride `stride` doubles) by linear interpolation between

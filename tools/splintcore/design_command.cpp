@@ -30,7 +30,8 @@ struct DesignArgs {
 // `design`'s options, in the order its --help lists them.
 std::vector<OptionSpec> design_options(DesignArgs* a) {
   return {
-      output_option("OUTDIR", &a->output, "the folder to write into"),
+      a->outline_only ? output_option("RESOLVED.json", &a->output, "the resolved case to write")
+                      : output_option("OUTDIR", &a->output, "the folder to write into"),
       size("--max-input-bytes", "SIZE", &a->max_input_bytes,
            "refuse a larger case or jaw file (default 16M, 2G for a jaw)",
            "--max-input-bytes needs a size such as 16M, 2G or 1048576"),
