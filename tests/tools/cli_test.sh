@@ -43,6 +43,18 @@ json_ok() {  # the file holds exactly one JSON object
   fi
 }
 
+sha256() {  # the SHA-256 of a file, hex
+  if command -v sha256sum >/dev/null 2>&1; then
+    sha256sum "$1" | cut -d' ' -f1
+  else
+    shasum -a 256 "$1" | cut -d' ' -f1
+  fi
+}
+
+has_sha256() {  # has_sha256 FILE HASH: the file exists and HASH (not empty) is its SHA-256
+  [ -n "$2" ] && [ -f "$1" ] && [ "$(sha256 "$1")" = "$2" ]
+}
+
 expect_exit 0 "help" -- "$tool" --help
 expect_exit 2 "no command" -- "$tool"
 expect_exit 2 "unknown command" -- "$tool" frobnicate
@@ -284,6 +296,28 @@ check "design from CT reports the voxels' hash" -- grep -q '"ct_voxels_sha256":"
 ctgolden=$(grep "design:ct_phantom-120x110x80" "$fixtures/golden.sha256" | cut -d' ' -f1)
 check "design from CT has the golden bytes" -- grep -q "\"splint_sha256\":\"$ctgolden\"" "$work/ctcase/out/report.json"
 expect_exit 0 "the splint from CT is printable" -- "$tool" check "$work/ctcase/out/splint.stl"
+# The automatic outline from CT (issue 28): fixtures/cases/ct_auto.json is the CT case with
+# "base": {"auto": {}} (the mandible's 2 mm move keeps the reconstructed jaws apart);
+# `outline` writes the resolved case, and designing either gives the pinned bytes.
+mkdir -p "$work/ctauto"
+cp "$fixtures/cases/ct_auto.json" "$work/ctauto/case.json"
+cp "$work/ct.nrrd" "$work/ctauto/ct.nrrd"
+expect_exit 0 "outline from CT" -- "$tool" outline "$work/ctauto/case.json" -o "$work/ctauto/resolved.json" --json
+check "outline from CT: one JSON object" -- json_ok "$work/out"
+check "outline from CT: the jaws were apart" -- grep -q '"gap_as_given_mm":[1-9].*"bite_opened":false' "$work/out"
+check "outline from CT wrote the resolved case" -- json_ok "$work/ctauto/resolved.json"
+expect_exit 0 "design the auto case from CT" -- "$tool" design "$work/ctauto/case.json" -o "$work/ctauto/out"
+ctautogolden=$(grep " design:ct_auto-120x110x80$" "$fixtures/golden.sha256" | cut -d' ' -f1)
+check "design of the auto case from CT has the golden bytes" -- grep -q "\"splint_sha256\":\"$ctautogolden\"" "$work/ctauto/out/report.json"
+check "the report has the outline" -- grep -q '"outline":{' "$work/ctauto/out/report.json"
+check "design wrote the resolved case" -- json_ok "$work/ctauto/out/case.resolved.json"
+check "the CT volume named absolute from another folder" -- grep -q '"volume":"/[^"]*ctauto/ct.nrrd"' "$work/ctauto/out/case.resolved.json"
+check "and as the case gives it in the case's folder" -- grep -q '"volume":"ct.nrrd"' "$work/ctauto/resolved.json"
+expect_exit 0 "design the resolved case design wrote" -- "$tool" design "$work/ctauto/out/case.resolved.json" -o "$work/ctauto/again-out"
+check "design's resolved case from CT gives the same splint" -- has_sha256 "$work/ctauto/again-out/splint.stl" "$ctautogolden"
+expect_exit 0 "the auto splint from CT is printable" -- "$tool" check "$work/ctauto/out/splint.stl"
+expect_exit 0 "design outline's resolved case from CT" -- "$tool" design "$work/ctauto/resolved.json" -o "$work/ctauto/again"
+check "the resolved case from CT gives the same splint" -- has_sha256 "$work/ctauto/again/splint.stl" "$ctautogolden"
 rm "$work/ctcase/ct.nrrd"
 expect_exit 1 "design from a missing CT" -- "$tool" design "$work/ctcase/case.json" -o "$work/ctcase/out2"
 check "no splint without the CT" -- test ! -e "$work/ctcase/out2/splint.stl"
@@ -491,6 +525,70 @@ sed 's/"text": "PHANTOM-01"/"text": "50%"/' "$fixtures/cases/blockout.json" >"$w
 expect_exit 1 "a label the font cannot write" -- "$tool" design "$work/opts/case.json" -o "$work/opts/bad"
 check "the error names the character" -- grep -q "label.*'%'" "$work/err"
 check "no splint after the label error" -- test ! -e "$work/opts/bad/splint.stl"
+
+# The automatic outline (issue 28): fixtures/cases/auto.json (the paper-scale case with
+# "base": {"auto": {}}) and auto_open.json (the jaws in occlusion, the bite opened 2 mm) with
+# the phantom jaws. `outline` writes the resolved case (explicit picks); `design` of an auto
+# case writes OUTDIR/case.resolved.json, and designing that gives the same bytes.
+mkdir -p "$work/auto"
+"$tool" phantom --triangles 6000 -o "$work/auto" >/dev/null
+cp "$fixtures/cases/auto.json" "$fixtures/cases/auto_open.json" "$work/auto/"
+expect_exit 0 "outline --help" -- "$tool" outline --help
+expect_exit 2 "outline without -o" -- "$tool" outline "$work/auto/auto.json"
+check "outline without -o is named" -- grep -q "^splintcore: outline needs -o RESOLVED.json$" "$work/err"
+expect_exit 0 "outline" -- "$tool" outline "$work/auto/auto.json" -o "$work/auto/resolved.json"
+check "outline names the file it wrote" -- grep -q "^wrote .*auto/resolved.json$" "$work/out"
+check "outline wrote the resolved case" -- json_ok "$work/auto/resolved.json"
+check "the resolved case has explicit picks" -- python3 -c "import json,sys; b=json.load(open('$work/auto/resolved.json'))['base']; sys.exit(0 if 'auto' not in b and len(b['upper']) == len(b['lower']) > 8 else 1)"
+check "jaw paths stay relative in the case's folder" -- grep -q '"mesh":"maxilla.stl"' "$work/auto/resolved.json"
+expect_exit 0 "outline --json" -- "$tool" outline "$work/auto/auto_open.json" -o "$work/auto/resolved_open.json" --json
+check "outline --json is one JSON object" -- json_ok "$work/out"
+outline_keys_ok() {  # every key outline --json gives, and the bite opened to 2 mm
+  python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+want = ["command", "status", "case", "resolved_case", "occlusal_normal", "gap_as_given_mm",
+        "bite_opened", "mandible_translation_mm", "opening_mm", "picks_per_jaw",
+        "arch_length_mm", "wafer_min_mm", "wafer_max_mm"]
+assert sorted(d) == sorted(want), sorted(d)
+assert d["command"] == "outline" and d["status"] == "ok", d
+assert d["bite_opened"] is True and d["gap_as_given_mm"] == 0, d
+assert abs(d["opening_mm"] - 2.0) < 1e-6, d["opening_mm"]
+assert d["mandible_translation_mm"][2] < 0 and d["picks_per_jaw"] > 8, d
+assert 0 < d["wafer_min_mm"] <= d["wafer_max_mm"], d
+' "$1"
+}
+check "outline --json has every key" -- outline_keys_ok "$work/out"
+autogolden=$(grep " design:auto-phantom6000$" "$fixtures/golden.sha256" | cut -d' ' -f1)
+expect_exit 0 "design an auto case" -- "$tool" design "$work/auto/auto.json" -o "$work/auto/out"
+check "the auto design has the golden bytes" -- grep -q "\"splint_sha256\":\"$autogolden\"" "$work/auto/out/report.json"
+check "design wrote case.resolved.json" -- json_ok "$work/auto/out/case.resolved.json"
+check "the report names the resolved case and the outline" -- grep -q '"outline":{' "$work/auto/out/report.json"
+expect_exit 0 "design the written case.resolved.json" -- "$tool" design "$work/auto/out/case.resolved.json" -o "$work/auto/again"
+check "the resolved case gives the same splint" -- has_sha256 "$work/auto/again/splint.stl" "$(sha256 "$work/auto/out/splint.stl")"
+check "no resolved case from an explicit case" -- test ! -e "$work/auto/again/case.resolved.json"
+expect_exit 0 "design outline's resolved case" -- "$tool" design "$work/auto/resolved.json" -o "$work/auto/again2"
+check "outline's resolved case gives the same splint" -- has_sha256 "$work/auto/again2/splint.stl" "$autogolden"
+opengolden=$(grep " design:auto_open-phantom6000$" "$fixtures/golden.sha256" | cut -d' ' -f1)
+expect_exit 0 "design the auto case with the bite opened" -- "$tool" design "$work/auto/auto_open.json" -o "$work/auto/open"
+check "the opened auto design has the golden bytes" -- has_sha256 "$work/auto/open/splint.stl" "$opengolden"
+expect_exit 0 "design its resolved case" -- "$tool" design "$work/auto/open/case.resolved.json" -o "$work/auto/open2"
+check "its resolved case gives the same splint" -- has_sha256 "$work/auto/open2/splint.stl" "$opengolden"
+# Refusals: exit 1, the reason named, nothing written.
+sed 's/"bite_opening_mm": 2.0//' "$work/auto/auto_open.json" >"$work/auto/closed.json"
+expect_exit 1 "outline with the jaws in occlusion" -- "$tool" outline "$work/auto/closed.json" -o "$work/auto/closed.resolved.json"
+check "interpenetrating jaws named, the opening suggested" -- grep -q 'closed.json: outline: the jaws interpenetrate as given .*"bite_opening_mm"' "$work/err"
+check "no resolved case after a refusal" -- test ! -e "$work/auto/closed.resolved.json"
+expect_exit 1 "design with the jaws in occlusion, --json" -- "$tool" design "$work/auto/closed.json" -o "$work/auto/closed" --json
+check "--json says invalid_argument" -- grep -q '"status":"invalid_argument","message":"outline: the jaws interpenetrate' "$work/out"
+check "nothing designed after a refusal" -- test -z "$(ls -A "$work/auto/closed" 2>/dev/null)"
+python3 -c "import json; c = json.load(open('$work/auto/auto.json')); c['jaws'] = c['jaws'][:1]; json.dump(c, open('$work/auto/maxilla_only.json', 'w'))"
+expect_exit 1 "outline with only a maxilla" -- "$tool" outline "$work/auto/maxilla_only.json" -o "$work/auto/maxilla_only.resolved.json"
+check "the missing jaw named" -- grep -q "outline: the automatic outline needs one mandible and one maxilla; the case has 0 mandibles" "$work/err"
+check "no resolved case without a mandible" -- test ! -e "$work/auto/maxilla_only.resolved.json"
+cp "$fixtures/cases/paper_scale.json" "$work/auto/explicit.json"
+expect_exit 1 "outline of a case with its own picks" -- "$tool" outline "$work/auto/explicit.json" -o "$work/auto/explicit.resolved.json"
+check "no auto named" -- grep -q 'outline: the case gives its picks (no "auto" in "base")' "$work/err"
 
 # One command table (tools/splintcore/main.cpp): --help lists it, every command's --help
 # starts with its usage line, and the README shows the same commands with no option their
