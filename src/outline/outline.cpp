@@ -234,7 +234,7 @@ uint64_t compute_outline_bound(uint64_t maxilla_vertices, uint64_t maxilla_trian
   const uint64_t arch = arena_array_bound<double>(cells) + arena_array_bound<ArchPoint>(points) +
                         6 * arena_array_bound<double>(kSectors) +
                         6 * arena_array_bound<double>(2 * points + 16) +
-                        arena_array_bound<double>(4 * kMaxPicks);
+                        arena_array_bound<double>(4 * kMaxPicks) + projector_bound();
   const DistanceIndexOptions io;
   const uint64_t opening = distance_index_bound(maxilla_vertices, maxilla_triangles, io) +
                            distance_index_bound(mandible_vertices, mandible_triangles, io) +
