@@ -186,7 +186,7 @@ bool near_segments(const Projector& g, double px, double py, double r, uint32_t*
   uint32_t ix0, ix1, iy0, iy1;
   g.cell_range(px - r, px + r, g.x0, g.nx, &ix0, &ix1);
   g.cell_range(py - r, py + r, g.y0, g.ny, &iy0, &iy1);
-  if (static_cast<size_t>(ix1 - ix0 + 1) * (iy1 - iy0 + 1) > 64) return false;
+  if (static_cast<size_t>(ix1 - ix0 + 1) * (iy1 - iy0 + 1) > 100) return false;
   size_t n = 0;
   for (uint32_t iy = iy0; iy <= iy1; ++iy) {
     for (uint32_t ix = ix0; ix <= ix1; ++ix) {
@@ -214,7 +214,17 @@ void project_fast(Projector& g, double px, double py, double* s, double* o) {
   size_t count = 0;
   double t, qx, qy;
   const size_t guess = g.hint < p.n - 1 ? g.hint : 0;
-  const double r = std::sqrt(segment_nearest(p, guess, px, py, &t, &qx, &qy)) + kProjectorMarginMm;
+  double first = segment_nearest(p, guess, px, py, &t, &qx, &qy);
+  if (g.gridded) {  // and the segments of the point's own cell
+    uint32_t ix, iy, unused;
+    g.cell_range(px, px, g.x0, g.nx, &ix, &unused);
+    g.cell_range(py, py, g.y0, g.ny, &iy, &unused);
+    const size_t cell = static_cast<size_t>(iy) * g.nx + ix;
+    for (uint32_t e = g.start[cell]; e < g.start[cell + 1]; ++e) {
+      first = std::min(first, segment_nearest(p, g.entries[e], px, py, &t, &qx, &qy));
+    }
+  }
+  const double r = std::sqrt(first) + kProjectorMarginMm;
   if (!g.gridded || !near_segments(g, px, py, r, near, &count)) {
     project(p, px, py, s, o);
     return;
