@@ -27,8 +27,8 @@ double pseudo_angle(double x, double y) {
 }
 
 // Segment k's point nearest (px, py): its squared distance, t along the segment, the point q.
-double segment_nearest(const Polyline& p, size_t k, double px, double py, double* t_out,
-                       double* qx, double* qy) {
+double segment_nearest(const Polyline& p, size_t k, double px, double py, double* t_out, double* qx,
+                       double* qy) {
   const double dx = p.x[k + 1] - p.x[k], dy = p.y[k + 1] - p.y[k];
   const double len2 = dx * dx + dy * dy;
   double t = ((px - p.x[k]) * dx + (py - p.y[k]) * dy) / len2;
@@ -74,11 +74,11 @@ void project(const Polyline& p, double px, double py, double* s, double* o) {
 // first guess (the previous point's segment: a jaw's vertices come tooth by tooth), in index
 // order, which gives project()'s answer bit for bit. Without the grid (too many entries)
 // every point scans every segment.
-constexpr uint32_t kProjectorSide = 64;            // cells per side, at most
-constexpr double kProjectorCellMm = 2.0;           // at least
+constexpr uint32_t kProjectorSide = 64;             // cells per side, at most
+constexpr double kProjectorCellMm = 2.0;            // at least
 constexpr size_t kProjectorEntriesPerSegment = 24;  // the grid's entries, at most
-constexpr size_t kProjectorCandidates = 128;       // segments tested per point, at most
-constexpr double kProjectorMarginMm = 1e-6;        // over any rounding of a distance
+constexpr size_t kProjectorCandidates = 128;        // segments tested per point, at most
+constexpr double kProjectorMarginMm = 1e-6;         // over any rounding of a distance
 
 size_t projector_entries(size_t segments) {
   return kProjectorEntriesPerSegment * segments + kProjectorSide * kProjectorSide;
@@ -94,8 +94,7 @@ struct Projector {
   size_t hint = 0;
   bool gridded = false;
 
-  void cell_range(double lo, double hi, double origin, uint32_t n, uint32_t* a,
-                  uint32_t* b) const {
+  void cell_range(double lo, double hi, double origin, uint32_t n, uint32_t* a, uint32_t* b) const {
     const double fa = std::floor((lo - origin) / cell), fb = std::floor((hi - origin) / cell);
     *a = fa < 0 ? 0 : (fa >= n ? n - 1 : static_cast<uint32_t>(fa));
     *b = fb < 0 ? 0 : (fb >= n ? n - 1 : static_cast<uint32_t>(fb));

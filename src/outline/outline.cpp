@@ -77,8 +77,33 @@ struct Opener {
   const DistanceIndex& upper;
   const DistanceIndex& lower;
   Vec3 n;
+  // The last closest pair: its distance at the next t bounds the search (the same result,
+  // found sooner).
+  mutable bool warm = false;
+  mutable uint32_t pair_a = 0, pair_b = 0;
   Status distance(double t, MeshPairDistance* d) const {
-    return mesh_pair_distance(ctx, upper, lower, n * (-t), HUGE_VAL, d);
+    const Vec3 offset = n * (-t);
+    double bound = HUGE_VAL;
+    if (warm) {
+      const Mesh& a = *upper.mesh;
+      const Mesh& b = *lower.mesh;
+      const Triangle& ta = a.triangles[pair_a];
+      const Triangle& tb = b.triangles[pair_b];
+      bound = triangle_pair_distance(a.vertices[ta.v[0]], a.vertices[ta.v[1]], a.vertices[ta.v[2]],
+                                     b.vertices[tb.v[0]] + offset, b.vertices[tb.v[1]] + offset,
+                                     b.vertices[tb.v[2]] + offset, nullptr, nullptr);
+      bound = bound * (1 + 1e-9) + 1e-9;  // over any rounding: the pair itself is found
+    }
+    SPLINTCORE_RETURN_IF_ERROR(mesh_pair_distance(ctx, upper, lower, offset, bound, d));
+    if (!(d->distance < HUGE_VAL) && bound < HUGE_VAL) {
+      SPLINTCORE_RETURN_IF_ERROR(mesh_pair_distance(ctx, upper, lower, offset, HUGE_VAL, d));
+    }
+    if (d->distance < HUGE_VAL) {
+      warm = true;
+      pair_a = d->triangle_a;
+      pair_b = d->triangle_b;
+    }
+    return Status::ok();
   }
 };
 
@@ -87,11 +112,36 @@ Status advance(const Opener& op, double target, double d0, double* t_out, double
   double t = 0, d = d0;
   MeshPairDistance pair;
   *steps = 0;
+  // The conservative step never passes the first root; past two steps, a secant step through
+  // the last two points below the target (Illinois false position once a point lies above
+  // it), kept between the conservative step and, from the point above, the Lipschitz bound.
+  double t_prev = 0, d_prev = -1, t_hi = HUGE_VAL, f_hi = 0;
+  bool kept_low = false;
   while (*steps < kMaxAdvanceSteps && std::fabs(d - target) > kOpeningTolerance) {
-    t += d == 0 ? target : target - d;
-    SPLINTCORE_RETURN_IF_ERROR(op.distance(t, &pair));
-    d = pair.distance;
+    const double safe = t + (d == 0 ? target : target - d);
+    double next = safe;
+    if (t_hi < HUGE_VAL) {
+      next = t + (target - d) * (t_hi - t) / (f_hi - (d - target));
+      next = std::fmin(next, t_hi - f_hi);
+    } else if (d_prev > 0 && d > d_prev) {
+      next = t + (target - d) * (t - t_prev) / (d - d_prev);
+      next = std::fmin(next, t + 4 * (target - d));
+    }
+    next = std::fmax(next, safe);
+    SPLINTCORE_RETURN_IF_ERROR(op.distance(next, &pair));
     ++*steps;
+    if (pair.distance > target + kOpeningTolerance) {
+      t_hi = next;
+      f_hi = pair.distance - target;
+      kept_low = false;
+      continue;
+    }
+    if (kept_low && t_hi < HUGE_VAL) f_hi *= 0.5;
+    kept_low = true;
+    t_prev = t;
+    d_prev = d;
+    t = next;
+    d = pair.distance;
   }
   if (std::fabs(d - target) > kOpeningTolerance && d < target) {
     // Slow convergence (a contact sliding almost along the move): bracket and bisect.

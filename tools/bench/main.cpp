@@ -1040,11 +1040,10 @@ Status real_jaws(Arena& arena, const realcase::RealCase& rc, Mesh jaws[2]) {
 void bench_outline_jaws(Harness& h, Arena& arena, const char* name, const Mesh& upper,
                         const Mesh& lower, const OutlineOptions& options) {
   Outline o;
-  h.measure(name, upper.triangles.size() + lower.triangles.size(), arena, [&](Arena& a) {
-    return compute_outline(Context(&a), upper, lower, options, &o);
-  });
-  std::printf("# %s: %u picks, opening %.12f mm in %u steps, arch %.3f mm\n", name,
-              o.report.picks, o.report.opening, o.report.opening_steps, o.report.arch_length_mm);
+  h.measure(name, upper.triangles.size() + lower.triangles.size(), arena,
+            [&](Arena& a) { return compute_outline(Context(&a), upper, lower, options, &o); });
+  std::printf("# %s: %u picks, opening %.12f mm in %u steps, arch %.3f mm\n", name, o.report.picks,
+              o.report.opening, o.report.opening_steps, o.report.arch_length_mm);
 }
 
 // The automatic outline (issue 28: under 50 ms on the real dentition): the real jaws as
@@ -1143,15 +1142,14 @@ void bench_design_auto_realdata(Harness& h, Arena& arena, const std::string& rea
     Span<uint8_t> text;
     SPLINTCORE_RETURN_IF_ERROR(read_file(a, (folder + "/case.json").c_str(), 1 << 20, &text));
     CaseFile c;
-    SPLINTCORE_RETURN_IF_ERROR(parse_case(ctx, reinterpret_cast<const char*>(text.data()),
-                                          text.size(), "case.json", &c));
+    SPLINTCORE_RETURN_IF_ERROR(
+        parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), "case.json", &c));
     Mesh jaws[2];
     SPLINTCORE_RETURN_IF_ERROR(read_mesh_path(ctx, folder + "/maxilla.stl", &jaws[0]));
     SPLINTCORE_RETURN_IF_ERROR(read_mesh_path(ctx, folder + "/mandible.stl", &jaws[1]));
     const double t1 = monotonic_seconds();
     Mesh splint;
-    SPLINTCORE_RETURN_IF_ERROR(
-        design_splint(ctx, c, Span<const Mesh>(jaws, 2), &splint, &report));
+    SPLINTCORE_RETURN_IF_ERROR(design_splint(ctx, c, Span<const Mesh>(jaws, 2), &splint, &report));
     const double t2 = monotonic_seconds();
     AtomicFile out;
     SPLINTCORE_RETURN_IF_ERROR(out.open((folder + "/splint.stl").c_str()));
