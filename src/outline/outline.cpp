@@ -119,12 +119,15 @@ Status advance(const Opener& op, double target, double d0, double* t_out, double
   bool kept_low = false;
   while (*steps < kMaxAdvanceSteps && std::fabs(d - target) > kOpeningTolerance) {
     const double safe = t + (d == 0 ? target : target - d);
-    double next = safe;
+    const bool secant = d_prev > 0 && d > d_prev;
+    double next = secant ? t + (target - d) * (t - t_prev) / (d - d_prev) : safe;
     if (t_hi < HUGE_VAL) {
-      next = t + (target - d) * (t_hi - t) / (f_hi - (d - target));
-      next = std::fmin(next, t_hi - f_hi);
-    } else if (d_prev > 0 && d > d_prev) {
-      next = t + (target - d) * (t - t_prev) / (d - d_prev);
+      // The secant while it stays short of the Lipschitz bound, else false position.
+      if (!secant || !(next <= t_hi - f_hi)) {
+        next = t + (target - d) * (t_hi - t) / (f_hi - (d - target));
+        next = std::fmin(next, t_hi - f_hi);
+      }
+    } else {
       next = std::fmin(next, t + 4 * (target - d));
     }
     next = std::fmax(next, safe);
@@ -168,25 +171,83 @@ Status advance(const Opener& op, double target, double d0, double* t_out, double
 }
 
 // The part of each jaw that can come within `reach` of the other while the mandible moves
-// along n away from the maxilla (or back towards it by at most `reach`): a pair of points at
-// most `reach` apart differs by at most that much in height along n, so the maxilla's
-// triangles lower than the mandible's top plus 2 reach, and the mandible's higher than the
-// maxilla's bottom minus 2 reach, hold every such pair. ids[k]: the jaw's triangle of view
-// triangle k.
+// along n away from the maxilla (reaches = 1), or also back towards it by at most `reach`
+// (reaches = 2): a pair of points at most `reach` apart differs by at most that much in height
+// along n, and by at most that much across it. So a maxilla triangle whose lowest vertex lies
+// more than `reaches` reach above the mandible's highest vertex near it (within reach plus
+// two of the longest edge, across n: a point of a triangle lies within its longest edge of
+// every vertex) has no such pair, nor a mandible triangle whose highest vertex lies that much
+// below the maxilla's lowest near it. The "near" comes from the frame's grid (the jaws as
+// given), each column's extreme over the columns around; too far around (long edges), the
+// jaws' global extremes. The bands only prune: the distances are the same whatever they keep.
+// ids[k]: the jaw's triangle of view triangle k.
 struct JawBand {
   Mesh view;
   uint32_t* ids = nullptr;
 };
 
-Status jaw_band(Arena& arena, const Mesh& m, const Vec3& n, bool upper, double bound,
-                JawBand* out) {
+constexpr uint32_t kMaxBandRadius = 40;  // columns around, at most
+
+// Per column, the extreme height of `jaw` over the columns within `radius` (the highest for
+// the mandible, the lowest for the maxilla): rows, then columns.
+Status extreme_around(Arena& arena, const Grid& g, int jaw, uint32_t radius, double** out) {
+  const size_t cells = static_cast<size_t>(g.nx) * g.ny;
+  double* rows = arena.allocate_array<double>(cells);
+  double* both = arena.allocate_array<double>(cells);
+  if (rows == nullptr || both == nullptr) return arena.exhausted_status();
+  auto pick = [jaw](double a, double b) { return jaw == 0 ? (b < a ? b : a) : (b > a ? b : a); };
+  for (uint32_t iy = 0; iy < g.ny; ++iy) {
+    for (uint32_t ix = 0; ix < g.nx; ++ix) {
+      const uint32_t lo = ix > radius ? ix - radius : 0;
+      const uint32_t hi = ix + radius < g.nx ? ix + radius : g.nx - 1;
+      double e = g.h[jaw][static_cast<size_t>(iy) * g.nx + lo];
+      for (uint32_t k = lo + 1; k <= hi; ++k)
+        e = pick(e, g.h[jaw][static_cast<size_t>(iy) * g.nx + k]);
+      rows[static_cast<size_t>(iy) * g.nx + ix] = e;
+    }
+  }
+  for (uint32_t iy = 0; iy < g.ny; ++iy) {
+    const uint32_t lo = iy > radius ? iy - radius : 0;
+    const uint32_t hi = iy + radius < g.ny ? iy + radius : g.ny - 1;
+    for (uint32_t ix = 0; ix < g.nx; ++ix) {
+      double e = rows[static_cast<size_t>(lo) * g.nx + ix];
+      for (uint32_t k = lo + 1; k <= hi; ++k) e = pick(e, rows[static_cast<size_t>(k) * g.nx + ix]);
+      both[static_cast<size_t>(iy) * g.nx + ix] = e;
+    }
+  }
+  *out = both;
+  return Status::ok();
+}
+
+// The other jaw's extreme near each column (nullptr: everywhere the global `bound`).
+struct BandLimit {
+  const Grid* g = nullptr;
+  const Frame* f = nullptr;
+  const double* other = nullptr;  // per column, the other jaw's extreme around it
+  double bound = 0;               // the global one
+  double margin = 0;              // reaches times reach
+};
+
+// A triangle is kept when one of its vertices lies within the margin of the other jaw's
+// extreme near it (the columns around reach one edge further than the pairs need, so the
+// vertex nearest the other jaw may stand for the whole triangle).
+Status jaw_band(Arena& arena, const Mesh& m, bool upper, const BandLimit& limit, JawBand* out) {
+  const Frame& f = *limit.f;
+  const size_t nv = m.vertices.size();
+  uint8_t* near = arena.allocate_array<uint8_t>(nv);
+  if (near == nullptr) return arena.exhausted_status();
+  for (size_t i = 0; i < nv; ++i) {
+    const Vec3& v = m.vertices[i];
+    double bound = limit.bound;
+    if (limit.other != nullptr) {
+      bound = limit.other[limit.g->cell_of(dot(v, f.e1), dot(v, f.e2))];
+      bound += upper ? limit.margin : -limit.margin;
+    }
+    const double h = dot(v, f.n);
+    near[i] = upper ? h <= bound : h >= bound;
+  }
+  auto keeps = [&](const Triangle& t) { return (near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) != 0; };
   size_t kept = 0;
-  auto keeps = [&](const Triangle& t) {
-    const double h0 = dot(m.vertices[t.v[0]], n), h1 = dot(m.vertices[t.v[1]], n),
-                 h2 = dot(m.vertices[t.v[2]], n);
-    return upper ? std::fmin(h0, std::fmin(h1, h2)) <= bound
-                 : std::fmax(h0, std::fmax(h1, h2)) >= bound;
-  };
   for (const Triangle& t : m.triangles) {
     if (keeps(t)) ++kept;
   }
@@ -210,35 +271,67 @@ struct BandedOpener {
   DistanceIndex upper_index, lower_index;
 };
 
-Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Vec3& n,
-                     double reach, BandedOpener* b) {
+double longest_edge(const Mesh& m) {
+  double e2 = 0;
+  for (const Triangle& t : m.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 d = m.vertices[t.v[k]] - m.vertices[t.v[(k + 1) % 3]];
+      const double l2 = dot(d, d);
+      e2 = l2 > e2 ? l2 : e2;
+    }
+  }
+  return std::sqrt(e2);
+}
+
+Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
+                     const Grid& g, double reach, int reaches, BandedOpener* b) {
   double low_u = HUGE_VAL, high_l = -HUGE_VAL;
-  for (const Vec3& v : maxilla.vertices) low_u = std::fmin(low_u, dot(v, n));
-  for (const Vec3& v : mandible.vertices) high_l = std::fmax(high_l, dot(v, n));
-  SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, maxilla, n, true, high_l + 2 * reach, &b->upper));
-  SPLINTCORE_RETURN_IF_ERROR(
-      jaw_band(*ctx.arena, mandible, n, false, low_u - 2 * reach, &b->lower));
+  for (const Vec3& v : maxilla.vertices) {
+    const double h = dot(v, f.n);
+    low_u = h < low_u ? h : low_u;
+  }
+  for (const Vec3& v : mandible.vertices) {
+    const double h = dot(v, f.n);
+    high_l = h > high_l ? h : high_l;
+  }
+  const double edge = std::fmax(longest_edge(maxilla), longest_edge(mandible));
+  const double across = (reach + 3 * edge) / kCellMm + 2;  // columns, with the rounding
+  const double margin = static_cast<double>(reaches) * reach;
+  BandLimit up{&g, &f, nullptr, high_l + margin, margin + 1e-9};
+  BandLimit down{&g, &f, nullptr, low_u - margin, margin + 1e-9};
+  if (across <= kMaxBandRadius) {
+    const uint32_t radius = static_cast<uint32_t>(across);
+    double* other = nullptr;
+    SPLINTCORE_RETURN_IF_ERROR(extreme_around(*ctx.arena, g, 1, radius, &other));
+    up.other = other;
+    SPLINTCORE_RETURN_IF_ERROR(extreme_around(*ctx.arena, g, 0, radius, &other));
+    down.other = other;
+  }
+  SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, maxilla, true, up, &b->upper));
+  SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, mandible, false, down, &b->lower));
   SPLINTCORE_RETURN_IF_ERROR(
       build_distance_index(ctx, b->upper.view, DistanceIndexOptions{}, &b->upper_index));
   return build_distance_index(ctx, b->lower.view, DistanceIndexOptions{}, &b->lower_index);
 }
 
 Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
-                 const OutlineOptions& o, Vec3* offset, OutlineReport* r) {
+                 const Grid& g, const OutlineOptions& o, Vec3* offset, OutlineReport* r) {
   ArenaScope scope(*ctx.arena);  // the bands and their indexes go when done
   // Near reach first (the jaws as scanned touch): exact up to it. Farther apart, again with
   // the reach of the largest gap accepted.
   const double target = o.has_bite_opening ? o.bite_opening_mm : 0.0;
   double reach = std::fmax(target, kNearReachMm);
+  // The first bands hold the pairs within reach only while the mandible moves away (or
+  // stays): enough for the distance as given and for an opening from nearer than asked.
   BandedOpener b;
-  SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f.n, reach, &b));
+  SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, 1, &b));
   MeshPairDistance d0;
   const Opener near{ctx, b.upper_index, b.lower_index, f.n};
   SPLINTCORE_RETURN_IF_ERROR(near.distance(0, &d0));
-  if (d0.distance > reach) {
+  if (d0.distance > reach || (o.has_bite_opening && d0.distance > target)) {
     ctx.arena->rewind(scope.start());
-    reach = o.max_gap_mm + target;
-    SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f.n, reach, &b));
+    if (d0.distance > reach) reach = o.max_gap_mm + target;
+    SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, 2, &b));
     const Opener far{ctx, b.upper_index, b.lower_index, f.n};
     SPLINTCORE_RETURN_IF_ERROR(far.distance(0, &d0));
   }
@@ -288,7 +381,9 @@ uint64_t compute_outline_bound(uint64_t maxilla_vertices, uint64_t maxilla_trian
   const DistanceIndexOptions io;
   const uint64_t opening = distance_index_bound(maxilla_vertices, maxilla_triangles, io) +
                            distance_index_bound(mandible_vertices, mandible_triangles, io) +
-                           kPairStackBound;
+                           kPairStackBound + 4 * arena_array_bound<double>(cells) +
+                           arena_array_bound<uint8_t>(maxilla_vertices) +
+                           arena_array_bound<uint8_t>(mandible_vertices);
   const uint64_t after_frame = opening > arch ? opening : arch;
   return buffers + grid + after_frame;
 }
@@ -320,7 +415,7 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 1, 3));
     Vec3 offset;
     SPLINTCORE_RETURN_IF_ERROR(
-        open_bite(ctx, maxilla, mandible, f, options, &offset, &out->report));
+        open_bite(ctx, maxilla, mandible, f, g, options, &offset, &out->report));
     // The move is along n: the columns stay; only the mandible's heights change.
     if (out->report.opened) fill_heights(mandible, offset, f, 1, &g);
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 2, 3));
