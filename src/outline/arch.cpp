@@ -26,15 +26,19 @@ double pseudo_angle(double x, double y) {
   return x < 0 ? 2 - y / (-x - y) : 3 + x / (x - y);
 }
 
+// Past the ends the line goes on straight, but only so far: a ray that reached across the
+// arch's open back would take the other side's points. The reach along segment k, in t.
+double segment_reach(const Polyline& p, size_t k) {
+  const double dx = p.x[k + 1] - p.x[k], dy = p.y[k + 1] - p.y[k];
+  return kMaxReachMm / std::sqrt(dx * dx + dy * dy);
+}
+
 // Segment k's point nearest (px, py): its squared distance, t along the segment, the point q.
-double segment_nearest(const Polyline& p, size_t k, double px, double py, double* t_out, double* qx,
-                       double* qy) {
+double segment_nearest(const Polyline& p, size_t k, double reach, double px, double py,
+                       double* t_out, double* qx, double* qy) {
   const double dx = p.x[k + 1] - p.x[k], dy = p.y[k + 1] - p.y[k];
   const double len2 = dx * dx + dy * dy;
   double t = ((px - p.x[k]) * dx + (py - p.y[k]) * dy) / len2;
-  // Past the ends the line goes on straight, but only so far: a ray that reached across
-  // the arch's open back would take the other side's points.
-  const double reach = kMaxReachMm / std::sqrt(len2);
   t = k > 0 && t < 0 ? 0 : (t < -reach ? -reach : t);
   t = k + 2 < p.n && t > 1 ? 1 : (t > 1 + reach ? 1 + reach : t);
   *qx = p.x[k] + t * dx;
@@ -46,7 +50,7 @@ double segment_nearest(const Polyline& p, size_t k, double px, double py, double
 // s and o of (px, py) on segment k (see project).
 void segment_place(const Polyline& p, size_t k, double px, double py, double* s, double* o) {
   double t, qx, qy;
-  segment_nearest(p, k, px, py, &t, &qx, &qy);
+  segment_nearest(p, k, segment_reach(p, k), px, py, &t, &qx, &qy);
   const double dx = p.x[k + 1] - p.x[k], dy = p.y[k + 1] - p.y[k];
   const double len = std::sqrt(dx * dx + dy * dy);
   *s = p.s[k] + t * len;
@@ -60,7 +64,7 @@ void project(const Polyline& p, double px, double py, double* s, double* o) {
   size_t best_k = 0;
   for (size_t k = 0; k + 1 < p.n; ++k) {
     double t, qx, qy;
-    const double d2 = segment_nearest(p, k, px, py, &t, &qx, &qy);
+    const double d2 = segment_nearest(p, k, segment_reach(p, k), px, py, &t, &qx, &qy);
     if (d2 < best) {
       best = d2;
       best_k = k;
@@ -90,7 +94,8 @@ struct Projector {
   uint32_t nx = 0, ny = 0;
   uint32_t* start = nullptr;  // per cell, into entries; nx ny + 1
   uint32_t* entries = nullptr;
-  double* box = nullptr;  // per segment: x_lo, x_hi, y_lo, y_hi
+  double* box = nullptr;    // per segment: x_lo, x_hi, y_lo, y_hi
+  double* reach = nullptr;  // per segment: segment_reach
   size_t hint = 0;
   bool gridded = false;
 
@@ -123,10 +128,12 @@ Status make_projector(Arena& arena, const Polyline& p, Projector* out) {
   g.line = &p;
   const size_t segments = p.n - 1;
   g.box = arena.allocate_array<double>(4 * segments);
-  if (g.box == nullptr) return arena.exhausted_status();
+  g.reach = arena.allocate_array<double>(segments);
+  if (g.box == nullptr || g.reach == nullptr) return arena.exhausted_status();
   double x_lo = HUGE_VAL, x_hi = -HUGE_VAL, y_lo = HUGE_VAL, y_hi = -HUGE_VAL;
   for (size_t k = 0; k < segments; ++k) {
     double* b = g.box + 4 * k;
+    g.reach[k] = segment_reach(p, k);
     segment_box(p, k, b);
     x_lo = std::min(x_lo, b[0]);
     x_hi = std::max(x_hi, b[1]);
@@ -212,18 +219,23 @@ void project_fast(Projector& g, double px, double py, double* s, double* o) {
   uint32_t near[kProjectorCandidates];
   size_t count = 0;
   double t, qx, qy;
+  // A bound on the nearest distance: the nearest start point of the guess's segment and of the
+  // segments in the point's own cell (their nearest points lie no farther).
   const size_t guess = g.hint < p.n - 1 ? g.hint : 0;
-  double first = segment_nearest(p, guess, px, py, &t, &qx, &qy);
-  if (g.gridded) {  // and the segments of the point's own cell
+  auto start_d2 = [&](size_t k) {
+    return (px - p.x[k]) * (px - p.x[k]) + (py - p.y[k]) * (py - p.y[k]);
+  };
+  double first = start_d2(guess);
+  if (g.gridded) {
     uint32_t ix, iy, unused;
     g.cell_range(px, px, g.x0, g.nx, &ix, &unused);
     g.cell_range(py, py, g.y0, g.ny, &iy, &unused);
     const size_t cell = static_cast<size_t>(iy) * g.nx + ix;
     for (uint32_t e = g.start[cell]; e < g.start[cell + 1]; ++e) {
-      first = std::min(first, segment_nearest(p, g.entries[e], px, py, &t, &qx, &qy));
+      first = std::min(first, start_d2(g.entries[e]));
     }
   }
-  const double r = std::sqrt(first) + kProjectorMarginMm;
+  const double r = std::sqrt(first) * (1 + 1e-9) + kProjectorMarginMm;
   if (!g.gridded || !near_segments(g, px, py, r, near, &count)) {
     project(p, px, py, s, o);
     return;
@@ -231,7 +243,7 @@ void project_fast(Projector& g, double px, double py, double* s, double* o) {
   double best = HUGE_VAL;
   size_t best_k = guess;
   for (size_t i = 0; i < count; ++i) {
-    const double d2 = segment_nearest(p, near[i], px, py, &t, &qx, &qy);
+    const double d2 = segment_nearest(p, near[i], g.reach[near[i]], px, py, &t, &qx, &qy);
     if (d2 < best) {
       best = d2;
       best_k = near[i];
@@ -617,7 +629,7 @@ bool fill_gaps(double* v, size_t n, size_t stride) {
 
 uint64_t projector_bound() {
   const size_t segments = std::max<size_t>(kSectors, kMaxArchPoints);
-  return arena_array_bound<double>(4 * segments) +
+  return arena_array_bound<double>(4 * segments) + arena_array_bound<double>(segments) +
          arena_array_bound<uint32_t>(kProjectorSide * kProjectorSide + 1) +
          arena_array_bound<uint32_t>(projector_entries(segments));
 }
