@@ -81,7 +81,8 @@ void project(const Polyline& p, double px, double py, double* s, double* o) {
 constexpr uint32_t kProjectorSide = 64;             // cells per side, at most
 constexpr double kProjectorCellMm = 2.0;            // at least
 constexpr size_t kProjectorEntriesPerSegment = 24;  // the grid's entries, at most
-constexpr size_t kProjectorCandidates = 128;        // segments tested per point, at most
+constexpr size_t kProjectorCandidates = 256;        // segments tested per point, at most
+constexpr size_t kProjectorCells = 400;             // cells looked at per point, at most
 constexpr double kProjectorMarginMm = 1e-6;         // over any rounding of a distance
 
 size_t projector_entries(size_t segments) {
@@ -192,7 +193,7 @@ bool near_segments(const Projector& g, double px, double py, double r, uint32_t*
   uint32_t ix0, ix1, iy0, iy1;
   g.cell_range(px - r, px + r, g.x0, g.nx, &ix0, &ix1);
   g.cell_range(py - r, py + r, g.y0, g.ny, &iy0, &iy1);
-  if (static_cast<size_t>(ix1 - ix0 + 1) * (iy1 - iy0 + 1) > 100) return false;
+  if (static_cast<size_t>(ix1 - ix0 + 1) * (iy1 - iy0 + 1) > kProjectorCells) return false;
   size_t n = 0;
   for (uint32_t iy = iy0; iy <= iy1; ++iy) {
     for (uint32_t ix = ix0; ix <= ix1; ++ix) {
