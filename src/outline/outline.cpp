@@ -107,23 +107,38 @@ struct Opener {
   }
 };
 
-Status advance(const Opener& op, double target, double d0, double* t_out, double* d_out,
-               uint32_t* steps) {
-  double t = 0, d = d0;
+// The distance's rate along the move at the closest pair (point_a - point_b along n, unit):
+// exact while the pair's features stay (a vertex over a face: linear), 0 when unknown.
+double opening_slope(const MeshPairDistance& pair, const Vec3& n) {
+  if (!(pair.distance > 0) || !(pair.distance < HUGE_VAL)) return 0;
+  return dot(pair.point_a - pair.point_b, n) / pair.distance;
+}
+
+Status advance(const Opener& op, double target, double d0, double slope0, double* t_out,
+               double* d_out, uint32_t* steps) {
+  double t = 0, d = d0, slope = slope0;
   MeshPairDistance pair;
   *steps = 0;
-  // The conservative step never passes the first root; past two steps, a secant step through
-  // the last two points below the target (Illinois false position once a point lies above
-  // it), kept between the conservative step and, from the point above, the Lipschitz bound.
+  // The conservative step never passes the first root. Beyond it: a Newton step by the
+  // closest pair's rate (else a secant through the last two points below the target), kept
+  // short of the Lipschitz bound from the nearest point above the target (Illinois false
+  // position when it would not be), and never short of the conservative step.
   double t_prev = 0, d_prev = -1, t_hi = HUGE_VAL, f_hi = 0;
   bool kept_low = false;
   while (*steps < kMaxAdvanceSteps && std::fabs(d - target) > kOpeningTolerance) {
     const double safe = t + (d == 0 ? target : target - d);
     const bool secant = d_prev > 0 && d > d_prev;
-    double next = secant ? t + (target - d) * (t - t_prev) / (d - d_prev) : safe;
+    double next = safe;
+    bool model = true;
+    if (slope > 0) {
+      next = t + (target - d) / slope;
+    } else if (secant) {
+      next = t + (target - d) * (t - t_prev) / (d - d_prev);
+    } else {
+      model = false;
+    }
     if (t_hi < HUGE_VAL) {
-      // The secant while it stays short of the Lipschitz bound, else false position.
-      if (!secant || !(next <= t_hi - f_hi)) {
+      if (!model || !(next <= t_hi - f_hi)) {
         next = t + (target - d) * (t_hi - t) / (f_hi - (d - target));
         next = std::fmin(next, t_hi - f_hi);
       }
@@ -145,6 +160,7 @@ Status advance(const Opener& op, double target, double d0, double* t_out, double
     d_prev = d;
     t = next;
     d = pair.distance;
+    slope = opening_slope(pair, op.n);
   }
   if (std::fabs(d - target) > kOpeningTolerance && d < target) {
     // Slow convergence (a contact sliding almost along the move): bracket and bisect.
@@ -354,8 +370,8 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
                       "): open the bite with \"bite_opening_mm\" (e.g. 2)");
   }
   double t = 0, d = 0;
-  SPLINTCORE_RETURN_IF_ERROR(
-      advance(op, o.bite_opening_mm, d0.distance, &t, &d, &r->opening_steps));
+  SPLINTCORE_RETURN_IF_ERROR(advance(op, o.bite_opening_mm, d0.distance, opening_slope(d0, f.n), &t,
+                                     &d, &r->opening_steps));
   *offset = f.n * (-t);
   r->opened = true;
   r->mandible_translation = *offset;
