@@ -13,6 +13,7 @@ constexpr uint32_t kMaxAdvanceSteps = 100;
 constexpr uint32_t kBisections = 80;
 constexpr double kOpeningTolerance = 1e-9;  // mm
 constexpr double kNearReachMm = 1.0;        // open_bite's first band
+constexpr double kStepSlackMm = 0.1;        // the opening's steps: exact this past the target
 // mesh_pair_distance_bound() for any two indexes: 384 (15 (a.depth + b.depth) + 1) bytes, and
 // a 4-wide tree over 32-bit Morton leaves is at most 32 deep.
 constexpr uint64_t kPairStackBound = 384 * (15 * 64 + 1) + 64;
@@ -77,6 +78,7 @@ struct Opener {
   const DistanceIndex& upper;
   const DistanceIndex& lower;
   Vec3 n;
+  double reach;  // the distance is exact up to this (above it, some value above it)
   // The last closest pair: its distance at the next t bounds the search (the same result,
   // found sooner).
   mutable bool warm = false;
@@ -150,7 +152,7 @@ Status advance(const Opener& op, double target, double d0, double slope0, double
     ++*steps;
     if (pair.distance > target + kOpeningTolerance) {
       t_hi = next;
-      f_hi = pair.distance - target;
+      f_hi = std::fmin(pair.distance, op.reach) - target;  // at most the true excess
       kept_low = false;
       continue;
     }
@@ -300,7 +302,7 @@ double longest_edge(const Mesh& m) {
 }
 
 Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
-                     const Grid& g, double reach, int reaches, BandedOpener* b) {
+                     const Grid& g, double reach, double margin, BandedOpener* b) {
   double low_u = HUGE_VAL, high_l = -HUGE_VAL;
   for (const Vec3& v : maxilla.vertices) {
     const double h = dot(v, f.n);
@@ -312,7 +314,6 @@ Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandib
   }
   const double edge = std::fmax(longest_edge(maxilla), longest_edge(mandible));
   const double across = (reach + 3 * edge) / kCellMm + 2;  // columns, with the rounding
-  const double margin = static_cast<double>(reaches) * reach;
   BandLimit up{&g, &f, nullptr, high_l + margin, margin + 1e-9};
   BandLimit down{&g, &f, nullptr, low_u - margin, margin + 1e-9};
   if (across <= kMaxBandRadius) {
@@ -336,24 +337,26 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
   // Near reach first (the jaws as scanned touch): exact up to it. Farther apart, again with
   // the reach of the largest gap accepted.
   const double target = o.has_bite_opening ? o.bite_opening_mm : 0.0;
-  double reach = std::fmax(target, kNearReachMm);
+  // (A little past the target: the opening's steps past it are then measured exactly, or
+  // known to be past the reach.)
+  double reach = std::fmax(target + (o.has_bite_opening ? kStepSlackMm : 0.0), kNearReachMm);
   // The first bands hold the pairs within reach only while the mandible moves away (or
   // stays): enough for the distance as given and for an opening from nearer than asked.
   BandedOpener b;
-  SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, 1, &b));
+  SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, reach, &b));
   MeshPairDistance d0;
-  const Opener near{ctx, b.upper_index, b.lower_index, f.n};
+  const Opener near{ctx, b.upper_index, b.lower_index, f.n, reach};
   SPLINTCORE_RETURN_IF_ERROR(near.distance(0, &d0));
   if (d0.distance > reach || (o.has_bite_opening && d0.distance > target)) {
     ctx.arena->rewind(scope.start());
     if (d0.distance > reach) reach = o.max_gap_mm + target;
-    SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, 2, &b));
-    const Opener far{ctx, b.upper_index, b.lower_index, f.n};
+    SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, 2 * reach, &b));
+    const Opener far{ctx, b.upper_index, b.lower_index, f.n, reach};
     SPLINTCORE_RETURN_IF_ERROR(far.distance(0, &d0));
   }
-  const Opener op{ctx, b.upper_index, b.lower_index, f.n};
   const uint32_t tri_u = d0.distance <= reach ? b.upper.ids[d0.triangle_a] : 0;
   const uint32_t tri_l = d0.distance <= reach ? b.lower.ids[d0.triangle_b] : 0;
+  const Opener op{ctx, b.upper_index, b.lower_index, f.n, reach};
   r->gap_as_given = d0.distance;
   r->jaws_intersect = d0.intersecting;
   if (d0.distance > o.max_gap_mm) {
