@@ -27,28 +27,232 @@ double pseudo_angle(double x, double y) {
   return x < 0 ? 2 - y / (-x - y) : 3 + x / (x - y);
 }
 
+// Past the ends the line goes on straight, but only so far: a ray that reached across the
+// arch's open back would take the other side's points. The reach along segment k, in t.
+double segment_reach(const Polyline& p, size_t k) {
+  const double dx = p.x[k + 1] - p.x[k], dy = p.y[k + 1] - p.y[k];
+  return kMaxReachMm / std::sqrt(dx * dx + dy * dy);
+}
+
+// Segment k's point nearest (px, py): its squared distance, t along the segment, the point q.
+double segment_nearest(const Polyline& p, size_t k, double reach, double px, double py,
+                       double* t_out, double* qx, double* qy) {
+  const double dx = p.x[k + 1] - p.x[k], dy = p.y[k + 1] - p.y[k];
+  const double len2 = dx * dx + dy * dy;
+  double t = ((px - p.x[k]) * dx + (py - p.y[k]) * dy) / len2;
+  t = k > 0 && t < 0 ? 0 : (t < -reach ? -reach : t);
+  t = k + 2 < p.n && t > 1 ? 1 : (t > 1 + reach ? 1 + reach : t);
+  *qx = p.x[k] + t * dx;
+  *qy = p.y[k] + t * dy;
+  *t_out = t;
+  return (px - *qx) * (px - *qx) + (py - *qy) * (py - *qy);
+}
+
+// s and o of (px, py) on segment k (see project).
+void segment_place(const Polyline& p, size_t k, double px, double py, double* s, double* o) {
+  double t, qx, qy;
+  segment_nearest(p, k, segment_reach(p, k), px, py, &t, &qx, &qy);
+  const double dx = p.x[k + 1] - p.x[k], dy = p.y[k + 1] - p.y[k];
+  const double len = std::sqrt(dx * dx + dy * dy);
+  *s = p.s[k] + t * len;
+  *o = (dx * (py - qy) - dy * (px - qx)) / len;
+}
+
 // The point of the polyline nearest (px, py): its arc length s and signed offset o (positive
-// to the left of the direction of travel).
+// to the left of the direction of travel). The first nearest segment in index order.
 void project(const Polyline& p, double px, double py, double* s, double* o) {
   double best = HUGE_VAL;
+  size_t best_k = 0;
   for (size_t k = 0; k + 1 < p.n; ++k) {
-    const double dx = p.x[k + 1] - p.x[k], dy = p.y[k + 1] - p.y[k];
-    const double len2 = dx * dx + dy * dy;
-    double t = ((px - p.x[k]) * dx + (py - p.y[k]) * dy) / len2;
-    // Past the ends the line goes on straight, but only so far: a ray that reached across
-    // the arch's open back would take the other side's points.
-    const double reach = kMaxReachMm / std::sqrt(len2);
-    t = k > 0 && t < 0 ? 0 : (t < -reach ? -reach : t);
-    t = k + 2 < p.n && t > 1 ? 1 : (t > 1 + reach ? 1 + reach : t);
-    const double qx = p.x[k] + t * dx, qy = p.y[k] + t * dy;
-    const double d2 = (px - qx) * (px - qx) + (py - qy) * (py - qy);
+    double t, qx, qy;
+    const double d2 = segment_nearest(p, k, segment_reach(p, k), px, py, &t, &qx, &qy);
     if (d2 < best) {
       best = d2;
-      const double len = std::sqrt(len2);
-      *s = p.s[k] + t * len;
-      *o = (dx * (py - qy) - dy * (px - qx)) / len;
+      best_k = k;
     }
   }
+  segment_place(p, best_k, px, py, s, o);
+}
+
+// project() for many points: the segments' boxes (the end segments' with their rays) binned
+// in a uniform grid, so that a point tests only the segments whose boxes come as near as a
+// first guess (the previous point's segment: a jaw's vertices come tooth by tooth), in index
+// order, which gives project()'s answer bit for bit. Without the grid (too many entries)
+// every point scans every segment.
+constexpr uint32_t kProjectorSide = 64;             // cells per side, at most
+constexpr double kProjectorCellMm = 2.0;            // at least
+constexpr size_t kProjectorEntriesPerSegment = 24;  // the grid's entries, at most
+constexpr size_t kProjectorCandidates = 256;        // segments tested per point, at most
+constexpr size_t kProjectorCells = 400;             // cells looked at per point, at most
+constexpr double kProjectorMarginMm = 1e-6;         // over any rounding of a distance
+
+size_t projector_entries(size_t segments) {
+  return kProjectorEntriesPerSegment * segments + kProjectorSide * kProjectorSide;
+}
+
+struct Projector {
+  const Polyline* line = nullptr;
+  double x0 = 0, y0 = 0, cell = 1;
+  uint32_t nx = 0, ny = 0;
+  uint32_t* start = nullptr;  // per cell, into entries; nx ny + 1
+  uint32_t* entries = nullptr;
+  double* box = nullptr;    // per segment: x_lo, x_hi, y_lo, y_hi
+  double* reach = nullptr;  // per segment: segment_reach
+  size_t hint = 0;
+  bool gridded = false;
+
+  void cell_range(double lo, double hi, double origin, uint32_t n, uint32_t* a, uint32_t* b) const {
+    const double fa = std::floor((lo - origin) / cell), fb = std::floor((hi - origin) / cell);
+    *a = fa < 0 ? 0 : (fa >= n ? n - 1 : static_cast<uint32_t>(fa));
+    *b = fb < 0 ? 0 : (fb >= n ? n - 1 : static_cast<uint32_t>(fb));
+  }
+  void segment_cells(size_t k, uint32_t c[4]) const {
+    cell_range(box[4 * k], box[4 * k + 1], x0, nx, &c[0], &c[1]);
+    cell_range(box[4 * k + 2], box[4 * k + 3], y0, ny, &c[2], &c[3]);
+  }
+};
+
+void segment_box(const Polyline& p, size_t k, double* b) {
+  const double dx = p.x[k + 1] - p.x[k], dy = p.y[k + 1] - p.y[k];
+  const double reach = kMaxReachMm / std::sqrt(dx * dx + dy * dy);
+  const double t0 = k == 0 ? -reach : 0, t1 = k + 2 == p.n ? 1 + reach : 1;
+  const double ax = p.x[k] + t0 * dx, bx = p.x[k] + t1 * dx;
+  const double ay = p.y[k] + t0 * dy, by = p.y[k] + t1 * dy;
+  b[0] = std::min(ax, bx) - kProjectorMarginMm;
+  b[1] = std::max(ax, bx) + kProjectorMarginMm;
+  b[2] = std::min(ay, by) - kProjectorMarginMm;
+  b[3] = std::max(ay, by) + kProjectorMarginMm;
+}
+
+Status make_projector(Arena& arena, const Polyline& p, Projector* out) {
+  Projector& g = *out;
+  g = Projector{};
+  g.line = &p;
+  const size_t segments = p.n - 1;
+  g.box = arena.allocate_array<double>(4 * segments);
+  g.reach = arena.allocate_array<double>(segments);
+  if (g.box == nullptr || g.reach == nullptr) return arena.exhausted_status();
+  double x_lo = HUGE_VAL, x_hi = -HUGE_VAL, y_lo = HUGE_VAL, y_hi = -HUGE_VAL;
+  for (size_t k = 0; k < segments; ++k) {
+    double* b = g.box + 4 * k;
+    g.reach[k] = segment_reach(p, k);
+    segment_box(p, k, b);
+    x_lo = std::min(x_lo, b[0]);
+    x_hi = std::max(x_hi, b[1]);
+    y_lo = std::min(y_lo, b[2]);
+    y_hi = std::max(y_hi, b[3]);
+  }
+  const double span = std::max(x_hi - x_lo, y_hi - y_lo);
+  if (!(span < HUGE_VAL)) return Status::ok();  // not finite: scan
+  g.cell = std::max(kProjectorCellMm, span / kProjectorSide) * (1 + 1e-9);
+  g.x0 = x_lo;
+  g.y0 = y_lo;
+  g.nx = std::min(kProjectorSide, static_cast<uint32_t>((x_hi - x_lo) / g.cell) + 1);
+  g.ny = std::min(kProjectorSide, static_cast<uint32_t>((y_hi - y_lo) / g.cell) + 1);
+  const size_t cells = static_cast<size_t>(g.nx) * g.ny;
+  size_t total = 0;
+  for (size_t k = 0; k < segments; ++k) {
+    uint32_t c[4];
+    g.segment_cells(k, c);
+    total += static_cast<size_t>(c[1] - c[0] + 1) * (c[3] - c[2] + 1);
+  }
+  if (total > projector_entries(segments)) return Status::ok();  // scan
+  g.start = arena.allocate_array<uint32_t>(cells + 1);
+  g.entries = arena.allocate_array<uint32_t>(total > 0 ? total : 1);
+  if (g.start == nullptr || g.entries == nullptr) return arena.exhausted_status();
+  std::fill(g.start, g.start + cells + 1, 0u);
+  for (int fill = 0; fill < 2; ++fill) {
+    for (size_t k = 0; k < segments; ++k) {
+      uint32_t c[4];
+      g.segment_cells(k, c);
+      for (uint32_t iy = c[2]; iy <= c[3]; ++iy) {
+        for (uint32_t ix = c[0]; ix <= c[1]; ++ix) {
+          const size_t cell = static_cast<size_t>(iy) * g.nx + ix;
+          if (fill == 0) {
+            ++g.start[cell + 1];
+          } else {
+            g.entries[g.start[cell]++] = static_cast<uint32_t>(k);
+          }
+        }
+      }
+    }
+    if (fill == 0) {
+      for (size_t i = 0; i < cells; ++i) g.start[i + 1] += g.start[i];
+    } else {
+      for (size_t i = cells; i > 0; --i) g.start[i] = g.start[i - 1];  // back to the starts
+      g.start[0] = 0;
+    }
+  }
+  g.gridded = true;
+  return Status::ok();
+}
+
+// The segments within reach r of (px, py) by their boxes, sorted, in `out`; false when more
+// than kProjectorCandidates or more cells than the grid's.
+bool near_segments(const Projector& g, double px, double py, double r, uint32_t* out,
+                   size_t* count) {
+  uint32_t ix0, ix1, iy0, iy1;
+  g.cell_range(px - r, px + r, g.x0, g.nx, &ix0, &ix1);
+  g.cell_range(py - r, py + r, g.y0, g.ny, &iy0, &iy1);
+  if (static_cast<size_t>(ix1 - ix0 + 1) * (iy1 - iy0 + 1) > kProjectorCells) return false;
+  size_t n = 0;
+  for (uint32_t iy = iy0; iy <= iy1; ++iy) {
+    for (uint32_t ix = ix0; ix <= ix1; ++ix) {
+      const size_t cell = static_cast<size_t>(iy) * g.nx + ix;
+      for (uint32_t e = g.start[cell]; e < g.start[cell + 1]; ++e) {
+        const uint32_t k = g.entries[e];
+        const double* b = g.box + 4 * k;
+        const double ex = std::max(0.0, std::max(b[0] - px, px - b[1]));
+        const double ey = std::max(0.0, std::max(b[2] - py, py - b[3]));
+        if (ex * ex + ey * ey > r * r) continue;
+        if (n == kProjectorCandidates) return false;
+        out[n++] = k;
+      }
+    }
+  }
+  std::sort(out, out + n);
+  *count = static_cast<size_t>(std::unique(out, out + n) - out);
+  return true;
+}
+
+// project(&line, px, py, s, o), bit for bit.
+void project_fast(Projector& g, double px, double py, double* s, double* o) {
+  const Polyline& p = *g.line;
+  uint32_t near[kProjectorCandidates];
+  size_t count = 0;
+  double t, qx, qy;
+  // A bound on the nearest distance: the nearest start point of the guess's segment and of the
+  // segments in the point's own cell (their nearest points lie no farther).
+  const size_t guess = g.hint < p.n - 1 ? g.hint : 0;
+  auto start_d2 = [&](size_t k) {
+    return (px - p.x[k]) * (px - p.x[k]) + (py - p.y[k]) * (py - p.y[k]);
+  };
+  double first = start_d2(guess);
+  if (g.gridded) {
+    uint32_t ix, iy, unused;
+    g.cell_range(px, px, g.x0, g.nx, &ix, &unused);
+    g.cell_range(py, py, g.y0, g.ny, &iy, &unused);
+    const size_t cell = static_cast<size_t>(iy) * g.nx + ix;
+    for (uint32_t e = g.start[cell]; e < g.start[cell + 1]; ++e) {
+      first = std::min(first, start_d2(g.entries[e]));
+    }
+  }
+  const double r = std::sqrt(first) * (1 + 1e-9) + kProjectorMarginMm;
+  if (!g.gridded || !near_segments(g, px, py, r, near, &count)) {
+    project(p, px, py, s, o);
+    return;
+  }
+  double best = HUGE_VAL;
+  size_t best_k = guess;
+  for (size_t i = 0; i < count; ++i) {
+    const double d2 = segment_nearest(p, near[i], g.reach[near[i]], px, py, &t, &qx, &qy);
+    if (d2 < best) {
+      best = d2;
+      best_k = near[i];
+    }
+  }
+  g.hint = best_k;
+  segment_place(p, best_k, px, py, s, o);
 }
 
 // The polyline's point at arc length s (extended along the end segments).
@@ -306,10 +510,15 @@ double local_linear(const double* s, const double* v, const double* w, size_t n,
 // to the last one with points.
 Status smooth_line(Arena& arena, Span<ArchPoint> pts, const Polyline& prev, Polyline* line) {
   double s_lo = HUGE_VAL, s_hi = -HUGE_VAL;
-  for (ArchPoint& a : pts) {
-    project(prev, a.x, a.y, &a.s, &a.o);
-    s_lo = std::min(s_lo, a.s);
-    s_hi = std::max(s_hi, a.s);
+  {
+    ArenaScope scope(arena);  // the projector goes when done
+    Projector g;
+    SPLINTCORE_RETURN_IF_ERROR(make_projector(arena, prev, &g));
+    for (ArchPoint& a : pts) {
+      project_fast(g, a.x, a.y, &a.s, &a.o);
+      s_lo = std::min(s_lo, a.s);
+      s_hi = std::max(s_hi, a.s);
+    }
   }
   const double origin = std::floor(s_lo / kBinMm) * kBinMm;
   const size_t bins = static_cast<size_t>((s_hi - origin) / kBinMm) + 1;
@@ -428,6 +637,13 @@ bool fill_gaps(double* v, size_t n, size_t stride) {
 
 }  // namespace
 
+uint64_t projector_bound() {
+  const size_t segments = std::max<size_t>(kSectors, kMaxArchPoints);
+  return arena_array_bound<double>(4 * segments) + arena_array_bound<double>(segments) +
+         arena_array_bound<uint32_t>(kProjectorSide * kProjectorSide + 1) +
+         arena_array_bound<uint32_t>(projector_entries(segments));
+}
+
 Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
                       const Vec3& lower_offset, const Frame& f, const Grid& g, const Plane& plane,
                       const OutlineOptions& options, const OutlineBuffers& buffers, Outline* out) {
@@ -449,16 +665,21 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
   // The ends and the centre from the band's vertices (they move with the jaws; see
   // occlusal_points), the columns' places along the arch for the picks' windows.
   double s_lo = HUGE_VAL, s_hi = -HUGE_VAL, cx = 0, cy = 0;
-  for (ArchPoint& a : line_pts) {
-    project(arch, a.x, a.y, &a.s, &a.o);
-    s_lo = std::min(s_lo, a.s);
-    s_hi = std::max(s_hi, a.s);
-    cx += a.x;
-    cy += a.y;
+  {
+    ArenaScope scope(arena);  // the projector goes when done
+    Projector proj;
+    SPLINTCORE_RETURN_IF_ERROR(make_projector(arena, arch, &proj));
+    for (ArchPoint& a : line_pts) {
+      project_fast(proj, a.x, a.y, &a.s, &a.o);
+      s_lo = std::min(s_lo, a.s);
+      s_hi = std::max(s_hi, a.s);
+      cx += a.x;
+      cy += a.y;
+    }
+    for (ArchPoint& a : pts) project_fast(proj, a.x, a.y, &a.s, &a.o);
   }
   cx /= static_cast<double>(line_pts.size());
   cy /= static_cast<double>(line_pts.size());
-  for (ArchPoint& a : pts) project(arch, a.x, a.y, &a.s, &a.o);
   out->report.arch_length_mm = s_hi - s_lo;
   if (s_hi - s_lo < kMinArchMm) {
     return make_error(StatusCode::kInvalidArgument, "outline: the arch is too short: ", s_hi - s_lo,

@@ -13,6 +13,7 @@ constexpr uint32_t kMaxAdvanceSteps = 100;
 constexpr uint32_t kBisections = 80;
 constexpr double kOpeningTolerance = 1e-9;  // mm
 constexpr double kNearReachMm = 1.0;        // open_bite's first band
+constexpr double kStepSlackMm = 0.1;        // the opening's steps: exact this past the target
 // At least mesh_pair_distance_bound() for any two indexes: 24-byte entries, a heap of 2048 and
 // a stack of 15 (a.depth + b.depth) + 1, where a 4-wide tree over 32-bit Morton leaves is at
 // most 32 deep; and their alignment.
@@ -78,21 +79,91 @@ struct Opener {
   const DistanceIndex& upper;
   const DistanceIndex& lower;
   Vec3 n;
+  double reach;  // the distance is exact up to this (above it, some value above it)
+  // The last closest pair: its distance at the next t bounds the search (the same result,
+  // found sooner).
+  mutable bool warm = false;
+  mutable uint32_t pair_a = 0, pair_b = 0;
   Status distance(double t, MeshPairDistance* d) const {
-    return mesh_pair_distance(ctx, upper, lower, n * (-t), HUGE_VAL, d);
+    const Vec3 offset = n * (-t);
+    double bound = HUGE_VAL;
+    if (warm) {
+      const Mesh& a = *upper.mesh;
+      const Mesh& b = *lower.mesh;
+      const Triangle& ta = a.triangles[pair_a];
+      const Triangle& tb = b.triangles[pair_b];
+      bound = triangle_pair_distance(a.vertices[ta.v[0]], a.vertices[ta.v[1]], a.vertices[ta.v[2]],
+                                     b.vertices[tb.v[0]] + offset, b.vertices[tb.v[1]] + offset,
+                                     b.vertices[tb.v[2]] + offset, nullptr, nullptr);
+      bound = bound * (1 + 1e-9) + 1e-9;  // over any rounding: the pair itself is found
+    }
+    SPLINTCORE_RETURN_IF_ERROR(mesh_pair_distance(ctx, upper, lower, offset, bound, d));
+    if (!(d->distance < HUGE_VAL) && bound < HUGE_VAL) {
+      SPLINTCORE_RETURN_IF_ERROR(mesh_pair_distance(ctx, upper, lower, offset, HUGE_VAL, d));
+    }
+    if (d->distance < HUGE_VAL) {
+      warm = true;
+      pair_a = d->triangle_a;
+      pair_b = d->triangle_b;
+    }
+    return Status::ok();
   }
 };
 
-Status advance(const Opener& op, double target, double d0, double* t_out, double* d_out,
-               uint32_t* steps) {
-  double t = 0, d = d0;
+// The distance's rate along the move at the closest pair (point_a - point_b along n, unit):
+// exact while the pair's features stay (a vertex over a face: linear), 0 when unknown.
+double opening_slope(const MeshPairDistance& pair, const Vec3& n) {
+  if (!(pair.distance > 0) || !(pair.distance < HUGE_VAL)) return 0;
+  return dot(pair.point_a - pair.point_b, n) / pair.distance;
+}
+
+Status advance(const Opener& op, double target, double d0, double slope0, double* t_out,
+               double* d_out, uint32_t* steps) {
+  double t = 0, d = d0, slope = slope0;
   MeshPairDistance pair;
   *steps = 0;
+  // The conservative step never passes the first root. Beyond it: a Newton step by the
+  // closest pair's rate (else a secant through the last two points below the target), kept
+  // short of the Lipschitz bound from the nearest point above the target (Illinois false
+  // position when it would not be), and never short of the conservative step.
+  double t_prev = 0, d_prev = -1, t_hi = HUGE_VAL, f_hi = 0;
+  bool kept_low = false;
   while (*steps < kMaxAdvanceSteps && std::fabs(d - target) > kOpeningTolerance) {
-    t += d == 0 ? target : target - d;
-    SPLINTCORE_RETURN_IF_ERROR(op.distance(t, &pair));
-    d = pair.distance;
+    const double safe = t + (d == 0 ? target : target - d);
+    const bool secant = d_prev > 0 && d > d_prev;
+    double next = safe;
+    bool model = true;
+    if (slope > 0) {
+      next = t + (target - d) / slope;
+    } else if (secant) {
+      next = t + (target - d) * (t - t_prev) / (d - d_prev);
+    } else {
+      model = false;
+    }
+    if (t_hi < HUGE_VAL) {
+      if (!model || !(next <= t_hi - f_hi)) {
+        next = t + (target - d) * (t_hi - t) / (f_hi - (d - target));
+        next = std::fmin(next, t_hi - f_hi);
+      }
+    } else {
+      next = std::fmin(next, t + 4 * (target - d));
+    }
+    next = std::fmax(next, safe);
+    SPLINTCORE_RETURN_IF_ERROR(op.distance(next, &pair));
     ++*steps;
+    if (pair.distance > target + kOpeningTolerance) {
+      t_hi = next;
+      f_hi = std::fmin(pair.distance, op.reach) - target;  // at most the true excess
+      kept_low = false;
+      continue;
+    }
+    if (kept_low && t_hi < HUGE_VAL) f_hi *= 0.5;
+    kept_low = true;
+    t_prev = t;
+    d_prev = d;
+    t = next;
+    d = pair.distance;
+    slope = opening_slope(pair, op.n);
   }
   if (std::fabs(d - target) > kOpeningTolerance && d < target) {
     // Slow convergence (a contact sliding almost along the move): bracket and bisect.
@@ -119,25 +190,83 @@ Status advance(const Opener& op, double target, double d0, double* t_out, double
 }
 
 // The part of each jaw that can come within `reach` of the other while the mandible moves
-// along n away from the maxilla (or back towards it by at most `reach`): a pair of points at
-// most `reach` apart differs by at most that much in height along n, so the maxilla's
-// triangles lower than the mandible's top plus 2 reach, and the mandible's higher than the
-// maxilla's bottom minus 2 reach, hold every such pair. ids[k]: the jaw's triangle of view
-// triangle k.
+// along n away from the maxilla (reaches = 1), or also back towards it by at most `reach`
+// (reaches = 2): a pair of points at most `reach` apart differs by at most that much in height
+// along n, and by at most that much across it. So a maxilla triangle whose lowest vertex lies
+// more than `reaches` reach above the mandible's highest vertex near it (within reach plus
+// two of the longest edge, across n: a point of a triangle lies within its longest edge of
+// every vertex) has no such pair, nor a mandible triangle whose highest vertex lies that much
+// below the maxilla's lowest near it. The "near" comes from the frame's grid (the jaws as
+// given), each column's extreme over the columns around; too far around (long edges), the
+// jaws' global extremes. The bands only prune: the distances are the same whatever they keep.
+// ids[k]: the jaw's triangle of view triangle k.
 struct JawBand {
   Mesh view;
   uint32_t* ids = nullptr;
 };
 
-Status jaw_band(Arena& arena, const Mesh& m, const Vec3& n, bool upper, double bound,
-                JawBand* out) {
+constexpr uint32_t kMaxBandRadius = 40;  // columns around, at most
+
+// Per column, the extreme height of `jaw` over the columns within `radius` (the highest for
+// the mandible, the lowest for the maxilla): rows, then columns.
+Status extreme_around(Arena& arena, const Grid& g, int jaw, uint32_t radius, double** out) {
+  const size_t cells = static_cast<size_t>(g.nx) * g.ny;
+  double* rows = arena.allocate_array<double>(cells);
+  double* both = arena.allocate_array<double>(cells);
+  if (rows == nullptr || both == nullptr) return arena.exhausted_status();
+  auto pick = [jaw](double a, double b) { return jaw == 0 ? (b < a ? b : a) : (b > a ? b : a); };
+  for (uint32_t iy = 0; iy < g.ny; ++iy) {
+    for (uint32_t ix = 0; ix < g.nx; ++ix) {
+      const uint32_t lo = ix > radius ? ix - radius : 0;
+      const uint32_t hi = ix + radius < g.nx ? ix + radius : g.nx - 1;
+      double e = g.h[jaw][static_cast<size_t>(iy) * g.nx + lo];
+      for (uint32_t k = lo + 1; k <= hi; ++k)
+        e = pick(e, g.h[jaw][static_cast<size_t>(iy) * g.nx + k]);
+      rows[static_cast<size_t>(iy) * g.nx + ix] = e;
+    }
+  }
+  for (uint32_t iy = 0; iy < g.ny; ++iy) {
+    const uint32_t lo = iy > radius ? iy - radius : 0;
+    const uint32_t hi = iy + radius < g.ny ? iy + radius : g.ny - 1;
+    for (uint32_t ix = 0; ix < g.nx; ++ix) {
+      double e = rows[static_cast<size_t>(lo) * g.nx + ix];
+      for (uint32_t k = lo + 1; k <= hi; ++k) e = pick(e, rows[static_cast<size_t>(k) * g.nx + ix]);
+      both[static_cast<size_t>(iy) * g.nx + ix] = e;
+    }
+  }
+  *out = both;
+  return Status::ok();
+}
+
+// The other jaw's extreme near each column (nullptr: everywhere the global `bound`).
+struct BandLimit {
+  const Grid* g = nullptr;
+  const Frame* f = nullptr;
+  const double* other = nullptr;  // per column, the other jaw's extreme around it
+  double bound = 0;               // the global one
+  double margin = 0;              // reaches times reach
+};
+
+// A triangle is kept when one of its vertices lies within the margin of the other jaw's
+// extreme near it (the columns around reach one edge further than the pairs need, so the
+// vertex nearest the other jaw may stand for the whole triangle).
+Status jaw_band(Arena& arena, const Mesh& m, bool upper, const BandLimit& limit, JawBand* out) {
+  const Frame& f = *limit.f;
+  const size_t nv = m.vertices.size();
+  uint8_t* near = arena.allocate_array<uint8_t>(nv);
+  if (near == nullptr) return arena.exhausted_status();
+  for (size_t i = 0; i < nv; ++i) {
+    const Vec3& v = m.vertices[i];
+    double bound = limit.bound;
+    if (limit.other != nullptr) {
+      bound = limit.other[limit.g->cell_of(dot(v, f.e1), dot(v, f.e2))];
+      bound += upper ? limit.margin : -limit.margin;
+    }
+    const double h = dot(v, f.n);
+    near[i] = upper ? h <= bound : h >= bound;
+  }
+  auto keeps = [&](const Triangle& t) { return (near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) != 0; };
   size_t kept = 0;
-  auto keeps = [&](const Triangle& t) {
-    const double h0 = dot(m.vertices[t.v[0]], n), h1 = dot(m.vertices[t.v[1]], n),
-                 h2 = dot(m.vertices[t.v[2]], n);
-    return upper ? std::fmin(h0, std::fmin(h1, h2)) <= bound
-                 : std::fmax(h0, std::fmax(h1, h2)) >= bound;
-  };
   for (const Triangle& t : m.triangles) {
     if (keeps(t)) ++kept;
   }
@@ -161,41 +290,74 @@ struct BandedOpener {
   DistanceIndex upper_index, lower_index;
 };
 
-Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Vec3& n,
-                     double reach, BandedOpener* b) {
+double longest_edge(const Mesh& m) {
+  double e2 = 0;
+  for (const Triangle& t : m.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 d = m.vertices[t.v[k]] - m.vertices[t.v[(k + 1) % 3]];
+      const double l2 = dot(d, d);
+      e2 = l2 > e2 ? l2 : e2;
+    }
+  }
+  return std::sqrt(e2);
+}
+
+Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
+                     const Grid& g, double reach, double margin, BandedOpener* b) {
   double low_u = HUGE_VAL, high_l = -HUGE_VAL;
-  for (const Vec3& v : maxilla.vertices) low_u = std::fmin(low_u, dot(v, n));
-  for (const Vec3& v : mandible.vertices) high_l = std::fmax(high_l, dot(v, n));
-  SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, maxilla, n, true, high_l + 2 * reach, &b->upper));
-  SPLINTCORE_RETURN_IF_ERROR(
-      jaw_band(*ctx.arena, mandible, n, false, low_u - 2 * reach, &b->lower));
+  for (const Vec3& v : maxilla.vertices) {
+    const double h = dot(v, f.n);
+    low_u = h < low_u ? h : low_u;
+  }
+  for (const Vec3& v : mandible.vertices) {
+    const double h = dot(v, f.n);
+    high_l = h > high_l ? h : high_l;
+  }
+  const double edge = std::fmax(longest_edge(maxilla), longest_edge(mandible));
+  const double across = (reach + 3 * edge) / kCellMm + 2;  // columns, with the rounding
+  BandLimit up{&g, &f, nullptr, high_l + margin, margin + 1e-9};
+  BandLimit down{&g, &f, nullptr, low_u - margin, margin + 1e-9};
+  if (across <= kMaxBandRadius) {
+    const uint32_t radius = static_cast<uint32_t>(across);
+    double* other = nullptr;
+    SPLINTCORE_RETURN_IF_ERROR(extreme_around(*ctx.arena, g, 1, radius, &other));
+    up.other = other;
+    SPLINTCORE_RETURN_IF_ERROR(extreme_around(*ctx.arena, g, 0, radius, &other));
+    down.other = other;
+  }
+  SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, maxilla, true, up, &b->upper));
+  SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, mandible, false, down, &b->lower));
   SPLINTCORE_RETURN_IF_ERROR(
       build_distance_index(ctx, b->upper.view, DistanceIndexOptions{}, &b->upper_index));
   return build_distance_index(ctx, b->lower.view, DistanceIndexOptions{}, &b->lower_index);
 }
 
 Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
-                 const OutlineOptions& o, Vec3* offset, OutlineReport* r) {
+                 const Grid& g, const OutlineOptions& o, Vec3* offset, OutlineReport* r) {
   ArenaScope scope(*ctx.arena);  // the bands and their indexes go when done
   // Near reach first (the jaws as scanned touch): exact up to it. Farther apart, again with
   // the reach of the largest gap accepted.
   const double target = o.has_bite_opening ? o.bite_opening_mm : 0.0;
-  double reach = std::fmax(target, kNearReachMm);
+  // (A little past the target: the opening's steps past it are then measured exactly, or
+  // known to be past the reach.)
+  double reach = std::fmax(target + (o.has_bite_opening ? kStepSlackMm : 0.0), kNearReachMm);
+  // The first bands hold the pairs within reach only while the mandible moves away (or
+  // stays): enough for the distance as given and for an opening from nearer than asked.
   BandedOpener b;
-  SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f.n, reach, &b));
+  SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, reach, &b));
   MeshPairDistance d0;
-  const Opener near{ctx, b.upper_index, b.lower_index, f.n};
+  const Opener near{ctx, b.upper_index, b.lower_index, f.n, reach};
   SPLINTCORE_RETURN_IF_ERROR(near.distance(0, &d0));
-  if (d0.distance > reach) {
+  if (d0.distance > reach || (o.has_bite_opening && d0.distance > target)) {
     ctx.arena->rewind(scope.start());
-    reach = o.max_gap_mm + target;
-    SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f.n, reach, &b));
-    const Opener far{ctx, b.upper_index, b.lower_index, f.n};
+    if (d0.distance > reach) reach = o.max_gap_mm + target;
+    SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, 2 * reach, &b));
+    const Opener far{ctx, b.upper_index, b.lower_index, f.n, reach};
     SPLINTCORE_RETURN_IF_ERROR(far.distance(0, &d0));
   }
-  const Opener op{ctx, b.upper_index, b.lower_index, f.n};
   const uint32_t tri_u = d0.distance <= reach ? b.upper.ids[d0.triangle_a] : 0;
   const uint32_t tri_l = d0.distance <= reach ? b.lower.ids[d0.triangle_b] : 0;
+  const Opener op{ctx, b.upper_index, b.lower_index, f.n, reach};
   r->gap_as_given = d0.distance;
   r->jaws_intersect = d0.intersecting;
   if (d0.distance > o.max_gap_mm) {
@@ -212,8 +374,8 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
                       "): open the bite with \"bite_opening_mm\" (e.g. 2)");
   }
   double t = 0, d = 0;
-  SPLINTCORE_RETURN_IF_ERROR(
-      advance(op, o.bite_opening_mm, d0.distance, &t, &d, &r->opening_steps));
+  SPLINTCORE_RETURN_IF_ERROR(advance(op, o.bite_opening_mm, d0.distance, opening_slope(d0, f.n), &t,
+                                     &d, &r->opening_steps));
   *offset = f.n * (-t);
   r->opened = true;
   r->mandible_translation = *offset;
@@ -252,16 +414,19 @@ uint64_t compute_outline_bound(const Mesh& maxilla, const Mesh& mandible) {
   };
   const uint64_t jaws =
       band(maxilla_vertices, maxilla_triangles) + band(mandible_vertices, mandible_triangles);
-  const uint64_t opening = jaws + kPairStackBound;
+  // The opening: the bands, the pair search, the columns' reach and the vertices' marks.
+  const uint64_t opening = jaws + kPairStackBound + 4 * arena_array_bound<double>(cells) +
+                           arena_array_bound<uint8_t>(maxilla_vertices) +
+                           arena_array_bound<uint8_t>(mandible_vertices);
   // The arch: the columns' distances and points, the band's vertices (both reserved once),
-  // the sectors, each pass's line, the picks' data.
+  // the sectors, each pass's line, the picks' data, the projector's grid.
   const uint64_t points = 2 * cells;
   const uint64_t line_points = 2 * (kLinePoints + 1);
   const uint64_t arch =
-      arena_array_bound<double>(cells) + 3 * arena_array_bound<ArchPoint>(points) +
-      3 * arena_array_bound<ArchPoint>(line_points) + 6 * arena_array_bound<double>(kSectors) +
+      arena_array_bound<double>(cells) + arena_array_bound<ArchPoint>(points) +
+      arena_array_bound<ArchPoint>(line_points) + 6 * arena_array_bound<double>(kSectors) +
       (kSmoothPasses + 1) * 9 * arena_array_bound<double>(kMaxArchPoints + 1) +
-      arena_array_bound<double>(6 * kMaxPicks);
+      arena_array_bound<double>(6 * kMaxPicks) + (kSmoothPasses + 2) * projector_bound();
   // The survey, after the arch: its columns (reserved once) and the jaws' slabs.
   const uint64_t survey = arena_array_bound<double>(4 * columns) + jaws;
   const uint64_t after_frame = opening > arch + survey ? opening : arch + survey;
@@ -295,7 +460,7 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 1, 3));
     Vec3 offset;
     SPLINTCORE_RETURN_IF_ERROR(
-        open_bite(ctx, maxilla, mandible, f, options, &offset, &out->report));
+        open_bite(ctx, maxilla, mandible, f, g, options, &offset, &out->report));
     // The move is along n: the columns stay; only the mandible's heights change.
     if (out->report.opened) fill_heights(mandible, offset, f, 1, &g);
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 2, 3));

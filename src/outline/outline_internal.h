@@ -98,6 +98,9 @@ struct OutlineBuffers {
   Vec3* arch = nullptr;
 };
 
+// Bytes the arch's projections take at most (arch.cpp), beyond what arch_and_picks keeps.
+uint64_t projector_bound();
+
 // The arch and the picks from the grids (arch.cpp). `lower_offset`: the mandible's move.
 Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
                       const Vec3& lower_offset, const Frame& f, const Grid& g, const Plane& plane,

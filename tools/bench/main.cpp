@@ -3,6 +3,7 @@
 //   bench=NAME size=N median_s=T min_s=T max_s=T peak_arena_bytes=B
 // Lines starting with '#' are derived figures (rates) and notes.
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -25,6 +26,7 @@
 #include "splintcore/distance.h"
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
+#include "splintcore/outline.h"
 #include "splintcore/platform.h"
 #include "splintcore/remesh.h"
 #include "splintcore/segment.h"
@@ -1014,6 +1016,169 @@ void bench_blockout(Harness& h, Arena& arena, const std::string& fixtures) {
   arena.rewind(m);
 }
 
+// The real dentition's two jaws (teeth 1-16, 17-32) as one mesh each, in `arena`.
+Status real_jaws(Arena& arena, const realcase::RealCase& rc, Mesh jaws[2]) {
+  for (int j = 0; j < 2; ++j) {
+    jaws[j] = Mesh();
+    jaws[j].bind(&arena);
+    for (const realcase::Tooth& t : rc.teeth) {
+      if ((t.number <= 16) != (j == 0)) continue;
+      const uint32_t base = static_cast<uint32_t>(jaws[j].vertices.size());
+      bool ok = true;
+      for (const Vec3& v : t.vertices) ok = ok && jaws[j].vertices.push_back(v);
+      for (const Triangle& tr : t.triangles) {
+        ok = ok && jaws[j].triangles.push_back(
+                       Triangle{{tr.v[0] + base, tr.v[1] + base, tr.v[2] + base}});
+      }
+      if (!ok) return arena.exhausted_status();
+    }
+  }
+  return Status::ok();
+}
+
+// compute_outline on two jaws already in memory (the call only).
+void bench_outline_jaws(Harness& h, Arena& arena, const char* name, const Mesh& upper,
+                        const Mesh& lower, const OutlineOptions& options) {
+  Outline o;
+  h.measure(name, upper.triangles.size() + lower.triangles.size(), arena,
+            [&](Arena& a) { return compute_outline(Context(&a), upper, lower, options, &o); });
+  std::printf("# %s: %u picks, opening %.12f mm in %u steps, arch %.3f mm\n", name, o.report.picks,
+              o.report.opening, o.report.opening_steps, o.report.arch_length_mm);
+}
+
+// The automatic outline (issue 28: under 50 ms on the real dentition): the real jaws as
+// scanned (they touch) opened by 2 mm, and the 87 k phantom jaws (the mandible 2 mm down).
+void bench_outline(Harness& h, Arena& arena, const std::string& realdata) {
+  const Arena::Marker m = arena.mark();
+  Mesh jaws[2];
+  if (h.wanted("outline_phantom")) {
+    Status s;
+    for (int j = 0; j < 2 && s.is_ok(); ++j) {
+      phantom::JawMesh jm;
+      phantom::PhantomOptions po;
+      po.target_triangles = 87000;
+      s = phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &jm);
+      jaws[j].bind(&arena);
+      if (s.is_ok()) s = phantom::to_mesh(jm, &jaws[j]);
+    }
+    if (!s.is_ok()) {
+      cli::print_error(s);
+      h.failed = true;
+      arena.rewind(m);
+      return;
+    }
+    for (Vec3& v : jaws[1].vertices) v.z -= 2.0;
+    bench_outline_jaws(h, arena, "outline_phantom", jaws[0], jaws[1], OutlineOptions{});
+    arena.rewind(m);
+  }
+  if (!h.wanted("outline_realdata")) return;
+  realcase::RealCase rc;
+  std::string error;
+  if (!realcase::load(realdata, 0.0, 1.5, 6.0, &rc, &error)) {
+    std::printf("# realdata not found (%s): outline_realdata skipped\n", error.c_str());
+    return;
+  }
+  const Status s = real_jaws(arena, rc, jaws);
+  if (!s.is_ok()) {
+    cli::print_error(s);
+    h.failed = true;
+    arena.rewind(m);
+    return;
+  }
+  OutlineOptions options;
+  options.has_bite_opening = true;
+  options.bite_opening_mm = 2.0;
+  bench_outline_jaws(h, arena, "outline_realdata", jaws[0], jaws[1], options);
+  arena.rewind(m);
+}
+
+// One stage of design_auto_realdata: reads a mesh file as the CLI does (read_mesh, welded).
+Status read_mesh_path(const Context& ctx, const std::string& path, Mesh* mesh) {
+  FileSource file;
+  SPLINTCORE_RETURN_IF_ERROR(file.open(path.c_str()));
+  MeshReadOptions options;
+  options.weld = true;
+  return read_mesh(ctx, file.source(), options, mesh, nullptr);
+}
+
+// The whole auto design of the real case, file to file (issue 28: under 0.5 s): the case
+// folder (the teeth as scanned in maxilla.stl and mandible.stl, an auto case.json opening the
+// bite by 2 mm) written once to a temporary folder; timed: reading the case and both STL
+// files, design_splint, writing the splint's binary STL.
+void bench_design_auto_realdata(Harness& h, Arena& arena, const std::string& realdata) {
+  const char* name = "design_auto_realdata";
+  if (!h.wanted(name)) return;
+  realcase::RealCase rc;
+  std::string error;
+  if (!realcase::load(realdata, 0.0, 1.5, 6.0, &rc, &error)) {
+    std::printf("# realdata not found (%s): %s skipped\n", error.c_str(), name);
+    return;
+  }
+  char dir[] = "/tmp/splintcore-bench-XXXXXX";
+  if (::mkdtemp(dir) == nullptr || !realcase::write_case_folder(rc, dir, 0.5, &error)) {
+    std::printf("# %s: cannot write the case folder (%s): skipped\n", name, error.c_str());
+    return;
+  }
+  const std::string folder = dir;
+  const std::string json =
+      "{\"splintcore_case\": 1, \"case_id\": \"realdata-auto\", \"units\": \"mm\", \"jaws\": ["
+      "{\"role\": \"maxilla\", \"mesh\": \"maxilla.stl\"}, "
+      "{\"role\": \"mandible\", \"mesh\": \"mandible.stl\"}], "
+      "\"base\": {\"spacing_mm\": 0.5, \"auto\": {\"bite_opening_mm\": 2}}, "
+      "\"output\": {\"splint\": \"splint.stl\"}}\n";
+  FILE* f = std::fopen((folder + "/case.json").c_str(), "wb");
+  const bool written = f != nullptr && std::fwrite(json.data(), 1, json.size(), f) == json.size();
+  if (f == nullptr || std::fclose(f) != 0 || !written) {
+    std::printf("# %s: cannot write case.json: skipped\n", name);
+    return;
+  }
+  double stage[4] = {0, 0, 0, 0};  // read, outline + design, write; summed over the runs
+  int runs = 0;
+  DesignReport report;
+  uint64_t triangles = 0;
+  h.measure(name, 0, arena, [&](Arena& a) {
+    const Context ctx(&a);
+    const double t0 = monotonic_seconds();
+    Span<uint8_t> text;
+    SPLINTCORE_RETURN_IF_ERROR(read_file(a, (folder + "/case.json").c_str(), 1 << 20, &text));
+    CaseFile c;
+    SPLINTCORE_RETURN_IF_ERROR(
+        parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), "case.json", &c));
+    Mesh jaws[2];
+    SPLINTCORE_RETURN_IF_ERROR(read_mesh_path(ctx, folder + "/maxilla.stl", &jaws[0]));
+    SPLINTCORE_RETURN_IF_ERROR(read_mesh_path(ctx, folder + "/mandible.stl", &jaws[1]));
+    const double t1 = monotonic_seconds();
+    Mesh splint;
+    SPLINTCORE_RETURN_IF_ERROR(design_splint(ctx, c, Span<const Mesh>(jaws, 2), &splint, &report));
+    const double t2 = monotonic_seconds();
+    AtomicFile out;
+    SPLINTCORE_RETURN_IF_ERROR(out.open((folder + "/splint.stl").c_str()));
+    SPLINTCORE_RETURN_IF_ERROR(write_stl(ctx, splint, out.sink(), StlWriteOptions{}));
+    SPLINTCORE_RETURN_IF_ERROR(out.commit());
+    const double t3 = monotonic_seconds();
+    triangles = splint.triangles.size();
+    stage[0] += t1 - t0;
+    stage[1] += t2 - t1;
+    stage[2] += t3 - t2;
+    stage[3] += t3 - t0;
+    ++runs;
+    return Status::ok();
+  });
+  if (runs > 0 && stage[3] > 0) {
+    std::printf(
+        "# %s: splint %llu triangles, %u picks, opening %.12f mm in %u steps; per run %.1f ms: "
+        "read %.1f ms (%.0f%%), design %.1f ms (%.0f%%), write %.1f ms (%.0f%%)\n",
+        name, static_cast<unsigned long long>(triangles), report.outline.picks,
+        report.outline.opening, report.outline.opening_steps, 1e3 * stage[3] / runs,
+        1e3 * stage[0] / runs, 100 * stage[0] / stage[3], 1e3 * stage[1] / runs,
+        100 * stage[1] / stage[3], 1e3 * stage[2] / runs, 100 * stage[2] / stage[3]);
+  }
+  for (const char* file : {"/maxilla.stl", "/mandible.stl", "/case.json", "/splint.stl"}) {
+    std::remove((folder + file).c_str());
+  }
+  ::rmdir(dir);
+}
+
 int run(int argc, char** argv) {
   Harness h;
   std::string realdata = "../shared/realdata/open-full-jaw-patient26";
@@ -1075,6 +1240,8 @@ int run(int argc, char** argv) {
     bench_marching_cubes(h, arena);
     bench_sweep(h, arena);
     bench_blockout(h, arena, fixtures);
+    bench_outline(h, arena, realdata);
+    bench_design_auto_realdata(h, arena, realdata);
     // A torus of 2 x 521 x 521 = 542,882 triangles: the size of the paper's largest jaw.
     std::vector<uint8_t> torus = to_binary_stl(shapes::torus(521, 521, 30.0, 8.0));
     bench_stl(h, arena, "", torus);
