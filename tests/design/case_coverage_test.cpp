@@ -251,6 +251,73 @@ TEST(CaseCoverage, EveryOptionalKeyIsRead) {
   EXPECT_EQ(c.memory_cap, 1048576u);
 }
 
+// The automatic outline's keys ("base": {"auto": {...}}): every error named, every key read.
+TEST(CaseCoverage, AutoOutlineKeys) {
+  const std::string none = R"("auto": {})";
+  auto with_auto = [](const std::string& body, const std::string& root = "") {
+    return make_case(root, "", "", std::string(R"("auto": )") + body);
+  };
+  const std::vector<Case> cases = {
+      {"auto not an object", with_auto("[1]"), StatusCode::kInvalidArgument,
+       "\"auto\" must be object"},
+      {"auto unknown key", with_auto(R"({"depth": 2})"), StatusCode::kInvalidArgument,
+       "unknown key \"depth\" in \"auto\""},
+      {"auto and picks", make_case("", "", R"("auto": {},)"), StatusCode::kInvalidArgument,
+       "give either \"auto\" or"},
+      {"auto and normal", make_case("", "", R"("occlusal_normal": [0, 0, 1],)", none),
+       StatusCode::kInvalidArgument, "give either \"auto\" or"},
+      {"depth zero", with_auto(R"({"indentation_depth_mm": 0})"), StatusCode::kInvalidArgument,
+       "\"indentation_depth_mm\" is 0, outside"},
+      {"overhang", with_auto(R"({"overhang_mm": 11})"), StatusCode::kInvalidArgument,
+       "\"overhang_mm\" is 11, outside"},
+      {"spacing", with_auto(R"({"pick_spacing_mm": 1})"), StatusCode::kInvalidArgument,
+       "\"pick_spacing_mm\" is 1, outside"},
+      {"opening", with_auto(R"({"bite_opening_mm": 0.05})"), StatusCode::kInvalidArgument,
+       "\"bite_opening_mm\" is 0.05, outside"},
+      {"survey type", with_auto(R"({"survey": 1})"), StatusCode::kInvalidArgument,
+       "\"survey\" must be true or false"},
+      {"survey and direction",
+       with_auto(R"({"survey": true})", R"("insertion_direction": [0, 0, 1],)"),
+       StatusCode::kInvalidArgument, "both choose the direction"},
+      {"neither picks nor auto", make_case("", "", "", R"("spacing_mm": 0.5)"),
+       StatusCode::kInvalidArgument, "needs \"upper\" and \"lower\" pick lists, or \"auto\""},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    test::TestArena t(size_t{1} << 20);
+    CaseFile out;
+    Status s = parse_case(Context(&t.arena), c.text.data(), c.text.size(), "case.json", &out);
+    EXPECT_EQ(s.code(), c.code) << test::format(s) << "\n" << c.text;
+    EXPECT_NE(std::string(s.message()).find(c.fragment), std::string::npos) << s.message() << "\n"
+                                                                            << c.text;
+  }
+  // Every key read; blockout without an insertion direction is fine with auto.
+  const std::string text =
+      make_case(R"("blockout": {"voxel": 0.2},)", "", "",
+                R"("auto": {"indentation_depth_mm": 1.5, "overhang_mm": 1, "pick_spacing_mm": 5,
+                  "bite_opening_mm": 2.5, "survey": true})");
+  test::TestArena t(size_t{1} << 20);
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse_case(Context(&t.arena), text.data(), text.size(), "case.json", &c));
+  EXPECT_TRUE(c.has_auto_outline);
+  EXPECT_TRUE(c.has_blockout);
+  EXPECT_FALSE(c.has_insertion_direction);
+  EXPECT_EQ(c.outline.indentation_depth_mm, 1.5);
+  EXPECT_EQ(c.outline.overhang_mm, 1.0);
+  EXPECT_EQ(c.outline.pick_spacing_mm, 5.0);
+  EXPECT_TRUE(c.outline.has_bite_opening);
+  EXPECT_EQ(c.outline.bite_opening_mm, 2.5);
+  EXPECT_TRUE(c.outline.survey);
+  EXPECT_TRUE(c.upper.empty());
+  // The defaults.
+  const std::string plain = with_auto("{}");
+  SPLINTCORE_ASSERT_OK(parse_case(Context(&t.arena), plain.data(), plain.size(), "case.json", &c));
+  EXPECT_EQ(c.outline.indentation_depth_mm, 2.0);
+  EXPECT_EQ(c.outline.pick_spacing_mm, 3.0);
+  EXPECT_FALSE(c.outline.has_bite_opening);
+  EXPECT_FALSE(c.outline.survey);
+}
+
 TEST(CaseCoverage, CtKeys) {
   auto ct = [](const std::string& body) { return make_case("\"ct\": {" + body + "},"); };
   const std::vector<Case> cases = {
