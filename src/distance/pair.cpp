@@ -528,7 +528,7 @@ Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const Dist
   ArenaScope scope(*ctx.arena);
   PairSearch s;
   s.capacity = stack_entries(a, b);
-  s.stack = ctx.arena->allocate_array<PairEntry>(s.capacity);
+  s.stack = ctx.arena->allocate_array<PairEntry>(static_cast<size_t>(s.capacity));
   s.heap = ctx.arena->allocate_array<PairEntry>(kHeapEntries);
   if (s.stack == nullptr || s.heap == nullptr) return ctx.arena->exhausted_status();
   s.index[0] = &a;
