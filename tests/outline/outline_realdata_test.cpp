@@ -15,6 +15,7 @@
 
 #include "splintcore/design.h"
 #include "splintcore/distance.h"
+#include "support/frame_moves.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -183,42 +184,6 @@ TEST(OutlineRealData, OpenBiteWithoutThirdMolars) {
   design_and_measure(r, c, 2.0, "open bite", true, {21, 22, 23, 24, 25, 26, 27, 28});
 }
 
-// A rigid move from a seed: a random rotation (unit quaternion) and up to 100 mm along each
-// axis.
-RigidTransform random_move(std::mt19937_64& rng) {
-  std::normal_distribution<double> g(0, 1);
-  double q[4] = {g(rng), g(rng), g(rng), g(rng)};
-  const double l = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  for (double& x : q) x /= l;
-  const double w = q[0], x = q[1], y = q[2], z = q[3];
-  RigidTransform m;
-  m.r[0][0] = 1 - 2 * (y * y + z * z);
-  m.r[0][1] = 2 * (x * y - w * z);
-  m.r[0][2] = 2 * (x * z + w * y);
-  m.r[1][0] = 2 * (x * y + w * z);
-  m.r[1][1] = 1 - 2 * (x * x + z * z);
-  m.r[1][2] = 2 * (y * z - w * x);
-  m.r[2][0] = 2 * (x * z - w * y);
-  m.r[2][1] = 2 * (y * z + w * x);
-  m.r[2][2] = 1 - 2 * (x * x + y * y);
-  std::uniform_real_distribution<double> u(-100, 100);
-  m.t = Vec3{u(rng), u(rng), u(rng)};
-  return m;
-}
-
-double one_sided(const Mesh& a, const Mesh& b, Arena& arena) {
-  ArenaScope scope(arena);
-  DistanceIndex index;
-  EXPECT_TRUE(build_distance_index(Context(&arena), b, DistanceIndexOptions{}, &index).is_ok());
-  double worst = 0;
-  for (const Vec3& p : a.vertices) {
-    ClosestPoint c;
-    closest_point(index, p, &c);
-    worst = std::max(worst, c.distance);
-  }
-  return worst;
-}
-
 // The real case moved by 10 random rigid moves gives the same splint moved: volume to 1e-6,
 // Hausdorff under 1e-4 mm (plus the Boolean's own nudge where rounding made it nudge).
 TEST(OutlineRealData, FrameInvariance) {
@@ -233,7 +198,7 @@ TEST(OutlineRealData, FrameInvariance) {
   int nudged = 0;
   for (int draw = 0; draw < 10; ++draw) {
     ArenaScope scope(r.t.arena);
-    const RigidTransform move = random_move(rng);
+    const RigidTransform move = test::random_move(rng);
     CaseFile moved = c;
     CaseJaw cj[2] = {c.jaws[0], c.jaws[1]};
     for (CaseJaw& j : cj) j.transform = compose(move, j.transform);
@@ -245,8 +210,8 @@ TEST(OutlineRealData, FrameInvariance) {
     const RigidTransform undo = inverse(move);
     for (const Vec3& v : splint.vertices) (void)back.vertices.push_back(undo.apply_point(v));
     for (const Triangle& tr : splint.triangles) (void)back.triangles.push_back(tr);
-    const double h =
-        std::max(one_sided(back, reference, r.t.arena), one_sided(reference, back, r.t.arena));
+    const double h = std::max(test::one_sided(back, reference, r.t.arena),
+                              test::one_sided(reference, back, r.t.arena));
     const double nudge = length(rm.boolean.nudge) + length(r0.boolean.nudge);
     std::printf("real frame %d: Hausdorff %.3g mm, volume ratio - 1 = %.3g, nudge %.3g mm\n", draw,
                 h, rm.print.mesh.volume / r0.print.mesh.volume - 1, length(rm.boolean.nudge));

@@ -18,6 +18,7 @@
 #include "splintcore/distance.h"
 #include "splintcore/io.h"
 #include "splintcore/outline.h"
+#include "support/frame_moves.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -312,44 +313,6 @@ TEST(Outline, ResolvedCaseDesignsTheSameBytes) {
   }
 }
 
-// A rigid move from a seed: a random rotation (unit quaternion) and a translation of up to
-// 100 mm along each axis (a CT or scanner frame).
-RigidTransform random_move(std::mt19937_64& rng) {
-  std::normal_distribution<double> g(0, 1);
-  double q[4] = {g(rng), g(rng), g(rng), g(rng)};
-  const double l = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  for (double& x : q) x /= l;
-  const double w = q[0], x = q[1], y = q[2], z = q[3];
-  RigidTransform m;
-  m.r[0][0] = 1 - 2 * (y * y + z * z);
-  m.r[0][1] = 2 * (x * y - w * z);
-  m.r[0][2] = 2 * (x * z + w * y);
-  m.r[1][0] = 2 * (x * y + w * z);
-  m.r[1][1] = 1 - 2 * (x * x + z * z);
-  m.r[1][2] = 2 * (y * z - w * x);
-  m.r[2][0] = 2 * (x * z - w * y);
-  m.r[2][1] = 2 * (y * z + w * x);
-  m.r[2][2] = 1 - 2 * (x * x + y * y);
-  std::uniform_real_distribution<double> u(-100, 100);
-  m.t = Vec3{u(rng), u(rng), u(rng)};
-  return m;
-}
-
-// The largest distance from a vertex of `a` to the surface of `b` (one side of Hausdorff; the
-// vertices of a fine mesh stand for its surface at the scale asked).
-double one_sided(const Mesh& a, const Mesh& b, Arena& arena) {
-  ArenaScope scope(arena);
-  DistanceIndex index;
-  EXPECT_TRUE(build_distance_index(Context(&arena), b, DistanceIndexOptions{}, &index).is_ok());
-  double worst = 0;
-  for (const Vec3& p : a.vertices) {
-    ClosestPoint c;
-    closest_point(index, p, &c);
-    worst = std::max(worst, c.distance);
-  }
-  return worst;
-}
-
 TEST(Outline, FrameInvariance) {
   PhantomJaws p(24000);
   test::TestArena t{size_t{768} << 20};
@@ -368,7 +331,7 @@ TEST(Outline, FrameInvariance) {
   double worst_unnudged = 0;
   for (int draw = 0; draw < 10; ++draw) {
     ArenaScope scope(t.arena);
-    const RigidTransform move = random_move(rng);
+    const RigidTransform move = test::random_move(rng);
     CaseFile moved = c;
     CaseJaw cj[2] = {c.jaws[0], c.jaws[1]};
     for (CaseJaw& j : cj) j.transform = compose(move, j.transform);
@@ -381,8 +344,8 @@ TEST(Outline, FrameInvariance) {
     const RigidTransform undo = inverse(move);
     for (const Vec3& v : splint.vertices) (void)back.vertices.push_back(undo.apply_point(v));
     for (const Triangle& tr : splint.triangles) (void)back.triangles.push_back(tr);
-    const double h =
-        std::max(one_sided(back, reference, t.arena), one_sided(reference, back, t.arena));
+    const double h = std::max(test::one_sided(back, reference, t.arena),
+                              test::one_sided(reference, back, t.arena));
     // The Boolean may nudge the base by a fraction of a micrometre where rounding to float32
     // would break its result (boolean.h, max_nudges): in 1 of these 10 frames it does, by
     // 0.117 um, and the splint moves with it. That move is the Boolean's, reported, and added.
@@ -415,7 +378,7 @@ TEST(Outline, PicksMoveWithTheJaws) {
   std::mt19937_64 rng(28);
   for (int draw = 0; draw < 6; ++draw) {
     ArenaScope scope(t.arena);
-    const RigidTransform move = random_move(rng);
+    const RigidTransform move = test::random_move(rng);
     Mesh m[2];
     for (int j = 0; j < 2; ++j) {
       m[j].bind(&t.arena);
