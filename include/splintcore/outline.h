@@ -38,6 +38,15 @@ struct OutlineOptions {
   // The insertion direction: the occlusal normal, or (survey) the direction within 15 degrees
   // of it along which the teeth leave the least undercut in the wafer (both volumes reported).
   bool survey = false;
+  // Where the wafer ends distally (patient mm, in the jaws' frame: the frame of the picks), one
+  // point a side in either order, e.g. the distal surface of the last tooth to cover. The arch
+  // is cut at each point's place along it (its projection onto the occlusal plane, nearest the
+  // arch's centre line: there the cut is the plane through the point across the arch), so that
+  // no pick lies beyond it. Each point lies within 15 mm of the centre line, in the occlusal
+  // plane, and one on each half of the arch (either side of its middle); a point beyond the
+  // arch's natural end (its last occlusal surface plus overhang_mm) changes nothing.
+  bool has_distal_ends = false;
+  Vec3 distal_ends[2] = {};
 };
 
 struct OutlineReport {
@@ -59,6 +68,12 @@ struct OutlineReport {
   uint32_t survey_directions = 0;  // directions tried
   double undercut_plain_mm3 = 0;   // along the occlusal normal (surveyed only)
   double undercut_chosen_mm3 = 0;  // along the chosen direction (surveyed only)
+  // The distal ends (has_distal_ends), per point as given: its distance from the arch's
+  // centre line in the occlusal plane, and how much of the picks' span it cut at its end (mm
+  // along the arch; 0 for a point beyond the natural end).
+  bool distal_limited = false;
+  double distal_offset_mm[2] = {0, 0};
+  double distal_cut_mm[2] = {0, 0};
 };
 
 struct Outline {
@@ -78,8 +93,9 @@ uint64_t compute_outline_bound(const Mesh& maxilla, const Mesh& mandible);
 // Errors (kInvalidArgument unless said): an empty or non-finite jaw (kInvalidMesh,
 // kNonFinite), jaws that do not face each other, no occlusal surfaces found, an arch too
 // short, jaws touching or interpenetrating without has_bite_opening, jaws farther apart than
-// max_gap_mm, options out of range; kArenaExhausted; kCancelled (progress "outline").
-// On an error the arena is as it was.
+// max_gap_mm, options out of range, distal ends that are not finite, lie more than 15 mm from
+// the arch, both on one half of it or leave less than 20 mm of it; kArenaExhausted; kCancelled
+// (progress "outline"). On an error the arena is as it was.
 Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mandible,
                        const OutlineOptions& options, Outline* out);
 

@@ -180,6 +180,12 @@ void write_base(JsonWriter& w, const CaseFile& c) {
     w.add("pick_spacing_mm", o.pick_spacing_mm);
     if (o.has_bite_opening) w.add("bite_opening_mm", o.bite_opening_mm);
     if (o.survey) w.add("survey", true);
+    if (o.has_distal_ends) {
+      w.begin_array("distal_ends");
+      w.add(nullptr, o.distal_ends[0]);
+      w.add(nullptr, o.distal_ends[1]);
+      w.end_array();
+    }
     w.end_object();
   } else {
     w.add("occlusal_normal", c.occlusal_normal);

@@ -253,8 +253,9 @@ Status parse_jaws(const Reader& r, const JsonValue* jaws, CaseFile* out) {
 Status parse_auto(const Reader& r, const JsonValue& a, CaseFile* out) {
   const JsonDocument& doc = *r.doc;
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(a, JsonType::kObject, "auto"));
-  static const char* const kAutoKeys[] = {"indentation_depth_mm", "overhang_mm", "pick_spacing_mm",
-                                          "bite_opening_mm",      "survey",      nullptr};
+  static const char* const kAutoKeys[] = {
+      "indentation_depth_mm", "overhang_mm", "pick_spacing_mm", "bite_opening_mm", "survey",
+      "distal_ends",          nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(a, kAutoKeys, "\"auto\""));
   OutlineOptions& o = out->outline;
   if (const JsonValue* v = doc.member(a, "indentation_depth_mm")) {
@@ -276,6 +277,17 @@ Status parse_auto(const Reader& r, const JsonValue& a, CaseFile* out) {
       return r.fail(*v, StatusCode::kInvalidArgument, "\"survey\" must be true or false");
     }
     o.survey = v->boolean;
+  }
+  if (const JsonValue* v = doc.member(a, "distal_ends")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*v, JsonType::kArray, "distal_ends"));
+    if (v->child_count != 2) {
+      return r.fail(*v, StatusCode::kInvalidArgument,
+                    "\"distal_ends\" needs 2 points, one a side of the arch");
+    }
+    const uint32_t second = doc.at(v->first_child).next_sibling;
+    SPLINTCORE_RETURN_IF_ERROR(r.vec3(doc.at(v->first_child), "distal_ends", &o.distal_ends[0]));
+    SPLINTCORE_RETURN_IF_ERROR(r.vec3(doc.at(second), "distal_ends", &o.distal_ends[1]));
+    o.has_distal_ends = true;
   }
   out->has_auto_outline = true;
   return Status::ok();

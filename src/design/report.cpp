@@ -151,6 +151,16 @@ void write_outline(JsonWriter& w, const OutlineReport& o, const DesignReportFile
     w.add("undercut_occlusal_normal_mm3", o.undercut_plain_mm3);
     w.add("undercut_chosen_mm3", o.undercut_chosen_mm3);
   }
+  if (o.distal_limited) {  // as given, so the key is absent without the case's distal ends
+    w.begin_array("distal_ends");
+    for (int i = 0; i < 2; ++i) {
+      w.begin_object();
+      w.add("offset_mm", o.distal_offset_mm[i]);
+      w.add("cut_mm", o.distal_cut_mm[i]);
+      w.end_object();
+    }
+    w.end_array();
+  }
   w.end_object();
 }
 

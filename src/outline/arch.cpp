@@ -635,6 +635,86 @@ bool fill_gaps(double* v, size_t n, size_t stride) {
   return true;
 }
 
+// The picks' places along the arch: even steps from `start` (grid picks k = 0 .. n-1), or, cut
+// at the case's distal ends, the limit itself at each cut end and the grid picks at least half
+// a step inside it (the middle picks are the uncut run's, bit for bit).
+struct PickPlaces {
+  double start = 0, step = 0;
+  size_t first = 0, grid = 0;  // the grid picks kept: k in [first, first + grid)
+  bool cut[2] = {false, false};
+  double limit[2] = {0, 0};
+  size_t size() const { return (cut[0] ? 1 : 0) + grid + (cut[1] ? 1 : 0); }
+  double at(size_t i) const {
+    if (cut[0] && i-- == 0) return limit[0];
+    return i < grid ? start + step * static_cast<double>(first + i) : limit[1];
+  }
+};
+
+constexpr double kMaxDistalOffsetMm = 15.0;  // a distal end's distance from the centre line
+constexpr double kDistalInsideMm = 1e-6;     // the limit's pick: this inside its plane
+
+// Cuts `places` (the whole grid of n picks from start to end) at options.distal_ends: each
+// point's place s along the arch (project: the plane through it across the arch there), the
+// point on the lower half of the arch (s below the middle of [s_lo, s_hi]) cutting the start,
+// the other the end, whatever their order; a limit past the end changes nothing. At least two
+// picks stay: each uncut end's grid pick lies kMinArchMm (>= the step) from the other end.
+Status cut_distal_ends(const Polyline& arch, const Frame& f, const OutlineOptions& options,
+                       double s_lo, double s_hi, size_t n, PickPlaces* places, OutlineReport* r) {
+  if (!options.has_distal_ends) return Status::ok();
+  const double middle = 0.5 * (s_lo + s_hi);
+  const double end = places->start + places->step * static_cast<double>(n - 1);
+  double at[2];
+  for (int i = 0; i < 2; ++i) {
+    const Vec3& p = options.distal_ends[i];
+    if (!is_finite(p)) {
+      return make_error(StatusCode::kInvalidArgument, "outline: distal_ends[", i,
+                        "] is not finite (NaN or infinity)");
+    }
+    const double x = dot(p, f.e1), y = dot(p, f.e2);
+    double o, qx, qy;
+    project(arch, x, y, &at[i], &o);
+    place_at(arch, at[i], &qx, &qy);
+    const double off = std::sqrt((x - qx) * (x - qx) + (y - qy) * (y - qy));
+    if (!(off <= kMaxDistalOffsetMm)) {
+      return make_error(StatusCode::kInvalidArgument, "outline: distal_ends[", i, "] lies ", off,
+                        " mm from the arch's centre line in the occlusal plane (at most ",
+                        kMaxDistalOffsetMm, "): put it at the last tooth to cover");
+    }
+    r->distal_offset_mm[i] = off;
+  }
+  if ((at[0] < middle) == (at[1] < middle)) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "outline: distal_ends[0] and [1] lie on the same half of the arch (",
+                      at[0] - middle, " and ", at[1] - middle,
+                      " mm along it from its middle): give one point a side");
+  }
+  const int lo = at[0] < middle ? 0 : 1;  // the point that cuts the start
+  const double a = at[lo] + kDistalInsideMm, b = at[1 - lo] - kDistalInsideMm;
+  places->cut[0] = a > places->start;
+  places->cut[1] = b < end;
+  const double from = places->cut[0] ? a : places->start, to = places->cut[1] ? b : end;
+  if (!(to - from >= kMinArchMm)) {
+    return make_error(StatusCode::kInvalidArgument, "outline: the distal ends leave ", to - from,
+                      " mm of the arch (at least ", kMinArchMm, ")");
+  }
+  places->limit[0] = a;
+  places->limit[1] = b;
+  r->distal_limited = true;
+  r->distal_cut_mm[lo] = from - places->start;
+  r->distal_cut_mm[1 - lo] = end - to;
+  size_t kept = 0, first = n;
+  for (size_t k = 0; k < n; ++k) {
+    const double s = places->start + places->step * static_cast<double>(k);
+    if (places->cut[0] && s < a + 0.5 * places->step) continue;
+    if (places->cut[1] && s > b - 0.5 * places->step) continue;
+    first = std::min(first, k);
+    ++kept;
+  }
+  places->first = kept > 0 ? first : 0;
+  places->grid = kept;
+  return Status::ok();
+}
+
 }  // namespace
 
 uint64_t projector_bound() {
@@ -686,28 +766,35 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
                       " mm end to end (at least ", kMinArchMm, ")");
   }
   const double start = s_lo - options.overhang_mm, end = s_hi + options.overhang_mm;
-  const size_t n = static_cast<size_t>(std::ceil((end - start) / options.pick_spacing_mm)) + 1;
-  const double step = (end - start) / static_cast<double>(n - 1);
+  const size_t grid = static_cast<size_t>(std::ceil((end - start) / options.pick_spacing_mm)) + 1;
+  const double step = (end - start) / static_cast<double>(grid - 1);
   // The buccal side: the left normal's side if, over the picks, it faces away from the centre.
   double side = 0;
-  for (size_t i = 0; i < n; ++i) {
+  for (size_t i = 0; i < grid; ++i) {
     double x, y, lx, ly;
     point_at(arch, start + step * static_cast<double>(i), &x, &y, &lx, &ly);
     side += lx * (x - cx) + ly * (y - cy);
   }
   side = side < 0 ? -1.0 : 1.0;
-  if (n > kMaxPicks) {
+  if (grid > kMaxPicks) {
     return make_error(StatusCode::kInvalidArgument, "outline: the arch is ", end - start,
                       " mm long: more than ", kMaxPicks, " picks at ", options.pick_spacing_mm,
                       " mm apart");
   }
+  PickPlaces places;
+  places.start = start;
+  places.step = step;
+  places.grid = grid;
+  SPLINTCORE_RETURN_IF_ERROR(
+      cut_distal_ends(arch, f, options, s_lo, s_hi, grid, &places, &out->report));
+  const size_t n = places.size();
   PickData* data = arena.allocate_array<PickData>(n);
   if (data == nullptr) return arena.exhausted_status();
   Pick* up = buffers.upper;
   Pick* lo = buffers.lower;
   Vec3* line = buffers.arch;
   for (size_t i = 0; i < n; ++i) {
-    gather_pick(pts.span(), start + step * static_cast<double>(i), step, side, &data[i]);
+    gather_pick(pts.span(), places.at(i), step, side, &data[i]);
   }
   const size_t stride = sizeof(PickData) / sizeof(double);
   if (!fill_gaps(&data[0].h[0], n, stride) || !fill_gaps(&data[0].h[1], n, stride) ||
@@ -721,7 +808,7 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
   out->report.max_wafer_mm = 0;
   for (size_t i = 0; i < n; ++i) {
     double x, y, lx, ly;
-    point_at(arch, start + step * static_cast<double>(i), &x, &y, &lx, &ly);
+    point_at(arch, places.at(i), &x, &y, &lx, &ly);
     // The face: the depth below (above) the tooth under the pick, but never deeper than the
     // depth and kDeepSlackMm into any tooth within the bound's reach.
     const double top = std::min(data[i].near_h[0] + depth, data[i].h[0] + depth + kDeepSlackMm);

@@ -279,6 +279,19 @@ TEST(CaseCoverage, AutoOutlineKeys) {
       {"survey and direction",
        with_auto(R"({"survey": true})", R"("insertion_direction": [0, 0, 1],)"),
        StatusCode::kInvalidArgument, "both choose the direction"},
+      {"distal ends not an array", with_auto(R"({"distal_ends": {"x": 1}})"),
+       StatusCode::kInvalidArgument, "\"distal_ends\" must be array, not object"},
+      {"distal ends one point", with_auto(R"({"distal_ends": [[1, 2, 3]]})"),
+       StatusCode::kInvalidArgument, "\"distal_ends\" needs 2 points, one a side"},
+      {"distal ends three points",
+       with_auto(R"({"distal_ends": [[1, 2, 3], [4, 5, 6], [7, 8, 9]]})"),
+       StatusCode::kInvalidArgument, "\"distal_ends\" needs 2 points"},
+      {"distal end 0 not a point", with_auto(R"({"distal_ends": [1, [4, 5, 6]]})"),
+       StatusCode::kInvalidArgument, "\"distal_ends\" must be array, not number"},
+      {"distal end 1 short", with_auto(R"({"distal_ends": [[1, 2, 3], [4, 5]]})"),
+       StatusCode::kInvalidArgument, "\"distal_ends\" needs 3 numbers, has 2"},
+      {"distal end 1 too far", with_auto(R"({"distal_ends": [[1, 2, 3], [4, 5, 2e6]]})"),
+       StatusCode::kInvalidArgument, "\"distal_ends\" is 2e+06, outside"},
       {"neither picks nor auto", make_case("", "", "", R"("spacing_mm": 0.5)"),
        StatusCode::kInvalidArgument, "needs \"upper\" and \"lower\" pick lists, or \"auto\""},
   };
@@ -295,7 +308,8 @@ TEST(CaseCoverage, AutoOutlineKeys) {
   const std::string text =
       make_case(R"("blockout": {"voxel": 0.2},)", "", "",
                 R"("auto": {"indentation_depth_mm": 1.5, "overhang_mm": 1, "pick_spacing_mm": 5,
-                  "bite_opening_mm": 2.5, "survey": true})");
+                  "bite_opening_mm": 2.5, "survey": true,
+                  "distal_ends": [[-20.5, -7, 0.25], [21, -6.5, 0]]})");
   test::TestArena t(size_t{1} << 20);
   CaseFile c;
   SPLINTCORE_ASSERT_OK(parse_case(Context(&t.arena), text.data(), text.size(), "case.json", &c));
@@ -308,6 +322,9 @@ TEST(CaseCoverage, AutoOutlineKeys) {
   EXPECT_TRUE(c.outline.has_bite_opening);
   EXPECT_EQ(c.outline.bite_opening_mm, 2.5);
   EXPECT_TRUE(c.outline.survey);
+  EXPECT_TRUE(c.outline.has_distal_ends);
+  EXPECT_EQ(c.outline.distal_ends[0], (Vec3{-20.5, -7, 0.25}));
+  EXPECT_EQ(c.outline.distal_ends[1], (Vec3{21, -6.5, 0}));
   EXPECT_TRUE(c.upper.empty());
   // The defaults.
   const std::string plain = with_auto("{}");
@@ -316,6 +333,7 @@ TEST(CaseCoverage, AutoOutlineKeys) {
   EXPECT_EQ(c.outline.pick_spacing_mm, 3.0);
   EXPECT_FALSE(c.outline.has_bite_opening);
   EXPECT_FALSE(c.outline.survey);
+  EXPECT_FALSE(c.outline.has_distal_ends);
 }
 
 TEST(CaseCoverage, CtKeys) {

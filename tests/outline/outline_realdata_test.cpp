@@ -15,7 +15,9 @@
 
 #include "splintcore/design.h"
 #include "splintcore/distance.h"
+#include "splintcore/outline.h"
 #include "support/frame_moves.h"
+#include "support/outline_checks.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -112,8 +114,10 @@ std::vector<std::pair<int, double>> indentation(const Mesh& jaw, const std::vect
 }
 
 // Designs the case and checks the splint and each tooth's indentation (`depth` asked).
+// `untouched`: teeth the splint must not touch (beyond its distal ends).
 void design_and_measure(RealJaws& r, const CaseFile& c, double depth, const char* what, bool print,
-                        const std::vector<int>& exempt = {}) {
+                        const std::vector<int>& exempt = {},
+                        const std::vector<int>& untouched = {}) {
   Mesh splint;
   DesignReport report;
   const Status s =
@@ -133,6 +137,9 @@ void design_and_measure(RealJaws& r, const CaseFile& c, double depth, const char
     double deepest = 0;
     for (const auto& [tooth, depth_k] : d) {
       if (print) std::printf("%s: tooth %2d indented %.3f mm\n", what, tooth, depth_k);
+      if (std::find(untouched.begin(), untouched.end(), tooth) != untouched.end()) {
+        EXPECT_TRUE(std::isnan(depth_k)) << what << " tooth " << tooth << ": " << depth_k;
+      }
       // Second molar to second molar; third molars (1, 17, 32) are reported.
       if (tooth == 1 || tooth == 16 || tooth == 17 || tooth == 32) continue;
       if (std::find(exempt.begin(), exempt.end(), tooth) != exempt.end()) continue;
@@ -182,6 +189,106 @@ TEST(OutlineRealData, OpenBiteWithoutThirdMolars) {
   if (!r.ok) GTEST_SKIP() << "realdata not found";
   const CaseFile c = auto_case(r.t.arena, 2.0);
   design_and_measure(r, c, 2.0, "open bite", true, {21, 22, 23, 24, 25, 26, 27, 28});
+}
+
+// The distal surface of a real tooth: among its vertices within 4 mm of its occlusal tip
+// (along `up`, towards the other jaw), the one farthest back (against `anterior`).
+Vec3 real_distal(const RealJaws& r, int tooth, const Vec3& up, const Vec3& anterior) {
+  const int j = tooth <= 16 ? 0 : 1;
+  const double sign = j == 0 ? -1.0 : 1.0;
+  double tip = -HUGE_VAL;
+  for (size_t i = 0; i < r.jaw[j].triangles.size(); ++i) {
+    if (r.label[j][i] != tooth) continue;
+    for (uint32_t v : r.jaw[j].triangles[i].v) {
+      tip = std::max(tip, sign * dot(r.jaw[j].vertices[v], up));
+    }
+  }
+  Vec3 best{};
+  double back = HUGE_VAL;
+  for (size_t i = 0; i < r.jaw[j].triangles.size(); ++i) {
+    if (r.label[j][i] != tooth) continue;
+    for (uint32_t v : r.jaw[j].triangles[i].v) {
+      const Vec3& p = r.jaw[j].vertices[v];
+      if (sign * dot(p, up) < tip - 4 || dot(p, anterior) >= back) continue;
+      back = dot(p, anterior);
+      best = p;
+    }
+  }
+  return best;
+}
+
+// distal_ends on the real dentition (third molars 1, 17 and 32 present): limits at the distal
+// surfaces of the upper second molars (2 and 15) leave no pick beyond them, the picks between
+// are the whole outline's, the order does not matter, the limits move with the jaws, and the
+// limited splint still imprints every tooth from second molar to second molar and does not
+// touch the third molars.
+TEST(OutlineRealData, DistalEndsAtTheSecondMolars) {
+  RealJaws r;
+  if (!r.ok) GTEST_SKIP() << "realdata not found";
+  const Context ctx(&r.t.arena);
+  OutlineOptions options;
+  options.has_bite_opening = true;
+  options.bite_opening_mm = 2.0;
+  Outline whole;
+  SPLINTCORE_ASSERT_OK(compute_outline(ctx, r.jaw[0], r.jaw[1], options, &whole));
+  const Vec3 up = whole.report.occlusal_normal, front = whole.report.anterior;
+  options.has_distal_ends = true;
+  options.distal_ends[0] = real_distal(r, 15, up, front);
+  options.distal_ends[1] = real_distal(r, 2, up, front);
+  Outline cut;
+  SPLINTCORE_ASSERT_OK(compute_outline(ctx, r.jaw[0], r.jaw[1], options, &cut));
+  const size_t dropped = test::check_limited(whole, cut, options.distal_ends);
+  std::printf(
+      "real: %zu of %zu picks, cut %.3f and %.3f mm, limits %.3f and %.3f mm from the "
+      "arch\n",
+      cut.upper.size(), whole.upper.size(), cut.report.distal_cut_mm[0],
+      cut.report.distal_cut_mm[1], cut.report.distal_offset_mm[0], cut.report.distal_offset_mm[1]);
+  EXPECT_GE(dropped, 4u);  // the lower third molars (17, 32) and the upper right (1) go
+  std::swap(options.distal_ends[0], options.distal_ends[1]);
+  Outline swapped;
+  SPLINTCORE_ASSERT_OK(compute_outline(ctx, r.jaw[0], r.jaw[1], options, &swapped));
+  ASSERT_EQ(swapped.upper.size(), cut.upper.size());
+  for (size_t i = 0; i < cut.upper.size(); ++i) {
+    EXPECT_TRUE(test::same_pick(swapped.upper[i], cut.upper[i])) << i;
+    EXPECT_TRUE(test::same_pick(swapped.lower[i], cut.lower[i])) << i;
+  }
+  // Moved: the jaws (rounded to float32, as design moves them) and the points.
+  std::mt19937_64 rng(2826);
+  double worst = 0;
+  for (int draw = 0; draw < 3; ++draw) {
+    ArenaScope scope(r.t.arena);
+    const RigidTransform move = test::random_move(rng);
+    Mesh m[2];
+    for (int j = 0; j < 2; ++j) {
+      m[j].bind(&r.t.arena);
+      for (const Vec3& v : r.jaw[j].vertices) {
+        Vec3 q = move.apply_point(v);
+        round_to_float32(&q);
+        (void)m[j].vertices.push_back(q);
+      }
+      for (const Triangle& tr : r.jaw[j].triangles) (void)m[j].triangles.push_back(tr);
+    }
+    OutlineOptions moved = options;
+    for (Vec3& e : moved.distal_ends) e = move.apply_point(e);
+    Outline o;
+    SPLINTCORE_ASSERT_OK(compute_outline(ctx, m[0], m[1], moved, &o));
+    const RigidTransform undo = inverse(move);
+    ASSERT_EQ(o.upper.size(), cut.upper.size()) << draw;
+    for (size_t i = 0; i < o.upper.size(); ++i) {
+      worst =
+          std::max(worst, length(undo.apply_point(o.upper[i].position) - cut.upper[i].position));
+      worst =
+          std::max(worst, length(undo.apply_point(o.lower[i].position) - cut.lower[i].position));
+    }
+  }
+  std::printf("real, moved: picks within %.3g mm\n", worst);
+  EXPECT_LT(worst, 1e-4);
+  // The splint of the limited case imprints every tooth from second molar to second molar.
+  CaseFile c = auto_case(r.t.arena, 2.0);
+  c.outline.has_distal_ends = true;
+  c.outline.distal_ends[0] = options.distal_ends[0];
+  c.outline.distal_ends[1] = options.distal_ends[1];
+  design_and_measure(r, c, 2.0, "limited at the second molars", true, {}, {1, 17, 32});
 }
 
 // The real case moved by 10 random rigid moves gives the same splint moved: volume to 1e-6,

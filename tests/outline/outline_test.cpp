@@ -9,6 +9,8 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -19,6 +21,7 @@
 #include "splintcore/io.h"
 #include "splintcore/outline.h"
 #include "support/frame_moves.h"
+#include "support/outline_checks.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -63,6 +66,16 @@ std::string stl_sha(Arena& arena, const Mesh& m) {
   std::vector<uint8_t> bytes;
   EXPECT_TRUE(test::mesh_to_bytes(arena, m, StlFormat::kBinary, &bytes).is_ok());
   return test::sha256_hex(bytes.data(), bytes.size());
+}
+
+// The distal surface of a phantom tooth: its crown's vertex farthest towards the arch's open
+// back (-y).
+Vec3 phantom_distal(const phantom::JawMesh& jaw, const Mesh& moved, uint8_t tooth) {
+  Vec3 best{0, HUGE_VAL, 0};
+  for (size_t v = 0; v < moved.vertices.size(); ++v) {
+    if (jaw.vertex_tooth[v] == tooth && moved.vertices[v].y < best.y) best = moved.vertices[v];
+  }
+  return best;
 }
 
 TEST(Outline, PhantomArchAndPicks) {
@@ -276,8 +289,14 @@ TEST(Outline, ResolvedCaseDesignsTheSameBytes) {
   Mesh jaws[2];
   copy_mesh(p.jaw[0], t.arena, &jaws[0], RigidTransform{});
   copy_mesh(p.jaw[1], t.arena, &jaws[1], RigidTransform{});
+  // Limits at the first molars' distal surfaces: the resolved case keeps the cut picks.
+  char ends[256];
+  const Vec3 a = phantom_distal(p.jaw[0], jaws[0], 1), b = phantom_distal(p.jaw[0], jaws[0], 12);
+  std::snprintf(ends, sizeof ends,
+                "\"distal_ends\": [[%.17g, %.17g, %.17g], [%.17g, %.17g, %.17g]]", b.x, b.y, b.z,
+                a.x, a.y, a.z);
   for (const std::string& text :
-       {auto_case("", -2.0), auto_case("\"bite_opening_mm\": 2.5", 0.0),
+       {auto_case(ends, -2.0), auto_case("", -2.0), auto_case("\"bite_opening_mm\": 2.5", 0.0),
         auto_case("\"overhang_mm\": 1.5, \"pick_spacing_mm\": 5", -2.0,
                   ", \"label\": {\"text\": \"AUTO\"}, \"placement\": \"tray\"")}) {
     ArenaScope scope(t.arena);
@@ -296,6 +315,16 @@ TEST(Outline, ResolvedCaseDesignsTheSameBytes) {
       static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
       return true;
     };
+    // The auto case itself written and read back: the same options, distal ends bit for bit.
+    SPLINTCORE_ASSERT_OK(write_case(c, sink));
+    CaseFile unresolved;
+    SPLINTCORE_ASSERT_OK(parse(t.arena, written, &unresolved));
+    EXPECT_TRUE(unresolved.has_auto_outline);
+    EXPECT_EQ(unresolved.outline.has_distal_ends, c.outline.has_distal_ends);
+    for (int i = 0; i < 2; ++i)
+      EXPECT_EQ(unresolved.outline.distal_ends[i], c.outline.distal_ends[i]);
+    EXPECT_EQ(unresolved.outline.overhang_mm, c.outline.overhang_mm);
+    written.clear();
     SPLINTCORE_ASSERT_OK(write_case(resolved, sink));
     CaseFile again;
     SPLINTCORE_ASSERT_OK(parse(t.arena, written, &again));
@@ -408,6 +437,172 @@ TEST(Outline, PicksMoveWithTheJaws) {
     EXPECT_LT(dl, 3e-5) << draw;
     EXPECT_NEAR(o.report.arch_length_mm, ref.report.arch_length_mm, 3e-5) << draw;
   }
+}
+
+// distal_ends: on the phantom, limits at the distal surfaces of the second molars (the last
+// teeth: they cut the overhang) and of the first molars (they cut a tooth each side); the
+// order of the two points does not matter; limits past the arch's ends change nothing; the
+// limits move with the jaws.
+TEST(Outline, DistalEndsCutTheArch) {
+  PhantomJaws p(87000);
+  test::TestArena t{size_t{768} << 20};
+  const Context ctx(&t.arena);
+  Mesh jaws[2];
+  copy_mesh(p.jaw[0], t.arena, &jaws[0], RigidTransform{});
+  copy_mesh(p.jaw[1], t.arena, &jaws[1], RigidTransform::translation(Vec3{0, 0, -2}));
+  for (Mesh& m : jaws)
+    for (Vec3& v : m.vertices) round_to_float32(&v);
+  Outline whole;
+  SPLINTCORE_ASSERT_OK(compute_outline(ctx, jaws[0], jaws[1], OutlineOptions{}, &whole));
+  EXPECT_FALSE(whole.report.distal_limited);
+  const uint8_t kTeeth[2][2] = {{0, 13}, {1, 12}};
+  for (const auto& teeth : kTeeth) {
+    ArenaScope scope(t.arena);
+    OutlineOptions options;
+    options.has_distal_ends = true;
+    options.distal_ends[0] = phantom_distal(p.jaw[0], jaws[0], teeth[0]);
+    options.distal_ends[1] = phantom_distal(p.jaw[0], jaws[0], teeth[1]);
+    Outline cut;
+    SPLINTCORE_ASSERT_OK(compute_outline(ctx, jaws[0], jaws[1], options, &cut));
+    const size_t dropped = test::check_limited(whole, cut, options.distal_ends);
+    const OutlineReport& r = cut.report;
+    std::printf(
+        "teeth %d and %d: %zu of %zu picks, cut %.3f and %.3f mm, limits %.3f and %.3f mm "
+        "from the arch\n",
+        teeth[0], teeth[1], cut.upper.size(), whole.upper.size(), r.distal_cut_mm[0],
+        r.distal_cut_mm[1], r.distal_offset_mm[0], r.distal_offset_mm[1]);
+    for (int i = 0; i < 2; ++i) {
+      EXPECT_GT(r.distal_cut_mm[i], teeth[0] == 0 ? 0.5 : 8.0) << i;
+      EXPECT_LT(r.distal_offset_mm[i], 15.0) << i;
+    }
+    EXPECT_GE(dropped, teeth[0] == 0 ? 0u : 4u);
+    EXPECT_EQ(r.picks, cut.upper.size());
+    // The order of the points does not matter: the same picks, bit for bit.
+    std::swap(options.distal_ends[0], options.distal_ends[1]);
+    Outline swapped;
+    SPLINTCORE_ASSERT_OK(compute_outline(ctx, jaws[0], jaws[1], options, &swapped));
+    ASSERT_EQ(swapped.upper.size(), cut.upper.size());
+    for (size_t i = 0; i < cut.upper.size(); ++i) {
+      EXPECT_TRUE(test::same_pick(swapped.upper[i], cut.upper[i])) << i;
+      EXPECT_TRUE(test::same_pick(swapped.lower[i], cut.lower[i])) << i;
+    }
+    EXPECT_EQ(swapped.report.distal_cut_mm[0], r.distal_cut_mm[1]);
+    EXPECT_EQ(swapped.report.distal_offset_mm[1], r.distal_offset_mm[0]);
+  }
+  // Past the ends (6 mm beyond the last crowns, the overhang 2): nothing changes.
+  {
+    OutlineOptions options;
+    options.has_distal_ends = true;
+    options.distal_ends[0] = phantom_distal(p.jaw[0], jaws[0], 0) + Vec3{0, -6, 0};
+    options.distal_ends[1] = phantom_distal(p.jaw[0], jaws[0], 13) + Vec3{0, -6, 0};
+    Outline o;
+    SPLINTCORE_ASSERT_OK(compute_outline(ctx, jaws[0], jaws[1], options, &o));
+    EXPECT_TRUE(o.report.distal_limited);
+    EXPECT_EQ(o.report.distal_cut_mm[0], 0.0);
+    EXPECT_EQ(o.report.distal_cut_mm[1], 0.0);
+    ASSERT_EQ(o.upper.size(), whole.upper.size());
+    for (size_t i = 0; i < o.upper.size(); ++i) {
+      EXPECT_TRUE(test::same_pick(o.upper[i], whole.upper[i])) << i;
+      EXPECT_TRUE(test::same_pick(o.lower[i], whole.lower[i])) << i;
+    }
+  }
+}
+
+// The limits move with the jaws: the jaws and the points moved by a random rigid move give
+// the same picks moved (to the rounding, as PicksMoveWithTheJaws).
+TEST(Outline, DistalEndsMoveWithTheJaws) {
+  PhantomJaws p(87000);
+  test::TestArena t{size_t{768} << 20};
+  const Context ctx(&t.arena);
+  Mesh jaws[2];
+  copy_mesh(p.jaw[0], t.arena, &jaws[0], RigidTransform{});
+  copy_mesh(p.jaw[1], t.arena, &jaws[1], RigidTransform::translation(Vec3{0, 0, -2}));
+  for (Mesh& m : jaws)
+    for (Vec3& v : m.vertices) round_to_float32(&v);
+  OutlineOptions options;
+  options.has_distal_ends = true;
+  options.distal_ends[0] = phantom_distal(p.jaw[0], jaws[0], 1);
+  options.distal_ends[1] = phantom_distal(p.jaw[0], jaws[0], 12);
+  Outline ref;
+  SPLINTCORE_ASSERT_OK(compute_outline(ctx, jaws[0], jaws[1], options, &ref));
+  std::mt19937_64 rng(2801);
+  for (int draw = 0; draw < 6; ++draw) {
+    ArenaScope scope(t.arena);
+    const RigidTransform move = test::random_move(rng);
+    Mesh m[2];
+    for (int j = 0; j < 2; ++j) {
+      m[j].bind(&t.arena);
+      for (const Vec3& v : jaws[j].vertices) {
+        Vec3 q = move.apply_point(v);
+        round_to_float32(&q);
+        (void)m[j].vertices.push_back(q);
+      }
+      for (const Triangle& tr : jaws[j].triangles) (void)m[j].triangles.push_back(tr);
+    }
+    OutlineOptions moved = options;
+    for (Vec3& e : moved.distal_ends) e = move.apply_point(e);
+    Outline o;
+    SPLINTCORE_ASSERT_OK(compute_outline(ctx, m[0], m[1], moved, &o));
+    const RigidTransform undo = inverse(move);
+    double dp = 0, dd = 0, dl = 0;
+    ASSERT_EQ(o.upper.size(), ref.upper.size()) << draw;
+    for (size_t i = 0; i < o.upper.size(); ++i) {
+      dp = std::max(dp, length(undo.apply_point(o.upper[i].position) - ref.upper[i].position));
+      dp = std::max(dp, length(undo.apply_point(o.lower[i].position) - ref.lower[i].position));
+      dd = std::max(dd, length(undo.apply_vector(o.upper[i].direction) - ref.upper[i].direction));
+      dl = std::max(dl, std::fabs(o.upper[i].inner_length - ref.upper[i].inner_length));
+      dl = std::max(dl, std::fabs(o.upper[i].outside_length - ref.upper[i].outside_length));
+    }
+    EXPECT_LT(dp, 3e-5) << draw;
+    EXPECT_LT(dd, 1e-6) << draw;
+    EXPECT_LT(dl, 3e-5) << draw;
+    for (int i = 0; i < 2; ++i) {
+      EXPECT_NEAR(o.report.distal_cut_mm[i], ref.report.distal_cut_mm[i], 3e-5) << draw;
+    }
+  }
+}
+
+// The refusals of distal_ends, each naming the point and what is wrong.
+TEST(Outline, DistalEndsRefusals) {
+  PhantomJaws p(24000);
+  test::TestArena t{size_t{256} << 20};
+  const Context ctx(&t.arena);
+  Mesh jaws[2];
+  copy_mesh(p.jaw[0], t.arena, &jaws[0], RigidTransform{});
+  copy_mesh(p.jaw[1], t.arena, &jaws[1], RigidTransform::translation(Vec3{0, 0, -2}));
+  Outline whole;
+  SPLINTCORE_ASSERT_OK(compute_outline(ctx, jaws[0], jaws[1], OutlineOptions{}, &whole));
+  const Vec3 right = phantom_distal(p.jaw[0], jaws[0], 0),
+             left = phantom_distal(p.jaw[0], jaws[0], 13);
+  auto refused = [&](const Vec3& a, const Vec3& b, const std::vector<const char*>& why) {
+    OutlineOptions options;
+    options.has_distal_ends = true;
+    options.distal_ends[0] = a;
+    options.distal_ends[1] = b;
+    Outline o;
+    const size_t used = t.arena.used();
+    const Status s = compute_outline(ctx, jaws[0], jaws[1], options, &o);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << test::format(s);
+    for (const char* w : why) {
+      EXPECT_NE(std::string(s.message()).find(w), std::string::npos) << s.message();
+    }
+    EXPECT_EQ(t.arena.used(), used);
+    std::printf("refused: %s\n", s.message());
+  };
+  // 30 mm buccal of the arch (the right molar lies at +x).
+  refused(left, right + Vec3{30, 0, 0},
+          {"distal_ends[1] lies 3", "mm from the arch's centre line", "at most 15"});
+  refused(left + Vec3{-30, 0, 0}, right, {"distal_ends[0] lies 3", "at most 15"});
+  // Both on one side.
+  refused(right, right + Vec3{0, 3, 0}, {"distal_ends[0] and [1] lie on the same half"});
+  refused(left + Vec3{0, 3, 0}, left, {"same half", "give one point a side"});
+  // Not finite.
+  refused(left, Vec3{0, std::numeric_limits<double>::quiet_NaN(), 0},
+          {"distal_ends[1] is not finite"});
+  // Either side of the incisors, 12 mm apart: too little arch left.
+  const size_t mid = whole.upper.size() / 2;
+  refused(whole.upper[mid - 2].position, whole.upper[mid + 2].position,
+          {"the distal ends leave", "mm of the arch (at least 20)"});
 }
 
 // The survey: within 15 degrees of the occlusal normal, a direction with less undercut than

@@ -297,6 +297,11 @@ void Design::print_outline() const {
   }
   std::printf("arch %.1f mm, %u picks per jaw, wafer %.2f to %.2f mm thick\n", o.arch_length_mm,
               o.picks, o.min_wafer_mm, o.max_wafer_mm);
+  if (o.distal_limited) {
+    std::printf("distal ends %.2f and %.2f mm from the arch: cut %.2f and %.2f mm\n",
+                o.distal_offset_mm[0], o.distal_offset_mm[1], o.distal_cut_mm[0],
+                o.distal_cut_mm[1]);
+  }
   std::printf("wrote %s\n", resolved_path_.c_str());
 }
 
