@@ -347,6 +347,10 @@ typedef struct sc_case_params {
   double auto_pick_spacing_mm;      /* 2 .. 20: between picks along the arch */
   int auto_has_bite_opening;        /* move the mandible until the jaws are this far apart */
   double auto_bite_opening_mm;      /* 0.1 .. 10 when auto_has_bite_opening */
+  /* Where the wafer ends distally ("distal_ends"): two points (mm, case frame; finite, within
+   * 1e6), one on each half of the arch in either order; the arch is cut across at each. */
+  int auto_has_distal_ends;
+  double auto_distal_ends[2][3];
 } sc_case_params;
 
 /* Reads the case's parameters into *out. */
@@ -376,6 +380,17 @@ size_t sc_case_pick_count(const sc_case* c, int which);
  * `which` or an index out of range. No arena. */
 int sc_case_pick(const sc_case* c, int which, size_t index, double position[3], double direction[3],
                  double* inner_mm, double* outside_mm);
+/* Changes pick `index` of the case's own list (sc_case_pick's shape), e.g. of a case from
+ * sc_outline before designing it again: `position` (mm, case frame; NULL keeps it), `direction`
+ * (the line's buccal direction, used normalised; the zero vector drops it, so the base takes
+ * the pick's normal or the arch's perpendicular; NULL keeps it), both line lengths (mm,
+ * 0 .. 100). Only the pick changes: its pair in the other list stays. On error nothing
+ * changes. No arena. Errors: SC_INVALID_ARGUMENT (NULL context or case, an unknown `which`,
+ * an index out of range (an auto case has no picks until sc_outline), a position or direction
+ * that is not finite or beyond 1e6 mm, a length out of range: the message names it). */
+sc_status sc_case_set_pick(sc_context* ctx, sc_case* c, int which, size_t index,
+                           const double position[3], const double direction[3], double inner_mm,
+                           double outside_mm);
 /* The dental arch's centre line (a polyline in the occlusal plane, mm) of a case from
  * sc_outline, for display; 0 points for any other case. sc_case_arch_point returns 1, or 0 for
  * NULL or an index out of range. */
@@ -398,6 +413,9 @@ typedef struct sc_outline_report {
   double wafer_max_mm;
   uint64_t occlusal_columns_maxilla; /* occlusal cells found per jaw */
   uint64_t occlusal_columns_mandible;
+  int distal_limited;         /* the case gave distal ends (auto_has_distal_ends) */
+  double distal_offset_mm[2]; /* per point as given: its distance from the arch's centre line */
+  double distal_cut_mm[2];    /* and how much of the picks' span it cut (0: beyond the end) */
 } sc_outline_report;
 
 /* The automatic outline of an auto case (resolve_case_outline of design.h): `jaws` are the

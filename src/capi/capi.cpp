@@ -5,6 +5,7 @@
 // is kept in the caller's context.
 #include "splintcore/splintcore.h"
 
+#include <cmath>
 #include <new>
 
 #include "splintcore/blockout.h"
@@ -177,16 +178,27 @@ constexpr size_t kMaxOperationMeshes = 8;
 
 // The case file's ranges (case_numbers(), design.h), so a set case is one a file could say.
 // `key`: the number's place in the case file; `voxel`: the blockout voxel (per-voxel ranges).
-Status check_range(const char* name, double value, const char* key, double voxel = 0) {
+// `value` in the case file's range for `key`; errors name `function` and `name`.
+Status check_range_of(const char* function, const char* name, double value, const char* key,
+                      double voxel) {
   const CaseNumber* n = find_case_number(key);
   SPLINTCORE_ASSERT(n != nullptr);
   double lo = 0, hi = 0;
   case_number_range(*n, voxel, &lo, &hi);
   if (!(value >= lo && value <= hi)) {  // NaN fails too
-    return make_error(StatusCode::kInvalidArgument, "sc_case_set_params: ", name, " is ", value,
+    return make_error(StatusCode::kInvalidArgument, function, ": ", name, " is ", value,
                       ", must be in [", lo, ", ", hi, "]");
   }
   return Status::ok();
+}
+
+Status check_range(const char* name, double value, const char* key, double voxel = 0) {
+  return check_range_of("sc_case_set_params", name, value, key, voxel);
+}
+
+// A point as the case file takes it: every coordinate finite and within 1e6 mm.
+bool in_case_range(const Vec3& p) {
+  return std::fabs(p.x) <= 1e6 && std::fabs(p.y) <= 1e6 && std::fabs(p.z) <= 1e6;  // NaN fails
 }
 
 // The automatic outline's options (checked when auto_outline is set).
@@ -200,6 +212,12 @@ Status check_auto_params(const sc_case_params& p) {
   if (p.auto_has_bite_opening != 0) {
     SPLINTCORE_RETURN_IF_ERROR(
         check_range("auto_bite_opening_mm", p.auto_bite_opening_mm, "base.auto.bite_opening_mm"));
+  }
+  for (int i = 0; i < 2 && p.auto_has_distal_ends != 0; ++i) {
+    if (!in_case_range(vec(p.auto_distal_ends[i]))) {
+      return make_error(StatusCode::kInvalidArgument, "sc_case_set_params: auto_distal_ends[", i,
+                        "] must be finite and within 1e6 mm");
+    }
   }
   return Status::ok();
 }
@@ -276,6 +294,11 @@ void copy_outline_report(const OutlineReport& o, sc_outline_report* out) {
   out->wafer_max_mm = o.max_wafer_mm;
   out->occlusal_columns_maxilla = o.cells_upper;
   out->occlusal_columns_mandible = o.cells_lower;
+  out->distal_limited = o.distal_limited ? 1 : 0;
+  for (int i = 0; i < 2; ++i) {
+    out->distal_offset_mm[i] = o.distal_offset_mm[i];
+    out->distal_cut_mm[i] = o.distal_cut_mm[i];
+  }
 }
 
 }  // namespace
@@ -741,6 +764,8 @@ sc_status sc_case_get_params(sc_context* ctx, const sc_case* c, sc_case_params* 
   out->auto_pick_spacing_mm = f.outline.pick_spacing_mm;
   out->auto_has_bite_opening = f.outline.has_bite_opening ? 1 : 0;
   out->auto_bite_opening_mm = f.outline.bite_opening_mm;
+  out->auto_has_distal_ends = f.outline.has_distal_ends ? 1 : 0;
+  for (int i = 0; i < 2; ++i) put(f.outline.distal_ends[i], out->auto_distal_ends[i]);
   return keep(ctx, Status::ok());
 }
 
@@ -776,6 +801,11 @@ sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* 
     f.outline.pick_spacing_mm = params->auto_pick_spacing_mm;
     f.outline.has_bite_opening = params->auto_has_bite_opening != 0;
     f.outline.bite_opening_mm = f.outline.has_bite_opening ? params->auto_bite_opening_mm : 0;
+    f.outline.has_distal_ends = params->auto_has_distal_ends != 0;
+    for (int i = 0; i < 2; ++i) {
+      f.outline.distal_ends[i] =
+          f.outline.has_distal_ends ? vec(params->auto_distal_ends[i]) : Vec3{};
+    }
   }
   return keep(ctx, Status::ok());
 }
@@ -802,6 +832,41 @@ int sc_case_pick(const sc_case* c, int which, size_t index, double position[3], 
   if (inner_mm != nullptr) *inner_mm = p.inner_length;
   if (outside_mm != nullptr) *outside_mm = p.outside_length;
   return 1;
+}
+
+sc_status sc_case_set_pick(sc_context* ctx, sc_case* c, int which, size_t index,
+                           const double position[3], const double direction[3], double inner_mm,
+                           double outside_mm) {
+  if (ctx == nullptr || c == nullptr) return null_argument(ctx, "sc_case_set_pick", "the case");
+  const Span<const Pick>* picks = case_picks(c, which);
+  if (picks == nullptr) {
+    return keep(ctx, make_error(StatusCode::kInvalidArgument, "sc_case_set_pick: `which` is ",
+                                which, ", must be SC_PICKS_UPPER (0) or SC_PICKS_LOWER (1)"));
+  }
+  if (index >= picks->size()) {
+    return keep(ctx, make_error(StatusCode::kInvalidArgument, "sc_case_set_pick: index ", index,
+                                " is out of range: the list has ", picks->size(),
+                                " picks (an auto case has none until sc_outline)"));
+  }
+  Pick p = (*picks)[index];
+  if (position != nullptr) p.position = vec(position);
+  if (direction != nullptr) p.direction = vec(direction);
+  if (!in_case_range(p.position) || !in_case_range(p.direction)) {
+    return keep(ctx, make_error(StatusCode::kInvalidArgument, "sc_case_set_pick: the ",
+                                in_case_range(p.position) ? "direction" : "position",
+                                " must be finite and within 1e6 mm"));
+  }
+  Status s = check_range_of("sc_case_set_pick", "inner_mm", inner_mm, "pick.inner_length_mm", 0);
+  if (s.is_ok()) {
+    s = check_range_of("sc_case_set_pick", "outside_mm", outside_mm, "pick.outside_length_mm", 0);
+  }
+  if (!s.is_ok()) return keep(ctx, s);
+  p.inner_length = inner_mm;
+  p.outside_length = outside_mm;
+  // The lists are the case's own (its parse or sc_outline allocated them, writable): only the
+  // view is const.
+  const_cast<Pick*>(picks->data())[index] = p;
+  return keep(ctx, Status::ok());
 }
 
 size_t sc_case_arch_count(const sc_case* c) { return c == nullptr ? 0 : c->arch.size(); }

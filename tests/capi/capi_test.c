@@ -830,7 +830,120 @@ static void test_auto_params(sc_context* ctx, sc_case* c) {
   CHECK_OK(ctx, sc_case_set_params(ctx, c, &q));
   CHECK_OK(ctx, sc_case_get_params(ctx, c, &q));
   CHECK(q.auto_overhang_mm == 1.5);
+  /* Distal ends: refused when not finite, kept as given. */
+  CHECK(p.auto_has_distal_ends == 0);
+  q = p;
+  q.auto_has_distal_ends = 1;
+  q.auto_distal_ends[0][0] = 20;
+  q.auto_distal_ends[1][1] = strtod("nan", NULL);
+  CHECK(sc_case_set_params(ctx, c, &q) == SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "auto_distal_ends[1] must be finite"));
+  q.auto_distal_ends[1][1] = -6.5;
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &q));
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &q));
+  CHECK(q.auto_has_distal_ends == 1 && q.auto_distal_ends[0][0] == 20);
+  CHECK(q.auto_distal_ends[1][1] == -6.5);
   CHECK_OK(ctx, sc_case_set_params(ctx, c, &p));
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &q));
+  CHECK(q.auto_has_distal_ends == 0);
+}
+
+static int near(double a, double b) { return a - b < 1e-4 && b - a < 1e-4; }
+
+/* Distal ends through the C API: the resolved case's third and third-last upper picks as the
+ * limits give fewer picks, the first and last at the limits, and the report says so. */
+static void test_outline_distal_ends(sc_context* ctx, sc_case* c, const sc_case* resolved,
+                                     const sc_mesh* const* jaws) {
+  sc_case_params p, q;
+  sc_case* limited = NULL;
+  sc_outline_report r;
+  const size_t n = sc_case_pick_count(resolved, SC_PICKS_UPPER);
+  double first[3], last[3];
+  if (n < 8) return;
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &p));
+  q = p;
+  q.auto_has_distal_ends = 1;
+  sc_case_pick(resolved, SC_PICKS_UPPER, n - 3, q.auto_distal_ends[0], NULL, NULL, NULL);
+  sc_case_pick(resolved, SC_PICKS_UPPER, 2, q.auto_distal_ends[1], NULL, NULL, NULL);
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &q));
+  CHECK_OK(ctx, sc_outline(ctx, c, jaws, 2, &limited, &r));
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &p));
+  if (limited == NULL) return;
+  CHECK(r.distal_limited == 1 && r.picks == sc_case_pick_count(limited, SC_PICKS_UPPER));
+  CHECK(r.picks + 4 <= n && r.picks + 6 >= n);
+  CHECK(r.distal_cut_mm[0] > 3 && r.distal_cut_mm[1] > 3);
+  CHECK(r.distal_offset_mm[0] < 1e-6 && r.distal_offset_mm[1] < 1e-6);
+  sc_case_pick(limited, SC_PICKS_UPPER, 0, first, NULL, NULL, NULL);
+  sc_case_pick(limited, SC_PICKS_UPPER, r.picks - 1, last, NULL, NULL, NULL);
+  CHECK(near(first[0], q.auto_distal_ends[1][0]) && near(first[1], q.auto_distal_ends[1][1]));
+  CHECK(near(last[0], q.auto_distal_ends[0][0]) && near(last[1], q.auto_distal_ends[0][1]));
+  printf("outline with distal ends: %u of %u picks, cut %.3f and %.3f mm\n", r.picks, (unsigned)n,
+         r.distal_cut_mm[0], r.distal_cut_mm[1]);
+}
+
+/* sc_case_set_pick: every refusal leaves the pick as it was; an edited pick gives another
+ * splint, and setting it back the same bytes as before. */
+static void test_set_pick(sc_context* ctx, sc_case* resolved, const sc_mesh* const* jaws,
+                          const char* h_resolved) {
+  const size_t n = sc_case_pick_count(resolved, SC_PICKS_UPPER), k = n / 2;
+  double pos[3], dir[3], inner = 0, outside = 0, pos2[3], dir2[3], inner2 = 0, outside2 = 0;
+  double moved[3], nan3[3];
+  const double nan = strtod("nan", NULL);
+  char text[512], h_edited[65], h_back[65];
+  sc_mesh* splint = NULL;
+  int i;
+  if (n < 3) return;
+  CHECK(sc_case_pick(resolved, SC_PICKS_UPPER, k, pos, dir, &inner, &outside) == 1);
+  for (i = 0; i < 3; ++i) {
+    moved[i] = pos[i] + 0.5 * dir[i];
+    nan3[i] = i == 1 ? nan : pos[i];
+  }
+  CHECK(sc_case_set_pick(ctx, resolved, SC_PICKS_UPPER, n, pos, dir, inner, outside) ==
+        SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "sc_case_set_pick: index") && contains(text, "out of range"));
+  CHECK(sc_case_set_pick(ctx, resolved, 7, 0, pos, dir, inner, outside) == SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "`which` is 7"));
+  CHECK(sc_case_set_pick(ctx, resolved, SC_PICKS_UPPER, k, nan3, dir, inner, outside) ==
+        SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "the position must be finite"));
+  CHECK(sc_case_set_pick(ctx, resolved, SC_PICKS_UPPER, k, pos, nan3, inner, outside) ==
+        SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "the direction must be finite"));
+  CHECK(sc_case_set_pick(ctx, resolved, SC_PICKS_UPPER, k, NULL, NULL, nan, outside) ==
+        SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "sc_case_set_pick: inner_mm is nan"));
+  CHECK(sc_case_set_pick(ctx, resolved, SC_PICKS_UPPER, k, NULL, NULL, inner, 101) ==
+        SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "outside_mm is 101, must be in [0, 100]"));
+  CHECK(sc_case_set_pick(NULL, resolved, SC_PICKS_UPPER, k, pos, dir, inner, outside) != SC_OK);
+  CHECK(sc_case_set_pick(ctx, NULL, SC_PICKS_UPPER, k, pos, dir, inner, outside) ==
+        SC_INVALID_ARGUMENT);
+  CHECK(sc_case_pick(resolved, SC_PICKS_UPPER, k, pos2, dir2, &inner2, &outside2) == 1);
+  CHECK(memcmp(pos, pos2, sizeof pos) == 0 && memcmp(dir, dir2, sizeof dir) == 0);
+  CHECK(inner == inner2 && outside == outside2);
+  /* An edit: 0.5 mm buccal, a longer inner line; read back as set. */
+  CHECK_OK(ctx,
+           sc_case_set_pick(ctx, resolved, SC_PICKS_UPPER, k, moved, NULL, inner + 1, outside));
+  CHECK(sc_case_pick(resolved, SC_PICKS_UPPER, k, pos2, dir2, &inner2, &outside2) == 1);
+  CHECK(memcmp(moved, pos2, sizeof moved) == 0 && memcmp(dir, dir2, sizeof dir) == 0);
+  CHECK(inner2 == inner + 1 && outside2 == outside);
+  CHECK_OK(ctx, sc_design(ctx, resolved, jaws, 2, &splint, NULL));
+  if (splint != NULL) splint_hash(ctx, splint, h_edited);
+  CHECK(splint != NULL && strcmp(h_edited, h_resolved) != 0);
+  /* Set back: the same bytes as before. */
+  splint = NULL;
+  CHECK_OK(ctx, sc_case_set_pick(ctx, resolved, SC_PICKS_UPPER, k, pos, dir, inner, outside));
+  CHECK_OK(ctx, sc_design(ctx, resolved, jaws, 2, &splint, NULL));
+  if (splint != NULL) splint_hash(ctx, splint, h_back);
+  CHECK(splint != NULL && strcmp(h_back, h_resolved) == 0);
+  printf("set pick %u: edited splint %.12s..., set back %.12s...\n", (unsigned)k, h_edited, h_back);
 }
 
 /* The resolved case's picks and arch, and the case written and read back with the same picks. */
@@ -921,6 +1034,7 @@ static void test_outline(const char* jaws_dir) {
   CHECK(r.jaws_intersect == 0 && r.opened == 0 && r.gap_as_given_mm > 0);
   CHECK(r.arch_length_mm > 20 && r.wafer_min_mm > 0 && r.wafer_max_mm >= r.wafer_min_mm);
   CHECK(r.occlusal_columns_maxilla > 0 && r.occlusal_columns_mandible > 0);
+  CHECK(r.distal_limited == 0);
   printf("outline: %u picks per jaw, arch %.2f mm, wafer %.3f..%.3f mm, gap %.3f mm\n", r.picks,
          r.arch_length_mm, r.wafer_min_mm, r.wafer_max_mm, r.gap_as_given_mm);
   {
@@ -945,6 +1059,8 @@ static void test_outline(const char* jaws_dir) {
   CHECK(d.outlined == 0);
   if (resolved_splint != NULL) splint_hash(f.ctx, resolved_splint, h_resolved);
   CHECK(resolved_splint != NULL && strcmp(h_auto, h_resolved) == 0);
+  if (resolved_splint != NULL) test_set_pick(f.ctx, resolved, jaws, h_resolved);
+  test_outline_distal_ends(f.ctx, c, resolved, jaws);
   if (reread != NULL) {
     CHECK_OK(f.ctx, sc_design(f.ctx, reread, jaws, 2, &reread_splint, NULL));
     if (reread_splint != NULL) splint_hash(f.ctx, reread_splint, h_reread);
