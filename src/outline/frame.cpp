@@ -133,15 +133,18 @@ void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Gr
     g->h[jaw][i] = none;
     g->tip[jaw][i] = kNoTip;
   }
+  // Without a branch on the comparison (which follows no pattern): both slots written always.
+  double* heights = g->h[jaw];
+  uint32_t* tips = g->tip[jaw];
+  const double sign = jaw == 0 ? 1.0 : -1.0;  // jaw 1: h > best as -h < -best
   for (size_t k = 0; k < m.vertices.size(); ++k) {
     const Vec3 p = m.vertices[k] + offset;
     const size_t cell = g->cell_of(dot(p, f.e1), dot(p, f.e2));
     const double h = dot(p, f.n);
-    double& best = g->h[jaw][cell];
-    if (jaw == 0 ? h < best : h > best) {
-      best = h;
-      g->tip[jaw][cell] = static_cast<uint32_t>(k);
-    }
+    const double best = heights[cell];
+    const bool better = sign * h < sign * best;
+    heights[cell] = better ? h : best;
+    tips[cell] = better ? static_cast<uint32_t>(k) : tips[cell];
   }
 }
 
