@@ -236,6 +236,32 @@ uint64_t mesh_pair_distance_bound(const DistanceIndex& a, const DistanceIndex& b
 Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
                           const Vec3& offset_b, double max_distance, MeshPairDistance* out);
 
+// A triangle of A and one of B.
+struct TrianglePairIds {
+  uint32_t a = 0, b = 0;
+};
+
+// mesh_pair_distance(ctx, a, b, offset_b, max_distance, out), and every triangle pair whose
+// distance may be at most max_distance (all those whose computed distance is, in traversal
+// order) into `pairs`: their number in *count, or pairs.size() + 1 when they do not fit (then
+// `pairs` holds a part only). B moved along a unit direction by at most m from offset_b
+// changes every pair's distance by at most m, so while the closest distance found plus 2 m
+// stays below max_distance, candidate_pair_distance() over the pairs gives mesh_pair_distance's
+// answer. Slower than mesh_pair_distance (every pair within max_distance is examined). Arena,
+// errors: as mesh_pair_distance.
+Status mesh_pair_distance_collect(const Context& ctx, const DistanceIndex& a,
+                                  const DistanceIndex& b, const Vec3& offset_b,
+                                  double max_distance, Span<TrianglePairIds> pairs, size_t* count,
+                                  MeshPairDistance* out);
+
+// The least (squared distance, triangle_a, triangle_b) over the given pairs only, B moved by
+// offset_b, with mesh_pair_distance's bits (its distance, points and intersecting flag for
+// that pair). No arena. Errors: kInvalidArgument (offset not finite, a pair's triangle out of
+// range).
+Status candidate_pair_distance(const DistanceIndex& a, const DistanceIndex& b,
+                               Span<const TrianglePairIds> pairs, const Vec3& offset_b,
+                               MeshPairDistance* out);
+
 // ---------------------------------------------------------------------------------------------
 // Narrow-band signed distance volume, sampled slab by slab for the tiled marching cubes.
 

@@ -223,6 +223,11 @@ struct PairSearch {
   // Bounds the rounding of a computed separation along a triangle's normal (see separation());
   // +inf when the coordinates are so large that the products could overflow: no such test.
   double separation_margin = HUGE_VAL;
+  // Collecting (mesh_pair_distance_collect): the reach stays that of the limit, and every pair
+  // not pruned by it and within it goes to `collected` (counted past its capacity).
+  bool collecting = false;
+  TrianglePairIds* collected = nullptr;
+  size_t collect_capacity = 0, collect_count = 0;
 
   // reach2 from best2: a pair of boxes whose computed distance is at most reach may hold a
   // pair whose computed distance is at most best. Box gaps round by a few ulps; a triangle
@@ -230,6 +235,7 @@ struct PairSearch {
   // few ulps of the coordinates): 2^-19 relative and 2^-30 (|x|_max + 1) absolute cover both
   // with a wide berth, and prune nothing that matters.
   void update_reach() {
+    if (collecting) return;
     if (!(best2 < HUGE_VAL)) {
       reach2 = reach = HUGE_VAL;
       return;
@@ -252,6 +258,7 @@ struct PairSearch {
   }
 
   void consider(uint32_t ta, uint32_t tb, const TriangleBox& x, const TriangleBox& y);
+  void collect(uint32_t ta, uint32_t tb, const TriangleBox& x, const TriangleBox& y);
   void leaf_pair(const PairEntry& e);
   uint32_t children(const PairEntry& e, PairEntry found_pairs[16]) const;
   bool depth_first(const PairEntry& first);
@@ -266,6 +273,10 @@ inline bool pair_less(uint32_t a0, uint32_t b0, uint32_t a1, uint32_t b1) {
 
 // Triangle ta of A against tb of B (moved), boxes within reach.
 void PairSearch::consider(uint32_t ta, uint32_t tb, const TriangleBox& x, const TriangleBox& y) {
+  if (collecting) {
+    collect(ta, tb, x, y);
+    return;
+  }
   const bool smaller = !found || pair_less(ta, tb, best_a, best_b);
   // At distance 0 only a smaller pair can win (and only by meeting or by a distance of 0).
   if (best2 == 0 && !smaller) return;
@@ -296,6 +307,35 @@ void PairSearch::consider(uint32_t ta, uint32_t tb, const TriangleBox& x, const 
     best_a = ta;
     best_b = tb;
     update_reach();
+  }
+}
+
+// consider() with the reach fixed: the pair's key (0 when the triangles meet, else the
+// computed squared distance) in full, the pair kept when within reach, and the best by
+// (key, ta, tb) as consider() would leave it.
+void PairSearch::collect(uint32_t ta, uint32_t tb, const TriangleBox& x, const TriangleBox& y) {
+  if (separation(x.p, y.p) - separation_margin > reach ||
+      separation(y.p, x.p) - separation_margin > reach) {
+    return;
+  }
+  const bool boxes_meet = x.lo.x <= y.hi.x && y.lo.x <= x.hi.x && x.lo.y <= y.hi.y &&
+                          y.lo.y <= x.hi.y && x.lo.z <= y.hi.z && y.lo.z <= x.hi.z;
+  const bool meets = boxes_meet && triangles_meet(x.p, y.p);
+  double d2 = 0;
+  if (!meets) {
+    Vec3 pa, pb;
+    d2 = separated_pair_d2(x.p, y.p, &pa, &pb);
+    if (d2 > reach2) return;
+  }
+  if (collect_count < collect_capacity) collected[collect_count] = TrianglePairIds{ta, tb};
+  if (collect_count <= collect_capacity) ++collect_count;
+  const bool smaller = !found || pair_less(ta, tb, best_a, best_b);
+  if (d2 < best2 || (d2 == best2 && smaller)) {
+    best2 = d2;
+    found = true;
+    meet = meets;
+    best_a = ta;
+    best_b = tb;
   }
 }
 
@@ -513,10 +553,12 @@ uint64_t mesh_pair_distance_bound(const DistanceIndex& a, const DistanceIndex& b
          arena_array_bound<PairEntry>(kHeapEntries);
 }
 
-Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
-                          const Vec3& offset_b, double max_distance, MeshPairDistance* out) {
-  *out = MeshPairDistance{};
-  out->distance = HUGE_VAL;
+namespace {
+
+// The checks and the search's set-up common to the entry points (no arena taken); *empty when
+// a mesh has no triangle (no search: nothing is within any distance).
+Status start_search(const DistanceIndex& a, const DistanceIndex& b, const Vec3& offset_b,
+                    double max_distance, PairSearch* s, bool* empty) {
   if (!is_finite(offset_b)) {
     return Status::error(StatusCode::kInvalidArgument, "mesh pair distance: offset not finite");
   }
@@ -524,25 +566,92 @@ Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const Dist
     return Status::error(StatusCode::kInvalidArgument,
                          "mesh pair distance: max_distance must be >= 0 (+inf for no limit)");
   }
-  if (a.mesh->triangles.size() == 0 || b.mesh->triangles.size() == 0) return Status::ok();
-  ArenaScope scope(*ctx.arena);
-  PairSearch s;
-  s.capacity = stack_entries(a, b);
-  s.stack = ctx.arena->allocate_array<PairEntry>(static_cast<size_t>(s.capacity));
-  s.heap = ctx.arena->allocate_array<PairEntry>(kHeapEntries);
-  if (s.stack == nullptr || s.heap == nullptr) return ctx.arena->exhausted_status();
-  s.index[0] = &a;
-  s.index[1] = &b;
-  s.shift[1] = offset_b;
-  const double ma = root_magnitude(a, s.shift[0]), mb = root_magnitude(b, s.shift[1]);
+  *empty = a.mesh->triangles.size() == 0 || b.mesh->triangles.size() == 0;
+  if (*empty) return Status::ok();
+  s->index[0] = &a;
+  s->index[1] = &b;
+  s->shift[1] = offset_b;
+  const double ma = root_magnitude(a, s->shift[0]), mb = root_magnitude(b, s->shift[1]);
   const double magnitude = ma > mb ? ma : mb;
-  s.slack = (magnitude + 1.0) * 0x1p-30;
-  if (magnitude <= 0x1p200) s.separation_margin = (magnitude + 1.0) * 0x1p-40;
-  s.best2 = max_distance * max_distance;
-  s.update_reach();
-  if (!s.run()) {
+  s->slack = (magnitude + 1.0) * 0x1p-30;
+  if (magnitude <= 0x1p200) s->separation_margin = (magnitude + 1.0) * 0x1p-40;
+  s->best2 = max_distance * max_distance;
+  s->update_reach();
+  return Status::ok();
+}
+
+// The traversal with its stack and heap in the arena (returned), then the answer.
+Status run_search(const Context& ctx, PairSearch* s, MeshPairDistance* out) {
+  ArenaScope scope(*ctx.arena);
+  s->capacity = stack_entries(*s->index[0], *s->index[1]);
+  s->stack = ctx.arena->allocate_array<PairEntry>(static_cast<size_t>(s->capacity));
+  s->heap = ctx.arena->allocate_array<PairEntry>(kHeapEntries);
+  if (s->stack == nullptr || s->heap == nullptr) return ctx.arena->exhausted_status();
+  if (!s->run()) {
     return Status::error(StatusCode::kInternal,
                          "mesh pair distance: the index's depth does not match its tree");
+  }
+  if (s->found) finish(*s, out);
+  return Status::ok();
+}
+
+}  // namespace
+
+Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
+                          const Vec3& offset_b, double max_distance, MeshPairDistance* out) {
+  *out = MeshPairDistance{};
+  out->distance = HUGE_VAL;
+  PairSearch s;
+  bool empty = false;
+  SPLINTCORE_RETURN_IF_ERROR(start_search(a, b, offset_b, max_distance, &s, &empty));
+  if (empty) return Status::ok();
+  return run_search(ctx, &s, out);
+}
+
+Status mesh_pair_distance_collect(const Context& ctx, const DistanceIndex& a,
+                                  const DistanceIndex& b, const Vec3& offset_b,
+                                  double max_distance, Span<TrianglePairIds> pairs, size_t* count,
+                                  MeshPairDistance* out) {
+  *out = MeshPairDistance{};
+  out->distance = HUGE_VAL;
+  *count = 0;
+  PairSearch s;
+  bool empty = false;
+  SPLINTCORE_RETURN_IF_ERROR(start_search(a, b, offset_b, max_distance, &s, &empty));
+  if (empty) return Status::ok();
+  s.collecting = true;
+  s.collected = pairs.data();
+  s.collect_capacity = pairs.size();
+  SPLINTCORE_RETURN_IF_ERROR(run_search(ctx, &s, out));
+  *count = s.collect_count;
+  return Status::ok();
+}
+
+Status candidate_pair_distance(const DistanceIndex& a, const DistanceIndex& b,
+                               Span<const TrianglePairIds> pairs, const Vec3& offset_b,
+                               MeshPairDistance* out) {
+  *out = MeshPairDistance{};
+  out->distance = HUGE_VAL;
+  PairSearch s;
+  bool empty = false;
+  SPLINTCORE_RETURN_IF_ERROR(start_search(a, b, offset_b, HUGE_VAL, &s, &empty));
+  if (empty) return Status::ok();
+  const size_t na = a.mesh->triangles.size(), nb = b.mesh->triangles.size();
+  TriangleBox x, y;
+  uint32_t loaded_a = ~uint32_t{0};
+  for (const TrianglePairIds& p : pairs) {
+    if (p.a >= na || p.b >= nb) {
+      return Status::error(StatusCode::kInvalidArgument,
+                           "candidate pair distance: a pair's triangle is out of range");
+    }
+    if (p.a != loaded_a) {
+      load_triangle(*a.mesh, p.a, s.shift[0], &x);
+      loaded_a = p.a;
+    }
+    load_triangle(*b.mesh, p.b, s.shift[1], &y);
+    const double lo[3] = {y.lo.x, y.lo.y, y.lo.z}, hi[3] = {y.hi.x, y.hi.y, y.hi.z};
+    if (box_gap2(x.lo, x.hi, lo, hi) > s.reach2) continue;
+    s.consider(p.a, p.b, x, y);
   }
   if (s.found) finish(s, out);
   return Status::ok();

@@ -98,6 +98,8 @@ struct Projector {
   uint32_t* entries = nullptr;
   double* box = nullptr;    // per segment: x_lo, x_hi, y_lo, y_hi
   double* reach = nullptr;  // per segment: segment_reach
+  uint32_t* seen = nullptr;  // per segment: the last query that took it as a candidate
+  uint32_t query = 0;
   size_t hint = 0;
   bool gridded = false;
 
@@ -131,7 +133,11 @@ Status make_projector(Arena& arena, const Polyline& p, Projector* out) {
   const size_t segments = p.n - 1;
   g.box = arena.allocate_array<double>(4 * segments);
   g.reach = arena.allocate_array<double>(segments);
-  if (g.box == nullptr || g.reach == nullptr) return arena.exhausted_status();
+  g.seen = arena.allocate_array<uint32_t>(segments);
+  if (g.box == nullptr || g.reach == nullptr || g.seen == nullptr) {
+    return arena.exhausted_status();
+  }
+  std::fill(g.seen, g.seen + segments, 0u);
   double x_lo = HUGE_VAL, x_hi = -HUGE_VAL, y_lo = HUGE_VAL, y_hi = -HUGE_VAL;
   for (size_t k = 0; k < segments; ++k) {
     double* b = g.box + 4 * k;
@@ -187,31 +193,35 @@ Status make_projector(Arena& arena, const Polyline& p, Projector* out) {
   return Status::ok();
 }
 
-// The segments within reach r of (px, py) by their boxes, sorted, in `out`; false when more
-// than kProjectorCandidates or more cells than the grid's.
-bool near_segments(const Projector& g, double px, double py, double r, uint32_t* out,
-                   size_t* count) {
+// The segments within reach r of (px, py) by their boxes, each once (in no particular order),
+// in `out`; false when more than kProjectorCandidates or more cells than the grid's.
+bool near_segments(Projector& g, double px, double py, double r, uint32_t* out, size_t* count) {
   uint32_t ix0, ix1, iy0, iy1;
   g.cell_range(px - r, px + r, g.x0, g.nx, &ix0, &ix1);
   g.cell_range(py - r, py + r, g.y0, g.ny, &iy0, &iy1);
   if (static_cast<size_t>(ix1 - ix0 + 1) * (iy1 - iy0 + 1) > kProjectorCells) return false;
+  if (++g.query == 0) {  // wrapped: start the marks afresh
+    std::fill(g.seen, g.seen + (g.line->n - 1), 0u);
+    g.query = 1;
+  }
   size_t n = 0;
   for (uint32_t iy = iy0; iy <= iy1; ++iy) {
     for (uint32_t ix = ix0; ix <= ix1; ++ix) {
       const size_t cell = static_cast<size_t>(iy) * g.nx + ix;
       for (uint32_t e = g.start[cell]; e < g.start[cell + 1]; ++e) {
         const uint32_t k = g.entries[e];
+        if (g.seen[k] == g.query) continue;
         const double* b = g.box + 4 * k;
         const double ex = std::max(0.0, std::max(b[0] - px, px - b[1]));
         const double ey = std::max(0.0, std::max(b[2] - py, py - b[3]));
         if (ex * ex + ey * ey > r * r) continue;
         if (n == kProjectorCandidates) return false;
+        g.seen[k] = g.query;
         out[n++] = k;
       }
     }
   }
-  std::sort(out, out + n);
-  *count = static_cast<size_t>(std::unique(out, out + n) - out);
+  *count = n;
   return true;
 }
 
@@ -221,13 +231,14 @@ void project_fast(Projector& g, double px, double py, double* s, double* o) {
   uint32_t near[kProjectorCandidates];
   size_t count = 0;
   double t, qx, qy;
-  // A bound on the nearest distance: the nearest start point of the guess's segment and of the
-  // segments in the point's own cell (their nearest points lie no farther).
+  // A bound on the nearest distance: the guess's segment's (the previous point's nearest: a
+  // jaw's vertices come tooth by tooth) and the nearest start point of the segments in the
+  // point's own cell (their nearest points lie no farther).
   const size_t guess = g.hint < p.n - 1 ? g.hint : 0;
   auto start_d2 = [&](size_t k) {
     return (px - p.x[k]) * (px - p.x[k]) + (py - p.y[k]) * (py - p.y[k]);
   };
-  double first = start_d2(guess);
+  double first = segment_nearest(p, guess, g.reach[guess], px, py, &t, &qx, &qy);
   if (g.gridded) {
     uint32_t ix, iy, unused;
     g.cell_range(px, px, g.x0, g.nx, &ix, &unused);
@@ -242,11 +253,12 @@ void project_fast(Projector& g, double px, double py, double* s, double* o) {
     project(p, px, py, s, o);
     return;
   }
+  // The least distance, the first segment in index order among equal ones (as project()).
   double best = HUGE_VAL;
   size_t best_k = guess;
   for (size_t i = 0; i < count; ++i) {
     const double d2 = segment_nearest(p, near[i], g.reach[near[i]], px, py, &t, &qx, &qy);
-    if (d2 < best) {
+    if (d2 < best || (d2 == best && near[i] < best_k)) {
       best = d2;
       best_k = near[i];
     }
@@ -720,6 +732,7 @@ Status cut_distal_ends(const Polyline& arch, const Frame& f, const OutlineOption
 uint64_t projector_bound() {
   const size_t segments = std::max<size_t>(kSectors, kMaxArchPoints);
   return arena_array_bound<double>(4 * segments) + arena_array_bound<double>(segments) +
+         arena_array_bound<uint32_t>(segments) +
          arena_array_bound<uint32_t>(kProjectorSide * kProjectorSide + 1) +
          arena_array_bound<uint32_t>(projector_entries(segments));
 }

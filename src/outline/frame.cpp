@@ -54,22 +54,21 @@ void complete_frame(const Vec3& n, const Vec3& anterior_hint, Frame* f) {
   f->e2 = cross(n, f->e1);
 }
 
-bool centroid_axis(const Mesh& upper, const Mesh& lower, const Vec3& lower_offset, Vec3* n) {
-  const Vec3 d = mesh_centroid(upper, Vec3{}) - mesh_centroid(lower, lower_offset);
+bool centroid_axis(const Vec3& upper_centroid, const Vec3& lower_centroid, Vec3* n) {
+  const Vec3 d = upper_centroid - lower_centroid;
   if (!(length(d) > 1.0)) return false;
   *n = unit(d);
   return true;
 }
 
-// The mean of the unit vectors from the centre to every vertex, in the plane: a dental arch
-// is open at the back, so this points to the front. Continuous in the data (no vertex is
-// chosen), so the lattice it orients moves with the jaws.
-Vec3 anterior_axis(const Mesh& upper, const Mesh& lower, const Vec3& lower_offset, const Frame& f) {
-  const Vec3 c = (mesh_centroid(upper, Vec3{}) + mesh_centroid(lower, lower_offset)) * 0.5;
+// The mean of the unit vectors from the centre c (the mean of the jaws' centroids) to every
+// vertex, in the plane: a dental arch is open at the back, so this points to the front.
+// Continuous in the data (no vertex is chosen), so the lattice it orients moves with the jaws.
+Vec3 anterior_axis(const Mesh& upper, const Mesh& lower, const Vec3& c, const Frame& f) {
   double sx = 0, sy = 0;
-  auto add = [&](const Mesh& m, const Vec3& offset) {
+  auto add = [&](const Mesh& m) {
     for (const Vec3& v : m.vertices) {
-      const Vec3 p = v + offset - c;
+      const Vec3 p = v - c;
       const double x = dot(p, f.e1), y = dot(p, f.e2);
       const double r = std::sqrt(x * x + y * y);
       if (r > 0) {
@@ -78,8 +77,8 @@ Vec3 anterior_axis(const Mesh& upper, const Mesh& lower, const Vec3& lower_offse
       }
     }
   };
-  add(upper, Vec3{});
-  add(lower, lower_offset);
+  add(upper);
+  add(lower);
   const double count = static_cast<double>(upper.vertices.size() + lower.vertices.size());
   return (f.e1 * sx + f.e2 * sy) * (1.0 / count);
 }
@@ -134,15 +133,18 @@ void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Gr
     g->h[jaw][i] = none;
     g->tip[jaw][i] = kNoTip;
   }
+  // Without a branch on the comparison (which follows no pattern): both slots written always.
+  double* heights = g->h[jaw];
+  uint32_t* tips = g->tip[jaw];
+  const double sign = jaw == 0 ? 1.0 : -1.0;  // jaw 1: h > best as -h < -best
   for (size_t k = 0; k < m.vertices.size(); ++k) {
     const Vec3 p = m.vertices[k] + offset;
     const size_t cell = g->cell_of(dot(p, f.e1), dot(p, f.e2));
     const double h = dot(p, f.n);
-    double& best = g->h[jaw][cell];
-    if (jaw == 0 ? h < best : h > best) {
-      best = h;
-      g->tip[jaw][cell] = static_cast<uint32_t>(k);
-    }
+    const double best = heights[cell];
+    const bool better = sign * h < sign * best;
+    heights[cell] = better ? h : best;
+    tips[cell] = better ? static_cast<uint32_t>(k) : tips[cell];
   }
 }
 
@@ -180,8 +182,12 @@ bool fit_contact_plane(const Grid& g, Plane* plane, uint64_t* contact_cells) {
 
 Status find_frame(Arena& arena, const Mesh& upper, const Mesh& lower, Frame* f, Grid* g,
                   Plane* plane) {
+  // The centroids do not depend on the frame: once for every round.
+  const Vec3 upper_centroid = mesh_centroid(upper, Vec3{});
+  const Vec3 lower_centroid = mesh_centroid(lower, Vec3{});
+  const Vec3 centre = (upper_centroid + lower_centroid) * 0.5;
   Vec3 n;
-  if (!centroid_axis(upper, lower, Vec3{}, &n)) {
+  if (!centroid_axis(upper_centroid, lower_centroid, &n)) {
     return Status::error(StatusCode::kInvalidArgument,
                          "outline: the jaws do not face each other: their centres are less "
                          "than 1 mm apart");
@@ -189,7 +195,7 @@ Status find_frame(Arena& arena, const Mesh& upper, const Mesh& lower, Frame* f, 
   for (int round = 0; round < kFrameRounds; ++round) {
     Frame provisional;
     complete_frame(n, any_perpendicular(n), &provisional);
-    complete_frame(n, anterior_axis(upper, lower, Vec3{}, provisional), f);
+    complete_frame(n, anterior_axis(upper, lower, centre, provisional), f);
     ArenaScope scope(arena);
     SPLINTCORE_RETURN_IF_ERROR(build_grid(arena, upper, lower, Vec3{}, *f, g));
     uint64_t contact = 0;

@@ -1,4 +1,5 @@
 // compute_outline (outline.h): the frame, the bite opening, the arch and the picks.
+#include <algorithm>
 #include <cmath>
 
 #include "outline_internal.h"
@@ -74,18 +75,51 @@ Status check_jaw(const Mesh& m, const char* name) {
 // opening asked: conservative advancement (a move by delta changes the distance by at most
 // delta, so stepping by the distance still missing never overshoots), then bisection if it
 // has not converged. Without an opening asked, the jaws must already be apart.
+//
+// The steps converge (Newton's, quadratically): once one is at most kCollectStepMm long, the
+// search there also keeps every pair within a margin (the step's length) of the closest
+// distance found, in the pool's room. A move by at most a quarter of the margin changes each
+// pair's distance by at most as much, so the closest pair there is one of the pool's: the next
+// steps that near are a scan of the pool, with the full search's bits. (A wider margin holds
+// many more pairs where the jaws' surfaces run parallel, and costs more to collect.)
+constexpr double kCollectStepMm = 0.1;
+constexpr double kMinPoolMarginMm = 1e-6;
+constexpr size_t kPoolPairs = 32768;
+
 struct Opener {
   const Context& ctx;
   const DistanceIndex& upper;
   const DistanceIndex& lower;
   Vec3 n;
-  double reach;  // the distance is exact up to this (above it, some value above it)
+  double reach = 0;  // the distance is exact up to this (above it, some value above it)
+  Span<TrianglePairIds> pool;
   // The last closest pair: its distance at the next t bounds the search (the same result,
   // found sooner).
-  mutable bool warm = false;
-  mutable uint32_t pair_a = 0, pair_b = 0;
-  Status distance(double t, MeshPairDistance* d) const {
+  bool warm = false;
+  uint32_t pair_a = 0, pair_b = 0;
+  bool has_last = false;
+  double last_t = 0;
+  size_t pooled = 0;  // pairs in the pool (0: none), kept at pool_t with pool_margin
+  double pool_t = 0, pool_margin = 0;
+
+  Opener(const Context& c, const DistanceIndex& u, const DistanceIndex& l, const Vec3& normal)
+      : ctx(c), upper(u), lower(l), n(normal) {}
+
+  // New bands (the indexes rebuilt in place), a new reach and a new pool.
+  void restart(double new_reach, Span<TrianglePairIds> new_pool) {
+    reach = new_reach;
+    pool = new_pool;
+    warm = has_last = false;
+    pooled = 0;
+  }
+
+  Status distance(double t, MeshPairDistance* d) {
     const Vec3 offset = n * (-t);
+    if (pooled > 0 && std::fabs(t - pool_t) <= 0.25 * pool_margin) {
+      SPLINTCORE_RETURN_IF_ERROR(candidate_pair_distance(
+          upper, lower, Span<const TrianglePairIds>(pool.data(), pooled), offset, d));
+      return remember(t, *d);
+    }
     double bound = HUGE_VAL;
     if (warm) {
       const Mesh& a = *upper.mesh;
@@ -97,14 +131,31 @@ struct Opener {
                                      b.vertices[tb.v[2]] + offset, nullptr, nullptr);
       bound = bound * (1 + 1e-9) + 1e-9;  // over any rounding: the pair itself is found
     }
-    SPLINTCORE_RETURN_IF_ERROR(mesh_pair_distance(ctx, upper, lower, offset, bound, d));
-    if (!(d->distance < HUGE_VAL) && bound < HUGE_VAL) {
+    const double step = std::fabs(t - last_t);
+    if (bound < HUGE_VAL && has_last && step <= kCollectStepMm && pool.size() > 0) {
+      size_t count = 0;
+      const double margin = std::fmax(step, kMinPoolMarginMm);
+      SPLINTCORE_RETURN_IF_ERROR(mesh_pair_distance_collect(ctx, upper, lower, offset,
+                                                            bound + margin, pool, &count, d));
+      pooled = d->distance <= bound && count <= pool.size() ? count : 0;
+      pool_t = t;
+      pool_margin = margin;
+    } else {
+      SPLINTCORE_RETURN_IF_ERROR(mesh_pair_distance(ctx, upper, lower, offset, bound, d));
+    }
+    if (!(d->distance <= bound) && bound < HUGE_VAL) {
       SPLINTCORE_RETURN_IF_ERROR(mesh_pair_distance(ctx, upper, lower, offset, HUGE_VAL, d));
     }
-    if (d->distance < HUGE_VAL) {
+    return remember(t, *d);
+  }
+
+  Status remember(double t, const MeshPairDistance& d) {
+    has_last = true;
+    last_t = t;
+    if (d.distance < HUGE_VAL) {
       warm = true;
-      pair_a = d->triangle_a;
-      pair_b = d->triangle_b;
+      pair_a = d.triangle_a;
+      pair_b = d.triangle_b;
     }
     return Status::ok();
   }
@@ -117,7 +168,7 @@ double opening_slope(const MeshPairDistance& pair, const Vec3& n) {
   return dot(pair.point_a - pair.point_b, n) / pair.distance;
 }
 
-Status advance(const Opener& op, double target, double d0, double slope0, double* t_out,
+Status advance(Opener& op, double target, double d0, double slope0, double* t_out,
                double* d_out, uint32_t* steps) {
   double t = 0, d = d0, slope = slope0;
   MeshPairDistance pair;
@@ -270,16 +321,33 @@ Status jaw_band(Arena& arena, const Mesh& m, bool upper, const BandLimit& limit,
   for (const Triangle& t : m.triangles) {
     if (keeps(t)) ++kept;
   }
+  // The kept triangles' vertices copied (numbered in order of first use, the corners in
+  // their order): the same coordinates, so the same distances, from a few hundred kilobytes
+  // that stay in cache instead of the whole jaw's.
+  uint32_t* renumber = arena.allocate_array<uint32_t>(nv);
   Triangle* tris = arena.allocate_array<Triangle>(kept > 0 ? kept : 1);
   out->ids = arena.allocate_array<uint32_t>(kept > 0 ? kept : 1);
-  if (tris == nullptr || out->ids == nullptr) return arena.exhausted_status();
+  if (renumber == nullptr || tris == nullptr || out->ids == nullptr) {
+    return arena.exhausted_status();
+  }
+  std::fill(renumber, renumber + nv, kNoTip);
+  uint32_t used = 0;
   size_t k = 0;
   for (size_t i = 0; i < m.triangles.size(); ++i) {
     if (!keeps(m.triangles[i])) continue;
-    tris[k] = m.triangles[i];
+    for (int c = 0; c < 3; ++c) {
+      uint32_t& r = renumber[m.triangles[i].v[c]];
+      if (r == kNoTip) r = used++;
+      tris[k].v[c] = r;
+    }
     out->ids[k++] = static_cast<uint32_t>(i);
   }
-  out->view = mesh_view(m.vertices.span(), Span<const Triangle>(tris, kept));
+  Vec3* verts = arena.allocate_array<Vec3>(used > 0 ? used : 1);
+  if (verts == nullptr) return arena.exhausted_status();
+  for (size_t i = 0; i < nv; ++i) {
+    if (renumber[i] != kNoTip) verts[renumber[i]] = m.vertices[i];
+  }
+  out->view = mesh_view(Span<const Vec3>(verts, used), Span<const Triangle>(tris, kept));
   return Status::ok();
 }
 
@@ -332,6 +400,13 @@ Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandib
   return build_distance_index(ctx, b->lower.view, DistanceIndexOptions{}, &b->lower_index);
 }
 
+Status allocate_pool(Arena& arena, Span<TrianglePairIds>* pool) {
+  TrianglePairIds* p = arena.allocate_array<TrianglePairIds>(kPoolPairs);
+  if (p == nullptr) return arena.exhausted_status();
+  *pool = Span<TrianglePairIds>(p, kPoolPairs);
+  return Status::ok();
+}
+
 Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
                  const Grid& g, const OutlineOptions& o, Vec3* offset, OutlineReport* r) {
   ArenaScope scope(*ctx.arena);  // the bands and their indexes go when done
@@ -345,19 +420,22 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
   // stays): enough for the distance as given and for an opening from nearer than asked.
   BandedOpener b;
   SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, reach, &b));
+  Opener op(ctx, b.upper_index, b.lower_index, f.n);
+  Span<TrianglePairIds> pool;
+  SPLINTCORE_RETURN_IF_ERROR(allocate_pool(*ctx.arena, &pool));
+  op.restart(reach, pool);
   MeshPairDistance d0;
-  const Opener near{ctx, b.upper_index, b.lower_index, f.n, reach};
-  SPLINTCORE_RETURN_IF_ERROR(near.distance(0, &d0));
+  SPLINTCORE_RETURN_IF_ERROR(op.distance(0, &d0));
   if (d0.distance > reach || (o.has_bite_opening && d0.distance > target)) {
     ctx.arena->rewind(scope.start());
     if (d0.distance > reach) reach = o.max_gap_mm + target;
     SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, 2 * reach, &b));
-    const Opener far{ctx, b.upper_index, b.lower_index, f.n, reach};
-    SPLINTCORE_RETURN_IF_ERROR(far.distance(0, &d0));
+    SPLINTCORE_RETURN_IF_ERROR(allocate_pool(*ctx.arena, &pool));
+    op.restart(reach, pool);
+    SPLINTCORE_RETURN_IF_ERROR(op.distance(0, &d0));
   }
   const uint32_t tri_u = d0.distance <= reach ? b.upper.ids[d0.triangle_a] : 0;
   const uint32_t tri_l = d0.distance <= reach ? b.lower.ids[d0.triangle_b] : 0;
-  const Opener op{ctx, b.upper_index, b.lower_index, f.n, reach};
   r->gap_as_given = d0.distance;
   r->jaws_intersect = d0.intersecting;
   if (d0.distance > o.max_gap_mm) {
@@ -409,13 +487,15 @@ uint64_t compute_outline_bound(const Mesh& maxilla, const Mesh& mandible) {
   // A jaw's band (a copy of its kept triangles, their ids) and its distance index.
   const DistanceIndexOptions io;
   const auto band = [&](uint64_t v, uint64_t t) {
-    return arena_array_bound<Triangle>(t) + arena_array_bound<uint32_t>(t) +
+    return arena_array_bound<uint32_t>(v) + arena_array_bound<Vec3>(v) +
+           arena_array_bound<Triangle>(t) + arena_array_bound<uint32_t>(t) +
            distance_index_bound(v, t, io);
   };
   const uint64_t jaws =
       band(maxilla_vertices, maxilla_triangles) + band(mandible_vertices, mandible_triangles);
   // The opening: the bands, the pair search, the columns' reach and the vertices' marks.
-  const uint64_t opening = jaws + kPairStackBound + 4 * arena_array_bound<double>(cells) +
+  const uint64_t opening = jaws + kPairStackBound + arena_array_bound<TrianglePairIds>(kPoolPairs) +
+                           4 * arena_array_bound<double>(cells) +
                            arena_array_bound<uint8_t>(maxilla_vertices) +
                            arena_array_bound<uint8_t>(mandible_vertices);
   // The arch: the columns' distances and points, the band's vertices (both reserved once),

@@ -51,9 +51,16 @@ struct Grid {
   double* h[2] = {nullptr, nullptr};
   uint32_t* tip[2] = {nullptr, nullptr};
 
+  // floor(x) as an integer, without a call to libm's floor (not inlined without SSE4.1): the
+  // same value wherever the truncation is exact (|x| < 2^52).
+  static int64_t floor_int(double x) {
+    if (!(std::fabs(x) < 0x1p52)) return static_cast<int64_t>(std::floor(x));
+    const int64_t t = static_cast<int64_t>(x);
+    return static_cast<double>(t) > x ? t - 1 : t;
+  }
   size_t cell_of(double x, double y) const {
-    int64_t ix = static_cast<int64_t>(std::floor((x - cx) / kCellMm)) - ix0;
-    int64_t iy = static_cast<int64_t>(std::floor((y - cy) / kCellMm)) - iy0;
+    int64_t ix = floor_int((x - cx) / kCellMm) - ix0;
+    int64_t iy = floor_int((y - cy) / kCellMm) - iy0;
     ix = ix < 0 ? 0 : (ix >= nx ? nx - 1 : ix);
     iy = iy < 0 ? 0 : (iy >= ny ? ny - 1 : iy);
     return static_cast<size_t>(iy) * nx + static_cast<size_t>(ix);
@@ -72,8 +79,10 @@ struct Plane {
 };
 
 void complete_frame(const Vec3& n, const Vec3& anterior_hint, Frame* f);
-bool centroid_axis(const Mesh& upper, const Mesh& lower, const Vec3& lower_offset, Vec3* n);
-Vec3 anterior_axis(const Mesh& upper, const Mesh& lower, const Vec3& lower_offset, const Frame& f);
+// The unit direction from the mandible's vertex centroid to the maxilla's; false when they lie
+// within 1 mm.
+bool centroid_axis(const Vec3& upper_centroid, const Vec3& lower_centroid, Vec3* n);
+Vec3 anterior_axis(const Mesh& upper, const Mesh& lower, const Vec3& centre, const Frame& f);
 Status build_grid(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3& lower_offset,
                   const Frame& f, Grid* g);
 void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g);

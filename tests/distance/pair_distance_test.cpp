@@ -588,6 +588,70 @@ TEST(MeshPairDistance, DenseNearParallelSurfacesMatchExhaustiveSearch) {
   EXPECT_GE(apart, 12);
 }
 
+// The pairs kept within a margin of the closest answer every move along a unit direction by at
+// most a quarter of the margin as the full search does (the bite opening's last steps).
+TEST(MeshPairDistance, CollectedPairsAnswerNearbyMovesWithTheSameBits) {
+  test::TestArena t(size_t{64} << 20);
+  Built a, b;
+  build(t, wavy_grid(22, 0.25, 0, 0, 7), 0, false, &a);
+  build(t, wavy_grid(20, 0.27, 0.35, 1.3, 8), 0, false, &b);
+  std::vector<TrianglePairIds> pool(1 << 16);
+  const Vec3 tilt{0.1, -0.2, 1.0};
+  const Vec3 up = tilt * (1.0 / length(tilt));
+  int scanned = 0;
+  for (const double dz : {1.5, 0.6, 0.2, 0.05, 0.0, -0.2}) {
+    for (const double margin : {0.08, 0.01, 1e-6}) {
+      const Vec3 off = Vec3{0.61, -0.37, 0} + up * dz;
+      SCOPED_TRACE(testing::Message() << "dz " << dz << " margin " << margin);
+      const MeshPairDistance full = run_pair(a, b, off);
+      const double limit = full.distance + margin;
+      MeshPairDistance got;
+      size_t count = 0;
+      const Status s = mesh_pair_distance_collect(Context(&t.arena), a.index, b.index, off, limit,
+                                                  Span<TrianglePairIds>(pool.data(), pool.size()),
+                                                  &count, &got);
+      ASSERT_TRUE(s.is_ok()) << test::format(s);
+      ASSERT_GE(count, 1u);
+      ASSERT_LE(count, pool.size());
+      EXPECT_EQ(std::memcmp(&got.distance, &full.distance, sizeof(double)), 0);
+      EXPECT_EQ(got.triangle_a, full.triangle_a);
+      EXPECT_EQ(got.triangle_b, full.triangle_b);
+      for (const double move : {0.0, 0.25, -0.25, 0.1, -0.02}) {
+        const Vec3 moved = off + up * (move * margin);
+        const MeshPairDistance want = run_pair(a, b, moved);
+        MeshPairDistance r;
+        ASSERT_TRUE(candidate_pair_distance(a.index, b.index,
+                                            Span<const TrianglePairIds>(pool.data(), count), moved,
+                                            &r)
+                        .is_ok());
+        EXPECT_EQ(std::memcmp(&r.distance, &want.distance, sizeof(double)), 0)
+            << r.distance << " " << want.distance;
+        EXPECT_EQ(r.triangle_a, want.triangle_a);
+        EXPECT_EQ(r.triangle_b, want.triangle_b);
+        EXPECT_EQ(r.point_a, want.point_a);
+        EXPECT_EQ(r.point_b, want.point_b);
+        EXPECT_EQ(r.intersecting, want.intersecting);
+        ++scanned;
+      }
+    }
+  }
+  EXPECT_EQ(scanned, 90);
+  // Too many pairs for the room: counted past it.
+  size_t count = 0;
+  MeshPairDistance r;
+  ASSERT_TRUE(mesh_pair_distance_collect(Context(&t.arena), a.index, b.index, Vec3{0, 0, 0.2},
+                                         2.0, Span<TrianglePairIds>(pool.data(), 3), &count, &r)
+                  .is_ok());
+  EXPECT_EQ(count, 4u);
+  EXPECT_EQ(r.triangle_a, run_pair(a, b, Vec3{0, 0, 0.2}).triangle_a);
+  // A pair out of range is refused.
+  const TrianglePairIds bad[1] = {TrianglePairIds{~uint32_t{0}, 0}};
+  EXPECT_EQ(candidate_pair_distance(a.index, b.index, Span<const TrianglePairIds>(bad, 1),
+                                    Vec3{}, &r)
+                .code(),
+            StatusCode::kInvalidArgument);
+}
+
 // ---------------------------------------------------------------------------------------------
 // The real dentition: upper teeth against the lower teeth moved 3 mm down.
 
