@@ -393,24 +393,26 @@ TEST(Outline, FrameInvariance) {
 
 // The picks themselves move with the jaws: the outline of the jaws moved (and rounded to
 // float32, as design moves them) is the outline moved, to the rounding.
-TEST(Outline, PicksMoveWithTheJaws) {
-  PhantomJaws p(87000);
-  test::TestArena t{size_t{768} << 20};
-  const Context ctx(&t.arena);
-  Mesh jaws[2];
-  copy_mesh(p.jaw[0], t.arena, &jaws[0], RigidTransform{});
-  copy_mesh(p.jaw[1], t.arena, &jaws[1], RigidTransform::translation(Vec3{0, 0, -2}));
-  for (Mesh& m : jaws)
-    for (Vec3& v : m.vertices) round_to_float32(&v);
-  Outline ref;
-  SPLINTCORE_ASSERT_OK(compute_outline(ctx, jaws[0], jaws[1], OutlineOptions{}, &ref));
-  std::mt19937_64 rng(28);
+// The phantom pair as the move tests use it: the mandible 2 mm below its occlusion, both
+// rounded to float32 (as design moves them).
+void opened_pair(const PhantomJaws& p, Arena& arena, Mesh jaws[2]) {
+  copy_mesh(p.jaw[0], arena, &jaws[0], RigidTransform{});
+  copy_mesh(p.jaw[1], arena, &jaws[1], RigidTransform::translation(Vec3{0, 0, -2}));
+  for (int j = 0; j < 2; ++j)
+    for (Vec3& v : jaws[j].vertices) round_to_float32(&v);
+}
+
+// The outline of the jaws (and of options' distal ends) moved by six random rigid moves is
+// `ref` moved, to the float32 rounding of the moved vertices.
+void expect_moves_with_jaws(const Context& ctx, Arena& arena, const Mesh jaws[2],
+                            const OutlineOptions& options, const Outline& ref, uint64_t seed) {
+  std::mt19937_64 rng(seed);
   for (int draw = 0; draw < 6; ++draw) {
-    ArenaScope scope(t.arena);
+    ArenaScope scope(arena);
     const RigidTransform move = test::random_move(rng);
     Mesh m[2];
     for (int j = 0; j < 2; ++j) {
-      m[j].bind(&t.arena);
+      m[j].bind(&arena);
       for (const Vec3& v : jaws[j].vertices) {
         Vec3 q = move.apply_point(v);
         round_to_float32(&q);
@@ -418,12 +420,14 @@ TEST(Outline, PicksMoveWithTheJaws) {
       }
       for (const Triangle& tr : jaws[j].triangles) (void)m[j].triangles.push_back(tr);
     }
+    OutlineOptions moved = options;
+    for (Vec3& e : moved.distal_ends) e = move.apply_point(e);
     Outline o;
-    SPLINTCORE_ASSERT_OK(compute_outline(ctx, m[0], m[1], OutlineOptions{}, &o));
+    SPLINTCORE_ASSERT_OK(compute_outline(ctx, m[0], m[1], moved, &o));
     const RigidTransform undo = inverse(move);
     double dp = 0, dd = 0, dl = 0,
            dn = length(undo.apply_vector(o.report.occlusal_normal) - ref.report.occlusal_normal);
-    ASSERT_EQ(o.upper.size(), ref.upper.size());
+    ASSERT_EQ(o.upper.size(), ref.upper.size()) << draw;
     for (size_t i = 0; i < o.upper.size(); ++i) {
       dp = std::max(dp, length(undo.apply_point(o.upper[i].position) - ref.upper[i].position));
       dp = std::max(dp, length(undo.apply_point(o.lower[i].position) - ref.lower[i].position));
@@ -436,7 +440,21 @@ TEST(Outline, PicksMoveWithTheJaws) {
     EXPECT_LT(dd, 1e-6) << draw;
     EXPECT_LT(dl, 3e-5) << draw;
     EXPECT_NEAR(o.report.arch_length_mm, ref.report.arch_length_mm, 3e-5) << draw;
+    for (int i = 0; i < 2; ++i) {
+      EXPECT_NEAR(o.report.distal_cut_mm[i], ref.report.distal_cut_mm[i], 3e-5) << draw;
+    }
   }
+}
+
+TEST(Outline, PicksMoveWithTheJaws) {
+  PhantomJaws p(87000);
+  test::TestArena t{size_t{768} << 20};
+  const Context ctx(&t.arena);
+  Mesh jaws[2];
+  opened_pair(p, t.arena, jaws);
+  Outline ref;
+  SPLINTCORE_ASSERT_OK(compute_outline(ctx, jaws[0], jaws[1], OutlineOptions{}, &ref));
+  expect_moves_with_jaws(ctx, t.arena, jaws, OutlineOptions{}, ref, 28);
 }
 
 // distal_ends: on the phantom, limits at the distal surfaces of the second molars (the last
@@ -448,10 +466,7 @@ TEST(Outline, DistalEndsCutTheArch) {
   test::TestArena t{size_t{768} << 20};
   const Context ctx(&t.arena);
   Mesh jaws[2];
-  copy_mesh(p.jaw[0], t.arena, &jaws[0], RigidTransform{});
-  copy_mesh(p.jaw[1], t.arena, &jaws[1], RigidTransform::translation(Vec3{0, 0, -2}));
-  for (Mesh& m : jaws)
-    for (Vec3& v : m.vertices) round_to_float32(&v);
+  opened_pair(p, t.arena, jaws);
   Outline whole;
   SPLINTCORE_ASSERT_OK(compute_outline(ctx, jaws[0], jaws[1], OutlineOptions{}, &whole));
   EXPECT_FALSE(whole.report.distal_limited);
@@ -515,51 +530,14 @@ TEST(Outline, DistalEndsMoveWithTheJaws) {
   test::TestArena t{size_t{768} << 20};
   const Context ctx(&t.arena);
   Mesh jaws[2];
-  copy_mesh(p.jaw[0], t.arena, &jaws[0], RigidTransform{});
-  copy_mesh(p.jaw[1], t.arena, &jaws[1], RigidTransform::translation(Vec3{0, 0, -2}));
-  for (Mesh& m : jaws)
-    for (Vec3& v : m.vertices) round_to_float32(&v);
+  opened_pair(p, t.arena, jaws);
   OutlineOptions options;
   options.has_distal_ends = true;
   options.distal_ends[0] = phantom_distal(p.jaw[0], jaws[0], 1);
   options.distal_ends[1] = phantom_distal(p.jaw[0], jaws[0], 12);
   Outline ref;
   SPLINTCORE_ASSERT_OK(compute_outline(ctx, jaws[0], jaws[1], options, &ref));
-  std::mt19937_64 rng(2801);
-  for (int draw = 0; draw < 6; ++draw) {
-    ArenaScope scope(t.arena);
-    const RigidTransform move = test::random_move(rng);
-    Mesh m[2];
-    for (int j = 0; j < 2; ++j) {
-      m[j].bind(&t.arena);
-      for (const Vec3& v : jaws[j].vertices) {
-        Vec3 q = move.apply_point(v);
-        round_to_float32(&q);
-        (void)m[j].vertices.push_back(q);
-      }
-      for (const Triangle& tr : jaws[j].triangles) (void)m[j].triangles.push_back(tr);
-    }
-    OutlineOptions moved = options;
-    for (Vec3& e : moved.distal_ends) e = move.apply_point(e);
-    Outline o;
-    SPLINTCORE_ASSERT_OK(compute_outline(ctx, m[0], m[1], moved, &o));
-    const RigidTransform undo = inverse(move);
-    double dp = 0, dd = 0, dl = 0;
-    ASSERT_EQ(o.upper.size(), ref.upper.size()) << draw;
-    for (size_t i = 0; i < o.upper.size(); ++i) {
-      dp = std::max(dp, length(undo.apply_point(o.upper[i].position) - ref.upper[i].position));
-      dp = std::max(dp, length(undo.apply_point(o.lower[i].position) - ref.lower[i].position));
-      dd = std::max(dd, length(undo.apply_vector(o.upper[i].direction) - ref.upper[i].direction));
-      dl = std::max(dl, std::fabs(o.upper[i].inner_length - ref.upper[i].inner_length));
-      dl = std::max(dl, std::fabs(o.upper[i].outside_length - ref.upper[i].outside_length));
-    }
-    EXPECT_LT(dp, 3e-5) << draw;
-    EXPECT_LT(dd, 1e-6) << draw;
-    EXPECT_LT(dl, 3e-5) << draw;
-    for (int i = 0; i < 2; ++i) {
-      EXPECT_NEAR(o.report.distal_cut_mm[i], ref.report.distal_cut_mm[i], 3e-5) << draw;
-    }
-  }
+  expect_moves_with_jaws(ctx, t.arena, jaws, options, ref, 2801);
 }
 
 // The refusals of distal_ends, each naming the point and what is wrong.
