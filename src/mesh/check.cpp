@@ -256,7 +256,7 @@ Status count_shells(Arena& arena, const Mesh& mesh, const uint8_t* first_use, Un
     const uint32_t root = shells->find(t);
     uint32_t* c = counts + 3 * size_t{root};
     ++c[2];
-    c[1] += static_cast<uint32_t>(__builtin_popcount(first_use[t]));
+    c[1] += (first_use[t] & 1u) + ((first_use[t] >> 1) & 1u) + (first_use[t] >> 2);  // 3 bits
     for (uint32_t v : tris[t].v) {
       if (stamp[v] == UINT32_MAX) {
         stamp[v] = root;
