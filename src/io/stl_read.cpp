@@ -11,6 +11,7 @@
 #include <charconv>
 
 #include "io/mesh_text.h"
+#include "mesh/exact_weld.h"
 #include "splintcore/io.h"
 
 namespace splintcore {
@@ -412,13 +413,92 @@ Status read_stl(const Context& ctx, const ByteSource& source, const StlReadOptio
   return located(s, source);
 }
 
-Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlReadOptions& options,
-                     Mesh* out, StlInfo* info) {
-  Arena& arena = *ctx.arena;
-  if (!out->vertices.empty() || !out->triangles.empty()) {
-    return Status::error(StatusCode::kInvalidArgument, "read_stl_mesh: output mesh must be empty");
+namespace {
+
+// Reads up to sizeof(head) bytes (less only at the end of the source) into `head`.
+Status read_head(const ByteSource& source, uint8_t* head, size_t cap, size_t* got) {
+  *got = 0;
+  while (*got < cap) {
+    const int64_t n = source.read(source.user, head + *got, cap - *got);
+    if (n < 0) return make_error(StatusCode::kIoError, "read failed").at_byte(*got);
+    if (static_cast<uint64_t>(n) > cap - *got) {
+      return Status::error(StatusCode::kIoError, "byte source returned more than asked");
+    }
+    if (n == 0) break;
+    *got += static_cast<size_t>(n);
   }
-  ArenaScope scope(arena);  // on an error the arena is as it was
+  return Status::ok();
+}
+
+// The binary STL welded straight from the read buffer: the triangles, then the read buffer
+// and the weld's table above them, then the vertices moved down onto the buffer; no soup.
+// Only for a source whose size confirms the header's count (read_stl_mesh checks), so the
+// errors left are the ones read_binary gives past its header, with the same text.
+Status read_binary_welded(const Context& ctx, const ByteSource& source, const uint8_t* head,
+                          size_t got, const StlReadOptions& options, Mesh* out, StlInfo* info) {
+  Arena& arena = *ctx.arena;
+  const uint64_t declared = load_u32(head + 80);
+  Triangle* tris = arena.allocate_array<Triangle>(static_cast<size_t>(declared));
+  if (tris == nullptr) return arena.exhausted_status();
+  const Arena::Marker above = arena.mark();
+  Reader in;
+  in.source = &source;
+  in.cap = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
+  in.buf = arena.allocate_array<uint8_t>(in.cap);
+  ExactWelder welder;
+  if (in.buf == nullptr || !welder.init(arena, declared)) return arena.exhausted_status();
+  std::memcpy(info->header, head, 80);
+  info->header[80] = '\0';
+  std::memcpy(in.buf, head + kBinaryHeaderBytes, got - kBinaryHeaderBytes);
+  in.end = got - kBinaryHeaderBytes;
+  in.base = kBinaryHeaderBytes;
+  float corners[9];
+  for (uint64_t t = 0; t < declared; ++t) {
+    if ((t & 0xffff) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read", t, declared));
+    if (in.available() < kBinaryRecordBytes) {
+      SPLINTCORE_RETURN_IF_ERROR(in.fill(kBinaryRecordBytes));
+      if (in.available() < kBinaryRecordBytes) {
+        return make_error(StatusCode::kTruncated, "binary STL ends inside triangle ", t, " of ",
+                          declared, " declared")
+            .at_byte(in.offset() + in.available())
+            .at_index(t);
+      }
+    }
+    const uint8_t* record = in.buf + in.pos;
+    if (in.available() >= 9 * kBinaryRecordBytes) {  // the table slots of a triangle ahead
+      for (int i = 0; i < 9; ++i) corners[i] = load_f32(record + 8 * kBinaryRecordBytes + 12 + 4 * i);
+      welder.prefetch(corners);
+    }
+    for (int i = 0; i < 9; ++i) corners[i] = load_f32(record + 12 + 4 * i);
+    for (int k = 0; k < 3; ++k) {
+      if (!corner_ok(corners + 3 * k, options.max_abs_coordinate)) {
+        return corner_error(corners + 3 * k, t, k, options.max_abs_coordinate)
+            .at_byte(in.offset() + 12 + 12 * static_cast<uint64_t>(k));
+      }
+    }
+    if (!welder.add(corners, tris + t)) return arena.exhausted_status();
+    in.pos += kBinaryRecordBytes;
+  }
+  SPLINTCORE_RETURN_IF_ERROR(in.fill(1));
+  if (in.available() > 0) {
+    return make_error(StatusCode::kParseError, "binary STL has data after the ", declared,
+                      " triangles its header declares")
+        .at_byte(in.offset());
+  }
+  info->format = StlFormat::kBinary;
+  info->triangles = declared;
+  info->bytes = in.offset();
+  welder.finish(arena, above, &out->vertices);
+  out->triangles.adopt(tris, static_cast<size_t>(declared), static_cast<size_t>(declared));
+  return Status::ok();
+}
+
+// The soup read whole by read_stl, then welded (ASCII, sources of unknown size, and binary
+// files whose header does not match their size: read_stl says what is wrong).
+Status read_then_weld(const Context& ctx, const ByteSource& source, const StlReadOptions& options,
+                      Mesh* out, StlInfo* info) {
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);
   ArenaArray<SoupTriangle> soup(&arena);
   SPLINTCORE_RETURN_IF_ERROR(read_stl(ctx, source, options, &soup, info));
   soup.shrink_to_fit();  // an ASCII soup grown by half again: the spare room is the weld's
@@ -431,13 +511,74 @@ Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlRead
   return Status::ok();
 }
 
+}  // namespace
+
+Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlReadOptions& options,
+                     Mesh* out, StlInfo* info) {
+  if (!out->vertices.empty() || !out->triangles.empty()) {
+    return Status::error(StatusCode::kInvalidArgument, "read_stl_mesh: output mesh must be empty");
+  }
+  StlInfo local;
+  if (info == nullptr) info = &local;
+  if (source.read == nullptr || source.size == kUnknownSize ||
+      options.format == StlFormat::kAscii) {
+    return read_then_weld(ctx, source, options, out, info);
+  }
+  // The size is known: the head tells the format and, for binary, whether the count is right.
+  uint8_t head[kDetectBytes];
+  size_t got = 0;
+  Status s = read_head(source, head, sizeof(head), &got);
+  if (!s.is_ok()) return located(s, source);
+  const bool binary = options.format == StlFormat::kBinary || !looks_ascii(head, got);
+  const uint64_t declared = got >= kBinaryHeaderBytes ? load_u32(head + 80) : 0;
+  const bool sized = binary && got >= kBinaryHeaderBytes && declared > 0 &&
+                     source.size == kBinaryHeaderBytes + kBinaryRecordBytes * declared &&
+                     declared <= options.max_triangles;
+  if (sized && declared > (uint64_t{UINT32_MAX} - 1) / 3) {  // weld_exact's limit, said early
+    return located(make_error(StatusCode::kLimitExceeded, "mesh has ", declared,
+                              " triangles; at most ", (uint64_t{UINT32_MAX} - 1) / 3,
+                              " are supported (32-bit vertex ids)"),
+                   source);
+  }
+  if (sized) {
+    *info = StlInfo{};
+    ArenaScope scope(*ctx.arena);  // on an error the arena is as it was, `out` empty
+    const Mesh saved = *out;
+    s = read_binary_welded(ctx, source, head, got, options, out, info);
+    if (!s.is_ok()) {
+      *out = saved;
+      *info = StlInfo{};
+      return located(s, source);
+    }
+    scope.commit();
+    return Status::ok();
+  }
+  meshio::PeekSource peek;
+  peek.head = head;
+  peek.size = got;
+  peek.inner = &source;
+  ByteSource replay = source;
+  replay.read = &meshio::PeekSource::read;
+  replay.user = &peek;
+  return read_then_weld(ctx, replay, options, out, info);
+}
+
 uint64_t read_stl_bound(uint64_t bytes, const StlReadOptions& options) {
   const size_t chunk = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
   return arena_array_bound<uint8_t>(chunk) + arena_array_bound<SoupTriangle>(bytes / 50);
 }
 
 uint64_t read_stl_mesh_bound(uint64_t bytes, const StlReadOptions& options) {
-  return read_stl_bound(bytes, options) + weld_exact_bound(bytes / 50);
+  const size_t chunk = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
+  // Binary, size known: the triangles and the weld's table and positions, with the read
+  // buffer among them; no soup.
+  const uint64_t binary = bytes >= kBinaryHeaderBytes ? (bytes - kBinaryHeaderBytes) / 50 : 0;
+  const uint64_t streamed = arena_array_bound<uint8_t>(chunk) + weld_exact_bound(binary);
+  // ASCII: the soup read whole, then welded; a facet takes at least 85 bytes.
+  const uint64_t facets = bytes / 85;
+  const uint64_t ascii = arena_array_bound<uint8_t>(chunk) +
+                         arena_array_bound<SoupTriangle>(facets) + weld_exact_bound(facets);
+  return streamed > ascii ? streamed : ascii;
 }
 
 }  // namespace splintcore

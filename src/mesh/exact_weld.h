@@ -1,0 +1,89 @@
+// The exact weld fed one triangle at a time (private to src/mesh and src/io): weld_exact() runs
+// it over a soup, and the binary STL reader straight from its read buffer, so a file's
+// triangles never sit in memory as soup.
+//
+// Vertex ids are handed out in order of first appearance (so they depend only on the corners,
+// never on hashing). The table holds 1 + a vertex id per slot and is compared against the
+// vertex positions (the float corners converted to double, exactly; -0 and +0 compare equal,
+// and the positions get +0). It is allocated for the worst case (every corner a new vertex:
+// weld_exact_bound's table) but only a power-of-two prefix sized for the vertices seen so far
+// is used (cleared, touched); it doubles and is rebuilt from the positions as they grow, so a
+// mesh with one vertex per two triangles touches a sixth of it.
+#ifndef SPLINTCORE_SRC_MESH_EXACT_WELD_H
+#define SPLINTCORE_SRC_MESH_EXACT_WELD_H
+
+#include "splintcore/mesh.h"
+
+namespace splintcore {
+
+class ExactWelder {
+ public:
+  // Allocates the table (after `triangles`, which the caller allocated) and the first
+  // positions; false when the arena is exhausted. `triangle_count` <= (2^32 - 2) / 3.
+  [[nodiscard]] bool init(Arena& arena, uint64_t triangle_count);
+
+  // Welds the three corners p[0..8] (finite floats) into `out`; false when the arena is
+  // exhausted (the positions could not grow).
+  [[nodiscard]] bool add(const float* p, Triangle* out) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t id = vertex(p + 3 * k);
+      if (id == kFull) return false;
+      out->v[k] = id;
+    }
+    return true;
+  }
+
+  // Prefetches the table slots of the triangle at p (nine floats), for one about to be added.
+  void prefetch(const float* p) const {
+    for (int k = 0; k < 3; ++k) __builtin_prefetch(table_ + (hash(p + 3 * k) & mask_));
+  }
+
+  // Moves the positions down to `marker` (where the caller's temporaries above its triangles
+  // begin) and points `vertices` at them. Never fails.
+  void finish(Arena& arena, const Arena::Marker& marker, ArenaArray<Vec3>* vertices);
+
+ private:
+  static constexpr uint32_t kFull = ~uint32_t{0};
+
+  static uint32_t key(float f) {
+    uint32_t bits;
+    std::memcpy(&bits, &f, sizeof(bits));
+    return bits == 0x80000000u ? 0u : bits;  // -0 welds with +0
+  }
+  static uint64_t hash(const float* p) {
+    return hash_mix(hash_mix((uint64_t{key(p[0])} << 32) ^ key(p[1])) ^ key(p[2]));
+  }
+
+  uint32_t vertex(const float* p) {
+    const double x = static_cast<double>(p[0]), y = static_cast<double>(p[1]),
+                 z = static_cast<double>(p[2]);
+    uint64_t slot = hash(p) & mask_;
+    for (;;) {
+      const uint32_t entry = table_[slot];
+      if (entry == 0) break;
+      const Vec3& v = positions_.data()[entry - 1];
+      if (v.x == x && v.y == y && v.z == z) return entry - 1;
+      slot = (slot + 1) & mask_;
+    }
+    const uint32_t id = static_cast<uint32_t>(positions_.size());
+    if (!positions_.push_back(Vec3{x + 0.0, y + 0.0, z + 0.0})) return kFull;
+    table_[slot] = id + 1;
+    if (positions_.size() > grow_at_) grow();
+    return id;
+  }
+
+  void grow();
+
+  uint32_t* table_ = nullptr;
+  uint64_t table_slots_ = 0;  // allocated (a power of two)
+  uint64_t mask_ = 0;         // slots in use - 1
+  uint64_t grow_at_ = 0;      // vertex count above which the slots in use double
+  ArenaArray<Vec3> positions_;
+};
+
+// Slots of the exact weld's table for `corners` corners (a power of two, at least 1.5 a corner).
+uint64_t exact_weld_table_slots(uint64_t corners);
+
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_SRC_MESH_EXACT_WELD_H
