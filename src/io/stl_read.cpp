@@ -22,6 +22,8 @@ constexpr size_t kBinaryHeaderBytes = 84;
 constexpr size_t kBinaryRecordBytes = 50;
 constexpr size_t kDetectBytes = 1024;
 constexpr size_t kMaxTokenBytes = 256;
+// How many triangles ahead the weld prefetches its table slots (about a memory latency).
+constexpr size_t kAhead = 32;
 
 // The chunked window over the source, shared with the PLY and OBJ readers.
 using meshio::Reader;
@@ -465,9 +467,11 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
       }
     }
     const uint8_t* record = in.buf + in.pos;
-    if (in.available() >= 9 * kBinaryRecordBytes) {  // the table slots of a triangle ahead
-      for (int i = 0; i < 9; ++i) corners[i] = load_f32(record + 8 * kBinaryRecordBytes + 12 + 4 * i);
-      welder.prefetch(corners);
+    if (in.available() >= (kAhead + 1) * kBinaryRecordBytes) {  // the slots of a triangle ahead
+      for (int i = 0; i < 9; ++i) corners[i] = load_f32(record + kAhead * kBinaryRecordBytes + 12 + 4 * i);
+      __builtin_prefetch(welder.first_slot(corners));
+      __builtin_prefetch(welder.first_slot(corners + 3));
+      __builtin_prefetch(welder.first_slot(corners + 6));
     }
     for (int i = 0; i < 9; ++i) corners[i] = load_f32(record + 12 + 4 * i);
     for (int k = 0; k < 3; ++k) {

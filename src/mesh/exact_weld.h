@@ -33,10 +33,10 @@ class ExactWelder {
     return true;
   }
 
-  // Prefetches the table slots of the triangle at p (nine floats), for one about to be added.
-  void prefetch(const float* p) const {
-    for (int k = 0; k < 3; ++k) __builtin_prefetch(table_ + (hash(p + 3 * k) & mask_));
-  }
+  // The table slot where the search for corner p (three floats) begins: callers prefetch the
+  // slots of a triangle a few dozen ahead with __builtin_prefetch (GCC 12 deletes the
+  // prefetches when they sit in a member function like this one).
+  const uint32_t* first_slot(const float* p) const { return table_ + (hash(p) & mask_); }
 
   // Moves the positions down to `marker` (where the caller's temporaries above its triangles
   // begin) and points `vertices` at them. Never fails.
@@ -54,23 +54,31 @@ class ExactWelder {
     return hash_mix(hash_mix((uint64_t{key(p[0])} << 32) ^ key(p[1])) ^ key(p[2]));
   }
 
+  // A slot holds 1 + the vertex id in its low id_bits_ bits and, above them, the top bits of
+  // the corner's hash: most slots of other corners are passed over without reading their
+  // position (which would be a cache miss each).
   uint32_t vertex(const float* p) {
     const double x = static_cast<double>(p[0]), y = static_cast<double>(p[1]),
                  z = static_cast<double>(p[2]);
-    uint64_t slot = hash(p) & mask_;
+    const uint64_t h = hash(p);
+    const uint32_t tag = tag_of(h);
+    uint64_t slot = h & mask_;
     for (;;) {
       const uint32_t entry = table_[slot];
       if (entry == 0) break;
-      const Vec3& v = positions_.data()[entry - 1];
-      if (v.x == x && v.y == y && v.z == z) return entry - 1;
+      if ((entry & ~id_mask_) == tag) {
+        const Vec3& v = positions_.data()[(entry & id_mask_) - 1];
+        if (v.x == x && v.y == y && v.z == z) return (entry & id_mask_) - 1;
+      }
       slot = (slot + 1) & mask_;
     }
     const uint32_t id = static_cast<uint32_t>(positions_.size());
     if (!positions_.push_back(Vec3{x + 0.0, y + 0.0, z + 0.0})) return kFull;
-    table_[slot] = id + 1;
+    table_[slot] = tag | (id + 1);
     if (positions_.size() > grow_at_) grow();
     return id;
   }
+  uint32_t tag_of(uint64_t h) const { return static_cast<uint32_t>(h >> 32) & ~id_mask_; }
 
   void grow();
 
@@ -78,6 +86,7 @@ class ExactWelder {
   uint64_t table_slots_ = 0;  // allocated (a power of two)
   uint64_t mask_ = 0;         // slots in use - 1
   uint64_t grow_at_ = 0;      // vertex count above which the slots in use double
+  uint32_t id_mask_ = 0;      // the low bits that hold 1 + a vertex id (at most 3 T)
   ArenaArray<Vec3> positions_;
 };
 

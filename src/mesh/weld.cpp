@@ -65,6 +65,8 @@ bool ExactWelder::init(Arena& arena, uint64_t triangle_count) {
   table_slots_ = exact_weld_table_slots(3 * triangle_count);
   table_ = arena.allocate_array<uint32_t>(static_cast<size_t>(table_slots_));
   if (table_ == nullptr) return false;
+  id_mask_ = 1;
+  while (id_mask_ < 3 * triangle_count + 1 && id_mask_ != UINT32_MAX) id_mask_ = 2 * id_mask_ + 1;
   // A closed mesh has about one vertex per two triangles: start there (load at most 2/3).
   const uint64_t expected = triangle_count / 2 + triangle_count / 16 + 16;
   uint64_t slots = 16;
@@ -88,9 +90,10 @@ void ExactWelder::grow() {
     // Back to the float corner (exact: every position came from a float).
     const float p[3] = {static_cast<float>(v[id].x), static_cast<float>(v[id].y),
                         static_cast<float>(v[id].z)};
-    uint64_t slot = hash(p) & mask_;
+    const uint64_t h = hash(p);
+    uint64_t slot = h & mask_;
     while (table_[slot] != 0) slot = (slot + 1) & mask_;
-    table_[slot] = id + 1;
+    table_[slot] = tag_of(h) | (id + 1);
   }
 }
 
@@ -143,7 +146,12 @@ Status weld_exact_steps(const Context& ctx, Span<const SoupTriangle> soup, Mesh*
     if ((t & 0xffff) == 0) {
       SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "weld", t, n));
     }
-    if (t + 8 < n) welder.prefetch(corners + 9 * (t + 8));
+    if (t + 32 < n) {  // the slots of a triangle ahead, about a memory latency
+      const float* ahead = corners + 9 * (t + 32);
+      __builtin_prefetch(welder.first_slot(ahead));
+      __builtin_prefetch(welder.first_slot(ahead + 3));
+      __builtin_prefetch(welder.first_slot(ahead + 6));
+    }
     if (!welder.add(corners + 9 * t, tris + t)) return arena.exhausted_status();
   }
   welder.finish(arena, temp_start, &out->vertices);
