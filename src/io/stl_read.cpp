@@ -8,6 +8,7 @@
 // Hostile input: the binary count is never trusted; it must equal the triangles actually
 // present, and when the source knows its size the two are compared before anything is
 // reserved. Every error carries the byte offset (binary) or line and column (ASCII).
+#include <cfloat>
 #include <charconv>
 
 #include "io/mesh_text.h"
@@ -52,6 +53,19 @@ inline bool corner_ok(const float* xyz, double max_abs) {
     ok = ok && v <= max_abs && v >= -max_abs;
   }
   return ok;
+}
+
+// The largest bit pattern (sign cleared) of a float within +-max_abs: a coordinate passes
+// corner_ok() exactly when its bits, sign cleared, are at most this (finite non-negative floats
+// order as their bits; infinities and NaNs lie above every finite one). 0 when max_abs is not a
+// number >= 0 (then every corner goes through corner_ok()).
+uint32_t abs_limit_bits(double max_abs) {
+  if (!(max_abs >= 0.0)) return 0;
+  if (max_abs >= static_cast<double>(FLT_MAX)) return 0x7f7fffffu;
+  const float f = static_cast<float>(max_abs);
+  uint32_t bits;
+  std::memcpy(&bits, &f, sizeof(bits));
+  return static_cast<double>(f) > max_abs ? bits - 1 : bits;  // rounded up: the float below
 }
 
 Status corner_error(const float* xyz, uint64_t triangle, int corner, double max_abs) {
@@ -454,8 +468,9 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
   std::memcpy(in.buf, head + kBinaryHeaderBytes, got - kBinaryHeaderBytes);
   in.end = got - kBinaryHeaderBytes;
   in.base = kBinaryHeaderBytes;
-  float corners[9];
-  for (uint64_t t = 0; t < declared; ++t) {
+  const uint32_t limit = abs_limit_bits(options.max_abs_coordinate);
+  const bool check_all = !(options.max_abs_coordinate >= 0.0);  // no corner passes corner_ok()
+  for (uint64_t t = 0; t < declared;) {
     if ((t & 0xffff) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read", t, declared));
     if (in.available() < kBinaryRecordBytes) {
       SPLINTCORE_RETURN_IF_ERROR(in.fill(kBinaryRecordBytes));
@@ -466,22 +481,37 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
             .at_index(t);
       }
     }
+    // The whole records in the buffer, up to the next progress report.
+    uint64_t run = in.available() / kBinaryRecordBytes;
+    run = run < declared - t ? run : declared - t;
+    run = run < 0x10000 - (t & 0xffff) ? run : 0x10000 - (t & 0xffff);
     const uint8_t* record = in.buf + in.pos;
-    if (in.available() >= (kAhead + 1) * kBinaryRecordBytes) {  // the slots of a triangle ahead
-      for (int i = 0; i < 9; ++i) corners[i] = load_f32(record + kAhead * kBinaryRecordBytes + 12 + 4 * i);
-      __builtin_prefetch(welder.first_slot(corners));
-      __builtin_prefetch(welder.first_slot(corners + 3));
-      __builtin_prefetch(welder.first_slot(corners + 6));
-    }
-    for (int i = 0; i < 9; ++i) corners[i] = load_f32(record + 12 + 4 * i);
-    for (int k = 0; k < 3; ++k) {
-      if (!corner_ok(corners + 3 * k, options.max_abs_coordinate)) {
-        return corner_error(corners + 3 * k, t, k, options.max_abs_coordinate)
-            .at_byte(in.offset() + 12 + 12 * static_cast<uint64_t>(k));
+    for (uint64_t i = 0; i < run; ++i, record += kBinaryRecordBytes) {
+      float corners[9];
+      if (i + kAhead < run) {  // the slots of a triangle ahead
+        for (int c = 0; c < 9; ++c) corners[c] = load_f32(record + kAhead * 50 + 12 + 4 * c);
+        __builtin_prefetch(welder.first_slot(corners));
+        __builtin_prefetch(welder.first_slot(corners + 3));
+        __builtin_prefetch(welder.first_slot(corners + 6));
       }
+      uint32_t worst = 0;
+      for (int c = 0; c < 9; ++c) {
+        const uint32_t bits = load_u32(record + 12 + 4 * c);
+        worst = (bits & 0x7fffffffu) > worst ? (bits & 0x7fffffffu) : worst;
+        std::memcpy(&corners[c], &bits, sizeof(float));
+      }
+      if (worst > limit || check_all) {
+        for (int k = 0; k < 3; ++k) {
+          if (!corner_ok(corners + 3 * k, options.max_abs_coordinate)) {
+            return corner_error(corners + 3 * k, t + i, k, options.max_abs_coordinate)
+                .at_byte(in.offset() + kBinaryRecordBytes * i + 12 + 12 * static_cast<uint64_t>(k));
+          }
+        }
+      }
+      if (!welder.add(corners, tris + t + i)) return arena.exhausted_status();
     }
-    if (!welder.add(corners, tris + t)) return arena.exhausted_status();
-    in.pos += kBinaryRecordBytes;
+    in.pos += static_cast<size_t>(kBinaryRecordBytes * run);
+    t += run;
   }
   SPLINTCORE_RETURN_IF_ERROR(in.fill(1));
   if (in.available() > 0) {
