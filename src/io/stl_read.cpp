@@ -446,8 +446,8 @@ Status read_head(const ByteSource& source, uint8_t* head, size_t cap, size_t* go
   return Status::ok();
 }
 
-// The binary STL welded straight from the read buffer: the triangles, then the read buffer
-// and the weld's table above them, then the vertices moved down onto the buffer; no soup.
+// The binary STL welded straight from the read buffer: the triangles, the weld's positions
+// and table, the read buffer; no soup. The vertices usually stay where they were reserved.
 // Only for a source whose size confirms the header's count (read_stl_mesh checks), so the
 // errors left are the ones read_binary gives past its header, with the same text.
 Status read_binary_welded(const Context& ctx, const ByteSource& source, const uint8_t* head,
@@ -460,9 +460,10 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
   Reader in;
   in.source = &source;
   in.cap = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
-  in.buf = arena.allocate_array<uint8_t>(in.cap);
   ExactWelder welder;
-  if (in.buf == nullptr || !welder.init(arena, declared)) return arena.exhausted_status();
+  if (!welder.init(arena, declared)) return arena.exhausted_status();
+  in.buf = arena.allocate_array<uint8_t>(in.cap);
+  if (in.buf == nullptr) return arena.exhausted_status();
   std::memcpy(info->header, head, 80);
   info->header[80] = '\0';
   std::memcpy(in.buf, head + kBinaryHeaderBytes, got - kBinaryHeaderBytes);

@@ -18,8 +18,8 @@ namespace splintcore {
 
 class ExactWelder {
  public:
-  // Allocates the table (after `triangles`, which the caller allocated) and the first
-  // positions; false when the arena is exhausted. `triangle_count` <= (2^32 - 2) / 3.
+  // Reserves the positions (for about one vertex per two triangles), then allocates the table;
+  // false when the arena is exhausted. `triangle_count` <= (2^32 - 2) / 3.
   [[nodiscard]] bool init(Arena& arena, uint64_t triangle_count);
 
   // Welds the three corners p[0..8] (finite floats) into `out`; false when the arena is
@@ -38,8 +38,9 @@ class ExactWelder {
   // prefetches when they sit in a member function like this one).
   const uint32_t* first_slot(const float* p) const { return table_ + (hash(p) & mask_); }
 
-  // Moves the positions down to `marker` (where the caller's temporaries above its triangles
-  // begin) and points `vertices` at them. Never fails.
+  // Points `vertices` at the positions and gives back everything above them: the reserve's
+  // unused end, or (when they outgrew it) everything above `marker`, where init() began, after
+  // moving them down there. Never fails.
   void finish(Arena& arena, const Arena::Marker& marker, ArenaArray<Vec3>* vertices);
 
  private:
@@ -94,6 +95,8 @@ class ExactWelder {
   uint64_t grow_at_ = 0;      // vertex count above which the slots in use double
   uint32_t id_mask_ = 0;      // the low bits that hold 1 + a vertex id (at most 3 T)
   ArenaArray<Vec3> positions_;
+  Vec3* reserved_ = nullptr;  // where the positions were first reserved
+  Arena::Marker after_reserve_;
 };
 
 // Slots of the exact weld's table for `corners` corners (a power of two, at least 1.5 a corner).

@@ -61,22 +61,34 @@ uint64_t exact_weld_table_slots(uint64_t corners) {
   return size;
 }
 
+namespace {
+// A closed mesh has about one vertex per two triangles: the positions first reserved, and
+// the table's first size (load at most 2/3 there).
+uint64_t expected_vertices(uint64_t triangle_count) {
+  const uint64_t expected = triangle_count / 2 + triangle_count / 16 + 16;
+  return expected < 3 * triangle_count ? expected : 3 * triangle_count;
+}
+}  // namespace
+
 bool ExactWelder::init(Arena& arena, uint64_t triangle_count) {
+  // The positions first, where they stay unless they outgrow the reserve (then they move to
+  // the top of the arena and grow there).
+  positions_.bind(&arena);
+  if (!positions_.reserve(static_cast<size_t>(expected_vertices(triangle_count)))) return false;
+  reserved_ = positions_.data();
+  after_reserve_ = arena.mark();
   table_slots_ = exact_weld_table_slots(3 * triangle_count);
   table_ = arena.allocate_array<uint32_t>(static_cast<size_t>(table_slots_));
   if (table_ == nullptr) return false;
   id_mask_ = 1;
   while (id_mask_ < 3 * triangle_count + 1 && id_mask_ != UINT32_MAX) id_mask_ = 2 * id_mask_ + 1;
-  // A closed mesh has about one vertex per two triangles: start there (load at most 2/3).
-  const uint64_t expected = triangle_count / 2 + triangle_count / 16 + 16;
+  const uint64_t expected = expected_vertices(triangle_count);
   uint64_t slots = 16;
   while (slots < expected + expected / 2 && slots < table_slots_) slots <<= 1;
   mask_ = slots - 1;
   grow_at_ = slots == table_slots_ ? UINT64_MAX : slots / 3 * 2;
   std::memset(table_, 0, static_cast<size_t>(slots) * sizeof(uint32_t));
-  positions_.bind(&arena);
-  const uint64_t most = 3 * triangle_count;
-  return positions_.reserve(static_cast<size_t>(expected < most ? expected : most));
+  return true;
 }
 
 void ExactWelder::grow() {
@@ -99,6 +111,12 @@ void ExactWelder::grow() {
 
 void ExactWelder::finish(Arena& arena, const Arena::Marker& marker, ArenaArray<Vec3>* vertices) {
   const size_t count = positions_.size();
+  if (positions_.data() == reserved_) {  // still in the reserve: give back its unused end
+    arena.rewind(after_reserve_);
+    (void)arena.try_shrink(reserved_, positions_.capacity() * sizeof(Vec3), count * sizeof(Vec3));
+    vertices->adopt(reserved_, count, count);
+    return;
+  }
   arena.rewind(marker);
   Vec3* target = arena.allocate_array<Vec3>(count);
   SPLINTCORE_ASSERT(target != nullptr || count == 0);  // it fit above the table
@@ -106,11 +124,13 @@ void ExactWelder::finish(Arena& arena, const Arena::Marker& marker, ArenaArray<V
   vertices->adopt(target, count, count);
 }
 
-// The triangles, the table (allocated whole, used in part), the positions (at most one per
-// corner; grown at the top of the arena), then the positions copied down over the table.
+// The triangles, the positions' reserve, the table (allocated whole, used in part), the
+// positions when they outgrow the reserve (at most one per corner, grown at the top of the
+// arena; copied down over the rest at the end).
 uint64_t weld_exact_bound(uint64_t triangle_count) {
   const uint64_t corners = 3 * triangle_count;
   return arena_array_bound<Triangle>(triangle_count) +
+         arena_array_bound<Vec3>(expected_vertices(triangle_count)) +
          arena_array_bound<uint32_t>(exact_weld_table_slots(corners)) +
          arena_array_bound<Vec3>(corners);
 }
