@@ -31,7 +31,7 @@ inline uint32_t mid3(uint32_t a, uint32_t b, uint32_t c) {
 // The per-phase arrays of check_mesh, in allocation order (check_mesh_bound adds them up).
 struct EdgeArrays {
   uint32_t* start = nullptr;   // V + 1: half-edges bucketed by their smaller vertex
-  uint64_t* half = nullptr;    // 3 T: larger vertex << 32 | use (3 t + k)
+  uint32_t* half = nullptr;    // 3 T: the uses (3 t + k), bucket by bucket
   uint64_t* tally = nullptr;   // V: per larger vertex, its uses in the current bucket
   uint32_t* last = nullptr;    // V: per larger vertex, the last triangle using it so far
 };
@@ -48,7 +48,7 @@ uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count) {
   const uint64_t v = vertex_count, t = triangle_count;
   const uint64_t kept = arena_array_bound<uint8_t>(v) + arena_array_bound<uint32_t>(t) +
                         arena_array_bound<uint8_t>(t) + arena_array_bound<uint32_t>(t);
-  const uint64_t edges = arena_array_bound<uint32_t>(v + 1) + arena_array_bound<uint64_t>(3 * t) +
+  const uint64_t edges = arena_array_bound<uint32_t>(v + 1) + arena_array_bound<uint32_t>(3 * t) +
                          arena_array_bound<uint64_t>(v) + arena_array_bound<uint32_t>(v);
   const uint64_t shells = arena_array_bound<uint32_t>(3 * t) + arena_array_bound<uint32_t>(v) +
                           2 * arena_array_bound<uint64_t>(3 * t);
@@ -59,11 +59,15 @@ uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count) {
 
 namespace {
 
-// Indices in range, referenced vertices, degenerate triangles (repeated ids or exactly flat).
+// Indices in range, referenced vertices, degenerate triangles (repeated ids or exactly flat);
+// in the same pass the area and volume, with mesh_area()'s and mesh_volume()'s arithmetic in
+// their order (the same bits), r->bounds being set.
 Status check_indices(const Mesh& mesh, uint8_t* referenced, MeshReport* r) {
   const uint64_t nv = mesh.vertices.size();
   const Triangle* tris = mesh.triangles.data();
   const Vec3* verts = mesh.vertices.data();
+  const Vec3 c = r->bounds.center();
+  double area = 0.0, volume = 0.0;
   if (nv > 0) std::memset(referenced, 0, static_cast<size_t>(nv));
   for (uint32_t t = 0; t < r->triangle_count; ++t) {
     const uint32_t* v = tris[t].v;
@@ -75,13 +79,18 @@ Status check_indices(const Mesh& mesh, uint8_t* referenced, MeshReport* r) {
       }
       referenced[v[k]] = 1;
     }
-    const bool degenerate = v[0] == v[1] || v[1] == v[2] || v[2] == v[0] ||
-                            collinear3d(verts[v[0]], verts[v[1]], verts[v[2]]);
+    const Vec3 &p0 = verts[v[0]], &p1 = verts[v[1]], &p2 = verts[v[2]];
+    const bool degenerate =
+        v[0] == v[1] || v[1] == v[2] || v[2] == v[0] || collinear3d(p0, p1, p2);
     if (degenerate) {
       if (r->degenerate_triangles == 0) r->first_degenerate_triangle = t;
       ++r->degenerate_triangles;
     }
+    area += 0.5 * length(cross(p1 - p0, p2 - p0));
+    volume += dot(p0 - c, cross(p1 - c, p2 - c));
   }
+  r->area = area;
+  r->volume = volume / 6.0;
   uint64_t referenced_count = 0;
   for (uint64_t i = 0; i < nv; ++i) referenced_count += referenced[i];
   r->unreferenced_vertices = nv - referenced_count;
@@ -127,8 +136,7 @@ struct EdgePass {
       const uint32_t* v = tris[t].v;
       for (uint32_t k = 0; k < 3; ++k) {
         const uint32_t p = v[k], q = v[k == 2 ? 0 : k + 1];
-        const uint32_t lo = p < q ? p : q, hi = p < q ? q : p;
-        a.half[start[lo]++] = (uint64_t{hi} << 32) | (3 * t + k);
+        a.half[start[p < q ? p : q]++] = 3 * t + k;
       }
     }
   }
@@ -191,17 +199,17 @@ struct EdgePass {
   void run_bucket(uint32_t lo, uint32_t begin, uint32_t end) {
     bool collecting = false;
     for (uint32_t i = begin; i < end; ++i) {
-      const uint32_t hi = static_cast<uint32_t>(a.half[i] >> 32);
-      const uint32_t use = static_cast<uint32_t>(a.half[i]);
+      const uint32_t use = a.half[i];
       const uint32_t t = use / 3;
+      const uint32_t from = start_of(use), hi = from ^ end_of(use) ^ lo;  // lo is one end
       // Forward: the side runs from the smaller id (always, for a side lo -> lo).
-      a.tally[hi] += start_of(use) == lo ? 1u : (uint64_t{1} << 32);
+      a.tally[hi] += from == lo ? 1u : (uint64_t{1} << 32);
       if (a.tally[hi] != 1u && a.tally[hi] != (uint64_t{1} << 32)) shells->unite(a.last[hi], t);
       a.last[hi] = t;
     }
     for (uint32_t i = begin; i < end; ++i) {
-      const uint32_t hi = static_cast<uint32_t>(a.half[i] >> 32);
-      const uint32_t use = static_cast<uint32_t>(a.half[i]);
+      const uint32_t use = a.half[i];
+      const uint32_t hi = start_of(use) ^ end_of(use) ^ lo;
       const uint64_t count = a.tally[hi];
       if (count == 0) continue;  // a later use of an edge already read
       if (count != kCollecting) {
@@ -217,7 +225,9 @@ struct EdgePass {
       if (candidate(use / 3, use % 3, lo, hi)) collected[collected_count++] = use / 3;
     }
     if (!collecting) return;
-    for (uint32_t i = begin; i < end; ++i) a.tally[a.half[i] >> 32] = 0;
+    for (uint32_t i = begin; i < end; ++i) {
+      a.tally[start_of(a.half[i]) ^ end_of(a.half[i]) ^ lo] = 0;
+    }
   }
 
   void run() {
@@ -355,7 +365,7 @@ Status check_topology(const Context& ctx, const Mesh& mesh, MeshReport* r) {
     EdgePass pass{mesh.triangles.data(), tri_count, nv, EdgeArrays{}, &shells, first_use,
                   collected, 0, r};
     pass.a.start = arena.allocate_array<uint32_t>(size_t{nv} + 1);
-    pass.a.half = arena.allocate_array<uint64_t>(size_t{3} * tri_count);
+    pass.a.half = arena.allocate_array<uint32_t>(size_t{3} * tri_count);
     pass.a.tally = arena.allocate_array<uint64_t>(nv);
     pass.a.last = arena.allocate_array<uint32_t>(nv);
     if (pass.a.start == nullptr || ((pass.a.half == nullptr) && tri_count > 0) ||
@@ -387,13 +397,11 @@ Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report) {
   }
   uint8_t* referenced = arena.allocate_array<uint8_t>(static_cast<size_t>(nv));
   if (referenced == nullptr && nv > 0) return arena.exhausted_status();
+  r.bounds = mesh_bounds(mesh);
   SPLINTCORE_RETURN_IF_ERROR(check_indices(mesh, referenced, &r));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 1, 4));
   SPLINTCORE_RETURN_IF_ERROR(check_topology(ctx, mesh, &r));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 3, 4));
-  r.bounds = mesh_bounds(mesh);
-  r.area = mesh_area(mesh);
-  r.volume = mesh_volume(mesh);
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 4, 4));
   return Status::ok();
 }

@@ -282,6 +282,9 @@ TEST(CheckMesh, PropertyEdgePassAgreesWithAPlainModel) {
     ASSERT_TRUE(check_mesh(Context(&t.arena), mesh, &got).is_ok());
     SCOPED_TRACE(round);
     expect_same_topology(got, model_report(mesh));
+    // The measures are taken in the check's own pass: the same bits as the functions.
+    EXPECT_EQ(got.area, mesh_area(mesh));
+    EXPECT_EQ(got.volume, mesh_volume(mesh));
   }
 }
 
