@@ -1,10 +1,12 @@
 // Topology checks and measures of an indexed mesh.
 //
-// Edges: every triangle side becomes a key (min id, max id); a stable radix sort groups the
-// uses of each undirected edge. One use is a boundary edge, three or more a non-manifold edge,
-// two uses in the same direction an orientation conflict. Shells are the components of
-// triangles joined through edges (union-find); per shell, Euler's V - E + F = 2 - 2g gives the
-// genus of a closed orientable surface. Degeneracy is decided exactly (collinear3d).
+// Edges, in linear time: every triangle side goes into the bucket of its smaller vertex (a
+// counting sort), and each bucket is tallied per larger vertex, so the uses of an undirected
+// edge are counted without sorting keys. One use is a boundary edge, three or more a
+// non-manifold edge, two uses in the same direction an orientation conflict. Shells are the
+// components of triangles joined through edges (union-find); per shell, Euler's V - E + F =
+// 2 - 2g gives the genus of a closed orientable surface. Duplicate triangles share the edge of
+// their two smallest ids. Degeneracy is decided exactly (collinear3d).
 #include "core/union_find.h"
 #include "splintcore/mesh.h"
 
@@ -152,7 +154,7 @@ struct EdgePass {
   // on that edge (so a triangle is a candidate once, on one edge).
   bool candidate(uint32_t t, uint32_t k, uint32_t lo, uint32_t hi) const {
     const uint32_t* v = tris[t].v;
-    if (min3(v[0], v[1], v[2]) != lo || mid3(v[0], v[1], v[2]) != hi) return false;
+    if (third(v, lo, hi) < hi) return false;
     for (uint32_t j = 0; j < k; ++j) {
       const uint32_t p = v[j], q = v[j + 1];
       if ((p < q ? p : q) == lo && (p < q ? q : p) == hi) return false;
@@ -160,15 +162,18 @@ struct EdgePass {
     return true;
   }
 
+  // The id of triangle v besides its side (lo, hi) (ids as a multiset: (a, a, b) on side (a, b)
+  // leaves a). (lo, hi) are its two smallest exactly when this is >= hi.
+  static uint32_t third(const uint32_t* v, uint32_t lo, uint32_t hi) {
+    return v[0] ^ v[1] ^ v[2] ^ lo ^ hi;
+  }
+
   // Two uses of one edge: a duplicate pair when both triangles have it as their two smallest
   // ids and share the third.
   void pair_duplicate(uint32_t t1, uint32_t t2, uint32_t lo, uint32_t hi) {
     if (t1 == t2) return;
-    const uint32_t* p = tris[t1].v;
-    const uint32_t* q = tris[t2].v;
-    if (min3(p[0], p[1], p[2]) != lo || mid3(p[0], p[1], p[2]) != hi) return;
-    if (min3(q[0], q[1], q[2]) != lo || mid3(q[0], q[1], q[2]) != hi) return;
-    if (max3(p[0], p[1], p[2]) != max3(q[0], q[1], q[2])) return;
+    const uint32_t x = third(tris[t1].v, lo, hi);
+    if (x != third(tris[t2].v, lo, hi) || x < hi) return;
     const uint32_t later = t1 > t2 ? t1 : t2;
     if (r->duplicate_triangles == 0 || later < r->first_duplicate_triangle) {
       r->first_duplicate_triangle = later;
