@@ -471,6 +471,7 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
   in.base = kBinaryHeaderBytes;
   const uint32_t limit = abs_limit_bits(options.max_abs_coordinate);
   const bool check_all = !(options.max_abs_coordinate >= 0.0);  // no corner passes corner_ok()
+  uint64_t ahead[2 * kAhead][3];  // the prefetched corners' hashes, by triangle mod 2 kAhead
   for (uint64_t t = 0; t < declared;) {
     if ((t & 0xffff) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read", t, declared));
     if (in.available() < kBinaryRecordBytes) {
@@ -489,11 +490,13 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
     const uint8_t* record = in.buf + in.pos;
     for (uint64_t i = 0; i < run; ++i, record += kBinaryRecordBytes) {
       float corners[9];
-      if (i + kAhead < run) {  // the slots of a triangle ahead
+      if (i + kAhead < run) {  // the slots of a triangle ahead; its hashes kept for then
         for (int c = 0; c < 9; ++c) corners[c] = load_f32(record + kAhead * 50 + 12 + 4 * c);
-        __builtin_prefetch(welder.first_slot(corners));
-        __builtin_prefetch(welder.first_slot(corners + 3));
-        __builtin_prefetch(welder.first_slot(corners + 6));
+        uint64_t* h = ahead[(i + kAhead) % (2 * kAhead)];
+        for (int k = 0; k < 3; ++k) h[k] = ExactWelder::hash(corners + 3 * k);
+        __builtin_prefetch(welder.first_slot(h[0]));
+        __builtin_prefetch(welder.first_slot(h[1]));
+        __builtin_prefetch(welder.first_slot(h[2]));
       }
       uint32_t worst = 0;
       for (int c = 0; c < 9; ++c) {
@@ -509,7 +512,9 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
           }
         }
       }
-      if (!welder.add(corners, tris + t + i)) return arena.exhausted_status();
+      const bool added = i >= kAhead ? welder.add_hashed(corners, ahead[i % (2 * kAhead)], tris + t + i)
+                                     : welder.add(corners, tris + t + i);
+      if (!added) return arena.exhausted_status();
     }
     in.pos += static_cast<size_t>(kBinaryRecordBytes * run);
     t += run;

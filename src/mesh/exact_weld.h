@@ -25,18 +25,35 @@ class ExactWelder {
   // Welds the three corners p[0..8] (finite floats) into `out`; false when the arena is
   // exhausted (the positions could not grow).
   [[nodiscard]] bool add(const float* p, Triangle* out) {
+    const uint64_t h[3] = {hash(p), hash(p + 3), hash(p + 6)};
+    return add_hashed(p, h, out);
+  }
+  // add() with the corners' hash() already known (`h`, from prefetching them).
+  [[nodiscard]] bool add_hashed(const float* p, const uint64_t* h, Triangle* out) {
     for (int k = 0; k < 3; ++k) {
-      const uint32_t id = vertex(p + 3 * k);
+      const uint32_t id = vertex(p + 3 * k, h[k]);
       if (id == kFull) return false;
       out->v[k] = id;
     }
     return true;
   }
 
-  // The table slot where the search for corner p (three floats) begins: callers prefetch the
+  // The hash of corner p (three floats): where its search begins (first_slot) and its tag.
+  static uint64_t hash(const float* p) {
+    // Three odd multipliers and one fold (each coordinate's bits reach the high half, which
+    // the fold brings down to the slot bits; the tag takes the high bits). Only the speed
+    // depends on it: ids go by first appearance.
+    const uint64_t h = uint64_t{key(p[0])} * 0x9e3779b97f4a7c15ull +
+                       uint64_t{key(p[1])} * 0xc2b2ae3d27d4eb4full +
+                       uint64_t{key(p[2])} * 0x165667b19e3779f9ull;
+    return (h ^ (h >> 29)) * 0xbf58476d1ce4e5b9ull;
+  }
+
+
+  // The table slot where the search for a corner of hash h begins: callers prefetch the
   // slots of a triangle a few dozen ahead with __builtin_prefetch (GCC 12 deletes the
   // prefetches when they sit in a member function like this one).
-  const uint32_t* first_slot(const float* p) const { return table_ + (hash(p) & mask_); }
+  const uint32_t* first_slot(uint64_t h) const { return table_ + (h & mask_); }
 
   // Points `vertices` at the positions and gives back everything above them: the reserve's
   // unused end, or (when they outgrew it) everything above `marker`, where init() began, after
@@ -51,23 +68,13 @@ class ExactWelder {
     std::memcpy(&bits, &f, sizeof(bits));
     return bits == 0x80000000u ? 0u : bits;  // -0 welds with +0
   }
-  static uint64_t hash(const float* p) {
-    // Three odd multipliers and one fold (each coordinate's bits reach the high half, which
-    // the fold brings down to the slot bits; the tag takes the high bits). Only the speed
-    // depends on it: ids go by first appearance.
-    const uint64_t h = uint64_t{key(p[0])} * 0x9e3779b97f4a7c15ull +
-                       uint64_t{key(p[1])} * 0xc2b2ae3d27d4eb4full +
-                       uint64_t{key(p[2])} * 0x165667b19e3779f9ull;
-    return (h ^ (h >> 29)) * 0xbf58476d1ce4e5b9ull;
-  }
 
   // A slot holds 1 + the vertex id in its low id_bits_ bits and, above them, the top bits of
   // the corner's hash: most slots of other corners are passed over without reading their
   // position (which would be a cache miss each).
-  uint32_t vertex(const float* p) {
+  uint32_t vertex(const float* p, uint64_t h) {
     const double x = static_cast<double>(p[0]), y = static_cast<double>(p[1]),
                  z = static_cast<double>(p[2]);
-    const uint64_t h = hash(p);
     const uint32_t tag = tag_of(h);
     uint64_t slot = h & mask_;
     for (;;) {

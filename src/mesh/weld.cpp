@@ -168,9 +168,9 @@ Status weld_exact_steps(const Context& ctx, Span<const SoupTriangle> soup, Mesh*
     }
     if (t + 32 < n) {  // the slots of a triangle ahead, about a memory latency
       const float* ahead = corners + 9 * (t + 32);
-      __builtin_prefetch(welder.first_slot(ahead));
-      __builtin_prefetch(welder.first_slot(ahead + 3));
-      __builtin_prefetch(welder.first_slot(ahead + 6));
+      __builtin_prefetch(welder.first_slot(ExactWelder::hash(ahead)));
+      __builtin_prefetch(welder.first_slot(ExactWelder::hash(ahead + 3)));
+      __builtin_prefetch(welder.first_slot(ExactWelder::hash(ahead + 6)));
     }
     if (!welder.add(corners + 9 * t, tris + t)) return arena.exhausted_status();
   }
