@@ -88,14 +88,18 @@ struct StlInfo {
 Status read_stl(const Context& ctx, const ByteSource& source, const StlReadOptions& options,
                 ArenaArray<SoupTriangle>* out, StlInfo* info);
 
-// read_stl() then weld_exact(), leaving only the mesh in the arena (the soup is reclaimed).
-// `out` must be empty. Errors: read_stl()'s and weld_exact()'s. On an error the arena is as it
-// was and `out` is empty.
+// read_stl() then weld_exact(), leaving only the mesh in the arena, with the same result. A
+// binary STL from a source that knows its size (files, memory) whose header agrees with it is
+// welded straight from the read buffer, never held as soup; anything else is read whole, then
+// welded. `out` must be empty. Errors: read_stl()'s and weld_exact()'s. On an error the arena
+// is as it was and `out` is empty.
 //
 // Sizing, from the input's length in bytes (a file's size): no STL of `bytes` bytes holds more
 // than bytes / 50 triangles (a binary one holds (bytes - 84) / 50; an ASCII facet takes at
 // least 85 bytes). read_stl_bound() covers read_stl() into an empty array (the read buffer and
-// the triangles), read_stl_mesh_bound() read_stl_mesh() (and read_mesh() on an STL).
+// the triangles), read_stl_mesh_bound() read_stl_mesh() (and read_mesh() on an STL) from a
+// source that knows its size; a binary STL from a source of unknown size is read whole first:
+// read_stl_bound() + weld_exact_bound(bytes / 50).
 uint64_t read_stl_bound(uint64_t bytes, const StlReadOptions& options);
 uint64_t read_stl_mesh_bound(uint64_t bytes, const StlReadOptions& options);
 Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlReadOptions& options,

@@ -51,6 +51,25 @@ struct Reader {
   }
 };
 
+// Replays the peeked head, then the rest of the source.
+struct PeekSource {
+  const uint8_t* head = nullptr;
+  size_t size = 0;
+  size_t position = 0;
+  const ByteSource* inner = nullptr;
+  static int64_t read(void* user, uint8_t* buffer, size_t capacity) {
+    PeekSource* self = static_cast<PeekSource*>(user);
+    if (self->position < self->size) {
+      size_t n = self->size - self->position;
+      if (n > capacity) n = capacity;
+      std::memcpy(buffer, self->head + self->position, n);
+      self->position += n;
+      return static_cast<int64_t>(n);
+    }
+    return self->inner->read(self->inner->user, buffer, capacity);
+  }
+};
+
 inline Status located(Status s, const ByteSource& source) {
   if (!s.is_ok() && source.name != nullptr && s.file()[0] == '\0') s.in_file(source.name);
   return s;

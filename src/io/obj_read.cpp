@@ -262,24 +262,6 @@ bool looks_stl_ascii(const uint8_t* p, size_t n) {
   return true;
 }
 
-// Replays the peeked head, then the rest of the source.
-struct PeekSource {
-  const uint8_t* head = nullptr;
-  size_t size = 0;
-  size_t position = 0;
-  const ByteSource* inner = nullptr;
-  static int64_t read(void* user, uint8_t* buffer, size_t capacity) {
-    PeekSource* self = static_cast<PeekSource*>(user);
-    if (self->position < self->size) {
-      size_t n = self->size - self->position;
-      if (n > capacity) n = capacity;
-      std::memcpy(buffer, self->head + self->position, n);
-      self->position += n;
-      return static_cast<int64_t>(n);
-    }
-    return self->inner->read(self->inner->user, buffer, capacity);
-  }
-};
 
 }  // namespace
 
@@ -317,12 +299,12 @@ Status read_mesh(const Context& ctx, const ByteSource& source, const MeshReadOpt
     if (n == 0) break;
     got += static_cast<size_t>(n);
   }
-  PeekSource peek;
+  meshio::PeekSource peek;
   peek.head = head;
   peek.size = got;
   peek.inner = &source;
   ByteSource replay = source;
-  replay.read = &PeekSource::read;
+  replay.read = &meshio::PeekSource::read;
   replay.user = &peek;
   const MeshFormat format = detect_mesh_format(head, got, source.name);
   if (format == MeshFormat::kPlyAscii) return read_ply(ctx, replay, options, out, info);

@@ -8,9 +8,11 @@
 // Hostile input: the binary count is never trusted; it must equal the triangles actually
 // present, and when the source knows its size the two are compared before anything is
 // reserved. Every error carries the byte offset (binary) or line and column (ASCII).
+#include <cfloat>
 #include <charconv>
 
 #include "io/mesh_text.h"
+#include "mesh/exact_weld.h"
 #include "splintcore/io.h"
 
 namespace splintcore {
@@ -21,6 +23,8 @@ constexpr size_t kBinaryHeaderBytes = 84;
 constexpr size_t kBinaryRecordBytes = 50;
 constexpr size_t kDetectBytes = 1024;
 constexpr size_t kMaxTokenBytes = 256;
+// How many triangles ahead the weld prefetches its table slots (about a memory latency).
+constexpr size_t kAhead = 32;
 
 // The chunked window over the source, shared with the PLY and OBJ readers.
 using meshio::Reader;
@@ -49,6 +53,19 @@ inline bool corner_ok(const float* xyz, double max_abs) {
     ok = ok && v <= max_abs && v >= -max_abs;
   }
   return ok;
+}
+
+// The largest bit pattern (sign cleared) of a float within +-max_abs: a coordinate passes
+// corner_ok() exactly when its bits, sign cleared, are at most this (finite non-negative floats
+// order as their bits; infinities and NaNs lie above every finite one). 0 when max_abs is not a
+// number >= 0 (then every corner goes through corner_ok()).
+uint32_t abs_limit_bits(double max_abs) {
+  if (!(max_abs >= 0.0)) return 0;
+  if (max_abs >= static_cast<double>(FLT_MAX)) return 0x7f7fffffu;
+  const float f = static_cast<float>(max_abs);
+  uint32_t bits;
+  std::memcpy(&bits, &f, sizeof(bits));
+  return static_cast<double>(f) > max_abs ? bits - 1 : bits;  // rounded up: the float below
 }
 
 Status corner_error(const float* xyz, uint64_t triangle, int corner, double max_abs) {
@@ -412,13 +429,116 @@ Status read_stl(const Context& ctx, const ByteSource& source, const StlReadOptio
   return located(s, source);
 }
 
-Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlReadOptions& options,
-                     Mesh* out, StlInfo* info) {
-  Arena& arena = *ctx.arena;
-  if (!out->vertices.empty() || !out->triangles.empty()) {
-    return Status::error(StatusCode::kInvalidArgument, "read_stl_mesh: output mesh must be empty");
+namespace {
+
+// Reads up to sizeof(head) bytes (less only at the end of the source) into `head`.
+Status read_head(const ByteSource& source, uint8_t* head, size_t cap, size_t* got) {
+  *got = 0;
+  while (*got < cap) {
+    const int64_t n = source.read(source.user, head + *got, cap - *got);
+    if (n < 0) return make_error(StatusCode::kIoError, "read failed").at_byte(*got);
+    if (static_cast<uint64_t>(n) > cap - *got) {
+      return Status::error(StatusCode::kIoError, "byte source returned more than asked");
+    }
+    if (n == 0) break;
+    *got += static_cast<size_t>(n);
   }
-  ArenaScope scope(arena);  // on an error the arena is as it was
+  return Status::ok();
+}
+
+// The binary STL welded straight from the read buffer: the triangles, the weld's positions
+// and table, the read buffer; no soup. The vertices usually stay where they were reserved.
+// Only for a source whose size confirms the header's count (read_stl_mesh checks), so the
+// errors left are the ones read_binary gives past its header, with the same text.
+Status read_binary_welded(const Context& ctx, const ByteSource& source, const uint8_t* head,
+                          size_t got, const StlReadOptions& options, Mesh* out, StlInfo* info) {
+  Arena& arena = *ctx.arena;
+  const uint64_t declared = load_u32(head + 80);
+  Triangle* tris = arena.allocate_array<Triangle>(static_cast<size_t>(declared));
+  if (tris == nullptr) return arena.exhausted_status();
+  const Arena::Marker above = arena.mark();
+  Reader in;
+  in.source = &source;
+  in.cap = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
+  ExactWelder welder;
+  if (!welder.init(arena, declared)) return arena.exhausted_status();
+  in.buf = arena.allocate_array<uint8_t>(in.cap);
+  if (in.buf == nullptr) return arena.exhausted_status();
+  std::memcpy(info->header, head, 80);
+  info->header[80] = '\0';
+  std::memcpy(in.buf, head + kBinaryHeaderBytes, got - kBinaryHeaderBytes);
+  in.end = got - kBinaryHeaderBytes;
+  in.base = kBinaryHeaderBytes;
+  const uint32_t limit = abs_limit_bits(options.max_abs_coordinate);
+  const bool check_all = !(options.max_abs_coordinate >= 0.0);  // no corner passes corner_ok()
+  uint64_t ahead[2 * kAhead][3];  // the prefetched corners' hashes, by triangle mod 2 kAhead
+  for (uint64_t t = 0; t < declared;) {
+    if ((t & 0xffff) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read", t, declared));
+    if (in.available() < kBinaryRecordBytes) {
+      SPLINTCORE_RETURN_IF_ERROR(in.fill(kBinaryRecordBytes));
+      if (in.available() < kBinaryRecordBytes) {
+        return make_error(StatusCode::kTruncated, "binary STL ends inside triangle ", t, " of ",
+                          declared, " declared")
+            .at_byte(in.offset() + in.available())
+            .at_index(t);
+      }
+    }
+    // The whole records in the buffer, up to the next progress report.
+    uint64_t run = in.available() / kBinaryRecordBytes;
+    run = run < declared - t ? run : declared - t;
+    run = run < 0x10000 - (t & 0xffff) ? run : 0x10000 - (t & 0xffff);
+    const uint8_t* record = in.buf + in.pos;
+    for (uint64_t i = 0; i < run; ++i, record += kBinaryRecordBytes) {
+      float corners[9];
+      if (i + kAhead < run) {  // the slots of a triangle ahead; its hashes kept for then
+        for (int c = 0; c < 9; ++c) corners[c] = load_f32(record + kAhead * 50 + 12 + 4 * c);
+        uint64_t* h = ahead[(i + kAhead) % (2 * kAhead)];
+        for (int k = 0; k < 3; ++k) h[k] = ExactWelder::hash(corners + 3 * k);
+        __builtin_prefetch(welder.first_slot(h[0]));
+        __builtin_prefetch(welder.first_slot(h[1]));
+        __builtin_prefetch(welder.first_slot(h[2]));
+      }
+      uint32_t worst = 0;
+      for (int c = 0; c < 9; ++c) {
+        const uint32_t bits = load_u32(record + 12 + 4 * c);
+        worst = (bits & 0x7fffffffu) > worst ? (bits & 0x7fffffffu) : worst;
+        std::memcpy(&corners[c], &bits, sizeof(float));
+      }
+      if (worst > limit || check_all) {
+        for (int k = 0; k < 3; ++k) {
+          if (!corner_ok(corners + 3 * k, options.max_abs_coordinate)) {
+            return corner_error(corners + 3 * k, t + i, k, options.max_abs_coordinate)
+                .at_byte(in.offset() + kBinaryRecordBytes * i + 12 + 12 * static_cast<uint64_t>(k));
+          }
+        }
+      }
+      const bool added = i >= kAhead ? welder.add_hashed(corners, ahead[i % (2 * kAhead)], tris + t + i)
+                                     : welder.add(corners, tris + t + i);
+      if (!added) return arena.exhausted_status();
+    }
+    in.pos += static_cast<size_t>(kBinaryRecordBytes * run);
+    t += run;
+  }
+  SPLINTCORE_RETURN_IF_ERROR(in.fill(1));
+  if (in.available() > 0) {
+    return make_error(StatusCode::kParseError, "binary STL has data after the ", declared,
+                      " triangles its header declares")
+        .at_byte(in.offset());
+  }
+  info->format = StlFormat::kBinary;
+  info->triangles = declared;
+  info->bytes = in.offset();
+  welder.finish(arena, above, &out->vertices);
+  out->triangles.adopt(tris, static_cast<size_t>(declared), static_cast<size_t>(declared));
+  return Status::ok();
+}
+
+// The soup read whole by read_stl, then welded (ASCII, sources of unknown size, and binary
+// files whose header does not match their size: read_stl says what is wrong).
+Status read_then_weld(const Context& ctx, const ByteSource& source, const StlReadOptions& options,
+                      Mesh* out, StlInfo* info) {
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);
   ArenaArray<SoupTriangle> soup(&arena);
   SPLINTCORE_RETURN_IF_ERROR(read_stl(ctx, source, options, &soup, info));
   soup.shrink_to_fit();  // an ASCII soup grown by half again: the spare room is the weld's
@@ -431,13 +551,74 @@ Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlRead
   return Status::ok();
 }
 
+}  // namespace
+
+Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlReadOptions& options,
+                     Mesh* out, StlInfo* info) {
+  if (!out->vertices.empty() || !out->triangles.empty()) {
+    return Status::error(StatusCode::kInvalidArgument, "read_stl_mesh: output mesh must be empty");
+  }
+  StlInfo local;
+  if (info == nullptr) info = &local;
+  if (source.read == nullptr || source.size == kUnknownSize ||
+      options.format == StlFormat::kAscii) {
+    return read_then_weld(ctx, source, options, out, info);
+  }
+  // The size is known: the head tells the format and, for binary, whether the count is right.
+  uint8_t head[kDetectBytes];
+  size_t got = 0;
+  Status s = read_head(source, head, sizeof(head), &got);
+  if (!s.is_ok()) return located(s, source);
+  const bool binary = options.format == StlFormat::kBinary || !looks_ascii(head, got);
+  const uint64_t declared = got >= kBinaryHeaderBytes ? load_u32(head + 80) : 0;
+  const bool sized = binary && got >= kBinaryHeaderBytes && declared > 0 &&
+                     source.size == kBinaryHeaderBytes + kBinaryRecordBytes * declared &&
+                     declared <= options.max_triangles;
+  if (sized && declared > (uint64_t{UINT32_MAX} - 1) / 3) {  // weld_exact's limit, said early
+    return located(make_error(StatusCode::kLimitExceeded, "mesh has ", declared,
+                              " triangles; at most ", (uint64_t{UINT32_MAX} - 1) / 3,
+                              " are supported (32-bit vertex ids)"),
+                   source);
+  }
+  if (sized) {
+    *info = StlInfo{};
+    ArenaScope scope(*ctx.arena);  // on an error the arena is as it was, `out` empty
+    const Mesh saved = *out;
+    s = read_binary_welded(ctx, source, head, got, options, out, info);
+    if (!s.is_ok()) {
+      *out = saved;
+      *info = StlInfo{};
+      return located(s, source);
+    }
+    scope.commit();
+    return Status::ok();
+  }
+  meshio::PeekSource peek;
+  peek.head = head;
+  peek.size = got;
+  peek.inner = &source;
+  ByteSource replay = source;
+  replay.read = &meshio::PeekSource::read;
+  replay.user = &peek;
+  return read_then_weld(ctx, replay, options, out, info);
+}
+
 uint64_t read_stl_bound(uint64_t bytes, const StlReadOptions& options) {
   const size_t chunk = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
   return arena_array_bound<uint8_t>(chunk) + arena_array_bound<SoupTriangle>(bytes / 50);
 }
 
 uint64_t read_stl_mesh_bound(uint64_t bytes, const StlReadOptions& options) {
-  return read_stl_bound(bytes, options) + weld_exact_bound(bytes / 50);
+  const size_t chunk = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
+  // Binary, size known: the triangles and the weld's table and positions, with the read
+  // buffer among them; no soup.
+  const uint64_t binary = bytes >= kBinaryHeaderBytes ? (bytes - kBinaryHeaderBytes) / 50 : 0;
+  const uint64_t streamed = arena_array_bound<uint8_t>(chunk) + weld_exact_bound(binary);
+  // ASCII: the soup read whole, then welded; a facet takes at least 85 bytes.
+  const uint64_t facets = bytes / 85;
+  const uint64_t ascii = arena_array_bound<uint8_t>(chunk) +
+                         arena_array_bound<SoupTriangle>(facets) + weld_exact_bound(facets);
+  return streamed > ascii ? streamed : ascii;
 }
 
 }  // namespace splintcore

@@ -1,37 +1,75 @@
 // Topology checks and measures of an indexed mesh.
 //
-// Edges: every triangle side becomes a key (min id, max id); a stable radix sort groups the
-// uses of each undirected edge. One use is a boundary edge, three or more a non-manifold edge,
-// two uses in the same direction an orientation conflict. Shells are the components of
-// triangles joined through edges (union-find); per shell, Euler's V - E + F = 2 - 2g gives the
-// genus of a closed orientable surface. Degeneracy is decided exactly (collinear3d).
+// Edges, in linear time: every triangle side goes into the bucket of its smaller vertex (a
+// counting sort), and each bucket is tallied per larger vertex, so the uses of an undirected
+// edge are counted without sorting keys. One use is a boundary edge, three or more a
+// non-manifold edge, two uses in the same direction an orientation conflict. Shells are the
+// components of triangles joined through edges (union-find); per shell, Euler's V - E + F =
+// 2 - 2g gives the genus of a closed orientable surface. Duplicate triangles share the edge of
+// their two smallest ids. Degeneracy is decided exactly (collinear3d).
 #include "core/union_find.h"
 #include "splintcore/mesh.h"
 
 namespace splintcore {
 
 namespace {
-inline uint64_t edge_key(uint32_t a, uint32_t b) {
-  return a < b ? (uint64_t{a} << 32) | b : (uint64_t{b} << 32) | a;
+
+// Marks an edge whose uses (three or more) are being collected for the duplicate search; the
+// tallies hold forward uses in the low 32 bits and backward uses in the high 32 bits.
+constexpr uint64_t kCollecting = ~uint64_t{0};
+
+inline uint32_t min3(uint32_t a, uint32_t b, uint32_t c) {
+  const uint32_t m = a < b ? a : b;
+  return m < c ? m : c;
 }
+inline uint32_t max3(uint32_t a, uint32_t b, uint32_t c) {
+  const uint32_t m = a > b ? a : b;
+  return m > c ? m : c;
+}
+inline uint32_t mid3(uint32_t a, uint32_t b, uint32_t c) {
+  return a ^ b ^ c ^ min3(a, b, c) ^ max3(a, b, c);
+}
+
+// The per-phase arrays of check_mesh, in allocation order (check_mesh_bound adds them up).
+struct EdgeArrays {
+  uint32_t* start = nullptr;   // V + 1: half-edges bucketed by their smaller vertex
+  uint32_t* half = nullptr;    // 3 T: the uses (3 t + k), bucket by bucket
+  uint64_t* tally = nullptr;   // V: per larger vertex, its uses in the current bucket
+  uint32_t* last = nullptr;    // V: per larger vertex, the last triangle using it so far
+};
+
 }  // namespace
 
 uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count) {
-  // The referenced flags, the edge uses and their sort scratch, the union-find, and the
-  // per-shell vertex, edge and face counts: about 124 bytes a triangle.
-  const uint64_t uses = 3 * triangle_count;
-  return arena_array_bound<uint8_t>(vertex_count) + 2 * arena_array_bound<KeyIndex>(uses) +
-         arena_array_bound<uint32_t>(triangle_count) +
-         3 * arena_array_bound<int64_t>(triangle_count);
+  // Kept through the check: the referenced flags, the union-find of shells, per triangle the
+  // sides that first use their edge, and the triangles of edges with 3+ uses (the duplicate
+  // search). Then the largest of three phases, each returned before the next: the edge pass
+  // (buckets, half-edges, tallies), the shell counts (per shell root; a vertex stamp; the
+  // (vertex, shell) pairs of vertices in several shells, with their sort scratch), the
+  // duplicate search (keys and scratch for the collected triangles).
+  const uint64_t v = vertex_count, t = triangle_count;
+  const uint64_t kept = arena_array_bound<uint8_t>(v) + arena_array_bound<uint32_t>(t) +
+                        arena_array_bound<uint8_t>(t) + arena_array_bound<uint32_t>(t);
+  const uint64_t edges = arena_array_bound<uint32_t>(v + 1) + arena_array_bound<uint32_t>(3 * t) +
+                         arena_array_bound<uint64_t>(v) + arena_array_bound<uint32_t>(v);
+  const uint64_t shells = arena_array_bound<uint32_t>(3 * t) + arena_array_bound<uint32_t>(v) +
+                          2 * arena_array_bound<uint64_t>(3 * t);
+  const uint64_t duplicates = 3 * arena_array_bound<KeyIndex>(t);
+  const uint64_t phase = edges > shells ? edges : shells;
+  return kept + (phase > duplicates ? phase : duplicates);
 }
 
 namespace {
 
-// Indices in range, referenced vertices, degenerate triangles (repeated ids or exactly flat).
+// Indices in range, referenced vertices, degenerate triangles (repeated ids or exactly flat);
+// in the same pass the area and volume, with mesh_area()'s and mesh_volume()'s arithmetic in
+// their order (the same bits), r->bounds being set.
 Status check_indices(const Mesh& mesh, uint8_t* referenced, MeshReport* r) {
   const uint64_t nv = mesh.vertices.size();
   const Triangle* tris = mesh.triangles.data();
   const Vec3* verts = mesh.vertices.data();
+  const Vec3 c = r->bounds.center();
+  double area = 0.0, volume = 0.0;
   if (nv > 0) std::memset(referenced, 0, static_cast<size_t>(nv));
   for (uint32_t t = 0; t < r->triangle_count; ++t) {
     const uint32_t* v = tris[t].v;
@@ -43,167 +81,308 @@ Status check_indices(const Mesh& mesh, uint8_t* referenced, MeshReport* r) {
       }
       referenced[v[k]] = 1;
     }
-    const bool degenerate = v[0] == v[1] || v[1] == v[2] || v[2] == v[0] ||
-                            collinear3d(verts[v[0]], verts[v[1]], verts[v[2]]);
+    const Vec3 &p0 = verts[v[0]], &p1 = verts[v[1]], &p2 = verts[v[2]];
+    const bool degenerate =
+        v[0] == v[1] || v[1] == v[2] || v[2] == v[0] || collinear3d(p0, p1, p2);
     if (degenerate) {
       if (r->degenerate_triangles == 0) r->first_degenerate_triangle = t;
       ++r->degenerate_triangles;
     }
+    area += 0.5 * length(cross(p1 - p0, p2 - p0));
+    volume += dot(p0 - c, cross(p1 - c, p2 - c));
   }
+  r->area = area;
+  r->volume = volume / 6.0;
   uint64_t referenced_count = 0;
   for (uint64_t i = 0; i < nv; ++i) referenced_count += referenced[i];
   r->unreferenced_vertices = nv - referenced_count;
   return Status::ok();
 }
 
-// The edges: every side's key sorted so the uses of an edge are adjacent; one use is a
-// boundary edge, three or more non-manifold, two in the same direction an orientation
-// conflict. Triangles sharing an edge are united into shells. For the first offender of each
-// kind the one with the smallest triangle index is kept.
-void classify_edges(const Mesh& mesh, KeyIndex* items, KeyIndex* scratch, UnionFind* shells,
-                    MeshReport* r) {
-  const Triangle* tris = mesh.triangles.data();
-  const uint32_t tri_count = static_cast<uint32_t>(r->triangle_count);
-  const uint32_t uses = 3 * tri_count;
-  for (uint32_t t = 0; t < tri_count; ++t) {
-    for (uint32_t k = 0; k < 3; ++k) {
-      items[3 * t + k] = KeyIndex{edge_key(tris[t].v[k], tris[t].v[(k + 1) % 3]), 3 * t + k, 0};
+// The edge pass, linear in the triangles: every side goes into the bucket of its smaller
+// vertex (a counting sort, so each bucket lists its uses in triangle order); a bucket is
+// tallied per larger vertex, then read in order, the first use of each edge reading (and
+// clearing) its tally. One use is a boundary edge, three or more non-manifold, two in the same
+// direction an orientation conflict. Triangles sharing an edge are united into shells; the
+// side that first uses an edge is marked in `first_use` (the shells' edge counts). Duplicate
+// triangles share the edge of their two smallest ids: an edge with two uses compares them
+// directly, one with more collects its candidates into `collected` (sorted later).
+// For the first offender of each kind the edge with the smallest triangle is kept (then the
+// smallest key): the order a sort of the keys would give.
+struct EdgePass {
+  const Triangle* tris;
+  uint32_t tri_count;
+  uint32_t vertex_count;
+  EdgeArrays a;
+  UnionFind* shells;
+  uint8_t* first_use;
+  uint32_t* collected;
+  uint32_t collected_count = 0;
+  MeshReport* r;
+
+  uint32_t end_of(uint32_t use) const { return tris[use / 3].v[(use % 3 + 1) % 3]; }
+  uint32_t start_of(uint32_t use) const { return tris[use / 3].v[use % 3]; }
+
+  void bucket() {
+    uint32_t* start = a.start;
+    std::memset(start, 0, (size_t{vertex_count} + 1) * sizeof(uint32_t));
+    for (uint32_t t = 0; t < tri_count; ++t) {
+      const uint32_t* v = tris[t].v;
+      ++start[(v[0] < v[1] ? v[0] : v[1]) + 1];
+      ++start[(v[1] < v[2] ? v[1] : v[2]) + 1];
+      ++start[(v[2] < v[0] ? v[2] : v[0]) + 1];
+    }
+    for (uint32_t i = 0; i < vertex_count; ++i) start[i + 1] += start[i];
+    // start[lo] is now where bucket lo begins; filling advances it to where it ends.
+    for (uint32_t t = 0; t < tri_count; ++t) {
+      const uint32_t* v = tris[t].v;
+      for (uint32_t k = 0; k < 3; ++k) {
+        const uint32_t p = v[k], q = v[k == 2 ? 0 : k + 1];
+        a.half[start[p < q ? p : q]++] = 3 * t + k;
+      }
     }
   }
-  radix_sort(Span<KeyIndex>(items, uses), Span<KeyIndex>(scratch, uses));
-  auto note = [&](EdgeRef* ref, uint64_t count, uint32_t key_hi, uint32_t key_lo, uint32_t tri) {
-    if (count == 0 || tri < ref->triangle) *ref = EdgeRef{key_hi, key_lo, tri};
-  };
-  // Directed use of side k of triangle t: v[k] -> v[k+1]. "Forward" when it runs a -> b.
-  auto forward = [&](uint32_t use, uint32_t a) { return tris[use / 3].v[use % 3] == a; };
-  uint32_t i = 0;
-  while (i < uses) {
-    uint32_t j = i + 1;
-    while (j < uses && items[j].key == items[i].key) ++j;
-    const uint32_t count = j - i;
-    const uint32_t a = static_cast<uint32_t>(items[i].key >> 32);
-    const uint32_t b = static_cast<uint32_t>(items[i].key);
-    uint32_t min_tri = UINT32_MAX;
-    for (uint32_t u = i; u < j; ++u) {
-      const uint32_t t = items[u].index / 3;
-      min_tri = t < min_tri ? t : min_tri;
-      shells->unite(items[i].index / 3, t);
+
+  static void note(EdgeRef* ref, uint64_t count, uint32_t lo, uint32_t hi, uint32_t tri) {
+    const bool better = count == 0 || tri < ref->triangle ||
+                        (tri == ref->triangle && (uint64_t{lo} << 32 | hi) <
+                                                     (uint64_t{ref->v0} << 32 | ref->v1));
+    if (better) *ref = EdgeRef{lo, hi, tri};
+  }
+
+  // True when (lo, hi) are triangle t's two smallest ids and side k is the first of its sides
+  // on that edge (so a triangle is a candidate once, on one edge).
+  bool candidate(uint32_t t, uint32_t k, uint32_t lo, uint32_t hi) const {
+    const uint32_t* v = tris[t].v;
+    if (third(v, lo, hi) < hi) return false;
+    for (uint32_t j = 0; j < k; ++j) {
+      const uint32_t p = v[j], q = v[j + 1];
+      if ((p < q ? p : q) == lo && (p < q ? q : p) == hi) return false;
     }
+    return true;
+  }
+
+  // The id of triangle v besides its side (lo, hi) (ids as a multiset: (a, a, b) on side (a, b)
+  // leaves a). (lo, hi) are its two smallest exactly when this is >= hi.
+  static uint32_t third(const uint32_t* v, uint32_t lo, uint32_t hi) {
+    return v[0] ^ v[1] ^ v[2] ^ lo ^ hi;
+  }
+
+  // Two uses of one edge: a duplicate pair when both triangles have it as their two smallest
+  // ids and share the third.
+  void pair_duplicate(uint32_t t1, uint32_t t2, uint32_t lo, uint32_t hi) {
+    if (t1 == t2) return;
+    const uint32_t x = third(tris[t1].v, lo, hi);
+    if (x != third(tris[t2].v, lo, hi) || x < hi) return;
+    const uint32_t later = t1 > t2 ? t1 : t2;
+    if (r->duplicate_triangles == 0 || later < r->first_duplicate_triangle) {
+      r->first_duplicate_triangle = later;
+    }
+    ++r->duplicate_triangles;
+  }
+
+  void classify(uint32_t lo, uint32_t hi, uint32_t use, uint64_t count) {
+    const uint32_t t = use / 3;
+    const uint64_t forward = count & 0xffffffffu, uses = forward + (count >> 32);
+    first_use[t] = static_cast<uint8_t>(first_use[t] | (1u << (use % 3)));
     ++r->edge_count;
-    if (count == 1) {
-      note(&r->first_boundary_edge, r->boundary_edges, a, b, min_tri);
+    if (uses == 1) {
+      note(&r->first_boundary_edge, r->boundary_edges, lo, hi, t);
       ++r->boundary_edges;
-    } else if (count > 2) {
-      note(&r->first_nonmanifold_edge, r->nonmanifold_edges, a, b, min_tri);
+    } else if (uses > 2) {
+      note(&r->first_nonmanifold_edge, r->nonmanifold_edges, lo, hi, t);
       ++r->nonmanifold_edges;
-    } else if (forward(items[i].index, a) == forward(items[i + 1].index, a)) {
-      note(&r->first_orientation_conflict, r->orientation_conflicts, a, b, min_tri);
-      ++r->orientation_conflicts;
+    } else {
+      if (forward != 1) {
+        note(&r->first_orientation_conflict, r->orientation_conflicts, lo, hi, t);
+        ++r->orientation_conflicts;
+      }
+      pair_duplicate(t, a.last[hi], lo, hi);
     }
-    i = j;
   }
-}
+
+  void run_bucket(uint32_t lo, uint32_t begin, uint32_t end) {
+    bool collecting = false;
+    for (uint32_t i = begin; i < end; ++i) {
+      const uint32_t use = a.half[i];
+      const uint32_t t = use / 3;
+      const uint32_t from = start_of(use), hi = from ^ end_of(use) ^ lo;  // lo is one end
+      // Forward: the side runs from the smaller id (always, for a side lo -> lo).
+      a.tally[hi] += from == lo ? 1u : (uint64_t{1} << 32);
+      if (a.tally[hi] != 1u && a.tally[hi] != (uint64_t{1} << 32)) shells->unite(a.last[hi], t);
+      a.last[hi] = t;
+    }
+    for (uint32_t i = begin; i < end; ++i) {
+      const uint32_t use = a.half[i];
+      const uint32_t hi = start_of(use) ^ end_of(use) ^ lo;
+      const uint64_t count = a.tally[hi];
+      if (count == 0) continue;  // a later use of an edge already read
+      if (count != kCollecting) {
+        classify(lo, hi, use, count);
+        const uint64_t uses = (count & 0xffffffffu) + (count >> 32);
+        if (uses <= 2) {
+          a.tally[hi] = 0;
+          continue;
+        }
+        a.tally[hi] = kCollecting;
+        collecting = true;
+      }
+      if (candidate(use / 3, use % 3, lo, hi)) collected[collected_count++] = use / 3;
+    }
+    if (!collecting) return;
+    for (uint32_t i = begin; i < end; ++i) {
+      a.tally[start_of(a.half[i]) ^ end_of(a.half[i]) ^ lo] = 0;
+    }
+  }
+
+  void run() {
+    bucket();
+    std::memset(a.tally, 0, size_t{vertex_count} * sizeof(uint64_t));
+    std::memset(first_use, 0, tri_count);
+    uint32_t begin = 0;
+    for (uint32_t lo = 0; lo < vertex_count; ++lo) {
+      const uint32_t end = a.start[lo];  // the fill left the bucket's end here
+      if (end > begin) run_bucket(lo, begin, end);
+      begin = end;
+    }
+  }
+};
 
 // Shells and Euler characteristic: distinct (shell, vertex) pairs, edges and faces counted per
-// shell (indexed by the shell's root triangle, in shell_v/e/f); the genus when every shell is
-// a closed orientable surface.
-void count_shells(const Mesh& mesh, KeyIndex* items, KeyIndex* scratch, UnionFind* shells,
-                  int64_t* shell_v, int64_t* shell_e, int64_t* shell_f, MeshReport* r) {
+// shell (indexed by the shell's root triangle, in counts[3 root + 0/1/2]); the genus when every
+// shell is a closed orientable surface. A vertex is stamped with the shell that first uses it;
+// a vertex used by other shells too (rare: shells touching at a vertex) gives (vertex, shell)
+// pairs, sorted to count each once.
+Status count_shells(Arena& arena, const Mesh& mesh, const uint8_t* first_use, UnionFind* shells,
+                    MeshReport* r) {
+  ArenaScope scope(arena);
   const Triangle* tris = mesh.triangles.data();
   const uint32_t tri_count = static_cast<uint32_t>(r->triangle_count);
-  const uint32_t uses = 3 * tri_count;
-  // Keys: shell root in the high half, vertex in the low half.
+  const uint32_t nv = static_cast<uint32_t>(r->vertex_count);
+  uint32_t* counts = arena.allocate_array<uint32_t>(size_t{3} * tri_count);
+  uint32_t* stamp = arena.allocate_array<uint32_t>(nv);
+  if ((counts == nullptr && tri_count > 0) || (stamp == nullptr && nv > 0)) {
+    return arena.exhausted_status();
+  }
+  std::memset(counts, 0, size_t{3} * tri_count * sizeof(uint32_t));
+  std::memset(stamp, 0xff, size_t{nv} * sizeof(uint32_t));
+  uint64_t others = 0;
   for (uint32_t t = 0; t < tri_count; ++t) {
-    const uint64_t root = shells->find(t);
-    for (uint32_t k = 0; k < 3; ++k) {
-      items[3 * t + k] = KeyIndex{(root << 32) | tris[t].v[k], 0, 0};
+    const uint32_t root = shells->find(t);
+    uint32_t* c = counts + 3 * size_t{root};
+    ++c[2];
+    c[1] += (first_use[t] & 1u) + ((first_use[t] >> 1) & 1u) + (first_use[t] >> 2);  // 3 bits
+    for (uint32_t v : tris[t].v) {
+      if (stamp[v] == UINT32_MAX) {
+        stamp[v] = root;
+        ++c[0];
+      } else if (stamp[v] != root) {
+        ++others;
+      }
     }
   }
-  radix_sort(Span<KeyIndex>(items, uses), Span<KeyIndex>(scratch, uses));
-  for (uint32_t t = 0; t < tri_count; ++t) shell_v[t] = shell_e[t] = shell_f[t] = 0;
-  int64_t total_v = 0;
-  for (uint32_t u = 0; u < uses; ++u) {
-    if (u == 0 || items[u].key != items[u - 1].key) {
-      ++shell_v[items[u].key >> 32];
-      ++total_v;
+  if (others > 0) {
+    uint64_t* pairs = arena.allocate_array<uint64_t>(static_cast<size_t>(others));
+    uint64_t* scratch = arena.allocate_array<uint64_t>(static_cast<size_t>(others));
+    if (pairs == nullptr || scratch == nullptr) return arena.exhausted_status();
+    size_t n = 0;
+    for (uint32_t t = 0; t < tri_count; ++t) {
+      const uint32_t root = shells->find(t);
+      for (uint32_t v : tris[t].v) {
+        if (stamp[v] != root) pairs[n++] = (uint64_t{v} << 32) | root;
+      }
     }
-  }
-  for (uint32_t t = 0; t < tri_count; ++t) ++shell_f[shells->find(t)];
-  // Edges per shell: each distinct edge counted once, at the shell of any triangle using it.
-  for (uint32_t t = 0; t < tri_count; ++t) {
-    for (uint32_t k = 0; k < 3; ++k) {
-      items[3 * t + k] = KeyIndex{edge_key(tris[t].v[k], tris[t].v[(k + 1) % 3]), t, 0};
+    radix_sort_bits(Span<uint64_t>(pairs, n), Span<uint64_t>(scratch, n), 0, 64);
+    for (size_t i = 0; i < n; ++i) {
+      if (i == 0 || pairs[i] != pairs[i - 1]) ++counts[3 * (pairs[i] & 0xffffffffu)];
     }
-  }
-  radix_sort(Span<KeyIndex>(items, uses), Span<KeyIndex>(scratch, uses));
-  for (uint32_t u = 0; u < uses; ++u) {
-    if (u == 0 || items[u].key != items[u - 1].key) ++shell_e[shells->find(items[u].index)];
   }
   bool genus_defined = r->boundary_edges == 0 && r->nonmanifold_edges == 0 &&
                        r->orientation_conflicts == 0 && tri_count > 0;
-  int64_t genus = 0;
+  int64_t genus = 0, total_v = 0;
   for (uint32_t t = 0; t < tri_count; ++t) {
     if (shells->find(t) != t) continue;
     ++r->shells;
-    const int64_t chi = shell_v[t] - shell_e[t] + shell_f[t];
+    const int64_t v = counts[3 * size_t{t}], e = counts[3 * size_t{t} + 1];
+    const int64_t chi = v - e + counts[3 * size_t{t} + 2];
+    total_v += v;
     if (chi > 2 || (2 - chi) % 2 != 0) genus_defined = false;
     genus += (2 - chi) / 2;
   }
   r->euler_characteristic = total_v - static_cast<int64_t>(r->edge_count) + int64_t{tri_count};
   r->genus = genus_defined ? genus : -1;
+  return Status::ok();
 }
 
-// Duplicate triangles: the same vertex set. Sorted by the largest id, then (stable) by the
-// smallest two, so equal sets end up adjacent in triangle order. `items` and `scratch` hold
-// 3 T entries each (the edge pass's).
-void count_duplicates(const Mesh& mesh, KeyIndex* items, KeyIndex* scratch, MeshReport* r) {
+// Duplicates among the triangles collected from edges with three or more uses: sorted by the
+// largest id, then (stable) by the smallest two, so equal sets end up adjacent in the order
+// they were collected (triangle order within an edge).
+Status count_collected_duplicates(Arena& arena, const Mesh& mesh, const uint32_t* collected,
+                                  uint32_t n, MeshReport* r) {
+  if (n < 2) return Status::ok();
+  ArenaScope scope(arena);
   const Triangle* tris = mesh.triangles.data();
-  const uint32_t tri_count = static_cast<uint32_t>(r->triangle_count);
-  for (uint32_t t = 0; t < tri_count; ++t) {
-    uint32_t a = tris[t].v[0], b = tris[t].v[1], c = tris[t].v[2];
-    if (a > b) {
-      uint32_t s = a;
-      a = b;
-      b = s;
-    }
-    if (b > c) {
-      uint32_t s = b;
-      b = c;
-      c = s;
-    }
-    if (a > b) {
-      uint32_t s = a;
-      a = b;
-      b = s;
-    }
-    items[t] = KeyIndex{c, t, 0};
-    scratch[t] = KeyIndex{(uint64_t{a} << 32) | b, t, 0};  // kept aside, looked up by t
+  KeyIndex* items = arena.allocate_array<KeyIndex>(n);
+  KeyIndex* ab = arena.allocate_array<KeyIndex>(n);
+  KeyIndex* scratch = arena.allocate_array<KeyIndex>(n);
+  if (items == nullptr || ab == nullptr || scratch == nullptr) return arena.exhausted_status();
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t* v = tris[collected[i]].v;
+    items[i] = KeyIndex{max3(v[0], v[1], v[2]), i, 0};
+    ab[i] = KeyIndex{(uint64_t{min3(v[0], v[1], v[2])} << 32) | mid3(v[0], v[1], v[2]), i, 0};
   }
-  // Move the (a, b) keys next to the c keys' scratch: reuse the second third of items.
-  KeyIndex* ab = items + tri_count;
-  KeyIndex* sort_scratch = scratch + tri_count;  // 2 * tri_count spare entries remain
-  if (tri_count > 0) std::memcpy(ab, scratch, tri_count * sizeof(KeyIndex));
-  radix_sort(Span<KeyIndex>(items, tri_count), Span<KeyIndex>(sort_scratch, tri_count));
-  for (uint32_t t = 0; t < tri_count; ++t) {
-    items[t].key = ab[items[t].index].key;  // re-key by (a, b), keeping the c order
-  }
-  radix_sort(Span<KeyIndex>(items, tri_count), Span<KeyIndex>(sort_scratch, tri_count));
-  // Now equal (a, b) are adjacent and ordered by c within; equal c must also be compared.
-  auto max_id = [&](uint32_t t) {
-    const uint32_t a = tris[t].v[0], b = tris[t].v[1], c = tris[t].v[2];
-    const uint32_t m = a > b ? a : b;
-    return m > c ? m : c;
+  radix_sort(Span<KeyIndex>(items, n), Span<KeyIndex>(scratch, n));
+  for (uint32_t i = 0; i < n; ++i) items[i].key = ab[items[i].index].key;  // keeps the c order
+  radix_sort(Span<KeyIndex>(items, n), Span<KeyIndex>(scratch, n));
+  auto largest = [&](uint32_t i) {
+    const uint32_t* v = tris[collected[i]].v;
+    return max3(v[0], v[1], v[2]);
   };
-  bool have_dup = false;
-  for (uint32_t u = 1; u < tri_count; ++u) {
-    if (items[u].key == items[u - 1].key && max_id(items[u].index) == max_id(items[u - 1].index)) {
-      const uint32_t later =
-          items[u].index > items[u - 1].index ? items[u].index : items[u - 1].index;
-      if (!have_dup || later < r->first_duplicate_triangle) r->first_duplicate_triangle = later;
-      have_dup = true;
-      ++r->duplicate_triangles;
+  for (uint32_t u = 1; u < n; ++u) {
+    if (items[u].key != items[u - 1].key || largest(items[u].index) != largest(items[u - 1].index)) {
+      continue;
     }
+    const uint32_t x = collected[items[u].index], y = collected[items[u - 1].index];
+    const uint32_t later = x > y ? x : y;
+    if (r->duplicate_triangles == 0 || later < r->first_duplicate_triangle) {
+      r->first_duplicate_triangle = later;
+    }
+    ++r->duplicate_triangles;
   }
+  return Status::ok();
+}
+
+Status check_topology(const Context& ctx, const Mesh& mesh, MeshReport* r) {
+  Arena& arena = *ctx.arena;
+  const uint32_t tri_count = static_cast<uint32_t>(r->triangle_count);
+  const uint32_t nv = static_cast<uint32_t>(r->vertex_count);
+  // The allocations check_mesh_bound() counts, in its order.
+  UnionFind shells;
+  if (!shells.init(arena, tri_count)) return arena.exhausted_status();
+  uint8_t* first_use = arena.allocate_array<uint8_t>(tri_count);
+  uint32_t* collected = arena.allocate_array<uint32_t>(tri_count);
+  if ((first_use == nullptr || collected == nullptr) && tri_count > 0) {
+    return arena.exhausted_status();
+  }
+  uint32_t collected_count = 0;
+  {
+    ArenaScope scope(arena);
+    EdgePass pass{mesh.triangles.data(), tri_count, nv, EdgeArrays{}, &shells, first_use,
+                  collected, 0, r};
+    pass.a.start = arena.allocate_array<uint32_t>(size_t{nv} + 1);
+    pass.a.half = arena.allocate_array<uint32_t>(size_t{3} * tri_count);
+    pass.a.tally = arena.allocate_array<uint64_t>(nv);
+    pass.a.last = arena.allocate_array<uint32_t>(nv);
+    if (pass.a.start == nullptr || ((pass.a.half == nullptr) && tri_count > 0) ||
+        ((pass.a.tally == nullptr || pass.a.last == nullptr) && nv > 0)) {
+      return arena.exhausted_status();
+    }
+    pass.run();
+    collected_count = pass.collected_count;
+  }
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 2, 4));
+  SPLINTCORE_RETURN_IF_ERROR(count_shells(arena, mesh, first_use, &shells, r));
+  return count_collected_duplicates(arena, mesh, collected, collected_count, r);
 }
 
 }  // namespace
@@ -221,35 +400,13 @@ Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report) {
     return make_error(StatusCode::kLimitExceeded, "mesh too large to check: ", nt, " triangles, ",
                       nv, " vertices (32-bit ids)");
   }
-  const uint32_t tri_count = static_cast<uint32_t>(nt);
-  // The allocations check_mesh_bound() counts, in its order.
   uint8_t* referenced = arena.allocate_array<uint8_t>(static_cast<size_t>(nv));
   if (referenced == nullptr && nv > 0) return arena.exhausted_status();
+  r.bounds = mesh_bounds(mesh);
   SPLINTCORE_RETURN_IF_ERROR(check_indices(mesh, referenced, &r));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 1, 4));
-
-  const uint32_t uses = 3 * tri_count;
-  KeyIndex* items = arena.allocate_array<KeyIndex>(uses);
-  KeyIndex* scratch = arena.allocate_array<KeyIndex>(uses);
-  if ((items == nullptr || scratch == nullptr) && tri_count > 0) return arena.exhausted_status();
-  UnionFind shells;
-  if (!shells.init(arena, tri_count)) return arena.exhausted_status();
-  classify_edges(mesh, items, scratch, &shells, &r);
-  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 2, 4));
-
-  int64_t* shell_v = arena.allocate_array<int64_t>(tri_count);
-  int64_t* shell_e = arena.allocate_array<int64_t>(tri_count);
-  int64_t* shell_f = arena.allocate_array<int64_t>(tri_count);
-  if ((shell_v == nullptr || shell_e == nullptr || shell_f == nullptr) && tri_count > 0) {
-    return arena.exhausted_status();
-  }
-  count_shells(mesh, items, scratch, &shells, shell_v, shell_e, shell_f, &r);
+  SPLINTCORE_RETURN_IF_ERROR(check_topology(ctx, mesh, &r));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 3, 4));
-
-  count_duplicates(mesh, items, scratch, &r);
-  r.bounds = mesh_bounds(mesh);
-  r.area = mesh_area(mesh);
-  r.volume = mesh_volume(mesh);
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 4, 4));
   return Status::ok();
 }

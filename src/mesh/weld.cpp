@@ -9,38 +9,17 @@
 // (union-find). Each component becomes one vertex at its lexicographically smallest corner,
 // which makes positions independent of the order of the soup.
 #include "core/union_find.h"
+#include "mesh/exact_weld.h"
 #include "splintcore/mesh.h"
 
 namespace splintcore {
 
 namespace {
 
-inline uint32_t float_key(float f) {
-  uint32_t bits;
-  std::memcpy(&bits, &f, sizeof(bits));
-  return bits == 0x80000000u ? 0u : bits;  // -0 welds with +0
-}
-
-inline uint64_t corner_hash(const float* p) {
-  uint64_t h = hash_mix((uint64_t{float_key(p[0])} << 32) ^ float_key(p[1]));
-  return hash_mix(h ^ float_key(p[2]));
-}
-
-inline bool same_corner(const float* a, const float* b) {
-  return float_key(a[0]) == float_key(b[0]) && float_key(a[1]) == float_key(b[1]) &&
-         float_key(a[2]) == float_key(b[2]);
-}
-
 inline Vec3 to_vec3(const float* p) {
   // -0 becomes +0 here too, so the mesh never holds a negative zero from the soup.
   return {static_cast<double>(p[0]) + 0.0, static_cast<double>(p[1]) + 0.0,
           static_cast<double>(p[2]) + 0.0};
-}
-
-uint64_t table_size_for(uint64_t corners) {
-  uint64_t size = 16;
-  while (size < corners + corners / 2) size <<= 1;
-  return size;
 }
 
 Status check_soup(Span<const SoupTriangle> soup) {
@@ -76,10 +55,84 @@ Status compact_vertices(Arena& arena, const Arena::Marker& marker, const Vec3* s
 
 }  // namespace
 
+uint64_t exact_weld_table_slots(uint64_t corners) {
+  uint64_t size = 16;
+  while (size < corners + corners / 2) size <<= 1;
+  return size;
+}
+
+namespace {
+// A closed mesh has about one vertex per two triangles: the positions first reserved, and
+// the table's first size (load at most 2/3 there).
+uint64_t expected_vertices(uint64_t triangle_count) {
+  const uint64_t expected = triangle_count / 2 + triangle_count / 16 + 16;
+  return expected < 3 * triangle_count ? expected : 3 * triangle_count;
+}
+}  // namespace
+
+bool ExactWelder::init(Arena& arena, uint64_t triangle_count) {
+  // The positions first, where they stay unless they outgrow the reserve (then they move to
+  // the top of the arena and grow there).
+  positions_.bind(&arena);
+  if (!positions_.reserve(static_cast<size_t>(expected_vertices(triangle_count)))) return false;
+  reserved_ = positions_.data();
+  after_reserve_ = arena.mark();
+  table_slots_ = exact_weld_table_slots(3 * triangle_count);
+  table_ = arena.allocate_array<uint32_t>(static_cast<size_t>(table_slots_));
+  if (table_ == nullptr) return false;
+  id_mask_ = 1;
+  while (id_mask_ < 3 * triangle_count + 1 && id_mask_ != UINT32_MAX) id_mask_ = 2 * id_mask_ + 1;
+  const uint64_t expected = expected_vertices(triangle_count);
+  uint64_t slots = 16;
+  while (slots < expected + expected / 2 && slots < table_slots_) slots <<= 1;
+  mask_ = slots - 1;
+  grow_at_ = slots == table_slots_ ? UINT64_MAX : slots / 3 * 2;
+  std::memset(table_, 0, static_cast<size_t>(slots) * sizeof(uint32_t));
+  return true;
+}
+
+void ExactWelder::grow() {
+  const uint64_t slots = 2 * (mask_ + 1);
+  mask_ = slots - 1;
+  grow_at_ = slots == table_slots_ ? UINT64_MAX : slots / 3 * 2;
+  std::memset(table_, 0, static_cast<size_t>(slots) * sizeof(uint32_t));
+  const Vec3* v = positions_.data();
+  const uint32_t n = static_cast<uint32_t>(positions_.size());
+  for (uint32_t id = 0; id < n; ++id) {
+    // Back to the float corner (exact: every position came from a float).
+    const float p[3] = {static_cast<float>(v[id].x), static_cast<float>(v[id].y),
+                        static_cast<float>(v[id].z)};
+    const uint64_t h = hash(p);
+    uint64_t slot = h & mask_;
+    while (table_[slot] != 0) slot = (slot + 1) & mask_;
+    table_[slot] = tag_of(h) | (id + 1);
+  }
+}
+
+void ExactWelder::finish(Arena& arena, const Arena::Marker& marker, ArenaArray<Vec3>* vertices) {
+  const size_t count = positions_.size();
+  if (positions_.data() == reserved_) {  // still in the reserve: give back its unused end
+    arena.rewind(after_reserve_);
+    (void)arena.try_shrink(reserved_, positions_.capacity() * sizeof(Vec3), count * sizeof(Vec3));
+    vertices->adopt(reserved_, count, count);
+    return;
+  }
+  arena.rewind(marker);
+  Vec3* target = arena.allocate_array<Vec3>(count);
+  SPLINTCORE_ASSERT(target != nullptr || count == 0);  // it fit above the table
+  if (count > 0) std::memmove(static_cast<void*>(target), positions_.data(), count * sizeof(Vec3));
+  vertices->adopt(target, count, count);
+}
+
+// The triangles, the positions' reserve, the table (allocated whole, used in part), the
+// positions when they outgrow the reserve (at most one per corner, grown at the top of the
+// arena; copied down over the rest at the end).
 uint64_t weld_exact_bound(uint64_t triangle_count) {
   const uint64_t corners = 3 * triangle_count;
-  return triangle_count * sizeof(Triangle) + table_size_for(corners) * sizeof(uint32_t) +
-         corners * sizeof(Vec3) + 4 * 64;
+  return arena_array_bound<Triangle>(triangle_count) +
+         arena_array_bound<Vec3>(expected_vertices(triangle_count)) +
+         arena_array_bound<uint32_t>(exact_weld_table_slots(corners)) +
+         arena_array_bound<Vec3>(corners);
 }
 
 // The triangles, the sort keys, then either the radix sort's scratch (returned) or the
@@ -105,51 +158,24 @@ Status weld_exact_steps(const Context& ctx, Span<const SoupTriangle> soup, Mesh*
   if (!out->triangles.resize(n)) return arena.exhausted_status();
 
   const Arena::Marker temp_start = arena.mark();
-  const uint64_t table_size = table_size_for(3 * uint64_t{n});
-  const uint64_t mask = table_size - 1;
-  // Each slot holds 1 + the corner index of a vertex's first appearance (0: empty).
-  uint32_t* table = arena.allocate_array<uint32_t>(static_cast<size_t>(table_size));
-  if (table == nullptr) return arena.exhausted_status();
-  std::memset(table, 0, static_cast<size_t>(table_size) * sizeof(uint32_t));
-
+  ExactWelder welder;
+  if (!welder.init(arena, n)) return arena.exhausted_status();
   const float* corners = &soup.data()[0].p[0][0];
   Triangle* tris = out->triangles.data();
-  uint32_t vertex_count = 0;
-  // Pass 1: give each corner its vertex id. The slot stores the first corner; its id is the
-  // id already written into that corner's triangle.
   for (size_t t = 0; t < n; ++t) {
     if ((t & 0xffff) == 0) {
       SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "weld", t, n));
     }
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t corner = static_cast<uint32_t>(3 * t + static_cast<size_t>(k));
-      const float* p = corners + 3 * size_t{corner};
-      uint64_t slot = corner_hash(p) & mask;
-      for (;;) {
-        uint32_t entry = table[slot];
-        if (entry == 0) {
-          table[slot] = corner + 1;
-          tris[t].v[k] = vertex_count++;
-          break;
-        }
-        const uint32_t first = entry - 1;
-        if (same_corner(corners + 3 * size_t{first}, p)) {
-          tris[t].v[k] = tris[first / 3].v[first % 3];
-          break;
-        }
-        slot = (slot + 1) & mask;
-      }
+    if (t + 32 < n) {  // the slots of a triangle ahead, about a memory latency
+      const float* ahead = corners + 9 * (t + 32);
+      __builtin_prefetch(welder.first_slot(ExactWelder::hash(ahead)));
+      __builtin_prefetch(welder.first_slot(ExactWelder::hash(ahead + 3)));
+      __builtin_prefetch(welder.first_slot(ExactWelder::hash(ahead + 6)));
     }
+    if (!welder.add(corners + 9 * t, tris + t)) return arena.exhausted_status();
   }
-  // Pass 2: positions, in id order (ids were handed out in corner order).
-  Vec3* positions = arena.allocate_array<Vec3>(vertex_count);
-  if (positions == nullptr && vertex_count > 0) return arena.exhausted_status();
-  uint32_t next = 0;
-  for (size_t c = 0; c < 3 * n && next < vertex_count; ++c) {
-    if (tris[c / 3].v[c % 3] == next) positions[next++] = to_vec3(corners + 3 * c);
-  }
-  SPLINTCORE_ASSERT(next == vertex_count);
-  return compact_vertices(arena, temp_start, positions, vertex_count, &out->vertices);
+  welder.finish(arena, temp_start, &out->vertices);
+  return Status::ok();
 }
 
 // The stages of weld_tolerance: the corners' grid cells, sorted; cells joined by union-find;

@@ -973,4 +973,69 @@ TEST(StlReadTest, FailedReadLeavesTheArenaWhereItWas) {
   EXPECT_LE(arena.used() - before, 12 * sizeof(splintcore::Triangle) + 8 * sizeof(Vec3) + 64);
 }
 
+// A binary STL from a source that knows its size is welded straight from the read buffer; from
+// one that does not, it is read whole and welded. Both must give the same mesh bytes, or the
+// same error (code, text, byte, triangle), whatever the chunk size: coordinates at and just
+// past a limit that no float holds exactly, NaN, infinity, -0, a source that delivers fewer or
+// more bytes than its size says.
+TEST(StlRead, StreamedWeldAgreesWithSoupThenWeld) {
+  std::vector<SoupTriangle> soup = splintcore::shapes::torus(17, 13, 30.0, 8.0);
+  // Not a float, and the nearest float lies above it: the float below passes, the next fails.
+  const double limit = 40.2;
+  ASSERT_GT(static_cast<double>(static_cast<float>(limit)), limit);
+  const float below = std::nextafter(static_cast<float>(limit), 0.0f);
+  const float above = std::nextafter(below, 100.0f);
+  std::vector<std::vector<uint8_t>> files;
+  files.push_back(binary_stl(soup, "torus"));
+  for (float bad : {below, -below, above, -above, std::numeric_limits<float>::quiet_NaN(),
+                    std::numeric_limits<float>::infinity(), -0.0f}) {
+    std::vector<SoupTriangle> s = soup;
+    s[soup.size() / 2].p[1][2] = bad;
+    s[0].p[2][0] = -0.0f;
+    files.push_back(binary_stl(s, "edited"));
+  }
+  std::vector<uint8_t> truncated = files[0];
+  truncated.resize(truncated.size() - 20);
+  std::vector<uint8_t> extra = files[0];
+  extra.push_back(0);
+  files.push_back(truncated);
+  files.push_back(extra);
+  for (size_t f = 0; f < files.size(); ++f) {
+    for (size_t chunk : {size_t{4096}, size_t{5000}, size_t{1} << 16}) {
+      std::string result[2];
+      for (int sized = 0; sized < 2; ++sized) {
+        splintcore::test::TestArena t(size_t{16} << 20);
+        StlReadOptions options;
+        options.chunk_bytes = chunk;
+        options.max_abs_coordinate = limit;
+        MemorySource ms{files[f].data(), files[f].size(), 0, 0};
+        ByteSource source = splintcore::memory_source(&ms, "t.stl");
+        // The short and the long file claim the right size (a source that then delivers less
+        // or more): the streamed reader must notice as the soup reader does.
+        source.size = sized == 0 ? kUnknownSize : files[0].size();
+        if (sized == 1 && f + 2 < files.size()) source.size = files[f].size();
+        Mesh mesh(&t.arena);
+        StlInfo info;
+        const size_t before = t.arena.used();
+        const Status st = splintcore::read_stl_mesh(Context(&t.arena), source, options, &mesh, &info);
+        if (!st.is_ok()) {
+          EXPECT_EQ(t.arena.used(), before);
+          EXPECT_TRUE(mesh.vertices.empty() && mesh.triangles.empty());
+          result[sized] = format(st) + " byte " + std::to_string(st.byte_offset()) + " index " +
+                          std::to_string(st.index());
+          continue;
+        }
+        result[sized].assign(reinterpret_cast<const char*>(mesh.vertices.data()),
+                             mesh.vertices.size() * sizeof(Vec3));
+        result[sized].append(reinterpret_cast<const char*>(mesh.triangles.data()),
+                             mesh.triangles.size() * sizeof(splintcore::Triangle));
+        result[sized] += std::string(info.header) + std::to_string(info.triangles) + " " +
+                         std::to_string(info.bytes);
+      }
+      EXPECT_EQ(result[0], result[1]) << "file " << f << " chunk " << chunk;
+      EXPECT_FALSE(result[1].empty());
+    }
+  }
+}
+
 }  // namespace

@@ -1,4 +1,9 @@
+#include <algorithm>
+#include <array>
+#include <map>
 #include <random>
+#include <set>
+#include <vector>
 
 #include "support/test_util.h"
 
@@ -138,6 +143,148 @@ TEST(CheckMesh, PropertyRandomBoxesStayValid) {
     ASSERT_TRUE(r.is_valid_solid());
     double exact = (double{hi[0]} - lo[0]) * (double{hi[1]} - lo[1]) * (double{hi[2]} - lo[2]);
     ASSERT_NEAR(r.volume, exact, 1e-12 * exact);
+  }
+}
+
+// The report as a plain model computes it: every undirected edge's uses gathered in a map
+// (ordered by key), shells by repeated flood fill, duplicates by comparing sorted id triples.
+// The check's linear edge pass must give exactly these figures and first offenders.
+MeshReport model_report(const Mesh& mesh) {
+  MeshReport r;
+  const uint32_t nt = static_cast<uint32_t>(mesh.triangles.size());
+  const Triangle* tris = mesh.triangles.data();
+  std::map<std::pair<uint32_t, uint32_t>, std::vector<uint32_t>> uses;  // edge -> 3 t + k
+  for (uint32_t t = 0; t < nt; ++t) {
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t a = tris[t].v[k], b = tris[t].v[(k + 1) % 3];
+      uses[{std::min(a, b), std::max(a, b)}].push_back(3 * t + k);
+    }
+  }
+  std::vector<uint32_t> shell(nt);
+  for (uint32_t t = 0; t < nt; ++t) shell[t] = t;
+  for (bool changed = true; changed;) {  // labels: the smallest triangle reachable
+    changed = false;
+    for (const auto& e : uses) {
+      uint32_t m = UINT32_MAX;
+      for (uint32_t u : e.second) m = std::min(m, shell[u / 3]);
+      for (uint32_t u : e.second) {
+        if (shell[u / 3] != m) shell[u / 3] = m, changed = true;
+      }
+    }
+  }
+  auto note = [](EdgeRef* ref, uint64_t* count, uint32_t a, uint32_t b, uint32_t t) {
+    if (*count == 0 || t < ref->triangle) *ref = EdgeRef{a, b, t};
+    ++*count;
+  };
+  std::set<std::pair<uint32_t, uint32_t>> shell_vertex, shell_edge;
+  for (const auto& e : uses) {
+    const uint32_t a = e.first.first, b = e.first.second;
+    uint32_t min_t = UINT32_MAX, forward = 0;
+    for (uint32_t u : e.second) {
+      min_t = std::min(min_t, u / 3);
+      forward += tris[u / 3].v[u % 3] == a ? 1u : 0u;
+    }
+    ++r.edge_count;
+    shell_edge.insert({shell[min_t], r.edge_count});
+    const size_t n = e.second.size();
+    if (n == 1) note(&r.first_boundary_edge, &r.boundary_edges, a, b, min_t);
+    if (n > 2) note(&r.first_nonmanifold_edge, &r.nonmanifold_edges, a, b, min_t);
+    if (n == 2 && forward != 1) {
+      note(&r.first_orientation_conflict, &r.orientation_conflicts, a, b, min_t);
+    }
+  }
+  std::map<std::array<uint32_t, 3>, std::vector<uint32_t>> sets;
+  std::map<uint32_t, std::array<int64_t, 3>> per_shell;  // V, E, F
+  for (uint32_t t = 0; t < nt; ++t) {
+    std::array<uint32_t, 3> v = {tris[t].v[0], tris[t].v[1], tris[t].v[2]};
+    for (uint32_t x : v) {
+      if (shell_vertex.insert({shell[t], x}).second) ++per_shell[shell[t]][0];
+    }
+    ++per_shell[shell[t]][2];
+    std::sort(v.begin(), v.end());
+    sets[v].push_back(t);
+  }
+  for (const auto& se : shell_edge) ++per_shell[se.first][1];
+  for (const auto& s : sets) {
+    if (s.second.size() < 2) continue;
+    if (r.duplicate_triangles == 0 || s.second[1] < r.first_duplicate_triangle) {
+      r.first_duplicate_triangle = s.second[1];
+    }
+    r.duplicate_triangles += s.second.size() - 1;
+  }
+  bool genus_defined = r.boundary_edges == 0 && r.nonmanifold_edges == 0 &&
+                       r.orientation_conflicts == 0 && nt > 0;
+  int64_t genus = 0, total_v = 0;
+  for (const auto& s : per_shell) {
+    const int64_t chi = s.second[0] - s.second[1] + s.second[2];
+    total_v += s.second[0];
+    if (chi > 2 || (2 - chi) % 2 != 0) genus_defined = false;
+    genus += (2 - chi) / 2;
+  }
+  r.shells = per_shell.size();
+  r.euler_characteristic = total_v - static_cast<int64_t>(r.edge_count) + nt;
+  r.genus = genus_defined ? genus : -1;
+  return r;
+}
+
+void expect_same_topology(const MeshReport& got, const MeshReport& want) {
+  EXPECT_EQ(got.edge_count, want.edge_count);
+  EXPECT_EQ(got.boundary_edges, want.boundary_edges);
+  EXPECT_EQ(got.nonmanifold_edges, want.nonmanifold_edges);
+  EXPECT_EQ(got.orientation_conflicts, want.orientation_conflicts);
+  EXPECT_EQ(got.duplicate_triangles, want.duplicate_triangles);
+  EXPECT_EQ(got.shells, want.shells);
+  EXPECT_EQ(got.euler_characteristic, want.euler_characteristic);
+  EXPECT_EQ(got.genus, want.genus);
+  const EdgeRef* g[3] = {&got.first_boundary_edge, &got.first_nonmanifold_edge,
+                         &got.first_orientation_conflict};
+  const EdgeRef* w[3] = {&want.first_boundary_edge, &want.first_nonmanifold_edge,
+                         &want.first_orientation_conflict};
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(g[i]->v0, w[i]->v0) << i;
+    EXPECT_EQ(g[i]->v1, w[i]->v1) << i;
+    EXPECT_EQ(g[i]->triangle, w[i]->triangle) << i;
+  }
+  if (want.duplicate_triangles > 0) {
+    EXPECT_EQ(got.first_duplicate_triangle, want.first_duplicate_triangle);
+  }
+}
+
+// Random index triples over few vertices: non-manifold edges, repeated ids, duplicates in any
+// order, shells touching at a vertex, conflicts; and closed meshes with triangles appended.
+TEST(CheckMesh, PropertyEdgePassAgreesWithAPlainModel) {
+  std::mt19937_64 rng(2029);
+  for (int round = 0; round < 400; ++round) {
+    TestArena t(1 << 22);
+    Mesh mesh(&t.arena);
+    if (round % 4 == 0) {
+      const float lo[3] = {0, 0, 0}, hi[3] = {1, 2, 3};
+      ASSERT_TRUE(test::mesh_from_soup(t.arena, shapes::box(lo, hi), &mesh).is_ok());
+    } else {
+      mesh.bind(&t.arena);
+    }
+    const uint32_t nv = 3 + static_cast<uint32_t>(rng() % (round % 3 == 0 ? 6 : 40));
+    while (mesh.vertices.size() < nv) {
+      ASSERT_TRUE(mesh.vertices.push_back(
+          Vec3{static_cast<double>(rng() % 7), static_cast<double>(rng() % 5), 0.5}));
+    }
+    const uint32_t extra = static_cast<uint32_t>(rng() % 60);
+    for (uint32_t i = 0; i < extra; ++i) {
+      Triangle tri{{static_cast<uint32_t>(rng() % nv), static_cast<uint32_t>(rng() % nv),
+                    static_cast<uint32_t>(rng() % nv)}};
+      if (i > 0 && rng() % 5 == 0) {  // an earlier triangle again, rotated or flipped
+        const Triangle& o = mesh.triangles[rng() % mesh.triangles.size()];
+        tri = rng() % 2 ? Triangle{{o.v[1], o.v[2], o.v[0]}} : Triangle{{o.v[0], o.v[2], o.v[1]}};
+      }
+      ASSERT_TRUE(mesh.triangles.push_back(tri));
+    }
+    MeshReport got;
+    ASSERT_TRUE(check_mesh(Context(&t.arena), mesh, &got).is_ok());
+    SCOPED_TRACE(round);
+    expect_same_topology(got, model_report(mesh));
+    // The measures are taken in the check's own pass: the same bits as the functions.
+    EXPECT_EQ(got.area, mesh_area(mesh));
+    EXPECT_EQ(got.volume, mesh_volume(mesh));
   }
 }
 

@@ -158,6 +158,51 @@ void bench_stl(Harness& h, Arena& arena, const char* label, const std::vector<ui
       return check_mesh(c, mesh, &report);
     });
   }
+  // What `splintcore check` does between its file and its report: read, weld, check.
+  name = std::string("stl_read_check") + label;
+  if (h.wanted(name.c_str())) {
+    Result r = h.measure(name.c_str(), triangles, arena, [&](Arena& a) {
+      Context c(&a);
+      MemorySource m{stl.data(), stl.size(), 0, 0};
+      Mesh read(&a);
+      SPLINTCORE_RETURN_IF_ERROR(
+          read_stl_mesh(c, memory_source(&m), StlReadOptions{}, &read, nullptr));
+      MeshReport report;
+      return check_mesh(c, read, &report);
+    });
+    std::printf("# %s: %.2f GB/s of STL (%zu bytes per run, median)\n", name.c_str(),
+                static_cast<double>(stl.size()) / r.median / 1e9, stl.size());
+  }
+}
+
+// The phantom maxilla of `splintcore phantom --triangles 543530` (the paper's largest jaw) as
+// the binary STL that command writes: read, weld and check at that size.
+void bench_stl_phantom(Harness& h, Arena& arena) {
+  const char* label = "_phantom_543k";
+  const char* names[3] = {"stl_read_weld_phantom_543k", "mesh_check_phantom_543k",
+                          "stl_read_check_phantom_543k"};
+  if (!h.wanted(names[0]) && !h.wanted(names[1]) && !h.wanted(names[2])) return;
+  phantom::JawMesh jaw;
+  phantom::PhantomOptions po;
+  po.target_triangles = 543530;
+  const Status s = phantom::make_jaw(phantom::Jaw::kMaxilla, po, &jaw);
+  if (!s.is_ok()) {
+    cli::print_error(s);
+    h.failed = true;
+    return;
+  }
+  std::vector<SoupTriangle> soup(jaw.triangles.size());
+  for (size_t t = 0; t < soup.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& v = jaw.vertices[jaw.triangles[t].v[k]];
+      soup[t].p[k][0] = static_cast<float>(v.x);
+      soup[t].p[k][1] = static_cast<float>(v.y);
+      soup[t].p[k][2] = static_cast<float>(v.z);
+    }
+  }
+  const Arena::Marker m = arena.mark();
+  bench_stl(h, arena, label, to_binary_stl(soup));
+  arena.rewind(m);
 }
 
 // The initial splint base at the paper's scale (fixtures/cases/paper_scale.json: 2,612
@@ -1245,6 +1290,7 @@ int run(int argc, char** argv) {
     // A torus of 2 x 521 x 521 = 542,882 triangles: the size of the paper's largest jaw.
     std::vector<uint8_t> torus = to_binary_stl(shapes::torus(521, 521, 30.0, 8.0));
     bench_stl(h, arena, "", torus);
+    bench_stl_phantom(h, arena);
 
     // The real CBCT dentition, all 31 teeth in one soup (skipped when absent).
     std::vector<uint8_t> all;

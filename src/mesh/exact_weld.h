@@ -1,0 +1,114 @@
+// The exact weld fed one triangle at a time (private to src/mesh and src/io): weld_exact() runs
+// it over a soup, and the binary STL reader straight from its read buffer, so a file's
+// triangles never sit in memory as soup.
+//
+// Vertex ids are handed out in order of first appearance (so they depend only on the corners,
+// never on hashing). The table holds 1 + a vertex id per slot and is compared against the
+// vertex positions (the float corners converted to double, exactly; -0 and +0 compare equal,
+// and the positions get +0). It is allocated for the worst case (every corner a new vertex:
+// weld_exact_bound's table) but only a power-of-two prefix sized for the vertices seen so far
+// is used (cleared, touched); it doubles and is rebuilt from the positions as they grow, so a
+// mesh with one vertex per two triangles touches a sixth of it.
+#ifndef SPLINTCORE_SRC_MESH_EXACT_WELD_H
+#define SPLINTCORE_SRC_MESH_EXACT_WELD_H
+
+#include "splintcore/mesh.h"
+
+namespace splintcore {
+
+class ExactWelder {
+ public:
+  // Reserves the positions (for about one vertex per two triangles), then allocates the table;
+  // false when the arena is exhausted. `triangle_count` <= (2^32 - 2) / 3.
+  [[nodiscard]] bool init(Arena& arena, uint64_t triangle_count);
+
+  // Welds the three corners p[0..8] (finite floats) into `out`; false when the arena is
+  // exhausted (the positions could not grow).
+  [[nodiscard]] bool add(const float* p, Triangle* out) {
+    const uint64_t h[3] = {hash(p), hash(p + 3), hash(p + 6)};
+    return add_hashed(p, h, out);
+  }
+  // add() with the corners' hash() already known (`h`, from prefetching them).
+  [[nodiscard]] bool add_hashed(const float* p, const uint64_t* h, Triangle* out) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t id = vertex(p + 3 * k, h[k]);
+      if (id == kFull) return false;
+      out->v[k] = id;
+    }
+    return true;
+  }
+
+  // The hash of corner p (three floats): where its search begins (first_slot) and its tag.
+  static uint64_t hash(const float* p) {
+    // Three odd multipliers and one fold (each coordinate's bits reach the high half, which
+    // the fold brings down to the slot bits; the tag takes the high bits). Only the speed
+    // depends on it: ids go by first appearance.
+    const uint64_t h = uint64_t{key(p[0])} * 0x9e3779b97f4a7c15ull +
+                       uint64_t{key(p[1])} * 0xc2b2ae3d27d4eb4full +
+                       uint64_t{key(p[2])} * 0x165667b19e3779f9ull;
+    return (h ^ (h >> 29)) * 0xbf58476d1ce4e5b9ull;
+  }
+
+
+  // The table slot where the search for a corner of hash h begins: callers prefetch the
+  // slots of a triangle a few dozen ahead with __builtin_prefetch (GCC 12 deletes the
+  // prefetches when they sit in a member function like this one).
+  const uint32_t* first_slot(uint64_t h) const { return table_ + (h & mask_); }
+
+  // Points `vertices` at the positions and gives back everything above them: the reserve's
+  // unused end, or (when they outgrew it) everything above `marker`, where init() began, after
+  // moving them down there. Never fails.
+  void finish(Arena& arena, const Arena::Marker& marker, ArenaArray<Vec3>* vertices);
+
+ private:
+  static constexpr uint32_t kFull = ~uint32_t{0};
+
+  static uint32_t key(float f) {
+    uint32_t bits;
+    std::memcpy(&bits, &f, sizeof(bits));
+    return bits == 0x80000000u ? 0u : bits;  // -0 welds with +0
+  }
+
+  // A slot holds 1 + the vertex id in its low id_bits_ bits and, above them, the top bits of
+  // the corner's hash: most slots of other corners are passed over without reading their
+  // position (which would be a cache miss each).
+  uint32_t vertex(const float* p, uint64_t h) {
+    const double x = static_cast<double>(p[0]), y = static_cast<double>(p[1]),
+                 z = static_cast<double>(p[2]);
+    const uint32_t tag = tag_of(h);
+    uint64_t slot = h & mask_;
+    for (;;) {
+      const uint32_t entry = table_[slot];
+      if (entry == 0) break;
+      if ((entry & ~id_mask_) == tag) {
+        const Vec3& v = positions_.data()[(entry & id_mask_) - 1];
+        if (v.x == x && v.y == y && v.z == z) return (entry & id_mask_) - 1;
+      }
+      slot = (slot + 1) & mask_;
+    }
+    const uint32_t id = static_cast<uint32_t>(positions_.size());
+    if (!positions_.push_back(Vec3{x + 0.0, y + 0.0, z + 0.0})) return kFull;
+    table_[slot] = tag | (id + 1);
+    if (positions_.size() > grow_at_) grow();
+    return id;
+  }
+  uint32_t tag_of(uint64_t h) const { return static_cast<uint32_t>(h >> 32) & ~id_mask_; }
+
+  void grow();
+
+  uint32_t* table_ = nullptr;
+  uint64_t table_slots_ = 0;  // allocated (a power of two)
+  uint64_t mask_ = 0;         // slots in use - 1
+  uint64_t grow_at_ = 0;      // vertex count above which the slots in use double
+  uint32_t id_mask_ = 0;      // the low bits that hold 1 + a vertex id (at most 3 T)
+  ArenaArray<Vec3> positions_;
+  Vec3* reserved_ = nullptr;  // where the positions were first reserved
+  Arena::Marker after_reserve_;
+};
+
+// Slots of the exact weld's table for `corners` corners (a power of two, at least 1.5 a corner).
+uint64_t exact_weld_table_slots(uint64_t corners);
+
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_SRC_MESH_EXACT_WELD_H
