@@ -1,7 +1,5 @@
 #include "command.h"
 
-#include <sys/mman.h>
-
 #include <cstdlib>
 
 namespace splintcore {
@@ -51,18 +49,9 @@ void CommandLine::print_help(std::FILE* out) const {
   print_options(out, specs_);
 }
 
-RunMemory::RunMemory(uint64_t cap) {
-  // Aligned to 2 MiB and marked for huge pages: the arena's first touch of a 27 MB mesh took
-  // 8,000 page faults, a fifth of `check`'s time. (Only where the kernel offers it.)
-  constexpr uint64_t kHuge = uint64_t{2} << 20;
-  const uint64_t rounded = (cap + kHuge - 1) / kHuge * kHuge;
-  buffer = std::aligned_alloc(static_cast<size_t>(kHuge), static_cast<size_t>(rounded));
-#ifdef MADV_HUGEPAGE
-  if (buffer != nullptr) (void)::madvise(buffer, static_cast<size_t>(rounded), MADV_HUGEPAGE);
-#endif
-}
+RunMemory::RunMemory(uint64_t cap) : buffer(acquire_arena_memory(cap)) {}
 
-RunMemory::~RunMemory() { std::free(buffer); }
+RunMemory::~RunMemory() { release_arena_memory(buffer); }
 
 int rejected(const CommonArgs& args, const char* command, const Status& s, const Arena* arena) {
   cli::print_error(s);

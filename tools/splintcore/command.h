@@ -82,9 +82,9 @@ class CommandLine {
   std::vector<OptionSpec> specs_;
 };
 
-// The arena for a run: one block of the cap, committed by the OS only as it is touched.
-// 16-byte aligned (Arena::kDefaultAlignment): malloc gives only 8 on 32-bit ARM, which would
-// shift the arena's padding and its reported figures.
+// The arena for a run: one block of the cap (acquire_arena_memory, platform.h), committed by
+// the OS only as it is touched. Its 2 MiB alignment covers Arena::kDefaultAlignment (malloc
+// gives only 8 on 32-bit ARM, which would shift the arena's padding and its reported figures).
 struct RunMemory {
   void* buffer = nullptr;
   explicit RunMemory(uint64_t cap);
