@@ -66,6 +66,14 @@ struct BooleanOptions {
   // stay float32): at most about 0.9 um with the default, far below a printer's 16 um layer. The
   // translation used is in BooleanStats::nudge. 0 turns it off.
   uint32_t max_nudges = 8;
+  // A bound on the work: the candidate pairs (triangles of A and B whose cells and boxes meet,
+  // each decided by exact tests) of one run summed over its nudged attempts. 0: 64 per
+  // triangle of A and B plus 2^22 (splint cases use a few per triangle). Two tessellations of
+  // nearly the same faces (e.g. long thin CAD triangles over dense ones) pair nearly every
+  // triangle with every other near it: tens of millions of pairs a run, minutes with nudges.
+  // Over the bound: kLimitExceeded at the first attempt, or after a nudge the first attempt's
+  // own error, saying that the nudges stopped.
+  uint64_t max_candidate_pairs = 0;
 };
 
 struct BooleanStats {
@@ -112,7 +120,8 @@ struct BooleanStats {
 // contact the exact rule cannot return, or a float32-fragile one, that no nudge resolved:
 // named), kArenaExhausted (the message says
 // how much was needed at that point), kLimitExceeded (more than 2^31 vertices or triangles),
-// kCancelled, kInternal (a result that fails its own check: please report it with the
+// kCancelled, kLimitExceeded also for more candidate pairs than options.max_candidate_pairs,
+// kInternal (a result that fails its own check: please report it with the
 // inputs). An error of a pass when there are several says which pass ("pass 2 of 3").
 Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b, const BooleanOptions& options,
                     Mesh* out, BooleanStats* stats);

@@ -300,6 +300,12 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
   if (s.is_ok()) s = build_broadphase(ctx, a, b, reach, options.float32_output, &bp);
   if (!s.is_ok()) return s;
   const Arena::Marker attempts_start = arena.mark();
+  const uint64_t budget =
+      options.max_candidate_pairs != 0
+          ? options.max_candidate_pairs
+          : 64 * (uint64_t{a.triangles.size()} + b.triangles.size()) + (uint64_t{1} << 22);
+  uint64_t used = 0;
+  Status first;  // the first attempt's failure, when a nudge then runs out of the budget
   Mesh result;
   for (uint32_t attempt = 0; attempt <= options.max_nudges; ++attempt) {
     *stats = BooleanStats{};
@@ -340,7 +346,17 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
     in.ntb = static_cast<uint32_t>(b.triangles.size());
     result = Mesh();
     BooleanRun run(ctx, in, bp, options, stats);
+    run.set_pair_budget(budget - used);
     s = run.run(&result);
+    used += stats->candidate_pairs;
+    if (attempt == 0) first = s;
+    if (s.code() == StatusCode::kLimitExceeded && attempt > 0 && used > budget) {
+      s = first;
+      s.append(" (nudges stopped after ").append_u64(attempt);
+      s.append(": more than ").append_u64(budget);
+      s.append(" candidate pairs of triangles in all, BooleanOptions::max_candidate_pairs)");
+      return s;
+    }
     if (s.code() != StatusCode::kUnsupported) break;
   }
   if (!s.is_ok()) {

@@ -264,6 +264,116 @@ struct Broadphase {
   }
 };
 
+// A grid coordinate as a cell index along an axis of `dim` cells (clamped to the grid).
+inline uint32_t grid_cell(double x, uint32_t dim) {
+  return x <= 0.0 ? 0u : (x >= dim - 1.0 ? dim - 1 : static_cast<uint32_t>(x));
+}
+
+// The cells of the grid that triangle (p0, p1, p2) may meet, also when moved by up to `reach`
+// along each axis: a superset, every rounding covered by a pad. Long thin triangles (CAD
+// meshes) meet a line of cells where their boxes cover a sheet or a block, so the triangle
+// itself is rasterised, not its box (issue 29: 48 M pairs of boxes, 1,239 crossings). Along
+// the dominant axis w of its normal the triangle is a graph over (u, v) = (w + 1, w + 2)
+// (mod 3): the rows of cells along u that its box covers; in each row the columns along v
+// that its projection meets within the row's strip (the three edges clipped to the strip,
+// the clipped ends bounding v); in each column the cells along w that its plane spans at the
+// column's four corners (the plane through p0, so that no large constant cancels, padded for
+// the rounding of its normal: a sliver's normal tilts by up to about eps |e1| |e2| / |n|).
+// row(iu, v0, v1) is called for each row (v0 > v1: none) and column(iu, iv, k0, k1) for each
+// of its columns, in order; *w_out: the axis w. A flat triangle (zero normal) takes its box's
+// cells.
+template <class Row, class Column>
+void triangle_cells(const Broadphase& bp, const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                    double reach, int* w_out, Row row, Column column) {
+  auto mag = [](double x) { return x < 0 ? -x : x; };
+  const Vec3 e1 = p1 - p0, e2 = p2 - p0;
+  const Vec3 n = cross(e1, e2);
+  const double an[3] = {mag(n.x), mag(n.y), mag(n.z)};
+  const int w = (an[0] >= an[1] && an[0] >= an[2]) ? 0 : (an[1] >= an[2] ? 1 : 2);
+  const int u = (w + 1) % 3, v = (w + 2) % 3;
+  *w_out = w;
+  Aabb box;
+  box.add(p0);
+  box.add(p1);
+  box.add(p2);
+  box.lo = box.lo - Vec3{reach, reach, reach};
+  box.hi = box.hi + Vec3{reach, reach, reach};
+  uint32_t lo[3], hi[3];
+  bp.cell_range(box, lo, hi);
+  const Aabb& g = bp.abox;
+  const double h = bp.h, inv_h = bp.inv_h;
+  double m = 0, e1m = 0, e2m = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double x[4] = {mag(g.lo[k]), mag(g.hi[k]), mag(box.lo[k]), mag(box.hi[k])};
+    for (double y : x) m = y > m ? y : m;
+    e1m = mag(e1[k]) > e1m ? mag(e1[k]) : e1m;
+    e2m = mag(e2[k]) > e2m ? mag(e2[k]) : e2m;
+  }
+  // (u, v): the rounding of cell bounds, of the clipping and of the projection, and the move.
+  const double pad = 1e-9 * m + 1e-6 * h + reach;
+  const double span = (box.hi[u] - box.lo[u]) + (box.hi[v] - box.lo[v]) + 4.0 * (h + pad);
+  const double pad_w = pad + 2.0 * reach + 1e-13 * (e1m * e2m / an[w]) * span;
+  if (!(an[w] > 0) || !(pad_w < HUGE_VAL)) {
+    for (uint32_t iu = lo[u]; iu <= hi[u]; ++iu) {
+      row(iu, lo[v], hi[v]);
+      for (uint32_t iv = lo[v]; iv <= hi[v]; ++iv) column(iu, iv, lo[w], hi[w]);
+    }
+    return;
+  }
+  const Vec3* q[3] = {&p0, &p1, &p2};
+  const double su = n[u] / n[w], sv = n[v] / n[w];  // w = p0_w - su (u - p0_u) - sv (v - p0_v)
+  for (uint32_t iu = lo[u]; iu <= hi[u]; ++iu) {
+    const double u0 = g.lo[u] + iu * h - pad, u1 = g.lo[u] + (iu + 1.0) * h + pad;
+    double vmin = HUGE_VAL, vmax = -HUGE_VAL;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& a = *q[k];
+      const Vec3& b = *q[k == 2 ? 0 : k + 1];
+      const double du = b[u] - a[u], dv = b[v] - a[v];
+      double t0 = 0, t1 = 1;
+      if (du != 0) {
+        double ta = (u0 - a[u]) / du, tb = (u1 - a[u]) / du;
+        if (ta > tb) {
+          const double swap = ta;
+          ta = tb;
+          tb = swap;
+        }
+        t0 = ta > t0 ? ta : t0;
+        t1 = tb < t1 ? tb : t1;
+        if (t0 > t1) continue;
+      } else if (a[u] < u0 || a[u] > u1) {
+        continue;
+      }
+      const double va = a[v] + dv * t0, vb = a[v] + dv * t1;
+      vmin = va < vmin ? va : vmin;
+      vmin = vb < vmin ? vb : vmin;
+      vmax = va > vmax ? va : vmax;
+      vmax = vb > vmax ? vb : vmax;
+    }
+    uint32_t v0 = 1, v1 = 0;
+    if (vmin <= vmax) {
+      v0 = grid_cell((vmin - pad - g.lo[v]) * inv_h, bp.dim[v]);
+      v1 = grid_cell((vmax + pad - g.lo[v]) * inv_h, bp.dim[v]);
+      v0 = v0 < lo[v] ? lo[v] : v0;
+      v1 = v1 > hi[v] ? hi[v] : v1;
+    }
+    row(iu, v0, v1);
+    if (v0 > v1) continue;
+    const double a0 = su * (u0 - p0[u]), a1 = su * (u1 - p0[u]);
+    const double amax = a0 > a1 ? a0 : a1, amin = a0 < a1 ? a0 : a1;
+    for (uint32_t iv = v0; iv <= v1; ++iv) {
+      const double c0 = g.lo[v] + iv * h - pad, c1 = g.lo[v] + (iv + 1.0) * h + pad;
+      const double b0 = sv * (c0 - p0[v]), b1 = sv * (c1 - p0[v]);
+      const double wmin = p0[w] - amax - (b0 > b1 ? b0 : b1);
+      const double wmax = p0[w] - amin - (b0 < b1 ? b0 : b1);
+      uint32_t k0 = grid_cell((wmin - pad_w - g.lo[w]) * inv_h, bp.dim[w]);
+      uint32_t k1 = grid_cell((wmax + pad_w - g.lo[w]) * inv_h, bp.dim[w]);
+      k0 = k0 < lo[w] ? lo[w] : k0;
+      k1 = k1 > hi[w] ? hi[w] : k1;
+      column(iu, iv, k0, k1);  // k0 > k1: none
+    }
+  }
+}
+
 class BooleanRun {
  public:
   BooleanRun(const Context& ctx, const Inputs& in, const Broadphase& bp,
@@ -277,8 +387,12 @@ class BooleanRun {
         bp_(bp) {}
 
   Status run(Mesh* result);
+  // The candidate pairs this run may test (options.max_candidate_pairs, less what earlier
+  // attempts used); over it, find_hits stops with kLimitExceeded.
+  void set_pair_budget(uint64_t budget) { pair_budget_ = budget; }
 
  private:
+  Status check_pair_budget(uint32_t tb) const;
   Status find_hits();
   Status add_contact(uint32_t ta, uint32_t tb);
   Status name_contact_point(const detail::ContactPoint& cp, const uint32_t ga[3],
@@ -353,6 +467,7 @@ class BooleanRun {
   uint8_t* tflag_ = nullptr;
   int8_t* tstate_ = nullptr;
   bool pending_ = false;
+  uint64_t pair_budget_ = ~uint64_t{0};
 };
 
 enum TriangleFlag : uint8_t { kUncut = 0, kDecided = 1, kPending = 2 };

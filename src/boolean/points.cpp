@@ -228,6 +228,17 @@ Status BooleanRun::degenerate(uint32_t ta, uint32_t tb) const {
       .at_index(ta);
 }
 
+Status BooleanRun::check_pair_budget(uint32_t tb) const {
+  if (st_.candidate_pairs <= pair_budget_) return Status::ok();
+  return make_error(StatusCode::kLimitExceeded, "Boolean: more than ", pair_budget_,
+                    " candidate pairs of triangles (at triangle ", tb,
+                    " of B): the surfaces of A and B nearly coincide or crowd together over a "
+                    "large area (e.g. long thin triangles over dense ones), where every nearby "
+                    "pair needs an exact test; raise BooleanOptions::max_candidate_pairs to run "
+                    "it anyway")
+      .at_index(tb);
+}
+
 // Candidate pairs through the broad phase's grid; each decided exactly (intersect_pair) with A
 // as this attempt has it.
 Status BooleanRun::find_hits() {
@@ -319,6 +330,7 @@ Status BooleanRun::find_hits() {
         }
       }
     }
+    SPLINTCORE_RETURN_IF_ERROR(check_pair_budget(t));
   }
   st_.intersecting_pairs = hits_.size();
   return Status::ok();
