@@ -230,12 +230,11 @@ Status BooleanRun::degenerate(uint32_t ta, uint32_t tb) const {
 
 Status BooleanRun::check_pair_budget(uint32_t tb) const {
   if (st_.candidate_pairs <= pair_budget_) return Status::ok();
-  return make_error(StatusCode::kLimitExceeded, "Boolean: more than ", pair_budget_,
-                    " candidate pairs of triangles (at triangle ", tb,
-                    " of B): the surfaces of A and B nearly coincide or crowd together over a "
-                    "large area (e.g. long thin triangles over dense ones), where every nearby "
-                    "pair needs an exact test; raise BooleanOptions::max_candidate_pairs to run "
-                    "it anyway")
+  // (Within the 255 characters of a Status message with 10-digit numbers.)
+  return make_error(StatusCode::kLimitExceeded, "Boolean: over ", pair_budget_,
+                    " candidate triangle pairs (max_candidate_pairs) at triangle ", tb,
+                    " of B: A and B nearly coincide or crowd over a large area (e.g. long thin "
+                    "triangles over dense ones); raise the bound to run it anyway")
       .at_index(tb);
 }
 

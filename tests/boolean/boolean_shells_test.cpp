@@ -15,7 +15,9 @@
 
 #include "common/realcase.h"
 #include "splintcore/boolean.h"
+#include "splintcore/io.h"
 #include "splintcore/mesh.h"
+#include "splintcore/platform.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -473,6 +475,55 @@ TEST(BooleanShells, RealTeeth) {
     MeshReport rep;
     SPLINTCORE_ASSERT_OK(check_mesh(Context(&arena), out, &rep));
     EXPECT_TRUE(rep.is_valid_solid()) << test::format(require_valid_solid(rep));
+  }
+}
+
+// The pair from Manifold's bug reports (realdata/manifold-bugreports, about 20k and 12k
+// triangles, coordinates near 20,000 mm: long thin CAD triangles lying over dense ones). Their
+// union tested about 48 M candidate pairs per attempt, nine attempts, 45-130 s, before failing
+// on a float32 coincidence. It must answer, either way, within the default work bound: a
+// valid solid whose volume lies between the larger input's and the sum, or kLimitExceeded
+// naming the bound.
+TEST(BooleanShells, RealManifoldTwinAnswersWithinTheWorkBound) {
+  const std::string dir = std::string(SPLINTCORE_REALDATA_DIR) + "/../manifold-bugreports/";
+  const char* names[2] = {"Generic_Twin_7081.1.t0_left.obj", "Generic_Twin_7081.1.t0_right.obj"};
+  if (!test::file_exists(dir + names[0])) GTEST_SKIP() << "realdata not found";
+  TestArena ta(size_t{1024} << 20);
+  Arena& arena = ta.arena;
+  const Context ctx(&arena);
+  Mesh m[2];
+  double volume[2] = {0, 0};
+  for (int i = 0; i < 2; ++i) {
+    FileSource file;
+    SPLINTCORE_ASSERT_OK(file.open((dir + names[i]).c_str()));
+    MeshReadInfo info;
+    SPLINTCORE_ASSERT_OK(read_mesh(ctx, file.source(), MeshReadOptions{}, &m[i], &info));
+    MeshReport rep;
+    SPLINTCORE_ASSERT_OK(check_mesh(ctx, m[i], &rep));
+    ASSERT_TRUE(rep.is_valid_solid()) << names[i];
+    volume[i] = rep.volume;
+  }
+  BooleanOptions o;
+  o.op = BooleanOp::kUnion;
+  Mesh out;
+  BooleanStats st;
+  const Status s = mesh_boolean(ctx, m[0], m[1], o, &out, &st);
+  const uint64_t bound = 64 * (m[0].triangles.size() + m[1].triangles.size()) + (uint64_t{1} << 22);
+  std::cout << "[ twin     ] " << test::format(s) << "; " << st.candidate_pairs
+            << " candidate pairs (bound " << bound << ")\n";
+  // The bound is checked after each triangle of B: it may be passed by one B triangle's pairs.
+  EXPECT_LE(st.candidate_pairs, bound + m[0].triangles.size());
+  if (s.is_ok()) {
+    MeshReport rep;
+    SPLINTCORE_ASSERT_OK(check_mesh(ctx, out, &rep));
+    EXPECT_TRUE(rep.is_valid_solid()) << test::format(require_valid_solid(rep));
+    EXPECT_GE(rep.volume, std::max(volume[0], volume[1]) * (1 - 1e-9));
+    EXPECT_LE(rep.volume, (volume[0] + volume[1]) * (1 + 1e-9));
+  } else {
+    EXPECT_EQ(s.code(), StatusCode::kLimitExceeded) << test::format(s);
+    const std::string text = s.message();
+    EXPECT_NE(text.find("max_candidate_pairs"), std::string::npos) << text;
+    EXPECT_NE(text.find("raise the bound"), std::string::npos) << text;
   }
 }
 

@@ -179,6 +179,34 @@ TEST(BooleanTest, CubeMinusSphereCrossingAFace) {
   EXPECT_LT(i.volume, 0.8 * vb);
 }
 
+// The work bound: a run that would test more candidate pairs than max_candidate_pairs stops
+// with kLimitExceeded naming the bound, the output empty and the arena as it was; the same
+// bound with room to spare changes nothing.
+TEST(BooleanTest, CandidatePairsBeyondTheBoundAreRefused) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  Mesh b = sphere_mesh(arena, 0.45, 16, 32, rotation(0.3, -0.2, 0.7, {0.52, 0.47, 0.93}));
+  BooleanOptions o = opts(BooleanOp::kDifference);
+  BooleanStats st;
+  Mesh full;
+  SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&arena), a, b, o, &full, &st));
+  const uint64_t needed = st.candidate_pairs;
+  ASSERT_GT(needed, 10u);
+  o.max_candidate_pairs = needed / 2;
+  Mesh out;
+  const size_t used = arena.used();
+  const Status s = mesh_boolean(Context(&arena), a, b, o, &out, &st);
+  EXPECT_EQ(s.code(), StatusCode::kLimitExceeded) << test::format(s);
+  EXPECT_NE(std::string(s.message()).find("max_candidate_pairs"), std::string::npos);
+  EXPECT_TRUE(out.triangles.empty());
+  EXPECT_EQ(arena.used(), used);
+  o.max_candidate_pairs = needed;
+  Mesh again;
+  SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&arena), a, b, o, &again, &st));
+  EXPECT_EQ(again.triangles.size(), full.triangles.size());
+}
+
 TEST(BooleanTest, DisjointAndSwallowed) {
   TestArena ta;
   Arena& arena = ta.arena;

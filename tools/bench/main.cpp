@@ -1146,6 +1146,39 @@ Status read_mesh_path(const Context& ctx, const std::string& path, Mesh* mesh) {
   return read_mesh(ctx, file.source(), options, mesh, nullptr);
 }
 
+// The union of the pair from Manifold's bug reports (realdata/manifold-bugreports, issue 29:
+// "should answer, either way, in under a second"): meshes in memory, the time to the answer.
+// Today the answer is the work bound's kLimitExceeded (printed, not counted as a failure).
+void bench_boolean_manifold_twin(Harness& h, Arena& arena, const std::string& realdata) {
+  const char* name = "boolean_manifold_twin";
+  if (!h.wanted(name)) return;
+  const std::string dir = realdata + "/../manifold-bugreports/";
+  const Arena::Marker m = arena.mark();
+  const Context ctx(&arena);
+  Mesh a, b;
+  Status s = read_mesh_path(ctx, dir + "Generic_Twin_7081.1.t0_left.obj", &a);
+  if (s.is_ok()) s = read_mesh_path(ctx, dir + "Generic_Twin_7081.1.t0_right.obj", &b);
+  if (!s.is_ok()) {
+    std::printf("# manifold-bugreports not read (%s): %s skipped\n", s.message(), name);
+    arena.rewind(m);
+    return;
+  }
+  BooleanOptions bo;
+  bo.op = BooleanOp::kUnion;
+  BooleanStats st;
+  Status answer;
+  h.measure(name, a.triangles.size() + b.triangles.size(), arena, [&](Arena& ar) {
+    Mesh out;
+    answer = mesh_boolean(Context(&ar), a, b, bo, &out, &st);
+    return Status::ok();  // either answer is one; the time to it is what is measured
+  });
+  std::printf("# %s: %zu + %zu triangles, %llu candidate pairs, %u attempt(s): %s\n", name,
+              a.triangles.size(), b.triangles.size(),
+              static_cast<unsigned long long>(st.candidate_pairs), st.attempts,
+              answer.is_ok() ? "a valid union" : answer.message());
+  arena.rewind(m);
+}
+
 // The whole auto design of the real case, file to file (issue 28: under 0.5 s): the case
 // folder (the teeth as scanned in maxilla.stl and mandible.stl, an auto case.json opening the
 // bite by 2 mm) written once to a temporary folder; timed: reading the case and both STL
@@ -1287,6 +1320,7 @@ int run(int argc, char** argv) {
     bench_blockout(h, arena, fixtures);
     bench_outline(h, arena, realdata);
     bench_design_auto_realdata(h, arena, realdata);
+    bench_boolean_manifold_twin(h, arena, realdata);
     // A torus of 2 x 521 x 521 = 542,882 triangles: the size of the paper's largest jaw.
     std::vector<uint8_t> torus = to_binary_stl(shapes::torus(521, 521, 30.0, 8.0));
     bench_stl(h, arena, "", torus);
