@@ -250,8 +250,8 @@ struct TrianglePairIds {
 // answer. Slower than mesh_pair_distance (every pair within max_distance is examined). Arena,
 // errors: as mesh_pair_distance.
 Status mesh_pair_distance_collect(const Context& ctx, const DistanceIndex& a,
-                                  const DistanceIndex& b, const Vec3& offset_b,
-                                  double max_distance, Span<TrianglePairIds> pairs, size_t* count,
+                                  const DistanceIndex& b, const Vec3& offset_b, double max_distance,
+                                  Span<TrianglePairIds> pairs, size_t* count,
                                   MeshPairDistance* out);
 
 // The least (squared distance, triangle_a, triangle_b) over the given pairs only, B moved by

@@ -609,8 +609,8 @@ Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const Dist
 }
 
 Status mesh_pair_distance_collect(const Context& ctx, const DistanceIndex& a,
-                                  const DistanceIndex& b, const Vec3& offset_b,
-                                  double max_distance, Span<TrianglePairIds> pairs, size_t* count,
+                                  const DistanceIndex& b, const Vec3& offset_b, double max_distance,
+                                  Span<TrianglePairIds> pairs, size_t* count,
                                   MeshPairDistance* out) {
   *out = MeshPairDistance{};
   out->distance = HUGE_VAL;

@@ -262,7 +262,6 @@ bool looks_stl_ascii(const uint8_t* p, size_t n) {
   return true;
 }
 
-
 }  // namespace
 
 MeshFormat detect_mesh_format(const uint8_t* head, size_t size, const char* name) {

@@ -512,8 +512,9 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
           }
         }
       }
-      const bool added = i >= kAhead ? welder.add_hashed(corners, ahead[i % (2 * kAhead)], tris + t + i)
-                                     : welder.add(corners, tris + t + i);
+      const bool added = i >= kAhead
+                             ? welder.add_hashed(corners, ahead[i % (2 * kAhead)], tris + t + i)
+                             : welder.add(corners, tris + t + i);
       if (!added) return arena.exhausted_status();
     }
     in.pos += static_cast<size_t>(kBinaryRecordBytes * run);
@@ -575,10 +576,10 @@ Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlRead
                      source.size == kBinaryHeaderBytes + kBinaryRecordBytes * declared &&
                      declared <= options.max_triangles;
   if (sized && declared > (uint64_t{UINT32_MAX} - 1) / 3) {  // weld_exact's limit, said early
-    return located(make_error(StatusCode::kLimitExceeded, "mesh has ", declared,
-                              " triangles; at most ", (uint64_t{UINT32_MAX} - 1) / 3,
-                              " are supported (32-bit vertex ids)"),
-                   source);
+    return located(
+        make_error(StatusCode::kLimitExceeded, "mesh has ", declared, " triangles; at most ",
+                   (uint64_t{UINT32_MAX} - 1) / 3, " are supported (32-bit vertex ids)"),
+        source);
   }
   if (sized) {
     *info = StlInfo{};

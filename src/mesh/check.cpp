@@ -32,10 +32,10 @@ inline uint32_t mid3(uint32_t a, uint32_t b, uint32_t c) {
 
 // The per-phase arrays of check_mesh, in allocation order (check_mesh_bound adds them up).
 struct EdgeArrays {
-  uint32_t* start = nullptr;   // V + 1: half-edges bucketed by their smaller vertex
-  uint32_t* half = nullptr;    // 3 T: the uses (3 t + k), bucket by bucket
-  uint64_t* tally = nullptr;   // V: per larger vertex, its uses in the current bucket
-  uint32_t* last = nullptr;    // V: per larger vertex, the last triangle using it so far
+  uint32_t* start = nullptr;  // V + 1: half-edges bucketed by their smaller vertex
+  uint32_t* half = nullptr;   // 3 T: the uses (3 t + k), bucket by bucket
+  uint64_t* tally = nullptr;  // V: per larger vertex, its uses in the current bucket
+  uint32_t* last = nullptr;   // V: per larger vertex, the last triangle using it so far
 };
 
 }  // namespace
@@ -82,8 +82,7 @@ Status check_indices(const Mesh& mesh, uint8_t* referenced, MeshReport* r) {
       referenced[v[k]] = 1;
     }
     const Vec3 &p0 = verts[v[0]], &p1 = verts[v[1]], &p2 = verts[v[2]];
-    const bool degenerate =
-        v[0] == v[1] || v[1] == v[2] || v[2] == v[0] || collinear3d(p0, p1, p2);
+    const bool degenerate = v[0] == v[1] || v[1] == v[2] || v[2] == v[0] || collinear3d(p0, p1, p2);
     if (degenerate) {
       if (r->degenerate_triangles == 0) r->first_degenerate_triangle = t;
       ++r->degenerate_triangles;
@@ -144,9 +143,9 @@ struct EdgePass {
   }
 
   static void note(EdgeRef* ref, uint64_t count, uint32_t lo, uint32_t hi, uint32_t tri) {
-    const bool better = count == 0 || tri < ref->triangle ||
-                        (tri == ref->triangle && (uint64_t{lo} << 32 | hi) <
-                                                     (uint64_t{ref->v0} << 32 | ref->v1));
+    const bool better =
+        count == 0 || tri < ref->triangle ||
+        (tri == ref->triangle && (uint64_t{lo} << 32 | hi) < (uint64_t{ref->v0} << 32 | ref->v1));
     if (better) *ref = EdgeRef{lo, hi, tri};
   }
 
@@ -339,7 +338,8 @@ Status count_collected_duplicates(Arena& arena, const Mesh& mesh, const uint32_t
     return max3(v[0], v[1], v[2]);
   };
   for (uint32_t u = 1; u < n; ++u) {
-    if (items[u].key != items[u - 1].key || largest(items[u].index) != largest(items[u - 1].index)) {
+    if (items[u].key != items[u - 1].key ||
+        largest(items[u].index) != largest(items[u - 1].index)) {
       continue;
     }
     const uint32_t x = collected[items[u].index], y = collected[items[u - 1].index];
@@ -367,8 +367,8 @@ Status check_topology(const Context& ctx, const Mesh& mesh, MeshReport* r) {
   uint32_t collected_count = 0;
   {
     ArenaScope scope(arena);
-    EdgePass pass{mesh.triangles.data(), tri_count, nv, EdgeArrays{}, &shells, first_use,
-                  collected, 0, r};
+    EdgePass pass{
+        mesh.triangles.data(), tri_count, nv, EdgeArrays{}, &shells, first_use, collected, 0, r};
     pass.a.start = arena.allocate_array<uint32_t>(size_t{nv} + 1);
     pass.a.half = arena.allocate_array<uint32_t>(size_t{3} * tri_count);
     pass.a.tally = arena.allocate_array<uint64_t>(nv);

@@ -49,7 +49,6 @@ class ExactWelder {
     return (h ^ (h >> 29)) * 0xbf58476d1ce4e5b9ull;
   }
 
-
   // The table slot where the search for a corner of hash h begins: callers prefetch the
   // slots of a triangle a few dozen ahead with __builtin_prefetch (GCC 12 deletes the
   // prefetches when they sit in a member function like this one).

@@ -96,8 +96,8 @@ struct Projector {
   uint32_t nx = 0, ny = 0;
   uint32_t* start = nullptr;  // per cell, into entries; nx ny + 1
   uint32_t* entries = nullptr;
-  double* box = nullptr;    // per segment: x_lo, x_hi, y_lo, y_hi
-  double* reach = nullptr;  // per segment: segment_reach
+  double* box = nullptr;     // per segment: x_lo, x_hi, y_lo, y_hi
+  double* reach = nullptr;   // per segment: segment_reach
   uint32_t* seen = nullptr;  // per segment: the last query that took it as a candidate
   uint32_t query = 0;
   size_t hint = 0;

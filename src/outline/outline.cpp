@@ -135,8 +135,8 @@ struct Opener {
     if (bound < HUGE_VAL && has_last && step <= kCollectStepMm && pool.size() > 0) {
       size_t count = 0;
       const double margin = std::fmax(step, kMinPoolMarginMm);
-      SPLINTCORE_RETURN_IF_ERROR(mesh_pair_distance_collect(ctx, upper, lower, offset,
-                                                            bound + margin, pool, &count, d));
+      SPLINTCORE_RETURN_IF_ERROR(
+          mesh_pair_distance_collect(ctx, upper, lower, offset, bound + margin, pool, &count, d));
       pooled = d->distance <= bound && count <= pool.size() ? count : 0;
       pool_t = t;
       pool_margin = margin;
@@ -168,8 +168,8 @@ double opening_slope(const MeshPairDistance& pair, const Vec3& n) {
   return dot(pair.point_a - pair.point_b, n) / pair.distance;
 }
 
-Status advance(Opener& op, double target, double d0, double slope0, double* t_out,
-               double* d_out, uint32_t* steps) {
+Status advance(Opener& op, double target, double d0, double slope0, double* t_out, double* d_out,
+               uint32_t* steps) {
   double t = 0, d = d0, slope = slope0;
   MeshPairDistance pair;
   *steps = 0;

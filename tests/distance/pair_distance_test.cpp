@@ -607,9 +607,9 @@ TEST(MeshPairDistance, CollectedPairsAnswerNearbyMovesWithTheSameBits) {
       const double limit = full.distance + margin;
       MeshPairDistance got;
       size_t count = 0;
-      const Status s = mesh_pair_distance_collect(Context(&t.arena), a.index, b.index, off, limit,
-                                                  Span<TrianglePairIds>(pool.data(), pool.size()),
-                                                  &count, &got);
+      const Status s =
+          mesh_pair_distance_collect(Context(&t.arena), a.index, b.index, off, limit,
+                                     Span<TrianglePairIds>(pool.data(), pool.size()), &count, &got);
       ASSERT_TRUE(s.is_ok()) << test::format(s);
       ASSERT_GE(count, 1u);
       ASSERT_LE(count, pool.size());
@@ -639,17 +639,17 @@ TEST(MeshPairDistance, CollectedPairsAnswerNearbyMovesWithTheSameBits) {
   // Too many pairs for the room: counted past it.
   size_t count = 0;
   MeshPairDistance r;
-  ASSERT_TRUE(mesh_pair_distance_collect(Context(&t.arena), a.index, b.index, Vec3{0, 0, 0.2},
-                                         2.0, Span<TrianglePairIds>(pool.data(), 3), &count, &r)
+  ASSERT_TRUE(mesh_pair_distance_collect(Context(&t.arena), a.index, b.index, Vec3{0, 0, 0.2}, 2.0,
+                                         Span<TrianglePairIds>(pool.data(), 3), &count, &r)
                   .is_ok());
   EXPECT_EQ(count, 4u);
   EXPECT_EQ(r.triangle_a, run_pair(a, b, Vec3{0, 0, 0.2}).triangle_a);
   // A pair out of range is refused.
   const TrianglePairIds bad[1] = {TrianglePairIds{~uint32_t{0}, 0}};
-  EXPECT_EQ(candidate_pair_distance(a.index, b.index, Span<const TrianglePairIds>(bad, 1),
-                                    Vec3{}, &r)
-                .code(),
-            StatusCode::kInvalidArgument);
+  EXPECT_EQ(
+      candidate_pair_distance(a.index, b.index, Span<const TrianglePairIds>(bad, 1), Vec3{}, &r)
+          .code(),
+      StatusCode::kInvalidArgument);
 }
 
 // ---------------------------------------------------------------------------------------------

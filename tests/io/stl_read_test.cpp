@@ -1017,7 +1017,8 @@ TEST(StlRead, StreamedWeldAgreesWithSoupThenWeld) {
         Mesh mesh(&t.arena);
         StlInfo info;
         const size_t before = t.arena.used();
-        const Status st = splintcore::read_stl_mesh(Context(&t.arena), source, options, &mesh, &info);
+        const Status st =
+            splintcore::read_stl_mesh(Context(&t.arena), source, options, &mesh, &info);
         if (!st.is_ok()) {
           EXPECT_EQ(t.arena.used(), before);
           EXPECT_TRUE(mesh.vertices.empty() && mesh.triangles.empty());

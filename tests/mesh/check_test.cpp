@@ -212,8 +212,8 @@ MeshReport model_report(const Mesh& mesh) {
     }
     r.duplicate_triangles += s.second.size() - 1;
   }
-  bool genus_defined = r.boundary_edges == 0 && r.nonmanifold_edges == 0 &&
-                       r.orientation_conflicts == 0 && nt > 0;
+  bool genus_defined =
+      r.boundary_edges == 0 && r.nonmanifold_edges == 0 && r.orientation_conflicts == 0 && nt > 0;
   int64_t genus = 0, total_v = 0;
   for (const auto& s : per_shell) {
     const int64_t chi = s.second[0] - s.second[1] + s.second[2];

@@ -67,7 +67,7 @@ const char kDistanceUsage[] =
 const char kBooleanUsage[] =
     "usage: splintcore boolean --difference|--union|--intersection A.stl B.stl [B2.stl ...]\n"
     "                         -o OUT.stl [--translate-b X,Y,Z] [--ascii] [--no-self-check]\n"
-    "                         [--json] [--memory-cap SIZE] [--threads N]\n"
+    "                         [--max-pairs N] [--json] [--memory-cap SIZE] [--threads N]\n"
     "\n"
     "A is a closed solid (the splint base); B is the union of the other files' shells (the\n"
     "jaws: one closed shell per tooth is fine; shells that overlap are united, one pass per\n"
@@ -82,7 +82,9 @@ const char kBooleanUsage[] =
     "atomically. Exact degenerate contacts (a vertex on the other surface, edges crossing\n"
     "exactly, coplanar faces) are resolved exactly; where the exact result is not a manifold\n"
     "solid (e.g. parts touching along an edge), A is nudged by at most about 1 um and the\n"
-    "summary says so.\n";
+    "summary says so. The work is bounded: surfaces that nearly coincide over a large area\n"
+    "(long thin CAD triangles over dense ones) can pair every triangle with every other near\n"
+    "it; past --max-pairs candidate pairs the run stops with an error saying so.\n";
 
 const char kPhantomUsage[] =
     "usage: splintcore phantom --triangles N -o DIR [--json]\n"

@@ -88,6 +88,7 @@ struct BooleanArgs {
   std::vector<Vec3> translate_b;
   bool ascii = false;
   bool self_check = true;
+  uint64_t max_pairs = 0;  // BooleanOptions::max_candidate_pairs (0: its default)
 };
 
 constexpr BooleanOp kBooleanOps[] = {BooleanOp::kDifference, BooleanOp::kUnion,
@@ -106,6 +107,9 @@ std::vector<OptionSpec> boolean_options(BooleanArgs* a) {
                  "--translate-b needs X,Y,Z (three finite numbers, mm)"),
       flag("--ascii", &a->ascii, "write ASCII STL (default binary)"),
       clear_flag("--no-self-check", &a->self_check, "skip the self-intersection check"),
+      count("--max-pairs", "N", &a->max_pairs, 1, UINT64_MAX,
+            "the work bound: candidate triangle pairs in all (default 64 per triangle + 2^22)",
+            "--max-pairs needs a whole number of pairs, at least 1"),
   };
 }
 
@@ -341,6 +345,7 @@ int run_boolean(const Command& command, int argc, char** argv) {
   BooleanResult r;
   r.t_read = monotonic_seconds();
   BooleanOptions bo;
+  bo.max_candidate_pairs = a.max_pairs;
   bo.op = kBooleanOps[a.op];
   bo.check_self_intersection = false;  // timed separately below
   Mesh out;
