@@ -351,6 +351,9 @@ typedef struct sc_case_params {
    * 1e6), one on each half of the arch in either order; the arch is cut across at each. */
   int auto_has_distal_ends;
   double auto_distal_ends[2][3];
+  /* "survey": when the case gives no insertion direction, the direction within 15 degrees of
+   * the occlusal normal that leaves the least undercut (else the normal itself). */
+  int auto_survey;
 } sc_case_params;
 
 /* Reads the case's parameters into *out. */
@@ -413,9 +416,14 @@ typedef struct sc_outline_report {
   double wafer_max_mm;
   uint64_t occlusal_columns_maxilla; /* occlusal cells found per jaw */
   uint64_t occlusal_columns_mandible;
-  int distal_limited;         /* the case gave distal ends (auto_has_distal_ends) */
-  double distal_offset_mm[2]; /* per point as given: its distance from the arch's centre line */
-  double distal_cut_mm[2];    /* and how much of the picks' span it cut (0: beyond the end) */
+  int distal_limited;            /* the case gave distal ends (auto_has_distal_ends) */
+  double distal_offset_mm[2];    /* per point as given: its distance from the arch's centre line */
+  double distal_cut_mm[2];       /* and how much of the picks' span it cut (0: beyond the end) */
+  double insertion_direction[3]; /* unit: the occlusal normal, or the survey's choice */
+  int surveyed;                  /* the survey chose it (auto_survey) */
+  uint32_t survey_directions;    /* directions tried */
+  double undercut_plain_mm3;     /* the undercut along the occlusal normal (surveyed only) */
+  double undercut_chosen_mm3;    /* and along the chosen direction */
 } sc_outline_report;
 
 /* The automatic outline of an auto case (resolve_case_outline of design.h): `jaws` are the

@@ -299,6 +299,11 @@ void copy_outline_report(const OutlineReport& o, sc_outline_report* out) {
     out->distal_offset_mm[i] = o.distal_offset_mm[i];
     out->distal_cut_mm[i] = o.distal_cut_mm[i];
   }
+  put(o.insertion_direction, out->insertion_direction);
+  out->surveyed = o.surveyed ? 1 : 0;
+  out->survey_directions = o.survey_directions;
+  out->undercut_plain_mm3 = o.undercut_plain_mm3;
+  out->undercut_chosen_mm3 = o.undercut_chosen_mm3;
 }
 
 }  // namespace
@@ -766,6 +771,7 @@ sc_status sc_case_get_params(sc_context* ctx, const sc_case* c, sc_case_params* 
   out->auto_bite_opening_mm = f.outline.bite_opening_mm;
   out->auto_has_distal_ends = f.outline.has_distal_ends ? 1 : 0;
   for (int i = 0; i < 2; ++i) put(f.outline.distal_ends[i], out->auto_distal_ends[i]);
+  out->auto_survey = f.outline.survey ? 1 : 0;
   return keep(ctx, Status::ok());
 }
 
@@ -806,6 +812,7 @@ sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* 
       f.outline.distal_ends[i] =
           f.outline.has_distal_ends ? vec(params->auto_distal_ends[i]) : Vec3{};
     }
+    f.outline.survey = params->auto_survey != 0;
   }
   return keep(ctx, Status::ok());
 }

@@ -858,6 +858,33 @@ static void test_auto_params(sc_context* ctx, sc_case* c) {
 
 static int near(double a, double b) { return a - b < 1e-4 && b - a < 1e-4; }
 
+/* The survey through the C API: auto_survey kept by the parameters; sc_outline then tries
+ * directions within 15 degrees of the occlusal normal and keeps one that leaves no more undercut
+ * than the normal. */
+static void test_outline_survey(sc_context* ctx, sc_case* c, const sc_mesh* const* jaws) {
+  sc_case_params p, q;
+  sc_case* surveyed = NULL;
+  sc_outline_report r;
+  double cosine = 0;
+  int i;
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &p));
+  CHECK(p.auto_survey == 0);
+  q = p;
+  q.auto_survey = 1;
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &q));
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &q));
+  CHECK(q.auto_survey == 1);
+  CHECK_OK(ctx, sc_outline(ctx, c, jaws, 2, &surveyed, &r));
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &p));
+  if (surveyed == NULL) return;
+  for (i = 0; i < 3; ++i) cosine += r.insertion_direction[i] * r.occlusal_normal[i];
+  CHECK(r.surveyed == 1 && r.survey_directions >= 25);
+  CHECK(cosine >= 0.9659 - 1e-12); /* cos 15 degrees */
+  CHECK(r.undercut_chosen_mm3 <= r.undercut_plain_mm3);
+  printf("outline with survey: %u directions, undercut %.4f mm3 (the normal: %.4f mm3)\n",
+         r.survey_directions, r.undercut_chosen_mm3, r.undercut_plain_mm3);
+}
+
 /* Distal ends through the C API: the resolved case's third and third-last upper picks as the
  * limits give fewer picks, the first and last at the limits, and the report says so. */
 static void test_outline_distal_ends(sc_context* ctx, sc_case* c, const sc_case* resolved,
@@ -1036,7 +1063,10 @@ static void test_outline(const char* jaws_dir) {
   CHECK(r.jaws_intersect == 0 && r.opened == 0 && r.gap_as_given_mm > 0);
   CHECK(r.arch_length_mm > 20 && r.wafer_min_mm > 0 && r.wafer_max_mm >= r.wafer_min_mm);
   CHECK(r.occlusal_columns_maxilla > 0 && r.occlusal_columns_mandible > 0);
-  CHECK(r.distal_limited == 0);
+  CHECK(r.distal_limited == 0 && r.surveyed == 0);
+  CHECK(r.insertion_direction[0] == r.occlusal_normal[0] &&
+        r.insertion_direction[1] == r.occlusal_normal[1] &&
+        r.insertion_direction[2] == r.occlusal_normal[2]);
   printf("outline: %u picks per jaw, arch %.2f mm, wafer %.3f..%.3f mm, gap %.3f mm\n", r.picks,
          r.arch_length_mm, r.wafer_min_mm, r.wafer_max_mm, r.gap_as_given_mm);
   {
@@ -1063,6 +1093,7 @@ static void test_outline(const char* jaws_dir) {
   CHECK(resolved_splint != NULL && strcmp(h_auto, h_resolved) == 0);
   if (resolved_splint != NULL) test_set_pick(f.ctx, resolved, jaws, h_resolved);
   test_outline_distal_ends(f.ctx, c, resolved, jaws);
+  test_outline_survey(f.ctx, c, jaws);
   if (reread != NULL) {
     CHECK_OK(f.ctx, sc_design(f.ctx, reread, jaws, 2, &reread_splint, NULL));
     if (reread_splint != NULL) splint_hash(f.ctx, reread_splint, h_reread);
