@@ -535,7 +535,7 @@ class Sha256 {
   static void to_hex(const uint8_t digest[32], char out[65]);
 
  private:
-  void block(const uint8_t* p);
+  void blocks(const uint8_t* p, size_t n);  // n whole 64-byte blocks
   uint32_t state_[8];
   uint64_t length_ = 0;
   uint8_t buffer_[64];
