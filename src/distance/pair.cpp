@@ -228,6 +228,8 @@ struct PairSearch {
   bool collecting = false;
   TrianglePairIds* collected = nullptr;
   size_t collect_capacity = 0, collect_count = 0;
+  // Stopping at the first meeting pair (mesh_pair_meet): `done` once one is found.
+  bool first_meet = false, done = false;
 
   // reach2 from best2: a pair of boxes whose computed distance is at most reach may hold a
   // pair whose computed distance is at most best. Box gaps round by a few ulps; a triangle
@@ -295,6 +297,7 @@ void PairSearch::consider(uint32_t ta, uint32_t tb, const TriangleBox& x, const 
     found = meet = true;
     best_a = ta;
     best_b = tb;
+    done = first_meet;
     update_reach();
     return;
   }
@@ -374,6 +377,7 @@ void PairSearch::leaf_pair(const PairEntry& e) {
       const double yhi[3] = {bs[j].hi.x, bs[j].hi.y, bs[j].hi.z};
       if (box_gap2(x.lo, x.hi, ylo, yhi) > reach2) continue;
       consider(ta, b_ids[j], x, bs[j]);
+      if (done) return;
     }
   }
 }
@@ -432,6 +436,7 @@ bool PairSearch::depth_first(const PairEntry& first) {
     if (e.lb2 > reach2) continue;
     if (is_leaf(0, e.node_a, e.slot_a) && is_leaf(1, e.node_b, e.slot_b)) {
       leaf_pair(e);
+      if (done) return true;
       continue;
     }
     PairEntry found_pairs[16];
@@ -476,6 +481,7 @@ bool PairSearch::run() {
     if (e.lb2 > reach2) break;  // and so are all the others
     if (is_leaf(0, e.node_a, e.slot_a) && is_leaf(1, e.node_b, e.slot_b)) {
       leaf_pair(e);
+      if (done) break;
       continue;
     }
     PairEntry found_pairs[16];
@@ -486,6 +492,7 @@ bool PairSearch::run() {
       } else if (!depth_first(found_pairs[k])) {
         return false;
       }
+      if (done) return true;
     }
   }
   return true;
@@ -624,6 +631,25 @@ Status mesh_pair_distance_collect(const Context& ctx, const DistanceIndex& a,
   s.collect_capacity = pairs.size();
   SPLINTCORE_RETURN_IF_ERROR(run_search(ctx, &s, out));
   *count = s.collect_count;
+  return Status::ok();
+}
+
+Status mesh_pair_meet(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
+                      const Vec3& offset_b, bool* meet, MeshPairDistance* out) {
+  *out = MeshPairDistance{};
+  out->distance = HUGE_VAL;
+  *meet = false;
+  PairSearch s;
+  bool empty = false;
+  SPLINTCORE_RETURN_IF_ERROR(start_search(a, b, offset_b, 0.0, &s, &empty));
+  if (empty) return Status::ok();
+  s.first_meet = true;
+  SPLINTCORE_RETURN_IF_ERROR(run_search(ctx, &s, out));
+  *meet = s.meet;
+  if (!s.meet) {  // a pair at distance 0 that does not meet: not an answer here
+    *out = MeshPairDistance{};
+    out->distance = HUGE_VAL;
+  }
   return Status::ok();
 }
 

@@ -433,6 +433,46 @@ TEST(MeshPairDistance, MatchesBruteForce) {
   EXPECT_GE(zero, 4);
 }
 
+// mesh_pair_meet says whether the meshes meet exactly when mesh_pair_distance finds a meeting
+// pair, and the pair it gives does meet (triangle_pair_distance, on its own, says 0).
+TEST(MeshPairDistance, MeetAgreesWithTheFullSearch) {
+  int met = 0, apart = 0;
+  for (const Case& c : oracle_cases()) {
+    test::TestArena t(size_t{32} << 20);
+    Built a, b;
+    build(t, c.a, 0, false, &a);
+    build(t, c.b, 0, false, &b);
+    for (const Vec3& off : c.offsets) {
+      SCOPED_TRACE(testing::Message() << "offset " << off.x << " " << off.y << " " << off.z);
+      const MeshPairDistance full = run_pair(a, b, off);
+      test::TestArena s(size_t{1} << 20);
+      bool meet = false;
+      MeshPairDistance r;
+      const Status st = mesh_pair_meet(Context(&s.arena), a.index, b.index, off, &meet, &r);
+      ASSERT_TRUE(st.is_ok()) << test::format(st);
+      EXPECT_EQ(s.arena.used(), 0u);
+      EXPECT_EQ(meet, full.intersecting);
+      if (!meet) {
+        ++apart;
+        EXPECT_EQ(r.distance, HUGE_VAL);
+        continue;
+      }
+      ++met;
+      EXPECT_EQ(r.distance, 0.0);
+      EXPECT_TRUE(r.intersecting);
+      const Triangle& ta = a.mesh.triangles[r.triangle_a];
+      const Triangle& tb = b.mesh.triangles[r.triangle_b];
+      const Vec3* va = a.mesh.vertices.data();
+      const Vec3* vb = b.mesh.vertices.data();
+      EXPECT_EQ(triangle_pair_distance(va[ta.v[0]], va[ta.v[1]], va[ta.v[2]], vb[tb.v[0]] + off,
+                                       vb[tb.v[1]] + off, vb[tb.v[2]] + off, nullptr, nullptr),
+                0.0);
+    }
+  }
+  EXPECT_GE(met, 4);
+  EXPECT_GE(apart, 12);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Independence of the trees' shapes, and the arena.
 
