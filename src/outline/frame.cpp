@@ -125,6 +125,34 @@ Status build_grid(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3
   return Status::ok();
 }
 
+namespace {
+
+// fill_heights for one jaw: kLowest for the maxilla (its lowest point of each column), else
+// the highest. The frame and the lattice in locals (the stores into the columns could alias
+// them), and no branch on the comparison (which follows no pattern): the height by a min or
+// max, the vertex by a mask, both slots written always.
+template <bool kLowest>
+void fill_columns(const Mesh& m, const Vec3& offset, const Frame& frame, Grid* g) {
+  const Vec3 e1 = frame.e1, e2 = frame.e2, n = frame.n;
+  const Grid grid = *g;
+  double* heights = grid.h[kLowest ? 0 : 1];
+  uint32_t* tips = grid.tip[kLowest ? 0 : 1];
+  const Vec3* v = m.vertices.data();
+  const size_t count = m.vertices.size();
+  for (size_t k = 0; k < count; ++k) {
+    const Vec3 p = v[k] + offset;
+    const size_t cell = grid.cell_of(dot(p, e1), dot(p, e2));
+    const double h = dot(p, n);
+    const double best = heights[cell];
+    const bool better = kLowest ? h < best : h > best;
+    heights[cell] = kLowest ? (h < best ? h : best) : (h > best ? h : best);
+    const uint32_t mask = 0u - static_cast<uint32_t>(better);
+    tips[cell] = (static_cast<uint32_t>(k) & mask) | (tips[cell] & ~mask);
+  }
+}
+
+}  // namespace
+
 // Jaw 0 (the maxilla) shows the mandible its lowest point of each column, jaw 1 its highest.
 void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g) {
   const size_t cells = static_cast<size_t>(g->nx) * g->ny;
@@ -133,18 +161,10 @@ void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Gr
     g->h[jaw][i] = none;
     g->tip[jaw][i] = kNoTip;
   }
-  // Without a branch on the comparison (which follows no pattern): both slots written always.
-  double* heights = g->h[jaw];
-  uint32_t* tips = g->tip[jaw];
-  const double sign = jaw == 0 ? 1.0 : -1.0;  // jaw 1: h > best as -h < -best
-  for (size_t k = 0; k < m.vertices.size(); ++k) {
-    const Vec3 p = m.vertices[k] + offset;
-    const size_t cell = g->cell_of(dot(p, f.e1), dot(p, f.e2));
-    const double h = dot(p, f.n);
-    const double best = heights[cell];
-    const bool better = sign * h < sign * best;
-    heights[cell] = better ? h : best;
-    tips[cell] = better ? static_cast<uint32_t>(k) : tips[cell];
+  if (jaw == 0) {
+    fill_columns<true>(m, offset, f, g);
+  } else {
+    fill_columns<false>(m, offset, f, g);
   }
 }
 
