@@ -359,6 +359,13 @@ Status jaw_band(Arena& arena, const Mesh& m, bool upper, const BandLimit& limit,
   return Status::ok();
 }
 
+// The bands' indexes serve the pair searches only.
+DistanceIndexOptions band_index_options() {
+  DistanceIndexOptions o;
+  o.pairs_only = true;
+  return o;
+}
+
 // The smallest distance between the jaws (the mandible moved by -t n) exactly for every t the
 // opening visits, when it is at most `reach` (else some value above `reach`).
 struct BandedOpener {
@@ -404,8 +411,8 @@ Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandib
   SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, maxilla, true, up, &b->upper));
   SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, mandible, false, down, &b->lower));
   SPLINTCORE_RETURN_IF_ERROR(
-      build_distance_index(ctx, b->upper.view, DistanceIndexOptions{}, &b->upper_index));
-  return build_distance_index(ctx, b->lower.view, DistanceIndexOptions{}, &b->lower_index);
+      build_distance_index(ctx, b->upper.view, band_index_options(), &b->upper_index));
+  return build_distance_index(ctx, b->lower.view, band_index_options(), &b->lower_index);
 }
 
 Status allocate_pool(Arena& arena, Span<TrianglePairIds>* pool) {
@@ -496,15 +503,18 @@ uint64_t compute_outline_bound(const Mesh& maxilla, const Mesh& mandible) {
   const uint64_t buffers =
       2 * arena_array_bound<Pick>(kMaxPicks) + arena_array_bound<Vec3>(kMaxArchPoints);
   const uint64_t grid = 2 * (arena_array_bound<double>(cells) + arena_array_bound<uint32_t>(cells));
-  // A jaw's band (a copy of its kept triangles, their ids) and its distance index.
-  const DistanceIndexOptions io;
-  const auto band = [&](uint64_t v, uint64_t t) {
+  // A jaw's band (a copy of its kept triangles, their ids) and its distance index: the
+  // opening's (pairs_only) or the survey's (default options).
+  const auto band = [&](uint64_t v, uint64_t t, const DistanceIndexOptions& io) {
     return arena_array_bound<uint32_t>(v) + arena_array_bound<Vec3>(v) +
            arena_array_bound<Triangle>(t) + arena_array_bound<uint32_t>(t) +
            distance_index_bound(v, t, io);
   };
-  const uint64_t jaws =
-      band(maxilla_vertices, maxilla_triangles) + band(mandible_vertices, mandible_triangles);
+  const auto both = [&](const DistanceIndexOptions& io) {
+    return band(maxilla_vertices, maxilla_triangles, io) +
+           band(mandible_vertices, mandible_triangles, io);
+  };
+  const uint64_t jaws = both(band_index_options());
   // The opening: the bands, the pair search, the columns' reach and the vertices' marks.
   const uint64_t opening = jaws + kPairStackBound + arena_array_bound<TrianglePairIds>(kPoolPairs) +
                            4 * arena_array_bound<double>(cells) +
@@ -520,7 +530,7 @@ uint64_t compute_outline_bound(const Mesh& maxilla, const Mesh& mandible) {
       (kSmoothPasses + 1) * 9 * arena_array_bound<double>(kMaxArchPoints + 1) +
       arena_array_bound<double>(6 * kMaxPicks) + (kSmoothPasses + 2) * projector_bound();
   // The survey, after the arch: its columns (reserved once) and the jaws' slabs.
-  const uint64_t survey = arena_array_bound<double>(4 * columns) + jaws;
+  const uint64_t survey = arena_array_bound<double>(4 * columns) + both(DistanceIndexOptions{});
   const uint64_t after_frame = opening > arch + survey ? opening : arch + survey;
   return buffers + grid + after_frame;
 }
