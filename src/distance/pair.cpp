@@ -354,7 +354,13 @@ void PairSearch::leaf_pair(const PairEntry& e) {
   const uint32_t b_first = nb.child[e.slot_b], b_count = nb.count[e.slot_b];
   double alo[3], ahi[3];
   item_box(0, e.node_a, e.slot_a, alo, ahi);
-  TriangleBox bs[16];
+  // Not value-initialised (Vec3's zeros, 2 kB a leaf pair): each slot is written before it
+  // is read.
+  union Slots {
+    Slots() {}
+    TriangleBox box[16];
+  } slots;
+  TriangleBox* bs = slots.box;
   uint32_t b_ids[16], kept = 0;
   Vec3 b_lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, b_hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
   for (uint32_t j = 0; j < b_count; ++j) {

@@ -64,16 +64,24 @@ bool centroid_axis(const Vec3& upper_centroid, const Vec3& lower_centroid, Vec3*
 // The mean of the unit vectors from the centre c (the mean of the jaws' centroids) to every
 // vertex, in the plane: a dental arch is open at the back, so this points to the front.
 // Continuous in the data (no vertex is chosen), so the lattice it orients moves with the jaws.
+// Both quotients of a vertex in one two-lane division (each lane rounds as the scalar one:
+// the same bits for half the divisions), summed in vertex order.
+typedef double Lanes2 __attribute__((vector_size(16)));
+
 Vec3 anterior_axis(const Mesh& upper, const Mesh& lower, const Vec3& c, const Frame& f) {
   double sx = 0, sy = 0;
+  const Vec3 e1 = f.e1, e2 = f.e2;
   auto add = [&](const Mesh& m) {
     for (const Vec3& v : m.vertices) {
       const Vec3 p = v - c;
-      const double x = dot(p, f.e1), y = dot(p, f.e2);
+      const double x = dot(p, e1), y = dot(p, e2);
       const double r = std::sqrt(x * x + y * y);
+      const Lanes2 xy = {x, y};
+      const double safe = r > 0 ? r : 1.0;  // no 0 / 0 (trapping tests), and not added
+      const Lanes2 q = xy / Lanes2{safe, safe};
       if (r > 0) {
-        sx += x / r;
-        sy += y / r;
+        sx += q[0];
+        sy += q[1];
       }
     }
   };

@@ -46,7 +46,9 @@ Status check_options(const OutlineOptions& o) {
   return Status::ok();
 }
 
-Status check_jaw(const Mesh& m, const char* name) {
+// Also the jaw's longest edge (the opening's bands need it), in the same pass over the
+// triangles.
+Status check_jaw(const Mesh& m, const char* name, double* longest_edge) {
   if (m.triangles.empty() || m.vertices.empty()) {
     return make_error(StatusCode::kInvalidMesh, "outline: the ", name, " is empty");
   }
@@ -59,6 +61,7 @@ Status check_jaw(const Mesh& m, const char* name) {
           .at_index(i);
     }
   }
+  double e2 = 0;
   for (size_t i = 0; i < m.triangles.size(); ++i) {
     const Triangle& t = m.triangles[i];
     const size_t n = m.vertices.size();
@@ -67,7 +70,13 @@ Status check_jaw(const Mesh& m, const char* name) {
                         " refers to a vertex that does not exist")
           .at_index(i);
     }
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 d = m.vertices[t.v[k]] - m.vertices[t.v[(k + 1) % 3]];
+      const double l2 = dot(d, d);
+      e2 = l2 > e2 ? l2 : e2;
+    }
   }
+  *longest_edge = std::sqrt(e2);
   return Status::ok();
 }
 
@@ -373,20 +382,9 @@ struct BandedOpener {
   DistanceIndex upper_index, lower_index;
 };
 
-double longest_edge(const Mesh& m) {
-  double e2 = 0;
-  for (const Triangle& t : m.triangles) {
-    for (int k = 0; k < 3; ++k) {
-      const Vec3 d = m.vertices[t.v[k]] - m.vertices[t.v[(k + 1) % 3]];
-      const double l2 = dot(d, d);
-      e2 = l2 > e2 ? l2 : e2;
-    }
-  }
-  return std::sqrt(e2);
-}
-
+// `edge`: the jaws' longest edge.
 Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
-                     const Grid& g, double reach, double margin, BandedOpener* b) {
+                     const Grid& g, double edge, double reach, double margin, BandedOpener* b) {
   double low_u = HUGE_VAL, high_l = -HUGE_VAL;
   for (const Vec3& v : maxilla.vertices) {
     const double h = dot(v, f.n);
@@ -396,7 +394,6 @@ Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandib
     const double h = dot(v, f.n);
     high_l = h > high_l ? h : high_l;
   }
-  const double edge = std::fmax(longest_edge(maxilla), longest_edge(mandible));
   const double across = (reach + 3 * edge) / kCellMm + 2;  // columns, with the rounding
   BandLimit up{&g, &f, nullptr, high_l + margin, margin + 1e-9};
   BandLimit down{&g, &f, nullptr, low_u - margin, margin + 1e-9};
@@ -423,7 +420,8 @@ Status allocate_pool(Arena& arena, Span<TrianglePairIds>* pool) {
 }
 
 Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
-                 const Grid& g, const OutlineOptions& o, Vec3* offset, OutlineReport* r) {
+                 const Grid& g, double edge, const OutlineOptions& o, Vec3* offset,
+                 OutlineReport* r) {
   ArenaScope scope(*ctx.arena);  // the bands and their indexes go when done
   // Near reach first (the jaws as scanned touch): exact up to it. Farther apart, again with
   // the reach of the largest gap accepted.
@@ -434,7 +432,7 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
   // The first bands hold the pairs within reach only while the mandible moves away (or
   // stays): enough for the distance as given and for an opening from nearer than asked.
   BandedOpener b;
-  SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, reach, &b));
+  SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, edge, reach, reach, &b));
   Opener op(ctx, b.upper_index, b.lower_index, f.n);
   Span<TrianglePairIds> pool;
   SPLINTCORE_RETURN_IF_ERROR(allocate_pool(*ctx.arena, &pool));
@@ -448,7 +446,7 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
   if (d0.distance > reach || (o.has_bite_opening && d0.distance > target)) {
     ctx.arena->rewind(scope.start());
     if (d0.distance > reach) reach = o.max_gap_mm + target;
-    SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, 2 * reach, &b));
+    SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, edge, reach, 2 * reach, &b));
     SPLINTCORE_RETURN_IF_ERROR(allocate_pool(*ctx.arena, &pool));
     op.restart(reach, pool);
     SPLINTCORE_RETURN_IF_ERROR(op.distance(0, &d0));
@@ -539,8 +537,9 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
                        const OutlineOptions& options, Outline* out) {
   *out = Outline{};
   SPLINTCORE_RETURN_IF_ERROR(check_options(options));
-  SPLINTCORE_RETURN_IF_ERROR(check_jaw(maxilla, "maxilla"));
-  SPLINTCORE_RETURN_IF_ERROR(check_jaw(mandible, "mandible"));
+  double edge_upper = 0, edge_lower = 0;
+  SPLINTCORE_RETURN_IF_ERROR(check_jaw(maxilla, "maxilla", &edge_upper));
+  SPLINTCORE_RETURN_IF_ERROR(check_jaw(mandible, "mandible", &edge_lower));
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
   OutlineBuffers buffers;
@@ -562,7 +561,8 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 1, 3));
     Vec3 offset;
     SPLINTCORE_RETURN_IF_ERROR(
-        open_bite(ctx, maxilla, mandible, f, g, options, &offset, &out->report));
+        open_bite(ctx, maxilla, mandible, f, g, std::fmax(edge_upper, edge_lower), options,
+                  &offset, &out->report));
     // The move is along n: the columns stay; only the mandible's heights change.
     if (out->report.opened) fill_heights(mandible, offset, f, 1, &g);
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 2, 3));
