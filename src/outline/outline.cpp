@@ -70,11 +70,12 @@ Status check_jaw(const Mesh& m, const char* name, double* longest_edge) {
                         " refers to a vertex that does not exist")
           .at_index(i);
     }
-    for (int k = 0; k < 3; ++k) {
-      const Vec3 d = m.vertices[t.v[k]] - m.vertices[t.v[(k + 1) % 3]];
-      const double l2 = dot(d, d);
-      e2 = l2 > e2 ? l2 : e2;
-    }
+    const Vec3 &a = m.vertices[t.v[0]], &b = m.vertices[t.v[1]], &c = m.vertices[t.v[2]];
+    const Vec3 ab = a - b, bc = b - c, ca = c - a;
+    const double lab = dot(ab, ab), lbc = dot(bc, bc), lca = dot(ca, ca);
+    e2 = lab > e2 ? lab : e2;
+    e2 = lbc > e2 ? lbc : e2;
+    e2 = lca > e2 ? lca : e2;
   }
   *longest_edge = std::sqrt(e2);
   return Status::ok();
