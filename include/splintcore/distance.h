@@ -90,7 +90,8 @@ struct DistanceIndexOptions {
   // are the same bits either way.
   bool oriented_boxes = false;
   // Only what the pair queries (mesh_pair_distance and its kin), closest_point, ray_intersect,
-  // segment_intersects_mesh and triangles_in_box read: the tree and the order, without the
+  // segment_intersects_mesh and triangles_in_box read: the tree, the order and the triangles'
+  // boxes (DistanceIndex::triangle_boxes), without the
   // dipoles (kept with oriented_boxes, whose frames come from them), the neighbours and the
   // vertex corner lists. About half the build time and a third of the memory; winding_number,
   // signed_distance, the batch queries, sample_sdf and vertex_pseudonormal must not be given
@@ -104,6 +105,10 @@ struct DistanceIndex {
   Span<const BvhDipole> dipoles;   // per node
   Span<const BvhObb> obbs;         // per node, or empty (DistanceIndexOptions::oriented_boxes)
   Span<const uint32_t> order;      // triangle ids in leaf order
+  // pairs_only: per triangle in leaf order, a box that holds it (lo x, y, z, hi x, y, z; float,
+  // widened by 2^-20 relative before rounding), which lets the pair searches pass over far
+  // triangles without loading them; else empty.
+  Span<const float> triangle_boxes;
   Span<const uint32_t> neighbors;  // 3 per triangle: across edge k, or kNoNeighbor
   // The corners at each vertex: vertex_uses[vertex_start[v] .. vertex_start[v + 1]) holds
   // 3 t + k for every corner k of triangle t at v, in triangle order (vertex_pseudonormal).

@@ -92,6 +92,16 @@ inline float float_up(double x) {
   return static_cast<double>(f) < x ? float_step(f, true) : f;
 }
 
+// A float at most x (finite), cheaply: x lowered by 2^-20 of itself and 2^-140 before the
+// conversion, whose rounding (at most 2^-24 relative or 2^-150 absolute) cannot undo that;
+// below the float range, -infinity; above it, the largest float.
+inline float float_below(double x) {
+  constexpr double kMax = 3.4028234663852886e38;  // FLT_MAX
+  const double y = x - (std::fabs(x) * 0x1p-20 + 0x1p-140);
+  if (!(y >= -kMax)) return -HUGE_VALF;
+  return static_cast<float>(y < kMax ? y : kMax);
+}
+
 inline int highest_bit(uint64_t x) { return 63 - __builtin_clzll(x); }
 
 }  // namespace
@@ -116,7 +126,8 @@ uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,
   const uint64_t per_node = sizeof(BvhNode) + (dipoles ? sizeof(BvhDipole) : 0) +
                             (options.oriented_boxes ? sizeof(BvhObb) : 0);
   const uint64_t kept = wide * per_node + triangle_count * (sizeof(uint32_t) * (topology ? 7 : 1)) +
-                        (topology ? (vertex_count + 1) * sizeof(uint32_t) : 0);
+                        (topology ? (vertex_count + 1) * sizeof(uint32_t) : 0) +
+                        (topology ? 0 : triangle_count * 6 * sizeof(float));
   // Temporaries (the larger stage): Morton keys and scratch with the tree at its upper bound
   // before it moves down, or the per-vertex corner lists.
   const uint64_t tree = 2 * triangle_count * sizeof(uint64_t) + wide * per_node;
@@ -280,6 +291,7 @@ struct IndexBuild {
   uint32_t leaves = 1;
   uint32_t wide_max = 1;  // the wide nodes' upper bound
   uint32_t* order = nullptr;
+  float* tboxes = nullptr;  // pairs_only: 6 per triangle, in leaf order
   uint32_t* neighbors = nullptr;
   uint32_t* start = nullptr;
   uint32_t* vuses = nullptr;
@@ -326,6 +338,10 @@ struct IndexBuild {
   Status scan_triangles() {
     order = arena.allocate_array<uint32_t>(nt);
     if (nt > 0 && order == nullptr) return arena.exhausted_status();
+    if (options.pairs_only) {
+      tboxes = arena.allocate_array<float>(6 * nt);
+      if (nt > 0 && tboxes == nullptr) return arena.exhausted_status();
+    }
     if (!options.pairs_only) {
       neighbors = arena.allocate_array<uint32_t>(3 * nt);
       start = arena.allocate_array<uint32_t>(nv + 1);
@@ -503,6 +519,14 @@ struct IndexBuild {
       box.add(p0);
       box.add(p1);
       box.add(p2);
+      if (tboxes != nullptr) {
+        const Vec3 lo = min_vec(min_vec(p0, p1), p2), hi = max_vec(max_vec(p0, p1), p2);
+        float* b = tboxes + 6 * size_t{j};
+        for (int a = 0; a < 3; ++a) {
+          b[a] = float_below(lo[a]);
+          b[3 + a] = -float_below(-hi[a]);
+        }
+      }
       if (dipoles == nullptr) continue;  // boxes only (pairs_only)
       const Vec3 an = cross(p1 - p0, p2 - p0) * 0.5;
       const double ar = length(an);
@@ -795,6 +819,7 @@ struct IndexBuild {
     out->dipoles = Span<const BvhDipole>(dipoles, dipoles != nullptr ? node_count : 0);
     out->obbs = Span<const BvhObb>(obbs, obbs != nullptr ? node_count : 0);
     out->order = Span<const uint32_t>(order, nt);
+    out->triangle_boxes = Span<const float>(tboxes, tboxes != nullptr ? 6 * nt : 0);
     out->neighbors = Span<const uint32_t>(neighbors, neighbors != nullptr ? 3 * nt : 0);
     out->vertex_start = Span<const uint32_t>(start, start != nullptr ? nv + 1 : 0);
     out->vertex_uses = Span<const uint32_t>(vuses, vuses != nullptr ? 3 * nt : 0);

@@ -206,8 +206,21 @@ inline double separation(const Vec3 t[3], const Vec3 o[3]) {
   return 0;
 }
 
+// box_gap2 for a triangle's float box (DistanceIndex::triangle_boxes) moved by `shift`.
+inline double float_box_gap2(const float* box, const Vec3& shift, const double blo[3],
+                             const double bhi[3]) {
+  const double lo[3] = {static_cast<double>(box[0]) + shift.x,
+                        static_cast<double>(box[1]) + shift.y,
+                        static_cast<double>(box[2]) + shift.z};
+  const double hi[3] = {static_cast<double>(box[3]) + shift.x,
+                        static_cast<double>(box[4]) + shift.y,
+                        static_cast<double>(box[5]) + shift.z};
+  return box_gap2(lo, hi, blo, bhi);
+}
+
 struct PairSearch {
   const DistanceIndex* index[2] = {nullptr, nullptr};
+  const float* triangle_boxes[2] = {nullptr, nullptr};  // or null: none in the index
   Vec3 shift[2];
   PairEntry* stack = nullptr;
   uint64_t top = 0, capacity = 0;
@@ -363,7 +376,16 @@ void PairSearch::leaf_pair(const PairEntry& e) {
   TriangleBox* bs = slots.box;
   uint32_t b_ids[16], kept = 0;
   Vec3 b_lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, b_hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  // With the triangles' float boxes (pairs_only), a triangle whose float box is out of reach
+  // is not loaded: that box holds the triangle's, so its computed gap is no larger (rounding
+  // is monotone) and the exact test below would drop it too. The same pairs go on.
+  const float* a_boxes = triangle_boxes[0];
+  const float* b_boxes = triangle_boxes[1];
   for (uint32_t j = 0; j < b_count; ++j) {
+    if (b_boxes != nullptr && float_box_gap2(b_boxes + 6 * size_t{b_first + j}, shift[1], alo,
+                                             ahi) > reach2) {
+      continue;
+    }
     const uint32_t tb = index[1]->order[b_first + j];
     load_triangle(*index[1]->mesh, tb, shift[1], &bs[kept]);
     if (box_gap2(bs[kept].lo, bs[kept].hi, alo, ahi) > reach2) continue;
@@ -374,6 +396,10 @@ void PairSearch::leaf_pair(const PairEntry& e) {
   if (kept == 0) return;
   const double blo[3] = {b_lo.x, b_lo.y, b_lo.z}, bhi[3] = {b_hi.x, b_hi.y, b_hi.z};
   for (uint32_t i = 0; i < a_count; ++i) {
+    if (a_boxes != nullptr &&
+        float_box_gap2(a_boxes + 6 * size_t{a_first + i}, shift[0], blo, bhi) > reach2) {
+      continue;
+    }
     const uint32_t ta = index[0]->order[a_first + i];
     TriangleBox x;
     load_triangle(*index[0]->mesh, ta, shift[0], &x);
@@ -583,6 +609,8 @@ Status start_search(const DistanceIndex& a, const DistanceIndex& b, const Vec3& 
   if (*empty) return Status::ok();
   s->index[0] = &a;
   s->index[1] = &b;
+  s->triangle_boxes[0] = a.triangle_boxes.empty() ? nullptr : a.triangle_boxes.data();
+  s->triangle_boxes[1] = b.triangle_boxes.empty() ? nullptr : b.triangle_boxes.data();
   s->shift[1] = offset_b;
   const double ma = root_magnitude(a, s->shift[0]), mb = root_magnitude(b, s->shift[1]);
   const double magnitude = ma > mb ? ma : mb;

@@ -2193,6 +2193,18 @@ TEST(DistanceBuild, ArenaBoundCoversTheHighWater) {
           EXPECT_TRUE(index.neighbors.empty());
           EXPECT_TRUE(index.vertex_uses.empty());
           EXPECT_EQ(index.dipoles.size(), oriented ? index.nodes.size() : 0u);
+          // Each triangle's float box holds its corners.
+          ASSERT_EQ(index.triangle_boxes.size(), 6 * mesh.triangles.size());
+          for (size_t j = 0; j < index.order.size(); ++j) {
+            const Triangle& tri = mesh.triangles[index.order[j]];
+            for (int c = 0; c < 3; ++c) {
+              const Vec3& p = mesh.vertices[tri.v[c]];
+              for (int a = 0; a < 3; ++a) {
+                EXPECT_LE(static_cast<double>(index.triangle_boxes[6 * j + a]), p[a]);
+                EXPECT_GE(static_cast<double>(index.triangle_boxes[6 * j + 3 + a]), p[a]);
+              }
+            }
+          }
         }
         t.arena.rewind(m);
       }
