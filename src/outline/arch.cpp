@@ -82,6 +82,7 @@ void project(const Polyline& p, double px, double py, double* s, double* o) {
 // guess (with a margin over the rounding): project()'s answer bit for bit.
 constexpr size_t kProjectorChunks = 32;      // at most (more segments: longer chunks)
 constexpr size_t kProjectorMinChunk = 8;     // segments a chunk, at least
+constexpr size_t kProjectorGroup = 4;        // chunks a group (a second level of boxes)
 constexpr double kProjectorMarginMm = 1e-6;  // over any rounding of a distance
 
 struct Projector {
@@ -89,7 +90,8 @@ struct Projector {
   double* box = nullptr;    // per segment: x_lo, x_hi, y_lo, y_hi
   double* reach = nullptr;  // per segment: segment_reach
   double* chunk_box = nullptr;  // per chunk: the union of its segments' boxes
-  size_t chunk = 1, chunks = 0;  // segments a chunk, chunks
+  double* group_box = nullptr;  // per group of kProjectorGroup chunks: the union of theirs
+  size_t chunk = 1, chunks = 0, groups = 0;  // segments a chunk, chunks, groups
   size_t hint = 0;
 };
 
@@ -118,12 +120,15 @@ Status make_projector(Arena& arena, const Polyline& p, Projector* out) {
   g.chunks = (segments + g.chunk - 1) / g.chunk;
   g.box = arena.allocate_array<double>(4 * segments);
   g.reach = arena.allocate_array<double>(segments);
+  g.groups = (g.chunks + kProjectorGroup - 1) / kProjectorGroup;
   g.chunk_box = arena.allocate_array<double>(4 * g.chunks);
-  if (g.box == nullptr || g.reach == nullptr || g.chunk_box == nullptr) {
+  g.group_box = arena.allocate_array<double>(4 * g.groups);
+  if (g.box == nullptr || g.reach == nullptr || g.chunk_box == nullptr ||
+      g.group_box == nullptr) {
     return arena.exhausted_status();
   }
-  for (size_t c = 0; c < g.chunks; ++c) {
-    double* cb = g.chunk_box + 4 * c;
+  for (size_t c = 0; c < g.chunks + g.groups; ++c) {
+    double* cb = c < g.chunks ? g.chunk_box + 4 * c : g.group_box + 4 * (c - g.chunks);
     cb[0] = cb[2] = HUGE_VAL;
     cb[1] = cb[3] = -HUGE_VAL;
   }
@@ -131,11 +136,13 @@ Status make_projector(Arena& arena, const Polyline& p, Projector* out) {
     double* b = g.box + 4 * k;
     g.reach[k] = segment_reach(p, k);
     segment_box(p, k, b);
-    double* cb = g.chunk_box + 4 * (k / g.chunk);
-    cb[0] = std::min(cb[0], b[0]);
-    cb[1] = std::max(cb[1], b[1]);
-    cb[2] = std::min(cb[2], b[2]);
-    cb[3] = std::max(cb[3], b[3]);
+    for (double* cb : {g.chunk_box + 4 * (k / g.chunk),
+                       g.group_box + 4 * (k / g.chunk / kProjectorGroup)}) {
+      cb[0] = std::min(cb[0], b[0]);
+      cb[1] = std::max(cb[1], b[1]);
+      cb[2] = std::min(cb[2], b[2]);
+      cb[3] = std::max(cb[3], b[3]);
+    }
   }
   return Status::ok();
 }
@@ -162,15 +169,19 @@ void project_fast(Projector& g, double px, double py, double* s, double* o) {
     return;
   }
   // The least distance, the first segment in index order among equal ones (as project()).
-  for (size_t c = 0; c < g.chunks; ++c) {
-    if (box_beyond(g.chunk_box + 4 * c, px, py, r)) continue;
-    const size_t end = std::min(segments, (c + 1) * g.chunk);
-    for (size_t k = c * g.chunk; k < end; ++k) {
-      if (k == guess || box_beyond(g.box + 4 * k, px, py, r)) continue;
-      const double d2 = segment_nearest(p, k, g.reach[k], px, py, &t, &qx, &qy);
-      if (d2 < best || (d2 == best && k < best_k)) {
-        best = d2;
-        best_k = k;
+  for (size_t gi = 0; gi < g.groups; ++gi) {
+    if (box_beyond(g.group_box + 4 * gi, px, py, r)) continue;
+    const size_t last_chunk = std::min(g.chunks, (gi + 1) * kProjectorGroup);
+    for (size_t c = gi * kProjectorGroup; c < last_chunk; ++c) {
+      if (box_beyond(g.chunk_box + 4 * c, px, py, r)) continue;
+      const size_t end = std::min(segments, (c + 1) * g.chunk);
+      for (size_t k = c * g.chunk; k < end; ++k) {
+        if (k == guess || box_beyond(g.box + 4 * k, px, py, r)) continue;
+        const double d2 = segment_nearest(p, k, g.reach[k], px, py, &t, &qx, &qy);
+        if (d2 < best || (d2 == best && k < best_k)) {
+          best = d2;
+          best_k = k;
+        }
       }
     }
   }
@@ -643,8 +654,9 @@ Status cut_distal_ends(const Polyline& arch, const Frame& f, const OutlineOption
 uint64_t projector_bound() {
   const size_t segments = std::max<size_t>(kSectors, kMaxArchPoints);
   const size_t chunks = (segments + projector_chunk(segments) - 1) / projector_chunk(segments);
+  const size_t groups = (chunks + kProjectorGroup - 1) / kProjectorGroup;
   return arena_array_bound<double>(4 * segments) + arena_array_bound<double>(segments) +
-         arena_array_bound<double>(4 * chunks);
+         arena_array_bound<double>(4 * chunks) + arena_array_bound<double>(4 * groups);
 }
 
 Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
