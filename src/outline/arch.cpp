@@ -228,7 +228,9 @@ Status occlusal_points(Arena& arena, const Mesh& upper, const Mesh& lower, const
                        uint64_t counts[2]) {
   const size_t cells = static_cast<size_t>(g.nx) * g.ny;
   double* r = arena.allocate_array<double>(cells);
-  if (r == nullptr) return arena.exhausted_status();
+  uint32_t* band = arena.allocate_array<uint32_t>(std::max(upper.vertices.size(),
+                                                           lower.vertices.size()));
+  if (r == nullptr || band == nullptr) return arena.exhausted_status();
   // Room for every shown column and kLinePoints vertices a jaw, reserved once (no growth).
   size_t shown = 0;
   for (uint32_t jaw = 0; jaw < 2; ++jaw) {
@@ -270,18 +272,18 @@ Status occlusal_points(Arena& arena, const Mesh& upper, const Mesh& lower, const
       if (!cells_out->push_back(a)) return arena.exhausted_status();
       ++counts[jaw];
     }
+    // The band's vertices marked in one pass (their indices in `band`), every k-th taken.
     size_t in_band = 0;
-    for (const Vec3& v : m.vertices) {
+    for (size_t k = 0; k < m.vertices.size(); ++k) {
       double x, y, h;
-      if (depth_of(v + offset, &x, &y, &h) <= limit) ++in_band;
+      band[in_band] = static_cast<uint32_t>(k);
+      in_band += depth_of(m.vertices[k] + offset, &x, &y, &h) <= limit ? 1u : 0u;
     }
     const size_t every = in_band / kLinePoints + 1;
-    size_t seen = 0;
-    for (const Vec3& v : m.vertices) {
+    for (size_t i = 0; i < in_band; i += every) {
       ArchPoint a;
       a.jaw = jaw;
-      if (depth_of(v + offset, &a.x, &a.y, &a.h) > limit) continue;
-      if (seen++ % every != 0) continue;
+      (void)depth_of(m.vertices[band[i]] + offset, &a.x, &a.y, &a.h);
       if (!line->push_back(a)) return arena.exhausted_status();
     }
   }

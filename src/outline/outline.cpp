@@ -519,12 +519,15 @@ uint64_t compute_outline_bound(const Mesh& maxilla, const Mesh& mandible) {
                            4 * arena_array_bound<double>(cells) +
                            arena_array_bound<uint8_t>(maxilla_vertices) +
                            arena_array_bound<uint8_t>(mandible_vertices);
-  // The arch: the columns' distances and points, the band's vertices (both reserved once),
+  // The arch: the columns' distances, the band's vertex marks, the points and the band's
+  // vertices (both reserved once),
   // the sectors, each pass's line, the picks' data, the projector's grid.
   const uint64_t points = 2 * cells;
   const uint64_t line_points = 2 * (kLinePoints + 1);
   const uint64_t arch =
-      arena_array_bound<double>(cells) + arena_array_bound<ArchPoint>(points) +
+      arena_array_bound<double>(cells) +
+      arena_array_bound<uint32_t>(std::max(maxilla_vertices, mandible_vertices)) +
+      arena_array_bound<ArchPoint>(points) +
       arena_array_bound<ArchPoint>(line_points) + 6 * arena_array_bound<double>(kSectors) +
       (kSmoothPasses + 1) * 9 * arena_array_bound<double>(kMaxArchPoints + 1) +
       arena_array_bound<double>(6 * kMaxPicks) + (kSmoothPasses + 2) * projector_bound();
