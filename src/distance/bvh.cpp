@@ -92,6 +92,16 @@ inline float float_up(double x) {
   return static_cast<double>(f) < x ? float_step(f, true) : f;
 }
 
+// A float at most x (finite), cheaply: x lowered by 2^-20 of itself and 2^-140 before the
+// conversion, whose rounding (at most 2^-24 relative or 2^-150 absolute) cannot undo that;
+// below the float range, -infinity; above it, the largest float.
+inline float float_below(double x) {
+  constexpr double kMax = 3.4028234663852886e38;  // FLT_MAX
+  const double y = x - (std::fabs(x) * 0x1p-20 + 0x1p-140);
+  if (!(y >= -kMax)) return -HUGE_VALF;
+  return static_cast<float>(y < kMax ? y : kMax);
+}
+
 inline int highest_bit(uint64_t x) { return 63 - __builtin_clzll(x); }
 
 }  // namespace
@@ -111,14 +121,17 @@ uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,
   const uint64_t leaves = triangle_count == 0 ? 1 : (triangle_count + leaf - 1) / leaf;
   // Every node splits a range of at least two leaves (an empty or one-leaf mesh has a root).
   const uint64_t wide = leaves > 1 ? leaves - 1 : 1;
-  const uint64_t per_node =
-      sizeof(BvhNode) + sizeof(BvhDipole) + (options.oriented_boxes ? sizeof(BvhObb) : 0);
-  const uint64_t kept = wide * per_node + triangle_count * (sizeof(uint32_t) * 7) +
-                        (vertex_count + 1) * sizeof(uint32_t);
+  const bool topology = !options.pairs_only;
+  const bool dipoles = topology || options.oriented_boxes;
+  const uint64_t per_node = sizeof(BvhNode) + (dipoles ? sizeof(BvhDipole) : 0) +
+                            (options.oriented_boxes ? sizeof(BvhObb) : 0);
+  const uint64_t kept = wide * per_node + triangle_count * (sizeof(uint32_t) * (topology ? 7 : 1)) +
+                        (topology ? (vertex_count + 1) * sizeof(uint32_t) : 0) +
+                        (topology ? 0 : triangle_count * 6 * sizeof(float));
   // Temporaries (the larger stage): Morton keys and scratch with the tree at its upper bound
   // before it moves down, or the per-vertex corner lists.
   const uint64_t tree = 2 * triangle_count * sizeof(uint64_t) + wide * per_node;
-  const uint64_t lists = 3 * triangle_count * 2 * sizeof(uint32_t);
+  const uint64_t lists = topology ? 3 * triangle_count * 2 * sizeof(uint32_t) : 0;
   const uint64_t temps = (tree > lists ? tree : lists) + kMaxDepth * 16;
   return kept + temps + 16 * 64;
 }
@@ -278,6 +291,7 @@ struct IndexBuild {
   uint32_t leaves = 1;
   uint32_t wide_max = 1;  // the wide nodes' upper bound
   uint32_t* order = nullptr;
+  float* tboxes = nullptr;  // pairs_only: 6 per triangle, in leaf order
   uint32_t* neighbors = nullptr;
   uint32_t* start = nullptr;
   uint32_t* vuses = nullptr;
@@ -323,14 +337,20 @@ struct IndexBuild {
   // and each vertex's corners counted (for its list, step 4).
   Status scan_triangles() {
     order = arena.allocate_array<uint32_t>(nt);
-    neighbors = arena.allocate_array<uint32_t>(3 * nt);
-    start = arena.allocate_array<uint32_t>(nv + 1);
-    vuses = arena.allocate_array<uint32_t>(3 * nt);
-    if ((nt > 0 && (order == nullptr || neighbors == nullptr || vuses == nullptr)) ||
-        start == nullptr) {
-      return arena.exhausted_status();
+    if (nt > 0 && order == nullptr) return arena.exhausted_status();
+    if (options.pairs_only) {
+      tboxes = arena.allocate_array<float>(6 * nt);
+      if (nt > 0 && tboxes == nullptr) return arena.exhausted_status();
     }
-    for (size_t i = 0; i <= nv; ++i) start[i] = 0;
+    if (!options.pairs_only) {
+      neighbors = arena.allocate_array<uint32_t>(3 * nt);
+      start = arena.allocate_array<uint32_t>(nv + 1);
+      vuses = arena.allocate_array<uint32_t>(3 * nt);
+      if ((nt > 0 && (neighbors == nullptr || vuses == nullptr)) || start == nullptr) {
+        return arena.exhausted_status();
+      }
+      for (size_t i = 0; i <= nv; ++i) start[i] = 0;
+    }
     for (size_t t = 0; t < nt; ++t) {
       const Triangle& tri = tris[t];
       if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) {
@@ -339,6 +359,7 @@ struct IndexBuild {
             .at_index(t);
       }
       centroids.add((v[tri.v[0]] + v[tri.v[1]] + v[tri.v[2]]) * (1.0 / 3.0));
+      if (start == nullptr) continue;
       for (int k = 0; k < 3; ++k) ++start[tri.v[k] + size_t{1}];
     }
     n = static_cast<uint32_t>(nt);
@@ -361,10 +382,11 @@ struct IndexBuild {
     keys = arena.allocate_array<uint64_t>(nt);
     uint64_t* scratch = arena.allocate_array<uint64_t>(nt);
     nodes = arena.allocate_array<BvhNode>(wide_max);
-    dipoles = arena.allocate_array<BvhDipole>(wide_max);
+    const bool with_dipoles = !options.pairs_only || options.oriented_boxes;
+    if (with_dipoles) dipoles = arena.allocate_array<BvhDipole>(wide_max);
     if (options.oriented_boxes) obbs = arena.allocate_array<BvhObb>(wide_max);
     if ((nt > 0 && (keys == nullptr || scratch == nullptr)) || nodes == nullptr ||
-        dipoles == nullptr || (options.oriented_boxes && obbs == nullptr)) {
+        (with_dipoles && dipoles == nullptr) || (options.oriented_boxes && obbs == nullptr)) {
       return arena.exhausted_status();
     }
     const Vec3 lo = centroids.lo;
@@ -497,6 +519,15 @@ struct IndexBuild {
       box.add(p0);
       box.add(p1);
       box.add(p2);
+      if (tboxes != nullptr) {
+        const Vec3 lo = min_vec(min_vec(p0, p1), p2), hi = max_vec(max_vec(p0, p1), p2);
+        float* b = tboxes + 6 * size_t{j};
+        for (int a = 0; a < 3; ++a) {
+          b[a] = float_below(lo[a]);
+          b[3 + a] = -float_below(-hi[a]);
+        }
+      }
+      if (dipoles == nullptr) continue;  // boxes only (pairs_only)
       const Vec3 an = cross(p1 - p0, p2 - p0) * 0.5;
       const double ar = length(an);
       sums->nsum = sums->nsum + an;
@@ -525,6 +556,7 @@ struct IndexBuild {
       node.lo[a][k] = lo[a];
       node.hi[a][k] = hi[a];
     }
+    if (dipoles == nullptr) return;  // boxes only (pairs_only)
     const BvhDipole& cd = dipoles[node.child[k]];
     const double ca = static_cast<double>(cd.area);
     sums->nsum =
@@ -625,7 +657,7 @@ struct IndexBuild {
         all.add(Vec3{static_cast<double>(node.hi[0][k]), static_cast<double>(node.hi[1][k]),
                      static_cast<double>(node.hi[2][k])});
       }
-      set_dipole(i, all, sums);
+      if (dipoles != nullptr) set_dipole(i, all, sums);
       if (obbs != nullptr) set_oriented_boxes(i, sums.nsum);
     }
   }
@@ -641,10 +673,13 @@ struct IndexBuild {
     nodes = arena.allocate_array<BvhNode>(node_count);
     SPLINTCORE_ASSERT(nodes != nullptr);
     std::memmove(static_cast<void*>(nodes), wide_src, size_t{node_count} * sizeof(BvhNode));
-    dipoles = arena.allocate_array<BvhDipole>(node_count);
-    SPLINTCORE_ASSERT(dipoles != nullptr);
-    std::memmove(static_cast<void*>(dipoles), wide_dipoles_src,
-                 size_t{node_count} * sizeof(BvhDipole));
+    dipoles = nullptr;
+    if (wide_dipoles_src != nullptr) {
+      dipoles = arena.allocate_array<BvhDipole>(node_count);
+      SPLINTCORE_ASSERT(dipoles != nullptr);
+      std::memmove(static_cast<void*>(dipoles), wide_dipoles_src,
+                   size_t{node_count} * sizeof(BvhDipole));
+    }
     obbs = nullptr;
     if (wide_obbs_src != nullptr) {
       obbs = arena.allocate_array<BvhObb>(node_count);
@@ -781,12 +816,13 @@ struct IndexBuild {
 
   void publish(DistanceIndex* out) const {
     out->nodes = Span<const BvhNode>(nodes, node_count);
-    out->dipoles = Span<const BvhDipole>(dipoles, node_count);
+    out->dipoles = Span<const BvhDipole>(dipoles, dipoles != nullptr ? node_count : 0);
     out->obbs = Span<const BvhObb>(obbs, obbs != nullptr ? node_count : 0);
     out->order = Span<const uint32_t>(order, nt);
-    out->neighbors = Span<const uint32_t>(neighbors, 3 * nt);
-    out->vertex_start = Span<const uint32_t>(start, nv + 1);
-    out->vertex_uses = Span<const uint32_t>(vuses, 3 * nt);
+    out->triangle_boxes = Span<const float>(tboxes, tboxes != nullptr ? 6 * nt : 0);
+    out->neighbors = Span<const uint32_t>(neighbors, neighbors != nullptr ? 3 * nt : 0);
+    out->vertex_start = Span<const uint32_t>(start, start != nullptr ? nv + 1 : 0);
+    out->vertex_uses = Span<const uint32_t>(vuses, vuses != nullptr ? 3 * nt : 0);
     out->closed_manifold = closed_manifold;
     out->depth = depth;
   }
@@ -806,7 +842,7 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   build.bound_nodes();
   build.move_tree_down(tree_temps);
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 2, 4));
-  SPLINTCORE_RETURN_IF_ERROR(build.link_neighbours());
+  if (!options.pairs_only) SPLINTCORE_RETURN_IF_ERROR(build.link_neighbours());
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 3, 4));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 4, 4));
   build.publish(out);
@@ -816,6 +852,7 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
 }  // namespace
 
 Vec3 vertex_pseudonormal(const DistanceIndex& index, uint32_t vertex) {
+  SPLINTCORE_ASSERT(vertex + size_t{1} < index.vertex_start.size());  // pairs_only: no lists
   const Mesh& mesh = *index.mesh;
   const Vec3* v = mesh.vertices.data();
   Vec3 sum{};

@@ -206,8 +206,21 @@ inline double separation(const Vec3 t[3], const Vec3 o[3]) {
   return 0;
 }
 
+// box_gap2 for a triangle's float box (DistanceIndex::triangle_boxes) moved by `shift`.
+inline double float_box_gap2(const float* box, const Vec3& shift, const double blo[3],
+                             const double bhi[3]) {
+  const double lo[3] = {static_cast<double>(box[0]) + shift.x,
+                        static_cast<double>(box[1]) + shift.y,
+                        static_cast<double>(box[2]) + shift.z};
+  const double hi[3] = {static_cast<double>(box[3]) + shift.x,
+                        static_cast<double>(box[4]) + shift.y,
+                        static_cast<double>(box[5]) + shift.z};
+  return box_gap2(lo, hi, blo, bhi);
+}
+
 struct PairSearch {
   const DistanceIndex* index[2] = {nullptr, nullptr};
+  const float* triangle_boxes[2] = {nullptr, nullptr};  // or null: none in the index
   Vec3 shift[2];
   PairEntry* stack = nullptr;
   uint64_t top = 0, capacity = 0;
@@ -228,6 +241,8 @@ struct PairSearch {
   bool collecting = false;
   TrianglePairIds* collected = nullptr;
   size_t collect_capacity = 0, collect_count = 0;
+  // Stopping at the first meeting pair (mesh_pair_meet): `done` once one is found.
+  bool first_meet = false, done = false;
 
   // reach2 from best2: a pair of boxes whose computed distance is at most reach may hold a
   // pair whose computed distance is at most best. Box gaps round by a few ulps; a triangle
@@ -295,6 +310,7 @@ void PairSearch::consider(uint32_t ta, uint32_t tb, const TriangleBox& x, const 
     found = meet = true;
     best_a = ta;
     best_b = tb;
+    done = first_meet;
     update_reach();
     return;
   }
@@ -351,10 +367,25 @@ void PairSearch::leaf_pair(const PairEntry& e) {
   const uint32_t b_first = nb.child[e.slot_b], b_count = nb.count[e.slot_b];
   double alo[3], ahi[3];
   item_box(0, e.node_a, e.slot_a, alo, ahi);
-  TriangleBox bs[16];
+  // Not value-initialised (Vec3's zeros, 2 kB a leaf pair): each slot is written before it
+  // is read.
+  union Slots {
+    Slots() {}
+    TriangleBox box[16];
+  } slots;
+  TriangleBox* bs = slots.box;
   uint32_t b_ids[16], kept = 0;
   Vec3 b_lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, b_hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  // With the triangles' float boxes (pairs_only), a triangle whose float box is out of reach
+  // is not loaded: that box holds the triangle's, so its computed gap is no larger (rounding
+  // is monotone) and the exact test below would drop it too. The same pairs go on.
+  const float* a_boxes = triangle_boxes[0];
+  const float* b_boxes = triangle_boxes[1];
   for (uint32_t j = 0; j < b_count; ++j) {
+    if (b_boxes != nullptr &&
+        float_box_gap2(b_boxes + 6 * size_t{b_first + j}, shift[1], alo, ahi) > reach2) {
+      continue;
+    }
     const uint32_t tb = index[1]->order[b_first + j];
     load_triangle(*index[1]->mesh, tb, shift[1], &bs[kept]);
     if (box_gap2(bs[kept].lo, bs[kept].hi, alo, ahi) > reach2) continue;
@@ -365,6 +396,10 @@ void PairSearch::leaf_pair(const PairEntry& e) {
   if (kept == 0) return;
   const double blo[3] = {b_lo.x, b_lo.y, b_lo.z}, bhi[3] = {b_hi.x, b_hi.y, b_hi.z};
   for (uint32_t i = 0; i < a_count; ++i) {
+    if (a_boxes != nullptr &&
+        float_box_gap2(a_boxes + 6 * size_t{a_first + i}, shift[0], blo, bhi) > reach2) {
+      continue;
+    }
     const uint32_t ta = index[0]->order[a_first + i];
     TriangleBox x;
     load_triangle(*index[0]->mesh, ta, shift[0], &x);
@@ -374,6 +409,7 @@ void PairSearch::leaf_pair(const PairEntry& e) {
       const double yhi[3] = {bs[j].hi.x, bs[j].hi.y, bs[j].hi.z};
       if (box_gap2(x.lo, x.hi, ylo, yhi) > reach2) continue;
       consider(ta, b_ids[j], x, bs[j]);
+      if (done) return;
     }
   }
 }
@@ -432,6 +468,7 @@ bool PairSearch::depth_first(const PairEntry& first) {
     if (e.lb2 > reach2) continue;
     if (is_leaf(0, e.node_a, e.slot_a) && is_leaf(1, e.node_b, e.slot_b)) {
       leaf_pair(e);
+      if (done) return true;
       continue;
     }
     PairEntry found_pairs[16];
@@ -476,6 +513,7 @@ bool PairSearch::run() {
     if (e.lb2 > reach2) break;  // and so are all the others
     if (is_leaf(0, e.node_a, e.slot_a) && is_leaf(1, e.node_b, e.slot_b)) {
       leaf_pair(e);
+      if (done) break;
       continue;
     }
     PairEntry found_pairs[16];
@@ -486,6 +524,7 @@ bool PairSearch::run() {
       } else if (!depth_first(found_pairs[k])) {
         return false;
       }
+      if (done) return true;
     }
   }
   return true;
@@ -570,6 +609,8 @@ Status start_search(const DistanceIndex& a, const DistanceIndex& b, const Vec3& 
   if (*empty) return Status::ok();
   s->index[0] = &a;
   s->index[1] = &b;
+  s->triangle_boxes[0] = a.triangle_boxes.empty() ? nullptr : a.triangle_boxes.data();
+  s->triangle_boxes[1] = b.triangle_boxes.empty() ? nullptr : b.triangle_boxes.data();
   s->shift[1] = offset_b;
   const double ma = root_magnitude(a, s->shift[0]), mb = root_magnitude(b, s->shift[1]);
   const double magnitude = ma > mb ? ma : mb;
@@ -624,6 +665,25 @@ Status mesh_pair_distance_collect(const Context& ctx, const DistanceIndex& a,
   s.collect_capacity = pairs.size();
   SPLINTCORE_RETURN_IF_ERROR(run_search(ctx, &s, out));
   *count = s.collect_count;
+  return Status::ok();
+}
+
+Status mesh_pair_meet(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
+                      const Vec3& offset_b, bool* meet, MeshPairDistance* out) {
+  *out = MeshPairDistance{};
+  out->distance = HUGE_VAL;
+  *meet = false;
+  PairSearch s;
+  bool empty = false;
+  SPLINTCORE_RETURN_IF_ERROR(start_search(a, b, offset_b, 0.0, &s, &empty));
+  if (empty) return Status::ok();
+  s.first_meet = true;
+  SPLINTCORE_RETURN_IF_ERROR(run_search(ctx, &s, out));
+  *meet = s.meet;
+  if (!s.meet) {  // a pair at distance 0 that does not meet: not an answer here
+    *out = MeshPairDistance{};
+    out->distance = HUGE_VAL;
+  }
   return Status::ok();
 }
 

@@ -518,6 +518,7 @@ bool closest_point(const DistanceIndex& index, const Vec3& q, ClosestPoint* out)
 double winding_number(const DistanceIndex& index, const Vec3& q, double beta) {
   const Mesh& mesh = *index.mesh;
   if (mesh.triangles.size() == 0) return 0.0;
+  SPLINTCORE_ASSERT(index.dipoles.size() == index.nodes.size());  // not a pairs_only index
   const Vec3* v = mesh.vertices.data();
   const BvhNode* nodes = index.nodes.data();
   const double beta2 = beta * beta;
@@ -635,6 +636,7 @@ void finish_signed(const DistanceIndex& index, const Vec3& q, SignMethod method,
 bool signed_distance(const DistanceIndex& index, const Vec3& q, SignMethod method,
                      SignedDistance* out) {
   *out = SignedDistance{};
+  SPLINTCORE_ASSERT(index.vertex_start.size() > 0);  // not a pairs_only index
   if (!closest_point(index, q, &out->closest)) return false;
   finish_signed(index, q, method, out);
   return true;
@@ -879,6 +881,7 @@ Status batch_closest_points(const Context& ctx, const DistanceIndex& index,
     return Status::error(StatusCode::kInvalidArgument,
                          "batch_closest_points: queries and results differ in size");
   }
+  SPLINTCORE_ASSERT(index.vertex_start.size() > 0);  // not a pairs_only index
   if (index.mesh->triangles.size() == 0) {
     for (size_t k = 0; k < results.size(); ++k) results[k] = ClosestPoint{};
     return Status::ok();
@@ -910,6 +913,7 @@ Status batch_signed_distances(const Context& ctx, const DistanceIndex& index,
     return Status::error(StatusCode::kInvalidArgument,
                          "batch_signed_distances: queries and results differ in size");
   }
+  SPLINTCORE_ASSERT(index.vertex_start.size() > 0);  // not a pairs_only index
   if (index.mesh->triangles.size() == 0) {
     for (size_t k = 0; k < results.size(); ++k) results[k] = HUGE_VAL;
     return Status::ok();

@@ -74,44 +74,25 @@ void project(const Polyline& p, double px, double py, double* s, double* o) {
   segment_place(p, best_k, px, py, s, o);
 }
 
-// project() for many points: the segments' boxes (the end segments' with their rays) binned
-// in a uniform grid, so that a point tests only the segments whose boxes come as near as a
-// first guess (the previous point's segment: a jaw's vertices come tooth by tooth), in index
-// order, which gives project()'s answer bit for bit. Without the grid (too many entries)
-// every point scans every segment.
-constexpr uint32_t kProjectorSide = 64;             // cells per side, at most
-constexpr double kProjectorCellMm = 2.0;            // at least
-constexpr size_t kProjectorEntriesPerSegment = 24;  // the grid's entries, at most
-constexpr size_t kProjectorCandidates = 256;        // segments tested per point, at most
-constexpr size_t kProjectorCells = 400;             // cells looked at per point, at most
-constexpr double kProjectorMarginMm = 1e-6;         // over any rounding of a distance
-
-size_t projector_entries(size_t segments) {
-  return kProjectorEntriesPerSegment * segments + kProjectorSide * kProjectorSide;
-}
+// project() for many points: the segments' boxes (the end segments' with their rays), and
+// the boxes of runs of consecutive segments (chunks: a run's segments lie together along the
+// arch), so that a point tests only the segments whose boxes come as near as a first guess
+// (the previous point's segment: a jaw's vertices come tooth by tooth), passing over every
+// chunk whose box does not. The nearest segment, and every segment as near, lies within the
+// guess (with a margin over the rounding): project()'s answer bit for bit.
+constexpr size_t kProjectorChunks = 32;      // at most (more segments: longer chunks)
+constexpr size_t kProjectorMinChunk = 8;     // segments a chunk, at least
+constexpr size_t kProjectorGroup = 4;        // chunks a group (a second level of boxes)
+constexpr double kProjectorMarginMm = 1e-6;  // over any rounding of a distance
 
 struct Projector {
   const Polyline* line = nullptr;
-  double x0 = 0, y0 = 0, cell = 1;
-  uint32_t nx = 0, ny = 0;
-  uint32_t* start = nullptr;  // per cell, into entries; nx ny + 1
-  uint32_t* entries = nullptr;
-  double* box = nullptr;     // per segment: x_lo, x_hi, y_lo, y_hi
-  double* reach = nullptr;   // per segment: segment_reach
-  uint32_t* seen = nullptr;  // per segment: the last query that took it as a candidate
-  uint32_t query = 0;
+  double* box = nullptr;        // per segment: x_lo, x_hi, y_lo, y_hi
+  double* reach = nullptr;      // per segment: segment_reach
+  double* chunk_box = nullptr;  // per chunk: the union of its segments' boxes
+  double* group_box = nullptr;  // per group of kProjectorGroup chunks: the union of theirs
+  size_t chunk = 1, chunks = 0, groups = 0;  // segments a chunk, chunks, groups
   size_t hint = 0;
-  bool gridded = false;
-
-  void cell_range(double lo, double hi, double origin, uint32_t n, uint32_t* a, uint32_t* b) const {
-    const double fa = std::floor((lo - origin) / cell), fb = std::floor((hi - origin) / cell);
-    *a = fa < 0 ? 0 : (fa >= n ? n - 1 : static_cast<uint32_t>(fa));
-    *b = fb < 0 ? 0 : (fb >= n ? n - 1 : static_cast<uint32_t>(fb));
-  }
-  void segment_cells(size_t k, uint32_t c[4]) const {
-    cell_range(box[4 * k], box[4 * k + 1], x0, nx, &c[0], &c[1]);
-    cell_range(box[4 * k + 2], box[4 * k + 3], y0, ny, &c[2], &c[3]);
-  }
 };
 
 void segment_box(const Polyline& p, size_t k, double* b) {
@@ -126,141 +107,81 @@ void segment_box(const Polyline& p, size_t k, double* b) {
   b[3] = std::max(ay, by) + kProjectorMarginMm;
 }
 
+size_t projector_chunk(size_t segments) {
+  return std::max(kProjectorMinChunk, (segments + kProjectorChunks - 1) / kProjectorChunks);
+}
+
 Status make_projector(Arena& arena, const Polyline& p, Projector* out) {
   Projector& g = *out;
   g = Projector{};
   g.line = &p;
   const size_t segments = p.n - 1;
+  g.chunk = projector_chunk(segments);
+  g.chunks = (segments + g.chunk - 1) / g.chunk;
   g.box = arena.allocate_array<double>(4 * segments);
   g.reach = arena.allocate_array<double>(segments);
-  g.seen = arena.allocate_array<uint32_t>(segments);
-  if (g.box == nullptr || g.reach == nullptr || g.seen == nullptr) {
+  g.groups = (g.chunks + kProjectorGroup - 1) / kProjectorGroup;
+  g.chunk_box = arena.allocate_array<double>(4 * g.chunks);
+  g.group_box = arena.allocate_array<double>(4 * g.groups);
+  if (g.box == nullptr || g.reach == nullptr || g.chunk_box == nullptr || g.group_box == nullptr) {
     return arena.exhausted_status();
   }
-  std::fill(g.seen, g.seen + segments, 0u);
-  double x_lo = HUGE_VAL, x_hi = -HUGE_VAL, y_lo = HUGE_VAL, y_hi = -HUGE_VAL;
+  for (size_t c = 0; c < g.chunks + g.groups; ++c) {
+    double* cb = c < g.chunks ? g.chunk_box + 4 * c : g.group_box + 4 * (c - g.chunks);
+    cb[0] = cb[2] = HUGE_VAL;
+    cb[1] = cb[3] = -HUGE_VAL;
+  }
   for (size_t k = 0; k < segments; ++k) {
     double* b = g.box + 4 * k;
     g.reach[k] = segment_reach(p, k);
     segment_box(p, k, b);
-    x_lo = std::min(x_lo, b[0]);
-    x_hi = std::max(x_hi, b[1]);
-    y_lo = std::min(y_lo, b[2]);
-    y_hi = std::max(y_hi, b[3]);
-  }
-  const double span = std::max(x_hi - x_lo, y_hi - y_lo);
-  if (!(span < HUGE_VAL)) return Status::ok();  // not finite: scan
-  g.cell = std::max(kProjectorCellMm, span / kProjectorSide) * (1 + 1e-9);
-  g.x0 = x_lo;
-  g.y0 = y_lo;
-  g.nx = std::min(kProjectorSide, static_cast<uint32_t>((x_hi - x_lo) / g.cell) + 1);
-  g.ny = std::min(kProjectorSide, static_cast<uint32_t>((y_hi - y_lo) / g.cell) + 1);
-  const size_t cells = static_cast<size_t>(g.nx) * g.ny;
-  size_t total = 0;
-  for (size_t k = 0; k < segments; ++k) {
-    uint32_t c[4];
-    g.segment_cells(k, c);
-    total += static_cast<size_t>(c[1] - c[0] + 1) * (c[3] - c[2] + 1);
-  }
-  if (total > projector_entries(segments)) return Status::ok();  // scan
-  g.start = arena.allocate_array<uint32_t>(cells + 1);
-  g.entries = arena.allocate_array<uint32_t>(total > 0 ? total : 1);
-  if (g.start == nullptr || g.entries == nullptr) return arena.exhausted_status();
-  std::fill(g.start, g.start + cells + 1, 0u);
-  for (int fill = 0; fill < 2; ++fill) {
-    for (size_t k = 0; k < segments; ++k) {
-      uint32_t c[4];
-      g.segment_cells(k, c);
-      for (uint32_t iy = c[2]; iy <= c[3]; ++iy) {
-        for (uint32_t ix = c[0]; ix <= c[1]; ++ix) {
-          const size_t cell = static_cast<size_t>(iy) * g.nx + ix;
-          if (fill == 0) {
-            ++g.start[cell + 1];
-          } else {
-            g.entries[g.start[cell]++] = static_cast<uint32_t>(k);
-          }
-        }
-      }
-    }
-    if (fill == 0) {
-      for (size_t i = 0; i < cells; ++i) g.start[i + 1] += g.start[i];
-    } else {
-      for (size_t i = cells; i > 0; --i) g.start[i] = g.start[i - 1];  // back to the starts
-      g.start[0] = 0;
+    for (double* cb :
+         {g.chunk_box + 4 * (k / g.chunk), g.group_box + 4 * (k / g.chunk / kProjectorGroup)}) {
+      cb[0] = std::min(cb[0], b[0]);
+      cb[1] = std::max(cb[1], b[1]);
+      cb[2] = std::min(cb[2], b[2]);
+      cb[3] = std::max(cb[3], b[3]);
     }
   }
-  g.gridded = true;
   return Status::ok();
 }
 
-// The segments within reach r of (px, py) by their boxes, each once (in no particular order),
-// in `out`; false when more than kProjectorCandidates or more cells than the grid's.
-bool near_segments(Projector& g, double px, double py, double r, uint32_t* out, size_t* count) {
-  uint32_t ix0, ix1, iy0, iy1;
-  g.cell_range(px - r, px + r, g.x0, g.nx, &ix0, &ix1);
-  g.cell_range(py - r, py + r, g.y0, g.ny, &iy0, &iy1);
-  if (static_cast<size_t>(ix1 - ix0 + 1) * (iy1 - iy0 + 1) > kProjectorCells) return false;
-  if (++g.query == 0) {  // wrapped: start the marks afresh
-    std::fill(g.seen, g.seen + (g.line->n - 1), 0u);
-    g.query = 1;
-  }
-  size_t n = 0;
-  for (uint32_t iy = iy0; iy <= iy1; ++iy) {
-    for (uint32_t ix = ix0; ix <= ix1; ++ix) {
-      const size_t cell = static_cast<size_t>(iy) * g.nx + ix;
-      for (uint32_t e = g.start[cell]; e < g.start[cell + 1]; ++e) {
-        const uint32_t k = g.entries[e];
-        if (g.seen[k] == g.query) continue;
-        const double* b = g.box + 4 * k;
-        const double ex = std::max(0.0, std::max(b[0] - px, px - b[1]));
-        const double ey = std::max(0.0, std::max(b[2] - py, py - b[3]));
-        if (ex * ex + ey * ey > r * r) continue;
-        if (n == kProjectorCandidates) return false;
-        g.seen[k] = g.query;
-        out[n++] = k;
-      }
-    }
-  }
-  *count = n;
-  return true;
+// Is the box b (x_lo, x_hi, y_lo, y_hi) farther than r from (px, py)?
+inline bool box_beyond(const double* b, double px, double py, double r) {
+  const double ex = std::max(0.0, std::max(b[0] - px, px - b[1]));
+  const double ey = std::max(0.0, std::max(b[2] - py, py - b[3]));
+  return ex * ex + ey * ey > r * r;
 }
 
 // project(&line, px, py, s, o), bit for bit.
 void project_fast(Projector& g, double px, double py, double* s, double* o) {
   const Polyline& p = *g.line;
-  uint32_t near[kProjectorCandidates];
-  size_t count = 0;
+  const size_t segments = p.n - 1;
   double t, qx, qy;
-  // A bound on the nearest distance: the guess's segment's (the previous point's nearest: a
-  // jaw's vertices come tooth by tooth) and the nearest start point of the segments in the
-  // point's own cell (their nearest points lie no farther).
-  const size_t guess = g.hint < p.n - 1 ? g.hint : 0;
-  auto start_d2 = [&](size_t k) {
-    return (px - p.x[k]) * (px - p.x[k]) + (py - p.y[k]) * (py - p.y[k]);
-  };
-  double first = segment_nearest(p, guess, g.reach[guess], px, py, &t, &qx, &qy);
-  if (g.gridded) {
-    uint32_t ix, iy, unused;
-    g.cell_range(px, px, g.x0, g.nx, &ix, &unused);
-    g.cell_range(py, py, g.y0, g.ny, &iy, &unused);
-    const size_t cell = static_cast<size_t>(iy) * g.nx + ix;
-    for (uint32_t e = g.start[cell]; e < g.start[cell + 1]; ++e) {
-      first = std::min(first, start_d2(g.entries[e]));
-    }
-  }
-  const double r = std::sqrt(first) * (1 + 1e-9) + kProjectorMarginMm;
-  if (!g.gridded || !near_segments(g, px, py, r, near, &count)) {
+  // A bound on the nearest distance: the guess's segment's.
+  const size_t guess = g.hint < segments ? g.hint : 0;
+  double best = segment_nearest(p, guess, g.reach[guess], px, py, &t, &qx, &qy);
+  size_t best_k = guess;
+  const double r = std::sqrt(best) * (1 + 1e-9) + kProjectorMarginMm;
+  if (!(r < HUGE_VAL)) {
     project(p, px, py, s, o);
     return;
   }
   // The least distance, the first segment in index order among equal ones (as project()).
-  double best = HUGE_VAL;
-  size_t best_k = guess;
-  for (size_t i = 0; i < count; ++i) {
-    const double d2 = segment_nearest(p, near[i], g.reach[near[i]], px, py, &t, &qx, &qy);
-    if (d2 < best || (d2 == best && near[i] < best_k)) {
-      best = d2;
-      best_k = near[i];
+  for (size_t gi = 0; gi < g.groups; ++gi) {
+    if (box_beyond(g.group_box + 4 * gi, px, py, r)) continue;
+    const size_t last_chunk = std::min(g.chunks, (gi + 1) * kProjectorGroup);
+    for (size_t c = gi * kProjectorGroup; c < last_chunk; ++c) {
+      if (box_beyond(g.chunk_box + 4 * c, px, py, r)) continue;
+      const size_t end = std::min(segments, (c + 1) * g.chunk);
+      for (size_t k = c * g.chunk; k < end; ++k) {
+        if (k == guess || box_beyond(g.box + 4 * k, px, py, r)) continue;
+        const double d2 = segment_nearest(p, k, g.reach[k], px, py, &t, &qx, &qy);
+        if (d2 < best || (d2 == best && k < best_k)) {
+          best = d2;
+          best_k = k;
+        }
+      }
     }
   }
   g.hint = best_k;
@@ -306,7 +227,9 @@ Status occlusal_points(Arena& arena, const Mesh& upper, const Mesh& lower, const
                        uint64_t counts[2]) {
   const size_t cells = static_cast<size_t>(g.nx) * g.ny;
   double* r = arena.allocate_array<double>(cells);
-  if (r == nullptr) return arena.exhausted_status();
+  uint32_t* band =
+      arena.allocate_array<uint32_t>(std::max(upper.vertices.size(), lower.vertices.size()));
+  if (r == nullptr || band == nullptr) return arena.exhausted_status();
   // Room for every shown column and kLinePoints vertices a jaw, reserved once (no growth).
   size_t shown = 0;
   for (uint32_t jaw = 0; jaw < 2; ++jaw) {
@@ -348,18 +271,18 @@ Status occlusal_points(Arena& arena, const Mesh& upper, const Mesh& lower, const
       if (!cells_out->push_back(a)) return arena.exhausted_status();
       ++counts[jaw];
     }
+    // The band's vertices marked in one pass (their indices in `band`), every k-th taken.
     size_t in_band = 0;
-    for (const Vec3& v : m.vertices) {
+    for (size_t k = 0; k < m.vertices.size(); ++k) {
       double x, y, h;
-      if (depth_of(v + offset, &x, &y, &h) <= limit) ++in_band;
+      band[in_band] = static_cast<uint32_t>(k);
+      in_band += depth_of(m.vertices[k] + offset, &x, &y, &h) <= limit ? 1u : 0u;
     }
     const size_t every = in_band / kLinePoints + 1;
-    size_t seen = 0;
-    for (const Vec3& v : m.vertices) {
+    for (size_t i = 0; i < in_band; i += every) {
       ArchPoint a;
       a.jaw = jaw;
-      if (depth_of(v + offset, &a.x, &a.y, &a.h) > limit) continue;
-      if (seen++ % every != 0) continue;
+      (void)depth_of(m.vertices[band[i]] + offset, &a.x, &a.y, &a.h);
       if (!line->push_back(a)) return arena.exhausted_status();
     }
   }
@@ -731,10 +654,10 @@ Status cut_distal_ends(const Polyline& arch, const Frame& f, const OutlineOption
 
 uint64_t projector_bound() {
   const size_t segments = std::max<size_t>(kSectors, kMaxArchPoints);
+  const size_t chunks = (segments + projector_chunk(segments) - 1) / projector_chunk(segments);
+  const size_t groups = (chunks + kProjectorGroup - 1) / kProjectorGroup;
   return arena_array_bound<double>(4 * segments) + arena_array_bound<double>(segments) +
-         arena_array_bound<uint32_t>(segments) +
-         arena_array_bound<uint32_t>(kProjectorSide * kProjectorSide + 1) +
-         arena_array_bound<uint32_t>(projector_entries(segments));
+         arena_array_bound<double>(4 * chunks) + arena_array_bound<double>(4 * groups);
 }
 
 Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,

@@ -64,16 +64,24 @@ bool centroid_axis(const Vec3& upper_centroid, const Vec3& lower_centroid, Vec3*
 // The mean of the unit vectors from the centre c (the mean of the jaws' centroids) to every
 // vertex, in the plane: a dental arch is open at the back, so this points to the front.
 // Continuous in the data (no vertex is chosen), so the lattice it orients moves with the jaws.
+// Both quotients of a vertex in one two-lane division (each lane rounds as the scalar one:
+// the same bits for half the divisions), summed in vertex order.
+typedef double Lanes2 __attribute__((vector_size(16)));
+
 Vec3 anterior_axis(const Mesh& upper, const Mesh& lower, const Vec3& c, const Frame& f) {
   double sx = 0, sy = 0;
+  const Vec3 e1 = f.e1, e2 = f.e2;
   auto add = [&](const Mesh& m) {
     for (const Vec3& v : m.vertices) {
       const Vec3 p = v - c;
-      const double x = dot(p, f.e1), y = dot(p, f.e2);
+      const double x = dot(p, e1), y = dot(p, e2);
       const double r = std::sqrt(x * x + y * y);
+      const Lanes2 xy = {x, y};
+      const double safe = r > 0 ? r : 1.0;  // no 0 / 0 (trapping tests), and not added
+      const Lanes2 q = xy / Lanes2{safe, safe};
       if (r > 0) {
-        sx += x / r;
-        sy += y / r;
+        sx += q[0];
+        sy += q[1];
       }
     }
   };
@@ -125,6 +133,34 @@ Status build_grid(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3
   return Status::ok();
 }
 
+namespace {
+
+// fill_heights for one jaw: kLowest for the maxilla (its lowest point of each column), else
+// the highest. The frame and the lattice in locals (the stores into the columns could alias
+// them), and no branch on the comparison (which follows no pattern): the height by a min or
+// max, the vertex by a mask, both slots written always.
+template <bool kLowest>
+void fill_columns(const Mesh& m, const Vec3& offset, const Frame& frame, Grid* g) {
+  const Vec3 e1 = frame.e1, e2 = frame.e2, n = frame.n;
+  const Grid grid = *g;
+  double* heights = grid.h[kLowest ? 0 : 1];
+  uint32_t* tips = grid.tip[kLowest ? 0 : 1];
+  const Vec3* v = m.vertices.data();
+  const size_t count = m.vertices.size();
+  for (size_t k = 0; k < count; ++k) {
+    const Vec3 p = v[k] + offset;
+    const size_t cell = grid.cell_of(dot(p, e1), dot(p, e2));
+    const double h = dot(p, n);
+    const double best = heights[cell];
+    const bool better = kLowest ? h < best : h > best;
+    heights[cell] = kLowest ? (h < best ? h : best) : (h > best ? h : best);
+    const uint32_t mask = 0u - static_cast<uint32_t>(better);
+    tips[cell] = (static_cast<uint32_t>(k) & mask) | (tips[cell] & ~mask);
+  }
+}
+
+}  // namespace
+
 // Jaw 0 (the maxilla) shows the mandible its lowest point of each column, jaw 1 its highest.
 void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g) {
   const size_t cells = static_cast<size_t>(g->nx) * g->ny;
@@ -133,18 +169,10 @@ void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Gr
     g->h[jaw][i] = none;
     g->tip[jaw][i] = kNoTip;
   }
-  // Without a branch on the comparison (which follows no pattern): both slots written always.
-  double* heights = g->h[jaw];
-  uint32_t* tips = g->tip[jaw];
-  const double sign = jaw == 0 ? 1.0 : -1.0;  // jaw 1: h > best as -h < -best
-  for (size_t k = 0; k < m.vertices.size(); ++k) {
-    const Vec3 p = m.vertices[k] + offset;
-    const size_t cell = g->cell_of(dot(p, f.e1), dot(p, f.e2));
-    const double h = dot(p, f.n);
-    const double best = heights[cell];
-    const bool better = sign * h < sign * best;
-    heights[cell] = better ? h : best;
-    tips[cell] = better ? static_cast<uint32_t>(k) : tips[cell];
+  if (jaw == 0) {
+    fill_columns<true>(m, offset, f, g);
+  } else {
+    fill_columns<false>(m, offset, f, g);
   }
 }
 

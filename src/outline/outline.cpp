@@ -46,7 +46,9 @@ Status check_options(const OutlineOptions& o) {
   return Status::ok();
 }
 
-Status check_jaw(const Mesh& m, const char* name) {
+// Also the jaw's longest edge (the opening's bands need it), in the same pass over the
+// triangles.
+Status check_jaw(const Mesh& m, const char* name, double* longest_edge) {
   if (m.triangles.empty() || m.vertices.empty()) {
     return make_error(StatusCode::kInvalidMesh, "outline: the ", name, " is empty");
   }
@@ -59,6 +61,7 @@ Status check_jaw(const Mesh& m, const char* name) {
           .at_index(i);
     }
   }
+  double e2 = 0;
   for (size_t i = 0; i < m.triangles.size(); ++i) {
     const Triangle& t = m.triangles[i];
     const size_t n = m.vertices.size();
@@ -67,7 +70,14 @@ Status check_jaw(const Mesh& m, const char* name) {
                         " refers to a vertex that does not exist")
           .at_index(i);
     }
+    const Vec3 &a = m.vertices[t.v[0]], &b = m.vertices[t.v[1]], &c = m.vertices[t.v[2]];
+    const Vec3 ab = a - b, bc = b - c, ca = c - a;
+    const double lab = dot(ab, ab), lbc = dot(bc, bc), lca = dot(ca, ca);
+    e2 = lab > e2 ? lab : e2;
+    e2 = lbc > e2 ? lbc : e2;
+    e2 = lca > e2 ? lca : e2;
   }
+  *longest_edge = std::sqrt(e2);
   return Status::ok();
 }
 
@@ -147,6 +157,14 @@ struct Opener {
       SPLINTCORE_RETURN_IF_ERROR(mesh_pair_distance(ctx, upper, lower, offset, HUGE_VAL, d));
     }
     return remember(t, *d);
+  }
+
+  // Whether the jaws meet at t: when they do, that is all the distance there says (0, and
+  // they intersect), and one meeting pair, found at once, is as good a warm start as any.
+  // (mesh_pair_distance would go on through every pair of touching boxes for the least ids.)
+  Status meets(double t, bool* meet, MeshPairDistance* d) {
+    SPLINTCORE_RETURN_IF_ERROR(mesh_pair_meet(ctx, upper, lower, n * (-t), meet, d));
+    return *meet ? remember(t, *d) : Status::ok();
   }
 
   Status remember(double t, const MeshPairDistance& d) {
@@ -351,6 +369,13 @@ Status jaw_band(Arena& arena, const Mesh& m, bool upper, const BandLimit& limit,
   return Status::ok();
 }
 
+// The bands' indexes serve the pair searches only.
+DistanceIndexOptions band_index_options() {
+  DistanceIndexOptions o;
+  o.pairs_only = true;
+  return o;
+}
+
 // The smallest distance between the jaws (the mandible moved by -t n) exactly for every t the
 // opening visits, when it is at most `reach` (else some value above `reach`).
 struct BandedOpener {
@@ -358,20 +383,9 @@ struct BandedOpener {
   DistanceIndex upper_index, lower_index;
 };
 
-double longest_edge(const Mesh& m) {
-  double e2 = 0;
-  for (const Triangle& t : m.triangles) {
-    for (int k = 0; k < 3; ++k) {
-      const Vec3 d = m.vertices[t.v[k]] - m.vertices[t.v[(k + 1) % 3]];
-      const double l2 = dot(d, d);
-      e2 = l2 > e2 ? l2 : e2;
-    }
-  }
-  return std::sqrt(e2);
-}
-
+// `edge`: the jaws' longest edge.
 Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
-                     const Grid& g, double reach, double margin, BandedOpener* b) {
+                     const Grid& g, double edge, double reach, double margin, BandedOpener* b) {
   double low_u = HUGE_VAL, high_l = -HUGE_VAL;
   for (const Vec3& v : maxilla.vertices) {
     const double h = dot(v, f.n);
@@ -381,7 +395,6 @@ Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandib
     const double h = dot(v, f.n);
     high_l = h > high_l ? h : high_l;
   }
-  const double edge = std::fmax(longest_edge(maxilla), longest_edge(mandible));
   const double across = (reach + 3 * edge) / kCellMm + 2;  // columns, with the rounding
   BandLimit up{&g, &f, nullptr, high_l + margin, margin + 1e-9};
   BandLimit down{&g, &f, nullptr, low_u - margin, margin + 1e-9};
@@ -396,8 +409,8 @@ Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandib
   SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, maxilla, true, up, &b->upper));
   SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, mandible, false, down, &b->lower));
   SPLINTCORE_RETURN_IF_ERROR(
-      build_distance_index(ctx, b->upper.view, DistanceIndexOptions{}, &b->upper_index));
-  return build_distance_index(ctx, b->lower.view, DistanceIndexOptions{}, &b->lower_index);
+      build_distance_index(ctx, b->upper.view, band_index_options(), &b->upper_index));
+  return build_distance_index(ctx, b->lower.view, band_index_options(), &b->lower_index);
 }
 
 Status allocate_pool(Arena& arena, Span<TrianglePairIds>* pool) {
@@ -408,7 +421,8 @@ Status allocate_pool(Arena& arena, Span<TrianglePairIds>* pool) {
 }
 
 Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
-                 const Grid& g, const OutlineOptions& o, Vec3* offset, OutlineReport* r) {
+                 const Grid& g, double edge, const OutlineOptions& o, Vec3* offset,
+                 OutlineReport* r) {
   ArenaScope scope(*ctx.arena);  // the bands and their indexes go when done
   // Near reach first (the jaws as scanned touch): exact up to it. Farther apart, again with
   // the reach of the largest gap accepted.
@@ -419,17 +433,22 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
   // The first bands hold the pairs within reach only while the mandible moves away (or
   // stays): enough for the distance as given and for an opening from nearer than asked.
   BandedOpener b;
-  SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, reach, &b));
+  SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, edge, reach, reach, &b));
   Opener op(ctx, b.upper_index, b.lower_index, f.n);
   Span<TrianglePairIds> pool;
   SPLINTCORE_RETURN_IF_ERROR(allocate_pool(*ctx.arena, &pool));
   op.restart(reach, pool);
   MeshPairDistance d0;
-  SPLINTCORE_RETURN_IF_ERROR(op.distance(0, &d0));
+  // With an opening asked, jaws that meet as given need no more than that (without one, the
+  // refusal names the meeting pair of least ids: the full search).
+  bool meet = false;
+  if (o.has_bite_opening) SPLINTCORE_RETURN_IF_ERROR(op.meets(0, &meet, &d0));
+  if (!meet) SPLINTCORE_RETURN_IF_ERROR(op.distance(0, &d0));
   if (d0.distance > reach || (o.has_bite_opening && d0.distance > target)) {
     ctx.arena->rewind(scope.start());
     if (d0.distance > reach) reach = o.max_gap_mm + target;
-    SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, 2 * reach, &b));
+    SPLINTCORE_RETURN_IF_ERROR(
+        banded_opener(ctx, maxilla, mandible, f, g, edge, reach, 2 * reach, &b));
     SPLINTCORE_RETURN_IF_ERROR(allocate_pool(*ctx.arena, &pool));
     op.restart(reach, pool);
     SPLINTCORE_RETURN_IF_ERROR(op.distance(0, &d0));
@@ -484,31 +503,37 @@ uint64_t compute_outline_bound(const Mesh& maxilla, const Mesh& mandible) {
   const uint64_t buffers =
       2 * arena_array_bound<Pick>(kMaxPicks) + arena_array_bound<Vec3>(kMaxArchPoints);
   const uint64_t grid = 2 * (arena_array_bound<double>(cells) + arena_array_bound<uint32_t>(cells));
-  // A jaw's band (a copy of its kept triangles, their ids) and its distance index.
-  const DistanceIndexOptions io;
-  const auto band = [&](uint64_t v, uint64_t t) {
+  // A jaw's band (a copy of its kept triangles, their ids) and its distance index: the
+  // opening's (pairs_only) or the survey's (default options).
+  const auto band = [&](uint64_t v, uint64_t t, const DistanceIndexOptions& io) {
     return arena_array_bound<uint32_t>(v) + arena_array_bound<Vec3>(v) +
            arena_array_bound<Triangle>(t) + arena_array_bound<uint32_t>(t) +
            distance_index_bound(v, t, io);
   };
-  const uint64_t jaws =
-      band(maxilla_vertices, maxilla_triangles) + band(mandible_vertices, mandible_triangles);
+  const auto both = [&](const DistanceIndexOptions& io) {
+    return band(maxilla_vertices, maxilla_triangles, io) +
+           band(mandible_vertices, mandible_triangles, io);
+  };
+  const uint64_t jaws = both(band_index_options());
   // The opening: the bands, the pair search, the columns' reach and the vertices' marks.
   const uint64_t opening = jaws + kPairStackBound + arena_array_bound<TrianglePairIds>(kPoolPairs) +
                            4 * arena_array_bound<double>(cells) +
                            arena_array_bound<uint8_t>(maxilla_vertices) +
                            arena_array_bound<uint8_t>(mandible_vertices);
-  // The arch: the columns' distances and points, the band's vertices (both reserved once),
+  // The arch: the columns' distances, the band's vertex marks, the points and the band's
+  // vertices (both reserved once),
   // the sectors, each pass's line, the picks' data, the projector's grid.
   const uint64_t points = 2 * cells;
   const uint64_t line_points = 2 * (kLinePoints + 1);
   const uint64_t arch =
-      arena_array_bound<double>(cells) + arena_array_bound<ArchPoint>(points) +
-      arena_array_bound<ArchPoint>(line_points) + 6 * arena_array_bound<double>(kSectors) +
+      arena_array_bound<double>(cells) +
+      arena_array_bound<uint32_t>(std::max(maxilla_vertices, mandible_vertices)) +
+      arena_array_bound<ArchPoint>(points) + arena_array_bound<ArchPoint>(line_points) +
+      6 * arena_array_bound<double>(kSectors) +
       (kSmoothPasses + 1) * 9 * arena_array_bound<double>(kMaxArchPoints + 1) +
       arena_array_bound<double>(6 * kMaxPicks) + (kSmoothPasses + 2) * projector_bound();
   // The survey, after the arch: its columns (reserved once) and the jaws' slabs.
-  const uint64_t survey = arena_array_bound<double>(4 * columns) + jaws;
+  const uint64_t survey = arena_array_bound<double>(4 * columns) + both(DistanceIndexOptions{});
   const uint64_t after_frame = opening > arch + survey ? opening : arch + survey;
   return buffers + grid + after_frame;
 }
@@ -517,8 +542,9 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
                        const OutlineOptions& options, Outline* out) {
   *out = Outline{};
   SPLINTCORE_RETURN_IF_ERROR(check_options(options));
-  SPLINTCORE_RETURN_IF_ERROR(check_jaw(maxilla, "maxilla"));
-  SPLINTCORE_RETURN_IF_ERROR(check_jaw(mandible, "mandible"));
+  double edge_upper = 0, edge_lower = 0;
+  SPLINTCORE_RETURN_IF_ERROR(check_jaw(maxilla, "maxilla", &edge_upper));
+  SPLINTCORE_RETURN_IF_ERROR(check_jaw(mandible, "mandible", &edge_lower));
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
   OutlineBuffers buffers;
@@ -539,8 +565,9 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
     out->report.anterior = f.e1;
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 1, 3));
     Vec3 offset;
-    SPLINTCORE_RETURN_IF_ERROR(
-        open_bite(ctx, maxilla, mandible, f, g, options, &offset, &out->report));
+    SPLINTCORE_RETURN_IF_ERROR(open_bite(ctx, maxilla, mandible, f, g,
+                                         std::fmax(edge_upper, edge_lower), options, &offset,
+                                         &out->report));
     // The move is along n: the columns stay; only the mandible's heights change.
     if (out->report.opened) fill_heights(mandible, offset, f, 1, &g);
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 2, 3));

@@ -2171,10 +2171,12 @@ TEST(DistanceBuild, ArenaBoundCoversTheHighWater) {
     Mesh mesh;
     ASSERT_TRUE(test::mesh_from_soup(t.arena, soup, &mesh).is_ok());
     for (uint32_t leaf : {0u, 1u, 2u, 3u, 4u, 7u, 16u}) {
-      for (bool oriented : {false, true}) {
+      for (int kind = 0; kind < 4; ++kind) {
+        const bool oriented = (kind & 1) != 0;
         DistanceIndexOptions options;
         options.leaf_size = leaf;
         options.oriented_boxes = oriented;
+        options.pairs_only = (kind & 2) != 0;
         const Arena::Marker m = t.arena.mark();
         t.arena.reset_high_water();
         const size_t before = t.arena.used();
@@ -2184,7 +2186,26 @@ TEST(DistanceBuild, ArenaBoundCoversTheHighWater) {
         const uint64_t bound =
             distance_index_bound(mesh.vertices.size(), mesh.triangles.size(), options);
         EXPECT_GE(bound, t.arena.high_water() - before)
-            << mesh.triangles.size() << " triangles, leaf " << leaf << " oriented " << oriented;
+            << mesh.triangles.size() << " triangles, leaf " << leaf << " oriented " << oriented
+            << " pairs_only " << options.pairs_only;
+        if (options.pairs_only) {
+          // Only the tree: no neighbours, corner lists, and dipoles only for oriented boxes.
+          EXPECT_TRUE(index.neighbors.empty());
+          EXPECT_TRUE(index.vertex_uses.empty());
+          EXPECT_EQ(index.dipoles.size(), oriented ? index.nodes.size() : 0u);
+          // Each triangle's float box holds its corners.
+          ASSERT_EQ(index.triangle_boxes.size(), 6 * mesh.triangles.size());
+          for (size_t j = 0; j < index.order.size(); ++j) {
+            const Triangle& tri = mesh.triangles[index.order[j]];
+            for (int c = 0; c < 3; ++c) {
+              const Vec3& p = mesh.vertices[tri.v[c]];
+              for (int a = 0; a < 3; ++a) {
+                EXPECT_LE(static_cast<double>(index.triangle_boxes[6 * j + a]), p[a]);
+                EXPECT_GE(static_cast<double>(index.triangle_boxes[6 * j + 3 + a]), p[a]);
+              }
+            }
+          }
+        }
         t.arena.rewind(m);
       }
     }

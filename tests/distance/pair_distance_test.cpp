@@ -208,11 +208,13 @@ struct Built {
   DistanceIndex index;
 };
 
-void build(test::TestArena& t, const Soup& soup, uint32_t leaf, bool oriented, Built* out) {
+void build(test::TestArena& t, const Soup& soup, uint32_t leaf, bool oriented, Built* out,
+           bool pairs_only = false) {
   ASSERT_TRUE(test::mesh_from_soup(t.arena, soup, &out->mesh).is_ok());
   DistanceIndexOptions o;
   o.leaf_size = leaf;
   o.oriented_boxes = oriented;
+  o.pairs_only = pairs_only;
   const Status s = build_distance_index(Context(&t.arena), out->mesh, o, &out->index);
   ASSERT_TRUE(s.is_ok()) << test::format(s);
 }
@@ -433,6 +435,46 @@ TEST(MeshPairDistance, MatchesBruteForce) {
   EXPECT_GE(zero, 4);
 }
 
+// mesh_pair_meet says whether the meshes meet exactly when mesh_pair_distance finds a meeting
+// pair, and the pair it gives does meet (triangle_pair_distance, on its own, says 0).
+TEST(MeshPairDistance, MeetAgreesWithTheFullSearch) {
+  int met = 0, apart = 0;
+  for (const Case& c : oracle_cases()) {
+    test::TestArena t(size_t{32} << 20);
+    Built a, b;
+    build(t, c.a, 0, false, &a);
+    build(t, c.b, 0, false, &b);
+    for (const Vec3& off : c.offsets) {
+      SCOPED_TRACE(testing::Message() << "offset " << off.x << " " << off.y << " " << off.z);
+      const MeshPairDistance full = run_pair(a, b, off);
+      test::TestArena s(size_t{1} << 20);
+      bool meet = false;
+      MeshPairDistance r;
+      const Status st = mesh_pair_meet(Context(&s.arena), a.index, b.index, off, &meet, &r);
+      ASSERT_TRUE(st.is_ok()) << test::format(st);
+      EXPECT_EQ(s.arena.used(), 0u);
+      EXPECT_EQ(meet, full.intersecting);
+      if (!meet) {
+        ++apart;
+        EXPECT_EQ(r.distance, HUGE_VAL);
+        continue;
+      }
+      ++met;
+      EXPECT_EQ(r.distance, 0.0);
+      EXPECT_TRUE(r.intersecting);
+      const Triangle& ta = a.mesh.triangles[r.triangle_a];
+      const Triangle& tb = b.mesh.triangles[r.triangle_b];
+      const Vec3* va = a.mesh.vertices.data();
+      const Vec3* vb = b.mesh.vertices.data();
+      EXPECT_EQ(triangle_pair_distance(va[ta.v[0]], va[ta.v[1]], va[ta.v[2]], vb[tb.v[0]] + off,
+                                       vb[tb.v[1]] + off, vb[tb.v[2]] + off, nullptr, nullptr),
+                0.0);
+    }
+  }
+  EXPECT_GE(met, 4);
+  EXPECT_GE(apart, 12);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Independence of the trees' shapes, and the arena.
 
@@ -444,8 +486,9 @@ TEST(MeshPairDistance, SameBitsAtEveryLeafSizeAndBoxKind) {
       for (bool oriented : {false, true}) {
         test::TestArena t(size_t{32} << 20);
         Built a, b;
-        build(t, c.a, leaf, oriented, &a);
-        build(t, c.b, 16 / leaf, !oriented, &b);  // B's shape differs from A's
+        // B's shape differs from A's; either index may hold only what the pairs need.
+        build(t, c.a, leaf, oriented, &a, leaf >= 8);
+        build(t, c.b, 16 / leaf, !oriented, &b, leaf < 8);
         for (size_t k = 0; k < c.offsets.size(); ++k) {
           const MeshPairDistance r = run_pair(a, b, c.offsets[k]);
           if (first) {

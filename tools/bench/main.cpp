@@ -1081,14 +1081,37 @@ Status real_jaws(Arena& arena, const realcase::RealCase& rc, Mesh jaws[2]) {
   return Status::ok();
 }
 
+// FNV-1a over the outline's doubles (picks, arch, the move and the normal): the same value
+// before and after a change that must not move the output bits.
+uint64_t outline_hash(const Outline& o) {
+  uint64_t hash = 14695981039346656037ull;
+  auto add = [&](const void* data, size_t bytes) {
+    const unsigned char* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
+  };
+  add(o.upper.data(), o.upper.size() * sizeof(Pick));
+  add(o.lower.data(), o.lower.size() * sizeof(Pick));
+  add(o.arch.data(), o.arch.size() * sizeof(Vec3));
+  add(&o.report.mandible_translation, sizeof(Vec3));
+  add(&o.report.occlusal_normal, sizeof(Vec3));
+  add(&o.report.opening, sizeof(double));
+  add(&o.report.gap_as_given, sizeof(double));
+  return hash;
+}
+
 // compute_outline on two jaws already in memory (the call only).
 void bench_outline_jaws(Harness& h, Arena& arena, const char* name, const Mesh& upper,
                         const Mesh& lower, const OutlineOptions& options) {
   Outline o;
-  h.measure(name, upper.triangles.size() + lower.triangles.size(), arena,
-            [&](Arena& a) { return compute_outline(Context(&a), upper, lower, options, &o); });
-  std::printf("# %s: %u picks, opening %.12f mm in %u steps, arch %.3f mm\n", name, o.report.picks,
-              o.report.opening, o.report.opening_steps, o.report.arch_length_mm);
+  uint64_t hash = 0;
+  h.measure(name, upper.triangles.size() + lower.triangles.size(), arena, [&](Arena& a) {
+    Status s = compute_outline(Context(&a), upper, lower, options, &o);
+    if (s.is_ok()) hash = outline_hash(o);  // before the harness rewinds the arena
+    return s;
+  });
+  std::printf("# %s: %u picks, opening %.12f mm in %u steps, arch %.3f mm, output hash %016llx\n",
+              name, o.report.picks, o.report.opening, o.report.opening_steps,
+              o.report.arch_length_mm, static_cast<unsigned long long>(hash));
 }
 
 // The automatic outline (issue 28: under 50 ms on the real dentition): the real jaws as
