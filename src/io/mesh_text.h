@@ -68,6 +68,17 @@ struct PeekSource {
     }
     return self->inner->read(self->inner->user, buffer, capacity);
   }
+  // `source` as read from its start again: the `got` bytes of `peeked`, then the rest.
+  ByteSource replay(const ByteSource& source, const uint8_t* peeked, size_t got) {
+    head = peeked;
+    size = got;
+    position = 0;
+    inner = &source;
+    ByteSource out = source;
+    out.read = &PeekSource::read;
+    out.user = this;
+    return out;
+  }
 };
 
 inline Status located(Status s, const ByteSource& source) {

@@ -299,12 +299,7 @@ Status read_mesh(const Context& ctx, const ByteSource& source, const MeshReadOpt
     got += static_cast<size_t>(n);
   }
   meshio::PeekSource peek;
-  peek.head = head;
-  peek.size = got;
-  peek.inner = &source;
-  ByteSource replay = source;
-  replay.read = &meshio::PeekSource::read;
-  replay.user = &peek;
+  const ByteSource replay = peek.replay(source, head, got);
   const MeshFormat format = detect_mesh_format(head, got, source.name);
   if (format == MeshFormat::kPlyAscii) return read_ply(ctx, replay, options, out, info);
   if (format == MeshFormat::kObj) return read_obj(ctx, replay, options, out, info);

@@ -88,6 +88,16 @@ Status corner_error(const float* xyz, uint64_t triangle, int corner, double max_
   return Status::ok();
 }
 
+// Fills `in` for the record of triangle t (of `declared`), or says where the file ends.
+Status fill_record(Reader& in, uint64_t t, uint64_t declared) {
+  SPLINTCORE_RETURN_IF_ERROR(in.fill(kBinaryRecordBytes));
+  if (in.available() >= kBinaryRecordBytes) return Status::ok();
+  return make_error(StatusCode::kTruncated, "binary STL ends inside triangle ", t, " of ", declared,
+                    " declared")
+      .at_byte(in.offset() + in.available())
+      .at_index(t);
+}
+
 Status read_binary(const Context& ctx, Reader& in, const StlReadOptions& options,
                    ArenaArray<SoupTriangle>* out, StlInfo* info) {
   SPLINTCORE_RETURN_IF_ERROR(in.fill(kBinaryHeaderBytes));
@@ -128,13 +138,7 @@ Status read_binary(const Context& ctx, Reader& in, const StlReadOptions& options
   for (uint64_t t = 0; t < declared; ++t) {
     if ((t & 0xffff) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read", t, declared));
     if (in.available() < kBinaryRecordBytes) {
-      SPLINTCORE_RETURN_IF_ERROR(in.fill(kBinaryRecordBytes));
-      if (in.available() < kBinaryRecordBytes) {
-        return make_error(StatusCode::kTruncated, "binary STL ends inside triangle ", t, " of ",
-                          declared, " declared")
-            .at_byte(in.offset() + in.available())
-            .at_index(t);
-      }
+      SPLINTCORE_RETURN_IF_ERROR(fill_record(in, t, declared));
     }
     const uint8_t* record = in.buf + in.pos;
     SoupTriangle tri;
@@ -475,13 +479,7 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
   for (uint64_t t = 0; t < declared;) {
     if ((t & 0xffff) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read", t, declared));
     if (in.available() < kBinaryRecordBytes) {
-      SPLINTCORE_RETURN_IF_ERROR(in.fill(kBinaryRecordBytes));
-      if (in.available() < kBinaryRecordBytes) {
-        return make_error(StatusCode::kTruncated, "binary STL ends inside triangle ", t, " of ",
-                          declared, " declared")
-            .at_byte(in.offset() + in.available())
-            .at_index(t);
-      }
+      SPLINTCORE_RETURN_IF_ERROR(fill_record(in, t, declared));
     }
     // The whole records in the buffer, up to the next progress report.
     uint64_t run = in.available() / kBinaryRecordBytes;
@@ -595,12 +593,7 @@ Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlRead
     return Status::ok();
   }
   meshio::PeekSource peek;
-  peek.head = head;
-  peek.size = got;
-  peek.inner = &source;
-  ByteSource replay = source;
-  replay.read = &meshio::PeekSource::read;
-  replay.user = &peek;
+  const ByteSource replay = peek.replay(source, head, got);
   return read_then_weld(ctx, replay, options, out, info);
 }
 
