@@ -55,12 +55,19 @@ inline bool corner_ok(const float* xyz, double max_abs) {
   return ok;
 }
 
-// The largest bit pattern (sign cleared) of a float within +-max_abs: a coordinate passes
-// corner_ok() exactly when its bits, sign cleared, are at most this (finite non-negative floats
-// order as their bits; infinities and NaNs lie above every finite one). 0 when max_abs is not a
-// number >= 0 (then every corner goes through corner_ok()).
+// A limit that no coordinate could be checked against (NaN, negative) is the caller's error;
+// unchecked, every corner would fail corner_ok() while corner_error() found nothing to name.
+Status limit_error(const StlReadOptions& options) {
+  if (options.max_abs_coordinate >= 0.0) return Status::ok();
+  return make_error(StatusCode::kInvalidArgument, "STL options: max_abs_coordinate is ",
+                    options.max_abs_coordinate, "; it must be a number >= 0 (mm)");
+}
+
+// The largest bit pattern (sign cleared) of a float within +-max_abs (a number >= 0, as
+// limit_error() requires): a coordinate passes corner_ok() exactly when its bits, sign cleared,
+// are at most this (finite non-negative floats order as their bits; infinities and NaNs lie
+// above every finite one).
 uint32_t abs_limit_bits(double max_abs) {
-  if (!(max_abs >= 0.0)) return 0;
   if (max_abs >= static_cast<double>(FLT_MAX)) return 0x7f7fffffu;
   const float f = static_cast<float>(max_abs);
   uint32_t bits;
@@ -400,6 +407,7 @@ Status read_stl(const Context& ctx, const ByteSource& source, const StlReadOptio
   StlInfo local;
   if (info == nullptr) info = &local;
   *info = StlInfo{};
+  SPLINTCORE_RETURN_IF_ERROR(limit_error(options));
   if (source.read == nullptr) {
     return Status::error(StatusCode::kInvalidArgument, "read_stl: byte source has no read()");
   }
@@ -474,7 +482,6 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
   in.end = got - kBinaryHeaderBytes;
   in.base = kBinaryHeaderBytes;
   const uint32_t limit = abs_limit_bits(options.max_abs_coordinate);
-  const bool check_all = !(options.max_abs_coordinate >= 0.0);  // no corner passes corner_ok()
   uint64_t ahead[2 * kAhead][3];  // the prefetched corners' hashes, by triangle mod 2 kAhead
   for (uint64_t t = 0; t < declared;) {
     if ((t & 0xffff) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read", t, declared));
@@ -502,7 +509,7 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
         worst = (bits & 0x7fffffffu) > worst ? (bits & 0x7fffffffu) : worst;
         std::memcpy(&corners[c], &bits, sizeof(float));
       }
-      if (worst > limit || check_all) {
+      if (worst > limit) {
         for (int k = 0; k < 3; ++k) {
           if (!corner_ok(corners + 3 * k, options.max_abs_coordinate)) {
             return corner_error(corners + 3 * k, t + i, k, options.max_abs_coordinate)
@@ -557,6 +564,7 @@ Status read_stl_mesh(const Context& ctx, const ByteSource& source, const StlRead
   if (!out->vertices.empty() || !out->triangles.empty()) {
     return Status::error(StatusCode::kInvalidArgument, "read_stl_mesh: output mesh must be empty");
   }
+  SPLINTCORE_RETURN_IF_ERROR(limit_error(options));
   StlInfo local;
   if (info == nullptr) info = &local;
   if (source.read == nullptr || source.size == kUnknownSize ||

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -286,6 +287,92 @@ TEST(StlCoverage, CancelledAndForcedFormats) {
                 .find("triangle 0 vertex 1 has coordinate 2e+06 mm, beyond the limit"),
             std::string::npos)
       << r.status.message();
+}
+
+// The welded binary path of read_stl_mesh (size known, read straight into the weld): limits
+// given as NaN (every corner checked) or at float's range, a coordinate beyond the limit, tiny
+// chunks, every arena size up to the bound (exhausted cleanly or read whole), a source without
+// a read function, a count beyond 32-bit vertex ids, and the bounds' own corners.
+TEST(StlCoverage, WeldedBinaryPath) {
+  const std::vector<SoupTriangle> soup = {{{{0, 0, 0}, {0, 1, 0}, {1, 0, 0}}},
+                                          {{{0, 0, 0}, {1, 0, 0}, {0, 0, 1}}},
+                                          {{{0, 0, 0}, {0, 0, 1}, {0, 1, 0}}},
+                                          {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}};
+  const std::vector<uint8_t> bytes = test::binary_stl(soup);
+  auto run = [&](const std::vector<uint8_t>& b, StlReadOptions o, size_t arena_bytes) {
+    test::TestArena t(arena_bytes);
+    MemorySource ms{b.data(), b.size(), 0, 0};
+    const ByteSource source = memory_source(&ms, "w.stl");
+    Mesh m(&t.arena);
+    const Status s = read_stl_mesh(Context(&t.arena), source, o, &m, nullptr);
+    EXPECT_EQ(m.triangles.size(), s.is_ok() ? 4u : 0u) << test::format(s);
+    return s;
+  };
+  StlReadOptions o;
+  for (double bad : {std::numeric_limits<double>::quiet_NaN(), -1.0}) {
+    o.max_abs_coordinate = bad;  // refused by both readers, naming the option
+    const Status s = run(bytes, o, size_t{1} << 20);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << test::format(s);
+    EXPECT_NE(std::string(s.message()).find("max_abs_coordinate"), std::string::npos);
+    Read r = read(std::string(bytes.begin(), bytes.end()), true, "t.stl", o);
+    EXPECT_EQ(r.status.code(), StatusCode::kInvalidArgument) << test::format(r.status);
+    EXPECT_TRUE(r.soup.empty());
+  }
+  o.max_abs_coordinate = std::numeric_limits<double>::infinity();
+  o.chunk_bytes = 100;
+  EXPECT_TRUE(run(bytes, o, size_t{1} << 20).is_ok());
+  std::vector<SoupTriangle> far = soup;
+  far[2].p[1][2] = 3.0e7f;
+  const Status beyond = run(test::binary_stl(far), StlReadOptions{}, size_t{1} << 20);
+  EXPECT_EQ(beyond.code(), StatusCode::kLimitExceeded) << test::format(beyond);
+  EXPECT_NE(std::string(beyond.message()).find("triangle 2 vertex 1"), std::string::npos)
+      << beyond.message();
+  // Every arena size up to the bound: exhausted (nothing kept) or the whole mesh.
+  const size_t bound = static_cast<size_t>(read_stl_mesh_bound(bytes.size(), StlReadOptions{}));
+  int exhausted = 0;
+  for (size_t cap = 0; cap <= bound; cap += 16) {
+    const Status s = run(bytes, StlReadOptions{}, cap);
+    if (s.code() == StatusCode::kArenaExhausted) {
+      ++exhausted;
+    } else {
+      EXPECT_TRUE(s.is_ok()) << cap << ": " << test::format(s);
+    }
+  }
+  EXPECT_GT(exhausted, 0);
+  EXPECT_TRUE(run(bytes, StlReadOptions{}, bound).is_ok());
+  // A source that cannot be read.
+  {
+    test::TestArena t(size_t{1} << 20);
+    MemorySource ms{bytes.data(), bytes.size(), 0, 0};
+    ByteSource source = memory_source(&ms, "none.stl");
+    source.read = nullptr;
+    Mesh m(&t.arena);
+    EXPECT_FALSE(read_stl_mesh(Context(&t.arena), source, StlReadOptions{}, &m, nullptr).is_ok());
+  }
+  // A count beyond 32-bit vertex ids, said from the header and the size alone.
+  {
+    test::TestArena t(size_t{1} << 20);
+    std::vector<uint8_t> head(bytes.begin(), bytes.begin() + 84);
+    const uint32_t count = 1500000000u;
+    test::put_u32(head, 80, count);
+    MemorySource ms{head.data(), head.size(), 0, 0};
+    ByteSource source = memory_source(&ms, "huge.stl");
+    source.size = 84 + uint64_t{50} * count;
+    StlReadOptions big;
+    big.max_triangles = count;
+    Mesh m(&t.arena);
+    const Status s = read_stl_mesh(Context(&t.arena), source, big, &m, nullptr);
+    EXPECT_EQ(s.code(), StatusCode::kLimitExceeded) << test::format(s);
+    EXPECT_NE(std::string(s.message()).find("32-bit vertex ids"), std::string::npos);
+  }
+  // The bounds take chunks under 4096 bytes as 4096, and files shorter than a header.
+  StlReadOptions small;
+  small.chunk_bytes = 10;
+  StlReadOptions page;
+  page.chunk_bytes = 4096;
+  EXPECT_EQ(read_stl_bound(1000, small), read_stl_bound(1000, page));
+  EXPECT_EQ(read_stl_mesh_bound(1000, small), read_stl_mesh_bound(1000, page));
+  EXPECT_GT(read_stl_mesh_bound(10, StlReadOptions{}), 0u);
 }
 
 }  // namespace
