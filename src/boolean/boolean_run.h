@@ -35,10 +35,25 @@ namespace boolean_detail {
 
 // Ids: a vertex of A is its index, a vertex of B is nva + its index, intersection point p is
 // nva + nvb + p. A triangle of A is its index, a triangle of B is nta + its index.
+// B may be the run's copy of B's triangles near A (mesh_boolean_single's bounded working set):
+// then b_whole is B as given (for winding numbers and for what a message calls B's own
+// triangles and vertices) and b_vertex_ids / b_triangle_ids map the copy's ids to B's.
 struct Inputs {
   const Mesh* a = nullptr;
   const Mesh* b = nullptr;
   uint32_t nva = 0, nvb = 0, nta = 0, ntb = 0;
+  const Mesh* b_whole = nullptr;
+  const uint32_t* b_vertex_ids = nullptr;    // null: b is B itself
+  const uint32_t* b_triangle_ids = nullptr;  // null: b is B itself
+
+  // B's own id of vertex (triangle) i of b, for messages.
+  uint32_t b_vertex(uint32_t i) const { return b_vertex_ids != nullptr ? b_vertex_ids[i] : i; }
+  uint32_t b_triangle(uint32_t i) const {
+    return b_triangle_ids != nullptr ? b_triangle_ids[i] : i;
+  }
+  // A run-wide vertex (triangle) id as its mesh numbers it: A's as is, B's as B's own.
+  uint32_t named_vertex(uint32_t g) const { return g < nva ? g : b_vertex(g - nva); }
+  uint32_t named_triangle(uint32_t tg) const { return tg < nta ? tg : b_triangle(tg - nta); }
 
   const Vec3& vertex(uint32_t g) const { return g < nva ? a->vertices[g] : b->vertices[g - nva]; }
   void corners(uint32_t tg, uint32_t out[3]) const {
@@ -386,7 +401,9 @@ class BooleanRun {
         st_(*stats),
         bp_(bp) {}
 
-  Status run(Mesh* result);
+  // The whole run; the result is moved down to result_at (over the run's temporaries and
+  // anything else above it) before it is checked.
+  Status run(Mesh* result, const Arena::Marker& result_at);
   // The candidate pairs this run may test (options.max_candidate_pairs, less what earlier
   // attempts used); over it, find_hits stops with kLimitExceeded.
   void set_pair_budget(uint64_t budget) { pair_budget_ = budget; }

@@ -9,10 +9,10 @@ namespace boolean_detail {
 Status BooleanRun::inconsistent_vertex(uint32_t v) const {
   const bool is_a = v < in_.nva;
   return make_error(StatusCode::kUnsupported,
-                    "inconsistent inside/outside classification at vertex ", is_a ? v : v - in_.nva,
+                    "inconsistent inside/outside classification at vertex ", in_.named_vertex(v),
                     is_a ? " of A" : " of B",
                     " (overlapping shells in B, or a nearly degenerate contact)")
-      .at_index(is_a ? v : v - in_.nva);
+      .at_index(in_.named_vertex(v));
 }
 
 // One mesh's flood (flood()): its cut flags, its vertex -> uncut triangles rows (compressed),
@@ -145,7 +145,7 @@ Status BooleanRun::FloodSide::winding_number(const Vec3& q, double* w) {
   if (side_a) {
     if (!have_b) {
       SPLINTCORE_RETURN_IF_ERROR(
-          build_distance_index(run.ctx_, *run.in_.b, DistanceIndexOptions{}, &index_b));
+          build_distance_index(run.ctx_, *run.in_.b_whole, DistanceIndexOptions{}, &index_b));
       have_b = true;
     }
     *w = splintcore::winding_number(index_b, q);

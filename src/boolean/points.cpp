@@ -222,7 +222,7 @@ Status sort_keys(Arena& arena, KeyIndex* items, size_t n) {
 
 Status BooleanRun::degenerate(uint32_t ta, uint32_t tb) const {
   return make_error(StatusCode::kUnsupported, "contact between triangle ", ta,
-                    " of A and triangle ", tb - in_.nta,
+                    " of A and triangle ", in_.named_triangle(tb),
                     " of B not decided: a coordinate is outside the exact predicates' range "
                     "(0, or 2^-300 .. 2^330 in magnitude)")
       .at_index(ta);
@@ -232,10 +232,11 @@ Status BooleanRun::check_pair_budget(uint32_t tb) const {
   if (st_.candidate_pairs <= pair_budget_) return Status::ok();
   // (Within the 255 characters of a Status message with 10-digit numbers.)
   return make_error(StatusCode::kLimitExceeded, "Boolean: over ", pair_budget_,
-                    " candidate triangle pairs (max_candidate_pairs) at triangle ", tb,
+                    " candidate triangle pairs (max_candidate_pairs) at triangle ",
+                    in_.b_triangle(tb),
                     " of B: A and B nearly coincide or crowd over a large area (e.g. long thin "
                     "triangles over dense ones); raise the bound to run it anyway")
-      .at_index(tb);
+      .at_index(in_.b_triangle(tb));
 }
 
 // Candidate pairs through the broad phase's grid; each decided exactly (intersect_pair) with A
@@ -303,9 +304,9 @@ Status BooleanRun::find_hits() {
             ++st_.candidate_pairs;
             if (!flat_checked) {
               if (collinear3d(vb[tri.v[0]], vb[tri.v[1]], vb[tri.v[2]])) {
-                return make_error(StatusCode::kInvalidMesh, "triangle ", t,
+                return make_error(StatusCode::kInvalidMesh, "triangle ", in_.b_triangle(t),
                                   " of B is degenerate (zero area) and meets A near triangle ", ta)
-                    .at_index(t);
+                    .at_index(in_.b_triangle(t));
               }
               flat_checked = true;
               pb = plane_filter(vb[tri.v[0]], vb[tri.v[1]], vb[tri.v[2]]);
@@ -363,10 +364,10 @@ Status BooleanRun::alias_b_vertex(uint32_t bv, uint32_t av) {
   }
   uint32_t& al = alias_[bv - in_.nva];
   if (al != ~0u && al != av) {
-    return make_error(StatusCode::kUnsupported, "vertex ", bv - in_.nva,
+    return make_error(StatusCode::kUnsupported, "vertex ", in_.named_vertex(bv),
                       " of B lies on two vertices of A (", al, " and ", av,
                       "): A has coincident vertices")
-        .at_index(bv - in_.nva);
+        .at_index(in_.named_vertex(bv));
   }
   al = av;
   return Status::ok();
@@ -683,13 +684,13 @@ Status BooleanRun::check_points_apart() {
         auto named = [&](Status& st, const PointKey& k) {
           const uint32_t u = key_hi(k.edge), v = key_lo(k.edge);
           const bool of_a = u < in_.nva;
-          st.append("edge ").append_u64(of_a ? u : u - in_.nva).append("-");
-          st.append_u64(of_a ? v : v - in_.nva).append(of_a ? " of A" : " of B");
+          st.append("edge ").append_u64(in_.named_vertex(u)).append("-");
+          st.append_u64(in_.named_vertex(v)).append(of_a ? " of A" : " of B");
           if (k.tri == ~0u) {
             st.append(" across an edge of B");
           } else {
             const bool tri_a = k.tri < in_.nta;
-            st.append(" through triangle ").append_u64(tri_a ? k.tri : k.tri - in_.nta);
+            st.append(" through triangle ").append_u64(in_.named_triangle(k.tri));
             st.append(tri_a ? " of A" : " of B");
           }
         };
@@ -699,7 +700,7 @@ Status BooleanRun::check_points_apart() {
         e.append(" and ");
         named(e, points_[keys[i].index].key);
         const uint32_t t = points_[keys[i].index].key.tri;
-        return t == ~0u ? e : e.at_index(t < in_.nta ? t : t - in_.nta);
+        return t == ~0u ? e : e.at_index(in_.named_triangle(t));
       }
     }
   }

@@ -151,7 +151,7 @@ struct BooleanRun::ContactSplit {
         nd(contact_count),
         base(r.in_.nva + r.in_.nvb),
         is_a(tri < r.in_.nta),
-        tn(is_a ? tri : tri - r.in_.nta),
+        tn(r.in_.named_triangle(tri)),
         which(is_a ? " of A" : " of B"),
         out(&r.arena_) {
     r.in_.corners(t, raw);
@@ -706,9 +706,9 @@ Status BooleanRun::CutSplit::triangulate() {
     if (s.code() == StatusCode::kArenaExhausted) return s;
     const uint32_t nta = run.in_.nta;
     return make_error(StatusCode::kUnsupported, "cannot re-triangulate triangle ",
-                      t < nta ? t : t - nta, t < nta ? " of A" : " of B",
+                      run.in_.named_triangle(t), t < nta ? " of A" : " of B",
                       " along its intersection (nearly degenerate contact): ", s.message())
-        .at_index(t < nta ? t : t - nta);
+        .at_index(run.in_.named_triangle(t));
   }
   return Status::ok();
 }
@@ -799,9 +799,9 @@ Status BooleanRun::CutSplit::emit_pieces() {
     const uint32_t nta = run.in_.nta;
     return make_error(StatusCode::kUnsupported,
                       "inconsistent inside/outside classification in triangle ",
-                      t < nta ? t : t - nta, t < nta ? " of A" : " of B",
+                      run.in_.named_triangle(t), t < nta ? " of A" : " of B",
                       " (overlapping shells in B, or a nearly degenerate contact)")
-        .at_index(t < nta ? t : t - nta);
+        .at_index(run.in_.named_triangle(t));
   }
   for (uint32_t j = 0; j < k; ++j) {
     const int8_t sj = state[uf.find(j)];

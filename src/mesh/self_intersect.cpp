@@ -847,8 +847,12 @@ struct HierarchyPass {
   Status make_items(double radius) {
     items = arena.allocate_array<Item>(kept);
     item_dops = arena.allocate_array<Dop>(kept);
-    nodes = arena.allocate_array<Node>(2 * size_t{kept} - 1);
-    leaves = arena.allocate_array<Leaf>(kept);  // at most one a triangle
+    // The tree's shape first, so that its nodes and leaves take what it has (a leaf holds
+    // up to kLeafSize items: on a real splint a fifth of the worst case of one a triangle).
+    uint32_t node_total = 0, leaf_total = 0;
+    count_tree(&node_total, &leaf_total);
+    nodes = arena.allocate_array<Node>(node_total);
+    leaves = arena.allocate_array<Leaf>(leaf_total);
     if (items == nullptr || item_dops == nullptr || nodes == nullptr || leaves == nullptr) {
       return arena.exhausted_status();
     }
@@ -937,6 +941,28 @@ struct HierarchyPass {
       }
     }
     return with;
+  }
+
+  // The number of nodes and leaves build_tree() makes (the same splits, nothing filled).
+  void count_tree(uint32_t* node_total, uint32_t* leaf_total) const {
+    struct Range {
+      uint32_t begin, count;
+    };
+    Range stack[kMaxHeight + 2];
+    int top = 0;
+    stack[top++] = Range{0, kept};
+    while (top > 0) {
+      const Range r = stack[--top];
+      ++*node_total;
+      if (r.count <= kLeafSize) {
+        ++*leaf_total;
+        continue;
+      }
+      const uint32_t half = split_point(r.begin, r.count);
+      SPLINTCORE_ASSERT(top + 2 <= kMaxHeight + 2);
+      stack[top++] = Range{r.begin + half, r.count - half};
+      stack[top++] = Range{r.begin, half};
+    }
   }
 
   // 4. Build: preorder, with an explicit stack of ranges (and the parent waiting for its
