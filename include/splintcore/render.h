@@ -53,6 +53,9 @@ struct RenderMesh {
   // blue-green-red ramp over [0, scalar_max] (render_ramp_colour) instead of rgb.
   const double* scalars = nullptr;
   double scalar_max = 0;
+  // Optional: the mesh is drawn moved by this transform, with the same bytes as a moved copy
+  // (each vertex moved by apply_point) and without the copy's memory.
+  const RigidTransform* transform = nullptr;
 };
 
 struct RenderOptions {
@@ -85,13 +88,14 @@ struct RenderImage {
 // Bytes render_meshes() may take from the arena at most (caller-buffer arena): the image
 // w*h*3 (kept) and the temporaries (returned before it finishes): a depth buffer w*h*4; with a
 // translucent mesh a second layer w*h*(4+3+1); with Gouraud shading one normal (3 floats) per
-// vertex of every mesh and a pointer per mesh; the vertices of the mesh being drawn projected
-// into every view (16 bytes each); each array padded to 16 bytes.
-// render_bound() = 15*w*h + 12*total_vertices + 16*view_count*total_vertices + 32*mesh_count
-// + 112, rounded up to 16 (translucency and Gouraud assumed; `total_vertices` is the sum over
-// the meshes, which also bounds the largest; UINT64_MAX on overflow).
-uint64_t render_bound(uint32_t width, uint32_t height, uint64_t total_vertices, uint32_t mesh_count,
-                      uint32_t view_count);
+// vertex of the mesh being drawn; its vertices projected into the views drawn at once (16
+// bytes each): views_at_once = the smaller of the view count and the executor's concurrency
+// (1 with the serial executor); each array padded to 16 bytes.
+// render_bound() = 15*w*h + 12*largest + 16*views_at_once*largest + 112, rounded up to 16
+// (translucency and Gouraud assumed; `largest`: the most vertices of one mesh; UINT64_MAX on
+// overflow).
+uint64_t render_bound(uint32_t width, uint32_t height, uint64_t largest_mesh_vertices,
+                      uint32_t views_at_once);
 
 // Draws `meshes` (in order) into `out->rgb`, allocated from ctx.arena (kept; temporaries are
 // returned before it finishes). Reads the meshes, writes *out. The scene is framed once for

@@ -218,6 +218,50 @@ Status label_splint(const Context& ctx, const CaseFile& c, Mesh* cut, DesignRepo
   return Status::ok();
 }
 
+// The Boolean base minus jaws. Without blockout (which takes B again) B and the base are not
+// needed after it, so the result's exact self-intersection check (the Boolean's final word,
+// and the largest arrays of the design after B) runs once the result has been moved down over
+// them, to `low`: on the real dentition that is what keeps the design within 64 MiB. Should
+// that check find a crossing, the Boolean runs again with the check inside, where a crossing
+// makes it nudge A and try again: the answer is the one the Boolean alone gives.
+Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                     const Arena::Marker& low, Mesh* base, Mesh* b, Mesh* cut,
+                     DesignReport* report) {
+  Arena& arena = *ctx.arena;
+  BooleanOptions bo;
+  bo.op = BooleanOp::kDifference;
+  const bool check_after = !c.has_blockout;
+  bo.check_self_intersection = !check_after;
+  SPLINTCORE_RETURN_IF_ERROR(stage_error(mesh_boolean(ctx, *base, *b, bo, cut, &report->boolean),
+                                         "boolean (base minus jaws)"));
+  if (check_after) {
+    Mesh moved;
+    move_mesh_down(arena, low, *cut, &moved);
+    *cut = moved;
+    *b = Mesh();
+    *base = Mesh();
+    SelfIntersectionReport si;
+    SPLINTCORE_RETURN_IF_ERROR(stage_error(find_self_intersections(ctx, *cut, 1, &si), "boolean"));
+    if (si.self_intersecting()) {
+      arena.rewind(low);
+      *cut = Mesh();
+      Mesh again_b(&arena), again_base(&arena);
+      SPLINTCORE_RETURN_IF_ERROR(gather_jaws(ctx, c, jaws, &again_b));
+      SPLINTCORE_RETURN_IF_ERROR(
+          stage_error(build_case_base(ctx, c, &again_base, &report->base), "base"));
+      bo.check_self_intersection = true;
+      SPLINTCORE_RETURN_IF_ERROR(
+          stage_error(mesh_boolean(ctx, again_base, again_b, bo, cut, &report->boolean),
+                      "boolean (base minus jaws)"));
+    } else {
+      report->boolean.self_intersection_checked = true;
+      report->boolean.self_intersection_candidates = si.candidate_pairs;
+    }
+  }
+  note_self_check(report, report->boolean, "boolean");
+  return Status::ok();
+}
+
 // Checks what design_splint takes before anything is allocated.
 Status check_design_inputs(const CaseFile& c, Span<const Mesh> jaws, const Mesh& splint,
                            const PrinterProfile** profile) {
@@ -271,6 +315,7 @@ Status design_splint(const Context& ctx, const CaseFile& case_given, Span<const 
 
   SPLINTCORE_RETURN_IF_ERROR(stage("design: jaws"));
   for (const Mesh& m : jaws) report->jaw_triangles += m.triangles.size();
+  const Arena::Marker before_b = arena.mark();
   Mesh b(&arena);
   SPLINTCORE_RETURN_IF_ERROR(gather_jaws(ctx, c, jaws, &b));
   SPLINTCORE_RETURN_IF_ERROR(refuse_inside_out_jaws(ctx, c, jaws, b));
@@ -288,11 +333,7 @@ Status design_splint(const Context& ctx, const CaseFile& case_given, Span<const 
     cut = base;
   } else {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: boolean"));
-    BooleanOptions bo;
-    bo.op = BooleanOp::kDifference;
-    SPLINTCORE_RETURN_IF_ERROR(stage_error(mesh_boolean(ctx, base, b, bo, &cut, &report->boolean),
-                                           "boolean (base minus jaws)"));
-    note_self_check(report, report->boolean, "boolean");
+    SPLINTCORE_RETURN_IF_ERROR(subtract_jaws(ctx, c, jaws, before_b, &base, &b, &cut, report));
   }
   if (c.has_blockout) {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: blockout"));

@@ -108,6 +108,11 @@ struct Projected {
   float intensity;  // Gouraud: the vertex's lighting
 };
 
+// Vertex i of a mesh where it is drawn (moved by the item's transform, if any).
+inline Vec3 placed(const RenderMesh& item, const Vec3& p) {
+  return item.transform != nullptr ? item.transform->apply_point(p) : p;
+}
+
 Projected project(const Frame& f, const View& v, const Vec3& p) {
   const double u = dot(p, v.basis.right) - v.centre_u;
   const double w = dot(p, v.basis.up) - v.centre_v;
@@ -133,7 +138,7 @@ struct MeshJob {
   Frame* frame = nullptr;
   const RenderMesh* item = nullptr;
   const float* normals = nullptr;  // Gouraud: 3 per vertex (unnormalised), else nullptr
-  Projected* projected = nullptr;  // view_count x vertex count
+  Projected* projected = nullptr;  // a batch of views x vertex count
 };
 
 void draw_triangle(const Frame& f, const View& view, const Layer& layer, const RenderMesh& item,
@@ -233,7 +238,7 @@ double lambert(const Vec3& normal, double normal_length, const Vec3& light) {
   return kAmbient + kDiffuse * c;
 }
 
-void draw_mesh_view(const MeshJob& job, uint32_t view_index) {
+void draw_mesh_view(const MeshJob& job, uint32_t view_index, uint32_t slot) {
   const Frame& f = *job.frame;
   const View& view = f.views[view_index];
   const RenderMesh& item = *job.item;
@@ -241,9 +246,9 @@ void draw_mesh_view(const MeshJob& job, uint32_t view_index) {
   const Layer& layer = item.alpha == 255 ? f.opaque : f.overlay;
   const Vec3* vertices = mesh.vertices.data();
   const size_t vertex_count = mesh.vertices.size();
-  Projected* projected = job.projected + static_cast<size_t>(view_index) * vertex_count;
+  Projected* projected = job.projected + static_cast<size_t>(slot) * vertex_count;
   for (size_t i = 0; i < vertex_count; ++i) {
-    projected[i] = project(f, view, vertices[i]);
+    projected[i] = project(f, view, placed(item, vertices[i]));
     if (job.normals != nullptr) {
       const float* n = job.normals + i * 3;
       const Vec3 normal(static_cast<double>(n[0]), static_cast<double>(n[1]),
@@ -271,9 +276,9 @@ void draw_mesh_view(const MeshJob& job, uint32_t view_index) {
     if (area == 0) continue;
     uint8_t flat_rgb[3] = {item.rgb[0], item.rgb[1], item.rgb[2]};
     if (job.normals == nullptr) {
-      const Vec3& p0 = vertices[tri.v[0]];
-      const Vec3& p1 = vertices[tri.v[1]];
-      const Vec3& p2 = vertices[tri.v[2]];
+      const Vec3 p0 = placed(item, vertices[tri.v[0]]);
+      const Vec3 p1 = placed(item, vertices[tri.v[1]]);
+      const Vec3 p2 = placed(item, vertices[tri.v[2]]);
       const Vec3 normal = cross(p1 - p0, p2 - p0);
       const double len = length(normal);
       const double intensity = len > 0 ? lambert(normal, len, view.light) : kAmbient;
@@ -309,7 +314,7 @@ Status validate(Span<const RenderMesh> meshes, const RenderOptions& o) {
     const Mesh& mesh = *item.mesh;
     const size_t vertex_count = mesh.vertices.size();
     for (size_t v = 0; v < vertex_count; ++v) {
-      if (!is_finite(mesh.vertices[v])) {
+      if (!is_finite(mesh.vertices[v]) || !is_finite(placed(item, mesh.vertices[v]))) {
         return make_error(StatusCode::kNonFinite, "render mesh ", m, ": vertex ", v,
                           " is not finite")
             .at_index(v);
@@ -387,8 +392,8 @@ void render_ramp_colour(double value, double max, uint8_t rgb[3]) {
   }
 }
 
-uint64_t render_bound(uint32_t width, uint32_t height, uint64_t total_vertices, uint32_t mesh_count,
-                      uint32_t view_count) {
+uint64_t render_bound(uint32_t width, uint32_t height, uint64_t largest_mesh_vertices,
+                      uint32_t views_at_once) {
   uint64_t pixels = 0, total = 0, part = 0;
   if (!checked_mul(width, height, &pixels)) return UINT64_MAX;
   // Image 3, depth 4, translucent depth 4, colour 3 and weight 1: 15 bytes a pixel, five
@@ -396,15 +401,12 @@ uint64_t render_bound(uint32_t width, uint32_t height, uint64_t total_vertices, 
   if (!checked_mul(pixels, 15, &total) || !checked_add(total, 5 * 16, &total)) {
     return UINT64_MAX;
   }
-  // Gouraud: 3 floats a vertex, a pointer and padding per mesh.
-  if (!checked_mul(total_vertices, 12, &part) || !checked_add(total, part, &total)) {
+  // Gouraud: 3 floats a vertex of the mesh being drawn.
+  if (!checked_mul(largest_mesh_vertices, 12, &part) || !checked_add(total, part + 16, &total)) {
     return UINT64_MAX;
   }
-  if (!checked_mul(mesh_count, 32, &part) || !checked_add(total, part + 16, &total)) {
-    return UINT64_MAX;
-  }
-  // The projections of the largest mesh (at most all vertices) in every view: 16 bytes each.
-  if (!checked_mul(total_vertices, 16, &part) || !checked_mul(part, view_count, &part) ||
+  // Its projections in the views drawn at once: 16 bytes each.
+  if (!checked_mul(largest_mesh_vertices, 16, &part) || !checked_mul(part, views_at_once, &part) ||
       !checked_add(total, part + 16, &total)) {
     return UINT64_MAX;
   }
@@ -458,7 +460,8 @@ void frame_views(Span<const RenderMesh> meshes, const RenderOptions& options, co
     bool any = false;
     double lo_u = 0, hi_u = 0, lo_v = 0, hi_v = 0;
     for (const RenderMesh& item : meshes) {
-      for (const Vec3& p : item.mesh->vertices) {
+      for (const Vec3& vertex : item.mesh->vertices) {
+        const Vec3 p = placed(item, vertex);
         const double u = dot(p, view.basis.right), v = dot(p, view.basis.up);
         if (!any) {
           lo_u = hi_u = u;
@@ -482,31 +485,28 @@ void frame_views(Span<const RenderMesh> meshes, const RenderOptions& options, co
   frame->scale = scale > 0 ? scale : 1;
 }
 
-// Gouraud: area-weighted vertex normals of every mesh (in triangle order), from the arena.
-Status vertex_normals(Arena& arena, Span<const RenderMesh> meshes, const float*** out) {
-  const float** normals = arena.allocate_array<const float*>(meshes.size());
-  if (normals == nullptr) return arena.exhausted_status();
-  for (size_t m = 0; m < meshes.size(); ++m) {
-    const Mesh& mesh = *meshes[m].mesh;
-    const size_t n = mesh.vertices.size();
-    normals[m] = nullptr;
-    if (n == 0) continue;
-    float* nv = arena.allocate_array<float>(n * 3);
-    if (nv == nullptr) return arena.exhausted_status();
-    std::memset(nv, 0, n * 3 * sizeof(float));
-    for (const Triangle& t : mesh.triangles) {
-      const Vec3& p0 = mesh.vertices[t.v[0]];
-      const Vec3 c = cross(mesh.vertices[t.v[1]] - p0, mesh.vertices[t.v[2]] - p0);
-      for (int k = 0; k < 3; ++k) {
-        float* q = nv + static_cast<size_t>(t.v[k]) * 3;
-        q[0] += static_cast<float>(c.x);
-        q[1] += static_cast<float>(c.y);
-        q[2] += static_cast<float>(c.z);
-      }
+// Gouraud: area-weighted vertex normals of one mesh where it is drawn (3 floats a vertex),
+// from the arena.
+Status vertex_normals(Arena& arena, const RenderMesh& item, const float** out) {
+  const Mesh& mesh = *item.mesh;
+  const size_t n = mesh.vertices.size();
+  *out = nullptr;
+  if (n == 0) return Status::ok();
+  float* nv = arena.allocate_array<float>(n * 3);
+  if (nv == nullptr) return arena.exhausted_status();
+  std::memset(nv, 0, n * 3 * sizeof(float));
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3 p0 = placed(item, mesh.vertices[t.v[0]]);
+    const Vec3 c =
+        cross(placed(item, mesh.vertices[t.v[1]]) - p0, placed(item, mesh.vertices[t.v[2]]) - p0);
+    for (int k = 0; k < 3; ++k) {
+      float* q = nv + static_cast<size_t>(t.v[k]) * 3;
+      q[0] += static_cast<float>(c.x);
+      q[1] += static_cast<float>(c.y);
+      q[2] += static_cast<float>(c.z);
     }
-    normals[m] = nv;
   }
-  *out = normals;
+  *out = nv;
   return Status::ok();
 }
 
@@ -592,10 +592,6 @@ Status render_meshes(const Context& ctx, Span<const RenderMesh> meshes,
   }
   for (size_t i = 0; i < pixels; ++i) frame.opaque.depth[i] = kFarDepth;
   frame_views(meshes, options, layout, &frame);
-  const float** normals = nullptr;
-  if (options.shading == RenderShading::kGouraud && !meshes.empty()) {
-    SPLINTCORE_RETURN_IF_ERROR(vertex_normals(arena, meshes, &normals));
-  }
 
   // Meshes in order; the views of one mesh in parallel (disjoint tiles).
   for (size_t m = 0; m < meshes.size(); ++m) {
@@ -603,20 +599,30 @@ Status render_meshes(const Context& ctx, Span<const RenderMesh> meshes,
     MeshJob job;
     job.frame = &frame;
     job.item = &meshes[m];
-    job.normals = normals != nullptr ? normals[m] : nullptr;
-    ArenaScope mesh_scope(arena);  // the projections of this mesh
+    ArenaScope mesh_scope(arena);  // the normals and projections of this mesh
+    if (options.shading == RenderShading::kGouraud) {
+      SPLINTCORE_RETURN_IF_ERROR(vertex_normals(arena, meshes[m], &job.normals));
+    }
     const size_t vertex_count = meshes[m].mesh->vertices.size();
+    // The views in batches of as many as the executor runs at once: the projections of a
+    // batch at a time (the views are drawn into disjoint tiles, so the bytes are the same).
+    const uint32_t concurrency = ctx.executor != nullptr ? ctx.executor->concurrency : 1;
+    const uint32_t batch =
+        concurrency < 1 ? 1 : (concurrency < view_count ? concurrency : view_count);
     uint64_t projections = 0;
-    if (!checked_mul(vertex_count, view_count, &projections) || projections > SIZE_MAX) {
+    if (!checked_mul(vertex_count, batch, &projections) || projections > SIZE_MAX) {
       return make_error(StatusCode::kArenaExhausted, "render: ", vertex_count, " vertices in ",
-                        view_count, " views do not fit in memory");
+                        batch, " views do not fit in memory");
     }
     if (projections > 0) {
       job.projected = arena.allocate_array<Projected>(static_cast<size_t>(projections));
       if (job.projected == nullptr) return arena.exhausted_status();
     }
-    auto task = [&job](uint32_t view_index) { draw_mesh_view(job, view_index); };
-    parallel_for_each(ctx.executor, view_count, task);
+    for (uint32_t first = 0; first < view_count; first += batch) {
+      const uint32_t count = view_count - first < batch ? view_count - first : batch;
+      auto task = [&job, first](uint32_t slot) { draw_mesh_view(job, first + slot, slot); };
+      parallel_for_each(ctx.executor, count, task);
+    }
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "render", meshes.size(), meshes.size()));
   if (any_overlay) blend_overlay(frame, pixels, rgb);

@@ -293,6 +293,43 @@ TEST(OutlineRealData, DistalEndsAtTheSecondMolars) {
 
 // The real case moved by 10 random rigid moves gives the same splint moved: volume to 1e-6,
 // Hausdorff under 1e-4 mm (plus the Boolean's own nudge where rounding made it nudge).
+// Issue 29: the whole design of the real case (automatic outline, bite opening, Boolean and
+// its exact checks) in a 64 MiB arena that also holds the two jaws (887k triangles, 21 MB),
+// as `splintcore design --memory-cap 64M` runs it; the same splint as with room to spare.
+TEST(OutlineRealData, WholeDesignIn64MiB) {
+  RealJaws r;
+  if (!r.ok) GTEST_SKIP() << "realdata not found";
+  const CaseFile c = auto_case(r.t.arena, 2.0);
+  Mesh reference;
+  DesignReport r0;
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&r.t.arena), c, Span<const Mesh>(r.jaw, 2), &reference, &r0));
+  test::TestArena small(size_t{64} << 20);
+  Mesh jaws[2];
+  for (int j = 0; j < 2; ++j) {
+    jaws[j].bind(&small.arena);
+    ASSERT_TRUE(jaws[j].vertices.resize(r.jaw[j].vertices.size()));
+    ASSERT_TRUE(jaws[j].triangles.resize(r.jaw[j].triangles.size()));
+    std::copy(r.jaw[j].vertices.begin(), r.jaw[j].vertices.end(), jaws[j].vertices.begin());
+    std::copy(r.jaw[j].triangles.begin(), r.jaw[j].triangles.end(), jaws[j].triangles.begin());
+  }
+  const size_t held = small.arena.used();
+  Mesh splint;
+  DesignReport report;
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&small.arena), c, Span<const Mesh>(jaws, 2), &splint, &report));
+  std::printf("real case in 64 MiB: jaws %zu bytes, peak arena %zu bytes\n", held,
+              small.arena.high_water());
+  EXPECT_TRUE(report.self_intersection_checked);
+  ASSERT_EQ(splint.triangles.size(), reference.triangles.size());
+  ASSERT_EQ(splint.vertices.size(), reference.vertices.size());
+  EXPECT_TRUE(
+      std::equal(splint.vertices.begin(), splint.vertices.end(), reference.vertices.begin()));
+  EXPECT_EQ(std::memcmp(splint.triangles.data(), reference.triangles.data(),
+                        splint.triangles.size() * sizeof(Triangle)),
+            0);
+}
+
 TEST(OutlineRealData, FrameInvariance) {
   RealJaws r;
   if (!r.ok) GTEST_SKIP() << "realdata not found";

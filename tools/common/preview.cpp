@@ -188,23 +188,7 @@ Status write_preview(const Context& ctx, const Mesh& splint, const std::vector<c
                       jaws.size(), " jaws");
   }
   Arena& arena = *ctx.arena;
-  ArenaScope scope(arena);  // the moved copies
-  std::vector<Mesh> moved;
-  for (size_t i = 0; i < jaws.size() && !moves.empty(); ++i) {
-    const Mesh& jaw = *jaws[i];
-    Mesh m(&arena);
-    if (!m.vertices.resize(jaw.vertices.size()) || !m.triangles.resize(jaw.triangles.size())) {
-      return arena.exhausted_status();
-    }
-    for (size_t v = 0; v < jaw.vertices.size(); ++v) {
-      m.vertices[v] = moves[i].apply_point(jaw.vertices[v]);
-    }
-    if (jaw.triangles.size() > 0) {
-      std::memcpy(m.triangles.data(), jaw.triangles.data(),
-                  jaw.triangles.size() * sizeof(Triangle));
-    }
-    moved.push_back(m);
-  }
+  ArenaScope scope(arena);  // the marks' mesh
   std::vector<RenderMesh> meshes;
   RenderMesh s;
   s.mesh = &splint;
@@ -212,7 +196,8 @@ Status write_preview(const Context& ctx, const Mesh& splint, const std::vector<c
   meshes.push_back(s);
   for (size_t i = 0; i < jaws.size(); ++i) {
     RenderMesh j;
-    j.mesh = moves.empty() ? jaws[i] : &moved[i];
+    j.mesh = jaws[i];
+    j.transform = moves.empty() ? nullptr : &moves[i];  // drawn moved, not copied
     for (int k = 0; k < 3; ++k) j.rgb[k] = kJawRgb[k];
     j.alpha = kJawAlpha;
     meshes.push_back(j);
