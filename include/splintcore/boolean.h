@@ -112,7 +112,11 @@ struct BooleanStats {
 // overlap are compared, at most about 130 bytes per triangle of theirs in the boxes' overlap;
 // all of it is returned before the one pass when there is one group. With several groups it
 // stays (with 4 more bytes per vertex of B) below the passes, and each pass also has the
-// previous result and one group's copy of its shells below it. Single-threaded (ctx.executor
+// previous result and one group's copy of its shells below it. A pass (difference and
+// intersection) works on a copy of B's triangles near A: 4 bytes per vertex of B, then about
+// 28 per near vertex and 17 per near triangle, the run's own arrays sized by the near part;
+// its result is checked after it has been moved down over the run's temporaries (the exact
+// self-intersection check: about 270 bytes per result triangle). Single-threaded (ctx.executor
 // is not used yet), so trivially the same at any thread count. Errors: kInvalidMesh (A is not
 // a solid, a degenerate triangle of B meets A, an index out of range: named; for the
 // intersection with overlapping shells also a group of them that is not a solid), kNonFinite,
