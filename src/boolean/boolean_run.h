@@ -410,6 +410,15 @@ class BooleanRun {
 
  private:
   Status check_pair_budget(uint32_t tb) const;
+  // The pair tests' data for the triangles of A near B (prepare_a_slots, find_hits).
+  struct ASlots {
+    uint32_t* slot = nullptr;  // per triangle of A: its slot, or UINT32_MAX (none)
+    PlaneFilter* filters = nullptr;
+    EdgePlanes* edges = nullptr;
+    Aabb* boxes = nullptr;
+    uint32_t* stamp = nullptr;  // the last triangle of B tested against it
+  };
+  Status prepare_a_slots(ASlots* out);
   Status find_hits();
   Status add_contact(uint32_t ta, uint32_t tb);
   Status name_contact_point(const detail::ContactPoint& cp, const uint32_t ga[3],

@@ -239,97 +239,151 @@ Status BooleanRun::check_pair_budget(uint32_t tb) const {
       .at_index(in_.b_triangle(tb));
 }
 
-// Candidate pairs through the broad phase's grid; each decided exactly (intersect_pair) with A
-// as this attempt has it.
-Status BooleanRun::find_hits() {
+namespace {
+
+// B's triangle t's box.
+inline Aabb b_box(const Vec3* vb, const Triangle& tri) {
+  Aabb box;
+  box.add(vb[tri.v[0]]);
+  box.add(vb[tri.v[1]]);
+  box.add(vb[tri.v[2]]);
+  return box;
+}
+
+// f(ta) for every triangle of A listed in the grid cells `box` covers (a triangle of A in
+// several of them comes once per cell). Returns false as soon as f does.
+template <class F>
+bool for_each_listed(const Broadphase& bp, const Aabb& box, F&& f) {
+  uint32_t lo[3], hi[3];
+  bp.cell_range(box, lo, hi);
+  for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
+    for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
+      for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
+        const size_t c = (size_t{z} * bp.dim[1] + y) * bp.dim[0] + x;
+        for (uint32_t k = bp.start[c]; k < bp.start[c + 1]; ++k) {
+          if (!f(bp.items[k])) return false;
+        }
+      }
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+// The triangles of A that some near triangle of B may meet (listed in a cell its box covers)
+// get a slot: their filters, edge planes, boxes and stamps (about 470 bytes each) are made
+// for them only. A may be large and mostly far from this B: in a later pass of mesh_boolean
+// it is the previous result, far from most of the next group of shells.
+Status BooleanRun::prepare_a_slots(ASlots* out) {
   const Mesh& b = *in_.b;
   const uint32_t nta = in_.nta;
-  const uint32_t nv_in = in_.nva + in_.nvb;
-  vstate_ = arena_.allocate_array<int8_t>(nv_in);
-  if (vstate_ == nullptr && nv_in > 0) return arena_.exhausted_status();
-  if (nv_in > 0) std::memset(vstate_, 0, nv_in);
-  PlaneFilter* filters = arena_.allocate_array<PlaneFilter>(nta);
-  EdgePlanes* edges = arena_.allocate_array<EdgePlanes>(nta);
-  Aabb* boxes = arena_.allocate_array<Aabb>(nta);
-  uint32_t* stamp = arena_.allocate_array<uint32_t>(nta);
-  if (filters == nullptr || edges == nullptr || boxes == nullptr || stamp == nullptr) {
+  uint32_t* slot = arena_.allocate_array<uint32_t>(nta);
+  if (slot == nullptr && nta > 0) return arena_.exhausted_status();
+  if (nta > 0) std::memset(slot, 0xff, size_t{nta} * sizeof(uint32_t));
+  const Vec3* vb = b.vertices.data();
+  for (size_t ni = 0; ni < bp_.near_ids.size(); ++ni) {
+    const Aabb box = b_box(vb, b.triangles[bp_.near_ids[ni]]);
+    for_each_listed(bp_, box, [&](uint32_t ta) {
+      slot[ta] = 0;
+      return true;
+    });
+  }
+  uint32_t count = 0;
+  for (uint32_t t = 0; t < nta; ++t) {
+    if (slot[t] != ~0u) slot[t] = count++;
+  }
+  out->slot = slot;
+  out->filters = arena_.allocate_array<PlaneFilter>(count);
+  out->edges = arena_.allocate_array<EdgePlanes>(count);
+  out->boxes = arena_.allocate_array<Aabb>(count);
+  out->stamp = arena_.allocate_array<uint32_t>(count);
+  if (count > 0 && (out->filters == nullptr || out->edges == nullptr || out->boxes == nullptr ||
+                    out->stamp == nullptr)) {
     return arena_.exhausted_status();
   }
   for (uint32_t t = 0; t < nta; ++t) {
+    const uint32_t k = slot[t];
+    if (k == ~0u) continue;
     const Triangle& at = in_.a->triangles[t];
     const Vec3& p0 = in_.a->vertices[at.v[0]];
     const Vec3& p1 = in_.a->vertices[at.v[1]];
     const Vec3& p2 = in_.a->vertices[at.v[2]];
-    filters[t] = plane_filter(p0, p1, p2);
-    edges[t] = edge_planes(p0, p1, p2);
-    boxes[t] = Aabb{};
-    boxes[t].add(p0);
-    boxes[t].add(p1);
-    boxes[t].add(p2);
-    stamp[t] = ~0u;
+    out->filters[k] = plane_filter(p0, p1, p2);
+    out->edges[k] = edge_planes(p0, p1, p2);
+    out->boxes[k] = Aabb{};
+    out->boxes[k].add(p0);
+    out->boxes[k].add(p1);
+    out->boxes[k].add(p2);
+    out->stamp[k] = ~0u;
   }
-  const uint32_t* dim = bp_.dim;
-  const uint32_t* start = bp_.start;
-  const uint32_t* items = bp_.items;
+  return Status::ok();
+}
+
+// Candidate pairs through the broad phase's grid; each decided exactly (intersect_pair) with A
+// as this attempt has it.
+Status BooleanRun::find_hits() {
+  const Mesh& b = *in_.b;
+  const uint32_t nv_in = in_.nva + in_.nvb;
+  vstate_ = arena_.allocate_array<int8_t>(nv_in);
+  if (vstate_ == nullptr && nv_in > 0) return arena_.exhausted_status();
+  if (nv_in > 0) std::memset(vstate_, 0, nv_in);
+  ASlots as;
+  SPLINTCORE_RETURN_IF_ERROR(prepare_a_slots(&as));
   const Vec3* vb = b.vertices.data();
   st_.near_b_triangles = bp_.near_ids.size();
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", 0, 1));
   hits_.bind(&arena_);
   deg_.bind(&arena_);
+  Status failed;
   for (size_t ni = 0; ni < bp_.near_ids.size(); ++ni) {
     const uint32_t t = bp_.near_ids[ni];
     if ((ni & 65535u) == 0) {
       SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", ni, bp_.near_ids.size()));
     }
     const Triangle& tri = b.triangles[t];
-    Aabb box;
-    box.add(vb[tri.v[0]]);
-    box.add(vb[tri.v[1]]);
-    box.add(vb[tri.v[2]]);
-    uint32_t lo[3], hi[3];
-    bp_.cell_range(box, lo, hi);
+    const Aabb box = b_box(vb, tri);
     bool flat_checked = false;
     PlaneFilter pb{};
     const Vec3 bc = (box.lo + box.hi) * 0.5;
     const Vec3 bext = box.hi - box.lo;
-    for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
-      for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
-        for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
-          const size_t c = (size_t{z} * dim[1] + y) * dim[0] + x;
-          for (uint32_t k = start[c]; k < start[c + 1]; ++k) {
-            const uint32_t ta = items[k];
-            if (stamp[ta] == t) continue;
-            stamp[ta] = t;
-            if (!boxes[ta].overlaps(box)) continue;
-            ++st_.candidate_pairs;
-            if (!flat_checked) {
-              if (collinear3d(vb[tri.v[0]], vb[tri.v[1]], vb[tri.v[2]])) {
-                return make_error(StatusCode::kInvalidMesh, "triangle ", in_.b_triangle(t),
-                                  " of B is degenerate (zero area) and meets A near triangle ", ta)
-                    .at_index(in_.b_triangle(t));
-              }
-              flat_checked = true;
-              pb = plane_filter(vb[tri.v[0]], vb[tri.v[1]], vb[tri.v[2]]);
-            }
-            // B's whole box strictly beyond one of A's edge planes: disjoint, which
-            // intersect_pair would answer kNone (tested here: it spares the call for most pairs).
-            const EdgePlanes& ea = edges[ta];
-            if ((ea.inside[0] != 0 && detail::box_beyond(ea.plane[0], ea.inside[0], bc, bext)) ||
-                (ea.inside[1] != 0 && detail::box_beyond(ea.plane[1], ea.inside[1], bc, bext)) ||
-                (ea.inside[2] != 0 && detail::box_beyond(ea.plane[2], ea.inside[2], bc, bext))) {
-              continue;
-            }
-            Hit hit;
-            const PairResult r = intersect_pair(in_, ta, in_.nta + t, filters[ta], ea, pb, &hit);
-            if (r == PairResult::kDegenerate)
-              SPLINTCORE_RETURN_IF_ERROR(add_contact(ta, in_.nta + t));
-            if (r == PairResult::kSegment && !hits_.push_back(hit)) {
-              return arena_.exhausted_status();
-            }
-          }
+    const bool done = for_each_listed(bp_, box, [&](uint32_t ta) {
+      const uint32_t k = as.slot[ta];
+      if (as.stamp[k] == t) return true;
+      as.stamp[k] = t;
+      if (!as.boxes[k].overlaps(box)) return true;
+      ++st_.candidate_pairs;
+      if (!flat_checked) {
+        if (collinear3d(vb[tri.v[0]], vb[tri.v[1]], vb[tri.v[2]])) {
+          failed = make_error(StatusCode::kInvalidMesh, "triangle ", in_.b_triangle(t),
+                              " of B is degenerate (zero area) and meets A near triangle ", ta)
+                       .at_index(in_.b_triangle(t));
+          return false;
         }
+        flat_checked = true;
+        pb = plane_filter(vb[tri.v[0]], vb[tri.v[1]], vb[tri.v[2]]);
       }
-    }
+      // B's whole box strictly beyond one of A's edge planes: disjoint, which intersect_pair
+      // would answer kNone (tested here: it spares the call for most pairs).
+      const EdgePlanes& ea = as.edges[k];
+      if ((ea.inside[0] != 0 && detail::box_beyond(ea.plane[0], ea.inside[0], bc, bext)) ||
+          (ea.inside[1] != 0 && detail::box_beyond(ea.plane[1], ea.inside[1], bc, bext)) ||
+          (ea.inside[2] != 0 && detail::box_beyond(ea.plane[2], ea.inside[2], bc, bext))) {
+        return true;
+      }
+      Hit hit;
+      const PairResult r = intersect_pair(in_, ta, in_.nta + t, as.filters[k], ea, pb, &hit);
+      if (r == PairResult::kDegenerate) {
+        failed = add_contact(ta, in_.nta + t);
+        if (!failed.is_ok()) return false;
+      }
+      if (r == PairResult::kSegment && !hits_.push_back(hit)) {
+        failed = arena_.exhausted_status();
+        return false;
+      }
+      return true;
+    });
+    if (!done) return failed;
     SPLINTCORE_RETURN_IF_ERROR(check_pair_budget(t));
   }
   st_.intersecting_pairs = hits_.size();
