@@ -176,6 +176,10 @@ rm -f "$work/both.stl"
 expect_exit 2 "boolean with a translation per file, miscounted" -- "$tool" boolean --difference "$work/base.stl" "$work/maxilla.stl" "$work/mandible.stl" -o "$work/both.stl" --translate-b 0,0,0 --translate-b 0,0,-2 --translate-b 0,0,0
 expect_exit 0 "boolean with both jaws, the mandible opened" -- "$tool" boolean --difference "$work/base.stl" "$work/maxilla.stl" "$work/mandible.stl" -o "$work/both.stl" --translate-b 0,0,0 --translate-b 0,0,-2
 expect_exit 0 "the written splint is a printable solid" -- "$tool" check "$work/both.stl"
+# B made of three files, the third far away: it is read, joined and dropped as far from A;
+# the splint is the same bytes as from the two files.
+expect_exit 0 "boolean with a third B file far away" -- "$tool" boolean --difference "$work/base.stl" "$work/maxilla.stl" "$work/mandible.stl" "$work/maxilla.stl" -o "$work/both3.stl" --translate-b 0,0,0 --translate-b 0,0,-2 --translate-b 500,0,0
+check "a far B file changes no byte" -- cmp -s "$work/both.stl" "$work/both3.stl"
 expect_exit 0 "boolean intersection" -- "$tool" boolean --intersection "$work/base.stl" "$work/maxilla.stl" -o "$work/inter.stl"
 expect_exit 0 "the written intersection is a solid" -- "$tool" check "$work/inter.stl" --no-place
 expect_exit 1 "boolean with an open A" -- "$tool" boolean --difference "$fixtures/stl/open_box_ascii.stl" "$work/maxilla.stl" -o "$work/open.stl"

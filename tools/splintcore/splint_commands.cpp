@@ -114,16 +114,24 @@ std::vector<OptionSpec> boolean_options(BooleanArgs* a) {
 }
 
 // B: the shells of every file after A, in order, in one mesh, each file moved by its
-// --translate-b.
+// --translate-b. The files are read one after the other into the arena; then B is made where
+// they lie: the triangles (renumbered) go to a scratch copy above them, the vertices move down
+// into one array, the triangles follow them. Peak: the files' meshes and B's triangles once
+// more (appending file after file to two growing arrays moved them up again and again: four
+// times B on the real dentition's 31 files).
 Status read_b(Run& run, const BooleanArgs& a, Mesh* b) {
   Arena& arena = run.arena;
   const std::vector<const char*>& files = a.common.positional;
+  const Arena::Marker start = arena.mark();
+  std::vector<Mesh> parts;
+  uint64_t total_v = 0, total_t = 0;
   for (size_t f = 1; f < files.size(); ++f) {
-    const Arena::Marker mark = arena.mark();
     Mesh part(&arena);
     SPLINTCORE_RETURN_IF_ERROR(
         read_mesh_file(run.ctx, files[f], kNoInputLimit, false, &part, nullptr));
-    if (b->vertices.size() + part.vertices.size() >= (size_t{1} << 31)) {
+    total_v += part.vertices.size();
+    total_t += part.triangles.size();
+    if (total_v >= (uint64_t{1} << 31) || total_t >= (uint64_t{1} << 31)) {
       return Status::error(StatusCode::kLimitExceeded, "B is too large").in_file(files[f]);
     }
     const std::vector<Vec3>& moves = a.translate_b;
@@ -138,24 +146,43 @@ Status read_b(Run& run, const BooleanArgs& a, Mesh* b) {
             .in_file(files[f]);
       }
     }
-    if (f == 1) {
-      *b = part;  // the first file's arrays stay where they are
-      continue;
-    }
-    // Later files: copy after B's arrays (which then grow in place or move up).
-    const uint32_t off = static_cast<uint32_t>(b->vertices.size());
-    std::vector<Vec3> vs(part.vertices.begin(), part.vertices.end());
-    std::vector<Triangle> ts(part.triangles.begin(), part.triangles.end());
-    arena.rewind(mark);
-    for (const Vec3& v : vs) {
-      if (!b->vertices.push_back(v)) return arena.exhausted_status();
-    }
-    for (const Triangle& t : ts) {
-      if (!b->triangles.push_back(Triangle{{t.v[0] + off, t.v[1] + off, t.v[2] + off}})) {
-        return arena.exhausted_status();
-      }
-    }
+    parts.push_back(part);
   }
+  if (parts.size() == 1) {
+    *b = parts[0];
+    return Status::ok();
+  }
+  const size_t nv = static_cast<size_t>(total_v), nt = static_cast<size_t>(total_t);
+  // (The gap: B's two arrays may take more alignment padding than the files' did.)
+  uint8_t* gap = arena.allocate_array<uint8_t>(2 * Arena::kDefaultAlignment);
+  Triangle* scratch = arena.allocate_array<Triangle>(nt);
+  if (gap == nullptr || (scratch == nullptr && nt > 0)) return arena.exhausted_status();
+  size_t k = 0;
+  uint32_t off = 0;
+  for (const Mesh& p : parts) {
+    for (const Triangle& t : p.triangles) {
+      scratch[k++] = Triangle{{t.v[0] + off, t.v[1] + off, t.v[2] + off}};
+    }
+    off += static_cast<uint32_t>(p.vertices.size());
+  }
+  // Every file's arrays lie above the previous files' (both of them), so each file's vertices
+  // move down (or stay) and never onto a later file's; B's two arrays end below the scratch.
+  arena.rewind(start);
+  Vec3* verts = arena.allocate_array<Vec3>(nv);
+  Triangle* tris = arena.allocate_array<Triangle>(nt);
+  SPLINTCORE_ASSERT((verts != nullptr || nv == 0) && (tris != nullptr || nt == 0));
+  SPLINTCORE_ASSERT(nt == 0 || tris + nt <= scratch);
+  size_t at = 0;
+  for (const Mesh& p : parts) {
+    if (!p.vertices.empty()) {
+      std::memmove(static_cast<void*>(verts + at), p.vertices.data(),
+                   p.vertices.size() * sizeof(Vec3));
+    }
+    at += p.vertices.size();
+  }
+  if (nt > 0) std::memcpy(static_cast<void*>(tris), scratch, nt * sizeof(Triangle));
+  b->vertices.adopt(verts, nv, nv);
+  b->triangles.adopt(tris, nt, nt);
   return Status::ok();
 }
 
