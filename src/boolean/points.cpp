@@ -274,20 +274,38 @@ bool for_each_listed(const Broadphase& bp, const Aabb& box, F&& f) {
 // The triangles of A that some near triangle of B may meet (listed in a cell its box covers)
 // get a slot: their filters, edge planes, boxes and stamps (about 470 bytes each) are made
 // for them only. A may be large and mostly far from this B: in a later pass of mesh_boolean
-// it is the previous result, far from most of the next group of shells.
+// it is the previous result, far from most of the next group of shells. The cells the near
+// triangles' boxes cover are marked first (a bit each), then the triangles those cells list.
 Status BooleanRun::prepare_a_slots(ASlots* out) {
   const Mesh& b = *in_.b;
   const uint32_t nta = in_.nta;
   uint32_t* slot = arena_.allocate_array<uint32_t>(nta);
   if (slot == nullptr && nta > 0) return arena_.exhausted_status();
   if (nta > 0) std::memset(slot, 0xff, size_t{nta} * sizeof(uint32_t));
-  const Vec3* vb = b.vertices.data();
-  for (size_t ni = 0; ni < bp_.near_ids.size(); ++ni) {
-    const Aabb box = b_box(vb, b.triangles[bp_.near_ids[ni]]);
-    for_each_listed(bp_, box, [&](uint32_t ta) {
-      slot[ta] = 0;
-      return true;
-    });
+  {
+    ArenaScope marks_scope(arena_);
+    const size_t cells = size_t{bp_.dim[0]} * bp_.dim[1] * bp_.dim[2];
+    uint64_t* marked = arena_.allocate_array<uint64_t>(cells / 64 + 1);
+    if (marked == nullptr) return arena_.exhausted_status();
+    std::memset(marked, 0, (cells / 64 + 1) * sizeof(uint64_t));
+    const Vec3* vb = b.vertices.data();
+    for (size_t ni = 0; ni < bp_.near_ids.size(); ++ni) {
+      const Aabb box = b_box(vb, b.triangles[bp_.near_ids[ni]]);
+      uint32_t lo[3], hi[3];
+      bp_.cell_range(box, lo, hi);
+      for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
+        for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
+          for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
+            const size_t c = (size_t{z} * bp_.dim[1] + y) * bp_.dim[0] + x;
+            marked[c >> 6] |= uint64_t{1} << (c & 63);
+          }
+        }
+      }
+    }
+    for (size_t c = 0; c < cells; ++c) {
+      if ((marked[c >> 6] >> (c & 63) & 1u) == 0) continue;
+      for (uint32_t k = bp_.start[c]; k < bp_.start[c + 1]; ++k) slot[bp_.items[k]] = 0;
+    }
   }
   uint32_t count = 0;
   for (uint32_t t = 0; t < nta; ++t) {
