@@ -257,6 +257,24 @@ Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const Dist
 Status mesh_pair_meet(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
                       const Vec3& offset_b, bool* meet, MeshPairDistance* out);
 
+// mesh_pair_distance and mesh_pair_meet with B moved by a rigid transform instead of a
+// translation: B's points are move_b.apply_point(p), rounded as such (the hinge-axis
+// autorotation, which turns the mandible about the condyles, calls them with its one index of
+// each jaw). B's node and triangle boxes are bounded after the move by the box of the moved box
+// (its centre moved, its half-extents through |R|, widened over the rounding), so the tree is
+// built once; the triangles themselves are moved exactly as given. The answer is the least
+// (squared distance, triangle_a, triangle_b) as mesh_pair_distance's, the same bits as
+// mesh_pair_distance over an index of B's moved copy when the moved copy's corners are those
+// apply_point gives. A rotated box is looser than the box of the rotated triangles (up to
+// sqrt(3) times as wide at 45 degrees), so the search examines more pairs than over an index
+// of the moved copy; no index is rebuilt. Arena: mesh_pair_distance_bound(). Errors: as
+// mesh_pair_distance (kInvalidArgument for a move that is not finite).
+Status mesh_pair_distance_rigid(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
+                                const RigidTransform& move_b, double max_distance,
+                                MeshPairDistance* out);
+Status mesh_pair_meet_rigid(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
+                            const RigidTransform& move_b, bool* meet, MeshPairDistance* out);
+
 // A triangle of A and one of B.
 struct TrianglePairIds {
   uint32_t a = 0, b = 0;
