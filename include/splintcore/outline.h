@@ -153,7 +153,8 @@ uint64_t autorotate_mandible_bound(const Mesh& maxilla, const Mesh& mandible);
 // each jaw, built once.
 // Errors (kInvalidArgument unless said): a jaw empty or broken (kInvalidMesh, kNonFinite), a
 // hinge point not finite or the two less than 1 mm apart, an opening outside [0, 10], a closing
-// sense that cannot be told (the centroid's velocity across the direction to the maxilla),
+// sense that cannot be told (the cosine between the centroid's velocity and the direction to
+// the maxilla under 0.1 in magnitude),
 // jaws that still meet or lie within X at 30 degrees open, or that do not come within X in 30
 // degrees of closing (each with the distances measured); kArenaExhausted; kLimitExceeded (no
 // convergence in 2000 evaluations). On an error the arena is as it was.

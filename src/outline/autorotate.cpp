@@ -22,6 +22,10 @@ constexpr double kBracketRad = 1e-10;
 constexpr uint32_t kMaxEvaluations = 2000;
 constexpr double kMinHingeMm = 1.0;
 constexpr double kMaxOpeningMm = 10.0;
+// The closing sense is told only when the centroid's velocity and the direction to the
+// maxilla's make an angle at least this far (cosine) from a right angle: nearer, the sense
+// would hang on the jaws' small asymmetries.
+constexpr double kMinSenseCosine = 0.1;
 
 double degrees(double rad) { return rad * (180.0 / kPi); }
 
@@ -242,12 +246,13 @@ Status sense_and_lever(const Mesh& maxilla, const Mesh& mandible, const Vec3& p,
   const Vec3 cx = centroid(maxilla), cm = centroid(mandible);
   const Vec3 velocity = cross(u, cm - p), towards = cx - cm;
   const double along = dot(velocity, towards);
-  if (!(std::fabs(along) > 1e-6 * length(velocity) * length(towards))) {
+  if (!(std::fabs(along) > kMinSenseCosine * length(velocity) * length(towards))) {
     return make_error(StatusCode::kInvalidArgument,
                       "autorotate: turning the mandible about the hinge axis moves its centroid "
-                      "across the direction to the maxilla's (velocity . direction = ",
-                      along,
-                      "), so the closing sense cannot be told; check the hinge points (the "
+                      "across the direction to the maxilla's (the cosine between them is ",
+                      along / (length(velocity) * length(towards)),
+                      ", under 0.1 in magnitude), so the closing sense cannot be told; check the "
+                      "hinge points (the "
                       "condyles, behind and above the teeth)");
   }
   *sign = along > 0 ? 1 : -1;
