@@ -301,6 +301,18 @@ Status candidate_pair_distance(const DistanceIndex& a, const DistanceIndex& b,
                                Span<const TrianglePairIds> pairs, const Vec3& offset_b,
                                MeshPairDistance* out);
 
+// mesh_pair_distance_collect and candidate_pair_distance with B moved rigidly (as
+// mesh_pair_distance_rigid). B turned by at most dtheta about an axis changes every pair's
+// distance by at most R dtheta (R: the largest distance of a B vertex from the axis), the
+// bound the autorotation's pool of pairs rests on. Arena, errors: as their translated kin.
+Status mesh_pair_distance_collect_rigid(const Context& ctx, const DistanceIndex& a,
+                                        const DistanceIndex& b, const RigidTransform& move_b,
+                                        double max_distance, Span<TrianglePairIds> pairs,
+                                        size_t* count, MeshPairDistance* out);
+Status candidate_pair_distance_rigid(const DistanceIndex& a, const DistanceIndex& b,
+                                     Span<const TrianglePairIds> pairs,
+                                     const RigidTransform& move_b, MeshPairDistance* out);
+
 // ---------------------------------------------------------------------------------------------
 // Narrow-band signed distance volume, sampled slab by slab for the tiled marching cubes.
 

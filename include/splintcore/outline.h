@@ -150,7 +150,8 @@ uint64_t autorotate_mandible_bound(const Mesh& maxilla, const Mesh& mandible);
 // closest pair's rate) shrinking the bracket from the far side, until the crossing is
 // bracketed within 1e-10 rad; the answer is the bracket's near end (the distance there is X
 // and at most R 1e-10 mm more). The distances are mesh_pair_distance_rigid over one index of
-// each jaw, built once.
+// each jaw, built once, and once the bracket is narrow a scan of the pairs that can come within
+// the opening inside it (docs/architecture.md).
 // Errors (kInvalidArgument unless said): a jaw empty or broken (kInvalidMesh, kNonFinite), a
 // hinge point not finite or the two less than 1 mm apart, an opening outside [0, 10], a closing
 // sense that cannot be told (the cosine between the centroid's velocity and the direction to

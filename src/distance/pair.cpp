@@ -743,16 +743,18 @@ Status mesh_pair_distance_rigid(const Context& ctx, const DistanceIndex& a, cons
   return run_search(ctx, &s, out);
 }
 
-Status mesh_pair_distance_collect(const Context& ctx, const DistanceIndex& a,
-                                  const DistanceIndex& b, const Vec3& offset_b, double max_distance,
-                                  Span<TrianglePairIds> pairs, size_t* count,
-                                  MeshPairDistance* out) {
+namespace {
+
+// mesh_pair_distance_collect, B shifted by offset_b or moved by *move_b.
+Status collect_pairs(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
+                     const Vec3& offset_b, const RigidTransform* move_b, double max_distance,
+                     Span<TrianglePairIds> pairs, size_t* count, MeshPairDistance* out) {
   *out = MeshPairDistance{};
   out->distance = HUGE_VAL;
   *count = 0;
   PairSearch s;
   bool empty = false;
-  SPLINTCORE_RETURN_IF_ERROR(start_search(a, b, offset_b, max_distance, &s, &empty));
+  SPLINTCORE_RETURN_IF_ERROR(start_search(a, b, offset_b, max_distance, &s, &empty, move_b));
   if (empty) return Status::ok();
   s.collecting = true;
   s.collected = pairs.data();
@@ -760,6 +762,52 @@ Status mesh_pair_distance_collect(const Context& ctx, const DistanceIndex& a,
   SPLINTCORE_RETURN_IF_ERROR(run_search(ctx, &s, out));
   *count = s.collect_count;
   return Status::ok();
+}
+
+// candidate_pair_distance, B shifted by offset_b or moved by *move_b.
+Status scan_pairs(const DistanceIndex& a, const DistanceIndex& b, Span<const TrianglePairIds> pairs,
+                  const Vec3& offset_b, const RigidTransform* move_b, MeshPairDistance* out) {
+  *out = MeshPairDistance{};
+  out->distance = HUGE_VAL;
+  PairSearch s;
+  bool empty = false;
+  SPLINTCORE_RETURN_IF_ERROR(start_search(a, b, offset_b, HUGE_VAL, &s, &empty, move_b));
+  if (empty) return Status::ok();
+  const size_t na = a.mesh->triangles.size(), nb = b.mesh->triangles.size();
+  TriangleBox x, y;
+  uint32_t loaded_a = ~uint32_t{0};
+  for (const TrianglePairIds& p : pairs) {
+    if (p.a >= na || p.b >= nb) {
+      return Status::error(StatusCode::kInvalidArgument,
+                           "candidate pair distance: a pair's triangle is out of range");
+    }
+    if (p.a != loaded_a) {
+      s.load(0, p.a, &x);
+      loaded_a = p.a;
+    }
+    s.load(1, p.b, &y);
+    const double lo[3] = {y.lo.x, y.lo.y, y.lo.z}, hi[3] = {y.hi.x, y.hi.y, y.hi.z};
+    if (box_gap2(x.lo, x.hi, lo, hi) > s.reach2) continue;
+    s.consider(p.a, p.b, x, y);
+  }
+  if (s.found) finish(s, out);
+  return Status::ok();
+}
+
+}  // namespace
+
+Status mesh_pair_distance_collect(const Context& ctx, const DistanceIndex& a,
+                                  const DistanceIndex& b, const Vec3& offset_b, double max_distance,
+                                  Span<TrianglePairIds> pairs, size_t* count,
+                                  MeshPairDistance* out) {
+  return collect_pairs(ctx, a, b, offset_b, nullptr, max_distance, pairs, count, out);
+}
+
+Status mesh_pair_distance_collect_rigid(const Context& ctx, const DistanceIndex& a,
+                                        const DistanceIndex& b, const RigidTransform& move_b,
+                                        double max_distance, Span<TrianglePairIds> pairs,
+                                        size_t* count, MeshPairDistance* out) {
+  return collect_pairs(ctx, a, b, Vec3{}, &move_b, max_distance, pairs, count, out);
 }
 
 Status mesh_pair_meet(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
@@ -803,31 +851,13 @@ Status mesh_pair_meet_rigid(const Context& ctx, const DistanceIndex& a, const Di
 Status candidate_pair_distance(const DistanceIndex& a, const DistanceIndex& b,
                                Span<const TrianglePairIds> pairs, const Vec3& offset_b,
                                MeshPairDistance* out) {
-  *out = MeshPairDistance{};
-  out->distance = HUGE_VAL;
-  PairSearch s;
-  bool empty = false;
-  SPLINTCORE_RETURN_IF_ERROR(start_search(a, b, offset_b, HUGE_VAL, &s, &empty));
-  if (empty) return Status::ok();
-  const size_t na = a.mesh->triangles.size(), nb = b.mesh->triangles.size();
-  TriangleBox x, y;
-  uint32_t loaded_a = ~uint32_t{0};
-  for (const TrianglePairIds& p : pairs) {
-    if (p.a >= na || p.b >= nb) {
-      return Status::error(StatusCode::kInvalidArgument,
-                           "candidate pair distance: a pair's triangle is out of range");
-    }
-    if (p.a != loaded_a) {
-      load_triangle(*a.mesh, p.a, s.shift[0], &x);
-      loaded_a = p.a;
-    }
-    load_triangle(*b.mesh, p.b, s.shift[1], &y);
-    const double lo[3] = {y.lo.x, y.lo.y, y.lo.z}, hi[3] = {y.hi.x, y.hi.y, y.hi.z};
-    if (box_gap2(x.lo, x.hi, lo, hi) > s.reach2) continue;
-    s.consider(p.a, p.b, x, y);
-  }
-  if (s.found) finish(s, out);
-  return Status::ok();
+  return scan_pairs(a, b, pairs, offset_b, nullptr, out);
+}
+
+Status candidate_pair_distance_rigid(const DistanceIndex& a, const DistanceIndex& b,
+                                     Span<const TrianglePairIds> pairs,
+                                     const RigidTransform& move_b, MeshPairDistance* out) {
+  return scan_pairs(a, b, pairs, Vec3{}, &move_b, out);
 }
 
 }  // namespace splintcore

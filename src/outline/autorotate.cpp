@@ -22,6 +22,10 @@ constexpr double kBracketRad = 1e-10;
 constexpr uint32_t kMaxEvaluations = 2000;
 constexpr double kMinHingeMm = 1.0;
 constexpr double kMaxOpeningMm = 10.0;
+// The pool of pairs (see maybe_pool): gathered once the bracket's reach beyond the opening is
+// at most this, in room for this many pairs.
+constexpr double kPoolMarginMm = 0.1;
+constexpr size_t kPoolPairs = 32768;
 // The closing sense is told only when the centroid's velocity and the direction to the
 // maxilla's make an angle at least this far (cosine) from a right angle: nearer, the sense
 // would hang on the jaws' small asymmetries.
@@ -40,6 +44,12 @@ struct Rotor {
   // answer, found sooner).
   bool warm = false;
   uint32_t pair_a = 0, pair_b = 0;
+  // Every pair that can come within the opening between the angles pool_from and pool_to
+  // (maybe_pool): there a scan of them gives what the full search would below the opening,
+  // and a value above it otherwise.
+  Span<TrianglePairIds> pool;
+  size_t pooled = 0;
+  double pool_from = 0, pool_to = 0;
 
   Rotor(const Context& c, const DistanceIndex& u, const DistanceIndex& l, const Vec3& p,
         const Vec3& a)
@@ -73,6 +83,12 @@ struct Rotor {
   Status distance(double angle, MeshPairDistance* d) {
     SPLINTCORE_RETURN_IF_ERROR(counted());
     const RigidTransform move = at(angle);
+    if (pooled > 0 && angle >= pool_from && angle <= pool_to) {
+      SPLINTCORE_RETURN_IF_ERROR(candidate_pair_distance_rigid(
+          upper, lower, Span<const TrianglePairIds>(pool.data(), pooled), move, d));
+      remember(*d);
+      return Status::ok();
+    }
     double bound = HUGE_VAL;
     if (warm) {
       const Triangle& ta = upper.mesh->triangles[pair_a];
@@ -111,7 +127,8 @@ struct Closing {
   double x = 0;      // the opening asked
   double lo = 0, flo = 0, hi = HUGE_VAL, fhi = 0;
   MeshPairDistance at_lo, at_hi;
-  double lean = 1e-3;  // how far past Newton's estimate a trial aims (relative)
+  double lean = 1e-3;            // how far past Newton's estimate a trial aims (relative)
+  double pool_tried = HUGE_VAL;  // the reach of the last pool that did not fit
 
   double angle(double psi) const { return start + sign * psi; }
   // The end of lo's certified zone: f > 0 on [lo, safe) (the Lipschitz bound R).
@@ -132,6 +149,32 @@ bool trial_point(const Closing& c, const Rotor& rot, double limit, double* p) {
   next = std::fmin(next, limit);
   *p = next;
   return next > c.safe();
+}
+
+// Once the crossing is bracketed in [lo, hi] with d(lo) + R (hi - lo) within kPoolMarginMm of
+// the opening: every pair whose distance at lo is at most d(lo) + R (hi - lo) (a turn by at
+// most hi - lo changes a pair's distance by at most R (hi - lo)). Any pair that comes within
+// the opening inside the bracket is one of them, and so is the closest pair wherever the
+// distance is at most d(lo): the pool's least distance has the full search's sign against the
+// opening and its Lipschitz bound, and its bits at the answer. The rest of the search scans it.
+Status maybe_pool(Rotor& rot, Closing& c) {
+  if (rot.pooled > 0 || !(c.hi < HUGE_VAL)) return Status::ok();
+  const double turn = c.lever * (c.hi - c.lo);
+  const double margin = turn + c.flo;
+  if (!(margin <= kPoolMarginMm) || !(margin <= 0.25 * c.pool_tried)) return Status::ok();
+  c.pool_tried = margin;
+  const double reach = c.at_lo.distance + turn * (1 + 1e-9) + 1e-9;  // over the rounding
+  size_t count = 0;
+  MeshPairDistance d;
+  SPLINTCORE_RETURN_IF_ERROR(rot.counted());
+  SPLINTCORE_RETURN_IF_ERROR(mesh_pair_distance_collect_rigid(
+      rot.ctx, rot.upper, rot.lower, rot.at(c.angle(c.lo)), reach, rot.pool, &count, &d));
+  if (count == 0 || count > rot.pool.size()) return Status::ok();
+  rot.pooled = count;
+  const double a = c.angle(c.lo), b = c.angle(c.hi);
+  rot.pool_from = a < b ? a : b;
+  rot.pool_to = a < b ? b : a;
+  return Status::ok();
 }
 
 Status no_contact(const Closing& c, double limit) {
@@ -180,6 +223,7 @@ Status close_to_opening(Rotor& rot, Closing& c) {
     } else {
       c.lean = std::fmin(2 * c.lean, 1.0);  // Newton fell short: aim further
     }
+    SPLINTCORE_RETURN_IF_ERROR(maybe_pool(rot, c));
   }
   return Status::ok();
 }
@@ -278,7 +322,7 @@ uint64_t autorotate_mandible_bound(const Mesh& maxilla, const Mesh& mandible) {
                               band_index_options()) +
          distance_index_bound(mandible.vertices.size(), mandible.triangles.size(),
                               band_index_options()) +
-         kPairStackBound;
+         kPairStackBound + arena_array_bound<TrianglePairIds>(kPoolPairs);
 }
 
 Status autorotate_mandible(const Context& ctx, const Mesh& maxilla, const Mesh& mandible,
@@ -298,6 +342,9 @@ Status autorotate_mandible(const Context& ctx, const Mesh& maxilla, const Mesh& 
   SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, maxilla, band_index_options(), &upper));
   SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, mandible, band_index_options(), &lower));
   Rotor rot(ctx, upper, lower, options.hinge[0], axis);
+  TrianglePairIds* pool = ctx.arena->allocate_array<TrianglePairIds>(kPoolPairs);
+  if (pool == nullptr) return ctx.arena->exhausted_status();
+  rot.pool = Span<TrianglePairIds>(pool, kPoolPairs);
   bool meet = false;
   MeshPairDistance d0;
   SPLINTCORE_RETURN_IF_ERROR(rot.meets(0, &meet, &d0));

@@ -517,7 +517,7 @@ TEST(MeshPairDistance, SameBitsAtEveryLeafSizeAndBoxKind) {
 TEST(MeshPairDistance, RigidMoveMatchesAMovedCopy) {
   std::mt19937_64 rng(32);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  int compared = 0, met = 0;
+  int compared = 0, met = 0, scans = 0;
   for (const Case& c : oracle_cases()) {
     test::TestArena t(size_t{32} << 20);
     Built a, b;
@@ -556,6 +556,28 @@ TEST(MeshPairDistance, RigidMoveMatchesAMovedCopy) {
       EXPECT_EQ(r.point_a, e.point_a);
       EXPECT_EQ(r.point_b, e.point_b);
       EXPECT_EQ(r.intersecting, e.intersecting);
+      // The pairs within 0.5 mm of the closest, collected at this move, answer a further small
+      // turn with the full search's bits (points move by well under 0.5 mm here).
+      std::vector<TrianglePairIds> pool(4096);
+      size_t count = 0;
+      MeshPairDistance collected;
+      SPLINTCORE_ASSERT_OK(mesh_pair_distance_collect_rigid(
+          Context(&s.arena), a.index, b.index, move, r.distance + 0.5,
+          Span<TrianglePairIds>(pool.data(), pool.size()), &count, &collected));
+      EXPECT_EQ(std::memcmp(&collected.distance, &r.distance, sizeof(double)), 0);
+      if (count <= pool.size()) {
+        const RigidTransform nudged =
+            compose(rotation_about_axis(Vec3{0.1, 0.2, 0.3}, Vec3{0, 0.6, 0.8}, 1e-3), move);
+        MeshPairDistance full, scanned;
+        SPLINTCORE_ASSERT_OK(
+            mesh_pair_distance_rigid(Context(&s.arena), a.index, b.index, nudged, HUGE_VAL, &full));
+        SPLINTCORE_ASSERT_OK(candidate_pair_distance_rigid(
+            a.index, b.index, Span<const TrianglePairIds>(pool.data(), count), nudged, &scanned));
+        EXPECT_EQ(std::memcmp(&full.distance, &scanned.distance, sizeof(double)), 0);
+        EXPECT_EQ(full.triangle_a, scanned.triangle_a);
+        EXPECT_EQ(full.triangle_b, scanned.triangle_b);
+        ++scans;
+      }
       bool meet = false;
       MeshPairDistance m;
       SPLINTCORE_ASSERT_OK(
@@ -572,6 +594,7 @@ TEST(MeshPairDistance, RigidMoveMatchesAMovedCopy) {
   }
   EXPECT_GE(compared, 16);
   EXPECT_GE(met, 2);
+  EXPECT_GE(scans, 8);
   // A move that is not finite is refused.
   test::TestArena t(size_t{4} << 20);
   Built a, b;
