@@ -102,7 +102,7 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
 // ---------------------------------------------------------------------------------------------
 // Hinge-axis autorotation (issue 32, two-jaw surgery): the mandible turned about the line
 // through the two condyles until the smallest distance between the jaws is the opening asked.
-// The method is in docs/architecture.md ("Autorotation").
+// The method is in docs/architecture.md ("Autorotation: the mandible about the hinge axis").
 
 struct AutorotateOptions {
   // The condylar points (patient mm, the jaws' frame): the line through them stays fixed. At
@@ -134,7 +134,8 @@ struct AutorotateReport {
   uint32_t triangle_maxilla = 0, triangle_mandible = 0;
 };
 
-// Arena bytes autorotate_mandible() takes at most (nothing stays).
+// Arena bytes autorotate_mandible() takes at most (nothing stays): a pairs_only distance index
+// of each jaw (distance_index_bound), one pair search's stack and heap, a pool of 32768 pairs.
 uint64_t autorotate_mandible_bound(const Mesh& maxilla, const Mesh& mandible);
 
 // The angle of the mandible about the hinge axis at which, closing it from open, the smallest
