@@ -257,6 +257,24 @@ Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const Dist
 Status mesh_pair_meet(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
                       const Vec3& offset_b, bool* meet, MeshPairDistance* out);
 
+// mesh_pair_distance and mesh_pair_meet with B moved by a rigid transform instead of a
+// translation: B's points are move_b.apply_point(p), rounded as such (the hinge-axis
+// autorotation, which turns the mandible about the condyles, calls them with its one index of
+// each jaw). B's node and triangle boxes are bounded after the move by the box of the moved box
+// (its centre moved, its half-extents through |R|, widened over the rounding), so the tree is
+// built once; the triangles themselves are moved exactly as given. The answer is the least
+// (squared distance, triangle_a, triangle_b) as mesh_pair_distance's, the same bits as
+// mesh_pair_distance over an index of B's moved copy when the moved copy's corners are those
+// apply_point gives. A rotated box is looser than the box of the rotated triangles (up to
+// sqrt(3) times as wide at 45 degrees), so the search examines more pairs than over an index
+// of the moved copy; no index is rebuilt. Arena: mesh_pair_distance_bound(). Errors: as
+// mesh_pair_distance (kInvalidArgument for a move that is not finite).
+Status mesh_pair_distance_rigid(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
+                                const RigidTransform& move_b, double max_distance,
+                                MeshPairDistance* out);
+Status mesh_pair_meet_rigid(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
+                            const RigidTransform& move_b, bool* meet, MeshPairDistance* out);
+
 // A triangle of A and one of B.
 struct TrianglePairIds {
   uint32_t a = 0, b = 0;
@@ -282,6 +300,18 @@ Status mesh_pair_distance_collect(const Context& ctx, const DistanceIndex& a,
 Status candidate_pair_distance(const DistanceIndex& a, const DistanceIndex& b,
                                Span<const TrianglePairIds> pairs, const Vec3& offset_b,
                                MeshPairDistance* out);
+
+// mesh_pair_distance_collect and candidate_pair_distance with B moved rigidly (as
+// mesh_pair_distance_rigid). B turned by at most dtheta about an axis changes every pair's
+// distance by at most R dtheta (R: the largest distance of a B vertex from the axis), the
+// bound the autorotation's pool of pairs rests on. Arena, errors: as their translated kin.
+Status mesh_pair_distance_collect_rigid(const Context& ctx, const DistanceIndex& a,
+                                        const DistanceIndex& b, const RigidTransform& move_b,
+                                        double max_distance, Span<TrianglePairIds> pairs,
+                                        size_t* count, MeshPairDistance* out);
+Status candidate_pair_distance_rigid(const DistanceIndex& a, const DistanceIndex& b,
+                                     Span<const TrianglePairIds> pairs,
+                                     const RigidTransform& move_b, MeshPairDistance* out);
 
 // ---------------------------------------------------------------------------------------------
 // Narrow-band signed distance volume, sampled slab by slab for the tiled marching cubes.

@@ -147,6 +147,15 @@ double deterministic_atan(double x);
 double deterministic_atan2(double y, double x);  // in [-pi, pi]; atan2(0, 0) = 0
 // The angle between two vectors, in [0, pi] (0 when either is zero).
 double angle_between(const Vec3& a, const Vec3& b);
+// sin x and cos x (Cody-Waite reduction by pi/2, Taylor series on [-pi/4, pi/4]): within 1 ulp
+// or so of the true values for |x| <= 2^20 (farther, the reduction loses accuracy); the same
+// bits everywhere. NaN for NaN and infinity.
+void deterministic_sincos(double x, double* s, double* c);
+// The rotation by `angle` (radians, right-handed about `unit_axis`) about the line through
+// `point` along `unit_axis` (unit length; not checked): p -> R (p - point) + point. R from
+// Rodrigues' formula with deterministic_sincos (the versine 1 - cos from the half angle, so
+// small angles keep their accuracy): the same bits everywhere.
+RigidTransform rotation_about_axis(const Vec3& point, const Vec3& unit_axis, double angle);
 
 // ---------------------------------------------------------------------------------------------
 // Exact geometric predicates (Shewchuk, "Adaptive Precision Floating-Point Arithmetic and Fast

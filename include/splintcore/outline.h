@@ -99,6 +99,70 @@ uint64_t compute_outline_bound(const Mesh& maxilla, const Mesh& mandible);
 Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mandible,
                        const OutlineOptions& options, Outline* out);
 
+// ---------------------------------------------------------------------------------------------
+// Hinge-axis autorotation (issue 32, two-jaw surgery): the mandible turned about the line
+// through the two condyles until the smallest distance between the jaws is the opening asked.
+// The method is in docs/architecture.md ("Autorotation: the mandible about the hinge axis").
+
+struct AutorotateOptions {
+  // The condylar points (patient mm, the jaws' frame): the line through them stays fixed. At
+  // least 1 mm apart. Angles are right-handed about the direction hinge[0] -> hinge[1].
+  Vec3 hinge[2] = {};
+  double opening_mm = 0;  // [0, 10]
+};
+
+struct AutorotateReport {
+  // The answer: the angle (radians, right-handed about hinge[0] -> hinge[1]; |angle| <= 30
+  // degrees) and the mandible's move it makes, p -> R (p - hinge[0]) + hinge[0]
+  // (rotation_about_axis, geometry.h).
+  double angle_rad = 0;
+  RigidTransform transform;
+  // +1 when a positive angle closes the mandible (moves it towards the maxilla), else -1: the
+  // sign of the velocity of the mandible's vertex centroid, turned by a positive angle, along
+  // the direction to the maxilla's vertex centroid.
+  int closing_sign = 1;
+  double gap_as_given = 0;     // the smallest distance at angle 0 (0 when the jaws meet)
+  bool met_as_given = false;   // the jaws' surfaces meet at angle 0
+  double start_angle_rad = 0;  // where the closing started: 0, or the open angle found first
+  double opening = 0;          // the smallest distance at angle_rad, mm (the opening measured)
+  double bracket_rad = 0;      // the first crossing lies in [angle, angle + this] (closing)
+  double lever_mm = 0;         // R: the largest distance of a mandible vertex from the axis
+  uint32_t steps = 0;          // distance evaluations
+  // The closest pair at angle_rad (the first contact for an opening of 0): the points (the
+  // mandible's moved) and their triangles.
+  Vec3 contact_maxilla{}, contact_mandible{};
+  uint32_t triangle_maxilla = 0, triangle_mandible = 0;
+};
+
+// Arena bytes autorotate_mandible() takes at most (nothing stays): a pairs_only distance index
+// of each jaw (distance_index_bound), one pair search's stack and heap, a pool of 32768 pairs.
+uint64_t autorotate_mandible_bound(const Mesh& maxilla, const Mesh& mandible);
+
+// The angle of the mandible about the hinge axis at which, closing it from open, the smallest
+// distance between the two meshes' surfaces first equals options.opening_mm (X). With the
+// jaws as given (angle 0) more than X apart, the mandible turns in the closing sense from 0 to
+// the first angle where the distance is X. With them X apart or nearer (touching,
+// interpenetrating), it first turns in the opening sense to the first of the angles 30 / 2^k
+// degrees (k = 7 .. 0, growing) where they are more than X apart (this only brackets), then
+// closes from there to the first angle where the distance is X.
+// No sampling in angle: conservative advancement (a point at distance r from the axis moves at
+// most r |dtheta|, so with R the largest distance of a mandible vertex from it the step
+// (d - X) / R never passes the first crossing), with Newton steps that land past it (by the
+// closest pair's rate) shrinking the bracket from the far side, until the crossing is
+// bracketed within 1e-10 rad; the answer is the bracket's near end (the distance there is X
+// and at most R 1e-10 mm more). The distances are mesh_pair_distance_rigid over one index of
+// each jaw, built once, and once the bracket is narrow a scan of the pairs that can come within
+// the opening inside it (docs/architecture.md).
+// Errors (kInvalidArgument unless said): a jaw empty or broken (kInvalidMesh, kNonFinite), a
+// hinge point not finite or the two less than 1 mm apart, an opening outside [0, 10], a closing
+// sense that cannot be told (the cosine between the centroid's velocity and the direction to
+// the maxilla under 0.1 in magnitude),
+// jaws that still meet or lie within X at 30 degrees open, or that do not come within X in 30
+// degrees of closing (each with the distances measured); kArenaExhausted; kLimitExceeded (no
+// convergence in 2000 evaluations). On an error the arena is as it was.
+Status autorotate_mandible(const Context& ctx, const Mesh& maxilla, const Mesh& mandible,
+                           const AutorotateOptions& options, AutorotateReport* out);
+
 }  // namespace splintcore
 
 #endif  // SPLINTCORE_OUTLINE_H

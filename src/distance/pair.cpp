@@ -218,10 +218,44 @@ inline double float_box_gap2(const float* box, const Vec3& shift, const double b
   return box_gap2(lo, hi, blo, bhi);
 }
 
+// A box [lo, hi] of B moved rigidly: the box of the moved box (its centre moved, its
+// half-extents through |R|), widened by 2^-40 (M + 1), M its largest coordinate, over the
+// rounding of the moved triangles' corners (apply_point: a few ulps of M) and of this
+// computation. A looser box only prunes less: the answer is the same.
+inline void moved_box(const RigidTransform& m, const double lo[3], const double hi[3],
+                      double out_lo[3], double out_hi[3]) {
+  const Vec3 c{0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
+  const double h[3] = {0.5 * (hi[0] - lo[0]), 0.5 * (hi[1] - lo[1]), 0.5 * (hi[2] - lo[2])};
+  const Vec3 mc = m.apply_point(c);
+  double mh[3], big = 0;
+  for (int i = 0; i < 3; ++i) {
+    mh[i] = std::fabs(m.r[i][0]) * h[0] + std::fabs(m.r[i][1]) * h[1] + std::fabs(m.r[i][2]) * h[2];
+    const double extent = std::fabs(mc[i]) + mh[i];
+    big = extent > big ? extent : big;
+  }
+  const double margin = (big + 1.0) * 0x1p-40;
+  for (int i = 0; i < 3; ++i) {
+    out_lo[i] = mc[i] - mh[i] - margin;
+    out_hi[i] = mc[i] + mh[i] + margin;
+  }
+}
+
+inline void load_moved_triangle(const Mesh& mesh, uint32_t t, const RigidTransform& move,
+                                TriangleBox* out) {
+  const Triangle& tri = mesh.triangles[t];
+  for (int k = 0; k < 3; ++k) out->p[k] = move.apply_point(mesh.vertices[tri.v[k]]);
+  out->lo = min_vec(min_vec(out->p[0], out->p[1]), out->p[2]);
+  out->hi = max_vec(max_vec(out->p[0], out->p[1]), out->p[2]);
+}
+
 struct PairSearch {
   const DistanceIndex* index[2] = {nullptr, nullptr};
   const float* triangle_boxes[2] = {nullptr, nullptr};  // or null: none in the index
   Vec3 shift[2];
+  // B moved by `move` instead of shift[1] (mesh_pair_distance_rigid and its kin): its boxes
+  // through moved_box, its triangles' corners through apply_point.
+  bool rigid = false;
+  RigidTransform move;
   PairEntry* stack = nullptr;
   uint64_t top = 0, capacity = 0;
   PairEntry* heap = nullptr;  // kHeapEntries
@@ -259,13 +293,40 @@ struct PairSearch {
     reach2 = reach * reach;
   }
 
-  // The box of an item (not the root) in double, shifted for B.
+  // The box of an item (not the root) in double, shifted (or moved) for B.
   void item_box(int side, uint32_t node, uint8_t slot, double lo[3], double hi[3]) const {
     const BvhNode& n = index[side]->nodes[node];
+    if (side == 1 && rigid) {
+      const double l[3] = {n.lo[0][slot], n.lo[1][slot], n.lo[2][slot]};
+      const double h[3] = {n.hi[0][slot], n.hi[1][slot], n.hi[2][slot]};
+      moved_box(move, l, h, lo, hi);
+      return;
+    }
     for (int i = 0; i < 3; ++i) {
       lo[i] = static_cast<double>(n.lo[i][slot]) + shift[side][i];
       hi[i] = static_cast<double>(n.hi[i][slot]) + shift[side][i];
     }
+  }
+
+  // Triangle t of a side, in its place.
+  void load(int side, uint32_t t, TriangleBox* out) const {
+    if (side == 1 && rigid) {
+      load_moved_triangle(*index[1]->mesh, t, move, out);
+    } else {
+      load_triangle(*index[side]->mesh, t, shift[side], out);
+    }
+  }
+
+  // float_box_gap2 for a triangle's float box of a side, in its place.
+  double triangle_box_gap2(int side, const float* box, const double blo[3],
+                           const double bhi[3]) const {
+    if (side == 1 && rigid) {
+      const double l[3] = {box[0], box[1], box[2]}, h[3] = {box[3], box[4], box[5]};
+      double lo[3], hi[3];
+      moved_box(move, l, h, lo, hi);
+      return box_gap2(lo, hi, blo, bhi);
+    }
+    return float_box_gap2(box, shift[side], blo, bhi);
   }
 
   bool is_leaf(int side, uint32_t node, uint8_t slot) const {
@@ -383,11 +444,11 @@ void PairSearch::leaf_pair(const PairEntry& e) {
   const float* b_boxes = triangle_boxes[1];
   for (uint32_t j = 0; j < b_count; ++j) {
     if (b_boxes != nullptr &&
-        float_box_gap2(b_boxes + 6 * size_t{b_first + j}, shift[1], alo, ahi) > reach2) {
+        triangle_box_gap2(1, b_boxes + 6 * size_t{b_first + j}, alo, ahi) > reach2) {
       continue;
     }
     const uint32_t tb = index[1]->order[b_first + j];
-    load_triangle(*index[1]->mesh, tb, shift[1], &bs[kept]);
+    load(1, tb, &bs[kept]);
     if (box_gap2(bs[kept].lo, bs[kept].hi, alo, ahi) > reach2) continue;
     b_lo = min_vec(b_lo, bs[kept].lo);
     b_hi = max_vec(b_hi, bs[kept].hi);
@@ -536,15 +597,22 @@ inline uint64_t stack_entries(const DistanceIndex& a, const DistanceIndex& b) {
   return 15 * (uint64_t{a.depth} + b.depth) + 1;
 }
 
-// The largest coordinate magnitude of a tree's root boxes, shifted.
-double root_magnitude(const DistanceIndex& index, const Vec3& shift) {
+// The largest coordinate magnitude of a tree's root boxes, shifted (or moved: `move`).
+double root_magnitude(const DistanceIndex& index, const Vec3& shift,
+                      const RigidTransform* move = nullptr) {
   const BvhNode& root = index.nodes[0];
   double m = 0;
   for (int k = 0; k < 4; ++k) {
     if (root.child[k] == kNoChild) continue;
+    double l[3], h[3];
     for (int i = 0; i < 3; ++i) {
-      const double lo = std::fabs(static_cast<double>(root.lo[i][k]) + shift[i]);
-      const double hi = std::fabs(static_cast<double>(root.hi[i][k]) + shift[i]);
+      l[i] = static_cast<double>(root.lo[i][k]) + shift[i];
+      h[i] = static_cast<double>(root.hi[i][k]) + shift[i];
+    }
+    if (move != nullptr) moved_box(*move, l, h, l, h);
+    for (int i = 0; i < 3; ++i) {
+      const double lo = std::fabs(l[i]);
+      const double hi = std::fabs(h[i]);
       m = lo > m ? lo : m;
       m = hi > m ? hi : m;
     }
@@ -556,8 +624,8 @@ double root_magnitude(const DistanceIndex& index, const Vec3& shift) {
 // does (the same bits).
 void finish(const PairSearch& s, MeshPairDistance* out) {
   TriangleBox x, y;
-  load_triangle(*s.index[0]->mesh, s.best_a, s.shift[0], &x);
-  load_triangle(*s.index[1]->mesh, s.best_b, s.shift[1], &y);
+  s.load(0, s.best_a, &x);
+  s.load(1, s.best_b, &y);
   out->triangle_a = s.best_a;
   out->triangle_b = s.best_b;
   out->intersecting = s.meet;
@@ -596,10 +664,24 @@ namespace {
 
 // The checks and the search's set-up common to the entry points (no arena taken); *empty when
 // a mesh has no triangle (no search: nothing is within any distance).
+// `move_b` (or null): B moved rigidly instead of by offset_b.
 Status start_search(const DistanceIndex& a, const DistanceIndex& b, const Vec3& offset_b,
-                    double max_distance, PairSearch* s, bool* empty) {
+                    double max_distance, PairSearch* s, bool* empty,
+                    const RigidTransform* move_b = nullptr) {
   if (!is_finite(offset_b)) {
     return Status::error(StatusCode::kInvalidArgument, "mesh pair distance: offset not finite");
+  }
+  if (move_b != nullptr) {
+    bool finite = is_finite(move_b->t);
+    for (int i = 0; i < 3; ++i) {
+      finite = finite && is_finite(Vec3{move_b->r[i][0], move_b->r[i][1], move_b->r[i][2]});
+    }
+    if (!finite) {
+      return Status::error(StatusCode::kInvalidArgument,
+                           "mesh pair distance: the rigid move is not finite");
+    }
+    s->rigid = true;
+    s->move = *move_b;
   }
   if (!(max_distance >= 0)) {
     return Status::error(StatusCode::kInvalidArgument,
@@ -612,7 +694,7 @@ Status start_search(const DistanceIndex& a, const DistanceIndex& b, const Vec3& 
   s->triangle_boxes[0] = a.triangle_boxes.empty() ? nullptr : a.triangle_boxes.data();
   s->triangle_boxes[1] = b.triangle_boxes.empty() ? nullptr : b.triangle_boxes.data();
   s->shift[1] = offset_b;
-  const double ma = root_magnitude(a, s->shift[0]), mb = root_magnitude(b, s->shift[1]);
+  const double ma = root_magnitude(a, s->shift[0]), mb = root_magnitude(b, s->shift[1], move_b);
   const double magnitude = ma > mb ? ma : mb;
   s->slack = (magnitude + 1.0) * 0x1p-30;
   if (magnitude <= 0x1p200) s->separation_margin = (magnitude + 1.0) * 0x1p-40;
@@ -649,16 +731,30 @@ Status mesh_pair_distance(const Context& ctx, const DistanceIndex& a, const Dist
   return run_search(ctx, &s, out);
 }
 
-Status mesh_pair_distance_collect(const Context& ctx, const DistanceIndex& a,
-                                  const DistanceIndex& b, const Vec3& offset_b, double max_distance,
-                                  Span<TrianglePairIds> pairs, size_t* count,
-                                  MeshPairDistance* out) {
+Status mesh_pair_distance_rigid(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
+                                const RigidTransform& move_b, double max_distance,
+                                MeshPairDistance* out) {
+  *out = MeshPairDistance{};
+  out->distance = HUGE_VAL;
+  PairSearch s;
+  bool empty = false;
+  SPLINTCORE_RETURN_IF_ERROR(start_search(a, b, Vec3{}, max_distance, &s, &empty, &move_b));
+  if (empty) return Status::ok();
+  return run_search(ctx, &s, out);
+}
+
+namespace {
+
+// mesh_pair_distance_collect, B shifted by offset_b or moved by *move_b.
+Status collect_pairs(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
+                     const Vec3& offset_b, const RigidTransform* move_b, double max_distance,
+                     Span<TrianglePairIds> pairs, size_t* count, MeshPairDistance* out) {
   *out = MeshPairDistance{};
   out->distance = HUGE_VAL;
   *count = 0;
   PairSearch s;
   bool empty = false;
-  SPLINTCORE_RETURN_IF_ERROR(start_search(a, b, offset_b, max_distance, &s, &empty));
+  SPLINTCORE_RETURN_IF_ERROR(start_search(a, b, offset_b, max_distance, &s, &empty, move_b));
   if (empty) return Status::ok();
   s.collecting = true;
   s.collected = pairs.data();
@@ -666,6 +762,52 @@ Status mesh_pair_distance_collect(const Context& ctx, const DistanceIndex& a,
   SPLINTCORE_RETURN_IF_ERROR(run_search(ctx, &s, out));
   *count = s.collect_count;
   return Status::ok();
+}
+
+// candidate_pair_distance, B shifted by offset_b or moved by *move_b.
+Status scan_pairs(const DistanceIndex& a, const DistanceIndex& b, Span<const TrianglePairIds> pairs,
+                  const Vec3& offset_b, const RigidTransform* move_b, MeshPairDistance* out) {
+  *out = MeshPairDistance{};
+  out->distance = HUGE_VAL;
+  PairSearch s;
+  bool empty = false;
+  SPLINTCORE_RETURN_IF_ERROR(start_search(a, b, offset_b, HUGE_VAL, &s, &empty, move_b));
+  if (empty) return Status::ok();
+  const size_t na = a.mesh->triangles.size(), nb = b.mesh->triangles.size();
+  TriangleBox x, y;
+  uint32_t loaded_a = ~uint32_t{0};
+  for (const TrianglePairIds& p : pairs) {
+    if (p.a >= na || p.b >= nb) {
+      return Status::error(StatusCode::kInvalidArgument,
+                           "candidate pair distance: a pair's triangle is out of range");
+    }
+    if (p.a != loaded_a) {
+      s.load(0, p.a, &x);
+      loaded_a = p.a;
+    }
+    s.load(1, p.b, &y);
+    const double lo[3] = {y.lo.x, y.lo.y, y.lo.z}, hi[3] = {y.hi.x, y.hi.y, y.hi.z};
+    if (box_gap2(x.lo, x.hi, lo, hi) > s.reach2) continue;
+    s.consider(p.a, p.b, x, y);
+  }
+  if (s.found) finish(s, out);
+  return Status::ok();
+}
+
+}  // namespace
+
+Status mesh_pair_distance_collect(const Context& ctx, const DistanceIndex& a,
+                                  const DistanceIndex& b, const Vec3& offset_b, double max_distance,
+                                  Span<TrianglePairIds> pairs, size_t* count,
+                                  MeshPairDistance* out) {
+  return collect_pairs(ctx, a, b, offset_b, nullptr, max_distance, pairs, count, out);
+}
+
+Status mesh_pair_distance_collect_rigid(const Context& ctx, const DistanceIndex& a,
+                                        const DistanceIndex& b, const RigidTransform& move_b,
+                                        double max_distance, Span<TrianglePairIds> pairs,
+                                        size_t* count, MeshPairDistance* out) {
+  return collect_pairs(ctx, a, b, Vec3{}, &move_b, max_distance, pairs, count, out);
 }
 
 Status mesh_pair_meet(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
@@ -687,34 +829,35 @@ Status mesh_pair_meet(const Context& ctx, const DistanceIndex& a, const Distance
   return Status::ok();
 }
 
+Status mesh_pair_meet_rigid(const Context& ctx, const DistanceIndex& a, const DistanceIndex& b,
+                            const RigidTransform& move_b, bool* meet, MeshPairDistance* out) {
+  *out = MeshPairDistance{};
+  out->distance = HUGE_VAL;
+  *meet = false;
+  PairSearch s;
+  bool empty = false;
+  SPLINTCORE_RETURN_IF_ERROR(start_search(a, b, Vec3{}, 0.0, &s, &empty, &move_b));
+  if (empty) return Status::ok();
+  s.first_meet = true;
+  SPLINTCORE_RETURN_IF_ERROR(run_search(ctx, &s, out));
+  *meet = s.meet;
+  if (!s.meet) {
+    *out = MeshPairDistance{};
+    out->distance = HUGE_VAL;
+  }
+  return Status::ok();
+}
+
 Status candidate_pair_distance(const DistanceIndex& a, const DistanceIndex& b,
                                Span<const TrianglePairIds> pairs, const Vec3& offset_b,
                                MeshPairDistance* out) {
-  *out = MeshPairDistance{};
-  out->distance = HUGE_VAL;
-  PairSearch s;
-  bool empty = false;
-  SPLINTCORE_RETURN_IF_ERROR(start_search(a, b, offset_b, HUGE_VAL, &s, &empty));
-  if (empty) return Status::ok();
-  const size_t na = a.mesh->triangles.size(), nb = b.mesh->triangles.size();
-  TriangleBox x, y;
-  uint32_t loaded_a = ~uint32_t{0};
-  for (const TrianglePairIds& p : pairs) {
-    if (p.a >= na || p.b >= nb) {
-      return Status::error(StatusCode::kInvalidArgument,
-                           "candidate pair distance: a pair's triangle is out of range");
-    }
-    if (p.a != loaded_a) {
-      load_triangle(*a.mesh, p.a, s.shift[0], &x);
-      loaded_a = p.a;
-    }
-    load_triangle(*b.mesh, p.b, s.shift[1], &y);
-    const double lo[3] = {y.lo.x, y.lo.y, y.lo.z}, hi[3] = {y.hi.x, y.hi.y, y.hi.z};
-    if (box_gap2(x.lo, x.hi, lo, hi) > s.reach2) continue;
-    s.consider(p.a, p.b, x, y);
-  }
-  if (s.found) finish(s, out);
-  return Status::ok();
+  return scan_pairs(a, b, pairs, offset_b, nullptr, out);
+}
+
+Status candidate_pair_distance_rigid(const DistanceIndex& a, const DistanceIndex& b,
+                                     Span<const TrianglePairIds> pairs,
+                                     const RigidTransform& move_b, MeshPairDistance* out) {
+  return scan_pairs(a, b, pairs, Vec3{}, &move_b, out);
 }
 
 }  // namespace splintcore

@@ -4,6 +4,12 @@
 // t - t^3/3 + t^5/5 - t^7/7 + t^9/9 is exact to double precision (the next term is below
 // 1e-16 of t). For |x| > 1, atan(x) = pi/2 - atan(1/x). The table holds atan(k/16) rounded
 // to double (fixed literals, so the same everywhere).
+//
+// sin and cos the same way (Cody and Waite, "Software Manual for the Elementary Functions",
+// 1980, ch. 8): x less the nearest multiple k of pi/2, with pi/2 split in two (the first part
+// has 33 significant bits, so k times it is exact for |k| < 2^20), leaves |r| <= pi/4; there
+// the Taylor series to r^17 (sin) and r^18 (cos) is exact to double precision (the next terms
+// are below 2^-60), and k mod 4 picks the quadrant.
 #include "splintcore/geometry.h"
 
 namespace splintcore {
@@ -61,6 +67,73 @@ double deterministic_atan2(double y, double x) {
   double r = ay <= ax ? atan_unit(ay / ax) : kHalfPi - atan_unit(ax / ay);
   if (x < 0.0) r = kPi - r;
   return y < 0.0 ? -r : r;
+}
+
+namespace {
+constexpr double kTwoOverPi = 0.636619772367581343076;
+constexpr double kHalfPiHigh = 1.57079632673412561417e+00;  // the first 33 bits of pi/2
+constexpr double kHalfPiLow = 6.07710050650619224932e-11;   // pi/2 - kHalfPiHigh
+
+// sin r and cos r for |r| <= pi/4 + a little: Horner in z = r^2, the coefficients 1/n! as
+// the compiler rounds the quotients (IEEE division: the same literal everywhere).
+inline void sincos_reduced(double r, double* s, double* c) {
+  const double z = r * r;
+  const double ps =
+      -1.0 / 6 +
+      z * (1.0 / 120 + z * (-1.0 / 5040 +
+                            z * (1.0 / 362880 + z * (-1.0 / 39916800 +
+                                                     z * (1.0 / 6227020800.0 +
+                                                          z * (-1.0 / 1307674368000.0 +
+                                                               z * (1.0 / 355687428096000.0)))))));
+  const double pc =
+      1.0 / 24 +
+      z * (-1.0 / 720 +
+           z * (1.0 / 40320 +
+                z * (-1.0 / 3628800 +
+                     z * (1.0 / 479001600 +
+                          z * (-1.0 / 87178291200.0 +
+                               z * (1.0 / 20922789888000.0 + z * (-1.0 / 6402373705728000.0)))))));
+  *s = r + r * z * ps;
+  *c = 1.0 + z * (-0.5 + z * pc);
+}
+}  // namespace
+
+void deterministic_sincos(double x, double* s, double* c) {
+  if (!is_finite(x)) {
+    *s = *c = x - x;  // NaN
+    return;
+  }
+  const double q = x * kTwoOverPi;
+  // The nearest integer (ties away from zero) without libm's round; far beyond 2^52 every
+  // double is an integer already.
+  double k = q;
+  int64_t quadrant = 0;
+  if (q > -0x1p52 && q < 0x1p52) {
+    const int64_t ki = static_cast<int64_t>(q + (q >= 0 ? 0.5 : -0.5));
+    k = static_cast<double>(ki);
+    quadrant = ki & 3;
+  }
+  const double r = (x - k * kHalfPiHigh) - k * kHalfPiLow;
+  double sr = 0, cr = 0;
+  sincos_reduced(r, &sr, &cr);
+  switch (quadrant) {
+    case 0:
+      *s = sr;
+      *c = cr;
+      break;
+    case 1:
+      *s = cr;
+      *c = -sr;
+      break;
+    case 2:
+      *s = -sr;
+      *c = -cr;
+      break;
+    default:
+      *s = -cr;
+      *c = sr;
+      break;
+  }
 }
 
 double angle_between(const Vec3& a, const Vec3& b) {

@@ -24,6 +24,21 @@ RigidTransform inverse(const RigidTransform& x) {
   return out;
 }
 
+RigidTransform rotation_about_axis(const Vec3& point, const Vec3& unit_axis, double angle) {
+  double sh = 0, ch = 0;
+  deterministic_sincos(0.5 * angle, &sh, &ch);
+  const double s = 2.0 * sh * ch, vers = 2.0 * sh * sh, c = 1.0 - vers;
+  const double u[3] = {unit_axis.x, unit_axis.y, unit_axis.z};
+  // [u]x, the cross-product matrix: [u]x v = u x v.
+  const double k[3][3] = {{0, -u[2], u[1]}, {u[2], 0, -u[0]}, {-u[1], u[0], 0}};
+  RigidTransform x;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) x.r[i][j] = (i == j ? c : 0.0) + s * k[i][j] + vers * u[i] * u[j];
+  }
+  x.t = point - x.apply_vector(point);
+  return x;
+}
+
 Status rigid_from_matrix(const double m[16], double tolerance, RigidTransform* out) {
   for (int i = 0; i < 16; ++i) {
     if (!is_finite(m[i])) {

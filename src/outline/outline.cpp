@@ -15,10 +15,6 @@ constexpr uint32_t kBisections = 80;
 constexpr double kOpeningTolerance = 1e-9;  // mm
 constexpr double kNearReachMm = 1.0;        // open_bite's first band
 constexpr double kStepSlackMm = 0.1;        // the opening's steps: exact this past the target
-// At least mesh_pair_distance_bound() for any two indexes: 24-byte entries, a heap of 2048 and
-// a stack of 15 (a.depth + b.depth) + 1, where a 4-wide tree over 32-bit Morton leaves is at
-// most 32 deep; and their alignment.
-constexpr uint64_t kPairStackBound = 24 * (2048 + 15 * 64 + 1) + 2 * 64;
 
 Status check_options(const OutlineOptions& o) {
   auto in = [](double v, double lo, double hi) { return v >= lo && v <= hi; };
@@ -46,15 +42,17 @@ Status check_options(const OutlineOptions& o) {
   return Status::ok();
 }
 
-// Also the jaw's longest edge (the opening's bands need it), in the same pass over the
-// triangles.
-Status check_jaw(const Mesh& m, const char* name, double* longest_edge) {
+}  // namespace
+
+namespace outline_detail {
+
+Status check_jaw(const Mesh& m, const char* who, const char* name, double* longest_edge) {
   if (m.triangles.empty() || m.vertices.empty()) {
-    return make_error(StatusCode::kInvalidMesh, "outline: the ", name, " is empty");
+    return make_error(StatusCode::kInvalidMesh, who, ": the ", name, " is empty");
   }
   for (size_t i = 0; i < m.vertices.size(); ++i) {
     if (!is_finite(m.vertices[i])) {
-      return make_error(StatusCode::kNonFinite, "outline: the ", name,
+      return make_error(StatusCode::kNonFinite, who, ": the ", name,
                         " has a vertex that is not "
                         "finite (NaN or infinity): vertex ",
                         i)
@@ -66,7 +64,7 @@ Status check_jaw(const Mesh& m, const char* name, double* longest_edge) {
     const Triangle& t = m.triangles[i];
     const size_t n = m.vertices.size();
     if (t.v[0] >= n || t.v[1] >= n || t.v[2] >= n) {
-      return make_error(StatusCode::kInvalidMesh, "outline: the ", name, "'s triangle ", i,
+      return make_error(StatusCode::kInvalidMesh, who, ": the ", name, "'s triangle ", i,
                         " refers to a vertex that does not exist")
           .at_index(i);
     }
@@ -80,6 +78,16 @@ Status check_jaw(const Mesh& m, const char* name, double* longest_edge) {
   *longest_edge = std::sqrt(e2);
   return Status::ok();
 }
+
+DistanceIndexOptions band_index_options() {
+  DistanceIndexOptions o;
+  o.pairs_only = true;
+  return o;
+}
+
+}  // namespace outline_detail
+
+namespace {
 
 // The mandible's move along -n that makes the smallest distance between the jaws exactly the
 // opening asked: conservative advancement (a move by delta changes the distance by at most
@@ -369,13 +377,6 @@ Status jaw_band(Arena& arena, const Mesh& m, bool upper, const BandLimit& limit,
   return Status::ok();
 }
 
-// The bands' indexes serve the pair searches only.
-DistanceIndexOptions band_index_options() {
-  DistanceIndexOptions o;
-  o.pairs_only = true;
-  return o;
-}
-
 // The smallest distance between the jaws (the mandible moved by -t n) exactly for every t the
 // opening visits, when it is at most `reach` (else some value above `reach`).
 struct BandedOpener {
@@ -543,8 +544,8 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
   *out = Outline{};
   SPLINTCORE_RETURN_IF_ERROR(check_options(options));
   double edge_upper = 0, edge_lower = 0;
-  SPLINTCORE_RETURN_IF_ERROR(check_jaw(maxilla, "maxilla", &edge_upper));
-  SPLINTCORE_RETURN_IF_ERROR(check_jaw(mandible, "mandible", &edge_lower));
+  SPLINTCORE_RETURN_IF_ERROR(check_jaw(maxilla, "outline", "maxilla", &edge_upper));
+  SPLINTCORE_RETURN_IF_ERROR(check_jaw(mandible, "outline", "mandible", &edge_lower));
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
   OutlineBuffers buffers;

@@ -36,6 +36,19 @@ constexpr size_t kMaxPicks = kMaxOutlinePicks;  // per jaw
 constexpr size_t kMaxArchPoints = kMaxOutlineArchPoints;  // kBinMm bins along the arch
 constexpr uint32_t kNoTip = ~uint32_t{0};
 
+// At least mesh_pair_distance_bound() for any two indexes: 24-byte entries, a heap of 2048 and
+// a stack of 15 (a.depth + b.depth) + 1, where a 4-wide tree over 32-bit Morton leaves is at
+// most 32 deep; and their alignment.
+constexpr uint64_t kPairStackBound = 24 * (2048 + 15 * 64 + 1) + 2 * 64;
+
+// A jaw is not empty, its vertices are finite and its triangles' corners exist; also its
+// longest edge (the opening's bands need it), in the same pass over the triangles. Errors
+// start with `who` ("outline") and name the jaw (`name`: "maxilla", "mandible") and the element.
+Status check_jaw(const Mesh& m, const char* who, const char* name, double* longest_edge);
+
+// The pair searches' indexes (the opening's bands, the autorotation's jaws): pairs_only.
+DistanceIndexOptions band_index_options();
+
 // n: from the mandible towards the maxilla; e1 towards the front; e2 = n x e1.
 struct Frame {
   Vec3 n{0, 0, 1}, e1{1, 0, 0}, e2{0, 1, 0};

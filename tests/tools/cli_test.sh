@@ -155,6 +155,27 @@ check "phantom wrote the mandible" -- test -s "$work/mandible.stl"
 cp "$work/maxilla.stl" "$work/maxilla.first"
 expect_exit 0 "phantom again" -- "$tool" phantom --triangles 6000 -o "$work"
 check "phantom bytes are the same every run" -- cmp -s "$work/maxilla.stl" "$work/maxilla.first"
+
+# Hinge-axis autorotation (issue 32) of the phantom's mandible (in occlusion: opened, then closed
+# to 2 mm), the turned mandible written atomically; the same bytes every run.
+hinge=-50,-55,25,50,-55,25
+expect_exit 2 "autorotate with one mesh" -- "$tool" autorotate "$work/maxilla.stl" --hinge $hinge --opening 2
+expect_exit 2 "autorotate without --hinge" -- "$tool" autorotate "$work/maxilla.stl" "$work/mandible.stl" --opening 2
+expect_exit 2 "autorotate with a short --hinge" -- "$tool" autorotate "$work/maxilla.stl" "$work/mandible.stl" --hinge 1,2,3,4,5 --opening 2
+expect_exit 2 "autorotate without --opening" -- "$tool" autorotate "$work/maxilla.stl" "$work/mandible.stl" --hinge $hinge
+expect_exit 1 "autorotate with an opening over 10 mm" -- "$tool" autorotate "$work/maxilla.stl" "$work/mandible.stl" --hinge $hinge --opening 11
+check "the opening's range is named" -- grep -q "opening must be in \[0, 10\]" "$work/err"
+expect_exit 1 "autorotate about a vertical axis" -- "$tool" autorotate "$work/maxilla.stl" "$work/mandible.stl" --hinge 0,0,-50,0,0,50 --opening 2
+check "the closing sense is named" -- grep -q "closing sense cannot be told" "$work/err"
+expect_exit 0 "autorotate" -- "$tool" autorotate "$work/maxilla.stl" "$work/mandible.stl" --hinge $hinge --opening 2 -o "$work/turned.stl" --json
+check "autorotate json is one object" -- json_ok "$work/out"
+check "autorotate reports the opening" -- grep -q '"opening_mm":2.00000000' "$work/out"
+check "autorotate reports the 4x4" -- grep -q '"transform":\[[^]]*,0,0,0,1\]' "$work/out"
+check "autorotate wrote the turned mandible" -- test -s "$work/turned.stl"
+cp "$work/turned.stl" "$work/turned.first"
+expect_exit 0 "autorotate again, text" -- "$tool" autorotate "$work/maxilla.stl" "$work/mandible.stl" --hinge $hinge --opening 2 -o "$work/turned.stl"
+check "autorotate prints the angle in degrees" -- grep -q "^angle: .* rad (.* degrees)" "$work/out"
+check "autorotate bytes are the same every run" -- cmp -s "$work/turned.stl" "$work/turned.first"
 expect_exit 0 "base for the Boolean" -- "$tool" base "$fixtures/cases/paper_scale.json" -o "$work/base.stl"
 expect_exit 2 "boolean without an operation" -- "$tool" boolean "$work/base.stl" "$work/maxilla.stl" -o "$work/cut.stl"
 expect_exit 2 "boolean with two operations" -- "$tool" boolean --union --difference "$work/base.stl" "$work/maxilla.stl" -o "$work/cut.stl"

@@ -1160,6 +1160,73 @@ void bench_outline(Harness& h, Arena& arena, const std::string& realdata) {
   arena.rewind(m);
 }
 
+// Hinge-axis autorotation (issue 32): the mandible turned about a hinge behind and above the
+// teeth to a 2 mm opening, on the 87 k phantom jaws (in occlusion: opened first, then closed)
+// and the real jaws as scanned; and, for the choice of a rigid pair search over one index per
+// jaw, one pairs_only index build of the mandible (what rebuilding per step would cost each
+// step).
+void bench_autorotate_jaws(Harness& h, Arena& arena, const char* name, const Mesh& upper,
+                           const Mesh& lower, const Vec3& h0, const Vec3& h1) {
+  AutorotateOptions o;
+  o.hinge[0] = h0;
+  o.hinge[1] = h1;
+  o.opening_mm = 2.0;
+  AutorotateReport r;
+  h.measure(name, upper.triangles.size() + lower.triangles.size(), arena,
+            [&](Arena& a) { return autorotate_mandible(Context(&a), upper, lower, o, &r); });
+  std::printf("# %s: %.12f rad, opening %.12f mm, %u distance evaluations, start %.6f rad\n", name,
+              r.angle_rad, r.opening, r.steps, r.start_angle_rad);
+  std::string build_name = std::string(name) + "_index_build";
+  DistanceIndexOptions io;
+  io.pairs_only = true;
+  h.measure(build_name.c_str(), lower.triangles.size(), arena, [&](Arena& a) {
+    DistanceIndex index;
+    return build_distance_index(Context(&a), lower, io, &index);
+  });
+}
+
+void bench_autorotate(Harness& h, Arena& arena, const std::string& realdata) {
+  const Arena::Marker m = arena.mark();
+  Mesh jaws[2];
+  if (h.wanted("autorotate_phantom")) {
+    Status s;
+    for (int j = 0; j < 2 && s.is_ok(); ++j) {
+      phantom::JawMesh jm;
+      phantom::PhantomOptions po;
+      po.target_triangles = 87000;
+      s = phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &jm);
+      jaws[j].bind(&arena);
+      if (s.is_ok()) s = phantom::to_mesh(jm, &jaws[j]);
+    }
+    if (!s.is_ok()) {
+      cli::print_error(s);
+      h.failed = true;
+      arena.rewind(m);
+      return;
+    }
+    bench_autorotate_jaws(h, arena, "autorotate_phantom", jaws[0], jaws[1], Vec3{-50, -55, 25},
+                          Vec3{50, -55, 25});
+    arena.rewind(m);
+  }
+  if (!h.wanted("autorotate_realdata")) return;
+  realcase::RealCase rc;
+  std::string error;
+  if (!realcase::load(realdata, 0.0, 1.5, 6.0, &rc, &error)) {
+    std::printf("# realdata not found (%s): autorotate_realdata skipped\n", error.c_str());
+    return;
+  }
+  const Status s = real_jaws(arena, rc, jaws);
+  if (!s.is_ok()) {
+    cli::print_error(s);
+    h.failed = true;
+    arena.rewind(m);
+    return;
+  }
+  bench_autorotate_jaws(h, arena, "autorotate_realdata", jaws[0], jaws[1], Vec3{4, 90, 80},
+                        Vec3{104, 90, 80});
+  arena.rewind(m);
+}
+
 // One stage of design_auto_realdata: reads a mesh file as the CLI does (read_mesh, welded).
 Status read_mesh_path(const Context& ctx, const std::string& path, Mesh* mesh) {
   FileSource file;
@@ -1342,6 +1409,7 @@ int run(int argc, char** argv) {
     bench_sweep(h, arena);
     bench_blockout(h, arena, fixtures);
     bench_outline(h, arena, realdata);
+    bench_autorotate(h, arena, realdata);
     bench_design_auto_realdata(h, arena, realdata);
     bench_boolean_manifold_twin(h, arena, realdata);
     // A torus of 2 x 521 x 521 = 542,882 triangles: the size of the paper's largest jaw.

@@ -64,6 +64,20 @@ const char kDistanceUsage[] =
     "distance (negative inside) and the generalised winding number. --sign auto uses\n"
     "pseudonormals on a closed manifold mesh and the winding number otherwise.\n";
 
+const char kAutorotateUsage[] =
+    "usage: splintcore autorotate MAXILLA MANDIBLE --hinge X1,Y1,Z1,X2,Y2,Z2 --opening MM\n"
+    "                            [-o ROTATED.stl] [--ascii] [--json] [--memory-cap SIZE]\n"
+    "\n"
+    "Turns the mandible about the hinge axis (the line through the two condylar points, which\n"
+    "stays fixed) to the angle at which, closing from open, the smallest distance between the\n"
+    "jaws first equals MM (0 to 10): from the jaws as given when they are farther apart, else\n"
+    "after opening them first. The closing sense is the one that moves the mandible's centroid\n"
+    "towards the maxilla's. Exact to 1e-10 rad (conservative advancement over the distance\n"
+    "index, no sampling in angle); at most 30 degrees either way, else rejected with the\n"
+    "distances measured. Prints the angle (rad and degrees, right-handed about point 1 -> 2),\n"
+    "the 4x4 applied to the mandible, the opening measured and the contact points; -o writes\n"
+    "the turned mandible as STL, atomically.\n";
+
 const char kBooleanUsage[] =
     "usage: splintcore boolean --difference|--union|--intersection A.stl B.stl [B2.stl ...]\n"
     "                         -o OUT.stl [--translate-b X,Y,Z] [--ascii] [--no-self-check]\n"
@@ -225,6 +239,8 @@ const Command kCommands[] = {
     {"boolean", run_boolean, kBooleanUsage, "splint base minus jaws (or --union, --intersection)"},
     {"phantom", run_phantom, kPhantomUsage, "synthetic maxilla.stl, mandible.stl and case.json"},
     {"outline", run_outline, kOutlineUsage, "the automatic outline as a case with explicit picks"},
+    {"autorotate", run_autorotate, kAutorotateUsage,
+     "the mandible turned about the hinge axis to an opening"},
     {"design", run_design, kDesignUsage,
      "the splint from a case: splint.stl, report.json, preview.png"},
     {"sweep", run_sweep, kSweepUsage, "the jaws' swept volume (the blocked-out model)"},

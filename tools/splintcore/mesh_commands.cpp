@@ -1,4 +1,5 @@
-// The commands that read meshes and report on them: check, convert, distance, compare, render.
+// The commands that read meshes and report on them: check, convert, distance, compare, render,
+// autorotate.
 #include <charconv>
 #include <cstring>
 #include <string>
@@ -9,6 +10,7 @@
 #include "command.h"
 #include "files.h"
 #include "splintcore/distance.h"
+#include "splintcore/outline.h"
 #include "splintcore/printer.h"
 #include "splintcore/render.h"
 
@@ -332,6 +334,113 @@ void print_render_report(const Run& run, const RenderArgs& a, size_t meshes,
       static_cast<unsigned long long>(run.peak_arena()));
 }
 
+// ---- autorotate -------------------------------------------------------------------------------
+
+struct Hinge {
+  Vec3 p[2];
+};
+
+// "X1,Y1,Z1,X2,Y2,Z2": two points (split at the third comma).
+bool parse_hinge(const char* text, Hinge* out) {
+  const std::string all(text);
+  size_t at = std::string::npos;
+  for (int k = 0, from = 0; k < 3; ++k) {
+    at = all.find(',', static_cast<size_t>(from));
+    if (at == std::string::npos) return false;
+    from = static_cast<int>(at) + 1;
+  }
+  return parse_point(all.substr(0, at).c_str(), &out->p[0]) &&
+         parse_point(all.substr(at + 1).c_str(), &out->p[1]);
+}
+
+struct AutorotateArgs {
+  CommonArgs common;
+  Hinge hinge;
+  bool has_hinge = false;
+  double opening = 0;
+  bool has_opening = false;
+  const char* output = nullptr;
+  bool ascii = false;
+};
+
+std::vector<OptionSpec> autorotate_options(AutorotateArgs* a) {
+  return {
+      custom<Hinge, parse_hinge>("--hinge", "X1,Y1,Z1,X2,Y2,Z2", &a->hinge,
+                                 "the condylar points (mm): the hinge axis through them",
+                                 "--hinge needs six numbers X1,Y1,Z1,X2,Y2,Z2")
+          .marks(&a->has_hinge),
+      non_negative("--opening", "MM", &a->opening,
+                   "the smallest distance between the jaws to turn to (mm, 0 to 10)",
+                   "--opening needs a number of mm from 0 to 10")
+          .marks(&a->has_opening),
+      output_option("ROTATED.stl", &a->output, "write the mandible turned by the angle found"),
+      flag("--ascii", &a->ascii, "write ASCII STL (default binary)"),
+  };
+}
+
+std::string matrix_json(const RigidTransform& m) {
+  std::string out = "[";
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) out += cli::json_number(m.r[i][j]) + ",";
+    out += cli::json_number(m.t[i]) + ",";
+  }
+  return out + "0,0,0,1]";
+}
+
+void print_autorotate(const Run& run, const AutorotateArgs& a, const AutorotateReport& r,
+                      double seconds) {
+  const double degrees = r.angle_rad * (180.0 / 3.14159265358979323846);
+  if (a.common.json) {
+    JsonObject j;
+    j.add("command", "autorotate");
+    j.add("maxilla", a.common.positional[0]);
+    j.add("mandible", a.common.positional[1]);
+    if (a.output != nullptr) j.add("output", a.output);
+    j.add_status(Status::ok());
+    j.add("hinge_mm", a.hinge.p[0]);
+    j.add("hinge2_mm", a.hinge.p[1]);
+    j.add("opening_asked_mm", a.opening);
+    j.add("angle_rad", r.angle_rad);
+    j.add("angle_deg", degrees);
+    j.add_raw("transform", matrix_json(r.transform));
+    j.add("opening_mm", r.opening);
+    j.add("closing_sign", r.closing_sign);
+    j.add("gap_as_given_mm", r.gap_as_given);
+    j.add("met_as_given", r.met_as_given);
+    j.add("start_angle_rad", r.start_angle_rad);
+    j.add("bracket_rad", r.bracket_rad);
+    j.add("lever_mm", r.lever_mm);
+    j.add("steps", r.steps);
+    j.add("contact_maxilla_mm", r.contact_maxilla);
+    j.add("contact_mandible_mm", r.contact_mandible);
+    j.add("triangle_maxilla", r.triangle_maxilla);
+    j.add("triangle_mandible", r.triangle_mandible);
+    j.add("time_s", seconds);
+    j.add("peak_arena_bytes", run.peak_arena());
+    print_json(j);
+    return;
+  }
+  std::printf("angle: %.12f rad (%.9f degrees), closing sense %s about hinge 1 -> 2\n", r.angle_rad,
+              degrees, r.closing_sign > 0 ? "positive" : "negative");
+  std::printf("as given: %s, %.9f mm apart; closed from %.9f rad in %u distance evaluations\n",
+              r.met_as_given ? "meeting" : "apart", r.gap_as_given, r.start_angle_rad, r.steps);
+  std::printf("opening measured: %.9f mm (asked %.9f mm)\n", r.opening, a.opening);
+  std::printf(
+      "contact: maxilla [%.6f, %.6f, %.6f] (triangle %u), mandible [%.6f, %.6f, %.6f] "
+      "(triangle %u)\n",
+      r.contact_maxilla.x, r.contact_maxilla.y, r.contact_maxilla.z, r.triangle_maxilla,
+      r.contact_mandible.x, r.contact_mandible.y, r.contact_mandible.z, r.triangle_mandible);
+  std::printf("transform (row-major 4x4, applied to the mandible):\n");
+  for (int i = 0; i < 3; ++i) {
+    std::printf("  %.17g %.17g %.17g %.17g\n", r.transform.r[i][0], r.transform.r[i][1],
+                r.transform.r[i][2], r.transform.t[i]);
+  }
+  std::printf("  0 0 0 1\n");
+  if (a.output != nullptr) std::printf("output: %s\n", a.output);
+  std::printf("time: %.3f s, peak arena: %llu bytes\n", seconds,
+              static_cast<unsigned long long>(run.peak_arena()));
+}
+
 }  // namespace
 
 int run_check(const Command& command, int argc, char** argv) {
@@ -549,6 +658,46 @@ int run_render(const Command& command, int argc, char** argv) {
   if (!s.is_ok()) return run.reject(s);
   r.t_end = monotonic_seconds();
   print_render_report(run, a, meshes.size(), r);
+  return kExitOk;
+}
+
+}  // namespace tool
+}  // namespace splintcore
+
+namespace splintcore {
+namespace tool {
+
+int run_autorotate(const Command& command, int argc, char** argv) {
+  AutorotateArgs a;
+  CommandLine line(command, &a.common, autorotate_options(&a));
+  const int early = line.parse(argc, argv);
+  if (early >= 0) return early;
+  if (a.common.positional.size() != 2) {
+    return line.usage_error("autorotate takes two mesh files: MAXILLA MANDIBLE");
+  }
+  if (!a.has_hinge) return line.usage_error("autorotate needs --hinge X1,Y1,Z1,X2,Y2,Z2");
+  if (!a.has_opening) return line.usage_error("autorotate needs --opening MM");
+  Run run(command, a.common);
+  if (!run.has_memory()) return run.no_memory();
+  Mesh jaws[2] = {Mesh(&run.arena), Mesh(&run.arena)};
+  for (size_t j = 0; j < 2; ++j) {
+    const Status s =
+        read_mesh_file(run.ctx, a.common.positional[j], kNoInputLimit, false, &jaws[j], nullptr);
+    if (!s.is_ok()) return run.reject(s);
+  }
+  AutorotateOptions o;
+  o.hinge[0] = a.hinge.p[0];
+  o.hinge[1] = a.hinge.p[1];
+  o.opening_mm = a.opening;
+  AutorotateReport r;
+  Status s = autorotate_mandible(run.ctx, jaws[0], jaws[1], o, &r);
+  if (!s.is_ok()) return run.reject(s);
+  if (a.output != nullptr) {
+    for (Vec3& v : jaws[1].vertices) v = r.transform.apply_point(v);
+    s = write_mesh_atomically(run.ctx, jaws[1], a.output, a.ascii);
+    if (!s.is_ok()) return run.reject(s);
+  }
+  print_autorotate(run, a, r, monotonic_seconds() - run.start);
   return kExitOk;
 }
 
