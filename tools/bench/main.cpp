@@ -411,25 +411,31 @@ void bench_pair_jaws(Harness& h, Arena& arena, const char* label, const Mesh& up
   arena.rewind(m);
 }
 
+// The phantom's two jaws (`triangles` each, about) in `arena`, jaws[0] the maxilla; on an
+// error it is printed, the harness marked failed and the arena rewound to `m`.
+bool phantom_jaws(Harness& h, Arena& arena, const Arena::Marker& m, uint32_t triangles,
+                  Mesh jaws[2]) {
+  Status s;
+  for (int j = 0; j < 2 && s.is_ok(); ++j) {
+    phantom::JawMesh jm;
+    phantom::PhantomOptions po;
+    po.target_triangles = triangles;
+    s = phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &jm);
+    jaws[j].bind(&arena);
+    if (s.is_ok()) s = phantom::to_mesh(jm, &jaws[j]);
+  }
+  if (s.is_ok()) return true;
+  cli::print_error(s);
+  h.failed = true;
+  arena.rewind(m);
+  return false;
+}
+
 void bench_mesh_pair_distance(Harness& h, Arena& arena, const std::string& realdata) {
   if (!h.wanted("mesh_pair_distance")) return;
   const Arena::Marker m = arena.mark();
   Mesh jaws[2];
-  for (int j = 0; j < 2; ++j) {
-    phantom::JawMesh jm;
-    phantom::PhantomOptions po;
-    po.target_triangles = 87000;
-    Status s =
-        phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &jm);
-    jaws[j].bind(&arena);
-    if (s.is_ok()) s = phantom::to_mesh(jm, &jaws[j]);
-    if (!s.is_ok()) {
-      cli::print_error(s);
-      h.failed = true;
-      arena.rewind(m);
-      return;
-    }
-  }
+  if (!phantom_jaws(h, arena, m, 87000, jaws)) return;
   bench_pair_jaws(h, arena, "_phantom", jaws[0], jaws[1]);
   arena.rewind(m);
   realcase::RealCase rc;
@@ -951,21 +957,7 @@ void bench_sweep(Harness& h, Arena& arena) {
   if (!h.wanted("sweep_phantom_01") && !fine) return;
   Mesh jaws[2];
   const Arena::Marker m = arena.mark();
-  for (int j = 0; j < 2; ++j) {
-    phantom::JawMesh jm;
-    phantom::PhantomOptions po;
-    po.target_triangles = 87000;
-    Status s =
-        phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &jm);
-    jaws[j].bind(&arena);
-    if (s.is_ok()) s = phantom::to_mesh(jm, &jaws[j]);
-    if (!s.is_ok()) {
-      cli::print_error(s);
-      h.failed = true;
-      arena.rewind(m);
-      return;
-    }
-  }
+  if (!phantom_jaws(h, arena, m, 87000, jaws)) return;
   struct Counter {
     uint64_t triangles = 0;
     static Status triangle(void* user, const Triangle&, const Vec3&, const Vec3&, const Vec3&) {
@@ -1025,20 +1017,13 @@ void bench_blockout(Harness& h, Arena& arena, const std::string& fixtures) {
   Status s =
       parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), path.c_str(), &c);
   Mesh jaws[2];
-  for (int j = 0; j < 2 && s.is_ok(); ++j) {
-    phantom::JawMesh jm;
-    phantom::PhantomOptions po;
-    po.target_triangles = 87000;
-    s = phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &jm);
-    jaws[j].bind(&arena);
-    if (s.is_ok()) s = phantom::to_mesh(jm, &jaws[j]);
-  }
   if (!s.is_ok()) {
     cli::print_error(s);
     h.failed = true;
     arena.rewind(m);
     return;
   }
+  if (!phantom_jaws(h, arena, m, 87000, jaws)) return;
   c.has_blockout = true;
   c.blockout.voxel = 0.1;
   c.blockout.inset = 0.05;
@@ -1120,21 +1105,7 @@ void bench_outline(Harness& h, Arena& arena, const std::string& realdata) {
   const Arena::Marker m = arena.mark();
   Mesh jaws[2];
   if (h.wanted("outline_phantom")) {
-    Status s;
-    for (int j = 0; j < 2 && s.is_ok(); ++j) {
-      phantom::JawMesh jm;
-      phantom::PhantomOptions po;
-      po.target_triangles = 87000;
-      s = phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &jm);
-      jaws[j].bind(&arena);
-      if (s.is_ok()) s = phantom::to_mesh(jm, &jaws[j]);
-    }
-    if (!s.is_ok()) {
-      cli::print_error(s);
-      h.failed = true;
-      arena.rewind(m);
-      return;
-    }
+    if (!phantom_jaws(h, arena, m, 87000, jaws)) return;
     for (Vec3& v : jaws[1].vertices) v.z -= 2.0;
     bench_outline_jaws(h, arena, "outline_phantom", jaws[0], jaws[1], OutlineOptions{});
     arena.rewind(m);
@@ -1189,21 +1160,7 @@ void bench_autorotate(Harness& h, Arena& arena, const std::string& realdata) {
   const Arena::Marker m = arena.mark();
   Mesh jaws[2];
   if (h.wanted("autorotate_phantom")) {
-    Status s;
-    for (int j = 0; j < 2 && s.is_ok(); ++j) {
-      phantom::JawMesh jm;
-      phantom::PhantomOptions po;
-      po.target_triangles = 87000;
-      s = phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &jm);
-      jaws[j].bind(&arena);
-      if (s.is_ok()) s = phantom::to_mesh(jm, &jaws[j]);
-    }
-    if (!s.is_ok()) {
-      cli::print_error(s);
-      h.failed = true;
-      arena.rewind(m);
-      return;
-    }
+    if (!phantom_jaws(h, arena, m, 87000, jaws)) return;
     bench_autorotate_jaws(h, arena, "autorotate_phantom", jaws[0], jaws[1], Vec3{-50, -55, 25},
                           Vec3{50, -55, 25});
     arena.rewind(m);
