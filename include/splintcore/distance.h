@@ -150,6 +150,11 @@ bool closest_point(const DistanceIndex& index, const Vec3& q, ClosestPoint* out)
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
                                Feature* feature = nullptr, uint8_t* index = nullptr);
 
+// Closest points of the closed segments p0p1 and q0q1 (Ericson 5.1.9), *cp on the first and
+// *cq on the second (an endpoint exactly when the parameter is 0 or 1): the squared distance.
+double segment_closest(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, Vec3* cp,
+                       Vec3* cq);
+
 // The distance between the closed triangles a0a1a2 and b0b1b2, with a closest pair of points
 // (pa on the first, pb on the second; either may be null). 0, with a common point in both,
 // when they meet: decided exactly by triangles_intersect (geometry.h) and, for a degenerate

@@ -80,32 +80,10 @@ inline Vec3 to_world(const Frame& f, const Vec3& p) {
 
 inline double clamp01(double t) { return t < 0 ? 0 : (t > 1 ? 1 : t); }
 
-// Squared distance between the segments p1q1 and p2q2 (Ericson 5.1.9).
-double segment_segment_d2(const Vec3& p1, const Vec3& q1, const Vec3& p2, const Vec3& q2) {
-  const Vec3 d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
-  const double a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r);
-  double s = 0, t = 0;
-  if (a <= 0 && e <= 0) return dot(r, r);
-  if (a <= 0) {
-    t = clamp01(f / e);
-  } else {
-    const double c = dot(d1, r);
-    if (e <= 0) {
-      s = clamp01(-c / a);
-    } else {
-      const double b = dot(d1, d2), denom = a * e - b * b;
-      s = denom > 0 ? clamp01((b * f - c * e) / denom) : 0.0;
-      t = (b * s + f) / e;
-      if (t < 0) {
-        t = 0;
-        s = clamp01(-c / a);
-      } else if (t > 1) {
-        t = 1;
-        s = clamp01((b - c) / a);
-      }
-    }
-  }
-  return length_squared((p1 + d1 * s) - (p2 + d2 * t));
+// Squared distance between the segments p1q1 and p2q2 (the distance module's).
+inline double segment_segment_d2(const Vec3& p1, const Vec3& q1, const Vec3& p2, const Vec3& q2) {
+  Vec3 x, y;
+  return segment_closest(p1, q1, p2, q2, &x, &y);
 }
 
 // Squared distance from the segment pq to the triangle abc, which it does not meet: the

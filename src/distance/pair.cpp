@@ -19,37 +19,6 @@ inline Vec3 along(const Vec3& p0, const Vec3& p1, const Vec3& d, double s) {
   return s == 0 ? p0 : (s == 1 ? p1 : p0 + d * s);
 }
 
-// Closest points of the closed segments p0p1 and q0q1 (Ericson 5.1.9): the squared distance.
-// Parallel segments (denominator 0) start from s = 0 and clamp from there, which reaches a
-// closest pair; nearly parallel ones lose accuracy in s only along a direction in which the
-// distance barely changes (the error in the squared distance is of order eps^2 / sin^2).
-double segment_closest(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, Vec3* cp,
-                       Vec3* cq) {
-  const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
-  const double a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r);
-  double s = 0, t = 0;
-  if (a > 0 && e > 0) {
-    const double b = dot(d1, d2), c = dot(d1, r);
-    const double denom = a * e - b * b;
-    s = denom > 0 ? clamp01((b * f - c * e) / denom) : 0.0;
-    t = (b * s + f) / e;
-    if (t < 0) {
-      t = 0;
-      s = clamp01(-c / a);
-    } else if (t > 1) {
-      t = 1;
-      s = clamp01((b - c) / a);
-    }
-  } else if (a > 0) {
-    s = clamp01(-dot(d1, r) / a);
-  } else if (e > 0) {
-    t = clamp01(f / e);
-  }
-  *cp = along(p0, p1, d1, s);
-  *cq = along(q0, q1, d2, t);
-  return length_squared(*cp - *cq);
-}
-
 // The squared distance of two triangles that do not meet, and a closest pair: the least of the
 // six vertex-triangle and nine edge-edge distances, the first of equal ones in that order.
 double separated_pair_d2(const Vec3 a[3], const Vec3 b[3], Vec3* pa, Vec3* pb) {
@@ -639,6 +608,36 @@ void finish(const PairSearch& s, MeshPairDistance* out) {
 }
 
 }  // namespace
+
+// Parallel segments (denominator 0) start from s = 0 and clamp from there, which reaches a
+// closest pair; nearly parallel ones lose accuracy in s only along a direction in which the
+// distance barely changes (the error in the squared distance is of order eps^2 / sin^2).
+double segment_closest(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, Vec3* cp,
+                       Vec3* cq) {
+  const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+  const double a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r);
+  double s = 0, t = 0;
+  if (a > 0 && e > 0) {
+    const double b = dot(d1, d2), c = dot(d1, r);
+    const double denom = a * e - b * b;
+    s = denom > 0 ? clamp01((b * f - c * e) / denom) : 0.0;
+    t = (b * s + f) / e;
+    if (t < 0) {
+      t = 0;
+      s = clamp01(-c / a);
+    } else if (t > 1) {
+      t = 1;
+      s = clamp01((b - c) / a);
+    }
+  } else if (a > 0) {
+    s = clamp01(-dot(d1, r) / a);
+  } else if (e > 0) {
+    t = clamp01(f / e);
+  }
+  *cp = along(p0, p1, d1, s);
+  *cq = along(q0, q1, d2, t);
+  return length_squared(*cp - *cq);
+}
 
 double triangle_pair_distance(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0,
                               const Vec3& b1, const Vec3& b2, Vec3* pa, Vec3* pb) {
