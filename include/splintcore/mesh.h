@@ -83,6 +83,8 @@ struct MeshReport {
   uint64_t unreferenced_vertices = 0;
   uint64_t edge_count = 0;             // distinct undirected edges
   uint64_t boundary_edges = 0;         // used by one triangle
+  uint64_t boundary_loops = 0;         // components of the boundary edges (holes and borders;
+                                       // two that touch at a vertex are one)
   uint64_t nonmanifold_edges = 0;      // used by three or more
   uint64_t orientation_conflicts = 0;  // used twice in the same direction
   uint64_t degenerate_triangles = 0;   // repeated vertex ids or zero area (exact)
@@ -91,7 +93,10 @@ struct MeshReport {
   int64_t euler_characteristic = 0;    // V - E + F over referenced vertices
   int64_t genus = -1;                  // sum over shells, when closed and edge-manifold
   double area = 0.0;                   // mm^2
-  double volume = 0.0;                 // signed, mm^3 (> 0 when outward)
+  // Signed, mm^3 (> 0 when outward). Computed for any mesh, but only a closed mesh has a
+  // volume: for an open one (a scan) it depends on where the origin lies, and neither it
+  // nor outward() says anything (the `check` command prints "n/a (open)").
+  double volume = 0.0;
   Aabb bounds;
 
   // The first offender of each kind (index order), for error messages.
@@ -112,7 +117,7 @@ struct MeshReport {
   }
 };
 
-// Bytes check_mesh() takes from the arena at most: about 69 per triangle plus 17 per vertex
+// Bytes check_mesh() takes from the arena at most: about 69 per triangle plus 21 per vertex
 // (the worst case is shells touching at many vertices), all returned before it finishes.
 // Linear time: the edges are counted in buckets by vertex, not sorted.
 uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count);
