@@ -43,10 +43,11 @@ struct EdgeArrays {
 uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count) {
   // Kept through the check: the referenced flags, the union-find of shells, per triangle the
   // sides that first use their edge, the triangles of edges with 3+ uses (the duplicate
-  // search), and the union-find of the boundary edges' vertices (the loops). Then the largest of three phases, each returned before the next: the edge pass
-  // (buckets, half-edges, tallies), the shell counts (per shell root; a vertex stamp; the
-  // (vertex, shell) pairs of vertices in several shells, with their sort scratch), the
-  // duplicate search (keys and scratch for the collected triangles).
+  // search), and the union-find of the boundary edges' vertices (the loops). Then the largest of
+  // three phases, each returned before the next: the edge pass (buckets, half-edges, tallies), the
+  // shell counts (per shell root; a vertex stamp; the (vertex, shell) pairs of vertices in several
+  // shells, with their sort scratch), the duplicate search (keys and scratch for the collected
+  // triangles).
   const uint64_t v = vertex_count, t = triangle_count;
   const uint64_t kept = arena_array_bound<uint8_t>(v) + arena_array_bound<uint32_t>(t) +
                         arena_array_bound<uint8_t>(t) + arena_array_bound<uint32_t>(t) +

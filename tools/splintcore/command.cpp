@@ -131,9 +131,10 @@ void print_mesh_report(const MeshReport& r) {
   if (closed) {
     std::printf("closed: yes (0 boundary edges)\n");
   } else {
-    std::printf("closed: no (%llu boundary edges in %llu loops)\n",
+    std::printf("closed: no (%llu boundary edges in %llu loop%s)\n",
                 static_cast<unsigned long long>(r.boundary_edges),
-                static_cast<unsigned long long>(r.boundary_loops));
+                static_cast<unsigned long long>(r.boundary_loops),
+                r.boundary_loops == 1 ? "" : "s");
   }
   std::printf("edge-manifold: %s (%llu edges with 3+ triangles)\n",
               r.edge_manifold() ? "yes" : "no",
