@@ -49,6 +49,9 @@ Status refuse_open_border_in_a(const Context& ctx, const Mesh& a, const Mesh& b,
   for (uint32_t t = 0; t < nt; ++t) {
     const Triangle& tri = b.triangles[t];
     if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) return Status::ok();  // named later
+    for (uint32_t v : tri.v) {
+      if (!is_finite(b.vertices[v])) return Status::ok();  // the run names it (kNonFinite)
+    }
     if (triangle_near(b, tri, region)) ++near;
   }
   if (near == 0) return Status::ok();
@@ -82,7 +85,11 @@ Status refuse_open_border_in_a(const Context& ctx, const Mesh& a, const Mesh& b,
     return Status::ok();
   }
   DistanceIndex index;
-  SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, a, DistanceIndexOptions{}, &index));
+  const Status built = build_distance_index(ctx, a, DistanceIndexOptions{}, &index);
+  if (built.code() == StatusCode::kArenaExhausted || built.code() == StatusCode::kCancelled) {
+    return built;
+  }
+  if (!built.is_ok()) return Status::ok();  // A not finite: the run names it
   const uint32_t v = first_border_vertex_in_a(index, b, keys, n);
   if (v == kNoTriangle) return Status::ok();
   // The whole border, for the message (its loops); what the check cannot afford is left out.
