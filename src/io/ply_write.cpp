@@ -3,7 +3,7 @@
 // vertex_indices per face. Records go through a fixed buffer on the stack to the sink, so
 // nothing is allocated; the bytes are a pure function of the mesh and the colours.
 #include <cfloat>
-#include <cstdio>
+#include <cstring>
 
 #include "splintcore/io.h"
 
@@ -28,6 +28,21 @@ struct Out {
     if (used + n > kBufferBytes) flush();
     std::memcpy(buffer + used, data, n);
     used += n;
+  }
+  void put_text(const char* text) { put(text, std::strlen(text)); }
+  void put_decimal(uint64_t v) {  // no printf in the core
+    char digits[20];
+    size_t n = 0;
+    do {
+      digits[n++] = static_cast<char>('0' + v % 10);
+      v /= 10;
+    } while (v > 0);
+    for (size_t i = 0; i < n / 2; ++i) {
+      const char c = digits[i];
+      digits[i] = digits[n - 1 - i];
+      digits[n - 1 - i] = c;
+    }
+    put(digits, n);
   }
   void put_u32(uint32_t v) {
     const uint8_t b[4] = {static_cast<uint8_t>(v), static_cast<uint8_t>(v >> 8),
@@ -78,16 +93,15 @@ Status write_ply(const Mesh& mesh, Span<const uint8_t> rgb, const ByteSink& sink
     }
   }
   Out out(sink);
-  char header[512];
-  const int n = std::snprintf(
-      header, sizeof header,
-      "ply\nformat binary_little_endian 1.0\ncomment splintcore\nelement vertex %llu\n"
-      "property float x\nproperty float y\nproperty float z\n%s"
-      "element face %llu\nproperty list uchar int vertex_indices\nend_header\n",
-      static_cast<unsigned long long>(nv),
-      rgb.empty() ? "" : "property uchar red\nproperty uchar green\nproperty uchar blue\n",
-      static_cast<unsigned long long>(nt));
-  out.put(header, static_cast<size_t>(n));
+  out.put_text("ply\nformat binary_little_endian 1.0\ncomment splintcore\nelement vertex ");
+  out.put_decimal(nv);
+  out.put_text("\nproperty float x\nproperty float y\nproperty float z\n");
+  if (!rgb.empty()) {
+    out.put_text("property uchar red\nproperty uchar green\nproperty uchar blue\n");
+  }
+  out.put_text("element face ");
+  out.put_decimal(nt);
+  out.put_text("\nproperty list uchar int vertex_indices\nend_header\n");
   for (uint64_t i = 0; i < nv; ++i) {
     const Vec3& p = mesh.vertices[i];
     out.put_f32(static_cast<float>(p.x));
