@@ -6,11 +6,13 @@
 // never said that B was open. This check says it first, and where.
 //
 // Only B's edges whose boxes meet A's region can matter, and every triangle using such an edge
-// meets the region too, so the boundary edges there are found among the near triangles alone:
-// their sides as (smaller id, larger id) keys, radix-sorted, a key seen once being a boundary
-// edge. Each such edge is then tested against A exactly (segment_intersects_mesh, orient3d
-// based) and, when it does not meet A's surface, by the winding number of A at one end (the
-// whole edge is then on one side of A's closed surface).
+// meets the region too, so the boundary edges there are found among the near triangles alone
+// (per-vertex outcodes against the region): their sides as (smaller id, larger id) keys,
+// radix-sorted, a key seen once being a boundary edge; a closed B is passed by a fingerprint
+// (the XOR of the keys' hashes, zero when every edge is used twice) without the sort. Each such
+// edge is then tested against A exactly (segment_intersects_mesh, orient3d based) and, when it does
+// not meet A's surface, by the winding number of A at one end (the whole edge is then on one side
+// of A's closed surface).
 #include "boolean/boolean_internal.h"
 #include "splintcore/distance.h"
 
@@ -18,10 +20,30 @@ namespace splintcore {
 
 namespace {
 
-bool triangle_near(const Mesh& b, const Triangle& t, const Aabb& region) {
-  Aabb box;
-  for (uint32_t v : t.v) box.add(b.vertices[v]);
-  return box.overlaps(region);
+// Which sides of the region a point lies beyond (one bit each): a triangle or edge whose
+// corners share a bit lies wholly beyond that side, so its box misses the region.
+uint8_t outcode(const Vec3& p, const Aabb& r) {
+  return static_cast<uint8_t>((p.x < r.lo.x ? 1u : 0u) | (p.x > r.hi.x ? 2u : 0u) |
+                              (p.y < r.lo.y ? 4u : 0u) | (p.y > r.hi.y ? 8u : 0u) |
+                              (p.z < r.lo.z ? 16u : 0u) | (p.z > r.hi.z ? 32u : 0u));
+}
+
+// The sides of B's near triangles whose edges meet the region, as (smaller id << 32 | larger
+// id), into keys (when not null); their count.
+size_t near_edges(const Mesh& b, const uint8_t* code, uint64_t* keys, uint64_t* fingerprint) {
+  size_t n = 0;
+  for (const Triangle& tri : b.triangles) {
+    if ((code[tri.v[0]] & code[tri.v[1]] & code[tri.v[2]]) != 0) continue;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t p = tri.v[k], q = tri.v[(k + 1) % 3];
+      if (p == q || (code[p] & code[q]) != 0) continue;
+      const uint64_t key = p < q ? (uint64_t{p} << 32 | q) : (uint64_t{q} << 32 | p);
+      if (keys != nullptr) keys[n] = key;
+      *fingerprint ^= hash_mix(key);
+      ++n;
+    }
+  }
+  return n;
 }
 
 // The vertex of B where its border meets A first (in key order), or kNoTriangle when none does.
@@ -44,34 +66,26 @@ Status refuse_open_border_in_a(const Context& ctx, const Mesh& a, const Mesh& b,
                                const Aabb& region) {
   Arena& arena = *ctx.arena;
   const uint32_t nv = static_cast<uint32_t>(b.vertices.size());
-  const uint32_t nt = static_cast<uint32_t>(b.triangles.size());
-  uint64_t near = 0;
-  for (uint32_t t = 0; t < nt; ++t) {
-    const Triangle& tri = b.triangles[t];
+  for (const Triangle& tri : b.triangles) {
     if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) return Status::ok();  // named later
-    for (uint32_t v : tri.v) {
-      if (!is_finite(b.vertices[v])) return Status::ok();  // the run names it (kNonFinite)
-    }
-    if (triangle_near(b, tri, region)) ++near;
   }
-  if (near == 0) return Status::ok();
   ArenaScope scope(arena);
-  uint64_t* keys = arena.allocate_array<uint64_t>(static_cast<size_t>(3 * near));
-  uint64_t* scratch = arena.allocate_array<uint64_t>(static_cast<size_t>(3 * near));
-  if (keys == nullptr || scratch == nullptr) return arena.exhausted_status();
-  size_t n = 0;
-  for (uint32_t t = 0; t < nt; ++t) {
-    const Triangle& tri = b.triangles[t];
-    if (!triangle_near(b, tri, region)) continue;
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t p = tri.v[k], q = tri.v[(k + 1) % 3];
-      Aabb edge;
-      edge.add(b.vertices[p]);
-      edge.add(b.vertices[q]);
-      if (p == q || !edge.overlaps(region)) continue;
-      keys[n++] = p < q ? (uint64_t{p} << 32 | q) : (uint64_t{q} << 32 | p);
-    }
+  uint8_t* code = arena.allocate_array<uint8_t>(nv);
+  if (code == nullptr && nv > 0) return arena.exhausted_status();
+  for (uint32_t v = 0; v < nv; ++v) {
+    if (!is_finite(b.vertices[v])) return Status::ok();  // the run names it (kNonFinite)
+    code[v] = outcode(b.vertices[v], region);
   }
+  // A closed B (the usual case) uses every edge twice, so the XOR of its edges' hashes is 0:
+  // only a non-zero fingerprint pays for the sort that finds the edges used once. (An open B
+  // whose fingerprint is 0 by chance, about 2^-64, gets the run's own message, as before.)
+  uint64_t fingerprint = 0;
+  const size_t n = near_edges(b, code, nullptr, &fingerprint);
+  if (fingerprint == 0) return Status::ok();
+  uint64_t* keys = arena.allocate_array<uint64_t>(n);
+  uint64_t* scratch = arena.allocate_array<uint64_t>(n);
+  if (keys == nullptr || scratch == nullptr) return arena.exhausted_status();
+  near_edges(b, code, keys, &fingerprint);
   radix_sort_bits(Span<uint64_t>(keys, n), Span<uint64_t>(scratch, n), 0, 64);
   bool open_near = false;
   for (size_t i = 0; i < n && !open_near; ++i) {
