@@ -22,7 +22,8 @@
 //    non-orientable strip) are counted, not guessed;
 // 7. holes: each boundary loop (boundary half-edges chained head to tail; a loop through a
 //    vertex with two outgoing ones is left alone) of at most max_hole_edges edges is filled, a
-//    triangle for three edges, else a fan from the loop's centroid (one new vertex); a fill
+//    triangle for three edges, else a fan from the loop's centroid (one new vertex, rounded
+//    to float32 so that the result is what an STL holds); a fill
 //    with a triangle of zero area (exact) is not made. Filling after the orientation lets the
 //    fill take its winding from the loop's;
 // 8. vertices no triangle uses go; the order of what is kept never changes.
@@ -449,7 +450,10 @@ bool fill_loop(Prep* p, uint32_t start, uint32_t length, const uint32_t* next) {
     sum = sum + p->v[x];
     x = next[x];
   } while (x != start);
-  const Vec3 m = sum * (1.0 / length);
+  // Rounded to float32: a scan's vertices are float32 (STL, PLY), and so the prepared mesh
+  // stays what an STL holds, as the Boolean's float32 output needs of B.
+  const Vec3 c = sum * (1.0 / length);
+  const Vec3 m{static_cast<float>(c.x), static_cast<float>(c.y), static_cast<float>(c.z)};
   x = start;
   do {
     if (collinear3d(p->v[next[x]], p->v[x], m)) return false;

@@ -59,6 +59,10 @@ TEST(ScanPhantom, PrepareFindsWhatWasPlanted) {
       EXPECT_EQ(after.shells, 1u);
       EXPECT_EQ(after.degenerate_triangles + after.duplicate_triangles, 0u);
       EXPECT_EQ(after.unreferenced_vertices, 0u);
+      for (const Vec3& v : out.vertices) {  // fills included: what an STL holds
+        ASSERT_TRUE(static_cast<float>(v.x) == v.x && static_cast<float>(v.y) == v.y &&
+                    static_cast<float>(v.z) == v.z);
+      }
       // The crowns face the other jaw: +z for the mandible, -z for the maxilla.
       Vec3 net{};
       for (const Triangle& t : out.triangles) {
