@@ -29,7 +29,10 @@
 // result (for the intersection's unions, the union of groups so far). For the intersection
 // with several groups the shells near A must be closed (they become the first operand of a
 // union). BooleanStats::shells, shell_groups and passes say what was done. B may be open (a
-// scan) when its border lies outside A. With float32 output B's vertices must be float32
+// scan) when its border lies outside A; an open B whose border meets or enters A is refused
+// up front (kInvalidMesh: "B is open: N boundary edges in M loops; its border meets A at
+// vertex i (x, y, z): ..."; at_index: i; decided exactly for B's boundary edges in A's box,
+// which costs A's distance index then). With float32 output B's vertices must be float32
 // values (as read from STL; a moved jaw must be rounded first), since they are kept bit for
 // bit.
 #ifndef SPLINTCORE_BOOLEAN_H

@@ -157,6 +157,14 @@ class StlWriter {
 Status write_stl(const Context& ctx, const Mesh& mesh, const ByteSink& sink,
                  const StlWriteOptions& options);
 
+// Writes the mesh as binary little-endian PLY to `sink`: float32 x, y, z per vertex (rounded
+// to nearest; -0 written as +0), with `rgb` (3 bytes a vertex, or empty: none) as uchar red,
+// green, blue, then each triangle as a uchar-counted int list vertex_indices. read_ply reads
+// it back (the vertices float32-exact). Allocates nothing (a 4 KiB buffer on the stack).
+// Errors: kInvalidArgument (rgb of the wrong size), kNonFinite / kLimitExceeded (a vertex not
+// finite or beyond float32: named), kInvalidMesh (an index out of range: named), kIoError.
+Status write_ply(const Mesh& mesh, Span<const uint8_t> rgb, const ByteSink& sink);
+
 // ---------------------------------------------------------------------------------------------
 // The indexed-mesh formats intraoral scanners export (PLY, Wavefront OBJ) and a reader that
 // detects the format (PLY, OBJ or STL) by content, then by file name (src/io/ply_read.cpp,

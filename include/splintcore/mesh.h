@@ -83,6 +83,8 @@ struct MeshReport {
   uint64_t unreferenced_vertices = 0;
   uint64_t edge_count = 0;             // distinct undirected edges
   uint64_t boundary_edges = 0;         // used by one triangle
+  uint64_t boundary_loops = 0;         // components of the boundary edges (holes and borders;
+                                       // two that touch at a vertex are one)
   uint64_t nonmanifold_edges = 0;      // used by three or more
   uint64_t orientation_conflicts = 0;  // used twice in the same direction
   uint64_t degenerate_triangles = 0;   // repeated vertex ids or zero area (exact)
@@ -91,7 +93,10 @@ struct MeshReport {
   int64_t euler_characteristic = 0;    // V - E + F over referenced vertices
   int64_t genus = -1;                  // sum over shells, when closed and edge-manifold
   double area = 0.0;                   // mm^2
-  double volume = 0.0;                 // signed, mm^3 (> 0 when outward)
+  // Signed, mm^3 (> 0 when outward). Computed for any mesh, but only a closed mesh has a
+  // volume: for an open one (a scan) it depends on where the origin lies, and neither it
+  // nor outward() says anything (the `check` command prints "n/a (open)").
+  double volume = 0.0;
   Aabb bounds;
 
   // The first offender of each kind (index order), for error messages.
@@ -112,7 +117,7 @@ struct MeshReport {
   }
 };
 
-// Bytes check_mesh() takes from the arena at most: about 69 per triangle plus 17 per vertex
+// Bytes check_mesh() takes from the arena at most: about 69 per triangle plus 21 per vertex
 // (the worst case is shells touching at many vertices), all returned before it finishes.
 // Linear time: the edges are counted in buckets by vertex, not sorted.
 uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count);
@@ -183,6 +188,64 @@ Status find_self_intersections(const Context& ctx, const Mesh& mesh, uint64_t ma
 // (marching_cubes_mesh's output).
 void move_mesh_down(Arena& arena, const Arena::Marker& start, const Mesh& mesh, Mesh* out,
                     bool vertices_first = false);
+
+// ---------------------------------------------------------------------------------------------
+// Scan preparation: the repairs an intraoral scan (an open surface of crowns and gum) needs
+// before it is a jaw, in a fixed order, each counted (src/mesh/prepare.cpp says how each is
+// decided): 1 duplicate triangles removed, 2 degenerate (zero-area, exact) triangles removed,
+// 3 edges with 3+ triangles resolved (the best-connected two kept), 4 vertices with several
+// fans split, 5 islands removed, 6 consistent orientation, 7 holes of at most max_hole_edges
+// edges filled, 8 unused vertices removed. It never closes the scan's border (a loop longer
+// than max_hole_edges): an open scan stays open.
+
+struct PrepareOptions {
+  // Islands: components (through edges) smaller than this, except the largest, are removed.
+  // By area unless min_island_triangles > 0: an area means the same at any scan resolution.
+  // 10 mm^2 (about 3 x 3 mm): scanner debris is a few mm^2, the smallest crown surface is
+  // several times more.
+  double min_island_area = 10.0;      // mm^2
+  uint32_t min_island_triangles = 0;  // > 0: count triangles instead
+  // Holes (boundary loops) of at most this many edges are filled; 0: none. A scan's own border
+  // has hundreds of edges, the spots it missed between teeth tens.
+  uint32_t max_hole_edges = 32;
+  // Non-zero: the whole mesh is turned, if need be, so that its net normal (the sum of its
+  // area vectors) points this way (an arch's crowns facing +occlusal).
+  Vec3 occlusal{0, 0, 0};
+};
+
+struct PrepareReport {
+  uint64_t input_vertices = 0, input_triangles = 0;
+  uint64_t duplicate_triangles = 0;    // 1: removed
+  uint64_t degenerate_triangles = 0;   // 2: removed
+  uint64_t nonmanifold_edges = 0;      // 3: edges that had 3+ triangles
+  uint64_t nonmanifold_triangles = 0;  //    triangles removed there
+  uint64_t nonmanifold_vertices = 0;   // 4: vertices whose fans were split
+  uint64_t split_vertices_added = 0;   //    copies made
+  uint64_t islands = 0;                // 5: components removed
+  uint64_t island_triangles = 0;       //    their triangles
+  uint64_t components = 0;             //    components kept
+  uint64_t flipped_triangles = 0;      // 6: triangles turned
+  uint64_t flipped_components = 0;     //    components turned whole
+  uint64_t orientation_conflicts = 0;  //    edges left disagreeing (a non-orientable strip)
+  uint64_t holes_filled = 0;           // 7: loops filled
+  uint64_t hole_triangles = 0;         //    triangles added
+  uint64_t holes_left = 0;             //    loops left open (the border; longer; not simple)
+  uint64_t unreferenced_vertices = 0;  // 8: removed
+  uint64_t output_vertices = 0, output_triangles = 0;
+};
+
+// Arena bytes prepare_scan() takes at most (the output mesh stays; it is at most
+// vertex_count + 4 triangle_count vertices and 4 triangle_count triangles): about 300 bytes a
+// triangle and 50 a vertex (the 87k-triangle torus: 28.7 MB, all of it used).
+uint64_t prepare_scan_bound(uint64_t vertex_count, uint64_t triangle_count);
+
+// Reads `mesh`, writes the prepared mesh to `out` (empty; it is placed where the arena's top
+// was, everything else returned). Deterministic: the output depends only on the input's bytes.
+// Errors: kInvalidMesh (an index out of range: named), kNonFinite (named), kInvalidArgument
+// (`out` not empty, a negative island area), kLimitExceeded (2^29 triangles or more),
+// kArenaExhausted, kCancelled. On an error the arena is as it was and `out` empty.
+Status prepare_scan(const Context& ctx, const Mesh& mesh, const PrepareOptions& options, Mesh* out,
+                    PrepareReport* report);
 
 // Applies a rigid transform to every vertex in place.
 void transform_mesh(const RigidTransform& x, Mesh* mesh);

@@ -46,6 +46,15 @@ inline Status check_boolean_arguments(const Mesh& a, const Mesh& b, const Mesh& 
   return Status::ok();
 }
 
+// An open B whose border meets or enters A (within `region`, A's box): kInvalidMesh saying that
+// B is open (its boundary edges and loops) and where its border meets A; ok otherwise, and when
+// A is not a solid or B has an index out of range or a non-finite vertex (the run names those).
+// Arena: temporaries, 1 byte per vertex of B, and when B is open in the region 16 bytes per
+// side of B's triangles there, and when B has boundary edges there A's distance index and
+// check_mesh(B); all returned (open_border.cpp).
+Status refuse_open_border_in_a(const Context& ctx, const Mesh& a, const Mesh& b,
+                               const Aabb& region);
+
 // Triangle t of B has a vertex that is not a float32 value, with float32 output.
 inline Status b_not_float32(uint32_t t) {
   return make_error(StatusCode::kInvalidArgument, "triangle ", t,

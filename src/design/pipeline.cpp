@@ -200,6 +200,26 @@ Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   return Status::ok();
 }
 
+// The Boolean names an open B's vertex where its border meets the base (issue 30); B is the
+// jaws one after another, so the jaw and its own vertex id are added.
+Status name_open_jaw(Status s, const CaseFile& c, Span<const Mesh> jaws) {
+  if (s.code() != StatusCode::kInvalidMesh || s.index() == kNoPosition ||
+      std::strncmp(s.message(), "B is open", 9) != 0) {
+    return s;
+  }
+  uint64_t first = 0;
+  for (size_t j = 0; j < jaws.size(); ++j) {
+    const uint64_t count = jaws[j].vertices.size();
+    if (s.index() < first + count) {
+      s.append(" (vertex ").append_u64(s.index() - first).append(" of jaw ").append_u64(j);
+      s.append(", ");
+      return s.append(c.jaws[j].role).append(")");
+    }
+    first += count;
+  }
+  return s;
+}
+
 // The label on the outer wall, placed from the base's lines (made as build_case_base makes
 // them); the labelled splint's triangles come first, so the final move takes it.
 Status label_splint(const Context& ctx, const CaseFile& c, Mesh* cut, DesignReport* report) {
@@ -232,8 +252,9 @@ Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   bo.op = BooleanOp::kDifference;
   const bool check_after = !c.has_blockout;
   bo.check_self_intersection = !check_after;
-  SPLINTCORE_RETURN_IF_ERROR(stage_error(mesh_boolean(ctx, *base, *b, bo, cut, &report->boolean),
-                                         "boolean (base minus jaws)"));
+  SPLINTCORE_RETURN_IF_ERROR(
+      stage_error(name_open_jaw(mesh_boolean(ctx, *base, *b, bo, cut, &report->boolean), c, jaws),
+                  "boolean (base minus jaws)"));
   if (check_after) {
     Mesh moved;
     move_mesh_down(arena, low, *cut, &moved);
@@ -250,9 +271,9 @@ Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
       SPLINTCORE_RETURN_IF_ERROR(
           stage_error(build_case_base(ctx, c, &again_base, &report->base), "base"));
       bo.check_self_intersection = true;
-      SPLINTCORE_RETURN_IF_ERROR(
-          stage_error(mesh_boolean(ctx, again_base, again_b, bo, cut, &report->boolean),
-                      "boolean (base minus jaws)"));
+      SPLINTCORE_RETURN_IF_ERROR(stage_error(
+          name_open_jaw(mesh_boolean(ctx, again_base, again_b, bo, cut, &report->boolean), c, jaws),
+          "boolean (base minus jaws)"));
     } else {
       report->boolean.self_intersection_checked = true;
       report->boolean.self_intersection_candidates = si.candidate_pairs;

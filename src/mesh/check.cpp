@@ -42,14 +42,16 @@ struct EdgeArrays {
 
 uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count) {
   // Kept through the check: the referenced flags, the union-find of shells, per triangle the
-  // sides that first use their edge, and the triangles of edges with 3+ uses (the duplicate
-  // search). Then the largest of three phases, each returned before the next: the edge pass
-  // (buckets, half-edges, tallies), the shell counts (per shell root; a vertex stamp; the
-  // (vertex, shell) pairs of vertices in several shells, with their sort scratch), the
-  // duplicate search (keys and scratch for the collected triangles).
+  // sides that first use their edge, the triangles of edges with 3+ uses (the duplicate
+  // search), and the union-find of the boundary edges' vertices (the loops). Then the largest of
+  // three phases, each returned before the next: the edge pass (buckets, half-edges, tallies), the
+  // shell counts (per shell root; a vertex stamp; the (vertex, shell) pairs of vertices in several
+  // shells, with their sort scratch), the duplicate search (keys and scratch for the collected
+  // triangles).
   const uint64_t v = vertex_count, t = triangle_count;
   const uint64_t kept = arena_array_bound<uint8_t>(v) + arena_array_bound<uint32_t>(t) +
-                        arena_array_bound<uint8_t>(t) + arena_array_bound<uint32_t>(t);
+                        arena_array_bound<uint8_t>(t) + arena_array_bound<uint32_t>(t) +
+                        arena_array_bound<uint32_t>(v);
   const uint64_t edges = arena_array_bound<uint32_t>(v + 1) + arena_array_bound<uint32_t>(3 * t) +
                          arena_array_bound<uint64_t>(v) + arena_array_bound<uint32_t>(v);
   const uint64_t shells = arena_array_bound<uint32_t>(3 * t) + arena_array_bound<uint32_t>(v) +
@@ -118,6 +120,8 @@ struct EdgePass {
   uint32_t* collected;
   uint32_t collected_count = 0;
   MeshReport* r;
+  UnionFind* border = nullptr;   // per vertex: the components of the boundary edges
+  uint8_t* on_border = nullptr;  // per vertex: bit 1 set when a boundary edge ends there
 
   uint32_t end_of(uint32_t use) const { return tris[use / 3].v[(use % 3 + 1) % 3]; }
   uint32_t start_of(uint32_t use) const { return tris[use / 3].v[use % 3]; }
@@ -188,6 +192,9 @@ struct EdgePass {
     if (uses == 1) {
       note(&r->first_boundary_edge, r->boundary_edges, lo, hi, t);
       ++r->boundary_edges;
+      border->unite(lo, hi);
+      on_border[lo] |= 2u;
+      on_border[hi] |= 2u;
     } else if (uses > 2) {
       note(&r->first_nonmanifold_edge, r->nonmanifold_edges, lo, hi, t);
       ++r->nonmanifold_edges;
@@ -352,7 +359,16 @@ Status count_collected_duplicates(Arena& arena, const Mesh& mesh, const uint32_t
   return Status::ok();
 }
 
-Status check_topology(const Context& ctx, const Mesh& mesh, MeshReport* r) {
+// The boundary loops: the components of the graph of boundary edges, one per root vertex on
+// the border (two holes that touch at a vertex count as one loop).
+void count_boundary_loops(UnionFind* border, const uint8_t* on_border, MeshReport* r) {
+  const uint32_t nv = static_cast<uint32_t>(r->vertex_count);
+  for (uint32_t v = 0; v < nv && r->boundary_edges > 0; ++v) {
+    if ((on_border[v] & 2u) != 0 && border->find(v) == v) ++r->boundary_loops;
+  }
+}
+
+Status check_topology(const Context& ctx, const Mesh& mesh, uint8_t* on_border, MeshReport* r) {
   Arena& arena = *ctx.arena;
   const uint32_t tri_count = static_cast<uint32_t>(r->triangle_count);
   const uint32_t nv = static_cast<uint32_t>(r->vertex_count);
@@ -364,11 +380,15 @@ Status check_topology(const Context& ctx, const Mesh& mesh, MeshReport* r) {
   if ((first_use == nullptr || collected == nullptr) && tri_count > 0) {
     return arena.exhausted_status();
   }
+  UnionFind border;
+  if (!border.init(arena, nv)) return arena.exhausted_status();
   uint32_t collected_count = 0;
   {
     ArenaScope scope(arena);
     EdgePass pass{
         mesh.triangles.data(), tri_count, nv, EdgeArrays{}, &shells, first_use, collected, 0, r};
+    pass.border = &border;
+    pass.on_border = on_border;
     pass.a.start = arena.allocate_array<uint32_t>(size_t{nv} + 1);
     pass.a.half = arena.allocate_array<uint32_t>(size_t{3} * tri_count);
     pass.a.tally = arena.allocate_array<uint64_t>(nv);
@@ -380,6 +400,7 @@ Status check_topology(const Context& ctx, const Mesh& mesh, MeshReport* r) {
     pass.run();
     collected_count = pass.collected_count;
   }
+  count_boundary_loops(&border, on_border, r);
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 2, 4));
   SPLINTCORE_RETURN_IF_ERROR(count_shells(arena, mesh, first_use, &shells, r));
   return count_collected_duplicates(arena, mesh, collected, collected_count, r);
@@ -405,7 +426,7 @@ Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report) {
   r.bounds = mesh_bounds(mesh);
   SPLINTCORE_RETURN_IF_ERROR(check_indices(mesh, referenced, &r));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 1, 4));
-  SPLINTCORE_RETURN_IF_ERROR(check_topology(ctx, mesh, &r));
+  SPLINTCORE_RETURN_IF_ERROR(check_topology(ctx, mesh, referenced, &r));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 3, 4));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 4, 4));
   return Status::ok();

@@ -431,13 +431,25 @@ TEST(BooleanShells, AnErrorNamesThePass) {
   TestArena ta;
   Arena& arena = ta.arena;
   const Mesh a = boxes_mesh(arena, {kA});
-  Mesh b = boxes_mesh(arena, {kB1, kB2});
-  // The first shell opened: the union of the shells (the intersection's first step) needs it
-  // closed.
+  // The first shell reaches beyond A (x up to 5) and is opened there: its border lies outside
+  // A (an open B whose border meets A is refused before any pass), but the union of the
+  // shells (the intersection's first step) needs it closed.
+  Box b1 = kB1;
+  b1.hi.x = 5;
+  Mesh b = boxes_mesh(arena, {b1, kB2});
   Mesh open(&arena);
   for (const Vec3& v : b.vertices) ASSERT_TRUE(open.vertices.push_back(v));
-  for (size_t t = 1; t < b.triangles.size(); ++t)
-    ASSERT_TRUE(open.triangles.push_back(b.triangles[t]));
+  size_t dropped = b.triangles.size();
+  for (size_t t = 0; t < b.triangles.size(); ++t) {
+    const uint32_t* v = b.triangles[t].v;
+    const bool far = b.vertices[v[0]].x == 5 && b.vertices[v[1]].x == 5 && b.vertices[v[2]].x == 5;
+    if (far && dropped == b.triangles.size()) {
+      dropped = t;
+    } else {
+      ASSERT_TRUE(open.triangles.push_back(b.triangles[t]));
+    }
+  }
+  ASSERT_LT(dropped, b.triangles.size());
   const Outcome r = run(arena, a, open, BooleanOp::kIntersection);
   ASSERT_FALSE(r.status.is_ok());
   EXPECT_EQ(r.status.code(), StatusCode::kInvalidMesh);

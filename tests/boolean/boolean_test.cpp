@@ -539,3 +539,54 @@ TEST(BooleanTest, ResultCheckNamesTheOpenEdgeOfAUnion) {
 
 }  // namespace
 }  // namespace splintcore
+
+namespace splintcore {
+namespace {
+
+// An open B whose border meets or enters A is refused up front, saying that B is open and
+// where (issue 30: the classification's "inconsistent inside/outside" said neither); an open
+// B whose border lies outside A (here inside A's box, so the exact test decides) still works.
+TEST(BooleanOpenB, BorderInsideAIsRefusedUpFrontAndOutsideAWorks) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  Mesh b = sphere_mesh(arena, 0.45, 6, 10, RigidTransform::translation({0.52, 0.47, 0.93}));
+  // The south cap's last triangle lies inside A.
+  ASSERT_LT(b.vertices[b.triangles[b.triangles.size() - 1].v[0]].z, 0.6);
+  b.triangles.pop_back();
+  {
+    const Result r = run_op(arena, a, b, BooleanOp::kDifference, true);
+    EXPECT_EQ(r.status.code(), StatusCode::kInvalidMesh) << test::format(r.status);
+    const std::string m = r.status.message();
+    EXPECT_NE(m.find("B is open: 3 boundary edges in 1 loop; its border meets A at vertex "),
+              std::string::npos)
+        << m;
+    EXPECT_NE(m.find("splintcore prepare"), std::string::npos) << m;
+    EXPECT_LT(r.status.index(), b.vertices.size());
+  }
+  // The tetrahedron x, y, z >= 0, x + y + z <= 1 (box [0, 1]^3) and a sphere through its
+  // slanted face, open where x + y + z > 1.5: in A's box, outside A.
+  Mesh t(&arena);
+  for (const Vec3& p : {Vec3{0, 0, 0}, Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 0, 1}}) {
+    ASSERT_TRUE(t.vertices.push_back(p));
+  }
+  for (const Triangle& f :
+       {Triangle{{0, 2, 1}}, Triangle{{0, 1, 3}}, Triangle{{0, 3, 2}}, Triangle{{1, 2, 3}}}) {
+    ASSERT_TRUE(t.triangles.push_back(f));
+  }
+  Mesh s = sphere_mesh(arena, 0.4, 6, 10, RigidTransform::translation({0.5, 0.5, 0.5}));
+  for (uint32_t v : s.triangles[0].v) {
+    const Vec3& p = s.vertices[v];
+    ASSERT_GT(p.x + p.y + p.z, 1.5);
+  }
+  s.triangles[0] = s.triangles[s.triangles.size() - 1];  // triangle 0 gone
+  s.triangles.pop_back();
+  EXPECT_EQ(report_of(arena, s).boundary_loops, 1u);
+  const Result ok = run_op(arena, t, s, BooleanOp::kDifference, true);
+  SPLINTCORE_EXPECT_OK(ok.status);
+  EXPECT_GT(ok.volume, 0.0);
+  EXPECT_LT(ok.volume, 1.0 / 6);
+}
+
+}  // namespace
+}  // namespace splintcore

@@ -1,8 +1,10 @@
 // The design pipeline (src/design/pipeline.cpp): the paper-scale case with the phantom jaws
 // gives the Boolean golden's bytes; bad calls are named errors; arena exhaustion is clean at
 // every cap tried; the jaws given are not changed.
+#include <array>
 #include <cstring>
 #include <map>
+#include <set>
 
 #include "common/phantom.h"
 #include "splintcore/design.h"
@@ -450,6 +452,52 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
     EXPECT_NE(std::string(st.message()).find(expect[i]), std::string::npos) << st.message();
     EXPECT_GT(st.line(), 0u) << bad[i];
   }
+}
+
+}  // namespace
+}  // namespace splintcore
+
+namespace splintcore {
+namespace {
+
+// A jaw cut open across the arch (a scan whose border runs under the splint) is refused by the
+// Boolean's input check, which names the jaw and its vertex (issue 30).
+TEST(DesignPipeline, OpenJawWhoseBorderCrossesTheSplintIsNamed) {
+  CaseAndJaws f;
+  ASSERT_TRUE(f.ok);
+  // A triangle of the mandible's imprint: its corners, moved as design moves them, are
+  // vertices of the splint (the Boolean keeps them bit for bit).
+  std::set<std::array<double, 3>> imprint;
+  {
+    Mesh whole;
+    DesignReport r;
+    SPLINTCORE_ASSERT_OK(
+        design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2), &whole, &r));
+    for (const Vec3& v : whole.vertices) imprint.insert({v.x, v.y, v.z});
+  }
+  Mesh& jaw = f.jaws[1];
+  auto moved_in_imprint = [&](uint32_t v) {
+    const Vec3 p = f.c.jaws[1].transform.apply_point(jaw.vertices[v]);
+    return imprint.count(
+               {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)}) > 0;
+  };
+  size_t cut = 0;
+  while (cut < jaw.triangles.size() &&
+         !(moved_in_imprint(jaw.triangles[cut].v[0]) && moved_in_imprint(jaw.triangles[cut].v[1]) &&
+           moved_in_imprint(jaw.triangles[cut].v[2]))) {
+    ++cut;
+  }
+  ASSERT_LT(cut, jaw.triangles.size());
+  jaw.triangles[cut] = jaw.triangles[jaw.triangles.size() - 1];
+  jaw.triangles.pop_back();
+  Mesh splint;
+  DesignReport r;
+  const Status s =
+      design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2), &splint, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh) << s.message();
+  const std::string m = s.message();
+  EXPECT_NE(m.find("boolean (base minus jaws): B is open: "), std::string::npos) << m;
+  EXPECT_NE(m.find(" of jaw 1, mandible)"), std::string::npos) << m;
 }
 
 }  // namespace

@@ -102,6 +102,17 @@ TEST(BoundExact, CheckMesh) {
   }
 }
 
+TEST(BoundExact, PrepareScan) {
+  for (const Input& in : inputs()) {
+    Welded w(in);
+    expect_fits(in, "prepare_scan", prepare_scan_bound(w.v(), w.t()), [&](Arena& arena) {
+      Mesh out;
+      PrepareReport report;
+      return prepare_scan(Context(&arena), w.mesh, PrepareOptions{}, &out, &report);
+    });
+  }
+}
+
 TEST(BoundExact, FindSelfIntersections) {
   for (const Input& in : inputs()) {
     Welded w(in);

@@ -62,10 +62,47 @@ TEST(CheckMesh, OpenMeshReportsFirstBoundaryEdge) {
   MeshReport r = check(t, soup);
   EXPECT_FALSE(r.closed());
   EXPECT_EQ(r.boundary_edges, 3u);
+  EXPECT_EQ(r.boundary_loops, 1u);
   EXPECT_EQ(r.genus, -1);
   Status s = require_valid_solid(r);
   EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
   EXPECT_NE(std::strstr(s.message(), "not closed: 3 boundary edges"), nullptr) << s.message();
+}
+
+// Boundary loops are the components of the boundary edges: one per hole, holes that share a
+// vertex counting once, none for a closed mesh.
+TEST(CheckMesh, BoundaryLoopsCountHoles) {
+  TestArena t;
+  EXPECT_EQ(check(t, unit_box()).boundary_loops, 0u);
+  auto soup = unit_box();
+  // Triangles far apart on the box: find two that share no corner, drop both.
+  auto shares_corner = [](const SoupTriangle& a, const SoupTriangle& b) {
+    for (const auto& p : a.p) {
+      for (const auto& q : b.p) {
+        if (p[0] == q[0] && p[1] == q[1] && p[2] == q[2]) return true;
+      }
+    }
+    return false;
+  };
+  size_t far = 1;
+  while (far < soup.size() && shares_corner(soup[0], soup[far])) ++far;
+  ASSERT_LT(far, soup.size());
+  auto two_holes = soup;
+  two_holes.erase(two_holes.begin() + static_cast<std::ptrdiff_t>(far));
+  two_holes.erase(two_holes.begin());
+  MeshReport r = check(t, two_holes);
+  EXPECT_EQ(r.boundary_edges, 6u);
+  EXPECT_EQ(r.boundary_loops, 2u);
+  // Two triangles that share a corner (or an edge) removed: one loop.
+  size_t touching = 1;
+  while (touching < soup.size() && !shares_corner(soup[0], soup[touching])) ++touching;
+  ASSERT_LT(touching, soup.size());
+  auto joined = soup;
+  joined.erase(joined.begin() + static_cast<std::ptrdiff_t>(touching));
+  joined.erase(joined.begin());
+  r = check(t, joined);
+  EXPECT_GT(r.boundary_edges, 0u);
+  EXPECT_EQ(r.boundary_loops, 1u);
 }
 
 TEST(CheckMesh, FlippedTriangleIsAnOrientationConflict) {

@@ -90,6 +90,10 @@ expect_exit 0 "check binary file with solid header" -- "$tool" check "$fixtures/
 expect_exit 0 "check ascii tetra" -- "$tool" check "$fixtures/stl/tetra_ascii.stl"
 expect_exit 1 "check open box" -- "$tool" check "$fixtures/stl/open_box_ascii.stl"
 check "open box message names the boundary" -- grep -q "not closed" "$work/err"
+check "an open mesh says so, with its loops" -- grep -q "^closed: no ([0-9]* boundary edges in 1 loop)" "$work/out"
+check "an open mesh has no outward side" -- grep -q "^outward: n/a (open)" "$work/out"
+check "an open mesh has no volume" -- grep -q "volume: n/a (open)" "$work/out"
+check "an open mesh has no genus" -- grep -q "genus n/a (open)" "$work/out"
 expect_exit 1 "check inside-out box" -- "$tool" check "$fixtures/stl/inside_out_box.stl" --json
 check "inside-out json status" -- grep -q '"status":"invalid_mesh"' "$work/out"
 expect_exit 1 "check too large box" -- "$tool" check "$fixtures/stl/too_large_box.stl"
@@ -614,6 +618,30 @@ check "no resolved case without a mandible" -- test ! -e "$work/auto/maxilla_onl
 cp "$fixtures/cases/paper_scale.json" "$work/auto/explicit.json"
 expect_exit 1 "outline of a case with its own picks" -- "$tool" outline "$work/auto/explicit.json" -o "$work/auto/explicit.resolved.json"
 check "no auto named" -- grep -q 'outline: the case gives its picks (no "auto" in "base")' "$work/err"
+
+# Scans (issue 30): the scan-like phantom, check on an open scan, prepare, and an open B whose
+# border meets the splint refused by name while the prepared scan is subtracted.
+mkdir -p "$work/scan"
+expect_exit 2 "phantom --scan with --triangles" -- "$tool" phantom --scan --triangles 6000 -o "$work/scan"
+expect_exit 0 "phantom --scan" -- "$tool" phantom --scan --seed 2 -o "$work/scan" --json
+check "phantom --scan json is one object" -- json_ok "$work/out"
+check "phantom --scan says what it planted" -- grep -q '"holes":3,"max_hole_edges":8,"islands":3' "$work/out"
+check "phantom --scan wrote PLY" -- test -s "$work/scan/mandible_scan.ply"
+expect_exit 1 "check an open scan" -- "$tool" check "$work/scan/mandible_scan.ply" --json
+check "check --json: no volume for an open scan" -- grep -q '"genus":null,"closed":false' "$work/out"
+check "check --json: loops" -- grep -q '"boundary_loops":9,' "$work/out"
+expect_exit 2 "prepare without -o" -- "$tool" prepare "$work/scan/maxilla_scan.stl"
+expect_exit 0 "prepare" -- "$tool" prepare "$work/scan/maxilla_scan.stl" -o "$work/scan/prepared.stl"
+check "prepare prints its steps" -- grep -q "5. islands removed  *3" "$work/out"
+check "prepare leaves one border" -- grep -q "^closed: no ([0-9]* boundary edges in 1 loop)" "$work/out"
+expect_exit 0 "prepare --json" -- "$tool" prepare "$work/scan/maxilla_scan.ply" -o "$work/scan/prepared2.stl" --json --max-hole-edges 4
+check "prepare --json is one object" -- json_ok "$work/out"
+check "prepare --max-hole-edges 4 fills one hole" -- grep -q '"holes_filled":1,' "$work/out"
+expect_exit 0 "base for the scans" -- "$tool" base "$fixtures/cases/paper_scale.json" -o "$work/scan/base.stl"
+expect_exit 1 "boolean with the raw scan" -- "$tool" boolean --difference "$work/scan/base.stl" "$work/scan/maxilla_scan.stl" -o "$work/scan/cut.stl"
+check "an open B is named" -- grep -q "B is open: [0-9]* boundary edges in 9 loops; its border meets A at vertex" "$work/err"
+expect_exit 0 "boolean with the prepared scan" -- "$tool" boolean --difference "$work/scan/base.stl" "$work/scan/prepared.stl" -o "$work/scan/cut.stl"
+expect_exit 0 "the splint from the prepared scan is printable" -- "$tool" check "$work/scan/cut.stl"
 
 # One command table (tools/splintcore/main.cpp): --help lists it, every command's --help
 # starts with its usage line, and the README shows the same commands with no option their

@@ -58,6 +58,8 @@ constexpr uint64_t kMinSections = 4 * kTeethPerJaw;
 constexpr uint32_t kRingTable = 8192;
 constexpr uint32_t kArchTable = 32768;
 
+}  // namespace
+
 // sin and cos with only + - * /: reduction by the nearest multiple of pi/2 (|x| is at most a
 // few radians here, so one double subtraction loses nothing that matters), then Taylor
 // polynomials to degree 17 and 18 on |r| <= pi/4 (truncation below 1e-16). Bit-identical
@@ -105,6 +107,8 @@ void sin_cos(double x, double* s, double* c) {
       break;
   }
 }
+
+namespace {
 
 // Rounds to float32 through a volatile float: g++ 12.2 at -O2 vectorises two neighbouring
 // double -> float -> double round trips into plain double arithmetic (the rounding vanishes).

@@ -113,6 +113,45 @@ GridSize choose_grid(uint64_t target_triangles);
 // decimals, as the fixture generator does), `case_id` as given. JSON text, newline-terminated.
 std::string case_json(const char* case_id);
 
+// sin and cos with only + - * / (Taylor polynomials after reduction by pi/2): the same bits
+// everywhere, for |x| up to a few radians.
+void sin_cos(double x, double* s, double* c);
+
+// ---- scan-like jaws (issue 30; scan_phantom.cpp) ----------------------------------------------
+//
+// An open surface as an intraoral scanner gives it: a band along the arch (the ellipses of the
+// solid phantom's picks) with 14 crowns on a gum ridge, as a height field over a grid (columns
+// along the arch, rows across it), crowns up for the mandible (+z), down for the maxilla. Then
+// the defects, placed by a seeded PRNG (splitmix64 over hash_mix) at fixed places along the
+// arch so they never touch: a ragged border (each column loses 0-2 cells at either side, so
+// the border is a staircase and stays vertex-manifold), `holes` holes of 1x1, 2x1 and 2x2 cells
+// (4, 6 and 8 boundary edges) inside the band, `islands` loose 2x2-cell patches (0.64 mm^2,
+// 8 triangles) beside it, `nonmanifold_edges` flaps (a triangle on a cell's diagonal sticking
+// out 1.5 mm), `duplicates` repeated triangles, one 2x2-cell patch (8 triangles) wound the
+// other way, and noise of +-0.025 mm in height. Colours: crowns ivory, gum pink.
+struct ScanOptions {
+  uint64_t seed = 1;
+  uint32_t columns = 280;  // cells along the arch
+  uint32_t rows = 40;      // cells across it (16 mm)
+};
+
+struct ScanJaw {
+  std::vector<Vec3> vertices;  // float32-exact
+  std::vector<Triangle> triangles;
+  std::vector<uint8_t> rgb;  // 3 per vertex
+  // What was planted: prepare_scan's report should find exactly these.
+  uint32_t holes = 0;
+  uint32_t max_hole_edges = 0;
+  uint32_t islands = 0;
+  uint32_t nonmanifold_edges = 0;
+  uint32_t duplicates = 0;
+  uint32_t flipped_triangles = 0;
+};
+
+// Builds one scan-like jaw (replaces *out). Errors: kInvalidArgument (fewer than 100 columns or
+// 32 rows, or more than 4000 of either).
+[[nodiscard]] Status make_scan_jaw(Jaw jaw, const ScanOptions& options, ScanJaw* out);
+
 }  // namespace phantom
 }  // namespace splintcore
 

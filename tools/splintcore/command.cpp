@@ -82,10 +82,13 @@ int Run::no_memory() const {
 }
 
 void add_mesh_report(JsonObject* j, const MeshReport& r) {
+  // An open mesh (a scan) has no volume, genus or outward side: those are null for it.
+  const bool closed = r.closed();
   j->add("vertices", r.vertex_count);
   j->add("triangles", r.triangle_count);
   j->add("edges", r.edge_count);
   j->add("boundary_edges", r.boundary_edges);
+  j->add("boundary_loops", r.boundary_loops);
   j->add("nonmanifold_edges", r.nonmanifold_edges);
   j->add("orientation_conflicts", r.orientation_conflicts);
   j->add("degenerate_triangles", r.degenerate_triangles);
@@ -93,35 +96,60 @@ void add_mesh_report(JsonObject* j, const MeshReport& r) {
   j->add("unreferenced_vertices", r.unreferenced_vertices);
   j->add("shells", r.shells);
   j->add("euler_characteristic", r.euler_characteristic);
-  j->add("genus", r.genus);
-  j->add("closed", r.closed());
+  if (closed) {
+    j->add("genus", r.genus);
+  } else {
+    j->add_raw("genus", "null");
+  }
+  j->add("closed", closed);
   j->add("edge_manifold", r.edge_manifold());
   j->add("oriented", r.oriented());
-  j->add("outward", r.outward());
+  if (closed) {
+    j->add("outward", r.outward());
+  } else {
+    j->add_raw("outward", "null");
+  }
   j->add("area_mm2", r.area);
-  j->add("volume_mm3", r.volume);
+  if (closed) {
+    j->add("volume_mm3", r.volume);
+  } else {
+    j->add_raw("volume_mm3", "null");
+  }
   j->add("bounds_min_mm", r.bounds.lo);
   j->add("bounds_max_mm", r.bounds.hi);
 }
 
 void print_mesh_report(const MeshReport& r) {
-  std::printf("mesh: %llu vertices, %llu triangles, %llu edges, %llu shell(s), genus %lld\n",
+  const bool closed = r.closed();
+  char genus[32] = "n/a (open)";
+  if (closed) std::snprintf(genus, sizeof genus, "%lld", static_cast<long long>(r.genus));
+  std::printf("mesh: %llu vertices, %llu triangles, %llu edges, %llu shell(s), genus %s\n",
               static_cast<unsigned long long>(r.vertex_count),
               static_cast<unsigned long long>(r.triangle_count),
               static_cast<unsigned long long>(r.edge_count),
-              static_cast<unsigned long long>(r.shells), static_cast<long long>(r.genus));
-  std::printf("closed: %s (%llu boundary edges)\n", r.closed() ? "yes" : "no",
-              static_cast<unsigned long long>(r.boundary_edges));
+              static_cast<unsigned long long>(r.shells), genus);
+  if (closed) {
+    std::printf("closed: yes (0 boundary edges)\n");
+  } else {
+    std::printf("closed: no (%llu boundary edges in %llu loop%s)\n",
+                static_cast<unsigned long long>(r.boundary_edges),
+                static_cast<unsigned long long>(r.boundary_loops),
+                r.boundary_loops == 1 ? "" : "s");
+  }
   std::printf("edge-manifold: %s (%llu edges with 3+ triangles)\n",
               r.edge_manifold() ? "yes" : "no",
               static_cast<unsigned long long>(r.nonmanifold_edges));
   std::printf("consistently oriented: %s (%llu conflicting edges)\n", r.oriented() ? "yes" : "no",
               static_cast<unsigned long long>(r.orientation_conflicts));
-  std::printf("outward: %s\n", r.outward() ? "yes" : "no");
+  std::printf("outward: %s\n", closed ? (r.outward() ? "yes" : "no") : "n/a (open)");
   std::printf("degenerate triangles: %llu, duplicate triangles: %llu\n",
               static_cast<unsigned long long>(r.degenerate_triangles),
               static_cast<unsigned long long>(r.duplicate_triangles));
-  std::printf("area: %.6f mm^2, volume: %.6f mm^3\n", r.area, r.volume);
+  if (closed) {
+    std::printf("area: %.6f mm^2, volume: %.6f mm^3\n", r.area, r.volume);
+  } else {
+    std::printf("area: %.6f mm^2, volume: n/a (open)\n", r.area);
+  }
   std::printf("bounds: [%.6f, %.6f, %.6f] - [%.6f, %.6f, %.6f] mm\n", r.bounds.lo.x, r.bounds.lo.y,
               r.bounds.lo.z, r.bounds.hi.x, r.bounds.hi.y, r.bounds.hi.z);
 }

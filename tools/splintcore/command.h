@@ -34,6 +34,7 @@ struct Command {
 // The commands (each in the file of its stage of the method).
 int run_check(const Command& command, int argc, char** argv);
 int run_convert(const Command& command, int argc, char** argv);
+int run_prepare(const Command& command, int argc, char** argv);
 int run_distance(const Command& command, int argc, char** argv);
 int run_autorotate(const Command& command, int argc, char** argv);
 int run_compare(const Command& command, int argc, char** argv);

@@ -30,10 +30,12 @@ const char kCheckUsage[] =
     "usage: splintcore check IN.stl [--printer NAME] [--no-place] [--json]\n"
     "                       [--memory-cap SIZE] [--threads N]\n"
     "\n"
-    "Reads a binary or ASCII STL, welds identical vertices and reports: closed, edge-manifold,\n"
-    "consistently and outward oriented, degenerate and duplicate triangles, shells, genus,\n"
-    "area, volume, extent, and whether it fits the printer's build volume (centred on the\n"
-    "tray unless --no-place). Exit 0 only when the mesh is printable.\n"
+    "Reads a mesh (STL, PLY or OBJ; STL welded) and reports: closed (else its boundary edges\n"
+    "and loops), edge-manifold, consistently and outward oriented, degenerate and duplicate\n"
+    "triangles, shells, genus, area, volume, extent, and whether it fits the printer's build\n"
+    "volume (centred on the tray unless --no-place). An open mesh (a scan) has no volume, genus\n"
+    "or outward side: they print as n/a (open), null in --json. Exit 0 only when the mesh is\n"
+    "printable.\n"
     "Printers: eden260 (Stratasys Eden260-class PolyJet, 255 x 252 x 200 mm, 16 um layers).\n";
 
 const char kConvertUsage[] =
@@ -100,15 +102,36 @@ const char kBooleanUsage[] =
     "(long thin CAD triangles over dense ones) can pair every triangle with every other near\n"
     "it; past --max-pairs candidate pairs the run stops with an error saying so.\n";
 
+const char kPrepareUsage[] =
+    "usage: splintcore prepare IN -o OUT.stl [--min-island MM2] [--min-island-triangles N]\n"
+    "                         [--max-hole-edges N] [--occlusal X,Y,Z] [--ascii] [--json]\n"
+    "                         [--memory-cap SIZE] [--threads N]\n"
+    "\n"
+    "Scan preparation: reads an intraoral scan (STL, PLY or OBJ) and, in this order, removes\n"
+    "duplicate and degenerate (zero-area, exact) triangles, resolves edges with 3+ triangles\n"
+    "(the two best connected stay), splits non-manifold vertices, removes islands under\n"
+    "--min-island mm^2 (default 10; or --min-island-triangles N), orients every component\n"
+    "consistently (the input's majority winding; --occlusal turns the whole mesh so its net\n"
+    "normal points that way), fills holes of at most --max-hole-edges boundary edges (default\n"
+    "32; a triangle, or a fan from the hole's centroid) and drops unused vertices. Prints\n"
+    "each step's count and the result's check; writes OUT.stl atomically. The scan's own\n"
+    "border (hundreds of edges) stays open. The output depends only on the input's bytes.\n";
+
 const char kPhantomUsage[] =
     "usage: splintcore phantom --triangles N -o DIR [--json]\n"
+    "       splintcore phantom --scan [--seed N] -o DIR [--json]\n"
     "\n"
     "Writes DIR/maxilla.stl and DIR/mandible.stl: synthetic dental-arch jaws (a gum ridge and\n"
     "14 big-end-up crowns with cusps each, one closed genus-0 shell per jaw, float32-exact), N\n"
     "triangles per jaw (2000..16000000, within 1%), in occlusion, in the frame of\n"
     "fixtures/cases/paper_scale.json: with that case's mandible transform (2 mm down) its base\n"
     "cuts 1.3-1.5 mm into every crown. Also DIR/case.json, that case for these jaws (design\n"
-    "it with `splintcore design DIR/case.json -o OUT`). The bytes depend only on N.\n";
+    "it with `splintcore design DIR/case.json -o OUT`). The bytes depend only on N.\n"
+    "With --scan: open, scan-like jaws instead (tools/common/phantom.h): DIR/maxilla_scan and\n"
+    "DIR/mandible_scan, each as .stl (binary) and .ply (binary, per-vertex colours): crowns on\n"
+    "a band of gum with a ragged border, 3 holes (4-8 edges), 3 loose islands, 2 non-manifold\n"
+    "flaps, 2 duplicate triangles, a patch wound the other way and 0.05 mm of noise, placed by\n"
+    "--seed (default 1); the summary lists what was planted. The bytes depend only on the seed.\n";
 
 const char kOutlineUsage[] =
     "usage: splintcore outline CASE.json -o RESOLVED.json [--json] [--memory-cap SIZE]\n"
@@ -234,10 +257,12 @@ const char kRenderUsage[] =
 const Command kCommands[] = {
     {"check", run_check, kCheckUsage, "check a mesh is a printable solid"},
     {"convert", run_convert, kConvertUsage, "read, weld, check and rewrite an STL"},
+    {"prepare", run_prepare, kPrepareUsage, "scan preparation: islands, holes, orientation"},
     {"base", run_base, kBaseUsage, "build the initial splint base from the picks"},
     {"distance", run_distance, kDistanceUsage, "closest point, signed distance, winding number"},
     {"boolean", run_boolean, kBooleanUsage, "splint base minus jaws (or --union, --intersection)"},
-    {"phantom", run_phantom, kPhantomUsage, "synthetic maxilla.stl, mandible.stl and case.json"},
+    {"phantom", run_phantom, kPhantomUsage,
+     "synthetic maxilla.stl, mandible.stl and case.json (--scan: open scans)"},
     {"outline", run_outline, kOutlineUsage, "the automatic outline as a case with explicit picks"},
     {"autorotate", run_autorotate, kAutorotateUsage,
      "the mandible turned about the hinge axis to an opening"},

@@ -279,6 +279,8 @@ struct PhantomArgs {
   CommonArgs common;
   uint64_t triangles = 0;
   const char* output = nullptr;
+  bool scan = false;
+  uint64_t seed = 1;
 };
 
 // `phantom`'s options, in the order its --help lists them.
@@ -287,6 +289,9 @@ std::vector<OptionSpec> phantom_options(PhantomArgs* a) {
       count("--triangles", "N", &a->triangles, 0, UINT64_MAX, "triangles per jaw, 2000..16000000",
             "--triangles needs a count"),
       output_option("DIR", &a->output, "the folder to write into"),
+      flag("--scan", &a->scan, "open, scan-like jaws (STL and PLY with colours) instead"),
+      count("--seed", "N", &a->seed, 0, UINT64_MAX, "where --scan places its defects (default 1)",
+            "--seed needs a number"),
   };
 }
 
@@ -316,6 +321,73 @@ Status write_phantom_jaw(const PhantomArgs& a, int index, std::string* row) {
                 jaw.triangles.size(), jaw.vertices.size(), hex.c_str());
   }
   return Status::ok();
+}
+
+// Writes DIR/NAME_scan.stl and .ply for one scan-like jaw; `row` gets its JSON object or its
+// summary is printed.
+Status write_scan_jaw(const PhantomArgs& a, int index, std::string* row) {
+  const char* names[2] = {"maxilla", "mandible"};
+  phantom::ScanJaw jaw;
+  phantom::ScanOptions so;
+  so.seed = a.seed;
+  const phantom::Jaw which = index == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible;
+  SPLINTCORE_RETURN_IF_ERROR(phantom::make_scan_jaw(which, so, &jaw));
+  const Mesh mesh = mesh_view(Span<const Vec3>(jaw.vertices.data(), jaw.vertices.size()),
+                              Span<const Triangle>(jaw.triangles.data(), jaw.triangles.size()));
+  std::string stl, ply;
+  std::vector<uint8_t> memory(size_t{128} << 10);
+  Arena arena(memory.data(), memory.size());  // write_stl's record buffer (64,000 bytes)
+  SPLINTCORE_RETURN_IF_ERROR(
+      write_stl(Context(&arena), mesh, cli::string_sink(&stl), StlWriteOptions{}));
+  SPLINTCORE_RETURN_IF_ERROR(
+      write_ply(mesh, Span<const uint8_t>(jaw.rgb.data(), jaw.rgb.size()), cli::string_sink(&ply)));
+  const std::string base = std::string(a.output) + "/" + names[index] + "_scan";
+  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(base + ".stl", stl));
+  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(base + ".ply", ply));
+  if (a.common.json) {
+    JsonObject r;
+    r.add("jaw", names[index]);
+    r.add("stl", base + ".stl");
+    r.add("ply", base + ".ply");
+    r.add("triangles", static_cast<uint64_t>(jaw.triangles.size()));
+    r.add("stl_sha256", hex_sha256(stl.data(), stl.size()));
+    r.add("ply_sha256", hex_sha256(ply.data(), ply.size()));
+    r.add("holes", jaw.holes);
+    r.add("max_hole_edges", jaw.max_hole_edges);
+    r.add("islands", jaw.islands);
+    r.add("nonmanifold_edges", jaw.nonmanifold_edges);
+    r.add("duplicate_triangles", jaw.duplicates);
+    r.add("flipped_triangles", jaw.flipped_triangles);
+    *row = r.str();
+  } else {
+    std::printf(
+        "%s: %s.stl and .ply, %zu triangles; planted: %u holes (at most %u edges), %u islands, "
+        "%u non-manifold edges, %u duplicate triangles, %u triangles wound the other way\n",
+        names[index], base.c_str(), jaw.triangles.size(), jaw.holes, jaw.max_hole_edges,
+        jaw.islands, jaw.nonmanifold_edges, jaw.duplicates, jaw.flipped_triangles);
+  }
+  return Status::ok();
+}
+
+// phantom --scan: both scan-like jaws.
+int run_scan_phantom(const Command& command, const PhantomArgs& a) {
+  const double t0 = monotonic_seconds();
+  std::string rows;
+  for (int j = 0; j < 2; ++j) {
+    std::string row;
+    const Status s = write_scan_jaw(a, j, &row);
+    if (!s.is_ok()) return rejected(a.common, command.name, s, nullptr);
+    if (a.common.json) rows += (j > 0 ? "," : "") + row;
+  }
+  if (!a.common.json) return kExitOk;
+  JsonObject j;
+  j.add("command", "phantom");
+  j.add_status(Status::ok());
+  j.add("seed", a.seed);
+  j.add_raw("scans", "[" + rows + "]");
+  j.add("time_s", monotonic_seconds() - t0);
+  print_json(j);
+  return kExitOk;
 }
 
 }  // namespace
@@ -403,6 +475,10 @@ int run_phantom(const Command& command, int argc, char** argv) {
   if (early >= 0) return early;
   if (!a.common.positional.empty()) return line.usage_error("phantom takes no input file");
   if (a.output == nullptr) return line.usage_error("phantom needs -o DIR");
+  if (a.scan) {
+    if (a.triangles != 0) return line.usage_error("phantom --scan takes no --triangles");
+    return run_scan_phantom(command, a);
+  }
   if (a.triangles < phantom::kMinTriangles || a.triangles > phantom::kMaxTriangles) {
     return line.usage_error("--triangles must be 2000..16000000");
   }

@@ -1,0 +1,130 @@
+// An open B (a scan) refused up front when its border meets A (issue 30). The Boolean takes an
+// open B when B's border lies outside A (boolean.h): then the part of B inside A is bounded by
+// the intersection curve alone and the result is closed. When the border crosses A's surface
+// or lies inside A, the classification finds pieces of B with no consistent side and used to
+// answer "inconsistent inside/outside classification (overlapping shells in B, ...)", which
+// never said that B was open. This check says it first, and where.
+//
+// Only B's edges whose boxes meet A's region can matter, and every triangle using such an edge
+// meets the region too, so the boundary edges there are found among the near triangles alone
+// (per-vertex outcodes against the region): their sides as (smaller id, larger id) keys,
+// radix-sorted, a key seen once being a boundary edge; a closed B is passed by a fingerprint
+// (the XOR of the keys' hashes, zero when every edge is used twice) without the sort. Each such
+// edge is then tested against A exactly (segment_intersects_mesh, orient3d based) and, when it does
+// not meet A's surface, by the winding number of A at one end (the whole edge is then on one side
+// of A's closed surface).
+#include "boolean/boolean_internal.h"
+#include "splintcore/distance.h"
+
+namespace splintcore {
+
+namespace {
+
+// Which sides of the region a point lies beyond (one bit each): a triangle or edge whose
+// corners share a bit lies wholly beyond that side, so its box misses the region.
+uint8_t outcode(const Vec3& p, const Aabb& r) {
+  return static_cast<uint8_t>((p.x < r.lo.x ? 1u : 0u) | (p.x > r.hi.x ? 2u : 0u) |
+                              (p.y < r.lo.y ? 4u : 0u) | (p.y > r.hi.y ? 8u : 0u) |
+                              (p.z < r.lo.z ? 16u : 0u) | (p.z > r.hi.z ? 32u : 0u));
+}
+
+// The sides of B's near triangles whose edges meet the region, as (smaller id << 32 | larger
+// id), into keys (when not null); their count.
+size_t near_edges(const Mesh& b, const uint8_t* code, uint64_t* keys, uint64_t* fingerprint) {
+  size_t n = 0;
+  for (const Triangle& tri : b.triangles) {
+    if ((code[tri.v[0]] & code[tri.v[1]] & code[tri.v[2]]) != 0) continue;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t p = tri.v[k], q = tri.v[(k + 1) % 3];
+      if (p == q || (code[p] & code[q]) != 0) continue;
+      const uint64_t key = p < q ? (uint64_t{p} << 32 | q) : (uint64_t{q} << 32 | p);
+      if (keys != nullptr) keys[n] = key;
+      *fingerprint ^= hash_mix(key);
+      ++n;
+    }
+  }
+  return n;
+}
+
+// The vertex of B where its border meets A first (in key order), or kNoTriangle when none does.
+uint32_t first_border_vertex_in_a(const DistanceIndex& index, const Mesh& b, const uint64_t* keys,
+                                  size_t n) {
+  for (size_t i = 0; i < n; ++i) {
+    if ((i > 0 && keys[i] == keys[i - 1]) || (i + 1 < n && keys[i] == keys[i + 1])) continue;
+    const uint32_t lo = static_cast<uint32_t>(keys[i] >> 32), hi = static_cast<uint32_t>(keys[i]);
+    const Vec3 &p = b.vertices[lo], &q = b.vertices[hi];
+    uint32_t hit = 0;
+    if (segment_intersects_mesh(index, p, q, &hit)) return lo;
+    if (winding_number(index, p) >= 0.5) return lo;
+  }
+  return kNoTriangle;
+}
+
+}  // namespace
+
+Status refuse_open_border_in_a(const Context& ctx, const Mesh& a, const Mesh& b,
+                               const Aabb& region) {
+  Arena& arena = *ctx.arena;
+  const uint32_t nv = static_cast<uint32_t>(b.vertices.size());
+  for (const Triangle& tri : b.triangles) {
+    if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) return Status::ok();  // named later
+  }
+  ArenaScope scope(arena);
+  uint8_t* code = arena.allocate_array<uint8_t>(nv);
+  if (code == nullptr && nv > 0) return arena.exhausted_status();
+  for (uint32_t v = 0; v < nv; ++v) {
+    if (!is_finite(b.vertices[v])) return Status::ok();  // the run names it (kNonFinite)
+    code[v] = outcode(b.vertices[v], region);
+  }
+  // A closed B (the usual case) uses every edge twice, so the XOR of its edges' hashes is 0:
+  // only a non-zero fingerprint pays for the sort that finds the edges used once. (An open B
+  // whose fingerprint is 0 by chance, about 2^-64, gets the run's own message, as before.)
+  uint64_t fingerprint = 0;
+  const size_t n = near_edges(b, code, nullptr, &fingerprint);
+  if (fingerprint == 0) return Status::ok();
+  uint64_t* keys = arena.allocate_array<uint64_t>(n);
+  uint64_t* scratch = arena.allocate_array<uint64_t>(n);
+  if (keys == nullptr || scratch == nullptr) return arena.exhausted_status();
+  near_edges(b, code, keys, &fingerprint);
+  radix_sort_bits(Span<uint64_t>(keys, n), Span<uint64_t>(scratch, n), 0, 64);
+  bool open_near = false;
+  for (size_t i = 0; i < n && !open_near; ++i) {
+    open_near = (i == 0 || keys[i] != keys[i - 1]) && (i + 1 == n || keys[i] != keys[i + 1]);
+  }
+  if (!open_near) return Status::ok();
+  // A that is not a solid is the run's error to name ("A must be a solid"): its winding
+  // number would mean nothing here.
+  if (!check_closed_oriented(ctx, a, nullptr).is_ok()) {
+    arena.forget_failure();
+    return Status::ok();
+  }
+  DistanceIndex index;
+  const Status built = build_distance_index(ctx, a, DistanceIndexOptions{}, &index);
+  if (built.code() == StatusCode::kArenaExhausted || built.code() == StatusCode::kCancelled) {
+    return built;
+  }
+  if (!built.is_ok()) return Status::ok();  // A not finite: the run names it
+  const uint32_t v = first_border_vertex_in_a(index, b, keys, n);
+  if (v == kNoTriangle) return Status::ok();
+  // The whole border, for the message (its loops); what the check cannot afford is left out.
+  arena.rewind(scope.start());
+  MeshReport r;
+  const bool counted = check_mesh(ctx, b, &r).is_ok();
+  if (!counted) arena.forget_failure();
+  // To the micrometre: a Status holds 256 bytes, and callers append where (design: the jaw).
+  auto um = [](double x) {
+    return static_cast<double>(static_cast<int64_t>(x * 1000 + (x < 0 ? -0.5 : 0.5))) / 1000;
+  };
+  const Vec3& p = b.vertices[v];
+  Status e = make_error(StatusCode::kInvalidMesh, "B is open");
+  if (counted) {
+    e = make_error(StatusCode::kInvalidMesh, "B is open: ", r.boundary_edges, " boundary edges in ",
+                   r.boundary_loops, r.boundary_loops == 1 ? " loop" : " loops");
+  }
+  return make_error(StatusCode::kInvalidMesh, e.message(), "; its border meets A at vertex ", v,
+                    " (", um(p.x), ", ", um(p.y), ", ", um(p.z),
+                    "): fill it (splintcore prepare --max-hole-edges N) or use a larger scan")
+      .at_index(v);
+}
+
+}  // namespace splintcore

@@ -1,0 +1,149 @@
+// Scan preparation (prepare_scan, src/mesh/prepare.cpp): each step on a small planted case,
+// the arena bound run at exactly its size, and the errors.
+#include <vector>
+
+#include "support/test_util.h"
+
+namespace splintcore {
+namespace {
+
+using test::TestArena;
+
+// A 6 x 6 grid of 2 mm cells in z = 0 (normals +z) and one of every defect.
+struct Planted {
+  std::vector<Vec3> v;
+  std::vector<Triangle> t;
+  Planted() {
+    for (uint32_t j = 0; j <= 6; ++j) {
+      for (uint32_t i = 0; i <= 6; ++i) v.push_back(Vec3{2.0 * i, 2.0 * j, 0});
+    }
+    for (uint32_t j = 0; j < 6; ++j) {
+      for (uint32_t i = 0; i < 6; ++i) {
+        if (i == 3 && j == 3) continue;  // a hole of 4 edges
+        const uint32_t a = 7 * j + i;
+        t.push_back(Triangle{{a, a + 1, a + 8}});
+        t.push_back(Triangle{{a, a + 8, a + 7}});
+      }
+    }
+    std::swap(t[20].v[1], t[20].v[2]);  // one triangle wound the other way
+    t.push_back(t[0]);                  // a duplicate
+    t.push_back(Triangle{{0, 1, 2}});   // zero area (collinear)
+    v.push_back(Vec3{3, 3, 2});         // 49: a flap on the diagonal 8 - 16
+    t.push_back(Triangle{{8, 16, 49}});
+    v.push_back(Vec3{13, 12, 0});  // 50, 51: a triangle touching the grid at its corner 48 only
+    v.push_back(Vec3{13, 13, 0});
+    t.push_back(Triangle{{48, 50, 51}});
+    v.push_back(Vec3{30, 0, 0});  // 52..54: a loose island
+    v.push_back(Vec3{31, 0, 0});
+    v.push_back(Vec3{30, 1, 0});
+    t.push_back(Triangle{{52, 53, 54}});
+  }
+  Mesh mesh(Arena& arena) const {
+    Mesh m(&arena);
+    for (const Vec3& p : v) EXPECT_TRUE(m.vertices.push_back(p));
+    for (const Triangle& x : t) EXPECT_TRUE(m.triangles.push_back(x));
+    return m;
+  }
+};
+
+TEST(PrepareScan, EveryStepCountsWhatWasPlanted) {
+  TestArena ta;
+  const Planted p;
+  const Mesh in = p.mesh(ta.arena);
+  PrepareOptions o;
+  o.max_hole_edges = 8;  // the grid's border (24 edges) stays open
+  Mesh out;
+  PrepareReport r;
+  SPLINTCORE_ASSERT_OK(prepare_scan(Context(&ta.arena), in, o, &out, &r));
+  EXPECT_EQ(r.input_triangles, 75u);
+  EXPECT_EQ(r.duplicate_triangles, 1u);
+  EXPECT_EQ(r.degenerate_triangles, 1u);
+  EXPECT_EQ(r.nonmanifold_edges, 1u);
+  EXPECT_EQ(r.nonmanifold_triangles, 1u);
+  EXPECT_EQ(r.nonmanifold_vertices, 1u);
+  EXPECT_EQ(r.split_vertices_added, 1u);
+  EXPECT_EQ(r.islands, 2u);
+  EXPECT_EQ(r.island_triangles, 2u);
+  EXPECT_EQ(r.components, 1u);
+  EXPECT_EQ(r.flipped_triangles, 1u);
+  EXPECT_EQ(r.orientation_conflicts, 0u);
+  EXPECT_EQ(r.holes_filled, 1u);
+  EXPECT_EQ(r.hole_triangles, 4u);
+  EXPECT_EQ(r.holes_left, 1u);  // the grid's border
+  EXPECT_EQ(r.unreferenced_vertices, 7u);
+  EXPECT_EQ(r.output_triangles, 74u);
+  EXPECT_EQ(r.output_vertices, 50u);
+  MeshReport c;
+  SPLINTCORE_ASSERT_OK(check_mesh(Context(&ta.arena), out, &c));
+  EXPECT_EQ(c.boundary_edges, 24u);
+  EXPECT_EQ(c.boundary_loops, 1u);
+  EXPECT_EQ(c.shells, 1u);
+  EXPECT_TRUE(c.edge_manifold() && c.oriented());
+  EXPECT_EQ(c.degenerate_triangles + c.duplicate_triangles + c.unreferenced_vertices, 0u);
+  // The input's majority winding (+z) is kept; vertices are copied, never moved.
+  const Triangle& t0 = out.triangles[0];
+  EXPECT_GT(cross(out.vertices[t0.v[1]] - out.vertices[t0.v[0]],
+                  out.vertices[t0.v[2]] - out.vertices[t0.v[0]])
+                .z,
+            0.0);
+  EXPECT_EQ(out.vertices[7], (Vec3{0, 2, 0}));
+}
+
+TEST(PrepareScan, OptionsChangeIslandsHolesAndFacing) {
+  TestArena ta;
+  const Planted p;
+  const Mesh in = p.mesh(ta.arena);
+  PrepareOptions o;
+  o.min_island_triangles = 1;  // by count: nothing is smaller than one triangle
+  o.max_hole_edges = 3;        // the 4-edge hole stays
+  o.occlusal = Vec3{0, 0, -1};
+  Mesh out;
+  PrepareReport r;
+  SPLINTCORE_ASSERT_OK(prepare_scan(Context(&ta.arena), in, o, &out, &r));
+  EXPECT_EQ(r.islands, 0u);
+  EXPECT_EQ(r.components, 3u);
+  EXPECT_EQ(r.holes_filled, 0u);
+  EXPECT_EQ(r.holes_left, 4u);          // the border, the hole, the two small pieces' borders
+  EXPECT_GT(r.flipped_triangles, 60u);  // all turned to face -z
+  const Triangle& t0 = out.triangles[0];
+  EXPECT_LT(cross(out.vertices[t0.v[1]] - out.vertices[t0.v[0]],
+                  out.vertices[t0.v[2]] - out.vertices[t0.v[0]])
+                .z,
+            0.0);
+}
+
+TEST(PrepareScan, RunsInExactlyItsBoundAndRewindsOnErrors) {
+  TestArena ta;
+  const Planted p;
+  const Mesh in = p.mesh(ta.arena);
+  const uint64_t bound = prepare_scan_bound(in.vertices.size(), in.triangles.size());
+  std::vector<unsigned char> buffer(static_cast<size_t>(bound));
+  Arena exact(buffer.data(), buffer.size());
+  Mesh out;
+  PrepareReport r;
+  SPLINTCORE_ASSERT_OK(prepare_scan(Context(&exact), in, PrepareOptions{}, &out, &r));
+  EXPECT_EQ(out.triangles.size(), 98u);  // by default the 24-edge border is filled too
+  // Too small: a clean error, the arena as it was.
+  Arena small(buffer.data(), static_cast<size_t>(bound / 4));
+  Mesh none;
+  Status s = prepare_scan(Context(&small), in, PrepareOptions{}, &none, &r);
+  EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << test::format(s);
+  EXPECT_EQ(small.used(), 0u);
+  EXPECT_TRUE(none.triangles.empty());
+  // Bad input: named.
+  Mesh bad = p.mesh(ta.arena);
+  bad.triangles[5].v[2] = 999;
+  s = prepare_scan(Context(&ta.arena), bad, PrepareOptions{}, &none, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_EQ(s.index(), 5u);
+  bad = p.mesh(ta.arena);
+  bad.vertices[3].y = std::numeric_limits<double>::quiet_NaN();
+  s = prepare_scan(Context(&ta.arena), bad, PrepareOptions{}, &none, &r);
+  EXPECT_EQ(s.code(), StatusCode::kNonFinite);
+  EXPECT_EQ(s.index(), 3u);
+  s = prepare_scan(Context(&ta.arena), in, PrepareOptions{}, &out, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace splintcore
