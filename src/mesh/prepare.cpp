@@ -452,8 +452,8 @@ bool fill_loop(Prep* p, uint32_t start, uint32_t length, const uint32_t* next) {
   } while (x != start);
   // Rounded to float32: a scan's vertices are float32 (STL, PLY), and so the prepared mesh
   // stays what an STL holds, as the Boolean's float32 output needs of B.
-  const Vec3 c = sum * (1.0 / length);
-  const Vec3 m{static_cast<float>(c.x), static_cast<float>(c.y), static_cast<float>(c.z)};
+  Vec3 m = sum * (1.0 / length);
+  round_to_float32(&m);  // (finite and in range: the mean of float32 vertices)
   x = start;
   do {
     if (collinear3d(p->v[next[x]], p->v[x], m)) return false;
