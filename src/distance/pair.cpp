@@ -266,8 +266,10 @@ struct PairSearch {
   void item_box(int side, uint32_t node, uint8_t slot, double lo[3], double hi[3]) const {
     const BvhNode& n = index[side]->nodes[node];
     if (side == 1 && rigid) {
-      const double l[3] = {n.lo[0][slot], n.lo[1][slot], n.lo[2][slot]};
-      const double h[3] = {n.hi[0][slot], n.hi[1][slot], n.hi[2][slot]};
+      const double l[3] = {static_cast<double>(n.lo[0][slot]), static_cast<double>(n.lo[1][slot]),
+                           static_cast<double>(n.lo[2][slot])};
+      const double h[3] = {static_cast<double>(n.hi[0][slot]), static_cast<double>(n.hi[1][slot]),
+                           static_cast<double>(n.hi[2][slot])};
       moved_box(move, l, h, lo, hi);
       return;
     }
@@ -290,7 +292,10 @@ struct PairSearch {
   double triangle_box_gap2(int side, const float* box, const double blo[3],
                            const double bhi[3]) const {
     if (side == 1 && rigid) {
-      const double l[3] = {box[0], box[1], box[2]}, h[3] = {box[3], box[4], box[5]};
+      const double l[3] = {static_cast<double>(box[0]), static_cast<double>(box[1]),
+                           static_cast<double>(box[2])};
+      const double h[3] = {static_cast<double>(box[3]), static_cast<double>(box[4]),
+                           static_cast<double>(box[5])};
       double lo[3], hi[3];
       moved_box(move, l, h, lo, hi);
       return box_gap2(lo, hi, blo, bhi);

@@ -10,6 +10,9 @@ namespace phantom {
 
 namespace {
 
+// A coordinate as a scan's float32 file holds it.
+inline double f32(double x) { return static_cast<double>(static_cast<float>(x)); }
+
 constexpr double kT0 = -0.25, kT1 = 3.141592653589793 + 0.25;  // arch parameter range
 constexpr double kWidth = 16.0;                                // band across the arch, mm
 constexpr double kCrownHeight = 7.0, kGumHeight = 2.0;
@@ -51,7 +54,7 @@ struct Builder {
     const double h = height(t, u, crown) + dz;
     const double x = a * ct + u * nx / nl, y = b * st + u * ny / nl;
     const double z = upper ? z0 - h : z0 + h;
-    return Vec3{static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)};
+    return Vec3{f32(x), f32(y), f32(z)};
   }
   uint32_t add(const Vec3& p, bool crown) {
     out->vertices.push_back(p);
@@ -182,8 +185,7 @@ Status make_scan_jaw(Jaw jaw, const ScanOptions& options, ScanJaw* out) {
     const uint32_t i = C * (6 + 6 * k) / 20 + bld.rng.below(4), j = R / 2 + 6 + bld.rng.below(2);
     const uint32_t v00 = base + i * (R + 1) + j, v11 = v00 + R + 2;
     const Vec3 mid = (out->vertices[v00] + out->vertices[v11]) * 0.5;
-    const Vec3 tip{static_cast<float>(mid.x), static_cast<float>(mid.y),
-                   static_cast<float>(mid.z + (upper ? -1.5 : 1.5))};
+    const Vec3 tip{f32(mid.x), f32(mid.y), f32(mid.z + (upper ? -1.5 : 1.5))};
     const uint32_t f = bld.add(tip, false);
     out->triangles.push_back(Triangle{{v00, v11, f}});
     ++out->nonmanifold_edges;
