@@ -59,8 +59,8 @@ Status deflate_fixed(const DeflateWorkspace& workspace, ZFormat format, const ui
 // Inflate: RFC 1951 complete (stored, fixed and dynamic Huffman blocks, 32 KiB window), with
 // the zlib wrapper (header check, Adler-32 verified; a preset dictionary, FDICT, is refused)
 // or the gzip wrapper (FEXTRA, FNAME, FCOMMENT skipped, FHCRC, CRC-32 and ISIZE verified;
-// members one after another are one stream, their outputs concatenated; anything after a
-// member that is not another member is an error).
+// members one after another are one stream, their outputs concatenated; bytes after a member
+// that do not start another one end the stream, unused, as zlib's gzread() treats them).
 //
 // Streaming: input in chunks of any size (down to one byte), output in chunks of any size,
 // into a caller buffer or a sink; the state (a 64 KiB window: 32 KiB of history and up to
@@ -70,7 +70,7 @@ Status deflate_fixed(const DeflateWorkspace& workspace, ZFormat format, const ui
 // message): kTruncated (the input ended inside the stream: end_of_input()); kParseError
 // (invalid block type, stored length mismatch, over-subscribed or incomplete code lengths,
 // invalid code, distance beyond the data so far, a bad zlib/gzip header, checksum or length
-// mismatch, data after the last gzip member); kUnsupported (a zlib preset dictionary);
+// mismatch); kUnsupported (a zlib preset dictionary);
 // kLimitExceeded (the output would pass the caller's max_output: a decompression bomb guard);
 // kIoError (a sink refused). After an error the Inflater stays failed (run() repeats it).
 

@@ -58,7 +58,7 @@ inline Vec3 ct_to_patient(const CtVolume& v, const Vec3& p) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Readers: DICOM series (PS3.5 / PS3.10, uncompressed), NRRD (teem NRRD0001-0005, raw) and
+// Readers: DICOM series (PS3.5 / PS3.10, uncompressed), NRRD (teem NRRD0001-0005, raw, gzip) and
 // MetaImage (.mha / .mhd, raw). No dependencies: bytes come through ByteSource, files a header
 // points to (NRRD "data file", MetaImage ElementDataFile, the files of a DICOM series) through
 // caller callbacks, so firmware can serve them from flash and a tool from disk.
@@ -164,9 +164,11 @@ CtSeries ct_memory_series(CtMemoryFiles* files);
 
 // NRRD (attached .nrrd, or a detached .nhdr header whose data file comes through `opener`;
 // opener may be null for attached data). Fields: type (8/16/32-bit integers, float, double),
-// dimension 3, sizes, encoding raw, endian, space directions or spacings (neither: 1 mm, identity
-// axes), space origin, space, data file, byte skip (-1: data at the end, needs a known size),
-// line skip. Space directions give spacing = vector lengths and axes = normalised vectors.
+// dimension 3, sizes, encoding raw or gzip (gz), endian, space directions or spacings (neither:
+// 1 mm, identity axes), space origin, space, data file, byte skip (-1: data at the end, needs a
+// known size; raw only), line skip. Gzip data (one or more members, nothing after them) is
+// inflated as it is read, never held compressed: line skip counts lines of the file, byte skip
+// inflated bytes, and the arena holds a second read chunk and inflate_state_bytes() more. Space directions give spacing = vector lengths and axes = normalised vectors.
 // Errors: kParseError (file and line), kUnsupported (encoding, type, dimension, LIST / pattern
 // data files), kLimitExceeded, kTruncated (byte offset and file), kNonFinite (voxel index),
 // kIoError, kArenaExhausted.

@@ -344,10 +344,6 @@ Status check_zlib_header(InflateState& s, uint64_t offset) {
 
 Status check_gzip_magic(InflateState& s, uint64_t offset) {
   if (s.header[0] == 0x1F && s.header[1] == 0x8B) return Status::ok();
-  if (s.members > 0) {
-    return parse_error(s, offset, "gzip: the data after the end of member ", s.members,
-                       " is not another gzip member");
-  }
   return parse_error(s, offset, "gzip header: magic bytes are not 1f 8b: not a gzip stream");
 }
 
@@ -652,7 +648,9 @@ Status step_trailer(InflateState& s, Input& in, bool* need_input) {
   const uint64_t offset = stream_offset(s) - size;
   const uint8_t* t = s.header;
   if (s.format == ZFormat::kZlib) {
-    const uint32_t stored = (static_cast<uint32_t>(t[0]) << 24) | (t[1] << 16) | (t[2] << 8) | t[3];
+    const uint32_t stored = (static_cast<uint32_t>(t[0]) << 24) |
+                            (static_cast<uint32_t>(t[1]) << 16) |
+                            (static_cast<uint32_t>(t[2]) << 8) | t[3];
     if (stored != s.check) {
       return parse_error(s, offset, "zlib: Adler-32 ", Hex32(stored).text,
                          " does not match the data's ", Hex32(s.check).text);
@@ -705,7 +703,16 @@ Status step(InflateState& s, Input& in, bool* need_input) {
         break;
       case Mode::kTrailer: SPLINTCORE_RETURN_IF_ERROR(step_trailer(s, in, need_input)); break;
       case Mode::kMemberEnd:
-        if (s.bitcount == 0 && in.p == in.end) return *need_input = true, Status::ok();
+        // Another member, or (as zlib's gzread) bytes that are not one: they end the stream,
+        // left unused (total_in() stops before them).
+        refill(s, in);
+        if (s.bitcount == 0 || ((s.bitbuf & 0xFF) == 0x1F && s.bitcount < 16)) {
+          return *need_input = true, Status::ok();
+        }
+        if ((s.bitbuf & 0xFFFF) != 0x8B1F) {
+          s.mode = Mode::kDone;
+          return Status::ok();
+        }
         start_member(s);
         break;
       case Mode::kDone: return Status::ok();
@@ -801,8 +808,7 @@ Status Inflater::run(const uint8_t** in, size_t* in_size, const CompressSink& si
 }
 
 bool Inflater::stream_ended() const {
-  return s_ != nullptr &&
-         (s_->mode == Mode::kDone || (s_->mode == Mode::kMemberEnd && s_->bitcount == 0));
+  return s_ != nullptr && (s_->mode == Mode::kDone || s_->mode == Mode::kMemberEnd);
 }
 
 bool Inflater::finished() const { return stream_ended() && s_->delivered == s_->decoded; }

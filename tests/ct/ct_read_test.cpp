@@ -261,7 +261,7 @@ TEST(CtNrrd, RejectsUnsupportedAndBadHeadersWithFileAndLine) {
     uint64_t line;
   };
   const Case cases[] = {
-      {"encoding: raw", "encoding: gzip", StatusCode::kUnsupported, "gzip", 10},
+      {"encoding: raw", "encoding: bzip2", StatusCode::kUnsupported, "bzip2", 10},
       {"encoding: raw", "encoding: ascii", StatusCode::kUnsupported, "ascii", 10},
       {"dimension: 3", "dimension: 4", StatusCode::kUnsupported, "dimension 4", 4},
       {"type: short", "type: int64", StatusCode::kUnsupported, "int64", 3},
