@@ -152,6 +152,18 @@ TEST(CtDicomDeflate, ZlibDeflatedSliceEqualsItsTwin) {
   }
 }
 
+// The fuzz seeds of tests/fuzz/ct_corpus.py: a slice with sequences of undefined length
+// inside the deflated data set (zlib level 6), and its uncompressed twin.
+TEST(CtDicomDeflate, CorpusSeedWithSequencesEqualsItsTwin) {
+  const std::string dir = std::string(SPLINTCORE_FIXTURES_DIR) + "/fuzz/ct_dicom/";
+  const Series plain = read({test::read_file_bytes(dir + "explicit_one.dcm")});
+  const Series z = read({test::read_file_bytes(dir + "deflated_one.dcm")}, 3);
+  ASSERT_TRUE(plain.status.is_ok()) << test::format(plain.status);
+  ASSERT_TRUE(z.status.is_ok()) << test::format(z.status);
+  EXPECT_TRUE(z.hu == plain.hu);
+  EXPECT_EQ(z.hu.size(), 20u);
+}
+
 TEST(CtDicomDeflate, SeriesEqualsItsTwin) {
   // Files out of position order: the deflated ones are re-read in the sorted order.
   const Series plain = read({file(2, false), file(0, false), file(1, false)});
