@@ -122,7 +122,7 @@ struct Input {
   const uint8_t* end;
 };
 
-// Tops the bit buffer up to at least 57 bits, or to what the input holds.
+// Tops the bit buffer up to 56..63 bits (a unit takes at most 48), or to what the input holds.
 inline void refill(InflateState& s, Input& in) {
   if (in.end - in.p >= 8) {
     s.bitbuf |= load_le64(in.p) << s.bitcount;
@@ -133,7 +133,7 @@ inline void refill(InflateState& s, Input& in) {
     s.bitbuf &= (uint64_t{1} << s.bitcount) - 1;  // the bytes not taken come again later
     return;
   }
-  while (s.bitcount <= 56 && in.p < in.end) {
+  while (s.bitcount < 56 && in.p < in.end) {  // at most 63 bits: shifts stay defined
     s.bitbuf |= static_cast<uint64_t>(*in.p++) << s.bitcount;
     s.bitcount += 8;
     ++s.bytes_fed;
