@@ -515,10 +515,9 @@ Status step_code_lengths(InflateState& s, Input& in, bool* need_input) {
     const uint64_t offset = stream_offset(s);
     uint32_t length = 0;
     const int sym = decode(s.lens, s.bitbuf, s.bitcount, &length);
-    if (sym == kNeedBits) return *need_input = true, Status::ok();
-    if (sym == kInvalidCode) {
-      return parse_error(s, offset, "deflate stream: invalid code length code");
-    }
+    // The code length code is complete (build_or_fail), so every 7 bits decode: a negative
+    // symbol can only mean "more bits".
+    if (sym < 0) return *need_input = true, Status::ok();
     if (sym < 16) {
       s.lengths[s.index++] = static_cast<uint8_t>(sym);
       consume(s, length);
@@ -715,52 +714,63 @@ Status step(InflateState& s, Input& in, bool* need_input) {
         }
         start_member(s);
         break;
-      case Mode::kDone: return Status::ok();
-      default:  // kFailed
-        return s.error;
+      default:  // kDone (run_stream never steps a failed state)
+        return Status::ok();
     }
     if (*need_input) return Status::ok();
   }
 }
 
-// Hands pending bytes to `deliver(data, bytes)` (which returns how many it took) in
-// contiguous pieces of the window.
-template <class Deliver>
-Status deliver_pending(InflateState& s, Deliver& deliver) {
+// Where run() puts output: the caller's buffer (out, room) or a sink.
+struct Output {
+  uint8_t** out = nullptr;
+  size_t* room = nullptr;
+  const CompressSink* sink = nullptr;
+};
+
+// Hands pending bytes to the output in contiguous pieces of the window.
+Status deliver_pending(InflateState& s, Output& o) {
   while (s.delivered < s.decoded) {
     const size_t at = static_cast<size_t>(s.delivered & kWindowMask);
     uint64_t n = s.decoded - s.delivered;
     if (n > kWindowBytes - at) n = kWindowBytes - at;
-    size_t taken = 0;
-    SPLINTCORE_RETURN_IF_ERROR(deliver(s.window + at, static_cast<size_t>(n), &taken));
-    s.delivered += taken;
-    if (taken < n) break;
+    if (o.sink != nullptr) {
+      if (!o.sink->write(o.sink->user, s.window + at, static_cast<size_t>(n))) {
+        return make_error(StatusCode::kIoError, "inflate: the sink refused ", n,
+                          " bytes of output");
+      }
+    } else {
+      if (*o.room == 0) break;
+      if (n > *o.room) n = *o.room;
+      std::memcpy(*o.out, s.window + at, static_cast<size_t>(n));
+      *o.out += n;
+      *o.room -= static_cast<size_t>(n);
+    }
+    s.delivered += n;
   }
   return Status::ok();
 }
 
-template <class Deliver>
-Status run_stream(InflateState& s, const uint8_t** in, size_t* in_size, Deliver& deliver) {
+Status run_stream(InflateState& s, const uint8_t** in, size_t* in_size, Output& output) {
   if (s.mode == Mode::kFailed) return s.error;
   Input input{*in, *in + *in_size};
   Status status = Status::ok();
   for (;;) {
-    status = deliver_pending(s, deliver);
+    status = deliver_pending(s, output);
     if (!status.is_ok()) break;
-    if (s.delivered < s.decoded && s.decoded - s.delivered > kPendingLimit) break;  // out full
-    if (s.mode == Mode::kDone) break;
+    if (s.decoded - s.delivered > kPendingLimit || s.mode == Mode::kDone) break;  // out full
     bool need_input = false;
     status = step(s, input, &need_input);
     update_check(s);
     if (!status.is_ok()) break;
     if (need_input || s.mode == Mode::kDone) {
-      status = deliver_pending(s, deliver);
+      status = deliver_pending(s, output);
       break;
     }
   }
   *in_size -= static_cast<size_t>(input.p - *in);
   *in = input.p;
-  if (!status.is_ok() && s.mode != Mode::kFailed) (void)fail(s, status);
+  if (!status.is_ok() && s.mode != Mode::kFailed) (void)fail(s, status);  // a sink's error
   return status;
 }
 
@@ -782,29 +792,17 @@ Status Inflater::begin(Arena& arena, ZFormat format, uint64_t max_output) {
 Status Inflater::run(const uint8_t** in, size_t* in_size, uint8_t** out, size_t* out_size) {
   SPLINTCORE_ASSERT(s_ != nullptr && in != nullptr && in_size != nullptr && out != nullptr &&
                     out_size != nullptr);
-  auto deliver = [&](const uint8_t* data, size_t bytes, size_t* taken) {
-    const size_t n = bytes < *out_size ? bytes : *out_size;
-    if (n > 0) std::memcpy(*out, data, n);
-    *out += n;
-    *out_size -= n;
-    *taken = n;
-    return Status::ok();
-  };
-  return run_stream(*s_, in, in_size, deliver);
+  Output output;
+  output.out = out;
+  output.room = out_size;
+  return run_stream(*s_, in, in_size, output);
 }
 
 Status Inflater::run(const uint8_t** in, size_t* in_size, const CompressSink& sink) {
   SPLINTCORE_ASSERT(s_ != nullptr && sink.write != nullptr);
-  auto deliver = [&](const uint8_t* data, size_t bytes, size_t* taken) {
-    *taken = 0;
-    if (!sink.write(sink.user, data, bytes)) {
-      return make_error(StatusCode::kIoError, "inflate: the sink refused ", bytes,
-                        " bytes of output");
-    }
-    *taken = bytes;
-    return Status::ok();
-  };
-  return run_stream(*s_, in, in_size, deliver);
+  Output output;
+  output.sink = &sink;
+  return run_stream(*s_, in, in_size, output);
 }
 
 bool Inflater::stream_ended() const {

@@ -4,6 +4,7 @@
 // and the state in exactly inflate_state_bytes().
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -58,7 +59,7 @@ const Fixture& fixture(const char* name) {
 Status inflate_all(ZFormat format, const std::vector<uint8_t>& in, std::vector<uint8_t>* out,
                    uint64_t max_output = UINT64_MAX) {
   TestArena t(inflate_state_bytes());
-  out->assign(in.size() * 1100 + 100000, 0);
+  out->assign(std::min<size_t>(in.size() * 1100 + 100000, size_t{1} << 22), 0);
   size_t produced = 0;
   const size_t cap = max_output < out->size() ? static_cast<size_t>(max_output) : out->size();
   Status s = inflate_buffer(t.arena, format, in.data(), in.size(), out->data(), cap, &produced);
@@ -306,6 +307,20 @@ TEST(InflateErrors, BlockTypeAndStoredLength) {
   b.put(1, 1);
   b.put(3, 2);
   expect_error(inflate_raw(b, &out), StatusCode::kParseError, "invalid block type", 0);
+  {  // the error stays: run() and end_of_input() repeat it
+    TestArena t(inflate_state_bytes());
+    Inflater z;
+    SPLINTCORE_ASSERT_OK(z.begin(t.arena, ZFormat::kRaw));
+    const uint8_t* p = b.bytes.data();
+    size_t n = b.bytes.size();
+    uint8_t sink[4];
+    uint8_t* o = sink;
+    size_t room = sizeof(sink);
+    EXPECT_EQ(z.run(&p, &n, &o, &room).code(), StatusCode::kParseError);
+    EXPECT_EQ(z.run(&p, &n, &o, &room).code(), StatusCode::kParseError);
+    EXPECT_EQ(z.end_of_input().code(), StatusCode::kParseError);
+    EXPECT_FALSE(z.finished());
+  }
   Bits stored;
   stored.put(0, 1);  // not final
   stored.put(0, 2);
@@ -393,6 +408,8 @@ TEST(InflateErrors, CodeLengths) {
   past.code(3, 2);
   past.put(127, 7);
   expect_error(inflate_raw(past, &out), StatusCode::kParseError, "passes the end", 4);
+  Bits many_dist = dynamic_header(257, 32, zero_one);  // HDIST 32
+  expect_error(inflate_raw(many_dist, &out), StatusCode::kParseError, "at most 286 and 30", 0);
   Bits many = dynamic_header(257, 1, zero_one);
   many.bytes[0] |= 30 << 3;  // HLIT 287
   expect_error(inflate_raw(many, &out), StatusCode::kParseError, "at most 286", 0);
@@ -449,6 +466,8 @@ TEST(InflateErrors, Wrappers) {
   bad = z;
   bad[0] = 0x77;
   EXPECT_EQ(inflate_all(ZFormat::kZlib, bad, &out).code(), StatusCode::kParseError);
+  bad = {0x78, 0x9D};
+  expect_error(inflate_all(ZFormat::kZlib, bad, &out), StatusCode::kParseError, "check bits", 0);
   bad = {0x79, 0x00};
   bad[1] = static_cast<uint8_t>(31 - (0x7900 % 31));
   expect_error(inflate_all(ZFormat::kZlib, bad, &out), StatusCode::kParseError, "method 9", 0);
@@ -507,6 +526,33 @@ TEST(InflateErrors, Wrappers) {
   expect_error(inflate_all(ZFormat::kGzip, none, &out), StatusCode::kTruncated, "header", 0);
 }
 
+// Stored blocks of 65,535 bytes: the window fills and wraps inside a block; the bomb guard
+// cuts a stored copy short.
+TEST(Inflate, LongStoredBlocks) {
+  Bits b;
+  std::vector<uint8_t> plain;
+  for (int block = 0; block < 3; ++block) {
+    b.put(block == 2 ? 1 : 0, 1);
+    b.put(0, 2);
+    b.put(0, b.count % 8 == 0 ? 0 : 8 - b.count % 8);
+    b.put(65535, 16);
+    b.put(0, 16);
+    for (uint32_t i = 0; i < 65535; ++i) {
+      const uint8_t v = static_cast<uint8_t>(hash_mix(i + 70000u * block));
+      plain.push_back(v);
+      b.put(v, 8);
+    }
+  }
+  std::vector<uint8_t> out;
+  SPLINTCORE_ASSERT_OK(inflate_all(ZFormat::kRaw, b.bytes, &out));
+  EXPECT_TRUE(out == plain);
+  std::vector<uint8_t> streamed;
+  SPLINTCORE_ASSERT_OK(inflate_chunked(ZFormat::kRaw, b.bytes, 40000, 5000, &streamed));
+  EXPECT_TRUE(streamed == plain);
+  expect_error(inflate_all(ZFormat::kRaw, b.bytes, &out, 40000), StatusCode::kLimitExceeded,
+               "limit of 40000", 40005);
+}
+
 TEST(InflateErrors, OutputLimit) {
   const Fixture& f = fixture("run.zlib9.zz");
   std::vector<uint8_t> out;
@@ -516,6 +562,10 @@ TEST(InflateErrors, OutputLimit) {
   const Fixture& s = fixture("random.stored.zz");
   expect_error(inflate_all(s.format, s.data, &out, 1000), StatusCode::kLimitExceeded,
                "limit of 1000", 1017);
+  expect_error(inflate_all(s.format, s.data, &out, 500), StatusCode::kLimitExceeded, "limit of 500",
+               507);
+  const Fixture& h = fixture("ct.huffman.zz");  // literals only
+  EXPECT_EQ(inflate_all(h.format, h.data, &out, 10).code(), StatusCode::kLimitExceeded);
   const Fixture& t = fixture("text.fixed.zz");
   EXPECT_EQ(inflate_all(t.format, t.data, &out, 10).code(), StatusCode::kLimitExceeded);
 }
