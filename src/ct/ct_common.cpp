@@ -672,7 +672,11 @@ int64_t InflatingSource::read(void* user, uint8_t* buffer, size_t capacity) {
     size_t n = r.available();
     if (s.is_ok()) s = z.inflater.run(&p, &n, &out, &room);
     r.pos = static_cast<size_t>(p - r.buf);
-    if (s.is_ok() && room == capacity && z.inflater.finished()) return 0;
+    // The end: a finished stream with input it refused, or with the file used up. (A gzip
+    // member that ends where the buffered input does may be followed by another: read on.)
+    if (s.is_ok() && room == capacity && z.inflater.finished() && (r.available() > 0 || r.at_eof)) {
+      return 0;
+    }
     if (s.is_ok() && room == capacity && r.available() == 0 && r.at_eof) {
       s = z.inflater.end_of_input();
     }
