@@ -781,7 +781,8 @@ uint64_t inflate_state_bytes() { return arena_array_bound<InflateState>(1); }
 Status Inflater::begin(Arena& arena, ZFormat format, uint64_t max_output) {
   void* memory = arena.allocate(sizeof(InflateState), Arena::kDefaultAlignment);
   if (memory == nullptr) return arena.exhausted_status();
-  InflateState* s = ::new (memory) InflateState();
+  ::new (memory) InflateState();  // zeroed window and tables: no output from stale memory
+  InflateState* s = static_cast<InflateState*>(memory);
   s->format = format;
   s->max_output = max_output;
   start_member(*s);
