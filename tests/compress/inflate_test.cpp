@@ -86,7 +86,7 @@ Status inflate_chunked(ZFormat format, const std::vector<uint8_t>& in, size_t in
     at += given - n;
     out->insert(out->end(), piece.data(), o);
     if (inflater.finished() && at == in.size()) break;
-    if (given == 0 && room == piece.size()) break;  // no input left and nothing came out
+    if (n == given && room == piece.size()) break;  // no progress
   }
   EXPECT_EQ(inflater.total_out(), out->size());
   return inflater.end_of_input();

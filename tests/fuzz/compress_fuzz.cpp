@@ -60,7 +60,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     at += given - n;
     out += offered - room;
     if (!two.is_ok() || (inflater.finished() && at == size)) break;  // gzip: members may follow
-    if (given == 0 && room == offered) break;
+    if (n == given && room == offered) break;  // no progress: input ended, or bytes after the end
   }
   if (two.is_ok()) two = inflater.end_of_input();
   require(one.code() == two.code());
