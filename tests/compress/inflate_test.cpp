@@ -101,6 +101,39 @@ TEST(Checksum, KnownValues) {
   EXPECT_EQ(adler32(adler32(1, wiki, 2), wiki + 2, 7), 0x11E60398u);
 }
 
+// The table-driven CRC (eight bytes a step) and Adler-32 against their definitions, bit by bit
+// and byte by byte, at every length and alignment up to 40 bytes and chained at every split.
+TEST(Checksum, MatchTheDefinitions) {
+  uint8_t data[48];
+  for (size_t i = 0; i < sizeof(data); ++i) data[i] = static_cast<uint8_t>(hash_mix(i) >> 7);
+  auto slow_crc = [](const uint8_t* p, size_t n) {
+    uint32_t c = 0xFFFFFFFFu;
+    for (size_t i = 0; i < n; ++i) {
+      c ^= p[i];
+      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    }
+    return c ^ 0xFFFFFFFFu;
+  };
+  auto slow_adler = [](const uint8_t* p, size_t n) {
+    uint32_t a = 1, b = 0;
+    for (size_t i = 0; i < n; ++i) {
+      a = (a + p[i]) % 65521;
+      b = (b + a) % 65521;
+    }
+    return (b << 16) | a;
+  };
+  for (size_t start = 0; start < 8; ++start) {
+    for (size_t n = 0; n + start <= 40; ++n) {
+      const uint8_t* p = data + start;
+      EXPECT_EQ(crc32(0, p, n), slow_crc(p, n)) << start << " " << n;
+      EXPECT_EQ(adler32(1, p, n), slow_adler(p, n)) << start << " " << n;
+      for (size_t split = 0; split <= n; ++split) {
+        EXPECT_EQ(crc32(crc32(0, p, split), p + split, n - split), slow_crc(p, n));
+      }
+    }
+  }
+}
+
 TEST(Inflate, FixturesFromGzipAndZlib) {
   const std::vector<Fixture> all = fixtures();
   ASSERT_GE(all.size(), 20u);
