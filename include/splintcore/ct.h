@@ -58,10 +58,10 @@ inline Vec3 ct_to_patient(const CtVolume& v, const Vec3& p) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Readers: DICOM series (PS3.5 / PS3.10, uncompressed), NRRD (teem NRRD0001-0005, raw) and
-// MetaImage (.mha / .mhd, raw). No dependencies: bytes come through ByteSource, files a header
-// points to (NRRD "data file", MetaImage ElementDataFile, the files of a DICOM series) through
-// caller callbacks, so firmware can serve them from flash and a tool from disk.
+// Readers: DICOM series (PS3.5 / PS3.10, uncompressed or deflated), NRRD (teem NRRD0001-0005, raw,
+// gzip) and MetaImage (.mha / .mhd, raw). No dependencies: bytes come through ByteSource, files a
+// header points to (NRRD "data file", MetaImage ElementDataFile, the files of a DICOM series)
+// through caller callbacks, so firmware can serve them from flash and a tool from disk.
 //
 // Memory: everything comes from ctx.arena. The voxels (2 bytes each) are the only thing left
 // there on success, at the position the arena's top had on entry; temporaries (a read chunk
@@ -164,12 +164,14 @@ CtSeries ct_memory_series(CtMemoryFiles* files);
 
 // NRRD (attached .nrrd, or a detached .nhdr header whose data file comes through `opener`;
 // opener may be null for attached data). Fields: type (8/16/32-bit integers, float, double),
-// dimension 3, sizes, encoding raw, endian, space directions or spacings (neither: 1 mm, identity
-// axes), space origin, space, data file, byte skip (-1: data at the end, needs a known size),
-// line skip. Space directions give spacing = vector lengths and axes = normalised vectors.
-// Errors: kParseError (file and line), kUnsupported (encoding, type, dimension, LIST / pattern
-// data files), kLimitExceeded, kTruncated (byte offset and file), kNonFinite (voxel index),
-// kIoError, kArenaExhausted.
+// dimension 3, sizes, encoding raw or gzip (gz), endian, space directions or spacings (neither:
+// 1 mm, identity axes), space origin, space, data file, byte skip (-1: data at the end, needs a
+// known size; raw only), line skip. Gzip data (one or more members, nothing after them) is
+// inflated as it is read, never held compressed: line skip counts lines of the file, byte skip
+// inflated bytes, and the arena holds a second read chunk and inflate_state_bytes() more. Space
+// directions give spacing = vector lengths and axes = normalised vectors. Errors: kParseError (file
+// and line), kUnsupported (encoding, type, dimension, LIST / pattern data files), kLimitExceeded,
+// kTruncated (byte offset and file), kNonFinite (voxel index), kIoError, kArenaExhausted.
 Status read_nrrd(const Context& ctx, const ByteSource& source, const CtFileOpener* opener,
                  const CtReadOptions& options, CtVolume* out, CtInfo* info);
 
@@ -184,8 +186,12 @@ Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFile
                       const CtReadOptions& options, CtVolume* out, CtInfo* info);
 
 // A DICOM series, one single-frame CT image per file: 128-byte preamble, "DICM", group 0002 in
-// explicit VR little endian; transfer syntax 1.2.840.10008.1.2 or 1.2.840.10008.1.2.1 (others:
-// kUnsupported "unsupported transfer syntax <UID>"). Sequences and items of defined or
+// explicit VR little endian; transfer syntax 1.2.840.10008.1.2, 1.2.840.10008.1.2.1 or
+// 1.2.840.10008.1.2.1.99 (deflated explicit VR little endian: the data set after the file meta
+// is inflated as it is read, twice per file (header, then pixels), an inflater of
+// inflate_state_bytes() in the arena each time; offsets in errors about its elements are
+// offsets in the inflated data set, errors of the stream itself offsets in the file); others:
+// kUnsupported "unsupported transfer syntax <UID>". Sequences and items of defined or
 // undefined length are skipped (nesting bounded at 32, iteratively); only top-level elements
 // count. Slices are ordered by Image Position projected on the normal row x column; spacing
 // between slices must be uniform (CtReadOptions), positions distinct and along the normal (no

@@ -124,8 +124,8 @@ void render_ramp_colour(double value, double max, uint8_t rgb[3]);
 // only the last 3 of a longer one): the bytes depend only on the pixels.
 
 // Bytes write_png() may take from the arena (all temporaries, returned before it finishes):
-// the filtered rows h*(1+3w) + 16, the hash tables 65536*4 + 32768*4 + 32, the output buffer
-// 65536 + 16 bytes. UINT64_MAX on overflow.
+// the filtered rows h*(1+3w) + 16 and the deflate workspace with a 64 KiB output buffer,
+// deflate_workspace_bound(65536) (compress.h). UINT64_MAX on overflow.
 uint64_t png_bound(uint32_t width, uint32_t height);
 
 // Writes the image as PNG to `sink` (a sequence of writes; never seeks). Reads image.rgb.
@@ -134,10 +134,8 @@ uint64_t png_bound(uint32_t width, uint32_t height);
 // filtering, before anything is written).
 Status write_png(const Context& ctx, const RenderImage& image, const ByteSink& sink);
 
-// CRC-32 (ISO 3309, as PNG and zlib's crc32: reflected polynomial 0xEDB88320, initial and
-// final xor 0xFFFFFFFF). Chainable: pass the previous result as `crc` (0 to start).
+// crc32() and adler32() of compress.h under their former names (kept for callers).
 uint32_t png_crc32(uint32_t crc, const uint8_t* data, size_t bytes);
-// Adler-32 (RFC 1950). Chainable: pass the previous result (1 to start).
 uint32_t png_adler32(uint32_t adler, const uint8_t* data, size_t bytes);
 
 }  // namespace splintcore

@@ -529,7 +529,7 @@ Status check_raw_size(const Reader& header, const ByteSource& header_source, con
   if (!checked_mul(*voxels, data.format.bytes, data_bytes)) {
     return in_source(make_error(StatusCode::kLimitExceeded, "voxel data too large"), header_source);
   }
-  if (data.data_file == nullptr && header_source.size != kUnknownSize) {
+  if (data.data_file == nullptr && header_source.size != kUnknownSize && !data.gzip) {
     uint64_t end = 0;
     if (!checked_add(header.offset(), *data_bytes, &end) || end > header_source.size) {
       return in_source(make_error(StatusCode::kTruncated, "the voxel data needs ", *data_bytes,
@@ -625,7 +625,77 @@ Status skip_to_voxels(Reader& reader, const ByteSource& source, const RawData& d
   return Status::ok();
 }
 
+// Gzip data: the line skip in the file, then the stream inflated through a second chunk (byte
+// skip in inflated bytes), converted as it comes.
+Status read_gzip_voxels(Arena& arena, DataInput& input, const RawData& data, size_t chunk,
+                        uint64_t voxels, int16_t* voxels_out, uint64_t* clamped) {
+  if (data.byte_skip < 0) {
+    return make_error(StatusCode::kUnsupported, "byte skip -1 with gzip encoding");
+  }
+  RawData lines_only = data;
+  lines_only.byte_skip = 0;
+  SPLINTCORE_RETURN_IF_ERROR(skip_to_voxels(*input.reader, *input.source, lines_only, 0));
+  InflatingSource z;
+  z.compressed = input.reader;
+  z.stream_start = input.reader->offset();
+  z.name = input.source->name;
+  SPLINTCORE_RETURN_IF_ERROR(z.inflater.begin(arena, ZFormat::kGzip));
+  uint8_t* buffer = arena.allocate_array<uint8_t>(chunk);
+  if (buffer == nullptr) return arena.exhausted_status();
+  const ByteSource inflated = z.source();
+  Reader reader;
+  reader.init(&inflated, buffer, chunk);
+  Status s = reader.skip(static_cast<uint64_t>(data.byte_skip),
+                         "the inflated bytes skipped before the voxel data");
+  if (s.is_ok()) s = convert_voxels(reader, data.format, voxels, 1.0, 0.0, voxels_out, 0, clamped);
+  if (!z.error.is_ok()) return z.error;  // the stream's own error, not "read failed"
+  if (s.code() == StatusCode::kTruncated) {
+    return make_error(StatusCode::kTruncated, "the gzip data inflates to ", reader.offset(),
+                      " bytes, fewer than the ",
+                      voxels * data.format.bytes + static_cast<uint64_t>(data.byte_skip),
+                      " the header describes")
+        .at_byte(z.stream_start + z.inflater.total_in());
+  }
+  return s;
+}
+
 }  // namespace
+
+int64_t InflatingSource::read(void* user, uint8_t* buffer, size_t capacity) {
+  InflatingSource& z = *static_cast<InflatingSource*>(user);
+  uint8_t* out = buffer;
+  size_t room = capacity;
+  while (room == capacity) {
+    Reader& r = *z.compressed;
+    Status s = r.available() == 0 ? r.fill(1) : Status::ok();
+    const uint8_t* p = r.buf + r.pos;
+    size_t n = r.available();
+    if (s.is_ok()) s = z.inflater.run(&p, &n, &out, &room);
+    r.pos = static_cast<size_t>(p - r.buf);
+    // The end: a finished stream with input it refused, or with the file used up. (A gzip
+    // member that ends where the buffered input does may be followed by another: read on.)
+    if (s.is_ok() && room == capacity && z.inflater.finished() && (r.available() > 0 || r.at_eof)) {
+      return 0;
+    }
+    if (s.is_ok() && room == capacity && r.available() == 0 && r.at_eof) {
+      s = z.inflater.end_of_input();
+    }
+    if (!s.is_ok()) {
+      if (s.byte_offset() != kNoPosition) s.at_byte(z.stream_start + s.byte_offset());
+      z.error = s;
+      return -1;
+    }
+  }
+  return static_cast<int64_t>(capacity - room);
+}
+
+ByteSource InflatingSource::source() {
+  ByteSource b;
+  b.read = &InflatingSource::read;
+  b.user = this;
+  b.name = name;
+  return b;
+}
 
 Status read_raw_volume(const Context& ctx, Reader& header, const ByteSource& header_source,
                        const CtFileOpener* opener, const RawData& data,
@@ -635,7 +705,14 @@ Status read_raw_volume(const Context& ctx, Reader& header, const ByteSource& hea
   SPLINTCORE_RETURN_IF_ERROR(
       check_raw_size(header, header_source, data, options, &voxels, &data_bytes));
   const size_t chunk = chunk_size(options);
-  SPLINTCORE_RETURN_IF_ERROR(check_budget(arena, voxels * 2, chunk, 2));
+  if (data.gzip) {  // a second chunk for the inflated bytes, and the inflater
+    SPLINTCORE_RETURN_IF_ERROR(
+        check_budget(arena, voxels * 2,
+                     uint64_t{chunk} * 2 + inflate_state_bytes() - (Arena::kDefaultAlignment - 1),
+                     3));  // (the padding inflate_state_bytes() allows for is counted by 3)
+  } else {
+    SPLINTCORE_RETURN_IF_ERROR(check_budget(arena, voxels * 2, chunk, 2));
+  }
 
   DataInput input;          // declared first: a data file is closed after the arena is rewound
   ArenaScope scope(arena);  // on an error the arena is as it was
@@ -648,6 +725,14 @@ Status read_raw_volume(const Context& ctx, Reader& header, const ByteSource& hea
       input.open(header, header_source, opener, data.data_file, buffer, chunk));
 
   uint64_t clamped = 0;
+  if (data.gzip) {
+    Status s = read_gzip_voxels(arena, input, data, chunk, voxels, voxels_out, &clamped);
+    if (!s.is_ok()) return in_source(s, *input.source);
+    scope.commit();  // the chunks and the inflater go with chunk_scope
+    *hu = voxels_out;
+    *saturated = clamped;
+    return Status::ok();
+  }
   Status s = skip_to_voxels(*input.reader, *input.source, data, data_bytes);
   if (s.is_ok()) {
     s = convert_voxels(*input.reader, data.format, voxels, 1.0, 0.0, voxels_out, 0, &clamped);

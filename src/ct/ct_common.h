@@ -4,6 +4,7 @@
 #ifndef SPLINTCORE_SRC_CT_CT_COMMON_H
 #define SPLINTCORE_SRC_CT_CT_COMMON_H
 
+#include "splintcore/compress.h"
 #include "splintcore/ct.h"
 
 namespace splintcore {
@@ -116,6 +117,21 @@ struct RawData {
   const char* data_file = nullptr;  // null: attached
   uint64_t line_skip = 0;           // lines skipped before byte_skip
   int64_t byte_skip = 0;            // -1: the data ends the file (needs a known size)
+  bool gzip = false;  // the data is a gzip stream (NRRD encoding gzip); byte skip counts
+                      // inflated bytes, line skip the file's
+};
+
+// A ByteSource of the bytes inflated from a deflate stream read through `compressed`: the
+// voxels stream through the inflater, never held compressed. Errors of the stream are kept in
+// `error` (read() then returns -1) with byte offsets in the file.
+struct InflatingSource {
+  Reader* compressed = nullptr;
+  Inflater inflater;
+  uint64_t stream_start = 0;  // file offset of the stream's first byte
+  Status error;
+  const char* name = nullptr;
+  static int64_t read(void* user, uint8_t* buffer, size_t capacity);
+  ByteSource source();
 };
 
 // Checks limits and the arena budget, allocates the voxels (left in the arena on success:

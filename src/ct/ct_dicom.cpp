@@ -80,6 +80,7 @@ Status tag_error(StatusCode code, uint32_t tag, const char* name, const char* wh
 // What one file's header says.
 struct Header {
   bool implicit = false;
+  bool deflated = false;  // 1.2.840.10008.1.2.1.99: the data set is a raw deflate stream
   char transfer_syntax[65] = {};
   char photometric[17] = {};
   uint32_t rows = 0, columns = 0;
@@ -266,10 +267,13 @@ Status read_file_meta(Reader& r, Header* h) {
     h->implicit = true;
   } else if (std::strcmp(h->transfer_syntax, "1.2.840.10008.1.2.1") == 0) {
     h->implicit = false;
+  } else if (std::strcmp(h->transfer_syntax, "1.2.840.10008.1.2.1.99") == 0) {
+    h->implicit = false;
+    h->deflated = true;
   } else {
     return make_error(StatusCode::kUnsupported, "unsupported transfer syntax ", h->transfer_syntax,
-                      " (only 1.2.840.10008.1.2 and 1.2.840.10008.1.2.1: uncompressed little "
-                      "endian)");
+                      " (only 1.2.840.10008.1.2, 1.2.840.10008.1.2.1 and 1.2.840.10008.1.2.1.99: "
+                      "uncompressed or deflated little endian)");
   }
   return Status::ok();
 }
@@ -436,15 +440,50 @@ class DataSetWalk {
   int depth_ = 0;
 };
 
+// A reader of the inflated data set of a deflated file (PS3.5 A.5: the bytes after the File
+// Meta Information are one raw deflate stream), positioned where the file's reader is. Its
+// offsets continue the file meta's: they are offsets in the data set as if it were not
+// deflated (Pixel Data's offset is one of them). The inflater's state comes from `arena`.
+struct InflatedDataSet {
+  InflatingSource z;
+  ByteSource source{};
+  uint8_t window[kHeaderWindow];
+  Reader reader;
+
+  Status open(Reader& file, Arena& arena) {
+    z.compressed = &file;
+    z.stream_start = file.offset();
+    z.name = file.source->name;
+    SPLINTCORE_RETURN_IF_ERROR(z.inflater.begin(arena, ZFormat::kRaw));
+    source = z.source();
+    reader.init(&source, window, sizeof(window));
+    reader.base = file.offset();
+    return Status::ok();
+  }
+  // The stream's own error (named with its offset in the file) before the reader's.
+  Status result(const Status& s) const { return z.error.is_ok() ? s : z.error; }
+};
+
 // Parses one file's header up to Pixel Data (the reader's window must hold >= 300 bytes).
-Status parse_header(Reader& r, const CtReadOptions& options, Header* h) {
+Status parse_header(Reader& r, const CtReadOptions& options, Arena& arena, Header* h) {
   SPLINTCORE_RETURN_IF_ERROR(read_file_meta(r, h));
-  DataSetWalk walk(r, options, h);
-  return walk.run();
+  if (!h->deflated) {
+    DataSetWalk walk(r, options, h);
+    return walk.run();
+  }
+  ArenaScope scope(arena);
+  InflatedDataSet data;
+  SPLINTCORE_RETURN_IF_ERROR(data.open(r, arena));
+  DataSetWalk walk(data.reader, options, h);
+  Status s = data.result(walk.run());
+  if (!s.is_ok() && data.z.error.is_ok()) s.append(" (at an offset in the inflated data set)");
+  return s;
 }
 
-// Checks what a slice needs and that its pixels fit the file.
-Status check_header(const Header& h, const ByteSource& source) {
+// Checks what a slice needs and that its pixels fit the file (not known for a deflated one).
+Status check_header(const Header& h, const ByteSource& file) {
+  ByteSource source = file;
+  if (h.deflated) source.size = kUnknownSize;
   auto missing = [&](const char* what) {
     return make_error(StatusCode::kParseError, "missing ", what);
   };
@@ -510,15 +549,15 @@ Status check_header(const Header& h, const ByteSource& source) {
 }
 
 // Opens file `index` of the series, parses its header, closes it.
-Status read_header(const CtSeries& series, uint32_t index, const CtReadOptions& options, Header* h,
-                   const char** name) {
+Status read_header(const CtSeries& series, uint32_t index, const CtReadOptions& options,
+                   Arena& arena, Header* h, const char** name) {
   ByteSource source;
   SPLINTCORE_RETURN_IF_ERROR(series.open(series.user, index, &source));
   *name = source.name;
   uint8_t window[kHeaderWindow];
   Reader r;
   r.init(&source, window, sizeof(window));
-  Status s = parse_header(r, options, h);
+  Status s = parse_header(r, options, arena, h);
   if (s.is_ok()) s = check_header(*h, source);
   if (series.close != nullptr) series.close(series.user, index, &source);
   if (!s.is_ok()) {
@@ -545,6 +584,7 @@ uint32_t bits_stored(const Header& h) {
 // What of a slice's header differs from the series' file 0 (first), or nullptr: all slices
 // share size, pixel format, pixel spacing and orientation (these two within `tolerance`).
 const char* difference(const Header& h, const Header& first, double tolerance) {
+  if (h.deflated != first.deflated) return "transfer syntax (deflated or not)";
   if (h.rows != first.rows || h.columns != first.columns) return "image size (Rows, Columns)";
   if (h.bits_allocated != first.bits_allocated || bits_stored(h) != bits_stored(first) ||
       h.pixel_representation != first.pixel_representation) {
@@ -625,7 +665,7 @@ struct SeriesReader {
       if (i == 0) {
         h = first;
       } else {
-        SPLINTCORE_RETURN_IF_ERROR(read_header(series, i, options, &h, &name));
+        SPLINTCORE_RETURN_IF_ERROR(read_header(series, i, options, *ctx.arena, &h, &name));
         const char* differs = difference(h, first, options.orientation_tolerance);
         if (differs != nullptr) {
           Status s = make_error(StatusCode::kUnsupported, "slice differs from the series' file 0 (",
@@ -791,6 +831,25 @@ struct SeriesReader {
   }
 };
 
+// The pixels of a deflated file: past the file meta, then inflated up to Pixel Data and on.
+Status read_deflated_pixels(Arena& arena, Reader& file, const SliceRecord& rec,
+                            const VoxelFormat& format, uint64_t count, int16_t* out,
+                            uint64_t first_index, uint64_t* saturated) {
+  Header meta;
+  SPLINTCORE_RETURN_IF_ERROR(read_file_meta(file, &meta));
+  ArenaScope scope(arena);
+  InflatedDataSet data;
+  SPLINTCORE_RETURN_IF_ERROR(data.open(file, arena));
+  Reader& r = data.reader;
+  Status s = rec.pixel_offset >= r.offset()
+                 ? r.skip(rec.pixel_offset - r.offset(), "the data set before Pixel Data")
+                 : make_error(StatusCode::kParseError, "the file meta information changed");
+  if (s.is_ok()) {
+    s = convert_voxels(r, format, count, rec.slope, rec.intercept, out, first_index, saturated);
+  }
+  return data.result(s);
+}
+
 // Pass 2: the pixels, slice by slice in position order, each with its own rescale. Not a
 // SeriesReader method: cppcheck 2.10 takes a Reader local to a method for a non-local one
 // (a false danglingLifetime on r.init(&source, ...)).
@@ -802,10 +861,16 @@ Status read_pixels(const SeriesReader& sr, const VoxelFormat& format, uint64_t* 
     SPLINTCORE_RETURN_IF_ERROR(sr.series.open(sr.series.user, rec.file, &source));
     Reader r;
     r.init(&source, sr.buffer, sr.chunk);
-    Status s = r.skip(rec.pixel_offset, "the header before Pixel Data");
-    if (s.is_ok()) {
-      s = convert_voxels(r, format, per_slice, rec.slope, rec.intercept, sr.hu + k * per_slice,
-                         k * per_slice, saturated);
+    Status s;
+    if (sr.first.deflated) {
+      s = read_deflated_pixels(*sr.ctx.arena, r, rec, format, per_slice, sr.hu + k * per_slice,
+                               k * per_slice, saturated);
+    } else {
+      s = r.skip(rec.pixel_offset, "the header before Pixel Data");
+      if (s.is_ok()) {
+        s = convert_voxels(r, format, per_slice, rec.slope, rec.intercept, sr.hu + k * per_slice,
+                           k * per_slice, saturated);
+      }
     }
     const char* name = source.name;
     if (sr.series.close != nullptr) sr.series.close(sr.series.user, rec.file, &source);
@@ -834,14 +899,19 @@ Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtRea
   SeriesReader reader(ctx, series, options);
   const uint32_t count = series.count;
   const Header& first = reader.first;
-  SPLINTCORE_RETURN_IF_ERROR(read_header(series, 0, options, &reader.first, &reader.first_name));
+  SPLINTCORE_RETURN_IF_ERROR(
+      read_header(series, 0, options, arena, &reader.first, &reader.first_name));
 
   uint64_t voxel_bytes = 0;
   SPLINTCORE_RETURN_IF_ERROR(check_size(first.columns, first.rows, count, options, &voxel_bytes));
   reader.chunk = chunk_size(options);
+  // Deflated files: an inflater per file read (the padding inflate_state_bytes() allows for is
+  // counted by check_budget's allocations).
+  const uint64_t inflater =
+      first.deflated ? inflate_state_bytes() - (Arena::kDefaultAlignment - 1) : 0;
   const uint64_t temporaries =
-      uint64_t{count} * (sizeof(SliceRecord) + 2 * sizeof(KeyIndex)) + reader.chunk;
-  SPLINTCORE_RETURN_IF_ERROR(check_budget(arena, voxel_bytes, temporaries, 4));
+      uint64_t{count} * (sizeof(SliceRecord) + 2 * sizeof(KeyIndex)) + reader.chunk + inflater;
+  SPLINTCORE_RETURN_IF_ERROR(check_budget(arena, voxel_bytes, temporaries, first.deflated ? 5 : 4));
 
   ArenaScope scope(arena);  // on an error the arena is as it was
   reader.hu = arena.allocate_array<int16_t>(static_cast<size_t>(voxel_bytes / 2));

@@ -1,7 +1,8 @@
 // NRRD reader: "NRRD: Nearly Raw Raster Data", file format definition (teem project,
 // http://teem.sourceforge.net/nrrd/format.html), magics NRRD0001 to NRRD0005. Only 3-D scalar
-// volumes with raw encoding; the header is parsed line by line in a fixed window; voxel data
-// goes through read_text_volume() (ct_common.h).
+// volumes with raw or gzip encoding (the gzip stream inflated as it is read, RFC 1952, through
+// src/compress); the header is parsed line by line in a fixed window; voxel data goes through
+// read_text_volume() (ct_common.h).
 #include "ct/ct_common.h"
 
 namespace splintcore {
@@ -101,6 +102,7 @@ struct NrrdHeader {
 
   // What the fields said.
   bool have_type = false, have_dimension = false, have_sizes = false, have_encoding = false;
+  bool gzip = false;  // encoding gzip / gz
   bool have_endian = false, have_directions = false;
   VoxelFormat format;
   uint64_t sizes[3] = {0, 0, 0};
@@ -254,16 +256,16 @@ struct NrrdHeader {
   }
 
   Status take_encoding(const Field& f) {
-    if (f.value_is("raw")) {
+    if (f.value_is("raw") || f.value_is("gzip") || f.value_is("gz")) {
       have_encoding = true;
+      gzip = !f.value_is("raw");
       return Status::ok();
     }
-    if (f.value_is("gzip") || f.value_is("gz") || f.value_is("bzip2") || f.value_is("bz2") ||
-        f.value_is("ascii") || f.value_is("txt") || f.value_is("text") || f.value_is("hex") ||
-        f.value_is("zstd")) {
+    if (f.value_is("bzip2") || f.value_is("bz2") || f.value_is("ascii") || f.value_is("txt") ||
+        f.value_is("text") || f.value_is("hex") || f.value_is("zstd")) {
       return fail(make_error(StatusCode::kUnsupported, "encoding \"")
                       .append(f.value, f.value_length)
-                      .append("\" is not supported (only raw)"));
+                      .append("\" is not supported (only raw and gzip)"));
     }
     return bad(f, "encoding");
   }
@@ -386,6 +388,7 @@ struct NrrdHeader {
     v.data.data_file = data_file[0] != '\0' ? data_file : nullptr;
     v.data.line_skip = static_cast<uint64_t>(line_skip);
     v.data.byte_skip = byte_skip;
+    v.data.gzip = gzip;
     return v;
   }
 };

@@ -6,6 +6,7 @@ detached NRRD / MetaImage seeds name a data file, which the target serves from t
 Run from anywhere: python3 tests/fuzz/ct_corpus.py"""
 import os
 import struct
+import zlib
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "fixtures", "fuzz")
 SEPARATOR = b"SPLINTCORE-NEXT-FILE"  # must match tests/fuzz/ct_dicom_fuzz.cpp
@@ -40,6 +41,16 @@ write("ct_nrrd", "uchar.nrrd",
 write("ct_nrrd", "detached.nhdr",
       b"NRRD0004\ntype: int16\ndimension: 3\nsizes: 2 2 2\nendian: little\nencoding: raw\n"
       b"data file: data.raw\nline skip: 1\nbyte skip: -1\n\n" + le16([1, -2, 3, -4, 5, -6, 7, -8]))
+
+
+def gzip_bytes(data):
+    """gzip member with no name and no time (the same bytes everywhere)."""
+    c = zlib.compressobj(6, zlib.DEFLATED, 31)
+    return c.compress(data) + c.flush()
+
+
+write("ct_nrrd", "gzip_short.nrrd", nrrd.replace(b"encoding: raw", b"encoding: gzip") +
+      gzip_bytes(le16(range(-1000, -976))))
 
 # ---- MetaImage
 mha = (b"ObjectType = Image\nNDims = 3\nBinaryData = True\nBinaryDataByteOrderMSB = False\n"
@@ -121,11 +132,32 @@ def dicom(implicit=False, z=0.0, bits=16, signed=True, rows=4, cols=5, sequences
     return bytes(d.b)
 
 
+def deflated(file):
+    """The same file as Deflated Explicit VR Little Endian: the data set after the file meta
+    as one raw deflate stream (PS3.5 A.5)."""
+    at = 132
+    while struct.unpack_from("<H", file, at)[0] == 2:
+        vr = file[at + 4:at + 6]
+        if vr in (b"OB", b"OW", b"SQ", b"UN", b"UT"):
+            at += 12 + struct.unpack_from("<I", file, at + 8)[0]
+        else:
+            at += 8 + struct.unpack_from("<H", file, at + 6)[0]
+    c = zlib.compressobj(6, zlib.DEFLATED, -15)
+    head = file[:at].replace(b"1.2.840.10008.1.2.1\0", b"1.2.840.10008.1.2.1.99")
+    head = head.replace(b"UI\x14\x00" + b"1.2.840.10008.1.2.1.99",
+                        b"UI\x16\x00" + b"1.2.840.10008.1.2.1.99")
+    return head + c.compress(file[at:]) + c.flush()
+
+
 write("ct_dicom", "explicit_one.dcm", dicom(sequences=True))
 write("ct_dicom", "implicit_one.dcm", dicom(implicit=True, sequences=True))
 write("ct_dicom", "uint8_one.dcm", dicom(bits=8, signed=False, rows=3, cols=3))
 write("ct_dicom", "series3.bin", SEPARATOR.join(dicom(z=z, k=k) for k, z in
                                                   enumerate([2.0, -1.0, 0.5])))
+write("ct_dicom", "deflated_one.dcm", deflated(dicom(sequences=True)))
+write("ct_dicom", "series2_deflated.bin",
+      SEPARATOR.join(deflated(dicom(z=z, k=k, rows=3, cols=2)) for k, z in
+                     enumerate([0.0, 1.5])))
 write("ct_dicom", "series2_implicit.bin",
       SEPARATOR.join(dicom(implicit=True, z=z, k=k, rows=2, cols=2) for k, z in
                      enumerate([0.0, 1.25])))

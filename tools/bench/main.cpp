@@ -21,6 +21,7 @@
 #include "../common/shapes.h"
 #include "splintcore/blockout.h"
 #include "splintcore/boolean.h"
+#include "splintcore/compress.h"
 #include "splintcore/core.h"
 #include "splintcore/design.h"
 #include "splintcore/distance.h"
@@ -1304,10 +1305,82 @@ void bench_design_auto_realdata(Harness& h, Arena& arena, const std::string& rea
   ::rmdir(dir);
 }
 
+// Inflate of CT-like 16-bit data (issue 31), MB/s of inflated bytes. inflate_ct16_own: the
+// CT phantom (256 x 256 x 32 int16 at 0.5 x 0.5 x 1.5 mm, 4 MiB, noise and streaks) deflated at
+// bench time by our own encoder (one fixed-Huffman block); inflate_ct16_zlib6: a zlib stream given
+// with
+// --inflate-input (tools/bench/make_inflate_input.py writes one: Python's zlib at level 6,
+// dynamic Huffman blocks), when given.
+void bench_inflate(Harness& h, Arena& arena, const std::string& zlib_file) {
+  struct Input {
+    const char* name;
+    std::vector<uint8_t> compressed;
+  };
+  std::vector<Input> inputs;
+  if (h.wanted("inflate_ct16_own")) {
+    cli::CtPhantomOptions po;
+    po.nx = 256;
+    po.ny = 256;
+    po.nz = 32;
+    po.spacing = Vec3{0.5, 0.5, 1.5};  // the jaws need 39 mm along z
+    cli::CtPhantom phantom;
+    CtVolume volume;
+    std::vector<int16_t> hu;
+    Status s = phantom.init(po);
+    if (s.is_ok()) phantom.generate(&hu, &volume);
+    std::vector<uint8_t> plain(hu.size() * 2);
+    for (size_t i = 0; i < hu.size(); ++i) {  // little-endian bytes, as files hold them
+      plain[2 * i] = static_cast<uint8_t>(static_cast<uint16_t>(hu[i]));
+      plain[2 * i + 1] = static_cast<uint8_t>(static_cast<uint16_t>(hu[i]) >> 8);
+    }
+    ArenaScope scope(arena);
+    DeflateWorkspace ws;
+    if (s.is_ok()) s = deflate_workspace(arena, 65536, &ws);
+    Input in{"inflate_ct16_own", {}};
+    CompressSink sink;
+    sink.user = &in.compressed;
+    sink.write = [](void* user, const uint8_t* d, size_t n) {
+      auto* v = static_cast<std::vector<uint8_t>*>(user);
+      v->insert(v->end(), d, d + n);
+      return true;
+    };
+    if (s.is_ok()) s = deflate_fixed(ws, ZFormat::kZlib, plain.data(), plain.size(), sink);
+    if (!s.is_ok()) {
+      cli::print_error(s);
+      h.failed = true;
+      return;
+    }
+    inputs.push_back(in);
+  }
+  if (!zlib_file.empty() && h.wanted("inflate_ct16_zlib6")) {
+    Input in{"inflate_ct16_zlib6", {}};
+    const Status s = cli::read_whole_file(zlib_file, uint64_t{1} << 30, &in.compressed);
+    if (!s.is_ok()) {
+      cli::print_error(s);
+      h.failed = true;
+      return;
+    }
+    inputs.push_back(in);
+  }
+  for (const Input& in : inputs) {
+    std::vector<uint8_t> out(size_t{64} << 20);
+    size_t produced = 0;
+    const Result r = h.measure(in.name, in.compressed.size(), arena, [&](Arena& a) {
+      return inflate_buffer(a, ZFormat::kZlib, in.compressed.data(), in.compressed.size(),
+                            out.data(), out.size(), &produced);
+    });
+    if (r.median > 0) {
+      std::printf("# %s: %zu -> %zu bytes, %.1f MB/s of inflated data\n", in.name,
+                  in.compressed.size(), produced, static_cast<double>(produced) / r.median / 1e6);
+    }
+  }
+}
+
 int run(int argc, char** argv) {
   Harness h;
   std::string realdata = "../shared/realdata/open-full-jaw-patient26";
   std::string fixtures = "fixtures";
+  std::string inflate_input;  // a zlib stream for inflate_ct16_zlib6
   uint64_t cap = uint64_t{4} << 30;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
@@ -1321,6 +1394,8 @@ int run(int argc, char** argv) {
       realdata = argv[++i];
     } else if (a == "--fixtures" && i + 1 < argc) {
       fixtures = argv[++i];
+    } else if (a == "--inflate-input" && i + 1 < argc) {
+      inflate_input = argv[++i];
     } else if (a == "--memory-cap" && i + 1 < argc && cli::parse_size(argv[i + 1], &cap)) {
       ++i;
     } else if (a == "--export-realcase" && i + 1 < argc) {
@@ -1342,7 +1417,8 @@ int run(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: splintcore-bench [--filter SUBSTRING] [--repeat N] "
-                   "[--realdata DIR] [--fixtures DIR] [--memory-cap SIZE]\n"
+                   "[--realdata DIR] [--fixtures DIR] [--memory-cap SIZE] "
+                   "[--inflate-input ZLIB_FILE]\n"
                    "       splintcore-bench [--realdata DIR] --export-realcase DIR\n");
       return a == "--help" ? 0 : 2;
     }
@@ -1362,6 +1438,7 @@ int run(int argc, char** argv) {
     bench_mesh_pair_distance(h, arena, realdata);
     bench_remesh(h, arena);
     bench_ct_reconstruct(h, arena);
+    bench_inflate(h, arena, inflate_input);
     bench_marching_cubes(h, arena);
     bench_sweep(h, arena);
     bench_blockout(h, arena, fixtures);

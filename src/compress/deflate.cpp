@@ -1,0 +1,232 @@
+// Deflate encoder (include/splintcore/compress.h): one fixed-Huffman block.
+//
+// Sources: RFC 1951 (deflate: fixed Huffman codes, section 3.2.6; length and distance codes,
+// 3.2.5) with a greedy LZ77 matcher over hash chains as described in section 4 of RFC 1951;
+// RFC 1950 (zlib wrapper) and RFC 1952 (gzip wrapper). Moved here from the PNG writer, whose
+// bytes it must keep (the render tests pin their SHA-256).
+//
+// Deterministic: integer arithmetic only; the matcher's choices depend only on the bytes.
+#include "splintcore/compress.h"
+
+namespace splintcore {
+namespace {
+
+constexpr uint32_t kHashBits = 16;
+constexpr uint32_t kWindow = kDeflateWindow;
+constexpr uint32_t kMaxChain = 64;
+constexpr uint32_t kMinMatch = 3;
+constexpr uint32_t kMaxMatch = 258;
+constexpr uint32_t kMaxInsert = 32;
+static_assert((size_t{1} << kHashBits) == kDeflateHashEntries, "hash table size");
+
+const uint16_t kLengthBase[29] = {3,  4,  5,  6,  7,  8,  9,  10, 11,  13,  15,  17,  19,  23, 27,
+                                  31, 35, 43, 51, 59, 67, 83, 99, 115, 131, 163, 195, 227, 258};
+const uint8_t kLengthExtra[29] = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2,
+                                  2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0};
+const uint16_t kDistBase[30] = {1,    2,    3,    4,    5,    7,    9,    13,    17,    25,
+                                33,   49,   65,   97,   129,  193,  257,  385,   513,   769,
+                                1025, 1537, 2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577};
+const uint8_t kDistExtra[30] = {0, 0, 0, 0, 1, 1, 2, 2,  3,  3,  4,  4,  5,  5,  6,
+                                6, 7, 7, 8, 8, 9, 9, 10, 10, 11, 11, 12, 12, 13, 13};
+
+uint32_t reverse_bits(uint32_t code, int length) {
+  uint32_t r = 0;
+  for (int i = 0; i < length; ++i) {
+    r = (r << 1) | (code & 1);
+    code >>= 1;
+  }
+  return r;
+}
+
+// Bits LSB first into the workspace's buffer, which goes to the sink each time it is full.
+class BitWriter {
+ public:
+  BitWriter(const DeflateWorkspace& ws, const CompressSink& sink) : ws_(ws), sink_(sink) {}
+  Status put(uint32_t bits, int count) {
+    bits_ |= static_cast<uint64_t>(bits) << count_;
+    count_ += count;
+    while (count_ >= 8) {
+      ws_.out[used_++] = static_cast<uint8_t>(bits_);
+      bits_ >>= 8;
+      count_ -= 8;
+      if (used_ == ws_.out_bytes) SPLINTCORE_RETURN_IF_ERROR(flush());
+    }
+    return Status::ok();
+  }
+  Status align() { return count_ > 0 ? put(0, 8 - count_) : Status::ok(); }
+  Status put_le32(uint32_t v) {
+    SPLINTCORE_RETURN_IF_ERROR(put(v & 0xFFFF, 16));
+    return put(v >> 16, 16);
+  }
+  Status flush() {
+    if (used_ == 0) return Status::ok();
+    if (!sink_.write(sink_.user, ws_.out, used_)) {
+      return make_error(StatusCode::kIoError, "cannot write the compressed stream");
+    }
+    used_ = 0;
+    return Status::ok();
+  }
+
+ private:
+  const DeflateWorkspace& ws_;
+  const CompressSink& sink_;
+  size_t used_ = 0;
+  uint64_t bits_ = 0;
+  int count_ = 0;
+};
+
+struct FixedCodes {
+  uint16_t literal[288];  // bit-reversed codes
+  uint8_t literal_length[288];
+  uint8_t distance[30];
+};
+
+void make_fixed_codes(FixedCodes* c) {
+  for (uint32_t s = 0; s < 288; ++s) {
+    uint32_t code = 0;
+    int length = 0;
+    if (s < 144) {
+      code = 0x30 + s;
+      length = 8;
+    } else if (s < 256) {
+      code = 0x190 + (s - 144);
+      length = 9;
+    } else if (s < 280) {
+      code = s - 256;
+      length = 7;
+    } else {
+      code = 0xC0 + (s - 280);
+      length = 8;
+    }
+    c->literal[s] = static_cast<uint16_t>(reverse_bits(code, length));
+    c->literal_length[s] = static_cast<uint8_t>(length);
+  }
+  for (uint32_t d = 0; d < 30; ++d) c->distance[d] = static_cast<uint8_t>(reverse_bits(d, 5));
+}
+
+Status put_literal(BitWriter& w, const FixedCodes& c, uint32_t symbol) {
+  return w.put(c.literal[symbol], c.literal_length[symbol]);
+}
+
+Status put_match(BitWriter& w, const FixedCodes& c, uint32_t length, uint32_t distance) {
+  uint32_t li = 28;
+  while (kLengthBase[li] > length) --li;
+  SPLINTCORE_RETURN_IF_ERROR(put_literal(w, c, 257 + li));
+  if (kLengthExtra[li] > 0) {
+    SPLINTCORE_RETURN_IF_ERROR(w.put(length - kLengthBase[li], kLengthExtra[li]));
+  }
+  uint32_t di = 29;
+  while (kDistBase[di] > distance) --di;
+  SPLINTCORE_RETURN_IF_ERROR(w.put(c.distance[di], 5));
+  if (kDistExtra[di] > 0) {
+    SPLINTCORE_RETURN_IF_ERROR(w.put(distance - kDistBase[di], kDistExtra[di]));
+  }
+  return Status::ok();
+}
+
+uint32_t hash3(const uint8_t* p) {
+  const uint32_t v =
+      (static_cast<uint32_t>(p[0]) << 16) | (static_cast<uint32_t>(p[1]) << 8) | p[2];
+  return (v * 2654435761u) >> (32 - kHashBits);
+}
+
+// One fixed-Huffman block holding the whole stream (deflate puts no limit on a block's size).
+Status deflate_block(const uint8_t* data, size_t size, int32_t* head, int32_t* prev, BitWriter& w) {
+  FixedCodes codes;
+  make_fixed_codes(&codes);
+  for (size_t i = 0; i < (size_t{1} << kHashBits); ++i) head[i] = -1;
+  SPLINTCORE_RETURN_IF_ERROR(w.put(1, 1));  // BFINAL
+  SPLINTCORE_RETURN_IF_ERROR(w.put(1, 2));  // BTYPE 01: fixed Huffman
+  auto insert = [&](size_t pos) {
+    if (pos + kMinMatch > size) return;
+    const uint32_t h = hash3(data + pos);
+    prev[pos & (kWindow - 1)] = head[h];
+    head[h] = static_cast<int32_t>(pos);
+  };
+  size_t i = 0;
+  while (i < size) {
+    uint32_t best_length = 0, best_distance = 0;
+    if (i + kMinMatch <= size) {
+      const size_t limit = size - i < kMaxMatch ? size - i : kMaxMatch;
+      int32_t candidate = head[hash3(data + i)];
+      for (uint32_t chain = 0; chain < kMaxChain && candidate >= 0; ++chain) {
+        const size_t cand = static_cast<size_t>(candidate);
+        const size_t distance = i - cand;
+        if (distance > kWindow) break;
+        if (best_length < limit && data[cand + best_length] == data[i + best_length]) {
+          size_t n = 0;
+          while (n < limit && data[cand + n] == data[i + n]) ++n;
+          if (n > best_length) {
+            best_length = static_cast<uint32_t>(n);
+            best_distance = static_cast<uint32_t>(distance);
+            if (n == limit) break;
+          }
+        }
+        candidate = prev[cand & (kWindow - 1)];
+        if (candidate >= 0 && static_cast<size_t>(candidate) >= cand) break;  // stale entry
+      }
+    }
+    if (best_length >= kMinMatch) {
+      SPLINTCORE_RETURN_IF_ERROR(put_match(w, codes, best_length, best_distance));
+      // Every position of a short match goes into the chains; of a long one (a run of
+      // background) only the last few, as zlib's fast levels do: the runs stay findable.
+      const uint32_t first = best_length <= kMaxInsert ? 0 : best_length - 3;
+      for (uint32_t k = first; k < best_length; ++k) insert(i + k);
+      i += best_length;
+    } else {
+      SPLINTCORE_RETURN_IF_ERROR(put_literal(w, codes, data[i]));
+      insert(i);
+      ++i;
+    }
+  }
+  return put_literal(w, codes, 256);  // end of block
+}
+
+}  // namespace
+
+uint64_t deflate_workspace_bound(size_t out_bytes) {
+  uint64_t total =
+      arena_array_bound<int32_t>(kDeflateHashEntries) + arena_array_bound<int32_t>(kDeflateWindow);
+  const uint64_t out = arena_array_bound<uint8_t>(out_bytes);
+  return checked_add(total, out, &total) ? total : UINT64_MAX;
+}
+
+Status deflate_workspace(Arena& arena, size_t out_bytes, DeflateWorkspace* workspace) {
+  SPLINTCORE_ASSERT(out_bytes >= 1 && workspace != nullptr);
+  DeflateWorkspace ws;
+  ws.head = arena.allocate_array<int32_t>(kDeflateHashEntries);
+  ws.prev = ws.head != nullptr ? arena.allocate_array<int32_t>(kDeflateWindow) : nullptr;
+  ws.out = ws.prev != nullptr ? arena.allocate_array<uint8_t>(out_bytes) : nullptr;
+  if (ws.out == nullptr) return arena.exhausted_status();
+  ws.out_bytes = out_bytes;
+  *workspace = ws;
+  return Status::ok();
+}
+
+Status deflate_fixed(const DeflateWorkspace& workspace, ZFormat format, const uint8_t* data,
+                     size_t size, const CompressSink& sink) {
+  SPLINTCORE_ASSERT(workspace.out != nullptr && sink.write != nullptr);
+  BitWriter bits(workspace, sink);
+  if (format == ZFormat::kZlib) {
+    SPLINTCORE_RETURN_IF_ERROR(bits.put(0x78, 8));  // CMF: deflate, 32 KiB window
+    SPLINTCORE_RETURN_IF_ERROR(bits.put(0x9C, 8));  // FLG: (0x789C % 31) == 0, no dictionary
+  } else if (format == ZFormat::kGzip) {
+    // ID1 ID2, CM 8, no flags, no time, XFL 0, OS 255 (unknown): the same bytes everywhere.
+    static const uint8_t kHeader[10] = {0x1F, 0x8B, 8, 0, 0, 0, 0, 0, 0, 255};
+    for (uint8_t b : kHeader) SPLINTCORE_RETURN_IF_ERROR(bits.put(b, 8));
+  }
+  SPLINTCORE_RETURN_IF_ERROR(deflate_block(data, size, workspace.head, workspace.prev, bits));
+  SPLINTCORE_RETURN_IF_ERROR(bits.align());
+  if (format == ZFormat::kZlib) {
+    const uint32_t adler = adler32(1, data, size);
+    for (int k = 3; k >= 0; --k) {
+      SPLINTCORE_RETURN_IF_ERROR(bits.put((adler >> (8 * k)) & 0xFF, 8));
+    }
+  } else if (format == ZFormat::kGzip) {
+    SPLINTCORE_RETURN_IF_ERROR(bits.put_le32(crc32(0, data, size)));
+    SPLINTCORE_RETURN_IF_ERROR(bits.put_le32(static_cast<uint32_t>(size)));
+  }
+  return bits.flush();
+}
+
+}  // namespace splintcore
