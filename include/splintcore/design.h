@@ -263,9 +263,9 @@ struct DesignReport {
 // "design: label", "design: thickness", "design: printer", then "design: done" (once the
 // splint is made, too late to cancel). Errors: those of the stages (naming the stage and,
 // for a jaw, its index and role), kInvalidArgument (jaw count differs from the case, unknown
-// printer), kNonFinite (a jaw vertex that is NaN or infinite), kLimitExceeded (a jaw moved
-// beyond float32 range), and kInvalidMesh when the result is not printable
-// (require_printable's reason).
+// printer, a case with "plan": design_plan() makes its splints), kNonFinite (a jaw vertex
+// that is NaN or infinite), kLimitExceeded (a jaw moved beyond float32 range), and
+// kInvalidMesh when the result is not printable (require_printable's reason).
 Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* splint,
                      DesignReport* report);
 

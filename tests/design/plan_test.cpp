@@ -203,6 +203,12 @@ TEST(DesignPlan, ErrorsLeaveTheArenaAsItWas) {
   no_plan.has_plan = false;
   Status s = design_plan(Context(&f.t.arena), no_plan, f.span(), &a, &b, &r);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  // design_splint of a plan case: refused (its jaws are the preoperative ones).
+  Mesh single;
+  DesignReport single_report;
+  s = design_splint(Context(&f.t.arena), f.c, f.span(), &single, &single_report);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(s.message()).find("design_plan makes its two splints"), std::string::npos);
   // One mesh for two jaws.
   s = design_plan(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 1), &a, &b, &r);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << test::format(s);
