@@ -28,6 +28,18 @@ struct CaseJaw {
   Vec3 seed{};
 };
 
+// The surgical plan of two-jaw surgery ("plan", docs/case-format.md): the case's jaws are the
+// preoperative ones in occlusion, these are the planned rigid moves (patient mm), and the
+// mandible turns about the hinge axis through the two condyles (which stay where they are).
+struct CasePlan {
+  bool mandible_first = false;         // "sequence": "maxilla_first" (false) or "mandible_first"
+  RigidTransform maxilla;              // the maxilla's planned move
+  RigidTransform mandible;             // the mandible's planned move
+  Vec3 hinge[2] = {};                  // the condylar points, at least 1 mm apart
+  double intermediate_opening_mm = 0;  // [0, 10]
+  double final_opening_mm = 0;         // [0, 10]
+};
+
 // A parsed case. Strings and arrays live in the arena the case was parsed into.
 struct CaseFile {
   uint32_t version = 0;
@@ -73,6 +85,9 @@ struct CaseFile {
   RegionGrowOptions ct_grow;        // connectivity 6 (the default) or 26; no split plane
   TaubinOptions ct_smooth{0};       // iterations (0: none); max_displacement: see below
   DecimateOptions ct_decimate;      // target_triangles per jaw (0: none)
+  // Two-jaw surgery ("plan"): design_plan() makes the intermediate and the final splint.
+  bool has_plan = false;
+  CasePlan plan;
   const char* printer = "eden260";
   uint64_t memory_cap =
       0;  // bytes; 0: the tool's default (`splintcore design` sizes its arena by it)
@@ -248,11 +263,59 @@ struct DesignReport {
 // "design: label", "design: thickness", "design: printer", then "design: done" (once the
 // splint is made, too late to cancel). Errors: those of the stages (naming the stage and,
 // for a jaw, its index and role), kInvalidArgument (jaw count differs from the case, unknown
-// printer), kNonFinite (a jaw vertex that is NaN or infinite), kLimitExceeded (a jaw moved
-// beyond float32 range), and kInvalidMesh when the result is not printable
-// (require_printable's reason).
+// printer, a case with "plan": design_plan() makes its splints), kNonFinite (a jaw vertex
+// that is NaN or infinite), kLimitExceeded (a jaw moved beyond float32 range), and
+// kInvalidMesh when the result is not printable (require_printable's reason).
 Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* splint,
                      DesignReport* report);
+
+// ---------------------------------------------------------------------------------------------
+// Two-jaw surgery: the two splints of the case's "plan" (docs/case-format.md, "Plan").
+//
+// intermediate: the jaw the sequence moves first in its planned position, the other as before
+//   surgery, the mandible then turned about the hinge axis until the smallest distance between
+//   the arches is intermediate_opening_mm (autorotate_mandible, outline.h). maxilla_first: the
+//   maxilla moved, the preoperative mandible turned. mandible_first: the maxilla preoperative,
+//   the planned mandible turned too: the surgeon fixes the mandible's segments with the teeth
+//   wired into this splint, and a turn of the whole mandible about the condyles does not change
+//   how its segments sit on each other, so the splint may hold it at the angle where the arches
+//   are the opening apart (where the planned mandible meets or misses the unmoved maxilla).
+// final: both jaws moved, the mandible turned to final_opening_mm.
+// The mandible's transform as applied is the turn composed after its planned move (the turn is
+// found on the jaws moved and rounded to float32, as design_splint moves them).
+struct PlanSplintReport {
+  RigidTransform maxilla;   // the maxilla's transform as applied
+  RigidTransform mandible;  // the mandible's: autorotation.transform after its planned move
+  double opening_asked_mm = 0;
+  AutorotateReport autorotation;  // angle_rad, the opening measured (opening), ...
+  double angle_deg = 0;           // autorotation.angle_rad in degrees
+  DesignReport design;            // design_splint's report of this splint
+};
+
+struct PlanReport {
+  PlanSplintReport intermediate;
+  PlanSplintReport final_splint;
+};
+
+// The case one splint of the plan is designed from: `c` without its plan, the jaws' transforms
+// set to `r`'s (maxilla, mandible). `jaws` (two entries, the caller's) holds its jaw list.
+// Errors: kInvalidArgument (not a plan case, not one maxilla and one mandible).
+Status plan_splint_case(const CaseFile& c, const PlanSplintReport& r, CaseJaw jaws[2],
+                        CaseFile* out);
+
+// Both splints of case `c` (c.has_plan; jaws[i] is the mesh of c.jaws[i], as read). Each is an
+// ordinary design_splint() of plan_splint_case(): outline (automatic when the base is "auto"),
+// blockout, label and checks as for one splint. `intermediate` and `final_splint` must be
+// empty. Arena: sequential. The intermediate splint stays, then the final one above it; the
+// rest is returned. At most: the intermediate splint, plus the larger of (the two moved jaws,
+// 24 bytes a vertex, and autorotate_mandible_bound of them) and one design_splint run of a
+// splint. Progress: "plan: intermediate", the design's stages, "plan: final", the design's.
+// Errors: kInvalidArgument (no plan, jaw count or roles), autorotate_mandible's prefixed
+// "plan: intermediate: autorotation: " (or final), design_splint's prefixed "plan:
+// intermediate: " (or final); kArenaExhausted and kCancelled unchanged. On an error the arena
+// is as it was and both meshes are empty.
+Status design_plan(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* intermediate,
+                   Mesh* final_splint, PlanReport* report);
 
 // ---------------------------------------------------------------------------------------------
 // The audit report (report.json): one writer for the command line and the C API.
@@ -306,6 +369,15 @@ Status write_design_report(const Context& ctx, const CaseFile& c, Span<const Mes
                            const Mesh& splint, const DesignReport& report,
                            const DesignReportFiles& files, const DesignRunInfo* run,
                            const ByteSink& sink);
+
+// The report of a design_plan() run (report.json of a plan case): the case and the plan as
+// given ("plan"), then per splint ("intermediate", "final") its transforms as applied, the
+// autorotation and everything write_design_report() writes of a single splint, then `run`.
+// files[0] and files[1] name the two splints' files. Arena and errors: write_design_report's.
+Status write_plan_report(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                         const Mesh& intermediate, const Mesh& final_splint,
+                         const PlanReport& report, const DesignReportFiles files[2],
+                         const DesignRunInfo* run, const ByteSink& sink);
 
 }  // namespace splintcore
 

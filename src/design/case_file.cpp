@@ -40,6 +40,14 @@ const CaseNumber kCaseNumbers[] = {
     {"label.stroke_mm", "mm", 0.05, 5, false, kNoCap, false, "0.35", ""},
     {"label.depth_mm", "mm", 0.05, 5, false, kNoCap, false, "0.4", ""},
     {"min_thickness", "mm", 0.05, 20, false, kNoCap, false, "not checked", ""},
+    {"plan.maxilla", "mm", -1e6, 1e6, false, kNoCap, false, "required",
+     "each of the 16 entries; rigid (see Jaw)"},
+    {"plan.mandible", "mm", -1e6, 1e6, false, kNoCap, false, "required",
+     "each of the 16 entries; rigid (see Jaw)"},
+    {"plan.hinge_axis", "mm", -1e6, 1e6, false, kNoCap, false, "required",
+     "two points at least 1 mm apart"},
+    {"plan.intermediate_opening_mm", "mm", 0, 10, false, kNoCap, false, "required", ""},
+    {"plan.final_opening_mm", "mm", 0, 10, false, kNoCap, false, "required", ""},
     {"memory_cap", "bytes", 1, 1099511627776.0, false, kNoCap, true, "the tool's (1G)",
      "or a string such as \"256M\""},
 };
@@ -139,6 +147,25 @@ struct Reader {
     return Status::ok();
   }
 
+  // A rigid move: a row-major 4x4 of 16 numbers (each in the table's range under `path`),
+  // orthonormal rotation within 1e-6, determinant +1, last row 0 0 0 1 (rigid_from_matrix).
+  Status transform(const JsonValue& t, const char* key, const char* path,
+                   RigidTransform* out) const {
+    SPLINTCORE_RETURN_IF_ERROR(expect_type(t, JsonType::kArray, key));
+    if (t.child_count != 16) {
+      return fail(t, StatusCode::kInvalidArgument, "\"", key,
+                  "\" needs 16 numbers (a row-major 4x4 matrix)");
+    }
+    double m[16];
+    uint32_t e = t.first_child;
+    for (int a = 0; a < 16; ++a, e = doc->at(e).next_sibling) {
+      SPLINTCORE_RETURN_IF_ERROR(number(doc->at(e), path, 0, &m[a]));
+    }
+    Status s = rigid_from_matrix(m, 1e-6, out);
+    if (!s.is_ok()) return fail(t, s.code(), "\"", key, "\": ").append(s.message());
+    return Status::ok();
+  }
+
   Status string(const JsonValue& v, const char* key, const char** out) const {
     SPLINTCORE_RETURN_IF_ERROR(expect_type(v, JsonType::kString, key));
     if (v.length == 0 || std::strlen(v.string) != v.length) {
@@ -221,21 +248,7 @@ Status parse_jaws(const Reader& r, const JsonValue* jaws, CaseFile* out) {
       jaw.has_seed = true;
     }
     if (const JsonValue* t = doc.member(j, "transform")) {
-      SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*t, JsonType::kArray, "transform"));
-      if (t->child_count != 16) {
-        return r.fail(*t, StatusCode::kInvalidArgument,
-                      "\"transform\" needs 16 numbers (a row-major 4x4 matrix)");
-      }
-      double m[16];
-      uint32_t e = t->first_child;
-      for (int a = 0; a < 16; ++a, e = doc.at(e).next_sibling) {
-        SPLINTCORE_RETURN_IF_ERROR(r.number(doc.at(e), "jaws[].transform", 0, &m[a]));
-      }
-      Status s = rigid_from_matrix(m, 1e-6, &jaw.transform);
-      if (!s.is_ok()) {
-        Status located = json_error(doc, *t, s.code(), "\"transform\": ");
-        return located.append(s.message());
-      }
+      SPLINTCORE_RETURN_IF_ERROR(r.transform(*t, "transform", "jaws[].transform", &jaw.transform));
     }
     for (uint32_t e = 0; e < i; ++e) {
       if (std::strcmp(list[e].role, jaw.role) == 0) {
@@ -503,6 +516,80 @@ Status parse_label(const Reader& r, const JsonValue* lb, CaseFile* out) {
   return Status::ok();
 }
 
+// The surgical plan ("plan", two-jaw surgery): the sequence, the two planned moves, the hinge
+// axis and the two openings, all required. The jaws are the preoperative ones: one maxilla and
+// one mandible, with no "transform" of their own (the plan moves them), and the bite is the
+// plan's (autorotation), so the automatic outline's "bite_opening_mm" is refused.
+Status parse_plan(const Reader& r, const JsonValue& root, const JsonValue& p, CaseFile* out) {
+  const JsonDocument& doc = *r.doc;
+  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(p, JsonType::kObject, "plan"));
+  static const char* const kPlanKeys[] = {
+      "sequence",         "maxilla", "mandible", "hinge_axis", "intermediate_opening_mm",
+      "final_opening_mm", nullptr};
+  SPLINTCORE_RETURN_IF_ERROR(r.known_keys(p, kPlanKeys, "\"plan\""));
+  for (const char* const* k = kPlanKeys; *k != nullptr; ++k) {
+    if (doc.member(p, *k) == nullptr) {
+      return r.fail(p, StatusCode::kInvalidArgument, "\"plan\" needs \"", *k,
+                    "\" (a plan gives sequence, maxilla, mandible, hinge_axis, "
+                    "intermediate_opening_mm and final_opening_mm)");
+    }
+  }
+  CasePlan& plan = out->plan;
+  const JsonValue& sequence = *doc.member(p, "sequence");
+  const char* seq = "";
+  SPLINTCORE_RETURN_IF_ERROR(r.string(sequence, "sequence", &seq));
+  if (std::strcmp(seq, "mandible_first") == 0) {
+    plan.mandible_first = true;
+  } else if (std::strcmp(seq, "maxilla_first") != 0) {
+    return r.fail(sequence, StatusCode::kInvalidArgument,
+                  "\"sequence\" must be \"maxilla_first\" or \"mandible_first\" (which jaw "
+                  "the surgeon moves first: the intermediate splint holds it)");
+  }
+  SPLINTCORE_RETURN_IF_ERROR(
+      r.transform(*doc.member(p, "maxilla"), "maxilla", "plan.maxilla", &plan.maxilla));
+  SPLINTCORE_RETURN_IF_ERROR(
+      r.transform(*doc.member(p, "mandible"), "mandible", "plan.mandible", &plan.mandible));
+  const JsonValue& hinge = *doc.member(p, "hinge_axis");
+  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(hinge, JsonType::kArray, "hinge_axis"));
+  if (hinge.child_count != 2) {
+    return r.fail(hinge, StatusCode::kInvalidArgument,
+                  "\"hinge_axis\" needs 2 points [[x, y, z], [x, y, z]]: the two condyles");
+  }
+  const uint32_t second = doc.at(hinge.first_child).next_sibling;
+  SPLINTCORE_RETURN_IF_ERROR(r.vec3(doc.at(hinge.first_child), "hinge_axis", &plan.hinge[0]));
+  SPLINTCORE_RETURN_IF_ERROR(r.vec3(doc.at(second), "hinge_axis", &plan.hinge[1]));
+  const double apart = length(plan.hinge[1] - plan.hinge[0]);
+  if (!(apart >= 1.0)) {
+    Status s = r.fail(hinge, StatusCode::kInvalidArgument, "\"hinge_axis\": the condyles are ");
+    return s.append_f64(apart).append(" mm apart; at least 1 mm (one point on each condyle)");
+  }
+  SPLINTCORE_RETURN_IF_ERROR(r.number(*doc.member(p, "intermediate_opening_mm"),
+                                      "plan.intermediate_opening_mm", 0,
+                                      &plan.intermediate_opening_mm));
+  SPLINTCORE_RETURN_IF_ERROR(r.number(*doc.member(p, "final_opening_mm"), "plan.final_opening_mm",
+                                      0, &plan.final_opening_mm));
+  if (out->jaws.size() != 2) {
+    return r.fail(p, StatusCode::kInvalidArgument,
+                  "\"plan\" needs \"jaws\" with the preoperative maxilla and mandible");
+  }
+  const JsonValue* jaws = doc.member(root, "jaws");
+  for (uint32_t k = jaws->first_child; k != kJsonNone; k = doc.at(k).next_sibling) {
+    if (const JsonValue* t = doc.member(doc.at(k), "transform")) {
+      return r.fail(*t, StatusCode::kInvalidArgument,
+                    "a jaw's \"transform\" and \"plan\" both move it: with a plan the jaws are "
+                    "the preoperative ones and the plan's \"maxilla\" and \"mandible\" move "
+                    "them");
+    }
+  }
+  if (out->outline.has_bite_opening) {
+    return r.fail(p, StatusCode::kInvalidArgument,
+                  "\"plan\" sets the bite (the mandible turned about the hinge axis to each "
+                  "opening): leave \"bite_opening_mm\" out of \"auto\"");
+  }
+  out->has_plan = true;
+  return Status::ok();
+}
+
 // The memory cap ("memory_cap": "256M" or a byte count).
 Status parse_memory_cap(const Reader& r, const JsonValue* m, CaseFile* out) {
   if (m->type == JsonType::kString) {
@@ -565,9 +652,9 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   const JsonValue& root = doc.root();
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(root, JsonType::kObject, "the case"));
   static const char* const kRootKeys[] = {
-      "splintcore_case",     "case_id",   "units", "jaws",    "base",
-      "insertion_direction", "blockout",  "ct",    "printer", "memory_cap",
-      "min_thickness",       "placement", "label", "output",  nullptr};
+      "splintcore_case", "case_id", "units",   "jaws",       "base",          "insertion_direction",
+      "blockout",        "ct",      "printer", "memory_cap", "min_thickness", "placement",
+      "label",           "output",  "plan",    nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(root, kRootKeys, "the case"));
 
   const JsonValue* version = doc.member(root, "splintcore_case");
@@ -657,6 +744,14 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   }
   if (const JsonValue* o = doc.member(root, "output")) {
     SPLINTCORE_RETURN_IF_ERROR(parse_output(r, o, out));
+  }
+  if (const JsonValue* p = doc.member(root, "plan")) {
+    SPLINTCORE_RETURN_IF_ERROR(parse_plan(r, root, *p, out));
+    if (out->output_splint != nullptr) {
+      return r.fail(*p, StatusCode::kInvalidArgument,
+                    "a case with \"plan\" writes intermediate.stl and final.stl: leave "
+                    "\"splint\" out of \"output\"");
+    }
   }
   return Status::ok();
 }

@@ -289,6 +289,11 @@ Status check_design_inputs(const CaseFile& c, Span<const Mesh> jaws, const Mesh&
   if (!splint.vertices.empty() || !splint.triangles.empty()) {
     return Status::error(StatusCode::kInvalidArgument, "design_splint: output mesh must be empty");
   }
+  if (c.has_plan) {  // its jaws are preoperative: one splint of them would be neither
+    return Status::error(StatusCode::kInvalidArgument,
+                         "design: the case has a \"plan\": design_plan makes its two splints "
+                         "(intermediate and final)");
+  }
   if (jaws.size() != c.jaws.size()) {
     return make_error(StatusCode::kInvalidArgument, "design: the case names ", c.jaws.size(),
                       " jaws but ", jaws.size(), " meshes were given");

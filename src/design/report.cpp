@@ -21,8 +21,8 @@ const char* at(Span<const char* const> list, size_t i) {
   return i < list.size() ? list[i] : nullptr;
 }
 
-void write_transform(JsonWriter& w, const RigidTransform& x) {
-  w.begin_array("transform");
+void write_transform(JsonWriter& w, const RigidTransform& x, const char* key = "transform") {
+  w.begin_array(key);
   for (int row = 0; row < 3; ++row) {
     for (int col = 0; col < 3; ++col) w.add(nullptr, x.r[row][col]);
     w.add(nullptr, x.t[row]);
@@ -245,44 +245,33 @@ void write_run(JsonWriter& w, const DesignRunInfo& run) {
   w.end_object();
 }
 
-}  // namespace
-
-Status write_design_report(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
-                           const Mesh& splint, const DesignReport& report,
-                           const DesignReportFiles& files, const DesignRunInfo* run,
-                           const ByteSink& sink) {
-  if (jaws.size() != c.jaws.size()) {
-    return make_error(StatusCode::kInvalidArgument, "design report: ", jaws.size(),
-                      " jaws for a case of ", c.jaws.size());
-  }
-  // The splint's SHA-256: of the bytes write_stl gives, which is what a caller writes.
-  char splint_sha256[65] = {};
+// The splint's SHA-256: of the bytes write_stl gives, which is what a caller writes (the
+// caller's when `files` has it).
+Status splint_sha256_of(const Context& ctx, const Mesh& splint, const DesignReportFiles& files,
+                        char out[65]) {
   if (files.splint_sha256 != nullptr) {
-    for (int i = 0; i < 64 && files.splint_sha256[i] != '\0'; ++i) {
-      splint_sha256[i] = files.splint_sha256[i];
-    }
-  } else {
-    Sha256 hash;
-    ByteSink hashing;
-    hashing.write = &hash_write;
-    hashing.user = &hash;
-    hashing.name = "the splint's hash";
-    SPLINTCORE_RETURN_IF_ERROR(write_stl(ctx, splint, hashing, StlWriteOptions{}));
-    uint8_t digest[32];
-    hash.finish(digest);
-    Sha256::to_hex(digest, splint_sha256);
+    for (int i = 0; i < 64 && files.splint_sha256[i] != '\0'; ++i) out[i] = files.splint_sha256[i];
+    return Status::ok();
   }
+  Sha256 hash;
+  ByteSink hashing;
+  hashing.write = &hash_write;
+  hashing.user = &hash;
+  hashing.name = "the splint's hash";
+  SPLINTCORE_RETURN_IF_ERROR(write_stl(ctx, splint, hashing, StlWriteOptions{}));
+  uint8_t digest[32];
+  hash.finish(digest);
+  Sha256::to_hex(digest, out);
+  return Status::ok();
+}
+
+// The members of one splint's report after the case's name and hash: the inputs, the
+// parameters, the outline, the checks, the output.
+void write_splint_members(JsonWriter& w, const CaseFile& c, Span<const Mesh> jaws,
+                          const Mesh& splint, const DesignReport& report,
+                          const DesignReportFiles& files, const char* splint_sha256) {
   bool any_ct = false;
   for (const CaseJaw& j : c.jaws) any_ct = any_ct || j.has_seed;
-
-  JsonWriter w(sink);
-  w.begin_object();
-  w.add("command", "design");
-  w.add("status", "ok");
-  w.add("library_version", library_version());
-  if (files.case_path != nullptr) w.add("case", files.case_path);
-  w.add("case_id", c.case_id);
-  w.add("case_sha256", c.sha256);
   write_inputs(w, c, jaws, files);
   write_parameters(w, c, report, files, any_ct);
   if (report.outlined) write_outline(w, report.outline, files);
@@ -297,6 +286,108 @@ Status write_design_report(const Context& ctx, const CaseFile& c, Span<const Mes
   w.add("volume_mm3", report.print.mesh.volume);
   w.add("extent_mm", report.print.extent);
   w.end_object();
+}
+
+void write_case_head(JsonWriter& w, const CaseFile& c, const DesignReportFiles& files) {
+  w.add("command", "design");
+  w.add("status", "ok");
+  w.add("library_version", library_version());
+  if (files.case_path != nullptr) w.add("case", files.case_path);
+  w.add("case_id", c.case_id);
+  w.add("case_sha256", c.sha256);
+}
+
+// The plan as the case gives it.
+void write_plan(JsonWriter& w, const CasePlan& p) {
+  w.begin_object("plan");
+  w.add("sequence", p.mandible_first ? "mandible_first" : "maxilla_first");
+  write_transform(w, p.maxilla, "maxilla");
+  write_transform(w, p.mandible, "mandible");
+  w.begin_array("hinge_axis");
+  w.add(nullptr, p.hinge[0]);
+  w.add(nullptr, p.hinge[1]);
+  w.end_array();
+  w.add("intermediate_opening_mm", p.intermediate_opening_mm);
+  w.add("final_opening_mm", p.final_opening_mm);
+  w.end_object();
+}
+
+// One splint of the plan: its moves as applied, the autorotation, then the single splint's
+// members (of the case it was designed from).
+void write_plan_splint(JsonWriter& w, const char* key, const CaseFile& derived,
+                       Span<const Mesh> jaws, const Mesh& splint, const PlanSplintReport& r,
+                       const DesignReportFiles& files, const char* splint_sha256) {
+  const AutorotateReport& a = r.autorotation;
+  w.begin_object(key);
+  write_transform(w, r.maxilla, "maxilla_transform");
+  write_transform(w, r.mandible, "mandible_transform");
+  w.begin_object("autorotation");
+  w.add("angle_rad", a.angle_rad);
+  w.add("angle_deg", r.angle_deg);
+  write_transform(w, a.transform, "transform");
+  w.add("closing_sign", static_cast<int64_t>(a.closing_sign));
+  w.add("opening_asked_mm", r.opening_asked_mm);
+  w.add("opening_mm", a.opening);
+  w.add("gap_as_given_mm", a.gap_as_given);
+  w.add("met_as_given", a.met_as_given);
+  w.add("start_angle_rad", a.start_angle_rad);
+  w.add("bracket_rad", a.bracket_rad);
+  w.add("lever_mm", a.lever_mm);
+  w.add("steps", static_cast<uint64_t>(a.steps));
+  w.add("contact_maxilla", a.contact_maxilla);
+  w.add("contact_mandible", a.contact_mandible);
+  w.end_object();
+  write_splint_members(w, derived, jaws, splint, r.design, files, splint_sha256);
+  w.end_object();
+}
+
+}  // namespace
+
+Status write_design_report(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                           const Mesh& splint, const DesignReport& report,
+                           const DesignReportFiles& files, const DesignRunInfo* run,
+                           const ByteSink& sink) {
+  if (jaws.size() != c.jaws.size()) {
+    return make_error(StatusCode::kInvalidArgument, "design report: ", jaws.size(),
+                      " jaws for a case of ", c.jaws.size());
+  }
+  char splint_sha256[65] = {};
+  SPLINTCORE_RETURN_IF_ERROR(splint_sha256_of(ctx, splint, files, splint_sha256));
+  JsonWriter w(sink);
+  w.begin_object();
+  write_case_head(w, c, files);
+  write_splint_members(w, c, jaws, splint, report, files, splint_sha256);
+  if (run != nullptr) write_run(w, *run);
+  w.end_object();
+  return w.finish();
+}
+
+Status write_plan_report(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                         const Mesh& intermediate, const Mesh& final_splint,
+                         const PlanReport& report, const DesignReportFiles files[2],
+                         const DesignRunInfo* run, const ByteSink& sink) {
+  if (!c.has_plan || jaws.size() != c.jaws.size()) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "plan report: not a plan case, or the jaws do not match it");
+  }
+  // Everything that can fail before the first byte: the derived cases and the hashes.
+  CaseJaw jaws_of[2][2];
+  CaseFile derived[2];
+  const PlanSplintReport* parts[2] = {&report.intermediate, &report.final_splint};
+  const Mesh* splints[2] = {&intermediate, &final_splint};
+  char sha256[2][65] = {};
+  for (int k = 0; k < 2; ++k) {
+    SPLINTCORE_RETURN_IF_ERROR(plan_splint_case(c, *parts[k], jaws_of[k], &derived[k]));
+    SPLINTCORE_RETURN_IF_ERROR(splint_sha256_of(ctx, *splints[k], files[k], sha256[k]));
+  }
+  JsonWriter w(sink);
+  w.begin_object();
+  write_case_head(w, c, files[0]);
+  write_plan(w, c.plan);
+  static const char* const kKeys[2] = {"intermediate", "final"};
+  for (int k = 0; k < 2; ++k) {
+    write_plan_splint(w, kKeys[k], derived[k], jaws, *splints[k], *parts[k], files[k], sha256[k]);
+  }
   if (run != nullptr) write_run(w, *run);
   w.end_object();
   return w.finish();

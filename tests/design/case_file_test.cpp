@@ -427,7 +427,7 @@ TEST(CaseFileErrors, UnknownKeysAtEveryLevel) {
   expect_invalid(with_root("  \"colour\": @\"red\",\n"),
                  {"unknown key \"colour\" in the case",
                   "(allowed: splintcore_case case_id units jaws base insertion_direction "
-                  "blockout ct printer memory_cap min_thickness placement label output)"});
+                  "blockout ct printer memory_cap min_thickness placement label output plan)"});
   expect_invalid(with_base("    \"spacing\": @1,\n"),
                  {"unknown key \"spacing\" in \"base\"",
                   "(allowed: occlusal_normal spacing_mm corner_radius_mm corner_segments "

@@ -180,6 +180,39 @@ cp "$work/turned.stl" "$work/turned.first"
 expect_exit 0 "autorotate again, text" -- "$tool" autorotate "$work/maxilla.stl" "$work/mandible.stl" --hinge $hinge --opening 2 -o "$work/turned.stl"
 check "autorotate prints the angle in degrees" -- grep -q "^angle: .* rad (.* degrees)" "$work/out"
 check "autorotate bytes are the same every run" -- cmp -s "$work/turned.stl" "$work/turned.first"
+
+# Two-jaw surgery (issue 32): a plan case on the phantom writes both splints, a preview of each
+# and one report with the plan and both splints; the same bytes every run; a plan case cannot
+# also give a jaw transform (line and column named).
+cat > "$work/plan.json" <<'PLAN'
+{"splintcore_case": 1, "case_id": "plan-cli",
+ "jaws": [{"role": "maxilla", "mesh": "maxilla.stl"}, {"role": "mandible", "mesh": "mandible.stl"}],
+ "base": {"spacing_mm": 0.5, "auto": {}},
+ "plan": {"sequence": "maxilla_first",
+          "maxilla": [1,0,0,0, 0,1,0,2, 0,0,1,1, 0,0,0,1],
+          "mandible": [1,0,0,0, 0,1,0,2.5, 0,0,1,0, 0,0,0,1],
+          "hinge_axis": [[-50, -55, 25], [50, -55, 25]],
+          "intermediate_opening_mm": 2, "final_opening_mm": 1.5}}
+PLAN
+expect_exit 0 "design a plan" -- "$tool" design "$work/plan.json" -o "$work/plan-out"
+check "plan wrote the intermediate splint" -- test -s "$work/plan-out/intermediate.stl"
+check "plan wrote the final splint" -- test -s "$work/plan-out/final.stl"
+check "plan wrote no single splint" -- test ! -e "$work/plan-out/splint.stl"
+check "plan wrote a preview of each" -- test -s "$work/plan-out/intermediate.png" -a -s "$work/plan-out/final.png"
+check "plan report is one object" -- json_ok "$work/plan-out/report.json"
+check "plan report has the plan and both splints" -- grep -q '"plan":{"sequence":"maxilla_first".*"intermediate":{.*"autorotation":{"angle_rad":.*"final":{' "$work/plan-out/report.json"
+check "the splints differ" -- sh -c "! cmp -s '$work/plan-out/intermediate.stl' '$work/plan-out/final.stl'"
+check "plan printed both splints" -- grep -q "^final: mandible turned .* deg" "$work/out"
+expect_exit 0 "the plan's intermediate splint is printable" -- "$tool" check "$work/plan-out/intermediate.stl"
+cp "$work/plan-out/intermediate.stl" "$work/intermediate.first"
+cp "$work/plan-out/final.stl" "$work/final.first"
+expect_exit 0 "design a plan again" -- "$tool" design "$work/plan.json" -o "$work/plan-out" --json
+check "plan bytes are the same every run" -- sh -c "cmp -s '$work/plan-out/intermediate.stl' '$work/intermediate.first' && cmp -s '$work/plan-out/final.stl' '$work/final.first'"
+sed 's/"mesh": "mandible.stl"}/"mesh": "mandible.stl", "transform": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]}/' "$work/plan.json" > "$work/plan-bad.json"
+expect_exit 1 "a plan with a jaw transform" -- "$tool" design "$work/plan-bad.json" -o "$work/plan-bad"
+check "the refusal names the line and column" -- grep -q "plan-bad.json:2:[0-9]*: .*both move it" "$work/err"
+expect_exit 1 "outline of a plan case" -- "$tool" outline "$work/plan.json" -o "$work/plan-resolved.json"
+
 expect_exit 0 "base for the Boolean" -- "$tool" base "$fixtures/cases/paper_scale.json" -o "$work/base.stl"
 expect_exit 2 "boolean without an operation" -- "$tool" boolean "$work/base.stl" "$work/maxilla.stl" -o "$work/cut.stl"
 expect_exit 2 "boolean with two operations" -- "$tool" boolean --union --difference "$work/base.stl" "$work/maxilla.stl" -o "$work/cut.stl"

@@ -109,8 +109,14 @@ class Design {
   Status write_resolved_case(const std::string& path);
   void print_outline() const;
   Status write_splint();
+  Status write_mesh_file(const Mesh& m, const std::string& path, std::string* hash) const;
   void write_preview();
+  void preview_splint(const Mesh& splint, const DesignReport& report,
+                      const std::vector<RigidTransform>& transforms, const std::string& path,
+                      cli::PreviewInfo* info, Status* status, char* error, size_t error_size);
   Status write_report();
+  int run_plan();
+  Status write_plan_report();
   void print_summary() const;
 
   Run& run_;
@@ -144,6 +150,14 @@ class Design {
   Status preview_status_;
   char preview_error_[512] = "";
   double t_read_ = 0, t_design_ = 0, t_end_ = 0;
+
+  // Two-jaw surgery ("plan"): [0] the intermediate splint, [1] the final one.
+  Mesh plan_splints_[2];
+  PlanReport plan_report_;
+  std::string plan_paths_[2], plan_hashes_[2];
+  cli::PreviewInfo plan_previews_[2];
+  Status plan_preview_status_[2];
+  char plan_preview_errors_[2][512] = {};
 };
 
 int Design::run() {
@@ -156,6 +170,15 @@ int Design::run() {
   if (s.is_ok() && any_ct_) s = reconstruct_ct_jaws();
   if (!s.is_ok()) return run_.reject(s);
   t_read_ = monotonic_seconds();
+  if (c_.has_plan) {
+    if (args_.outline_only) {
+      return run_.reject(Status::error(StatusCode::kInvalidArgument,
+                                       "outline: a case with \"plan\" has an outline per splint: "
+                                       "design it (report.json gives both)")
+                             .in_file(case_path_.c_str()));
+    }
+    return run_plan();
+  }
   if (c_.has_auto_outline) {
     s = resolve_outline();
     if (!s.is_ok()) return run_.reject(s.in_file(case_path_.c_str()));
@@ -305,17 +328,21 @@ void Design::print_outline() const {
   std::printf("wrote %s\n", resolved_path_.c_str());
 }
 
-// The splint's bytes: hashed, then written atomically.
-Status Design::write_splint() {
-  std::vector<uint8_t> stl(84 + 50 * splint_.triangles.size());
+// A splint's binary STL bytes: hashed, then written atomically.
+Status Design::write_mesh_file(const Mesh& m, const std::string& path, std::string* hash) const {
+  std::vector<uint8_t> stl(84 + 50 * m.triangles.size());
   MemorySink sink{stl.data(), stl.size(), 0, 0};
-  SPLINTCORE_RETURN_IF_ERROR(write_stl(ctx_, splint_, memory_sink(&sink), StlWriteOptions{}));
+  SPLINTCORE_RETURN_IF_ERROR(write_stl(ctx_, m, memory_sink(&sink), StlWriteOptions{}));
   stl.resize(static_cast<size_t>(sink.size));
+  *hash = hex_sha256(stl.data(), stl.size());
+  return write_bytes_atomically(path, stl.data(), stl.size());
+}
+
+Status Design::write_splint() {
   const std::string out_dir = args_.output;
   splint_path_ = out_dir + "/" + (c_.output_splint != nullptr ? c_.output_splint : "splint.stl");
   report_path_ = out_dir + "/" + (c_.output_report != nullptr ? c_.output_report : "report.json");
-  splint_hash_ = hex_sha256(stl.data(), stl.size());
-  return write_bytes_atomically(splint_path_, stl.data(), stl.size());
+  return write_mesh_file(splint_, splint_path_, &splint_hash_);
 }
 
 // OUTDIR/preview.png: the splint on the jaws as the plan (and a tray placement) moved them;
@@ -398,6 +425,129 @@ Status Design::write_report() {
   SPLINTCORE_RETURN_IF_ERROR(
       write_design_report(ctx_, c_, Span<const Mesh>(jaws_.data(), jaws_.size()), splint_, report_,
                           files, &run_info, cli::string_sink(&report_text_)));
+  return write_bytes_atomically(report_path_, report_text_ + "\n");
+}
+
+// Two-jaw surgery: both splints (design_plan), OUTDIR/intermediate.stl and final.stl, a
+// preview of each (intermediate.png, final.png: not fatal) and one report.json for both.
+int Design::run_plan() {
+  Status s = design_plan(ctx_, c_, Span<const Mesh>(jaws_.data(), jaws_.size()), &plan_splints_[0],
+                         &plan_splints_[1], &plan_report_);
+  if (clock_.print && !s.is_ok()) std::fprintf(stderr, " failed\n");
+  if (!s.is_ok()) return run_.reject(s.in_file(case_path_.c_str()));
+  t_design_ = monotonic_seconds();
+  const std::string out_dir = args_.output;
+  static const char* const kNames[2] = {"intermediate", "final"};
+  const PlanSplintReport* parts[2] = {&plan_report_.intermediate, &plan_report_.final_splint};
+  for (int k = 0; k < 2; ++k) {
+    plan_paths_[k] = out_dir + "/" + kNames[k] + ".stl";
+    s = write_mesh_file(plan_splints_[k], plan_paths_[k], &plan_hashes_[k]);
+    if (!s.is_ok()) return run_.reject(s);
+  }
+  for (int k = 0; k < 2; ++k) {
+    std::vector<RigidTransform> moves;
+    for (const CaseJaw& j : c_.jaws) {
+      moves.push_back(std::strcmp(j.role, "maxilla") == 0 ? parts[k]->maxilla : parts[k]->mandible);
+    }
+    preview_splint(plan_splints_[k], parts[k]->design, moves, out_dir + "/" + kNames[k] + ".png",
+                   &plan_previews_[k], &plan_preview_status_[k], plan_preview_errors_[k],
+                   sizeof(plan_preview_errors_[k]));
+  }
+  t_end_ = monotonic_seconds();
+  report_path_ = out_dir + "/" + (c_.output_report != nullptr ? c_.output_report : "report.json");
+  s = write_plan_report();
+  if (!s.is_ok()) return run_.reject(s);
+  if (args_.common.json) {
+    std::printf("%s\n", report_text_.c_str());
+    return kExitOk;
+  }
+  for (int k = 0; k < 2; ++k) {
+    const PlanSplintReport& r = *parts[k];
+    std::printf(
+        "%s: mandible turned %.9f rad (%.6f deg) about the hinge axis to %.6f mm; "
+        "%zu triangles, %.3f mm^3; wrote %s (sha256 %s)\n",
+        kNames[k], r.autorotation.angle_rad, r.angle_deg, r.autorotation.opening,
+        plan_splints_[k].triangles.size(), r.design.print.mesh.volume, plan_paths_[k].c_str(),
+        plan_hashes_[k].c_str());
+  }
+  std::printf("wrote %s; time: design %.3f s, total %.3f s; peak arena %llu bytes\n",
+              report_path_.c_str(), t_design_ - t_read_, t_end_ - run_.start,
+              static_cast<unsigned long long>(run_.peak_arena()));
+  return kExitOk;
+}
+
+// A preview of one splint on the jaws moved by `transforms` (and the tray's move); a failure is
+// a warning, kept for the report.
+void Design::preview_splint(const Mesh& splint, const DesignReport& report,
+                            const std::vector<RigidTransform>& transforms, const std::string& path,
+                            cli::PreviewInfo* info, Status* status, char* error,
+                            size_t error_size) {
+  std::vector<const Mesh*> preview_jaws;
+  std::vector<RigidTransform> moves;
+  for (size_t i = 0; i < jaws_.size(); ++i) {
+    preview_jaws.push_back(&jaws_[i]);
+    moves.push_back(
+        report.placed_on_tray
+            ? compose(RigidTransform::translation(report.tray_translation), transforms[i])
+            : transforms[i]);
+  }
+  *status = cli::write_preview(ctx_, splint, preview_jaws, moves, path, 1024, 1024, info);
+  if (!status->is_ok()) {
+    status->format(error, error_size);
+    std::fprintf(stderr, "splintcore: warning: no preview: %s\n", error);
+  }
+}
+
+Status Design::write_plan_report() {
+  std::vector<const char*> path_list, hash_list;
+  for (size_t i = 0; i < jaw_paths_.size(); ++i) {
+    path_list.push_back(jaw_paths_[i].c_str());
+    hash_list.push_back(jaw_hashes_[i].c_str());
+  }
+  DesignReportFiles files[2];
+  for (int k = 0; k < 2; ++k) {
+    files[k].case_path = case_path_.c_str();
+    files[k].jaw_paths = Span<const char* const>(path_list.data(), path_list.size());
+    files[k].jaw_sha256 = Span<const char* const>(hash_list.data(), hash_list.size());
+    if (any_ct_) {
+      files[k].ct_path = ct_path_.c_str();
+      files[k].ct_size[0] = ct_info_.nx;
+      files[k].ct_size[1] = ct_info_.ny;
+      files[k].ct_size[2] = ct_info_.nz;
+      files[k].ct = &ct_report_;
+    }
+    files[k].splint_path = plan_paths_[k].c_str();
+    files[k].splint_sha256 = plan_hashes_[k].c_str();
+    if (plan_preview_status_[k].is_ok()) {
+      files[k].preview_path = plan_previews_[k].path.c_str();
+      files[k].preview_sha256 = plan_previews_[k].sha256.c_str();
+    } else {
+      files[k].preview_error = plan_preview_errors_[k];
+    }
+  }
+  std::vector<DesignStageTime> stage_times;
+  for (size_t i = 0; i < clock_.names.size(); ++i) {
+    stage_times.push_back(
+        DesignStageTime{clock_.names[i].c_str(), clock_.seconds[i], clock_.peaks[i]});
+  }
+  DesignRunInfo run_info;
+  run_info.memory_cap_bytes = args_.common.memory_cap;
+  run_info.memory_cap_from = cap_source_;
+  run_info.threads = static_cast<uint32_t>(args_.common.threads);
+  run_info.stages = Span<const DesignStageTime>(stage_times.data(), stage_times.size());
+  run_info.read_seconds = t_read_ - run_.start;
+  run_info.design_seconds = t_design_ - t_read_;
+  for (int k = 0; k < 2; ++k) {
+    if (plan_preview_status_[k].is_ok()) {
+      run_info.preview_seconds +=
+          plan_previews_[k].render_seconds + plan_previews_[k].encode_seconds;
+    }
+  }
+  run_info.total_seconds = t_end_ - run_.start;
+  run_info.peak_arena_bytes = run_.peak_arena();
+  SPLINTCORE_RETURN_IF_ERROR(splintcore::write_plan_report(
+      ctx_, c_, Span<const Mesh>(jaws_.data(), jaws_.size()), plan_splints_[0], plan_splints_[1],
+      plan_report_, files, &run_info, cli::string_sink(&report_text_)));
   return write_bytes_atomically(report_path_, report_text_ + "\n");
 }
 

@@ -160,6 +160,9 @@ const char kDesignUsage[] =
     "object in the case, each jaw's interference (undercut) is removed after the Boolean\n"
     "(see `splintcore blockout --help`), reported per jaw. A jaw may instead come from the\n"
     "case's CT volume (\"ct\" and a seed per jaw: see `splintcore reconstruct --help`).\n"
+    "A case with \"plan\" (two-jaw surgery) gives two splints, OUTDIR/intermediate.stl and\n"
+    "OUTDIR/final.stl, the mandible turned about the plan's hinge axis to each opening, a\n"
+    "preview of each and one report.json for both.\n"
     "Exit status: 0 splint written, 1 rejected (the message names the stage), 2 usage.\n";
 
 const char kSweepUsage[] =

@@ -1,0 +1,131 @@
+// Two-jaw surgery (design.h, design_plan): the intermediate and the final splint of one
+// surgical plan, each an ordinary design_splint() of the case with the jaws where the plan and
+// the hinge-axis autorotation (outline.h, autorotate_mandible) put them. Why each splint holds
+// the jaws where it does, in either sequence: docs/case-format.md, "Plan".
+#include <cstring>
+
+#include "splintcore/design.h"
+
+namespace splintcore {
+
+namespace {
+
+// The prefix names which splint and which stage; running out and cancelling pass unchanged.
+Status plan_error(const Status& s, const char* which, const char* stage) {
+  if (s.is_ok() || s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) {
+    return s;
+  }
+  Status e = make_error(s.code(), "plan: ", which, ": ", stage, s.message());
+  if (s.index() != kNoPosition) e.at_index(s.index());
+  return e;
+}
+
+// Indices of the maxilla and the mandible (the parser allows one of each role).
+Status plan_roles(const CaseFile& c, size_t* up, size_t* low) {
+  if (!c.has_plan || c.jaws.size() != 2) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "plan: the case has no \"plan\" with a maxilla and a mandible");
+  }
+  *up = std::strcmp(c.jaws[0].role, "maxilla") == 0 ? 0 : 1;
+  *low = 1 - *up;
+  if (std::strcmp(c.jaws[*up].role, "maxilla") != 0 ||
+      std::strcmp(c.jaws[*low].role, "mandible") != 0) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "plan: the case's jaws must be one maxilla and one mandible");
+  }
+  return Status::ok();
+}
+
+// `m` moved by `x` and rounded to float32 (as design_splint moves a jaw), into `out`; the
+// triangles are shared with `m`.
+Status moved_copy(const Context& ctx, const Mesh& m, const RigidTransform& x, const char* role,
+                  Mesh* out) {
+  out->bind(ctx.arena);
+  if (!out->vertices.reserve(m.vertices.size())) return ctx.arena->exhausted_status();
+  for (const Vec3& v : m.vertices) {
+    Vec3 p = x.apply_point(v);
+    if (!round_to_float32(&p)) {
+      return make_error(StatusCode::kLimitExceeded, "the ", role,
+                        " moved by the plan is beyond float32 range (or not finite)");
+    }
+    (void)out->vertices.push_back(p);
+  }
+  out->triangles.adopt(const_cast<Triangle*>(m.triangles.span().data()), m.triangles.size(),
+                       m.triangles.size());
+  return Status::ok();
+}
+
+// One splint: the jaws moved as the plan says for it, the mandible turned about the hinge axis
+// to the opening, then design_splint. The moved copies are returned before the design.
+Status plan_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, bool final_splint,
+                Mesh* splint, PlanSplintReport* r) {
+  const char* which = final_splint ? "final" : "intermediate";
+  size_t up = 0, low = 0;
+  SPLINTCORE_RETURN_IF_ERROR(plan_roles(c, &up, &low));
+  const CasePlan& plan = c.plan;
+  const bool move_maxilla = final_splint || !plan.mandible_first;
+  const bool move_mandible = final_splint || plan.mandible_first;
+  const RigidTransform maxilla_move = move_maxilla ? plan.maxilla : RigidTransform{};
+  const RigidTransform mandible_move = move_mandible ? plan.mandible : RigidTransform{};
+  r->opening_asked_mm = final_splint ? plan.final_opening_mm : plan.intermediate_opening_mm;
+  {
+    ArenaScope temporaries(*ctx.arena);
+    Mesh upper, lower;
+    Status s = moved_copy(ctx, jaws[up], maxilla_move, "maxilla", &upper);
+    if (s.is_ok()) s = moved_copy(ctx, jaws[low], mandible_move, "mandible", &lower);
+    AutorotateOptions o;
+    o.hinge[0] = plan.hinge[0];
+    o.hinge[1] = plan.hinge[1];
+    o.opening_mm = r->opening_asked_mm;
+    if (s.is_ok()) s = autorotate_mandible(ctx, upper, lower, o, &r->autorotation);
+    SPLINTCORE_RETURN_IF_ERROR(plan_error(s, which, "autorotation: "));
+  }
+  r->angle_deg = r->autorotation.angle_rad * (180.0 / 3.14159265358979323846);
+  r->maxilla = maxilla_move;
+  r->mandible = compose(r->autorotation.transform, mandible_move);
+  CaseJaw derived_jaws[2];
+  CaseFile derived;
+  SPLINTCORE_RETURN_IF_ERROR(plan_splint_case(c, *r, derived_jaws, &derived));
+  return plan_error(design_splint(ctx, derived, jaws, splint, &r->design), which, "");
+}
+
+}  // namespace
+
+Status plan_splint_case(const CaseFile& c, const PlanSplintReport& r, CaseJaw jaws[2],
+                        CaseFile* out) {
+  size_t up = 0, low = 0;
+  SPLINTCORE_RETURN_IF_ERROR(plan_roles(c, &up, &low));
+  jaws[up] = c.jaws[up];
+  jaws[up].transform = r.maxilla;
+  jaws[low] = c.jaws[low];
+  jaws[low].transform = r.mandible;
+  *out = c;
+  out->has_plan = false;
+  out->jaws = Span<const CaseJaw>(jaws, 2);
+  return Status::ok();
+}
+
+Status design_plan(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* intermediate,
+                   Mesh* final_splint, PlanReport* report) {
+  *report = PlanReport{};
+  size_t up = 0, low = 0;
+  SPLINTCORE_RETURN_IF_ERROR(plan_roles(c, &up, &low));
+  if (jaws.size() != 2) {
+    return make_error(StatusCode::kInvalidArgument, "plan: the case names 2 jaws but ", jaws.size(),
+                      " meshes were given");
+  }
+  ArenaScope scope(*ctx.arena);  // on an error nothing stays
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "plan: intermediate", 0, 2));
+  Status s = plan_one(ctx, c, jaws, false, intermediate, &report->intermediate);
+  if (s.is_ok()) s = report_progress(ctx, "plan: final", 1, 2);
+  if (s.is_ok()) s = plan_one(ctx, c, jaws, true, final_splint, &report->final_splint);
+  if (!s.is_ok()) {
+    *intermediate = Mesh{};
+    *final_splint = Mesh{};
+    return s;
+  }
+  scope.commit();
+  return Status::ok();
+}
+
+}  // namespace splintcore

@@ -1,0 +1,255 @@
+// Two-jaw surgery (src/design/plan.cpp, design_plan; issue 32) on the phantom: both splints
+// made, printable closed solids, different; the angle each reports is autorotate_mandible's on
+// the jaws as the plan moves them; the same bytes every run; the report names both; an error
+// leaves the arena as it was.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "common/phantom.h"
+#include "splintcore/design.h"
+#include "support/test_util.h"
+
+namespace splintcore {
+namespace {
+
+// The phantom's arch runs round +y, the maxilla above: the condyles behind (-y) and above.
+// The plan: the maxilla advanced 2 mm and impacted 1 mm, the mandible advanced 2.5 mm.
+std::string phantom_plan_case(const char* sequence, const char* mandible) {
+  return std::string(R"({"splintcore_case": 1, "case_id": "plan-1",
+    "jaws": [{"role": "maxilla", "mesh": "maxilla.stl"}, {"role": "mandible", "mesh": "mandible.stl"}],
+    "base": {"spacing_mm": 0.5, "auto": {}},
+    "plan": {"sequence": ")") +
+         sequence + R"(",
+      "maxilla": [1,0,0,0, 0,1,0,2, 0,0,1,1, 0,0,0,1],
+      "mandible": )" +
+         mandible + R"(,
+      "hinge_axis": [[-50, -55, 25], [50, -55, 25]],
+      "intermediate_opening_mm": 2, "final_opening_mm": 1.5}})";
+}
+
+struct PlanFixture {
+  test::TestArena t{size_t{160} << 20};
+  CaseFile c;
+  Mesh jaws[2];
+  bool ok = false;
+  explicit PlanFixture(const char* sequence,
+                       const char* mandible = "[1,0,0,0, 0,1,0,2.5, 0,0,1,0, 0,0,0,1]") {
+    Context ctx(&t.arena);
+    static std::string text;
+    text = phantom_plan_case(sequence, mandible);
+    if (!parse_case(ctx, text.data(), text.size(), "plan", &c).is_ok()) return;
+    for (int j = 0; j < 2; ++j) {
+      phantom::JawMesh m;
+      phantom::PhantomOptions po;
+      po.target_triangles = 6000;
+      if (!phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &m)
+               .is_ok()) {
+        return;
+      }
+      jaws[j].bind(&t.arena);
+      for (const Vec3& v : m.vertices) (void)jaws[j].vertices.push_back(v);
+      for (const Triangle& tr : m.triangles) (void)jaws[j].triangles.push_back(tr);
+    }
+    ok = true;
+  }
+  Span<const Mesh> span() const { return Span<const Mesh>(jaws, 2); }
+};
+
+std::vector<uint8_t> stl_bytes(Arena& arena, const Mesh& m) {
+  std::vector<uint8_t> bytes;
+  EXPECT_TRUE(test::mesh_to_bytes(arena, m, StlFormat::kBinary, &bytes).is_ok());
+  return bytes;
+}
+
+// The same autorotation, computed here from the jaws moved as the plan says (float32, as
+// design_splint moves them).
+AutorotateReport autorotate_as_planned(Arena& arena, const PlanFixture& f, const RigidTransform& up,
+                                       const RigidTransform& low, double opening) {
+  ArenaScope scope(arena);
+  Mesh moved[2];
+  const RigidTransform* moves[2] = {&up, &low};
+  for (int j = 0; j < 2; ++j) {
+    moved[j].bind(&arena);
+    for (const Vec3& v : f.jaws[j].vertices) {
+      Vec3 p = moves[j]->apply_point(v);
+      EXPECT_TRUE(round_to_float32(&p));
+      (void)moved[j].vertices.push_back(p);
+    }
+    for (const Triangle& t : f.jaws[j].triangles) (void)moved[j].triangles.push_back(t);
+  }
+  AutorotateOptions o;
+  o.hinge[0] = f.c.plan.hinge[0];
+  o.hinge[1] = f.c.plan.hinge[1];
+  o.opening_mm = opening;
+  AutorotateReport r;
+  EXPECT_TRUE(autorotate_mandible(Context(&arena), moved[0], moved[1], o, &r).is_ok());
+  return r;
+}
+
+TEST(DesignPlan, MaxillaFirstGivesTwoSplintsWithTheAutorotationsAngles) {
+  PlanFixture f("maxilla_first");
+  ASSERT_TRUE(f.ok);
+  Context ctx(&f.t.arena);
+  Mesh intermediate, final_splint;
+  PlanReport r;
+  SPLINTCORE_ASSERT_OK(design_plan(ctx, f.c, f.span(), &intermediate, &final_splint, &r));
+  // Both printable closed solids (design_splint's printer check: closed, manifold, no
+  // self-intersection), each from its own automatic outline.
+  for (const PlanSplintReport* p : {&r.intermediate, &r.final_splint}) {
+    EXPECT_TRUE(p->design.print.printable);
+    EXPECT_TRUE(p->design.self_intersection_checked);
+    EXPECT_TRUE(p->design.outlined);
+    EXPECT_GT(p->design.print.mesh.volume, 100.0);
+  }
+  EXPECT_GT(intermediate.triangles.size(), 0u);
+  EXPECT_GT(final_splint.triangles.size(), 0u);
+  const std::vector<uint8_t> a = stl_bytes(f.t.arena, intermediate);
+  const std::vector<uint8_t> b = stl_bytes(f.t.arena, final_splint);
+  EXPECT_NE(a, b);
+  EXPECT_NE(r.intermediate.design.print.mesh.volume, r.final_splint.design.print.mesh.volume);
+
+  // The moves as applied: intermediate = maxilla moved, mandible preoperative then turned;
+  // final = both moved, the mandible then turned.
+  const RigidTransform none;
+  EXPECT_EQ(r.intermediate.maxilla.t[1], 2.0);
+  const AutorotateReport ai = autorotate_as_planned(f.t.arena, f, f.c.plan.maxilla, none, 2.0);
+  EXPECT_EQ(r.intermediate.autorotation.angle_rad, ai.angle_rad);  // the same bits
+  EXPECT_NEAR(r.intermediate.autorotation.opening, 2.0, 1e-6);
+  EXPECT_EQ(r.intermediate.angle_deg, ai.angle_rad * (180.0 / 3.14159265358979323846));
+  const AutorotateReport af =
+      autorotate_as_planned(f.t.arena, f, f.c.plan.maxilla, f.c.plan.mandible, 1.5);
+  EXPECT_EQ(r.final_splint.autorotation.angle_rad, af.angle_rad);
+  EXPECT_NEAR(r.final_splint.autorotation.opening, 1.5, 1e-6);
+  EXPECT_NE(ai.angle_rad, af.angle_rad);
+  const RigidTransform expected = compose(af.transform, f.c.plan.mandible);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(r.final_splint.mandible.t[i], expected.t[i]);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(r.final_splint.mandible.r[i][k], expected.r[i][k]);
+  }
+  std::printf("intermediate: %.9f deg, %zu triangles; final: %.9f deg, %zu triangles\n",
+              r.intermediate.angle_deg, intermediate.triangles.size(), r.final_splint.angle_deg,
+              final_splint.triangles.size());
+
+  // Deterministic: a second run gives the same bytes.
+  {
+    ArenaScope again(f.t.arena);
+    Mesh i2, f2;
+    PlanReport r2;
+    SPLINTCORE_ASSERT_OK(design_plan(ctx, f.c, f.span(), &i2, &f2, &r2));
+    EXPECT_EQ(stl_bytes(f.t.arena, i2), a);
+    EXPECT_EQ(stl_bytes(f.t.arena, f2), b);
+  }
+
+  // The report: the plan, then each splint with its autorotation and output.
+  std::string json;
+  ByteSink sink;
+  sink.user = &json;
+  sink.write = [](void* user, const uint8_t* data, size_t n) {
+    static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
+    return true;
+  };
+  DesignReportFiles files[2];
+  files[0].splint_path = "intermediate.stl";
+  files[1].splint_path = "final.stl";
+  SPLINTCORE_ASSERT_OK(
+      write_plan_report(ctx, f.c, f.span(), intermediate, final_splint, r, files, nullptr, sink));
+  JsonDocument doc;
+  SPLINTCORE_ASSERT_OK(parse_json(ctx, json.data(), json.size(), JsonLimits{}, "report", &doc));
+  const JsonValue* plan = doc.member(doc.root(), "plan");
+  ASSERT_NE(plan, nullptr);
+  EXPECT_STREQ(doc.member(*plan, "sequence")->string, "maxilla_first");
+  for (const char* key : {"intermediate", "final"}) {
+    const JsonValue* s = doc.member(doc.root(), key);
+    ASSERT_NE(s, nullptr) << key;
+    const JsonValue* rot = doc.member(*s, "autorotation");
+    ASSERT_NE(rot, nullptr);
+    const PlanSplintReport& p = std::strcmp(key, "final") == 0 ? r.final_splint : r.intermediate;
+    EXPECT_EQ(doc.member(*rot, "angle_rad")->number, p.autorotation.angle_rad);
+    EXPECT_NE(doc.member(*s, "output"), nullptr);
+    EXPECT_NE(doc.member(*s, "inputs"), nullptr);
+  }
+}
+
+// Mandible first: the intermediate splint holds the planned mandible, turned, against the
+// maxilla as before surgery; the final one is the maxilla-first plan's final splint.
+TEST(DesignPlan, MandibleFirstMovesTheMandibleFirst) {
+  PlanFixture f("mandible_first", "[1,0,0,0, 0,1,0,0.5, 0,0,1,-0.5, 0,0,0,1]");
+  ASSERT_TRUE(f.ok);
+  Context ctx(&f.t.arena);
+  Mesh intermediate, final_splint;
+  PlanReport r;
+  SPLINTCORE_ASSERT_OK(design_plan(ctx, f.c, f.span(), &intermediate, &final_splint, &r));
+  EXPECT_EQ(r.intermediate.maxilla.t[1], 0.0);
+  const RigidTransform none;
+  const AutorotateReport ai = autorotate_as_planned(f.t.arena, f, none, f.c.plan.mandible, 2.0);
+  EXPECT_EQ(r.intermediate.autorotation.angle_rad, ai.angle_rad);
+  std::printf("mandible first: intermediate %.9f deg, final %.9f deg\n", r.intermediate.angle_deg,
+              r.final_splint.angle_deg);
+  EXPECT_TRUE(r.intermediate.design.print.printable);
+  EXPECT_TRUE(r.final_splint.design.print.printable);
+  EXPECT_NE(stl_bytes(f.t.arena, intermediate), stl_bytes(f.t.arena, final_splint));
+}
+
+TEST(DesignPlan, ErrorsLeaveTheArenaAsItWas) {
+  PlanFixture f("maxilla_first");
+  ASSERT_TRUE(f.ok);
+  Mesh a, b;
+  PlanReport r;
+  // Not a plan case.
+  CaseFile no_plan = f.c;
+  no_plan.has_plan = false;
+  Status s = design_plan(Context(&f.t.arena), no_plan, f.span(), &a, &b, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  // design_splint of a plan case: refused (its jaws are the preoperative ones).
+  Mesh single;
+  DesignReport single_report;
+  s = design_splint(Context(&f.t.arena), f.c, f.span(), &single, &single_report);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(s.message()).find("design_plan makes its two splints"), std::string::npos);
+  // One mesh for two jaws.
+  s = design_plan(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 1), &a, &b, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << test::format(s);
+  // An opening the jaws cannot reach: named for the splint and the stage.
+  CaseFile far = f.c;
+  far.plan.hinge[0] = Vec3{0, 0, -50};  // a vertical axis: no closing sense
+  far.plan.hinge[1] = Vec3{0, 0, 50};
+  const size_t used = f.t.arena.used();
+  s = design_plan(Context(&f.t.arena), far, f.span(), &a, &b, &r);
+  EXPECT_NE(s.code(), StatusCode::kOk);
+  EXPECT_NE(std::string(s.message()).find("plan: intermediate: autorotation: "), std::string::npos)
+      << s.message();
+  EXPECT_EQ(f.t.arena.used(), used);
+  // The memory contract (design_plan has no bound of its own: design_splint has none): in
+  // exactly the arena a first run took it gives the same splints; one byte less fails cleanly,
+  // the arena as it was and both meshes empty.
+  uint64_t need = 0;
+  std::vector<uint8_t> first;
+  {
+    test::TestArena big{size_t{64} << 20};
+    SPLINTCORE_ASSERT_OK(design_plan(Context(&big.arena), f.c, f.span(), &a, &b, &r));
+    need = big.arena.high_water();
+    first = stl_bytes(f.t.arena, b);
+    a = Mesh{};
+    b = Mesh{};
+  }
+  {
+    test::TestArena exact{static_cast<size_t>(need)};
+    SPLINTCORE_ASSERT_OK(design_plan(Context(&exact.arena), f.c, f.span(), &a, &b, &r));
+    EXPECT_EQ(stl_bytes(f.t.arena, b), first);
+    a = Mesh{};
+    b = Mesh{};
+  }
+  test::TestArena small{static_cast<size_t>(need - 1)};
+  s = design_plan(Context(&small.arena), f.c, f.span(), &a, &b, &r);
+  EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << test::format(s);
+  EXPECT_EQ(small.arena.used(), 0u);
+  EXPECT_TRUE(a.triangles.empty() && b.triangles.empty());
+  std::printf("design_plan on the 6000-triangle phantom: %llu arena bytes\n",
+              static_cast<unsigned long long>(need));
+}
+
+}  // namespace
+}  // namespace splintcore
