@@ -153,6 +153,38 @@ class StlWriter {
   const char* solid_name_ = "splintcore";
 };
 
+// ---- 3MF print jobs ----------------------------------------------------------------------
+// One object of a 3MF job: a mesh in millimetres (its vertices written as float32, in their
+// shortest decimal form), its name, and the SHA-256 (hex) of what it was made from (e.g. its
+// STL), written as the object's metadata sc:sha256.
+struct ThreeMfObject {
+  const Mesh* mesh = nullptr;
+  const char* name = "";
+  const char* sha256 = "";
+};
+
+struct ThreeMfOptions {
+  const char* title = "";    // the model's Title metadata ("": none)
+  const char* case_id = "";  // metadata sc:case_id ("": none)
+  bool deflate = true;       // entries deflated when that is smaller, else stored
+};
+
+// Arena bytes write_3mf() takes at most (nothing stays): the model part (up to 81 bytes a
+// vertex and 66 a triangle, 6 per character of a name, id or hash, 1 KiB more, 256 an object)
+// and, deflating, the encoder's tables with a 64 KiB output buffer and each entry's
+// compressed copy (9/8 of it).
+uint64_t write_3mf_bound(Span<const ThreeMfObject> objects, const ThreeMfOptions& options);
+
+// Writes `objects` as a 3MF package (3MF Core 1.3: unit millimetre, an object and a build
+// item per mesh, in order; the ZIP container: fixed dates, no ZIP64): the same input gives the
+// same bytes. The objects are placed as their coordinates say (the caller places them on the
+// tray). Errors: kInvalidArgument (no objects, an empty mesh, a sink without write()),
+// kInvalidMesh (a vertex id out of range), kNonFinite / kLimitExceeded (a vertex not finite or
+// beyond float32 range: object and vertex named; a package over 4 GiB), kArenaExhausted,
+// kIoError (the sink refused).
+Status write_3mf(const Context& ctx, Span<const ThreeMfObject> objects,
+                 const ThreeMfOptions& options, const ByteSink& sink);
+
 // Writes a whole mesh through an StlWriter.
 Status write_stl(const Context& ctx, const Mesh& mesh, const ByteSink& sink,
                  const StlWriteOptions& options);

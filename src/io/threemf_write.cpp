@@ -1,0 +1,377 @@
+// 3MF print jobs (io.h): the 3MF Core Specification 1.3 (3MF Consortium): one model part,
+// 3D/3dmodel.model, with units in millimetres, an object per mesh and a build item per
+// object; packaged as OPC (ECMA-376 part 2: [Content_Types].xml and _rels/.rels) in a ZIP
+// container (PKWARE APPNOTE 6.3: local file headers, central directory, end of central
+// directory; no ZIP64, no data descriptors, every date 1980-01-01 00:00). Entries are deflated
+// with the compress module's fixed-Huffman encoder (method 8) unless that is not smaller
+// (then stored, method 0). Same input, same bytes.
+#include <charconv>
+#include <cstring>
+
+#include "splintcore/compress.h"
+#include "splintcore/io.h"
+
+namespace splintcore {
+
+namespace {
+
+constexpr double kFloatMax = 3.4028234663852886e38;
+const char kSplintcoreNamespace[] = "http://schemas.splintcore.org/3mf/2026/11";
+
+const char kContentTypes[] =
+    "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+    "<Types xmlns=\"http://schemas.openxmlformats.org/package/2006/content-types\">"
+    "<Default Extension=\"rels\" "
+    "ContentType=\"application/vnd.openxmlformats-package.relationships+xml\"/>"
+    "<Default Extension=\"model\" "
+    "ContentType=\"application/vnd.ms-package.3dmanufacturing-3dmodel+xml\"/></Types>\n";
+
+const char kRels[] =
+    "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+    "<Relationships xmlns=\"http://schemas.openxmlformats.org/package/2006/relationships\">"
+    "<Relationship Target=\"/3D/3dmodel.model\" Id=\"rel0\" "
+    "Type=\"http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel\"/></Relationships>\n";
+
+// The longest text of one vertex and of one triangle line (float32 in its shortest form: at
+// most 15 characters; ids at most 10 digits).
+constexpr uint64_t kVertexLine = 18 + 3 * (4 + 15 + 1) + 3;
+constexpr uint64_t kTriangleLine = 15 + 3 * (5 + 10 + 1) + 3;
+constexpr uint64_t kFixedText = 1024;  // the model's header, footer, and per object's tags
+constexpr uint64_t kPerObject = 256;
+constexpr size_t kDeflateChunk = 65536;  // the encoder's output buffer
+
+// A text that grows in the arena (the model part is built whole: a ZIP entry's header holds
+// its size and CRC).
+struct Text {
+  uint8_t* data = nullptr;
+  size_t size = 0, capacity = 0;
+  void put(const char* s, size_t n) {
+    SPLINTCORE_ASSERT(size + n <= capacity);
+    std::memcpy(data + size, s, n);
+    size += n;
+  }
+  void put(const char* s) { put(s, std::strlen(s)); }
+  void put_u64(uint64_t v) {
+    char buf[24];
+    const auto r = std::to_chars(buf, buf + sizeof buf, v);
+    put(buf, static_cast<size_t>(r.ptr - buf));
+  }
+  void put_float(float f) {
+    if (f == 0.0f) f = 0.0f;  // no "-0"
+    char buf[32];
+    const auto r = std::to_chars(buf, buf + sizeof buf, f);
+    put(buf, static_cast<size_t>(r.ptr - buf));
+  }
+  // XML character data or an attribute value: & < > " ' escaped.
+  void put_escaped(const char* s) {
+    for (; *s != 0; ++s) {
+      switch (*s) {
+        case '&': put("&amp;"); break;
+        case '<': put("&lt;"); break;
+        case '>': put("&gt;"); break;
+        case '"': put("&quot;"); break;
+        case '\'': put("&apos;"); break;
+        default: put(s, 1); break;
+      }
+    }
+  }
+};
+
+uint64_t escaped_bound(const char* s) { return s == nullptr ? 0 : 6 * uint64_t{std::strlen(s)}; }
+
+uint64_t model_bound(Span<const ThreeMfObject> objects, const ThreeMfOptions& options) {
+  uint64_t n = kFixedText + escaped_bound(options.title) + escaped_bound(options.case_id);
+  for (const ThreeMfObject& o : objects) {
+    n += kPerObject + escaped_bound(o.name) + escaped_bound(o.sha256);
+    if (o.mesh != nullptr) {
+      n += kVertexLine * o.mesh->vertices.size() + kTriangleLine * o.mesh->triangles.size();
+    }
+  }
+  return n;
+}
+
+// Fixed-Huffman deflate output of n bytes: at most 9 bits a literal, the block's 3 header bits
+// and its end code (7 bits): n * 9 / 8 + 3.
+uint64_t deflated_bound(uint64_t n) { return n + n / 8 + 16; }
+
+Status check_objects(Span<const ThreeMfObject> objects) {
+  if (objects.empty()) {
+    return Status::error(StatusCode::kInvalidArgument, "3MF: no objects to write");
+  }
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const Mesh* m = objects[i].mesh;
+    if (m == nullptr || m->triangles.empty()) {
+      return make_error(StatusCode::kInvalidArgument, "3MF: object ", i, " has no triangles")
+          .at_index(i);
+    }
+    const size_t nv = m->vertices.size();
+    for (size_t t = 0; t < m->triangles.size(); ++t) {
+      for (const uint32_t v : m->triangles[t].v) {
+        if (v >= nv) {
+          return make_error(StatusCode::kInvalidMesh, "3MF: object ", i, " triangle ", t,
+                            " refers to vertex ", v, " of ", nv)
+              .at_index(t);
+        }
+      }
+    }
+    for (size_t v = 0; v < nv; ++v) {
+      const Vec3& p = m->vertices[v];
+      const double c[3] = {p.x, p.y, p.z};
+      for (const double x : c) {
+        if (!(x <= kFloatMax && x >= -kFloatMax)) {
+          return make_error(is_finite(p) ? StatusCode::kLimitExceeded : StatusCode::kNonFinite,
+                            "3MF: object ", i, " vertex ", v,
+                            is_finite(p) ? " is beyond float32 range" : " is not finite")
+              .at_index(v);
+        }
+      }
+    }
+  }
+  return Status::ok();
+}
+
+void write_model(Span<const ThreeMfObject> objects, const ThreeMfOptions& options, Text* t) {
+  t->put(
+      "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      "<model unit=\"millimeter\" xml:lang=\"en-US\" "
+      "xmlns=\"http://schemas.microsoft.com/3dmanufacturing/core/2015/02\" xmlns:sc=\"");
+  t->put(kSplintcoreNamespace);
+  t->put("\">\n<metadata name=\"Application\">splintcore ");
+  t->put(library_version());
+  t->put("</metadata>\n");
+  if (options.title != nullptr && options.title[0] != 0) {
+    t->put("<metadata name=\"Title\">");
+    t->put_escaped(options.title);
+    t->put("</metadata>\n");
+  }
+  if (options.case_id != nullptr && options.case_id[0] != 0) {
+    t->put("<metadata name=\"sc:case_id\">");
+    t->put_escaped(options.case_id);
+    t->put("</metadata>\n");
+  }
+  t->put("<resources>\n");
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const ThreeMfObject& o = objects[i];
+    t->put("<object id=\"");
+    t->put_u64(i + 1);
+    t->put("\" type=\"model\"");
+    if (o.name != nullptr && o.name[0] != 0) {
+      t->put(" name=\"");
+      t->put_escaped(o.name);
+      t->put("\"");
+    }
+    t->put(">\n");
+    if (o.sha256 != nullptr && o.sha256[0] != 0) {
+      t->put("<metadatagroup><metadata name=\"sc:sha256\">");
+      t->put_escaped(o.sha256);
+      t->put("</metadata></metadatagroup>\n");
+    }
+    t->put("<mesh>\n<vertices>\n");
+    for (const Vec3& p : o.mesh->vertices) {
+      t->put("<vertex x=\"");
+      t->put_float(static_cast<float>(p.x));
+      t->put("\" y=\"");
+      t->put_float(static_cast<float>(p.y));
+      t->put("\" z=\"");
+      t->put_float(static_cast<float>(p.z));
+      t->put("\"/>\n");
+    }
+    t->put("</vertices>\n<triangles>\n");
+    for (const Triangle& tr : o.mesh->triangles) {
+      t->put("<triangle v1=\"");
+      t->put_u64(tr.v[0]);
+      t->put("\" v2=\"");
+      t->put_u64(tr.v[1]);
+      t->put("\" v3=\"");
+      t->put_u64(tr.v[2]);
+      t->put("\"/>\n");
+    }
+    t->put("</triangles>\n</mesh>\n</object>\n");
+  }
+  t->put("</resources>\n<build>\n");
+  for (size_t i = 0; i < objects.size(); ++i) {
+    t->put("<item objectid=\"");
+    t->put_u64(i + 1);
+    t->put("\"/>\n");
+  }
+  t->put("</build>\n</model>\n");
+}
+
+// One entry of the package: its name, its bytes as written (deflated or stored) and what the
+// ZIP headers say of it.
+struct Entry {
+  const char* name = "";
+  const uint8_t* data = nullptr;
+  uint32_t size = 0;        // as written
+  uint32_t plain_size = 0;  // uncompressed
+  uint32_t crc = 0;         // of the uncompressed bytes
+  uint16_t method = 0;      // 0 stored, 8 deflated
+  uint32_t offset = 0;      // of its local header
+};
+
+struct BufferSink {
+  uint8_t* data;
+  size_t size, capacity;
+  static bool write(void* user, const uint8_t* bytes, size_t n) {
+    BufferSink* b = static_cast<BufferSink*>(user);
+    if (n > b->capacity - b->size) return false;
+    std::memcpy(b->data + b->size, bytes, n);
+    b->size += n;
+    return true;
+  }
+};
+
+// The entry's bytes: deflated into `out` (capacity deflated_bound(size)) when that is smaller.
+Status pack_entry(const DeflateWorkspace& ws, bool deflate, const char* name, const uint8_t* data,
+                  size_t size, uint8_t* out, Entry* e) {
+  e->name = name;
+  e->plain_size = static_cast<uint32_t>(size);
+  e->crc = crc32(0, data, size);
+  e->data = data;
+  e->size = static_cast<uint32_t>(size);
+  e->method = 0;
+  if (!deflate) return Status::ok();
+  BufferSink b{out, 0, static_cast<size_t>(deflated_bound(size))};
+  CompressSink sink;
+  sink.write = &BufferSink::write;
+  sink.user = &b;
+  SPLINTCORE_RETURN_IF_ERROR(deflate_fixed(ws, ZFormat::kRaw, data, size, sink));
+  if (b.size < size) {
+    e->data = out;
+    e->size = static_cast<uint32_t>(b.size);
+    e->method = 8;
+  }
+  return Status::ok();
+}
+
+void put16(uint8_t* p, uint32_t v) {
+  p[0] = static_cast<uint8_t>(v);
+  p[1] = static_cast<uint8_t>(v >> 8);
+}
+void put32(uint8_t* p, uint32_t v) {
+  for (int k = 0; k < 4; ++k) p[k] = static_cast<uint8_t>(v >> (8 * k));
+}
+
+// The fields a local header and a central directory header share, from "version needed".
+void common_fields(uint8_t* p, const Entry& e) {
+  put16(p, 20);     // version needed to extract: 2.0 (deflate)
+  put16(p + 2, 0);  // flags
+  put16(p + 4, e.method);
+  put16(p + 6, 0);       // time 00:00:00
+  put16(p + 8, 0x0021);  // date 1980-01-01
+  put32(p + 10, e.crc);
+  put32(p + 14, e.size);
+  put32(p + 18, e.plain_size);
+  put16(p + 22, static_cast<uint32_t>(std::strlen(e.name)));
+  put16(p + 24, 0);  // extra field length
+}
+
+bool emit(const ByteSink& sink, const uint8_t* p, size_t n, uint64_t* at) {
+  *at += n;
+  return n == 0 || sink.write(sink.user, p, n);
+}
+
+Status write_zip(const ByteSink& sink, Entry* entries, size_t count) {
+  const auto failed = [&]() {
+    return Status::error(StatusCode::kIoError, "3MF: cannot write the package")
+        .in_file(sink.name != nullptr ? sink.name : "");
+  };
+  uint64_t at = 0;
+  uint8_t h[46];
+  for (size_t i = 0; i < count; ++i) {
+    Entry& e = entries[i];
+    e.offset = static_cast<uint32_t>(at);
+    put32(h, 0x04034b50);
+    common_fields(h + 4, e);
+    const size_t name = std::strlen(e.name);
+    if (!emit(sink, h, 30, &at) ||
+        !emit(sink, reinterpret_cast<const uint8_t*>(e.name), name, &at) ||
+        !emit(sink, e.data, e.size, &at)) {
+      return failed();
+    }
+  }
+  const uint64_t directory = at;
+  for (size_t i = 0; i < count; ++i) {
+    const Entry& e = entries[i];
+    put32(h, 0x02014b50);
+    put16(h + 4, 20);  // version made by: MS-DOS attributes, 2.0
+    common_fields(h + 6, e);
+    put16(h + 32, 0);  // comment length
+    put16(h + 34, 0);  // disk number start
+    put16(h + 36, 0);  // internal attributes
+    put32(h + 38, 0);  // external attributes
+    put32(h + 42, e.offset);
+    const size_t name = std::strlen(e.name);
+    if (!emit(sink, h, 46, &at) ||
+        !emit(sink, reinterpret_cast<const uint8_t*>(e.name), name, &at)) {
+      return failed();
+    }
+  }
+  if (at > UINT32_MAX) {
+    return make_error(StatusCode::kLimitExceeded, "3MF: the package would be ", at,
+                      " bytes; at most 4 GiB without ZIP64");
+  }
+  put32(h, 0x06054b50);
+  put16(h + 4, 0);
+  put16(h + 6, 0);
+  put16(h + 8, static_cast<uint32_t>(count));
+  put16(h + 10, static_cast<uint32_t>(count));
+  put32(h + 12, static_cast<uint32_t>(at - directory));
+  put32(h + 16, static_cast<uint32_t>(directory));
+  put16(h + 20, 0);
+  if (!emit(sink, h, 22, &at)) return failed();
+  return Status::ok();
+}
+
+}  // namespace
+
+uint64_t write_3mf_bound(Span<const ThreeMfObject> objects, const ThreeMfOptions& options) {
+  const uint64_t model = model_bound(objects, options);
+  uint64_t n = model + 16;
+  if (options.deflate) {
+    n += deflate_workspace_bound(kDeflateChunk) + deflated_bound(model) + 16 +
+         deflated_bound(sizeof kContentTypes) + 16 + deflated_bound(sizeof kRels) + 16;
+  }
+  return n;
+}
+
+Status write_3mf(const Context& ctx, Span<const ThreeMfObject> objects,
+                 const ThreeMfOptions& options, const ByteSink& sink) {
+  if (sink.write == nullptr) {
+    return Status::error(StatusCode::kInvalidArgument, "3MF: the sink has no write()");
+  }
+  SPLINTCORE_RETURN_IF_ERROR(check_objects(objects));
+  const uint64_t bound = model_bound(objects, options);
+  if (bound > UINT32_MAX) {
+    return make_error(StatusCode::kLimitExceeded, "3MF: the model would take up to ", bound,
+                      " bytes; at most 4 GiB without ZIP64");
+  }
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);
+  Text model;
+  model.capacity = static_cast<size_t>(bound);
+  model.data = arena.allocate_array<uint8_t>(model.capacity);
+  if (model.data == nullptr) return arena.exhausted_status();
+  write_model(objects, options, &model);
+  DeflateWorkspace ws;
+  uint8_t* packed[3] = {nullptr, nullptr, nullptr};
+  const size_t plain[3] = {sizeof kContentTypes - 1, sizeof kRels - 1, model.size};
+  if (options.deflate) {
+    SPLINTCORE_RETURN_IF_ERROR(deflate_workspace(arena, kDeflateChunk, &ws));
+    for (int k = 0; k < 3; ++k) {
+      packed[k] = arena.allocate_array<uint8_t>(static_cast<size_t>(deflated_bound(plain[k])));
+      if (packed[k] == nullptr) return arena.exhausted_status();
+    }
+  }
+  Entry entries[3];
+  const char* names[3] = {"[Content_Types].xml", "_rels/.rels", "3D/3dmodel.model"};
+  const uint8_t* data[3] = {reinterpret_cast<const uint8_t*>(kContentTypes),
+                            reinterpret_cast<const uint8_t*>(kRels), model.data};
+  for (int k = 0; k < 3; ++k) {
+    SPLINTCORE_RETURN_IF_ERROR(
+        pack_entry(ws, options.deflate, names[k], data[k], plain[k], packed[k], &entries[k]));
+  }
+  return write_zip(sink, entries, 3);
+}
+
+}  // namespace splintcore
