@@ -161,6 +161,9 @@ struct ThreeMfObject {
   const Mesh* mesh = nullptr;
   const char* name = "";
   const char* sha256 = "";
+  // Where the build item puts it (its transform: the mesh's own coordinates are written as
+  // they are, never moved and rounded again): e.g. arrange_on_tray()'s translation.
+  Vec3 translation{};
 };
 
 struct ThreeMfOptions {

@@ -23,6 +23,14 @@ const PrinterProfile& eden260_profile();
 // Looks a built-in profile up by name ("eden260"); nullptr when unknown.
 const PrinterProfile* find_printer_profile(const char* name);
 
+// Several parts on one tray (a print job): in a row along x, in order, `gap_mm` apart (box to
+// box), the row centred on the tray in x, each part centred in y, each bottom at z = 0.
+// translations[k] moves part k (whose bounds are boxes[k]) there. No memory. Errors:
+// kInvalidArgument (no parts, an empty or non-finite box, a negative gap), kLimitExceeded (the
+// row, a part's depth or height does not fit the profile's build volume: the sizes named).
+Status arrange_on_tray(const PrinterProfile& profile, Span<const Aabb> boxes, double gap_mm,
+                       Vec3* translations);
+
 struct PrintCheckOptions {
   bool place_on_tray = true;  // translate so the part sits centred on the tray, z from 0
   double margin_mm = 5.0;     // clearance kept from the tray edges when fitting

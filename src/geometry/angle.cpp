@@ -108,7 +108,8 @@ void deterministic_sincos(double x, double* s, double* c) {
   // double is an integer already.
   double k = q;
   int64_t quadrant = 0;
-  if (q > -0x1p52 && q < 0x1p52) {
+  constexpr double kTwo52 = 4503599627370496.0;  // 2^52 (cppcheck misreads hex floats here)
+  if (q > -kTwo52 && q < kTwo52) {
     const int64_t ki = static_cast<int64_t>(q + (q >= 0 ? 0.5 : -0.5));
     k = static_cast<double>(ki);
     quadrant = ki & 3;

@@ -36,9 +36,9 @@ const char kRels[] =
 // most 15 characters; ids at most 10 digits).
 constexpr uint64_t kVertexLine = 18 + 3 * (4 + 15 + 1) + 3;
 constexpr uint64_t kTriangleLine = 15 + 3 * (5 + 10 + 1) + 3;
-constexpr uint64_t kFixedText = 1024;  // the model's header, footer, and per object's tags
-constexpr uint64_t kPerObject = 256;
-constexpr size_t kDeflateChunk = 65536;  // the encoder's output buffer
+constexpr uint64_t kFixedText = 1024;          // the model's header, footer, and per object's tags
+constexpr uint64_t kPerObject = 256 + 3 * 25;  // with a build item's transform
+constexpr size_t kDeflateChunk = 65536;        // the encoder's output buffer
 
 // A text that grows in the arena (the model part is built whole: a ZIP entry's header holds
 // its size and CRC).
@@ -60,6 +60,12 @@ struct Text {
     if (f == 0.0f) f = 0.0f;  // no "-0"
     char buf[32];
     const auto r = std::to_chars(buf, buf + sizeof buf, f);
+    put(buf, static_cast<size_t>(r.ptr - buf));
+  }
+  void put_f64(double d) {
+    if (d == 0.0) d = 0.0;  // no "-0"
+    char buf[40];
+    const auto r = std::to_chars(buf, buf + sizeof buf, d);
     put(buf, static_cast<size_t>(r.ptr - buf));
   }
   // XML character data or an attribute value: & < > " ' escaped.
@@ -102,6 +108,10 @@ Status check_objects(Span<const ThreeMfObject> objects) {
     const Mesh* m = objects[i].mesh;
     if (m == nullptr || m->triangles.empty()) {
       return make_error(StatusCode::kInvalidArgument, "3MF: object ", i, " has no triangles")
+          .at_index(i);
+    }
+    if (!is_finite(objects[i].translation)) {
+      return make_error(StatusCode::kNonFinite, "3MF: object ", i, "'s translation is not finite")
           .at_index(i);
     }
     const size_t nv = m->vertices.size();
@@ -192,6 +202,15 @@ void write_model(Span<const ThreeMfObject> objects, const ThreeMfOptions& option
   for (size_t i = 0; i < objects.size(); ++i) {
     t->put("<item objectid=\"");
     t->put_u64(i + 1);
+    const Vec3& d = objects[i].translation;
+    if (!(d == Vec3{})) {
+      t->put("\" transform=\"1 0 0 0 1 0 0 0 1 ");
+      t->put_f64(d.x);
+      t->put(" ");
+      t->put_f64(d.y);
+      t->put(" ");
+      t->put_f64(d.z);
+    }
     t->put("\"/>\n");
   }
   t->put("</build>\n</model>\n");
@@ -210,8 +229,8 @@ struct Entry {
 };
 
 struct BufferSink {
-  uint8_t* data;
-  size_t size, capacity;
+  uint8_t* data = nullptr;
+  size_t size = 0, capacity = 0;
   static bool write(void* user, const uint8_t* bytes, size_t n) {
     BufferSink* b = static_cast<BufferSink*>(user);
     if (n > b->capacity - b->size) return false;
@@ -231,7 +250,10 @@ Status pack_entry(const DeflateWorkspace& ws, bool deflate, const char* name, co
   e->size = static_cast<uint32_t>(size);
   e->method = 0;
   if (!deflate) return Status::ok();
-  BufferSink b{out, 0, static_cast<size_t>(deflated_bound(size))};
+  BufferSink b;
+  b.data = out;
+  b.size = 0;
+  b.capacity = static_cast<size_t>(deflated_bound(size));
   CompressSink sink;
   sink.write = &BufferSink::write;
   sink.user = &b;

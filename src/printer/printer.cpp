@@ -31,6 +31,45 @@ const PrinterProfile* find_printer_profile(const char* name) {
   return nullptr;
 }
 
+Status arrange_on_tray(const PrinterProfile& profile, Span<const Aabb> boxes, double gap_mm,
+                       Vec3* translations) {
+  if (boxes.empty()) return Status::error(StatusCode::kInvalidArgument, "tray: no parts to place");
+  if (!(gap_mm >= 0.0) || !is_finite(Vec3{gap_mm, 0, 0})) {
+    return make_error(StatusCode::kInvalidArgument, "tray: the gap must be 0 mm or more, not ",
+                      gap_mm);
+  }
+  const Vec3& tray = profile.build_volume_mm;
+  double row = 0;
+  for (size_t k = 0; k < boxes.size(); ++k) {
+    const Aabb& b = boxes[k];
+    if (!is_finite(b.lo) || !is_finite(b.hi) || !(b.lo.x <= b.hi.x) || !(b.lo.y <= b.hi.y) ||
+        !(b.lo.z <= b.hi.z)) {
+      return make_error(StatusCode::kInvalidArgument, "tray: part ", k, " has no finite bounds")
+          .at_index(k);
+    }
+    const Vec3 e = b.extent();
+    if (e.y > tray.y || e.z > tray.z) {
+      return make_error(StatusCode::kLimitExceeded, "tray: part ", k, " is ", e.y, " mm deep and ",
+                        e.z, " mm high; the ", profile.name, " tray holds ", tray.y, " x ", tray.z,
+                        " mm")
+          .at_index(k);
+    }
+    row += e.x + (k > 0 ? gap_mm : 0.0);
+  }
+  if (row > tray.x) {
+    return make_error(StatusCode::kLimitExceeded, "tray: ", boxes.size(), " parts ", gap_mm,
+                      " mm apart make a row ", row, " mm long; the ", profile.name, " tray is ",
+                      tray.x, " mm wide");
+  }
+  double x = 0.5 * (tray.x - row);
+  for (size_t k = 0; k < boxes.size(); ++k) {
+    const Aabb& b = boxes[k];
+    translations[k] = Vec3{x - b.lo.x, 0.5 * tray.y - 0.5 * (b.lo.y + b.hi.y), -b.lo.z};
+    x += (b.hi.x - b.lo.x) + gap_mm;
+  }
+  return Status::ok();
+}
+
 uint64_t check_printable_bound(uint64_t vertex_count, uint64_t triangle_count) {
   return check_mesh_bound(vertex_count, triangle_count);  // the mesh check is all it allocates
 }

@@ -195,6 +195,24 @@ TEST(ThreeMf, LargeModelIsDeflatedAndRunsInItsBound) {
   EXPECT_TRUE(none.empty());
 }
 
+TEST(ThreeMf, BuildItemsCarryTheTranslation) {
+  test::TestArena t;
+  const Mesh a = tetra(t.arena, 0);
+  std::vector<ThreeMfObject> objects = {{&a, "a", ""}, {&a, "b", ""}};
+  objects[1].translation = Vec3{127.5, -0.25, 3};
+  const std::vector<ZipEntry> entries = read_zip(write(objects, ThreeMfOptions{}));
+  ASSERT_EQ(entries.size(), 3u);
+  EXPECT_NE(entries[2].text.find("<item objectid=\"1\"/>"), std::string::npos);
+  EXPECT_NE(
+      entries[2].text.find("<item objectid=\"2\" transform=\"1 0 0 0 1 0 0 0 1 127.5 -0.25 3\"/>"),
+      std::string::npos)
+      << entries[2].text.substr(entries[2].text.find("<build>"));
+  objects[1].translation.y = NAN;
+  Status s;
+  write(objects, ThreeMfOptions{}, &s);
+  EXPECT_EQ(s.code(), StatusCode::kNonFinite);
+}
+
 TEST(ThreeMf, ErrorsNameTheCause) {
   test::TestArena t;
   Status s;

@@ -68,3 +68,41 @@ TEST(Printer, MetresAreSuspect) {
 
 }  // namespace
 }  // namespace splintcore
+
+namespace splintcore {
+namespace {
+
+// Issue 32's print job: parts in a row along x, the gap between boxes exactly as asked, the
+// row centred, each part centred in y, bottoms at z = 0; what does not fit is named.
+TEST(ArrangeOnTray, RowCentredWithTheGapAndRefusalsNamed) {
+  const PrinterProfile& p = eden260_profile();
+  const Aabb boxes[2] = {Aabb{{-10, -5, 3}, {30, 15, 9}}, Aabb{{100, 0, -2}, {160, 40, 4}}};
+  Vec3 t[2];
+  SPLINTCORE_ASSERT_OK(arrange_on_tray(p, Span<const Aabb>(boxes, 2), 5.0, t));
+  const Aabb placed[2] = {Aabb{boxes[0].lo + t[0], boxes[0].hi + t[0]},
+                          Aabb{boxes[1].lo + t[1], boxes[1].hi + t[1]}};
+  EXPECT_DOUBLE_EQ(placed[1].lo.x - placed[0].hi.x, 5.0);
+  EXPECT_DOUBLE_EQ(placed[0].lo.x + placed[1].hi.x, p.build_volume_mm.x);  // centred row
+  for (const Aabb& b : placed) {
+    EXPECT_DOUBLE_EQ(b.lo.z, 0.0);
+    EXPECT_DOUBLE_EQ(b.lo.y + b.hi.y, p.build_volume_mm.y);
+  }
+  Vec3 unused[2];
+  const Aabb wide[2] = {Aabb{{0, 0, 0}, {130, 10, 10}}, Aabb{{0, 0, 0}, {130, 10, 10}}};
+  const Status s = arrange_on_tray(p, Span<const Aabb>(wide, 2), 5.0, unused);
+  EXPECT_EQ(s.code(), StatusCode::kLimitExceeded);
+  EXPECT_NE(test::format(s).find("265 mm long"), std::string::npos) << test::format(s);
+  const Aabb deep[1] = {Aabb{{0, 0, 0}, {10, 300, 10}}};
+  EXPECT_EQ(arrange_on_tray(p, Span<const Aabb>(deep, 1), 5.0, unused).code(),
+            StatusCode::kLimitExceeded);
+  EXPECT_EQ(arrange_on_tray(p, Span<const Aabb>(boxes, 2), -1.0, unused).code(),
+            StatusCode::kInvalidArgument);
+  EXPECT_EQ(arrange_on_tray(p, Span<const Aabb>(), 5.0, unused).code(),
+            StatusCode::kInvalidArgument);
+  const Aabb empty[1] = {Aabb{}};
+  EXPECT_EQ(arrange_on_tray(p, Span<const Aabb>(empty, 1), 5.0, unused).code(),
+            StatusCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace splintcore

@@ -199,6 +199,10 @@ check "plan wrote the intermediate splint" -- test -s "$work/plan-out/intermedia
 check "plan wrote the final splint" -- test -s "$work/plan-out/final.stl"
 check "plan wrote no single splint" -- test ! -e "$work/plan-out/splint.stl"
 check "plan wrote a preview of each" -- test -s "$work/plan-out/intermediate.png" -a -s "$work/plan-out/final.png"
+int_sha=$(sha256sum "$work/plan-out/intermediate.stl" | cut -d' ' -f1)
+fin_sha=$(sha256sum "$work/plan-out/final.stl" | cut -d' ' -f1)
+check "plan wrote one print job: both splints on the Eden260 tray, 5 mm apart (Python zipfile)" -- \
+  python3 "$(dirname "$0")/check_3mf.py" "$work/plan-out/job.3mf" 2 255 252 5 "$int_sha" "$fin_sha"
 check "plan report is one object" -- json_ok "$work/plan-out/report.json"
 check "plan report has the plan and both splints" -- grep -q '"plan":{"sequence":"maxilla_first".*"intermediate":{.*"autorotation":{"angle_rad":.*"final":{' "$work/plan-out/report.json"
 check "the splints differ" -- sh -c "! cmp -s '$work/plan-out/intermediate.stl' '$work/plan-out/final.stl'"

@@ -14,6 +14,9 @@
 #include "command.h"
 #include "files.h"
 #include "splintcore/design.h"
+#include "splintcore/io.h"
+#include "splintcore/platform.h"
+#include "splintcore/printer.h"
 
 namespace splintcore {
 namespace tool {
@@ -116,6 +119,7 @@ class Design {
                       cli::PreviewInfo* info, Status* status, char* error, size_t error_size);
   Status write_report();
   int run_plan();
+  Status write_plan_job(const std::string& path);
   Status write_plan_report();
   void print_summary() const;
 
@@ -155,6 +159,8 @@ class Design {
   Mesh plan_splints_[2];
   PlanReport plan_report_;
   std::string plan_paths_[2], plan_hashes_[2];
+  std::string job_path_;                    // OUTDIR/job.3mf
+  static constexpr double kJobGapMm = 5.0;  // between the splints on the tray (issue 32)
   cli::PreviewInfo plan_previews_[2];
   Status plan_preview_status_[2];
   char plan_preview_errors_[2][512] = {};
@@ -444,6 +450,8 @@ int Design::run_plan() {
     s = write_mesh_file(plan_splints_[k], plan_paths_[k], &plan_hashes_[k]);
     if (!s.is_ok()) return run_.reject(s);
   }
+  s = write_plan_job(out_dir + "/job.3mf");
+  if (!s.is_ok()) return run_.reject(s);
   for (int k = 0; k < 2; ++k) {
     std::vector<RigidTransform> moves;
     for (const CaseJaw& j : c_.jaws) {
@@ -470,10 +478,45 @@ int Design::run_plan() {
         plan_splints_[k].triangles.size(), r.design.print.mesh.volume, plan_paths_[k].c_str(),
         plan_hashes_[k].c_str());
   }
-  std::printf("wrote %s; time: design %.3f s, total %.3f s; peak arena %llu bytes\n",
-              report_path_.c_str(), t_design_ - t_read_, t_end_ - run_.start,
-              static_cast<unsigned long long>(run_.peak_arena()));
+  std::printf(
+      "wrote %s (both on the tray, %.0f mm apart) and %s; time: design %.3f s, total %.3f s; peak "
+      "arena %llu bytes\n",
+      job_path_.c_str(), kJobGapMm, report_path_.c_str(), t_design_ - t_read_, t_end_ - run_.start,
+      static_cast<unsigned long long>(run_.peak_arena()));
   return kExitOk;
+}
+
+// OUTDIR/job.3mf: both splints on the printer's tray, in a row 5 mm apart (arrange_on_tray),
+// each placed by its build item's transform (the splints' own float32 vertices are written as
+// they are), named INT/FIN and the case id, with the SHA-256 of each splint's STL.
+Status Design::write_plan_job(const std::string& path) {
+  const PrinterProfile* profile = find_printer_profile(c_.printer);
+  if (profile == nullptr) profile = &eden260_profile();
+  Aabb boxes[2];
+  for (int k = 0; k < 2; ++k) {
+    for (const Vec3& p : plan_splints_[k].vertices) boxes[k].add(p);
+  }
+  Vec3 moves[2];
+  SPLINTCORE_RETURN_IF_ERROR(
+      arrange_on_tray(*profile, Span<const Aabb>(boxes, 2), kJobGapMm, moves));
+  const std::string names[2] = {std::string("INT ") + c_.case_id, std::string("FIN ") + c_.case_id};
+  ThreeMfObject objects[2];
+  for (int k = 0; k < 2; ++k) {
+    objects[k].mesh = &plan_splints_[k];
+    objects[k].name = names[k].c_str();
+    objects[k].sha256 = plan_hashes_[k].c_str();
+    objects[k].translation = moves[k];
+  }
+  ThreeMfOptions options;
+  options.case_id = c_.case_id;
+  options.title = "intermediate and final splints";
+  AtomicFile file;
+  SPLINTCORE_RETURN_IF_ERROR(file.open(path.c_str()));
+  SPLINTCORE_RETURN_IF_ERROR(
+      write_3mf(ctx_, Span<const ThreeMfObject>(objects, 2), options, file.sink()));
+  SPLINTCORE_RETURN_IF_ERROR(file.commit());
+  job_path_ = path;
+  return Status::ok();
 }
 
 // A preview of one splint on the jaws moved by `transforms` (and the tray's move); a failure is

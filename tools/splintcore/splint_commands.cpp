@@ -155,8 +155,8 @@ Status read_b(Run& run, const BooleanArgs& a, Mesh* b) {
   const size_t nv = static_cast<size_t>(total_v), nt = static_cast<size_t>(total_t);
   // (The gap: B's two arrays may take more alignment padding than the files' did.)
   uint8_t* gap = arena.allocate_array<uint8_t>(2 * Arena::kDefaultAlignment);
-  Triangle* scratch = arena.allocate_array<Triangle>(nt);
-  if (gap == nullptr || (scratch == nullptr && nt > 0)) return arena.exhausted_status();
+  Triangle* scratch = arena.allocate_array<Triangle>(nt > 0 ? nt : 1);
+  if (gap == nullptr || scratch == nullptr) return arena.exhausted_status();
   size_t k = 0;
   uint32_t off = 0;
   for (const Mesh& p : parts) {
