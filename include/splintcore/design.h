@@ -337,6 +337,9 @@ struct DesignReportFiles {
   const char* preview_sha256 = nullptr;
   const char* preview_error = nullptr;       // why there is no preview
   const char* resolved_case_path = nullptr;  // where the automatic outline's case was written
+  // A plan's print job (files[0] of write_plan_report: both splints in one 3MF), when written.
+  const char* print_job_path = nullptr;
+  const char* print_job_sha256 = nullptr;
 };
 
 // One stage of the design as a caller's progress callback timed it.

@@ -388,6 +388,12 @@ Status write_plan_report(const Context& ctx, const CaseFile& c, Span<const Mesh>
   for (int k = 0; k < 2; ++k) {
     write_plan_splint(w, kKeys[k], derived[k], jaws, *splints[k], *parts[k], files[k], sha256[k]);
   }
+  if (files[0].print_job_path != nullptr) {
+    w.begin_object("print_job");
+    w.add("path", files[0].print_job_path);
+    if (files[0].print_job_sha256 != nullptr) w.add("sha256", files[0].print_job_sha256);
+    w.end_object();
+  }
   if (run != nullptr) write_run(w, *run);
   w.end_object();
   return w.finish();

@@ -204,6 +204,8 @@ fin_sha=$(sha256sum "$work/plan-out/final.stl" | cut -d' ' -f1)
 check "plan wrote one print job: both splints on the Eden260 tray, 5 mm apart (Python zipfile)" -- \
   python3 "$(dirname "$0")/check_3mf.py" "$work/plan-out/job.3mf" 2 255 252 5 "$int_sha" "$fin_sha"
 check "plan report is one object" -- json_ok "$work/plan-out/report.json"
+job_sha=$(sha256sum "$work/plan-out/job.3mf" | cut -d' ' -f1)
+check "plan report names the print job and its SHA-256" -- grep -q "\"print_job\":{\"path\":\"[^\"]*job.3mf\",\"sha256\":\"$job_sha\"}" "$work/plan-out/report.json"
 check "plan report has the plan and both splints" -- grep -q '"plan":{"sequence":"maxilla_first".*"intermediate":{.*"autorotation":{"angle_rad":.*"final":{' "$work/plan-out/report.json"
 check "the splints differ" -- sh -c "! cmp -s '$work/plan-out/intermediate.stl' '$work/plan-out/final.stl'"
 check "plan printed both splints" -- grep -q "^final: mandible turned .* deg" "$work/out"

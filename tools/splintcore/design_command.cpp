@@ -159,7 +159,7 @@ class Design {
   Mesh plan_splints_[2];
   PlanReport plan_report_;
   std::string plan_paths_[2], plan_hashes_[2];
-  std::string job_path_;                    // OUTDIR/job.3mf
+  std::string job_path_, job_sha256_;       // OUTDIR/job.3mf
   static constexpr double kJobGapMm = 5.0;  // between the splints on the tray (issue 32)
   cli::PreviewInfo plan_previews_[2];
   Status plan_preview_status_[2];
@@ -510,12 +510,12 @@ Status Design::write_plan_job(const std::string& path) {
   ThreeMfOptions options;
   options.case_id = c_.case_id;
   options.title = "intermediate and final splints";
-  AtomicFile file;
-  SPLINTCORE_RETURN_IF_ERROR(file.open(path.c_str()));
+  std::string bytes;
   SPLINTCORE_RETURN_IF_ERROR(
-      write_3mf(ctx_, Span<const ThreeMfObject>(objects, 2), options, file.sink()));
-  SPLINTCORE_RETURN_IF_ERROR(file.commit());
+      write_3mf(ctx_, Span<const ThreeMfObject>(objects, 2), options, cli::string_sink(&bytes)));
+  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(path, bytes));
   job_path_ = path;
+  job_sha256_ = hex_sha256(bytes.data(), bytes.size());
   return Status::ok();
 }
 
@@ -561,6 +561,10 @@ Status Design::write_plan_report() {
     }
     files[k].splint_path = plan_paths_[k].c_str();
     files[k].splint_sha256 = plan_hashes_[k].c_str();
+    if (k == 0 && !job_path_.empty()) {
+      files[k].print_job_path = job_path_.c_str();
+      files[k].print_job_sha256 = job_sha256_.c_str();
+    }
     if (plan_preview_status_[k].is_ok()) {
       files[k].preview_path = plan_previews_[k].path.c_str();
       files[k].preview_sha256 = plan_previews_[k].sha256.c_str();
