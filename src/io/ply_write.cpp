@@ -69,7 +69,7 @@ Status write_ply(const Mesh& mesh, Span<const uint8_t> rgb, const ByteSink& sink
     return make_error(StatusCode::kLimitExceeded, "write_ply: ", nv,
                       " vertices; PLY int indices hold at most 2^31 - 1");
   }
-  for (uint64_t i = 0; i < nv; ++i) {
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
     const Vec3& p = mesh.vertices[i];
     if (!is_finite(p)) {
       return make_error(StatusCode::kNonFinite, "write_ply: vertex ", i, " is not finite")
@@ -83,7 +83,7 @@ Status write_ply(const Mesh& mesh, Span<const uint8_t> rgb, const ByteSink& sink
           .at_index(i);
     }
   }
-  for (uint64_t i = 0; i < nt; ++i) {
+  for (size_t i = 0; i < mesh.triangles.size(); ++i) {
     for (uint32_t k : mesh.triangles[i].v) {
       if (k >= nv) {
         return make_error(StatusCode::kInvalidMesh, "write_ply: triangle ", i, " refers to vertex ",
@@ -102,14 +102,14 @@ Status write_ply(const Mesh& mesh, Span<const uint8_t> rgb, const ByteSink& sink
   out.put_text("element face ");
   out.put_decimal(nt);
   out.put_text("\nproperty list uchar int vertex_indices\nend_header\n");
-  for (uint64_t i = 0; i < nv; ++i) {
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
     const Vec3& p = mesh.vertices[i];
     out.put_f32(static_cast<float>(p.x));
     out.put_f32(static_cast<float>(p.y));
     out.put_f32(static_cast<float>(p.z));
     if (!rgb.empty()) out.put(rgb.data() + 3 * i, 3);
   }
-  for (uint64_t i = 0; i < nt; ++i) {
+  for (size_t i = 0; i < mesh.triangles.size(); ++i) {
     const uint8_t three = 3;
     out.put(&three, 1);
     for (uint32_t k : mesh.triangles[i].v) out.put_u32(k);
