@@ -6,6 +6,7 @@
 // bytes it must keep (the render tests pin their SHA-256).
 //
 // Deterministic: integer arithmetic only; the matcher's choices depend only on the bytes.
+#include "compress/rfc1951_tables.h"
 #include "splintcore/compress.h"
 
 namespace splintcore {
@@ -19,15 +20,10 @@ constexpr uint32_t kMaxMatch = 258;
 constexpr uint32_t kMaxInsert = 32;
 static_assert((size_t{1} << kHashBits) == kDeflateHashEntries, "hash table size");
 
-const uint16_t kLengthBase[29] = {3,  4,  5,  6,  7,  8,  9,  10, 11,  13,  15,  17,  19,  23, 27,
-                                  31, 35, 43, 51, 59, 67, 83, 99, 115, 131, 163, 195, 227, 258};
-const uint8_t kLengthExtra[29] = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2,
-                                  2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0};
-const uint16_t kDistBase[30] = {1,    2,    3,    4,    5,    7,    9,    13,    17,    25,
-                                33,   49,   65,   97,   129,  193,  257,  385,   513,   769,
-                                1025, 1537, 2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577};
-const uint8_t kDistExtra[30] = {0, 0, 0, 0, 1, 1, 2, 2,  3,  3,  4,  4,  5,  5,  6,
-                                6, 7, 7, 8, 8, 9, 9, 10, 10, 11, 11, 12, 12, 13, 13};
+using rfc1951::kDistBase;
+using rfc1951::kDistExtra;
+using rfc1951::kLengthBase;
+using rfc1951::kLengthExtra;
 
 uint32_t reverse_bits(uint32_t code, int length) {
   uint32_t r = 0;
