@@ -10,44 +10,17 @@
 #include <random>
 #include <string>
 
-#include "common/realcase.h"
 #include "splintcore/outline.h"
 #include "support/autorotate_oracle.h"
 #include "support/frame_moves.h"
+#include "support/real_jaws.h"
 #include "support/test_util.h"
 
 namespace splintcore {
 namespace {
 
-// The teeth joined into two jaws, as scanned.
-struct RealJaws {
-  test::TestArena store{size_t{256} << 20};
-  Mesh jaw[2];
-  bool ok = false;
-  RealJaws() {
-    realcase::RealCase rc;
-    std::string error;
-    if (!realcase::load(SPLINTCORE_REALDATA_DIR, 0.0, 1.5, 6.0, &rc, &error)) return;
-    for (int j = 0; j < 2; ++j) {
-      jaw[j].bind(&store.arena);
-      for (const realcase::Tooth& t : rc.teeth) {
-        if ((t.number <= 16) != (j == 0)) continue;
-        const uint32_t base = static_cast<uint32_t>(jaw[j].vertices.size());
-        for (const Vec3& v : t.vertices) (void)jaw[j].vertices.push_back(v);
-        for (const Triangle& tr : t.triangles) {
-          (void)jaw[j].triangles.push_back(
-              Triangle{{tr.v[0] + base, tr.v[1] + base, tr.v[2] + base}});
-        }
-      }
-    }
-    ok = true;
-  }
-};
-
-const RealJaws& real_jaws() {
-  static const RealJaws* jaws = new RealJaws();
-  return *jaws;
-}
+using test::real_jaws;
+using test::RealJaws;
 
 // The dentition's frame: z up (the maxilla above), incisors at y = 5, molars near y = 40, the
 // arch's middle at x = 54: condyles behind (+y) and above the teeth.
