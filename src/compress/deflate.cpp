@@ -6,6 +6,8 @@
 // bytes it must keep (the render tests pin their SHA-256).
 //
 // Deterministic: integer arithmetic only; the matcher's choices depend only on the bytes.
+#include <cstring>
+
 #include "compress/rfc1951_tables.h"
 #include "splintcore/compress.h"
 
@@ -14,7 +16,6 @@ namespace {
 
 constexpr uint32_t kHashBits = 16;
 constexpr uint32_t kWindow = kDeflateWindow;
-constexpr uint32_t kMaxChain = 64;
 constexpr uint32_t kMinMatch = 3;
 constexpr uint32_t kMaxMatch = 258;
 constexpr uint32_t kMaxInsert = 32;
@@ -38,23 +39,46 @@ uint32_t reverse_bits(uint32_t code, int length) {
 class BitWriter {
  public:
   BitWriter(const DeflateWorkspace& ws, const CompressSink& sink) : ws_(ws), sink_(sink) {}
+  // Up to 32 bits at a time; whole 32-bit words leave the accumulator at once (the same bytes
+  // as one at a time: LSB first).
   Status put(uint32_t bits, int count) {
     bits_ |= static_cast<uint64_t>(bits) << count_;
     count_ += count;
-    while (count_ >= 8) {
-      ws_.out[used_++] = static_cast<uint8_t>(bits_);
-      bits_ >>= 8;
-      count_ -= 8;
-      if (used_ == ws_.out_bytes) SPLINTCORE_RETURN_IF_ERROR(flush());
+    if (count_ < 32) return Status::ok();
+    if (ws_.out_bytes - used_ >= 4) {
+      for (int k = 0; k < 4; ++k) ws_.out[used_++] = static_cast<uint8_t>(bits_ >> (8 * k));
+      bits_ >>= 32;
+      count_ -= 32;
+      return used_ == ws_.out_bytes ? write_out() : Status::ok();
     }
-    return Status::ok();
+    return drain();
   }
-  Status align() { return count_ > 0 ? put(0, 8 - count_) : Status::ok(); }
+  // Pads to a byte boundary and writes every whole byte held.
+  Status align() {
+    if (count_ % 8 != 0) count_ += 8 - count_ % 8;
+    return drain();
+  }
   Status put_le32(uint32_t v) {
     SPLINTCORE_RETURN_IF_ERROR(put(v & 0xFFFF, 16));
     return put(v >> 16, 16);
   }
   Status flush() {
+    SPLINTCORE_RETURN_IF_ERROR(drain());
+    return write_out();
+  }
+
+ private:
+  // Every whole byte out of the accumulator.
+  Status drain() {
+    while (count_ >= 8) {
+      ws_.out[used_++] = static_cast<uint8_t>(bits_);
+      bits_ >>= 8;
+      count_ -= 8;
+      if (used_ == ws_.out_bytes) SPLINTCORE_RETURN_IF_ERROR(write_out());
+    }
+    return Status::ok();
+  }
+  Status write_out() {
     if (used_ == 0) return Status::ok();
     if (!sink_.write(sink_.user, ws_.out, used_)) {
       return make_error(StatusCode::kIoError, "cannot write the compressed stream");
@@ -63,7 +87,6 @@ class BitWriter {
     return Status::ok();
   }
 
- private:
   const DeflateWorkspace& ws_;
   const CompressSink& sink_;
   size_t used_ = 0;
@@ -75,6 +98,9 @@ struct FixedCodes {
   uint16_t literal[288];  // bit-reversed codes
   uint8_t literal_length[288];
   uint8_t distance[30];
+  uint8_t length_code[kMaxMatch + 1];  // length 3..258 -> its index in kLengthBase
+  // distance 1..256 -> [d - 1]; 257..32768 -> [256 + ((d - 1) >> 7)]: its index in kDistBase
+  uint8_t distance_code[512];
 };
 
 void make_fixed_codes(FixedCodes* c) {
@@ -98,6 +124,23 @@ void make_fixed_codes(FixedCodes* c) {
     c->literal_length[s] = static_cast<uint8_t>(length);
   }
   for (uint32_t d = 0; d < 30; ++d) c->distance[d] = static_cast<uint8_t>(reverse_bits(d, 5));
+  // The code of a length or distance: the last whose base is at most it.
+  uint32_t li = 0;
+  for (uint32_t length = kMinMatch; length <= kMaxMatch; ++length) {
+    while (li < 28 && kLengthBase[li + 1] <= length) ++li;
+    c->length_code[length] = static_cast<uint8_t>(li);
+  }
+  uint32_t di = 0;
+  for (uint32_t d = 1; d <= 256; ++d) {
+    while (di < 29 && kDistBase[di + 1] <= d) ++di;
+    c->distance_code[d - 1] = static_cast<uint8_t>(di);
+  }
+  // Above 256 every code's base is 1 + a multiple of 128, so (d - 1) >> 7 tells them apart.
+  for (uint32_t k = 2; k < 256; ++k) {
+    const uint32_t d = (k << 7) + 1;
+    while (di < 29 && kDistBase[di + 1] <= d) ++di;
+    c->distance_code[256 + k] = static_cast<uint8_t>(di);
+  }
 }
 
 Status put_literal(BitWriter& w, const FixedCodes& c, uint32_t symbol) {
@@ -105,19 +148,36 @@ Status put_literal(BitWriter& w, const FixedCodes& c, uint32_t symbol) {
 }
 
 Status put_match(BitWriter& w, const FixedCodes& c, uint32_t length, uint32_t distance) {
-  uint32_t li = 28;
-  while (kLengthBase[li] > length) --li;
+  const uint32_t li = c.length_code[length];
   SPLINTCORE_RETURN_IF_ERROR(put_literal(w, c, 257 + li));
   if (kLengthExtra[li] > 0) {
     SPLINTCORE_RETURN_IF_ERROR(w.put(length - kLengthBase[li], kLengthExtra[li]));
   }
-  uint32_t di = 29;
-  while (kDistBase[di] > distance) --di;
+  const uint32_t di = distance <= 256 ? c.distance_code[distance - 1]
+                                      : c.distance_code[256 + ((distance - 1) >> 7)];
   SPLINTCORE_RETURN_IF_ERROR(w.put(c.distance[di], 5));
   if (kDistExtra[di] > 0) {
     SPLINTCORE_RETURN_IF_ERROR(w.put(distance - kDistBase[di], kDistExtra[di]));
   }
   return Status::ok();
+}
+
+// How many bytes a and b have in common from the start, at most `limit` (8 at a time where
+// the byte order lets the lowest differing byte be found from the trailing zeros).
+size_t common_length(const uint8_t* a, const uint8_t* b, size_t limit) {
+  size_t n = 0;
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  while (n + 8 <= limit) {
+    uint64_t x, y;
+    std::memcpy(&x, a + n, 8);
+    std::memcpy(&y, b + n, 8);
+    const uint64_t d = x ^ y;
+    if (d != 0) return n + static_cast<size_t>(__builtin_ctzll(d) >> 3);
+    n += 8;
+  }
+#endif
+  while (n < limit && a[n] == b[n]) ++n;
+  return n;
 }
 
 uint32_t hash3(const uint8_t* p) {
@@ -127,7 +187,11 @@ uint32_t hash3(const uint8_t* p) {
 }
 
 // One fixed-Huffman block holding the whole stream (deflate puts no limit on a block's size).
-Status deflate_block(const uint8_t* data, size_t size, int32_t* head, int32_t* prev, BitWriter& w) {
+Status deflate_block(const uint8_t* data, size_t size, const DeflateWorkspace& ws, BitWriter& w) {
+  int32_t* head = ws.head;
+  int32_t* prev = ws.prev;
+  const uint32_t max_chain = ws.effort.max_chain;
+  const size_t nice = ws.effort.nice_length;
   FixedCodes codes;
   make_fixed_codes(&codes);
   for (size_t i = 0; i < (size_t{1} << kHashBits); ++i) head[i] = -1;
@@ -145,17 +209,18 @@ Status deflate_block(const uint8_t* data, size_t size, int32_t* head, int32_t* p
     if (i + kMinMatch <= size) {
       const size_t limit = size - i < kMaxMatch ? size - i : kMaxMatch;
       int32_t candidate = head[hash3(data + i)];
-      for (uint32_t chain = 0; chain < kMaxChain && candidate >= 0; ++chain) {
+      for (uint32_t chain = 0; chain < max_chain && candidate >= 0; ++chain) {
         const size_t cand = static_cast<size_t>(candidate);
         const size_t distance = i - cand;
         if (distance > kWindow) break;
-        if (best_length < limit && data[cand + best_length] == data[i + best_length]) {
-          size_t n = 0;
-          while (n < limit && data[cand + n] == data[i + n]) ++n;
+        // A longer match agrees at best_length and the bytes before it (a filter only).
+        if (best_length < limit && data[cand + best_length] == data[i + best_length] &&
+            (best_length < 2 || data[cand + best_length - 1] == data[i + best_length - 1])) {
+          const size_t n = common_length(data + cand, data + i, limit);
           if (n > best_length) {
             best_length = static_cast<uint32_t>(n);
             best_distance = static_cast<uint32_t>(distance);
-            if (n == limit) break;
+            if (n == limit || n >= nice) break;
           }
         }
         candidate = prev[cand & (kWindow - 1)];
@@ -202,6 +267,9 @@ Status deflate_workspace(Arena& arena, size_t out_bytes, DeflateWorkspace* works
 Status deflate_fixed(const DeflateWorkspace& workspace, ZFormat format, const uint8_t* data,
                      size_t size, const CompressSink& sink) {
   SPLINTCORE_ASSERT(workspace.out != nullptr && sink.write != nullptr);
+  SPLINTCORE_ASSERT(workspace.effort.max_chain >= 1 && workspace.effort.max_chain <= 4096);
+  SPLINTCORE_ASSERT(workspace.effort.nice_length >= kMinMatch &&
+                    workspace.effort.nice_length <= kMaxMatch);
   BitWriter bits(workspace, sink);
   if (format == ZFormat::kZlib) {
     SPLINTCORE_RETURN_IF_ERROR(bits.put(0x78, 8));  // CMF: deflate, 32 KiB window
@@ -211,7 +279,7 @@ Status deflate_fixed(const DeflateWorkspace& workspace, ZFormat format, const ui
     static const uint8_t kHeader[10] = {0x1F, 0x8B, 8, 0, 0, 0, 0, 0, 0, 255};
     for (uint8_t b : kHeader) SPLINTCORE_RETURN_IF_ERROR(bits.put(b, 8));
   }
-  SPLINTCORE_RETURN_IF_ERROR(deflate_block(data, size, workspace.head, workspace.prev, bits));
+  SPLINTCORE_RETURN_IF_ERROR(deflate_block(data, size, workspace, bits));
   SPLINTCORE_RETURN_IF_ERROR(bits.align());
   if (format == ZFormat::kZlib) {
     const uint32_t adler = adler32(1, data, size);

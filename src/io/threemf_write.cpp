@@ -380,6 +380,7 @@ Status write_3mf(const Context& ctx, Span<const ThreeMfObject> objects,
   const size_t plain[3] = {sizeof kContentTypes - 1, sizeof kRels - 1, model.size};
   if (options.deflate) {
     SPLINTCORE_RETURN_IF_ERROR(deflate_workspace(arena, kDeflateChunk, &ws));
+    ws.effort = kDeflateFast;
     for (int k = 0; k < 3; ++k) {
       packed[k] = arena.allocate_array<uint8_t>(static_cast<size_t>(deflated_bound(plain[k])));
       if (packed[k] == nullptr) return arena.exhausted_status();

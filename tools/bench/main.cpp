@@ -1376,6 +1376,47 @@ void bench_inflate(Harness& h, Arena& arena, const std::string& zlib_file) {
   }
 }
 
+// The print job (issue 32): write_3mf of the two phantom jaws (87k triangles each, as two
+// objects) into memory, deflated: the 3D model's text, its deflate and the ZIP's CRC-32. MB/s
+// of the model's text is printed with the package's size.
+void bench_write_3mf(Harness& h, Arena& arena) {
+  if (!h.wanted("write_3mf_phantom")) return;
+  const Arena::Marker m = arena.mark();
+  Mesh jaws[2];
+  if (!phantom_jaws(h, arena, m, 87000, jaws)) return;
+  ThreeMfObject objects[2];
+  for (int j = 0; j < 2; ++j) {
+    objects[j].mesh = &jaws[j];
+    objects[j].name = j == 0 ? "maxilla" : "mandible";
+    objects[j].translation = Vec3{0, 80.0 * j, 0};
+  }
+  std::vector<uint8_t> out;
+  ByteSink sink;
+  sink.user = &out;
+  sink.write = [](void* user, const uint8_t* d, size_t n) {
+    auto* v = static_cast<std::vector<uint8_t>*>(user);
+    v->insert(v->end(), d, d + n);
+    return true;
+  };
+  const Result r =
+      h.measure("write_3mf_phantom", jaws[0].triangles.size() + jaws[1].triangles.size(), arena,
+                [&](Arena& a) {
+                  out.clear();
+                  return write_3mf(Context(&a), Span<const ThreeMfObject>(objects, 2),
+                                   ThreeMfOptions{}, sink);
+                });
+  if (r.median > 0) {
+    Sha256 sha;
+    sha.update(out.data(), out.size());
+    uint8_t digest[32];
+    sha.finish(digest);
+    char hex[65];
+    Sha256::to_hex(digest, hex);
+    std::printf("# write_3mf_phantom: %zu bytes, SHA-256 %s\n", out.size(), hex);
+  }
+  arena.rewind(m);
+}
+
 int run(int argc, char** argv) {
   Harness h;
   std::string realdata = "../shared/realdata/open-full-jaw-patient26";
@@ -1439,6 +1480,7 @@ int run(int argc, char** argv) {
     bench_remesh(h, arena);
     bench_ct_reconstruct(h, arena);
     bench_inflate(h, arena, inflate_input);
+    bench_write_3mf(h, arena);
     bench_marching_cubes(h, arena);
     bench_sweep(h, arena);
     bench_blockout(h, arena, fixtures);
