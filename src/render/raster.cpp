@@ -12,6 +12,7 @@
 // the bytes are the same on every compiler and CPU. Views are tiles of the image: drawing them
 // in parallel writes disjoint pixels, and within a tile meshes and triangles are drawn in
 // order, a depth tie keeping the earlier one.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -141,16 +142,10 @@ struct MeshJob {
   Projected* projected = nullptr;  // a batch of views x vertex count
 };
 
-void draw_triangle(const Frame& f, const View& view, const Layer& layer, const RenderMesh& item,
-                   Vertex v[3], const uint8_t flat_rgb[3]) {
-  int64_t area = (v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[1].y - v[0].y) * (v[2].x - v[0].x);
-  if (area == 0) return;
-  if (area < 0) {
-    const Vertex t = v[1];
-    v[1] = v[2];
-    v[2] = t;
-    area = -area;
-  }
+// The pixels whose centres (px * 256 + 128, py * 256 + 128) lie in the box of the triangle
+// `v` and in the view's tile: false when there are none (the triangle draws nothing).
+bool pixel_box(const View& view, const Vertex v[3], int64_t* px0, int64_t* px1, int64_t* py0,
+               int64_t* py1) {
   int64_t min_x = v[0].x;
   int64_t max_x = min_x;
   int64_t min_y = v[0].y;
@@ -161,16 +156,25 @@ void draw_triangle(const Frame& f, const View& view, const Layer& layer, const R
     if (v[k].y < min_y) min_y = v[k].y;
     if (v[k].y > max_y) max_y = v[k].y;
   }
-  // Pixel centres px * 256 + 128 inside [min, max].
-  int64_t px0 = -floor_div(-(min_x - kSubpixel / 2), kSubpixel);
-  int64_t px1 = floor_div(max_x - kSubpixel / 2, kSubpixel);
-  int64_t py0 = -floor_div(-(min_y - kSubpixel / 2), kSubpixel);
-  int64_t py1 = floor_div(max_y - kSubpixel / 2, kSubpixel);
-  if (px0 < view.x0) px0 = view.x0;
-  if (py0 < view.y0) py0 = view.y0;
-  if (px1 > view.x1 - 1) px1 = view.x1 - 1;
-  if (py1 > view.y1 - 1) py1 = view.y1 - 1;
-  if (px0 > px1 || py0 > py1) return;
+  *px0 = std::max<int64_t>(-floor_div(-(min_x - kSubpixel / 2), kSubpixel), view.x0);
+  *px1 = std::min<int64_t>(floor_div(max_x - kSubpixel / 2, kSubpixel), view.x1 - 1);
+  *py0 = std::max<int64_t>(-floor_div(-(min_y - kSubpixel / 2), kSubpixel), view.y0);
+  *py1 = std::min<int64_t>(floor_div(max_y - kSubpixel / 2, kSubpixel), view.y1 - 1);
+  return *px0 <= *px1 && *py0 <= *py1;
+}
+
+void draw_triangle(const Frame& f, const View& view, const Layer& layer, const RenderMesh& item,
+                   Vertex v[3], const uint8_t flat_rgb[3]) {
+  int64_t area = (v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[1].y - v[0].y) * (v[2].x - v[0].x);
+  if (area == 0) return;
+  if (area < 0) {
+    const Vertex t = v[1];
+    v[1] = v[2];
+    v[2] = t;
+    area = -area;
+  }
+  int64_t px0 = 0, px1 = 0, py0 = 0, py1 = 0;
+  if (!pixel_box(view, v, &px0, &px1, &py0, &py1)) return;
 
   // w0 is opposite v0 (edge v1->v2), and so on; positive inside.
   const Vertex& a = v[0];
@@ -274,6 +278,9 @@ void draw_mesh_view(const MeshJob& job, uint32_t view_index, uint32_t slot) {
     const int64_t area =
         (v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[1].y - v[0].y) * (v[2].x - v[0].x);
     if (area == 0) continue;
+    // No pixel centre in its box: nothing to light or draw (most triangles of a fine mesh).
+    int64_t px0 = 0, px1 = 0, py0 = 0, py1 = 0;
+    if (!pixel_box(view, v, &px0, &px1, &py0, &py1)) continue;
     uint8_t flat_rgb[3] = {item.rgb[0], item.rgb[1], item.rgb[2]};
     if (job.normals == nullptr) {
       const Vec3 p0 = placed(item, vertices[tri.v[0]]);
