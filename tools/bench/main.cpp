@@ -17,6 +17,7 @@
 #include "../common/cli.h"
 #include "../common/ct_phantom.h"
 #include "../common/phantom.h"
+#include "../common/preview.h"
 #include "../common/realcase.h"
 #include "../common/shapes.h"
 #include "splintcore/blockout.h"
@@ -1406,13 +1407,8 @@ void bench_write_3mf(Harness& h, Arena& arena) {
                                    ThreeMfOptions{}, sink);
                 });
   if (r.median > 0) {
-    Sha256 sha;
-    sha.update(out.data(), out.size());
-    uint8_t digest[32];
-    sha.finish(digest);
-    char hex[65];
-    Sha256::to_hex(digest, hex);
-    std::printf("# write_3mf_phantom: %zu bytes, SHA-256 %s\n", out.size(), hex);
+    std::printf("# write_3mf_phantom: %zu bytes, SHA-256 %s\n", out.size(),
+                cli::sha256_hex(out).c_str());
   }
   arena.rewind(m);
 }

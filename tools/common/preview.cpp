@@ -7,13 +7,6 @@
 
 namespace splintcore {
 namespace cli {
-namespace {
-
-bool vector_write(void* user, const uint8_t* data, size_t bytes) {
-  auto* out = static_cast<std::vector<uint8_t>*>(user);
-  out->insert(out->end(), data, data + bytes);
-  return true;
-}
 
 std::string sha256_hex(const std::vector<uint8_t>& bytes) {
   Sha256 sha;
@@ -23,6 +16,14 @@ std::string sha256_hex(const std::vector<uint8_t>& bytes) {
   char hex[65];
   Sha256::to_hex(digest, hex);
   return hex;
+}
+
+namespace {
+
+bool vector_write(void* user, const uint8_t* data, size_t bytes) {
+  auto* out = static_cast<std::vector<uint8_t>*>(user);
+  out->insert(out->end(), data, data + bytes);
+  return true;
 }
 
 // Adds a closed, thin square bar from a to b (half-width w) to `m`'s vertex and triangle lists.

@@ -50,6 +50,9 @@ struct PreviewMarks {
   RigidTransform move;
 };
 
+// SHA-256 of `bytes`, 64 lower-case hex digits.
+std::string sha256_hex(const std::vector<uint8_t>& bytes);
+
 // The design preview: `splint` (opaque blue) under `jaws` (translucent grey), four views (front,
 // top, right, iso) at width x height. `moves` is empty or one transform per jaw: the jaws are drawn
 // from copies moved by it (in ctx.arena, returned; 24 bytes a vertex and 12 a triangle more).
