@@ -48,9 +48,10 @@ struct RegisterResult {
   bool converged = false;    // the last update was below 1e-7 mm and 1e-7 rad
   uint32_t samples = 0;      // scan vertices sampled
   uint32_t kept = 0;         // samples kept each iteration (overlap * samples)
-  // The automatic alignment: which start won (0: the scan as given, 1..4: the principal axes
-  // with the sign combinations (+,+), (+,-), (-,+), (-,-) of the first two). -1 with
-  // landmarks.
+  // The automatic alignment: which start won (0: the scan as given; 1..4: turned by -10, -5,
+  // 5, 10 degrees about the CT's least principal axis through its centroid; 5..8: the
+  // principal axes with the sign combinations (+,+), (+,-), (-,+), (-,-) of the first two).
+  // -1 with landmarks.
   int32_t start = -1;
   double landmark_rms_mm = 0;  // with landmarks: their RMS under the final transform
 };

@@ -86,16 +86,17 @@ const char kRegisterUsage[] =
     "                          [--memory-cap SIZE] [--threads N]\n"
     "\n"
     "Scan-CT fusion: the rigid motion that places an intraoral scan (an open surface, crowns\n"
-    "and gum) onto a jaw reconstructed from CT. The start is the scan as given or its principal\n"
-    "axes onto the CT's (the best of five after a few iterations), or the least-squares fit of\n"
-    "3+ landmark pairs (each a scan point then the same point on the CT, mm; pairs whose fit\n"
-    "leaves them over 2 mm RMS apart are rejected as a wrong pairing). Then a trimmed\n"
-    "point-to-plane ICP: up to 3000 scan vertices (every k-th) paired with their closest points\n"
-    "on the CT, the best --overlap of them (default 0.6: scans are mostly gum, which CT does not\n"
-    "show) fitted, until the update is under 1e-7 mm and rad. A fit whose RMS is over --max-rms\n"
-    "(default 0.3 mm) is rejected. Writes OUT.json (the 4x4 scan -> CT, row-major; RMS; the\n"
-    "overlap: samples within 0.5 mm; iterations) and with --moved the moved scan, atomically.\n"
-    "The bytes are the same at any --threads.\n";
+    "and gum) onto a jaw reconstructed from CT. The start is the best of nine after a coarse fit\n"
+    "(the scan as given, turned 5 and 10 degrees either way about the CT's occlusal axis, or its\n"
+    "principal axes onto the CT's), or the least-squares fit of 3+ landmark pairs (each a scan\n"
+    "point then the same point on the CT, mm; pairs left over 2 mm RMS apart are rejected as a\n"
+    "wrong pairing). Then a trimmed point-to-plane ICP: up to 3000 scan vertices (every k-th)\n"
+    "paired with their closest points on the CT, the best --overlap of them (default 0.6: scans\n"
+    "are mostly gum, which CT does not show) fitted, until the update is under 1e-7 mm and rad.\n"
+    "A fit whose RMS is over --max-rms (default 0.3 mm) is rejected. Writes OUT.json (the 4x4\n"
+    "scan -> CT, row-major; RMS; the overlap: samples within 0.5 mm; iterations) and with\n"
+    "--moved the moved scan (STL), atomically. The bytes are the same at any --threads.\n"
+    "A scan that is mostly gum may need landmarks (docs/commands.md).\n";
 
 const char kBooleanUsage[] =
     "usage: splintcore boolean --difference|--union|--intersection A.stl B.stl [B2.stl ...]\n"

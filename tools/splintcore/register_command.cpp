@@ -105,7 +105,9 @@ std::string result_json(const RegisterArgs& a, const RegisterResult& r, const St
   if (!a.landmarks.empty()) {
     w.add("landmark_rms_mm", r.landmark_rms_mm);
   } else {
-    w.add("start", r.start == 0 ? "as given" : "principal axes");
+    static const char* const kStarts[] = {"as given", "turned -10", "turned -5", "turned 5",
+                                          "turned 10"};
+    w.add("start", r.start >= 0 && r.start < 5 ? kStarts[r.start] : "principal axes");
   }
   w.end_object();
   (void)w.finish();  // a string sink does not fail
