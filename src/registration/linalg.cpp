@@ -48,8 +48,8 @@ void jacobi_rotate(double* m, double* v, int n, int p, int q) {
 
 void symmetric_eigen(const double* a, int n, double* values, double* vectors) {
   SPLINTCORE_ASSERT(n >= 1 && n <= kMaxDim);
-  double m[kMaxDim * kMaxDim];
-  double v[kMaxDim * kMaxDim];
+  double m[kMaxDim * kMaxDim] = {};
+  double v[kMaxDim * kMaxDim] = {};
   double scale = 0;
   for (int i = 0; i < n * n; ++i) {
     m[i] = a[i];
@@ -69,12 +69,13 @@ void symmetric_eigen(const double* a, int n, double* values, double* vectors) {
     }
   }
   // Descending by value, stable (selection of the largest remaining, first on ties).
-  int order[kMaxDim];
+  int order[kMaxDim] = {};
   bool used[kMaxDim] = {};
   for (int k = 0; k < n; ++k) {
-    int best = -1;
-    for (int i = 0; i < n; ++i) {
-      if (!used[i] && (best < 0 || m[i * n + i] > m[best * n + best])) best = i;
+    int best = 0;
+    while (best < n - 1 && used[best]) ++best;  // the first unused (k < n: there is one)
+    for (int i = best + 1; i < n; ++i) {
+      if (!used[i] && m[i * n + i] > m[best * n + best]) best = i;
     }
     used[best] = true;
     order[k] = best;
@@ -103,7 +104,7 @@ bool cholesky_solve(const double* a, const double* b, int n, double min_pivot_ra
       l[i * n + j] = s / ljj;
     }
   }
-  double y[kMaxDim];
+  double y[kMaxDim] = {};
   for (int i = 0; i < n; ++i) {  // L y = b
     double s = b[i];
     for (int k = 0; k < i; ++k) s -= l[i * n + k] * y[k];
