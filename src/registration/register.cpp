@@ -37,6 +37,9 @@ constexpr uint32_t kTurns = sizeof(kTurnDegrees) / sizeof(kTurnDegrees[0]);
 constexpr uint32_t kAutomaticStarts = 1 + kTurns + 4;
 constexpr double kStopMm = 1e-7;  // update below this (and kStopRad): converged
 constexpr double kStopRad = 1e-7;
+// The automatic alignment stops at a start whose fractional RMS is at most this share of
+// max_rms_mm.
+constexpr double kGoodEnough = 0.1;
 constexpr double kMinPivotRatio = 1e-12;  // Cholesky: below this the motion is not fixed
 constexpr double kCollinearRatio = 1e-6;  // landmarks: second variance over the first
 
@@ -327,6 +330,8 @@ Status choose_start(Icp& icp, const Mesh& scan, const Mesh& ct, Pose* best, int3
       *best = pose;
       *which = static_cast<int32_t>(k);
     }
+    // A fit this close leaves nothing for another start to win: the rest are not tried.
+    if (best_rms <= kGoodEnough * icp.o.max_rms_mm) break;
   }
   return best_rms < HUGE_VAL ? Status::ok() : last;
 }
