@@ -306,6 +306,35 @@ sc_status sc_blockout(sc_context* ctx, const sc_mesh* splint, const sc_mesh* con
                       sc_mesh** out);
 
 /* ------------------------------------------------------------------------------------------ */
+/* Scan-CT fusion (registration.h): the rigid motion placing an intraoral scan onto a CT jaw. */
+
+typedef struct sc_register_options {
+  const double* landmarks; /* 6 per pair: scan x y z, then the same point on the CT; or NULL */
+  size_t landmark_count;   /* pairs (0: the automatic start; else at least 3) */
+  double overlap;          /* fraction of samples fitted, (0, 1]; 0: the default, 0.6 */
+  double max_rms_mm;       /* a fit with a larger RMS is SC_LIMIT_EXCEEDED; 0: the default, 0.3 */
+} sc_register_options;
+
+typedef struct sc_register_result {
+  double transform[16]; /* row-major 4x4, scan -> CT (last row 0 0 0 1) */
+  double rms_mm;        /* RMS distance to the CT of the samples fitted */
+  double overlap;       /* fraction of all samples within 0.5 mm of the CT */
+  double landmark_rms_mm;
+  uint32_t iterations;
+  uint32_t samples;
+  uint32_t kept;
+  int converged;
+} sc_register_result;
+
+/* register_rigid (registration.h): `options` may be NULL (the defaults). Arena: at most
+ * register_rigid_bound() and the landmarks (48 bytes a pair), all freed before return. *out is
+ * filled on success and on SC_LIMIT_EXCEEDED (the fit that was refused). Errors:
+ * SC_INVALID_ARGUMENT (options; landmarks too few, collinear or wrongly paired: the message
+ * names the pair), SC_INVALID_MESH, SC_LIMIT_EXCEEDED, SC_ARENA_EXHAUSTED, SC_CANCELLED. */
+sc_status sc_register_rigid(sc_context* ctx, const sc_mesh* scan, const sc_mesh* ct_jaw,
+                            const sc_register_options* options, sc_register_result* out);
+
+/* ------------------------------------------------------------------------------------------ */
 /* The design pipeline: a case file (docs/case-format.md) and the jaw meshes it names. */
 
 typedef struct sc_case sc_case;

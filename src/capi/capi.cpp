@@ -15,6 +15,7 @@
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
 #include "splintcore/printer.h"
+#include "splintcore/registration.h"
 
 using namespace splintcore;
 
@@ -988,3 +989,46 @@ sc_status sc_design_write_report(sc_context* ctx, const sc_case* c, const sc_mes
 }
 
 }  // extern "C"
+
+sc_status sc_register_rigid(sc_context* ctx, const sc_mesh* scan, const sc_mesh* ct_jaw,
+                            const sc_register_options* options, sc_register_result* out) {
+  if (ctx == nullptr || scan == nullptr || ct_jaw == nullptr || out == nullptr) {
+    return null_argument(ctx, "sc_register_rigid", "the scan, the CT jaw or the result");
+  }
+  std::memset(out, 0, sizeof(*out));
+  RegisterOptions o;
+  ArenaScope scope(ctx->arena);
+  if (options != nullptr) {
+    if (options->overlap != 0) o.overlap = options->overlap;
+    if (options->max_rms_mm != 0) o.max_rms_mm = options->max_rms_mm;
+    if (options->landmark_count > 0) {
+      if (options->landmarks == nullptr) {
+        return null_argument(ctx, "sc_register_rigid", "the landmarks");
+      }
+      LandmarkPair* pairs = ctx->arena.allocate_array<LandmarkPair>(options->landmark_count);
+      if (pairs == nullptr) return keep(ctx, ctx->arena.exhausted_status());
+      for (size_t i = 0; i < options->landmark_count; ++i) {
+        pairs[i] =
+            LandmarkPair{vec(options->landmarks + 6 * i), vec(options->landmarks + 6 * i + 3)};
+      }
+      o.landmarks = Span<const LandmarkPair>(pairs, options->landmark_count);
+    }
+  }
+  RegisterResult r;
+  const Status s = register_rigid(core_context(ctx), scan->mesh, ct_jaw->mesh, o, &r);
+  if (s.is_ok() || s.code() == StatusCode::kLimitExceeded) {
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) out->transform[4 * i + j] = r.transform.r[i][j];
+      out->transform[4 * i + 3] = r.transform.t[i];
+    }
+    out->transform[15] = 1.0;
+    out->rms_mm = r.rms_mm;
+    out->overlap = r.overlap;
+    out->landmark_rms_mm = r.landmark_rms_mm;
+    out->iterations = r.iterations;
+    out->samples = r.samples;
+    out->kept = r.kept;
+    out->converged = r.converged ? 1 : 0;
+  }
+  return s.is_ok() ? SC_OK : keep(ctx, s);
+}

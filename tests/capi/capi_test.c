@@ -1106,6 +1106,35 @@ static void test_outline(const char* jaws_dir) {
   free(json);
 }
 
+/* Scan-CT fusion: the torus onto itself (the identity, RMS 0); a wrong landmark pairing is
+ * refused with the pair named. */
+static void test_register(const Bytes* torus) {
+  Fixture f = open_fixture((size_t)8 << 20);
+  sc_mesh* m = NULL;
+  sc_register_result r;
+  sc_register_options o;
+  /* Three points of the torus paired with each other's places: no rotation fits. */
+  double pairs[18] = {10, 0, 0, 0, 10, 0, 0, 10, 0, -10, 0, 0, -10, 0, 0, 10, 0, 0};
+  char text[512];
+  int i;
+  CHECK_OK(f.ctx, read_mesh(f.ctx, torus, "torus_binary.stl", &m));
+  g_counting = 1;
+  CHECK_OK(f.ctx, sc_register_rigid(f.ctx, m, m, NULL, &r));
+  for (i = 0; i < 16; ++i) {
+    const double off = r.transform[i] - ((i % 5 == 0) ? 1.0 : 0.0);
+    CHECK(off < 1e-9 && off > -1e-9);
+  }
+  CHECK(r.rms_mm < 1e-9 && r.overlap == 1.0 && r.samples > 16);
+  memset(&o, 0, sizeof o);
+  o.landmarks = pairs;
+  o.landmark_count = 3;
+  CHECK(sc_register_rigid(f.ctx, m, m, &o, &r) == SC_INVALID_ARGUMENT);
+  last_message(f.ctx, text, sizeof text);
+  CHECK(contains(text, "landmarks"));
+  g_counting = 0;
+  close_fixture(&f);
+}
+
 int main(int argc, char** argv) {
   Bytes torus, case_text;
   if (argc < 2) {
@@ -1133,6 +1162,7 @@ int main(int argc, char** argv) {
   test_round_trip(&torus);
   test_errors_with_location(&torus);
   test_mesh_check(&torus);
+  test_register(&torus);
   test_operations();
   test_case_params(&case_text);
   if (argc >= 3) {

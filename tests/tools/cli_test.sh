@@ -181,6 +181,26 @@ expect_exit 0 "autorotate again, text" -- "$tool" autorotate "$work/maxilla.stl"
 check "autorotate prints the angle in degrees" -- grep -q "^angle: .* rad (.* degrees)" "$work/out"
 check "autorotate bytes are the same every run" -- cmp -s "$work/turned.stl" "$work/turned.first"
 
+# Scan-CT registration (issue 30): the turned mandible placed back onto the mandible (from the
+# scan as given), written atomically; the same bytes at any --threads; a wrong landmark pairing
+# rejected with nothing written.
+expect_exit 2 "register with one mesh" -- "$tool" register "$work/turned.stl" -o "$work/reg.json"
+expect_exit 2 "register without -o" -- "$tool" register "$work/turned.stl" "$work/mandible.stl"
+expect_exit 2 "register with a short landmark pair" -- "$tool" register "$work/turned.stl" "$work/mandible.stl" -o "$work/reg.json" --landmarks "1 2 3 4 5"
+expect_exit 2 "register with an overlap over 1" -- "$tool" register "$work/turned.stl" "$work/mandible.stl" -o "$work/reg.json" --overlap 1.5
+expect_exit 0 "register" -- "$tool" register "$work/turned.stl" "$work/mandible.stl" -o "$work/reg.json" --moved "$work/back.stl" --json
+check "register json is one object" -- json_ok "$work/out"
+check "register wrote its JSON" -- json_ok "$work/reg.json"
+check "register reports the 4x4" -- grep -q '"transform":\[[^]]*,0,0,0,1\]' "$work/reg.json"
+check "register reports a small RMS" -- python3 -c "import json, sys; sys.exit(json.load(open(sys.argv[1]))['rms_mm'] > 0.01)" "$work/reg.json"
+check "register wrote the moved scan" -- test -s "$work/back.stl"
+cp "$work/reg.json" "$work/reg.first"
+expect_exit 0 "register at 2 threads" -- "$tool" register "$work/turned.stl" "$work/mandible.stl" -o "$work/reg.json" --threads 2
+check "register bytes are the same at any thread count" -- cmp -s "$work/reg.json" "$work/reg.first"
+expect_exit 1 "register with a wrong landmark pairing" -- "$tool" register "$work/mandible.stl" "$work/mandible.stl" -o "$work/wrong.json" --landmarks "0 0 0 0 0 0; 10 0 0 0 10 0; 0 10 0 10 0 0"
+check "the wrong pairing is named" -- grep -q "landmarks .* mm RMS apart" "$work/err"
+check "nothing written for a rejected fit" -- test ! -e "$work/wrong.json"
+
 # Two-jaw surgery (issue 32): a plan case on the phantom writes both splints, a preview of each
 # and one report with the plan and both splints; the same bytes every run; a plan case cannot
 # also give a jaw transform (line and column named).

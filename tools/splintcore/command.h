@@ -37,6 +37,7 @@ int run_convert(const Command& command, int argc, char** argv);
 int run_prepare(const Command& command, int argc, char** argv);
 int run_distance(const Command& command, int argc, char** argv);
 int run_autorotate(const Command& command, int argc, char** argv);
+int run_register(const Command& command, int argc, char** argv);
 int run_compare(const Command& command, int argc, char** argv);
 int run_render(const Command& command, int argc, char** argv);
 int run_base(const Command& command, int argc, char** argv);

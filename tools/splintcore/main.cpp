@@ -80,6 +80,24 @@ const char kAutorotateUsage[] =
     "the 4x4 applied to the mandible, the opening measured and the contact points; -o writes\n"
     "the turned mandible as STL, atomically.\n";
 
+const char kRegisterUsage[] =
+    "usage: splintcore register SCAN CT_JAW -o OUT.json [--landmarks \"X Y Z X Y Z; ...\"]\n"
+    "                          [--overlap F] [--max-rms MM] [--moved MOVED.stl] [--json]\n"
+    "                          [--memory-cap SIZE] [--threads N]\n"
+    "\n"
+    "Scan-CT fusion: the rigid motion that places an intraoral scan (an open surface, crowns\n"
+    "and gum) onto a jaw reconstructed from CT. The start is the best of nine after a coarse fit\n"
+    "(the scan as given, turned 5 and 10 degrees either way about the CT's occlusal axis, or its\n"
+    "principal axes onto the CT's), or the least-squares fit of 3+ landmark pairs (each a scan\n"
+    "point then the same point on the CT, mm; pairs left over 2 mm RMS apart are rejected as a\n"
+    "wrong pairing). Then a trimmed point-to-plane ICP: up to 3000 scan vertices (every k-th)\n"
+    "paired with their closest points on the CT, the best --overlap of them (default 0.6: scans\n"
+    "are mostly gum, which CT does not show) fitted, until the update is under 1e-7 mm and rad.\n"
+    "A fit whose RMS is over --max-rms (default 0.3 mm) is rejected. Writes OUT.json (the 4x4\n"
+    "scan -> CT, row-major; RMS; the overlap: samples within 0.5 mm; iterations) and with\n"
+    "--moved the moved scan (STL), atomically. The bytes are the same at any --threads.\n"
+    "A scan that is mostly gum may need landmarks (docs/commands.md).\n";
+
 const char kBooleanUsage[] =
     "usage: splintcore boolean --difference|--union|--intersection A.stl B.stl [B2.stl ...]\n"
     "                         -o OUT.stl [--translate-b X,Y,Z] [--ascii] [--no-self-check]\n"
@@ -269,6 +287,7 @@ const Command kCommands[] = {
     {"outline", run_outline, kOutlineUsage, "the automatic outline as a case with explicit picks"},
     {"autorotate", run_autorotate, kAutorotateUsage,
      "the mandible turned about the hinge axis to an opening"},
+    {"register", run_register, kRegisterUsage, "scan-CT fusion: a scan placed onto a CT jaw"},
     {"design", run_design, kDesignUsage,
      "the splint from a case: splint.stl, report.json, preview.png"},
     {"sweep", run_sweep, kSweepUsage, "the jaws' swept volume (the blocked-out model)"},
