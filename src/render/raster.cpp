@@ -67,11 +67,15 @@ int64_t floor_to_int(double v) {
   return t;
 }
 
-int64_t floor_div(int64_t a, int64_t b) {  // b > 0
-  int64_t q = a / b;
-  if ((a % b != 0) && (a < 0)) --q;
-  return q;
+// floor(a / kSubpixel), in shifts (kSubpixel is a power of two): the quotient rounded toward
+// zero, one less for a negative a with a remainder.
+constexpr int64_t floor_subpixel(int64_t a) {
+  return a >= 0 ? a / kSubpixel : -((-a + kSubpixel - 1) / kSubpixel);
 }
+static_assert(floor_subpixel(-1) == -1 && floor_subpixel(-256) == -1 &&
+                  floor_subpixel(-257) == -2 && floor_subpixel(255) == 0 &&
+                  floor_subpixel(256) == 1,
+              "floor_subpixel");
 
 struct View {
   Basis basis;
@@ -156,10 +160,10 @@ bool pixel_box(const View& view, const Vertex v[3], int64_t* px0, int64_t* px1, 
     if (v[k].y < min_y) min_y = v[k].y;
     if (v[k].y > max_y) max_y = v[k].y;
   }
-  *px0 = std::max<int64_t>(-floor_div(-(min_x - kSubpixel / 2), kSubpixel), view.x0);
-  *px1 = std::min<int64_t>(floor_div(max_x - kSubpixel / 2, kSubpixel), view.x1 - 1);
-  *py0 = std::max<int64_t>(-floor_div(-(min_y - kSubpixel / 2), kSubpixel), view.y0);
-  *py1 = std::min<int64_t>(floor_div(max_y - kSubpixel / 2, kSubpixel), view.y1 - 1);
+  *px0 = std::max<int64_t>(-floor_subpixel(-(min_x - kSubpixel / 2)), view.x0);
+  *px1 = std::min<int64_t>(floor_subpixel(max_x - kSubpixel / 2), view.x1 - 1);
+  *py0 = std::max<int64_t>(-floor_subpixel(-(min_y - kSubpixel / 2)), view.y0);
+  *py1 = std::min<int64_t>(floor_subpixel(max_y - kSubpixel / 2), view.y1 - 1);
   return *px0 <= *px1 && *py0 <= *py1;
 }
 
