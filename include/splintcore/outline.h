@@ -30,7 +30,8 @@ struct OutlineOptions {
   // Distance between picks along the arch (mm, [2, 20]).
   double pick_spacing_mm = 3.0;
   // Move the mandible along the occlusal normal until the smallest distance between the jaws
-  // is exactly bite_opening_mm (mm, [0.1, 10]); without it the jaws must already be apart.
+  // is exactly bite_opening_mm (mm, [0.1, 10]): away from the maxilla when they are nearer (or
+  // meet), towards it when they stand farther apart; without it the jaws must already be apart.
   bool has_bite_opening = false;
   double bite_opening_mm = 0;
   // Jaws farther apart than this (mm) are refused: no wafer bridges them.

@@ -266,6 +266,56 @@ Status advance(Opener& op, double target, double d0, double slope0, double* t_ou
   return Status::ok();
 }
 
+// Jaws farther apart than the opening asked: the mandible moves back towards the maxilla
+// (t < 0) until the distance is the target. A move by delta changes the distance by at most
+// delta, so a step back by the excess never passes the first root; a Newton step by the
+// closest pair's rate (at most 1) goes at least as far and may pass it, which then brackets
+// the root for bisection. The distance at every t visited is exact (within the bands' reach:
+// the distance as given and everything nearer).
+Status close_to(Opener& op, double target, double d0, double slope0, double* t_out, double* d_out,
+                uint32_t* steps) {
+  double t = 0, d = d0, slope = slope0;
+  MeshPairDistance pair;
+  *steps = 0;
+  double below = -HUGE_VAL;  // a t known to be past the root (distance under the target)
+  while (*steps < kMaxAdvanceSteps && d - target > kOpeningTolerance) {
+    double next = t - (d - target);  // the conservative step
+    if (slope > 0) next = std::fmin(next, t - (d - target) / slope);
+    if (!(next > below)) next = 0.5 * (t + below);  // inside the bracket
+    SPLINTCORE_RETURN_IF_ERROR(op.distance(next, &pair));
+    ++*steps;
+    if (pair.distance < target - kOpeningTolerance) {
+      below = next;  // passed it: the root lies in (below, t)
+      slope = 0;     // bisect from here on
+      continue;
+    }
+    t = next;
+    d = pair.distance;
+    slope = below > -HUGE_VAL ? 0 : opening_slope(pair, op.n);
+  }
+  if (d - target > kOpeningTolerance && below > -HUGE_VAL) {
+    double lo = below, hi = t;  // d(lo) < target < d(hi)
+    for (uint32_t k = 0; k < kBisections && hi - lo > 1e-12; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      SPLINTCORE_RETURN_IF_ERROR(op.distance(mid, &pair));
+      ++*steps;
+      if (std::fabs(pair.distance - target) <= kOpeningTolerance) {
+        hi = mid;
+        d = pair.distance;
+        break;
+      }
+      (pair.distance < target ? lo : hi) = mid;
+      d = pair.distance < target ? d : pair.distance;
+    }
+    t = hi;
+    SPLINTCORE_RETURN_IF_ERROR(op.distance(t, &pair));
+    d = pair.distance;
+  }
+  *t_out = t;
+  *d_out = d;
+  return Status::ok();
+}
+
 // The part of each jaw that can come within `reach` of the other while the mandible moves
 // along n away from the maxilla (reaches = 1), or also back towards it by at most `reach`
 // (reaches = 2): a pair of points at most `reach` apart differs by at most that much in height
@@ -377,6 +427,21 @@ Status jaw_band(Arena& arena, const Mesh& m, bool upper, const BandLimit& limit,
   return Status::ok();
 }
 
+// The distance between the nearest pair of column tips (the vertex each column of the frame's
+// grid shows the other jaw, for columns that see both): at least the jaws' smallest distance.
+// Infinity when no column sees both.
+double tip_pair_bound(const Mesh& maxilla, const Mesh& mandible, const Grid& g) {
+  const size_t cells = static_cast<size_t>(g.nx) * g.ny;
+  double best = HUGE_VAL;
+  for (size_t i = 0; i < cells; ++i) {
+    if (g.tip[0][i] == kNoTip || g.tip[1][i] == kNoTip) continue;
+    const Vec3 d = maxilla.vertices[g.tip[0][i]] - mandible.vertices[g.tip[1][i]];
+    const double d2 = dot(d, d);
+    best = d2 < best ? d2 : best;
+  }
+  return std::sqrt(best);
+}
+
 // The smallest distance between the jaws (the mandible moved by -t n) exactly for every t the
 // opening visits, when it is at most `reach` (else some value above `reach`).
 struct BandedOpener {
@@ -433,8 +498,18 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
   double reach = std::fmax(target + (o.has_bite_opening ? kStepSlackMm : 0.0), kNearReachMm);
   // The first bands hold the pairs within reach only while the mandible moves away (or
   // stays): enough for the distance as given and for an opening from nearer than asked.
+  // Jaws that stand apart by more (a plan's autorotated jaws, a case opened by hand): the
+  // nearest pair of column tips is a pair of points, so the smallest distance is at most
+  // theirs, and bands of that reach hold it (and, twice as wide, a move back towards the
+  // maxilla to the opening asked): one build, not a near one and then the widest.
+  double margin = reach;
+  const double apart = tip_pair_bound(maxilla, mandible, g);
+  if (apart > reach && apart <= o.max_gap_mm + target) {
+    reach = apart * (1 + 1e-9) + 1e-9;  // over the rounding of the pair's own distance
+    margin = o.has_bite_opening ? 2 * reach : reach;
+  }
   BandedOpener b;
-  SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, edge, reach, reach, &b));
+  SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, edge, reach, margin, &b));
   Opener op(ctx, b.upper_index, b.lower_index, f.n);
   Span<TrianglePairIds> pool;
   SPLINTCORE_RETURN_IF_ERROR(allocate_pool(*ctx.arena, &pool));
@@ -445,7 +520,7 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
   bool meet = false;
   if (o.has_bite_opening) SPLINTCORE_RETURN_IF_ERROR(op.meets(0, &meet, &d0));
   if (!meet) SPLINTCORE_RETURN_IF_ERROR(op.distance(0, &d0));
-  if (d0.distance > reach || (o.has_bite_opening && d0.distance > target)) {
+  if (d0.distance > reach || (o.has_bite_opening && d0.distance > target && margin < 2 * reach)) {
     ctx.arena->rewind(scope.start());
     if (d0.distance > reach) reach = o.max_gap_mm + target;
     SPLINTCORE_RETURN_IF_ERROR(
@@ -472,8 +547,13 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
                       "): open the bite with \"bite_opening_mm\" (e.g. 2)");
   }
   double t = 0, d = 0;
-  SPLINTCORE_RETURN_IF_ERROR(advance(op, o.bite_opening_mm, d0.distance, opening_slope(d0, f.n), &t,
-                                     &d, &r->opening_steps));
+  if (d0.distance > target) {  // apart by more than asked: closed to it
+    SPLINTCORE_RETURN_IF_ERROR(
+        close_to(op, target, d0.distance, opening_slope(d0, f.n), &t, &d, &r->opening_steps));
+  } else {
+    SPLINTCORE_RETURN_IF_ERROR(
+        advance(op, target, d0.distance, opening_slope(d0, f.n), &t, &d, &r->opening_steps));
+  }
   *offset = f.n * (-t);
   r->opened = true;
   r->mandible_translation = *offset;

@@ -282,6 +282,40 @@ TEST(Outline, BiteOpensToTheExactDistance) {
   }
 }
 
+// Jaws already apart (moved apart along z by hand, as a plan's autorotated jaws come): the
+// first bands reach the nearest pair of column tips; the distance as given and the opening,
+// nearer or farther than the gap, are still exact (a brute force over every pair agrees).
+TEST(Outline, BiteOpensToTheExactDistanceFromApart) {
+  PhantomJaws p(2000);
+  test::TestArena t{size_t{64} << 20};
+  Mesh jaws[2];
+  copy_mesh(p.jaw[0], t.arena, &jaws[0], RigidTransform{});
+  copy_mesh(p.jaw[1], t.arena, &jaws[1], RigidTransform::translation(Vec3{0, 0, -4}));
+  const double gap = brute_distance(jaws[0], jaws[1], Vec3{}, -6, 6);
+  ASSERT_GT(gap, 2.0);
+  {
+    OutlineOptions options;  // no opening asked: the gap as given
+    Outline o;
+    SPLINTCORE_ASSERT_OK(compute_outline(Context(&t.arena), jaws[0], jaws[1], options, &o));
+    EXPECT_FALSE(o.report.opened);
+    EXPECT_NEAR(o.report.gap_as_given, gap, 1e-9);
+  }
+  for (const double opening : {1.0, gap + 1.5}) {
+    ArenaScope scope(t.arena);
+    OutlineOptions options;
+    options.has_bite_opening = true;
+    options.bite_opening_mm = opening;
+    Outline o;
+    SPLINTCORE_ASSERT_OK(compute_outline(Context(&t.arena), jaws[0], jaws[1], options, &o));
+    EXPECT_FALSE(o.report.jaws_intersect);
+    EXPECT_NEAR(o.report.gap_as_given, gap, 1e-9);
+    EXPECT_NEAR(o.report.opening, opening, 1e-9);
+    EXPECT_NEAR(brute_distance(jaws[0], jaws[1], o.report.mandible_translation, -6, 6), opening,
+                1e-9)
+        << opening;
+  }
+}
+
 TEST(Outline, ResolvedCaseDesignsTheSameBytes) {
   PhantomJaws p(87000);
   test::TestArena t{size_t{512} << 20};
