@@ -273,6 +273,20 @@ TEST(DesignPlan, LabelsTheSplintsIntAndFin) {
     ASSERT_NE(label, nullptr);
     EXPECT_STREQ(doc.member(*label, "text")->string, stats_texts[k]);
   }
+  // Embossed instead: the glyphs stand out of the wall, the splints gain volume.
+  {
+    ArenaScope scope(f.t.arena);
+    CaseFile embossed = f.c;
+    embossed.label.mode = LabelMode::kEmboss;
+    Mesh a, b;
+    PlanReport re;
+    SPLINTCORE_ASSERT_OK(design_plan(ctx, embossed, f.span(), &a, &b, &re));
+    EXPECT_STREQ(re.intermediate.design.label.text, "INT PLAN-1");
+    EXPECT_STREQ(re.final_splint.design.label.text, "FIN PLAN-1");
+    EXPECT_GT(re.intermediate.design.print.mesh.volume, plain_volume[0]);
+    EXPECT_GT(re.final_splint.design.print.mesh.volume, plain_volume[1]);
+    EXPECT_TRUE(re.intermediate.design.print.printable && re.final_splint.design.print.printable);
+  }
   // A text the prefix would push past 32 characters: refused by the parser and by design_plan.
   CaseFile longer = f.c;
   longer.label.text = "ABCDEFGHIJKLMNOPQRSTUVWXYZ012";  // 29
