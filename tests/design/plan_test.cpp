@@ -365,6 +365,68 @@ TEST(DesignPlan, WriteCaseRoundTripsThePlan) {
   }
 }
 
+// A tetrahedron `size` mm across, float32-exact.
+Mesh job_tetra(Arena& arena, double size) {
+  Mesh m(&arena);
+  const Vec3 v[4] = {{0, 0, 0}, {size, 0, 0}, {0, size, 0}, {0, 0, size / 2}};
+  for (const Vec3& p : v) (void)m.vertices.push_back(p);
+  const Triangle t[4] = {{{0, 2, 1}}, {{0, 1, 3}}, {{1, 2, 3}}, {{2, 0, 3}}};
+  for (const Triangle& x : t) (void)m.triangles.push_back(x);
+  return m;
+}
+
+// write_plan_job on small parts: the hashes given are the ones it would compute (the same
+// bytes), other hashes give other bytes; an unknown printer, an empty splint, parts that do
+// not fit the tray side by side and a sink that refuses are errors, the arena as it was.
+TEST(DesignPlan, PrintJobHashesAndErrors) {
+  test::TestArena t{size_t{8} << 20};
+  const Context ctx(&t.arena);
+  CaseFile c;
+  c.case_id = "job-1";
+  const Mesh a = job_tetra(t.arena, 20), b = job_tetra(t.arena, 30);
+  std::string computed, given, other;
+  const auto sink_of = [](std::string* out) {
+    ByteSink sink;
+    sink.user = out;
+    sink.write = [](void* user, const uint8_t* data, size_t n) {
+      static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
+      return true;
+    };
+    return sink;
+  };
+  Vec3 moves[2];
+  SPLINTCORE_ASSERT_OK(write_plan_job(ctx, c, a, b, nullptr, sink_of(&computed), moves));
+  EXPECT_GE(moves[1].x - moves[0].x, 20 + kPlanJobGapMm);  // a's box is 20 mm wide
+  char hashes[2][65];
+  SPLINTCORE_ASSERT_OK(splint_stl_sha256(ctx, a, hashes[0]));
+  SPLINTCORE_ASSERT_OK(splint_stl_sha256(ctx, b, hashes[1]));
+  const char* const right[2] = {hashes[0], hashes[1]};
+  SPLINTCORE_ASSERT_OK(write_plan_job(ctx, c, a, b, right, sink_of(&given), nullptr));
+  EXPECT_EQ(given, computed);
+  const char* const swapped[2] = {hashes[1], hashes[0]};
+  SPLINTCORE_ASSERT_OK(write_plan_job(ctx, c, a, b, swapped, sink_of(&other), nullptr));
+  EXPECT_NE(other, computed);
+
+  const Mesh wide = job_tetra(t.arena, 200);  // two of them: 405 mm, the tray 255
+  const size_t used = t.arena.used();
+  std::string unused;
+  CaseFile unknown = c;
+  unknown.printer = "nope";
+  Status s = write_plan_job(ctx, unknown, a, b, nullptr, sink_of(&unused), nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(s.message()).find("nope"), std::string::npos) << s.message();
+  s = write_plan_job(ctx, c, a, Mesh(), nullptr, sink_of(&unused), nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(s.message()).find("final splint is empty"), std::string::npos);
+  s = write_plan_job(ctx, c, wide, wide, nullptr, sink_of(&unused), nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kLimitExceeded) << test::format(s);
+  ByteSink refuse;
+  refuse.write = [](void*, const uint8_t*, size_t) { return false; };
+  s = write_plan_job(ctx, c, a, b, nullptr, refuse, nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kIoError) << test::format(s);
+  EXPECT_EQ(t.arena.used(), used);
+}
+
 TEST(DesignPlan, ErrorsLeaveTheArenaAsItWas) {
   PlanFixture f("maxilla_first");
   ASSERT_TRUE(f.ok);
