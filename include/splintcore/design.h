@@ -173,7 +173,8 @@ Status resolve_case_outline(const Context& ctx, const CaseFile& c, Span<const Me
 // Writes `c` as a case file (format version 1, every key it uses, numbers as the shortest text
 // that reads back to the same double), so that parse_case() of the text gives back `c`'s
 // values and designing it gives the same splint. An auto case is written with its "auto"
-// object; a resolved one with its picks (each with position, direction and both lengths).
+// object; a resolved one with its picks (each with position, direction and both lengths); a
+// plan case with its "plan" (and its jaws without "transform": the plan moves them).
 // Errors: kIoError (the sink failed).
 Status write_case(const CaseFile& c, const ByteSink& sink);
 
@@ -283,8 +284,12 @@ Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
 // final: both jaws moved, the mandible turned to final_opening_mm.
 // The mandible's transform as applied is the turn composed after its planned move (the turn is
 // found on the jaws moved and rounded to float32, as design_splint moves them).
+// With a case "label" each splint carries its own: "INT " (intermediate) or "FIN " (final)
+// before the case's label text (so at most kLabelMaxCharacters - 4 characters), placed, meshed
+// and applied as design_splint applies a label.
 struct PlanSplintReport {
-  RigidTransform maxilla;   // the maxilla's transform as applied
+  char label_text[kLabelMaxCharacters + 1] = {};  // the label applied ("" without "label")
+  RigidTransform maxilla;                         // the maxilla's transform as applied
   RigidTransform mandible;  // the mandible's: autorotation.transform after its planned move
   double opening_asked_mm = 0;
   AutorotateReport autorotation;  // angle_rad, the opening measured (opening), ...
@@ -298,8 +303,9 @@ struct PlanReport {
 };
 
 // The case one splint of the plan is designed from: `c` without its plan, the jaws' transforms
-// set to `r`'s (maxilla, mandible). `jaws` (two entries, the caller's) holds its jaw list.
-// Errors: kInvalidArgument (not a plan case, not one maxilla and one mandible).
+// set to `r`'s (maxilla, mandible), the label's text r.label_text (`out` points into `r`).
+// `jaws` (two entries, the caller's) holds its jaw list. Errors: kInvalidArgument (not a plan
+// case, not one maxilla and one mandible, a case label but no r.label_text).
 Status plan_splint_case(const CaseFile& c, const PlanSplintReport& r, CaseJaw jaws[2],
                         CaseFile* out);
 
@@ -310,12 +316,33 @@ Status plan_splint_case(const CaseFile& c, const PlanSplintReport& r, CaseJaw ja
 // rest is returned. At most: the intermediate splint, plus the larger of (the two moved jaws,
 // 24 bytes a vertex, and autorotate_mandible_bound of them) and one design_splint run of a
 // splint. Progress: "plan: intermediate", the design's stages, "plan: final", the design's.
-// Errors: kInvalidArgument (no plan, jaw count or roles), autorotate_mandible's prefixed
+// Errors: kInvalidArgument (no plan, jaw count or roles, a label text too long for the prefix:
+// "plan: intermediate: label: ..."), autorotate_mandible's prefixed
 // "plan: intermediate: autorotation: " (or final), design_splint's prefixed "plan:
 // intermediate: " (or final); kArenaExhausted and kCancelled unchanged. On an error the arena
 // is as it was and both meshes are empty.
 Status design_plan(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* intermediate,
                    Mesh* final_splint, PlanReport* report);
+
+// The print job of a plan (job.3mf): both splints on the printer's tray (c.printer's profile),
+// in a row kPlanJobGapMm apart box to box (arrange_on_tray, printer.h), each placed by its
+// build item's translation (the splints' own float32 vertices are written as they are),
+// named "INT " and "FIN " with the case id, with the SHA-256 of each splint's binary STL as
+// metadata (sha256[k], 64 hex digits, when the caller has it; null: computed here), written
+// by write_3mf (io.h). The same splints give the same bytes. `moves` (may be null) receives
+// the two translations. Arena: at most plan_job_bound(), nothing stays. Errors: kInvalidArgument
+// (unknown printer, an empty splint), arrange_on_tray's (kLimitExceeded: they do not fit the
+// tray), write_3mf's, kArenaExhausted.
+constexpr double kPlanJobGapMm = 5.0;
+uint64_t plan_job_bound(const CaseFile& c, const Mesh& intermediate, const Mesh& final_splint);
+Status write_plan_job(const Context& ctx, const CaseFile& c, const Mesh& intermediate,
+                      const Mesh& final_splint, const char* const sha256[2], const ByteSink& sink,
+                      Vec3 moves[2]);
+
+// The SHA-256 (64 lower-case hex digits and a NUL) of the binary STL write_stl() writes of
+// `splint`, without keeping the bytes. Arena: write_stl's buffer (64,000 bytes), returned.
+// Errors: write_stl's.
+Status splint_stl_sha256(const Context& ctx, const Mesh& splint, char out[65]);
 
 // ---------------------------------------------------------------------------------------------
 // The audit report (report.json): one writer for the command line and the C API.

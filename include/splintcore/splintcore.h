@@ -540,6 +540,51 @@ sc_status sc_design_write_report(sc_context* ctx, const sc_case* c, const sc_mes
                                  size_t jaw_count, const sc_mesh* splint,
                                  const sc_report_files* files, const sc_sink* sink);
 
+/* ------------------------------------------------------------------------------------------ */
+/* Two-jaw surgery (issue 32): the intermediate and the final splint of a case with "plan"
+ * (docs/case-format.md, "Plan"; design_plan in design.h). */
+
+/* What sc_design_plan gives: [0] the intermediate splint, [1] the final one. Flags are 0 or 1. */
+typedef struct sc_plan_report {
+  double angle_rad[2];  /* the mandible's turn about the hinge axis (autorotation) */
+  double opening_mm[2]; /* the smallest distance between the arches there, measured */
+  uint64_t triangles[2];
+  double volume_mm3[2];
+  int printable[2];
+  int outlined[2];                 /* an auto case: each splint's picks were computed first */
+  char label_text[2][33];          /* the label applied: "INT " / "FIN " and the case's label text;
+                                      "" without "label" */
+  int job_written;                 /* `job` was given and the 3MF written to it */
+  double job_translation_mm[2][3]; /* where the job put each splint on the tray (its build
+                                      item's translation); 0 without a job */
+} sc_plan_report;
+
+/* Designs both splints of the plan case `c` from `jaws` (jaws[i] is the mesh of the case's jaw
+ * i, as read: the preoperative maxilla and mandible), as design_plan does (C++ design.h): the
+ * same meshes, vertex for vertex, as the C++ function and `splintcore design` give. Each splint
+ * is an ordinary design (outline, blockout, label, checks) with the jaws where the plan and the
+ * hinge-axis autorotation put them; with the case's "label", the intermediate splint carries
+ * "INT " and the label's text, the final "FIN " and the text.
+ * `job` (may be NULL): the print job is written to it as `splintcore design` writes job.3mf:
+ * both splints on the case printer's tray, 5 mm apart, one 3MF package (write_plan_job).
+ * `report` may be NULL.
+ * Arena: design_plan's peak, then (with `job`) the job writer's (write_plan_job, at most
+ * plan_job_bound(): the model text, about 150 bytes a triangle, and its compressed copy) on
+ * top of the two splints; of it both splints, their handles and the plan's record (a few tens
+ * of KB) stay. Measured: the phantom plan (fixtures/cases/plan.json, both splints labelled)
+ * with the two 6,000-triangle phantom jaws, the case and the jaws read into the same arena, the
+ * job included: 6.1 MB on x86-64; give such a case 8 MiB (tests/capi/capi_test.c runs it in
+ * 8 MiB, and in exactly its high water mark). On any error the arena is back where it was and
+ * both handles NULL.
+ * Progress: "plan: intermediate", the design's stages, "plan: final", the design's stages.
+ * Errors: SC_INVALID_ARGUMENT (not a plan case, jaw count or roles, a label text too long for
+ * the prefix, unknown printer), the autorotation's and the design's prefixed "plan:
+ * intermediate: " or "plan: final: ", SC_LIMIT_EXCEEDED (the splints do not fit the tray
+ * together), SC_IO_ERROR (the job sink refused), SC_ARENA_EXHAUSTED, SC_CANCELLED. */
+sc_status sc_design_plan(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
+                         size_t jaw_count, sc_mesh** intermediate, sc_mesh** final_splint,
+                         const sc_sink* job, sc_plan_report* report);
+
 #ifdef __cplusplus
 } /* extern "C" */
 #endif

@@ -307,6 +307,29 @@ void copy_outline_report(const OutlineReport& o, sc_outline_report* out) {
   out->undercut_chosen_mm3 = o.undercut_chosen_mm3;
 }
 
+void fill_plan_report(const PlanReport& r, const Mesh* splints[2], const Vec3* moves,
+                      sc_plan_report* out) {
+  std::memset(out, 0, sizeof(*out));
+  const PlanSplintReport* parts[2] = {&r.intermediate, &r.final_splint};
+  for (int k = 0; k < 2; ++k) {
+    const PlanSplintReport& p = *parts[k];
+    out->angle_rad[k] = p.autorotation.angle_rad;
+    out->opening_mm[k] = p.autorotation.opening;
+    out->triangles[k] = splints[k]->triangles.size();
+    out->volume_mm3[k] = p.design.print.mesh.volume;
+    out->printable[k] = p.design.print.printable ? 1 : 0;
+    out->outlined[k] = p.design.outlined ? 1 : 0;
+    static_assert(sizeof(out->label_text[k]) == sizeof(p.label_text), "label text sizes agree");
+    std::memcpy(out->label_text[k], p.label_text, sizeof(p.label_text));
+    if (moves != nullptr) {
+      out->job_translation_mm[k][0] = moves[k].x;
+      out->job_translation_mm[k][1] = moves[k].y;
+      out->job_translation_mm[k][2] = moves[k].z;
+    }
+  }
+  out->job_written = moves != nullptr ? 1 : 0;
+}
+
 }  // namespace
 
 extern "C" {
@@ -986,6 +1009,46 @@ sc_status sc_design_write_report(sc_context* ctx, const sc_case* c, const sc_mes
   }
   return keep(ctx, write_design_report(core_context(ctx), c->c, Span<const Mesh>(local, jaw_count),
                                        splint->mesh, *splint->design, f, nullptr, core_sink(sink)));
+}
+
+sc_status sc_design_plan(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
+                         size_t jaw_count, sc_mesh** intermediate, sc_mesh** final_splint,
+                         const sc_sink* job, sc_plan_report* report) {
+  if (ctx == nullptr || c == nullptr || intermediate == nullptr || final_splint == nullptr) {
+    return null_argument(ctx, "sc_design_plan", "the case or an output");
+  }
+  *intermediate = nullptr;
+  *final_splint = nullptr;
+  if (job != nullptr && job->write == nullptr) {
+    return null_argument(ctx, "sc_design_plan", "the job sink's write function");
+  }
+  Mesh local[2];
+  Status s = gather_meshes(jaws, jaw_count, "sc_design_plan", local, 2);
+  if (!s.is_ok()) return keep(ctx, s);
+  const Context core = core_context(ctx);
+  ArenaScope scope(ctx->arena);  // on an error nothing stays
+  sc_mesh* handles[2] = {place<sc_mesh>(ctx->arena), place<sc_mesh>(ctx->arena)};
+  PlanReport* record = place<PlanReport>(ctx->arena);
+  if (handles[0] == nullptr || handles[1] == nullptr || record == nullptr) {
+    return keep(ctx, ctx->arena.exhausted_status());
+  }
+  s = design_plan(core, c->c, Span<const Mesh>(local, jaw_count), &handles[0]->mesh,
+                  &handles[1]->mesh, record);
+  if (!s.is_ok()) return keep(ctx, s);
+  Vec3 moves[2];
+  if (job != nullptr) {
+    s = write_plan_job(core, c->c, handles[0]->mesh, handles[1]->mesh, nullptr, core_sink(job),
+                       moves);
+    if (!s.is_ok()) return keep(ctx, s);
+  }
+  scope.commit();
+  *intermediate = handles[0];
+  *final_splint = handles[1];
+  if (report != nullptr) {
+    const Mesh* splints[2] = {&handles[0]->mesh, &handles[1]->mesh};
+    fill_plan_report(*record, splints, job != nullptr ? moves : nullptr, report);
+  }
+  return keep(ctx, Status::ok());
 }
 
 }  // extern "C"

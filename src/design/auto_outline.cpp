@@ -126,8 +126,8 @@ Status resolve_case_outline(const Context& ctx, const CaseFile& c, Span<const Me
 
 namespace {
 
-void write_transform(JsonWriter& w, const RigidTransform& t) {
-  w.begin_array("transform");
+void write_transform(JsonWriter& w, const RigidTransform& t, const char* key = "transform") {
+  w.begin_array(key);
   const double row_t[3] = {t.t.x, t.t.y, t.t.z};
   for (int i = 0; i < 3; ++i) {
     for (int k = 0; k < 3; ++k) w.add(nullptr, t.r[i][k]);
@@ -147,7 +147,7 @@ void write_jaws(JsonWriter& w, const CaseFile& c) {
     } else {
       w.add("mesh", j.mesh);
     }
-    write_transform(w, j.transform);
+    if (!c.has_plan) write_transform(w, j.transform);  // with a plan, the plan moves the jaws
     w.end_object();
   }
   w.end_array();
@@ -239,6 +239,21 @@ void write_later_stages(JsonWriter& w, const CaseFile& c) {
   }
 }
 
+// The plan ("plan"), every key (all are required).
+void write_plan(JsonWriter& w, const CasePlan& p) {
+  w.begin_object("plan");
+  w.add("sequence", p.mandible_first ? "mandible_first" : "maxilla_first");
+  write_transform(w, p.maxilla, "maxilla");
+  write_transform(w, p.mandible, "mandible");
+  w.begin_array("hinge_axis");
+  w.add(nullptr, p.hinge[0]);
+  w.add(nullptr, p.hinge[1]);
+  w.end_array();
+  w.add("intermediate_opening_mm", p.intermediate_opening_mm);
+  w.add("final_opening_mm", p.final_opening_mm);
+  w.end_object();
+}
+
 }  // namespace
 
 Status write_case(const CaseFile& c, const ByteSink& sink) {
@@ -250,6 +265,7 @@ Status write_case(const CaseFile& c, const ByteSink& sink) {
   write_jaws(w, c);
   write_base(w, c);
   write_later_stages(w, c);
+  if (c.has_plan) write_plan(w, c.plan);
   w.end_object();
   return w.finish();
 }

@@ -586,6 +586,13 @@ Status parse_plan(const Reader& r, const JsonValue& root, const JsonValue& p, Ca
                   "\"plan\" sets the bite (the mandible turned about the hinge axis to each "
                   "opening): leave \"bite_opening_mm\" out of \"auto\"");
   }
+  if (out->has_label && std::strlen(out->label.text) + 4 > kLabelMaxCharacters) {
+    // Each splint's label is "INT " or "FIN " and this text (design_plan).
+    Status s = r.fail(*doc.member(*doc.member(root, "label"), "text"), StatusCode::kInvalidArgument,
+                      "with \"plan\" the label's \"text\" is at most ");
+    return s.append_u64(kLabelMaxCharacters - 4)
+        .append(" characters: each splint's label is \"INT \" or \"FIN \" and the text");
+  }
   out->has_plan = true;
   return Status::ok();
 }

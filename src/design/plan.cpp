@@ -55,6 +55,23 @@ Status moved_copy(const Context& ctx, const Mesh& m, const RigidTransform& x, co
   return Status::ok();
 }
 
+// The label of one splint: "INT " or "FIN " and the case's label text (nothing without one).
+Status plan_label_text(const CaseFile& c, bool final_splint, char out[kLabelMaxCharacters + 1]) {
+  out[0] = '\0';
+  if (!c.has_label) return Status::ok();
+  const char* prefix = final_splint ? "FIN " : "INT ";
+  const size_t n = std::strlen(c.label.text);
+  if (n + 4 > kLabelMaxCharacters) {
+    return make_error(
+        StatusCode::kInvalidArgument, "plan: ", final_splint ? "final" : "intermediate",
+        ": label: \"", prefix, "\" and the label's text are ", n + 4, " characters, at most ",
+        kLabelMaxCharacters, ": shorten \"label\"'s \"text\" to ", kLabelMaxCharacters - 4);
+  }
+  std::memcpy(out, prefix, 4);
+  std::memcpy(out + 4, c.label.text, n + 1);
+  return Status::ok();
+}
+
 // One splint: the jaws moved as the plan says for it, the mandible turned about the hinge axis
 // to the opening, then design_splint. The moved copies are returned before the design.
 Status plan_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, bool final_splint,
@@ -62,6 +79,7 @@ Status plan_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, bo
   const char* which = final_splint ? "final" : "intermediate";
   size_t up = 0, low = 0;
   SPLINTCORE_RETURN_IF_ERROR(plan_roles(c, &up, &low));
+  SPLINTCORE_RETURN_IF_ERROR(plan_label_text(c, final_splint, r->label_text));
   const CasePlan& plan = c.plan;
   const bool move_maxilla = final_splint || !plan.mandible_first;
   const bool move_mandible = final_splint || plan.mandible_first;
@@ -99,8 +117,13 @@ Status plan_splint_case(const CaseFile& c, const PlanSplintReport& r, CaseJaw ja
   jaws[up].transform = r.maxilla;
   jaws[low] = c.jaws[low];
   jaws[low].transform = r.mandible;
+  if (c.has_label && r.label_text[0] == '\0') {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "plan: the case has a \"label\" but the splint's report no label text");
+  }
   *out = c;
   out->has_plan = false;
+  if (c.has_label) out->label.text = r.label_text;
   out->jaws = Span<const CaseJaw>(jaws, 2);
   return Status::ok();
 }

@@ -253,16 +253,7 @@ Status splint_sha256_of(const Context& ctx, const Mesh& splint, const DesignRepo
     for (int i = 0; i < 64 && files.splint_sha256[i] != '\0'; ++i) out[i] = files.splint_sha256[i];
     return Status::ok();
   }
-  Sha256 hash;
-  ByteSink hashing;
-  hashing.write = &hash_write;
-  hashing.user = &hash;
-  hashing.name = "the splint's hash";
-  SPLINTCORE_RETURN_IF_ERROR(write_stl(ctx, splint, hashing, StlWriteOptions{}));
-  uint8_t digest[32];
-  hash.finish(digest);
-  Sha256::to_hex(digest, out);
-  return Status::ok();
+  return splint_stl_sha256(ctx, splint, out);
 }
 
 // The members of one splint's report after the case's name and hash: the inputs, the
@@ -342,6 +333,19 @@ void write_plan_splint(JsonWriter& w, const char* key, const CaseFile& derived,
 }
 
 }  // namespace
+
+Status splint_stl_sha256(const Context& ctx, const Mesh& splint, char out[65]) {
+  Sha256 hash;
+  ByteSink hashing;
+  hashing.write = &hash_write;
+  hashing.user = &hash;
+  hashing.name = "the splint's hash";
+  SPLINTCORE_RETURN_IF_ERROR(write_stl(ctx, splint, hashing, StlWriteOptions{}));
+  uint8_t digest[32];
+  hash.finish(digest);
+  Sha256::to_hex(digest, out);
+  return Status::ok();
+}
 
 Status write_design_report(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                            const Mesh& splint, const DesignReport& report,

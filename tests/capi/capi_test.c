@@ -4,10 +4,12 @@
  * 6,000-triangle phantom jaws (written by `splintcore phantom` as a ctest fixture), whose bytes
  * must be the golden splint's; the automatic outline (sc_outline, the resolved case's picks,
  * sc_case_write) on the same jaws, whose auto, resolved and re-read cases design to the same
- * bytes. With glibc, malloc/calloc/realloc are counted while sc_
- * functions run: the count must stay zero.
+ * bytes; both splints of the two-jaw surgery case fixtures/cases/plan.json and its print job
+ * (sc_design_plan), whose bytes must be the goldens of the C++ design_plan. With glibc,
+ * malloc/calloc/realloc are counted while sc_ functions run: the count must stay zero.
  *
- * usage: splintcore_capi_test FIXTURES_DIR [JAWS_DIR]   (no JAWS_DIR: the design is skipped)
+ * usage: splintcore_capi_test FIXTURES_DIR [JAWS_DIR [CLI_DESIGN_DIR [CLI_PLAN_DIR]]]
+ *        (no JAWS_DIR: the designs are skipped)
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -1135,6 +1137,144 @@ static void test_register(const Bytes* torus) {
   close_fixture(&f);
 }
 
+/* ---- two-jaw surgery (sc_design_plan) ------------------------------------------------------ */
+
+/* The arena splintcore.h documents for the phantom plan, jaws and job included. */
+#define PLAN_ARENA_BYTES ((size_t)8 << 20)
+#define PLAN_JOB_CAP ((size_t)16 << 20)
+
+typedef struct PlanRun {
+  sc_status status;
+  size_t high_water;
+  size_t used_before; /* the arena in use before sc_design_plan */
+  size_t used_after;  /* and after it */
+  int handles_null;   /* both handles NULL */
+  char sha256[3][65]; /* intermediate.stl, final.stl, job.3mf */
+  sc_plan_report report;
+} PlanRun;
+
+/* The SHA-256 of the binary STL of `m`. */
+static void mesh_sha256(sc_context* ctx, const sc_mesh* m, char out[65]) {
+  const size_t cap = (size_t)sc_stl_binary_size(sc_mesh_triangle_count(m));
+  unsigned char* stl = (unsigned char*)malloc(cap);
+  sc_memory_sink_state state;
+  sc_sink sink = sc_memory_sink(&state, stl, cap, "splint.stl");
+  out[0] = '\0';
+  g_counting = 1;
+  CHECK_OK(ctx, sc_mesh_write_stl(ctx, m, &sink, NULL));
+  sc_sha256_hex(stl, (size_t)state.size, out);
+  g_counting = 0;
+  free(stl);
+}
+
+/* fixtures/cases/plan.json with the phantom jaws in an arena of `arena_bytes`. */
+static PlanRun run_plan(size_t arena_bytes, const Bytes* case_text, const Bytes jaw_bytes[2]) {
+  PlanRun run;
+  Fixture f = open_fixture(arena_bytes);
+  sc_case* c = NULL;
+  const sc_mesh* jaws[2] = {NULL, NULL};
+  sc_mesh* splints[2] = {NULL, NULL};
+  unsigned char* job = (unsigned char*)malloc(PLAN_JOB_CAP);
+  sc_memory_sink_state job_state;
+  sc_sink job_sink = sc_memory_sink(&job_state, job, PLAN_JOB_CAP, "job.3mf");
+  size_t i;
+  memset(&run, 0, sizeof run);
+  g_counting = 1;
+  run.status = sc_case_parse(f.ctx, (const char*)case_text->data, case_text->size, "plan.json", &c);
+  for (i = 0; i < 2 && run.status == SC_OK; ++i) {
+    sc_mesh* m = NULL;
+    run.status = read_mesh(f.ctx, &jaw_bytes[i], "jaw.stl", &m);
+    jaws[i] = m;
+  }
+  if (run.status == SC_OK) {
+    run.used_before = sc_arena_used(f.ctx);
+    run.status =
+        sc_design_plan(f.ctx, c, jaws, 2, &splints[0], &splints[1], &job_sink, &run.report);
+    run.used_after = sc_arena_used(f.ctx);
+    run.handles_null = splints[0] == NULL && splints[1] == NULL;
+  }
+  g_counting = 0;
+  run.high_water = sc_arena_high_water(f.ctx);
+  if (run.status == SC_OK) {
+    for (i = 0; i < 2; ++i) mesh_sha256(f.ctx, splints[i], run.sha256[i]);
+    sc_sha256_hex(job, (size_t)job_state.size, run.sha256[2]);
+  } else {
+    char text[512];
+    sc_status_message(f.ctx, text, sizeof text);
+    printf("sc_design_plan in %llu bytes: %s: %s\n", (unsigned long long)arena_bytes,
+           sc_status_name(run.status), text);
+  }
+  free(job);
+  close_fixture(&f);
+  return run;
+}
+
+/* The CLI's file in `cli_dir` has the SHA-256 `want`. */
+static int cli_file_is(const char* cli_dir, const char* name, const char* want) {
+  Bytes b = read_file(cli_dir, name);
+  char hash[65];
+  if (b.data == NULL) return 0;
+  sc_sha256_hex(b.data, b.size, hash);
+  free(b.data);
+  return strcmp(hash, want) == 0;
+}
+
+/* Two-jaw surgery: fixtures/cases/plan.json designed with the phantom jaws through the C API
+ * in the arena splintcore.h documents. Both splints and the print job are the bytes the C++
+ * design_plan and write_plan_job give (pinned from C++ by DesignGolden.PlanSplintsAndPrintJob)
+ * and, with `cli_dir`, those `splintcore design` wrote there; the same again in exactly the
+ * arena's high water mark; one byte less fails cleanly (the arena as sc_design_plan found it,
+ * both handles NULL). */
+static void test_design_plan(const char* jaws_dir, const char* cli_dir) {
+  static const char* const kKeys[3] = {"design:plan-intermediate-phantom6000",
+                                       "design:plan-final-phantom6000",
+                                       "design:plan-job3mf-phantom6000"};
+  static const char* const kFiles[3] = {"intermediate.stl", "final.stl", "job.3mf"};
+  Bytes case_text = read_file(g_fixtures, "cases/plan.json");
+  Bytes jaw_bytes[2];
+  PlanRun first, exact, short_by_one;
+  char golden[65];
+  int k;
+  jaw_bytes[0] = read_file(jaws_dir, "maxilla.stl");
+  jaw_bytes[1] = read_file(jaws_dir, "mandible.stl");
+  CHECK(case_text.data != NULL && jaw_bytes[0].data != NULL && jaw_bytes[1].data != NULL);
+  if (case_text.data == NULL || jaw_bytes[0].data == NULL || jaw_bytes[1].data == NULL) return;
+  first = run_plan(PLAN_ARENA_BYTES, &case_text, jaw_bytes);
+  CHECK(first.status == SC_OK);
+  if (first.status != SC_OK) return;
+  CHECK(first.high_water <= PLAN_ARENA_BYTES);
+  CHECK(first.report.printable[0] == 1 && first.report.printable[1] == 1);
+  CHECK(first.report.outlined[0] == 1 && first.report.outlined[1] == 1);
+  CHECK(strcmp(first.report.label_text[0], "INT P1") == 0);
+  CHECK(strcmp(first.report.label_text[1], "FIN P1") == 0);
+  CHECK(first.report.job_written == 1);
+  CHECK(first.report.opening_mm[0] > 1.999999 && first.report.opening_mm[0] < 2.000001);
+  CHECK(first.report.opening_mm[1] > 1.499999 && first.report.opening_mm[1] < 1.500001);
+  CHECK(first.report.angle_rad[0] != first.report.angle_rad[1]);
+  for (k = 0; k < 3; ++k) {
+    read_golden(kKeys[k], golden);
+    CHECK(strlen(golden) == 64);
+    CHECK(strcmp(first.sha256[k], golden) == 0);
+    if (cli_dir != NULL) CHECK(cli_file_is(cli_dir, kFiles[k], first.sha256[k]));
+  }
+  printf(
+      "plan: intermediate %llu triangles (%.9f rad), final %llu triangles (%.9f rad); "
+      "arena high water %llu bytes; job.3mf sha256 %s\n",
+      (unsigned long long)first.report.triangles[0], first.report.angle_rad[0],
+      (unsigned long long)first.report.triangles[1], first.report.angle_rad[1],
+      (unsigned long long)first.high_water, first.sha256[2]);
+  exact = run_plan(first.high_water, &case_text, jaw_bytes);
+  CHECK(exact.status == SC_OK);
+  for (k = 0; k < 3; ++k) CHECK(strcmp(exact.sha256[k], first.sha256[k]) == 0);
+  short_by_one = run_plan(first.high_water - 1, &case_text, jaw_bytes);
+  CHECK(short_by_one.status == SC_ARENA_EXHAUSTED);
+  CHECK(short_by_one.used_after == short_by_one.used_before);
+  CHECK(short_by_one.handles_null);
+  free(case_text.data);
+  free(jaw_bytes[0].data);
+  free(jaw_bytes[1].data);
+}
+
 int main(int argc, char** argv) {
   Bytes torus, case_text;
   if (argc < 2) {
@@ -1169,6 +1309,7 @@ int main(int argc, char** argv) {
     test_design(&case_text, argv[2]);
     test_outline(argv[2]);
     if (argc >= 4) test_report_matches_cli(argv[2], argv[3]);
+    test_design_plan(argv[2], argc >= 5 ? argv[4] : NULL);
   } else {
     printf("design skipped: no jaws folder given\n");
   }

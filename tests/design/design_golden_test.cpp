@@ -167,5 +167,68 @@ TEST(DesignGolden, AutoOutlineBiteOpened) {
   expect_auto_golden("auto_open.json", "design:auto_open-phantom6000", true);
 }
 
+// Two-jaw surgery (issue 32): fixtures/cases/plan.json designed with the phantom jaws
+// (design_plan: both splints, each labelled, INT and FIN) and its print job (write_plan_job:
+// both on the Eden260 tray, one 3MF package), the bytes of all three pinned; the C API
+// (tests/capi/capi_test.c) and `splintcore design` (tests/tools/cli_test.sh) must give them too.
+TEST(DesignGolden, PlanSplintsAndPrintJob) {
+  test::TestArena t{size_t{256} << 20};
+  Context ctx(&t.arena);
+  const std::string text = fixture_case_text("plan.json");
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse_case(ctx, text.data(), text.size(), "plan.json", &c));
+  Mesh jaws[2];
+  ASSERT_NO_FATAL_FAILURE(phantom_jaws(t.arena, jaws));
+  Mesh splints[2];
+  PlanReport r;
+  SPLINTCORE_ASSERT_OK(
+      design_plan(ctx, c, Span<const Mesh>(jaws, 2), &splints[0], &splints[1], &r));
+  EXPECT_STREQ(r.intermediate.design.label.text, "INT P1");
+  EXPECT_STREQ(r.final_splint.design.label.text, "FIN P1");
+  static const char* const kKeys[2] = {"design:plan-intermediate-phantom6000",
+                                       "design:plan-final-phantom6000"};
+  for (int k = 0; k < 2; ++k) {
+    Designed d;
+    d.report = k == 0 ? r.intermediate.design : r.final_splint.design;
+    SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, splints[k], &d.volume));
+    d.triangles = splints[k].triangles.size();
+    SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(t.arena, splints[k], StlFormat::kBinary, &d.stl));
+    expect_golden_and_meshlab(kKeys[k], kKeys[k], d);
+  }
+  std::string job;
+  ByteSink sink;
+  sink.user = &job;
+  sink.write = [](void* user, const uint8_t* data, size_t n) {
+    static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
+    return true;
+  };
+  Vec3 moves[2];
+  const uint64_t before = t.arena.used();
+  t.arena.reset_high_water();
+  SPLINTCORE_ASSERT_OK(write_plan_job(ctx, c, splints[0], splints[1], nullptr, sink, moves));
+  EXPECT_EQ(t.arena.used(), before);  // nothing stays
+  EXPECT_LE(t.arena.high_water() - before, plan_job_bound(c, splints[0], splints[1]));
+  {  // in an arena of exactly plan_job_bound() bytes: the same bytes
+    const uint64_t bound = plan_job_bound(c, splints[0], splints[1]);
+    test::TestArena exact{static_cast<size_t>(bound)};
+    std::string again;
+    sink.user = &again;
+    SPLINTCORE_ASSERT_OK(
+        write_plan_job(Context(&exact.arena), c, splints[0], splints[1], nullptr, sink, nullptr));
+    EXPECT_EQ(again, job);
+    EXPECT_EQ(exact.arena.used(), 0u);
+  }
+  const std::string hash = test::sha256_hex(job.data(), job.size());
+  const char* key = "design:plan-job3mf-phantom6000";
+  EXPECT_EQ(hash, test::golden_hash(key))
+      << "fixtures/golden.sha256 line, if the change is intended:\n"
+      << hash << "  " << key;
+  std::printf(
+      "[ figures  ] job.3mf: %zu bytes, sha256 %s; splints moved by (%.4f, %.4f, %.4f) "
+      "and (%.4f, %.4f, %.4f)\n",
+      job.size(), hash.c_str(), moves[0].x, moves[0].y, moves[0].z, moves[1].x, moves[1].y,
+      moves[1].z);
+}
+
 }  // namespace
 }  // namespace splintcore

@@ -17,11 +17,11 @@ namespace {
 
 // The phantom's arch runs round +y, the maxilla above: the condyles behind (-y) and above.
 // The plan: the maxilla advanced 2 mm and impacted 1 mm, the mandible advanced 2.5 mm.
-std::string phantom_plan_case(const char* sequence, const char* mandible) {
-  return std::string(R"({"splintcore_case": 1, "case_id": "plan-1",
+std::string phantom_plan_case(const char* sequence, const char* mandible, const char* extra = "") {
+  return std::string(R"({"splintcore_case": 1, "case_id": "plan-1",)") + extra + R"(
     "jaws": [{"role": "maxilla", "mesh": "maxilla.stl"}, {"role": "mandible", "mesh": "mandible.stl"}],
     "base": {"spacing_mm": 0.5, "auto": {}},
-    "plan": {"sequence": ")") +
+    "plan": {"sequence": ")" +
          sequence + R"(",
       "maxilla": [1,0,0,0, 0,1,0,2, 0,0,1,1, 0,0,0,1],
       "mandible": )" +
@@ -36,10 +36,11 @@ struct PlanFixture {
   Mesh jaws[2];
   bool ok = false;
   explicit PlanFixture(const char* sequence,
-                       const char* mandible = "[1,0,0,0, 0,1,0,2.5, 0,0,1,0, 0,0,0,1]") {
+                       const char* mandible = "[1,0,0,0, 0,1,0,2.5, 0,0,1,0, 0,0,0,1]",
+                       const char* extra = "") {
     Context ctx(&t.arena);
     static std::string text;
-    text = phantom_plan_case(sequence, mandible);
+    text = phantom_plan_case(sequence, mandible, extra);
     if (!parse_case(ctx, text.data(), text.size(), "plan", &c).is_ok()) return;
     for (int j = 0; j < 2; ++j) {
       phantom::JawMesh m;
@@ -191,6 +192,239 @@ TEST(DesignPlan, MandibleFirstMovesTheMandibleFirst) {
   EXPECT_TRUE(r.intermediate.design.print.printable);
   EXPECT_TRUE(r.final_splint.design.print.printable);
   EXPECT_NE(stl_bytes(f.t.arena, intermediate), stl_bytes(f.t.arena, final_splint));
+}
+
+// The report of a plan run as text.
+std::string plan_report_json(const Context& ctx, const PlanFixture& f, const Mesh& a, const Mesh& b,
+                             const PlanReport& r) {
+  std::string json;
+  ByteSink sink;
+  sink.user = &json;
+  sink.write = [](void* user, const uint8_t* data, size_t n) {
+    static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
+    return true;
+  };
+  DesignReportFiles files[2];
+  EXPECT_TRUE(write_plan_report(ctx, f.c, f.span(), a, b, r, files, nullptr, sink).is_ok());
+  return json;
+}
+
+// A case "label": the intermediate splint carries "INT " and the text, the final "FIN " and the
+// text, engraved as design_splint engraves one (the glyphs cut out of each splint: less
+// volume, closed and checked after the label's Boolean); each report section names its text.
+TEST(DesignPlan, LabelsTheSplintsIntAndFin) {
+  double plain_volume[2] = {};
+  {
+    PlanFixture plain("maxilla_first");
+    ASSERT_TRUE(plain.ok);
+    Mesh a, b;
+    PlanReport r;
+    SPLINTCORE_ASSERT_OK(design_plan(Context(&plain.t.arena), plain.c, plain.span(), &a, &b, &r));
+    EXPECT_FALSE(r.intermediate.design.labelled);
+    EXPECT_STREQ(r.intermediate.label_text, "");
+    plain_volume[0] = r.intermediate.design.print.mesh.volume;
+    plain_volume[1] = r.final_splint.design.print.mesh.volume;
+  }
+  PlanFixture f("maxilla_first", "[1,0,0,0, 0,1,0,2.5, 0,0,1,0, 0,0,0,1]",
+                R"( "label": {"text": "Plan-1"},)");
+  ASSERT_TRUE(f.ok);
+  ASSERT_TRUE(f.c.has_label);
+  Context ctx(&f.t.arena);
+  Mesh splints[2];
+  PlanReport r;
+  SPLINTCORE_ASSERT_OK(design_plan(ctx, f.c, f.span(), &splints[0], &splints[1], &r));
+  const PlanSplintReport* parts[2] = {&r.intermediate, &r.final_splint};
+  const char* const texts[2] = {"INT Plan-1", "FIN Plan-1"};
+  const char* const stats_texts[2] = {"INT PLAN-1", "FIN PLAN-1"};  // as engraved: upper case
+  for (int k = 0; k < 2; ++k) {
+    SCOPED_TRACE(texts[k]);
+    const DesignReport& d = parts[k]->design;
+    EXPECT_STREQ(parts[k]->label_text, texts[k]);
+    ASSERT_TRUE(d.labelled);
+    EXPECT_STREQ(d.label.text, stats_texts[k]);
+    EXPECT_EQ(d.label.glyphs, 9u);  // the space has none
+    EXPECT_TRUE(d.print.printable);
+    EXPECT_STREQ(d.self_intersection_checked_by, "label");
+    double volume = 0;
+    SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, splints[k], &volume));
+    EXPECT_NEAR(volume, d.print.mesh.volume, 1e-9 * volume);
+    // Engraved: the glyphs' grooves are gone, about stroke length x stroke width x depth.
+    const double groove = d.label.stroke_length_mm * 0.35 * 0.4;
+    const double removed = plain_volume[k] - volume;
+    std::printf("%s: %.4f mm^3 removed, %.1f mm of strokes (%.4f mm^3 as straight grooves)\n",
+                texts[k], removed, d.label.stroke_length_mm, groove);
+    EXPECT_GT(removed, 0.5 * groove);
+    EXPECT_LT(removed, 2.0 * groove);
+  }
+  // Each section of report.json names the text applied, in the parameters and the label's check.
+  const std::string json = plan_report_json(ctx, f, splints[0], splints[1], r);
+  JsonDocument doc;
+  SPLINTCORE_ASSERT_OK(parse_json(ctx, json.data(), json.size(), JsonLimits{}, "report", &doc));
+  const char* const keys[2] = {"intermediate", "final"};
+  for (int k = 0; k < 2; ++k) {
+    const JsonValue* s = doc.member(doc.root(), keys[k]);
+    ASSERT_NE(s, nullptr);
+    const JsonValue* params = doc.member(*s, "parameters");
+    ASSERT_NE(params, nullptr);
+    EXPECT_STREQ(doc.member(*params, "label_text")->string, texts[k]);
+    const JsonValue* checks = doc.member(*s, "checks");
+    ASSERT_NE(checks, nullptr);
+    const JsonValue* label = doc.member(*checks, "label");
+    ASSERT_NE(label, nullptr);
+    EXPECT_STREQ(doc.member(*label, "text")->string, stats_texts[k]);
+  }
+  // Embossed instead: the glyphs stand out of the wall, the splints gain volume.
+  {
+    ArenaScope scope(f.t.arena);
+    CaseFile embossed = f.c;
+    embossed.label.mode = LabelMode::kEmboss;
+    Mesh a, b;
+    PlanReport re;
+    SPLINTCORE_ASSERT_OK(design_plan(ctx, embossed, f.span(), &a, &b, &re));
+    EXPECT_STREQ(re.intermediate.design.label.text, "INT PLAN-1");
+    EXPECT_STREQ(re.final_splint.design.label.text, "FIN PLAN-1");
+    EXPECT_GT(re.intermediate.design.print.mesh.volume, plain_volume[0]);
+    EXPECT_GT(re.final_splint.design.print.mesh.volume, plain_volume[1]);
+    EXPECT_TRUE(re.intermediate.design.print.printable && re.final_splint.design.print.printable);
+  }
+  // A text the prefix would push past 32 characters: refused by the parser and by design_plan.
+  CaseFile longer = f.c;
+  longer.label.text = "ABCDEFGHIJKLMNOPQRSTUVWXYZ012";  // 29
+  Mesh a, b;
+  const Status s = design_plan(ctx, longer, f.span(), &a, &b, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(s.message()).find("plan: intermediate: label: \"INT \""), std::string::npos)
+      << s.message();
+  const std::string text =
+      phantom_plan_case("maxilla_first", "[1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]",
+                        R"( "label": {"text": "ABCDEFGHIJKLMNOPQRSTUVWXYZ012"},)");
+  CaseFile parsed;
+  const Status p = parse_case(ctx, text.data(), text.size(), "plan", &parsed);
+  EXPECT_EQ(p.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(p.message()).find("at most 28 characters"), std::string::npos)
+      << p.message();
+}
+
+void expect_same_transform(const RigidTransform& a, const RigidTransform& b) {
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(a.t[i], b.t[i]);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(a.r[i][k], b.r[i][k]);
+  }
+}
+
+std::string written_case(const CaseFile& c) {
+  std::string text;
+  ByteSink sink;
+  sink.user = &text;
+  sink.write = [](void* user, const uint8_t* data, size_t n) {
+    static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
+    return true;
+  };
+  EXPECT_TRUE(write_case(c, sink).is_ok());
+  return text;
+}
+
+// write_case of a plan case: parsed again, the same plan bit for bit (a turned move and an odd
+// hinge: numbers that need all 17 digits), the jaws without "transform" (which a plan case
+// refuses); written again, the same text; designed, the same splints' bytes.
+TEST(DesignPlan, WriteCaseRoundTripsThePlan) {
+  // 0.6 and 0.8: a rotation about x whose entries are not short decimals after parsing.
+  PlanFixture f("mandible_first", "[1,0,0,0.1, 0,0.8,-0.6,0.5, 0,0.6,0.8,-0.5, 0,0,0,1]");
+  ASSERT_TRUE(f.ok);
+  Context ctx(&f.t.arena);
+  f.c.plan.hinge[0] = Vec3{-50.123456789012345, -55.1, 25.000000000000004};
+  f.c.plan.intermediate_opening_mm = 1.9999999999999998;
+  const std::string text = written_case(f.c);
+  EXPECT_EQ(text.find("\"transform\""), std::string::npos) << text;
+  CaseFile back;
+  SPLINTCORE_ASSERT_OK(parse_case(ctx, text.data(), text.size(), "written", &back));
+  ASSERT_TRUE(back.has_plan);
+  EXPECT_EQ(back.plan.mandible_first, f.c.plan.mandible_first);
+  expect_same_transform(back.plan.maxilla, f.c.plan.maxilla);
+  expect_same_transform(back.plan.mandible, f.c.plan.mandible);
+  for (int e = 0; e < 2; ++e) {
+    for (int i = 0; i < 3; ++i) EXPECT_EQ(back.plan.hinge[e][i], f.c.plan.hinge[e][i]);
+  }
+  EXPECT_EQ(back.plan.intermediate_opening_mm, f.c.plan.intermediate_opening_mm);
+  EXPECT_EQ(back.plan.final_opening_mm, f.c.plan.final_opening_mm);
+  EXPECT_STREQ(back.case_id, f.c.case_id);
+  EXPECT_EQ(back.has_auto_outline, f.c.has_auto_outline);
+  EXPECT_EQ(written_case(back), text);
+  // The maxilla-first plan of the other tests, written and read back, designs the same bytes.
+  PlanFixture g("maxilla_first");
+  ASSERT_TRUE(g.ok);
+  const std::string gtext = written_case(g.c);
+  CaseFile gback;
+  SPLINTCORE_ASSERT_OK(parse_case(ctx, gtext.data(), gtext.size(), "written", &gback));
+  Mesh a[2], b[2];
+  PlanReport ra, rb;
+  SPLINTCORE_ASSERT_OK(design_plan(ctx, g.c, g.span(), &a[0], &a[1], &ra));
+  SPLINTCORE_ASSERT_OK(design_plan(ctx, gback, g.span(), &b[0], &b[1], &rb));
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_EQ(stl_bytes(f.t.arena, a[k]), stl_bytes(f.t.arena, b[k])) << k;
+  }
+}
+
+// A tetrahedron `size` mm across, float32-exact.
+Mesh job_tetra(Arena& arena, double size) {
+  Mesh m(&arena);
+  const Vec3 v[4] = {{0, 0, 0}, {size, 0, 0}, {0, size, 0}, {0, 0, size / 2}};
+  for (const Vec3& p : v) (void)m.vertices.push_back(p);
+  const Triangle t[4] = {{{0, 2, 1}}, {{0, 1, 3}}, {{1, 2, 3}}, {{2, 0, 3}}};
+  for (const Triangle& x : t) (void)m.triangles.push_back(x);
+  return m;
+}
+
+// write_plan_job on small parts: the hashes given are the ones it would compute (the same
+// bytes), other hashes give other bytes; an unknown printer, an empty splint, parts that do
+// not fit the tray side by side and a sink that refuses are errors, the arena as it was.
+TEST(DesignPlan, PrintJobHashesAndErrors) {
+  test::TestArena t{size_t{8} << 20};
+  const Context ctx(&t.arena);
+  CaseFile c;
+  c.case_id = "job-1";
+  const Mesh a = job_tetra(t.arena, 20), b = job_tetra(t.arena, 30);
+  std::string computed, given, other;
+  const auto sink_of = [](std::string* out) {
+    ByteSink sink;
+    sink.user = out;
+    sink.write = [](void* user, const uint8_t* data, size_t n) {
+      static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
+      return true;
+    };
+    return sink;
+  };
+  Vec3 moves[2];
+  SPLINTCORE_ASSERT_OK(write_plan_job(ctx, c, a, b, nullptr, sink_of(&computed), moves));
+  EXPECT_GE(moves[1].x - moves[0].x, 20 + kPlanJobGapMm);  // a's box is 20 mm wide
+  char hashes[2][65];
+  SPLINTCORE_ASSERT_OK(splint_stl_sha256(ctx, a, hashes[0]));
+  SPLINTCORE_ASSERT_OK(splint_stl_sha256(ctx, b, hashes[1]));
+  const char* const right[2] = {hashes[0], hashes[1]};
+  SPLINTCORE_ASSERT_OK(write_plan_job(ctx, c, a, b, right, sink_of(&given), nullptr));
+  EXPECT_EQ(given, computed);
+  const char* const swapped[2] = {hashes[1], hashes[0]};
+  SPLINTCORE_ASSERT_OK(write_plan_job(ctx, c, a, b, swapped, sink_of(&other), nullptr));
+  EXPECT_NE(other, computed);
+
+  const Mesh wide = job_tetra(t.arena, 200);  // two of them: 405 mm, the tray 255
+  const size_t used = t.arena.used();
+  std::string unused;
+  CaseFile unknown = c;
+  unknown.printer = "nope";
+  Status s = write_plan_job(ctx, unknown, a, b, nullptr, sink_of(&unused), nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(s.message()).find("nope"), std::string::npos) << s.message();
+  s = write_plan_job(ctx, c, a, Mesh(), nullptr, sink_of(&unused), nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(s.message()).find("final splint is empty"), std::string::npos);
+  s = write_plan_job(ctx, c, wide, wide, nullptr, sink_of(&unused), nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kLimitExceeded) << test::format(s);
+  ByteSink refuse;
+  refuse.write = [](void*, const uint8_t*, size_t) { return false; };
+  s = write_plan_job(ctx, c, a, b, nullptr, refuse, nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kIoError) << test::format(s);
+  EXPECT_EQ(t.arena.used(), used);
 }
 
 TEST(DesignPlan, ErrorsLeaveTheArenaAsItWas) {

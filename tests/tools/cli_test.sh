@@ -222,7 +222,8 @@ check "plan wrote a preview of each" -- test -s "$work/plan-out/intermediate.png
 int_sha=$(sha256sum "$work/plan-out/intermediate.stl" | cut -d' ' -f1)
 fin_sha=$(sha256sum "$work/plan-out/final.stl" | cut -d' ' -f1)
 check "plan wrote one print job: both splints on the Eden260 tray, 5 mm apart (Python zipfile)" -- \
-  python3 "$(dirname "$0")/check_3mf.py" "$work/plan-out/job.3mf" 2 255 252 5 "$int_sha" "$fin_sha"
+  python3 "$(dirname "$0")/check_3mf.py" "$work/plan-out/job.3mf" 2 255 252 5 "$int_sha" "$fin_sha" \
+  --height 200 --stl "$work/plan-out/intermediate.stl" "$work/plan-out/final.stl"
 check "plan report is one object" -- json_ok "$work/plan-out/report.json"
 job_sha=$(sha256sum "$work/plan-out/job.3mf" | cut -d' ' -f1)
 check "plan report names the print job and its SHA-256" -- grep -q "\"print_job\":{\"path\":\"[^\"]*job.3mf\",\"sha256\":\"$job_sha\"}" "$work/plan-out/report.json"
@@ -238,6 +239,19 @@ sed 's/"mesh": "mandible.stl"}/"mesh": "mandible.stl", "transform": [1,0,0,0, 0,
 expect_exit 1 "a plan with a jaw transform" -- "$tool" design "$work/plan-bad.json" -o "$work/plan-bad"
 check "the refusal names the line and column" -- grep -q "plan-bad.json:2:[0-9]*: .*both move it" "$work/err"
 expect_exit 1 "outline of a plan case" -- "$tool" outline "$work/plan.json" -o "$work/plan-resolved.json"
+# The plan fixture (fixtures/cases/plan.json: each splint labelled, INT P1 and FIN P1): both
+# splints and the print job have the golden bytes (pinned by tests/design/design_golden_test.cpp
+# from the library), and the job holds the STLs' triangles and volumes, apart on the tray.
+cp "$fixtures/cases/plan.json" "$work/plan-fixture.json"
+expect_exit 0 "design the plan fixture" -- "$tool" design "$work/plan-fixture.json" -o "$work/plan-fixture"
+for part in intermediate final; do
+  check "the plan fixture's $part splint has the golden bytes" -- has_sha256 "$work/plan-fixture/$part.stl" "$(grep " design:plan-$part-phantom6000$" "$fixtures/golden.sha256" | cut -d' ' -f1)"
+done
+check "the plan fixture's job.3mf has the golden bytes" -- has_sha256 "$work/plan-fixture/job.3mf" "$(grep " design:plan-job3mf-phantom6000$" "$fixtures/golden.sha256" | cut -d' ' -f1)"
+check "the plan fixture's job: the STLs' triangles and volumes, on the tray 5 mm apart (Python)" -- \
+  python3 "$(dirname "$0")/check_3mf.py" "$work/plan-fixture/job.3mf" 2 255 252 5 \
+  --height 200 --stl "$work/plan-fixture/intermediate.stl" "$work/plan-fixture/final.stl"
+check "the plan fixture's report names each splint's label" -- grep -q '"intermediate":{.*"label_text":"INT P1".*"final":{.*"label_text":"FIN P1"' "$work/plan-fixture/report.json"
 
 expect_exit 0 "base for the Boolean" -- "$tool" base "$fixtures/cases/paper_scale.json" -o "$work/base.stl"
 expect_exit 2 "boolean without an operation" -- "$tool" boolean "$work/base.stl" "$work/maxilla.stl" -o "$work/cut.stl"

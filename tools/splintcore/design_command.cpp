@@ -159,8 +159,7 @@ class Design {
   Mesh plan_splints_[2];
   PlanReport plan_report_;
   std::string plan_paths_[2], plan_hashes_[2];
-  std::string job_path_, job_sha256_;       // OUTDIR/job.3mf
-  static constexpr double kJobGapMm = 5.0;  // between the splints on the tray (issue 32)
+  std::string job_path_, job_sha256_;  // OUTDIR/job.3mf
   cli::PreviewInfo plan_previews_[2];
   Status plan_preview_status_[2];
   char plan_preview_errors_[2][512] = {};
@@ -481,38 +480,18 @@ int Design::run_plan() {
   std::printf(
       "wrote %s (both on the tray, %.0f mm apart) and %s; time: design %.3f s, total %.3f s; peak "
       "arena %llu bytes\n",
-      job_path_.c_str(), kJobGapMm, report_path_.c_str(), t_design_ - t_read_, t_end_ - run_.start,
-      static_cast<unsigned long long>(run_.peak_arena()));
+      job_path_.c_str(), kPlanJobGapMm, report_path_.c_str(), t_design_ - t_read_,
+      t_end_ - run_.start, static_cast<unsigned long long>(run_.peak_arena()));
   return kExitOk;
 }
 
-// OUTDIR/job.3mf: both splints on the printer's tray, in a row 5 mm apart (arrange_on_tray),
-// each placed by its build item's transform (the splints' own float32 vertices are written as
-// they are), named INT/FIN and the case id, with the SHA-256 of each splint's STL.
+// OUTDIR/job.3mf: both splints on the printer's tray, 5 mm apart (write_plan_job, design.h),
+// with the SHA-256 of each splint's STL as written.
 Status Design::write_plan_job(const std::string& path) {
-  const PrinterProfile* profile = find_printer_profile(c_.printer);
-  if (profile == nullptr) profile = &eden260_profile();
-  Aabb boxes[2];
-  for (int k = 0; k < 2; ++k) {
-    for (const Vec3& p : plan_splints_[k].vertices) boxes[k].add(p);
-  }
-  Vec3 moves[2];
-  SPLINTCORE_RETURN_IF_ERROR(
-      arrange_on_tray(*profile, Span<const Aabb>(boxes, 2), kJobGapMm, moves));
-  const std::string names[2] = {std::string("INT ") + c_.case_id, std::string("FIN ") + c_.case_id};
-  ThreeMfObject objects[2];
-  for (int k = 0; k < 2; ++k) {
-    objects[k].mesh = &plan_splints_[k];
-    objects[k].name = names[k].c_str();
-    objects[k].sha256 = plan_hashes_[k].c_str();
-    objects[k].translation = moves[k];
-  }
-  ThreeMfOptions options;
-  options.case_id = c_.case_id;
-  options.title = "intermediate and final splints";
+  const char* hashes[2] = {plan_hashes_[0].c_str(), plan_hashes_[1].c_str()};
   std::string bytes;
-  SPLINTCORE_RETURN_IF_ERROR(
-      write_3mf(ctx_, Span<const ThreeMfObject>(objects, 2), options, cli::string_sink(&bytes)));
+  SPLINTCORE_RETURN_IF_ERROR(splintcore::write_plan_job(
+      ctx_, c_, plan_splints_[0], plan_splints_[1], hashes, cli::string_sink(&bytes), nullptr));
   SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(path, bytes));
   job_path_ = path;
   job_sha256_ = hex_sha256(bytes.data(), bytes.size());
