@@ -1028,7 +1028,13 @@ Status read_bytes(Reader& r, uint8_t* out, uint64_t n, const char* what) {
 Status read_fragments(Reader& r, uint8_t* frame, uint64_t cap, uint64_t* size, uint64_t* first,
                       uint32_t* fragments) {
   uint32_t tag = 0, length = 0;
+  const uint64_t table_at = r.offset();
   SPLINTCORE_RETURN_IF_ERROR(read_item_header(r, &tag, &length));
+  if (tag != tag_of(0xFFFE, 0xE000) || length == kUndefinedLength) {
+    return make_error(StatusCode::kParseError,
+                      "Pixel Data differs from the first read (file changed?)")
+        .at_byte(table_at);
+  }
   SPLINTCORE_RETURN_IF_ERROR(r.skip(length, "the basic offset table"));
   *size = 0;
   *fragments = 0;
@@ -1038,7 +1044,7 @@ Status read_fragments(Reader& r, uint8_t* frame, uint64_t cap, uint64_t* size, u
     if (tag == tag_of(0xFFFE, 0xE0DD)) return Status::ok();
     if (tag != tag_of(0xFFFE, 0xE000) || length > cap - *size) {
       return make_error(StatusCode::kParseError,
-                        "Pixel Data fragments differ from the first read (file changed?)")
+                        "Pixel Data differs from the first read (file changed?)")
           .at_byte(at);
     }
     if (*fragments == 0) *first = r.offset();

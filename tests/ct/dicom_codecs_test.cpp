@@ -119,6 +119,7 @@ TEST(CtDicomCodecs, JpegLosslessEqualsItsTwin) {
   expect_twins({"jpeg57_rst.dcm"}, {"raw16_0.dcm"}, "1.2.840.10008.1.2.4.57");    // RSTn
   expect_twins({"jpeg57_pt2.dcm"}, {"raw16_pt2.dcm"}, "1.2.840.10008.1.2.4.57");  // Pt 2
   expect_twins({"jpeg57s12.dcm"}, {"raws12.dcm"}, "1.2.840.10008.1.2.4.57");
+  expect_twins({"jpeg57_8.dcm"}, {"raw8.dcm"}, "1.2.840.10008.1.2.4.57");  // 8 bits, predictor 7
 }
 
 // The fuzz seeds of tests/fuzz/ct_corpus.py (its own small encoders: 12 bits stored, signed,
