@@ -1071,7 +1071,8 @@ Status read_encapsulated_pixels(const SeriesReader& sr, Reader& r, const SliceRe
   Status s =
       sr.first.codec == Codec::kRle
           ? rle_decode_frame(sr.frame, n, rows, columns, sr.first.bits_allocated / 8, samples)
-          : jpeg_lossless_decode(*sr.ctx.arena, sr.frame, n, rows, columns, samples);
+          : jpeg_lossless_decode(*sr.ctx.arena, sr.frame, n, rows, columns, sr.first.bits_allocated,
+                                 samples);
   if (!s.is_ok()) {
     // Offsets in the frame are offsets in the file when it is one fragment.
     if (fragments == 1) return s.at_byte(first + s.byte_offset());

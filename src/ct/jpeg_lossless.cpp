@@ -254,7 +254,7 @@ Status decode_scan(const JpegFrame& f, JpegBits& bits, uint8_t* out) {
 
 // The marker segments and the scan, up to EOI.
 Status decode_stream(JpegFrame& f, const uint8_t* data, size_t size, uint32_t rows,
-                     uint32_t columns, uint8_t* out) {
+                     uint32_t columns, uint32_t max_precision, uint8_t* out) {
   JpegParser p{data, size};
   if (size < 2 || data[0] != 0xFF || data[1] != 0xD8) {
     return jpeg_error(StatusCode::kParseError, "not a JPEG stream (no SOI marker)", 0);
@@ -276,6 +276,12 @@ Status decode_stream(JpegFrame& f, const uint8_t* data, size_t size, uint32_t ro
         s.append(" x ");
         s.append_u64(f.rows);
         return s.append(" differs from the DICOM Columns x Rows");
+      }
+      if (f.precision > max_precision) {
+        Status s = jpeg_error(StatusCode::kParseError, "SOF3 sample precision ", at);
+        s.append_u64(f.precision);
+        s.append(" is over the DICOM Bits Allocated ");
+        return s.append_u64(max_precision);
       }
     } else if (code == 0xC4) {
       SPLINTCORE_RETURN_IF_ERROR(p.huffman(at, &f));
@@ -391,12 +397,12 @@ void JpegBits::align() {
 size_t jpeg_lossless_arena_bytes() { return sizeof(JpegFrame) + Arena::kDefaultAlignment - 1; }
 
 Status jpeg_lossless_decode(Arena& arena, const uint8_t* data, size_t size, uint32_t rows,
-                            uint32_t columns, uint8_t* out) {
+                            uint32_t columns, uint32_t max_precision, uint8_t* out) {
   ArenaScope scope(arena);
   JpegFrame* f = arena.allocate_array<JpegFrame>(1);
   if (f == nullptr) return arena.exhausted_status();
   *f = JpegFrame();
-  return decode_stream(*f, data, size, rows, columns, out);
+  return decode_stream(*f, data, size, rows, columns, max_precision, out);
 }
 
 }  // namespace ct_detail

@@ -49,13 +49,14 @@ size_t jpeg_lossless_arena_bytes();
 
 // Decodes one JPEG lossless image, data[0, size) (SOI ... EOI: SOF3 with one component, DHT,
 // DRI, SOS with predictor 1..7 and point transform, restart markers; APPn, COM and DQT are
-// skipped), which must be `columns` x `rows` samples, into out[0, 2 * rows * columns) as
+// skipped), which must be `columns` x `rows` samples of at most `max_precision` bits (the
+// DICOM Bits Allocated), into out[0, 2 * rows * columns) as
 // 16-bit little-endian values. Errors name what and the byte offset in data: kUnsupported
 // (another JPEG process, more than one component, a height given by DNL), kParseError (bad
 // marker segments, Huffman tables, codes, restart markers), kTruncated (data ends first).
 // Arena: jpeg_lossless_arena_bytes(), returned before it returns.
 Status jpeg_lossless_decode(Arena& arena, const uint8_t* data, size_t size, uint32_t rows,
-                            uint32_t columns, uint8_t* out);
+                            uint32_t columns, uint32_t max_precision, uint8_t* out);
 
 }  // namespace ct_detail
 }  // namespace splintcore

@@ -221,7 +221,7 @@ Status decode(const Bytes& j, Bytes* out = nullptr) {
   Bytes local(8);
   Bytes& o = out != nullptr ? *out : local;
   o.assign(8, 0);
-  return ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 2, o.data());
+  return ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 2, 16, o.data());
 }
 
 TEST(CtDicomJpegErrors, FrameAndTableSegments) {
@@ -286,8 +286,10 @@ TEST(CtDicomJpegErrors, MarkersAndLengths) {
   TestArena t(1 << 12);
   Bytes out(32);
   const Bytes j = jpeg({sof(), dht(), sos(), kScan, kEoi});
-  expect_error(ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 3, out.data()),
+  expect_error(ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 3, 16, out.data()),
                StatusCode::kParseError, "differs");
+  expect_error(ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 2, 7, out.data()),
+               StatusCode::kParseError, "over the DICOM Bits Allocated 7");
 }
 
 TEST(CtDicomJpegErrors, EntropyCodedData) {

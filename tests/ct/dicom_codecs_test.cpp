@@ -169,7 +169,7 @@ TEST(CtDicomCodecs, TruncatedFilesAndFramesAreErrors) {
     for (size_t cut = 0; cut < frame.size(); ++cut) {
       const Status s =
           rle ? ct_detail::rle_decode_frame(frame.data(), cut, 56, 64, bytes, out.data())
-              : ct_detail::jpeg_lossless_decode(t.arena, frame.data(), cut, 56, 64, out.data());
+              : ct_detail::jpeg_lossless_decode(t.arena, frame.data(), cut, 56, 64, 16, out.data());
       // The last byte may be the fragment's pad to an even length.
       if (cut + 1 < frame.size()) {
         ASSERT_FALSE(s.is_ok()) << name << " frame cut at " << cut;
@@ -230,7 +230,7 @@ TEST(CtDicomCodecs, CorruptHuffmanTableIsAClearError) {
   for (size_t i = sos; i < frame.size(); i += 3) {
     Bytes f = frame;
     f[i] = static_cast<uint8_t>(f[i] ^ 0x5A);
-    (void)ct_detail::jpeg_lossless_decode(t.arena, f.data(), f.size(), 56, 64, out.data());
+    (void)ct_detail::jpeg_lossless_decode(t.arena, f.data(), f.size(), 56, 64, 16, out.data());
   }
 }
 
@@ -413,42 +413,42 @@ TEST(CtDicomJpeg, TinyImagesAndMarkerErrors) {
   // 0 101 0 0 + pad 11 = 0101 0011 -> 0x53.
   Bytes j = tiny_jpeg(0xC3, {0x53});
   SPLINTCORE_ASSERT_OK(
-      ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 2, out.data()));
+      ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 2, 16, out.data()));
   EXPECT_EQ(out, (Bytes{128, 0, 129, 0, 128, 0, 128, 0}));
   EXPECT_EQ(t.arena.used(), 0u);
   // The image size must match the DICOM one.
-  Status s = ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 3, 2, out.data());
+  Status s = ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 3, 2, 16, out.data());
   EXPECT_NE(message(s).find("differs from the DICOM"), std::string::npos) << message(s);
   // Lossy and arithmetic processes are refused by name.
   j = tiny_jpeg(0xC0, {0x53});
-  s = ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 2, out.data());
+  s = ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 2, 16, out.data());
   EXPECT_EQ(s.code(), StatusCode::kUnsupported);
   EXPECT_NE(message(s).find("not lossless process 14"), std::string::npos) << message(s);
   EXPECT_EQ(s.byte_offset(), 8u);
   // Predictor 0 is not lossless; extra entropy data after the last sample.
   j = tiny_jpeg(0xC3, {0x53}, 0);
-  s = ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 2, out.data());
+  s = ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 2, 16, out.data());
   EXPECT_NE(message(s).find("predictor"), std::string::npos) << message(s);
   j = tiny_jpeg(0xC3, {0x53, 0x00});
-  s = ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 2, out.data());
+  s = ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 2, 16, out.data());
   EXPECT_NE(message(s).find("continues past the last sample"), std::string::npos) << message(s);
   // Not a JPEG stream; a restart marker where none belongs.
   const Bytes junk = {0x00, 0x01};
-  s = ct_detail::jpeg_lossless_decode(t.arena, junk.data(), junk.size(), 2, 2, out.data());
+  s = ct_detail::jpeg_lossless_decode(t.arena, junk.data(), junk.size(), 2, 2, 16, out.data());
   EXPECT_NE(message(s).find("no SOI"), std::string::npos) << message(s);
   j = tiny_jpeg(0xC3, {0x53});
   j[2] = 0xFF;
   j[3] = 0xD0;
-  s = ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 2, out.data());
+  s = ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 2, 16, out.data());
   EXPECT_NE(message(s).find("unexpected marker"), std::string::npos) << message(s);
   // No room for the decoder's state.
   TestArena small(ct_detail::jpeg_lossless_arena_bytes() - 16);
   j = tiny_jpeg(0xC3, {0x53});
-  s = ct_detail::jpeg_lossless_decode(small.arena, j.data(), j.size(), 2, 2, out.data());
+  s = ct_detail::jpeg_lossless_decode(small.arena, j.data(), j.size(), 2, 2, 16, out.data());
   EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << message(s);
   TestArena exact(ct_detail::jpeg_lossless_arena_bytes());
   SPLINTCORE_EXPECT_OK(
-      ct_detail::jpeg_lossless_decode(exact.arena, j.data(), j.size(), 2, 2, out.data()));
+      ct_detail::jpeg_lossless_decode(exact.arena, j.data(), j.size(), 2, 2, 16, out.data()));
 }
 
 }  // namespace
