@@ -149,7 +149,7 @@ struct Header {
   bool have_pixels = false;
   // Encapsulated pixel data (PS3.5 A.4): the fragments after the basic offset table.
   uint32_t fragments = 0;
-  uint64_t fragment_bytes = 0;  // their total length (saturating)
+  uint64_t fragment_bytes = 0;  // their total length (< max_dimension x 4 GiB: no overflow)
 };
 
 bool encapsulated(Codec codec) { return codec == Codec::kRle || codec == Codec::kJpegLossless; }

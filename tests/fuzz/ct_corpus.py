@@ -330,3 +330,17 @@ write("ct_dicom", "series2_rle.bin",
       SEPARATOR.join(encapsulated(dicom(z=z, k=k, rows=3, cols=2), b"1.2.840.10008.1.2.5",
                                   rle_frame(pixels_of(dicom(z=z, k=k, rows=3, cols=2)), 16, 2))
                      for k, z in enumerate([0.0, 1.5])))
+
+
+# ---- The decoders directly (tests/fuzz/ct_codecs_fuzz.cpp): mode, rows, columns, frame.
+def codec_seed(name, mode, rows, cols, frame):
+    write("ct_codecs", name, bytes([mode, rows - 1, cols - 1]) + frame)
+
+
+os.makedirs(os.path.join(ROOT, "ct_codecs"), exist_ok=True)
+codec_seed("rle16.bin", 0, 4, 5, rle_frame(px16, 16, 5))
+codec_seed("rle8.bin", 2, 3, 3, rle_frame(pixels_of(plain8), 8, 3))
+for p in (1, 5, 7):
+    codec_seed("jpeg_p%d.bin" % p, 1 | (14 << 2), 4, 5, jpeg_lossless(samples16, 4, 5, 12, p))
+codec_seed("jpeg_restart.bin", 1 | (14 << 2), 4, 5,
+           jpeg_lossless(samples16, 4, 5, 12, 2, restart_lines=2))
