@@ -94,6 +94,10 @@ TEST(CtDicomEncapsulated, ItemErrors) {
   expect_error(read({with_pixel_data(undefined(items))}), StatusCode::kParseError,
                "basic offset table");
   items.clear();
+  item(&items, 0xE000, 0xFFFFFFFF);  // a table of undefined length
+  expect_error(read({with_pixel_data(undefined(items))}), StatusCode::kParseError,
+               "basic offset table");
+  items.clear();
   item(&items, 0xE000, 0);
   item(&items, 0xE00D, 0);  // not a fragment
   expect_error(read({with_pixel_data(undefined(items))}), StatusCode::kParseError,
@@ -137,6 +141,8 @@ TEST(CtDicomEncapsulated, SliceInAnotherSyntaxAndErrorsInSeveralFragments) {
   // An RLE slice in a series of uncompressed ones.
   Status s = read({fixture("raw16_0.dcm"), fixture("rle16_1.dcm")});
   expect_error(s, StatusCode::kUnsupported, "transfer syntax");
+  s = read({fixture("raw16_0.dcm"), fixture("big16_1.dcm")});  // another byte order
+  expect_error(s, StatusCode::kUnsupported, "transfer syntax");
   // A bad Huffman table in a frame of five fragments: the offset is in the fragments.
   Bytes f = fixture("jpeg57_frag.dcm");
   size_t p = 0;
@@ -153,20 +159,10 @@ struct ChangingFile {
   MemorySource current{};
 };
 
-TEST(CtDicomEncapsulated, FileChangedBetweenPasses) {
+Status read_changed(const Bytes& first, const Bytes& second) {
   ChangingFile c;
-  c.first = fixture("rle16_0.dcm");
-  c.second = c.first;  // its fragment 2 bytes longer
-  const uint8_t item_tag[] = {0xFE, 0xFF, 0x00, 0xE0};
-  size_t p = 0;
-  for (int found = 0; found < 2; ++p) {
-    if (std::memcmp(&c.second[p], item_tag, 4) == 0) ++found;
-  }
-  --p;  // the fragment's item
-  const uint32_t length = uint32_t{c.second[p + 4]} | (uint32_t{c.second[p + 5]} << 8);
-  c.second[p + 4] = static_cast<uint8_t>(length + 2);
-  c.second[p + 5] = static_cast<uint8_t>((length + 2) >> 8);
-  c.second.insert(c.second.begin() + static_cast<std::ptrdiff_t>(p + 8 + length), {0x80, 0x80});
+  c.first = first;
+  c.second = second;
   CtSeries series;
   series.count = 1;
   series.user = &c;
@@ -180,8 +176,35 @@ TEST(CtDicomEncapsulated, FileChangedBetweenPasses) {
   TestArena t(1 << 20);
   Context ctx(&t.arena);
   CtVolume volume;
-  const Status s = read_dicom_series(ctx, series, CtReadOptions(), &volume, nullptr);
-  expect_error(s, StatusCode::kParseError, "file changed?");
+  return read_dicom_series(ctx, series, CtReadOptions(), &volume, nullptr);
+}
+
+TEST(CtDicomEncapsulated, FileChangedBetweenPasses) {
+  const Bytes first = fixture("rle16_0.dcm");
+  const uint8_t item_tag[] = {0xFE, 0xFF, 0x00, 0xE0};
+  size_t table = 0;
+  while (std::memcmp(&first[table], item_tag, 4) != 0) ++table;
+  size_t fragment = table + 1;
+  while (std::memcmp(&first[fragment], item_tag, 4) != 0) ++fragment;
+  const uint32_t length = uint32_t{first[fragment + 4]} | (uint32_t{first[fragment + 5]} << 8);
+  // The fragment 2 bytes longer than the buffer pass 1 sized.
+  Bytes longer = first;
+  longer[fragment + 4] = static_cast<uint8_t>(length + 2);
+  longer[fragment + 5] = static_cast<uint8_t>((length + 2) >> 8);
+  longer.insert(longer.begin() + static_cast<std::ptrdiff_t>(fragment + 8 + length), {0x80, 0x80});
+  expect_error(read_changed(first, longer), StatusCode::kParseError, "file changed?");
+  // The offset table, then the fragment, no longer items; the offset table of undefined length.
+  for (size_t at : {table + 2, fragment + 2}) {
+    Bytes b = first;
+    b[at] = 0x0D;
+    expect_error(read_changed(first, b), StatusCode::kParseError, "file changed?");
+  }
+  Bytes undefined_table = first;
+  for (size_t i = 4; i < 8; ++i) undefined_table[table + i] = 0xFF;
+  expect_error(read_changed(first, undefined_table), StatusCode::kParseError, "file changed?");
+  // The file cut inside its fragment.
+  const Bytes cut(first.begin(), first.begin() + static_cast<std::ptrdiff_t>(fragment + 20));
+  expect_error(read_changed(first, cut), StatusCode::kTruncated, "a Pixel Data fragment");
 }
 
 // ---- JPEG marker segments -------------------------------------------------------------------
