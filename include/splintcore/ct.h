@@ -197,7 +197,7 @@ Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFile
 // 1.2.840.10008.1.2.5 (RLE Lossless, 8 or 16 bits) or 1.2.840.10008.1.2.4.57 / .70 (JPEG
 // lossless process 14, one component, 2..16 bits): pass 1 reads each file whole to sum its
 // fragments; pass 2 reads a file's fragments into one buffer of the largest file's total
-// (from the arena, as are the JPEG decoder's tables, under 3 KiB) and decodes it into the
+// (from the arena, as are the JPEG decoder's tables, about 6 KiB) and decodes it into the
 // slice; errors name the byte offset in the file (in the fragments when there are several).
 // Compressed data may be at most 8 bytes a sample + 64 KiB (kLimitExceeded). Others:
 // kUnsupported "unsupported transfer syntax <UID> (<name>)". Sequences and items of defined or

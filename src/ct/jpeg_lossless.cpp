@@ -223,8 +223,10 @@ Status decode_scan(const JpegFrame& f, JpegBits& bits, uint8_t* out) {
         px = predict(f.predictor, a, b, c);
       }
       uint32_t category = 0;
-      Status s = bits.decode(table, &category);
-      if (!s.is_ok()) return s;
+      if (!bits.decode_fast(table, &category)) {
+        Status s = bits.decode(table, &category);
+        if (!s.is_ok()) return s;
+      }
       int32_t diff = 0;
       if (category == 16) {
         diff = 32768;
@@ -339,6 +341,17 @@ Status jpeg_build_huffman(const uint8_t counts[16], const uint8_t* symbols, size
                         " is not a lossless difference category (0..16)");
     }
     table->values[i] = symbols[i];
+  }
+  // The look-up table: each code of up to kJpegFastBits bits fills the entries it prefixes.
+  std::memset(table->fast, 0, sizeof(table->fast));
+  for (uint32_t l = 1; l <= kJpegFastBits; ++l) {
+    for (int32_t c = table->min_code[l]; c <= table->max_code[l]; ++c) {
+      const uint32_t symbol = table->values[table->value_index[l] + c - table->min_code[l]];
+      const uint32_t first = static_cast<uint32_t>(c) << (kJpegFastBits - l);
+      for (uint32_t e = 0; e < (1u << (kJpegFastBits - l)); ++e) {
+        table->fast[first + e] = static_cast<uint16_t>((l << 8) | symbol);
+      }
+    }
   }
   table->defined = true;
   return Status::ok();

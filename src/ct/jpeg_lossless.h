@@ -10,11 +10,14 @@ namespace ct_detail {
 
 // One Huffman table of T.81 Annex C (BITS and HUFFVAL) ready for decoding (F.2.2.3: MAXCODE,
 // MINCODE, VALPTR per code length).
+constexpr uint32_t kJpegFastBits = 9;  // codes up to this long decode with one table look-up
 struct JpegHuffman {
   int32_t max_code[17];  // per length 1..16; -1: no code of that length
   int32_t min_code[17];
   int32_t value_index[17];
   uint8_t values[256];
+  // The next kJpegFastBits bits -> (code length << 8) | symbol, 0 when the code is longer.
+  uint16_t fast[1u << kJpegFastBits];
   bool defined = false;
 };
 
@@ -40,6 +43,18 @@ struct JpegBits {
   bool bits(uint32_t n, uint32_t* out);
   // The next Huffman symbol; kParseError if no code matches, kTruncated at a marker.
   Status decode(const JpegHuffman& table, uint32_t* symbol);
+  // decode() for a code of at most kJpegFastBits bits with as many bits held (the common
+  // case); false otherwise, nothing consumed (then decode() gives the symbol or the error).
+  bool decode_fast(const JpegHuffman& table, uint32_t* symbol) {
+    if (count < 16) refill();
+    if (count < kJpegFastBits) return false;
+    const uint32_t entry = table.fast[static_cast<uint32_t>(buffer >> (count - kJpegFastBits)) &
+                                      ((1u << kJpegFastBits) - 1)];
+    if (entry == 0) return false;
+    count -= entry >> 8;
+    *symbol = entry & 0xFF;
+    return true;
+  }
   // Drops the bits of the current byte and moves to the marker ahead (restart, end).
   void align();
 };

@@ -240,7 +240,7 @@ const Bytes kEoi = {0xFF, 0xD9};
 const Bytes kScan = {0x53};  // 128 129 / 128 128 with predictor 1
 
 Status decode(const Bytes& j, Bytes* out = nullptr) {
-  TestArena t(1 << 12);
+  TestArena t(1 << 14);
   Bytes local(8);
   Bytes& o = out != nullptr ? *out : local;
   o.assign(8, 0);
@@ -306,7 +306,7 @@ TEST(CtDicomJpegErrors, MarkersAndLengths) {
   // Fill bytes before a marker are allowed.
   SPLINTCORE_EXPECT_OK(decode(jpeg({sof(), {0xFF}, dht(), sos(), kScan, {0xFF}, kEoi})));
   // The image size must be the DICOM one.
-  TestArena t(1 << 12);
+  TestArena t(1 << 14);
   Bytes out(32);
   const Bytes j = jpeg({sof(), dht(), sos(), kScan, kEoi});
   expect_error(ct_detail::jpeg_lossless_decode(t.arena, j.data(), j.size(), 2, 3, 16, out.data()),

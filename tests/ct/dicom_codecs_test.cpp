@@ -407,7 +407,7 @@ Bytes tiny_jpeg(uint8_t sof, const Bytes& entropy, uint8_t predictor = 1) {
 }
 
 TEST(CtDicomJpeg, TinyImagesAndMarkerErrors) {
-  TestArena t(1 << 12);
+  TestArena t(1 << 14);
   Bytes out(8);
   // Sample 0: 128 + 0; sample 1: Ra + 1 (10 1); row 1: Rb + 0, then Ra + 0:
   // 0 101 0 0 + pad 11 = 0101 0011 -> 0x53.

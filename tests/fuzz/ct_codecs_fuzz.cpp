@@ -14,7 +14,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace splintcore;
   if (size < 3) return 0;
   static uint8_t out[2 * 64 * 64];
-  alignas(16) static unsigned char memory[8192];
+  alignas(16) static unsigned char memory[16384];
   const uint32_t mode = data[0];
   const uint32_t rows = 1 + data[1] % 64u, columns = 1 + data[2] % 64u;
   const uint8_t* frame = data + 3;
