@@ -198,29 +198,33 @@ Status restart(JpegBits& bits, uint32_t index) {
 }
 
 // The scan's samples (H.1.2, H.2): predicted, plus the Huffman-coded differences.
-Status decode_scan(const JpegFrame& f, JpegBits& bits, uint8_t* out) {
+Status decode_scan(const JpegFrame& f, JpegBits& stream, uint8_t* out) {
+  // Locals, not the frame's fields or the caller's reader: `out` is bytes, and a store through
+  // it could alias them, forcing a reload or store of each per sample.
+  JpegBits bits = stream;
   const JpegHuffman& table = f.tables[f.table];
-  const uint32_t columns = f.columns, pt = f.point_transform;
+  const uint32_t rows = f.rows, columns = f.columns, pt = f.point_transform;
+  const uint32_t predictor = f.predictor, interval = f.restart;
   const int32_t initial = int32_t{1} << (f.precision - pt - 1);
-  uint32_t left_in_interval = f.restart, restarts = 0, interval_row = 0;
-  for (uint32_t y = 0; y < f.rows; ++y) {
-    if (f.restart != 0 && left_in_interval == 0) {
+  uint32_t left_in_interval = interval, restarts = 0, interval_row = 0;
+  for (uint32_t y = 0; y < rows; ++y) {
+    if (interval != 0 && left_in_interval == 0) {
       SPLINTCORE_RETURN_IF_ERROR(restart(bits, restarts++));
-      left_in_interval = f.restart;
+      left_in_interval = interval;
       interval_row = y;
     }
     const uint64_t row = uint64_t{y} * columns;
+    int32_t a = 0;  // the sample to the left
     for (uint32_t x = 0; x < columns; ++x) {
       int32_t px;
       if (y == interval_row) {
-        px = x == 0 ? initial : static_cast<int32_t>(load16(out, row + x - 1) >> pt);
+        px = x == 0 ? initial : a;
       } else if (x == 0) {
         px = static_cast<int32_t>(load16(out, row - columns) >> pt);
       } else {
-        const int32_t a = static_cast<int32_t>(load16(out, row + x - 1) >> pt);
         const int32_t b = static_cast<int32_t>(load16(out, row - columns + x) >> pt);
         const int32_t c = static_cast<int32_t>(load16(out, row - columns + x - 1) >> pt);
-        px = predict(f.predictor, a, b, c);
+        px = predict(predictor, a, b, c);
       }
       uint32_t category = 0;
       if (!bits.decode_fast(table, &category)) {
@@ -240,17 +244,20 @@ Status decode_scan(const JpegFrame& f, JpegBits& bits, uint8_t* out) {
                                           : static_cast<int32_t>(v);
       }
       const uint32_t value = static_cast<uint32_t>(px + diff) & 0xFFFFu;
+      // The neighbours are read back as stored (shifted up, cut to 16 bits, then down).
       const uint32_t sample = (value << pt) & 0xFFFFu;
+      a = static_cast<int32_t>(sample >> pt);
       out[2 * (row + x)] = static_cast<uint8_t>(sample);
       out[2 * (row + x) + 1] = static_cast<uint8_t>(sample >> 8);
-      if (f.restart != 0) --left_in_interval;
     }
+    if (interval != 0) left_in_interval -= columns;  // intervals are whole lines
   }
   if (bits.count >= 8) {
     return jpeg_error(StatusCode::kParseError, "entropy-coded data continues past the last sample",
                       bits.pos);
   }
   bits.align();
+  stream = bits;
   return Status::ok();
 }
 
