@@ -186,12 +186,21 @@ Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFile
                       const CtReadOptions& options, CtVolume* out, CtInfo* info);
 
 // A DICOM series, one single-frame CT image per file: 128-byte preamble, "DICM", group 0002 in
-// explicit VR little endian; transfer syntax 1.2.840.10008.1.2, 1.2.840.10008.1.2.1 or
+// explicit VR little endian; transfer syntax 1.2.840.10008.1.2, 1.2.840.10008.1.2.1,
+// 1.2.840.10008.1.2.2 (explicit VR big endian: the data set and 16-bit pixels big endian) or
 // 1.2.840.10008.1.2.1.99 (deflated explicit VR little endian: the data set after the file meta
 // is inflated as it is read, twice per file (header, then pixels), an inflater of
 // inflate_state_bytes() in the arena each time; offsets in errors about its elements are
-// offsets in the inflated data set, errors of the stream itself offsets in the file); others:
-// kUnsupported "unsupported transfer syntax <UID>". Sequences and items of defined or
+// offsets in the inflated data set, errors of the stream itself offsets in the file); or
+// encapsulated (PS3.5 A.4: Pixel Data of undefined length, a basic offset table item, fragment
+// items, the sequence delimiter; all fragments of a file are its one frame) in
+// 1.2.840.10008.1.2.5 (RLE Lossless, 8 or 16 bits) or 1.2.840.10008.1.2.4.57 / .70 (JPEG
+// lossless process 14, one component, 2..16 bits): pass 1 reads each file whole to sum its
+// fragments; pass 2 reads a file's fragments into one buffer of the largest file's total
+// (from the arena, as are the JPEG decoder's tables, about 6 KiB) and decodes it into the
+// slice; errors name the byte offset in the file (in the fragments when there are several).
+// Compressed data may be at most 8 bytes a sample + 64 KiB (kLimitExceeded). Others:
+// kUnsupported "unsupported transfer syntax <UID> (<name>)". Sequences and items of defined or
 // undefined length are skipped (nesting bounded at 32, iteratively); only top-level elements
 // count. Slices are ordered by Image Position projected on the normal row x column; spacing
 // between slices must be uniform (CtReadOptions), positions distinct and along the normal (no

@@ -9,6 +9,8 @@
 // Two passes: headers of every file (up to Pixel Data, in a fixed stack window), then the
 // slices ordered by their position along the normal, pixels read into place.
 #include "ct/ct_common.h"
+#include "ct/dicom_rle.h"
+#include "ct/jpeg_lossless.h"
 
 #include <cmath>
 
@@ -46,6 +48,51 @@ inline uint16_t u16(const uint8_t* p) { return static_cast<uint16_t>(p[0] | (p[1
 inline uint32_t u32(const uint8_t* p) {
   return uint32_t{p[0]} | (uint32_t{p[1]} << 8) | (uint32_t{p[2]} << 16) | (uint32_t{p[3]} << 24);
 }
+// The data set's byte order (explicit VR big endian, 1.2.840.10008.1.2.2, is the one big).
+inline uint16_t u16(const uint8_t* p, bool big) {
+  return big ? static_cast<uint16_t>((p[0] << 8) | p[1]) : u16(p);
+}
+inline uint32_t u32(const uint8_t* p, bool big) {
+  return big ? (uint32_t{p[0]} << 24) | (uint32_t{p[1]} << 16) | (uint32_t{p[2]} << 8) | p[3]
+             : u32(p);
+}
+
+// How a transfer syntax stores the pixels.
+enum class Codec : uint8_t { kNative, kDeflated, kRle, kJpegLossless };
+
+// PS3.6 table A-1: the transfer syntaxes this reader knows, read or refused by name.
+struct Syntax {
+  const char* uid;
+  const char* name;
+  Codec codec;
+  bool implicit;
+  bool big_endian;
+  bool supported;
+};
+constexpr Syntax kSyntaxes[] = {
+    {"1.2.840.10008.1.2", "Implicit VR Little Endian", Codec::kNative, true, false, true},
+    {"1.2.840.10008.1.2.1", "Explicit VR Little Endian", Codec::kNative, false, false, true},
+    {"1.2.840.10008.1.2.1.99", "Deflated Explicit VR Little Endian", Codec::kDeflated, false, false,
+     true},
+    {"1.2.840.10008.1.2.2", "Explicit VR Big Endian", Codec::kNative, false, true, true},
+    {"1.2.840.10008.1.2.5", "RLE Lossless", Codec::kRle, false, false, true},
+    {"1.2.840.10008.1.2.4.57", "JPEG Lossless, Process 14", Codec::kJpegLossless, false, false,
+     true},
+    {"1.2.840.10008.1.2.4.70", "JPEG Lossless, Process 14, Selection Value 1", Codec::kJpegLossless,
+     false, false, true},
+    {"1.2.840.10008.1.2.4.50", "JPEG Baseline (lossy)", Codec::kNative, false, false, false},
+    {"1.2.840.10008.1.2.4.51", "JPEG Extended (lossy)", Codec::kNative, false, false, false},
+    {"1.2.840.10008.1.2.4.80", "JPEG-LS Lossless", Codec::kNative, false, false, false},
+    {"1.2.840.10008.1.2.4.81", "JPEG-LS Near-Lossless", Codec::kNative, false, false, false},
+    {"1.2.840.10008.1.2.4.90", "JPEG 2000 Lossless", Codec::kNative, false, false, false},
+    {"1.2.840.10008.1.2.4.91", "JPEG 2000", Codec::kNative, false, false, false},
+    {"1.2.840.10008.1.2.4.201", "HTJ2K Lossless", Codec::kNative, false, false, false},
+    {"1.2.840.10008.1.2.4.202", "HTJ2K Lossless RPCL", Codec::kNative, false, false, false},
+    {"1.2.840.10008.1.2.4.203", "HTJ2K", Codec::kNative, false, false, false},
+};
+constexpr const char* kSupportedSyntaxes =
+    "; read are implicit and explicit VR little endian, deflated, explicit VR big endian, "
+    "RLE Lossless, JPEG Lossless process 14";
 
 // PS3.5 table 7.1-1: VRs whose explicit encoding has 2 reserved bytes and a 32-bit length.
 bool long_vr(uint8_t a, uint8_t b) {
@@ -80,7 +127,9 @@ Status tag_error(StatusCode code, uint32_t tag, const char* name, const char* wh
 // What one file's header says.
 struct Header {
   bool implicit = false;
-  bool deflated = false;  // 1.2.840.10008.1.2.1.99: the data set is a raw deflate stream
+  bool deflated = false;    // 1.2.840.10008.1.2.1.99: the data set is a raw deflate stream
+  bool big_endian = false;  // 1.2.840.10008.1.2.2: the data set (not group 0002) big endian
+  Codec codec = Codec::kNative;
   char transfer_syntax[65] = {};
   char photometric[17] = {};
   uint32_t rows = 0, columns = 0;
@@ -95,10 +144,15 @@ struct Header {
   double position[3] = {0, 0, 0};
   double orientation[6] = {0, 0, 0, 0, 0, 0};
   double slice_thickness = 0, spacing_between = 0;
-  uint64_t pixel_offset = 0;
+  uint64_t pixel_offset = 0;  // native: the pixels; encapsulated: the basic offset table item
   uint64_t pixel_length = 0;
   bool have_pixels = false;
+  // Encapsulated pixel data (PS3.5 A.4): the fragments after the basic offset table.
+  uint32_t fragments = 0;
+  uint64_t fragment_bytes = 0;  // their total length (< max_dimension x 4 GiB: no overflow)
 };
+
+bool encapsulated(Codec codec) { return codec == Codec::kRle || codec == Codec::kJpegLossless; }
 
 // One slice kept between the passes.
 struct SliceRecord {
@@ -123,7 +177,7 @@ void copy_string(char* out, size_t cap, const uint8_t* v, uint32_t n) {
 Status take_value(Header* h, uint32_t tag, const uint8_t* v, uint32_t n, uint64_t at) {
   auto us = [&](const char* name, uint32_t* out, bool* have) {
     if (n != 2) return tag_error(StatusCode::kParseError, tag, name, "expected 2 bytes (US)", at);
-    *out = u16(v);
+    *out = u16(v, h->big_endian);
     if (have != nullptr) *have = true;
     return Status::ok();
   };
@@ -263,19 +317,20 @@ Status read_file_meta(Reader& r, Header* h) {
     return make_error(StatusCode::kParseError, "missing (0002,0010) Transfer Syntax UID")
         .at_byte(r.offset());
   }
-  if (std::strcmp(h->transfer_syntax, "1.2.840.10008.1.2") == 0) {
-    h->implicit = true;
-  } else if (std::strcmp(h->transfer_syntax, "1.2.840.10008.1.2.1") == 0) {
-    h->implicit = false;
-  } else if (std::strcmp(h->transfer_syntax, "1.2.840.10008.1.2.1.99") == 0) {
-    h->implicit = false;
-    h->deflated = true;
-  } else {
-    return make_error(StatusCode::kUnsupported, "unsupported transfer syntax ", h->transfer_syntax,
-                      " (only 1.2.840.10008.1.2, 1.2.840.10008.1.2.1 and 1.2.840.10008.1.2.1.99: "
-                      "uncompressed or deflated little endian)");
+  for (const Syntax& syntax : kSyntaxes) {
+    if (std::strcmp(h->transfer_syntax, syntax.uid) != 0) continue;
+    if (!syntax.supported) {
+      return make_error(StatusCode::kUnsupported, "unsupported transfer syntax ", syntax.uid, " (",
+                        syntax.name, ")", kSupportedSyntaxes);
+    }
+    h->implicit = syntax.implicit;
+    h->big_endian = syntax.big_endian;
+    h->codec = syntax.codec;
+    h->deflated = syntax.codec == Codec::kDeflated;
+    return Status::ok();
   }
-  return Status::ok();
+  return make_error(StatusCode::kUnsupported, "unsupported transfer syntax ", h->transfer_syntax,
+                    " (unknown)", kSupportedSyntaxes);
 }
 
 // A data element's value length and VR (explicit VR only: implicit VR says neither SQ nor UN).
@@ -287,9 +342,9 @@ struct ElementHeader {
 
 // Reads the VR (explicit) and the length following the tag at p, and moves past them.
 Status read_element_header(Reader& r, const uint8_t* p, uint32_t tag, uint64_t at, bool implicit,
-                           ElementHeader* e) {
+                           bool big, ElementHeader* e) {
   if (implicit) {
-    e->length = u32(p + 4);
+    e->length = u32(p + 4, big);
     r.pos += 8;
     return Status::ok();
   }
@@ -301,13 +356,66 @@ Status read_element_header(Reader& r, const uint8_t* p, uint32_t tag, uint64_t a
   e->is_un = a == 'U' && b == 'N';
   if (long_vr(a, b)) {
     if (r.available() < 12) return truncated(r, "a data element header");
-    e->length = u32(p + 8);
+    e->length = u32(p + 8, big);
     r.pos += 12;
   } else {
-    e->length = u16(p + 6);
+    e->length = u16(p + 6, big);
     r.pos += 8;
   }
   return Status::ok();
+}
+
+// The item header (tag and 32-bit length, PS3.5 A.4) at the reader: kTruncated if it is cut.
+Status read_item_header(Reader& r, uint32_t* tag, uint32_t* length) {
+  SPLINTCORE_RETURN_IF_ERROR(r.fill(8));
+  if (r.available() < 8) return truncated(r, "encapsulated Pixel Data (an item header)");
+  const uint8_t* p = r.buf + r.pos;
+  *tag = tag_of(u16(p), u16(p + 2));
+  *length = u32(p + 4);
+  r.pos += 8;
+  return Status::ok();
+}
+
+// Encapsulated Pixel Data (PS3.5 A.4), the reader just after its element header: the basic
+// offset table (an item whose length is a multiple of 4, skipped: one frame per file), then
+// fragment items up to the sequence delimiter. Counts and sums the fragments.
+Status scan_fragments(Reader& r, const CtReadOptions& options, Header* h) {
+  h->pixel_offset = r.offset();
+  h->have_pixels = true;
+  uint32_t tag = 0, length = 0;
+  uint64_t at = r.offset();
+  SPLINTCORE_RETURN_IF_ERROR(read_item_header(r, &tag, &length));
+  if (tag != tag_of(0xFFFE, 0xE000) || length == kUndefinedLength || length % 4 != 0) {
+    return tag_error(StatusCode::kParseError, tag, "Pixel Data",
+                     "expected the basic offset table: an Item (FFFE,E000) whose length is a "
+                     "multiple of 4",
+                     at);
+  }
+  SPLINTCORE_RETURN_IF_ERROR(r.skip(length, "the basic offset table"));
+  for (;;) {
+    at = r.offset();
+    SPLINTCORE_RETURN_IF_ERROR(read_item_header(r, &tag, &length));
+    if (tag == tag_of(0xFFFE, 0xE0DD)) {
+      if (length != 0) {
+        return tag_error(StatusCode::kParseError, tag, "Sequence Delimitation", "length not 0", at);
+      }
+      return Status::ok();
+    }
+    if (tag != tag_of(0xFFFE, 0xE000) || length == kUndefinedLength) {
+      return tag_error(StatusCode::kParseError, tag, "Pixel Data",
+                       "expected a fragment Item (FFFE,E000) of defined length or the Sequence "
+                       "Delimitation (FFFE,E0DD)",
+                       at);
+    }
+    if (h->fragments == options.max_dimension) {
+      return make_error(StatusCode::kLimitExceeded, "Pixel Data has more than ",
+                        options.max_dimension, " fragments (CtReadOptions::max_dimension)")
+          .at_byte(at);
+    }
+    ++h->fragments;
+    h->fragment_bytes += length;  // at most 2^32 a fragment times 2^32 fragments: no overflow
+    SPLINTCORE_RETURN_IF_ERROR(r.skip(length, "a Pixel Data fragment"));
+  }
 }
 
 // The data set, up to Pixel Data. Containers of undefined length are tracked on a bounded
@@ -332,17 +440,25 @@ class DataSetWalk {
       if (r_.available() < 8) return truncated(r_, "a data element header");
       const uint8_t* p = r_.buf + r_.pos;
       const uint64_t at = r_.offset();
-      const uint32_t group = u16(p);
-      const uint32_t tag = tag_of(group, u16(p + 2));
+      const bool big = h_->big_endian;
+      const uint32_t group = u16(p, big);
+      const uint32_t tag = tag_of(group, u16(p + 2, big));
       if (group == 0xFFFE) {
-        const uint32_t length = u32(p + 4);
+        const uint32_t length = u32(p + 4, big);
         r_.pos += 8;
         SPLINTCORE_RETURN_IF_ERROR(delimiter(tag, length, at));
         continue;
       }
       const bool implicit = depth_ > 0 ? stack_[depth_ - 1].implicit : h_->implicit;
       ElementHeader e;
-      SPLINTCORE_RETURN_IF_ERROR(read_element_header(r_, p, tag, at, implicit, &e));
+      SPLINTCORE_RETURN_IF_ERROR(read_element_header(r_, p, tag, at, implicit, big, &e));
+      if (depth_ == 0 && tag == kPixelData && encapsulated(h_->codec)) {
+        if (e.length != kUndefinedLength) {
+          return tag_error(StatusCode::kParseError, tag, "Pixel Data",
+                           "of defined length in an encapsulated (compressed) transfer syntax", at);
+        }
+        return scan_fragments(r_, options_, h_);
+      }
       if (e.length == kUndefinedLength) {
         SPLINTCORE_RETURN_IF_ERROR(open_sequence(tag, implicit, e, at));
         continue;
@@ -404,7 +520,7 @@ class DataSetWalk {
   Status open_sequence(uint32_t tag, bool implicit, const ElementHeader& e, uint64_t at) {
     if (depth_ == 0 && tag == kPixelData) {
       return tag_error(StatusCode::kUnsupported, tag, "Pixel Data",
-                       "encapsulated (compressed) pixel data is not supported", at);
+                       "encapsulated (compressed) pixel data in a native transfer syntax", at);
     }
     if (!implicit && !e.is_sq && !e.is_un) {
       return tag_error(StatusCode::kParseError, tag, "element",
@@ -480,6 +596,23 @@ Status parse_header(Reader& r, const CtReadOptions& options, Arena& arena, Heade
   return s;
 }
 
+// Encapsulated pixels: at least one fragment, and not absurdly more compressed bytes than the
+// raw ones (a bound on the compressed frame buffer: 8 bytes a sample and 64 KiB covers the
+// worst JPEG lossless code, 32 bits a sample, with every byte stuffed).
+Status check_fragments(const Header& h, uint64_t raw_bytes) {
+  if (h.fragments == 0) {
+    return make_error(StatusCode::kParseError, "encapsulated Pixel Data has no fragment")
+        .at_byte(h.pixel_offset);
+  }
+  const uint64_t limit = raw_bytes * 8 + 65536;
+  if (h.fragment_bytes > limit) {
+    return make_error(StatusCode::kLimitExceeded, "encapsulated Pixel Data has ", h.fragment_bytes,
+                      " bytes of fragments, more than 8 x the raw ", raw_bytes, " bytes + 64 KiB")
+        .at_byte(h.pixel_offset);
+  }
+  return Status::ok();
+}
+
 // Checks what a slice needs and that its pixels fit the file (not known for a deflated one).
 Status check_header(const Header& h, const ByteSource& file) {
   ByteSource source = file;
@@ -534,6 +667,7 @@ Status check_header(const Header& h, const ByteSource& file) {
                       ": must be finite and non-zero");
   }
   const uint64_t needed = uint64_t{h.rows} * h.columns * (h.bits_allocated / 8);
+  if (encapsulated(h.codec)) return check_fragments(h, needed);
   if (h.pixel_length != needed && !(needed % 2 == 1 && h.pixel_length == needed + 1)) {
     return make_error(StatusCode::kParseError, "Pixel Data has ", h.pixel_length,
                       " bytes; rows x columns x bytes per pixel is ", needed)
@@ -584,7 +718,9 @@ uint32_t bits_stored(const Header& h) {
 // What of a slice's header differs from the series' file 0 (first), or nullptr: all slices
 // share size, pixel format, pixel spacing and orientation (these two within `tolerance`).
 const char* difference(const Header& h, const Header& first, double tolerance) {
-  if (h.deflated != first.deflated) return "transfer syntax (deflated or not)";
+  if (h.codec != first.codec || h.big_endian != first.big_endian) {
+    return "transfer syntax (deflated, compressed, byte order)";
+  }
   if (h.rows != first.rows || h.columns != first.columns) return "image size (Rows, Columns)";
   if (h.bits_allocated != first.bits_allocated || bits_stored(h) != bits_stored(first) ||
       h.pixel_representation != first.pixel_representation) {
@@ -625,6 +761,9 @@ struct SeriesReader {
   KeyIndex* scratch = nullptr;
   uint8_t* buffer = nullptr;  // the read chunk
   size_t chunk = 0;
+  // Encapsulated pixels: the largest slice's fragments (pass 1), and their buffer.
+  uint64_t max_fragment_bytes = 0;
+  uint8_t* frame = nullptr;
   // The frame (from file 0's orientation), origin and spacing.
   Vec3 row, column, normal;
   Vec3 origin, spacing;
@@ -676,6 +815,7 @@ struct SeriesReader {
         }
         if (h.slope != first.slope || h.intercept != first.intercept) rescale_varies = true;
       }
+      if (h.fragment_bytes > max_fragment_bytes) max_fragment_bytes = h.fragment_bytes;
       const Vec3 p{h.position[0], h.position[1], h.position[2]};
       records[i] = SliceRecord{{p.x, p.y, p.z}, h.slope, h.intercept, h.pixel_offset, i, 0};
       keys[i] = KeyIndex{order_key(dot(p, normal)), i, 0};
@@ -774,6 +914,20 @@ struct SeriesReader {
     return Status::ok();
   }
 
+  // The buffer of a compressed frame: the largest slice's fragments, checked against the arena
+  // (as the voxels were) before it is taken.
+  Status allocate_frame(Arena& arena) {
+    if (!encapsulated(first.codec)) return Status::ok();
+    // The JPEG decoder's state (the padding jpeg_lossless_arena_bytes() allows for is counted
+    // by check_budget's allocations).
+    const bool jpeg = first.codec == Codec::kJpegLossless;
+    const uint64_t decoder =
+        jpeg ? jpeg_lossless_arena_bytes() - (Arena::kDefaultAlignment - 1) : 0;
+    SPLINTCORE_RETURN_IF_ERROR(check_budget(arena, 0, max_fragment_bytes + decoder, jpeg ? 2 : 1));
+    frame = arena.allocate_array<uint8_t>(static_cast<size_t>(max_fragment_bytes));
+    return frame != nullptr ? Status::ok() : arena.exhausted_status();
+  }
+
   // Origin (slice 0's position) and spacing: Pixel Spacing is row spacing, then column spacing.
   Status set_geometry() {
     origin = position(0);
@@ -795,7 +949,7 @@ struct SeriesReader {
     VoxelFormat format;
     format.bytes = static_cast<uint8_t>(first.bits_allocated / 8);
     format.is_signed = first.pixel_representation == 1;
-    format.big_endian = false;
+    format.big_endian = first.big_endian;
     format.bits_stored = static_cast<uint8_t>(bits_stored(first));
     return format;
   }
@@ -850,6 +1004,92 @@ Status read_deflated_pixels(Arena& arena, Reader& file, const SliceRecord& rec,
   return data.result(s);
 }
 
+// Reads n bytes from the reader into out.
+Status read_bytes(Reader& r, uint8_t* out, uint64_t n, const char* what) {
+  while (n > 0) {
+    SPLINTCORE_RETURN_IF_ERROR(r.fill(1));
+    if (r.available() == 0) {
+      return make_error(StatusCode::kTruncated, "file ends inside ", what, " (", n,
+                        " more bytes expected)")
+          .at_byte(r.offset());
+    }
+    const size_t take = r.available() < n ? r.available() : static_cast<size_t>(n);
+    std::memcpy(out, r.buf + r.pos, take);
+    r.pos += take;
+    out += take;
+    n -= take;
+  }
+  return Status::ok();
+}
+
+// The fragments of a file's encapsulated Pixel Data, concatenated into frame[0, cap) (the
+// reader at the basic offset table). *size is their length, *first the file offset of the
+// first fragment's bytes.
+Status read_fragments(Reader& r, uint8_t* frame, uint64_t cap, uint64_t* size, uint64_t* first,
+                      uint32_t* fragments) {
+  uint32_t tag = 0, length = 0;
+  const uint64_t table_at = r.offset();
+  SPLINTCORE_RETURN_IF_ERROR(read_item_header(r, &tag, &length));
+  if (tag != tag_of(0xFFFE, 0xE000) || length == kUndefinedLength) {
+    return make_error(StatusCode::kParseError,
+                      "Pixel Data differs from the first read (file changed?)")
+        .at_byte(table_at);
+  }
+  SPLINTCORE_RETURN_IF_ERROR(r.skip(length, "the basic offset table"));
+  *size = 0;
+  *fragments = 0;
+  for (;;) {
+    const uint64_t at = r.offset();
+    SPLINTCORE_RETURN_IF_ERROR(read_item_header(r, &tag, &length));
+    if (tag == tag_of(0xFFFE, 0xE0DD)) return Status::ok();
+    if (tag != tag_of(0xFFFE, 0xE000) || length > cap - *size) {
+      return make_error(StatusCode::kParseError,
+                        "Pixel Data differs from the first read (file changed?)")
+          .at_byte(at);
+    }
+    if (*fragments == 0) *first = r.offset();
+    ++*fragments;
+    SPLINTCORE_RETURN_IF_ERROR(read_bytes(r, frame + *size, length, "a Pixel Data fragment"));
+    *size += length;
+  }
+}
+
+// The pixels of an encapsulated file: its fragments decoded into the slice's own memory as
+// 16-bit little-endian samples, then converted there to HU (each value is read before its
+// HU overwrites it).
+Status read_encapsulated_pixels(const SeriesReader& sr, Reader& r, const SliceRecord& rec,
+                                const VoxelFormat& format, int16_t* out, uint64_t first_index,
+                                uint64_t* saturated) {
+  SPLINTCORE_RETURN_IF_ERROR(r.skip(rec.pixel_offset, "the header before Pixel Data"));
+  uint64_t size = 0, first = 0;
+  uint32_t fragments = 0;
+  SPLINTCORE_RETURN_IF_ERROR(
+      read_fragments(r, sr.frame, sr.max_fragment_bytes, &size, &first, &fragments));
+  const uint32_t rows = sr.first.rows, columns = sr.first.columns;
+  uint8_t* samples = reinterpret_cast<uint8_t*>(out);
+  const size_t n = static_cast<size_t>(size);
+  Status s =
+      sr.first.codec == Codec::kRle
+          ? rle_decode_frame(sr.frame, n, rows, columns, sr.first.bits_allocated / 8, samples)
+          : jpeg_lossless_decode(*sr.ctx.arena, sr.frame, n, rows, columns, sr.first.bits_allocated,
+                                 samples);
+  if (!s.is_ok()) {
+    // Offsets in the frame are offsets in the file when it is one fragment.
+    if (fragments == 1) return s.at_byte(first + s.byte_offset());
+    return s.append(" (byte offset in the concatenated fragments)");
+  }
+  const uint64_t count = uint64_t{rows} * columns;
+  ByteSource none;
+  Reader decoded;
+  decoded.init(&none, samples, static_cast<size_t>(count * 2));
+  decoded.end = decoded.cap;
+  decoded.at_eof = true;
+  VoxelFormat f = format;
+  f.bytes = 2;
+  f.big_endian = false;
+  return convert_voxels(decoded, f, count, rec.slope, rec.intercept, out, first_index, saturated);
+}
+
 // Pass 2: the pixels, slice by slice in position order, each with its own rescale. Not a
 // SeriesReader method: cppcheck 2.10 takes a Reader local to a method for a non-local one
 // (a false danglingLifetime on r.init(&source, ...)).
@@ -862,7 +1102,10 @@ Status read_pixels(const SeriesReader& sr, const VoxelFormat& format, uint64_t* 
     Reader r;
     r.init(&source, sr.buffer, sr.chunk);
     Status s;
-    if (sr.first.deflated) {
+    if (encapsulated(sr.first.codec)) {
+      s = read_encapsulated_pixels(sr, r, rec, format, sr.hu + k * per_slice, k * per_slice,
+                                   saturated);
+    } else if (sr.first.deflated) {
       s = read_deflated_pixels(*sr.ctx.arena, r, rec, format, per_slice, sr.hu + k * per_slice,
                                k * per_slice, saturated);
     } else {
@@ -921,6 +1164,7 @@ Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtRea
 
   SPLINTCORE_RETURN_IF_ERROR(reader.set_frame());
   SPLINTCORE_RETURN_IF_ERROR(reader.read_headers());
+  SPLINTCORE_RETURN_IF_ERROR(reader.allocate_frame(arena));
   SPLINTCORE_RETURN_IF_ERROR(reader.set_geometry());
   const VoxelFormat format = reader.pixel_format();
   uint64_t saturated = 0;

@@ -161,3 +161,186 @@ write("ct_dicom", "series2_deflated.bin",
 write("ct_dicom", "series2_implicit.bin",
       SEPARATOR.join(dicom(implicit=True, z=z, k=k, rows=2, cols=2) for k, z in
                      enumerate([0.0, 1.25])))
+
+
+# ---- DICOM encapsulated pixel data (PS3.5 A.4), RLE (Annex G), JPEG lossless (T.81 H),
+# explicit VR big endian. Small encoders of our own: the fixtures/ct files are made by gdcm and
+# dcmtk; these seeds only need to be valid and small.
+def packbits_rows(plane, cols):
+    """PackBits (PS3.5 G.3.1), each row on its own: repeats of 3 or more, literals otherwise."""
+    out = bytearray()
+    for r in range(0, len(plane), cols):
+        row, i = plane[r:r + cols], 0
+        while i < len(row):
+            j = i
+            while j < len(row) and row[j] == row[i] and j - i < 128:
+                j += 1
+            if j - i >= 3:
+                out += bytes([257 - (j - i), row[i]])
+                i = j
+                continue
+            j = i
+            while j < len(row) and j - i < 128 and not (
+                    j + 2 < len(row) and row[j] == row[j + 1] == row[j + 2]):
+                j += 1
+            out += bytes([j - i - 1]) + bytes(row[i:j])
+            i = j
+    if len(out) % 2:
+        out += b"\x80"
+    return bytes(out)
+
+
+def rle_frame(pixels, bits, cols):
+    n = len(pixels) // (bits // 8)
+    if bits == 8:
+        planes = [pixels]
+    else:
+        planes = [pixels[1::2], pixels[0::2]]  # most significant byte first
+    segments = [packbits_rows(p, cols) for p in planes]
+    offsets, at = [], 64
+    for s in segments:
+        offsets.append(at)
+        at += len(s)
+    header = struct.pack("<16I", len(segments), *(offsets + [0] * (15 - len(offsets))))
+    assert n > 0
+    return header + b"".join(segments)
+
+
+def jpeg_lossless(samples, rows, cols, precision, predictor, restart_lines=0):
+    """T.81 H: every difference category 0..16 a 5-bit code (a flat table), predictor p."""
+    def at(x, y):
+        return samples[y * cols + x]
+    bits, n = 0, 0
+    out = bytearray()
+
+    def put(v, k):
+        nonlocal bits, n
+        bits, n = (bits << k) | v, n + k
+        while n >= 8:
+            n -= 8
+            byte = (bits >> n) & 0xFF
+            out.append(byte)
+            if byte == 0xFF:
+                out.append(0)
+
+    def flush():
+        nonlocal n
+        if n:
+            put((1 << (8 - n)) - 1, 8 - n)
+
+    for y in range(rows):
+        if restart_lines and y and y % restart_lines == 0:
+            flush()
+            out.extend(bytes([0xFF, 0xD0 + (y // restart_lines - 1) % 8]))
+        first = y - y % restart_lines if restart_lines else 0
+        for x in range(cols):
+            a = at(x - 1, y) if x else 0
+            b = at(x, y - 1) if y else 0
+            c = at(x - 1, y - 1) if x and y else 0
+            if y == first:
+                p = 1 << (precision - 1) if x == 0 else a
+            elif x == 0:
+                p = b
+            else:
+                p = [a, b, c, a + b - c, a + ((b - c) >> 1), b + ((a - c) >> 1),
+                     (a + b) >> 1][predictor - 1]
+            d = (at(x, y) - p) & 0xFFFF
+            d = d - 65536 if d >= 32768 else d
+            s = 16 if d == -32768 else abs(d).bit_length()
+            put(s, 5)
+            if 0 < s < 16:
+                put(d if d > 0 else d + (1 << s) - 1, s)
+    flush()
+    head = b"\xff\xd8\xff\xc3" + struct.pack(">HBHHB", 11, precision, rows, cols, 1) + b"\x01\x11\x00"
+    head += b"\xff\xc4" + struct.pack(">H", 2 + 17 + 17) + b"\x00" + bytes([0, 0, 0, 0, 17] + [0] * 11)
+    head += bytes(range(17))
+    if restart_lines:
+        head += b"\xff\xdd" + struct.pack(">HH", 4, restart_lines * cols)
+    head += b"\xff\xda" + struct.pack(">HB", 8, 1) + bytes([1, 0, predictor, 0, 0])
+    return head + bytes(out) + b"\xff\xd9"
+
+
+def encapsulated(file, syntax, frame, split=0):
+    """file's Pixel Data as encapsulated fragments of `frame` (split: bytes per fragment)."""
+    at = file.index(b"\xe0\x7f\x10\x00")
+    if len(syntax) % 2:
+        syntax += b"\0"
+    head = file[:at].replace(b"UI\x14\x001.2.840.10008.1.2.1\0",
+                             b"UI" + struct.pack("<H", len(syntax)) + syntax)
+    if len(frame) % 2:
+        frame += b"\0"
+    body = b"\xe0\x7f\x10\x00OB\0\0" + struct.pack("<I", 0xFFFFFFFF)
+    body += struct.pack("<HHI", 0xFFFE, 0xE000, 4) + struct.pack("<I", 0)
+    step = split or len(frame)
+    for i in range(0, len(frame), step):
+        body += struct.pack("<HHI", 0xFFFE, 0xE000, len(frame[i:i + step])) + frame[i:i + step]
+    return head + body + struct.pack("<HHI", 0xFFFE, 0xE0DD, 0)
+
+
+def big_endian(file):
+    """Explicit VR big endian (1.2.840.10008.1.2.2): group 0002 stays little endian."""
+    at = 132
+    out = bytearray(file[:at])
+    while at < len(file):
+        group, elem = struct.unpack_from("<HH", file, at)
+        vr = file[at + 4:at + 6]
+        long_vr = vr in (b"OB", b"OW", b"SQ", b"UN", b"UT")
+        length = struct.unpack_from("<I" if long_vr else "<H", file, at + (8 if long_vr else 6))[0]
+        head = 12 if long_vr else 8
+        value = file[at + head:at + head + length]
+        if group == 2 and elem == 0x10:
+            value = b"1.2.840.10008.1.2.2\0"
+            out += file[at:at + 6] + struct.pack("<H", len(value)) + value
+        elif group == 2:
+            out += file[at:at + head + length]
+        else:
+            if vr == b"US" or vr == b"OW":
+                value = b"".join(value[i:i + 2][::-1] for i in range(0, len(value), 2))
+            out += struct.pack(">HH", group, elem) + vr
+            out += (b"\0\0" + struct.pack(">I", len(value))) if long_vr else struct.pack(">H", len(value))
+            out += value
+        at += head + length
+    return bytes(out)
+
+
+def pixels_of(file):
+    at = file.index(b"\xe0\x7f\x10\x00")
+    length = struct.unpack_from("<I", file, at + 8)[0]
+    return file[at + 12:at + 12 + length]
+
+
+plain16 = dicom(rows=4, cols=5)
+px16 = pixels_of(plain16)
+plain8 = dicom(bits=8, signed=False, rows=3, cols=3)
+write("ct_dicom", "explicit_4x5.dcm", plain16)  # the twin of the seeds below
+write("ct_dicom", "rle16_one.dcm",
+      encapsulated(plain16, b"1.2.840.10008.1.2.5", rle_frame(px16, 16, 5)))
+write("ct_dicom", "rle8_one.dcm",
+      encapsulated(plain8, b"1.2.840.10008.1.2.5", rle_frame(pixels_of(plain8), 8, 3)))
+samples16 = [v & 0xFFF for v in struct.unpack("<20H", px16)]  # 12 bits stored
+for p in (1, 4, 7):
+    write("ct_dicom", "jpeg57_p%d.dcm" % p,
+          encapsulated(plain16, b"1.2.840.10008.1.2.4.57",
+                       jpeg_lossless(samples16, 4, 5, 12, p)))
+write("ct_dicom", "jpeg70_restart.dcm",
+      encapsulated(plain16, b"1.2.840.10008.1.2.4.70",
+                   jpeg_lossless(samples16, 4, 5, 12, 1, restart_lines=1), split=10))
+write("ct_dicom", "big_one.dcm", big_endian(plain16))
+write("ct_dicom", "series2_rle.bin",
+      SEPARATOR.join(encapsulated(dicom(z=z, k=k, rows=3, cols=2), b"1.2.840.10008.1.2.5",
+                                  rle_frame(pixels_of(dicom(z=z, k=k, rows=3, cols=2)), 16, 2))
+                     for k, z in enumerate([0.0, 1.5])))
+
+
+# ---- The decoders directly (tests/fuzz/ct_codecs_fuzz.cpp): mode, rows, columns, frame.
+def codec_seed(name, mode, rows, cols, frame):
+    write("ct_codecs", name, bytes([mode, rows - 1, cols - 1]) + frame)
+
+
+os.makedirs(os.path.join(ROOT, "ct_codecs"), exist_ok=True)
+codec_seed("rle16.bin", 0, 4, 5, rle_frame(px16, 16, 5))
+codec_seed("rle8.bin", 2, 3, 3, rle_frame(pixels_of(plain8), 8, 3))
+for p in (1, 5, 7):
+    codec_seed("jpeg_p%d.bin" % p, 1 | (14 << 2), 4, 5, jpeg_lossless(samples16, 4, 5, 12, p))
+codec_seed("jpeg_restart.bin", 1 | (14 << 2), 4, 5,
+           jpeg_lossless(samples16, 4, 5, 12, 2, restart_lines=2))

@@ -1,0 +1,31 @@
+// libFuzzer target: arbitrary frames straight into the DICOM pixel decoders (RLE Lossless,
+// src/ct/dicom_rle.cpp; JPEG lossless, src/ct/jpeg_lossless.cpp), without the DICOM framing
+// the ct_dicom target needs before it reaches them. Input: a mode byte (bit 0: JPEG, else RLE;
+// bit 1: 8-bit RLE samples, else 16-bit; bits 2-7 with the next byte: the JPEG max precision),
+// rows and columns (one byte each, 1..64), then the frame. tests/fuzz/ct_corpus.py writes the
+// seeds. Any crash or sanitizer report, or arena left in use, is a bug.
+//   build/fuzz/tests/splintcore_fuzz_ct_codecs -max_total_time=60 fixtures/fuzz/ct_codecs
+#include <cstdlib>
+
+#include "ct/dicom_rle.h"
+#include "ct/jpeg_lossless.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  using namespace splintcore;
+  if (size < 3) return 0;
+  static uint8_t out[2 * 64 * 64];
+  alignas(16) static unsigned char memory[16384];
+  const uint32_t mode = data[0];
+  const uint32_t rows = 1 + data[1] % 64u, columns = 1 + data[2] % 64u;
+  const uint8_t* frame = data + 3;
+  const size_t n = size - 3;
+  if ((mode & 1) != 0) {
+    Arena arena(memory, sizeof(memory));
+    const uint32_t precision = 2 + (mode >> 2) % 15u;
+    (void)ct_detail::jpeg_lossless_decode(arena, frame, n, rows, columns, precision, out);
+    if (arena.used() != 0) std::abort();
+  } else {
+    (void)ct_detail::rle_decode_frame(frame, n, rows, columns, (mode & 2) != 0 ? 1 : 2, out);
+  }
+  return 0;
+}
