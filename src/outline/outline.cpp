@@ -301,11 +301,9 @@ Status close_to(Opener& op, double target, double d0, double slope0, double* t_o
       ++*steps;
       if (std::fabs(pair.distance - target) <= kOpeningTolerance) {
         hi = mid;
-        d = pair.distance;
         break;
       }
       (pair.distance < target ? lo : hi) = mid;
-      d = pair.distance < target ? d : pair.distance;
     }
     t = hi;
     SPLINTCORE_RETURN_IF_ERROR(op.distance(t, &pair));
