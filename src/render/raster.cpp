@@ -252,6 +252,7 @@ void draw_mesh_view(const MeshJob& job, uint32_t view_index, uint32_t slot) {
   const RenderMesh& item = *job.item;
   const Mesh& mesh = *item.mesh;
   const Layer& layer = item.alpha == 255 ? f.opaque : f.overlay;
+  if (mesh.triangles.empty()) return;  // framed (frame_views), nothing to draw
   const Vec3* vertices = mesh.vertices.data();
   const size_t vertex_count = mesh.vertices.size();
   Projected* projected = job.projected + static_cast<size_t>(slot) * vertex_count;
