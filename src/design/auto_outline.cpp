@@ -2,9 +2,42 @@
 // saves what it resolved as a case a person can read, edit and design again (design.h).
 #include <cstring>
 
+#include "design/case_json.h"
 #include "splintcore/design.h"
 
 namespace splintcore {
+
+namespace design_detail {
+
+void write_transform(JsonWriter& w, const RigidTransform& t, const char* key) {
+  w.begin_array(key);
+  const double row_t[3] = {t.t.x, t.t.y, t.t.z};
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 3; ++k) w.add(nullptr, t.r[i][k]);
+    w.add(nullptr, row_t[i]);
+  }
+  for (int k = 0; k < 4; ++k) w.add(nullptr, k == 3 ? 1.0 : 0.0);
+  w.end_array();
+}
+
+void write_plan(JsonWriter& w, const CasePlan& p) {
+  w.begin_object("plan");
+  w.add("sequence", p.mandible_first ? "mandible_first" : "maxilla_first");
+  write_transform(w, p.maxilla, "maxilla");
+  write_transform(w, p.mandible, "mandible");
+  w.begin_array("hinge_axis");
+  w.add(nullptr, p.hinge[0]);
+  w.add(nullptr, p.hinge[1]);
+  w.end_array();
+  w.add("intermediate_opening_mm", p.intermediate_opening_mm);
+  w.add("final_opening_mm", p.final_opening_mm);
+  w.end_object();
+}
+
+}  // namespace design_detail
+
+using design_detail::write_plan;
+using design_detail::write_transform;
 
 namespace {
 
@@ -126,17 +159,6 @@ Status resolve_case_outline(const Context& ctx, const CaseFile& c, Span<const Me
 
 namespace {
 
-void write_transform(JsonWriter& w, const RigidTransform& t, const char* key = "transform") {
-  w.begin_array(key);
-  const double row_t[3] = {t.t.x, t.t.y, t.t.z};
-  for (int i = 0; i < 3; ++i) {
-    for (int k = 0; k < 3; ++k) w.add(nullptr, t.r[i][k]);
-    w.add(nullptr, row_t[i]);
-  }
-  for (int k = 0; k < 4; ++k) w.add(nullptr, k == 3 ? 1.0 : 0.0);
-  w.end_array();
-}
-
 void write_jaws(JsonWriter& w, const CaseFile& c) {
   w.begin_array("jaws");
   for (const CaseJaw& j : c.jaws) {
@@ -237,21 +259,6 @@ void write_later_stages(JsonWriter& w, const CaseFile& c) {
     if (c.output_report != nullptr) w.add("report", c.output_report);
     w.end_object();
   }
-}
-
-// The plan ("plan"), every key (all are required).
-void write_plan(JsonWriter& w, const CasePlan& p) {
-  w.begin_object("plan");
-  w.add("sequence", p.mandible_first ? "mandible_first" : "maxilla_first");
-  write_transform(w, p.maxilla, "maxilla");
-  write_transform(w, p.mandible, "mandible");
-  w.begin_array("hinge_axis");
-  w.add(nullptr, p.hinge[0]);
-  w.add(nullptr, p.hinge[1]);
-  w.end_array();
-  w.add("intermediate_opening_mm", p.intermediate_opening_mm);
-  w.add("final_opening_mm", p.final_opening_mm);
-  w.end_object();
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // The audit report of a design (design.h, write_design_report): what an auditor needs to
 // reproduce the run, every value from a recorded result. One writer serves the command line
 // (report.json) and the C API (sc_design_write_report), so both give the same bytes.
+#include "design/case_json.h"
 #include "splintcore/blockout.h"
 #include "splintcore/boolean.h"
 #include "splintcore/design.h"
@@ -8,6 +9,9 @@
 #include "splintcore/json.h"
 
 namespace splintcore {
+
+using design_detail::write_plan;
+using design_detail::write_transform;
 
 namespace {
 
@@ -19,17 +23,6 @@ bool hash_write(void* user, const uint8_t* data, size_t bytes) {
 
 const char* at(Span<const char* const> list, size_t i) {
   return i < list.size() ? list[i] : nullptr;
-}
-
-void write_transform(JsonWriter& w, const RigidTransform& x, const char* key = "transform") {
-  w.begin_array(key);
-  for (int row = 0; row < 3; ++row) {
-    for (int col = 0; col < 3; ++col) w.add(nullptr, x.r[row][col]);
-    w.add(nullptr, x.t[row]);
-  }
-  for (int k = 0; k < 3; ++k) w.add(nullptr, 0);
-  w.add(nullptr, 1);
-  w.end_array();
 }
 
 void write_inputs(JsonWriter& w, const CaseFile& c, Span<const Mesh> jaws,
@@ -286,21 +279,6 @@ void write_case_head(JsonWriter& w, const CaseFile& c, const DesignReportFiles& 
   if (files.case_path != nullptr) w.add("case", files.case_path);
   w.add("case_id", c.case_id);
   w.add("case_sha256", c.sha256);
-}
-
-// The plan as the case gives it.
-void write_plan(JsonWriter& w, const CasePlan& p) {
-  w.begin_object("plan");
-  w.add("sequence", p.mandible_first ? "mandible_first" : "maxilla_first");
-  write_transform(w, p.maxilla, "maxilla");
-  write_transform(w, p.mandible, "mandible");
-  w.begin_array("hinge_axis");
-  w.add(nullptr, p.hinge[0]);
-  w.add(nullptr, p.hinge[1]);
-  w.end_array();
-  w.add("intermediate_opening_mm", p.intermediate_opening_mm);
-  w.add("final_opening_mm", p.final_opening_mm);
-  w.end_object();
 }
 
 // One splint of the plan: its moves as applied, the autorotation, then the single splint's
