@@ -476,31 +476,26 @@ Status register_rigid(const Context& ctx, const Mesh& scan, const Mesh& ct_jaw,
   DistanceIndex index;
   SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, ct_jaw, io, &index));
   const size_t nc = (n + m - 1) / m;
-  Icp coarse{ctx,
-             ct_jaw,
-             index,
-             options,
-             Span<Vec3>(points, nc),
-             Span<Correspondence>(corr, nc),
-             Span<KeyIndex>(keys, nc),
-             Span<KeyIndex>(scratch, nc),
-             options.overlap,
-             true};
+  // The first `count` samples (the coarse phase takes every m-th: they come first).
+  const auto phase = [&](size_t count, bool coarse_phase) {
+    return Icp{ctx,
+               ct_jaw,
+               index,
+               options,
+               Span<Vec3>(points, count),
+               Span<Correspondence>(corr, count),
+               Span<KeyIndex>(keys, count),
+               Span<KeyIndex>(scratch, count),
+               options.overlap,
+               coarse_phase};
+  };
+  Icp coarse = phase(nc, true);
   uint32_t done = 0;
   bool converged = false;
   if (options.landmarks.empty()) {
     SPLINTCORE_RETURN_IF_ERROR(choose_start(coarse, scan, ct_jaw, &pose, &start));
   }
-  Icp icp{ctx,
-          ct_jaw,
-          index,
-          options,
-          Span<Vec3>(points, n),
-          Span<Correspondence>(corr, n),
-          Span<KeyIndex>(keys, n),
-          Span<KeyIndex>(scratch, n),
-          options.overlap,
-          false};
+  Icp icp = phase(n, false);
   SPLINTCORE_RETURN_IF_ERROR(icp.run(&pose, options.max_iterations, &done, &converged));
   RegisterResult& r = *result;
   r.transform = pose_transform(pose);
