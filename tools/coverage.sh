@@ -3,6 +3,11 @@
 # -fprofile-instr-generate -fcoverage-mapping, then llvm-profdata and llvm-cov).
 #   bash tools/coverage.sh [build-dir]          (default build/ci-coverage)
 #   SPLINTCORE_COVERAGE_FILTER='-Realdata|Meshlab' bash tools/coverage.sh   (gtest filter)
+#   bash tools/coverage.sh --report build-dir   the report alone, from the profiles a test run
+#                                               of an instrumented build left there (the
+#                                               clang-O0 job of tools/test.sh: it is built with
+#                                               coverage_flags below and runs ctest with
+#                                               LLVM_PROFILE_FILE=build-dir/coverage-%4m.profraw)
 # Prints llvm-cov's per-file report for src/ (lines, regions, branches), then the parsers'
 # figures on their own (issue 9 asks for >= 95% branch coverage of every parser of outside
 # bytes: JSON, the case schema, STL, PLY, OBJ, their shared text scanner, the CT readers, and
@@ -12,6 +17,8 @@
 # parser is under that branch coverage (marked "LOW" in the table).
 set -u
 cd "$(dirname "$0")/.."
+report_only=0
+if [ "${1:-}" = "--report" ]; then report_only=1; shift; fi
 dir=${1:-build/ci-coverage}
 par=${SPLINTCORE_JOBS:-$(nproc)}
 llvm_profdata=$(command -v llvm-profdata || ls /usr/bin/llvm-profdata-* 2>/dev/null | tail -n 1)
@@ -19,20 +26,26 @@ llvm_cov=$(command -v llvm-cov || ls /usr/bin/llvm-cov-* 2>/dev/null | tail -n 1
 if [ -z "$llvm_profdata" ] || [ -z "$llvm_cov" ]; then
   echo "coverage: llvm-profdata and llvm-cov are needed (apt-get install llvm)"; exit 1
 fi
-flags="-fprofile-instr-generate -fcoverage-mapping"
-cmake -S . -B "$dir" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=Debug \
-  -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="$flags" >"$dir.configure.log" 2>&1 \
-  || { cat "$dir.configure.log"; exit 1; }
-cmake --build "$dir" -j "$par" --target splintcore_tests >"$dir.build.log" 2>&1 \
-  || { tail -n 40 "$dir.build.log"; exit 1; }
-rm -f "$dir"/coverage-*.profraw
-# The long randomised properties, the MeshLab oracle and the real dentition's tests (run
-# serially here, at -O0) add little line coverage and most of the time; the filter can be widened.
-filter=${SPLINTCORE_COVERAGE_FILTER:--BooleanRandom.*:*Meshlab*:*MeshLab*:*RealData*:*.Real*}
-(cd "$dir" && LLVM_PROFILE_FILE="$PWD/coverage-%p.profraw" \
-   ./tests/splintcore_tests --gtest_filter="$filter" >coverage-tests.log 2>&1)
-rc=$?
-tail -n 3 "$dir/coverage-tests.log"
+rc=0
+if [ "$report_only" -eq 0 ]; then
+  flags="-fprofile-instr-generate -fcoverage-mapping"
+  cmake -S . -B "$dir" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=Debug \
+    -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="$flags" >"$dir.configure.log" 2>&1 \
+    || { cat "$dir.configure.log"; exit 1; }
+  cmake --build "$dir" -j "$par" --target splintcore_tests >"$dir.build.log" 2>&1 \
+    || { tail -n 40 "$dir.build.log"; exit 1; }
+  rm -f "$dir"/coverage-*.profraw
+  # The long randomised properties, the MeshLab oracle and the real dentition's tests (run
+  # serially here, at -O0) add little line coverage and most of the time; the filter can be
+  # widened.
+  filter=${SPLINTCORE_COVERAGE_FILTER:--BooleanRandom.*:*Meshlab*:*MeshLab*:*RealData*:*.Real*}
+  (cd "$dir" && LLVM_PROFILE_FILE="$PWD/coverage-%p.profraw" \
+     ./tests/splintcore_tests --gtest_filter="$filter" >coverage-tests.log 2>&1)
+  rc=$?
+  tail -n 3 "$dir/coverage-tests.log"
+elif ! ls "$dir"/coverage-*.profraw >/dev/null 2>&1; then
+  echo "coverage: no profiles (coverage-*.profraw) in $dir"; exit 1
+fi
 "$llvm_profdata" merge -sparse "$dir"/coverage-*.profraw -o "$dir/coverage.profdata" || exit 1
 objects="$dir/tests/splintcore_tests"
 "$llvm_cov" report "$objects" -instr-profile="$dir/coverage.profdata" \
