@@ -97,6 +97,10 @@ struct DistanceIndexOptions {
   // signed_distance, the batch queries, sample_sdf and vertex_pseudonormal must not be given
   // such an index (they assert).
   bool pairs_only = false;
+  // With pairs_only: leave out the triangles' float boxes (24 bytes a triangle, the largest
+  // part of such an index). The pair searches then load every triangle of a leaf pair they
+  // reach: the same pairs, the same answers (bits), more work.
+  bool without_triangle_boxes = false;
 };
 
 struct DistanceIndex {

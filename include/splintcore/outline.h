@@ -136,7 +136,8 @@ struct AutorotateReport {
 };
 
 // Arena bytes autorotate_mandible() takes at most (nothing stays): a pairs_only distance index
-// of each jaw (distance_index_bound), one pair search's stack and heap, a pool of 32768 pairs.
+// of each jaw without the triangles' boxes (distance_index_bound), one pair search's stack
+// and heap, a pool of 32768 pairs.
 uint64_t autorotate_mandible_bound(const Mesh& maxilla, const Mesh& mandible);
 
 // The angle of the mandible about the hinge axis at which, closing it from open, the smallest

@@ -125,9 +125,10 @@ uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,
   const bool dipoles = topology || options.oriented_boxes;
   const uint64_t per_node = sizeof(BvhNode) + (dipoles ? sizeof(BvhDipole) : 0) +
                             (options.oriented_boxes ? sizeof(BvhObb) : 0);
-  const uint64_t kept = wide * per_node + triangle_count * (sizeof(uint32_t) * (topology ? 7 : 1)) +
-                        (topology ? (vertex_count + 1) * sizeof(uint32_t) : 0) +
-                        (topology ? 0 : triangle_count * 6 * sizeof(float));
+  const uint64_t kept =
+      wide * per_node + triangle_count * (sizeof(uint32_t) * (topology ? 7 : 1)) +
+      (topology ? (vertex_count + 1) * sizeof(uint32_t) : 0) +
+      (topology || options.without_triangle_boxes ? 0 : triangle_count * 6 * sizeof(float));
   // Temporaries (the larger stage): Morton keys and scratch with the tree at its upper bound
   // before it moves down, or the per-vertex corner lists.
   const uint64_t tree = 2 * triangle_count * sizeof(uint64_t) + wide * per_node;
@@ -338,7 +339,7 @@ struct IndexBuild {
   Status scan_triangles() {
     order = arena.allocate_array<uint32_t>(nt);
     if (nt > 0 && order == nullptr) return arena.exhausted_status();
-    if (options.pairs_only) {
+    if (options.pairs_only && !options.without_triangle_boxes) {
       tboxes = arena.allocate_array<float>(6 * nt);
       if (nt > 0 && tboxes == nullptr) return arena.exhausted_status();
     }

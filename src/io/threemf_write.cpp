@@ -42,13 +42,33 @@ constexpr size_t kDeflateChunk = 65536;        // the encoder's output buffer
 
 // A text that grows in the arena (the model part is built whole: a ZIP entry's header holds
 // its size and CRC).
+// The model's text, in an arena array that grows as it is written (in place: it is the top
+// allocation), never past `bound` (model_bound: the text cannot be longer); `exhausted` when
+// the arena had no room (the rest is dropped).
 struct Text {
-  uint8_t* data = nullptr;
-  size_t size = 0, capacity = 0;
+  Arena* arena = nullptr;
+  ArenaArray<uint8_t> bytes;
+  size_t bound = 0;
+  bool exhausted = false;
   void put(const char* s, size_t n) {
-    SPLINTCORE_ASSERT(size + n <= capacity);
-    std::memcpy(data + size, s, n);
-    size += n;
+    const size_t need = bytes.size() + n;
+    if (need > bytes.capacity() && !grow(need)) return;
+    const size_t at = bytes.size();
+    (void)bytes.resize(need);  // within the capacity
+    std::memcpy(bytes.data() + at, s, n);
+  }
+  bool grow(size_t need) {
+    SPLINTCORE_ASSERT(need <= bound);
+    if (exhausted) return false;
+    const size_t doubled =
+        2 * bytes.capacity() > (size_t{1} << 16) ? 2 * bytes.capacity() : size_t{1} << 16;
+    const size_t wanted = doubled < bound ? doubled : bound;
+    if (wanted > need) {
+      if (bytes.reserve(wanted)) return true;
+      arena->forget_failure();  // the exact size replaces the failed larger request
+    }
+    exhausted = !bytes.reserve(need);
+    return !exhausted;
   }
   void put(const char* s) { put(s, std::strlen(s)); }
   void put_u64(uint64_t v) {
@@ -228,21 +248,44 @@ struct Entry {
   uint32_t offset = 0;      // of its local header
 };
 
-struct BufferSink {
-  uint8_t* data = nullptr;
-  size_t size = 0, capacity = 0;
-  static bool write(void* user, const uint8_t* bytes, size_t n) {
-    BufferSink* b = static_cast<BufferSink*>(user);
-    if (n > b->capacity - b->size) return false;
-    std::memcpy(b->data + b->size, bytes, n);
-    b->size += n;
+// Deflated bytes into an arena array that grows as they come (in place while it is the top
+// allocation), up to `limit` bytes: past that the entry is stored (deflate would not be
+// smaller), so only what the compressed entry takes is held, not its bound.
+struct GrowingSink {
+  Arena* arena = nullptr;
+  ArenaArray<uint8_t>* bytes = nullptr;
+  size_t limit = 0;
+  bool larger = false;     // the deflated bytes reached `limit`
+  bool exhausted = false;  // the arena had no room
+  static bool write(void* user, const uint8_t* data, size_t n) {
+    GrowingSink* g = static_cast<GrowingSink*>(user);
+    ArenaArray<uint8_t>& b = *g->bytes;
+    if (n >= g->limit - b.size()) {
+      g->larger = true;
+      return false;
+    }
+    const size_t need = b.size() + n;
+    if (need > b.capacity()) {
+      const size_t grown = b.capacity() + b.capacity() / 2;
+      if (!b.reserve(grown > need && grown < g->limit ? grown : need)) {
+        g->arena->forget_failure();  // the exact size replaces the failed larger request
+        if (!b.reserve(need)) {
+          g->exhausted = true;
+          return false;
+        }
+      }
+    }
+    const size_t at = b.size();
+    if (!b.resize(need)) return false;  // within the capacity: cannot fail
+    std::memcpy(b.data() + at, data, n);
     return true;
   }
 };
 
-// The entry's bytes: deflated into `out` (capacity deflated_bound(size)) when that is smaller.
-Status pack_entry(const DeflateWorkspace& ws, bool deflate, const char* name, const uint8_t* data,
-                  size_t size, uint8_t* out, Entry* e) {
+// The entry's bytes: deflated into `out` (an empty array bound to the arena) when that is
+// smaller.
+Status pack_entry(Arena& arena, const DeflateWorkspace& ws, bool deflate, const char* name,
+                  const uint8_t* data, size_t size, ArenaArray<uint8_t>* out, Entry* e) {
   e->name = name;
   e->plain_size = static_cast<uint32_t>(size);
   e->crc = crc32(0, data, size);
@@ -250,19 +293,25 @@ Status pack_entry(const DeflateWorkspace& ws, bool deflate, const char* name, co
   e->size = static_cast<uint32_t>(size);
   e->method = 0;
   if (!deflate) return Status::ok();
-  BufferSink b;
-  b.data = out;
-  b.size = 0;
-  b.capacity = static_cast<size_t>(deflated_bound(size));
+  GrowingSink g;
+  g.arena = &arena;
+  g.bytes = out;
+  g.limit = size;
   CompressSink sink;
-  sink.write = &BufferSink::write;
-  sink.user = &b;
-  SPLINTCORE_RETURN_IF_ERROR(deflate_fixed(ws, ZFormat::kRaw, data, size, sink));
-  if (b.size < size) {
-    e->data = out;
-    e->size = static_cast<uint32_t>(b.size);
-    e->method = 8;
+  sink.write = &GrowingSink::write;
+  sink.user = &g;
+  const Status s = deflate_fixed(ws, ZFormat::kRaw, data, size, sink);
+  if (g.exhausted) return arena.exhausted_status();
+  if (g.larger) {
+    out->clear();
+    out->shrink_to_fit();
+    return Status::ok();
   }
+  SPLINTCORE_RETURN_IF_ERROR(s);
+  out->shrink_to_fit();
+  e->data = out->data();
+  e->size = static_cast<uint32_t>(out->size());
+  e->method = 8;
   return Status::ok();
 }
 
@@ -371,28 +420,27 @@ Status write_3mf(const Context& ctx, Span<const ThreeMfObject> objects,
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
   Text model;
-  model.capacity = static_cast<size_t>(bound);
-  model.data = arena.allocate_array<uint8_t>(model.capacity);
-  if (model.data == nullptr) return arena.exhausted_status();
+  model.arena = &arena;
+  model.bytes.bind(&arena);
+  model.bound = static_cast<size_t>(bound);
   write_model(objects, options, &model);
+  if (model.exhausted) return arena.exhausted_status();
+  model.bytes.shrink_to_fit();
   DeflateWorkspace ws;
-  uint8_t* packed[3] = {nullptr, nullptr, nullptr};
-  const size_t plain[3] = {sizeof kContentTypes - 1, sizeof kRels - 1, model.size};
+  const size_t plain[3] = {sizeof kContentTypes - 1, sizeof kRels - 1, model.bytes.size()};
   if (options.deflate) {
     SPLINTCORE_RETURN_IF_ERROR(deflate_workspace(arena, kDeflateChunk, &ws));
     ws.effort = kDeflateFast;
-    for (int k = 0; k < 3; ++k) {
-      packed[k] = arena.allocate_array<uint8_t>(static_cast<size_t>(deflated_bound(plain[k])));
-      if (packed[k] == nullptr) return arena.exhausted_status();
-    }
   }
   Entry entries[3];
+  ArenaArray<uint8_t> packed[3];
   const char* names[3] = {"[Content_Types].xml", "_rels/.rels", "3D/3dmodel.model"};
   const uint8_t* data[3] = {reinterpret_cast<const uint8_t*>(kContentTypes),
-                            reinterpret_cast<const uint8_t*>(kRels), model.data};
-  for (int k = 0; k < 3; ++k) {
-    SPLINTCORE_RETURN_IF_ERROR(
-        pack_entry(ws, options.deflate, names[k], data[k], plain[k], packed[k], &entries[k]));
+                            reinterpret_cast<const uint8_t*>(kRels), model.bytes.data()};
+  for (int k = 0; k < 3; ++k) {  // each grows while it is the top allocation
+    packed[k].bind(&arena);
+    SPLINTCORE_RETURN_IF_ERROR(pack_entry(arena, ws, options.deflate, names[k], data[k], plain[k],
+                                          &packed[k], &entries[k]));
   }
   return write_zip(sink, entries, 3);
 }

@@ -317,11 +317,23 @@ Status sense_and_lever(const Mesh& maxilla, const Mesh& mandible, const Vec3& p,
 
 }  // namespace
 
+namespace {
+
+// pairs_only indexes without the triangles' boxes: the same answers (bits), 24 bytes a
+// triangle less, and here fewer instructions too (the real dentition's plan: 1.10 G against
+// 1.38 G with them, under callgrind): the closing's pair searches reach few far triangles.
+DistanceIndexOptions rotor_index_options() {
+  DistanceIndexOptions io = band_index_options();
+  io.without_triangle_boxes = true;
+  return io;
+}
+
+}  // namespace
+
 uint64_t autorotate_mandible_bound(const Mesh& maxilla, const Mesh& mandible) {
-  return distance_index_bound(maxilla.vertices.size(), maxilla.triangles.size(),
-                              band_index_options()) +
-         distance_index_bound(mandible.vertices.size(), mandible.triangles.size(),
-                              band_index_options()) +
+  const DistanceIndexOptions io = rotor_index_options();
+  return distance_index_bound(maxilla.vertices.size(), maxilla.triangles.size(), io) +
+         distance_index_bound(mandible.vertices.size(), mandible.triangles.size(), io) +
          kPairStackBound + arena_array_bound<TrianglePairIds>(kPoolPairs);
 }
 
@@ -337,10 +349,11 @@ Status autorotate_mandible(const Context& ctx, const Mesh& maxilla, const Mesh& 
   c.x = options.opening_mm;
   SPLINTCORE_RETURN_IF_ERROR(
       sense_and_lever(maxilla, mandible, options.hinge[0], axis, &c.sign, &c.lever));
+  const DistanceIndexOptions io = rotor_index_options();
   ArenaScope scope(*ctx.arena);  // the indexes go when done
   DistanceIndex upper, lower;
-  SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, maxilla, band_index_options(), &upper));
-  SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, mandible, band_index_options(), &lower));
+  SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, maxilla, io, &upper));
+  SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, mandible, io, &lower));
   Rotor rot(ctx, upper, lower, options.hinge[0], axis);
   TrianglePairIds* pool = ctx.arena->allocate_array<TrianglePairIds>(kPoolPairs);
   if (pool == nullptr) return ctx.arena->exhausted_status();
