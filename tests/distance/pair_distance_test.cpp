@@ -509,6 +509,55 @@ TEST(MeshPairDistance, SameBitsAtEveryLeafSizeAndBoxKind) {
   }
 }
 
+// Indexes without the triangles' float boxes (DistanceIndexOptions::without_triangle_boxes,
+// autorotation's) give the same answers to the rigid pair queries, bit for bit: the boxes only
+// spare loading far triangles. Random moves as below, every offset of each oracle case.
+TEST(MeshPairDistance, WithoutTriangleBoxesTheSameBits) {
+  std::mt19937_64 rng(33);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  int compared = 0;
+  for (const Case& c : oracle_cases()) {
+    test::TestArena t(size_t{32} << 20);
+    Built a, b, a_lean, b_lean;
+    build(t, c.a, 0, false, &a, true);
+    build(t, c.b, 0, false, &b, true);
+    DistanceIndexOptions lean;
+    lean.pairs_only = true;
+    lean.without_triangle_boxes = true;
+    SPLINTCORE_ASSERT_OK(build_distance_index(Context(&t.arena), a.mesh, lean, &a_lean.index));
+    SPLINTCORE_ASSERT_OK(build_distance_index(Context(&t.arena), b.mesh, lean, &b_lean.index));
+    ASSERT_TRUE(a_lean.index.triangle_boxes.empty());
+    ASSERT_FALSE(a.index.triangle_boxes.empty());
+    for (const Vec3& off : c.offsets) {
+      Vec3 axis{unit(rng), unit(rng), unit(rng)};
+      axis = axis * (1.0 / length(axis));
+      RigidTransform move = rotation_about_axis(Vec3{unit(rng), unit(rng), unit(rng)}, axis,
+                                                compared % 2 == 0 ? 0.5 * unit(rng) : 0.0);
+      move.t = move.t + off;
+      test::TestArena s(size_t{1} << 20);
+      MeshPairDistance r, e;
+      SPLINTCORE_ASSERT_OK(
+          mesh_pair_distance_rigid(Context(&s.arena), a.index, b.index, move, HUGE_VAL, &r));
+      SPLINTCORE_ASSERT_OK(mesh_pair_distance_rigid(Context(&s.arena), a_lean.index, b_lean.index,
+                                                    move, HUGE_VAL, &e));
+      EXPECT_EQ(std::memcmp(&r.distance, &e.distance, sizeof(double)), 0);
+      EXPECT_EQ(r.triangle_a, e.triangle_a);
+      EXPECT_EQ(r.triangle_b, e.triangle_b);
+      EXPECT_EQ(r.point_a, e.point_a);
+      EXPECT_EQ(r.point_b, e.point_b);
+      bool meet = false, meet_lean = false;
+      MeshPairDistance m;
+      SPLINTCORE_ASSERT_OK(
+          mesh_pair_meet_rigid(Context(&s.arena), a.index, b.index, move, &meet, &m));
+      SPLINTCORE_ASSERT_OK(mesh_pair_meet_rigid(Context(&s.arena), a_lean.index, b_lean.index, move,
+                                                &meet_lean, &m));
+      EXPECT_EQ(meet, meet_lean);
+      ++compared;
+    }
+  }
+  EXPECT_GE(compared, 16);
+}
+
 // mesh_pair_distance_rigid and mesh_pair_meet_rigid give the bits mesh_pair_distance and
 // mesh_pair_meet give over an index of B's moved copy (its corners through apply_point): B's
 // boxes bounded after the move only prune less. Random moves (rotations about axes through
