@@ -93,6 +93,9 @@ struct CaseFile {
       0;  // bytes; 0: the tool's default (`splintcore design` sizes its arena by it)
   const char* output_splint = nullptr;
   const char* output_report = nullptr;
+  // "output": {"job": NAME}: a 3MF print job (the plan's: default "job.3mf"; one splint's:
+  // written only when named).
+  const char* output_job = nullptr;
 };
 
 // Parses and validates a case file (strict: unknown keys, wrong types, missing required keys
@@ -339,6 +342,15 @@ Status write_plan_job(const Context& ctx, const CaseFile& c, const Mesh& interme
                       const Mesh& final_splint, const char* const sha256[2], const ByteSink& sink,
                       Vec3 moves[2]);
 
+// One splint's print job (a case's "output": {"job": NAME}): the splint on the printer's tray
+// (arrange_on_tray), named by the case id ("splint" without one), with the SHA-256 of its
+// binary STL (sha256, or null: computed here), as write_plan_job writes two. `move` (may be
+// null) receives its translation. Arena: at most splint_job_bound(), nothing stays. Errors:
+// write_plan_job's.
+uint64_t splint_job_bound(const CaseFile& c, const Mesh& splint);
+Status write_splint_job(const Context& ctx, const CaseFile& c, const Mesh& splint,
+                        const char* sha256, const ByteSink& sink, Vec3* move);
+
 // The SHA-256 (64 lower-case hex digits and a NUL) of the binary STL write_stl() writes of
 // `splint`, without keeping the bytes. Arena: write_stl's buffer (64,000 bytes), returned.
 // Errors: write_stl's.
@@ -364,7 +376,8 @@ struct DesignReportFiles {
   const char* preview_sha256 = nullptr;
   const char* preview_error = nullptr;       // why there is no preview
   const char* resolved_case_path = nullptr;  // where the automatic outline's case was written
-  // A plan's print job (files[0] of write_plan_report: both splints in one 3MF), when written.
+  // The print job, when written: a plan's (files[0] of write_plan_report: both splints in one
+  // 3MF) or one splint's ("output": {"job": NAME}).
   const char* print_job_path = nullptr;
   const char* print_job_sha256 = nullptr;
 };

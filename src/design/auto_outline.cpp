@@ -253,10 +253,11 @@ void write_later_stages(JsonWriter& w, const CaseFile& c) {
   w.add("placement", c.place_on_tray ? "tray" : "case");
   w.add("printer", c.printer);
   if (c.memory_cap > 0) w.add("memory_cap", c.memory_cap);
-  if (c.output_splint != nullptr || c.output_report != nullptr) {
+  if (c.output_splint != nullptr || c.output_report != nullptr || c.output_job != nullptr) {
     w.begin_object("output");
     if (c.output_splint != nullptr) w.add("splint", c.output_splint);
     if (c.output_report != nullptr) w.add("report", c.output_report);
+    if (c.output_job != nullptr) w.add("job", c.output_job);
     w.end_object();
   }
 }

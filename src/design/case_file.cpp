@@ -624,7 +624,7 @@ Status parse_memory_cap(const Reader& r, const JsonValue* m, CaseFile* out) {
 Status parse_output(const Reader& r, const JsonValue* o, CaseFile* out) {
   const JsonDocument& doc = *r.doc;
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*o, JsonType::kObject, "output"));
-  static const char* const kOutputKeys[] = {"splint", "report", nullptr};
+  static const char* const kOutputKeys[] = {"splint", "report", "job", nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*o, kOutputKeys, "\"output\""));
   // Output names are file names inside the output folder the user chose: a case from
   // elsewhere must not be able to write outside it ("../x", "/etc/x").
@@ -640,6 +640,12 @@ Status parse_output(const Reader& r, const JsonValue* o, CaseFile* out) {
     SPLINTCORE_RETURN_IF_ERROR(r.string(*s, "report", &out->output_report));
     if (!is_plain_name(out->output_report, 128)) {
       return r.fail(*s, StatusCode::kInvalidArgument, "\"report", kOutputNameRule);
+    }
+  }
+  if (const JsonValue* s = doc.member(*o, "job")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.string(*s, "job", &out->output_job));
+    if (!is_plain_name(out->output_job, 128)) {
+      return r.fail(*s, StatusCode::kInvalidArgument, "\"job", kOutputNameRule);
     }
   }
   return Status::ok();

@@ -325,6 +325,19 @@ Status splint_stl_sha256(const Context& ctx, const Mesh& splint, char out[65]) {
   return Status::ok();
 }
 
+namespace {
+
+// The print job written (3MF), when there is one.
+void write_print_job(JsonWriter& w, const DesignReportFiles& files) {
+  if (files.print_job_path == nullptr) return;
+  w.begin_object("print_job");
+  w.add("path", files.print_job_path);
+  if (files.print_job_sha256 != nullptr) w.add("sha256", files.print_job_sha256);
+  w.end_object();
+}
+
+}  // namespace
+
 Status write_design_report(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                            const Mesh& splint, const DesignReport& report,
                            const DesignReportFiles& files, const DesignRunInfo* run,
@@ -339,6 +352,7 @@ Status write_design_report(const Context& ctx, const CaseFile& c, Span<const Mes
   w.begin_object();
   write_case_head(w, c, files);
   write_splint_members(w, c, jaws, splint, report, files, splint_sha256);
+  write_print_job(w, files);
   if (run != nullptr) write_run(w, *run);
   w.end_object();
   return w.finish();
@@ -370,12 +384,7 @@ Status write_plan_report(const Context& ctx, const CaseFile& c, Span<const Mesh>
   for (int k = 0; k < 2; ++k) {
     write_plan_splint(w, kKeys[k], derived[k], jaws, *splints[k], *parts[k], files[k], sha256[k]);
   }
-  if (files[0].print_job_path != nullptr) {
-    w.begin_object("print_job");
-    w.add("path", files[0].print_job_path);
-    if (files[0].print_job_sha256 != nullptr) w.add("sha256", files[0].print_job_sha256);
-    w.end_object();
-  }
+  write_print_job(w, files[0]);
   if (run != nullptr) write_run(w, *run);
   w.end_object();
   return w.finish();

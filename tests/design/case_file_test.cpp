@@ -439,7 +439,7 @@ TEST(CaseFileErrors, UnknownKeysAtEveryLevel) {
       with_root("  \"jaws\": [{\"role\": \"maxilla\", \"mesh\": \"m.stl\", \"scale\": @2}],\n"),
       {"unknown key \"scale\" in a jaw", "(allowed: role mesh seed transform)"});
   expect_invalid(with_root("  \"output\": {\"splint\": \"s.stl\", \"stl\": @\"x\"},\n"),
-                 {"unknown key \"stl\" in \"output\"", "(allowed: splint report)"});
+                 {"unknown key \"stl\" in \"output\"", "(allowed: splint report job)"});
   // Keys are case-sensitive.
   expect_invalid(with_root("  \"Case_ID\": @\"x\",\n"), {"unknown key \"Case_ID\""});
 }

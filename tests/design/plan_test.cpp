@@ -427,6 +427,53 @@ TEST(DesignPlan, PrintJobHashesAndErrors) {
   EXPECT_EQ(t.arena.used(), used);
 }
 
+// write_splint_job: one splint's package, in exactly splint_job_bound(); the hash given is the
+// one it would compute (the same bytes); its object is named by the case id, "splint" without
+// one; an empty splint and an unknown printer are errors, the arena as it was.
+TEST(DesignPlan, OneSplintsPrintJob) {
+  test::TestArena t{size_t{4} << 20};
+  const Context ctx(&t.arena);
+  CaseFile c;
+  c.case_id = "one-1";
+  const Mesh a = job_tetra(t.arena, 20);
+  std::string computed, given, unnamed;
+  const auto sink_of = [](std::string* out) {
+    ByteSink sink;
+    sink.user = out;
+    sink.write = [](void* user, const uint8_t* data, size_t n) {
+      static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
+      return true;
+    };
+    return sink;
+  };
+  {
+    test::TestArena exact{static_cast<size_t>(splint_job_bound(c, a))};
+    Vec3 move;
+    SPLINTCORE_ASSERT_OK(
+        write_splint_job(Context(&exact.arena), c, a, nullptr, sink_of(&computed), &move));
+    EXPECT_GE(move.x + 0.0, 0.0);  // placed on the tray, whose corner is the origin
+    EXPECT_EQ(exact.arena.used(), 0u);
+  }
+  char hash[65];
+  SPLINTCORE_ASSERT_OK(splint_stl_sha256(ctx, a, hash));
+  SPLINTCORE_ASSERT_OK(write_splint_job(ctx, c, a, hash, sink_of(&given), nullptr));
+  EXPECT_EQ(given, computed);
+  CaseFile no_id = c;
+  no_id.case_id = "";
+  SPLINTCORE_ASSERT_OK(write_splint_job(ctx, no_id, a, hash, sink_of(&unnamed), nullptr));
+  EXPECT_NE(unnamed, computed);  // another object name and no case id metadata
+  const size_t used = t.arena.used();
+  std::string unused;
+  Status s = write_splint_job(ctx, c, Mesh(), nullptr, sink_of(&unused), nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(s.message()).find("the splint is empty"), std::string::npos) << s.message();
+  CaseFile unknown = c;
+  unknown.printer = "nope";
+  s = write_splint_job(ctx, unknown, a, nullptr, sink_of(&unused), nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(t.arena.used(), used);
+}
+
 TEST(DesignPlan, ErrorsLeaveTheArenaAsItWas) {
   PlanFixture f("maxilla_first");
   ASSERT_TRUE(f.ok);

@@ -329,6 +329,20 @@ check "design splint has the golden bytes" -- grep -q "\"splint_sha256\":\"$gold
 check "report has the case hash" -- grep -q '"case_sha256":"[0-9a-f]\{64\}"' "$work/design/report.json"
 check "report has the stages" -- grep -q '"stage":"boolean"' "$work/design/report.json"
 expect_exit 0 "the designed splint is printable" -- "$tool" check "$work/design/splint.stl"
+# One splint's print job ("output": {"job": NAME}, issue 32): the splint alone on the Eden260
+# tray as a 3MF, its triangles and volume those of the STL (Python's zipfile and XML parser),
+# named in the report with its SHA-256; the STL's bytes unchanged.
+sed 's/"report": "report.json"/"report": "report.json", "job": "splint.3mf"/' "$work/case/case.json" >"$work/case/job.json"
+expect_exit 0 "design with a print job" -- "$tool" design "$work/case/job.json" -o "$work/design-job"
+check "the job's splint has the golden bytes" -- has_sha256 "$work/design-job/splint.stl" "$golden"
+check "the splint's print job: one object on the tray, the STL's triangles and volume (Python)" -- \
+  python3 "$(dirname "$0")/check_3mf.py" "$work/design-job/splint.3mf" 1 255 252 5 "$golden" \
+  --height 200 --stl "$work/design-job/splint.stl"
+one_job_sha=$(sha256sum "$work/design-job/splint.3mf" | cut -d' ' -f1)
+check "the report names the splint's print job and its SHA-256" -- grep -q "\"print_job\":{\"path\":\"[^\"]*splint.3mf\",\"sha256\":\"$one_job_sha\"}" "$work/design-job/report.json"
+sed 's/"report": "report.json"/"report": "report.json", "job": "..\/x.3mf"/' "$work/case/case.json" >"$work/case/job-bad.json"
+expect_exit 1 "a print job outside the output folder" -- "$tool" design "$work/case/job-bad.json" -o "$work/design-job-bad"
+check "the refusal names the rule" -- grep -q '"job" must be a file name in the output folder' "$work/err"
 # The same case with interference elimination ("blockout" added before "printer").
 sed 's/"printer":/"blockout": {"voxel": 0.3},\n  "printer":/' "$work/case/case.json" >"$work/case/blockout.json"
 mkdir -p "$work/design-blockout"

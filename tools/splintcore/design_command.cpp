@@ -120,6 +120,7 @@ class Design {
   Status write_report();
   int run_plan();
   Status write_plan_job(const std::string& path);
+  Status write_splint_job(const std::string& path);
   Status write_plan_report();
   void print_summary() const;
 
@@ -159,7 +160,7 @@ class Design {
   Mesh plan_splints_[2];
   PlanReport plan_report_;
   std::string plan_paths_[2], plan_hashes_[2];
-  std::string job_path_, job_sha256_;  // OUTDIR/job.3mf
+  std::string job_path_, job_sha256_;  // OUTDIR/job.3mf, or the case's "output" "job"
   cli::PreviewInfo plan_previews_[2];
   Status plan_preview_status_[2];
   char plan_preview_errors_[2][512] = {};
@@ -205,6 +206,9 @@ int Design::run() {
   }
   t_design_ = monotonic_seconds();
   s = write_splint();
+  if (s.is_ok() && c_.output_job != nullptr) {
+    s = write_splint_job(std::string(args_.output) + "/" + c_.output_job);
+  }
   if (!s.is_ok()) return run_.reject(s);
   write_preview();
   t_end_ = monotonic_seconds();
@@ -404,6 +408,10 @@ Status Design::write_report() {
   files.splint_path = splint_path_.c_str();
   if (outlined_) files.resolved_case_path = resolved_path_.c_str();
   files.splint_sha256 = splint_hash_.c_str();  // of the bytes just written
+  if (!job_path_.empty()) {
+    files.print_job_path = job_path_.c_str();
+    files.print_job_sha256 = job_sha256_.c_str();
+  }
   if (preview_status_.is_ok()) {
     files.preview_path = preview_.path.c_str();
     files.preview_sha256 = preview_.sha256.c_str();
@@ -449,7 +457,7 @@ int Design::run_plan() {
     s = write_mesh_file(plan_splints_[k], plan_paths_[k], &plan_hashes_[k]);
     if (!s.is_ok()) return run_.reject(s);
   }
-  s = write_plan_job(out_dir + "/job.3mf");
+  s = write_plan_job(out_dir + "/" + (c_.output_job != nullptr ? c_.output_job : "job.3mf"));
   if (!s.is_ok()) return run_.reject(s);
   for (int k = 0; k < 2; ++k) {
     std::vector<RigidTransform> moves;
@@ -492,6 +500,18 @@ Status Design::write_plan_job(const std::string& path) {
   std::string bytes;
   SPLINTCORE_RETURN_IF_ERROR(splintcore::write_plan_job(
       ctx_, c_, plan_splints_[0], plan_splints_[1], hashes, cli::string_sink(&bytes), nullptr));
+  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(path, bytes));
+  job_path_ = path;
+  job_sha256_ = hex_sha256(bytes.data(), bytes.size());
+  return Status::ok();
+}
+
+// OUTDIR/NAME ("output": {"job": NAME}): the splint on the printer's tray as a 3MF
+// (write_splint_job, design.h), with the SHA-256 of its STL as written.
+Status Design::write_splint_job(const std::string& path) {
+  std::string bytes;
+  SPLINTCORE_RETURN_IF_ERROR(splintcore::write_splint_job(ctx_, c_, splint_, splint_hash_.c_str(),
+                                                          cli::string_sink(&bytes), nullptr));
   SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(path, bytes));
   job_path_ = path;
   job_sha256_ = hex_sha256(bytes.data(), bytes.size());
@@ -626,6 +646,10 @@ void Design::print_summary() const {
       report.placed_on_tray ? ", placed on the tray" : "");
   std::printf("wrote %s (sha256 %s) and %s\n", splint_path_.c_str(), splint_hash_.c_str(),
               report_path_.c_str());
+  if (!job_path_.empty()) {
+    std::printf("wrote %s (the splint on the tray, sha256 %s)\n", job_path_.c_str(),
+                job_sha256_.c_str());
+  }
   std::printf("time: read %.3f s, design %.3f s, total %.3f s; peak arena %llu bytes\n",
               t_read_ - run_.start, t_design_ - t_read_, t_end_ - run_.start,
               static_cast<unsigned long long>(run_.peak_arena()));
