@@ -517,6 +517,16 @@ typedef struct sc_design_report {
 sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws, size_t jaw_count,
                     sc_mesh** splint, sc_design_report* report);
 
+/* Writes one splint's print job to `sink` as `splintcore design` writes the case's
+ * "output" "job": the splint alone on the case printer's tray, one 3MF package named by the
+ * case id, the SHA-256 of its binary STL in metadata (write_splint_job, C++ design.h). The same
+ * splint gives the same bytes. Arena: at most splint_job_bound() (the model text, up to about
+ * 150 bytes a triangle, and its compressed copy), nothing stays. Errors: SC_INVALID_ARGUMENT
+ * (NULL pointers, an empty splint, unknown printer), SC_LIMIT_EXCEEDED (it does not fit the
+ * tray), SC_IO_ERROR (the sink refused), SC_ARENA_EXHAUSTED. */
+sc_status sc_write_splint_job(sc_context* ctx, const sc_case* c, const sc_mesh* splint,
+                              const sc_sink* sink);
+
 /* What the audit report names that the library cannot know (every member may be NULL: that
  * entry is left out). jaw_paths and jaw_sha256 hold jaw_count entries when given. */
 typedef struct sc_report_files {

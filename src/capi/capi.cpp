@@ -983,6 +983,17 @@ sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaw
   return code;
 }
 
+sc_status sc_write_splint_job(sc_context* ctx, const sc_case* c, const sc_mesh* splint,
+                              const sc_sink* sink) {
+  if (ctx == nullptr || c == nullptr || splint == nullptr || sink == nullptr ||
+      sink->write == nullptr) {
+    return null_argument(ctx, "sc_write_splint_job", "the case, the splint, the sink or its write");
+  }
+  ArenaScope scope(ctx->arena);
+  return keep(ctx, write_splint_job(core_context(ctx), c->c, splint->mesh, nullptr, core_sink(sink),
+                                    nullptr));
+}
+
 sc_status sc_design_write_report(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
                                  size_t jaw_count, const sc_mesh* splint,
                                  const sc_report_files* files, const sc_sink* sink) {

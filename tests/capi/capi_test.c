@@ -668,6 +668,25 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
   read_golden("boolean:paper_scale-phantom6000", golden);
   CHECK(strlen(golden) == 64);
   CHECK(strcmp(hash, golden) == 0);
+  /* The splint's print job: a ZIP (its local header signature first), the same bytes twice;
+   * NULL arguments refused; the arena as it was. */
+  {
+    size_t job_cap = 4u << 20;
+    unsigned char* job = (unsigned char*)malloc(job_cap);
+    unsigned char* again = (unsigned char*)malloc(job_cap);
+    sc_memory_sink_state js, ks;
+    sc_sink jsink = sc_memory_sink(&js, job, job_cap, "splint.3mf");
+    sc_sink ksink = sc_memory_sink(&ks, again, job_cap, "splint.3mf");
+    size_t used = sc_arena_used(f.ctx);
+    CHECK_OK(f.ctx, sc_write_splint_job(f.ctx, c, splint, &jsink));
+    CHECK_OK(f.ctx, sc_write_splint_job(f.ctx, c, splint, &ksink));
+    CHECK(js.size > 30 && job[0] == 'P' && job[1] == 'K' && job[2] == 3 && job[3] == 4);
+    CHECK(js.size == ks.size && memcmp(job, again, (size_t)js.size) == 0);
+    CHECK(sc_write_splint_job(f.ctx, c, NULL, &jsink) == SC_INVALID_ARGUMENT);
+    CHECK(sc_arena_used(f.ctx) == used);
+    free(job);
+    free(again);
+  }
   printf(
       "design: %llu triangles, %.3f mm^3, printable %d, arena high water %llu bytes, sha256 %s\n",
       (unsigned long long)report.splint_triangles, report.splint_volume_mm3, report.printable,
