@@ -375,6 +375,17 @@ Mesh job_tetra(Arena& arena, double size) {
   return m;
 }
 
+// A sink that appends to `out`.
+ByteSink sink_of(std::string* out) {
+  ByteSink sink;
+  sink.user = out;
+  sink.write = [](void* user, const uint8_t* data, size_t n) {
+    static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
+    return true;
+  };
+  return sink;
+}
+
 // write_plan_job on small parts: the hashes given are the ones it would compute (the same
 // bytes), other hashes give other bytes; an unknown printer, an empty splint, parts that do
 // not fit the tray side by side and a sink that refuses are errors, the arena as it was.
@@ -385,15 +396,6 @@ TEST(DesignPlan, PrintJobHashesAndErrors) {
   c.case_id = "job-1";
   const Mesh a = job_tetra(t.arena, 20), b = job_tetra(t.arena, 30);
   std::string computed, given, other;
-  const auto sink_of = [](std::string* out) {
-    ByteSink sink;
-    sink.user = out;
-    sink.write = [](void* user, const uint8_t* data, size_t n) {
-      static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
-      return true;
-    };
-    return sink;
-  };
   Vec3 moves[2];
   SPLINTCORE_ASSERT_OK(write_plan_job(ctx, c, a, b, nullptr, sink_of(&computed), moves));
   EXPECT_GE(moves[1].x - moves[0].x, 20 + kPlanJobGapMm);  // a's box is 20 mm wide
@@ -437,15 +439,6 @@ TEST(DesignPlan, OneSplintsPrintJob) {
   c.case_id = "one-1";
   const Mesh a = job_tetra(t.arena, 20);
   std::string computed, given, unnamed;
-  const auto sink_of = [](std::string* out) {
-    ByteSink sink;
-    sink.user = out;
-    sink.write = [](void* user, const uint8_t* data, size_t n) {
-      static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
-      return true;
-    };
-    return sink;
-  };
   {
     test::TestArena exact{static_cast<size_t>(splint_job_bound(c, a))};
     Vec3 move;
