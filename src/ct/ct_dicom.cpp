@@ -26,6 +26,7 @@ constexpr int kMaxNesting = 32;
 
 constexpr uint32_t tag_of(uint32_t group, uint32_t element) { return (group << 16) | element; }
 constexpr uint32_t kTransferSyntax = tag_of(0x0002, 0x0010);
+constexpr uint32_t kImageType = tag_of(0x0008, 0x0008);
 constexpr uint32_t kSliceThickness = tag_of(0x0018, 0x0050);
 constexpr uint32_t kSpacingBetweenSlices = tag_of(0x0018, 0x0088);
 constexpr uint32_t kImagePosition = tag_of(0x0020, 0x0032);
@@ -132,6 +133,8 @@ struct Header {
   Codec codec = Codec::kNative;
   char transfer_syntax[65] = {};
   char photometric[17] = {};
+  char image_type[65] = {};  // (0008,0008), as written (for messages)
+  bool localizer = false;    // one of its values is LOCALIZER: a scout, not a slice
   uint32_t rows = 0, columns = 0;
   uint32_t bits_allocated = 0, bits_stored = 0, high_bit = 0, pixel_representation = 0;
   uint32_t samples = 1;
@@ -227,6 +230,20 @@ Status take_value(Header* h, uint32_t tag, const uint8_t* v, uint32_t n, uint64_
     case kPhotometric:
       copy_string(h->photometric, sizeof(h->photometric), v, n);
       return Status::ok();
+    case kImageType: {  // CS values split by '\': a localizer (scout) says LOCALIZER
+      copy_string(h->image_type, sizeof(h->image_type), v, n);
+      const char* text = reinterpret_cast<const char*>(v);
+      for (uint32_t i = 0; i <= n;) {
+        uint32_t j = i;
+        while (j < n && text[j] != '\\') ++j;
+        const char* value = text + i;
+        size_t len = j - i;
+        trim(&value, &len);
+        if (len == 9 && std::memcmp(value, "LOCALIZER", 9) == 0) h->localizer = true;
+        i = j + 1;
+      }
+      return Status::ok();
+    }
     case kNumberOfFrames: {
       int64_t f = 0;
       if (!parse_i64(reinterpret_cast<const char*>(v), n, &f)) {
@@ -256,6 +273,7 @@ bool kept_tag(uint32_t tag) {
     case kHighBit:
     case kPixelRepresentation:
     case kPhotometric:
+    case kImageType:
     case kNumberOfFrames: return true;
     default: return false;
   }
@@ -620,6 +638,18 @@ Status check_header(const Header& h, const ByteSource& file) {
   auto missing = [&](const char* what) {
     return make_error(StatusCode::kParseError, "missing ", what);
   };
+  // What the file is, before what it lacks: a scout or a multi-frame file is not a slice.
+  if (h.localizer) {
+    return make_error(StatusCode::kUnsupported, "a localizer (scout) image (Image Type ",
+                      h.image_type,
+                      "), not a slice of a CT volume: leave it out of the series (move it out "
+                      "of the folder)");
+  }
+  if (h.frames != 1) {
+    return make_error(StatusCode::kUnsupported, "Number of Frames is ", h.frames,
+                      ": a multi-frame image (e.g. enhanced CT, one file for the volume); only "
+                      "single-frame slices are supported");
+  }
   if (!h.have_rows) return missing("(0028,0010) Rows");
   if (!h.have_columns) return missing("(0028,0011) Columns");
   if (!h.have_bits_allocated) return missing("(0028,0100) Bits Allocated");
@@ -640,10 +670,6 @@ Status check_header(const Header& h, const ByteSource& file) {
       std::strcmp(h.photometric, "MONOCHROME2") != 0) {
     return make_error(StatusCode::kUnsupported, "Photometric Interpretation ", h.photometric,
                       ": only MONOCHROME1 and MONOCHROME2 are supported");
-  }
-  if (h.frames != 1) {
-    return make_error(StatusCode::kUnsupported, "Number of Frames is ", h.frames,
-                      ": only single-frame images are supported");
   }
   if (h.bits_allocated != 8 && h.bits_allocated != 16) {
     return make_error(StatusCode::kUnsupported, "Bits Allocated is ", h.bits_allocated,

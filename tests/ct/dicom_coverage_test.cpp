@@ -409,6 +409,20 @@ TEST(DicomCoverage, HeaderChecks) {
          put(e, {tag(0x0028, 0x1053), "DS", text("0")});
        }),
        StatusCode::kParseError, "Rescale Slope is 0: must be finite and non-zero"},
+      // A scout (localizer) says what it is, whatever else it has or lacks.
+      {"scout", with([](std::vector<El>* e) {
+         put(e, {tag(0x0008, 0x0008), "CS", text("ORIGINAL\\PRIMARY\\LOCALIZER ")});
+         drop(e, tag(0x0020, 0x0032));
+       }),
+       StatusCode::kUnsupported,
+       "a localizer (scout) image (Image Type ORIGINAL\\PRIMARY\\LOCALIZER), not a slice"},
+      // A multi-frame file (enhanced CT keeps positions in functional groups): named as such,
+      // not as a file missing its Image Position.
+      {"multi-frame", with([](std::vector<El>* e) {
+         put(e, {tag(0x0028, 0x0008), "IS", text("120")});
+         drop(e, tag(0x0020, 0x0032));
+       }),
+       StatusCode::kUnsupported, "Number of Frames is 120: a multi-frame image"},
   };
   expect_files(cases);
   // A truncated Pixel Data; a source that does not know its size (the same file is fine).
@@ -461,6 +475,17 @@ TEST(DicomCoverage, AcceptedVariants) {
   put(&els, {tag(0x0018, 0x0088), "DS", text("y")});
   r = read_one(file(els));
   EXPECT_TRUE(has(r.status, "a single slice needs")) << r.status.message();
+  // Image types of axial slices (LOCALIZER only as a whole value marks a scout; an empty
+  // value and NUL padding are fine).
+  const std::string types[] = {"ORIGINAL\\PRIMARY\\AXIAL", "DERIVED\\SECONDARY\\LOCALIZERX", "",
+                               std::string("ORIGINAL\\PRIMARY\\AXIAL\0", 24)};
+  for (const std::string& type : types) {
+    els = slice(0);
+    put(&els, {tag(0x0018, 0x0088), "DS", text("2.5")});
+    put(&els, {tag(0x0008, 0x0008), "CS", text(type)});
+    r = read_one(file(els));
+    EXPECT_TRUE(r.status.is_ok()) << type << ": " << r.status.message();
+  }
   // The header limit.
   CtReadOptions small;
   small.max_header_bytes = 150;
