@@ -392,6 +392,17 @@ check "at most 20000 triangles" -- python3 -c "import json,sys; r=json.load(open
 expect_exit 0 "the decimated maxilla is a printable solid" -- "$tool" check "$work/jawsdec/maxilla.stl"
 expect_exit 0 "reconstruct mha" -- "$tool" reconstruct "$work/ct.mha" -o "$work/jawsmha" "${seeds[@]}"
 expect_exit 0 "reconstruct dicom folder" -- "$tool" reconstruct "$work/ctdcm" -o "$work/jawsdcm" "${seeds[@]}" --hu-min 300 --hu-max 4000
+# One DICOM file given directly (issue 31): read as a series of one slice (by its extension, or
+# by the "DICM" preamble without one), so the error is the seed's, not the format's.
+one_dcm=$(ls "$work/ctdcm" | head -n 1)
+cp "$work/ctdcm/$one_dcm" "$work/one-slice"
+for f in "$work/ctdcm/$one_dcm" "$work/one-slice"; do
+  expect_exit 1 "reconstruct one DICOM file ($(basename "$f"))" -- "$tool" reconstruct "$f" -o "$work/jawsone" "${seeds[@]}"
+  check "one DICOM file read as a volume of one slice" -- grep -q "outside the volume" "$work/err"
+done
+printf 'not a CT' >"$work/not-ct.bin"
+expect_exit 1 "reconstruct a file of unknown format" -- "$tool" reconstruct "$work/not-ct.bin" -o "$work/jawsone" "${seeds[@]}"
+check "unknown format named" -- grep -q "cannot tell the CT format of .*a DICOM file or a folder" "$work/err"
 expect_exit 0 "reconstruct with a split plane" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jawsplane" "${seeds[@]}" --split-plane 0,0,0,0,0,1
 expect_exit 1 "reconstruct with the plane the wrong way" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jawsbad" "${seeds[@]}" --split-plane 0,0,0,0,0,-1
 check "wrong side named" -- grep -q "split plane's side" "$work/err"

@@ -2,7 +2,9 @@
 #include "ct_files.h"
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 
 #include "splintcore/platform.h"
 
@@ -60,12 +62,21 @@ void series_close(void* user, uint32_t index, ByteSource* source) {
 
 }  // namespace
 
+// A DICOM Part 10 file: "DICM" after the 128-byte preamble (PS3.10 7.1).
+bool has_dicom_preamble(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char head[132] = {};
+  if (!in.read(head, sizeof head)) return false;
+  return std::memcmp(head + 128, "DICM", 4) == 0;
+}
+
 CtFormat ct_format_of_path(const std::string& path) {
   std::error_code ec;
   if (fs::is_directory(path, ec)) return CtFormat::kDicom;
   const std::string ext = lower_extension(path);
   if (ext == ".nrrd" || ext == ".nhdr") return CtFormat::kNrrd;
   if (ext == ".mha" || ext == ".mhd") return CtFormat::kMetaImage;
+  if (ext == ".dcm" || ext == ".dicom" || has_dicom_preamble(path)) return CtFormat::kDicom;
   return CtFormat::kUnknown;
 }
 
@@ -108,7 +119,13 @@ Status read_ct_path(const Context& ctx, const std::string& path, const CtReadOpt
   const CtFormat format = ct_format_of_path(path);
   if (format == CtFormat::kDicom) {
     SeriesFiles series;
-    SPLINTCORE_RETURN_IF_ERROR(list_dicom_folder(path, &series.paths));
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) {
+      SPLINTCORE_RETURN_IF_ERROR(list_dicom_folder(path, &series.paths));
+    } else {
+      series.paths.push_back(path);  // one file: a series of one (a single slice's spacing
+                                     // from its Spacing Between Slices or Slice Thickness)
+    }
     if (series.paths.size() > options.max_dimension) {
       return make_error(StatusCode::kLimitExceeded, "folder ", path.c_str(), " holds ",
                         series.paths.size(), " files, more than the limit ", options.max_dimension,
@@ -123,8 +140,9 @@ Status read_ct_path(const Context& ctx, const std::string& path, const CtReadOpt
     return read_dicom_series(ctx, s, options, out, info);
   }
   if (format == CtFormat::kUnknown) {
-    return make_error(StatusCode::kUnsupported, "cannot tell the CT format of ", path.c_str(),
-                      ": give a .nrrd, .nhdr, .mha or .mhd file or a folder of DICOM files")
+    return make_error(
+               StatusCode::kUnsupported, "cannot tell the CT format of ", path.c_str(),
+               ": give a .nrrd, .nhdr, .mha or .mhd file, a DICOM file or a folder of DICOM files")
         .in_file(path.c_str());
   }
   FileSource header;

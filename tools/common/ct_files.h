@@ -1,5 +1,5 @@
 // Opening CT volumes from disk (hosted: std::filesystem): a .nrrd / .nhdr / .mha / .mhd file,
-// or a folder of DICOM files, read with the core readers of splintcore/ct.h.
+// a folder of DICOM files or one DICOM file, read with the core readers of splintcore/ct.h.
 #ifndef SPLINTCORE_TOOLS_CT_FILES_H
 #define SPLINTCORE_TOOLS_CT_FILES_H
 
@@ -13,7 +13,8 @@ namespace splintcore {
 namespace cli {
 
 // The format a path names: a folder is kDicom; a file by its extension (.nrrd/.nhdr: kNrrd,
-// .mha/.mhd: kMetaImage, case-insensitive; .dcm or anything else: kUnknown).
+// .mha/.mhd: kMetaImage, .dcm/.dicom: kDicom, case-insensitive), else kDicom when it has the
+// DICOM preamble ("DICM" at byte 128), else kUnknown.
 CtFormat ct_format_of_path(const std::string& path);
 
 // Every regular file in `folder` (not recursing; hidden files, i.e. names starting with '.',
