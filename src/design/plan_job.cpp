@@ -25,7 +25,6 @@ struct Job {
   const char* title = "";
   const char* what[2] = {"", ""};  // for messages
   char names[2][kNameBytes] = {};
-  ThreeMfObject objects[2];
 
   void name(const CaseFile& c) {
     size_t n = std::strlen(c.case_id);
@@ -37,12 +36,18 @@ struct Job {
       names[k][p + n] = '\0';
       if (n == 0 && p > 0) names[k][p - 1] = '\0';  // the prefix alone, without its space
       if (names[k][0] == '\0') std::memcpy(names[k], "splint", 7);
-      objects[k].mesh = splints[k];
-      objects[k].name = names[k];
-      objects[k].sha256 = kNoHash;  // the hashes and translations are set by write_job
     }
   }
-  Span<const ThreeMfObject> span() const { return Span<const ThreeMfObject>(objects, count); }
+  // The objects as write_3mf takes them, naming this Job's names (the hashes and translations
+  // are set by write_job).
+  Span<const ThreeMfObject> objects(ThreeMfObject out[2]) const {
+    for (size_t k = 0; k < count; ++k) {
+      out[k].mesh = splints[k];
+      out[k].name = names[k];
+      out[k].sha256 = kNoHash;
+    }
+    return Span<const ThreeMfObject>(out, count);
+  }
 };
 
 Job plan_job(const CaseFile& c, const Mesh& intermediate, const Mesh& final_splint) {
@@ -77,13 +82,14 @@ ThreeMfOptions job_options(const CaseFile& c, const Job& j) {
 }
 
 uint64_t job_bound(const CaseFile& c, const Job& j) {
-  const uint64_t job = write_3mf_bound(j.span(), job_options(c, j));
+  ThreeMfObject objects[2];
+  const uint64_t job = write_3mf_bound(j.objects(objects), job_options(c, j));
   const uint64_t hash = uint64_t{StlWriteOptions{}.buffer_bytes} + Arena::kDefaultAlignment;
   return job > hash ? job : hash;  // the hashes are computed first, and returned
 }
 
 // The splints on the printer's tray, kPlanJobGapMm apart, as one 3MF package.
-Status write_job(const Context& ctx, const CaseFile& c, Job& j, const char* const* sha256,
+Status write_job(const Context& ctx, const CaseFile& c, const Job& j, const char* const* sha256,
                  const ByteSink& sink, Vec3* moves) {
   const PrinterProfile* profile = find_printer_profile(c.printer);
   if (profile == nullptr) {
@@ -107,12 +113,14 @@ Status write_job(const Context& ctx, const CaseFile& c, Job& j, const char* cons
   Vec3 placed[2];
   SPLINTCORE_RETURN_IF_ERROR(
       arrange_on_tray(*profile, Span<const Aabb>(boxes, j.count), kPlanJobGapMm, placed));
+  ThreeMfObject objects[2];
+  (void)j.objects(objects);
   for (size_t k = 0; k < j.count; ++k) {
-    j.objects[k].sha256 = hashes[k];
-    j.objects[k].translation = placed[k];
+    objects[k].sha256 = hashes[k];
+    objects[k].translation = placed[k];
     if (moves != nullptr) moves[k] = placed[k];
   }
-  return write_3mf(ctx, j.span(), job_options(c, j), sink);
+  return write_3mf(ctx, Span<const ThreeMfObject>(objects, j.count), job_options(c, j), sink);
 }
 
 }  // namespace
@@ -124,8 +132,7 @@ uint64_t plan_job_bound(const CaseFile& c, const Mesh& intermediate, const Mesh&
 Status write_plan_job(const Context& ctx, const CaseFile& c, const Mesh& intermediate,
                       const Mesh& final_splint, const char* const sha256[2], const ByteSink& sink,
                       Vec3 moves[2]) {
-  Job j = plan_job(c, intermediate, final_splint);
-  return write_job(ctx, c, j, sha256, sink, moves);
+  return write_job(ctx, c, plan_job(c, intermediate, final_splint), sha256, sink, moves);
 }
 
 uint64_t splint_job_bound(const CaseFile& c, const Mesh& splint) {
@@ -134,9 +141,8 @@ uint64_t splint_job_bound(const CaseFile& c, const Mesh& splint) {
 
 Status write_splint_job(const Context& ctx, const CaseFile& c, const Mesh& splint,
                         const char* sha256, const ByteSink& sink, Vec3* move) {
-  Job j = splint_job(c, splint);
   const char* const hashes[1] = {sha256};
-  return write_job(ctx, c, j, hashes, sink, move);
+  return write_job(ctx, c, splint_job(c, splint), hashes, sink, move);
 }
 
 }  // namespace splintcore
