@@ -56,7 +56,7 @@ struct J2kTagNode {
   uint32_t parent;
 };
 constexpr int32_t kTagUnknown = 0x7FFFFFFF;
-size_t j2k_tag_tree_nodes(uint32_t w, uint32_t h);  // w, h >= 1
+size_t j2k_tag_tree_nodes(uint32_t w, uint32_t h);  // 0 if w or h is 0
 void j2k_tag_tree_init(J2kTagNode* nodes, uint32_t w, uint32_t h);
 // Reads bits until it is known whether leaf's value is below `threshold`: *below says it.
 // Returns false if the tree is deeper than the 32 levels it walks (it never is for w, h

@@ -523,6 +523,7 @@ void tile_records(Tile& t, bool fill) {
     res.first_precinct = precincts;
     for (uint32_t j = 0; j < res.ph; ++j) {
       for (uint32_t i = 0; i < res.pw; ++i, ++precincts) {
+        if (fill) std::memset(&t.precincts[precincts], 0, sizeof(Precinct));  // unused bands
         for (uint32_t b = 0; b < res.bands; ++b) {
           PrecinctBand pb;
           J2kRect area;

@@ -295,6 +295,7 @@ void J2kBits::align() {
 }
 
 size_t j2k_tag_tree_nodes(uint32_t w, uint32_t h) {
+  if (w == 0 || h == 0) return 0;
   size_t n = 0;
   for (;;) {
     n += size_t{w} * h;
@@ -305,6 +306,7 @@ size_t j2k_tag_tree_nodes(uint32_t w, uint32_t h) {
 }
 
 void j2k_tag_tree_init(J2kTagNode* nodes, uint32_t w, uint32_t h) {
+  if (w == 0 || h == 0) return;
   size_t level = 0;  // first node of the current level
   for (;;) {
     const uint32_t pw = (w + 1) / 2, ph = (h + 1) / 2;
