@@ -537,3 +537,54 @@ TEST(CtDicomJ2k, ErrorsCarryFileOffsets) {
 
 }  // namespace
 }  // namespace splintcore
+
+namespace splintcore {
+namespace {
+
+// Headers that say the same thing another way decode to the same pixels: a COC and a QCC
+// repeating COD and QCD, a tile-part COD, and (one layer, one precinct per resolution) every
+// progression order, whose packets then come in the same order as LRCP's.
+TEST(CtDicomJ2k, EquivalentHeadersDecodeTheSame) {
+  const Bytes cs = fragment_of(fixture("j2k16_0.dcm"));
+  const Bytes expected = native_pixels("raw16_0.dcm", 2 * kRows * kColumns);
+  auto expect_same = [&](const Bytes& b, const char* what) {
+    Bytes out;
+    const Status s = decode(b, &out);
+    ASSERT_TRUE(s.is_ok()) << what << ": " << test::format(s);
+    EXPECT_TRUE(out == expected) << what;
+  };
+  for (uint8_t order = 1; order <= 4; ++order) {
+    Bytes b = cs;
+    b[50] = order;
+    expect_same(b, "progression order");
+  }
+  // COC (Lcoc 9: Ccoc, Scoc, levels, xcb, ycb, style, transform) and QCC before QCD.
+  const uint32_t lqcd = (uint32_t{cs[61]} << 8) | cs[62];
+  Bytes b(cs.begin(), cs.begin() + 59);
+  const uint8_t coc[] = {0xFF, 0x53, 0, 9, 0, 0, cs[54], cs[55], cs[56], cs[57], cs[58]};
+  b.insert(b.end(), coc, coc + sizeof(coc));
+  const uint8_t qcc[] = {0xFF, 0x5D, static_cast<uint8_t>((lqcd + 1) >> 8),
+                         static_cast<uint8_t>(lqcd + 1), 0};
+  b.insert(b.end(), qcc, qcc + sizeof(qcc));
+  b.insert(b.end(), cs.begin() + 63, cs.begin() + 61 + lqcd);
+  b.insert(b.end(), cs.begin() + 59, cs.end());
+  expect_same(b, "COC and QCC");
+  // COD and QCD again in the tile-part header (Psot grows by their lengths).
+  size_t sot = 0;
+  while (!(cs[sot] == 0xFF && cs[sot + 1] == 0x90)) ++sot;
+  Bytes t(cs.begin(), cs.begin() + static_cast<std::ptrdiff_t>(sot + 12));
+  t.insert(t.end(), cs.begin() + 45, cs.begin() + 61 + lqcd);
+  t.insert(t.end(), cs.begin() + static_cast<std::ptrdiff_t>(sot + 12), cs.end());
+  const uint32_t grown = ((uint32_t{cs[sot + 6]} << 24) | (uint32_t{cs[sot + 7]} << 16) |
+                          (uint32_t{cs[sot + 8]} << 8) | cs[sot + 9]) +
+                         16 + lqcd;
+  for (int i = 0; i < 4; ++i) t[sot + 6 + i] = static_cast<uint8_t>(grown >> (24 - 8 * i));
+  expect_same(t, "tile-part COD and QCD");
+  // Psot 0: the last tile-part runs to the EOC.
+  Bytes z = cs;
+  for (int i = 0; i < 4; ++i) z[sot + 6 + i] = 0;
+  expect_same(z, "Psot 0");
+}
+
+}  // namespace
+}  // namespace splintcore
