@@ -166,6 +166,10 @@ TEST(CtDicomJ2k, Jp2BoxesAreSkipped) {
   Status s = decode(jp2, &out);
   ASSERT_TRUE(s.is_ok()) << test::format(s);
   EXPECT_TRUE(out == native_pixels("raw16_0.dcm", out.size()));
+  // The codestream box with length 0 (to the end of the file).
+  for (int i = 0; i < 4; ++i) jp2[32 + i] = 0;
+  s = decode(jp2, &out);
+  ASSERT_TRUE(s.is_ok()) << test::format(s);
   jp2.resize(40);  // no codestream box
   s = decode(jp2, &out);
   EXPECT_EQ(s.code(), StatusCode::kParseError);
@@ -580,6 +584,28 @@ TEST(CtDicomJ2k, EquivalentHeadersDecodeTheSame) {
                          16 + lqcd;
   for (int i = 0; i < 4; ++i) t[sot + 6 + i] = static_cast<uint8_t>(grown >> (24 - 8 * i));
   expect_same(t, "tile-part COD and QCD");
+  // SOP markers allowed (none present); predictable termination (nothing for a decoder).
+  Bytes sop = cs;
+  sop[49] = 0x02;
+  expect_same(sop, "SOP allowed");
+  Bytes predictable = cs;
+  predictable[57] = 0x10;
+  expect_same(predictable, "predictable termination");
+  // Styles that change the decoding (reset, causal, segmentation symbols) on a stream coded
+  // without them: some result, never a crash or a leak.
+  for (uint8_t style : {uint8_t{0x02}, uint8_t{0x08}, uint8_t{0x20}}) {
+    Bytes other = cs;
+    other[57] = style;
+    Bytes out;
+    (void)decode(other, &out);
+  }
+  // EPH required but absent.
+  Bytes eph = cs;
+  eph[49] = 0x04;
+  Bytes out;
+  const Status s = decode(eph, &out);
+  EXPECT_EQ(s.code(), StatusCode::kParseError);
+  EXPECT_NE(std::string(s.message()).find("EPH marker missing"), std::string::npos);
   // Psot 0: the last tile-part runs to the EOC.
   Bytes z = cs;
   for (int i = 0; i < 4; ++i) z[sot + 6 + i] = 0;
