@@ -614,3 +614,107 @@ TEST(CtDicomJ2k, EquivalentHeadersDecodeTheSame) {
 
 }  // namespace
 }  // namespace splintcore
+
+namespace splintcore {
+namespace {
+
+// Decodes `b`: any outcome but a crash, a leak (decode() checks the arena) or an error
+// without a byte offset.
+void expect_clean(const Bytes& b, const std::string& what) {
+  Bytes out;
+  const Status s =
+      decode(b, &out,
+             static_cast<size_t>(ct_detail::jpeg2000_arena_bytes(kRows, kColumns, b.size() + 64)));
+  if (!s.is_ok() && s.code() != StatusCode::kArenaExhausted) {
+    EXPECT_NE(s.byte_offset(), kNoPosition) << what << ": " << s.message();
+    EXPECT_NE(std::string(s.message()).find("JPEG 2000"), std::string::npos) << s.message();
+  }
+}
+
+// Every byte of the headers set to a few values, and every 9th byte of the packet data with
+// one bit flipped: clean errors or some image (SQLite's and meshoptimizer's sweeps).
+TEST(CtDicomJ2k, MutationSweepIsClean) {
+  for (const char* name : {"j2k16_0.dcm", "j2k97.dcm"}) {
+    const Bytes cs = fragment_of(fixture(name));
+    size_t sod = 0;
+    while (!(cs[sod] == 0xFF && cs[sod + 1] == 0x93)) ++sod;
+    for (size_t at = 0; at < sod + 2; ++at) {
+      for (uint8_t v :
+           {uint8_t{0}, uint8_t{1}, uint8_t{2}, uint8_t{0x10}, uint8_t{0x7F}, uint8_t{0x80},
+            uint8_t{0xFF}, static_cast<uint8_t>(cs[at] + 1), static_cast<uint8_t>(cs[at] - 1)}) {
+        Bytes b = cs;
+        b[at] = v;
+        expect_clean(b, std::string(name) + " header byte " + std::to_string(at));
+      }
+    }
+    for (size_t at = sod + 2; at < cs.size(); at += 9) {
+      for (uint8_t bit : {uint8_t{0x01}, uint8_t{0x80}}) {
+        Bytes b = cs;
+        b[at] = static_cast<uint8_t>(b[at] ^ bit);
+        expect_clean(b, std::string(name) + " data byte " + std::to_string(at));
+      }
+    }
+  }
+}
+
+// Headers this decoder refuses or skips, spliced into j2k16_0 before its QCD (at 59).
+TEST(CtDicomJ2k, SplicedSegments) {
+  const Bytes cs = fragment_of(fixture("j2k16_0.dcm"));
+  auto splice = [&](std::initializer_list<uint8_t> segment) {
+    Bytes b(cs.begin(), cs.begin() + 59);
+    b.insert(b.end(), segment.begin(), segment.end());
+    b.insert(b.end(), cs.begin() + 59, cs.end());
+    Bytes out;
+    return decode(b, &out);
+  };
+  EXPECT_TRUE(splice({0xFF, 0x64, 0, 5, 0, 1, 'x'}).is_ok());  // COM
+  EXPECT_TRUE(splice({0xFF, 0x55, 0, 4, 0, 0}).is_ok());       // TLM
+  auto words = [](const Status& s, const char* w) {
+    return std::string(s.message()).find(w) != std::string::npos;
+  };
+  Status s = splice({0xFF, 0x50, 0, 4, 0, 0});
+  EXPECT_TRUE(words(s, "CAP")) << s.message();
+  s = splice({0xFF, 0x52, 0, 12, 0, 0, 0, 1, 0, 4, 4, 4, 0, 1});
+  EXPECT_TRUE(words(s, "a second COD")) << s.message();
+  s = splice({0xFF, 0x53, 0, 9, 1, 0, 4, 4, 4, 0, 1});
+  EXPECT_TRUE(words(s, "COC for a component other than 0")) << s.message();
+  s = splice({0xFF, 0x53, 0, 5, 0, 0, 4});
+  EXPECT_TRUE(words(s, "COC segment too short")) << s.message();
+  s = splice({0xFF, 0x53, 0, 10, 0, 0, 4, 4, 4, 0, 1, 0});
+  EXPECT_TRUE(words(s, "COC length 10, expected 9")) << s.message();
+  s = splice({0xFF, 0x53, 0, 9, 0, 0, 33, 4, 4, 0, 1});
+  EXPECT_TRUE(words(s, "more than 32 levels")) << s.message();
+  s = splice({0xFF, 0x53, 0, 14, 0, 1, 4, 4, 4, 0, 1, 0x77, 0x77, 0x70, 0x77, 0x77});
+  EXPECT_TRUE(words(s, "precinct size 1")) << s.message();
+  s = splice({0xFF, 0x5D, 0, 5, 1, 0x40, 0x80});
+  EXPECT_TRUE(words(s, "QCC for a component other than 0")) << s.message();
+  s = splice({0xFF, 0x5D, 0, 4, 0, 0x40});
+  EXPECT_TRUE(words(s, "too short")) << s.message();
+  s = splice({0xFF, 0x5D, 0, 8, 0, 0x41, 0x80, 0, 0x80});
+  EXPECT_TRUE(words(s, "does not fit its style")) << s.message();
+  s = splice({0xFF, 0x5D, 0, 6, 0, 0x40, 0x80, 0x80});
+  EXPECT_TRUE(words(s, "fewer values than subbands")) << s.message();
+  s = splice({0xFF, 0x5D, 0, 5, 0, 0xE0, 0xF8});  // 7 guard bits + exponent 31
+  EXPECT_TRUE(words(s, "more than 30 bit planes")) << s.message();
+  // Precincts of 2^1 above resolution 0 and 2^1 at 0: more precincts; still the same image.
+  s = splice({0xFF, 0x53, 0, 14, 0, 1, 4, 4, 4, 0, 1, 0x11, 0x11, 0x11, 0x11, 0x11});
+  EXPECT_FALSE(s.is_ok());  // the packets were coded for one precinct per resolution
+  // Derived quantisation on the 9/7 stream: decodes (to other values).
+  const Bytes i97 = fragment_of(fixture("j2k97.dcm"));
+  size_t qcd = 0;
+  while (!(i97[qcd] == 0xFF && i97[qcd + 1] == 0x5C)) ++qcd;
+  Bytes derived(i97.begin(), i97.begin() + static_cast<std::ptrdiff_t>(qcd));
+  const uint8_t q[] = {
+      0xFF,         0x5C,        0, 5, static_cast<uint8_t>((i97[qcd + 4] & 0xE0) | 1),
+      i97[qcd + 5], i97[qcd + 6]};
+  derived.insert(derived.end(), q, q + sizeof(q));
+  const size_t lqcd = (size_t{i97[qcd + 2]} << 8) | i97[qcd + 3];
+  derived.insert(derived.end(), i97.begin() + static_cast<std::ptrdiff_t>(qcd + 2 + lqcd),
+                 i97.end());
+  Bytes out;
+  s = decode(derived, &out);
+  EXPECT_TRUE(s.is_ok()) << test::format(s);
+}
+
+}  // namespace
+}  // namespace splintcore
