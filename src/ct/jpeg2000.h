@@ -59,9 +59,7 @@ constexpr int32_t kTagUnknown = 0x7FFFFFFF;
 size_t j2k_tag_tree_nodes(uint32_t w, uint32_t h);  // 0 if w or h is 0
 void j2k_tag_tree_init(J2kTagNode* nodes, uint32_t w, uint32_t h);
 // Reads bits until it is known whether leaf's value is below `threshold`: *below says it.
-// Returns false if the tree is deeper than the 32 levels it walks (it never is for w, h
-// under 2^31).
-bool j2k_tag_tree_decode(J2kTagNode* nodes, uint32_t leaf, int32_t threshold, J2kBits& bits,
+void j2k_tag_tree_decode(J2kTagNode* nodes, uint32_t leaf, int32_t threshold, J2kBits& bits,
                          bool* below);
 
 // Code-block styles (Table A.19) this decoder reads: the default, plus the ones that cost no

@@ -10,6 +10,7 @@
 // jpeg2000_tier1.cpp.
 #include "ct/jpeg2000.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -29,7 +30,7 @@ uint32_t be16(const uint8_t* p) { return (uint32_t{p[0]} << 8) | p[1]; }
 uint32_t be32(const uint8_t* p) { return (be16(p) << 16) | be16(p + 2); }
 
 int64_t ceil_div(int64_t a, int64_t b) { return a >= 0 ? (a + b - 1) / b : -((-a) / b); }
-int64_t floor_div(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+int64_t floor_div(int64_t a, int64_t b) { return a / b; }  // a >= 0 (reference grid)
 
 // The coding style of the one component (COD with COC applied: A.6.1, A.6.2).
 struct CodingStyle {
@@ -355,6 +356,26 @@ Status Decoder::read_quantization(size_t at, bool qcc, Quantization* quant) {
   return Status::ok();
 }
 
+// A marker no header of this decoder reads: named when Part 1 defines it.
+Status refused_marker(uint32_t code, bool main, size_t at) {
+  struct Refused {
+    uint32_t code;
+    const char* what;
+  };
+  static const Refused kRefused[] = {{kRgn, "RGN (region of interest) not supported"},
+                                     {kPoc, "POC (progression changes) not supported"},
+                                     {kPpm, "packed packet headers (PPM) not supported"},
+                                     {kPpt, "packed packet headers (PPT) not supported"},
+                                     {kCap, "CAP (HTJ2K capabilities) not supported"}};
+  for (const Refused& r : kRefused) {
+    if (r.code == code) return j2k_error(StatusCode::kUnsupported, r.what, at);
+  }
+  return j2k_error(
+      StatusCode::kParseError,
+      main ? "unexpected marker in the main header" : "unexpected marker in a tile-part header",
+      at);
+}
+
 // Marker segments until SOT (main header: pos is left on the SOT) or SOD (tile-part header:
 // pos is left after it). `at` is where the header starts.
 Status Decoder::read_header(size_t at, bool main, HeaderSegments* h) {
@@ -393,14 +414,6 @@ Status Decoder::read_header(size_t at, bool main, HeaderSegments* h) {
         (qcc ? h->qcc : h->qcd) = true;
         break;
       }
-      case kRgn:
-        return j2k_error(StatusCode::kUnsupported, "RGN (region of interest) not supported", m);
-      case kPoc:
-        return j2k_error(StatusCode::kUnsupported, "POC (progression changes) not supported", m);
-      case kPpm:
-      case kPpt: return j2k_error(StatusCode::kUnsupported, "packed packet headers (PPM, PPT)", m);
-      case kCap:
-        return j2k_error(StatusCode::kUnsupported, "CAP (HTJ2K capabilities) not supported", m);
       case kTlm:
       case kPlm:
       case kPlt:
@@ -411,11 +424,7 @@ Status Decoder::read_header(size_t at, bool main, HeaderSegments* h) {
         SPLINTCORE_RETURN_IF_ERROR(segment(m, &length, &b));
         break;
       }
-      default:
-        return j2k_error(main && code == kSiz ? StatusCode::kParseError : StatusCode::kUnsupported,
-                         main ? "unexpected marker in the main header"
-                              : "unexpected marker in a tile-part header",
-                         m);
+      default: return refused_marker(code, main, m);
     }
   }
 }
@@ -500,10 +509,10 @@ void precinct_band_grid(const Resolution& res, uint32_t r, uint32_t b, uint32_t 
   const uint32_t sx = r == 0 ? res.ppx : res.ppx - 1, sy = r == 0 ? res.ppy : res.ppy - 1;
   const int64_t x0 = (int64_t{res.px0} + i) << sx, y0 = (int64_t{res.py0} + j) << sy;
   const int64_t x1 = x0 + (int64_t{1} << sx), y1 = y0 + (int64_t{1} << sy);
-  area->x0 = static_cast<int32_t>(x0 > band.r.x0 ? x0 : band.r.x0);
-  area->y0 = static_cast<int32_t>(y0 > band.r.y0 ? y0 : band.r.y0);
-  area->x1 = static_cast<int32_t>(x1 < band.r.x1 ? x1 : band.r.x1);
-  area->y1 = static_cast<int32_t>(y1 < band.r.y1 ? y1 : band.r.y1);
+  area->x0 = static_cast<int32_t>(std::max<int64_t>(x0, band.r.x0));
+  area->y0 = static_cast<int32_t>(std::max<int64_t>(y0, band.r.y0));
+  area->x1 = static_cast<int32_t>(std::min<int64_t>(x1, band.r.x1));
+  area->y1 = static_cast<int32_t>(std::min<int64_t>(y1, band.r.y1));
   if (area->x1 <= area->x0 || area->y1 <= area->y0) {
     pb->cbx0 = pb->cby0 = pb->cw = pb->ch = 0;
     return;
@@ -603,20 +612,15 @@ Status read_block_header(Tile& t, const PrecinctBand& pb, const Band& band, uint
   J2kTagNode* zero = t.nodes + pb.zero_planes;
   bool below = false;
   if (k.included == 0) {
-    if (!j2k_tag_tree_decode(inclusion, leaf, static_cast<int32_t>(layer) + 1, bits, &below)) {
-      return j2k_error(StatusCode::kParseError, "tag tree too deep", at);
-    }
+    j2k_tag_tree_decode(inclusion, leaf, static_cast<int32_t>(layer) + 1, bits, &below);
     if (!below) return Status::ok();
-    for (int32_t threshold = 1;; ++threshold) {
-      if (!j2k_tag_tree_decode(zero, leaf, threshold, bits, &below)) {
-        return j2k_error(StatusCode::kParseError, "tag tree too deep", at);
-      }
-      if (below || bits.truncated) break;
-      if (threshold > 64) {
-        return j2k_error(StatusCode::kParseError, "more than 64 zero bit planes", at);
-      }
+    // Zero bit planes beyond M_b <= 30 fail the pass count check below; a cut header
+    // (bits read as 0) stops here and is reported by the caller.
+    below = false;
+    for (int32_t threshold = 1; !below && threshold <= 64; ++threshold) {
+      j2k_tag_tree_decode(zero, leaf, threshold, bits, &below);
     }
-    k.zero_planes = static_cast<uint32_t>(zero[leaf].value < 0 ? 0 : zero[leaf].value);
+    k.zero_planes = static_cast<uint32_t>(zero[leaf].value);
     k.included = 1;
   } else if (!bits.bit()) {
     return Status::ok();
@@ -746,11 +750,8 @@ Status read_packets(Tile& t, const uint8_t* data, bool copy, size_t at) {
   return Status::ok();
 }
 
-int64_t round_to_integer(double v) {  // half up; NaN and huge values clamp
-  if (!(v > -1e9)) return -1000000000;
-  if (v > 1e9) return 1000000000;
-  const double f = std::floor(v + 0.5);
-  return static_cast<int64_t>(f);
+int64_t round_to_integer(double v) {  // half up; huge values clamp (std::min: NaN too)
+  return static_cast<int64_t>(std::floor(std::max(-1e9, std::min(1e9, v)) + 0.5));
 }
 
 // Tier-1 of every code-block with passes, dequantised (E.1) into the tile's subbands.
@@ -952,9 +953,8 @@ Status Decoder::read_tile_parts() {
     ++tile->parts;
     pos = end;
   }
-  if (current >= 0) {
-    SPLINTCORE_RETURN_IF_ERROR(decode_tile(static_cast<uint32_t>(current), segments, current_at));
-  }
+  // The main header ended at an SOT: there was a tile.
+  SPLINTCORE_RETURN_IF_ERROR(decode_tile(static_cast<uint32_t>(current), segments, current_at));
   if (tiles_seen != uint64_t{image.tiles_x} * image.tiles_y) {
     return make_error(StatusCode::kParseError, "JPEG 2000: ", tiles_seen, " of ",
                       uint64_t{image.tiles_x} * image.tiles_y, " tiles present")
@@ -996,7 +996,7 @@ Status find_codestream(const uint8_t* data, size_t size, size_t* begin, size_t* 
 
 uint64_t jpeg2000_arena_bytes(uint32_t rows, uint32_t columns, uint64_t size) {
   const uint64_t samples = uint64_t{rows} * columns;
-  const uint64_t line = (rows > columns ? rows : columns) + 8;
+  const uint64_t line = std::max(rows, columns) + uint64_t{8};
   return sizeof(J2kTier1) + sizeof(Tile) + 8 * (samples + line) + size + 1 + records_cap(samples) +
          8 * Arena::kDefaultAlignment;
 }

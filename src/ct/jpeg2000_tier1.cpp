@@ -327,13 +327,12 @@ void j2k_tag_tree_init(J2kTagNode* nodes, uint32_t w, uint32_t h) {
   }
 }
 
-bool j2k_tag_tree_decode(J2kTagNode* nodes, uint32_t leaf, int32_t threshold, J2kBits& bits,
+void j2k_tag_tree_decode(J2kTagNode* nodes, uint32_t leaf, int32_t threshold, J2kBits& bits,
                          bool* below) {
-  uint32_t path[33];
+  uint32_t path[34];  // a tree over fewer than 2^32 x 2^32 leaves has at most 33 levels
   uint32_t depth = 0;
   uint32_t n = leaf;
   for (;;) {
-    if (depth == 33) return false;
     path[depth++] = n;
     if (nodes[n].parent == n) break;
     n = nodes[n].parent;
@@ -357,7 +356,6 @@ bool j2k_tag_tree_decode(J2kTagNode* nodes, uint32_t leaf, int32_t threshold, J2
     node.low = low;
   }
   *below = nodes[leaf].value < threshold;
-  return true;
 }
 
 void j2k_tier1_init(J2kTier1& t1) {

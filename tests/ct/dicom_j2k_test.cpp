@@ -326,13 +326,13 @@ TEST(CtDicomJ2k, TagTreeHandCase) {
   bits.size = 1;
   bool below = true;
   for (int32_t t = 1; t <= 2; ++t) {
-    ASSERT_TRUE(ct_detail::j2k_tag_tree_decode(nodes, 0, t, bits, &below));
+    ct_detail::j2k_tag_tree_decode(nodes, 0, t, bits, &below);
     EXPECT_FALSE(below) << t;
   }
-  ASSERT_TRUE(ct_detail::j2k_tag_tree_decode(nodes, 0, 3, bits, &below));
+  ct_detail::j2k_tag_tree_decode(nodes, 0, 3, bits, &below);
   EXPECT_TRUE(below);
   EXPECT_EQ(nodes[0].value, 2);
-  ASSERT_TRUE(ct_detail::j2k_tag_tree_decode(nodes, 0, 9, bits, &below));  // no bits read
+  ct_detail::j2k_tag_tree_decode(nodes, 0, 9, bits, &below);  // no bits read
   EXPECT_EQ(bits.left, 5u);
   // 3 x 2 leaves: 6 + 2 + 1 nodes; the leaves' parents.
   EXPECT_EQ(ct_detail::j2k_tag_tree_nodes(3, 2), 9u);
@@ -402,7 +402,7 @@ TEST(CtDicomJ2k, TagTreeRoundTripsTheEncoder) {
     bits.size = packed.size();
     for (const auto& ask : asks) {
       bool below = false;
-      ASSERT_TRUE(ct_detail::j2k_tag_tree_decode(dec.data(), ask.first, ask.second, bits, &below));
+      ct_detail::j2k_tag_tree_decode(dec.data(), ask.first, ask.second, bits, &below);
       ASSERT_EQ(below, value[ask.first] < ask.second) << trial;
     }
     EXPECT_FALSE(bits.truncated);
@@ -714,6 +714,187 @@ TEST(CtDicomJ2k, SplicedSegments) {
   Bytes out;
   s = decode(derived, &out);
   EXPECT_TRUE(s.is_ok()) << test::format(s);
+}
+
+}  // namespace
+}  // namespace splintcore
+
+namespace splintcore {
+namespace {
+
+bool has(const Status& s, const char* words) {
+  return std::string(s.message()).find(words) != std::string::npos;
+}
+
+// Every arena size from the tier-1 state up to the bound: exhaustion is clean, and the bound
+// is enough.
+TEST(CtDicomJ2k, ArenaSweep) {
+  const Bytes cs = fragment_of(fixture("j2k97.dcm"));
+  const size_t bound =
+      static_cast<size_t>(ct_detail::jpeg2000_arena_bytes(kRows, kColumns, cs.size()));
+  for (size_t bytes = 1024; bytes < bound; bytes += bytes < 60000 ? 8192 : 256) {
+    Bytes out;
+    const Status s = decode(cs, &out, bytes);
+    if (!s.is_ok()) {
+      EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << bytes;
+    }
+  }
+}
+
+TEST(CtDicomJ2k, TilePartLayouts) {
+  const Bytes cs = fragment_of(fixture("j2k16_0.dcm"));
+  const Bytes expected = native_pixels("raw16_0.dcm", 2 * kRows * kColumns);
+  size_t sot = 0;
+  while (!(cs[sot] == 0xFF && cs[sot + 1] == 0x90)) ++sot;
+  const Bytes empty_part = {0xFF, 0x90, 0, 10, 0, 0, 0, 0, 0, 14, 0, 2, 0xFF, 0x93};
+  auto with_parts = [&](size_t count) {
+    Bytes b(cs.begin(), cs.begin() + static_cast<std::ptrdiff_t>(sot));
+    for (size_t i = 0; i < count; ++i) b.insert(b.end(), empty_part.begin(), empty_part.end());
+    b.insert(b.end(), cs.begin() + static_cast<std::ptrdiff_t>(sot), cs.end());
+    Bytes out;
+    const Status s = decode(b, &out);
+    return std::make_pair(s, out == expected);
+  };
+  auto one = with_parts(1);  // an empty tile-part first: the packets are in the second
+  EXPECT_TRUE(one.first.is_ok()) << test::format(one.first);
+  EXPECT_TRUE(one.second);
+  EXPECT_TRUE(has(with_parts(256).first, "more than 256 tile-parts"));
+  // A tile-part header longer than its Psot.
+  Bytes b(cs.begin(), cs.begin() + static_cast<std::ptrdiff_t>(sot));
+  const uint8_t part[] = {0xFF, 0x90, 0,    10,   0, 0, 0, 0,    0,   14,
+                          0,    2,    0xFF, 0x64, 0, 3, 0, 0xFF, 0x93};
+  b.insert(b.end(), part, part + sizeof(part));
+  b.insert(b.end(), cs.begin() + static_cast<std::ptrdiff_t>(sot), cs.end());
+  Bytes out;
+  EXPECT_TRUE(has(decode(b, &out), "runs past its Psot"));
+  // Psot 0 with a pad byte after the EOC, and without an EOC; a cut tile-part header.
+  Bytes z = cs;
+  for (int i = 0; i < 4; ++i) z[sot + 6 + i] = 0;
+  z.push_back(0);
+  Status s = decode(z, &out);
+  EXPECT_TRUE(s.is_ok()) << test::format(s);
+  z.resize(z.size() - 3);
+  EXPECT_TRUE(has(decode(z, &out), "data ends before EOC"));
+  z.resize(sot + 13);
+  EXPECT_TRUE(has(decode(z, &out), "data ends in a tile-part header"));
+  // Cut inside the first packets (Psot and EOC moved up).
+  for (size_t n = sot + 15; n < sot + 60; ++n) {
+    Bytes cut(cs.begin(), cs.begin() + static_cast<std::ptrdiff_t>(n));
+    const size_t psot = n - sot;
+    cut[sot + 8] = static_cast<uint8_t>(psot >> 8);
+    cut[sot + 9] = static_cast<uint8_t>(psot);
+    cut.push_back(0xFF);
+    cut.push_back(0xD9);
+    EXPECT_FALSE(decode(cut, &out).is_ok()) << n;
+  }
+  // SOP markers before the first packet (Scod says they may be there).
+  Bytes sop(cs.begin(), cs.begin() + static_cast<std::ptrdiff_t>(sot + 14));
+  const uint8_t marker[] = {0xFF, 0x91, 0, 4, 0, 0};
+  sop.insert(sop.end(), marker, marker + 6);
+  sop.insert(sop.end(), cs.begin() + static_cast<std::ptrdiff_t>(sot + 14), cs.end());
+  sop[49] = 0x02;
+  const uint32_t psot = ((uint32_t{cs[sot + 8]} << 8) | cs[sot + 9]) + 6;
+  sop[sot + 8] = static_cast<uint8_t>(psot >> 8);
+  sop[sot + 9] = static_cast<uint8_t>(psot);
+  s = decode(sop, &out);
+  EXPECT_TRUE(s.is_ok()) << test::format(s);
+  EXPECT_TRUE(out == expected);
+}
+
+TEST(CtDicomJ2k, MoreRefusals) {
+  const Bytes cs = fragment_of(fixture("j2k16_0.dcm"));
+  Bytes out;
+  auto splice = [&](std::initializer_list<uint8_t> segment, uint8_t progression) {
+    Bytes b(cs.begin(), cs.begin() + 59);
+    b.insert(b.end(), segment.begin(), segment.end());
+    b.insert(b.end(), cs.begin() + 59, cs.end());
+    b[50] = progression;
+    return decode(b, &out);
+  };
+  EXPECT_TRUE(has(splice({0xFF, 0x53, 0, 14, 0, 1, 4, 4, 4, 0, 1, 0x77, 0x77, 0x70, 0x07, 0x77}, 0),
+                  "precinct size 1"));
+  EXPECT_TRUE(has(splice({0xFF, 0x53, 0, 14, 0, 1, 4, 4, 4, 0, 1, 0x22, 0x22, 0x22, 0x22, 0x22}, 0),
+                  "too small"));
+  EXPECT_TRUE(has(splice({0xFF, 0x53, 0, 14, 0, 1, 4, 4, 4, 0, 1, 0x55, 0x55, 0x55, 0x55, 0x55}, 3),
+                  "several precincts"));
+  {  // derived quantisation with exponent 0 on a 9/7 header: negative band exponents
+    Bytes b(cs.begin(), cs.begin() + 59);
+    const uint8_t qcc[] = {0xFF, 0x5D, 0, 6, 0, 0x21, 0, 0};
+    b.insert(b.end(), qcc, qcc + sizeof(qcc));
+    b.insert(b.end(), cs.begin() + 59, cs.end());
+    b[58] = 0;
+    EXPECT_TRUE(has(decode(b, &out), "negative exponent"));
+  }
+  EXPECT_TRUE(has(splice({0xFF, 0x61, 0, 3, 0}, 0), "PPT"));
+  EXPECT_TRUE(has(splice({0xFF, 0x63, 0, 6, 0, 1, 0, 1}, 0), "unexpected") ||
+              splice({0xFF, 0x63, 0, 6, 0, 1, 0, 1}, 0).is_ok());  // CRG: skipped
+  // No COD.
+  Bytes b(cs.begin(), cs.begin() + 45);
+  b.insert(b.end(), cs.begin() + 59, cs.end());
+  EXPECT_TRUE(has(decode(b, &out), "lacks COD or QCD"));
+  // 16-bit samples where 8 are allocated.
+  EXPECT_TRUE(has(decode(cs, &out, 0, 8), "16-bit samples, more than the 8 bits"));
+  // 512 x 512 in tiles of 1 x 1: too many tiles.
+  Bytes big = cs;
+  big[10] = 2;  // Xsiz 0x200 + 0x40
+  big[11] = 0;
+  big[14] = 2;
+  big[15] = 0;
+  big[27] = 1;
+  big[31] = 1;
+  TestArena t(8 << 20);
+  Bytes frame(2 * 512 * 512);
+  const Status s =
+      ct_detail::jpeg2000_decode(t.arena, big.data(), big.size(), 512, 512, 16, frame.data());
+  EXPECT_TRUE(has(s, "more than 65535 tiles")) << s.message();
+  // Rsiz with Part 2 bits; an image offset of 2^31.
+  Bytes r = cs;
+  r[6] = 0x80;
+  EXPECT_TRUE(has(decode(r, &out), "Part 2"));
+  r = cs;
+  r[8] = 0x80;
+  EXPECT_TRUE(has(decode(r, &out), "2^31"));
+}
+
+TEST(CtDicomJ2k, Jp2BoxVariants) {
+  const Bytes cs = fragment_of(fixture("j2k16_0.dcm"));
+  const Bytes sig = {0, 0, 0, 12, 'j', 'P', ' ', ' ', 0x0D, 0x0A, 0x87, 0x0A};
+  Bytes xl = sig;  // an XLBox (length 1, then 64 bits)
+  const uint64_t box = cs.size() + 16;
+  const uint8_t head[] = {0, 0, 0, 1, 'j', 'p', '2', 'c'};
+  xl.insert(xl.end(), head, head + 8);
+  for (int i = 0; i < 8; ++i) xl.push_back(static_cast<uint8_t>(box >> (56 - 8 * i)));
+  xl.insert(xl.end(), cs.begin(), cs.end());
+  Bytes out;
+  Status s = decode(xl, &out);
+  EXPECT_TRUE(s.is_ok()) << test::format(s);
+  Bytes cut = sig;  // an XLBox cut short
+  cut.insert(cut.end(), head, head + 8);
+  cut.push_back(0);
+  EXPECT_TRUE(has(decode(cut, &out), "without a codestream box"));
+  Bytes past = sig;  // a box longer than the file
+  const uint8_t long_box[] = {0, 0, 1, 0, 'j', 'p', '2', 'h'};
+  past.insert(past.end(), long_box, long_box + 8);
+  EXPECT_TRUE(has(decode(past, &out), "runs past the data"));
+  Bytes small = sig;  // a length under its header
+  const uint8_t small_box[] = {0, 0, 0, 4, 'j', 'p', '2', 'h'};
+  small.insert(small.end(), small_box, small_box + 8);
+  EXPECT_TRUE(has(decode(small, &out), "runs past the data"));
+}
+
+// The first packet headers byte by byte: long Lblock runs, many passes, cut headers.
+TEST(CtDicomJ2k, PacketHeaderSweep) {
+  const Bytes cs = fragment_of(fixture("j2k97.dcm"));
+  size_t sod = 0;
+  while (!(cs[sod] == 0xFF && cs[sod + 1] == 0x93)) ++sod;
+  for (size_t at = sod + 2; at < sod + 40; ++at) {
+    for (uint8_t v : {uint8_t{0x00}, uint8_t{0xFF}, uint8_t{0x7F}, uint8_t{0xFE}, uint8_t{0xC0}}) {
+      Bytes b = cs;
+      b[at] = v;
+      if (v == 0xFF) b[at + 1] = 0x7F;  // a run of 1 bits (stuffing keeps it a header)
+      expect_clean(b, "packet header byte " + std::to_string(at));
+    }
+  }
 }
 
 }  // namespace
