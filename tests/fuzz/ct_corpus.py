@@ -344,3 +344,17 @@ for p in (1, 5, 7):
     codec_seed("jpeg_p%d.bin" % p, 1 | (14 << 2), 4, 5, jpeg_lossless(samples16, 4, 5, 12, p))
 codec_seed("jpeg_restart.bin", 1 | (14 << 2), 4, 5,
            jpeg_lossless(samples16, 4, 5, 12, 2, restart_lines=2))
+
+
+def j2k_codestream(name):
+    """The one-fragment codestream of a JPEG 2000 fixture (fixtures/ct, make_ct_fixtures.py)."""
+    data = open(os.path.join(ROOT, "..", "ct", name), "rb").read()
+    at = data.rfind(b"\xe0\x7f\x10\x00") + 12
+    table = struct.unpack("<I", data[at + 4:at + 8])[0]
+    at += 8 + table
+    length = struct.unpack("<I", data[at + 4:at + 8])[0]
+    return data[at + 8:at + 8 + length]
+
+
+for name, precision in (("j2k16_0", 16), ("j2k97", 16), ("j2k_tiles", 16), ("j2k8", 8)):
+    codec_seed(name + ".bin", 4 | ((precision - 2) << 3), 56, 64, j2k_codestream(name + ".dcm"))
