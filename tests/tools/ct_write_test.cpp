@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -232,10 +233,24 @@ TEST(CtFiles, FormatOfPathAndErrors) {
   EXPECT_EQ(cli::ct_format_of_path(dir / "a.nhdr"), CtFormat::kNrrd);
   EXPECT_EQ(cli::ct_format_of_path(dir / "a.mhd"), CtFormat::kMetaImage);
   EXPECT_EQ(cli::ct_format_of_path(dir.path.string()), CtFormat::kDicom);
-  EXPECT_EQ(cli::ct_format_of_path(dir / "a.dcm"), CtFormat::kUnknown);
+  // One DICOM file: by its extension, or by the "DICM" preamble; other files are unknown.
+  EXPECT_EQ(cli::ct_format_of_path(dir / "a.dcm"), CtFormat::kDicom);
+  EXPECT_EQ(cli::ct_format_of_path(dir / "a.DICOM"), CtFormat::kDicom);
+  EXPECT_EQ(cli::ct_format_of_path(dir / "a.bin"), CtFormat::kUnknown);  // no such file
+  {
+    std::string part10(128, '\0');
+    part10 += "DICM";
+    std::ofstream(dir / "slice", std::ios::binary) << part10;
+    std::ofstream(dir / "short", std::ios::binary) << "DICM";
+  }
+  EXPECT_EQ(cli::ct_format_of_path(dir / "slice"), CtFormat::kDicom);
+  EXPECT_EQ(cli::ct_format_of_path(dir / "short"), CtFormat::kUnknown);
   test::TestArena arena(1 << 20);
   CtVolume v;
-  EXPECT_EQ(read_back(arena.arena, dir / "a.dcm", &v, nullptr).code(), StatusCode::kUnsupported);
+  EXPECT_EQ(read_back(arena.arena, dir / "a.bin", &v, nullptr).code(), StatusCode::kUnsupported);
+  EXPECT_EQ(read_back(arena.arena, dir / "a.dcm", &v, nullptr).code(), StatusCode::kIoError);
+  fs::remove(dir / "slice");
+  fs::remove(dir / "short");
   EXPECT_EQ(read_back(arena.arena, dir / "missing.nrrd", &v, nullptr).code(), StatusCode::kIoError);
   EXPECT_EQ(read_back(arena.arena, dir.path.string(), &v, nullptr).code(),
             StatusCode::kInvalidArgument);  // an empty folder
