@@ -212,7 +212,7 @@ Status name_open_jaw(Status s, const CaseFile& c, Span<const Mesh> jaws) {
     const uint64_t count = jaws[j].vertices.size();
     if (s.index() < first + count) {
       s.append(" (vertex ").append_u64(s.index() - first).append(" of jaw ").append_u64(j);
-      s.append(", ");
+      s.append(c.jaws[j].has_scan ? "'s scan, " : ", ");  // a fused jaw is its scan
       return s.append(c.jaws[j].role).append(")");
     }
     first += count;
