@@ -287,7 +287,7 @@ struct DesignReport {
 // the splint comes out on the printer's tray. With "blockout", each jaw's swept volume is
 // subtracted after the Boolean (blockout.h; at most kMaxBlockoutJaws jaws). `splint` must be
 // empty. Stage progress goes to ctx.progress, in this order, each stage only when the case
-// asks for it: "design: jaws", "design: base", "design: boolean", "design: blockout",
+// asks for it: "design: fusion" (the overload with scans, below), "design: jaws", "design: base", "design: boolean", "design: blockout",
 // "design: label", "design: thickness", "design: printer", then "design: done" (once the
 // splint is made, too late to cancel). Errors: those of the stages (naming the stage and,
 // for a jaw, its index and role), kInvalidArgument (jaw count differs from the case, unknown
