@@ -207,6 +207,15 @@ TEST(DesignFusion, FitOverTheThresholdsNamesTheNumbers) {
   ASSERT_TRUE(f.ok);
   Mesh splint;
   DesignReport r;
+  // Within the default thresholds the noisy scan is recovered as well.
+  SPLINTCORE_ASSERT_OK(f.design(&splint, &r));
+  double rms = 0, deg = 0;
+  motion_error(f.scans[1], r.fusion[1].registration.transform, f.truth, &rms, &deg);
+  EXPECT_LT(rms, 0.05);
+  EXPECT_LT(deg, 0.1);
+  EXPECT_GT(r.fusion[1].registration.rms_mm, 0.01);  // the noise, measured
+  EXPECT_TRUE(r.print.printable);
+  splint = Mesh();
   f.case_jaws[1].scan.max_rms_mm = 0.01;
   Status s = f.design(&splint, &r);
   EXPECT_EQ(s.code(), StatusCode::kLimitExceeded) << s.message();
@@ -241,6 +250,21 @@ TEST(DesignFusion, BlockoutSweepsTheScan) {
   SPLINTCORE_ASSERT_OK(f.design(&splint, &r));
   EXPECT_TRUE(r.fused[1]);
   EXPECT_EQ(r.blockout_jaws, 2u);
+  EXPECT_TRUE(r.print.printable);
+  MeshReport mr;
+  SPLINTCORE_ASSERT_OK(check_mesh(Context(&f.t.arena), splint, &mr));
+  EXPECT_TRUE(mr.closed() && mr.edge_manifold() && mr.outward()) << mr.boundary_edges;
+}
+
+TEST(DesignFusion, AutomaticOutlineOnTheJawsThenTheScan) {
+  Fused f;
+  ASSERT_TRUE(f.ok);
+  f.c.has_auto_outline = true;  // the outline's defaults; it runs on the jaws' own meshes
+  Mesh splint;
+  DesignReport r;
+  SPLINTCORE_ASSERT_OK(f.design(&splint, &r));
+  EXPECT_TRUE(r.outlined);
+  EXPECT_TRUE(r.fused[1]);
   EXPECT_TRUE(r.print.printable);
   MeshReport mr;
   SPLINTCORE_ASSERT_OK(check_mesh(Context(&f.t.arena), splint, &mr));
