@@ -308,7 +308,7 @@ Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
 // scan is open: its border must lie outside the base, else the Boolean's "B is open" error
 // names the border vertex (of the jaw's scan). report->fused[j] and report->fusion[j] give the
 // registration. Errors, besides design_splint's: kInvalidArgument (scans do not match the
-// case, a wrong landmark pairing, register_rigid's option errors: "design: fusion: jaw j
+// case: a count other than the jaws', a scan for a jaw without "scan"; a wrong landmark pairing, register_rigid's option errors: "design: fusion: jaw j
 // (role), scan PATH: ..."), kLimitExceeded (a fit whose RMS is above max_rms_mm or whose
 // overlap is below min_overlap: the message gives both figures and both thresholds),
 // kInvalidMesh (an empty scan, or register_rigid's). Arena: design_splint's plus

@@ -340,15 +340,21 @@ Status fuse_scans(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
   return Status::ok();
 }
 
-// Checks the scans design_splint takes: one per jaw with "scan" (none: no jaw has one).
+// Checks the scans design_splint takes: none when no jaw has "scan", else one entry per jaw,
+// a mesh exactly for the jaws with "scan".
 Status check_scans(const CaseFile& c, Span<const Mesh> scans) {
-  size_t with_scan = 0;
-  for (const CaseJaw& j : c.jaws) with_scan += j.has_scan ? 1 : 0;
-  if (with_scan == 0) return Status::ok();
+  size_t first = c.jaws.size();  // the first jaw with a scan
+  for (size_t j = c.jaws.size(); j-- > 0;) first = c.jaws[j].has_scan ? j : first;
+  if (first == c.jaws.size() && scans.empty()) return Status::ok();
   if (scans.size() != c.jaws.size()) {
-    return make_error(StatusCode::kInvalidArgument, "design: ", with_scan,
-                      " jaws of the case have a \"scan\" but ", scans.size(),
-                      " scan meshes were given (one entry per jaw, empty for a jaw without)");
+    Status e = make_error(StatusCode::kInvalidArgument, "design: ", scans.size(),
+                          " scan meshes were given for the case's ", c.jaws.size(),
+                          " jaws (one per jaw, empty for a jaw without a scan)");
+    if (first < c.jaws.size()) {
+      e.append("; jaw ").append_u64(first).append(" (").append(c.jaws[first].role);
+      e.append(") has a \"scan\"");
+    }
+    return e;
   }
   if (c.jaws.size() > DesignReport::kMaxFusedJaws) {
     return make_error(StatusCode::kLimitExceeded, "design: fusion takes at most ",
@@ -358,6 +364,11 @@ Status check_scans(const CaseFile& c, Span<const Mesh> scans) {
     if (c.jaws[j].has_scan && scans[j].triangles.empty()) {
       return make_error(StatusCode::kInvalidMesh, "design: the scan of jaw ", j, " (",
                         c.jaws[j].role, ") is empty: it has no triangles")
+          .at_index(j);
+    }
+    if (!c.jaws[j].has_scan && (!scans[j].triangles.empty() || !scans[j].vertices.empty())) {
+      return make_error(StatusCode::kInvalidArgument, "design: a scan mesh was given for jaw ", j,
+                        " (", c.jaws[j].role, "), which has no \"scan\" in the case")
           .at_index(j);
     }
   }

@@ -331,7 +331,20 @@ TEST(DesignFusion, ScansMustMatchTheCase) {
   // The overload without scans on a case with one.
   Status s = design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2), &splint, &r);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(std::string(s.message()).find("have a \"scan\" but 0 scan meshes"), std::string::npos)
+  EXPECT_NE(std::string(s.message())
+                .find("0 scan meshes were given for the case's 2 jaws (one per jaw, empty for a "
+                      "jaw without a scan); jaw 1 (mandible) has a \"scan\""),
+            std::string::npos)
+      << s.message();
+  // A scan for a jaw the case gives none.
+  Mesh swapped[2] = {f.scans[1], f.scans[1]};
+  s = design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2),
+                    Span<const Mesh>(swapped, 2), &splint, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(s.message())
+                .find("a scan mesh was given for jaw 0 (maxilla), which has "
+                      "no \"scan\" in the case"),
+            std::string::npos)
       << s.message();
   // An empty scan where the case has one.
   Mesh none[2];
