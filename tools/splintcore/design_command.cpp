@@ -616,6 +616,12 @@ void Design::print_summary() const {
               case_path_.c_str(), c_.case_id, jaws_.size(),
               static_cast<unsigned long long>(report.jaw_triangles), report.base.sections,
               c_.upper.size(), c_.lower.size());
+  for (size_t i = 0; i < c_.jaws.size() && i < DesignReport::kMaxFusedJaws; ++i) {
+    if (!report.fused[i]) continue;
+    const RegisterResult& f = report.fusion[i].registration;
+    std::printf("fusion (%s): scan %s registered, RMS %.4f mm, overlap %.3f, %u iterations\n",
+                c_.jaws[i].role, scan_paths_[i].c_str(), f.rms_mm, f.overlap, f.iterations);
+  }
   if (report.imprint_offset) {
     std::printf("imprint: a %.3g mm clearance around each jaw's swept volume\n",
                 c_.blockout.offset);
