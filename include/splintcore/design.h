@@ -287,12 +287,12 @@ struct DesignReport {
 // the splint comes out on the printer's tray. With "blockout", each jaw's swept volume is
 // subtracted after the Boolean (blockout.h; at most kMaxBlockoutJaws jaws). `splint` must be
 // empty. Stage progress goes to ctx.progress, in this order, each stage only when the case
-// asks for it: "design: fusion" (the overload with scans, below), "design: jaws", "design: base", "design: boolean", "design: blockout",
-// "design: label", "design: thickness", "design: printer", then "design: done" (once the
-// splint is made, too late to cancel). Errors: those of the stages (naming the stage and,
-// for a jaw, its index and role), kInvalidArgument (jaw count differs from the case, unknown
-// printer, a case with "plan": design_plan() makes its splints), kNonFinite (a jaw vertex
-// that is NaN or infinite), kLimitExceeded (a jaw moved beyond float32 range), and
+// asks for it: "design: fusion" (the overload with scans, below), "design: jaws", "design: base",
+// "design: boolean", "design: blockout", "design: label", "design: thickness", "design: printer",
+// then "design: done" (once the splint is made, too late to cancel). Errors: those of the stages
+// (naming the stage and, for a jaw, its index and role), kInvalidArgument (jaw count differs from
+// the case, unknown printer, a case with "plan": design_plan() makes its splints), kNonFinite (a
+// jaw vertex that is NaN or infinite), kLimitExceeded (a jaw moved beyond float32 range), and
 // kInvalidMesh when the result is not printable (require_printable's reason).
 Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* splint,
                      DesignReport* report);
@@ -308,11 +308,12 @@ Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
 // scan is open: its border must lie outside the base, else the Boolean's "B is open" error
 // names the border vertex (of the jaw's scan). report->fused[j] and report->fusion[j] give the
 // registration. Errors, besides design_splint's: kInvalidArgument (scans do not match the
-// case: a count other than the jaws', a scan for a jaw without "scan"; a wrong landmark pairing, register_rigid's option errors: "design: fusion: jaw j
-// (role), scan PATH: ..."), kLimitExceeded (a fit whose RMS is above max_rms_mm or whose
-// overlap is below min_overlap: the message gives both figures and both thresholds),
-// kInvalidMesh (an empty scan, or register_rigid's). Arena: design_splint's plus
-// register_rigid_bound() of the largest scan and its jaw, returned before the jaws are gathered.
+// case: a count other than the jaws', a scan for a jaw without "scan"; a wrong landmark pairing,
+// register_rigid's option errors: "design: fusion: jaw j (role), scan PATH: ..."), kLimitExceeded
+// (a fit whose RMS is above max_rms_mm or whose overlap is below min_overlap: the message gives
+// both figures and both thresholds), kInvalidMesh (an empty scan, or register_rigid's). Arena:
+// design_splint's plus register_rigid_bound() of the largest scan and its jaw, returned before the
+// jaws are gathered.
 Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                      Span<const Mesh> scans, Mesh* splint, DesignReport* report);
 
