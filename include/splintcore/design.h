@@ -11,6 +11,7 @@
 #include "splintcore/label.h"
 #include "splintcore/outline.h"
 #include "splintcore/printer.h"
+#include "splintcore/registration.h"
 #include "splintcore/remesh.h"
 #include "splintcore/segment.h"
 #include "splintcore/spline.h"
@@ -19,6 +20,18 @@ namespace splintcore {
 
 constexpr uint32_t kCaseFormatVersion = 1;
 
+// An intraoral scan fused into a jaw ("scan" in a jaw, docs/case-format.md, "Scan-CT fusion"):
+// design registers it onto the jaw's mesh (register_rigid, trimmed point-to-plane ICP) and the
+// registered scan is the jaw's surface for the imprint.
+struct CaseScan {
+  const char* path = nullptr;          // the scan's mesh file, relative to the case file
+  Span<const LandmarkPair> landmarks;  // "landmarks": [[scan xyz, jaw xyz], ...] (3 or more)
+  double trim = 0.6;                   // RegisterOptions::overlap: the fraction the ICP keeps
+  double min_overlap = 0.3;            // at least this fraction of the scan within crowns_within_mm
+  double max_rms_mm = 0.3;             // RegisterOptions::max_rms_mm
+  double crowns_within_mm = 0.5;       // RegisterOptions::inlier_mm: the crowns' distance
+};
+
 struct CaseJaw {
   const char* role = "";       // "maxilla" or "mandible"
   const char* mesh = nullptr;  // path, relative to the case file's folder
@@ -26,6 +39,9 @@ struct CaseJaw {
   // A jaw from the case's CT ("seed" instead of "mesh"): a point of it, patient mm.
   bool has_seed = false;
   Vec3 seed{};
+  // An intraoral scan of this jaw's teeth, fused in by design_splint (CaseScan).
+  bool has_scan = false;
+  CaseScan scan;
 };
 
 // The surgical plan of two-jaw surgery ("plan", docs/case-format.md): the case's jaws are the
@@ -222,8 +238,19 @@ uint64_t check_wall_thickness_bound(uint64_t vertex_count, uint64_t triangle_cou
 Status check_wall_thickness(const Context& ctx, const Mesh& mesh, double min_thickness,
                             ThicknessReport* report);
 
+// One jaw's scan-CT fusion: the registration of the scan onto the jaw as given.
+struct FusionReport {
+  RegisterResult registration;  // transform: scan -> the jaw's mesh frame
+  RigidTransform applied;       // the scan's transform in the design: the jaw's after that one
+  uint64_t scan_triangles = 0;
+};
+
 struct DesignReport {
   uint64_t jaw_triangles = 0;  // all jaws together, as given
+  // Scan-CT fusion: per jaw in case order (fused[j]: jaw j has a scan), at most kMaxFusedJaws.
+  static constexpr uint32_t kMaxFusedJaws = 8;
+  bool fused[kMaxFusedJaws] = {};
+  FusionReport fusion[kMaxFusedJaws];
   // The case's "auto" outline, when it had one (resolve_case_outline).
   bool outlined = false;
   OutlineReport outline;
@@ -263,15 +290,35 @@ struct DesignReport {
 // the splint comes out on the printer's tray. With "blockout", each jaw's swept volume is
 // subtracted after the Boolean (blockout.h; at most kMaxBlockoutJaws jaws). `splint` must be
 // empty. Stage progress goes to ctx.progress, in this order, each stage only when the case
-// asks for it: "design: jaws", "design: base", "design: boolean", "design: blockout",
-// "design: label", "design: thickness", "design: printer", then "design: done" (once the
-// splint is made, too late to cancel). Errors: those of the stages (naming the stage and,
-// for a jaw, its index and role), kInvalidArgument (jaw count differs from the case, unknown
-// printer, a case with "plan": design_plan() makes its splints), kNonFinite (a jaw vertex
-// that is NaN or infinite), kLimitExceeded (a jaw moved beyond float32 range), and
+// asks for it: "design: fusion" (the overload with scans, below), "design: jaws", "design: base",
+// "design: boolean", "design: blockout", "design: label", "design: thickness", "design: printer",
+// then "design: done" (once the splint is made, too late to cancel). Errors: those of the stages
+// (naming the stage and, for a jaw, its index and role), kInvalidArgument (jaw count differs from
+// the case, unknown printer, a case with "plan": design_plan() makes its splints), kNonFinite (a
+// jaw vertex that is NaN or infinite), kLimitExceeded (a jaw moved beyond float32 range), and
 // kInvalidMesh when the result is not printable (require_printable's reason).
 Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* splint,
                      DesignReport* report);
+
+// The same for a case whose jaws have scans ("scan", CaseScan): scans[j] is the scan of
+// c.jaws[j] as read (an empty mesh for a jaw without one); `scans` may be empty only when no
+// jaw has one (the overload above passes none). After the outline and the tray placement, the
+// stage "design: fusion" registers each scan onto its jaw's mesh as given (register_rigid with
+// the case's landmarks, trim, max_rms_mm and crowns_within_mm as inlier_mm); the jaw's
+// transform then applies after the registration's, and from there on the jaw is its
+// registered scan: within the base the scan is the jaw's whole surface, so the imprint is the
+// scan's own triangles (the jaw's mesh is used for the registration and the outline). The
+// scan is open: its border must lie outside the base, else the Boolean's "B is open" error
+// names the border vertex (of the jaw's scan). report->fused[j] and report->fusion[j] give the
+// registration. Errors, besides design_splint's: kInvalidArgument (scans do not match the
+// case: a count other than the jaws', a scan for a jaw without "scan"; a wrong landmark pairing,
+// register_rigid's option errors: "design: fusion: jaw j (role), scan PATH: ..."), kLimitExceeded
+// (a fit whose RMS is above max_rms_mm or whose overlap is below min_overlap: the message gives
+// both figures and both thresholds), kInvalidMesh (an empty scan, or register_rigid's). Arena:
+// design_splint's plus register_rigid_bound() of the largest scan and its jaw, returned before the
+// jaws are gathered.
+Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                     Span<const Mesh> scans, Mesh* splint, DesignReport* report);
 
 // ---------------------------------------------------------------------------------------------
 // Two-jaw surgery: the two splints of the case's "plan" (docs/case-format.md, "Plan").
@@ -363,11 +410,13 @@ Status splint_stl_sha256(const Context& ctx, const Mesh& splint, char out[65]);
 // hashes of their bytes. Every pointer may be null (that entry is left out).
 struct DesignReportFiles {
   const char* case_path = nullptr;
-  Span<const char* const> jaw_paths;   // per jaw of the case, in case order (or empty)
-  Span<const char* const> jaw_sha256;  // of each jaw file's bytes (CT jaws: of the voxels)
-  const char* ct_path = nullptr;       // the case's CT, when a jaw came from it
-  uint32_t ct_size[3] = {0, 0, 0};     // its voxels per axis
-  const CaseCtReport* ct = nullptr;    // reconstruct_case_jaws' report, when it ran
+  Span<const char* const> jaw_paths;    // per jaw of the case, in case order (or empty)
+  Span<const char* const> jaw_sha256;   // of each jaw file's bytes (CT jaws: of the voxels)
+  Span<const char* const> scan_paths;   // per jaw (those with "scan"), in case order (or empty)
+  Span<const char* const> scan_sha256;  // of each scan file's bytes
+  const char* ct_path = nullptr;        // the case's CT, when a jaw came from it
+  uint32_t ct_size[3] = {0, 0, 0};      // its voxels per axis
+  const CaseCtReport* ct = nullptr;     // reconstruct_case_jaws' report, when it ran
   const char* splint_path = nullptr;
   // The SHA-256 of the splint's binary STL as the caller wrote it (write_stl's bytes, 64 hex
   // digits): saves hashing it twice. Null: the report writer computes it.

@@ -497,6 +497,13 @@ typedef struct sc_design_report {
   uint64_t layers;
   const char* printer; /* the profile used (static text) */
   int outlined;        /* an auto case: the picks were computed first (sc_outline's) */
+  /* Scan-CT fusion (sc_design_scans), per jaw in case order: fused[i] is 1 when jaw i's scan
+   * was registered; then the fit's RMS (mm), the fraction of the scan within the case's
+   * crowns_within_mm, and the registration (scan -> the jaw's mesh, row-major 4 x 4). */
+  int fused[SC_MAX_BLOCKOUT_JAWS];
+  double fusion_rms_mm[SC_MAX_BLOCKOUT_JAWS];
+  double fusion_overlap[SC_MAX_BLOCKOUT_JAWS];
+  double fusion_transform[SC_MAX_BLOCKOUT_JAWS][16];
 } sc_design_report;
 
 /* Designs the splint for `c` from `jaws` (jaws[i] is the mesh of the case's jaw i, as read; it
@@ -526,6 +533,19 @@ sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaw
  * tray), SC_IO_ERROR (the sink refused), SC_ARENA_EXHAUSTED. */
 sc_status sc_write_splint_job(sc_context* ctx, const sc_case* c, const sc_mesh* splint,
                               const sc_sink* sink);
+
+/* sc_design for a case whose jaws have intraoral scans ("scan", docs/case-format.md, "Scan-CT
+ * fusion"): scans[i] is the scan of the case's jaw i as read (NULL for a jaw without one;
+ * `scans` itself NULL: no scans, which is sc_design). Each scan is registered onto its jaw
+ * (stage "design: fusion", before "design: jaws") and is then that jaw for the Boolean and
+ * blockout: the imprint is the scan's triangles; sc_design_write_report writes the
+ * registrations under "fusion". Arena: sc_design's plus the registration's
+ * (register_rigid_bound, returned). Errors: sc_design's, SC_INVALID_ARGUMENT (a scan missing
+ * for a jaw with "scan", a wrong landmark pairing), SC_LIMIT_EXCEEDED (a fit over the case's
+ * max_rms_mm or under its min_overlap: the message gives the figures and the thresholds). */
+sc_status sc_design_scans(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
+                          const sc_mesh* const* scans, size_t jaw_count, sc_mesh** splint,
+                          sc_design_report* report);
 
 /* What the audit report names that the library cannot know (every member may be NULL: that
  * entry is left out). jaw_paths and jaw_sha256 hold jaw_count entries when given. */

@@ -49,6 +49,7 @@ static_assert(static_cast<int>(StatusCode::kInternal) == SC_INTERNAL, "codes mir
 static_assert(static_cast<int>(StatusCode::kArenaExhausted) == SC_ARENA_EXHAUSTED, "codes");
 static_assert(static_cast<int>(StatusCode::kInvalidMesh) == SC_INVALID_MESH, "codes");
 static_assert(DesignReport::kMaxBlockoutJaws == SC_MAX_BLOCKOUT_JAWS, "report sizes agree");
+static_assert(DesignReport::kMaxFusedJaws == SC_MAX_BLOCKOUT_JAWS, "fusion report sizes agree");
 static_assert(sizeof(sc_arena_mark) == sizeof(Arena::Marker), "mark mirrors Arena::Marker");
 
 namespace {
@@ -157,6 +158,15 @@ Status gather_meshes(const sc_mesh* const* jaws, size_t count, const char* funct
     out[i] = jaws[i]->mesh;
   }
   return Status::ok();
+}
+
+// A rigid transform as a row-major 4 x 4 (the last row 0 0 0 1).
+void row_major(const RigidTransform& x, double out[16]) {
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) out[4 * i + j] = x.r[i][j];
+    out[4 * i + 3] = x.t[i];
+  }
+  for (int j = 0; j < 4; ++j) out[12 + j] = j == 3 ? 1.0 : 0.0;
 }
 
 // Runs `make(mesh)` for a new mesh handle; on failure the arena is as it was and *out NULL.
@@ -933,20 +943,34 @@ sc_status sc_outline(sc_context* ctx, const sc_case* c, const sc_mesh* const* ja
 
 sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws, size_t jaw_count,
                     sc_mesh** splint, sc_design_report* report) {
+  return sc_design_scans(ctx, c, jaws, nullptr, jaw_count, splint, report);
+}
+
+sc_status sc_design_scans(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
+                          const sc_mesh* const* scans, size_t jaw_count, sc_mesh** splint,
+                          sc_design_report* report) {
   if (ctx == nullptr || c == nullptr || splint == nullptr) {
-    return null_argument(ctx, "sc_design", "the case or the output");
+    return null_argument(ctx, scans != nullptr ? "sc_design_scans" : "sc_design",
+                         "the case or the output");
   }
   *splint = nullptr;
   Mesh local[SC_MAX_BLOCKOUT_JAWS];
   Status s = gather_meshes(jaws, jaw_count, "sc_design", local, SC_MAX_BLOCKOUT_JAWS);
   if (!s.is_ok()) return keep(ctx, s);
+  Mesh scan_meshes[SC_MAX_BLOCKOUT_JAWS];  // empty for a jaw without a scan
+  if (scans != nullptr) {
+    for (size_t i = 0; i < jaw_count; ++i) {
+      if (scans[i] != nullptr) scan_meshes[i] = scans[i]->mesh;
+    }
+  }
+  const Span<const Mesh> scan_span(scan_meshes, scans != nullptr ? jaw_count : 0);
   // The handle, then the design's record (kept for sc_design_write_report), then the mesh.
   const Context core = core_context(ctx);
   DesignReport* record = nullptr;
   const sc_status code = new_mesh(ctx, splint, [&](Mesh* m) {
     record = place<DesignReport>(ctx->arena);
     if (record == nullptr) return ctx->arena.exhausted_status();
-    return design_splint(core, c->c, Span<const Mesh>(local, jaw_count), m, record);
+    return design_splint(core, c->c, Span<const Mesh>(local, jaw_count), scan_span, m, record);
   });
   if (code != SC_OK) return code;
   (*splint)->design = record;
@@ -980,6 +1004,14 @@ sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaw
   report->layers = r.print.layers;
   report->printer = r.printer;
   report->outlined = r.outlined ? 1 : 0;
+  for (size_t i = 0; i < jaw_count && i < DesignReport::kMaxFusedJaws; ++i) {
+    if (!r.fused[i]) continue;
+    const RegisterResult& f = r.fusion[i].registration;
+    report->fused[i] = 1;
+    report->fusion_rms_mm[i] = f.rms_mm;
+    report->fusion_overlap[i] = f.overlap;
+    row_major(f.transform, report->fusion_transform[i]);
+  }
   return code;
 }
 
@@ -1091,11 +1123,7 @@ sc_status sc_register_rigid(sc_context* ctx, const sc_mesh* scan, const sc_mesh*
   RegisterResult r;
   const Status s = register_rigid(core_context(ctx), scan->mesh, ct_jaw->mesh, o, &r);
   if (s.is_ok() || s.code() == StatusCode::kLimitExceeded) {
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) out->transform[4 * i + j] = r.transform.r[i][j];
-      out->transform[4 * i + 3] = r.transform.t[i];
-    }
-    out->transform[15] = 1.0;
+    row_major(r.transform, out->transform);
     out->rms_mm = r.rms_mm;
     out->overlap = r.overlap;
     out->landmark_rms_mm = r.landmark_rms_mm;

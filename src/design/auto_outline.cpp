@@ -20,6 +20,26 @@ void write_transform(JsonWriter& w, const RigidTransform& t, const char* key) {
   w.end_array();
 }
 
+void write_scan(JsonWriter& w, const CaseScan& s) {
+  w.begin_object("scan");
+  w.add("path", s.path);
+  if (!s.landmarks.empty()) {
+    w.begin_array("landmarks");
+    for (const LandmarkPair& l : s.landmarks) {
+      w.begin_array();
+      w.add(nullptr, l.scan);
+      w.add(nullptr, l.ct);
+      w.end_array();
+    }
+    w.end_array();
+  }
+  w.add("trim", s.trim);
+  w.add("min_overlap", s.min_overlap);
+  w.add("max_rms_mm", s.max_rms_mm);
+  w.add("crowns_within_mm", s.crowns_within_mm);
+  w.end_object();
+}
+
 void write_plan(JsonWriter& w, const CasePlan& p) {
   w.begin_object("plan");
   w.add("sequence", p.mandible_first ? "mandible_first" : "maxilla_first");
@@ -37,6 +57,7 @@ void write_plan(JsonWriter& w, const CasePlan& p) {
 }  // namespace design_detail
 
 using design_detail::write_plan;
+using design_detail::write_scan;
 using design_detail::write_transform;
 
 namespace {
@@ -170,6 +191,7 @@ void write_jaws(JsonWriter& w, const CaseFile& c) {
       w.add("mesh", j.mesh);
     }
     if (!c.has_plan) write_transform(w, j.transform);  // with a plan, the plan moves the jaws
+    if (j.has_scan) write_scan(w, j.scan);
     w.end_object();
   }
   w.end_array();

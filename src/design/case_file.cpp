@@ -14,6 +14,12 @@ const CaseNumber kCaseNumbers[] = {
     {"splintcore_case", "", 1, 1e6, false, kNoCap, true, "required", "the format version: 1"},
     {"jaws[].transform", "mm", -1e6, 1e6, false, kNoCap, false, "identity",
      "each of the 16 entries; rigid (see Jaw)"},
+    {"jaws[].scan.landmarks", "mm", -1e6, 1e6, false, kNoCap, false, "none (automatic)",
+     "3 to 64 pairs, not collinear"},
+    {"jaws[].scan.trim", "", 0.05, 1, false, kNoCap, false, "0.6", ""},
+    {"jaws[].scan.min_overlap", "", 0, 1, false, kNoCap, false, "0.3", ""},
+    {"jaws[].scan.max_rms_mm", "mm", 0.001, 10, false, kNoCap, false, "0.3", ""},
+    {"jaws[].scan.crowns_within_mm", "mm", 0.01, 10, false, kNoCap, false, "0.5", ""},
     {"base.spacing_mm", "mm", 0.01, 50, false, kNoCap, false, "0.5", ""},
     {"base.corner_radius_mm", "mm", 0, 20, false, kNoCap, false, "0", ""},
     {"base.corner_segments", "", 1, 16, false, kNoCap, true, "4", "1, 2, 4, 8 or 16"},
@@ -215,13 +221,64 @@ Status parse_picks(const Reader& r, const JsonValue& list, const char* key, doub
   return Status::ok();
 }
 
-// The jaws ("jaws": role, mesh or seed, transform).
+// A jaw's intraoral scan ("scan": path, landmarks, trim, min_overlap, max_rms_mm,
+// crowns_within_mm; CaseScan).
+Status parse_scan(const Reader& r, const JsonValue& v, CaseScan* out) {
+  const JsonDocument& doc = *r.doc;
+  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(v, JsonType::kObject, "scan"));
+  static const char* const kScanKeys[] = {"path",       "landmarks",        "trim", "min_overlap",
+                                          "max_rms_mm", "crowns_within_mm", nullptr};
+  SPLINTCORE_RETURN_IF_ERROR(r.known_keys(v, kScanKeys, "\"scan\""));
+  const JsonValue* path = doc.member(v, "path");
+  if (path == nullptr) {
+    return r.fail(v, StatusCode::kInvalidArgument, "\"scan\" needs \"path\" (the scan's mesh)");
+  }
+  SPLINTCORE_RETURN_IF_ERROR(r.string(*path, "path", &out->path));
+  if (const JsonValue* l = doc.member(v, "landmarks")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*l, JsonType::kArray, "landmarks"));
+    if (l->child_count < 3 || l->child_count > 64) {
+      return r.fail(*l, StatusCode::kInvalidArgument,
+                    "\"landmarks\" needs 3 to 64 pairs [[scan x, y, z], [jaw x, y, z]]");
+    }
+    LandmarkPair* pairs = r.arena->allocate_array<LandmarkPair>(l->child_count);
+    if (pairs == nullptr) return r.arena->exhausted_status();
+    uint32_t i = 0;
+    for (uint32_t k = l->first_child; k != kJsonNone; k = doc.at(k).next_sibling, ++i) {
+      const JsonValue& pair = doc.at(k);
+      SPLINTCORE_RETURN_IF_ERROR(r.expect_type(pair, JsonType::kArray, "landmarks"));
+      if (pair.child_count != 2) {
+        return r.fail(pair, StatusCode::kInvalidArgument,
+                      "a landmark pair is [[scan x, y, z], [jaw x, y, z]]");
+      }
+      SPLINTCORE_RETURN_IF_ERROR(r.vec3(doc.at(pair.first_child), "landmarks", &pairs[i].scan));
+      SPLINTCORE_RETURN_IF_ERROR(
+          r.vec3(doc.at(doc.at(pair.first_child).next_sibling), "landmarks", &pairs[i].ct));
+    }
+    out->landmarks = Span<const LandmarkPair>(pairs, l->child_count);
+  }
+  if (const JsonValue* e = doc.member(v, "trim")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "jaws[].scan.trim", 0, &out->trim));
+  }
+  if (const JsonValue* e = doc.member(v, "min_overlap")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "jaws[].scan.min_overlap", 0, &out->min_overlap));
+  }
+  if (const JsonValue* e = doc.member(v, "max_rms_mm")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "jaws[].scan.max_rms_mm", 0, &out->max_rms_mm));
+  }
+  if (const JsonValue* e = doc.member(v, "crowns_within_mm")) {
+    SPLINTCORE_RETURN_IF_ERROR(
+        r.number(*e, "jaws[].scan.crowns_within_mm", 0, &out->crowns_within_mm));
+  }
+  return Status::ok();
+}
+
+// The jaws ("jaws": role, mesh or seed, transform, scan).
 Status parse_jaws(const Reader& r, const JsonValue* jaws, CaseFile* out) {
   const JsonDocument& doc = *r.doc;
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*jaws, JsonType::kArray, "jaws"));
   CaseJaw* list = r.arena->allocate_array<CaseJaw>(jaws->child_count);
   if (list == nullptr && jaws->child_count > 0) return r.arena->exhausted_status();
-  static const char* const kJawKeys[] = {"role", "mesh", "seed", "transform", nullptr};
+  static const char* const kJawKeys[] = {"role", "mesh", "seed", "transform", "scan", nullptr};
   uint32_t i = 0;
   for (uint32_t k = jaws->first_child; k != kJsonNone; k = doc.at(k).next_sibling, ++i) {
     const JsonValue& j = doc.at(k);
@@ -249,6 +306,10 @@ Status parse_jaws(const Reader& r, const JsonValue* jaws, CaseFile* out) {
     }
     if (const JsonValue* t = doc.member(j, "transform")) {
       SPLINTCORE_RETURN_IF_ERROR(r.transform(*t, "transform", "jaws[].transform", &jaw.transform));
+    }
+    if (const JsonValue* sc = doc.member(j, "scan")) {
+      SPLINTCORE_RETURN_IF_ERROR(parse_scan(r, *sc, &jaw.scan));
+      jaw.has_scan = true;
     }
     for (uint32_t e = 0; e < i; ++e) {
       if (std::strcmp(list[e].role, jaw.role) == 0) {
@@ -592,6 +653,13 @@ Status parse_plan(const Reader& r, const JsonValue& root, const JsonValue& p, Ca
                       "with \"plan\" the label's \"text\" is at most ");
     return s.append_u64(kLabelMaxCharacters - 4)
         .append(" characters: each splint's label is \"INT \" or \"FIN \" and the text");
+  }
+  for (const CaseJaw& jaw : out->jaws) {
+    if (jaw.has_scan) {  // design_plan passes no scans to its two designs (yet)
+      return r.fail(p, StatusCode::kUnsupported,
+                    "\"plan\" with a jaw's \"scan\" is not supported yet: design each splint "
+                    "as a case of its own");
+    }
   }
   out->has_plan = true;
   return Status::ok();

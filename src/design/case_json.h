@@ -12,6 +12,9 @@ namespace design_detail {
 // `key`: [r00, r01, r02, tx, r10, ..., 0, 0, 0, 1].
 void write_transform(JsonWriter& w, const RigidTransform& t, const char* key = "transform");
 
+// A jaw's "scan" with every key (the defaults written out), as the case gives it.
+void write_scan(JsonWriter& w, const CaseScan& s);
+
 // "plan" with every key (all are required), as the case gives it.
 void write_plan(JsonWriter& w, const CasePlan& p);
 

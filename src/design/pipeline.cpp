@@ -212,7 +212,7 @@ Status name_open_jaw(Status s, const CaseFile& c, Span<const Mesh> jaws) {
     const uint64_t count = jaws[j].vertices.size();
     if (s.index() < first + count) {
       s.append(" (vertex ").append_u64(s.index() - first).append(" of jaw ").append_u64(j);
-      s.append(", ");
+      s.append(c.jaws[j].has_scan ? "'s scan, " : ", ");  // a fused jaw is its scan
       return s.append(c.jaws[j].role).append(")");
     }
     first += count;
@@ -283,6 +283,98 @@ Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   return Status::ok();
 }
 
+// One jaw's scan registered onto the jaw as given (its mesh frame, before the case moves it),
+// with the case's thresholds: a fit above max_rms_mm or an overlap below min_overlap is an
+// error naming the jaw, both figures and both thresholds; so is a wrong landmark pairing.
+Status register_scan(const Context& ctx, const CaseJaw& jaw, size_t j, const Mesh& ct,
+                     const Mesh& scan, FusionReport* out) {
+  const CaseScan& sc = jaw.scan;
+  RegisterOptions ro;
+  ro.landmarks = sc.landmarks;
+  ro.overlap = sc.trim;
+  ro.max_rms_mm = sc.max_rms_mm;
+  ro.inlier_mm = sc.crowns_within_mm;
+  RegisterResult& r = out->registration;
+  const Status s = register_rigid(ctx, scan, ct, ro, &r);
+  const auto named = [&](StatusCode code) {
+    Status e = make_error(code, "design: fusion: jaw ", j, " (", jaw.role, "), scan ", sc.path);
+    return e.at_index(j);
+  };
+  if (s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) return s;
+  if (s.code() == StatusCode::kLimitExceeded || (s.is_ok() && r.overlap < sc.min_overlap)) {
+    Status e = named(StatusCode::kLimitExceeded);
+    e.append(": the scan does not fit the jaw: RMS ").append_f64(r.rms_mm);
+    e.append(" mm (max_rms_mm ").append_f64(sc.max_rms_mm).append("), overlap ");
+    e.append_f64(r.overlap).append(" (min_overlap ").append_f64(sc.min_overlap);
+    e.append(", the fraction of the scan within crowns_within_mm ");
+    e.append_f64(sc.crowns_within_mm).append(" mm of the jaw)");
+    return e.append("; check the scan is of this jaw, or give \"landmarks\"");
+  }
+  if (!s.is_ok()) return named(s.code()).append(": ").append(s.message());
+  out->scan_triangles = scan.triangles.size();
+  return Status::ok();
+}
+
+// Scan-CT fusion: every jaw with a scan registered onto its mesh (register_scan); in *out (the
+// case with the jaw list copied into the arena) and fused[] that jaw is its scan, moved by the
+// registration and then by the jaw's transform. Within the base the registered scan is the
+// jaw's whole surface, so the imprint is the scan's own triangles; its border must lie outside
+// the base (the Boolean names the border vertex otherwise: a larger scan or a smaller outline).
+Status fuse_scans(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                  Span<const Mesh> scans, CaseFile* out, Mesh* fused, DesignReport* report) {
+  *out = c;
+  CaseJaw* list = ctx.arena->allocate_array<CaseJaw>(c.jaws.size());
+  if (list == nullptr) return ctx.arena->exhausted_status();
+  for (size_t j = 0; j < c.jaws.size(); ++j) {
+    list[j] = c.jaws[j];
+    fused[j] = mesh_view(jaws[j].vertices.span(), jaws[j].triangles.span());
+    if (!c.jaws[j].has_scan) continue;
+    FusionReport& f = report->fusion[j];
+    SPLINTCORE_RETURN_IF_ERROR(register_scan(ctx, c.jaws[j], j, jaws[j], scans[j], &f));
+    f.applied = compose(c.jaws[j].transform, f.registration.transform);
+    report->fused[j] = true;
+    list[j].transform = f.applied;
+    fused[j] = mesh_view(scans[j].vertices.span(), scans[j].triangles.span());
+  }
+  out->jaws = Span<const CaseJaw>(list, c.jaws.size());
+  return Status::ok();
+}
+
+// Checks the scans design_splint takes: none when no jaw has "scan", else one entry per jaw,
+// a mesh exactly for the jaws with "scan".
+Status check_scans(const CaseFile& c, Span<const Mesh> scans) {
+  size_t first = c.jaws.size();  // the first jaw with a scan
+  for (size_t j = c.jaws.size(); j-- > 0;) first = c.jaws[j].has_scan ? j : first;
+  if (first == c.jaws.size() && scans.empty()) return Status::ok();
+  if (scans.size() != c.jaws.size()) {
+    Status e = make_error(StatusCode::kInvalidArgument, "design: ", scans.size(),
+                          " scan meshes were given for the case's ", c.jaws.size(),
+                          " jaws (one per jaw, empty for a jaw without a scan)");
+    if (first < c.jaws.size()) {
+      e.append("; jaw ").append_u64(first).append(" (").append(c.jaws[first].role);
+      e.append(") has a \"scan\"");
+    }
+    return e;
+  }
+  if (c.jaws.size() > DesignReport::kMaxFusedJaws) {
+    return make_error(StatusCode::kLimitExceeded, "design: fusion takes at most ",
+                      DesignReport::kMaxFusedJaws, " jaws, the case has ", c.jaws.size());
+  }
+  for (size_t j = 0; j < c.jaws.size(); ++j) {
+    if (c.jaws[j].has_scan && scans[j].triangles.empty()) {
+      return make_error(StatusCode::kInvalidMesh, "design: the scan of jaw ", j, " (",
+                        c.jaws[j].role, ") is empty: it has no triangles")
+          .at_index(j);
+    }
+    if (!c.jaws[j].has_scan && (!scans[j].triangles.empty() || !scans[j].vertices.empty())) {
+      return make_error(StatusCode::kInvalidArgument, "design: a scan mesh was given for jaw ", j,
+                        " (", c.jaws[j].role, "), which has no \"scan\" in the case")
+          .at_index(j);
+    }
+  }
+  return Status::ok();
+}
+
 // Checks what design_splint takes before anything is allocated.
 Status check_design_inputs(const CaseFile& c, Span<const Mesh> jaws, const Mesh& splint,
                            const PrinterProfile** profile) {
@@ -314,10 +406,16 @@ Status check_design_inputs(const CaseFile& c, Span<const Mesh> jaws, const Mesh&
 
 Status design_splint(const Context& ctx, const CaseFile& case_given, Span<const Mesh> jaws,
                      Mesh* splint, DesignReport* report) {
+  return design_splint(ctx, case_given, jaws, Span<const Mesh>(), splint, report);
+}
+
+Status design_splint(const Context& ctx, const CaseFile& case_given, Span<const Mesh> jaws_given,
+                     Span<const Mesh> scans, Mesh* splint, DesignReport* report) {
   Arena& arena = *ctx.arena;
   *report = DesignReport{};
   const PrinterProfile* profile = nullptr;
-  SPLINTCORE_RETURN_IF_ERROR(check_design_inputs(case_given, jaws, *splint, &profile));
+  SPLINTCORE_RETURN_IF_ERROR(check_design_inputs(case_given, jaws_given, *splint, &profile));
+  SPLINTCORE_RETURN_IF_ERROR(check_scans(case_given, scans));
   report->printer = profile->name;
   ArenaScope scope(arena);  // every error, a cancel included, leaves the arena as it was
   const auto stage = [&](const char* name) { return report_progress(ctx, name, 0, 1); };
@@ -325,7 +423,7 @@ Status design_splint(const Context& ctx, const CaseFile& case_given, Span<const 
   if (case_given.has_auto_outline) {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: outline"));
     Outline o;
-    SPLINTCORE_RETURN_IF_ERROR(resolve_case_outline(ctx, case_given, jaws, &outlined, &o));
+    SPLINTCORE_RETURN_IF_ERROR(resolve_case_outline(ctx, case_given, jaws_given, &outlined, &o));
     report->outlined = true;
     report->outline = o.report;
   }
@@ -337,10 +435,22 @@ Status design_splint(const Context& ctx, const CaseFile& case_given, Span<const 
                     "placement on the tray"));
     report->placed_on_tray = true;
   }
-  const CaseFile& c = case_in.place_on_tray ? on_tray : case_in;
+  const CaseFile& c_placed = case_in.place_on_tray ? on_tray : case_in;
+  for (const Mesh& m : jaws_given) report->jaw_triangles += m.triangles.size();
+  // Scan-CT fusion: from here on a jaw with a scan is its registered scan.
+  CaseFile fused_case;
+  Mesh fused[DesignReport::kMaxFusedJaws];
+  bool fusing = false;
+  for (const CaseJaw& j : c_placed.jaws) fusing = fusing || j.has_scan;
+  if (fusing) {
+    SPLINTCORE_RETURN_IF_ERROR(stage("design: fusion"));
+    SPLINTCORE_RETURN_IF_ERROR(
+        fuse_scans(ctx, c_placed, jaws_given, scans, &fused_case, fused, report));
+  }
+  const CaseFile& c = fusing ? fused_case : c_placed;
+  const Span<const Mesh> jaws = fusing ? Span<const Mesh>(fused, jaws_given.size()) : jaws_given;
 
   SPLINTCORE_RETURN_IF_ERROR(stage("design: jaws"));
-  for (const Mesh& m : jaws) report->jaw_triangles += m.triangles.size();
   const Arena::Marker before_b = arena.mark();
   Mesh b(&arena);
   SPLINTCORE_RETURN_IF_ERROR(gather_jaws(ctx, c, jaws, &b));

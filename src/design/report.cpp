@@ -52,6 +52,41 @@ void write_inputs(JsonWriter& w, const CaseFile& c, Span<const Mesh> jaws,
   w.end_array();
 }
 
+// Scan-CT fusion ("fusion"): per jaw with a scan, the case's thresholds and the registration.
+void write_fusion(JsonWriter& w, const CaseFile& c, const DesignReport& report,
+                  const DesignReportFiles& files) {
+  w.begin_array("fusion");
+  for (size_t i = 0; i < c.jaws.size() && i < DesignReport::kMaxFusedJaws; ++i) {
+    if (!report.fused[i]) continue;
+    const CaseScan& sc = c.jaws[i].scan;
+    const FusionReport& f = report.fusion[i];
+    const RegisterResult& r = f.registration;
+    w.begin_object();
+    w.add("role", c.jaws[i].role);
+    w.add("scan", at(files.scan_paths, i) != nullptr ? at(files.scan_paths, i) : sc.path);
+    if (at(files.scan_sha256, i) != nullptr) w.add("scan_sha256", at(files.scan_sha256, i));
+    w.add("scan_triangles", f.scan_triangles);
+    w.add("start", sc.landmarks.empty() ? "automatic" : "landmarks");
+    w.add("landmarks", static_cast<uint64_t>(sc.landmarks.size()));
+    if (!sc.landmarks.empty()) w.add("landmark_rms_mm", r.landmark_rms_mm);
+    w.add("trim", sc.trim);
+    w.add("min_overlap", sc.min_overlap);
+    w.add("max_rms_mm", sc.max_rms_mm);
+    w.add("crowns_within_mm", sc.crowns_within_mm);
+    write_transform(w, r.transform);  // scan -> the jaw's mesh
+    write_transform(w, f.applied, "applied_transform");
+    w.add("rms_mm", r.rms_mm);
+    w.add("overlap", r.overlap);
+    w.add("iterations", r.iterations);
+    w.add("converged", r.converged);
+    w.add("samples", r.samples);
+    w.add("kept", r.kept);
+    w.add("imprint", "scan triangles");
+    w.end_object();
+  }
+  w.end_array();
+}
+
 void write_parameters(JsonWriter& w, const CaseFile& c, const DesignReport& report,
                       const DesignReportFiles& files, bool any_ct) {
   w.begin_object("parameters");
@@ -256,7 +291,10 @@ void write_splint_members(JsonWriter& w, const CaseFile& c, Span<const Mesh> jaw
                           const DesignReportFiles& files, const char* splint_sha256) {
   bool any_ct = false;
   for (const CaseJaw& j : c.jaws) any_ct = any_ct || j.has_seed;
+  bool any_scan = false;
+  for (const CaseJaw& j : c.jaws) any_scan = any_scan || j.has_scan;
   write_inputs(w, c, jaws, files);
+  if (any_scan) write_fusion(w, c, report, files);
   write_parameters(w, c, report, files, any_ct);
   if (report.outlined) write_outline(w, report.outline, files);
   write_checks(w, c, report);

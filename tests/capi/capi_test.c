@@ -730,6 +730,70 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
   for (i = 0; i < 2; ++i) free(jaw_bytes[i].data);
 }
 
+/* Scan-CT fusion (sc_design_scans): the paper-scale case with the mandible's own mesh as its
+ * "scan" (registered onto itself: the identity), and sc_design refusing that case (no scans). */
+static void test_design_scans(const Bytes* case_text, const char* jaws_dir) {
+  static const char kMesh[] = "\"mesh\": \"mandible.stl\",";
+  static const char kScan[] = " \"scan\": {\"path\": \"mandible.stl\", \"max_rms_mm\": 0.01},";
+  Fixture f = open_fixture((size_t)96 << 20);
+  const char* text = (const char*)case_text->data;
+  const char* at = NULL;
+  char* fused_text = NULL;
+  size_t head, i, length;
+  sc_case* c = NULL;
+  const sc_mesh* jaws[2] = {NULL, NULL};
+  const sc_mesh* scans[2] = {NULL, NULL};
+  Bytes jaw_bytes[2] = {{NULL, 0}, {NULL, 0}};
+  sc_mesh* splint = NULL;
+  sc_design_report report;
+  char message[512];
+
+  for (i = 0; i + sizeof kMesh - 1 <= case_text->size && at == NULL; ++i) {
+    if (memcmp(text + i, kMesh, sizeof kMesh - 1) == 0) at = text + i;
+  }
+  CHECK(at != NULL);
+  if (at == NULL) return;
+  head = (size_t)(at - text) + sizeof kMesh - 1;
+  length = case_text->size + sizeof kScan - 1;
+  fused_text = (char*)malloc(length);
+  memcpy(fused_text, text, head);
+  memcpy(fused_text + head, kScan, sizeof kScan - 1);
+  memcpy(fused_text + head + sizeof kScan - 1, text + head, case_text->size - head);
+  CHECK_OK(f.ctx, sc_case_parse(f.ctx, fused_text, length, "fused.json", &c));
+  free(fused_text);
+  if (c == NULL) return;
+  for (i = 0; i < 2; ++i) {
+    sc_mesh* m = NULL;
+    jaw_bytes[i] = read_file(jaws_dir, sc_case_jaw_mesh(c, i));
+    CHECK(jaw_bytes[i].data != NULL);
+    if (jaw_bytes[i].data == NULL) return;
+    CHECK_OK(f.ctx, read_mesh(f.ctx, &jaw_bytes[i], sc_case_jaw_mesh(c, i), &m));
+    jaws[i] = m;
+  }
+  /* Without the scans the case is refused, naming the jaw. */
+  CHECK(sc_design(f.ctx, c, jaws, 2, &splint, &report) == SC_INVALID_ARGUMENT);
+  last_message(f.ctx, message, sizeof message);
+  CHECK(contains(message, "jaw 1 (mandible) has a \"scan\""));
+  scans[1] = jaws[1];
+  CHECK_OK(f.ctx, sc_design_scans(f.ctx, c, jaws, scans, 2, &splint, &report));
+  if (splint != NULL) {
+    CHECK(report.fused[0] == 0 && report.fused[1] == 1);
+    CHECK(report.fusion_rms_mm[1] < 1e-6);
+    CHECK(report.fusion_overlap[1] > 0.99);
+    for (i = 0; i < 16; ++i) {
+      const double identity = (i % 5 == 0) ? 1.0 : 0.0;
+      const double off = report.fusion_transform[1][i] - identity;
+      CHECK(off < 1e-6 && off > -1e-6);
+    }
+    CHECK(report.printable == 1);
+    printf("design with the mandible as its own scan: rms %.3g mm, overlap %.3f, %llu triangles\n",
+           report.fusion_rms_mm[1], report.fusion_overlap[1],
+           (unsigned long long)report.splint_triangles);
+  }
+  close_fixture(&f);
+  for (i = 0; i < 2; ++i) free(jaw_bytes[i].data);
+}
+
 /* The report through the C API is report.json as `splintcore design` wrote it for the same
  * case (cli_dir: its -o folder), less the "run" part: the same names given, the same bytes. */
 static void test_report_matches_cli(const char* jaws_dir, const char* cli_dir) {
@@ -1326,6 +1390,7 @@ int main(int argc, char** argv) {
   test_case_params(&case_text);
   if (argc >= 3) {
     test_design(&case_text, argv[2]);
+    test_design_scans(&case_text, argv[2]);
     test_outline(argv[2]);
     if (argc >= 4) test_report_matches_cli(argv[2], argv[3]);
     test_design_plan(argv[2], argc >= 5 ? argv[4] : NULL);

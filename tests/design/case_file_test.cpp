@@ -437,7 +437,7 @@ TEST(CaseFileErrors, UnknownKeysAtEveryLevel) {
                   "(allowed: position normal direction inner_length_mm outside_length_mm)"});
   expect_invalid(
       with_root("  \"jaws\": [{\"role\": \"maxilla\", \"mesh\": \"m.stl\", \"scale\": @2}],\n"),
-      {"unknown key \"scale\" in a jaw", "(allowed: role mesh seed transform)"});
+      {"unknown key \"scale\" in a jaw", "(allowed: role mesh seed transform scan)"});
   expect_invalid(with_root("  \"output\": {\"splint\": \"s.stl\", \"stl\": @\"x\"},\n"),
                  {"unknown key \"stl\" in \"output\"", "(allowed: splint report job)"});
   // Keys are case-sensitive.

@@ -350,6 +350,28 @@ expect_exit 0 "design with blockout" -- "$tool" design "$work/case/blockout.json
 check "blockout reported per jaw" -- grep -q '"blockout":\[{"role":"maxilla"' "$work/design-blockout/report.json"
 check "blockout parameters reported" -- grep -q '"blockout_voxel_mm":0.3' "$work/design-blockout/report.json"
 expect_exit 0 "the blocked-out design is printable" -- "$tool" check "$work/design-blockout/splint.stl"
+# Scan-CT fusion (issue 30): the turned mandible (autorotate, above) as the mandible's "scan":
+# registered back onto it, reported under "fusion"; a wrong landmark pairing stops the design
+# with the jaw named and nothing written.
+python3 - "$work/case/case.json" "$work/turned.stl" "$work/case/fused.json" "$work/case/fused-wrong.json" <<'PY'
+import json, sys
+case = json.load(open(sys.argv[1]))
+case["jaws"][1]["scan"] = {"path": sys.argv[2], "max_rms_mm": 0.05}
+json.dump(case, open(sys.argv[3], "w"))
+case["jaws"][1]["scan"]["landmarks"] = [[[0, 0, 0], [0, 0, 0]], [[10, 0, 0], [0, 10, 0]], [[0, 10, 0], [10, 0, 0]]]
+json.dump(case, open(sys.argv[4], "w"))
+PY
+mkdir -p "$work/design-fused" "$work/design-fused-wrong"
+expect_exit 0 "design with a scan" -- "$tool" design "$work/case/fused.json" -o "$work/design-fused"
+check "fusion reported for the mandible" -- grep -q '"fusion":\[{"role":"mandible","scan":"[^"]*turned.stl","scan_sha256":"[0-9a-f]\{64\}"' "$work/design-fused/report.json"
+check "fusion fits within 0.01 mm" -- python3 -c "import json, sys; f = json.load(open(sys.argv[1]))['fusion'][0]; sys.exit(not (f['rms_mm'] < 0.01 and f['overlap'] > 0.99))" "$work/design-fused/report.json"
+check "fusion printed" -- grep -q "^fusion (mandible): scan .*turned.stl registered, RMS 0.0" "$work/out"
+check "fusion reported as a stage" -- grep -q '"stage":"fusion"' "$work/design-fused/report.json"
+expect_exit 0 "the fused design is printable" -- "$tool" check "$work/design-fused/splint.stl"
+expect_exit 1 "design with a wrong landmark pairing" -- "$tool" design "$work/case/fused-wrong.json" -o "$work/design-fused-wrong"
+check "the wrong pairing names the jaw" -- grep -q "design: fusion: jaw 1 (mandible), scan .*turned.stl: .*landmarks" "$work/err"
+check "no splint after a wrong pairing" -- test ! -e "$work/design-fused-wrong/splint.stl"
+check "no report after a wrong pairing" -- test ! -e "$work/design-fused-wrong/report.json"
 rm "$work/case/mandible.stl"
 mkdir -p "$work/design2"
 expect_exit 1 "design with a missing jaw" -- "$tool" design "$work/case/case.json" -o "$work/design2"

@@ -138,6 +138,10 @@ class Design {
   // The jaws, as read (their bytes hashed for the report); those from CT, reconstructed.
   std::vector<std::string> jaw_paths_, jaw_hashes_;
   std::vector<Mesh> jaws_;
+  // The jaws' intraoral scans ("scan"), as read; an empty mesh for a jaw without one.
+  std::vector<std::string> scan_paths_, scan_hashes_;
+  std::vector<Mesh> scans_;
+  bool any_scan_ = false;
   bool any_ct_ = false;
   CaseCtReport ct_report_;
   CtInfo ct_info_;
@@ -197,7 +201,9 @@ int Design::run() {
                                      "outline: the case gives its picks (no \"auto\" in \"base\")")
                            .in_file(case_path_.c_str()));
   }
-  s = design_splint(ctx_, c_, Span<const Mesh>(jaws_.data(), jaws_.size()), &splint_, &report_);
+  s = design_splint(ctx_, c_, Span<const Mesh>(jaws_.data(), jaws_.size()),
+                    Span<const Mesh>(scans_.data(), any_scan_ ? scans_.size() : 0), &splint_,
+                    &report_);
   if (clock_.print && !s.is_ok()) std::fprintf(stderr, " failed\n");
   if (!s.is_ok()) return run_.reject(s.in_file(case_path_.c_str()));
   if (outlined_) {
@@ -225,6 +231,17 @@ int Design::run() {
 Status Design::read_jaws() {
   const uint64_t limit = args_.max_input_bytes != 0 ? args_.max_input_bytes : cli::kMaxMeshBytes;
   for (const CaseJaw& j : c_.jaws) {
+    scan_paths_.emplace_back();
+    scan_hashes_.emplace_back();
+    scans_.emplace_back(&run_.arena);
+    if (j.has_scan) {  // the scan's mesh, read as a jaw is (welded)
+      any_scan_ = true;
+      scan_paths_.back() = j.scan.path[0] == '/' ? std::string(j.scan.path) : folder_ + j.scan.path;
+      MeshFileInfo info;
+      SPLINTCORE_RETURN_IF_ERROR(
+          read_mesh_file(ctx_, scan_paths_.back().c_str(), limit, true, &scans_.back(), &info));
+      scan_hashes_.back() = info.sha256;
+    }
     if (j.has_seed) {  // reconstructed from the case's CT (reconstruct_ct_jaws)
       any_ct_ = true;
       jaw_paths_.emplace_back();
@@ -285,14 +302,17 @@ Status Design::write_resolved_case(const std::string& path) {
   CaseFile written = c_;
   std::vector<CaseJaw> jaws(c_.jaws.begin(), c_.jaws.end());
   std::vector<std::string> names;
-  names.reserve(jaws.size() + 1);
+  names.reserve(2 * jaws.size() + 1);  // mesh and scan paths: the pointers must stay put
   auto absolute = [&](const char* name) -> const char* {
     if (same || name == nullptr || name[0] == '/') return name;
     char full[PATH_MAX];
     names.push_back(::realpath((folder_ + name).c_str(), full) != nullptr ? full : folder_ + name);
     return names.back().c_str();
   };
-  for (CaseJaw& j : jaws) j.mesh = absolute(j.mesh);
+  for (CaseJaw& j : jaws) {
+    j.mesh = absolute(j.mesh);
+    if (j.has_scan) j.scan.path = absolute(j.scan.path);
+  }
   written.jaws = Span<const CaseJaw>(jaws.data(), jaws.size());
   written.ct_volume = absolute(c_.ct_volume);
   std::string text;
@@ -362,6 +382,11 @@ void Design::write_preview() {
   std::vector<const Mesh*> preview_jaws;
   std::vector<RigidTransform> preview_moves;
   for (size_t i = 0; i < jaws_.size(); ++i) {
+    if (i < DesignReport::kMaxFusedJaws && report_.fused[i]) {  // the registered scan
+      preview_jaws.push_back(&scans_[i]);
+      preview_moves.push_back(report_.fusion[i].applied);  // the tray's move included
+      continue;
+    }
     preview_jaws.push_back(&jaws_[i]);
     // On the tray the whole case moved by tray_translation before the design: the jaws
     // follow it, so the preview shows the fit where the splint is.
@@ -398,6 +423,14 @@ Status Design::write_report() {
   files.case_path = case_path_.c_str();
   files.jaw_paths = Span<const char* const>(path_list.data(), path_list.size());
   files.jaw_sha256 = Span<const char* const>(hash_list.data(), hash_list.size());
+  std::vector<const char*> scan_list, scan_hash_list;
+  for (size_t i = 0; i < scan_paths_.size(); ++i) {
+    const bool has = c_.jaws[i].has_scan;
+    scan_list.push_back(has ? scan_paths_[i].c_str() : nullptr);
+    scan_hash_list.push_back(has ? scan_hashes_[i].c_str() : nullptr);
+  }
+  files.scan_paths = Span<const char* const>(scan_list.data(), scan_list.size());
+  files.scan_sha256 = Span<const char* const>(scan_hash_list.data(), scan_hash_list.size());
   if (any_ct_) {
     files.ct_path = ct_path_.c_str();
     files.ct_size[0] = ct_info_.nx;
@@ -603,6 +636,12 @@ void Design::print_summary() const {
               case_path_.c_str(), c_.case_id, jaws_.size(),
               static_cast<unsigned long long>(report.jaw_triangles), report.base.sections,
               c_.upper.size(), c_.lower.size());
+  for (size_t i = 0; i < c_.jaws.size() && i < DesignReport::kMaxFusedJaws; ++i) {
+    if (!report.fused[i]) continue;
+    const RegisterResult& f = report.fusion[i].registration;
+    std::printf("fusion (%s): scan %s registered, RMS %.4f mm, overlap %.3f, %u iterations\n",
+                c_.jaws[i].role, scan_paths_[i].c_str(), f.rms_mm, f.overlap, f.iterations);
+  }
   if (report.imprint_offset) {
     std::printf("imprint: a %.3g mm clearance around each jaw's swept volume\n",
                 c_.blockout.offset);

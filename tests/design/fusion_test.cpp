@@ -1,0 +1,463 @@
+// Scan-CT fusion in design (issue 30): the paper-scale case on the phantom jaws, the mandible
+// given a "scan" (its crowns and the jaw down to 3 mm below them, cut out of the phantom and
+// moved by a known rigid motion). Design recovers the motion (within 0.05 mm and 0.1 degree),
+// the scan's triangles are the imprint, the splint is a closed, valid solid; a wrong landmark
+// pairing and a fit over the thresholds are errors naming the numbers, with nothing made; the
+// "scan" keys are parsed, checked and written back; report.json has "fusion".
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "common/cli.h"
+#include "common/phantom.h"
+#include "splintcore/design.h"
+#include "support/test_util.h"
+
+namespace splintcore {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// The paper-scale case, both phantom jaws (6000 triangles) and the mandible's scan: the
+// triangles whose corners all lie above z = cut_z in the jaw's own frame (-3: the crowns and a
+// band below them, the border below the base's reach), with `noise` mm per axis (a seeded
+// counter), moved by the inverse of `truth` (so truth takes it back onto the jaw).
+struct Fused {
+  test::TestArena t{size_t{128} << 20};
+  std::vector<uint8_t> text;
+  CaseFile c;
+  CaseJaw case_jaws[2];
+  Mesh jaws[2];
+  Mesh scans[2];  // scans[0] stays empty (the maxilla has none)
+  RigidTransform truth;
+  bool ok = false;
+
+  explicit Fused(double noise = 0, double cut_z = -3) {
+    Context ctx(&t.arena);
+    text = test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/cases/paper_scale.json");
+    if (!parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), "paper_scale", &c)
+             .is_ok()) {
+      return;
+    }
+    for (int j = 0; j < 2; ++j) {
+      phantom::JawMesh m;
+      phantom::PhantomOptions po;
+      po.target_triangles = 6000;
+      if (!phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &m)
+               .is_ok()) {
+        return;
+      }
+      jaws[j].bind(&t.arena);
+      scans[j].bind(&t.arena);
+      for (const Vec3& v : m.vertices) (void)jaws[j].vertices.push_back(v);
+      for (const Triangle& tr : m.triangles) (void)jaws[j].triangles.push_back(tr);
+    }
+    Aabb box;
+    for (const Vec3& v : jaws[1].vertices) box.add(v);
+    const Vec3 axis{0.3, -0.2, 1.0};
+    truth = rotation_about_axis(box.center(), axis * (1.0 / length(axis)), 6.0 * kPi / 180.0);
+    truth.t = truth.t + Vec3{1.5, -2.0, 0.8};
+    const RigidTransform back = inverse(truth);
+    std::vector<uint32_t> map(jaws[1].vertices.size(), ~0u);
+    uint64_t state = 777;
+    const auto jitter = [&]() {
+      state = hash_mix(state + 0x9e3779b97f4a7c15ull);
+      return noise * (2 * static_cast<double>(state >> 11) * (1.0 / 9007199254740992.0) - 1);
+    };
+    for (const Triangle& tr : jaws[1].triangles) {
+      bool keep = true;
+      for (uint32_t v : tr.v) keep = keep && jaws[1].vertices[v].z > cut_z;
+      if (!keep) continue;
+      Triangle out;
+      for (int k = 0; k < 3; ++k) {
+        if (map[tr.v[k]] == ~0u) {
+          map[tr.v[k]] = static_cast<uint32_t>(scans[1].vertices.size());
+          Vec3 p = jaws[1].vertices[tr.v[k]];
+          p = p + Vec3{jitter(), jitter(), jitter()};
+          (void)scans[1].vertices.push_back(back.apply_point(p));
+        }
+        out.v[k] = map[tr.v[k]];
+      }
+      (void)scans[1].triangles.push_back(out);
+    }
+    case_jaws[0] = c.jaws[0];
+    case_jaws[1] = c.jaws[1];
+    case_jaws[1].has_scan = true;
+    case_jaws[1].scan.path = "mandible_scan.stl";
+    c.jaws = Span<const CaseJaw>(case_jaws, 2);
+    ok = !scans[1].triangles.empty() && scans[1].triangles.size() < jaws[1].triangles.size();
+  }
+
+  Status design(Mesh* splint, DesignReport* r) {
+    return design_splint(Context(&t.arena), c, Span<const Mesh>(jaws, 2),
+                         Span<const Mesh>(scans, 2), splint, r);
+  }
+};
+
+// RMS over the mesh's vertices of the distance between their places under a and b, and the
+// angle of the rotation between them (degrees).
+void motion_error(const Mesh& m, const RigidTransform& a, const RigidTransform& b, double* rms_mm,
+                  double* degrees) {
+  double sum = 0;
+  for (const Vec3& v : m.vertices) sum += length_squared(a.apply_point(v) - b.apply_point(v));
+  *rms_mm = std::sqrt(sum / static_cast<double>(m.vertices.size()));
+  double trace = 0;
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 3; ++k) trace += a.r[i][k] * b.r[i][k];
+  }
+  *degrees = std::acos(std::fmin(1.0, std::fmax(-1.0, 0.5 * (trace - 1)))) * 180.0 / kPi;
+}
+
+TEST(DesignFusion, ScanIsRegisteredAndIsTheImprint) {
+  Fused f;
+  ASSERT_TRUE(f.ok);
+  Mesh splint;
+  DesignReport r;
+  const std::string scan_before =
+      test::sha256_hex(f.scans[1].vertices.data(), f.scans[1].vertices.size() * sizeof(Vec3));
+  SPLINTCORE_ASSERT_OK(f.design(&splint, &r));
+  // The scan given is read, not moved.
+  EXPECT_EQ(test::sha256_hex(f.scans[1].vertices.data(), f.scans[1].vertices.size() * sizeof(Vec3)),
+            scan_before);
+  EXPECT_FALSE(r.fused[0]);
+  ASSERT_TRUE(r.fused[1]);
+  const FusionReport& fu = r.fusion[1];
+  double rms = 0, deg = 0;
+  motion_error(f.scans[1], fu.registration.transform, f.truth, &rms, &deg);
+  EXPECT_LT(rms, 0.05);
+  EXPECT_LT(deg, 0.1);
+  EXPECT_LT(fu.registration.rms_mm, 0.01);
+  EXPECT_GT(fu.registration.overlap, 0.99);
+  EXPECT_EQ(fu.scan_triangles, f.scans[1].triangles.size());
+  // The jaw's transform applies after the registration.
+  const RigidTransform expect = compose(f.c.jaws[1].transform, fu.registration.transform);
+  motion_error(f.scans[1], fu.applied, expect, &rms, &deg);
+  EXPECT_EQ(rms, 0.0);
+  // A closed, valid, printable solid, checked for self-intersections by its Boolean.
+  EXPECT_TRUE(r.print.printable);
+  EXPECT_TRUE(r.self_intersection_checked);
+  MeshReport mr;
+  SPLINTCORE_ASSERT_OK(check_mesh(Context(&f.t.arena), splint, &mr));
+  EXPECT_TRUE(mr.closed() && mr.edge_manifold() && mr.outward()) << mr.boundary_edges;
+  EXPECT_GT(mr.volume, 0);
+  // The imprint is the scan's: many of its vertices, moved as applied and rounded to float32,
+  // are splint vertices bit for bit.
+  std::set<std::array<float, 3>> at;
+  for (const Vec3& v : splint.vertices) {
+    at.insert({static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)});
+  }
+  size_t kept = 0;
+  for (const Vec3& v : f.scans[1].vertices) {
+    const Vec3 p = fu.applied.apply_point(v);
+    kept += at.count({static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)});
+  }
+  EXPECT_GT(kept, 100u);
+  // report.json: the registration under "fusion".
+  std::string json;
+  SPLINTCORE_ASSERT_OK(write_design_report(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2),
+                                           splint, r, DesignReportFiles{}, nullptr,
+                                           cli::string_sink(&json)));
+  for (const char* key :
+       {"\"fusion\":[{\"role\":\"mandible\",\"scan\":\"mandible_scan.stl\"", "\"rms_mm\":",
+        "\"overlap\":", "\"iterations\":", "\"applied_transform\":[", "\"max_rms_mm\":0.3"}) {
+    EXPECT_NE(json.find(key), std::string::npos) << key << "\n" << json.substr(0, 2000);
+  }
+}
+
+TEST(DesignFusion, WrongLandmarkPairingIsAnErrorAndNothingIsMade) {
+  Fused f;
+  ASSERT_TRUE(f.ok);
+  // Three scan vertices paired with the jaw points of the wrong ones (a rotation of the list).
+  const Vec3 s0 = f.scans[1].vertices[0], s1 = f.scans[1].vertices[f.scans[1].vertices.size() / 3],
+             s2 = f.scans[1].vertices[2 * f.scans[1].vertices.size() / 3];
+  const LandmarkPair pairs[3] = {
+      {s0, f.truth.apply_point(s1)}, {s1, f.truth.apply_point(s2)}, {s2, f.truth.apply_point(s0)}};
+  f.case_jaws[1].scan.landmarks = Span<const LandmarkPair>(pairs, 3);
+  const size_t used = f.t.arena.used();
+  Mesh splint;
+  DesignReport r;
+  const Status s = f.design(&splint, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << s.message();
+  const std::string m = s.message();
+  EXPECT_NE(m.find("design: fusion: jaw 1 (mandible), scan mandible_scan.stl: "), std::string::npos)
+      << m;
+  EXPECT_NE(m.find("landmark"), std::string::npos) << m;
+  EXPECT_TRUE(splint.triangles.empty());
+  EXPECT_EQ(f.t.arena.used(), used);
+  // The right pairing starts the same registration well.
+  const LandmarkPair right[3] = {
+      {s0, f.truth.apply_point(s0)}, {s1, f.truth.apply_point(s1)}, {s2, f.truth.apply_point(s2)}};
+  f.case_jaws[1].scan.landmarks = Span<const LandmarkPair>(right, 3);
+  SPLINTCORE_ASSERT_OK(f.design(&splint, &r));
+  double rms = 0, deg = 0;
+  motion_error(f.scans[1], r.fusion[1].registration.transform, f.truth, &rms, &deg);
+  EXPECT_LT(rms, 0.05);
+  EXPECT_LT(deg, 0.1);
+  EXPECT_LT(r.fusion[1].registration.landmark_rms_mm, 0.05);
+}
+
+TEST(DesignFusion, FitOverTheThresholdsNamesTheNumbers) {
+  Fused f(0.05);  // 0.05 mm of noise per axis: an RMS of about 0.03 mm
+  ASSERT_TRUE(f.ok);
+  Mesh splint;
+  DesignReport r;
+  // Within the default thresholds the noisy scan is recovered as well.
+  SPLINTCORE_ASSERT_OK(f.design(&splint, &r));
+  double rms = 0, deg = 0;
+  motion_error(f.scans[1], r.fusion[1].registration.transform, f.truth, &rms, &deg);
+  EXPECT_LT(rms, 0.05);
+  EXPECT_LT(deg, 0.1);
+  EXPECT_GT(r.fusion[1].registration.rms_mm, 0.01);  // the noise, measured
+  EXPECT_TRUE(r.print.printable);
+  splint = Mesh();
+  f.case_jaws[1].scan.max_rms_mm = 0.01;
+  Status s = f.design(&splint, &r);
+  EXPECT_EQ(s.code(), StatusCode::kLimitExceeded) << s.message();
+  std::string m = s.message();
+  for (const char* part :
+       {"design: fusion: jaw 1 (mandible)", "the scan does not fit the jaw: RMS ",
+        "(max_rms_mm 0.01)", ", overlap ", "(min_overlap 0.3,"}) {
+    EXPECT_NE(m.find(part), std::string::npos) << part << " in " << m;
+  }
+  EXPECT_TRUE(splint.triangles.empty());
+  // The overlap: with crowns only 0.01 mm from the jaw almost no sample counts.
+  f.case_jaws[1].scan.max_rms_mm = 1;
+  f.case_jaws[1].scan.crowns_within_mm = 0.01;
+  s = f.design(&splint, &r);
+  EXPECT_EQ(s.code(), StatusCode::kLimitExceeded) << s.message();
+  m = s.message();
+  EXPECT_NE(m.find("crowns_within_mm 0.01 mm"), std::string::npos) << m;
+  const size_t at = m.find(", overlap ");
+  ASSERT_NE(at, std::string::npos) << m;
+  EXPECT_LT(std::strtod(m.c_str() + at + 10, nullptr), 0.3) << m;
+  EXPECT_TRUE(splint.triangles.empty());
+}
+
+TEST(DesignFusion, BlockoutSweepsTheScan) {
+  Fused f;
+  ASSERT_TRUE(f.ok);
+  f.c.has_blockout = true;
+  f.c.blockout.voxel = 0.2;
+  f.c.blockout.inset = 0.1;
+  Mesh splint;
+  DesignReport r;
+  SPLINTCORE_ASSERT_OK(f.design(&splint, &r));
+  EXPECT_TRUE(r.fused[1]);
+  EXPECT_EQ(r.blockout_jaws, 2u);
+  EXPECT_TRUE(r.print.printable);
+  MeshReport mr;
+  SPLINTCORE_ASSERT_OK(check_mesh(Context(&f.t.arena), splint, &mr));
+  EXPECT_TRUE(mr.closed() && mr.edge_manifold() && mr.outward()) << mr.boundary_edges;
+}
+
+TEST(DesignFusion, AutomaticOutlineOnTheJawsThenTheScan) {
+  Fused f;
+  ASSERT_TRUE(f.ok);
+  f.c.has_auto_outline = true;  // the outline's defaults; it runs on the jaws' own meshes
+  Mesh splint;
+  DesignReport r;
+  SPLINTCORE_ASSERT_OK(f.design(&splint, &r));
+  EXPECT_TRUE(r.outlined);
+  EXPECT_TRUE(r.fused[1]);
+  EXPECT_TRUE(r.print.printable);
+  MeshReport mr;
+  SPLINTCORE_ASSERT_OK(check_mesh(Context(&f.t.arena), splint, &mr));
+  EXPECT_TRUE(mr.closed() && mr.edge_manifold() && mr.outward()) << mr.boundary_edges;
+}
+
+TEST(DesignFusion, ArenaExhaustionIsCleanAtEveryCapTried) {
+  Fused f;
+  ASSERT_TRUE(f.ok);
+  size_t need = 0;
+  {
+    std::vector<unsigned char> big(size_t{64} << 20);
+    Arena probe(big.data(), big.size());
+    Mesh splint;
+    DesignReport r;
+    SPLINTCORE_ASSERT_OK(design_splint(Context(&probe), f.c, Span<const Mesh>(f.jaws, 2),
+                                       Span<const Mesh>(f.scans, 2), &splint, &r));
+    need = probe.high_water();
+  }
+  for (size_t cap = 0; cap < need; cap += need / 12 + 1) {
+    std::vector<unsigned char> buf(cap + 1);
+    Arena small(buf.data(), cap);
+    Mesh splint;
+    DesignReport r;
+    const Status s = design_splint(Context(&small), f.c, Span<const Mesh>(f.jaws, 2),
+                                   Span<const Mesh>(f.scans, 2), &splint, &r);
+    ASSERT_EQ(s.code(), StatusCode::kArenaExhausted) << cap << " " << test::format(s);
+    EXPECT_EQ(small.used(), 0u);
+    EXPECT_TRUE(splint.triangles.empty());
+  }
+  std::vector<unsigned char> buf(need);
+  Arena exact(buf.data(), need);
+  Mesh splint;
+  DesignReport r;
+  SPLINTCORE_EXPECT_OK(design_splint(Context(&exact), f.c, Span<const Mesh>(f.jaws, 2),
+                                     Span<const Mesh>(f.scans, 2), &splint, &r));
+  Arena short_one(buf.data(), need - 1);
+  Mesh none;
+  EXPECT_EQ(design_splint(Context(&short_one), f.c, Span<const Mesh>(f.jaws, 2),
+                          Span<const Mesh>(f.scans, 2), &none, &r)
+                .code(),
+            StatusCode::kArenaExhausted);
+}
+
+TEST(DesignFusion, ScanWhoseBorderCrossesTheBaseIsNamed) {
+  Fused f(0, 0.5);  // the crowns' tops only: the border runs through the base
+  ASSERT_TRUE(f.ok);
+  Mesh splint;
+  DesignReport r;
+  const Status s = f.design(&splint, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh) << s.message();
+  const std::string m = s.message();
+  EXPECT_NE(m.find("boolean (base minus jaws): B is open: "), std::string::npos) << m;
+  EXPECT_NE(m.find(" of jaw 1's scan, mandible)"), std::string::npos) << m;
+  EXPECT_TRUE(r.fused[1]);  // the registration itself went well
+  EXPECT_TRUE(splint.triangles.empty());
+}
+
+TEST(DesignFusion, ScansMustMatchTheCase) {
+  Fused f;
+  ASSERT_TRUE(f.ok);
+  Mesh splint;
+  DesignReport r;
+  // The overload without scans on a case with one.
+  Status s = design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2), &splint, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(s.message())
+                .find("0 scan meshes were given for the case's 2 jaws (one per jaw, empty for a "
+                      "jaw without a scan); jaw 1 (mandible) has a \"scan\""),
+            std::string::npos)
+      << s.message();
+  // A scan for a jaw the case gives none.
+  Mesh swapped[2] = {f.scans[1], f.scans[1]};
+  s = design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2),
+                    Span<const Mesh>(swapped, 2), &splint, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(s.message())
+                .find("a scan mesh was given for jaw 0 (maxilla), which has "
+                      "no \"scan\" in the case"),
+            std::string::npos)
+      << s.message();
+  // An empty scan where the case has one.
+  Mesh none[2];
+  s = design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2),
+                    Span<const Mesh>(none, 2), &splint, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_NE(std::string(s.message()).find("the scan of jaw 1 (mandible) is empty"),
+            std::string::npos)
+      << s.message();
+}
+
+Status parse(test::TestArena& t, const std::string& text, CaseFile* c) {
+  return parse_case(Context(&t.arena), text.data(), text.size(), "scan.json", c);
+}
+
+std::string scan_case(const std::string& scan) {
+  return R"({"splintcore_case": 1,
+ "jaws": [{"role": "mandible", "mesh": "ct.stl", "scan": )" +
+         scan + R"(}],
+ "base": {"upper": [{"position": [0, 0, 1]}, {"position": [10, 0, 1]}],
+          "lower": [{"position": [0, 0, -1]}, {"position": [10, 0, -1]}]}})";
+}
+
+TEST(DesignFusion, ScanKeysAreParsedCheckedAndWrittenBack) {
+  test::TestArena t(size_t{4} << 20);
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse(t, scan_case(R"({"path": "s.ply", "landmarks": [[[1, 2, 3], [4, 5, 6]],
+  [[7, 8, 9], [1, 1, 1]], [[0, 0, 1], [2, 2, 2]]], "trim": 0.5, "min_overlap": 0.25,
+  "max_rms_mm": 0.2, "crowns_within_mm": 0.4})"),
+                             &c));
+  ASSERT_EQ(c.jaws.size(), 1u);
+  const CaseJaw& j = c.jaws[0];
+  ASSERT_TRUE(j.has_scan);
+  EXPECT_STREQ(j.scan.path, "s.ply");
+  ASSERT_EQ(j.scan.landmarks.size(), 3u);
+  EXPECT_EQ(j.scan.landmarks[1].scan.y, 8);
+  EXPECT_EQ(j.scan.landmarks[2].ct.z, 2);
+  EXPECT_EQ(j.scan.trim, 0.5);
+  EXPECT_EQ(j.scan.min_overlap, 0.25);
+  EXPECT_EQ(j.scan.max_rms_mm, 0.2);
+  EXPECT_EQ(j.scan.crowns_within_mm, 0.4);
+  // Written back, read again: the same values.
+  std::string written;
+  SPLINTCORE_ASSERT_OK(write_case(c, cli::string_sink(&written)));
+  CaseFile again;
+  SPLINTCORE_ASSERT_OK(parse(t, written, &again));
+  ASSERT_TRUE(again.jaws[0].has_scan);
+  EXPECT_STREQ(again.jaws[0].scan.path, "s.ply");
+  ASSERT_EQ(again.jaws[0].scan.landmarks.size(), 3u);
+  EXPECT_EQ(again.jaws[0].scan.landmarks[0].ct.x, 4);
+  EXPECT_EQ(again.jaws[0].scan.max_rms_mm, 0.2);
+  // Defaults.
+  SPLINTCORE_ASSERT_OK(parse(t, scan_case(R"({"path": "s.stl"})"), &c));
+  EXPECT_TRUE(c.jaws[0].scan.landmarks.empty());
+  EXPECT_EQ(c.jaws[0].scan.trim, 0.6);
+  EXPECT_EQ(c.jaws[0].scan.min_overlap, 0.3);
+  EXPECT_EQ(c.jaws[0].scan.max_rms_mm, 0.3);
+  EXPECT_EQ(c.jaws[0].scan.crowns_within_mm, 0.5);
+  // Errors, each with its place and what is wrong.
+  const struct {
+    const char* scan;
+    const char* says;
+  } bad[] = {
+      {R"({})", "\"scan\" needs \"path\""},
+      {R"("s.stl")", "\"scan\" must be object, not string"},
+      {R"({"path": "s.stl", "rms": 1})", "unknown key \"rms\" in \"scan\""},
+      {R"({"path": "s.stl", "max_rms_mm": 0})", "\"max_rms_mm\" is 0, outside [0.001, 10]"},
+      {R"({"path": "s.stl", "trim": 1.5})", "\"trim\" is 1.5, outside [0.05, 1]"},
+      {R"({"path": "s.stl", "min_overlap": -0.1})", "\"min_overlap\" is -0.1, outside [0, 1]"},
+      {R"({"path": "s.stl", "crowns_within_mm": 20})", "\"crowns_within_mm\" is 20"},
+      {R"({"path": "s.stl", "landmarks": [[[1, 2, 3], [4, 5, 6]]]})", "needs 3 to 64 pairs"},
+      {R"({"path": "s.stl", "landmarks": [[1, 2, 3], [4, 5, 6], [7, 8, 9]]})",
+       "a landmark pair is [[scan x, y, z], [jaw x, y, z]]"},
+      {R"({"path": "s.stl", "landmarks": 5})", "\"landmarks\" must be array, not number"},
+      {R"({"path": "s.stl", "landmarks": [[[1, 2, 3], [4, 5]], [[1, 2, 3], [4, 5, 6]],
+          [[1, 2, 3], [4, 5, 6]]]})",
+       "\"landmarks\" needs 3 numbers, has 2"},
+      {R"({"path": "s.stl", "landmarks": [[[1, 2], [4, 5, 6]], [[1, 2, 3], [4, 5, 6]],
+          [[1, 2, 3], [4, 5, 6]]]})",
+       "\"landmarks\" needs 3 numbers, has 2"},
+      {R"({"path": "s.stl", "landmarks": [[[1, 2, 3], [4, 5, 6]], [[1, 2, 3], [4, 5, 6]],
+          [[1, 2, 3], [4, 5, 6]], 7]})",
+       "\"landmarks\" must be array, not number"},
+      {R"({"path": "", "trim": 0.5})", "\"path\" must be a non-empty string"},
+      {R"({"path": "s.stl", "landmarks": [[[1, 2, 3]], [[1, 2, 3]], [[1, 2, 3]]]})",
+       "a landmark pair is [[scan x, y, z], [jaw x, y, z]]"},
+  };
+  for (const auto& b : bad) {
+    const Status s = parse(t, scan_case(b.scan), &c);
+    EXPECT_FALSE(s.is_ok()) << b.scan;
+    EXPECT_NE(std::string(s.message()).find(b.says), std::string::npos)
+        << b.scan << ": " << s.message();
+    EXPECT_NE(test::format(s).find("scan.json:"), std::string::npos) << test::format(s);
+  }
+}
+
+TEST(DesignFusion, PlanWithAScanIsNotSupportedYet) {
+  test::TestArena t(size_t{4} << 20);
+  const std::string text = R"({"splintcore_case": 1,
+ "jaws": [{"role": "maxilla", "mesh": "a.stl"},
+          {"role": "mandible", "mesh": "b.stl", "scan": {"path": "s.stl"}}],
+ "base": {"auto": {}},
+ "plan": {"sequence": "maxilla_first", "maxilla": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1],
+          "mandible": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1],
+          "hinge_axis": [[-50, -55, 25], [50, -55, 25]],
+          "intermediate_opening_mm": 2, "final_opening_mm": 1.5}})";
+  CaseFile c;
+  const Status s = parse(t, text, &c);
+  EXPECT_EQ(s.code(), StatusCode::kUnsupported) << s.message();
+  EXPECT_NE(std::string(s.message()).find("\"plan\" with a jaw's \"scan\" is not supported yet"),
+            std::string::npos)
+      << s.message();
+}
+
+}  // namespace
+}  // namespace splintcore
