@@ -134,6 +134,20 @@ struct JlsBits {
 
   // At least 57 bits held afterwards.
   void refill() {
+    // Whole bytes at once while the next 8 hold no 0xFF (most of the time).
+    if (!after_ff && size - pos >= 8 && valid <= 56) {
+      uint64_t w = 0;
+      for (size_t i = 0; i < 8; ++i) w = (w << 8) | data[pos + i];
+      const uint64_t x = ~w;  // a 0xFF byte of w is a zero byte of x
+      if (((x - 0x0101010101010101u) & ~x & 0x8080808080808080u) == 0) {
+        const uint32_t take = (64 - valid) / 8;
+        cache |= (w >> (64 - 8 * take)) << (64 - valid - 8 * take);
+        valid += 8 * take;
+        appended += 8 * take;
+        pos += take;
+        return;
+      }
+    }
     while (valid <= 56) {
       if (at_marker) {
         appended += 64 - valid;  // zeros
@@ -240,17 +254,12 @@ struct JlsScan {
     run_index = 0;
   }
 
-  // A.3.3: one gradient quantised to -4..4.
+  // A.3.3: one gradient quantised to -4..4, as a count of the bounds it passes (no branch:
+  // CT noise spreads the gradients over all nine regions, and mispredicted branches were
+  // most of the decoding time). -T3 <= -T2 <= -T1 < -NEAR <= NEAR < T1 <= T2 <= T3.
   int32_t quantize(int32_t d) const {
-    if (d <= -p.t3) return -4;
-    if (d <= -p.t2) return -3;
-    if (d <= -p.t1) return -2;
-    if (d < -p.near) return -1;
-    if (d <= p.near) return 0;
-    if (d < p.t1) return 1;
-    if (d < p.t2) return 2;
-    if (d < p.t3) return 3;
-    return 4;
+    return -4 + (d > -p.t3) + (d > -p.t2) + (d > -p.t1) + (d >= -p.near) + (d > p.near) +
+           (d >= p.t1) + (d >= p.t2) + (d >= p.t3);
   }
 
   // The reconstruction: Px plus the dequantised error, modulo RANGE (2 NEAR + 1), clamped.
@@ -264,10 +273,13 @@ struct JlsScan {
     return x < 0 ? 0 : (x > p.maxval ? p.maxval : x);
   }
 
-  // Golomb parameter k (A.5.1, A.7.2.1): the least k with N 2^k >= A.
+  // Golomb parameter k (A.5.1, A.7.2.1): the least k with N 2^k >= A (N >= 1). With
+  // d = bitlength(A) - bitlength(N), k is d or d + 1.
   static uint32_t golomb_k(int64_t n, int64_t a) {
-    uint32_t k = 0;
-    while ((n << k) < a) ++k;
+    if (n >= a) return 0;
+    uint32_t k = static_cast<uint32_t>(__builtin_clzll(static_cast<uint64_t>(n)) -
+                                       __builtin_clzll(static_cast<uint64_t>(a)));
+    k += (n << k) < a ? 1u : 0u;
     return k;
   }
 
@@ -277,9 +289,10 @@ struct JlsScan {
     const int32_t negative = q < 0 ? -1 : 0;  // SIGN -1: the context of -Q, errors negated
     q = (q ^ negative) - negative;
     JlsContext& cx = ctx[q];
-    int32_t px = rc >= (ra > rb ? ra : rb)   ? (ra < rb ? ra : rb)
-                 : rc <= (ra < rb ? ra : rb) ? (ra > rb ? ra : rb)
-                                             : ra + rb - rc;
+    // A.4.1, the median edge detector: the median of Ra, Rb and Ra + Rb - Rc.
+    const int32_t low = ra < rb ? ra : rb, high = ra < rb ? rb : ra, plane = ra + rb - rc;
+    int32_t px = plane < high ? plane : high;
+    px = px > low ? px : low;
     px += (cx.c ^ negative) - negative;
     px = px < 0 ? 0 : (px > p.maxval ? p.maxval : px);
     const uint32_t k = golomb_k(cx.n, cx.a);
@@ -289,12 +302,10 @@ struct JlsScan {
       return false;
     }
     const int32_t m = static_cast<int32_t>(mapped);
-    int32_t error = 0;
-    if (p.near == 0 && k == 0 && 2 * cx.b <= -cx.n) {
-      error = (m & 1) != 0 ? (m - 1) / 2 : -(m / 2) - 1;
-    } else {
-      error = (m & 1) != 0 ? -((m + 1) / 2) : m / 2;
-    }
+    // A.5.2 inverted: an even m is 2 Errval, an odd one -2 Errval - 1; in the special case
+    // (lossless, k 0, 2 B <= -N) the parity is the other way round.
+    const int32_t special = (p.near == 0 && k == 0 && 2 * cx.b <= -cx.n) ? 1 : 0;
+    const int32_t error = (m >> 1) ^ -((m & 1) ^ special);
     cx.b += error * p.step;
     cx.a += error < 0 ? -error : error;
     if (cx.n == p.reset) {
@@ -383,19 +394,32 @@ struct JlsScan {
   bool line() {
     cur[0] = prev[1];
     prev[1 + columns] = prev[columns];
+    // The neighbours move along in registers (a sample's Ra is the one just decoded: read
+    // back from memory it would wait for the store).
+    const uint32_t near = static_cast<uint32_t>(p.near);
+    int32_t ra = cur[0], rb = prev[1], rc = prev[0];
     uint32_t x = 0;
     while (x < columns) {
-      const int32_t ra = cur[x], rb = prev[1 + x], rc = prev[x], rd = prev[2 + x];
+      const int32_t rd = prev[2 + x];
       const int32_t d1 = rd - rb, d2 = rb - rc, d3 = rc - ra;
-      const bool flat = p.near == 0 ? (d1 | d2 | d3) == 0
-                                    : d1 <= p.near && -d1 <= p.near && d2 <= p.near &&
-                                          -d2 <= p.near && d3 <= p.near && -d3 <= p.near;
+      // |d| <= NEAR for all three: d + NEAR in [0, 2 NEAR] as unsigned.
+      const bool flat = static_cast<uint32_t>(d1) + near <= 2 * near &&
+                        static_cast<uint32_t>(d2) + near <= 2 * near &&
+                        static_cast<uint32_t>(d3) + near <= 2 * near;
       if (flat) {
         const uint32_t n = run(x);
         if (n == 0) return false;
         x += n;
+        ra = cur[x];
+        rb = prev[1 + x];
+        rc = prev[x];
       } else {
-        if (!regular(ra, rb, rc, rd, &cur[1 + x])) return false;
+        int32_t rx = 0;
+        if (!regular(ra, rb, rc, rd, &rx)) return false;
+        cur[1 + x] = rx;
+        ra = rx;
+        rc = rb;
+        rb = rd;
         ++x;
       }
     }
