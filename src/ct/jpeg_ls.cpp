@@ -9,7 +9,8 @@
 // markers: SOF55, SOS with NEAR and ILV, LSE preset parameters id 1 and the default thresholds
 // of C.2.4.1.1, DRI) and Annex D (D.1: after a 0xFF byte in the coded data one 0 bit is
 // stuffed, so 0xFF followed by a byte with its top bit set is a marker; restart intervals count
-// lines and restart the coding variables). DICOM PS3.5 A.4.3. Decodes line by line into the
+// lines, and each starts as the scan does: the coding variables reset, the line above zeros, as
+// CharLS 2.4 decodes them). DICOM PS3.5 A.4.3. Decodes line by line into the
 // slice: the two lines of context live in the arena, the samples go straight to `out`.
 #include "ct/jpeg_ls.h"
 
@@ -440,8 +441,8 @@ struct JlsScan {
     return Status::ok();
   }
 
-  // The RSTm marker ending restart interval `index`; the variables restart after it (D.1? the
-  // lines do not: the next line still predicts from the one above).
+  // The RSTm marker ending restart interval `index`; after it the coding variables and the
+  // line above start as at the top of the scan.
   Status restart(uint32_t index) {
     SPLINTCORE_RETURN_IF_ERROR(end_of_data("the end of a restart interval"));
     size_t q = bits.pos;
@@ -455,6 +456,7 @@ struct JlsScan {
     const JlsBits fresh{bits.data, bits.size, q + 1};
     bits = fresh;
     reset_variables();
+    for (uint32_t i = 0; i < columns + 2; ++i) prev[i] = 0;
     return Status::ok();
   }
 };

@@ -131,6 +131,8 @@ TEST(CtDicomJpegLs, LosslessEqualsItsTwin) {
   expect_twins({"jlss12.dcm"}, {"raws12.dcm"}, "1.2.840.10008.1.2.4.80");
   // LSE with T1 5, T2 12, T3 40, RESET 32 instead of the defaults.
   expect_twins({"jls16_lse.dcm"}, {"raw16_0.dcm"}, "1.2.840.10008.1.2.4.80");
+  // Restart markers every 5 lines (make_ct_fixtures.py's own encoder, checked by gdcm).
+  expect_twins({"jls16_rst.dcm"}, {"raw16_0.dcm"}, "1.2.840.10008.1.2.4.80");
 }
 
 TEST(CtDicomJpegLs, LosslessSamplesAreTheRawOnes) {
@@ -153,7 +155,8 @@ TEST(CtDicomJpegLs, NearLosslessEqualsCharLsAndIsWithinNear) {
   };
   for (const Case& c : {Case{"jlsn16_0.dcm", "rawn16_0.dcm", "raw16_0.dcm", 2},
                         Case{"jlsn8.dcm", "rawn8.dcm", "raw8.dcm", 1},
-                        Case{"jlsns12.dcm", "rawns12.dcm", "raws12.dcm", 2}}) {
+                        Case{"jlsns12.dcm", "rawns12.dcm", "raws12.dcm", 2},
+                        Case{"jlsn16_rst.dcm", "rawn16_rst.dcm", "raw16_0.dcm", 2}}) {
     expect_twins({c.name}, {c.oracle}, "1.2.840.10008.1.2.4.81");
     size_t at = 0;
     const Bytes frame = fragment_of(fixture(c.name), &at);
@@ -198,7 +201,7 @@ TEST(CtDicomJpegLs, ArenaBound) {
 // ---- Truncation and corruption --------------------------------------------------------------
 
 TEST(CtDicomJpegLs, TruncatedFramesAndFilesAreErrors) {
-  for (const char* name : {"jls16_0.dcm", "jlsn8.dcm"}) {
+  for (const char* name : {"jls16_0.dcm", "jlsn8.dcm", "jls16_rst.dcm"}) {
     const Bytes file = fixture(name);
     size_t at = 0;
     const Bytes frame = fragment_of(file, &at);
@@ -309,6 +312,31 @@ TEST(CtDicomJpegLs, MalformedStreamsNameCauseAndOffset) {
   const Bytes no_scan = {0xFF, 0xD8, 0xFF, 0xD9};
   s = decode(no_scan, &got);
   EXPECT_NE(message(s).find("EOI before the scan"), std::string::npos) << message(s);
+}
+
+TEST(CtDicomJpegLs, RestartMarkersInOrder) {
+  size_t at = 0;
+  const Bytes good = fragment_of(fixture("jls16_rst.dcm"), &at);
+  std::vector<uint32_t> got;
+  SPLINTCORE_ASSERT_OK(decode(good, &got));
+  EXPECT_EQ(got, raw_samples(fixture("raw16_0.dcm"), 2));
+  // The third RSTm (RST2) renumbered, then dropped.
+  const size_t rst2 = marker(good, 0xD2);
+  Status s = decode(with(good, rst2 + 1, {0xD5}), &got);
+  EXPECT_EQ(s.code(), StatusCode::kParseError) << test::format(s);
+  EXPECT_NE(message(s).find("expected the next RSTm marker"), std::string::npos) << message(s);
+  EXPECT_EQ(s.byte_offset(), rst2);
+  Bytes dropped = good;
+  dropped.erase(dropped.begin() + static_cast<std::ptrdiff_t>(rst2),
+                dropped.begin() + static_cast<std::ptrdiff_t>(rst2 + 2));
+  s = decode(dropped, &got);
+  EXPECT_FALSE(s.is_ok());
+  EXPECT_NE(message(s).find("restart interval"), std::string::npos) << message(s);
+  // The stream cut just before RST2.
+  s = decode(Bytes(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(rst2)), &got);
+  EXPECT_EQ(s.code(), StatusCode::kTruncated) << test::format(s);
+  EXPECT_NE(message(s).find("before RSTm"), std::string::npos) << message(s);
+  EXPECT_EQ(s.byte_offset(), rst2);
 }
 
 // In a series the offsets are the file's: one fragment's start plus the offset in it.
