@@ -177,6 +177,17 @@ TEST(CtDicomJpegLs, NearLosslessEqualsCharLsAndIsWithinNear) {
   }
 }
 
+// The fuzz seeds (tests/fuzz/ct_corpus.py, fixtures/ct/jpegls_encode.py: 12 bits stored,
+// signed, 4 x 5) read to the voxels of their uncompressed twin.
+TEST(CtDicomJpegLs, CorpusSeedEqualsItsTwin) {
+  const std::string dir = std::string(SPLINTCORE_FIXTURES_DIR) + "/fuzz/ct_dicom/";
+  const Series plain = read({test::read_file_bytes(dir + "explicit_4x5.dcm")});
+  const Series z = read({test::read_file_bytes(dir + "jls_one.dcm")});
+  ASSERT_TRUE(z.status.is_ok()) << test::format(z.status);
+  ASSERT_EQ(plain.hu.size(), 20u);
+  EXPECT_TRUE(z.hu == plain.hu);
+}
+
 // ---- Memory ---------------------------------------------------------------------------------
 
 TEST(CtDicomJpegLs, ArenaBound) {

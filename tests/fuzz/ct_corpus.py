@@ -6,6 +6,7 @@ detached NRRD / MetaImage seeds name a data file, which the target serves from t
 Run from anywhere: python3 tests/fuzz/ct_corpus.py"""
 import os
 import struct
+import sys
 import zlib
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "fixtures", "fuzz")
@@ -344,3 +345,9 @@ for p in (1, 5, 7):
     codec_seed("jpeg_p%d.bin" % p, 1 | (14 << 2), 4, 5, jpeg_lossless(samples16, 4, 5, 12, p))
 codec_seed("jpeg_restart.bin", 1 | (14 << 2), 4, 5,
            jpeg_lossless(samples16, 4, 5, 12, 2, restart_lines=2))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "fixtures", "ct"))
+import jpegls_encode  # noqa: E402 (T.87, one component)
+for name, near, lines in (("jls.bin", 0, 0), ("jls_near.bin", 2, 0), ("jls_restart.bin", 0, 2)):
+    codec_seed(name, 3 | (14 << 2), 4, 5, jpegls_encode.encode(samples16, 4, 5, 12, near, lines))
+write("ct_dicom", "jls_one.dcm", encapsulated(plain16, b"1.2.840.10008.1.2.4.80",
+                                              jpegls_encode.encode(samples16, 4, 5, 12)))
