@@ -285,8 +285,8 @@ struct JlsScan {
   }
 
   // A.4 - A.6: one sample in regular mode; false for an invalid code.
-  bool regular(int32_t ra, int32_t rb, int32_t rc, int32_t rd, int32_t* out) {
-    int32_t q = 81 * quantize(rd - rb) + 9 * quantize(rb - rc) + quantize(rc - ra);
+  // q: 81 Q1 + 9 Q2 + Q3 (A.3.4), not 0.
+  bool regular(int32_t q, int32_t ra, int32_t rb, int32_t rc, int32_t* out) {
     const int32_t negative = q < 0 ? -1 : 0;  // SIGN -1: the context of -Q, errors negated
     q = (q ^ negative) - negative;
     JlsContext& cx = ctx[q];
@@ -396,31 +396,30 @@ struct JlsScan {
     cur[0] = prev[1];
     prev[1 + columns] = prev[columns];
     // The neighbours move along in registers (a sample's Ra is the one just decoded: read
-    // back from memory it would wait for the store).
-    const uint32_t near = static_cast<uint32_t>(p.near);
+    // back from memory it would wait for the store), and so does the quantised D1 (Rd - Rb),
+    // which is the next sample's D2 (its Rb - Rc).
     int32_t ra = cur[0], rb = prev[1], rc = prev[0];
+    int32_t q2 = quantize(rb - rc);
     uint32_t x = 0;
     while (x < columns) {
       const int32_t rd = prev[2 + x];
-      const int32_t d1 = rd - rb, d2 = rb - rc, d3 = rc - ra;
-      // |d| <= NEAR for all three: d + NEAR in [0, 2 NEAR] as unsigned.
-      const bool flat = static_cast<uint32_t>(d1) + near <= 2 * near &&
-                        static_cast<uint32_t>(d2) + near <= 2 * near &&
-                        static_cast<uint32_t>(d3) + near <= 2 * near;
-      if (flat) {
+      const int32_t q1 = quantize(rd - rb), q3 = quantize(rc - ra);
+      if ((q1 | q2 | q3) == 0) {  // all three |D| <= NEAR: run mode
         const uint32_t n = run(x);
         if (n == 0) return false;
         x += n;
         ra = cur[x];
         rb = prev[1 + x];
         rc = prev[x];
+        q2 = quantize(rb - rc);
       } else {
         int32_t rx = 0;
-        if (!regular(ra, rb, rc, rd, &rx)) return false;
+        if (!regular(81 * q1 + 9 * q2 + q3, ra, rb, rc, &rx)) return false;
         cur[1 + x] = rx;
         ra = rx;
         rc = rb;
         rb = rd;
+        q2 = q1;
         ++x;
       }
     }
