@@ -91,9 +91,10 @@ Status coding_parameters(const JlsFrame& f, size_t at, JlsCoding* c) {
     t2 = factor * (7 - 3) + 3 + 5 * near;
     t3 = factor * (21 - 4) + 4 + 7 * near;
   } else {
+    // FACTOR >= 2 here, so max(2, 3 / FACTOR) is 2 and max(3, 7 / FACTOR) is 3.
     const int32_t factor = 256 / (maxval + 1);
-    t1 = (3 / factor > 2 ? 3 / factor : 2) + 3 * near;
-    t2 = (7 / factor > 3 ? 7 / factor : 3) + 5 * near;
+    t1 = 2 + 3 * near;
+    t2 = 3 + 5 * near;
     t3 = (21 / factor > 4 ? 21 / factor : 4) + 7 * near;
   }
   c->t1 = threshold(f.t1, t1, near + 1, maxval);
@@ -136,7 +137,7 @@ struct JlsBits {
   // At least 57 bits held afterwards.
   void refill() {
     // Whole bytes at once while the next 8 hold no 0xFF (most of the time).
-    if (!after_ff && size - pos >= 8 && valid <= 56) {
+    if (!after_ff && size - pos >= 8) {
       uint64_t w = 0;
       for (size_t i = 0; i < 8; ++i) w = (w << 8) | data[pos + i];
       const uint64_t x = ~w;  // a 0xFF byte of w is a zero byte of x
@@ -184,11 +185,11 @@ struct JlsBits {
     }
   }
 
-  // The next n (<= 57) bits.
+  // The next n (< 58) bits.
   uint64_t read(uint32_t n) {
     if (valid < n) refill();
     const uint64_t v = (cache >> 1) >> (63 - n);
-    cache = n < 64 ? cache << n : 0;
+    cache <<= n;
     valid -= n;
     return v;
   }
@@ -429,10 +430,7 @@ struct JlsScan {
   // The end of the coded data of a scan or a restart interval (`what`): the marker must follow
   // the last sample's byte (with at most the padding of that byte and of one after a 0xFF).
   Status end_of_data(const char* what) {
-    bits.refill();
-    if (bits.overrun()) {
-      return jls_error(StatusCode::kTruncated, "coded data ends inside the last line", bits.pos);
-    }
+    bits.refill();  // (the lines checked that they did not run past the data)
     if (bits.left() > 14) {
       Status s = jls_error(StatusCode::kParseError, "coded data continues past ", bits.pos);
       return s.append(what);
@@ -449,7 +447,7 @@ struct JlsScan {
     if (q >= bits.size) {
       return jls_error(StatusCode::kTruncated, "data ends before RSTm", bits.size);
     }
-    if (q == bits.pos || bits.data[q] != 0xD0 + (index & 7)) {
+    if (bits.data[q] != 0xD0 + (index & 7)) {  // (at a marker: data[pos] is 0xFF)
       return jls_error(StatusCode::kParseError, "expected the next RSTm marker", bits.pos);
     }
     const JlsBits fresh{bits.data, bits.size, q + 1};
@@ -587,7 +585,7 @@ struct JlsParser {
     }
     uint64_t interval = 0;
     for (size_t i = b; i < b + length - 2; ++i) interval = (interval << 8) | data[i];
-    f->restart = interval > UINT32_MAX ? UINT32_MAX : static_cast<uint32_t>(interval);
+    f->restart = static_cast<uint32_t>(interval);  // at most 4 bytes
     return Status::ok();
   }
 

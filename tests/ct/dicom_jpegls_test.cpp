@@ -107,16 +107,21 @@ std::vector<uint32_t> raw_samples(const Bytes& file, uint32_t bytes_per_sample) 
 }
 
 // Decodes a file's fragment (64 x 56) straight with the decoder.
-Status decode(const Bytes& frame, std::vector<uint32_t>* samples, uint32_t max_precision = 16,
-              size_t arena_bytes = 1 << 16) {
+Status decode_size(const Bytes& frame, uint32_t rows, uint32_t columns, uint32_t max_precision,
+                   std::vector<uint32_t>* samples, size_t arena_bytes = 1 << 16) {
   TestArena t(arena_bytes);
-  Bytes out(2 * 64 * 56, 0xEE);
-  const Status s = ct_detail::jpeg_ls_decode(t.arena, frame.data(), frame.size(), 56, 64,
+  Bytes out(2 * size_t{rows} * columns, 0xEE);
+  const Status s = ct_detail::jpeg_ls_decode(t.arena, frame.data(), frame.size(), rows, columns,
                                              max_precision, out.data());
   EXPECT_EQ(t.arena.used(), 0u);
   samples->clear();
   for (size_t i = 0; i < out.size(); i += 2) samples->push_back(out[i] | (out[i + 1] << 8));
   return s;
+}
+
+Status decode(const Bytes& frame, std::vector<uint32_t>* samples, uint32_t max_precision = 16,
+              size_t arena_bytes = 1 << 16) {
+  return decode_size(frame, 56, 64, max_precision, samples, arena_bytes);
 }
 
 std::string message(const Status& s) { return s.message(); }
@@ -380,6 +385,250 @@ TEST(CtDicomJpegLs, CorruptCodedDataNeverCrashes) {
       }
     }
   }
+}
+
+// ---- Small and unusual streams (the seeds of tests/fuzz/ct_corpus.py, made by
+// fixtures/ct/jpegls_encode.py; hand-made bits) -----------------------------------------------
+
+struct Seed {
+  uint32_t precision, rows, columns;
+  Bytes frame;
+};
+
+Seed seed(const std::string& name) {
+  const Bytes b =
+      test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/fuzz/ct_codecs/" + name);
+  EXPECT_GT(b.size(), 3u) << name;
+  return Seed{2 + (uint32_t{b[0]} >> 2) % 15u, 1 + b[1] % 64u, 1 + b[2] % 64u,
+              Bytes(b.begin() + 3, b.end())};
+}
+
+TEST(CtDicomJpegLs, SmallStreamsDecodeToTheirSamples) {
+  const std::string dir = std::string(SPLINTCORE_FIXTURES_DIR) + "/fuzz/ct_dicom/";
+  std::vector<uint32_t> twelve = raw_samples(test::read_file_bytes(dir + "explicit_4x5.dcm"), 2);
+  ASSERT_EQ(twelve.size(), 20u);
+  for (uint32_t& v : twelve) v &= 0xFFF;  // 12 bits stored
+  auto masked = [&](uint32_t bits) {
+    std::vector<uint32_t> v = twelve;
+    for (uint32_t& x : v) x &= (1u << bits) - 1;
+    return v;
+  };
+  auto product = [](bool down) {  // 170 x (19 - y) or 170 x y, 20 x 20
+    std::vector<uint32_t> v;
+    for (uint32_t y = 0; y < 20; ++y) {
+      for (uint32_t x = 0; x < 20; ++x) v.push_back(170 * x * (down ? 19 - y : y));
+    }
+    return v;
+  };
+  struct Case {
+    const char* name;
+    std::vector<uint32_t> want;
+  };
+  for (const Case& c :
+       {Case{"jls.bin", twelve}, Case{"jls_restart.bin", twelve}, Case{"jls_p2.bin", masked(2)},
+        Case{"jls_p5.bin", masked(5)}, Case{"jls_p7.bin", masked(7)},
+        Case{"jls_c_high.bin", product(false)}, Case{"jls_c_low.bin", product(true)}}) {
+    const Seed sd = seed(c.name);
+    std::vector<uint32_t> got;
+    SPLINTCORE_ASSERT_OK(decode_size(sd.frame, sd.rows, sd.columns, sd.precision, &got));
+    EXPECT_EQ(got, c.want) << c.name;
+  }
+  // NEAR 2.
+  const Seed near = seed("jls_near.bin");
+  std::vector<uint32_t> got;
+  SPLINTCORE_ASSERT_OK(decode_size(near.frame, 4, 5, 16, &got));
+  for (size_t i = 0; i < got.size(); ++i) {
+    EXPECT_LE(got[i] > twelve[i] ? got[i] - twelve[i] : twelve[i] - got[i], 2u) << i;
+  }
+  // A code of a mapped error past 2 RANGE + 2, in regular and in run interruption mode.
+  for (const char* name : {"jls_bad_regular.bin", "jls_bad_run.bin"}) {
+    const Seed bad = seed(name);
+    const Status s = decode_size(bad.frame, 4, 5, 16, &got);
+    EXPECT_EQ(s.code(), StatusCode::kParseError) << name << ": " << test::format(s);
+    EXPECT_NE(message(s).find("invalid code"), std::string::npos) << message(s);
+  }
+}
+
+// Bits written as JPEG-LS codes them (D.1: a 0 bit stuffed after each 0xFF byte), between a
+// header for rows x columns samples of `precision` bits and EOI.
+struct BitWriter {
+  Bytes out;
+  uint32_t byte = 0, n = 0, width = 8;
+  void put(uint32_t bit) {
+    byte = (byte << 1) | bit;
+    if (++n == width) {
+      out.push_back(static_cast<uint8_t>(byte));
+      width = byte == 0xFF ? 7 : 8;
+      byte = n = 0;
+    }
+  }
+  Bytes stream(uint32_t rows, uint32_t columns, uint32_t precision) {
+    while (n != 0 || width == 7) put(0);
+    Bytes s = {0xFF,
+               0xD8,
+               0xFF,
+               0xF7,
+               0,
+               11,
+               static_cast<uint8_t>(precision),
+               static_cast<uint8_t>(rows >> 8),
+               static_cast<uint8_t>(rows),
+               static_cast<uint8_t>(columns >> 8),
+               static_cast<uint8_t>(columns),
+               1,
+               1,
+               0x11,
+               0,
+               0xFF,
+               0xDA,
+               0,
+               8,
+               1,
+               1,
+               0,
+               0,
+               0,
+               0};
+    s.insert(s.end(), out.begin(), out.end());
+    s.push_back(0xFF);
+    s.push_back(0xD9);
+    return s;
+  }
+};
+
+TEST(CtDicomJpegLs, LongRunsAndRunsPastTheLine) {
+  // A zero image of 6 lines of 16384: every line one run (A.7.1: full segments of
+  // 2^J[RUNindex] samples, then a 1 for the shorter rest), RUNindex climbing to its top, 31
+  // (the segments of J 14 fit in a line).
+  static const uint32_t kJ[32] = {0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2,  2,  3,  3,  3,  3,
+                                  4, 4, 5, 5, 6, 6, 7, 7, 8, 9, 10, 11, 12, 13, 14, 15};
+  BitWriter w;
+  uint32_t run_index = 0;
+  for (uint32_t y = 0; y < 6; ++y) {
+    uint32_t left = 16384;
+    while (left > 0) {
+      w.put(1);
+      const uint32_t segment = 1u << kJ[run_index];
+      if (segment > left) break;
+      left -= segment;
+      if (run_index < 31) ++run_index;
+    }
+  }
+  EXPECT_EQ(run_index, 31u);
+  std::vector<uint32_t> got;
+  SPLINTCORE_ASSERT_OK(decode_size(w.stream(6, 16384, 8), 6, 16384, 8, &got, 1 << 18));
+  EXPECT_EQ(got, std::vector<uint32_t>(6 * 16384, 0));
+  // 1 x 5 zeros: four segments of 1 (RUNindex 4, J 1), then an interruption whose 1-bit count
+  // (1) puts the run's end at 5, past the last sample (4).
+  BitWriter past;
+  for (uint32_t bit : {1, 1, 1, 1, 0, 1}) past.put(bit);
+  const Status s = decode_size(past.stream(1, 5, 8), 1, 5, 8, &got);
+  EXPECT_EQ(s.code(), StatusCode::kParseError) << test::format(s);
+  EXPECT_NE(message(s).find("invalid code"), std::string::npos) << message(s);
+}
+
+Bytes lse(uint32_t maxval, uint32_t t1, uint32_t t2, uint32_t t3, uint32_t reset) {
+  Bytes b = {0xFF, 0xF8, 0, 13, 1};
+  for (uint32_t v : {maxval, t1, t2, t3, reset}) {
+    b.push_back(static_cast<uint8_t>(v >> 8));
+    b.push_back(static_cast<uint8_t>(v));
+  }
+  return b;
+}
+
+// LSE preset parameters against the ranges of C.2.4.1.1, on 8-bit streams (MAXVAL 255).
+TEST(CtDicomJpegLs, PresetParametersAreChecked) {
+  size_t at = 0;
+  const Bytes lossless = fragment_of(fixture("jls8.dcm"), &at);
+  const Bytes near = fragment_of(fixture("jlsn8.dcm"), &at);
+  struct Case {
+    const Bytes* frame;
+    Bytes segment;
+    const char* text;  // nullptr: decodes
+  };
+  const std::vector<Case> cases = {
+      {&lossless, lse(256, 0, 0, 0, 0), "MAXVAL over 2^P - 1"},
+      {&lossless, lse(0, 256, 0, 0, 0), "thresholds"},  // T1 > MAXVAL
+      {&lossless, lse(0, 0, 256, 0, 0), "thresholds"},  // T2 > MAXVAL
+      {&lossless, lse(0, 0, 0, 256, 0), "thresholds"},  // T3 > MAXVAL
+      {&lossless, lse(0, 0, 0, 1, 0), "thresholds"},    // T3 < T2
+      {&lossless, lse(0, 0, 0, 0, 256), "RESET"},       // over max(255, MAXVAL)
+      {&near, lse(0, 1, 0, 0, 0), "thresholds"},        // T1 < NEAR + 1
+      {&lossless, lse(0, 100, 0, 0, 0), nullptr},       // T2, T3 raised to T1
+  };
+  for (const Case& c : cases) {
+    const Bytes frame = inserted(*c.frame, marker(*c.frame, 0xDA), c.segment);
+    std::vector<uint32_t> got;
+    const Status s = decode(frame, &got, 8);
+    if (c.text == nullptr) {
+      // Other thresholds than the encoder's: other contexts, so other samples (or an error).
+      std::vector<uint32_t> original;
+      SPLINTCORE_ASSERT_OK(decode(*c.frame, &original, 8));
+      EXPECT_TRUE(!s.is_ok() || got != original);
+      continue;
+    }
+    EXPECT_EQ(s.code(), StatusCode::kParseError) << c.text << ": " << test::format(s);
+    EXPECT_NE(message(s).find(c.text), std::string::npos) << c.text << ": " << message(s);
+    EXPECT_EQ(s.byte_offset(), marker(*c.frame, 0xDA)) << message(s);
+  }
+}
+
+// Every marker class before SOF55: skipped, refused as another process, or unexpected.
+TEST(CtDicomJpegLs, MarkerClasses) {
+  size_t at = 0;
+  const Bytes good = fragment_of(fixture("jls8.dcm"), &at);
+  std::vector<uint32_t> original, got;
+  SPLINTCORE_ASSERT_OK(decode(good, &original, 8));
+  const size_t sof = marker(good, 0xF7);
+  for (uint8_t code : {0xC4, 0xCC, 0xE1, 0xFE, 0xC0, 0xCF, 0xF9, 0xD8, 0xD5, 0x10}) {
+    const Status s = decode(inserted(good, sof, {0xFF, code, 0, 2}), &got, 8);
+    if (code == 0xC4 || code == 0xCC || code == 0xE1 || code == 0xFE) {
+      EXPECT_TRUE(s.is_ok() && got == original) << int{code} << ": " << test::format(s);
+    } else if (code >= 0xC0 && code != 0xD8 && code != 0xD5) {
+      EXPECT_EQ(s.code(), StatusCode::kUnsupported) << int{code};
+      EXPECT_NE(message(s).find("not JPEG-LS baseline"), std::string::npos) << message(s);
+    } else {
+      EXPECT_EQ(s.code(), StatusCode::kParseError) << int{code};
+      EXPECT_NE(message(s).find("unexpected marker"), std::string::npos) << message(s);
+    }
+  }
+}
+
+TEST(CtDicomJpegLs, MoreMalformedSegments) {
+  size_t at = 0;
+  const Bytes good = fragment_of(fixture("jls16_0.dcm"), &at);
+  const size_t sof = marker(good, 0xF7), sos = marker(good, 0xDA);
+  struct Case {
+    Bytes frame;
+    StatusCode code;
+    const char* text;
+  };
+  const std::vector<Case> cases = {
+      {with(good, sof + 3, {6}), StatusCode::kParseError, "SOF55 segment too short"},
+      {with(good, sof + 3, {12}), StatusCode::kUnsupported, "1 components (length must be 11)"},
+      {with(good, sof + 4, {1}), StatusCode::kParseError, "precision not in 2..16"},
+      {with(good, sof + 7, {0, 0}), StatusCode::kUnsupported, "image size 0"},
+      {with(good, sof + 7, {0, 65}), StatusCode::kParseError, "differs from the DICOM"},
+      {inserted(good, sos, {0xFF, 0xF8, 0, 2}), StatusCode::kParseError, "LSE segment too short"},
+      {inserted(good, sos, {0xFF, 0xF8, 0, 3, 3}), StatusCode::kUnsupported, "mapping table"},
+      {inserted(good, sos, {0xFF, 0xF8, 0, 4, 1, 0}), StatusCode::kParseError, "length not 13"},
+      {inserted(good, sos, {0xFF, 0xDD, 0, 8, 0, 0, 0, 0, 0, 1}), StatusCode::kParseError,
+       "DRI length"},
+      {with(good, sos + 3, {10}), StatusCode::kParseError, "one component (length 8)"},
+      {Bytes{0xFF}, StatusCode::kParseError, "no SOI"},
+      {Bytes{0xFF, 0xD9}, StatusCode::kParseError, "no SOI"},
+  };
+  for (const Case& c : cases) {
+    std::vector<uint32_t> got;
+    const Status s = decode(c.frame, &got);
+    EXPECT_EQ(s.code(), c.code) << c.text << ": " << test::format(s);
+    EXPECT_NE(message(s).find(c.text), std::string::npos) << c.text << ": " << message(s);
+  }
+  // A restart interval of 4 bytes, longer than the image: no RSTm, the same samples.
+  std::vector<uint32_t> original, got;
+  SPLINTCORE_ASSERT_OK(decode(good, &original));
+  SPLINTCORE_ASSERT_OK(decode(inserted(good, sos, {0xFF, 0xDD, 0, 6, 0, 1, 0, 0}), &got));
+  EXPECT_EQ(got, original);
 }
 
 }  // namespace
