@@ -497,15 +497,15 @@ struct BitWriter {
 };
 
 TEST(CtDicomJpegLs, LongRunsAndRunsPastTheLine) {
-  // A zero image of 6 lines of 16384: every line one run (A.7.1: full segments of
-  // 2^J[RUNindex] samples, then a 1 for the shorter rest), RUNindex climbing to its top, 31
-  // (the segments of J 14 fit in a line).
+  // A zero image of 3 lines of 32768: every line one run (A.7.1: full segments of
+  // 2^J[RUNindex] samples, then a 1 for the shorter rest), RUNindex climbing to its top, 31,
+  // and staying there (the segments of J 15 fit in a line).
   static const uint32_t kJ[32] = {0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2,  2,  3,  3,  3,  3,
                                   4, 4, 5, 5, 6, 6, 7, 7, 8, 9, 10, 11, 12, 13, 14, 15};
   BitWriter w;
   uint32_t run_index = 0;
-  for (uint32_t y = 0; y < 6; ++y) {
-    uint32_t left = 16384;
+  for (uint32_t y = 0; y < 3; ++y) {
+    uint32_t left = 32768;
     while (left > 0) {
       w.put(1);
       const uint32_t segment = 1u << kJ[run_index];
@@ -516,8 +516,8 @@ TEST(CtDicomJpegLs, LongRunsAndRunsPastTheLine) {
   }
   EXPECT_EQ(run_index, 31u);
   std::vector<uint32_t> got;
-  SPLINTCORE_ASSERT_OK(decode_size(w.stream(6, 16384, 8), 6, 16384, 8, &got, 1 << 18));
-  EXPECT_EQ(got, std::vector<uint32_t>(6 * 16384, 0));
+  SPLINTCORE_ASSERT_OK(decode_size(w.stream(3, 32768, 8), 3, 32768, 8, &got, 1 << 19));
+  EXPECT_EQ(got, std::vector<uint32_t>(3 * 32768, 0));
   // 1 x 5 zeros: four segments of 1 (RUNindex 4, J 1), then an interruption whose 1-bit count
   // (1) puts the run's end at 5, past the last sample (4).
   BitWriter past;
