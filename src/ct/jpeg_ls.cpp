@@ -315,16 +315,18 @@ struct JlsScan {
       cx.b = cx.b >= 0 ? cx.b / 2 : -((1 - cx.b) / 2);
       cx.n >>= 1;
     }
-    ++cx.n;
-    if (cx.b <= -cx.n) {
-      cx.b += cx.n;
-      if (cx.c > -128) --cx.c;
-      if (cx.b <= -cx.n) cx.b = -cx.n + 1;
-    } else if (cx.b > 0) {
-      cx.b -= cx.n;
-      if (cx.c < 127) ++cx.c;
-      if (cx.b > 0) cx.b = 0;
-    }
+    const int32_t n = cx.n + 1;
+    cx.n = n;
+    // A.6.2 without branches (the bias moves either way on CT noise): B <= -N moves B up by N
+    // and C down by one, B > 0 the other way; B is then kept in (-N, 0].
+    int32_t b = cx.b, c = cx.c;
+    const int32_t down = b <= -n ? 1 : 0, up = b > 0 ? 1 : 0;
+    b += (down - up) * n;
+    c += up & (c < 127 ? 1 : 0);
+    c -= down & (c > -128 ? 1 : 0);
+    b = b <= -n ? -n + 1 : (b > 0 ? 0 : b);
+    cx.b = b;
+    cx.c = c;
     const int32_t e = error * p.step;
     *out = reconstruct(px, (e ^ negative) - negative);
     return true;
