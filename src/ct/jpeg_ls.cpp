@@ -474,7 +474,7 @@ Status decode_scan(JlsScan& s, const JlsFrame& f, uint8_t* out) {
       return jls_error(StatusCode::kTruncated, "coded data ends inside a line", s.bits.pos);
     }
     if (!ok) return jls_error(StatusCode::kParseError, "invalid code", s.bits.pos);
-    uint8_t* row = out + 2 * uint64_t{y} * f.columns;
+    uint8_t* row = out + 2 * size_t{y} * f.columns;  // (out holds them all: no overflow)
     const int32_t* line = s.cur + 1;
     for (uint32_t x = 0; x < f.columns; ++x) {
       row[2 * x] = static_cast<uint8_t>(line[x]);
