@@ -12,6 +12,7 @@
 #include "ct/dicom_rle.h"
 #include "ct/jpeg2000.h"
 #include "ct/jpeg_lossless.h"
+#include "ct/jpeg_ls.h"
 
 #include <cmath>
 
@@ -60,7 +61,7 @@ inline uint32_t u32(const uint8_t* p, bool big) {
 }
 
 // How a transfer syntax stores the pixels.
-enum class Codec : uint8_t { kNative, kDeflated, kRle, kJpegLossless, kJpeg2000 };
+enum class Codec : uint8_t { kNative, kDeflated, kRle, kJpegLossless, kJpegLs, kJpeg2000 };
 
 // PS3.6 table A-1: the transfer syntaxes this reader knows, read or refused by name.
 struct Syntax {
@@ -84,8 +85,8 @@ constexpr Syntax kSyntaxes[] = {
      false, false, true},
     {"1.2.840.10008.1.2.4.50", "JPEG Baseline (lossy)", Codec::kNative, false, false, false},
     {"1.2.840.10008.1.2.4.51", "JPEG Extended (lossy)", Codec::kNative, false, false, false},
-    {"1.2.840.10008.1.2.4.80", "JPEG-LS Lossless", Codec::kNative, false, false, false},
-    {"1.2.840.10008.1.2.4.81", "JPEG-LS Near-Lossless", Codec::kNative, false, false, false},
+    {"1.2.840.10008.1.2.4.80", "JPEG-LS Lossless", Codec::kJpegLs, false, false, true},
+    {"1.2.840.10008.1.2.4.81", "JPEG-LS Near-Lossless", Codec::kJpegLs, false, false, true},
     {"1.2.840.10008.1.2.4.90", "JPEG 2000 Lossless", Codec::kJpeg2000, false, false, true},
     {"1.2.840.10008.1.2.4.91", "JPEG 2000", Codec::kJpeg2000, false, false, true},
     {"1.2.840.10008.1.2.4.201", "HTJ2K Lossless", Codec::kNative, false, false, false},
@@ -94,7 +95,7 @@ constexpr Syntax kSyntaxes[] = {
 };
 constexpr const char* kSupportedSyntaxes =
     "; read are implicit and explicit VR little endian, deflated, explicit VR big endian, "
-    "RLE Lossless, JPEG Lossless process 14, JPEG 2000";
+    "RLE Lossless, JPEG Lossless process 14, JPEG-LS, JPEG 2000";
 
 // PS3.5 table 7.1-1: VRs whose explicit encoding has 2 reserved bytes and a 32-bit length.
 bool long_vr(uint8_t a, uint8_t b) {
@@ -157,7 +158,8 @@ struct Header {
 };
 
 bool encapsulated(Codec codec) {
-  return codec == Codec::kRle || codec == Codec::kJpegLossless || codec == Codec::kJpeg2000;
+  return codec == Codec::kRle || codec == Codec::kJpegLossless || codec == Codec::kJpegLs ||
+         codec == Codec::kJpeg2000;
 }
 
 // One slice kept between the passes.
@@ -947,14 +949,19 @@ struct SeriesReader {
   // (as the voxels were) before it is taken.
   Status allocate_frame(Arena& arena) {
     if (!encapsulated(first.codec)) return Status::ok();
-    // The JPEG decoder's state (the padding jpeg_lossless_arena_bytes() allows for is counted
+    // The JPEG decoders' state (the padding their ..._arena_bytes() allow for is counted
     // by check_budget's allocations).
-    const bool jpeg = first.codec == Codec::kJpegLossless;
-    uint64_t decoder = jpeg ? jpeg_lossless_arena_bytes() - (Arena::kDefaultAlignment - 1) : 0;
-    if (first.codec == Codec::kJpeg2000) {
+    uint64_t decoder = 0;
+    if (first.codec == Codec::kJpegLossless) {
+      decoder = jpeg_lossless_arena_bytes() - (Arena::kDefaultAlignment - 1);
+    } else if (first.codec == Codec::kJpegLs) {
+      decoder = jpeg_ls_arena_bytes(first.columns) - (Arena::kDefaultAlignment - 1);
+    } else if (first.codec == Codec::kJpeg2000) {
       decoder = jpeg2000_arena_bytes(first.rows, first.columns, max_fragment_bytes);
     }
-    SPLINTCORE_RETURN_IF_ERROR(check_budget(arena, 0, max_fragment_bytes + decoder, jpeg ? 2 : 1));
+    SPLINTCORE_RETURN_IF_ERROR(
+        check_budget(arena, 0, max_fragment_bytes + decoder,
+                     first.codec == Codec::kJpegLossless || first.codec == Codec::kJpegLs ? 2 : 1));
     frame = arena.allocate_array<uint8_t>(static_cast<size_t>(max_fragment_bytes));
     return frame != nullptr ? Status::ok() : arena.exhausted_status();
   }
@@ -1099,13 +1106,17 @@ Status read_encapsulated_pixels(const SeriesReader& sr, Reader& r, const SliceRe
   const uint32_t rows = sr.first.rows, columns = sr.first.columns;
   uint8_t* samples = reinterpret_cast<uint8_t*>(out);
   const size_t n = static_cast<size_t>(size);
-  Status s = sr.first.codec == Codec::kRle ? rle_decode_frame(sr.frame, n, rows, columns,
-                                                              sr.first.bits_allocated / 8, samples)
-             : sr.first.codec == Codec::kJpeg2000
-                 ? jpeg2000_decode(*sr.ctx.arena, sr.frame, n, rows, columns,
-                                   sr.first.bits_allocated, samples)
-                 : jpeg_lossless_decode(*sr.ctx.arena, sr.frame, n, rows, columns,
-                                        sr.first.bits_allocated, samples);
+  const uint32_t bits = sr.first.bits_allocated;
+  Status s;
+  if (sr.first.codec == Codec::kRle) {
+    s = rle_decode_frame(sr.frame, n, rows, columns, bits / 8, samples);
+  } else if (sr.first.codec == Codec::kJpegLs) {
+    s = jpeg_ls_decode(*sr.ctx.arena, sr.frame, n, rows, columns, bits, samples);
+  } else if (sr.first.codec == Codec::kJpeg2000) {
+    s = jpeg2000_decode(*sr.ctx.arena, sr.frame, n, rows, columns, bits, samples);
+  } else {
+    s = jpeg_lossless_decode(*sr.ctx.arena, sr.frame, n, rows, columns, bits, samples);
+  }
   if (!s.is_ok()) {
     // Offsets in the frame are offsets in the file when it is one fragment.
     if (fragments == 1) return s.at_byte(first + s.byte_offset());

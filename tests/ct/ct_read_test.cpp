@@ -744,7 +744,7 @@ TEST(CtDicom, SkipsSequencesOfDefinedAndUndefinedLength) {
 TEST(CtDicom, UnsupportedTransferSyntaxes) {
   // (1.2.840.10008.1.2.1.99, deflated, is read: tests/ct/dicom_deflate_test.cpp; RLE, big
   // endian and JPEG lossless: tests/ct/dicom_codecs_test.cpp.)
-  for (const char* uid : {"1.2.840.10008.1.2.4.50", "1.2.840.10008.1.2.4.80", "1.2.3.4"}) {
+  for (const char* uid : {"1.2.840.10008.1.2.4.50", "1.2.840.10008.1.2.4.51", "1.2.3.4"}) {
     DicomSpec s = slice(0, 0);
     s.syntax = uid;
     SeriesResult r = read_series({dicom_file(s)});

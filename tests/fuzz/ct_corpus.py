@@ -6,6 +6,7 @@ detached NRRD / MetaImage seeds name a data file, which the target serves from t
 Run from anywhere: python3 tests/fuzz/ct_corpus.py"""
 import os
 import struct
+import sys
 import zlib
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "fixtures", "fuzz")
@@ -358,3 +359,21 @@ def j2k_codestream(name):
 
 for name, precision in (("j2k16_0", 16), ("j2k97", 16), ("j2k_tiles", 16), ("j2k8", 8)):
     codec_seed(name + ".bin", 4 | ((precision - 2) << 3), 56, 64, j2k_codestream(name + ".dcm"))
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "fixtures", "ct"))
+import jpegls_encode  # noqa: E402 (T.87, one component)
+for name, near, lines in (("jls.bin", 0, 0), ("jls_near.bin", 2, 0), ("jls_restart.bin", 0, 2)):
+    codec_seed(name, 3 | (14 << 2), 4, 5, jpegls_encode.encode(samples16, 4, 5, 12, near, lines))
+for p in (2, 5, 7):  # the low bits: small MAXVAL, k 0, the default thresholds clamped
+    codec_seed("jls_p%d.bin" % p, 3 | ((p - 2) << 2), 4, 5,
+               jpegls_encode.encode([v & ((1 << p) - 1) for v in samples16], 4, 5, p))
+for name, f in (("jls_c_high.bin", lambda x, y: 170 * x * y),  # the bias C up to 127
+                ("jls_c_low.bin", lambda x, y: 170 * x * (19 - y))):  # down to -128
+    codec_seed(name, 3 | (14 << 2), 20, 20,
+               jpegls_encode.encode([f(x, y) for y in range(20) for x in range(20)], 20, 20, 16))
+two_bits = [0, 0, 0, 1, 2, 3, 0, 1, 2, 0, 1, 1, 0, 3, 2, 0, 2, 1, 0, 3]  # a run, interrupted
+for kind in ("regular", "run"):  # refused: a mapped error over 2 RANGE + 2
+    codec_seed("jls_bad_%s.bin" % kind, 3, 4, 5,
+               jpegls_encode.encode(two_bits, 4, 5, 2, corrupt=kind))
+write("ct_dicom", "jls_one.dcm", encapsulated(plain16, b"1.2.840.10008.1.2.4.80",
+                                              jpegls_encode.encode(samples16, 4, 5, 12)))

@@ -1413,11 +1413,43 @@ void bench_write_3mf(Harness& h, Arena& arena) {
   arena.rewind(m);
 }
 
+// One compressed DICOM slice read (issue 31: a 512 x 512 x 300 series should decode in well
+// under 3 s), whole read_dicom_series of the file from memory: header, fragments, decoding,
+// HU conversion. --dicom-input FILE; e.g. a JPEG-LS slice made with dcmcjpls of a slice of
+// `splintcore ct-phantom --format dicom --size 512,512,16 --spacing 0.4,0.4,4`.
+void bench_dicom_input(Harness& h, Arena& arena, const std::string& file) {
+  if (file.empty() || !h.wanted("dicom_read_slice")) return;
+  std::vector<uint8_t> bytes;
+  const Status s = cli::read_whole_file(file, uint64_t{1} << 30, &bytes);
+  if (!s.is_ok()) {
+    cli::print_error(s);
+    h.failed = true;
+    return;
+  }
+  CtMemoryFile one{"slice.dcm", bytes.data(), bytes.size()};
+  CtInfo info;
+  uint64_t voxels = 0;
+  const Result r = h.measure("dicom_read_slice", bytes.size(), arena, [&](Arena& a) {
+    CtMemoryFiles m{&one, 1, 0, {}};
+    Context ctx(&a);
+    CtVolume volume;
+    const Status st = read_dicom_series(ctx, ct_memory_series(&m), CtReadOptions(), &volume, &info);
+    voxels = volume.voxel_count();
+    return st;
+  });
+  if (r.median > 0) {
+    std::printf("# dicom_read_slice: %s, %llu voxels, %.2f ms a slice, %.1f Mvoxel/s\n",
+                info.transfer_syntax, static_cast<unsigned long long>(voxels), 1e3 * r.median,
+                static_cast<double>(voxels) / r.median / 1e6);
+  }
+}
+
 int run(int argc, char** argv) {
   Harness h;
   std::string realdata = "../shared/realdata/open-full-jaw-patient26";
   std::string fixtures = "fixtures";
   std::string inflate_input;  // a zlib stream for inflate_ct16_zlib6
+  std::string dicom_input;    // a DICOM slice for dicom_read_slice
   uint64_t cap = uint64_t{4} << 30;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
@@ -1433,6 +1465,8 @@ int run(int argc, char** argv) {
       fixtures = argv[++i];
     } else if (a == "--inflate-input" && i + 1 < argc) {
       inflate_input = argv[++i];
+    } else if (a == "--dicom-input" && i + 1 < argc) {
+      dicom_input = argv[++i];
     } else if (a == "--memory-cap" && i + 1 < argc && cli::parse_size(argv[i + 1], &cap)) {
       ++i;
     } else if (a == "--export-realcase" && i + 1 < argc) {
@@ -1455,7 +1489,7 @@ int run(int argc, char** argv) {
       std::fprintf(stderr,
                    "usage: splintcore-bench [--filter SUBSTRING] [--repeat N] "
                    "[--realdata DIR] [--fixtures DIR] [--memory-cap SIZE] "
-                   "[--inflate-input ZLIB_FILE]\n"
+                   "[--inflate-input ZLIB_FILE] [--dicom-input DICOM_FILE]\n"
                    "       splintcore-bench [--realdata DIR] --export-realcase DIR\n");
       return a == "--help" ? 0 : 2;
     }
@@ -1476,6 +1510,7 @@ int run(int argc, char** argv) {
     bench_remesh(h, arena);
     bench_ct_reconstruct(h, arena);
     bench_inflate(h, arena, inflate_input);
+    bench_dicom_input(h, arena, dicom_input);
     bench_write_3mf(h, arena);
     bench_marching_cubes(h, arena);
     bench_sweep(h, arena);
