@@ -344,3 +344,11 @@ for p in (1, 5, 7):
     codec_seed("jpeg_p%d.bin" % p, 1 | (14 << 2), 4, 5, jpeg_lossless(samples16, 4, 5, 12, p))
 codec_seed("jpeg_restart.bin", 1 | (14 << 2), 4, 5,
            jpeg_lossless(samples16, 4, 5, 12, 2, restart_lines=2))
+
+# Enhanced multi-frame CT (issue 31): fixtures/ct/mf16.dcm (functional groups of defined
+# length) and mf16_rev.dcm (undefined lengths, frames out of order), made by
+# fixtures/ct/make_ct_fixtures.py.
+FIXTURES_CT = os.path.join(ROOT, "..", "ct")
+for name in ("mf16.dcm", "mf16_rev.dcm"):
+    with open(os.path.join(FIXTURES_CT, name), "rb") as f:
+        write("ct_dicom", name, f.read())
