@@ -232,10 +232,13 @@ TEST(CtFiles, FormatOfPathAndErrors) {
   EXPECT_EQ(cli::ct_format_of_path(dir / "a.nhdr"), CtFormat::kNrrd);
   EXPECT_EQ(cli::ct_format_of_path(dir / "a.mhd"), CtFormat::kMetaImage);
   EXPECT_EQ(cli::ct_format_of_path(dir.path.string()), CtFormat::kDicom);
-  EXPECT_EQ(cli::ct_format_of_path(dir / "a.dcm"), CtFormat::kUnknown);
+  // A .dcm file is a DICOM series of one (04ac3aa); a missing one cannot be opened.
+  EXPECT_EQ(cli::ct_format_of_path(dir / "a.dcm"), CtFormat::kDicom);
+  EXPECT_EQ(cli::ct_format_of_path(dir / "a.txt"), CtFormat::kUnknown);
   test::TestArena arena(1 << 20);
   CtVolume v;
-  EXPECT_EQ(read_back(arena.arena, dir / "a.dcm", &v, nullptr).code(), StatusCode::kUnsupported);
+  EXPECT_EQ(read_back(arena.arena, dir / "a.dcm", &v, nullptr).code(), StatusCode::kIoError);
+  EXPECT_EQ(read_back(arena.arena, dir / "a.txt", &v, nullptr).code(), StatusCode::kUnsupported);
   EXPECT_EQ(read_back(arena.arena, dir / "missing.nrrd", &v, nullptr).code(), StatusCode::kIoError);
   EXPECT_EQ(read_back(arena.arena, dir.path.string(), &v, nullptr).code(),
             StatusCode::kInvalidArgument);  // an empty folder
