@@ -12,6 +12,7 @@
 #include "ct/dicom_rle.h"
 #include "ct/jpeg_lossless.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace splintcore {
@@ -552,7 +553,6 @@ class DataSetWalk {
       case kImageOrientation:
       case kPixelSpacing:
       case kSliceThickness:
-      case kSpacingBetweenSlices:
       case kRescaleIntercept:
       case kRescaleSlope: return stack_[0].tag == kSharedGroups ? h_ : &frame_;
       default: return nullptr;
@@ -565,7 +565,7 @@ class DataSetWalk {
                        "nested too deeply", at);
     }
     if (level.end != kNoEnd && depth_ > 0 && level.end > stack_[depth_ - 1].end) {
-      return tag_error(StatusCode::kParseError, level.tag, level.item ? "Item" : "Sequence",
+      return tag_error(StatusCode::kParseError, level.tag, "sequence or item",
                        "its length runs past the end of the enclosing item or sequence", at);
     }
     stack_[depth_] = level;
@@ -585,7 +585,7 @@ class DataSetWalk {
            r_.offset() >= stack_[depth_ - 1].end) {
       const Level& l = stack_[depth_ - 1];
       if (r_.offset() > l.end) {
-        Status s = tag_error(StatusCode::kParseError, l.tag, l.item ? "Item" : "Sequence",
+        Status s = tag_error(StatusCode::kParseError, l.tag, "sequence or item",
                              "an element inside runs past its defined length, which ends at byte ",
                              r_.offset());
         s.append_u64(l.end);
@@ -650,12 +650,14 @@ class DataSetWalk {
     if (r_.available() < length) return truncated(r_, "a data element value");
     SPLINTCORE_RETURN_IF_ERROR(take_value(target, tag, r_.buf + r_.pos, length, at));
     r_.pos += length;
-    if (tag == kNumberOfFrames && (h_->frames < 1 || h_->frames > options_.max_dimension)) {
+    // At most 65535 frames: frames x frame bytes (< 2^33) cannot overflow.
+    const int64_t most = std::min<int64_t>(options_.max_dimension, 65535);
+    if (tag == kNumberOfFrames && (h_->frames < 1 || h_->frames > most)) {
       Status s = tag_error(h_->frames < 1 ? StatusCode::kParseError : StatusCode::kLimitExceeded,
                            tag, "Number of Frames", "is ", at);
       s.append_i64(h_->frames);
       s.append(": must be 1 to ");
-      s.append_u64(options_.max_dimension);
+      s.append_i64(most);
       s.append(" (CtReadOptions::max_dimension)");
       return s;
     }
@@ -727,7 +729,6 @@ class DataSetWalk {
       }
     }
     if (h_->slice_thickness == 0) h_->slice_thickness = frame_.slice_thickness;
-    if (h_->spacing_between == 0) h_->spacing_between = frame_.spacing_between;
     if (i == 0) {
       std::memcpy(h_->position, frame_.position, sizeof(h_->position));
       h_->slope = frame_.slope;
@@ -744,7 +745,7 @@ class DataSetWalk {
   // At Pixel Data: a multi-frame image (or one with per-frame groups) has one Per-frame
   // Functional Groups item for every frame; then it has its positions.
   Status check_frames(uint64_t at) {
-    if (h_->frames == 1 && !h_->have_per_frame) return Status::ok();
+    if (!h_->have_per_frame && h_->frames == 1) return Status::ok();
     if (int64_t{h_->frame_items} != h_->frames) {
       Status s = make_error(StatusCode::kParseError, "Number of Frames is ", h_->frames,
                             " but the (5200,9230) Per-frame Functional Groups Sequence (the frame "
@@ -897,10 +898,8 @@ Status check_header(const Header& h, const ByteSource& file) {
                       "images are read (decompress it, e.g. with dcmdjpeg or gdcmconv --raw)");
   }
   if (encapsulated(h.codec)) return check_fragments(h, frame_bytes);
-  // frames <= max_dimension: the product, if it overflows, is no length Pixel Data can have.
-  const uint64_t frames = static_cast<uint64_t>(h.frames);
-  const uint64_t needed =
-      frames <= ~uint64_t{0} / frame_bytes ? frame_bytes * frames : ~uint64_t{0};
+  const uint64_t frames = static_cast<uint64_t>(h.frames);  // 1..65535
+  const uint64_t needed = frame_bytes * frames;
   if (h.pixel_length != needed && !(needed % 2 == 1 && h.pixel_length == needed + 1)) {
     return make_error(StatusCode::kParseError, "Pixel Data has ", h.pixel_length,
                       " bytes; rows x columns x bytes per pixel",
@@ -1251,23 +1250,30 @@ struct SeriesReader {
   }
 };
 
-// The pixels of a deflated file: past the file meta, then inflated up to Pixel Data and on.
-Status read_deflated_pixels(Arena& arena, Reader& file, const SliceRecord& rec,
-                            const VoxelFormat& format, uint64_t count, int16_t* out,
-                            uint64_t first_index, uint64_t* saturated) {
+// Runs read(reader) with the reader at `pixel_offset` of a deflated file: past the file meta,
+// then inflated up to there (an offset in the data set) and on.
+template <typename Read>
+Status read_deflated(Arena& arena, Reader& file, uint64_t pixel_offset, Read read) {
   Header meta;
   SPLINTCORE_RETURN_IF_ERROR(read_file_meta(file, &meta));
   ArenaScope scope(arena);
   InflatedDataSet data;
   SPLINTCORE_RETURN_IF_ERROR(data.open(file, arena));
   Reader& r = data.reader;
-  Status s = rec.pixel_offset >= r.offset()
-                 ? r.skip(rec.pixel_offset - r.offset(), "the data set before Pixel Data")
+  Status s = pixel_offset >= r.offset()
+                 ? r.skip(pixel_offset - r.offset(), "the data set before Pixel Data")
                  : make_error(StatusCode::kParseError, "the file meta information changed");
-  if (s.is_ok()) {
-    s = convert_voxels(r, format, count, rec.slope, rec.intercept, out, first_index, saturated);
-  }
+  if (s.is_ok()) s = read(r);
   return data.result(s);
+}
+
+// The pixels of a deflated file.
+Status read_deflated_pixels(Arena& arena, Reader& file, const SliceRecord& rec,
+                            const VoxelFormat& format, uint64_t count, int16_t* out,
+                            uint64_t first_index, uint64_t* saturated) {
+  return read_deflated(arena, file, rec.pixel_offset, [&](Reader& r) {
+    return convert_voxels(r, format, count, rec.slope, rec.intercept, out, first_index, saturated);
+  });
 }
 
 // Reads n bytes from the reader into out.
@@ -1379,25 +1385,12 @@ Status read_frame_pixels(const SeriesReader& sr, const VoxelFormat& format, uint
   SPLINTCORE_RETURN_IF_ERROR(sr.series.open(sr.series.user, 0, &source));
   Reader r;
   r.init(&source, sr.buffer, sr.chunk);
-  Status s;
-  if (sr.first.deflated) {
-    Header meta;
-    s = read_file_meta(r, &meta);
-    ArenaScope scope(*sr.ctx.arena);
-    InflatedDataSet data;
-    if (s.is_ok()) s = data.open(r, *sr.ctx.arena);
-    if (s.is_ok()) {
-      s = sr.first.pixel_offset >= data.reader.offset()
-              ? data.reader.skip(sr.first.pixel_offset - data.reader.offset(),
-                                 "the data set before Pixel Data")
-              : make_error(StatusCode::kParseError, "the file meta information changed");
-    }
-    if (s.is_ok()) s = convert_frames(sr, data.reader, format, saturated);
-    s = data.result(s);
-  } else {
-    s = r.skip(sr.first.pixel_offset, "the header before Pixel Data");
-    if (s.is_ok()) s = convert_frames(sr, r, format, saturated);
-  }
+  auto convert = [&](Reader& at_pixels) {
+    return convert_frames(sr, at_pixels, format, saturated);
+  };
+  Status s = sr.first.deflated ? read_deflated(*sr.ctx.arena, r, sr.first.pixel_offset, convert)
+                               : r.skip(sr.first.pixel_offset, "the header before Pixel Data");
+  if (s.is_ok() && !sr.first.deflated) s = convert(r);
   const char* name = source.name;
   if (sr.series.close != nullptr) sr.series.close(sr.series.user, 0, &source);
   if (!s.is_ok() && name != nullptr) s.in_file(name);
@@ -1464,8 +1457,7 @@ Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtRea
                             " frames) in a series of ", series.count,
                             " files: give a multi-frame file alone");
       s.at_index(0);
-      if (reader.first_name != nullptr) s.in_file(reader.first_name);
-      return s;
+      return s.in_file(reader.first_name);  // in_file ignores a null name
     }
     reader.multi_frame = true;
     reader.count = static_cast<uint32_t>(first.frames);  // <= max_dimension (checked)

@@ -193,7 +193,8 @@ TEST(CtDicomMultiFrame, MalformedFunctionalGroupsAreErrors) {
   put_u32(&b, sq + 16, 20);  // the item's length (22)
   Read r = read({b});
   EXPECT_EQ(r.status.code(), StatusCode::kParseError);
-  EXPECT_TRUE(has(r.status, "(FFFE,E000) Item: an element inside runs past its defined length"))
+  EXPECT_TRUE(
+      has(r.status, "(FFFE,E000) sequence or item: an element inside runs past its defined length"))
       << r.status.message();
   // The sequence longer than the frame's item.
   b = fixture("mf16.dcm");
@@ -201,7 +202,7 @@ TEST(CtDicomMultiFrame, MalformedFunctionalGroupsAreErrors) {
   r = read({b});
   EXPECT_EQ(r.status.code(), StatusCode::kParseError);
   EXPECT_TRUE(has(r.status,
-                  "(0020,9113) Sequence: its length runs past the end of the "
+                  "(0020,9113) sequence or item: its length runs past the end of the "
                   "enclosing item"))
       << r.status.message();
   EXPECT_EQ(r.status.byte_offset(), sq);
@@ -227,6 +228,40 @@ TEST(CtDicomMultiFrame, MalformedFunctionalGroupsAreErrors) {
   EXPECT_EQ(r.status.code(), StatusCode::kUnsupported);
   EXPECT_TRUE(has(r.status, "frame 1 (item 1")) << r.status.message();
   EXPECT_TRUE(has(r.status, "Pixel Spacing differs")) << r.status.message();
+}
+
+// Frame positions go through the series' checks, messages naming frames; rescale per frame.
+TEST(CtDicomMultiFrame, FramesAreCheckedAsSlices) {
+  const std::string position = tag_bytes(0x0020, 0x0032) + "DS";
+  // Frame 1 at frame 0's position.
+  Bytes b = fixture("mf16.dcm");
+  const size_t second = find(b, position, 1);
+  ASSERT_EQ(std::memcmp(&b[second + 8], "-37.8\\-33\\-2.5", 14), 0);
+  std::memcpy(&b[second + 8], "-37.8\\-33\\22.5", 14);
+  Read r = read({b});
+  EXPECT_EQ(r.status.code(), StatusCode::kParseError);
+  EXPECT_TRUE(has(r.status, "duplicate slice position")) << r.status.message();
+  EXPECT_TRUE(has(r.status, "(frames ")) << r.status.message();
+  // Frame 1 off the normal through frame 0 (a tilt).
+  b = fixture("mf16.dcm");
+  b[second + 10] = '0';  // -30.8
+  r = read({b});
+  EXPECT_EQ(r.status.code(), StatusCode::kUnsupported);
+  EXPECT_TRUE(has(r.status, "gantry tilt or sheared series: slice 1 (frame 1)"))
+      << r.status.message();
+  // Frame 0 of mf16_rev (raw16_2: lowest z, slice 0) one HU up: its own intercept is used.
+  b = fixture("mf16_rev.dcm");
+  const size_t intercept = find(b, tag_bytes(0x0028, 0x1052) + "DS");
+  ASSERT_EQ(std::memcmp(&b[intercept + 8], "-1063", 5), 0);
+  b[intercept + 12] = '2';
+  r = read({b});
+  const Read folder = read_folder();
+  ASSERT_TRUE(r.status.is_ok()) << r.status.message();
+  EXPECT_TRUE(r.info.rescale_varies);
+  const size_t per_slice = 64 * 56;
+  for (size_t i = 0; i < r.hu.size(); ++i) {
+    ASSERT_EQ(r.hu[i], folder.hu[i] + (i < per_slice ? 1 : 0)) << i;
+  }
 }
 
 TEST(CtDicomMultiFrame, RefusedWhereNotSupported) {
