@@ -290,5 +290,55 @@ TEST(CtDicomMultiFrame, RefusedWhereNotSupported) {
   EXPECT_TRUE(has(r.status, "multi-frame Pixel Data is not supported")) << r.status.message();
 }
 
+// A file that changes between the header pass and the frames' pass (the second open serves
+// other bytes: two frames of the three) is an error, not a read of stale records.
+struct ChangingFile {
+  Bytes first, then;
+  int opens = 0;
+  MemorySource source;
+};
+
+TEST(CtDicomMultiFrame, FileChangedBetweenReadsIsAnError) {
+  ChangingFile file;
+  file.first = fixture("mf16.dcm");
+  // mf16 cut to its first two frames: Number of Frames 2, the third per-frame item dropped
+  // (the sequence is of defined length), two frames of pixels.
+  Bytes b = with_value(0x0028, 0x0008, "2 ");
+  const size_t sq = find(b, tag_bytes(0x5200, 0x9230) + "SQ");
+  auto u32_at = [&](size_t at) {
+    return uint32_t{b[at]} | (uint32_t{b[at + 1]} << 8) | (uint32_t{b[at + 2]} << 16) |
+           (uint32_t{b[at + 3]} << 24);
+  };
+  size_t third = sq + 12;
+  for (int k = 0; k < 2; ++k) third += 8 + u32_at(third + 4);
+  const uint32_t third_bytes = 8 + u32_at(third + 4);
+  put_u32(&b, sq + 8, u32_at(sq + 8) - third_bytes);
+  b.erase(b.begin() + static_cast<std::ptrdiff_t>(third),
+          b.begin() + static_cast<std::ptrdiff_t>(third + third_bytes));
+  const size_t pixels = find(b, tag_bytes(0x7FE0, 0x0010) + "OW");
+  put_u32(&b, pixels + 8, 2 * 64 * 56 * 2);
+  b.resize(pixels + 12 + 2 * 64 * 56 * 2);
+  ASSERT_TRUE(read({b}).status.is_ok()) << read({b}).status.message();  // valid alone
+  file.then = b;
+  CtSeries series;
+  series.count = 1;
+  series.user = &file;
+  series.open = [](void* user, uint32_t, ByteSource* out) {
+    ChangingFile* f = static_cast<ChangingFile*>(user);
+    const Bytes& bytes = f->opens++ == 0 ? f->first : f->then;
+    f->source = MemorySource{bytes.data(), bytes.size(), 0, 0};
+    *out = memory_source(&f->source, "changing.dcm");
+    return Status::ok();
+  };
+  TestArena t(1 << 20);
+  Context ctx(&t.arena);
+  CtReadOptions options;
+  CtVolume volume;
+  const Status s = read_dicom_series(ctx, series, options, &volume, nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kParseError);
+  EXPECT_TRUE(has(s, "the file changed between two reads")) << s.message();
+  EXPECT_EQ(file.opens, 2);
+}
+
 }  // namespace
 }  // namespace splintcore
