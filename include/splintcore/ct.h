@@ -202,8 +202,17 @@ Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFile
 // Compressed data may be at most 8 bytes a sample + 64 KiB (kLimitExceeded). Others:
 // kUnsupported "unsupported transfer syntax <UID> (<name>)". Sequences and items of defined or
 // undefined length are skipped (nesting bounded at 32, iteratively); only top-level elements
-// count. Slices are ordered by Image Position projected on the normal row x column; spacing
-// between slices must be uniform (CtReadOptions), positions distinct and along the normal (no
+// count, and those of the functional group macros below. Or ONE enhanced multi-frame file
+// (PS3.3 C.7.6.16, e.g. Enhanced CT; Number of Frames > 1, native pixels, not encapsulated:
+// kUnsupported): its frames are the slices, frame i's pixels at Pixel Data + i x frame bytes;
+// every frame's (5200,9230) Per-frame Functional Groups item holds its (0020,9113) Plane
+// Position (required: else kParseError naming the frame and its item's byte offset), and may
+// hold its (0028,9145) rescale; orientation (0020,9116) and pixel measures (0028,9110) are
+// shared (5200,9229) or per frame (then equal in all frames). The items must be as many as the
+// frames, Number of Frames 1..max_dimension. The arena need is that of the same slices as a
+// folder of single-frame files.
+// Slices are ordered by Image Position projected on the normal row x column; spacing between
+// slices must be uniform (CtReadOptions), positions distinct and along the normal (no
 // gantry tilt), and all slices must share size, orientation, pixel spacing and pixel format.
 // A single slice takes its z spacing from Spacing Between Slices or Slice Thickness.
 // Axes: axis_x = row direction (+column index), axis_y = column direction, axis_z = normal

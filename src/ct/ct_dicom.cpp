@@ -14,6 +14,7 @@
 #include "ct/jpeg_lossless.h"
 #include "ct/jpeg_ls.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace splintcore {
@@ -46,6 +47,15 @@ constexpr uint32_t kPixelRepresentation = tag_of(0x0028, 0x0103);
 constexpr uint32_t kRescaleIntercept = tag_of(0x0028, 0x1052);
 constexpr uint32_t kRescaleSlope = tag_of(0x0028, 0x1053);
 constexpr uint32_t kPixelData = tag_of(0x7FE0, 0x0010);
+// Enhanced multi-frame images (PS3.3 C.7.6.16): the functional group sequences and the macros
+// of them this reader interprets (Plane Position, Plane Orientation, Pixel Measures, Pixel
+// Value Transformation).
+constexpr uint32_t kSharedGroups = tag_of(0x5200, 0x9229);
+constexpr uint32_t kPerFrameGroups = tag_of(0x5200, 0x9230);
+constexpr uint32_t kPlanePosition = tag_of(0x0020, 0x9113);
+constexpr uint32_t kPlaneOrientation = tag_of(0x0020, 0x9116);
+constexpr uint32_t kPixelMeasures = tag_of(0x0028, 0x9110);
+constexpr uint32_t kPixelValueTransformation = tag_of(0x0028, 0x9145);
 
 inline uint16_t u16(const uint8_t* p) { return static_cast<uint16_t>(p[0] | (p[1] << 8)); }
 inline uint32_t u32(const uint8_t* p) {
@@ -155,6 +165,10 @@ struct Header {
   // Encapsulated pixel data (PS3.5 A.4): the fragments after the basic offset table.
   uint32_t fragments = 0;
   uint64_t fragment_bytes = 0;  // their total length (< max_dimension x 4 GiB: no overflow)
+  // Enhanced multi-frame (frames > 1): the Per-frame Functional Groups items seen, each with
+  // its Image Position (Patient) (then have_position is set, position is frame 0's).
+  uint32_t frame_items = 0;
+  bool have_per_frame = false;
 };
 
 bool encapsulated(Codec codec) {
@@ -442,14 +456,21 @@ Status scan_fragments(Reader& r, const CtReadOptions& options, Header* h) {
 }
 
 // The data set, up to Pixel Data. Containers of undefined length are tracked on a bounded
-// stack (no recursion); those of defined length are skipped whole. Only depth 0 is interpreted.
+// stack (no recursion), as are those of defined length on the path to the functional group
+// macros of an enhanced multi-frame image (their end offsets checked); other containers of
+// defined length are skipped whole. Interpreted are depth 0 and, at depth 4, the values of
+// the Shared (5200,9229) and Per-frame (5200,9230) Functional Groups' Plane Position, Plane
+// Orientation, Pixel Measures and Pixel Value Transformation items (PS3.3 C.7.6.16).
 class DataSetWalk {
  public:
-  DataSetWalk(Reader& r, const CtReadOptions& options, Header* h)
-      : r_(r), options_(options), h_(h) {}
+  // frames: when not null, where frame i's position and rescale go (room for `capacity`).
+  DataSetWalk(Reader& r, const CtReadOptions& options, Header* h, SliceRecord* frames = nullptr,
+              uint32_t capacity = 0)
+      : r_(r), options_(options), h_(h), frames_(frames), capacity_(capacity) {}
 
   Status run() {
     for (;;) {
+      SPLINTCORE_RETURN_IF_ERROR(close_ended());
       if (r_.offset() > options_.max_header_bytes) {
         return make_error(StatusCode::kLimitExceeded, "no Pixel Data within the first ",
                           options_.max_header_bytes, " bytes (CtReadOptions::max_header_bytes)")
@@ -475,6 +496,7 @@ class DataSetWalk {
       const bool implicit = depth_ > 0 ? stack_[depth_ - 1].implicit : h_->implicit;
       ElementHeader e;
       SPLINTCORE_RETURN_IF_ERROR(read_element_header(r_, p, tag, at, implicit, big, &e));
+      if (depth_ == 0 && tag == kPixelData) SPLINTCORE_RETURN_IF_ERROR(check_frames(at));
       if (depth_ == 0 && tag == kPixelData && encapsulated(h_->codec)) {
         if (e.length != kUndefinedLength) {
           return tag_error(StatusCode::kParseError, tag, "Pixel Data",
@@ -492,8 +514,14 @@ class DataSetWalk {
         h_->have_pixels = true;
         return Status::ok();
       }
-      if (depth_ == 0 && kept_tag(tag) && !e.is_sq) {
-        SPLINTCORE_RETURN_IF_ERROR(keep_value(tag, e.length, at));
+      if ((e.is_sq || implicit) && interesting(tag)) {
+        SPLINTCORE_RETURN_IF_ERROR(
+            push(Level{false, implicit, true, tag, r_.offset() + e.length}, at));
+        continue;
+      }
+      Header* target = depth_ == 0 ? h_ : macro_target(tag);
+      if (target != nullptr && kept_tag(tag) && !e.is_sq) {
+        SPLINTCORE_RETURN_IF_ERROR(keep_value(target, tag, e.length, at));
         continue;
       }
       SPLINTCORE_RETURN_IF_ERROR(r_.skip(e.length, "a data element value"));
@@ -501,10 +529,77 @@ class DataSetWalk {
   }
 
  private:
+  static constexpr uint64_t kNoEnd = ~uint64_t{0};
   struct Level {
-    bool item;      // an item (else a sequence)
-    bool implicit;  // encoding inside (UN of undefined length is implicit VR, PS3.5 6.2.2)
+    bool item;         // an item (else a sequence)
+    bool implicit;     // encoding inside (UN of undefined length is implicit VR, PS3.5 6.2.2)
+    bool interesting;  // a sequence whose items are walked even when of defined length
+    uint32_t tag;
+    uint64_t end;  // offset past its value (defined length), else kNoEnd
   };
+
+  bool is_group_sequence(uint32_t tag) const {
+    return tag == kSharedGroups || tag == kPerFrameGroups;
+  }
+  // A sequence on the path to the functional group macros, if opened at the current depth.
+  bool interesting(uint32_t tag) const {
+    if (depth_ == 0) return is_group_sequence(tag);
+    return depth_ == 2 && is_group_sequence(stack_[0].tag) && stack_[1].item &&
+           (tag == kPlanePosition || tag == kPlaneOrientation || tag == kPixelMeasures ||
+            tag == kPixelValueTransformation);
+  }
+  // Where a value inside a functional group macro's item goes (null: not interpreted).
+  Header* macro_target(uint32_t tag) {
+    if (depth_ != 4 || !stack_[2].interesting || !stack_[1].item || !stack_[3].item) {
+      return nullptr;
+    }
+    switch (tag) {
+      case kImagePosition:
+      case kImageOrientation:
+      case kPixelSpacing:
+      case kSliceThickness:
+      case kRescaleIntercept:
+      case kRescaleSlope: return stack_[0].tag == kSharedGroups ? h_ : &frame_;
+      default: return nullptr;
+    }
+  }
+
+  Status push(const Level& level, uint64_t at) {
+    if (depth_ == kMaxNesting) {
+      return tag_error(StatusCode::kLimitExceeded, level.tag, level.item ? "Item" : "Sequence",
+                       "nested too deeply", at);
+    }
+    if (level.end != kNoEnd && depth_ > 0 && level.end > stack_[depth_ - 1].end) {
+      return tag_error(StatusCode::kParseError, level.tag, "sequence or item",
+                       "its length runs past the end of the enclosing item or sequence", at);
+    }
+    stack_[depth_] = level;
+    ++depth_;
+    if (level.item && depth_ == 2 && stack_[0].tag == kPerFrameGroups) return begin_frame(at);
+    if (!level.item && depth_ == 1 && level.tag == kPerFrameGroups) h_->have_per_frame = true;
+    return Status::ok();
+  }
+  Status pop() {
+    --depth_;
+    if (stack_[depth_].item && depth_ == 1 && stack_[0].tag == kPerFrameGroups) return end_frame();
+    return Status::ok();
+  }
+  // Closes the containers of defined length whose end the walk has reached.
+  Status close_ended() {
+    while (depth_ > 0 && stack_[depth_ - 1].end != kNoEnd &&
+           r_.offset() >= stack_[depth_ - 1].end) {
+      const Level& l = stack_[depth_ - 1];
+      if (r_.offset() > l.end) {
+        Status s = tag_error(StatusCode::kParseError, l.tag, "sequence or item",
+                             "an element inside runs past its defined length, which ends at byte ",
+                             r_.offset());
+        s.append_u64(l.end);
+        return s;
+      }
+      SPLINTCORE_RETURN_IF_ERROR(pop());
+    }
+    return Status::ok();
+  }
 
   // Item, Item Delimitation and Sequence Delimitation (group FFFE).
   Status delimiter(uint32_t tag, uint32_t length, uint64_t at) {
@@ -512,29 +607,24 @@ class DataSetWalk {
       if (depth_ == 0 || stack_[depth_ - 1].item) {
         return tag_error(StatusCode::kParseError, tag, "Item", "outside a sequence", at);
       }
-      if (length != kUndefinedLength) return r_.skip(length, "an item");
-      if (depth_ == kMaxNesting) {
-        return tag_error(StatusCode::kLimitExceeded, tag, "Item", "nested too deeply", at);
-      }
-      stack_[depth_] = Level{true, stack_[depth_ - 1].implicit};
-      ++depth_;
-      return Status::ok();
+      const Level& parent = stack_[depth_ - 1];
+      if (length != kUndefinedLength && !parent.interesting) return r_.skip(length, "an item");
+      const uint64_t end = length == kUndefinedLength ? kNoEnd : r_.offset() + length;
+      return push(Level{true, parent.implicit, false, tag, end}, at);
     }
     if (tag == tag_of(0xFFFE, 0xE00D)) {
-      if (depth_ == 0 || !stack_[depth_ - 1].item) {
+      if (depth_ == 0 || !stack_[depth_ - 1].item || stack_[depth_ - 1].end != kNoEnd) {
         return tag_error(StatusCode::kParseError, tag, "Item Delimitation",
                          "outside an item of undefined length", at);
       }
-      --depth_;
-      return Status::ok();
+      return pop();
     }
     if (tag == tag_of(0xFFFE, 0xE0DD)) {
-      if (depth_ == 0 || stack_[depth_ - 1].item) {
+      if (depth_ == 0 || stack_[depth_ - 1].item || stack_[depth_ - 1].end != kNoEnd) {
         return tag_error(StatusCode::kParseError, tag, "Sequence Delimitation",
                          "outside a sequence of undefined length", at);
       }
-      --depth_;
-      return Status::ok();
+      return pop();
     }
     return tag_error(StatusCode::kParseError, tag, "element", "unknown delimiter tag", at);
   }
@@ -549,16 +639,12 @@ class DataSetWalk {
       return tag_error(StatusCode::kParseError, tag, "element",
                        "undefined length on a VR other than SQ or UN", at);
     }
-    if (depth_ == kMaxNesting) {
-      return tag_error(StatusCode::kLimitExceeded, tag, "Sequence", "nested too deeply", at);
-    }
-    stack_[depth_] = Level{false, implicit || e.is_un};
-    ++depth_;
-    return Status::ok();
+    const bool walk = !e.is_un && interesting(tag);
+    return push(Level{false, implicit || e.is_un, walk, tag, kNoEnd}, at);
   }
 
-  // The value of a top-level element this reader keeps (kept_tag()).
-  Status keep_value(uint32_t tag, uint32_t length, uint64_t at) {
+  // The value of an element this reader keeps (kept_tag()), into *target.
+  Status keep_value(Header* target, uint32_t tag, uint32_t length, uint64_t at) {
     if (length > kMaxValueBytes) {
       Status s = tag_error(StatusCode::kParseError, tag, "element", "value of ", at);
       s.append_u64(length);
@@ -567,14 +653,129 @@ class DataSetWalk {
     }
     SPLINTCORE_RETURN_IF_ERROR(r_.fill(length));
     if (r_.available() < length) return truncated(r_, "a data element value");
-    SPLINTCORE_RETURN_IF_ERROR(take_value(h_, tag, r_.buf + r_.pos, length, at));
+    SPLINTCORE_RETURN_IF_ERROR(take_value(target, tag, r_.buf + r_.pos, length, at));
     r_.pos += length;
+    // At most 65535 frames: frames x frame bytes (< 2^33) cannot overflow.
+    const int64_t most = std::min<int64_t>(options_.max_dimension, 65535);
+    if (tag == kNumberOfFrames && (h_->frames < 1 || h_->frames > most)) {
+      Status s = tag_error(h_->frames < 1 ? StatusCode::kParseError : StatusCode::kLimitExceeded,
+                           tag, "Number of Frames", "is ", at);
+      s.append_i64(h_->frames);
+      s.append(": must be 1 to ");
+      s.append_i64(most);
+      s.append(" (CtReadOptions::max_dimension)");
+      return s;
+    }
+    return Status::ok();
+  }
+
+  // A Per-frame Functional Groups item opens: frame h_->frame_items, at byte `at`.
+  Status begin_frame(uint64_t at) {
+    const uint32_t i = h_->frame_items;
+    if (int64_t{i} >= h_->frames || (frames_ != nullptr && i >= capacity_)) {
+      Status s = tag_error(StatusCode::kParseError, kPerFrameGroups,
+                           "Per-frame Functional Groups Sequence",
+                           "has more items than Number of Frames (", at);
+      s.append_i64(h_->frames);
+      s.append(")");
+      return s;
+    }
+    if (i == 0) {
+      shared_slope_ = h_->slope;
+      shared_intercept_ = h_->intercept;
+    }
+    frame_ = Header();
+    frame_.slope = shared_slope_;
+    frame_.intercept = shared_intercept_;
+    frame_at_ = at;
+    return Status::ok();
+  }
+
+  // "frame i: <what>" at the frame's item.
+  Status frame_error(StatusCode code, const char* what) const {
+    return make_error(code, "frame ", h_->frame_items, " (item ", h_->frame_items,
+                      " of (5200,9230) Per-frame Functional Groups Sequence): ", what)
+        .at_byte(frame_at_);
+  }
+
+  // A Per-frame Functional Groups item closes: its position (required) and rescale kept, its
+  // orientation and pixel spacing (if any) equal to the shared ones or frame 0's.
+  Status end_frame() {
+    const uint32_t i = h_->frame_items;
+    if (!frame_.have_position) {
+      return frame_error(StatusCode::kParseError,
+                         "no (0020,0032) Image Position (Patient) in a (0020,9113) Plane "
+                         "Position Sequence");
+    }
+    const double tolerance = options_.orientation_tolerance;
+    if (frame_.have_orientation) {
+      if (!h_->have_orientation) {
+        std::memcpy(h_->orientation, frame_.orientation, sizeof(h_->orientation));
+        h_->have_orientation = true;
+      }
+      for (int c = 0; c < 6; ++c) {
+        if (!(std::fabs(frame_.orientation[c] - h_->orientation[c]) <= tolerance)) {
+          return frame_error(StatusCode::kUnsupported,
+                             "its Image Orientation (Patient) differs from frame 0's or the "
+                             "shared one: the frames of a volume share one orientation");
+        }
+      }
+    }
+    if (frame_.have_pixel_spacing) {
+      if (!h_->have_pixel_spacing) {
+        std::memcpy(h_->pixel_spacing, frame_.pixel_spacing, sizeof(h_->pixel_spacing));
+        h_->have_pixel_spacing = true;
+      }
+      for (int c = 0; c < 2; ++c) {
+        if (!(std::fabs(frame_.pixel_spacing[c] - h_->pixel_spacing[c]) <= tolerance)) {
+          return frame_error(StatusCode::kUnsupported,
+                             "its Pixel Spacing differs from frame 0's or the shared one");
+        }
+      }
+    }
+    if (h_->slice_thickness == 0) h_->slice_thickness = frame_.slice_thickness;
+    if (i == 0) {
+      std::memcpy(h_->position, frame_.position, sizeof(h_->position));
+      h_->slope = frame_.slope;
+      h_->intercept = frame_.intercept;
+    }
+    if (frames_ != nullptr) {
+      const double* p = frame_.position;
+      frames_[i] = SliceRecord{{p[0], p[1], p[2]}, frame_.slope, frame_.intercept, 0, 0, 0};
+    }
+    h_->frame_items = i + 1;
+    return Status::ok();
+  }
+
+  // At Pixel Data: a multi-frame image (or one with per-frame groups) has one Per-frame
+  // Functional Groups item for every frame; then it has its positions.
+  Status check_frames(uint64_t at) {
+    if (!h_->have_per_frame && h_->frames == 1) return Status::ok();
+    if (int64_t{h_->frame_items} != h_->frames) {
+      Status s = make_error(StatusCode::kParseError, "Number of Frames is ", h_->frames,
+                            " but the (5200,9230) Per-frame Functional Groups Sequence (the frame "
+                            "positions) has ",
+                            h_->frame_items, " items");
+      if (!h_->have_per_frame) {
+        s = make_error(StatusCode::kUnsupported, "Number of Frames is ", h_->frames,
+                       " but there is no (5200,9230) Per-frame Functional Groups Sequence (the "
+                       "frame positions): only enhanced multi-frame images (e.g. Enhanced CT) are "
+                       "read");
+      }
+      return s.at_byte(at);
+    }
+    h_->have_position = true;
     return Status::ok();
   }
 
   Reader& r_;
   const CtReadOptions& options_;
   Header* h_;
+  SliceRecord* frames_;
+  uint32_t capacity_;
+  Header frame_;  // the values of the per-frame item being read
+  uint64_t frame_at_ = 0;
+  double shared_slope_ = 1.0, shared_intercept_ = 0.0;
   Level stack_[kMaxNesting] = {};
   int depth_ = 0;
 };
@@ -604,16 +805,18 @@ struct InflatedDataSet {
 };
 
 // Parses one file's header up to Pixel Data (the reader's window must hold >= 300 bytes).
-Status parse_header(Reader& r, const CtReadOptions& options, Arena& arena, Header* h) {
+// frames (room for `capacity`): where a multi-frame image's per-frame values go, or null.
+Status parse_header(Reader& r, const CtReadOptions& options, Arena& arena, Header* h,
+                    SliceRecord* frames, uint32_t capacity) {
   SPLINTCORE_RETURN_IF_ERROR(read_file_meta(r, h));
   if (!h->deflated) {
-    DataSetWalk walk(r, options, h);
+    DataSetWalk walk(r, options, h, frames, capacity);
     return walk.run();
   }
   ArenaScope scope(arena);
   InflatedDataSet data;
   SPLINTCORE_RETURN_IF_ERROR(data.open(r, arena));
-  DataSetWalk walk(data.reader, options, h);
+  DataSetWalk walk(data.reader, options, h, frames, capacity);
   Status s = data.result(walk.run());
   if (!s.is_ok() && data.z.error.is_ok()) s.append(" (at an offset in the inflated data set)");
   return s;
@@ -649,11 +852,6 @@ Status check_header(const Header& h, const ByteSource& file) {
                       h.image_type,
                       "), not a slice of a CT volume: leave it out of the series (move it out "
                       "of the folder)");
-  }
-  if (h.frames != 1) {
-    return make_error(StatusCode::kUnsupported, "Number of Frames is ", h.frames,
-                      ": a multi-frame image (e.g. enhanced CT, one file for the volume); only "
-                      "single-frame slices are supported");
   }
   if (!h.have_rows) return missing("(0028,0010) Rows");
   if (!h.have_columns) return missing("(0028,0011) Columns");
@@ -697,11 +895,20 @@ Status check_header(const Header& h, const ByteSource& file) {
     return make_error(StatusCode::kParseError, "Rescale Slope is ", h.slope,
                       ": must be finite and non-zero");
   }
-  const uint64_t needed = uint64_t{h.rows} * h.columns * (h.bits_allocated / 8);
-  if (encapsulated(h.codec)) return check_fragments(h, needed);
+  const uint64_t frame_bytes = uint64_t{h.rows} * h.columns * (h.bits_allocated / 8);
+  if (encapsulated(h.codec) && h.frames > 1) {
+    return make_error(StatusCode::kUnsupported, "Number of Frames is ", h.frames, ": compressed (",
+                      h.transfer_syntax,
+                      ") multi-frame Pixel Data is not supported; only uncompressed multi-frame "
+                      "images are read (decompress it, e.g. with dcmdjpeg or gdcmconv --raw)");
+  }
+  if (encapsulated(h.codec)) return check_fragments(h, frame_bytes);
+  const uint64_t frames = static_cast<uint64_t>(h.frames);  // 1..65535
+  const uint64_t needed = frame_bytes * frames;
   if (h.pixel_length != needed && !(needed % 2 == 1 && h.pixel_length == needed + 1)) {
     return make_error(StatusCode::kParseError, "Pixel Data has ", h.pixel_length,
-                      " bytes; rows x columns x bytes per pixel is ", needed)
+                      " bytes; rows x columns x bytes per pixel",
+                      frames > 1 ? " x Number of Frames" : "", " is ", needed)
         .at_byte(h.pixel_offset);
   }
   if (source.size != kUnknownSize &&
@@ -713,16 +920,18 @@ Status check_header(const Header& h, const ByteSource& file) {
   return Status::ok();
 }
 
-// Opens file `index` of the series, parses its header, closes it.
+// Opens file `index` of the series, parses its header (a multi-frame image's per-frame values
+// into frames[0, capacity) when not null), closes it.
 Status read_header(const CtSeries& series, uint32_t index, const CtReadOptions& options,
-                   Arena& arena, Header* h, const char** name) {
+                   Arena& arena, Header* h, const char** name, SliceRecord* frames = nullptr,
+                   uint32_t capacity = 0) {
   ByteSource source;
   SPLINTCORE_RETURN_IF_ERROR(series.open(series.user, index, &source));
   *name = source.name;
   uint8_t window[kHeaderWindow];
   Reader r;
   r.init(&source, window, sizeof(window));
-  Status s = parse_header(r, options, arena, h);
+  Status s = parse_header(r, options, arena, h, frames, capacity);
   if (s.is_ok()) s = check_header(*h, source);
   if (series.close != nullptr) series.close(series.user, index, &source);
   if (!s.is_ok()) {
@@ -749,6 +958,7 @@ uint32_t bits_stored(const Header& h) {
 // What of a slice's header differs from the series' file 0 (first), or nullptr: all slices
 // share size, pixel format, pixel spacing and orientation (these two within `tolerance`).
 const char* difference(const Header& h, const Header& first, double tolerance) {
+  if (h.frames != first.frames) return "Number of Frames (a multi-frame file is read alone)";
   if (h.codec != first.codec || h.big_endian != first.big_endian) {
     return "transfer syntax (deflated, compressed, byte order)";
   }
@@ -799,6 +1009,7 @@ struct SeriesReader {
   Vec3 row, column, normal;
   Vec3 origin, spacing;
   bool rescale_varies = false;
+  bool multi_frame = false;  // one file, count frames: "slices" are frames, not files
 
   SeriesReader(const Context& c, const CtSeries& s, const CtReadOptions& o)
       : ctx(c), series(s), options(o), count(s.count) {}
@@ -827,8 +1038,34 @@ struct SeriesReader {
     return Status::ok();
   }
 
+  // Pass 1 of a multi-frame file (the series' only one): its header again, the frames'
+  // positions and rescale into the records, frame i's pixels at frame i x its bytes.
+  Status read_frames() {
+    Header h;
+    const char* name = first_name;
+    SPLINTCORE_RETURN_IF_ERROR(
+        read_header(series, 0, options, *ctx.arena, &h, &name, records, count));
+    if (h.frames != first.frames) {  // fewer frames than records (more: begin_frame refuses)
+      return make_error(StatusCode::kParseError, "the file changed between two reads")
+          .in_file(name != nullptr ? name : "?");
+    }
+    const uint64_t frame_bytes = uint64_t{first.rows} * first.columns * (first.bits_allocated / 8);
+    for (uint32_t i = 0; i < count; ++i) {
+      SliceRecord& r = records[i];
+      r.pixel_offset = first.pixel_offset + i * frame_bytes;
+      if (r.slope != records[0].slope || r.intercept != records[0].intercept) {
+        rescale_varies = true;
+      }
+      keys[i] =
+          KeyIndex{order_key(dot(Vec3{r.position[0], r.position[1], r.position[2]}, normal)), i, 0};
+    }
+    radix_sort(Span<KeyIndex>(keys, count), Span<KeyIndex>(scratch, count));
+    return report_progress(ctx, "read DICOM headers", 1, 1);
+  }
+
   // Pass 1: every header, checked against file 0's; then the slices in position order.
   Status read_headers() {
+    if (multi_frame) return read_frames();
     for (uint32_t i = 0; i < count; ++i) {
       Header h;
       const char* name = first_name;
@@ -865,8 +1102,9 @@ struct SeriesReader {
   // "<text>slices k and k + 1 (series files i and j) are <a><t2>[<b><t3>]", at file j.
   Status pair_error(StatusCode code, uint32_t k, const char* text, double a, const char* t2,
                     double b, const char* t3) const {
-    Status e = make_error(code, text, "slices ", k, " and ", k + 1, " (series files ",
-                          keys[k].index, " and ", keys[k + 1].index, ") are ");
+    Status e = make_error(code, text, "slices ", k, " and ", k + 1,
+                          multi_frame ? " (frames " : " (series files ", keys[k].index, " and ",
+                          keys[k + 1].index, ") are ");
     e.append_f64(a);
     e.append(t2);
     e.at_index(keys[k + 1].index);
@@ -912,7 +1150,8 @@ struct SeriesReader {
       const double offset = length(in_plane);
       if (!(offset <= allowed_deviation(options, along))) {
         Status s = make_error(StatusCode::kUnsupported, "gantry tilt or sheared series: slice ", k,
-                              " (series file ", keys[k].index, ") lies ", offset,
+                              multi_frame ? " (frame " : " (series file ", keys[k].index, ") lies ",
+                              offset,
                               " mm off the normal through slice 0; only stacks along the "
                               "normal are supported");
         s.at_index(keys[k].index);
@@ -1023,23 +1262,30 @@ struct SeriesReader {
   }
 };
 
-// The pixels of a deflated file: past the file meta, then inflated up to Pixel Data and on.
-Status read_deflated_pixels(Arena& arena, Reader& file, const SliceRecord& rec,
-                            const VoxelFormat& format, uint64_t count, int16_t* out,
-                            uint64_t first_index, uint64_t* saturated) {
+// Runs read(reader) with the reader at `pixel_offset` of a deflated file: past the file meta,
+// then inflated up to there (an offset in the data set) and on.
+template <typename Read>
+Status read_deflated(Arena& arena, Reader& file, uint64_t pixel_offset, Read read) {
   Header meta;
   SPLINTCORE_RETURN_IF_ERROR(read_file_meta(file, &meta));
   ArenaScope scope(arena);
   InflatedDataSet data;
   SPLINTCORE_RETURN_IF_ERROR(data.open(file, arena));
   Reader& r = data.reader;
-  Status s = rec.pixel_offset >= r.offset()
-                 ? r.skip(rec.pixel_offset - r.offset(), "the data set before Pixel Data")
+  Status s = pixel_offset >= r.offset()
+                 ? r.skip(pixel_offset - r.offset(), "the data set before Pixel Data")
                  : make_error(StatusCode::kParseError, "the file meta information changed");
-  if (s.is_ok()) {
-    s = convert_voxels(r, format, count, rec.slope, rec.intercept, out, first_index, saturated);
-  }
+  if (s.is_ok()) s = read(r);
   return data.result(s);
+}
+
+// The pixels of a deflated file.
+Status read_deflated_pixels(Arena& arena, Reader& file, const SliceRecord& rec,
+                            const VoxelFormat& format, uint64_t count, int16_t* out,
+                            uint64_t first_index, uint64_t* saturated) {
+  return read_deflated(arena, file, rec.pixel_offset, [&](Reader& r) {
+    return convert_voxels(r, format, count, rec.slope, rec.intercept, out, first_index, saturated);
+  });
 }
 
 // Reads n bytes from the reader into out.
@@ -1134,10 +1380,46 @@ Status read_encapsulated_pixels(const SeriesReader& sr, Reader& r, const SliceRe
   return convert_voxels(decoded, f, count, rec.slope, rec.intercept, out, first_index, saturated);
 }
 
+// The frames of a multi-frame file in file order (the reader at the first), each converted into
+// its place in position order (the inverse of the sort, in sr.scratch).
+Status convert_frames(const SeriesReader& sr, Reader& r, const VoxelFormat& format,
+                      uint64_t* saturated) {
+  const uint64_t per_slice = uint64_t{sr.first.rows} * sr.first.columns;
+  for (uint32_t i = 0; i < sr.count; ++i) {
+    const SliceRecord& rec = sr.records[i];
+    const uint64_t k = sr.scratch[i].index;
+    SPLINTCORE_RETURN_IF_ERROR(convert_voxels(r, format, per_slice, rec.slope, rec.intercept,
+                                              sr.hu + k * per_slice, k * per_slice, saturated));
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(sr.ctx, "read DICOM pixels", i + 1, sr.count));
+  }
+  return Status::ok();
+}
+
+// Pass 2 of a multi-frame file: its Pixel Data read once, front to back (the data set inflated
+// when deflated: the pixel offset is one in the inflated data set).
+Status read_frame_pixels(const SeriesReader& sr, const VoxelFormat& format, uint64_t* saturated) {
+  for (uint32_t k = 0; k < sr.count; ++k) sr.scratch[sr.keys[k].index].index = k;
+  ByteSource source;
+  SPLINTCORE_RETURN_IF_ERROR(sr.series.open(sr.series.user, 0, &source));
+  Reader r;
+  r.init(&source, sr.buffer, sr.chunk);
+  auto convert = [&](Reader& at_pixels) {
+    return convert_frames(sr, at_pixels, format, saturated);
+  };
+  Status s = sr.first.deflated ? read_deflated(*sr.ctx.arena, r, sr.first.pixel_offset, convert)
+                               : r.skip(sr.first.pixel_offset, "the header before Pixel Data");
+  if (s.is_ok() && !sr.first.deflated) s = convert(r);
+  const char* name = source.name;
+  if (sr.series.close != nullptr) sr.series.close(sr.series.user, 0, &source);
+  if (!s.is_ok() && name != nullptr) s.in_file(name);
+  return s;
+}
+
 // Pass 2: the pixels, slice by slice in position order, each with its own rescale. Not a
 // SeriesReader method: cppcheck 2.10 takes a Reader local to a method for a non-local one
 // (a false danglingLifetime on r.init(&source, ...)).
 Status read_pixels(const SeriesReader& sr, const VoxelFormat& format, uint64_t* saturated) {
+  if (sr.multi_frame) return read_frame_pixels(sr, format, saturated);
   const uint64_t per_slice = uint64_t{sr.first.rows} * sr.first.columns;
   for (uint32_t k = 0; k < sr.count; ++k) {
     const SliceRecord& rec = sr.records[sr.keys[k].index];
@@ -1184,10 +1466,21 @@ Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtRea
                       " (CtReadOptions::max_dimension)");
   }
   SeriesReader reader(ctx, series, options);
-  const uint32_t count = series.count;
   const Header& first = reader.first;
   SPLINTCORE_RETURN_IF_ERROR(
       read_header(series, 0, options, arena, &reader.first, &reader.first_name));
+  if (first.frames > 1) {  // an enhanced multi-frame image: its frames are the slices
+    if (series.count != 1) {
+      Status s = make_error(StatusCode::kUnsupported, "a multi-frame image (", first.frames,
+                            " frames) in a series of ", series.count,
+                            " files: give a multi-frame file alone");
+      s.at_index(0);
+      return s.in_file(reader.first_name);  // in_file ignores a null name
+    }
+    reader.multi_frame = true;
+    reader.count = static_cast<uint32_t>(first.frames);  // <= max_dimension (checked)
+  }
+  const uint32_t count = reader.count;
 
   uint64_t voxel_bytes = 0;
   SPLINTCORE_RETURN_IF_ERROR(check_size(first.columns, first.rows, count, options, &voxel_bytes));

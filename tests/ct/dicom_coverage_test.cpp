@@ -416,13 +416,15 @@ TEST(DicomCoverage, HeaderChecks) {
        }),
        StatusCode::kUnsupported,
        "a localizer (scout) image (Image Type ORIGINAL\\PRIMARY\\LOCALIZER), not a slice"},
-      // A multi-frame file (enhanced CT keeps positions in functional groups): named as such,
-      // not as a file missing its Image Position.
+      // A multi-frame file without the per-frame functional groups of an enhanced image (its
+      // frame positions): named as such, not as a file missing its Image Position.
       {"multi-frame", with([](std::vector<El>* e) {
          put(e, {tag(0x0028, 0x0008), "IS", text("120")});
          drop(e, tag(0x0020, 0x0032));
        }),
-       StatusCode::kUnsupported, "Number of Frames is 120: a multi-frame image"},
+       StatusCode::kUnsupported,
+       "Number of Frames is 120 but there is no (5200,9230) Per-frame Functional Groups "
+       "Sequence"},
   };
   expect_files(cases);
   // A truncated Pixel Data; a source that does not know its size (the same file is fine).

@@ -377,3 +377,11 @@ for kind in ("regular", "run"):  # refused: a mapped error over 2 RANGE + 2
                jpegls_encode.encode(two_bits, 4, 5, 2, corrupt=kind))
 write("ct_dicom", "jls_one.dcm", encapsulated(plain16, b"1.2.840.10008.1.2.4.80",
                                               jpegls_encode.encode(samples16, 4, 5, 12)))
+
+# Enhanced multi-frame CT (issue 31): fixtures/ct/mf16.dcm (functional groups of defined
+# length) and mf16_rev.dcm (undefined lengths, frames out of order), made by
+# fixtures/ct/make_ct_fixtures.py.
+FIXTURES_CT = os.path.join(ROOT, "..", "ct")
+for name in ("mf16.dcm", "mf16_rev.dcm"):
+    with open(os.path.join(FIXTURES_CT, name), "rb") as f:
+        write("ct_dicom", name, f.read())
