@@ -776,8 +776,11 @@ void decode_blocks(Tile& t, J2kTier1& t1, int32_t* ints, double* reals, size_t s
           job.passes = k.passes;
           job.style = t.style.block_style;
           j2k_decode_block(t1, job, t1.coefficients, job.w);
-          const size_t x0 = static_cast<size_t>(band.bx + (k.r.x0 - band.r.x0));
-          const size_t y0 = static_cast<size_t>(band.by + (k.r.y0 - band.r.y0));
+          // >= 0: the block lies inside its band.
+          const int64_t bx = int64_t{band.bx} + (int64_t{k.r.x0} - band.r.x0);
+          const int64_t by = int64_t{band.by} + (int64_t{k.r.y0} - band.r.y0);
+          const size_t x0 = static_cast<size_t>(bx);
+          const size_t y0 = static_cast<size_t>(by);
           const double half_step = band.step * 0.5;
           for (uint32_t y = 0; y < job.h; ++y) {
             const int32_t* from = t1.coefficients + size_t{y} * job.w;
@@ -1009,7 +1012,9 @@ Status jpeg2000_decode(Arena& arena, const uint8_t* data, size_t size, uint32_t 
   size_t begin = 0, end = 0;
   SPLINTCORE_RETURN_IF_ERROR(find_codestream(data, size, &begin, &end));
   ArenaScope scope(arena);
-  Decoder d{arena, data, end, rows, columns, max_precision, out, Image(), nullptr, nullptr, begin};
+  Decoder d{arena,   data,    end,     rows,    columns, max_precision,
+            nullptr, Image(), nullptr, nullptr, begin};
+  d.out = out;  // the samples are written through it
   if (end - begin < 4 || be16(data + begin) != kSoc) {
     return j2k_error(StatusCode::kParseError, "no SOC marker (not a JPEG 2000 codestream)", begin);
   }

@@ -241,11 +241,12 @@ struct JlsBits {
 
 // The decoder of one scan: the coding variables, the two lines, the bits.
 struct JlsScan {
-  JlsCoding p;
-  JlsContext* ctx;
-  int32_t* prev;  // line y - 1: [0] the Rc of x = 0, [1 + x] sample x, [1 + columns] its Rd
-  int32_t* cur;   // line y: [0] the Ra of x = 0
-  uint32_t columns;
+  JlsCoding p{};
+  JlsContext* ctx = nullptr;
+  int32_t* prev = nullptr;  // line y - 1: [0] the Rc of x = 0, [1 + x] sample x, [1 + columns]
+                            // its Rd
+  int32_t* cur = nullptr;   // line y: [0] the Ra of x = 0
+  uint32_t columns = 0;
   uint32_t run_index = 0;
   JlsBits bits;
 
