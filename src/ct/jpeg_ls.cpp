@@ -691,8 +691,11 @@ Status jpeg_ls_decode(Arena& arena, const uint8_t* data, size_t size, uint32_t r
   uint8_t* work = arena.allocate_array<uint8_t>(static_cast<size_t>(jls_work_bytes(columns)));
   if (work == nullptr) return arena.exhausted_status();
   JlsScan scan;
-  scan.ctx = reinterpret_cast<JlsContext*>(work);
-  scan.prev = reinterpret_cast<int32_t*>(work + sizeof(JlsContext) * kContexts);
+  // The block is aligned for both (Arena::kDefaultAlignment); the lines start after the
+  // contexts, a multiple of 8 bytes.
+  static_assert(sizeof(JlsContext) % alignof(int32_t) == 0, "the lines follow the contexts");
+  scan.ctx = static_cast<JlsContext*>(static_cast<void*>(work));
+  scan.prev = static_cast<int32_t*>(static_cast<void*>(work + sizeof(JlsContext) * kContexts));
   scan.cur = scan.prev + columns + 2;
   scan.columns = columns;
   return decode_stream(scan, data, size, rows, columns, max_precision, out);
