@@ -777,8 +777,10 @@ void decode_blocks(Tile& t, J2kTier1& t1, int32_t* ints, double* reals, size_t s
           job.style = t.style.block_style;
           j2k_decode_block(t1, job, t1.coefficients, job.w);
           // >= 0: the block lies inside its band.
-          const int64_t bx = int64_t{band.bx} + (int64_t{k.r.x0} - band.r.x0);
-          const int64_t by = int64_t{band.by} + (int64_t{k.r.y0} - band.r.y0);
+          const int64_t bx =
+              static_cast<int64_t>(band.bx) + (static_cast<int64_t>(k.r.x0) - band.r.x0);
+          const int64_t by =
+              static_cast<int64_t>(band.by) + (static_cast<int64_t>(k.r.y0) - band.r.y0);
           const size_t x0 = static_cast<size_t>(bx);
           const size_t y0 = static_cast<size_t>(by);
           const double half_step = band.step * 0.5;
