@@ -13,6 +13,7 @@
 
 #include "ct/jpeg2000.h"
 #include "splintcore/ct.h"
+#include "support/dicom_read.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -21,36 +22,17 @@ namespace {
 using ct_detail::J2kBits;
 using ct_detail::J2kTagNode;
 using ct_detail::MqDecoder;
+using test::Bytes;
 using test::TestArena;
-using Bytes = std::vector<uint8_t>;
 
-Bytes fixture(const std::string& name) {
-  return test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/ct/" + name);
-}
+Bytes fixture(const std::string& name) { return test::ct_fixture(name); }
 
-struct Series {
-  Status status;
-  CtInfo info;
-  std::vector<int16_t> hu;
-};
+using Series = test::DicomRead;
 
 Series read_names(const std::vector<std::string>& names, size_t arena_bytes = 4 << 20) {
   std::vector<Bytes> files;
   for (const std::string& n : names) files.push_back(fixture(n));
-  TestArena t(arena_bytes);
-  std::vector<CtMemoryFile> mem;
-  for (size_t i = 0; i < files.size(); ++i) {
-    mem.push_back({names[i].c_str(), files[i].data(), files[i].size()});
-  }
-  CtMemoryFiles m{mem.data(), static_cast<uint32_t>(mem.size()), 0, {}};
-  Context ctx(&t.arena);
-  CtReadOptions options;
-  options.chunk_bytes = 1024;
-  CtVolume volume;
-  Series r;
-  r.status = read_dicom_series(ctx, ct_memory_series(&m), options, &volume, &r.info);
-  if (r.status.is_ok()) r.hu.assign(volume.hu, volume.hu + volume.voxel_count());
-  return r;
+  return test::read_dicom_bytes(files, names, arena_bytes);
 }
 
 // Reads `names` and `twins`: both succeed, voxels differ by at most `tolerance`.

@@ -12,43 +12,21 @@
 
 #include "ct/jpeg_ls.h"
 #include "splintcore/ct.h"
+#include "support/dicom_read.h"
 #include "support/test_util.h"
 
 namespace splintcore {
 namespace {
 
+using test::Bytes;
 using test::TestArena;
-using Bytes = std::vector<uint8_t>;
 
-Bytes fixture(const std::string& name) {
-  return test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/ct/" + name);
-}
+Bytes fixture(const std::string& name) { return test::ct_fixture(name); }
 
-struct Series {
-  Status status;
-  CtInfo info;
-  std::vector<int16_t> hu;
-  size_t high_water = 0;
-};
+using Series = test::DicomRead;
 
 Series read(const std::vector<Bytes>& files, size_t arena_bytes = 4 << 20) {
-  TestArena t(arena_bytes);
-  std::vector<std::string> names;
-  for (size_t i = 0; i < files.size(); ++i) names.push_back("s" + std::to_string(i) + ".dcm");
-  std::vector<CtMemoryFile> mem;
-  for (size_t i = 0; i < files.size(); ++i) {
-    mem.push_back({names[i].c_str(), files[i].data(), files[i].size()});
-  }
-  CtMemoryFiles m{mem.data(), static_cast<uint32_t>(mem.size()), 0, {}};
-  Context ctx(&t.arena);
-  CtReadOptions options;
-  options.chunk_bytes = 1024;
-  CtVolume volume;
-  Series r;
-  r.status = read_dicom_series(ctx, ct_memory_series(&m), options, &volume, &r.info);
-  if (r.status.is_ok()) r.hu.assign(volume.hu, volume.hu + volume.voxel_count());
-  r.high_water = t.arena.high_water();
-  return r;
+  return test::read_dicom_bytes(files, test::numbered_names(files.size(), "s"), arena_bytes);
 }
 
 Series read_names(const std::vector<std::string>& names) {

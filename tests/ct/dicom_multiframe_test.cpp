@@ -10,46 +10,23 @@
 #include <vector>
 
 #include "splintcore/ct.h"
+#include "support/dicom_read.h"
 #include "support/test_util.h"
 
 namespace splintcore {
 namespace {
 
+using test::Bytes;
 using test::TestArena;
-using Bytes = std::vector<uint8_t>;
 
-Bytes fixture(const std::string& name) {
-  return test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/ct/" + name);
-}
+Bytes fixture(const std::string& name) { return test::ct_fixture(name); }
 
-struct Read {
-  Status status;
-  CtVolume volume;
-  CtInfo info;
-  std::vector<int16_t> hu;
-  size_t high_water = 0;
-};
+using Read = test::DicomRead;
 
 Read read(const std::vector<Bytes>& files, size_t arena_bytes = 1 << 20,
           uint32_t max_dimension = 4096) {
-  TestArena t(arena_bytes);
-  std::vector<std::string> names;
-  for (size_t i = 0; i < files.size(); ++i) names.push_back("f" + std::to_string(i) + ".dcm");
-  std::vector<CtMemoryFile> mem;
-  for (size_t i = 0; i < files.size(); ++i) {
-    mem.push_back({names[i].c_str(), files[i].data(), files[i].size()});
-  }
-  CtMemoryFiles m{mem.data(), static_cast<uint32_t>(mem.size()), 0, {}};
-  Context ctx(&t.arena);
-  CtReadOptions options;
-  options.chunk_bytes = 1024;
-  options.max_dimension = max_dimension;
-  Read r;
-  r.status = read_dicom_series(ctx, ct_memory_series(&m), options, &r.volume, &r.info);
-  if (r.status.is_ok()) r.hu.assign(r.volume.hu, r.volume.hu + r.volume.voxel_count());
-  r.volume.hu = nullptr;
-  r.high_water = t.arena.high_water();
-  return r;
+  return test::read_dicom_bytes(files, test::numbered_names(files.size(), "f"), arena_bytes, 0,
+                                max_dimension);
 }
 
 Read read_folder() {

@@ -1,0 +1,63 @@
+// The DICOM tests' one way to read a series from bytes in memory (tests/ct: codecs, JPEG-LS,
+// JPEG 2000, multi-frame): the fixture files and read_dicom_series over them in a test arena.
+#ifndef SPLINTCORE_TESTS_SUPPORT_DICOM_READ_H
+#define SPLINTCORE_TESTS_SUPPORT_DICOM_READ_H
+
+#include <string>
+#include <vector>
+
+#include "splintcore/ct.h"
+#include "support/test_util.h"
+
+namespace splintcore {
+namespace test {
+
+using Bytes = std::vector<uint8_t>;
+
+inline Bytes ct_fixture(const std::string& name) {
+  return read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/ct/" + name);
+}
+
+// What a read gave: the volume's header (its voxels, gone with the arena, are in `hu`).
+struct DicomRead {
+  Status status;
+  CtVolume volume;
+  CtInfo info;
+  std::vector<int16_t> hu;
+  size_t high_water = 0;
+};
+
+// files[i] named names[i], read in 1 KiB chunks (max_chunk > 0: the memory files hand out at
+// most that many bytes a read) in an arena of arena_bytes.
+inline DicomRead read_dicom_bytes(const std::vector<Bytes>& files,
+                                  const std::vector<std::string>& names, size_t arena_bytes,
+                                  size_t max_chunk = 0, uint32_t max_dimension = 4096) {
+  TestArena t(arena_bytes);
+  std::vector<CtMemoryFile> mem;
+  for (size_t i = 0; i < files.size(); ++i) {
+    mem.push_back({names[i].c_str(), files[i].data(), files[i].size()});
+  }
+  CtMemoryFiles m{mem.data(), static_cast<uint32_t>(mem.size()), max_chunk, {}};
+  Context ctx(&t.arena);
+  CtReadOptions options;
+  options.chunk_bytes = 1024;
+  options.max_dimension = max_dimension;
+  DicomRead r;
+  r.status = read_dicom_series(ctx, ct_memory_series(&m), options, &r.volume, &r.info);
+  if (r.status.is_ok()) r.hu.assign(r.volume.hu, r.volume.hu + r.volume.voxel_count());
+  r.volume.hu = nullptr;
+  r.high_water = t.arena.high_water();
+  return r;
+}
+
+// Names "<prefix>0.dcm", "<prefix>1.dcm", ...
+inline std::vector<std::string> numbered_names(size_t count, const char* prefix) {
+  std::vector<std::string> names;
+  for (size_t i = 0; i < count; ++i) names.push_back(prefix + std::to_string(i) + ".dcm");
+  return names;
+}
+
+}  // namespace test
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_TESTS_SUPPORT_DICOM_READ_H
