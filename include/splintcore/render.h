@@ -58,6 +58,15 @@ struct RenderMesh {
   const RigidTransform* transform = nullptr;
 };
 
+// Where the views look and how large: each view's centre (mm along its right and up axes) and
+// the scale common to all. render_meshes() returns the one it chose (RenderImage::framing); given
+// back in RenderOptions::framing it draws other meshes into exactly the same places.
+struct RenderFraming {
+  double pixels_per_mm = 0;
+  double centre_u[kRenderMaxViews] = {};
+  double centre_v[kRenderMaxViews] = {};
+};
+
 struct RenderOptions {
   uint32_t width = 1024;  // the whole image, 1..kRenderMaxSide
   uint32_t height = 1024;
@@ -71,6 +80,9 @@ struct RenderOptions {
   // A vertical ramp bar (blue at the bottom = 0, red at the top = scalar_max) in a strip of
   // max(8, width / 48) pixels at the right edge; the tiles share the rest.
   bool legend = false;
+  // Optional: a framing to use instead of framing the meshes (e.g. marks drawn in a second
+  // pass in the places of a first); finite, pixels_per_mm > 0.
+  const RenderFraming* framing = nullptr;
 };
 
 // An 8-bit RGB image, rows top to bottom, 3 bytes per pixel.
@@ -80,6 +92,7 @@ struct RenderImage {
   uint8_t* rgb = nullptr;  // width * height * 3 bytes (in the arena)
   // The common scale of every view (pixels per mm) and the tile size.
   double pixels_per_mm = 0;
+  RenderFraming framing;  // the views' centres and the scale (pixels_per_mm)
   uint32_t tile_width = 0;
   uint32_t tile_height = 0;
   uint32_t columns = 0;
@@ -87,13 +100,14 @@ struct RenderImage {
 
 // Bytes render_meshes() may take from the arena at most (caller-buffer arena): the image
 // w*h*3 (kept) and the temporaries (returned before it finishes): a depth buffer w*h*4; with a
-// translucent mesh a second layer w*h*(4+3+1); with Gouraud shading one normal (3 floats) per
+// translucent mesh a second layer w*h*(4+3+1); for a mesh with a transform its moved vertices
+// (24 bytes each, made once for all views); with Gouraud shading one normal (3 floats) per
 // vertex of the mesh being drawn; its vertices projected into the views drawn at once (16
 // bytes each): views_at_once = the smaller of the view count and the executor's concurrency
 // (1 with the serial executor); each array padded to 16 bytes.
-// render_bound() = 15*w*h + 12*largest + 16*views_at_once*largest + 112, rounded up to 16
-// (translucency and Gouraud assumed; `largest`: the most vertices of one mesh; UINT64_MAX on
-// overflow).
+// render_bound() = 15*w*h + 24*largest + 12*largest + 16*views_at_once*largest + 128, rounded
+// up to 16 (translucency, a transform and Gouraud assumed; `largest`: the most vertices of one
+// mesh; UINT64_MAX on overflow).
 uint64_t render_bound(uint32_t width, uint32_t height, uint64_t largest_mesh_vertices,
                       uint32_t views_at_once);
 
@@ -103,8 +117,8 @@ uint64_t render_bound(uint32_t width, uint32_t height, uint64_t largest_mesh_ver
 // all meshes' vertices, 5% margin. Triangles are drawn from both sides. Of the translucent
 // meshes only the nearest surface of each pixel is kept, blended over the nearest opaque one.
 // Errors: kInvalidArgument (size 0 or over kRenderMaxSide, view_count 0 or over
-// kRenderMaxViews, a tile smaller than a pixel, a null mesh, scalars with scalar_max not > 0
-// or not finite);
+// kRenderMaxViews, a tile smaller than a pixel, a framing not finite or of scale not > 0, a
+// null mesh, scalars with scalar_max not > 0 or not finite);
 // kInvalidMesh (a triangle naming a missing vertex: at_index the triangle); kNonFinite (a
 // vertex or scalar that is NaN or infinite: at_index the vertex); kArenaExhausted;
 // kCancelled (ctx.progress, checked between meshes).

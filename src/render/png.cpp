@@ -58,26 +58,49 @@ struct IdatWriter {
   }
 };
 
-uint8_t paeth(uint8_t a, uint8_t b, uint8_t c) {
+inline uint8_t paeth(uint8_t a, uint8_t b, uint8_t c) {
   const int p = static_cast<int>(a) + b - c;
   const int pa = p > a ? p - a : a - p;
   const int pb = p > b ? p - b : b - p;
   const int pc = p > c ? p - c : c - p;
-  if (pa <= pb && pa <= pc) return a;
-  return pb <= pc ? b : c;
+  const uint8_t bc = pb <= pc ? b : c;
+  return (pa <= pb && pa <= pc) ? a : bc;
+}
+
+// The predictions at byte i of a row: a (left), b (above), c (above left) are 0 outside the
+// image (the first pixel's 3 bytes, the first row). The loops below handle those edges first
+// so that the inner loops have no branches (the same bytes as the spec's definition).
+struct Neighbours {
+  uint8_t a, b, c;
+};
+inline Neighbours neighbours(const uint8_t* row, const uint8_t* above, size_t i) {
+  return {i >= 3 ? row[i - 3] : uint8_t{0}, above != nullptr ? above[i] : uint8_t{0},
+          (i >= 3 && above != nullptr) ? above[i - 3] : uint8_t{0}};
 }
 
 // Row `y` filtered with `type` (0 None, 1 Sub, 2 Up, 4 Paeth) into out (3w bytes).
 void filter_row(const uint8_t* row, const uint8_t* above, size_t bytes, int type, uint8_t* out) {
-  for (size_t i = 0; i < bytes; ++i) {
-    const uint8_t a = i >= 3 ? row[i - 3] : 0;
-    const uint8_t b = above != nullptr ? above[i] : 0;
-    const uint8_t c = (i >= 3 && above != nullptr) ? above[i - 3] : 0;
+  const size_t edge = bytes < 3 ? bytes : 3;
+  for (size_t i = 0; i < edge; ++i) {
+    const Neighbours n = neighbours(row, above, i);
     uint8_t predicted = 0;
-    if (type == 1) predicted = a;
-    if (type == 2) predicted = b;
-    if (type == 4) predicted = paeth(a, b, c);
+    if (type == 1) predicted = n.a;
+    if (type == 2) predicted = n.b;
+    if (type == 4) predicted = paeth(n.a, n.b, n.c);
     out[i] = static_cast<uint8_t>(row[i] - predicted);
+  }
+  if (type == 0) {
+    for (size_t i = edge; i < bytes; ++i) out[i] = row[i];
+  } else if (type == 1 || (type == 4 && above == nullptr)) {  // Paeth of (a, 0, 0) is a
+    for (size_t i = edge; i < bytes; ++i) out[i] = static_cast<uint8_t>(row[i] - row[i - 3]);
+  } else if (above == nullptr) {  // Up with b = 0
+    for (size_t i = edge; i < bytes; ++i) out[i] = row[i];
+  } else if (type == 2) {
+    for (size_t i = edge; i < bytes; ++i) out[i] = static_cast<uint8_t>(row[i] - above[i]);
+  } else {
+    for (size_t i = edge; i < bytes; ++i) {
+      out[i] = static_cast<uint8_t>(row[i] - paeth(row[i - 3], above[i], above[i - 3]));
+    }
   }
 }
 
@@ -86,15 +109,32 @@ uint32_t abs_signed(uint8_t v) { return v < 128 ? v : 256u - v; }
 // Sums of |filtered byte as int8| for None, Sub, Up and Paeth, in one pass.
 void filter_costs(const uint8_t* row, const uint8_t* above, size_t bytes, uint64_t costs[4]) {
   uint64_t none = 0, sub = 0, up = 0, pae = 0;
-  for (size_t i = 0; i < bytes; ++i) {
+  const size_t edge = bytes < 3 ? bytes : 3;
+  for (size_t i = 0; i < edge; ++i) {
     const uint8_t x = row[i];
-    const uint8_t a = i >= 3 ? row[i - 3] : 0;
-    const uint8_t b = above != nullptr ? above[i] : 0;
-    const uint8_t c = (i >= 3 && above != nullptr) ? above[i - 3] : 0;
+    const Neighbours n = neighbours(row, above, i);
     none += abs_signed(x);
-    sub += abs_signed(static_cast<uint8_t>(x - a));
-    up += abs_signed(static_cast<uint8_t>(x - b));
-    pae += abs_signed(static_cast<uint8_t>(x - paeth(a, b, c)));
+    sub += abs_signed(static_cast<uint8_t>(x - n.a));
+    up += abs_signed(static_cast<uint8_t>(x - n.b));
+    pae += abs_signed(static_cast<uint8_t>(x - paeth(n.a, n.b, n.c)));
+  }
+  if (above == nullptr) {  // b = c = 0: Up is None, and Paeth of (a, 0, 0) is a (Sub)
+    for (size_t i = edge; i < bytes; ++i) {
+      const uint8_t x = row[i];
+      const uint32_t s = abs_signed(static_cast<uint8_t>(x - row[i - 3]));
+      none += abs_signed(x);
+      up += abs_signed(x);
+      sub += s;
+      pae += s;
+    }
+  } else {
+    for (size_t i = edge; i < bytes; ++i) {
+      const uint8_t x = row[i];
+      none += abs_signed(x);
+      sub += abs_signed(static_cast<uint8_t>(x - row[i - 3]));
+      up += abs_signed(static_cast<uint8_t>(x - above[i]));
+      pae += abs_signed(static_cast<uint8_t>(x - paeth(row[i - 3], above[i], above[i - 3])));
+    }
   }
   costs[0] = none;
   costs[1] = sub;

@@ -142,43 +142,41 @@ int64_t edge_bias(const Vertex& a, const Vertex& b) {
 struct MeshJob {
   Frame* frame = nullptr;
   const RenderMesh* item = nullptr;
-  const float* normals = nullptr;  // Gouraud: 3 per vertex (unnormalised), else nullptr
-  Projected* projected = nullptr;  // a batch of views x vertex count
+  const Vec3* positions = nullptr;  // the vertices where drawn (moved by the item's transform)
+  const float* normals = nullptr;   // Gouraud: 3 per vertex (unnormalised), else nullptr
+  Projected* projected = nullptr;   // a batch of views x vertex count
+};
+
+struct PixelBox {
+  int64_t x0, x1, y0, y1;  // inclusive
 };
 
 // The pixels whose centres (px * 256 + 128, py * 256 + 128) lie in the box of the triangle
-// `v` and in the view's tile: false when there are none (the triangle draws nothing).
-bool pixel_box(const View& view, const Vertex v[3], int64_t* px0, int64_t* px1, int64_t* py0,
-               int64_t* py1) {
-  int64_t min_x = v[0].x;
-  int64_t max_x = min_x;
-  int64_t min_y = v[0].y;
-  int64_t max_y = min_y;
-  for (int k = 1; k < 3; ++k) {
-    if (v[k].x < min_x) min_x = v[k].x;
-    if (v[k].x > max_x) max_x = v[k].x;
-    if (v[k].y < min_y) min_y = v[k].y;
-    if (v[k].y > max_y) max_y = v[k].y;
-  }
-  *px0 = std::max<int64_t>(-floor_subpixel(-(min_x - kSubpixel / 2)), view.x0);
-  *px1 = std::min<int64_t>(floor_subpixel(max_x - kSubpixel / 2), view.x1 - 1);
-  *py0 = std::max<int64_t>(-floor_subpixel(-(min_y - kSubpixel / 2)), view.y0);
-  *py1 = std::min<int64_t>(floor_subpixel(max_y - kSubpixel / 2), view.y1 - 1);
-  return *px0 <= *px1 && *py0 <= *py1;
+// with fixed-point corners (x[k], y[k]) and in the view's tile: false when there are none (the
+// triangle draws nothing).
+inline bool pixel_box(const View& view, const int64_t x[3], const int64_t y[3], PixelBox* box) {
+  const int64_t min_x = std::min(std::min(x[0], x[1]), x[2]);
+  const int64_t max_x = std::max(std::max(x[0], x[1]), x[2]);
+  const int64_t min_y = std::min(std::min(y[0], y[1]), y[2]);
+  const int64_t max_y = std::max(std::max(y[0], y[1]), y[2]);
+  box->x0 = std::max<int64_t>(-floor_subpixel(-(min_x - kSubpixel / 2)), view.x0);
+  box->x1 = std::min<int64_t>(floor_subpixel(max_x - kSubpixel / 2), view.x1 - 1);
+  box->y0 = std::max<int64_t>(-floor_subpixel(-(min_y - kSubpixel / 2)), view.y0);
+  box->y1 = std::min<int64_t>(floor_subpixel(max_y - kSubpixel / 2), view.y1 - 1);
+  return box->x0 <= box->x1 && box->y0 <= box->y1;
 }
 
-void draw_triangle(const Frame& f, const View& view, const Layer& layer, const RenderMesh& item,
-                   Vertex v[3], const uint8_t flat_rgb[3]) {
-  int64_t area = (v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[1].y - v[0].y) * (v[2].x - v[0].x);
-  if (area == 0) return;
+// Draws the triangle `v` of signed fixed-point area `area` (not 0) over the pixels of `box`
+// (pixel_box: not empty).
+void draw_triangle(const Frame& f, const Layer& layer, const RenderMesh& item, Vertex v[3],
+                   int64_t area, const PixelBox& box, const uint8_t flat_rgb[3]) {
   if (area < 0) {
     const Vertex t = v[1];
     v[1] = v[2];
     v[2] = t;
     area = -area;
   }
-  int64_t px0 = 0, px1 = 0, py0 = 0, py1 = 0;
-  if (!pixel_box(view, v, &px0, &px1, &py0, &py1)) return;
+  const int64_t px0 = box.x0, px1 = box.x1, py0 = box.y0, py1 = box.y1;
 
   // w0 is opposite v0 (edge v1->v2), and so on; positive inside.
   const Vertex& a = v[0];
@@ -253,11 +251,11 @@ void draw_mesh_view(const MeshJob& job, uint32_t view_index, uint32_t slot) {
   const Mesh& mesh = *item.mesh;
   const Layer& layer = item.alpha == 255 ? f.opaque : f.overlay;
   if (mesh.triangles.empty()) return;  // framed (frame_views), nothing to draw
-  const Vec3* vertices = mesh.vertices.data();
+  const Vec3* positions = job.positions;
   const size_t vertex_count = mesh.vertices.size();
   Projected* projected = job.projected + static_cast<size_t>(slot) * vertex_count;
   for (size_t i = 0; i < vertex_count; ++i) {
-    projected[i] = project(f, view, placed(item, vertices[i]));
+    projected[i] = project(f, view, positions[i]);
     if (job.normals != nullptr) {
       const float* n = job.normals + i * 3;
       const Vec3 normal(static_cast<double>(n[0]), static_cast<double>(n[1]),
@@ -270,28 +268,29 @@ void draw_mesh_view(const MeshJob& job, uint32_t view_index, uint32_t slot) {
   const size_t triangle_count = mesh.triangles.size();
   for (size_t t = 0; t < triangle_count; ++t) {
     const Triangle& tri = mesh.triangles[t];
+    const Projected& q0 = projected[tri.v[0]];
+    const Projected& q1 = projected[tri.v[1]];
+    const Projected& q2 = projected[tri.v[2]];
+    const int64_t x[3] = {q0.x, q1.x, q2.x}, y[3] = {q0.y, q1.y, q2.y};
+    // Quick reject: zero area in the fixed grid (also covers edge-on faces).
+    const int64_t area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
+    if (area == 0) continue;
+    // No pixel centre in its box: nothing to light or draw (most triangles of a fine mesh).
+    PixelBox box;
+    if (!pixel_box(view, x, y, &box)) continue;
     Vertex v[3];
     for (int k = 0; k < 3; ++k) {
       const Projected& q = projected[tri.v[k]];
-      v[k].x = q.x;
-      v[k].y = q.y;
+      v[k].x = x[k];
+      v[k].y = y[k];
       v[k].depth = static_cast<double>(q.depth);
       v[k].intensity = static_cast<double>(q.intensity);
       v[k].scalar = 0;
     }
-    // Quick reject: zero area in the fixed grid (also covers edge-on faces).
-    const int64_t area =
-        (v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[1].y - v[0].y) * (v[2].x - v[0].x);
-    if (area == 0) continue;
-    // No pixel centre in its box: nothing to light or draw (most triangles of a fine mesh).
-    int64_t px0 = 0, px1 = 0, py0 = 0, py1 = 0;
-    if (!pixel_box(view, v, &px0, &px1, &py0, &py1)) continue;
     uint8_t flat_rgb[3] = {item.rgb[0], item.rgb[1], item.rgb[2]};
     if (job.normals == nullptr) {
-      const Vec3 p0 = placed(item, vertices[tri.v[0]]);
-      const Vec3 p1 = placed(item, vertices[tri.v[1]]);
-      const Vec3 p2 = placed(item, vertices[tri.v[2]]);
-      const Vec3 normal = cross(p1 - p0, p2 - p0);
+      const Vec3& p0 = positions[tri.v[0]];
+      const Vec3 normal = cross(positions[tri.v[1]] - p0, positions[tri.v[2]] - p0);
       const double len = length(normal);
       const double intensity = len > 0 ? lambert(normal, len, view.light) : kAmbient;
       for (int k = 0; k < 3; ++k) v[k].intensity = intensity;
@@ -300,7 +299,7 @@ void draw_mesh_view(const MeshJob& job, uint32_t view_index, uint32_t slot) {
     if (item.scalars != nullptr) {
       for (int k = 0; k < 3; ++k) v[k].scalar = item.scalars[tri.v[k]];
     }
-    draw_triangle(f, view, layer, item, v, flat_rgb);
+    draw_triangle(f, layer, item, v, area, box, flat_rgb);
   }
 }
 
@@ -316,6 +315,18 @@ Status validate(Span<const RenderMesh> meshes, const RenderOptions& o) {
   for (uint32_t i = 0; i < o.view_count; ++i) {
     if (static_cast<uint8_t>(o.views[i]) > static_cast<uint8_t>(RenderView::kIso)) {
       return make_error(StatusCode::kInvalidArgument, "render view ", i, " is not a known view");
+    }
+  }
+  if (o.framing != nullptr) {
+    const RenderFraming& fr = *o.framing;
+    bool finite = is_finite(fr.pixels_per_mm) && fr.pixels_per_mm > 0;
+    for (uint32_t i = 0; i < o.view_count; ++i) {
+      finite = finite && is_finite(fr.centre_u[i]) && is_finite(fr.centre_v[i]);
+    }
+    if (!finite) {
+      return Status::error(StatusCode::kInvalidArgument,
+                           "render framing: the scale must be finite and > 0 and every view's "
+                           "centre finite");
     }
   }
   for (size_t m = 0; m < meshes.size(); ++m) {
@@ -413,6 +424,10 @@ uint64_t render_bound(uint32_t width, uint32_t height, uint64_t largest_mesh_ver
   if (!checked_mul(pixels, 15, &total) || !checked_add(total, 5 * 16, &total)) {
     return UINT64_MAX;
   }
+  // A transform: the moved vertices, 24 bytes each.
+  if (!checked_mul(largest_mesh_vertices, 24, &part) || !checked_add(total, part + 16, &total)) {
+    return UINT64_MAX;
+  }
   // Gouraud: 3 floats a vertex of the mesh being drawn.
   if (!checked_mul(largest_mesh_vertices, 12, &part) || !checked_add(total, part + 16, &total)) {
     return UINT64_MAX;
@@ -455,10 +470,13 @@ Status lay_out(const RenderOptions& options, Layout* l) {
 }
 
 // Framing: each view's tile and its projected box of all vertices; one scale for all views.
+// Each vertex is moved once and projected into every view (the boxes are accumulated in vertex
+// order per view, so the same values as one pass per view). With options.framing the given
+// centres and scale are used and the vertices are not read.
 void frame_views(Span<const RenderMesh> meshes, const RenderOptions& options, const Layout& l,
                  Frame* frame) {
-  double scale = 0;
-  for (uint32_t vi = 0; vi < options.view_count; ++vi) {
+  const uint32_t view_count = options.view_count;
+  for (uint32_t vi = 0; vi < view_count; ++vi) {
     View& view = frame->views[vi];
     view.basis = view_basis(options.views[vi]);
     view.light = view_light(view.basis);
@@ -469,27 +487,44 @@ void frame_views(Span<const RenderMesh> meshes, const RenderOptions& options, co
     view.y1 = view.y0 + l.tile_h;
     view.pixel_x = static_cast<double>(view.x0) + 0.5 * l.tile_w;
     view.pixel_y = static_cast<double>(view.y0) + 0.5 * l.tile_h;
-    bool any = false;
-    double lo_u = 0, hi_u = 0, lo_v = 0, hi_v = 0;
-    for (const RenderMesh& item : meshes) {
-      for (const Vec3& vertex : item.mesh->vertices) {
-        const Vec3 p = placed(item, vertex);
-        const double u = dot(p, view.basis.right), v = dot(p, view.basis.up);
-        if (!any) {
-          lo_u = hi_u = u;
-          lo_v = hi_v = v;
-          any = true;
-        }
-        if (u < lo_u) lo_u = u;
-        if (u > hi_u) hi_u = u;
-        if (v < lo_v) lo_v = v;
-        if (v > hi_v) hi_v = v;
-      }
+  }
+  if (options.framing != nullptr) {
+    for (uint32_t vi = 0; vi < view_count; ++vi) {
+      frame->views[vi].centre_u = options.framing->centre_u[vi];
+      frame->views[vi].centre_v = options.framing->centre_v[vi];
     }
-    view.centre_u = 0.5 * lo_u + 0.5 * hi_u;
-    view.centre_v = 0.5 * lo_v + 0.5 * hi_v;
-    const double fits[2] = {hi_u - lo_u > 0 ? kMargin * l.tile_w / (hi_u - lo_u) : 0,
-                            hi_v - lo_v > 0 ? kMargin * l.tile_h / (hi_v - lo_v) : 0};
+    frame->scale = options.framing->pixels_per_mm;
+    return;
+  }
+  bool any = false;
+  double lo_u[kRenderMaxViews] = {}, hi_u[kRenderMaxViews] = {};
+  double lo_v[kRenderMaxViews] = {}, hi_v[kRenderMaxViews] = {};
+  for (const RenderMesh& item : meshes) {
+    for (const Vec3& vertex : item.mesh->vertices) {
+      const Vec3 p = placed(item, vertex);
+      for (uint32_t vi = 0; vi < view_count; ++vi) {
+        const Basis& basis = frame->views[vi].basis;
+        const double u = dot(p, basis.right), v = dot(p, basis.up);
+        if (!any) {
+          lo_u[vi] = hi_u[vi] = u;
+          lo_v[vi] = hi_v[vi] = v;
+        }
+        if (u < lo_u[vi]) lo_u[vi] = u;
+        if (u > hi_u[vi]) hi_u[vi] = u;
+        if (v < lo_v[vi]) lo_v[vi] = v;
+        if (v > hi_v[vi]) hi_v[vi] = v;
+      }
+      any = true;
+    }
+  }
+  double scale = 0;
+  for (uint32_t vi = 0; vi < view_count; ++vi) {
+    View& view = frame->views[vi];
+    view.centre_u = 0.5 * lo_u[vi] + 0.5 * hi_u[vi];
+    view.centre_v = 0.5 * lo_v[vi] + 0.5 * hi_v[vi];
+    const double du = hi_u[vi] - lo_u[vi], dv = hi_v[vi] - lo_v[vi];
+    const double fits[2] = {du > 0 ? kMargin * l.tile_w / du : 0,
+                            dv > 0 ? kMargin * l.tile_h / dv : 0};
     for (double s : fits) {
       if (s > 0 && (scale == 0 || s < scale)) scale = s;
     }
@@ -497,10 +532,9 @@ void frame_views(Span<const RenderMesh> meshes, const RenderOptions& options, co
   frame->scale = scale > 0 ? scale : 1;
 }
 
-// Gouraud: area-weighted vertex normals of one mesh where it is drawn (3 floats a vertex),
-// from the arena.
-Status vertex_normals(Arena& arena, const RenderMesh& item, const float** out) {
-  const Mesh& mesh = *item.mesh;
+// Gouraud: area-weighted vertex normals of one mesh at `positions` (where it is drawn; 3
+// floats a vertex), from the arena.
+Status vertex_normals(Arena& arena, const Mesh& mesh, const Vec3* positions, const float** out) {
   const size_t n = mesh.vertices.size();
   *out = nullptr;
   if (n == 0) return Status::ok();
@@ -508,9 +542,8 @@ Status vertex_normals(Arena& arena, const RenderMesh& item, const float** out) {
   if (nv == nullptr) return arena.exhausted_status();
   std::memset(nv, 0, n * 3 * sizeof(float));
   for (const Triangle& t : mesh.triangles) {
-    const Vec3 p0 = placed(item, mesh.vertices[t.v[0]]);
-    const Vec3 c =
-        cross(placed(item, mesh.vertices[t.v[1]]) - p0, placed(item, mesh.vertices[t.v[2]]) - p0);
+    const Vec3& p0 = positions[t.v[0]];
+    const Vec3 c = cross(positions[t.v[1]] - p0, positions[t.v[2]] - p0);
     for (int k = 0; k < 3; ++k) {
       float* q = nv + static_cast<size_t>(t.v[k]) * 3;
       q[0] += static_cast<float>(c.x);
@@ -519,6 +552,20 @@ Status vertex_normals(Arena& arena, const RenderMesh& item, const float** out) {
     }
   }
   *out = nv;
+  return Status::ok();
+}
+
+// The vertices of `item` where they are drawn: the mesh's own, or (with a transform) a moved
+// copy in the arena, made once for all views.
+Status drawn_positions(Arena& arena, const RenderMesh& item, const Vec3** out) {
+  const Mesh& mesh = *item.mesh;
+  *out = mesh.vertices.data();
+  if (item.transform == nullptr || mesh.vertices.empty()) return Status::ok();
+  const size_t n = mesh.vertices.size();
+  Vec3* moved = arena.allocate_array<Vec3>(n);
+  if (moved == nullptr) return arena.exhausted_status();
+  for (size_t i = 0; i < n; ++i) moved[i] = item.transform->apply_point(mesh.vertices[i]);
+  *out = moved;
   return Status::ok();
 }
 
@@ -611,9 +658,11 @@ Status render_meshes(const Context& ctx, Span<const RenderMesh> meshes,
     MeshJob job;
     job.frame = &frame;
     job.item = &meshes[m];
-    ArenaScope mesh_scope(arena);  // the normals and projections of this mesh
+    ArenaScope mesh_scope(arena);  // the moved vertices, normals and projections of this mesh
+    SPLINTCORE_RETURN_IF_ERROR(drawn_positions(arena, meshes[m], &job.positions));
     if (options.shading == RenderShading::kGouraud) {
-      SPLINTCORE_RETURN_IF_ERROR(vertex_normals(arena, meshes[m], &job.normals));
+      SPLINTCORE_RETURN_IF_ERROR(
+          vertex_normals(arena, *meshes[m].mesh, job.positions, &job.normals));
     }
     const size_t vertex_count = meshes[m].mesh->vertices.size();
     // The views in batches of as many as the executor runs at once: the projections of a
@@ -644,6 +693,11 @@ Status render_meshes(const Context& ctx, Span<const RenderMesh> meshes,
   out->height = height;
   out->rgb = rgb;
   out->pixels_per_mm = frame.scale;
+  out->framing.pixels_per_mm = frame.scale;
+  for (uint32_t vi = 0; vi < view_count; ++vi) {
+    out->framing.centre_u[vi] = frame.views[vi].centre_u;
+    out->framing.centre_v[vi] = frame.views[vi].centre_v;
+  }
   out->tile_width = layout.tile_w;
   out->tile_height = layout.tile_h;
   out->columns = layout.columns;

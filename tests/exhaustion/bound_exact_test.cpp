@@ -218,11 +218,13 @@ TEST(BoundExact, RenderAndPng) {
   for (const Input& in : inputs()) {
     Welded w(in);
     for (uint32_t side : {1u, 64u, 640u}) {
-      // The mesh opaque and, drawn again, translucent with Gouraud shading: the bound's case.
+      // The mesh opaque and, drawn again moved, translucent with Gouraud shading: the bound's case.
       RenderMesh items[2];
       items[0].mesh = &w.mesh;
       items[1].mesh = &w.mesh;
       items[1].alpha = 100;
+      const RigidTransform move = RigidTransform::translation({0.5, -0.25, 1});
+      items[1].transform = &move;  // the moved copy of its vertices
       RenderOptions options;
       options.width = side;
       options.height = side;

@@ -607,6 +607,73 @@ TEST(Render, SameBytesTwiceAndWithThreads) {
   EXPECT_EQ(h, 240u);
 }
 
+// A mesh drawn with a transform gives the bytes of its moved copy (flat and Gouraud), and a
+// second pass given the first's framing draws into the same places as a pass that frames the
+// same vertices itself.
+TEST(Render, TransformIsTheMovedCopyAndFramingIsReused) {
+  test::TestArena t(256 << 20);
+  Mesh torus;
+  SPLINTCORE_ASSERT_OK(test::mesh_from_soup(t.arena, shapes::torus(40, 20, 10, 3), &torus));
+  Mesh cube = cube_mesh(t.arena, -4, 4);
+  const Vec3 axis = Vec3(1, 2, 3) * (1 / length(Vec3(1, 2, 3)));
+  const RigidTransform move =
+      compose(RigidTransform::translation({3, -2, 5}), rotation_about_axis({1, 2, 0}, axis, 0.7));
+  Mesh moved;
+  SPLINTCORE_ASSERT_OK(test::mesh_from_soup(t.arena, shapes::torus(40, 20, 10, 3), &moved));
+  for (size_t i = 0; i < moved.vertices.size(); ++i) {
+    moved.vertices[i] = move.apply_point(torus.vertices[i]);
+  }
+  for (RenderShading shading : {RenderShading::kFlat, RenderShading::kGouraud}) {
+    RenderOptions o;
+    o.width = 200;
+    o.height = 160;
+    o.shading = shading;
+    RenderMesh a[2], b[2];
+    a[0].mesh = b[0].mesh = &cube;
+    a[1].mesh = &torus;
+    a[1].transform = &move;
+    a[1].alpha = b[1].alpha = 120;
+    b[1].mesh = &moved;
+    ArenaScope scope(t.arena);
+    RenderImage ia, ib;
+    SPLINTCORE_ASSERT_OK(render_meshes(Context(&t.arena), Span<const RenderMesh>(a, 2), o, &ia));
+    SPLINTCORE_ASSERT_OK(render_meshes(Context(&t.arena), Span<const RenderMesh>(b, 2), o, &ib));
+    ASSERT_EQ(0, std::memcmp(ia.rgb, ib.rgb, size_t{200} * 160 * 3));
+    EXPECT_EQ(ia.framing.pixels_per_mm, ia.pixels_per_mm);
+
+    // The cube alone in the framing of (cube + moved torus) = the cube with the torus's
+    // vertices but no triangles, framed by itself.
+    Mesh vertices_only;
+    SPLINTCORE_ASSERT_OK(
+        test::mesh_from_soup(t.arena, shapes::torus(40, 20, 10, 3), &vertices_only));
+    for (size_t i = 0; i < vertices_only.vertices.size(); ++i) {
+      vertices_only.vertices[i] = moved.vertices[i];
+    }
+    vertices_only.triangles.clear();
+    RenderMesh c[2];
+    c[0].mesh = &cube;
+    c[1].mesh = &vertices_only;
+    RenderImage ic, id;
+    SPLINTCORE_ASSERT_OK(render_meshes(Context(&t.arena), Span<const RenderMesh>(c, 2), o, &ic));
+    RenderOptions given = o;
+    given.framing = &ia.framing;
+    SPLINTCORE_ASSERT_OK(
+        render_meshes(Context(&t.arena), Span<const RenderMesh>(c, 1), given, &id));
+    EXPECT_EQ(0, std::memcmp(ic.rgb, id.rgb, size_t{200} * 160 * 3));
+    EXPECT_EQ(id.framing.pixels_per_mm, ia.framing.pixels_per_mm);
+
+    RenderFraming bad = ia.framing;
+    bad.pixels_per_mm = 0;
+    given.framing = &bad;
+    const Status s = render_meshes(Context(&t.arena), Span<const RenderMesh>(c, 1), given, &id);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+    bad.pixels_per_mm = ia.framing.pixels_per_mm;
+    bad.centre_v[3] = std::nan("");
+    EXPECT_EQ(render_meshes(Context(&t.arena), Span<const RenderMesh>(c, 1), given, &id).code(),
+              StatusCode::kInvalidArgument);
+  }
+}
+
 TEST(Render, RejectsBadArgumentsAndMeshes) {
   test::TestArena t(16 << 20);
   Context ctx(&t.arena);

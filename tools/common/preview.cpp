@@ -115,17 +115,9 @@ Status render_with_marks(const Context& ctx, const std::vector<RenderMesh>& scen
   m.mesh = marks;
   for (int k = 0; k < 3; ++k) m.rgb[k] = kMarkRgb[k];
   second.push_back(m);
-  // The scene's vertices without its triangles, moved as drawn: the same framing, nothing
-  // drawn, nothing hidden (drawing it with weight 0 gave the same pixels at the cost of a
-  // second render of the jaws).
-  std::vector<Mesh> framing(scene.size());
-  for (size_t i = 0; i < scene.size(); ++i) {
-    framing[i] = mesh_view(scene[i].mesh->vertices.span(), Span<const Triangle>());
-    RenderMesh r = scene[i];
-    r.mesh = &framing[i];
-    second.push_back(r);
-  }
+  // The marks alone, framed as the first pass framed the scene (nothing hides them).
   RenderOptions o = options;
+  o.framing = &image->framing;
   for (int k = 0; k < 3; ++k) o.background[k] = 0;
   ArenaScope scope(*ctx.arena);
   RenderImage marked;

@@ -58,8 +58,8 @@ std::string sha256_hex(const std::vector<uint8_t>& bytes);
 // from copies moved by it (in ctx.arena, returned; 24 bytes a vertex and 12 a triangle more).
 // As write_png_file; kInvalidArgument when moves has another size than jaws.
 // With `marks` (may be null) the picks and the arch are drawn over everything, seen through
-// the splint and the jaws: the scene is drawn a second time with the marks opaque and the rest
-// invisible (translucent, weight 0: the same framing), and the marks' pixels are copied over.
+// the splint and the jaws: the marks are drawn alone in a second pass given the first pass's
+// framing (RenderOptions::framing), and their pixels are copied over.
 Status write_preview(const Context& ctx, const Mesh& splint, const std::vector<const Mesh*>& jaws,
                      const std::vector<RigidTransform>& moves, const std::string& path,
                      uint32_t width, uint32_t height, PreviewInfo* info,
