@@ -166,10 +166,35 @@ inline bool pixel_box(const View& view, const int64_t x[3], const int64_t y[3], 
   return box->x0 <= box->x1 && box->y0 <= box->y1;
 }
 
+double lambert(const Vec3& normal, double normal_length, const Vec3& light) {
+  double c = dot(normal, light) / normal_length;
+  if (c < 0) c = -c;  // both sides lit: open scans are seen from inside too
+  if (c > 1) c = 1;
+  return kAmbient + kDiffuse * c;
+}
+
+// Flat shading of one triangle, computed when its first pixel is written (most triangles of a
+// fine mesh write none: hidden, or no pixel centre inside).
+struct FlatLight {
+  const Vec3* p[3];
+  const Vec3* light;
+  const uint8_t* rgb;
+  bool ready = false;
+  double intensity = 0;
+  uint8_t shaded[3] = {0, 0, 0};
+  void prepare() {
+    const Vec3 normal = cross(*p[1] - *p[0], *p[2] - *p[0]);
+    const double len = length(normal);
+    intensity = len > 0 ? lambert(normal, len, *light) : kAmbient;
+    for (int k = 0; k < 3; ++k) shaded[k] = shade(rgb[k], intensity);
+    ready = true;
+  }
+};
+
 // Draws the triangle `v` of signed fixed-point area `area` (not 0) over the pixels of `box`
-// (pixel_box: not empty).
+// (pixel_box: not empty). `flat`: the triangle's flat shading (null with Gouraud shading).
 void draw_triangle(const Frame& f, const Layer& layer, const RenderMesh& item, Vertex v[3],
-                   int64_t area, const PixelBox& box, const uint8_t flat_rgb[3]) {
+                   int64_t area, const PixelBox& box, FlatLight* flat) {
   if (area < 0) {
     const Vertex t = v[1];
     v[1] = v[2];
@@ -191,14 +216,15 @@ void draw_triangle(const Frame& f, const Layer& layer, const RenderMesh& item, V
   const int64_t step_x0 = -(c.y - b.y) * kSubpixel, step_y0 = (c.x - b.x) * kSubpixel;
   const int64_t step_x1 = -(a.y - c.y) * kSubpixel, step_y1 = (a.x - c.x) * kSubpixel;
   const int64_t step_x2 = -(b.y - a.y) * kSubpixel, step_y2 = (b.x - a.x) * kSubpixel;
-  const double inv_area = 1.0 / static_cast<double>(area);
-  const bool gouraud = f.options->shading == RenderShading::kGouraud;
+  double inv_area = 0;  // 1 / area, at the first pixel inside
+  const bool gouraud = flat == nullptr;
   const bool scalars = item.scalars != nullptr;
   const size_t width = f.width;
   for (int64_t py = py0; py <= py1; ++py) {
     int64_t w0 = row0, w1 = row1, w2 = row2;
     for (int64_t px = px0; px <= px1; ++px) {
       if ((w0 + bias0) >= 0 && (w1 + bias1) >= 0 && (w2 + bias2) >= 0) {
+        if (inv_area == 0) inv_area = 1.0 / static_cast<double>(area);
         const double l0 = static_cast<double>(w0), l1 = static_cast<double>(w1),
                      l2 = static_cast<double>(w2);
         const double z = (l0 * a.depth + l1 * b.depth + l2 * c.depth) * inv_area;
@@ -208,14 +234,15 @@ void draw_triangle(const Frame& f, const Layer& layer, const RenderMesh& item, V
           layer.depth[index] = zf;
           if (layer.alpha != nullptr) layer.alpha[index] = item.alpha;
           uint8_t* out = layer.rgb + index * 3;
+          if (!gouraud && !flat->ready) flat->prepare();
           if (!gouraud && !scalars) {
-            out[0] = flat_rgb[0];
-            out[1] = flat_rgb[1];
-            out[2] = flat_rgb[2];
+            out[0] = flat->shaded[0];
+            out[1] = flat->shaded[1];
+            out[2] = flat->shaded[2];
           } else {
             const double intensity =
                 gouraud ? (l0 * a.intensity + l1 * b.intensity + l2 * c.intensity) * inv_area
-                        : a.intensity;
+                        : flat->intensity;
             uint8_t base[3] = {item.rgb[0], item.rgb[1], item.rgb[2]};
             if (scalars) {
               const double s = (l0 * a.scalar + l1 * b.scalar + l2 * c.scalar) * inv_area;
@@ -235,13 +262,6 @@ void draw_triangle(const Frame& f, const Layer& layer, const RenderMesh& item, V
     row1 += step_y1;
     row2 += step_y2;
   }
-}
-
-double lambert(const Vec3& normal, double normal_length, const Vec3& light) {
-  double c = dot(normal, light) / normal_length;
-  if (c < 0) c = -c;  // both sides lit: open scans are seen from inside too
-  if (c > 1) c = 1;
-  return kAmbient + kDiffuse * c;
 }
 
 void draw_mesh_view(const MeshJob& job, uint32_t view_index, uint32_t slot) {
@@ -287,19 +307,18 @@ void draw_mesh_view(const MeshJob& job, uint32_t view_index, uint32_t slot) {
       v[k].intensity = static_cast<double>(q.intensity);
       v[k].scalar = 0;
     }
-    uint8_t flat_rgb[3] = {item.rgb[0], item.rgb[1], item.rgb[2]};
-    if (job.normals == nullptr) {
-      const Vec3& p0 = positions[tri.v[0]];
-      const Vec3 normal = cross(positions[tri.v[1]] - p0, positions[tri.v[2]] - p0);
-      const double len = length(normal);
-      const double intensity = len > 0 ? lambert(normal, len, view.light) : kAmbient;
-      for (int k = 0; k < 3; ++k) v[k].intensity = intensity;
-      for (int k = 0; k < 3; ++k) flat_rgb[k] = shade(item.rgb[k], intensity);
-    }
     if (item.scalars != nullptr) {
       for (int k = 0; k < 3; ++k) v[k].scalar = item.scalars[tri.v[k]];
     }
-    draw_triangle(f, layer, item, v, area, box, flat_rgb);
+    if (job.normals != nullptr) {
+      draw_triangle(f, layer, item, v, area, box, nullptr);
+      continue;
+    }
+    FlatLight flat;
+    for (int k = 0; k < 3; ++k) flat.p[k] = positions + tri.v[k];
+    flat.light = &view.light;
+    flat.rgb = item.rgb;
+    draw_triangle(f, layer, item, v, area, box, &flat);
   }
 }
 
