@@ -1431,18 +1431,24 @@ void bench_dicom_input(Harness& h, Arena& arena, const std::string& file) {
   CtMemoryFile one{"slice.dcm", bytes.data(), bytes.size()};
   CtInfo info;
   uint64_t voxels = 0;
+  std::vector<uint8_t> hu;  // the last run's HU, hashed: the same figure before and after a change
   const Result r = h.measure("dicom_read_slice", bytes.size(), arena, [&](Arena& a) {
     CtMemoryFiles m{&one, 1, 0, {}};
     Context ctx(&a);
     CtVolume volume;
     const Status st = read_dicom_series(ctx, ct_memory_series(&m), CtReadOptions(), &volume, &info);
     voxels = volume.voxel_count();
+    if (st.is_ok()) {
+      const uint8_t* v = reinterpret_cast<const uint8_t*>(volume.hu);
+      hu.assign(v, v + voxels * sizeof(int16_t));
+    }
     return st;
   });
   if (r.median > 0) {
-    std::printf("# dicom_read_slice: %s, %llu voxels, %.2f ms a slice, %.1f Mvoxel/s\n",
-                info.transfer_syntax, static_cast<unsigned long long>(voxels), 1e3 * r.median,
-                static_cast<double>(voxels) / r.median / 1e6);
+    std::printf(
+        "# dicom_read_slice: %s, %llu voxels, %.2f ms a slice, %.1f Mvoxel/s, HU SHA-256 %s\n",
+        info.transfer_syntax, static_cast<unsigned long long>(voxels), 1e3 * r.median,
+        static_cast<double>(voxels) / r.median / 1e6, cli::sha256_hex(hu).c_str());
   }
 }
 
