@@ -652,6 +652,57 @@ void bench_boolean_realdata(Harness& h, Arena& arena, const std::string& dir) {
 // CT reconstruction at scan size (issue 7): a 512 x 512 x 300 skull phantom (0.3 mm voxels)
 // through threshold, competitive region growing and reconstruction of both jaws, in an arena
 // of a stated cap that also holds the volume (as the CT readers leave it).
+// The CT phantom at the issue's size: 512 x 512 x 300 voxels of 0.3 mm.
+Status init_phantom_512(cli::CtPhantom* phantom) {
+  cli::CtPhantomOptions po;
+  po.nx = 512;
+  po.ny = 512;
+  po.nz = 300;
+  po.spacing = Vec3{0.3, 0.3, 0.3};
+  return phantom->init(po);
+}
+
+// The phantom's jaws out of a CT volume as `splintcore reconstruct` does: the HU window
+// (300..4000) thresholded, both jaws grown from the phantom's seeds in competition, each meshed
+// (in ctx's arena, returned after each jaw). lap(i) after each stage: 0 threshold, 1 region
+// growing, 2 and 3 the maxilla and mandible meshed.
+struct PhantomJaws {
+  uint64_t in_window = 0, voxels[2] = {0, 0}, triangles[2] = {0, 0};
+  uint32_t layers_per_tile = 0;
+};
+Status reconstruct_phantom_jaws(const Context& ctx, const CtVolume& volume,
+                                const cli::CtPhantom& phantom, PhantomJaws* out,
+                                const std::function<void(int)>& lap) {
+  LabelVolume labels;
+  ThresholdStats ts;
+  SPLINTCORE_RETURN_IF_ERROR(threshold_window(ctx, volume, HuWindow{300, 4000}, &labels, &ts));
+  lap(0);
+  RegionSeed seeds[2];
+  seeds[0].label = 1;
+  seeds[0].patient_mm = phantom.seed_maxilla();
+  seeds[1].label = 2;
+  seeds[1].patient_mm = phantom.seed_mandible();
+  RegionStats rs;
+  SPLINTCORE_RETURN_IF_ERROR(grow_regions(ctx, volume, Span<const RegionSeed>(seeds, 2),
+                                          RegionGrowOptions{}, &labels, &rs));
+  lap(1);
+  out->in_window = ts.in_window;
+  out->voxels[0] = rs.voxels[1];
+  out->voxels[1] = rs.voxels[2];
+  for (int jaw = 0; jaw < 2; ++jaw) {
+    ArenaScope scope(*ctx.arena);
+    Mesh mesh(ctx.arena);
+    ReconstructOptions ro;
+    ro.label = static_cast<uint8_t>(jaw + 1);
+    ReconstructStats st;
+    SPLINTCORE_RETURN_IF_ERROR(reconstruct_region(ctx, volume, labels, ro, &mesh, &st));
+    out->triangles[jaw] = mesh.triangles.size();
+    out->layers_per_tile = st.marching.layers_per_tile;
+    lap(2 + jaw);
+  }
+  return Status::ok();
+}
+
 void bench_ct_reconstruct(Harness& h, Arena& arena) {
   const char* name = "ct_reconstruct_512";
   if (!h.wanted(name)) return;
@@ -665,13 +716,8 @@ void bench_ct_reconstruct(Harness& h, Arena& arena) {
   }
   {
     Arena ct_arena(slice, static_cast<size_t>(kCap));
-    cli::CtPhantomOptions po;
-    po.nx = 512;
-    po.ny = 512;
-    po.nz = 300;
-    po.spacing = Vec3{0.3, 0.3, 0.3};
     cli::CtPhantom phantom;
-    Status s = phantom.init(po);
+    Status s = init_phantom_512(&phantom);
     CtVolume volume;
     const double t0 = monotonic_seconds();
     if (s.is_ok()) {
@@ -733,34 +779,18 @@ void bench_ct_reconstruct(Harness& h, Arena& arena) {
         stage[i] = now - t;
         t = now;
       };
-      LabelVolume labels;
-      ThresholdStats ts;
-      SPLINTCORE_RETURN_IF_ERROR(threshold_window(ctx, volume, HuWindow{300, 4000}, &labels, &ts));
-      lap(0);
-      RegionSeed seeds[2];
-      seeds[0].label = 1;
-      seeds[0].patient_mm = phantom.seed_maxilla();
-      seeds[1].label = 2;
-      seeds[1].patient_mm = phantom.seed_mandible();
-      RegionStats rs;
-      SPLINTCORE_RETURN_IF_ERROR(grow_regions(ctx, volume, Span<const RegionSeed>(seeds, 2),
-                                              RegionGrowOptions{}, &labels, &rs));
-      lap(1);
-      window = ts.in_window;
-      voxels[0] = rs.voxels[1];
-      voxels[1] = rs.voxels[2];
-      for (int jaw = 0; jaw < 2; ++jaw) {
-        ArenaScope scope(a);
-        Mesh mesh(&a);
-        ReconstructOptions ro;
-        ro.label = static_cast<uint8_t>(jaw + 1);
-        ReconstructStats st;
-        SPLINTCORE_RETURN_IF_ERROR(reconstruct_region(ctx, volume, labels, ro, &mesh, &st));
-        Stages::report(&clock, "reconstruct: returned", 0, 0);
-        triangles[jaw] = mesh.triangles.size();
-        layers = st.marching.layers_per_tile;
-        lap(2 + jaw);
-      }
+      PhantomJaws jaws;
+      SPLINTCORE_RETURN_IF_ERROR(
+          reconstruct_phantom_jaws(ctx, volume, phantom, &jaws, [&](int stage_index) {
+            if (stage_index >= 2) Stages::report(&clock, "reconstruct: returned", 0, 0);
+            lap(stage_index);
+          }));
+      window = jaws.in_window;
+      voxels[0] = jaws.voxels[0];
+      voxels[1] = jaws.voxels[1];
+      triangles[0] = jaws.triangles[0];
+      triangles[1] = jaws.triangles[1];
+      layers = jaws.layers_per_tile;
       return Status::ok();
     });
     std::printf(
@@ -1468,13 +1498,8 @@ void bench_dicom_jpeg_series(Harness& h, Arena& arena) {
     return;
   }
   const std::string folder = std::string(dir) + "/series";
-  cli::CtPhantomOptions po;
-  po.nx = 512;
-  po.ny = 512;
-  po.nz = 300;
-  po.spacing = Vec3{0.3, 0.3, 0.3};
   cli::CtPhantom phantom;
-  Status s = phantom.init(po);
+  Status s = init_phantom_512(&phantom);
   const double t0 = monotonic_seconds();
   uint64_t compressed = 0;
   if (s.is_ok()) {
@@ -1515,30 +1540,12 @@ void bench_dicom_jpeg_series(Harness& h, Arena& arena) {
       SPLINTCORE_RETURN_IF_ERROR(cli::read_ct_path(ctx, folder, CtReadOptions{}, &volume, &info));
       syntax = info.transfer_syntax;
       lap(0);
-      LabelVolume labels;
-      ThresholdStats ts;
-      SPLINTCORE_RETURN_IF_ERROR(threshold_window(ctx, volume, HuWindow{300, 4000}, &labels, &ts));
-      lap(1);
-      RegionSeed seeds[2];
-      seeds[0].label = 1;
-      seeds[0].patient_mm = phantom.seed_maxilla();
-      seeds[1].label = 2;
-      seeds[1].patient_mm = phantom.seed_mandible();
-      RegionStats rs;
-      SPLINTCORE_RETURN_IF_ERROR(grow_regions(ctx, volume, Span<const RegionSeed>(seeds, 2),
-                                              RegionGrowOptions{}, &labels, &rs));
-      lap(2);
-      for (int jaw = 0; jaw < 2; ++jaw) {
-        ArenaScope scope(a);
-        Mesh mesh(&a);
-        ReconstructOptions ro;
-        ro.label = static_cast<uint8_t>(jaw + 1);
-        ro.round_to_float32 = true;
-        ReconstructStats st;
-        SPLINTCORE_RETURN_IF_ERROR(reconstruct_region(ctx, volume, labels, ro, &mesh, &st));
-        triangles[jaw] = mesh.triangles.size();
-      }
-      lap(3);
+      PhantomJaws jaws;
+      SPLINTCORE_RETURN_IF_ERROR(reconstruct_phantom_jaws(ctx, volume, phantom, &jaws, [&](int i) {
+        if (i != 2) lap(i == 3 ? 3 : i + 1);  // the two jaws as one stage
+      }));
+      triangles[0] = jaws.triangles[0];
+      triangles[1] = jaws.triangles[1];
       return Status::ok();
     });
     if (r.median > 0) {
