@@ -122,6 +122,17 @@ constexpr MqTable make_mq_table() {
 }
 constexpr MqTable kMq = make_mq_table();
 
+// The left shifts that set bit 15 of a in [1, 0x8000).
+SPLINTCORE_J2K_INLINE uint32_t renorm_shifts(uint32_t a) {
+#if defined(__GNUC__)
+  return static_cast<uint32_t>(__builtin_clz(a)) - 16;
+#else
+  uint32_t n = 0;
+  while (((a << n) & 0x8000) == 0) ++n;
+  return n;
+#endif
+}
+
 // DECODE (C.3.2) with its exchanges and RENORMD. Inline on purpose: the passes call it on a
 // local copy of the decoder, whose registers no store into the flags can then alias.
 SPLINTCORE_J2K_INLINE uint32_t mq_decode(MqDecoder& m, uint32_t context) {
@@ -150,12 +161,19 @@ SPLINTCORE_J2K_INLINE uint32_t mq_decode(MqDecoder& m, uint32_t context) {
       cx = e.next_mps;
     }
   }
-  do {  // RENORMD
-    if (m.ct == 0) mq_byte_in(m);
-    m.a <<= 1;
-    m.c <<= 1;
-    --m.ct;
-  } while ((m.a & 0x8000) == 0);
+  // RENORMD: the shifts that bring A to 0x8000 or more, as many at once as CT allows, a byte
+  // read in whenever CT runs out (the same order as bit by bit).
+  uint32_t n = renorm_shifts(m.a);
+  while (n > m.ct) {
+    m.a <<= m.ct;
+    m.c <<= m.ct;
+    n -= m.ct;
+    m.ct = 0;
+    mq_byte_in(m);
+  }
+  m.a <<= n;
+  m.c <<= n;
+  m.ct -= n;
   return d;
 }
 
