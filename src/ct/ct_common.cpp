@@ -786,5 +786,85 @@ Status read_text_volume(const Context& ctx, Reader& header, const ByteSource& he
   return Status::ok();
 }
 
+// ---- JPEG marker segments (T.81 Annex B) ----------------------------------------------------
+
+Status JpegMarkers::error(StatusCode code, const char* what, uint64_t at) const {
+  return make_error(code, codec, ": ", what).at_byte(at);
+}
+
+Status JpegMarkers::start(const char* stream) {
+  if (size < 2 || data[0] != 0xFF || data[1] != 0xD8) {
+    return make_error(StatusCode::kParseError, codec, ": not a ", stream, " stream (no SOI marker)")
+        .at_byte(0);
+  }
+  pos = 2;
+  return Status::ok();
+}
+
+Status JpegMarkers::next_marker(uint32_t* code, size_t* at) {
+  *at = pos;
+  if (pos >= size) return error(StatusCode::kTruncated, "data ends before EOI", size);
+  if (data[pos] != 0xFF) return error(StatusCode::kParseError, "expected a marker", pos);
+  while (pos < size && data[pos] == 0xFF) ++pos;
+  if (pos >= size) return error(StatusCode::kTruncated, "data ends inside a marker", size);
+  *code = data[pos++];
+  return Status::ok();
+}
+
+Status JpegMarkers::segment(size_t at, uint32_t* length, size_t* body) {
+  if (size - pos < 2) {
+    return error(StatusCode::kTruncated, "data ends inside a segment length", size);
+  }
+  *length = u16(pos);
+  if (*length < 2) return error(StatusCode::kParseError, "segment length under 2", at);
+  if (*length > size - pos) {
+    return error(StatusCode::kTruncated, "data ends inside a marker segment", size);
+  }
+  *body = pos + 2;
+  pos += *length;
+  return Status::ok();
+}
+
+Status JpegMarkers::frame(size_t at, const char* name, JpegFrameHeader* f) {
+  uint32_t length = 0;
+  size_t b = 0;
+  SPLINTCORE_RETURN_IF_ERROR(segment(at, &length, &b));
+  if (f->read) return error(StatusCode::kParseError, "a second SOF marker", at);
+  if (length < 8) {
+    return make_error(StatusCode::kParseError, codec, ": ", name, " segment too short").at_byte(at);
+  }
+  f->precision = u8(b);
+  f->rows = u16(b + 1);
+  f->columns = u16(b + 3);
+  const uint32_t components = u8(b + 5);
+  if (components != 1 || length != 8 + 3 * components) {
+    return make_error(StatusCode::kUnsupported, codec, ": ", name, " has ", components,
+                      " components (length must be 11): only one is supported, not colour")
+        .at_byte(at);
+  }
+  f->component = u8(b + 6);
+  if (f->precision < 2 || f->precision > 16) {
+    return make_error(StatusCode::kParseError, codec, ": ", name, " sample precision not in 2..16")
+        .at_byte(at);
+  }
+  f->read = true;
+  return Status::ok();
+}
+
+Status JpegMarkers::check_frame(size_t at, const char* name, const JpegFrameHeader& f,
+                                uint32_t rows, uint32_t columns, uint32_t max_precision) const {
+  if (f.rows != rows || f.columns != columns) {
+    return make_error(StatusCode::kParseError, codec, ": ", name, " image size ", f.columns, " x ",
+                      f.rows, " differs from the DICOM Columns x Rows")
+        .at_byte(at);
+  }
+  if (f.precision > max_precision) {
+    return make_error(StatusCode::kParseError, codec, ": ", name, " sample precision ", f.precision,
+                      " is over the DICOM Bits Allocated ", max_precision)
+        .at_byte(at);
+  }
+  return Status::ok();
+}
+
 }  // namespace ct_detail
 }  // namespace splintcore

@@ -156,6 +156,44 @@ Status read_text_volume(const Context& ctx, Reader& header, const ByteSource& he
                         const CtFileOpener* opener, const CtReadOptions& options,
                         const TextVolume& volume, CtInfo found, CtVolume* out, CtInfo* info);
 
+// ---- JPEG marker segments ------------------------------------------------------------------
+// The marker syntax of ITU-T T.81 Annex B (B.1.1.2 markers, any 0xFF fill bytes before them;
+// B.1.1.4 segment lengths; B.2.2 the frame header), which T.87 Annex C keeps for JPEG-LS:
+// shared by the JPEG lossless (jpeg_lossless.cpp) and JPEG-LS (jpeg_ls.cpp) decoders, and its
+// segment lengths by JPEG 2000 (T.800 A.1.3). Errors start with `codec` ("JPEG lossless",
+// "JPEG-LS", "JPEG 2000") and give the byte offset in data.
+
+// A frame header (SOFn) of one component.
+struct JpegFrameHeader {
+  uint32_t precision = 0, rows = 0, columns = 0, component = 0;
+  bool read = false;
+};
+
+// The walk over data[0, size): pos is the next byte to read.
+struct JpegMarkers {
+  const uint8_t* data;
+  size_t size;
+  const char* codec;
+  size_t pos = 0;
+
+  uint32_t u8(size_t at) const { return data[at]; }
+  uint32_t u16(size_t at) const { return (uint32_t{data[at]} << 8) | data[at + 1]; }
+  Status error(StatusCode code, const char* what, uint64_t at) const;
+  // The SOI marker at the start (pos moves past it); else "not a <stream> stream".
+  Status start(const char* stream);
+  // The marker at pos (after any 0xFF fill bytes): *code its second byte, *at its offset.
+  Status next_marker(uint32_t* code, size_t* at);
+  // The segment whose marker is at `at` (pos after the marker): its length (at least 2, the
+  // segment inside the data) and *body, its first byte after the length; pos moves past it.
+  Status segment(size_t at, uint32_t* length, size_t* body);
+  // A frame header (`name`: "SOF3", "SOF55") of one component, precision 2..16; a second one is
+  // an error. Sizes of 0 are the caller's to judge. kParseError, kUnsupported, kTruncated.
+  Status frame(size_t at, const char* name, JpegFrameHeader* f);
+  // The frame's size is the DICOM Columns x Rows, its precision at most Bits Allocated.
+  Status check_frame(size_t at, const char* name, const JpegFrameHeader& f, uint32_t rows,
+                     uint32_t columns, uint32_t max_precision) const;
+};
+
 }  // namespace ct_detail
 }  // namespace splintcore
 

@@ -13,7 +13,7 @@ namespace ct_detail {
 
 // The MQ arithmetic decoder (T.800 Annex C, the software conventions of C.3) over one
 // codeword segment data[0, size); past its end the decoder reads 0xFF bytes as C.3.4 does at
-// a marker. Contexts hold the state index (Table C.2) and the MPS in bit 7.
+// a marker. Contexts hold 2 x the state index (Table C.2) + the MPS.
 constexpr uint32_t kMqContexts = 19;
 struct MqDecoder {
   const uint8_t* data = nullptr;
@@ -27,9 +27,6 @@ struct MqDecoder {
   // state 3) and all-zero-neighbour significance (0, state 4) contexts.
   void reset_contexts();
   uint32_t decode(uint32_t context);  // DECODE (C.3.2): the decision, 0 or 1
-
- private:
-  void byte_in();  // BYTEIN (C.3.4)
 };
 
 // The bits of a packet header (B.10.1): most significant first; after a 0xFF byte the next
@@ -95,8 +92,9 @@ struct J2kTier1 {
   uint32_t magnitude[kJ2kMaxBlockSamples];
   int32_t coefficients[kJ2kMaxBlockSamples];  // j2k_decode_block's output for the caller
   uint8_t zero_context[4][256];               // Table D.1 per subband, by the 8 neighbour bits
+  uint8_t sign_context[256];  // Table D.3: the context, and in bit 7 whether the sign flips
 };
-void j2k_tier1_init(J2kTier1& t1);  // fills zero_context
+void j2k_tier1_init(J2kTier1& t1);  // fills zero_context and sign_context
 
 // Decodes one code-block into out[y * stride + x]: the signed coefficient times 2 (one
 // fractional bit: the midpoint of the last decoded bit plane, as C code decoders round). The

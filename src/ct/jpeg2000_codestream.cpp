@@ -14,6 +14,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "ct/ct_common.h"
+
 namespace splintcore {
 namespace ct_detail {
 
@@ -177,18 +179,12 @@ struct Decoder {
   size_t pos = 0;
 
   // The segment whose marker is at `at` (pos just after the marker): its length (>= 2, inside
-  // the data) and first byte after the length; pos moves past it.
+  // the data) and first byte after the length; pos moves past it. T.800 A.1.3 keeps T.81's
+  // segment lengths: the JPEG decoders' walk (ct_common.h) reads them.
   Status segment(size_t at, uint32_t* length, size_t* body) {
-    if (size - pos < 2) {
-      return j2k_error(StatusCode::kTruncated, "data ends inside a marker segment length", size);
-    }
-    *length = be16(data + pos);
-    if (*length < 2) return j2k_error(StatusCode::kParseError, "marker segment length under 2", at);
-    if (*length > size - pos) {
-      return j2k_error(StatusCode::kTruncated, "data ends inside a marker segment", size);
-    }
-    *body = pos + 2;
-    pos += *length;
+    JpegMarkers markers{data, size, "JPEG 2000", pos};
+    SPLINTCORE_RETURN_IF_ERROR(markers.segment(at, length, body));
+    pos = markers.pos;
     return Status::ok();
   }
 

@@ -12,6 +12,14 @@
 
 #include <cstring>
 
+// The MQ decoder's state must stay in registers through the passes: GCC and clang are told to
+// inline its steps where -O2's size heuristics would not.
+#if defined(__GNUC__)
+#define SPLINTCORE_J2K_INLINE inline __attribute__((always_inline))
+#else
+#define SPLINTCORE_J2K_INLINE inline
+#endif
+
 namespace splintcore {
 namespace ct_detail {
 
@@ -70,120 +78,250 @@ uint8_t zero_context(uint32_t band, uint32_t h, uint32_t v, uint32_t d) {
   return d >= 2 ? 2 : static_cast<uint8_t>(d);
 }
 
-// The decoding of one code-block's passes.
-struct BlockDecoder {
-  J2kTier1& t1;
-  const J2kBlockJob& job;
-  uint32_t fs;  // flag row stride
-  const uint8_t* zc;
-
-  uint32_t* flag(uint32_t x, uint32_t y) { return &t1.flags[(y + 1) * fs + x + 1]; }
-  uint32_t mask(uint32_t y) const {
-    return (job.style & kJ2kStyleCausal) != 0 && (y & 3) == 3 ? kCausalMask : ~0u;
+// BYTEIN (C.3.4).
+SPLINTCORE_J2K_INLINE void mq_byte_in(MqDecoder& m) {
+  const uint32_t b = m.pos < m.size ? m.data[m.pos] : 0xFFu;
+  const uint32_t next = m.pos + 1 < m.size ? m.data[m.pos + 1] : 0xFFu;
+  if (b != 0xFF) {
+    ++m.pos;
+    m.c += next << 8;
+    m.ct = 8;
+  } else if (next > 0x8F) {  // a marker (or the end): 1 bits from here on
+    m.c += 0xFF00;
+    m.ct = 8;
+  } else {
+    ++m.pos;
+    m.c += next << 9;
+    m.ct = 7;
   }
+}
 
-  // The sample becomes significant at bit plane p: its sign (Table D.3) and its neighbours.
-  void significant(uint32_t x, uint32_t y, uint32_t p) {
-    uint32_t* f = flag(x, y);
-    const uint32_t m = *f & mask(y);
-    const int h =
-        ((m & kSigW) ? ((m & kNegW) ? -1 : 1) : 0) + ((m & kSigE) ? ((m & kNegE) ? -1 : 1) : 0);
-    const int v =
-        ((m & kSigN) ? ((m & kNegN) ? -1 : 1) : 0) + ((m & kSigS) ? ((m & kNegS) ? -1 : 1) : 0);
-    const int hc = h > 0 ? 1 : (h < 0 ? -1 : 0), vc = v > 0 ? 1 : (v < 0 ? -1 : 0);
-    uint32_t context, flip = 0;
-    if (hc == 0) {
-      context = vc == 0 ? 9 : 10;
-      flip = vc < 0 ? 1u : 0u;
-    } else {
-      context = vc == 0 ? 12 : (vc == hc ? 13 : 11);
-      flip = hc < 0 ? 1u : 0u;
+// Table C.2 unfolded by MPS sense (OpenJPEG's layout): entry 2 state + mps holds Qe, the MPS
+// and the entries after an MPS and after an LPS (the switch applied), so a decision is two
+// look-ups and no bit fiddling.
+struct MqEntry {
+  uint16_t qe = 0;
+  uint8_t mps = 0, next_mps = 0, next_lps = 0;
+};
+struct MqTable {
+  MqEntry e[2 * 47];
+};
+constexpr MqTable make_mq_table() {
+  MqTable t{};
+  for (uint32_t s = 0; s < 47; ++s) {
+    for (uint32_t mps = 0; mps < 2; ++mps) {
+      MqEntry& x = t.e[2 * s + mps];
+      x.qe = kMqStates[s].qe;
+      x.mps = static_cast<uint8_t>(mps);
+      x.next_mps = static_cast<uint8_t>(2 * kMqStates[s].next_mps + mps);
+      x.next_lps = static_cast<uint8_t>(2 * kMqStates[s].next_lps +
+                                        (kMqStates[s].switch_mps ? 1 - mps : mps));
     }
-    const uint32_t negative = t1.mq.decode(context) ^ flip;
-    t1.magnitude[y * job.w + x] = 3u << p;
+  }
+  return t;
+}
+constexpr MqTable kMq = make_mq_table();
+
+// The left shifts that set bit 15 of a in [1, 0x8000).
+SPLINTCORE_J2K_INLINE uint32_t renorm_shifts(uint32_t a) {
+#if defined(__GNUC__)
+  return static_cast<uint32_t>(__builtin_clz(a)) - 16;
+#else
+  uint32_t n = 0;
+  while (((a << n) & 0x8000) == 0) ++n;
+  return n;
+#endif
+}
+
+// DECODE (C.3.2) with its exchanges and RENORMD. Inline on purpose: the passes call it on a
+// local copy of the decoder, whose registers no store into the flags can then alias.
+SPLINTCORE_J2K_INLINE uint32_t mq_decode(MqDecoder& m, uint32_t context) {
+  uint8_t& cx = m.contexts[context];
+  const MqEntry& e = kMq.e[cx];
+  const uint32_t qe = e.qe;
+  uint32_t d;
+  m.a -= qe;
+  if ((m.c >> 16) < qe) {  // the lower sub-interval, Qe: LPS_EXCHANGE
+    if (m.a < qe) {
+      d = e.mps;
+      cx = e.next_mps;
+    } else {
+      d = e.mps ^ 1u;
+      cx = e.next_lps;
+    }
+    m.a = qe;
+  } else {
+    m.c -= qe << 16;
+    if ((m.a & 0x8000) != 0) return e.mps;
+    if (m.a < qe) {  // MPS_EXCHANGE, the LPS branch
+      d = e.mps ^ 1u;
+      cx = e.next_lps;
+    } else {
+      d = e.mps;
+      cx = e.next_mps;
+    }
+  }
+  // RENORMD: the shifts that bring A to 0x8000 or more, as many at once as CT allows, a byte
+  // read in whenever CT runs out (the same order as bit by bit).
+  uint32_t n = renorm_shifts(m.a);
+  while (n > m.ct) {
+    m.a <<= m.ct;
+    m.c <<= m.ct;
+    n -= m.ct;
+    m.ct = 0;
+    mq_byte_in(m);
+  }
+  m.a <<= n;
+  m.c <<= n;
+  m.ct -= n;
+  return d;
+}
+
+// One code-block's arrays: `flags` points at sample (0, 0) of the bordered flag array (row
+// stride fs), `mag` at the magnitudes (row stride w).
+struct BlockView {
+  uint32_t* flags;
+  uint32_t* mag;
+  uint32_t fs, w, h;
+  const uint8_t* zc;  // Table D.1 of the band, by the 8 neighbour bits
+  const uint8_t* sc;  // Table D.3 by the 4 direct neighbours' significance and signs
+};
+
+// The passes of one code-block (D.3), stripe by stripe, each stripe column by column. Each
+// pass takes the view by value and a local copy of the MQ decoder, so that neither can be
+// aliased by the stores into the flags and both stay in registers; the decoder is handed back.
+// kCausal: the vertically causal mode (the last row of a stripe does not see the stripe below).
+template <bool kCausal>
+struct Passes {
+  // The neighbour bits a sample in stripe row r sees.
+  static uint32_t seen(uint32_t f, uint32_t r) { return kCausal && r == 3 ? f & kCausalMask : f; }
+
+  // The sample at f becomes significant at bit plane p: its sign decoded (Table D.3), its
+  // magnitude 1.5 2^p (with the fractional bit), its neighbours told.
+  SPLINTCORE_J2K_INLINE static void significant(MqDecoder& m, const BlockView& v, uint32_t* f,
+                                                uint32_t* magnitude, uint32_t r, uint32_t p) {
+    const uint32_t n = seen(*f, r);
+    const uint32_t s = v.sc[(n & 0xF) | ((n >> 4) & 0xF0)];
+    const uint32_t negative = mq_decode(m, s & 0x7F) ^ (s >> 7);
+    *magnitude = 3u << p;
+    const size_t fs = v.fs;
     *f |= kSig | (negative ? kNeg : 0);
-    f[-static_cast<ptrdiff_t>(fs)] |= kSigS | (negative ? kNegS : 0);
+    *(f - fs) |= kSigS | (negative ? kNegS : 0);
     f[fs] |= kSigN | (negative ? kNegN : 0);
     f[-1] |= kSigE | (negative ? kNegE : 0);
     f[1] |= kSigW | (negative ? kNegW : 0);
-    f[-static_cast<ptrdiff_t>(fs) - 1] |= kSigSE;
-    f[-static_cast<ptrdiff_t>(fs) + 1] |= kSigSW;
+    *(f - fs - 1) |= kSigSE;
+    *(f - fs + 1) |= kSigSW;
     f[fs - 1] |= kSigNE;
     f[fs + 1] |= kSigNW;
   }
 
-  void significance_pass(uint32_t p) {
-    for (uint32_t y0 = 0; y0 < job.h; y0 += 4) {
-      const uint32_t y1 = y0 + 4 < job.h ? y0 + 4 : job.h;
-      for (uint32_t x = 0; x < job.w; ++x) {
-        for (uint32_t y = y0; y < y1; ++y) {
-          uint32_t* f = flag(x, y);
-          const uint32_t neighbours = *f & mask(y) & 0xFF;
-          if ((*f & kSig) != 0 || neighbours == 0) continue;
-          *f |= kVisit;
-          if (t1.mq.decode(zc[neighbours])) significant(x, y, p);
+  static void significance(const BlockView v, MqDecoder* decoder, uint32_t p) {
+    MqDecoder m = *decoder;
+    const size_t fs = v.fs;
+    for (uint32_t y0 = 0; y0 < v.h; y0 += 4) {
+      const uint32_t rows = v.h - y0 < 4 ? v.h - y0 : 4;
+      uint32_t* col = v.flags + y0 * fs;
+      uint32_t* mcol = v.mag + size_t{y0} * v.w;
+      for (uint32_t x = 0; x < v.w; ++x, ++col, ++mcol) {
+        if (rows == 4 && ((col[0] | col[fs] | col[2 * fs] | col[3 * fs]) & 0xFF) == 0) continue;
+        uint32_t* f = col;
+        for (uint32_t r = 0; r < rows; ++r, f += fs) {
+          const uint32_t value = *f;
+          const uint32_t neighbours = seen(value, r) & 0xFF;
+          if ((value & kSig) != 0 || neighbours == 0) continue;
+          *f = value | kVisit;
+          if (mq_decode(m, v.zc[neighbours])) significant(m, v, f, mcol + size_t{r} * v.w, r, p);
         }
       }
     }
+    *decoder = m;
   }
 
-  void refinement_pass(uint32_t p) {
-    for (uint32_t y0 = 0; y0 < job.h; y0 += 4) {
-      const uint32_t y1 = y0 + 4 < job.h ? y0 + 4 : job.h;
-      for (uint32_t x = 0; x < job.w; ++x) {
-        for (uint32_t y = y0; y < y1; ++y) {
-          uint32_t* f = flag(x, y);
-          if ((*f & (kSig | kVisit)) != kSig) continue;
+  static void refinement(const BlockView v, MqDecoder* decoder, uint32_t p) {
+    MqDecoder m = *decoder;
+    const size_t fs = v.fs;
+    const uint32_t bit = 1u << p;
+    for (uint32_t y0 = 0; y0 < v.h; y0 += 4) {
+      const uint32_t rows = v.h - y0 < 4 ? v.h - y0 : 4;
+      uint32_t* col = v.flags + y0 * fs;
+      uint32_t* mcol = v.mag + size_t{y0} * v.w;
+      for (uint32_t x = 0; x < v.w; ++x, ++col, ++mcol) {
+        if (rows == 4 && ((col[0] | col[fs] | col[2 * fs] | col[3 * fs]) & kSig) == 0) continue;
+        uint32_t* f = col;
+        for (uint32_t r = 0; r < rows; ++r, f += fs) {
+          const uint32_t value = *f;
+          if ((value & (kSig | kVisit)) != kSig) continue;
           const uint32_t context =
-              (*f & kRefined) != 0 ? 16 : ((*f & mask(y) & 0xFF) != 0 ? 15 : 14);
-          uint32_t& m = t1.magnitude[y * job.w + x];
-          if (t1.mq.decode(context)) {
-            m += 1u << p;
+              (value & kRefined) != 0 ? 16 : ((seen(value, r) & 0xFF) != 0 ? 15 : 14);
+          uint32_t& magnitude = mcol[size_t{r} * v.w];
+          if (mq_decode(m, context)) {
+            magnitude += bit;
           } else {
-            m -= 1u << p;
+            magnitude -= bit;
           }
-          *f |= kRefined;
+          *f = value | kRefined;
         }
       }
     }
+    *decoder = m;
   }
 
-  // One stripe column of the cleanup pass (D.3.4), the visit flags cleared behind it.
-  void cleanup_column(uint32_t x, uint32_t y0, uint32_t y1, uint32_t p) {
-    uint32_t y = y0;
-    if (y1 - y0 == 4) {
-      bool run = true;
-      for (uint32_t k = y0; k < y1 && run; ++k) {
-        const uint32_t f = *flag(x, k);
-        run = (f & (kSig | kVisit)) == 0 && (f & mask(k) & 0xFF) == 0;
-      }
-      if (run) {
-        if (!t1.mq.decode(kRunContext)) return;
-        uint32_t r = t1.mq.decode(kUniformContext) << 1;
-        r |= t1.mq.decode(kUniformContext);
-        y = y0 + r;
-        significant(x, y, p);
-        ++y;
+  // D.3.4: a column of four samples with nothing significant around and not yet visited is
+  // coded as a run; the visit flags are cleared behind each column.
+  static void cleanup(const BlockView v, MqDecoder* decoder, uint32_t p, bool segmentation) {
+    MqDecoder m = *decoder;
+    const size_t fs = v.fs;
+    constexpr uint32_t kBusy = kSig | kVisit | 0xFF;
+    for (uint32_t y0 = 0; y0 < v.h; y0 += 4) {
+      const uint32_t rows = v.h - y0 < 4 ? v.h - y0 : 4;
+      uint32_t* col = v.flags + y0 * fs;
+      uint32_t* mcol = v.mag + size_t{y0} * v.w;
+      for (uint32_t x = 0; x < v.w; ++x, ++col, ++mcol) {
+        uint32_t r = 0;
+        if (rows == 4 && ((col[0] | col[fs] | col[2 * fs] | seen(col[3 * fs], 3)) & kBusy) == 0) {
+          if (!mq_decode(m, kRunContext)) continue;  // four zeros (nothing to clear)
+          r = mq_decode(m, kUniformContext) << 1;
+          r |= mq_decode(m, kUniformContext);
+          significant(m, v, col + r * fs, mcol + size_t{r} * v.w, r, p);
+          ++r;
+        }
+        for (; r < rows; ++r) {
+          uint32_t* f = col + r * fs;
+          const uint32_t value = *f;
+          if ((value & (kSig | kVisit)) == 0 && mq_decode(m, v.zc[seen(value, r) & 0xFF])) {
+            significant(m, v, f, mcol + size_t{r} * v.w, r, p);
+          }
+        }
+        for (r = 0; r < rows; ++r) col[r * fs] &= ~kVisit;
       }
     }
-    for (; y < y1; ++y) {
-      uint32_t* f = flag(x, y);
-      if ((*f & (kSig | kVisit)) == 0 && t1.mq.decode(zc[*f & mask(y) & 0xFF])) {
-        significant(x, y, p);
-      }
+    if (segmentation) {
+      for (int i = 0; i < 4; ++i) (void)mq_decode(m, kUniformContext);
     }
+    *decoder = m;
   }
 
-  void cleanup_pass(uint32_t p) {
-    for (uint32_t y0 = 0; y0 < job.h; y0 += 4) {
-      const uint32_t y1 = y0 + 4 < job.h ? y0 + 4 : job.h;
-      for (uint32_t x = 0; x < job.w; ++x) {
-        cleanup_column(x, y0, y1, p);
-        for (uint32_t y = y0; y < y1; ++y) *flag(x, y) &= ~kVisit;
+  static void run(const BlockView& v, J2kTier1& t1, const J2kBlockJob& job) {
+    uint32_t p = job.bitplanes - 1 - job.zero_planes;
+    uint32_t type = 2;  // the first pass is a cleanup pass
+    const bool segmentation = (job.style & kJ2kStyleSegmentation) != 0;
+    for (uint32_t k = 0; k < job.passes; ++k) {
+      if (type == 0) {
+        significance(v, &t1.mq, p);
+      } else if (type == 1) {
+        refinement(v, &t1.mq, p);
+      } else {
+        cleanup(v, &t1.mq, p, segmentation);
       }
-    }
-    if ((job.style & kJ2kStyleSegmentation) != 0) {
-      for (int i = 0; i < 4; ++i) (void)t1.mq.decode(kUniformContext);
+      if ((job.style & kJ2kStyleReset) != 0) t1.mq.reset_contexts();
+      if (type == 2) {
+        if (p == 0) break;
+        --p;
+        type = 0;
+      } else {
+        ++type;
+      }
     }
   }
 };
@@ -195,7 +333,7 @@ void MqDecoder::init(const uint8_t* bytes, size_t count) {
   size = count;
   pos = 0;
   c = uint32_t{count > 0 ? bytes[0] : uint8_t{0xFF}} << 16;
-  byte_in();
+  mq_byte_in(*this);
   c <<= 7;
   ct -= 7;
   a = 0x8000;
@@ -203,66 +341,12 @@ void MqDecoder::init(const uint8_t* bytes, size_t count) {
 
 void MqDecoder::reset_contexts() {
   std::memset(contexts, 0, sizeof(contexts));
-  contexts[0] = 4;
-  contexts[kRunContext] = 3;
-  contexts[kUniformContext] = 46;
+  contexts[0] = 2 * 4;  // entries 2 state + mps of kMq, the MPS 0
+  contexts[kRunContext] = 2 * 3;
+  contexts[kUniformContext] = 2 * 46;
 }
 
-void MqDecoder::byte_in() {
-  const uint32_t b = pos < size ? data[pos] : 0xFFu;
-  const uint32_t next = pos + 1 < size ? data[pos + 1] : 0xFFu;
-  if (b != 0xFF) {
-    ++pos;
-    c += next << 8;
-    ct = 8;
-  } else if (next > 0x8F) {  // a marker (or the end): 1 bits from here on
-    c += 0xFF00;
-    ct = 8;
-  } else {
-    ++pos;
-    c += next << 9;
-    ct = 7;
-  }
-}
-
-uint32_t MqDecoder::decode(uint32_t context) {
-  uint8_t& cx = contexts[context];
-  const MqState& state = kMqStates[cx & 0x7F];
-  uint32_t mps = cx >> 7;
-  const uint32_t qe = state.qe;
-  uint32_t d;
-  a -= qe;
-  if ((c >> 16) < qe) {  // the lower sub-interval, Qe: LPS_EXCHANGE
-    if (a < qe) {
-      d = mps;
-      cx = static_cast<uint8_t>(state.next_mps | (mps << 7));
-    } else {
-      d = 1 - mps;
-      if (state.switch_mps) mps = 1 - mps;
-      cx = static_cast<uint8_t>(state.next_lps | (mps << 7));
-    }
-    a = qe;
-  } else {
-    c -= qe << 16;
-    if ((a & 0x8000) != 0) return mps;
-    if (a < qe) {  // MPS_EXCHANGE, the LPS branch
-      d = 1 - mps;
-      if (state.switch_mps) mps = 1 - mps;
-      cx = static_cast<uint8_t>(state.next_lps | (mps << 7));
-    } else {
-      d = mps;
-      cx = static_cast<uint8_t>(state.next_mps | (mps << 7));
-    }
-  }
-  do {  // RENORMD
-    if (ct == 0) byte_in();
-    a <<= 1;
-    c <<= 1;
-    --ct;
-  } while ((a & 0x8000) == 0);
-  return d;
-}
-
+uint32_t MqDecoder::decode(uint32_t context) { return mq_decode(*this, context); }
 uint32_t J2kBits::bit() {
   if (left == 0) {
     if (pos >= size) {
@@ -368,6 +452,24 @@ void j2k_tier1_init(J2kTier1& t1) {
       t1.zero_context[band][b] = zero_context(band, h, v, d);
     }
   }
+  // Table D.3 by index: significance of N, S, W, E in bits 0-3, their signs in bits 4-7.
+  for (uint32_t i = 0; i < 256; ++i) {
+    auto contribution = [i](uint32_t sig, uint32_t neg) {
+      return (i & sig) == 0 ? 0 : ((i & neg) != 0 ? -1 : 1);
+    };
+    const int h = contribution(kSigW, kNegW >> 4) + contribution(kSigE, kNegE >> 4);
+    const int v = contribution(kSigN, kNegN >> 4) + contribution(kSigS, kNegS >> 4);
+    const int hc = h > 0 ? 1 : (h < 0 ? -1 : 0), vc = v > 0 ? 1 : (v < 0 ? -1 : 0);
+    uint32_t context, flip = 0;
+    if (hc == 0) {
+      context = vc == 0 ? 9 : 10;
+      flip = vc < 0 ? 1u : 0u;
+    } else {
+      context = vc == 0 ? 12 : (vc == hc ? 13 : 11);
+      flip = hc < 0 ? 1u : 0u;
+    }
+    t1.sign_context[i] = static_cast<uint8_t>(context | (flip << 7));
+  }
 }
 
 void j2k_decode_block(J2kTier1& t1, const J2kBlockJob& job, int32_t* out, size_t stride) {
@@ -376,30 +478,21 @@ void j2k_decode_block(J2kTier1& t1, const J2kBlockJob& job, int32_t* out, size_t
   std::memset(t1.magnitude, 0, sizeof(uint32_t) * job.w * job.h);
   t1.mq.init(job.data, job.size);
   t1.mq.reset_contexts();
-  BlockDecoder d{t1, job, fs, t1.zero_context[job.band]};
-  uint32_t p = job.bitplanes - 1 - job.zero_planes;
-  uint32_t type = 2;  // the first pass is a cleanup pass
-  for (uint32_t k = 0; k < job.passes; ++k) {
-    if (type == 0) {
-      d.significance_pass(p);
-    } else if (type == 1) {
-      d.refinement_pass(p);
-    } else {
-      d.cleanup_pass(p);
-    }
-    if ((job.style & kJ2kStyleReset) != 0) t1.mq.reset_contexts();
-    if (type == 2) {
-      if (p == 0) break;
-      --p;
-      type = 0;
-    } else {
-      ++type;
-    }
+  uint32_t* flags = t1.flags + fs + 1;
+  const BlockView view{flags,          t1.magnitude, fs, job.w, job.h, t1.zero_context[job.band],
+                       t1.sign_context};
+  if ((job.style & kJ2kStyleCausal) != 0) {
+    Passes<true>::run(view, t1, job);
+  } else {
+    Passes<false>::run(view, t1, job);
   }
   for (uint32_t y = 0; y < job.h; ++y) {
+    const uint32_t* f = flags + size_t{y} * fs;
+    const uint32_t* m = t1.magnitude + size_t{y} * job.w;
+    int32_t* o = out + y * stride;
     for (uint32_t x = 0; x < job.w; ++x) {
-      const int32_t m = static_cast<int32_t>(t1.magnitude[y * job.w + x]);
-      out[y * stride + x] = (t1.flags[(y + 1) * fs + x + 1] & kNeg) != 0 ? -m : m;
+      const int32_t v = static_cast<int32_t>(m[x]);
+      o[x] = (f[x] & kNeg) != 0 ? -v : v;
     }
   }
 }

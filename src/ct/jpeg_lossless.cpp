@@ -10,6 +10,8 @@
 
 #include <cstring>
 
+#include "ct/ct_common.h"
+
 namespace splintcore {
 namespace ct_detail {
 
@@ -21,76 +23,15 @@ Status jpeg_error(StatusCode code, const char* what, uint64_t at) {
 
 // What the marker segments before the scan said.
 struct JpegFrame {
-  uint32_t precision = 0, rows = 0, columns = 0;
+  JpegFrameHeader sof;
   uint32_t restart = 0;  // samples (MCUs) per restart interval; 0: none
   uint32_t predictor = 0, point_transform = 0, table = 0;
-  bool have_frame = false;
   bool scanned = false;
   JpegHuffman tables[4];
 };
 
-// The marker segment parser: data[pos] is the next marker.
-struct JpegParser {
-  const uint8_t* data;
-  size_t size;
-  size_t pos = 0;
-
-  uint32_t u8(size_t at) const { return data[at]; }
-  uint32_t u16(size_t at) const { return (uint32_t{data[at]} << 8) | data[at + 1]; }
-
-  // The marker at pos (after any 0xFF fill bytes): *code its second byte, *at its offset.
-  Status next_marker(uint32_t* code, size_t* at) {
-    *at = pos;
-    if (pos >= size) return jpeg_error(StatusCode::kTruncated, "data ends before EOI", size);
-    if (data[pos] != 0xFF) return jpeg_error(StatusCode::kParseError, "expected a marker", pos);
-    while (pos < size && data[pos] == 0xFF) ++pos;
-    if (pos >= size) return jpeg_error(StatusCode::kTruncated, "data ends inside a marker", size);
-    *code = data[pos++];
-    return Status::ok();
-  }
-
-  // The length of the segment whose marker is at `at` (pos after the marker): at least 2, and
-  // the segment inside the data; *body is its first byte after the length.
-  Status segment(size_t at, uint32_t* length, size_t* body) {
-    if (size - pos < 2) {
-      return jpeg_error(StatusCode::kTruncated, "data ends inside a segment length", size);
-    }
-    *length = u16(pos);
-    if (*length < 2) return jpeg_error(StatusCode::kParseError, "segment length under 2", at);
-    if (*length > size - pos) {
-      return jpeg_error(StatusCode::kTruncated, "data ends inside a marker segment", size);
-    }
-    *body = pos + 2;
-    pos += *length;
-    return Status::ok();
-  }
-
-  // SOF3 (B.2.2): P, Y, X, one component.
-  Status frame(size_t at, JpegFrame* f) {
-    uint32_t length = 0;
-    size_t b = 0;
-    SPLINTCORE_RETURN_IF_ERROR(segment(at, &length, &b));
-    if (f->have_frame) return jpeg_error(StatusCode::kParseError, "a second SOF marker", at);
-    if (length < 8) return jpeg_error(StatusCode::kParseError, "SOF3 segment too short", at);
-    f->precision = u8(b);
-    f->rows = u16(b + 1);
-    f->columns = u16(b + 3);
-    const uint32_t components = u8(b + 5);
-    if (components != 1 || length != 8 + 3 * components) {
-      Status s = jpeg_error(StatusCode::kUnsupported, "SOF3 has ", at);
-      s.append_u64(components);
-      return s.append(" components (length must be 11): only one is supported");
-    }
-    if (f->precision < 2 || f->precision > 16) {
-      return jpeg_error(StatusCode::kParseError, "SOF3 sample precision not in 2..16", at);
-    }
-    if (f->rows == 0) {
-      return jpeg_error(StatusCode::kUnsupported, "image height 0 (given by a DNL marker)", at);
-    }
-    f->have_frame = true;
-    return Status::ok();
-  }
-
+// The segments of T.81 lossless on the shared marker walk (ct_common.h).
+struct JpegParser : JpegMarkers {
   // DHT (B.2.4.2): one or more tables, class 0 (lossless uses DC-style tables) ids 0..3.
   Status huffman(size_t at, JpegFrame* f) {
     uint32_t length = 0;
@@ -131,7 +72,7 @@ struct JpegParser {
     uint32_t length = 0;
     size_t b = 0;
     SPLINTCORE_RETURN_IF_ERROR(segment(at, &length, &b));
-    if (!f->have_frame) return jpeg_error(StatusCode::kParseError, "SOS before SOF3", at);
+    if (!f->sof.read) return jpeg_error(StatusCode::kParseError, "SOS before SOF3", at);
     if (f->scanned) return jpeg_error(StatusCode::kUnsupported, "more than one scan", at);
     if (length != 8 || u8(b) != 1) {
       return jpeg_error(StatusCode::kParseError, "SOS must have one component (length 8)", at);
@@ -146,10 +87,10 @@ struct JpegParser {
       return jpeg_error(StatusCode::kParseError,
                         "SOS predictor not 1..7, or Se / Ah not 0 (not lossless)", at);
     }
-    if (f->point_transform >= f->precision) {
+    if (f->point_transform >= f->sof.precision) {
       return jpeg_error(StatusCode::kParseError, "point transform not below the precision", at);
     }
-    if (f->restart != 0 && f->restart % f->columns != 0) {
+    if (f->restart != 0 && f->restart % f->sof.columns != 0) {
       return jpeg_error(StatusCode::kUnsupported, "restart interval not a whole number of lines",
                         at);
     }
@@ -203,9 +144,9 @@ Status decode_scan(const JpegFrame& f, JpegBits& stream, uint8_t* out) {
   // it could alias them, forcing a reload or store of each per sample.
   JpegBits bits = stream;
   const JpegHuffman& table = f.tables[f.table];
-  const uint32_t rows = f.rows, columns = f.columns, pt = f.point_transform;
+  const uint32_t rows = f.sof.rows, columns = f.sof.columns, pt = f.point_transform;
   const uint32_t predictor = f.predictor, interval = f.restart;
-  const int32_t initial = int32_t{1} << (f.precision - pt - 1);
+  const int32_t initial = int32_t{1} << (f.sof.precision - pt - 1);
   uint32_t left_in_interval = interval, restarts = 0, interval_row = 0;
   for (uint32_t y = 0; y < rows; ++y) {
     if (interval != 0 && left_in_interval == 0) {
@@ -264,11 +205,8 @@ Status decode_scan(const JpegFrame& f, JpegBits& stream, uint8_t* out) {
 // The marker segments and the scan, up to EOI.
 Status decode_stream(JpegFrame& f, const uint8_t* data, size_t size, uint32_t rows,
                      uint32_t columns, uint32_t max_precision, uint8_t* out) {
-  JpegParser p{data, size};
-  if (size < 2 || data[0] != 0xFF || data[1] != 0xD8) {
-    return jpeg_error(StatusCode::kParseError, "not a JPEG stream (no SOI marker)", 0);
-  }
-  p.pos = 2;
+  JpegParser p{{data, size, "JPEG lossless"}};
+  SPLINTCORE_RETURN_IF_ERROR(p.start("JPEG"));
   for (;;) {
     uint32_t code = 0;
     size_t at = 0;
@@ -278,20 +216,11 @@ Status decode_stream(JpegFrame& f, const uint8_t* data, size_t size, uint32_t ro
       return Status::ok();
     }
     if (code == 0xC3) {
-      SPLINTCORE_RETURN_IF_ERROR(p.frame(at, &f));
-      if (f.rows != rows || f.columns != columns) {
-        Status s = jpeg_error(StatusCode::kParseError, "SOF3 image size ", at);
-        s.append_u64(f.columns);
-        s.append(" x ");
-        s.append_u64(f.rows);
-        return s.append(" differs from the DICOM Columns x Rows");
+      SPLINTCORE_RETURN_IF_ERROR(p.frame(at, "SOF3", &f.sof));
+      if (f.sof.rows == 0) {
+        return jpeg_error(StatusCode::kUnsupported, "image height 0 (given by a DNL marker)", at);
       }
-      if (f.precision > max_precision) {
-        Status s = jpeg_error(StatusCode::kParseError, "SOF3 sample precision ", at);
-        s.append_u64(f.precision);
-        s.append(" is over the DICOM Bits Allocated ");
-        return s.append_u64(max_precision);
-      }
+      SPLINTCORE_RETURN_IF_ERROR(p.check_frame(at, "SOF3", f.sof, rows, columns, max_precision));
     } else if (code == 0xC4) {
       SPLINTCORE_RETURN_IF_ERROR(p.huffman(at, &f));
     } else if (code == 0xDD) {

@@ -16,6 +16,8 @@
 
 #include <cstring>
 
+#include "ct/ct_common.h"
+
 namespace splintcore {
 namespace ct_detail {
 
@@ -40,13 +42,12 @@ struct JlsContext {
 
 // What the marker segments before the scan said.
 struct JlsFrame {
-  uint32_t precision = 0, rows = 0, columns = 0, component = 0;
+  JpegFrameHeader sof;
   uint32_t restart = 0;  // lines per restart interval; 0: none
   // LSE id 1 (C.2.4.1.1); 0: the default.
   uint32_t maxval = 0, t1 = 0, t2 = 0, t3 = 0, reset = 0;
   size_t lse_at = 0;  // the LSE segment's offset, for its errors
   uint32_t near = 0;
-  bool have_frame = false;
   bool scanned = false;
 };
 
@@ -74,7 +75,7 @@ int32_t threshold(uint32_t given, int32_t computed, int32_t low, int32_t maxval)
 // The parameters of a scan: MAXVAL, T1..T3 and RESET from LSE or their defaults, checked
 // against the ranges of C.2.4.1.1 and C.2.3 (NEAR).
 Status coding_parameters(const JlsFrame& f, size_t at, JlsCoding* c) {
-  const int32_t top = (int32_t{1} << f.precision) - 1;
+  const int32_t top = (int32_t{1} << f.sof.precision) - 1;
   c->maxval = f.maxval != 0 ? static_cast<int32_t>(f.maxval) : top;
   if (c->maxval > top) {
     return jls_error(StatusCode::kParseError, "LSE MAXVAL over 2^P - 1", f.lse_at);
@@ -464,9 +465,9 @@ struct JlsScan {
 // The scan: lines decoded and written to out as 16-bit little-endian samples.
 Status decode_scan(JlsScan& s, const JlsFrame& f, uint8_t* out) {
   s.reset_variables();
-  for (uint32_t i = 0; i < f.columns + 2; ++i) s.prev[i] = 0;  // the line above the first
+  for (uint32_t i = 0; i < f.sof.columns + 2; ++i) s.prev[i] = 0;  // the line above the first
   uint32_t restarts = 0;
-  for (uint32_t y = 0; y < f.rows; ++y) {
+  for (uint32_t y = 0; y < f.sof.rows; ++y) {
     if (f.restart != 0 && y != 0 && y % f.restart == 0) {
       SPLINTCORE_RETURN_IF_ERROR(s.restart(restarts++));
     }
@@ -475,9 +476,9 @@ Status decode_scan(JlsScan& s, const JlsFrame& f, uint8_t* out) {
       return jls_error(StatusCode::kTruncated, "coded data ends inside a line", s.bits.pos);
     }
     if (!ok) return jls_error(StatusCode::kParseError, "invalid code", s.bits.pos);
-    uint8_t* row = out + 2 * size_t{y} * f.columns;  // (out holds them all: no overflow)
+    uint8_t* row = out + 2 * size_t{y} * f.sof.columns;  // (out holds them all: no overflow)
     const int32_t* line = s.cur + 1;
-    for (uint32_t x = 0; x < f.columns; ++x) {
+    for (uint32_t x = 0; x < f.sof.columns; ++x) {
       row[2 * x] = static_cast<uint8_t>(line[x]);
       row[2 * x + 1] = static_cast<uint8_t>(line[x] >> 8);
     }
@@ -488,70 +489,8 @@ Status decode_scan(JlsScan& s, const JlsFrame& f, uint8_t* out) {
   return s.end_of_data("the last sample");
 }
 
-// The marker segment parser: data[pos] is the next marker.
-struct JlsParser {
-  const uint8_t* data;
-  size_t size;
-  size_t pos = 0;
-
-  uint32_t u8(size_t at) const { return data[at]; }
-  uint32_t u16(size_t at) const { return (uint32_t{data[at]} << 8) | data[at + 1]; }
-
-  // The marker at pos (after any 0xFF fill bytes): *code its second byte, *at its offset.
-  Status next_marker(uint32_t* code, size_t* at) {
-    *at = pos;
-    if (pos >= size) return jls_error(StatusCode::kTruncated, "data ends before EOI", size);
-    if (data[pos] != 0xFF) return jls_error(StatusCode::kParseError, "expected a marker", pos);
-    while (pos < size && data[pos] == 0xFF) ++pos;
-    if (pos >= size) return jls_error(StatusCode::kTruncated, "data ends inside a marker", size);
-    *code = data[pos++];
-    return Status::ok();
-  }
-
-  // The segment whose marker is at `at` (pos after the marker): its length (at least 2, the
-  // segment inside the data) and *body, its first byte after the length.
-  Status segment(size_t at, uint32_t* length, size_t* body) {
-    if (size - pos < 2) {
-      return jls_error(StatusCode::kTruncated, "data ends inside a segment length", size);
-    }
-    *length = u16(pos);
-    if (*length < 2) return jls_error(StatusCode::kParseError, "segment length under 2", at);
-    if (*length > size - pos) {
-      return jls_error(StatusCode::kTruncated, "data ends inside a marker segment", size);
-    }
-    *body = pos + 2;
-    pos += *length;
-    return Status::ok();
-  }
-
-  // SOF55 (C.2.2): P, Y, X, one component (Tq 0).
-  Status frame(size_t at, JlsFrame* f) {
-    uint32_t length = 0;
-    size_t b = 0;
-    SPLINTCORE_RETURN_IF_ERROR(segment(at, &length, &b));
-    if (f->have_frame) return jls_error(StatusCode::kParseError, "a second SOF marker", at);
-    if (length < 8) return jls_error(StatusCode::kParseError, "SOF55 segment too short", at);
-    f->precision = u8(b);
-    f->rows = u16(b + 1);
-    f->columns = u16(b + 3);
-    const uint32_t components = u8(b + 5);
-    if (components != 1 || length != 8 + 3 * components) {
-      Status s = jls_error(StatusCode::kUnsupported, "SOF55 has ", at);
-      s.append_u64(components);
-      return s.append(" components (length must be 11): only one is supported, not colour");
-    }
-    f->component = u8(b + 6);
-    if (f->precision < 2 || f->precision > 16) {
-      return jls_error(StatusCode::kParseError, "SOF55 sample precision not in 2..16", at);
-    }
-    if (f->rows == 0 || f->columns == 0) {
-      return jls_error(StatusCode::kUnsupported, "image size 0 in SOF55 (given by DNL or LSE id 4)",
-                       at);
-    }
-    f->have_frame = true;
-    return Status::ok();
-  }
-
+// The segments of T.87 on the shared marker walk (ct_common.h).
+struct JlsParser : JpegMarkers {
   // LSE (C.2.4.1): id 1, the preset coding parameters; mapping tables are not supported.
   Status preset(size_t at, JlsFrame* f) {
     uint32_t length = 0;
@@ -596,13 +535,13 @@ struct JlsParser {
   Status scan_header(size_t at, JlsFrame* f) {
     uint32_t length = 0;
     size_t b = 0;
-    if (!f->have_frame) return jls_error(StatusCode::kParseError, "SOS before SOF55", at);
+    if (!f->sof.read) return jls_error(StatusCode::kParseError, "SOS before SOF55", at);
     if (f->scanned) return jls_error(StatusCode::kParseError, "more than one scan", at);
     SPLINTCORE_RETURN_IF_ERROR(segment(at, &length, &b));
     if (length != 8 || u8(b) != 1) {
       return jls_error(StatusCode::kParseError, "SOS must have one component (length 8)", at);
     }
-    if (u8(b + 1) != f->component) {
+    if (u8(b + 1) != f->sof.component) {
       return jls_error(StatusCode::kParseError, "SOS names another component than SOF55", at);
     }
     if (u8(b + 2) != 0) {
@@ -621,12 +560,9 @@ struct JlsParser {
 // The marker segments and the scan, up to EOI.
 Status decode_stream(JlsScan& scan, const uint8_t* data, size_t size, uint32_t rows,
                      uint32_t columns, uint32_t max_precision, uint8_t* out) {
-  JlsParser p{data, size};
+  JlsParser p{{data, size, "JPEG-LS"}};
   JlsFrame f;
-  if (size < 2 || data[0] != 0xFF || data[1] != 0xD8) {
-    return jls_error(StatusCode::kParseError, "not a JPEG-LS stream (no SOI marker)", 0);
-  }
-  p.pos = 2;
+  SPLINTCORE_RETURN_IF_ERROR(p.start("JPEG-LS"));
   for (;;) {
     uint32_t code = 0;
     size_t at = 0;
@@ -636,20 +572,12 @@ Status decode_stream(JlsScan& scan, const uint8_t* data, size_t size, uint32_t r
       return Status::ok();
     }
     if (code == 0xF7) {
-      SPLINTCORE_RETURN_IF_ERROR(p.frame(at, &f));
-      if (f.rows != rows || f.columns != columns) {
-        Status s = jls_error(StatusCode::kParseError, "SOF55 image size ", at);
-        s.append_u64(f.columns);
-        s.append(" x ");
-        s.append_u64(f.rows);
-        return s.append(" differs from the DICOM Columns x Rows");
+      SPLINTCORE_RETURN_IF_ERROR(p.frame(at, "SOF55", &f.sof));
+      if (f.sof.rows == 0 || f.sof.columns == 0) {
+        return jls_error(StatusCode::kUnsupported,
+                         "image size 0 in SOF55 (given by DNL or LSE id 4)", at);
       }
-      if (f.precision > max_precision) {
-        Status s = jls_error(StatusCode::kParseError, "SOF55 sample precision ", at);
-        s.append_u64(f.precision);
-        s.append(" is over the DICOM Bits Allocated ");
-        return s.append_u64(max_precision);
-      }
+      SPLINTCORE_RETURN_IF_ERROR(p.check_frame(at, "SOF55", f.sof, rows, columns, max_precision));
     } else if (code == 0xF8) {
       SPLINTCORE_RETURN_IF_ERROR(p.preset(at, &f));
     } else if (code == 0xDD) {

@@ -10,6 +10,8 @@
 
 #include "common/ct_files.h"
 #include "common/ct_write.h"
+#include "common/jpeg_lossless_write.h"
+#include "ct/jpeg_lossless.h"
 #include "splintcore/ct.h"
 #include "support/test_util.h"
 
@@ -191,6 +193,59 @@ TEST(CtWrite, DicomSeriesRoundTripsAndIsOrderedByPosition) {
         EXPECT_FALSE(along[0] > along[1] && along[1] > along[2]);
       }
     }
+}
+
+// The JPEG lossless series (the speed proof's input, tools/bench): the same HU back through the
+// core reader's decoder, stored signed or unsigned (the extremes -32768 and 32767 side by side
+// make the difference category 16).
+TEST(CtWrite, DicomJpegLosslessSeriesRoundTrips) {
+  test::TestArena arena(size_t{4} << 20);
+  for (bool is_signed : {false, true}) {
+    Phantom p(false);
+    TempDir dir(is_signed ? "jpeg_signed" : "jpeg_unsigned");
+    CtWriteOptions o;
+    o.dicom_jpeg_lossless = true;
+    o.dicom_signed = is_signed;
+    const std::string folder = dir / "series";
+    SPLINTCORE_ASSERT_OK(cli::write_dicom_series(p.v, folder, o));
+    CtVolume back;
+    CtInfo info;
+    SPLINTCORE_ASSERT_OK(read_back(arena.arena, folder, &back, &info));
+    expect_same(p.v, back, 1e-12);
+    EXPECT_STREQ(info.transfer_syntax, "1.2.840.10008.1.2.4.70");
+  }
+  Phantom p;
+  TempDir dir("jpeg_implicit");
+  CtWriteOptions o;
+  o.dicom_jpeg_lossless = true;
+  o.dicom_implicit_vr = true;
+  EXPECT_EQ(cli::write_dicom_series(p.v, dir / "series", o).code(), StatusCode::kInvalidArgument);
+}
+
+// Every predictor of the encoder, on samples that jump across the whole 16-bit range, decoded
+// by the core decoder to the same samples.
+TEST(CtWrite, JpegLosslessEncoderEveryPredictor) {
+  const uint32_t rows = 9, columns = 13;
+  std::vector<uint16_t> samples(rows * columns);
+  uint32_t state = 12345;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    state = state * 1103515245u + 12345u;
+    samples[i] = i % 5 == 0 ? static_cast<uint16_t>(state >> 16)
+                            : static_cast<uint16_t>(1000 + i * 7 + (state >> 28));
+  }
+  samples[3] = 0;
+  samples[4] = 65535;
+  for (uint32_t predictor = 1; predictor <= 7; ++predictor) {
+    const std::vector<uint8_t> jpeg =
+        cli::jpeg_lossless_encode(samples.data(), rows, columns, predictor);
+    test::TestArena arena(ct_detail::jpeg_lossless_arena_bytes());
+    std::vector<uint8_t> out(samples.size() * 2);
+    SPLINTCORE_ASSERT_OK(ct_detail::jpeg_lossless_decode(arena.arena, jpeg.data(), jpeg.size(),
+                                                         rows, columns, 16, out.data()));
+    for (size_t i = 0; i < samples.size(); ++i) {
+      ASSERT_EQ(out[2 * i] | (out[2 * i + 1] << 8), samples[i]) << predictor << " " << i;
+    }
+  }
 }
 
 TEST(CtWrite, DicomWriterRefusesAFolderWithOtherFiles) {

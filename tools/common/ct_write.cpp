@@ -9,6 +9,7 @@
 #include <set>
 #include <vector>
 
+#include "jpeg_lossless_write.h"
 #include "splintcore/platform.h"
 
 namespace splintcore {
@@ -201,6 +202,25 @@ struct DicomBuffer {
     const uint8_t d[2] = {static_cast<uint8_t>(value & 0xFF), static_cast<uint8_t>(value >> 8)};
     element(group, elem, "US", d, 2, 0);
   }
+  // Encapsulated Pixel Data (PS3.5 A.4): undefined length, an empty Basic Offset Table item,
+  // one fragment (padded to even length with 0), the sequence delimiter.
+  void encapsulated(const std::vector<uint8_t>& frame) {
+    u16(0x7FE0);
+    u16(0x0010);
+    b.insert(b.end(), {'O', 'B', 0, 0});
+    u32(0xFFFFFFFFu);
+    const uint32_t items[2] = {0, static_cast<uint32_t>(frame.size() + frame.size() % 2)};
+    for (uint32_t length : items) {
+      u16(0xFFFE);
+      u16(0xE000);
+      u32(length);
+    }
+    b.insert(b.end(), frame.begin(), frame.end());
+    if (frame.size() % 2 != 0) b.push_back(0);
+    u16(0xFFFE);
+    u16(0xE0DD);
+    u32(0);
+  }
 };
 
 uint32_t gcd(uint32_t a, uint32_t b) {
@@ -277,8 +297,13 @@ Status write_dicom_series(const CtVolume& v, const std::string& folder,
   for (int i = 0; i < 8; ++i) h = (h << 8) | digest[i];
   const std::string root = "2.25." + std::to_string(h >> 1);
   const std::string sop_class = "1.2.840.10008.5.1.4.1.1.2";  // CT Image Storage
-  const std::string syntax =
-      options.dicom_implicit_vr ? "1.2.840.10008.1.2" : "1.2.840.10008.1.2.1";
+  if (options.dicom_jpeg_lossless && options.dicom_implicit_vr) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "JPEG lossless DICOM is explicit VR: not with implicit VR");
+  }
+  const std::string syntax = options.dicom_jpeg_lossless ? "1.2.840.10008.1.2.4.70"
+                             : options.dicom_implicit_vr ? "1.2.840.10008.1.2"
+                                                         : "1.2.840.10008.1.2.1";
   const std::string orientation = ds(v.axis_x.x) + "\\" + ds(v.axis_x.y) + "\\" + ds(v.axis_x.z) +
                                   "\\" + ds(v.axis_y.x) + "\\" + ds(v.axis_y.y) + "\\" +
                                   ds(v.axis_y.z);
@@ -336,14 +361,21 @@ Status write_dicom_series(const CtVolume& v, const std::string& folder,
     d.us(0x0028, 0x0103, options.dicom_signed ? 1 : 0);
     d.str(0x0028, 0x1052, "DS", std::to_string(intercept));
     d.str(0x0028, 0x1053, "DS", "1");
-    std::vector<uint8_t> pixels(static_cast<size_t>(per_slice * 2));
+    std::vector<uint16_t> stored(static_cast<size_t>(per_slice));
     const int16_t* slice = v.hu + static_cast<size_t>(k * per_slice);
-    for (size_t i = 0; i < static_cast<size_t>(per_slice); ++i) {
-      const uint16_t stored = static_cast<uint16_t>(static_cast<int32_t>(slice[i]) - intercept);
-      pixels[2 * i] = static_cast<uint8_t>(stored & 0xFF);
-      pixels[2 * i + 1] = static_cast<uint8_t>(stored >> 8);
+    for (size_t i = 0; i < stored.size(); ++i) {
+      stored[i] = static_cast<uint16_t>(static_cast<int32_t>(slice[i]) - intercept);
     }
-    d.element(0x7FE0, 0x0010, "OW", pixels.data(), pixels.size(), 0);
+    if (options.dicom_jpeg_lossless) {
+      d.encapsulated(jpeg_lossless_encode(stored.data(), v.ny, v.nx, 1));
+    } else {
+      std::vector<uint8_t> pixels(stored.size() * 2);
+      for (size_t i = 0; i < stored.size(); ++i) {
+        pixels[2 * i] = static_cast<uint8_t>(stored[i] & 0xFF);
+        pixels[2 * i + 1] = static_cast<uint8_t>(stored[i] >> 8);
+      }
+      d.element(0x7FE0, 0x0010, "OW", pixels.data(), pixels.size(), 0);
+    }
     file.b.insert(file.b.end(), d.b.begin(), d.b.end());
     SPLINTCORE_RETURN_IF_ERROR(
         write_bytes((fs::path(folder) / names[k]).string(), file.b, nullptr));

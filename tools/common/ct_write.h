@@ -22,6 +22,9 @@ struct CtWriteOptions {
   // DICOM stored values: false = unsigned 16-bit with Rescale Intercept min(-1024, min HU)
   // (slope 1); true = signed 16-bit, intercept 0. Either way the HU round-trip exactly.
   bool dicom_signed = false;
+  // DICOM: JPEG lossless, first-order prediction (1.2.840.10008.1.2.4.70: encapsulated pixel
+  // data, one fragment a slice; explicit VR, so not with dicom_implicit_vr).
+  bool dicom_jpeg_lossless = false;
   std::string space = "left-posterior-superior";  // NRRD `space` (written, not converted)
 };
 
