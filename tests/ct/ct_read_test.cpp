@@ -910,6 +910,86 @@ TEST(CtDicomResample, GantryTiltShiftsEachSliceInPlane) {
   for (int v = 12; v < 18; ++v) EXPECT_EQ(r.hu[static_cast<size_t>(v)], air) << v;
 }
 
+// Three tilted slices with a gap (four output slices: two reads), and four uneven slices
+// resampled onto three (the voxels shrunk to them): at every cap the read succeeds leaving only
+// the voxels or fails with kArenaExhausted leaving nothing.
+std::vector<std::vector<uint8_t>> tilted_series(const std::vector<double>& z) {
+  std::vector<std::vector<uint8_t>> files;
+  for (size_t k = 0; k < z.size(); ++k) {
+    DicomSpec s = slice(static_cast<int>(k), z[k]);
+    s.position = "10\\" + std::to_string(-20 + 0.1 * z[k]) + "\\" + std::to_string(z[k]);
+    files.push_back(dicom_file(s));
+  }
+  return files;
+}
+
+TEST(CtArena, ResampledSeriesEveryCapFailsCleanlyOrSucceeds) {
+  CtReadOptions o;
+  o.chunk_bytes = 1024;
+  const std::vector<std::vector<uint8_t>> more = tilted_series({0, 1, 3});
+  const std::vector<std::vector<uint8_t>> fewer = tilted_series({0, 1, 1.2, 2});
+  size_t smallest[2] = {0, 0};
+  for (size_t cap = 1000; cap <= 2600; ++cap) {
+    for (int c = 0; c < 2; ++c) {
+      TestArena a(cap);
+      SeriesResult d = read_series(c == 0 ? more : fewer, 0, o, &a.arena);
+      if (d.status.is_ok()) {
+        EXPECT_EQ(d.volume.nz, c == 0 ? 4u : 3u);
+        EXPECT_EQ(a.arena.used(), d.volume.nz * 12u);  // 2 x 3 voxels a slice
+        if (smallest[c] == 0) smallest[c] = cap;
+      } else {
+        ASSERT_EQ(d.status.code(), StatusCode::kArenaExhausted) << message(d.status);
+        EXPECT_EQ(a.arena.used(), 0u);
+        EXPECT_EQ(smallest[c], 0u) << cap;  // no failure above the smallest cap that works
+      }
+    }
+  }
+  EXPECT_NE(smallest[0], 0u);
+  EXPECT_NE(smallest[1], 0u);
+}
+
+// A series whose files change between the two reads of a resampled stack (the second finds
+// even more output slices) is an error, not a loop.
+struct ChangingSeries {
+  CtMemoryFiles before, after;
+  uint32_t opens = 0, switch_after = 0;
+  CtMemoryFiles& now() { return opens <= switch_after ? before : after; }
+  static Status open(void* user, uint32_t index, ByteSource* out) {
+    ChangingSeries* c = static_cast<ChangingSeries*>(user);
+    ++c->opens;
+    CtSeries s = ct_memory_series(&c->now());
+    return s.open(s.user, index, out);
+  }
+  static void close(void* user, uint32_t index, ByteSource* source) {
+    ChangingSeries* c = static_cast<ChangingSeries*>(user);
+    CtSeries s = ct_memory_series(&c->now());
+    s.close(s.user, index, source);
+  }
+};
+
+TEST(CtDicomResample, FilesChangingBetweenTheTwoReadsIsAnError) {
+  const std::vector<std::vector<uint8_t>> a = tilted_series({0, 1, 3}),
+                                          b = tilted_series({0, 1, 4});
+  std::vector<CtMemoryFile> ma, mb;
+  const char* names[3] = {"f0.dcm", "f1.dcm", "f2.dcm"};
+  for (size_t i = 0; i < 3; ++i) {
+    ma.push_back({names[i], a[i].data(), a[i].size()});
+    mb.push_back({names[i], b[i].data(), b[i].size()});
+  }
+  ChangingSeries c;
+  c.before = CtMemoryFiles{ma.data(), 3, 0, {}};
+  c.after = CtMemoryFiles{mb.data(), 3, 0, {}};
+  c.switch_after = 3;  // file 0's header, then files 1 and 2 in the first read
+  CtSeries series{3, ChangingSeries::open, ChangingSeries::close, &c};
+  TestArena t(size_t{1} << 20);
+  Context ctx(&t.arena);
+  CtVolume v;
+  Status s = read_dicom_series(ctx, series, CtReadOptions{}, &v, nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kParseError) << message(s);
+  EXPECT_NE(message(s).find("changed between two reads"), std::string::npos) << message(s);
+  EXPECT_EQ(t.arena.used(), 0u);
+}
+
 TEST(CtDicom, MissingAndBadTags) {
   struct Case {
     uint32_t tag;
