@@ -1228,10 +1228,16 @@ struct SeriesReader {
   // The resampler's three slices (only when there is a plan), after the other temporaries.
   Status allocate_slices(Arena& arena) {
     const uint64_t n = uint64_t{first.rows} * first.columns;
-    resampler = SliceResampler{&plan,     offsets, count,   first.columns, first.rows, spacing.x,
-                               spacing.y, hu,      nullptr, nullptr,       nullptr,    0};
+    resampler = SliceResampler{};
+    resampler.plan = &plan;
+    resampler.offsets = offsets;
+    resampler.count = count;
+    resampler.nx = first.columns;
+    resampler.ny = first.rows;
+    resampler.pixel_x = spacing.x;
+    resampler.pixel_y = spacing.y;
+    resampler.volume = hu;
     if (!plan.shift && !plan.interpolate) return Status::ok();
-    SPLINTCORE_RETURN_IF_ERROR(check_budget(arena, 0, 3 * n * sizeof(int16_t), 1));
     int16_t* slices = arena.allocate_array<int16_t>(static_cast<size_t>(3 * n));
     if (slices == nullptr) return arena.exhausted_status();
     resampler.raw = slices;
