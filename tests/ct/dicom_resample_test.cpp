@@ -322,7 +322,8 @@ TEST(CtDicomResample, UnevenSpacingAndAMissingSliceMatchTheEvenPhantom) {
 TEST(CtDicomResample, ExactArenaAndRefusals) {
   const uint32_t nx = 9, ny = 7, nz = 4;
   std::vector<int16_t> hu(size_t{nx} * ny * nz);
-  for (size_t v = 0; v < hu.size(); ++v) hu[v] = static_cast<int16_t>((v * 37) % 2001 - 1000);
+  for (size_t v = 0; v < hu.size(); ++v)
+    hu[v] = static_cast<int16_t>(static_cast<int>((v * 37) % 2001) - 1000);
   CtVolume frame;
   const CtVolume v = volume_of(&hu, nx, ny, nz, frame, Vec3{0.5, 0.5, 1.0}, Vec3{0, 0, 0});
   std::vector<Vec3> positions = {Vec3{0, 0, 0}, Vec3{0, 0.3, 1}, Vec3{0, 0.6, 2}, Vec3{0, 1.2, 4}};
