@@ -98,9 +98,16 @@ struct CtReadOptions {
                                             // (at least 1024 is used)
   double min_spacing = 1.0e-3;              // mm; smaller is an error ("wrong units?")
   double max_spacing = 100.0;               // mm; larger is an error ("wrong units?")
-  // DICOM slice spacing must be uniform: each gap within max(tolerance_mm, relative x mean).
+  // A DICOM stack is uniform when each gap is within max(tolerance_mm, relative x mean) of
+  // the mean gap and each slice within max(tolerance_mm, relative x its distance along the
+  // normal) of the normal through slice 0; it is then read as it is.
   double slice_spacing_tolerance_mm = 0.01;
   double slice_spacing_tolerance_relative = 0.01;
+  // Otherwise (gantry tilt or shear, uneven spacing, missing slices) it is resampled onto a
+  // regular grid when every gap is at most resample_max_gap times the median gap (plus the
+  // tolerance; 3: up to two missing slices in a row); a wider gap is refused. 0: every stack
+  // that is not uniform is refused.
+  double resample_max_gap = 3.0;
   // Direction cosines: |length - 1| and |dot| of two axes at most this; DICOM slices must agree
   // on orientation and pixel spacing within it too (per component / in mm).
   double orientation_tolerance = 1.0e-4;
@@ -122,7 +129,16 @@ struct CtInfo {
   char photometric[17] = {};      // DICOM: MONOCHROME1 or MONOCHROME2
   char space[64] = {};            // NRRD `space`, MetaImage AnatomicalOrientation, DICOM "LPS"
   uint32_t slice_count = 0;       // DICOM files, otherwise nz
-  bool detached = false;          // NRRD / MetaImage data in another file
+  // DICOM stacks resampled onto a regular grid (CtReadOptions::resample_max_gap): what was
+  // corrected. tilt_degrees: the angle between the normal and the line from the first slice's
+  // position to the last's (gantry tilt; 0 when the slices were not shifted); max_shift_mm: the
+  // largest in-plane shift of a slice; max_slice_offset_mm: the largest distance from an
+  // output slice to its nearest input slice (0 when none was interpolated along the normal).
+  bool resampled = false;
+  double tilt_degrees = 0;
+  double max_shift_mm = 0;
+  double max_slice_offset_mm = 0;
+  bool detached = false;  // NRRD / MetaImage data in another file
   uint64_t saturated = 0;
 };
 
@@ -211,18 +227,31 @@ Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFile
 // shared (5200,9229) or per frame (then equal in all frames). The items must be as many as the
 // frames, Number of Frames 1..max_dimension. The arena need is that of the same slices as a
 // folder of single-frame files.
-// Slices are ordered by Image Position projected on the normal row x column; spacing between
-// slices must be uniform (CtReadOptions), positions distinct and along the normal (no
-// gantry tilt), and all slices must share size, orientation, pixel spacing and pixel format.
-// A single slice takes its z spacing from Spacing Between Slices or Slice Thickness.
+// Slices are ordered by Image Position projected on the normal row x column; positions must be
+// distinct along the normal, and all slices must share size, orientation, pixel spacing and
+// pixel format. A single slice takes its z spacing from Spacing Between Slices or Slice
+// Thickness. A uniform stack along the normal (CtReadOptions tolerances) is read as it is.
+// Geometry as scanners write it is resampled onto a regular grid while the slices stream in
+// (CtReadOptions::resample_max_gap; CtInfo says what was corrected): gantry tilt or shear
+// (slice origins offset in-plane) -- each slice shifted in-plane onto the output's columns and
+// rows by bilinear interpolation, samples from outside the slice -1000 HU (air), the output's
+// in-plane origin the centre of the slices' offsets rounded to whole pixels, the size and pixel
+// spacing kept; uneven spacing or missing slices -- output slices every median gap from the
+// first slice, each interpolated linearly between the two input slices around it; a gap wider
+// than resample_max_gap medians is kUnsupported naming the two slices. Multi-frame files are
+// never resampled (kUnsupported as with resample_max_gap 0).
 // Axes: axis_x = row direction (+column index), axis_y = column direction, axis_z = normal
-// pointing to increasing slice position; origin = position of the first slice.
+// pointing to increasing slice position; origin = position of the first slice (moved in-plane
+// when the slices were shifted).
 // Errors: kParseError (file, byte offset, tag), kUnsupported, kLimitExceeded, kTruncated,
 // kInvalidArgument (count 0), kIoError, kArenaExhausted.
 // Arena (all three readers): the voxels (2 bytes each) stay; the read buffer and, for DICOM,
-// the slice table are returned. Before reading voxels each reader checks that they and its
-// temporaries fit, and otherwise says how much it needs. The need of a file is the high water
-// of a first read (the two-step contract, docs/embedding.md): it then reads in exactly that.
+// the slice table are returned. A resampled DICOM stack also takes 32 bytes a slice and three
+// slices (2 bytes a pixel) of temporaries; resampled onto more slices than files, it is read
+// twice (the first read finds the output's size) and the voxels are those of the output. Before
+// reading voxels each reader checks that they and its temporaries fit, and otherwise says how much
+// it needs. The need of a file is the high water of a first read (the two-step contract,
+// docs/embedding.md): it then reads in exactly that.
 Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtReadOptions& options,
                          CtVolume* out, CtInfo* info);
 

@@ -9,6 +9,7 @@
 // Two passes: headers of every file (up to Pixel Data, in a fixed stack window), then the
 // slices ordered by their position along the normal, pixels read into place.
 #include "ct/ct_common.h"
+#include "ct/ct_resample.h"
 #include "ct/dicom_rle.h"
 #include "ct/jpeg2000.h"
 #include "ct/jpeg_lossless.h"
@@ -979,13 +980,6 @@ const char* difference(const Header& h, const Header& first, double tolerance) {
   return nullptr;
 }
 
-// How far slice positions may stray at distance x: max(tolerance_mm, relative * x).
-double allowed_deviation(const CtReadOptions& options, double x) {
-  return options.slice_spacing_tolerance_mm > options.slice_spacing_tolerance_relative * x
-             ? options.slice_spacing_tolerance_mm
-             : options.slice_spacing_tolerance_relative * x;
-}
-
 // The stages of read_dicom_series(), sharing the series, its file 0's header, the arrays kept
 // between the two passes and the geometry.
 struct SeriesReader {
@@ -1010,6 +1004,11 @@ struct SeriesReader {
   Vec3 origin, spacing;
   bool rescale_varies = false;
   bool multi_frame = false;  // one file, count frames: "slices" are frames, not files
+  // A stack that is not uniform along the normal: its plan, the slices' offsets (position
+  // order) and the resampler pass 2 reads through (which, without a plan, reads in place).
+  ResamplePlan plan;
+  SliceOffset* offsets = nullptr;
+  SliceResampler resampler;
 
   SeriesReader(const Context& c, const CtSeries& s, const CtReadOptions& o)
       : ctx(c), series(s), options(o), count(s.count) {}
@@ -1115,10 +1114,8 @@ struct SeriesReader {
     return e;
   }
 
-  // Consecutive slices: distinct positions along the normal, each gap within the tolerance of
-  // the mean gap.
-  Status check_gaps(double d0, double mean) const {
-    const double allowed_gap = allowed_deviation(options, mean);
+  // Consecutive slices: distinct positions along the normal.
+  Status check_distinct(double d0) const {
     double previous = d0;
     for (uint32_t k = 0; k + 1 < count; ++k) {
       const double next = dot(position(k + 1), normal);
@@ -1128,7 +1125,13 @@ struct SeriesReader {
       }
       previous = next;
     }
-    previous = d0;
+    return Status::ok();
+  }
+
+  // Each gap within the tolerance of the mean gap.
+  Status check_gaps(double d0, double mean) const {
+    const double allowed_gap = allowed_deviation(options, mean);
+    double previous = d0;
     for (uint32_t k = 0; k + 1 < count; ++k) {
       const double next = dot(position(k + 1), normal);
       const double gap = next - previous;
@@ -1152,8 +1155,8 @@ struct SeriesReader {
         Status s = make_error(StatusCode::kUnsupported, "gantry tilt or sheared series: slice ", k,
                               multi_frame ? " (frame " : " (series file ", keys[k].index, ") lies ",
                               offset,
-                              " mm off the normal through slice 0; only stacks along the "
-                              "normal are supported");
+                              " mm off the normal through slice 0 (not resampled: a multi-frame "
+                              "file, or CtReadOptions::resample_max_gap 0)");
         s.at_index(keys[k].index);
         return s;
       }
@@ -1161,9 +1164,41 @@ struct SeriesReader {
     return Status::ok();
   }
 
-  // The spacing between slices: the mean gap of a uniform stack along the normal; a single
-  // slice takes Spacing Between Slices, else Slice Thickness.
-  Status slice_spacing(double* z) const {
+  // A stack that is not uniform along the normal: the slices' offsets and the plan that puts
+  // them on a regular grid (the output spacing *z; the origin moved in-plane when the slices
+  // are shifted), or why not.
+  Status plan_grid(bool uniform, double* z) {
+    Arena& arena = *ctx.arena;
+    offsets = arena.allocate_array<SliceOffset>(count);
+    double* gaps = offsets != nullptr ? arena.allocate_array<double>(count) : nullptr;
+    if (gaps == nullptr) return arena.exhausted_status();
+    for (uint32_t k = 0; k < count; ++k) {
+      const Vec3 d = position(k) - origin;
+      offsets[k] = SliceOffset{dot(d, normal), dot(d, row), dot(d, column)};
+    }
+    plan_resampling(offsets, count, uniform, spacing.x, spacing.y, options, gaps, &plan);
+    if (plan.gap_too_wide) {
+      const uint32_t k = plan.bad_gap;
+      return pair_error(StatusCode::kUnsupported, k, "slices too far apart to resample: ",
+                        offsets[k + 1].along - offsets[k].along,
+                        " mm apart, more than CtReadOptions::resample_max_gap times the median "
+                        "spacing ",
+                        plan.median_gap, " mm (slices missing?)");
+    }
+    if (plan.nz > options.max_dimension) {
+      return make_error(StatusCode::kLimitExceeded, "resampled onto slices ", plan.spacing_z,
+                        " mm apart the series has ", plan.nz, " slices, more than the limit ",
+                        options.max_dimension, " (CtReadOptions::max_dimension)");
+    }
+    if (plan.shift) origin = origin + row * plan.origin_x + column * plan.origin_y;
+    *z = plan.spacing_z;
+    return Status::ok();
+  }
+
+  // The spacing between slices: the mean gap of a uniform stack along the normal, else the
+  // plan's (resample_max_gap); a single slice takes Spacing Between Slices, else Slice
+  // Thickness.
+  Status slice_spacing(double* z) {
     if (count == 1) {
       *z = first.spacing_between > 0 ? first.spacing_between : first.slice_thickness;
       if (!(*z > 0)) {
@@ -1178,9 +1213,36 @@ struct SeriesReader {
     const double d0 = dot(origin, normal);
     const double span = dot(position(count - 1), normal) - d0;
     const double mean = span / static_cast<double>(count - 1);
-    SPLINTCORE_RETURN_IF_ERROR(check_gaps(d0, mean));
-    SPLINTCORE_RETURN_IF_ERROR(check_on_normal());
-    *z = mean;
+    SPLINTCORE_RETURN_IF_ERROR(check_distinct(d0));
+    const Status uneven = check_gaps(d0, mean);
+    const Status tilted = check_on_normal();
+    if (uneven.is_ok() && tilted.is_ok()) {
+      *z = mean;
+      return Status::ok();
+    }
+    // Multi-frame files are read in file order: never resampled.
+    if (multi_frame || !(options.resample_max_gap > 0)) return uneven.is_ok() ? tilted : uneven;
+    return plan_grid(uneven.is_ok(), z);
+  }
+
+  // The resampler's three slices (only when there is a plan), after the other temporaries.
+  Status allocate_slices(Arena& arena) {
+    const uint64_t n = uint64_t{first.rows} * first.columns;
+    resampler = SliceResampler{};
+    resampler.plan = &plan;
+    resampler.offsets = offsets;
+    resampler.count = count;
+    resampler.nx = first.columns;
+    resampler.ny = first.rows;
+    resampler.pixel_x = spacing.x;
+    resampler.pixel_y = spacing.y;
+    resampler.volume = hu;
+    if (!plan.shift && !plan.interpolate) return Status::ok();
+    int16_t* slices = arena.allocate_array<int16_t>(static_cast<size_t>(3 * n));
+    if (slices == nullptr) return arena.exhausted_status();
+    resampler.raw = slices;
+    resampler.previous = slices + n;
+    resampler.current = slices + 2 * n;
     return Status::ok();
   }
 
@@ -1205,14 +1267,15 @@ struct SeriesReader {
     return frame != nullptr ? Status::ok() : arena.exhausted_status();
   }
 
-  // Origin (slice 0's position) and spacing: Pixel Spacing is row spacing, then column spacing.
+  // Origin (slice 0's position, or the plan's) and spacing: Pixel Spacing is row spacing, then
+  // column spacing (checked first: a plan divides by them).
   Status set_geometry() {
     origin = position(0);
     spacing = Vec3{first.pixel_spacing[1], first.pixel_spacing[0], 0.0};
-    SPLINTCORE_RETURN_IF_ERROR(slice_spacing(&spacing.z));
     const char* axis_names[3] = {"x (Pixel Spacing, column spacing)",
                                  "y (Pixel Spacing, row spacing)", "z (between slices)"};
     for (int a = 0; a < 3; ++a) {
+      if (a == 2) SPLINTCORE_RETURN_IF_ERROR(slice_spacing(&spacing.z));
       Status s = check_spacing(spacing[a], axis_names[a], options);
       if (!s.is_ok()) {
         if (first_name != nullptr) s.in_file(first_name);
@@ -1221,6 +1284,9 @@ struct SeriesReader {
     }
     return Status::ok();
   }
+
+  // The output's slices: the plan's when it interpolates, else the input's.
+  uint32_t output_slices() const { return plan.interpolate ? plan.nz : count; }
 
   VoxelFormat pixel_format() const {
     VoxelFormat format;
@@ -1234,7 +1300,7 @@ struct SeriesReader {
   void store(const VoxelFormat& format, uint64_t saturated, CtVolume* out, CtInfo* info) const {
     out->nx = first.columns;
     out->ny = first.rows;
-    out->nz = count;
+    out->nz = output_slices();
     out->spacing = spacing;
     out->origin = origin;
     out->axis_x = row;
@@ -1258,6 +1324,10 @@ struct SeriesReader {
     std::memcpy(found.space, "LPS", 4);
     found.slice_count = count;
     found.saturated = saturated;
+    found.resampled = plan.shift || plan.interpolate;
+    found.tilt_degrees = plan.tilt_degrees;
+    found.max_shift_mm = plan.max_shift_mm;
+    found.max_slice_offset_mm = plan.max_offset_mm;
     *info = found;
   }
 };
@@ -1415,30 +1485,31 @@ Status read_frame_pixels(const SeriesReader& sr, const VoxelFormat& format, uint
   return s;
 }
 
-// Pass 2: the pixels, slice by slice in position order, each with its own rescale. Not a
-// SeriesReader method: cppcheck 2.10 takes a Reader local to a method for a non-local one
-// (a false danglingLifetime on r.init(&source, ...)).
-Status read_pixels(const SeriesReader& sr, const VoxelFormat& format, uint64_t* saturated) {
+// Pass 2: the pixels, slice by slice in position order, each with its own rescale, through
+// the resampler (in place when there is no plan). Not a SeriesReader method: cppcheck 2.10
+// takes a Reader local to a method for a non-local one (a false danglingLifetime on
+// r.init(&source, ...)).
+Status read_pixels(SeriesReader& sr, const VoxelFormat& format, uint64_t* saturated) {
   if (sr.multi_frame) return read_frame_pixels(sr, format, saturated);
   const uint64_t per_slice = uint64_t{sr.first.rows} * sr.first.columns;
   for (uint32_t k = 0; k < sr.count; ++k) {
     const SliceRecord& rec = sr.records[sr.keys[k].index];
+    int16_t* slice = sr.resampler.target(k);
     ByteSource source;
     SPLINTCORE_RETURN_IF_ERROR(sr.series.open(sr.series.user, rec.file, &source));
     Reader r;
     r.init(&source, sr.buffer, sr.chunk);
     Status s;
     if (encapsulated(sr.first.codec)) {
-      s = read_encapsulated_pixels(sr, r, rec, format, sr.hu + k * per_slice, k * per_slice,
-                                   saturated);
+      s = read_encapsulated_pixels(sr, r, rec, format, slice, k * per_slice, saturated);
     } else if (sr.first.deflated) {
-      s = read_deflated_pixels(*sr.ctx.arena, r, rec, format, per_slice, sr.hu + k * per_slice,
-                               k * per_slice, saturated);
+      s = read_deflated_pixels(*sr.ctx.arena, r, rec, format, per_slice, slice, k * per_slice,
+                               saturated);
     } else {
       s = r.skip(rec.pixel_offset, "the header before Pixel Data");
       if (s.is_ok()) {
-        s = convert_voxels(r, format, per_slice, rec.slope, rec.intercept, sr.hu + k * per_slice,
-                           k * per_slice, saturated);
+        s = convert_voxels(r, format, per_slice, rec.slope, rec.intercept, slice, k * per_slice,
+                           saturated);
       }
     }
     const char* name = source.name;
@@ -1447,8 +1518,63 @@ Status read_pixels(const SeriesReader& sr, const VoxelFormat& format, uint64_t* 
       if (name != nullptr) s.in_file(name);
       return s;
     }
+    sr.resampler.place(k);
     SPLINTCORE_RETURN_IF_ERROR(report_progress(sr.ctx, "read DICOM pixels", k + 1, sr.count));
   }
+  return Status::ok();
+}
+
+// One read of the series with room for `planned` slices. When the stack is resampled onto
+// more slices, *needed says how many (nothing is left in the arena, *out untouched) unless
+// `last` (the second read, which planned for what the first found: the files changed).
+Status read_attempt(SeriesReader& reader, uint32_t planned, bool last, CtVolume* out, CtInfo* info,
+                    uint32_t* needed) {
+  Arena& arena = *reader.ctx.arena;
+  const Header& first = reader.first;
+  const uint32_t count = reader.count;
+  uint64_t voxel_bytes = 0;
+  SPLINTCORE_RETURN_IF_ERROR(
+      check_size(first.columns, first.rows, planned, reader.options, &voxel_bytes));
+  reader.chunk = chunk_size(reader.options);
+  // Deflated files: an inflater per file read (the padding inflate_state_bytes() allows for is
+  // counted by check_budget's allocations).
+  const uint64_t inflater =
+      first.deflated ? inflate_state_bytes() - (Arena::kDefaultAlignment - 1) : 0;
+  const uint64_t temporaries =
+      uint64_t{count} * (sizeof(SliceRecord) + 2 * sizeof(KeyIndex)) + reader.chunk + inflater;
+  SPLINTCORE_RETURN_IF_ERROR(check_budget(arena, voxel_bytes, temporaries, first.deflated ? 5 : 4));
+
+  ArenaScope scope(arena);  // on an error the arena is as it was
+  reader.hu = arena.allocate_array<int16_t>(static_cast<size_t>(voxel_bytes / 2));
+  if (reader.hu == nullptr) return arena.exhausted_status();
+  uint32_t slices = 0;
+  {
+    ArenaScope temporaries_scope(arena);  // rewound also on success: only the voxels stay
+    if (!reader.allocate_temporaries(arena)) return arena.exhausted_status();
+    SPLINTCORE_RETURN_IF_ERROR(reader.set_frame());
+    SPLINTCORE_RETURN_IF_ERROR(reader.read_headers());
+    SPLINTCORE_RETURN_IF_ERROR(reader.allocate_frame(arena));
+    SPLINTCORE_RETURN_IF_ERROR(reader.set_geometry());
+    slices = reader.output_slices();
+    if (slices > planned) {
+      if (last) {
+        return make_error(StatusCode::kParseError,
+                          "the series' files changed between two reads (resampled onto ", slices,
+                          " slices, then more)");
+      }
+      *needed = slices;
+      return Status::ok();
+    }
+    SPLINTCORE_RETURN_IF_ERROR(reader.allocate_slices(arena));
+    const VoxelFormat format = reader.pixel_format();
+    uint64_t saturated = 0;
+    SPLINTCORE_RETURN_IF_ERROR(read_pixels(reader, format, &saturated));
+    reader.store(format, saturated, out, info);
+  }
+  // Fewer slices than planned: the rest given back (the voxels are the top allocation now).
+  arena.try_shrink(reader.hu, static_cast<size_t>(voxel_bytes),
+                   static_cast<size_t>(uint64_t{slices} * first.rows * first.columns * 2));
+  scope.commit();
   return Status::ok();
 }
 
@@ -1480,35 +1606,12 @@ Status read_dicom_series(const Context& ctx, const CtSeries& series, const CtRea
     reader.multi_frame = true;
     reader.count = static_cast<uint32_t>(first.frames);  // <= max_dimension (checked)
   }
-  const uint32_t count = reader.count;
-
-  uint64_t voxel_bytes = 0;
-  SPLINTCORE_RETURN_IF_ERROR(check_size(first.columns, first.rows, count, options, &voxel_bytes));
-  reader.chunk = chunk_size(options);
-  // Deflated files: an inflater per file read (the padding inflate_state_bytes() allows for is
-  // counted by check_budget's allocations).
-  const uint64_t inflater =
-      first.deflated ? inflate_state_bytes() - (Arena::kDefaultAlignment - 1) : 0;
-  const uint64_t temporaries =
-      uint64_t{count} * (sizeof(SliceRecord) + 2 * sizeof(KeyIndex)) + reader.chunk + inflater;
-  SPLINTCORE_RETURN_IF_ERROR(check_budget(arena, voxel_bytes, temporaries, first.deflated ? 5 : 4));
-
-  ArenaScope scope(arena);  // on an error the arena is as it was
-  reader.hu = arena.allocate_array<int16_t>(static_cast<size_t>(voxel_bytes / 2));
-  if (reader.hu == nullptr) return arena.exhausted_status();
-  ArenaScope temporaries_scope(arena);  // rewound also on success: only the voxels stay
-  if (!reader.allocate_temporaries(arena)) return arena.exhausted_status();
-
-  SPLINTCORE_RETURN_IF_ERROR(reader.set_frame());
-  SPLINTCORE_RETURN_IF_ERROR(reader.read_headers());
-  SPLINTCORE_RETURN_IF_ERROR(reader.allocate_frame(arena));
-  SPLINTCORE_RETURN_IF_ERROR(reader.set_geometry());
-  const VoxelFormat format = reader.pixel_format();
-  uint64_t saturated = 0;
-  SPLINTCORE_RETURN_IF_ERROR(read_pixels(reader, format, &saturated));
-  scope.commit();
-  reader.store(format, saturated, out, info);
-  return Status::ok();
+  // A stack resampled onto more slices than it has is read again with room for them.
+  uint32_t needed = 0;
+  SeriesReader second = reader;
+  SPLINTCORE_RETURN_IF_ERROR(read_attempt(reader, reader.count, false, out, info, &needed));
+  if (needed == 0) return Status::ok();
+  return read_attempt(second, needed, true, out, info, &needed);
 }
 
 }  // namespace splintcore

@@ -766,7 +766,10 @@ TEST(CtDicom, SeriesGeometryErrors) {
     return std::vector<std::vector<uint8_t>>{dicom_file(slice(0, z0)), dicom_file(slice(1, z1)),
                                              dicom_file(slice(2, z2))};
   };
-  SeriesResult r = read_series(three(0, 1, 3));
+  // Uneven spacing is resampled (CtDicomResample); with resampling off it is refused.
+  CtReadOptions strict;
+  strict.resample_max_gap = 0;
+  SeriesResult r = read_series(three(0, 1, 3), 0, strict);
   EXPECT_EQ(r.status.code(), StatusCode::kUnsupported);
   EXPECT_NE(message(r.status).find("non-uniform slice spacing"), std::string::npos)
       << message(r.status);
@@ -782,7 +785,7 @@ TEST(CtDicom, SeriesGeometryErrors) {
     s.position = "10\\" + std::to_string(-20 + 0.5 * k) + "\\" + std::to_string(k);
     tilt.push_back(dicom_file(s));
   }
-  r = read_series(tilt);
+  r = read_series(tilt, 0, strict);
   EXPECT_EQ(r.status.code(), StatusCode::kUnsupported);
   EXPECT_NE(message(r.status).find("gantry tilt"), std::string::npos) << message(r.status);
   // Mismatched slices.
@@ -809,6 +812,182 @@ TEST(CtDicom, SeriesGeometryErrors) {
   units.pixel_spacing = "500\\500";
   r = read_series({dicom_file(units)});
   EXPECT_NE(message(r.status).find("wrong units?"), std::string::npos) << message(r.status);
+}
+
+// Geometry as scanners write it (issue 31): exact values on 2 x 3 slices (pixels 100 k + i,
+// row spacing 0.5 mm, column spacing 0.25 mm).
+TEST(CtDicomResample, UnevenSpacingInterpolatesBetweenNeighbours) {
+  // Gaps 1 and 2 mm: median (the lower of two) 1 mm, four output slices; z = 2 is halfway
+  // between slices 1 and 2.
+  std::vector<std::vector<uint8_t>> files = {dicom_file(slice(2, 3)), dicom_file(slice(0, 0)),
+                                             dicom_file(slice(1, 1))};
+  SeriesResult r = read_series(files);
+  ASSERT_TRUE(r.status.is_ok()) << message(r.status);
+  EXPECT_EQ(r.volume.nz, 4u);
+  EXPECT_EQ(r.volume.spacing.z, 1.0);
+  const std::vector<int> expected = {0,   1,   2,   3,   4,   5,   100, 101, 102, 103, 104, 105,
+                                     150, 151, 152, 153, 154, 155, 200, 201, 202, 203, 204, 205};
+  EXPECT_EQ(r.hu, expected);
+  EXPECT_TRUE(r.info.resampled);
+  EXPECT_EQ(r.info.slice_count, 3u);
+  EXPECT_EQ(r.info.tilt_degrees, 0.0);
+  EXPECT_EQ(r.info.max_shift_mm, 0.0);
+  EXPECT_EQ(r.info.max_slice_offset_mm, 1.0);
+  expect_vec(r.volume.origin, Vec3{10, -20, 0});
+  // Gaps 1 and 1.4 (median 1): output at 0, 1, 2 (0.6 of the way to 2.4); 2.4 is not reached.
+  files = {dicom_file(slice(0, 0)), dicom_file(slice(1, 1)), dicom_file(slice(2, 2.4))};
+  r = read_series(files);
+  ASSERT_TRUE(r.status.is_ok()) << message(r.status);
+  ASSERT_EQ(r.volume.nz, 3u);
+  EXPECT_EQ(r.hu[12], 171);  // 100 x 0.2857 + 200 x 0.7143 (t = 1 / 1.4), rounded
+  EXPECT_NEAR(r.info.max_slice_offset_mm, 0.4, 1e-12);
+  // A gap of more than three medians (two slices missing) is refused, naming the slices.
+  files = {dicom_file(slice(0, 0)), dicom_file(slice(1, 1)), dicom_file(slice(2, 5))};
+  r = read_series(files);
+  EXPECT_EQ(r.status.code(), StatusCode::kUnsupported);
+  EXPECT_NE(message(r.status).find("slices too far apart to resample: slices 1 and 2"),
+            std::string::npos)
+      << message(r.status);
+  EXPECT_NE(message(r.status).find("4 mm apart"), std::string::npos) << message(r.status);
+  EXPECT_EQ(r.status.index(), 2u);
+  // Resampled onto more slices than max_dimension.
+  CtReadOptions small;
+  small.max_dimension = 3;
+  r = read_series({dicom_file(slice(0, 0)), dicom_file(slice(1, 1)), dicom_file(slice(2, 3))}, 0,
+                  small);
+  EXPECT_EQ(r.status.code(), StatusCode::kLimitExceeded);
+  EXPECT_NE(message(r.status).find("4 slices, more than the limit 3"), std::string::npos)
+      << message(r.status);
+}
+
+TEST(CtDicomResample, GantryTiltShiftsEachSliceInPlane) {
+  // Positions drift 0.5 mm (one row) along the column direction per 1 mm along the normal:
+  // the output grid is centred on slice 1's, slices 0 and 2 move by one row.
+  std::vector<std::vector<uint8_t>> files;
+  for (int k : {2, 0, 1}) {
+    DicomSpec s = slice(k, k);
+    s.position = "10\\" + std::to_string(-20 + 0.5 * k) + "\\" + std::to_string(k);
+    files.push_back(dicom_file(s));
+  }
+  SeriesResult r = read_series(files);
+  ASSERT_TRUE(r.status.is_ok()) << message(r.status);
+  EXPECT_EQ(r.volume.nz, 3u);
+  const int air = -1000;
+  const std::vector<int> expected = {3,   4,   5,   air, air, air, 100, 101, 102,
+                                     103, 104, 105, air, air, air, 200, 201, 202};
+  EXPECT_EQ(r.hu, expected);
+  expect_vec(r.volume.origin, Vec3{10, -19.5, 0});
+  EXPECT_EQ(r.volume.spacing.z, 1.0);
+  EXPECT_TRUE(r.info.resampled);
+  EXPECT_NEAR(r.info.tilt_degrees, 26.565051177077990, 1e-9);  // atan(0.5)
+  EXPECT_EQ(r.info.max_shift_mm, 0.5);
+  EXPECT_EQ(r.info.max_slice_offset_mm, 0.0);
+  // Half a row per slice: slice 1 is interpolated halfway between two rows; the output is
+  // centred on (0 + 0.5) / 2 = 0.25 mm, rounded to 0.5 (one row): slice 0 moves one row, slice 2
+  // none.
+  files.clear();
+  for (int k = 0; k < 3; ++k) {
+    DicomSpec s = slice(k, k);
+    s.position = "10\\" + std::to_string(-20 + 0.25 * k) + "\\" + std::to_string(k);
+    files.push_back(dicom_file(s));
+  }
+  r = read_series(files);
+  ASSERT_TRUE(r.status.is_ok()) << message(r.status);
+  const std::vector<int> half = {3,   4,   5,   air, air, air, 102, 103, 104,
+                                 air, air, air, 200, 201, 202, 203, 204, 205};
+  EXPECT_EQ(r.hu, half);
+  // Columns too (shear along x), and a shift of more than the slice: all air.
+  files.clear();
+  for (int k = 0; k < 3; ++k) {
+    DicomSpec s = slice(k, k);
+    s.position = std::to_string(10 + 0.25 * k * (k == 2 ? 10 : 1)) + "\\-20\\" + std::to_string(k);
+    files.push_back(dicom_file(s));
+  }
+  r = read_series(files);
+  ASSERT_TRUE(r.status.is_ok()) << message(r.status);
+  EXPECT_EQ(r.volume.nz, 3u);
+  EXPECT_EQ(r.hu[0], air);
+  for (int v = 12; v < 18; ++v) EXPECT_EQ(r.hu[static_cast<size_t>(v)], air) << v;
+}
+
+// Three tilted slices with a gap (four output slices: two reads), and four uneven slices
+// resampled onto three (the voxels shrunk to them): at every cap the read succeeds leaving only
+// the voxels or fails with kArenaExhausted leaving nothing.
+std::vector<std::vector<uint8_t>> tilted_series(const std::vector<double>& z) {
+  std::vector<std::vector<uint8_t>> files;
+  for (size_t k = 0; k < z.size(); ++k) {
+    DicomSpec s = slice(static_cast<int>(k), z[k]);
+    s.position = "10\\" + std::to_string(-20 + 0.1 * z[k]) + "\\" + std::to_string(z[k]);
+    files.push_back(dicom_file(s));
+  }
+  return files;
+}
+
+TEST(CtArena, ResampledSeriesEveryCapFailsCleanlyOrSucceeds) {
+  CtReadOptions o;
+  o.chunk_bytes = 1024;
+  const std::vector<std::vector<uint8_t>> more = tilted_series({0, 1, 3});
+  const std::vector<std::vector<uint8_t>> fewer = tilted_series({0, 1, 1.2, 2});
+  size_t smallest[2] = {0, 0};
+  for (size_t cap = 1000; cap <= 2600; ++cap) {
+    for (int c = 0; c < 2; ++c) {
+      TestArena a(cap);
+      SeriesResult d = read_series(c == 0 ? more : fewer, 0, o, &a.arena);
+      if (d.status.is_ok()) {
+        EXPECT_EQ(d.volume.nz, c == 0 ? 4u : 3u);
+        EXPECT_EQ(a.arena.used(), d.volume.nz * 12u);  // 2 x 3 voxels a slice
+        if (smallest[c] == 0) smallest[c] = cap;
+      } else {
+        ASSERT_EQ(d.status.code(), StatusCode::kArenaExhausted) << message(d.status);
+        EXPECT_EQ(a.arena.used(), 0u);
+        EXPECT_EQ(smallest[c], 0u) << cap;  // no failure above the smallest cap that works
+      }
+    }
+  }
+  EXPECT_NE(smallest[0], 0u);
+  EXPECT_NE(smallest[1], 0u);
+}
+
+// A series whose files change between the two reads of a resampled stack (the second finds
+// even more output slices) is an error, not a loop.
+struct ChangingSeries {
+  CtMemoryFiles before, after;
+  uint32_t opens = 0, switch_after = 0;
+  CtMemoryFiles& now() { return opens <= switch_after ? before : after; }
+  static Status open(void* user, uint32_t index, ByteSource* out) {
+    ChangingSeries* c = static_cast<ChangingSeries*>(user);
+    ++c->opens;
+    CtSeries s = ct_memory_series(&c->now());
+    return s.open(s.user, index, out);
+  }
+  static void close(void* user, uint32_t index, ByteSource* source) {
+    ChangingSeries* c = static_cast<ChangingSeries*>(user);
+    CtSeries s = ct_memory_series(&c->now());
+    s.close(s.user, index, source);
+  }
+};
+
+TEST(CtDicomResample, FilesChangingBetweenTheTwoReadsIsAnError) {
+  const std::vector<std::vector<uint8_t>> a = tilted_series({0, 1, 3}),
+                                          b = tilted_series({0, 1, 4});
+  std::vector<CtMemoryFile> ma, mb;
+  const char* names[3] = {"f0.dcm", "f1.dcm", "f2.dcm"};
+  for (size_t i = 0; i < 3; ++i) {
+    ma.push_back({names[i], a[i].data(), a[i].size()});
+    mb.push_back({names[i], b[i].data(), b[i].size()});
+  }
+  ChangingSeries c;
+  c.before = CtMemoryFiles{ma.data(), 3, 0, {}};
+  c.after = CtMemoryFiles{mb.data(), 3, 0, {}};
+  c.switch_after = 3;  // file 0's header, then files 1 and 2 in the first read
+  CtSeries series{3, ChangingSeries::open, ChangingSeries::close, &c};
+  TestArena t(size_t{1} << 20);
+  Context ctx(&t.arena);
+  CtVolume v;
+  Status s = read_dicom_series(ctx, series, CtReadOptions{}, &v, nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kParseError) << message(s);
+  EXPECT_NE(message(s).find("changed between two reads"), std::string::npos) << message(s);
+  EXPECT_EQ(t.arena.used(), 0u);
 }
 
 TEST(CtDicom, MissingAndBadTags) {

@@ -241,6 +241,11 @@ Status write_dicom_series(const CtVolume& v, const std::string& folder,
     return make_error(StatusCode::kInvalidArgument, "DICOM images are at most 65535 x 65535");
   }
   const uint32_t n = v.nz;
+  if (!options.slice_positions.empty() && options.slice_positions.size() != n) {
+    return make_error(StatusCode::kInvalidArgument, "slice_positions holds ",
+                      static_cast<uint64_t>(options.slice_positions.size()),
+                      " positions for a volume of ", n, " slices");
+  }
   // File number of slice k: a fixed permutation (k p + (n + 1) / 2) mod n, p coprime with n
   // and not n - 1 (for n > 2 neither the slice order nor its reverse).
   uint32_t p = 1;
@@ -333,7 +338,9 @@ Status write_dicom_series(const CtVolume& v, const std::string& folder,
     }
     DicomBuffer d;
     d.implicit = options.dicom_implicit_vr;
-    const Vec3 position = v.origin + v.axis_z * (static_cast<double>(k) * v.spacing.z);
+    const Vec3 position = options.slice_positions.empty()
+                              ? v.origin + v.axis_z * (static_cast<double>(k) * v.spacing.z)
+                              : options.slice_positions[k];
     d.str(0x0008, 0x0008, "CS", "ORIGINAL\\PRIMARY\\AXIAL");
     d.str(0x0008, 0x0016, "UI", sop_class);
     d.str(0x0008, 0x0018, "UI", instance);

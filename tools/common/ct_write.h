@@ -9,6 +9,7 @@
 #define SPLINTCORE_TOOLS_CT_WRITE_H
 
 #include <string>
+#include <vector>
 
 #include "splintcore/core.h"
 #include "splintcore/ct.h"
@@ -26,6 +27,9 @@ struct CtWriteOptions {
   // data, one fragment a slice; explicit VR, so not with dicom_implicit_vr).
   bool dicom_jpeg_lossless = false;
   std::string space = "left-posterior-superior";  // NRRD `space` (written, not converted)
+  // DICOM: when not empty (one per slice), slice k is written at slice_positions[k] instead of
+  // origin + axis_z * (k * spacing.z): series with gantry tilt, uneven spacing or gaps.
+  std::vector<Vec3> slice_positions;
 };
 
 // NRRD0004, type int16. `path` ending in ".nhdr": detached header plus "<stem>.raw" next to it

@@ -358,6 +358,13 @@ void Reconstruct::add_jaw_row(int jaw, const std::string& path, const Mesh& mesh
 
 void Reconstruct::print_report() const {
   if (!a_.common.json) {
+    if (info_.resampled) {
+      std::printf(
+          "resampled onto a regular grid: %u slices -> %u, gantry tilt %.2f deg, largest "
+          "in-plane correction %.3f mm, largest slice correction %.3f mm\n",
+          info_.slice_count, volume_.nz, info_.tilt_degrees, info_.max_shift_mm,
+          info_.max_slice_offset_mm);
+    }
     std::printf("window voxels %llu, unclaimed %llu; %.3f s, peak arena %llu bytes\n",
                 static_cast<unsigned long long>(ts_.in_window),
                 static_cast<unsigned long long>(rs_.unclaimed), monotonic_seconds() - run_.start,
@@ -372,6 +379,14 @@ void Reconstruct::print_report() const {
   j.add_raw("size", "[" + std::to_string(volume_.nx) + "," + std::to_string(volume_.ny) + "," +
                         std::to_string(volume_.nz) + "]");
   j.add("spacing", volume_.spacing);
+  // Geometry as scanners write it: a DICOM stack put on a regular grid, and by how much.
+  JsonObject g;
+  g.add("resampled", info_.resampled);
+  g.add("input_slices", static_cast<uint64_t>(info_.slice_count));
+  g.add("tilt_deg", info_.tilt_degrees);
+  g.add("max_inplane_correction_mm", info_.max_shift_mm);
+  g.add("max_slice_correction_mm", info_.max_slice_offset_mm);
+  j.add_raw("geometry", g.str());
   j.add("hu_min", static_cast<int64_t>(a_.hu_min));
   j.add("hu_max", static_cast<int64_t>(a_.hu_max));
   j.add("connectivity", static_cast<uint64_t>(a_.connectivity == 1 ? 26 : 6));
