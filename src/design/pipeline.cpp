@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "design/fusion.h"
 #include "splintcore/design.h"
 
 namespace splintcore {
@@ -320,8 +321,10 @@ Status register_scan(const Context& ctx, const CaseJaw& jaw, size_t j, const Mes
 // registration and then by the jaw's transform. Within the base the registered scan is the
 // jaw's whole surface, so the imprint is the scan's own triangles; its border must lie outside
 // the base (the Boolean names the border vertex otherwise: a larger scan or a smaller outline).
+// `registered` (per jaw, or null): registrations made already on the same jaws as given.
 Status fuse_scans(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
-                  Span<const Mesh> scans, CaseFile* out, Mesh* fused, DesignReport* report) {
+                  Span<const Mesh> scans, const FusionReport* registered, CaseFile* out,
+                  Mesh* fused, DesignReport* report) {
   *out = c;
   CaseJaw* list = ctx.arena->allocate_array<CaseJaw>(c.jaws.size());
   if (list == nullptr) return ctx.arena->exhausted_status();
@@ -330,7 +333,11 @@ Status fuse_scans(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
     fused[j] = mesh_view(jaws[j].vertices.span(), jaws[j].triangles.span());
     if (!c.jaws[j].has_scan) continue;
     FusionReport& f = report->fusion[j];
-    SPLINTCORE_RETURN_IF_ERROR(register_scan(ctx, c.jaws[j], j, jaws[j], scans[j], &f));
+    if (registered != nullptr) {
+      f = registered[j];
+    } else {
+      SPLINTCORE_RETURN_IF_ERROR(register_scan(ctx, c.jaws[j], j, jaws[j], scans[j], &f));
+    }
     f.applied = compose(c.jaws[j].transform, f.registration.transform);
     report->fused[j] = true;
     list[j].transform = f.applied;
@@ -340,9 +347,11 @@ Status fuse_scans(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
   return Status::ok();
 }
 
+}  // namespace
+
 // Checks the scans design_splint takes: none when no jaw has "scan", else one entry per jaw,
 // a mesh exactly for the jaws with "scan".
-Status check_scans(const CaseFile& c, Span<const Mesh> scans) {
+Status design_detail::check_case_scans(const CaseFile& c, Span<const Mesh> scans) {
   size_t first = c.jaws.size();  // the first jaw with a scan
   for (size_t j = c.jaws.size(); j-- > 0;) first = c.jaws[j].has_scan ? j : first;
   if (first == c.jaws.size() && scans.empty()) return Status::ok();
@@ -374,6 +383,22 @@ Status check_scans(const CaseFile& c, Span<const Mesh> scans) {
   }
   return Status::ok();
 }
+
+Status design_detail::register_case_scans(const Context& ctx, const CaseFile& c,
+                                          Span<const Mesh> jaws, Span<const Mesh> scans,
+                                          bool* fused, FusionReport* fusion) {
+  SPLINTCORE_RETURN_IF_ERROR(check_case_scans(c, scans));
+  for (size_t j = 0; j < c.jaws.size(); ++j) {
+    fused[j] = false;
+    if (!c.jaws[j].has_scan) continue;
+    SPLINTCORE_RETURN_IF_ERROR(register_scan(ctx, c.jaws[j], j, jaws[j], scans[j], &fusion[j]));
+    fusion[j].applied = fusion[j].registration.transform;
+    fused[j] = true;
+  }
+  return Status::ok();
+}
+
+namespace {
 
 // Checks what design_splint takes before anything is allocated.
 Status check_design_inputs(const CaseFile& c, Span<const Mesh> jaws, const Mesh& splint,
@@ -411,11 +436,19 @@ Status design_splint(const Context& ctx, const CaseFile& case_given, Span<const 
 
 Status design_splint(const Context& ctx, const CaseFile& case_given, Span<const Mesh> jaws_given,
                      Span<const Mesh> scans, Mesh* splint, DesignReport* report) {
+  return design_detail::design_splint_registered(ctx, case_given, jaws_given, scans, nullptr,
+                                                 splint, report);
+}
+
+Status design_detail::design_splint_registered(const Context& ctx, const CaseFile& case_given,
+                                               Span<const Mesh> jaws_given, Span<const Mesh> scans,
+                                               const FusionReport* registered, Mesh* splint,
+                                               DesignReport* report) {
   Arena& arena = *ctx.arena;
   *report = DesignReport{};
   const PrinterProfile* profile = nullptr;
   SPLINTCORE_RETURN_IF_ERROR(check_design_inputs(case_given, jaws_given, *splint, &profile));
-  SPLINTCORE_RETURN_IF_ERROR(check_scans(case_given, scans));
+  SPLINTCORE_RETURN_IF_ERROR(check_case_scans(case_given, scans));
   report->printer = profile->name;
   ArenaScope scope(arena);  // every error, a cancel included, leaves the arena as it was
   const auto stage = [&](const char* name) { return report_progress(ctx, name, 0, 1); };
@@ -445,7 +478,7 @@ Status design_splint(const Context& ctx, const CaseFile& case_given, Span<const 
   if (fusing) {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: fusion"));
     SPLINTCORE_RETURN_IF_ERROR(
-        fuse_scans(ctx, c_placed, jaws_given, scans, &fused_case, fused, report));
+        fuse_scans(ctx, c_placed, jaws_given, scans, registered, &fused_case, fused, report));
   }
   const CaseFile& c = fusing ? fused_case : c_placed;
   const Span<const Mesh> jaws = fusing ? Span<const Mesh>(fused, jaws_given.size()) : jaws_given;
