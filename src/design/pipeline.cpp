@@ -288,9 +288,10 @@ Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
 // with the case's thresholds: a fit above max_rms_mm or an overlap below min_overlap is an
 // error naming the jaw, both figures and both thresholds; so is a wrong landmark pairing.
 Status register_scan(const Context& ctx, const CaseJaw& jaw, size_t j, const Mesh& ct,
-                     const Mesh& scan, FusionReport* out) {
+                     const Mesh& scan, const Vec3& toward_other_jaw, FusionReport* out) {
   const CaseScan& sc = jaw.scan;
   RegisterOptions ro;
+  ro.toward_other_jaw = toward_other_jaw;
   ro.landmarks = sc.landmarks;
   ro.overlap = sc.trim;
   ro.max_rms_mm = sc.max_rms_mm;
@@ -316,6 +317,31 @@ Status register_scan(const Context& ctx, const CaseJaw& jaw, size_t j, const Mes
   return Status::ok();
 }
 
+// The direction from jaw j's vertex centroid to that of the one jaw of the other role
+// (maxilla and mandible), both where the case puts them, turned into jaw j's mesh frame (the
+// registration's): the way the scan's occlusal side must face. Zero without such a jaw.
+Vec3 toward_other_jaw(const CaseFile& c, Span<const Mesh> jaws, size_t j) {
+  const bool upper = std::strcmp(c.jaws[j].role, "maxilla") == 0;
+  const char* other = upper ? "mandible" : "maxilla";
+  if (!upper && std::strcmp(c.jaws[j].role, "mandible") != 0) return Vec3{};
+  size_t k = c.jaws.size();
+  for (size_t i = 0; i < c.jaws.size(); ++i) {
+    if (std::strcmp(c.jaws[i].role, other) != 0) continue;
+    if (k != c.jaws.size()) return Vec3{};  // two of them: no one direction
+    k = i;
+  }
+  if (k == c.jaws.size() || jaws[j].vertices.empty() || jaws[k].vertices.empty()) return Vec3{};
+  Vec3 centre[2];
+  const size_t which[2] = {j, k};
+  for (int w = 0; w < 2; ++w) {
+    Vec3 sum{};
+    for (const Vec3& v : jaws[which[w]].vertices) sum = sum + v;
+    const double n = static_cast<double>(jaws[which[w]].vertices.size());
+    centre[w] = c.jaws[which[w]].transform.apply_point(sum * (1.0 / n));
+  }
+  return inverse(c.jaws[j].transform).apply_vector(centre[1] - centre[0]);
+}
+
 // Scan-CT fusion: every jaw with a scan registered onto its mesh (register_scan); in *out (the
 // case with the jaw list copied into the arena) and fused[] that jaw is its scan, moved by the
 // registration and then by the jaw's transform. Within the base the registered scan is the
@@ -336,7 +362,8 @@ Status fuse_scans(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
     if (registered != nullptr) {
       f = registered[j];
     } else {
-      SPLINTCORE_RETURN_IF_ERROR(register_scan(ctx, c.jaws[j], j, jaws[j], scans[j], &f));
+      SPLINTCORE_RETURN_IF_ERROR(
+          register_scan(ctx, c.jaws[j], j, jaws[j], scans[j], toward_other_jaw(c, jaws, j), &f));
     }
     f.applied = compose(c.jaws[j].transform, f.registration.transform);
     report->fused[j] = true;
@@ -391,7 +418,8 @@ Status design_detail::register_case_scans(const Context& ctx, const CaseFile& c,
   for (size_t j = 0; j < c.jaws.size(); ++j) {
     fused[j] = false;
     if (!c.jaws[j].has_scan) continue;
-    SPLINTCORE_RETURN_IF_ERROR(register_scan(ctx, c.jaws[j], j, jaws[j], scans[j], &fusion[j]));
+    SPLINTCORE_RETURN_IF_ERROR(register_scan(ctx, c.jaws[j], j, jaws[j], scans[j],
+                                             toward_other_jaw(c, jaws, j), &fusion[j]));
     fusion[j].applied = fusion[j].registration.transform;
     fused[j] = true;
   }

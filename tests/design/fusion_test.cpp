@@ -455,7 +455,9 @@ struct PlanScans {
   Mesh jaws[2], scans[2];
   RigidTransform truth[2];
   bool ok = false;
-  PlanScans() {
+  // upside_down: each scan turned 180 degrees about the arch's width axis (x) before its
+  // motion, its occlusal side pointing away from the other jaw.
+  explicit PlanScans(bool upside_down = false) {
     text = R"({"splintcore_case": 1, "case_id": "plan-scans",
       "jaws": [{"role": "maxilla", "mesh": "maxilla.stl", "scan": {"path": "maxilla_scan.stl"}},
                {"role": "mandible", "mesh": "mandible.stl", "scan": {"path": "mandible_scan.stl"}}],
@@ -485,6 +487,8 @@ struct PlanScans {
       truth[j] = rotation_about_axis(box.center(), axis * (1.0 / length(axis)),
                                      (j == 0 ? -5.0 : 6.0) * kPi / 180.0);
       truth[j].t = truth[j].t + (j == 0 ? Vec3{-1.0, 1.5, -0.5} : Vec3{1.5, -2.0, 0.8});
+      if (upside_down)
+        truth[j] = compose(truth[j], rotation_about_axis(box.center(), {1, 0, 0}, kPi));
       const RigidTransform back = inverse(truth[j]);
       std::vector<uint32_t> map(m.vertices.size(), ~0u);
       for (const Triangle& tr : m.triangles) {
@@ -614,6 +618,36 @@ TEST(DesignFusion, PlanFusesTheScansOnceBeforeItsMoves) {
       << over.message();
   EXPECT_EQ(f.t.arena.used(), used);
   EXPECT_TRUE(i2.triangles.empty() && f2.triangles.empty());
+}
+
+// The upside-down guard in design (issue 30), both arches: the plan's scans each given upside
+// down are registered correctly (the direction to the other jaw passes over the starts that
+// would lay a scan on its jaw's far side) or refused saying the scan faces away; never a splint
+// from an upside-down scan.
+TEST(DesignFusion, UpsideDownScansAreRegisteredOrRefused) {
+  PlanScans f(true);
+  ASSERT_TRUE(f.ok);
+  Context ctx(&f.t.arena);
+  Mesh intermediate, final_splint;
+  PlanReport r;
+  const Status s = design_plan(ctx, f.c, Span<const Mesh>(f.jaws, 2), Span<const Mesh>(f.scans, 2),
+                               &intermediate, &final_splint, &r);
+  if (!s.is_ok()) {
+    EXPECT_NE(std::string(s.message()).find("the scan faces away"), std::string::npos)
+        << s.message();
+    return;
+  }
+  for (int j = 0; j < 2; ++j) {
+    const FusionReport& fu = r.final_splint.design.fusion[j];
+    double rms = 0, deg = 0;
+    motion_error(f.scans[j], fu.registration.transform, f.truth[j], &rms, &deg);
+    EXPECT_LT(rms, 0.05) << "jaw " << j;
+    EXPECT_LT(deg, 0.1) << "jaw " << j;
+    EXPECT_GT(fu.registration.occlusal_cos, 0.5) << "jaw " << j;
+    std::printf("jaw %d upside down: registered from start %d, RMS error %.6f mm\n", j,
+                fu.registration.start, rms);
+  }
+  EXPECT_TRUE(r.intermediate.design.print.printable && r.final_splint.design.print.printable);
 }
 
 }  // namespace
