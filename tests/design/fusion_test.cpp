@@ -3,7 +3,9 @@
 // moved by a known rigid motion). Design recovers the motion (within 0.05 mm and 0.1 degree),
 // the scan's triangles are the imprint, the splint is a closed, valid solid; a wrong landmark
 // pairing and a fit over the thresholds are errors naming the numbers, with nothing made; the
-// "scan" keys are parsed, checked and written back; report.json has "fusion".
+// "scan" keys are parsed, checked and written back; report.json has "fusion". Two-jaw surgery
+// with scans (the fusion once, before the plan's moves); scans given upside down (registered
+// correctly or refused); the Teeth3DS upper scan as a maxilla (a real case).
 #include <gtest/gtest.h>
 
 #include <array>
@@ -17,6 +19,8 @@
 #include "common/cli.h"
 #include "common/phantom.h"
 #include "splintcore/design.h"
+#include "splintcore/distance.h"
+#include "support/meshlab.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -648,6 +652,96 @@ TEST(DesignFusion, UpsideDownScansAreRegisteredOrRefused) {
                 fu.registration.start, rms);
   }
   EXPECT_TRUE(r.intermediate.design.print.printable && r.final_splint.design.print.printable);
+}
+
+// The Teeth3DS real case (issue 30): the sample's upper-jaw scan (an open surface, 16k
+// triangles; CC BY-NC-ND, read where it lies, skipped when absent) as the maxilla, against a
+// stand-in mandible made from it: the scan mirrored across the horizontal plane 1.25 mm beyond
+// its crown tips (its crowns point +z in the sample's frame), its triangles turned back so it
+// faces outward, rounded to float32. The automatic outline, then the design: a closed, valid,
+// printable splint; every scan vertex strictly inside the base (no blockout) is a splint
+// vertex bit for bit (the imprint is the scan's own surface); MeshLab agrees when present.
+TEST(DesignTeeth3dsRealData, UpperScanAsTheMaxilla) {
+  const std::string path = std::string(SPLINTCORE_TEETH3DS_DIR) + "/YBSESUN6_upper.ply";
+  if (!test::file_exists(path)) GTEST_SKIP() << "Teeth3DS sample not found: " << path;
+  test::TestArena t(size_t{256} << 20);
+  Context ctx(&t.arena);
+  const std::vector<uint8_t> bytes = test::read_file_bytes(path);
+  MemorySource src{bytes.data(), bytes.size(), 0, 0};
+  Mesh jaws[2];
+  MeshReadInfo info;
+  SPLINTCORE_ASSERT_OK(
+      read_ply(ctx, memory_source(&src, path.c_str()), MeshReadOptions{}, &jaws[0], &info));
+  MeshReport scan_report;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, jaws[0], &scan_report));
+  ASSERT_FALSE(scan_report.closed());  // a scan: open
+  ASSERT_TRUE(scan_report.edge_manifold() && scan_report.oriented());
+  double top = -HUGE_VAL;
+  for (const Vec3& v : jaws[0].vertices) top = std::fmax(top, v.z);
+  const double mirror = top + 1.25;
+  jaws[1].bind(&t.arena);
+  for (const Vec3& v : jaws[0].vertices) {
+    Vec3 p{v.x, v.y, 2 * mirror - v.z};
+    ASSERT_TRUE(round_to_float32(&p));
+    ASSERT_TRUE(jaws[1].vertices.push_back(p));
+  }
+  for (const Triangle& tr : jaws[0].triangles) {
+    ASSERT_TRUE(jaws[1].triangles.push_back(Triangle{{tr.v[0], tr.v[2], tr.v[1]}}));
+  }
+  const std::string text = R"({"splintcore_case": 1, "case_id": "teeth3ds",
+    "jaws": [{"role": "maxilla", "mesh": "YBSESUN6_upper.ply"},
+             {"role": "mandible", "mesh": "mirrored.stl"}],
+    "base": {"auto": {}}})";
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse_case(ctx, text.data(), text.size(), "teeth3ds.json", &c));
+  Mesh splint;
+  DesignReport r;
+  SPLINTCORE_ASSERT_OK(design_splint(ctx, c, Span<const Mesh>(jaws, 2), &splint, &r));
+  EXPECT_TRUE(r.outlined);
+  EXPECT_TRUE(r.print.printable);
+  EXPECT_TRUE(r.self_intersection_checked);
+  MeshReport mr;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, splint, &mr));
+  EXPECT_TRUE(mr.closed() && mr.edge_manifold() && mr.outward()) << mr.boundary_edges;
+  EXPECT_EQ(mr.shells, 1u);
+  EXPECT_GT(mr.volume, 100.0);
+  // The imprint: the base the design cut (its resolved outline, built again), and every scan
+  // vertex strictly inside it (winding number, and more than 1e-3 mm from its surface).
+  CaseFile resolved;
+  SPLINTCORE_ASSERT_OK(resolve_case_outline(ctx, c, Span<const Mesh>(jaws, 2), &resolved, nullptr));
+  Mesh base(&t.arena);
+  BaseReport br;
+  SPLINTCORE_ASSERT_OK(build_case_base(ctx, resolved, &base, &br));
+  DistanceIndex index;
+  SPLINTCORE_ASSERT_OK(build_distance_index(ctx, base, DistanceIndexOptions{}, &index));
+  std::set<std::array<float, 3>> at;
+  for (const Vec3& v : splint.vertices) {
+    at.insert({static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)});
+  }
+  size_t inside = 0, kept = 0;
+  for (const Vec3& v : jaws[0].vertices) {
+    ClosestPoint cp;
+    if (!closest_point(index, v, &cp) || cp.distance <= 1e-3) continue;
+    if (winding_number(index, v) < 0.5) continue;
+    ++inside;
+    const size_t n =
+        at.count({static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)});
+    kept += n;
+    EXPECT_EQ(n, 1u) << "scan vertex (" << v.x << ", " << v.y << ", " << v.z << ")";
+  }
+  EXPECT_GT(inside, 500u);
+  if (test::have_meshlab()) {  // the independent oracle: two-manifold, no border, same volume
+    std::vector<uint8_t> stl;
+    SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(t.arena, splint, StlFormat::kBinary, &stl));
+    const std::string log = test::meshlab_log_of_bytes(stl);
+    EXPECT_NE(log.find("Mesh is two-manifold"), std::string::npos) << log;
+    EXPECT_NE(log.find("Boundary Edges 0"), std::string::npos) << log;
+    EXPECT_NEAR(test::number_after(log, "Mesh Volume  is "), mr.volume, 1e-5 * mr.volume);
+  }
+  std::printf(
+      "teeth3ds: splint %zu triangles, %.1f mm^3; %zu scan vertices inside the base, %zu "
+      "of them splint vertices bit for bit\n",
+      splint.triangles.size(), mr.volume, inside, kept);
 }
 
 }  // namespace
