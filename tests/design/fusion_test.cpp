@@ -624,6 +624,35 @@ TEST(DesignFusion, PlanFusesTheScansOnceBeforeItsMoves) {
   EXPECT_TRUE(i2.triangles.empty() && f2.triangles.empty());
 }
 
+// The plan with scans in exactly the arena its first run took at its peak, and one byte
+// less: kArenaExhausted with the arena as it was and nothing made.
+TEST(DesignFusion, PlanWithScansRunsInItsMeasuredNeed) {
+  PlanScans f;
+  ASSERT_TRUE(f.ok);
+  const auto run = [&](size_t cap, Mesh* a, Mesh* b, size_t* high_water) {
+    test::TestArena work(cap);
+    PlanReport r;
+    const Status s = design_plan(Context(&work.arena), f.c, Span<const Mesh>(f.jaws, 2),
+                                 Span<const Mesh>(f.scans, 2), a, b, &r);
+    *high_water = work.arena.high_water();
+    if (!s.is_ok()) {
+      EXPECT_EQ(work.arena.used(), 0u);
+      EXPECT_TRUE(a->triangles.empty() && b->triangles.empty());
+      return s;
+    }
+    EXPECT_TRUE(!a->triangles.empty() && !b->triangles.empty());  // (they go with `work`)
+    return s;
+  };
+  Mesh a, b;
+  size_t need = 0, ignored = 0;
+  SPLINTCORE_ASSERT_OK(run(size_t{128} << 20, &a, &b, &need));
+  Mesh a2, b2;
+  SPLINTCORE_EXPECT_OK(run(need, &a2, &b2, &ignored));
+  Mesh a3, b3;
+  EXPECT_EQ(run(need - 1, &a3, &b3, &ignored).code(), StatusCode::kArenaExhausted);
+  std::printf("plan with two scans: %zu bytes at its peak\n", need);
+}
+
 // The upside-down guard in design (issue 30), both arches: the plan's scans each given upside
 // down are registered correctly (the direction to the other jaw passes over the starts that
 // would lay a scan on its jaw's far side) or refused saying the scan faces away; never a splint
