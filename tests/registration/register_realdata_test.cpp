@@ -5,6 +5,7 @@
 // issue's proof itself: the "CT" a CT volume of the teeth (0.3 mm voxels) written and read by
 // the project's CT code and reconstructed, 20 motions (CrownsOntoTheirCtReconstruction).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -240,8 +241,9 @@ struct RealCtMandible {
     volume.origin = grid.origin;
     volume.hu = hu.data();
     // Through the project's CT writer and the core reader (the reader's volume is used).
-    const std::filesystem::path path =
-        std::filesystem::temp_directory_path() / "splintcore_register_realdata_ct.nrrd";
+    const std::filesystem::path path =  // per process: CI jobs may run side by side
+        std::filesystem::temp_directory_path() /
+        ("splintcore_register_realdata_ct_" + std::to_string(::getpid()) + ".nrrd");
     const Status written = cli::write_nrrd(volume, path.string(), cli::CtWriteOptions{});
     EXPECT_TRUE(written.is_ok()) << test::format(written);
     CtVolume read;
