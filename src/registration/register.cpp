@@ -513,14 +513,15 @@ Status check_fit(const RegisterOptions& o, const RegisterResult& r, bool occlusa
                       "or reverse its triangles, or give landmarks");
   }
   if (r.facing < o.min_facing) {
-    return make_error(StatusCode::kInvalidMesh,
-                      "registration: the scan faces away from the CT: only ", r.facing,
-                      " of its area near the CT faces the way the CT's surface does there (at "
-                      "least ",
-                      o.min_facing,
-                      " needed): it lies upside down on the jaw, or its triangles are wound "
-                      "inside out (its occlusal side pointing away from the other jaw); reverse "
-                      "the scan's triangles if it is inside out, else give landmarks");
+    return make_error(
+        StatusCode::kInvalidMesh, "registration: the scan faces away from the CT: only ", r.facing,
+        " of its area near the CT faces the way the CT's surface does there (at "
+        "least ",
+        o.min_facing,
+        " needed): it lies upside down on the jaw, or its triangles are wound "
+        "inside out (its occlusal side pointing away from the other jaw); reverse "
+        "the scan's triangles if it is inside out (or the CT jaw's, if that is), else give "
+        "landmarks");
   }
   return Status::ok();
 }
