@@ -374,6 +374,22 @@ Status plan_splint_case(const CaseFile& c, const PlanSplintReport& r, CaseJaw ja
 Status design_plan(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* intermediate,
                    Mesh* final_splint, PlanReport* report);
 
+// The same for a plan case whose jaws have scans ("scan"; scans[j] as design_splint's overload
+// with scans takes them: may be empty only when no jaw has one). The fusion comes first, once:
+// progress "plan: fusion", each scan registered onto its preoperative jaw as given (as
+// design_splint does), then everything of the plan sees a fused jaw as its registered scan,
+// the registration first and the plan's move (and the autorotation) after it: the
+// autorotation turns the mandible until the scans (or a scan and a jaw) are the opening apart,
+// and each splint's imprint is the scans' triangles. Each splint's report (design) holds the
+// same registration in fused[] and fusion[], `applied` there being its own moves after it.
+// Errors, besides the overload's: design_splint's fusion errors prefixed "plan: " (a fit over
+// the thresholds, a wrong landmark pairing, scans that do not match the case). Arena: the
+// overload's plus register_rigid_bound() of the largest scan and its jaw, returned before the
+// splints are made.
+Status design_plan(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                   Span<const Mesh> scans, Mesh* intermediate, Mesh* final_splint,
+                   PlanReport* report);
+
 // The print job of a plan (job.3mf): both splints on the printer's tray (c.printer's profile),
 // in a row kPlanJobGapMm apart box to box (arrange_on_tray, printer.h), each placed by its
 // build item's translation (the splints' own float32 vertices are written as they are),

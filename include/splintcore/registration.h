@@ -38,6 +38,20 @@ struct RegisterOptions {
   uint32_t max_samples = 3000;
   // ICP iterations at most (after the automatic alignment's trials), >= 1.
   uint32_t max_iterations = 100;
+  // The fit is refused when less than this share of the scan's area near the CT faces the
+  // way the CT does there (RegisterResult::facing), in [0, 1]; 0: never. A scan laid on the
+  // CT the right way up faces as the CT does (near 1): below a half it lies upside down on
+  // the jaw or is wound inside out. The CT must be outward (a closed reconstruction is).
+  double min_facing = 0.5;
+  // The direction from the CT jaw towards the other jaw, in the CT's frame (any length; zero:
+  // not known). A scan of crowns and gum faces the other jaw: its net normal (the sum of its
+  // triangles' area vectors, which an open cap turns out of its occlusal side) must point that
+  // way. With it, the automatic alignment passes over starts that end with the scan's
+  // occlusal side pointing away (upside down on the jaw: on a jaw whose far side looks like
+  // its near side, a tube, such a fit can be as close as the right one), and a final fit that
+  // does is an error. Ignored for a scan whose net normal is under a tenth of its area (a
+  // closed or flat-folded surface has no occlusal side to go by).
+  Vec3 toward_other_jaw{};
 };
 
 struct RegisterResult {
@@ -54,6 +68,13 @@ struct RegisterResult {
   // -1 with landmarks.
   int32_t start = -1;
   double landmark_rms_mm = 0;  // with landmarks: their RMS under the final transform
+  // Over every k-th scan triangle (k the least giving at most max_samples) whose centroid
+  // lies within inlier_mm of the CT after the fit: the share of their area whose normal
+  // agrees with the CT's face there (1 when none is that near).
+  double facing = 1;
+  // With toward_other_jaw: the cosine of the angle between the registered scan's net normal
+  // and that direction (0 when not known or not used).
+  double occlusal_cos = 0;
 };
 
 // Arena bytes register_rigid() takes at most (all returned before it does): the CT's distance
@@ -69,7 +90,11 @@ uint64_t register_rigid_bound(uint64_t scan_vertex_count, uint64_t ct_vertex_cou
 // landmarks, landmarks whose fit leaves them more than landmark_tolerance_mm apart: the
 // message names the pair farthest off), kInvalidMesh (an empty mesh, a non-finite vertex,
 // fewer than 16 samples, surfaces that do not fix the motion: flat or symmetric),
-// kLimitExceeded (the fit's RMS is above max_rms_mm; *result then holds that fit),
+// kLimitExceeded (the fit's RMS is above max_rms_mm; *result then holds that fit), kInvalidMesh
+// "the scan faces away from the CT" (facing below min_facing: upside down or inside out; the
+// message says which to do; *result holds the fit), kInvalidMesh "the scan faces away from the
+// other jaw" (with toward_other_jaw: every automatic start, or the final fit, leaves its
+// occlusal side pointing away),
 // kArenaExhausted, kCancelled. Arena: at most register_rigid_bound(); nothing stays.
 Status register_rigid(const Context& ctx, const Mesh& scan, const Mesh& ct_jaw,
                       const RegisterOptions& options, RegisterResult* result);

@@ -615,6 +615,18 @@ sc_status sc_design_plan(sc_context* ctx, const sc_case* c, const sc_mesh* const
                          size_t jaw_count, sc_mesh** intermediate, sc_mesh** final_splint,
                          const sc_sink* job, sc_plan_report* report);
 
+/* The same for a plan case whose jaws have "scan" (design_plan with scans, C++ design.h):
+ * scans[i] is the scan of the case's jaw i as read, NULL for a jaw without one (`scans` may be
+ * NULL only when no jaw has one). The fusion comes first, once, on the preoperative jaws (stage
+ * "plan: fusion"); both splints and the autorotation then see each scanned jaw as its
+ * registered scan, the plan's moves after the registration. Arena: sc_design_plan's plus
+ * register_rigid_bound() of the largest scan and its jaw (returned). Errors: sc_design_plan's,
+ * and sc_design_scans' fusion errors prefixed "plan: ". At most 2 jaws (the plan's). */
+sc_status sc_design_plan_scans(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
+                               const sc_mesh* const* scans, size_t jaw_count,
+                               sc_mesh** intermediate, sc_mesh** final_splint, const sc_sink* job,
+                               sc_plan_report* report);
+
 #ifdef __cplusplus
 } /* extern "C" */
 #endif

@@ -1057,8 +1057,17 @@ sc_status sc_design_write_report(sc_context* ctx, const sc_case* c, const sc_mes
 sc_status sc_design_plan(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
                          size_t jaw_count, sc_mesh** intermediate, sc_mesh** final_splint,
                          const sc_sink* job, sc_plan_report* report) {
+  return sc_design_plan_scans(ctx, c, jaws, nullptr, jaw_count, intermediate, final_splint, job,
+                              report);
+}
+
+sc_status sc_design_plan_scans(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
+                               const sc_mesh* const* scans, size_t jaw_count,
+                               sc_mesh** intermediate, sc_mesh** final_splint, const sc_sink* job,
+                               sc_plan_report* report) {
   if (ctx == nullptr || c == nullptr || intermediate == nullptr || final_splint == nullptr) {
-    return null_argument(ctx, "sc_design_plan", "the case or an output");
+    return null_argument(ctx, scans != nullptr ? "sc_design_plan_scans" : "sc_design_plan",
+                         "the case or an output");
   }
   *intermediate = nullptr;
   *final_splint = nullptr;
@@ -1075,8 +1084,13 @@ sc_status sc_design_plan(sc_context* ctx, const sc_case* c, const sc_mesh* const
   if (handles[0] == nullptr || handles[1] == nullptr || record == nullptr) {
     return keep(ctx, ctx->arena.exhausted_status());
   }
-  s = design_plan(core, c->c, Span<const Mesh>(local, jaw_count), &handles[0]->mesh,
-                  &handles[1]->mesh, record);
+  Mesh scan_meshes[2];  // empty for a jaw without a scan
+  for (size_t i = 0; scans != nullptr && i < jaw_count; ++i) {
+    if (scans[i] != nullptr) scan_meshes[i] = scans[i]->mesh;
+  }
+  s = design_plan(core, c->c, Span<const Mesh>(local, jaw_count),
+                  Span<const Mesh>(scan_meshes, scans != nullptr ? jaw_count : 0),
+                  &handles[0]->mesh, &handles[1]->mesh, record);
   if (!s.is_ok()) return keep(ctx, s);
   Vec3 moves[2];
   if (job != nullptr) {

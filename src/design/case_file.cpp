@@ -654,13 +654,6 @@ Status parse_plan(const Reader& r, const JsonValue& root, const JsonValue& p, Ca
     return s.append_u64(kLabelMaxCharacters - 4)
         .append(" characters: each splint's label is \"INT \" or \"FIN \" and the text");
   }
-  for (const CaseJaw& jaw : out->jaws) {
-    if (jaw.has_scan) {  // design_plan passes no scans to its two designs (yet)
-      return r.fail(p, StatusCode::kUnsupported,
-                    "\"plan\" with a jaw's \"scan\" is not supported yet: design each splint "
-                    "as a case of its own");
-    }
-  }
   out->has_plan = true;
   return Status::ok();
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "design/fusion.h"
 #include "splintcore/design.h"
 
 namespace splintcore {
@@ -287,9 +288,10 @@ Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
 // with the case's thresholds: a fit above max_rms_mm or an overlap below min_overlap is an
 // error naming the jaw, both figures and both thresholds; so is a wrong landmark pairing.
 Status register_scan(const Context& ctx, const CaseJaw& jaw, size_t j, const Mesh& ct,
-                     const Mesh& scan, FusionReport* out) {
+                     const Mesh& scan, const Vec3& toward_other_jaw, FusionReport* out) {
   const CaseScan& sc = jaw.scan;
   RegisterOptions ro;
+  ro.toward_other_jaw = toward_other_jaw;
   ro.landmarks = sc.landmarks;
   ro.overlap = sc.trim;
   ro.max_rms_mm = sc.max_rms_mm;
@@ -315,13 +317,40 @@ Status register_scan(const Context& ctx, const CaseJaw& jaw, size_t j, const Mes
   return Status::ok();
 }
 
+// The direction from jaw j's vertex centroid to that of the one jaw of the other role
+// (maxilla and mandible), both where the case puts them, turned into jaw j's mesh frame (the
+// registration's): the way the scan's occlusal side must face. Zero without such a jaw.
+Vec3 toward_other_jaw(const CaseFile& c, Span<const Mesh> jaws, size_t j) {
+  const bool upper = std::strcmp(c.jaws[j].role, "maxilla") == 0;
+  const char* other = upper ? "mandible" : "maxilla";
+  if (!upper && std::strcmp(c.jaws[j].role, "mandible") != 0) return Vec3{};
+  size_t k = c.jaws.size();
+  for (size_t i = 0; i < c.jaws.size(); ++i) {
+    if (std::strcmp(c.jaws[i].role, other) != 0) continue;
+    if (k != c.jaws.size()) return Vec3{};  // two of them: no one direction
+    k = i;
+  }
+  if (k == c.jaws.size() || jaws[j].vertices.empty() || jaws[k].vertices.empty()) return Vec3{};
+  Vec3 centre[2];
+  const size_t which[2] = {j, k};
+  for (int w = 0; w < 2; ++w) {
+    Vec3 sum{};
+    for (const Vec3& v : jaws[which[w]].vertices) sum = sum + v;
+    const double n = static_cast<double>(jaws[which[w]].vertices.size());
+    centre[w] = c.jaws[which[w]].transform.apply_point(sum * (1.0 / n));
+  }
+  return inverse(c.jaws[j].transform).apply_vector(centre[1] - centre[0]);
+}
+
 // Scan-CT fusion: every jaw with a scan registered onto its mesh (register_scan); in *out (the
 // case with the jaw list copied into the arena) and fused[] that jaw is its scan, moved by the
 // registration and then by the jaw's transform. Within the base the registered scan is the
 // jaw's whole surface, so the imprint is the scan's own triangles; its border must lie outside
 // the base (the Boolean names the border vertex otherwise: a larger scan or a smaller outline).
+// `registered` (per jaw, or null): registrations made already on the same jaws as given.
 Status fuse_scans(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
-                  Span<const Mesh> scans, CaseFile* out, Mesh* fused, DesignReport* report) {
+                  Span<const Mesh> scans, const FusionReport* registered, CaseFile* out,
+                  Mesh* fused, DesignReport* report) {
   *out = c;
   CaseJaw* list = ctx.arena->allocate_array<CaseJaw>(c.jaws.size());
   if (list == nullptr) return ctx.arena->exhausted_status();
@@ -330,7 +359,12 @@ Status fuse_scans(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
     fused[j] = mesh_view(jaws[j].vertices.span(), jaws[j].triangles.span());
     if (!c.jaws[j].has_scan) continue;
     FusionReport& f = report->fusion[j];
-    SPLINTCORE_RETURN_IF_ERROR(register_scan(ctx, c.jaws[j], j, jaws[j], scans[j], &f));
+    if (registered != nullptr) {
+      f = registered[j];
+    } else {
+      SPLINTCORE_RETURN_IF_ERROR(
+          register_scan(ctx, c.jaws[j], j, jaws[j], scans[j], toward_other_jaw(c, jaws, j), &f));
+    }
     f.applied = compose(c.jaws[j].transform, f.registration.transform);
     report->fused[j] = true;
     list[j].transform = f.applied;
@@ -340,9 +374,11 @@ Status fuse_scans(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
   return Status::ok();
 }
 
+}  // namespace
+
 // Checks the scans design_splint takes: none when no jaw has "scan", else one entry per jaw,
 // a mesh exactly for the jaws with "scan".
-Status check_scans(const CaseFile& c, Span<const Mesh> scans) {
+Status design_detail::check_case_scans(const CaseFile& c, Span<const Mesh> scans) {
   size_t first = c.jaws.size();  // the first jaw with a scan
   for (size_t j = c.jaws.size(); j-- > 0;) first = c.jaws[j].has_scan ? j : first;
   if (first == c.jaws.size() && scans.empty()) return Status::ok();
@@ -374,6 +410,23 @@ Status check_scans(const CaseFile& c, Span<const Mesh> scans) {
   }
   return Status::ok();
 }
+
+Status design_detail::register_case_scans(const Context& ctx, const CaseFile& c,
+                                          Span<const Mesh> jaws, Span<const Mesh> scans,
+                                          bool* fused, FusionReport* fusion) {
+  SPLINTCORE_RETURN_IF_ERROR(check_case_scans(c, scans));
+  for (size_t j = 0; j < c.jaws.size(); ++j) {
+    fused[j] = false;
+    if (!c.jaws[j].has_scan) continue;
+    SPLINTCORE_RETURN_IF_ERROR(register_scan(ctx, c.jaws[j], j, jaws[j], scans[j],
+                                             toward_other_jaw(c, jaws, j), &fusion[j]));
+    fusion[j].applied = fusion[j].registration.transform;
+    fused[j] = true;
+  }
+  return Status::ok();
+}
+
+namespace {
 
 // Checks what design_splint takes before anything is allocated.
 Status check_design_inputs(const CaseFile& c, Span<const Mesh> jaws, const Mesh& splint,
@@ -411,11 +464,19 @@ Status design_splint(const Context& ctx, const CaseFile& case_given, Span<const 
 
 Status design_splint(const Context& ctx, const CaseFile& case_given, Span<const Mesh> jaws_given,
                      Span<const Mesh> scans, Mesh* splint, DesignReport* report) {
+  return design_detail::design_splint_registered(ctx, case_given, jaws_given, scans, nullptr,
+                                                 splint, report);
+}
+
+Status design_detail::design_splint_registered(const Context& ctx, const CaseFile& case_given,
+                                               Span<const Mesh> jaws_given, Span<const Mesh> scans,
+                                               const FusionReport* registered, Mesh* splint,
+                                               DesignReport* report) {
   Arena& arena = *ctx.arena;
   *report = DesignReport{};
   const PrinterProfile* profile = nullptr;
   SPLINTCORE_RETURN_IF_ERROR(check_design_inputs(case_given, jaws_given, *splint, &profile));
-  SPLINTCORE_RETURN_IF_ERROR(check_scans(case_given, scans));
+  SPLINTCORE_RETURN_IF_ERROR(check_case_scans(case_given, scans));
   report->printer = profile->name;
   ArenaScope scope(arena);  // every error, a cancel included, leaves the arena as it was
   const auto stage = [&](const char* name) { return report_progress(ctx, name, 0, 1); };
@@ -445,7 +506,7 @@ Status design_splint(const Context& ctx, const CaseFile& case_given, Span<const 
   if (fusing) {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: fusion"));
     SPLINTCORE_RETURN_IF_ERROR(
-        fuse_scans(ctx, c_placed, jaws_given, scans, &fused_case, fused, report));
+        fuse_scans(ctx, c_placed, jaws_given, scans, registered, &fused_case, fused, report));
   }
   const CaseFile& c = fusing ? fused_case : c_placed;
   const Span<const Mesh> jaws = fusing ? Span<const Mesh>(fused, jaws_given.size()) : jaws_given;

@@ -4,6 +4,7 @@
 // the jaws where it does, in either sequence: docs/case-format.md, "Plan".
 #include <cstring>
 
+#include "design/fusion.h"
 #include "splintcore/design.h"
 
 namespace splintcore {
@@ -16,6 +17,16 @@ Status plan_error(const Status& s, const char* which, const char* stage) {
     return s;
   }
   Status e = make_error(s.code(), "plan: ", which, ": ", stage, s.message());
+  if (s.index() != kNoPosition) e.at_index(s.index());
+  return e;
+}
+
+// An error of both splints (the fusion, made once): "plan: " and the message.
+Status plan_prefixed(const Status& s) {
+  if (s.is_ok() || s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) {
+    return s;
+  }
+  Status e = make_error(s.code(), "plan: ", s.message());
   if (s.index() != kNoPosition) e.at_index(s.index());
   return e;
 }
@@ -72,10 +83,27 @@ Status plan_label_text(const CaseFile& c, bool final_splint, char out[kLabelMaxC
   return Status::ok();
 }
 
+// The scan-CT fusion of a plan case, made once before either splint: the scans as given and
+// their registrations onto the preoperative jaws (fused[j]: jaw j has a scan).
+struct PlanFusion {
+  Span<const Mesh> scans;
+  bool fused[2] = {false, false};
+  FusionReport fusion[2];
+  bool any() const { return fused[0] || fused[1]; }
+};
+
+// Jaw j as the autorotation sees it, moved by `move`: its registered scan (the registration
+// first, then the plan's move) when it has one, else its mesh.
+Status plan_jaw(const Context& ctx, Span<const Mesh> jaws, const PlanFusion& f, size_t j,
+                const RigidTransform& move, const char* role, Mesh* out) {
+  if (!f.fused[j]) return moved_copy(ctx, jaws[j], move, role, out);
+  return moved_copy(ctx, f.scans[j], compose(move, f.fusion[j].registration.transform), role, out);
+}
+
 // One splint: the jaws moved as the plan says for it, the mandible turned about the hinge axis
 // to the opening, then design_splint. The moved copies are returned before the design.
-Status plan_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, bool final_splint,
-                Mesh* splint, PlanSplintReport* r) {
+Status plan_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, const PlanFusion& f,
+                bool final_splint, Mesh* splint, PlanSplintReport* r) {
   const char* which = final_splint ? "final" : "intermediate";
   size_t up = 0, low = 0;
   SPLINTCORE_RETURN_IF_ERROR(plan_roles(c, &up, &low));
@@ -89,8 +117,8 @@ Status plan_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, bo
   {
     ArenaScope temporaries(*ctx.arena);
     Mesh upper, lower;
-    Status s = moved_copy(ctx, jaws[up], maxilla_move, "maxilla", &upper);
-    if (s.is_ok()) s = moved_copy(ctx, jaws[low], mandible_move, "mandible", &lower);
+    Status s = plan_jaw(ctx, jaws, f, up, maxilla_move, "maxilla", &upper);
+    if (s.is_ok()) s = plan_jaw(ctx, jaws, f, low, mandible_move, "mandible", &lower);
     AutorotateOptions o;
     o.hinge[0] = plan.hinge[0];
     o.hinge[1] = plan.hinge[1];
@@ -104,7 +132,10 @@ Status plan_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, bo
   CaseJaw derived_jaws[2];
   CaseFile derived;
   SPLINTCORE_RETURN_IF_ERROR(plan_splint_case(c, *r, derived_jaws, &derived));
-  return plan_error(design_splint(ctx, derived, jaws, splint, &r->design), which, "");
+  return plan_error(
+      design_detail::design_splint_registered(ctx, derived, jaws, f.scans,
+                                              f.any() ? f.fusion : nullptr, splint, &r->design),
+      which, "");
 }
 
 }  // namespace
@@ -130,6 +161,12 @@ Status plan_splint_case(const CaseFile& c, const PlanSplintReport& r, CaseJaw ja
 
 Status design_plan(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* intermediate,
                    Mesh* final_splint, PlanReport* report) {
+  return design_plan(ctx, c, jaws, Span<const Mesh>(), intermediate, final_splint, report);
+}
+
+Status design_plan(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                   Span<const Mesh> scans, Mesh* intermediate, Mesh* final_splint,
+                   PlanReport* report) {
   *report = PlanReport{};
   size_t up = 0, low = 0;
   SPLINTCORE_RETURN_IF_ERROR(plan_roles(c, &up, &low));
@@ -137,11 +174,19 @@ Status design_plan(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
     return make_error(StatusCode::kInvalidArgument, "plan: the case names 2 jaws but ", jaws.size(),
                       " meshes were given");
   }
+  SPLINTCORE_RETURN_IF_ERROR(plan_prefixed(design_detail::check_case_scans(c, scans)));
+  PlanFusion f;
+  f.scans = scans;
+  if (!scans.empty()) {  // once, on the preoperative jaws: before the plan moves them
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "plan: fusion", 0, 2));
+    SPLINTCORE_RETURN_IF_ERROR(
+        plan_prefixed(design_detail::register_case_scans(ctx, c, jaws, scans, f.fused, f.fusion)));
+  }
   ArenaScope scope(*ctx.arena);  // on an error nothing stays
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "plan: intermediate", 0, 2));
-  Status s = plan_one(ctx, c, jaws, false, intermediate, &report->intermediate);
+  Status s = plan_one(ctx, c, jaws, f, false, intermediate, &report->intermediate);
   if (s.is_ok()) s = report_progress(ctx, "plan: final", 1, 2);
-  if (s.is_ok()) s = plan_one(ctx, c, jaws, true, final_splint, &report->final_splint);
+  if (s.is_ok()) s = plan_one(ctx, c, jaws, f, true, final_splint, &report->final_splint);
   if (!s.is_ok()) {
     *intermediate = Mesh{};
     *final_splint = Mesh{};

@@ -103,6 +103,9 @@ struct Icp {
   bool fractional = false;  // choose the fraction by the fractional RMS (select())
   uint32_t kept = 0;
   double rms = 0;
+  // The scan's net normal and the direction to the other jaw (Occlusal), when both count.
+  Vec3 net{}, toward{};
+  bool occlusal = false;
 
   void correspond(const Pose& pose);
   void select();
@@ -298,6 +301,27 @@ Pose automatic_start(uint32_t k, const Vec3& cs, const double es[3][3], const Ve
   return transform_pose(x);
 }
 
+// The cosine between the scan's net normal turned by the pose and the direction to the other
+// jaw.
+double occlusal_cos(const Icp& icp, const Pose& pose) {
+  const Vec3 n = pose_transform(pose).apply_vector(icp.net);
+  return dot(n, icp.toward) / (length(n) * length(icp.toward));
+}
+
+// The net normal (the sum of the triangles' area vectors, twice over) and the total of their
+// lengths.
+Vec3 net_normal(const Mesh& m, double* total) {
+  Vec3 net{};
+  *total = 0;
+  for (const Triangle& t : m.triangles) {
+    const Vec3& a = m.vertices[t.v[0]];
+    const Vec3 n = cross(m.vertices[t.v[1]] - a, m.vertices[t.v[2]] - a);
+    net = net + n;
+    *total += length(n);
+  }
+  return net;
+}
+
 // The automatic alignment: each start after the coarse phase; the lowest fractional RMS wins
 // (ties: the earlier start). A start whose iterations fail on the geometry is passed over.
 Status choose_start(Icp& icp, const Mesh& scan, const Mesh& ct, Pose* best, int32_t* which) {
@@ -312,6 +336,7 @@ Status choose_start(Icp& icp, const Mesh& scan, const Mesh& ct, Pose* best, int3
   principal_frame(covc, ec);
   double best_rms = HUGE_VAL;
   Status last = Status::ok();
+  bool faced_away = false;
   for (uint32_t k = 0; k < kAutomaticStarts; ++k) {
     Pose pose = automatic_start(k, cs, es, cc, ec);
     uint32_t done = 0;
@@ -323,6 +348,10 @@ Status choose_start(Icp& icp, const Mesh& scan, const Mesh& ct, Pose* best, int3
       continue;
     }
     // The fractional RMS (select()'s objective): a fit of fewer samples must be closer.
+    if (icp.occlusal && occlusal_cos(icp, pose) <= 0) {  // upside down on the jaw
+      faced_away = true;
+      continue;
+    }
     const double f = static_cast<double>(icp.points.size()) / static_cast<double>(icp.kept);
     const double score = icp.rms * (f * f * f);
     if (score < best_rms) {
@@ -333,17 +362,26 @@ Status choose_start(Icp& icp, const Mesh& scan, const Mesh& ct, Pose* best, int3
     // A fit this close leaves nothing for another start to win: the rest are not tried.
     if (best_rms <= kGoodEnough * icp.o.max_rms_mm) break;
   }
+  if (best_rms == HUGE_VAL && faced_away) {
+    return Status::error(
+        StatusCode::kInvalidMesh,
+        "registration: the scan faces away from the other jaw at every start of the automatic "
+        "alignment (its occlusal side ends pointing away from it): the scan is wound inside "
+        "out (reverse its triangles) or fits the jaw only upside down (check it is this jaw's "
+        "scan, or give landmarks)");
+  }
   return best_rms < HUGE_VAL ? Status::ok() : last;
 }
 
 Status check_inputs(const Mesh& scan, const Mesh& ct, const RegisterOptions& o) {
   if (!(o.overlap > 0 && o.overlap <= 1) || !(o.max_rms_mm > 0) || !is_finite(o.max_rms_mm) ||
       !(o.inlier_mm > 0) || !is_finite(o.inlier_mm) || !(o.landmark_tolerance_mm > 0) ||
-      o.max_samples < kMinSamples || o.max_iterations < 1) {
+      o.max_samples < kMinSamples || o.max_iterations < 1 ||
+      !(o.min_facing >= 0 && o.min_facing <= 1) || !is_finite(o.toward_other_jaw)) {
     return make_error(StatusCode::kInvalidArgument,
                       "registration: options out of range (overlap in (0, 1], max_rms_mm, "
                       "inlier_mm and landmark_tolerance_mm > 0, max_samples >= 16, "
-                      "max_iterations >= 1)");
+                      "max_iterations >= 1, min_facing in [0, 1], toward_other_jaw finite)");
   }
   if (scan.vertices.size() < kMinSamples || ct.triangles.size() == 0) {
     return make_error(StatusCode::kInvalidMesh, "registration: the scan has ", scan.vertices.size(),
@@ -428,6 +466,66 @@ void final_figures(Icp& icp, const Pose& pose, RegisterResult* r) {
   r->overlap = static_cast<double>(within) / static_cast<double>(icp.points.size());
 }
 
+// RegisterResult::facing at the final transform: over every k-th scan triangle (k the least
+// giving at most max_samples), those whose centroid lies within inlier_mm of the CT, the share
+// of their area whose normal agrees with the CT's face there (a positive dot product). Sums in
+// triangle order; no arena.
+double facing_share(const Mesh& scan, const Mesh& ct, const DistanceIndex& index,
+                    const RigidTransform& x, const RegisterOptions& o) {
+  const uint64_t stride = sample_stride(scan.triangles.size(), o.max_samples);
+  double agree = 0, total = 0;
+  for (uint64_t i = 0; i < scan.triangles.size(); i += stride) {
+    const Triangle& t = scan.triangles[static_cast<size_t>(i)];
+    const Vec3 a = x.apply_point(scan.vertices[t.v[0]]), b = x.apply_point(scan.vertices[t.v[1]]),
+               c = x.apply_point(scan.vertices[t.v[2]]);
+    const Vec3 n = cross(b - a, c - a);  // twice the area, outward for an outward scan
+    ClosestPoint cp;
+    if (!detail::closest_within(index, (a + b + c) * (1.0 / 3.0), o.inlier_mm * o.inlier_mm, &cp)) {
+      continue;
+    }
+    bool ok = false;
+    const Vec3 m = unit_normal(ct, cp.triangle, &ok);
+    if (!ok) continue;
+    const double area = length(n);
+    total += area;
+    agree += dot(n, m) > 0 ? area : 0;
+  }
+  return total > 0 ? agree / total : 1.0;
+}
+
+// The final fit's refusals, in this order: it does not fit (RMS), it fits with its occlusal
+// side away from the other jaw, it fits facing against the CT.
+Status check_fit(const RegisterOptions& o, const RegisterResult& r, bool occlusal) {
+  if (!(r.rms_mm <= o.max_rms_mm)) {
+    return make_error(StatusCode::kLimitExceeded, "registration: the fit's RMS is ", r.rms_mm,
+                      " mm over the best ", r.kept, " of ", r.samples,
+                      " samples, above the limit of ", o.max_rms_mm, " mm (overlap within ",
+                      o.inlier_mm, " mm: ", r.overlap,
+                      "); give landmarks, or check that the scan and the CT are the same jaw");
+  }
+  if (occlusal && !(r.occlusal_cos > 0)) {
+    return make_error(StatusCode::kInvalidMesh,
+                      "registration: the scan faces away from the other jaw after the fit: its "
+                      "occlusal side points away from it (the cosine between its net normal and "
+                      "the direction to the other jaw is ",
+                      r.occlusal_cos,
+                      "); it lies upside down on the jaw or is wound inside out: turn it over "
+                      "or reverse its triangles, or give landmarks");
+  }
+  if (r.facing < o.min_facing) {
+    return make_error(
+        StatusCode::kInvalidMesh, "registration: the scan faces away from the CT: only ", r.facing,
+        " of its area near the CT faces the way the CT's surface does there (at "
+        "least ",
+        o.min_facing,
+        " needed): it lies upside down on the jaw, or its triangles are wound "
+        "inside out (its occlusal side pointing away from the other jaw); reverse "
+        "the scan's triangles if it is inside out (or the CT jaw's, if that is), else give "
+        "landmarks");
+  }
+  return Status::ok();
+}
+
 }  // namespace
 
 uint64_t register_rigid_bound(uint64_t scan_vertex_count, uint64_t ct_vertex_count,
@@ -490,6 +588,10 @@ Status register_rigid(const Context& ctx, const Mesh& scan, const Mesh& ct_jaw,
                coarse_phase};
   };
   Icp coarse = phase(nc, true);
+  double area = 0;
+  coarse.net = net_normal(scan, &area);
+  coarse.toward = options.toward_other_jaw;
+  coarse.occlusal = length(coarse.toward) > 0 && length(coarse.net) > 0.1 * area;
   uint32_t done = 0;
   bool converged = false;
   if (options.landmarks.empty()) {
@@ -513,14 +615,9 @@ Status register_rigid(const Context& ctx, const Mesh& scan, const Mesh& ct_jaw,
                             options.landmark_tolerance_mm);
     }
   }
-  if (!(r.rms_mm <= options.max_rms_mm)) {
-    return make_error(StatusCode::kLimitExceeded, "registration: the fit's RMS is ", r.rms_mm,
-                      " mm over the best ", r.kept, " of ", r.samples,
-                      " samples, above the limit of ", options.max_rms_mm, " mm (overlap within ",
-                      options.inlier_mm, " mm: ", r.overlap,
-                      "); give landmarks, or check that the scan and the CT are the same jaw");
-  }
-  return Status::ok();
+  if (coarse.occlusal) r.occlusal_cos = occlusal_cos(coarse, pose);
+  r.facing = facing_share(scan, ct_jaw, index, r.transform, options);
+  return check_fit(options, r, coarse.occlusal);
 }
 
 Status fit_landmarks(Span<const LandmarkPair> pairs, RigidTransform* out, double* rms_mm) {

@@ -3,7 +3,9 @@
 // moved by a known rigid motion). Design recovers the motion (within 0.05 mm and 0.1 degree),
 // the scan's triangles are the imprint, the splint is a closed, valid solid; a wrong landmark
 // pairing and a fit over the thresholds are errors naming the numbers, with nothing made; the
-// "scan" keys are parsed, checked and written back; report.json has "fusion".
+// "scan" keys are parsed, checked and written back; report.json has "fusion". Two-jaw surgery
+// with scans (the fusion once, before the plan's moves); scans given upside down (registered
+// correctly or refused); the Teeth3DS upper scan as a maxilla (a real case).
 #include <gtest/gtest.h>
 
 #include <array>
@@ -17,6 +19,8 @@
 #include "common/cli.h"
 #include "common/phantom.h"
 #include "splintcore/design.h"
+#include "splintcore/distance.h"
+#include "support/meshlab.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -441,22 +445,332 @@ TEST(DesignFusion, ScanKeysAreParsedCheckedAndWrittenBack) {
   }
 }
 
-TEST(DesignFusion, PlanWithAScanIsNotSupportedYet) {
-  test::TestArena t(size_t{4} << 20);
-  const std::string text = R"({"splintcore_case": 1,
- "jaws": [{"role": "maxilla", "mesh": "a.stl"},
-          {"role": "mandible", "mesh": "b.stl", "scan": {"path": "s.stl"}}],
- "base": {"auto": {}},
- "plan": {"sequence": "maxilla_first", "maxilla": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1],
-          "mandible": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1],
-          "hinge_axis": [[-50, -55, 25], [50, -55, 25]],
-          "intermediate_opening_mm": 2, "final_opening_mm": 1.5}})";
+// Two-jaw surgery with scans (issue 30 with issue 32): the phantom plan (plan_test.cpp's)
+// with both jaws scanned (each jaw's crowns and a band below them, cut out of the phantom jaw,
+// 0.01 mm of noise, moved by its own known motion). The fusion comes once, before the plan's
+// moves: both splints hold the same registrations (within 0.05 mm and 0.1 degree of the
+// truth), each applied after that splint's own moves; the autorotation sees the registered
+// scans; each imprint is scan vertices bit for bit; report.json gives "fusion" in both
+// splints' sections.
+struct PlanScans {
+  test::TestArena t{size_t{192} << 20};
+  std::string text;
   CaseFile c;
-  const Status s = parse(t, text, &c);
-  EXPECT_EQ(s.code(), StatusCode::kUnsupported) << s.message();
-  EXPECT_NE(std::string(s.message()).find("\"plan\" with a jaw's \"scan\" is not supported yet"),
-            std::string::npos)
-      << s.message();
+  Mesh jaws[2], scans[2];
+  RigidTransform truth[2];
+  bool ok = false;
+  // upside_down: each scan turned 180 degrees about the arch's width axis (x) before its
+  // motion, its occlusal side pointing away from the other jaw.
+  explicit PlanScans(bool upside_down = false) {
+    text = R"({"splintcore_case": 1, "case_id": "plan-scans",
+      "jaws": [{"role": "maxilla", "mesh": "maxilla.stl", "scan": {"path": "maxilla_scan.stl"}},
+               {"role": "mandible", "mesh": "mandible.stl", "scan": {"path": "mandible_scan.stl"}}],
+      "base": {"spacing_mm": 0.5, "auto": {}},
+      "plan": {"sequence": "maxilla_first",
+        "maxilla": [1,0,0,0, 0,1,0,2, 0,0,1,1, 0,0,0,1],
+        "mandible": [1,0,0,0, 0,1,0,2.5, 0,0,1,0, 0,0,0,1],
+        "hinge_axis": [[-50, -55, 25], [50, -55, 25]],
+        "intermediate_opening_mm": 2, "final_opening_mm": 1.5}})";
+    if (!parse(t, text, &c).is_ok()) return;
+    uint64_t state = 4711;
+    for (int j = 0; j < 2; ++j) {
+      phantom::JawMesh m;
+      phantom::PhantomOptions po;
+      po.target_triangles = 6000;
+      if (!phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &m)
+               .is_ok()) {
+        return;
+      }
+      jaws[j].bind(&t.arena);
+      scans[j].bind(&t.arena);
+      for (const Vec3& v : m.vertices) (void)jaws[j].vertices.push_back(v);
+      for (const Triangle& tr : m.triangles) (void)jaws[j].triangles.push_back(tr);
+      Aabb box;
+      for (const Vec3& v : m.vertices) box.add(v);
+      const Vec3 axis = j == 0 ? Vec3{-0.2, 0.4, 1.0} : Vec3{0.3, -0.2, 1.0};
+      truth[j] = rotation_about_axis(box.center(), axis * (1.0 / length(axis)),
+                                     (j == 0 ? -5.0 : 6.0) * kPi / 180.0);
+      truth[j].t = truth[j].t + (j == 0 ? Vec3{-1.0, 1.5, -0.5} : Vec3{1.5, -2.0, 0.8});
+      if (upside_down)
+        truth[j] = compose(truth[j], rotation_about_axis(box.center(), {1, 0, 0}, kPi));
+      const RigidTransform back = inverse(truth[j]);
+      std::vector<uint32_t> map(m.vertices.size(), ~0u);
+      for (const Triangle& tr : m.triangles) {
+        // The crowns and a band below them (the maxilla's point down, its gum ridge above
+        // z = 4.1, the mandible's below -2.1: phantom.h).
+        bool keep = true;
+        for (uint32_t v : tr.v)
+          keep = keep && (j == 0 ? m.vertices[v].z < 7 : m.vertices[v].z > -5);
+        if (!keep) continue;
+        Triangle out;
+        for (int k = 0; k < 3; ++k) {
+          if (map[tr.v[k]] == ~0u) {
+            map[tr.v[k]] = static_cast<uint32_t>(scans[j].vertices.size());
+            Vec3 noise;
+            for (int a = 0; a < 3; ++a) {
+              state = hash_mix(state + 0x9e3779b97f4a7c15ull);
+              noise[a] = 0.01 * (2 * static_cast<double>(state >> 11) / 9007199254740992.0 - 1);
+            }
+            Vec3 p = back.apply_point(m.vertices[tr.v[k]] + noise);
+            (void)round_to_float32(&p);  // as an STL holds it
+            (void)scans[j].vertices.push_back(p);
+          }
+          out.v[k] = map[tr.v[k]];
+        }
+        (void)scans[j].triangles.push_back(out);
+      }
+      if (scans[j].triangles.size() < 500 || scans[j].triangles.size() >= m.triangles.size()) {
+        return;
+      }
+    }
+    ok = true;
+  }
+};
+
+TEST(DesignFusion, PlanFusesTheScansOnceBeforeItsMoves) {
+  PlanScans f;
+  ASSERT_TRUE(f.ok);
+  Context ctx(&f.t.arena);
+  Mesh intermediate, final_splint;
+  PlanReport r;
+  SPLINTCORE_ASSERT_OK(design_plan(ctx, f.c, Span<const Mesh>(f.jaws, 2),
+                                   Span<const Mesh>(f.scans, 2), &intermediate, &final_splint, &r));
+  const PlanSplintReport* parts[2] = {&r.intermediate, &r.final_splint};
+  const Mesh* splints[2] = {&intermediate, &final_splint};
+  for (int k = 0; k < 2; ++k) {
+    SCOPED_TRACE(k == 0 ? "intermediate" : "final");
+    const PlanSplintReport& p = *parts[k];
+    EXPECT_TRUE(p.design.print.printable);
+    EXPECT_TRUE(p.design.self_intersection_checked);
+    MeshReport mr;
+    SPLINTCORE_ASSERT_OK(check_mesh(ctx, *splints[k], &mr));
+    EXPECT_TRUE(mr.closed() && mr.edge_manifold() && mr.outward()) << mr.boundary_edges;
+    EXPECT_GT(mr.volume, 100.0);
+    std::set<std::array<float, 3>> at;
+    for (const Vec3& v : splints[k]->vertices) {
+      at.insert({static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)});
+    }
+    const RigidTransform moves[2] = {p.maxilla, p.mandible};
+    for (int j = 0; j < 2; ++j) {
+      ASSERT_TRUE(p.design.fused[j]);
+      const FusionReport& fu = p.design.fusion[j];
+      // The same fit in both splints (made once), near the truth.
+      const FusionReport& first = r.intermediate.design.fusion[j];
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_EQ(fu.registration.transform.t[a], first.registration.transform.t[a]);
+        for (int b = 0; b < 3; ++b) {
+          EXPECT_EQ(fu.registration.transform.r[a][b], first.registration.transform.r[a][b]);
+        }
+      }
+      double rms = 0, deg = 0;
+      motion_error(f.scans[j], fu.registration.transform, f.truth[j], &rms, &deg);
+      EXPECT_LT(rms, 0.05) << "jaw " << j;
+      EXPECT_LT(deg, 0.1) << "jaw " << j;
+      // The splint's own moves (the plan's, the mandible's turn) after the registration.
+      motion_error(f.scans[j], fu.applied, compose(moves[j], fu.registration.transform), &rms,
+                   &deg);
+      EXPECT_EQ(rms, 0.0) << "jaw " << j;
+      // The imprint is the scan's: its vertices as applied, rounded to float32, bit for bit.
+      size_t kept = 0;
+      for (const Vec3& v : f.scans[j].vertices) {
+        const Vec3 q = fu.applied.apply_point(v);
+        kept +=
+            at.count({static_cast<float>(q.x), static_cast<float>(q.y), static_cast<float>(q.z)});
+      }
+      EXPECT_GT(kept, 100u) << "jaw " << j;
+    }
+    std::printf("%s: %.6f deg, opening %.6f mm, %zu triangles, %.1f mm^3\n",
+                k == 0 ? "intermediate" : "final", p.angle_deg, p.autorotation.opening,
+                splints[k]->triangles.size(), mr.volume);
+  }
+  // The autorotation measured the registered scans: the opening asked, between the scans.
+  EXPECT_NEAR(r.intermediate.autorotation.opening, 2.0, 1e-6);
+  EXPECT_NEAR(r.final_splint.autorotation.opening, 1.5, 1e-6);
+  // report.json: "fusion" in both splints' sections.
+  std::string json;
+  DesignReportFiles files[2];
+  SPLINTCORE_ASSERT_OK(write_plan_report(ctx, f.c, Span<const Mesh>(f.jaws, 2), intermediate,
+                                         final_splint, r, files, nullptr, cli::string_sink(&json)));
+  const size_t inter = json.find("\"intermediate\":{"), fin = json.find("\"final\":{");
+  ASSERT_NE(inter, std::string::npos);
+  ASSERT_NE(fin, std::string::npos);
+  const size_t first = json.find("\"fusion\":[{\"role\":\"maxilla\",\"scan\":\"maxilla_scan.stl\"");
+  ASSERT_NE(first, std::string::npos) << json.substr(0, 3000);
+  const size_t second = json.find("\"fusion\":[{\"role\":\"maxilla\"", first + 1);
+  ASSERT_NE(second, std::string::npos);
+  EXPECT_TRUE(inter < first && first < fin && fin < second)
+      << inter << " " << first << " " << fin << " " << second;
+  EXPECT_NE(json.find("\"role\":\"mandible\",\"scan\":\"mandible_scan.stl\""), std::string::npos);
+
+  // Without the scans the case is refused (it names them), and a fit over the case's
+  // thresholds is the fusion's error, prefixed "plan: ", with nothing made.
+  Mesh i2, f2;
+  PlanReport r2;
+  const Status none = design_plan(ctx, f.c, Span<const Mesh>(f.jaws, 2), &i2, &f2, &r2);
+  EXPECT_EQ(none.code(), StatusCode::kInvalidArgument) << none.message();
+  EXPECT_NE(std::string(none.message()).find("has a \"scan\""), std::string::npos)
+      << none.message();
+  CaseJaw strict[2] = {f.c.jaws[0], f.c.jaws[1]};
+  strict[0].scan.max_rms_mm = 0.001;
+  CaseFile c2 = f.c;
+  c2.jaws = Span<const CaseJaw>(strict, 2);
+  const size_t used = f.t.arena.used();
+  const Status over = design_plan(ctx, c2, Span<const Mesh>(f.jaws, 2),
+                                  Span<const Mesh>(f.scans, 2), &i2, &f2, &r2);
+  EXPECT_EQ(over.code(), StatusCode::kLimitExceeded) << over.message();
+  EXPECT_EQ(std::string(over.message()).rfind("plan: design: fusion: jaw 0 (maxilla)", 0), 0u)
+      << over.message();
+  EXPECT_EQ(f.t.arena.used(), used);
+  EXPECT_TRUE(i2.triangles.empty() && f2.triangles.empty());
+}
+
+// The plan with scans in exactly the arena its first run took at its peak, and one byte
+// less: kArenaExhausted with the arena as it was and nothing made.
+TEST(DesignFusion, PlanWithScansRunsInItsMeasuredNeed) {
+  PlanScans f;
+  ASSERT_TRUE(f.ok);
+  const auto run = [&](size_t cap, Mesh* a, Mesh* b, size_t* high_water) {
+    test::TestArena work(cap);
+    PlanReport r;
+    const Status s = design_plan(Context(&work.arena), f.c, Span<const Mesh>(f.jaws, 2),
+                                 Span<const Mesh>(f.scans, 2), a, b, &r);
+    *high_water = work.arena.high_water();
+    if (!s.is_ok()) {
+      EXPECT_EQ(work.arena.used(), 0u);
+      EXPECT_TRUE(a->triangles.empty() && b->triangles.empty());
+      return s;
+    }
+    EXPECT_TRUE(!a->triangles.empty() && !b->triangles.empty());  // (they go with `work`)
+    return s;
+  };
+  Mesh a, b;
+  size_t need = 0, ignored = 0;
+  SPLINTCORE_ASSERT_OK(run(size_t{128} << 20, &a, &b, &need));
+  Mesh a2, b2;
+  SPLINTCORE_EXPECT_OK(run(need, &a2, &b2, &ignored));
+  Mesh a3, b3;
+  EXPECT_EQ(run(need - 1, &a3, &b3, &ignored).code(), StatusCode::kArenaExhausted);
+  std::printf("plan with two scans: %zu bytes at its peak\n", need);
+}
+
+// The upside-down guard in design (issue 30), both arches: the plan's scans each given upside
+// down are registered correctly (the direction to the other jaw passes over the starts that
+// would lay a scan on its jaw's far side) or refused saying the scan faces away; never a splint
+// from an upside-down scan.
+TEST(DesignFusion, UpsideDownScansAreRegisteredOrRefused) {
+  PlanScans f(true);
+  ASSERT_TRUE(f.ok);
+  Context ctx(&f.t.arena);
+  Mesh intermediate, final_splint;
+  PlanReport r;
+  const Status s = design_plan(ctx, f.c, Span<const Mesh>(f.jaws, 2), Span<const Mesh>(f.scans, 2),
+                               &intermediate, &final_splint, &r);
+  if (!s.is_ok()) {
+    EXPECT_NE(std::string(s.message()).find("the scan faces away"), std::string::npos)
+        << s.message();
+    return;
+  }
+  for (int j = 0; j < 2; ++j) {
+    const FusionReport& fu = r.final_splint.design.fusion[j];
+    double rms = 0, deg = 0;
+    motion_error(f.scans[j], fu.registration.transform, f.truth[j], &rms, &deg);
+    EXPECT_LT(rms, 0.05) << "jaw " << j;
+    EXPECT_LT(deg, 0.1) << "jaw " << j;
+    EXPECT_GT(fu.registration.occlusal_cos, 0.5) << "jaw " << j;
+    std::printf("jaw %d upside down: registered from start %d, RMS error %.6f mm\n", j,
+                fu.registration.start, rms);
+  }
+  EXPECT_TRUE(r.intermediate.design.print.printable && r.final_splint.design.print.printable);
+}
+
+// The Teeth3DS real case (issue 30): the sample's upper-jaw scan (an open surface, 16k
+// triangles; CC BY-NC-ND, read where it lies, skipped when absent) as the maxilla, against a
+// stand-in mandible made from it: the scan mirrored across the horizontal plane 1.25 mm beyond
+// its crown tips (its crowns point +z in the sample's frame), its triangles turned back so it
+// faces outward, rounded to float32. The automatic outline, then the design: a closed, valid,
+// printable splint; every scan vertex strictly inside the base (no blockout) is a splint
+// vertex bit for bit (the imprint is the scan's own surface); MeshLab agrees when present.
+TEST(DesignTeeth3dsRealData, UpperScanAsTheMaxilla) {
+  const std::string path = std::string(SPLINTCORE_TEETH3DS_DIR) + "/YBSESUN6_upper.ply";
+  if (!test::file_exists(path)) GTEST_SKIP() << "Teeth3DS sample not found: " << path;
+  test::TestArena t(size_t{256} << 20);
+  Context ctx(&t.arena);
+  const std::vector<uint8_t> bytes = test::read_file_bytes(path);
+  MemorySource src{bytes.data(), bytes.size(), 0, 0};
+  Mesh jaws[2];
+  MeshReadInfo info;
+  SPLINTCORE_ASSERT_OK(
+      read_ply(ctx, memory_source(&src, path.c_str()), MeshReadOptions{}, &jaws[0], &info));
+  MeshReport scan_report;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, jaws[0], &scan_report));
+  ASSERT_FALSE(scan_report.closed());  // a scan: open
+  ASSERT_TRUE(scan_report.edge_manifold() && scan_report.oriented());
+  double top = -HUGE_VAL;
+  for (const Vec3& v : jaws[0].vertices) top = std::fmax(top, v.z);
+  const double mirror = top + 1.25;
+  jaws[1].bind(&t.arena);
+  for (const Vec3& v : jaws[0].vertices) {
+    Vec3 p{v.x, v.y, 2 * mirror - v.z};
+    ASSERT_TRUE(round_to_float32(&p));
+    ASSERT_TRUE(jaws[1].vertices.push_back(p));
+  }
+  for (const Triangle& tr : jaws[0].triangles) {
+    ASSERT_TRUE(jaws[1].triangles.push_back(Triangle{{tr.v[0], tr.v[2], tr.v[1]}}));
+  }
+  const std::string text = R"({"splintcore_case": 1, "case_id": "teeth3ds",
+    "jaws": [{"role": "maxilla", "mesh": "YBSESUN6_upper.ply"},
+             {"role": "mandible", "mesh": "mirrored.stl"}],
+    "base": {"auto": {}}})";
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse_case(ctx, text.data(), text.size(), "teeth3ds.json", &c));
+  Mesh splint;
+  DesignReport r;
+  SPLINTCORE_ASSERT_OK(design_splint(ctx, c, Span<const Mesh>(jaws, 2), &splint, &r));
+  EXPECT_TRUE(r.outlined);
+  EXPECT_TRUE(r.print.printable);
+  EXPECT_TRUE(r.self_intersection_checked);
+  MeshReport mr;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, splint, &mr));
+  EXPECT_TRUE(mr.closed() && mr.edge_manifold() && mr.outward()) << mr.boundary_edges;
+  EXPECT_EQ(mr.shells, 1u);
+  EXPECT_GT(mr.volume, 100.0);
+  // The imprint: the base the design cut (its resolved outline, built again), and every scan
+  // vertex strictly inside it (winding number, and more than 1e-3 mm from its surface).
+  CaseFile resolved;
+  SPLINTCORE_ASSERT_OK(resolve_case_outline(ctx, c, Span<const Mesh>(jaws, 2), &resolved, nullptr));
+  Mesh base(&t.arena);
+  BaseReport br;
+  SPLINTCORE_ASSERT_OK(build_case_base(ctx, resolved, &base, &br));
+  DistanceIndex index;
+  SPLINTCORE_ASSERT_OK(build_distance_index(ctx, base, DistanceIndexOptions{}, &index));
+  std::set<std::array<float, 3>> at;
+  for (const Vec3& v : splint.vertices) {
+    at.insert({static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)});
+  }
+  size_t inside = 0, kept = 0;
+  for (const Vec3& v : jaws[0].vertices) {
+    ClosestPoint cp;
+    if (!closest_point(index, v, &cp) || cp.distance <= 1e-3) continue;
+    if (winding_number(index, v) < 0.5) continue;
+    ++inside;
+    const size_t n =
+        at.count({static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)});
+    kept += n;
+    EXPECT_EQ(n, 1u) << "scan vertex (" << v.x << ", " << v.y << ", " << v.z << ")";
+  }
+  EXPECT_GT(inside, 500u);
+  if (test::have_meshlab()) {  // the independent oracle: two-manifold, no border, same volume
+    std::vector<uint8_t> stl;
+    SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(t.arena, splint, StlFormat::kBinary, &stl));
+    const std::string log = test::meshlab_log_of_bytes(stl);
+    EXPECT_NE(log.find("Mesh is two-manifold"), std::string::npos) << log;
+    EXPECT_NE(log.find("Boundary Edges 0"), std::string::npos) << log;
+    EXPECT_NEAR(test::number_after(log, "Mesh Volume  is "), mr.volume, 1e-5 * mr.volume);
+  }
+  std::printf(
+      "teeth3ds: splint %zu triangles, %.1f mm^3; %zu scan vertices inside the base, %zu "
+      "of them splint vertices bit for bit\n",
+      splint.triangles.size(), mr.volume, inside, kept);
 }
 
 }  // namespace

@@ -194,6 +194,10 @@ check "register wrote its JSON" -- json_ok "$work/reg.json"
 check "register reports the 4x4" -- grep -q '"transform":\[[^]]*,0,0,0,1\]' "$work/reg.json"
 check "register reports a small RMS" -- python3 -c "import json, sys; sys.exit(json.load(open(sys.argv[1]))['rms_mm'] > 0.01)" "$work/reg.json"
 check "register wrote the moved scan" -- test -s "$work/back.stl"
+check "register reports how the scan faces the CT" -- grep -q '"facing":1,' "$work/reg.json"
+expect_exit 2 "register with a zero --toward" -- "$tool" register "$work/turned.stl" "$work/mandible.stl" -o "$work/reg2.json" --toward 0,0,0
+expect_exit 0 "register --toward the maxilla" -- "$tool" register "$work/turned.stl" "$work/mandible.stl" -o "$work/reg2.json" --toward 0,0,1
+check "register --toward prints the facing" -- grep -q "^facing the CT: 1.0000 of the matched area" "$work/out"
 cp "$work/reg.json" "$work/reg.first"
 expect_exit 0 "register at 2 threads" -- "$tool" register "$work/turned.stl" "$work/mandible.stl" -o "$work/reg.json" --threads 2
 check "register bytes are the same at any thread count" -- cmp -s "$work/reg.json" "$work/reg.first"

@@ -477,8 +477,9 @@ Status Design::write_report() {
 // Two-jaw surgery: both splints (design_plan), OUTDIR/intermediate.stl and final.stl, a
 // preview of each (intermediate.png, final.png: not fatal) and one report.json for both.
 int Design::run_plan() {
-  Status s = design_plan(ctx_, c_, Span<const Mesh>(jaws_.data(), jaws_.size()), &plan_splints_[0],
-                         &plan_splints_[1], &plan_report_);
+  Status s = design_plan(ctx_, c_, Span<const Mesh>(jaws_.data(), jaws_.size()),
+                         Span<const Mesh>(scans_.data(), any_scan_ ? scans_.size() : 0),
+                         &plan_splints_[0], &plan_splints_[1], &plan_report_);
   if (clock_.print && !s.is_ok()) std::fprintf(stderr, " failed\n");
   if (!s.is_ok()) return run_.reject(s.in_file(case_path_.c_str()));
   t_design_ = monotonic_seconds();
@@ -560,6 +561,11 @@ void Design::preview_splint(const Mesh& splint, const DesignReport& report,
   std::vector<const Mesh*> preview_jaws;
   std::vector<RigidTransform> moves;
   for (size_t i = 0; i < jaws_.size(); ++i) {
+    if (i < DesignReport::kMaxFusedJaws && report.fused[i]) {  // the registered scan
+      preview_jaws.push_back(&scans_[i]);
+      moves.push_back(report.fusion[i].applied);  // the tray's move included
+      continue;
+    }
     preview_jaws.push_back(&jaws_[i]);
     moves.push_back(
         report.placed_on_tray
@@ -579,11 +585,19 @@ Status Design::write_plan_report() {
     path_list.push_back(jaw_paths_[i].c_str());
     hash_list.push_back(jaw_hashes_[i].c_str());
   }
+  std::vector<const char*> scan_list, scan_hash_list;
+  for (size_t i = 0; i < scan_paths_.size(); ++i) {
+    const bool has = c_.jaws[i].has_scan;
+    scan_list.push_back(has ? scan_paths_[i].c_str() : nullptr);
+    scan_hash_list.push_back(has ? scan_hashes_[i].c_str() : nullptr);
+  }
   DesignReportFiles files[2];
   for (int k = 0; k < 2; ++k) {
     files[k].case_path = case_path_.c_str();
     files[k].jaw_paths = Span<const char* const>(path_list.data(), path_list.size());
     files[k].jaw_sha256 = Span<const char* const>(hash_list.data(), hash_list.size());
+    files[k].scan_paths = Span<const char* const>(scan_list.data(), scan_list.size());
+    files[k].scan_sha256 = Span<const char* const>(scan_hash_list.data(), scan_hash_list.size());
     if (any_ct_) {
       files[k].ct_path = ct_path_.c_str();
       files[k].ct_size[0] = ct_info_.nx;

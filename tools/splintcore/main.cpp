@@ -82,8 +82,8 @@ const char kAutorotateUsage[] =
 
 const char kRegisterUsage[] =
     "usage: splintcore register SCAN CT_JAW -o OUT.json [--landmarks \"X Y Z X Y Z; ...\"]\n"
-    "                          [--overlap F] [--max-rms MM] [--moved MOVED.stl] [--json]\n"
-    "                          [--memory-cap SIZE] [--threads N]\n"
+    "                          [--overlap F] [--max-rms MM] [--moved MOVED.stl]\n"
+    "                          [--toward X,Y,Z] [--json] [--memory-cap SIZE] [--threads N]\n"
     "\n"
     "Scan-CT fusion: the rigid motion that places an intraoral scan (an open surface, crowns\n"
     "and gum) onto a jaw reconstructed from CT. The start is the best of nine after a coarse fit\n"
@@ -93,7 +93,10 @@ const char kRegisterUsage[] =
     "wrong pairing). Then a trimmed point-to-plane ICP: up to 3000 scan vertices (every k-th)\n"
     "paired with their closest points on the CT, the best --overlap of them (default 0.6: scans\n"
     "are mostly gum, which CT does not show) fitted, until the update is under 1e-7 mm and rad.\n"
-    "A fit whose RMS is over --max-rms (default 0.3 mm) is rejected. Writes OUT.json (the 4x4\n"
+    "A fit whose RMS is over --max-rms (default 0.3 mm) is rejected, and so is a scan that faces\n"
+    "away: wound inside out against the CT's surface, or, with --toward (the direction from the\n"
+    "CT jaw to the other jaw), with its occlusal side pointing away from it (upside down; the\n"
+    "starts that end so are passed over). Writes OUT.json (the 4x4\n"
     "scan -> CT, row-major; RMS; the overlap: samples within 0.5 mm; iterations) and with\n"
     "--moved the moved scan (STL), atomically. The bytes are the same at any --threads.\n"
     "A scan that is mostly gum may need landmarks (docs/commands.md).\n";

@@ -74,6 +74,10 @@ std::vector<OptionSpec> register_options(RegisterArgs* a) {
                "--max-rms needs a number of mm > 0"),
       text("--moved", "MOVED.stl", &a->moved, "write the scan moved onto the CT (STL)",
            "--moved needs a file name"),
+      direction("--toward", "X,Y,Z", &a->options.toward_other_jaw,
+                "the direction from the CT jaw to the other jaw: the scan's occlusal side must "
+                "face it (an upside-down fit is passed over or refused)",
+                "--toward needs a direction X,Y,Z (three finite numbers, not all 0)"),
   };
 }
 
@@ -99,6 +103,8 @@ std::string result_json(const RegisterArgs& a, const RegisterResult& r, const St
   w.add("converged", r.converged);
   w.add("samples", r.samples);
   w.add("kept", r.kept);
+  w.add("facing", r.facing);
+  if (length(a.options.toward_other_jaw) > 0) w.add("occlusal_cos", r.occlusal_cos);
   w.add("overlap_asked", a.options.overlap);
   w.add("max_rms_mm", a.options.max_rms_mm);
   w.add("landmarks", static_cast<uint64_t>(a.landmarks.size()));
@@ -125,6 +131,11 @@ void print_register(const Run& run, const RegisterArgs& a, const RegisterResult&
   std::printf("RMS: %.6f mm over the best %u of %u samples; overlap %.4f within %.3g mm\n",
               r.rms_mm, r.kept, r.samples, r.overlap, a.options.inlier_mm);
   std::printf("iterations: %u (%s)\n", r.iterations, r.converged ? "converged" : "not converged");
+  std::printf("facing the CT: %.4f of the matched area", r.facing);
+  if (r.occlusal_cos != 0) {  // --toward, and a scan with an occlusal side to go by
+    std::printf("; occlusal side towards the other jaw: cosine %.4f", r.occlusal_cos);
+  }
+  std::printf("\n");
   if (!a.landmarks.empty()) std::printf("landmarks: RMS %.6f mm\n", r.landmark_rms_mm);
   std::printf("transform (row-major 4x4, scan -> CT):\n");
   for (int i = 0; i < 3; ++i) {
