@@ -242,9 +242,11 @@ Status occlusal_points(Arena& arena, const Mesh& upper, const Mesh& lower, const
     const Mesh& m = jaw == 0 ? upper : lower;
     const Vec3 offset = jaw == 0 ? Vec3{} : lower_offset;
     // Distance from the plane towards the jaw's own side (>= about 0 at the tips).
+    const PlaneAxes axes(f);
     auto depth_of = [&](const Vec3& p, double* x, double* y, double* h) {
-      *x = dot(p, f.e1);
-      *y = dot(p, f.e2);
+      const Lanes2 xy = axes.xy(p);
+      *x = xy[0];
+      *y = xy[1];
       *h = dot(p, f.n);
       const double above = *h - plane.at(*x - g.cx, *y - g.cy);
       return jaw == 0 ? above : -above;

@@ -377,6 +377,7 @@ struct BandLimit {
 // vertex nearest the other jaw may stand for the whole triangle).
 Status jaw_band(Arena& arena, const Mesh& m, bool upper, const BandLimit& limit, JawBand* out) {
   const Frame& f = *limit.f;
+  const PlaneAxes axes(f);
   const size_t nv = m.vertices.size();
   uint8_t* near = arena.allocate_array<uint8_t>(nv);
   if (near == nullptr) return arena.exhausted_status();
@@ -384,7 +385,8 @@ Status jaw_band(Arena& arena, const Mesh& m, bool upper, const BandLimit& limit,
     const Vec3& v = m.vertices[i];
     double bound = limit.bound;
     if (limit.other != nullptr) {
-      bound = limit.other[limit.g->cell_of(dot(v, f.e1), dot(v, f.e2))];
+      const Lanes2 xy = axes.xy(v);
+      bound = limit.other[limit.g->cell_of(xy[0], xy[1])];
       bound += upper ? limit.margin : -limit.margin;
     }
     const double h = dot(v, f.n);
@@ -450,14 +452,14 @@ struct BandedOpener {
 // `edge`: the jaws' longest edge.
 Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
                      const Grid& g, double edge, double reach, double margin, BandedOpener* b) {
+  // The maxilla's lowest vertex and the mandible's highest along n: the extremes of the grid's
+  // columns (every vertex went into one, its height dot(v + 0, n): the value of dot(v, n), up
+  // to the sign of a zero, which compares equal), not two more passes over the vertices.
   double low_u = HUGE_VAL, high_l = -HUGE_VAL;
-  for (const Vec3& v : maxilla.vertices) {
-    const double h = dot(v, f.n);
-    low_u = h < low_u ? h : low_u;
-  }
-  for (const Vec3& v : mandible.vertices) {
-    const double h = dot(v, f.n);
-    high_l = h > high_l ? h : high_l;
+  const size_t cells = static_cast<size_t>(g.nx) * g.ny;
+  for (size_t i = 0; i < cells; ++i) {
+    low_u = g.h[0][i] < low_u ? g.h[0][i] : low_u;
+    high_l = g.h[1][i] > high_l ? g.h[1][i] : high_l;
   }
   const double across = (reach + 3 * edge) / kCellMm + 2;  // columns, with the rounding
   BandLimit up{&g, &f, nullptr, high_l + margin, margin + 1e-9};

@@ -54,6 +54,21 @@ struct Frame {
   Vec3 n{0, 0, 1}, e1{1, 0, 0}, e2{0, 1, 0};
 };
 
+// Two doubles in one SSE2 register (GCC's and clang's vector extension; elsewhere two scalars):
+// each lane rounds as the scalar operation would, so a pair of dot products computed in lanes
+// has the scalar dot()'s bits, for half the multiplications and additions.
+typedef double Lanes2 __attribute__((vector_size(16)));
+
+// (dot(p, e1), dot(p, e2)) of a frame, in lanes: the same bits as the two dot() calls (each
+// lane's sum in dot()'s order, x then y then z).
+struct PlaneAxes {
+  Lanes2 ax, ay, az;
+  explicit PlaneAxes(const Frame& f) : ax{f.e1.x, f.e2.x}, ay{f.e1.y, f.e2.y}, az{f.e1.z, f.e2.z} {}
+  Lanes2 xy(const Vec3& p) const {
+    return (Lanes2{p.x, p.x} * ax + Lanes2{p.y, p.y} * ay) + Lanes2{p.z, p.z} * az;
+  }
+};
+
 // A lattice of kCellMm columns along n over the plane (e1, e2), origin at the vertices'
 // centroid (cx, cy). Per jaw and column: the height (along n) of the vertex the column shows
 // the other jaw (0: the maxilla's lowest, 1: the mandible's highest) and its index.
