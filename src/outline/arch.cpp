@@ -48,14 +48,20 @@ double segment_nearest(const Polyline& p, size_t k, double reach, double px, dou
   return (px - *qx) * (px - *qx) + (py - *qy) * (py - *qy);
 }
 
-// s and o of (px, py) on segment k (see project).
-void segment_place(const Polyline& p, size_t k, double px, double py, double* s, double* o) {
-  double t, qx, qy;
-  segment_nearest(p, k, segment_reach(p, k), px, py, &t, &qx, &qy);
+// s and o of (px, py) on segment k from its nearest point q at t (segment_nearest).
+void segment_place_at(const Polyline& p, size_t k, double px, double py, double t, double qx,
+                      double qy, double* s, double* o) {
   const double dx = p.x[k + 1] - p.x[k], dy = p.y[k + 1] - p.y[k];
   const double len = std::sqrt(dx * dx + dy * dy);
   *s = p.s[k] + t * len;
   *o = (dx * (py - qy) - dy * (px - qx)) / len;
+}
+
+// s and o of (px, py) on segment k (see project).
+void segment_place(const Polyline& p, size_t k, double px, double py, double* s, double* o) {
+  double t, qx, qy;
+  segment_nearest(p, k, segment_reach(p, k), px, py, &t, &qx, &qy);
+  segment_place_at(p, k, px, py, t, qx, qy, s, o);
 }
 
 // The point of the polyline nearest (px, py): its arc length s and signed offset o (positive
@@ -158,10 +164,12 @@ void project_fast(Projector& g, double px, double py, double* s, double* o) {
   const Polyline& p = *g.line;
   const size_t segments = p.n - 1;
   double t, qx, qy;
-  // A bound on the nearest distance: the guess's segment's.
+  // A bound on the nearest distance: the guess's segment's. (Its t and q kept with the best:
+  // segment_place's, which computes them again the same way from the same reach.)
   const size_t guess = g.hint < segments ? g.hint : 0;
   double best = segment_nearest(p, guess, g.reach[guess], px, py, &t, &qx, &qy);
   size_t best_k = guess;
+  double best_t = t, best_qx = qx, best_qy = qy;
   const double r = std::sqrt(best) * (1 + 1e-9) + kProjectorMarginMm;
   if (!(r < HUGE_VAL)) {
     project(p, px, py, s, o);
@@ -180,12 +188,15 @@ void project_fast(Projector& g, double px, double py, double* s, double* o) {
         if (d2 < best || (d2 == best && k < best_k)) {
           best = d2;
           best_k = k;
+          best_t = t;
+          best_qx = qx;
+          best_qy = qy;
         }
       }
     }
   }
   g.hint = best_k;
-  segment_place(p, best_k, px, py, s, o);
+  segment_place_at(p, best_k, px, py, best_t, best_qx, best_qy, s, o);
 }
 
 // The polyline's point at arc length s (extended along the end segments).
