@@ -121,6 +121,7 @@ Status build_grid(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3
                                 g->ix0 + 1);
   g->ny = static_cast<uint32_t>(static_cast<int64_t>(std::floor((y_hi - g->cy) / kCellMm)) -
                                 g->iy0 + 1);
+  g->set_limits();
   const size_t cells = static_cast<size_t>(g->nx) * g->ny;
   for (int jaw = 0; jaw < 2; ++jaw) {
     g->h[jaw] = arena.allocate_array<double>(cells);
