@@ -59,6 +59,10 @@ Status check_jaw(const Mesh& m, const char* who, const char* name, double* longe
           .at_index(i);
     }
   }
+  // The squared edges a - b and b - c in two lanes (each lane rounds as the scalar dot(ab,
+  // ab) would), c - a alone; the largest of them all (a maximum of finite values: the same
+  // whatever the order it is taken in).
+  Lanes2 e2_lanes = {0, 0};
   double e2 = 0;
   for (size_t i = 0; i < m.triangles.size(); ++i) {
     const Triangle& t = m.triangles[i];
@@ -69,12 +73,17 @@ Status check_jaw(const Mesh& m, const char* who, const char* name, double* longe
           .at_index(i);
     }
     const Vec3 &a = m.vertices[t.v[0]], &b = m.vertices[t.v[1]], &c = m.vertices[t.v[2]];
-    const Vec3 ab = a - b, bc = b - c, ca = c - a;
-    const double lab = dot(ab, ab), lbc = dot(bc, bc), lca = dot(ca, ca);
-    e2 = lab > e2 ? lab : e2;
-    e2 = lbc > e2 ? lbc : e2;
+    const Lanes2 dx = Lanes2{a.x, b.x} - Lanes2{b.x, c.x};
+    const Lanes2 dy = Lanes2{a.y, b.y} - Lanes2{b.y, c.y};
+    const Lanes2 dz = Lanes2{a.z, b.z} - Lanes2{b.z, c.z};
+    const Lanes2 l2 = (dx * dx + dy * dy) + dz * dz;
+    const Vec3 ca = c - a;
+    const double lca = dot(ca, ca);
+    e2_lanes = l2 > e2_lanes ? l2 : e2_lanes;
     e2 = lca > e2 ? lca : e2;
   }
+  e2 = e2_lanes[0] > e2 ? e2_lanes[0] : e2;
+  e2 = e2_lanes[1] > e2 ? e2_lanes[1] : e2;
   *longest_edge = std::sqrt(e2);
   return Status::ok();
 }
@@ -392,31 +401,31 @@ Status jaw_band(Arena& arena, const Mesh& m, bool upper, const BandLimit& limit,
     const double h = dot(v, f.n);
     near[i] = upper ? h <= bound : h >= bound;
   }
-  auto keeps = [&](const Triangle& t) { return (near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) != 0; };
-  size_t kept = 0;
-  for (const Triangle& t : m.triangles) {
-    if (keeps(t)) ++kept;
-  }
-  // The kept triangles' vertices copied (numbered in order of first use, the corners in
+  // The kept triangles' ids in one pass (room for all of them: the bound counts a jaw's
+  // triangles), then their vertices copied (numbered in order of first use, the corners in
   // their order): the same coordinates, so the same distances, from a few hundred kilobytes
   // that stay in cache instead of the whole jaw's.
+  const size_t nt = m.triangles.size();
+  out->ids = arena.allocate_array<uint32_t>(nt > 0 ? nt : 1);
+  if (out->ids == nullptr) return arena.exhausted_status();
+  size_t kept = 0;
+  for (size_t i = 0; i < nt; ++i) {
+    const Triangle& t = m.triangles[i];
+    out->ids[kept] = static_cast<uint32_t>(i);
+    kept += (near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) != 0 ? 1 : 0;
+  }
   uint32_t* renumber = arena.allocate_array<uint32_t>(nv);
   Triangle* tris = arena.allocate_array<Triangle>(kept > 0 ? kept : 1);
-  out->ids = arena.allocate_array<uint32_t>(kept > 0 ? kept : 1);
-  if (renumber == nullptr || tris == nullptr || out->ids == nullptr) {
-    return arena.exhausted_status();
-  }
+  if (renumber == nullptr || tris == nullptr) return arena.exhausted_status();
   std::fill(renumber, renumber + nv, kNoTip);
   uint32_t used = 0;
-  size_t k = 0;
-  for (size_t i = 0; i < m.triangles.size(); ++i) {
-    if (!keeps(m.triangles[i])) continue;
+  for (size_t k = 0; k < kept; ++k) {
+    const Triangle& t = m.triangles[out->ids[k]];
     for (int c = 0; c < 3; ++c) {
-      uint32_t& r = renumber[m.triangles[i].v[c]];
+      uint32_t& r = renumber[t.v[c]];
       if (r == kNoTip) r = used++;
       tris[k].v[c] = r;
     }
-    out->ids[k++] = static_cast<uint32_t>(i);
   }
   Vec3* verts = arena.allocate_array<Vec3>(used > 0 ? used : 1);
   if (verts == nullptr) return arena.exhausted_status();
