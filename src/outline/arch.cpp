@@ -93,7 +93,7 @@ constexpr double kProjectorMarginMm = 1e-6;  // over any rounding of a distance
 
 struct Projector {
   const Polyline* line = nullptr;
-  double* box = nullptr;        // per segment: x_lo, x_hi, y_lo, y_hi
+  double* box = nullptr;        // per segment: x_lo, y_lo, x_hi, y_hi
   double* reach = nullptr;      // per segment: segment_reach
   double* chunk_box = nullptr;  // per chunk: the union of its segments' boxes
   double* group_box = nullptr;  // per group of kProjectorGroup chunks: the union of theirs
@@ -108,8 +108,8 @@ void segment_box(const Polyline& p, size_t k, double* b) {
   const double ax = p.x[k] + t0 * dx, bx = p.x[k] + t1 * dx;
   const double ay = p.y[k] + t0 * dy, by = p.y[k] + t1 * dy;
   b[0] = std::min(ax, bx) - kProjectorMarginMm;
-  b[1] = std::max(ax, bx) + kProjectorMarginMm;
-  b[2] = std::min(ay, by) - kProjectorMarginMm;
+  b[1] = std::min(ay, by) - kProjectorMarginMm;
+  b[2] = std::max(ax, bx) + kProjectorMarginMm;
   b[3] = std::max(ay, by) + kProjectorMarginMm;
 }
 
@@ -134,8 +134,8 @@ Status make_projector(Arena& arena, const Polyline& p, Projector* out) {
   }
   for (size_t c = 0; c < g.chunks + g.groups; ++c) {
     double* cb = c < g.chunks ? g.chunk_box + 4 * c : g.group_box + 4 * (c - g.chunks);
-    cb[0] = cb[2] = HUGE_VAL;
-    cb[1] = cb[3] = -HUGE_VAL;
+    cb[0] = cb[1] = HUGE_VAL;
+    cb[2] = cb[3] = -HUGE_VAL;
   }
   for (size_t k = 0; k < segments; ++k) {
     double* b = g.box + 4 * k;
@@ -144,19 +144,22 @@ Status make_projector(Arena& arena, const Polyline& p, Projector* out) {
     for (double* cb :
          {g.chunk_box + 4 * (k / g.chunk), g.group_box + 4 * (k / g.chunk / kProjectorGroup)}) {
       cb[0] = std::min(cb[0], b[0]);
-      cb[1] = std::max(cb[1], b[1]);
-      cb[2] = std::min(cb[2], b[2]);
+      cb[1] = std::min(cb[1], b[1]);
+      cb[2] = std::max(cb[2], b[2]);
       cb[3] = std::max(cb[3], b[3]);
     }
   }
   return Status::ok();
 }
 
-// Is the box b (x_lo, x_hi, y_lo, y_hi) farther than r from (px, py)?
-inline bool box_beyond(const double* b, double px, double py, double r) {
-  const double ex = std::max(0.0, std::max(b[0] - px, px - b[1]));
-  const double ey = std::max(0.0, std::max(b[2] - py, py - b[3]));
-  return ex * ex + ey * ey > r * r;
+// Is the box b (x_lo, y_lo, x_hi, y_hi) farther than r from p = (px, py)? Both axes' gaps in
+// two lanes: each lane does the scalar max(0, max(lo - p, p - hi)) (finite values: the same
+// gap, up to the sign of a zero, which its square drops), then ex * ex + ey * ey as scalars.
+inline bool box_beyond(const double* b, const Lanes2& p, double r) {
+  const Lanes2 below = Lanes2{b[0], b[1]} - p, above = p - Lanes2{b[2], b[3]};
+  Lanes2 e = below < above ? above : below;
+  e = Lanes2{0.0, 0.0} < e ? e : Lanes2{0.0, 0.0};
+  return e[0] * e[0] + e[1] * e[1] > r * r;
 }
 
 // project(&line, px, py, s, o), bit for bit.
@@ -175,15 +178,16 @@ void project_fast(Projector& g, double px, double py, double* s, double* o) {
     project(p, px, py, s, o);
     return;
   }
+  const Lanes2 p2 = {px, py};
   // The least distance, the first segment in index order among equal ones (as project()).
   for (size_t gi = 0; gi < g.groups; ++gi) {
-    if (box_beyond(g.group_box + 4 * gi, px, py, r)) continue;
+    if (box_beyond(g.group_box + 4 * gi, p2, r)) continue;
     const size_t last_chunk = std::min(g.chunks, (gi + 1) * kProjectorGroup);
     for (size_t c = gi * kProjectorGroup; c < last_chunk; ++c) {
-      if (box_beyond(g.chunk_box + 4 * c, px, py, r)) continue;
+      if (box_beyond(g.chunk_box + 4 * c, p2, r)) continue;
       const size_t end = std::min(segments, (c + 1) * g.chunk);
       for (size_t k = c * g.chunk; k < end; ++k) {
-        if (k == guess || box_beyond(g.box + 4 * k, px, py, r)) continue;
+        if (k == guess || box_beyond(g.box + 4 * k, p2, r)) continue;
         const double d2 = segment_nearest(p, k, g.reach[k], px, py, &t, &qx, &qy);
         if (d2 < best || (d2 == best && k < best_k)) {
           best = d2;
