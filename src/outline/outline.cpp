@@ -401,31 +401,31 @@ Status jaw_band(Arena& arena, const Mesh& m, bool upper, const BandLimit& limit,
     const double h = dot(v, f.n);
     near[i] = upper ? h <= bound : h >= bound;
   }
-  // The kept triangles' ids in one pass (room for all of them: the bound counts a jaw's
-  // triangles), then their vertices copied (numbered in order of first use, the corners in
+  auto keeps = [&](const Triangle& t) { return (near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) != 0; };
+  size_t kept = 0;
+  for (const Triangle& t : m.triangles) {
+    if (keeps(t)) ++kept;
+  }
+  // The kept triangles' vertices copied (numbered in order of first use, the corners in
   // their order): the same coordinates, so the same distances, from a few hundred kilobytes
   // that stay in cache instead of the whole jaw's.
-  const size_t nt = m.triangles.size();
-  out->ids = arena.allocate_array<uint32_t>(nt > 0 ? nt : 1);
-  if (out->ids == nullptr) return arena.exhausted_status();
-  size_t kept = 0;
-  for (size_t i = 0; i < nt; ++i) {
-    const Triangle& t = m.triangles[i];
-    out->ids[kept] = static_cast<uint32_t>(i);
-    kept += (near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) != 0 ? 1 : 0;
-  }
   uint32_t* renumber = arena.allocate_array<uint32_t>(nv);
   Triangle* tris = arena.allocate_array<Triangle>(kept > 0 ? kept : 1);
-  if (renumber == nullptr || tris == nullptr) return arena.exhausted_status();
+  out->ids = arena.allocate_array<uint32_t>(kept > 0 ? kept : 1);
+  if (renumber == nullptr || tris == nullptr || out->ids == nullptr) {
+    return arena.exhausted_status();
+  }
   std::fill(renumber, renumber + nv, kNoTip);
   uint32_t used = 0;
-  for (size_t k = 0; k < kept; ++k) {
-    const Triangle& t = m.triangles[out->ids[k]];
+  size_t k = 0;
+  for (size_t i = 0; i < m.triangles.size(); ++i) {
+    if (!keeps(m.triangles[i])) continue;
     for (int c = 0; c < 3; ++c) {
-      uint32_t& r = renumber[t.v[c]];
+      uint32_t& r = renumber[m.triangles[i].v[c]];
       if (r == kNoTip) r = used++;
       tris[k].v[c] = r;
     }
+    out->ids[k++] = static_cast<uint32_t>(i);
   }
   Vec3* verts = arena.allocate_array<Vec3>(used > 0 ? used : 1);
   if (verts == nullptr) return arena.exhausted_status();
