@@ -48,14 +48,20 @@ double segment_nearest(const Polyline& p, size_t k, double reach, double px, dou
   return (px - *qx) * (px - *qx) + (py - *qy) * (py - *qy);
 }
 
-// s and o of (px, py) on segment k (see project).
-void segment_place(const Polyline& p, size_t k, double px, double py, double* s, double* o) {
-  double t, qx, qy;
-  segment_nearest(p, k, segment_reach(p, k), px, py, &t, &qx, &qy);
+// s and o of (px, py) on segment k from its nearest point q at t (segment_nearest).
+void segment_place_at(const Polyline& p, size_t k, double px, double py, double t, double qx,
+                      double qy, double* s, double* o) {
   const double dx = p.x[k + 1] - p.x[k], dy = p.y[k + 1] - p.y[k];
   const double len = std::sqrt(dx * dx + dy * dy);
   *s = p.s[k] + t * len;
   *o = (dx * (py - qy) - dy * (px - qx)) / len;
+}
+
+// s and o of (px, py) on segment k (see project).
+void segment_place(const Polyline& p, size_t k, double px, double py, double* s, double* o) {
+  double t, qx, qy;
+  segment_nearest(p, k, segment_reach(p, k), px, py, &t, &qx, &qy);
+  segment_place_at(p, k, px, py, t, qx, qy, s, o);
 }
 
 // The point of the polyline nearest (px, py): its arc length s and signed offset o (positive
@@ -87,7 +93,7 @@ constexpr double kProjectorMarginMm = 1e-6;  // over any rounding of a distance
 
 struct Projector {
   const Polyline* line = nullptr;
-  double* box = nullptr;        // per segment: x_lo, x_hi, y_lo, y_hi
+  double* box = nullptr;        // per segment: x_lo, y_lo, x_hi, y_hi
   double* reach = nullptr;      // per segment: segment_reach
   double* chunk_box = nullptr;  // per chunk: the union of its segments' boxes
   double* group_box = nullptr;  // per group of kProjectorGroup chunks: the union of theirs
@@ -102,8 +108,8 @@ void segment_box(const Polyline& p, size_t k, double* b) {
   const double ax = p.x[k] + t0 * dx, bx = p.x[k] + t1 * dx;
   const double ay = p.y[k] + t0 * dy, by = p.y[k] + t1 * dy;
   b[0] = std::min(ax, bx) - kProjectorMarginMm;
-  b[1] = std::max(ax, bx) + kProjectorMarginMm;
-  b[2] = std::min(ay, by) - kProjectorMarginMm;
+  b[1] = std::min(ay, by) - kProjectorMarginMm;
+  b[2] = std::max(ax, bx) + kProjectorMarginMm;
   b[3] = std::max(ay, by) + kProjectorMarginMm;
 }
 
@@ -128,8 +134,8 @@ Status make_projector(Arena& arena, const Polyline& p, Projector* out) {
   }
   for (size_t c = 0; c < g.chunks + g.groups; ++c) {
     double* cb = c < g.chunks ? g.chunk_box + 4 * c : g.group_box + 4 * (c - g.chunks);
-    cb[0] = cb[2] = HUGE_VAL;
-    cb[1] = cb[3] = -HUGE_VAL;
+    cb[0] = cb[1] = HUGE_VAL;
+    cb[2] = cb[3] = -HUGE_VAL;
   }
   for (size_t k = 0; k < segments; ++k) {
     double* b = g.box + 4 * k;
@@ -138,19 +144,22 @@ Status make_projector(Arena& arena, const Polyline& p, Projector* out) {
     for (double* cb :
          {g.chunk_box + 4 * (k / g.chunk), g.group_box + 4 * (k / g.chunk / kProjectorGroup)}) {
       cb[0] = std::min(cb[0], b[0]);
-      cb[1] = std::max(cb[1], b[1]);
-      cb[2] = std::min(cb[2], b[2]);
+      cb[1] = std::min(cb[1], b[1]);
+      cb[2] = std::max(cb[2], b[2]);
       cb[3] = std::max(cb[3], b[3]);
     }
   }
   return Status::ok();
 }
 
-// Is the box b (x_lo, x_hi, y_lo, y_hi) farther than r from (px, py)?
-inline bool box_beyond(const double* b, double px, double py, double r) {
-  const double ex = std::max(0.0, std::max(b[0] - px, px - b[1]));
-  const double ey = std::max(0.0, std::max(b[2] - py, py - b[3]));
-  return ex * ex + ey * ey > r * r;
+// Is the box b (x_lo, y_lo, x_hi, y_hi) farther than r from p = (px, py)? Both axes' gaps in
+// two lanes: each lane does the scalar max(0, max(lo - p, p - hi)) (finite values: the same
+// gap, up to the sign of a zero, which its square drops), then ex * ex + ey * ey as scalars.
+inline bool box_beyond(const double* b, const Lanes2& p, double r) {
+  const Lanes2 below = Lanes2{b[0], b[1]} - p, above = p - Lanes2{b[2], b[3]};
+  Lanes2 e = below < above ? above : below;
+  e = Lanes2{0.0, 0.0} < e ? e : Lanes2{0.0, 0.0};
+  return e[0] * e[0] + e[1] * e[1] > r * r;
 }
 
 // project(&line, px, py, s, o), bit for bit.
@@ -158,34 +167,40 @@ void project_fast(Projector& g, double px, double py, double* s, double* o) {
   const Polyline& p = *g.line;
   const size_t segments = p.n - 1;
   double t, qx, qy;
-  // A bound on the nearest distance: the guess's segment's.
+  // A bound on the nearest distance: the guess's segment's. (Its t and q kept with the best:
+  // segment_place's, which computes them again the same way from the same reach.)
   const size_t guess = g.hint < segments ? g.hint : 0;
   double best = segment_nearest(p, guess, g.reach[guess], px, py, &t, &qx, &qy);
   size_t best_k = guess;
+  double best_t = t, best_qx = qx, best_qy = qy;
   const double r = std::sqrt(best) * (1 + 1e-9) + kProjectorMarginMm;
   if (!(r < HUGE_VAL)) {
     project(p, px, py, s, o);
     return;
   }
+  const Lanes2 p2 = {px, py};
   // The least distance, the first segment in index order among equal ones (as project()).
   for (size_t gi = 0; gi < g.groups; ++gi) {
-    if (box_beyond(g.group_box + 4 * gi, px, py, r)) continue;
+    if (box_beyond(g.group_box + 4 * gi, p2, r)) continue;
     const size_t last_chunk = std::min(g.chunks, (gi + 1) * kProjectorGroup);
     for (size_t c = gi * kProjectorGroup; c < last_chunk; ++c) {
-      if (box_beyond(g.chunk_box + 4 * c, px, py, r)) continue;
+      if (box_beyond(g.chunk_box + 4 * c, p2, r)) continue;
       const size_t end = std::min(segments, (c + 1) * g.chunk);
       for (size_t k = c * g.chunk; k < end; ++k) {
-        if (k == guess || box_beyond(g.box + 4 * k, px, py, r)) continue;
+        if (k == guess || box_beyond(g.box + 4 * k, p2, r)) continue;
         const double d2 = segment_nearest(p, k, g.reach[k], px, py, &t, &qx, &qy);
         if (d2 < best || (d2 == best && k < best_k)) {
           best = d2;
           best_k = k;
+          best_t = t;
+          best_qx = qx;
+          best_qy = qy;
         }
       }
     }
   }
   g.hint = best_k;
-  segment_place(p, best_k, px, py, s, o);
+  segment_place_at(p, best_k, px, py, best_t, best_qx, best_qy, s, o);
 }
 
 // The polyline's point at arc length s (extended along the end segments).
@@ -242,9 +257,11 @@ Status occlusal_points(Arena& arena, const Mesh& upper, const Mesh& lower, const
     const Mesh& m = jaw == 0 ? upper : lower;
     const Vec3 offset = jaw == 0 ? Vec3{} : lower_offset;
     // Distance from the plane towards the jaw's own side (>= about 0 at the tips).
+    const PlaneAxes axes(f);
     auto depth_of = [&](const Vec3& p, double* x, double* y, double* h) {
-      *x = dot(p, f.e1);
-      *y = dot(p, f.e2);
+      const Lanes2 xy = axes.xy(p);
+      *x = xy[0];
+      *y = xy[1];
       *h = dot(p, f.n);
       const double above = *h - plane.at(*x - g.cx, *y - g.cy);
       return jaw == 0 ? above : -above;

@@ -66,17 +66,14 @@ bool centroid_axis(const Vec3& upper_centroid, const Vec3& lower_centroid, Vec3*
 // Continuous in the data (no vertex is chosen), so the lattice it orients moves with the jaws.
 // Both quotients of a vertex in one two-lane division (each lane rounds as the scalar one:
 // the same bits for half the divisions), summed in vertex order.
-typedef double Lanes2 __attribute__((vector_size(16)));
-
 Vec3 anterior_axis(const Mesh& upper, const Mesh& lower, const Vec3& c, const Frame& f) {
   double sx = 0, sy = 0;
-  const Vec3 e1 = f.e1, e2 = f.e2;
+  const PlaneAxes axes(f);
   auto add = [&](const Mesh& m) {
     for (const Vec3& v : m.vertices) {
-      const Vec3 p = v - c;
-      const double x = dot(p, e1), y = dot(p, e2);
+      const Lanes2 xy = axes.xy(v - c);
+      const double x = xy[0], y = xy[1];
       const double r = std::sqrt(x * x + y * y);
-      const Lanes2 xy = {x, y};
       const double safe = r > 0 ? r : 1.0;  // no 0 / 0 (trapping tests), and not added
       const Lanes2 q = xy / Lanes2{safe, safe};
       if (r > 0) {
@@ -94,9 +91,11 @@ Vec3 anterior_axis(const Mesh& upper, const Mesh& lower, const Vec3& c, const Fr
 Status build_grid(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3& lower_offset,
                   const Frame& f, Grid* g) {
   double x_lo = HUGE_VAL, x_hi = -HUGE_VAL, y_lo = HUGE_VAL, y_hi = -HUGE_VAL, cx = 0, cy = 0;
+  const PlaneAxes axes(f);
   auto extent = [&](const Mesh& m, const Vec3& offset) {
     for (const Vec3& v : m.vertices) {
-      const double x = dot(v + offset, f.e1), y = dot(v + offset, f.e2);
+      const Lanes2 xy = axes.xy(v + offset);
+      const double x = xy[0], y = xy[1];
       x_lo = x < x_lo ? x : x_lo;
       x_hi = x > x_hi ? x : x_hi;
       y_lo = y < y_lo ? y : y_lo;
@@ -122,6 +121,7 @@ Status build_grid(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3
                                 g->ix0 + 1);
   g->ny = static_cast<uint32_t>(static_cast<int64_t>(std::floor((y_hi - g->cy) / kCellMm)) -
                                 g->iy0 + 1);
+  g->set_limits();
   const size_t cells = static_cast<size_t>(g->nx) * g->ny;
   for (int jaw = 0; jaw < 2; ++jaw) {
     g->h[jaw] = arena.allocate_array<double>(cells);
@@ -141,7 +141,8 @@ namespace {
 // max, the vertex by a mask, both slots written always.
 template <bool kLowest>
 void fill_columns(const Mesh& m, const Vec3& offset, const Frame& frame, Grid* g) {
-  const Vec3 e1 = frame.e1, e2 = frame.e2, n = frame.n;
+  const PlaneAxes axes(frame);
+  const Vec3 n = frame.n;
   const Grid grid = *g;
   double* heights = grid.h[kLowest ? 0 : 1];
   uint32_t* tips = grid.tip[kLowest ? 0 : 1];
@@ -149,7 +150,8 @@ void fill_columns(const Mesh& m, const Vec3& offset, const Frame& frame, Grid* g
   const size_t count = m.vertices.size();
   for (size_t k = 0; k < count; ++k) {
     const Vec3 p = v[k] + offset;
-    const size_t cell = grid.cell_of(dot(p, e1), dot(p, e2));
+    const Lanes2 xy = axes.xy(p);
+    const size_t cell = grid.cell_of(xy[0], xy[1]);
     const double h = dot(p, n);
     const double best = heights[cell];
     const bool better = kLowest ? h < best : h > best;

@@ -54,6 +54,21 @@ struct Frame {
   Vec3 n{0, 0, 1}, e1{1, 0, 0}, e2{0, 1, 0};
 };
 
+// Two doubles in one SSE2 register (GCC's and clang's vector extension; elsewhere two scalars):
+// each lane rounds as the scalar operation would, so a pair of dot products computed in lanes
+// has the scalar dot()'s bits, for half the multiplications and additions.
+typedef double Lanes2 __attribute__((vector_size(16)));
+
+// (dot(p, e1), dot(p, e2)) of a frame, in lanes: the same bits as the two dot() calls (each
+// lane's sum in dot()'s order, x then y then z).
+struct PlaneAxes {
+  Lanes2 ax, ay, az;
+  explicit PlaneAxes(const Frame& f) : ax{f.e1.x, f.e2.x}, ay{f.e1.y, f.e2.y}, az{f.e1.z, f.e2.z} {}
+  Lanes2 xy(const Vec3& p) const {
+    return (Lanes2{p.x, p.x} * ax + Lanes2{p.y, p.y} * ay) + Lanes2{p.z, p.z} * az;
+  }
+};
+
 // A lattice of kCellMm columns along n over the plane (e1, e2), origin at the vertices'
 // centroid (cx, cy). Per jaw and column: the height (along n) of the vertex the column shows
 // the other jaw (0: the maxilla's lowest, 1: the mandible's highest) and its index.
@@ -64,18 +79,29 @@ struct Grid {
   double* h[2] = {nullptr, nullptr};
   uint32_t* tip[2] = {nullptr, nullptr};
 
-  // floor(x) as an integer, without a call to libm's floor (not inlined without SSE4.1): the
-  // same value wherever the truncation is exact (|x| < 2^52).
-  static int64_t floor_int(double x) {
-    if (!(std::fabs(x) < 0x1p52)) return static_cast<int64_t>(std::floor(x));
-    const int64_t t = static_cast<int64_t>(x);
-    return static_cast<double>(t) > x ? t - 1 : t;
+  // The first and last column's index along each axis, as doubles (set_limits).
+  double first_x = 0, last_x = 0, first_y = 0, last_y = 0;
+
+  void set_limits() {
+    first_x = static_cast<double>(ix0);
+    last_x = static_cast<double>(ix0 + static_cast<int64_t>(nx) - 1);
+    first_y = static_cast<double>(iy0);
+    last_y = static_cast<double>(iy0 + static_cast<int64_t>(ny) - 1);
+  }
+  // The column index floor(q) clamped to [first, last] (integers): clamped first, so that the
+  // truncation is exact and needs no range check (nor a call to libm's floor, not inlined
+  // without SSE4.1). The same index: below first, floor(q) < first and first's floor is
+  // first; above last, floor(q) >= last and last's is last; between, floor(q) itself. (q is
+  // finite: the vertices are, check_jaw; the comparisons as written are one maxsd and minsd.)
+  static int64_t clamped_floor(double q, double first, double last) {
+    q = q < first ? first : q;
+    q = q > last ? last : q;
+    const int64_t t = static_cast<int64_t>(q);
+    return static_cast<double>(t) > q ? t - 1 : t;
   }
   size_t cell_of(double x, double y) const {
-    int64_t ix = floor_int((x - cx) / kCellMm) - ix0;
-    int64_t iy = floor_int((y - cy) / kCellMm) - iy0;
-    ix = ix < 0 ? 0 : (ix >= nx ? nx - 1 : ix);
-    iy = iy < 0 ? 0 : (iy >= ny ? ny - 1 : iy);
+    const int64_t ix = clamped_floor((x - cx) / kCellMm, first_x, last_x) - ix0;
+    const int64_t iy = clamped_floor((y - cy) / kCellMm, first_y, last_y) - iy0;
     return static_cast<size_t>(iy) * nx + static_cast<size_t>(ix);
   }
   // The column's centre relative to (cx, cy).
