@@ -232,6 +232,27 @@ uint32_t gcd(uint32_t a, uint32_t b) {
   return a;
 }
 
+// Makes `folder` (if needed) and checks it holds no file but the series' own `names`.
+Status series_folder(const std::string& folder, const std::vector<std::string>& names) {
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (!fs::is_directory(folder, ec)) {
+    return make_error(StatusCode::kIoError, "cannot create folder ", folder.c_str())
+        .in_file(folder.c_str());
+  }
+  const std::set<std::string> ours(names.begin(), names.end());
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (ours.count(name) == 0) {
+      return make_error(StatusCode::kInvalidArgument, "folder ", folder.c_str(),
+                        " already holds other files (e.g. ", name.c_str(),
+                        "); write a DICOM series into an empty or new folder")
+          .in_file(folder.c_str());
+    }
+  }
+  return Status::ok();
+}
+
 }  // namespace
 
 Status write_dicom_series(const CtVolume& v, const std::string& folder,
@@ -264,22 +285,7 @@ Status write_dicom_series(const CtVolume& v, const std::string& folder,
     std::snprintf(buf, sizeof(buf), "CT%0*u.dcm", width, number[k]);
     names[k] = buf;
   }
-  std::error_code ec;
-  fs::create_directories(folder, ec);
-  if (!fs::is_directory(folder, ec)) {
-    return make_error(StatusCode::kIoError, "cannot create folder ", folder.c_str())
-        .in_file(folder.c_str());
-  }
-  const std::set<std::string> ours(names.begin(), names.end());
-  for (const auto& entry : fs::directory_iterator(folder, ec)) {
-    const std::string name = entry.path().filename().string();
-    if (ours.count(name) == 0) {
-      return make_error(StatusCode::kInvalidArgument, "folder ", folder.c_str(),
-                        " already holds other files (e.g. ", name.c_str(),
-                        "); write a DICOM series into an empty or new folder")
-          .in_file(folder.c_str());
-    }
-  }
+  SPLINTCORE_RETURN_IF_ERROR(series_folder(folder, names));
 
   // Stored values: unsigned with intercept min(-1024, min HU), or signed with intercept 0.
   const uint64_t count = v.voxel_count();
