@@ -21,6 +21,7 @@
 #include "splintcore/design.h"
 #include "splintcore/distance.h"
 #include "support/meshlab.h"
+#include "support/phantom_jaws.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -49,19 +50,8 @@ struct Fused {
              .is_ok()) {
       return;
     }
-    for (int j = 0; j < 2; ++j) {
-      phantom::JawMesh m;
-      phantom::PhantomOptions po;
-      po.target_triangles = 6000;
-      if (!phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &m)
-               .is_ok()) {
-        return;
-      }
-      jaws[j].bind(&t.arena);
-      scans[j].bind(&t.arena);
-      for (const Vec3& v : m.vertices) (void)jaws[j].vertices.push_back(v);
-      for (const Triangle& tr : m.triangles) (void)jaws[j].triangles.push_back(tr);
-    }
+    if (!test::phantom_jaw_meshes(t.arena, 6000, jaws)) return;
+    for (int j = 0; j < 2; ++j) scans[j].bind(&t.arena);
     Aabb box;
     for (const Vec3& v : jaws[1].vertices) box.add(v);
     const Vec3 axis{0.3, -0.2, 1.0};
@@ -473,20 +463,11 @@ struct PlanScans {
         "intermediate_opening_mm": 2, "final_opening_mm": 1.5}})";
     if (!parse(t, text, &c).is_ok()) return;
     uint64_t state = 4711;
+    if (!test::phantom_jaw_meshes(t.arena, 6000, jaws)) return;
     for (int j = 0; j < 2; ++j) {
-      phantom::JawMesh m;
-      phantom::PhantomOptions po;
-      po.target_triangles = 6000;
-      if (!phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &m)
-               .is_ok()) {
-        return;
-      }
-      jaws[j].bind(&t.arena);
       scans[j].bind(&t.arena);
-      for (const Vec3& v : m.vertices) (void)jaws[j].vertices.push_back(v);
-      for (const Triangle& tr : m.triangles) (void)jaws[j].triangles.push_back(tr);
       Aabb box;
-      for (const Vec3& v : m.vertices) box.add(v);
+      for (const Vec3& v : jaws[j].vertices) box.add(v);
       const Vec3 axis = j == 0 ? Vec3{-0.2, 0.4, 1.0} : Vec3{0.3, -0.2, 1.0};
       truth[j] = rotation_about_axis(box.center(), axis * (1.0 / length(axis)),
                                      (j == 0 ? -5.0 : 6.0) * kPi / 180.0);
@@ -494,13 +475,13 @@ struct PlanScans {
       if (upside_down)
         truth[j] = compose(truth[j], rotation_about_axis(box.center(), {1, 0, 0}, kPi));
       const RigidTransform back = inverse(truth[j]);
-      std::vector<uint32_t> map(m.vertices.size(), ~0u);
-      for (const Triangle& tr : m.triangles) {
+      std::vector<uint32_t> map(jaws[j].vertices.size(), ~0u);
+      for (const Triangle& tr : jaws[j].triangles) {
         // The crowns and a band below them (the maxilla's point down, its gum ridge above
         // z = 4.1, the mandible's below -2.1: phantom.h).
         bool keep = true;
         for (uint32_t v : tr.v)
-          keep = keep && (j == 0 ? m.vertices[v].z < 7 : m.vertices[v].z > -5);
+          keep = keep && (j == 0 ? jaws[j].vertices[v].z < 7 : jaws[j].vertices[v].z > -5);
         if (!keep) continue;
         Triangle out;
         for (int k = 0; k < 3; ++k) {
@@ -511,7 +492,7 @@ struct PlanScans {
               state = hash_mix(state + 0x9e3779b97f4a7c15ull);
               noise[a] = 0.01 * (2 * static_cast<double>(state >> 11) / 9007199254740992.0 - 1);
             }
-            Vec3 p = back.apply_point(m.vertices[tr.v[k]] + noise);
+            Vec3 p = back.apply_point(jaws[j].vertices[tr.v[k]] + noise);
             (void)round_to_float32(&p);  // as an STL holds it
             (void)scans[j].vertices.push_back(p);
           }
@@ -519,7 +500,8 @@ struct PlanScans {
         }
         (void)scans[j].triangles.push_back(out);
       }
-      if (scans[j].triangles.size() < 500 || scans[j].triangles.size() >= m.triangles.size()) {
+      if (scans[j].triangles.size() < 500 ||
+          scans[j].triangles.size() >= jaws[j].triangles.size()) {
         return;
       }
     }

@@ -8,6 +8,7 @@
 
 #include "common/phantom.h"
 #include "splintcore/design.h"
+#include "support/phantom_jaws.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -26,18 +27,7 @@ struct CaseAndJaws {
              .is_ok()) {
       return;
     }
-    for (int j = 0; j < 2; ++j) {
-      phantom::JawMesh m;
-      phantom::PhantomOptions po;
-      po.target_triangles = 6000;
-      if (!phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &m)
-               .is_ok()) {
-        return;
-      }
-      jaws[j].bind(&t.arena);
-      for (const Vec3& v : m.vertices) (void)jaws[j].vertices.push_back(v);
-      for (const Triangle& tr : m.triangles) (void)jaws[j].triangles.push_back(tr);
-    }
+    if (!test::phantom_jaw_meshes(t.arena, 6000, jaws)) return;
     ok = true;
   }
 };

@@ -10,6 +10,7 @@
 
 #include "common/phantom.h"
 #include "splintcore/design.h"
+#include "support/phantom_jaws.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -42,18 +43,7 @@ struct PlanFixture {
     static std::string text;
     text = phantom_plan_case(sequence, mandible, extra);
     if (!parse_case(ctx, text.data(), text.size(), "plan", &c).is_ok()) return;
-    for (int j = 0; j < 2; ++j) {
-      phantom::JawMesh m;
-      phantom::PhantomOptions po;
-      po.target_triangles = 6000;
-      if (!phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &m)
-               .is_ok()) {
-        return;
-      }
-      jaws[j].bind(&t.arena);
-      for (const Vec3& v : m.vertices) (void)jaws[j].vertices.push_back(v);
-      for (const Triangle& tr : m.triangles) (void)jaws[j].triangles.push_back(tr);
-    }
+    if (!test::phantom_jaw_meshes(t.arena, 6000, jaws)) return;
     ok = true;
   }
   Span<const Mesh> span() const { return Span<const Mesh>(jaws, 2); }
