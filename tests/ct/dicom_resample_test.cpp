@@ -19,6 +19,7 @@
 #include "splintcore/ct.h"
 #include "splintcore/geometry.h"
 #include "splintcore/segment.h"
+#include "support/dicom_read.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -43,13 +44,7 @@ struct TempDir {
 };
 
 // A volume's slices written as a DICOM series at `positions`, read back (voxels copied out).
-struct ReadBack {
-  Status status;
-  CtVolume volume;
-  CtInfo info;
-  std::vector<int16_t> hu;
-  size_t high_water = 0;
-};
+using ReadBack = test::DicomRead;
 
 ReadBack read_folder(const std::string& folder, size_t arena_bytes,
                      const CtReadOptions& options = CtReadOptions{}) {
@@ -61,6 +56,14 @@ ReadBack read_folder(const std::string& folder, size_t arena_bytes,
   r.volume.hu = nullptr;
   r.high_water = t.arena.high_water();
   return r;
+}
+
+// The CT phantom of `po` without streaks or noise (the reference the resampled series match).
+void clean_phantom(CtPhantomOptions po, CtPhantom* phantom, std::vector<int16_t>* hu, CtVolume* v) {
+  po.streak = false;
+  po.noise_hu = 0;
+  SPLINTCORE_ASSERT_OK(phantom->init(po));
+  phantom->generate(hu, v);
 }
 
 void write_series(const CtVolume& v, const std::vector<Vec3>& positions, const TempDir& dir) {
@@ -165,13 +168,10 @@ TEST(CtDicomResample, FifteenDegreeGantryTiltMatchesTheUntiltedPhantom) {
   po.spacing = Vec3{0.5, half_row, dz};
   po.axis_y = Vec3{0, c, -s};
   po.axis_z = Vec3{0, s, c};
-  po.streak = false;
-  po.noise_hu = 0;
   CtPhantom phantom;
-  SPLINTCORE_ASSERT_OK(phantom.init(po));
   std::vector<int16_t> fine;
   CtVolume f;
-  phantom.generate(&fine, &f);
+  ASSERT_NO_FATAL_FAILURE(clean_phantom(po, &phantom, &fine, &f));
   std::vector<int16_t> tilted(size_t{nx} * ny * nz), untilted(size_t{nx} * ny * nz);
   std::vector<Vec3> positions;
   for (uint32_t k = 0; k < nz; ++k) {
@@ -245,13 +245,10 @@ TEST(CtDicomResample, UnevenSpacingAndAMissingSliceMatchTheEvenPhantom) {
   po.ny = ny;
   po.nz = fine_nz;
   po.spacing = Vec3{0.5, 0.5, 0.25};
-  po.streak = false;
-  po.noise_hu = 0;
   CtPhantom phantom;
-  SPLINTCORE_ASSERT_OK(phantom.init(po));
   std::vector<int16_t> fine;
   CtVolume f;
-  phantom.generate(&fine, &f);
+  ASSERT_NO_FATAL_FAILURE(clean_phantom(po, &phantom, &fine, &f));
   // Fine slice indices: gaps of 2, 2, 3, 1 (0.5, 0.5, 0.75, 0.25 mm) repeated, and one gap of 4
   // (a missing slice) at the occlusal plane (fine slice 98).
   std::vector<uint32_t> taken = {0};
