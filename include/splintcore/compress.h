@@ -68,6 +68,33 @@ Status deflate_workspace(Arena& arena, size_t out_bytes, DeflateWorkspace* works
 Status deflate_fixed(const DeflateWorkspace& workspace, ZFormat format, const uint8_t* data,
                      size_t size, const CompressSink& sink);
 
+// Deflate on the caller's executor: the input cut into pieces of kDeflatePiece bytes, each one
+// fixed-Huffman block made by the matcher of deflate_fixed, whose matches may reach into the
+// 32 KiB before the piece; the blocks are joined bit to bit, in order, into one stream. The
+// bytes depend only on the input and the effort, not on the executor or its threads; an input
+// of at most one piece gives deflate_fixed's bytes. Pieces are made kDeflateLanes at a time,
+// each lane with its own tables and a buffer for its piece's bits.
+constexpr size_t kDeflatePiece = size_t{1} << 18;
+constexpr uint32_t kDeflateLanes = 4;
+
+struct DeflateLanes {
+  DeflateWorkspace stream;  // the joined stream's tables (a single piece) and its 64 KiB buffer
+  DeflateWorkspace lane[kDeflateLanes];  // for inputs of more than one piece
+  uint32_t lanes = 0;  // lanes allocated: 0 for one piece, else up to kDeflateLanes
+  size_t largest = 0;  // the largest input they take
+};
+// Arena bytes deflate_lanes() takes for inputs of up to `largest` bytes: up to one piece,
+// deflate_workspace_bound(65536); more, also (one per piece, at most kDeflateLanes) a lane:
+// deflate_workspace_bound of a piece's bound (9/8 of it and 16 bytes).
+uint64_t deflate_lanes_bound(size_t largest);
+// Allocates the lanes from `arena`; they stay there. Errors: kArenaExhausted.
+Status deflate_lanes(Arena& arena, size_t largest, DeflateEffort effort, DeflateLanes* lanes);
+// Compresses data[0..size) (size <= lanes.largest) as one stream in `format` into `sink`
+// (writes of at most 64 KiB) with `executor`'s threads (nullptr: serial). Errors: kIoError
+// (the sink refused).
+Status deflate_parallel(const Executor* executor, const DeflateLanes& lanes, ZFormat format,
+                        const uint8_t* data, size_t size, const CompressSink& sink);
+
 // ---------------------------------------------------------------------------------------------
 // Inflate: RFC 1951 complete (stored, fixed and dynamic Huffman blocks, 32 KiB window), with
 // the zlib wrapper (header check, Adler-32 verified; a preset dictionary, FDICT, is refused)

@@ -174,8 +174,9 @@ struct ThreeMfOptions {
 
 // Arena bytes write_3mf() takes at most (nothing stays): the model part (up to 81 bytes a
 // vertex and 66 a triangle, 6 per character of a name, id or hash, 1 KiB more, 256 an object)
-// and, deflating, the encoder's tables with a 64 KiB output buffer and each entry's
-// compressed copy (9/8 of it).
+// and, deflating, the encoder's lanes (deflate_lanes_bound of the model part: a model over
+// 1 MiB is deflated in pieces on the context's executor) and each entry's compressed copy
+// (9/8 of it).
 uint64_t write_3mf_bound(Span<const ThreeMfObject> objects, const ThreeMfOptions& options);
 
 // Writes `objects` as a 3MF package (3MF Core 1.3: unit millimetre, an object and a build

@@ -132,14 +132,16 @@ void render_ramp_colour(double value, double max, uint8_t rgb[3]);
 // ---------------------------------------------------------------------------------------------
 // PNG (ISO/IEC 15948:2003): 8-bit RGB, no interlace; IHDR, IDAT chunks of at most 64 KiB, a
 // tEXt "Software" chunk, IEND. Rows are filtered (None, Sub, Up or Paeth, chosen per row by
-// the smallest sum of absolute values) and compressed as one zlib stream (RFC 1950) holding
-// one fixed-Huffman deflate block (RFC 1951) from a greedy LZ77 hash-chain matcher (32 KiB
-// window, chains of at most 64 candidates, every position of a match up to 32 bytes hashed,
-// only the last 3 of a longer one): the bytes depend only on the pixels.
+// the smallest sum of absolute values, in bands of rows on the context's executor) and
+// compressed as one zlib stream (RFC 1950) of fixed-Huffman deflate blocks (RFC 1951) from a
+// greedy LZ77 hash-chain matcher (32 KiB window, chains of at most 64 candidates, every
+// position of a match up to 32 bytes hashed, only the last 3 of a longer one), one block per
+// MiB of filtered rows made on the executor (deflate_parallel, compress.h): the bytes depend
+// only on the pixels, not on the threads.
 
 // Bytes write_png() may take from the arena (all temporaries, returned before it finishes):
-// the filtered rows h*(1+3w) + 16 and the deflate workspace with a 64 KiB output buffer,
-// deflate_workspace_bound(65536) (compress.h). UINT64_MAX on overflow.
+// the filtered rows h*(1+3w) + 16 and the deflate lanes for them, deflate_lanes_bound
+// (compress.h). UINT64_MAX on overflow.
 uint64_t png_bound(uint32_t width, uint32_t height);
 
 // Writes the image as PNG to `sink` (a sequence of writes; never seeks). Reads image.rgb.

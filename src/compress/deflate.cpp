@@ -66,6 +66,16 @@ class BitWriter {
     SPLINTCORE_RETURN_IF_ERROR(drain());
     return write_out();
   }
+  // Writes every whole byte and hands back the bits of the last partial one (fewer than 8),
+  // unpadded: a piece of a stream that another writer continues.
+  Status finish_piece(uint32_t* bits, int* count) {
+    SPLINTCORE_RETURN_IF_ERROR(drain());
+    *bits = static_cast<uint32_t>(bits_);
+    *count = count_;
+    return Status::ok();
+  }
+  // Bytes in the buffer, not yet written to the sink.
+  size_t held() const { return used_; }
 
  private:
   // Every whole byte out of the accumulator.
@@ -186,8 +196,12 @@ uint32_t hash3(const uint8_t* p) {
   return (v * 2654435761u) >> (32 - kHashBits);
 }
 
-// One fixed-Huffman block holding the whole stream (deflate puts no limit on a block's size).
-Status deflate_block(const uint8_t* data, size_t size, const DeflateWorkspace& ws, BitWriter& w) {
+// One fixed-Huffman block of data[begin..end) (the last block when end == size; deflate puts
+// no limit on a block's size). Matches may reach back into the 32 KiB before `begin`, which go
+// into the hash chains first, and end at `end`: the block depends only on the input and its
+// bounds, so the blocks of a cut input can be made in any order (deflate_parallel).
+Status deflate_block(const uint8_t* data, size_t size, size_t begin, size_t end,
+                     const DeflateWorkspace& ws, BitWriter& w) {
   int32_t* head = ws.head;
   int32_t* prev = ws.prev;
   const uint32_t max_chain = ws.effort.max_chain;
@@ -195,19 +209,20 @@ Status deflate_block(const uint8_t* data, size_t size, const DeflateWorkspace& w
   FixedCodes codes;
   make_fixed_codes(&codes);
   for (size_t i = 0; i < (size_t{1} << kHashBits); ++i) head[i] = -1;
-  SPLINTCORE_RETURN_IF_ERROR(w.put(1, 1));  // BFINAL
-  SPLINTCORE_RETURN_IF_ERROR(w.put(1, 2));  // BTYPE 01: fixed Huffman
+  SPLINTCORE_RETURN_IF_ERROR(w.put(end == size ? 1 : 0, 1));  // BFINAL
+  SPLINTCORE_RETURN_IF_ERROR(w.put(1, 2));                    // BTYPE 01: fixed Huffman
   auto insert = [&](size_t pos) {
     if (pos + kMinMatch > size) return;
     const uint32_t h = hash3(data + pos);
     prev[pos & (kWindow - 1)] = head[h];
     head[h] = static_cast<int32_t>(pos);
   };
-  size_t i = 0;
-  while (i < size) {
+  for (size_t pos = begin > kWindow ? begin - kWindow : 0; pos < begin; ++pos) insert(pos);
+  size_t i = begin;
+  while (i < end) {
     uint32_t best_length = 0, best_distance = 0;
-    if (i + kMinMatch <= size) {
-      const size_t limit = size - i < kMaxMatch ? size - i : kMaxMatch;
+    if (i + kMinMatch <= end) {
+      const size_t limit = end - i < kMaxMatch ? end - i : kMaxMatch;
       int32_t candidate = head[hash3(data + i)];
       for (uint32_t chain = 0; chain < max_chain && candidate >= 0; ++chain) {
         const size_t cand = static_cast<size_t>(candidate);
@@ -243,6 +258,82 @@ Status deflate_block(const uint8_t* data, size_t size, const DeflateWorkspace& w
   return put_literal(w, codes, 256);  // end of block
 }
 
+// The wrapper's header (RFC 1950 / 1952), before the first block.
+Status put_header(BitWriter& bits, ZFormat format) {
+  if (format == ZFormat::kZlib) {
+    SPLINTCORE_RETURN_IF_ERROR(bits.put(0x78, 8));  // CMF: deflate, 32 KiB window
+    SPLINTCORE_RETURN_IF_ERROR(bits.put(0x9C, 8));  // FLG: (0x789C % 31) == 0, no dictionary
+  } else if (format == ZFormat::kGzip) {
+    // ID1 ID2, CM 8, no flags, no time, XFL 0, OS 255 (unknown): the same bytes everywhere.
+    static const uint8_t kHeader[10] = {0x1F, 0x8B, 8, 0, 0, 0, 0, 0, 0, 255};
+    for (uint8_t b : kHeader) SPLINTCORE_RETURN_IF_ERROR(bits.put(b, 8));
+  }
+  return Status::ok();
+}
+
+// Pads the last block to a byte, then the wrapper's trailer, then everything to the sink.
+Status put_trailer(BitWriter& bits, ZFormat format, const uint8_t* data, size_t size) {
+  SPLINTCORE_RETURN_IF_ERROR(bits.align());
+  if (format == ZFormat::kZlib) {
+    const uint32_t adler = adler32(1, data, size);
+    for (int k = 3; k >= 0; --k) {
+      SPLINTCORE_RETURN_IF_ERROR(bits.put((adler >> (8 * k)) & 0xFF, 8));
+    }
+  } else if (format == ZFormat::kGzip) {
+    SPLINTCORE_RETURN_IF_ERROR(bits.put_le32(crc32(0, data, size)));
+    SPLINTCORE_RETURN_IF_ERROR(bits.put_le32(static_cast<uint32_t>(size)));
+  }
+  return bits.flush();
+}
+
+void check_effort(const DeflateEffort& effort) {
+  SPLINTCORE_ASSERT(effort.max_chain >= 1 && effort.max_chain <= 4096);
+  SPLINTCORE_ASSERT(effort.nice_length >= kMinMatch && effort.nice_length <= kMaxMatch);
+}
+
+constexpr size_t kStreamOut = 65536;  // deflate_parallel's writes to the sink
+
+// A piece's bits: at most 9 a byte (a literal), the block's header and end code.
+size_t piece_bytes_bound(size_t n) { return n + n / 8 + 16; }
+
+bool refuse(void*, const uint8_t*, size_t) { return false; }
+
+// A wave of deflate_parallel: lane k makes piece first + k into its own buffer.
+struct Pieces {
+  const uint8_t* data = nullptr;
+  size_t size = 0;
+  size_t first = 0;                      // the wave's first piece
+  const DeflateWorkspace* ws = nullptr;  // the lanes
+  size_t used[kDeflateLanes] = {};       // whole bytes of the piece
+  uint32_t bits[kDeflateLanes] = {};
+  int count[kDeflateLanes] = {};  // bits after them (0..7)
+  Status status[kDeflateLanes];
+
+  void run(uint32_t k) {
+    const size_t begin = (first + k) * kDeflatePiece;
+    const size_t end = size - begin > kDeflatePiece ? begin + kDeflatePiece : size;
+    CompressSink none;
+    none.write = &refuse;  // the buffer holds the piece's bound: never full
+    BitWriter w(ws[k], none);
+    status[k] = deflate_block(data, size, begin, end, ws[k], w);
+    if (status[k].is_ok()) status[k] = w.finish_piece(&bits[k], &count[k]);
+    used[k] = w.held();
+  }
+};
+
+// Appends a piece (whole bytes, then up to 7 bits) to the stream.
+Status append_piece(BitWriter& out, const uint8_t* bytes, size_t n, uint32_t bits, int count) {
+  size_t i = 0;
+  for (; i + 4 <= n; i += 4) {
+    const uint32_t word =
+        static_cast<uint32_t>(bytes[i]) | static_cast<uint32_t>(bytes[i + 1]) << 8 |
+        static_cast<uint32_t>(bytes[i + 2]) << 16 | static_cast<uint32_t>(bytes[i + 3]) << 24;
+    SPLINTCORE_RETURN_IF_ERROR(out.put(word, 32));
+  }
+  for (; i < n; ++i) SPLINTCORE_RETURN_IF_ERROR(out.put(bytes[i], 8));
+  return count > 0 ? out.put(bits, count) : Status::ok();
+}
+
 }  // namespace
 
 uint64_t deflate_workspace_bound(size_t out_bytes) {
@@ -267,30 +358,65 @@ Status deflate_workspace(Arena& arena, size_t out_bytes, DeflateWorkspace* works
 Status deflate_fixed(const DeflateWorkspace& workspace, ZFormat format, const uint8_t* data,
                      size_t size, const CompressSink& sink) {
   SPLINTCORE_ASSERT(workspace.out != nullptr && sink.write != nullptr);
-  SPLINTCORE_ASSERT(workspace.effort.max_chain >= 1 && workspace.effort.max_chain <= 4096);
-  SPLINTCORE_ASSERT(workspace.effort.nice_length >= kMinMatch &&
-                    workspace.effort.nice_length <= kMaxMatch);
+  check_effort(workspace.effort);
   BitWriter bits(workspace, sink);
-  if (format == ZFormat::kZlib) {
-    SPLINTCORE_RETURN_IF_ERROR(bits.put(0x78, 8));  // CMF: deflate, 32 KiB window
-    SPLINTCORE_RETURN_IF_ERROR(bits.put(0x9C, 8));  // FLG: (0x789C % 31) == 0, no dictionary
-  } else if (format == ZFormat::kGzip) {
-    // ID1 ID2, CM 8, no flags, no time, XFL 0, OS 255 (unknown): the same bytes everywhere.
-    static const uint8_t kHeader[10] = {0x1F, 0x8B, 8, 0, 0, 0, 0, 0, 0, 255};
-    for (uint8_t b : kHeader) SPLINTCORE_RETURN_IF_ERROR(bits.put(b, 8));
+  SPLINTCORE_RETURN_IF_ERROR(put_header(bits, format));
+  SPLINTCORE_RETURN_IF_ERROR(deflate_block(data, size, 0, size, workspace, bits));
+  return put_trailer(bits, format, data, size);
+}
+
+// The lanes for inputs of up to `largest` bytes: 0 for one piece, else one a piece, at most
+// kDeflateLanes.
+uint32_t lanes_for(size_t largest) {
+  if (largest <= kDeflatePiece) return 0;
+  const size_t pieces = largest / kDeflatePiece + (largest % kDeflatePiece != 0 ? 1 : 0);
+  return pieces < kDeflateLanes ? static_cast<uint32_t>(pieces) : kDeflateLanes;
+}
+
+uint64_t deflate_lanes_bound(size_t largest) {
+  return deflate_workspace_bound(kStreamOut) +
+         uint64_t{lanes_for(largest)} * deflate_workspace_bound(piece_bytes_bound(kDeflatePiece));
+}
+
+Status deflate_lanes(Arena& arena, size_t largest, DeflateEffort effort, DeflateLanes* lanes) {
+  check_effort(effort);
+  DeflateLanes l;
+  l.largest = largest;
+  SPLINTCORE_RETURN_IF_ERROR(deflate_workspace(arena, kStreamOut, &l.stream));
+  l.stream.effort = effort;
+  l.lanes = lanes_for(largest);
+  for (uint32_t k = 0; k < l.lanes; ++k) {
+    SPLINTCORE_RETURN_IF_ERROR(
+        deflate_workspace(arena, piece_bytes_bound(kDeflatePiece), &l.lane[k]));
+    l.lane[k].effort = effort;
   }
-  SPLINTCORE_RETURN_IF_ERROR(deflate_block(data, size, workspace, bits));
-  SPLINTCORE_RETURN_IF_ERROR(bits.align());
-  if (format == ZFormat::kZlib) {
-    const uint32_t adler = adler32(1, data, size);
-    for (int k = 3; k >= 0; --k) {
-      SPLINTCORE_RETURN_IF_ERROR(bits.put((adler >> (8 * k)) & 0xFF, 8));
+  *lanes = l;
+  return Status::ok();
+}
+
+Status deflate_parallel(const Executor* executor, const DeflateLanes& lanes, ZFormat format,
+                        const uint8_t* data, size_t size, const CompressSink& sink) {
+  SPLINTCORE_ASSERT(sink.write != nullptr && size <= lanes.largest);
+  if (size <= kDeflatePiece) return deflate_fixed(lanes.stream, format, data, size, sink);
+  Pieces p;
+  p.data = data;
+  p.size = size;
+  p.ws = lanes.lane;
+  BitWriter bits(lanes.stream, sink);
+  SPLINTCORE_RETURN_IF_ERROR(put_header(bits, format));
+  const size_t pieces = (size + kDeflatePiece - 1) / kDeflatePiece;
+  for (size_t first = 0; first < pieces; first += lanes.lanes) {
+    const uint32_t wave =
+        static_cast<uint32_t>(pieces - first < lanes.lanes ? pieces - first : lanes.lanes);
+    p.first = first;
+    auto task = [&p](uint32_t k) { p.run(k); };
+    parallel_for_each(executor, wave, task);
+    for (uint32_t k = 0; k < wave; ++k) {
+      SPLINTCORE_RETURN_IF_ERROR(p.status[k]);
+      SPLINTCORE_RETURN_IF_ERROR(append_piece(bits, p.ws[k].out, p.used[k], p.bits[k], p.count[k]));
     }
-  } else if (format == ZFormat::kGzip) {
-    SPLINTCORE_RETURN_IF_ERROR(bits.put_le32(crc32(0, data, size)));
-    SPLINTCORE_RETURN_IF_ERROR(bits.put_le32(static_cast<uint32_t>(size)));
   }
-  return bits.flush();
+  return put_trailer(bits, format, data, size);
 }
 
 }  // namespace splintcore

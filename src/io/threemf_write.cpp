@@ -38,7 +38,6 @@ constexpr uint64_t kVertexLine = 18 + 3 * (4 + 15 + 1) + 3;
 constexpr uint64_t kTriangleLine = 15 + 3 * (5 + 10 + 1) + 3;
 constexpr uint64_t kFixedText = 1024;          // the model's header, footer, and per object's tags
 constexpr uint64_t kPerObject = 256 + 3 * 25;  // with a build item's transform
-constexpr size_t kDeflateChunk = 65536;        // the encoder's output buffer
 
 // A text that grows in the arena (the model part is built whole: a ZIP entry's header holds
 // its size and CRC).
@@ -284,8 +283,9 @@ struct GrowingSink {
 
 // The entry's bytes: deflated into `out` (an empty array bound to the arena) when that is
 // smaller.
-Status pack_entry(Arena& arena, const DeflateWorkspace& ws, bool deflate, const char* name,
+Status pack_entry(const Context& ctx, const DeflateLanes& lanes, bool deflate, const char* name,
                   const uint8_t* data, size_t size, ArenaArray<uint8_t>* out, Entry* e) {
+  Arena& arena = *ctx.arena;
   e->name = name;
   e->plain_size = static_cast<uint32_t>(size);
   e->crc = crc32(0, data, size);
@@ -300,7 +300,7 @@ Status pack_entry(Arena& arena, const DeflateWorkspace& ws, bool deflate, const 
   CompressSink sink;
   sink.write = &GrowingSink::write;
   sink.user = &g;
-  const Status s = deflate_fixed(ws, ZFormat::kRaw, data, size, sink);
+  const Status s = deflate_parallel(ctx.executor, lanes, ZFormat::kRaw, data, size, sink);
   if (g.exhausted) return arena.exhausted_status();
   if (g.larger) {
     out->clear();
@@ -400,7 +400,7 @@ uint64_t write_3mf_bound(Span<const ThreeMfObject> objects, const ThreeMfOptions
   const uint64_t model = model_bound(objects, options);
   uint64_t n = model + 16;
   if (options.deflate) {
-    n += deflate_workspace_bound(kDeflateChunk) + deflated_bound(model) + 16 +
+    n += deflate_lanes_bound(static_cast<size_t>(model)) + deflated_bound(model) + 16 +
          deflated_bound(sizeof kContentTypes) + 16 + deflated_bound(sizeof kRels) + 16;
   }
   return n;
@@ -426,11 +426,10 @@ Status write_3mf(const Context& ctx, Span<const ThreeMfObject> objects,
   write_model(objects, options, &model);
   if (model.exhausted) return arena.exhausted_status();
   model.bytes.shrink_to_fit();
-  DeflateWorkspace ws;
+  DeflateLanes lanes;
   const size_t plain[3] = {sizeof kContentTypes - 1, sizeof kRels - 1, model.bytes.size()};
   if (options.deflate) {
-    SPLINTCORE_RETURN_IF_ERROR(deflate_workspace(arena, kDeflateChunk, &ws));
-    ws.effort = kDeflateFast;
+    SPLINTCORE_RETURN_IF_ERROR(deflate_lanes(arena, plain[2], kDeflateFast, &lanes));
   }
   Entry entries[3];
   ArenaArray<uint8_t> packed[3];
@@ -439,7 +438,7 @@ Status write_3mf(const Context& ctx, Span<const ThreeMfObject> objects,
                             reinterpret_cast<const uint8_t*>(kRels), model.bytes.data()};
   for (int k = 0; k < 3; ++k) {  // each grows while it is the top allocation
     packed[k].bind(&arena);
-    SPLINTCORE_RETURN_IF_ERROR(pack_entry(arena, ws, options.deflate, names[k], data[k], plain[k],
+    SPLINTCORE_RETURN_IF_ERROR(pack_entry(ctx, lanes, options.deflate, names[k], data[k], plain[k],
                                           &packed[k], &entries[k]));
   }
   return write_zip(sink, entries, 3);

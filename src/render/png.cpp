@@ -16,6 +16,7 @@ namespace splintcore {
 namespace {
 
 constexpr size_t kOutCapacity = 65536;  // bytes of one IDAT chunk's data
+constexpr uint32_t kPngBands = 16;      // filtering's tasks (the bytes do not depend on it)
 
 void put_be32(uint8_t* p, uint32_t v) {
   p[0] = static_cast<uint8_t>(v >> 24);
@@ -142,6 +143,24 @@ void filter_costs(const uint8_t* row, const uint8_t* above, size_t bytes, uint64
   costs[3] = pae;
 }
 
+// A row's filter byte (the type of smallest absolute sum; ties: the lowest type) and its
+// filtered bytes into dest[0..bytes].
+void filter_best(const uint8_t* row, const uint8_t* above, size_t bytes, uint8_t* dest) {
+  const int types[4] = {0, 1, 2, 4};
+  uint64_t costs[4];
+  filter_costs(row, above, bytes, costs);
+  int best_type = 0;
+  uint64_t best_cost = UINT64_MAX;
+  for (int k = 0; k < 4; ++k) {
+    if (costs[k] < best_cost) {
+      best_cost = costs[k];
+      best_type = types[k];
+    }
+  }
+  dest[0] = static_cast<uint8_t>(best_type);
+  filter_row(row, above, bytes, best_type, dest + 1);
+}
+
 }  // namespace
 
 uint32_t png_crc32(uint32_t crc, const uint8_t* data, size_t bytes) {
@@ -159,7 +178,10 @@ uint64_t png_bound(uint32_t width, uint32_t height) {
     return UINT64_MAX;
   }
   uint64_t total = 0;
-  if (!checked_add(rows, 16 + deflate_workspace_bound(kOutCapacity), &total)) return UINT64_MAX;
+  static_assert(kOutCapacity == 65536, "deflate_parallel writes IDAT chunks of 64 KiB");
+  if (!checked_add(rows, 16 + deflate_lanes_bound(static_cast<size_t>(rows)), &total)) {
+    return UINT64_MAX;
+  }
   return total;
 }
 
@@ -178,29 +200,23 @@ Status write_png(const Context& ctx, const RenderImage& image, const ByteSink& s
   const size_t size = stride * h;  // <= 8192 * 24577: no overflow
   uint8_t* filtered = arena.allocate_array<uint8_t>(size);
   if (filtered == nullptr) return arena.exhausted_status();
-  DeflateWorkspace workspace;
-  SPLINTCORE_RETURN_IF_ERROR(deflate_workspace(arena, kOutCapacity, &workspace));
+  DeflateLanes lanes;
+  SPLINTCORE_RETURN_IF_ERROR(deflate_lanes(arena, size, DeflateEffort{}, &lanes));
 
-  // Filter each row with the type of smallest absolute sum (ties: the lowest type).
-  for (uint32_t y = 0; y < h; ++y) {
-    const uint8_t* row = image.rgb + static_cast<size_t>(y) * row_bytes;
-    const uint8_t* above = y > 0 ? row - row_bytes : nullptr;
-    uint8_t* dest = filtered + static_cast<size_t>(y) * stride;
-    const int types[4] = {0, 1, 2, 4};
-    uint64_t costs[4];
-    filter_costs(row, above, row_bytes, costs);
-    int best_type = 0;
-    uint64_t best_cost = UINT64_MAX;
-    for (int k = 0; k < 4; ++k) {
-      if (costs[k] < best_cost) {
-        best_cost = costs[k];
-        best_type = types[k];
-      }
+  // Each row filtered with the type of smallest absolute sum (ties: the lowest type), in
+  // bands of rows on the executor (a row depends only on itself and the row above).
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "png", 0, h));
+  const uint32_t bands = h < kPngBands ? h : kPngBands;
+  auto band = [&](uint32_t b) {
+    const uint32_t y1 = static_cast<uint32_t>(uint64_t{h} * (b + 1) / bands);
+    for (uint32_t y = static_cast<uint32_t>(uint64_t{h} * b / bands); y < y1; ++y) {
+      const uint8_t* row = image.rgb + static_cast<size_t>(y) * row_bytes;
+      filter_best(row, y > 0 ? row - row_bytes : nullptr, row_bytes,
+                  filtered + static_cast<size_t>(y) * stride);
     }
-    dest[0] = static_cast<uint8_t>(best_type);
-    filter_row(row, above, row_bytes, best_type, dest + 1);
-    if ((y & 63) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "png", y, h));
-  }
+  };
+  parallel_for_each(ctx.executor, bands, band);
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "png", h, h));
 
   static const uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
   SPLINTCORE_RETURN_IF_ERROR(write_sink(sink, kSignature, 8));
@@ -221,7 +237,8 @@ Status write_png(const Context& ctx, const RenderImage& image, const ByteSink& s
   CompressSink idat_sink;
   idat_sink.write = &IdatWriter::write;
   idat_sink.user = &idat;
-  const Status deflated = deflate_fixed(workspace, ZFormat::kZlib, filtered, size, idat_sink);
+  const Status deflated =
+      deflate_parallel(ctx.executor, lanes, ZFormat::kZlib, filtered, size, idat_sink);
   if (!idat.failure.is_ok()) return idat.failure;
   SPLINTCORE_RETURN_IF_ERROR(deflated);
   return write_chunk(sink, "IEND", nullptr, 0);
