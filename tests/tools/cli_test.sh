@@ -652,6 +652,16 @@ expect_exit 0 "phantom for the options" -- "$tool" phantom --triangles 6000 -o "
 check "phantom writes its case" -- grep -q "^case: .*opts/case.json" "$work/out"
 expect_exit 0 "design the phantom's own case" -- "$tool" design "$work/opts/case.json" -o "$work/opts/plain"
 check "the phantom's case gives the paper-scale golden" -- grep -q "\"splint_sha256\":\"$(grep " boolean:paper_scale-phantom6000$" "$fixtures/golden.sha256" | cut -d' ' -f1)\"" "$work/opts/plain/report.json"
+# The jaws' SHA-256 in the report are the files' own, hashed beside the reading when the run has
+# threads (a 4.5 MB maxilla: more than the hasher's four 1 MiB slots) and in the reading without.
+mkdir -p "$work/hash"
+expect_exit 0 "phantom of 90000 triangles" -- "$tool" phantom --triangles 90000 -o "$work/hash"
+for threads in 1 3; do
+  expect_exit 0 "design at $threads threads" -- "$tool" design "$work/hash/case.json" -o "$work/hash/t$threads" --threads "$threads"
+  for jaw in maxilla mandible; do
+    check "report: the $jaw's SHA-256 at $threads threads" -- grep -q "\"sha256\":\"$(sha256 "$work/hash/$jaw.stl")\"" "$work/hash/t$threads/report.json"
+  done
+done
 cp "$fixtures/cases/blockout.json" "$work/opts/case.json"
 expect_exit 0 "design with every option" -- "$tool" design "$work/opts/case.json" -o "$work/opts/out"
 check "summary names the label" -- grep -q '^label: "PHANTOM-01" engraved, 10 glyphs' "$work/out"

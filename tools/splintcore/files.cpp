@@ -1,7 +1,65 @@
 #include "files.h"
 
+#include <algorithm>
+#include <memory>
+
 namespace splintcore {
 namespace tool {
+
+BackgroundHasher::BackgroundHasher(Sha256* sha) : sha_(sha) {
+  for (std::vector<uint8_t>& slot : slot_) slot.reserve(kSlotBytes);
+  thread_ = std::thread([this] { run(); });
+}
+
+BackgroundHasher::~BackgroundHasher() { finish(); }
+
+void BackgroundHasher::add(const uint8_t* data, size_t bytes) {
+  while (bytes > 0) {
+    std::vector<uint8_t>& slot = slot_[fill_];
+    const size_t n = std::min(bytes, kSlotBytes - slot.size());
+    slot.insert(slot.end(), data, data + n);
+    data += n;
+    bytes -= n;
+    if (slot.size() == kSlotBytes) publish();
+  }
+}
+
+void BackgroundHasher::publish() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  ++ready_;
+  changed_.notify_all();
+  changed_.wait(lock, [this] { return ready_ < kSlots; });  // the next slot is free
+  fill_ = (fill_ + 1) % kSlots;
+}
+
+void BackgroundHasher::finish() {
+  if (!thread_.joinable()) return;
+  if (!slot_[fill_].empty()) publish();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    finishing_ = true;
+  }
+  changed_.notify_all();
+  thread_.join();
+}
+
+void BackgroundHasher::run() {
+  size_t next = 0;  // the oldest published slot
+  for (;;) {
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      changed_.wait(lock, [this] { return ready_ > 0 || finishing_; });
+      if (ready_ == 0) return;  // finishing, all hashed
+    }
+    std::vector<uint8_t>& slot = slot_[next];
+    sha_->update(slot.data(), slot.size());
+    slot.clear();
+    next = (next + 1) % kSlots;
+    std::lock_guard<std::mutex> lock(mutex_);
+    --ready_;
+    changed_.notify_all();
+  }
+}
 
 Status InputFile::open(const char* path, uint64_t max_bytes) {
   path_ = path;
@@ -37,6 +95,7 @@ int64_t InputFile::read(void* user, uint8_t* buffer, size_t capacity) {
   }
   self->count_ += static_cast<uint64_t>(n);
   if (self->sha_ != nullptr) self->sha_->update(buffer, static_cast<size_t>(n));
+  if (self->hasher_ != nullptr) self->hasher_->add(buffer, static_cast<size_t>(n));
   return n;
 }
 
@@ -78,12 +137,21 @@ Status read_mesh_file(const Context& ctx, const char* path, uint64_t max_bytes, 
   InputFile file;
   SPLINTCORE_RETURN_IF_ERROR(file.open(path, max_bytes));
   Sha256 sha;
-  if (hash) file.hash_into(&sha);
+  // With more than one thread the file is hashed beside the reading (the same digest).
+  const bool beside = hash && ctx.executor != nullptr && ctx.executor->concurrency > 1;
+  std::unique_ptr<BackgroundHasher> hasher;
+  if (beside) {
+    hasher.reset(new BackgroundHasher(&sha));
+    file.hash_into(hasher.get());
+  } else if (hash) {
+    file.hash_into(&sha);
+  }
   MeshReadOptions options;
   options.weld = true;
   MeshReadInfo read;
   Status s = read_mesh(ctx, file.source(), options, mesh, &read);
   if (s.is_ok() && hash) s = file.read_rest();
+  if (hasher != nullptr) hasher->finish();
   if (file.went_over_limit()) return file.limit_status(kUnknownSize);
   SPLINTCORE_RETURN_IF_ERROR(s);
   if (info != nullptr) {

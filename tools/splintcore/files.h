@@ -3,8 +3,11 @@
 #ifndef SPLINTCORE_TOOLS_SPLINTCORE_FILES_H
 #define SPLINTCORE_TOOLS_SPLINTCORE_FILES_H
 
+#include <condition_variable>
 #include <cstdint>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "splintcore/core.h"
@@ -22,11 +25,41 @@ constexpr uint64_t kNoInputLimit = UINT64_MAX;
 // whole), so a missing, unreadable or oversized file gets the same message everywhere. A
 // regular file larger than `max_bytes` is refused before anything is read; a pipe or device
 // is counted as it is read.
+// SHA-256 on a thread of its own: the bytes handed to add() are copied into one of a few
+// slots and hashed in order while the caller goes on (reading a mesh hashes its file this way
+// when the run has more than one thread: the same digest, without the hash's time in the read).
+class BackgroundHasher {
+ public:
+  explicit BackgroundHasher(Sha256* sha);
+  ~BackgroundHasher();  // finishes
+  BackgroundHasher(const BackgroundHasher&) = delete;
+  BackgroundHasher& operator=(const BackgroundHasher&) = delete;
+  void add(const uint8_t* data, size_t bytes);  // waits while every slot is full
+  void finish();                                // every byte added is hashed
+
+ private:
+  static constexpr size_t kSlots = 4;
+  static constexpr size_t kSlotBytes = size_t{1} << 20;
+  void publish();  // the slot being filled goes to the hashing thread
+  void run();
+
+  Sha256* sha_;
+  std::vector<uint8_t> slot_[kSlots];
+  size_t fill_ = 0;   // the slot being filled (owned by the caller)
+  size_t ready_ = 0;  // slots published, not yet hashed
+  bool finishing_ = false;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::thread thread_;
+};
+
 class InputFile {
  public:
   Status open(const char* path, uint64_t max_bytes = kNoInputLimit);
   // Every byte read through source() (or read by read_rest) also goes to `sha`.
   void hash_into(Sha256* sha) { sha_ = sha; }
+  // The same through a BackgroundHasher (finished by the caller).
+  void hash_into(BackgroundHasher* hasher) { hasher_ = hasher; }
   // The file as a ByteSource (its name: the path).
   ByteSource source();
   // Reads the rest of the file into `out` (replaced).
@@ -47,6 +80,7 @@ class InputFile {
   uint64_t max_bytes_ = kNoInputLimit;
   uint64_t count_ = 0;
   Sha256* sha_ = nullptr;
+  BackgroundHasher* hasher_ = nullptr;
   bool over_limit_ = false;
 };
 
