@@ -219,8 +219,15 @@ Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFile
 // kUnsupported "unsupported transfer syntax <UID> (<name>)". Sequences and items of defined or
 // undefined length are skipped (nesting bounded at 32, iteratively); only top-level elements
 // count, and those of the functional group macros below. Or ONE enhanced multi-frame file
-// (PS3.3 C.7.6.16, e.g. Enhanced CT; Number of Frames > 1, native pixels, not encapsulated:
-// kUnsupported): its frames are the slices, frame i's pixels at Pixel Data + i x frame bytes;
+// (PS3.3 C.7.6.16, e.g. Enhanced CT; Number of Frames > 1): its frames are the slices, frame
+// i's pixels at Pixel Data + i x frame bytes when native; when encapsulated, frame i is one or
+// more whole fragments from entry i of the Basic Offset Table or the Extended Offset Table
+// (7FE0,0001) (then the basic one empty), else (no table) RLE frames are one fragment each and
+// JPEG, JPEG-LS and JPEG 2000 frames start at the fragments that begin with SOI / SOC; the
+// fragments are mapped to frames in the header pass (errors name the frame and the byte offset
+// of the item or table entry at fault), then each frame is read into the fragment buffer (the
+// largest frame's bytes) and decoded in its slice, in file order (errors name the frame, its
+// fragments, and the byte offset in the file); a frame may hold 8 bytes a sample + 64 KiB;
 // every frame's (5200,9230) Per-frame Functional Groups item holds its (0020,9113) Plane
 // Position (required: else kParseError naming the frame and its item's byte offset), and may
 // hold its (0028,9145) rescale; orientation (0020,9116) and pixel measures (0028,9110) are
@@ -238,8 +245,10 @@ Status read_metaimage(const Context& ctx, const ByteSource& source, const CtFile
 // in-plane origin the centre of the slices' offsets rounded to whole pixels, the size and pixel
 // spacing kept; uneven spacing or missing slices -- output slices every median gap from the
 // first slice, each interpolated linearly between the two input slices around it; a gap wider
-// than resample_max_gap medians is kUnsupported naming the two slices. Multi-frame files are
-// never resampled (kUnsupported as with resample_max_gap 0).
+// than resample_max_gap medians is kUnsupported naming the two slices. A multi-frame file is
+// resampled as it streams, in file order, when its frames are stored in slice order: ascending,
+// or descending (then read with the normal reversed: axis_z = -(row x column), the origin at
+// the last frame's end of the stack, a left-handed frame); other orders are kUnsupported.
 // Axes: axis_x = row direction (+column index), axis_y = column direction, axis_z = normal
 // pointing to increasing slice position; origin = position of the first slice (moved in-plane
 // when the slices were shifted).

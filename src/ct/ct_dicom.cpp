@@ -10,6 +10,7 @@
 // slices ordered by their position along the normal, pixels read into place.
 #include "ct/ct_common.h"
 #include "ct/ct_resample.h"
+#include "ct/dicom_frames.h"
 #include "ct/dicom_rle.h"
 #include "ct/jpeg2000.h"
 #include "ct/jpeg_lossless.h"
@@ -48,6 +49,7 @@ constexpr uint32_t kPixelRepresentation = tag_of(0x0028, 0x0103);
 constexpr uint32_t kRescaleIntercept = tag_of(0x0028, 0x1052);
 constexpr uint32_t kRescaleSlope = tag_of(0x0028, 0x1053);
 constexpr uint32_t kPixelData = tag_of(0x7FE0, 0x0010);
+constexpr uint32_t kExtendedOffsetTable = tag_of(0x7FE0, 0x0001);  // PS3.3 C.7.6.3.1.8
 // Enhanced multi-frame images (PS3.3 C.7.6.16): the functional group sequences and the macros
 // of them this reader interprets (Plane Position, Plane Orientation, Pixel Measures, Pixel
 // Value Transformation).
@@ -170,22 +172,17 @@ struct Header {
   // its Image Position (Patient) (then have_position is set, position is frame 0's).
   uint32_t frame_items = 0;
   bool have_per_frame = false;
+  // Encapsulated multi-frame: the Extended Offset Table (7FE0,0001) (its value's file offset),
+  // and the largest frame's fragment bytes (found when the frames are mapped).
+  bool extended_offsets = false;
+  uint64_t extended_at = 0;
+  uint64_t largest_frame = 0;
 };
 
 bool encapsulated(Codec codec) {
   return codec == Codec::kRle || codec == Codec::kJpegLossless || codec == Codec::kJpegLs ||
          codec == Codec::kJpeg2000;
 }
-
-// One slice kept between the passes.
-struct SliceRecord {
-  double position[3];
-  double slope;
-  double intercept;
-  uint64_t pixel_offset;
-  uint32_t file;
-  uint32_t pad;
-};
 
 void copy_string(char* out, size_t cap, const uint8_t* v, uint32_t n) {
   const char* text = reinterpret_cast<const char*>(v);
@@ -414,10 +411,85 @@ Status read_item_header(Reader& r, uint32_t* tag, uint32_t* length) {
   return Status::ok();
 }
 
+// Reads `count` little-endian entries of `bytes` (4 or 8) each into records[i].pixel_offset.
+Status read_offsets(Reader& r, SliceRecord* records, uint32_t count, uint32_t bytes,
+                    const char* what) {
+  for (uint32_t i = 0; i < count; ++i) {
+    SPLINTCORE_RETURN_IF_ERROR(r.fill(bytes));
+    if (r.available() < bytes) return truncated(r, what);
+    const uint8_t* p = r.buf + r.pos;
+    records[i].pixel_offset = bytes == 4 ? u32(p) : u32(p) | (uint64_t{u32(p + 4)} << 32);
+    r.pos += bytes;
+  }
+  return Status::ok();
+}
+
+// The fragments of a multi-frame image (the reader after the basic offset table's item header,
+// `length` its value's bytes, the item at `table_at`), mapped to its frames (dicom_frames.h)
+// when frames (the records of pass 1) is not null; pass 0 stops here. The offset table is
+// empty or has one entry a frame; with an Extended Offset Table it is empty.
+Status map_frames(Reader& r, Header* h, SliceRecord* frames, uint32_t length, uint64_t table_at) {
+  const uint32_t count = static_cast<uint32_t>(h->frames);  // 2..65535
+  if (length != 0 && (length != 4 * count || h->extended_offsets)) {
+    Status s = tag_error(StatusCode::kParseError, tag_of(0xFFFE, 0xE000), "Basic Offset Table",
+                         "has ", table_at);
+    s.append_u64(length / 4);
+    s.append(" entries for ");
+    s.append_u64(count);
+    s.append(h->extended_offsets ? " frames and an Extended Offset Table (then it must be empty)"
+                                 : " frames (Number of Frames): it must be empty or have one "
+                                   "entry a frame");
+    return s;
+  }
+  if (frames == nullptr) return Status::ok();
+  OffsetTable table;
+  if (length != 0) {
+    table = OffsetTable{"Basic Offset Table", r.offset(), 4};
+    SPLINTCORE_RETURN_IF_ERROR(read_offsets(r, frames, count, 4, "the basic offset table"));
+  } else if (h->extended_offsets) {
+    table = OffsetTable{"Extended Offset Table (7FE0,0001)", h->extended_at, 8};
+  }
+  const FrameStart start = h->codec == Codec::kRle        ? FrameStart::kEachFragment
+                           : h->codec == Codec::kJpeg2000 ? FrameStart::kJpeg2000Soc
+                                                          : FrameStart::kJpegSoi;
+  const uint64_t raw = uint64_t{h->rows} * h->columns * (h->bits_allocated / 8);
+  FrameMapper mapper(frames, count, table, start, raw * 8 + 65536);
+  for (;;) {
+    const uint64_t at = r.offset();
+    uint32_t tag = 0, item_length = 0;
+    SPLINTCORE_RETURN_IF_ERROR(read_item_header(r, &tag, &item_length));
+    if (tag == tag_of(0xFFFE, 0xE0DD)) {
+      if (item_length != 0) {
+        return tag_error(StatusCode::kParseError, tag, "Sequence Delimitation", "length not 0", at);
+      }
+      SPLINTCORE_RETURN_IF_ERROR(mapper.finish(at));
+      h->largest_frame = mapper.largest();
+      return Status::ok();
+    }
+    if (tag != tag_of(0xFFFE, 0xE000) || item_length == kUndefinedLength) {
+      return tag_error(StatusCode::kParseError, tag, "Pixel Data",
+                       "expected a fragment Item (FFFE,E000) of defined length or the Sequence "
+                       "Delimitation (FFFE,E0DD)",
+                       at);
+    }
+    SPLINTCORE_RETURN_IF_ERROR(r.fill(4));
+    const size_t head = std::min<size_t>({r.available(), 4, item_length});
+    SPLINTCORE_RETURN_IF_ERROR(mapper.add(at, item_length, r.buf + r.pos, head));
+    ++h->fragments;
+    h->fragment_bytes += item_length;
+    Status s = r.skip(item_length, "a Pixel Data fragment");
+    if (!s.is_ok()) {
+      return make_error(s.code(), "frame ", mapper.frames_found() - 1, " (fragment item ",
+                        h->fragments - 1, " at byte ", at, "): ", s.message())
+          .at_byte(s.byte_offset());
+    }
+  }
+}
+
 // Encapsulated Pixel Data (PS3.5 A.4), the reader just after its element header: the basic
 // offset table (an item whose length is a multiple of 4, skipped: one frame per file), then
 // fragment items up to the sequence delimiter. Counts and sums the fragments.
-Status scan_fragments(Reader& r, const CtReadOptions& options, Header* h) {
+Status scan_fragments(Reader& r, const CtReadOptions& options, Header* h, SliceRecord* frames) {
   h->pixel_offset = r.offset();
   h->have_pixels = true;
   uint32_t tag = 0, length = 0;
@@ -429,6 +501,7 @@ Status scan_fragments(Reader& r, const CtReadOptions& options, Header* h) {
                      "multiple of 4",
                      at);
   }
+  if (h->frames > 1) return map_frames(r, h, frames, length, at);
   SPLINTCORE_RETURN_IF_ERROR(r.skip(length, "the basic offset table"));
   for (;;) {
     at = r.offset();
@@ -503,10 +576,15 @@ class DataSetWalk {
           return tag_error(StatusCode::kParseError, tag, "Pixel Data",
                            "of defined length in an encapsulated (compressed) transfer syntax", at);
         }
-        return scan_fragments(r_, options_, h_);
+        return scan_fragments(r_, options_, h_, frames_);
       }
       if (e.length == kUndefinedLength) {
         SPLINTCORE_RETURN_IF_ERROR(open_sequence(tag, implicit, e, at));
+        continue;
+      }
+      if (depth_ == 0 && tag == kExtendedOffsetTable && e.length != kUndefinedLength &&
+          h_->frames > 1) {
+        SPLINTCORE_RETURN_IF_ERROR(extended_offsets(e.length, at));
         continue;
       }
       if (depth_ == 0 && tag == kPixelData) {
@@ -668,6 +746,26 @@ class DataSetWalk {
       return s;
     }
     return Status::ok();
+  }
+
+  // The Extended Offset Table (PS3.3 C.7.6.3.1.8): one 64-bit offset a frame, read into the
+  // frames' records (pass 1; skipped in pass 0).
+  Status extended_offsets(uint32_t length, uint64_t at) {
+    if (uint64_t{length} != 8 * static_cast<uint64_t>(h_->frames)) {
+      Status s = tag_error(StatusCode::kParseError, kExtendedOffsetTable, "Extended Offset Table",
+                           "has ", at);
+      s.append_u64(length);
+      s.append(" bytes, 8 x Number of Frames is ");
+      s.append_i64(8 * h_->frames);
+      return s;
+    }
+    h_->extended_offsets = true;
+    h_->extended_at = r_.offset();
+    if (frames_ == nullptr || !encapsulated(h_->codec) || h_->frames > int64_t{capacity_}) {
+      return r_.skip(length, "the Extended Offset Table");
+    }
+    return read_offsets(r_, frames_, static_cast<uint32_t>(h_->frames), 8,
+                        "the Extended Offset Table");
   }
 
   // A Per-frame Functional Groups item opens: frame h_->frame_items, at byte `at`.
@@ -897,12 +995,8 @@ Status check_header(const Header& h, const ByteSource& file) {
                       ": must be finite and non-zero");
   }
   const uint64_t frame_bytes = uint64_t{h.rows} * h.columns * (h.bits_allocated / 8);
-  if (encapsulated(h.codec) && h.frames > 1) {
-    return make_error(StatusCode::kUnsupported, "Number of Frames is ", h.frames, ": compressed (",
-                      h.transfer_syntax,
-                      ") multi-frame Pixel Data is not supported; only uncompressed multi-frame "
-                      "images are read (decompress it, e.g. with dcmdjpeg or gdcmconv --raw)");
-  }
+  // A multi-frame image's fragments are checked as they are mapped to frames (pass 1).
+  if (encapsulated(h.codec) && h.frames > 1) return Status::ok();
   if (encapsulated(h.codec)) return check_fragments(h, frame_bytes);
   const uint64_t frames = static_cast<uint64_t>(h.frames);  // 1..65535
   const uint64_t needed = frame_bytes * frames;
@@ -1044,14 +1138,18 @@ struct SeriesReader {
     const char* name = first_name;
     SPLINTCORE_RETURN_IF_ERROR(
         read_header(series, 0, options, *ctx.arena, &h, &name, records, count));
-    if (h.frames != first.frames) {  // fewer frames than records (more: begin_frame refuses)
+    // Fewer frames than records (more: begin_frame refuses), or other pixels.
+    if (h.frames != first.frames ||
+        difference(h, first, options.orientation_tolerance) != nullptr) {
       return make_error(StatusCode::kParseError, "the file changed between two reads")
           .in_file(name != nullptr ? name : "?");
     }
+    const bool compressed = encapsulated(first.codec);
+    max_fragment_bytes = h.largest_frame;  // encapsulated: the frames are mapped
     const uint64_t frame_bytes = uint64_t{first.rows} * first.columns * (first.bits_allocated / 8);
     for (uint32_t i = 0; i < count; ++i) {
       SliceRecord& r = records[i];
-      r.pixel_offset = first.pixel_offset + i * frame_bytes;
+      if (!compressed) r.pixel_offset = first.pixel_offset + i * frame_bytes;
       if (r.slope != records[0].slope || r.intercept != records[0].intercept) {
         rescale_varies = true;
       }
@@ -1155,12 +1253,42 @@ struct SeriesReader {
         Status s = make_error(StatusCode::kUnsupported, "gantry tilt or sheared series: slice ", k,
                               multi_frame ? " (frame " : " (series file ", keys[k].index, ") lies ",
                               offset,
-                              " mm off the normal through slice 0 (not resampled: a multi-frame "
-                              "file, or CtReadOptions::resample_max_gap 0)");
+                              " mm off the normal through slice 0 (not resampled: "
+                              "CtReadOptions::resample_max_gap 0)");
         s.at_index(keys[k].index);
         return s;
       }
     }
+    return Status::ok();
+  }
+
+  // A multi-frame file to resample: its frames are read once, in file order, and the resampler
+  // takes slices in position order, so file order must be position order. Frames stored in
+  // decreasing position make it so with the normal reversed (the volume's axis_z then points
+  // from the last frame to the first: a left-handed frame, which the reconstruction handles).
+  // Other orders are refused.
+  Status frames_in_slice_order() {
+    bool ascending = true, descending = true;
+    for (uint32_t k = 0; k < count; ++k) {
+      ascending = ascending && keys[k].index == k;
+      descending = descending && keys[k].index == count - 1 - k;
+    }
+    if (ascending) return Status::ok();
+    if (!descending) {
+      uint32_t k = 0;
+      while (keys[k].index == k) ++k;
+      Status s = make_error(StatusCode::kUnsupported,
+                            "a multi-frame file to resample (gantry tilt, uneven spacing or "
+                            "missing slices) must store its frames in slice order, ascending or "
+                            "descending; frame ",
+                            keys[k].index, " is slice ", k, " of ", count);
+      s.at_index(keys[k].index);
+      if (first_name != nullptr) s.in_file(first_name);
+      return s;
+    }
+    normal = -normal;
+    for (uint32_t k = 0; k < count - 1 - k; ++k) std::swap(keys[k], keys[count - 1 - k]);
+    origin = position(0);
     return Status::ok();
   }
 
@@ -1220,8 +1348,8 @@ struct SeriesReader {
       *z = mean;
       return Status::ok();
     }
-    // Multi-frame files are read in file order: never resampled.
-    if (multi_frame || !(options.resample_max_gap > 0)) return uneven.is_ok() ? tilted : uneven;
+    if (!(options.resample_max_gap > 0)) return uneven.is_ok() ? tilted : uneven;
+    if (multi_frame) SPLINTCORE_RETURN_IF_ERROR(frames_in_slice_order());
     return plan_grid(uneven.is_ok(), z);
   }
 
@@ -1376,11 +1504,53 @@ Status read_bytes(Reader& r, uint8_t* out, uint64_t n, const char* what) {
   return Status::ok();
 }
 
-// The fragments of a file's encapsulated Pixel Data, concatenated into frame[0, cap) (the
-// reader at the basic offset table). *size is their length, *first the file offset of the
-// first fragment's bytes.
-Status read_fragments(Reader& r, uint8_t* frame, uint64_t cap, uint64_t* size, uint64_t* first,
-                      uint32_t* fragments) {
+// A frame's fragments concatenated into one buffer: its bytes, and where the first kNamed
+// fragments lie in the file (for an error's byte offset in the file).
+struct FrameBytes {
+  static constexpr uint32_t kNamed = 32;
+  uint8_t* data = nullptr;
+  uint64_t cap = 0;
+  uint64_t size = 0;
+  uint32_t fragments = 0;
+  uint64_t start[kNamed] = {};  // offset in data of fragment i's first byte
+  uint64_t file[kNamed] = {};   // its offset in the file
+
+  // The decoder's offset in data as a file offset, when the fragment it falls in is known.
+  bool file_offset(uint64_t at, uint64_t* out) const {
+    if (fragments > kNamed) return false;
+    uint32_t i = 0;
+    while (i + 1 < fragments && start[i + 1] <= at) ++i;
+    *out = file[i] + (at - start[i]);
+    return true;
+  }
+};
+
+// One fragment item (its header at the reader) appended to f; *end set at the sequence
+// delimiter.
+Status read_fragment(Reader& r, FrameBytes* f, bool* end) {
+  uint32_t tag = 0, length = 0;
+  const uint64_t at = r.offset();
+  SPLINTCORE_RETURN_IF_ERROR(read_item_header(r, &tag, &length));
+  *end = tag == tag_of(0xFFFE, 0xE0DD);
+  if (*end) return Status::ok();
+  if (tag != tag_of(0xFFFE, 0xE000) || length > f->cap - f->size) {
+    return make_error(StatusCode::kParseError,
+                      "Pixel Data differs from the first read (file changed?)")
+        .at_byte(at);
+  }
+  if (f->fragments < FrameBytes::kNamed) {
+    f->start[f->fragments] = f->size;
+    f->file[f->fragments] = r.offset();
+  }
+  ++f->fragments;
+  SPLINTCORE_RETURN_IF_ERROR(read_bytes(r, f->data + f->size, length, "a Pixel Data fragment"));
+  f->size += length;
+  return Status::ok();
+}
+
+// The fragments of a file's encapsulated Pixel Data, concatenated (the reader at the basic
+// offset table).
+Status read_fragments(Reader& r, FrameBytes* f) {
   uint32_t tag = 0, length = 0;
   const uint64_t table_at = r.offset();
   SPLINTCORE_RETURN_IF_ERROR(read_item_header(r, &tag, &length));
@@ -1390,52 +1560,34 @@ Status read_fragments(Reader& r, uint8_t* frame, uint64_t cap, uint64_t* size, u
         .at_byte(table_at);
   }
   SPLINTCORE_RETURN_IF_ERROR(r.skip(length, "the basic offset table"));
-  *size = 0;
-  *fragments = 0;
-  for (;;) {
-    const uint64_t at = r.offset();
-    SPLINTCORE_RETURN_IF_ERROR(read_item_header(r, &tag, &length));
-    if (tag == tag_of(0xFFFE, 0xE0DD)) return Status::ok();
-    if (tag != tag_of(0xFFFE, 0xE000) || length > cap - *size) {
-      return make_error(StatusCode::kParseError,
-                        "Pixel Data differs from the first read (file changed?)")
-          .at_byte(at);
-    }
-    if (*fragments == 0) *first = r.offset();
-    ++*fragments;
-    SPLINTCORE_RETURN_IF_ERROR(read_bytes(r, frame + *size, length, "a Pixel Data fragment"));
-    *size += length;
+  for (bool end = false;;) {
+    SPLINTCORE_RETURN_IF_ERROR(read_fragment(r, f, &end));
+    if (end) return Status::ok();
   }
 }
 
-// The pixels of an encapsulated file: its fragments decoded into the slice's own memory as
-// 16-bit little-endian samples, then converted there to HU (each value is read before its
-// HU overwrites it).
-Status read_encapsulated_pixels(const SeriesReader& sr, Reader& r, const SliceRecord& rec,
-                                const VoxelFormat& format, int16_t* out, uint64_t first_index,
-                                uint64_t* saturated) {
-  SPLINTCORE_RETURN_IF_ERROR(r.skip(rec.pixel_offset, "the header before Pixel Data"));
-  uint64_t size = 0, first = 0;
-  uint32_t fragments = 0;
-  SPLINTCORE_RETURN_IF_ERROR(
-      read_fragments(r, sr.frame, sr.max_fragment_bytes, &size, &first, &fragments));
+// A frame's concatenated fragments decoded into the slice's own memory as 16-bit little-endian
+// samples, then converted there to HU (each value is read before its HU overwrites it).
+Status decode_frame(const SeriesReader& sr, const FrameBytes& f, const SliceRecord& rec,
+                    const VoxelFormat& format, int16_t* out, uint64_t first_index,
+                    uint64_t* saturated) {
   const uint32_t rows = sr.first.rows, columns = sr.first.columns;
   uint8_t* samples = reinterpret_cast<uint8_t*>(out);
-  const size_t n = static_cast<size_t>(size);
+  const size_t n = static_cast<size_t>(f.size);
   const uint32_t bits = sr.first.bits_allocated;
   Status s;
   if (sr.first.codec == Codec::kRle) {
-    s = rle_decode_frame(sr.frame, n, rows, columns, bits / 8, samples);
+    s = rle_decode_frame(f.data, n, rows, columns, bits / 8, samples);
   } else if (sr.first.codec == Codec::kJpegLs) {
-    s = jpeg_ls_decode(*sr.ctx.arena, sr.frame, n, rows, columns, bits, samples);
+    s = jpeg_ls_decode(*sr.ctx.arena, f.data, n, rows, columns, bits, samples);
   } else if (sr.first.codec == Codec::kJpeg2000) {
-    s = jpeg2000_decode(*sr.ctx.arena, sr.frame, n, rows, columns, bits, samples);
+    s = jpeg2000_decode(*sr.ctx.arena, f.data, n, rows, columns, bits, samples);
   } else {
-    s = jpeg_lossless_decode(*sr.ctx.arena, sr.frame, n, rows, columns, bits, samples);
+    s = jpeg_lossless_decode(*sr.ctx.arena, f.data, n, rows, columns, bits, samples);
   }
   if (!s.is_ok()) {
-    // Offsets in the frame are offsets in the file when it is one fragment.
-    if (fragments == 1) return s.at_byte(first + s.byte_offset());
+    uint64_t at = 0;
+    if (f.file_offset(s.byte_offset(), &at)) return s.at_byte(at);
     return s.append(" (byte offset in the concatenated fragments)");
   }
   const uint64_t count = uint64_t{rows} * columns;
@@ -1444,22 +1596,72 @@ Status read_encapsulated_pixels(const SeriesReader& sr, Reader& r, const SliceRe
   decoded.init(&none, samples, static_cast<size_t>(count * 2));
   decoded.end = decoded.cap;
   decoded.at_eof = true;
-  VoxelFormat f = format;
-  f.bytes = 2;
-  f.big_endian = false;
-  return convert_voxels(decoded, f, count, rec.slope, rec.intercept, out, first_index, saturated);
+  VoxelFormat v = format;
+  v.bytes = 2;
+  v.big_endian = false;
+  return convert_voxels(decoded, v, count, rec.slope, rec.intercept, out, first_index, saturated);
 }
 
-// The frames of a multi-frame file in file order (the reader at the first), each converted into
-// its place in position order (the inverse of the sort, in sr.scratch).
-Status convert_frames(const SeriesReader& sr, Reader& r, const VoxelFormat& format,
-                      uint64_t* saturated) {
+// The pixels of an encapsulated single-frame file: all its fragments are its frame.
+Status read_encapsulated_pixels(const SeriesReader& sr, Reader& r, const SliceRecord& rec,
+                                const VoxelFormat& format, int16_t* out, uint64_t first_index,
+                                uint64_t* saturated) {
+  SPLINTCORE_RETURN_IF_ERROR(r.skip(rec.pixel_offset, "the header before Pixel Data"));
+  FrameBytes f;
+  f.data = sr.frame;
+  f.cap = sr.max_fragment_bytes;
+  SPLINTCORE_RETURN_IF_ERROR(read_fragments(r, &f));
+  return decode_frame(sr, f, rec, format, out, first_index, saturated);
+}
+
+// Frame i (file order) of an encapsulated multi-frame file, the reader at its first fragment
+// item, decoded into `out`; errors say which frame.
+Status read_encapsulated_frame(const SeriesReader& sr, Reader& r, uint32_t i,
+                               const VoxelFormat& format, int16_t* out, uint64_t first_index,
+                               uint64_t* saturated) {
+  const SliceRecord& rec = sr.records[i];
+  FrameBytes f;
+  f.data = sr.frame;
+  f.cap = sr.max_fragment_bytes;
+  Status s = r.offset() == rec.pixel_offset
+                 ? Status::ok()
+                 : make_error(StatusCode::kParseError,
+                              "Pixel Data differs from the first read (file changed?)")
+                       .at_byte(r.offset());
+  for (uint32_t k = 0; s.is_ok() && k < rec.fragments; ++k) {
+    bool end = false;
+    s = read_fragment(r, &f, &end);
+    if (s.is_ok() && end) {
+      s = make_error(StatusCode::kParseError,
+                     "Pixel Data differs from the first read (file changed?)")
+              .at_byte(r.offset() - 8);
+    }
+  }
+  if (s.is_ok()) s = decode_frame(sr, f, rec, format, out, first_index, saturated);
+  if (s.is_ok()) return s;
+  Status e = make_error(s.code(), "frame ", i, " (of ", sr.count, ", ", rec.fragments,
+                        " fragment item(s) from byte ", rec.pixel_offset, "): ", s.message());
+  e.at_index(i);
+  if (s.byte_offset() != kNoPosition) e.at_byte(s.byte_offset());
+  return e;
+}
+
+// The frames of a multi-frame file in file order (the reader at the first: its pixels, or its
+// first fragment item), each read into the slice the resampler gives for its place in position
+// order (with a plan the frames are in position order: file order is position order).
+Status convert_frames(SeriesReader& sr, Reader& r, const VoxelFormat& format, uint64_t* saturated) {
   const uint64_t per_slice = uint64_t{sr.first.rows} * sr.first.columns;
+  const bool compressed = encapsulated(sr.first.codec);
+  SliceResampler& resampler = sr.resampler;
   for (uint32_t i = 0; i < sr.count; ++i) {
     const SliceRecord& rec = sr.records[i];
-    const uint64_t k = sr.scratch[i].index;
-    SPLINTCORE_RETURN_IF_ERROR(convert_voxels(r, format, per_slice, rec.slope, rec.intercept,
-                                              sr.hu + k * per_slice, k * per_slice, saturated));
+    const uint32_t k = sr.scratch[i].index;
+    int16_t* slice = resampler.target(k);
+    SPLINTCORE_RETURN_IF_ERROR(
+        compressed ? read_encapsulated_frame(sr, r, i, format, slice, k * per_slice, saturated)
+                   : convert_voxels(r, format, per_slice, rec.slope, rec.intercept, slice,
+                                    k * per_slice, saturated));
+    resampler.place(k);
     SPLINTCORE_RETURN_IF_ERROR(report_progress(sr.ctx, "read DICOM pixels", i + 1, sr.count));
   }
   return Status::ok();
@@ -1467,7 +1669,7 @@ Status convert_frames(const SeriesReader& sr, Reader& r, const VoxelFormat& form
 
 // Pass 2 of a multi-frame file: its Pixel Data read once, front to back (the data set inflated
 // when deflated: the pixel offset is one in the inflated data set).
-Status read_frame_pixels(const SeriesReader& sr, const VoxelFormat& format, uint64_t* saturated) {
+Status read_frame_pixels(SeriesReader& sr, const VoxelFormat& format, uint64_t* saturated) {
   for (uint32_t k = 0; k < sr.count; ++k) sr.scratch[sr.keys[k].index].index = k;
   ByteSource source;
   SPLINTCORE_RETURN_IF_ERROR(sr.series.open(sr.series.user, 0, &source));
@@ -1476,8 +1678,11 @@ Status read_frame_pixels(const SeriesReader& sr, const VoxelFormat& format, uint
   auto convert = [&](Reader& at_pixels) {
     return convert_frames(sr, at_pixels, format, saturated);
   };
-  Status s = sr.first.deflated ? read_deflated(*sr.ctx.arena, r, sr.first.pixel_offset, convert)
-                               : r.skip(sr.first.pixel_offset, "the header before Pixel Data");
+  // Encapsulated: from the first frame's first fragment item (frame 0 in file order).
+  const uint64_t start =
+      encapsulated(sr.first.codec) ? sr.records[0].pixel_offset : sr.first.pixel_offset;
+  Status s = sr.first.deflated ? read_deflated(*sr.ctx.arena, r, start, convert)
+                               : r.skip(start, "the header before Pixel Data");
   if (s.is_ok() && !sr.first.deflated) s = convert(r);
   const char* name = source.name;
   if (sr.series.close != nullptr) sr.series.close(sr.series.user, 0, &source);

@@ -143,13 +143,14 @@ TEST(CtDicomEncapsulated, SliceInAnotherSyntaxAndErrorsInSeveralFragments) {
   expect_error(s, StatusCode::kUnsupported, "transfer syntax");
   s = read({fixture("raw16_0.dcm"), fixture("big16_1.dcm")});  // another byte order
   expect_error(s, StatusCode::kUnsupported, "transfer syntax");
-  // A bad Huffman table in a frame of five fragments: the offset is in the fragments.
+  // A bad Huffman table in a frame of five fragments: the offset is the byte's in the file.
   Bytes f = fixture("jpeg57_frag.dcm");
   size_t p = 0;
   while (!(f[p] == 0xFF && f[p + 1] == 0xC4)) ++p;
   f[p + 4] = 0x14;  // table class 1
   s = read({f});
-  expect_error(s, StatusCode::kParseError, "concatenated fragments");
+  expect_error(s, StatusCode::kParseError, "DHT table class/id not 0/0..3");
+  EXPECT_EQ(s.byte_offset(), p + 4) << test::format(s);
 }
 
 // A series whose file 0 changes between the two passes (a file rewritten while read).

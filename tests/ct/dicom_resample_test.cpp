@@ -379,29 +379,25 @@ double sample(const InputSlice& s, const CtVolume& g, const Vec3& p, bool* insid
          (at(i, j1) * (1 - fu) + at(i1, j1) * fu) * fv;
 }
 
-TEST(CtDicomResample, GeHeadCtWithGantryTiltMatchesAnIndependentResampling) {
-  const std::string folder = std::string(SPLINTCORE_DCM_QA_CT_DIR) + "/In/GE";
-  if (!fs::is_directory(folder)) GTEST_SKIP() << "dcm_qa_ct not found at " << folder;
-  ReadBack r = read_folder(folder, size_t{160} << 20);
-  SPLINTCORE_ASSERT_OK(r.status);
+// How the reader's resampled volume r of `folder` agrees with the independent resampling:
+// voxels compared (inside both slices around them), the largest difference, how many are
+// more than 1 HU apart.
+struct Agreement {
+  bool ok = false;
+  uint64_t compared = 0, off_by_more = 0;
+  int largest = 0;
+};
+
+Agreement compare_with_independent_resampling(const std::string& folder, const ReadBack& r) {
+  Agreement out;
   const CtVolume& g = r.volume;
-  EXPECT_TRUE(r.info.resampled);
-  EXPECT_EQ(r.info.slice_count, 28u);
-  EXPECT_NEAR(r.info.tilt_degrees, 18.5, 0.01);
-  EXPECT_EQ(g.nx, 512u);
-  EXPECT_EQ(g.ny, 512u);
-  std::printf(
-      "GE: %u slices -> %u of %.4f mm, tilt %.3f deg, in-plane correction <= %.2f mm, "
-      "slice correction <= %.3f mm\n",
-      r.info.slice_count, g.nz, g.spacing.z, r.info.tilt_degrees, r.info.max_shift_mm,
-      r.info.max_slice_offset_mm);
   // The input slices, read one by one, in order along the normal.
   std::vector<std::string> files;
-  SPLINTCORE_ASSERT_OK(cli::list_dicom_folder(folder, &files));
+  if (!cli::list_dicom_folder(folder, &files).is_ok()) return out;
   std::vector<InputSlice> slices;
   for (const std::string& name : files) {
     ReadBack one = read_folder(name, size_t{8} << 20);
-    SPLINTCORE_ASSERT_OK(one.status);
+    if (!one.status.is_ok()) return out;
     InputSlice s;
     s.position = one.volume.origin;
     s.along = dot(s.position, g.axis_z);
@@ -410,8 +406,9 @@ TEST(CtDicomResample, GeHeadCtWithGantryTiltMatchesAnIndependentResampling) {
   }
   std::sort(slices.begin(), slices.end(),
             [](const InputSlice& a, const InputSlice& b) { return a.along < b.along; });
-  uint64_t compared = 0, off_by_more = 0;
-  int largest = 0;
+  uint64_t& compared = out.compared;
+  uint64_t& off_by_more = out.off_by_more;
+  int& largest = out.largest;
   for (uint32_t k = 0; k < g.nz; ++k) {
     for (uint32_t j = 0; j < g.ny; ++j) {
       for (uint32_t i = 0; i < g.nx; ++i) {
@@ -433,13 +430,35 @@ TEST(CtDicomResample, GeHeadCtWithGantryTiltMatchesAnIndependentResampling) {
       }
     }
   }
+  out.ok = true;
+  return out;
+}
+
+TEST(CtDicomResample, GeHeadCtWithGantryTiltMatchesAnIndependentResampling) {
+  const std::string folder = std::string(SPLINTCORE_DCM_QA_CT_DIR) + "/In/GE";
+  if (!fs::is_directory(folder)) GTEST_SKIP() << "dcm_qa_ct not found at " << folder;
+  ReadBack r = read_folder(folder, size_t{160} << 20);
+  SPLINTCORE_ASSERT_OK(r.status);
+  const CtVolume& g = r.volume;
+  EXPECT_TRUE(r.info.resampled);
+  EXPECT_EQ(r.info.slice_count, 28u);
+  EXPECT_NEAR(r.info.tilt_degrees, 18.5, 0.01);
+  EXPECT_EQ(g.nx, 512u);
+  EXPECT_EQ(g.ny, 512u);
+  std::printf(
+      "GE: %u slices -> %u of %.4f mm, tilt %.3f deg, in-plane correction <= %.2f mm, "
+      "slice correction <= %.3f mm\n",
+      r.info.slice_count, g.nz, g.spacing.z, r.info.tilt_degrees, r.info.max_shift_mm,
+      r.info.max_slice_offset_mm);
+  const Agreement a = compare_with_independent_resampling(folder, r);
+  ASSERT_TRUE(a.ok);
   std::printf(
       "GE: %llu voxels compared with the independent resampling, largest difference %d HU, "
       "%llu more than 1 HU apart\n",
-      static_cast<unsigned long long>(compared), largest,
-      static_cast<unsigned long long>(off_by_more));
-  EXPECT_GT(compared, uint64_t{g.nx} * g.ny * g.nz / 2);
-  EXPECT_LT(off_by_more * 10000, compared);  // the rounding of the straightened slices aside
+      static_cast<unsigned long long>(a.compared), a.largest,
+      static_cast<unsigned long long>(a.off_by_more));
+  EXPECT_GT(a.compared, uint64_t{g.nx} * g.ny * g.nz / 2);
+  EXPECT_LT(a.off_by_more * 10000, a.compared);  // the rounding of the straightened slices aside
   // The skull (300 HU and up, grown from the first bone voxel left of the middle row of the
   // middle slice) reconstructs into a closed, oriented mesh.
   std::vector<int16_t> hu = r.hu;
@@ -474,6 +493,31 @@ TEST(CtDicomResample, GeHeadCtWithGantryTiltMatchesAnIndependentResampling) {
   std::printf("GE: skull %llu voxels, %zu triangles, %.0f mm^3, closed and oriented\n",
               static_cast<unsigned long long>(grow.voxels[1]), mesh.triangles.size(), volume);
   EXPECT_GT(volume, 1.0e4);
+}
+
+// The Philips phantom series of the same set (In/Philips/S21610: S2010 and S3010, two gantry
+// tilts; each folder holds a DIRFILE, the DICOM directory the folder lister skips), against
+// the same independent resampling. Skipped when absent.
+TEST(CtDicomResample, PhilipsTiltedSeriesMatchAnIndependentResampling) {
+  for (const char* series : {"S2010", "S3010"}) {
+    const std::string folder =
+        std::string(SPLINTCORE_DCM_QA_CT_DIR) + "/In/Philips/S21610/" + series;
+    if (!fs::is_directory(folder)) GTEST_SKIP() << "dcm_qa_ct not found at " << folder;
+    ReadBack r = read_folder(folder, size_t{160} << 20);
+    SPLINTCORE_ASSERT_OK(r.status);
+    EXPECT_TRUE(r.info.resampled) << series;
+    EXPECT_GT(r.info.tilt_degrees, 1.0) << series;
+    const Agreement a = compare_with_independent_resampling(folder, r);
+    ASSERT_TRUE(a.ok);
+    std::printf(
+        "Philips %s: %u slices -> %u of %.4f mm, tilt %.3f deg, in-plane correction <= %.2f mm; "
+        "%llu voxels compared, largest difference %d HU, %llu more than 1 HU apart\n",
+        series, r.info.slice_count, r.volume.nz, r.volume.spacing.z, r.info.tilt_degrees,
+        r.info.max_shift_mm, static_cast<unsigned long long>(a.compared), a.largest,
+        static_cast<unsigned long long>(a.off_by_more));
+    EXPECT_GT(a.compared, r.volume.voxel_count() / 2) << series;
+    EXPECT_LT(a.off_by_more * 10000, a.compared) << series;
+  }
 }
 
 }  // namespace

@@ -385,3 +385,55 @@ FIXTURES_CT = os.path.join(ROOT, "..", "ct")
 for name in ("mf16.dcm", "mf16_rev.dcm"):
     with open(os.path.join(FIXTURES_CT, name), "rb") as f:
         write("ct_dicom", name, f.read())
+
+
+# Compressed enhanced multi-frame (issue 31): mf16.dcm's header with the fragments of the
+# single-frame compressed twins of its three frames (fixtures/ct: rle16_k, jpeg70_k, jls16_k,
+# j2k16_k), one or several fragments a frame, no table, a Basic or an Extended Offset Table.
+def fragment_of(data):
+    at = data.rfind(b"\xe0\x7f\x10\x00") + 12
+    table = struct.unpack("<I", data[at + 4:at + 8])[0]
+    at += 8 + table
+    length = struct.unpack("<I", data[at + 4:at + 8])[0]
+    return data[at + 8:at + 8 + length]
+
+
+def multi_frame(prefix, uid, pieces, table):
+    with open(os.path.join(FIXTURES_CT, "mf16.dcm"), "rb") as f:
+        header = f.read()
+    at = header.find(b"\x02\x00\x10\x00UI")
+    old = struct.unpack("<H", header[at + 6:at + 8])[0]
+    value = uid + (b"\0" if len(uid) % 2 else b"")
+    header = header[:at + 6] + struct.pack("<H", len(value)) + value + header[at + 8 + old:]
+    group = header.find(b"\x02\x00\x00\x00UL")
+    length = struct.unpack("<I", header[group + 8:group + 12])[0] + len(value) - old
+    header = header[:group + 8] + struct.pack("<I", length) + header[group + 12:]
+    header = header[:header.rfind(b"\xe0\x7f\x10\x00OW")]
+    frames = []
+    for k in range(3):
+        with open(os.path.join(FIXTURES_CT, "%s_%d.dcm" % (prefix, k)), "rb") as f:
+            whole = fragment_of(f.read())
+        cuts = [0] + [(len(whole) * (i + 1) // pieces) & ~1 for i in range(pieces - 1)] + [len(whole)]
+        frames.append([whole[cuts[i]:cuts[i + 1]] for i in range(pieces)])
+    offsets, relative = [], 0
+    for frame in frames:
+        offsets.append(relative)
+        relative += sum(8 + len(f) for f in frame)
+    out = header
+    if table == "extended":
+        out += b"\x01\x00\xe0\x7fOV\0\0" + struct.pack("<I", 24) + b"".join(
+            struct.pack("<Q", o) for o in offsets)
+    bot = b"".join(struct.pack("<I", o) for o in offsets) if table == "basic" else b""
+    out += b"\xe0\x7f\x10\x00OB\0\0\xff\xff\xff\xff\xfe\xff\x00\xe0" + struct.pack("<I", len(bot)) + bot
+    for frame in frames:
+        for f in frame:
+            out += b"\xfe\xff\x00\xe0" + struct.pack("<I", len(f)) + f
+    return out + b"\xfe\xff\xdd\xe0\0\0\0\0"
+
+
+for name, prefix, uid, pieces, table in (
+        ("mf_rle.dcm", "rle16", b"1.2.840.10008.1.2.5", 1, None),
+        ("mf_jpeg70_bot.dcm", "jpeg70", b"1.2.840.10008.1.2.4.70", 2, "basic"),
+        ("mf_jls_split.dcm", "jls16", b"1.2.840.10008.1.2.4.80", 3, None),
+        ("mf_j2k_eot.dcm", "j2k16", b"1.2.840.10008.1.2.4.90", 2, "extended")):
+    write("ct_dicom", name, multi_frame(prefix, uid, pieces, table))

@@ -70,6 +70,27 @@ bool has_dicom_preamble(const std::string& path) {
   return std::memcmp(head + 128, "DICM", 4) == 0;
 }
 
+// A DICOM directory (DICOMDIR, or Philips' DIRFILE in each series folder): a Part 10 file whose
+// (0002,0002) Media Storage SOP Class UID is 1.2.840.10008.1.3.10 (Media Storage Directory
+// Storage, PS3.4 annex F), found in the file meta's first 512 bytes. It holds no pixels.
+bool is_dicom_directory(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char head[512] = {};
+  in.read(head, sizeof head);
+  const size_t n = static_cast<size_t>(in.gcount());
+  if (n < 132 || std::memcmp(head + 128, "DICM", 4) != 0) return false;
+  static const char kUid[] = "1.2.840.10008.1.3.10";
+  const size_t uid = sizeof kUid - 1;
+  for (size_t at = 132; at + 8 + uid <= n; ++at) {
+    if (std::memcmp(head + at, "\x02\x00\x02\x00UI", 6) != 0) continue;
+    const size_t length =
+        static_cast<uint8_t>(head[at + 6]) | (static_cast<uint8_t>(head[at + 7]) << 8);
+    return (length == uid || length == uid + 1) && std::memcmp(head + at + 8, kUid, uid) == 0 &&
+           (length == uid || head[at + 8 + uid] == '\0');
+  }
+  return false;
+}
+
 CtFormat ct_format_of_path(const std::string& path) {
   std::error_code ec;
   if (fs::is_directory(path, ec)) return CtFormat::kDicom;
@@ -99,6 +120,7 @@ Status list_dicom_folder(const std::string& folder, std::vector<std::string>* fi
     if (name.empty() || name[0] == '.') continue;
     std::error_code type_ec;
     if (!it->is_regular_file(type_ec)) continue;
+    if (is_dicom_directory(it->path().string())) continue;  // an index, not a slice
     files->push_back(it->path().string());
   }
   if (ec) {
