@@ -57,7 +57,7 @@ echo "parsers (lines, branches):"
 gate=0
 for f in src/json/json.cpp src/design/case_file.cpp src/io/stl_read.cpp src/io/ply_read.cpp \
          src/io/obj_read.cpp src/io/mesh_text.h src/ct/ct_common.cpp src/ct/ct_nrrd.cpp \
-         src/ct/ct_metaimage.cpp src/ct/ct_dicom.cpp src/ct/dicom_rle.cpp \
+         src/ct/ct_metaimage.cpp src/ct/ct_dicom.cpp src/ct/dicom_frames.cpp src/ct/dicom_rle.cpp \
          src/ct/jpeg_lossless.cpp src/ct/jpeg_ls.cpp src/compress/inflate.cpp \
          src/ct/jpeg2000_codestream.cpp src/ct/jpeg2000_tier1.cpp; do
   # llvm-cov report columns: Regions Missed Cover Functions Missed Executed Lines Missed Cover
