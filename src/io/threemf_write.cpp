@@ -102,6 +102,27 @@ struct Text {
   }
 };
 
+// One vertex or triangle line, formatted on the stack and put whole (one bound check a line,
+// not one a piece): at most kVertexLine bytes (the formats of Text's put_float and put_u64).
+struct Line {
+  char text[kVertexLine > kTriangleLine ? kVertexLine : kTriangleLine];
+  size_t size = 0;
+  template <size_t N>
+  void put(const char (&literal)[N]) {
+    std::memcpy(text + size, literal, N - 1);
+    size += N - 1;
+  }
+  void put_u64(uint64_t v) {
+    const auto r = std::to_chars(text + size, text + sizeof text, v);
+    size = static_cast<size_t>(r.ptr - text);
+  }
+  void put_float(float f) {
+    if (f == 0.0f) f = 0.0f;  // no "-0"
+    const auto r = std::to_chars(text + size, text + sizeof text, f);
+    size = static_cast<size_t>(r.ptr - text);
+  }
+};
+
 uint64_t escaped_bound(const char* s) { return s == nullptr ? 0 : 6 * uint64_t{std::strlen(s)}; }
 
 uint64_t model_bound(Span<const ThreeMfObject> objects, const ThreeMfOptions& options) {
@@ -197,23 +218,27 @@ void write_model(Span<const ThreeMfObject> objects, const ThreeMfOptions& option
     }
     t->put("<mesh>\n<vertices>\n");
     for (const Vec3& p : o.mesh->vertices) {
-      t->put("<vertex x=\"");
-      t->put_float(static_cast<float>(p.x));
-      t->put("\" y=\"");
-      t->put_float(static_cast<float>(p.y));
-      t->put("\" z=\"");
-      t->put_float(static_cast<float>(p.z));
-      t->put("\"/>\n");
+      Line line;
+      line.put("<vertex x=\"");
+      line.put_float(static_cast<float>(p.x));
+      line.put("\" y=\"");
+      line.put_float(static_cast<float>(p.y));
+      line.put("\" z=\"");
+      line.put_float(static_cast<float>(p.z));
+      line.put("\"/>\n");
+      t->put(line.text, line.size);
     }
     t->put("</vertices>\n<triangles>\n");
     for (const Triangle& tr : o.mesh->triangles) {
-      t->put("<triangle v1=\"");
-      t->put_u64(tr.v[0]);
-      t->put("\" v2=\"");
-      t->put_u64(tr.v[1]);
-      t->put("\" v3=\"");
-      t->put_u64(tr.v[2]);
-      t->put("\"/>\n");
+      Line line;
+      line.put("<triangle v1=\"");
+      line.put_u64(tr.v[0]);
+      line.put("\" v2=\"");
+      line.put_u64(tr.v[1]);
+      line.put("\" v3=\"");
+      line.put_u64(tr.v[2]);
+      line.put("\"/>\n");
+      t->put(line.text, line.size);
     }
     t->put("</triangles>\n</mesh>\n</object>\n");
   }
