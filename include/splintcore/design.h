@@ -295,8 +295,11 @@ struct DesignReport {
 // then "design: done" (once the splint is made, too late to cancel). Errors: those of the stages
 // (naming the stage and, for a jaw, its index and role), kInvalidArgument (jaw count differs from
 // the case, unknown printer, a case with "plan": design_plan() makes its splints), kNonFinite (a
-// jaw vertex that is NaN or infinite), kLimitExceeded (a jaw moved beyond float32 range), and
-// kInvalidMesh when the result is not printable (require_printable's reason).
+// jaw vertex that is NaN or infinite), kLimitExceeded (a jaw moved beyond float32 range),
+// kInvalidMesh for a jaw that is no jaw, named before anything runs ("design: jaw j (role) is a
+// triangle soup" or "has no teeth": fewer than 4 triangles per piece connected through shared
+// corners, or every vertex within 1 mm of one plane; 5 bytes of arena a vertex, returned),
+// and kInvalidMesh when the result is not printable (require_printable's reason).
 Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* splint,
                      DesignReport* report);
 
@@ -309,9 +312,11 @@ Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
 // registered scan: within the base the scan is the jaw's whole surface, so the imprint is the
 // scan's own triangles (the jaw's mesh is used for the registration and the outline). The
 // scan is open: its border must lie outside the base, else the Boolean's "B is open" error
-// names the border vertex (of the jaw's scan). report->fused[j] and report->fusion[j] give the
-// registration. Errors, besides design_splint's: kInvalidArgument (scans do not match the
-// case: a count other than the jaws', a scan for a jaw without "scan"; a wrong landmark pairing,
+// names the scan, its border vertex and where it lies, and what to do. report->fused[j] and
+// report->fusion[j] give the registration. Errors, besides design_splint's (a scan that is no
+// jaw among them: "design: the scan of jaw j (role) ..."): kInvalidArgument (scans do not
+// match the case: a count other than the jaws', a scan for a jaw without "scan", two jaws of
+// one role each with a scan: "two scans of the same jaw"; a wrong landmark pairing,
 // register_rigid's option errors: "design: fusion: jaw j (role), scan PATH: ..."), kLimitExceeded
 // (a fit whose RMS is above max_rms_mm or whose overlap is below min_overlap: the message gives
 // both figures and both thresholds), kInvalidMesh (an empty scan, or register_rigid's). Arena:

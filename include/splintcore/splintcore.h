@@ -587,6 +587,14 @@ typedef struct sc_plan_report {
   int job_written;                 /* `job` was given and the 3MF written to it */
   double job_translation_mm[2][3]; /* where the job put each splint on the tray (its build
                                       item's translation); 0 without a job */
+  /* Scan-CT fusion (sc_design_plan_scans), per jaw in case order: fused[i] is 1 when jaw i's
+   * scan was registered (once, before the plan's moves: both splints hold this fit); then the
+   * fit's RMS (mm), the fraction of the scan within the case's crowns_within_mm, and the
+   * registration (scan -> the jaw's mesh as given, row-major 4 x 4). 0 for a jaw without one. */
+  int fused[2];
+  double fusion_rms_mm[2];
+  double fusion_overlap[2];
+  double fusion_transform[2][16];
 } sc_plan_report;
 
 /* Designs both splints of the plan case `c` from `jaws` (jaws[i] is the mesh of the case's jaw
@@ -619,7 +627,9 @@ sc_status sc_design_plan(sc_context* ctx, const sc_case* c, const sc_mesh* const
  * scans[i] is the scan of the case's jaw i as read, NULL for a jaw without one (`scans` may be
  * NULL only when no jaw has one). The fusion comes first, once, on the preoperative jaws (stage
  * "plan: fusion"); both splints and the autorotation then see each scanned jaw as its
- * registered scan, the plan's moves after the registration. Arena: sc_design_plan's plus
+ * registered scan, the plan's moves after the registration; the report's fused[],
+ * fusion_rms_mm[], fusion_overlap[] and fusion_transform[] give each jaw's fit (as
+ * sc_design_report has them for one splint). Arena: sc_design_plan's plus
  * register_rigid_bound() of the largest scan and its jaw (returned). Errors: sc_design_plan's,
  * and sc_design_scans' fusion errors prefixed "plan: ". At most 2 jaws (the plan's). */
 sc_status sc_design_plan_scans(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,

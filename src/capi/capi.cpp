@@ -338,6 +338,16 @@ void fill_plan_report(const PlanReport& r, const Mesh* splints[2], const Vec3* m
     }
   }
   out->job_written = moves != nullptr ? 1 : 0;
+  // The fusion was made once for both splints: the intermediate's record holds it.
+  const DesignReport& d = r.intermediate.design;
+  for (int i = 0; i < 2; ++i) {
+    if (!d.fused[i]) continue;
+    const RegisterResult& f = d.fusion[i].registration;
+    out->fused[i] = 1;
+    out->fusion_rms_mm[i] = f.rms_mm;
+    out->fusion_overlap[i] = f.overlap;
+    row_major(f.transform, out->fusion_transform[i]);
+  }
 }
 
 }  // namespace

@@ -308,14 +308,26 @@ Status parse_jaws(const Reader& r, const JsonValue* jaws, CaseFile* out) {
       SPLINTCORE_RETURN_IF_ERROR(r.transform(*t, "transform", "jaws[].transform", &jaw.transform));
     }
     if (const JsonValue* sc = doc.member(j, "scan")) {
+      if (sc->type == JsonType::kArray) {  // several scans of this jaw
+        return r.fail(*sc, StatusCode::kInvalidArgument,
+                      "\"scan\" is a list: a jaw takes one scan (an object); merge the scans of "
+                      "this jaw into one mesh (or choose one)");
+      }
       SPLINTCORE_RETURN_IF_ERROR(parse_scan(r, *sc, &jaw.scan));
       jaw.has_scan = true;
     }
     for (uint32_t e = 0; e < i; ++e) {
-      if (std::strcmp(list[e].role, jaw.role) == 0) {
-        return r.fail(*role, StatusCode::kInvalidArgument, "two jaws with the role \"", jaw.role,
-                      "\"");
+      if (std::strcmp(list[e].role, jaw.role) != 0) continue;
+      Status twice = r.fail(*role, StatusCode::kInvalidArgument, "two jaws with the role \"",
+                            jaw.role, "\" (jaws[");
+      twice.append_u64(e).append("] and jaws[").append_u64(i).append("])");
+      if (list[e].has_scan && jaw.has_scan) {  // two scans of the same jaw
+        return twice.append(", each with a \"scan\": two scans of the ")
+            .append(jaw.role)
+            .append("; a case takes one scan per jaw: merge them into one mesh (or choose one) ")
+            .append("and give the jaw once");
       }
+      return twice.append(": give each jaw once");
     }
     list[i] = jaw;
   }

@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "design/fusion.h"
+#include "design/no_jaw.h"
 #include "splintcore/design.h"
 
 namespace splintcore {
@@ -201,20 +202,27 @@ Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   return Status::ok();
 }
 
-// The Boolean names an open B's vertex where its border meets the base (issue 30); B is the
-// jaws one after another, so the jaw and its own vertex id are added.
-Status name_open_jaw(Status s, const CaseFile& c, Span<const Mesh> jaws) {
+// The Boolean names an open B's vertex where its border meets the base (issue 30). B is the
+// jaws one after another: said again in the design's terms (which jaw or scan, its own vertex,
+// where it lies in the case's frame, what to do), within a Status's 256 bytes.
+Status name_open_jaw(Status s, const CaseFile& c, Span<const Mesh> jaws, const Mesh& b) {
   if (s.code() != StatusCode::kInvalidMesh || s.index() == kNoPosition ||
-      std::strncmp(s.message(), "B is open", 9) != 0) {
+      s.index() >= b.vertices.size() || std::strncmp(s.message(), "B is open", 9) != 0) {
     return s;
   }
+  const auto um = [](double x) { return std::floor(x * 1000 + 0.5) / 1000; };
+  const Vec3& p = b.vertices[s.index()];
   uint64_t first = 0;
   for (size_t j = 0; j < jaws.size(); ++j) {
     const uint64_t count = jaws[j].vertices.size();
     if (s.index() < first + count) {
-      s.append(" (vertex ").append_u64(s.index() - first).append(" of jaw ").append_u64(j);
-      s.append(c.jaws[j].has_scan ? "'s scan, " : ", ");  // a fused jaw is its scan
-      return s.append(c.jaws[j].role).append(")");
+      const bool scan = c.jaws[j].has_scan;  // a fused jaw is its scan
+      return make_error(StatusCode::kInvalidMesh, "B is open: ", scan ? "the scan of " : "", "jaw ",
+                        j, " (", c.jaws[j].role, ") has its border inside the base at ",
+                        "its vertex ", s.index() - first, " (", um(p.x), ", ", um(p.y), ", ",
+                        um(p.z), "): use a larger ", scan ? "scan" : "surface",
+                        ", a smaller outline, or close it first (splintcore prepare)")
+          .at_index(j);
     }
     first += count;
   }
@@ -253,9 +261,9 @@ Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   bo.op = BooleanOp::kDifference;
   const bool check_after = !c.has_blockout;
   bo.check_self_intersection = !check_after;
-  SPLINTCORE_RETURN_IF_ERROR(
-      stage_error(name_open_jaw(mesh_boolean(ctx, *base, *b, bo, cut, &report->boolean), c, jaws),
-                  "boolean (base minus jaws)"));
+  SPLINTCORE_RETURN_IF_ERROR(stage_error(
+      name_open_jaw(mesh_boolean(ctx, *base, *b, bo, cut, &report->boolean), c, jaws, *b),
+      "boolean (base minus jaws)"));
   if (check_after) {
     Mesh moved;
     move_mesh_down(arena, low, *cut, &moved);
@@ -273,7 +281,8 @@ Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
           stage_error(build_case_base(ctx, c, &again_base, &report->base), "base"));
       bo.check_self_intersection = true;
       SPLINTCORE_RETURN_IF_ERROR(stage_error(
-          name_open_jaw(mesh_boolean(ctx, again_base, again_b, bo, cut, &report->boolean), c, jaws),
+          name_open_jaw(mesh_boolean(ctx, again_base, again_b, bo, cut, &report->boolean), c, jaws,
+                        again_b),
           "boolean (base minus jaws)"));
     } else {
       report->boolean.self_intersection_checked = true;
@@ -396,6 +405,16 @@ Status design_detail::check_case_scans(const CaseFile& c, Span<const Mesh> scans
     return make_error(StatusCode::kLimitExceeded, "design: fusion takes at most ",
                       DesignReport::kMaxFusedJaws, " jaws, the case has ", c.jaws.size());
   }
+  for (size_t j = 0; j < c.jaws.size(); ++j) {  // first: the meshes come after this
+    for (size_t k = 0; k < j && c.jaws[j].has_scan; ++k) {
+      if (!c.jaws[k].has_scan || std::strcmp(c.jaws[k].role, c.jaws[j].role) != 0) continue;
+      return make_error(StatusCode::kInvalidArgument, "design: jaws ", k, " and ", j,
+                        " are both the ", c.jaws[j].role,
+                        ", each with a \"scan\": two scans of the same jaw; give "
+                        "one scan per jaw (merge them into one mesh, or choose one)")
+          .at_index(j);
+    }
+  }
   for (size_t j = 0; j < c.jaws.size(); ++j) {
     if (c.jaws[j].has_scan && scans[j].triangles.empty()) {
       return make_error(StatusCode::kInvalidMesh, "design: the scan of jaw ", j, " (",
@@ -479,6 +498,7 @@ Status design_detail::design_splint_registered(const Context& ctx, const CaseFil
   SPLINTCORE_RETURN_IF_ERROR(check_case_scans(case_given, scans));
   report->printer = profile->name;
   ArenaScope scope(arena);  // every error, a cancel included, leaves the arena as it was
+  SPLINTCORE_RETURN_IF_ERROR(refuse_no_jaw(ctx, case_given, jaws_given, scans));
   const auto stage = [&](const char* name) { return report_progress(ctx, name, 0, 1); };
   CaseFile outlined;
   if (case_given.has_auto_outline) {

@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "design/fusion.h"
+#include "design/no_jaw.h"
 #include "splintcore/design.h"
 
 namespace splintcore {
@@ -175,6 +176,7 @@ Status design_plan(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                       " meshes were given");
   }
   SPLINTCORE_RETURN_IF_ERROR(plan_prefixed(design_detail::check_case_scans(c, scans)));
+  SPLINTCORE_RETURN_IF_ERROR(plan_prefixed(design_detail::refuse_no_jaw(ctx, c, jaws, scans)));
   PlanFusion f;
   f.scans = scans;
   if (!scans.empty()) {  // once, on the preoperative jaws: before the plan moves them

@@ -1370,6 +1370,103 @@ static void test_design_plan(const char* jaws_dir, const char* cli_dir) {
   free(jaw_bytes[1].data);
 }
 
+/* Two-jaw surgery with a scan (sc_design_plan_scans): fixtures/cases/plan.json with the mandible
+ * given a "scan", the mandible's own mesh moved by a known translation. The plan's report gives
+ * the fusion of each jaw: none for the maxilla; for the mandible the registration (scan -> the
+ * jaw), which takes the translation back, its RMS and overlap; both splints are printable.
+ * Without the scans the case is refused, naming the jaw. */
+static void test_design_plan_scans(const char* jaws_dir) {
+  static const char kMesh[] = "\"mesh\": \"mandible.stl\"";
+  static const char kScan[] = ", \"scan\": {\"path\": \"mandible_scan.stl\", \"max_rms_mm\": 0.01}";
+  static const double kMove[3] = {0.7, -0.4, 0.3};
+  Bytes case_text = read_file(g_fixtures, "cases/plan.json");
+  Bytes jaw_bytes[2];
+  Fixture f = open_fixture((size_t)64 << 20);
+  const char* text = (const char*)case_text.data;
+  const char* at = NULL;
+  char* fused_text = NULL;
+  size_t head, i, length;
+  sc_case* c = NULL;
+  const sc_mesh* jaws[2] = {NULL, NULL};
+  const sc_mesh* scans[2] = {NULL, NULL};
+  sc_mesh* scan = NULL;
+  sc_mesh* splints[2] = {NULL, NULL};
+  sc_plan_report report;
+  double* vertices = NULL;
+  uint32_t* triangles = NULL;
+  uint64_t nv, nt;
+  char message[512];
+  jaw_bytes[0] = read_file(jaws_dir, "maxilla.stl");
+  jaw_bytes[1] = read_file(jaws_dir, "mandible.stl");
+  CHECK(case_text.data != NULL && jaw_bytes[0].data != NULL && jaw_bytes[1].data != NULL);
+  if (case_text.data == NULL || jaw_bytes[0].data == NULL || jaw_bytes[1].data == NULL) return;
+  for (i = 0; i + sizeof kMesh - 1 <= case_text.size && at == NULL; ++i) {
+    if (memcmp(text + i, kMesh, sizeof kMesh - 1) == 0) at = text + i;
+  }
+  CHECK(at != NULL);
+  if (at == NULL) return;
+  head = (size_t)(at - text) + sizeof kMesh - 1;
+  length = case_text.size + sizeof kScan - 1;
+  fused_text = (char*)malloc(length);
+  memcpy(fused_text, text, head);
+  memcpy(fused_text + head, kScan, sizeof kScan - 1);
+  memcpy(fused_text + head + sizeof kScan - 1, text + head, case_text.size - head);
+  CHECK_OK(f.ctx, sc_case_parse(f.ctx, fused_text, length, "plan-scan.json", &c));
+  free(fused_text);
+  for (i = 0; i < 2 && c != NULL; ++i) {
+    sc_mesh* m = NULL;
+    CHECK_OK(f.ctx, read_mesh(f.ctx, &jaw_bytes[i], i == 0 ? "maxilla.stl" : "mandible.stl", &m));
+    jaws[i] = m;
+  }
+  if (c == NULL || jaws[0] == NULL || jaws[1] == NULL) return;
+  /* The scan: the mandible moved by kMove. */
+  nv = sc_mesh_vertex_count(jaws[1]);
+  nt = sc_mesh_triangle_count(jaws[1]);
+  vertices = (double*)malloc((size_t)nv * 3 * sizeof(double));
+  triangles = (uint32_t*)malloc((size_t)nt * 3 * sizeof(uint32_t));
+  CHECK_OK(f.ctx, sc_mesh_copy_vertices(f.ctx, jaws[1], vertices, (size_t)nv * 3));
+  CHECK_OK(f.ctx, sc_mesh_copy_triangles(f.ctx, jaws[1], triangles, (size_t)nt * 3));
+  for (i = 0; i < (size_t)nv * 3; ++i) vertices[i] += kMove[i % 3];
+  CHECK_OK(f.ctx,
+           sc_mesh_from_arrays(f.ctx, vertices, (uint32_t)nv, triangles, (uint32_t)nt, &scan));
+  free(vertices);
+  free(triangles);
+  scans[1] = scan;
+  /* Without the scans the case is refused, naming the jaw. */
+  CHECK(sc_design_plan(f.ctx, c, jaws, 2, &splints[0], &splints[1], NULL, &report) ==
+        SC_INVALID_ARGUMENT);
+  last_message(f.ctx, message, sizeof message);
+  CHECK(contains(message, "jaw 1 (mandible) has a \"scan\""));
+  CHECK(splints[0] == NULL && splints[1] == NULL);
+  memset(&report, 0xff, sizeof report); /* every field must be written */
+  CHECK_OK(f.ctx,
+           sc_design_plan_scans(f.ctx, c, jaws, scans, 2, &splints[0], &splints[1], NULL, &report));
+  if (splints[0] != NULL && splints[1] != NULL) {
+    CHECK(report.printable[0] == 1 && report.printable[1] == 1);
+    CHECK(report.fused[0] == 0 && report.fused[1] == 1);
+    CHECK(report.fusion_rms_mm[0] == 0 && report.fusion_overlap[0] == 0);
+    for (i = 0; i < 16; ++i) CHECK(report.fusion_transform[0][i] == 0);
+    CHECK(report.fusion_rms_mm[1] >= 0 && report.fusion_rms_mm[1] < 1e-3);
+    CHECK(report.fusion_overlap[1] > 0.99 && report.fusion_overlap[1] <= 1);
+    for (i = 0; i < 16; ++i) {
+      /* scan -> jaw: the identity rotation and the move taken back. */
+      const double want = (i % 5 == 0) ? 1.0 : (i % 4 == 3 && i < 12) ? -kMove[i / 4] : 0.0;
+      const double off = report.fusion_transform[1][i] - want;
+      CHECK(off < 1e-4 && off > -1e-4);
+    }
+    printf(
+        "plan with the mandible's scan: rms %.3g mm, overlap %.3f, translation back "
+        "(%.6f, %.6f, %.6f); arena high water %llu bytes\n",
+        report.fusion_rms_mm[1], report.fusion_overlap[1], report.fusion_transform[1][3],
+        report.fusion_transform[1][7], report.fusion_transform[1][11],
+        (unsigned long long)sc_arena_high_water(f.ctx));
+  }
+  close_fixture(&f);
+  free(case_text.data);
+  free(jaw_bytes[0].data);
+  free(jaw_bytes[1].data);
+}
+
 int main(int argc, char** argv) {
   Bytes torus, case_text;
   if (argc < 2) {
@@ -1406,6 +1503,7 @@ int main(int argc, char** argv) {
     test_outline(argv[2]);
     if (argc >= 4) test_report_matches_cli(argv[2], argv[3]);
     test_design_plan(argv[2], argc >= 5 ? argv[4] : NULL);
+    test_design_plan_scans(argv[2]);
   } else {
     printf("design skipped: no jaws folder given\n");
   }

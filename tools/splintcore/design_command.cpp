@@ -510,6 +510,13 @@ int Design::run_plan() {
     std::printf("%s\n", report_text_.c_str());
     return kExitOk;
   }
+  const DesignReport& fused = parts[0]->design;  // the fusion, made once for both splints
+  for (size_t i = 0; i < c_.jaws.size() && i < DesignReport::kMaxFusedJaws; ++i) {
+    if (!fused.fused[i]) continue;
+    const RegisterResult& f = fused.fusion[i].registration;
+    std::printf("fusion (%s): scan %s registered, RMS %.4f mm, overlap %.3f, %u iterations\n",
+                c_.jaws[i].role, scan_paths_[i].c_str(), f.rms_mm, f.overlap, f.iterations);
+  }
   for (int k = 0; k < 2; ++k) {
     const PlanSplintReport& r = *parts[k];
     std::printf(

@@ -1,0 +1,129 @@
+// Jaws that are no jaws (no_jaw.h): a triangle soup or a flat sheet given as a jaw or a scan.
+// Two measures, each linear and far from any real jaw: the triangles per connected piece
+// (union-find over the vertices) and the relief across the plane of the summed area vectors.
+#include "design/no_jaw.h"
+
+#include <cmath>
+
+#include "core/union_find.h"
+
+namespace splintcore {
+namespace design_detail {
+
+namespace {
+
+// What refuse_no_jaw measures of one mesh.
+struct JawShape {
+  bool measured = false;  // false: empty, ids out of range or no area (left to later stages)
+  uint64_t pieces = 0;    // connected through shared vertices
+  double relief = 0;      // mm across `normal`
+  Vec3 normal{};          // unit
+};
+
+// The pieces: referenced vertices less the unions that joined two of them.
+Status count_pieces(const Context& ctx, const Mesh& m, JawShape* out) {
+  const size_t n = m.vertices.size();
+  if (n >= (size_t{1} << 32)) return Status::ok();  // not measured: a later stage names it
+  ArenaScope scope(*ctx.arena);
+  UnionFind uf;
+  uint8_t* used = ctx.arena->allocate_array<uint8_t>(n);
+  if (!uf.init(*ctx.arena, static_cast<uint32_t>(n)) || (used == nullptr && n > 0)) {
+    return ctx.arena->exhausted_status();
+  }
+  for (size_t i = 0; i < n; ++i) used[i] = 0;
+  uint64_t referenced = 0, unions = 0;
+  for (const Triangle& t : m.triangles) {
+    for (uint32_t v : t.v) {
+      if (v >= n) return Status::ok();  // gather_jaws names it
+      referenced += used[v] == 0 ? 1u : 0u;
+      used[v] = 1;
+    }
+    unions += uf.unite(t.v[0], t.v[1]) ? 1u : 0u;
+    unions += uf.unite(t.v[1], t.v[2]) ? 1u : 0u;
+  }
+  out->pieces = referenced - unions;
+  return Status::ok();
+}
+
+// The relief: the plane's normal is the sum of the triangles' area vectors, each turned to
+// agree with the largest one (a sheet's triangles may be wound either way).
+void measure_relief(const Mesh& m, JawShape* out) {
+  Vec3 largest{};
+  double largest_sq = 0;
+  for (const Triangle& t : m.triangles) {
+    const Vec3& a = m.vertices[t.v[0]];
+    const Vec3 n = cross(m.vertices[t.v[1]] - a, m.vertices[t.v[2]] - a);
+    const double sq = length_squared(n);
+    if (sq > largest_sq) {
+      largest_sq = sq;
+      largest = n;
+    }
+  }
+  Vec3 sum{};
+  for (const Triangle& t : m.triangles) {
+    const Vec3& a = m.vertices[t.v[0]];
+    const Vec3 n = cross(m.vertices[t.v[1]] - a, m.vertices[t.v[2]] - a);
+    sum = dot(n, largest) < 0 ? sum - n : sum + n;
+  }
+  const double sq = length_squared(sum);
+  if (!(sq > 0) || !std::isfinite(sq)) return;  // no area (or not finite): left to later stages
+  const Vec3 u = sum * (1.0 / std::sqrt(sq));
+  double lo = HUGE_VAL, hi = -HUGE_VAL;
+  for (const Triangle& t : m.triangles) {
+    for (uint32_t v : t.v) {
+      const double h = dot(m.vertices[v], u);
+      lo = h < lo ? h : lo;
+      hi = h > hi ? h : hi;
+    }
+  }
+  out->relief = hi - lo;
+  out->normal = u;
+  out->measured = true;
+}
+
+// For a message: to 3 decimals.
+double shown(double v) { return std::floor(v * 1000 + 0.5) / 1000; }
+
+Status check_one(const Context& ctx, const Mesh& m, size_t j, const char* role, bool scan) {
+  if (m.triangles.empty()) return Status::ok();
+  JawShape shape;
+  SPLINTCORE_RETURN_IF_ERROR(count_pieces(ctx, m, &shape));
+  if (shape.pieces == 0) return Status::ok();  // not measured
+  const char* of = scan ? "the scan of " : "";
+  const char* file = scan ? "the scan's file" : "the jaw's file";
+  const uint64_t triangles = m.triangles.size();
+  if (triangles < kMinTrianglesPerPiece * shape.pieces) {
+    return make_error(StatusCode::kInvalidMesh, "design: ", of, "jaw ", j, " (", role,
+                      ") is a triangle soup, not a jaw: its ", triangles, " triangles form ",
+                      shape.pieces, " pieces (a jaw is one piece or a few); check ", file,
+                      ": its triangles must meet at their corners (export it again)")
+        .at_index(j);
+  }
+  measure_relief(m, &shape);
+  if (shape.measured && shape.relief < kMinJawReliefMm) {
+    return make_error(StatusCode::kInvalidMesh, "design: ", of, "jaw ", j, " (", role,
+                      ") has no teeth: all its vertices lie within ", shown(shape.relief),
+                      " mm of one plane (normal ", shown(shape.normal.x), ", ",
+                      shown(shape.normal.y), ", ", shown(shape.normal.z), "; crowns rise at least ",
+                      kMinJawReliefMm, " mm from it); check ", file,
+                      ": it is a flat sheet, not this jaw")
+        .at_index(j);
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+Status refuse_no_jaw(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                     Span<const Mesh> scans) {
+  for (size_t j = 0; j < jaws.size() && j < c.jaws.size(); ++j) {
+    SPLINTCORE_RETURN_IF_ERROR(check_one(ctx, jaws[j], j, c.jaws[j].role, false));
+    if (j < scans.size() && c.jaws[j].has_scan) {
+      SPLINTCORE_RETURN_IF_ERROR(check_one(ctx, scans[j], j, c.jaws[j].role, true));
+    }
+  }
+  return Status::ok();
+}
+
+}  // namespace design_detail
+}  // namespace splintcore

@@ -1,0 +1,34 @@
+// Jaws that are no jaws (issue 30, "a jaw that is a single triangle soup without any tooth"):
+// refused up front, naming the cause, before the outline, the fusion or the Boolean make
+// something of them (an outline of noise, a fit to a plane, or a base with nothing subtracted).
+#ifndef SPLINTCORE_DESIGN_NO_JAW_H
+#define SPLINTCORE_DESIGN_NO_JAW_H
+
+#include "splintcore/design.h"
+
+namespace splintcore {
+namespace design_detail {
+
+// A jaw's surface rises at least this far from any plane: crowns stand several mm above the gum
+// (a jaw reconstructed from CT, an intraoral scan of crowns and gum alike).
+constexpr double kMinJawReliefMm = 1.0;
+// At least this many triangles a connected piece, on average: a jaw's surface is one piece or
+// a few (teeth, islands of a scan), never hundreds of loose triangles.
+constexpr uint32_t kMinTrianglesPerPiece = 4;
+
+// Each jaw of `c` (jaws[j]) and each scan (scans[j] where c.jaws[j].has_scan; `scans` may be
+// empty): kInvalidMesh naming the jaw (its index and role, "the scan of" for a scan) when it is
+//   - a triangle soup: fewer than kMinTrianglesPerPiece triangles a piece, the pieces being
+//     the triangles connected through shared vertices (loose triangles, an unwelded export);
+//   - flat: every corner within kMinJawReliefMm of one plane, the plane of its triangles'
+//     area vectors summed with the sign of the largest one's (a sheet, a plate: no tooth).
+// The message says what was found and what to do. An empty mesh, a triangle with a vertex id
+// out of range or a mesh of zero area is left to the stage that names it. Arena: 5 bytes a
+// vertex of the largest mesh, returned. Errors: kInvalidMesh, kArenaExhausted.
+Status refuse_no_jaw(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                     Span<const Mesh> scans);
+
+}  // namespace design_detail
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_DESIGN_NO_JAW_H

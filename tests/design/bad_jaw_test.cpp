@@ -1,0 +1,304 @@
+// Every bad input of issue 30 named: a jaw that is a triangle soup without any tooth (a flat
+// sheet, or loose triangles), wherever it goes (the design with its picks, with the automatic
+// outline, as a jaw's scan in the fusion, in a plan); two scans of the same jaw (the case file,
+// and a case built in code); the scan whose border crosses the outline is
+// DesignFusion.ScanWhoseBorderCrossesTheBaseIsNamed (fusion_test.cpp). Each is an error that
+// says what is wrong, where and what to do, with nothing made and the arena as it was.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "splintcore/design.h"
+#include "splintcore/registration.h"
+#include "support/phantom_jaws.h"
+#include "support/test_util.h"
+
+namespace splintcore {
+namespace {
+
+// A seeded counter: uniform in [0, 1).
+struct Uniform {
+  uint64_t state;
+  double operator()() {
+    state += 0x9e3779b97f4a7c15ull;
+    return static_cast<double>(hash_mix(state) >> 11) * (1.0 / 9007199254740992.0);
+  }
+};
+
+// A flat sheet over the arch's footprint (60 x 55 mm in 1 mm squares) at height z.
+void flat_sheet(double z, Mesh* m) {
+  const uint32_t nx = 60, ny = 55;
+  for (uint32_t j = 0; j <= ny; ++j) {
+    for (uint32_t i = 0; i <= nx; ++i) {
+      ASSERT_TRUE(m->vertices.push_back(Vec3{-30.0 + i, -10.0 + j, z}));
+    }
+  }
+  for (uint32_t j = 0; j < ny; ++j) {
+    for (uint32_t i = 0; i < nx; ++i) {
+      const uint32_t a = j * (nx + 1) + i;
+      ASSERT_TRUE(m->triangles.push_back(Triangle{{a, a + 1, a + nx + 2}}));
+      ASSERT_TRUE(m->triangles.push_back(Triangle{{a, a + nx + 2, a + nx + 1}}));
+    }
+  }
+}
+
+// 2000 loose triangles (about 1 mm each, no corner shared) over the same footprint, z in
+// [z_lo, z_hi].
+void loose_triangles(double z_lo, double z_hi, Mesh* m) {
+  Uniform u{7};
+  for (uint32_t t = 0; t < 2000; ++t) {
+    const Vec3 c{-30 + 60 * u(), -10 + 55 * u(), z_lo + (z_hi - z_lo) * u()};
+    const uint32_t first = static_cast<uint32_t>(m->vertices.size());
+    for (int k = 0; k < 3; ++k) {
+      Vec3 p = c + Vec3{u() - 0.5, u() - 0.5, u() - 0.5};
+      ASSERT_TRUE(round_to_float32(&p));
+      ASSERT_TRUE(m->vertices.push_back(p));
+    }
+    ASSERT_TRUE(m->triangles.push_back(Triangle{{first, first + 1, first + 2}}));
+  }
+}
+
+struct Soup {
+  const char* what;
+  const char* says;  // the cause, as the message gives it
+  Mesh mesh;
+};
+
+// The paper-scale case and the phantom jaws, and four soups in place of the mandible: a sheet
+// through the base and one below it, loose triangles through the base and below it.
+struct BadJaws {
+  test::TestArena t{size_t{192} << 20};
+  CaseFile c;
+  Mesh jaws[2];
+  Soup soups[4] = {{"a flat sheet through the base",
+                    "has no teeth: all its vertices lie within 0 "
+                    "mm of one plane (normal 0, 0, 1;",
+                    Mesh()},
+                   {"a flat sheet below the base", "has no teeth", Mesh()},
+                   {"loose triangles through the base",
+                    "is a triangle soup, not a jaw: its 2000 triangles form 2000 pieces", Mesh()},
+                   {"loose triangles below the base", "is a triangle soup", Mesh()}};
+  bool ok = false;
+  BadJaws() {
+    const std::vector<uint8_t> text =
+        test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/cases/paper_scale.json");
+    if (!parse_case(Context(&t.arena), reinterpret_cast<const char*>(text.data()), text.size(),
+                    "paper_scale", &c)
+             .is_ok() ||
+        !test::phantom_jaw_meshes(t.arena, 6000, jaws)) {
+      return;
+    }
+    for (Soup& s : soups) s.mesh.bind(&t.arena);
+    flat_sheet(1.8, &soups[0].mesh);  // z = -0.2 after the mandible's move: inside the base
+    flat_sheet(-3.0, &soups[1].mesh);
+    loose_triangles(-3.0, 3.0, &soups[2].mesh);
+    loose_triangles(-8.0, -5.0, &soups[3].mesh);
+    ok = !::testing::Test::HasFatalFailure();
+  }
+};
+
+// The error's rules: the code, the message's start (the place) and cause, nothing made, the
+// arena as it was.
+void expect_named(const Status& s, const std::string& starts, const char* says, const Mesh& splint,
+                  size_t used_before, const Arena& arena) {
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh) << test::format(s);
+  const std::string m = s.message();
+  EXPECT_EQ(m.rfind(starts, 0), 0u) << m;
+  EXPECT_NE(m.find(says), std::string::npos) << m;
+  EXPECT_NE(m.find("check "), std::string::npos) << m;  // what to do
+  EXPECT_LT(m.size(), Status::kMessageCapacity - 1) << "truncated: " << m;
+  EXPECT_TRUE(splint.triangles.empty() && splint.vertices.empty());
+  EXPECT_EQ(arena.used(), used_before);
+}
+
+TEST(DesignBadJaws, TriangleSoupWithoutAnyToothIsNamedWhereverItGoes) {
+  BadJaws f;
+  ASSERT_TRUE(f.ok);
+  Context ctx(&f.t.arena);
+  for (const Soup& soup : f.soups) {
+    SCOPED_TRACE(soup.what);
+    // As the mandible: with the case's picks (where a soup below the base would otherwise give
+    // the base back, nothing subtracted) and with the automatic outline.
+    const Mesh given[2] = {f.jaws[0], soup.mesh};
+    for (bool automatic : {false, true}) {
+      CaseFile c = f.c;
+      c.has_auto_outline = automatic;
+      const size_t used = f.t.arena.used();
+      Mesh splint;
+      DesignReport r;
+      const Status s = design_splint(ctx, c, Span<const Mesh>(given, 2), &splint, &r);
+      expect_named(s, "design: jaw 1 (mandible) ", soup.says, splint, used, f.t.arena);
+      EXPECT_EQ(s.index(), 1u);
+    }
+    // As the mandible's scan (the fusion would fit it to the jaw).
+    CaseJaw scanned[2] = {f.c.jaws[0], f.c.jaws[1]};
+    scanned[1].has_scan = true;
+    scanned[1].scan.path = "soup.stl";
+    CaseFile c = f.c;
+    c.jaws = Span<const CaseJaw>(scanned, 2);
+    const Mesh scans[2] = {Mesh(), soup.mesh};
+    const size_t used = f.t.arena.used();
+    Mesh splint;
+    DesignReport r;
+    Status s =
+        design_splint(ctx, c, Span<const Mesh>(f.jaws, 2), Span<const Mesh>(scans, 2), &splint, &r);
+    expect_named(s, "design: the scan of jaw 1 (mandible) ", soup.says, splint, used, f.t.arena);
+    EXPECT_FALSE(r.fused[1]);  // refused before the registration
+    // In a plan: the plan's autorotation and fusion never see it.
+    const std::string plan = R"({"splintcore_case": 1, "case_id": "plan-soup",
+      "jaws": [{"role": "maxilla", "mesh": "maxilla.stl"}, {"role": "mandible", "mesh": "m.stl"}],
+      "base": {"spacing_mm": 0.5, "auto": {}},
+      "plan": {"sequence": "maxilla_first", "maxilla": [1,0,0,0, 0,1,0,2, 0,0,1,1, 0,0,0,1],
+        "mandible": [1,0,0,0, 0,1,0,2.5, 0,0,1,0, 0,0,0,1],
+        "hinge_axis": [[-50, -55, 25], [50, -55, 25]],
+        "intermediate_opening_mm": 2, "final_opening_mm": 1.5}})";
+    CaseFile pc;
+    SPLINTCORE_ASSERT_OK(parse_case(ctx, plan.data(), plan.size(), "plan.json", &pc));
+    const size_t before = f.t.arena.used();
+    Mesh intermediate, final_splint;
+    PlanReport pr;
+    s = design_plan(ctx, pc, Span<const Mesh>(given, 2), &intermediate, &final_splint, &pr);
+    expect_named(s, "plan: design: jaw 1 (mandible) ", soup.says, final_splint, before, f.t.arena);
+    EXPECT_TRUE(intermediate.triangles.empty());
+  }
+  // The real jaws pass the same check: the unchanged case makes its splint.
+  Mesh splint;
+  DesignReport r;
+  SPLINTCORE_EXPECT_OK(design_splint(ctx, f.c, Span<const Mesh>(f.jaws, 2), &splint, &r));
+}
+
+// Where the check draws its lines: a flat sheet with 1.2 mm of relief (a bump) is past the flat
+// test, and pieces of 4 triangles (a tetrahedron's surface each) are past the soup test; one
+// triangle less a piece (3 loose triangles sharing a corner) is a soup.
+TEST(DesignBadJaws, TheLinesAreWhereTheDocumentationDrawsThem) {
+  BadJaws f;
+  ASSERT_TRUE(f.ok);
+  Context ctx(&f.t.arena);
+  const auto design_with = [&](const Mesh& mandible) {
+    const Mesh given[2] = {f.jaws[0], mandible};
+    Mesh splint;
+    DesignReport r;
+    return design_splint(ctx, f.c, Span<const Mesh>(given, 2), &splint, &r);
+  };
+  Mesh bumped(&f.t.arena), flat_by_a_hair(&f.t.arena);
+  flat_sheet(-3.0, &bumped);
+  flat_sheet(-3.0, &flat_by_a_hair);
+  bumped.vertices[bumped.vertices.size() / 2].z += 1.2;
+  EXPECT_EQ(std::string(design_with(bumped).message()).find("has no teeth"), std::string::npos);
+  flat_by_a_hair.vertices[flat_by_a_hair.vertices.size() / 2].z += 0.8;
+  const Status flat = design_with(flat_by_a_hair);
+  EXPECT_NE(std::string(flat.message()).find("has no teeth: all its vertices lie within 0.8 mm"),
+            std::string::npos)
+      << flat.message();
+  // Tetrahedra far below the base (nothing to subtract there: the design makes the base).
+  Mesh pieces(&f.t.arena), fans(&f.t.arena);
+  for (uint32_t k = 0; k < 50; ++k) {
+    const Vec3 o{-25.0 + k, 0, -30};
+    const uint32_t b = static_cast<uint32_t>(pieces.vertices.size());
+    for (const Vec3& d : {Vec3{0, 0, 0}, Vec3{0.5, 0, 0}, Vec3{0, 0.5, 0}, Vec3{0, 0, 0.5}}) {
+      ASSERT_TRUE(pieces.vertices.push_back(o + d));
+      ASSERT_TRUE(fans.vertices.push_back(o + d));
+    }
+    for (const Triangle& t : {Triangle{{b, b + 2, b + 1}}, Triangle{{b, b + 1, b + 3}},
+                              Triangle{{b, b + 3, b + 2}}, Triangle{{b + 1, b + 2, b + 3}}}) {
+      ASSERT_TRUE(pieces.triangles.push_back(t));
+      if (t.v[0] == b) {  // 3 a piece
+        ASSERT_TRUE(fans.triangles.push_back(t));
+      }
+    }
+  }
+  SPLINTCORE_EXPECT_OK(design_with(pieces));
+  const Status fan = design_with(fans);
+  EXPECT_NE(std::string(fan.message())
+                .find("is a triangle soup, not a jaw: its 150 triangles "
+                      "form 50 pieces"),
+            std::string::npos)
+      << fan.message();
+}
+
+TEST(DesignBadJaws, TwoScansOfTheSameJaw) {
+  test::TestArena t(size_t{4} << 20);
+  Context ctx(&t.arena);
+  CaseFile c;
+  // In the case file: the mandible twice, each with a scan; or a list of scans.
+  const std::string twice = R"({"splintcore_case": 1,
+ "jaws": [{"role": "maxilla", "mesh": "maxilla.stl"},
+          {"role": "mandible", "mesh": "mandible.stl", "scan": {"path": "first.ply"}},
+          {"role": "mandible", "mesh": "mandible.stl", "scan": {"path": "second.ply"}}],
+ "base": {"auto": {}}})";
+  Status s = parse_case(ctx, twice.data(), twice.size(), "twice.json", &c);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(std::string(s.message()),
+            "two jaws with the role \"mandible\" (jaws[1] and jaws[2]), each with a \"scan\": two "
+            "scans of the mandible; a case takes one scan per jaw: merge them into one mesh (or "
+            "choose one) and give the jaw once");
+  EXPECT_EQ(s.line(), 4u);  // the second mandible's role
+  const std::string list = R"({"splintcore_case": 1,
+ "jaws": [{"role": "mandible", "mesh": "mandible.stl",
+           "scan": [{"path": "first.ply"}, {"path": "second.ply"}]}],
+ "base": {"auto": {}}})";
+  s = parse_case(ctx, list.data(), list.size(), "list.json", &c);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(s.message()).find("\"scan\" is a list: a jaw takes one scan"),
+            std::string::npos)
+      << s.message();
+  EXPECT_EQ(s.line(), 3u);
+  // The same jaw twice without scans: named too, and what to do.
+  const std::string plain = R"({"splintcore_case": 1,
+ "jaws": [{"role": "maxilla", "mesh": "a.stl"}, {"role": "maxilla", "mesh": "b.stl"}],
+ "base": {"auto": {}}})";
+  s = parse_case(ctx, plain.data(), plain.size(), "plain.json", &c);
+  EXPECT_EQ(std::string(s.message()),
+            "two jaws with the role \"maxilla\" (jaws[0] and jaws[1]): give each jaw once");
+  // A case made in code (the C++ API does not require the parser): design refuses it before
+  // anything is registered.
+  const std::string one = R"({"splintcore_case": 1,
+ "jaws": [{"role": "mandible", "mesh": "m.stl", "scan": {"path": "a.ply"}}],
+ "base": {"upper": [{"position": [0, 0, 1]}, {"position": [10, 0, 1]}],
+          "lower": [{"position": [0, 0, -1]}, {"position": [10, 0, -1]}]}})";
+  SPLINTCORE_ASSERT_OK(parse_case(ctx, one.data(), one.size(), "one.json", &c));
+  CaseJaw both[2] = {c.jaws[0], c.jaws[0]};
+  both[1].scan.path = "b.ply";
+  c.jaws = Span<const CaseJaw>(both, 2);
+  Mesh jaws[2], scans[2];
+  const size_t used = t.arena.used();
+  Mesh splint;
+  DesignReport r;
+  s = design_splint(ctx, c, Span<const Mesh>(jaws, 2), Span<const Mesh>(scans, 2), &splint, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(std::string(s.message()),
+            "design: jaws 0 and 1 are both the mandible, each with a \"scan\": two scans of the "
+            "same jaw; give one scan per jaw (merge them into one mesh, or choose one)");
+  EXPECT_EQ(t.arena.used(), used);
+  EXPECT_TRUE(splint.triangles.empty());
+}
+
+// `register` alone (no design to check the jaws first): a sheet or loose triangles, as the scan
+// or as the CT jaw, are refused too, saying why (a fit far over the limit, with what to check;
+// or a surface that does not fix the motion).
+TEST(DesignBadJaws, RegistrationAloneRefusesSoupsSayingWhy) {
+  BadJaws f;
+  ASSERT_TRUE(f.ok);
+  Context ctx(&f.t.arena);
+  for (const Soup* soup : {&f.soups[0], &f.soups[2]}) {
+    for (bool as_scan : {true, false}) {
+      SCOPED_TRACE(std::string(soup->what) + (as_scan ? " as the scan" : " as the CT jaw"));
+      const size_t used = f.t.arena.used();
+      RegisterResult rr;
+      const Status s = register_rigid(ctx, as_scan ? soup->mesh : f.jaws[1],
+                                      as_scan ? f.jaws[1] : soup->mesh, RegisterOptions{}, &rr);
+      const std::string m = s.message();
+      EXPECT_TRUE(
+          (s.code() == StatusCode::kLimitExceeded &&
+           m.find("check that the scan and the CT are the same jaw") != std::string::npos) ||
+          (s.code() == StatusCode::kInvalidMesh &&
+           m.find("(a flat or symmetric surface)") != std::string::npos))
+          << test::format(s);
+      EXPECT_EQ(f.t.arena.used(), used);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace splintcore
