@@ -367,10 +367,14 @@ Status plan_splint_case(const CaseFile& c, const PlanSplintReport& r, CaseJaw ja
 // Both splints of case `c` (c.has_plan; jaws[i] is the mesh of c.jaws[i], as read). Each is an
 // ordinary design_splint() of plan_splint_case(): outline (automatic when the base is "auto"),
 // blockout, label and checks as for one splint. `intermediate` and `final_splint` must be
-// empty. Arena: sequential. The intermediate splint stays, then the final one above it; the
-// rest is returned. At most: the intermediate splint, plus the larger of (the two moved jaws,
-// 24 bytes a vertex, and autorotate_mandible_bound of them) and one design_splint run of a
-// splint. Progress: "plan: intermediate", the design's stages, "plan: final", the design's.
+// empty. Arena: sequential. Both autorotations come first, with one index of each jaw
+// (distance_index_bound with autorotate_index_options) and, per splint, the two moved jaws (24
+// bytes a vertex), their refit indexes (refit_distance_index_bound) and
+// autorotate_mandible_indexed_bound(), all returned; then the intermediate splint stays, then
+// the final one above it. At most the larger of that and the intermediate splint plus one
+// design_splint run of a splint. An autorotation's error is reported where it was before: the
+// final's after the intermediate's design. Progress: "plan: intermediate", the design's
+// stages, "plan: final", the design's.
 // Errors: kInvalidArgument (no plan, jaw count or roles, a label text too long for the prefix:
 // "plan: intermediate: label: ..."), autorotate_mandible's prefixed
 // "plan: intermediate: autorotation: " (or final), design_splint's prefixed "plan:

@@ -144,6 +144,21 @@ uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,
 Status build_distance_index(const Context& ctx, const Mesh& mesh,
                             const DistanceIndexOptions& options, DistanceIndex* out);
 
+// An index of `mesh` with `index`'s tree: the same leaf order (shared: `index` must outlive
+// *out) and topology, the boxes (and the triangles' boxes, when `index` has them) computed
+// from `mesh`'s triangles as build_distance_index computes them. For a pairs_only index
+// (without oriented boxes) of a mesh with as many triangles, typically the same mesh moved
+// (a jaw moved rigidly and rounded to float32): about a tenth of a build. Any such mesh gives
+// a valid tree (the order is a permutation of its triangles), a good one when it is near the
+// index's own mesh in shape. The pair queries' answers (mesh_pair_distance and its kin) do not
+// depend on the tree: the same bits as over build_distance_index(mesh). Errors:
+// kInvalidArgument (another triangle count), kInvalidMesh (a vertex not finite, a corner out of
+// range), kArenaExhausted. Arena: refit_distance_index_bound(index), all of which stays. On an
+// error the arena is as it was and *out is empty.
+uint64_t refit_distance_index_bound(const DistanceIndex& index);
+Status refit_distance_index(const Context& ctx, const DistanceIndex& index, const Mesh& mesh,
+                            DistanceIndex* out);
+
 // The closest point of the mesh to q (false for an empty mesh). Exact to the rounding of the
 // point-triangle computation in double (about 1e-15 relative).
 bool closest_point(const DistanceIndex& index, const Vec3& q, ClosestPoint* out);

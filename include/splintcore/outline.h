@@ -165,6 +165,21 @@ uint64_t autorotate_mandible_bound(const Mesh& maxilla, const Mesh& mandible);
 Status autorotate_mandible(const Context& ctx, const Mesh& maxilla, const Mesh& mandible,
                            const AutorotateOptions& options, AutorotateReport* out);
 
+// autorotate_mandible over the caller's indexes of the two jaws (their meshes: maxilla.mesh,
+// mandible.mesh), which a plan's two splints build once and refit to each splint's moved jaws
+// (refit_distance_index, distance.h): the same report, bit for bit, as autorotate_mandible of
+// the two meshes. The indexes must be pairs_only (distance.h), any leaf size, with or without
+// the triangles' boxes; their builds checked the meshes (finite vertices, corners in range).
+// Arena: autorotate_mandible_indexed_bound() (nothing stays). Errors: as autorotate_mandible
+// (an empty jaw: kInvalidMesh).
+// The options autorotate_mandible builds its indexes with (pairs_only, without the triangles'
+// boxes): the cheapest for its searches, for a caller that builds its own.
+DistanceIndexOptions autorotate_index_options();
+uint64_t autorotate_mandible_indexed_bound();
+Status autorotate_mandible_indexed(const Context& ctx, const DistanceIndex& maxilla,
+                                   const DistanceIndex& mandible, const AutorotateOptions& options,
+                                   AutorotateReport* out);
+
 }  // namespace splintcore
 
 #endif  // SPLINTCORE_OUTLINE_H

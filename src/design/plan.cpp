@@ -93,43 +93,119 @@ struct PlanFusion {
   bool any() const { return fused[0] || fused[1]; }
 };
 
-// Jaw j as the autorotation sees it, moved by `move`: its registered scan (the registration
-// first, then the plan's move) when it has one, else its mesh.
-Status plan_jaw(const Context& ctx, Span<const Mesh> jaws, const PlanFusion& f, size_t j,
-                const RigidTransform& move, const char* role, Mesh* out) {
-  if (!f.fused[j]) return moved_copy(ctx, jaws[j], move, role, out);
-  return moved_copy(ctx, f.scans[j], compose(move, f.fusion[j].registration.transform), role, out);
+// Jaw j as the autorotation sees it: its registered scan when it has one (the registration
+// first, then the plan's move), else its mesh.
+const Mesh& plan_source(Span<const Mesh> jaws, const PlanFusion& f, size_t j) {
+  return f.fused[j] ? f.scans[j] : jaws[j];
+}
+RigidTransform plan_source_move(const PlanFusion& f, size_t j, const RigidTransform& move) {
+  return f.fused[j] ? compose(move, f.fusion[j].registration.transform) : move;
 }
 
-// One splint: the jaws moved as the plan says for it, the mandible turned about the hinge axis
-// to the opening, then design_splint. The moved copies are returned before the design.
+// The plan's moves of one splint's jaws (before the autorotation) and its opening.
+void plan_moves(const CasePlan& plan, bool final_splint, PlanSplintReport* r) {
+  const bool move_maxilla = final_splint || !plan.mandible_first;
+  const bool move_mandible = final_splint || plan.mandible_first;
+  r->maxilla = move_maxilla ? plan.maxilla : RigidTransform{};
+  r->mandible = move_mandible ? plan.mandible : RigidTransform{};
+  r->opening_asked_mm = final_splint ? plan.final_opening_mm : plan.intermediate_opening_mm;
+}
+
+// One jaw's index for both splints' autorotations (the splints' moved jaws refit it), with
+// autorotate_mandible's refusals of an empty or broken jaw.
+Status plan_jaw_index(const Context& ctx, const Mesh& m, const char* role, DistanceIndex* out) {
+  if (m.triangles.empty() || m.vertices.empty()) {
+    return make_error(StatusCode::kInvalidMesh, "autorotate: the ", role, " is empty");
+  }
+  const Status s = build_distance_index(ctx, m, autorotate_index_options(), out);
+  if (s.code() != StatusCode::kInvalidMesh) return s;
+  Status e = make_error(s.code(), "autorotate: the ", role, "'s ", s.message());
+  if (s.index() != kNoPosition) e.at_index(s.index());
+  return e;
+}
+
+// The identity move exactly (a jaw the plan leaves where it is, without a scan).
+bool is_identity(const RigidTransform& x) {
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      if (x.r[i][k] != (i == k ? 1.0 : 0.0)) return false;
+    }
+  }
+  return x.t.x == 0 && x.t.y == 0 && x.t.z == 0;
+}
+
+// One splint's autorotation: the jaws moved as the plan says for it (and rounded to float32,
+// as design_splint moves them), the indexes refit to them, the mandible turned about the
+// hinge axis to the opening. The moved copies stay (the caller's scope returns them).
+Status plan_autorotation(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                         const PlanFusion& f, const DistanceIndex index[2], bool final_splint,
+                         PlanSplintReport* r) {
+  size_t up = 0, low = 0;
+  SPLINTCORE_RETURN_IF_ERROR(plan_roles(c, &up, &low));
+  plan_moves(c.plan, final_splint, r);
+  Mesh upper, lower;
+  const RigidTransform moves[2] = {plan_source_move(f, up, r->maxilla),
+                                   plan_source_move(f, low, r->mandible)};
+  SPLINTCORE_RETURN_IF_ERROR(
+      moved_copy(ctx, plan_source(jaws, f, up), moves[0], "maxilla", &upper));
+  SPLINTCORE_RETURN_IF_ERROR(
+      moved_copy(ctx, plan_source(jaws, f, low), moves[1], "mandible", &lower));
+  const Mesh* copies[2] = {&upper, &lower};
+  DistanceIndex moved[2];
+  for (int j = 0; j < 2; ++j) {
+    if (is_identity(moves[j])) {
+      // The copy is the jaw's vertices rounded to float32, which its boxes hold already (each
+      // is rounded outward to float from the vertices: the rounding to the nearest float of a
+      // value within a box stays within it): its tree serves as it is.
+      moved[j] = index[j];
+      moved[j].mesh = copies[j];
+    } else {
+      SPLINTCORE_RETURN_IF_ERROR(refit_distance_index(ctx, index[j], *copies[j], &moved[j]));
+    }
+  }
+  AutorotateOptions o;
+  o.hinge[0] = c.plan.hinge[0];
+  o.hinge[1] = c.plan.hinge[1];
+  o.opening_mm = r->opening_asked_mm;
+  return autorotate_mandible_indexed(ctx, moved[0], moved[1], o, &r->autorotation);
+}
+
+// Both splints' autorotations, before either design: each jaw's index is built once (not
+// once a splint) and refit to each splint's moved jaws. Nothing stays in the arena. A
+// splint's error goes to status[splint] (0: intermediate, 1: final), prefixed, for the caller
+// to report where it did before (the final's after the intermediate's design); the final's is
+// not looked for after the intermediate's, nor after running out or a cancel.
+void plan_autorotations(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                        const PlanFusion& f, PlanReport* report, Status status[2]) {
+  ArenaScope scope(*ctx.arena);
+  // The label's refusal first, as before the autorotation (both splints' texts are as long).
+  status[0] = plan_label_text(c, false, report->intermediate.label_text);
+  if (!status[0].is_ok()) return;
+  size_t up = 0, low = 0;
+  status[0] = plan_roles(c, &up, &low);
+  DistanceIndex index[2];
+  if (status[0].is_ok())
+    status[0] = plan_jaw_index(ctx, plan_source(jaws, f, up), "maxilla", &index[0]);
+  if (status[0].is_ok())
+    status[0] = plan_jaw_index(ctx, plan_source(jaws, f, low), "mandible", &index[1]);
+  if (status[0].is_ok()) {
+    ArenaScope splint(*ctx.arena);
+    status[0] = plan_autorotation(ctx, c, jaws, f, index, false, &report->intermediate);
+  }
+  status[0] = plan_error(status[0], "intermediate", "autorotation: ");
+  if (!status[0].is_ok()) return;
+  status[1] = plan_error(plan_autorotation(ctx, c, jaws, f, index, true, &report->final_splint),
+                         "final", "autorotation: ");
+}
+
+// One splint, its autorotation done: design_splint with the jaws where the plan and the
+// autorotation put them.
 Status plan_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, const PlanFusion& f,
                 bool final_splint, Mesh* splint, PlanSplintReport* r) {
   const char* which = final_splint ? "final" : "intermediate";
-  size_t up = 0, low = 0;
-  SPLINTCORE_RETURN_IF_ERROR(plan_roles(c, &up, &low));
   SPLINTCORE_RETURN_IF_ERROR(plan_label_text(c, final_splint, r->label_text));
-  const CasePlan& plan = c.plan;
-  const bool move_maxilla = final_splint || !plan.mandible_first;
-  const bool move_mandible = final_splint || plan.mandible_first;
-  const RigidTransform maxilla_move = move_maxilla ? plan.maxilla : RigidTransform{};
-  const RigidTransform mandible_move = move_mandible ? plan.mandible : RigidTransform{};
-  r->opening_asked_mm = final_splint ? plan.final_opening_mm : plan.intermediate_opening_mm;
-  {
-    ArenaScope temporaries(*ctx.arena);
-    Mesh upper, lower;
-    Status s = plan_jaw(ctx, jaws, f, up, maxilla_move, "maxilla", &upper);
-    if (s.is_ok()) s = plan_jaw(ctx, jaws, f, low, mandible_move, "mandible", &lower);
-    AutorotateOptions o;
-    o.hinge[0] = plan.hinge[0];
-    o.hinge[1] = plan.hinge[1];
-    o.opening_mm = r->opening_asked_mm;
-    if (s.is_ok()) s = autorotate_mandible(ctx, upper, lower, o, &r->autorotation);
-    SPLINTCORE_RETURN_IF_ERROR(plan_error(s, which, "autorotation: "));
-  }
   r->angle_deg = r->autorotation.angle_rad * (180.0 / 3.14159265358979323846);
-  r->maxilla = maxilla_move;
-  r->mandible = compose(r->autorotation.transform, mandible_move);
+  r->mandible = compose(r->autorotation.transform, r->mandible);
   CaseJaw derived_jaws[2];
   CaseFile derived;
   SPLINTCORE_RETURN_IF_ERROR(plan_splint_case(c, *r, derived_jaws, &derived));
@@ -186,8 +262,12 @@ Status design_plan(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
   }
   ArenaScope scope(*ctx.arena);  // on an error nothing stays
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "plan: intermediate", 0, 2));
-  Status s = plan_one(ctx, c, jaws, f, false, intermediate, &report->intermediate);
+  Status autorotated[2];
+  plan_autorotations(ctx, c, jaws, f, report, autorotated);
+  Status s = autorotated[0];
+  if (s.is_ok()) s = plan_one(ctx, c, jaws, f, false, intermediate, &report->intermediate);
   if (s.is_ok()) s = report_progress(ctx, "plan: final", 1, 2);
+  if (s.is_ok()) s = autorotated[1];
   if (s.is_ok()) s = plan_one(ctx, c, jaws, f, true, final_splint, &report->final_splint);
   if (!s.is_ok()) {
     *intermediate = Mesh{};

@@ -885,6 +885,54 @@ Vec3 vertex_pseudonormal(const DistanceIndex& index, uint32_t vertex) {
   return sum;
 }
 
+uint64_t refit_distance_index_bound(const DistanceIndex& index) {
+  return arena_array_bound<BvhNode>(index.nodes.size()) +
+         arena_array_bound<float>(index.triangle_boxes.size());
+}
+
+Status refit_distance_index(const Context& ctx, const DistanceIndex& index, const Mesh& mesh,
+                            DistanceIndex* out) {
+  *out = DistanceIndex{};
+  // Only what the pair queries read: dipoles and oriented boxes would need their own refits.
+  SPLINTCORE_ASSERT(index.dipoles.empty() && index.obbs.empty());
+  if (index.mesh == nullptr || mesh.triangles.size() != index.mesh->triangles.size()) {
+    return make_error(StatusCode::kInvalidArgument, "distance index refit: the mesh has ",
+                      mesh.triangles.size(), " triangles, the index's ",
+                      index.mesh == nullptr ? 0 : index.mesh->triangles.size());
+  }
+  DistanceIndexOptions options;
+  options.pairs_only = true;
+  options.without_triangle_boxes = index.triangle_boxes.empty();
+  IndexBuild build(*ctx.arena, mesh, options);
+  SPLINTCORE_RETURN_IF_ERROR(build.check_input());
+  for (size_t t = 0; t < build.nt; ++t) {
+    const Triangle& tri = build.tris[t];
+    if (tri.v[0] >= build.nv || tri.v[1] >= build.nv || tri.v[2] >= build.nv) {
+      return make_error(StatusCode::kInvalidMesh, "triangle ", t,
+                        " refers to a vertex that does not exist")
+          .at_index(t);
+    }
+  }
+  ArenaScope entry(*ctx.arena);
+  build.n = static_cast<uint32_t>(build.nt);
+  build.order = const_cast<uint32_t*>(index.order.data());  // read only (bound_nodes)
+  build.node_count = static_cast<uint32_t>(index.nodes.size());
+  build.nodes = ctx.arena->allocate_array<BvhNode>(build.node_count);
+  if (build.nodes == nullptr) return ctx.arena->exhausted_status();
+  std::memcpy(static_cast<void*>(build.nodes), index.nodes.data(),
+              size_t{build.node_count} * sizeof(BvhNode));
+  if (!index.triangle_boxes.empty()) {
+    build.tboxes = ctx.arena->allocate_array<float>(6 * build.nt);
+    if (build.nt > 0 && build.tboxes == nullptr) return ctx.arena->exhausted_status();
+  }
+  build.bound_nodes();
+  out->mesh = &mesh;
+  build.publish(out);
+  out->depth = index.depth;
+  entry.commit();
+  return Status::ok();
+}
+
 Status build_distance_index(const Context& ctx, const Mesh& mesh,
                             const DistanceIndexOptions& options, DistanceIndex* out) {
   *out = DistanceIndex{};

@@ -656,6 +656,82 @@ TEST(MeshPairDistance, RigidMoveMatchesAMovedCopy) {
             StatusCode::kInvalidArgument);
 }
 
+// refit_distance_index: B moved rigidly and rounded to float32 (as a plan moves a jaw), its
+// index refit from the unmoved B's tree, answers every search with the bits of an index built
+// afresh over the moved copy; the refit runs in its bound, and one byte short of what it took
+// fails cleanly; a mesh of another triangle
+// count and a non-finite vertex are refused, the arena as it was.
+TEST(MeshPairDistance, RefitIndexGivesTheSameBitsAsABuild) {
+  std::mt19937_64 rng(34);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  int compared = 0;
+  for (const Case& c : oracle_cases()) {
+    for (const bool boxes : {false, true}) {
+      test::TestArena t(size_t{32} << 20);
+      Built a, b;
+      build(t, c.a, 0, false, &a, true);
+      DistanceIndexOptions o;
+      o.pairs_only = true;
+      o.without_triangle_boxes = !boxes;
+      ASSERT_TRUE(test::mesh_from_soup(t.arena, c.b, &b.mesh).is_ok());
+      SPLINTCORE_ASSERT_OK(build_distance_index(Context(&t.arena), b.mesh, o, &b.index));
+      Vec3 axis{unit(rng), unit(rng), unit(rng)};
+      axis = axis * (1.0 / length(axis));
+      RigidTransform move =
+          rotation_about_axis(Vec3{unit(rng), unit(rng), unit(rng)}, axis, 0.5 * unit(rng));
+      move.t = move.t + Vec3{unit(rng), unit(rng), unit(rng)};
+      Built copy, fresh;
+      copy.mesh.bind(&t.arena);
+      for (const Vec3& v : b.mesh.vertices) {
+        Vec3 p = move.apply_point(v);
+        ASSERT_TRUE(round_to_float32(&p));
+        ASSERT_TRUE(copy.mesh.vertices.push_back(p));
+      }
+      for (const Triangle& tr : b.mesh.triangles) ASSERT_TRUE(copy.mesh.triangles.push_back(tr));
+      fresh.mesh = mesh_view(copy.mesh.vertices.span(), copy.mesh.triangles.span());
+      SPLINTCORE_ASSERT_OK(build_distance_index(Context(&t.arena), fresh.mesh, o, &fresh.index));
+      size_t need = 0;
+      {
+        test::TestArena exact(static_cast<size_t>(refit_distance_index_bound(b.index)));
+        SPLINTCORE_ASSERT_OK(
+            refit_distance_index(Context(&exact.arena), b.index, copy.mesh, &copy.index));
+        EXPECT_EQ(copy.index.mesh, &copy.mesh);
+        EXPECT_EQ(copy.index.triangle_boxes.empty(), !boxes);
+        for (const Vec3& off : c.offsets) {
+          const MeshPairDistance r = run_pair(a, copy, off);
+          const MeshPairDistance e = run_pair(a, fresh, off);
+          EXPECT_EQ(std::memcmp(&r.distance, &e.distance, sizeof(double)), 0);
+          EXPECT_EQ(r.triangle_a, e.triangle_a);
+          EXPECT_EQ(r.triangle_b, e.triangle_b);
+          EXPECT_EQ(r.point_a, e.point_a);
+          EXPECT_EQ(r.point_b, e.point_b);
+          EXPECT_EQ(r.intersecting, e.intersecting);
+          ++compared;
+        }
+        need = exact.arena.high_water();
+      }
+      test::TestArena short_by_one(need - 1);
+      DistanceIndex none;
+      EXPECT_EQ(
+          refit_distance_index(Context(&short_by_one.arena), b.index, copy.mesh, &none).code(),
+          StatusCode::kArenaExhausted);
+      EXPECT_EQ(short_by_one.arena.used(), 0u);
+      EXPECT_TRUE(none.nodes.empty());
+      const Mesh fewer = mesh_view(
+          copy.mesh.vertices.span(),
+          Span<const Triangle>(copy.mesh.triangles.data(), copy.mesh.triangles.size() - 1));
+      EXPECT_EQ(refit_distance_index(Context(&t.arena), b.index, fewer, &none).code(),
+                StatusCode::kInvalidArgument);
+      copy.mesh.vertices[0].y = std::nan("");
+      const size_t used = t.arena.used();
+      EXPECT_EQ(refit_distance_index(Context(&t.arena), b.index, copy.mesh, &none).code(),
+                StatusCode::kInvalidMesh);
+      EXPECT_EQ(t.arena.used(), used);
+    }
+  }
+  EXPECT_GE(compared, 16);
+}
+
 TEST(MeshPairDistance, RunsInExactlyItsBound) {
   for (const Case& c : oracle_cases()) {
     test::TestArena t(size_t{32} << 20);

@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "common/phantom.h"
@@ -284,6 +286,60 @@ TEST(Autorotate, PhantomFrameInvariance) {
       EXPECT_NEAR(r.opening, base.opening, 1e-7);
     }
   }
+}
+
+// autorotate_mandible_indexed over the caller's indexes (built with other options, or refit
+// from another mesh's tree as a plan refits them) gives autorotate_mandible's report bit for bit,
+// in autorotate_mandible_indexed_bound(); an empty jaw is refused.
+TEST(Autorotate, IndexedGivesTheSameBits) {
+  PhantomPair p(20000, 0);
+  for (const Plan& plan : kPhantomPlans) {
+    PhantomPair q(20000, plan.drop);
+    const AutorotateReport base = rotate(q.jaw[0], q.jaw[1], plan.h0, plan.h1, plan.opening);
+    test::TestArena t(size_t{32} << 20);
+    // The maxilla's index built with the triangles' boxes and leaves of 4; the mandible's
+    // refit from the undropped mandible's tree.
+    DistanceIndexOptions boxed;
+    boxed.pairs_only = true;
+    boxed.leaf_size = 4;
+    DistanceIndex upper, shape, lower;
+    SPLINTCORE_ASSERT_OK(build_distance_index(Context(&t.arena), q.jaw[0], boxed, &upper));
+    SPLINTCORE_ASSERT_OK(
+        build_distance_index(Context(&t.arena), p.jaw[1], autorotate_index_options(), &shape));
+    SPLINTCORE_ASSERT_OK(refit_distance_index(Context(&t.arena), shape, q.jaw[1], &lower));
+    AutorotateOptions o;
+    o.hinge[0] = plan.h0;
+    o.hinge[1] = plan.h1;
+    o.opening_mm = plan.opening;
+    AutorotateReport r;
+    test::TestArena work{static_cast<size_t>(autorotate_mandible_indexed_bound())};
+    SPLINTCORE_ASSERT_OK(autorotate_mandible_indexed(Context(&work.arena), upper, lower, o, &r));
+    EXPECT_EQ(work.arena.used(), 0u);
+    EXPECT_EQ(std::memcmp(&r.angle_rad, &base.angle_rad, sizeof(double)), 0)
+        << r.angle_rad << " " << base.angle_rad;
+    EXPECT_EQ(std::memcmp(&r.opening, &base.opening, sizeof(double)), 0);
+    EXPECT_EQ(std::memcmp(&r.transform, &base.transform, sizeof(RigidTransform)), 0);
+    EXPECT_EQ(r.contact_maxilla, base.contact_maxilla);
+    EXPECT_EQ(r.contact_mandible, base.contact_mandible);
+    EXPECT_EQ(r.triangle_maxilla, base.triangle_maxilla);
+    EXPECT_EQ(r.triangle_mandible, base.triangle_mandible);
+    EXPECT_EQ(r.steps, base.steps);
+  }
+  test::TestArena t(size_t{8} << 20);
+  Mesh empty;
+  DistanceIndex upper, none;
+  SPLINTCORE_ASSERT_OK(
+      build_distance_index(Context(&t.arena), p.jaw[0], autorotate_index_options(), &upper));
+  SPLINTCORE_ASSERT_OK(
+      build_distance_index(Context(&t.arena), empty, autorotate_index_options(), &none));
+  AutorotateOptions o;
+  o.hinge[0] = kPhantomPlans[0].h0;
+  o.hinge[1] = kPhantomPlans[0].h1;
+  AutorotateReport r;
+  const Status s = autorotate_mandible_indexed(Context(&t.arena), upper, none, o, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_NE(std::string(s.message()).find("the mandible is empty"), std::string::npos)
+      << s.message();
 }
 
 // The memory contract: autorotate_mandible runs in exactly autorotate_mandible_bound() bytes,
