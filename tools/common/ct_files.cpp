@@ -83,8 +83,8 @@ bool is_dicom_directory(const std::string& path) {
   const size_t uid = sizeof kUid - 1;
   for (size_t at = 132; at + 8 + uid <= n; ++at) {
     if (std::memcmp(head + at, "\x02\x00\x02\x00UI", 6) != 0) continue;
-    const size_t length =
-        static_cast<uint8_t>(head[at + 6]) | (static_cast<uint8_t>(head[at + 7]) << 8);
+    const size_t length = size_t{static_cast<uint8_t>(head[at + 6])} |
+                          (size_t{static_cast<uint8_t>(head[at + 7])} << 8);
     return (length == uid || length == uid + 1) && std::memcmp(head + at + 8, kUid, uid) == 0 &&
            (length == uid || head[at + 8 + uid] == '\0');
   }
