@@ -272,11 +272,10 @@ struct Entry {
   uint32_t offset = 0;      // of its local header
 };
 
-// Deflated bytes into an arena array that grows as they come (in place while it is the top
+// Deflated bytes into an arena array that grows as they come (in place: it is the top
 // allocation), up to `limit` bytes: past that the entry is stored (deflate would not be
 // smaller), so only what the compressed entry takes is held, not its bound.
 struct GrowingSink {
-  Arena* arena = nullptr;
   ArenaArray<uint8_t>* bytes = nullptr;
   size_t limit = 0;
   bool larger = false;     // the deflated bytes reached `limit`
@@ -289,15 +288,11 @@ struct GrowingSink {
       return false;
     }
     const size_t need = b.size() + n;
-    if (need > b.capacity()) {
-      const size_t grown = b.capacity() + b.capacity() / 2;
-      if (!b.reserve(grown > need && grown < g->limit ? grown : need)) {
-        g->arena->forget_failure();  // the exact size replaces the failed larger request
-        if (!b.reserve(need)) {
-          g->exhausted = true;
-          return false;
-        }
-      }
+    // Exactly what is needed (in place: the array is the top allocation), so the arena's high
+    // water is what the package takes, to the byte.
+    if (need > b.capacity() && !b.reserve(need)) {
+      g->exhausted = true;
+      return false;
     }
     const size_t at = b.size();
     if (!b.resize(need)) return false;  // within the capacity: cannot fail
@@ -319,7 +314,6 @@ Status pack_entry(const Context& ctx, const DeflateLanes& lanes, bool deflate, c
   e->method = 0;
   if (!deflate) return Status::ok();
   GrowingSink g;
-  g.arena = &arena;
   g.bytes = out;
   g.limit = size;
   CompressSink sink;
