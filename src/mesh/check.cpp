@@ -34,6 +34,7 @@ inline uint32_t mid3(uint32_t a, uint32_t b, uint32_t c) {
 struct EdgeArrays {
   uint32_t* start = nullptr;  // V + 1: half-edges bucketed by their smaller vertex
   uint32_t* half = nullptr;   // 3 T: the uses (3 t + k), bucket by bucket
+  uint32_t* other = nullptr;  // 3 T: per use, its larger vertex << 1 | 1 when it runs from lo
   uint64_t* tally = nullptr;  // V: per larger vertex, its uses in the current bucket
   uint32_t* last = nullptr;   // V: per larger vertex, the last triangle using it so far
 };
@@ -52,8 +53,9 @@ uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count) {
   const uint64_t kept = arena_array_bound<uint8_t>(v) + arena_array_bound<uint32_t>(t) +
                         arena_array_bound<uint8_t>(t) + arena_array_bound<uint32_t>(t) +
                         arena_array_bound<uint32_t>(v);
-  const uint64_t edges = arena_array_bound<uint32_t>(v + 1) + arena_array_bound<uint32_t>(3 * t) +
-                         arena_array_bound<uint64_t>(v) + arena_array_bound<uint32_t>(v);
+  const uint64_t edges = arena_array_bound<uint32_t>(v + 1) +
+                         2 * arena_array_bound<uint32_t>(3 * t) + arena_array_bound<uint64_t>(v) +
+                         arena_array_bound<uint32_t>(v);
   const uint64_t shells = arena_array_bound<uint32_t>(3 * t) + arena_array_bound<uint32_t>(v) +
                           2 * arena_array_bound<uint64_t>(3 * t);
   const uint64_t duplicates = 3 * arena_array_bound<KeyIndex>(t);
@@ -123,9 +125,6 @@ struct EdgePass {
   UnionFind* border = nullptr;   // per vertex: the components of the boundary edges
   uint8_t* on_border = nullptr;  // per vertex: bit 1 set when a boundary edge ends there
 
-  uint32_t end_of(uint32_t use) const { return tris[use / 3].v[(use % 3 + 1) % 3]; }
-  uint32_t start_of(uint32_t use) const { return tris[use / 3].v[use % 3]; }
-
   void bucket() {
     uint32_t* start = a.start;
     std::memset(start, 0, (size_t{vertex_count} + 1) * sizeof(uint32_t));
@@ -141,7 +140,9 @@ struct EdgePass {
       const uint32_t* v = tris[t].v;
       for (uint32_t k = 0; k < 3; ++k) {
         const uint32_t p = v[k], q = v[k == 2 ? 0 : k + 1];
-        a.half[start[p < q ? p : q]++] = 3 * t + k;
+        const uint32_t at = start[p < q ? p : q]++;
+        a.half[at] = 3 * t + k;
+        a.other[at] = p <= q ? (q << 1 | 1u) : (p << 1);  // a side p -> p runs from lo: forward
       }
     }
   }
@@ -210,17 +211,16 @@ struct EdgePass {
   void run_bucket(uint32_t lo, uint32_t begin, uint32_t end) {
     bool collecting = false;
     for (uint32_t i = begin; i < end; ++i) {
-      const uint32_t use = a.half[i];
-      const uint32_t t = use / 3;
-      const uint32_t from = start_of(use), hi = from ^ end_of(use) ^ lo;  // lo is one end
+      const uint32_t t = a.half[i] / 3;
+      const uint32_t hi = a.other[i] >> 1;  // lo is the other end
       // Forward: the side runs from the smaller id (always, for a side lo -> lo).
-      a.tally[hi] += from == lo ? 1u : (uint64_t{1} << 32);
+      a.tally[hi] += (a.other[i] & 1u) != 0 ? 1u : (uint64_t{1} << 32);
       if (a.tally[hi] != 1u && a.tally[hi] != (uint64_t{1} << 32)) shells->unite(a.last[hi], t);
       a.last[hi] = t;
     }
     for (uint32_t i = begin; i < end; ++i) {
       const uint32_t use = a.half[i];
-      const uint32_t hi = start_of(use) ^ end_of(use) ^ lo;
+      const uint32_t hi = a.other[i] >> 1;
       const uint64_t count = a.tally[hi];
       if (count == 0) continue;  // a later use of an edge already read
       if (count != kCollecting) {
@@ -236,9 +236,7 @@ struct EdgePass {
       if (candidate(use / 3, use % 3, lo, hi)) collected[collected_count++] = use / 3;
     }
     if (!collecting) return;
-    for (uint32_t i = begin; i < end; ++i) {
-      a.tally[start_of(a.half[i]) ^ end_of(a.half[i]) ^ lo] = 0;
-    }
+    for (uint32_t i = begin; i < end; ++i) a.tally[a.other[i] >> 1] = 0;
   }
 
   void run() {
@@ -307,7 +305,7 @@ Status count_shells(Arena& arena, const Mesh& mesh, const uint8_t* first_use, Un
                        r->orientation_conflicts == 0 && tri_count > 0;
   int64_t genus = 0, total_v = 0;
   for (uint32_t t = 0; t < tri_count; ++t) {
-    if (shells->find(t) != t) continue;
+    if (!shells->is_root(t)) continue;
     ++r->shells;
     const int64_t v = counts[3 * size_t{t}], e = counts[3 * size_t{t} + 1];
     const int64_t chi = v - e + counts[3 * size_t{t} + 2];
@@ -364,7 +362,7 @@ Status count_collected_duplicates(Arena& arena, const Mesh& mesh, const uint32_t
 void count_boundary_loops(UnionFind* border, const uint8_t* on_border, MeshReport* r) {
   const uint32_t nv = static_cast<uint32_t>(r->vertex_count);
   for (uint32_t v = 0; v < nv && r->boundary_edges > 0; ++v) {
-    if ((on_border[v] & 2u) != 0 && border->find(v) == v) ++r->boundary_loops;
+    if ((on_border[v] & 2u) != 0 && border->is_root(v)) ++r->boundary_loops;
   }
 }
 
@@ -391,9 +389,11 @@ Status check_topology(const Context& ctx, const Mesh& mesh, uint8_t* on_border, 
     pass.on_border = on_border;
     pass.a.start = arena.allocate_array<uint32_t>(size_t{nv} + 1);
     pass.a.half = arena.allocate_array<uint32_t>(size_t{3} * tri_count);
+    pass.a.other = arena.allocate_array<uint32_t>(size_t{3} * tri_count);
     pass.a.tally = arena.allocate_array<uint64_t>(nv);
     pass.a.last = arena.allocate_array<uint32_t>(nv);
-    if (pass.a.start == nullptr || ((pass.a.half == nullptr) && tri_count > 0) ||
+    if (pass.a.start == nullptr ||
+        ((pass.a.half == nullptr || pass.a.other == nullptr) && tri_count > 0) ||
         ((pass.a.tally == nullptr || pass.a.last == nullptr) && nv > 0)) {
       return arena.exhausted_status();
     }
@@ -417,7 +417,8 @@ Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report) {
   const uint64_t nt = mesh.triangles.size();
   r.vertex_count = nv;
   r.triangle_count = nt;
-  if (nt > (uint64_t{UINT32_MAX} - 1) / 3 || nv > UINT32_MAX) {
+  // (Vertex ids below 2^31: the edge pass keeps an id and a direction bit in 32 bits.)
+  if (nt > (uint64_t{UINT32_MAX} - 1) / 3 || nv > (uint64_t{1} << 31)) {
     return make_error(StatusCode::kLimitExceeded, "mesh too large to check: ", nt, " triangles, ",
                       nv, " vertices (32-bit ids)");
   }
