@@ -33,8 +33,7 @@ inline uint32_t mid3(uint32_t a, uint32_t b, uint32_t c) {
 // The per-phase arrays of check_mesh, in allocation order (check_mesh_bound adds them up).
 struct EdgeArrays {
   uint32_t* start = nullptr;  // V + 1: half-edges bucketed by their smaller vertex
-  uint32_t* half = nullptr;   // 3 T: the uses (3 t + k), bucket by bucket
-  uint32_t* other = nullptr;  // 3 T: per use, its larger vertex << 1 | 1 when it runs from lo
+  uint32_t* half = nullptr;   // 3 T: the uses (t << 2 | k: side k of triangle t), by bucket
   uint64_t* tally = nullptr;  // V: per larger vertex, its uses in the current bucket
   uint32_t* last = nullptr;   // V: per larger vertex, the last triangle using it so far
 };
@@ -53,9 +52,8 @@ uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count) {
   const uint64_t kept = arena_array_bound<uint8_t>(v) + arena_array_bound<uint32_t>(t) +
                         arena_array_bound<uint8_t>(t) + arena_array_bound<uint32_t>(t) +
                         arena_array_bound<uint32_t>(v);
-  const uint64_t edges = arena_array_bound<uint32_t>(v + 1) +
-                         2 * arena_array_bound<uint32_t>(3 * t) + arena_array_bound<uint64_t>(v) +
-                         arena_array_bound<uint32_t>(v);
+  const uint64_t edges = arena_array_bound<uint32_t>(v + 1) + arena_array_bound<uint32_t>(3 * t) +
+                         arena_array_bound<uint64_t>(v) + arena_array_bound<uint32_t>(v);
   const uint64_t shells = arena_array_bound<uint32_t>(3 * t) + arena_array_bound<uint32_t>(v) +
                           2 * arena_array_bound<uint64_t>(3 * t);
   const uint64_t duplicates = 3 * arena_array_bound<KeyIndex>(t);
@@ -125,6 +123,13 @@ struct EdgePass {
   UnionFind* border = nullptr;   // per vertex: the components of the boundary edges
   uint8_t* on_border = nullptr;  // per vertex: bit 1 set when a boundary edge ends there
 
+  // A use's two ends (side k of triangle t runs from v[k] to v[k + 1 mod 3]).
+  uint32_t start_of(uint32_t use) const { return tris[use >> 2].v[use & 3u]; }
+  uint32_t end_of(uint32_t use) const {
+    constexpr uint8_t kNext[4] = {1, 2, 0, 0};
+    return tris[use >> 2].v[kNext[use & 3u]];
+  }
+
   void bucket() {
     uint32_t* start = a.start;
     std::memset(start, 0, (size_t{vertex_count} + 1) * sizeof(uint32_t));
@@ -140,9 +145,7 @@ struct EdgePass {
       const uint32_t* v = tris[t].v;
       for (uint32_t k = 0; k < 3; ++k) {
         const uint32_t p = v[k], q = v[k == 2 ? 0 : k + 1];
-        const uint32_t at = start[p < q ? p : q]++;
-        a.half[at] = 3 * t + k;
-        a.other[at] = p <= q ? (q << 1 | 1u) : (p << 1);  // a side p -> p runs from lo: forward
+        a.half[start[p < q ? p : q]++] = t << 2 | k;
       }
     }
   }
@@ -186,9 +189,9 @@ struct EdgePass {
   }
 
   void classify(uint32_t lo, uint32_t hi, uint32_t use, uint64_t count) {
-    const uint32_t t = use / 3;
+    const uint32_t t = use >> 2;
     const uint64_t forward = count & 0xffffffffu, uses = forward + (count >> 32);
-    first_use[t] = static_cast<uint8_t>(first_use[t] | (1u << (use % 3)));
+    first_use[t] = static_cast<uint8_t>(first_use[t] | (1u << (use & 3u)));
     ++r->edge_count;
     if (uses == 1) {
       note(&r->first_boundary_edge, r->boundary_edges, lo, hi, t);
@@ -211,16 +214,17 @@ struct EdgePass {
   void run_bucket(uint32_t lo, uint32_t begin, uint32_t end) {
     bool collecting = false;
     for (uint32_t i = begin; i < end; ++i) {
-      const uint32_t t = a.half[i] / 3;
-      const uint32_t hi = a.other[i] >> 1;  // lo is the other end
+      const uint32_t use = a.half[i];
+      const uint32_t t = use >> 2;
+      const uint32_t from = start_of(use), hi = from ^ end_of(use) ^ lo;  // lo is one end
       // Forward: the side runs from the smaller id (always, for a side lo -> lo).
-      a.tally[hi] += (a.other[i] & 1u) != 0 ? 1u : (uint64_t{1} << 32);
+      a.tally[hi] += from == lo ? 1u : (uint64_t{1} << 32);
       if (a.tally[hi] != 1u && a.tally[hi] != (uint64_t{1} << 32)) shells->unite(a.last[hi], t);
       a.last[hi] = t;
     }
     for (uint32_t i = begin; i < end; ++i) {
       const uint32_t use = a.half[i];
-      const uint32_t hi = a.other[i] >> 1;
+      const uint32_t hi = start_of(use) ^ end_of(use) ^ lo;
       const uint64_t count = a.tally[hi];
       if (count == 0) continue;  // a later use of an edge already read
       if (count != kCollecting) {
@@ -233,10 +237,12 @@ struct EdgePass {
         a.tally[hi] = kCollecting;
         collecting = true;
       }
-      if (candidate(use / 3, use % 3, lo, hi)) collected[collected_count++] = use / 3;
+      if (candidate(use >> 2, use & 3u, lo, hi)) collected[collected_count++] = use >> 2;
     }
     if (!collecting) return;
-    for (uint32_t i = begin; i < end; ++i) a.tally[a.other[i] >> 1] = 0;
+    for (uint32_t i = begin; i < end; ++i) {
+      a.tally[start_of(a.half[i]) ^ end_of(a.half[i]) ^ lo] = 0;
+    }
   }
 
   void run() {
@@ -389,11 +395,9 @@ Status check_topology(const Context& ctx, const Mesh& mesh, uint8_t* on_border, 
     pass.on_border = on_border;
     pass.a.start = arena.allocate_array<uint32_t>(size_t{nv} + 1);
     pass.a.half = arena.allocate_array<uint32_t>(size_t{3} * tri_count);
-    pass.a.other = arena.allocate_array<uint32_t>(size_t{3} * tri_count);
     pass.a.tally = arena.allocate_array<uint64_t>(nv);
     pass.a.last = arena.allocate_array<uint32_t>(nv);
-    if (pass.a.start == nullptr ||
-        ((pass.a.half == nullptr || pass.a.other == nullptr) && tri_count > 0) ||
+    if (pass.a.start == nullptr || ((pass.a.half == nullptr) && tri_count > 0) ||
         ((pass.a.tally == nullptr || pass.a.last == nullptr) && nv > 0)) {
       return arena.exhausted_status();
     }
@@ -417,8 +421,8 @@ Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report) {
   const uint64_t nt = mesh.triangles.size();
   r.vertex_count = nv;
   r.triangle_count = nt;
-  // (Vertex ids below 2^31: the edge pass keeps an id and a direction bit in 32 bits.)
-  if (nt > (uint64_t{UINT32_MAX} - 1) / 3 || nv > (uint64_t{1} << 31)) {
+  // (Below 2^30 triangles: the edge pass keeps a triangle and a side as t << 2 | k in 32 bits.)
+  if (nt >= (uint64_t{1} << 30) || nv > UINT32_MAX) {
     return make_error(StatusCode::kLimitExceeded, "mesh too large to check: ", nt, " triangles, ",
                       nv, " vertices (32-bit ids)");
   }
