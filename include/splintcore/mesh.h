@@ -125,7 +125,7 @@ uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count);
 // Fills `report` (temporaries from the arena, at most check_mesh_bound(), returned before it
 // finishes).
 // Errors: kArenaExhausted; kInvalidMesh when a triangle references a vertex that does not
-// exist (names the triangle).
+// exist (names the triangle); kLimitExceeded (2^30 triangles or more).
 Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report);
 
 // What a constructed solid must be, checked in linear time (half-edges bucketed by vertex):

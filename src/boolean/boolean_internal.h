@@ -51,9 +51,10 @@ inline Status check_boolean_arguments(const Mesh& a, const Mesh& b, const Mesh& 
 // A is not a solid or B has an index out of range or a non-finite vertex (the run names those).
 // Arena: temporaries, 1 byte per vertex of B, and when B is open in the region 16 bytes per
 // side of B's triangles there, and when B has boundary edges there A's distance index and
-// check_mesh(B); all returned (open_border.cpp).
-Status refuse_open_border_in_a(const Context& ctx, const Mesh& a, const Mesh& b,
-                               const Aabb& region);
+// check_mesh(B); all returned (open_border.cpp). b_valid: B's indices are known to be in range
+// and its vertices finite (find_shells found them so), and are not scanned again.
+Status refuse_open_border_in_a(const Context& ctx, const Mesh& a, const Mesh& b, const Aabb& region,
+                               bool b_valid);
 
 // Triangle t of B has a vertex that is not a float32 value, with float32 output.
 inline Status b_not_float32(uint32_t t) {

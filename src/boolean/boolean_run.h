@@ -260,7 +260,8 @@ struct OutTri {
 // box and plane meet them (A is the small mesh: the splint base). Everything is widened by
 // `reach`, the most a nudge (and its float32 rounding) can move A, so the candidates are a
 // superset for every attempt; the exact tests then use A as moved. Its memory stays until the
-// Boolean returns (the per-triangle planes of A, about 100 bytes a triangle, included).
+// Boolean returns (the per-triangle planes of A, about 100 bytes a triangle, included); while
+// the grid is built, 4 bytes per triangle of A and 8 per (triangle, cell) listed more, returned.
 struct Broadphase {
   Aabb abox;  // A's bounds widened by reach
   double h = 1, inv_h = 1;
@@ -315,18 +316,23 @@ void triangle_cells(const Broadphase& bp, const Vec3& p0, const Vec3& p1, const 
   box.hi = box.hi + Vec3{reach, reach, reach};
   uint32_t lo[3], hi[3];
   bp.cell_range(box, lo, hi);
-  const Aabb& g = bp.abox;
+  // Coordinates as arrays, indexed by axis in the loops below (Vec3's operator[] branches).
+  const double q[3][3] = {{p0.x, p0.y, p0.z}, {p1.x, p1.y, p1.z}, {p2.x, p2.y, p2.z}};
+  const double nn[3] = {n.x, n.y, n.z}, e1a[3] = {e1.x, e1.y, e1.z}, e2a[3] = {e2.x, e2.y, e2.z};
+  const double glo[3] = {bp.abox.lo.x, bp.abox.lo.y, bp.abox.lo.z};
+  const double ghi[3] = {bp.abox.hi.x, bp.abox.hi.y, bp.abox.hi.z};
+  const double blo[3] = {box.lo.x, box.lo.y, box.lo.z}, bhi[3] = {box.hi.x, box.hi.y, box.hi.z};
   const double h = bp.h, inv_h = bp.inv_h;
   double m = 0, e1m = 0, e2m = 0;
   for (int k = 0; k < 3; ++k) {
-    const double x[4] = {mag(g.lo[k]), mag(g.hi[k]), mag(box.lo[k]), mag(box.hi[k])};
+    const double x[4] = {mag(glo[k]), mag(ghi[k]), mag(blo[k]), mag(bhi[k])};
     for (double y : x) m = y > m ? y : m;
-    e1m = mag(e1[k]) > e1m ? mag(e1[k]) : e1m;
-    e2m = mag(e2[k]) > e2m ? mag(e2[k]) : e2m;
+    e1m = mag(e1a[k]) > e1m ? mag(e1a[k]) : e1m;
+    e2m = mag(e2a[k]) > e2m ? mag(e2a[k]) : e2m;
   }
   // (u, v): the rounding of cell bounds, of the clipping and of the projection, and the move.
   const double pad = 1e-9 * m + 1e-6 * h + reach;
-  const double span = (box.hi[u] - box.lo[u]) + (box.hi[v] - box.lo[v]) + 4.0 * (h + pad);
+  const double span = (bhi[u] - blo[u]) + (bhi[v] - blo[v]) + 4.0 * (h + pad);
   const double pad_w = pad + 2.0 * reach + 1e-13 * (e1m * e2m / an[w]) * span;
   if (!(an[w] > 0) || !(pad_w < HUGE_VAL)) {
     for (uint32_t iu = lo[u]; iu <= hi[u]; ++iu) {
@@ -335,18 +341,21 @@ void triangle_cells(const Broadphase& bp, const Vec3& p0, const Vec3& p1, const 
     }
     return;
   }
-  const Vec3* q[3] = {&p0, &p1, &p2};
-  const double su = n[u] / n[w], sv = n[v] / n[w];  // w = p0_w - su (u - p0_u) - sv (v - p0_v)
+  const double su = nn[u] / nn[w], sv = nn[v] / nn[w];  // w = p0_w - su (u - p0_u) - sv (v - p0_v)
+  double du[3], dv[3];                                  // the edges k -> k + 1 along u and v
+  for (int k = 0; k < 3; ++k) {
+    const double* b = q[k == 2 ? 0 : k + 1];
+    du[k] = b[u] - q[k][u];
+    dv[k] = b[v] - q[k][v];
+  }
   for (uint32_t iu = lo[u]; iu <= hi[u]; ++iu) {
-    const double u0 = g.lo[u] + iu * h - pad, u1 = g.lo[u] + (iu + 1.0) * h + pad;
+    const double u0 = glo[u] + iu * h - pad, u1 = glo[u] + (iu + 1.0) * h + pad;
     double vmin = HUGE_VAL, vmax = -HUGE_VAL;
     for (int k = 0; k < 3; ++k) {
-      const Vec3& a = *q[k];
-      const Vec3& b = *q[k == 2 ? 0 : k + 1];
-      const double du = b[u] - a[u], dv = b[v] - a[v];
+      const double* a = q[k];
       double t0 = 0, t1 = 1;
-      if (du != 0) {
-        double ta = (u0 - a[u]) / du, tb = (u1 - a[u]) / du;
+      if (du[k] != 0) {
+        double ta = (u0 - a[u]) / du[k], tb = (u1 - a[u]) / du[k];
         if (ta > tb) {
           const double swap = ta;
           ta = tb;
@@ -358,7 +367,7 @@ void triangle_cells(const Broadphase& bp, const Vec3& p0, const Vec3& p1, const 
       } else if (a[u] < u0 || a[u] > u1) {
         continue;
       }
-      const double va = a[v] + dv * t0, vb = a[v] + dv * t1;
+      const double va = a[v] + dv[k] * t0, vb = a[v] + dv[k] * t1;
       vmin = va < vmin ? va : vmin;
       vmin = vb < vmin ? vb : vmin;
       vmax = va > vmax ? va : vmax;
@@ -366,22 +375,22 @@ void triangle_cells(const Broadphase& bp, const Vec3& p0, const Vec3& p1, const 
     }
     uint32_t v0 = 1, v1 = 0;
     if (vmin <= vmax) {
-      v0 = grid_cell((vmin - pad - g.lo[v]) * inv_h, bp.dim[v]);
-      v1 = grid_cell((vmax + pad - g.lo[v]) * inv_h, bp.dim[v]);
+      v0 = grid_cell((vmin - pad - glo[v]) * inv_h, bp.dim[v]);
+      v1 = grid_cell((vmax + pad - glo[v]) * inv_h, bp.dim[v]);
       v0 = v0 < lo[v] ? lo[v] : v0;
       v1 = v1 > hi[v] ? hi[v] : v1;
     }
     row(iu, v0, v1);
     if (v0 > v1) continue;
-    const double a0 = su * (u0 - p0[u]), a1 = su * (u1 - p0[u]);
+    const double a0 = su * (u0 - q[0][u]), a1 = su * (u1 - q[0][u]);
     const double amax = a0 > a1 ? a0 : a1, amin = a0 < a1 ? a0 : a1;
     for (uint32_t iv = v0; iv <= v1; ++iv) {
-      const double c0 = g.lo[v] + iv * h - pad, c1 = g.lo[v] + (iv + 1.0) * h + pad;
-      const double b0 = sv * (c0 - p0[v]), b1 = sv * (c1 - p0[v]);
-      const double wmin = p0[w] - amax - (b0 > b1 ? b0 : b1);
-      const double wmax = p0[w] - amin - (b0 < b1 ? b0 : b1);
-      uint32_t k0 = grid_cell((wmin - pad_w - g.lo[w]) * inv_h, bp.dim[w]);
-      uint32_t k1 = grid_cell((wmax + pad_w - g.lo[w]) * inv_h, bp.dim[w]);
+      const double c0 = glo[v] + iv * h - pad, c1 = glo[v] + (iv + 1.0) * h + pad;
+      const double b0 = sv * (c0 - q[0][v]), b1 = sv * (c1 - q[0][v]);
+      const double wmin = q[0][w] - amax - (b0 > b1 ? b0 : b1);
+      const double wmax = q[0][w] - amin - (b0 < b1 ? b0 : b1);
+      uint32_t k0 = grid_cell((wmin - pad_w - glo[w]) * inv_h, bp.dim[w]);
+      uint32_t k1 = grid_cell((wmax + pad_w - glo[w]) * inv_h, bp.dim[w]);
       k0 = k0 < lo[w] ? lo[w] : k0;
       k1 = k1 > hi[w] ? hi[w] : k1;
       column(iu, iv, k0, k1);  // k0 > k1: none

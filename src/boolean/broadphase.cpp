@@ -30,39 +30,55 @@ void size_grid(uint32_t nta, Broadphase* bp) {
 }
 
 // The grid's cell lists (bp->start, bp->items): the cells each triangle of A may meet
-// (triangle_cells, with `reach`: every attempt's A), counted in one pass and written in a
-// second that repeats the first's arithmetic (the same cells, bit for bit).
+// (triangle_cells, with `reach`: every attempt's A). One pass over the triangles counts the
+// cells and notes them in order (triangle by triangle, above the lists); the notes are then
+// sorted into the lists by cell (a counting sort, each cell's triangles ascending) and the
+// lists moved down over them.
 Status list_cells(Arena& arena, const Mesh& a, double reach, Broadphase* bp) {
   const uint32_t nta = static_cast<uint32_t>(a.triangles.size());
   const size_t cells = size_t{bp->dim[0]} * bp->dim[1] * bp->dim[2];
   uint32_t* start = arena.allocate_array<uint32_t>(cells + 1);
   if (start == nullptr) return arena.exhausted_status();
   std::memset(start, 0, (cells + 1) * sizeof(uint32_t));
+  const Arena::Marker notes_at = arena.mark();
+  uint32_t* note_end = arena.allocate_array<uint32_t>(nta);  // per triangle: end of its notes
+  if (note_end == nullptr && nta > 0) return arena.exhausted_status();
+  ArenaArray<uint32_t> notes(&arena);  // the cells, triangle by triangle
+  if (!notes.reserve(size_t{nta} * 4 + 16)) return arena.exhausted_status();
   const uint32_t* dim = bp->dim;
-  auto for_each_cell = [&](uint32_t t, auto&& visit) {
+  const size_t stride[3] = {1, dim[0], size_t{dim[0]} * dim[1]};
+  bool fits = true;
+  for (uint32_t t = 0; t < nta && fits; ++t) {
     const Triangle& at = a.triangles[t];
     int w = 2;
     triangle_cells(
         *bp, a.vertices[at.v[0]], a.vertices[at.v[1]], a.vertices[at.v[2]], reach, &w,
         [](uint32_t, uint32_t, uint32_t) {},
         [&](uint32_t iu, uint32_t iv, uint32_t k0, uint32_t k1) {
-          uint32_t idx[3];
-          idx[(w + 1) % 3] = iu;
-          idx[(w + 2) % 3] = iv;
-          for (idx[w] = k0; idx[w] <= k1; ++idx[w]) {
-            visit((size_t{idx[2]} * dim[1] + idx[1]) * dim[0] + idx[0]);
+          size_t c = iu * stride[(w + 1) % 3] + iv * stride[(w + 2) % 3] + k0 * stride[w];
+          for (uint32_t k = k0; k <= k1 && fits; ++k, c += stride[w]) {
+            ++start[c + 1];
+            fits = notes.push_back(static_cast<uint32_t>(c));
           }
         });
-  };
-  for (uint32_t t = 0; t < nta; ++t) for_each_cell(t, [&](size_t c) { ++start[c + 1]; });
+    note_end[t] = static_cast<uint32_t>(notes.size());
+  }
+  if (!fits) return arena.exhausted_status();
   for (size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
   const size_t item_count = start[cells];
-  uint32_t* items = arena.allocate_array<uint32_t>(item_count);
-  if (items == nullptr && item_count > 0) return arena.exhausted_status();
-  for (uint32_t t = 0; t < nta; ++t) for_each_cell(t, [&](size_t c) { items[start[c]++] = t; });
+  uint32_t* sorted = arena.allocate_array<uint32_t>(item_count);
+  if (sorted == nullptr && item_count > 0) return arena.exhausted_status();
+  for (uint32_t t = 0, i = 0; t < nta; ++t) {
+    for (; i < note_end[t]; ++i) sorted[start[notes[i]]++] = t;
+  }
   // start[c] now ends cell c: shifted to start it.
   for (size_t c = cells; c > 0; --c) start[c] = start[c - 1];
   start[0] = 0;
+  // The lists down over the notes (the arena keeps the bytes readable after the rewind).
+  arena.rewind(notes_at);
+  uint32_t* items = arena.allocate_array<uint32_t>(item_count);
+  if (items == nullptr && item_count > 0) return arena.exhausted_status();
+  if (item_count > 0) std::memmove(items, sorted, item_count * sizeof(uint32_t));
   bp->start = start;
   bp->items = items;
   return Status::ok();

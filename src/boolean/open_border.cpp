@@ -62,20 +62,23 @@ uint32_t first_border_vertex_in_a(const DistanceIndex& index, const Mesh& b, con
 
 }  // namespace
 
-Status refuse_open_border_in_a(const Context& ctx, const Mesh& a, const Mesh& b,
-                               const Aabb& region) {
+Status refuse_open_border_in_a(const Context& ctx, const Mesh& a, const Mesh& b, const Aabb& region,
+                               bool b_valid) {
   Arena& arena = *ctx.arena;
   const uint32_t nv = static_cast<uint32_t>(b.vertices.size());
-  for (const Triangle& tri : b.triangles) {
-    if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) return Status::ok();  // named later
+  const Vec3* vb = b.vertices.data();
+  if (!b_valid) {
+    for (const Triangle& tri : b.triangles) {
+      if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) return Status::ok();  // named later
+    }
+    for (uint32_t v = 0; v < nv; ++v) {
+      if (!is_finite(vb[v])) return Status::ok();  // the run names it (kNonFinite)
+    }
   }
   ArenaScope scope(arena);
   uint8_t* code = arena.allocate_array<uint8_t>(nv);
   if (code == nullptr && nv > 0) return arena.exhausted_status();
-  for (uint32_t v = 0; v < nv; ++v) {
-    if (!is_finite(b.vertices[v])) return Status::ok();  // the run names it (kNonFinite)
-    code[v] = outcode(b.vertices[v], region);
-  }
+  for (uint32_t v = 0; v < nv; ++v) code[v] = outcode(vb[v], region);
   // A closed B (the usual case) uses every edge twice, so the XOR of its edges' hashes is 0:
   // only a non-zero fingerprint pays for the sort that finds the edges used once. (An open B
   // whose fingerprint is 0 by chance, about 2^-64, gets the run's own message, as before.)

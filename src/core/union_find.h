@@ -30,6 +30,9 @@ class UnionFind {
   }
   // Returns true when a and b were in different sets.
   bool unite(uint32_t a, uint32_t b) {
+    SPLINTCORE_ASSERT(a < size_ && b < size_);
+    // One parent: one set already (the common case of neighbours, without the two finds).
+    if (parent_[a] == parent_[b]) return false;
     uint32_t ra = find(a);
     uint32_t rb = find(b);
     if (ra == rb) return false;
@@ -39,6 +42,11 @@ class UnionFind {
       parent_[ra] = rb;
     }
     return true;
+  }
+  // find(x) == x, without the walk: a root is its own parent.
+  bool is_root(uint32_t x) const {
+    SPLINTCORE_ASSERT(x < size_);
+    return parent_[x] == x;
   }
   uint32_t size() const { return size_; }
 

@@ -40,6 +40,16 @@ inline float load_f32(const uint8_t* p) {
   return f;
 }
 
+// A record's nine coordinates (little-endian float32 at p) as their bits: one copy on a
+// little-endian host, byte by byte elsewhere.
+inline void load_corner_bits(const uint8_t* p, uint32_t bits[9]) {
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  std::memcpy(bits, p, 9 * sizeof(uint32_t));
+#else
+  for (int c = 0; c < 9; ++c) bits[c] = load_u32(p + 4 * c);
+#endif
+}
+
 Status located(Status s, const ByteSource& source) {
   if (source.name != nullptr) s.in_file(source.name);
   return s;
@@ -495,19 +505,22 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
     const uint8_t* record = in.buf + in.pos;
     for (uint64_t i = 0; i < run; ++i, record += kBinaryRecordBytes) {
       float corners[9];
+      uint32_t bits[9];
       if (i + kAhead < run) {  // the slots of a triangle ahead; its hashes kept for then
-        for (int c = 0; c < 9; ++c) corners[c] = load_f32(record + kAhead * 50 + 12 + 4 * c);
+        load_corner_bits(record + kAhead * 50 + 12, bits);
+        std::memcpy(corners, bits, sizeof(corners));
         uint64_t* h = ahead[(i + kAhead) % (2 * kAhead)];
         for (int k = 0; k < 3; ++k) h[k] = ExactWelder::hash(corners + 3 * k);
         __builtin_prefetch(welder.first_slot(h[0]));
         __builtin_prefetch(welder.first_slot(h[1]));
         __builtin_prefetch(welder.first_slot(h[2]));
       }
+      load_corner_bits(record + 12, bits);
+      std::memcpy(corners, bits, sizeof(corners));
       uint32_t worst = 0;
       for (int c = 0; c < 9; ++c) {
-        const uint32_t bits = load_u32(record + 12 + 4 * c);
-        worst = (bits & 0x7fffffffu) > worst ? (bits & 0x7fffffffu) : worst;
-        std::memcpy(&corners[c], &bits, sizeof(float));
+        const uint32_t magnitude = bits[c] & 0x7fffffffu;
+        worst = magnitude > worst ? magnitude : worst;
       }
       if (worst > limit) {
         for (int k = 0; k < 3; ++k) {

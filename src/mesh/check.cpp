@@ -33,7 +33,7 @@ inline uint32_t mid3(uint32_t a, uint32_t b, uint32_t c) {
 // The per-phase arrays of check_mesh, in allocation order (check_mesh_bound adds them up).
 struct EdgeArrays {
   uint32_t* start = nullptr;  // V + 1: half-edges bucketed by their smaller vertex
-  uint32_t* half = nullptr;   // 3 T: the uses (3 t + k), bucket by bucket
+  uint32_t* half = nullptr;   // 3 T: the uses (t << 2 | k: side k of triangle t), by bucket
   uint64_t* tally = nullptr;  // V: per larger vertex, its uses in the current bucket
   uint32_t* last = nullptr;   // V: per larger vertex, the last triangle using it so far
 };
@@ -123,8 +123,12 @@ struct EdgePass {
   UnionFind* border = nullptr;   // per vertex: the components of the boundary edges
   uint8_t* on_border = nullptr;  // per vertex: bit 1 set when a boundary edge ends there
 
-  uint32_t end_of(uint32_t use) const { return tris[use / 3].v[(use % 3 + 1) % 3]; }
-  uint32_t start_of(uint32_t use) const { return tris[use / 3].v[use % 3]; }
+  // A use's two ends (side k of triangle t runs from v[k] to v[k + 1 mod 3]).
+  uint32_t start_of(uint32_t use) const { return tris[use >> 2].v[use & 3u]; }
+  uint32_t end_of(uint32_t use) const {
+    constexpr uint8_t kNext[4] = {1, 2, 0, 0};
+    return tris[use >> 2].v[kNext[use & 3u]];
+  }
 
   void bucket() {
     uint32_t* start = a.start;
@@ -141,7 +145,7 @@ struct EdgePass {
       const uint32_t* v = tris[t].v;
       for (uint32_t k = 0; k < 3; ++k) {
         const uint32_t p = v[k], q = v[k == 2 ? 0 : k + 1];
-        a.half[start[p < q ? p : q]++] = 3 * t + k;
+        a.half[start[p < q ? p : q]++] = t << 2 | k;
       }
     }
   }
@@ -185,9 +189,9 @@ struct EdgePass {
   }
 
   void classify(uint32_t lo, uint32_t hi, uint32_t use, uint64_t count) {
-    const uint32_t t = use / 3;
+    const uint32_t t = use >> 2;
     const uint64_t forward = count & 0xffffffffu, uses = forward + (count >> 32);
-    first_use[t] = static_cast<uint8_t>(first_use[t] | (1u << (use % 3)));
+    first_use[t] = static_cast<uint8_t>(first_use[t] | (1u << (use & 3u)));
     ++r->edge_count;
     if (uses == 1) {
       note(&r->first_boundary_edge, r->boundary_edges, lo, hi, t);
@@ -211,7 +215,7 @@ struct EdgePass {
     bool collecting = false;
     for (uint32_t i = begin; i < end; ++i) {
       const uint32_t use = a.half[i];
-      const uint32_t t = use / 3;
+      const uint32_t t = use >> 2;
       const uint32_t from = start_of(use), hi = from ^ end_of(use) ^ lo;  // lo is one end
       // Forward: the side runs from the smaller id (always, for a side lo -> lo).
       a.tally[hi] += from == lo ? 1u : (uint64_t{1} << 32);
@@ -233,7 +237,7 @@ struct EdgePass {
         a.tally[hi] = kCollecting;
         collecting = true;
       }
-      if (candidate(use / 3, use % 3, lo, hi)) collected[collected_count++] = use / 3;
+      if (candidate(use >> 2, use & 3u, lo, hi)) collected[collected_count++] = use >> 2;
     }
     if (!collecting) return;
     for (uint32_t i = begin; i < end; ++i) {
@@ -307,7 +311,7 @@ Status count_shells(Arena& arena, const Mesh& mesh, const uint8_t* first_use, Un
                        r->orientation_conflicts == 0 && tri_count > 0;
   int64_t genus = 0, total_v = 0;
   for (uint32_t t = 0; t < tri_count; ++t) {
-    if (shells->find(t) != t) continue;
+    if (!shells->is_root(t)) continue;
     ++r->shells;
     const int64_t v = counts[3 * size_t{t}], e = counts[3 * size_t{t} + 1];
     const int64_t chi = v - e + counts[3 * size_t{t} + 2];
@@ -364,7 +368,7 @@ Status count_collected_duplicates(Arena& arena, const Mesh& mesh, const uint32_t
 void count_boundary_loops(UnionFind* border, const uint8_t* on_border, MeshReport* r) {
   const uint32_t nv = static_cast<uint32_t>(r->vertex_count);
   for (uint32_t v = 0; v < nv && r->boundary_edges > 0; ++v) {
-    if ((on_border[v] & 2u) != 0 && border->find(v) == v) ++r->boundary_loops;
+    if ((on_border[v] & 2u) != 0 && border->is_root(v)) ++r->boundary_loops;
   }
 }
 
@@ -417,7 +421,8 @@ Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report) {
   const uint64_t nt = mesh.triangles.size();
   r.vertex_count = nv;
   r.triangle_count = nt;
-  if (nt > (uint64_t{UINT32_MAX} - 1) / 3 || nv > UINT32_MAX) {
+  // (Below 2^30 triangles: the edge pass keeps a triangle and a side as t << 2 | k in 32 bits.)
+  if (nt >= (uint64_t{1} << 30) || nv > UINT32_MAX) {
     return make_error(StatusCode::kLimitExceeded, "mesh too large to check: ", nt, " triangles, ",
                       nv, " vertices (32-bit ids)");
   }
