@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cstring>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "splintcore/ct.h"
@@ -400,6 +401,77 @@ TEST(CtDicomMultiFrameCodecs, TruncatedAndCorruptFrames) {
   EXPECT_TRUE(has(r.status, "frame 0: its fragments hold more than 122880 bytes"))
       << test::format(r.status);
   EXPECT_EQ(r.status.byte_offset(), huge.item_at[0]);
+}
+
+// A series of one file that is `first` when opened for its header (twice: a multi-frame file's
+// frames are found, then checked) and `second` when opened for its pixels (a file changed
+// between the passes), served without a name and without close() (both optional in CtSeries).
+struct ChangingFile {
+  ChangingFile(Bytes a, Bytes b) : first(std::move(a)), second(std::move(b)) {}
+  Bytes first, second;
+  int opens = 0;
+  MemorySource state;
+  static Status open(void* user, uint32_t, ByteSource* out) {
+    ChangingFile& f = *static_cast<ChangingFile*>(user);
+    const Bytes& b = f.opens++ < 2 ? f.first : f.second;
+    f.state = MemorySource{b.data(), b.size(), 0, 0};
+    *out = memory_source(&f.state, nullptr);
+    return Status::ok();
+  }
+};
+
+Status read_changing(ChangingFile* f) {
+  test::TestArena t(4 << 20);
+  Context ctx(&t.arena);
+  CtSeries series;
+  series.count = 1;
+  series.open = &ChangingFile::open;
+  series.user = f;
+  CtReadOptions options;
+  options.chunk_bytes = 1024;
+  CtVolume volume;
+  CtInfo info;
+  return read_dicom_series(ctx, series, options, &volume, &info);
+}
+
+// What the second pass finds differs from the first: named, with the frame and the byte.
+TEST(CtDicomMultiFrameCodecs, FileChangedBetweenThePasses) {
+  const Encapsulated e = mf16_as("jpeg70", 1, Table::kBasic);
+  ChangingFile same(e.file, e.file);
+  SPLINTCORE_EXPECT_OK(read_changing(&same));
+  EXPECT_EQ(same.opens, 3);  // the header twice (frames found, then checked), the pixels
+  // Frame 0's fragment item is now the sequence's end.
+  ChangingFile ended(e.file, e.file);
+  const size_t item0 = e.item_at[0];
+  const std::string delimiter = tag(0xFFFE, 0xE0DD);
+  put_u32(&ended.second, item0 + 4, 0);
+  std::copy(delimiter.begin(), delimiter.end(),
+            ended.second.begin() + static_cast<std::ptrdiff_t>(item0));
+  Status s = read_changing(&ended);
+  EXPECT_EQ(s.code(), StatusCode::kParseError);
+  EXPECT_TRUE(has(s, "frame 0 (of 3, 1 fragment item(s) from byte " + std::to_string(item0) +
+                         "): Pixel Data differs from the first read (file changed?)"))
+      << test::format(s);
+  EXPECT_EQ(s.byte_offset(), item0);
+  // Frame 0's fragment two bytes longer (padding after its end of image): frame 1 is not where
+  // the first pass found it.
+  ChangingFile longer(e.file, e.file);
+  const uint32_t length = get_u32(e.file, item0 + 4);
+  put_u32(&longer.second, item0 + 4, length + 2);
+  longer.second.insert(longer.second.begin() + static_cast<std::ptrdiff_t>(item0 + 8 + length), 2,
+                       0);
+  s = read_changing(&longer);
+  EXPECT_EQ(s.code(), StatusCode::kParseError);
+  EXPECT_TRUE(has(s, "frame 1 (of 3, 1 fragment item(s) from byte " + std::to_string(e.item_at[1]) +
+                         "): Pixel Data differs"))
+      << test::format(s);
+  EXPECT_EQ(s.byte_offset(), e.item_at[1] + 2);
+  // The file now ends inside frame 1: the reader's error, in that frame.
+  ChangingFile cut(e.file, Bytes(e.file.begin(),
+                                 e.file.begin() + static_cast<std::ptrdiff_t>(e.item_at[1] + 20)));
+  s = read_changing(&cut);
+  EXPECT_EQ(s.code(), StatusCode::kTruncated);
+  EXPECT_TRUE(has(s, "frame 1 (of 3,")) << test::format(s);
 }
 
 // ---- Tilted and uneven multi-frame, resampled ---------------------------------------------

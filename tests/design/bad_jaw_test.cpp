@@ -251,6 +251,14 @@ TEST(DesignBadJaws, TwoScansOfTheSameJaw) {
   s = parse_case(ctx, plain.data(), plain.size(), "plain.json", &c);
   EXPECT_EQ(std::string(s.message()),
             "two jaws with the role \"maxilla\" (jaws[0] and jaws[1]): give each jaw once");
+  // Twice, the first with a scan and the second without: the jaw twice, not two scans.
+  const std::string one_scan = R"({"splintcore_case": 1,
+ "jaws": [{"role": "maxilla", "mesh": "a.stl", "scan": {"path": "s.ply"}},
+          {"role": "maxilla", "mesh": "b.stl"}],
+ "base": {"auto": {}}})";
+  s = parse_case(ctx, one_scan.data(), one_scan.size(), "one_scan.json", &c);
+  EXPECT_EQ(std::string(s.message()),
+            "two jaws with the role \"maxilla\" (jaws[0] and jaws[1]): give each jaw once");
   // A case made in code (the C++ API does not require the parser): design refuses it before
   // anything is registered.
   const std::string one = R"({"splintcore_case": 1,

@@ -198,6 +198,10 @@ TEST(CaseCoverage, EveryErrorIsNamed) {
        StatusCode::kInvalidArgument, "must be a file name in the output folder"},
       {"output report path", make_case(R"("output": {"report": "a/r.json"},)"),
        StatusCode::kInvalidArgument, "\"report\" must be a file name in the output folder"},
+      {"output job type", make_case(R"("output": {"job": 3},)"), StatusCode::kInvalidArgument,
+       "\"job\" must be string"},
+      {"output job path", make_case(R"("output": {"job": "../job.3mf"},)"),
+       StatusCode::kInvalidArgument, "\"job\" must be a file name in the output folder"},
       {"output report type", make_case(R"("output": {"report": []},)"),
        StatusCode::kInvalidArgument, "\"report\" must be string"},
   };
