@@ -407,20 +407,22 @@ TEST(CtDicomMultiFrameCodecs, TruncatedAndCorruptFrames) {
 // frames are found, then checked) and `second` when opened for its pixels (a file changed
 // between the passes), served without a name and without close() (both optional in CtSeries).
 struct ChangingFile {
-  ChangingFile(Bytes a, Bytes b) : first(std::move(a)), second(std::move(b)) {}
+  ChangingFile(Bytes a, Bytes b, int from = 2)
+      : first(std::move(a)), second(std::move(b)), changed_from(from) {}
   Bytes first, second;
+  int changed_from;  // the first open that gives `second`
   int opens = 0;
   MemorySource state;
   static Status open(void* user, uint32_t, ByteSource* out) {
     ChangingFile& f = *static_cast<ChangingFile*>(user);
-    const Bytes& b = f.opens++ < 2 ? f.first : f.second;
+    const Bytes& b = f.opens++ < f.changed_from ? f.first : f.second;
     f.state = MemorySource{b.data(), b.size(), 0, 0};
     *out = memory_source(&f.state, nullptr);
     return Status::ok();
   }
 };
 
-Status read_changing(ChangingFile* f) {
+Status read_changing(ChangingFile* f) {  // read_dicom_series of f
   test::TestArena t(4 << 20);
   Context ctx(&t.arena);
   CtSeries series;
@@ -472,6 +474,15 @@ TEST(CtDicomMultiFrameCodecs, FileChangedBetweenThePasses) {
   s = read_changing(&cut);
   EXPECT_EQ(s.code(), StatusCode::kTruncated);
   EXPECT_TRUE(has(s, "frame 1 (of 3,")) << test::format(s);
+  // Other rows when the header is read the second time (the frames checked).
+  ChangingFile rows(e.file, e.file, 1);
+  const size_t at = find(e.file, tag(0x0028, 0x0010) + "US");
+  ASSERT_NE(at, std::string::npos);
+  rows.second[at + 8] = static_cast<uint8_t>(rows.second[at + 8] + 2);
+  s = read_changing(&rows);
+  EXPECT_EQ(s.code(), StatusCode::kParseError);
+  EXPECT_EQ(std::string(s.message()), "the file changed between two reads");
+  EXPECT_STREQ(s.file(), "?");
 }
 
 // ---- Tilted and uneven multi-frame, resampled ---------------------------------------------
@@ -562,6 +573,16 @@ TEST(CtDicomMultiFrameResample, FramesOutOfSliceOrderAreRefused) {
                   "frame 2 is slice 1 of 3"))
       << test::format(r.status);
   EXPECT_EQ(r.status.index(), 2u);
+}
+
+// Frames out of slice order in a file without a name: refused, naming the frame.
+TEST(CtDicomMultiFrameResample, FramesOutOfOrderInAFileWithoutAName) {
+  const Bytes mf = with_position(fixture("mf16_rev.dcm"), 1, "-36.6\\-33\\22.5");
+  ChangingFile unnamed(mf, mf);
+  const Status s = read_changing(&unnamed);
+  EXPECT_EQ(s.code(), StatusCode::kUnsupported);
+  EXPECT_EQ(s.index(), 2u);
+  EXPECT_STREQ(s.file(), "");
 }
 
 }  // namespace
