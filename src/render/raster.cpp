@@ -67,11 +67,11 @@ int64_t floor_to_int(double v) {
   return t;
 }
 
-// floor(a / kSubpixel), in shifts (kSubpixel is a power of two): the quotient rounded toward
-// zero, one less for a negative a with a remainder.
-constexpr int64_t floor_subpixel(int64_t a) {
-  return a >= 0 ? a / kSubpixel : -((-a + kSubpixel - 1) / kSubpixel);
-}
+// floor(a / kSubpixel): an arithmetic shift right (kSubpixel is 2^8). C++17 leaves the shift of
+// a negative value to the implementation; g++ and clang++ shift arithmetically, and the
+// static_assert below checks it for the compiler at hand (C++20 requires it).
+static_assert(kSubpixel == 256, "floor_subpixel shifts by 8");
+constexpr int64_t floor_subpixel(int64_t a) { return a >> 8; }
 static_assert(floor_subpixel(-1) == -1 && floor_subpixel(-256) == -1 &&
                   floor_subpixel(-257) == -2 && floor_subpixel(255) == 0 &&
                   floor_subpixel(256) == 1,
