@@ -38,30 +38,14 @@ uint32_t get_u32(const Bytes& b, size_t at) {
   return uint32_t{b[at]} | (uint32_t{b[at + 1]} << 8) | (uint32_t{b[at + 2]} << 16) |
          (uint32_t{b[at + 3]} << 24);
 }
-void put_u32(Bytes* b, size_t at, uint32_t v) {
-  for (int i = 0; i < 4; ++i) (*b)[at + i] = static_cast<uint8_t>(v >> (8 * i));
-}
 void append_u32(Bytes* b, uint32_t v) {
   for (int i = 0; i < 4; ++i) b->push_back(static_cast<uint8_t>(v >> (8 * i)));
 }
 void append(Bytes* b, const std::string& s) { b->insert(b->end(), s.begin(), s.end()); }
 
-size_t find(const Bytes& b, const std::string& pattern, int n = 0) {
-  const std::string s(b.begin(), b.end());
-  size_t at = s.find(pattern);
-  for (int i = 0; i < n && at != std::string::npos; ++i) at = s.find(pattern, at + 1);
-  return at;
-}
-
-std::string tag(uint16_t group, uint16_t element) {
-  const char t[4] = {static_cast<char>(group & 0xFF), static_cast<char>(group >> 8),
-                     static_cast<char>(element & 0xFF), static_cast<char>(element >> 8)};
-  return std::string(t, 4);
-}
-
 // The one fragment of a single-frame encapsulated file.
 Bytes fragment_of(const Bytes& file) {
-  size_t p = find(file, tag(0x7FE0, 0x0010) + "OB") + 12;
+  size_t p = test::find_bytes(file, test::dicom_tag(0x7FE0, 0x0010) + "OB") + 12;
   p += 8 + get_u32(file, p + 4);  // the basic offset table
   const uint32_t length = get_u32(file, p + 4);
   return Bytes(file.begin() + static_cast<std::ptrdiff_t>(p + 8),
@@ -105,7 +89,7 @@ Encapsulated encapsulate(Bytes header, const std::string& uid,
                          const std::vector<std::vector<Bytes>>& frames, Table table) {
   Encapsulated e;
   // The transfer syntax (its length and the file meta group length updated).
-  const size_t at = find(header, tag(0x0002, 0x0010) + "UI");
+  const size_t at = test::find_bytes(header, test::dicom_tag(0x0002, 0x0010) + "UI");
   std::string value = uid;
   if (value.size() % 2 == 1) value.push_back('\0');
   const size_t old = header[at + 6] | (header[at + 7] << 8);
@@ -113,10 +97,10 @@ Encapsulated encapsulate(Bytes header, const std::string& uid,
                header.begin() + static_cast<std::ptrdiff_t>(at + 8 + old));
   header.insert(header.begin() + static_cast<std::ptrdiff_t>(at + 8), value.begin(), value.end());
   header[at + 6] = static_cast<uint8_t>(value.size());
-  const size_t group = find(header, tag(0x0002, 0x0000) + "UL");
-  put_u32(&header, group + 8,
-          static_cast<uint32_t>(get_u32(header, group + 8) + value.size() - old));
-  header.resize(find(header, tag(0x7FE0, 0x0010) + "OW"));
+  const size_t group = test::find_bytes(header, test::dicom_tag(0x0002, 0x0000) + "UL");
+  test::put_le32(&header, group + 8,
+                 static_cast<uint32_t>(get_u32(header, group + 8) + value.size() - old));
+  header.resize(test::find_bytes(header, test::dicom_tag(0x7FE0, 0x0010) + "OW"));
   std::vector<uint64_t> offsets;
   uint64_t relative = 0;
   for (const auto& frame : frames) {
@@ -125,7 +109,7 @@ Encapsulated encapsulate(Bytes header, const std::string& uid,
   }
   e.file = header;
   if (table == Table::kExtended) {
-    append(&e.file, tag(0x7FE0, 0x0001) + "OV" + std::string(2, '\0'));
+    append(&e.file, test::dicom_tag(0x7FE0, 0x0001) + "OV" + std::string(2, '\0'));
     append_u32(&e.file, static_cast<uint32_t>(8 * frames.size()));
     e.table_at = e.file.size();
     for (uint64_t o : offsets) {
@@ -133,9 +117,9 @@ Encapsulated encapsulate(Bytes header, const std::string& uid,
       append_u32(&e.file, static_cast<uint32_t>(o >> 32));
     }
   }
-  append(&e.file, tag(0x7FE0, 0x0010) + "OB" + std::string(2, '\0'));
+  append(&e.file, test::dicom_tag(0x7FE0, 0x0010) + "OB" + std::string(2, '\0'));
   append_u32(&e.file, 0xFFFFFFFFu);
-  append(&e.file, tag(0xFFFE, 0xE000));
+  append(&e.file, test::dicom_tag(0xFFFE, 0xE000));
   append_u32(&e.file, table == Table::kBasic ? static_cast<uint32_t>(4 * frames.size()) : 0);
   if (table == Table::kBasic) {
     e.table_at = e.file.size();
@@ -145,12 +129,12 @@ Encapsulated encapsulate(Bytes header, const std::string& uid,
     e.frame_item.push_back(e.item_at.size());
     for (const Bytes& f : frame) {
       e.item_at.push_back(e.file.size());
-      append(&e.file, tag(0xFFFE, 0xE000));
+      append(&e.file, test::dicom_tag(0xFFFE, 0xE000));
       append_u32(&e.file, static_cast<uint32_t>(f.size()));
       e.file.insert(e.file.end(), f.begin(), f.end());
     }
   }
-  append(&e.file, tag(0xFFFE, 0xE0DD));
+  append(&e.file, test::dicom_tag(0xFFFE, 0xE0DD));
   append_u32(&e.file, 0);
   return e;
 }
@@ -301,7 +285,7 @@ TEST(CtDicomMultiFrameCodecs, LyingOffsetTables) {
     const Encapsulated good = mf16_as("jpeg70", 3, table);
     // Frame 1's entry 2 bytes into a fragment.
     Bytes b = good.file;
-    put_u32(&b, good.table_at + width, get_u32(b, good.table_at + width) + 2);
+    test::put_le32(&b, good.table_at + width, get_u32(b, good.table_at + width) + 2);
     Read r = read({b});
     EXPECT_EQ(r.status.code(), StatusCode::kParseError);
     EXPECT_TRUE(has(r.status, "frame 1: its " + name + " entry is ")) << test::format(r.status);
@@ -310,14 +294,14 @@ TEST(CtDicomMultiFrameCodecs, LyingOffsetTables) {
     EXPECT_EQ(r.status.byte_offset(), good.table_at + width);
     // Frame 0's entry not 0.
     b = good.file;
-    put_u32(&b, good.table_at, 8);
+    test::put_le32(&b, good.table_at, 8);
     r = read({b});
     EXPECT_TRUE(has(r.status, "frame 0: its " + name + " entry is 8, not 0"))
         << test::format(r.status);
     EXPECT_EQ(r.status.byte_offset(), good.table_at);
     // Frame 2's entry past the end.
     b = good.file;
-    put_u32(&b, good.table_at + 2 * width, 1u << 30);
+    test::put_le32(&b, good.table_at + 2 * width, 1u << 30);
     r = read({b});
     EXPECT_TRUE(has(r.status, "frame 2: its " + name +
                                   " entry is 1073741824 bytes, past the last "
@@ -328,7 +312,7 @@ TEST(CtDicomMultiFrameCodecs, LyingOffsetTables) {
   // A basic offset table of two entries for three frames.
   Encapsulated e = mf16_as("jpeg70", 1, Table::kBasic);
   Bytes b = e.file;
-  put_u32(&b, e.table_at - 4, 8);
+  test::put_le32(&b, e.table_at - 4, 8);
   b.erase(b.begin() + static_cast<std::ptrdiff_t>(e.table_at + 8),
           b.begin() + static_cast<std::ptrdiff_t>(e.table_at + 12));
   Read r = read({b});
@@ -338,15 +322,15 @@ TEST(CtDicomMultiFrameCodecs, LyingOffsetTables) {
   // Both tables.
   e = mf16_as("jpeg70", 1, Table::kExtended);
   b = e.file;
-  const size_t bot = find(b, tag(0x7FE0, 0x0010) + "OB") + 12;
-  put_u32(&b, bot + 4, 12);
+  const size_t bot = test::find_bytes(b, test::dicom_tag(0x7FE0, 0x0010) + "OB") + 12;
+  test::put_le32(&b, bot + 4, 12);
   b.insert(b.begin() + static_cast<std::ptrdiff_t>(bot + 8), 12, 0);
   r = read({b});
   EXPECT_TRUE(has(r.status, "frames and an Extended Offset Table (then it must be empty)"))
       << test::format(r.status);
   // An extended offset table of the wrong length.
   b = e.file;
-  put_u32(&b, e.table_at - 4, 16);
+  test::put_le32(&b, e.table_at - 4, 16);
   b.erase(b.begin() + static_cast<std::ptrdiff_t>(e.table_at + 16),
           b.begin() + static_cast<std::ptrdiff_t>(e.table_at + 24));
   r = read({b});
@@ -445,8 +429,8 @@ TEST(CtDicomMultiFrameCodecs, FileChangedBetweenThePasses) {
   // Frame 0's fragment item is now the sequence's end.
   ChangingFile ended(e.file, e.file);
   const size_t item0 = e.item_at[0];
-  const std::string delimiter = tag(0xFFFE, 0xE0DD);
-  put_u32(&ended.second, item0 + 4, 0);
+  const std::string delimiter = test::dicom_tag(0xFFFE, 0xE0DD);
+  test::put_le32(&ended.second, item0 + 4, 0);
   std::copy(delimiter.begin(), delimiter.end(),
             ended.second.begin() + static_cast<std::ptrdiff_t>(item0));
   Status s = read_changing(&ended);
@@ -459,7 +443,7 @@ TEST(CtDicomMultiFrameCodecs, FileChangedBetweenThePasses) {
   // the first pass found it.
   ChangingFile longer(e.file, e.file);
   const uint32_t length = get_u32(e.file, item0 + 4);
-  put_u32(&longer.second, item0 + 4, length + 2);
+  test::put_le32(&longer.second, item0 + 4, length + 2);
   longer.second.insert(longer.second.begin() + static_cast<std::ptrdiff_t>(item0 + 8 + length), 2,
                        0);
   s = read_changing(&longer);
@@ -476,7 +460,7 @@ TEST(CtDicomMultiFrameCodecs, FileChangedBetweenThePasses) {
   EXPECT_TRUE(has(s, "frame 1 (of 3,")) << test::format(s);
   // Other rows when the header is read the second time (the frames checked).
   ChangingFile rows(e.file, e.file, 1);
-  const size_t at = find(e.file, tag(0x0028, 0x0010) + "US");
+  const size_t at = test::find_bytes(e.file, test::dicom_tag(0x0028, 0x0010) + "US");
   ASSERT_NE(at, std::string::npos);
   rows.second[at + 8] = static_cast<uint8_t>(rows.second[at + 8] + 2);
   s = read_changing(&rows);
@@ -491,7 +475,7 @@ TEST(CtDicomMultiFrameCodecs, FileChangedBetweenThePasses) {
 // sequences need no update; with defined lengths, keep the length).
 Bytes with_position(Bytes file, int n, std::string value) {
   if (value.size() % 2 == 1) value.push_back(' ');
-  const size_t at = find(file, tag(0x0020, 0x0032) + "DS", n);
+  const size_t at = test::find_bytes(file, test::dicom_tag(0x0020, 0x0032) + "DS", n);
   EXPECT_NE(at, std::string::npos);
   const size_t old = file[at + 6] | (file[at + 7] << 8);
   file.erase(file.begin() + static_cast<std::ptrdiff_t>(at + 8),

@@ -37,29 +37,11 @@ bool has(const Status& s, const char* text) {
   return std::string(s.message()).find(text) != std::string::npos;
 }
 
-// Offset of the n-th (0-based) occurrence of `pattern` in b (npos if none).
-size_t find(const Bytes& b, const std::string& pattern, int n = 0) {
-  const std::string s(b.begin(), b.end());
-  size_t at = s.find(pattern);
-  for (int i = 0; i < n && at != std::string::npos; ++i) at = s.find(pattern, at + 1);
-  return at;
-}
-
-std::string tag_bytes(uint16_t group, uint16_t element) {
-  const char t[4] = {static_cast<char>(group & 0xFF), static_cast<char>(group >> 8),
-                     static_cast<char>(element & 0xFF), static_cast<char>(element >> 8)};
-  return std::string(t, 4);
-}
-
-void put_u32(Bytes* b, size_t at, uint32_t v) {
-  for (int i = 0; i < 4; ++i) (*b)[at + i] = static_cast<uint8_t>(v >> (8 * i));
-}
-
 // mf16.dcm (explicit VR, defined lengths) with the top-level element (group, element) of a
 // short VR given `value` (its length updated).
 Bytes with_value(uint16_t group, uint16_t element, const std::string& value) {
   Bytes b = fixture("mf16.dcm");
-  const size_t at = find(b, tag_bytes(group, element));
+  const size_t at = test::find_bytes(b, test::dicom_tag(group, element));
   EXPECT_NE(at, std::string::npos);
   const size_t old = b[at + 6] | (b[at + 7] << 8);
   b.erase(b.begin() + static_cast<std::ptrdiff_t>(at + 8),
@@ -108,8 +90,8 @@ TEST(CtDicomMultiFrame, ReadsLikeTheFolderOfItsSlices) {
 
 TEST(CtDicomMultiFrame, MissingFramePositionNamesTheFrame) {
   Bytes b = fixture("mf16.dcm");
-  const std::string position = tag_bytes(0x0020, 0x0032) + "DS";
-  const size_t second = find(b, position, 1);
+  const std::string position = test::dicom_tag(0x0020, 0x0032) + "DS";
+  const size_t second = test::find_bytes(b, position, 1);
   ASSERT_NE(second, std::string::npos);
   b[second + 2] = 0x31;  // (0020,0031): not a position
   const Read r = read({b});
@@ -117,17 +99,17 @@ TEST(CtDicomMultiFrame, MissingFramePositionNamesTheFrame) {
   EXPECT_TRUE(has(r.status, "frame 1 (item 1 of (5200,9230)")) << r.status.message();
   EXPECT_TRUE(has(r.status, "no (0020,0032) Image Position (Patient)")) << r.status.message();
   // At frame 1's item: after frame 0's position, before its own.
-  EXPECT_GT(r.status.byte_offset(), find(b, position, 0));
+  EXPECT_GT(r.status.byte_offset(), test::find_bytes(b, position, 0));
   EXPECT_LT(r.status.byte_offset(), second);
 }
 
 TEST(CtDicomMultiFrame, FrameCountMustMatchItemsAndPixels) {
   // Pixel Data of two frames for three.
   Bytes b = fixture("mf16.dcm");
-  const size_t pixels = find(b, tag_bytes(0x7FE0, 0x0010) + "OW");
+  const size_t pixels = test::find_bytes(b, test::dicom_tag(0x7FE0, 0x0010) + "OW");
   ASSERT_NE(pixels, std::string::npos);
   const uint32_t frame_bytes = 64 * 56 * 2;
-  put_u32(&b, pixels + 8, 2 * frame_bytes);
+  test::put_le32(&b, pixels + 8, 2 * frame_bytes);
   b.resize(pixels + 12 + 2 * frame_bytes);
   Read r = read({b});
   EXPECT_EQ(r.status.code(), StatusCode::kParseError);
@@ -165,9 +147,9 @@ TEST(CtDicomMultiFrame, AbsurdNumberOfFramesIsAnError) {
 TEST(CtDicomMultiFrame, MalformedFunctionalGroupsAreErrors) {
   // The Plane Position item of frame 0 two bytes shorter than its position element.
   Bytes b = fixture("mf16.dcm");
-  const size_t sq = find(b, tag_bytes(0x0020, 0x9113) + "SQ");
+  const size_t sq = test::find_bytes(b, test::dicom_tag(0x0020, 0x9113) + "SQ");
   ASSERT_NE(sq, std::string::npos);
-  put_u32(&b, sq + 16, 20);  // the item's length (22)
+  test::put_le32(&b, sq + 16, 20);  // the item's length (22)
   Read r = read({b});
   EXPECT_EQ(r.status.code(), StatusCode::kParseError);
   EXPECT_TRUE(
@@ -175,7 +157,7 @@ TEST(CtDicomMultiFrame, MalformedFunctionalGroupsAreErrors) {
       << r.status.message();
   // The sequence longer than the frame's item.
   b = fixture("mf16.dcm");
-  put_u32(&b, sq + 8, 3000);
+  test::put_le32(&b, sq + 8, 3000);
   r = read({b});
   EXPECT_EQ(r.status.code(), StatusCode::kParseError);
   EXPECT_TRUE(has(r.status,
@@ -185,7 +167,7 @@ TEST(CtDicomMultiFrame, MalformedFunctionalGroupsAreErrors) {
   EXPECT_EQ(r.status.byte_offset(), sq);
   // A frame whose orientation is not the others'.
   b = fixture("mf16_rev.dcm");
-  const size_t o = find(b, tag_bytes(0x0020, 0x0037) + "DS", 2);
+  const size_t o = test::find_bytes(b, test::dicom_tag(0x0020, 0x0037) + "DS", 2);
   ASSERT_NE(o, std::string::npos);
   ASSERT_EQ(std::memcmp(&b[o + 8], "1\\0\\0\\0\\1\\0", 11), 0);
   std::memcpy(&b[o + 8], "0\\1\\0\\1\\0\\0", 11);
@@ -197,7 +179,7 @@ TEST(CtDicomMultiFrame, MalformedFunctionalGroupsAreErrors) {
       << r.status.message();
   // And one whose pixel spacing is not.
   b = fixture("mf16_rev.dcm");
-  const size_t ps = find(b, tag_bytes(0x0028, 0x0030) + "DS", 1);
+  const size_t ps = test::find_bytes(b, test::dicom_tag(0x0028, 0x0030) + "DS", 1);
   ASSERT_NE(ps, std::string::npos);
   ASSERT_EQ(std::memcmp(&b[ps + 8], "1.2\\1.2", 7), 0);
   b[ps + 8] = '2';
@@ -209,10 +191,10 @@ TEST(CtDicomMultiFrame, MalformedFunctionalGroupsAreErrors) {
 
 // Frame positions go through the series' checks, messages naming frames; rescale per frame.
 TEST(CtDicomMultiFrame, FramesAreCheckedAsSlices) {
-  const std::string position = tag_bytes(0x0020, 0x0032) + "DS";
+  const std::string position = test::dicom_tag(0x0020, 0x0032) + "DS";
   // Frame 1 at frame 0's position.
   Bytes b = fixture("mf16.dcm");
-  const size_t second = find(b, position, 1);
+  const size_t second = test::find_bytes(b, position, 1);
   ASSERT_EQ(std::memcmp(&b[second + 8], "-37.8\\-33\\-2.5", 14), 0);
   std::memcpy(&b[second + 8], "-37.8\\-33\\22.5", 14);
   Read r = read({b});
@@ -228,7 +210,7 @@ TEST(CtDicomMultiFrame, FramesAreCheckedAsSlices) {
   EXPECT_GT(r.info.max_shift_mm, 0.0);
   // Frame 0 of mf16_rev (raw16_2: lowest z, slice 0) one HU up: its own intercept is used.
   b = fixture("mf16_rev.dcm");
-  const size_t intercept = find(b, tag_bytes(0x0028, 0x1052) + "DS");
+  const size_t intercept = test::find_bytes(b, test::dicom_tag(0x0028, 0x1052) + "DS");
   ASSERT_EQ(std::memcmp(&b[intercept + 8], "-1063", 5), 0);
   b[intercept + 12] = '2';
   r = read({b});
@@ -253,10 +235,10 @@ TEST(CtDicomMultiFrame, RefusedWhereNotSupported) {
   // Compressed multi-frame (read: dicom_multiframe_codecs_test): mf16 as RLE (same-length UID)
   // with encapsulated Pixel Data of one fragment for three frames.
   Bytes b = fixture("mf16.dcm");
-  const size_t uid = find(b, std::string("1.2.840.10008.1.2.1\0", 20));
+  const size_t uid = test::find_bytes(b, std::string("1.2.840.10008.1.2.1\0", 20));
   ASSERT_NE(uid, std::string::npos);
   b[uid + 18] = '5';
-  const size_t pixels = find(b, tag_bytes(0x7FE0, 0x0010) + "OW");
+  const size_t pixels = test::find_bytes(b, test::dicom_tag(0x7FE0, 0x0010) + "OW");
   b.resize(pixels);
   const uint8_t tail[] = {0xE0, 0x7F, 0x10, 0x00, 'O',  'B',  0, 0, 0xFF, 0xFF,
                           0xFF, 0xFF, 0xFE, 0xFF, 0x00, 0xE0, 0, 0, 0,    0,
@@ -285,7 +267,7 @@ TEST(CtDicomMultiFrame, FileChangedBetweenReadsIsAnError) {
   // mf16 cut to its first two frames: Number of Frames 2, the third per-frame item dropped
   // (the sequence is of defined length), two frames of pixels.
   Bytes b = with_value(0x0028, 0x0008, "2 ");
-  const size_t sq = find(b, tag_bytes(0x5200, 0x9230) + "SQ");
+  const size_t sq = test::find_bytes(b, test::dicom_tag(0x5200, 0x9230) + "SQ");
   auto u32_at = [&](size_t at) {
     return uint32_t{b[at]} | (uint32_t{b[at + 1]} << 8) | (uint32_t{b[at + 2]} << 16) |
            (uint32_t{b[at + 3]} << 24);
@@ -293,11 +275,11 @@ TEST(CtDicomMultiFrame, FileChangedBetweenReadsIsAnError) {
   size_t third = sq + 12;
   for (int k = 0; k < 2; ++k) third += 8 + u32_at(third + 4);
   const uint32_t third_bytes = 8 + u32_at(third + 4);
-  put_u32(&b, sq + 8, u32_at(sq + 8) - third_bytes);
+  test::put_le32(&b, sq + 8, u32_at(sq + 8) - third_bytes);
   b.erase(b.begin() + static_cast<std::ptrdiff_t>(third),
           b.begin() + static_cast<std::ptrdiff_t>(third + third_bytes));
-  const size_t pixels = find(b, tag_bytes(0x7FE0, 0x0010) + "OW");
-  put_u32(&b, pixels + 8, 2 * 64 * 56 * 2);
+  const size_t pixels = test::find_bytes(b, test::dicom_tag(0x7FE0, 0x0010) + "OW");
+  test::put_le32(&b, pixels + 8, 2 * 64 * 56 * 2);
   b.resize(pixels + 12 + 2 * 64 * 56 * 2);
   ASSERT_TRUE(read({b}).status.is_ok()) << read({b}).status.message();  // valid alone
   file.then = b;

@@ -50,6 +50,26 @@ inline DicomRead read_dicom_bytes(const std::vector<Bytes>& files,
   return r;
 }
 
+// Offset of the n-th (0-based) occurrence of `pattern` in b (npos if none).
+inline size_t find_bytes(const Bytes& b, const std::string& pattern, int n = 0) {
+  const std::string s(b.begin(), b.end());
+  size_t at = s.find(pattern);
+  for (int i = 0; i < n && at != std::string::npos; ++i) at = s.find(pattern, at + 1);
+  return at;
+}
+
+// A tag as it is written in explicit little endian: group, then element, each low byte first.
+inline std::string dicom_tag(uint16_t group, uint16_t element) {
+  const char t[4] = {static_cast<char>(group & 0xFF), static_cast<char>(group >> 8),
+                     static_cast<char>(element & 0xFF), static_cast<char>(element >> 8)};
+  return std::string(t, 4);
+}
+
+inline void put_le32(Bytes* b, size_t at, uint32_t v) {
+  for (int i = 0; i < 4; ++i)
+    (*b)[at + static_cast<size_t>(i)] = static_cast<uint8_t>(v >> (8 * i));
+}
+
 // Names "<prefix>0.dcm", "<prefix>1.dcm", ...
 inline std::vector<std::string> numbered_names(size_t count, const char* prefix) {
   std::vector<std::string> names;

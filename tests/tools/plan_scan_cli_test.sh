@@ -16,31 +16,8 @@ trap 'rm -rf "$work"' EXIT
 passed=0
 failed=0
 
-expect_exit() {  # expect_exit CODE DESCRIPTION -- command...
-  local want=$1 what=$2
-  shift 3
-  "$@" >"$work/out" 2>"$work/err"
-  local got=$?
-  if [ "$got" -eq "$want" ]; then
-    passed=$((passed + 1))
-  else
-    failed=$((failed + 1))
-    echo "FAIL: $what: exit $got, expected $want"
-    sed 's/^/  stdout: /' "$work/out" | head -5
-    sed 's/^/  stderr: /' "$work/err" | head -5
-  fi
-}
-
-check() {  # check DESCRIPTION -- test-command...
-  local what=$1
-  shift 2
-  if "$@"; then
-    passed=$((passed + 1))
-  else
-    failed=$((failed + 1))
-    echo "FAIL: $what"
-  fi
-}
+# shellcheck source=cli_checks.sh
+source "$(dirname "$0")/cli_checks.sh"
 
 expect_exit 0 "phantom" -- "$tool" phantom --triangles 6000 -o "$work"
 
