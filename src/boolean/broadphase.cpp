@@ -46,7 +46,7 @@ Status list_cells(Arena& arena, const Mesh& a, double reach, Broadphase* bp) {
   ArenaArray<uint32_t> notes(&arena);  // the cells, triangle by triangle
   if (!notes.reserve(size_t{nta} * 4 + 16)) return arena.exhausted_status();
   const uint32_t* dim = bp->dim;
-  const size_t stride[3] = {1, dim[0], size_t{dim[0]} * dim[1]};
+  const size_t stride[3] = {1, dim[0], static_cast<size_t>(dim[0]) * dim[1]};
   bool fits = true;
   for (uint32_t t = 0; t < nta && fits; ++t) {
     const Triangle& at = a.triangles[t];

@@ -208,8 +208,10 @@ Status write_png(const Context& ctx, const RenderImage& image, const ByteSink& s
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "png", 0, h));
   const uint32_t bands = h < kPngBands ? h : kPngBands;
   auto band = [&](uint32_t b) {
-    const uint32_t y1 = static_cast<uint32_t>(uint64_t{h} * (b + 1) / bands);
-    for (uint32_t y = static_cast<uint32_t>(uint64_t{h} * b / bands); y < y1; ++y) {
+    const uint64_t rows = h;
+    const uint32_t y0 = static_cast<uint32_t>(rows * b / bands);
+    const uint32_t y1 = static_cast<uint32_t>(rows * (b + 1) / bands);
+    for (uint32_t y = y0; y < y1; ++y) {
       const uint8_t* row = image.rgb + static_cast<size_t>(y) * row_bytes;
       filter_best(row, y > 0 ? row - row_bytes : nullptr, row_bytes,
                   filtered + static_cast<size_t>(y) * stride);

@@ -18,8 +18,9 @@ namespace cli {
 CtFormat ct_format_of_path(const std::string& path);
 
 // Every regular file in `folder` (not recursing; hidden files, i.e. names starting with '.',
-// and DICOM directories such as DICOMDIR or Philips' DIRFILE, are skipped), sorted by name (byte order) only for a stable input order: the reader orders
-// slices by position. Errors: kIoError (not a folder / unreadable), kInvalidArgument (empty).
+// and DICOM directories such as DICOMDIR or Philips' DIRFILE, are skipped), sorted by name (byte
+// order) only for a stable input order: the reader orders slices by position. Errors: kIoError (not
+// a folder / unreadable), kInvalidArgument (empty).
 Status list_dicom_folder(const std::string& folder, std::vector<std::string>* files);
 
 // Reads the volume at `path` into *out (voxels in ctx.arena, see splintcore/ct.h for the memory
