@@ -23,7 +23,8 @@ struct JawShape {
 // The pieces: referenced vertices less the unions that joined two of them.
 Status count_pieces(const Context& ctx, const Mesh& m, JawShape* out) {
   const size_t n = m.vertices.size();
-  if (n >= (size_t{1} << 32)) return Status::ok();  // not measured: a later stage names it
+  if (static_cast<uint64_t>(n) >= (uint64_t{1} << 32))
+    return Status::ok();  // a later stage names it
   ArenaScope scope(*ctx.arena);
   UnionFind uf;
   uint8_t* used = ctx.arena->allocate_array<uint8_t>(n);

@@ -211,7 +211,7 @@ Status name_open_jaw(Status s, const CaseFile& c, Span<const Mesh> jaws, const M
     return s;
   }
   const auto um = [](double x) { return std::floor(x * 1000 + 0.5) / 1000; };
-  const Vec3& p = b.vertices[s.index()];
+  const Vec3& p = b.vertices[static_cast<size_t>(s.index())];
   uint64_t first = 0;
   for (size_t j = 0; j < jaws.size(); ++j) {
     const uint64_t count = jaws[j].vertices.size();
