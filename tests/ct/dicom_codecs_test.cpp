@@ -134,7 +134,7 @@ TEST(CtDicomCodecs, ArenaOfTheFirstReadsHighWater) {
 TEST(CtDicomCodecs, TruncatedFilesAndFramesAreErrors) {
   for (const char* name : {"rle16_0.dcm", "jpeg57_rst.dcm", "rle8.dcm"}) {
     const Bytes file = fixture(name);
-    for (size_t cut = 0; cut < file.size(); ++cut) {
+    for (size_t cut = 0; cut < file.size(); cut += test::kSweepStep) {
       const Series r =
           read({Bytes(file.begin(), file.begin() + static_cast<std::ptrdiff_t>(cut))}, 1 << 20);
       ASSERT_FALSE(r.status.is_ok()) << name << " cut at " << cut;
@@ -145,7 +145,7 @@ TEST(CtDicomCodecs, TruncatedFilesAndFramesAreErrors) {
     const uint32_t bytes = std::string(name) == "rle8.dcm" ? 1 : 2;
     Bytes out(2 * 64 * 56);
     TestArena t(1 << 16);
-    for (size_t cut = 0; cut < frame.size(); ++cut) {
+    for (size_t cut = 0; cut < frame.size(); cut += test::kSweepStep) {
       const Status s =
           rle ? ct_detail::rle_decode_frame(frame.data(), cut, 56, 64, bytes, out.data())
               : ct_detail::jpeg_lossless_decode(t.arena, frame.data(), cut, 56, 64, 16, out.data());

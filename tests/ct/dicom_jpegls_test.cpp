@@ -200,7 +200,7 @@ TEST(CtDicomJpegLs, TruncatedFramesAndFilesAreErrors) {
     size_t at = 0;
     const Bytes frame = fragment_of(file, &at);
     std::vector<uint32_t> got;
-    for (size_t cut = 0; cut + 1 < frame.size(); ++cut) {
+    for (size_t cut = 0; cut + 1 < frame.size(); cut += test::kSweepStep) {
       const Status s =
           decode(Bytes(frame.begin(), frame.begin() + static_cast<std::ptrdiff_t>(cut)), &got);
       ASSERT_FALSE(s.is_ok()) << name << " frame cut at " << cut;

@@ -207,7 +207,8 @@ TEST(IoExhaustionTest, BufferArenaSweep) {
       return s;
     };
     // Every 16 bytes (the arena's alignment); ASCII parses are slower, so every 48 there.
-    const uint64_t coarse_step = in.format == StlFormat::kAscii ? 48 : 16;
+    const uint64_t coarse_step =
+        (in.format == StlFormat::kAscii ? 48 : 16) * splintcore::test::kSweepStep;
     SweepResult r = sweep(expected, coarse_step, high_water + 4096, run);
     ASSERT_GT(r.first_success, 0u);
     EXPECT_LE(r.first_success, r.last_need)
@@ -313,7 +314,7 @@ TEST(IoExhaustionTest, HooksArenaSweep) {
     }
     EXPECT_EQ(unlimited.allocations, unlimited.releases);
     const uint64_t limit = unlimited.peak_bytes + 4096;
-    const uint64_t step = in.format == StlFormat::kAscii ? 96 : 32;
+    const uint64_t step = (in.format == StlFormat::kAscii ? 96 : 32) * splintcore::test::kSweepStep;
     SweepResult r = sweep(expected, step, limit, run);
     ASSERT_GT(r.first_success, 0u);
     EXPECT_LE(r.first_success, r.last_need)

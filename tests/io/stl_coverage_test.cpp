@@ -198,7 +198,7 @@ TEST(StlCoverage, AnIoErrorAtEveryByte) {
   const std::string ascii = big_ascii();
   for (const std::string* bytes : {&binary, &ascii}) {
     // The error surfaces at a refill: every byte offset of the first chunk, then a stride.
-    for (size_t at = 0; at < bytes->size(); at += at < 4200 ? 1 : 97) {
+    for (size_t at = 0; at < bytes->size(); at += at < 4200 ? test::kSweepStep : 97) {
       test::TestArena t(size_t{1} << 20);
       ASSERT_NE(t.arena.allocate(16), nullptr);
       FailingSource f{bytes, 0, at};
