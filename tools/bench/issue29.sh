@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# Issue 29's table in one run: reading and checking against admesh, the Booleans, and the
+# blockout and spacer of the real case at 0.1 mm in a 64 MiB cap, with peak arena where the
+# program reports one. Each row is measured here, now, by the command named beside it.
+#   bash tools/bench/issue29.sh [BUILD_DIR] [REPEAT] [REALDATA_DIR]
+# Rows that need the real dentition (../shared/realdata) say so and are skipped without it.
+# CGAL and Manifold are not Debian packages with a command-line Boolean: their figures are in
+# ../shared/peers.md (same machine class), not rerun here.
+set -eu
+build=${1:-build/rel}
+repeat=${2:-5}
+realdata=${3:-../shared/realdata/open-full-jaw-patient26}
+tool=$build/tools/splintcore
+bench=$build/tools/splintcore-bench
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+echo "== check of the 543,530-triangle phantom maxilla (27 MB binary STL), whole process"
+bash "$(dirname "$0")/read_check.sh" "$tool" "$repeat"
+
+echo
+echo "== the exact Boolean in memory (splintcore-bench; peak_arena_bytes is the arena's high water)"
+"$bench" --filter boolean_phantom_87k --repeat "$((repeat * 4))" | grep -E "^bench="
+"$bench" --filter boolean_phantom_324k --repeat "$repeat" | grep -E "^bench="
+if [ -d "$realdata" ]; then
+  "$bench" --realdata "$realdata" --filter boolean_realdata --repeat "$repeat" | grep -E "^bench="
+else
+  echo "boolean_realdata: no real data at $realdata"
+fi
+
+echo
+echo "== the paper-scale phantom's sweep at 0.05 mm in 64 MiB (splintcore-bench)"
+"$bench" --filter sweep_phantom_005_64m --repeat 1 | grep -E "^bench=|^# sweep"
+
+echo
+echo "== the real case, file to file, blockout and spacer at 0.1 mm, --memory-cap 64M"
+if [ ! -d "$realdata" ]; then
+  echo "no real data at $realdata: skipped"
+  exit 0
+fi
+"$bench" --realdata "$realdata" --export-realcase "$work/case" >/dev/null
+python3 - "$tool" "$work/case" <<'PY'
+import json, os, subprocess, sys, time
+tool, case = sys.argv[1], sys.argv[2]
+base = {"splintcore_case": 1, "case_id": "realdata-patient26", "units": "mm",
+        "jaws": [{"role": "maxilla", "mesh": "maxilla.stl"},
+                 {"role": "mandible", "mesh": "mandible.stl"}],
+        "base": {"spacing_mm": 0.5, "auto": {"bite_opening_mm": 2}}, "printer": "eden260",
+        "output": {"splint": "splint.stl", "report": "report.json"}}
+rows = [("plain splint", None), ("blockout voxel 0.1", {"voxel": 0.1}),
+        ("spacer (clearance 0.1, voxel 0.1)", {"voxel": 0.1, "clearance": 0.1})]
+print("%-36s %9s %14s %11s  %s" % ("case", "wall (s)", "peak arena (B)", "triangles", "result"))
+for name, blockout in rows:
+    c = dict(base)
+    if blockout is not None:
+        c["blockout"] = blockout
+    path = os.path.join(case, "c.json")
+    with open(path, "w") as f:
+        json.dump(c, f)
+    out = os.path.join(case, "out")
+    t0 = time.perf_counter()
+    r = subprocess.run([tool, "design", path, "-o", out, "--memory-cap", "64M"],
+                       capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if r.returncode != 0:
+        err = (r.stderr.strip().splitlines() or ["exit %d" % r.returncode])[-1]
+        print("%-36s %9.3f %14s %11s  %s" % (name, wall, "-", "-", err[:110]))
+        continue
+    rep = json.load(open(os.path.join(out, "report.json")))
+    def find(d, key):
+        if isinstance(d, dict):
+            if key in d:
+                return d[key]
+            for v in d.values():
+                x = find(v, key)
+                if x is not None:
+                    return x
+        return None
+    print("%-36s %9.3f %14s %11s  ok" % (name, wall, find(rep, "peak_arena_bytes"),
+                                        rep.get("output", {}).get("triangles")))
+PY
