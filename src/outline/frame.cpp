@@ -88,13 +88,22 @@ Vec3 anterior_axis(const Mesh& upper, const Mesh& lower, const Vec3& c, const Fr
   return (f.e1 * sx + f.e2 * sy) * (1.0 / count);
 }
 
-Status build_grid(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3& lower_offset,
-                  const Frame& f, Grid* g) {
+namespace {
+
+// The lattice of build_grid over the jaws (the extent and centroid of their vertices in the
+// plane) and its arrays, unfilled. kHeights: also the maxilla's lowest and the mandible's
+// highest vertex along n (their heights as fill_columns computes them), in the same pass.
+template <bool kHeights>
+Status grid_layout(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3& lower_offset,
+                   const Frame& f, Grid* g, double* low_upper, double* high_lower) {
   double x_lo = HUGE_VAL, x_hi = -HUGE_VAL, y_lo = HUGE_VAL, y_hi = -HUGE_VAL, cx = 0, cy = 0;
+  double h_lo = HUGE_VAL, h_hi = -HUGE_VAL;
   const PlaneAxes axes(f);
-  auto extent = [&](const Mesh& m, const Vec3& offset) {
+  const Vec3 n = f.n;
+  auto extent = [&](const Mesh& m, const Vec3& offset, bool upper_jaw) {
     for (const Vec3& v : m.vertices) {
-      const Lanes2 xy = axes.xy(v + offset);
+      const Vec3 p = v + offset;
+      const Lanes2 xy = axes.xy(p);
       const double x = xy[0], y = xy[1];
       x_lo = x < x_lo ? x : x_lo;
       x_hi = x > x_hi ? x : x_hi;
@@ -102,10 +111,20 @@ Status build_grid(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3
       y_hi = y > y_hi ? y : y_hi;
       cx += x;
       cy += y;
+      if (kHeights) {
+        const double h = dot(p, n);
+        if (upper_jaw) {
+          h_lo = h < h_lo ? h : h_lo;
+        } else {
+          h_hi = h > h_hi ? h : h_hi;
+        }
+      }
     }
   };
-  extent(upper, Vec3{});
-  extent(lower, lower_offset);
+  extent(upper, Vec3{}, true);
+  extent(lower, lower_offset, false);
+  *low_upper = h_lo;
+  *high_lower = h_hi;
   const double count = static_cast<double>(upper.vertices.size() + lower.vertices.size());
   if (x_hi - x_lo > kMaxSpanMm || y_hi - y_lo > kMaxSpanMm) {
     return make_error(StatusCode::kInvalidArgument, "outline: the jaws span ", x_hi - x_lo, " x ",
@@ -128,6 +147,16 @@ Status build_grid(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3
     g->tip[jaw] = arena.allocate_array<uint32_t>(cells);
     if (g->h[jaw] == nullptr || g->tip[jaw] == nullptr) return arena.exhausted_status();
   }
+  return Status::ok();
+}
+
+}  // namespace
+
+Status build_grid(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3& lower_offset,
+                  const Frame& f, Grid* g) {
+  double unused_low = 0, unused_high = 0;
+  SPLINTCORE_RETURN_IF_ERROR(
+      grid_layout<false>(arena, upper, lower, lower_offset, f, g, &unused_low, &unused_high));
   fill_heights(upper, Vec3{}, f, 0, g);
   fill_heights(lower, lower_offset, f, 1, g);
   return Status::ok();
@@ -161,16 +190,45 @@ void fill_columns(const Mesh& m, const Vec3& offset, const Frame& frame, Grid* g
   }
 }
 
-}  // namespace
+// fill_columns over the vertices whose height lies in a window only: for the maxilla (kLowest)
+// in (from, to], for the mandible in [to, from). The heights and columns as fill_columns
+// computes them; a vertex outside goes on after its height alone.
+template <bool kLowest>
+void fill_window(const Mesh& m, const Frame& frame, double from, double to, Grid* g) {
+  const PlaneAxes axes(frame);
+  const Vec3 n = frame.n;
+  const Grid grid = *g;
+  double* heights = grid.h[kLowest ? 0 : 1];
+  uint32_t* tips = grid.tip[kLowest ? 0 : 1];
+  const Vec3* v = m.vertices.data();
+  const size_t count = m.vertices.size();
+  for (size_t k = 0; k < count; ++k) {
+    const Vec3 p = v[k] + Vec3{};
+    const double h = dot(p, n);
+    if (kLowest ? !(h > from && h <= to) : !(h < from && h >= to)) continue;
+    const Lanes2 xy = axes.xy(p);
+    const size_t cell = grid.cell_of(xy[0], xy[1]);
+    const double best = heights[cell];
+    const bool better = kLowest ? h < best : h > best;
+    heights[cell] = kLowest ? (h < best ? h : best) : (h > best ? h : best);
+    if (better) tips[cell] = static_cast<uint32_t>(k);
+  }
+}
 
-// Jaw 0 (the maxilla) shows the mandible its lowest point of each column, jaw 1 its highest.
-void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g) {
+void clear_heights(int jaw, Grid* g) {
   const size_t cells = static_cast<size_t>(g->nx) * g->ny;
   const double none = jaw == 0 ? HUGE_VAL : -HUGE_VAL;
   for (size_t i = 0; i < cells; ++i) {
     g->h[jaw][i] = none;
     g->tip[jaw][i] = kNoTip;
   }
+}
+
+}  // namespace
+
+// Jaw 0 (the maxilla) shows the mandible its lowest point of each column, jaw 1 its highest.
+void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g) {
+  clear_heights(jaw, g);
   if (jaw == 0) {
     fill_columns<true>(m, offset, f, g);
   } else {
@@ -178,7 +236,11 @@ void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Gr
   }
 }
 
-bool fit_contact_plane(const Grid& g, Plane* plane, uint64_t* contact_cells) {
+namespace {
+
+// The least gap (maxilla's height less the mandible's) over the columns that see both jaws;
+// infinity when none does.
+double least_gap(const Grid& g) {
   const size_t cells = static_cast<size_t>(g.nx) * g.ny;
   double gap_min = HUGE_VAL;
   for (size_t i = 0; i < cells; ++i) {
@@ -186,6 +248,11 @@ bool fit_contact_plane(const Grid& g, Plane* plane, uint64_t* contact_cells) {
     const double gap = g.h[0][i] - g.h[1][i];
     gap_min = gap < gap_min ? gap : gap_min;
   }
+  return gap_min;
+}
+
+bool fit_with_gap(const Grid& g, double gap_min, Plane* plane, uint64_t* contact_cells) {
+  const size_t cells = static_cast<size_t>(g.nx) * g.ny;
   double m[3][3] = {}, r[3] = {};
   uint64_t used = 0;
   for (size_t i = 0; i < cells; ++i) {
@@ -210,6 +277,55 @@ bool fit_contact_plane(const Grid& g, Plane* plane, uint64_t* contact_cells) {
   return true;
 }
 
+// A provisional round's plane (fit_contact_plane of the full grid, bit for bit) from the
+// vertices near the occlusal plane only. The fit reads the columns whose gap lies within
+// kContactBandMm of the least; a column's gap is at least its maxilla height less the
+// mandible's highest vertex (high), and at least the maxilla's lowest (low) less its mandible
+// height. So with the maxilla's vertices up to `up` = low + w and the mandible's down to
+// `down` = high - w in the grid, where both up - high and low - down exceed the least gap
+// (of these columns) plus the band: the column of the least gap has both its extremes in
+// the grid (else its gap would exceed that), so the least gap is the full grid's; so does
+// every column the fit reads; and a column with a vertex left out whose extreme that is lies
+// outside the band either way (its gap only grows). The same columns, heights and sums.
+// w: the jaws' overlap along n plus the band plus `slack`, a guess at the least gap (an
+// estimate too low costs a second pass over the vertices up to the window it shows is
+// enough).
+constexpr double kSlackOverGapMm = 0.5;
+
+bool fit_near_plane(const Mesh& upper, const Mesh& lower, const Frame& f, double low, double high,
+                    double slack, Grid* g, Plane* plane, uint64_t* contact_cells, double* gap_out) {
+  clear_heights(0, g);
+  clear_heights(1, g);
+  double up = -HUGE_VAL, down = HUGE_VAL;
+  for (int pass = 0; pass < 2; ++pass) {
+    const double w = (high - low) + kContactBandMm + slack;
+    const double next_up = low + w, next_down = high - w;
+    if (!(next_up > up && next_down < down)) break;  // (no wider: a NaN or an overflow)
+    fill_window<true>(upper, f, up, next_up, g);
+    fill_window<false>(lower, f, down, next_down, g);
+    up = next_up;
+    down = next_down;
+    const double gap_min = least_gap(*g);
+    if (up - high > gap_min + kContactBandMm && low - down > gap_min + kContactBandMm) {
+      *gap_out = gap_min;
+      return fit_with_gap(*g, gap_min, plane, contact_cells);
+    }
+    if (!(gap_min < HUGE_VAL)) break;
+    slack = gap_min + kSlackOverGapMm;  // then up - high is about the band plus this
+  }
+  // Every vertex.
+  fill_heights(upper, Vec3{}, f, 0, g);
+  fill_heights(lower, Vec3{}, f, 1, g);
+  *gap_out = least_gap(*g);
+  return fit_with_gap(*g, *gap_out, plane, contact_cells);
+}
+
+}  // namespace
+
+bool fit_contact_plane(const Grid& g, Plane* plane, uint64_t* contact_cells) {
+  return fit_with_gap(g, least_gap(g), plane, contact_cells);
+}
+
 Status find_frame(Arena& arena, const Mesh& upper, const Mesh& lower, Frame* f, Grid* g,
                   Plane* plane) {
   // The centroids do not depend on the frame: once for every round.
@@ -222,21 +338,34 @@ Status find_frame(Arena& arena, const Mesh& upper, const Mesh& lower, Frame* f, 
                          "outline: the jaws do not face each other: their centres are less "
                          "than 1 mm apart");
   }
+  double slack = kSlackOverGapMm;  // jaws in occlusion: a least gap of at most 0
   for (int round = 0; round < kFrameRounds; ++round) {
     Frame provisional;
     complete_frame(n, any_perpendicular(n), &provisional);
     complete_frame(n, anterior_axis(upper, lower, centre, provisional), f);
     ArenaScope scope(arena);
-    SPLINTCORE_RETURN_IF_ERROR(build_grid(arena, upper, lower, Vec3{}, *f, g));
+    const bool last = round + 1 == kFrameRounds;
     uint64_t contact = 0;
-    if (!fit_contact_plane(*g, plane, &contact)) {
+    bool fitted = false;
+    if (last) {
+      SPLINTCORE_RETURN_IF_ERROR(build_grid(arena, upper, lower, Vec3{}, *f, g));
+      fitted = fit_contact_plane(*g, plane, &contact);
+    } else {
+      // The plane only (the grid goes): from the vertices near the occlusal plane.
+      double low = 0, high = 0, gap = 0;
+      SPLINTCORE_RETURN_IF_ERROR(
+          grid_layout<true>(arena, upper, lower, Vec3{}, *f, g, &low, &high));
+      fitted = fit_near_plane(upper, lower, *f, low, high, slack, g, plane, &contact, &gap);
+      slack = gap + kSlackOverGapMm;  // the next round's frame is a little tilted from this
+    }
+    if (!fitted) {
       return make_error(StatusCode::kInvalidArgument,
                         "outline: the jaws do not face each other: only ", contact,
                         " columns of 0.5 mm see both the maxilla and the mandible across the "
                         "occlusal plane (at least ",
                         kMinContactCells, ")");
     }
-    if (round + 1 == kFrameRounds) {
+    if (last) {
       scope.commit();
       break;
     }
