@@ -349,7 +349,8 @@ Status copy_near_b(Arena& arena, const Mesh& b, boolean_detail::Broadphase* bp, 
 }  // namespace
 
 Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
-                           const BooleanOptions& options, Mesh* out, BooleanStats* stats) {
+                           const BooleanOptions& options, Mesh* out, BooleanStats* stats,
+                           bool b_valid) {
   using namespace boolean_detail;
   Arena& arena = *ctx.arena;
   BooleanStats local{};
@@ -364,7 +365,7 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
   const double reach = (options.max_nudges + 1.0) * step * 8.0;
   Broadphase bp;
   Status s = report_progress(ctx, "boolean: grid", 0, 1);
-  if (s.is_ok()) s = build_broadphase(ctx, a, b, reach, options.float32_output, &bp);
+  if (s.is_ok()) s = build_broadphase(ctx, a, b, reach, options.float32_output, b_valid, &bp);
   NearB near;
   const bool bounded = options.op != BooleanOp::kUnion && bp.near_ids.size() < b.triangles.size();
   if (s.is_ok() && bounded) s = copy_near_b(arena, b, &bp, &near);

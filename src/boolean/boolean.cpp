@@ -107,6 +107,11 @@ Status find_shells(Arena& arena, const Mesh& b, Shells* sh, bool* usable) {
     const Triangle& tri = tris[t];
     if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) return Status::ok();
     used[tri.v[0]] = used[tri.v[1]] = used[tri.v[2]] = 1;
+    // The common case: all three corners' parent is one root (a shell's root, its smallest
+    // id, is where most of its vertices point), so they are in one set already. (The walks
+    // below would find the same and change nothing.)
+    const uint32_t p0 = parent[tri.v[0]];
+    if (parent[p0] == p0 && parent[tri.v[1]] == p0 && parent[tri.v[2]] == p0) continue;
     uint32_t r0 = root_of(parent, tri.v[0]);
     for (int k = 1; k < 3; ++k) {
       const uint32_t r = root_of(parent, tri.v[k]);
@@ -679,7 +684,8 @@ Status run_passes(const Context& ctx, const Mesh& a, const Mesh& b, const Shells
     if (!last) o.check_self_intersection = false;
     Mesh result;
     BooleanStats ps;
-    Status s = mesh_boolean_single(ctx, *first, *second, o, &result, &ps);
+    // (The groups are copies of B's valid shells; the intersection's union a checked result.)
+    Status s = mesh_boolean_single(ctx, *first, *second, o, &result, &ps, true);
     add_stats(ps, &total);
     if (!s.is_ok()) {
       s.append(" (pass ").append_u64(pass + 1).append(" of ").append_u64(passes);
@@ -733,7 +739,7 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b, const Bool
   if (groups == 1) {
     // One run, with the arena as the caller gave it (it rewinds itself on an error).
     arena.rewind(scope.start());
-    s = mesh_boolean_single(ctx, a, b, options, out, stats);
+    s = mesh_boolean_single(ctx, a, b, options, out, stats, usable);
     scope.commit();
   } else if (options.float32_output && !(s = check_b_float32(b, region)).is_ok()) {
     return s;

@@ -512,8 +512,9 @@ EdgePlanes edge_planes(const Vec3& a0, const Vec3& a1, const Vec3& a2);
 PairResult intersect_pair(const Inputs& in, uint32_t ta, uint32_t tb, const PlaneFilter& pa,
                           const EdgePlanes& ea, const PlaneFilter& pb, Hit* hit);
 Point make_point(const Inputs& in, const PointKey& key);
+// b_valid: B's indices are known to be in range and its vertices finite (not checked again).
 Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double reach,
-                        bool float32_output, Broadphase* bp);
+                        bool float32_output, bool b_valid, Broadphase* bp);
 
 }  // namespace boolean_detail
 }  // namespace splintcore

@@ -84,10 +84,12 @@ Status list_cells(Arena& arena, const Mesh& a, double reach, Broadphase* bp) {
   return Status::ok();
 }
 
-// B's triangles near A's box (bp->near_b, bp->near_ids), B's indices and finiteness checked,
-// and with float32 output the near ones checked float32. B's vertices are tested against the
-// box once (6 outcode bits, 64 when not finite); a triangle is near when no side of the box
-// has all three of its corners beyond it.
+// B's triangles near A's box (bp->near_b, bp->near_ids), B's indices and finiteness checked
+// (unless b_valid: mesh_boolean's find_shells checked them already), and with float32 output
+// the near ones checked float32. B's vertices are tested against the box once (6 outcode bits,
+// 64 when not finite); a triangle is near when no side of the box has all three of its corners
+// beyond it.
+template <bool kChecked>
 Status near_triangles_of_b(Arena& arena, const Mesh& b, bool float32_output, Broadphase* bp) {
   const uint32_t ntb = static_cast<uint32_t>(b.triangles.size());
   const uint32_t nvb = static_cast<uint32_t>(b.vertices.size());
@@ -103,18 +105,18 @@ Status near_triangles_of_b(Arena& arena, const Mesh& b, bool float32_output, Bro
     outcode[v] = static_cast<uint8_t>((p.x < abox.lo.x ? 1 : 0) | (p.x > abox.hi.x ? 2 : 0) |
                                       (p.y < abox.lo.y ? 4 : 0) | (p.y > abox.hi.y ? 8 : 0) |
                                       (p.z < abox.lo.z ? 16 : 0) | (p.z > abox.hi.z ? 32 : 0) |
-                                      (is_finite(p) ? 0 : 64));
+                                      (!kChecked || is_finite(p) ? 0 : 64));
   }
   bp->near_ids.bind(&arena);
   for (uint32_t t = 0; t < ntb; ++t) {
     const Triangle& tri = b.triangles[t];
-    if (tri.v[0] >= nvb || tri.v[1] >= nvb || tri.v[2] >= nvb) {
+    if (kChecked && (tri.v[0] >= nvb || tri.v[1] >= nvb || tri.v[2] >= nvb)) {
       return make_error(StatusCode::kInvalidMesh, "triangle ", t,
                         " of B refers to a vertex that does not exist")
           .at_index(t);
     }
     const uint32_t o0 = outcode[tri.v[0]], o1 = outcode[tri.v[1]], o2 = outcode[tri.v[2]];
-    if (((o0 | o1 | o2) & 64u) != 0) {
+    if (kChecked && ((o0 | o1 | o2) & 64u) != 0) {
       return make_error(StatusCode::kNonFinite, "triangle ", t,
                         " of B has a vertex that is not finite")
           .at_index(t);
@@ -138,7 +140,7 @@ Status near_triangles_of_b(Arena& arena, const Mesh& b, bool float32_output, Bro
 // only at the cells its box covers, so B's many triangles far from A's surface cost a few
 // comparisons each.
 Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double reach,
-                        bool float32_output, Broadphase* bp) {
+                        bool float32_output, bool b_valid, Broadphase* bp) {
   Arena& arena = *ctx.arena;
   const uint32_t nta = static_cast<uint32_t>(a.triangles.size());
   Aabb abox = mesh_bounds(a);
@@ -148,7 +150,8 @@ Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double
   size_grid(nta, bp);
   SPLINTCORE_RETURN_IF_ERROR(list_cells(arena, a, reach, bp));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "boolean: cull", 0, 1));
-  return near_triangles_of_b(arena, b, float32_output, bp);
+  return b_valid ? near_triangles_of_b<false>(arena, b, float32_output, bp)
+                 : near_triangles_of_b<true>(arena, b, float32_output, bp);
 }
 
 }  // namespace boolean_detail
