@@ -79,6 +79,19 @@ inline Neighbours neighbours(const uint8_t* row, const uint8_t* above, size_t i)
           (i >= 3 && above != nullptr) ? above[i - 3] : uint8_t{0}};
 }
 
+// Bytes i..i+7 of a row (i >= 3, with a row above) are flat: each equals its left, above and
+// above-left neighbours (a uniform region, three quarters of a preview): Sub, Up and Paeth all
+// predict them exactly. The filters below take such runs whole (the same bytes as byte by byte).
+inline uint64_t load8(const uint8_t* p) {
+  uint64_t v;
+  std::memcpy(&v, p, 8);
+  return v;
+}
+inline bool flat8(const uint8_t* row, const uint8_t* above, size_t i) {
+  const uint64_t x = load8(row + i);
+  return x == load8(row + i - 3) && x == load8(above + i) && x == load8(above + i - 3);
+}
+
 // Row `y` filtered with `type` (0 None, 1 Sub, 2 Up, 4 Paeth) into out (3w bytes).
 void filter_row(const uint8_t* row, const uint8_t* above, size_t bytes, int type, uint8_t* out) {
   const size_t edge = bytes < 3 ? bytes : 3;
@@ -99,9 +112,18 @@ void filter_row(const uint8_t* row, const uint8_t* above, size_t bytes, int type
   } else if (type == 2) {
     for (size_t i = edge; i < bytes; ++i) out[i] = static_cast<uint8_t>(row[i] - above[i]);
   } else {
-    for (size_t i = edge; i < bytes; ++i) {
+    auto one = [&](size_t i) {
       out[i] = static_cast<uint8_t>(row[i] - paeth(row[i - 3], above[i], above[i - 3]));
+    };
+    size_t i = edge;
+    for (; i + 8 <= bytes; i += 8) {
+      if (flat8(row, above, i)) {
+        std::memset(out + i, 0, 8);  // Paeth predicts a flat byte exactly
+      } else {
+        for (size_t k = i; k < i + 8; ++k) one(k);
+      }
     }
+    for (; i < bytes; ++i) one(i);
   }
 }
 
@@ -129,13 +151,22 @@ void filter_costs(const uint8_t* row, const uint8_t* above, size_t bytes, uint64
       pae += s;
     }
   } else {
-    for (size_t i = edge; i < bytes; ++i) {
+    auto one = [&](size_t i) {
       const uint8_t x = row[i];
       none += abs_signed(x);
       sub += abs_signed(static_cast<uint8_t>(x - row[i - 3]));
       up += abs_signed(static_cast<uint8_t>(x - above[i]));
       pae += abs_signed(static_cast<uint8_t>(x - paeth(row[i - 3], above[i], above[i - 3])));
+    };
+    size_t i = edge;
+    for (; i + 8 <= bytes; i += 8) {
+      if (flat8(row, above, i)) {  // Sub, Up and Paeth residuals 0
+        for (size_t k = i; k < i + 8; ++k) none += abs_signed(row[k]);
+      } else {
+        for (size_t k = i; k < i + 8; ++k) one(k);
+      }
     }
+    for (; i < bytes; ++i) one(i);
   }
   costs[0] = none;
   costs[1] = sub;

@@ -99,13 +99,6 @@ struct Frame {
   Layer opaque, overlay;
 };
 
-struct Vertex {
-  int64_t x, y;  // fixed point
-  double depth;  // smaller is nearer
-  double intensity;
-  double scalar;
-};
-
 // A vertex as one view sees it (each vertex is projected once per view, not per triangle).
 struct Projected {
   int32_t x, y;     // fixed point, inside the tile (|x|, |y| < 2^22)
@@ -132,10 +125,17 @@ Projected project(const Frame& f, const View& v, const Vec3& p) {
   return out;
 }
 
+// A triangle's corners on the screen, counter-clockwise (positive area): fixed-point positions
+// and the mesh vertices they are.
+struct Corners {
+  int64_t x[3], y[3];
+  uint32_t vertex[3];
+};
+
 // An edge a->b owns the pixels exactly on it when it goes down, or left when horizontal: of two
 // triangles sharing the edge (traversed in opposite directions) exactly one owns it.
-int64_t edge_bias(const Vertex& a, const Vertex& b) {
-  const int64_t dy = b.y - a.y, dx = b.x - a.x;
+inline int64_t edge_bias(const Corners& c, int a, int b) {
+  const int64_t dy = c.y[b] - c.y[a], dx = c.x[b] - c.x[a];
   return (dy > 0 || (dy == 0 && dx < 0)) ? 0 : -1;
 }
 
@@ -153,17 +153,18 @@ struct PixelBox {
 
 // The pixels whose centres (px * 256 + 128, py * 256 + 128) lie in the box of the triangle
 // with fixed-point corners (x[k], y[k]) and in the view's tile: false when there are none (the
-// triangle draws nothing).
+// triangle draws nothing). The columns first: half the triangles of a fine mesh have none.
 inline bool pixel_box(const View& view, const int64_t x[3], const int64_t y[3], PixelBox* box) {
   const int64_t min_x = std::min(std::min(x[0], x[1]), x[2]);
   const int64_t max_x = std::max(std::max(x[0], x[1]), x[2]);
-  const int64_t min_y = std::min(std::min(y[0], y[1]), y[2]);
-  const int64_t max_y = std::max(std::max(y[0], y[1]), y[2]);
   box->x0 = std::max<int64_t>(-floor_subpixel(-(min_x - kSubpixel / 2)), view.x0);
   box->x1 = std::min<int64_t>(floor_subpixel(max_x - kSubpixel / 2), view.x1 - 1);
+  if (box->x0 > box->x1) return false;
+  const int64_t min_y = std::min(std::min(y[0], y[1]), y[2]);
+  const int64_t max_y = std::max(std::max(y[0], y[1]), y[2]);
   box->y0 = std::max<int64_t>(-floor_subpixel(-(min_y - kSubpixel / 2)), view.y0);
   box->y1 = std::min<int64_t>(floor_subpixel(max_y - kSubpixel / 2), view.y1 - 1);
-  return box->x0 <= box->x1 && box->y0 <= box->y1;
+  return box->y0 <= box->y1;
 }
 
 double lambert(const Vec3& normal, double normal_length, const Vec3& light) {
@@ -173,12 +174,12 @@ double lambert(const Vec3& normal, double normal_length, const Vec3& light) {
   return kAmbient + kDiffuse * c;
 }
 
-// Flat shading of one triangle, computed when its first pixel is written (most triangles of a
-// fine mesh write none: hidden, or no pixel centre inside).
+// Flat shading of one triangle (its corners p in the mesh's order), computed when its first
+// pixel is written (most triangles of a fine mesh write none: hidden, or no pixel centre inside).
 struct FlatLight {
-  const Vec3* p[3];
-  const Vec3* light;
-  const uint8_t* rgb;
+  const Vec3* p[3] = {nullptr, nullptr, nullptr};
+  const Vec3* light = nullptr;
+  const uint8_t* rgb = nullptr;
   bool ready = false;
   double intensity = 0;
   uint8_t shaded[3] = {0, 0, 0};
@@ -191,76 +192,109 @@ struct FlatLight {
   }
 };
 
-// Draws the triangle `v` of signed fixed-point area `area` (not 0) over the pixels of `box`
-// (pixel_box: not empty). `flat`: the triangle's flat shading (null with Gouraud shading).
-void draw_triangle(const Frame& f, const Layer& layer, const RenderMesh& item, Vertex v[3],
-                   int64_t area, const PixelBox& box, FlatLight* flat) {
-  if (area < 0) {
-    const Vertex t = v[1];
-    v[1] = v[2];
-    v[2] = t;
-    area = -area;
-  }
-  const int64_t px0 = box.x0, px1 = box.x1, py0 = box.y0, py1 = box.y1;
+// What a covered pixel of a triangle needs besides its edge values (w0, w1, w2: opposite the
+// corners 0, 1, 2, summing to the area), set up at the triangle's first covered pixel (most
+// triangles of a fine mesh cover none).
+struct Fill {
+  const MeshJob* job = nullptr;
+  const Layer* layer = nullptr;
+  const Projected* projected = nullptr;
+  const Corners* corners = nullptr;
+  const Triangle* tri = nullptr;
+  bool ready = false;
+  double inv_area = 0;
+  double depth[3] = {0, 0, 0}, intensity[3] = {0, 0, 0}, scalar[3] = {0, 0, 0};
+  FlatLight flat;
 
-  // w0 is opposite v0 (edge v1->v2), and so on; positive inside.
-  const Vertex& a = v[0];
-  const Vertex& b = v[1];
-  const Vertex& c = v[2];
-  const int64_t bias0 = edge_bias(b, c), bias1 = edge_bias(c, a), bias2 = edge_bias(a, b);
-  const int64_t sx = px0 * kSubpixel + kSubpixel / 2, sy = py0 * kSubpixel + kSubpixel / 2;
-  auto edge = [](const Vertex& p, const Vertex& q, int64_t x, int64_t y) {
-    return (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x);
-  };
-  int64_t row0 = edge(b, c, sx, sy), row1 = edge(c, a, sx, sy), row2 = edge(a, b, sx, sy);
-  const int64_t step_x0 = -(c.y - b.y) * kSubpixel, step_y0 = (c.x - b.x) * kSubpixel;
-  const int64_t step_x1 = -(a.y - c.y) * kSubpixel, step_y1 = (a.x - c.x) * kSubpixel;
-  const int64_t step_x2 = -(b.y - a.y) * kSubpixel, step_y2 = (b.x - a.x) * kSubpixel;
-  double inv_area = 0;  // 1 / area, at the first pixel inside
-  const bool gouraud = flat == nullptr;
-  const bool scalars = item.scalars != nullptr;
-  const size_t width = f.width;
-  for (int64_t py = py0; py <= py1; ++py) {
-    int64_t w0 = row0, w1 = row1, w2 = row2;
-    for (int64_t px = px0; px <= px1; ++px) {
-      if ((w0 + bias0) >= 0 && (w1 + bias1) >= 0 && (w2 + bias2) >= 0) {
-        if (inv_area == 0) inv_area = 1.0 / static_cast<double>(area);
-        const double l0 = static_cast<double>(w0), l1 = static_cast<double>(w1),
-                     l2 = static_cast<double>(w2);
-        const double z = (l0 * a.depth + l1 * b.depth + l2 * c.depth) * inv_area;
-        const float zf = static_cast<float>(z);
-        const size_t index = static_cast<size_t>(py) * width + static_cast<size_t>(px);
-        if (zf < layer.depth[index]) {
-          layer.depth[index] = zf;
-          if (layer.alpha != nullptr) layer.alpha[index] = item.alpha;
-          uint8_t* out = layer.rgb + index * 3;
-          if (!gouraud && !flat->ready) flat->prepare();
-          if (!gouraud && !scalars) {
-            out[0] = flat->shaded[0];
-            out[1] = flat->shaded[1];
-            out[2] = flat->shaded[2];
-          } else {
-            const double intensity =
-                gouraud ? (l0 * a.intensity + l1 * b.intensity + l2 * c.intensity) * inv_area
-                        : flat->intensity;
-            uint8_t base[3] = {item.rgb[0], item.rgb[1], item.rgb[2]};
-            if (scalars) {
-              const double s = (l0 * a.scalar + l1 * b.scalar + l2 * c.scalar) * inv_area;
-              render_ramp_colour(s, item.scalar_max, base);
-            }
-            out[0] = shade(base[0], intensity);
-            out[1] = shade(base[1], intensity);
-            out[2] = shade(base[2], intensity);
-          }
-        }
-      }
-      w0 += step_x0;
-      w1 += step_x1;
-      w2 += step_x2;
+  void prepare(int64_t area, const View& view) {
+    inv_area = 1.0 / static_cast<double>(area);
+    const RenderMesh& item = *job->item;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t i = corners->vertex[k];
+      depth[k] = static_cast<double>(projected[i].depth);
+      intensity[k] = static_cast<double>(projected[i].intensity);
+      if (item.scalars != nullptr) scalar[k] = item.scalars[i];
+      flat.p[k] = job->positions + tri->v[k];
     }
-    row0 += step_y0;
-    row1 += step_y1;
-    row2 += step_y2;
+    flat.light = &view.light;
+    flat.rgb = item.rgb;
+    ready = true;
+  }
+
+  // The pixel `index` with edge values w0, w1, w2: depth-tested, written when nearer.
+  void pixel(size_t index, int64_t w0, int64_t w1, int64_t w2) {
+    const RenderMesh& item = *job->item;
+    const double l0 = static_cast<double>(w0), l1 = static_cast<double>(w1),
+                 l2 = static_cast<double>(w2);
+    const double z = (l0 * depth[0] + l1 * depth[1] + l2 * depth[2]) * inv_area;
+    const float zf = static_cast<float>(z);
+    if (!(zf < layer->depth[index])) return;
+    layer->depth[index] = zf;
+    if (layer->alpha != nullptr) layer->alpha[index] = item.alpha;
+    uint8_t* out = layer->rgb + index * 3;
+    const bool gouraud = job->normals != nullptr;
+    const bool scalars = item.scalars != nullptr;
+    if (!gouraud && !flat.ready) flat.prepare();
+    if (!gouraud && !scalars) {
+      out[0] = flat.shaded[0];
+      out[1] = flat.shaded[1];
+      out[2] = flat.shaded[2];
+      return;
+    }
+    const double shading =
+        gouraud ? (l0 * intensity[0] + l1 * intensity[1] + l2 * intensity[2]) * inv_area
+                : flat.intensity;
+    uint8_t base[3] = {item.rgb[0], item.rgb[1], item.rgb[2]};
+    if (scalars) {
+      const double s = (l0 * scalar[0] + l1 * scalar[1] + l2 * scalar[2]) * inv_area;
+      render_ramp_colour(s, item.scalar_max, base);
+    }
+    out[0] = shade(base[0], shading);
+    out[1] = shade(base[1], shading);
+    out[2] = shade(base[2], shading);
+  }
+};
+
+// Draws the triangle `tri` with corners `c` (counter-clockwise, of fixed-point area `area` > 0)
+// over the pixels of `box` (pixel_box: not empty). Edge functions in exact integers, stepped
+// from pixel to pixel; nothing in floating point until a pixel is covered.
+void draw_triangle(const MeshJob& job, const View& view, const Layer& layer,
+                   const Projected* projected, const Triangle& tri, const Corners& c, int64_t area,
+                   const PixelBox& box) {
+  const int64_t px0 = box.x0, px1 = box.x1, py0 = box.y0, py1 = box.y1;
+  // w0 is opposite corner 0 (edge 1->2), and so on; positive inside.
+  const int64_t bias0 = edge_bias(c, 1, 2), bias1 = edge_bias(c, 2, 0), bias2 = edge_bias(c, 0, 1);
+  const int64_t sx = px0 * kSubpixel + kSubpixel / 2, sy = py0 * kSubpixel + kSubpixel / 2;
+  auto edge = [&c](int p, int q, int64_t x, int64_t y) {
+    return (c.x[q] - c.x[p]) * (y - c.y[p]) - (c.y[q] - c.y[p]) * (x - c.x[p]);
+  };
+  // Biased: a pixel is covered when all three are >= 0.
+  int64_t row0 = edge(1, 2, sx, sy) + bias0, row1 = edge(2, 0, sx, sy) + bias1,
+          row2 = edge(0, 1, sx, sy) + bias2;
+  Fill fill;
+  fill.job = &job;
+  fill.layer = &layer;
+  fill.projected = projected;
+  fill.corners = &c;
+  fill.tri = &tri;
+  const size_t width = job.frame->width;
+  for (int64_t py = py0;;) {
+    int64_t w0 = row0, w1 = row1, w2 = row2;
+    for (int64_t px = px0;;) {
+      if ((w0 | w1 | w2) >= 0) {
+        if (!fill.ready) fill.prepare(area, view);
+        fill.pixel(static_cast<size_t>(py) * width + static_cast<size_t>(px), w0 - bias0,
+                   w1 - bias1, w2 - bias2);
+      }
+      if (++px > px1) break;
+      w0 -= (c.y[2] - c.y[1]) * kSubpixel;
+      w1 -= (c.y[0] - c.y[2]) * kSubpixel;
+      w2 -= (c.y[1] - c.y[0]) * kSubpixel;
+    }
+    if (++py > py1) break;
+    row0 += (c.x[2] - c.x[1]) * kSubpixel;
+    row1 += (c.x[0] - c.x[2]) * kSubpixel;
+    row2 += (c.x[1] - c.x[0]) * kSubpixel;
   }
 }
 
@@ -285,40 +319,34 @@ void draw_mesh_view(const MeshJob& job, uint32_t view_index, uint32_t slot) {
           static_cast<float>(len > 0 ? lambert(normal, len, view.light) : kAmbient);
     }
   }
+  const Triangle* triangles = mesh.triangles.data();
   const size_t triangle_count = mesh.triangles.size();
   for (size_t t = 0; t < triangle_count; ++t) {
-    const Triangle& tri = mesh.triangles[t];
+    const Triangle& tri = triangles[t];
     const Projected& q0 = projected[tri.v[0]];
     const Projected& q1 = projected[tri.v[1]];
     const Projected& q2 = projected[tri.v[2]];
     const int64_t x[3] = {q0.x, q1.x, q2.x}, y[3] = {q0.y, q1.y, q2.y};
-    // Quick reject: zero area in the fixed grid (also covers edge-on faces).
-    const int64_t area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
-    if (area == 0) continue;
     // No pixel centre in its box: nothing to light or draw (most triangles of a fine mesh).
     PixelBox box;
     if (!pixel_box(view, x, y, &box)) continue;
-    Vertex v[3];
-    for (int k = 0; k < 3; ++k) {
-      const Projected& q = projected[tri.v[k]];
-      v[k].x = x[k];
-      v[k].y = y[k];
-      v[k].depth = static_cast<double>(q.depth);
-      v[k].intensity = static_cast<double>(q.intensity);
-      v[k].scalar = 0;
-    }
-    if (item.scalars != nullptr) {
-      for (int k = 0; k < 3; ++k) v[k].scalar = item.scalars[tri.v[k]];
-    }
-    if (job.normals != nullptr) {
-      draw_triangle(f, layer, item, v, area, box, nullptr);
-      continue;
-    }
-    FlatLight flat;
-    for (int k = 0; k < 3; ++k) flat.p[k] = positions + tri.v[k];
-    flat.light = &view.light;
-    flat.rgb = item.rgb;
-    draw_triangle(f, layer, item, v, area, box, &flat);
+    // Zero area in the fixed grid (also edge-on faces): nothing to draw.
+    int64_t area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
+    if (area == 0) continue;
+    // Counter-clockwise on the screen: corners 1 and 2 swapped when the area is negative.
+    const int second = area > 0 ? 1 : 2, third = 3 - second;
+    Corners c;
+    c.x[0] = x[0];
+    c.y[0] = y[0];
+    c.vertex[0] = tri.v[0];
+    c.x[1] = x[second];
+    c.y[1] = y[second];
+    c.vertex[1] = tri.v[second];
+    c.x[2] = x[third];
+    c.y[2] = y[third];
+    c.vertex[2] = tri.v[third];
+    if (area < 0) area = -area;
+    draw_triangle(job, view, layer, projected, tri, c, area, box);
   }
 }
 
