@@ -76,6 +76,23 @@ struct SweepOptions {
   // false: the plain running minimum inside (for measuring the bias it has); true: the
   // extrapolated inside field described above.
   bool correct_bias = true;
+  // > 0 (mm, at most a tenth of a voxel): the surface is decimated in the stream, one-sided:
+  // extracted decimate_error / 2 further out (iso + decimate_error / 2), then decimated in
+  // tiles of whole cell layers (at least 2^16 triangles each, a count of the data, so the
+  // bytes do not depend on the memory cap) by half-edge collapses whose quadric error
+  // (remesh.h) stays below decimate_error / 4. A tile is an open patch whose border stays;
+  // what reaches its top two cell layers is carried into the next tile and decimated again
+  // there, so no seam stays on a plane. Every vertex is an extractor vertex (float32_vertices:
+  // rounded). EXPERIMENTAL, off by default: the aim is a one-sided bound of decimate_error,
+  // but the quadric criterion (a mean of plane distances) does not hold it; measured at
+  // 0.1 mm voxels with decimate_error 0.01 mm, up to about 0.05 mm on either side (at creases
+  // and along walls; tests/blockout/sweep_test.cpp, SweepDecimate). 0: the extractor's
+  // surface, as it is.
+  double decimate_error = 0;
+  // With decimate_error: the vertices rounded to float32 (in the jaws' frame) before the
+  // decimation, whose exact flatness test then sees the bits a float32 consumer (the
+  // Boolean) gets; kLimitExceeded for a vertex beyond float32 range. The blockout sets it.
+  bool float32_vertices = false;
   uint32_t layers_per_tile = 0;      // slab size for the extractor (0: automatic); bytes unchanged
   double edge_margin = kEdgeMargin;  // the extractor's (volume.h); the blockout uses 1/16
 };
@@ -92,6 +109,10 @@ struct SweepStats {
   uint64_t cap_triangles_dropped = 0;  // open_at_region: the caps' triangles left out
   uint64_t closing_samples = 0;        // samples the erosion searched around
   uint64_t closed_samples = 0;         // samples outside the volume that the closing filled
+  uint64_t decimated_tiles = 0;        // decimate_error > 0: tiles decimated
+  uint64_t undecimated_triangles = 0;  // the extractor's triangles (caps dropped left out)
+  uint64_t peak_tile_triangles = 0;    // the most in one tile
+  double decimate_qem_error = 0;       // the largest quadric error of a collapse made (mm)
   MarchingCubesStats extraction;
   Vec3 axis_u{}, axis_v{}, axis_w{};  // the grid's axes in the jaws' frame (axis_w = d)
 };
@@ -114,6 +135,11 @@ uint64_t sweep_state_bound(uint64_t vertex_count, uint64_t triangle_count, uint3
 // marching_cubes(). Progress: "sweep" per layer, then the extractor's. Arena: the sweep's state
 // (sweep_state_bound) and the extractor's working set, returned; the grid comes from the jaws,
 // so the need is known by the two-step contract (a first run's high water, docs/embedding.md).
+// Decimating, the extractor's slab is chosen within a quarter of the free arena, and above it
+// the tiles take about 400 bytes per triangle of the largest tile (peak_tile_triangles: the
+// gathered triangles and vertices, the patch, decimate_qem_bound, the carry) and, for the
+// mesh variant, the decimated output logged (24 bytes a vertex, 12 a triangle) and split once
+// more at the end.
 Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& options,
                     const MarchingCubesVisitor& visitor, SweepStats* stats = nullptr);
 

@@ -101,6 +101,20 @@ struct DecimateOptions {
   uint64_t target_triangles = 0;
   // > 0: no collapse whose error (see above, mm) exceeds it. 0: no limit.
   double max_error = 0.0;
+  // Patches of a larger surface (the blockout's tiles). All default off; with them off the
+  // result is the same bytes as before they existed.
+  // Open meshes: boundary edges (used by one triangle) are allowed. A vertex on one never
+  // moves or goes, and no edge with such an endpoint collapses, so a patch's border, and with
+  // it the seam to its neighbours, stays exactly as it was.
+  bool allow_boundary = false;
+  // Half-edge collapses only: an edge collapses into the endpoint of smaller error, which
+  // stays where it is, so every vertex of `out` is an input vertex with its input bits.
+  bool keep_positions = false;
+  // Optional (keep_positions only), one per input vertex: nonzero keeps the vertex (others
+  // may collapse into it).
+  Span<const uint8_t> locked;
+  // Optional output, one per input vertex: its id in `out`, or ~0u when it went.
+  Span<uint32_t> vertex_map;
 };
 
 enum class DecimateStop : uint8_t {
@@ -140,11 +154,13 @@ uint64_t decimate_qem_bound(uint64_t vertex_count, uint64_t triangle_count);
 // (kInvalidMesh names a boundary edge). An empty mesh gives an empty `out`.
 // Progress: stage "decimate", every 65,536 collapses (done = triangles removed so far).
 // On every error the arena's top is back where it was and `out` is empty.
-// Errors: kInvalidArgument (`out` not empty; no target and no error limit; max_error negative
-// or not finite); kInvalidMesh (index out of range, a repeated id, a boundary edge, an edge
-// used twice in one direction or by more than two triangles, a vertex whose triangles form more
-// than one fan: the message names the vertices, at_index the triangle); kNonFinite (a vertex,
-// at_index: its id); kLimitExceeded (more than 2^32 - 2 vertices or 2^30 triangles);
+// With allow_boundary the mesh may be open (edges used once; vertices on them need not have a
+// single fan). Errors: kInvalidArgument (`out` not empty; no target and no error limit;
+// max_error negative or not finite; `locked` without keep_positions, or `locked` or
+// `vertex_map` not one per vertex); kInvalidMesh (index out of range, a repeated id, a boundary
+// edge, an edge used twice in one direction or by more than two triangles, a vertex whose triangles
+// form more than one fan: the message names the vertices, at_index the triangle); kNonFinite (a
+// vertex, at_index: its id); kLimitExceeded (more than 2^32 - 2 vertices or 2^30 triangles);
 // kArenaExhausted; kCancelled.
 Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions& options, Mesh* out,
                     DecimateStats* stats = nullptr);

@@ -60,13 +60,18 @@ struct LayerSource {
 
 // Where output goes when streamed. vertex() is called once per vertex, ids 0, 1, 2, ... in
 // order, just before the first triangle that uses it; triangle() gets the ids and the
-// positions of its corners. Either may be null. A non-ok status stops the extraction. They
-// must not allocate from ctx.arena (they may when they rewind what they took).
+// positions of its corners. layer_done() is called after the last triangle of each cell layer
+// cz (-1 .. nz - 1, in order): a vertex on sample plane cz + 1 or above may be used again by
+// later triangles, one below it never is. Any may be null. A non-ok status stops the
+// extraction. They must not allocate from ctx.arena (they may when they rewind what they
+// took), except above the working set in marching_cubes() (the blockout's tiles): what they
+// leave there is above the arena's top when it returns.
 struct MarchingCubesVisitor {
   Status (*vertex)(void* user, uint32_t id, const Vec3& position) = nullptr;
   Status (*triangle)(void* user, const Triangle& triangle, const Vec3& a, const Vec3& b,
                      const Vec3& c) = nullptr;
   void* user = nullptr;
+  Status (*layer_done)(void* user, int64_t cz) = nullptr;
 };
 
 // Vertices are kept at least this fraction of an edge away from its samples (1/256).

@@ -33,6 +33,7 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
     so.region = bounds;
     so.open_at_region = true;  // the caps lie outside the splint: the Boolean takes an open B
     if (so.edge_margin < 1.0 / 16) so.edge_margin = 1.0 / 16;
+    so.float32_vertices = true;  // rounded below anyway; decimating, before the decimation
     if (options.sweep.offset > 0) {
       so.offset = options.sweep.offset + attempt * (options.sweep.voxel / 64);
       if (attempt > 0 && !(so.offset <= 20 * so.voxel)) break;

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "blockout/tiles.h"
 #include "splintcore/blockout.h"
 #include "splintcore/distance.h"
 
@@ -537,6 +538,11 @@ Status check_sweep_options(const SweepOptions& o) {
                       "voxels (inset ",
                       o.inset, " mm, voxel ", o.voxel, " mm)");
   }
+  if (!(o.decimate_error >= 0) || !(o.decimate_error <= o.voxel * 0.1)) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "sweep: the decimation error must be from 0 to a tenth of a voxel (",
+                      o.decimate_error, " mm, voxel ", o.voxel, " mm)");
+  }
   if (!(o.offset >= 0) || !(o.offset <= 20 * o.voxel) || (o.offset > 0 && o.inset != 0)) {
     return make_error(StatusCode::kInvalidArgument,
                       "sweep: the offset must be from 0 to 20 "
@@ -853,6 +859,60 @@ Status drop_caps(const Sweep& s, Arena& arena, Mesh* mesh, SweepStats* st) {
   return Status::ok();
 }
 
+// The extractor's options. Decimating, the iso moves out by half the error bound, and the
+// slab is chosen within a quarter of the free arena (the tiles need the rest).
+MarchingCubesOptions extraction_options(const Sweep& s, const SweepOptions& o) {
+  MarchingCubesOptions mc;
+  mc.iso = o.offset > 0 ? o.offset : -o.inset;
+  mc.layers_per_tile = o.layers_per_tile;
+  mc.edge_margin = o.edge_margin;
+  if (o.decimate_error > 0) {
+    mc.iso += 0.5 * o.decimate_error;
+    if (mc.layers_per_tile == 0) {
+      const Arena& arena = *s.ctx->arena;
+      const uint64_t free_bytes = arena.cap() > arena.used() ? arena.cap() - arena.used() : 0;
+      uint32_t best = 1;
+      const uint32_t limit = s.mesh_grid.nz < kMarchingCubesDefaultLayers
+                                 ? s.mesh_grid.nz
+                                 : kMarchingCubesDefaultLayers;
+      for (uint32_t k = 2; k <= limit; ++k) {
+        const uint64_t need = marching_cubes_bound(s.mesh_grid, k);
+        if (need == 0 || need > free_bytes / 4) break;
+        best = k;
+      }
+      mc.layers_per_tile = best;
+    }
+  }
+  return mc;
+}
+
+void setup_tiles(const Sweep& s, const SweepOptions& o, const MarchingCubesVisitor* out,
+                 TileDecimator* d) {
+  const VolumeGrid& g = s.mesh_grid;
+  d->ctx = s.ctx;
+  d->max_error = 0.25 * o.decimate_error;
+  d->lo = g.origin;
+  d->hi = Vec3{g.origin.x + g.spacing.x * (g.nx - 1.0), g.origin.y + g.spacing.y * (g.ny - 1.0),
+               g.origin.z + g.spacing.z * (g.nz - 1.0)};
+  d->spacing_w = g.spacing.z;
+  d->drop_caps = o.open_at_region && o.has_region;
+  d->last_layer = static_cast<int64_t>(g.nz) - 1;
+  d->out = out;
+  d->world = [](const void* frame, const Vec3& p) {
+    return to_world(*static_cast<const Frame*>(frame), p);
+  };
+  d->frame = &s.frame;
+  d->float32 = o.float32_vertices;
+}
+
+void tile_stats(const TileDecimator& d, SweepStats* st) {
+  st->decimated_tiles = d.tiles;
+  st->undecimated_triangles = d.input_triangles - d.caps_dropped;
+  st->cap_triangles_dropped = d.caps_dropped;
+  st->peak_tile_triangles = d.peak_tile_triangles;
+  st->decimate_qem_error = d.max_collapse_error;
+}
+
 }  // namespace
 
 uint64_t sweep_state_bound(uint64_t vertex_count, uint64_t triangle_count, uint32_t nx,
@@ -877,10 +937,16 @@ Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOption
   outer.triangle = world_triangle;
   outer.user = &wv;
   if (s.empty) return Status::ok();
-  MarchingCubesOptions mc;
-  mc.iso = options.offset > 0 ? options.offset : -options.inset;
-  mc.layers_per_tile = options.layers_per_tile;
-  mc.edge_margin = options.edge_margin;
+  const MarchingCubesOptions mc = extraction_options(s, options);
+  if (options.decimate_error > 0) {
+    TileDecimator d;  // streams in the jaws' frame itself
+    setup_tiles(s, options, &visitor, &d);
+    const MarchingCubesVisitor tiles = tile_visitor(&d);
+    const Status status =
+        marching_cubes(ctx, s.mesh_grid, LayerSource{fill_layers, &s}, mc, tiles, &st->extraction);
+    tile_stats(d, st);
+    return status;
+  }
   return marching_cubes(ctx, s.mesh_grid, LayerSource{fill_layers, &s}, mc, outer, &st->extraction);
 }
 
@@ -898,13 +964,25 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
   Sweep s;
   Status status = prepare(ctx, jaws, options, &s, st);
   Mesh mesh(&arena);
+  if (status.is_ok() && !s.empty && options.decimate_error > 0) {
+    // The tiles' log becomes a mesh above the arena's top; moved down over the sweep's state.
+    TileDecimator d;
+    setup_tiles(s, options, nullptr, &d);
+    const MarchingCubesVisitor tiles = tile_visitor(&d);
+    status = marching_cubes(ctx, s.mesh_grid, LayerSource{fill_layers, &s},
+                            extraction_options(s, options), tiles, &st->extraction);
+    tile_stats(d, st);
+    if (!status.is_ok()) {
+      out->bind(&arena);
+      return status;
+    }
+    move_mesh_down(arena, scope.start(), d.mesh, out);
+    scope.commit();
+    return Status::ok();
+  }
   if (status.is_ok() && !s.empty) {
-    MarchingCubesOptions mc;
-    mc.iso = options.offset > 0 ? options.offset : -options.inset;
-    mc.layers_per_tile = options.layers_per_tile;
-    mc.edge_margin = options.edge_margin;
-    status = marching_cubes_mesh(ctx, s.mesh_grid, LayerSource{fill_layers, &s}, mc, &mesh,
-                                 &st->extraction);
+    status = marching_cubes_mesh(ctx, s.mesh_grid, LayerSource{fill_layers, &s},
+                                 extraction_options(s, options), &mesh, &st->extraction);
   }
   if (!status.is_ok()) {
     out->bind(&arena);

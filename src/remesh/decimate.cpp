@@ -214,8 +214,10 @@ struct alignas(64) VertexData {
   uint32_t head;     // one outgoing half-edge, kNone when unused or gone
   uint32_t valence;  // neighbours
   uint32_t stamp;    // link condition marks
-  uint32_t pad;
+  uint32_t flags;    // kLocked, kBoundary
 };
+constexpr uint32_t kLocked = 1;    // stays (options.locked)
+constexpr uint32_t kBoundary = 2;  // on a boundary edge: stays, and its edges never collapse
 static_assert(sizeof(VertexData) == 128, "two cache lines per vertex");
 
 struct Decimator {
@@ -225,6 +227,7 @@ struct Decimator {
   uint32_t generation = 0;
   Vec3 center{};
   Heap heap;
+  bool keep = false;  // options.keep_positions
 
   uint32_t origin(uint32_t h) const { return tri[h / 3].v[h % 3]; }
   uint32_t dest(uint32_t h) const { return tri[h / 3].v[(h % 3 + 1) % 3]; }
@@ -237,6 +240,16 @@ struct Decimator {
     const uint32_t u = origin(h), v = dest(h);
     const Quadric q = sum_of(vx[u].quadric, vx[v].quadric);
     const Vec3 pu = vx[u].pos - center, pv = vx[v].pos - center;
+    if (keep) {
+      // Into the endpoint that may stay and gives the smaller error (u on a tie).
+      const bool may_keep_u = (vx[v].flags & kLocked) == 0;
+      const bool may_keep_v = (vx[u].flags & kLocked) == 0;
+      const double eu = may_keep_u ? evaluate(q, pu) : HUGE_VAL;
+      const double ev = may_keep_v ? evaluate(q, pv) : HUGE_VAL;
+      *target = ev < eu ? vx[v].pos : vx[u].pos;
+      const double e = ev < eu ? ev : eu;
+      return q.w > 0.0 ? e / q.w : 0.0;
+    }
     const Vec3 mid = (pu + pv) * 0.5;
     Vec3 best = pu;
     double best_error = evaluate(q, pu);
@@ -270,6 +283,15 @@ struct Decimator {
   }
 
   uint32_t edge_of(uint32_t h) const { return h < twin(h) ? h : twin(h); }
+
+  // Whether edge h may ever collapse: both endpoints inside (closed fans, which check() and
+  // collapse() walk) and, keeping positions, not both locked.
+  bool collapsible(uint32_t h) const {
+    if (twin(h) == kNone) return false;
+    const uint32_t fu = vx[origin(h)].flags, fv = vx[dest(h)].flags;
+    if (((fu | fv) & kBoundary) != 0) return false;
+    return (fu & fv & kLocked) == 0;
+  }
 
   // Takes an edge out of the heap (or the parked set).
   void detach(uint32_t h, uint32_t* parked) {
@@ -367,6 +389,10 @@ struct Decimator {
     e = y0;
     do {
       const uint32_t id = edge_of(e);
+      if (!collapsible(id)) {
+        e = next_out(e);
+        continue;
+      }
       Vec3 unused;
       const double key = cost(id, &unused);
       if (heap.contains(id)) {
@@ -381,7 +407,7 @@ struct Decimator {
 
   // Twins: half-edges bucketed by origin; a -> b pairs with the one b -> a. The buckets are
   // temporaries.
-  Status link_twins(Arena& arena) {
+  Status link_twins(Arena& arena, bool allow_boundary) {
     ArenaScope buckets(arena);
     const uint32_t half = 3 * nt;
     uint32_t* first = arena.allocate_array<uint32_t>(size_t{nv} + 1);
@@ -402,6 +428,12 @@ struct Decimator {
           ++opposite;
           match = out_edges[i];
         }
+      }
+      if (allow_boundary && same == 1 && opposite == 0) {
+        twin(h) = kNone;  // a boundary edge: both ends stay
+        vx[a].flags |= kBoundary;
+        vx[b].flags |= kBoundary;
+        continue;
       }
       if (same != 1 || opposite != 1) {
         const char* what = opposite == 0 ? "is not closed: a boundary edge (open meshes are "
@@ -430,6 +462,7 @@ struct Decimator {
       }
       const uint32_t h0 = out_edges[first[i]];
       vx[i].head = h0;
+      if ((vx[i].flags & kBoundary) != 0) continue;  // never walked
       uint32_t steps = 0, e = h0;
       do {
         e = next_out(e);
@@ -454,7 +487,6 @@ struct Decimator {
       x.pos = in_verts[i];
       x.valence = 0;
       x.stamp = 0;
-      x.pad = 0;
     }
     for (uint32_t h = 0; h < 3 * nt; ++h) ++vx[origin(h)].valence;
     {
@@ -493,7 +525,7 @@ struct Decimator {
   // Every edge in the heap (by its smaller half-edge), then heapified.
   void fill_heap() {
     for (uint32_t h = 0; h < 3 * nt; ++h) {
-      if (h < twin(h)) {
+      if (h < twin(h) && collapsible(h)) {
         Vec3 unused;
         heap.items[heap.size] = heap_entry(cost(h, &unused), h);
         heap.pos(h) = heap.size++;
@@ -548,7 +580,9 @@ struct Decimator {
         break;
       }
       heap.remove(h);
-      const int verdict = check(h, p);
+      // Keeping positions, the edge collapses into the endpoint cost() chose.
+      const uint32_t into = keep && !(p == vx[origin(h)].pos) ? twin(h) : h;
+      const int verdict = check(into, p);
       if (verdict != 0) {
         heap.pos(h) = kParked;
         ++parked;
@@ -557,7 +591,7 @@ struct Decimator {
         if (verdict == 3) ++local.rejected_degenerate;
         continue;
       }
-      collapse(h, p, &parked);
+      collapse(into, p, &parked);
       live -= 2;
       ++local.collapses;
       if (key > max_key) max_key = key;
@@ -574,7 +608,7 @@ struct Decimator {
 
   // The compact output above the work: the live triangles in order, their vertices numbered
   // by first use (triangles allocated first, as move_mesh_down needs).
-  Status compact(Arena& arena, uint64_t live, Mesh* result) const {
+  Status compact(Arena& arena, uint64_t live, Span<uint32_t> vertex_map, Mesh* result) const {
     uint32_t* remap = arena.allocate_array<uint32_t>(nv);
     if (remap == nullptr) return arena.exhausted_status();
     for (uint32_t i = 0; i < nv; ++i) remap[i] = kNone;
@@ -585,6 +619,7 @@ struct Decimator {
         if (remap[k] == kNone) remap[k] = out_v++;
       }
     }
+    for (size_t i = 0; i < vertex_map.size(); ++i) vertex_map[i] = remap[i];
     const uint32_t out_t = static_cast<uint32_t>(live);
     Triangle* res_t = arena.allocate_array<Triangle>(out_t);
     Vec3* res_v = arena.allocate_array<Vec3>(out_v);
@@ -615,6 +650,14 @@ Status check_decimate_input(const Mesh& mesh, const DecimateOptions& options, co
     return make_error(StatusCode::kInvalidArgument,
                       "decimate_qem: max_error must be a finite distance >= 0 mm, not ",
                       options.max_error);
+  }
+  if ((!options.locked.empty() &&
+       (!options.keep_positions || options.locked.size() != mesh.vertices.size())) ||
+      (!options.vertex_map.empty() && options.vertex_map.size() != mesh.vertices.size())) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "decimate_qem: `locked` needs keep_positions, and it and `vertex_map` "
+                      "need one entry per vertex (",
+                      mesh.vertices.size(), ")");
   }
   if (options.target_triangles == 0 && options.max_error == 0.0) {
     return make_error(StatusCode::kInvalidArgument,
@@ -682,6 +725,7 @@ Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions&
   local.input_vertices = nv;
   local.input_triangles = nt;
   if (nt == 0) {
+    for (uint32_t& m : options.vertex_map) m = kNone;
     if (stats != nullptr) *stats = local;
     return Status::ok();
   }
@@ -699,7 +743,11 @@ Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions&
                     {kNone, kNone, kNone},
                     {kNone, kNone, kNone}};
   }
-  SPLINTCORE_RETURN_IF_ERROR(d.link_twins(arena));
+  d.keep = options.keep_positions;
+  for (uint32_t i = 0; i < nv; ++i) {
+    d.vx[i].flags = !options.locked.empty() && options.locked[i] != 0 ? kLocked : 0;
+  }
+  SPLINTCORE_RETURN_IF_ERROR(d.link_twins(arena, options.allow_boundary));
 
   d.heap.faces = d.tri;
   const uint32_t half = 3 * nt;
@@ -718,7 +766,7 @@ Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions&
   SPLINTCORE_RETURN_IF_ERROR(d.collapse_edges(ctx, options, &live, &local));
   // The compact output above the work, then moved down to where the top was.
   Mesh result(&arena);
-  SPLINTCORE_RETURN_IF_ERROR(d.compact(arena, live, &result));
+  SPLINTCORE_RETURN_IF_ERROR(d.compact(arena, live, options.vertex_map, &result));
   move_mesh_down(arena, scope.start(), result, out);
   scope.commit();
   local.output_vertices = out->vertices.size();

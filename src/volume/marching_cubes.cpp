@@ -730,6 +730,9 @@ Status march_slab(Sweep& s, uint32_t next_z, uint32_t n, const Slab& slab) {
         cz + 1 >= nz ? nullptr : slab.samples + static_cast<uint64_t>(slot + 1) * layer_floats;
     const uint64_t* lo_bits = slab.bits + static_cast<uint64_t>(slot) * layer_words;
     SPLINTCORE_RETURN_IF_ERROR(march_layer(s, cz, lo, hi, lo_bits, lo_bits + layer_words));
+    if (s.visitor->layer_done != nullptr) {
+      SPLINTCORE_RETURN_IF_ERROR(s.visitor->layer_done(s.visitor->user, cz));
+    }
   }
   std::memcpy(slab.samples, slab.samples + layer_floats * n, static_cast<size_t>(layer_floats * 4));
   std::memcpy(slab.bits, slab.bits + layer_words * n, static_cast<size_t>(layer_words * 8));

@@ -617,3 +617,250 @@ TEST(Sweep, ClosingFillsAGapNarrowerThanItsDiameter) {
 
 }  // namespace
 }  // namespace splintcore
+
+namespace splintcore {
+namespace {
+
+using test::TestArena;
+
+// A torus (R 4, r 1.5) tilted about x, as a jaw: curved everywhere, with a hole.
+Mesh tilted_torus(Arena* arena) {
+  Mesh m(arena);
+  Context ctx(arena);
+  const std::vector<SoupTriangle> soup = shapes::torus(96, 48, 4.0, 1.5);
+  SPLINTCORE_ASSERT(
+      weld_exact(ctx, Span<const SoupTriangle>(soup.data(), soup.size()), &m).is_ok());
+  const double c = 0.8, s = 0.6;  // 36.87 degrees about x
+  for (Vec3& p : m.vertices) p = Vec3{p.x, c * p.y - s * p.z, s * p.y + c * p.z};
+  return m;
+}
+
+struct SideErrors {
+  double outside_max = 0;  // the largest distance of a sample of `a` outside `b`
+  double inside_max = 0;   // the largest depth of a sample of `a` inside `b`
+  size_t samples = 0;
+};
+
+// Samples of a's triangles (corners and edge midpoints) against the closed mesh b: signed
+// distance (pseudonormals), split by side.
+SideErrors sampled_errors(Arena& arena, const Mesh& a, const Mesh& b) {
+  Context ctx(&arena);
+  ArenaScope scope(arena);
+  DistanceIndex index;
+  EXPECT_TRUE(build_distance_index(ctx, b, DistanceIndexOptions{}, &index).is_ok());
+  SideErrors e;
+  for (const Triangle& t : a.triangles) {
+    const Vec3& p0 = a.vertices[t.v[0]];
+    const Vec3& p1 = a.vertices[t.v[1]];
+    const Vec3& p2 = a.vertices[t.v[2]];
+    for (int i = 0; i <= 4; i += 2) {
+      for (int j = 0; i + j <= 4; j += 2) {
+        const int k = 4 - i - j;
+        const Vec3 q = (p0 * (i / 4.0) + p1 * (j / 4.0)) + p2 * (k / 4.0);
+        SignedDistance sd;
+        EXPECT_TRUE(signed_distance(index, q, SignMethod::kPseudonormal, &sd));
+        if (sd.distance >= 0) {
+          e.outside_max = std::fmax(e.outside_max, sd.distance);
+        } else {
+          e.inside_max = std::fmax(e.inside_max, -sd.distance);
+        }
+        ++e.samples;
+      }
+    }
+  }
+  return e;
+}
+
+// The decimation's error, measured (sampled both ways against the surface without it). The
+// aim is one-sided and within a tenth of a voxel; the quadric criterion (an area-weighted mean
+// of plane distances) does not hold that: measured at 0.1 mm voxels, up to about 0.05 mm
+// (half a voxel) on either side, at the cone's rim and along the walls. What is asserted here
+// is what holds now (within half a voxel, and a 4x reduction), so a change that makes it worse
+// fails; the tenth of a voxel is the next step (a max-distance criterion), and decimation
+// stays off by default until then.
+TEST(SweepDecimate, StaysWithinHalfAVoxelOfTheSurface) {
+  TestArena ta(size_t{1} << 30);
+  Context ctx(&ta.arena);
+  Mesh cone(&ta.arena);
+  frustum(&cone, 3.0, 5.0, 0.0, 8.0, 360);
+  const Mesh torus = tilted_torus(&ta.arena);
+  struct Shape {
+    const char* name;
+    const Mesh* jaw;
+    Vec3 direction;
+    double voxel;
+  };
+  const Shape shapes[] = {{"tilted cone", &cone, {0.2, -0.1, -1}, 0.1},
+                          {"torus", &torus, {0.1, 0.2, 1}, 0.1}};
+  for (const Shape& sh : shapes) {
+    SCOPED_TRACE(sh.name);
+    ArenaScope scope(ta.arena);
+    SweepOptions o;
+    o.direction = sh.direction;
+    o.voxel = sh.voxel;
+    o.extent = 2.0;
+    Mesh plain(&ta.arena), reduced(&ta.arena);
+    SweepStats plain_stats, stats;
+    SPLINTCORE_ASSERT_OK(
+        sweep_volume_mesh(ctx, Span<const Mesh>(sh.jaw, 1), o, &plain, &plain_stats));
+    o.decimate_error = o.voxel / 10;
+    SPLINTCORE_ASSERT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(sh.jaw, 1), o, &reduced, &stats));
+    double v_plain = 0, v_reduced = 0;
+    SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, plain, &v_plain));
+    SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, reduced, &v_reduced));
+    // The extractor's own count (of the surface decimate_error / 2 further out).
+    EXPECT_GT(stats.undecimated_triangles, plain.triangles.size() * 99 / 100);
+    EXPECT_LT(stats.undecimated_triangles, plain.triangles.size() * 101 / 100);
+    EXPECT_GT(stats.decimated_tiles, 1u);
+    // Both ways: the decimated surface against the plain one, and the plain one's samples
+    // against the decimated (so neither has parts the other lacks).
+    const SideErrors there = sampled_errors(ta.arena, reduced, plain);
+    const SideErrors back = sampled_errors(ta.arena, plain, reduced);
+    std::printf(
+        "[ figures  ] %s: %zu -> %zu triangles (%.1fx, %llu tiles); decimated vs plain: out "
+        "%.5f, in %.6f mm; plain vs decimated: in %.5f, out %.6f mm (bound %.4f); volume "
+        "%.4f -> %.4f mm^3\n",
+        sh.name, plain.triangles.size(), reduced.triangles.size(),
+        static_cast<double>(plain.triangles.size()) / reduced.triangles.size(),
+        static_cast<unsigned long long>(stats.decimated_tiles), there.outside_max, there.inside_max,
+        back.inside_max, back.outside_max, o.decimate_error, v_plain, v_reduced);
+    EXPECT_LT(reduced.triangles.size() * 4, plain.triangles.size());
+    EXPECT_LE(there.inside_max, 0.5 * o.voxel);
+    EXPECT_LE(there.outside_max, 0.5 * o.voxel);
+    EXPECT_LE(back.inside_max, 0.5 * o.voxel);
+    EXPECT_LE(back.outside_max, 0.5 * o.voxel);
+    // Outside on the whole: the iso moved out by decimate_error / 2 adds more volume than
+    // the collapses take (area about 300 mm^2 x 0.005 mm).
+    EXPECT_GT(v_reduced, v_plain);
+  }
+}
+
+TEST(SweepDecimate, SameBytesForEverySlabSizeAndThreadCount) {
+  TestArena ta(size_t{256} << 20);
+  const Mesh torus = tilted_torus(&ta.arena);
+  std::string first;
+  for (uint32_t layers : {1u, 3u, 16u, 0u}) {
+    for (unsigned threads : {1u, 3u}) {
+      SCOPED_TRACE(testing::Message() << layers << " layers, " << threads << " threads");
+#if defined(SPLINTCORE_WITH_PLATFORM)
+      ThreadExecutor pool(threads);
+      Context ctx(&ta.arena, &pool.executor(), nullptr);
+#else
+      Context ctx(&ta.arena);
+#endif
+      ArenaScope scope(ta.arena);
+      SweepOptions o;
+      o.direction = Vec3{0.2, -0.3, 1.0};
+      o.voxel = 0.1;
+      o.decimate_error = 0.01;
+      o.layers_per_tile = layers;
+      HashVisitor hv;
+      MarchingCubesVisitor v;
+      v.triangle = HashVisitor::triangle;
+      v.user = &hv;
+      SweepStats stats;
+      SPLINTCORE_ASSERT_OK(sweep_volume(ctx, Span<const Mesh>(&torus, 1), o, v, &stats));
+      EXPECT_GT(stats.decimated_tiles, 1u);
+      const std::string hex = hv.hex();
+      if (first.empty()) first = hex;
+      EXPECT_EQ(hex, first);
+      // The mesh variant is the same surface, triangle for triangle.
+      Mesh m(&ta.arena);
+      SPLINTCORE_ASSERT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(&torus, 1), o, &m));
+      EXPECT_EQ(m.triangles.size(), hv.triangles);
+      HashVisitor again;
+      for (const Triangle& t : m.triangles) {
+        SPLINTCORE_ASSERT_OK(HashVisitor::triangle(&again, t, m.vertices[t.v[0]],
+                                                   m.vertices[t.v[1]], m.vertices[t.v[2]]));
+      }
+      EXPECT_EQ(again.hex(), first);
+    }
+  }
+}
+
+TEST(SweepDecimate, RunsInExactlyItsHighWaterAndFailsCleanlyBelow) {
+  TestArena big(size_t{256} << 20);
+  const Mesh torus = tilted_torus(&big.arena);
+  SweepOptions o;
+  o.direction = Vec3{0, 0, 1};
+  o.voxel = 0.1;
+  o.decimate_error = 0.01;
+  o.has_region = true;
+  o.region.lo = Vec3{-6, -6, 0};
+  o.region.hi = Vec3{6, 6, 4};
+  o.open_at_region = true;
+  size_t need = 0;
+  size_t triangles = 0;
+  {
+    TestArena ta(size_t{256} << 20);
+    Context ctx(&ta.arena);
+    Mesh out(&ta.arena);
+    SPLINTCORE_ASSERT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(&torus, 1), o, &out));
+    need = ta.arena.high_water();
+    triangles = out.triangles.size();
+    EXPECT_GT(triangles, 1000u);
+  }
+  {
+    TestArena ta(need);
+    Context ctx(&ta.arena);
+    Mesh out(&ta.arena);
+    SPLINTCORE_EXPECT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(&torus, 1), o, &out));
+    EXPECT_EQ(out.triangles.size(), triangles);
+  }
+  uint32_t failures = 0;
+  for (size_t cap = need / 64; cap < need; cap += need / 16) {
+    TestArena ta(cap);
+    Context ctx(&ta.arena);
+    Mesh out(&ta.arena);
+    const Status st = sweep_volume_mesh(ctx, Span<const Mesh>(&torus, 1), o, &out);
+    if (st.is_ok()) {
+      EXPECT_EQ(out.triangles.size(), triangles);
+      continue;
+    }
+    EXPECT_EQ(st.code(), StatusCode::kArenaExhausted) << test::format(st);
+    EXPECT_EQ(ta.arena.used(), 0u);
+    EXPECT_TRUE(out.triangles.empty());
+    ++failures;
+  }
+  EXPECT_GT(failures, 3u);
+}
+
+TEST(Blockout, DecimatedSweepPassesTheIndependentCheck) {
+  TestArena ta(size_t{1} << 30);
+  Context ctx(&ta.arena);
+  Mesh cone(&ta.arena);
+  frustum(&cone, 3.0, 5.0, 0.0, 8.0, 360);
+  for (Vec3& p : cone.vertices) ASSERT_TRUE(round_to_float32(&p));
+  const float lo[3] = {-7, -7, 4}, hi[3] = {7, 7, 10};
+  Mesh box = box_mesh(&ta.arena, lo, hi);
+  Mesh imprint;
+  SPLINTCORE_ASSERT_OK(mesh_boolean(ctx, box, cone, BooleanOptions{}, &imprint, nullptr));
+  BlockoutOptions o;
+  o.sweep.direction = Vec3{0, 0, -1};
+  o.sweep.voxel = 0.1;
+  o.sweep.inset = 0.05;
+  o.sweep.decimate_error = 0.01;
+  Mesh blocked;
+  BlockoutStats stats;
+  SPLINTCORE_ASSERT_OK(blockout(ctx, imprint, Span<const Mesh>(&cone, 1), o, &blocked, &stats));
+  double volume = 0;
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, blocked, &volume));
+  const Vec3 d{0, 0, -1}, u{1, 0, 0}, v{0, 1, 0}, c{0, 0, 5};
+  const LockReport before = lock_report(ta.arena, imprint, cone, d, u, v, c, 6.0, 60, 1e-3);
+  const LockReport after = lock_report(ta.arena, blocked, cone, d, u, v, c, 6.0, 60, 1e-3);
+  std::printf(
+      "[ figures  ] decimated blockout: swept %llu triangles (%llu before decimation); %zu "
+      "lines through the cone: before %zu locked, after %zu (longest %.4f mm)\n",
+      static_cast<unsigned long long>(stats.swept_triangles),
+      static_cast<unsigned long long>(stats.sweep.undecimated_triangles), before.lines_through_jaw,
+      before.locked_lines, after.locked_lines, after.longest);
+  EXPECT_GT(before.locked_lines, 100u);
+  EXPECT_LT(after.locked_lines, before.locked_lines / 10);
+  for (const Vec3& p : after.locked_at) {
+    EXPECT_GT(std::sqrt(p.x * p.x + p.y * p.y), 5.0 - o.sweep.inset - 0.03) << p.x << " " << p.y;
+  }
+  EXPECT_LT(stats.swept_triangles * 4, stats.sweep.undecimated_triangles);
+}
+
+}  // namespace
+}  // namespace splintcore
