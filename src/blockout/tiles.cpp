@@ -16,6 +16,18 @@ constexpr uint32_t kGone = ~uint32_t{0};
 
 inline uint64_t round8(uint64_t n) { return (n + 7) & ~uint64_t{7}; }
 
+// A part of the log as an array of T: the log is 8-byte aligned and every part starts at a
+// multiple of 8 from it (round8), so the cast keeps T's alignment (through void*: the compiler
+// cannot see that, and -Wcast-align is an error on 32-bit ARM).
+template <typename T>
+T* part(uint8_t* p) {
+  return static_cast<T*>(static_cast<void*>(p));
+}
+template <typename T>
+const T* part(const uint8_t* p) {
+  return static_cast<const T*>(static_cast<const void*>(p));
+}
+
 // A chunk of the log: two 64-bit counts (vertices, triangles), the vertices (24 bytes each)
 // and the triangles (12 bytes, then padding to 8).
 uint64_t chunk_bytes(uint64_t nv, uint64_t nt) { return 16 + 24 * nv + round8(12 * nt); }
@@ -154,17 +166,17 @@ void read_carry(TileDecimator& d) {
   d.carried_triangles = counts[1];
   d.prev_count = counts[2];
   c += 16;
-  d.c_pos = reinterpret_cast<const Vec3*>(c);
+  d.c_pos = part<Vec3>(c);
   c += 24 * nv;
-  d.c_w = reinterpret_cast<const double*>(c);
+  d.c_w = part<double>(c);
   c += 8 * nv;
-  d.c_out = reinterpret_cast<const uint32_t*>(c);
+  d.c_out = part<uint32_t>(c);
   c += round8(4 * nv);
   d.c_beyond = c;
   c += round8(nv);
-  d.c_tris = reinterpret_cast<const Triangle*>(c);
+  d.c_tris = part<Triangle>(c);
   c += round8(12 * nt);
-  d.prev_map = reinterpret_cast<const uint32_t*>(c);
+  d.prev_map = part<uint32_t>(c);
 }
 
 // The pieces of a decimated tile the carry is written from.
@@ -188,13 +200,12 @@ void write_carry(const TileDecimator& d, const CarryParts& cp, uint8_t* c) {
   const size_t dv = dec.vertices.size(), dt = dec.triangles.size();
   const uint32_t counts[4] = {next_nc, next_nt, n_new, 0};
   std::memcpy(c, counts, sizeof(counts));
-  Vec3* pos = reinterpret_cast<Vec3*>(c + 16);
-  double* w = reinterpret_cast<double*>(c + 16 + 24 * uint64_t{next_nc});
-  uint32_t* out = reinterpret_cast<uint32_t*>(reinterpret_cast<uint8_t*>(w) + 8 * next_nc);
+  Vec3* pos = part<Vec3>(c + 16);
+  double* w = part<double>(c + 16 + 24 * uint64_t{next_nc});
+  uint32_t* out = part<uint32_t>(reinterpret_cast<uint8_t*>(w) + 8 * next_nc);
   uint8_t* bey = reinterpret_cast<uint8_t*>(out) + round8(4 * uint64_t{next_nc});
-  Triangle* tris = reinterpret_cast<Triangle*>(bey + round8(next_nc));
-  uint32_t* map = reinterpret_cast<uint32_t*>(reinterpret_cast<uint8_t*>(tris) +
-                                              round8(12 * uint64_t{next_nt}));
+  Triangle* tris = part<Triangle>(bey + round8(next_nc));
+  uint32_t* map = part<uint32_t>(reinterpret_cast<uint8_t*>(tris) + round8(12 * uint64_t{next_nt}));
   for (size_t i = 0; i < dv; ++i) {
     const uint32_t ci = carry_id[i];
     if (ci == kGone) continue;
