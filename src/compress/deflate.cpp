@@ -35,80 +35,113 @@ uint32_t reverse_bits(uint32_t code, int length) {
   return r;
 }
 
-// Bits LSB first into the workspace's buffer, which goes to the sink each time it is full.
+// Bits LSB first into the workspace's buffer, which goes to the sink each time it is full. The
+// hot path (put) is a plain append: a sink's refusal is kept (failed()) and reported by flush()
+// and finish_piece(), and nothing more is written after it.
 class BitWriter {
  public:
-  BitWriter(const DeflateWorkspace& ws, const CompressSink& sink) : ws_(ws), sink_(sink) {}
+  BitWriter(const DeflateWorkspace& ws, const CompressSink& sink)
+      : out_(ws.out), capacity_(ws.out_bytes), sink_(sink) {}
   // Up to 32 bits at a time; whole 32-bit words leave the accumulator at once (the same bytes
   // as one at a time: LSB first).
-  Status put(uint32_t bits, int count) {
+  void put(uint32_t bits, int count) {
     bits_ |= static_cast<uint64_t>(bits) << count_;
     count_ += count;
-    if (count_ < 32) return Status::ok();
-    if (ws_.out_bytes - used_ >= 4) {
-      for (int k = 0; k < 4; ++k) ws_.out[used_++] = static_cast<uint8_t>(bits_ >> (8 * k));
-      bits_ >>= 32;
-      count_ -= 32;
-      return used_ == ws_.out_bytes ? write_out() : Status::ok();
-    }
-    return drain();
+    if (count_ >= 32) put_word();
   }
   // Pads to a byte boundary and writes every whole byte held.
-  Status align() {
+  void align() {
     if (count_ % 8 != 0) count_ += 8 - count_ % 8;
-    return drain();
+    drain();
   }
-  Status put_le32(uint32_t v) {
-    SPLINTCORE_RETURN_IF_ERROR(put(v & 0xFFFF, 16));
-    return put(v >> 16, 16);
+  void put_le32(uint32_t v) {
+    put(v & 0xFFFF, 16);
+    put(v >> 16, 16);
+  }
+  // n whole bytes after the bits held, 8 at a time (shifted by the bits held: fewer than 8).
+  void put_bytes(const uint8_t* bytes, size_t n) {
+    drain();
+    size_t i = 0;
+    while (n - i >= 8 && !failed_) {
+      if (capacity_ - used_ < 8) {  // byte at a time up to the buffer's end
+        put(bytes[i++], 8);
+        continue;
+      }
+      uint64_t word = 0;
+      for (size_t k = 0; k < 8; ++k) word |= static_cast<uint64_t>(bytes[i + k]) << (8 * k);
+      const uint64_t shifted = (word << count_) | bits_;
+      for (size_t k = 0; k < 8; ++k) out_[used_ + k] = static_cast<uint8_t>(shifted >> (8 * k));
+      used_ += 8;
+      bits_ = count_ > 0 ? word >> (64 - count_) : 0;
+      i += 8;
+      if (used_ == capacity_) write_out();
+    }
+    for (; i < n; ++i) put(bytes[i], 8);
   }
   Status flush() {
-    SPLINTCORE_RETURN_IF_ERROR(drain());
-    return write_out();
+    drain();
+    write_out();
+    return status();
   }
   // Writes every whole byte and hands back the bits of the last partial one (fewer than 8),
   // unpadded: a piece of a stream that another writer continues.
   Status finish_piece(uint32_t* bits, int* count) {
-    SPLINTCORE_RETURN_IF_ERROR(drain());
+    drain();
     *bits = static_cast<uint32_t>(bits_);
     *count = count_;
-    return Status::ok();
+    return status();
   }
   // Bytes in the buffer, not yet written to the sink.
   size_t held() const { return used_; }
+  // The sink refused a write (what follows is dropped).
+  bool failed() const { return failed_; }
+  Status status() const {
+    return failed_ ? make_error(StatusCode::kIoError, "cannot write the compressed stream")
+                   : Status::ok();
+  }
 
  private:
+  void put_word() {
+    if (capacity_ - used_ < 4) {
+      drain();
+      return;
+    }
+    for (size_t k = 0; k < 4; ++k) out_[used_ + k] = static_cast<uint8_t>(bits_ >> (8 * k));
+    used_ += 4;
+    bits_ >>= 32;
+    count_ -= 32;
+    if (used_ == capacity_) write_out();
+  }
   // Every whole byte out of the accumulator.
-  Status drain() {
+  void drain() {
     while (count_ >= 8) {
-      ws_.out[used_++] = static_cast<uint8_t>(bits_);
+      out_[used_++] = static_cast<uint8_t>(bits_);
       bits_ >>= 8;
       count_ -= 8;
-      if (used_ == ws_.out_bytes) SPLINTCORE_RETURN_IF_ERROR(write_out());
+      if (used_ == capacity_) write_out();
     }
-    return Status::ok();
   }
-  Status write_out() {
-    if (used_ == 0) return Status::ok();
-    if (!sink_.write(sink_.user, ws_.out, used_)) {
-      return make_error(StatusCode::kIoError, "cannot write the compressed stream");
-    }
+  void write_out() {
+    if (used_ != 0 && !failed_ && !sink_.write(sink_.user, out_, used_)) failed_ = true;
     used_ = 0;
-    return Status::ok();
   }
 
-  const DeflateWorkspace& ws_;
+  uint8_t* out_;
+  size_t capacity_;
   const CompressSink& sink_;
   size_t used_ = 0;
   uint64_t bits_ = 0;
   int count_ = 0;
+  bool failed_ = false;
 };
 
 struct FixedCodes {
   uint16_t literal[288];  // bit-reversed codes
   uint8_t literal_length[288];
   uint8_t distance[30];
-  uint8_t length_code[kMaxMatch + 1];  // length 3..258 -> its index in kLengthBase
+  // length 3..258 -> its code and extra bits as they are written (up to 13 bits), and how many
+  uint16_t length_bits[kMaxMatch + 1];
+  uint8_t length_count[kMaxMatch + 1];
   // distance 1..256 -> [d - 1]; 257..32768 -> [256 + ((d - 1) >> 7)]: its index in kDistBase
   uint8_t distance_code[512];
 };
@@ -138,7 +171,10 @@ void make_fixed_codes(FixedCodes* c) {
   uint32_t li = 0;
   for (uint32_t length = kMinMatch; length <= kMaxMatch; ++length) {
     while (li < 28 && kLengthBase[li + 1] <= length) ++li;
-    c->length_code[length] = static_cast<uint8_t>(li);
+    const int code_length = c->literal_length[257 + li];
+    c->length_bits[length] =
+        static_cast<uint16_t>(c->literal[257 + li] | (length - kLengthBase[li]) << code_length);
+    c->length_count[length] = static_cast<uint8_t>(code_length + kLengthExtra[li]);
   }
   uint32_t di = 0;
   for (uint32_t d = 1; d <= 256; ++d) {
@@ -153,23 +189,18 @@ void make_fixed_codes(FixedCodes* c) {
   }
 }
 
-Status put_literal(BitWriter& w, const FixedCodes& c, uint32_t symbol) {
-  return w.put(c.literal[symbol], c.literal_length[symbol]);
+void put_literal(BitWriter& w, const FixedCodes& c, uint32_t symbol) {
+  w.put(c.literal[symbol], c.literal_length[symbol]);
 }
 
-Status put_match(BitWriter& w, const FixedCodes& c, uint32_t length, uint32_t distance) {
-  const uint32_t li = c.length_code[length];
-  SPLINTCORE_RETURN_IF_ERROR(put_literal(w, c, 257 + li));
-  if (kLengthExtra[li] > 0) {
-    SPLINTCORE_RETURN_IF_ERROR(w.put(length - kLengthBase[li], kLengthExtra[li]));
-  }
+// A match in one put: its length's code and extra bits (up to 8 + 5), then its distance's
+// code and extra bits (5 + 13): at most 31 bits.
+void put_match(BitWriter& w, const FixedCodes& c, uint32_t length, uint32_t distance) {
   const uint32_t di = distance <= 256 ? c.distance_code[distance - 1]
                                       : c.distance_code[256 + ((distance - 1) >> 7)];
-  SPLINTCORE_RETURN_IF_ERROR(w.put(c.distance[di], 5));
-  if (kDistExtra[di] > 0) {
-    SPLINTCORE_RETURN_IF_ERROR(w.put(distance - kDistBase[di], kDistExtra[di]));
-  }
-  return Status::ok();
+  const int length_count = c.length_count[length];
+  const uint32_t distance_bits = c.distance[di] | (distance - kDistBase[di]) << 5;
+  w.put(c.length_bits[length] | distance_bits << length_count, length_count + 5 + kDistExtra[di]);
 }
 
 // How many bytes a and b have in common from the start, at most `limit` (8 at a time where
@@ -190,10 +221,95 @@ size_t common_length(const uint8_t* a, const uint8_t* b, size_t limit) {
   return n;
 }
 
+// Four bytes as a little-endian word (p[0] lowest), whatever the machine's byte order.
+uint32_t load_le32(const uint8_t* p) {
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  uint32_t v;
+  std::memcpy(&v, p, 4);
+  return v;
+#else
+  return static_cast<uint32_t>(p[0]) | static_cast<uint32_t>(p[1]) << 8 |
+         static_cast<uint32_t>(p[2]) << 16 | static_cast<uint32_t>(p[3]) << 24;
+#endif
+}
+
+uint32_t hash_of(uint32_t v) { return (v * 2654435761u) >> (32 - kHashBits); }
+
+// The hash of the three bytes at p: p[0] p[1] p[2] as a big-endian 24-bit value.
 uint32_t hash3(const uint8_t* p) {
-  const uint32_t v =
-      (static_cast<uint32_t>(p[0]) << 16) | (static_cast<uint32_t>(p[1]) << 8) | p[2];
-  return (v * 2654435761u) >> (32 - kHashBits);
+  return hash_of((static_cast<uint32_t>(p[0]) << 16) | (static_cast<uint32_t>(p[1]) << 8) | p[2]);
+}
+
+// hash3 of data + pos where a fourth byte may be read (pos + 4 <= size): one load.
+uint32_t hash3_wide(const uint8_t* p) {
+  const uint32_t v = load_le32(p);  // p[3] p[2] p[1] p[0], high to low
+#if defined(__GNUC__) || defined(__clang__)
+  return hash_of(__builtin_bswap32(v) >> 8);
+#else
+  return hash_of((v & 0xFF) << 16 | (v & 0xFF00) | (v >> 16 & 0xFF));
+#endif
+}
+
+// The matcher's chains: head[hash] the newest position with those three bytes, prev[pos mod
+// the window] the one before it.
+struct Chains {
+  int32_t* head;
+  int32_t* prev;
+  const uint8_t* data;
+  size_t size;
+
+  uint32_t hash(size_t pos) const {
+    return pos + 4 <= size ? hash3_wide(data + pos) : hash3(data + pos);
+  }
+  void insert_hashed(size_t pos, uint32_t h) {
+    prev[pos & (kWindow - 1)] = head[h];
+    head[h] = static_cast<int32_t>(pos);
+  }
+  void insert(size_t pos) {
+    if (pos + kMinMatch <= size) insert_hashed(pos, hash(pos));
+  }
+};
+
+// The first longest match (at least kMinMatch bytes) at i among the chain's first max_chain
+// candidates within the window; 0 when there is none. A candidate is looked at only if the 4
+// bytes that end where the best match so far ends agree (3 from the start before there is
+// one): only a candidate that fails no such test can be longer, so the choice is the same as
+// looking at every candidate.
+uint32_t longest_match(const Chains& c, size_t i, size_t end, uint32_t h, uint32_t max_chain,
+                       size_t nice, uint32_t* best_distance) {
+  const uint8_t* data = c.data;
+  const size_t limit = end - i < kMaxMatch ? end - i : kMaxMatch;
+  // Candidates in [low, cand) are in the window and older than the one before: the chain
+  // is newest first, so anything else ends it.
+  const int64_t low = i > kWindow ? static_cast<int64_t>(i - kWindow) : 0;
+  auto in_range = [low](int64_t candidate, int64_t above) {
+    return static_cast<uint64_t>(candidate - low) < static_cast<uint64_t>(above - low);
+  };
+  size_t best = 0;
+  size_t probe = 0;  // the tested word starts here: best - 3 once best >= 3
+  uint32_t mask = 0xFFFFFF;
+  uint32_t want = static_cast<uint32_t>(data[i]) | static_cast<uint32_t>(data[i + 1]) << 8 |
+                  static_cast<uint32_t>(data[i + 2]) << 16;
+  int64_t candidate = c.head[h];
+  int64_t above = static_cast<int64_t>(i);
+  for (uint32_t chain = 0; chain < max_chain && in_range(candidate, above); ++chain) {
+    const size_t cand = static_cast<size_t>(candidate);
+    // cand + probe + 4 <= i + best + 1 <= i + limit <= size: in bounds.
+    if ((load_le32(data + cand + probe) & mask) == want) {
+      const size_t n = common_length(data + cand, data + i, limit);
+      if (n > best) {
+        best = n;
+        *best_distance = static_cast<uint32_t>(i - cand);
+        if (n == limit || n >= nice) break;
+        probe = n - 3;
+        mask = 0xFFFFFFFF;
+        want = load_le32(data + i + probe);  // i + n < i + limit <= size
+      }
+    }
+    above = candidate;
+    candidate = c.prev[cand & (kWindow - 1)];
+  }
+  return static_cast<uint32_t>(best);
 }
 
 // One fixed-Huffman block of data[begin..end) (the last block when end == size; deflate puts
@@ -202,86 +318,71 @@ uint32_t hash3(const uint8_t* p) {
 // bounds, so the blocks of a cut input can be made in any order (deflate_parallel).
 Status deflate_block(const uint8_t* data, size_t size, size_t begin, size_t end,
                      const DeflateWorkspace& ws, BitWriter& w) {
-  int32_t* head = ws.head;
-  int32_t* prev = ws.prev;
+  Chains chains{ws.head, ws.prev, data, size};
   const uint32_t max_chain = ws.effort.max_chain;
   const size_t nice = ws.effort.nice_length;
   FixedCodes codes;
   make_fixed_codes(&codes);
-  for (size_t i = 0; i < (size_t{1} << kHashBits); ++i) head[i] = -1;
-  SPLINTCORE_RETURN_IF_ERROR(w.put(end == size ? 1 : 0, 1));  // BFINAL
-  SPLINTCORE_RETURN_IF_ERROR(w.put(1, 2));                    // BTYPE 01: fixed Huffman
-  auto insert = [&](size_t pos) {
-    if (pos + kMinMatch > size) return;
-    const uint32_t h = hash3(data + pos);
-    prev[pos & (kWindow - 1)] = head[h];
-    head[h] = static_cast<int32_t>(pos);
-  };
-  for (size_t pos = begin > kWindow ? begin - kWindow : 0; pos < begin; ++pos) insert(pos);
+  for (size_t i = 0; i < (size_t{1} << kHashBits); ++i) chains.head[i] = -1;
+  w.put(end == size ? 1 : 0, 1);  // BFINAL
+  w.put(1, 2);                    // BTYPE 01: fixed Huffman
+  for (size_t pos = begin > kWindow ? begin - kWindow : 0; pos < begin; ++pos) {
+    chains.insert(pos);
+  }
   size_t i = begin;
-  while (i < end) {
+  while (i < end && !w.failed()) {
+    if (i + kMinMatch > size) {  // the last two bytes: neither matched nor hashed
+      put_literal(w, codes, data[i]);
+      ++i;
+      continue;
+    }
+    const uint32_t h = chains.hash(i);
     uint32_t best_length = 0, best_distance = 0;
     if (i + kMinMatch <= end) {
-      const size_t limit = end - i < kMaxMatch ? end - i : kMaxMatch;
-      int32_t candidate = head[hash3(data + i)];
-      for (uint32_t chain = 0; chain < max_chain && candidate >= 0; ++chain) {
-        const size_t cand = static_cast<size_t>(candidate);
-        const size_t distance = i - cand;
-        if (distance > kWindow) break;
-        // A longer match agrees at best_length and the bytes before it (a filter only).
-        if (best_length < limit && data[cand + best_length] == data[i + best_length] &&
-            (best_length < 2 || data[cand + best_length - 1] == data[i + best_length - 1])) {
-          const size_t n = common_length(data + cand, data + i, limit);
-          if (n > best_length) {
-            best_length = static_cast<uint32_t>(n);
-            best_distance = static_cast<uint32_t>(distance);
-            if (n == limit || n >= nice) break;
-          }
-        }
-        candidate = prev[cand & (kWindow - 1)];
-        if (candidate >= 0 && static_cast<size_t>(candidate) >= cand) break;  // stale entry
-      }
+      best_length = longest_match(chains, i, end, h, max_chain, nice, &best_distance);
     }
     if (best_length >= kMinMatch) {
-      SPLINTCORE_RETURN_IF_ERROR(put_match(w, codes, best_length, best_distance));
+      put_match(w, codes, best_length, best_distance);
       // Every position of a short match goes into the chains; of a long one (a run of
       // background) only the last few, as zlib's fast levels do: the runs stay findable.
-      const uint32_t first = best_length <= kMaxInsert ? 0 : best_length - 3;
-      for (uint32_t k = first; k < best_length; ++k) insert(i + k);
+      if (best_length <= kMaxInsert) {
+        chains.insert_hashed(i, h);
+        for (uint32_t k = 1; k < best_length; ++k) chains.insert(i + k);
+      } else {
+        for (uint32_t k = best_length - 3; k < best_length; ++k) chains.insert(i + k);
+      }
       i += best_length;
     } else {
-      SPLINTCORE_RETURN_IF_ERROR(put_literal(w, codes, data[i]));
-      insert(i);
+      put_literal(w, codes, data[i]);
+      chains.insert_hashed(i, h);
       ++i;
     }
   }
-  return put_literal(w, codes, 256);  // end of block
+  put_literal(w, codes, 256);  // end of block
+  return w.status();
 }
 
 // The wrapper's header (RFC 1950 / 1952), before the first block.
-Status put_header(BitWriter& bits, ZFormat format) {
+void put_header(BitWriter& bits, ZFormat format) {
   if (format == ZFormat::kZlib) {
-    SPLINTCORE_RETURN_IF_ERROR(bits.put(0x78, 8));  // CMF: deflate, 32 KiB window
-    SPLINTCORE_RETURN_IF_ERROR(bits.put(0x9C, 8));  // FLG: (0x789C % 31) == 0, no dictionary
+    bits.put(0x78, 8);  // CMF: deflate, 32 KiB window
+    bits.put(0x9C, 8);  // FLG: (0x789C % 31) == 0, no dictionary
   } else if (format == ZFormat::kGzip) {
     // ID1 ID2, CM 8, no flags, no time, XFL 0, OS 255 (unknown): the same bytes everywhere.
     static const uint8_t kHeader[10] = {0x1F, 0x8B, 8, 0, 0, 0, 0, 0, 0, 255};
-    for (uint8_t b : kHeader) SPLINTCORE_RETURN_IF_ERROR(bits.put(b, 8));
+    for (uint8_t b : kHeader) bits.put(b, 8);
   }
-  return Status::ok();
 }
 
 // Pads the last block to a byte, then the wrapper's trailer, then everything to the sink.
 Status put_trailer(BitWriter& bits, ZFormat format, const uint8_t* data, size_t size) {
-  SPLINTCORE_RETURN_IF_ERROR(bits.align());
+  bits.align();
   if (format == ZFormat::kZlib) {
     const uint32_t adler = adler32(1, data, size);
-    for (int k = 3; k >= 0; --k) {
-      SPLINTCORE_RETURN_IF_ERROR(bits.put((adler >> (8 * k)) & 0xFF, 8));
-    }
+    for (int k = 3; k >= 0; --k) bits.put((adler >> (8 * k)) & 0xFF, 8);
   } else if (format == ZFormat::kGzip) {
-    SPLINTCORE_RETURN_IF_ERROR(bits.put_le32(crc32(0, data, size)));
-    SPLINTCORE_RETURN_IF_ERROR(bits.put_le32(static_cast<uint32_t>(size)));
+    bits.put_le32(crc32(0, data, size));
+    bits.put_le32(static_cast<uint32_t>(size));
   }
   return bits.flush();
 }
@@ -322,16 +423,9 @@ struct Pieces {
 };
 
 // Appends a piece (whole bytes, then up to 7 bits) to the stream.
-Status append_piece(BitWriter& out, const uint8_t* bytes, size_t n, uint32_t bits, int count) {
-  size_t i = 0;
-  for (; i + 4 <= n; i += 4) {
-    const uint32_t word =
-        static_cast<uint32_t>(bytes[i]) | static_cast<uint32_t>(bytes[i + 1]) << 8 |
-        static_cast<uint32_t>(bytes[i + 2]) << 16 | static_cast<uint32_t>(bytes[i + 3]) << 24;
-    SPLINTCORE_RETURN_IF_ERROR(out.put(word, 32));
-  }
-  for (; i < n; ++i) SPLINTCORE_RETURN_IF_ERROR(out.put(bytes[i], 8));
-  return count > 0 ? out.put(bits, count) : Status::ok();
+void append_piece(BitWriter& out, const uint8_t* bytes, size_t n, uint32_t bits, int count) {
+  out.put_bytes(bytes, n);
+  if (count > 0) out.put(bits, count);
 }
 
 }  // namespace
@@ -360,7 +454,7 @@ Status deflate_fixed(const DeflateWorkspace& workspace, ZFormat format, const ui
   SPLINTCORE_ASSERT(workspace.out != nullptr && sink.write != nullptr);
   check_effort(workspace.effort);
   BitWriter bits(workspace, sink);
-  SPLINTCORE_RETURN_IF_ERROR(put_header(bits, format));
+  put_header(bits, format);
   SPLINTCORE_RETURN_IF_ERROR(deflate_block(data, size, 0, size, workspace, bits));
   return put_trailer(bits, format, data, size);
 }
@@ -403,7 +497,7 @@ Status deflate_parallel(const Executor* executor, const DeflateLanes& lanes, ZFo
   p.size = size;
   p.ws = lanes.lane;
   BitWriter bits(lanes.stream, sink);
-  SPLINTCORE_RETURN_IF_ERROR(put_header(bits, format));
+  put_header(bits, format);
   const size_t pieces = (size + kDeflatePiece - 1) / kDeflatePiece;
   for (size_t first = 0; first < pieces; first += lanes.lanes) {
     const uint32_t wave =
@@ -413,8 +507,9 @@ Status deflate_parallel(const Executor* executor, const DeflateLanes& lanes, ZFo
     parallel_for_each(executor, wave, task);
     for (uint32_t k = 0; k < wave; ++k) {
       SPLINTCORE_RETURN_IF_ERROR(p.status[k]);
-      SPLINTCORE_RETURN_IF_ERROR(append_piece(bits, p.ws[k].out, p.used[k], p.bits[k], p.count[k]));
+      append_piece(bits, p.ws[k].out, p.used[k], p.bits[k], p.count[k]);
     }
+    SPLINTCORE_RETURN_IF_ERROR(bits.status());
   }
   return put_trailer(bits, format, data, size);
 }
