@@ -117,11 +117,13 @@ struct SweepStats {
   Vec3 axis_u{}, axis_v{}, axis_w{};  // the grid's axes in the jaws' frame (axis_w = d)
 };
 
-// Arena bytes the sweep's own state takes for `jaws` (local vertex copies, sorted triangle
-// list, five layers of the raw field as 16-bit steps of band / 65534, the newest being the
-// column state: 10 bytes per column), without the extractor's
-// working set (marching_cubes_bound) and output. A closing adds 2 m + 1 layers of the
-// field and 40 (2 m + 1)^3 bytes of search offsets, m = ceil(radius / voxel) + 2.
+// Arena bytes the sweep's own state takes for `jaws` at most: a bit per vertex and per
+// triangle that selects what the sweep needs (the front triangles whose shadow, grown by the
+// band, meets the grid's columns: with a region, only those near it), local copies of those
+// triangles and their vertices, sorted, and five layers of the raw field as 16-bit steps of
+// band / 65534, the newest being the column state: 10 bytes per column. Without the
+// extractor's working set (marching_cubes_bound) and output. A closing adds 2 m + 1 layers of
+// the field and 40 (2 m + 1)^3 bytes of search offsets, m = ceil(radius / voxel) + 2.
 uint64_t sweep_state_bound(uint64_t vertex_count, uint64_t triangle_count, uint32_t nx,
                            uint32_t ny);
 

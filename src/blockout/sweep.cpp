@@ -552,10 +552,10 @@ Status check_sweep_options(const SweepOptions& o) {
   return Status::ok();
 }
 
-// The jaws' vertices in the local frame, all jaws concatenated (s->vertices), their box, and
-// the jaws' triangle count.
-Status jaws_in_frame(Arena& arena, Span<const Mesh> jaws, Sweep* s, Aabb* box,
-                     size_t* triangle_total) {
+// The jaws' box in the local frame (all their vertices: its corner anchors the lattice, so a
+// region sees the samples of the whole sweep) and their counts.
+Status jaws_box(Span<const Mesh> jaws, const Frame& frame, Aabb* box, size_t* vertex_total,
+                size_t* triangle_total) {
   uint64_t vertex_count = 0, triangle_count = 0;
   for (const Mesh& m : jaws) {
     vertex_count += m.vertices.size();
@@ -569,49 +569,115 @@ Status jaws_in_frame(Arena& arena, Span<const Mesh> jaws, Sweep* s, Aabb* box,
                       "sweep: more than 2^32 - 1 vertices or triangles");
   }
   // Both below 2^32 now, so they fit a 32-bit size_t too.
-  const size_t vertex_total = static_cast<size_t>(vertex_count);
+  *vertex_total = static_cast<size_t>(vertex_count);
   *triangle_total = static_cast<size_t>(triangle_count);
-  Vec3* local = arena.allocate_array<Vec3>(vertex_total);
-  if (local == nullptr) return arena.exhausted_status();
-  size_t at = 0;
   for (size_t j = 0; j < jaws.size(); ++j) {
-    for (size_t i = 0; i < jaws[j].vertices.size(); ++i, ++at) {
+    for (size_t i = 0; i < jaws[j].vertices.size(); ++i) {
       const Vec3& p = jaws[j].vertices[i];
       if (!is_finite(p)) {
         return make_error(StatusCode::kNonFinite, "sweep: jaw ", j, " has a non-finite vertex")
             .at_index(i);
       }
-      local[at] = to_local(s->frame, p);
-      box->add(local[at]);
+      box->add(to_local(frame, p));
     }
   }
-  s->vertices = Span<const Vec3>(local, vertex_total);
   return Status::ok();
 }
 
-// Front and silhouette triangles (orient2d of the projection <= 0: the outward normal has
-// no component along w), with global vertex ids.
-Status select_front(Span<const Mesh> jaws, const Vec3* local, ArenaArray<Triangle>* front) {
-  size_t base = 0;
+inline uint32_t popcount64(uint64_t x) {
+  x = x - ((x >> 1) & 0x5555555555555555ull);
+  x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
+  x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0full;
+  return static_cast<uint32_t>((x * 0x0101010101010101ull) >> 56);
+}
+
+// Whether the sweep can use the triangle (local corners a, b, c): it faces against w or
+// across it (orient2d of the projection <= 0: the outward normal has no component along w),
+// its shadow grown by the band meets the grid's columns, and it starts within the band of
+// the last layer. sweep_rows() and make_raw_layer() never touch the others, so leaving them
+// out changes nothing but the memory (a voxel of slack against rounding).
+bool needed_triangle(const Sweep& s, const Vec3& a, const Vec3& b, const Vec3& c) {
+  if (orient2d(a.x, a.y, b.x, b.y, c.x, c.y) > 0 || s.empty) return false;
+  const VolumeGrid& g = s.grid;
+  const double reach = s.band + g.spacing.x;
+  const double x_hi = g.origin.x + g.spacing.x * (g.nx - 1.0);
+  const double y_hi = g.origin.y + g.spacing.y * (g.ny - 1.0);
+  const double w_hi = g.origin.z + g.spacing.z * (g.nz - 1.0);
+  return std::fmax(a.x, std::fmax(b.x, c.x)) + reach >= g.origin.x &&
+         std::fmin(a.x, std::fmin(b.x, c.x)) - reach <= x_hi &&
+         std::fmax(a.y, std::fmax(b.y, c.y)) + reach >= g.origin.y &&
+         std::fmin(a.y, std::fmin(b.y, c.y)) - reach <= y_hi &&
+         std::fmin(a.z, std::fmin(b.z, c.z)) - reach <= w_hi;
+}
+
+// The triangles the sweep needs (needed_triangle, in input order) with ids into
+// s->vertices, the local copies of only the vertices they use (in input order). Bits per
+// vertex and per triangle say which are kept (vertex ids by rank among the kept).
+// stats->front_triangles counts the front triangles of all the jaws.
+Status select_front(Arena& arena, Span<const Mesh> jaws, size_t vertex_total, size_t triangle_total,
+                    Sweep* s, ArenaArray<Triangle>* front, SweepStats* stats) {
+  const size_t vwords = vertex_total / 64 + 1, twords = triangle_total / 64 + 1;
+  uint64_t* vbits = arena.allocate_array<uint64_t>(vwords);
+  uint32_t* rank = arena.allocate_array<uint32_t>(vwords);
+  uint64_t* tbits = arena.allocate_array<uint64_t>(twords);
+  if (vbits == nullptr || rank == nullptr || tbits == nullptr) return arena.exhausted_status();
+  std::memset(vbits, 0, vwords * 8);
+  std::memset(tbits, 0, twords * 8);
+  size_t base = 0, t_at = 0, kept = 0;
+  uint64_t front_total = 0;
   for (size_t j = 0; j < jaws.size(); ++j) {
     const Mesh& m = jaws[j];
-    for (size_t t = 0; t < m.triangles.size(); ++t) {
-      Triangle g;
+    for (size_t t = 0; t < m.triangles.size(); ++t, ++t_at) {
+      Vec3 p[3];
       for (int k = 0; k < 3; ++k) {
-        if (m.triangles[t].v[k] >= m.vertices.size()) {
+        const uint32_t v = m.triangles[t].v[k];
+        if (v >= m.vertices.size()) {
           return make_error(StatusCode::kInvalidMesh, "sweep: jaw ", j, " triangle ", t,
                             " has a vertex id out of range")
               .at_index(t);
         }
-        g.v[k] = static_cast<uint32_t>(base + m.triangles[t].v[k]);
+        p[k] = to_local(s->frame, m.vertices[v]);
       }
-      const Vec3& a = local[g.v[0]];
-      const Vec3& b = local[g.v[1]];
-      const Vec3& c = local[g.v[2]];
-      if (orient2d(a.x, a.y, b.x, b.y, c.x, c.y) <= 0) (void)front->push_back(g);
+      if (orient2d(p[0].x, p[0].y, p[1].x, p[1].y, p[2].x, p[2].y) <= 0) ++front_total;
+      if (!needed_triangle(*s, p[0], p[1], p[2])) continue;
+      tbits[t_at / 64] |= uint64_t{1} << (t_at % 64);
+      ++kept;
+      for (int k = 0; k < 3; ++k) {
+        const size_t g = base + m.triangles[t].v[k];
+        vbits[g / 64] |= uint64_t{1} << (g % 64);
+      }
     }
     base += m.vertices.size();
   }
+  stats->front_triangles = front_total;
+  uint32_t used = 0;
+  for (size_t w = 0; w < vwords; ++w) {
+    rank[w] = used;
+    used += popcount64(vbits[w]);
+  }
+  Vec3* local = arena.allocate_array<Vec3>(used);
+  if (used > 0 && local == nullptr) return arena.exhausted_status();
+  if (!front->reserve(kept > 0 ? kept : 1)) return arena.exhausted_status();
+  const auto id = [&](size_t g) {
+    const uint64_t below = vbits[g / 64] & ((uint64_t{1} << (g % 64)) - 1);
+    return rank[g / 64] + popcount64(below);
+  };
+  base = 0;
+  t_at = 0;
+  for (const Mesh& m : jaws) {
+    for (size_t i = 0; i < m.vertices.size(); ++i) {
+      const size_t g = base + i;
+      if ((vbits[g / 64] >> (g % 64)) & 1) local[id(g)] = to_local(s->frame, m.vertices[i]);
+    }
+    for (size_t t = 0; t < m.triangles.size(); ++t, ++t_at) {
+      if (((tbits[t_at / 64] >> (t_at % 64)) & 1) == 0) continue;
+      Triangle g;
+      for (int k = 0; k < 3; ++k) g.v[k] = id(base + m.triangles[t].v[k]);
+      (void)front->push_back(g);
+    }
+    base += m.vertices.size();
+  }
+  s->vertices = Span<const Vec3>(local, used);
   return Status::ok();
 }
 
@@ -761,15 +827,16 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   SPLINTCORE_RETURN_IF_ERROR(check_sweep_options(o));
   SPLINTCORE_RETURN_IF_ERROR(make_frame(o.direction, &s->frame));
   Aabb box;
-  size_t triangle_total = 0;
-  SPLINTCORE_RETURN_IF_ERROR(jaws_in_frame(arena, jaws, s, &box, &triangle_total));
-  ArenaArray<Triangle> front(&arena);
-  if (!front.reserve(triangle_total)) return arena.exhausted_status();
-  SPLINTCORE_RETURN_IF_ERROR(select_front(jaws, s->vertices.data(), &front));
-  stats->front_triangles = front.size();
-  SPLINTCORE_RETURN_IF_ERROR(sort_front(arena, front, s));
+  size_t vertex_total = 0, triangle_total = 0;
+  SPLINTCORE_RETURN_IF_ERROR(jaws_box(jaws, s->frame, &box, &vertex_total, &triangle_total));
   double band = 0;
   SPLINTCORE_RETURN_IF_ERROR(lay_grid(o, box, s, &band));
+  s->band = band;
+  // Only the triangles whose shadow meets the grid's columns (the region's) are kept.
+  ArenaArray<Triangle> front(&arena);
+  SPLINTCORE_RETURN_IF_ERROR(
+      select_front(arena, jaws, vertex_total, triangle_total, s, &front, stats));
+  SPLINTCORE_RETURN_IF_ERROR(sort_front(arena, front, s));
   if (s->empty) {
     s->ctx = &ctx;
     s->stats = stats;
@@ -785,7 +852,6 @@ Status prepare(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
   }
   s->ring = arena.allocate_array<uint16_t>(static_cast<size_t>(layer) * kRing);
   if (s->ring == nullptr) return arena.exhausted_status();
-  s->band = band;
   s->fband = static_cast<float>(band);
   s->step = band / 65534.0;
   if (o.closing_radius > 0) SPLINTCORE_RETURN_IF_ERROR(prepare_closing(arena, o, layer, s));
@@ -918,8 +984,11 @@ void tile_stats(const TileDecimator& d, SweepStats* st) {
 uint64_t sweep_state_bound(uint64_t vertex_count, uint64_t triangle_count, uint32_t nx,
                            uint32_t ny) {
   const uint64_t layer = uint64_t{nx} * ny;
-  return 24 * vertex_count + (12 + 16 + 12 + 8 + 8 + 4) * triangle_count + 2 * kRing * layer +
-         16 * 64;
+  // The bits that select what is kept (a bit per vertex and per triangle, a rank per 64
+  // vertices), then the kept vertices and triangles: all of them at most.
+  const uint64_t selection = 12 * (vertex_count / 64 + 1) + 8 * (triangle_count / 64 + 1);
+  return selection + 24 * vertex_count + (12 + 16 + 12 + 8 + 8 + 4) * triangle_count +
+         2 * kRing * layer + 16 * 64;
 }
 
 Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& options,

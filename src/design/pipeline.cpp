@@ -169,24 +169,61 @@ Status refuse_inside_out_jaws(const Context& ctx, const CaseFile& c, Span<const 
   return Status::ok();
 }
 
+// Jaw k's vertices as B holds them (moved by its transform, rounded to float32): the jaw's
+// own when that changes no bit (a jaw that does not move, read from STL), else a copy.
+Status moved_vertices(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, size_t k,
+                      Span<const Vec3>* out) {
+  const Mesh& m = jaws[k];
+  const RigidTransform& x = c.jaws[k].transform;
+  bool same = true;
+  for (size_t i = 0; i < m.vertices.size() && same; ++i) {
+    Vec3 p = x.apply_point(m.vertices[i]);
+    same = round_to_float32(&p) && std::memcmp(&p, &m.vertices[i], sizeof(Vec3)) == 0;
+  }
+  if (same) {
+    *out = m.vertices.span();
+    return Status::ok();
+  }
+  Vec3* moved = ctx.arena->allocate_array<Vec3>(m.vertices.size());
+  if (moved == nullptr) return ctx.arena->exhausted_status();
+  for (size_t i = 0; i < m.vertices.size(); ++i) {
+    moved[i] = x.apply_point(m.vertices[i]);
+    (void)round_to_float32(&moved[i]);  // in range: gather_jaws checked it
+  }
+  *out = Span<const Vec3>(moved, m.vertices.size());
+  return Status::ok();
+}
+
 // Interference elimination, jaw by jaw: each jaw's part of B swept along the direction it
 // leaves the splint (the mandible's is the opposite of the insertion direction), and
-// subtracted from *cut, which becomes the result (the previous one stays below it).
-Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, const Mesh& b,
-                     Mesh* cut, DesignReport* report) {
+// subtracted from *cut, which becomes the result, moved down over the jaw's temporaries (the
+// previous one stays below it). B itself is not needed: the sweep gets jaw j's triangles and
+// every jaw's moved vertices (the others' without triangles: they only anchor its lattice,
+// as B's vertices did), views of the jaws where moving them changes nothing.
+Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* cut,
+                     DesignReport* report) {
   if (jaws.size() > DesignReport::kMaxBlockoutJaws) {
     return make_error(StatusCode::kLimitExceeded, "design: blockout takes at most ",
                       DesignReport::kMaxBlockoutJaws, " jaws, the case has ", jaws.size());
   }
+  Arena& arena = *ctx.arena;
   for (size_t j = 0; j < jaws.size(); ++j) {
-    const Mesh jaw = jaw_part(b, jaws, j);
+    const Arena::Marker start = arena.mark();
+    Mesh swept_jaws[DesignReport::kMaxBlockoutJaws];
+    for (size_t k = 0; k < jaws.size(); ++k) {
+      Span<const Vec3> v;
+      SPLINTCORE_RETURN_IF_ERROR(moved_vertices(ctx, c, jaws, k, &v));
+      // The jaw swept first, then the others' vertices.
+      const size_t at = k == j ? 0 : (k < j ? k + 1 : k);
+      swept_jaws[at] = mesh_view(v, k == j ? jaws[k].triangles.span() : Span<const Triangle>());
+    }
     const bool mandible = std::strcmp(c.jaws[j].role, "mandible") == 0;
     BlockoutOptions bl;
     bl.sweep = c.blockout;  // voxel, inset, closing radius, offset as the case gives them
     bl.sweep.direction = mandible ? -c.insertion_direction : c.insertion_direction;
     Mesh blocked;
-    const Status s =
-        blockout(ctx, *cut, Span<const Mesh>(&jaw, 1), bl, &blocked, &report->blockout[j]);
+    const Status s = blockout(ctx, *cut, Span<const Mesh>(swept_jaws, jaws.size()), bl, &blocked,
+                              &report->blockout[j]);
     if (!s.is_ok()) {
       Status e = stage_error(s, "blockout");
       if (s.code() != StatusCode::kArenaExhausted && s.code() != StatusCode::kCancelled) {
@@ -197,7 +234,7 @@ Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
     report->blockout_removed_mm3[j] = mesh_volume(*cut) - mesh_volume(blocked);
     report->blockout_jaws = static_cast<uint32_t>(j + 1);
     note_self_check(report, report->blockout[j].boolean, "blockout");
-    *cut = blocked;
+    move_mesh_down(arena, start, blocked, cut);
   }
   return Status::ok();
 }
@@ -247,10 +284,11 @@ Status label_splint(const Context& ctx, const CaseFile& c, Mesh* cut, DesignRepo
   return Status::ok();
 }
 
-// The Boolean base minus jaws. Without blockout (which takes B again) B and the base are not
-// needed after it, so the result's exact self-intersection check (the Boolean's final word,
-// and the largest arrays of the design after B) runs once the result has been moved down over
-// them, to `low`: on the real dentition that is what keeps the design within 64 MiB. Should
+// The Boolean base minus jaws. B and the base are not needed after it (the blockout takes
+// the jaws themselves), so the result's exact self-intersection check (the Boolean's final
+// word, and the largest arrays of the design after B) runs once the result has been moved
+// down over them, to `low`: on the real dentition that is what keeps the design within 64 MiB.
+// Should
 // that check find a crossing, the Boolean runs again with the check inside, where a crossing
 // makes it nudge A and try again: the answer is the one the Boolean alone gives.
 Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
@@ -259,35 +297,32 @@ Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   Arena& arena = *ctx.arena;
   BooleanOptions bo;
   bo.op = BooleanOp::kDifference;
-  const bool check_after = !c.has_blockout;
-  bo.check_self_intersection = !check_after;
+  bo.check_self_intersection = false;
   SPLINTCORE_RETURN_IF_ERROR(stage_error(
       name_open_jaw(mesh_boolean(ctx, *base, *b, bo, cut, &report->boolean), c, jaws, *b),
       "boolean (base minus jaws)"));
-  if (check_after) {
-    Mesh moved;
-    move_mesh_down(arena, low, *cut, &moved);
-    *cut = moved;
-    *b = Mesh();
-    *base = Mesh();
-    SelfIntersectionReport si;
-    SPLINTCORE_RETURN_IF_ERROR(stage_error(find_self_intersections(ctx, *cut, 1, &si), "boolean"));
-    if (si.self_intersecting()) {
-      arena.rewind(low);
-      *cut = Mesh();
-      Mesh again_b(&arena), again_base(&arena);
-      SPLINTCORE_RETURN_IF_ERROR(gather_jaws(ctx, c, jaws, &again_b));
-      SPLINTCORE_RETURN_IF_ERROR(
-          stage_error(build_case_base(ctx, c, &again_base, &report->base), "base"));
-      bo.check_self_intersection = true;
-      SPLINTCORE_RETURN_IF_ERROR(stage_error(
-          name_open_jaw(mesh_boolean(ctx, again_base, again_b, bo, cut, &report->boolean), c, jaws,
-                        again_b),
-          "boolean (base minus jaws)"));
-    } else {
-      report->boolean.self_intersection_checked = true;
-      report->boolean.self_intersection_candidates = si.candidate_pairs;
-    }
+  Mesh moved;
+  move_mesh_down(arena, low, *cut, &moved);
+  *cut = moved;
+  *b = Mesh();
+  *base = Mesh();
+  SelfIntersectionReport si;
+  SPLINTCORE_RETURN_IF_ERROR(stage_error(find_self_intersections(ctx, *cut, 1, &si), "boolean"));
+  if (si.self_intersecting()) {
+    arena.rewind(low);
+    *cut = Mesh();
+    Mesh again_b(&arena), again_base(&arena);
+    SPLINTCORE_RETURN_IF_ERROR(gather_jaws(ctx, c, jaws, &again_b));
+    SPLINTCORE_RETURN_IF_ERROR(
+        stage_error(build_case_base(ctx, c, &again_base, &report->base), "base"));
+    bo.check_self_intersection = true;
+    SPLINTCORE_RETURN_IF_ERROR(
+        stage_error(name_open_jaw(mesh_boolean(ctx, again_base, again_b, bo, cut, &report->boolean),
+                                  c, jaws, again_b),
+                    "boolean (base minus jaws)"));
+  } else {
+    report->boolean.self_intersection_checked = true;
+    report->boolean.self_intersection_candidates = si.candidate_pairs;
   }
   note_self_check(report, report->boolean, "boolean");
   return Status::ok();
@@ -554,7 +589,7 @@ Status design_detail::design_splint_registered(const Context& ctx, const CaseFil
   }
   if (c.has_blockout) {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: blockout"));
-    SPLINTCORE_RETURN_IF_ERROR(blockout_jaws(ctx, c, jaws, b, &cut, report));
+    SPLINTCORE_RETURN_IF_ERROR(blockout_jaws(ctx, c, jaws, &cut, report));
   }
   if (c.has_label) {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: label"));
