@@ -217,6 +217,72 @@ inline void load_moved_triangle(const Mesh& mesh, uint32_t t, const RigidTransfo
   out->hi = max_vec(max_vec(out->p[0], out->p[1]), out->p[2]);
 }
 
+// Two doubles in one SSE2 register (GCC's and clang's vector extension): each lane rounds as
+// the scalar operation would.
+typedef double Lanes2 __attribute__((vector_size(16)));
+
+// Up to 16 boxes, lane k % 2 of pair k / 2, and their gaps to one box: box_gap2(lo, hi, box k)
+// bit for bit, two at a time. A lane's gap on an axis is max(max(blo - ahi, alo - bhi), 0):
+// for boxes with lo <= hi at most one difference is positive, and positive exactly when
+// box_gap2 takes it (x > y if and only if x - y > 0 in IEEE arithmetic); a zero of either
+// sign squares to +0. The sum in box_gap2's order: (0 + gx^2) + gy^2 + gz^2, and 0 + gx^2 is
+// gx^2.
+struct BoxLanes {
+  Lanes2 lo[3][8], hi[3][8];
+
+  void set(uint32_t k, const Vec3& l, const Vec3& h) {
+    lo[0][k / 2][k % 2] = l.x;
+    lo[1][k / 2][k % 2] = l.y;
+    lo[2][k / 2][k % 2] = l.z;
+    hi[0][k / 2][k % 2] = h.x;
+    hi[1][k / 2][k % 2] = h.y;
+    hi[2][k / 2][k % 2] = h.z;
+  }
+  // gap2[k] for k < count (lanes past count, up to an even count, hold finite boxes).
+  void gaps_to(const Vec3& alo, const Vec3& ahi, uint32_t count, double gap2[16]) const {
+    const Lanes2 zero = {0.0, 0.0};
+    const Lanes2 al[3] = {{alo.x, alo.x}, {alo.y, alo.y}, {alo.z, alo.z}};
+    const Lanes2 ah[3] = {{ahi.x, ahi.x}, {ahi.y, ahi.y}, {ahi.z, ahi.z}};
+    for (uint32_t p = 0; 2 * p < count; ++p) {
+      Lanes2 g[3];
+      for (int i = 0; i < 3; ++i) {
+        const Lanes2 d1 = lo[i][p] - ah[i], d2 = al[i] - hi[i][p];
+        const Lanes2 m = d1 > d2 ? d1 : d2;
+        g[i] = m > zero ? m : zero;
+      }
+      const Lanes2 sum = (g[0] * g[0] + g[1] * g[1]) + g[2] * g[2];
+      gap2[2 * p] = sum[0];
+      gap2[2 * p + 1] = sum[1];
+    }
+  }
+};
+
+// float_box_gap2(boxes + 6 k, shift, blo, bhi) for k < count (at most 16), two boxes a lane
+// pair, bit for bit: each lane converts, shifts and subtracts as the scalar code does, and
+// takes the gap as BoxLanes::gaps_to does (a triangle's box, shifted, has lo <= hi: rounding
+// is monotone; so has [blo, bhi]).
+void float_box_gaps(const float* boxes, uint32_t count, const Vec3& shift, const double blo[3],
+                    const double bhi[3], double gap2[16]) {
+  const Lanes2 zero = {0.0, 0.0};
+  const Lanes2 sh[3] = {{shift.x, shift.x}, {shift.y, shift.y}, {shift.z, shift.z}};
+  for (uint32_t k = 0; k < count; k += 2) {
+    const float* a = boxes + 6 * size_t{k};
+    const float* b = k + 1 < count ? a + 6 : a;
+    Lanes2 g[3];
+    for (int i = 0; i < 3; ++i) {
+      const Lanes2 lo = Lanes2{static_cast<double>(a[i]), static_cast<double>(b[i])} + sh[i];
+      const Lanes2 hi =
+          Lanes2{static_cast<double>(a[3 + i]), static_cast<double>(b[3 + i])} + sh[i];
+      const Lanes2 d1 = Lanes2{blo[i], blo[i]} - hi, d2 = lo - Lanes2{bhi[i], bhi[i]};
+      const Lanes2 m = d1 > d2 ? d1 : d2;
+      g[i] = m > zero ? m : zero;
+    }
+    const Lanes2 sum = (g[0] * g[0] + g[1] * g[1]) + g[2] * g[2];
+    gap2[k] = sum[0];
+    if (k + 1 < count) gap2[k + 1] = sum[1];
+  }
+}
+
 struct PairSearch {
   const DistanceIndex* index[2] = {nullptr, nullptr};
   const float* triangle_boxes[2] = {nullptr, nullptr};  // or null: none in the index
@@ -409,6 +475,8 @@ void PairSearch::leaf_pair(const PairEntry& e) {
     TriangleBox box[16];
   } slots;
   TriangleBox* bs = slots.box;
+  // The kept boxes' coordinates again, two boxes a lane pair (Lanes2), for gaps_to().
+  BoxLanes lanes;
   uint32_t b_ids[16], kept = 0;
   Vec3 b_lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, b_hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
   // With the triangles' float boxes (pairs_only), a triangle whose float box is out of reach
@@ -416,9 +484,16 @@ void PairSearch::leaf_pair(const PairEntry& e) {
   // is monotone) and the exact test below would drop it too. The same pairs go on.
   const float* a_boxes = triangle_boxes[0];
   const float* b_boxes = triangle_boxes[1];
+  // The float boxes' gaps first (float_box_gaps, bit for bit), then each tested against
+  // reach2 as it is at its turn (consider() may lower it while A's triangles go by).
+  double box_gaps[16];
+  if (b_boxes != nullptr && !rigid) {
+    float_box_gaps(b_boxes + 6 * size_t{b_first}, b_count, shift[1], alo, ahi, box_gaps);
+  }
   for (uint32_t j = 0; j < b_count; ++j) {
     if (b_boxes != nullptr &&
-        triangle_box_gap2(1, b_boxes + 6 * size_t{b_first + j}, alo, ahi) > reach2) {
+        (rigid ? triangle_box_gap2(1, b_boxes + 6 * size_t{b_first + j}, alo, ahi) : box_gaps[j]) >
+            reach2) {
       continue;
     }
     const uint32_t tb = index[1]->order[b_first + j];
@@ -426,23 +501,27 @@ void PairSearch::leaf_pair(const PairEntry& e) {
     if (box_gap2(bs[kept].lo, bs[kept].hi, alo, ahi) > reach2) continue;
     b_lo = min_vec(b_lo, bs[kept].lo);
     b_hi = max_vec(b_hi, bs[kept].hi);
+    lanes.set(kept, bs[kept].lo, bs[kept].hi);
     b_ids[kept++] = tb;
   }
   if (kept == 0) return;
+  if (kept % 2 != 0) lanes.set(kept, bs[kept - 1].lo, bs[kept - 1].hi);  // finite padding
   const double blo[3] = {b_lo.x, b_lo.y, b_lo.z}, bhi[3] = {b_hi.x, b_hi.y, b_hi.z};
+  if (a_boxes != nullptr) {
+    float_box_gaps(a_boxes + 6 * size_t{a_first}, a_count, shift[0], blo, bhi, box_gaps);
+  }
   for (uint32_t i = 0; i < a_count; ++i) {
-    if (a_boxes != nullptr &&
-        float_box_gap2(a_boxes + 6 * size_t{a_first + i}, shift[0], blo, bhi) > reach2) {
-      continue;
-    }
+    if (a_boxes != nullptr && box_gaps[i] > reach2) continue;
     const uint32_t ta = index[0]->order[a_first + i];
     TriangleBox x;
     load_triangle(*index[0]->mesh, ta, shift[0], &x);
     if (box_gap2(x.lo, x.hi, blo, bhi) > reach2) continue;
+    // Every gap first (each box_gap2's bits), then each tested against reach2 as it is when
+    // that pair's turn comes (consider() may lower it): the same pairs go on.
+    double gap2[16];
+    lanes.gaps_to(x.lo, x.hi, kept, gap2);
     for (uint32_t j = 0; j < kept; ++j) {
-      const double ylo[3] = {bs[j].lo.x, bs[j].lo.y, bs[j].lo.z};
-      const double yhi[3] = {bs[j].hi.x, bs[j].hi.y, bs[j].hi.z};
-      if (box_gap2(x.lo, x.hi, ylo, yhi) > reach2) continue;
+      if (gap2[j] > reach2) continue;
       consider(ta, b_ids[j], x, bs[j]);
       if (done) return;
     }

@@ -203,6 +203,24 @@ void project_fast(Projector& g, double px, double py, double* s, double* o) {
   segment_place_at(p, best_k, px, py, best_t, best_qx, best_qy, s, o);
 }
 
+// project_fast for every point (its s and o), in up to the executor's concurrency runs of
+// consecutive points, each with its own hint: the answers do not depend on the hint (only
+// how many segments a point tests), so they are the same bits at every thread count.
+void project_all(const Context& ctx, const Projector& g, Span<ArchPoint> pts) {
+  const uint32_t concurrency = ctx.executor != nullptr ? ctx.executor->concurrency : 1;
+  const size_t n = pts.size();
+  const uint32_t tasks = n < 1024 || concurrency < 2 ? 1 : concurrency;
+  auto task = [&](uint32_t i) {
+    Projector local = g;
+    const size_t end = n * (i + 1) / tasks;
+    for (size_t k = n * i / tasks; k < end; ++k) {
+      ArchPoint& a = pts[k];
+      project_fast(local, a.x, a.y, &a.s, &a.o);
+    }
+  };
+  parallel_for_each(ctx.executor, tasks, task);
+}
+
 // The polyline's point at arc length s (extended along the end segments).
 void place_at(const Polyline& p, double s, double* x, double* y) {
   size_t k = 0;
@@ -460,14 +478,15 @@ double local_linear(const double* s, const double* v, const double* w, size_t n,
 // A centre line along `prev`: the points' mean place in each kBinMm bin along it, smoothed by
 // local linear regression over kSmoothMm along the arch, sampled at every bin from the first
 // to the last one with points.
-Status smooth_line(Arena& arena, Span<ArchPoint> pts, const Polyline& prev, Polyline* line) {
+Status smooth_line(const Context& ctx, Span<ArchPoint> pts, const Polyline& prev, Polyline* line) {
+  Arena& arena = *ctx.arena;
   double s_lo = HUGE_VAL, s_hi = -HUGE_VAL;
   {
     ArenaScope scope(arena);  // the projector goes when done
     Projector g;
     SPLINTCORE_RETURN_IF_ERROR(make_projector(arena, prev, &g));
-    for (ArchPoint& a : pts) {
-      project_fast(g, a.x, a.y, &a.s, &a.o);
+    project_all(ctx, g, pts);
+    for (const ArchPoint& a : pts) {
       s_lo = std::min(s_lo, a.s);
       s_hi = std::max(s_hi, a.s);
     }
@@ -692,7 +711,7 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
   arch = first;
   for (int pass = 0; pass < kSmoothPasses; ++pass) {
     Polyline next;
-    SPLINTCORE_RETURN_IF_ERROR(smooth_line(arena, line_pts.span(), arch, &next));
+    SPLINTCORE_RETURN_IF_ERROR(smooth_line(ctx, line_pts.span(), arch, &next));
     arch = next;
   }
   // The ends and the centre from the band's vertices (they move with the jaws; see
@@ -702,14 +721,14 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
     ArenaScope scope(arena);  // the projector goes when done
     Projector proj;
     SPLINTCORE_RETURN_IF_ERROR(make_projector(arena, arch, &proj));
-    for (ArchPoint& a : line_pts) {
-      project_fast(proj, a.x, a.y, &a.s, &a.o);
+    project_all(ctx, proj, line_pts.span());
+    project_all(ctx, proj, pts.span());
+    for (const ArchPoint& a : line_pts) {
       s_lo = std::min(s_lo, a.s);
       s_hi = std::max(s_hi, a.s);
       cx += a.x;
       cy += a.y;
     }
-    for (ArchPoint& a : pts) project_fast(proj, a.x, a.y, &a.s, &a.o);
   }
   cx /= static_cast<double>(line_pts.size());
   cy /= static_cast<double>(line_pts.size());

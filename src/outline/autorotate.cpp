@@ -389,9 +389,9 @@ Status start_closing(const Mesh& maxilla, const Mesh& mandible, const Autorotate
 Status autorotate_mandible(const Context& ctx, const Mesh& maxilla, const Mesh& mandible,
                            const AutorotateOptions& options, AutorotateReport* out) {
   *out = AutorotateReport{};
-  double edge = 0;
-  SPLINTCORE_RETURN_IF_ERROR(check_jaw(maxilla, "autorotate", "maxilla", &edge));
-  SPLINTCORE_RETURN_IF_ERROR(check_jaw(mandible, "autorotate", "mandible", &edge));
+  double edge_maxilla = 0, edge_mandible = 0;
+  SPLINTCORE_RETURN_IF_ERROR(
+      check_jaws(ctx, maxilla, mandible, "autorotate", &edge_maxilla, &edge_mandible));
   Vec3 axis;
   Closing c;
   SPLINTCORE_RETURN_IF_ERROR(start_closing(maxilla, mandible, options, &axis, &c));

@@ -152,13 +152,12 @@ Status grid_layout(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec
 
 }  // namespace
 
-Status build_grid(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3& lower_offset,
-                  const Frame& f, Grid* g) {
+Status build_grid(Arena& arena, const Executor* executor, const Mesh& upper, const Mesh& lower,
+                  const Vec3& lower_offset, const Frame& f, Grid* g) {
   double unused_low = 0, unused_high = 0;
   SPLINTCORE_RETURN_IF_ERROR(
       grid_layout<false>(arena, upper, lower, lower_offset, f, g, &unused_low, &unused_high));
-  fill_heights(upper, Vec3{}, f, 0, g);
-  fill_heights(lower, lower_offset, f, 1, g);
+  fill_both(executor, upper, lower, lower_offset, f, g);
   return Status::ok();
 }
 
@@ -236,6 +235,15 @@ void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Gr
   }
 }
 
+void fill_both(const Executor* executor, const Mesh& upper, const Mesh& lower,
+               const Vec3& lower_offset, const Frame& f, Grid* g) {
+  auto task = [&](uint32_t jaw) {
+    fill_heights(jaw == 0 ? upper : lower, jaw == 0 ? Vec3{} : lower_offset, f,
+                 static_cast<int>(jaw), g);
+  };
+  parallel_for_each(executor, 2, task);
+}
+
 namespace {
 
 // The least gap (maxilla's height less the mandible's) over the columns that see both jaws;
@@ -292,8 +300,9 @@ bool fit_with_gap(const Grid& g, double gap_min, Plane* plane, uint64_t* contact
 // enough).
 constexpr double kSlackOverGapMm = 0.5;
 
-bool fit_near_plane(const Mesh& upper, const Mesh& lower, const Frame& f, double low, double high,
-                    double slack, Grid* g, Plane* plane, uint64_t* contact_cells, double* gap_out) {
+bool fit_near_plane(const Executor* executor, const Mesh& upper, const Mesh& lower, const Frame& f,
+                    double low, double high, double slack, Grid* g, Plane* plane,
+                    uint64_t* contact_cells, double* gap_out) {
   clear_heights(0, g);
   clear_heights(1, g);
   double up = -HUGE_VAL, down = HUGE_VAL;
@@ -301,8 +310,14 @@ bool fit_near_plane(const Mesh& upper, const Mesh& lower, const Frame& f, double
     const double w = (high - low) + kContactBandMm + slack;
     const double next_up = low + w, next_down = high - w;
     if (!(next_up > up && next_down < down)) break;  // (no wider: a NaN or an overflow)
-    fill_window<true>(upper, f, up, next_up, g);
-    fill_window<false>(lower, f, down, next_down, g);
+    auto task = [&](uint32_t jaw) {
+      if (jaw == 0) {
+        fill_window<true>(upper, f, up, next_up, g);
+      } else {
+        fill_window<false>(lower, f, down, next_down, g);
+      }
+    };
+    parallel_for_each(executor, 2, task);
     up = next_up;
     down = next_down;
     const double gap_min = least_gap(*g);
@@ -314,8 +329,7 @@ bool fit_near_plane(const Mesh& upper, const Mesh& lower, const Frame& f, double
     slack = gap_min + kSlackOverGapMm;  // then up - high is about the band plus this
   }
   // Every vertex.
-  fill_heights(upper, Vec3{}, f, 0, g);
-  fill_heights(lower, Vec3{}, f, 1, g);
+  fill_both(executor, upper, lower, Vec3{}, f, g);
   *gap_out = least_gap(*g);
   return fit_with_gap(*g, *gap_out, plane, contact_cells);
 }
@@ -326,8 +340,9 @@ bool fit_contact_plane(const Grid& g, Plane* plane, uint64_t* contact_cells) {
   return fit_with_gap(g, least_gap(g), plane, contact_cells);
 }
 
-Status find_frame(Arena& arena, const Mesh& upper, const Mesh& lower, Frame* f, Grid* g,
+Status find_frame(const Context& ctx, const Mesh& upper, const Mesh& lower, Frame* f, Grid* g,
                   Plane* plane) {
+  Arena& arena = *ctx.arena;
   // The centroids do not depend on the frame: once for every round.
   const Vec3 upper_centroid = mesh_centroid(upper, Vec3{});
   const Vec3 lower_centroid = mesh_centroid(lower, Vec3{});
@@ -348,14 +363,15 @@ Status find_frame(Arena& arena, const Mesh& upper, const Mesh& lower, Frame* f, 
     uint64_t contact = 0;
     bool fitted = false;
     if (last) {
-      SPLINTCORE_RETURN_IF_ERROR(build_grid(arena, upper, lower, Vec3{}, *f, g));
+      SPLINTCORE_RETURN_IF_ERROR(build_grid(arena, ctx.executor, upper, lower, Vec3{}, *f, g));
       fitted = fit_contact_plane(*g, plane, &contact);
     } else {
       // The plane only (the grid goes): from the vertices near the occlusal plane.
       double low = 0, high = 0, gap = 0;
       SPLINTCORE_RETURN_IF_ERROR(
           grid_layout<true>(arena, upper, lower, Vec3{}, *f, g, &low, &high));
-      fitted = fit_near_plane(upper, lower, *f, low, high, slack, g, plane, &contact, &gap);
+      fitted = fit_near_plane(ctx.executor, upper, lower, *f, low, high, slack, g, plane, &contact,
+                              &gap);
       slack = gap + kSlackOverGapMm;  // the next round's frame is a little tilted from this
     }
     if (!fitted) {

@@ -88,6 +88,17 @@ Status check_jaw(const Mesh& m, const char* who, const char* name, double* longe
   return Status::ok();
 }
 
+Status check_jaws(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const char* who,
+                  double* edge_maxilla, double* edge_mandible) {
+  const Mesh* jaws[2] = {&maxilla, &mandible};
+  const char* names[2] = {"maxilla", "mandible"};
+  double* edges[2] = {edge_maxilla, edge_mandible};
+  Status status[2];
+  auto task = [&](uint32_t i) { status[i] = check_jaw(*jaws[i], who, names[i], edges[i]); };
+  parallel_for_each(ctx.executor, 2, task);
+  return status[0].is_ok() ? status[1] : status[0];
+}
+
 DistanceIndexOptions band_index_options() {
   DistanceIndexOptions o;
   o.pairs_only = true;
@@ -343,11 +354,8 @@ constexpr uint32_t kMaxBandRadius = 40;  // columns around, at most
 
 // Per column, the extreme height of `jaw` over the columns within `radius` (the highest for
 // the mandible, the lowest for the maxilla): rows, then columns.
-Status extreme_around(Arena& arena, const Grid& g, int jaw, uint32_t radius, double** out) {
-  const size_t cells = static_cast<size_t>(g.nx) * g.ny;
-  double* rows = arena.allocate_array<double>(cells);
-  double* both = arena.allocate_array<double>(cells);
-  if (rows == nullptr || both == nullptr) return arena.exhausted_status();
+// `rows` and `both` hold a column each.
+void extreme_around(const Grid& g, int jaw, uint32_t radius, double* rows, double* both) {
   auto pick = [jaw](double a, double b) { return jaw == 0 ? (b < a ? b : a) : (b > a ? b : a); };
   for (uint32_t iy = 0; iy < g.ny; ++iy) {
     for (uint32_t ix = 0; ix < g.nx; ++ix) {
@@ -368,8 +376,6 @@ Status extreme_around(Arena& arena, const Grid& g, int jaw, uint32_t radius, dou
       both[static_cast<size_t>(iy) * g.nx + ix] = e;
     }
   }
-  *out = both;
-  return Status::ok();
 }
 
 // The other jaw's extreme near each column (nullptr: everywhere the global `bound`).
@@ -386,13 +392,12 @@ struct BandLimit {
 
 // A triangle is kept when one of its vertices lies within the margin of the other jaw's
 // extreme near it (the columns around reach one edge further than the pairs need, so the
-// vertex nearest the other jaw may stand for the whole triangle).
-Status jaw_band(Arena& arena, const Mesh& m, bool upper, const BandLimit& limit, JawBand* out) {
+// vertex nearest the other jaw may stand for the whole triangle): its vertices' marks (near: 1
+// when within the margin).
+void mark_band(const Mesh& m, bool upper, const BandLimit& limit, uint8_t* near) {
   const Frame& f = *limit.f;
   const PlaneAxes axes(f);
   const size_t nv = m.vertices.size();
-  uint8_t* near = arena.allocate_array<uint8_t>(nv);
-  if (near == nullptr) return arena.exhausted_status();
   for (size_t i = 0; i < nv; ++i) {
     const Vec3& v = m.vertices[i];
     const double h = dot(v, f.n);
@@ -410,6 +415,11 @@ Status jaw_band(Arena& arena, const Mesh& m, bool upper, const BandLimit& limit,
     }
     near[i] = upper ? h <= bound : h >= bound;
   }
+}
+
+// The band of the marked vertices (mark_band): the triangles with a near vertex.
+Status jaw_band(Arena& arena, const Mesh& m, const uint8_t* near, JawBand* out) {
+  const size_t nv = m.vertices.size();
   auto keeps = [&](const Triangle& t) { return (near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) != 0; };
   size_t kept = 0;
   for (const Triangle& t : m.triangles) {
@@ -497,15 +507,35 @@ Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandib
   up.beyond = high_l + up.margin;
   down.beyond = low_u - down.margin;
   if (across <= kMaxBandRadius) {
+    // Both jaws' extremes, one task each (each writes its own arrays).
     const uint32_t radius = static_cast<uint32_t>(across);
-    double* other = nullptr;
-    SPLINTCORE_RETURN_IF_ERROR(extreme_around(*ctx.arena, g, 1, radius, &other));
-    up.other = other;
-    SPLINTCORE_RETURN_IF_ERROR(extreme_around(*ctx.arena, g, 0, radius, &other));
-    down.other = other;
+    const size_t cells_all = static_cast<size_t>(g.nx) * g.ny;
+    double* work[4];
+    for (double*& w : work) {
+      w = ctx.arena->allocate_array<double>(cells_all);
+      if (w == nullptr) return ctx.arena->exhausted_status();
+    }
+    auto extremes = [&](uint32_t jaw) {
+      extreme_around(g, static_cast<int>(jaw), radius, work[2 * jaw], work[2 * jaw + 1]);
+    };
+    parallel_for_each(ctx.executor, 2, extremes);
+    up.other = work[3];
+    down.other = work[1];
   }
-  SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, maxilla, true, up, &b->upper));
-  SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, mandible, false, down, &b->lower));
+  // The marks of both jaws, one task each (each writes its own), then their bands.
+  uint8_t* near_u = ctx.arena->allocate_array<uint8_t>(maxilla.vertices.size());
+  uint8_t* near_l = ctx.arena->allocate_array<uint8_t>(mandible.vertices.size());
+  if (near_u == nullptr || near_l == nullptr) return ctx.arena->exhausted_status();
+  auto mark = [&](uint32_t jaw) {
+    if (jaw == 0) {
+      mark_band(maxilla, true, up, near_u);
+    } else {
+      mark_band(mandible, false, down, near_l);
+    }
+  };
+  parallel_for_each(ctx.executor, 2, mark);
+  SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, maxilla, near_u, &b->upper));
+  SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, mandible, near_l, &b->lower));
   SPLINTCORE_RETURN_IF_ERROR(
       build_distance_index(ctx, b->upper.view, opening_index_options(), &b->upper_index));
   return build_distance_index(ctx, b->lower.view, opening_index_options(), &b->lower_index);
@@ -672,8 +702,8 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
   *out = Outline{};
   SPLINTCORE_RETURN_IF_ERROR(check_options(options));
   double edge_upper = 0, edge_lower = 0;
-  SPLINTCORE_RETURN_IF_ERROR(check_jaw(maxilla, "outline", "maxilla", &edge_upper));
-  SPLINTCORE_RETURN_IF_ERROR(check_jaw(mandible, "outline", "mandible", &edge_lower));
+  SPLINTCORE_RETURN_IF_ERROR(
+      check_jaws(ctx, maxilla, mandible, "outline", &edge_upper, &edge_lower));
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
   OutlineBuffers buffers;
@@ -689,7 +719,7 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
     Frame f;
     Grid g;
     Plane plane;
-    SPLINTCORE_RETURN_IF_ERROR(find_frame(arena, maxilla, mandible, &f, &g, &plane));
+    SPLINTCORE_RETURN_IF_ERROR(find_frame(ctx, maxilla, mandible, &f, &g, &plane));
     out->report.occlusal_normal = f.n;
     out->report.anterior = f.e1;
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 1, 3));

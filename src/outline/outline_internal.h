@@ -45,6 +45,10 @@ constexpr uint64_t kPairStackBound = 24 * (2048 + 15 * 64 + 1) + 2 * 64;
 // longest edge (the opening's bands need it), in the same pass over the triangles. Errors
 // start with `who` ("outline") and name the jaw (`name`: "maxilla", "mandible") and the element.
 Status check_jaw(const Mesh& m, const char* who, const char* name, double* longest_edge);
+// check_jaw of the maxilla and the mandible, one task each on ctx's executor (they read only
+// their own jaw): the maxilla's error first, as when checked one after the other.
+Status check_jaws(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const char* who,
+                  double* edge_maxilla, double* edge_mandible);
 
 // The pair searches' indexes (the opening's bands, the autorotation's jaws): pairs_only.
 DistanceIndexOptions band_index_options();
@@ -122,12 +126,16 @@ void complete_frame(const Vec3& n, const Vec3& anterior_hint, Frame* f);
 // within 1 mm.
 bool centroid_axis(const Vec3& upper_centroid, const Vec3& lower_centroid, Vec3* n);
 Vec3 anterior_axis(const Mesh& upper, const Mesh& lower, const Vec3& centre, const Frame& f);
-Status build_grid(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3& lower_offset,
-                  const Frame& f, Grid* g);
+Status build_grid(Arena& arena, const Executor* executor, const Mesh& upper, const Mesh& lower,
+                  const Vec3& lower_offset, const Frame& f, Grid* g);
 void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g);
+// fill_heights of both jaws, one task each on the executor (each writes only its own
+// columns' arrays).
+void fill_both(const Executor* executor, const Mesh& upper, const Mesh& lower,
+               const Vec3& lower_offset, const Frame& f, Grid* g);
 bool fit_contact_plane(const Grid& g, Plane* plane, uint64_t* contact_cells);
 // The frame (three plane fits) and the grid and plane of the last, left in the arena.
-Status find_frame(Arena& arena, const Mesh& upper, const Mesh& lower, Frame* f, Grid* g,
+Status find_frame(const Context& ctx, const Mesh& upper, const Mesh& lower, Frame* f, Grid* g,
                   Plane* plane);
 
 // An occlusal column's shown vertex: its place in the plane (absolute x along e1, y along

@@ -20,6 +20,7 @@
 #include "splintcore/distance.h"
 #include "splintcore/io.h"
 #include "splintcore/outline.h"
+#include "splintcore/platform.h"
 #include "support/frame_moves.h"
 #include "support/outline_checks.h"
 #include "support/test_util.h"
@@ -701,6 +702,65 @@ TEST(Outline, RunsInItsBoundAndInItsMeasuredNeed) {
       EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << test::format(s);
       EXPECT_EQ(short_by_one.arena.used(), 0u);
     }
+  }
+}
+
+// The same outline at every thread count: the jaws' checks, columns, band marks and extremes
+// (one task a jaw) and the arch's projections (runs of points) split over the executor, with
+// the bite opened from occlusion and the survey on.
+TEST(Outline, SameBitsAtEveryThreadCount) {
+  PhantomJaws p(87000);
+  test::TestArena t{size_t{512} << 20};
+  Mesh jaws[2];
+  copy_mesh(p.jaw[0], t.arena, &jaws[0], RigidTransform{});
+  copy_mesh(p.jaw[1], t.arena, &jaws[1], RigidTransform{});
+  OutlineOptions options;
+  options.has_bite_opening = true;
+  options.bite_opening_mm = 2;
+  options.survey = true;
+  Outline ref;
+  SPLINTCORE_ASSERT_OK(compute_outline(Context(&t.arena), jaws[0], jaws[1], options, &ref));
+  ASSERT_TRUE(ref.report.opened);
+  ASSERT_GE(ref.upper.size(), 20u);
+  for (unsigned threads : {1u, 2u, 3u, 4u}) {
+    ThreadExecutor pool(threads);
+    ArenaScope scope(t.arena);
+    Outline o;
+    SPLINTCORE_ASSERT_OK(compute_outline(Context(&t.arena, &pool.executor(), nullptr), jaws[0],
+                                         jaws[1], options, &o));
+    ASSERT_EQ(o.upper.size(), ref.upper.size()) << threads;
+    ASSERT_EQ(o.arch.size(), ref.arch.size()) << threads;
+    EXPECT_EQ(std::memcmp(o.upper.data(), ref.upper.data(), sizeof(Pick) * o.upper.size()), 0);
+    EXPECT_EQ(std::memcmp(o.lower.data(), ref.lower.data(), sizeof(Pick) * o.lower.size()), 0);
+    EXPECT_EQ(std::memcmp(o.arch.data(), ref.arch.data(), sizeof(Vec3) * o.arch.size()), 0);
+    const OutlineReport &a = o.report, &b = ref.report;
+    EXPECT_EQ(std::memcmp(&a.occlusal_normal, &b.occlusal_normal, sizeof(Vec3)), 0) << threads;
+    EXPECT_EQ(std::memcmp(&a.mandible_translation, &b.mandible_translation, sizeof(Vec3)), 0);
+    EXPECT_EQ(std::memcmp(&a.insertion_direction, &b.insertion_direction, sizeof(Vec3)), 0);
+    EXPECT_EQ(a.opening, b.opening) << threads;
+    EXPECT_EQ(a.gap_as_given, b.gap_as_given) << threads;
+    EXPECT_EQ(a.arch_length_mm, b.arch_length_mm) << threads;
+    EXPECT_EQ(a.min_wafer_mm, b.min_wafer_mm) << threads;
+    EXPECT_EQ(a.undercut_chosen_mm3, b.undercut_chosen_mm3) << threads;
+  }
+}
+
+// The jaws' checks on the executor: the maxilla's error first, whichever task ends first.
+TEST(Outline, BothJawsCheckedMaxillaFirst) {
+  PhantomJaws p(24000);
+  test::TestArena t{size_t{64} << 20};
+  Mesh jaws[2];
+  copy_mesh(p.jaw[0], t.arena, &jaws[0], RigidTransform{});
+  copy_mesh(p.jaw[1], t.arena, &jaws[1], RigidTransform{});
+  jaws[0].vertices[5].x = std::numeric_limits<double>::quiet_NaN();
+  jaws[1].triangles[7].v[1] = static_cast<uint32_t>(jaws[1].vertices.size());
+  ThreadExecutor pool(2);
+  for (const Executor* e : {static_cast<const Executor*>(nullptr), &pool.executor()}) {
+    Outline o;
+    const Status s =
+        compute_outline(Context(&t.arena, e, nullptr), jaws[0], jaws[1], OutlineOptions{}, &o);
+    EXPECT_EQ(s.code(), StatusCode::kNonFinite) << test::format(s);
+    EXPECT_NE(std::strstr(s.message(), "maxilla"), nullptr) << test::format(s);
   }
 }
 
