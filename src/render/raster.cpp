@@ -177,12 +177,12 @@ double lambert(const Vec3& normal, double normal_length, const Vec3& light) {
 // Flat shading of one triangle (its corners p in the mesh's order), computed when its first
 // pixel is written (most triangles of a fine mesh write none: hidden, or no pixel centre inside).
 struct FlatLight {
-  const Vec3* p[3] = {nullptr, nullptr, nullptr};
-  const Vec3* light = nullptr;
-  const uint8_t* rgb = nullptr;
-  bool ready = false;
-  double intensity = 0;
-  uint8_t shaded[3] = {0, 0, 0};
+  const Vec3* p[3];
+  const Vec3* light;
+  const uint8_t* rgb;
+  bool ready;
+  double intensity;
+  uint8_t shaded[3];
   void prepare() {
     const Vec3 normal = cross(*p[1] - *p[0], *p[2] - *p[0]);
     const double len = length(normal);
@@ -193,32 +193,31 @@ struct FlatLight {
 };
 
 // What a covered pixel of a triangle needs besides its edge values (w0, w1, w2: opposite the
-// corners 0, 1, 2, summing to the area), set up at the triangle's first covered pixel (most
-// triangles of a fine mesh cover none).
+// corners 0, 1, 2, summing to the area), set up (prepare) at the triangle's first covered pixel:
+// most triangles of a fine mesh cover none, so nothing is initialised before.
 struct Fill {
-  const MeshJob* job = nullptr;
-  const Layer* layer = nullptr;
-  const Projected* projected = nullptr;
-  const Corners* corners = nullptr;
-  const Triangle* tri = nullptr;
-  bool ready = false;
-  double inv_area = 0;
-  double depth[3] = {0, 0, 0}, intensity[3] = {0, 0, 0}, scalar[3] = {0, 0, 0};
+  const MeshJob* job;
+  const Layer* layer;
+  double inv_area;
+  double depth[3], intensity[3], scalar[3];
   FlatLight flat;
 
-  void prepare(int64_t area, const View& view) {
+  void prepare(const MeshJob& mesh_job, const Layer& target, const Projected* projected,
+               const Triangle& tri, const Corners& corners, int64_t area, const View& view) {
+    job = &mesh_job;
+    layer = &target;
     inv_area = 1.0 / static_cast<double>(area);
     const RenderMesh& item = *job->item;
     for (int k = 0; k < 3; ++k) {
-      const uint32_t i = corners->vertex[k];
+      const uint32_t i = corners.vertex[k];
       depth[k] = static_cast<double>(projected[i].depth);
       intensity[k] = static_cast<double>(projected[i].intensity);
-      if (item.scalars != nullptr) scalar[k] = item.scalars[i];
-      flat.p[k] = job->positions + tri->v[k];
+      scalar[k] = item.scalars != nullptr ? item.scalars[i] : 0;
+      flat.p[k] = job->positions + tri.v[k];
     }
     flat.light = &view.light;
     flat.rgb = item.rgb;
-    ready = true;
+    flat.ready = false;
   }
 
   // The pixel `index` with edge values w0, w1, w2: depth-tested, written when nearer.
@@ -255,46 +254,101 @@ struct Fill {
   }
 };
 
+// The edge function of the corners p -> q at the fixed-point point (x, y): positive left of it
+// (inside the counter-clockwise triangle), twice the area of (p, q, (x, y)).
+inline int64_t edge_at(const Corners& c, int p, int q, int64_t x, int64_t y) {
+  return (c.x[q] - c.x[p]) * (y - c.y[p]) - (c.y[q] - c.y[p]) * (x - c.x[p]);
+}
+
 // Draws the triangle `tri` with corners `c` (counter-clockwise, of fixed-point area `area` > 0)
-// over the pixels of `box` (pixel_box: not empty). Edge functions in exact integers, stepped
-// from pixel to pixel; nothing in floating point until a pixel is covered.
-void draw_triangle(const MeshJob& job, const View& view, const Layer& layer,
-                   const Projected* projected, const Triangle& tri, const Corners& c, int64_t area,
-                   const PixelBox& box) {
-  const int64_t px0 = box.x0, px1 = box.x1, py0 = box.y0, py1 = box.y1;
+// whose box holds the one pixel centre (px, py) (most triangles of a fine mesh that draw
+// anything): its three edge values there, the fill rule only for a centre exactly on an edge.
+// The same decisions and values as draw_triangle's for that pixel.
+void draw_one_pixel(const MeshJob& job, const View& view, const Layer& layer,
+                    const Projected* projected, const Triangle& tri, const Corners& c, int64_t area,
+                    int64_t px, int64_t py) {
+  const int64_t sx = px * kSubpixel + kSubpixel / 2, sy = py * kSubpixel + kSubpixel / 2;
+  const int64_t w0 = edge_at(c, 1, 2, sx, sy), w1 = edge_at(c, 2, 0, sx, sy),
+                w2 = edge_at(c, 0, 1, sx, sy);
+  if ((w0 | w1 | w2) < 0) return;  // outside an edge
+  // On an edge: drawn only by the triangle that owns it (the bias is 0 or -1).
+  if ((w0 == 0 && edge_bias(c, 1, 2) < 0) || (w1 == 0 && edge_bias(c, 2, 0) < 0) ||
+      (w2 == 0 && edge_bias(c, 0, 1) < 0)) {
+    return;
+  }
+  Fill fill;
+  fill.prepare(job, layer, projected, tri, c, area, view);
+  fill.pixel(static_cast<size_t>(py) * job.frame->width + static_cast<size_t>(px), w0, w1, w2);
+}
+
+// The columns [*first, *last] (offsets from the box's left column, at most `last_column`) where
+// an edge's biased value, `w` at offset 0 and falling by `step` a column, is >= 0: narrowed, and
+// false when none is left. Exact integer arithmetic (|w| < 2^60, |step| < 2^38); a division only
+// where the edge crosses the row inside the box.
+inline bool edge_span(int64_t w, int64_t step, int64_t last_column, int64_t* first, int64_t* last) {
+  if (step > 0) {  // falling: from offset 0 up to floor(w / step)
+    if (w < 0) return false;
+    if (w - *last * step < 0) *last = w / step;
+  } else if (step < 0) {  // rising: from ceil(-w / -step)
+    if (w < 0) {
+      const int64_t rise = -step;
+      if (w + last_column * rise < 0) return false;
+      const int64_t from = (-w + rise - 1) / rise;
+      if (from > *first) *first = from;
+    }
+  } else if (w < 0) {
+    return false;
+  }
+  return *first <= *last;
+}
+
+// Draws the triangle `tri` with corners `c` (counter-clockwise, of fixed-point area `area` > 0)
+// over the pixels of `box` (pixel_box: not empty). Edge functions in exact integers: in each row
+// the columns where all three are >= 0 (edge_span: the pixels the stepped per-pixel test
+// covers, a row of a convex shape being one run), then only those pixels, in order.
+__attribute__((noinline)) void draw_triangle(const MeshJob& job, const View& view,
+                                             const Layer& layer, const Projected* projected,
+                                             const Triangle& tri, const Corners& c, int64_t area,
+                                             const PixelBox& box) {
+  const int64_t px0 = box.x0, py0 = box.y0, py1 = box.y1, last_column = box.x1 - box.x0;
   // w0 is opposite corner 0 (edge 1->2), and so on; positive inside.
   const int64_t bias0 = edge_bias(c, 1, 2), bias1 = edge_bias(c, 2, 0), bias2 = edge_bias(c, 0, 1);
   const int64_t sx = px0 * kSubpixel + kSubpixel / 2, sy = py0 * kSubpixel + kSubpixel / 2;
-  auto edge = [&c](int p, int q, int64_t x, int64_t y) {
-    return (c.x[q] - c.x[p]) * (y - c.y[p]) - (c.y[q] - c.y[p]) * (x - c.x[p]);
-  };
   // Biased: a pixel is covered when all three are >= 0.
-  int64_t row0 = edge(1, 2, sx, sy) + bias0, row1 = edge(2, 0, sx, sy) + bias1,
-          row2 = edge(0, 1, sx, sy) + bias2;
+  int64_t row0 = edge_at(c, 1, 2, sx, sy) + bias0, row1 = edge_at(c, 2, 0, sx, sy) + bias1,
+          row2 = edge_at(c, 0, 1, sx, sy) + bias2;
+  const int64_t step_x0 = (c.y[2] - c.y[1]) * kSubpixel, step_x1 = (c.y[0] - c.y[2]) * kSubpixel,
+                step_x2 = (c.y[1] - c.y[0]) * kSubpixel;
+  const int64_t step_y0 = (c.x[2] - c.x[1]) * kSubpixel, step_y1 = (c.x[0] - c.x[2]) * kSubpixel,
+                step_y2 = (c.x[1] - c.x[0]) * kSubpixel;
   Fill fill;
-  fill.job = &job;
-  fill.layer = &layer;
-  fill.projected = projected;
-  fill.corners = &c;
-  fill.tri = &tri;
+  bool ready = false;
   const size_t width = job.frame->width;
   for (int64_t py = py0;;) {
-    int64_t w0 = row0, w1 = row1, w2 = row2;
-    for (int64_t px = px0;;) {
-      if ((w0 | w1 | w2) >= 0) {
-        if (!fill.ready) fill.prepare(area, view);
-        fill.pixel(static_cast<size_t>(py) * width + static_cast<size_t>(px), w0 - bias0,
-                   w1 - bias1, w2 - bias2);
+    int64_t first = 0, last = last_column;
+    if (edge_span(row0, step_x0, last_column, &first, &last) &&
+        edge_span(row1, step_x1, last_column, &first, &last) &&
+        edge_span(row2, step_x2, last_column, &first, &last)) {
+      if (!ready) {
+        fill.prepare(job, layer, projected, tri, c, area, view);
+        ready = true;
       }
-      if (++px > px1) break;
-      w0 -= (c.y[2] - c.y[1]) * kSubpixel;
-      w1 -= (c.y[0] - c.y[2]) * kSubpixel;
-      w2 -= (c.y[1] - c.y[0]) * kSubpixel;
+      // Unbiased values at the run's first pixel.
+      int64_t w0 = row0 - first * step_x0 - bias0, w1 = row1 - first * step_x1 - bias1,
+              w2 = row2 - first * step_x2 - bias2;
+      const size_t row_start = static_cast<size_t>(py) * width + static_cast<size_t>(px0);
+      for (int64_t i = first;; ++i) {
+        fill.pixel(row_start + static_cast<size_t>(i), w0, w1, w2);
+        if (i == last) break;
+        w0 -= step_x0;
+        w1 -= step_x1;
+        w2 -= step_x2;
+      }
     }
     if (++py > py1) break;
-    row0 += (c.x[2] - c.x[1]) * kSubpixel;
-    row1 += (c.x[0] - c.x[2]) * kSubpixel;
-    row2 += (c.x[1] - c.x[0]) * kSubpixel;
+    row0 += step_y0;
+    row1 += step_y1;
+    row2 += step_y2;
   }
 }
 
@@ -346,7 +400,11 @@ void draw_mesh_view(const MeshJob& job, uint32_t view_index, uint32_t slot) {
     c.y[2] = y[third];
     c.vertex[2] = tri.v[third];
     if (area < 0) area = -area;
-    draw_triangle(job, view, layer, projected, tri, c, area, box);
+    if (box.x0 == box.x1 && box.y0 == box.y1) {
+      draw_one_pixel(job, view, layer, projected, tri, c, area, box.x0, box.y0);
+    } else {
+      draw_triangle(job, view, layer, projected, tri, c, area, box);
+    }
   }
 }
 
