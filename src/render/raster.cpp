@@ -151,20 +151,14 @@ struct PixelBox {
   int64_t x0, x1, y0, y1;  // inclusive
 };
 
-// The pixels whose centres (px * 256 + 128, py * 256 + 128) lie in the box of the triangle
-// with fixed-point corners (x[k], y[k]) and in the view's tile: false when there are none (the
-// triangle draws nothing). The columns first: half the triangles of a fine mesh have none.
-inline bool pixel_box(const View& view, const int64_t x[3], const int64_t y[3], PixelBox* box) {
-  const int64_t min_x = std::min(std::min(x[0], x[1]), x[2]);
-  const int64_t max_x = std::max(std::max(x[0], x[1]), x[2]);
-  box->x0 = std::max<int64_t>(-floor_subpixel(-(min_x - kSubpixel / 2)), view.x0);
-  box->x1 = std::min<int64_t>(floor_subpixel(max_x - kSubpixel / 2), view.x1 - 1);
-  if (box->x0 > box->x1) return false;
-  const int64_t min_y = std::min(std::min(y[0], y[1]), y[2]);
-  const int64_t max_y = std::max(std::max(y[0], y[1]), y[2]);
-  box->y0 = std::max<int64_t>(-floor_subpixel(-(min_y - kSubpixel / 2)), view.y0);
-  box->y1 = std::min<int64_t>(floor_subpixel(max_y - kSubpixel / 2), view.y1 - 1);
-  return box->y0 <= box->y1;
+// The pixel centres p * 256 + 128 (one axis) between the smallest and the largest of the
+// fixed-point a, b, c and in the tile's [lo, hi]: [*first, *last], false when there are none.
+inline bool centre_range(int64_t a, int64_t b, int64_t c, int64_t lo, int64_t hi, int64_t* first,
+                         int64_t* last) {
+  const int64_t least = std::min(std::min(a, b), c), most = std::max(std::max(a, b), c);
+  *first = std::max<int64_t>(-floor_subpixel(kSubpixel / 2 - least), lo);
+  *last = std::min<int64_t>(floor_subpixel(most - kSubpixel / 2), hi);
+  return *first <= *last;
 }
 
 double lambert(const Vec3& normal, double normal_length, const Vec3& light) {
@@ -260,25 +254,53 @@ inline int64_t edge_at(const Corners& c, int p, int q, int64_t x, int64_t y) {
   return (c.x[q] - c.x[p]) * (y - c.y[p]) - (c.y[q] - c.y[p]) * (x - c.x[p]);
 }
 
-// Draws the triangle `tri` with corners `c` (counter-clockwise, of fixed-point area `area` > 0)
-// whose box holds the one pixel centre (px, py) (most triangles of a fine mesh that draw
-// anything): its three edge values there, the fill rule only for a centre exactly on an edge.
-// The same decisions and values as draw_triangle's for that pixel.
-void draw_one_pixel(const MeshJob& job, const View& view, const Layer& layer,
-                    const Projected* projected, const Triangle& tri, const Corners& c, int64_t area,
-                    int64_t px, int64_t py) {
-  const int64_t sx = px * kSubpixel + kSubpixel / 2, sy = py * kSubpixel + kSubpixel / 2;
-  const int64_t w0 = edge_at(c, 1, 2, sx, sy), w1 = edge_at(c, 2, 0, sx, sy),
-                w2 = edge_at(c, 0, 1, sx, sy);
-  if ((w0 | w1 | w2) < 0) return;  // outside an edge
+// The corners of the triangle `tri` (fixed-point x, y in its order, signed area `area` != 0)
+// counter-clockwise: corners 1 and 2 swapped when the area is negative.
+inline void make_corners(const Triangle& tri, const int64_t x[3], const int64_t y[3], int64_t area,
+                         Corners* c) {
+  const int second = area > 0 ? 1 : 2, third = 3 - second;
+  c->x[0] = x[0];
+  c->y[0] = y[0];
+  c->vertex[0] = tri.v[0];
+  c->x[1] = x[second];
+  c->y[1] = y[second];
+  c->vertex[1] = tri.v[second];
+  c->x[2] = x[third];
+  c->y[2] = y[third];
+  c->vertex[2] = tri.v[third];
+}
+
+// The one pixel centre (px, py) of the box of the triangle `tri` (fixed-point corners x, y in
+// its order, signed area `area` != 0) is inside it or on its boundary: its edge values there in
+// the triangle's order, e12 (of the edge from corner 1 to 2), e20 and e01, are all >= 0 when
+// the area is positive, all <= 0 when negative. The fill rule on an edge, the depth test, then
+// the pixel: the decisions and values draw_triangle makes for that pixel (most triangles of a
+// fine mesh that draw anything have a box of one pixel centre).
+__attribute__((noinline)) void draw_one_pixel(const MeshJob& job, const View& view,
+                                              const Layer& layer, const Projected* projected,
+                                              const Triangle& tri, const int64_t x[3],
+                                              const int64_t y[3], int64_t area, int64_t e12,
+                                              int64_t e20, int64_t e01, int64_t px, int64_t py) {
+  Corners c;
+  make_corners(tri, x, y, area, &c);
+  // Opposite the counter-clockwise corners: an edge reversed negates its value.
+  const int64_t w0 = area > 0 ? e12 : -e12, w1 = area > 0 ? e20 : -e01, w2 = area > 0 ? e01 : -e20;
   // On an edge: drawn only by the triangle that owns it (the bias is 0 or -1).
   if ((w0 == 0 && edge_bias(c, 1, 2) < 0) || (w1 == 0 && edge_bias(c, 2, 0) < 0) ||
       (w2 == 0 && edge_bias(c, 0, 1) < 0)) {
     return;
   }
+  const int64_t size = area > 0 ? area : -area;
+  const size_t index = static_cast<size_t>(py) * job.frame->width + static_cast<size_t>(px);
+  // The depth test before anything else is looked up (Fill::pixel repeats it, same values).
+  const double z = (static_cast<double>(w0) * static_cast<double>(projected[c.vertex[0]].depth) +
+                    static_cast<double>(w1) * static_cast<double>(projected[c.vertex[1]].depth) +
+                    static_cast<double>(w2) * static_cast<double>(projected[c.vertex[2]].depth)) *
+                   (1.0 / static_cast<double>(size));
+  if (!(static_cast<float>(z) < layer.depth[index])) return;
   Fill fill;
-  fill.prepare(job, layer, projected, tri, c, area, view);
-  fill.pixel(static_cast<size_t>(py) * job.frame->width + static_cast<size_t>(px), w0, w1, w2);
+  fill.prepare(job, layer, projected, tri, c, size, view);
+  fill.pixel(index, w0, w1, w2);
 }
 
 // The columns [*first, *last] (offsets from the box's left column, at most `last_column`) where
@@ -303,7 +325,7 @@ inline bool edge_span(int64_t w, int64_t step, int64_t last_column, int64_t* fir
 }
 
 // Draws the triangle `tri` with corners `c` (counter-clockwise, of fixed-point area `area` > 0)
-// over the pixels of `box` (pixel_box: not empty). Edge functions in exact integers: in each row
+// over the pixels of `box` (centre_range: not empty). Edge functions in exact integers: in each row
 // the columns where all three are >= 0 (edge_span: the pixels the stepped per-pixel test
 // covers, a row of a convex shape being one run), then only those pixels, in order.
 __attribute__((noinline)) void draw_triangle(const MeshJob& job, const View& view,
@@ -375,36 +397,42 @@ void draw_mesh_view(const MeshJob& job, uint32_t view_index, uint32_t slot) {
   }
   const Triangle* triangles = mesh.triangles.data();
   const size_t triangle_count = mesh.triangles.size();
+  // The tile in locals: the pixel writes (through uint8_t*) would otherwise reload them.
+  const int64_t tile_x0 = view.x0, tile_x1 = view.x1 - 1, tile_y0 = view.y0, tile_y1 = view.y1 - 1;
+  constexpr int64_t kHalf = kSubpixel / 2;
   for (size_t t = 0; t < triangle_count; ++t) {
     const Triangle& tri = triangles[t];
     const Projected& q0 = projected[tri.v[0]];
     const Projected& q1 = projected[tri.v[1]];
     const Projected& q2 = projected[tri.v[2]];
-    const int64_t x[3] = {q0.x, q1.x, q2.x}, y[3] = {q0.y, q1.y, q2.y};
     // No pixel centre in its box: nothing to light or draw (most triangles of a fine mesh).
+    // The columns first: half the triangles of a fine mesh have none.
     PixelBox box;
-    if (!pixel_box(view, x, y, &box)) continue;
-    // Zero area in the fixed grid (also edge-on faces): nothing to draw.
-    int64_t area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
-    if (area == 0) continue;
-    // Counter-clockwise on the screen: corners 1 and 2 swapped when the area is negative.
-    const int second = area > 0 ? 1 : 2, third = 3 - second;
-    Corners c;
-    c.x[0] = x[0];
-    c.y[0] = y[0];
-    c.vertex[0] = tri.v[0];
-    c.x[1] = x[second];
-    c.y[1] = y[second];
-    c.vertex[1] = tri.v[second];
-    c.x[2] = x[third];
-    c.y[2] = y[third];
-    c.vertex[2] = tri.v[third];
-    if (area < 0) area = -area;
-    if (box.x0 == box.x1 && box.y0 == box.y1) {
-      draw_one_pixel(job, view, layer, projected, tri, c, area, box.x0, box.y0);
-    } else {
-      draw_triangle(job, view, layer, projected, tri, c, area, box);
+    if (!centre_range(q0.x, q1.x, q2.x, tile_x0, tile_x1, &box.x0, &box.x1) ||
+        !centre_range(q0.y, q1.y, q2.y, tile_y0, tile_y1, &box.y0, &box.y1)) {
+      continue;
     }
+    const int64_t x[3] = {q0.x, q1.x, q2.x}, y[3] = {q0.y, q1.y, q2.y};
+    // Zero area in the fixed grid (also edge-on faces): nothing to draw.
+    const int64_t area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
+    if (area == 0) continue;
+    if (box.x0 == box.x1 && box.y0 == box.y1) {
+      // One pixel centre: the edge values there, from the corners relative to it (the same
+      // integers as edge_at's).
+      const int64_t cx = box.x0 * kSubpixel + kHalf, cy = box.y0 * kSubpixel + kHalf;
+      const int64_t r0x = x[0] - cx, r0y = y[0] - cy, r1x = x[1] - cx, r1y = y[1] - cy,
+                    r2x = x[2] - cx, r2y = y[2] - cy;
+      const int64_t e12 = r1x * r2y - r1y * r2x, e20 = r2x * r0y - r2y * r0x,
+                    e01 = r0x * r1y - r0y * r1x;
+      const bool inside = area > 0 ? (e12 | e20 | e01) >= 0 : ((-e12) | (-e20) | (-e01)) >= 0;
+      if (inside) {
+        draw_one_pixel(job, view, layer, projected, tri, x, y, area, e12, e20, e01, box.x0, box.y0);
+      }
+      continue;
+    }
+    Corners c;
+    make_corners(tri, x, y, area, &c);
+    draw_triangle(job, view, layer, projected, tri, c, area > 0 ? area : -area, box);
   }
 }
 
