@@ -151,20 +151,14 @@ struct PixelBox {
   int64_t x0, x1, y0, y1;  // inclusive
 };
 
-// The pixels whose centres (px * 256 + 128, py * 256 + 128) lie in the box of the triangle
-// with fixed-point corners (x[k], y[k]) and in the view's tile: false when there are none (the
-// triangle draws nothing). The columns first: half the triangles of a fine mesh have none.
-inline bool pixel_box(const View& view, const int64_t x[3], const int64_t y[3], PixelBox* box) {
-  const int64_t min_x = std::min(std::min(x[0], x[1]), x[2]);
-  const int64_t max_x = std::max(std::max(x[0], x[1]), x[2]);
-  box->x0 = std::max<int64_t>(-floor_subpixel(-(min_x - kSubpixel / 2)), view.x0);
-  box->x1 = std::min<int64_t>(floor_subpixel(max_x - kSubpixel / 2), view.x1 - 1);
-  if (box->x0 > box->x1) return false;
-  const int64_t min_y = std::min(std::min(y[0], y[1]), y[2]);
-  const int64_t max_y = std::max(std::max(y[0], y[1]), y[2]);
-  box->y0 = std::max<int64_t>(-floor_subpixel(-(min_y - kSubpixel / 2)), view.y0);
-  box->y1 = std::min<int64_t>(floor_subpixel(max_y - kSubpixel / 2), view.y1 - 1);
-  return box->y0 <= box->y1;
+// The pixel centres p * 256 + 128 (one axis) between the smallest and the largest of the
+// fixed-point a, b, c and in the tile's [lo, hi]: [*first, *last], false when there are none.
+inline bool centre_range(int64_t a, int64_t b, int64_t c, int64_t lo, int64_t hi, int64_t* first,
+                         int64_t* last) {
+  const int64_t least = std::min(std::min(a, b), c), most = std::max(std::max(a, b), c);
+  *first = std::max<int64_t>(-floor_subpixel(kSubpixel / 2 - least), lo);
+  *last = std::min<int64_t>(floor_subpixel(most - kSubpixel / 2), hi);
+  return *first <= *last;
 }
 
 double lambert(const Vec3& normal, double normal_length, const Vec3& light) {
@@ -177,12 +171,12 @@ double lambert(const Vec3& normal, double normal_length, const Vec3& light) {
 // Flat shading of one triangle (its corners p in the mesh's order), computed when its first
 // pixel is written (most triangles of a fine mesh write none: hidden, or no pixel centre inside).
 struct FlatLight {
-  const Vec3* p[3] = {nullptr, nullptr, nullptr};
-  const Vec3* light = nullptr;
-  const uint8_t* rgb = nullptr;
-  bool ready = false;
-  double intensity = 0;
-  uint8_t shaded[3] = {0, 0, 0};
+  const Vec3* p[3];
+  const Vec3* light;
+  const uint8_t* rgb;
+  bool ready;
+  double intensity;
+  uint8_t shaded[3];
   void prepare() {
     const Vec3 normal = cross(*p[1] - *p[0], *p[2] - *p[0]);
     const double len = length(normal);
@@ -193,32 +187,31 @@ struct FlatLight {
 };
 
 // What a covered pixel of a triangle needs besides its edge values (w0, w1, w2: opposite the
-// corners 0, 1, 2, summing to the area), set up at the triangle's first covered pixel (most
-// triangles of a fine mesh cover none).
+// corners 0, 1, 2, summing to the area), set up (prepare) at the triangle's first covered pixel:
+// most triangles of a fine mesh cover none, so nothing is initialised before.
 struct Fill {
-  const MeshJob* job = nullptr;
-  const Layer* layer = nullptr;
-  const Projected* projected = nullptr;
-  const Corners* corners = nullptr;
-  const Triangle* tri = nullptr;
-  bool ready = false;
-  double inv_area = 0;
-  double depth[3] = {0, 0, 0}, intensity[3] = {0, 0, 0}, scalar[3] = {0, 0, 0};
+  const MeshJob* job;
+  const Layer* layer;
+  double inv_area;
+  double depth[3], intensity[3], scalar[3];
   FlatLight flat;
 
-  void prepare(int64_t area, const View& view) {
+  void prepare(const MeshJob& mesh_job, const Layer& target, const Projected* projected,
+               const Triangle& tri, const Corners& corners, int64_t area, const View& view) {
+    job = &mesh_job;
+    layer = &target;
     inv_area = 1.0 / static_cast<double>(area);
     const RenderMesh& item = *job->item;
     for (int k = 0; k < 3; ++k) {
-      const uint32_t i = corners->vertex[k];
+      const uint32_t i = corners.vertex[k];
       depth[k] = static_cast<double>(projected[i].depth);
       intensity[k] = static_cast<double>(projected[i].intensity);
-      if (item.scalars != nullptr) scalar[k] = item.scalars[i];
-      flat.p[k] = job->positions + tri->v[k];
+      scalar[k] = item.scalars != nullptr ? item.scalars[i] : 0;
+      flat.p[k] = job->positions + tri.v[k];
     }
     flat.light = &view.light;
     flat.rgb = item.rgb;
-    ready = true;
+    flat.ready = false;
   }
 
   // The pixel `index` with edge values w0, w1, w2: depth-tested, written when nearer.
@@ -255,46 +248,129 @@ struct Fill {
   }
 };
 
+// The edge function of the corners p -> q at the fixed-point point (x, y): positive left of it
+// (inside the counter-clockwise triangle), twice the area of (p, q, (x, y)).
+inline int64_t edge_at(const Corners& c, int p, int q, int64_t x, int64_t y) {
+  return (c.x[q] - c.x[p]) * (y - c.y[p]) - (c.y[q] - c.y[p]) * (x - c.x[p]);
+}
+
+// The corners of the triangle `tri` (fixed-point x, y in its order, signed area `area` != 0)
+// counter-clockwise: corners 1 and 2 swapped when the area is negative.
+inline void make_corners(const Triangle& tri, const int64_t x[3], const int64_t y[3], int64_t area,
+                         Corners* c) {
+  const int second = area > 0 ? 1 : 2, third = 3 - second;
+  c->x[0] = x[0];
+  c->y[0] = y[0];
+  c->vertex[0] = tri.v[0];
+  c->x[1] = x[second];
+  c->y[1] = y[second];
+  c->vertex[1] = tri.v[second];
+  c->x[2] = x[third];
+  c->y[2] = y[third];
+  c->vertex[2] = tri.v[third];
+}
+
+// The one pixel centre (px, py) of the box of the triangle `tri` (fixed-point corners x, y in
+// its order, signed area `area` != 0) is inside it or on its boundary: its edge values there in
+// the triangle's order, e12 (of the edge from corner 1 to 2), e20 and e01, are all >= 0 when
+// the area is positive, all <= 0 when negative. The fill rule on an edge, the depth test, then
+// the pixel: the decisions and values draw_triangle makes for that pixel (most triangles of a
+// fine mesh that draw anything have a box of one pixel centre).
+__attribute__((noinline)) void draw_one_pixel(const MeshJob& job, const View& view,
+                                              const Layer& layer, const Projected* projected,
+                                              const Triangle& tri, const int64_t x[3],
+                                              const int64_t y[3], int64_t area, int64_t e12,
+                                              int64_t e20, int64_t e01, int64_t px, int64_t py) {
+  Corners c;
+  make_corners(tri, x, y, area, &c);
+  // Opposite the counter-clockwise corners: an edge reversed negates its value.
+  const int64_t w0 = area > 0 ? e12 : -e12, w1 = area > 0 ? e20 : -e01, w2 = area > 0 ? e01 : -e20;
+  // On an edge: drawn only by the triangle that owns it (the bias is 0 or -1).
+  if ((w0 == 0 && edge_bias(c, 1, 2) < 0) || (w1 == 0 && edge_bias(c, 2, 0) < 0) ||
+      (w2 == 0 && edge_bias(c, 0, 1) < 0)) {
+    return;
+  }
+  const int64_t size = area > 0 ? area : -area;
+  const size_t index = static_cast<size_t>(py) * job.frame->width + static_cast<size_t>(px);
+  // The depth test before anything else is looked up (Fill::pixel repeats it, same values).
+  const double z = (static_cast<double>(w0) * static_cast<double>(projected[c.vertex[0]].depth) +
+                    static_cast<double>(w1) * static_cast<double>(projected[c.vertex[1]].depth) +
+                    static_cast<double>(w2) * static_cast<double>(projected[c.vertex[2]].depth)) *
+                   (1.0 / static_cast<double>(size));
+  if (!(static_cast<float>(z) < layer.depth[index])) return;
+  Fill fill;
+  fill.prepare(job, layer, projected, tri, c, size, view);
+  fill.pixel(index, w0, w1, w2);
+}
+
+// The columns [*first, *last] (offsets from the box's left column, at most `last_column`) where
+// an edge's biased value, `w` at offset 0 and falling by `step` a column, is >= 0: narrowed, and
+// false when none is left. Exact integer arithmetic (|w| < 2^60, |step| < 2^38); a division only
+// where the edge crosses the row inside the box.
+inline bool edge_span(int64_t w, int64_t step, int64_t last_column, int64_t* first, int64_t* last) {
+  if (step > 0) {  // falling: from offset 0 up to floor(w / step)
+    if (w < 0) return false;
+    if (w - *last * step < 0) *last = w / step;
+  } else if (step < 0) {  // rising: from ceil(-w / -step)
+    if (w < 0) {
+      const int64_t rise = -step;
+      if (w + last_column * rise < 0) return false;
+      const int64_t from = (-w + rise - 1) / rise;
+      if (from > *first) *first = from;
+    }
+  } else if (w < 0) {
+    return false;
+  }
+  return *first <= *last;
+}
+
 // Draws the triangle `tri` with corners `c` (counter-clockwise, of fixed-point area `area` > 0)
-// over the pixels of `box` (pixel_box: not empty). Edge functions in exact integers, stepped
-// from pixel to pixel; nothing in floating point until a pixel is covered.
-void draw_triangle(const MeshJob& job, const View& view, const Layer& layer,
-                   const Projected* projected, const Triangle& tri, const Corners& c, int64_t area,
-                   const PixelBox& box) {
-  const int64_t px0 = box.x0, px1 = box.x1, py0 = box.y0, py1 = box.y1;
+// over the pixels of `box` (centre_range: not empty). Edge functions in exact integers: in each row
+// the columns where all three are >= 0 (edge_span: the pixels the stepped per-pixel test
+// covers, a row of a convex shape being one run), then only those pixels, in order.
+__attribute__((noinline)) void draw_triangle(const MeshJob& job, const View& view,
+                                             const Layer& layer, const Projected* projected,
+                                             const Triangle& tri, const Corners& c, int64_t area,
+                                             const PixelBox& box) {
+  const int64_t px0 = box.x0, py0 = box.y0, py1 = box.y1, last_column = box.x1 - box.x0;
   // w0 is opposite corner 0 (edge 1->2), and so on; positive inside.
   const int64_t bias0 = edge_bias(c, 1, 2), bias1 = edge_bias(c, 2, 0), bias2 = edge_bias(c, 0, 1);
   const int64_t sx = px0 * kSubpixel + kSubpixel / 2, sy = py0 * kSubpixel + kSubpixel / 2;
-  auto edge = [&c](int p, int q, int64_t x, int64_t y) {
-    return (c.x[q] - c.x[p]) * (y - c.y[p]) - (c.y[q] - c.y[p]) * (x - c.x[p]);
-  };
   // Biased: a pixel is covered when all three are >= 0.
-  int64_t row0 = edge(1, 2, sx, sy) + bias0, row1 = edge(2, 0, sx, sy) + bias1,
-          row2 = edge(0, 1, sx, sy) + bias2;
+  int64_t row0 = edge_at(c, 1, 2, sx, sy) + bias0, row1 = edge_at(c, 2, 0, sx, sy) + bias1,
+          row2 = edge_at(c, 0, 1, sx, sy) + bias2;
+  const int64_t step_x0 = (c.y[2] - c.y[1]) * kSubpixel, step_x1 = (c.y[0] - c.y[2]) * kSubpixel,
+                step_x2 = (c.y[1] - c.y[0]) * kSubpixel;
+  const int64_t step_y0 = (c.x[2] - c.x[1]) * kSubpixel, step_y1 = (c.x[0] - c.x[2]) * kSubpixel,
+                step_y2 = (c.x[1] - c.x[0]) * kSubpixel;
   Fill fill;
-  fill.job = &job;
-  fill.layer = &layer;
-  fill.projected = projected;
-  fill.corners = &c;
-  fill.tri = &tri;
+  bool ready = false;
   const size_t width = job.frame->width;
   for (int64_t py = py0;;) {
-    int64_t w0 = row0, w1 = row1, w2 = row2;
-    for (int64_t px = px0;;) {
-      if ((w0 | w1 | w2) >= 0) {
-        if (!fill.ready) fill.prepare(area, view);
-        fill.pixel(static_cast<size_t>(py) * width + static_cast<size_t>(px), w0 - bias0,
-                   w1 - bias1, w2 - bias2);
+    int64_t first = 0, last = last_column;
+    if (edge_span(row0, step_x0, last_column, &first, &last) &&
+        edge_span(row1, step_x1, last_column, &first, &last) &&
+        edge_span(row2, step_x2, last_column, &first, &last)) {
+      if (!ready) {
+        fill.prepare(job, layer, projected, tri, c, area, view);
+        ready = true;
       }
-      if (++px > px1) break;
-      w0 -= (c.y[2] - c.y[1]) * kSubpixel;
-      w1 -= (c.y[0] - c.y[2]) * kSubpixel;
-      w2 -= (c.y[1] - c.y[0]) * kSubpixel;
+      // Unbiased values at the run's first pixel.
+      int64_t w0 = row0 - first * step_x0 - bias0, w1 = row1 - first * step_x1 - bias1,
+              w2 = row2 - first * step_x2 - bias2;
+      const size_t row_start = static_cast<size_t>(py) * width + static_cast<size_t>(px0);
+      for (int64_t i = first;; ++i) {
+        fill.pixel(row_start + static_cast<size_t>(i), w0, w1, w2);
+        if (i == last) break;
+        w0 -= step_x0;
+        w1 -= step_x1;
+        w2 -= step_x2;
+      }
     }
     if (++py > py1) break;
-    row0 += (c.x[2] - c.x[1]) * kSubpixel;
-    row1 += (c.x[0] - c.x[2]) * kSubpixel;
-    row2 += (c.x[1] - c.x[0]) * kSubpixel;
+    row0 += step_y0;
+    row1 += step_y1;
+    row2 += step_y2;
   }
 }
 
@@ -321,32 +397,42 @@ void draw_mesh_view(const MeshJob& job, uint32_t view_index, uint32_t slot) {
   }
   const Triangle* triangles = mesh.triangles.data();
   const size_t triangle_count = mesh.triangles.size();
+  // The tile in locals: the pixel writes (through uint8_t*) would otherwise reload them.
+  const int64_t tile_x0 = view.x0, tile_x1 = view.x1 - 1, tile_y0 = view.y0, tile_y1 = view.y1 - 1;
+  constexpr int64_t kHalf = kSubpixel / 2;
   for (size_t t = 0; t < triangle_count; ++t) {
     const Triangle& tri = triangles[t];
     const Projected& q0 = projected[tri.v[0]];
     const Projected& q1 = projected[tri.v[1]];
     const Projected& q2 = projected[tri.v[2]];
-    const int64_t x[3] = {q0.x, q1.x, q2.x}, y[3] = {q0.y, q1.y, q2.y};
     // No pixel centre in its box: nothing to light or draw (most triangles of a fine mesh).
+    // The columns first: half the triangles of a fine mesh have none.
     PixelBox box;
-    if (!pixel_box(view, x, y, &box)) continue;
+    if (!centre_range(q0.x, q1.x, q2.x, tile_x0, tile_x1, &box.x0, &box.x1) ||
+        !centre_range(q0.y, q1.y, q2.y, tile_y0, tile_y1, &box.y0, &box.y1)) {
+      continue;
+    }
+    const int64_t x[3] = {q0.x, q1.x, q2.x}, y[3] = {q0.y, q1.y, q2.y};
     // Zero area in the fixed grid (also edge-on faces): nothing to draw.
-    int64_t area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
+    const int64_t area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
     if (area == 0) continue;
-    // Counter-clockwise on the screen: corners 1 and 2 swapped when the area is negative.
-    const int second = area > 0 ? 1 : 2, third = 3 - second;
+    if (box.x0 == box.x1 && box.y0 == box.y1) {
+      // One pixel centre: the edge values there, from the corners relative to it (the same
+      // integers as edge_at's).
+      const int64_t cx = box.x0 * kSubpixel + kHalf, cy = box.y0 * kSubpixel + kHalf;
+      const int64_t r0x = x[0] - cx, r0y = y[0] - cy, r1x = x[1] - cx, r1y = y[1] - cy,
+                    r2x = x[2] - cx, r2y = y[2] - cy;
+      const int64_t e12 = r1x * r2y - r1y * r2x, e20 = r2x * r0y - r2y * r0x,
+                    e01 = r0x * r1y - r0y * r1x;
+      const bool inside = area > 0 ? (e12 | e20 | e01) >= 0 : ((-e12) | (-e20) | (-e01)) >= 0;
+      if (inside) {
+        draw_one_pixel(job, view, layer, projected, tri, x, y, area, e12, e20, e01, box.x0, box.y0);
+      }
+      continue;
+    }
     Corners c;
-    c.x[0] = x[0];
-    c.y[0] = y[0];
-    c.vertex[0] = tri.v[0];
-    c.x[1] = x[second];
-    c.y[1] = y[second];
-    c.vertex[1] = tri.v[second];
-    c.x[2] = x[third];
-    c.y[2] = y[third];
-    c.vertex[2] = tri.v[third];
-    if (area < 0) area = -area;
-    draw_triangle(job, view, layer, projected, tri, c, area, box);
+    make_corners(tri, x, y, area, &c);
+    draw_triangle(job, view, layer, projected, tri, c, area > 0 ? area : -area, box);
   }
 }
 
