@@ -486,16 +486,19 @@ void PairSearch::leaf_pair(const PairEntry& e) {
   const float* b_boxes = triangle_boxes[1];
   // The float boxes' gaps first (float_box_gaps, bit for bit), then each tested against
   // reach2 as it is at its turn (consider() may lower it while A's triangles go by).
+  // (Without float boxes every gap is 0: nothing is dropped here.)
   double box_gaps[16];
-  if (b_boxes != nullptr && !rigid) {
+  if (b_boxes == nullptr) {
+    for (uint32_t j = 0; j < b_count; ++j) box_gaps[j] = 0.0;
+  } else if (rigid) {
+    for (uint32_t j = 0; j < b_count; ++j) {
+      box_gaps[j] = triangle_box_gap2(1, b_boxes + 6 * size_t{b_first + j}, alo, ahi);
+    }
+  } else {
     float_box_gaps(b_boxes + 6 * size_t{b_first}, b_count, shift[1], alo, ahi, box_gaps);
   }
   for (uint32_t j = 0; j < b_count; ++j) {
-    if (b_boxes != nullptr &&
-        (rigid ? triangle_box_gap2(1, b_boxes + 6 * size_t{b_first + j}, alo, ahi) : box_gaps[j]) >
-            reach2) {
-      continue;
-    }
+    if (b_boxes != nullptr && box_gaps[j] > reach2) continue;
     const uint32_t tb = index[1]->order[b_first + j];
     load(1, tb, &bs[kept]);
     if (box_gap2(bs[kept].lo, bs[kept].hi, alo, ahi) > reach2) continue;
