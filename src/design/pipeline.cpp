@@ -169,6 +169,18 @@ Status refuse_inside_out_jaws(const Context& ctx, const CaseFile& c, Span<const 
   return Status::ok();
 }
 
+// The same bits in every coordinate (+0 and -0 differ, as they would in the output).
+bool same_bits(const Vec3& a, const Vec3& b) {
+  const double pa[3] = {a.x, a.y, a.z}, pb[3] = {b.x, b.y, b.z};
+  for (int i = 0; i < 3; ++i) {
+    uint64_t u, v;
+    std::memcpy(&u, &pa[i], sizeof(u));
+    std::memcpy(&v, &pb[i], sizeof(v));
+    if (u != v) return false;
+  }
+  return true;
+}
+
 // Jaw k's vertices as B holds them (moved by its transform, rounded to float32): the jaw's
 // own when that changes no bit (a jaw that does not move, read from STL), else a copy.
 Status moved_vertices(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, size_t k,
@@ -178,7 +190,7 @@ Status moved_vertices(const Context& ctx, const CaseFile& c, Span<const Mesh> ja
   bool same = true;
   for (size_t i = 0; i < m.vertices.size() && same; ++i) {
     Vec3 p = x.apply_point(m.vertices[i]);
-    same = round_to_float32(&p) && std::memcmp(&p, &m.vertices[i], sizeof(Vec3)) == 0;
+    same = round_to_float32(&p) && same_bits(p, m.vertices[i]);
   }
   if (same) {
     *out = m.vertices.span();

@@ -496,8 +496,9 @@ bool reference_closest(const Mesh& m, const Vec3& q, ClosestPoint* out) {
   double best2 = HUGE_VAL;
   for (uint32_t t = 0; t < m.triangles.size(); ++t) {
     Vec3 p;
-    Feature f;
-    uint8_t fi;
+    // (ericson() sets both; g++ -O1 without UBSan, the ASan job, cannot see it.)
+    Feature f = Feature::kFace;
+    uint8_t fi = 0;
     ericson(q, corner(m, t, 0), corner(m, t, 1), corner(m, t, 2), &p, &f, &fi);
     const double d2 = length_squared(p - q);
     if (d2 < best2 || (!found && d2 <= best2)) {
