@@ -99,9 +99,10 @@ double monotonic_seconds();
 // Memory for a tool's arena: at least `bytes`, aligned to 2 MiB and offered to the kernel for
 // transparent huge pages where it has them (the first touch of a 27 MB mesh took 8,294 page
 // faults in 4 KiB pages, a fifth of `splintcore check`'s time; 149 with huge pages). nullptr
-// when the system has no such memory. Give it back with release_arena_memory().
+// when the system has no such memory. Give it back with release_arena_memory(), with the same
+// `bytes`.
 void* acquire_arena_memory(uint64_t bytes);
-void release_arena_memory(void* p);
+void release_arena_memory(void* p, uint64_t bytes);
 
 }  // namespace splintcore
 

@@ -1,5 +1,7 @@
+#include <cstdint>
 #include <cstdlib>
 
+#include "splintcore/platform.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -165,6 +167,25 @@ TEST(ArenaArray, UsesTheCapToTheLastElementBeforeFailing) {
   while (a.push_back(static_cast<uint32_t>(n))) ++n;
   EXPECT_EQ(n, 1024u);  // growth falls back to the exact size when doubling does not fit
   EXPECT_EQ(arena.exhausted_status().code(), StatusCode::kArenaExhausted);
+}
+
+// A tool's arena memory (the hosted layer): 2 MiB aligned, every byte of the size asked for
+// writable, given back by size; nothing for zero bytes or a size that cannot be mapped.
+TEST(ArenaMemory, MappedAlignedWritableAndGivenBack) {
+  for (uint64_t bytes : {uint64_t{1}, uint64_t{5} << 20, (uint64_t{6} << 20) + 1}) {
+    void* p = acquire_arena_memory(bytes);
+    ASSERT_NE(p, nullptr) << bytes;
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(p) % (uintptr_t{2} << 20), 0u) << bytes;
+    unsigned char* b = static_cast<unsigned char*>(p);
+    b[0] = 1;
+    b[bytes - 1] = 2;
+    Arena arena(p, static_cast<size_t>(bytes));
+    EXPECT_NE(arena.allocate(static_cast<size_t>(bytes), 1), nullptr);
+    release_arena_memory(p, bytes);
+  }
+  EXPECT_EQ(acquire_arena_memory(0), nullptr);
+  EXPECT_EQ(acquire_arena_memory(UINT64_MAX), nullptr);
+  release_arena_memory(nullptr, 1);  // nothing to give back
 }
 
 }  // namespace

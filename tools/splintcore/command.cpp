@@ -49,9 +49,9 @@ void CommandLine::print_help(std::FILE* out) const {
   print_options(out, specs_);
 }
 
-RunMemory::RunMemory(uint64_t cap) : buffer(acquire_arena_memory(cap)) {}
+RunMemory::RunMemory(uint64_t cap) : buffer(acquire_arena_memory(cap)), bytes(cap) {}
 
-RunMemory::~RunMemory() { release_arena_memory(buffer); }
+RunMemory::~RunMemory() { release_arena_memory(buffer, bytes); }
 
 int rejected(const CommonArgs& args, const char* command, const Status& s, const Arena* arena) {
   cli::print_error(s);

@@ -90,6 +90,7 @@ class CommandLine {
 // gives only 8 on 32-bit ARM, which would shift the arena's padding and its reported figures).
 struct RunMemory {
   void* buffer = nullptr;
+  uint64_t bytes = 0;
   explicit RunMemory(uint64_t cap);
   ~RunMemory();
   RunMemory(const RunMemory&) = delete;
