@@ -62,16 +62,21 @@ slow_properties='^BooleanRandom\.|^SweepDecimate\.StaysWithin'
 # exercise the same code as the phantom tests next to them.
 realdata_tests='RealData\.|\.Real[A-Z]'
 
-# The whole suite runs once per compiler and once instrumented: g++ -O2 (every test), clang++
-# -O0 with coverage and g++ ASan+UBSan (every test but the two groups above). g++ -O0 and
-# clang++ -O2 run the tests that pin or compare output bytes (the goldens, same bytes at every
-# thread count and run, the command line and the C API): the build with -Werror and the bytes
-# are what those two builds add; running the rest a second time per compiler took about
-# 6 minutes of CI.
-# Those two builds compile only the test files that hold these tests (-DSPLINTCORE_BYTES_ONLY=ON,
-# tests/CMakeLists.txt: 29 of 87 files; about two thirds of each build's time was the tests'
-# compile); a bytes job that finds the gcc-O2 job's full build checks it has every such test.
+# The whole suite runs once per compiler: g++ -O2 (every test) and clang++ -O1 with ASan and
+# UBSan (every test but the two groups above). g++ -O0 and clang++ -O2 run the tests that pin or
+# compare output bytes (the goldens, same bytes at every thread count and run, the command line
+# and the C API): the build with -Werror and the bytes are what those two builds add; running
+# the rest a second time per compiler took about 6 minutes of CI. clang++ -O0, built with
+# coverage, runs the byte tests and the tests of the parsers, whose branch coverage it gates
+# (a whole third run of the suite there took 280 s of CI at -O0).
+# Those three builds compile only the test files that hold these tests
+# (-DSPLINTCORE_BYTES_ONLY=ON, and -DSPLINTCORE_PARSER_TESTS=ON for clang -O0:
+# tests/CMakeLists.txt; about two thirds of each build's time was the tests' compile); a job
+# that finds the gcc-O2 job's full build checks it has every byte test.
 bytes_tests='Golden|SameBytes|SameBits|Determinis|Pinned|Thread|^cli\.|^capi\.|^Sha256\.'
+# The tests of the parsers of outside bytes (their files: SPLINTCORE_PARSER_TESTS in
+# tests/CMakeLists.txt): with the byte tests, what the clang++ -O0 coverage job runs.
+parser_tests='^(Checksum|Deflate|Inflate|InflateErrors|StlRead|StlReadTest|MeshReadDetect|PlyRead|ObjRead|IoExhaustionTest|Json[A-Za-z]*|MeshDetectCoverage|MeshTextCoverage|ObjCoverage|PlyCoverage|StlCoverage|Ct[A-Za-z]*|DicomCoverage|Case[A-Za-z]*|PlanCase)\.'
 bytes_names() {  # build-dir: the names of the byte tests a job runs there, sorted
   (cd "$1" && ctest -N -R "$bytes_tests" -E "$slow_properties|$realdata_tests") |
     sed -n 's/^ *Test *#[0-9]*: //p' | sort
@@ -84,6 +89,7 @@ run_ctest_job() {  # name cxx build_type extra-cmake-args...
   case $name in
     gcc-O2) ;;
     gcc-O0 | clang-O2) exclude=(-R "$bytes_tests" -E "$slow_properties|$realdata_tests") ;;
+    clang-O0) exclude=(-R "$bytes_tests|$parser_tests" -E "$slow_properties|$realdata_tests") ;;
     *) exclude=(-E "$slow_properties|$realdata_tests") ;;
   esac
   echo "=== $name: $cxx $type $*"
@@ -382,19 +388,29 @@ fuzz_job() {
     tail -n 40 "$dir.build.log"; return 1
   fi
   local rc=0 log=$dir.ctest.log
-  (cd "$dir" && ctest --output-on-failure -R '^fuzz\.' --timeout 900) >"$log" 2>&1 || rc=1
+  (cd "$dir" && ctest --output-on-failure -j "$par" -R '^fuzz\.' --timeout 900) >"$log" 2>&1 || rc=1
   grep -E "tests passed|tests failed|\*\*\*" "$log" | tail -n 15
   local n failed
   n=$(grep -oE "out of [0-9]+" "$log" | tail -n 1 | grep -oE "[0-9]+")
   failed=$(grep -oE "[0-9]+ tests failed" "$log" | tail -n 1 | grep -oE "^[0-9]+")
   total_passed=$((total_passed + ${n:-0} - ${failed:-0}))
   total_failed=$((total_failed + ${failed:-0}))
+  # The targets run $par at a time (each fuzzes on one core); the table is printed in order.
+  local running=0
+  rm -f "$dir"/fuzz-*.rc
   for t in $targets; do
     mkdir -p "$dir/corpus/$t" "$dir/artifacts/$t"
-    "$dir/tests/splintcore_fuzz_$t" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=2048 \
-      -print_final_stats=1 -artifact_prefix="$dir/artifacts/$t/" "$dir/corpus/$t" \
-      "fixtures/fuzz/$t" >"$dir/fuzz-$t.log" 2>&1
-    local frc=$?
+    if [ "$running" -ge "$par" ]; then wait -n; running=$((running - 1)); fi
+    ("$dir/tests/splintcore_fuzz_$t" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=2048 \
+       -print_final_stats=1 -artifact_prefix="$dir/artifacts/$t/" "$dir/corpus/$t" \
+       "fixtures/fuzz/$t" >"$dir/fuzz-$t.log" 2>&1
+     echo $? >"$dir/fuzz-$t.rc") &
+    running=$((running + 1))
+  done
+  wait
+  for t in $targets; do
+    local frc
+    frc=$(cat "$dir/fuzz-$t.rc" 2>/dev/null || echo 1)
     printf 'fuzz %-10s %10s execs %6s exec/s  %s\n' "$t" \
       "$(grep -oE '^stat::number_of_executed_units: [0-9]+' "$dir/fuzz-$t.log" | grep -oE '[0-9]+$')" \
       "$(grep -oE '^stat::average_exec_per_sec: [0-9]+' "$dir/fuzz-$t.log" | grep -oE '[0-9]+$')" \
@@ -474,7 +490,7 @@ clang_o0_job() {
   rm -f "$dir"/coverage-*.profraw
   ctest_profile="$PWD/$dir/coverage-%4m.profraw"
   run_ctest_job clang-O0 clang++ Debug "-DCMAKE_CXX_FLAGS=$flags" \
-    "-DCMAKE_EXE_LINKER_FLAGS=$flags" || rc=1
+    "-DCMAKE_EXE_LINKER_FLAGS=$flags" -DSPLINTCORE_BYTES_ONLY=ON -DSPLINTCORE_PARSER_TESTS=ON || rc=1
   ctest_profile=""
   echo "--- coverage of the clang-O0 test run (tools/coverage.sh --report $dir)"
   if SPLINTCORE_COVERAGE_MIN_BRANCH="${SPLINTCORE_COVERAGE_MIN_BRANCH:-95}" \
@@ -508,8 +524,10 @@ for job in $jobs; do
     clang-O0) clang_o0_job ;;
     clang-O2) run_ctest_job "$job" clang++ Release -DSPLINTCORE_BYTES_ONLY=ON ;;
     # -O1 -g1 (line tables): half the compile time of -O2 -g, the same findings (ASan's own
-    # recommendation is -O1), stack traces still name file and line.
-    asan) run_ctest_job "$job" g++ RelWithDebInfo -DSPLINTCORE_SANITIZE=ON \
+    # recommendation is -O1), stack traces still name file and line. clang++: UBSan on the
+    # test files costs it little, where g++ took 2x the time of ASan alone.
+    asan) ensure_packages clang libclang-rt-14-dev &&  # the sanitizer runtimes
+          run_ctest_job "$job" clang++ RelWithDebInfo -DSPLINTCORE_SANITIZE=ON \
             "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" ;;
     core) core_job ;;
     fuzz) fuzz_job ;;

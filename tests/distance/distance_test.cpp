@@ -53,8 +53,8 @@ namespace {
 
 using test::TestArena;
 
-#if defined(__OPTIMIZE__)
-constexpr int kEffort = 4;  // optimised builds run four times the cases of -O0 builds
+#if defined(__OPTIMIZE__) && !defined(SPLINTCORE_TEST_SANITIZED)
+constexpr int kEffort = 4;  // optimised builds run four times the cases of -O0 and sanitized ones
 #else
 constexpr int kEffort = 1;
 #endif

@@ -472,9 +472,10 @@ using splintcore_test::exact_collinear3d;
 using splintcore_test::exact_orient3d_sign;
 namespace oracle = splintcore_test::tri_oracle;
 
-// Unoptimised builds run a quarter of the random cases and half of the constructed ones (the
-// oracle is schoolbook big-integer arithmetic), to stay quick at -O0 and under sanitizers.
-#if defined(__OPTIMIZE__)
+// Unoptimised and sanitized builds run a quarter of the random cases and half of the constructed
+// ones (the oracle is schoolbook big-integer arithmetic), to stay quick at -O0 and under
+// sanitizers.
+#if defined(__OPTIMIZE__) && !defined(SPLINTCORE_TEST_SANITIZED)
 constexpr int kRandomDivisor = 1;
 constexpr int kAdversarialDivisor = 1;
 #else
