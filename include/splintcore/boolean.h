@@ -85,6 +85,9 @@ struct BooleanStats {
   uint64_t intersecting_pairs = 0;   // pairs that cross (one segment each)
   uint64_t degenerate_pairs = 0;     // pairs that touch or overlap, resolved exactly
   uint64_t intersection_points = 0;  // distinct points shared by both meshes
+  // Intersection points that rounded (to float32 for STL output) onto another one and were
+  // merged into it: the one with the lowest id stands for them all (0 in most runs).
+  uint64_t merged_points = 0;
   uint64_t cut_triangles_a = 0;
   uint64_t cut_triangles_b = 0;
   uint64_t winding_queries = 0;  // parts without a cut, classified by winding number
