@@ -938,23 +938,19 @@ Status BooleanRun::CutSplit::emit_pieces() {
   }
   for (uint32_t j = 0; j < k; ++j) {
     const int8_t sj = state[uf.find(j)];
-    if (sj == 0 && merged) {
-      // Beside a segment that collapsed only: its corners decide, after flooding.
-      const detail::CdtTriangle& ct = cdt_out[j];
-      if (!run.tris_.push_back(
-              OutTri{{vid[ct.v[0]], vid[ct.v[1]], vid[ct.v[2]]}, t, kStateFromCorners})) {
-        return arena.exhausted_status();
-      }
-      run.pending_ = true;
-      continue;
-    }
-    if (sj == 0) {
+    if (sj == 0 && !merged) {
       return make_error(StatusCode::kInternal, "boolean: a piece of triangle ", t,
                         " is not next to any intersection segment");
     }
+    // Beside a segment that collapsed only (merged ends): its corners decide, after flooding.
+    const int8_t out_state = sj != 0 ? sj : kStateFromCorners;
     const detail::CdtTriangle& ct = cdt_out[j];
-    if (!run.tris_.push_back(OutTri{{vid[ct.v[0]], vid[ct.v[1]], vid[ct.v[2]]}, t, sj})) {
+    if (!run.tris_.push_back(OutTri{{vid[ct.v[0]], vid[ct.v[1]], vid[ct.v[2]]}, t, out_state})) {
       return arena.exhausted_status();
+    }
+    if (sj == 0) {
+      run.pending_ = true;
+      continue;
     }
     // Most pieces have no corner of the triangle (only those do have a vertex id below base).
     if (vid[ct.v[0]] >= base && vid[ct.v[1]] >= base && vid[ct.v[2]] >= base) continue;
