@@ -13,8 +13,9 @@
 //   are resolved exactly; what the exact rule cannot return falls back to translating A (never
 //   B) by at most about 1 um (BooleanOptions::max_nudges, BooleanStats::nudge);
 // - the result is checked (closed, edge-manifold, oriented, nothing flat or merged by
-//   rounding, positive volume, and with check_self_intersection no self-intersection,
-//   exactly) before it is returned: a failure is an error, never a silently broken mesh.
+//   rounding unless merged on purpose (max_nudges), positive volume, and with
+//   check_self_intersection no self-intersection, exactly) before it is returned: a failure
+//   is an error, never a silently broken mesh.
 //
 // B may hold several shells (one per tooth; shells are components through shared vertices),
 // which may overlap each other: B means the union of its shells. Shells that overlap where it
@@ -67,7 +68,12 @@ struct BooleanOptions {
   // retried with A (never B) translated by k * step * (1, 3, 7) for k = 1..max_nudges, step = 2^-16
   // mm (15 nm; coarser only when A's coordinates are beyond 256 mm, so that float32 vertices of A
   // stay float32): at most about 0.9 um with the default, far below a printer's 16 um layer. The
-  // translation used is in BooleanStats::nudge. 0 turns it off.
+  // translation used is in BooleanStats::nudge. 0 turns it off. When every one of these
+  // attempts is unsupported, those that met intersection points rounding together (distinct
+  // exact points closer than a rounding step) run once more with such points merged into one
+  // (BooleanStats::merged_points; a point that collapses a segment or pinches off a sliver's
+  // corner): results found without merging stay byte for byte as they were, and a merge that
+  // breaks any check of the result (or pinches it at a point) leaves the first error.
   uint32_t max_nudges = 8;
   // A bound on the work: the candidate pairs (triangles of A and B whose cells and boxes meet,
   // each decided by exact tests) of one run summed over its nudged attempts. 0: 64 per
@@ -85,6 +91,9 @@ struct BooleanStats {
   uint64_t intersecting_pairs = 0;   // pairs that cross (one segment each)
   uint64_t degenerate_pairs = 0;     // pairs that touch or overlap, resolved exactly
   uint64_t intersection_points = 0;  // distinct points shared by both meshes
+  // Intersection points that rounded (to float32 for STL output) onto another one and were
+  // merged into it: the one with the lowest id stands for them all (0 in most runs).
+  uint64_t merged_points = 0;
   uint64_t cut_triangles_a = 0;
   uint64_t cut_triangles_b = 0;
   uint64_t winding_queries = 0;  // parts without a cut, classified by winding number

@@ -89,6 +89,9 @@ Status BooleanRun::assemble(Mesh* result) {
     }
     out_t[k++] = Triangle{{v[0], v[1], v[2]}};
   }));
+  if (merge_ != nullptr) {
+    SPLINTCORE_RETURN_IF_ERROR(check_merged_fans(out_t, static_cast<size_t>(kept), remap, nv));
+  }
   Vec3* out_v = arena_.allocate_array<Vec3>(nv);
   if (out_v == nullptr && nv > 0) return arena_.exhausted_status();
   for (uint32_t v = 0; v < nv_all; ++v) {
@@ -99,6 +102,70 @@ Status BooleanRun::assemble(Mesh* result) {
   result->vertices.adopt(out_v, nv, nv);
   st_.output_triangles = kept;
   st_.output_triangles_a = kept_a;
+  return Status::ok();
+}
+
+// Merged points (check_points_apart, split_with_merges) stand for several: the result must
+// still pass once around each of them (one fan of triangles), or the merge pinched it there
+// (a hole in a face smaller than the rounding step closed to a point): kUnsupported, and the
+// nudge runs. The fans of the other vertices are as the exact arrangement made them. Arena: a
+// byte per result vertex and 16 bytes per corner at a merged point, returned.
+Status BooleanRun::check_merged_fans(const Triangle* tris, size_t nt, const uint32_t* remap,
+                                     uint32_t nv) {
+  ArenaScope scope(arena_);
+  const uint32_t base = in_.nva + in_.nvb;
+  const uint32_t np = static_cast<uint32_t>(points_.size());
+  uint8_t* merged = arena_.allocate_array<uint8_t>(nv);
+  if (merged == nullptr && nv > 0) return arena_.exhausted_status();
+  if (nv > 0) std::memset(merged, 0, nv);
+  for (uint32_t i = 0; i < np; ++i) {
+    const uint32_t o = merge_[i] != i ? remap[base + merge_[i]] : ~0u;
+    if (o != ~0u) merged[o] = 1;
+  }
+  size_t count = 0;
+  for (size_t t = 0; t < nt; ++t) {
+    for (const uint32_t v : tris[t].v) count += merged[v];
+  }
+  if (count == 0) return Status::ok();
+  struct Wedge {
+    uint32_t from, to;  // the triangle's other corners, counter-clockwise
+  };
+  KeyIndex* at = arena_.allocate_array<KeyIndex>(count);
+  Wedge* wedge = arena_.allocate_array<Wedge>(count);
+  if (at == nullptr || wedge == nullptr) return arena_.exhausted_status();
+  size_t n = 0;
+  for (size_t t = 0; t < nt; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      if (merged[tris[t].v[k]] == 0) continue;
+      wedge[n] = Wedge{tris[t].v[(k + 1) % 3], tris[t].v[(k + 2) % 3]};
+      at[n] = KeyIndex{tris[t].v[k], static_cast<uint32_t>(n), 0};
+      ++n;
+    }
+  }
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena_, at, n));
+  for (size_t a = 0; a < n;) {
+    size_t b = a + 1;
+    while (b < n && at[b].key == at[a].key) ++b;
+    // Around the vertex from the first wedge: (v, x, y) is followed by (v, y, z).
+    const uint32_t start = wedge[at[a].index].from;
+    uint32_t cur = wedge[at[a].index].to;
+    size_t steps = 1;
+    while (cur != start && steps <= b - a) {
+      size_t next = b;
+      for (size_t x = a; x < b && next == b; ++x) {
+        if (wedge[at[x].index].from == cur) next = x;
+      }
+      if (next == b) break;  // open there: the result's edge check names it
+      cur = wedge[at[next].index].to;
+      ++steps;
+    }
+    if (cur == start && steps < b - a) {
+      return make_error(StatusCode::kUnsupported, "Boolean ", boolean_op_name(op_),
+                        " result is pinched at a point where intersection points that round "
+                        "together were merged (a hole smaller than the rounding step)");
+    }
+    a = b;
+  }
   return Status::ok();
 }
 
@@ -125,7 +192,7 @@ Status BooleanRun::run(Mesh* result, const Arena::Marker& result_at) {
   SPLINTCORE_RETURN_IF_ERROR(number_degenerate_points());
   SPLINTCORE_RETURN_IF_ERROR(check_points_apart());
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: split", 0, 1));
-  SPLINTCORE_RETURN_IF_ERROR(split_triangles());
+  SPLINTCORE_RETURN_IF_ERROR(split_with_merges());
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: classify", 0, 1));
   SPLINTCORE_RETURN_IF_ERROR(classify());
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: assemble", 0, 1));
@@ -216,7 +283,9 @@ Status BooleanRun::check_result(Mesh* result) {
   const char* as = options_.float32_output ? " (as float32)" : "";
   // With exact contacts resolved, the result may not be a solid (parts that touch along an
   // edge, points that coincide after rounding): unsupported, so that the nudge takes over.
-  const StatusCode fragile = (options_.float32_output || st_.degenerate_pairs > 0)
+  // Merged points (check_points_apart) are a near-degeneracy too: what they break is fragile.
+  const bool merged = merge_ != nullptr;
+  const StatusCode fragile = (options_.float32_output || st_.degenerate_pairs > 0 || merged)
                                  ? StatusCode::kUnsupported
                                  : StatusCode::kInternal;
   // A flat triangle can come from rounding (then A is nudged); anything else would be a bug
@@ -263,11 +332,13 @@ Status BooleanRun::check_result(Mesh* result) {
       }
     }
     const StatusCode code =
-        st_.degenerate_pairs > 0
+        (st_.degenerate_pairs > 0 || merged)
             ? StatusCode::kUnsupported
             : (op_ == BooleanOp::kUnion ? StatusCode::kInvalidMesh : StatusCode::kInternal);
     return make_error(code, "Boolean ", boolean_op_name(op_), " result", as,
-                      st_.degenerate_pairs > 0 ? " with exact contacts" : "", ": ", s.message())
+                      st_.degenerate_pairs > 0 ? " with exact contacts"
+                                               : (merged ? " with merged points" : ""),
+                      ": ", s.message())
         .at_index(s.index());
   }
   if (options_.check_self_intersection) {
@@ -377,9 +448,22 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
           ? options.max_candidate_pairs
           : 64 * (uint64_t{a.triangles.size()} + b.triangles.size()) + (uint64_t{1} << 22);
   uint64_t used = 0;
-  Status first;  // the first attempt's failure, when a nudge then runs out of the budget
+  Status first;    // the first attempt's failure, when a nudge then runs out of the budget
+  Status refused;  // the last failure of the attempts without merging
   Mesh result;
-  for (uint32_t attempt = 0; attempt <= options.max_nudges; ++attempt) {
+  // The attempts as they always were (intersection points that round together refused, the
+  // nudge taking over), then, when each was unsupported, the same attempts again with such
+  // points merged (check_points_apart): every result found without merging is found as before,
+  // byte for byte, and the merge serves the cases no nudge resolves (issue 29).
+  // An attempt that met no such points ends the same way with merging: it is not run again
+  // (known for the first 64).
+  const uint32_t per_pass = options.max_nudges + 1;
+  uint64_t coincident = 0;  // bit k: attempt k met points that round together
+  for (uint32_t round = 0; round < 2 * per_pass; ++round) {
+    const bool merging = round >= per_pass;
+    const uint32_t attempt = merging ? round - per_pass : round;
+    if (merging && attempt == 0) refused = s;
+    if (merging && attempt < 64 && ((coincident >> attempt) & 1u) == 0) continue;
     *stats = BooleanStats{};
     arena.rewind(attempts_start);
     Mesh moved;
@@ -408,7 +492,7 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
       pa = &moved;
       stats->nudge = d;
     }
-    stats->attempts = attempt + 1;
+    stats->attempts = round + 1;
     Inputs in;
     in.a = pa;
     in.b = &run_b;
@@ -422,10 +506,12 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
     result = Mesh();
     BooleanRun run(ctx, in, bp, options, stats);
     run.set_pair_budget(budget - used);
+    run.set_merging(merging);
     s = run.run(&result, attempts_start);
+    if (!merging && attempt < 64 && run.saw_coincident()) coincident |= uint64_t{1} << attempt;
     used += stats->candidate_pairs;
-    if (attempt == 0) first = s;
-    if (s.code() == StatusCode::kLimitExceeded && attempt > 0 && used > budget) {
+    if (round == 0) first = s;
+    if (s.code() == StatusCode::kLimitExceeded && round > 0 && used > budget) {
       s = first;
       s.append(" (nudges stopped after ").append_u64(attempt);
       s.append(": more than ").append_u64(budget);
@@ -434,6 +520,8 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
     }
     if (s.code() != StatusCode::kUnsupported) break;
   }
+  // Unsupported with merging too: the failure without it, which names what was refused.
+  if (s.code() == StatusCode::kUnsupported && !refused.is_ok()) s = refused;
   if (!s.is_ok()) {
     if (s.code() == StatusCode::kUnsupported && options.max_nudges > 0) {
       s.append(" (also with A moved by up to ");

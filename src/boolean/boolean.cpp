@@ -546,6 +546,7 @@ void add_stats(const BooleanStats& p, BooleanStats* total) {
   total->intersecting_pairs += p.intersecting_pairs;
   total->degenerate_pairs += p.degenerate_pairs;
   total->intersection_points += p.intersection_points;
+  total->merged_points += p.merged_points;
   total->cut_triangles_a += p.cut_triangles_a;
   total->cut_triangles_b += p.cut_triangles_b;
   total->winding_queries += p.winding_queries;

@@ -123,6 +123,9 @@ struct DegRecord {
 constexpr int8_t kStateNone = 0, kStateIn = 1, kStateOut = -1, kOnSame = 2, kOnOpposite = -2;
 // A vertex on the other surface (its state is not passed on by flooding).
 constexpr int8_t kVertexOn = 3;
+// A piece that no constraint decides because the segment beside it collapsed when its two
+// ends were merged (rounded together): it takes its corners' state after flooding.
+constexpr int8_t kStateFromCorners = 4;
 
 enum class PairResult { kNone, kSegment, kDegenerate };
 enum Through { kOut, kIn, kOnBoundary };
@@ -416,6 +419,12 @@ class BooleanRun {
   // The candidate pairs this run may test (options.max_candidate_pairs, less what earlier
   // attempts used); over it, find_hits stops with kLimitExceeded.
   void set_pair_budget(uint64_t budget) { pair_budget_ = budget; }
+  // Merge intersection points that round together (check_points_apart) instead of refusing
+  // them: mesh_boolean_single's attempts after the nudges without it.
+  void set_merging(bool merging) { merging_ = merging; }
+  // This run met points that round together (or nearly, where a triangulation failed): an
+  // attempt with merging may end otherwise than this one did.
+  bool saw_coincident() const { return saw_coincident_; }
 
  private:
   Status check_pair_budget(uint32_t tb) const;
@@ -438,12 +447,24 @@ class BooleanRun {
   Status number_points();
   Status number_degenerate_points();
   Status check_points_apart();
+  Status sort_points_by_position(KeyIndex* keys, uint32_t np);
+  Status coincide(const PointKey& kp, uint32_t p, const PointKey& kq, uint32_t q) const;
+  // The point that stands for intersection point p (itself unless it was merged into one that
+  // rounds to the same coordinates); vertex id x likewise (input vertices stand for themselves).
+  uint32_t rep(uint32_t p) const { return merge_ != nullptr ? merge_[p] : p; }
+  uint32_t rep_id(uint32_t x) const {
+    const uint32_t base = in_.nva + in_.nvb;
+    return (merge_ != nullptr && x >= base) ? base + merge_[x - base] : x;
+  }
   // split.cpp: the records grouped by triangle, then each cut triangle split by the fast path
   // (one segment edge to edge), by CutSplit (crossing segments only) or by ContactSplit
   // (split_general: degenerate contacts too), each a struct with one method per stage.
   struct CutSplit;
   struct ContactSplit;
   Status split_triangles();
+  Status split_with_merges();
+  bool note_coincident(const detail::CdtPoint* pts, const uint32_t* vid, uint32_t m);
+  Status merge_noted();
   Status sort_records_by_triangle();
   Status sort_contacts_by_triangle(KeyIndex** dorder);
   Status split_single_crossing(uint32_t t, const uint32_t c[3], const Record& rc, bool* done);
@@ -469,6 +490,7 @@ class BooleanRun {
   Status classify();
   Status assemble(Mesh* result);
   Status check_result(Mesh* result);
+  Status check_merged_fans(const Triangle* tris, size_t nt, const uint32_t* remap, uint32_t nv);
   struct FloodSide;  // classify.cpp: one mesh's flood, one method per stage
   Status flood(bool side_a);
   Status degenerate(uint32_t ta, uint32_t tb) const;
@@ -487,6 +509,17 @@ class BooleanRun {
   ArenaArray<Hit> hits_;
   uint32_t* hit_points_ = nullptr;  // 2 per hit: start, end point ids
   ArenaArray<Point> points_;
+  // Per intersection point, the lowest-id point with the same (rounded) coordinates; null when
+  // no two coincide (check_points_apart). A triangle whose points merge is split by split_cut
+  // or split_general with the merged ids (CutSplit::merge_coincident).
+  uint32_t* merge_ = nullptr;
+  // Pairs of intersection points that coincide in the projection of a triangle they share
+  // (distinct in 3-D by a rounding step along its normal), noted by a split that failed on
+  // them; split_with_merges merges them and splits again. kMaxNoted: more is unsupported.
+  static constexpr uint32_t kMaxNoted = 64;
+  uint32_t noted_[kMaxNoted][2] = {};
+  uint32_t n_noted_ = 0;
+  bool noted_overflow_ = false;
   Record* rec_ = nullptr;      // 2 per hit
   KeyIndex* order_ = nullptr;  // records sorted by triangle
   ArenaArray<OutTri> tris_;    // pieces of cut triangles, by triangle id
@@ -503,6 +536,8 @@ class BooleanRun {
   int8_t* tstate_ = nullptr;
   bool pending_ = false;
   uint64_t pair_budget_ = ~uint64_t{0};
+  bool merging_ = false;
+  bool saw_coincident_ = false;
 };
 
 enum TriangleFlag : uint8_t { kUncut = 0, kDecided = 1, kPending = 2 };

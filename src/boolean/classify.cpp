@@ -249,8 +249,38 @@ int8_t BooleanRun::uncut_state(uint32_t t, const uint32_t c[3]) const {
 // Pieces of triangles with lone contact points only: the triangle's state, after flooding.
 Status BooleanRun::resolve_pending() {
   if (!pending_) return Status::ok();
+  const uint32_t base = in_.nva + in_.nvb;
   for (size_t i = 0; i < tris_.size(); ++i) {
     OutTri& o = tris_[i];
+    if (o.state == kStateFromCorners) {
+      // Beside a segment that collapsed when its ends merged: the piece's own corners among
+      // the triangle's (those off the other surface agree); its triangle's corners when it
+      // has none (check_points_apart).
+      uint32_t c[3];
+      int nc = 0;
+      for (const uint32_t v : o.v) {
+        if (v < base) c[nc++] = v;
+      }
+      if (nc == 0) {
+        in_.corners(o.src, c);
+        nc = 3;
+      }
+      int8_t s = kStateNone;
+      for (int k = 0; k < nc; ++k) {
+        const int8_t x = vstate_[c[k]];
+        if (x != kStateIn && x != kStateOut) continue;
+        if (s != kStateNone && s != x) return inconsistent_vertex(c[k]);
+        s = x;
+      }
+      if (s == kStateNone) {
+        return make_error(StatusCode::kUnsupported, "a piece of triangle ",
+                          in_.named_triangle(o.src), o.src < in_.nta ? " of A" : " of B",
+                          " beside intersection points that round together is not classified")
+            .at_index(in_.named_triangle(o.src));
+      }
+      o.state = s;
+      continue;
+    }
     if (o.state != kStateNone) continue;
     uint32_t c[3];
     in_.corners(o.src, c);

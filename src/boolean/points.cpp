@@ -708,28 +708,69 @@ Status BooleanRun::number_points() {
   return Status::ok();
 }
 
-// Two points rounded together would break the triangulations: found here, before any work
-// depends on them (the caller then nudges A and tries again).
+// Points p and q (keys kp, kq) coincide after rounding: kUnsupported (a near-degeneracy, not a
+// bug: the next nudge runs, then the attempts that merge them), the points named by what
+// defines them: an edge (two vertex ids) of one mesh through a triangle of the other, or
+// through an edge of the other.
+Status BooleanRun::coincide(const PointKey& kp, uint32_t p, const PointKey& kq, uint32_t q) const {
+  const char* as = options_.float32_output ? " (as float32)" : "";
+  auto named = [&](Status& st, const PointKey& k) {
+    const uint32_t u = key_hi(k.edge), v = key_lo(k.edge);
+    const bool of_a = u < in_.nva;
+    st.append("edge ").append_u64(in_.named_vertex(u)).append("-");
+    st.append_u64(in_.named_vertex(v)).append(of_a ? " of A" : " of B");
+    if (k.tri == ~0u) {
+      st.append(" across an edge of B");
+    } else {
+      const bool tri_a = k.tri < in_.nta;
+      st.append(" through triangle ").append_u64(in_.named_triangle(k.tri));
+      st.append(tri_a ? " of A" : " of B");
+    }
+  };
+  Status e = make_error(StatusCode::kUnsupported, "intersection points ", p, " and ", q,
+                        " coincide", as, ": ");
+  named(e, kp);
+  e.append(" and ");
+  named(e, kq);
+  return kq.tri == ~0u ? e : e.at_index(in_.named_triangle(kq.tri));
+}
+
+// The points sorted by their coordinates (lexicographic x, y, z; -0 as +0), equal ones in id
+// order: three stable radix passes.
+Status BooleanRun::sort_points_by_position(KeyIndex* keys, uint32_t np) {
+  for (int axis = 2; axis >= 0; --axis) {
+    for (uint32_t i = 0; i < np; ++i) {
+      const uint32_t id = axis == 2 ? i : keys[i].index;
+      keys[i] = KeyIndex{order_key(points_[id].p[axis] + 0.0), id, 0};
+    }
+    SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(keys, np)));
+  }
+  return Status::ok();
+}
+
+// Points that round together (issue 29): distinct exact points closer than a rounding step
+// (float32 for STL: 4-8 nm at 60 mm), e.g. several edges of B from a vertex just off a
+// triangle of A crossing it nm apart, or crossings near the tip of a needle triangle. A nudge
+// draws new ones, so they are merged rather than refused: each group of equal points is
+// named by its lowest id (merge_), the coordinates being equal, the choice depends on nothing
+// else. The splits then see the merged ids: a segment whose ends merged collapses, the corner
+// a triangle's outline pinches off is dropped (CutSplit::merge_coincident). The result's
+// checks stay the safety net: a merge that leaves it open or self-intersecting is
+// kUnsupported, and the next nudge runs. No memory is kept when no two points coincide.
 Status BooleanRun::check_points_apart() {
   st_.intersection_points = points_.size();
-  const char* as = options_.float32_output ? " (as float32)" : "";
-  // With exact contacts resolved, the result may not be a solid (parts that touch along an
-  // edge, points that coincide after rounding): unsupported, so that the nudge takes over.
-  // Two points that round together are a near-degeneracy, not a bug: a nudged A (attempts
-  // > 1), or in a later pass of several shell groups an A that holds the previous pass's
-  // rounded intersection points, meets B within a rounding error. The next nudge runs.
-  const StatusCode fragile = StatusCode::kUnsupported;
-  ArenaScope scope(arena_);
   const uint32_t np = static_cast<uint32_t>(points_.size());
-  if (np > 1) {
+  if (np < 2) return Status::ok();
+  bool maybe = false;
+  {
+    ArenaScope scope(arena_);
     KeyIndex* keys = arena_.allocate_array<KeyIndex>(np);
     if (keys == nullptr) return arena_.exhausted_status();
     // First a cheaper look: sorted by x alone, equal points share a run of equal x; runs are
     // a handful of points. Only when it finds a pair (or a run too long to compare pairwise)
-    // does the full lexicographic sort below run, so the pair named is the same as always.
+    // does the full lexicographic sort below run.
     for (uint32_t i = 0; i < np; ++i) keys[i] = KeyIndex{order_key(points_[i].p.x + 0.0), i, 0};
     SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(keys, np)));
-    bool maybe = false;
     for (uint32_t i = 0; i < np && !maybe;) {
       uint32_t j = i + 1;
       while (j < np && keys[j].key == keys[i].key) ++j;
@@ -741,41 +782,43 @@ Status BooleanRun::check_points_apart() {
       }
       i = j;
     }
-    if (!maybe) return Status::ok();
-    for (int axis = 2; axis >= 0; --axis) {
-      for (uint32_t i = 0; i < np; ++i) {
-        const uint32_t id = axis == 2 ? i : keys[i].index;
-        keys[i] = KeyIndex{order_key(points_[id].p[axis] + 0.0), id, 0};
-      }
-      SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena_, Span<KeyIndex>(keys, np)));
-    }
-    for (uint32_t i = 1; i < np; ++i) {
-      if (points_[keys[i].index].p == points_[keys[i - 1].index].p) {
-        // Named by what defines them: an edge (two vertex ids) of one mesh through a triangle
-        // of the other, or through an edge of the other.
-        auto named = [&](Status& st, const PointKey& k) {
-          const uint32_t u = key_hi(k.edge), v = key_lo(k.edge);
-          const bool of_a = u < in_.nva;
-          st.append("edge ").append_u64(in_.named_vertex(u)).append("-");
-          st.append_u64(in_.named_vertex(v)).append(of_a ? " of A" : " of B");
-          if (k.tri == ~0u) {
-            st.append(" across an edge of B");
-          } else {
-            const bool tri_a = k.tri < in_.nta;
-            st.append(" through triangle ").append_u64(in_.named_triangle(k.tri));
-            st.append(tri_a ? " of A" : " of B");
-          }
-        };
-        Status e = make_error(fragile, "intersection points ", keys[i - 1].index, " and ",
-                              keys[i].index, " coincide", as, ": ");
-        named(e, points_[keys[i - 1].index].key);
-        e.append(" and ");
-        named(e, points_[keys[i].index].key);
-        const uint32_t t = points_[keys[i].index].key.tri;
-        return t == ~0u ? e : e.at_index(in_.named_triangle(t));
+  }
+  if (!maybe) return Status::ok();
+  bool found = false;
+  {
+    ArenaScope scope(arena_);
+    KeyIndex* keys = arena_.allocate_array<KeyIndex>(np);
+    if (keys == nullptr) return arena_.exhausted_status();
+    SPLINTCORE_RETURN_IF_ERROR(sort_points_by_position(keys, np));
+    for (uint32_t i = 1; i < np && !found; ++i) {
+      found = points_[keys[i].index].p == points_[keys[i - 1].index].p;
+      if (found && !merging_) {
+        saw_coincident_ = true;
+        return coincide(points_[keys[i - 1].index].key, keys[i - 1].index,
+                        points_[keys[i].index].key, keys[i].index);
       }
     }
   }
+  if (!found) return Status::ok();
+  // Kept for the split (below the sort's temporaries).
+  merge_ = arena_.allocate_array<uint32_t>(np);
+  if (merge_ == nullptr) return arena_.exhausted_status();
+  for (uint32_t i = 0; i < np; ++i) merge_[i] = i;
+  ArenaScope scope(arena_);
+  KeyIndex* keys = arena_.allocate_array<KeyIndex>(np);
+  if (keys == nullptr) return arena_.exhausted_status();
+  SPLINTCORE_RETURN_IF_ERROR(sort_points_by_position(keys, np));
+  uint32_t first = keys[0].index;  // the lowest id of its run (ties are in id order)
+  for (uint32_t i = 1; i < np; ++i) {
+    const uint32_t id = keys[i].index;
+    if (points_[id].p == points_[first].p) {
+      merge_[id] = first;
+      ++st_.merged_points;
+    } else {
+      first = id;
+    }
+  }
+  st_.intersection_points = np - st_.merged_points;  // distinct ones
   return Status::ok();
 }
 

@@ -264,7 +264,7 @@ Status BooleanRun::ContactSplit::gather_points() {
           return make_error(StatusCode::kInternal, "boolean: intersection point ", pid,
                             " is not on triangle ", t);
       }
-      add_point(base + pid, where);
+      add_point(run.rep_id(base + pid), where);
     }
   }
   for (size_t i = 0; i < nd; ++i) {
@@ -273,7 +273,7 @@ Status BooleanRun::ContactSplit::gather_points() {
     for (int e = 0; e < ends; ++e) {
       const Loc l = static_cast<Loc>(r.loc_t[e]);
       if (detail::loc_is_vertex(l)) continue;
-      add_point(run.canon(r.id[e]), detail::loc_is_edge(l) ? detail::loc_index(l) : 3);
+      add_point(run.rep_id(run.canon(r.id[e])), detail::loc_is_edge(l) ? detail::loc_index(l) : 3);
     }
   }
   return Status::ok();
@@ -341,17 +341,19 @@ Status BooleanRun::ContactSplit::add_constraints() {
   if (cons == nullptr || ckey == nullptr || dseg == nullptr) return arena.exhausted_status();
   for (size_t x = 0; x < np; ++x) {
     const Record& rc = run.rec_[proper[x].index];
-    const uint32_t from = local(base + rc.from), to = local(base + rc.to);
+    const uint32_t from = local(run.rep_id(base + rc.from)), to = local(run.rep_id(base + rc.to));
     if (from == ~0u || to == ~0u)
       return make_error(StatusCode::kInternal, "boolean: a segment end is not a point of triangle ",
                         t);
+    if (from == to) return unsupported("a crossing segment whose ends round together");
     cons[nc++] = Cons{from, to, kStateIn, kStateOut};
   }
   size_t ns = 0;
   for (size_t x = 0; x < nd; ++x) {
     const DegRecord& r = run.deg_[dk[x].index];
     if (r.kind == kDegPointOnly) continue;
-    const uint32_t a = local(run.canon(r.id[0])), b = local(run.canon(r.id[1]));
+    const uint32_t a = local(run.rep_id(run.canon(r.id[0])));
+    const uint32_t b = local(run.rep_id(run.canon(r.id[1])));
     if (a == ~0u || b == ~0u)
       return make_error(StatusCode::kInternal, "boolean: a contact end is not a point of triangle ",
                         t);
@@ -430,8 +432,8 @@ Status BooleanRun::ContactSplit::sides_across(const DegRecord& trans, const uint
   }
   if (lc == ~0u || rc == ~0u)
     return unsupported("a contact segment across it without corners on both sides");
-  cn->from = local(run.canon(trans.id[0]));
-  cn->to = local(run.canon(trans.id[1]));
+  cn->from = local(run.rep_id(run.canon(trans.id[0])));
+  cn->to = local(run.rep_id(run.canon(trans.id[1])));
   cn->left = run.side_state(t, lc, sheets, nsheets);
   cn->right = run.side_state(t, rc, sheets, nsheets);
   return Status::ok();
@@ -456,6 +458,7 @@ Status BooleanRun::ContactSplit::triangulate() {
                          Span<const detail::CdtSegment>(segs, nseg), boundary, &out, nullptr);
   if (!s.is_ok()) {
     if (s.code() == StatusCode::kArenaExhausted) return s;
+    run.note_coincident(pts, vid, m);
     return make_error(StatusCode::kUnsupported, "cannot re-triangulate triangle ", tn, which,
                       " along its exact contacts: ", s.message())
         .at_index(tn);
@@ -553,6 +556,8 @@ struct BooleanRun::CutSplit {
 
   Status gather_points();
   Status order_and_project();
+  Status merge_coincident();
+  Status unsupported_merge(const char* what);
   uint32_t local(uint32_t pid) const;
   Status add_constraints();
   Status triangulate();
@@ -574,10 +579,16 @@ struct BooleanRun::CutSplit {
   uint32_t* local_of = nullptr;  // by index in `locals`
   detail::CdtSegment* segs = nullptr;
   uint32_t m = 0, boundary = 0, ns = 0;
-  uint32_t corner_at[3] = {};
+  uint32_t corner_at[3] = {};  // ~0u: a corner its outline pinched off (merge_coincident)
   KeyIndex* cons = nullptr;
   uint32_t* cons_from = nullptr;  // by segment, in record order
+  size_t ncons = 0;               // nseg less the segments that collapsed to a point
   bool distinct = true;
+  bool merged = false;  // two of its points share a vertex id (merge_coincident)
+  // Before merge_coincident (runs with merged points only): its points projected, their ids.
+  detail::CdtPoint* pts0 = nullptr;
+  uint32_t* vid0 = nullptr;
+  uint32_t m0 = 0;
   ArenaArray<detail::CdtTriangle> cdt_out;
   ArenaArray<detail::CdtAdjacency> adjacency;
   int8_t* vote = nullptr;
@@ -648,10 +659,23 @@ Status BooleanRun::CutSplit::order_and_project() {
   }
   SPLINTCORE_RETURN_IF_ERROR(order_points(
       arena, n, c, [&](size_t x) { return locals[x].where; },
-      [&](size_t x) { return locals[x].along; }, [&](size_t x) { return base + locals[x].point; },
-      by, vid, local_of, corner_at, &m, &boundary));
+      [&](size_t x) { return locals[x].along; },
+      [&](size_t x) { return base + run.rep(locals[x].point); }, by, vid, local_of, corner_at, &m,
+      &boundary));
   const Projection pr =
       projection_of(run.in_.vertex(c[0]), run.in_.vertex(c[1]), run.in_.vertex(c[2]));
+  if (run.merge_ != nullptr) {
+    // Kept as they were, for the points to note when a merge cannot be split.
+    pts0 = arena.allocate_array<detail::CdtPoint>(m);
+    vid0 = arena.allocate_array<uint32_t>(m);
+    if (pts0 == nullptr || vid0 == nullptr) return arena.exhausted_status();
+    m0 = m;
+    for (uint32_t j = 0; j < m; ++j) {
+      vid0[j] = vid[j];
+      pts0[j] = to_2d(run.position(vid[j]), pr);
+    }
+    SPLINTCORE_RETURN_IF_ERROR(merge_coincident());
+  }
   for (uint32_t j = 0; j < m; ++j) pts[j] = to_2d(run.position(vid[j]), pr);
   for (uint32_t j = 0; j < boundary; ++j) segs[ns++] = detail::CdtSegment{j, (j + 1) % boundary};
   return Status::ok();
@@ -672,6 +696,94 @@ inline uint32_t BooleanRun::CutSplit::local(uint32_t pid) const {
   return local_of[lo];
 }
 
+// kUnsupported, with the points near enough to merge too noted (split_with_merges then tries
+// again with them merged: a point between two that merged, say).
+Status BooleanRun::CutSplit::unsupported_merge(const char* what) {
+  run.note_coincident(pts0, vid0, m0);
+  const uint32_t tn = run.in_.named_triangle(t);
+  return make_error(StatusCode::kUnsupported, "cannot split triangle ", tn,
+                    t < run.in_.nta ? " of A" : " of B",
+                    " along intersection points that round together: ", what)
+      .at_index(tn);
+}
+
+// Points of t merged into one (check_points_apart) share a vertex id here. Along the outline
+// (c0, edge 0's points, c1, ...) a repeat next to itself is one point, and X Y X pinches off Y
+// (a corner, or a point, between two crossings that rounded together): a piece of zero area,
+// dropped with Y. An inside point that is one of the outline's is that outline point; inside
+// points that merged are one. Renumbers the locals (outline first, in order; then the inside
+// points by vertex id) and the corners (~0u: pinched off). Anything else (the outline still
+// repeating a point, a constraint end pinched off) is kUnsupported: the nudge takes over.
+Status BooleanRun::CutSplit::merge_coincident() {
+  KeyIndex* by = arena.allocate_array<KeyIndex>(m);
+  if (by == nullptr) return arena.exhausted_status();
+  for (uint32_t j = 0; j < m; ++j) by[j] = KeyIndex{vid[j], j, 0};
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena, by, m));
+  bool repeats = false;
+  for (uint32_t j = 1; j < m && !repeats; ++j) repeats = by[j].key == by[j - 1].key;
+  if (!repeats) return Status::ok();
+  merged = true;
+  // The outline as a cycle of local indices, reduced until neither pattern is left.
+  uint32_t* seq = arena.allocate_array<uint32_t>(boundary);
+  uint32_t* at = arena.allocate_array<uint32_t>(m);
+  uint32_t* vid2 = arena.allocate_array<uint32_t>(m);
+  if (seq == nullptr || at == nullptr || vid2 == nullptr) return arena.exhausted_status();
+  uint32_t k = boundary;
+  for (uint32_t j = 0; j < k; ++j) seq[j] = j;
+  auto erase = [&](uint32_t i) {
+    for (uint32_t x = i; x + 1 < k; ++x) seq[x] = seq[x + 1];
+    --k;
+  };
+  for (bool changed = true; changed && k >= 3;) {
+    changed = false;
+    for (uint32_t i = 0; i < k && !changed; ++i) {
+      const uint32_t i1 = (i + 1) % k, i2 = (i + 2) % k;
+      if (vid[seq[i]] == vid[seq[i1]]) {
+        erase(i1);
+        changed = true;
+      } else if (vid[seq[i]] == vid[seq[i2]]) {
+        erase(i1 > i2 ? i1 : i2);  // the later index first, so the other stays where it is
+        erase(i1 > i2 ? i2 : i1);
+        changed = true;
+      }
+    }
+  }
+  if (k < 3) return unsupported_merge("its whole outline collapses");
+  for (uint32_t j = 0; j < m; ++j) at[j] = ~0u;
+  for (uint32_t i = 0; i < k; ++i) {
+    at[seq[i]] = i;
+    vid2[i] = vid[seq[i]];
+  }
+  // Each group of one vertex id: to its outline place (at most one is left), else to one new
+  // inside place when it has an inside member, else pinched off (~0u).
+  uint32_t m2 = k;
+  for (uint32_t a = 0; a < m;) {
+    uint32_t b = a + 1;
+    while (b < m && by[b].key == by[a].key) ++b;
+    uint32_t target = ~0u;
+    bool inside = false;
+    for (uint32_t x = a; x < b; ++x) {
+      const uint32_t j = by[x].index;
+      inside = inside || j >= boundary;
+      if (j >= boundary || at[j] == ~0u) continue;
+      if (target != ~0u) return unsupported_merge("its outline passes twice through one point");
+      target = at[j];
+    }
+    if (target == ~0u && inside) {
+      target = m2;
+      vid2[m2++] = static_cast<uint32_t>(by[a].key);
+    }
+    for (uint32_t x = a; x < b; ++x) at[by[x].index] = target;
+    a = b;
+  }
+  for (uint32_t e = 0; e < 3; ++e) corner_at[e] = at[corner_at[e]];
+  for (size_t x = 0; x < locals.size(); ++x) local_of[x] = at[local_of[x]];
+  for (uint32_t j = 0; j < m2; ++j) vid[j] = vid2[j];
+  m = m2;
+  boundary = k;
+  return Status::ok();
+}
+
 // The constraints, directed with the other solid's inside on their left, sorted by their
 // undirected key (for the classification).
 Status BooleanRun::CutSplit::add_constraints() {
@@ -683,18 +795,38 @@ Status BooleanRun::CutSplit::add_constraints() {
   for (size_t r = 0; r < nseg; ++r) {
     const Record& rc = run.rec_[recs[r].index];
     const uint32_t from = local(rc.from), to = local(rc.to);
-    cons[r] = KeyIndex{edge_key(from, to), from, 0};
-    cons_from[r] = from;
+    if (merged) {
+      // A segment whose ends merged is a point: it cuts nothing (the pieces beside it take
+      // their corners' state). One whose end was pinched off cannot be placed.
+      if (from == ~0u || to == ~0u) return unsupported_merge("a segment ends at a pinched corner");
+      if (from == to) continue;
+    }
+    cons[ncons] = KeyIndex{edge_key(from, to), from, 0};
+    cons_from[ncons++] = from;
     segs[ns++] = detail::CdtSegment{from, to};
     if (from < boundary && to < boundary) {
       const uint32_t gap = from < to ? to - from : from - to;
       if (gap == 1 || gap == boundary - 1) distinct = false;
     }
   }
-  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena, cons, nseg));
-  for (size_t x = 1; x < nseg; ++x) {
+  SPLINTCORE_RETURN_IF_ERROR(sort_keys(arena, cons, ncons));
+  for (size_t x = 1; x < ncons; ++x) {
     if (cons[x].key == cons[x - 1].key) distinct = false;
   }
+  if (!merged) return Status::ok();
+  distinct = false;  // the votes by half-edges take repeated constraints as well
+  // A segment there and back (X -> Y, Y -> X: the sliver between two segments whose far ends
+  // merged) bounds nothing: it stays an edge of the triangulation and votes for neither side.
+  size_t kept = 0;
+  for (size_t a = 0; a < ncons;) {
+    size_t b = a + 1;
+    while (b < ncons && cons[b].key == cons[a].key) ++b;
+    if (!(b - a == 2 && cons[a].index != cons[a + 1].index)) {
+      for (size_t x = a; x < b; ++x) cons[kept++] = cons[x];
+    }
+    a = b;
+  }
+  ncons = kept;
   return Status::ok();
 }
 
@@ -704,6 +836,7 @@ Status BooleanRun::CutSplit::triangulate() {
                          distinct ? &adjacency : nullptr);
   if (!s.is_ok()) {
     if (s.code() == StatusCode::kArenaExhausted) return s;
+    run.note_coincident(pts, vid, m);
     const uint32_t nta = run.in_.nta;
     return make_error(StatusCode::kUnsupported, "cannot re-triangulate triangle ",
                       run.in_.named_triangle(t), t < nta ? " of A" : " of B",
@@ -776,8 +909,8 @@ Status BooleanRun::CutSplit::vote_by_half_edges() {
   for (size_t a = 0; a < size_t{3} * k;) {
     size_t b = a + 1;
     while (b < size_t{3} * k && half[b].key == half[a].key) ++b;
-    while (ci < nseg && cons[ci].key < half[a].key) ++ci;
-    if (ci < nseg && cons[ci].key == half[a].key) {
+    while (ci < ncons && cons[ci].key < half[a].key) ++ci;
+    if (ci < ncons && cons[ci].key == half[a].key) {
       for (size_t x = a; x < b; ++x) {
         const uint32_t j = half[x].index / 3, e = half[x].index % 3;
         vote[j] = cdt_out[j].v[e] == cons[ci].index ? 1 : -1;
@@ -805,13 +938,19 @@ Status BooleanRun::CutSplit::emit_pieces() {
   }
   for (uint32_t j = 0; j < k; ++j) {
     const int8_t sj = state[uf.find(j)];
-    if (sj == 0) {
+    if (sj == 0 && !merged) {
       return make_error(StatusCode::kInternal, "boolean: a piece of triangle ", t,
                         " is not next to any intersection segment");
     }
+    // Beside a segment that collapsed only (merged ends): its corners decide, after flooding.
+    const int8_t out_state = sj != 0 ? sj : kStateFromCorners;
     const detail::CdtTriangle& ct = cdt_out[j];
-    if (!run.tris_.push_back(OutTri{{vid[ct.v[0]], vid[ct.v[1]], vid[ct.v[2]]}, t, sj})) {
+    if (!run.tris_.push_back(OutTri{{vid[ct.v[0]], vid[ct.v[1]], vid[ct.v[2]]}, t, out_state})) {
       return arena.exhausted_status();
+    }
+    if (sj == 0) {
+      run.pending_ = true;
+      continue;
     }
     // Most pieces have no corner of the triangle (only those do have a vertex id below base).
     if (vid[ct.v[0]] >= base && vid[ct.v[1]] >= base && vid[ct.v[2]] >= base) continue;
@@ -873,6 +1012,9 @@ inline bool ccw(const detail::CdtPoint& a, const detail::CdtPoint& b, const deta
 Status BooleanRun::split_single_crossing(uint32_t t, const uint32_t c[3], const Record& rc,
                                          bool* done) {
   *done = false;
+  // A merged end (rounded onto another point): split_cut names it by the point that stands
+  // for it and drops what collapses.
+  if (merge_ != nullptr && (rep(rc.from) != rc.from || rep(rc.to) != rc.to)) return Status::ok();
   const uint32_t base = in_.nva + in_.nvb;
   const Point& pf = points_[rc.from];
   const Point& pt = points_[rc.to];
@@ -1023,6 +1165,7 @@ Status BooleanRun::split_triangles() {
   tris_.bind(&arena_);
   if (!tris_.reserve(static_cast<size_t>(total))) return arena_.exhausted_status();
 
+  Status first;  // the first triangle that failed on points noted to merge
   for (size_t g = 0, d = 0; groups.more(g, d);) {
     size_t g_end = 0, d_end = 0;
     const uint32_t t = groups.next(g, d, &g_end, &d_end);
@@ -1030,8 +1173,10 @@ Status BooleanRun::split_triangles() {
       SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: split", g, n));
     }
     if (tflag_ != nullptr) tflag_[t] = kDecided;
+    const uint32_t noted = n_noted_;
+    Status s;
     if (d_end > d) {
-      SPLINTCORE_RETURN_IF_ERROR(split_general(t, order_ + g, g_end - g, dorder + d, d_end - d));
+      s = split_general(t, order_ + g, g_end - g, dorder + d, d_end - d);
     } else {
       uint32_t c[3];
       in_.corners(t, c);
@@ -1039,12 +1184,117 @@ Status BooleanRun::split_triangles() {
       if (g_end - g == 1) {
         SPLINTCORE_RETURN_IF_ERROR(split_single_crossing(t, c, rec_[order_[g].index], &done));
       }
-      if (!done) SPLINTCORE_RETURN_IF_ERROR(split_cut(t, c, order_ + g, g_end - g));
+      if (!done) s = split_cut(t, c, order_ + g, g_end - g);
+    }
+    if (!s.is_ok()) {
+      // Failed on points that coincide in its plane: the others are split (their pairs noted
+      // too), then split_with_merges merges them and splits again.
+      if (n_noted_ == noted || s.code() != StatusCode::kUnsupported) return s;
+      if (first.is_ok()) first = s;
     }
     g = g_end;
     d = d_end;
   }
+  return first;
+}
+
+namespace {
+
+// The spacing of the output's numbers at magnitude x (x >= 0): float32's, or double's.
+double rounding_step(double x, bool float32) {
+  double u = 0x1p-126;
+  while (u * 8388608.0 <= x && u < 1e300) u *= 2.0;
+  return float32 ? u : u * 0x1p-29;
+}
+
+}  // namespace
+
+// Intersection points of a triangle (its m points projected, pts, with their vertex ids vid)
+// that coincide in its plane as projected, or lie within kNear rounding steps of each other
+// there along both axes (the triangulation then fails on a point exactly on a segment, or two
+// segments crossing, by rounding): noted as pairs to merge (never a corner: that cannot move).
+// True when it noted one. Runs only where the triangulation failed.
+bool BooleanRun::note_coincident(const detail::CdtPoint* pts, const uint32_t* vid, uint32_t m) {
+  constexpr double kNear = 4.0;
+  const uint32_t base = in_.nva + in_.nvb;
+  auto mag = [](double x) { return x < 0 ? -x : x; };
+  bool any = false;
+  for (uint32_t i = 0; i < m; ++i) {
+    for (uint32_t j = i + 1; j < m; ++j) {
+      const double xs[4] = {mag(pts[i].x), mag(pts[i].y), mag(pts[j].x), mag(pts[j].y)};
+      double big = 0;
+      for (const double x : xs) big = x > big ? x : big;
+      const double tol = kNear * rounding_step(big, options_.float32_output);
+      if (!(mag(pts[i].x - pts[j].x) <= tol && mag(pts[i].y - pts[j].y) <= tol)) continue;
+      if (vid[i] < base || vid[j] < base || vid[i] == vid[j]) continue;
+      saw_coincident_ = true;
+      if (!merging_) return false;  // refused as always (mesh_boolean_single merges later)
+      if (n_noted_ == kMaxNoted) {
+        noted_overflow_ = true;
+        return any;
+      }
+      noted_[n_noted_][0] = vid[i] - base;
+      noted_[n_noted_][1] = vid[j] - base;
+      ++n_noted_;
+      any = true;
+    }
+  }
+  return any;
+}
+
+// The noted pairs merged into merge_ (allocated here at the first): each group named by its
+// lowest id, as check_points_apart names them (a root always has a lower id than its members,
+// so one pass in id order resolves every chain).
+Status BooleanRun::merge_noted() {
+  const uint32_t np = static_cast<uint32_t>(points_.size());
+  if (merge_ == nullptr) {
+    merge_ = arena_.allocate_array<uint32_t>(np);
+    if (merge_ == nullptr) return arena_.exhausted_status();
+    for (uint32_t i = 0; i < np; ++i) merge_[i] = i;
+  }
+  auto root = [&](uint32_t x) {
+    while (merge_[x] != x) x = merge_[x];
+    return x;
+  };
+  for (uint32_t k = 0; k < n_noted_; ++k) {
+    const uint32_t a = root(noted_[k][0]), b = root(noted_[k][1]);
+    if (a < b) merge_[b] = a;
+    if (b < a) merge_[a] = b;
+  }
+  uint64_t merged = 0;
+  for (uint32_t i = 0; i < np; ++i) {
+    merge_[i] = merge_[merge_[i]];
+    merged += merge_[i] != i ? 1 : 0;
+  }
+  st_.merged_points = merged;
+  st_.intersection_points = np - merged;  // distinct ones
   return Status::ok();
+}
+
+// split_triangles, and again (a few rounds at most) while a round notes points that coincide
+// in the plane of a triangle they share: those are merged and the split starts over from
+// where it started (its memory returned, the vertex states it set cleared).
+Status BooleanRun::split_with_merges() {
+  constexpr int kRounds = 4;
+  for (int round = 0;; ++round) {
+    const Arena::Marker mark = arena_.mark();
+    n_noted_ = 0;
+    const Status s = split_triangles();
+    if (n_noted_ == 0 || s.code() == StatusCode::kArenaExhausted) return s;
+    if (round + 1 == kRounds || noted_overflow_) return s;
+    arena_.rewind(mark);
+    const uint32_t nv_in = in_.nva + in_.nvb;
+    for (uint32_t v = 0; v < nv_in; ++v) {
+      if (vstate_[v] != kVertexOn) vstate_[v] = 0;
+    }
+    pending_ = false;
+    tflag_ = nullptr;
+    tstate_ = nullptr;
+    rec_ = nullptr;
+    order_ = nullptr;
+    tris_.bind(&arena_);
+    SPLINTCORE_RETURN_IF_ERROR(merge_noted());
+  }
 }
 
 }  // namespace boolean_detail
