@@ -255,6 +255,79 @@ TEST(CaseCoverage, EveryOptionalKeyIsRead) {
   EXPECT_EQ(c.memory_cap, 1048576u);
 }
 
+// A jaw's scan, the label, the placement and the spacer's keys: every refusal named (these were
+// reached only by the pipeline's tests before, which the coverage job does not run), every key
+// read, and the arena bounds the parser states.
+TEST(CaseCoverage, ScanLabelPlacementAndClearanceKeys) {
+  auto scan_jaws = [](const std::string& scan) {
+    return R"([{"role": "maxilla", "mesh": "u.stl", "scan": )" + scan +
+           R"(}, {"role": "mandible", "mesh": "l.stl"}])";
+  };
+  const std::string lm3 = R"([[[0,0,0],[0,0,0]], [[1,0,0],[1,0,0]], [[0,1,0],[0,1,0]]])";
+  const std::vector<Case> cases = {
+      {"scan without path", make_case("", scan_jaws("{}")), StatusCode::kInvalidArgument,
+       "\"scan\" needs \"path\""},
+      {"scan landmarks too few",
+       make_case("", scan_jaws(R"({"path": "s.stl", "landmarks": [[[0,0,0],[0,0,0]]]})")),
+       StatusCode::kInvalidArgument, "\"landmarks\" needs 3 to 64 pairs"},
+      {"scan landmark pair",
+       make_case(
+           "",
+           scan_jaws(
+               R"({"path": "s.stl", "landmarks": [[[0,0,0]], [[1,0,0],[1,0,0]], [[0,1,0],[0,1,0]]]})")),
+       StatusCode::kInvalidArgument, "a landmark pair is"},
+      {"scan as a list", make_case("", scan_jaws(R"([{"path": "s.stl"}])")),
+       StatusCode::kInvalidArgument, "\"scan\" is a list"},
+      {"two scans of one jaw",
+       make_case("", R"([{"role": "maxilla", "mesh": "u.stl", "scan": {"path": "a.stl"}},
+                         {"role": "maxilla", "mesh": "v.stl", "scan": {"path": "b.stl"}},
+                         {"role": "mandible", "mesh": "l.stl"}])"),
+       StatusCode::kInvalidArgument, "each with a \"scan\""},
+      {"label without text", make_case(R"("label": {"mode": "engrave"},)"),
+       StatusCode::kInvalidArgument, "\"label\" needs \"text\""},
+      {"label mode", make_case(R"("label": {"text": "A", "mode": "carve"},)"),
+       StatusCode::kInvalidArgument, "\"mode\" must be \"engrave\""},
+      {"placement", make_case(R"("placement": "floor",)"), StatusCode::kInvalidArgument,
+       "\"placement\" must be \"case\""},
+      {"inset with clearance", make_case(R"("insertion_direction": [0, 0, 1],
+                 "blockout": {"voxel": 0.2, "clearance": 0.1, "inset": 0.1},)"),
+       StatusCode::kInvalidArgument, "\"inset\" and \"clearance\" exclude each other"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    test::TestArena t(size_t{1} << 20);
+    CaseFile out;
+    Status s = parse_case(Context(&t.arena), c.text.data(), c.text.size(), "case.json", &out);
+    EXPECT_EQ(s.code(), c.code) << test::format(s) << "\n" << c.text;
+    EXPECT_NE(std::string(s.message()).find(c.fragment), std::string::npos) << s.message();
+    EXPECT_EQ(t.arena.used(), 0u) << "a failed parse left memory in the arena";
+  }
+  // Every key read, within the parser's own bound.
+  const std::string text = make_case(
+      R"("label": {"text": "P 7", "mode": "emboss"}, "placement": "tray",
+         "insertion_direction": [0, 0, 1],
+         "blockout": {"voxel": 0.2, "clearance": 0.1, "inset": 0},)",
+      scan_jaws(R"({"path": "s.stl", "landmarks": )" + lm3 +
+                R"(, "trim": 0.5, "min_overlap": 0.4, "crowns_within_mm": 1.5})"));
+  test::TestArena t(static_cast<size_t>(parse_case_bound(text.size())));
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse_case(Context(&t.arena), text.data(), text.size(), "case.json", &c));
+  ASSERT_EQ(c.jaws.size(), 2u);
+  ASSERT_TRUE(c.jaws[0].has_scan);
+  EXPECT_STREQ(c.jaws[0].scan.path, "s.stl");
+  EXPECT_EQ(c.jaws[0].scan.landmarks.size(), 3u);
+  EXPECT_EQ(c.jaws[0].scan.trim, 0.5);
+  EXPECT_EQ(c.jaws[0].scan.min_overlap, 0.4);
+  EXPECT_EQ(c.jaws[0].scan.crowns_within_mm, 1.5);
+  EXPECT_TRUE(c.has_label);
+  EXPECT_EQ(c.label.mode, LabelMode::kEmboss);
+  EXPECT_TRUE(c.place_on_tray);
+  EXPECT_EQ(c.blockout.offset, 0.1);
+  EXPECT_EQ(c.blockout.inset, 0.0);
+  // The base's bound grows with the picks and the sections.
+  EXPECT_GT(case_base_bound(c, 100, 8), case_base_bound(c, 10, 8));
+}
+
 // The automatic outline's keys ("base": {"auto": {...}}): every error named, every key read.
 TEST(CaseCoverage, AutoOutlineKeys) {
   const std::string none = R"("auto": {})";
