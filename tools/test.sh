@@ -408,8 +408,8 @@ fuzz_job() {
     local frc
     frc=$(cat "$dir/fuzz-$t.rc" 2>/dev/null || echo 1)
     printf 'fuzz %-10s %10s execs %6s exec/s  %s\n' "$t" \
-      "$(grep -oE '^stat::number_of_executed_units: [0-9]+' "$dir/fuzz-$t.log" | grep -oE '[0-9]+$')" \
-      "$(grep -oE '^stat::average_exec_per_sec: [0-9]+' "$dir/fuzz-$t.log" | grep -oE '[0-9]+$')" \
+      "$(grep -oE '^stat::number_of_executed_units: +[0-9]+' "$dir/fuzz-$t.log" | grep -oE '[0-9]+$')" \
+      "$(grep -oE '^stat::average_exec_per_sec: +[0-9]+' "$dir/fuzz-$t.log" | grep -oE '[0-9]+$')" \
       "$([ $frc -eq 0 ] && echo ok || echo "FAILED: see $dir/fuzz-$t.log")"
     if [ $frc -ne 0 ]; then
       rc=1; total_failed=$((total_failed + 1)); grep -E "^==|ERROR|SUMMARY" "$dir/fuzz-$t.log" | head -n 20
