@@ -35,6 +35,26 @@ struct Case {
   const char* fragment;
 };
 
+// Each case is refused with its code and a message holding its fragment and naming the file;
+// the arena is as it was and the CaseFile empty.
+void expect_refusals(const std::vector<Case>& cases) {
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    test::TestArena t(size_t{1} << 20);
+    ASSERT_NE(t.arena.allocate(16), nullptr);
+    const size_t used = t.arena.used();
+    CaseFile out;
+    Status s = parse_case(Context(&t.arena), c.text.data(), c.text.size(), "case.json", &out);
+    EXPECT_EQ(s.code(), c.code) << test::format(s) << "\n" << c.text;
+    EXPECT_NE(std::string(s.message()).find(c.fragment), std::string::npos) << s.message() << "\n"
+                                                                            << c.text;
+    EXPECT_STREQ(s.file(), "case.json");
+    EXPECT_EQ(t.arena.used(), used) << "a failed parse left memory in the arena";
+    EXPECT_TRUE(out.jaws.empty() && out.upper.empty() && out.lower.empty());
+    EXPECT_EQ(out.version, 0u);
+  }
+}
+
 TEST(CaseCoverage, EveryErrorIsNamed) {
   auto picks = [](const std::string& upper_pick) {
     return R"("upper": [)" + upper_pick + R"(, {"position": [10, 0, 1]}],
@@ -205,21 +225,7 @@ TEST(CaseCoverage, EveryErrorIsNamed) {
       {"output report type", make_case(R"("output": {"report": []},)"),
        StatusCode::kInvalidArgument, "\"report\" must be string"},
   };
-  for (const Case& c : cases) {
-    SCOPED_TRACE(c.name);
-    test::TestArena t(size_t{1} << 20);
-    ASSERT_NE(t.arena.allocate(16), nullptr);
-    const size_t used = t.arena.used();
-    CaseFile out;
-    Status s = parse_case(Context(&t.arena), c.text.data(), c.text.size(), "case.json", &out);
-    EXPECT_EQ(s.code(), c.code) << test::format(s) << "\n" << c.text;
-    EXPECT_NE(std::string(s.message()).find(c.fragment), std::string::npos) << s.message() << "\n"
-                                                                            << c.text;
-    EXPECT_STREQ(s.file(), "case.json");
-    EXPECT_EQ(t.arena.used(), used) << "a failed parse left memory in the arena";
-    EXPECT_TRUE(out.jaws.empty() && out.upper.empty() && out.lower.empty());
-    EXPECT_EQ(out.version, 0u);
-  }
+  expect_refusals(cases);
 }
 
 TEST(CaseCoverage, EveryOptionalKeyIsRead) {
@@ -293,15 +299,7 @@ TEST(CaseCoverage, ScanLabelPlacementAndClearanceKeys) {
                  "blockout": {"voxel": 0.2, "clearance": 0.1, "inset": 0.1},)"),
        StatusCode::kInvalidArgument, "\"inset\" and \"clearance\" exclude each other"},
   };
-  for (const Case& c : cases) {
-    SCOPED_TRACE(c.name);
-    test::TestArena t(size_t{1} << 20);
-    CaseFile out;
-    Status s = parse_case(Context(&t.arena), c.text.data(), c.text.size(), "case.json", &out);
-    EXPECT_EQ(s.code(), c.code) << test::format(s) << "\n" << c.text;
-    EXPECT_NE(std::string(s.message()).find(c.fragment), std::string::npos) << s.message();
-    EXPECT_EQ(t.arena.used(), 0u) << "a failed parse left memory in the arena";
-  }
+  expect_refusals(cases);
   // Every key read, within the parser's own bound.
   const std::string text = make_case(
       R"("label": {"text": "P 7", "mode": "emboss"}, "placement": "tray",
@@ -372,15 +370,7 @@ TEST(CaseCoverage, AutoOutlineKeys) {
       {"neither picks nor auto", make_case("", "", "", R"("spacing_mm": 0.5)"),
        StatusCode::kInvalidArgument, "needs \"upper\" and \"lower\" pick lists, or \"auto\""},
   };
-  for (const Case& c : cases) {
-    SCOPED_TRACE(c.name);
-    test::TestArena t(size_t{1} << 20);
-    CaseFile out;
-    Status s = parse_case(Context(&t.arena), c.text.data(), c.text.size(), "case.json", &out);
-    EXPECT_EQ(s.code(), c.code) << test::format(s) << "\n" << c.text;
-    EXPECT_NE(std::string(s.message()).find(c.fragment), std::string::npos) << s.message() << "\n"
-                                                                            << c.text;
-  }
+  expect_refusals(cases);
   // Every key read; blockout without an insertion direction is fine with auto.
   const std::string text =
       make_case(R"("blockout": {"voxel": 0.2},)", "", "",
@@ -425,15 +415,7 @@ TEST(CaseCoverage, CtKeys) {
       {"connectivity 18", ct(R"("volume": "v.nrrd", "connectivity": 18)"),
        StatusCode::kInvalidArgument, "\"connectivity\" must be 6 or 26"},
   };
-  for (const Case& c : cases) {
-    SCOPED_TRACE(c.name);
-    test::TestArena t(size_t{1} << 20);
-    CaseFile out;
-    Status s = parse_case(Context(&t.arena), c.text.data(), c.text.size(), "case.json", &out);
-    EXPECT_EQ(s.code(), c.code) << test::format(s);
-    EXPECT_NE(std::string(s.message()).find(c.fragment), std::string::npos) << s.message();
-    EXPECT_EQ(t.arena.used(), 0u);
-  }
+  expect_refusals(cases);
   // Accepted: 26-connectivity, smoothing, no decimation.
   const std::string text = ct(R"("volume": "v.nrrd", "hu_min": -100, "hu_max": 2000,
                                   "connectivity": 26, "smooth": 3)");
