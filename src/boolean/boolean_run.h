@@ -449,6 +449,8 @@ class BooleanRun {
   Status check_points_apart();
   Status sort_points_by_position(KeyIndex* keys, uint32_t np);
   Status coincide(const PointKey& kp, uint32_t p, const PointKey& kq, uint32_t q) const;
+  bool same_features(const PointKey& kp, const PointKey& kq) const;
+  Status duplicated(const PointKey& kp, const PointKey& kq) const;
   // The point that stands for intersection point p (itself unless it was merged into one that
   // rounds to the same coordinates); vertex id x likewise (input vertices stand for themselves).
   uint32_t rep(uint32_t p) const { return merge_ != nullptr ? merge_[p] : p; }

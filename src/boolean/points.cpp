@@ -735,6 +735,56 @@ Status BooleanRun::coincide(const PointKey& kp, uint32_t p, const PointKey& kq, 
   return kq.tri == ~0u ? e : e.at_index(in_.named_triangle(kq.tri));
 }
 
+// Points p and q are defined by features with the same coordinates: edges of one mesh with the
+// same two ends through triangles of the other with the same three corners (two copies of a
+// triangle, or of an edge). They are the same exact point in every attempt, and both copies of
+// the triangle (or of the triangles at the edge) cross the other mesh: whatever is kept of one
+// is kept of the other, so every result has coincident faces. Edge-across-edge points are not
+// judged here.
+bool BooleanRun::same_features(const PointKey& kp, const PointKey& kq) const {
+  if (kp.tri == ~0u || kq.tri == ~0u) return false;
+  if ((kp.tri < in_.nta) != (kq.tri < in_.nta)) return false;
+  const uint32_t pu = key_hi(kp.edge), pv = key_lo(kp.edge);
+  const uint32_t qu = key_hi(kq.edge), qv = key_lo(kq.edge);
+  if ((pu < in_.nva) != (qu < in_.nva)) return false;
+  const Vec3 &p0 = in_.vertex(pu), &p1 = in_.vertex(pv);
+  const Vec3 &q0 = in_.vertex(qu), &q1 = in_.vertex(qv);
+  if (!((p0 == q0 && p1 == q1) || (p0 == q1 && p1 == q0))) return false;
+  uint32_t cp[3], cq[3];
+  in_.corners(kp.tri, cp);
+  in_.corners(kq.tri, cq);
+  // Each corner of one among the other's, both ways (a corner may repeat in a degenerate one).
+  auto among = [&](const uint32_t* x, const uint32_t* y) {
+    for (int i = 0; i < 3; ++i) {
+      const Vec3& v = in_.vertex(x[i]);
+      if (!(v == in_.vertex(y[0]) || v == in_.vertex(y[1]) || v == in_.vertex(y[2]))) return false;
+    }
+    return true;
+  };
+  return among(cp, cq) && among(cq, cp);
+}
+
+// The refusal for same_features: the input's fault, named by both copies (no nudge or merge
+// can help, so the attempts stop).
+Status BooleanRun::duplicated(const PointKey& kp, const PointKey& kq) const {
+  const bool tri_of_a = kp.tri < in_.nta;
+  Status e;
+  if (kp.tri != kq.tri) {
+    e = make_error(StatusCode::kInvalidArgument, "triangles ", in_.named_triangle(kp.tri), " and ",
+                   in_.named_triangle(kq.tri), tri_of_a ? " of A" : " of B",
+                   " have the same corners");
+  } else {
+    e = make_error(StatusCode::kInvalidArgument, "edges ", in_.named_vertex(key_hi(kp.edge)), "-",
+                   in_.named_vertex(key_lo(kp.edge)), " and ", in_.named_vertex(key_hi(kq.edge)),
+                   "-", in_.named_vertex(key_lo(kq.edge)), tri_of_a ? " of B" : " of A",
+                   " have the same ends");
+  }
+  e.append(
+      " and cross the other mesh at the same point: what is kept of one is kept of the other,"
+      " so any result would have coincident faces; remove the duplicates");
+  return e.at_index(in_.named_triangle(kp.tri));
+}
+
 // The points sorted by their coordinates (lexicographic x, y, z; -0 as +0), equal ones in id
 // order: three stable radix passes.
 Status BooleanRun::sort_points_by_position(KeyIndex* keys, uint32_t np) {
@@ -790,13 +840,25 @@ Status BooleanRun::check_points_apart() {
     KeyIndex* keys = arena_.allocate_array<KeyIndex>(np);
     if (keys == nullptr) return arena_.exhausted_status();
     SPLINTCORE_RETURN_IF_ERROR(sort_points_by_position(keys, np));
+    // Without merging: duplicated geometry first (every attempt would meet it), else the first
+    // pair that rounds together.
+    uint32_t first_pair = 0;
     for (uint32_t i = 1; i < np && !found; ++i) {
-      found = points_[keys[i].index].p == points_[keys[i - 1].index].p;
-      if (found && !merging_) {
-        saw_coincident_ = true;
-        return coincide(points_[keys[i - 1].index].key, keys[i - 1].index,
-                        points_[keys[i].index].key, keys[i].index);
+      const Point& p = points_[keys[i - 1].index];
+      const Point& q = points_[keys[i].index];
+      if (!(q.p == p.p)) continue;
+      if (merging_) {
+        found = true;
+      } else if (same_features(p.key, q.key)) {
+        return duplicated(p.key, q.key);
+      } else if (first_pair == 0) {
+        first_pair = i;
       }
+    }
+    if (first_pair != 0) {
+      saw_coincident_ = true;
+      return coincide(points_[keys[first_pair - 1].index].key, keys[first_pair - 1].index,
+                      points_[keys[first_pair].index].key, keys[first_pair].index);
     }
   }
   if (!found) return Status::ok();
