@@ -164,9 +164,13 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
 struct BlockoutOptions {
   SweepOptions sweep;      // direction and voxel; the region is set to the splint's bounds
   BooleanOptions boolean;  // the operation is always the difference
-  // Keep only the swept triangles near the splint (within a cell of 5 voxels of its surface
-  // or inside it), filtered in the stream (SweepOptions::keep_triangle): the same solid, with
-  // a fraction of the swept mesh and the Boolean's work. false: the whole swept surface in the
+  // Keep only the swept triangles that can matter to the splint, filtered in the stream
+  // (SweepOptions::keep_triangle): those inside it or within an eighth of a voxel of its
+  // surface (meeting included, exact), found through cells of 5 voxels (inside, outside, on
+  // the surface) and, near the surface, the splint's distance index. The kept part's open
+  // border then lies outside the splint (the Boolean's rule for an open B): the same solid,
+  // with a few percent of the swept mesh (the imprint the sweep reproduces lies just inside
+  // the jaw, outside the splint, and is left out). false: the whole swept surface in the
   // splint's box (for comparison). Not with decimation (decimate_error > 0).
   bool filter_near_splint = true;
 };
@@ -191,10 +195,11 @@ struct BlockoutStats {
 // 1/64 voxel further out instead (offset_used). A splint the sweep does not reach comes back
 // unchanged (copied). For a wafer between two jaws call it once per jaw: the maxilla's direction is
 // the mandible's reversed. Memory: with filter_near_splint a byte per cell of 5 voxels over the
-// splint's box grown by two cells; the sweep's state and extractor (its slab within a quarter
-// of the free arena), the kept swept triangles logged above it (48 bytes each, with growth
-// slack), then 4 bytes per extracted vertex and the swept mesh; then the Boolean's; only `out`
-// stays (moved down to where the arena's top was). Errors: those of sweep_volume_mesh and
+// splint's box grown by two cells and the splint's distance index (distance_index_bound), the
+// sweep's state and extractor (a slab of 4 layers), the kept swept
+// triangles logged above it (48 bytes each), then 4 bytes per extracted
+// vertex and the swept mesh, moved down over the cells and the index; then the Boolean's; only
+// `out` stays (moved down to where the arena's top was). Errors: those of sweep_volume_mesh and
 // mesh_boolean (the latter prefixed "blockout:"), kInvalidArgument (out not empty), kLimitExceeded
 // (a swept vertex beyond float32 range).
 Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,

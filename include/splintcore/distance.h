@@ -218,6 +218,11 @@ bool ray_intersect(const DistanceIndex& index, const Vec3& origin, const Vec3& d
 bool segment_intersects_mesh(const DistanceIndex& index, const Vec3& p, const Vec3& q,
                              uint32_t* triangle);
 
+// Does some triangle of the mesh come within `reach` (> 0) of the closed triangle abc
+// (triangle_pair_distance() < reach: 0 when they meet, decided exactly)? No arena.
+bool triangle_near_mesh(const DistanceIndex& index, const Vec3& a, const Vec3& b, const Vec3& c,
+                        double reach);
+
 // Every triangle whose bounds overlap `box`, appended to `out` in ascending id order.
 Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aabb& box,
                         ArenaArray<uint32_t>* out);

@@ -4,29 +4,39 @@
 #include <cstring>
 
 #include "splintcore/blockout.h"
+#include "splintcore/distance.h"
 
 namespace splintcore {
 
 namespace {
 
-// The swept surface is filtered as it leaves the extractor: only its triangles near the
-// splint are kept (SweepOptions::keep_triangle), which is all the Boolean needs. Near: the
-// triangle's box meets a cell of a coarse grid (kCellVoxels voxels a side) marked as the
-// splint's: the cells whose box meets a splint triangle's box, those enclosed by them (not
-// reached from the grid's border face to face through unmarked cells: every such path would
-// cross the closed splint surface in a marked cell), grown by one cell (26 neighbours). So
-// every swept triangle that meets the splint is kept, and every triangle left out is at least
-// a cell from it: the kept part's open border lies outside the splint, as the Boolean needs
-// (an open B), with a cell to spare for the rounding to float32. The grid's border is two
-// cells beyond the splint's box, so it starts unmarked.
+// The swept surface is filtered as it leaves the extractor: only its triangles that can
+// matter to the splint are kept (SweepOptions::keep_triangle), which is all the Boolean needs.
+// A coarse grid over the splint's box (cells of kCellVoxels voxels a side) marks the cells
+// whose box meets a splint triangle's box (surface cells), the outside (reached from the
+// grid's border face to face through unmarked cells: a path into the splint would cross its
+// closed surface in a marked cell) and, left unmarked, the enclosed cells, wholly inside; and
+// the cells within one cell (26 neighbours) of a cell not outside. A swept triangle is left
+// out when its box meets no such cell; kept when it meets no surface cell but an enclosed
+// one; else, near the surface, kept when it comes within kReachVoxels of a splint triangle
+// (triangle_near_mesh, meeting decided exactly), else kept when its first corner is inside
+// (signed distance, at least that far from the surface). So every swept triangle that meets
+// the splint is kept and every one left out is outside it, at least kReachVoxels from it:
+// the kept part's open border lies outside the splint, as the Boolean needs of an open B. The
+// imprint the sweep reproduces (the inset surface, just inside the jaw, in the splint's
+// cavity) is most of the swept surface and is left out. The grid's border is two cells beyond
+// the splint's box, so it starts unmarked.
 constexpr double kCellVoxels = 5;
+constexpr double kReachVoxels = 0.125;
 constexpr uint8_t kSurface = 1, kOutside = 2, kNear = 4, kGrowX = 8, kGrowY = 16;
 
 struct NearSplint {
   Vec3 origin{};
   double cell = 0;
   int64_t n[3] = {0, 0, 0};
-  uint8_t* flags = nullptr;  // x fastest
+  uint8_t* flags = nullptr;              // x fastest
+  const DistanceIndex* index = nullptr;  // the splint's: the fine test (null: cells only)
+  double reach = 0;                      // mm: kept when at most this far from the splint
 };
 
 inline size_t cell_at(const NearSplint& g, int64_t x, int64_t y, int64_t z) {
@@ -54,14 +64,28 @@ bool near_splint(const void* user, const Vec3& p, const Vec3& q, const Vec3& r) 
   box.add(r);
   int64_t a[3], b[3];
   if (!cell_range(g, box.lo, box.hi, a, b)) return false;
+  bool near = false, surface = false, enclosed = false;
   for (int64_t z = a[2]; z <= b[2]; ++z) {
     for (int64_t y = a[1]; y <= b[1]; ++y) {
       for (int64_t x = a[0]; x <= b[0]; ++x) {
-        if ((g.flags[cell_at(g, x, y, z)] & kNear) != 0) return true;
+        const uint8_t f = g.flags[cell_at(g, x, y, z)];
+        near = near || (f & kNear) != 0;
+        surface = surface || (f & kSurface) != 0;
+        enclosed = enclosed || (f & (kSurface | kOutside)) == 0;
       }
     }
   }
-  return false;
+  if (!near) return false;
+  if (g.index == nullptr) return true;
+  // Cells that do not meet the surface lie wholly inside or wholly outside: the triangle
+  // (within them) is inside when one is enclosed, outside when all are outside.
+  if (!surface) return enclosed;
+  // Near the surface: kept when it comes within reach of a splint triangle (meeting included,
+  // decided exactly); else it lies at least that far from the surface, wholly on the side of
+  // its first corner.
+  if (triangle_near_mesh(*g.index, p, q, r, g.reach)) return true;
+  SignedDistance sd;
+  return signed_distance(*g.index, p, SignMethod::kAuto, &sd) && sd.distance < 0;
 }
 
 // Marks the outside: from the border, face to face through unmarked cells, by forward and
@@ -168,6 +192,31 @@ Status mark_near_splint(Arena& arena, const Mesh& splint, const Aabb& bounds, do
   return Status::ok();
 }
 
+// The swept mesh (sweep_volume_mesh), with `filter` only its triangles near the splint: the
+// cells and the splint's distance index are made first and the mesh is moved down over them.
+Status sweep_near_splint(const Context& ctx, const Mesh& splint, const Aabb& bounds,
+                         Span<const Mesh> jaws, SweepOptions so, bool filter, Mesh* swept,
+                         SweepStats* stats) {
+  Arena& arena = *ctx.arena;
+  if (!filter || so.decimate_error > 0) return sweep_volume_mesh(ctx, jaws, so, swept, stats);
+  ArenaScope scope(arena);
+  NearSplint near;
+  DistanceIndex splint_index;
+  SPLINTCORE_RETURN_IF_ERROR(mark_near_splint(arena, splint, bounds, so.voxel, &near));
+  SPLINTCORE_RETURN_IF_ERROR(
+      build_distance_index(ctx, splint, DistanceIndexOptions{}, &splint_index));
+  near.index = &splint_index;
+  near.reach = kReachVoxels * so.voxel;
+  so.keep_triangle = near_splint;
+  so.keep_user = &near;
+  Mesh kept;
+  SPLINTCORE_RETURN_IF_ERROR(sweep_volume_mesh(ctx, jaws, so, &kept, stats));
+  // Triangles before vertices, as sweep_volume_mesh leaves a filtered mesh.
+  move_mesh_down(arena, scope.start(), kept, swept);
+  scope.commit();
+  return Status::ok();
+}
+
 }  // namespace
 
 Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
@@ -188,16 +237,11 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
     return make_error(StatusCode::kInvalidArgument, "blockout: the splint has no vertices");
   }
   ArenaScope scope(arena);  // on an error the arena is as it was
-  NearSplint near;
-  if (options.filter_near_splint) {
-    SPLINTCORE_RETURN_IF_ERROR(mark_near_splint(arena, splint, bounds, options.sweep.voxel, &near));
-  }
-  const Arena::Marker attempt_start = arena.mark();
   const int kAttempts = 4;
   Mesh result;
   Status s;
   for (int attempt = 0; attempt < kAttempts; ++attempt) {
-    arena.rewind(attempt_start);
+    arena.rewind(scope.start());
     result = Mesh();
     SweepOptions so = options.sweep;
     so.has_region = true;
@@ -205,10 +249,6 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
     so.open_at_region = true;  // the caps lie outside the splint: the Boolean takes an open B
     if (so.edge_margin < 1.0 / 16) so.edge_margin = 1.0 / 16;
     so.float32_vertices = true;  // rounded below anyway; decimating, before the decimation
-    if (options.filter_near_splint && so.decimate_error == 0) {
-      so.keep_triangle = near_splint;
-      so.keep_user = &near;
-    }
     if (options.sweep.offset > 0) {
       so.offset = options.sweep.offset + attempt * (options.sweep.voxel / 64);
       if (attempt > 0 && !(so.offset <= 20 * so.voxel)) break;
@@ -220,7 +260,8 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
     st->inset_used = so.inset;
     st->offset_used = so.offset;
     Mesh swept;
-    s = sweep_volume_mesh(ctx, jaws, so, &swept, &st->sweep);
+    s = sweep_near_splint(ctx, splint, bounds, jaws, so, options.filter_near_splint, &swept,
+                          &st->sweep);
     if (!s.is_ok()) break;
     st->swept_triangles = swept.triangles.size();
     for (size_t i = 0; i < swept.vertices.size() && s.is_ok(); ++i) {

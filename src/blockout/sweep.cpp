@@ -23,6 +23,7 @@ namespace {
 constexpr uint32_t kRing = 5;        // raw layers kept: the output layer and two on each side
 constexpr double kBandVoxels = 2.1;  // band half-width in voxels (the correction reads 2 h out)
 constexpr uint32_t kMaxBands = 64;
+constexpr uint32_t kKeepLayers = 4;  // the extractor's slab when filtering (keep_triangle)
 constexpr float kTinyPositive = 1.17549435e-38f;  // FLT_MIN: an outside distance that rounded to 0
 
 struct Frame {
@@ -939,7 +940,12 @@ MarchingCubesOptions extraction_options(const Sweep& s, const SweepOptions& o) {
   mc.layers_per_tile = o.layers_per_tile;
   mc.edge_margin = o.edge_margin;
   if (o.decimate_error > 0) mc.iso += 0.5 * o.decimate_error;
-  if (o.decimate_error > 0 || o.keep_triangle != nullptr) {
+  if (o.keep_triangle != nullptr && mc.layers_per_tile == 0) {
+    // A slab of a fixed size, never of the room there is: the log grows above it, and the
+    // high water must depend on the input alone (the two-step contract).
+    mc.layers_per_tile = kKeepLayers;
+  }
+  if (o.decimate_error > 0) {
     if (mc.layers_per_tile == 0) {
       const Arena& arena = *s.ctx->arena;
       const uint64_t free_bytes = arena.cap() > arena.used() ? arena.cap() - arena.used() : 0;
@@ -1008,7 +1014,11 @@ Status log_kept(void* user, const Triangle& t, const Vec3& a, const Vec3& b, con
     k.p[3 * i + 1] = static_cast<float>(w[i].y);
     k.p[3 * i + 2] = static_cast<float>(w[i].z);
   }
-  if (!log.kept.push_back(k)) return log.kept.arena()->exhausted_status();
+  // Grown to the exact size (in place: the log is the arena's top during the extraction), so
+  // the arena's high water depends on the input alone, never on the room there was.
+  const size_t n = log.kept.size();
+  if (!log.kept.resize(n + 1)) return log.kept.arena()->exhausted_status();
+  log.kept[n] = k;
   return Status::ok();
 }
 

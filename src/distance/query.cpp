@@ -777,6 +777,45 @@ bool segment_intersects_mesh(const DistanceIndex& index, const Vec3& p, const Ve
   return found;
 }
 
+bool triangle_near_mesh(const DistanceIndex& index, const Vec3& a, const Vec3& b, const Vec3& c,
+                        double reach) {
+  const Mesh& mesh = *index.mesh;
+  if (mesh.triangles.size() == 0) return false;
+  const Vec3* v = mesh.vertices.data();
+  Aabb box;
+  box.add(a);
+  box.add(b);
+  box.add(c);
+  box.lo = box.lo - Vec3{reach, reach, reach};
+  box.hi = box.hi + Vec3{reach, reach, reach};
+  bool found = false;
+  auto visit = [&](uint32_t t) {
+    const Triangle& tri = mesh.triangles[t];
+    Aabb tb;
+    tb.add(v[tri.v[0]]);
+    tb.add(v[tri.v[1]]);
+    tb.add(v[tri.v[2]]);
+    if (!tb.overlaps(box)) return true;
+    // Wholly on one side of the triangle's plane, farther than reach (with a margin far above
+    // the rounding): no closer than that.
+    const Vec3 n = cross(v[tri.v[1]] - v[tri.v[0]], v[tri.v[2]] - v[tri.v[0]]);
+    const double len = std::sqrt(dot(n, n));
+    if (len > 0) {
+      const double limit = (reach + 1e-9 * (1.0 + std::fabs(dot(n, v[tri.v[0]])) / len)) * len;
+      const double da = dot(n, a - v[tri.v[0]]), db = dot(n, b - v[tri.v[0]]),
+                   dc = dot(n, c - v[tri.v[0]]);
+      if ((da > limit && db > limit && dc > limit) || (da < -limit && db < -limit && dc < -limit)) {
+        return true;
+      }
+    }
+    found = triangle_pair_distance(a, b, c, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], nullptr,
+                                   nullptr) < reach;
+    return !found;
+  };
+  for_each_triangle_near(index, box, visit);
+  return found;
+}
+
 Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aabb& box,
                         ArenaArray<uint32_t>* out) {
   const size_t start = out->size();

@@ -1532,6 +1532,40 @@ TEST(DistanceSegment, MatchesExactBruteForce) {
   EXPECT_LT(hits, total);
 }
 
+// triangle_near_mesh against the brute-force least triangle_pair_distance, with small
+// triangles near the surface (the blockout's swept triangles against its splint), reaches of
+// 0.01 and 0.05 times the shape's size, and triangles through the surface (distance 0).
+TEST(DistanceTriangle, NearMeshMatchesBruteForce) {
+  Rng rng(0x5eed0077);
+  int near = 0, total = 0;
+  for (const auto& shape : query_shapes(rng)) {
+    auto b = build(shape.second, 4);
+    const Mesh& m = b->mesh;
+    const Aabb box = bounds_of(m);
+    const double size = length(box.extent());
+    const uint32_t nt = static_cast<uint32_t>(m.triangles.size());
+    for (int i = 0; i < 40 * kEffort; ++i) {
+      const uint32_t t = rng.below(nt);
+      const Vec3 on = (corner(m, t, 0) + corner(m, t, 1) + corner(m, t, 2)) * (1.0 / 3.0);
+      const Vec3 c = on + rng.unit() * (size * 0.06 * rng.uniform());
+      const Vec3 p = c + rng.unit() * (size * 0.01), q = c + rng.unit() * (size * 0.01),
+                 r = c + rng.unit() * (size * 0.01);
+      const double reach = size * (i % 2 == 0 ? 0.01 : 0.05);
+      double least = HUGE_VAL;
+      for (uint32_t k = 0; k < nt; ++k) {
+        least = std::fmin(least, triangle_pair_distance(p, q, r, corner(m, k, 0), corner(m, k, 1),
+                                                        corner(m, k, 2), nullptr, nullptr));
+      }
+      const bool got = triangle_near_mesh(b->index, p, q, r, reach);
+      ASSERT_EQ(got, least < reach) << shape.first << " i " << i << " least " << least;
+      near += got ? 1 : 0;
+      ++total;
+    }
+  }
+  EXPECT_GT(near, total / 5);
+  EXPECT_LT(near, total * 9 / 10);
+}
+
 TEST(DistanceBox, TrianglesInBoxMatchBruteForce) {
   Rng rng(0x5eed0042);
   for (const auto& shape : query_shapes(rng)) {
