@@ -18,14 +18,15 @@ namespace {
 // closed surface in a marked cell) and, left unmarked, the enclosed cells, wholly inside; and
 // the cells within one cell (26 neighbours) of a cell not outside. A swept triangle is left
 // out when its box meets no such cell; kept when it meets no surface cell but an enclosed
-// one; else, near the surface, kept when it comes within kReachVoxels of a splint triangle
-// (triangle_near_mesh, meeting decided exactly), else kept when its first corner is inside
-// (signed distance, at least that far from the surface). So every swept triangle that meets
-// the splint is kept and every one left out is outside it, at least kReachVoxels from it:
-// the kept part's open border lies outside the splint, as the Boolean needs of an open B. The
-// imprint the sweep reproduces (the inset surface, just inside the jaw, in the splint's
-// cavity) is most of the swept surface and is left out. The grid's border is two cells beyond
-// the splint's box, so it starts unmarked.
+// one; else, near the surface, kept unless triangle_side (distance.h) finds it wholly outside
+// and at least kReachVoxels from every splint triangle (one closest-point query from its first
+// corner, which decides alone when that corner is farther than the triangle's extent plus the
+// reach; else the exact triangle_near_mesh, meeting decided exactly). So every swept triangle that
+// meets the splint is kept and every one left out is outside it, at least kReachVoxels from it: the
+// kept part's open border lies outside the splint, as the Boolean needs of an open B. The imprint
+// the sweep reproduces (the inset surface, just inside the jaw, in the splint's cavity) is most of
+// the swept surface and is left out. The grid's border is two cells beyond the splint's box, so it
+// starts unmarked.
 constexpr double kCellVoxels = 5;
 constexpr double kReachVoxels = 0.125;
 constexpr uint8_t kSurface = 1, kOutside = 2, kNear = 4, kGrowX = 8, kGrowY = 16;
@@ -37,6 +38,7 @@ struct NearSplint {
   uint8_t* flags = nullptr;              // x fastest
   const DistanceIndex* index = nullptr;  // the splint's: the fine test (null: cells only)
   double reach = 0;                      // mm: kept when at most this far from the splint
+  mutable uint32_t seed = kNoNeighbor;   // the last fine test's closest splint triangle
 };
 
 inline size_t cell_at(const NearSplint& g, int64_t x, int64_t y, int64_t z) {
@@ -82,10 +84,9 @@ bool near_splint(const void* user, const Vec3& p, const Vec3& q, const Vec3& r) 
   if (!surface) return enclosed;
   // Near the surface: kept when it comes within reach of a splint triangle (meeting included,
   // decided exactly); else it lies at least that far from the surface, wholly on the side of
-  // its first corner.
-  if (triangle_near_mesh(*g.index, p, q, r, g.reach)) return true;
-  SignedDistance sd;
-  return signed_distance(*g.index, p, SignMethod::kAuto, &sd) && sd.distance < 0;
+  // its first corner. The extractor's triangles come in order, each near the one before it:
+  // the previous answer seeds the query (the answer does not depend on it).
+  return triangle_side(*g.index, p, q, r, g.reach, &g.seed) != TriangleSide::kOutside;
 }
 
 // Marks the outside: from the border, face to face through unmarked cells, by forward and
@@ -287,6 +288,9 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
     }
     BooleanOptions bo = options.boolean;
     bo.op = BooleanOp::kDifference;
+    // The filter leaves B's border outside the splint, a reach away (see the top); the caps'
+    // border lies beyond the splint's box.
+    if (options.filter_near_splint && so.decimate_error == 0) bo.b_border_outside_a = true;
     s = mesh_boolean(ctx, splint, swept, bo, &result, &st->boolean);
     if (s.is_ok() || s.code() == StatusCode::kArenaExhausted ||
         s.code() == StatusCode::kCancelled || s.code() == StatusCode::kInvalidArgument) {

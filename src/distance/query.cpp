@@ -816,6 +816,27 @@ bool triangle_near_mesh(const DistanceIndex& index, const Vec3& a, const Vec3& b
   return found;
 }
 
+TriangleSide triangle_side(const DistanceIndex& index, const Vec3& a, const Vec3& b, const Vec3& c,
+                           double reach, uint32_t* seed) {
+  SPLINTCORE_ASSERT(index.vertex_start.size() > 0);  // not a pairs_only index
+  SignedDistance sd;
+  if (!closest_within(index, a, HUGE_VAL, &sd.closest, *seed)) return TriangleSide::kOutside;
+  *seed = sd.closest.triangle;
+  // Every point x of abc has |x - a| <= extent, so its distance to the surface is at least
+  // |a's| - extent, and the ball about a of radius |a's| holds no surface: all of abc lies on
+  // a's side. The margin is far above the rounding of both lengths (about 1e-15 relative).
+  const double extent = std::sqrt(std::fmax(length_squared(b - a), length_squared(c - a)));
+  const double margin = 1e-9 * (1.0 + abs_max3(a));
+  if (!(sd.closest.distance > reach + extent + margin) &&
+      triangle_near_mesh(index, a, b, c, reach)) {
+    return TriangleSide::kNear;
+  }
+  // Farther than reach everywhere: abc does not cross the surface, a's side is its side (a is
+  // at least reach from the surface, so its sign is not in doubt).
+  finish_signed(index, a, SignMethod::kAuto, &sd);
+  return sd.distance < 0 ? TriangleSide::kInside : TriangleSide::kOutside;
+}
+
 Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aabb& box,
                         ArenaArray<uint32_t>* out) {
   const size_t start = out->size();
