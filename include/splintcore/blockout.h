@@ -93,6 +93,13 @@ struct SweepOptions {
   // decimation, whose exact flatness test then sees the bits a float32 consumer (the
   // Boolean) gets; kLimitExceeded for a vertex beyond float32 range. The blockout sets it.
   bool float32_vertices = false;
+  // Mesh variant with a region, open_at_region and float32_vertices, not decimating: only
+  // the triangles this returns true for (corners in the jaws' frame, rounded to float32) are
+  // kept, filtered in the stream, so that the extractor's whole surface is never held (the
+  // blockout keeps the triangles near its splint). Kept triangles keep their order and are
+  // numbered by first use among them; null: all are kept (as the unfiltered variant).
+  bool (*keep_triangle)(const void* user, const Vec3& a, const Vec3& b, const Vec3& c) = nullptr;
+  const void* keep_user = nullptr;
   uint32_t layers_per_tile = 0;      // slab size for the extractor (0: automatic); bytes unchanged
   double edge_margin = kEdgeMargin;  // the extractor's (volume.h); the blockout uses 1/16
 };
@@ -107,6 +114,7 @@ struct SweepStats {
   uint64_t inside_columns = 0;         // columns that met a jaw
   uint64_t corrected_samples = 0;      // inside samples given an extrapolated value
   uint64_t cap_triangles_dropped = 0;  // open_at_region: the caps' triangles left out
+  uint64_t filtered_triangles = 0;     // keep_triangle: the other triangles it left out
   uint64_t closing_samples = 0;        // samples the erosion searched around
   uint64_t closed_samples = 0;         // samples outside the volume that the closing filled
   uint64_t decimated_tiles = 0;        // decimate_error > 0: tiles decimated
@@ -156,6 +164,15 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
 struct BlockoutOptions {
   SweepOptions sweep;      // direction and voxel; the region is set to the splint's bounds
   BooleanOptions boolean;  // the operation is always the difference
+  // Keep only the swept triangles that can matter to the splint, filtered in the stream
+  // (SweepOptions::keep_triangle): those inside it or within an eighth of a voxel of its
+  // surface (meeting included, exact), found through cells of 5 voxels (inside, outside, on
+  // the surface) and, near the surface, the splint's distance index. The kept part's open
+  // border then lies outside the splint (the Boolean's rule for an open B): the same solid,
+  // with a few percent of the swept mesh (the imprint the sweep reproduces lies just inside
+  // the jaw, outside the splint, and is left out). false: the whole swept surface in the
+  // splint's box (for comparison). Not with decimation (decimate_error > 0).
+  bool filter_near_splint = true;
 };
 
 struct BlockoutStats {
@@ -177,10 +194,14 @@ struct BlockoutStats {
 // inset_used say what was used; the inset stays below two voxels); with an offset (a spacer),
 // 1/64 voxel further out instead (offset_used). A splint the sweep does not reach comes back
 // unchanged (copied). For a wafer between two jaws call it once per jaw: the maxilla's direction is
-// the mandible's reversed. Memory: the sweep's state and extractor, the swept mesh, then the
-// Boolean's; only `out` stays (moved down to where the arena's top was). Errors: those of
-// sweep_volume_mesh and mesh_boolean (the latter prefixed "blockout:"), kInvalidArgument (out
-// not empty), kLimitExceeded (a swept vertex beyond float32 range).
+// the mandible's reversed. Memory: with filter_near_splint a byte per cell of 5 voxels over the
+// splint's box grown by two cells and the splint's distance index (distance_index_bound), the
+// sweep's state and extractor (a slab of 4 layers), the kept swept
+// triangles logged above it (48 bytes each), then 4 bytes per extracted
+// vertex and the swept mesh, moved down over the cells and the index; then the Boolean's; only
+// `out` stays (moved down to where the arena's top was). Errors: those of sweep_volume_mesh and
+// mesh_boolean (the latter prefixed "blockout:"), kInvalidArgument (out not empty), kLimitExceeded
+// (a swept vertex beyond float32 range).
 Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
                 const BlockoutOptions& options, Mesh* out, BlockoutStats* stats = nullptr);
 

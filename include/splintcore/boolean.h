@@ -83,6 +83,12 @@ struct BooleanOptions {
   // Over the bound: kLimitExceeded at the first attempt, or after a nudge the first attempt's
   // own error, saying that the nudges stopped.
   uint64_t max_candidate_pairs = 0;
+  // The caller vouches that B's open border, if B has one, lies outside A (the blockout's swept
+  // surface, kept only near the splint: outside it, at least an eighth of a voxel from it,
+  // by construction): the up-front check that names where a border meets A (issue 30: an exact
+  // segment test and a winding number a border edge; most of the blockout's Boolean time) is
+  // left out. A border that does meet A still fails, with the run's own less specific error.
+  bool b_border_outside_a = false;
 };
 
 struct BooleanStats {

@@ -218,6 +218,24 @@ bool ray_intersect(const DistanceIndex& index, const Vec3& origin, const Vec3& d
 bool segment_intersects_mesh(const DistanceIndex& index, const Vec3& p, const Vec3& q,
                              uint32_t* triangle);
 
+// Does some triangle of the mesh come within `reach` (> 0) of the closed triangle abc
+// (triangle_pair_distance() < reach: 0 when they meet, decided exactly)? No arena.
+bool triangle_near_mesh(const DistanceIndex& index, const Vec3& a, const Vec3& b, const Vec3& c,
+                        double reach);
+
+// Where the closed triangle abc lies with respect to a closed mesh (signed_distance's kAuto
+// sign): kNear when it comes within `reach` (> 0) of the surface (triangle_near_mesh), else
+// wholly inside or wholly outside, at least `reach` from the surface. One closest-point query
+// from a: when a is farther than reach plus abc's extent from a (max |b - a|, |c - a|), that
+// query alone decides (a's sign holds for the whole triangle), and triangle_near_mesh runs only
+// for the others. *seed (kNoNeighbor, or what the previous call left there, e.g. for the next
+// triangle of a surface streamed out in order) starts the query with a tight bound and is set
+// to a's closest triangle: the answer never depends on it. Needs a full index (not pairs_only).
+// No arena.
+enum class TriangleSide : uint8_t { kOutside, kInside, kNear };
+TriangleSide triangle_side(const DistanceIndex& index, const Vec3& a, const Vec3& b, const Vec3& c,
+                           double reach, uint32_t* seed);
+
 // Every triangle whose bounds overlap `box`, appended to `out` in ascending id order.
 Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aabb& box,
                         ArenaArray<uint32_t>* out);

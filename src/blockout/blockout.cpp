@@ -1,8 +1,224 @@
 // Interference elimination (Chen et al. 2016, "The Interference Elimination"): the splint
 // minus the jaws' swept volume, by the exact Boolean (boolean.h) on the swept volume's mesh.
+#include <cmath>
+#include <cstring>
+
 #include "splintcore/blockout.h"
+#include "splintcore/distance.h"
 
 namespace splintcore {
+
+namespace {
+
+// The swept surface is filtered as it leaves the extractor: only its triangles that can
+// matter to the splint are kept (SweepOptions::keep_triangle), which is all the Boolean needs.
+// A coarse grid over the splint's box (cells of kCellVoxels voxels a side) marks the cells
+// whose box meets a splint triangle's box (surface cells), the outside (reached from the
+// grid's border face to face through unmarked cells: a path into the splint would cross its
+// closed surface in a marked cell) and, left unmarked, the enclosed cells, wholly inside; and
+// the cells within one cell (26 neighbours) of a cell not outside. A swept triangle is left
+// out when its box meets no such cell; kept when it meets no surface cell but an enclosed
+// one; else, near the surface, kept unless triangle_side (distance.h) finds it wholly outside
+// and at least kReachVoxels from every splint triangle (one closest-point query from its first
+// corner, which decides alone when that corner is farther than the triangle's extent plus the
+// reach; else the exact triangle_near_mesh, meeting decided exactly). So every swept triangle that
+// meets the splint is kept and every one left out is outside it, at least kReachVoxels from it: the
+// kept part's open border lies outside the splint, as the Boolean needs of an open B. The imprint
+// the sweep reproduces (the inset surface, just inside the jaw, in the splint's cavity) is most of
+// the swept surface and is left out. The grid's border is two cells beyond the splint's box, so it
+// starts unmarked.
+constexpr double kCellVoxels = 5;
+constexpr double kReachVoxels = 0.125;
+constexpr uint8_t kSurface = 1, kOutside = 2, kNear = 4, kGrowX = 8, kGrowY = 16;
+
+struct NearSplint {
+  Vec3 origin{};
+  double cell = 0;
+  int64_t n[3] = {0, 0, 0};
+  uint8_t* flags = nullptr;              // x fastest
+  const DistanceIndex* index = nullptr;  // the splint's: the fine test (null: cells only)
+  double reach = 0;                      // mm: kept when at most this far from the splint
+  mutable uint32_t seed = kNoNeighbor;   // the last fine test's closest splint triangle
+};
+
+inline size_t cell_at(const NearSplint& g, int64_t x, int64_t y, int64_t z) {
+  return static_cast<size_t>((z * g.n[1] + y) * g.n[0] + x);
+}
+
+// The cells a box [lo, hi] may meet (clamped to the grid; a margin of a thousandth of a cell
+// against the rounding of the division). False when it misses the grid.
+bool cell_range(const NearSplint& g, const Vec3& lo, const Vec3& hi, int64_t* a, int64_t* b) {
+  for (int k = 0; k < 3; ++k) {
+    const double f0 = std::floor((lo[k] - g.origin[k]) / g.cell - 1e-3);
+    const double f1 = std::floor((hi[k] - g.origin[k]) / g.cell + 1e-3);
+    if (f1 < 0 || f0 > static_cast<double>(g.n[k] - 1)) return false;
+    a[k] = f0 < 0 ? 0 : static_cast<int64_t>(f0);
+    b[k] = f1 > static_cast<double>(g.n[k] - 1) ? g.n[k] - 1 : static_cast<int64_t>(f1);
+  }
+  return true;
+}
+
+bool near_splint(const void* user, const Vec3& p, const Vec3& q, const Vec3& r) {
+  const NearSplint& g = *static_cast<const NearSplint*>(user);
+  Aabb box;
+  box.add(p);
+  box.add(q);
+  box.add(r);
+  int64_t a[3], b[3];
+  if (!cell_range(g, box.lo, box.hi, a, b)) return false;
+  bool near = false, surface = false, enclosed = false;
+  for (int64_t z = a[2]; z <= b[2]; ++z) {
+    for (int64_t y = a[1]; y <= b[1]; ++y) {
+      for (int64_t x = a[0]; x <= b[0]; ++x) {
+        const uint8_t f = g.flags[cell_at(g, x, y, z)];
+        near = near || (f & kNear) != 0;
+        surface = surface || (f & kSurface) != 0;
+        enclosed = enclosed || (f & (kSurface | kOutside)) == 0;
+      }
+    }
+  }
+  if (!near) return false;
+  if (g.index == nullptr) return true;
+  // Cells that do not meet the surface lie wholly inside or wholly outside: the triangle
+  // (within them) is inside when one is enclosed, outside when all are outside.
+  if (!surface) return enclosed;
+  // Near the surface: kept when it comes within reach of a splint triangle (meeting included,
+  // decided exactly); else it lies at least that far from the surface, wholly on the side of
+  // its first corner. The extractor's triangles come in order, each near the one before it:
+  // the previous answer seeds the query (the answer does not depend on it).
+  return triangle_side(*g.index, p, q, r, g.reach, &g.seed) != TriangleSide::kOutside;
+}
+
+// Marks the outside: from the border, face to face through unmarked cells, by forward and
+// backward raster passes until one changes nothing (no queue: the grid is the state).
+void flood_outside(NearSplint& g) {
+  const int64_t nx = g.n[0], ny = g.n[1], nz = g.n[2];
+  for (int64_t z = 0; z < nz; ++z) {
+    for (int64_t y = 0; y < ny; ++y) {
+      for (int64_t x = 0; x < nx; ++x) {
+        const bool border = x == 0 || y == 0 || z == 0 || x == nx - 1 || y == ny - 1 || z == nz - 1;
+        uint8_t& f = g.flags[cell_at(g, x, y, z)];
+        if (border && f == 0) f = kOutside;
+      }
+    }
+  }
+  const int64_t step[3] = {1, nx, nx * ny};
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int pass = 0; pass < 2; ++pass) {
+      const int64_t total = nx * ny * nz;
+      for (int64_t n = 0; n < total; ++n) {
+        const int64_t i = pass == 0 ? n : total - 1 - n;
+        if (g.flags[i] != 0) continue;
+        const int64_t x = i % nx, y = (i / nx) % ny, z = i / (nx * ny);
+        if (x == 0 || y == 0 || z == 0 || x == nx - 1 || y == ny - 1 || z == nz - 1) continue;
+        for (int k = 0; k < 3; ++k) {
+          if (g.flags[i - step[k]] == kOutside || g.flags[i + step[k]] == kOutside) {
+            g.flags[i] = kOutside;
+            changed = true;
+            break;
+          }
+        }
+      }
+    }
+  }
+}
+
+// kNear: within one cell (26 neighbours) of a cell not outside; separably along x, y, z.
+void grow_near(NearSplint& g) {
+  const int64_t nx = g.n[0], ny = g.n[1], nz = g.n[2];
+  const int64_t step[3] = {1, nx, nx * ny};
+  const uint8_t from[3] = {0, kGrowX, kGrowY}, to[3] = {kGrowX, kGrowY, kNear};
+  for (int k = 0; k < 3; ++k) {
+    for (int64_t z = 0; z < nz; ++z) {
+      for (int64_t y = 0; y < ny; ++y) {
+        for (int64_t x = 0; x < nx; ++x) {
+          const int64_t c[3] = {x, y, z};
+          const size_t i = cell_at(g, x, y, z);
+          auto has = [&](size_t j) {
+            return k == 0 ? (g.flags[j] & kOutside) == 0 : (g.flags[j] & from[k]) != 0;
+          };
+          bool v = has(i);
+          if (!v && c[k] > 0) v = has(i - static_cast<size_t>(step[k]));
+          if (!v && c[k] + 1 < g.n[k]) v = has(i + static_cast<size_t>(step[k]));
+          if (v) g.flags[i] |= to[k];
+        }
+      }
+    }
+  }
+}
+
+// The grid over the splint's box and its flags (a byte per cell, from the arena).
+Status mark_near_splint(Arena& arena, const Mesh& splint, const Aabb& bounds, double voxel,
+                        NearSplint* g) {
+  g->cell = kCellVoxels * voxel;
+  g->origin = bounds.lo - Vec3{2 * g->cell, 2 * g->cell, 2 * g->cell};
+  uint64_t total = 1;
+  for (int k = 0; k < 3; ++k) {
+    const double cells = std::floor((bounds.hi[k] - bounds.lo[k]) / g->cell) + 5;
+    if (!(cells < 1048576.0)) {
+      return make_error(StatusCode::kLimitExceeded, "blockout: the splint spans ", cells,
+                        " cells of ", g->cell, " mm (at most 2^20 per axis)");
+    }
+    g->n[k] = static_cast<int64_t>(cells);
+    if (!checked_mul(total, static_cast<uint64_t>(cells), &total) || total > SIZE_MAX) {
+      return make_error(StatusCode::kLimitExceeded,
+                        "blockout: the splint's cell grid is too large");
+    }
+  }
+  g->flags = arena.allocate_array<uint8_t>(static_cast<size_t>(total));
+  if (g->flags == nullptr) return arena.exhausted_status();
+  std::memset(g->flags, 0, static_cast<size_t>(total));
+  for (size_t i = 0; i < splint.triangles.size(); ++i) {
+    const Triangle& t = splint.triangles[i];
+    Aabb box;
+    for (int k = 0; k < 3; ++k) {
+      if (t.v[k] >= splint.vertices.size()) {
+        return make_error(StatusCode::kInvalidMesh,
+                          "blockout: a splint triangle has a vertex id out of range")
+            .at_index(i);
+      }
+      box.add(splint.vertices[t.v[k]]);
+    }
+    int64_t a[3], b[3];
+    if (!cell_range(*g, box.lo, box.hi, a, b)) continue;
+    for (int64_t z = a[2]; z <= b[2]; ++z) {
+      for (int64_t y = a[1]; y <= b[1]; ++y) {
+        for (int64_t x = a[0]; x <= b[0]; ++x) g->flags[cell_at(*g, x, y, z)] = kSurface;
+      }
+    }
+  }
+  flood_outside(*g);
+  grow_near(*g);
+  return Status::ok();
+}
+
+// The swept mesh (sweep_volume_mesh), with `filter` only its triangles near the splint: the
+// cells and the splint's distance index are made first and the mesh is moved down over them.
+Status sweep_near_splint(const Context& ctx, const Mesh& splint, const Aabb& bounds,
+                         Span<const Mesh> jaws, SweepOptions so, bool filter, Mesh* swept,
+                         SweepStats* stats) {
+  Arena& arena = *ctx.arena;
+  if (!filter || so.decimate_error > 0) return sweep_volume_mesh(ctx, jaws, so, swept, stats);
+  ArenaScope scope(arena);
+  NearSplint near;
+  DistanceIndex splint_index;
+  SPLINTCORE_RETURN_IF_ERROR(mark_near_splint(arena, splint, bounds, so.voxel, &near));
+  SPLINTCORE_RETURN_IF_ERROR(
+      build_distance_index(ctx, splint, DistanceIndexOptions{}, &splint_index));
+  near.index = &splint_index;
+  near.reach = kReachVoxels * so.voxel;
+  so.keep_triangle = near_splint;
+  so.keep_user = &near;
+  Mesh kept;
+  SPLINTCORE_RETURN_IF_ERROR(sweep_volume_mesh(ctx, jaws, so, &kept, stats));
+  // Triangles before vertices, as sweep_volume_mesh leaves a filtered mesh.
+  move_mesh_down(arena, scope.start(), kept, swept);
+  scope.commit();
+  return Status::ok();
+}
+
+}  // namespace
 
 Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
                 const BlockoutOptions& options, Mesh* out, BlockoutStats* stats) {
@@ -45,7 +261,8 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
     st->inset_used = so.inset;
     st->offset_used = so.offset;
     Mesh swept;
-    s = sweep_volume_mesh(ctx, jaws, so, &swept, &st->sweep);
+    s = sweep_near_splint(ctx, splint, bounds, jaws, so, options.filter_near_splint, &swept,
+                          &st->sweep);
     if (!s.is_ok()) break;
     st->swept_triangles = swept.triangles.size();
     for (size_t i = 0; i < swept.vertices.size() && s.is_ok(); ++i) {
@@ -71,6 +288,9 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
     }
     BooleanOptions bo = options.boolean;
     bo.op = BooleanOp::kDifference;
+    // The filter leaves B's border outside the splint, a reach away (see the top); the caps'
+    // border lies beyond the splint's box.
+    if (options.filter_near_splint && so.decimate_error == 0) bo.b_border_outside_a = true;
     s = mesh_boolean(ctx, splint, swept, bo, &result, &st->boolean);
     if (s.is_ok() || s.code() == StatusCode::kArenaExhausted ||
         s.code() == StatusCode::kCancelled || s.code() == StatusCode::kInvalidArgument) {

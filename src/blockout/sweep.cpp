@@ -23,6 +23,7 @@ namespace {
 constexpr uint32_t kRing = 5;        // raw layers kept: the output layer and two on each side
 constexpr double kBandVoxels = 2.1;  // band half-width in voxels (the correction reads 2 h out)
 constexpr uint32_t kMaxBands = 64;
+constexpr uint32_t kKeepLayers = 4;  // the extractor's slab when filtering (keep_triangle)
 constexpr float kTinyPositive = 1.17549435e-38f;  // FLT_MIN: an outside distance that rounded to 0
 
 struct Frame {
@@ -543,6 +544,12 @@ Status check_sweep_options(const SweepOptions& o) {
                       "sweep: the decimation error must be from 0 to a tenth of a voxel (",
                       o.decimate_error, " mm, voxel ", o.voxel, " mm)");
   }
+  if (o.keep_triangle != nullptr &&
+      (!o.has_region || !o.open_at_region || !o.float32_vertices || o.decimate_error > 0)) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "sweep: keep_triangle needs a region, open_at_region and float32_vertices, "
+                      "and no decimation");
+  }
   if (!(o.offset >= 0) || !(o.offset <= 20 * o.voxel) || (o.offset > 0 && o.inset != 0)) {
     return make_error(StatusCode::kInvalidArgument,
                       "sweep: the offset must be from 0 to 20 "
@@ -932,8 +939,13 @@ MarchingCubesOptions extraction_options(const Sweep& s, const SweepOptions& o) {
   mc.iso = o.offset > 0 ? o.offset : -o.inset;
   mc.layers_per_tile = o.layers_per_tile;
   mc.edge_margin = o.edge_margin;
+  if (o.decimate_error > 0) mc.iso += 0.5 * o.decimate_error;
+  if (o.keep_triangle != nullptr && mc.layers_per_tile == 0) {
+    // A slab of a fixed size, never of the room there is: the log grows above it, and the
+    // high water must depend on the input alone (the two-step contract).
+    mc.layers_per_tile = kKeepLayers;
+  }
   if (o.decimate_error > 0) {
-    mc.iso += 0.5 * o.decimate_error;
     if (mc.layers_per_tile == 0) {
       const Arena& arena = *s.ctx->arena;
       const uint64_t free_bytes = arena.cap() > arena.used() ? arena.cap() - arena.used() : 0;
@@ -950,6 +962,121 @@ MarchingCubesOptions extraction_options(const Sweep& s, const SweepOptions& o) {
     }
   }
   return mc;
+}
+
+// --- the open surface filtered in the stream (SweepOptions::keep_triangle) ---------------------
+//
+// The extractor's triangles are tested as they come: those beyond the grid (the caps, as
+// drop_caps()) and those keep_triangle() refuses are left out; the rest are logged with their
+// extractor ids and corners (jaws' frame, float32) in one array growing above the extractor's
+// working set. After the extraction the log is moved down to the arena's top, the kept
+// vertices are numbered by first use (a map of the extractor's ids) and the mesh is built
+// above it, triangles before vertices, to be moved down (move_mesh_down).
+
+struct KeptTriangle {
+  uint32_t v[3];
+  float p[9];
+};
+
+struct KeepLog {
+  const Sweep* s = nullptr;
+  const SweepOptions* o = nullptr;
+  Vec3 lo{}, hi{};  // the extracted grid's box (local frame)
+  ArenaArray<KeptTriangle> kept;
+  uint64_t caps = 0, left_out = 0;
+};
+
+Status log_kept(void* user, const Triangle& t, const Vec3& a, const Vec3& b, const Vec3& c) {
+  KeepLog& log = *static_cast<KeepLog*>(user);
+  auto beyond = [&](const Vec3& p) {
+    return p.x < log.lo.x || p.y < log.lo.y || p.z < log.lo.z || p.x > log.hi.x || p.y > log.hi.y ||
+           p.z > log.hi.z;
+  };
+  if (beyond(a) && beyond(b) && beyond(c)) {
+    ++log.caps;
+    return Status::ok();
+  }
+  Vec3 w[3] = {to_world(log.s->frame, a), to_world(log.s->frame, b), to_world(log.s->frame, c)};
+  for (Vec3& p : w) {
+    if (!round_to_float32(&p)) {
+      return make_error(StatusCode::kLimitExceeded,
+                        "sweep: a vertex of the swept volume is beyond float32 range");
+    }
+  }
+  if (!log.o->keep_triangle(log.o->keep_user, w[0], w[1], w[2])) {
+    ++log.left_out;
+    return Status::ok();
+  }
+  KeptTriangle k;
+  for (int i = 0; i < 3; ++i) {
+    k.v[i] = t.v[i];
+    k.p[3 * i] = static_cast<float>(w[i].x);
+    k.p[3 * i + 1] = static_cast<float>(w[i].y);
+    k.p[3 * i + 2] = static_cast<float>(w[i].z);
+  }
+  // Grown to the exact size (in place: the log is the arena's top during the extraction), so
+  // the arena's high water depends on the input alone, never on the room there was.
+  const size_t n = log.kept.size();
+  if (!log.kept.resize(n + 1)) return log.kept.arena()->exhausted_status();
+  log.kept[n] = k;
+  return Status::ok();
+}
+
+// The logged triangles (above the arena's top) as a mesh above it: triangles, then vertices.
+// Memory: the log moved down (48 bytes a kept triangle), 4 bytes per extractor vertex, the
+// mesh (12 bytes a triangle, 24 a vertex).
+Status build_kept_mesh(Arena& arena, const KeepLog& log, uint64_t extractor_vertices, Mesh* mesh) {
+  const size_t n = log.kept.size();
+  KeptTriangle* recs = arena.allocate_array<KeptTriangle>(n > 0 ? n : 1);
+  if (recs == nullptr) return arena.exhausted_status();
+  if (n > 0 && recs != log.kept.data()) {
+    std::memmove(static_cast<void*>(recs), log.kept.data(), n * sizeof(KeptTriangle));
+  }
+  const size_t nv = static_cast<size_t>(extractor_vertices);
+  uint32_t* remap = arena.allocate_array<uint32_t>(nv > 0 ? nv : 1);
+  Triangle* tris = arena.allocate_array<Triangle>(n > 0 ? n : 1);
+  if (remap == nullptr || tris == nullptr) return arena.exhausted_status();
+  for (size_t i = 0; i < nv; ++i) remap[i] = ~uint32_t{0};
+  uint32_t next = 0;
+  for (size_t t = 0; t < n; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      SPLINTCORE_ASSERT(recs[t].v[k] < nv);
+      uint32_t& id = remap[recs[t].v[k]];
+      if (id == ~uint32_t{0}) id = next++;
+      tris[t].v[k] = id;
+    }
+  }
+  Vec3* verts = arena.allocate_array<Vec3>(next > 0 ? next : 1);
+  if (verts == nullptr) return arena.exhausted_status();
+  for (size_t t = 0; t < n; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      verts[tris[t].v[k]] = Vec3{recs[t].p[3 * k], recs[t].p[3 * k + 1], recs[t].p[3 * k + 2]};
+    }
+  }
+  mesh->triangles.adopt(tris, n, n);
+  mesh->vertices.adopt(verts, next, next);
+  return Status::ok();
+}
+
+// sweep_volume_mesh() with keep_triangle: the kept mesh above the arena's top when it returns.
+Status extract_kept(Sweep& s, const SweepOptions& o, Mesh* mesh, SweepStats* st) {
+  Arena& arena = *s.ctx->arena;
+  const VolumeGrid& g = s.mesh_grid;
+  KeepLog log;
+  log.s = &s;
+  log.o = &o;
+  log.lo = g.origin;
+  log.hi = Vec3{g.origin.x + g.spacing.x * (g.nx - 1.0), g.origin.y + g.spacing.y * (g.ny - 1.0),
+                g.origin.z + g.spacing.z * (g.nz - 1.0)};
+  log.kept.bind(&arena);
+  MarchingCubesVisitor visitor;
+  visitor.triangle = log_kept;
+  visitor.user = &log;
+  SPLINTCORE_RETURN_IF_ERROR(marching_cubes(*s.ctx, g, LayerSource{fill_layers, &s},
+                                            extraction_options(s, o), visitor, &st->extraction));
+  st->cap_triangles_dropped = log.caps;
+  st->filtered_triangles = log.left_out;
+  return build_kept_mesh(arena, log, st->extraction.vertices, mesh);
 }
 
 void setup_tiles(const Sweep& s, const SweepOptions& o, const MarchingCubesVisitor* out,
@@ -1046,6 +1173,16 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
       return status;
     }
     move_mesh_down(arena, scope.start(), d.mesh, out);
+    scope.commit();
+    return Status::ok();
+  }
+  if (status.is_ok() && !s.empty && options.keep_triangle != nullptr) {
+    status = extract_kept(s, options, &mesh, st);
+    if (!status.is_ok()) {
+      out->bind(&arena);
+      return status;
+    }
+    move_mesh_down(arena, scope.start(), mesh, out);
     scope.commit();
     return Status::ok();
   }

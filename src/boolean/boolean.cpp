@@ -729,7 +729,9 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b, const Bool
   SPLINTCORE_RETURN_IF_ERROR(find_shells(arena, b, &sh, &usable));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "boolean: shell pairs", 0, 1));
   const Aabb region = region_of_a(a, options.max_nudges);
-  SPLINTCORE_RETURN_IF_ERROR(refuse_open_border_in_a(ctx, a, b, region, usable));
+  if (!options.b_border_outside_a) {
+    SPLINTCORE_RETURN_IF_ERROR(refuse_open_border_in_a(ctx, a, b, region, usable));
+  }
   uint32_t* group = nullptr;
   uint32_t groups = 1;
   if (usable && sh.count > 1) {

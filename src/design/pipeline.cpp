@@ -206,12 +206,51 @@ Status moved_vertices(const Context& ctx, const CaseFile& c, Span<const Mesh> ja
   return Status::ok();
 }
 
+// One jaw's blockout (blockout_jaws), run with `check` the Boolean's own self-intersection
+// check (the blockout's answer alone) or without it; the result moved down to `start` over
+// the jaw's temporaries.
+Status blockout_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, size_t j,
+                    const Arena::Marker& start, bool check, Mesh* cut, DesignReport* report) {
+  Mesh swept_jaws[DesignReport::kMaxBlockoutJaws];
+  for (size_t k = 0; k < jaws.size(); ++k) {
+    Span<const Vec3> v;
+    SPLINTCORE_RETURN_IF_ERROR(moved_vertices(ctx, c, jaws, k, &v));
+    // The jaw swept first, then the others' vertices.
+    const size_t at = k == j ? 0 : (k < j ? k + 1 : k);
+    swept_jaws[at] = mesh_view(v, k == j ? jaws[k].triangles.span() : Span<const Triangle>());
+  }
+  const bool mandible = std::strcmp(c.jaws[j].role, "mandible") == 0;
+  BlockoutOptions bl;
+  bl.sweep = c.blockout;  // voxel, inset, closing radius, offset as the case gives them
+  bl.sweep.direction = mandible ? -c.insertion_direction : c.insertion_direction;
+  bl.boolean.check_self_intersection = check;
+  Mesh blocked;
+  const Status s = blockout(ctx, *cut, Span<const Mesh>(swept_jaws, jaws.size()), bl, &blocked,
+                            &report->blockout[j]);
+  if (!s.is_ok()) {
+    Status e = stage_error(s, "blockout");
+    if (s.code() != StatusCode::kArenaExhausted && s.code() != StatusCode::kCancelled) {
+      e.append(" (jaw ").append_u64(j).append(", ").append(c.jaws[j].role).append(")");
+    }
+    return e;
+  }
+  report->blockout_removed_mm3[j] = mesh_volume(*cut) - mesh_volume(blocked);
+  move_mesh_down(*ctx.arena, start, blocked, cut);
+  return Status::ok();
+}
+
 // Interference elimination, jaw by jaw: each jaw's part of B swept along the direction it
 // leaves the splint (the mandible's is the opposite of the insertion direction), and
 // subtracted from *cut, which becomes the result, moved down over the jaw's temporaries (the
 // previous one stays below it). B itself is not needed: the sweep gets jaw j's triangles and
 // every jaw's moved vertices (the others' without triangles: they only anchor its lattice,
 // as B's vertices did), views of the jaws where moving them changes nothing.
+// The result's exact self-intersection check (the Boolean's final word, and the largest arrays
+// of the blockout: 33 MB for the real dentition's splint) runs once the result has been moved
+// down over the sweep, the Boolean's working set and the jaws' moved vertices, as
+// subtract_jaws does for the first Boolean: on the real dentition that keeps the blockout in
+// 64 MiB. Should it find a crossing, the jaw's blockout runs again with the check inside the
+// Boolean (where a crossing makes it nudge and retry): the answer is the blockout's alone.
 Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* cut,
                      DesignReport* report) {
   if (jaws.size() > DesignReport::kMaxBlockoutJaws) {
@@ -221,32 +260,25 @@ Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   Arena& arena = *ctx.arena;
   for (size_t j = 0; j < jaws.size(); ++j) {
     const Arena::Marker start = arena.mark();
-    Mesh swept_jaws[DesignReport::kMaxBlockoutJaws];
-    for (size_t k = 0; k < jaws.size(); ++k) {
-      Span<const Vec3> v;
-      SPLINTCORE_RETURN_IF_ERROR(moved_vertices(ctx, c, jaws, k, &v));
-      // The jaw swept first, then the others' vertices.
-      const size_t at = k == j ? 0 : (k < j ? k + 1 : k);
-      swept_jaws[at] = mesh_view(v, k == j ? jaws[k].triangles.span() : Span<const Triangle>());
+    const Mesh before = *cut;
+    SPLINTCORE_RETURN_IF_ERROR(blockout_one(ctx, c, jaws, j, start, false, cut, report));
+    BooleanStats& bs = report->blockout[j].boolean;
+    SelfIntersectionReport si;
+    // No swept triangle reached the splint: no Boolean ran, the splint is as it was.
+    if (report->blockout[j].swept_triangles > 0) {
+      SPLINTCORE_RETURN_IF_ERROR(
+          stage_error(find_self_intersections(ctx, *cut, 1, &si), "blockout"));
     }
-    const bool mandible = std::strcmp(c.jaws[j].role, "mandible") == 0;
-    BlockoutOptions bl;
-    bl.sweep = c.blockout;  // voxel, inset, closing radius, offset as the case gives them
-    bl.sweep.direction = mandible ? -c.insertion_direction : c.insertion_direction;
-    Mesh blocked;
-    const Status s = blockout(ctx, *cut, Span<const Mesh>(swept_jaws, jaws.size()), bl, &blocked,
-                              &report->blockout[j]);
-    if (!s.is_ok()) {
-      Status e = stage_error(s, "blockout");
-      if (s.code() != StatusCode::kArenaExhausted && s.code() != StatusCode::kCancelled) {
-        e.append(" (jaw ").append_u64(j).append(", ").append(c.jaws[j].role).append(")");
-      }
-      return e;
+    if (si.self_intersecting()) {
+      arena.rewind(start);
+      *cut = before;
+      SPLINTCORE_RETURN_IF_ERROR(blockout_one(ctx, c, jaws, j, start, true, cut, report));
+    } else if (report->blockout[j].swept_triangles > 0) {
+      bs.self_intersection_checked = true;
+      bs.self_intersection_candidates = si.candidate_pairs;
     }
-    report->blockout_removed_mm3[j] = mesh_volume(*cut) - mesh_volume(blocked);
     report->blockout_jaws = static_cast<uint32_t>(j + 1);
-    note_self_check(report, report->blockout[j].boolean, "blockout");
-    move_mesh_down(arena, start, blocked, cut);
+    note_self_check(report, bs, "blockout");
   }
   return Status::ok();
 }

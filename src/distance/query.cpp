@@ -777,6 +777,66 @@ bool segment_intersects_mesh(const DistanceIndex& index, const Vec3& p, const Ve
   return found;
 }
 
+bool triangle_near_mesh(const DistanceIndex& index, const Vec3& a, const Vec3& b, const Vec3& c,
+                        double reach) {
+  const Mesh& mesh = *index.mesh;
+  if (mesh.triangles.size() == 0) return false;
+  const Vec3* v = mesh.vertices.data();
+  Aabb box;
+  box.add(a);
+  box.add(b);
+  box.add(c);
+  box.lo = box.lo - Vec3{reach, reach, reach};
+  box.hi = box.hi + Vec3{reach, reach, reach};
+  bool found = false;
+  auto visit = [&](uint32_t t) {
+    const Triangle& tri = mesh.triangles[t];
+    Aabb tb;
+    tb.add(v[tri.v[0]]);
+    tb.add(v[tri.v[1]]);
+    tb.add(v[tri.v[2]]);
+    if (!tb.overlaps(box)) return true;
+    // Wholly on one side of the triangle's plane, farther than reach (with a margin far above
+    // the rounding): no closer than that.
+    const Vec3 n = cross(v[tri.v[1]] - v[tri.v[0]], v[tri.v[2]] - v[tri.v[0]]);
+    const double len = std::sqrt(dot(n, n));
+    if (len > 0) {
+      const double limit = (reach + 1e-9 * (1.0 + std::fabs(dot(n, v[tri.v[0]])) / len)) * len;
+      const double da = dot(n, a - v[tri.v[0]]), db = dot(n, b - v[tri.v[0]]),
+                   dc = dot(n, c - v[tri.v[0]]);
+      if ((da > limit && db > limit && dc > limit) || (da < -limit && db < -limit && dc < -limit)) {
+        return true;
+      }
+    }
+    found = triangle_pair_distance(a, b, c, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], nullptr,
+                                   nullptr) < reach;
+    return !found;
+  };
+  for_each_triangle_near(index, box, visit);
+  return found;
+}
+
+TriangleSide triangle_side(const DistanceIndex& index, const Vec3& a, const Vec3& b, const Vec3& c,
+                           double reach, uint32_t* seed) {
+  SPLINTCORE_ASSERT(index.vertex_start.size() > 0);  // not a pairs_only index
+  SignedDistance sd;
+  if (!closest_within(index, a, HUGE_VAL, &sd.closest, *seed)) return TriangleSide::kOutside;
+  *seed = sd.closest.triangle;
+  // Every point x of abc has |x - a| <= extent, so its distance to the surface is at least
+  // |a's| - extent, and the ball about a of radius |a's| holds no surface: all of abc lies on
+  // a's side. The margin is far above the rounding of both lengths (about 1e-15 relative).
+  const double extent = std::sqrt(std::fmax(length_squared(b - a), length_squared(c - a)));
+  const double margin = 1e-9 * (1.0 + abs_max3(a));
+  if (!(sd.closest.distance > reach + extent + margin) &&
+      triangle_near_mesh(index, a, b, c, reach)) {
+    return TriangleSide::kNear;
+  }
+  // Farther than reach everywhere: abc does not cross the surface, a's side is its side (a is
+  // at least reach from the surface, so its sign is not in doubt).
+  finish_signed(index, a, SignMethod::kAuto, &sd);
+  return sd.distance < 0 ? TriangleSide::kInside : TriangleSide::kOutside;
+}
+
 Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aabb& box,
                         ArenaArray<uint32_t>* out) {
   const size_t start = out->size();

@@ -1532,6 +1532,91 @@ TEST(DistanceSegment, MatchesExactBruteForce) {
   EXPECT_LT(hits, total);
 }
 
+// triangle_near_mesh against the brute-force least triangle_pair_distance, with small
+// triangles near the surface (the blockout's swept triangles against its splint), reaches of
+// 0.01 and 0.05 times the shape's size, and triangles through the surface (distance 0).
+TEST(DistanceTriangle, NearMeshMatchesBruteForce) {
+  Rng rng(0x5eed0077);
+  int near = 0, total = 0;
+  for (const auto& shape : query_shapes(rng)) {
+    auto b = build(shape.second, 4);
+    const Mesh& m = b->mesh;
+    const Aabb box = bounds_of(m);
+    const double size = length(box.extent());
+    const uint32_t nt = static_cast<uint32_t>(m.triangles.size());
+    for (int i = 0; i < 40 * kEffort; ++i) {
+      const uint32_t t = rng.below(nt);
+      const Vec3 on = (corner(m, t, 0) + corner(m, t, 1) + corner(m, t, 2)) * (1.0 / 3.0);
+      const Vec3 c = on + rng.unit() * (size * 0.06 * rng.uniform());
+      const Vec3 p = c + rng.unit() * (size * 0.01), q = c + rng.unit() * (size * 0.01),
+                 r = c + rng.unit() * (size * 0.01);
+      const double reach = size * (i % 2 == 0 ? 0.01 : 0.05);
+      double least = HUGE_VAL;
+      for (uint32_t k = 0; k < nt; ++k) {
+        least = std::fmin(least, triangle_pair_distance(p, q, r, corner(m, k, 0), corner(m, k, 1),
+                                                        corner(m, k, 2), nullptr, nullptr));
+      }
+      const bool got = triangle_near_mesh(b->index, p, q, r, reach);
+      ASSERT_EQ(got, least < reach) << shape.first << " i " << i << " least " << least;
+      near += got ? 1 : 0;
+      ++total;
+    }
+  }
+  EXPECT_GT(near, total / 5);
+  EXPECT_LT(near, total * 9 / 10);
+}
+
+// triangle_side against brute force on the closed shapes: near exactly when the least pair
+// distance is under reach; otherwise the side of the exact winding number at every corner
+// (the triangle lies wholly on one side). Triangles up to a tenth of the shape's size, so both
+// paths run: the closest-point query deciding alone, and the exact near test after it. The
+// seed carried from call to call gives the answers a fresh one gives.
+TEST(DistanceTriangle, SideMatchesBruteForce) {
+  Rng rng(0x5eed0078);
+  int counts[3] = {0, 0, 0};
+  for (const auto& shape : query_shapes(rng)) {
+    auto b = build(shape.second, 4);
+    if (!b->index.closed_manifold) continue;
+    const Mesh& m = b->mesh;
+    const Aabb box = bounds_of(m);
+    const double size = length(box.extent());
+    const uint32_t nt = static_cast<uint32_t>(m.triangles.size());
+    uint32_t seed = kNoNeighbor;
+    for (int i = 0; i < 40 * kEffort; ++i) {
+      const uint32_t t = rng.below(nt);
+      const Vec3 on = (corner(m, t, 0) + corner(m, t, 1) + corner(m, t, 2)) * (1.0 / 3.0);
+      const Vec3 c = on + rng.unit() * (size * 0.08 * rng.uniform());
+      const double spread = size * (i % 3 == 0 ? 0.05 : 0.005);
+      const Vec3 p = c + rng.unit() * spread, q = c + rng.unit() * spread,
+                 r = c + rng.unit() * spread;
+      const double reach = size * (i % 2 == 0 ? 0.002 : 0.02);
+      double least = HUGE_VAL;
+      for (uint32_t k = 0; k < nt; ++k) {
+        least = std::fmin(least, triangle_pair_distance(p, q, r, corner(m, k, 0), corner(m, k, 1),
+                                                        corner(m, k, 2), nullptr, nullptr));
+      }
+      const TriangleSide got = triangle_side(b->index, p, q, r, reach, &seed);
+      uint32_t fresh = kNoNeighbor;
+      ASSERT_EQ(static_cast<int>(triangle_side(b->index, p, q, r, reach, &fresh)),
+                static_cast<int>(got));
+      if (least < reach) {
+        ASSERT_EQ(static_cast<int>(got), static_cast<int>(TriangleSide::kNear))
+            << shape.first << " i " << i << " least " << least;
+      } else {
+        const bool inside = winding_number(b->index, p, 0.0) >= 0.5;
+        ASSERT_EQ(winding_number(b->index, q, 0.0) >= 0.5, inside);
+        ASSERT_EQ(winding_number(b->index, r, 0.0) >= 0.5, inside);
+        ASSERT_EQ(static_cast<int>(got),
+                  static_cast<int>(inside ? TriangleSide::kInside : TriangleSide::kOutside))
+            << shape.first << " i " << i << " least " << least;
+      }
+      ++counts[static_cast<int>(got)];
+    }
+  }
+  // Each answer comes up often enough to mean something.
+  for (int k = 0; k < 3; ++k) EXPECT_GT(counts[k], 10) << k;
+}
+
 TEST(DistanceBox, TrianglesInBoxMatchBruteForce) {
   Rng rng(0x5eed0042);
   for (const auto& shape : query_shapes(rng)) {
