@@ -553,36 +553,59 @@ struct PickData {
   double lingual, buccal;
 };
 
-void gather_pick(Span<const ArchPoint> pts, double s, double step, double side, PickData* d) {
-  d->h[0] = d->near_h[0] = HUGE_VAL;
-  d->h[1] = d->near_h[1] = -HUGE_VAL;
-  d->lingual = -HUGE_VAL;
-  d->buccal = -HUGE_VAL;
-  for (const ArchPoint& a : pts) {
-    const double along = std::fabs(a.s - s);
-    if (along <= step + kToothHalfMm) {
-      if (a.jaw == 0) {
-        d->h[0] = std::min(d->h[0], a.h);
-      } else {
-        d->h[1] = std::max(d->h[1], a.h);
-      }
+// The pick at `at` (places along the arch, increasing) takes the points within a step and half
+// a molar of it (along = |s - at|), in their order; so each point goes only to the picks within
+// that reach of it (found by bisection, with a margin far over the rounding of along, then
+// tested as before): the picks' data bit for bit as when each pick scanned every point.
+constexpr double kPickWindowSlackMm = 1e-6;
+
+void add_to_pick(const ArchPoint& a, double at, double step, double side, PickData* d) {
+  const double along = std::fabs(a.s - at);
+  if (along <= step + kToothHalfMm) {
+    if (a.jaw == 0) {
+      d->h[0] = std::min(d->h[0], a.h);
+    } else {
+      d->h[1] = std::max(d->h[1], a.h);
     }
-    if (along <= 0.5 * step) {
-      if (a.jaw == 0) {
-        d->near_h[0] = std::min(d->near_h[0], a.h);
-      } else {
-        d->near_h[1] = std::max(d->near_h[1], a.h);
-      }
-    }
-    if (along > step) continue;
-    d->buccal = std::max(d->buccal, a.o * side);
-    d->lingual = std::max(d->lingual, -a.o * side);
   }
-  if (d->h[0] == HUGE_VAL) d->h[0] = std::numeric_limits<double>::quiet_NaN();
-  if (d->h[1] == -HUGE_VAL) d->h[1] = std::numeric_limits<double>::quiet_NaN();
-  if (d->near_h[0] == HUGE_VAL) d->near_h[0] = std::numeric_limits<double>::quiet_NaN();
-  if (d->near_h[1] == -HUGE_VAL) d->near_h[1] = std::numeric_limits<double>::quiet_NaN();
-  if (d->buccal == -HUGE_VAL) d->buccal = d->lingual = std::numeric_limits<double>::quiet_NaN();
+  if (along <= 0.5 * step) {
+    if (a.jaw == 0) {
+      d->near_h[0] = std::min(d->near_h[0], a.h);
+    } else {
+      d->near_h[1] = std::max(d->near_h[1], a.h);
+    }
+  }
+  if (along > step) return;
+  d->buccal = std::max(d->buccal, a.o * side);
+  d->lingual = std::max(d->lingual, -a.o * side);
+}
+
+void gather_picks(Span<const ArchPoint> pts, const double* at, size_t n, double step, double side,
+                  PickData* data) {
+  for (size_t i = 0; i < n; ++i) {
+    PickData* d = &data[i];
+    d->h[0] = d->near_h[0] = HUGE_VAL;
+    d->h[1] = d->near_h[1] = -HUGE_VAL;
+    d->lingual = -HUGE_VAL;
+    d->buccal = -HUGE_VAL;
+  }
+  const double reach = step + kToothHalfMm + kPickWindowSlackMm;
+  for (const ArchPoint& a : pts) {
+    size_t first = 0, last = n;  // a place that is not a number: every pick, as a scan would
+    if (!std::isnan(a.s)) {
+      first = static_cast<size_t>(std::lower_bound(at, at + n, a.s - reach) - at);
+      last = static_cast<size_t>(std::upper_bound(at + first, at + n, a.s + reach) - at);
+    }
+    for (size_t i = first; i < last; ++i) add_to_pick(a, at[i], step, side, &data[i]);
+  }
+  for (size_t i = 0; i < n; ++i) {
+    PickData* d = &data[i];
+    if (d->h[0] == HUGE_VAL) d->h[0] = std::numeric_limits<double>::quiet_NaN();
+    if (d->h[1] == -HUGE_VAL) d->h[1] = std::numeric_limits<double>::quiet_NaN();
+    if (d->near_h[0] == HUGE_VAL) d->near_h[0] = std::numeric_limits<double>::quiet_NaN();
+    if (d->near_h[1] == -HUGE_VAL) d->near_h[1] = std::numeric_limits<double>::quiet_NaN();
+    if (d->buccal == -HUGE_VAL) d->buccal = d->lingual = std::numeric_limits<double>::quiet_NaN();
+  }
 }
 
 // Fills the NaN entries of v[0..n) (stride `stride` doubles) by linear interpolation between
@@ -761,13 +784,13 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
       cut_distal_ends(arch, f, options, s_lo, s_hi, grid, &places, &out->report));
   const size_t n = places.size();
   PickData* data = arena.allocate_array<PickData>(n);
-  if (data == nullptr) return arena.exhausted_status();
+  double* at = arena.allocate_array<double>(n);
+  if (data == nullptr || at == nullptr) return arena.exhausted_status();
   Pick* up = buffers.upper;
   Pick* lo = buffers.lower;
   Vec3* line = buffers.arch;
-  for (size_t i = 0; i < n; ++i) {
-    gather_pick(pts.span(), places.at(i), step, side, &data[i]);
-  }
+  for (size_t i = 0; i < n; ++i) at[i] = places.at(i);
+  gather_picks(pts.span(), at, n, step, side, data);
   const size_t stride = sizeof(PickData) / sizeof(double);
   if (!fill_gaps(&data[0].h[0], n, stride) || !fill_gaps(&data[0].h[1], n, stride) ||
       !fill_gaps(&data[0].near_h[0], n, stride) || !fill_gaps(&data[0].near_h[1], n, stride) ||
