@@ -203,10 +203,202 @@ void project_fast(Projector& g, double px, double py, double* s, double* o) {
   segment_place_at(p, best_k, px, py, best_t, best_qx, best_qy, s, o);
 }
 
-// project_fast for every point (its s and o), in up to the executor's concurrency runs of
-// consecutive points, each with its own hint: the answers do not depend on the hint (only
-// how many segments a point tests), so they are the same bits at every thread count.
-void project_all(const Context& ctx, const Projector& g, Span<ArchPoint> pts) {
+// project() for the points of a lattice cell, from a list of the cell's candidate segments:
+// every segment that can be the nearest to a point of the cell. A point p of the cell lies
+// within the cell's half-diagonal of its centre c, so its nearest distance is at most U, the
+// centre's nearest distance plus the half-diagonal; every segment that comes as near as that
+// to p has its box within U of the cell's box. So the candidates (in index order) hold the
+// nearest segment and every segment as near: the first least among them is project()'s, bit
+// for bit (the same segment_nearest, the same comparison). The cells are square, at least
+// kCellGridMinMm and at most kCellGridCells of them over the points' box; only the cells
+// that hold points get a list. A point outside its cell's box (rounding at the edges), in a
+// cell without a list (the lists' room used up) or any value not finite: project_fast.
+constexpr uint32_t kCellGridCells = 4096;
+constexpr double kCellGridMinMm = 1.0;
+constexpr size_t kCellListRoom = 32768;  // candidate entries over all cells
+constexpr uint32_t kNoList = ~uint32_t{0};
+constexpr uint32_t kWanted = kNoList - 1;  // a cell with points, before its list is made
+constexpr double kCellEdgeMm = 1e-6;       // the cells' boxes grown by this (rounding)
+
+struct CellGrid {
+  double x0 = 0, y0 = 0, size = 0, inverse = 0;
+  uint32_t nx = 0, ny = 0;
+  uint32_t* start = nullptr;  // per cell: its first entry in `list`, or kNoList
+  uint16_t* count = nullptr;  // per cell: its entries
+  uint16_t* list = nullptr;   // the candidates' segment indices, cell after cell
+};
+
+uint64_t cell_grid_bound() {
+  return arena_array_bound<uint32_t>(kCellGridCells) + arena_array_bound<uint16_t>(kCellGridCells) +
+         arena_array_bound<uint16_t>(kCellListRoom);
+}
+
+// Cell (ix, iy)'s box, grown by kCellEdgeMm.
+void cell_box(const CellGrid& c, uint32_t ix, uint32_t iy, double box[4]) {
+  box[0] = c.x0 + ix * c.size - kCellEdgeMm;
+  box[1] = c.y0 + iy * c.size - kCellEdgeMm;
+  box[2] = c.x0 + (ix + 1) * c.size + kCellEdgeMm;
+  box[3] = c.y0 + (iy + 1) * c.size + kCellEdgeMm;
+}
+
+// The cell of (px, py), a point of the box the lattice was laid over; false when it is not a
+// number. (The quotients round by far less than kCellEdgeMm: the point lies in its cell's
+// grown box, also where it is clamped to the last cell.)
+inline bool cell_of_point(const CellGrid& c, double px, double py, size_t* cell) {
+  const double fx = (px - c.x0) * c.inverse, fy = (py - c.y0) * c.inverse;
+  if (!(fx >= 0 && fy >= 0 && fx <= c.nx && fy <= c.ny)) return false;
+  const uint32_t ix = fx < c.nx ? static_cast<uint32_t>(fx) : c.nx - 1;
+  const uint32_t iy = fy < c.ny ? static_cast<uint32_t>(fy) : c.ny - 1;
+  *cell = static_cast<size_t>(iy) * c.nx + ix;
+  return true;
+}
+
+// Is the box b (x_lo, y_lo, x_hi, y_hi) farther than r from the box a?
+inline bool boxes_beyond(const double* b, const double* a, double r) {
+  const double ex = std::max(0.0, std::max(b[0] - a[2], a[0] - b[2]));
+  const double ey = std::max(0.0, std::max(b[1] - a[3], a[1] - b[3]));
+  return ex * ex + ey * ey > r * r;
+}
+
+// The candidates of the cell with box `box` (grown by kCellEdgeMm) appended to the list at
+// *used; false when they do not fit (or a value is not finite).
+bool cell_candidates(Projector& g, CellGrid& c, const double box[4], size_t* used) {
+  const Polyline& p = *g.line;
+  const double cx = 0.5 * (box[0] + box[2]), cy = 0.5 * (box[1] + box[3]);
+  const double hw = 0.5 * (box[2] - box[0]), hh = 0.5 * (box[3] - box[1]);
+  double s = 0, o = 0;
+  project_fast(g, cx, cy, &s, &o);  // the nearest segment: g.hint
+  double t, qx, qy;
+  const double d2 = segment_nearest(p, g.hint, g.reach[g.hint], cx, cy, &t, &qx, &qy);
+  const double u =
+      (std::sqrt(d2) + std::sqrt(hw * hw + hh * hh)) * (1 + 1e-9) + 2 * kProjectorMarginMm;
+  if (!(u < HUGE_VAL)) return false;
+  const size_t segments = p.n - 1;
+  const size_t first = *used;
+  const size_t nearest = g.hint;
+  if (*used == kCellListRoom) return false;
+  c.list[(*used)++] = static_cast<uint16_t>(nearest);  // first: the point's first bound
+  for (size_t gi = 0; gi < g.groups; ++gi) {
+    if (boxes_beyond(g.group_box + 4 * gi, box, u)) continue;
+    const size_t last_chunk = std::min(g.chunks, (gi + 1) * kProjectorGroup);
+    for (size_t ci = gi * kProjectorGroup; ci < last_chunk; ++ci) {
+      if (boxes_beyond(g.chunk_box + 4 * ci, box, u)) continue;
+      const size_t end = std::min(segments, (ci + 1) * g.chunk);
+      for (size_t k = ci * g.chunk; k < end; ++k) {
+        if (k == nearest || boxes_beyond(g.box + 4 * k, box, u)) continue;
+        if (*used == kCellListRoom) {
+          *used = first;
+          return false;
+        }
+        c.list[(*used)++] = static_cast<uint16_t>(k);
+      }
+    }
+  }
+  return true;
+}
+
+// The cell lattice over the points and the lists of the cells that hold points.
+Status make_cell_grid(Arena& arena, Projector& g, Span<const ArchPoint> pts, CellGrid* out) {
+  CellGrid& c = *out;
+  c = CellGrid{};
+  double x_lo = HUGE_VAL, y_lo = HUGE_VAL, x_hi = -HUGE_VAL, y_hi = -HUGE_VAL;
+  for (const ArchPoint& a : pts) {
+    x_lo = std::min(x_lo, a.x);
+    x_hi = std::max(x_hi, a.x);
+    y_lo = std::min(y_lo, a.y);
+    y_hi = std::max(y_hi, a.y);
+  }
+  if (!(x_hi - x_lo < kMaxSpanMm && y_hi - y_lo < kMaxSpanMm)) return Status::ok();  // no grid
+  double size = kCellGridMinMm;
+  for (;;) {
+    const double fx = (x_hi - x_lo) / size + 1, fy = (y_hi - y_lo) / size + 1;
+    if (fx * fy <= kCellGridCells) {
+      c.nx = static_cast<uint32_t>(fx);
+      c.ny = static_cast<uint32_t>(fy);
+      break;
+    }
+    size *= 1.25;
+  }
+  c.x0 = x_lo;
+  c.y0 = y_lo;
+  c.size = size;
+  c.inverse = 1.0 / size;
+  const size_t cells = static_cast<size_t>(c.nx) * c.ny;
+  c.start = arena.allocate_array<uint32_t>(cells);
+  c.count = arena.allocate_array<uint16_t>(cells);
+  c.list = arena.allocate_array<uint16_t>(kCellListRoom);
+  if (c.start == nullptr || c.count == nullptr || c.list == nullptr) {
+    return arena.exhausted_status();
+  }
+  std::fill(c.start, c.start + cells, kNoList);
+  std::fill(c.count, c.count + cells, uint16_t{0});
+  for (const ArchPoint& a : pts) {
+    size_t cell;
+    if (cell_of_point(c, a.x, a.y, &cell)) c.start[cell] = kWanted;
+  }
+  size_t used = 0;
+  for (size_t i = 0; i < cells; ++i) {
+    if (c.start[i] != kWanted) continue;
+    const uint32_t ix = static_cast<uint32_t>(i % c.nx), iy = static_cast<uint32_t>(i / c.nx);
+    double box[4];
+    cell_box(c, ix, iy, box);
+    const size_t first = used;
+    if (!cell_candidates(g, c, box, &used)) {
+      c.start[i] = kNoList;
+      continue;
+    }
+    c.start[i] = static_cast<uint32_t>(first);
+    c.count[i] = static_cast<uint16_t>(used - first);
+  }
+  return Status::ok();
+}
+
+// project(&line, px, py, s, o), bit for bit: from the cell's candidates when it has them. The
+// first candidate's distance bounds the nearest (as project_fast's guess), so a candidate
+// whose box lies beyond it is passed over; the least (distance, segment) of the others, in
+// the list's order (project()'s first least in index order).
+void project_cell(Projector& g, const CellGrid& c, double px, double py, double* s, double* o) {
+  size_t cell = 0;
+  if (c.start == nullptr || !cell_of_point(c, px, py, &cell) || c.start[cell] == kNoList) {
+    project_fast(g, px, py, s, o);
+    return;
+  }
+  const Polyline& p = *g.line;
+  const uint16_t* k = c.list + c.start[cell];
+  const uint16_t* end = k + c.count[cell];
+  double t, qx, qy;
+  double best = segment_nearest(p, *k, g.reach[*k], px, py, &t, &qx, &qy);
+  size_t best_k = *k;
+  double best_t = t, best_qx = qx, best_qy = qy;
+  const double r = std::sqrt(best) * (1 + 1e-9) + kProjectorMarginMm;
+  if (!(r < HUGE_VAL)) {
+    project(p, px, py, s, o);
+    return;
+  }
+  const Lanes2 p2 = {px, py};
+  for (++k; k < end; ++k) {
+    if (box_beyond(g.box + 4 * size_t{*k}, p2, r)) continue;
+    const double d2 = segment_nearest(p, *k, g.reach[*k], px, py, &t, &qx, &qy);
+    if (d2 < best || (d2 == best && *k < best_k)) {
+      best = d2;
+      best_k = *k;
+      best_t = t;
+      best_qx = qx;
+      best_qy = qy;
+    }
+  }
+  segment_place_at(p, best_k, px, py, best_t, best_qx, best_qy, s, o);
+}
+
+// project() for every point (its s and o), in up to the executor's concurrency runs of
+// consecutive points: the cell lists are made first (one pass); the answers depend neither on
+// the lists nor on the hints, so they are the same bits at every thread count. Arena:
+// cell_grid_bound(), gone when done.
+Status project_all(const Context& ctx, const Projector& g, Span<ArchPoint> pts) {
+  ArenaScope scope(*ctx.arena);
+  Projector first = g;
+  CellGrid cells;
+  SPLINTCORE_RETURN_IF_ERROR(make_cell_grid(*ctx.arena, first, pts, &cells));
   const uint32_t concurrency = ctx.executor != nullptr ? ctx.executor->concurrency : 1;
   const size_t n = pts.size();
   const uint32_t tasks = n < 1024 || concurrency < 2 ? 1 : concurrency;
@@ -215,10 +407,11 @@ void project_all(const Context& ctx, const Projector& g, Span<ArchPoint> pts) {
     const size_t end = n * (i + 1) / tasks;
     for (size_t k = n * i / tasks; k < end; ++k) {
       ArchPoint& a = pts[k];
-      project_fast(local, a.x, a.y, &a.s, &a.o);
+      project_cell(local, cells, a.x, a.y, &a.s, &a.o);
     }
   };
   parallel_for_each(ctx.executor, tasks, task);
+  return Status::ok();
 }
 
 // The polyline's point at arc length s (extended along the end segments).
@@ -485,7 +678,7 @@ Status smooth_line(const Context& ctx, Span<ArchPoint> pts, const Polyline& prev
     ArenaScope scope(arena);  // the projector goes when done
     Projector g;
     SPLINTCORE_RETURN_IF_ERROR(make_projector(arena, prev, &g));
-    project_all(ctx, g, pts);
+    SPLINTCORE_RETURN_IF_ERROR(project_all(ctx, g, pts));
     for (const ArchPoint& a : pts) {
       s_lo = std::min(s_lo, a.s);
       s_hi = std::max(s_hi, a.s);
@@ -553,36 +746,59 @@ struct PickData {
   double lingual, buccal;
 };
 
-void gather_pick(Span<const ArchPoint> pts, double s, double step, double side, PickData* d) {
-  d->h[0] = d->near_h[0] = HUGE_VAL;
-  d->h[1] = d->near_h[1] = -HUGE_VAL;
-  d->lingual = -HUGE_VAL;
-  d->buccal = -HUGE_VAL;
-  for (const ArchPoint& a : pts) {
-    const double along = std::fabs(a.s - s);
-    if (along <= step + kToothHalfMm) {
-      if (a.jaw == 0) {
-        d->h[0] = std::min(d->h[0], a.h);
-      } else {
-        d->h[1] = std::max(d->h[1], a.h);
-      }
+// The pick at `at` (places along the arch, increasing) takes the points within a step and half
+// a molar of it (along = |s - at|), in their order; so each point goes only to the picks within
+// that reach of it (found by bisection, with a margin far over the rounding of along, then
+// tested as before): the picks' data bit for bit as when each pick scanned every point.
+constexpr double kPickWindowSlackMm = 1e-6;
+
+void add_to_pick(const ArchPoint& a, double at, double step, double side, PickData* d) {
+  const double along = std::fabs(a.s - at);
+  if (along <= step + kToothHalfMm) {
+    if (a.jaw == 0) {
+      d->h[0] = std::min(d->h[0], a.h);
+    } else {
+      d->h[1] = std::max(d->h[1], a.h);
     }
-    if (along <= 0.5 * step) {
-      if (a.jaw == 0) {
-        d->near_h[0] = std::min(d->near_h[0], a.h);
-      } else {
-        d->near_h[1] = std::max(d->near_h[1], a.h);
-      }
-    }
-    if (along > step) continue;
-    d->buccal = std::max(d->buccal, a.o * side);
-    d->lingual = std::max(d->lingual, -a.o * side);
   }
-  if (d->h[0] == HUGE_VAL) d->h[0] = std::numeric_limits<double>::quiet_NaN();
-  if (d->h[1] == -HUGE_VAL) d->h[1] = std::numeric_limits<double>::quiet_NaN();
-  if (d->near_h[0] == HUGE_VAL) d->near_h[0] = std::numeric_limits<double>::quiet_NaN();
-  if (d->near_h[1] == -HUGE_VAL) d->near_h[1] = std::numeric_limits<double>::quiet_NaN();
-  if (d->buccal == -HUGE_VAL) d->buccal = d->lingual = std::numeric_limits<double>::quiet_NaN();
+  if (along <= 0.5 * step) {
+    if (a.jaw == 0) {
+      d->near_h[0] = std::min(d->near_h[0], a.h);
+    } else {
+      d->near_h[1] = std::max(d->near_h[1], a.h);
+    }
+  }
+  if (along > step) return;
+  d->buccal = std::max(d->buccal, a.o * side);
+  d->lingual = std::max(d->lingual, -a.o * side);
+}
+
+void gather_picks(Span<const ArchPoint> pts, const double* at, size_t n, double step, double side,
+                  PickData* data) {
+  for (size_t i = 0; i < n; ++i) {
+    PickData* d = &data[i];
+    d->h[0] = d->near_h[0] = HUGE_VAL;
+    d->h[1] = d->near_h[1] = -HUGE_VAL;
+    d->lingual = -HUGE_VAL;
+    d->buccal = -HUGE_VAL;
+  }
+  const double reach = step + kToothHalfMm + kPickWindowSlackMm;
+  for (const ArchPoint& a : pts) {
+    size_t first = 0, last = n;  // a place that is not a number: every pick, as a scan would
+    if (!std::isnan(a.s)) {
+      first = static_cast<size_t>(std::lower_bound(at, at + n, a.s - reach) - at);
+      last = static_cast<size_t>(std::upper_bound(at + first, at + n, a.s + reach) - at);
+    }
+    for (size_t i = first; i < last; ++i) add_to_pick(a, at[i], step, side, &data[i]);
+  }
+  for (size_t i = 0; i < n; ++i) {
+    PickData* d = &data[i];
+    if (d->h[0] == HUGE_VAL) d->h[0] = std::numeric_limits<double>::quiet_NaN();
+    if (d->h[1] == -HUGE_VAL) d->h[1] = std::numeric_limits<double>::quiet_NaN();
+    if (d->near_h[0] == HUGE_VAL) d->near_h[0] = std::numeric_limits<double>::quiet_NaN();
+    if (d->near_h[1] == -HUGE_VAL) d->near_h[1] = std::numeric_limits<double>::quiet_NaN();
+    if (d->buccal == -HUGE_VAL) d->buccal = d->lingual = std::numeric_limits<double>::quiet_NaN();
+  }
 }
 
 // Fills the NaN entries of v[0..n) (stride `stride` doubles) by linear interpolation between
@@ -693,7 +909,8 @@ uint64_t projector_bound() {
   const size_t chunks = (segments + projector_chunk(segments) - 1) / projector_chunk(segments);
   const size_t groups = (chunks + kProjectorGroup - 1) / kProjectorGroup;
   return arena_array_bound<double>(4 * segments) + arena_array_bound<double>(segments) +
-         arena_array_bound<double>(4 * chunks) + arena_array_bound<double>(4 * groups);
+         arena_array_bound<double>(4 * chunks) + arena_array_bound<double>(4 * groups) +
+         cell_grid_bound();
 }
 
 Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
@@ -721,8 +938,8 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
     ArenaScope scope(arena);  // the projector goes when done
     Projector proj;
     SPLINTCORE_RETURN_IF_ERROR(make_projector(arena, arch, &proj));
-    project_all(ctx, proj, line_pts.span());
-    project_all(ctx, proj, pts.span());
+    SPLINTCORE_RETURN_IF_ERROR(project_all(ctx, proj, line_pts.span()));
+    SPLINTCORE_RETURN_IF_ERROR(project_all(ctx, proj, pts.span()));
     for (const ArchPoint& a : line_pts) {
       s_lo = std::min(s_lo, a.s);
       s_hi = std::max(s_hi, a.s);
@@ -761,13 +978,13 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
       cut_distal_ends(arch, f, options, s_lo, s_hi, grid, &places, &out->report));
   const size_t n = places.size();
   PickData* data = arena.allocate_array<PickData>(n);
-  if (data == nullptr) return arena.exhausted_status();
+  double* at = arena.allocate_array<double>(n);
+  if (data == nullptr || at == nullptr) return arena.exhausted_status();
   Pick* up = buffers.upper;
   Pick* lo = buffers.lower;
   Vec3* line = buffers.arch;
-  for (size_t i = 0; i < n; ++i) {
-    gather_pick(pts.span(), places.at(i), step, side, &data[i]);
-  }
+  for (size_t i = 0; i < n; ++i) at[i] = places.at(i);
+  gather_picks(pts.span(), at, n, step, side, data);
   const size_t stride = sizeof(PickData) / sizeof(double);
   if (!fill_gaps(&data[0].h[0], n, stride) || !fill_gaps(&data[0].h[1], n, stride) ||
       !fill_gaps(&data[0].near_h[0], n, stride) || !fill_gaps(&data[0].near_h[1], n, stride) ||

@@ -681,7 +681,7 @@ uint64_t compute_outline_bound(const Mesh& maxilla, const Mesh& mandible) {
                            arena_array_bound<uint8_t>(mandible_vertices);
   // The arch: the columns' distances, the band's vertex marks, the points and the band's
   // vertices (both reserved once),
-  // the sectors, each pass's line, the picks' data, the projector's grid.
+  // the sectors, each pass's line, the picks' data and places, the projector's grid.
   const uint64_t points = 2 * cells;
   const uint64_t line_points = 2 * (kLinePoints + 1);
   const uint64_t arch =
@@ -690,7 +690,8 @@ uint64_t compute_outline_bound(const Mesh& maxilla, const Mesh& mandible) {
       arena_array_bound<ArchPoint>(points) + arena_array_bound<ArchPoint>(line_points) +
       6 * arena_array_bound<double>(kSectors) +
       (kSmoothPasses + 1) * 9 * arena_array_bound<double>(kMaxArchPoints + 1) +
-      arena_array_bound<double>(6 * kMaxPicks) + (kSmoothPasses + 2) * projector_bound();
+      arena_array_bound<double>(6 * kMaxPicks) + arena_array_bound<double>(kMaxPicks) +
+      (kSmoothPasses + 2) * projector_bound();
   // The survey, after the arch: its columns (reserved once) and the jaws' slabs.
   const uint64_t survey = arena_array_bound<double>(4 * columns) + both(DistanceIndexOptions{});
   const uint64_t after_frame = opening > arch + survey ? opening : arch + survey;
