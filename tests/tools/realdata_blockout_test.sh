@@ -6,23 +6,8 @@
 # closed, valid solid (splintcore check), and the report must say the blockout ran on both
 # jaws and checked the result for self-intersections.
 #   usage: realdata_blockout_test.sh SPLINTCORE SPLINTCORE_BENCH REALDATA_DIR
-set -u
-tool=$1
-bench=$2
-real=$3
-[ -f "$real/maxilla/tooth_1.stl" ] || { echo "realdata not found: skipped"; exit 77; }
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-failed=0
-step() {  # what command...
-  local what=$1
-  shift
-  if "$@" >"$work/out" 2>"$work/err"; then
-    echo "ok: $what"
-  else
-    echo "FAILED: $what"; cat "$work/out" "$work/err"; failed=1
-  fi
-}
+# shellcheck source=realdata_steps.sh
+source "$(dirname "$0")/realdata_steps.sh"
 step "export the real case" "$bench" --realdata "$real" --export-realcase "$work/rc"
 # The exported case (its picks, the insertion direction) with the blockout at 0.1 mm.
 step "the case with the blockout" python3 -c '

@@ -5,23 +5,8 @@
 # one arena), its two-jaw plan likewise, and the Boolean of its base and the 31 tooth files as scanned (in occlusion:
 # overlapping shells, two passes) file to file in 64 MiB; each result checked a valid solid.
 #   usage: realdata_cli_test.sh SPLINTCORE SPLINTCORE_BENCH REALDATA_DIR
-set -u
-tool=$1
-bench=$2
-real=$3
-[ -f "$real/maxilla/tooth_1.stl" ] || { echo "realdata not found: skipped"; exit 77; }
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-failed=0
-step() {  # what command...
-  local what=$1
-  shift
-  if "$@" >"$work/out" 2>"$work/err"; then
-    echo "ok: $what"
-  else
-    echo "FAILED: $what"; cat "$work/err"; failed=1
-  fi
-}
+# shellcheck source=realdata_steps.sh
+source "$(dirname "$0")/realdata_steps.sh"
 step "export the real case" "$bench" --realdata "$real" --export-realcase "$work/rc"
 step "design the real case in 64 MiB" "$tool" design "$work/rc/case.json" -o "$work/d" --memory-cap 64M
 step "the splint written is a printable solid" "$tool" check "$work/d/splint.stl"
