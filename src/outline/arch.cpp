@@ -162,6 +162,27 @@ inline bool box_beyond(const double* b, const Lanes2& p, double r) {
   return e[0] * e[0] + e[1] * e[1] > r * r;
 }
 
+// Every segment of the projector's line but `skip`, in index order, whose box and whose
+// chunk's and group's boxes `beyond` (box -> bool) does not rule out, given to `visit` (k ->
+// bool: false stops the walk, which then returns false).
+template <class Beyond, class Visit>
+bool for_segments_within(const Projector& g, size_t skip, Beyond beyond, Visit visit) {
+  const size_t segments = g.line->n - 1;
+  for (size_t gi = 0; gi < g.groups; ++gi) {
+    if (beyond(g.group_box + 4 * gi)) continue;
+    const size_t last_chunk = std::min(g.chunks, (gi + 1) * kProjectorGroup);
+    for (size_t c = gi * kProjectorGroup; c < last_chunk; ++c) {
+      if (beyond(g.chunk_box + 4 * c)) continue;
+      const size_t end = std::min(segments, (c + 1) * g.chunk);
+      for (size_t k = c * g.chunk; k < end; ++k) {
+        if (k == skip || beyond(g.box + 4 * k)) continue;
+        if (!visit(k)) return false;
+      }
+    }
+  }
+  return true;
+}
+
 // project(&line, px, py, s, o), bit for bit.
 void project_fast(Projector& g, double px, double py, double* s, double* o) {
   const Polyline& p = *g.line;
@@ -180,14 +201,9 @@ void project_fast(Projector& g, double px, double py, double* s, double* o) {
   }
   const Lanes2 p2 = {px, py};
   // The least distance, the first segment in index order among equal ones (as project()).
-  for (size_t gi = 0; gi < g.groups; ++gi) {
-    if (box_beyond(g.group_box + 4 * gi, p2, r)) continue;
-    const size_t last_chunk = std::min(g.chunks, (gi + 1) * kProjectorGroup);
-    for (size_t c = gi * kProjectorGroup; c < last_chunk; ++c) {
-      if (box_beyond(g.chunk_box + 4 * c, p2, r)) continue;
-      const size_t end = std::min(segments, (c + 1) * g.chunk);
-      for (size_t k = c * g.chunk; k < end; ++k) {
-        if (k == guess || box_beyond(g.box + 4 * k, p2, r)) continue;
+  for_segments_within(
+      g, guess, [&](const double* box) { return box_beyond(box, p2, r); },
+      [&](size_t k) {
         const double d2 = segment_nearest(p, k, g.reach[k], px, py, &t, &qx, &qy);
         if (d2 < best || (d2 == best && k < best_k)) {
           best = d2;
@@ -196,9 +212,8 @@ void project_fast(Projector& g, double px, double py, double* s, double* o) {
           best_qx = qx;
           best_qy = qy;
         }
-      }
-    }
-  }
+        return true;
+      });
   g.hint = best_k;
   segment_place_at(p, best_k, px, py, best_t, best_qx, best_qy, s, o);
 }
@@ -273,28 +288,19 @@ bool cell_candidates(Projector& g, CellGrid& c, const double box[4], size_t* use
   const double u =
       (std::sqrt(d2) + std::sqrt(hw * hw + hh * hh)) * (1 + 1e-9) + 2 * kProjectorMarginMm;
   if (!(u < HUGE_VAL)) return false;
-  const size_t segments = p.n - 1;
   const size_t first = *used;
   const size_t nearest = g.hint;
   if (*used == kCellListRoom) return false;
   c.list[(*used)++] = static_cast<uint16_t>(nearest);  // first: the point's first bound
-  for (size_t gi = 0; gi < g.groups; ++gi) {
-    if (boxes_beyond(g.group_box + 4 * gi, box, u)) continue;
-    const size_t last_chunk = std::min(g.chunks, (gi + 1) * kProjectorGroup);
-    for (size_t ci = gi * kProjectorGroup; ci < last_chunk; ++ci) {
-      if (boxes_beyond(g.chunk_box + 4 * ci, box, u)) continue;
-      const size_t end = std::min(segments, (ci + 1) * g.chunk);
-      for (size_t k = ci * g.chunk; k < end; ++k) {
-        if (k == nearest || boxes_beyond(g.box + 4 * k, box, u)) continue;
-        if (*used == kCellListRoom) {
-          *used = first;
-          return false;
-        }
+  const bool fit = for_segments_within(
+      g, nearest, [&](const double* b) { return boxes_beyond(b, box, u); },
+      [&](size_t k) {
+        if (*used == kCellListRoom) return false;
         c.list[(*used)++] = static_cast<uint16_t>(k);
-      }
-    }
-  }
-  return true;
+        return true;
+      });
+  if (!fit) *used = first;
+  return fit;
 }
 
 // The cell lattice over the points and the lists of the cells that hold points.
