@@ -1050,7 +1050,9 @@ Status build_kept_mesh(Arena& arena, const KeepLog& log, uint64_t extractor_vert
   if (verts == nullptr) return arena.exhausted_status();
   for (size_t t = 0; t < n; ++t) {
     for (int k = 0; k < 3; ++k) {
-      verts[tris[t].v[k]] = Vec3{recs[t].p[3 * k], recs[t].p[3 * k + 1], recs[t].p[3 * k + 2]};
+      const float* q = recs[t].p + 3 * k;
+      verts[tris[t].v[k]] =
+          Vec3{static_cast<double>(q[0]), static_cast<double>(q[1]), static_cast<double>(q[2])};
     }
   }
   mesh->triangles.adopt(tris, n, n);
