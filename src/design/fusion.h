@@ -23,10 +23,11 @@ Status register_case_scans(const Context& ctx, const CaseFile& c, Span<const Mes
 
 // design_splint with scans, where `registered` (per jaw, or null: registered here) holds the
 // registrations register_case_scans made on the same jaws as given; the jaws' transforms apply
-// after them as usual.
+// after them as usual. `vetted`: refuse_no_jaw already passed on these very jaws and scans
+// (design_plan checks them once for both splints), so it is not run again.
 Status design_splint_registered(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                                 Span<const Mesh> scans, const FusionReport* registered,
-                                Mesh* splint, DesignReport* report);
+                                bool vetted, Mesh* splint, DesignReport* report);
 
 }  // namespace design_detail
 }  // namespace splintcore

@@ -562,14 +562,14 @@ Status design_splint(const Context& ctx, const CaseFile& case_given, Span<const 
 
 Status design_splint(const Context& ctx, const CaseFile& case_given, Span<const Mesh> jaws_given,
                      Span<const Mesh> scans, Mesh* splint, DesignReport* report) {
-  return design_detail::design_splint_registered(ctx, case_given, jaws_given, scans, nullptr,
+  return design_detail::design_splint_registered(ctx, case_given, jaws_given, scans, nullptr, false,
                                                  splint, report);
 }
 
 Status design_detail::design_splint_registered(const Context& ctx, const CaseFile& case_given,
                                                Span<const Mesh> jaws_given, Span<const Mesh> scans,
-                                               const FusionReport* registered, Mesh* splint,
-                                               DesignReport* report) {
+                                               const FusionReport* registered, bool vetted,
+                                               Mesh* splint, DesignReport* report) {
   Arena& arena = *ctx.arena;
   *report = DesignReport{};
   const PrinterProfile* profile = nullptr;
@@ -577,7 +577,7 @@ Status design_detail::design_splint_registered(const Context& ctx, const CaseFil
   SPLINTCORE_RETURN_IF_ERROR(check_case_scans(case_given, scans));
   report->printer = profile->name;
   ArenaScope scope(arena);  // every error, a cancel included, leaves the arena as it was
-  SPLINTCORE_RETURN_IF_ERROR(refuse_no_jaw(ctx, case_given, jaws_given, scans));
+  if (!vetted) SPLINTCORE_RETURN_IF_ERROR(refuse_no_jaw(ctx, case_given, jaws_given, scans));
   const auto stage = [&](const char* name) { return report_progress(ctx, name, 0, 1); };
   CaseFile outlined;
   if (case_given.has_auto_outline) {
