@@ -120,6 +120,9 @@ struct BooleanStats {
   uint32_t shells = 0;
   uint32_t shell_groups = 0;
   uint32_t passes = 0;
+  // Near triangles of B whose pair tests ran in the executor's tasks (0 on one thread or when
+  // the tasks' memory was not there): the one figure here that depends on the thread count.
+  uint64_t parallel_near_triangles = 0;
 };
 
 // Computes options.op of the closed mesh A and the mesh B into `out` (empty).
@@ -134,17 +137,21 @@ struct BooleanStats {
 // intersection) works on a copy of B's triangles near A: 4 bytes per vertex of B, then about
 // 28 per near vertex and 17 per near triangle, the run's own arrays sized by the near part;
 // its result is checked after it has been moved down over the run's temporaries (the exact
-// self-intersection check: about 270 bytes per result triangle). Single-threaded (ctx.executor
-// is not used yet), so trivially the same at any thread count. Errors: kInvalidMesh (A is not
-// a solid, a degenerate triangle of B meets A, an index out of range: named; for the
-// intersection with overlapping shells also a group of them that is not a solid), kNonFinite,
-// kInvalidArgument (B not float32 with float32 output), kUnsupported (a degenerate
-// contact the exact rule cannot return, or a float32-fragile one, that no nudge resolved:
-// named), kArenaExhausted (the message says
-// how much was needed at that point), kLimitExceeded (more than 2^31 vertices or triangles),
-// kCancelled, kLimitExceeded also for more candidate pairs than options.max_candidate_pairs,
-// kInternal (a result that fails its own check: please report it with the
-// inputs). An error of a pass when there are several says which pass ("pass 2 of 3").
+// self-intersection check: about 270 bytes per result triangle). Threads: with ctx.executor
+// the pair tests of the near triangles of B run in tasks (each with 4 bytes per triangle of A
+// near B and about 2.5 per near triangle of B of its own, taken only when the arena has them
+// and given back before the next stage); a task stops where the run's own state is needed (a
+// degenerate contact, an error, the bound on pairs) and one thread goes on from there, so the
+// result, the stats (but parallel_near_triangles), every error and the arena as left are the
+// same at any thread count. Errors: kInvalidMesh (A is not a solid, a degenerate triangle of B
+// meets A, an index out of range: named; for the intersection with overlapping shells also a group
+// of them that is not a solid), kNonFinite, kInvalidArgument (B not float32 with float32 output),
+// kUnsupported (a degenerate contact the exact rule cannot return, or a float32-fragile one, that
+// no nudge resolved: named), kArenaExhausted (the message says how much was needed at that point),
+// kLimitExceeded (more than 2^31 vertices or triangles), kCancelled, kLimitExceeded also for more
+// candidate pairs than options.max_candidate_pairs, kInternal (a result that fails its own check:
+// please report it with the inputs). An error of a pass when there are several says which pass
+// ("pass 2 of 3").
 Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b, const BooleanOptions& options,
                     Mesh* out, BooleanStats* stats);
 

@@ -358,9 +358,14 @@ class ArenaArray {
     size_ = n;
     return true;
   }
+  // The capacity push_back grows a full array of `capacity` elements to, when the arena has
+  // it (otherwise to one more element).
+  static size_t grown_capacity(size_t capacity) {
+    return capacity < 8 ? 16 : capacity + capacity / 2;
+  }
   [[nodiscard]] bool push_back(const T& value) {
     if (size_ == capacity_) {
-      size_t wanted = capacity_ < 8 ? 16 : capacity_ + capacity_ / 2;
+      size_t wanted = grown_capacity(capacity_);
       if (!grow_to(wanted, size_ + 1)) return false;
     }
     data_[size_++] = value;

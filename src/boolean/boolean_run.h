@@ -435,8 +435,10 @@ class BooleanRun {
     EdgePlanes* edges = nullptr;
     Aabb* boxes = nullptr;
     uint32_t* stamp = nullptr;  // the last triangle of B tested against it
+    uint32_t count = 0;         // slots
   };
   Status prepare_a_slots(ASlots* out);
+  size_t hits_in_parallel(const ASlots& as);
   Status find_hits();
   Status add_contact(uint32_t ta, uint32_t tb);
   Status name_contact_point(const detail::ContactPoint& cp, const uint32_t ga[3],

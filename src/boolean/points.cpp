@@ -312,6 +312,7 @@ Status BooleanRun::prepare_a_slots(ASlots* out) {
     if (slot[t] != ~0u) slot[t] = count++;
   }
   out->slot = slot;
+  out->count = count;
   out->filters = arena_.allocate_array<PlaneFilter>(count);
   out->edges = arena_.allocate_array<EdgePlanes>(count);
   out->boxes = arena_.allocate_array<Aabb>(count);
@@ -338,69 +339,209 @@ Status BooleanRun::prepare_a_slots(ASlots* out) {
   return Status::ok();
 }
 
+namespace {
+
+// B's near triangle t against the triangles of A its box's cells list, each pair decided
+// exactly (intersect_pair) with A as this attempt has it: every candidate pair counted in
+// *candidates, each crossing given to on_hit(hit), each degenerate pair to on_contact(ta) and a
+// flat t meeting A to on_flat(ta). `stamp` (one per slot of A) skips an A triangle listed in
+// several cells; any stamps work that hold no triangle id of B yet. Returns false as soon as
+// a handler does.
+template <class Slots, class OnHit, class OnContact, class OnFlat>
+bool test_near_triangle(const Inputs& in, const Broadphase& bp, const Slots& as, uint32_t* stamp,
+                        uint32_t t, uint64_t* candidates, OnHit&& on_hit, OnContact&& on_contact,
+                        OnFlat&& on_flat) {
+  const Vec3* vb = in.b->vertices.data();
+  const Triangle& tri = in.b->triangles[t];
+  const Aabb box = b_box(vb, tri);
+  bool flat_checked = false;
+  PlaneFilter pb{};
+  const Vec3 bc = (box.lo + box.hi) * 0.5;
+  const Vec3 bext = box.hi - box.lo;
+  return for_each_listed(bp, box, [&](uint32_t ta) {
+    const uint32_t k = as.slot[ta];
+    if (stamp[k] == t) return true;
+    stamp[k] = t;
+    if (!as.boxes[k].overlaps(box)) return true;
+    ++*candidates;
+    if (!flat_checked) {
+      if (collinear3d(vb[tri.v[0]], vb[tri.v[1]], vb[tri.v[2]])) return on_flat(ta);
+      flat_checked = true;
+      pb = plane_filter(vb[tri.v[0]], vb[tri.v[1]], vb[tri.v[2]]);
+    }
+    // B's whole box strictly beyond one of A's edge planes: disjoint, which intersect_pair
+    // would answer kNone (tested here: it spares the call for most pairs).
+    const EdgePlanes& ea = as.edges[k];
+    if ((ea.inside[0] != 0 && detail::box_beyond(ea.plane[0], ea.inside[0], bc, bext)) ||
+        (ea.inside[1] != 0 && detail::box_beyond(ea.plane[1], ea.inside[1], bc, bext)) ||
+        (ea.inside[2] != 0 && detail::box_beyond(ea.plane[2], ea.inside[2], bc, bext))) {
+      return true;
+    }
+    Hit hit;
+    const PairResult r = intersect_pair(in, ta, in.nta + t, as.filters[k], ea, pb, &hit);
+    if (r == PairResult::kDegenerate) return on_contact(ta);
+    if (r == PairResult::kSegment) return on_hit(hit);
+    return true;
+  });
+}
+
+// One task of the parallel prefix (BooleanRun::hits_in_parallel): the near triangles
+// [begin, end) of B with its own stamps and hits. It stops before the first triangle that
+// needs more than that (a degenerate pair, which add_contact records in the run; a flat
+// triangle; a full buffer) or that takes its candidate pairs over the budget: done, hits and
+// candidates are those of the triangles before `stop`.
+struct HitTask {
+  size_t begin = 0, end = 0, stop = 0;
+  uint32_t* stamp = nullptr;
+  Hit* hits = nullptr;
+  size_t capacity = 0, count = 0;
+  uint64_t candidates = 0;
+};
+
+constexpr size_t kParallelHitsMin = 4096;  // near triangles of B below which one thread does all
+constexpr uint32_t kHitTasksPerThread = 2;
+constexpr uint32_t kMaxHitTasks = 16;
+
+}  // namespace
+
+// The near triangles of B split into tasks run on the executor, each stopping where the run's
+// own state would be needed; their hits are then joined in task order (the order one thread
+// finds them in) at the bottom of their slab, which becomes hits_, with the capacity push_back
+// would have given it: the arena is then as one thread leaves it. Returns the near index the
+// serial loop goes on from (the first task that stopped early, or whose candidates pass the
+// budget: that task is redone) with st_.candidate_pairs counting those before it. The slab is
+// extra memory (per task 4 bytes per slot of A, and 2.5 per near triangle): without it, or
+// when the hits need more than it and the arena has no more above it, one thread does all
+// (0), and everything is the same but the time.
+size_t BooleanRun::hits_in_parallel(const ASlots& as) {
+  const Executor* executor = ctx_.executor;
+  const size_t n = bp_.near_ids.size();
+  if (executor == nullptr || executor->concurrency < 2 || n < kParallelHitsMin) return 0;
+  uint32_t tasks = executor->concurrency * kHitTasksPerThread;
+  if (tasks > kMaxHitTasks) tasks = kMaxHitTasks;
+  const size_t per_task = (n + tasks - 1) / tasks;
+  const size_t stamp_hits = (size_t{as.count} * sizeof(uint32_t) + sizeof(Hit) - 1) / sizeof(Hit);
+  // A hit per 16 near triangles (the real case: 1 per 25); more stops the task.
+  const size_t capacity = per_task / 16 + 256;
+  const size_t slice = stamp_hits + capacity;  // in Hits: the stamps, then the hits
+  const size_t slab_hits = slice * tasks;
+  const Arena::Marker before = arena_.mark();
+  Hit* slab = arena_.allocate_array<Hit>(slab_hits);
+  if (slab == nullptr || arena_.mark().block != before.block) {  // (a new block: hooks mode)
+    if (slab == nullptr) arena_.forget_failure();
+    arena_.rewind(before);
+    return 0;  // one thread does it all, in the memory it needs
+  }
+  HitTask task[kMaxHitTasks];
+  for (uint32_t i = 0; i < tasks; ++i) {
+    HitTask& h = task[i];
+    h.begin = per_task * i < n ? per_task * i : n;
+    h.end = h.begin + per_task < n ? h.begin + per_task : n;
+    h.stop = h.begin;
+    h.stamp = reinterpret_cast<uint32_t*>(slab + slice * i);
+    h.hits = slab + slice * i + stamp_hits;
+    h.capacity = capacity;
+  }
+  const uint64_t budget_left =
+      pair_budget_ > st_.candidate_pairs ? pair_budget_ - st_.candidate_pairs : 0;
+  auto run_task = [&](uint32_t i) {
+    HitTask& h = task[i];
+    for (uint32_t k = 0; k < as.count; ++k) h.stamp[k] = ~0u;
+    const auto stop = [](uint32_t) { return false; };
+    for (size_t ni = h.begin; ni < h.end; ++ni) {
+      const size_t count = h.count;
+      const uint64_t candidates = h.candidates;
+      const bool done = test_near_triangle(
+          in_, bp_, as, h.stamp, bp_.near_ids[ni], &h.candidates,
+          [&h](const Hit& hit) {
+            if (h.count == h.capacity) return false;
+            h.hits[h.count++] = hit;
+            return true;
+          },
+          stop, stop);
+      if (!done || h.candidates > budget_left) {
+        h.count = count;
+        h.candidates = candidates;
+        break;
+      }
+      h.stop = ni + 1;
+    }
+  };
+  parallel_for_each(executor, tasks, run_task);
+  size_t joined = 0, resume = n;
+  uint64_t candidates = 0, done = 0;
+  for (uint32_t i = 0; i < tasks; ++i) {
+    const HitTask& h = task[i];
+    if (candidates + h.candidates > budget_left) {  // the serial loop names where it passes
+      resume = h.begin;
+      break;
+    }
+    candidates += h.candidates;
+    done += h.stop - h.begin;
+    std::memmove(static_cast<void*>(slab + joined), h.hits, h.count * sizeof(Hit));
+    joined += h.count;
+    if (h.stop != h.end) {
+      resume = h.stop;
+      break;
+    }
+  }
+  size_t capacity_one_thread = 0;  // push_back's, joined times from empty
+  while (capacity_one_thread < joined) {
+    capacity_one_thread = ArenaArray<Hit>::grown_capacity(capacity_one_thread);
+  }
+  const size_t have = slab_hits * sizeof(Hit), need = capacity_one_thread * sizeof(Hit);
+  if (capacity_one_thread == 0) {
+    arena_.rewind(before);
+  } else if (need <= have ? !arena_.try_shrink(slab, have, need)
+                          : !arena_.try_extend(slab, have, need)) {
+    arena_.rewind(before);
+    return 0;  // one thread would have taken other memory for them: it does it all
+  } else {
+    hits_.adopt(slab, joined, capacity_one_thread);
+  }
+  st_.candidate_pairs += candidates;
+  st_.parallel_near_triangles += done;
+  return resume;
+}
+
 // Candidate pairs through the broad phase's grid; each decided exactly (intersect_pair) with A
-// as this attempt has it.
+// as this attempt has it. With an executor a parallel prefix does most of them
+// (hits_in_parallel); this loop goes on from where it stopped, with the run's state.
 Status BooleanRun::find_hits() {
-  const Mesh& b = *in_.b;
   const uint32_t nv_in = in_.nva + in_.nvb;
   vstate_ = arena_.allocate_array<int8_t>(nv_in);
   if (vstate_ == nullptr && nv_in > 0) return arena_.exhausted_status();
   if (nv_in > 0) std::memset(vstate_, 0, nv_in);
   ASlots as;
   SPLINTCORE_RETURN_IF_ERROR(prepare_a_slots(&as));
-  const Vec3* vb = b.vertices.data();
   st_.near_b_triangles = bp_.near_ids.size();
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", 0, 1));
   hits_.bind(&arena_);
   deg_.bind(&arena_);
+  const size_t from = hits_in_parallel(as);
   Status failed;
-  for (size_t ni = 0; ni < bp_.near_ids.size(); ++ni) {
+  for (size_t ni = from; ni < bp_.near_ids.size(); ++ni) {
     const uint32_t t = bp_.near_ids[ni];
-    if ((ni & 65535u) == 0) {
+    if (ni == from || (ni & 65535u) == 0) {
       SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", ni, bp_.near_ids.size()));
     }
-    const Triangle& tri = b.triangles[t];
-    const Aabb box = b_box(vb, tri);
-    bool flat_checked = false;
-    PlaneFilter pb{};
-    const Vec3 bc = (box.lo + box.hi) * 0.5;
-    const Vec3 bext = box.hi - box.lo;
-    const bool done = for_each_listed(bp_, box, [&](uint32_t ta) {
-      const uint32_t k = as.slot[ta];
-      if (as.stamp[k] == t) return true;
-      as.stamp[k] = t;
-      if (!as.boxes[k].overlaps(box)) return true;
-      ++st_.candidate_pairs;
-      if (!flat_checked) {
-        if (collinear3d(vb[tri.v[0]], vb[tri.v[1]], vb[tri.v[2]])) {
+    const bool done = test_near_triangle(
+        in_, bp_, as, as.stamp, t, &st_.candidate_pairs,
+        [&](const Hit& hit) {
+          if (hits_.push_back(hit)) return true;
+          failed = arena_.exhausted_status();
+          return false;
+        },
+        [&](uint32_t ta) {
+          failed = add_contact(ta, in_.nta + t);
+          return failed.is_ok();
+        },
+        [&](uint32_t ta) {
           failed = make_error(StatusCode::kInvalidMesh, "triangle ", in_.b_triangle(t),
                               " of B is degenerate (zero area) and meets A near triangle ", ta)
                        .at_index(in_.b_triangle(t));
           return false;
-        }
-        flat_checked = true;
-        pb = plane_filter(vb[tri.v[0]], vb[tri.v[1]], vb[tri.v[2]]);
-      }
-      // B's whole box strictly beyond one of A's edge planes: disjoint, which intersect_pair
-      // would answer kNone (tested here: it spares the call for most pairs).
-      const EdgePlanes& ea = as.edges[k];
-      if ((ea.inside[0] != 0 && detail::box_beyond(ea.plane[0], ea.inside[0], bc, bext)) ||
-          (ea.inside[1] != 0 && detail::box_beyond(ea.plane[1], ea.inside[1], bc, bext)) ||
-          (ea.inside[2] != 0 && detail::box_beyond(ea.plane[2], ea.inside[2], bc, bext))) {
-        return true;
-      }
-      Hit hit;
-      const PairResult r = intersect_pair(in_, ta, in_.nta + t, as.filters[k], ea, pb, &hit);
-      if (r == PairResult::kDegenerate) {
-        failed = add_contact(ta, in_.nta + t);
-        if (!failed.is_ok()) return false;
-      }
-      if (r == PairResult::kSegment && !hits_.push_back(hit)) {
-        failed = arena_.exhausted_status();
-        return false;
-      }
-      return true;
-    });
+        });
     if (!done) return failed;
     SPLINTCORE_RETURN_IF_ERROR(check_pair_budget(t));
   }

@@ -17,6 +17,7 @@
 #include "splintcore/boolean.h"
 #include "splintcore/distance.h"
 #include "splintcore/mesh.h"
+#include "splintcore/platform.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -586,6 +587,123 @@ TEST(BooleanOpenB, BorderInsideAIsRefusedUpFrontAndOutsideAWorks) {
   SPLINTCORE_EXPECT_OK(ok.status);
   EXPECT_GT(ok.volume, 0.0);
   EXPECT_LT(ok.volume, 1.0 / 6);
+}
+
+// ---- the parallel prefix of the pair tests (find_hits on the executor) ------------------------
+
+// One difference of a fine sphere (B, 16,256 triangles: enough near triangles for the tasks)
+// and a box (A; box_hi.z < 0: its top face through a ring of the sphere's vertices) at
+// `threads` (0: no executor), in an arena of `cap` bytes (0: 256 MiB): the result's bytes and
+// the stats that say what was done.
+struct ThreadedRun {
+  Status status;
+  std::string bytes;
+  BooleanStats stats;
+  size_t high_water = 0;
+};
+
+ThreadedRun threaded_difference(const Vec3& box_hi, unsigned threads, size_t cap,
+                                uint64_t max_pairs) {
+  TestArena inputs(size_t{64} << 20);
+  Mesh b =
+      sphere_mesh(inputs.arena, 0.45, 64, 128, rotation(0.3, -0.2, 0.7, {0.52, 0.47, 0.93}));
+  const Vec3 hi = box_hi.z < 0 ? Vec3{1, 1, b.vertices[1 + 20 * 128].z} : box_hi;
+  Mesh a = box_mesh(inputs.arena, {0, 0, 0}, hi, RigidTransform{});
+  TestArena run(cap == 0 ? size_t{256} << 20 : cap);
+  ThreadExecutor pool(threads == 0 ? 1 : threads);
+  const Context ctx(&run.arena, threads == 0 ? nullptr : &pool.executor(), nullptr);
+  BooleanOptions o = opts(BooleanOp::kDifference);
+  o.max_candidate_pairs = max_pairs;
+  ThreadedRun r;
+  Mesh out;
+  r.status = mesh_boolean(ctx, a, b, o, &out, &r.stats);
+  r.high_water = run.arena.high_water();
+  if (r.status.is_ok()) {
+    r.bytes = test::sha256_hex(out.vertices.data(), out.vertices.size() * sizeof(Vec3)) +
+              test::sha256_hex(out.triangles.data(), out.triangles.size() * sizeof(Triangle));
+  }
+  return r;
+}
+
+void expect_same_run(const ThreadedRun& r, const ThreadedRun& one, unsigned threads) {
+  EXPECT_EQ(r.status.code(), one.status.code()) << threads << " threads: " << test::format(r.status);
+  EXPECT_STREQ(r.status.message(), one.status.message()) << threads << " threads";
+  EXPECT_EQ(r.bytes, one.bytes) << threads << " threads";
+  EXPECT_EQ(r.stats.candidate_pairs, one.stats.candidate_pairs) << threads << " threads";
+  EXPECT_EQ(r.stats.intersecting_pairs, one.stats.intersecting_pairs) << threads << " threads";
+  EXPECT_EQ(r.stats.degenerate_pairs, one.stats.degenerate_pairs) << threads << " threads";
+  EXPECT_EQ(r.stats.attempts, one.stats.attempts) << threads << " threads";
+}
+
+// Crossings only (every task runs to its end), and a box whose top face holds a whole ring of
+// the sphere's vertices exactly (degenerate contacts: the tasks stop there and one thread
+// goes on with the run's state): the same result, stats included, at every thread count.
+TEST(BooleanThreads, SameResultAtEveryThreadCount) {
+  for (const Vec3& hi : {Vec3{1, 1, 1}, Vec3{1, 1, -1}}) {
+    const ThreadedRun one = threaded_difference(hi, 0, 0, 0);
+    SPLINTCORE_ASSERT_OK(one.status);
+    ASSERT_GT(one.stats.near_b_triangles, 4096u);  // enough for the tasks
+    ASSERT_GT(one.stats.intersecting_pairs, 100u);
+    if (hi.z < 0) {
+      EXPECT_GT(one.stats.degenerate_pairs, 0u);
+    }
+    EXPECT_EQ(one.stats.parallel_near_triangles, 0u);
+    for (unsigned threads : {1u, 2u, 3u, 5u}) {
+      const ThreadedRun r = threaded_difference(hi, threads, 0, 0);
+      expect_same_run(r, one, threads);
+      if (threads == 1) {
+        EXPECT_EQ(r.stats.parallel_near_triangles, 0u);
+      } else if (hi.z > 0) {  // every task ran to its end, in every attempt
+        EXPECT_EQ(r.stats.parallel_near_triangles, r.stats.near_b_triangles * r.stats.attempts);
+      } else {  // the tasks stopped at the first contact
+        EXPECT_GT(r.stats.parallel_near_triangles, 0u);
+        EXPECT_LT(r.stats.parallel_near_triangles, r.stats.near_b_triangles * r.stats.attempts);
+      }
+    }
+  }
+}
+
+// Over max_candidate_pairs: the same error, naming the same triangle of B, at every thread
+// count (one thread redoes the task where the sum passes the bound).
+TEST(BooleanThreads, TheBoundIsPassedAtTheSameTriangle) {
+  const ThreadedRun full = threaded_difference({1, 1, 1}, 0, 0, 0);
+  SPLINTCORE_ASSERT_OK(full.status);
+  for (uint64_t bound : {full.stats.candidate_pairs / 7, full.stats.candidate_pairs * 3 / 4,
+                         full.stats.candidate_pairs - 1}) {
+    const ThreadedRun one = threaded_difference({1, 1, 1}, 0, 0, bound);
+    ASSERT_EQ(one.status.code(), StatusCode::kLimitExceeded) << test::format(one.status);
+    for (unsigned threads : {2u, 3u}) {
+      expect_same_run(threaded_difference({1, 1, 1}, threads, 0, bound), one, threads);
+    }
+  }
+  expect_same_run(threaded_difference({1, 1, 1}, 2, 0, full.stats.candidate_pairs), full, 2);
+}
+
+// The tasks' memory is extra, taken only when the arena has it: at every cap two threads
+// succeed where one does, with the same bytes, and run out where one runs out.
+TEST(BooleanThreads, TwoThreadsFitWhereOneFits) {
+  const ThreadedRun one = threaded_difference({1, 1, 1}, 0, 0, 0);
+  SPLINTCORE_ASSERT_OK(one.status);
+  const ThreadedRun two = threaded_difference({1, 1, 1}, 2, one.high_water, 0);
+  expect_same_run(two, one, 2);
+  EXPECT_GT(two.stats.parallel_near_triangles, 0u);
+  bool fell_back = false;
+  for (size_t k = 1; k <= 32; ++k) {
+    const size_t cap = one.high_water * k / 32;
+    const ThreadedRun serial = threaded_difference({1, 1, 1}, 0, cap, 0);
+    const ThreadedRun parallel = threaded_difference({1, 1, 1}, 2, cap, 0);
+    EXPECT_EQ(parallel.status.code(), serial.status.code()) << "cap " << cap;
+    EXPECT_STREQ(parallel.status.message(), serial.status.message()) << "cap " << cap;
+    EXPECT_EQ(parallel.bytes, serial.bytes) << "cap " << cap;
+    if (serial.status.is_ok()) {
+      EXPECT_EQ(parallel.bytes, one.bytes) << "cap " << cap;
+    } else {
+      EXPECT_EQ(serial.status.code(), StatusCode::kArenaExhausted) << test::format(serial.status);
+    }
+    fell_back = fell_back || (parallel.stats.near_b_triangles > 0 &&
+                              parallel.stats.parallel_near_triangles == 0);
+  }
+  EXPECT_TRUE(fell_back);  // some cap left no room for the tasks: one thread went on
 }
 
 }  // namespace
