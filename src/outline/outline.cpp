@@ -59,9 +59,11 @@ Status check_jaw(const Mesh& m, const char* who, const char* name, double* longe
           .at_index(i);
     }
   }
-  // The squared edges a - b and b - c in two lanes (each lane rounds as the scalar dot(ab,
-  // ab) would), c - a alone; the largest of them all (a maximum of finite values: the same
-  // whatever the order it is taken in).
+  // The squared edges: each edge's x and y differences a lane pair (its corners' x and y
+  // loaded together), their squares' sums for a - b and b - c in two lanes, then each lane's
+  // z square added (dot()'s order, x then y then z: the same bits as dot(ab, ab)); c - a alone.
+  // The largest of them all (a maximum of finite values: the same whatever the order it is
+  // taken in).
   Lanes2 e2_lanes = {0, 0};
   double e2 = 0;
   for (size_t i = 0; i < m.triangles.size(); ++i) {
@@ -73,12 +75,13 @@ Status check_jaw(const Mesh& m, const char* who, const char* name, double* longe
           .at_index(i);
     }
     const Vec3 &a = m.vertices[t.v[0]], &b = m.vertices[t.v[1]], &c = m.vertices[t.v[2]];
-    const Lanes2 dx = Lanes2{a.x, b.x} - Lanes2{b.x, c.x};
-    const Lanes2 dy = Lanes2{a.y, b.y} - Lanes2{b.y, c.y};
+    const Lanes2 axy = {a.x, a.y}, bxy = {b.x, b.y}, cxy = {c.x, c.y};
+    const Lanes2 ab = axy - bxy, bc = bxy - cxy, ca = cxy - axy;
+    const Lanes2 ab2 = ab * ab, bc2 = bc * bc, ca2 = ca * ca;
     const Lanes2 dz = Lanes2{a.z, b.z} - Lanes2{b.z, c.z};
-    const Lanes2 l2 = (dx * dx + dy * dy) + dz * dz;
-    const Vec3 ca = c - a;
-    const double lca = dot(ca, ca);
+    const Lanes2 l2 = (Lanes2{ab2[0], bc2[0]} + Lanes2{ab2[1], bc2[1]}) + dz * dz;
+    const double caz = c.z - a.z;
+    const double lca = (ca2[0] + ca2[1]) + caz * caz;
     e2_lanes = l2 > e2_lanes ? l2 : e2_lanes;
     e2 = lca > e2 ? lca : e2;
   }
