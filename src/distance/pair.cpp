@@ -5,6 +5,7 @@
 // edge-edge distances (Ericson, "Real-Time Collision Detection", 2005, 5.1.5 and 5.1.9), with
 // meeting triangles decided exactly (Shewchuk's orient3d, geometry.h).
 #include <cmath>
+#include <cstring>
 
 #include "splintcore/distance.h"
 
@@ -140,16 +141,32 @@ inline void load_triangle(const Mesh& mesh, uint32_t t, const Vec3& shift, Trian
   out->hi = max_vec(max_vec(out->p[0], out->p[1]), out->p[2]);
 }
 
+// Two doubles in one SSE2 register (GCC's and clang's vector extension): each lane rounds as
+// the scalar operation would.
+typedef double Lanes2 __attribute__((vector_size(16)));
+
 // Squared distance between the boxes [alo, ahi] and [blo, bhi] as computed (the caller's
-// margin covers the rounding).
+// margin covers the rounding): on each axis the gap blo - ahi when blo > ahi, alo - bhi when
+// alo > bhi, else 0, squared and summed in axis order ((0 + gx^2) + gy^2) + gz^2. The x and y
+// axes a lane pair each: max(max(blo - ahi, alo - bhi), 0) is that gap for boxes with lo <= hi
+// (x > y if and only if x - y > 0 in IEEE arithmetic, and then the other difference is
+// negative; a zero of either sign squares to +0), and 0 + gx^2 is gx^2.
 inline double box_gap2(const double alo[3], const double ahi[3], const double blo[3],
                        const double bhi[3]) {
-  double sum = 0;
-  for (int i = 0; i < 3; ++i) {
-    const double g = blo[i] > ahi[i] ? blo[i] - ahi[i] : (alo[i] > bhi[i] ? alo[i] - bhi[i] : 0);
-    sum += g * g;
-  }
-  return sum;
+  Lanes2 al, ah, bl, bh;
+  std::memcpy(&al, alo, sizeof al);
+  std::memcpy(&ah, ahi, sizeof ah);
+  std::memcpy(&bl, blo, sizeof bl);
+  std::memcpy(&bh, bhi, sizeof bh);
+  const Lanes2 zero = {0.0, 0.0};
+  const Lanes2 d1 = bl - ah, d2 = al - bh;
+  const Lanes2 m = d1 > d2 ? d1 : d2;
+  const Lanes2 g = m > zero ? m : zero;
+  const Lanes2 sq = g * g;
+  const double e1 = blo[2] - ahi[2], e2 = alo[2] - bhi[2];
+  const double mz = e1 > e2 ? e1 : e2;
+  const double gz = mz > 0.0 ? mz : 0.0;
+  return (sq[0] + sq[1]) + gz * gz;
 }
 
 inline double box_gap2(const Vec3& alo, const Vec3& ahi, const double blo[3], const double bhi[3]) {
@@ -217,10 +234,6 @@ inline void load_moved_triangle(const Mesh& mesh, uint32_t t, const RigidTransfo
   out->hi = max_vec(max_vec(out->p[0], out->p[1]), out->p[2]);
 }
 
-// Two doubles in one SSE2 register (GCC's and clang's vector extension): each lane rounds as
-// the scalar operation would.
-typedef double Lanes2 __attribute__((vector_size(16)));
-
 // Up to 16 boxes, lane k % 2 of pair k / 2, and their gaps to one box: box_gap2(lo, hi, box k)
 // bit for bit, two at a time. A lane's gap on an axis is max(max(blo - ahi, alo - bhi), 0):
 // for boxes with lo <= hi at most one difference is positive, and positive exactly when
@@ -257,29 +270,37 @@ struct BoxLanes {
   }
 };
 
-// float_box_gap2(boxes + 6 k, shift, blo, bhi) for k < count (at most 16), two boxes a lane
-// pair, bit for bit: each lane converts, shifts and subtracts as the scalar code does, and
-// takes the gap as BoxLanes::gaps_to does (a triangle's box, shifted, has lo <= hi: rounding
-// is monotone; so has [blo, bhi]).
+// Two floats (a triangle's float box's x and y), converted to a Lanes2 at once.
+typedef float Floats2 __attribute__((vector_size(8)));
+
+// float_box_gap2(boxes + 6 k, shift, blo, bhi) for k < count (at most 16), bit for bit: a
+// box's x and y a lane pair (each converted, shifted and subtracted as the scalar code does,
+// two floats converted in one instruction), its z alone; a lane's gap on an axis is
+// max(max(blo - hi, lo - bhi), 0) as in BoxLanes::gaps_to (a triangle's box, shifted, has
+// lo <= hi: rounding is monotone; so has [blo, bhi]), and the sum in box_gap2's order
+// (gx^2 + gy^2) + gz^2.
 void float_box_gaps(const float* boxes, uint32_t count, const Vec3& shift, const double blo[3],
                     const double bhi[3], double gap2[16]) {
   const Lanes2 zero = {0.0, 0.0};
-  const Lanes2 sh[3] = {{shift.x, shift.x}, {shift.y, shift.y}, {shift.z, shift.z}};
-  for (uint32_t k = 0; k < count; k += 2) {
+  const Lanes2 sxy = {shift.x, shift.y};
+  const Lanes2 bl = {blo[0], blo[1]}, bh = {bhi[0], bhi[1]};
+  for (uint32_t k = 0; k < count; ++k) {
     const float* a = boxes + 6 * size_t{k};
-    const float* b = k + 1 < count ? a + 6 : a;
-    Lanes2 g[3];
-    for (int i = 0; i < 3; ++i) {
-      const Lanes2 lo = Lanes2{static_cast<double>(a[i]), static_cast<double>(b[i])} + sh[i];
-      const Lanes2 hi =
-          Lanes2{static_cast<double>(a[3 + i]), static_cast<double>(b[3 + i])} + sh[i];
-      const Lanes2 d1 = Lanes2{blo[i], blo[i]} - hi, d2 = lo - Lanes2{bhi[i], bhi[i]};
-      const Lanes2 m = d1 > d2 ? d1 : d2;
-      g[i] = m > zero ? m : zero;
-    }
-    const Lanes2 sum = (g[0] * g[0] + g[1] * g[1]) + g[2] * g[2];
-    gap2[k] = sum[0];
-    if (k + 1 < count) gap2[k + 1] = sum[1];
+    Floats2 flo, fhi;
+    std::memcpy(&flo, a, sizeof flo);
+    std::memcpy(&fhi, a + 3, sizeof fhi);
+    const Lanes2 lo = __builtin_convertvector(flo, Lanes2) + sxy;
+    const Lanes2 hi = __builtin_convertvector(fhi, Lanes2) + sxy;
+    const Lanes2 d1 = bl - hi, d2 = lo - bh;
+    const Lanes2 m = d1 > d2 ? d1 : d2;
+    const Lanes2 g = m > zero ? m : zero;
+    const Lanes2 sq = g * g;
+    const double lz = static_cast<double>(a[2]) + shift.z;
+    const double hz = static_cast<double>(a[5]) + shift.z;
+    const double e1 = blo[2] - hz, e2 = lz - bhi[2];
+    const double mz = e1 > e2 ? e1 : e2;
+    const double gz = mz > 0.0 ? mz : 0.0;
+    gap2[k] = (sq[0] + sq[1]) + gz * gz;
   }
 }
 

@@ -92,27 +92,30 @@ namespace {
 
 // The lattice of build_grid over the jaws (the extent and centroid of their vertices in the
 // plane) and its arrays, unfilled. kHeights: also the maxilla's lowest and the mandible's
-// highest vertex along n (their heights as fill_columns computes them), in the same pass.
+// highest vertex along n (their heights as fill_columns computes them), in the same pass, and
+// every vertex's height in heights[0] (the maxilla's) and heights[1] (the mandible's). The
+// extent's least and greatest x and y and the centroid's sums in lanes (each lane compares and
+// adds as the scalar code would, in vertex order).
 template <bool kHeights>
 Status grid_layout(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3& lower_offset,
-                   const Frame& f, Grid* g, double* low_upper, double* high_lower) {
-  double x_lo = HUGE_VAL, x_hi = -HUGE_VAL, y_lo = HUGE_VAL, y_hi = -HUGE_VAL, cx = 0, cy = 0;
+                   const Frame& f, Grid* g, double* low_upper, double* high_lower,
+                   double* heights[2]) {
+  Lanes2 lo = {HUGE_VAL, HUGE_VAL}, hi = {-HUGE_VAL, -HUGE_VAL}, sum = {0.0, 0.0};
   double h_lo = HUGE_VAL, h_hi = -HUGE_VAL;
   const PlaneAxes axes(f);
   const Vec3 n = f.n;
-  auto extent = [&](const Mesh& m, const Vec3& offset, bool upper_jaw) {
-    for (const Vec3& v : m.vertices) {
-      const Vec3 p = v + offset;
+  auto extent = [&](const Mesh& m, const Vec3& offset, bool upper_jaw, double* h_out) {
+    const Vec3* v = m.vertices.data();
+    const size_t count = m.vertices.size();
+    for (size_t k = 0; k < count; ++k) {
+      const Vec3 p = v[k] + offset;
       const Lanes2 xy = axes.xy(p);
-      const double x = xy[0], y = xy[1];
-      x_lo = x < x_lo ? x : x_lo;
-      x_hi = x > x_hi ? x : x_hi;
-      y_lo = y < y_lo ? y : y_lo;
-      y_hi = y > y_hi ? y : y_hi;
-      cx += x;
-      cy += y;
+      lo = xy < lo ? xy : lo;
+      hi = xy > hi ? xy : hi;
+      sum += xy;
       if (kHeights) {
         const double h = dot(p, n);
+        h_out[k] = h;
         if (upper_jaw) {
           h_lo = h < h_lo ? h : h_lo;
         } else {
@@ -121,10 +124,11 @@ Status grid_layout(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec
       }
     }
   };
-  extent(upper, Vec3{}, true);
-  extent(lower, lower_offset, false);
+  extent(upper, Vec3{}, true, kHeights ? heights[0] : nullptr);
+  extent(lower, lower_offset, false, kHeights ? heights[1] : nullptr);
   *low_upper = h_lo;
   *high_lower = h_hi;
+  const double x_lo = lo[0], y_lo = lo[1], x_hi = hi[0], y_hi = hi[1], cx = sum[0], cy = sum[1];
   const double count = static_cast<double>(upper.vertices.size() + lower.vertices.size());
   if (x_hi - x_lo > kMaxSpanMm || y_hi - y_lo > kMaxSpanMm) {
     return make_error(StatusCode::kInvalidArgument, "outline: the jaws span ", x_hi - x_lo, " x ",
@@ -155,8 +159,8 @@ Status grid_layout(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec
 Status build_grid(Arena& arena, const Executor* executor, const Mesh& upper, const Mesh& lower,
                   const Vec3& lower_offset, const Frame& f, Grid* g) {
   double unused_low = 0, unused_high = 0;
-  SPLINTCORE_RETURN_IF_ERROR(
-      grid_layout<false>(arena, upper, lower, lower_offset, f, g, &unused_low, &unused_high));
+  SPLINTCORE_RETURN_IF_ERROR(grid_layout<false>(arena, upper, lower, lower_offset, f, g,
+                                                &unused_low, &unused_high, nullptr));
   fill_both(executor, upper, lower, lower_offset, f, g);
   return Status::ok();
 }
@@ -191,20 +195,21 @@ void fill_columns(const Mesh& m, const Vec3& offset, const Frame& frame, Grid* g
 
 // fill_columns over the vertices whose height lies in a window only: for the maxilla (kLowest)
 // in (from, to], for the mandible in [to, from). The heights and columns as fill_columns
-// computes them; a vertex outside goes on after its height alone.
+// computes them (`vertex_h`: each vertex's height, dot(v + 0, n), from grid_layout); a vertex
+// outside goes on after its height alone.
 template <bool kLowest>
-void fill_window(const Mesh& m, const Frame& frame, double from, double to, Grid* g) {
+void fill_window(const Mesh& m, const double* vertex_h, double from, double to, const Frame& frame,
+                 Grid* g) {
   const PlaneAxes axes(frame);
-  const Vec3 n = frame.n;
   const Grid grid = *g;
   double* heights = grid.h[kLowest ? 0 : 1];
   uint32_t* tips = grid.tip[kLowest ? 0 : 1];
   const Vec3* v = m.vertices.data();
   const size_t count = m.vertices.size();
   for (size_t k = 0; k < count; ++k) {
-    const Vec3 p = v[k] + Vec3{};
-    const double h = dot(p, n);
+    const double h = vertex_h[k];
     if (kLowest ? !(h > from && h <= to) : !(h < from && h >= to)) continue;
+    const Vec3 p = v[k] + Vec3{};
     const Lanes2 xy = axes.xy(p);
     const size_t cell = grid.cell_of(xy[0], xy[1]);
     const double best = heights[cell];
@@ -300,9 +305,10 @@ bool fit_with_gap(const Grid& g, double gap_min, Plane* plane, uint64_t* contact
 // enough).
 constexpr double kSlackOverGapMm = 0.5;
 
+// `heights`: each vertex's height (grid_layout's), the maxilla's and the mandible's.
 bool fit_near_plane(const Executor* executor, const Mesh& upper, const Mesh& lower, const Frame& f,
-                    double low, double high, double slack, Grid* g, Plane* plane,
-                    uint64_t* contact_cells, double* gap_out) {
+                    double* const heights[2], double low, double high, double slack, Grid* g,
+                    Plane* plane, uint64_t* contact_cells, double* gap_out) {
   clear_heights(0, g);
   clear_heights(1, g);
   double up = -HUGE_VAL, down = HUGE_VAL;
@@ -312,9 +318,9 @@ bool fit_near_plane(const Executor* executor, const Mesh& upper, const Mesh& low
     if (!(next_up > up && next_down < down)) break;  // (no wider: a NaN or an overflow)
     auto task = [&](uint32_t jaw) {
       if (jaw == 0) {
-        fill_window<true>(upper, f, up, next_up, g);
+        fill_window<true>(upper, heights[0], up, next_up, f, g);
       } else {
-        fill_window<false>(lower, f, down, next_down, g);
+        fill_window<false>(lower, heights[1], down, next_down, f, g);
       }
     };
     parallel_for_each(executor, 2, task);
@@ -366,12 +372,16 @@ Status find_frame(const Context& ctx, const Mesh& upper, const Mesh& lower, Fram
       SPLINTCORE_RETURN_IF_ERROR(build_grid(arena, ctx.executor, upper, lower, Vec3{}, *f, g));
       fitted = fit_contact_plane(*g, plane, &contact);
     } else {
-      // The plane only (the grid goes): from the vertices near the occlusal plane.
+      // The plane only (the grid and the vertices' heights go): from the vertices near the
+      // occlusal plane.
       double low = 0, high = 0, gap = 0;
+      double* heights[2] = {arena.allocate_array<double>(upper.vertices.size()),
+                            arena.allocate_array<double>(lower.vertices.size())};
+      if (heights[0] == nullptr || heights[1] == nullptr) return arena.exhausted_status();
       SPLINTCORE_RETURN_IF_ERROR(
-          grid_layout<true>(arena, upper, lower, Vec3{}, *f, g, &low, &high));
-      fitted = fit_near_plane(ctx.executor, upper, lower, *f, low, high, slack, g, plane, &contact,
-                              &gap);
+          grid_layout<true>(arena, upper, lower, Vec3{}, *f, g, &low, &high, heights));
+      fitted = fit_near_plane(ctx.executor, upper, lower, *f, heights, low, high, slack, g, plane,
+                              &contact, &gap);
       slack = gap + kSlackOverGapMm;  // the next round's frame is a little tilted from this
     }
     if (!fitted) {

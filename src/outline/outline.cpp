@@ -59,9 +59,11 @@ Status check_jaw(const Mesh& m, const char* who, const char* name, double* longe
           .at_index(i);
     }
   }
-  // The squared edges a - b and b - c in two lanes (each lane rounds as the scalar dot(ab,
-  // ab) would), c - a alone; the largest of them all (a maximum of finite values: the same
-  // whatever the order it is taken in).
+  // The squared edges: each edge's x and y differences a lane pair (its corners' x and y
+  // loaded together), their squares' sums for a - b and b - c in two lanes, then each lane's
+  // z square added (dot()'s order, x then y then z: the same bits as dot(ab, ab)); c - a alone.
+  // The largest of them all (a maximum of finite values: the same whatever the order it is
+  // taken in).
   Lanes2 e2_lanes = {0, 0};
   double e2 = 0;
   for (size_t i = 0; i < m.triangles.size(); ++i) {
@@ -73,12 +75,13 @@ Status check_jaw(const Mesh& m, const char* who, const char* name, double* longe
           .at_index(i);
     }
     const Vec3 &a = m.vertices[t.v[0]], &b = m.vertices[t.v[1]], &c = m.vertices[t.v[2]];
-    const Lanes2 dx = Lanes2{a.x, b.x} - Lanes2{b.x, c.x};
-    const Lanes2 dy = Lanes2{a.y, b.y} - Lanes2{b.y, c.y};
+    const Lanes2 axy = {a.x, a.y}, bxy = {b.x, b.y}, cxy = {c.x, c.y};
+    const Lanes2 ab = axy - bxy, bc = bxy - cxy, ca = cxy - axy;
+    const Lanes2 ab2 = ab * ab, bc2 = bc * bc, ca2 = ca * ca;
     const Lanes2 dz = Lanes2{a.z, b.z} - Lanes2{b.z, c.z};
-    const Lanes2 l2 = (dx * dx + dy * dy) + dz * dz;
-    const Vec3 ca = c - a;
-    const double lca = dot(ca, ca);
+    const Lanes2 l2 = (Lanes2{ab2[0], bc2[0]} + Lanes2{ab2[1], bc2[1]}) + dz * dz;
+    const double caz = c.z - a.z;
+    const double lca = (ca2[0] + ca2[1]) + caz * caz;
     e2_lanes = l2 > e2_lanes ? l2 : e2_lanes;
     e2 = lca > e2 ? lca : e2;
   }
@@ -352,29 +355,55 @@ struct JawBand {
 
 constexpr uint32_t kMaxBandRadius = 40;  // columns around, at most
 
-// Per column, the extreme height of `jaw` over the columns within `radius` (the highest for
-// the mandible, the lowest for the maxilla): rows, then columns.
-// `rows` and `both` hold a column each.
-void extreme_around(const Grid& g, int jaw, uint32_t radius, double* rows, double* both) {
-  auto pick = [jaw](double a, double b) { return jaw == 0 ? (b < a ? b : a) : (b > a ? b : a); };
-  for (uint32_t iy = 0; iy < g.ny; ++iy) {
-    for (uint32_t ix = 0; ix < g.nx; ++ix) {
-      const uint32_t lo = ix > radius ? ix - radius : 0;
-      const uint32_t hi = ix + radius < g.nx ? ix + radius : g.nx - 1;
-      double e = g.h[jaw][static_cast<size_t>(iy) * g.nx + lo];
-      for (uint32_t k = lo + 1; k <= hi; ++k)
-        e = pick(e, g.h[jaw][static_cast<size_t>(iy) * g.nx + k]);
-      rows[static_cast<size_t>(iy) * g.nx + ix] = e;
+// The extreme (the least when `lowest`, else the greatest) of each window of a line of n
+// values at `stride`: out[i] over in[max(0, i - r) .. min(n - 1, i + r)], a few comparisons a
+// value whatever r (van Herk and Gil-Werman): blocks of 2 r + 1 values, their running extremes
+// from the block's end (into out) and from its start (into g, which may be `in` itself: each
+// is read before it is written), and each window, which spans at most two blocks, from the
+// end's running extreme at its first value and the start's at its last (a window shortened at
+// an end of the line lies in one block and starts at the block's start or ends at the line's
+// end). out[i] is written after its last read (in descending i). The same values as comparing
+// the whole window (a maximum or minimum is one of the values; of a +0 and a -0 either may come,
+// which compare equal, and to which the band adds a margin that is not 0).
+void sliding_extreme(const double* in, double* g, double* out, size_t stride, uint32_t n,
+                     uint32_t r, bool lowest) {
+  auto pick = [lowest](double a, double b) { return lowest ? (b < a ? b : a) : (b > a ? b : a); };
+  const uint32_t w = 2 * r + 1;
+  for (uint32_t b0 = 0; b0 < n; b0 += w) {
+    const uint32_t b1 = n - b0 > w ? b0 + w - 1 : n - 1;
+    out[b1 * stride] = in[b1 * stride];
+    for (uint32_t i = b1; i-- > b0;) out[i * stride] = pick(out[(i + 1) * stride], in[i * stride]);
+    double e = in[b0 * stride];
+    g[b0 * stride] = e;
+    for (uint32_t i = b0 + 1; i <= b1; ++i) {
+      e = pick(e, in[i * stride]);
+      g[i * stride] = e;
     }
   }
-  for (uint32_t iy = 0; iy < g.ny; ++iy) {
-    const uint32_t lo = iy > radius ? iy - radius : 0;
-    const uint32_t hi = iy + radius < g.ny ? iy + radius : g.ny - 1;
-    for (uint32_t ix = 0; ix < g.nx; ++ix) {
-      double e = rows[static_cast<size_t>(lo) * g.nx + ix];
-      for (uint32_t k = lo + 1; k <= hi; ++k) e = pick(e, rows[static_cast<size_t>(k) * g.nx + ix]);
-      both[static_cast<size_t>(iy) * g.nx + ix] = e;
+  for (uint32_t i = n; i-- > 0;) {
+    const uint32_t lo = i > r ? i - r : 0;
+    const uint32_t hi = n - 1 - i > r ? i + r : n - 1;
+    double e;
+    if (lo / w != hi / w) {
+      e = pick(out[lo * stride], g[hi * stride]);
+    } else {
+      e = lo % w == 0 ? g[hi * stride] : out[lo * stride];
     }
+    out[i * stride] = e;
+  }
+}
+
+// Per column, the extreme height of `jaw` over the columns within `radius` (the highest for
+// the mandible, the lowest for the maxilla): rows, then columns (sliding_extreme).
+// `rows` and `both` hold a column each.
+void extreme_around(const Grid& g, int jaw, uint32_t radius, double* rows, double* both) {
+  const bool lowest = jaw == 0;
+  for (uint32_t iy = 0; iy < g.ny; ++iy) {
+    const size_t row = static_cast<size_t>(iy) * g.nx;
+    sliding_extreme(g.h[jaw] + row, both + row, rows + row, 1, g.nx, radius, lowest);
+  }
+  for (uint32_t ix = 0; ix < g.nx; ++ix) {
+    sliding_extreme(rows + ix, rows + ix, both + ix, g.nx, g.ny, radius, lowest);
   }
 }
 
@@ -470,11 +499,12 @@ double tip_pair_bound(const Mesh& maxilla, const Mesh& mandible, const Grid& g) 
   return std::sqrt(best);
 }
 
-// The opening's band indexes: leaves of 12 triangles, not 8 (a shallower tree for the few
-// searches over the bands' near-parallel occlusal surfaces, where most leaf pairs within reach
-// are opened anyway: about 11 M instructions less an outline of the real dentition). The
-// searches' answers do not depend on the tree: the least (distance, triangle ids).
-constexpr uint32_t kOpeningLeafSize = 12;
+// The opening's band indexes: leaves of 16 triangles (the most a leaf holds), not 8 (a
+// shallower tree for the few searches over the bands' near-parallel occlusal surfaces, where
+// most leaf pairs within reach are opened anyway: about 11 M instructions less an outline of
+// the real dentition at 12, 6 M more at 16). The searches' answers do not depend on the tree:
+// the least (distance, triangle ids).
+constexpr uint32_t kOpeningLeafSize = 16;
 
 DistanceIndexOptions opening_index_options() {
   DistanceIndexOptions o = band_index_options();
@@ -694,6 +724,8 @@ uint64_t compute_outline_bound(const Mesh& maxilla, const Mesh& mandible) {
       (kSmoothPasses + 2) * projector_bound();
   // The survey, after the arch: its columns (reserved once) and the jaws' slabs.
   const uint64_t survey = arena_array_bound<double>(4 * columns) + both(DistanceIndexOptions{});
+  // (The frame's rounds before them hold a lattice and every vertex's height: less than the
+  // opening's copies of the vertices.)
   const uint64_t after_frame = opening > arch + survey ? opening : arch + survey;
   return buffers + grid + after_frame;
 }
