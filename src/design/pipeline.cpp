@@ -242,17 +242,19 @@ Status blockout_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws
 // Interference elimination, jaw by jaw: each jaw's part of B swept along the direction it
 // leaves the splint (the mandible's is the opposite of the insertion direction), and
 // subtracted from *cut, which becomes the result, moved down over the jaw's temporaries (the
-// previous one stays below it). B itself is not needed: the sweep gets jaw j's triangles and
-// every jaw's moved vertices (the others' without triangles: they only anchor its lattice,
-// as B's vertices did), views of the jaws where moving them changes nothing.
+// previous one stays below it until the new one is checked, then the new one moves down over
+// it, to `low`: *cut must be all the arena holds above `low`). B itself is not needed: the
+// sweep gets jaw j's triangles and every jaw's moved vertices (the others' without triangles:
+// they only anchor its lattice, as B's vertices did), views of the jaws where moving them
+// changes nothing.
 // The result's exact self-intersection check (the Boolean's final word, and the largest arrays
 // of the blockout: 33 MB for the real dentition's splint) runs once the result has been moved
 // down over the sweep, the Boolean's working set and the jaws' moved vertices, as
 // subtract_jaws does for the first Boolean: on the real dentition that keeps the blockout in
 // 64 MiB. Should it find a crossing, the jaw's blockout runs again with the check inside the
 // Boolean (where a crossing makes it nudge and retry): the answer is the blockout's alone.
-Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* cut,
-                     DesignReport* report) {
+Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                     const Arena::Marker& low, Mesh* cut, DesignReport* report) {
   if (jaws.size() > DesignReport::kMaxBlockoutJaws) {
     return make_error(StatusCode::kLimitExceeded, "design: blockout takes at most ",
                       DesignReport::kMaxBlockoutJaws, " jaws, the case has ", jaws.size());
@@ -279,6 +281,10 @@ Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
     }
     report->blockout_jaws = static_cast<uint32_t>(j + 1);
     note_self_check(report, bs, "blockout");
+    // The previous splint is no retry's input any more: the next jaw starts from `low`.
+    Mesh moved;
+    move_mesh_down(arena, low, *cut, &moved);
+    *cut = moved;
   }
   return Status::ok();
 }
@@ -622,18 +628,21 @@ Status design_detail::design_splint_registered(const Context& ctx, const CaseFil
   Mesh base(&arena);
   SPLINTCORE_RETURN_IF_ERROR(stage_error(build_case_base(ctx, c, &base, &report->base), "base"));
   Mesh cut;
+  // Where the splint sits with nothing of use above it (blockout_jaws moves its results there).
+  Arena::Marker cut_low = before_b;
   if (c.has_blockout && c.blockout.offset > 0) {
     // A spacer: the imprint is the swept volumes' offset surface, which holds each jaw, so
     // subtracting the jaws themselves first would only cut what the blockout removes anyway.
     report->imprint_offset = true;
     cut = base;
+    cut_low = arena.mark();
   } else {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: boolean"));
     SPLINTCORE_RETURN_IF_ERROR(subtract_jaws(ctx, c, jaws, before_b, &base, &b, &cut, report));
   }
   if (c.has_blockout) {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: blockout"));
-    SPLINTCORE_RETURN_IF_ERROR(blockout_jaws(ctx, c, jaws, &cut, report));
+    SPLINTCORE_RETURN_IF_ERROR(blockout_jaws(ctx, c, jaws, cut_low, &cut, report));
   }
   if (c.has_label) {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: label"));

@@ -652,6 +652,16 @@ inline uint64_t spread_bits(uint32_t x) {
   return r;
 }
 
+// A triangle DOP's Morton code: of the middle of its quantized x, y, z extents, 10 bits each.
+inline uint32_t morton_code(const Dop& d) {
+  uint64_t code = 0;
+  for (int k = 0; k < 3; ++k) {  // centres in 0 .. 65535
+    const uint32_t c = static_cast<uint32_t>((d.lo[k] + d.hi[k]) / 2 + 32768);
+    code |= spread_bits(c >> 6) << (2 - k);
+  }
+  return static_cast<uint32_t>(code);
+}
+
 // ---- the two passes
 // ---------------------------------------------------------------------------------
 
@@ -800,6 +810,7 @@ struct HierarchyPass {
   double error = 0;           // of the separating directions (fill_item)
   Dop* vd = nullptr;          // the vertices' DOPs
   uint64_t* order = nullptr;  // the kept triangles: Morton code << 32 | triangle id, sorted
+                              // (until the items are made: then item_dops give the codes)
   uint32_t kept = 0;
   Item* items = nullptr;  // in Morton order
   Dop* item_dops = nullptr;
@@ -818,44 +829,41 @@ struct HierarchyPass {
         grid(quantization),
         tally(counts) {}
 
-  // 1. The vertices' DOPs; the kept triangles' Morton codes (of the middle of their quantized
-  // x, y, z extents, in bits 32..61 above the triangle id), sorted.
+  // 1. The kept triangles counted, the room for their items and DOPs: these stay below the
+  // sort's arrays and the star lists, which go before the tree is made (the arena is a stack).
+  Status allocate_items() {
+    for (size_t t = 0; t < nt; ++t) kept += skipped(v, tris[t], true) ? 0u : 1u;
+    if (kept == 0) return Status::ok();
+    items = arena.allocate_array<Item>(kept);
+    item_dops = arena.allocate_array<Dop>(kept);
+    if (items == nullptr || item_dops == nullptr) return arena.exhausted_status();
+    return Status::ok();
+  }
+
+  // 2. The vertices' DOPs; the kept triangles' Morton codes (morton_code, in bits 32..61 above
+  // the triangle id), sorted.
   Status sort_triangles() {
-    order = arena.allocate_array<uint64_t>(nt);
-    uint64_t* scratch = arena.allocate_array<uint64_t>(nt);
+    order = arena.allocate_array<uint64_t>(kept);
+    uint64_t* scratch = arena.allocate_array<uint64_t>(kept);
     vd = arena.allocate_array<Dop>(nv);
-    if (((order == nullptr || scratch == nullptr) && nt > 0) || (vd == nullptr && nv > 0)) {
+    if (order == nullptr || scratch == nullptr || (vd == nullptr && nv > 0)) {
       return arena.exhausted_status();
     }
     for (size_t i = 0; i < nv; ++i) vd[i] = point_dop(grid, v[i]);
+    uint32_t at = 0;
     for (size_t t = 0; t < nt; ++t) {
       const Triangle& tri = tris[t];
       if (skipped(v, tri, true)) continue;
       const Dop d = triangle_dop(vd[tri.v[0]], vd[tri.v[1]], vd[tri.v[2]]);
-      uint64_t code = 0;
-      for (int k = 0; k < 3; ++k) {  // centres in 0 .. 65535, 10 bits each
-        const uint32_t c = static_cast<uint32_t>((d.lo[k] + d.hi[k]) / 2 + 32768);
-        code |= spread_bits(c >> 6) << (2 - k);
-      }
-      order[kept++] = code << 32 | t;
+      order[at++] = uint64_t{morton_code(d)} << 32 | t;
     }
-    if (kept != 0) order = sort_morton(order, scratch, kept);
+    SPLINTCORE_ASSERT(at == kept);
+    order = sort_morton(order, scratch, kept);
     return Status::ok();
   }
 
-  // 2. The items and their DOPs in Morton order (and the memory for the tree).
-  Status make_items(double radius) {
-    items = arena.allocate_array<Item>(kept);
-    item_dops = arena.allocate_array<Dop>(kept);
-    // The tree's shape first, so that its nodes and leaves take what it has (a leaf holds
-    // up to kLeafSize items: on a real splint a fifth of the worst case of one a triangle).
-    uint32_t node_total = 0, leaf_total = 0;
-    count_tree(&node_total, &leaf_total);
-    nodes = arena.allocate_array<Node>(node_total);
-    leaves = arena.allocate_array<Leaf>(leaf_total);
-    if (items == nullptr || item_dops == nullptr || nodes == nullptr || leaves == nullptr) {
-      return arena.exhausted_status();
-    }
+  // 3. The items and their DOPs in Morton order.
+  void make_items(double radius) {
     error = 1e-15 * radius;  // above 3 eps R, generously
     for (uint32_t i = 0; i < kept; ++i) {
       const uint32_t t = static_cast<uint32_t>(order[i]);
@@ -863,10 +871,21 @@ struct HierarchyPass {
       fill_item(v, tri, t, error, &items[i]);
       item_dops[i] = triangle_dop(vd[tri.v[0]], vd[tri.v[1]], vd[tri.v[2]]);
     }
+  }
+
+  // 5. The memory for the tree: its shape first, so that its nodes and leaves take what it
+  // has (a leaf holds up to kLeafSize items: on a real splint a fifth of the worst case of one
+  // a triangle).
+  Status allocate_tree() {
+    uint32_t node_total = 0, leaf_total = 0;
+    count_tree(&node_total, &leaf_total);
+    nodes = arena.allocate_array<Node>(node_total);
+    leaves = arena.allocate_array<Leaf>(leaf_total);
+    if (nodes == nullptr || leaves == nullptr) return arena.exhausted_status();
     return Status::ok();
   }
 
-  // 3. Stars: per-vertex lists of items by counting sort, then each star checked.
+  // 4. Stars: per-vertex lists of items by counting sort, then each star checked.
   Status clear_stars() {
     ArenaScope star_scope(arena);
     uint32_t* start = arena.allocate_array<uint32_t>(nv + 1);
@@ -928,13 +947,14 @@ struct HierarchyPass {
   // The size of the first half of items begin .. begin + count - 1: where the highest
   // differing Morton bit changes (equal codes: in the middle).
   uint32_t split_point(uint32_t begin, uint32_t count) const {
-    const uint64_t first = order[begin] >> 32, last = order[begin + count - 1] >> 32;
+    const uint32_t first = morton_code(item_dops[begin]);
+    const uint32_t last = morton_code(item_dops[begin + count - 1]);
     if (first == last) return count / 2;
-    const uint64_t bit = uint64_t{1} << (63 - __builtin_clzll(first ^ last));
+    const uint32_t bit = uint32_t{1} << (31 - __builtin_clz(first ^ last));
     uint32_t without = 0, with = count - 1;  // the bit: clear at without, set at with
     while (without + 1 < with) {
       const uint32_t mid = without + (with - without) / 2;
-      if (((order[begin + mid] >> 32) & bit) == 0) {
+      if ((morton_code(item_dops[begin + mid]) & bit) == 0) {
         without = mid;
       } else {
         with = mid;
@@ -965,7 +985,7 @@ struct HierarchyPass {
     }
   }
 
-  // 4. Build: preorder, with an explicit stack of ranges (and the parent waiting for its
+  // 6. Build: preorder, with an explicit stack of ranges (and the parent waiting for its
   // right child), leaves filled as they come; bounds bottom-up (children come after their
   // parent).
   void build_tree() {
@@ -1049,7 +1069,7 @@ struct HierarchyPass {
     return false;
   }
 
-  // 5. Traversal of the hierarchy against itself: (i, i) stands for the pairs within node i,
+  // 7. Traversal of the hierarchy against itself: (i, i) stands for the pairs within node i,
   // (i, j) for those between two nodes whose DOPs overlap. Depth first: each step goes one
   // level down in one of the two nodes and leaves at most two pairs pending, so the stack
   // never holds more than 4 * height + 1. Sets *stopped when the tally is full.
@@ -1113,10 +1133,19 @@ Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triang
   *stopped = false;
   SPLINTCORE_ASSERT(nv <= 3 * nt && nv < UINT32_MAX);
   HierarchyPass pass(arena, v, nv, tris, nt, grid, tally);
-  SPLINTCORE_RETURN_IF_ERROR(pass.sort_triangles());
+  SPLINTCORE_RETURN_IF_ERROR(pass.allocate_items());
   if (pass.kept == 0) return Status::ok();
-  SPLINTCORE_RETURN_IF_ERROR(pass.make_items(radius));
-  SPLINTCORE_RETURN_IF_ERROR(pass.clear_stars());
+  {
+    // The sort's keys and the vertices' DOPs are done with once the items are made: the tree
+    // takes their room (a sixth less at the peak on the real dentition's splint).
+    ArenaScope sorting(arena);
+    SPLINTCORE_RETURN_IF_ERROR(pass.sort_triangles());
+    pass.make_items(radius);
+    SPLINTCORE_RETURN_IF_ERROR(pass.clear_stars());
+    pass.order = nullptr;
+    pass.vd = nullptr;
+  }
+  SPLINTCORE_RETURN_IF_ERROR(pass.allocate_tree());
   pass.build_tree();
   return pass.traverse(ctx, stopped);
 }
@@ -1125,12 +1154,14 @@ Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triang
 
 uint64_t find_self_intersections_bound(uint64_t triangle_count) {
   const uint64_t n = triangle_count;
-  // The hierarchy pass: keys and scratch, the vertices' DOPs (at most 3n vertices), the items,
-  // their DOPs, the nodes (at most 2n - 1), the leaves (at most n), then the star lists.
+  // The hierarchy pass: the items and their DOPs, and above them first the keys and scratch,
+  // the vertices' DOPs (at most 3n vertices) and the star lists, then, in their room, the
+  // nodes (at most 2n - 1) and the leaves (at most n).
   const uint64_t stars = (3 * n + 1) * sizeof(uint32_t) + 3 * n * sizeof(uint32_t) + 3 * n;
-  const uint64_t tree = n * (2 * sizeof(uint64_t) + 3 * sizeof(Dop) + sizeof(Item) + sizeof(Dop) +
-                             2 * sizeof(Node) + sizeof(Leaf)) +
-                        stars + 10 * 64;
+  const uint64_t sorting = n * (2 * sizeof(uint64_t) + 3 * sizeof(Dop)) + stars;
+  const uint64_t nodes = n * (2 * sizeof(Node) + sizeof(Leaf));
+  const uint64_t tree =
+      n * (sizeof(Item) + sizeof(Dop)) + (sorting > nodes ? sorting : nodes) + 10 * 64;
   // The sweep: keys, planes, DOPs, boxes.
   const uint64_t sweep_bytes =
       n * (2 * sizeof(KeyIndex) + sizeof(Plane) + sizeof(Dop) + 56) + 6 * 64;
