@@ -817,7 +817,6 @@ struct HierarchyPass {
   Node* nodes = nullptr;
   Leaf* leaves = nullptr;
   uint32_t node_count = 0, leaf_count = 0;
-  uint64_t candidates = 0;  // pairs whose DOPs overlap
 
   HierarchyPass(Arena& a, const Vec3* vertices, size_t vertex_count, const Triangle* triangles,
                 size_t triangle_count, const Grid& quantization, Tally* counts)
@@ -1020,7 +1019,7 @@ struct HierarchyPass {
 
   // Items i and j, whose DOPs overlap: sharing a cleared vertex, no conflict; sharing none,
   // the separating directions first; the rest to the exact tests. True when the tally is full.
-  bool test_pair(uint32_t i, uint32_t j) {
+  bool test_pair(uint32_t i, uint32_t j, Tally* found) const {
     const Item& s = items[i];
     const Item& t = items[j];
     const uint32_t shared = shared_corners(s, t);  // of t
@@ -1040,13 +1039,14 @@ struct HierarchyPass {
     if (!conflict(v, s.tri, t.tri, Plane{v[s0], s.n, s.nabs}, Plane{v[t0], t.n, t.nabs}, true)) {
       return false;
     }
-    return tally->add(s.id, t.id);
+    return found->add(s.id, t.id);
   }
 
   // The pairs of two leaves (the same leaf: i < j) whose DOPs overlap: one triangle of a
   // against all of b at once; those that share a cleared vertex dropped (their stars are
-  // embedded), the rest decided one by one. True when the tally is full.
-  bool leaf_pairs(const Leaf& a, const Leaf& b, bool same) {
+  // embedded), the rest decided one by one, counted in *candidates. True when the tally is
+  // full.
+  bool leaf_pairs(const Leaf& a, const Leaf& b, bool same, Tally* found, uint64_t* tested) const {
     const uint32_t valid = (1u << b.count) - 1;
     for (uint32_t i = 0; i < a.count; ++i) {
       const uint32_t lanes = same ? valid & ~((2u << i) - 1) : valid;
@@ -1054,7 +1054,7 @@ struct HierarchyPass {
       const uint32_t si = a.first + i;
       uint32_t bits = overlapping_lanes(item_dops[si], b) & lanes;
       if (bits == 0) continue;
-      candidates += static_cast<uint64_t>(bit_count(bits));
+      *tested += static_cast<uint64_t>(bit_count(bits));
       const Item& s = items[si];
       const uint32_t cleared_ids[3] = {(s.cleared & 1u) != 0 ? s.tri.v[0] : UINT32_MAX,
                                        (s.cleared & 2u) != 0 ? s.tri.v[1] : UINT32_MAX,
@@ -1063,7 +1063,7 @@ struct HierarchyPass {
       while (bits != 0) {
         const uint32_t j = b.first + static_cast<uint32_t>(lowest_bit(bits));
         bits &= bits - 1;
-        if (test_pair(si, j)) return true;
+        if (test_pair(si, j, found)) return true;
       }
     }
     return false;
@@ -1072,54 +1072,142 @@ struct HierarchyPass {
   // 7. Traversal of the hierarchy against itself: (i, i) stands for the pairs within node i,
   // (i, j) for those between two nodes whose DOPs overlap. Depth first: each step goes one
   // level down in one of the two nodes and leaves at most two pairs pending, so the stack
-  // never holds more than 4 * height + 1. Sets *stopped when the tally is full.
-  Status traverse(const Context& ctx, bool* stopped) {
-    struct PairOfNodes {
-      uint32_t a, b;
-    };
+  // never holds more than 4 * height + 1.
+  struct PairOfNodes {
+    uint32_t a, b;
+  };
+
+  // The pairs p stands for one level down, in the order the walk pushes them (its last is
+  // walked first); -1 when p is a leaf with itself or two leaves (leaf_pairs' work).
+  int open(const PairOfNodes& p, PairOfNodes out[3]) const {
+    const Node& na = nodes[p.a];
+    const Node& nb = nodes[p.b];
+    int n = 0;
+    if (p.a == p.b) {
+      if (na.right == 0) return -1;
+      const uint32_t l = p.a + 1, r = na.right;
+      if (dops_overlap(nodes[l].dop, nodes[r].dop)) out[n++] = PairOfNodes{l, r};
+      out[n++] = PairOfNodes{r, r};
+      out[n++] = PairOfNodes{l, l};
+      return n;
+    }
+    if (na.right == 0 && nb.right == 0) return -1;
+    // Open the larger node.
+    const bool open_a = nb.right == 0 || (na.right != 0 && na.count >= nb.count);
+    const uint32_t keep = open_a ? p.b : p.a;
+    const uint32_t opened = open_a ? p.a : p.b;
+    const Dop& other = nodes[keep].dop;
+    const uint32_t l = opened + 1, r = nodes[opened].right;
+    if (dops_overlap(nodes[r].dop, other)) out[n++] = PairOfNodes{r, keep};
+    if (dops_overlap(nodes[l].dop, other)) out[n++] = PairOfNodes{l, keep};
+    return n;
+  }
+
+  // The pairs below `start`, depth first, into *found and *tested; with ctx, progress
+  // (and a cancel) every 65,536 steps. *stop: the tally is full.
+  Status walk(const Context* ctx, const PairOfNodes& start, Tally* found, uint64_t* tested,
+              uint32_t* done, bool* stop) const {
     constexpr int kMaxStack = 4 * kMaxHeight + 8;
     PairOfNodes stack[kMaxStack];
     int top = 0;
-    stack[top++] = PairOfNodes{0, 0};
+    stack[top++] = start;
     uint64_t steps = 0;
-    uint32_t done = 0;  // triangles whose leaf is done with itself (for progress)
-    bool stop = false;
-    while (top > 0 && !stop) {
-      if ((++steps & 0xffff) == 0) {
-        SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "self-intersection", done, nt));
+    while (top > 0 && !*stop) {
+      if (ctx != nullptr && (++steps & 0xffff) == 0) {
+        SPLINTCORE_RETURN_IF_ERROR(report_progress(*ctx, "self-intersection", *done, nt));
       }
       const PairOfNodes p = stack[--top];
-      const Node& na = nodes[p.a];
-      const Node& nb = nodes[p.b];
       SPLINTCORE_ASSERT(top + 3 <= kMaxStack);
-      if (p.a == p.b) {
-        if (na.right == 0) {
-          stop = leaf_pairs(leaves[na.leaf], leaves[na.leaf], true);
-          done += na.count;
-          continue;
-        }
-        const uint32_t l = p.a + 1, r = na.right;
-        if (dops_overlap(nodes[l].dop, nodes[r].dop)) stack[top++] = PairOfNodes{l, r};
-        stack[top++] = PairOfNodes{r, r};
-        stack[top++] = PairOfNodes{l, l};
+      const int n = open(p, stack + top);
+      if (n >= 0) {
+        top += n;
         continue;
       }
-      if (na.right == 0 && nb.right == 0) {
-        stop = leaf_pairs(leaves[na.leaf], leaves[nb.leaf], false);
-        continue;
-      }
-      // Open the larger node.
-      const bool open_a = nb.right == 0 || (na.right != 0 && na.count >= nb.count);
-      const uint32_t keep = open_a ? p.b : p.a;
-      const uint32_t open = open_a ? p.a : p.b;
-      const Dop& other = nodes[keep].dop;
-      const uint32_t l = open + 1, r = nodes[open].right;
-      if (dops_overlap(nodes[r].dop, other)) stack[top++] = PairOfNodes{r, keep};
-      if (dops_overlap(nodes[l].dop, other)) stack[top++] = PairOfNodes{l, keep};
+      const Node& na = nodes[p.a];
+      *stop = leaf_pairs(leaves[na.leaf], leaves[nodes[p.b].leaf], p.a == p.b, found, tested);
+      if (p.a == p.b) *done += na.count;
+    }
+    return Status::ok();
+  }
+
+  // The whole traversal: in tasks on the executor when there is one (traverse_in_tasks),
+  // otherwise one walk from the root. Sets *stopped when the tally is full.
+  Status traverse(const Context& ctx, bool* stopped) {
+    uint64_t candidates = 0;
+    bool stop = false;
+    if (!traverse_in_tasks(ctx, &candidates, &stop)) {
+      uint32_t done = 0;  // triangles whose leaf is done with itself (for progress)
+      SPLINTCORE_RETURN_IF_ERROR(walk(&ctx, PairOfNodes{0, 0}, tally, &candidates, &done, &stop));
     }
     tally->report->candidate_pairs += candidates;
     *stopped = stop;
     return Status::ok();
+  }
+
+  // The root opened level by level (the walk's own rule) until the pairs pending are enough
+  // for the tasks; each task walks a run of them with its own tally, and the tallies are
+  // summed. The traversal visits every pair whose DOPs overlap whatever the order, so the
+  // counts, candidates and smallest pair are those of one walk, unless the tally fills up,
+  // which stops the pass either way (the sweep then answers). False: one thread (no
+  // executor, or too few triangles to share).
+  bool traverse_in_tasks(const Context& ctx, uint64_t* candidates, bool* stop) const {
+    constexpr size_t kFrontier = 768, kEnough = 256, kMinItems = 8192;
+    constexpr uint32_t kMaxTasks = 16;
+    const Executor* executor = ctx.executor;
+    if (executor == nullptr || executor->concurrency < 2 || kept < kMinItems) return false;
+    PairOfNodes pending[kFrontier], next[kFrontier];
+    size_t n = 1;
+    pending[0] = PairOfNodes{0, 0};
+    bool opened = true;
+    while (opened && n < kEnough && 3 * n <= kFrontier) {
+      opened = false;
+      size_t m = 0;
+      for (size_t i = 0; i < n; ++i) {
+        const int k = open(pending[i], next + m);
+        if (k < 0) {
+          next[m++] = pending[i];
+        } else {
+          m += static_cast<size_t>(k);
+          opened = true;
+        }
+      }
+      std::memcpy(pending, next, m * sizeof(PairOfNodes));
+      n = m;
+    }
+    uint32_t tasks = executor->concurrency * 4;
+    tasks = tasks > kMaxTasks ? kMaxTasks : tasks;
+    struct Part {
+      SelfIntersectionReport report;
+      Tally tally{nullptr, 0};
+      uint64_t candidates = 0;
+      bool stop = false;
+    };
+    Part part[kMaxTasks];
+    auto task = [&](uint32_t t) {
+      Part& p = part[t];
+      p.tally = Tally{&p.report, tally->max_pairs};
+      uint32_t done = 0;
+      for (size_t i = n * t / tasks; i < n * (t + 1) / tasks && !p.stop; ++i) {
+        (void)walk(nullptr, pending[i], &p.tally, &p.candidates, &done, &p.stop);
+      }
+    };
+    parallel_for_each(executor, tasks, task);
+    SelfIntersectionReport* r = tally->report;
+    for (uint32_t t = 0; t < tasks; ++t) {
+      const Part& p = part[t];
+      *candidates += p.candidates;
+      *stop = *stop || p.stop;
+      r->intersecting_pairs += p.report.intersecting_pairs;
+      if (p.tally.have_first &&
+          (!tally->have_first || p.report.first_a < r->first_a ||
+           (p.report.first_a == r->first_a && p.report.first_b < r->first_b))) {
+        r->first_a = p.report.first_a;
+        r->first_b = p.report.first_b;
+        tally->have_first = true;
+      }
+    }
+    *stop = *stop || (tally->max_pairs != 0 && r->intersecting_pairs >= tally->max_pairs);
+    return true;
   }
 };
 

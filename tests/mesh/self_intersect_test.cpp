@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "splintcore/platform.h"
 #include "support/exact.h"
 #include "support/self_intersection_oracle.h"
 #include "support/test_util.h"
@@ -884,6 +885,53 @@ TEST(SelfIntersection, EmptyMeshBadIndexAndCancellation) {
     Status s = find_self_intersections(ctx, torus, 0, &rep);
     EXPECT_EQ(s.code(), StatusCode::kCancelled);
     EXPECT_EQ(work.arena.used(), 0u);
+  }
+}
+
+// ---- threads ----------------------------------------------------------------------------------
+
+// The traversal in tasks (more than 8,192 triangles and an executor) gives the report one
+// thread gives, pairs, first pair and candidates, whether it counts all, stops at max_pairs
+// (then the sweep answers) or finds nothing: a clean octasphere of 12,800 triangles, a torus of
+// 9,216 with vertices pushed through it, and both in one mesh.
+TEST(SelfIntersection, SameReportAtEveryThreadCount) {
+  TestArena t;
+  Mesh sphere = welded(t, octasphere(40, 5.0));
+  Mesh torus = welded(t, shapes::torus(96, 48, 10, 3));
+  ASSERT_GE(torus.triangles.size(), 8192u);
+  std::mt19937_64 rng(11);
+  for (int i = 0; i < 30; ++i) {
+    Vec3& p = torus.vertices[rng() % torus.vertices.size()];
+    p = p + Vec3{static_cast<double>(rng() % 9) * 0.5 - 2.0,
+                 static_cast<double>(rng() % 9) * 0.5 - 2.0, static_cast<double>(rng() % 5) - 2.0};
+  }
+  std::vector<SoupTriangle> both = octasphere(40, 5.0);
+  for (const SoupTriangle& q : shapes::torus(96, 48, 6, 2)) both.push_back(q);
+  const Mesh meshes[3] = {sphere, torus, welded(t, both)};
+  const char* names[3] = {"octasphere", "pushed torus", "sphere and torus"};
+  for (int m = 0; m < 3; ++m) {
+    for (uint64_t max_pairs : {uint64_t{0}, uint64_t{1}, uint64_t{7}}) {
+      const SelfIntersectionReport one = run(meshes[m], max_pairs);
+      if (m == 0) {
+        EXPECT_EQ(one.intersecting_pairs, 0u);
+      } else {
+        EXPECT_GT(one.intersecting_pairs, 0u) << names[m];
+      }
+      for (unsigned threads : {2u, 3u, 5u}) {
+        ThreadExecutor pool(threads);
+        TestArena work(size_t{16} << 20);
+        const Context ctx(&work.arena, &pool.executor(), nullptr);
+        SelfIntersectionReport r;
+        SPLINTCORE_ASSERT_OK(find_self_intersections(ctx, meshes[m], max_pairs, &r));
+        EXPECT_EQ(r.intersecting_pairs, one.intersecting_pairs)
+            << names[m] << ", " << threads << " threads, max_pairs " << max_pairs;
+        EXPECT_EQ(r.first_a, one.first_a) << names[m] << ", " << threads << " threads";
+        EXPECT_EQ(r.first_b, one.first_b) << names[m] << ", " << threads << " threads";
+        EXPECT_EQ(r.candidate_pairs, one.candidate_pairs)
+            << names[m] << ", " << threads << " threads, max_pairs " << max_pairs;
+        EXPECT_EQ(work.arena.used(), 0u);
+      }
+    }
   }
 }
 
