@@ -115,6 +115,9 @@ struct SweepStats {
   uint64_t corrected_samples = 0;      // inside samples given an extrapolated value
   uint64_t cap_triangles_dropped = 0;  // open_at_region: the caps' triangles left out
   uint64_t filtered_triangles = 0;     // keep_triangle: the other triangles it left out
+  // keep_triangle: the extraction ran again with the full id pool (a layer crossed more edges
+  // than the quarter of it the first run has; the bytes are the same either way).
+  bool full_id_pool = false;
   uint64_t closing_samples = 0;        // samples the erosion searched around
   uint64_t closed_samples = 0;         // samples outside the volume that the closing filled
   uint64_t decimated_tiles = 0;        // decimate_error > 0: tiles decimated

@@ -91,6 +91,12 @@ struct MarchingCubesOptions {
   // vertices by at most that fraction of an edge and keeps triangles away from slivers that
   // rounding to float32 would fold (the blockout uses 1/16).
   double edge_margin = kEdgeMargin;
+  // The id pool's size in ids when nonzero and below the full pool (ten ids per grid point of
+  // a layer, or what the free arena holds): a caller that knows its surface crosses few edges
+  // keeps the arena for its own use. A layer that needs more stops the extraction with
+  // kArenaExhausted and MarchingCubesStats::pool_short set (the caller may run it again with a
+  // larger pool). The output never depends on it.
+  uint64_t pool_ids = 0;
 };
 
 struct MarchingCubesStats {
@@ -99,6 +105,7 @@ struct MarchingCubesStats {
   uint32_t layers_per_tile = 0;  // what was used
   uint32_t fill_calls = 0;
   uint64_t working_set_bytes = 0;  // arena bytes held during the sweep (mesh output aside)
+  bool pool_short = false;         // stopped: a layer needed more ids than the pool held
 };
 
 // Arena bytes of the sweep's working set with `layers` sample layers per fill call (buffer-mode

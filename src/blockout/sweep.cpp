@@ -24,6 +24,10 @@ constexpr uint32_t kRing = 5;        // raw layers kept: the output layer and tw
 constexpr double kBandVoxels = 2.1;  // band half-width in voxels (the correction reads 2 h out)
 constexpr uint32_t kMaxBands = 64;
 constexpr uint32_t kKeepLayers = 4;  // the extractor's slab when filtering (keep_triangle)
+// The extractor's id pool when filtering: this share of the full pool (ten ids per grid point
+// of a layer) first, the full pool only when a layer needs more (the real dentition's sweep at
+// 0.1 mm needs under a third of the quarter; the full pool is 16.8 MB there).
+constexpr uint64_t kKeepPoolShare = 4;
 constexpr float kTinyPositive = 1.17549435e-38f;  // FLT_MIN: an outside distance that rounded to 0
 
 struct Frame {
@@ -1061,7 +1065,9 @@ Status build_kept_mesh(Arena& arena, const KeepLog& log, uint64_t extractor_vert
 }
 
 // sweep_volume_mesh() with keep_triangle: the kept mesh above the arena's top when it returns.
-Status extract_kept(Sweep& s, const SweepOptions& o, Mesh* mesh, SweepStats* st) {
+// pool_share: the extractor's id pool is this share of the full pool (1: all of it).
+Status extract_kept(Sweep& s, const SweepOptions& o, uint64_t pool_share, Mesh* mesh,
+                    SweepStats* st) {
   Arena& arena = *s.ctx->arena;
   const VolumeGrid& g = s.mesh_grid;
   KeepLog log;
@@ -1074,8 +1080,10 @@ Status extract_kept(Sweep& s, const SweepOptions& o, Mesh* mesh, SweepStats* st)
   MarchingCubesVisitor visitor;
   visitor.triangle = log_kept;
   visitor.user = &log;
-  SPLINTCORE_RETURN_IF_ERROR(marching_cubes(*s.ctx, g, LayerSource{fill_layers, &s},
-                                            extraction_options(s, o), visitor, &st->extraction));
+  MarchingCubesOptions mc = extraction_options(s, o);
+  mc.pool_ids = (uint64_t{g.nx} + 1) * (uint64_t{g.ny} + 1) * 10 / pool_share;
+  SPLINTCORE_RETURN_IF_ERROR(
+      marching_cubes(*s.ctx, g, LayerSource{fill_layers, &s}, mc, visitor, &st->extraction));
   st->cap_triangles_dropped = log.caps;
   st->filtered_triangles = log.left_out;
   return build_kept_mesh(arena, log, st->extraction.vertices, mesh);
@@ -1179,7 +1187,18 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
     return Status::ok();
   }
   if (status.is_ok() && !s.empty && options.keep_triangle != nullptr) {
-    status = extract_kept(s, options, &mesh, st);
+    status = extract_kept(s, options, kKeepPoolShare, &mesh, st);
+    if (st->extraction.pool_short) {
+      // A layer crossed more edges than the share holds: all again with the full pool (the
+      // same bytes; the high water is this run's, the first stopped below it).
+      arena.rewind(scope.start());
+      Sweep again;
+      mesh = Mesh(&arena);
+      *st = SweepStats{};
+      status = prepare(ctx, jaws, options, &again, st);
+      st->full_id_pool = true;
+      if (status.is_ok()) status = extract_kept(again, options, 1, &mesh, st);
+    }
     if (!status.is_ok()) {
       out->bind(&arena);
       return status;

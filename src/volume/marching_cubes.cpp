@@ -271,7 +271,8 @@ struct Sweep {
   uint64_t* spare_prefix = nullptr;  // the prefix buffer the next plane set takes
   uint32_t* pool = nullptr;          // vertex ids of the crossed edges of the three sets
   uint64_t pool_size = 0;
-  uint64_t pool_next = 0;  // where the next set is placed
+  uint64_t pool_next = 0;   // where the next set is placed
+  bool pool_short = false;  // a set found no room (place_ids failed)
   uint64_t vertices = 0;
   uint64_t triangles = 0;
   int64_t cz = 0;
@@ -490,6 +491,7 @@ Status place_ids(Sweep& s, EdgeSet* set, const EdgeSet& keep1, const EdgeSet& ke
     }
   }
   const uint64_t live = keep1.count + keep2.count;
+  s.pool_short = true;
   return make_error(StatusCode::kArenaExhausted, "marching cubes: cell layer ", s.cz,
                     " needs ids for ", n, " crossed grid edges beside the ", live,
                     " still in use, and the id pool holds ", s.pool_size,
@@ -658,7 +660,8 @@ struct Slab {
 // the id pool: ten ids per grid point when the budget allows (no layer can need more), else
 // what the budget leaves (a layer that needs more is a clean error naming the need).
 Status allocate_working_set(Arena& arena, const VolumeGrid& grid, uint32_t layers,
-                            uint64_t edge_bytes, uint64_t share_divisor, Slab* slab) {
+                            uint64_t edge_bytes, uint64_t share_divisor, uint64_t pool_limit,
+                            Slab* slab) {
   slab->layer_floats = uint64_t{grid.nx} * grid.ny;
   slab->layer_words = bit_words(grid.nx) * grid.ny;
   const uint64_t prefix_words = bit_words(grid.nx) * (uint64_t{grid.ny} + 1);
@@ -673,6 +676,7 @@ Status allocate_working_set(Arena& arena, const VolumeGrid& grid, uint32_t layer
                          : arena.allocate_array<uint64_t>(static_cast<size_t>(prefix_words * 10));
   if (prefix == nullptr) return arena.exhausted_status();
   uint64_t pool_ids = edge_bytes / 4;
+  if (pool_limit != 0 && pool_limit < pool_ids) pool_ids = pool_limit;
   {
     const uint64_t now_free = arena.cap() > arena.used() ? arena.cap() - arena.used() : 0;
     const uint64_t budget = now_free / share_divisor;
@@ -754,8 +758,8 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
   }
   // Not rewound here: the mesh variant's log grows above the working set (callers rewind).
   Slab slab;
-  SPLINTCORE_RETURN_IF_ERROR(
-      allocate_working_set(arena, grid, layers, edge_bytes, share_divisor, &slab));
+  SPLINTCORE_RETURN_IF_ERROR(allocate_working_set(arena, grid, layers, edge_bytes, share_divisor,
+                                                  options.pool_ids, &slab));
   Sweep s;
   s.grid = &grid;
   s.iso = options.iso;
@@ -775,7 +779,11 @@ Status run_sweep(const Context& ctx, const VolumeGrid& grid, const LayerSource& 
     const uint32_t n = grid.nz - next_z < layers ? grid.nz - next_z : layers;
     SPLINTCORE_RETURN_IF_ERROR(fill_slab(source, grid, threshold, next_z, n, slab));
     ++fill_calls;
-    SPLINTCORE_RETURN_IF_ERROR(march_slab(s, next_z, n, slab));
+    const Status marched = march_slab(s, next_z, n, slab);
+    if (!marched.is_ok()) {
+      if (stats != nullptr) stats->pool_short = s.pool_short;
+      return marched;
+    }
     next_z += n;
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "marching cubes", grid.nz, grid.nz));

@@ -469,6 +469,48 @@ TEST(Blockout, NearSplintFilterGivesTheSameSolid) {
   expect_same_solid(ctx, cut, jaw, o, "phantom maxilla, 0.2 mm", false);
 }
 
+bool keep_all(const void*, const Vec3&, const Vec3&, const Vec3&) { return true; }
+
+TEST(Sweep, FilteredSweepRunsAgainWithTheFullIdPoolWhenALayerNeedsIt) {
+  // A slab wider than the region swept up through it: the region's last layer is inside
+  // everywhere, so the closing cells cross four edges at each of its samples, more than the
+  // quarter pool of the filtered extraction holds; it runs again with the full pool, with the
+  // bytes of a run whose slab differs (the output never depends on the pool or the slab).
+  TestArena ta(size_t{256} << 20);
+  Context ctx(&ta.arena);
+  const float lo[3] = {-4, -4, 0}, hi[3] = {4, 4, 1};
+  Mesh slab = box_mesh(&ta.arena, lo, hi);
+  SweepOptions o;
+  o.direction = Vec3{0, 0, 1};
+  o.voxel = 0.25;
+  o.has_region = true;
+  o.region.lo = Vec3{-2.0, -2.0, 0.5};
+  o.region.hi = Vec3{2.0, 2.0, 3.0};
+  o.open_at_region = true;
+  o.keep_triangle = keep_all;
+  o.float32_vertices = true;
+  std::vector<Vec3> vertices[2];
+  std::vector<Triangle> triangles[2];
+  for (uint32_t layers : {0u, 1u}) {
+    o.layers_per_tile = layers;
+    Mesh swept(&ta.arena);
+    SweepStats st;
+    SPLINTCORE_ASSERT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(&slab, 1), o, &swept, &st));
+    EXPECT_TRUE(st.full_id_pool);
+    EXPECT_FALSE(st.extraction.pool_short);
+    EXPECT_GT(swept.triangles.size(), 100u);
+    EXPECT_EQ(swept.triangles.size() + st.cap_triangles_dropped, st.extraction.triangles);
+    vertices[layers].assign(swept.vertices.begin(), swept.vertices.end());
+    triangles[layers].assign(swept.triangles.begin(), swept.triangles.end());
+  }
+  ASSERT_EQ(vertices[0].size(), vertices[1].size());
+  ASSERT_EQ(triangles[0].size(), triangles[1].size());
+  EXPECT_EQ(0,
+            std::memcmp(vertices[0].data(), vertices[1].data(), vertices[0].size() * sizeof(Vec3)));
+  EXPECT_EQ(0, std::memcmp(triangles[0].data(), triangles[1].data(),
+                           triangles[0].size() * sizeof(Triangle)));
+}
+
 TEST(Sweep, RegionGivesTheSameSurfaceInsideIt) {
   // Cutting the grid to a region changes nothing inside it: the samples are the same lattice
   // points with the same values, so the clipped surface's vertices away from the region's caps

@@ -626,6 +626,47 @@ TEST(MarchingCubes, StreamingYieldsExactlyTheMeshTriangles) {
   }
 }
 
+// MarchingCubesOptions::pool_ids: a pool that holds what the layers need gives the same
+// output in less memory; one that does not stops cleanly with pool_short set.
+TEST(MarchingCubes, SmallerIdPoolSameOutputOrPoolShort) {
+  Field fd = torus(3.0, 1.2, 0.3);
+  auto stream = [&](uint64_t pool_ids, std::string* hash, size_t* high_water,
+                    MarchingCubesStats* stats) {
+    TestArena ta(size_t{64} << 20);
+    Context ctx(&ta.arena);
+    Collected c;
+    MarchingCubesVisitor visitor;
+    visitor.vertex = collect_vertex;
+    visitor.triangle = collect_triangle;
+    visitor.user = &c;
+    MarchingCubesOptions options;
+    options.layers_per_tile = 4;
+    options.pool_ids = pool_ids;
+    fd.next_layer = 0;
+    const Status st = marching_cubes(ctx, fd.grid, source_of(&fd), options, visitor, stats);
+    *hash =
+        arrays_hash(c.vertices.data(), c.vertices.size(), c.triangles.data(), c.triangles.size());
+    *high_water = ta.arena.high_water();
+    EXPECT_EQ(ta.arena.used(), 0u);
+    return st;
+  };
+  std::string full_hash, small_hash, short_hash;
+  size_t full_water = 0, small_water = 0, short_water = 0;
+  MarchingCubesStats full_stats, small_stats, short_stats;
+  SPLINTCORE_ASSERT_OK(stream(0, &full_hash, &full_water, &full_stats));
+  EXPECT_FALSE(full_stats.pool_short);
+  EXPECT_GT(full_stats.triangles, 100u);
+  const uint64_t full_ids = (uint64_t{fd.grid.nx} + 1) * (fd.grid.ny + 1) * 10;
+  SPLINTCORE_ASSERT_OK(stream(full_ids / 4, &small_hash, &small_water, &small_stats));
+  EXPECT_FALSE(small_stats.pool_short);
+  EXPECT_EQ(small_hash, full_hash);
+  EXPECT_EQ(small_stats.triangles, full_stats.triangles);
+  EXPECT_LE(small_water + 3 * full_ids, full_water);
+  const Status st = stream(8, &short_hash, &short_water, &short_stats);
+  EXPECT_EQ(st.code(), StatusCode::kArenaExhausted) << test::format(st);
+  EXPECT_TRUE(short_stats.pool_short);
+}
+
 TEST(MarchingCubes, IsoBetweenTwoFloatsClassifiesExactly) {
   // Samples are float, iso is double: "inside" is (double)sample < iso, exactly, also when iso
   // lies strictly between two floats (the extractor compares against the least float not
