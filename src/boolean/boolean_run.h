@@ -440,6 +440,7 @@ class BooleanRun {
   Status prepare_a_slots(ASlots* out);
   size_t hits_in_parallel(const ASlots& as);
   Status find_hits();
+  void hits_over_slots(const Arena::Marker& slots_at);
   Status add_contact(uint32_t ta, uint32_t tb);
   Status name_contact_point(const detail::ContactPoint& cp, const uint32_t ga[3],
                             const uint32_t gb[3], uint32_t ta, uint32_t tb, DegPoint* name);

@@ -512,6 +512,7 @@ Status BooleanRun::find_hits() {
   vstate_ = arena_.allocate_array<int8_t>(nv_in);
   if (vstate_ == nullptr && nv_in > 0) return arena_.exhausted_status();
   if (nv_in > 0) std::memset(vstate_, 0, nv_in);
+  const Arena::Marker slots_at = arena_.mark();
   ASlots as;
   SPLINTCORE_RETURN_IF_ERROR(prepare_a_slots(&as));
   st_.near_b_triangles = bp_.near_ids.size();
@@ -546,7 +547,25 @@ Status BooleanRun::find_hits() {
     SPLINTCORE_RETURN_IF_ERROR(check_pair_budget(t));
   }
   st_.intersecting_pairs = hits_.size();
+  hits_over_slots(slots_at);
   return Status::ok();
+}
+
+// The slots of A (about 470 bytes per triangle of A near B, a fifth of the blockout's Boolean
+// on the real dentition) are done with once the hits are found: when the hits are all that
+// lies above them (no contact recorded, and all in the arena's block of `slots_at`), the hits
+// move down over them, with the same capacity, and the rest of the run has that room.
+void BooleanRun::hits_over_slots(const Arena::Marker& slots_at) {
+  if (deg_.data() != nullptr || alias_ != nullptr || arena_.mark().block != slots_at.block) return;
+  const size_t size = hits_.size(), capacity = hits_.capacity();
+  const Hit* old = hits_.data();
+  arena_.rewind(slots_at);
+  hits_.bind(&arena_);
+  if (capacity == 0) return;
+  Hit* moved = arena_.allocate_array<Hit>(capacity);  // where the slots began: it fits
+  SPLINTCORE_ASSERT(moved != nullptr && moved <= old);
+  std::memmove(static_cast<void*>(moved), old, size * sizeof(Hit));
+  hits_.adopt(moved, size, capacity);
 }
 
 namespace {
