@@ -410,8 +410,8 @@ constexpr uint32_t kMaxHitTasks = 16;
 // would have given it: the arena is then as one thread leaves it. Returns the near index the
 // serial loop goes on from (the first task that stopped early, or whose candidates pass the
 // budget: that task is redone) with st_.candidate_pairs counting those before it. The slab is
-// extra memory (per task 4 bytes per slot of A, and 2.5 per near triangle): without it, or
-// when the hits need more than it and the arena has no more above it, one thread does all
+// extra memory (per task 4 bytes per slot of A, and 20 per near triangle, 2.5 when short): without
+// it, or when the hits need more than it and the arena has no more above it, one thread does all
 // (0), and everything is the same but the time.
 size_t BooleanRun::hits_in_parallel(const ASlots& as) {
   const Executor* executor = ctx_.executor;
@@ -421,14 +421,19 @@ size_t BooleanRun::hits_in_parallel(const ASlots& as) {
   if (tasks > kMaxHitTasks) tasks = kMaxHitTasks;
   const size_t per_task = (n + tasks - 1) / tasks;
   const size_t stamp_hits = (size_t{as.count} * sizeof(uint32_t) + sizeof(Hit) - 1) / sizeof(Hit);
-  // A hit per 16 near triangles (the real case: 1 per 25); more stops the task.
-  const size_t capacity = per_task / 16 + 256;
-  const size_t slice = stamp_hits + capacity;  // in Hits: the stamps, then the hits
-  const size_t slab_hits = slice * tasks;
+  // A hit per 2 near triangles (the 87k phantom: 1 per 2.2; the real case: 1 per 25), or
+  // where the arena is short a hit per 16; more stops the task (one thread goes on there).
   const Arena::Marker before = arena_.mark();
-  Hit* slab = arena_.allocate_array<Hit>(slab_hits);
-  if (slab == nullptr || arena_.mark().block != before.block) {  // (a new block: hooks mode)
+  size_t capacity = per_task / 2 + 256, slice = 0, slab_hits = 0;
+  Hit* slab = nullptr;
+  for (int attempt = 0; attempt < 2 && slab == nullptr; ++attempt) {
+    if (attempt == 1) capacity = per_task / 16 + 256;
+    slice = stamp_hits + capacity;  // in Hits: the stamps, then the hits
+    slab_hits = slice * tasks;
+    slab = arena_.allocate_array<Hit>(slab_hits);
     if (slab == nullptr) arena_.forget_failure();
+  }
+  if (slab == nullptr || arena_.mark().block != before.block) {  // (a new block: hooks mode)
     arena_.rewind(before);
     return 0;  // one thread does it all, in the memory it needs
   }

@@ -48,6 +48,10 @@ struct Harness {
   int repeat = 7;
   std::string filter;
   bool failed = false;
+  // --threads N (N > 1): the Booleans, outlines, autorotations and designs run on N threads
+  // (the same results); the other entries and the default run on one.
+  const Executor* executor = nullptr;
+  unsigned threads = 1;
 
   bool wanted(const char* name) const {
     return filter.empty() || std::strstr(name, filter.c_str()) != nullptr;
@@ -79,9 +83,11 @@ struct Harness {
     r.median = times[times.size() / 2];
     r.min = times.front();
     r.max = times.back();
-    std::printf("bench=%s size=%llu median_s=%.6f min_s=%.6f max_s=%.6f peak_arena_bytes=%llu\n",
-                name, static_cast<unsigned long long>(size), r.median, r.min, r.max,
-                static_cast<unsigned long long>(r.peak_arena));
+    std::printf(
+        "bench=%s size=%llu median_s=%.6f min_s=%.6f max_s=%.6f peak_arena_bytes=%llu "
+        "threads=%u\n",
+        name, static_cast<unsigned long long>(size), r.median, r.min, r.max,
+        static_cast<unsigned long long>(r.peak_arena), threads);
     std::fflush(stdout);
     return r;
   }
@@ -571,7 +577,7 @@ void bench_boolean_phantom(Harness& h, Arena& arena, const std::string& fixtures
       progress.user = &clock;
       h.measure(name.c_str(), jaws.triangles.size(), arena, [&](Arena& a) {
         Mesh out;
-        Status r = mesh_boolean(Context(&a, nullptr, &progress), base, jaws, bo, &out, &st);
+        Status r = mesh_boolean(Context(&a, h.executor, &progress), base, jaws, bo, &out, &st);
         out_tris = out.triangles.size();
         if (r.is_ok()) volume = mesh_volume(out);
         return r;
@@ -630,7 +636,7 @@ void bench_boolean_realdata(Harness& h, Arena& arena, const std::string& dir) {
     progress.user = &clock;
     h.measure(name, teeth.triangles.size(), arena, [&](Arena& a) {
       Mesh out;
-      Status r = mesh_boolean(Context(&a, nullptr, &progress), wafer, teeth, bo, &out, &st);
+      Status r = mesh_boolean(Context(&a, h.executor, &progress), wafer, teeth, bo, &out, &st);
       out_tris = out.triangles.size();
       if (r.is_ok()) volume = mesh_volume(out);
       return r;
@@ -1065,7 +1071,8 @@ void bench_blockout(Harness& h, Arena& arena, const std::string& fixtures) {
   uint64_t triangles = 0;
   h.measure(name, 0, arena, [&](Arena& a) {
     Mesh splint;
-    Status st = design_splint(Context(&a), c, Span<const Mesh>(jaws, 2), &splint, &report);
+    Status st = design_splint(Context(&a, h.executor, nullptr), c, Span<const Mesh>(jaws, 2),
+                              &splint, &report);
     triangles = splint.triangles.size();
     return st;
   });
@@ -1124,7 +1131,7 @@ void bench_outline_jaws(Harness& h, Arena& arena, const char* name, const Mesh& 
   Outline o;
   uint64_t hash = 0;
   h.measure(name, upper.triangles.size() + lower.triangles.size(), arena, [&](Arena& a) {
-    Status s = compute_outline(Context(&a), upper, lower, options, &o);
+    Status s = compute_outline(Context(&a, h.executor, nullptr), upper, lower, options, &o);
     if (s.is_ok()) hash = outline_hash(o);  // before the harness rewinds the arena
     return s;
   });
@@ -1177,8 +1184,9 @@ void bench_autorotate_jaws(Harness& h, Arena& arena, const char* name, const Mes
   o.hinge[1] = h1;
   o.opening_mm = 2.0;
   AutorotateReport r;
-  h.measure(name, upper.triangles.size() + lower.triangles.size(), arena,
-            [&](Arena& a) { return autorotate_mandible(Context(&a), upper, lower, o, &r); });
+  h.measure(name, upper.triangles.size() + lower.triangles.size(), arena, [&](Arena& a) {
+    return autorotate_mandible(Context(&a, h.executor, nullptr), upper, lower, o, &r);
+  });
   std::printf("# %s: %.12f rad, opening %.12f mm, %u distance evaluations, start %.6f rad\n", name,
               r.angle_rad, r.opening, r.steps, r.start_angle_rad);
   std::string build_name = std::string(name) + "_index_build";
@@ -1588,6 +1596,10 @@ int run(int argc, char** argv) {
       dicom_input = argv[++i];
     } else if (a == "--memory-cap" && i + 1 < argc && cli::parse_size(argv[i + 1], &cap)) {
       ++i;
+    } else if (a == "--threads" && i + 1 < argc && cli::parse_unsigned(argv[i + 1], &v) && v > 0 &&
+               v <= ThreadExecutor::kMaxThreads) {
+      h.threads = static_cast<unsigned>(v);
+      ++i;
     } else if (a == "--export-realcase" && i + 1 < argc) {
       // The real case as a folder `splintcore design` takes (tools/bench/table1.sh).
       realcase::RealCase rc;
@@ -1607,7 +1619,7 @@ int run(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: splintcore-bench [--filter SUBSTRING] [--repeat N] "
-                   "[--realdata DIR] [--fixtures DIR] [--memory-cap SIZE] "
+                   "[--realdata DIR] [--fixtures DIR] [--memory-cap SIZE] [--threads N] "
                    "[--inflate-input ZLIB_FILE] [--dicom-input DICOM_FILE]\n"
                    "       splintcore-bench [--realdata DIR] --export-realcase DIR\n");
       return a == "--help" ? 0 : 2;
@@ -1620,6 +1632,8 @@ int run(int argc, char** argv) {
     return 1;
   }
   {
+    ThreadExecutor pool(h.threads);
+    if (h.threads > 1) h.executor = &pool.executor();
     Arena arena(buffer, static_cast<size_t>(cap));
     bench_base(h, arena, fixtures);
     bench_boolean_phantom(h, arena, fixtures);
