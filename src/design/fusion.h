@@ -26,8 +26,8 @@ Status register_case_scans(const Context& ctx, const CaseFile& c, Span<const Mes
 // after them as usual. `vetted`: refuse_no_jaw already passed on these very jaws and scans
 // (design_plan checks them once for both splints), so it is not run again.
 Status design_splint_registered(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
-                                Span<const Mesh> scans, const FusionReport* registered,
-                                bool vetted, Mesh* splint, DesignReport* report);
+                                Span<const Mesh> scans, const FusionReport* registered, bool vetted,
+                                Mesh* splint, DesignReport* report);
 
 }  // namespace design_detail
 }  // namespace splintcore

@@ -210,9 +210,8 @@ Status plan_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, co
   CaseFile derived;
   SPLINTCORE_RETURN_IF_ERROR(plan_splint_case(c, *r, derived_jaws, &derived));
   return plan_error(
-      design_detail::design_splint_registered(ctx, derived, jaws, f.scans,
-                                              f.any() ? f.fusion : nullptr, true, splint,
-                                              &r->design),
+      design_detail::design_splint_registered(
+          ctx, derived, jaws, f.scans, f.any() ? f.fusion : nullptr, true, splint, &r->design),
       which, "");
 }
 

@@ -605,8 +605,7 @@ struct ThreadedRun {
 ThreadedRun threaded_difference(const Vec3& box_hi, unsigned threads, size_t cap,
                                 uint64_t max_pairs) {
   TestArena inputs(size_t{64} << 20);
-  Mesh b =
-      sphere_mesh(inputs.arena, 0.45, 64, 128, rotation(0.3, -0.2, 0.7, {0.52, 0.47, 0.93}));
+  Mesh b = sphere_mesh(inputs.arena, 0.45, 64, 128, rotation(0.3, -0.2, 0.7, {0.52, 0.47, 0.93}));
   const Vec3 hi = box_hi.z < 0 ? Vec3{1, 1, b.vertices[1 + 20 * 128].z} : box_hi;
   Mesh a = box_mesh(inputs.arena, {0, 0, 0}, hi, RigidTransform{});
   TestArena run(cap == 0 ? size_t{256} << 20 : cap);
@@ -626,7 +625,8 @@ ThreadedRun threaded_difference(const Vec3& box_hi, unsigned threads, size_t cap
 }
 
 void expect_same_run(const ThreadedRun& r, const ThreadedRun& one, unsigned threads) {
-  EXPECT_EQ(r.status.code(), one.status.code()) << threads << " threads: " << test::format(r.status);
+  EXPECT_EQ(r.status.code(), one.status.code())
+      << threads << " threads: " << test::format(r.status);
   EXPECT_STREQ(r.status.message(), one.status.message()) << threads << " threads";
   EXPECT_EQ(r.bytes, one.bytes) << threads << " threads";
   EXPECT_EQ(r.stats.candidate_pairs, one.stats.candidate_pairs) << threads << " threads";

@@ -301,6 +301,15 @@ Status collect_triangle(void* user, const Triangle& t, const Vec3& a, const Vec3
   return Status::ok();
 }
 
+// A visitor that collects into *c.
+MarchingCubesVisitor collecting(Collected* c) {
+  MarchingCubesVisitor visitor;
+  visitor.vertex = collect_vertex;
+  visitor.triangle = collect_triangle;
+  visitor.user = c;
+  return visitor;
+}
+
 TEST(MarchingCubes, IdenticalOutputForEveryTileSizeAndCap) {
   std::vector<Field> fields = {sphere(5.0, 17), torus(3.0, 1.0, 0.37)};
   for (Field& fd : fields) {
@@ -352,10 +361,7 @@ TEST(MarchingCubes, IdenticalOutputForEveryTileSizeAndCap) {
       TestArena ta(static_cast<size_t>(cap));
       Context ctx(&ta.arena);
       Collected c;
-      MarchingCubesVisitor visitor;
-      visitor.vertex = collect_vertex;
-      visitor.triangle = collect_triangle;
-      visitor.user = &c;
+      const MarchingCubesVisitor visitor = collecting(&c);
       MarchingCubesStats stats;
       fd.next_layer = 0;
       SPLINTCORE_ASSERT_OK(
@@ -597,10 +603,7 @@ TEST(MarchingCubes, StreamingYieldsExactlyTheMeshTriangles) {
     SPLINTCORE_ASSERT_OK(writer.begin(ctx, memory_sink(&ms), StlWriteOptions{}, kUnknownSize));
     Collected c;
     c.writer = &writer;
-    MarchingCubesVisitor visitor;
-    visitor.vertex = collect_vertex;
-    visitor.triangle = collect_triangle;
-    visitor.user = &c;
+    const MarchingCubesVisitor visitor = collecting(&c);
     MarchingCubesOptions options;
     options.layers_per_tile = layers;
     fd.next_layer = 0;
@@ -635,10 +638,7 @@ TEST(MarchingCubes, SmallerIdPoolSameOutputOrPoolShort) {
     TestArena ta(size_t{64} << 20);
     Context ctx(&ta.arena);
     Collected c;
-    MarchingCubesVisitor visitor;
-    visitor.vertex = collect_vertex;
-    visitor.triangle = collect_triangle;
-    visitor.user = &c;
+    const MarchingCubesVisitor visitor = collecting(&c);
     MarchingCubesOptions options;
     options.layers_per_tile = 4;
     options.pool_ids = pool_ids;
