@@ -97,8 +97,10 @@ RigidTransform plan_source_move(const PlanFusion& f, size_t j, const RigidTransf
   return f.fused[j] ? compose(move, f.fusion[j].registration.transform) : move;
 }
 
-// The plan's moves of one splint's jaws (before the autorotation) and its opening.
-void plan_moves(const CasePlan& plan, bool final_splint, PlanSplintReport* r) {
+// The plan's moves of one splint's jaws (before the autorotation) and its opening, into a
+// PlanSplintReport or a SplintRotation (the same members).
+template <class Report>
+void plan_moves(const CasePlan& plan, bool final_splint, Report* r) {
   const bool move_maxilla = final_splint || !plan.mandible_first;
   const bool move_mandible = final_splint || plan.mandible_first;
   r->maxilla = move_maxilla ? plan.maxilla : RigidTransform{};
@@ -294,15 +296,23 @@ bool same_move(const RigidTransform& a, const RigidTransform& b) {
   return true;
 }
 
+// One splint's part of PlanSplintReport that its autorotation writes (a task's own: the
+// report's is written when both tasks succeeded; small, unlike the report, on the stack).
+struct SplintRotation {
+  RigidTransform maxilla, mandible;
+  double opening_asked_mm = 0;
+  AutorotateReport autorotation;
+};
+
 // What one splint's task reads: its jaws' sources and moves (maxilla, mandible), the jaws'
-// indexes, the jaws both splints move alike (moved already, else null), its report.
+// indexes, the jaws both splints move alike (moved already, else null), where it writes.
 struct SplintTask {
   const CaseFile* c = nullptr;
   const Mesh* sources[2] = {nullptr, nullptr};
   RigidTransform moves[2];
   const DistanceIndex* index = nullptr;
   const MovedJaw* shared[2] = {nullptr, nullptr};
-  PlanSplintReport* r = nullptr;
+  SplintRotation* r = nullptr;
 };
 
 // Its own moved jaws (those not shared), then the autorotation (the mandible's index second).
@@ -331,7 +341,7 @@ Status splint_task(const Context& ctx, const SplintTask& t) {
 bool splint_autorotations_in_tasks(const Context& ctx, const CaseFile& c,
                                    const Mesh* const sources[2], const PlanFusion& f, size_t up,
                                    size_t low, const DistanceIndex index[2],
-                                   PlanSplintReport local[2]) {
+                                   SplintRotation local[2]) {
   ArenaScope scope(*ctx.arena);
   SplintTask tasks[2];
   for (int k = 0; k < 2; ++k) {
@@ -392,7 +402,7 @@ void serial_autorotations(const Context& ctx, const CaseFile& c, Span<const Mesh
 }
 
 // The report's part of one splint's autorotation, from `from`.
-void take_autorotation(const PlanSplintReport& from, PlanSplintReport* to) {
+void take_autorotation(const SplintRotation& from, PlanSplintReport* to) {
   to->maxilla = from.maxilla;
   to->mandible = from.mandible;
   to->opening_asked_mm = from.opening_asked_mm;
@@ -436,7 +446,7 @@ void plan_autorotations(const Context& ctx, const CaseFile& c, Span<const Mesh> 
       // The tasks report no progress: a cancel is seen here.
       status[0] = report_progress(ctx, "distance index", 4, 4);
       if (!status[0].is_ok()) return;
-      PlanSplintReport local[2];
+      SplintRotation local[2];
       if (splint_autorotations_in_tasks(ctx, c, sources, f, up, low, index, local)) {
         take_autorotation(local[0], &report->intermediate);
         take_autorotation(local[1], &report->final_splint);
