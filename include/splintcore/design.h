@@ -372,7 +372,12 @@ Status plan_splint_case(const CaseFile& c, const PlanSplintReport& r, CaseJaw ja
 // bytes a vertex), their refit indexes (refit_distance_index_bound) and
 // autorotate_mandible_indexed_bound(), all returned; then the intermediate splint stays, then
 // the final one above it. At most the larger of that and the intermediate splint plus one
-// design_splint run of a splint. An autorotation's error is reported where it was before: the
+// design_splint run of a splint. With an executor of more than one thread the autorotations
+// run in tasks when their slices fit (else as above; the same answers either way): both
+// indexes' distance_index_bound() at once (the indexes then moved together, the rest
+// returned), then a jaw both splints move alike moved and refit once and, at once, one slice a
+// splint of its other moved jaws, their refit indexes and autorotate_mandible_indexed_bound()
+// (each rounded up to 16 bytes). An autorotation's error is reported where it was before: the
 // final's after the intermediate's design. Progress: "plan: intermediate", the design's
 // stages, "plan: final", the design's.
 // Errors: kInvalidArgument (no plan, jaw count or roles, a label text too long for the prefix:

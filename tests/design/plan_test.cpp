@@ -9,7 +9,9 @@
 #include <vector>
 
 #include "common/phantom.h"
+#include "design/plan_internal.h"
 #include "splintcore/design.h"
+#include "splintcore/platform.h"
 #include "support/phantom_jaws.h"
 #include "support/test_util.h"
 
@@ -38,12 +40,12 @@ struct PlanFixture {
   bool ok = false;
   explicit PlanFixture(const char* sequence,
                        const char* mandible = "[1,0,0,0, 0,1,0,2.5, 0,0,1,0, 0,0,0,1]",
-                       const char* extra = "") {
+                       const char* extra = "", uint32_t triangles = 6000) {
     Context ctx(&t.arena);
     static std::string text;
     text = phantom_plan_case(sequence, mandible, extra);
     if (!parse_case(ctx, text.data(), text.size(), "plan", &c).is_ok()) return;
-    if (!test::phantom_jaw_meshes(t.arena, 6000, jaws)) return;
+    if (!test::phantom_jaw_meshes(t.arena, triangles, jaws)) return;
     ok = true;
   }
   Span<const Mesh> span() const { return Span<const Mesh>(jaws, 2); }
@@ -513,6 +515,151 @@ TEST(DesignPlan, ErrorsLeaveTheArenaAsItWas) {
   EXPECT_TRUE(a.triangles.empty() && b.triangles.empty());
   std::printf("design_plan on the 6000-triangle phantom: %llu arena bytes\n",
               static_cast<unsigned long long>(need));
+}
+
+// The same bits: EXPECT_EQ on doubles would take -0 for +0.
+uint64_t bits(double x) {
+  uint64_t u = 0;
+  std::memcpy(&u, &x, sizeof u);
+  return u;
+}
+
+void expect_same_autorotation(const AutorotateReport& a, const AutorotateReport& b) {
+  EXPECT_EQ(bits(a.angle_rad), bits(b.angle_rad));
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(bits(a.transform.t[i]), bits(b.transform.t[i]));
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(bits(a.transform.r[i][k]), bits(b.transform.r[i][k]));
+    EXPECT_EQ(bits(a.contact_maxilla[i]), bits(b.contact_maxilla[i]));
+    EXPECT_EQ(bits(a.contact_mandible[i]), bits(b.contact_mandible[i]));
+  }
+  EXPECT_EQ(a.closing_sign, b.closing_sign);
+  EXPECT_EQ(bits(a.gap_as_given), bits(b.gap_as_given));
+  EXPECT_EQ(a.met_as_given, b.met_as_given);
+  EXPECT_EQ(bits(a.start_angle_rad), bits(b.start_angle_rad));
+  EXPECT_EQ(bits(a.opening), bits(b.opening));
+  EXPECT_EQ(bits(a.bracket_rad), bits(b.bracket_rad));
+  EXPECT_EQ(bits(a.lever_mm), bits(b.lever_mm));
+  EXPECT_EQ(a.steps, b.steps);
+  EXPECT_EQ(a.triangle_maxilla, b.triangle_maxilla);
+  EXPECT_EQ(a.triangle_mandible, b.triangle_mandible);
+}
+
+// At 1, 2 and 3 threads (the autorotations serial, then in tasks, in either sequence: a
+// different jaw shared by both splints' moves): the same splints, print job, report and
+// autorotations, bit for bit; an opening the jaws cannot reach gives the same error.
+TEST(DesignPlan, SameBytesAndAutorotationsAtOneTwoAndThreeThreads) {
+  for (const char* sequence : {"maxilla_first", "mandible_first"}) {
+    const bool maxilla_first = std::strcmp(sequence, "maxilla_first") == 0;
+    PlanFixture f(sequence, maxilla_first ? "[1,0,0,0, 0,1,0,2.5, 0,0,1,0, 0,0,0,1]"
+                                          : "[1,0,0,0, 0,1,0,0.5, 0,0,1,-0.5, 0,0,0,1]");
+    ASSERT_TRUE(f.ok);
+    std::string first[4];
+    PlanReport first_report;
+    std::string first_error;
+    for (unsigned threads = 1; threads <= 3; ++threads) {
+      ThreadExecutor pool(threads);
+      const Context ctx(&f.t.arena, &pool.executor(), nullptr);
+      ArenaScope scope(f.t.arena);
+      Mesh a, b;
+      PlanReport r;
+      SPLINTCORE_ASSERT_OK(design_plan(ctx, f.c, f.span(), &a, &b, &r));
+      std::string out[4] = {std::string(), std::string(), std::string(),
+                            plan_report_json(ctx, f, a, b, r)};
+      const std::vector<uint8_t> sa = stl_bytes(f.t.arena, a), sb = stl_bytes(f.t.arena, b);
+      out[0].assign(sa.begin(), sa.end());
+      out[1].assign(sb.begin(), sb.end());
+      SPLINTCORE_ASSERT_OK(write_plan_job(ctx, f.c, a, b, nullptr, sink_of(&out[2]), nullptr));
+      CaseFile far = f.c;
+      far.plan.hinge[0] = Vec3{0, 0, -50};  // a vertical axis: no closing sense
+      far.plan.hinge[1] = Vec3{0, 0, 50};
+      Mesh c, d;
+      PlanReport unused;
+      const size_t used = f.t.arena.used();
+      const Status s = design_plan(ctx, far, f.span(), &c, &d, &unused);
+      EXPECT_EQ(f.t.arena.used(), used);
+      const std::string error = test::format(s);
+      EXPECT_NE(error.find("plan: intermediate: autorotation: "), std::string::npos) << error;
+      if (threads == 1) {
+        for (int i = 0; i < 4; ++i) first[i] = out[i];
+        first_report = r;
+        first_error = error;
+        continue;
+      }
+      for (int i = 0; i < 4; ++i) EXPECT_TRUE(out[i] == first[i]) << sequence << " " << i;
+      expect_same_autorotation(r.intermediate.autorotation, first_report.intermediate.autorotation);
+      expect_same_autorotation(r.final_splint.autorotation, first_report.final_splint.autorotation);
+      EXPECT_EQ(error, first_error);
+    }
+    EXPECT_FALSE(first[0].empty() || first[2].empty() || first[3].empty());
+  }
+}
+
+// plan_autorotations in tasks: each task in its slice, which takes more of the arena than the
+// serial order at its peak; in exactly that peak the tasks run (the same peak again), and in
+// every smaller arena down to the serial peak the serial order takes over for what does not
+// fit: always the same answers, nothing left in the arena. Too small for the serial order: its
+// error, to the byte. On the 6000-triangle phantom the autorotations' slices are what stops
+// fitting first (the indexes stay those the tasks built), on the 60000-triangle one the
+// indexes' slices (all serial).
+void autorotations_in_tasks_or_serially(uint32_t triangles) {
+  PlanFixture f("maxilla_first", "[1,0,0,0, 0,1,0,2.5, 0,0,1,0, 0,0,0,1]", "", triangles);
+  ASSERT_TRUE(f.ok);
+  ThreadExecutor two(2);
+  struct Run {
+    PlanReport r;
+    Status status[2];
+    size_t peak = 0;
+  };
+  auto run = [&](size_t cap, const Executor* executor, Run* out) {
+    test::TestArena t{cap};
+    design_detail::plan_autorotations(Context(&t.arena, executor, nullptr), f.c, f.span(),
+                                      design_detail::PlanFusion{}, &out->r, out->status);
+    EXPECT_EQ(t.arena.used(), 0u);
+    out->peak = t.arena.high_water();
+  };
+  auto expect_same = [](const Run& a, const Run& b) {
+    for (int k = 0; k < 2; ++k) {
+      EXPECT_EQ(a.status[k].code(), b.status[k].code());
+      EXPECT_EQ(test::format(a.status[k]), test::format(b.status[k]));
+    }
+    expect_same_autorotation(a.r.intermediate.autorotation, b.r.intermediate.autorotation);
+    expect_same_autorotation(a.r.final_splint.autorotation, b.r.final_splint.autorotation);
+    EXPECT_EQ(bits(a.r.final_splint.opening_asked_mm), bits(b.r.final_splint.opening_asked_mm));
+    EXPECT_EQ(bits(a.r.final_splint.mandible.t[1]), bits(b.r.final_splint.mandible.t[1]));
+  };
+  Run serial, tasks;
+  run(size_t{64} << 20, nullptr, &serial);
+  SPLINTCORE_ASSERT_OK(serial.status[0]);
+  SPLINTCORE_ASSERT_OK(serial.status[1]);
+  run(size_t{64} << 20, &two.executor(), &tasks);
+  expect_same(tasks, serial);
+  ASSERT_GT(tasks.peak, serial.peak);  // the slices: the tasks ran
+  Run exact;
+  run(tasks.peak, &two.executor(), &exact);
+  expect_same(exact, serial);
+  EXPECT_EQ(exact.peak, tasks.peak);
+  for (int i = 1; i <= 12; ++i) {
+    const size_t cap = tasks.peak - (tasks.peak - serial.peak) * static_cast<size_t>(i) / 12;
+    Run smaller;
+    run(cap, &two.executor(), &smaller);
+    expect_same(smaller, serial);
+    EXPECT_LE(smaller.peak, cap);
+  }
+  // (The peak is not the least arena that does: arrays grow by more than they need when they
+  // can.)
+  Run short_serial, short_tasks;
+  run(serial.peak / 2, nullptr, &short_serial);
+  run(serial.peak / 2, &two.executor(), &short_tasks);
+  EXPECT_EQ(short_serial.status[0].code(), StatusCode::kArenaExhausted);
+  expect_same(short_tasks, short_serial);
+  std::printf(
+      "plan_autorotations on the %u-triangle phantom: %zu arena bytes serial, %zu in tasks\n",
+      triangles, serial.peak, tasks.peak);
+}
+
+TEST(DesignPlan, AutorotationsInTasksFitTheirSlicesOrRunSerially) {
+  autorotations_in_tasks_or_serially(6000);
+  autorotations_in_tasks_or_serially(60000);
 }
 
 }  // namespace
