@@ -160,6 +160,7 @@ void Sha256::blocks(const uint8_t* p, size_t n) {
 }
 
 void Sha256::update(const void* data, size_t bytes) {
+  if (bytes == 0) return;  // (data may be null then: an empty array's; memcpy must not see it)
   const uint8_t* p = static_cast<const uint8_t*>(data);
   length_ += bytes;
   if (buffered_ > 0) {
