@@ -209,11 +209,12 @@ void follow(Span<const T>* s, uintptr_t from, size_t bytes, uintptr_t to) {
   *s = Span<const T>(reinterpret_cast<const T*>(to + (p - from)), s->size());
 }
 
-void follow_index(DistanceIndex* x, const unsigned char* from, size_t bytes, unsigned char* to) {
+void follow_index(DistanceIndex* x, const unsigned char* from, size_t bytes,
+                  const unsigned char* to) {
   // Every array of an index is one of these spans: a new member must be followed here too.
-  static_assert(sizeof(DistanceIndex) ==
-                    sizeof(const Mesh*) + 8 * sizeof(Span<const float>) + 2 * sizeof(uint32_t),
-                "DistanceIndex changed: follow its new arrays in follow_index");
+  static_assert(
+      sizeof(DistanceIndex) == sizeof(void*) + 8 * sizeof(Span<const float>) + 2 * sizeof(uint32_t),
+      "DistanceIndex changed: follow its new arrays in follow_index");
   const uintptr_t f = reinterpret_cast<uintptr_t>(from), t = reinterpret_cast<uintptr_t>(to);
   follow(&x->nodes, f, bytes, t);
   follow(&x->dipoles, f, bytes, t);
@@ -283,7 +284,12 @@ Status move_jaw(const Context& ctx, const Mesh& source, const RigidTransform& mo
   return Status::ok();
 }
 
-bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+bool same_bits(double a, double b) {
+  uint64_t ua = 0, ub = 0;
+  std::memcpy(&ua, &a, sizeof ua);
+  std::memcpy(&ub, &b, sizeof ub);
+  return ua == ub;
+}
 
 // The same move bit for bit (the same copy and refit).
 bool same_move(const RigidTransform& a, const RigidTransform& b) {
