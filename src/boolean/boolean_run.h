@@ -508,8 +508,6 @@ class BooleanRun {
   BooleanOptions options_;
   BooleanStats& st_;
 
-  DistanceIndex index_a_{};  // built when a part of B needs a winding number
-  bool have_a_index_ = false;
   const Broadphase& bp_;  // near B triangles and A's grid (all attempts)
   ArenaArray<Hit> hits_;
   uint32_t* hit_points_ = nullptr;  // 2 per hit: start, end point ids

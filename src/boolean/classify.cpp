@@ -50,8 +50,10 @@ struct BooleanRun::FloodSide {
   uint32_t* rows = nullptr;
   uint32_t* queue = nullptr;
   uint32_t head = 0, tail = 0;
-  DistanceIndex index_b{};  // A's side: B's index, built at its first winding number
-  bool have_b = false;
+  // The other mesh's index (B's whole for A's side, A for B's), built at the first winding
+  // number, in this flood's arena scope: it ends with the flood.
+  DistanceIndex other{};
+  bool have_other = false;
 };
 
 // Cut flags per triangle from the sorted groups.
@@ -142,21 +144,12 @@ Status BooleanRun::FloodSide::spread() {
 
 // The other mesh's winding number at q (its index built at the first query).
 Status BooleanRun::FloodSide::winding_number(const Vec3& q, double* w) {
-  if (side_a) {
-    if (!have_b) {
-      SPLINTCORE_RETURN_IF_ERROR(
-          build_distance_index(run.ctx_, *run.in_.b_whole, DistanceIndexOptions{}, &index_b));
-      have_b = true;
-    }
-    *w = splintcore::winding_number(index_b, q);
-  } else {
-    if (!run.have_a_index_) {
-      SPLINTCORE_RETURN_IF_ERROR(
-          build_distance_index(run.ctx_, *run.in_.a, DistanceIndexOptions{}, &run.index_a_));
-      run.have_a_index_ = true;
-    }
-    *w = splintcore::winding_number(run.index_a_, q);
+  if (!have_other) {
+    const Mesh& m = side_a ? *run.in_.b_whole : *run.in_.a;
+    SPLINTCORE_RETURN_IF_ERROR(build_distance_index(run.ctx_, m, DistanceIndexOptions{}, &other));
+    have_other = true;
   }
+  *w = splintcore::winding_number(other, q);
   ++run.st_.winding_queries;
   return Status::ok();
 }
