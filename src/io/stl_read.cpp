@@ -517,12 +517,10 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
       }
       load_corner_bits(record + 12, bits);
       std::memcpy(corners, bits, sizeof(corners));
-      uint32_t worst = 0;
-      for (int c = 0; c < 9; ++c) {
-        const uint32_t magnitude = bits[c] & 0x7fffffffu;
-        worst = magnitude > worst ? magnitude : worst;
-      }
-      if (worst > limit) {
+      // limit - magnitude wraps (top bit set) exactly when magnitude > limit: both < 2^31.
+      uint32_t over = 0;
+      for (int c = 0; c < 9; ++c) over |= limit - (bits[c] & 0x7fffffffu);
+      if ((over & 0x80000000u) != 0) {
         for (int k = 0; k < 3; ++k) {
           if (!corner_ok(corners + 3 * k, options.max_abs_coordinate)) {
             return corner_error(corners + 3 * k, t + i, k, options.max_abs_coordinate)

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <map>
 #include <random>
 #include <set>
@@ -145,6 +146,63 @@ TEST(CheckMesh, NonManifoldEdgeDegenerateAndDuplicateTriangles) {
   EXPECT_EQ(r.first_degenerate_triangle, 13u);
   EXPECT_EQ(r.duplicate_triangles, 1u);
   EXPECT_EQ(r.first_duplicate_triangle, 14u);
+}
+
+// The check decides most triangles with an inline copy of orient2d's filter before collinear3d:
+// the degenerate count must be collinear3d's on triangles flat in x-y but not in 3D (vertical),
+// nearly flat ones (filter undecided), exactly collinear ones off the axes, and random ones.
+TEST(CheckMesh, DegenerateCountIsCollinear3dOnEveryTriangle) {
+  TestArena t;
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<float> coord(-20.0f, 20.0f);
+  Mesh mesh(&t.arena);
+  std::vector<Vec3> v;
+  std::vector<Triangle> tris;
+  for (uint32_t i = 0; i < 4000; ++i) {
+    const Vec3 a{coord(rng), coord(rng), coord(rng)};
+    Vec3 b{coord(rng), coord(rng), coord(rng)};
+    Vec3 c{coord(rng), coord(rng), coord(rng)};
+    switch (i % 5) {
+      case 0:  // vertical: the x-y orientation is exactly zero, the triangle is not flat
+        b = Vec3{a.x, a.y, b.z};
+        break;
+      case 1:  // exactly collinear, off the axes (a + 2 (b - a) in small integers)
+        b = Vec3{a.x + 1.0, a.y + 2.0, a.z + 3.0};
+        c = Vec3{a.x + 2.0, a.y + 4.0, a.z + 6.0};
+        break;
+      case 2:  // nearly collinear: the midpoint nudged by one ulp
+        c = Vec3{0.5 * (a.x + b.x), 0.5 * (a.y + b.y), std::nextafter(0.5 * (a.z + b.z), 1e9)};
+        break;
+      case 3:  // collinear in x-y only
+        c = Vec3{0.5 * (a.x + b.x), 0.5 * (a.y + b.y), c.z};
+        break;
+      default: break;
+    }
+    const uint32_t base = static_cast<uint32_t>(v.size());
+    v.push_back(a);
+    v.push_back(b);
+    v.push_back(c);
+    tris.push_back(Triangle{{base, base + 1, base + 2}});
+  }
+  ASSERT_TRUE(mesh.vertices.resize(v.size()));
+  ASSERT_TRUE(mesh.triangles.resize(tris.size()));
+  std::copy(v.begin(), v.end(), mesh.vertices.data());
+  std::copy(tris.begin(), tris.end(), mesh.triangles.data());
+  uint64_t expected = 0;
+  uint32_t first = 0;
+  for (uint32_t i = 0; i < tris.size(); ++i) {
+    const uint32_t* k = tris[i].v;
+    if (collinear3d(v[k[0]], v[k[1]], v[k[2]])) {
+      if (expected == 0) first = i;
+      ++expected;
+    }
+  }
+  EXPECT_GE(expected, 800u);  // the exactly collinear fifth at least
+  MeshReport r;
+  Context ctx(&t.arena);
+  ASSERT_TRUE(check_mesh(ctx, mesh, &r).is_ok());
+  EXPECT_EQ(r.degenerate_triangles, expected);
+  EXPECT_EQ(r.first_degenerate_triangle, first);
 }
 
 TEST(CheckMesh, TwoShellsAndOutOfRangeIndex) {
