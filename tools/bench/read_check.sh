@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # `splintcore check` of the phantom maxilla (the paper's largest jaw, 543,530 triangles, a
 # 27 MB binary STL), whole process, against admesh on the same file, interleaved in one run
-# (issue 29's first row); the medians of REPEAT runs each, wall clock.
+# (issue 29's first row); the medians of REPEAT runs each, wall clock and CPU time.
 #   bash tools/bench/read_check.sh [TOOL] [REPEAT] [TRIANGLES]   (TOOL: build/tools/splintcore)
 set -eu
 tool=${1:-build/tools/splintcore}
@@ -13,24 +13,35 @@ trap 'rm -rf "$work"' EXIT
 file=$work/maxilla.stl
 command -v admesh >/dev/null || echo "admesh not installed (apt-get install admesh): its column is empty"
 python3 - "$tool" "$file" "$repeat" <<'PY'
-import os, shutil, statistics, subprocess, sys, time
+import os, resource, shutil, statistics, subprocess, sys, time
 tool, path, repeat = sys.argv[1], sys.argv[2], int(sys.argv[3])
 runs = {"splintcore check": [tool, "check", path]}
 if shutil.which("admesh"):
     runs["admesh"] = ["admesh", path]
+# Wall clock, and the CPU time (user + sys) of each child: on a loaded machine the wall clock
+# is mostly waiting, the CPU time much less so.
 times = {name: [] for name in runs}
+cpu = {name: [] for name in runs}
+def child_cpu():
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
 for _ in range(repeat):
     for name, argv in runs.items():
+        c0 = child_cpu()
         start = time.perf_counter()
         subprocess.run(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
         times[name].append(time.perf_counter() - start)
+        cpu[name].append(child_cpu() - c0)
 size = os.path.getsize(path)
-print("| program | median (s) | min (s) | MB/s (median) |")
-print("|---|---|---|---|")
+print("load average %.2f %.2f %.2f" % os.getloadavg())
+print("| program | median wall (s) | min wall (s) | MB/s (median wall) | median CPU (s) |")
+print("|---|---|---|---|---|")
 for name, t in times.items():
     m = statistics.median(t)
-    print("| %s | %.4f | %.4f | %.0f |" % (name, m, min(t), size / m / 1e6))
+    print("| %s | %.4f | %.4f | %.0f | %.4f |" % (name, m, min(t), size / m / 1e6,
+                                             statistics.median(cpu[name])))
 if "admesh" in times:
-    print("splintcore check is %.1fx admesh (medians)" %
-          (statistics.median(times["admesh"]) / statistics.median(times["splintcore check"])))
+    print("splintcore check is %.1fx admesh (median wall), %.1fx (median CPU)" %
+          (statistics.median(times["admesh"]) / statistics.median(times["splintcore check"]),
+           statistics.median(cpu["admesh"]) / statistics.median(cpu["splintcore check"])))
 PY
