@@ -23,6 +23,7 @@
 // original algorithm) answers, so the pairs reported are the ones it always reported.
 #include "splintcore/mesh.h"
 
+#include "geometry/float_bounds.h"
 #include "geometry/plane_filter.h"
 
 namespace splintcore {
@@ -365,25 +366,51 @@ inline Dop triangle_dop(const Dop& a, const Dop& b, const Dop& c) {
   return dop_union(dop_union(a, b), c);
 }
 
+// The same DOP from the corners themselves (when the vertices' DOPs are gone): the
+// quantization is monotone, so quantizing the corners' smallest and largest projections gives
+// the union of their point DOPs.
+inline Dop triangle_dop(const Grid& g, const Vec3& a, const Vec3& b, const Vec3& c) {
+  double ua[kLanes], ub[kLanes], uc[kLanes];
+  project(a, ua);
+  project(b, ub);
+  project(c, uc);
+  int16_t lo[kLanes], hi[kLanes];
+  for (int k = 0; k < kLanes; ++k) {
+    const double l = ua[k] < ub[k] ? ua[k] : ub[k], h = ua[k] > ub[k] ? ua[k] : ub[k];
+    const int ql = static_cast<int>(((l < uc[k] ? l : uc[k]) - g.origin[k]) * g.scale[k]) - 32000;
+    const int qh = static_cast<int>(((h > uc[k] ? h : uc[k]) - g.origin[k]) * g.scale[k]) - 32000;
+    lo[k] = static_cast<int16_t>(ql - g.margin[k]);
+    hi[k] = static_cast<int16_t>(qh + g.margin[k]);
+  }
+  Dop d;
+  std::memcpy(&d.lo, lo, sizeof(lo));
+  std::memcpy(&d.hi, hi, sizeof(hi));
+  return d;
+}
+
 // ---- the triangles, in Morton order -------------------------------------------------------------
-// Each with its plane (for the filters and the stars) and, for pairs that share no vertex, a
-// separating direction kept ready: the in-plane normal of its longest edge (a sliver's thin
-// direction), with the triangle's extent along it widened by twice the error of evaluating a
-// dot product with any vertex of the mesh (|fl(m . x) - m . x| <= 3 eps |m| . |x|
-// <= 3 eps |m|_1 R, plus what underflow can lose). A triangle whose three corners all evaluate
-// beyond that widened extent is disjoint from it, whatever the rounding of m: any direction is
-// a valid separating axis. When neither triangle's ready direction separates them, the others
-// (the normal and the other two edges') are tried, computed then.
+// Each with its plane's normal (for the filters and the stars; the rest of the plane filter,
+// the magnitudes of the normal's terms, is made again where needed from the corners) and,
+// for pairs that share no vertex, a separating direction kept ready: the in-plane normal of
+// its longest edge (a sliver's thin direction), scaled to a largest component of 1 and
+// rounded to float, with the triangle's extent along it computed in double, widened by twice
+// the error of evaluating a dot product with any vertex of the mesh (|fl(m . x) - m . x|
+// <= 3 eps |m| . |x| <= 3 eps |m|_1 R, plus what underflow can lose), and rounded outward to
+// float. A triangle whose three corners all evaluate beyond that widened extent is disjoint
+// from it: any direction is a valid separating axis, the rounded one too. When neither
+// triangle's ready direction separates them, the others (the normal and the other two
+// edges') are tried, computed then. 64 bytes: the item array is the largest of the check's.
 struct Item {
   Triangle tri;  // (with the id: 16 bytes)
   uint32_t id;
-  uint32_t cleared;  // bit k: corner k's vertex has a cleared star (see below)
-  uint32_t longest;  // the longest edge: from corner `longest` to the next
-  double m[3];       // its in-plane normal
-  double lo, hi;     // the extent along m, widened
-  Vec3 n;            // (b - a) x (c - a)
-  Vec3 nabs;         // the magnitudes of its terms (see Plane)
+  uint8_t cleared;  // bit k: corner k's vertex has a cleared star (see below)
+  uint8_t longest;  // the longest edge: from corner `longest` to the next
+  uint16_t unused;
+  float m[3];    // its in-plane normal, scaled
+  float lo, hi;  // the extent along m, widened
+  Vec3 n;        // (b - a) x (c - a)
 };
+static_assert(sizeof(Item) == 64, "an item is a cache line");
 
 // The extent of the triangle abc along m, widened (error: per unit of |m|_1, see above).
 inline void extent_along(const Vec3& m, const Vec3& a, const Vec3& b, const Vec3& c, double error,
@@ -396,23 +423,44 @@ inline void extent_along(const Vec3& m, const Vec3& a, const Vec3& b, const Vec3
   *hi = (h > dc ? h : dc) + margin;
 }
 
+inline Vec3 scaled_to_unit_max(const Vec3& m) {
+  const double x = std::fabs(m.x), y = std::fabs(m.y), z = std::fabs(m.z);
+  const double big = x > y ? (x > z ? x : z) : (y > z ? y : z);
+  if (!(big > 0.0)) return Vec3{};
+  return Vec3{m.x / big, m.y / big, m.z / big};
+}
+
+// The item's plane filter (the normal as stored, the rest from the corners).
+inline Plane plane_of(const Vec3* v, const Item& t) {
+  return plane_of(v[t.tri.v[0]], v[t.tri.v[1]], v[t.tri.v[2]]);
+}
+
+inline Vec3 ready_direction(const Item& t) {
+  return Vec3{static_cast<double>(t.m[0]), static_cast<double>(t.m[1]),
+              static_cast<double>(t.m[2])};
+}
+
 void fill_item(const Vec3* v, const Triangle& tri, uint32_t id, double error, Item* item) {
   const Vec3 p[3] = {v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]};
   const Plane plane = plane_of(p[0], p[1], p[2]);
   item->tri = tri;
   item->id = id;
   item->cleared = 0;
+  item->unused = 0;
   item->n = plane.n;
-  item->nabs = plane.nabs;
   const Vec3 e[3] = {p[1] - p[0], p[2] - p[1], p[0] - p[2]};
   const double len[3] = {dot(e[0], e[0]), dot(e[1], e[1]), dot(e[2], e[2])};
   const uint32_t k = len[0] >= len[1] ? (len[0] >= len[2] ? 0 : 2) : (len[1] >= len[2] ? 1 : 2);
-  const Vec3 m = cross(plane.n, e[k]);
-  item->longest = k;
-  item->m[0] = m.x;
-  item->m[1] = m.y;
-  item->m[2] = m.z;
-  extent_along(m, p[0], p[1], p[2], error, &item->lo, &item->hi);
+  // Components within [-1, 1]: in float range whatever the coordinates (R^3 would not be).
+  const Vec3 m = scaled_to_unit_max(cross(plane.n, e[k]));
+  item->longest = static_cast<uint8_t>(k);
+  item->m[0] = static_cast<float>(m.x);
+  item->m[1] = static_cast<float>(m.y);
+  item->m[2] = static_cast<float>(m.z);
+  double lo, hi;
+  extent_along(ready_direction(*item), p[0], p[1], p[2], error, &lo, &hi);
+  item->lo = float_down(lo);
+  item->hi = float_up(hi);
 }
 
 // Are p, q, r all certainly beyond [lo, hi] along m?
@@ -483,22 +531,16 @@ inline int sure_triple(const Vec3& d, const Diff& p, const Diff& q) {
   return det > bound ? 1 : (det < -bound ? -1 : 0);
 }
 
-inline Vec3 scaled_to_unit_max(const Vec3& m) {
-  const double x = std::fabs(m.x), y = std::fabs(m.y), z = std::fabs(m.z);
-  const double big = x > y ? (x > z ? x : z) : (y > z ? y : z);
-  if (!(big > 0.0)) return Vec3{};
-  return Vec3{m.x / big, m.y / big, m.z / big};
-}
-
 // Do the star's k triangles (items `star`, in any order) certainly all face d, and does the
 // fan turn once around o (e: u_i - o for i = 0, 2, 3, .., k - 2 in fan order)?
-bool fan_turns_once(const Vec3& d, const Item* items, const uint32_t* star, const Diff* e,
-                    uint32_t k) {
+bool fan_turns_once(const Vec3& d, const Item* items, const Vec3* nabs, const uint32_t* star,
+                    const Diff* e, uint32_t k) {
   const Vec3 dabs{std::fabs(d.x), std::fabs(d.y), std::fabs(d.z)};
   for (uint32_t i = 0; i < k; ++i) {
     // d . n is det[b - a, c - a, d]: the plane filter's bound, with d for x - a.
-    const Item& t = items[star[i]];
-    if (!(dot(d, t.n) > kPlaneFilter * dot(dabs, t.nabs) + 0x1p-1000)) return false;
+    if (!(dot(d, items[star[i]].n) > kPlaneFilter * dot(dabs, nabs[star[i]]) + 0x1p-1000)) {
+      return false;
+    }
   }
   bool turned = false;  // past the direction opposite u_0
   for (uint32_t i = 2; i + 1 < k; ++i) {
@@ -522,8 +564,9 @@ inline uint32_t equal_lanes(const uint32_t* ids, uint32_t groups, uint32_t x) {
 }
 
 // Is the star of vertex o (items `star`: every non-degenerate triangle using o) certainly
-// embedded?
-bool star_embedded(const Vec3* v, const Item* items, uint32_t o, const uint32_t* star, uint32_t k) {
+// embedded? (nabs: the items' planes' term magnitudes, see Plane.)
+bool star_embedded(const Vec3* v, const Item* items, const Vec3* nabs, uint32_t o,
+                   const uint32_t* star, uint32_t k) {
   if (k < 3 || k > kMaxStar) return false;
   // Each triangle as (o, from, to), in its winding; the lanes past k hold o, which is
   // neither (the triangles are not degenerate).
@@ -560,10 +603,10 @@ bool star_embedded(const Vec3* v, const Item* items, uint32_t o, const uint32_t*
   // small triangles leaves the small ones edge-on), of the normals scaled alike.
   Vec3 d{};
   for (uint32_t i = 0; i < k; ++i) d = d + items[star[i]].n;
-  if (fan_turns_once(scaled_to_unit_max(d), items, star, e, k)) return true;
+  if (fan_turns_once(scaled_to_unit_max(d), items, nabs, star, e, k)) return true;
   d = Vec3{};
   for (uint32_t i = 0; i < k; ++i) d = d + scaled_to_unit_max(items[star[i]].n);
-  return fan_turns_once(scaled_to_unit_max(d), items, star, e, k);
+  return fan_turns_once(scaled_to_unit_max(d), items, nabs, star, e, k);
 }
 
 // ---- the hierarchy
@@ -572,6 +615,7 @@ bool star_embedded(const Vec3* v, const Item* items, uint32_t o, const uint32_t*
 // where the highest differing Morton bit changes (Karras); leaves of at most eight triangles,
 // stored lane by lane so that one triangle is tested against a whole leaf at once.
 constexpr uint32_t kLeafSize = 8;
+constexpr uint32_t kMinLeaf = kLeafSize / 2;
 // Each split either takes one of the 30 bits of the Morton code or halves a range of equal
 // codes (at most 32 times for 2^32 triangles): the height stays below 64.
 constexpr int kMaxHeight = 64;
@@ -597,6 +641,15 @@ inline Lanes8 load8(const int16_t* p) {
   Lanes8 x;
   std::memcpy(&x, p, sizeof(x));
   return x;
+}
+
+// The DOP of lane i of leaf a (the items' DOPs are kept only there).
+inline Dop lane_dop(const Leaf& a, uint32_t i) {
+  static_assert(kAxes == 7, "the seven axes below");
+  return Dop{
+      Lanes8{a.lo[0][i], a.lo[1][i], a.lo[2][i], a.lo[3][i], a.lo[4][i], a.lo[5][i], a.lo[6][i], 0},
+      Lanes8{a.hi[0][i], a.hi[1][i], a.hi[2][i], a.hi[3][i], a.hi[4][i], a.hi[5][i], a.hi[6][i],
+             0}};
 }
 
 // The lanes of leaf b whose DOP overlaps the DOP d of one triangle.
@@ -810,10 +863,10 @@ struct HierarchyPass {
   double error = 0;           // of the separating directions (fill_item)
   Dop* vd = nullptr;          // the vertices' DOPs
   uint64_t* order = nullptr;  // the kept triangles: Morton code << 32 | triangle id, sorted
-                              // (until the items are made: then item_dops give the codes)
+                              // (until the items are made: then `codes` holds the codes)
   uint32_t kept = 0;
-  Item* items = nullptr;  // in Morton order
-  Dop* item_dops = nullptr;
+  Item* items = nullptr;      // in Morton order
+  uint32_t* codes = nullptr;  // their Morton codes (for the tree's splits)
   Node* nodes = nullptr;
   Leaf* leaves = nullptr;
   uint32_t node_count = 0, leaf_count = 0;
@@ -828,14 +881,15 @@ struct HierarchyPass {
         grid(quantization),
         tally(counts) {}
 
-  // 1. The kept triangles counted, the room for their items and DOPs: these stay below the
-  // sort's arrays and the star lists, which go before the tree is made (the arena is a stack).
+  // 1. The kept triangles counted, the room for their items and Morton codes: these stay
+  // below the sort's arrays and the star lists, which go before the tree is made (the arena
+  // is a stack). The items' DOPs are not kept beside them: the leaves hold them.
   Status allocate_items() {
     for (size_t t = 0; t < nt; ++t) kept += skipped(v, tris[t], true) ? 0u : 1u;
     if (kept == 0) return Status::ok();
     items = arena.allocate_array<Item>(kept);
-    item_dops = arena.allocate_array<Dop>(kept);
-    if (items == nullptr || item_dops == nullptr) return arena.exhausted_status();
+    codes = arena.allocate_array<uint32_t>(kept);
+    if (items == nullptr || codes == nullptr) return arena.exhausted_status();
     return Status::ok();
   }
 
@@ -861,20 +915,19 @@ struct HierarchyPass {
     return Status::ok();
   }
 
-  // 3. The items and their DOPs in Morton order.
+  // 3. The items and their codes in Morton order.
   void make_items(double radius) {
     error = 1e-15 * radius;  // above 3 eps R, generously
     for (uint32_t i = 0; i < kept; ++i) {
       const uint32_t t = static_cast<uint32_t>(order[i]);
-      const Triangle& tri = tris[t];
-      fill_item(v, tri, t, error, &items[i]);
-      item_dops[i] = triangle_dop(vd[tri.v[0]], vd[tri.v[1]], vd[tri.v[2]]);
+      fill_item(v, tris[t], t, error, &items[i]);
+      codes[i] = static_cast<uint32_t>(order[i] >> 32);
     }
   }
 
   // 5. The memory for the tree: its shape first, so that its nodes and leaves take what it
-  // has (a leaf holds up to kLeafSize items: on a real splint a fifth of the worst case of one
-  // a triangle).
+  // has (a leaf holds kMinLeaf to kLeafSize items, see split_point: on a real splint 5.5 on
+  // average).
   Status allocate_tree() {
     uint32_t node_total = 0, leaf_total = 0;
     count_tree(&node_total, &leaf_total);
@@ -884,15 +937,18 @@ struct HierarchyPass {
     return Status::ok();
   }
 
-  // 4. Stars: per-vertex lists of items by counting sort, then each star checked.
+  // 4. Stars: per-vertex lists of items by counting sort, then each star checked (with the
+  // rest of each item's plane filter made once: a triangle is in three stars).
   Status clear_stars() {
     ArenaScope star_scope(arena);
     uint32_t* start = arena.allocate_array<uint32_t>(nv + 1);
     uint32_t* list = arena.allocate_array<uint32_t>(3 * size_t{kept});
     uint8_t* cleared = arena.allocate_array<uint8_t>(nv);
-    if (start == nullptr || list == nullptr || (cleared == nullptr && nv > 0)) {
+    Vec3* nabs = arena.allocate_array<Vec3>(kept);
+    if (start == nullptr || list == nullptr || (cleared == nullptr && nv > 0) || nabs == nullptr) {
       return arena.exhausted_status();
     }
+    for (uint32_t i = 0; i < kept; ++i) nabs[i] = plane_of(v, items[i]).nabs;
     for (size_t i = 0; i <= nv; ++i) start[i] = 0;
     for (uint32_t i = 0; i < kept; ++i) {
       for (uint32_t id : items[i].tri.v) ++start[id + 1];
@@ -905,7 +961,7 @@ struct HierarchyPass {
     uint32_t begin = 0;
     for (size_t i = 0; i < nv; ++i) {
       cleared[i] =
-          star_embedded(v, items, static_cast<uint32_t>(i), list + begin, start[i] - begin);
+          star_embedded(v, items, nabs, static_cast<uint32_t>(i), list + begin, start[i] - begin);
       begin = start[i];
     }
     for (uint32_t i = 0; i < kept; ++i) {
@@ -931,10 +987,10 @@ struct HierarchyPass {
     for (uint32_t j = 0; j < kLeafSize; ++j) {
       for (int k = 0; k < 3; ++k) leaf.ids[k][j] = 0;
     }
-    node.dop = item_dops[begin];
     for (uint32_t j = 0; j < count; ++j) {
-      const Dop& d = item_dops[begin + j];
-      node.dop = dop_union(node.dop, d);
+      const Triangle& tri = items[begin + j].tri;
+      const Dop d = triangle_dop(grid, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]);
+      node.dop = j == 0 ? d : dop_union(node.dop, d);
       for (int k = 0; k < kAxes; ++k) {
         leaf.lo[k][j] = d.lo[k];
         leaf.hi[k][j] = d.hi[k];
@@ -943,17 +999,24 @@ struct HierarchyPass {
     }
   }
 
-  // The size of the first half of items begin .. begin + count - 1: where the highest
-  // differing Morton bit changes (equal codes: in the middle).
+  // The size of the first half of items begin .. begin + count - 1 (count > kLeafSize): where
+  // the highest differing Morton bit changes (equal codes: in the middle), but leaving at
+  // least kMinLeaf items on either side. So every leaf but a lone root holds kMinLeaf or more
+  // (at most n / kMinLeaf leaves: the bound), and the height bound holds: a side cut short
+  // is a leaf, the other side is all on one side of the bit.
   uint32_t split_point(uint32_t begin, uint32_t count) const {
-    const uint32_t first = morton_code(item_dops[begin]);
-    const uint32_t last = morton_code(item_dops[begin + count - 1]);
+    const uint32_t half = morton_split(begin, count);
+    return half < kMinLeaf ? kMinLeaf : (half > count - kMinLeaf ? count - kMinLeaf : half);
+  }
+  uint32_t morton_split(uint32_t begin, uint32_t count) const {
+    const uint32_t first = codes[begin];
+    const uint32_t last = codes[begin + count - 1];
     if (first == last) return count / 2;
     const uint32_t bit = uint32_t{1} << (31 - __builtin_clz(first ^ last));
     uint32_t without = 0, with = count - 1;  // the bit: clear at without, set at with
     while (without + 1 < with) {
       const uint32_t mid = without + (with - without) / 2;
-      if ((morton_code(item_dops[begin + mid]) & bit) == 0) {
+      if ((codes[begin + mid] & bit) == 0) {
         without = mid;
       } else {
         with = mid;
@@ -1027,8 +1090,12 @@ struct HierarchyPass {
     const uint32_t t0 = t.tri.v[0], t1 = t.tri.v[1], t2 = t.tri.v[2];
     if (shared == 0) {
       const Vec3 &a = v[s0], &b = v[s1], &c = v[s2], &d = v[t0], &e = v[t1], &f = v[t2];
-      const Vec3 ms{s.m[0], s.m[1], s.m[2]}, mt{t.m[0], t.m[1], t.m[2]};
-      if (beyond(ms, s.lo, s.hi, d, e, f) || beyond(mt, t.lo, t.hi, a, b, c)) return false;
+      if (beyond(ready_direction(s), static_cast<double>(s.lo), static_cast<double>(s.hi), d, e,
+                 f) ||
+          beyond(ready_direction(t), static_cast<double>(t.lo), static_cast<double>(t.hi), a, b,
+                 c)) {
+        return false;
+      }
       if (beyond_other_axes(s, a, b, c, d, e, f, error) ||
           beyond_other_axes(t, d, e, f, a, b, c, error)) {
         return false;
@@ -1036,7 +1103,7 @@ struct HierarchyPass {
     } else if ((shared & t.cleared) != 0) {
       return false;  // part of a cleared star
     }
-    if (!conflict(v, s.tri, t.tri, Plane{v[s0], s.n, s.nabs}, Plane{v[t0], t.n, t.nabs}, true)) {
+    if (!conflict(v, s.tri, t.tri, plane_of(v, s), plane_of(v, t), true)) {
       return false;
     }
     return found->add(s.id, t.id);
@@ -1052,7 +1119,7 @@ struct HierarchyPass {
       const uint32_t lanes = same ? valid & ~((2u << i) - 1) : valid;
       if (lanes == 0) break;
       const uint32_t si = a.first + i;
-      uint32_t bits = overlapping_lanes(item_dops[si], b) & lanes;
+      uint32_t bits = overlapping_lanes(lane_dop(a, i), b) & lanes;
       if (bits == 0) continue;
       *tested += static_cast<uint64_t>(bit_count(bits));
       const Item& s = items[si];
@@ -1224,15 +1291,15 @@ Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triang
   SPLINTCORE_RETURN_IF_ERROR(pass.allocate_items());
   if (pass.kept == 0) return Status::ok();
   {
-    // The sort's keys and the vertices' DOPs are done with once the items are made: the tree
-    // takes their room (a sixth less at the peak on the real dentition's splint).
+    // The sort's keys and the vertices' DOPs are done with once the items are made: the star
+    // lists, then the tree take their room.
     ArenaScope sorting(arena);
     SPLINTCORE_RETURN_IF_ERROR(pass.sort_triangles());
     pass.make_items(radius);
-    SPLINTCORE_RETURN_IF_ERROR(pass.clear_stars());
     pass.order = nullptr;
     pass.vd = nullptr;
   }
+  SPLINTCORE_RETURN_IF_ERROR(pass.clear_stars());
   SPLINTCORE_RETURN_IF_ERROR(pass.allocate_tree());
   pass.build_tree();
   return pass.traverse(ctx, stopped);
@@ -1242,14 +1309,17 @@ Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triang
 
 uint64_t find_self_intersections_bound(uint64_t triangle_count) {
   const uint64_t n = triangle_count;
-  // The hierarchy pass: the items and their DOPs, and above them first the keys and scratch,
-  // the vertices' DOPs (at most 3n vertices) and the star lists, then, in their room, the
-  // nodes (at most 2n - 1) and the leaves (at most n).
-  const uint64_t stars = (3 * n + 1) * sizeof(uint32_t) + 3 * n * sizeof(uint32_t) + 3 * n;
-  const uint64_t sorting = n * (2 * sizeof(uint64_t) + 3 * sizeof(Dop)) + stars;
-  const uint64_t nodes = n * (2 * sizeof(Node) + sizeof(Leaf));
-  const uint64_t tree =
-      n * (sizeof(Item) + sizeof(Dop)) + (sorting > nodes ? sorting : nodes) + 10 * 64;
+  // The hierarchy pass: the items and their codes, and above them in turn the keys, scratch
+  // and vertices' DOPs (at most 3n vertices), the star lists, and the leaves (every one but a
+  // lone root holds kMinLeaf items or more) with the nodes (one fewer than twice the leaves).
+  const uint64_t sorting = n * (2 * sizeof(uint64_t) + 3 * sizeof(Dop));
+  const uint64_t stars =
+      (3 * n + 1) * sizeof(uint32_t) + 3 * n * sizeof(uint32_t) + 3 * n + n * sizeof(Vec3);
+  const uint64_t leaves = n / kMinLeaf + 1;
+  const uint64_t nodes = leaves * (2 * sizeof(Node) + sizeof(Leaf));
+  uint64_t above = sorting > stars ? sorting : stars;
+  above = above > nodes ? above : nodes;
+  const uint64_t tree = n * (sizeof(Item) + sizeof(uint32_t)) + above + 10 * 64;
   // The sweep: keys, planes, DOPs, boxes.
   const uint64_t sweep_bytes =
       n * (2 * sizeof(KeyIndex) + sizeof(Plane) + sizeof(Dop) + 56) + 6 * 64;
