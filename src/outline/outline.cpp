@@ -117,14 +117,21 @@ namespace {
 // delta, so stepping by the distance still missing never overshoots), then bisection if it
 // has not converged. Without an opening asked, the jaws must already be apart.
 //
-// The steps converge (Newton's, quadratically): once one is at most kCollectStepMm long, the
-// search there also keeps every pair within a margin (the step's length) of the closest
-// distance found, in the pool's room. A move by at most a quarter of the margin changes each
-// pair's distance by at most as much, so the closest pair there is one of the pool's: the next
-// steps that near are a scan of the pool, with the full search's bits. (A wider margin holds
-// many more pairs where the jaws' surfaces run parallel, and costs more to collect.)
+// The steps converge (Newton's, quadratically): once the last distance measured was a
+// separated pair's (its rate along the move models the step), or a step is at most
+// kCollectStepMm long, the search there also keeps every pair within the bound it starts from
+// (the last closest pair's distance there) plus a margin, in the pool's room: pool_reach. A
+// move by m from there changes each pair's distance by at most m, so a pair left out lies
+// farther than pool_reach - m; where the pool's closest lies nearer than that (and a rounding
+// slack), it is the full search's answer, bit for bit (the same pairs' computed distances, the
+// same least). So the next steps near there are a scan of the pool, checked after the scan
+// (else the full search). A bound above the distance found there leaves room for the steps
+// that follow: the step that overshot the target, and the Newton steps back to it, lie within
+// about the overshoot. (A wider margin holds many more pairs where the jaws' surfaces run
+// parallel, and costs more to collect.)
 constexpr double kCollectStepMm = 0.1;
 constexpr double kMinPoolMarginMm = 1e-6;
+constexpr double kPoolSlackMm = 2.5e-7;  // over the computed distances' rounding
 constexpr size_t kPoolPairs = 32768;
 
 struct Opener {
@@ -139,9 +146,9 @@ struct Opener {
   bool warm = false;
   uint32_t pair_a = 0, pair_b = 0;
   bool has_last = false;
-  double last_t = 0;
-  size_t pooled = 0;  // pairs in the pool (0: none), kept at pool_t with pool_margin
-  double pool_t = 0, pool_margin = 0;
+  double last_t = 0, last_distance = 0;
+  size_t pooled = 0;  // pairs in the pool (0: none): every pair within pool_reach at pool_t
+  double pool_t = 0, pool_reach = 0;
 
   Opener(const Context& c, const DistanceIndex& u, const DistanceIndex& l, const Vec3& normal)
       : ctx(c), upper(u), lower(l), n(normal) {}
@@ -156,10 +163,12 @@ struct Opener {
 
   Status distance(double t, MeshPairDistance* d) {
     const Vec3 offset = n * (-t);
-    if (pooled > 0 && std::fabs(t - pool_t) <= 0.25 * pool_margin) {
+    if (pooled > 0) {
       SPLINTCORE_RETURN_IF_ERROR(candidate_pair_distance(
           upper, lower, Span<const TrianglePairIds>(pool.data(), pooled), offset, d));
-      return remember(t, *d);
+      if (d->distance + std::fabs(t - pool_t) + kPoolSlackMm < pool_reach) {
+        return remember(t, *d);
+      }
     }
     double bound = HUGE_VAL;
     if (warm) {
@@ -173,14 +182,15 @@ struct Opener {
       bound = bound * (1 + 1e-9) + 1e-9;  // over any rounding: the pair itself is found
     }
     const double step = std::fabs(t - last_t);
-    if (bound < HUGE_VAL && has_last && step <= kCollectStepMm && pool.size() > 0) {
+    const bool modelled = last_distance > 0 && last_distance < HUGE_VAL;
+    if (bound < HUGE_VAL && has_last && (modelled || step <= kCollectStepMm) && pool.size() > 0) {
       size_t count = 0;
-      const double margin = std::fmax(step, kMinPoolMarginMm);
+      const double margin = std::fmax(step <= kCollectStepMm ? step : 0.0, kMinPoolMarginMm);
       SPLINTCORE_RETURN_IF_ERROR(
           mesh_pair_distance_collect(ctx, upper, lower, offset, bound + margin, pool, &count, d));
       pooled = d->distance <= bound && count <= pool.size() ? count : 0;
       pool_t = t;
-      pool_margin = margin;
+      pool_reach = bound + margin;
     } else {
       SPLINTCORE_RETURN_IF_ERROR(mesh_pair_distance(ctx, upper, lower, offset, bound, d));
     }
@@ -201,6 +211,7 @@ struct Opener {
   Status remember(double t, const MeshPairDistance& d) {
     has_last = true;
     last_t = t;
+    last_distance = d.distance;
     if (d.distance < HUGE_VAL) {
       warm = true;
       pair_a = d.triangle_a;
