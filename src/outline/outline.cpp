@@ -59,34 +59,44 @@ Status check_jaw(const Mesh& m, const char* who, const char* name, double* longe
           .at_index(i);
     }
   }
-  // The squared edges: each edge's x and y differences a lane pair (its corners' x and y
-  // loaded together), their squares' sums for a - b and b - c in two lanes, then each lane's
-  // z square added (dot()'s order, x then y then z: the same bits as dot(ab, ab)); c - a alone.
-  // The largest of them all (a maximum of finite values: the same whatever the order it is
-  // taken in).
+  // The squared edges of two triangles at a time, one a lane (each lane's x, y and z of a
+  // corner loaded together): each edge's squared length in its lane as dot() computes it (x
+  // then y then z; c - a's square is a - c's), the same bits. The largest of them all (a
+  // maximum of finite values: the same whatever the order it is taken in). A triangle's
+  // corners are checked before it is read, in triangle order (the first bad one is named).
+  const size_t n = m.vertices.size();
+  const Vec3* v = m.vertices.data();
+  auto bad_triangle = [&](size_t i) {
+    return make_error(StatusCode::kInvalidMesh, who, ": the ", name, "'s triangle ", i,
+                      " refers to a vertex that does not exist")
+        .at_index(i);
+  };
+  auto corners_exist = [n](const Triangle& t) { return t.v[0] < n && t.v[1] < n && t.v[2] < n; };
   Lanes2 e2_lanes = {0, 0};
-  double e2 = 0;
-  for (size_t i = 0; i < m.triangles.size(); ++i) {
-    const Triangle& t = m.triangles[i];
-    const size_t n = m.vertices.size();
-    if (t.v[0] >= n || t.v[1] >= n || t.v[2] >= n) {
-      return make_error(StatusCode::kInvalidMesh, who, ": the ", name, "'s triangle ", i,
-                        " refers to a vertex that does not exist")
-          .at_index(i);
-    }
-    const Vec3 &a = m.vertices[t.v[0]], &b = m.vertices[t.v[1]], &c = m.vertices[t.v[2]];
-    const Lanes2 axy = {a.x, a.y}, bxy = {b.x, b.y}, cxy = {c.x, c.y};
-    const Lanes2 ab = axy - bxy, bc = bxy - cxy, ca = cxy - axy;
-    const Lanes2 ab2 = ab * ab, bc2 = bc * bc, ca2 = ca * ca;
-    const Lanes2 dz = Lanes2{a.z, b.z} - Lanes2{b.z, c.z};
-    const Lanes2 l2 = (Lanes2{ab2[0], bc2[0]} + Lanes2{ab2[1], bc2[1]}) + dz * dz;
-    const double caz = c.z - a.z;
-    const double lca = (ca2[0] + ca2[1]) + caz * caz;
-    e2_lanes = l2 > e2_lanes ? l2 : e2_lanes;
-    e2 = lca > e2 ? lca : e2;
+  const size_t count = m.triangles.size();
+  for (size_t i = 0; i < count; i += 2) {
+    const Triangle& t0 = m.triangles[i];
+    if (!corners_exist(t0)) return bad_triangle(i);
+    // An odd count: the last triangle twice.
+    const size_t j = i + 1 < count ? i + 1 : i;
+    const Triangle& t1 = m.triangles[j];
+    if (!corners_exist(t1)) return bad_triangle(j);
+    const Vec3 &a0 = v[t0.v[0]], &b0 = v[t0.v[1]], &c0 = v[t0.v[2]];
+    const Vec3 &a1 = v[t1.v[0]], &b1 = v[t1.v[1]], &c1 = v[t1.v[2]];
+    const Lanes2 ax = {a0.x, a1.x}, ay = {a0.y, a1.y}, az = {a0.z, a1.z};
+    const Lanes2 bx = {b0.x, b1.x}, by = {b0.y, b1.y}, bz = {b0.z, b1.z};
+    const Lanes2 cx = {c0.x, c1.x}, cy = {c0.y, c1.y}, cz = {c0.z, c1.z};
+    const Lanes2 abx = ax - bx, aby = ay - by, abz = az - bz;
+    const Lanes2 bcx = bx - cx, bcy = by - cy, bcz = bz - cz;
+    const Lanes2 cax = cx - ax, cay = cy - ay, caz = cz - az;
+    const Lanes2 lab = (abx * abx + aby * aby) + abz * abz;
+    const Lanes2 lbc = (bcx * bcx + bcy * bcy) + bcz * bcz;
+    const Lanes2 lca = (cax * cax + cay * cay) + caz * caz;
+    e2_lanes = lab > e2_lanes ? lab : e2_lanes;
+    e2_lanes = lbc > e2_lanes ? lbc : e2_lanes;
+    e2_lanes = lca > e2_lanes ? lca : e2_lanes;
   }
-  e2 = e2_lanes[0] > e2 ? e2_lanes[0] : e2;
-  e2 = e2_lanes[1] > e2 ? e2_lanes[1] : e2;
+  const double e2 = e2_lanes[0] > e2_lanes[1] ? e2_lanes[0] : e2_lanes[1];
   *longest_edge = std::sqrt(e2);
   return Status::ok();
 }
@@ -457,34 +467,37 @@ void mark_band(const Mesh& m, bool upper, const BandLimit& limit, uint8_t* near)
   }
 }
 
-// The band of the marked vertices (mark_band): the triangles with a near vertex.
+// The band of the marked vertices (mark_band): the triangles with a near vertex. One pass over
+// the triangles: the kept ones' ids into room for all of them (at the top of the arena, given
+// back down to the kept ones at once), then only the kept ones.
 Status jaw_band(Arena& arena, const Mesh& m, const uint8_t* near, JawBand* out) {
-  const size_t nv = m.vertices.size();
-  auto keeps = [&](const Triangle& t) { return (near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) != 0; };
+  const size_t nv = m.vertices.size(), nt = m.triangles.size();
+  uint32_t* ids = arena.allocate_array<uint32_t>(nt > 0 ? nt : 1);
+  if (ids == nullptr) return arena.exhausted_status();
   size_t kept = 0;
-  for (const Triangle& t : m.triangles) {
-    if (keeps(t)) ++kept;
+  for (size_t i = 0; i < nt; ++i) {
+    const Triangle& t = m.triangles[i];
+    ids[kept] = static_cast<uint32_t>(i);
+    kept += (near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) != 0 ? 1u : 0u;
   }
+  const size_t room = kept > 0 ? kept : 1;
+  (void)arena.try_shrink(ids, sizeof(uint32_t) * (nt > 0 ? nt : 1), sizeof(uint32_t) * room);
+  out->ids = ids;
   // The kept triangles' vertices copied (numbered in order of first use, the corners in
   // their order): the same coordinates, so the same distances, from a few hundred kilobytes
   // that stay in cache instead of the whole jaw's.
   uint32_t* renumber = arena.allocate_array<uint32_t>(nv);
-  Triangle* tris = arena.allocate_array<Triangle>(kept > 0 ? kept : 1);
-  out->ids = arena.allocate_array<uint32_t>(kept > 0 ? kept : 1);
-  if (renumber == nullptr || tris == nullptr || out->ids == nullptr) {
-    return arena.exhausted_status();
-  }
+  Triangle* tris = arena.allocate_array<Triangle>(room);
+  if (renumber == nullptr || tris == nullptr) return arena.exhausted_status();
   std::fill(renumber, renumber + nv, kNoTip);
   uint32_t used = 0;
-  size_t k = 0;
-  for (size_t i = 0; i < m.triangles.size(); ++i) {
-    if (!keeps(m.triangles[i])) continue;
+  for (size_t k = 0; k < kept; ++k) {
+    const Triangle& t = m.triangles[ids[k]];
     for (int c = 0; c < 3; ++c) {
-      uint32_t& r = renumber[m.triangles[i].v[c]];
+      uint32_t& r = renumber[t.v[c]];
       if (r == kNoTip) r = used++;
       tris[k].v[c] = r;
     }
-    out->ids[k++] = static_cast<uint32_t>(i);
   }
   Vec3* verts = arena.allocate_array<Vec3>(used > 0 ? used : 1);
   if (verts == nullptr) return arena.exhausted_status();
