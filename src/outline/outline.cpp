@@ -72,8 +72,14 @@ Status check_jaw(const Mesh& m, const char* who, const char* name, double* longe
         .at_index(i);
   };
   auto corners_exist = [n](const Triangle& t) { return t.v[0] < n && t.v[1] < n && t.v[2] < n; };
-  Lanes2 e2_lanes = {0, 0};
   const size_t count = m.triangles.size();
+  if (longest_edge == nullptr) {
+    for (size_t i = 0; i < count; ++i) {
+      if (!corners_exist(m.triangles[i])) return bad_triangle(i);
+    }
+    return Status::ok();
+  }
+  Lanes2 e2_lanes = {0, 0};
   for (size_t i = 0; i < count; i += 2) {
     const Triangle& t0 = m.triangles[i];
     if (!corners_exist(t0)) return bad_triangle(i);
@@ -443,22 +449,20 @@ struct BandLimit {
 // A triangle is kept when one of its vertices lies within the margin of the other jaw's
 // extreme near it (the columns around reach one edge further than the pairs need, so the
 // vertex nearest the other jaw may stand for the whole triangle): its vertices' marks (near: 1
-// when within the margin).
+// when within the margin). `near` comes in with mark_reachable's marks: a vertex past the
+// other jaw's global extreme and the margin (0) lies past its extreme near and past the
+// global bound too, and stays 0 (most of the jaw: neither its height nor its column need be
+// found again).
 void mark_band(const Mesh& m, bool upper, const BandLimit& limit, uint8_t* near) {
   const Frame& f = *limit.f;
   const PlaneAxes axes(f);
   const size_t nv = m.vertices.size();
   for (size_t i = 0; i < nv; ++i) {
+    if (near[i] == 0) continue;
     const Vec3& v = m.vertices[i];
     const double h = dot(v, f.n);
     double bound = limit.bound;
     if (limit.other != nullptr) {
-      // Past the other jaw's global extreme and the margin, past its extreme near (most of
-      // the jaw: the column need not be found).
-      if (upper ? h > limit.beyond : h < limit.beyond) {
-        near[i] = 0;
-        continue;
-      }
       const Lanes2 xy = axes.xy(v);
       bound = limit.other[limit.g->cell_of(xy[0], xy[1])];
       bound += upper ? limit.margin : -limit.margin;
@@ -543,9 +547,35 @@ struct BandedOpener {
   DistanceIndex upper_index, lower_index;
 };
 
-// `edge`: the jaws' longest edge.
+// The part of a jaw that can come within the margin of the other jaw's global extreme (the
+// maxilla's vertices at most `beyond` high, the mandible's at least): near[i] = 1. Every
+// triangle with a pair within reach has a vertex there (the bands' global argument).
+void mark_reachable(const Mesh& m, bool upper, double beyond, const Vec3& n, uint8_t* near) {
+  const size_t nv = m.vertices.size();
+  for (size_t i = 0; i < nv; ++i) {
+    const double h = dot(m.vertices[i], n);
+    near[i] = upper ? h <= beyond : h >= beyond;
+  }
+}
+
+// The squared longest edge of the triangles with a marked vertex (0 when none).
+double marked_longest_edge2(const Mesh& m, const uint8_t* near) {
+  double e2 = 0;
+  for (const Triangle& t : m.triangles) {
+    if ((near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) == 0) continue;
+    const Vec3 &a = m.vertices[t.v[0]], &b = m.vertices[t.v[1]], &c = m.vertices[t.v[2]];
+    const double l[3] = {dot(a - b, a - b), dot(b - c, b - c), dot(c - a, c - a)};
+    for (const double x : l) e2 = x > e2 ? x : e2;
+  }
+  return e2;
+}
+
+// The bands' reasoning needs the longest edge of the triangles that can come within reach
+// only: those with a vertex within the margin of the other jaw's global extreme (every
+// triangle of a pair within reach is one: mark_reachable), not the whole jaws'. (Any edge at
+// least theirs gives bands that hold every pair within reach: the same distances.)
 Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
-                     const Grid& g, double edge, double reach, double margin, BandedOpener* b) {
+                     const Grid& g, double reach, double margin, BandedOpener* b) {
   // The maxilla's lowest vertex and the mandible's highest along n: the extremes of the grid's
   // columns (every vertex went into one, its height dot(v + 0, n): the value of dot(v, n), up
   // to the sign of a zero, which compares equal), not two more passes over the vertices.
@@ -555,11 +585,23 @@ Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandib
     low_u = g.h[0][i] < low_u ? g.h[0][i] : low_u;
     high_l = g.h[1][i] > high_l ? g.h[1][i] : high_l;
   }
-  const double across = (reach + 3 * edge) / kCellMm + 2;  // columns, with the rounding
   BandLimit up{&g, &f, nullptr, high_l + margin, margin + 1e-9, 0};
   BandLimit down{&g, &f, nullptr, low_u - margin, margin + 1e-9, 0};
   up.beyond = high_l + up.margin;
   down.beyond = low_u - down.margin;
+  uint8_t* near_u = ctx.arena->allocate_array<uint8_t>(maxilla.vertices.size());
+  uint8_t* near_l = ctx.arena->allocate_array<uint8_t>(mandible.vertices.size());
+  if (near_u == nullptr || near_l == nullptr) return ctx.arena->exhausted_status();
+  double edge2[2] = {0, 0};
+  auto reachable = [&](uint32_t jaw) {
+    const Mesh& m = jaw == 0 ? maxilla : mandible;
+    uint8_t* near = jaw == 0 ? near_u : near_l;
+    mark_reachable(m, jaw == 0, jaw == 0 ? up.beyond : down.beyond, f.n, near);
+    edge2[jaw] = marked_longest_edge2(m, near);
+  };
+  parallel_for_each(ctx.executor, 2, reachable);
+  const double edge = std::sqrt(edge2[0] > edge2[1] ? edge2[0] : edge2[1]);
+  const double across = (reach + 3 * edge) / kCellMm + 2;  // columns, with the rounding
   if (across <= kMaxBandRadius) {
     // Both jaws' extremes, one task each (each writes its own arrays).
     const uint32_t radius = static_cast<uint32_t>(across);
@@ -577,9 +619,6 @@ Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandib
     down.other = work[1];
   }
   // The marks of both jaws, one task each (each writes its own), then their bands.
-  uint8_t* near_u = ctx.arena->allocate_array<uint8_t>(maxilla.vertices.size());
-  uint8_t* near_l = ctx.arena->allocate_array<uint8_t>(mandible.vertices.size());
-  if (near_u == nullptr || near_l == nullptr) return ctx.arena->exhausted_status();
   auto mark = [&](uint32_t jaw) {
     if (jaw == 0) {
       mark_band(maxilla, true, up, near_u);
@@ -603,8 +642,7 @@ Status allocate_pool(Arena& arena, Span<TrianglePairIds>* pool) {
 }
 
 Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
-                 const Grid& g, double edge, const OutlineOptions& o, Vec3* offset,
-                 OutlineReport* r) {
+                 const Grid& g, const OutlineOptions& o, Vec3* offset, OutlineReport* r) {
   ArenaScope scope(*ctx.arena);  // the bands and their indexes go when done
   // Near reach first (the jaws as scanned touch): exact up to it. Farther apart, again with
   // the reach of the largest gap accepted.
@@ -634,7 +672,7 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
   const bool try_met = o.has_bite_opening && margin == reach && met_margin < margin;
   BandedOpener b;
   SPLINTCORE_RETURN_IF_ERROR(
-      banded_opener(ctx, maxilla, mandible, f, g, edge, reach, try_met ? met_margin : margin, &b));
+      banded_opener(ctx, maxilla, mandible, f, g, reach, try_met ? met_margin : margin, &b));
   Opener op(ctx, b.upper_index, b.lower_index, f.n);
   Span<TrianglePairIds> pool;
   SPLINTCORE_RETURN_IF_ERROR(allocate_pool(*ctx.arena, &pool));
@@ -646,8 +684,7 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
   if (o.has_bite_opening) SPLINTCORE_RETURN_IF_ERROR(op.meets(0, &meet, &d0));
   if (!meet && try_met) {
     ctx.arena->rewind(scope.start());
-    SPLINTCORE_RETURN_IF_ERROR(
-        banded_opener(ctx, maxilla, mandible, f, g, edge, reach, margin, &b));
+    SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, margin, &b));
     SPLINTCORE_RETURN_IF_ERROR(allocate_pool(*ctx.arena, &pool));
     op.restart(reach, pool);
   }
@@ -655,8 +692,7 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
   if (d0.distance > reach || (o.has_bite_opening && d0.distance > target && margin < 2 * reach)) {
     ctx.arena->rewind(scope.start());
     if (d0.distance > reach) reach = o.max_gap_mm + target;
-    SPLINTCORE_RETURN_IF_ERROR(
-        banded_opener(ctx, maxilla, mandible, f, g, edge, reach, 2 * reach, &b));
+    SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, 2 * reach, &b));
     SPLINTCORE_RETURN_IF_ERROR(allocate_pool(*ctx.arena, &pool));
     op.restart(reach, pool);
     SPLINTCORE_RETURN_IF_ERROR(op.distance(0, &d0));
@@ -758,9 +794,8 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
                        const OutlineOptions& options, Outline* out) {
   *out = Outline{};
   SPLINTCORE_RETURN_IF_ERROR(check_options(options));
-  double edge_upper = 0, edge_lower = 0;
-  SPLINTCORE_RETURN_IF_ERROR(
-      check_jaws(ctx, maxilla, mandible, "outline", &edge_upper, &edge_lower));
+  // (The bands measure the edges they need: banded_opener.)
+  SPLINTCORE_RETURN_IF_ERROR(check_jaws(ctx, maxilla, mandible, "outline", nullptr, nullptr));
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
   OutlineBuffers buffers;
@@ -781,9 +816,8 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
     out->report.anterior = f.e1;
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 1, 3));
     Vec3 offset;
-    SPLINTCORE_RETURN_IF_ERROR(open_bite(ctx, maxilla, mandible, f, g,
-                                         std::fmax(edge_upper, edge_lower), options, &offset,
-                                         &out->report));
+    SPLINTCORE_RETURN_IF_ERROR(
+        open_bite(ctx, maxilla, mandible, f, g, options, &offset, &out->report));
     // The move is along n: the columns stay; only the mandible's heights change.
     if (out->report.opened) fill_heights(mandible, offset, f, 1, &g);
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 2, 3));

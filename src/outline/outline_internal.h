@@ -42,7 +42,8 @@ constexpr uint32_t kNoTip = ~uint32_t{0};
 constexpr uint64_t kPairStackBound = 24 * (2048 + 15 * 64 + 1) + 2 * 64;
 
 // A jaw is not empty, its vertices are finite and its triangles' corners exist; also its
-// longest edge (the opening's bands need it), in the same pass over the triangles. Errors
+// longest edge (the autorotation's bands need it), in the same pass over the triangles, unless
+// longest_edge is nullptr (the outline's bands measure only the triangles they need). Errors
 // start with `who` ("outline") and name the jaw (`name`: "maxilla", "mandible") and the element.
 Status check_jaw(const Mesh& m, const char* who, const char* name, double* longest_edge);
 // check_jaw of the maxilla and the mandible, one task each on ctx's executor (they read only
