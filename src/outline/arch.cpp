@@ -241,11 +241,14 @@ struct CellGrid {
   uint32_t* start = nullptr;  // per cell: its first entry in `list`, or kNoList
   uint16_t* count = nullptr;  // per cell: its entries
   uint16_t* list = nullptr;   // the candidates' segment indices, cell after cell
+  // Per entry after a cell's first: its segment's box's squared gap to the cell's grown box
+  // (boxes_beyond's), the entries after the first in increasing order of it (then of index).
+  double* gap2 = nullptr;
 };
 
 uint64_t cell_grid_bound() {
   return arena_array_bound<uint32_t>(kCellGridCells) + arena_array_bound<uint16_t>(kCellGridCells) +
-         arena_array_bound<uint16_t>(kCellListRoom);
+         arena_array_bound<uint16_t>(kCellListRoom) + arena_array_bound<double>(kCellListRoom);
 }
 
 // Cell (ix, iy)'s box, grown by kCellEdgeMm.
@@ -268,11 +271,16 @@ inline bool cell_of_point(const CellGrid& c, double px, double py, size_t* cell)
   return true;
 }
 
-// Is the box b (x_lo, y_lo, x_hi, y_hi) farther than r from the box a?
-inline bool boxes_beyond(const double* b, const double* a, double r) {
+// The squared gap between the boxes a and b (x_lo, y_lo, x_hi, y_hi), as computed.
+inline double boxes_gap2(const double* b, const double* a) {
   const double ex = std::max(0.0, std::max(b[0] - a[2], a[0] - b[2]));
   const double ey = std::max(0.0, std::max(b[1] - a[3], a[1] - b[3]));
-  return ex * ex + ey * ey > r * r;
+  return ex * ex + ey * ey;
+}
+
+// Is the box b farther than r from the box a?
+inline bool boxes_beyond(const double* b, const double* a, double r) {
+  return boxes_gap2(b, a) > r * r;
 }
 
 // The candidates of the cell with box `box` (grown by kCellEdgeMm) appended to the list at
@@ -299,8 +307,25 @@ bool cell_candidates(Projector& g, CellGrid& c, const double box[4], size_t* use
         c.list[(*used)++] = static_cast<uint16_t>(k);
         return true;
       });
-  if (!fit) *used = first;
-  return fit;
+  if (!fit) {
+    *used = first;
+    return false;
+  }
+  // The entries after the first by (gap, index): insertion sort (a few dozen a cell).
+  for (size_t i = first + 1; i < *used; ++i) {
+    const uint16_t k = c.list[i];
+    const double gap = boxes_gap2(g.box + 4 * size_t{k}, box);
+    size_t at = i;
+    while (at > first + 1 &&
+           (c.gap2[at - 1] > gap || (c.gap2[at - 1] == gap && c.list[at - 1] > k))) {
+      c.list[at] = c.list[at - 1];
+      c.gap2[at] = c.gap2[at - 1];
+      --at;
+    }
+    c.list[at] = k;
+    c.gap2[at] = gap;
+  }
+  return true;
 }
 
 // The cell lattice over the points and the lists of the cells that hold points.
@@ -333,7 +358,8 @@ Status make_cell_grid(Arena& arena, Projector& g, Span<const ArchPoint> pts, Cel
   c.start = arena.allocate_array<uint32_t>(cells);
   c.count = arena.allocate_array<uint16_t>(cells);
   c.list = arena.allocate_array<uint16_t>(kCellListRoom);
-  if (c.start == nullptr || c.count == nullptr || c.list == nullptr) {
+  c.gap2 = arena.allocate_array<double>(kCellListRoom);
+  if (c.start == nullptr || c.count == nullptr || c.list == nullptr || c.gap2 == nullptr) {
     return arena.exhausted_status();
   }
   std::fill(c.start, c.start + cells, kNoList);
@@ -362,7 +388,7 @@ Status make_cell_grid(Arena& arena, Projector& g, Span<const ArchPoint> pts, Cel
 // project(&line, px, py, s, o), bit for bit: from the cell's candidates when it has them. The
 // first candidate's distance bounds the nearest (as project_fast's guess), so a candidate
 // whose box lies beyond it is passed over; the least (distance, segment) of the others, in
-// the list's order (project()'s first least in index order).
+// any order (project()'s first least in index order).
 void project_cell(Projector& g, const CellGrid& c, double px, double py, double* s, double* o) {
   size_t cell = 0;
   if (c.start == nullptr || !cell_of_point(c, px, py, &cell) || c.start[cell] == kNoList) {
@@ -382,7 +408,13 @@ void project_cell(Projector& g, const CellGrid& c, double px, double py, double*
     return;
   }
   const Lanes2 p2 = {px, py};
-  for (++k; k < end; ++k) {
+  // The point lies in its cell's grown box, so its box gap to a segment's box is at least the
+  // cell's (each axis's difference and square round monotonically): past the first entry
+  // whose cell gap exceeds r, every box lies beyond it.
+  const double r2 = r * r;
+  const double* gap = c.gap2 + c.start[cell];
+  for (++k, ++gap; k < end; ++k, ++gap) {
+    if (*gap > r2) break;
     if (box_beyond(g.box + 4 * size_t{*k}, p2, r)) continue;
     const double d2 = segment_nearest(p, *k, g.reach[*k], px, py, &t, &qx, &qy);
     if (d2 < best || (d2 == best && *k < best_k)) {
@@ -453,6 +485,8 @@ Status allocate(Arena& arena, size_t n, double** a, double** b, double** c) {
 // index order, at most kLinePoints a jaw: the centre line's points). The line takes vertices,
 // not columns, so that it moves with the jaws: which vertex a column shows can change with a
 // rounding when the jaws move, which vertices lie in the band only where one lies on its edge.
+constexpr double kBandCutSlackMm = 0.01;
+
 Status occlusal_points(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3& lower_offset,
                        const Frame& f, const Grid& g, const Plane& plane,
                        ArenaArray<ArchPoint>* cells_out, ArenaArray<ArchPoint>* line,
@@ -506,11 +540,23 @@ Status occlusal_points(Arena& arena, const Mesh& upper, const Mesh& lower, const
       ++counts[jaw];
     }
     // The band's vertices marked in one pass (their indices in `band`), every k-th taken.
+    // Most of a jaw lies far from the plane: every vertex's place in the plane lies within
+    // kMaxSpanMm of the lattice's origin (grid_layout refuses a wider extent, and the origin
+    // is the vertices' mean; the mandible's move is along n), so the plane's height under it
+    // lies within `tilt` of plane.a, and a vertex whose height lies beyond the limit from
+    // that is outside the band by its height alone (with a slack far over the rounding): the
+    // same vertices as depth_of's test of every one.
+    const double tilt =
+        (std::fabs(plane.b) + std::fabs(plane.c)) * (kMaxSpanMm + 1.0) + kBandCutSlackMm;
+    const double cut = jaw == 0 ? plane.a + limit + tilt : plane.a - limit - tilt;
     size_t in_band = 0;
     for (size_t k = 0; k < m.vertices.size(); ++k) {
-      double x, y, h;
+      const Vec3 p = m.vertices[k] + offset;
       band[in_band] = static_cast<uint32_t>(k);
-      in_band += depth_of(m.vertices[k] + offset, &x, &y, &h) <= limit ? 1u : 0u;
+      const double h_k = dot(p, f.n);
+      if (jaw == 0 ? h_k > cut : h_k < cut) continue;
+      double x, y, h;
+      in_band += depth_of(p, &x, &y, &h) <= limit ? 1u : 0u;
     }
     const size_t every = in_band / kLinePoints + 1;
     for (size_t i = 0; i < in_band; i += every) {

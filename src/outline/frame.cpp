@@ -171,7 +171,8 @@ namespace {
 // the highest. The frame and the lattice in locals (the stores into the columns could alias
 // them), and no branch on the comparison (which follows no pattern): the height by a min or
 // max, the vertex by a mask, both slots written always.
-template <bool kLowest>
+// kLaid: the vertices, in this place, are those the lattice was laid over (cell_of_laid).
+template <bool kLowest, bool kLaid>
 void fill_columns(const Mesh& m, const Vec3& offset, const Frame& frame, Grid* g) {
   const PlaneAxes axes(frame);
   const Vec3 n = frame.n;
@@ -183,7 +184,7 @@ void fill_columns(const Mesh& m, const Vec3& offset, const Frame& frame, Grid* g
   for (size_t k = 0; k < count; ++k) {
     const Vec3 p = v[k] + offset;
     const Lanes2 xy = axes.xy(p);
-    const size_t cell = grid.cell_of(xy[0], xy[1]);
+    const size_t cell = kLaid ? grid.cell_of_laid(xy[0], xy[1]) : grid.cell_of(xy[0], xy[1]);
     const double h = dot(p, n);
     const double best = heights[cell];
     const bool better = kLowest ? h < best : h > best;
@@ -211,7 +212,7 @@ void fill_window(const Mesh& m, const double* vertex_h, double from, double to, 
     if (kLowest ? !(h > from && h <= to) : !(h < from && h >= to)) continue;
     const Vec3 p = v[k] + Vec3{};
     const Lanes2 xy = axes.xy(p);
-    const size_t cell = grid.cell_of(xy[0], xy[1]);
+    const size_t cell = grid.cell_of_laid(xy[0], xy[1]);  // (grid_layout's vertices and place)
     const double best = heights[cell];
     const bool better = kLowest ? h < best : h > best;
     heights[cell] = kLowest ? (h < best ? h : best) : (h > best ? h : best);
@@ -234,17 +235,23 @@ void clear_heights(int jaw, Grid* g) {
 void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g) {
   clear_heights(jaw, g);
   if (jaw == 0) {
-    fill_columns<true>(m, offset, f, g);
+    fill_columns<true, false>(m, offset, f, g);
   } else {
-    fill_columns<false>(m, offset, f, g);
+    fill_columns<false, false>(m, offset, f, g);
   }
 }
 
+// (Its callers laid the lattice over these vertices in these places: build_grid, and
+// fit_near_plane after grid_layout.)
 void fill_both(const Executor* executor, const Mesh& upper, const Mesh& lower,
                const Vec3& lower_offset, const Frame& f, Grid* g) {
   auto task = [&](uint32_t jaw) {
-    fill_heights(jaw == 0 ? upper : lower, jaw == 0 ? Vec3{} : lower_offset, f,
-                 static_cast<int>(jaw), g);
+    clear_heights(static_cast<int>(jaw), g);
+    if (jaw == 0) {
+      fill_columns<true, true>(upper, Vec3{}, f, g);
+    } else {
+      fill_columns<false, true>(lower, lower_offset, f, g);
+    }
   };
   parallel_for_each(executor, 2, task);
 }

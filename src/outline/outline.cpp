@@ -59,34 +59,50 @@ Status check_jaw(const Mesh& m, const char* who, const char* name, double* longe
           .at_index(i);
     }
   }
-  // The squared edges: each edge's x and y differences a lane pair (its corners' x and y
-  // loaded together), their squares' sums for a - b and b - c in two lanes, then each lane's
-  // z square added (dot()'s order, x then y then z: the same bits as dot(ab, ab)); c - a alone.
-  // The largest of them all (a maximum of finite values: the same whatever the order it is
-  // taken in).
-  Lanes2 e2_lanes = {0, 0};
-  double e2 = 0;
-  for (size_t i = 0; i < m.triangles.size(); ++i) {
-    const Triangle& t = m.triangles[i];
-    const size_t n = m.vertices.size();
-    if (t.v[0] >= n || t.v[1] >= n || t.v[2] >= n) {
-      return make_error(StatusCode::kInvalidMesh, who, ": the ", name, "'s triangle ", i,
-                        " refers to a vertex that does not exist")
-          .at_index(i);
+  // The squared edges of two triangles at a time, one a lane (each lane's x, y and z of a
+  // corner loaded together): each edge's squared length in its lane as dot() computes it (x
+  // then y then z; c - a's square is a - c's), the same bits. The largest of them all (a
+  // maximum of finite values: the same whatever the order it is taken in). A triangle's
+  // corners are checked before it is read, in triangle order (the first bad one is named).
+  const size_t n = m.vertices.size();
+  const Vec3* v = m.vertices.data();
+  auto bad_triangle = [&](size_t i) {
+    return make_error(StatusCode::kInvalidMesh, who, ": the ", name, "'s triangle ", i,
+                      " refers to a vertex that does not exist")
+        .at_index(i);
+  };
+  auto corners_exist = [n](const Triangle& t) { return t.v[0] < n && t.v[1] < n && t.v[2] < n; };
+  const size_t count = m.triangles.size();
+  if (longest_edge == nullptr) {
+    for (size_t i = 0; i < count; ++i) {
+      if (!corners_exist(m.triangles[i])) return bad_triangle(i);
     }
-    const Vec3 &a = m.vertices[t.v[0]], &b = m.vertices[t.v[1]], &c = m.vertices[t.v[2]];
-    const Lanes2 axy = {a.x, a.y}, bxy = {b.x, b.y}, cxy = {c.x, c.y};
-    const Lanes2 ab = axy - bxy, bc = bxy - cxy, ca = cxy - axy;
-    const Lanes2 ab2 = ab * ab, bc2 = bc * bc, ca2 = ca * ca;
-    const Lanes2 dz = Lanes2{a.z, b.z} - Lanes2{b.z, c.z};
-    const Lanes2 l2 = (Lanes2{ab2[0], bc2[0]} + Lanes2{ab2[1], bc2[1]}) + dz * dz;
-    const double caz = c.z - a.z;
-    const double lca = (ca2[0] + ca2[1]) + caz * caz;
-    e2_lanes = l2 > e2_lanes ? l2 : e2_lanes;
-    e2 = lca > e2 ? lca : e2;
+    return Status::ok();
   }
-  e2 = e2_lanes[0] > e2 ? e2_lanes[0] : e2;
-  e2 = e2_lanes[1] > e2 ? e2_lanes[1] : e2;
+  Lanes2 e2_lanes = {0, 0};
+  for (size_t i = 0; i < count; i += 2) {
+    const Triangle& t0 = m.triangles[i];
+    if (!corners_exist(t0)) return bad_triangle(i);
+    // An odd count: the last triangle twice.
+    const size_t j = i + 1 < count ? i + 1 : i;
+    const Triangle& t1 = m.triangles[j];
+    if (!corners_exist(t1)) return bad_triangle(j);
+    const Vec3 &a0 = v[t0.v[0]], &b0 = v[t0.v[1]], &c0 = v[t0.v[2]];
+    const Vec3 &a1 = v[t1.v[0]], &b1 = v[t1.v[1]], &c1 = v[t1.v[2]];
+    const Lanes2 ax = {a0.x, a1.x}, ay = {a0.y, a1.y}, az = {a0.z, a1.z};
+    const Lanes2 bx = {b0.x, b1.x}, by = {b0.y, b1.y}, bz = {b0.z, b1.z};
+    const Lanes2 cx = {c0.x, c1.x}, cy = {c0.y, c1.y}, cz = {c0.z, c1.z};
+    const Lanes2 abx = ax - bx, aby = ay - by, abz = az - bz;
+    const Lanes2 bcx = bx - cx, bcy = by - cy, bcz = bz - cz;
+    const Lanes2 cax = cx - ax, cay = cy - ay, caz = cz - az;
+    const Lanes2 lab = (abx * abx + aby * aby) + abz * abz;
+    const Lanes2 lbc = (bcx * bcx + bcy * bcy) + bcz * bcz;
+    const Lanes2 lca = (cax * cax + cay * cay) + caz * caz;
+    e2_lanes = lab > e2_lanes ? lab : e2_lanes;
+    e2_lanes = lbc > e2_lanes ? lbc : e2_lanes;
+    e2_lanes = lca > e2_lanes ? lca : e2_lanes;
+  }
+  const double e2 = e2_lanes[0] > e2_lanes[1] ? e2_lanes[0] : e2_lanes[1];
   *longest_edge = std::sqrt(e2);
   return Status::ok();
 }
@@ -117,14 +133,21 @@ namespace {
 // delta, so stepping by the distance still missing never overshoots), then bisection if it
 // has not converged. Without an opening asked, the jaws must already be apart.
 //
-// The steps converge (Newton's, quadratically): once one is at most kCollectStepMm long, the
-// search there also keeps every pair within a margin (the step's length) of the closest
-// distance found, in the pool's room. A move by at most a quarter of the margin changes each
-// pair's distance by at most as much, so the closest pair there is one of the pool's: the next
-// steps that near are a scan of the pool, with the full search's bits. (A wider margin holds
-// many more pairs where the jaws' surfaces run parallel, and costs more to collect.)
+// The steps converge (Newton's, quadratically): once the last distance measured was a
+// separated pair's (its rate along the move models the step), or a step is at most
+// kCollectStepMm long, the search there also keeps every pair within the bound it starts from
+// (the last closest pair's distance there) plus a margin, in the pool's room: pool_reach. A
+// move by m from there changes each pair's distance by at most m, so a pair left out lies
+// farther than pool_reach - m; where the pool's closest lies nearer than that (and a rounding
+// slack), it is the full search's answer, bit for bit (the same pairs' computed distances, the
+// same least). So the next steps near there are a scan of the pool, checked after the scan
+// (else the full search). A bound above the distance found there leaves room for the steps
+// that follow: the step that overshot the target, and the Newton steps back to it, lie within
+// about the overshoot. (A wider margin holds many more pairs where the jaws' surfaces run
+// parallel, and costs more to collect.)
 constexpr double kCollectStepMm = 0.1;
 constexpr double kMinPoolMarginMm = 1e-6;
+constexpr double kPoolSlackMm = 2.5e-7;  // over the computed distances' rounding
 constexpr size_t kPoolPairs = 32768;
 
 struct Opener {
@@ -139,9 +162,9 @@ struct Opener {
   bool warm = false;
   uint32_t pair_a = 0, pair_b = 0;
   bool has_last = false;
-  double last_t = 0;
-  size_t pooled = 0;  // pairs in the pool (0: none), kept at pool_t with pool_margin
-  double pool_t = 0, pool_margin = 0;
+  double last_t = 0, last_distance = 0;
+  size_t pooled = 0;  // pairs in the pool (0: none): every pair within pool_reach at pool_t
+  double pool_t = 0, pool_reach = 0;
 
   Opener(const Context& c, const DistanceIndex& u, const DistanceIndex& l, const Vec3& normal)
       : ctx(c), upper(u), lower(l), n(normal) {}
@@ -156,10 +179,12 @@ struct Opener {
 
   Status distance(double t, MeshPairDistance* d) {
     const Vec3 offset = n * (-t);
-    if (pooled > 0 && std::fabs(t - pool_t) <= 0.25 * pool_margin) {
+    if (pooled > 0) {
       SPLINTCORE_RETURN_IF_ERROR(candidate_pair_distance(
           upper, lower, Span<const TrianglePairIds>(pool.data(), pooled), offset, d));
-      return remember(t, *d);
+      if (d->distance + std::fabs(t - pool_t) + kPoolSlackMm < pool_reach) {
+        return remember(t, *d);
+      }
     }
     double bound = HUGE_VAL;
     if (warm) {
@@ -173,14 +198,15 @@ struct Opener {
       bound = bound * (1 + 1e-9) + 1e-9;  // over any rounding: the pair itself is found
     }
     const double step = std::fabs(t - last_t);
-    if (bound < HUGE_VAL && has_last && step <= kCollectStepMm && pool.size() > 0) {
+    const bool modelled = last_distance > 0 && last_distance < HUGE_VAL;
+    if (bound < HUGE_VAL && has_last && (modelled || step <= kCollectStepMm) && pool.size() > 0) {
       size_t count = 0;
-      const double margin = std::fmax(step, kMinPoolMarginMm);
+      const double margin = std::fmax(step <= kCollectStepMm ? step : 0.0, kMinPoolMarginMm);
       SPLINTCORE_RETURN_IF_ERROR(
           mesh_pair_distance_collect(ctx, upper, lower, offset, bound + margin, pool, &count, d));
       pooled = d->distance <= bound && count <= pool.size() ? count : 0;
       pool_t = t;
-      pool_margin = margin;
+      pool_reach = bound + margin;
     } else {
       SPLINTCORE_RETURN_IF_ERROR(mesh_pair_distance(ctx, upper, lower, offset, bound, d));
     }
@@ -201,6 +227,7 @@ struct Opener {
   Status remember(double t, const MeshPairDistance& d) {
     has_last = true;
     last_t = t;
+    last_distance = d.distance;
     if (d.distance < HUGE_VAL) {
       warm = true;
       pair_a = d.triangle_a;
@@ -422,22 +449,20 @@ struct BandLimit {
 // A triangle is kept when one of its vertices lies within the margin of the other jaw's
 // extreme near it (the columns around reach one edge further than the pairs need, so the
 // vertex nearest the other jaw may stand for the whole triangle): its vertices' marks (near: 1
-// when within the margin).
+// when within the margin). `near` comes in with mark_reachable's marks: a vertex past the
+// other jaw's global extreme and the margin (0) lies past its extreme near and past the
+// global bound too, and stays 0 (most of the jaw: neither its height nor its column need be
+// found again).
 void mark_band(const Mesh& m, bool upper, const BandLimit& limit, uint8_t* near) {
   const Frame& f = *limit.f;
   const PlaneAxes axes(f);
   const size_t nv = m.vertices.size();
   for (size_t i = 0; i < nv; ++i) {
+    if (near[i] == 0) continue;
     const Vec3& v = m.vertices[i];
     const double h = dot(v, f.n);
     double bound = limit.bound;
     if (limit.other != nullptr) {
-      // Past the other jaw's global extreme and the margin, past its extreme near (most of
-      // the jaw: the column need not be found).
-      if (upper ? h > limit.beyond : h < limit.beyond) {
-        near[i] = 0;
-        continue;
-      }
       const Lanes2 xy = axes.xy(v);
       bound = limit.other[limit.g->cell_of(xy[0], xy[1])];
       bound += upper ? limit.margin : -limit.margin;
@@ -446,34 +471,37 @@ void mark_band(const Mesh& m, bool upper, const BandLimit& limit, uint8_t* near)
   }
 }
 
-// The band of the marked vertices (mark_band): the triangles with a near vertex.
+// The band of the marked vertices (mark_band): the triangles with a near vertex. One pass over
+// the triangles: the kept ones' ids into room for all of them (at the top of the arena, given
+// back down to the kept ones at once), then only the kept ones.
 Status jaw_band(Arena& arena, const Mesh& m, const uint8_t* near, JawBand* out) {
-  const size_t nv = m.vertices.size();
-  auto keeps = [&](const Triangle& t) { return (near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) != 0; };
+  const size_t nv = m.vertices.size(), nt = m.triangles.size();
+  uint32_t* ids = arena.allocate_array<uint32_t>(nt > 0 ? nt : 1);
+  if (ids == nullptr) return arena.exhausted_status();
   size_t kept = 0;
-  for (const Triangle& t : m.triangles) {
-    if (keeps(t)) ++kept;
+  for (size_t i = 0; i < nt; ++i) {
+    const Triangle& t = m.triangles[i];
+    ids[kept] = static_cast<uint32_t>(i);
+    kept += (near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) != 0 ? 1u : 0u;
   }
+  const size_t room = kept > 0 ? kept : 1;
+  (void)arena.try_shrink(ids, sizeof(uint32_t) * (nt > 0 ? nt : 1), sizeof(uint32_t) * room);
+  out->ids = ids;
   // The kept triangles' vertices copied (numbered in order of first use, the corners in
   // their order): the same coordinates, so the same distances, from a few hundred kilobytes
   // that stay in cache instead of the whole jaw's.
   uint32_t* renumber = arena.allocate_array<uint32_t>(nv);
-  Triangle* tris = arena.allocate_array<Triangle>(kept > 0 ? kept : 1);
-  out->ids = arena.allocate_array<uint32_t>(kept > 0 ? kept : 1);
-  if (renumber == nullptr || tris == nullptr || out->ids == nullptr) {
-    return arena.exhausted_status();
-  }
+  Triangle* tris = arena.allocate_array<Triangle>(room);
+  if (renumber == nullptr || tris == nullptr) return arena.exhausted_status();
   std::fill(renumber, renumber + nv, kNoTip);
   uint32_t used = 0;
-  size_t k = 0;
-  for (size_t i = 0; i < m.triangles.size(); ++i) {
-    if (!keeps(m.triangles[i])) continue;
+  for (size_t k = 0; k < kept; ++k) {
+    const Triangle& t = m.triangles[ids[k]];
     for (int c = 0; c < 3; ++c) {
-      uint32_t& r = renumber[m.triangles[i].v[c]];
+      uint32_t& r = renumber[t.v[c]];
       if (r == kNoTip) r = used++;
       tris[k].v[c] = r;
     }
-    out->ids[k++] = static_cast<uint32_t>(i);
   }
   Vec3* verts = arena.allocate_array<Vec3>(used > 0 ? used : 1);
   if (verts == nullptr) return arena.exhausted_status();
@@ -519,9 +547,35 @@ struct BandedOpener {
   DistanceIndex upper_index, lower_index;
 };
 
-// `edge`: the jaws' longest edge.
+// The part of a jaw that can come within the margin of the other jaw's global extreme (the
+// maxilla's vertices at most `beyond` high, the mandible's at least): near[i] = 1. Every
+// triangle with a pair within reach has a vertex there (the bands' global argument).
+void mark_reachable(const Mesh& m, bool upper, double beyond, const Vec3& n, uint8_t* near) {
+  const size_t nv = m.vertices.size();
+  for (size_t i = 0; i < nv; ++i) {
+    const double h = dot(m.vertices[i], n);
+    near[i] = upper ? h <= beyond : h >= beyond;
+  }
+}
+
+// The squared longest edge of the triangles with a marked vertex (0 when none).
+double marked_longest_edge2(const Mesh& m, const uint8_t* near) {
+  double e2 = 0;
+  for (const Triangle& t : m.triangles) {
+    if ((near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) == 0) continue;
+    const Vec3 &a = m.vertices[t.v[0]], &b = m.vertices[t.v[1]], &c = m.vertices[t.v[2]];
+    const double l[3] = {dot(a - b, a - b), dot(b - c, b - c), dot(c - a, c - a)};
+    for (const double x : l) e2 = x > e2 ? x : e2;
+  }
+  return e2;
+}
+
+// The bands' reasoning needs the longest edge of the triangles that can come within reach
+// only: those with a vertex within the margin of the other jaw's global extreme (every
+// triangle of a pair within reach is one: mark_reachable), not the whole jaws'. (Any edge at
+// least theirs gives bands that hold every pair within reach: the same distances.)
 Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
-                     const Grid& g, double edge, double reach, double margin, BandedOpener* b) {
+                     const Grid& g, double reach, double margin, BandedOpener* b) {
   // The maxilla's lowest vertex and the mandible's highest along n: the extremes of the grid's
   // columns (every vertex went into one, its height dot(v + 0, n): the value of dot(v, n), up
   // to the sign of a zero, which compares equal), not two more passes over the vertices.
@@ -531,11 +585,23 @@ Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandib
     low_u = g.h[0][i] < low_u ? g.h[0][i] : low_u;
     high_l = g.h[1][i] > high_l ? g.h[1][i] : high_l;
   }
-  const double across = (reach + 3 * edge) / kCellMm + 2;  // columns, with the rounding
   BandLimit up{&g, &f, nullptr, high_l + margin, margin + 1e-9, 0};
   BandLimit down{&g, &f, nullptr, low_u - margin, margin + 1e-9, 0};
   up.beyond = high_l + up.margin;
   down.beyond = low_u - down.margin;
+  uint8_t* near_u = ctx.arena->allocate_array<uint8_t>(maxilla.vertices.size());
+  uint8_t* near_l = ctx.arena->allocate_array<uint8_t>(mandible.vertices.size());
+  if (near_u == nullptr || near_l == nullptr) return ctx.arena->exhausted_status();
+  double edge2[2] = {0, 0};
+  auto reachable = [&](uint32_t jaw) {
+    const Mesh& m = jaw == 0 ? maxilla : mandible;
+    uint8_t* near = jaw == 0 ? near_u : near_l;
+    mark_reachable(m, jaw == 0, jaw == 0 ? up.beyond : down.beyond, f.n, near);
+    edge2[jaw] = marked_longest_edge2(m, near);
+  };
+  parallel_for_each(ctx.executor, 2, reachable);
+  const double edge = std::sqrt(edge2[0] > edge2[1] ? edge2[0] : edge2[1]);
+  const double across = (reach + 3 * edge) / kCellMm + 2;  // columns, with the rounding
   if (across <= kMaxBandRadius) {
     // Both jaws' extremes, one task each (each writes its own arrays).
     const uint32_t radius = static_cast<uint32_t>(across);
@@ -553,9 +619,6 @@ Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandib
     down.other = work[1];
   }
   // The marks of both jaws, one task each (each writes its own), then their bands.
-  uint8_t* near_u = ctx.arena->allocate_array<uint8_t>(maxilla.vertices.size());
-  uint8_t* near_l = ctx.arena->allocate_array<uint8_t>(mandible.vertices.size());
-  if (near_u == nullptr || near_l == nullptr) return ctx.arena->exhausted_status();
   auto mark = [&](uint32_t jaw) {
     if (jaw == 0) {
       mark_band(maxilla, true, up, near_u);
@@ -579,8 +642,7 @@ Status allocate_pool(Arena& arena, Span<TrianglePairIds>* pool) {
 }
 
 Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, const Frame& f,
-                 const Grid& g, double edge, const OutlineOptions& o, Vec3* offset,
-                 OutlineReport* r) {
+                 const Grid& g, const OutlineOptions& o, Vec3* offset, OutlineReport* r) {
   ArenaScope scope(*ctx.arena);  // the bands and their indexes go when done
   // Near reach first (the jaws as scanned touch): exact up to it. Farther apart, again with
   // the reach of the largest gap accepted.
@@ -610,7 +672,7 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
   const bool try_met = o.has_bite_opening && margin == reach && met_margin < margin;
   BandedOpener b;
   SPLINTCORE_RETURN_IF_ERROR(
-      banded_opener(ctx, maxilla, mandible, f, g, edge, reach, try_met ? met_margin : margin, &b));
+      banded_opener(ctx, maxilla, mandible, f, g, reach, try_met ? met_margin : margin, &b));
   Opener op(ctx, b.upper_index, b.lower_index, f.n);
   Span<TrianglePairIds> pool;
   SPLINTCORE_RETURN_IF_ERROR(allocate_pool(*ctx.arena, &pool));
@@ -622,8 +684,7 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
   if (o.has_bite_opening) SPLINTCORE_RETURN_IF_ERROR(op.meets(0, &meet, &d0));
   if (!meet && try_met) {
     ctx.arena->rewind(scope.start());
-    SPLINTCORE_RETURN_IF_ERROR(
-        banded_opener(ctx, maxilla, mandible, f, g, edge, reach, margin, &b));
+    SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, margin, &b));
     SPLINTCORE_RETURN_IF_ERROR(allocate_pool(*ctx.arena, &pool));
     op.restart(reach, pool);
   }
@@ -631,8 +692,7 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
   if (d0.distance > reach || (o.has_bite_opening && d0.distance > target && margin < 2 * reach)) {
     ctx.arena->rewind(scope.start());
     if (d0.distance > reach) reach = o.max_gap_mm + target;
-    SPLINTCORE_RETURN_IF_ERROR(
-        banded_opener(ctx, maxilla, mandible, f, g, edge, reach, 2 * reach, &b));
+    SPLINTCORE_RETURN_IF_ERROR(banded_opener(ctx, maxilla, mandible, f, g, reach, 2 * reach, &b));
     SPLINTCORE_RETURN_IF_ERROR(allocate_pool(*ctx.arena, &pool));
     op.restart(reach, pool);
     SPLINTCORE_RETURN_IF_ERROR(op.distance(0, &d0));
@@ -734,9 +794,8 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
                        const OutlineOptions& options, Outline* out) {
   *out = Outline{};
   SPLINTCORE_RETURN_IF_ERROR(check_options(options));
-  double edge_upper = 0, edge_lower = 0;
-  SPLINTCORE_RETURN_IF_ERROR(
-      check_jaws(ctx, maxilla, mandible, "outline", &edge_upper, &edge_lower));
+  // (The bands measure the edges they need: banded_opener.)
+  SPLINTCORE_RETURN_IF_ERROR(check_jaws(ctx, maxilla, mandible, "outline", nullptr, nullptr));
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
   OutlineBuffers buffers;
@@ -757,9 +816,8 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
     out->report.anterior = f.e1;
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 1, 3));
     Vec3 offset;
-    SPLINTCORE_RETURN_IF_ERROR(open_bite(ctx, maxilla, mandible, f, g,
-                                         std::fmax(edge_upper, edge_lower), options, &offset,
-                                         &out->report));
+    SPLINTCORE_RETURN_IF_ERROR(
+        open_bite(ctx, maxilla, mandible, f, g, options, &offset, &out->report));
     // The move is along n: the columns stay; only the mandible's heights change.
     if (out->report.opened) fill_heights(mandible, offset, f, 1, &g);
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 2, 3));

@@ -42,7 +42,8 @@ constexpr uint32_t kNoTip = ~uint32_t{0};
 constexpr uint64_t kPairStackBound = 24 * (2048 + 15 * 64 + 1) + 2 * 64;
 
 // A jaw is not empty, its vertices are finite and its triangles' corners exist; also its
-// longest edge (the opening's bands need it), in the same pass over the triangles. Errors
+// longest edge (the autorotation's bands need it), in the same pass over the triangles, unless
+// longest_edge is nullptr (the outline's bands measure only the triangles they need). Errors
 // start with `who` ("outline") and name the jaw (`name`: "maxilla", "mandible") and the element.
 Status check_jaw(const Mesh& m, const char* who, const char* name, double* longest_edge);
 // check_jaw of the maxilla and the mandible, one task each on ctx's executor (they read only
@@ -108,6 +109,19 @@ struct Grid {
     const int64_t iy = clamped_floor((y - cy) / kCellMm, first_y, last_y) - iy0;
     return static_cast<size_t>(iy) * nx + static_cast<size_t>(ix);
   }
+  // cell_of for a point of the vertices the lattice was laid over (grid_layout), in the same
+  // place: its quotient q lies in [first, last + 1) (x_lo <= x <= x_hi, and the subtraction,
+  // the division and floor are monotone), where floor(q) is clamped_floor's, so it is not
+  // clamped.
+  static int64_t floor_of(double q) {
+    const int64_t t = static_cast<int64_t>(q);
+    return static_cast<double>(t) > q ? t - 1 : t;
+  }
+  size_t cell_of_laid(double x, double y) const {
+    const int64_t ix = floor_of((x - cx) / kCellMm) - ix0;
+    const int64_t iy = floor_of((y - cy) / kCellMm) - iy0;
+    return static_cast<size_t>(iy) * nx + static_cast<size_t>(ix);
+  }
   // The column's centre relative to (cx, cy).
   void cell_centre(size_t i, double* x, double* y) const {
     *x = (static_cast<double>(ix0 + static_cast<int64_t>(i % nx)) + 0.5) * kCellMm;
@@ -130,7 +144,8 @@ Status build_grid(Arena& arena, const Executor* executor, const Mesh& upper, con
                   const Vec3& lower_offset, const Frame& f, Grid* g);
 void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g);
 // fill_heights of both jaws, one task each on the executor (each writes only its own
-// columns' arrays).
+// columns' arrays), for the vertices the lattice was laid over, in the same places (the
+// upper's as given, the lower's moved by lower_offset): cell_of_laid.
 void fill_both(const Executor* executor, const Mesh& upper, const Mesh& lower,
                const Vec3& lower_offset, const Frame& f, Grid* g);
 bool fit_contact_plane(const Grid& g, Plane* plane, uint64_t* contact_cells);
