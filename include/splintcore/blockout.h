@@ -199,7 +199,7 @@ struct BlockoutStats {
 // unchanged (copied). For a wafer between two jaws call it once per jaw: the maxilla's direction is
 // the mandible's reversed. Memory: with filter_near_splint a byte per cell of 5 voxels over the
 // splint's box grown by two cells and the splint's distance index (distance_index_bound), the
-// sweep's state and extractor (a slab of 4 layers), the kept swept
+// sweep's state and extractor (a slab of one layer beside the carried one), the kept swept
 // triangles logged above it (48 bytes each), then 4 bytes per extracted
 // vertex and the swept mesh, moved down over the cells and the index; then the Boolean's; only
 // `out` stays (moved down to where the arena's top was). Errors: those of sweep_volume_mesh and
