@@ -376,9 +376,13 @@ inline Dop triangle_dop(const Grid& g, const Vec3& a, const Vec3& b, const Vec3&
   project(c, uc);
   int16_t lo[kLanes], hi[kLanes];
   for (int k = 0; k < kLanes; ++k) {
-    const double l = ua[k] < ub[k] ? ua[k] : ub[k], h = ua[k] > ub[k] ? ua[k] : ub[k];
-    const int ql = static_cast<int>(((l < uc[k] ? l : uc[k]) - g.origin[k]) * g.scale[k]) - 32000;
-    const int qh = static_cast<int>(((h > uc[k] ? h : uc[k]) - g.origin[k]) * g.scale[k]) - 32000;
+    // (Only `<`: cppcheck reads a `<` and a `>` in one statement as template brackets.)
+    const double l = ua[k] < ub[k] ? ua[k] : ub[k];
+    const double h = ub[k] < ua[k] ? ua[k] : ub[k];
+    const double least = l < uc[k] ? l : uc[k];
+    const double most = uc[k] < h ? h : uc[k];
+    const int ql = static_cast<int>((least - g.origin[k]) * g.scale[k]) - 32000;
+    const int qh = static_cast<int>((most - g.origin[k]) * g.scale[k]) - 32000;
     lo[k] = static_cast<int16_t>(ql - g.margin[k]);
     hi[k] = static_cast<int16_t>(qh + g.margin[k]);
   }
