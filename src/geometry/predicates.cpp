@@ -50,6 +50,7 @@
 #include "splintcore/geometry.h"
 
 #include "geometry/incircle_stage_a.h"
+#include "geometry/orient2d_stage_a.h"
 
 // Contraction into FMA is not only a matter of bit-identity here: it breaks Two-Sum, Split and
 // Two-Product (their round-off terms rely on every operation being rounded separately), and
@@ -76,7 +77,7 @@ constexpr double kEpsilon = 0x1p-53;
 constexpr double kSplitter = 134217729.0;
 
 // Error bounds of Section 4.3 (computed exactly: every constant here is representable).
-constexpr double kCcwErrBoundA = (3.0 + 16.0 * kEpsilon) * kEpsilon;
+// ccwerrboundA: detail::kCcwErrBoundA (orient2d_stage_a.h, shared with the mesh check).
 constexpr double kCcwErrBoundB = (2.0 + 12.0 * kEpsilon) * kEpsilon;
 constexpr double kO3dErrBoundA = (7.0 + 56.0 * kEpsilon) * kEpsilon;
 constexpr double kO3dErrBoundB = (3.0 + 28.0 * kEpsilon) * kEpsilon;
@@ -515,26 +516,9 @@ double incircle_adapt(double ax, double ay, double bx, double by, double cx, dou
 }  // namespace
 
 double orient2d(double ax, double ay, double bx, double by, double cx, double cy) {
-  const double detleft = (ax - cx) * (by - cy);
-  const double detright = (ay - cy) * (bx - cx);
-  const double det = detleft - detright;
-  double detsum = 0.0;
-  // When the two products do not have the same sign, no cancellation: det has the right sign.
-  // (A rounded product is zero only when one factor is exactly zero, inside the range.)
-  if (detleft > 0.0) {
-    if (detright <= 0.0) return det;
-    detsum = detleft + detright;
-  } else if (detleft < 0.0) {
-    if (detright >= 0.0) return det;
-    detsum = -detleft - detright;
-  } else {
-    return det;
-  }
-  // Strict comparison (the paper has >=): when the bound is subnormal it may be rounded down
-  // onto the error itself, and a tie could then hide an exact zero.
-  const double errbound = kCcwErrBoundA * detsum;
-  if (det > errbound || -det > errbound) return det;
-  return orient2d_adapt(ax, ay, bx, by, cx, cy, detsum);
+  const detail::Orient2dStageA s = detail::orient2d_stage_a(ax, ay, bx, by, cx, cy);
+  if (s.certain) return s.det;
+  return orient2d_adapt(ax, ay, bx, by, cx, cy, s.detsum);
 }
 
 double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {

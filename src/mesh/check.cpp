@@ -8,6 +8,7 @@
 // 2 - 2g gives the genus of a closed orientable surface. Duplicate triangles share the edge of
 // their two smallest ids. Degeneracy is decided exactly (collinear3d).
 #include "core/union_find.h"
+#include "geometry/orient2d_stage_a.h"
 #include "splintcore/mesh.h"
 
 namespace splintcore {
@@ -28,30 +29,6 @@ inline uint32_t max3(uint32_t a, uint32_t b, uint32_t c) {
 }
 inline uint32_t mid3(uint32_t a, uint32_t b, uint32_t c) {
   return a ^ b ^ c ^ min3(a, b, c) ^ max3(a, b, c);
-}
-
-// The first stage of orient2d (Shewchuk's filter, the same products in the same order): true
-// only when orient2d(a, b, c) certainly returns a nonzero value, so the triangle is not flat and
-// collinear3d need not be called (its first test is this orientation). Inline: the check calls
-// it once per triangle, and almost every triangle is decided here.
-inline bool xy_orientation_nonzero(const Vec3& a, const Vec3& b, const Vec3& c) {
-  constexpr double kEpsilon = 0x1p-53;
-  constexpr double kCcwErrBoundA = (3.0 + 16.0 * kEpsilon) * kEpsilon;
-  const double detleft = (a.x - c.x) * (b.y - c.y);
-  const double detright = (a.y - c.y) * (b.x - c.x);
-  const double det = detleft - detright;
-  double detsum = 0.0;
-  if (detleft > 0.0) {
-    if (detright <= 0.0) return true;  // det > 0
-    detsum = detleft + detright;
-  } else if (detleft < 0.0) {
-    if (detright >= 0.0) return true;  // det < 0
-    detsum = -detleft - detright;
-  } else {
-    return det != 0.0;  // orient2d returns det here
-  }
-  const double errbound = kCcwErrBoundA * detsum;
-  return det > errbound || -det > errbound;
 }
 
 // The per-phase arrays of check_mesh, in allocation order (check_mesh_bound adds them up).
@@ -108,8 +85,11 @@ Status check_indices(const Mesh& mesh, uint8_t* referenced, MeshReport* r) {
       referenced[v[k]] = 1;
     }
     const Vec3 &p0 = verts[v[0]], &p1 = verts[v[1]], &p2 = verts[v[2]];
+    // collinear3d's first test is orient2d in x-y: its first stage, inline, decides almost every
+    // triangle (not flat when it shows that orientation nonzero).
+    const detail::Orient2dStageA xy = detail::orient2d_stage_a(p0.x, p0.y, p1.x, p1.y, p2.x, p2.y);
     const bool degenerate = v[0] == v[1] || v[1] == v[2] || v[2] == v[0] ||
-                            (!xy_orientation_nonzero(p0, p1, p2) && collinear3d(p0, p1, p2));
+                            (!(xy.certain && xy.det != 0.0) && collinear3d(p0, p1, p2));
     if (degenerate) {
       if (r->degenerate_triangles == 0) r->first_degenerate_triangle = t;
       ++r->degenerate_triangles;
