@@ -346,6 +346,14 @@ Grid grid_of(const Vec3* v, size_t nv, double radius) {
   return g;
 }
 
+// A DOP from its lanes' bounds.
+inline Dop dop_of(const int16_t (&lo)[kLanes], const int16_t (&hi)[kLanes]) {
+  Dop d;
+  std::memcpy(&d.lo, lo, sizeof(lo));
+  std::memcpy(&d.hi, hi, sizeof(hi));
+  return d;
+}
+
 // A vertex's DOP: one quantized point, widened by the margins (values in -32602 .. 32602).
 inline Dop point_dop(const Grid& g, const Vec3& p) {
   double u[kLanes];
@@ -356,10 +364,7 @@ inline Dop point_dop(const Grid& g, const Vec3& p) {
     lo[k] = static_cast<int16_t>(q - g.margin[k]);
     hi[k] = static_cast<int16_t>(q + g.margin[k]);
   }
-  Dop d;
-  std::memcpy(&d.lo, lo, sizeof(lo));
-  std::memcpy(&d.hi, hi, sizeof(hi));
-  return d;
+  return dop_of(lo, hi);
 }
 
 inline Dop triangle_dop(const Dop& a, const Dop& b, const Dop& c) {
@@ -386,10 +391,7 @@ inline Dop triangle_dop(const Grid& g, const Vec3& a, const Vec3& b, const Vec3&
     lo[k] = static_cast<int16_t>(ql - g.margin[k]);
     hi[k] = static_cast<int16_t>(qh + g.margin[k]);
   }
-  Dop d;
-  std::memcpy(&d.lo, lo, sizeof(lo));
-  std::memcpy(&d.hi, hi, sizeof(hi));
-  return d;
+  return dop_of(lo, hi);
 }
 
 // ---- the triangles, in Morton order -------------------------------------------------------------
