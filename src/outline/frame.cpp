@@ -229,16 +229,22 @@ void clear_heights(int jaw, Grid* g) {
   }
 }
 
+// kLaid: as fill_columns.
+template <bool kLaid>
+void fill_heights_of(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g) {
+  clear_heights(jaw, g);
+  if (jaw == 0) {
+    fill_columns<true, kLaid>(m, offset, f, g);
+  } else {
+    fill_columns<false, kLaid>(m, offset, f, g);
+  }
+}
+
 }  // namespace
 
 // Jaw 0 (the maxilla) shows the mandible its lowest point of each column, jaw 1 its highest.
 void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g) {
-  clear_heights(jaw, g);
-  if (jaw == 0) {
-    fill_columns<true, false>(m, offset, f, g);
-  } else {
-    fill_columns<false, false>(m, offset, f, g);
-  }
+  fill_heights_of<false>(m, offset, f, jaw, g);
 }
 
 // (Its callers laid the lattice over these vertices in these places: build_grid, and
@@ -246,12 +252,8 @@ void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Gr
 void fill_both(const Executor* executor, const Mesh& upper, const Mesh& lower,
                const Vec3& lower_offset, const Frame& f, Grid* g) {
   auto task = [&](uint32_t jaw) {
-    clear_heights(static_cast<int>(jaw), g);
-    if (jaw == 0) {
-      fill_columns<true, true>(upper, Vec3{}, f, g);
-    } else {
-      fill_columns<false, true>(lower, lower_offset, f, g);
-    }
+    fill_heights_of<true>(jaw == 0 ? upper : lower, jaw == 0 ? Vec3{} : lower_offset, f,
+                          static_cast<int>(jaw), g);
   };
   parallel_for_each(executor, 2, task);
 }
