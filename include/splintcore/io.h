@@ -173,7 +173,8 @@ struct ThreeMfOptions {
 };
 
 // Arena bytes write_3mf() takes at most (nothing stays): the model part (up to 81 bytes a
-// vertex and 66 a triangle, 6 per character of a name, id or hash, 1 KiB more, 256 an object)
+// vertex and 66 a triangle, 6 per character of a name, id or hash, 1 KiB more, 256 an object),
+// the lanes its lines are formatted in (4 x 1024 lines of 81 bytes, on the context's executor)
 // and, deflating, the encoder's lanes (deflate_lanes_bound of the model part: a model over
 // 1 MiB is deflated in pieces on the context's executor) and each entry's compressed copy
 // (9/8 of it).

@@ -123,6 +123,47 @@ struct Line {
   }
 };
 
+// The vertex and triangle lines are formatted in chunks of kChunkLines lines, kTextLanes chunks
+// at a time on the executor, each into its lane of a scratch array, then appended in order:
+// the same text as line by line, at every thread count (and the same arena use: the lanes are
+// taken whatever the executor).
+constexpr size_t kChunkLines = 1024;
+constexpr uint32_t kTextLanes = 4;
+constexpr size_t kLineBytes = sizeof(Line::text);
+constexpr uint64_t kLanesBytes = uint64_t{kTextLanes} * kChunkLines * kLineBytes;
+
+struct LineLanes {
+  const Executor* executor = nullptr;
+  char* scratch = nullptr;  // kTextLanes lanes of kChunkLines * kLineBytes
+};
+
+// Lines 0..count-1, format(i, &line) making line i, appended to `t` in order.
+template <class Format>
+void put_lines(const LineLanes& lanes, size_t count, const Format& format, Text* t) {
+  const size_t chunks = (count + kChunkLines - 1) / kChunkLines;
+  size_t used[kTextLanes] = {};
+  for (size_t first = 0; first < chunks; first += kTextLanes) {
+    const uint32_t wave =
+        static_cast<uint32_t>(chunks - first < kTextLanes ? chunks - first : kTextLanes);
+    auto task = [&](uint32_t k) {
+      const size_t begin = (first + k) * kChunkLines;
+      const size_t end = count - begin < kChunkLines ? count : begin + kChunkLines;
+      char* out = lanes.scratch + k * kChunkLines * kLineBytes;
+      size_t n = 0;
+      for (size_t i = begin; i < end; ++i) {
+        Line line;
+        format(i, &line);
+        std::memcpy(out + n, line.text, line.size);
+        n += line.size;
+      }
+      used[k] = n;
+    };
+    parallel_for_each(lanes.executor, wave, task);
+    for (uint32_t k = 0; k < wave; ++k)
+      t->put(lanes.scratch + k * kChunkLines * kLineBytes, used[k]);
+  }
+}
+
 uint64_t escaped_bound(const char* s) { return s == nullptr ? 0 : 6 * uint64_t{std::strlen(s)}; }
 
 uint64_t model_bound(Span<const ThreeMfObject> objects, const ThreeMfOptions& options) {
@@ -180,7 +221,8 @@ Status check_objects(Span<const ThreeMfObject> objects) {
   return Status::ok();
 }
 
-void write_model(Span<const ThreeMfObject> objects, const ThreeMfOptions& options, Text* t) {
+void write_model(const LineLanes& lines, Span<const ThreeMfObject> objects,
+                 const ThreeMfOptions& options, Text* t) {
   t->put(
       "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
       "<model unit=\"millimeter\" xml:lang=\"en-US\" "
@@ -217,29 +259,31 @@ void write_model(Span<const ThreeMfObject> objects, const ThreeMfOptions& option
       t->put("</metadata></metadatagroup>\n");
     }
     t->put("<mesh>\n<vertices>\n");
-    for (const Vec3& p : o.mesh->vertices) {
-      Line line;
-      line.put("<vertex x=\"");
-      line.put_float(static_cast<float>(p.x));
-      line.put("\" y=\"");
-      line.put_float(static_cast<float>(p.y));
-      line.put("\" z=\"");
-      line.put_float(static_cast<float>(p.z));
-      line.put("\"/>\n");
-      t->put(line.text, line.size);
-    }
+    const Vec3* vertices = o.mesh->vertices.data();
+    auto vertex = [vertices](size_t at, Line* line) {
+      const Vec3& p = vertices[at];
+      line->put("<vertex x=\"");
+      line->put_float(static_cast<float>(p.x));
+      line->put("\" y=\"");
+      line->put_float(static_cast<float>(p.y));
+      line->put("\" z=\"");
+      line->put_float(static_cast<float>(p.z));
+      line->put("\"/>\n");
+    };
+    put_lines(lines, o.mesh->vertices.size(), vertex, t);
     t->put("</vertices>\n<triangles>\n");
-    for (const Triangle& tr : o.mesh->triangles) {
-      Line line;
-      line.put("<triangle v1=\"");
-      line.put_u64(tr.v[0]);
-      line.put("\" v2=\"");
-      line.put_u64(tr.v[1]);
-      line.put("\" v3=\"");
-      line.put_u64(tr.v[2]);
-      line.put("\"/>\n");
-      t->put(line.text, line.size);
-    }
+    const Triangle* triangles = o.mesh->triangles.data();
+    auto triangle = [triangles](size_t at, Line* line) {
+      const Triangle& tr = triangles[at];
+      line->put("<triangle v1=\"");
+      line->put_u64(tr.v[0]);
+      line->put("\" v2=\"");
+      line->put_u64(tr.v[1]);
+      line->put("\" v3=\"");
+      line->put_u64(tr.v[2]);
+      line->put("\"/>\n");
+    };
+    put_lines(lines, o.mesh->triangles.size(), triangle, t);
     t->put("</triangles>\n</mesh>\n</object>\n");
   }
   t->put("</resources>\n<build>\n");
@@ -417,7 +461,7 @@ Status write_zip(const ByteSink& sink, Entry* entries, size_t count) {
 
 uint64_t write_3mf_bound(Span<const ThreeMfObject> objects, const ThreeMfOptions& options) {
   const uint64_t model = model_bound(objects, options);
-  uint64_t n = model + 16;
+  uint64_t n = arena_array_bound<char>(static_cast<size_t>(kLanesBytes)) + model + 16;
   if (options.deflate) {
     n += deflate_lanes_bound(static_cast<size_t>(model)) + deflated_bound(model) + 16 +
          deflated_bound(sizeof kContentTypes) + 16 + deflated_bound(sizeof kRels) + 16;
@@ -438,11 +482,15 @@ Status write_3mf(const Context& ctx, Span<const ThreeMfObject> objects,
   }
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
+  LineLanes lines;  // below the model's text, which grows in place above them
+  lines.executor = ctx.executor;
+  lines.scratch = arena.allocate_array<char>(static_cast<size_t>(kLanesBytes));
+  if (lines.scratch == nullptr) return arena.exhausted_status();
   Text model;
   model.arena = &arena;
   model.bytes.bind(&arena);
   model.bound = static_cast<size_t>(bound);
-  write_model(objects, options, &model);
+  write_model(lines, objects, options, &model);
   if (model.exhausted) return arena.exhausted_status();
   model.bytes.shrink_to_fit();
   DeflateLanes lanes;
