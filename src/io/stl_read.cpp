@@ -533,15 +533,16 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
         __builtin_prefetch(welder.first_slot(h[2]));
       }
       const uint8_t* corners = record + 12;
-      // limit - magnitude wraps (top bit set) exactly when magnitude > limit: both < 2^31.
-      uint32_t over = 0;
-      for (int c = 0; c < 9; ++c) over |= limit - (bits_at(corners + 4 * c) & 0x7fffffffu);
-      if ((over & 0x80000000u) != 0) {
-        return binary_corner_error(corners, options, t + i, in.offset() + kBinaryRecordBytes * i);
-      }
       for (int k = 0; k < 3; ++k) {
         const uint8_t* c = corners + 12 * k;
         const uint32_t x = bits_at(c), y = bits_at(c + 4), z = bits_at(c + 8);
+        // limit - magnitude wraps (top bit set) exactly when magnitude > limit: both < 2^31.
+        // (The corners before k are welded by then, but an error leaves nothing behind.)
+        const uint32_t over =
+            (limit - (x & 0x7fffffffu)) | (limit - (y & 0x7fffffffu)) | (limit - (z & 0x7fffffffu));
+        if ((over & 0x80000000u) != 0) {
+          return binary_corner_error(corners, options, t + i, in.offset() + kBinaryRecordBytes * i);
+        }
         const uint64_t h =
             i >= kAhead ? ahead[i % (2 * kAhead)][k] : ExactWelder::hash_bits(x, y, z);
         const uint32_t id = welder.vertex(x, y, z, h);
