@@ -40,13 +40,14 @@ inline float load_f32(const uint8_t* p) {
   return f;
 }
 
-// A record's nine coordinates (little-endian float32 at p) as their bits: one copy on a
-// little-endian host, byte by byte elsewhere.
-inline void load_corner_bits(const uint8_t* p, uint32_t bits[9]) {
+// A little-endian float32's bits: one 4-byte load on a little-endian host.
+inline uint32_t bits_at(const uint8_t* p) {
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-  std::memcpy(bits, p, 9 * sizeof(uint32_t));
+  uint32_t bits;
+  std::memcpy(&bits, p, sizeof(bits));
+  return bits;
 #else
-  for (int c = 0; c < 9; ++c) bits[c] = load_u32(p + 4 * c);
+  return load_u32(p);
 #endif
 }
 
@@ -103,6 +104,21 @@ Status corner_error(const float* xyz, uint64_t triangle, int corner, double max_
     }
   }
   return Status::ok();
+}
+
+// The error of a binary record (its corners at `corners`) with a coordinate beyond the limit,
+// located at that corner (the record starts at byte `offset`).
+Status binary_corner_error(const uint8_t* corners, const StlReadOptions& options, uint64_t t,
+                           uint64_t offset) {
+  for (int k = 0; k < 3; ++k) {
+    const float xyz[3] = {load_f32(corners + 12 * k), load_f32(corners + 12 * k + 4),
+                          load_f32(corners + 12 * k + 8)};
+    if (!corner_ok(xyz, options.max_abs_coordinate)) {
+      return corner_error(xyz, t, k, options.max_abs_coordinate)
+          .at_byte(offset + 12 + 12 * static_cast<uint64_t>(k));
+    }
+  }
+  return Status::ok();  // not reached: some corner is over the limit
 }
 
 // Fills `in` for the record of triangle t (of `declared`), or says where the file ends.
@@ -504,34 +520,35 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
     run = run < 0x10000 - (t & 0xffff) ? run : 0x10000 - (t & 0xffff);
     const uint8_t* record = in.buf + in.pos;
     for (uint64_t i = 0; i < run; ++i, record += kBinaryRecordBytes) {
-      float corners[9];
-      uint32_t bits[9];
+      // Each coordinate loaded where it is used, never copied into an array (GCC makes such a
+      // copy a `rep movs`, whose start-up cost was a third of this loop's time).
       if (i + kAhead < run) {  // the slots of a triangle ahead; its hashes kept for then
-        load_corner_bits(record + kAhead * 50 + 12, bits);
-        std::memcpy(corners, bits, sizeof(corners));
+        const uint8_t* c = record + kAhead * kBinaryRecordBytes + 12;
         uint64_t* h = ahead[(i + kAhead) % (2 * kAhead)];
-        for (int k = 0; k < 3; ++k) h[k] = ExactWelder::hash(corners + 3 * k);
+        for (int k = 0; k < 3; ++k, c += 12) {
+          h[k] = ExactWelder::hash_bits(bits_at(c), bits_at(c + 4), bits_at(c + 8));
+        }
         __builtin_prefetch(welder.first_slot(h[0]));
         __builtin_prefetch(welder.first_slot(h[1]));
         __builtin_prefetch(welder.first_slot(h[2]));
       }
-      load_corner_bits(record + 12, bits);
-      std::memcpy(corners, bits, sizeof(corners));
-      // limit - magnitude wraps (top bit set) exactly when magnitude > limit: both < 2^31.
-      uint32_t over = 0;
-      for (int c = 0; c < 9; ++c) over |= limit - (bits[c] & 0x7fffffffu);
-      if ((over & 0x80000000u) != 0) {
-        for (int k = 0; k < 3; ++k) {
-          if (!corner_ok(corners + 3 * k, options.max_abs_coordinate)) {
-            return corner_error(corners + 3 * k, t + i, k, options.max_abs_coordinate)
-                .at_byte(in.offset() + kBinaryRecordBytes * i + 12 + 12 * static_cast<uint64_t>(k));
-          }
+      const uint8_t* corners = record + 12;
+      for (int k = 0; k < 3; ++k) {
+        const uint8_t* c = corners + 12 * k;
+        const uint32_t x = bits_at(c), y = bits_at(c + 4), z = bits_at(c + 8);
+        // limit - magnitude wraps (top bit set) exactly when magnitude > limit: both < 2^31.
+        // (The corners before k are welded by then, but an error leaves nothing behind.)
+        const uint32_t over =
+            (limit - (x & 0x7fffffffu)) | (limit - (y & 0x7fffffffu)) | (limit - (z & 0x7fffffffu));
+        if ((over & 0x80000000u) != 0) {
+          return binary_corner_error(corners, options, t + i, in.offset() + kBinaryRecordBytes * i);
         }
+        const uint64_t h =
+            i >= kAhead ? ahead[i % (2 * kAhead)][k] : ExactWelder::hash_bits(x, y, z);
+        const uint32_t id = welder.vertex(x, y, z, h);
+        if (id == ExactWelder::kFull) return arena.exhausted_status();
+        tris[t + i].v[k] = id;
       }
-      const bool added = i >= kAhead
-                             ? welder.add_hashed(corners, ahead[i % (2 * kAhead)], tris + t + i)
-                             : welder.add(corners, tris + t + i);
-      if (!added) return arena.exhausted_status();
     }
     in.pos += static_cast<size_t>(kBinaryRecordBytes * run);
     t += run;

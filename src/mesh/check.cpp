@@ -76,14 +76,15 @@ Status check_indices(const Mesh& mesh, uint8_t* referenced, MeshReport* r) {
   if (nv > 0) std::memset(referenced, 0, static_cast<size_t>(nv));
   for (uint32_t t = 0; t < r->triangle_count; ++t) {
     const uint32_t* v = tris[t].v;
-    for (int k = 0; k < 3; ++k) {
-      if (v[k] >= nv) {
-        return make_error(StatusCode::kInvalidMesh, "triangle ", t, " refers to vertex ", v[k],
-                          " but the mesh has ", nv, " vertices")
-            .at_index(t);
-      }
-      referenced[v[k]] = 1;
+    if (v[0] >= nv || v[1] >= nv || v[2] >= nv) {
+      const uint32_t bad = v[0] >= nv ? v[0] : (v[1] >= nv ? v[1] : v[2]);  // the first
+      return make_error(StatusCode::kInvalidMesh, "triangle ", t, " refers to vertex ", bad,
+                        " but the mesh has ", nv, " vertices")
+          .at_index(t);
     }
+    referenced[v[0]] = 1;
+    referenced[v[1]] = 1;
+    referenced[v[2]] = 1;
     const Vec3 &p0 = verts[v[0]], &p1 = verts[v[1]], &p2 = verts[v[2]];
     // collinear3d's first test is orient2d in x-y: its first stage, inline, decides almost every
     // triangle (not flat when it shows that orientation nonzero).
@@ -147,11 +148,10 @@ struct EdgePass {
     for (uint32_t i = 0; i < vertex_count; ++i) start[i + 1] += start[i];
     // start[lo] is now where bucket lo begins; filling advances it to where it ends.
     for (uint32_t t = 0; t < tri_count; ++t) {
-      const uint32_t* v = tris[t].v;
-      for (uint32_t k = 0; k < 3; ++k) {
-        const uint32_t p = v[k], q = v[k == 2 ? 0 : k + 1];
-        a.half[start[p < q ? p : q]++] = t << 2 | k;
-      }
+      const uint32_t v0 = tris[t].v[0], v1 = tris[t].v[1], v2 = tris[t].v[2];
+      a.half[start[v0 < v1 ? v0 : v1]++] = t << 2;
+      a.half[start[v1 < v2 ? v1 : v2]++] = t << 2 | 1u;
+      a.half[start[v2 < v0 ? v2 : v0]++] = t << 2 | 2u;
     }
   }
 

@@ -22,30 +22,41 @@ class ExactWelder {
   // false when the arena is exhausted. `triangle_count` <= (2^32 - 2) / 3.
   [[nodiscard]] bool init(Arena& arena, uint64_t triangle_count);
 
+  // The id add() gives when the arena is exhausted (the positions could not grow).
+  static constexpr uint32_t kFull = ~uint32_t{0};
+
   // Welds the three corners p[0..8] (finite floats) into `out`; false when the arena is
   // exhausted (the positions could not grow).
   [[nodiscard]] bool add(const float* p, Triangle* out) {
-    const uint64_t h[3] = {hash(p), hash(p + 3), hash(p + 6)};
-    return add_hashed(p, h, out);
-  }
-  // add() with the corners' hash() already known (`h`, from prefetching them).
-  [[nodiscard]] bool add_hashed(const float* p, const uint64_t* h, Triangle* out) {
     for (int k = 0; k < 3; ++k) {
-      const uint32_t id = vertex(p + 3 * k, h[k]);
+      const uint32_t x = bits_of(p[3 * k]), y = bits_of(p[3 * k + 1]), z = bits_of(p[3 * k + 2]);
+      const uint32_t id = vertex(x, y, z, hash_bits(x, y, z));
       if (id == kFull) return false;
       out->v[k] = id;
     }
     return true;
   }
 
+  // The vertex id of the corner whose coordinates have the float bit patterns x, y, z (finite)
+  // and hash_bits(x, y, z) `h`: a new id (the next) the first time; kFull when the arena is
+  // exhausted. The binary STL reader welds straight from its buffer through this (one scalar
+  // load per coordinate: copying a record's corners into an array costs a `rep movs` there).
+  [[nodiscard]] uint32_t vertex(uint32_t x, uint32_t y, uint32_t z, uint64_t h) {
+    return vertex_at(to_double(x), to_double(y), to_double(z), h);
+  }
+
   // The hash of corner p (three floats): where its search begins (first_slot) and its tag.
   static uint64_t hash(const float* p) {
+    return hash_bits(bits_of(p[0]), bits_of(p[1]), bits_of(p[2]));
+  }
+  // hash() of a corner given as its coordinates' float bit patterns.
+  static uint64_t hash_bits(uint32_t x, uint32_t y, uint32_t z) {
     // Three odd multipliers and one fold (each coordinate's bits reach the high half, which
     // the fold brings down to the slot bits; the tag takes the high bits). Only the speed
     // depends on it: ids go by first appearance.
-    const uint64_t h = uint64_t{key(p[0])} * 0x9e3779b97f4a7c15ull +
-                       uint64_t{key(p[1])} * 0xc2b2ae3d27d4eb4full +
-                       uint64_t{key(p[2])} * 0x165667b19e3779f9ull;
+    const uint64_t h = uint64_t{key(x)} * 0x9e3779b97f4a7c15ull +
+                       uint64_t{key(y)} * 0xc2b2ae3d27d4eb4full +
+                       uint64_t{key(z)} * 0x165667b19e3779f9ull;
     return (h ^ (h >> 29)) * 0xbf58476d1ce4e5b9ull;
   }
 
@@ -60,20 +71,24 @@ class ExactWelder {
   void finish(Arena& arena, const Arena::Marker& marker, ArenaArray<Vec3>* vertices);
 
  private:
-  static constexpr uint32_t kFull = ~uint32_t{0};
-
-  static uint32_t key(float f) {
+  static uint32_t bits_of(float f) {
     uint32_t bits;
     std::memcpy(&bits, &f, sizeof(bits));
+    return bits;
+  }
+  static double to_double(uint32_t bits) {
+    float f;
+    std::memcpy(&f, &bits, sizeof(f));
+    return static_cast<double>(f);
+  }
+  static uint32_t key(uint32_t bits) {
     return bits == 0x80000000u ? 0u : bits;  // -0 welds with +0
   }
 
   // A slot holds 1 + the vertex id in its low id_bits_ bits and, above them, the top bits of
   // the corner's hash: most slots of other corners are passed over without reading their
   // position (which would be a cache miss each).
-  uint32_t vertex(const float* p, uint64_t h) {
-    const double x = static_cast<double>(p[0]), y = static_cast<double>(p[1]),
-                 z = static_cast<double>(p[2]);
+  uint32_t vertex_at(double x, double y, double z, uint64_t h) {
     const uint32_t tag = tag_of(h);
     uint64_t slot = h & mask_;
     for (;;) {

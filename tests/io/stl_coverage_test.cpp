@@ -375,5 +375,40 @@ TEST(StlCoverage, WeldedBinaryPath) {
   EXPECT_GT(read_stl_mesh_bound(10, StlReadOptions{}), 0u);
 }
 
+// A bad coordinate in any corner of a triangle past the welded reader's prefetch distance (and
+// in the first ones): the welded path (read_stl_mesh, size known) and the soup path (read_stl)
+// give the same code, message and byte offset, the offset of the corner's first coordinate.
+TEST(StlCoverage, WeldedBinaryPathLocatesBadCorners) {
+  std::vector<SoupTriangle> soup;
+  for (int t = 0; t < 80; ++t) {
+    const float x = static_cast<float>(t);
+    soup.push_back(SoupTriangle{{{x, 0, 0}, {x + 1, 0, 0}, {x, 1, 0}}});
+  }
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (const float bad : {nan, -3.0e7f, std::numeric_limits<float>::infinity()}) {
+    for (const int t : {0, 5, 40, 79}) {
+      for (int k = 0; k < 3; ++k) {
+        for (int a = 0; a < 3; ++a) {
+          std::vector<SoupTriangle> broken = soup;
+          broken[static_cast<size_t>(t)].p[k][a] = bad;
+          const std::vector<uint8_t> bytes = test::binary_stl(broken);
+          const Read r = read(std::string(bytes.begin(), bytes.end()));
+          test::TestArena arena(size_t{1} << 20);
+          MemorySource ms{bytes.data(), bytes.size(), 0, 0};
+          Mesh m(&arena.arena);
+          const Status s = read_stl_mesh(Context(&arena.arena), memory_source(&ms, "t.stl"),
+                                         StlReadOptions{}, &m, nullptr);
+          EXPECT_FALSE(s.is_ok());
+          EXPECT_EQ(s.code(), r.status.code()) << test::format(s);
+          EXPECT_STREQ(s.message(), r.status.message());
+          EXPECT_EQ(s.byte_offset(), 84u + 50u * static_cast<uint64_t>(t) + 12u + 12u * k);
+          EXPECT_EQ(r.status.byte_offset(), s.byte_offset());
+          EXPECT_TRUE(m.triangles.empty() && m.vertices.empty());
+        }
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace splintcore
