@@ -100,14 +100,14 @@ struct RenderImage {
 
 // Bytes render_meshes() may take from the arena at most (caller-buffer arena): the image
 // w*h*3 (kept) and the temporaries (returned before it finishes): a depth buffer w*h*4; with a
-// translucent mesh a second layer w*h*(4+3+1); for a mesh with a transform its moved vertices
-// (24 bytes each, made once for all views); with Gouraud shading one normal (3 floats) per
+// translucent mesh a second layer w*h*(4+3+1); with Gouraud shading one normal (3 floats) per
 // vertex of the mesh being drawn; its vertices projected into the views drawn at once (16
 // bytes each): views_at_once = the smaller of the view count and the executor's concurrency
-// (1 with the serial executor); each array padded to 16 bytes.
-// render_bound() = 15*w*h + 24*largest + 12*largest + 16*views_at_once*largest + 128, rounded
-// up to 16 (translucency, a transform and Gouraud assumed; `largest`: the most vertices of one
-// mesh; UINT64_MAX on overflow).
+// (1 with the serial executor); each array padded to 16 bytes. A mesh with a transform takes
+// nothing more (each vertex is moved where it is projected, not copied).
+// render_bound() = 15*w*h + 12*largest + 16*views_at_once*largest + 112, rounded up to 16
+// (translucency and Gouraud assumed; `largest`: the most vertices of one mesh; UINT64_MAX on
+// overflow).
 uint64_t render_bound(uint32_t width, uint32_t height, uint64_t largest_mesh_vertices,
                       uint32_t views_at_once);
 

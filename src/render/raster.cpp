@@ -142,9 +142,8 @@ inline int64_t edge_bias(const Corners& c, int a, int b) {
 struct MeshJob {
   Frame* frame = nullptr;
   const RenderMesh* item = nullptr;
-  const Vec3* positions = nullptr;  // the vertices where drawn (moved by the item's transform)
-  const float* normals = nullptr;   // Gouraud: 3 per vertex (unnormalised), else nullptr
-  Projected* projected = nullptr;   // a batch of views x vertex count
+  const float* normals = nullptr;  // Gouraud: 3 per vertex (unnormalised), else nullptr
+  Projected* projected = nullptr;  // a batch of views x vertex count
 };
 
 struct PixelBox {
@@ -168,20 +167,24 @@ double lambert(const Vec3& normal, double normal_length, const Vec3& light) {
   return kAmbient + kDiffuse * c;
 }
 
-// Flat shading of one triangle (its corners p in the mesh's order), computed when its first
-// pixel is written (most triangles of a fine mesh write none: hidden, or no pixel centre inside).
+// Flat shading of one triangle (its corners `vertex` in the mesh's order, moved where drawn),
+// computed when its first pixel is written (most triangles of a fine mesh write none: hidden,
+// or no pixel centre inside).
 struct FlatLight {
-  const Vec3* p[3];
+  const RenderMesh* item;
+  uint32_t vertex[3];
   const Vec3* light;
-  const uint8_t* rgb;
   bool ready;
   double intensity;
   uint8_t shaded[3];
   void prepare() {
-    const Vec3 normal = cross(*p[1] - *p[0], *p[2] - *p[0]);
+    const Vec3* vertices = item->mesh->vertices.data();
+    const Vec3 p[3] = {placed(*item, vertices[vertex[0]]), placed(*item, vertices[vertex[1]]),
+                       placed(*item, vertices[vertex[2]])};
+    const Vec3 normal = cross(p[1] - p[0], p[2] - p[0]);
     const double len = length(normal);
     intensity = len > 0 ? lambert(normal, len, *light) : kAmbient;
-    for (int k = 0; k < 3; ++k) shaded[k] = shade(rgb[k], intensity);
+    for (int k = 0; k < 3; ++k) shaded[k] = shade(item->rgb[k], intensity);
     ready = true;
   }
 };
@@ -207,10 +210,10 @@ struct Fill {
       depth[k] = static_cast<double>(projected[i].depth);
       intensity[k] = static_cast<double>(projected[i].intensity);
       scalar[k] = item.scalars != nullptr ? item.scalars[i] : 0;
-      flat.p[k] = job->positions + tri.v[k];
+      flat.vertex[k] = tri.v[k];
     }
+    flat.item = &item;
     flat.light = &view.light;
-    flat.rgb = item.rgb;
     flat.ready = false;
   }
 
@@ -374,27 +377,54 @@ __attribute__((noinline)) void draw_triangle(const MeshJob& job, const View& vie
   }
 }
 
+// Vertices a task of the vertex passes (checks and framing, projection) takes at most.
+constexpr size_t kVertexChunk = 16384;
+
+// Projects the vertices [begin, end) of the job's mesh into the views [first, first + count)
+// (slots 0.. of job.projected): each vertex moved (placed) once for all of them.
+void project_chunk(const MeshJob& job, uint32_t first, uint32_t count, size_t begin, size_t end) {
+  const Frame& f = *job.frame;
+  const RenderMesh& item = *job.item;
+  const Vec3* vertices = item.mesh->vertices.data();
+  const size_t vertex_count = item.mesh->vertices.size();
+  for (size_t i = begin; i < end; ++i) {
+    const Vec3 p = placed(item, vertices[i]);
+    for (uint32_t slot = 0; slot < count; ++slot) {
+      const View& view = f.views[first + slot];
+      Projected& q = job.projected[static_cast<size_t>(slot) * vertex_count + i];
+      q = project(f, view, p);
+      if (job.normals != nullptr) {
+        const float* n = job.normals + i * 3;
+        const Vec3 normal(static_cast<double>(n[0]), static_cast<double>(n[1]),
+                          static_cast<double>(n[2]));
+        const double len = length(normal);
+        q.intensity = static_cast<float>(len > 0 ? lambert(normal, len, view.light) : kAmbient);
+      }
+    }
+  }
+}
+
+// Projects the job's mesh into the views [first, first + count), in chunks of vertices on the
+// executor (each writes its own vertices' slots: the same values at every thread count).
+void project_mesh(const Executor* executor, const MeshJob& job, uint32_t first, uint32_t count) {
+  const size_t n = job.item->mesh->vertices.size();
+  const uint32_t chunks = static_cast<uint32_t>((n + kVertexChunk - 1) / kVertexChunk);
+  auto task = [&job, first, count, n](uint32_t c) {
+    const size_t begin = static_cast<size_t>(c) * kVertexChunk;
+    project_chunk(job, first, count, begin, std::min(n, begin + kVertexChunk));
+  };
+  parallel_for_each(executor, chunks, task);
+}
+
+// Draws the job's mesh into view `view_index`, its vertices projected in slot `slot`.
 void draw_mesh_view(const MeshJob& job, uint32_t view_index, uint32_t slot) {
   const Frame& f = *job.frame;
   const View& view = f.views[view_index];
   const RenderMesh& item = *job.item;
   const Mesh& mesh = *item.mesh;
   const Layer& layer = item.alpha == 255 ? f.opaque : f.overlay;
-  if (mesh.triangles.empty()) return;  // framed (frame_views), nothing to draw
-  const Vec3* positions = job.positions;
   const size_t vertex_count = mesh.vertices.size();
-  Projected* projected = job.projected + static_cast<size_t>(slot) * vertex_count;
-  for (size_t i = 0; i < vertex_count; ++i) {
-    projected[i] = project(f, view, positions[i]);
-    if (job.normals != nullptr) {
-      const float* n = job.normals + i * 3;
-      const Vec3 normal(static_cast<double>(n[0]), static_cast<double>(n[1]),
-                        static_cast<double>(n[2]));
-      const double len = length(normal);
-      projected[i].intensity =
-          static_cast<float>(len > 0 ? lambert(normal, len, view.light) : kAmbient);
-    }
-  }
+  const Projected* projected = job.projected + static_cast<size_t>(slot) * vertex_count;
   const Triangle* triangles = mesh.triangles.data();
   const size_t triangle_count = mesh.triangles.size();
   // The tile in locals: the pixel writes (through uint8_t*) would otherwise reload them.
@@ -436,7 +466,7 @@ void draw_mesh_view(const MeshJob& job, uint32_t view_index, uint32_t slot) {
   }
 }
 
-Status validate(Span<const RenderMesh> meshes, const RenderOptions& o) {
+Status validate_options(const RenderOptions& o) {
   if (o.width == 0 || o.height == 0 || o.width > kRenderMaxSide || o.height > kRenderMaxSide) {
     return make_error(StatusCode::kInvalidArgument, "render size ", o.width, " x ", o.height,
                       " is out of range (each side 1..", kRenderMaxSide, " pixels)");
@@ -462,43 +492,172 @@ Status validate(Span<const RenderMesh> meshes, const RenderOptions& o) {
                            "centre finite");
     }
   }
+  return Status::ok();
+}
+
+// Each view's box of the projected vertices: the least and most u (right) and v (up).
+struct ViewBoxes {
+  bool any = false;  // a vertex was added (to every view)
+  double lo_u[kRenderMaxViews] = {}, hi_u[kRenderMaxViews] = {};
+  double lo_v[kRenderMaxViews] = {}, hi_v[kRenderMaxViews] = {};
+};
+
+// [*least, *most] widened to [lo, hi] by strict comparisons: of equal values (-0 and +0) the
+// one there first stays, so boxes of consecutive runs of points merged in order are the box of
+// all the points added one by one, bit for bit. (No NaN reaches here: the vertices are finite
+// and a dot product of finite values with a unit axis is finite or infinite, never NaN.)
+inline void widen(double lo, double hi, double* least, double* most) {
+  if (lo < *least) *least = lo;
+  if (*most < hi) *most = hi;
+}
+
+// Adds [lo_u, hi_u] x [lo_v, hi_v] (a point: lo = hi) to view vi's box of `b`.
+inline void add_view_box(ViewBoxes* b, uint32_t vi, double lo_u, double hi_u, double lo_v,
+                         double hi_v) {
+  if (!b->any) {
+    b->lo_u[vi] = lo_u;
+    b->hi_u[vi] = hi_u;
+    b->lo_v[vi] = lo_v;
+    b->hi_v[vi] = hi_v;
+    return;
+  }
+  widen(lo_u, hi_u, &b->lo_u[vi], &b->hi_u[vi]);
+  widen(lo_v, hi_v, &b->lo_v[vi], &b->hi_v[vi]);
+}
+
+// The point p (moved where drawn) projected into the views of `bases`, added to their boxes.
+inline void add_point(ViewBoxes* b, const Basis* bases, uint32_t view_count, const Vec3& p) {
+  for (uint32_t vi = 0; vi < view_count; ++vi) {
+    const double u = dot(p, bases[vi].right), v = dot(p, bases[vi].up);
+    add_view_box(b, vi, u, u, v, v);
+  }
+  b->any = true;
+}
+
+// The boxes `c` (of later points) merged into `b`.
+void merge_boxes(ViewBoxes* b, const ViewBoxes& c, uint32_t view_count) {
+  if (!c.any) return;
+  for (uint32_t vi = 0; vi < view_count; ++vi) {
+    add_view_box(b, vi, c.lo_u[vi], c.hi_u[vi], c.lo_v[vi], c.hi_v[vi]);
+  }
+  b->any = true;
+}
+
+// Chunks of one round of a checking pass, their results on the stack.
+constexpr uint32_t kChunksPerRound = 16;
+
+// [0, n) in chunks of kVertexChunk on the executor, kChunksPerRound at a time: scan(begin, end,
+// &chunk) fills a Chunk (its first_bad: the first bad index of the range, or SIZE_MAX); the
+// chunks are then taken in order, merge(chunk) for each up to the first with a bad index,
+// which is returned (SIZE_MAX: none). The same result at every thread count.
+template <class Chunk, class Scan, class Merge>
+size_t scan_chunks(const Executor* executor, size_t n, Scan& scan, Merge& merge) {
+  constexpr size_t kRound = kVertexChunk * kChunksPerRound;
+  for (size_t start = 0; start < n; start += kRound) {
+    const size_t round = std::min(n - start, kRound);
+    const uint32_t count = static_cast<uint32_t>((round + kVertexChunk - 1) / kVertexChunk);
+    Chunk chunks[kChunksPerRound];
+    auto task = [&](uint32_t c) {
+      const size_t begin = start + static_cast<size_t>(c) * kVertexChunk;
+      scan(begin, std::min(n, begin + kVertexChunk), &chunks[c]);
+    };
+    parallel_for_each(executor, count, task);
+    for (uint32_t c = 0; c < count; ++c) {
+      if (chunks[c].first_bad != SIZE_MAX) return chunks[c].first_bad;
+      merge(chunks[c]);
+    }
+  }
+  return SIZE_MAX;
+}
+
+struct VertexChunk {
+  size_t first_bad = SIZE_MAX;  // the first vertex not finite, or not finite when moved
+  ViewBoxes boxes;              // with framing: the boxes of its vertices where drawn
+};
+
+struct TriangleChunk {
+  size_t first_bad = SIZE_MAX;  // the first triangle naming a missing vertex
+};
+
+// The vertices of `item` checked finite (also where drawn) and, when `bases` is not null,
+// added to `boxes` (in order), in chunks on the executor. Errors: kNonFinite.
+Status check_vertices(const Executor* executor, size_t m, const RenderMesh& item,
+                      const Basis* bases, uint32_t view_count, ViewBoxes* boxes) {
+  const Vec3* vertices = item.mesh->vertices.data();
+  auto scan = [&](size_t begin, size_t end, VertexChunk* chunk) {
+    for (size_t v = begin; v < end; ++v) {
+      const Vec3 p = placed(item, vertices[v]);
+      if (!is_finite(vertices[v]) || !is_finite(p)) {
+        chunk->first_bad = v;
+        return;
+      }
+      if (bases != nullptr) add_point(&chunk->boxes, bases, view_count, p);
+    }
+  };
+  auto merge = [&](const VertexChunk& chunk) { merge_boxes(boxes, chunk.boxes, view_count); };
+  const size_t v = scan_chunks<VertexChunk>(executor, item.mesh->vertices.size(), scan, merge);
+  if (v == SIZE_MAX) return Status::ok();
+  return make_error(StatusCode::kNonFinite, "render mesh ", m, ": vertex ", v, " is not finite")
+      .at_index(v);
+}
+
+// The triangles of `mesh` name its vertices, checked in chunks on the executor. Errors:
+// kInvalidMesh.
+Status check_triangles(const Executor* executor, size_t m, const Mesh& mesh) {
+  const Triangle* triangles = mesh.triangles.data();
+  const size_t vertex_count = mesh.vertices.size();
+  auto named = [&](size_t t, int k) { return triangles[t].v[k] < vertex_count; };
+  auto scan = [&](size_t begin, size_t end, TriangleChunk* chunk) {
+    for (size_t t = begin; t < end; ++t) {
+      if (!named(t, 0) || !named(t, 1) || !named(t, 2)) {
+        chunk->first_bad = t;
+        return;
+      }
+    }
+  };
+  auto merge = [](const TriangleChunk&) {};
+  const size_t t = scan_chunks<TriangleChunk>(executor, mesh.triangles.size(), scan, merge);
+  if (t == SIZE_MAX) return Status::ok();
+  const int k = !named(t, 0) ? 0 : (!named(t, 1) ? 1 : 2);
+  return make_error(StatusCode::kInvalidMesh, "render mesh ", m, ": triangle ", t, " names vertex ",
+                    triangles[t].v[k], " of ", vertex_count)
+      .at_index(t);
+}
+
+Status check_scalars(size_t m, const RenderMesh& item) {
+  if (item.scalars == nullptr) return Status::ok();
+  if (!is_finite(item.scalar_max) || !(item.scalar_max > 0)) {
+    return make_error(StatusCode::kInvalidArgument, "render mesh ", m,
+                      ": the scalar range must be a finite number > 0, got ", item.scalar_max);
+  }
+  for (size_t v = 0; v < item.mesh->vertices.size(); ++v) {
+    if (!is_finite(item.scalars[v])) {
+      return make_error(StatusCode::kNonFinite, "render mesh ", m, ": the scalar of vertex ", v,
+                        " is not finite")
+          .at_index(v);
+    }
+  }
+  return Status::ok();
+}
+
+// The options and the meshes checked (in order: each mesh's vertices, triangles, scalars) and,
+// unless options.framing is given, each view's box of all meshes' vertices where drawn, in
+// mesh and vertex order (*boxes; chunks of vertices on the executor, merged in order: the same
+// values as one pass).
+Status validate(const Executor* executor, Span<const RenderMesh> meshes, const RenderOptions& o,
+                ViewBoxes* boxes) {
+  SPLINTCORE_RETURN_IF_ERROR(validate_options(o));
+  Basis bases[kRenderMaxViews];
+  for (uint32_t vi = 0; vi < o.view_count; ++vi) bases[vi] = view_basis(o.views[vi]);
+  const Basis* framed = o.framing == nullptr ? bases : nullptr;
   for (size_t m = 0; m < meshes.size(); ++m) {
     const RenderMesh& item = meshes[m];
     if (item.mesh == nullptr) {
       return make_error(StatusCode::kInvalidArgument, "render mesh ", m, " is null");
     }
-    const Mesh& mesh = *item.mesh;
-    const size_t vertex_count = mesh.vertices.size();
-    for (size_t v = 0; v < vertex_count; ++v) {
-      if (!is_finite(mesh.vertices[v]) || !is_finite(placed(item, mesh.vertices[v]))) {
-        return make_error(StatusCode::kNonFinite, "render mesh ", m, ": vertex ", v,
-                          " is not finite")
-            .at_index(v);
-      }
-    }
-    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-      const Triangle& tri = mesh.triangles[t];
-      for (int k = 0; k < 3; ++k) {
-        if (tri.v[k] >= vertex_count) {
-          return make_error(StatusCode::kInvalidMesh, "render mesh ", m, ": triangle ", t,
-                            " names vertex ", tri.v[k], " of ", vertex_count)
-              .at_index(t);
-        }
-      }
-    }
-    if (item.scalars != nullptr) {
-      if (!is_finite(item.scalar_max) || !(item.scalar_max > 0)) {
-        return make_error(StatusCode::kInvalidArgument, "render mesh ", m,
-                          ": the scalar range must be a finite number > 0, got ", item.scalar_max);
-      }
-      for (size_t v = 0; v < vertex_count; ++v) {
-        if (!is_finite(item.scalars[v])) {
-          return make_error(StatusCode::kNonFinite, "render mesh ", m, ": the scalar of vertex ", v,
-                            " is not finite")
-              .at_index(v);
-        }
-      }
-    }
+    SPLINTCORE_RETURN_IF_ERROR(check_vertices(executor, m, item, framed, o.view_count, boxes));
+    SPLINTCORE_RETURN_IF_ERROR(check_triangles(executor, m, *item.mesh));
+    SPLINTCORE_RETURN_IF_ERROR(check_scalars(m, item));
   }
   return Status::ok();
 }
@@ -557,10 +716,6 @@ uint64_t render_bound(uint32_t width, uint32_t height, uint64_t largest_mesh_ver
   if (!checked_mul(pixels, 15, &total) || !checked_add(total, 5 * 16, &total)) {
     return UINT64_MAX;
   }
-  // A transform: the moved vertices, 24 bytes each.
-  if (!checked_mul(largest_mesh_vertices, 24, &part) || !checked_add(total, part + 16, &total)) {
-    return UINT64_MAX;
-  }
   // Gouraud: 3 floats a vertex of the mesh being drawn.
   if (!checked_mul(largest_mesh_vertices, 12, &part) || !checked_add(total, part + 16, &total)) {
     return UINT64_MAX;
@@ -577,7 +732,7 @@ namespace {
 
 // Tiles in columns x rows, a legend strip at the right when asked.
 struct Layout {
-  uint32_t columns = 0, rows = 0, legend_width = 0, tile_w = 0, tile_h = 0;
+  uint32_t columns = 1, rows = 1, legend_width = 0, tile_w = 0, tile_h = 0;  // set by lay_out()
 };
 
 Status lay_out(const RenderOptions& options, Layout* l) {
@@ -602,11 +757,9 @@ Status lay_out(const RenderOptions& options, Layout* l) {
   return Status::ok();
 }
 
-// Framing: each view's tile and its projected box of all vertices; one scale for all views.
-// Each vertex is moved once and projected into every view (the boxes are accumulated in vertex
-// order per view, so the same values as one pass per view). With options.framing the given
-// centres and scale are used and the vertices are not read.
-void frame_views(Span<const RenderMesh> meshes, const RenderOptions& options, const Layout& l,
+// Framing: each view's tile and, from each view's box of all vertices (`boxes`, validate()),
+// its centre; one scale for all views. With options.framing the given centres and scale.
+void frame_views(const RenderOptions& options, const Layout& l, const ViewBoxes& boxes,
                  Frame* frame) {
   const uint32_t view_count = options.view_count;
   for (uint32_t vi = 0; vi < view_count; ++vi) {
@@ -629,27 +782,7 @@ void frame_views(Span<const RenderMesh> meshes, const RenderOptions& options, co
     frame->scale = options.framing->pixels_per_mm;
     return;
   }
-  bool any = false;
-  double lo_u[kRenderMaxViews] = {}, hi_u[kRenderMaxViews] = {};
-  double lo_v[kRenderMaxViews] = {}, hi_v[kRenderMaxViews] = {};
-  for (const RenderMesh& item : meshes) {
-    for (const Vec3& vertex : item.mesh->vertices) {
-      const Vec3 p = placed(item, vertex);
-      for (uint32_t vi = 0; vi < view_count; ++vi) {
-        const Basis& basis = frame->views[vi].basis;
-        const double u = dot(p, basis.right), v = dot(p, basis.up);
-        if (!any) {
-          lo_u[vi] = hi_u[vi] = u;
-          lo_v[vi] = hi_v[vi] = v;
-        }
-        if (u < lo_u[vi]) lo_u[vi] = u;
-        if (u > hi_u[vi]) hi_u[vi] = u;
-        if (v < lo_v[vi]) lo_v[vi] = v;
-        if (v > hi_v[vi]) hi_v[vi] = v;
-      }
-      any = true;
-    }
-  }
+  const double *lo_u = boxes.lo_u, *hi_u = boxes.hi_u, *lo_v = boxes.lo_v, *hi_v = boxes.hi_v;
   double scale = 0;
   for (uint32_t vi = 0; vi < view_count; ++vi) {
     View& view = frame->views[vi];
@@ -665,9 +798,11 @@ void frame_views(Span<const RenderMesh> meshes, const RenderOptions& options, co
   frame->scale = scale > 0 ? scale : 1;
 }
 
-// Gouraud: area-weighted vertex normals of one mesh at `positions` (where it is drawn; 3
-// floats a vertex), from the arena.
-Status vertex_normals(Arena& arena, const Mesh& mesh, const Vec3* positions, const float** out) {
+// Gouraud: area-weighted vertex normals of the mesh of `item` where it is drawn (its corners
+// moved by placed(); 3 floats a vertex), from the arena.
+Status vertex_normals(Arena& arena, const RenderMesh& item, const float** out) {
+  const Mesh& mesh = *item.mesh;
+  const Vec3* vertices = mesh.vertices.data();
   const size_t n = mesh.vertices.size();
   *out = nullptr;
   if (n == 0) return Status::ok();
@@ -675,8 +810,8 @@ Status vertex_normals(Arena& arena, const Mesh& mesh, const Vec3* positions, con
   if (nv == nullptr) return arena.exhausted_status();
   std::memset(nv, 0, n * 3 * sizeof(float));
   for (const Triangle& t : mesh.triangles) {
-    const Vec3& p0 = positions[t.v[0]];
-    const Vec3 c = cross(positions[t.v[1]] - p0, positions[t.v[2]] - p0);
+    const Vec3 p0 = placed(item, vertices[t.v[0]]);
+    const Vec3 c = cross(placed(item, vertices[t.v[1]]) - p0, placed(item, vertices[t.v[2]]) - p0);
     for (int k = 0; k < 3; ++k) {
       float* q = nv + static_cast<size_t>(t.v[k]) * 3;
       q[0] += static_cast<float>(c.x);
@@ -688,31 +823,46 @@ Status vertex_normals(Arena& arena, const Mesh& mesh, const Vec3* positions, con
   return Status::ok();
 }
 
-// The vertices of `item` where they are drawn: the mesh's own, or (with a transform) a moved
-// copy in the arena, made once for all views.
-Status drawn_positions(Arena& arena, const RenderMesh& item, const Vec3** out) {
-  const Mesh& mesh = *item.mesh;
-  *out = mesh.vertices.data();
-  if (item.transform == nullptr || mesh.vertices.empty()) return Status::ok();
-  const size_t n = mesh.vertices.size();
-  Vec3* moved = arena.allocate_array<Vec3>(n);
-  if (moved == nullptr) return arena.exhausted_status();
-  for (size_t i = 0; i < n; ++i) moved[i] = item.transform->apply_point(mesh.vertices[i]);
-  *out = moved;
-  return Status::ok();
+// Pixels a task of the per-pixel passes (clearing, blending) takes at most.
+constexpr size_t kPixelBand = 65536;
+
+// fill(begin, end) over [0, pixels) in bands of kPixelBand pixels on the executor (each band
+// writes its own pixels only: the same bytes at every thread count).
+template <class F>
+void for_pixel_bands(const Executor* executor, size_t pixels, F& fill) {
+  const uint32_t bands = static_cast<uint32_t>((pixels + kPixelBand - 1) / kPixelBand);
+  auto task = [&fill, pixels](uint32_t b) {
+    const size_t begin = static_cast<size_t>(b) * kPixelBand;
+    fill(begin, std::min(pixels, begin + kPixelBand));
+  };
+  parallel_for_each(executor, bands, task);
 }
 
-// Translucent surfaces in front of the opaque ones, blended over them.
-void blend_overlay(const Frame& frame, size_t pixels, uint8_t* rgb) {
-  for (size_t i = 0; i < pixels; ++i) {
-    if (frame.overlay.depth[i] < frame.opaque.depth[i]) {
+// The image cleared to the background and the depth buffers to far, in bands on the executor.
+void clear_layers(const Executor* executor, const Frame& frame, size_t pixels,
+                  const uint8_t background[3]) {
+  auto clear = [&frame, background](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) std::memcpy(frame.opaque.rgb + i * 3, background, 3);
+    for (size_t i = begin; i < end; ++i) frame.opaque.depth[i] = kFarDepth;
+    if (frame.overlay.depth == nullptr) return;
+    for (size_t i = begin; i < end; ++i) frame.overlay.depth[i] = kFarDepth;
+  };
+  for_pixel_bands(executor, pixels, clear);
+}
+
+// Translucent surfaces in front of the opaque ones, blended over them, in bands on the executor.
+void blend_overlay(const Executor* executor, const Frame& frame, size_t pixels, uint8_t* rgb) {
+  auto blend = [&frame, rgb](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      if (!(frame.overlay.depth[i] < frame.opaque.depth[i])) continue;
       const uint32_t alpha = frame.overlay.alpha[i];
       for (size_t k = 0; k < 3; ++k) {
         const uint32_t front = frame.overlay.rgb[i * 3 + k], back = rgb[i * 3 + k];
         rgb[i * 3 + k] = static_cast<uint8_t>((front * alpha + back * (255 - alpha) + 127) / 255);
       }
     }
-  }
+  };
+  for_pixel_bands(executor, pixels, blend);
 }
 
 // Tile separators (light grey) and the legend.
@@ -745,95 +895,106 @@ void draw_decorations(const Layout& l, uint32_t width, uint32_t height, uint8_t*
   }
 }
 
-}  // namespace
-
-Status render_meshes(const Context& ctx, Span<const RenderMesh> meshes,
-                     const RenderOptions& options, RenderImage* out) {
-  SPLINTCORE_ASSERT(ctx.arena != nullptr && out != nullptr);
-  *out = RenderImage{};
-  SPLINTCORE_RETURN_IF_ERROR(validate(meshes, options));
-  Arena& arena = *ctx.arena;
-  const uint32_t width = options.width, height = options.height;
-  const size_t pixels = static_cast<size_t>(width) * height;  // <= 2^26: no overflow
-  Layout layout;
-  SPLINTCORE_RETURN_IF_ERROR(lay_out(options, &layout));
-  const uint32_t view_count = options.view_count;
-
-  // The output image, kept; everything after the scope's mark is temporary.
-  uint8_t* rgb = arena.allocate_array<uint8_t>(pixels * 3);
-  if (rgb == nullptr) return arena.exhausted_status();
-  for (size_t i = 0; i < pixels; ++i) std::memcpy(rgb + i * 3, options.background, 3);
-  ArenaScope scope(arena);
-
+// The depth buffer and, with a translucent mesh, the overlay layer, from the arena.
+Status allocate_layers(Arena& arena, Span<const RenderMesh> meshes, size_t pixels, Frame* frame) {
   bool any_overlay = false;
   for (const RenderMesh& item : meshes) any_overlay = any_overlay || item.alpha != 255;
-  Frame frame;
-  frame.options = &options;
-  frame.width = width;
-  frame.opaque.rgb = rgb;
-  frame.opaque.depth = arena.allocate_array<float>(pixels);
-  if (frame.opaque.depth == nullptr) return arena.exhausted_status();
-  if (any_overlay) {
-    frame.overlay.depth = arena.allocate_array<float>(pixels);
-    if (frame.overlay.depth == nullptr) return arena.exhausted_status();
-    frame.overlay.rgb = arena.allocate_array<uint8_t>(pixels * 3);
-    if (frame.overlay.rgb == nullptr) return arena.exhausted_status();
-    frame.overlay.alpha = arena.allocate_array<uint8_t>(pixels);
-    if (frame.overlay.alpha == nullptr) return arena.exhausted_status();
-    for (size_t i = 0; i < pixels; ++i) frame.overlay.depth[i] = kFarDepth;
-  }
-  for (size_t i = 0; i < pixels; ++i) frame.opaque.depth[i] = kFarDepth;
-  frame_views(meshes, options, layout, &frame);
+  frame->opaque.depth = arena.allocate_array<float>(pixels);
+  if (frame->opaque.depth == nullptr) return arena.exhausted_status();
+  if (!any_overlay) return Status::ok();
+  frame->overlay.depth = arena.allocate_array<float>(pixels);
+  if (frame->overlay.depth == nullptr) return arena.exhausted_status();
+  frame->overlay.rgb = arena.allocate_array<uint8_t>(pixels * 3);
+  if (frame->overlay.rgb == nullptr) return arena.exhausted_status();
+  frame->overlay.alpha = arena.allocate_array<uint8_t>(pixels);
+  if (frame->overlay.alpha == nullptr) return arena.exhausted_status();
+  return Status::ok();
+}
 
-  // Meshes in order; the views of one mesh in parallel (disjoint tiles).
-  for (size_t m = 0; m < meshes.size(); ++m) {
-    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "render", m, meshes.size()));
-    MeshJob job;
-    job.frame = &frame;
-    job.item = &meshes[m];
-    ArenaScope mesh_scope(arena);  // the moved vertices, normals and projections of this mesh
-    SPLINTCORE_RETURN_IF_ERROR(drawn_positions(arena, meshes[m], &job.positions));
-    if (options.shading == RenderShading::kGouraud) {
-      SPLINTCORE_RETURN_IF_ERROR(
-          vertex_normals(arena, *meshes[m].mesh, job.positions, &job.normals));
-    }
-    const size_t vertex_count = meshes[m].mesh->vertices.size();
-    // The views in batches of as many as the executor runs at once: the projections of a
-    // batch at a time (the views are drawn into disjoint tiles, so the bytes are the same).
-    const uint32_t concurrency = ctx.executor != nullptr ? ctx.executor->concurrency : 1;
-    const uint32_t batch =
-        concurrency < 1 ? 1 : (concurrency < view_count ? concurrency : view_count);
-    uint64_t projections = 0;
-    if (!checked_mul(vertex_count, batch, &projections) || projections > SIZE_MAX) {
-      return make_error(StatusCode::kArenaExhausted, "render: ", vertex_count, " vertices in ",
-                        batch, " views do not fit in memory");
-    }
-    if (projections > 0) {
-      job.projected = arena.allocate_array<Projected>(static_cast<size_t>(projections));
-      if (job.projected == nullptr) return arena.exhausted_status();
-    }
-    for (uint32_t first = 0; first < view_count; first += batch) {
-      const uint32_t count = view_count - first < batch ? view_count - first : batch;
-      auto task = [&job, first](uint32_t slot) { draw_mesh_view(job, first + slot, slot); };
-      parallel_for_each(ctx.executor, count, task);
-    }
+// Draws one mesh into every view: its normals (Gouraud), then the views in batches of as many
+// as the executor runs at once, each batch projected (chunks of vertices, each moved once for
+// the batch) then drawn (a view a task: disjoint tiles, so the bytes are the same).
+Status draw_mesh(const Context& ctx, Frame* frame, const RenderMesh& item) {
+  if (item.mesh->triangles.empty()) return Status::ok();  // framed (validate), nothing to draw
+  Arena& arena = *ctx.arena;
+  ArenaScope mesh_scope(arena);  // the normals and projections of this mesh
+  MeshJob job;
+  job.frame = frame;
+  job.item = &item;
+  if (frame->options->shading == RenderShading::kGouraud) {
+    SPLINTCORE_RETURN_IF_ERROR(vertex_normals(arena, item, &job.normals));
   }
-  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "render", meshes.size(), meshes.size()));
-  if (any_overlay) blend_overlay(frame, pixels, rgb);
-  draw_decorations(layout, width, height, rgb);
+  const size_t vertex_count = item.mesh->vertices.size();
+  const uint32_t view_count = frame->options->view_count;
+  const uint32_t concurrency = ctx.executor != nullptr ? ctx.executor->concurrency : 1;
+  const uint32_t batch =
+      concurrency < 1 ? 1 : (concurrency < view_count ? concurrency : view_count);
+  uint64_t projections = 0;
+  if (!checked_mul(vertex_count, batch, &projections) || projections > SIZE_MAX) {
+    return make_error(StatusCode::kArenaExhausted, "render: ", vertex_count, " vertices in ", batch,
+                      " views do not fit in memory");
+  }
+  job.projected = arena.allocate_array<Projected>(static_cast<size_t>(projections));
+  if (job.projected == nullptr) return arena.exhausted_status();
+  for (uint32_t first = 0; first < view_count; first += batch) {
+    const uint32_t count = view_count - first < batch ? view_count - first : batch;
+    project_mesh(ctx.executor, job, first, count);
+    auto task = [&job, first](uint32_t slot) { draw_mesh_view(job, first + slot, slot); };
+    parallel_for_each(ctx.executor, count, task);
+  }
+  return Status::ok();
+}
 
-  out->width = width;
-  out->height = height;
+void fill_result(const Frame& frame, const Layout& layout, uint8_t* rgb, RenderImage* out) {
+  out->width = frame.options->width;
+  out->height = frame.options->height;
   out->rgb = rgb;
   out->pixels_per_mm = frame.scale;
   out->framing.pixels_per_mm = frame.scale;
-  for (uint32_t vi = 0; vi < view_count; ++vi) {
+  for (uint32_t vi = 0; vi < frame.options->view_count; ++vi) {
     out->framing.centre_u[vi] = frame.views[vi].centre_u;
     out->framing.centre_v[vi] = frame.views[vi].centre_v;
   }
   out->tile_width = layout.tile_w;
   out->tile_height = layout.tile_h;
   out->columns = layout.columns;
+}
+
+}  // namespace
+
+Status render_meshes(const Context& ctx, Span<const RenderMesh> meshes,
+                     const RenderOptions& options, RenderImage* out) {
+  SPLINTCORE_ASSERT(ctx.arena != nullptr && out != nullptr);
+  *out = RenderImage{};
+  ViewBoxes boxes;
+  SPLINTCORE_RETURN_IF_ERROR(validate(ctx.executor, meshes, options, &boxes));
+  Arena& arena = *ctx.arena;
+  const uint32_t width = options.width, height = options.height;
+  const size_t pixels = static_cast<size_t>(width) * height;  // <= 2^26: no overflow
+  Layout layout;
+  SPLINTCORE_RETURN_IF_ERROR(lay_out(options, &layout));
+
+  // The output image, kept; everything after the scope's mark is temporary.
+  uint8_t* rgb = arena.allocate_array<uint8_t>(pixels * 3);
+  if (rgb == nullptr) return arena.exhausted_status();
+  ArenaScope scope(arena);
+  Frame frame;
+  frame.options = &options;
+  frame.width = width;
+  frame.opaque.rgb = rgb;
+  SPLINTCORE_RETURN_IF_ERROR(allocate_layers(arena, meshes, pixels, &frame));
+  clear_layers(ctx.executor, frame, pixels, options.background);
+  frame_views(options, layout, boxes, &frame);
+
+  // Meshes in order; the views of one mesh in parallel (disjoint tiles).
+  for (size_t m = 0; m < meshes.size(); ++m) {
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "render", m, meshes.size()));
+    SPLINTCORE_RETURN_IF_ERROR(draw_mesh(ctx, &frame, meshes[m]));
+  }
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "render", meshes.size(), meshes.size()));
+  if (frame.overlay.depth != nullptr) blend_overlay(ctx.executor, frame, pixels, rgb);
+  draw_decorations(layout, width, height, rgb);
+  fill_result(frame, layout, rgb, out);
   return Status::ok();
 }
 

@@ -696,6 +696,46 @@ TEST(Render, SameBytesTwiceAndWithThreads) {
   EXPECT_EQ(h, 240u);
 }
 
+// The framing of a mesh of several chunks of vertices (validate's pass in chunks on the
+// executor) is the box of its vertices taken one by one, strict comparisons keeping the first of
+// equal values (-0 before +0), at 1 and 3 threads.
+TEST(Render, FramingInChunksIsTheBoxOfTheVerticesInOrder) {
+  test::TestArena t(64 << 20);
+  Mesh m(&t.arena);
+  const size_t n = 40000;  // 3 chunks of 16384 vertices
+  ASSERT_TRUE(m.vertices.resize(n));
+  for (size_t i = 0; i < n; ++i) {
+    // The top view's u = x*1 + y*0 + z*0 keeps x's sign of zero (y, z < 0): -0 at vertex 0 and
+    // every third, +0 elsewhere (the second chunk starts with +0). v = y: least in the second
+    // chunk, most in the third.
+    const double x = i % 3 == 0 ? -0.0 : 0.0;
+    const double y = i == 20000 ? -200.0 : (i == 39000 ? -0.5 : -1.0 - static_cast<double>(i % 7));
+    m.vertices[i] = Vec3(x, y, -1);
+  }
+  RenderMesh item;
+  item.mesh = &m;
+  RenderOptions o;
+  o.width = 64;
+  o.height = 64;
+  RenderFraming framing[2];
+  for (int run = 0; run < 2; ++run) {
+    ArenaScope scope(t.arena);
+    RenderImage image;
+#if defined(SPLINTCORE_WITH_PLATFORM)
+    ThreadExecutor threads(run == 1 ? 3 : 1);
+    Context ctx(&t.arena, &threads.executor(), nullptr);
+#else
+    Context ctx(&t.arena);
+#endif
+    SPLINTCORE_ASSERT_OK(render_meshes(ctx, Span<const RenderMesh>(&item, 1), o, &image));
+    framing[run] = image.framing;
+  }
+  EXPECT_TRUE(std::signbit(framing[0].centre_u[1]));  // -0: lo and hi both vertex 0's
+  EXPECT_EQ(framing[0].centre_u[1], 0.0);
+  EXPECT_EQ(framing[0].centre_v[1], 0.5 * -200.0 + 0.5 * -0.5);
+  EXPECT_EQ(0, std::memcmp(&framing[0], &framing[1], sizeof(RenderFraming)));
+}
+
 // A mesh drawn with a transform gives the bytes of its moved copy (flat and Gouraud), and a
 // second pass given the first's framing draws into the same places as a pass that frames the
 // same vertices itself.
