@@ -316,22 +316,46 @@ inline void project(const Vec3& p, double u[kLanes]) {
 constexpr double kErrorUnits[kLanes] = {0, 0, 0, 5, 5, 5, 5, 0};
 
 // The quantization of each direction (the pad lane: scale 0, margin 0).
+// The runs the scans and the serial stages of the hierarchy pass are cut into, to share them
+// on the executor: run r of n things is n * r / kRuns .. n * (r + 1) / kRuns - 1. Every stage gives
+// the same result however it is cut, so the results do not depend on the thread count.
+constexpr uint32_t kRuns = 8;
+inline size_t run_start(size_t n, uint32_t r) {
+  return static_cast<size_t>(uint64_t{n} * r / kRuns);
+}
+
 struct Grid {
   double origin[kLanes];
   double scale[kLanes];
   int margin[kLanes];
 };
 
-// Over all the vertices (radius: their largest coordinate magnitude).
-Grid grid_of(const Vec3* v, size_t nv, double radius) {
-  double lo[kLanes], hi[kLanes], u[kLanes];
-  for (int k = 0; k < kLanes; ++k) lo[k] = hi[k] = 0.0;
-  for (size_t i = 0; i < nv; ++i) {
-    project(v[i], u);
-    for (int k = 0; k < kLanes; ++k) {
-      lo[k] = i == 0 || u[k] < lo[k] ? u[k] : lo[k];
-      hi[k] = i == 0 || u[k] > hi[k] ? u[k] : hi[k];
+// Over all the vertices (radius: their largest coordinate magnitude). The bounds of each run,
+// then of the runs in order: the same values (and the first of equal ones) as one scan.
+Grid grid_of(const Executor* executor, const Vec3* v, size_t nv, double radius) {
+  double run_lo[kRuns][kLanes], run_hi[kRuns][kLanes];
+  auto bounds = [&](uint32_t r) {
+    double u[kLanes];
+    const size_t first = run_start(nv, r);
+    for (size_t i = first; i < run_start(nv, r + 1); ++i) {
+      project(v[i], u);
+      for (int k = 0; k < kLanes; ++k) {
+        run_lo[r][k] = i == first || u[k] < run_lo[r][k] ? u[k] : run_lo[r][k];
+        run_hi[r][k] = i == first || u[k] > run_hi[r][k] ? u[k] : run_hi[r][k];
+      }
     }
+  };
+  parallel_for_each(executor, kRuns, bounds);
+  double lo[kLanes], hi[kLanes];
+  for (int k = 0; k < kLanes; ++k) lo[k] = hi[k] = 0.0;
+  bool any = false;
+  for (uint32_t r = 0; r < kRuns; ++r) {
+    if (run_start(nv, r) == run_start(nv, r + 1)) continue;
+    for (int k = 0; k < kLanes; ++k) {
+      lo[k] = !any || run_lo[r][k] < lo[k] ? run_lo[r][k] : lo[k];
+      hi[k] = !any || run_hi[r][k] > hi[k] ? run_hi[r][k] : hi[k];
+    }
+    any = true;
   }
   Grid g;
   for (int k = 0; k < kLanes; ++k) {
@@ -682,14 +706,6 @@ inline uint32_t lanes_using(const uint32_t* c, const Leaf& b) {
   return lane_bits(m[0], m[1]);
 }
 
-// The runs the serial stages of the hierarchy pass are cut into, to share them on the
-// executor: run r of n things is n * r / kRuns .. n * (r + 1) / kRuns - 1. Every stage gives
-// the same result however it is cut, so the results do not depend on the thread count.
-constexpr uint32_t kRuns = 8;
-inline size_t run_start(size_t n, uint32_t r) {
-  return static_cast<size_t>(uint64_t{n} * r / kRuns);
-}
-
 // Stable LSD radix sort on bits 32..61 of the keys, ten at a time (three passes, where the
 // library's byte-wise sort takes a histogram of all eight bytes and a pass per byte), on the
 // executor: each pass counts the digits of each run, places digit by digit and, within a
@@ -772,16 +788,51 @@ struct Tally {
 // The largest coordinate magnitude when every coordinate is finite and, when nonzero, within
 // [2^-306, 2^100] (orient3d's exact range, geometry.h, and well inside float's and the DOP
 // grid's), so that every filter's bound holds and every exact test is exact; -1 otherwise.
-double exact_range_radius(const Vec3* v, size_t n) {
-  double radius = 0.0;
-  for (size_t i = 0; i < n; ++i) {
-    for (int a = 0; a < 3; ++a) {
-      const double x = std::fabs(v[i][a]);
-      if (x != 0.0 && !(x >= 0x1p-306 && x <= 0x1p100)) return -1.0;  // NaN fails too
-      radius = x > radius ? x : radius;
+// In runs on the executor (the largest of the runs' largest, or -1 when any run fails).
+double exact_range_radius(const Executor* executor, const Vec3* v, size_t n) {
+  double run_radius[kRuns];
+  auto scan = [&](uint32_t r) {
+    double radius = 0.0;
+    for (size_t i = run_start(n, r); i < run_start(n, r + 1); ++i) {
+      for (int a = 0; a < 3; ++a) {
+        const double x = std::fabs(v[i][a]);
+        if (x != 0.0 && !(x >= 0x1p-306 && x <= 0x1p100)) {  // NaN fails too
+          run_radius[r] = -1.0;
+          return;
+        }
+        radius = x > radius ? x : radius;
+      }
     }
+    run_radius[r] = radius;
+  };
+  parallel_for_each(executor, kRuns, scan);
+  double radius = 0.0;
+  for (double x : run_radius) {
+    if (x < 0.0) return -1.0;
+    radius = x > radius ? x : radius;
   }
   return radius;
+}
+
+// The first triangle that refers to a vertex that does not exist (nt: none), in runs on the
+// executor: the first run's first.
+size_t first_bad_triangle(const Executor* executor, const Triangle* tris, size_t nt, size_t nv) {
+  size_t run_bad[kRuns];
+  auto scan = [&](uint32_t r) {
+    run_bad[r] = nt;
+    for (size_t t = run_start(nt, r); t < run_start(nt, r + 1); ++t) {
+      const Triangle& tri = tris[t];
+      if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) {
+        run_bad[r] = t;
+        return;
+      }
+    }
+  };
+  parallel_for_each(executor, kRuns, scan);
+  for (size_t t : run_bad) {
+    if (t != nt) return t;
+  }
+  return nt;
 }
 
 // Degenerate: a repeated vertex id, or collinear corners (exactly; with `filters`, a component
@@ -1504,23 +1555,21 @@ Status find_self_intersections(const Context& ctx, const Mesh& mesh, uint64_t ma
   }
   const Vec3* v = mesh.vertices.data();
   const Triangle* tris = mesh.triangles.data();
-  for (size_t t = 0; t < nt; ++t) {
-    const Triangle& tri = tris[t];
-    if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) {
-      return make_error(StatusCode::kInvalidMesh, "triangle ", t,
-                        " refers to a vertex that does not exist")
-          .at_index(t);
-    }
+  const size_t bad = first_bad_triangle(ctx.executor, tris, nt, nv);
+  if (bad != nt) {
+    return make_error(StatusCode::kInvalidMesh, "triangle ", bad,
+                      " refers to a vertex that does not exist")
+        .at_index(bad);
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "self-intersection", 0, nt));
-  const double radius = exact_range_radius(v, nv);
+  const double radius = exact_range_radius(ctx.executor, v, nv);
   if (radius < 0.0) {
     // Non-finite or extreme coordinates: no filter bound holds and nothing is exact there;
     // the sweep over boxes answers as it always has.
     Tally tally{report, max_pairs};
     return sweep(ctx, v, tris, nt, nullptr, &tally);
   }
-  const Grid grid = grid_of(v, nv, radius);
+  const Grid grid = grid_of(ctx.executor, v, nv, radius);
   if (nv <= 3 * nt && nv < UINT32_MAX) {
     // All pairs are counted unless there are more than max_pairs: the pass stops at one more.
     Tally all{report, max_pairs != 0 && max_pairs != UINT64_MAX ? max_pairs + 1 : 0};
