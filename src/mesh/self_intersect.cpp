@@ -964,9 +964,9 @@ struct HierarchyPass {
     uint32_t node, leaf;     // its first node and leaf
     uint32_t nodes, leaves;  // how many
   };
-  Subtree sub[2 * kSubtrees];
+  Subtree sub[2 * kSubtrees] = {};
   uint32_t sub_count = 0;
-  uint32_t above[2 * kSubtrees];
+  uint32_t above[2 * kSubtrees] = {};
   uint32_t above_count = 0;
 
   HierarchyPass(Arena& a, const Vec3* vertices, size_t vertex_count, const Triangle* triangles,
