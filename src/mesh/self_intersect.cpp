@@ -316,22 +316,46 @@ inline void project(const Vec3& p, double u[kLanes]) {
 constexpr double kErrorUnits[kLanes] = {0, 0, 0, 5, 5, 5, 5, 0};
 
 // The quantization of each direction (the pad lane: scale 0, margin 0).
+// The runs the scans and the serial stages of the hierarchy pass are cut into, to share them
+// on the executor: run r of n things is n * r / kRuns .. n * (r + 1) / kRuns - 1. Every stage gives
+// the same result however it is cut, so the results do not depend on the thread count.
+constexpr uint32_t kRuns = 8;
+inline size_t run_start(size_t n, uint32_t r) {
+  return static_cast<size_t>(uint64_t{n} * r / kRuns);
+}
+
 struct Grid {
   double origin[kLanes];
   double scale[kLanes];
   int margin[kLanes];
 };
 
-// Over all the vertices (radius: their largest coordinate magnitude).
-Grid grid_of(const Vec3* v, size_t nv, double radius) {
-  double lo[kLanes], hi[kLanes], u[kLanes];
-  for (int k = 0; k < kLanes; ++k) lo[k] = hi[k] = 0.0;
-  for (size_t i = 0; i < nv; ++i) {
-    project(v[i], u);
-    for (int k = 0; k < kLanes; ++k) {
-      lo[k] = i == 0 || u[k] < lo[k] ? u[k] : lo[k];
-      hi[k] = i == 0 || u[k] > hi[k] ? u[k] : hi[k];
+// Over all the vertices (radius: their largest coordinate magnitude). The bounds of each run,
+// then of the runs in order: the same values (and the first of equal ones) as one scan.
+Grid grid_of(const Executor* executor, const Vec3* v, size_t nv, double radius) {
+  double run_lo[kRuns][kLanes], run_hi[kRuns][kLanes];
+  auto bounds = [&](uint32_t r) {
+    double u[kLanes];
+    const size_t first = run_start(nv, r);
+    for (size_t i = first; i < run_start(nv, r + 1); ++i) {
+      project(v[i], u);
+      for (int k = 0; k < kLanes; ++k) {
+        run_lo[r][k] = i == first || u[k] < run_lo[r][k] ? u[k] : run_lo[r][k];
+        run_hi[r][k] = i == first || u[k] > run_hi[r][k] ? u[k] : run_hi[r][k];
+      }
     }
+  };
+  parallel_for_each(executor, kRuns, bounds);
+  double lo[kLanes], hi[kLanes];
+  for (int k = 0; k < kLanes; ++k) lo[k] = hi[k] = 0.0;
+  bool any = false;
+  for (uint32_t r = 0; r < kRuns; ++r) {
+    if (run_start(nv, r) == run_start(nv, r + 1)) continue;
+    for (int k = 0; k < kLanes; ++k) {
+      lo[k] = !any || run_lo[r][k] < lo[k] ? run_lo[r][k] : lo[k];
+      hi[k] = !any || run_hi[r][k] > hi[k] ? run_hi[r][k] : hi[k];
+    }
+    any = true;
   }
   Grid g;
   for (int k = 0; k < kLanes; ++k) {
@@ -683,17 +707,36 @@ inline uint32_t lanes_using(const uint32_t* c, const Leaf& b) {
 }
 
 // Stable LSD radix sort on bits 32..61 of the keys, ten at a time (three passes, where the
-// library's byte-wise sort takes a histogram of all eight bytes and a pass per byte); returns
-// the sorted array, which is `keys` or `scratch`.
-uint64_t* sort_morton(uint64_t* keys, uint64_t* scratch, uint32_t n) {
+// library's byte-wise sort takes a histogram of all eight bytes and a pass per byte), on the
+// executor: each pass counts the digits of each run, places digit by digit and, within a
+// digit, run by run (the order of the serial stable sort), and each run scatters its keys.
+// Returns the sorted array, which is `keys` or `scratch`.
+uint64_t* sort_morton(const Executor* executor, uint64_t* keys, uint64_t* scratch, uint32_t n) {
   uint64_t* from = keys;
   uint64_t* to = scratch;
+  uint32_t start[kRuns][1024];
   for (int shift = 32; shift < 62; shift += 10) {
-    uint32_t start[1025];
-    for (uint32_t& c : start) c = 0;
-    for (uint32_t i = 0; i < n; ++i) ++start[((from[i] >> shift) & 1023u) + 1];
-    for (uint32_t b = 0; b < 1024; ++b) start[b + 1] += start[b];
-    for (uint32_t i = 0; i < n; ++i) to[start[(from[i] >> shift) & 1023u]++] = from[i];
+    auto count = [&](uint32_t r) {
+      for (uint32_t& c : start[r]) c = 0;
+      for (size_t i = run_start(n, r); i < run_start(n, r + 1); ++i) {
+        ++start[r][(from[i] >> shift) & 1023u];
+      }
+    };
+    parallel_for_each(executor, kRuns, count);
+    uint32_t sum = 0;
+    for (uint32_t b = 0; b < 1024; ++b) {
+      for (uint32_t r = 0; r < kRuns; ++r) {
+        const uint32_t c = start[r][b];
+        start[r][b] = sum;
+        sum += c;
+      }
+    }
+    auto scatter = [&](uint32_t r) {
+      for (size_t i = run_start(n, r); i < run_start(n, r + 1); ++i) {
+        to[start[r][(from[i] >> shift) & 1023u]++] = from[i];
+      }
+    };
+    parallel_for_each(executor, kRuns, scatter);
     uint64_t* t = from;
     from = to;
     to = t;
@@ -745,16 +788,51 @@ struct Tally {
 // The largest coordinate magnitude when every coordinate is finite and, when nonzero, within
 // [2^-306, 2^100] (orient3d's exact range, geometry.h, and well inside float's and the DOP
 // grid's), so that every filter's bound holds and every exact test is exact; -1 otherwise.
-double exact_range_radius(const Vec3* v, size_t n) {
-  double radius = 0.0;
-  for (size_t i = 0; i < n; ++i) {
-    for (int a = 0; a < 3; ++a) {
-      const double x = std::fabs(v[i][a]);
-      if (x != 0.0 && !(x >= 0x1p-306 && x <= 0x1p100)) return -1.0;  // NaN fails too
-      radius = x > radius ? x : radius;
+// In runs on the executor (the largest of the runs' largest, or -1 when any run fails).
+double exact_range_radius(const Executor* executor, const Vec3* v, size_t n) {
+  double run_radius[kRuns];
+  auto scan = [&](uint32_t r) {
+    double radius = 0.0;
+    for (size_t i = run_start(n, r); i < run_start(n, r + 1); ++i) {
+      for (int a = 0; a < 3; ++a) {
+        const double x = std::fabs(v[i][a]);
+        if (x != 0.0 && !(x >= 0x1p-306 && x <= 0x1p100)) {  // NaN fails too
+          run_radius[r] = -1.0;
+          return;
+        }
+        radius = x > radius ? x : radius;
+      }
     }
+    run_radius[r] = radius;
+  };
+  parallel_for_each(executor, kRuns, scan);
+  double radius = 0.0;
+  for (double x : run_radius) {
+    if (x < 0.0) return -1.0;
+    radius = x > radius ? x : radius;
   }
   return radius;
+}
+
+// The first triangle that refers to a vertex that does not exist (nt: none), in runs on the
+// executor: the first run's first.
+size_t first_bad_triangle(const Executor* executor, const Triangle* tris, size_t nt, size_t nv) {
+  size_t run_bad[kRuns];
+  auto scan = [&](uint32_t r) {
+    run_bad[r] = nt;
+    for (size_t t = run_start(nt, r); t < run_start(nt, r + 1); ++t) {
+      const Triangle& tri = tris[t];
+      if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) {
+        run_bad[r] = t;
+        return;
+      }
+    }
+  };
+  parallel_for_each(executor, kRuns, scan);
+  for (size_t t : run_bad) {
+    if (t != nt) return t;
+  }
+  return nt;
 }
 
 // Degenerate: a repeated vertex id, or collinear corners (exactly; with `filters`, a component
@@ -866,32 +944,56 @@ struct HierarchyPass {
   size_t nt;
   const Grid& grid;
   Tally* tally;
-  double error = 0;           // of the separating directions (fill_item)
-  Dop* vd = nullptr;          // the vertices' DOPs
-  uint64_t* order = nullptr;  // the kept triangles: Morton code << 32 | triangle id, sorted
-                              // (until the items are made: then `codes` holds the codes)
+  const Executor* executor;       // for the stages' runs (nullptr: serial)
+  uint32_t run_kept[kRuns] = {};  // the kept triangles of each run of the triangles
+  double error = 0;               // of the separating directions (fill_item)
+  Dop* vd = nullptr;              // the vertices' DOPs
+  uint64_t* order = nullptr;      // the kept triangles: Morton code << 32 | triangle id, sorted
+                                  // (until the items are made: then `codes` holds the codes)
   uint32_t kept = 0;
   Item* items = nullptr;      // in Morton order
   uint32_t* codes = nullptr;  // their Morton codes (for the tree's splits)
   Node* nodes = nullptr;
   Leaf* leaves = nullptr;
-  uint32_t node_count = 0, leaf_count = 0;
+  // The tree's top levels, split as build_tree() splits them, down to kSubtrees ranges (or
+  // fewer when ranges become leaves); each range's subtree is counted and built on its own,
+  // into the nodes and leaves preorder gives it. above[]: the nodes above them.
+  static constexpr uint32_t kSubtrees = 32;
+  struct Subtree {
+    uint32_t begin, count;   // its items
+    uint32_t node, leaf;     // its first node and leaf
+    uint32_t nodes, leaves;  // how many
+  };
+  Subtree sub[2 * kSubtrees] = {};
+  uint32_t sub_count = 0;
+  uint32_t above[2 * kSubtrees] = {};
+  uint32_t above_count = 0;
 
   HierarchyPass(Arena& a, const Vec3* vertices, size_t vertex_count, const Triangle* triangles,
-                size_t triangle_count, const Grid& quantization, Tally* counts)
+                size_t triangle_count, const Grid& quantization, Tally* counts,
+                const Executor* runs)
       : arena(a),
         v(vertices),
         nv(vertex_count),
         tris(triangles),
         nt(triangle_count),
         grid(quantization),
-        tally(counts) {}
+        tally(counts),
+        executor(runs) {}
 
   // 1. The kept triangles counted, the room for their items and Morton codes: these stay
   // below the sort's arrays and the star lists, which go before the tree is made (the arena
   // is a stack). The items' DOPs are not kept beside them: the leaves hold them.
   Status allocate_items() {
-    for (size_t t = 0; t < nt; ++t) kept += skipped(v, tris[t], true) ? 0u : 1u;
+    auto count = [&](uint32_t r) {
+      uint32_t k = 0;
+      for (size_t t = run_start(nt, r); t < run_start(nt, r + 1); ++t) {
+        k += skipped(v, tris[t], true) ? 0u : 1u;
+      }
+      run_kept[r] = k;
+    };
+    parallel_for_each(executor, kRuns, count);
+    for (uint32_t k : run_kept) kept += k;
     if (kept == 0) return Status::ok();
     items = arena.allocate_array<Item>(kept);
     codes = arena.allocate_array<uint32_t>(kept);
@@ -908,35 +1010,61 @@ struct HierarchyPass {
     if (order == nullptr || scratch == nullptr || (vd == nullptr && nv > 0)) {
       return arena.exhausted_status();
     }
-    for (size_t i = 0; i < nv; ++i) vd[i] = point_dop(grid, v[i]);
-    uint32_t at = 0;
-    for (size_t t = 0; t < nt; ++t) {
-      const Triangle& tri = tris[t];
-      if (skipped(v, tri, true)) continue;
-      const Dop d = triangle_dop(vd[tri.v[0]], vd[tri.v[1]], vd[tri.v[2]]);
-      order[at++] = uint64_t{morton_code(d)} << 32 | t;
+    auto dops = [&](uint32_t r) {
+      for (size_t i = run_start(nv, r); i < run_start(nv, r + 1); ++i) {
+        vd[i] = point_dop(grid, v[i]);
+      }
+    };
+    parallel_for_each(executor, kRuns, dops);
+    uint32_t first[kRuns];  // of each run's keys
+    for (uint32_t r = 0, at = 0; r < kRuns; ++r) {
+      first[r] = at;
+      at += run_kept[r];
     }
-    SPLINTCORE_ASSERT(at == kept);
-    order = sort_morton(order, scratch, kept);
+    auto keys = [&](uint32_t r) {
+      uint32_t at = first[r];
+      for (size_t t = run_start(nt, r); t < run_start(nt, r + 1); ++t) {
+        const Triangle& tri = tris[t];
+        if (skipped(v, tri, true)) continue;
+        const Dop d = triangle_dop(vd[tri.v[0]], vd[tri.v[1]], vd[tri.v[2]]);
+        order[at++] = uint64_t{morton_code(d)} << 32 | t;
+      }
+      SPLINTCORE_ASSERT(at == first[r] + run_kept[r]);
+    };
+    parallel_for_each(executor, kRuns, keys);
+    order = sort_morton(executor, order, scratch, kept);
     return Status::ok();
   }
 
   // 3. The items and their codes in Morton order.
   void make_items(double radius) {
     error = 1e-15 * radius;  // above 3 eps R, generously
-    for (uint32_t i = 0; i < kept; ++i) {
-      const uint32_t t = static_cast<uint32_t>(order[i]);
-      fill_item(v, tris[t], t, error, &items[i]);
-      codes[i] = static_cast<uint32_t>(order[i] >> 32);
-    }
+    auto fill = [&](uint32_t r) {
+      for (size_t i = run_start(kept, r); i < run_start(kept, r + 1); ++i) {
+        const uint32_t t = static_cast<uint32_t>(order[i]);
+        fill_item(v, tris[t], t, error, &items[i]);
+        codes[i] = static_cast<uint32_t>(order[i] >> 32);
+      }
+    };
+    parallel_for_each(executor, kRuns, fill);
   }
 
   // 5. The memory for the tree: its shape first, so that its nodes and leaves take what it
   // has (a leaf holds kMinLeaf to kLeafSize items, see split_point: on a real splint 5.5 on
   // average).
   Status allocate_tree() {
-    uint32_t node_total = 0, leaf_total = 0;
-    count_tree(&node_total, &leaf_total);
+    find_subtrees();
+    auto count = [&](uint32_t i) {
+      Subtree& t = sub[i];
+      t.nodes = t.leaves = 0;
+      count_tree(t.begin, t.count, &t.nodes, &t.leaves);
+    };
+    parallel_for_each(executor, sub_count, count);
+    uint32_t node_total = sub_count - 1, leaf_total = 0;  // a binary top over the subtrees
+    for (uint32_t i = 0; i < sub_count; ++i) {
+      node_total += sub[i].nodes;
+      leaf_total += sub[i].leaves;
+    }
     nodes = arena.allocate_array<Node>(node_total);
     leaves = arena.allocate_array<Leaf>(leaf_total);
     if (nodes == nullptr || leaves == nullptr) return arena.exhausted_status();
@@ -954,7 +1082,12 @@ struct HierarchyPass {
     if (start == nullptr || list == nullptr || (cleared == nullptr && nv > 0) || nabs == nullptr) {
       return arena.exhausted_status();
     }
-    for (uint32_t i = 0; i < kept; ++i) nabs[i] = plane_of(v, items[i]).nabs;
+    auto planes = [&](uint32_t r) {
+      for (size_t i = run_start(kept, r); i < run_start(kept, r + 1); ++i) {
+        nabs[i] = plane_of(v, items[i]).nabs;
+      }
+    };
+    parallel_for_each(executor, kRuns, planes);
     for (size_t i = 0; i <= nv; ++i) start[i] = 0;
     for (uint32_t i = 0; i < kept; ++i) {
       for (uint32_t id : items[i].tri.v) ++start[id + 1];
@@ -964,24 +1097,30 @@ struct HierarchyPass {
       for (uint32_t id : items[i].tri.v) list[start[id]++] = i;
     }
     // start[i] is now the end of vertex i's list, the start of vertex i + 1's.
-    uint32_t begin = 0;
-    for (size_t i = 0; i < nv; ++i) {
-      cleared[i] =
-          star_embedded(v, items, nabs, static_cast<uint32_t>(i), list + begin, start[i] - begin);
-      begin = start[i];
-    }
-    for (uint32_t i = 0; i < kept; ++i) {
-      const Triangle& tri = items[i].tri;
-      items[i].cleared = (cleared[tri.v[0]] ? 1u : 0u) | (cleared[tri.v[1]] ? 2u : 0u) |
-                         (cleared[tri.v[2]] ? 4u : 0u);
-    }
+    auto stars = [&](uint32_t r) {
+      for (size_t i = run_start(nv, r); i < run_start(nv, r + 1); ++i) {
+        const uint32_t begin = i == 0 ? 0 : start[i - 1];
+        cleared[i] =
+            star_embedded(v, items, nabs, static_cast<uint32_t>(i), list + begin, start[i] - begin);
+      }
+    };
+    parallel_for_each(executor, kRuns, stars);
+    auto mark = [&](uint32_t r) {
+      for (size_t i = run_start(kept, r); i < run_start(kept, r + 1); ++i) {
+        const Triangle& tri = items[i].tri;
+        items[i].cleared =
+            static_cast<uint8_t>((cleared[tri.v[0]] ? 1u : 0u) | (cleared[tri.v[1]] ? 2u : 0u) |
+                                 (cleared[tri.v[2]] ? 4u : 0u));
+      }
+    };
+    parallel_for_each(executor, kRuns, mark);
     return Status::ok();
   }
 
   // Node `node` as the leaf of items begin .. begin + count - 1 (count <= kLeafSize).
-  void fill_leaf(Node& node, uint32_t begin, uint32_t count) {
-    node.leaf = leaf_count;
-    Leaf& leaf = leaves[leaf_count++];
+  void fill_leaf(Node& node, uint32_t leaf_index, uint32_t begin, uint32_t count) {
+    node.leaf = leaf_index;
+    Leaf& leaf = leaves[leaf_index];
     leaf.first = begin;
     leaf.count = count;
     for (int k = 0; k < kAxes; ++k) {
@@ -1031,56 +1170,131 @@ struct HierarchyPass {
     return with;
   }
 
-  // The number of nodes and leaves build_tree() makes (the same splits, nothing filled).
-  void count_tree(uint32_t* node_total, uint32_t* leaf_total) const {
+  // The number of nodes and leaves build_tree() makes below the range of `count` items from
+  // `begin` (the same splits, nothing filled).
+  void count_tree(uint32_t begin, uint32_t count, uint32_t* node_total,
+                  uint32_t* leaf_total) const {
     struct Range {
       uint32_t begin, count;
     };
     Range stack[kMaxHeight + 2];
-    int top = 0;
-    stack[top++] = Range{0, kept};
-    while (top > 0) {
-      const Range r = stack[--top];
+    int top_of_stack = 0;
+    stack[top_of_stack++] = Range{begin, count};
+    while (top_of_stack > 0) {
+      const Range r = stack[--top_of_stack];
       ++*node_total;
       if (r.count <= kLeafSize) {
         ++*leaf_total;
         continue;
       }
       const uint32_t half = split_point(r.begin, r.count);
-      SPLINTCORE_ASSERT(top + 2 <= kMaxHeight + 2);
-      stack[top++] = Range{r.begin + half, r.count - half};
-      stack[top++] = Range{r.begin, half};
+      SPLINTCORE_ASSERT(top_of_stack + 2 <= kMaxHeight + 2);
+      stack[top_of_stack++] = Range{r.begin + half, r.count - half};
+      stack[top_of_stack++] = Range{r.begin, half};
     }
   }
 
-  // 6. Build: preorder, with an explicit stack of ranges (and the parent waiting for its
-  // right child), leaves filled as they come; bounds bottom-up (children come after their
-  // parent).
+  // The top levels' ranges (see sub): every range of more than a leaf split, level by level,
+  // until there are kSubtrees of them or all are leaves; in order of their items.
+  void find_subtrees() {
+    sub[0] = Subtree{0, kept, 0, 0, 0, 0};
+    sub_count = 1;
+    bool split = true;
+    while (split && sub_count < kSubtrees) {
+      split = false;
+      Subtree next[2 * kSubtrees];
+      uint32_t m = 0;
+      for (uint32_t i = 0; i < sub_count; ++i) {
+        const Subtree& r = sub[i];
+        if (r.count <= kLeafSize) {
+          next[m++] = r;
+          continue;
+        }
+        const uint32_t half = split_point(r.begin, r.count);
+        next[m++] = Subtree{r.begin, half, 0, 0, 0, 0};
+        next[m++] = Subtree{r.begin + half, r.count - half, 0, 0, 0, 0};
+        split = true;
+      }
+      std::memcpy(sub, next, m * sizeof(Subtree));
+      sub_count = m;
+    }
+  }
+
+  // 6. Build: the nodes in preorder, the top levels first (their nodes, and each subtree's
+  // place: its counts are known), then the subtrees in parallel; bounds bottom-up (children
+  // come after their parent), the subtrees' in their tasks, then the top's.
   void build_tree() {
+    place_subtrees();
+    auto build = [&](uint32_t i) { build_subtree(sub[i]); };
+    parallel_for_each(executor, sub_count, build);
+    for (uint32_t k = above_count; k-- > 0;) {
+      Node& node = nodes[above[k]];
+      node.dop = dop_union(nodes[above[k] + 1].dop, nodes[node.right].dop);
+    }
+  }
+
+  // The top levels in preorder, with an explicit stack of ranges (and the parent waiting for
+  // its right child): a subtree's range takes its place, the others are split.
+  void place_subtrees() {
     struct Pending {
       uint32_t begin, count, parent;  // parent: UINT32_MAX for the root or a left child
     };
     Pending stack[kMaxHeight + 2];
-    int top = 0;
-    stack[top++] = Pending{0, kept, UINT32_MAX};
-    while (top > 0) {
-      const Pending p = stack[--top];
-      const uint32_t index = node_count++;
+    int top_of_stack = 0;
+    stack[top_of_stack++] = Pending{0, kept, UINT32_MAX};
+    uint32_t next_sub = 0, node_at = 0, leaf_at = 0;
+    while (top_of_stack > 0) {
+      const Pending p = stack[--top_of_stack];
+      if (p.parent != UINT32_MAX) nodes[p.parent].right = node_at;
+      if (next_sub < sub_count && p.begin == sub[next_sub].begin &&
+          p.count == sub[next_sub].count) {
+        Subtree& t = sub[next_sub++];
+        t.node = node_at;
+        t.leaf = leaf_at;
+        node_at += t.nodes;
+        leaf_at += t.leaves;
+        continue;
+      }
+      above[above_count++] = node_at;
+      Node& node = nodes[node_at];
+      node = Node{Dop{}, 0, p.begin, p.count, 0};
+      const uint32_t half = split_point(p.begin, p.count);
+      SPLINTCORE_ASSERT(top_of_stack + 2 <= kMaxHeight + 2);
+      stack[top_of_stack++] = Pending{p.begin + half, p.count - half, node_at++};
+      stack[top_of_stack++] = Pending{p.begin, half, UINT32_MAX};
+    }
+    SPLINTCORE_ASSERT(next_sub == sub_count);
+  }
+
+  // One subtree in preorder into its nodes and leaves, leaves filled as they come, then its
+  // bounds bottom-up. Its root's parent is linked already.
+  void build_subtree(const Subtree& t) {
+    struct Pending {
+      uint32_t begin, count, parent;  // parent: UINT32_MAX for the root or a left child
+    };
+    Pending stack[kMaxHeight + 2];
+    int top_of_stack = 0;
+    stack[top_of_stack++] = Pending{t.begin, t.count, UINT32_MAX};
+    uint32_t node_at = t.node, leaf_at = t.leaf;
+    while (top_of_stack > 0) {
+      const Pending p = stack[--top_of_stack];
+      const uint32_t index = node_at++;
       if (p.parent != UINT32_MAX) nodes[p.parent].right = index;
       Node& node = nodes[index];
       node.begin = p.begin;
       node.count = p.count;
       node.right = 0;
       if (p.count <= kLeafSize) {
-        fill_leaf(node, p.begin, p.count);
+        fill_leaf(node, leaf_at++, p.begin, p.count);
         continue;
       }
       const uint32_t half = split_point(p.begin, p.count);
-      SPLINTCORE_ASSERT(top + 2 <= kMaxHeight + 2);
-      stack[top++] = Pending{p.begin + half, p.count - half, index};
-      stack[top++] = Pending{p.begin, half, UINT32_MAX};
+      SPLINTCORE_ASSERT(top_of_stack + 2 <= kMaxHeight + 2);
+      stack[top_of_stack++] = Pending{p.begin + half, p.count - half, index};
+      stack[top_of_stack++] = Pending{p.begin, half, UINT32_MAX};
     }
-    for (uint32_t i = node_count; i-- > 0;) {
+    SPLINTCORE_ASSERT(node_at == t.node + t.nodes && leaf_at == t.leaf + t.leaves);
+    for (uint32_t i = node_at; i-- > t.node;) {
       Node& node = nodes[i];
       if (node.right != 0) node.dop = dop_union(nodes[i + 1].dop, nodes[node.right].dop);
     }
@@ -1208,7 +1422,7 @@ struct HierarchyPass {
   Status traverse(const Context& ctx, bool* stopped) {
     uint64_t candidates = 0;
     bool stop = false;
-    if (!traverse_in_tasks(ctx, &candidates, &stop)) {
+    if (!traverse_in_tasks(&candidates, &stop)) {
       uint32_t done = 0;  // triangles whose leaf is done with itself (for progress)
       SPLINTCORE_RETURN_IF_ERROR(walk(&ctx, PairOfNodes{0, 0}, tally, &candidates, &done, &stop));
     }
@@ -1223,10 +1437,9 @@ struct HierarchyPass {
   // counts, candidates and smallest pair are those of one walk, unless the tally fills up,
   // which stops the pass either way (the sweep then answers). False: one thread (no
   // executor, or too few triangles to share).
-  bool traverse_in_tasks(const Context& ctx, uint64_t* candidates, bool* stop) const {
+  bool traverse_in_tasks(uint64_t* candidates, bool* stop) const {
     constexpr size_t kFrontier = 768, kEnough = 256, kMinItems = 8192;
     constexpr uint32_t kMaxTasks = 16;
-    const Executor* executor = ctx.executor;
     if (executor == nullptr || executor->concurrency < 2 || kept < kMinItems) return false;
     PairOfNodes pending[kFrontier], next[kFrontier];
     size_t n = 1;
@@ -1293,7 +1506,7 @@ Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triang
   ArenaScope scope(arena);
   *stopped = false;
   SPLINTCORE_ASSERT(nv <= 3 * nt && nv < UINT32_MAX);
-  HierarchyPass pass(arena, v, nv, tris, nt, grid, tally);
+  HierarchyPass pass(arena, v, nv, tris, nt, grid, tally, ctx.executor);
   SPLINTCORE_RETURN_IF_ERROR(pass.allocate_items());
   if (pass.kept == 0) return Status::ok();
   {
@@ -1342,23 +1555,21 @@ Status find_self_intersections(const Context& ctx, const Mesh& mesh, uint64_t ma
   }
   const Vec3* v = mesh.vertices.data();
   const Triangle* tris = mesh.triangles.data();
-  for (size_t t = 0; t < nt; ++t) {
-    const Triangle& tri = tris[t];
-    if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) {
-      return make_error(StatusCode::kInvalidMesh, "triangle ", t,
-                        " refers to a vertex that does not exist")
-          .at_index(t);
-    }
+  const size_t bad = first_bad_triangle(ctx.executor, tris, nt, nv);
+  if (bad != nt) {
+    return make_error(StatusCode::kInvalidMesh, "triangle ", bad,
+                      " refers to a vertex that does not exist")
+        .at_index(bad);
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "self-intersection", 0, nt));
-  const double radius = exact_range_radius(v, nv);
+  const double radius = exact_range_radius(ctx.executor, v, nv);
   if (radius < 0.0) {
     // Non-finite or extreme coordinates: no filter bound holds and nothing is exact there;
     // the sweep over boxes answers as it always has.
     Tally tally{report, max_pairs};
     return sweep(ctx, v, tris, nt, nullptr, &tally);
   }
-  const Grid grid = grid_of(v, nv, radius);
+  const Grid grid = grid_of(ctx.executor, v, nv, radius);
   if (nv <= 3 * nt && nv < UINT32_MAX) {
     // All pairs are counted unless there are more than max_pairs: the pass stops at one more.
     Tally all{report, max_pairs != 0 && max_pairs != UINT64_MAX ? max_pairs + 1 : 0};

@@ -935,5 +935,29 @@ TEST(SelfIntersection, SameReportAtEveryThreadCount) {
   }
 }
 
+// The checks before the pass run in runs on the executor: a mesh with vertex ids out of range
+// in several runs names the first such triangle at every thread count.
+TEST(SelfIntersection, FirstBadTriangleAtEveryThreadCount) {
+  TestArena t;
+  Mesh torus = welded(t, shapes::torus(96, 48, 10, 3));
+  const uint32_t nv = static_cast<uint32_t>(torus.vertices.size());
+  const size_t nt = torus.triangles.size();
+  for (size_t first : {size_t{0}, nt / 5, nt - 1}) {
+    Mesh bad = welded(t, shapes::torus(96, 48, 10, 3));  // (a copy would share the arrays)
+    bad.triangles[first].v[1] = nv;                      // the first bad one, then others after it
+    for (size_t later = first + 1; later < nt; later += nt / 7) bad.triangles[later].v[2] = nv + 5;
+    for (unsigned threads : {1u, 2u, 3u}) {
+      ThreadExecutor pool(threads);
+      TestArena work(size_t{1} << 20);
+      const Context ctx(&work.arena, &pool.executor(), nullptr);
+      SelfIntersectionReport r;
+      const Status s = find_self_intersections(ctx, bad, 0, &r);
+      EXPECT_EQ(s.code(), StatusCode::kInvalidMesh) << threads << " threads";
+      EXPECT_EQ(s.index(), first) << threads << " threads";
+      EXPECT_EQ(work.arena.used(), 0u);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace splintcore
