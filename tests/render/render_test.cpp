@@ -290,6 +290,20 @@ Status draw(Arena& arena, const RenderMesh* items, size_t count, const RenderOpt
   return render_meshes(Context(&arena), Span<const RenderMesh>(items, count), o, image);
 }
 
+// draw() on `threads` worker threads (one: no executor; without the platform layer, always one).
+Status draw_on_threads(Arena& arena, uint32_t threads, const RenderMesh* items, size_t count,
+                       const RenderOptions& o, RenderImage* image) {
+#if defined(SPLINTCORE_WITH_PLATFORM)
+  if (threads > 1) {
+    ThreadExecutor executor(threads);
+    Context ctx(&arena, &executor.executor(), nullptr);
+    return render_meshes(ctx, Span<const RenderMesh>(items, count), o, image);
+  }
+#endif
+  (void)threads;
+  return draw(arena, items, count, o, image);
+}
+
 Mesh cube_mesh(Arena& arena, float lo, float hi) {
   const float l[3] = {lo, lo, lo}, u[3] = {hi, hi, hi};
   Mesh m;
@@ -676,13 +690,7 @@ TEST(Render, SameBytesTwiceAndWithThreads) {
   for (int run = 0; run < 3; ++run) {
     ArenaScope scope(t.arena);
     RenderImage image;
-#if defined(SPLINTCORE_WITH_PLATFORM)
-    ThreadExecutor threads(run == 2 ? 3 : 1);
-    Context ctx(&t.arena, &threads.executor(), nullptr);
-#else
-    Context ctx(&t.arena);
-#endif
-    SPLINTCORE_ASSERT_OK(render_meshes(ctx, Span<const RenderMesh>(items, 2), o, &image));
+    SPLINTCORE_ASSERT_OK(draw_on_threads(t.arena, run == 2 ? 3 : 1, items, 2, o, &image));
     std::vector<uint8_t> png;
     SPLINTCORE_ASSERT_OK(encode(t.arena, image, &png));
     pngs.push_back(png);
@@ -721,13 +729,7 @@ TEST(Render, FramingInChunksIsTheBoxOfTheVerticesInOrder) {
   for (int run = 0; run < 2; ++run) {
     ArenaScope scope(t.arena);
     RenderImage image;
-#if defined(SPLINTCORE_WITH_PLATFORM)
-    ThreadExecutor threads(run == 1 ? 3 : 1);
-    Context ctx(&t.arena, &threads.executor(), nullptr);
-#else
-    Context ctx(&t.arena);
-#endif
-    SPLINTCORE_ASSERT_OK(render_meshes(ctx, Span<const RenderMesh>(&item, 1), o, &image));
+    SPLINTCORE_ASSERT_OK(draw_on_threads(t.arena, run == 1 ? 3 : 1, &item, 1, o, &image));
     framing[run] = image.framing;
   }
   EXPECT_TRUE(std::signbit(framing[0].centre_u[1]));  // -0: lo and hi both vertex 0's
