@@ -315,7 +315,6 @@ inline void project(const Vec3& p, double u[kLanes]) {
 }
 constexpr double kErrorUnits[kLanes] = {0, 0, 0, 5, 5, 5, 5, 0};
 
-// The quantization of each direction (the pad lane: scale 0, margin 0).
 // The runs the scans and the serial stages of the hierarchy pass are cut into, to share them
 // on the executor: run r of n things is n * r / kRuns .. n * (r + 1) / kRuns - 1. Every stage gives
 // the same result however it is cut, so the results do not depend on the thread count.
@@ -324,6 +323,7 @@ inline size_t run_start(size_t n, uint32_t r) {
   return static_cast<size_t>(uint64_t{n} * r / kRuns);
 }
 
+// The quantization of each direction (the pad lane: scale 0, margin 0).
 struct Grid {
   double origin[kLanes];
   double scale[kLanes];
