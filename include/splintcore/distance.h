@@ -101,6 +101,13 @@ struct DistanceIndexOptions {
   // part of such an index). The pair searches then load every triangle of a leaf pair they
   // reach: the same pairs, the same answers (bits), more work.
   bool without_triangle_boxes = false;
+  // Only what winding_number reads: the tree, the order and the dipoles, without the
+  // neighbours, the vertex corner lists and the triangles' boxes (pairs_only and
+  // without_triangle_boxes are then ignored). The same tree and dipoles as a full index, so
+  // the same winding numbers (bits); the pair searches, closest_point and ray_intersect take
+  // it too (as pairs_only without_triangle_boxes). About 1 MB less per 40,000 triangles than
+  // a full index, kept and at the build's peak: the Boolean's winding numbers use it.
+  bool winding_only = false;
 };
 
 struct DistanceIndex {

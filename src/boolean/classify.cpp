@@ -142,11 +142,14 @@ Status BooleanRun::FloodSide::spread() {
   return Status::ok();
 }
 
-// The other mesh's winding number at q (its index built at the first query).
+// The other mesh's winding number at q (its index built at the first query: only the tree and
+// the dipoles, the same winding numbers as a full index for about half its peak memory).
 Status BooleanRun::FloodSide::winding_number(const Vec3& q, double* w) {
   if (!have_other) {
     const Mesh& m = side_a ? *run.in_.b_whole : *run.in_.a;
-    SPLINTCORE_RETURN_IF_ERROR(build_distance_index(run.ctx_, m, DistanceIndexOptions{}, &other));
+    DistanceIndexOptions options;
+    options.winding_only = true;
+    SPLINTCORE_RETURN_IF_ERROR(build_distance_index(run.ctx_, m, options, &other));
     have_other = true;
   }
   *w = splintcore::winding_number(other, q);

@@ -30,6 +30,17 @@ inline uint32_t leaf_size_of(const DistanceIndexOptions& options) {
   return options.leaf_size != 0 ? options.leaf_size : 8;
 }
 
+// What an index with these options keeps besides the tree and the order (distance.h).
+inline bool with_topology(const DistanceIndexOptions& o) {
+  return !o.pairs_only && !o.winding_only;
+}
+inline bool with_dipoles(const DistanceIndexOptions& o) {
+  return !o.pairs_only || o.oriented_boxes || o.winding_only;
+}
+inline bool with_triangle_boxes(const DistanceIndexOptions& o) {
+  return o.pairs_only && !o.winding_only && !o.without_triangle_boxes;
+}
+
 // Morton codes of 16 bits an axis (detail::spread_bits, morton.h): 65536 cells per axis, finer
 // than any triangle here.
 using detail::spread_bits;
@@ -88,14 +99,13 @@ uint64_t distance_index_bound(uint64_t vertex_count, uint64_t triangle_count,
   const uint64_t leaves = triangle_count == 0 ? 1 : (triangle_count + leaf - 1) / leaf;
   // Every node splits a range of at least two leaves (an empty or one-leaf mesh has a root).
   const uint64_t wide = leaves > 1 ? leaves - 1 : 1;
-  const bool topology = !options.pairs_only;
-  const bool dipoles = topology || options.oriented_boxes;
+  const bool topology = with_topology(options);
+  const bool dipoles = with_dipoles(options);
   const uint64_t per_node = sizeof(BvhNode) + (dipoles ? sizeof(BvhDipole) : 0) +
                             (options.oriented_boxes ? sizeof(BvhObb) : 0);
-  const uint64_t kept =
-      wide * per_node + triangle_count * (sizeof(uint32_t) * (topology ? 7 : 1)) +
-      (topology ? (vertex_count + 1) * sizeof(uint32_t) : 0) +
-      (topology || options.without_triangle_boxes ? 0 : triangle_count * 6 * sizeof(float));
+  const uint64_t kept = wide * per_node + triangle_count * (sizeof(uint32_t) * (topology ? 7 : 1)) +
+                        (topology ? (vertex_count + 1) * sizeof(uint32_t) : 0) +
+                        (with_triangle_boxes(options) ? triangle_count * 6 * sizeof(float) : 0);
   // Temporaries (the larger stage): Morton keys and scratch with the tree at its upper bound
   // before it moves down, or the per-vertex corner lists.
   const uint64_t tree = 2 * triangle_count * sizeof(uint64_t) + wide * per_node;
@@ -306,11 +316,11 @@ struct IndexBuild {
   Status scan_triangles() {
     order = arena.allocate_array<uint32_t>(nt);
     if (nt > 0 && order == nullptr) return arena.exhausted_status();
-    if (options.pairs_only && !options.without_triangle_boxes) {
+    if (with_triangle_boxes(options)) {
       tboxes = arena.allocate_array<float>(6 * nt);
       if (nt > 0 && tboxes == nullptr) return arena.exhausted_status();
     }
-    if (!options.pairs_only) {
+    if (with_topology(options)) {
       neighbors = arena.allocate_array<uint32_t>(3 * nt);
       start = arena.allocate_array<uint32_t>(nv + 1);
       vuses = arena.allocate_array<uint32_t>(3 * nt);
@@ -350,11 +360,11 @@ struct IndexBuild {
     keys = arena.allocate_array<uint64_t>(nt);
     uint64_t* scratch = arena.allocate_array<uint64_t>(nt);
     nodes = arena.allocate_array<BvhNode>(wide_max);
-    const bool with_dipoles = !options.pairs_only || options.oriented_boxes;
-    if (with_dipoles) dipoles = arena.allocate_array<BvhDipole>(wide_max);
+    const bool keep_dipoles = with_dipoles(options);
+    if (keep_dipoles) dipoles = arena.allocate_array<BvhDipole>(wide_max);
     if (options.oriented_boxes) obbs = arena.allocate_array<BvhObb>(wide_max);
     if ((nt > 0 && (keys == nullptr || scratch == nullptr)) || nodes == nullptr ||
-        (with_dipoles && dipoles == nullptr) || (options.oriented_boxes && obbs == nullptr)) {
+        (keep_dipoles && dipoles == nullptr) || (options.oriented_boxes && obbs == nullptr)) {
       return arena.exhausted_status();
     }
     const Vec3 lo = centroids.lo;
@@ -810,7 +820,7 @@ Status build_index_steps(const Context& ctx, const Mesh& mesh, const DistanceInd
   build.bound_nodes();
   build.move_tree_down(tree_temps);
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 2, 4));
-  if (!options.pairs_only) SPLINTCORE_RETURN_IF_ERROR(build.link_neighbours());
+  if (with_topology(options)) SPLINTCORE_RETURN_IF_ERROR(build.link_neighbours());
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 3, 4));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "distance index", 4, 4));
   build.publish(out);

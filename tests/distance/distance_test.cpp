@@ -2257,12 +2257,13 @@ TEST(DistanceBuild, ArenaBoundCoversTheHighWater) {
     Mesh mesh;
     ASSERT_TRUE(test::mesh_from_soup(t.arena, soup, &mesh).is_ok());
     for (uint32_t leaf : {0u, 1u, 2u, 3u, 4u, 7u, 16u}) {
-      for (int kind = 0; kind < 4; ++kind) {
+      for (int kind = 0; kind < 6; ++kind) {
         const bool oriented = (kind & 1) != 0;
         DistanceIndexOptions options;
         options.leaf_size = leaf;
         options.oriented_boxes = oriented;
         options.pairs_only = (kind & 2) != 0;
+        options.winding_only = kind >= 4;
         const Arena::Marker m = t.arena.mark();
         t.arena.reset_high_water();
         const size_t before = t.arena.used();
@@ -2273,8 +2274,16 @@ TEST(DistanceBuild, ArenaBoundCoversTheHighWater) {
             distance_index_bound(mesh.vertices.size(), mesh.triangles.size(), options);
         EXPECT_GE(bound, t.arena.high_water() - before)
             << mesh.triangles.size() << " triangles, leaf " << leaf << " oriented " << oriented
-            << " pairs_only " << options.pairs_only;
-        if (options.pairs_only) {
+            << " pairs_only " << options.pairs_only << " winding_only " << options.winding_only;
+        if (options.winding_only) {
+          // The tree and its dipoles only (and the oriented boxes when asked).
+          EXPECT_TRUE(index.neighbors.empty());
+          EXPECT_TRUE(index.vertex_start.empty());
+          EXPECT_TRUE(index.vertex_uses.empty());
+          EXPECT_TRUE(index.triangle_boxes.empty());
+          EXPECT_EQ(index.dipoles.size(), index.nodes.size());
+          EXPECT_EQ(index.obbs.size(), oriented ? index.nodes.size() : 0u);
+        } else if (options.pairs_only) {
           // Only the tree: no neighbours, corner lists, and dipoles only for oriented boxes.
           EXPECT_TRUE(index.neighbors.empty());
           EXPECT_TRUE(index.vertex_uses.empty());
@@ -2294,6 +2303,56 @@ TEST(DistanceBuild, ArenaBoundCoversTheHighWater) {
         }
         t.arena.rewind(m);
       }
+    }
+  }
+}
+
+// A winding_only index (the Boolean's winding numbers) is a full index's tree, order and
+// dipoles and nothing else: the same winding numbers and closest points, bit for bit, at
+// points inside, outside and near the surface, in less memory (kept, and at the build's peak).
+TEST(DistanceBuild, WindingOnlyIndexGivesTheSameBits) {
+  Rng rng(0x5eed0063);
+  std::vector<Soup> soups = {icosphere(3, 1, Vec3{}), shapes::torus(40, 20, 5, 1),
+                             random_soup(rng, 500, 3001, 2)};
+  for (const Soup& soup : soups) {
+    TestArena t;
+    Mesh mesh;
+    ASSERT_TRUE(test::mesh_from_soup(t.arena, soup, &mesh).is_ok());
+    Context ctx(&t.arena);
+    size_t before = t.arena.used();
+    t.arena.reset_high_water();
+    DistanceIndex full;
+    SPLINTCORE_ASSERT_OK(build_distance_index(ctx, mesh, DistanceIndexOptions{}, &full));
+    const size_t full_kept = t.arena.used() - before, full_peak = t.arena.high_water() - before;
+    before = t.arena.used();
+    t.arena.reset_high_water();
+    DistanceIndexOptions wo;
+    wo.winding_only = true;
+    DistanceIndex lean;
+    SPLINTCORE_ASSERT_OK(build_distance_index(ctx, mesh, wo, &lean));
+    const size_t lean_kept = t.arena.used() - before, lean_peak = t.arena.high_water() - before;
+    EXPECT_LT(lean_kept, full_kept);
+    EXPECT_LT(lean_peak, full_peak);
+    ASSERT_EQ(lean.nodes.size(), full.nodes.size());
+    ASSERT_EQ(lean.order.size(), full.order.size());
+    EXPECT_EQ(
+        std::memcmp(lean.nodes.data(), full.nodes.data(), full.nodes.size() * sizeof(BvhNode)), 0);
+    EXPECT_EQ(std::memcmp(lean.dipoles.data(), full.dipoles.data(),
+                          full.dipoles.size() * sizeof(BvhDipole)),
+              0);
+    EXPECT_EQ(
+        std::memcmp(lean.order.data(), full.order.data(), full.order.size() * sizeof(uint32_t)), 0);
+    const Aabb box = mesh_bounds(mesh);
+    const Vec3 pad = box.extent() * 0.25;
+    for (int i = 0; i < 300; ++i) {
+      const Vec3 q = rng.in_box(box.lo - pad, box.hi + pad);
+      const double wf = winding_number(full, q), wl = winding_number(lean, q);
+      EXPECT_EQ(std::memcmp(&wf, &wl, sizeof wf), 0) << "winding number at query " << i;
+      ClosestPoint cf, cl;
+      ASSERT_TRUE(closest_point(full, q, &cf));
+      ASSERT_TRUE(closest_point(lean, q, &cl));
+      EXPECT_EQ(cf.triangle, cl.triangle) << "query " << i;
+      EXPECT_EQ(std::memcmp(&cf.distance, &cl.distance, sizeof cf.distance), 0) << "query " << i;
     }
   }
 }
