@@ -64,15 +64,11 @@ uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count) {
 
 namespace {
 
-// Indices in range, referenced vertices, degenerate triangles (repeated ids or exactly flat);
-// in the same pass the area and volume, with mesh_area()'s and mesh_volume()'s arithmetic in
-// their order (the same bits), r->bounds being set.
+// Indices in range (before anything reads a corner) and the referenced vertices (bit 1 of
+// `referenced`).
 Status check_indices(const Mesh& mesh, uint8_t* referenced, MeshReport* r) {
   const uint64_t nv = mesh.vertices.size();
   const Triangle* tris = mesh.triangles.data();
-  const Vec3* verts = mesh.vertices.data();
-  const Vec3 c = r->bounds.center();
-  double area = 0.0, volume = 0.0;
   if (nv > 0) std::memset(referenced, 0, static_cast<size_t>(nv));
   for (uint32_t t = 0; t < r->triangle_count; ++t) {
     const uint32_t* v = tris[t].v;
@@ -85,6 +81,23 @@ Status check_indices(const Mesh& mesh, uint8_t* referenced, MeshReport* r) {
     referenced[v[0]] = 1;
     referenced[v[1]] = 1;
     referenced[v[2]] = 1;
+  }
+  uint64_t referenced_count = 0;
+  for (uint64_t i = 0; i < nv; ++i) referenced_count += referenced[i];
+  r->unreferenced_vertices = nv - referenced_count;
+  return Status::ok();
+}
+
+// Degenerate triangles (repeated ids or exactly flat), the area and the volume, with
+// mesh_area()'s and mesh_volume()'s arithmetic in their order (the same bits), r->bounds being
+// set. Writes only those fields of *r: it runs beside the edge pass (check_topology).
+void check_geometry(const Mesh& mesh, MeshReport* r) {
+  const Triangle* tris = mesh.triangles.data();
+  const Vec3* verts = mesh.vertices.data();
+  const Vec3 c = r->bounds.center();
+  double area = 0.0, volume = 0.0;
+  for (uint32_t t = 0; t < r->triangle_count; ++t) {
+    const uint32_t* v = tris[t].v;
     const Vec3 &p0 = verts[v[0]], &p1 = verts[v[1]], &p2 = verts[v[2]];
     // collinear3d's first test is orient2d in x-y: its first stage, inline, decides almost every
     // triangle (not flat when it shows that orientation nonzero).
@@ -100,10 +113,6 @@ Status check_indices(const Mesh& mesh, uint8_t* referenced, MeshReport* r) {
   }
   r->area = area;
   r->volume = volume / 6.0;
-  uint64_t referenced_count = 0;
-  for (uint64_t i = 0; i < nv; ++i) referenced_count += referenced[i];
-  r->unreferenced_vertices = nv - referenced_count;
-  return Status::ok();
 }
 
 // The edge pass, linear in the triangles: every side goes into the bucket of its smaller
@@ -406,7 +415,16 @@ Status check_topology(const Context& ctx, const Mesh& mesh, uint8_t* on_border, 
         ((pass.a.tally == nullptr || pass.a.last == nullptr) && nv > 0)) {
       return arena.exhausted_status();
     }
-    pass.run();
+    // The edge pass and the geometry (independent: they write different fields of *r) side
+    // by side when there is an executor; in this order without one.
+    auto task = [&](uint32_t i) {
+      if (i == 0) {
+        pass.run();
+      } else {
+        check_geometry(mesh, r);
+      }
+    };
+    parallel_for_each(ctx.executor, 2, task);
     collected_count = pass.collected_count;
   }
   count_boundary_loops(&border, on_border, r);
