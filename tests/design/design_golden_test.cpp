@@ -127,6 +127,38 @@ TEST(DesignGolden, BlockoutRoundedLabelledOnTheTray) {
   expect_golden_and_meshlab("blockout", "design:blockout-phantom6000", d);
 }
 
+// The firmware example's third stage (tools/firmware/main.cpp, issue 29): the paper-scale case
+// with blockout on a 0.1 mm grid (inset 0.05 mm, no closing), designed in an arena of exactly
+// the board's 16 MiB (the jaws in an arena of their own, as the board's come from flash). Its
+// hash is what the Cortex-M7 and the cross builds must give.
+TEST(DesignGolden, FirmwareBlockoutTenthMillimetreIn16MiB) {
+  test::TestArena jaw_arena{size_t{16} << 20};
+  Mesh jaws[2];
+  ASSERT_NO_FATAL_FAILURE(phantom_jaws(jaw_arena.arena, jaws));
+  test::TestArena t{size_t{16} << 20};
+  Context ctx(&t.arena);
+  const std::string text = fixture_case_text("paper_scale.json");
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse_case(ctx, text.data(), text.size(), "paper_scale.json", &c));
+  c.has_blockout = true;
+  c.blockout.voxel = 0.1;
+  c.blockout.inset = 0.05;
+  c.blockout.closing_radius = 0;
+  Designed d;
+  Mesh splint;
+  SPLINTCORE_ASSERT_OK(design_splint(ctx, c, Span<const Mesh>(jaws, 2), &splint, &d.report));
+  EXPECT_EQ(d.report.blockout_jaws, 2u);
+  EXPECT_TRUE(d.report.print.printable);
+  std::printf("[ figures  ] firmware blockout: arena high water %zu of %zu bytes\n",
+              t.arena.high_water(), t.arena.cap());
+  Context check(&jaw_arena.arena);  // the checks below are the test's, not the board's
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(check, splint, &d.volume));
+  d.triangles = splint.triangles.size();
+  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(jaw_arena.arena, splint, StlFormat::kBinary, &d.stl));
+  expect_golden_and_meshlab("firmware_blockout", "design:blockout-0.1mm-paper_scale-phantom6000",
+                            d);
+}
+
 TEST(DesignGolden, SpacerOnTheTray) {
   Designed d;
   ASSERT_NO_FATAL_FAILURE(design_case("spacer.json", &d));

@@ -39,9 +39,9 @@ using namespace splintcore;
 constexpr size_t kStlBufferBytes = 4096;  // the STL writer's chunk (from the arena)
 #if defined(SPLINTCORE_FIRMWARE_WITH_JAWS)
 constexpr size_t kStlReadChunkBytes = 8192;
-// Coarse (the case format allows 0.01 .. 1 mm): finer grids need more than the board's 16 MiB
-// (0.5 mm: about 16.8 MB, 0.2 mm: about 31 MB; docs/embedding.md).
-constexpr double kBlockoutVoxelMm = 1.0;
+// The grid of issue 29's firmware row (the case format allows 0.01 .. 1 mm): about 16.4 MB at
+// its peak, in the board's 16 MiB PSRAM (docs/embedding.md).
+constexpr double kBlockoutVoxelMm = 0.1;
 #endif
 
 // ---- text out without printf ------------------------------------------------------------------
@@ -213,8 +213,8 @@ Status run_base(Arena& arena, const Progress& progress) {
 // Stage 2: the design (design.h, design_splint): jaws read from their STL bytes (as a device
 // would receive them), moved by the plan, subtracted from the base by the exact Boolean, the
 // result checked for the printer. Stage 3 (`blockout_voxel` > 0): the same with interference
-// elimination (blockout.h) on a coarse grid, each jaw's swept volume along the case's
-// insertion direction subtracted too.
+// elimination (blockout.h) on a 0.1 mm grid (kBlockoutVoxelMm), each jaw's swept volume along the
+// case's insertion direction subtracted too.
 Status run_design(Arena& arena, const Progress& progress, const char* stage,
                   double blockout_voxel) {
   arena.reset();
