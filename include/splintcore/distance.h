@@ -243,6 +243,23 @@ enum class TriangleSide : uint8_t { kOutside, kInside, kNear };
 TriangleSide triangle_side(const DistanceIndex& index, const Vec3& a, const Vec3& b, const Vec3& c,
                            double reach, uint32_t* seed);
 
+// The triangles whose bounds overlap `box` (any order) into out[0 .. capacity); their count, or
+// capacity + 1 when there are more (out then holds some of them). No arena.
+size_t triangles_meeting_box(const DistanceIndex& index, const Aabb& box, uint32_t* out,
+                             size_t capacity);
+
+// triangle_side() answered from a window of candidates: `ids` must hold every triangle whose
+// bounds overlap abc's box grown by window_reach (>= reach), e.g. triangles_meeting_box() of a
+// box that holds abc's, grown by window_reach. True with *side set to triangle_side()'s answer
+// (the same closest triangle, the same sign) when a's closest triangle is certainly among them
+// (closer than window_reach); false, *side untouched, when it may not be (ask triangle_side).
+// With `closest`: a's closest point there too (closest_point()'s answer, bits). For many small
+// triangles streamed out in order (a window serves the next ones): no tree descent per query.
+// Needs a full index (not pairs_only). No arena.
+bool triangle_side_among(const DistanceIndex& index, const uint32_t* ids, size_t count,
+                         double window_reach, const Vec3& a, const Vec3& b, const Vec3& c,
+                         double reach, TriangleSide* side, ClosestPoint* closest = nullptr);
+
 // Every triangle whose bounds overlap `box`, appended to `out` in ascending id order.
 Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aabb& box,
                         ArenaArray<uint32_t>* out);

@@ -30,6 +30,13 @@ namespace {
 constexpr double kCellVoxels = 5;
 constexpr double kReachVoxels = 0.125;
 constexpr uint8_t kSurface = 1, kOutside = 2, kNear = 4, kGrowX = 8, kGrowY = 16;
+// The fine test's window (triangle_side_among): the splint triangles near a box that holds the
+// swept triangle with kWindowVoxels to spare on every side, within kWindowReachVoxels of it;
+// it serves the triangles that come next while they stay inside that box (the extractor goes
+// cell by cell, row by row). At most kWindowTriangles of them (else the tree answers).
+constexpr double kWindowVoxels = 1.5;
+constexpr double kWindowReachVoxels = 1.5;
+constexpr size_t kWindowTriangles = 1024;
 
 struct NearSplint {
   Vec3 origin{};
@@ -39,7 +46,34 @@ struct NearSplint {
   const DistanceIndex* index = nullptr;  // the splint's: the fine test (null: cells only)
   double reach = 0;                      // mm: kept when at most this far from the splint
   mutable uint32_t seed = kNoNeighbor;   // the last fine test's closest splint triangle
+  // The window (kWindowTriangles ids from the arena); empty box: none yet.
+  double window_grow = 0, window_reach = 0;  // mm
+  uint32_t* window_ids = nullptr;
+  mutable Aabb window;
+  mutable size_t window_count = 0;  // kWindowTriangles + 1: too many, the tree answers
 };
+
+// The fine test of a swept triangle near the splint's surface (see the top): from the window
+// when it holds the triangle and decides, else by the tree.
+TriangleSide fine_side(const NearSplint& g, const Aabb& box, const Vec3& p, const Vec3& q,
+                       const Vec3& r) {
+  if (g.window_ids != nullptr) {
+    if (g.window.empty() || !g.window.contains(box.lo) || !g.window.contains(box.hi)) {
+      const Vec3 grow{g.window_grow, g.window_grow, g.window_grow};
+      g.window = Aabb{box.lo - grow, box.hi + grow};
+      const Vec3 reach{g.window_reach, g.window_reach, g.window_reach};
+      g.window_count = triangles_meeting_box(
+          *g.index, Aabb{g.window.lo - reach, g.window.hi + reach}, g.window_ids, kWindowTriangles);
+    }
+    TriangleSide side = TriangleSide::kOutside;
+    if (g.window_count <= kWindowTriangles &&
+        triangle_side_among(*g.index, g.window_ids, g.window_count, g.window_reach, p, q, r,
+                            g.reach, &side)) {
+      return side;
+    }
+  }
+  return triangle_side(*g.index, p, q, r, g.reach, &g.seed);
+}
 
 inline size_t cell_at(const NearSplint& g, int64_t x, int64_t y, int64_t z) {
   return static_cast<size_t>((z * g.n[1] + y) * g.n[0] + x);
@@ -85,8 +119,9 @@ bool near_splint(const void* user, const Vec3& p, const Vec3& q, const Vec3& r) 
   // Near the surface: kept when it comes within reach of a splint triangle (meeting included,
   // decided exactly); else it lies at least that far from the surface, wholly on the side of
   // its first corner. The extractor's triangles come in order, each near the one before it:
-  // the previous answer seeds the query (the answer does not depend on it).
-  return triangle_side(*g.index, p, q, r, g.reach, &g.seed) != TriangleSide::kOutside;
+  // a window of splint triangles serves the next ones, and the previous answer seeds the tree's
+  // query (the answer depends on neither).
+  return fine_side(g, box, p, q, r) != TriangleSide::kOutside;
 }
 
 // Marks the outside: from the border, face to face through unmarked cells, by forward and
@@ -208,6 +243,10 @@ Status sweep_near_splint(const Context& ctx, const Mesh& splint, const Aabb& bou
       build_distance_index(ctx, splint, DistanceIndexOptions{}, &splint_index));
   near.index = &splint_index;
   near.reach = kReachVoxels * so.voxel;
+  near.window_grow = kWindowVoxels * so.voxel;
+  near.window_reach = kWindowReachVoxels * so.voxel;
+  near.window_ids = arena.allocate_array<uint32_t>(kWindowTriangles);
+  if (near.window_ids == nullptr) return arena.exhausted_status();
   so.keep_triangle = near_splint;
   so.keep_user = &near;
   Mesh kept;

@@ -777,18 +777,72 @@ bool segment_intersects_mesh(const DistanceIndex& index, const Vec3& p, const Ve
   return found;
 }
 
-bool triangle_near_mesh(const DistanceIndex& index, const Vec3& a, const Vec3& b, const Vec3& c,
-                        double reach) {
-  const Mesh& mesh = *index.mesh;
-  if (mesh.triangles.size() == 0) return false;
-  const Vec3* v = mesh.vertices.data();
+namespace {
+
+// abc's box grown by reach.
+Aabb reach_box(const Vec3& a, const Vec3& b, const Vec3& c, double reach) {
   Aabb box;
   box.add(a);
   box.add(b);
   box.add(c);
   box.lo = box.lo - Vec3{reach, reach, reach};
   box.hi = box.hi + Vec3{reach, reach, reach};
+  return box;
+}
+
+// Does triangle t of `mesh` come within reach of abc (`box`: reach_box(a, b, c, reach))?
+bool triangle_within_reach(const Mesh& mesh, uint32_t t, const Aabb& box, const Vec3& a,
+                           const Vec3& b, const Vec3& c, double reach) {
+  const Vec3* v = mesh.vertices.data();
+  const Triangle& tri = mesh.triangles[t];
+  Aabb tb;
+  tb.add(v[tri.v[0]]);
+  tb.add(v[tri.v[1]]);
+  tb.add(v[tri.v[2]]);
+  if (!tb.overlaps(box)) return false;
+  // Wholly on one side of the triangle's plane, farther than reach (with a margin far above
+  // the rounding): no closer than that.
+  const Vec3 n = cross(v[tri.v[1]] - v[tri.v[0]], v[tri.v[2]] - v[tri.v[0]]);
+  const double len = std::sqrt(dot(n, n));
+  if (len > 0) {
+    const double limit = (reach + 1e-9 * (1.0 + std::fabs(dot(n, v[tri.v[0]])) / len)) * len;
+    const double da = dot(n, a - v[tri.v[0]]), db = dot(n, b - v[tri.v[0]]),
+                 dc = dot(n, c - v[tri.v[0]]);
+    if ((da > limit && db > limit && dc > limit) || (da < -limit && db < -limit && dc < -limit)) {
+      return false;
+    }
+  }
+  return triangle_pair_distance(a, b, c, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], nullptr, nullptr) <
+         reach;
+}
+
+// Every point x of abc has |x - a| <= extent: a bound on how far abc reaches from a.
+double extent_from(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return std::sqrt(std::fmax(length_squared(b - a), length_squared(c - a)));
+}
+
+}  // namespace
+
+bool triangle_near_mesh(const DistanceIndex& index, const Vec3& a, const Vec3& b, const Vec3& c,
+                        double reach) {
+  const Mesh& mesh = *index.mesh;
+  if (mesh.triangles.size() == 0) return false;
+  const Aabb box = reach_box(a, b, c, reach);
   bool found = false;
+  auto visit = [&](uint32_t t) {
+    found = triangle_within_reach(mesh, t, box, a, b, c, reach);
+    return !found;
+  };
+  for_each_triangle_near(index, box, visit);
+  return found;
+}
+
+size_t triangles_meeting_box(const DistanceIndex& index, const Aabb& box, uint32_t* out,
+                             size_t capacity) {
+  const Mesh& mesh = *index.mesh;
+  if (mesh.triangles.size() == 0 || box.empty()) return 0;
+  const Vec3* v = mesh.vertices.data();
+  size_t n = 0;
   auto visit = [&](uint32_t t) {
     const Triangle& tri = mesh.triangles[t];
     Aabb tb;
@@ -796,24 +850,48 @@ bool triangle_near_mesh(const DistanceIndex& index, const Vec3& a, const Vec3& b
     tb.add(v[tri.v[1]]);
     tb.add(v[tri.v[2]]);
     if (!tb.overlaps(box)) return true;
-    // Wholly on one side of the triangle's plane, farther than reach (with a margin far above
-    // the rounding): no closer than that.
-    const Vec3 n = cross(v[tri.v[1]] - v[tri.v[0]], v[tri.v[2]] - v[tri.v[0]]);
-    const double len = std::sqrt(dot(n, n));
-    if (len > 0) {
-      const double limit = (reach + 1e-9 * (1.0 + std::fabs(dot(n, v[tri.v[0]])) / len)) * len;
-      const double da = dot(n, a - v[tri.v[0]]), db = dot(n, b - v[tri.v[0]]),
-                   dc = dot(n, c - v[tri.v[0]]);
-      if ((da > limit && db > limit && dc > limit) || (da < -limit && db < -limit && dc < -limit)) {
+    if (n == capacity) {
+      n = capacity + 1;
+      return false;
+    }
+    out[n++] = t;
+    return true;
+  };
+  for_each_triangle_near(index, box, visit);
+  return n;
+}
+
+bool triangle_side_among(const DistanceIndex& index, const uint32_t* ids, size_t count,
+                         double window_reach, const Vec3& a, const Vec3& b, const Vec3& c,
+                         double reach, TriangleSide* side, ClosestPoint* closest) {
+  SPLINTCORE_ASSERT(index.vertex_start.size() > 0 && reach <= window_reach);
+  if (count == 0) return false;
+  // a's closest triangle among ids: every other triangle's box misses abc's box grown by
+  // window_reach, so it lies at least window_reach from a; closer than that (with a margin far
+  // above the rounding), the best among ids is the best of all, the same (distance, triangle)
+  // as the tree search finds (the same filters and the same exact routine, lowest id on a tie).
+  ClosestSearch search(index, a, HUGE_VAL);
+  for (size_t i = 0; i < count; ++i) search.consider(ids[i]);
+  if (!search.found || !(search.best_d < window_reach * (1 - 1e-9))) return false;
+  SignedDistance sd;
+  settle_closest(index, a, search.best2, &search.best);
+  sd.closest = search.best;
+  if (closest != nullptr) *closest = search.best;
+  // Then as triangle_side().
+  const double extent = extent_from(a, b, c);
+  const double margin = 1e-9 * (1.0 + abs_max3(a));
+  if (!(sd.closest.distance > reach + extent + margin)) {
+    const Aabb box = reach_box(a, b, c, reach);
+    for (size_t i = 0; i < count; ++i) {
+      if (triangle_within_reach(*index.mesh, ids[i], box, a, b, c, reach)) {
+        *side = TriangleSide::kNear;
         return true;
       }
     }
-    found = triangle_pair_distance(a, b, c, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], nullptr,
-                                   nullptr) < reach;
-    return !found;
-  };
-  for_each_triangle_near(index, box, visit);
-  return found;
+  }
+  finish_signed(index, a, SignMethod::kAuto, &sd);
+  *side = sd.distance < 0 ? TriangleSide::kInside : TriangleSide::kOutside;
+  return true;
 }
 
 TriangleSide triangle_side(const DistanceIndex& index, const Vec3& a, const Vec3& b, const Vec3& c,
@@ -825,7 +903,7 @@ TriangleSide triangle_side(const DistanceIndex& index, const Vec3& a, const Vec3
   // Every point x of abc has |x - a| <= extent, so its distance to the surface is at least
   // |a's| - extent, and the ball about a of radius |a's| holds no surface: all of abc lies on
   // a's side. The margin is far above the rounding of both lengths (about 1e-15 relative).
-  const double extent = std::sqrt(std::fmax(length_squared(b - a), length_squared(c - a)));
+  const double extent = extent_from(a, b, c);
   const double margin = 1e-9 * (1.0 + abs_max3(a));
   if (!(sd.closest.distance > reach + extent + margin) &&
       triangle_near_mesh(index, a, b, c, reach)) {

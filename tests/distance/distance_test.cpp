@@ -1617,6 +1617,77 @@ TEST(DistanceTriangle, SideMatchesBruteForce) {
   for (int k = 0; k < 3; ++k) EXPECT_GT(counts[k], 10) << k;
 }
 
+// triangle_side_among (the blockout's window): given every triangle whose box meets abc's box
+// grown by window_reach (triangles_meeting_box of a box holding abc's, grown so), it answers
+// exactly as triangle_side, with closest_point's closest point (bits), or declines (the closest
+// triangle may lie beyond the window).
+// Windows from a reach's width to a third of the shape; too small ones decline, large ones
+// answer nearly always. triangles_meeting_box finds the set triangles_in_box finds, and says
+// when it has more than its capacity.
+TEST(DistanceTriangle, SideAmongAWindowIsTriangleSide) {
+  Rng rng(0x5eed0079);
+  int answered = 0, declined = 0, overflowed = 0;
+  for (const auto& shape : query_shapes(rng)) {
+    auto b = build(shape.second, 4);
+    if (!b->index.closed_manifold) continue;
+    const Mesh& m = b->mesh;
+    const double size = length(bounds_of(m).extent());
+    const uint32_t nt = static_cast<uint32_t>(m.triangles.size());
+    std::vector<uint32_t> ids(nt + 1);
+    for (int i = 0; i < 40 * kEffort; ++i) {
+      const uint32_t t = rng.below(nt);
+      const Vec3 on = (corner(m, t, 0) + corner(m, t, 1) + corner(m, t, 2)) * (1.0 / 3.0);
+      const Vec3 c = on + rng.unit() * (size * 0.08 * rng.uniform());
+      const double spread = size * (i % 3 == 0 ? 0.05 : 0.005);
+      const Vec3 p = c + rng.unit() * spread, q = c + rng.unit() * spread,
+                 r = c + rng.unit() * spread;
+      const double reach = size * (i % 2 == 0 ? 0.002 : 0.02);
+      uint32_t seed = kNoNeighbor;
+      const TriangleSide want = triangle_side(b->index, p, q, r, reach, &seed);
+      const double window_reach = reach + size * (i % 4 == 0 ? 0.0 : 0.01 * (i % 4) * (i % 4));
+      Aabb window;
+      window.add(p);
+      window.add(q);
+      window.add(r);
+      // Half of them exactly the triangles the contract asks for (the tightest window).
+      const double grow = (i / 2) % 2 == 0 ? 0.0 : size * 0.02 * rng.uniform();
+      const Vec3 pad{grow + window_reach, grow + window_reach, grow + window_reach};
+      const Aabb query{window.lo - pad, window.hi + pad};
+      const size_t n = triangles_meeting_box(b->index, query, ids.data(), nt);
+      ASSERT_LE(n, static_cast<size_t>(nt));
+      TestArena scratch;
+      Context ctx(&scratch.arena);
+      ArenaArray<uint32_t> in_box(&scratch.arena);
+      SPLINTCORE_ASSERT_OK(triangles_in_box(ctx, b->index, query, &in_box));
+      std::vector<uint32_t> got_ids(ids.begin(), ids.begin() + static_cast<std::ptrdiff_t>(n));
+      std::sort(got_ids.begin(), got_ids.end());
+      ASSERT_EQ(got_ids, std::vector<uint32_t>(in_box.begin(), in_box.end())) << shape.first;
+      if (n > 1) {
+        ASSERT_EQ(triangles_meeting_box(b->index, query, ids.data(), n - 1), n);  // capacity + 1
+        ++overflowed;
+      }
+      TriangleSide side = TriangleSide::kNear;
+      ClosestPoint among;
+      if (!triangle_side_among(b->index, ids.data(), n, window_reach, p, q, r, reach, &side,
+                               &among)) {
+        ++declined;
+        continue;
+      }
+      ASSERT_EQ(static_cast<int>(side), static_cast<int>(want))
+          << shape.first << " i " << i << " window_reach " << window_reach;
+      ClosestPoint tree;
+      ASSERT_TRUE(closest_point(b->index, p, &tree));
+      ASSERT_EQ(among.triangle, tree.triangle) << shape.first << " i " << i;
+      ASSERT_EQ(std::memcmp(&among.distance, &tree.distance, sizeof tree.distance), 0);
+      ASSERT_EQ(std::memcmp(&among.point, &tree.point, sizeof tree.point), 0);
+      ++answered;
+    }
+  }
+  EXPECT_GT(answered, 100);
+  EXPECT_GT(declined, 10);
+  EXPECT_GT(overflowed, 10);
+}
+
 TEST(DistanceBox, TrianglesInBoxMatchBruteForce) {
   Rng rng(0x5eed0042);
   for (const auto& shape : query_shapes(rng)) {
