@@ -779,6 +779,17 @@ bool segment_intersects_mesh(const DistanceIndex& index, const Vec3& p, const Ve
 
 namespace {
 
+// Triangle t's bounds.
+Aabb triangle_box(const Mesh& mesh, uint32_t t) {
+  const Vec3* v = mesh.vertices.data();
+  const Triangle& tri = mesh.triangles[t];
+  Aabb tb;
+  tb.add(v[tri.v[0]]);
+  tb.add(v[tri.v[1]]);
+  tb.add(v[tri.v[2]]);
+  return tb;
+}
+
 // abc's box grown by reach.
 Aabb reach_box(const Vec3& a, const Vec3& b, const Vec3& c, double reach) {
   Aabb box;
@@ -793,13 +804,9 @@ Aabb reach_box(const Vec3& a, const Vec3& b, const Vec3& c, double reach) {
 // Does triangle t of `mesh` come within reach of abc (`box`: reach_box(a, b, c, reach))?
 bool triangle_within_reach(const Mesh& mesh, uint32_t t, const Aabb& box, const Vec3& a,
                            const Vec3& b, const Vec3& c, double reach) {
+  if (!triangle_box(mesh, t).overlaps(box)) return false;
   const Vec3* v = mesh.vertices.data();
   const Triangle& tri = mesh.triangles[t];
-  Aabb tb;
-  tb.add(v[tri.v[0]]);
-  tb.add(v[tri.v[1]]);
-  tb.add(v[tri.v[2]]);
-  if (!tb.overlaps(box)) return false;
   // Wholly on one side of the triangle's plane, farther than reach (with a margin far above
   // the rounding): no closer than that.
   const Vec3 n = cross(v[tri.v[1]] - v[tri.v[0]], v[tri.v[2]] - v[tri.v[0]]);
@@ -841,15 +848,9 @@ size_t triangles_meeting_box(const DistanceIndex& index, const Aabb& box, uint32
                              size_t capacity) {
   const Mesh& mesh = *index.mesh;
   if (mesh.triangles.size() == 0 || box.empty()) return 0;
-  const Vec3* v = mesh.vertices.data();
   size_t n = 0;
   auto visit = [&](uint32_t t) {
-    const Triangle& tri = mesh.triangles[t];
-    Aabb tb;
-    tb.add(v[tri.v[0]]);
-    tb.add(v[tri.v[1]]);
-    tb.add(v[tri.v[2]]);
-    if (!tb.overlaps(box)) return true;
+    if (!triangle_box(mesh, t).overlaps(box)) return true;
     if (n == capacity) {
       n = capacity + 1;
       return false;
@@ -919,15 +920,9 @@ Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aa
                         ArenaArray<uint32_t>* out) {
   const size_t start = out->size();
   if (index.mesh->triangles.size() == 0 || box.empty()) return Status::ok();
-  const Vec3* v = index.mesh->vertices.data();
   bool exhausted = false;
   auto visit = [&](uint32_t t) {
-    const Triangle& tri = index.mesh->triangles[t];
-    Aabb tb;
-    tb.add(v[tri.v[0]]);
-    tb.add(v[tri.v[1]]);
-    tb.add(v[tri.v[2]]);
-    if (!tb.overlaps(box)) return true;
+    if (!triangle_box(*index.mesh, t).overlaps(box)) return true;
     if (!out->push_back(t)) {
       exhausted = true;
       return false;

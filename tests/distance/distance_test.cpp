@@ -1566,6 +1566,25 @@ TEST(DistanceTriangle, NearMeshMatchesBruteForce) {
   EXPECT_LT(near, total * 9 / 10);
 }
 
+// A query triangle for triangle_side: about a random triangle of m, up to 8% of the shape's
+// size off it, up to a tenth of that size wide; reach 0.2% or 2% of the size (by i).
+struct QueryTriangle {
+  Vec3 p, q, r;
+  double reach;
+};
+QueryTriangle query_triangle(Rng& rng, const Mesh& m, double size, int i) {
+  const uint32_t t = rng.below(static_cast<uint32_t>(m.triangles.size()));
+  const Vec3 on = (corner(m, t, 0) + corner(m, t, 1) + corner(m, t, 2)) * (1.0 / 3.0);
+  const Vec3 c = on + rng.unit() * (size * 0.08 * rng.uniform());
+  const double spread = size * (i % 3 == 0 ? 0.05 : 0.005);
+  QueryTriangle qt;
+  qt.p = c + rng.unit() * spread;
+  qt.q = c + rng.unit() * spread;
+  qt.r = c + rng.unit() * spread;
+  qt.reach = size * (i % 2 == 0 ? 0.002 : 0.02);
+  return qt;
+}
+
 // triangle_side against brute force on the closed shapes: near exactly when the least pair
 // distance is under reach; otherwise the side of the exact winding number at every corner
 // (the triangle lies wholly on one side). Triangles up to a tenth of the shape's size, so both
@@ -1583,13 +1602,9 @@ TEST(DistanceTriangle, SideMatchesBruteForce) {
     const uint32_t nt = static_cast<uint32_t>(m.triangles.size());
     uint32_t seed = kNoNeighbor;
     for (int i = 0; i < 40 * kEffort; ++i) {
-      const uint32_t t = rng.below(nt);
-      const Vec3 on = (corner(m, t, 0) + corner(m, t, 1) + corner(m, t, 2)) * (1.0 / 3.0);
-      const Vec3 c = on + rng.unit() * (size * 0.08 * rng.uniform());
-      const double spread = size * (i % 3 == 0 ? 0.05 : 0.005);
-      const Vec3 p = c + rng.unit() * spread, q = c + rng.unit() * spread,
-                 r = c + rng.unit() * spread;
-      const double reach = size * (i % 2 == 0 ? 0.002 : 0.02);
+      const QueryTriangle qt = query_triangle(rng, m, size, i);
+      const Vec3 &p = qt.p, &q = qt.q, &r = qt.r;
+      const double reach = qt.reach;
       double least = HUGE_VAL;
       for (uint32_t k = 0; k < nt; ++k) {
         least = std::fmin(least, triangle_pair_distance(p, q, r, corner(m, k, 0), corner(m, k, 1),
@@ -1635,13 +1650,9 @@ TEST(DistanceTriangle, SideAmongAWindowIsTriangleSide) {
     const uint32_t nt = static_cast<uint32_t>(m.triangles.size());
     std::vector<uint32_t> ids(nt + 1);
     for (int i = 0; i < 40 * kEffort; ++i) {
-      const uint32_t t = rng.below(nt);
-      const Vec3 on = (corner(m, t, 0) + corner(m, t, 1) + corner(m, t, 2)) * (1.0 / 3.0);
-      const Vec3 c = on + rng.unit() * (size * 0.08 * rng.uniform());
-      const double spread = size * (i % 3 == 0 ? 0.05 : 0.005);
-      const Vec3 p = c + rng.unit() * spread, q = c + rng.unit() * spread,
-                 r = c + rng.unit() * spread;
-      const double reach = size * (i % 2 == 0 ? 0.002 : 0.02);
+      const QueryTriangle qt = query_triangle(rng, m, size, i);
+      const Vec3 &p = qt.p, &q = qt.q, &r = qt.r;
+      const double reach = qt.reach;
       uint32_t seed = kNoNeighbor;
       const TriangleSide want = triangle_side(b->index, p, q, r, reach, &seed);
       const double window_reach = reach + size * (i % 4 == 0 ? 0.0 : 0.01 * (i % 4) * (i % 4));
