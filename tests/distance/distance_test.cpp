@@ -1694,9 +1694,13 @@ TEST(DistanceTriangle, SideAmongAWindowIsTriangleSide) {
       ++answered;
     }
   }
-  EXPECT_GT(answered, 100);
-  EXPECT_GT(declined, 10);
-  EXPECT_GT(overflowed, 10);
+  // Each outcome often enough to mean something (the counts scale with kEffort: at 1, about
+  // 75 answered, the rest declined).
+  std::printf("[ figures  ] answered %d, declined %d, windows that overflowed %d\n", answered,
+              declined, overflowed);
+  EXPECT_GT(answered, 40 * kEffort);
+  EXPECT_GT(declined, 5 * kEffort);
+  EXPECT_GT(overflowed, 5 * kEffort);
 }
 
 TEST(DistanceBox, TrianglesInBoxMatchBruteForce) {
