@@ -862,6 +862,27 @@ size_t triangles_meeting_box(const DistanceIndex& index, const Aabb& box, uint32
   return n;
 }
 
+namespace {
+
+// triangle_side() once a's closest point is in sd->closest: kNear when near() (abc within reach
+// of the surface) is asked and says so, else a's side.
+template <class Near>
+TriangleSide side_from_closest(const DistanceIndex& index, const Vec3& a, const Vec3& b,
+                               const Vec3& c, double reach, const Near& near, SignedDistance* sd) {
+  // Every point x of abc has |x - a| <= extent, so its distance to the surface is at least
+  // |a's| - extent, and the ball about a of radius |a's| holds no surface: all of abc lies on
+  // a's side. The margin is far above the rounding of both lengths (about 1e-15 relative).
+  const double extent = extent_from(a, b, c);
+  const double margin = 1e-9 * (1.0 + abs_max3(a));
+  if (!(sd->closest.distance > reach + extent + margin) && near()) return TriangleSide::kNear;
+  // Farther than reach everywhere: abc does not cross the surface, a's side is its side (a is
+  // at least reach from the surface, so its sign is not in doubt).
+  finish_signed(index, a, SignMethod::kAuto, sd);
+  return sd->distance < 0 ? TriangleSide::kInside : TriangleSide::kOutside;
+}
+
+}  // namespace
+
 bool triangle_side_among(const DistanceIndex& index, const uint32_t* ids, size_t count,
                          double window_reach, const Vec3& a, const Vec3& b, const Vec3& c,
                          double reach, TriangleSide* side, ClosestPoint* closest) {
@@ -878,20 +899,14 @@ bool triangle_side_among(const DistanceIndex& index, const uint32_t* ids, size_t
   settle_closest(index, a, search.best2, &search.best);
   sd.closest = search.best;
   if (closest != nullptr) *closest = search.best;
-  // Then as triangle_side().
-  const double extent = extent_from(a, b, c);
-  const double margin = 1e-9 * (1.0 + abs_max3(a));
-  if (!(sd.closest.distance > reach + extent + margin)) {
+  const auto near = [&] {
     const Aabb box = reach_box(a, b, c, reach);
     for (size_t i = 0; i < count; ++i) {
-      if (triangle_within_reach(*index.mesh, ids[i], box, a, b, c, reach)) {
-        *side = TriangleSide::kNear;
-        return true;
-      }
+      if (triangle_within_reach(*index.mesh, ids[i], box, a, b, c, reach)) return true;
     }
-  }
-  finish_signed(index, a, SignMethod::kAuto, &sd);
-  *side = sd.distance < 0 ? TriangleSide::kInside : TriangleSide::kOutside;
+    return false;
+  };
+  *side = side_from_closest(index, a, b, c, reach, near, &sd);
   return true;
 }
 
@@ -901,19 +916,8 @@ TriangleSide triangle_side(const DistanceIndex& index, const Vec3& a, const Vec3
   SignedDistance sd;
   if (!closest_within(index, a, HUGE_VAL, &sd.closest, *seed)) return TriangleSide::kOutside;
   *seed = sd.closest.triangle;
-  // Every point x of abc has |x - a| <= extent, so its distance to the surface is at least
-  // |a's| - extent, and the ball about a of radius |a's| holds no surface: all of abc lies on
-  // a's side. The margin is far above the rounding of both lengths (about 1e-15 relative).
-  const double extent = extent_from(a, b, c);
-  const double margin = 1e-9 * (1.0 + abs_max3(a));
-  if (!(sd.closest.distance > reach + extent + margin) &&
-      triangle_near_mesh(index, a, b, c, reach)) {
-    return TriangleSide::kNear;
-  }
-  // Farther than reach everywhere: abc does not cross the surface, a's side is its side (a is
-  // at least reach from the surface, so its sign is not in doubt).
-  finish_signed(index, a, SignMethod::kAuto, &sd);
-  return sd.distance < 0 ? TriangleSide::kInside : TriangleSide::kOutside;
+  const auto near = [&] { return triangle_near_mesh(index, a, b, c, reach); };
+  return side_from_closest(index, a, b, c, reach, near, &sd);
 }
 
 Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aabb& box,
