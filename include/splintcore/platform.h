@@ -96,11 +96,11 @@ class ThreadExecutor {
 // Seconds from a monotonic clock (for timing; never reaches output bytes).
 double monotonic_seconds();
 
-// Memory for a tool's arena: at least `bytes`, aligned to 2 MiB and offered to the kernel for
-// transparent huge pages where it has them (the first touch of a 27 MB mesh took 8,294 page
-// faults in 4 KiB pages, a fifth of `splintcore check`'s time; 149 with huge pages). nullptr
-// when the system has no such memory. Give it back with release_arena_memory(), with the same
-// `bytes`.
+// Memory for a tool's arena: at least `bytes`, aligned to 2 MiB, in the kernel's ordinary
+// pages (not advised for transparent huge pages: on a VM that hands free memory back to its
+// host, a huge page's first touch waits for the host to zero 2 MiB, and a run started after a
+// second idle spent 0.1-0.2 s more in the kernel; see memory.cpp). nullptr when the system has
+// no such memory. Give it back with release_arena_memory(), with the same `bytes`.
 void* acquire_arena_memory(uint64_t bytes);
 void release_arena_memory(void* p, uint64_t bytes);
 
