@@ -242,8 +242,8 @@ check "plan printed both splints" -- grep -q "^final: mandible turned .* deg" "$
 expect_exit 0 "the plan's intermediate splint is printable" -- "$tool" check "$work/plan-out/intermediate.stl"
 cp "$work/plan-out/intermediate.stl" "$work/intermediate.first"
 cp "$work/plan-out/final.stl" "$work/final.first"
-expect_exit 0 "design a plan again" -- "$tool" design "$work/plan.json" -o "$work/plan-out" --json
-check "plan bytes are the same every run" -- sh -c "cmp -s '$work/plan-out/intermediate.stl' '$work/intermediate.first' && cmp -s '$work/plan-out/final.stl' '$work/final.first'"
+expect_exit 0 "design a plan again, 2 threads" -- "$tool" design "$work/plan.json" -o "$work/plan-out" --json --threads 2
+check "plan bytes are the same every run and at 2 threads (the STLs written in two tasks)" -- sh -c "cmp -s '$work/plan-out/intermediate.stl' '$work/intermediate.first' && cmp -s '$work/plan-out/final.stl' '$work/final.first'"
 sed 's/"mesh": "mandible.stl"}/"mesh": "mandible.stl", "transform": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]}/' "$work/plan.json" > "$work/plan-bad.json"
 expect_exit 1 "a plan with a jaw transform" -- "$tool" design "$work/plan-bad.json" -o "$work/plan-bad"
 check "the refusal names the line and column" -- grep -q "plan-bad.json:2:[0-9]*: .*both move it" "$work/err"
