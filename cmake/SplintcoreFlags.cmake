@@ -10,6 +10,7 @@ option(SPLINTCORE_WERROR "Treat warnings as errors on splintcore's own code" ON)
 option(SPLINTCORE_SANITIZE "Build with AddressSanitizer and UndefinedBehaviorSanitizer" OFF)
 option(SPLINTCORE_CORE_NO_EXCEPTIONS "Build the core library with -fno-exceptions -fno-rtti" ON)
 option(SPLINTCORE_FUZZ "Build libFuzzer targets (clang only)" OFF)
+option(SPLINTCORE_TSAN "Build with ThreadSanitizer (the executor's tasks; tools/test.sh tsan)" OFF)
 
 set(SPLINTCORE_WARNINGS
   -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wsign-conversion
@@ -38,6 +39,14 @@ add_compile_options(${SPLINTCORE_FP_FLAGS})
 if(SPLINTCORE_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
   add_link_options(-fsanitize=address,undefined)
+endif()
+
+if(SPLINTCORE_TSAN)
+  if(SPLINTCORE_SANITIZE OR SPLINTCORE_FUZZ)
+    message(FATAL_ERROR "SPLINTCORE_TSAN cannot be combined with AddressSanitizer builds")
+  endif()
+  add_compile_options(-fsanitize=thread -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=thread)
 endif()
 
 if(SPLINTCORE_FUZZ)

@@ -35,6 +35,8 @@
 #                                  min from a clean build dir on a quiet machine)
 # Optional jobs, not in the default list (cross builds run under qemu-user, about 27 min):
 #   bash tools/test.sh aarch64 armv7
+#   bash tools/test.sh tsan        ThreadSanitizer: the executor's tests and the tool at 2
+#                                  threads on the fixture cases (about 4 min)
 #   They run the suite except the long randomised Boolean properties (BooleanRandom.Phantom*,
 #   about 8 min under qemu, run natively by the default jobs); SPLINTCORE_CROSS_FULL=1 runs all.
 set -u
@@ -530,6 +532,31 @@ clang_o0_job() {
   return $rc
 }
 
+# ThreadSanitizer (optional: about 4 min from a clean build dir): the tests that run the
+# executor's tasks (names with Thread, Parallel, Executor) and the tool at 2 threads on the
+# fixture cases (tests/tools/tsan_cli_test.sh, its bytes against the gcc-O2 job's tool when
+# built, else this build's own at one thread).
+tsan_job() {
+  echo "=== tsan: clang++ -fsanitize=thread, the executor's tests and the tool at 2 threads"
+  ensure_packages clang libclang-rt-14-dev || return 1
+  local dir=build/ci-tsan
+  if ! cmake -S . -B "$dir" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+       -DSPLINTCORE_TSAN=ON >"$dir.configure.log" 2>&1 ||
+     ! cmake --build "$dir" -j "$par" --target splintcore_tests splintcore_tool \
+       >"$dir.build.log" 2>&1; then
+    tail -n 40 "$dir.build.log" 2>/dev/null || cat "$dir.configure.log"
+    total_failed=$((total_failed + 1)); return 1
+  fi
+  local plain=build/ci-gcc-O2/tools/splintcore rc=0
+  [ -x "$plain" ] || plain=$dir/tools/splintcore
+  (cd "$dir" && TSAN_OPTIONS="halt_on_error=1 exitcode=66" ctest --output-on-failure -j 1 \
+     --timeout 900 -R 'Thread|Parallel|Executor') >"$dir.ctest.log" 2>&1 || rc=1
+  grep -E "tests passed|tests failed|Failed|ThreadSanitizer" "$dir.ctest.log" | tail -n 15
+  bash tests/tools/tsan_cli_test.sh "$dir/tools/splintcore" "$plain" fixtures || rc=1
+  if [ "$rc" -eq 0 ]; then total_passed=$((total_passed + 1)); else total_failed=$((total_failed + 1)); fi
+  return $rc
+}
+
 coverage_job() {
   # Fails when a parser of outside bytes (JSON, case, STL, PLY, OBJ, the CT readers) is under
   # SPLINTCORE_COVERAGE_MIN_BRANCH percent branch coverage (default 95, issue 9); prints the table.
@@ -561,6 +588,7 @@ for job in $jobs; do
     fuzz) fuzz_job ;;
     lint) lint_job ;;
     coverage) coverage_job ;;
+    tsan) tsan_job ;;
     aarch64) cross_job "$job" cmake/toolchain-aarch64-linux-gnu.cmake aarch64-linux-gnu ;;
     armv7) cross_job "$job" cmake/toolchain-arm-linux-gnueabihf.cmake arm-linux-gnueabihf ;;
     baremetal) bm_defer=0
