@@ -400,8 +400,8 @@ Status Design::write_plan_stls() {
   Arena slices[2] = {Arena(base, slice), Arena(base + slice, slice)};
   Status status[2];
   auto task = [&](uint32_t k) {
-    status[k] = write_stl_file(Context(&slices[k]), plan_splints_[k], plan_paths_[k],
-                               &plan_hashes_[k]);
+    status[k] =
+        write_stl_file(Context(&slices[k]), plan_splints_[k], plan_paths_[k], &plan_hashes_[k]);
   };
   parallel_for_each(ctx_.executor, 2, task);
   return status[0].is_ok() ? status[1] : status[0];
