@@ -379,7 +379,7 @@ Status Design::write_mesh_file(const Mesh& m, const std::string& path, std::stri
 }
 
 // OUTDIR/intermediate.stl and final.stl. With more than one thread, in two tasks, each
-// writer's buffer in its own slice of the arena (given back after): the same bytes, about 30
+// writer's buffer in its own slice of the arena (given back after): the same bytes, about 20
 // ms less on the real case (issue 32). A failure is the intermediate's first, as in the
 // serial order; the other file may then be written already (whole, as always).
 Status Design::write_plan_stls() {
