@@ -49,6 +49,14 @@ if(SPLINTCORE_TSAN)
   add_link_options(-fsanitize=thread)
 endif()
 
+# A sanitizer's runtime replaces malloc and operator new, and each consumer of an instrumented
+# library needs it: the allocation-counting tests and the install consumer are left out.
+if(SPLINTCORE_SANITIZE OR SPLINTCORE_FUZZ OR SPLINTCORE_TSAN)
+  set(SPLINTCORE_SANITIZER_RUNTIME ON)
+else()
+  set(SPLINTCORE_SANITIZER_RUNTIME OFF)
+endif()
+
 if(SPLINTCORE_FUZZ)
   # Coverage instrumentation for everything; the fuzz targets add the libFuzzer main.
   add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer)

@@ -36,7 +36,7 @@
 # Optional jobs, not in the default list (cross builds run under qemu-user, about 27 min):
 #   bash tools/test.sh aarch64 armv7
 #   bash tools/test.sh tsan        ThreadSanitizer: the executor's tests and the tool at 2
-#                                  threads on the fixture cases (about 4 min)
+#                                  threads on the fixture cases (about 5 min)
 #   They run the suite except the long randomised Boolean properties (BooleanRandom.Phantom*,
 #   about 8 min under qemu, run natively by the default jobs); SPLINTCORE_CROSS_FULL=1 runs all.
 set -u
@@ -87,10 +87,12 @@ bytes_names() {  # build-dir: the names of the byte tests a job runs there, sort
 run_ctest_job() {  # name cxx build_type extra-cmake-args...
   local name=$1 cxx=$2 type=$3
   shift 3
-  local dir=build/ci-$name exclude=()
+  local dir=build/ci-$name exclude=() bytes_only=0
   case $name in
     gcc-O2) ;;
-    gcc-O0 | clang-O2) exclude=(-R "$bytes_tests" -E "$slow_properties|$realdata_tests") ;;
+    gcc-O0 | clang-O2) exclude=(-R "$bytes_tests" -E "$slow_properties|$realdata_tests")
+                       bytes_only=1 ;;
+    tsan) exclude=(-R 'Thread|Parallel|Executor') ;;  # the tests that run the executor's tasks
     *) exclude=(-E "$slow_properties|$realdata_tests") ;;
   esac
   echo "=== $name: $cxx $type $*"
@@ -115,7 +117,7 @@ run_ctest_job() {  # name cxx build_type extra-cmake-args...
   total_passed=$((total_passed + n - failed))
   total_failed=$((total_failed + failed))
   [ "$rc" -eq 0 ] || tail -n 60 "$log"
-  if [ "${#exclude[@]}" -gt 0 ] && [ "${exclude[0]}" = -R ] && [ -f build/ci-gcc-O2/CTestTestfile.cmake ]; then
+  if [ "$bytes_only" = 1 ] && [ -f build/ci-gcc-O2/CTestTestfile.cmake ]; then
     local missing
     missing=$(comm -23 <(bytes_names build/ci-gcc-O2) <(bytes_names "$dir"))
     if [ -n "$missing" ]; then
@@ -532,29 +534,21 @@ clang_o0_job() {
   return $rc
 }
 
-# ThreadSanitizer (optional: about 4 min from a clean build dir): the tests that run the
-# executor's tasks (names with Thread, Parallel, Executor) and the tool at 2 threads on the
-# fixture cases (tests/tools/tsan_cli_test.sh, its bytes against the gcc-O2 job's tool when
-# built, else this build's own at one thread).
+# ThreadSanitizer (optional: about 5 min from a clean build dir; a report fails the test with
+# TSan's exit code 66): the tests that run the executor's tasks (names with Thread, Parallel,
+# Executor; run_ctest_job) and the tool at 2 threads on the fixture cases
+# (tests/tools/tsan_cli_test.sh: its bytes against the gcc-O2 job's tool when built, else this
+# build's own at one thread).
 tsan_job() {
-  echo "=== tsan: clang++ -fsanitize=thread, the executor's tests and the tool at 2 threads"
   ensure_packages clang libclang-rt-14-dev || return 1
-  local dir=build/ci-tsan
-  if ! cmake -S . -B "$dir" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-       -DSPLINTCORE_TSAN=ON >"$dir.configure.log" 2>&1 ||
-     ! cmake --build "$dir" -j "$par" --target splintcore_tests splintcore_tool \
-       >"$dir.build.log" 2>&1; then
-    tail -n 40 "$dir.build.log" 2>/dev/null || cat "$dir.configure.log"
+  run_ctest_job tsan clang++ RelWithDebInfo -DSPLINTCORE_TSAN=ON || return 1
+  local plain=build/ci-gcc-O2/tools/splintcore
+  [ -x "$plain" ] || plain=build/ci-tsan/tools/splintcore
+  if bash tests/tools/tsan_cli_test.sh build/ci-tsan/tools/splintcore "$plain" fixtures; then
+    total_passed=$((total_passed + 1))
+  else
     total_failed=$((total_failed + 1)); return 1
   fi
-  local plain=build/ci-gcc-O2/tools/splintcore rc=0
-  [ -x "$plain" ] || plain=$dir/tools/splintcore
-  (cd "$dir" && TSAN_OPTIONS="halt_on_error=1 exitcode=66" ctest --output-on-failure -j 1 \
-     --timeout 900 -R 'Thread|Parallel|Executor') >"$dir.ctest.log" 2>&1 || rc=1
-  grep -E "tests passed|tests failed|Failed|ThreadSanitizer" "$dir.ctest.log" | tail -n 15
-  bash tests/tools/tsan_cli_test.sh "$dir/tools/splintcore" "$plain" fixtures || rc=1
-  if [ "$rc" -eq 0 ]; then total_passed=$((total_passed + 1)); else total_failed=$((total_failed + 1)); fi
-  return $rc
 }
 
 coverage_job() {
