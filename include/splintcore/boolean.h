@@ -155,6 +155,17 @@ struct BooleanStats {
 Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b, const BooleanOptions& options,
                     Mesh* out, BooleanStats* stats);
 
+// Where B matters to mesh_boolean(a, B, options) for the difference and the intersection: A's
+// box widened by the farthest a nudge can move A (options.max_nudges), with room to spare; for
+// the union, everywhere (infinite bounds). A triangle of B whose corners all lie beyond one side
+// of this box (x below lo.x, ..., strictly) is never cut and never inside A, so a caller may
+// leave such triangles (and the vertices only they use) out of B, keeping the others in their
+// order: B's border is then outside A, which the Boolean takes. The result is the same bytes
+// when no two shells of what is left overlap near A (one group); otherwise the same solid, the
+// passes grouping the pieces left of a shell one by one (the design's crop of the jaws: the
+// design goldens and the real dentition's splints kept their bytes). Reads A's vertices only.
+Aabb boolean_region(const Mesh& a, const BooleanOptions& options);
+
 }  // namespace splintcore
 
 #endif  // SPLINTCORE_BOOLEAN_H

@@ -284,8 +284,9 @@ struct DesignReport {
 
 // The splint for case `c` from its jaws (jaws[i] is the mesh of c.jaws[i], as read: it is not
 // changed). Each jaw is moved by its transform and rounded to float32 (what a moved jaw's STL
-// holds; the Boolean keeps these bits), the base is built, the jaws are subtracted, and the
-// result is checked for the case's printer. It stays in the case's frame, unless the case asks
+// holds; the Boolean keeps these bits), the base is built, the jaws are subtracted (only their
+// triangles that can touch the base: boolean_region, boolean.h), and the result is checked for
+// the case's printer. It stays in the case's frame, unless the case asks
 // for "placement": "tray": then the whole case is moved first (report->tray_translation) and
 // the splint comes out on the printer's tray. With "blockout", each jaw's swept volume is
 // subtracted after the Boolean (blockout.h; at most kMaxBlockoutJaws jaws). `splint` must be

@@ -756,4 +756,14 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b, const Bool
   return s;
 }
 
+Aabb boolean_region(const Mesh& a, const BooleanOptions& options) {
+  if (options.op == BooleanOp::kUnion) {
+    Aabb all;
+    all.lo = Vec3{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    all.hi = Vec3{HUGE_VAL, HUGE_VAL, HUGE_VAL};
+    return all;
+  }
+  return region_of_a(a, options.max_nudges);
+}
+
 }  // namespace splintcore

@@ -35,7 +35,7 @@ Status count_pieces(const Context& ctx, const Mesh& m, JawShape* out) {
   uint64_t referenced = 0, unions = 0;
   for (const Triangle& t : m.triangles) {
     for (uint32_t v : t.v) {
-      if (v >= n) return Status::ok();  // gather_jaws names it
+      if (v >= n) return Status::ok();  // check_jaws names it
       referenced += used[v] == 0 ? 1u : 0u;
       used[v] = 1;
     }

@@ -78,11 +78,16 @@ Status case_on_tray(const Context& ctx, const CaseFile& c, const PrinterProfile&
   return Status::ok();
 }
 
-// B of the Boolean: every jaw moved by its transform and rounded to float32 (what a moved
-// jaw's STL holds; the Boolean keeps these bits), one mesh, jaw after jaw. Names the jaw
-// (index and role) that is empty, not finite, moved out of float32 range or broken.
-Status gather_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* b) {
-  Arena& arena = *ctx.arena;
+// Vertex v of jaw j where B holds it: moved by the jaw's transform, rounded to float32; false
+// when that leaves float32 range.
+inline bool b_vertex(const CaseFile& c, Span<const Mesh> jaws, size_t j, size_t v, Vec3* p) {
+  *p = c.jaws[j].transform.apply_point(jaws[j].vertices[v]);
+  return round_to_float32(p);
+}
+
+// The jaws fit to go into B: each has triangles, finite vertices that stay in float32 range
+// where B holds them, and vertex ids in range. Names the jaw (index and role) that does not.
+Status check_jaws(const CaseFile& c, Span<const Mesh> jaws) {
   uint64_t nv = 0, nt = 0;
   for (const Mesh& m : jaws) {
     nv += m.vertices.size();
@@ -92,10 +97,6 @@ Status gather_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
     return make_error(StatusCode::kLimitExceeded, "design: the jaws have ", nt, " triangles and ",
                       nv, " vertices; at most 2^31 each");
   }
-  if (!b->vertices.reserve(static_cast<size_t>(nv)) ||
-      !b->triangles.reserve(static_cast<size_t>(nt))) {
-    return arena.exhausted_status();
-  }
   for (size_t j = 0; j < jaws.size(); ++j) {
     const char* role = c.jaws[j].role;
     if (jaws[j].triangles.empty()) {
@@ -103,22 +104,19 @@ Status gather_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                         ") is empty: it has no triangles")
           .at_index(j);
     }
-    const uint32_t off = static_cast<uint32_t>(b->vertices.size());
     const uint32_t count = static_cast<uint32_t>(jaws[j].vertices.size());
-    for (const Vec3& v : jaws[j].vertices) {
-      if (!is_finite(v)) {
+    for (uint32_t v = 0; v < count; ++v) {
+      if (!is_finite(jaws[j].vertices[v])) {
         return make_error(StatusCode::kNonFinite, "design: jaw ", j, " (", role,
-                          ") has a vertex that is not finite (NaN or infinity): vertex ",
-                          static_cast<uint64_t>(&v - jaws[j].vertices.begin()))
+                          ") has a vertex that is not finite (NaN or infinity): vertex ", v)
             .at_index(j);
       }
-      Vec3 p = c.jaws[j].transform.apply_point(v);
-      if (!round_to_float32(&p)) {
+      Vec3 p;
+      if (!b_vertex(c, jaws, j, v, &p)) {
         return make_error(StatusCode::kLimitExceeded, "design: jaw ", j, " (", role,
                           ") moved beyond float32 range")
             .at_index(j);
       }
-      (void)b->vertices.push_back(p);
     }
     for (const Triangle& t : jaws[j].triangles) {
       if (t.v[0] >= count || t.v[1] >= count || t.v[2] >= count) {
@@ -126,43 +124,95 @@ Status gather_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                           ") has a triangle that refers to a vertex that does not exist")
             .at_index(j);
       }
-      (void)b->triangles.push_back(Triangle{{t.v[0] + off, t.v[1] + off, t.v[2] + off}});
     }
   }
   return Status::ok();
 }
 
-// Jaw j's part of B: its triangles (ids into all of B's vertices).
-Mesh jaw_part(const Mesh& b, Span<const Mesh> jaws, size_t j) {
-  size_t first = 0;
-  for (size_t i = 0; i < j; ++i) first += jaws[i].triangles.size();
-  return mesh_view(b.vertices.span(), b.triangles.span().subspan(first, jaws[j].triangles.size()));
+// B of the Boolean, from jaws that passed check_jaws: every jaw where B holds it (b_vertex),
+// jaw after jaw, only the triangles that can matter to the base minus the jaws: those with a
+// corner in `keep` or not all beyond one side of it (boolean_region), and the vertices they
+// use, in their order. Arena: 1 byte per vertex of the jaws (kept: *kept, bit kKeptVertex set
+// for a vertex in B, all jaws' vertices in order) below B's own arrays, and 4 bytes per vertex
+// of the largest jaw while it is gathered.
+constexpr uint8_t kKeptVertex = 0x80;
+Status gather_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, const Aabb& keep,
+                   Mesh* b, const uint8_t** kept) {
+  Arena& arena = *ctx.arena;
+  size_t nv = 0;
+  for (const Mesh& m : jaws) nv += m.vertices.size();
+  uint8_t* code = arena.allocate_array<uint8_t>(nv);
+  if (code == nullptr && nv > 0) return arena.exhausted_status();
+  *kept = code;
+  // The sides of `keep` each vertex lies beyond, then which vertices the kept triangles use.
+  size_t kv = 0, kt = 0, off = 0;
+  for (size_t j = 0; j < jaws.size(); ++j) {
+    uint8_t* cj = code + off;
+    for (size_t v = 0; v < jaws[j].vertices.size(); ++v) {
+      Vec3 p;
+      (void)b_vertex(c, jaws, j, v, &p);  // in range: check_jaws
+      cj[v] = static_cast<uint8_t>((p.x < keep.lo.x ? 1 : 0) | (p.x > keep.hi.x ? 2 : 0) |
+                                   (p.y < keep.lo.y ? 4 : 0) | (p.y > keep.hi.y ? 8 : 0) |
+                                   (p.z < keep.lo.z ? 16 : 0) | (p.z > keep.hi.z ? 32 : 0));
+    }
+    for (const Triangle& t : jaws[j].triangles) {
+      if ((cj[t.v[0]] & cj[t.v[1]] & cj[t.v[2]] & ~kKeptVertex) != 0) continue;
+      for (uint32_t v : t.v) {
+        kv += (cj[v] & kKeptVertex) == 0 ? 1 : 0;
+        cj[v] |= kKeptVertex;
+      }
+      ++kt;
+    }
+    off += jaws[j].vertices.size();
+  }
+  if (!b->vertices.reserve(kv) || !b->triangles.reserve(kt)) return arena.exhausted_status();
+  off = 0;
+  for (size_t j = 0; j < jaws.size(); ++j) {
+    ArenaScope scope(arena);
+    const uint8_t* cj = code + off;
+    const size_t count = jaws[j].vertices.size();
+    uint32_t* index = arena.allocate_array<uint32_t>(count);
+    if (index == nullptr) return arena.exhausted_status();
+    for (size_t v = 0; v < count; ++v) {
+      if ((cj[v] & kKeptVertex) == 0) continue;
+      Vec3 p;
+      (void)b_vertex(c, jaws, j, v, &p);
+      index[v] = static_cast<uint32_t>(b->vertices.size());
+      (void)b->vertices.push_back(p);
+    }
+    for (const Triangle& t : jaws[j].triangles) {
+      if ((cj[t.v[0]] & cj[t.v[1]] & cj[t.v[2]] & ~kKeptVertex) != 0) continue;
+      (void)b->triangles.push_back(Triangle{{index[t.v[0]], index[t.v[1]], index[t.v[2]]}});
+    }
+    off += count;
+  }
+  return Status::ok();
 }
 
 // An inside-out jaw (its triangles facing inward) would be subtracted as its complement. A
 // negative volume says so for a closed jaw; an open one (a scan) has no volume to go by, so
-// a jaw is refused only when it is closed and consistently oriented once turned over.
-Status refuse_inside_out_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
-                              const Mesh& b) {
+// a jaw is refused only when it is closed and consistently oriented once turned over. Measured
+// on the jaw as given (a rigid move keeps its volume; B holds only the part near the base).
+Status refuse_inside_out_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws) {
   for (size_t j = 0; j < jaws.size(); ++j) {
-    const Mesh part = jaw_part(b, jaws, j);
-    if (!(mesh_volume(part) < 0)) continue;
+    const Mesh& jaw = jaws[j];
+    if (!(mesh_volume(jaw) < 0)) continue;
     ArenaScope scope(*ctx.arena);
     Mesh flipped(ctx.arena);
-    if (!flipped.triangles.resize(part.triangles.size())) return ctx.arena->exhausted_status();
-    for (size_t i = 0; i < part.triangles.size(); ++i) {
-      const Triangle& t = part.triangles[i];
+    if (!flipped.triangles.resize(jaw.triangles.size())) return ctx.arena->exhausted_status();
+    for (size_t i = 0; i < jaw.triangles.size(); ++i) {
+      const Triangle& t = jaw.triangles[i];
       flipped.triangles[i] = Triangle{{t.v[0], t.v[2], t.v[1]}};
     }
     double volume = 0;
-    const Status closed =
-        check_closed_oriented(ctx, mesh_view(b.vertices.span(), flipped.triangles.span()), &volume);
+    const Status closed = check_closed_oriented(
+        ctx, mesh_view(jaw.vertices.span(), flipped.triangles.span()), &volume);
     if (closed.code() == StatusCode::kArenaExhausted) return closed;
     if (closed.is_ok()) {
       return make_error(StatusCode::kInvalidMesh, "design: jaw ", j, " (", c.jaws[j].role,
                         ") is inside out: it is closed but its triangles face inward "
                         "(volume ",
-                        mesh_volume(part), " mm^3); reverse their orientation")
+                        mesh_volume(jaw), " mm^3); reverse their orientation")
           .at_index(j);
     }
   }
@@ -200,7 +250,7 @@ Status moved_vertices(const Context& ctx, const CaseFile& c, Span<const Mesh> ja
   if (moved == nullptr) return ctx.arena->exhausted_status();
   for (size_t i = 0; i < m.vertices.size(); ++i) {
     moved[i] = x.apply_point(m.vertices[i]);
-    (void)round_to_float32(&moved[i]);  // in range: gather_jaws checked it
+    (void)round_to_float32(&moved[i]);  // in range: check_jaws checked it
   }
   *out = Span<const Vec3>(moved, m.vertices.size());
   return Status::ok();
@@ -290,28 +340,29 @@ Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
 }
 
 // The Boolean names an open B's vertex where its border meets the base (issue 30). B is the
-// jaws one after another: said again in the design's terms (which jaw or scan, its own vertex,
-// where it lies in the case's frame, what to do), within a Status's 256 bytes.
-Status name_open_jaw(Status s, const CaseFile& c, Span<const Mesh> jaws, const Mesh& b) {
+// jaws' kept vertices one after another (gather_jaws, `kept`): said again in the design's terms
+// (which jaw or scan, its own vertex, where it lies in the case's frame, what to do), within a
+// Status's 256 bytes.
+Status name_open_jaw(Status s, const CaseFile& c, Span<const Mesh> jaws, const Mesh& b,
+                     const uint8_t* kept) {
   if (s.code() != StatusCode::kInvalidMesh || s.index() == kNoPosition ||
       s.index() >= b.vertices.size() || std::strncmp(s.message(), "B is open", 9) != 0) {
     return s;
   }
   const auto um = [](double x) { return std::floor(x * 1000 + 0.5) / 1000; };
   const Vec3& p = b.vertices[static_cast<size_t>(s.index())];
-  uint64_t first = 0;
+  uint64_t seen = 0;  // B's vertices before the one looked at
   for (size_t j = 0; j < jaws.size(); ++j) {
-    const uint64_t count = jaws[j].vertices.size();
-    if (s.index() < first + count) {
+    for (size_t v = 0; v < jaws[j].vertices.size(); ++v, ++kept) {
+      if ((*kept & kKeptVertex) == 0 || seen++ != s.index()) continue;
       const bool scan = c.jaws[j].has_scan;  // a fused jaw is its scan
       return make_error(StatusCode::kInvalidMesh, "B is open: ", scan ? "the scan of " : "", "jaw ",
                         j, " (", c.jaws[j].role, ") has its border inside the base at ",
-                        "its vertex ", s.index() - first, " (", um(p.x), ", ", um(p.y), ", ",
-                        um(p.z), "): use a larger ", scan ? "scan" : "surface",
+                        "its vertex ", v, " (", um(p.x), ", ", um(p.y), ", ", um(p.z),
+                        "): use a larger ", scan ? "scan" : "surface",
                         ", a smaller outline, or close it first (splintcore prepare)")
           .at_index(j);
     }
-    first += count;
   }
   return s;
 }
@@ -334,42 +385,43 @@ Status label_splint(const Context& ctx, const CaseFile& c, Mesh* cut, DesignRepo
   return Status::ok();
 }
 
-// The Boolean base minus jaws. B and the base are not needed after it (the blockout takes
-// the jaws themselves), so the result's exact self-intersection check (the Boolean's final
-// word, and the largest arrays of the design after B) runs once the result has been moved
-// down over them, to `low`: on the real dentition that is what keeps the design within 64 MiB.
-// Should
-// that check find a crossing, the Boolean runs again with the check inside, where a crossing
-// makes it nudge A and try again: the answer is the one the Boolean alone gives.
+// The Boolean base minus jaws, B being the jaws near the base (gather_jaws over the Boolean's
+// region: the same result as with the whole jaws, with less to read, sort and hold). B and the
+// base are not needed after it (the blockout takes the jaws themselves), so the result's exact
+// self-intersection check (the Boolean's final word, and the largest arrays of the design after
+// B) runs once the result has been moved down over them, to `low`: on the real dentition that
+// is what keeps the design within 64 MiB. Should that check find a crossing, the Boolean runs
+// again with the check inside, where a crossing makes it nudge A and try again: the answer is
+// the one the Boolean alone gives. *base is the arena's top at entry, above `low`.
 Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
-                     const Arena::Marker& low, Mesh* base, Mesh* b, Mesh* cut,
-                     DesignReport* report) {
+                     const Arena::Marker& low, Mesh* base, Mesh* cut, DesignReport* report) {
   Arena& arena = *ctx.arena;
   BooleanOptions bo;
   bo.op = BooleanOp::kDifference;
   bo.check_self_intersection = false;
-  SPLINTCORE_RETURN_IF_ERROR(stage_error(
-      name_open_jaw(mesh_boolean(ctx, *base, *b, bo, cut, &report->boolean), c, jaws, *b),
-      "boolean (base minus jaws)"));
+  const auto subtract = [&]() -> Status {
+    Mesh b(&arena);
+    const uint8_t* kept = nullptr;
+    SPLINTCORE_RETURN_IF_ERROR(gather_jaws(ctx, c, jaws, boolean_region(*base, bo), &b, &kept));
+    return stage_error(
+        name_open_jaw(mesh_boolean(ctx, *base, b, bo, cut, &report->boolean), c, jaws, b, kept),
+        "boolean (base minus jaws)");
+  };
+  SPLINTCORE_RETURN_IF_ERROR(subtract());
   Mesh moved;
   move_mesh_down(arena, low, *cut, &moved);
   *cut = moved;
-  *b = Mesh();
   *base = Mesh();
   SelfIntersectionReport si;
   SPLINTCORE_RETURN_IF_ERROR(stage_error(find_self_intersections(ctx, *cut, 1, &si), "boolean"));
   if (si.self_intersecting()) {
     arena.rewind(low);
     *cut = Mesh();
-    Mesh again_b(&arena), again_base(&arena);
-    SPLINTCORE_RETURN_IF_ERROR(gather_jaws(ctx, c, jaws, &again_b));
-    SPLINTCORE_RETURN_IF_ERROR(
-        stage_error(build_case_base(ctx, c, &again_base, &report->base), "base"));
+    *base = Mesh(&arena);
+    SPLINTCORE_RETURN_IF_ERROR(stage_error(build_case_base(ctx, c, base, &report->base), "base"));
     bo.check_self_intersection = true;
-    SPLINTCORE_RETURN_IF_ERROR(
-        stage_error(name_open_jaw(mesh_boolean(ctx, again_base, again_b, bo, cut, &report->boolean),
-                                  c, jaws, again_b),
-                    "boolean (base minus jaws)"));
+    SPLINTCORE_RETURN_IF_ERROR(subtract());
+    *base = Mesh();
   } else {
     report->boolean.self_intersection_checked = true;
     report->boolean.self_intersection_candidates = si.candidate_pairs;
@@ -617,10 +669,9 @@ Status design_detail::design_splint_registered(const Context& ctx, const CaseFil
   const Span<const Mesh> jaws = fusing ? Span<const Mesh>(fused, jaws_given.size()) : jaws_given;
 
   SPLINTCORE_RETURN_IF_ERROR(stage("design: jaws"));
-  const Arena::Marker before_b = arena.mark();
-  Mesh b(&arena);
-  SPLINTCORE_RETURN_IF_ERROR(gather_jaws(ctx, c, jaws, &b));
-  SPLINTCORE_RETURN_IF_ERROR(refuse_inside_out_jaws(ctx, c, jaws, b));
+  const Arena::Marker before_base = arena.mark();
+  SPLINTCORE_RETURN_IF_ERROR(check_jaws(c, jaws));
+  SPLINTCORE_RETURN_IF_ERROR(refuse_inside_out_jaws(ctx, c, jaws));
 
   // The base, then the Boolean: the base's temporaries go, the base stays until the result is
   // moved down over everything.
@@ -629,7 +680,7 @@ Status design_detail::design_splint_registered(const Context& ctx, const CaseFil
   SPLINTCORE_RETURN_IF_ERROR(stage_error(build_case_base(ctx, c, &base, &report->base), "base"));
   Mesh cut;
   // Where the splint sits with nothing of use above it (blockout_jaws moves its results there).
-  Arena::Marker cut_low = before_b;
+  Arena::Marker cut_low = before_base;
   if (c.has_blockout && c.blockout.offset > 0) {
     // A spacer: the imprint is the swept volumes' offset surface, which holds each jaw, so
     // subtracting the jaws themselves first would only cut what the blockout removes anyway.
@@ -638,7 +689,7 @@ Status design_detail::design_splint_registered(const Context& ctx, const CaseFil
     cut_low = arena.mark();
   } else {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: boolean"));
-    SPLINTCORE_RETURN_IF_ERROR(subtract_jaws(ctx, c, jaws, before_b, &base, &b, &cut, report));
+    SPLINTCORE_RETURN_IF_ERROR(subtract_jaws(ctx, c, jaws, before_base, &base, &cut, report));
   }
   if (c.has_blockout) {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: blockout"));

@@ -367,6 +367,105 @@ TEST(BooleanShells, FineShellsOverlapAndApart) {
   expect_volume(d.volume, w.volume);
 }
 
+// B without its triangles whose corners all lie beyond one side of `r` (strictly), and the
+// vertices only they use; the rest in their order (written here, not taken from the design).
+Mesh cropped(Arena& arena, const Mesh& b, const Aabb& r) {
+  Mesh out(&arena);
+  std::vector<int> side(b.vertices.size());
+  std::vector<uint32_t> index(b.vertices.size(), UINT32_MAX);
+  for (size_t v = 0; v < b.vertices.size(); ++v) {
+    const Vec3& p = b.vertices[v];
+    side[v] = (p.x < r.lo.x) | (p.x > r.hi.x) << 1 | (p.y < r.lo.y) << 2 | (p.y > r.hi.y) << 3 |
+              (p.z < r.lo.z) << 4 | (p.z > r.hi.z) << 5;
+  }
+  auto kept = [&](const Triangle& t) { return (side[t.v[0]] & side[t.v[1]] & side[t.v[2]]) == 0; };
+  for (const Triangle& t : b.triangles) {
+    if (kept(t)) {
+      for (uint32_t v : t.v) index[v] = 0;
+    }
+  }
+  for (size_t v = 0; v < b.vertices.size(); ++v) {
+    if (index[v] == UINT32_MAX) continue;
+    index[v] = static_cast<uint32_t>(out.vertices.size());
+    EXPECT_TRUE(out.vertices.push_back(b.vertices[v]));
+  }
+  for (const Triangle& t : b.triangles) {
+    if (kept(t)) {
+      EXPECT_TRUE(out.triangles.push_back(Triangle{{index[t.v[0]], index[t.v[1]], index[t.v[2]]}}));
+    }
+  }
+  return out;
+}
+
+// A torus (closed, outward) about the axis through c along z: major radius R, minor r.
+void add_torus(const Vec3& c, double R, double r, int n_major, int n_minor, Mesh* m) {
+  const double pi = 3.14159265358979323846;
+  const uint32_t off = static_cast<uint32_t>(m->vertices.size());
+  for (int i = 0; i < n_major; ++i) {
+    const double u = 2 * pi * i / n_major;
+    for (int j = 0; j < n_minor; ++j) {
+      const double w = 2 * pi * j / n_minor + 0.05 * i;
+      const double d = R + r * std::cos(w);
+      ASSERT_TRUE(
+          m->vertices.push_back(c + Vec3{d * std::cos(u), d * std::sin(u), r * std::sin(w)}));
+    }
+  }
+  auto at = [&](int i, int j) {
+    return off + static_cast<uint32_t>((i % n_major) * n_minor + (j % n_minor));
+  };
+  for (int i = 0; i < n_major; ++i) {
+    for (int j = 0; j < n_minor; ++j) {
+      ASSERT_TRUE(m->triangles.push_back(Triangle{{at(i, j), at(i + 1, j), at(i + 1, j + 1)}}));
+      ASSERT_TRUE(m->triangles.push_back(Triangle{{at(i, j), at(i + 1, j + 1), at(i, j + 1)}}));
+    }
+  }
+}
+
+// boolean_region: B's triangles beyond it can be left out (an open B whose border is outside A).
+// B: a sphere inside A, one through A's face x = 4 (the cap outside cropped off), one apart from
+// A (cropped whole), and a ring wider than A around its centre that the crop cuts into four
+// pieces. None overlaps another near A (one group): the difference is the same bytes. Then a
+// sphere overlapping the first: two groups, whose passes may divide the same solid otherwise
+// (the ring's pieces are grouped one by one): the same volume, a valid solid. The union's
+// region is everywhere.
+TEST(BooleanShells, TrianglesBeyondTheRegionChangeNothing) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = boxes_mesh(arena, {kA});
+  Mesh b(&arena);
+  add_sphere(Vec3{1.3, 1.6, 1.7}, 0.9, 24, 48, &b);        // inside A
+  add_sphere(Vec3{4.1, 2.3, 1.0}, 1.2, 24, 48, &b);        // through A's face x = 4
+  add_sphere(Vec3{9.0, 9.0, 9.0}, 1.0, 12, 24, &b);        // apart from A
+  add_torus(Vec3{2.05, 1.95, 3.1}, 2.5, 0.3, 96, 12, &b);  // out through A's four side edges
+  BooleanOptions o;
+  o.float32_output = false;
+  const Aabb region = boolean_region(a, o);
+  EXPECT_LE(region.lo.x, 0.0);
+  EXPECT_GE(region.hi.x, 4.0);
+  EXPECT_LT(region.hi.x, 4.01);
+  for (uint32_t overlapping = 0; overlapping < 2; ++overlapping) {
+    if (overlapping == 1) add_sphere(Vec3{2.4, 2.1, 2.2}, 0.8, 22, 44, &b);
+    const Mesh c = cropped(arena, b, region);
+    EXPECT_LT(c.triangles.size(), b.triangles.size() * 4 / 5);
+    const Outcome whole = run(arena, a, b, BooleanOp::kDifference);
+    const Outcome crop = run(arena, a, c, BooleanOp::kDifference);
+    ASSERT_TRUE(whole.status.is_ok()) << test::format(whole.status);
+    ASSERT_TRUE(crop.status.is_ok()) << test::format(crop.status);
+    EXPECT_EQ(whole.stats.shells, 4u + overlapping);
+    EXPECT_EQ(crop.stats.shells, 2u + 4u + overlapping);  // the far sphere gone, the ring in 4
+    EXPECT_EQ(crop.stats.shell_groups, 1u + overlapping);
+    if (overlapping == 0) {
+      EXPECT_FALSE(whole.bytes.empty());
+      EXPECT_EQ(whole.bytes, crop.bytes);
+    } else {
+      EXPECT_NEAR(crop.volume, whole.volume, 1e-12 * whole.volume);
+    }
+  }
+  o.op = BooleanOp::kUnion;
+  const Aabb everywhere = boolean_region(a, o);
+  EXPECT_EQ(cropped(arena, b, everywhere).triangles.size(), b.triangles.size());
+}
+
 TEST(BooleanShells, SameBytesEveryRunAndFloat32) {
   TestArena ta;
   Arena& arena = ta.arena;
