@@ -299,8 +299,9 @@ struct DesignReport {
 // jaw vertex that is NaN or infinite), kLimitExceeded (a jaw moved beyond float32 range),
 // kInvalidMesh for a jaw that is no jaw, named before anything runs ("design: jaw j (role) is a
 // triangle soup" or "has no teeth": fewer than 4 triangles per piece connected through shared
-// corners, or every vertex within 1 mm of one plane; 5 bytes of arena a vertex, returned),
-// and kInvalidMesh when the result is not printable (require_printable's reason).
+// corners, or every vertex within 1 mm of one plane; 5 bytes of arena a vertex of the jaws and
+// scans together, returned), and kInvalidMesh when the result is not printable
+// (require_printable's reason).
 Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* splint,
                      DesignReport* report);
 

@@ -20,30 +20,22 @@ struct JawShape {
   Vec3 normal{};          // unit
 };
 
-// The pieces: referenced vertices less the unions that joined two of them.
-Status count_pieces(const Context& ctx, const Mesh& m, JawShape* out) {
+// The pieces: referenced vertices less the unions that joined two of them. `uf` and `used`
+// (one byte a vertex) are the mesh's own, set up by the caller.
+void count_pieces(const Mesh& m, UnionFind* uf, uint8_t* used, JawShape* out) {
   const size_t n = m.vertices.size();
-  if (static_cast<uint64_t>(n) >= (uint64_t{1} << 32))
-    return Status::ok();  // a later stage names it
-  ArenaScope scope(*ctx.arena);
-  UnionFind uf;
-  uint8_t* used = ctx.arena->allocate_array<uint8_t>(n);
-  if (!uf.init(*ctx.arena, static_cast<uint32_t>(n)) || (used == nullptr && n > 0)) {
-    return ctx.arena->exhausted_status();
-  }
   for (size_t i = 0; i < n; ++i) used[i] = 0;
   uint64_t referenced = 0, unions = 0;
   for (const Triangle& t : m.triangles) {
     for (uint32_t v : t.v) {
-      if (v >= n) return Status::ok();  // check_jaws names it
+      if (v >= n) return;  // check_jaws names it
       referenced += used[v] == 0 ? 1u : 0u;
       used[v] = 1;
     }
-    unions += uf.unite(t.v[0], t.v[1]) ? 1u : 0u;
-    unions += uf.unite(t.v[1], t.v[2]) ? 1u : 0u;
+    unions += uf->unite(t.v[0], t.v[1]) ? 1u : 0u;
+    unions += uf->unite(t.v[1], t.v[2]) ? 1u : 0u;
   }
   out->pieces = referenced - unions;
-  return Status::ok();
 }
 
 // The relief: the plane's normal is the sum of the triangles' area vectors, each turned to
@@ -85,10 +77,13 @@ void measure_relief(const Mesh& m, JawShape* out) {
 // For a message: to 3 decimals.
 double shown(double v) { return std::floor(v * 1000 + 0.5) / 1000; }
 
-Status check_one(const Context& ctx, const Mesh& m, size_t j, const char* role, bool scan) {
-  if (m.triangles.empty()) return Status::ok();
+// One mesh, its union-find and `used` set up by the caller (uf null: too many vertices to
+// measure, left to a later stage).
+Status check_one(const Mesh& m, UnionFind* uf, uint8_t* used, size_t j, const char* role,
+                 bool scan) {
+  if (m.triangles.empty() || uf == nullptr) return Status::ok();
   JawShape shape;
-  SPLINTCORE_RETURN_IF_ERROR(count_pieces(ctx, m, &shape));
+  count_pieces(m, uf, used, &shape);
   if (shape.pieces == 0) return Status::ok();  // not measured
   const char* of = scan ? "the scan of " : "";
   const char* file = scan ? "the scan's file" : "the jaw's file";
@@ -117,12 +112,43 @@ Status check_one(const Context& ctx, const Mesh& m, size_t j, const char* role, 
 
 Status refuse_no_jaw(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                      Span<const Mesh> scans) {
+  // The meshes in the order they are named: each jaw, then its scan.
+  struct Item {
+    const Mesh* mesh;
+    size_t jaw;
+    bool scan;
+    UnionFind uf;
+    uint8_t* used;
+    Status status;
+  };
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);
+  const size_t most = 2 * jaws.size();
+  Item* items = arena.allocate_array<Item>(most);
+  if (items == nullptr && most > 0) return arena.exhausted_status();
+  uint32_t n = 0;
   for (size_t j = 0; j < jaws.size() && j < c.jaws.size(); ++j) {
-    SPLINTCORE_RETURN_IF_ERROR(check_one(ctx, jaws[j], j, c.jaws[j].role, false));
-    if (j < scans.size() && c.jaws[j].has_scan) {
-      SPLINTCORE_RETURN_IF_ERROR(check_one(ctx, scans[j], j, c.jaws[j].role, true));
+    for (int k = 0; k < 2; ++k) {
+      if (k == 1 && !(j < scans.size() && c.jaws[j].has_scan)) continue;
+      Item& it = items[n++];
+      it = Item{k == 0 ? &jaws[j] : &scans[j], j, k == 1, UnionFind{}, nullptr, Status::ok()};
+      const size_t nv = it.mesh->vertices.size();
+      if (static_cast<uint64_t>(nv) >= (uint64_t{1} << 32)) continue;  // a later stage names it
+      it.used = arena.allocate_array<uint8_t>(nv);
+      if (!it.uf.init(arena, static_cast<uint32_t>(nv)) || (it.used == nullptr && nv > 0)) {
+        return arena.exhausted_status();
+      }
     }
   }
+  // Each mesh in a task of its own; the first error in the order above.
+  auto task = [&](uint32_t i) {
+    Item& it = items[i];
+    const bool measured = it.used != nullptr || it.mesh->vertices.empty();
+    it.status = check_one(*it.mesh, measured ? &it.uf : nullptr, it.used, it.jaw,
+                          c.jaws[it.jaw].role, it.scan);
+  };
+  parallel_for_each(ctx.executor, n, task);
+  for (uint32_t i = 0; i < n; ++i) SPLINTCORE_RETURN_IF_ERROR(items[i].status);
   return Status::ok();
 }
 

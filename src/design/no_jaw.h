@@ -22,9 +22,11 @@ constexpr uint32_t kMinTrianglesPerPiece = 4;
 //     the triangles connected through shared vertices (loose triangles, an unwelded export);
 //   - flat: every corner within kMinJawReliefMm of one plane, the plane of its triangles'
 //     area vectors summed with the sign of the largest one's (a sheet, a plate: no tooth).
-// The message says what was found and what to do. An empty mesh, a triangle with a vertex id
-// out of range or a mesh of zero area is left to the stage that names it. Arena: 5 bytes a
-// vertex of the largest mesh, returned. Errors: kInvalidMesh, kArenaExhausted.
+// The message says what was found and what to do (the first such mesh in that order: each jaw,
+// then its scan). An empty mesh, a triangle with a vertex id out of range or a mesh of zero
+// area is left to the stage that names it. Threads: each mesh is measured in a task of its own
+// on ctx.executor. Arena: 5 bytes a vertex of all the meshes together, returned. Errors:
+// kInvalidMesh, kArenaExhausted.
 Status refuse_no_jaw(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                      Span<const Mesh> scans);
 

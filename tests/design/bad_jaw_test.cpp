@@ -6,10 +6,12 @@
 // says what is wrong, where and what to do, with nothing made and the arena as it was.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
 #include "splintcore/design.h"
+#include "splintcore/platform.h"
 #include "splintcore/registration.h"
 #include "support/phantom_jaws.h"
 #include "support/test_util.h"
@@ -166,6 +168,41 @@ TEST(DesignBadJaws, TriangleSoupWithoutAnyToothIsNamedWhereverItGoes) {
   Mesh splint;
   DesignReport r;
   SPLINTCORE_EXPECT_OK(design_splint(ctx, f.c, Span<const Mesh>(f.jaws, 2), &splint, &r));
+}
+
+// The jaws are checked each in a task of its own (refuse_no_jaw, then check_jaws): with two bad
+// jaws the first is named, the same error with one thread and with two.
+TEST(DesignBadJaws, TheFirstBadJawIsNamedWhenTheyAreCheckedInParallel) {
+  BadJaws f;
+  ASSERT_TRUE(f.ok);
+  ThreadExecutor pool(2);
+  // A soup and a flat sheet; then a jaw with a vertex that is NaN and one with a triangle
+  // naming a vertex that does not exist.
+  Mesh nan_jaw(&f.t.arena), broken_jaw(&f.t.arena);
+  for (const Vec3& p : f.jaws[0].vertices) ASSERT_TRUE(nan_jaw.vertices.push_back(p));
+  for (const Triangle& t : f.jaws[0].triangles) ASSERT_TRUE(nan_jaw.triangles.push_back(t));
+  for (const Vec3& p : f.jaws[1].vertices) ASSERT_TRUE(broken_jaw.vertices.push_back(p));
+  for (const Triangle& t : f.jaws[1].triangles) ASSERT_TRUE(broken_jaw.triangles.push_back(t));
+  nan_jaw.vertices[5].y = std::nan("");
+  broken_jaw.triangles[7].v[2] = static_cast<uint32_t>(broken_jaw.vertices.size());
+  const Mesh soups[2] = {f.soups[2].mesh, f.soups[0].mesh};
+  const Mesh broken[2] = {nan_jaw, broken_jaw};
+  for (unsigned threads : {1u, 2u}) {
+    SCOPED_TRACE(threads);
+    Context ctx(&f.t.arena, threads == 1 ? nullptr : &pool.executor(), nullptr);
+    const size_t used = f.t.arena.used();
+    Mesh splint;
+    DesignReport r;
+    Status s = design_splint(ctx, f.c, Span<const Mesh>(soups, 2), &splint, &r);
+    expect_named(s, "design: jaw 0 (maxilla) ", "is a triangle soup", splint, used, f.t.arena);
+    EXPECT_EQ(s.index(), 0u);
+    s = design_splint(ctx, f.c, Span<const Mesh>(broken, 2), &splint, &r);
+    EXPECT_EQ(s.code(), StatusCode::kNonFinite) << test::format(s);
+    EXPECT_EQ(std::string(s.message()),
+              "design: jaw 0 (maxilla) has a vertex that is not finite (NaN or infinity): "
+              "vertex 5");
+    EXPECT_EQ(f.t.arena.used(), used);
+  }
 }
 
 // Where the check draws its lines: a flat sheet with 1.2 mm of relief (a bump) is past the flat
