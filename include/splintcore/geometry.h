@@ -104,6 +104,14 @@ struct Aabb {
   bool contains(const Vec3& p) const {
     return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
   }
+  // The sides of the box that p lies beyond (strictly), one bit each: x below lo 1, above hi 2,
+  // y 4 and 8, z 16 and 32; 0 inside (or on) it. A triangle or segment whose corners share a
+  // bit lies wholly beyond that side, so its box misses this one.
+  uint8_t outcode(const Vec3& p) const {
+    return static_cast<uint8_t>((p.x < lo.x ? 1u : 0u) | (p.x > hi.x ? 2u : 0u) |
+                                (p.y < lo.y ? 4u : 0u) | (p.y > hi.y ? 8u : 0u) |
+                                (p.z < lo.z ? 16u : 0u) | (p.z > hi.z ? 32u : 0u));
+  }
 };
 
 // ---------------------------------------------------------------------------------------------

@@ -208,9 +208,7 @@ Status triangles_in_region(Arena& arena, const Mesh& b, const Shells& sh, uint32
   for (uint32_t i = sh.vstart[s]; i < sh.vstart[s + 1]; ++i) {
     const uint32_t v = sh.verts[i];
     const Vec3& p = vb[v];
-    oc[v] = static_cast<uint8_t>((p.x < region.lo.x ? 1 : 0) | (p.x > region.hi.x ? 2 : 0) |
-                                 (p.y < region.lo.y ? 4 : 0) | (p.y > region.hi.y ? 8 : 0) |
-                                 (p.z < region.lo.z ? 16 : 0) | (p.z > region.hi.z ? 32 : 0));
+    oc[v] = region.outcode(p);
   }
   uint32_t k = 0;
   for (uint32_t i = sh.start[s]; i < sh.start[s + 1]; ++i) {

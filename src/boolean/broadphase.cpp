@@ -102,10 +102,7 @@ Status near_triangles_of_b(Arena& arena, const Mesh& b, bool float32_output, Bro
   const Vec3* vb = b.vertices.data();
   for (uint32_t v = 0; v < nvb; ++v) {
     const Vec3& p = vb[v];
-    outcode[v] = static_cast<uint8_t>((p.x < abox.lo.x ? 1 : 0) | (p.x > abox.hi.x ? 2 : 0) |
-                                      (p.y < abox.lo.y ? 4 : 0) | (p.y > abox.hi.y ? 8 : 0) |
-                                      (p.z < abox.lo.z ? 16 : 0) | (p.z > abox.hi.z ? 32 : 0) |
-                                      (!kChecked || is_finite(p) ? 0 : 64));
+    outcode[v] = static_cast<uint8_t>(abox.outcode(p) | (!kChecked || is_finite(p) ? 0 : 64));
   }
   bp->near_ids.bind(&arena);
   for (uint32_t t = 0; t < ntb; ++t) {

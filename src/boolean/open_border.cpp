@@ -20,14 +20,6 @@ namespace splintcore {
 
 namespace {
 
-// Which sides of the region a point lies beyond (one bit each): a triangle or edge whose
-// corners share a bit lies wholly beyond that side, so its box misses the region.
-uint8_t outcode(const Vec3& p, const Aabb& r) {
-  return static_cast<uint8_t>((p.x < r.lo.x ? 1u : 0u) | (p.x > r.hi.x ? 2u : 0u) |
-                              (p.y < r.lo.y ? 4u : 0u) | (p.y > r.hi.y ? 8u : 0u) |
-                              (p.z < r.lo.z ? 16u : 0u) | (p.z > r.hi.z ? 32u : 0u));
-}
-
 // The sides of B's near triangles whose edges meet the region, as (smaller id << 32 | larger
 // id), into keys (when not null); their count.
 size_t near_edges(const Mesh& b, const uint8_t* code, uint64_t* keys, uint64_t* fingerprint) {
@@ -78,7 +70,7 @@ Status refuse_open_border_in_a(const Context& ctx, const Mesh& a, const Mesh& b,
   ArenaScope scope(arena);
   uint8_t* code = arena.allocate_array<uint8_t>(nv);
   if (code == nullptr && nv > 0) return arena.exhausted_status();
-  for (uint32_t v = 0; v < nv; ++v) code[v] = outcode(vb[v], region);
+  for (uint32_t v = 0; v < nv; ++v) code[v] = region.outcode(vb[v]);
   // A closed B (the usual case) uses every edge twice, so the XOR of its edges' hashes is 0:
   // only a non-zero fingerprint pays for the sort that finds the edges used once. (An open B
   // whose fingerprint is 0 by chance, about 2^-64, gets the run's own message, as before.)

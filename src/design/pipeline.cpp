@@ -204,9 +204,7 @@ Status gather_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
     for (size_t v = 0; v < jaws[j].vertices.size(); ++v) {
       Vec3 p;
       (void)b_vertex(c, jaws, j, v, &p);  // in range: check_jaws
-      cj[v] = static_cast<uint8_t>((p.x < keep.lo.x ? 1 : 0) | (p.x > keep.hi.x ? 2 : 0) |
-                                   (p.y < keep.lo.y ? 4 : 0) | (p.y > keep.hi.y ? 8 : 0) |
-                                   (p.z < keep.lo.z ? 16 : 0) | (p.z > keep.hi.z ? 32 : 0));
+      cj[v] = keep.outcode(p);
     }
     size_t kv = 0, kt = 0;
     for (const Triangle& t : jaws[j].triangles) {

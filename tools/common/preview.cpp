@@ -171,6 +171,48 @@ Status write_marked_png_file(const Context& ctx, const std::vector<RenderMesh>& 
   return Status::ok();
 }
 
+// The triangles of `jaw` (where `move`, if any, puts them) not wholly beyond one side of `near`,
+// and the vertices they use, in their order, into `out` (in the arena, as are a byte and a
+// uint32 a vertex of `jaw` below it).
+Status jaw_near(Arena& arena, const Mesh& jaw, const RigidTransform* move, const Aabb& near,
+                Mesh* out) {
+  const size_t n = jaw.vertices.size();
+  uint8_t* code = arena.allocate_array<uint8_t>(n);
+  uint32_t* index = arena.allocate_array<uint32_t>(n);
+  if ((code == nullptr || index == nullptr) && n > 0) return arena.exhausted_status();
+  for (size_t v = 0; v < n; ++v) {
+    const Vec3& p = jaw.vertices[v];
+    code[v] = near.outcode(move != nullptr ? move->apply_point(p) : p);
+    index[v] = UINT32_MAX;
+  }
+  const auto kept = [&](const Triangle& t) {
+    return t.v[0] < n && t.v[1] < n && t.v[2] < n &&
+           (code[t.v[0]] & code[t.v[1]] & code[t.v[2]]) == 0;
+  };
+  size_t triangles = 0;
+  for (const Triangle& t : jaw.triangles) {
+    if (!kept(t)) continue;
+    ++triangles;
+    for (uint32_t v : t.v) index[v] = 0;
+  }
+  uint32_t vertices = 0;
+  for (size_t v = 0; v < n; ++v) {
+    if (index[v] == 0) index[v] = vertices++;
+  }
+  out->bind(&arena);
+  if (!out->vertices.reserve(vertices) || !out->triangles.reserve(triangles)) {
+    return arena.exhausted_status();
+  }
+  for (size_t v = 0; v < n; ++v) {
+    if (index[v] != UINT32_MAX) (void)out->vertices.push_back(jaw.vertices[v]);
+  }
+  for (const Triangle& t : jaw.triangles) {
+    if (kept(t))
+      (void)out->triangles.push_back(Triangle{{index[t.v[0]], index[t.v[1]], index[t.v[2]]}});
+  }
+  return Status::ok();
+}
+
 }  // namespace
 
 Status write_png_file(const Context& ctx, const std::vector<RenderMesh>& meshes,
@@ -193,9 +235,19 @@ Status write_preview(const Context& ctx, const Mesh& splint, const std::vector<c
   s.mesh = &splint;
   for (int k = 0; k < 3; ++k) s.rgb[k] = kSplintRgb[k];
   meshes.push_back(s);
+  // The jaws near the splint: its box widened by kPreviewJawMarginMm.
+  Aabb near = mesh_bounds(splint);
+  const Vec3 margin{kPreviewJawMarginMm, kPreviewJawMarginMm, kPreviewJawMarginMm};
+  near.lo = near.lo - margin;
+  near.hi = near.hi + margin;
+  std::vector<Mesh> cropped(jaws.size());
+  for (size_t i = 0; i < jaws.size(); ++i) {
+    SPLINTCORE_RETURN_IF_ERROR(
+        jaw_near(arena, *jaws[i], moves.empty() ? nullptr : &moves[i], near, &cropped[i]));
+  }
   for (size_t i = 0; i < jaws.size(); ++i) {
     RenderMesh j;
-    j.mesh = jaws[i];
+    j.mesh = &cropped[i];
     j.transform = moves.empty() ? nullptr : &moves[i];  // drawn moved, not copied
     for (int k = 0; k < 3; ++k) j.rgb[k] = kJawRgb[k];
     j.alpha = kJawAlpha;
