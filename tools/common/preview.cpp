@@ -171,47 +171,50 @@ Status write_marked_png_file(const Context& ctx, const std::vector<RenderMesh>& 
   return Status::ok();
 }
 
-// The triangles of `jaw` (where `move`, if any, puts them) not wholly beyond one side of `near`,
-// and the vertices they use, in their order, into `out` (in the arena, as are a byte and a
-// uint32 a vertex of `jaw` below it).
-Status jaw_near(Arena& arena, const Mesh& jaw, const RigidTransform* move, const Aabb& near,
-                Mesh* out) {
-  const size_t n = jaw.vertices.size();
-  uint8_t* code = arena.allocate_array<uint8_t>(n);
-  uint32_t* index = arena.allocate_array<uint32_t>(n);
-  if ((code == nullptr || index == nullptr) && n > 0) return arena.exhausted_status();
-  for (size_t v = 0; v < n; ++v) {
-    const Vec3& p = jaw.vertices[v];
-    code[v] = near.outcode(move != nullptr ? move->apply_point(p) : p);
-    index[v] = UINT32_MAX;
-  }
-  const auto kept = [&](const Triangle& t) {
+// One jaw's part near the splint (write_preview): its triangles (where `move`, if any, puts
+// them) not wholly beyond one side of `near`, and the vertices they use, in their order. mark()
+// then fill() (each jaw in a task of its own), with `code` and `index` (a byte and a uint32 a
+// vertex) and then `out`'s arrays (sized by mark's counts) taken from the arena before each.
+struct JawNear {
+  const Mesh* jaw = nullptr;
+  const RigidTransform* move = nullptr;
+  uint8_t* code = nullptr;
+  uint32_t* index = nullptr;
+  uint32_t vertices = 0;
+  size_t triangles = 0;
+  Mesh out;
+
+  bool kept(const Triangle& t) const {
+    const size_t n = jaw->vertices.size();
     return t.v[0] < n && t.v[1] < n && t.v[2] < n &&
            (code[t.v[0]] & code[t.v[1]] & code[t.v[2]]) == 0;
-  };
-  size_t triangles = 0;
-  for (const Triangle& t : jaw.triangles) {
-    if (!kept(t)) continue;
-    ++triangles;
-    for (uint32_t v : t.v) index[v] = 0;
   }
-  uint32_t vertices = 0;
-  for (size_t v = 0; v < n; ++v) {
-    if (index[v] == 0) index[v] = vertices++;
+  void mark(const Aabb& near) {
+    const size_t n = jaw->vertices.size();
+    for (size_t v = 0; v < n; ++v) {
+      const Vec3& p = jaw->vertices[v];
+      code[v] = near.outcode(move != nullptr ? move->apply_point(p) : p);
+      index[v] = UINT32_MAX;
+    }
+    for (const Triangle& t : jaw->triangles) {
+      if (!kept(t)) continue;
+      ++triangles;
+      for (uint32_t v : t.v) index[v] = 0;
+    }
+    for (size_t v = 0; v < n; ++v) {
+      if (index[v] == 0) index[v] = vertices++;
+    }
   }
-  out->bind(&arena);
-  if (!out->vertices.reserve(vertices) || !out->triangles.reserve(triangles)) {
-    return arena.exhausted_status();
+  void fill() {
+    for (size_t v = 0; v < jaw->vertices.size(); ++v) {
+      if (index[v] != UINT32_MAX) out.vertices[index[v]] = jaw->vertices[v];
+    }
+    size_t k = 0;
+    for (const Triangle& t : jaw->triangles) {
+      if (kept(t)) out.triangles[k++] = Triangle{{index[t.v[0]], index[t.v[1]], index[t.v[2]]}};
+    }
   }
-  for (size_t v = 0; v < n; ++v) {
-    if (index[v] != UINT32_MAX) (void)out->vertices.push_back(jaw.vertices[v]);
-  }
-  for (const Triangle& t : jaw.triangles) {
-    if (kept(t))
-      (void)out->triangles.push_back(Triangle{{index[t.v[0]], index[t.v[1]], index[t.v[2]]}});
-  }
-  return Status::ok();
-}
+};
 
 }  // namespace
 
@@ -240,14 +243,30 @@ Status write_preview(const Context& ctx, const Mesh& splint, const std::vector<c
   const Vec3 margin{kPreviewJawMarginMm, kPreviewJawMarginMm, kPreviewJawMarginMm};
   near.lo = near.lo - margin;
   near.hi = near.hi + margin;
-  std::vector<Mesh> cropped(jaws.size());
+  std::vector<JawNear> cropped(jaws.size());
   for (size_t i = 0; i < jaws.size(); ++i) {
-    SPLINTCORE_RETURN_IF_ERROR(
-        jaw_near(arena, *jaws[i], moves.empty() ? nullptr : &moves[i], near, &cropped[i]));
+    JawNear& c = cropped[i];
+    c.jaw = jaws[i];
+    c.move = moves.empty() ? nullptr : &moves[i];
+    const size_t n = c.jaw->vertices.size();
+    c.code = arena.allocate_array<uint8_t>(n);
+    c.index = arena.allocate_array<uint32_t>(n);
+    if ((c.code == nullptr || c.index == nullptr) && n > 0) return arena.exhausted_status();
   }
+  const uint32_t count = static_cast<uint32_t>(jaws.size());
+  auto mark = [&](uint32_t i) { cropped[i].mark(near); };
+  parallel_for_each(ctx.executor, count, mark);
+  for (JawNear& c : cropped) {
+    c.out.bind(&arena);
+    if (!c.out.vertices.resize(c.vertices) || !c.out.triangles.resize(c.triangles)) {
+      return arena.exhausted_status();
+    }
+  }
+  auto fill = [&](uint32_t i) { cropped[i].fill(); };
+  parallel_for_each(ctx.executor, count, fill);
   for (size_t i = 0; i < jaws.size(); ++i) {
     RenderMesh j;
-    j.mesh = &cropped[i];
+    j.mesh = &cropped[i].out;
     j.transform = moves.empty() ? nullptr : &moves[i];  // drawn moved, not copied
     for (int k = 0; k < 3; ++k) j.rgb[k] = kJawRgb[k];
     j.alpha = kJawAlpha;
