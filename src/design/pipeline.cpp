@@ -172,9 +172,9 @@ Status check_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws) 
 }
 
 // B of the Boolean, from jaws that passed check_jaws: every jaw where B holds it (b_vertex),
-// jaw after jaw, only the triangles that can matter to the base minus the jaws: those with a
-// corner in `keep` or not all beyond one side of it (boolean_region), and the vertices they
-// use, in their order. Each jaw in a task of its own on ctx.executor, twice (what it keeps, then
+// jaw after jaw, only the triangles that can matter to the base minus the jaws: those whose
+// corners are not all beyond one side of `keep` (boolean_region), and the vertices they use,
+// in their order. Each jaw in a task of its own on ctx.executor, twice (what it keeps, then
 // its part of B). Arena: 1 byte per vertex of the jaws (kept: *kept, bit kKeptVertex set for a
 // vertex in B, all jaws' vertices in order) and 32 bytes a jaw below B's own arrays, and 4
 // bytes per vertex of the jaws while B is filled.
@@ -269,11 +269,10 @@ bool same_bits(const Vec3& a, const Vec3& b) {
 Status moved_vertices(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, size_t k,
                       Span<const Vec3>* out) {
   const Mesh& m = jaws[k];
-  const RigidTransform& x = c.jaws[k].transform;
   bool same = true;
   for (size_t i = 0; i < m.vertices.size() && same; ++i) {
-    Vec3 p = x.apply_point(m.vertices[i]);
-    same = round_to_float32(&p) && same_bits(p, m.vertices[i]);
+    Vec3 p;
+    same = b_vertex(c, jaws, k, i, &p) && same_bits(p, m.vertices[i]);
   }
   if (same) {
     *out = m.vertices.span();
@@ -282,8 +281,7 @@ Status moved_vertices(const Context& ctx, const CaseFile& c, Span<const Mesh> ja
   Vec3* moved = ctx.arena->allocate_array<Vec3>(m.vertices.size());
   if (moved == nullptr) return ctx.arena->exhausted_status();
   for (size_t i = 0; i < m.vertices.size(); ++i) {
-    moved[i] = x.apply_point(m.vertices[i]);
-    (void)round_to_float32(&moved[i]);  // in range: check_jaws checked it
+    (void)b_vertex(c, jaws, k, i, &moved[i]);  // in range: check_jaws checked it
   }
   *out = Span<const Vec3>(moved, m.vertices.size());
   return Status::ok();
