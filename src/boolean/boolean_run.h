@@ -273,6 +273,11 @@ struct Broadphase {
   uint32_t* items = nullptr;
   uint8_t* near_b = nullptr;  // per B triangle: its box meets abox
   ArenaArray<uint32_t> near_ids;
+  // Per triangle of A: its slot among those listed in a cell that a near triangle of B's box
+  // covers (the only ones a pair test can meet), in A's order; UINT32_MAX for the others
+  // (number_a_slots, once: the same for every attempt).
+  uint32_t* a_slot = nullptr;
+  uint32_t a_slot_count = 0;
 
   void cell_range(const Aabb& box, uint32_t lo[3], uint32_t hi[3]) const {
     for (int k = 0; k < 3; ++k) {
@@ -282,6 +287,15 @@ struct Broadphase {
     }
   }
 };
+
+// The box of B's triangle `tri` (vertices vb).
+inline Aabb b_box(const Vec3* vb, const Triangle& tri) {
+  Aabb box;
+  box.add(vb[tri.v[0]]);
+  box.add(vb[tri.v[1]]);
+  box.add(vb[tri.v[2]]);
+  return box;
+}
 
 // A grid coordinate as a cell index along an axis of `dim` cells (clamped to the grid).
 inline uint32_t grid_cell(double x, uint32_t dim) {
@@ -553,6 +567,9 @@ Point make_point(const Inputs& in, const PointKey& key);
 // b_valid: B's indices are known to be in range and its vertices finite (not checked again).
 Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double reach,
                         bool float32_output, bool b_valid, Broadphase* bp);
+// bp->a_slot and a_slot_count for B as the run has it (its near triangles bp->near_ids), over
+// nta triangles of A. Arena: 4 bytes per triangle of A (kept), and one bit per cell (returned).
+Status number_a_slots(Arena& arena, const Mesh& b, uint32_t nta, Broadphase* bp);
 
 }  // namespace boolean_detail
 }  // namespace splintcore

@@ -241,15 +241,6 @@ Status BooleanRun::check_pair_budget(uint32_t tb) const {
 
 namespace {
 
-// B's triangle t's box.
-inline Aabb b_box(const Vec3* vb, const Triangle& tri) {
-  Aabb box;
-  box.add(vb[tri.v[0]]);
-  box.add(vb[tri.v[1]]);
-  box.add(vb[tri.v[2]]);
-  return box;
-}
-
 // f(ta) for every triangle of A listed in the grid cells `box` covers (a triangle of A in
 // several of them comes once per cell). Returns false as soon as f does.
 template <class F>
@@ -271,47 +262,14 @@ bool for_each_listed(const Broadphase& bp, const Aabb& box, F&& f) {
 
 }  // namespace
 
-// The triangles of A that some near triangle of B may meet (listed in a cell its box covers)
-// get a slot: their filters, edge planes, boxes and stamps (about 470 bytes each) are made
-// for them only. A may be large and mostly far from this B: in a later pass of mesh_boolean
-// it is the previous result, far from most of the next group of shells. The cells the near
-// triangles' boxes cover are marked first (a bit each), then the triangles those cells list.
+// The triangles of A that some near triangle of B may meet (listed in a cell its box covers:
+// number_a_slots, once for all attempts) get a slot: their filters, edge planes, boxes and
+// stamps (about 470 bytes each) are made for them only, from A as this attempt has it. A may be
+// large and mostly far from this B: in a later pass of mesh_boolean it is the previous result,
+// far from most of the next group of shells.
 Status BooleanRun::prepare_a_slots(ASlots* out) {
-  const Mesh& b = *in_.b;
-  const uint32_t nta = in_.nta;
-  uint32_t* slot = arena_.allocate_array<uint32_t>(nta);
-  if (slot == nullptr && nta > 0) return arena_.exhausted_status();
-  if (nta > 0) std::memset(slot, 0xff, size_t{nta} * sizeof(uint32_t));
-  {
-    ArenaScope marks_scope(arena_);
-    const size_t cells = size_t{bp_.dim[0]} * bp_.dim[1] * bp_.dim[2];
-    uint64_t* marked = arena_.allocate_array<uint64_t>(cells / 64 + 1);
-    if (marked == nullptr) return arena_.exhausted_status();
-    std::memset(marked, 0, (cells / 64 + 1) * sizeof(uint64_t));
-    const Vec3* vb = b.vertices.data();
-    for (size_t ni = 0; ni < bp_.near_ids.size(); ++ni) {
-      const Aabb box = b_box(vb, b.triangles[bp_.near_ids[ni]]);
-      uint32_t lo[3], hi[3];
-      bp_.cell_range(box, lo, hi);
-      for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
-        for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
-          for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
-            const size_t c = (size_t{z} * bp_.dim[1] + y) * bp_.dim[0] + x;
-            marked[c >> 6] |= uint64_t{1} << (c & 63);
-          }
-        }
-      }
-    }
-    for (size_t c = 0; c < cells; ++c) {
-      if ((marked[c >> 6] >> (c & 63) & 1u) == 0) continue;
-      for (uint32_t k = bp_.start[c]; k < bp_.start[c + 1]; ++k) slot[bp_.items[k]] = 0;
-    }
-  }
-  uint32_t count = 0;
-  for (uint32_t t = 0; t < nta; ++t) {
-    if (slot[t] != ~0u) slot[t] = count++;
-  }
-  out->slot = slot;
+  const uint32_t count = bp_.a_slot_count;
+  out->slot = bp_.a_slot;
   out->count = count;
   out->filters = arena_.allocate_array<PlaneFilter>(count);
   out->edges = arena_.allocate_array<EdgePlanes>(count);
@@ -321,21 +279,32 @@ Status BooleanRun::prepare_a_slots(ASlots* out) {
                     out->stamp == nullptr)) {
     return arena_.exhausted_status();
   }
-  for (uint32_t t = 0; t < nta; ++t) {
-    const uint32_t k = slot[t];
-    if (k == ~0u) continue;
-    const Triangle& at = in_.a->triangles[t];
-    const Vec3& p0 = in_.a->vertices[at.v[0]];
-    const Vec3& p1 = in_.a->vertices[at.v[1]];
-    const Vec3& p2 = in_.a->vertices[at.v[2]];
-    out->filters[k] = plane_filter(p0, p1, p2);
-    out->edges[k] = edge_planes(p0, p1, p2);
-    out->boxes[k] = Aabb{};
-    out->boxes[k].add(p0);
-    out->boxes[k].add(p1);
-    out->boxes[k].add(p2);
-    out->stamp[k] = ~0u;
-  }
+  // Each slot's planes and box from A as this attempt has it, in chunks of A's triangles on the
+  // executor (each writes only its own slots: the same values at every thread count).
+  constexpr uint32_t kChunk = 8192;
+  const uint32_t nta = in_.nta;
+  const uint32_t chunks = (nta + kChunk - 1) / kChunk;
+  const Mesh& a = *in_.a;
+  const uint32_t* slot = bp_.a_slot;
+  auto task = [&](uint32_t c) {
+    const uint32_t end = nta - c * kChunk < kChunk ? nta : c * kChunk + kChunk;
+    for (uint32_t t = c * kChunk; t < end; ++t) {
+      const uint32_t k = slot[t];
+      if (k == ~0u) continue;
+      const Triangle& at = a.triangles[t];
+      const Vec3& p0 = a.vertices[at.v[0]];
+      const Vec3& p1 = a.vertices[at.v[1]];
+      const Vec3& p2 = a.vertices[at.v[2]];
+      out->filters[k] = plane_filter(p0, p1, p2);
+      out->edges[k] = edge_planes(p0, p1, p2);
+      out->boxes[k] = Aabb{};
+      out->boxes[k].add(p0);
+      out->boxes[k].add(p1);
+      out->boxes[k].add(p2);
+      out->stamp[k] = ~0u;
+    }
+  };
+  parallel_for_each(ctx_.executor, chunks, task);
   return Status::ok();
 }
 
