@@ -11,6 +11,9 @@ namespace splintcore {
 // CRC-32 (ISO 3309, as PNG, gzip and zlib's crc32: reflected polynomial 0xEDB88320, initial
 // and final xor 0xFFFFFFFF). Chainable: pass the previous result as `crc` (0 to start).
 uint32_t crc32(uint32_t crc, const uint8_t* data, size_t bytes);
+// The CRC-32 of bytes A then B from crc32(0, A) = crc_a, crc32(0, B) = crc_b and B's length:
+// a message's CRC from its pieces' CRCs, computed apart (on several threads).
+uint32_t crc32_combine(uint32_t crc_a, uint32_t crc_b, uint64_t bytes_b);
 // Adler-32 (RFC 1950). Chainable: pass the previous result (1 to start).
 uint32_t adler32(uint32_t adler, const uint8_t* data, size_t bytes);
 
@@ -90,10 +93,12 @@ uint64_t deflate_lanes_bound(size_t largest);
 // Allocates the lanes from `arena`; they stay there. Errors: kArenaExhausted.
 Status deflate_lanes(Arena& arena, size_t largest, DeflateEffort effort, DeflateLanes* lanes);
 // Compresses data[0..size) (size <= lanes.largest) as one stream in `format` into `sink`
-// (writes of at most 64 KiB) with `executor`'s threads (nullptr: serial). Errors: kIoError
-// (the sink refused).
+// (writes of at most 64 KiB) with `executor`'s threads (nullptr: serial). `data_crc` (may be
+// nullptr): crc32(0, data, size), computed piece by piece beside the deflate (a ZIP entry's
+// header needs it); set only when the stream is complete. Errors: kIoError (the sink refused).
 Status deflate_parallel(const Executor* executor, const DeflateLanes& lanes, ZFormat format,
-                        const uint8_t* data, size_t size, const CompressSink& sink);
+                        const uint8_t* data, size_t size, const CompressSink& sink,
+                        uint32_t* data_crc = nullptr);
 
 // ---------------------------------------------------------------------------------------------
 // Inflate: RFC 1951 complete (stored, fixed and dynamic Huffman blocks, 32 KiB window), with

@@ -48,6 +48,34 @@ uint32_t crc32(uint32_t crc, const uint8_t* data, size_t bytes) {
   return c ^ 0xFFFFFFFFu;
 }
 
+namespace {
+
+// a(x) b(x) mod the CRC's polynomial, both in the CRC's reflected form (bit 31 the coefficient
+// of x^0): b multiplied by x once per bit of a, from x^0 up, added where a has the bit.
+uint32_t multiply_mod(uint32_t a, uint32_t b) {
+  uint32_t product = 0;
+  for (uint32_t bit = 1u << 31; bit != 0; bit >>= 1) {
+    if ((a & bit) != 0) product ^= b;
+    b = (b & 1u) != 0 ? (b >> 1) ^ 0xEDB88320u : b >> 1;
+  }
+  return product;
+}
+
+}  // namespace
+
+// Appending n bytes to a message multiplies its register by x^(8n) before the new bytes' own
+// CRC is added (the initial and final xors cancel: zlib's crc32_combine rests on the same
+// identity); x^(8n) by squaring, a bit of n at a time.
+uint32_t crc32_combine(uint32_t crc_a, uint32_t crc_b, uint64_t bytes_b) {
+  uint32_t power = 1u << 31;   // x^0
+  uint32_t square = 1u << 23;  // x^8: one byte
+  for (uint64_t n = bytes_b; n != 0; n >>= 1) {
+    if ((n & 1u) != 0) power = multiply_mod(power, square);
+    square = multiply_mod(square, square);
+  }
+  return multiply_mod(power, crc_a) ^ crc_b;
+}
+
 uint32_t adler32(uint32_t adler, const uint8_t* data, size_t bytes) {
   uint32_t a = adler & 0xFFFF, b = adler >> 16;
   while (bytes > 0) {

@@ -375,13 +375,15 @@ void put_header(BitWriter& bits, ZFormat format) {
 }
 
 // Pads the last block to a byte, then the wrapper's trailer, then everything to the sink.
-Status put_trailer(BitWriter& bits, ZFormat format, const uint8_t* data, size_t size) {
+// `crc`: the data's CRC-32 when known (else computed here, for gzip).
+Status put_trailer(BitWriter& bits, ZFormat format, const uint8_t* data, size_t size,
+                   const uint32_t* crc = nullptr) {
   bits.align();
   if (format == ZFormat::kZlib) {
     const uint32_t adler = adler32(1, data, size);
     for (int k = 3; k >= 0; --k) bits.put((adler >> (8 * k)) & 0xFF, 8);
   } else if (format == ZFormat::kGzip) {
-    bits.put_le32(crc32(0, data, size));
+    bits.put_le32(crc != nullptr ? *crc : crc32(0, data, size));
     bits.put_le32(static_cast<uint32_t>(size));
   }
   return bits.flush();
@@ -409,10 +411,13 @@ struct Pieces {
   uint32_t bits[kDeflateLanes] = {};
   int count[kDeflateLanes] = {};  // bits after them (0..7)
   Status status[kDeflateLanes];
+  bool with_crc = false;
+  uint32_t crc[kDeflateLanes] = {};  // of the piece's input, when with_crc
 
   void run(uint32_t k) {
     const size_t begin = (first + k) * kDeflatePiece;
     const size_t end = size - begin > kDeflatePiece ? begin + kDeflatePiece : size;
+    if (with_crc) crc[k] = crc32(0, data + begin, end - begin);
     CompressSink none;
     none.write = &refuse;  // the buffer holds the piece's bound: never full
     BitWriter w(ws[k], none);
@@ -489,13 +494,20 @@ Status deflate_lanes(Arena& arena, size_t largest, DeflateEffort effort, Deflate
 }
 
 Status deflate_parallel(const Executor* executor, const DeflateLanes& lanes, ZFormat format,
-                        const uint8_t* data, size_t size, const CompressSink& sink) {
+                        const uint8_t* data, size_t size, const CompressSink& sink,
+                        uint32_t* data_crc) {
   SPLINTCORE_ASSERT(sink.write != nullptr && size <= lanes.largest);
-  if (size <= kDeflatePiece) return deflate_fixed(lanes.stream, format, data, size, sink);
+  if (size <= kDeflatePiece) {
+    SPLINTCORE_RETURN_IF_ERROR(deflate_fixed(lanes.stream, format, data, size, sink));
+    if (data_crc != nullptr) *data_crc = crc32(0, data, size);
+    return Status::ok();
+  }
   Pieces p;
   p.data = data;
   p.size = size;
   p.ws = lanes.lane;
+  p.with_crc = data_crc != nullptr || format == ZFormat::kGzip;
+  uint32_t crc = 0;  // of the pieces joined so far
   BitWriter bits(lanes.stream, sink);
   put_header(bits, format);
   const size_t pieces = (size + kDeflatePiece - 1) / kDeflatePiece;
@@ -508,10 +520,15 @@ Status deflate_parallel(const Executor* executor, const DeflateLanes& lanes, ZFo
     for (uint32_t k = 0; k < wave; ++k) {
       SPLINTCORE_RETURN_IF_ERROR(p.status[k]);
       append_piece(bits, p.ws[k].out, p.used[k], p.bits[k], p.count[k]);
+      const size_t begin = (first + k) * kDeflatePiece;
+      const size_t length = size - begin > kDeflatePiece ? kDeflatePiece : size - begin;
+      crc = first + k == 0 ? p.crc[k] : crc32_combine(crc, p.crc[k], length);
     }
     SPLINTCORE_RETURN_IF_ERROR(bits.status());
   }
-  return put_trailer(bits, format, data, size);
+  SPLINTCORE_RETURN_IF_ERROR(put_trailer(bits, format, data, size, p.with_crc ? &crc : nullptr));
+  if (data_crc != nullptr) *data_crc = crc;
+  return Status::ok();
 }
 
 }  // namespace splintcore

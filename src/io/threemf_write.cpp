@@ -352,20 +352,24 @@ Status pack_entry(const Context& ctx, const DeflateLanes& lanes, bool deflate, c
   Arena& arena = *ctx.arena;
   e->name = name;
   e->plain_size = static_cast<uint32_t>(size);
-  e->crc = crc32(0, data, size);
   e->data = data;
   e->size = static_cast<uint32_t>(size);
   e->method = 0;
-  if (!deflate) return Status::ok();
+  if (!deflate) {
+    e->crc = crc32(0, data, size);
+    return Status::ok();
+  }
   GrowingSink g;
   g.bytes = out;
   g.limit = size;
   CompressSink sink;
   sink.write = &GrowingSink::write;
   sink.user = &g;
-  const Status s = deflate_parallel(ctx.executor, lanes, ZFormat::kRaw, data, size, sink);
+  // The CRC comes with the deflate (piece by piece on the executor), unless it stops early.
+  const Status s = deflate_parallel(ctx.executor, lanes, ZFormat::kRaw, data, size, sink, &e->crc);
   if (g.exhausted) return arena.exhausted_status();
   if (g.larger) {
+    e->crc = crc32(0, data, size);
     out->clear();
     out->shrink_to_fit();
     return Status::ok();

@@ -137,6 +137,32 @@ TEST(Checksum, MatchTheDefinitions) {
   }
 }
 
+// crc32_combine against the CRC of the joined bytes: every split of short inputs (empty parts
+// included), and a long second part (3 MiB + 77 bytes: a length with several bits set).
+TEST(Checksum, CombineEqualsTheCrcOfTheJoinedBytes) {
+  std::vector<uint8_t> data(300);
+  for (size_t i = 0; i < data.size(); ++i) data[i] = static_cast<uint8_t>(hash_mix(i + 99) >> 11);
+  for (size_t n : {size_t{0}, size_t{1}, size_t{7}, size_t{64}, size_t{300}}) {
+    for (size_t split = 0; split <= n; ++split) {
+      const uint32_t a = crc32(0, data.data(), split);
+      const uint32_t b = crc32(0, data.data() + split, n - split);
+      EXPECT_EQ(crc32_combine(a, b, n - split), crc32(0, data.data(), n)) << n << " " << split;
+    }
+  }
+  const std::vector<uint8_t> zeros(size_t{1} << 20, 0);
+  uint32_t chained = crc32(0, data.data(), 5);  // 5 bytes, then 3 MiB + 77 zero bytes
+  for (int k = 0; k < 3; ++k) chained = crc32(chained, zeros.data(), zeros.size());
+  chained = crc32(chained, zeros.data(), 77);
+  const uint32_t zeros_crc =
+      crc32(crc32(crc32(crc32(0, zeros.data(), zeros.size()), zeros.data(), zeros.size()),
+                  zeros.data(), zeros.size()),
+            zeros.data(), 77);
+  EXPECT_EQ(crc32_combine(crc32(0, data.data(), 5), zeros_crc, 3 * zeros.size() + 77), chained);
+  // A combine with an empty second part changes nothing; the CRC of no bytes is 0.
+  EXPECT_EQ(crc32_combine(0x12345678u, 0, 0), 0x12345678u);
+  EXPECT_EQ(crc32_combine(0, crc32(0, data.data(), 9), 9), crc32(0, data.data(), 9));
+}
+
 TEST(Inflate, FixturesFromGzipAndZlib) {
   const std::vector<Fixture> all = fixtures();
   ASSERT_GE(all.size(), 20u);
@@ -320,7 +346,7 @@ std::vector<uint8_t> piece_test_input(size_t size) {
 
 Status deflate_in_pieces(const Executor* executor, size_t arena_bytes, DeflateEffort effort,
                          ZFormat format, const std::vector<uint8_t>& data,
-                         std::vector<uint8_t>* out) {
+                         std::vector<uint8_t>* out, uint32_t* data_crc = nullptr) {
   TestArena t(arena_bytes);
   DeflateLanes lanes;
   SPLINTCORE_RETURN_IF_ERROR(deflate_lanes(t.arena, data.size(), effort, &lanes));
@@ -331,7 +357,7 @@ Status deflate_in_pieces(const Executor* executor, size_t arena_bytes, DeflateEf
     v->insert(v->end(), d, d + bytes);
     return bytes <= 65536;  // the writes of at most 64 KiB the header promises
   };
-  return deflate_parallel(executor, lanes, format, data.data(), data.size(), sink);
+  return deflate_parallel(executor, lanes, format, data.data(), data.size(), sink, data_crc);
 }
 
 // Inputs of more than one piece: one stream that inflates back, the same bytes serially and on
@@ -349,9 +375,11 @@ TEST(Deflate, ParallelPiecesJoinIntoOneStream) {
       const uint64_t bound = deflate_lanes_bound(size);
       std::vector<uint8_t> serial, parallel, back;
       SPLINTCORE_ASSERT_OK(deflate_in_pieces(nullptr, bound, kDeflateFast, format, data, &serial));
+      uint32_t crc = 0;  // the input's CRC-32, joined from the pieces' (threemf_write's use)
       SPLINTCORE_ASSERT_OK(
-          deflate_in_pieces(threaded, bound, kDeflateFast, format, data, &parallel));
+          deflate_in_pieces(threaded, bound, kDeflateFast, format, data, &parallel, &crc));
       EXPECT_TRUE(serial == parallel) << size;
+      EXPECT_EQ(crc, crc32(0, data.data(), data.size())) << size;
       SPLINTCORE_ASSERT_OK(inflate_all(format, serial, &back));
       EXPECT_TRUE(back == data) << size;
       if (size <= kDeflatePiece) {
