@@ -79,28 +79,67 @@ Status find_role(const CaseFile& c, const char* role, size_t* index) {
   return Status::ok();
 }
 
-// Jaw j moved by its transform and rounded to float32, as design_splint's gather moves it.
-Status moved_jaw(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, size_t j,
-                 Mesh* out) {
-  out->bind(ctx.arena);
-  const Mesh& m = jaws[j];
-  if (!out->vertices.reserve(m.vertices.size())) return ctx.arena->exhausted_status();
-  for (const Vec3& v : m.vertices) {
-    if (!is_finite(v)) {
+// Jaws up and low moved by their transforms and rounded to float32, as design_splint's gather
+// moves them: in chunks of vertices on the executor, each chunk noting its first vertex that is
+// not finite or leaves float32's range; the first of those in jaw order (up, then low) is the
+// error, as one loop over them would find it. The triangles are the jaws' own.
+Status moved_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, size_t up,
+                  size_t low, Mesh* maxilla, Mesh* mandible) {
+  constexpr size_t kChunk = 65536;
+  const size_t which[2] = {up, low};
+  Mesh* out[2] = {maxilla, mandible};
+  size_t first_chunk[3] = {0, 0, 0};  // jaw k's chunks are [first_chunk[k], first_chunk[k + 1])
+  for (int k = 0; k < 2; ++k) {
+    const Mesh& m = jaws[which[k]];
+    out[k]->bind(ctx.arena);
+    Vec3* to = ctx.arena->allocate_array<Vec3>(m.vertices.size());  // written by the tasks
+    if (to == nullptr && !m.vertices.empty()) return ctx.arena->exhausted_status();
+    out[k]->vertices.adopt(to, m.vertices.size(), m.vertices.size());
+    first_chunk[k + 1] = first_chunk[k] + (m.vertices.size() + kChunk - 1) / kChunk;
+  }
+  struct Failure {
+    size_t vertex = SIZE_MAX;  // the chunk's first bad vertex (SIZE_MAX: none)
+    bool finite = true;        // it was finite (it left float32's range)
+  };
+  ArenaScope scope(*ctx.arena);
+  Failure* failed = ctx.arena->allocate_array<Failure>(first_chunk[2] + 1);
+  if (failed == nullptr) return ctx.arena->exhausted_status();
+  for (size_t i = 0; i < first_chunk[2]; ++i) failed[i] = Failure{};
+  auto task = [&](uint32_t chunk) {
+    const int k = chunk < first_chunk[1] ? 0 : 1;
+    const Mesh& m = jaws[which[k]];
+    const RigidTransform& x = c.jaws[which[k]].transform;
+    const size_t begin = (chunk - first_chunk[k]) * kChunk;
+    const size_t end = m.vertices.size() - begin < kChunk ? m.vertices.size() : begin + kChunk;
+    Vec3* to = out[k]->vertices.data();
+    for (size_t v = begin; v < end; ++v) {
+      const bool finite = is_finite(m.vertices[v]);
+      Vec3 p = finite ? x.apply_point(m.vertices[v]) : Vec3{};
+      if (!finite || !round_to_float32(&p)) {
+        failed[chunk] = Failure{v, finite};
+        return;
+      }
+      to[v] = p;
+    }
+  };
+  parallel_for_each(ctx.executor, static_cast<uint32_t>(first_chunk[2]), task);
+  for (size_t chunk = 0; chunk < first_chunk[2]; ++chunk) {
+    if (failed[chunk].vertex == SIZE_MAX) continue;
+    const size_t j = which[chunk < first_chunk[1] ? 0 : 1];
+    if (!failed[chunk].finite) {
       return make_error(StatusCode::kNonFinite, "outline: jaw ", j, " (", c.jaws[j].role,
                         ") has a vertex that is not finite (NaN or infinity)")
           .at_index(j);
     }
-    Vec3 p = c.jaws[j].transform.apply_point(v);
-    if (!round_to_float32(&p)) {
-      return make_error(StatusCode::kLimitExceeded, "outline: jaw ", j, " (", c.jaws[j].role,
-                        ") moved beyond float32 range")
-          .at_index(j);
-    }
-    (void)out->vertices.push_back(p);
+    return make_error(StatusCode::kLimitExceeded, "outline: jaw ", j, " (", c.jaws[j].role,
+                      ") moved beyond float32 range")
+        .at_index(j);
   }
-  out->triangles.adopt(const_cast<Triangle*>(m.triangles.span().data()), m.triangles.size(),
-                       m.triangles.size());
+  for (int k = 0; k < 2; ++k) {
+    const Mesh& m = jaws[which[k]];
+    out[k]->triangles.adopt(const_cast<Triangle*>(m.triangles.span().data()), m.triangles.size(),
+                            m.triangles.size());
+  }
   return Status::ok();
 }
 
@@ -142,8 +181,7 @@ Status resolve_case_outline(const Context& ctx, const CaseFile& c, Span<const Me
   {
     ArenaScope work(arena);
     Mesh maxilla, mandible;
-    SPLINTCORE_RETURN_IF_ERROR(moved_jaw(ctx, c, jaws, up, &maxilla));
-    SPLINTCORE_RETURN_IF_ERROR(moved_jaw(ctx, c, jaws, low, &mandible));
+    SPLINTCORE_RETURN_IF_ERROR(moved_jaws(ctx, c, jaws, up, low, &maxilla, &mandible));
     SPLINTCORE_RETURN_IF_ERROR(compute_outline(ctx, maxilla, mandible, c.outline, &o));
     for (size_t i = 0; i < o.upper.size(); ++i) {
       upper[i] = o.upper[i];

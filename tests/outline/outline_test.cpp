@@ -797,6 +797,46 @@ void block(Arena& arena, const Vec3& corner, Mesh* out) {
   EXPECT_TRUE(test::mesh_from_soup(arena, soup, out).is_ok());
 }
 
+// The jaws are moved (and checked finite) in chunks on the executor: the first bad vertex in
+// jaw order is named, maxilla before mandible, at 1 and 2 threads alike.
+TEST(Outline, BadVertexNamedInJawOrderInParallel) {
+  PhantomJaws p(6000);
+  test::TestArena t{size_t{256} << 20};
+  ThreadExecutor threads(2);
+  Mesh jaws[2];
+  copy_mesh(p.jaw[0], t.arena, &jaws[0], RigidTransform{});
+  copy_mesh(p.jaw[1], t.arena, &jaws[1], RigidTransform{});
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse(t.arena, auto_case("", -2.0), &c));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto resolve = [&](const Executor* executor) {
+    ArenaScope scope(t.arena);
+    CaseFile resolved;
+    return resolve_case_outline(Context(&t.arena, executor, nullptr), c, Span<const Mesh>(jaws, 2),
+                                &resolved, nullptr);
+  };
+  const Vec3 last = jaws[1].vertices[jaws[1].vertices.size() - 1];
+  jaws[1].vertices[jaws[1].vertices.size() - 1].z = nan;  // the mandible's last vertex
+  for (const Executor* e : {static_cast<const Executor*>(nullptr), &threads.executor()}) {
+    const Status s = resolve(e);
+    EXPECT_EQ(s.code(), StatusCode::kNonFinite);
+    EXPECT_NE(std::string(s.message()).find("jaw 1 (mandible) has a vertex that is not finite"),
+              std::string::npos)
+        << s.message();
+  }
+  const Vec3 first = jaws[0].vertices[0];
+  jaws[0].vertices[0].x = nan;  // and the maxilla's first: the maxilla is named
+  for (const Executor* e : {static_cast<const Executor*>(nullptr), &threads.executor()}) {
+    const Status s = resolve(e);
+    EXPECT_NE(std::string(s.message()).find("jaw 0 (maxilla) has a vertex that is not finite"),
+              std::string::npos)
+        << s.message();
+  }
+  jaws[0].vertices[0] = first;
+  jaws[1].vertices[jaws[1].vertices.size() - 1] = last;
+  SPLINTCORE_EXPECT_OK(resolve(&threads.executor()));
+}
+
 TEST(Outline, RefusalsSayWhy) {
   PhantomJaws p(6000);
   test::TestArena t{size_t{256} << 20};
