@@ -64,18 +64,6 @@ std::string sweep_usage_problem(const SweepArgs& a, const char* name, const char
   return "";
 }
 
-// Reads each file into its own mesh (in the arena, in order).
-Status read_mesh_files(const Context& ctx, const std::vector<const char*>& paths,
-                       std::vector<Mesh>* out) {
-  out->resize(paths.size());
-  for (size_t i = 0; i < paths.size(); ++i) {
-    (*out)[i].bind(ctx.arena);
-    SPLINTCORE_RETURN_IF_ERROR(
-        read_mesh_file(ctx, paths[i], kNoInputLimit, false, &(*out)[i], nullptr));
-  }
-  return Status::ok();
-}
-
 void add_sweep_stats(JsonObject* j, const SweepStats& st) {
   j->add("grid",
          std::to_string(st.nx) + " x " + std::to_string(st.ny) + " x " + std::to_string(st.nz));
@@ -222,7 +210,7 @@ int run_sweep(const Command& command, int argc, char** argv) {
   if (!run.has_memory()) return run.no_memory();
 
   std::vector<Mesh> jaws;
-  Status s = read_mesh_files(run.ctx, a.common.positional, &jaws);
+  Status s = read_mesh_files(run.ctx, a.common.positional, kNoInputLimit, false, &jaws, nullptr);
   if (!s.is_ok()) return run.reject(s);
   const double t_read = monotonic_seconds();
   SweepOptions so;
@@ -257,7 +245,8 @@ int run_blockout(const Command& command, int argc, char** argv) {
   std::vector<Mesh> jaws;
   Status s = read_mesh_file(run.ctx, files[0], kNoInputLimit, false, &splint, nullptr);
   if (s.is_ok()) {
-    s = read_mesh_files(run.ctx, std::vector<const char*>(files.begin() + 1, files.end()), &jaws);
+    s = read_mesh_files(run.ctx, std::vector<const char*>(files.begin() + 1, files.end()),
+                        kNoInputLimit, false, &jaws, nullptr);
   }
   if (!s.is_ok()) return run.reject(s);
   BlockoutResult r;

@@ -231,32 +231,44 @@ int Design::run() {
 
 Status Design::read_jaws() {
   const uint64_t limit = args_.max_input_bytes != 0 ? args_.max_input_bytes : cli::kMaxMeshBytes;
+  // Every mesh file of the case, each jaw's scan before the jaw (the order errors are named
+  // in), read together (read_mesh_files: in tasks with more than one thread).
+  std::vector<const char*> files;
+  std::vector<Mesh*> into;
+  std::vector<std::string*> hashes;
   for (const CaseJaw& j : c_.jaws) {
     scan_paths_.emplace_back();
     scan_hashes_.emplace_back();
     scans_.emplace_back(&run_.arena);
+    jaw_paths_.emplace_back();
+    jaw_hashes_.emplace_back();
+    jaws_.emplace_back(&run_.arena);
     if (j.has_scan) {  // the scan's mesh, read as a jaw is (welded)
       any_scan_ = true;
       scan_paths_.back() = j.scan.path[0] == '/' ? std::string(j.scan.path) : folder_ + j.scan.path;
-      MeshFileInfo info;
-      SPLINTCORE_RETURN_IF_ERROR(
-          read_mesh_file(ctx_, scan_paths_.back().c_str(), limit, true, &scans_.back(), &info));
-      scan_hashes_.back() = info.sha256;
     }
-    if (j.has_seed) {  // reconstructed from the case's CT (reconstruct_ct_jaws)
-      any_ct_ = true;
-      jaw_paths_.emplace_back();
-      jaw_hashes_.emplace_back();
-      jaws_.emplace_back(&run_.arena);
-      continue;
+    // A jaw with a seed is reconstructed from the case's CT (reconstruct_ct_jaws).
+    if (j.has_seed) any_ct_ = true;
+    if (!j.has_seed) jaw_paths_.back() = j.mesh[0] == '/' ? std::string(j.mesh) : folder_ + j.mesh;
+  }
+  for (size_t i = 0; i < c_.jaws.size(); ++i) {
+    if (c_.jaws[i].has_scan) {
+      files.push_back(scan_paths_[i].c_str());
+      into.push_back(&scans_[i]);
+      hashes.push_back(&scan_hashes_[i]);
     }
-    const std::string path = j.mesh[0] == '/' ? std::string(j.mesh) : folder_ + j.mesh;
-    Mesh m;  // STL, PLY or OBJ (by content), welded as STL is
-    MeshFileInfo info;
-    SPLINTCORE_RETURN_IF_ERROR(read_mesh_file(ctx_, path.c_str(), limit, true, &m, &info));
-    jaw_paths_.push_back(path);
-    jaw_hashes_.push_back(info.sha256);
-    jaws_.push_back(m);
+    if (!c_.jaws[i].has_seed) {  // STL, PLY or OBJ (by content), welded as STL is
+      files.push_back(jaw_paths_[i].c_str());
+      into.push_back(&jaws_[i]);
+      hashes.push_back(&jaw_hashes_[i]);
+    }
+  }
+  std::vector<Mesh> meshes;
+  std::vector<MeshFileInfo> infos;
+  SPLINTCORE_RETURN_IF_ERROR(read_mesh_files(ctx_, files, limit, true, &meshes, &infos));
+  for (size_t k = 0; k < files.size(); ++k) {
+    *into[k] = meshes[k];
+    *hashes[k] = infos[k].sha256;
   }
   return Status::ok();
 }

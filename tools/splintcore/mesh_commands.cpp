@@ -594,13 +594,15 @@ int run_compare(const Command& command, int argc, char** argv) {
   Run run(command, a.common);
   if (!run.has_memory()) return run.no_memory();
 
-  Mesh ma(&run.arena), mb(&run.arena);
   CompareResult r;
-  Status s = read_mesh_file(run.ctx, a.common.positional[0], kNoInputLimit, false, &ma, &r.info_a);
-  if (s.is_ok()) {
-    s = read_mesh_file(run.ctx, a.common.positional[1], kNoInputLimit, false, &mb, &r.info_b);
-  }
+  std::vector<Mesh> both;
+  std::vector<MeshFileInfo> infos;
+  Status s = read_mesh_files(run.ctx, a.common.positional, kNoInputLimit, false, &both, &infos);
   if (!s.is_ok()) return run.reject(s);
+  const Mesh& ma = both[0];
+  const Mesh& mb = both[1];
+  r.info_a = infos[0];
+  r.info_b = infos[1];
   std::vector<double> da, db;
   s = cli::compare_meshes(run.ctx, ma, mb, &da, &db, &r.c);
   if (!s.is_ok()) return run.reject(s);
@@ -635,16 +637,15 @@ int run_render(const Command& command, int argc, char** argv) {
   if (!run.has_memory()) return run.no_memory();
 
   // The first mesh is the splint (opaque blue), the others jaws (translucent grey).
-  std::vector<Mesh> meshes(a.common.positional.size());
+  std::vector<Mesh> meshes;
   std::vector<RenderMesh> items;
   RenderResult r;
-  for (size_t i = 0; i < meshes.size(); ++i) {
-    meshes[i].bind(&run.arena);
-    Status s =
-        read_mesh_file(run.ctx, a.common.positional[i], kNoInputLimit, false, &meshes[i], nullptr);
+  {
+    const Status s =
+        read_mesh_files(run.ctx, a.common.positional, kNoInputLimit, false, &meshes, nullptr);
     if (!s.is_ok()) return run.reject(s);
-    r.triangles += meshes[i].triangles.size();
   }
+  for (const Mesh& m : meshes) r.triangles += m.triangles.size();
   r.t_read = monotonic_seconds();
   for (size_t i = 0; i < meshes.size(); ++i) {
     RenderMesh m;
@@ -679,10 +680,10 @@ int run_autorotate(const Command& command, int argc, char** argv) {
   if (!a.has_opening) return line.usage_error("autorotate needs --opening MM");
   Run run(command, a.common);
   if (!run.has_memory()) return run.no_memory();
-  Mesh jaws[2] = {Mesh(&run.arena), Mesh(&run.arena)};
-  for (size_t j = 0; j < 2; ++j) {
+  std::vector<Mesh> jaws;
+  {
     const Status s =
-        read_mesh_file(run.ctx, a.common.positional[j], kNoInputLimit, false, &jaws[j], nullptr);
+        read_mesh_files(run.ctx, a.common.positional, kNoInputLimit, false, &jaws, nullptr);
     if (!s.is_ok()) return run.reject(s);
   }
   AutorotateOptions o;

@@ -114,7 +114,8 @@ std::vector<OptionSpec> boolean_options(BooleanArgs* a) {
 }
 
 // B: the shells of every file after A, in order, in one mesh, each file moved by its
-// --translate-b. The files are read one after the other into the arena; then B is made where
+// --translate-b. The files are read into the arena, in order (read_mesh_files: in tasks with
+// more than one thread); then B is made where
 // they lie: the triangles (renumbered) go to a scratch copy above them, the vertices move down
 // into one array, the triangles follow them. Peak: the files' meshes and B's triangles once
 // more (appending file after file to two growing arrays moved them up again and again: four
@@ -124,11 +125,12 @@ Status read_b(Run& run, const BooleanArgs& a, Mesh* b) {
   const std::vector<const char*>& files = a.common.positional;
   const Arena::Marker start = arena.mark();
   std::vector<Mesh> parts;
+  SPLINTCORE_RETURN_IF_ERROR(
+      read_mesh_files(run.ctx, std::vector<const char*>(files.begin() + 1, files.end()),
+                      kNoInputLimit, false, &parts, nullptr));
   uint64_t total_v = 0, total_t = 0;
   for (size_t f = 1; f < files.size(); ++f) {
-    Mesh part(&arena);
-    SPLINTCORE_RETURN_IF_ERROR(
-        read_mesh_file(run.ctx, files[f], kNoInputLimit, false, &part, nullptr));
+    Mesh& part = parts[f - 1];
     total_v += part.vertices.size();
     total_t += part.triangles.size();
     if (total_v >= (uint64_t{1} << 31) || total_t >= (uint64_t{1} << 31)) {
@@ -146,7 +148,6 @@ Status read_b(Run& run, const BooleanArgs& a, Mesh* b) {
             .in_file(files[f]);
       }
     }
-    parts.push_back(part);
   }
   if (parts.size() == 1) {
     *b = parts[0];
