@@ -232,9 +232,6 @@ class Arena {
   size_t cap() const { return cap_; }
   size_t high_water() const { return high_water_; }
   void reset_high_water() { high_water_ = used_; }
-  // Raises high_water() to `bytes` (no change when it is higher already): memory used through
-  // arenas over slices of this one's, each of which counts only as far as its own arena went.
-  void note_high_water(size_t bytes) { high_water_ = bytes > high_water_ ? bytes : high_water_; }
   size_t reserved() const { return reserved_; }  // hooks mode: bytes taken from the hooks
 
   // The last failure: the total the arena would have needed (failed requests in a row add up),

@@ -169,112 +169,15 @@ Status read_mesh_file(const Context& ctx, const char* path, uint64_t max_bytes, 
   return Status::ok();
 }
 
-namespace {
-
-// The files read in tasks, each into its slice (read_mesh_files); false when they are to be read
-// one after the other (the arena then as it was). *status: the first file's error, in order.
-bool read_in_slices(const Context& ctx, const std::vector<const char*>& paths, uint64_t max_bytes,
-                    bool hash, std::vector<Mesh>* out, std::vector<MeshFileInfo>* infos,
-                    Status* status) {
-  const size_t n = paths.size();
-  std::vector<uint64_t> sizes(n);
-  uint64_t total = 0;
-  for (size_t i = 0; i < n; ++i) {
-    FileSource f;
-    if (!f.open(paths[i]).is_ok()) return false;  // its error comes from the serial read
-    sizes[i] = f.source().size;
-    if (sizes[i] == kUnknownSize || sizes[i] > max_bytes) return false;
-    total += sizes[i];
-  }
-  Arena& arena = *ctx.arena;
-  constexpr size_t kAlign = 64;
-  const size_t high_before = arena.high_water(), used_before = arena.used();
-  // Each slice: 1 MiB for what any file needs (the reader's 64 KiB buffer, a small weld table),
-  // then a share of the rest by size.
-  constexpr size_t kFixed = size_t{1} << 20;
-  const size_t spare = n * (kAlign + kFixed) + kAlign;
-  if (total == 0 || arena.cap() - used_before <= spare) return false;
-  const size_t free_bytes = arena.cap() - used_before - spare;
-  std::vector<size_t> slice(n);
-  size_t all = 0;
-  for (size_t i = 0; i < n; ++i) {
-    // free * size / total without overflow (sizes and the cap are below 2^63).
-    const double share = static_cast<double>(sizes[i]) / static_cast<double>(total);
-    slice[i] =
-        kFixed + static_cast<size_t>(static_cast<double>(free_bytes) * share) / kAlign * kAlign;
-    all += slice[i];
-  }
-  const Arena::Marker start = arena.mark();
-  auto* base = static_cast<unsigned char*>(arena.allocate(all, kAlign));
-  if (base == nullptr) {
-    arena.forget_failure();
-    return false;
-  }
-  std::vector<std::unique_ptr<Arena>> arenas(n);
-  std::vector<Mesh> meshes(n);
-  std::vector<MeshFileInfo> found(n);
-  std::vector<Status> statuses(n);
-  size_t offset = 0;
-  for (size_t i = 0; i < n; ++i) {
-    arenas[i].reset(new Arena(base + offset, slice[i]));
-    meshes[i].bind(arenas[i].get());
-    offset += slice[i];
-  }
-  auto task = [&](uint32_t i) {
-    const Context own(arenas[i].get());  // serial inside, no progress from a worker
-    statuses[i] = read_mesh_file(own, paths[i], max_bytes, hash, &meshes[i], &found[i]);
-  };
-  parallel_for_each(ctx.executor, static_cast<uint32_t>(n), task);
-  size_t peak = used_before;
-  for (size_t i = 0; i < n; ++i) {
-    if (statuses[i].code() == StatusCode::kArenaExhausted) {
-      arena.rewind(start);
-      arena.reset_high_water();
-      arena.note_high_water(high_before);
-      return false;
-    }
-    peak += arenas[i]->high_water();
-  }
-  arena.rewind(start);
-  arena.reset_high_water();
-  arena.note_high_water(high_before > peak ? high_before : peak);
-  for (size_t i = 0; i < n; ++i) {
-    if (!statuses[i].is_ok()) {
-      *status = statuses[i];
-      return true;
-    }
-  }
-  // Down in order: each mesh lies in its slice, at or above where it goes.
-  for (size_t i = 0; i < n; ++i) {
-    const Mesh& m = meshes[i];
-    const bool vertices_first =
-        !m.vertices.empty() && !m.triangles.empty() &&
-        static_cast<const void*>(m.vertices.data()) < static_cast<const void*>(m.triangles.data());
-    move_mesh_down(arena, arena.mark(), m, &(*out)[i], vertices_first);
-    if (infos != nullptr) (*infos)[i] = found[i];
-  }
-  *status = Status::ok();
-  return true;
-}
-
-}  // namespace
-
 Status read_mesh_files(const Context& ctx, const std::vector<const char*>& paths,
                        uint64_t max_bytes, bool hash, std::vector<Mesh>* out,
-                       std::vector<MeshFileInfo>* infos, bool* in_tasks) {
-  if (in_tasks != nullptr) *in_tasks = false;
+                       std::vector<MeshFileInfo>* infos) {
   out->clear();
   out->resize(paths.size());
   for (Mesh& m : *out) m.bind(ctx.arena);
   if (infos != nullptr) {
     infos->clear();
     infos->resize(paths.size());
-  }
-  const bool threads = ctx.executor != nullptr && ctx.executor->concurrency > 1;
-  Status s;
-  if (paths.size() > 1 && threads && read_in_slices(ctx, paths, max_bytes, hash, out, infos, &s)) {
-    if (in_tasks != nullptr) *in_tasks = true;
-    return s;
   }
   for (size_t i = 0; i < paths.size(); ++i) {
     SPLINTCORE_RETURN_IF_ERROR(read_mesh_file(ctx, paths[i], max_bytes, hash, &(*out)[i],

@@ -98,17 +98,13 @@ struct MeshFileInfo {
 Status read_mesh_file(const Context& ctx, const char* path, uint64_t max_bytes, bool hash,
                       Mesh* mesh, MeshFileInfo* info);
 
-// Reads several mesh files as read_mesh_file does, into out[i] (replaced, bound to ctx.arena)
-// and, when not null, infos[i]: the meshes, hashes and error are those of reading them one
-// after the other, in order. With more than one thread, one task per file (no progress reported
-// from them, each file hashed by its task), each into its own slice of the arena's free room
-// (shared in proportion to the files' sizes); the meshes are then moved down in order, and the
-// arena's high water is the slices' own use. A file that needs more than its slice, a file of
-// unknown size, or no room for the slices: all are read one after the other. *in_tasks (may be
-// null): whether the tasks' reading was kept.
+// Reads several mesh files as read_mesh_file does, one after the other, into out[i] (replaced,
+// bound to ctx.arena, in the arena in order) and, when not null, infos[i]; the first error in
+// order stops it. (Reading them in tasks, each into a slice of the arena, gave no measurable
+// gain on the 2-core machine of issue 29's figures and raised the peak arena: not kept.)
 Status read_mesh_files(const Context& ctx, const std::vector<const char*>& paths,
                        uint64_t max_bytes, bool hash, std::vector<Mesh>* out,
-                       std::vector<MeshFileInfo>* infos, bool* in_tasks = nullptr);
+                       std::vector<MeshFileInfo>* infos);
 
 // Reads a whole file (a case) into `out`.
 Status read_whole_input(const char* path, uint64_t max_bytes, std::vector<uint8_t>* out);
