@@ -68,12 +68,13 @@ struct BooleanOptions {
   // retried with A (never B) translated by k * step * (1, 3, 7) for k = 1..max_nudges, step = 2^-16
   // mm (15 nm; coarser only when A's coordinates are beyond 256 mm, so that float32 vertices of A
   // stay float32): at most about 0.9 um with the default, far below a printer's 16 um layer. The
-  // translation used is in BooleanStats::nudge. 0 turns it off. When every one of these
-  // attempts is unsupported, those that met intersection points rounding together (distinct
-  // exact points closer than a rounding step) run once more with such points merged into one
-  // (BooleanStats::merged_points; a point that collapses a segment or pinches off a sliver's
-  // corner): results found without merging stay byte for byte as they were, and a merge that
-  // breaks any check of the result (or pinches it at a point) leaves the first error.
+  // translation used is in BooleanStats::nudge. 0 turns it off. In every attempt, intersection
+  // points rounding together (distinct exact points closer than a rounding step) are merged
+  // into one (BooleanStats::merged_points; a point that collapses a segment or pinches off a
+  // sliver's corner) rather than refused, so a nudge runs only when that fails too. An attempt
+  // that meets no such points gives the bytes it gave without merging; a failed one is judged
+  // (nudged again, or its error returned) by the refusal it would have met without merging,
+  // so the errors name what rounding broke.
   uint32_t max_nudges = 8;
   // A bound on the work: the candidate pairs (triangles of A and B whose cells and boxes meet,
   // each decided by exact tests) of one run summed over its nudged attempts. 0: 64 per

@@ -449,22 +449,16 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
           ? options.max_candidate_pairs
           : 64 * (uint64_t{a.triangles.size()} + b.triangles.size()) + (uint64_t{1} << 22);
   uint64_t used = 0;
-  Status first;    // the first attempt's failure, when a nudge then runs out of the budget
-  Status refused;  // the last failure of the attempts without merging
+  Status first;  // the first attempt's failure, when a nudge then runs out of the budget
   Mesh result;
-  // The attempts as they always were (intersection points that round together refused, the
-  // nudge taking over), then, when each was unsupported, the same attempts again with such
-  // points merged (check_points_apart): every result found without merging is found as before,
-  // byte for byte, and the merge serves the cases no nudge resolves (issue 29).
-  // An attempt that met no such points ends the same way with merging: it is not run again
-  // (known for the first 64).
-  const uint32_t per_pass = options.max_nudges + 1;
-  uint64_t coincident = 0;  // bit k: attempt k met points that round together
-  for (uint32_t round = 0; round < 2 * per_pass; ++round) {
-    const bool merging = round >= per_pass;
-    const uint32_t attempt = merging ? round - per_pass : round;
-    if (merging && attempt == 0) refused = s;
-    if (merging && attempt < 64 && ((coincident >> attempt) & 1u) == 0) continue;
+  // Every attempt merges the intersection points that round together (check_points_apart) and
+  // those a triangulation fails on (split_with_merges); A is nudged only when an attempt fails
+  // all the same. Where an attempt meets no such points, merging changes nothing: its result is
+  // the one without, byte for byte. A failed attempt is judged by the status it would have had
+  // without merging (unmerged_status: the refusal of those points), so the nudges, the errors
+  // and their messages are those of attempts without merging; only a result can come sooner
+  // (issue 32: the real plan's intermediate splint in 1 attempt, not 3).
+  for (uint32_t attempt = 0; attempt <= options.max_nudges; ++attempt) {
     *stats = BooleanStats{};
     arena.rewind(attempts_start);
     Mesh moved;
@@ -493,7 +487,7 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
       pa = &moved;
       stats->nudge = d;
     }
-    stats->attempts = round + 1;
+    stats->attempts = attempt + 1;
     Inputs in;
     in.a = pa;
     in.b = &run_b;
@@ -507,12 +501,14 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
     result = Mesh();
     BooleanRun run(ctx, in, bp, options, stats);
     run.set_pair_budget(budget - used);
-    run.set_merging(merging);
+    run.set_merging(true);
     s = run.run(&result, attempts_start);
-    if (!merging && attempt < 64 && run.saw_coincident()) coincident |= uint64_t{1} << attempt;
+    if (!s.is_ok() && s.code() != StatusCode::kCancelled && !run.unmerged_status().is_ok()) {
+      s = run.unmerged_status();
+    }
     used += stats->candidate_pairs;
-    if (round == 0) first = s;
-    if (s.code() == StatusCode::kLimitExceeded && round > 0 && used > budget) {
+    if (attempt == 0) first = s;
+    if (s.code() == StatusCode::kLimitExceeded && attempt > 0 && used > budget) {
       s = first;
       s.append(" (nudges stopped after ").append_u64(attempt);
       s.append(": more than ").append_u64(budget);
@@ -521,8 +517,6 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
     }
     if (s.code() != StatusCode::kUnsupported) break;
   }
-  // Unsupported with merging too: the failure without it, which names what was refused.
-  if (s.code() == StatusCode::kUnsupported && !refused.is_ok()) s = refused;
   if (!s.is_ok()) {
     if (s.code() == StatusCode::kUnsupported && options.max_nudges > 0) {
       s.append(" (also with A moved by up to ");

@@ -436,9 +436,10 @@ class BooleanRun {
   // Merge intersection points that round together (check_points_apart) instead of refusing
   // them: mesh_boolean_single's attempts after the nudges without it.
   void set_merging(bool merging) { merging_ = merging; }
-  // This run met points that round together (or nearly, where a triangulation failed): an
-  // attempt with merging may end otherwise than this one did.
-  bool saw_coincident() const { return saw_coincident_; }
+  // With merging: the error this attempt would have ended with without merging, from where the
+  // two part (the first pair of points that round together refused, or the first triangulation
+  // that failed on such points); ok while they have not parted.
+  const Status& unmerged_status() const { return unmerged_; }
 
  private:
   Status check_pair_budget(uint32_t tb) const;
@@ -554,7 +555,7 @@ class BooleanRun {
   bool pending_ = false;
   uint64_t pair_budget_ = ~uint64_t{0};
   bool merging_ = false;
-  bool saw_coincident_ = false;
+  Status unmerged_;  // unmerged_status()
 };
 
 enum TriangleFlag : uint8_t { kUncut = 0, kDecided = 1, kPending = 2 };

@@ -974,25 +974,24 @@ Status BooleanRun::check_points_apart() {
     KeyIndex* keys = arena_.allocate_array<KeyIndex>(np);
     if (keys == nullptr) return arena_.exhausted_status();
     SPLINTCORE_RETURN_IF_ERROR(sort_points_by_position(keys, np));
-    // Without merging: duplicated geometry first (every attempt would meet it), else the first
-    // pair that rounds together.
+    // Duplicated geometry first (every attempt would meet it, merging or not), else the first
+    // pair that rounds together: refused without merging; with it, the refusal is what the
+    // attempt would have ended with without (unmerged_status), and the points are merged.
     uint32_t first_pair = 0;
-    for (uint32_t i = 1; i < np && !found; ++i) {
+    for (uint32_t i = 1; i < np; ++i) {
       const Point& p = points_[keys[i - 1].index];
       const Point& q = points_[keys[i].index];
       if (!(q.p == p.p)) continue;
-      if (merging_) {
-        found = true;
-      } else if (same_features(p.key, q.key)) {
-        return duplicated(p.key, q.key);
-      } else if (first_pair == 0) {
-        first_pair = i;
-      }
+      if (same_features(p.key, q.key)) return duplicated(p.key, q.key);
+      if (first_pair == 0) first_pair = i;
     }
     if (first_pair != 0) {
-      saw_coincident_ = true;
-      return coincide(points_[keys[first_pair - 1].index].key, keys[first_pair - 1].index,
-                      points_[keys[first_pair].index].key, keys[first_pair].index);
+      const Status refused =
+          coincide(points_[keys[first_pair - 1].index].key, keys[first_pair - 1].index,
+                   points_[keys[first_pair].index].key, keys[first_pair].index);
+      if (!merging_) return refused;
+      if (unmerged_.is_ok()) unmerged_ = refused;
+      found = true;
     }
   }
   if (!found) return Status::ok();
