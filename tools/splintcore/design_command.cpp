@@ -231,8 +231,8 @@ int Design::run() {
 
 Status Design::read_jaws() {
   const uint64_t limit = args_.max_input_bytes != 0 ? args_.max_input_bytes : cli::kMaxMeshBytes;
-  // Every mesh file of the case, each jaw's scan before the jaw (the order errors are named
-  // in), read together (read_mesh_files: in tasks with more than one thread).
+  // Every mesh file of the case, each jaw's scan before the jaw, read in that order (the first
+  // bad file is the one named) by read_mesh_files.
   std::vector<const char*> files;
   std::vector<Mesh*> into;
   std::vector<std::string*> hashes;

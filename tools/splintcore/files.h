@@ -101,7 +101,7 @@ Status read_mesh_file(const Context& ctx, const char* path, uint64_t max_bytes, 
 // Reads several mesh files as read_mesh_file does, one after the other, into out[i] (replaced,
 // bound to ctx.arena, in the arena in order) and, when not null, infos[i]; the first error in
 // order stops it. (Reading them in tasks, each into a slice of the arena, gave no measurable
-// gain on the 2-core machine of issue 29's figures and raised the peak arena: not kept.)
+// gain on the 2-core machine of issue 29's figures: the read is memory-bound. Not kept.)
 Status read_mesh_files(const Context& ctx, const std::vector<const char*>& paths,
                        uint64_t max_bytes, bool hash, std::vector<Mesh>* out,
                        std::vector<MeshFileInfo>* infos);
