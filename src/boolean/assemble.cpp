@@ -501,7 +501,6 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
     result = Mesh();
     BooleanRun run(ctx, in, bp, options, stats);
     run.set_pair_budget(budget - used);
-    run.set_merging(true);
     s = run.run(&result, attempts_start);
     if (!s.is_ok() && s.code() != StatusCode::kCancelled && !run.unmerged_status().is_ok()) {
       s = run.unmerged_status();

@@ -433,12 +433,10 @@ class BooleanRun {
   // The candidate pairs this run may test (options.max_candidate_pairs, less what earlier
   // attempts used); over it, find_hits stops with kLimitExceeded.
   void set_pair_budget(uint64_t budget) { pair_budget_ = budget; }
-  // Merge intersection points that round together (check_points_apart) instead of refusing
-  // them: mesh_boolean_single's attempts after the nudges without it.
-  void set_merging(bool merging) { merging_ = merging; }
-  // With merging: the error this attempt would have ended with without merging, from where the
-  // two part (the first pair of points that round together refused, or the first triangulation
-  // that failed on such points); ok while they have not parted.
+  // Intersection points that round together are merged (check_points_apart, and those a
+  // triangulation fails on: split_with_merges), not refused. The error this run would have
+  // ended with had they been refused, from where the two would part (the first pair of such
+  // points, or the first triangulation that failed on them); ok while they have not parted.
   const Status& unmerged_status() const { return unmerged_; }
 
  private:
@@ -554,7 +552,6 @@ class BooleanRun {
   int8_t* tstate_ = nullptr;
   bool pending_ = false;
   uint64_t pair_budget_ = ~uint64_t{0};
-  bool merging_ = false;
   Status unmerged_;  // unmerged_status()
 };
 

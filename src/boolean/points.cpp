@@ -975,8 +975,8 @@ Status BooleanRun::check_points_apart() {
     if (keys == nullptr) return arena_.exhausted_status();
     SPLINTCORE_RETURN_IF_ERROR(sort_points_by_position(keys, np));
     // Duplicated geometry first (every attempt would meet it, merging or not), else the first
-    // pair that rounds together: refused without merging; with it, the refusal is what the
-    // attempt would have ended with without (unmerged_status), and the points are merged.
+    // pair that rounds together: its refusal is what the attempt would have ended with without
+    // merging (unmerged_status), and the points are merged.
     uint32_t first_pair = 0;
     for (uint32_t i = 1; i < np; ++i) {
       const Point& p = points_[keys[i - 1].index];
@@ -989,7 +989,6 @@ Status BooleanRun::check_points_apart() {
       const Status refused =
           coincide(points_[keys[first_pair - 1].index].key, keys[first_pair - 1].index,
                    points_[keys[first_pair].index].key, keys[first_pair].index);
-      if (!merging_) return refused;
       if (unmerged_.is_ok()) unmerged_ = refused;
       found = true;
     }

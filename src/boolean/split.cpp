@@ -1227,7 +1227,6 @@ bool BooleanRun::note_coincident(const detail::CdtPoint* pts, const uint32_t* vi
       const double tol = kNear * rounding_step(big, options_.float32_output);
       if (!(mag(pts[i].x - pts[j].x) <= tol && mag(pts[i].y - pts[j].y) <= tol)) continue;
       if (vid[i] < base || vid[j] < base || vid[i] == vid[j]) continue;
-      if (!merging_) return false;  // refused as always
       if (n_noted_ == kMaxNoted) {
         noted_overflow_ = true;
         return any;
@@ -1280,7 +1279,7 @@ Status BooleanRun::split_with_merges() {
     n_noted_ = 0;
     const Status s = split_triangles();
     if (n_noted_ == 0 || s.code() == StatusCode::kArenaExhausted) return s;
-    // Without merging the first failure would have been the end (nothing is noted then).
+    // Had the points been refused, this first failure would have been the end.
     if (round == 0 && unmerged_.is_ok()) unmerged_ = s;
     if (round + 1 == kRounds || noted_overflow_) return s;
     arena_.rewind(mark);
