@@ -2,6 +2,7 @@
 // saves what it resolved as a case a person can read, edit and design again (design.h).
 #include <cstring>
 
+#include "design/b_vertex.h"
 #include "design/case_json.h"
 #include "splintcore/design.h"
 
@@ -79,10 +80,10 @@ Status find_role(const CaseFile& c, const char* role, size_t* index) {
   return Status::ok();
 }
 
-// Jaws up and low moved by their transforms and rounded to float32, as design_splint's gather
-// moves them: in chunks of vertices on the executor, each chunk noting its first vertex that is
-// not finite or leaves float32's range; the first of those in jaw order (up, then low) is the
-// error, as one loop over them would find it. The triangles are the jaws' own.
+// Jaws up and low where design_splint's B holds them (b_vertex): in chunks of vertices on the
+// executor, each chunk noting its first vertex that is not finite or leaves float32's range; the
+// first of those in jaw order (up, then low) is the error, as one loop over them would find it. The
+// triangles are the jaws' own.
 Status moved_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, size_t up,
                   size_t low, Mesh* maxilla, Mesh* mandible) {
   constexpr size_t kChunk = 65536;
@@ -108,18 +109,15 @@ Status moved_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, 
   auto task = [&](uint32_t chunk) {
     const int k = chunk < first_chunk[1] ? 0 : 1;
     const Mesh& m = jaws[which[k]];
-    const RigidTransform& x = c.jaws[which[k]].transform;
     const size_t begin = (chunk - first_chunk[k]) * kChunk;
     const size_t end = m.vertices.size() - begin < kChunk ? m.vertices.size() : begin + kChunk;
     Vec3* to = out[k]->vertices.data();
     for (size_t v = begin; v < end; ++v) {
       const bool finite = is_finite(m.vertices[v]);
-      Vec3 p = finite ? x.apply_point(m.vertices[v]) : Vec3{};
-      if (!finite || !round_to_float32(&p)) {
+      if (!finite || !design_detail::b_vertex(c, jaws, which[k], v, &to[v])) {
         failed[chunk] = Failure{v, finite};
         return;
       }
-      to[v] = p;
     }
   };
   parallel_for_each(ctx.executor, static_cast<uint32_t>(first_chunk[2]), task);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "design/b_vertex.h"
 #include "design/fusion.h"
 #include "design/no_jaw.h"
 #include "splintcore/design.h"
@@ -11,6 +12,8 @@
 namespace splintcore {
 
 namespace {
+
+using design_detail::b_vertex;
 
 // Records which stage made the splint as it now is and whether its Boolean checked that mesh
 // for self-intersections (the report's check comes from here, not from a constant).
@@ -76,13 +79,6 @@ Status case_on_tray(const Context& ctx, const CaseFile& c, const PrinterProfile&
   out->lower = Span<const Pick>(lower, c.lower.size());
   out->jaws = Span<const CaseJaw>(jaws, c.jaws.size());
   return Status::ok();
-}
-
-// Vertex v of jaw j where B holds it: moved by the jaw's transform, rounded to float32; false
-// when that leaves float32 range.
-inline bool b_vertex(const CaseFile& c, Span<const Mesh> jaws, size_t j, size_t v, Vec3* p) {
-  *p = c.jaws[j].transform.apply_point(jaws[j].vertices[v]);
-  return round_to_float32(p);
 }
 
 // Jaw j fit to go into B: it has triangles, finite vertices that stay in float32 range where B

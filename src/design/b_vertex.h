@@ -1,0 +1,21 @@
+// Where the design's Boolean holds a jaw's vertex (pipeline.cpp's B, the outline's moved jaws):
+// the one rule for moving a jaw by its transform and rounding it as its STL would hold it.
+#ifndef SPLINTCORE_DESIGN_B_VERTEX_H
+#define SPLINTCORE_DESIGN_B_VERTEX_H
+
+#include "splintcore/design.h"
+
+namespace splintcore {
+namespace design_detail {
+
+// Vertex v of jaw j where B holds it: moved by the jaw's transform, rounded to float32; false
+// when that leaves float32 range.
+inline bool b_vertex(const CaseFile& c, Span<const Mesh> jaws, size_t j, size_t v, Vec3* p) {
+  *p = c.jaws[j].transform.apply_point(jaws[j].vertices[v]);
+  return round_to_float32(p);
+}
+
+}  // namespace design_detail
+}  // namespace splintcore
+
+#endif  // SPLINTCORE_DESIGN_B_VERTEX_H
