@@ -89,6 +89,10 @@ struct BooleanOptions {
   // by construction): the up-front check that names where a border meets A (issue 30: an exact
   // segment test and a winding number a border edge; most of the blockout's Boolean time) is
   // left out. A border that does meet A still fails, with the run's own less specific error.
+  // For the difference it also spares the winding numbers of B's uncut parts that reach the
+  // border of B's triangles near A: outside A, their corners flood out from there (the
+  // blockout's swept surface leaves thousands of such islands near the splint). The border
+  // must lie outside A as any nudge moves it (the blockout's eighth of a voxel is far more).
   bool b_border_outside_a = false;
 };
 

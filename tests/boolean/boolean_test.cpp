@@ -589,6 +589,81 @@ TEST(BooleanOpenB, BorderInsideAIsRefusedUpFrontAndOutsideAWorks) {
   EXPECT_LT(ok.volume, 1.0 / 6);
 }
 
+// With b_border_outside_a, B's uncut parts that reach the border of its near triangles are
+// outside A without a winding number (the blockout's swept surface leaves thousands of such
+// islands near the splint); a closed uncut part still takes one. A: two boxes with a gap in
+// A's box. B: a sphere through the first box's face, open in the gap; a small sphere in the
+// gap, open (uncut, in A's box, outside A); a closed small sphere inside the first box. The
+// same result as without the vouch (which checks the border and asks every uncut part's
+// winding number), with one winding query fewer.
+TEST(BooleanOpenB, UncutPartsThatReachTheBorderNeedNoWindingNumber) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  auto append = [&](Mesh* to, const Mesh& from) {
+    const uint32_t base = static_cast<uint32_t>(to->vertices.size());
+    for (const Vec3& p : from.vertices) ASSERT_TRUE(to->vertices.push_back(p));
+    for (const Triangle& t : from.triangles) {
+      ASSERT_TRUE(to->triangles.push_back(Triangle{{base + t.v[0], base + t.v[1], base + t.v[2]}}));
+    }
+  };
+  // Opens a sphere at its triangle whose centroid has the largest x (in the gap).
+  auto open_at_largest_x = [](Mesh* m) {
+    size_t best = 0;
+    double best_x = -HUGE_VAL;
+    for (size_t i = 0; i < m->triangles.size(); ++i) {
+      const Triangle& t = m->triangles[i];
+      const double x = m->vertices[t.v[0]].x + m->vertices[t.v[1]].x + m->vertices[t.v[2]].x;
+      if (x > best_x) {
+        best_x = x;
+        best = i;
+      }
+    }
+    m->triangles[best] = m->triangles[m->triangles.size() - 1];
+    m->triangles.pop_back();
+  };
+  Mesh a(&arena);
+  append(&a, box_mesh(arena, {0, 0, 0}, {4, 10, 10}, RigidTransform{}));
+  append(&a, box_mesh(arena, {6, 0, 0}, {10, 10, 10}, RigidTransform{}));
+  Mesh cut = sphere_mesh(arena, 1.0, 8, 12, RigidTransform::translation({4.3, 5.1, 4.9}));
+  open_at_largest_x(&cut);
+  Mesh island = sphere_mesh(arena, 0.3, 6, 10, RigidTransform::translation({5.0, 5.0, 2.0}));
+  open_at_largest_x(&island);
+  Mesh bubble = sphere_mesh(arena, 0.5, 6, 10, RigidTransform::translation({2.0, 5.0, 5.0}));
+  Mesh b(&arena);
+  append(&b, cut);
+  append(&b, island);
+  append(&b, bubble);
+  EXPECT_EQ(report_of(arena, b).boundary_loops, 2u);
+  std::vector<Vec3> vertices[2];
+  std::vector<Triangle> triangles[2];
+  BooleanStats stats[2];
+  for (int vouch = 0; vouch < 2; ++vouch) {
+    ArenaScope scope(arena);
+    BooleanOptions o = opts(BooleanOp::kDifference);
+    o.b_border_outside_a = vouch == 1;
+    Mesh out;
+    SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&arena), a, b, o, &out, &stats[vouch]));
+    vertices[vouch].assign(out.vertices.begin(), out.vertices.end());
+    triangles[vouch].assign(out.triangles.begin(), out.triangles.end());
+    const MeshReport r = report_of(arena, out);
+    EXPECT_TRUE(r.is_valid_solid()) << test::format(require_valid_solid(r));
+    EXPECT_EQ(r.shells, 3u);  // the two boxes and the bubble's cavity
+  }
+  EXPECT_GT(stats[0].cut_triangles_b, 0u);
+  // A's uncut second box (B's winding number), the island and the bubble; with the vouch, not
+  // the island.
+  EXPECT_EQ(stats[0].winding_queries, 3u);
+  EXPECT_EQ(stats[1].winding_queries, 2u);
+  ASSERT_EQ(vertices[0].size(), vertices[1].size());
+  ASSERT_EQ(triangles[0].size(), triangles[1].size());
+  for (size_t i = 0; i < vertices[0].size(); ++i) {
+    ASSERT_TRUE(vertices[0][i] == vertices[1][i]) << "vertex " << i;
+  }
+  for (size_t i = 0; i < triangles[0].size(); ++i) {
+    for (int k = 0; k < 3; ++k) ASSERT_EQ(triangles[0][i].v[k], triangles[1][i].v[k]);
+  }
+}
+
 // ---- the parallel prefix of the pair tests (find_hits on the executor) ------------------------
 
 // One difference of a fine sphere (B, 16,256 triangles: enough near triangles for the tasks)
