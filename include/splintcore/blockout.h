@@ -100,9 +100,19 @@ struct SweepOptions {
   // numbered by first use among them; null: all are kept (as the unfiltered variant).
   bool (*keep_triangle)(const void* user, const Vec3& a, const Vec3& b, const Vec3& c) = nullptr;
   const void* keep_user = nullptr;
+  // keep_triangle from several tasks at once (ctx's executor): with keep_tasks > 0, the run
+  // of the batch that task i tests passes keep_task_users[i] (keep_user is then not used), and
+  // keep_triangle must answer the same whichever user it gets (each may hold caches, used by
+  // one task at a time). The triangles are tested in batches of kSweepKeepBatch (a fixed
+  // 49 bytes each, from the arena before the extraction), cut into at most keep_tasks
+  // contiguous runs, and logged in their order: the same kept triangles at any thread count.
+  const void* const* keep_task_users = nullptr;
+  uint32_t keep_tasks = 0;
   uint32_t layers_per_tile = 0;      // slab size for the extractor (0: automatic); bytes unchanged
   double edge_margin = kEdgeMargin;  // the extractor's (volume.h); the blockout uses 1/16
 };
+
+constexpr uint32_t kSweepKeepBatch = 4096;  // SweepOptions::keep_tasks
 
 struct SweepStats {
   uint32_t nx = 0, ny = 0, nz = 0;     // the extracted grid (z along the direction)
@@ -199,7 +209,9 @@ struct BlockoutStats {
 // unchanged (copied). For a wafer between two jaws call it once per jaw: the maxilla's direction is
 // the mandible's reversed. Memory: with filter_near_splint a byte per cell of 5 voxels over the
 // splint's box grown by two cells and the splint's distance index (distance_index_bound), the
-// sweep's state and extractor (a slab of one layer beside the carried one), the kept swept
+// sweep's state and extractor (a slab of one layer beside the carried one), a batch of
+// kSweepKeepBatch triangles waiting for the filter (49 bytes each) and four copies of its
+// window (4 KB each; the filter runs in the executor's tasks), the kept swept
 // triangles logged above it (48 bytes each), then 4 bytes per extracted
 // vertex and the swept mesh, moved down over the cells and the index; then the Boolean's; only
 // `out` stays (moved down to where the arena's top was). Errors: those of sweep_volume_mesh and

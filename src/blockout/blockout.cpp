@@ -37,6 +37,8 @@ constexpr uint8_t kSurface = 1, kOutside = 2, kNear = 4, kGrowX = 8, kGrowY = 16
 constexpr double kWindowVoxels = 1.5;
 constexpr double kWindowReachVoxels = 1.5;
 constexpr size_t kWindowTriangles = 1024;
+// The filter's copies for the extractor's tasks (SweepOptions::keep_tasks).
+constexpr uint32_t kKeepTasks = 4;
 
 struct NearSplint {
   Vec3 origin{};
@@ -245,10 +247,20 @@ Status sweep_near_splint(const Context& ctx, const Mesh& splint, const Aabb& bou
   near.reach = kReachVoxels * so.voxel;
   near.window_grow = kWindowVoxels * so.voxel;
   near.window_reach = kWindowReachVoxels * so.voxel;
-  near.window_ids = arena.allocate_array<uint32_t>(kWindowTriangles);
-  if (near.window_ids == nullptr) return arena.exhausted_status();
+  // One copy of the filter a task (its own window and seed: the answers never depend on
+  // them), kKeepTasks of them whatever the executor, so the high water is the same at any
+  // thread count.
+  NearSplint tasks[kKeepTasks];
+  const void* users[kKeepTasks];
+  for (uint32_t i = 0; i < kKeepTasks; ++i) {
+    tasks[i] = near;
+    tasks[i].window_ids = arena.allocate_array<uint32_t>(kWindowTriangles);
+    if (tasks[i].window_ids == nullptr) return arena.exhausted_status();
+    users[i] = &tasks[i];
+  }
   so.keep_triangle = near_splint;
-  so.keep_user = &near;
+  so.keep_task_users = users;
+  so.keep_tasks = kKeepTasks;
   Mesh kept;
   SPLINTCORE_RETURN_IF_ERROR(sweep_volume_mesh(ctx, jaws, so, &kept, stats));
   // Triangles before vertices, as sweep_volume_mesh leaves a filtered mesh.

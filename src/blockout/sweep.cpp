@@ -992,7 +992,55 @@ struct KeepLog {
   Vec3 lo{}, hi{};  // the extracted grid's box (local frame)
   ArenaArray<KeptTriangle> kept;
   uint64_t caps = 0, left_out = 0;
+  // The triangles waiting for keep_triangle (kSweepKeepBatch, from the arena before the
+  // extraction) and its answers.
+  KeptTriangle* batch = nullptr;
+  uint8_t* keep = nullptr;
+  uint32_t waiting = 0;
 };
+
+inline Vec3 kept_corner(const KeptTriangle& k, int i) {
+  return Vec3{static_cast<double>(k.p[3 * i]), static_cast<double>(k.p[3 * i + 1]),
+              static_cast<double>(k.p[3 * i + 2])};
+}
+
+// keep_triangle over the waiting triangles (contiguous runs in tasks when the options give
+// task users: the answers do not depend on the run or its user), then the kept ones logged in
+// order.
+Status flush_batch(KeepLog& log) {
+  const uint32_t n = log.waiting;
+  if (n == 0) return Status::ok();
+  const SweepOptions& o = *log.o;
+  const Executor* ex = log.s->ctx->executor;
+  uint32_t runs = 1;
+  if (o.keep_tasks > 0 && ex != nullptr && ex->concurrency > 1) {
+    runs = ex->concurrency < o.keep_tasks ? ex->concurrency : o.keep_tasks;
+    if (runs > n) runs = n;
+  }
+  auto run = [&](uint32_t r) {
+    const void* user = o.keep_tasks > 0 ? o.keep_task_users[r] : o.keep_user;
+    const uint32_t begin = static_cast<uint32_t>(uint64_t{n} * r / runs);
+    const uint32_t end = static_cast<uint32_t>(uint64_t{n} * (r + 1) / runs);
+    for (uint32_t i = begin; i < end; ++i) {
+      const KeptTriangle& k = log.batch[i];
+      log.keep[i] =
+          o.keep_triangle(user, kept_corner(k, 0), kept_corner(k, 1), kept_corner(k, 2)) ? 1 : 0;
+    }
+  };
+  parallel_for_each(runs > 1 ? ex : nullptr, runs, run);
+  log.waiting = 0;
+  size_t at = log.kept.size();
+  size_t keeping = 0;
+  for (uint32_t i = 0; i < n; ++i) keeping += log.keep[i];
+  log.left_out += n - keeping;
+  // Grown to the exact size (in place: the log is the arena's top during the extraction), so
+  // the arena's high water depends on the input alone, never on the room there was.
+  if (!log.kept.resize(at + keeping)) return log.kept.arena()->exhausted_status();
+  for (uint32_t i = 0; i < n; ++i) {
+    if (log.keep[i] != 0) log.kept[at++] = log.batch[i];
+  }
+  return Status::ok();
+}
 
 Status log_kept(void* user, const Triangle& t, const Vec3& a, const Vec3& b, const Vec3& c) {
   KeepLog& log = *static_cast<KeepLog*>(user);
@@ -1011,23 +1059,16 @@ Status log_kept(void* user, const Triangle& t, const Vec3& a, const Vec3& b, con
                         "sweep: a vertex of the swept volume is beyond float32 range");
     }
   }
-  if (!log.o->keep_triangle(log.o->keep_user, w[0], w[1], w[2])) {
-    ++log.left_out;
-    return Status::ok();
-  }
-  KeptTriangle k;
+  // Waits for keep_triangle with the others of its batch (the corners as float32: the same
+  // values as w).
+  KeptTriangle& k = log.batch[log.waiting++];
   for (int i = 0; i < 3; ++i) {
     k.v[i] = t.v[i];
     k.p[3 * i] = static_cast<float>(w[i].x);
     k.p[3 * i + 1] = static_cast<float>(w[i].y);
     k.p[3 * i + 2] = static_cast<float>(w[i].z);
   }
-  // Grown to the exact size (in place: the log is the arena's top during the extraction), so
-  // the arena's high water depends on the input alone, never on the room there was.
-  const size_t n = log.kept.size();
-  if (!log.kept.resize(n + 1)) return log.kept.arena()->exhausted_status();
-  log.kept[n] = k;
-  return Status::ok();
+  return log.waiting == kSweepKeepBatch ? flush_batch(log) : Status::ok();
 }
 
 // The logged triangles (above the arena's top) as a mesh above it: triangles, then vertices.
@@ -1080,6 +1121,9 @@ Status extract_kept(Sweep& s, const SweepOptions& o, uint64_t pool_share, Mesh* 
   log.lo = g.origin;
   log.hi = Vec3{g.origin.x + g.spacing.x * (g.nx - 1.0), g.origin.y + g.spacing.y * (g.ny - 1.0),
                 g.origin.z + g.spacing.z * (g.nz - 1.0)};
+  log.batch = arena.allocate_array<KeptTriangle>(kSweepKeepBatch);
+  log.keep = arena.allocate_array<uint8_t>(kSweepKeepBatch);
+  if (log.batch == nullptr || log.keep == nullptr) return arena.exhausted_status();
   log.kept.bind(&arena);
   MarchingCubesVisitor visitor;
   visitor.triangle = log_kept;
@@ -1088,6 +1132,7 @@ Status extract_kept(Sweep& s, const SweepOptions& o, uint64_t pool_share, Mesh* 
   mc.pool_ids = (uint64_t{g.nx} + 1) * (uint64_t{g.ny} + 1) * 10 / pool_share;
   SPLINTCORE_RETURN_IF_ERROR(
       marching_cubes(*s.ctx, g, LayerSource{fill_layers, &s}, mc, visitor, &st->extraction));
+  SPLINTCORE_RETURN_IF_ERROR(flush_batch(log));
   st->cap_triangles_dropped = log.caps;
   st->filtered_triangles = log.left_out;
   return build_kept_mesh(arena, log, st->extraction.vertices, mesh);

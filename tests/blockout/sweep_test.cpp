@@ -511,6 +511,67 @@ TEST(Sweep, FilteredSweepRunsAgainWithTheFullIdPoolWhenALayerNeedsIt) {
                            triangles[0].size() * sizeof(Triangle)));
 }
 
+#if defined(SPLINTCORE_WITH_PLATFORM)
+// A filter that keeps the triangles left of x = 0.3 and counts its calls (one user a task).
+struct CountingFilter {
+  mutable uint64_t calls = 0;
+};
+bool keep_left(const void* user, const Vec3& a, const Vec3& b, const Vec3& c) {
+  ++static_cast<const CountingFilter*>(user)->calls;
+  return a.x + b.x + c.x < 0.9;
+}
+
+TEST(Sweep, FilterInTasksSameBytesForEveryThreadCount) {
+  // keep_triangle from the executor's tasks (SweepOptions::keep_tasks, several batches of
+  // kSweepKeepBatch): the kept mesh of one filter called in order, at every thread count, each
+  // triangle tested once, by more than one task's user when there are threads.
+  TestArena ta(size_t{256} << 20);
+  const float lo[3] = {-4, -4, 0}, hi[3] = {4, 4, 1};
+  Mesh slab = box_mesh(&ta.arena, lo, hi);
+  SweepOptions o;
+  o.direction = Vec3{0, 0, -1};  // the slab's top face crosses the region
+  o.voxel = 0.05;
+  o.has_region = true;
+  o.region.lo = Vec3{-2.0, -2.0, 0.5};
+  o.region.hi = Vec3{2.0, 2.0, 3.0};
+  o.open_at_region = true;
+  o.keep_triangle = keep_left;
+  o.float32_vertices = true;
+  std::string first;
+  for (unsigned threads : {0u, 1u, 2u, 3u}) {
+    SCOPED_TRACE(threads);
+    ThreadExecutor pool(threads == 0 ? 1 : threads);
+    ArenaScope scope(ta.arena);
+    Context ctx(&ta.arena, threads == 0 ? nullptr : &pool.executor(), nullptr);
+    CountingFilter one, users[4];
+    const void* pointers[4] = {&users[0], &users[1], &users[2], &users[3]};
+    if (threads == 0) {  // one at a time, keep_user
+      o.keep_user = &one;
+      o.keep_tasks = 0;
+    } else {
+      o.keep_task_users = pointers;
+      o.keep_tasks = 4;
+    }
+    Mesh swept(&ta.arena);
+    SweepStats st;
+    SPLINTCORE_ASSERT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(&slab, 1), o, &swept, &st));
+    EXPECT_GT(st.filtered_triangles, uint64_t{kSweepKeepBatch});
+    EXPECT_GT(swept.triangles.size(), size_t{kSweepKeepBatch});
+    const uint64_t calls =
+        one.calls + users[0].calls + users[1].calls + users[2].calls + users[3].calls;
+    EXPECT_EQ(calls, swept.triangles.size() + st.filtered_triangles);
+    EXPECT_EQ(users[1].calls > 0, threads > 1);
+    EXPECT_EQ(users[3].calls > 0, threads > 3);
+    std::string bytes(reinterpret_cast<const char*>(swept.vertices.data()),
+                      swept.vertices.size() * sizeof(Vec3));
+    bytes.append(reinterpret_cast<const char*>(swept.triangles.data()),
+                 swept.triangles.size() * sizeof(Triangle));
+    if (first.empty()) first = bytes;
+    EXPECT_TRUE(bytes == first);
+  }
+}
+#endif
+
 TEST(Sweep, RegionGivesTheSameSurfaceInsideIt) {
   // Cutting the grid to a region changes nothing inside it: the samples are the same lattice
   // points with the same values, so the clipped surface's vertices away from the region's caps
