@@ -255,10 +255,13 @@ size_t triangles_meeting_box(const DistanceIndex& index, const Aabb& box, uint32
 // (closer than window_reach); false, *side untouched, when it may not be (ask triangle_side).
 // With `closest`: a's closest point there too (closest_point()'s answer, bits). For many small
 // triangles streamed out in order (a window serves the next ones): no tree descent per query.
-// Needs a full index (not pairs_only). No arena.
+// `seed` (any triangle id, or kNoNeighbor), e.g. the previous query's closest triangle, is
+// looked at first: a tight bound from the start, so most of the window is passed over by its
+// boxes; the answer never depends on it. Needs a full index (not pairs_only). No arena.
 bool triangle_side_among(const DistanceIndex& index, const uint32_t* ids, size_t count,
                          double window_reach, const Vec3& a, const Vec3& b, const Vec3& c,
-                         double reach, TriangleSide* side, ClosestPoint* closest = nullptr);
+                         double reach, TriangleSide* side, ClosestPoint* closest = nullptr,
+                         uint32_t seed = kNoNeighbor);
 
 // Every triangle whose bounds overlap `box`, appended to `out` in ascending id order.
 Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aabb& box,

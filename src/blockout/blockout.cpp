@@ -68,9 +68,11 @@ TriangleSide fine_side(const NearSplint& g, const Aabb& box, const Vec3& p, cons
           *g.index, Aabb{g.window.lo - reach, g.window.hi + reach}, g.window_ids, kWindowTriangles);
     }
     TriangleSide side = TriangleSide::kOutside;
+    ClosestPoint closest;
     if (g.window_count <= kWindowTriangles &&
         triangle_side_among(*g.index, g.window_ids, g.window_count, g.window_reach, p, q, r,
-                            g.reach, &side)) {
+                            g.reach, &side, &closest, g.seed)) {
+      g.seed = closest.triangle;
       return side;
     }
   }

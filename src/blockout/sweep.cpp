@@ -343,9 +343,11 @@ Status make_raw_layer(Sweep& s, uint32_t k) {
   return Status::ok();
 }
 
-// Output layer k (raw layers up to min(k + 2, nz - 1) made) into out.
-void make_output_layer(Sweep& s, uint32_t k, float* out) {
+// Rows [y_begin, y_end) of output layer k (raw layers up to min(k + 2, nz - 1) made) into
+// out; returns how many samples it corrected.
+uint64_t make_output_rows(const Sweep& s, uint32_t k, float* out, int64_t y_begin, int64_t y_end) {
   const VolumeGrid& g = s.grid;
+  uint64_t corrected = 0;
   const size_t layer = size_t{g.nx} * g.ny;
   // Raw layers k - 2 .. k + 2 (null: beyond the grid or not made).
   const uint16_t* z[5];
@@ -358,7 +360,7 @@ void make_output_layer(Sweep& s, uint32_t k, float* out) {
   const uint16_t* here = z[2];
   const float fband = s.fband;
   const int64_t nx = g.nx, ny = g.ny;
-  for (int64_t y = 0; y < ny; ++y) {
+  for (int64_t y = y_begin; y < y_end; ++y) {
     const size_t row = static_cast<size_t>(y) * g.nx;
     for (int64_t x = 0; x < nx; ++x) {
       const size_t at = row + static_cast<size_t>(x);
@@ -401,7 +403,7 @@ void make_output_layer(Sweep& s, uint32_t k, float* out) {
           }
         }
         if (found) {
-          ++s.stats->corrected_samples;
+          ++corrected;
           value = static_cast<float>(best);
           if (!(value < 0.0f)) value = -kTinyPositive;
           if (value < -fband) value = -fband;
@@ -410,6 +412,21 @@ void make_output_layer(Sweep& s, uint32_t k, float* out) {
       out[at] = value;
     }
   }
+  return corrected;
+}
+
+// Output layer k into out: bands of rows on the executor (each sample depends on the raw
+// layers alone), the corrected samples counted per band.
+void make_output_layer(Sweep& s, uint32_t k, float* out) {
+  const uint32_t bands = s.bands;
+  uint64_t corrected[kMaxBands];
+  auto band = [&](uint32_t i) {
+    const int64_t y_begin = static_cast<int64_t>(uint64_t{s.grid.ny} * i / bands);
+    const int64_t y_end = static_cast<int64_t>(uint64_t{s.grid.ny} * (i + 1) / bands);
+    corrected[i] = make_output_rows(s, k, out, y_begin, y_end);
+  };
+  parallel_for_each(s.ctx->executor, bands, band);
+  for (uint32_t i = 0; i < bands; ++i) s.stats->corrected_samples += corrected[i];
 }
 
 // The corrected layers up to `last` (inclusive), with the raw layers they need.

@@ -885,14 +885,17 @@ TriangleSide side_from_closest(const DistanceIndex& index, const Vec3& a, const 
 
 bool triangle_side_among(const DistanceIndex& index, const uint32_t* ids, size_t count,
                          double window_reach, const Vec3& a, const Vec3& b, const Vec3& c,
-                         double reach, TriangleSide* side, ClosestPoint* closest) {
+                         double reach, TriangleSide* side, ClosestPoint* closest, uint32_t seed) {
   SPLINTCORE_ASSERT(index.vertex_start.size() > 0 && reach <= window_reach);
   if (count == 0) return false;
   // a's closest triangle among ids: every other triangle's box misses abc's box grown by
   // window_reach, so it lies at least window_reach from a; closer than that (with a margin far
   // above the rounding), the best among ids is the best of all, the same (distance, triangle)
   // as the tree search finds (the same filters and the same exact routine, lowest id on a tie).
+  // The seed first: the least (distance, id) over the seed and ids is the least over ids
+  // whenever that is nearer than window_reach (a seed that near is among ids).
   ClosestSearch search(index, a, HUGE_VAL);
+  if (seed < index.mesh->triangles.size()) search.consider(seed);
   for (size_t i = 0; i < count; ++i) search.consider(ids[i]);
   if (!search.found || !(search.best_d < window_reach * (1 - 1e-9))) return false;
   SignedDistance sd;

@@ -1684,6 +1684,16 @@ TEST(DistanceTriangle, SideAmongAWindowIsTriangleSide) {
         ++declined;
         continue;
       }
+      // A seed (the answer itself, another triangle, an id out of range) changes nothing.
+      for (const uint32_t s : {among.triangle, static_cast<uint32_t>(i * 7919) % nt, nt + 7}) {
+        TriangleSide seeded_side = TriangleSide::kNear;
+        ClosestPoint seeded;
+        ASSERT_TRUE(triangle_side_among(b->index, ids.data(), n, window_reach, p, q, r, reach,
+                                        &seeded_side, &seeded, s));
+        ASSERT_EQ(static_cast<int>(seeded_side), static_cast<int>(side));
+        ASSERT_EQ(seeded.triangle, among.triangle);
+        ASSERT_EQ(std::memcmp(&seeded.point, &among.point, sizeof among.point), 0);
+      }
       ASSERT_EQ(static_cast<int>(side), static_cast<int>(want))
           << shape.first << " i " << i << " window_reach " << window_reach;
       ClosestPoint tree;
