@@ -244,9 +244,10 @@ TriangleSide triangle_side(const DistanceIndex& index, const Vec3& a, const Vec3
                            double reach, uint32_t* seed);
 
 // The triangles whose bounds overlap `box` (any order) into out[0 .. capacity); their count, or
-// capacity + 1 when there are more (out then holds some of them). No arena.
+// capacity + 1 when there are more (out then holds some of them). With `boxes`, each one's
+// bounds (its corners' least and most coordinates) at the same index. No arena.
 size_t triangles_meeting_box(const DistanceIndex& index, const Aabb& box, uint32_t* out,
-                             size_t capacity);
+                             size_t capacity, Aabb* boxes = nullptr);
 
 // triangle_side() answered from a window of candidates: `ids` must hold every triangle whose
 // bounds overlap abc's box grown by window_reach (>= reach), e.g. triangles_meeting_box() of a
@@ -257,11 +258,13 @@ size_t triangles_meeting_box(const DistanceIndex& index, const Aabb& box, uint32
 // triangles streamed out in order (a window serves the next ones): no tree descent per query.
 // `seed` (any triangle id, or kNoNeighbor), e.g. the previous query's closest triangle, is
 // looked at first: a tight bound from the start, so most of the window is passed over by its
-// boxes; the answer never depends on it. Needs a full index (not pairs_only). No arena.
+// boxes; the answer never depends on it. `boxes` (or null), ids' bounds as
+// triangles_meeting_box gives them, spare computing them for each query (the same filters, the
+// same bits). Needs a full index (not pairs_only). No arena.
 bool triangle_side_among(const DistanceIndex& index, const uint32_t* ids, size_t count,
                          double window_reach, const Vec3& a, const Vec3& b, const Vec3& c,
                          double reach, TriangleSide* side, ClosestPoint* closest = nullptr,
-                         uint32_t seed = kNoNeighbor);
+                         uint32_t seed = kNoNeighbor, const Aabb* boxes = nullptr);
 
 // Every triangle whose bounds overlap `box`, appended to `out` in ascending id order.
 Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aabb& box,

@@ -51,6 +51,7 @@ struct NearSplint {
   // The window (kWindowTriangles ids from the arena); empty box: none yet.
   double window_grow = 0, window_reach = 0;  // mm
   uint32_t* window_ids = nullptr;
+  Aabb* window_boxes = nullptr;  // the window's triangles' bounds (kWindowTriangles)
   mutable Aabb window;
   mutable size_t window_count = 0;  // kWindowTriangles + 1: too many, the tree answers
 };
@@ -64,14 +65,15 @@ TriangleSide fine_side(const NearSplint& g, const Aabb& box, const Vec3& p, cons
       const Vec3 grow{g.window_grow, g.window_grow, g.window_grow};
       g.window = Aabb{box.lo - grow, box.hi + grow};
       const Vec3 reach{g.window_reach, g.window_reach, g.window_reach};
-      g.window_count = triangles_meeting_box(
-          *g.index, Aabb{g.window.lo - reach, g.window.hi + reach}, g.window_ids, kWindowTriangles);
+      g.window_count =
+          triangles_meeting_box(*g.index, Aabb{g.window.lo - reach, g.window.hi + reach},
+                                g.window_ids, kWindowTriangles, g.window_boxes);
     }
     TriangleSide side = TriangleSide::kOutside;
     ClosestPoint closest;
     if (g.window_count <= kWindowTriangles &&
         triangle_side_among(*g.index, g.window_ids, g.window_count, g.window_reach, p, q, r,
-                            g.reach, &side, &closest, g.seed)) {
+                            g.reach, &side, &closest, g.seed, g.window_boxes)) {
       g.seed = closest.triangle;
       return side;
     }
@@ -257,7 +259,10 @@ Status sweep_near_splint(const Context& ctx, const Mesh& splint, const Aabb& bou
   for (uint32_t i = 0; i < kKeepTasks; ++i) {
     tasks[i] = near;
     tasks[i].window_ids = arena.allocate_array<uint32_t>(kWindowTriangles);
-    if (tasks[i].window_ids == nullptr) return arena.exhausted_status();
+    tasks[i].window_boxes = arena.allocate_array<Aabb>(kWindowTriangles);
+    if (tasks[i].window_ids == nullptr || tasks[i].window_boxes == nullptr) {
+      return arena.exhausted_status();
+    }
     users[i] = &tasks[i];
   }
   so.keep_triangle = near_splint;

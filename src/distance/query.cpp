@@ -370,6 +370,20 @@ struct ClosestSearch {
     }
   }
 
+  // consider() with t's box given (the least and most of its corners' coordinates: the same
+  // gaps, the same decision).
+  void consider_boxed(uint32_t t, const Aabb& box) {
+    const auto gap = [](double x, double lo, double hi) {
+      const double below = lo - x, above = x - hi;
+      return (below > 0.0 ? below : 0.0) + (above > 0.0 ? above : 0.0);
+    };
+    const double gx = gap(q.x, box.lo.x, box.hi.x), gy = gap(q.y, box.lo.y, box.hi.y),
+                 gz = gap(q.z, box.lo.z, box.hi.z);
+    if (gx * gx + gy * gy + gz * gz > best2 * (1.0 + 0x1p-40)) return;
+    const Triangle& tri = mesh.triangles[t];
+    consider_near(t, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]);
+  }
+
   // Triangle t, behind the filter of its box.
   void consider(uint32_t t) {
     const Triangle& tri = mesh.triangles[t];
@@ -802,9 +816,18 @@ Aabb reach_box(const Vec3& a, const Vec3& b, const Vec3& c, double reach) {
 }
 
 // Does triangle t of `mesh` come within reach of abc (`box`: reach_box(a, b, c, reach))?
+// triangle_within_reach() once t's box is known to meet abc's reach box.
+bool triangle_within_reach_boxed(const Mesh& mesh, uint32_t t, const Vec3& a, const Vec3& b,
+                                 const Vec3& c, double reach);
+
 bool triangle_within_reach(const Mesh& mesh, uint32_t t, const Aabb& box, const Vec3& a,
                            const Vec3& b, const Vec3& c, double reach) {
   if (!triangle_box(mesh, t).overlaps(box)) return false;
+  return triangle_within_reach_boxed(mesh, t, a, b, c, reach);
+}
+
+bool triangle_within_reach_boxed(const Mesh& mesh, uint32_t t, const Vec3& a, const Vec3& b,
+                                 const Vec3& c, double reach) {
   const Vec3* v = mesh.vertices.data();
   const Triangle& tri = mesh.triangles[t];
   // Wholly on one side of the triangle's plane, farther than reach (with a margin far above
@@ -845,16 +868,18 @@ bool triangle_near_mesh(const DistanceIndex& index, const Vec3& a, const Vec3& b
 }
 
 size_t triangles_meeting_box(const DistanceIndex& index, const Aabb& box, uint32_t* out,
-                             size_t capacity) {
+                             size_t capacity, Aabb* boxes) {
   const Mesh& mesh = *index.mesh;
   if (mesh.triangles.size() == 0 || box.empty()) return 0;
   size_t n = 0;
   auto visit = [&](uint32_t t) {
-    if (!triangle_box(mesh, t).overlaps(box)) return true;
+    const Aabb tb = triangle_box(mesh, t);
+    if (!tb.overlaps(box)) return true;
     if (n == capacity) {
       n = capacity + 1;
       return false;
     }
+    if (boxes != nullptr) boxes[n] = tb;
     out[n++] = t;
     return true;
   };
@@ -885,7 +910,8 @@ TriangleSide side_from_closest(const DistanceIndex& index, const Vec3& a, const 
 
 bool triangle_side_among(const DistanceIndex& index, const uint32_t* ids, size_t count,
                          double window_reach, const Vec3& a, const Vec3& b, const Vec3& c,
-                         double reach, TriangleSide* side, ClosestPoint* closest, uint32_t seed) {
+                         double reach, TriangleSide* side, ClosestPoint* closest, uint32_t seed,
+                         const Aabb* boxes) {
   SPLINTCORE_ASSERT(index.vertex_start.size() > 0 && reach <= window_reach);
   if (count == 0) return false;
   // a's closest triangle among ids: every other triangle's box misses abc's box grown by
@@ -896,7 +922,11 @@ bool triangle_side_among(const DistanceIndex& index, const uint32_t* ids, size_t
   // whenever that is nearer than window_reach (a seed that near is among ids).
   ClosestSearch search(index, a, HUGE_VAL);
   if (seed < index.mesh->triangles.size()) search.consider(seed);
-  for (size_t i = 0; i < count; ++i) search.consider(ids[i]);
+  if (boxes != nullptr) {
+    for (size_t i = 0; i < count; ++i) search.consider_boxed(ids[i], boxes[i]);
+  } else {
+    for (size_t i = 0; i < count; ++i) search.consider(ids[i]);
+  }
   if (!search.found || !(search.best_d < window_reach * (1 - 1e-9))) return false;
   SignedDistance sd;
   settle_closest(index, a, search.best2, &search.best);
@@ -905,7 +935,11 @@ bool triangle_side_among(const DistanceIndex& index, const uint32_t* ids, size_t
   const auto near = [&] {
     const Aabb box = reach_box(a, b, c, reach);
     for (size_t i = 0; i < count; ++i) {
-      if (triangle_within_reach(*index.mesh, ids[i], box, a, b, c, reach)) return true;
+      if (boxes != nullptr ? boxes[i].overlaps(box) &&
+                                 triangle_within_reach_boxed(*index.mesh, ids[i], a, b, c, reach)
+                           : triangle_within_reach(*index.mesh, ids[i], box, a, b, c, reach)) {
+        return true;
+      }
     }
     return false;
   };

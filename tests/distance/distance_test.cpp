@@ -1694,6 +1694,23 @@ TEST(DistanceTriangle, SideAmongAWindowIsTriangleSide) {
         ASSERT_EQ(seeded.triangle, among.triangle);
         ASSERT_EQ(std::memcmp(&seeded.point, &among.point, sizeof among.point), 0);
       }
+      // With the window's boxes (triangles_meeting_box gives them): the same bits.
+      std::vector<Aabb> boxes(n > 0 ? n : 1);
+      std::vector<uint32_t> boxed_ids(n > 0 ? n : 1);
+      ASSERT_EQ(triangles_meeting_box(b->index, query, boxed_ids.data(), n, boxes.data()), n);
+      for (size_t k = 0; k < n; ++k) {
+        const Triangle& t = m.triangles[boxed_ids[k]];
+        Aabb want_box;
+        for (uint32_t v : t.v) want_box.add(m.vertices[v]);
+        ASSERT_TRUE(boxes[k].lo == want_box.lo && boxes[k].hi == want_box.hi);
+      }
+      TriangleSide boxed_side = TriangleSide::kNear;
+      ClosestPoint boxed;
+      ASSERT_TRUE(triangle_side_among(b->index, boxed_ids.data(), n, window_reach, p, q, r, reach,
+                                      &boxed_side, &boxed, kNoNeighbor, boxes.data()));
+      ASSERT_EQ(static_cast<int>(boxed_side), static_cast<int>(side));
+      ASSERT_EQ(boxed.triangle, among.triangle);
+      ASSERT_EQ(std::memcmp(&boxed.point, &among.point, sizeof among.point), 0);
       ASSERT_EQ(static_cast<int>(side), static_cast<int>(want))
           << shape.first << " i " << i << " window_reach " << window_reach;
       ClosestPoint tree;
