@@ -211,7 +211,7 @@ struct BlockoutStats {
 // splint's box grown by two cells and the splint's distance index (distance_index_bound), the
 // sweep's state and extractor (a slab of one layer beside the carried one), a batch of
 // kSweepKeepBatch triangles waiting for the filter (49 bytes each) and four copies of its
-// window (4 KB each; the filter runs in the executor's tasks), the kept swept
+// window (1,024 ids and boxes, 52 KB each; the filter runs in the executor's tasks), the kept swept
 // triangles logged above it (48 bytes each), then 4 bytes per extracted
 // vertex and the swept mesh, moved down over the cells and the index; then the Boolean's; only
 // `out` stays (moved down to where the arena's top was). Errors: those of sweep_volume_mesh and

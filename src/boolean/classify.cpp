@@ -160,8 +160,8 @@ Status BooleanRun::FloodSide::winding_number(const Vec3& q, double* w) {
 }
 
 // Whether an edge at vertex v is used by exactly one of B's near triangles (all uncut here:
-// the caller passes only vertices of no cut triangle). At most kFan uses looked at (more:
-// false, and the winding number decides as before).
+// the caller passes only vertices of no cut triangle). At most kFan uses looked at (more, or a
+// triangle with a repeated corner: false, and the winding number decides as before).
 bool BooleanRun::FloodSide::on_near_border(uint32_t v) const {
   constexpr uint32_t kFan = 64;
   const uint32_t uses = start[v + 1] - start[v];
@@ -170,6 +170,8 @@ bool BooleanRun::FloodSide::on_near_border(uint32_t v) const {
   uint32_t n = 0;
   for (uint32_t r = start[v]; r < start[v + 1]; ++r) {
     const Triangle& t = mesh.triangles[rows[r]];
+    // A triangle with a repeated corner would count an edge once: no answer then.
+    if (t.v[0] == t.v[1] || t.v[1] == t.v[2] || t.v[2] == t.v[0]) return false;
     for (uint32_t w : t.v) {
       if (w != v) ends[n++] = w;
     }
