@@ -1059,6 +1059,11 @@ Status flush_batch(KeepLog& log) {
   return Status::ok();
 }
 
+// The batch is flushed at the end of every cell layer, while the extraction runs: the log
+// grows in place only while it is the arena's top (the extractor's working set is returned
+// when it ends, and the log then lies above the top).
+Status flush_layer(void* user, int64_t) { return flush_batch(*static_cast<KeepLog*>(user)); }
+
 Status log_kept(void* user, const Triangle& t, const Vec3& a, const Vec3& b, const Vec3& c) {
   KeepLog& log = *static_cast<KeepLog*>(user);
   auto beyond = [&](const Vec3& p) {
@@ -1144,12 +1149,13 @@ Status extract_kept(Sweep& s, const SweepOptions& o, uint64_t pool_share, Mesh* 
   log.kept.bind(&arena);
   MarchingCubesVisitor visitor;
   visitor.triangle = log_kept;
+  visitor.layer_done = flush_layer;
   visitor.user = &log;
   MarchingCubesOptions mc = extraction_options(s, o);
   mc.pool_ids = (uint64_t{g.nx} + 1) * (uint64_t{g.ny} + 1) * 10 / pool_share;
   SPLINTCORE_RETURN_IF_ERROR(
       marching_cubes(*s.ctx, g, LayerSource{fill_layers, &s}, mc, visitor, &st->extraction));
-  SPLINTCORE_RETURN_IF_ERROR(flush_batch(log));
+  SPLINTCORE_ASSERT(log.waiting == 0);  // flushed at each layer's end
   st->cap_triangles_dropped = log.caps;
   st->filtered_triangles = log.left_out;
   return build_kept_mesh(arena, log, st->extraction.vertices, mesh);
