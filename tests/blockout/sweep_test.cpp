@@ -471,6 +471,22 @@ TEST(Blockout, NearSplintFilterGivesTheSameSolid) {
 
 bool keep_all(const void*, const Vec3&, const Vec3&, const Vec3&) { return true; }
 
+// A filtered sweep of the slab [-4, 4]^2 x [0, 1] through the region [-2, 2]^2 x [0.5, 3].
+SweepOptions filtered_slab_options(const Vec3& direction, double voxel,
+                                   bool (*keep)(const void*, const Vec3&, const Vec3&,
+                                                const Vec3&)) {
+  SweepOptions o;
+  o.direction = direction;
+  o.voxel = voxel;
+  o.has_region = true;
+  o.region.lo = Vec3{-2.0, -2.0, 0.5};
+  o.region.hi = Vec3{2.0, 2.0, 3.0};
+  o.open_at_region = true;
+  o.keep_triangle = keep;
+  o.float32_vertices = true;
+  return o;
+}
+
 TEST(Sweep, FilteredSweepRunsAgainWithTheFullIdPoolWhenALayerNeedsIt) {
   // A slab wider than the region swept up through it: the region's last layer is inside
   // everywhere, so the closing cells cross four edges at each of its samples, more than the
@@ -480,15 +496,7 @@ TEST(Sweep, FilteredSweepRunsAgainWithTheFullIdPoolWhenALayerNeedsIt) {
   Context ctx(&ta.arena);
   const float lo[3] = {-4, -4, 0}, hi[3] = {4, 4, 1};
   Mesh slab = box_mesh(&ta.arena, lo, hi);
-  SweepOptions o;
-  o.direction = Vec3{0, 0, 1};
-  o.voxel = 0.25;
-  o.has_region = true;
-  o.region.lo = Vec3{-2.0, -2.0, 0.5};
-  o.region.hi = Vec3{2.0, 2.0, 3.0};
-  o.open_at_region = true;
-  o.keep_triangle = keep_all;
-  o.float32_vertices = true;
+  SweepOptions o = filtered_slab_options(Vec3{0, 0, 1}, 0.25, keep_all);
   std::vector<Vec3> vertices[2];
   std::vector<Triangle> triangles[2];
   for (uint32_t layers : {0u, 1u}) {
@@ -528,15 +536,8 @@ TEST(Sweep, FilterInTasksSameBytesForEveryThreadCount) {
   TestArena ta(size_t{256} << 20);
   const float lo[3] = {-4, -4, 0}, hi[3] = {4, 4, 1};
   Mesh slab = box_mesh(&ta.arena, lo, hi);
-  SweepOptions o;
-  o.direction = Vec3{0, 0, -1};  // the slab's top face crosses the region
-  o.voxel = 0.05;
-  o.has_region = true;
-  o.region.lo = Vec3{-2.0, -2.0, 0.5};
-  o.region.hi = Vec3{2.0, 2.0, 3.0};
-  o.open_at_region = true;
-  o.keep_triangle = keep_left;
-  o.float32_vertices = true;
+  // Down: the slab's top face crosses the region.
+  SweepOptions o = filtered_slab_options(Vec3{0, 0, -1}, 0.05, keep_left);
   std::string first;
   for (unsigned threads : {0u, 1u, 2u, 3u}) {
     SCOPED_TRACE(threads);
