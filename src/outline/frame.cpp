@@ -1,6 +1,7 @@
 // The occlusal frame and the height grids of the automatic outline (outline.h): the plane the
 // two arches meet in, fitted to where they face each other, and per jaw the surface each
 // column of a 0.5 mm lattice shows the other jaw.
+#include <algorithm>
 #include <cmath>
 
 #include "outline_internal.h"
@@ -61,31 +62,58 @@ bool centroid_axis(const Vec3& upper_centroid, const Vec3& lower_centroid, Vec3*
   return true;
 }
 
+namespace {
+
+constexpr size_t kQuotientChunk = 16384;  // vertices a task of anterior_axis
+
+// anterior_axis's quotients of vertices [first, first + count) of m, moved by -c: (x, y) / r
+// in the plane, or +0 where r is 0 (adding +0 to a sum that starts at +0 changes nothing: such
+// a sum is never -0).
+void unit_quotients(const Mesh& m, size_t first, size_t count, const Vec3& c, const PlaneAxes& axes,
+                    Lanes2* q) {
+  const Vec3* v = m.vertices.data() + first;
+  for (size_t k = 0; k < count; ++k) {
+    const Lanes2 xy = axes.xy(v[k] - c);
+    const double x = xy[0], y = xy[1];
+    const double r = std::sqrt(x * x + y * y);
+    const double safe = r > 0 ? r : 1.0;  // no 0 / 0 (trapping tests), and not added
+    const Lanes2 zero = {0.0, 0.0};
+    q[k] = r > 0 ? xy / Lanes2{safe, safe} : zero;
+  }
+}
+
+}  // namespace
+
 // The mean of the unit vectors from the centre c (the mean of the jaws' centroids) to every
 // vertex, in the plane: a dental arch is open at the back, so this points to the front.
 // Continuous in the data (no vertex is chosen), so the lattice it orients moves with the jaws.
 // Both quotients of a vertex in one two-lane division (each lane rounds as the scalar one:
-// the same bits for half the divisions), summed in vertex order.
-Vec3 anterior_axis(const Mesh& upper, const Mesh& lower, const Vec3& c, const Frame& f) {
-  double sx = 0, sy = 0;
+// the same bits for half the divisions), in chunks of vertices on the executor (into the
+// arena, returned), then summed in vertex order.
+Status anterior_axis(const Context& ctx, const Mesh& upper, const Mesh& lower, const Vec3& c,
+                     const Frame& f, Vec3* axis) {
+  ArenaScope scope(*ctx.arena);
+  const size_t nu = upper.vertices.size(), n = nu + lower.vertices.size();
+  Lanes2* q = ctx.arena->allocate_array<Lanes2>(n);
+  if (q == nullptr) return ctx.arena->exhausted_status();
   const PlaneAxes axes(f);
-  auto add = [&](const Mesh& m) {
-    for (const Vec3& v : m.vertices) {
-      const Lanes2 xy = axes.xy(v - c);
-      const double x = xy[0], y = xy[1];
-      const double r = std::sqrt(x * x + y * y);
-      const double safe = r > 0 ? r : 1.0;  // no 0 / 0 (trapping tests), and not added
-      const Lanes2 q = xy / Lanes2{safe, safe};
-      if (r > 0) {
-        sx += q[0];
-        sy += q[1];
-      }
-    }
+  const size_t chunks_upper = (nu + kQuotientChunk - 1) / kQuotientChunk;
+  const size_t chunks = chunks_upper + (n - nu + kQuotientChunk - 1) / kQuotientChunk;
+  auto task = [&](uint32_t i) {
+    const bool in_upper = i < chunks_upper;
+    const size_t first = (in_upper ? i : i - chunks_upper) * kQuotientChunk;
+    const Mesh& m = in_upper ? upper : lower;
+    const size_t count = std::min(kQuotientChunk, m.vertices.size() - first);
+    unit_quotients(m, first, count, c, axes, q + (in_upper ? 0 : nu) + first);
   };
-  add(upper);
-  add(lower);
-  const double count = static_cast<double>(upper.vertices.size() + lower.vertices.size());
-  return (f.e1 * sx + f.e2 * sy) * (1.0 / count);
+  parallel_for_each(ctx.executor, static_cast<uint32_t>(chunks), task);
+  double sx = 0, sy = 0;
+  for (size_t k = 0; k < n; ++k) {
+    sx += q[k][0];
+    sy += q[k][1];
+  }
+  *axis = (f.e1 * sx + f.e2 * sy) * (1.0 / static_cast<double>(n));
+  return Status::ok();
 }
 
 namespace {
@@ -93,39 +121,74 @@ namespace {
 // The lattice of build_grid over the jaws (the extent and centroid of their vertices in the
 // plane) and its arrays, unfilled. kHeights: also the maxilla's lowest and the mandible's
 // highest vertex along n (their heights as fill_columns computes them), in the same pass, and
-// every vertex's height in heights[0] (the maxilla's) and heights[1] (the mandible's). The
-// extent's least and greatest x and y and the centroid's sums in lanes (each lane compares and
-// adds as the scalar code would, in vertex order).
-template <bool kHeights>
-Status grid_layout(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3& lower_offset,
-                   const Frame& f, Grid* g, double* low_upper, double* high_lower,
-                   double* heights[2]) {
-  Lanes2 lo = {HUGE_VAL, HUGE_VAL}, hi = {-HUGE_VAL, -HUGE_VAL}, sum = {0.0, 0.0};
+// every vertex's height in heights[0] (the maxilla's) and heights[1] (the mandible's).
+// On the executor: task 0 sums the vertices' places in the plane (in lanes, in vertex order:
+// the centroid's bits do not depend on the threads); the others take chunks of kLayoutChunk
+// vertices, their extent (least and greatest x and y) and heights, combined in chunk order
+// after (a strict comparison keeps the first of equal values, as one pass in vertex order
+// would: the same bits).
+constexpr size_t kLayoutChunk = 32768;
+
+struct LayoutChunk {
+  Lanes2 lo = {HUGE_VAL, HUGE_VAL}, hi = {-HUGE_VAL, -HUGE_VAL};
   double h_lo = HUGE_VAL, h_hi = -HUGE_VAL;
+};
+
+template <bool kHeights>
+Status grid_layout(Arena& arena, const Executor* executor, const Mesh& upper, const Mesh& lower,
+                   const Vec3& lower_offset, const Frame& f, Grid* g, double* low_upper,
+                   double* high_lower, double* heights[2]) {
   const PlaneAxes axes(f);
   const Vec3 n = f.n;
-  auto extent = [&](const Mesh& m, const Vec3& offset, bool upper_jaw, double* h_out) {
+  const size_t nu = upper.vertices.size(), nl = lower.vertices.size();
+  const size_t chunks_upper = (nu + kLayoutChunk - 1) / kLayoutChunk;
+  const size_t chunks = chunks_upper + (nl + kLayoutChunk - 1) / kLayoutChunk;
+  ArenaScope scope(arena);  // the chunks' extents go when done
+  LayoutChunk* parts = arena.allocate_array<LayoutChunk>(chunks > 0 ? chunks : 1);
+  if (parts == nullptr) return arena.exhausted_status();
+  Lanes2 sum = {0.0, 0.0};
+  auto task = [&](uint32_t i) {
+    if (i == 0) {
+      for (const Vec3& v : upper.vertices) sum += axes.xy(v + Vec3{});
+      for (const Vec3& v : lower.vertices) sum += axes.xy(v + lower_offset);
+      return;
+    }
+    const size_t c = i - 1;
+    const bool upper_jaw = c < chunks_upper;
+    const Mesh& m = upper_jaw ? upper : lower;
+    const Vec3 offset = upper_jaw ? Vec3{} : lower_offset;
+    const size_t first = (upper_jaw ? c : c - chunks_upper) * kLayoutChunk;
+    const size_t last = std::min(first + kLayoutChunk, m.vertices.size());
+    double* h_out = kHeights ? heights[upper_jaw ? 0 : 1] : nullptr;
+    LayoutChunk part;
     const Vec3* v = m.vertices.data();
-    const size_t count = m.vertices.size();
-    for (size_t k = 0; k < count; ++k) {
+    for (size_t k = first; k < last; ++k) {
       const Vec3 p = v[k] + offset;
       const Lanes2 xy = axes.xy(p);
-      lo = xy < lo ? xy : lo;
-      hi = xy > hi ? xy : hi;
-      sum += xy;
+      part.lo = xy < part.lo ? xy : part.lo;
+      part.hi = xy > part.hi ? xy : part.hi;
       if (kHeights) {
         const double h = dot(p, n);
         h_out[k] = h;
         if (upper_jaw) {
-          h_lo = h < h_lo ? h : h_lo;
+          part.h_lo = h < part.h_lo ? h : part.h_lo;
         } else {
-          h_hi = h > h_hi ? h : h_hi;
+          part.h_hi = h > part.h_hi ? h : part.h_hi;
         }
       }
     }
+    parts[c] = part;
   };
-  extent(upper, Vec3{}, true, kHeights ? heights[0] : nullptr);
-  extent(lower, lower_offset, false, kHeights ? heights[1] : nullptr);
+  parallel_for_each(executor, static_cast<uint32_t>(chunks + 1), task);
+  Lanes2 lo = {HUGE_VAL, HUGE_VAL}, hi = {-HUGE_VAL, -HUGE_VAL};
+  double h_lo = HUGE_VAL, h_hi = -HUGE_VAL;
+  for (size_t c = 0; c < chunks; ++c) {
+    const LayoutChunk& part = parts[c];
+    lo = part.lo < lo ? part.lo : lo;
+    hi = part.hi > hi ? part.hi : hi;
+    h_lo = part.h_lo < h_lo ? part.h_lo : h_lo;
+    h_hi = part.h_hi > h_hi ? part.h_hi : h_hi;
+  }
   *low_upper = h_lo;
   *high_lower = h_hi;
   const double x_lo = lo[0], y_lo = lo[1], x_hi = hi[0], y_hi = hi[1], cx = sum[0], cy = sum[1];
@@ -145,6 +208,8 @@ Status grid_layout(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec
   g->ny = static_cast<uint32_t>(static_cast<int64_t>(std::floor((y_hi - g->cy) / kCellMm)) -
                                 g->iy0 + 1);
   g->set_limits();
+  arena.rewind(scope.start());  // (the chunks' extents: the grid's arrays stay)
+  scope.commit();
   const size_t cells = static_cast<size_t>(g->nx) * g->ny;
   for (int jaw = 0; jaw < 2; ++jaw) {
     g->h[jaw] = arena.allocate_array<double>(cells);
@@ -159,7 +224,7 @@ Status grid_layout(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec
 Status build_grid(Arena& arena, const Executor* executor, const Mesh& upper, const Mesh& lower,
                   const Vec3& lower_offset, const Frame& f, Grid* g) {
   double unused_low = 0, unused_high = 0;
-  SPLINTCORE_RETURN_IF_ERROR(grid_layout<false>(arena, upper, lower, lower_offset, f, g,
+  SPLINTCORE_RETURN_IF_ERROR(grid_layout<false>(arena, executor, upper, lower, lower_offset, f, g,
                                                 &unused_low, &unused_high, nullptr));
   fill_both(executor, upper, lower, lower_offset, f, g);
   return Status::ok();
@@ -358,9 +423,14 @@ bool fit_contact_plane(const Grid& g, Plane* plane, uint64_t* contact_cells) {
 Status find_frame(const Context& ctx, const Mesh& upper, const Mesh& lower, Frame* f, Grid* g,
                   Plane* plane) {
   Arena& arena = *ctx.arena;
-  // The centroids do not depend on the frame: once for every round.
-  const Vec3 upper_centroid = mesh_centroid(upper, Vec3{});
-  const Vec3 lower_centroid = mesh_centroid(lower, Vec3{});
+  // The centroids do not depend on the frame: once for every round (one task a jaw).
+  Vec3 centroids[2];
+  auto centroid = [&](uint32_t jaw) {
+    centroids[jaw] = mesh_centroid(jaw == 0 ? upper : lower, Vec3{});
+  };
+  parallel_for_each(ctx.executor, 2, centroid);
+  const Vec3 upper_centroid = centroids[0];
+  const Vec3 lower_centroid = centroids[1];
   const Vec3 centre = (upper_centroid + lower_centroid) * 0.5;
   Vec3 n;
   if (!centroid_axis(upper_centroid, lower_centroid, &n)) {
@@ -372,7 +442,9 @@ Status find_frame(const Context& ctx, const Mesh& upper, const Mesh& lower, Fram
   for (int round = 0; round < kFrameRounds; ++round) {
     Frame provisional;
     complete_frame(n, any_perpendicular(n), &provisional);
-    complete_frame(n, anterior_axis(upper, lower, centre, provisional), f);
+    Vec3 anterior;
+    SPLINTCORE_RETURN_IF_ERROR(anterior_axis(ctx, upper, lower, centre, provisional, &anterior));
+    complete_frame(n, anterior, f);
     ArenaScope scope(arena);
     const bool last = round + 1 == kFrameRounds;
     uint64_t contact = 0;
@@ -387,8 +459,8 @@ Status find_frame(const Context& ctx, const Mesh& upper, const Mesh& lower, Fram
       double* heights[2] = {arena.allocate_array<double>(upper.vertices.size()),
                             arena.allocate_array<double>(lower.vertices.size())};
       if (heights[0] == nullptr || heights[1] == nullptr) return arena.exhausted_status();
-      SPLINTCORE_RETURN_IF_ERROR(
-          grid_layout<true>(arena, upper, lower, Vec3{}, *f, g, &low, &high, heights));
+      SPLINTCORE_RETURN_IF_ERROR(grid_layout<true>(arena, ctx.executor, upper, lower, Vec3{}, *f, g,
+                                                   &low, &high, heights));
       fitted = fit_near_plane(ctx.executor, upper, lower, *f, heights, low, high, slack, g, plane,
                               &contact, &gap);
       slack = gap + kSlackOverGapMm;  // the next round's frame is a little tilted from this

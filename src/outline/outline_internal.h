@@ -139,7 +139,10 @@ void complete_frame(const Vec3& n, const Vec3& anterior_hint, Frame* f);
 // The unit direction from the mandible's vertex centroid to the maxilla's; false when they lie
 // within 1 mm.
 bool centroid_axis(const Vec3& upper_centroid, const Vec3& lower_centroid, Vec3* n);
-Vec3 anterior_axis(const Mesh& upper, const Mesh& lower, const Vec3& centre, const Frame& f);
+// The front of the arch in the plane (e1, e2) of f (see frame.cpp), in *axis. Arena: one
+// 16-byte pair a vertex of both jaws (returned). Errors: kArenaExhausted.
+Status anterior_axis(const Context& ctx, const Mesh& upper, const Mesh& lower, const Vec3& centre,
+                     const Frame& f, Vec3* axis);
 Status build_grid(Arena& arena, const Executor* executor, const Mesh& upper, const Mesh& lower,
                   const Vec3& lower_offset, const Frame& f, Grid* g);
 void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g);
