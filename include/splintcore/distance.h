@@ -301,8 +301,10 @@ struct MeshPairDistance {
 };
 
 // Arena bytes mesh_pair_distance() takes (its best-first heap of 2048 box pairs and its
-// depth-first stack of 15 (a.depth + b.depth) + 1, 24 bytes each, returned before it does):
-// plus alignment, a few tens of kilobytes.
+// depth-first stack of 15 (a.depth + b.depth) + 1, 24 bytes each, returned before it does;
+// on an executor of more than one thread also 8 tasks' heaps of 256 and stacks: the search
+// split, with the same answer, where the arena holds them, else serial): plus alignment, a
+// few hundred kilobytes.
 uint64_t mesh_pair_distance_bound(const DistanceIndex& a, const DistanceIndex& b);
 
 // The least triangle_pair_distance() between a triangle of A and one of B moved by offset_b:

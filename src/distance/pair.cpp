@@ -4,6 +4,7 @@
 // ICRA 2000, section 4), and the triangle-triangle distance as the least of the vertex-face and
 // edge-edge distances (Ericson, "Real-Time Collision Detection", 2005, 5.1.5 and 5.1.9), with
 // meeting triangles decided exactly (Shewchuk's orient3d, geometry.h).
+#include <atomic>
 #include <cmath>
 #include <cstring>
 
@@ -314,8 +315,8 @@ struct PairSearch {
   RigidTransform move;
   PairEntry* stack = nullptr;
   uint64_t top = 0, capacity = 0;
-  PairEntry* heap = nullptr;  // kHeapEntries
-  uint32_t heap_size = 0;
+  PairEntry* heap = nullptr;  // heap_capacity
+  uint32_t heap_size = 0, heap_capacity = kHeapEntries;
   // The best pair so far by (best2, triangle a, triangle b); before any, best2 is the limit.
   double best2 = HUGE_VAL;
   bool found = false, meet = false;
@@ -333,6 +334,11 @@ struct PairSearch {
   size_t collect_capacity = 0, collect_count = 0;
   // Stopping at the first meeting pair (mesh_pair_meet): `done` once one is found.
   bool first_meet = false, done = false;
+  // A task of a split search (run_split): the least best2 of all its tasks so far, as the bits
+  // of a double (non-negative: their order is the doubles' order), which every task prunes by
+  // (the reach of a best found elsewhere: it prunes only pairs that cannot win either).
+  std::atomic<uint64_t>* shared = nullptr;
+  double reach_from = HUGE_VAL;  // the best2 that reach was computed from
 
   // reach2 from best2: a pair of boxes whose computed distance is at most reach may hold a
   // pair whose computed distance is at most best. Box gaps round by a few ulps; a triangle
@@ -341,12 +347,34 @@ struct PairSearch {
   // with a wide berth, and prune nothing that matters.
   void update_reach() {
     if (collecting) return;
-    if (!(best2 < HUGE_VAL)) {
+    set_reach(shared != nullptr ? share(best2) : best2);
+  }
+  void set_reach(double b) {
+    reach_from = b;
+    if (!(b < HUGE_VAL)) {
       reach2 = reach = HUGE_VAL;
       return;
     }
-    reach = (std::sqrt(best2) + slack) * (1.0 + 0x1p-19);
+    reach = (std::sqrt(b) + slack) * (1.0 + 0x1p-19);
     reach2 = reach * reach;
+  }
+  // Publishes b to the tasks' shared best (when less): the least of the two.
+  double share(double b) {
+    uint64_t bits = 0;
+    std::memcpy(&bits, &b, sizeof bits);
+    uint64_t seen = shared->load(std::memory_order_relaxed);
+    while (bits < seen && !shared->compare_exchange_weak(seen, bits, std::memory_order_relaxed)) {
+    }
+    if (seen < bits) std::memcpy(&b, &seen, sizeof b);
+    return b;
+  }
+  // A task's reach from a better best found by another task.
+  void refresh() {
+    if (shared == nullptr || collecting) return;
+    const uint64_t bits = shared->load(std::memory_order_relaxed);
+    double b = 0;
+    std::memcpy(&b, &bits, sizeof b);
+    if (b < reach_from) set_reach(b);
   }
 
   // The box of an item (not the root) in double, shifted (or moved) for B.
@@ -402,6 +430,7 @@ struct PairSearch {
   void heap_push(const PairEntry& e);
   PairEntry heap_pop();
   bool run();
+  bool drain(uint32_t frontier, bool* finished);
 };
 
 inline bool pair_less(uint32_t a0, uint32_t b0, uint32_t a1, uint32_t b1) {
@@ -603,6 +632,7 @@ bool PairSearch::depth_first(const PairEntry& first) {
   stack[top++] = first;
   while (top > 0) {
     const PairEntry e = stack[--top];
+    refresh();
     if (e.lb2 > reach2) continue;
     if (is_leaf(0, e.node_a, e.slot_a) && is_leaf(1, e.node_b, e.slot_b)) {
       leaf_pair(e);
@@ -646,7 +676,17 @@ PairEntry PairSearch::heap_pop() {
 // first at once (the answer does not depend on the order, only the work does).
 bool PairSearch::run() {
   heap_push(PairEntry{0, 0, kRootSlot, kRootSlot, 0.0f, 0.0});
+  bool finished = false;
+  return drain(~uint32_t{0}, &finished);
+}
+
+// The best-first loop over the heap as it is, until it is empty or holds `frontier` pairs
+// (then *finished is false). False when the stack is full (see depth_first).
+bool PairSearch::drain(uint32_t frontier, bool* finished) {
+  *finished = false;
   while (heap_size > 0) {
+    if (heap_size >= frontier) return true;
+    refresh();
     const PairEntry e = heap_pop();
     if (e.lb2 > reach2) break;  // and so are all the others
     if (is_leaf(0, e.node_a, e.slot_a) && is_leaf(1, e.node_b, e.slot_b)) {
@@ -657,14 +697,19 @@ bool PairSearch::run() {
     PairEntry found_pairs[16];
     const uint32_t m = children(e, found_pairs);
     for (uint32_t k = m; k-- > 0;) {
-      if (heap_size < kHeapEntries) {
+      if (heap_size < heap_capacity) {
         heap_push(found_pairs[k]);
       } else if (!depth_first(found_pairs[k])) {
         return false;
       }
-      if (done) return true;
+      if (done) {
+        *finished = true;
+        return true;
+      }
     }
   }
+  heap_size = 0;
+  *finished = true;
   return true;
 }
 
@@ -762,9 +807,24 @@ double triangle_pair_distance(const Vec3& a0, const Vec3& a1, const Vec3& a2, co
   return d;
 }
 
+// A search on an executor of more than one thread is split (run_split): the serial best-first
+// start until its heap holds kSplitFrontier pairs, then those pairs dealt to kSplitTasks tasks
+// (pair i to task i % kSplitTasks), each with its own heap of kTaskHeapEntries and stack, its
+// own best and pool slice, and the shared best's reach. The answer is the least (squared
+// distance, triangle a, triangle b) of the start's and the tasks' bests: no task prunes a pair
+// that could win (the reach of a best found anywhere is at least the final best's), so the
+// pair that wins the serial search is examined by the task that holds it, and wins there. The
+// same bits as the serial search, at every thread count; only the work depends on the timing.
+constexpr uint32_t kSplitTasks = 8;
+constexpr uint32_t kSplitFrontier = 32;
+constexpr uint32_t kTaskHeapEntries = 256;
+static_assert((kSplitFrontier + 15) / kSplitTasks + 1 <= kTaskHeapEntries, "the frontier fits");
+
 uint64_t mesh_pair_distance_bound(const DistanceIndex& a, const DistanceIndex& b) {
   return arena_array_bound<PairEntry>(stack_entries(a, b)) +
-         arena_array_bound<PairEntry>(kHeapEntries);
+         arena_array_bound<PairEntry>(kHeapEntries) +
+         kSplitTasks * (arena_array_bound<PairEntry>(stack_entries(a, b)) +
+                        arena_array_bound<PairEntry>(kTaskHeapEntries));
 }
 
 namespace {
@@ -810,14 +870,120 @@ Status start_search(const DistanceIndex& a, const DistanceIndex& b, const Vec3& 
   return Status::ok();
 }
 
-// The traversal with its stack and heap in the arena (returned), then the answer.
+// Whether x's best is before y's: (best2, best_a, best_b), a search with none last.
+bool best_before(const PairSearch& x, const PairSearch& y) {
+  if (!x.found || !y.found) return x.found;
+  if (x.best2 != y.best2) return x.best2 < y.best2;
+  return pair_less(x.best_a, x.best_b, y.best_a, y.best_b);
+}
+
+// The rest of s's search (its heap: the frontier) in kSplitTasks tasks on `executor`, their
+// stacks and heaps in the arena; then s holds the least best (and, collecting, every task's
+// pairs after its own, in task order). False when a stack is full. When the arena does not
+// hold the tasks' stacks and heaps: *no_room, the arena as it was (its failure forgotten) and
+// s untouched, to go on serially. *overflow: a task's slice of the pool overflowed (the
+// caller searches again serially: the pool may hold them all).
+bool run_split(Arena& arena, const Executor* executor, PairSearch* s, bool* no_room,
+               bool* slice_overflow) {
+  *no_room = *slice_overflow = false;
+  const Arena::Marker start = arena.mark();
+  PairSearch tasks[kSplitTasks];
+  std::atomic<uint64_t> shared{0};
+  {
+    double b = s->best2;
+    uint64_t bits = 0;
+    std::memcpy(&bits, &b, sizeof bits);
+    shared.store(bits, std::memory_order_relaxed);
+  }
+  // The pool's room after the start's pairs, in equal slices.
+  const size_t used =
+      s->collect_count < s->collect_capacity ? s->collect_count : s->collect_capacity;
+  const size_t slice = s->collecting ? (s->collect_capacity - used) / kSplitTasks : 0;
+  for (uint32_t i = 0; i < kSplitTasks; ++i) {
+    PairSearch& t = tasks[i];
+    t = *s;
+    t.stack = arena.allocate_array<PairEntry>(static_cast<size_t>(s->capacity));
+    t.heap = arena.allocate_array<PairEntry>(kTaskHeapEntries);
+    if (t.stack == nullptr || t.heap == nullptr) {
+      arena.rewind(start);
+      arena.forget_failure();
+      *no_room = true;
+      return true;
+    }
+    t.top = 0;
+    t.heap_size = 0;
+    t.heap_capacity = kTaskHeapEntries;
+    t.shared = &shared;
+    t.reach_from = HUGE_VAL;
+    t.update_reach();
+    if (s->collecting) {
+      t.collected = s->collected + used + i * slice;
+      t.collect_capacity = slice;
+      t.collect_count = 0;
+    }
+  }
+  for (uint32_t k = 0; k < s->heap_size; ++k) {
+    PairSearch& t = tasks[k % kSplitTasks];
+    t.heap_push(s->heap[k]);
+  }
+  s->heap_size = 0;
+  bool ok[kSplitTasks];
+  auto task = [&](uint32_t i) {
+    bool finished = false;
+    ok[i] = tasks[i].drain(~uint32_t{0}, &finished);
+  };
+  parallel_for_each(executor, kSplitTasks, task);
+  bool overflow = s->collect_count > s->collect_capacity;
+  size_t at = used;
+  for (uint32_t i = 0; i < kSplitTasks; ++i) {
+    const PairSearch& t = tasks[i];
+    if (!ok[i]) return false;
+    if (best_before(t, *s)) {
+      s->best2 = t.best2;
+      s->found = t.found;
+      s->meet = t.meet;
+      s->best_a = t.best_a;
+      s->best_b = t.best_b;
+    }
+    if (!s->collecting) continue;
+    if (t.collect_count > t.collect_capacity && !overflow) *slice_overflow = true;
+    if (overflow || *slice_overflow) continue;
+    std::memmove(s->collected + at, t.collected, t.collect_count * sizeof(TrianglePairIds));
+    at += t.collect_count;
+  }
+  if (s->collecting) s->collect_count = overflow || *slice_overflow ? s->collect_capacity + 1 : at;
+  return true;
+}
+
+// The traversal with its stack and heap in the arena (returned), then the answer. Split on an
+// executor of more than one thread (run_split) where the arena holds the tasks' stacks and
+// heaps too, except the search for the first meeting pair (whose pair depends on the order).
 Status run_search(const Context& ctx, PairSearch* s, MeshPairDistance* out) {
   ArenaScope scope(*ctx.arena);
   s->capacity = stack_entries(*s->index[0], *s->index[1]);
   s->stack = ctx.arena->allocate_array<PairEntry>(static_cast<size_t>(s->capacity));
   s->heap = ctx.arena->allocate_array<PairEntry>(kHeapEntries);
   if (s->stack == nullptr || s->heap == nullptr) return ctx.arena->exhausted_status();
-  if (!s->run()) {
+  const bool split = ctx.executor != nullptr && ctx.executor->concurrency > 1 && !s->first_meet;
+  bool ok = false;
+  if (!split) {
+    ok = s->run();
+  } else {
+    const PairSearch fresh = *s;
+    s->heap_push(PairEntry{0, 0, kRootSlot, kRootSlot, 0.0f, 0.0});
+    bool finished = false;
+    ok = s->drain(kSplitFrontier, &finished);
+    bool no_room = false, slice_overflow = false;
+    if (ok && !finished) {
+      ok = run_split(*ctx.arena, ctx.executor, s, &no_room, &slice_overflow);
+    }
+    if (ok && no_room) ok = s->drain(~uint32_t{0}, &finished);  // (the same answer)
+    if (ok && slice_overflow) {
+      *s = fresh;
+      ok = s->run();
+    }
+  }
+  if (!ok) {
     return Status::error(StatusCode::kInternal,
                          "mesh pair distance: the index's depth does not match its tree");
   }

@@ -784,8 +784,9 @@ uint64_t compute_outline_bound(const Mesh& maxilla, const Mesh& mandible) {
       (kSmoothPasses + 2) * projector_bound();
   // The survey, after the arch: its columns (reserved once) and the jaws' slabs.
   const uint64_t survey = arena_array_bound<double>(4 * columns) + both(DistanceIndexOptions{});
-  // (The frame's rounds before them hold a lattice and every vertex's height: less than the
-  // opening's copies of the vertices.)
+  // (The frame's rounds before them hold a lattice and every vertex's height, or every
+  // vertex's two quotients (anterior_axis, 16 bytes): less than the opening's copies of the
+  // vertices.)
   const uint64_t after_frame = opening > arch + survey ? opening : arch + survey;
   return buffers + grid + after_frame;
 }

@@ -38,8 +38,9 @@ constexpr uint32_t kNoTip = ~uint32_t{0};
 
 // At least mesh_pair_distance_bound() for any two indexes: 24-byte entries, a heap of 2048 and
 // a stack of 15 (a.depth + b.depth) + 1, where a 4-wide tree over 32-bit Morton leaves is at
-// most 32 deep; and their alignment.
-constexpr uint64_t kPairStackBound = 24 * (2048 + 15 * 64 + 1) + 2 * 64;
+// most 32 deep; the split search's 8 tasks' heaps of 256 and stacks; and their alignment.
+constexpr uint64_t kPairStackBound =
+    24 * (2048 + 15 * 64 + 1) + 2 * 64 + 8 * (24 * (256 + 15 * 64 + 1) + 2 * 64);
 
 // A jaw is not empty, its vertices are finite and its triangles' corners exist; also its
 // longest edge (the autorotation's bands need it), in the same pass over the triangles, unless

@@ -732,7 +732,12 @@ TEST(MeshPairDistance, RefitIndexGivesTheSameBitsAsABuild) {
   EXPECT_GE(compared, 16);
 }
 
+// The bound holds the search split on an executor of more than one thread (its tasks' heaps
+// and stacks); with less room the search runs serially (the same answer), and it fails
+// cleanly only with less than the serial search's own heap and stack.
 TEST(MeshPairDistance, RunsInExactlyItsBound) {
+  ThreadExecutor two(2);
+  size_t split_peaks = 0;
   for (const Case& c : oracle_cases()) {
     test::TestArena t(size_t{32} << 20);
     Built a, b;
@@ -741,21 +746,35 @@ TEST(MeshPairDistance, RunsInExactlyItsBound) {
     const uint64_t bound = mesh_pair_distance_bound(a.index, b.index);
     EXPECT_LT(bound, uint64_t{1} << 20);
     for (const Vec3& off : c.offsets) {
-      std::vector<unsigned char> buffer(bound);
-      Arena exact(buffer.data(), buffer.size());
-      MeshPairDistance r, e;
-      Status s = mesh_pair_distance(Context(&exact), a.index, b.index, off, HUGE_VAL, &r);
-      ASSERT_TRUE(s.is_ok()) << test::format(s);
-      EXPECT_EQ(exact.used(), 0u);
-      e = run_pair(a, b, off);
-      EXPECT_EQ(r.distance, e.distance);
-      std::vector<unsigned char> small(bound / 2);
+      const MeshPairDistance e = run_pair(a, b, off);
+      for (const Executor* executor : {static_cast<const Executor*>(nullptr), &two.executor()}) {
+        for (const size_t size : {static_cast<size_t>(bound), static_cast<size_t>(bound / 2)}) {
+          std::vector<unsigned char> buffer(size);
+          Arena arena(buffer.data(), buffer.size());
+          MeshPairDistance r;
+          const Status s = mesh_pair_distance(Context(&arena, executor, nullptr), a.index, b.index,
+                                              off, HUGE_VAL, &r);
+          ASSERT_TRUE(s.is_ok()) << test::format(s);
+          EXPECT_EQ(arena.used(), 0u);
+          EXPECT_LE(arena.high_water(), size);
+          EXPECT_EQ(r.distance, e.distance);
+          EXPECT_EQ(r.triangle_a, e.triangle_a);
+          EXPECT_EQ(r.triangle_b, e.triangle_b);
+          if (executor != nullptr && size == bound && arena.high_water() > bound / 2) {
+            ++split_peaks;
+          }
+        }
+      }
+      std::vector<unsigned char> small(1024);
       Arena smaller(small.data(), small.size());
-      s = mesh_pair_distance(Context(&smaller), a.index, b.index, off, HUGE_VAL, &r);
+      MeshPairDistance r;
+      const Status s = mesh_pair_distance(Context(&smaller, &two.executor(), nullptr), a.index,
+                                          b.index, off, HUGE_VAL, &r);
       EXPECT_EQ(s.code(), StatusCode::kArenaExhausted);
       EXPECT_EQ(smaller.used(), 0u);
     }
   }
+  EXPECT_GT(split_peaks, 0u);  // some searches were split, in the bound
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -818,6 +837,142 @@ ExhaustiveResult exhaustive(const Mesh& a, const Mesh& b, const Vec3& offset) {
     }
   }
   return r;
+}
+
+// The least (squared distance, triangle a, triangle b) over every pair, by
+// triangle_pair_distance() (0 for meeting triangles), with no pruning at all.
+ExhaustiveResult all_pairs(const Mesh& a, const Mesh& b, const Vec3& offset) {
+  const std::vector<TriangleCorners> x = corners_of(a, Vec3{}), y = corners_of(b, offset);
+  ExhaustiveResult r;
+  for (uint32_t i = 0; i < x.size(); ++i) {
+    for (uint32_t j = 0; j < y.size(); ++j) {
+      Vec3 pa, pb;
+      const double d = triangle_pair_distance(x[i].p[0], x[i].p[1], x[i].p[2], y[j].p[0], y[j].p[1],
+                                              y[j].p[2], &pa, &pb);
+      const double d2 = d == 0 ? 0 : length_squared(pa - pb);
+      if (d2 < r.d2) r = ExhaustiveResult{d2, d, i, j, pa, pb};
+    }
+  }
+  return r;
+}
+
+// A flat n x n grid of unit squares at height z, two triangles a square: congruent
+// triangles at integer coordinates, so that many pairs tie at exactly the least distance.
+Soup flat_grid(uint32_t n, float z) {
+  Soup out;
+  for (uint32_t i = 0; i < n; ++i) {
+    for (uint32_t j = 0; j < n; ++j) {
+      const float x = static_cast<float>(i), y = static_cast<float>(j);
+      SoupTriangle lower, upper;
+      const float l[3][3] = {{x, y, z}, {x + 1, y, z}, {x + 1, y + 1, z}};
+      const float u[3][3] = {{x, y, z}, {x + 1, y + 1, z}, {x, y + 1, z}};
+      std::memcpy(lower.p, l, sizeof l);
+      std::memcpy(upper.p, u, sizeof u);
+      out.push_back(lower);
+      out.push_back(upper);
+    }
+  }
+  return out;
+}
+
+// The search split over tasks on an executor (more than one thread) answers what the serial
+// search does, bit for bit, at 1, 2, 3 and 8 threads, and both the least of every pair: on grids
+// of congruent triangles where many pairs tie (every triangle over its twin, and its
+// neighbours' edges, at the same distance), apart, side by side and coplanar (every
+// overlapping pair meets); with leaves of one triangle and of the default size, translated
+// and moved rigidly.
+TEST(MeshPairDistance, SplitSearchAnswersAsTheSerialOneAtEveryThreadCount) {
+  test::TestArena t(size_t{64} << 20);
+  Built a[2], b[2];
+  for (int k = 0; k < 2; ++k) {
+    build(t, flat_grid(24, 0), k == 0 ? 1 : 0, false, &a[k]);
+    build(t, flat_grid(24, 0), k == 0 ? 1 : 0, false, &b[k], true);
+  }
+  ThreadExecutor one(1), two(2), three(3), eight(8);
+  const Executor* executors[4] = {&one.executor(), &two.executor(), &three.executor(),
+                                  &eight.executor()};
+  for (const Vec3 off : {Vec3{0, 0, 1}, Vec3{0.5, 0.25, 1}, Vec3{3, -2, 2}, Vec3{25.5, 0, 0.75},
+                         Vec3{0, 0, 0}, Vec3{0.5, 0.5, 0}}) {
+    SCOPED_TRACE(testing::Message() << "offset " << off.x << " " << off.y << " " << off.z);
+    const ExhaustiveResult e = all_pairs(a[0].mesh, b[0].mesh, off);
+    for (int k = 0; k < 2; ++k) {
+      const MeshPairDistance serial = run_pair(a[k], b[k], off);
+      EXPECT_EQ(std::memcmp(&serial.distance, &e.d, sizeof(double)), 0);
+      EXPECT_EQ(serial.triangle_a, e.ta);
+      EXPECT_EQ(serial.triangle_b, e.tb);
+      RigidTransform move;
+      move.t = off;
+      for (const Executor* ex : executors) {
+        test::TestArena arena(size_t{1} << 20);
+        const Context ctx(&arena.arena, ex, nullptr);
+        MeshPairDistance r, m;
+        ASSERT_TRUE(mesh_pair_distance(ctx, a[k].index, b[k].index, off, HUGE_VAL, &r).is_ok());
+        ASSERT_TRUE(
+            mesh_pair_distance_rigid(ctx, a[k].index, b[k].index, move, HUGE_VAL, &m).is_ok());
+        EXPECT_EQ(arena.arena.used(), 0u);
+        for (const MeshPairDistance& x : {r, m}) {
+          EXPECT_EQ(std::memcmp(&x.distance, &e.d, sizeof(double)), 0) << x.distance << " " << e.d;
+          EXPECT_EQ(x.triangle_a, e.ta);
+          EXPECT_EQ(x.triangle_b, e.tb);
+          EXPECT_EQ(x.point_a, serial.point_a);
+          EXPECT_EQ(x.point_b, serial.point_b);
+          EXPECT_EQ(x.intersecting, e.d == 0);
+        }
+      }
+    }
+  }
+}
+
+// The pairs a split search collects (on an executor of more than one thread) are the serial
+// search's, as a set (their order is the tasks' one after the other), with the same count and
+// answer; in a pool of exactly their number (a task's slice overflows: the search again,
+// serially, which fits them) and in one too small (the count past it).
+TEST(MeshPairDistance, SplitCollectGathersTheSerialPairsAtEveryThreadCount) {
+  test::TestArena t(size_t{64} << 20);
+  Built a, b;
+  build(t, flat_grid(24, 0), 1, false, &a);
+  build(t, flat_grid(24, 0), 1, false, &b, true);
+  ThreadExecutor two(2), three(3), eight(8);
+  const auto key = [](const TrianglePairIds& p) { return uint64_t{p.a} << 32 | p.b; };
+  for (const Vec3 off : {Vec3{0, 0, 1}, Vec3{0.5, 0.25, 1}, Vec3{0, 0, 0}}) {
+    SCOPED_TRACE(testing::Message() << "offset " << off.x << " " << off.y << " " << off.z);
+    std::vector<TrianglePairIds> serial(size_t{1} << 18);
+    size_t count = 0;
+    MeshPairDistance rs;
+    ASSERT_TRUE(mesh_pair_distance_collect(Context(&t.arena), a.index, b.index, off, 1.6,
+                                           Span<TrianglePairIds>(serial.data(), serial.size()),
+                                           &count, &rs)
+                    .is_ok());
+    ASSERT_GT(count, 200u);
+    ASSERT_LE(count, serial.size());
+    std::vector<uint64_t> want;
+    for (size_t i = 0; i < count; ++i) want.push_back(key(serial[i]));
+    std::sort(want.begin(), want.end());
+    for (const ThreadExecutor* pool : {&two, &three, &eight}) {
+      for (const size_t room : {serial.size(), count, count - 1}) {
+        std::vector<TrianglePairIds> pairs(room);
+        size_t n = 0;
+        MeshPairDistance r;
+        const Context ctx(&t.arena, &pool->executor(), nullptr);
+        ASSERT_TRUE(mesh_pair_distance_collect(ctx, a.index, b.index, off, 1.6,
+                                               Span<TrianglePairIds>(pairs.data(), pairs.size()),
+                                               &n, &r)
+                        .is_ok());
+        EXPECT_EQ(std::memcmp(&r.distance, &rs.distance, sizeof(double)), 0);
+        EXPECT_EQ(r.triangle_a, rs.triangle_a);
+        EXPECT_EQ(r.triangle_b, rs.triangle_b);
+        if (room < count) {
+          EXPECT_EQ(n, room + 1);
+          continue;
+        }
+        ASSERT_EQ(n, count);
+        std::vector<uint64_t> got;
+        for (size_t i = 0; i < n; ++i) got.push_back(key(pairs[i]));
+        std::sort(got.begin(), got.end());
+        EXPECT_EQ(got, want);
+      }
+    }
+  }
 }
 
 TEST(MeshPairDistance, DenseNearParallelSurfacesMatchExhaustiveSearch) {
