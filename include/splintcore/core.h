@@ -297,6 +297,14 @@ class ArenaScope {
   bool committed_ = false;
 };
 
+// Two tasks' own arenas (Arena(buffer, size), one each) carved from a caller's: `bytes`
+// rounded up to the arena's alignment, which each slice starts at (false on overflow); and two
+// slices at the top of `arena` of need[0] and need[1] bytes (rounded up, into sizes), one
+// after the other: their start, or nullptr with the arena's failure forgotten (for a caller
+// that then runs serially, whose requests do not add to this one).
+bool arena_slice_size(uint64_t bytes, size_t* out);
+unsigned char* take_arena_slices(Arena& arena, const uint64_t need[2], size_t sizes[2]);
+
 // ---------------------------------------------------------------------------------------------
 // Span: a non-owning view.
 

@@ -209,4 +209,21 @@ void Arena::release_unused_blocks() {
   }
 }
 
+bool arena_slice_size(uint64_t bytes, size_t* out) {
+  constexpr uint64_t kAlign = Arena::kDefaultAlignment;
+  if (bytes > SIZE_MAX - kAlign) return false;
+  *out = static_cast<size_t>((bytes + kAlign - 1) / kAlign * kAlign);
+  return true;
+}
+
+unsigned char* take_arena_slices(Arena& arena, const uint64_t need[2], size_t sizes[2]) {
+  if (!arena_slice_size(need[0], &sizes[0]) || !arena_slice_size(need[1], &sizes[1]) ||
+      sizes[0] > SIZE_MAX - sizes[1]) {
+    return nullptr;
+  }
+  void* p = arena.allocate(sizes[0] + sizes[1]);
+  if (p == nullptr) arena.forget_failure();
+  return static_cast<unsigned char*>(p);
+}
+
 }  // namespace splintcore

@@ -179,27 +179,6 @@ bool in_tasks(const Context& ctx) {
   return ctx.executor != nullptr && ctx.executor->concurrency > 1;
 }
 
-// `bytes` rounded up to the arena's alignment, which each slice starts at; false on overflow.
-bool slice_size(uint64_t bytes, size_t* out) {
-  constexpr uint64_t kAlign = Arena::kDefaultAlignment;
-  if (bytes > SIZE_MAX - kAlign) return false;
-  *out = static_cast<size_t>((bytes + kAlign - 1) / kAlign * kAlign);
-  return true;
-}
-
-// Two slices at the top of the arena, of need[0] and need[1] bytes (rounded up, into sizes),
-// one after the other: their start, or nullptr, the failure forgotten (the caller falls back
-// to the serial order, whose requests do not add to this one).
-unsigned char* take_slices(Arena& arena, const uint64_t need[2], size_t sizes[2]) {
-  if (!slice_size(need[0], &sizes[0]) || !slice_size(need[1], &sizes[1]) ||
-      sizes[0] > SIZE_MAX - sizes[1]) {
-    return nullptr;
-  }
-  void* p = arena.allocate(sizes[0] + sizes[1]);
-  if (p == nullptr) arena.forget_failure();
-  return static_cast<unsigned char*>(p);
-}
-
 // A span of an index whose arrays were moved (memmove) from [from, from + bytes) to `to`:
 // follows them when it pointed there.
 template <class T>
@@ -239,7 +218,7 @@ bool jaw_indexes_in_tasks(const Context& ctx, const Mesh* const sources[2],
       distance_index_bound(sources[0]->vertices.size(), sources[0]->triangles.size(), o),
       distance_index_bound(sources[1]->vertices.size(), sources[1]->triangles.size(), o)};
   size_t sizes[2] = {0, 0};
-  unsigned char* base = take_slices(*ctx.arena, need, sizes);
+  unsigned char* base = take_arena_slices(*ctx.arena, need, sizes);
   if (base == nullptr) return false;
   Arena a0(base, sizes[0]), a1(base + sizes[0], sizes[1]);
   Arena* arenas[2] = {&a0, &a1};
@@ -250,7 +229,7 @@ bool jaw_indexes_in_tasks(const Context& ctx, const Mesh* const sources[2],
   };
   parallel_for_each(ctx.executor, 2, task);
   size_t kept0 = 0;
-  if (!s[0].is_ok() || !s[1].is_ok() || !slice_size(a0.used(), &kept0)) {
+  if (!s[0].is_ok() || !s[1].is_ok() || !arena_slice_size(a0.used(), &kept0)) {
     ctx.arena->rewind(start);
     index[0] = index[1] = DistanceIndex{};
     return false;
@@ -376,7 +355,7 @@ bool splint_autorotations_in_tasks(const Context& ctx, const CaseFile& c,
     }
   }
   size_t sizes[2] = {0, 0};
-  unsigned char* base = take_slices(*ctx.arena, need, sizes);
+  unsigned char* base = take_arena_slices(*ctx.arena, need, sizes);
   if (base == nullptr) return false;
   Arena a0(base, sizes[0]), a1(base + sizes[0], sizes[1]);
   Arena* arenas[2] = {&a0, &a1};

@@ -471,45 +471,73 @@ void mark_band(const Mesh& m, bool upper, const BandLimit& limit, uint8_t* near)
   }
 }
 
-// The band of the marked vertices (mark_band): the triangles with a near vertex. One pass over
-// the triangles: the kept ones' ids into room for all of them (at the top of the arena, given
-// back down to the kept ones at once), then only the kept ones.
-Status jaw_band(Arena& arena, const Mesh& m, const uint8_t* near, JawBand* out) {
+// The band of the marked vertices (mark_band: bit 0 of near): the triangles with a near
+// vertex, counted (kept) with the vertices they use (used), which count_band marks in bit 1.
+void count_band(const Mesh& m, uint8_t* near, size_t* kept, size_t* used) {
+  size_t k = 0, u = 0;
+  for (const Triangle& t : m.triangles) {
+    if (((near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) & 1) == 0) continue;
+    ++k;
+    for (int c = 0; c < 3; ++c) {
+      uint8_t& mark = near[t.v[c]];
+      u += (mark & 2) == 0 ? 1u : 0u;
+      mark = static_cast<uint8_t>(mark | 2);
+    }
+  }
+  *kept = k;
+  *used = u;
+}
+
+// A band's arrays (count_band's sizes) and a jaw's vertex renumbering, from the arena.
+struct BandArrays {
+  uint32_t* ids = nullptr;
+  uint32_t* renumber = nullptr;
+  Triangle* tris = nullptr;
+  Vec3* verts = nullptr;
+  size_t kept = 0, used = 0;
+};
+
+Status allocate_band(Arena& arena, size_t vertices, size_t kept, size_t used, BandArrays* out) {
+  out->kept = kept;
+  out->used = used;
+  out->ids = arena.allocate_array<uint32_t>(kept > 0 ? kept : 1);
+  out->renumber = arena.allocate_array<uint32_t>(vertices > 0 ? vertices : 1);
+  out->tris = arena.allocate_array<Triangle>(kept > 0 ? kept : 1);
+  out->verts = arena.allocate_array<Vec3>(used > 0 ? used : 1);
+  if (out->ids == nullptr || out->renumber == nullptr || out->tris == nullptr ||
+      out->verts == nullptr) {
+    return arena.exhausted_status();
+  }
+  return Status::ok();
+}
+
+// The band's triangles into its arrays: their ids, then the kept triangles' vertices copied
+// (numbered in order of first use, the corners in their order): the same coordinates, so the
+// same distances, from a few hundred kilobytes that stay in cache instead of the whole jaw's.
+void fill_band(const Mesh& m, const uint8_t* near, const BandArrays& a, JawBand* out) {
   const size_t nv = m.vertices.size(), nt = m.triangles.size();
-  uint32_t* ids = arena.allocate_array<uint32_t>(nt > 0 ? nt : 1);
-  if (ids == nullptr) return arena.exhausted_status();
   size_t kept = 0;
   for (size_t i = 0; i < nt; ++i) {
     const Triangle& t = m.triangles[i];
-    ids[kept] = static_cast<uint32_t>(i);
-    kept += (near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) != 0 ? 1u : 0u;
-  }
-  const size_t room = kept > 0 ? kept : 1;
-  (void)arena.try_shrink(ids, sizeof(uint32_t) * (nt > 0 ? nt : 1), sizeof(uint32_t) * room);
-  out->ids = ids;
-  // The kept triangles' vertices copied (numbered in order of first use, the corners in
-  // their order): the same coordinates, so the same distances, from a few hundred kilobytes
-  // that stay in cache instead of the whole jaw's.
-  uint32_t* renumber = arena.allocate_array<uint32_t>(nv);
-  Triangle* tris = arena.allocate_array<Triangle>(room);
-  if (renumber == nullptr || tris == nullptr) return arena.exhausted_status();
-  std::fill(renumber, renumber + nv, kNoTip);
-  uint32_t used = 0;
-  for (size_t k = 0; k < kept; ++k) {
-    const Triangle& t = m.triangles[ids[k]];
-    for (int c = 0; c < 3; ++c) {
-      uint32_t& r = renumber[t.v[c]];
-      if (r == kNoTip) r = used++;
-      tris[k].v[c] = r;
+    if (((near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) & 1) != 0) {
+      a.ids[kept++] = static_cast<uint32_t>(i);
     }
   }
-  Vec3* verts = arena.allocate_array<Vec3>(used > 0 ? used : 1);
-  if (verts == nullptr) return arena.exhausted_status();
-  for (size_t i = 0; i < nv; ++i) {
-    if (renumber[i] != kNoTip) verts[renumber[i]] = m.vertices[i];
+  out->ids = a.ids;
+  std::fill(a.renumber, a.renumber + nv, kNoTip);
+  uint32_t used = 0;
+  for (size_t k = 0; k < kept; ++k) {
+    const Triangle& t = m.triangles[a.ids[k]];
+    for (int c = 0; c < 3; ++c) {
+      uint32_t& r = a.renumber[t.v[c]];
+      if (r == kNoTip) r = used++;
+      a.tris[k].v[c] = r;
+    }
   }
-  out->view = mesh_view(Span<const Vec3>(verts, used), Span<const Triangle>(tris, kept));
-  return Status::ok();
+  for (size_t i = 0; i < nv; ++i) {
+    if (a.renumber[i] != kNoTip) a.verts[a.renumber[i]] = m.vertices[i];
+  }
+  out->view = mesh_view(Span<const Vec3>(a.verts, used), Span<const Triangle>(a.tris, kept));
 }
 
 // The distance between the nearest pair of column tips (the vertex each column of the frame's
@@ -618,20 +646,55 @@ Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandib
     up.other = work[3];
     down.other = work[1];
   }
-  // The marks of both jaws, one task each (each writes its own), then their bands.
+  // The marks of both jaws and their bands' sizes, one task each (each writes its own).
+  size_t kept[2] = {0, 0}, used[2] = {0, 0};
   auto mark = [&](uint32_t jaw) {
     if (jaw == 0) {
       mark_band(maxilla, true, up, near_u);
+      count_band(maxilla, near_u, &kept[0], &used[0]);
     } else {
       mark_band(mandible, false, down, near_l);
+      count_band(mandible, near_l, &kept[1], &used[1]);
     }
   };
   parallel_for_each(ctx.executor, 2, mark);
-  SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, maxilla, near_u, &b->upper));
-  SPLINTCORE_RETURN_IF_ERROR(jaw_band(*ctx.arena, mandible, near_l, &b->lower));
-  SPLINTCORE_RETURN_IF_ERROR(
-      build_distance_index(ctx, b->upper.view, opening_index_options(), &b->upper_index));
-  return build_distance_index(ctx, b->lower.view, opening_index_options(), &b->lower_index);
+  BandArrays arrays[2];
+  const Mesh* jaws[2] = {&maxilla, &mandible};
+  const uint8_t* near[2] = {near_u, near_l};
+  JawBand* bands[2] = {&b->upper, &b->lower};
+  DistanceIndex* indexes[2] = {&b->upper_index, &b->lower_index};
+  for (int jaw = 0; jaw < 2; ++jaw) {
+    SPLINTCORE_RETURN_IF_ERROR(
+        allocate_band(*ctx.arena, jaws[jaw]->vertices.size(), kept[jaw], used[jaw], &arrays[jaw]));
+  }
+  // Each band and its index in a task, the index in a slice of the arena of its bound (the
+  // second slice's rest given back): the same index as built in the arena itself. Serially
+  // when the slices do not fit (or one thread).
+  const DistanceIndexOptions io = opening_index_options();
+  const uint64_t need[2] = {distance_index_bound(used[0], kept[0], io),
+                            distance_index_bound(used[1], kept[1], io)};
+  size_t sizes[2] = {0, 0};
+  unsigned char* base = ctx.executor != nullptr && ctx.executor->concurrency > 1
+                            ? take_arena_slices(*ctx.arena, need, sizes)
+                            : nullptr;
+  if (base == nullptr) {
+    for (int jaw = 0; jaw < 2; ++jaw) {
+      fill_band(*jaws[jaw], near[jaw], arrays[jaw], bands[jaw]);
+      SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, bands[jaw]->view, io, indexes[jaw]));
+    }
+    return Status::ok();
+  }
+  Arena slices[2] = {Arena(base, sizes[0]), Arena(base + sizes[0], sizes[1])};
+  Status built[2];
+  auto band = [&](uint32_t jaw) {
+    fill_band(*jaws[jaw], near[jaw], arrays[jaw], bands[jaw]);
+    built[jaw] = build_distance_index(Context(&slices[jaw]), bands[jaw]->view, io, indexes[jaw]);
+  };
+  parallel_for_each(ctx.executor, 2, band);
+  SPLINTCORE_RETURN_IF_ERROR(built[0]);
+  SPLINTCORE_RETURN_IF_ERROR(built[1]);
+  (void)ctx.arena->try_shrink(base, sizes[0] + sizes[1], sizes[0] + slices[1].used());
+  return Status::ok();
 }
 
 Status allocate_pool(Arena& arena, Span<TrianglePairIds>* pool) {

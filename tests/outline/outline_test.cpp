@@ -665,7 +665,10 @@ TEST(Outline, SurveyChoosesLessUndercut) {
 }
 
 // The memory contract: compute_outline runs in an arena of exactly compute_outline_bound()
-// bytes, and in exactly the high water of a first run (one byte less fails cleanly).
+// bytes, and in exactly the high water of a first run (one byte less fails cleanly). On two
+// threads (the bands' indexes and the pair searches in tasks, each in slices of the arena) it
+// runs in the bound too, and in the serial run's need (serially where the slices do not fit),
+// with the serial run's picks.
 TEST(Outline, RunsInItsBoundAndInItsMeasuredNeed) {
   PhantomJaws p(24000);
   test::TestArena store{size_t{64} << 20};
@@ -680,11 +683,14 @@ TEST(Outline, RunsInItsBoundAndInItsMeasuredNeed) {
   for (const OutlineOptions& options : {opened, surveyed}) {
     const uint64_t bound = compute_outline_bound(jaws[0], jaws[1]);
     uint64_t need = 0;
+    std::vector<Pick> serial_picks;
     {
       test::TestArena exact{static_cast<size_t>(bound)};
       Outline o;
       SPLINTCORE_ASSERT_OK(compute_outline(Context(&exact.arena), jaws[0], jaws[1], options, &o));
       need = exact.arena.high_water();
+      serial_picks.assign(o.upper.begin(), o.upper.end());
+      serial_picks.insert(serial_picks.end(), o.lower.begin(), o.lower.end());
       std::printf("compute_outline%s: bound %llu, need %llu (%.2f)\n",
                   options.survey ? " (survey)" : "", static_cast<unsigned long long>(bound),
                   static_cast<unsigned long long>(need),
@@ -701,6 +707,23 @@ TEST(Outline, RunsInItsBoundAndInItsMeasuredNeed) {
       const Status s = compute_outline(Context(&short_by_one.arena), jaws[0], jaws[1], options, &o);
       EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << test::format(s);
       EXPECT_EQ(short_by_one.arena.used(), 0u);
+    }
+    ThreadExecutor two(2);
+    for (const uint64_t size : {bound, need}) {
+      test::TestArena arena{static_cast<size_t>(size)};
+      Outline o;
+      SPLINTCORE_ASSERT_OK(compute_outline(Context(&arena.arena, &two.executor(), nullptr), jaws[0],
+                                           jaws[1], options, &o));
+      EXPECT_LE(arena.arena.high_water(), size);
+      std::vector<Pick> picks(o.upper.begin(), o.upper.end());
+      picks.insert(picks.end(), o.lower.begin(), o.lower.end());
+      ASSERT_EQ(picks.size(), serial_picks.size());
+      EXPECT_EQ(std::memcmp(picks.data(), serial_picks.data(), sizeof(Pick) * picks.size()), 0);
+      if (size == bound) {
+        std::printf("compute_outline%s on two threads: need %llu\n",
+                    options.survey ? " (survey)" : "",
+                    static_cast<unsigned long long>(arena.arena.high_water()));
+      }
     }
   }
 }
