@@ -479,9 +479,9 @@ void count_band(const Mesh& m, uint8_t* near, size_t* kept, size_t* used) {
     if (((near[t.v[0]] | near[t.v[1]] | near[t.v[2]]) & 1) == 0) continue;
     ++k;
     for (int c = 0; c < 3; ++c) {
-      uint8_t& mark = near[t.v[c]];
-      u += (mark & 2) == 0 ? 1u : 0u;
-      mark = static_cast<uint8_t>(mark | 2);
+      const uint32_t v = t.v[c];
+      u += (near[v] & 2) == 0 ? 1u : 0u;
+      near[v] = static_cast<uint8_t>(near[v] | 2);
     }
   }
   *kept = k;
