@@ -14,6 +14,7 @@
 #include "common/phantom.h"
 #include "splintcore/distance.h"
 #include "splintcore/outline.h"
+#include "splintcore/platform.h"
 #include "support/autorotate_oracle.h"
 #include "support/frame_moves.h"
 #include "support/test_util.h"
@@ -340,6 +341,37 @@ TEST(Autorotate, IndexedGivesTheSameBits) {
   EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
   EXPECT_NE(std::string(s.message()).find("the mandible is empty"), std::string::npos)
       << s.message();
+}
+
+// On an executor of more than one thread the rotation's pair searches (meeting, distance,
+// collecting) are split over tasks: the report is the serial one bit for bit, at 2 and 3
+// threads, in autorotate_mandible_bound(), for every plan (from occlusion and from apart).
+TEST(Autorotate, SameBitsAtEveryThreadCount) {
+  PhantomPair p(20000, 0), dropped4(20000, 4), dropped5(20000, 5);
+  ThreadExecutor two(2), three(3);
+  for (const Plan& plan : kPhantomPlans) {
+    const PhantomPair& jaws = plan.drop == 0 ? p : (plan.drop == 4 ? dropped4 : dropped5);
+    const AutorotateReport base = rotate(jaws.jaw[0], jaws.jaw[1], plan.h0, plan.h1, plan.opening);
+    AutorotateOptions o;
+    o.hinge[0] = plan.h0;
+    o.hinge[1] = plan.h1;
+    o.opening_mm = plan.opening;
+    for (const ThreadExecutor* pool : {&two, &three}) {
+      test::TestArena work{
+          static_cast<size_t>(autorotate_mandible_bound(jaws.jaw[0], jaws.jaw[1]))};
+      AutorotateReport r;
+      SPLINTCORE_ASSERT_OK(autorotate_mandible(Context(&work.arena, &pool->executor(), nullptr),
+                                               jaws.jaw[0], jaws.jaw[1], o, &r));
+      EXPECT_EQ(work.arena.used(), 0u);
+      EXPECT_EQ(std::memcmp(&r.angle_rad, &base.angle_rad, sizeof(double)), 0)
+          << r.angle_rad << " " << base.angle_rad;
+      EXPECT_EQ(std::memcmp(&r.opening, &base.opening, sizeof(double)), 0);
+      EXPECT_EQ(std::memcmp(&r.transform, &base.transform, sizeof(RigidTransform)), 0);
+      EXPECT_EQ(r.triangle_maxilla, base.triangle_maxilla);
+      EXPECT_EQ(r.triangle_mandible, base.triangle_mandible);
+      EXPECT_EQ(r.steps, base.steps);
+    }
+  }
 }
 
 // The memory contract: autorotate_mandible runs in exactly autorotate_mandible_bound() bytes,
