@@ -220,11 +220,11 @@ void build(test::TestArena& t, const Soup& soup, uint32_t leaf, bool oriented, B
 }
 
 MeshPairDistance run_pair(const Built& a, const Built& b, const Vec3& offset,
-                          double max_distance = HUGE_VAL) {
+                          double max_distance = HUGE_VAL, const Executor* executor = nullptr) {
   test::TestArena t(size_t{1} << 20);
   MeshPairDistance r;
-  const Status s =
-      mesh_pair_distance(Context(&t.arena), a.index, b.index, offset, max_distance, &r);
+  const Status s = mesh_pair_distance(Context(&t.arena, executor, nullptr), a.index, b.index,
+                                      offset, max_distance, &r);
   EXPECT_TRUE(s.is_ok()) << test::format(s);
   EXPECT_EQ(t.arena.used(), 0u);
   return r;
@@ -983,13 +983,18 @@ TEST(MeshPairDistance, DenseNearParallelSurfacesMatchExhaustiveSearch) {
   build(t, wavy_grid(22, 0.25, 0, 0, 7), 1, true, &a1);
   build(t, wavy_grid(20, 0.27, 0.35, 1.3, 8), 16, false, &b16);
   int meeting = 0, apart = 0;
+  // (Also split over tasks on two threads: the same answers.)
+  ThreadExecutor two(2);
+  const Executor* split = &two.executor();
   // B above A: far, near, grazing, touching at the crests and interpenetrating.
   for (const double dz : {1.5, 0.6, 0.2, 0.05, 0.01, 0.0, -0.05, -0.2, -0.35}) {
     for (const Vec3 lateral : {Vec3{0, 0, 0}, Vec3{0.61, -0.37, 0}, Vec3{-1.1, 0.9, 0}}) {
       const Vec3 off = lateral + Vec3{0, 0, dz};
       SCOPED_TRACE(testing::Message() << "offset " << off.x << " " << off.y << " " << off.z);
       const ExhaustiveResult e = exhaustive(a.mesh, b.mesh, off);
-      for (const MeshPairDistance& r : {run_pair(a, b, off), run_pair(a1, b16, off)}) {
+      for (const MeshPairDistance& r :
+           {run_pair(a, b, off), run_pair(a1, b16, off), run_pair(a, b, off, HUGE_VAL, split),
+            run_pair(a1, b16, off, HUGE_VAL, split)}) {
         EXPECT_EQ(std::memcmp(&r.distance, &e.d, sizeof(double)), 0) << r.distance << " " << e.d;
         EXPECT_EQ(r.triangle_a, e.ta);
         EXPECT_EQ(r.triangle_b, e.tb);
@@ -1001,6 +1006,8 @@ TEST(MeshPairDistance, DenseNearParallelSurfacesMatchExhaustiveSearch) {
       if (e.d > 0) {
         EXPECT_EQ(run_pair(a, b, off, e.d * (1 + 1e-12)).triangle_a, e.ta);
         EXPECT_EQ(run_pair(a, b, off, e.d * (1 - 1e-9)).distance, HUGE_VAL);
+        EXPECT_EQ(run_pair(a, b, off, e.d * (1 + 1e-12), split).triangle_a, e.ta);
+        EXPECT_EQ(run_pair(a, b, off, e.d * (1 - 1e-9), split).distance, HUGE_VAL);
       }
       ++(e.d == 0 ? meeting : apart);
     }
