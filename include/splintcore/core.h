@@ -473,6 +473,12 @@ struct Executor {
 // The serial executor: runs tasks in index order on the calling thread.
 const Executor& serial_executor();
 
+// Whether work split into tasks can run on more than one thread at once (else a split only
+// costs: callers keep their one-pass serial code for this case).
+inline bool has_threads(const Executor* executor) {
+  return executor != nullptr && executor->concurrency > 1;
+}
+
 void parallel_for(const Executor* executor, uint32_t count, TaskFunction task, void* context);
 
 template <class F>

@@ -1030,7 +1030,7 @@ Status flush_batch(KeepLog& log) {
   const SweepOptions& o = *log.o;
   const Executor* ex = log.s->ctx->executor;
   uint32_t runs = 1;
-  if (o.keep_tasks > 0 && ex != nullptr && ex->concurrency > 1) {
+  if (o.keep_tasks > 0 && has_threads(ex)) {
     runs = ex->concurrency < o.keep_tasks ? ex->concurrency : o.keep_tasks;
     if (runs > n) runs = n;
   }

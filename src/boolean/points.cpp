@@ -385,7 +385,7 @@ constexpr uint32_t kMaxHitTasks = 16;
 size_t BooleanRun::hits_in_parallel(const ASlots& as) {
   const Executor* executor = ctx_.executor;
   const size_t n = bp_.near_ids.size();
-  if (executor == nullptr || executor->concurrency < 2 || n < kParallelHitsMin) return 0;
+  if (!has_threads(executor) || n < kParallelHitsMin) return 0;
   uint32_t tasks = executor->concurrency * kHitTasksPerThread;
   if (tasks > kMaxHitTasks) tasks = kMaxHitTasks;
   const size_t per_task = (n + tasks - 1) / tasks;

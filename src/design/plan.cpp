@@ -175,9 +175,7 @@ Status plan_autorotation(const Context& ctx, const CaseFile& c, Span<const Mesh>
 // or a task fails, the arena is rewound and the serial order runs instead, so the errors are
 // its errors in its order.
 
-bool in_tasks(const Context& ctx) {
-  return ctx.executor != nullptr && ctx.executor->concurrency > 1;
-}
+bool in_tasks(const Context& ctx) { return has_threads(ctx.executor); }
 
 // A span of an index whose arrays were moved (memmove) from [from, from + bytes) to `to`:
 // follows them when it pointed there.

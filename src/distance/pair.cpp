@@ -964,7 +964,7 @@ Status run_search(const Context& ctx, PairSearch* s, MeshPairDistance* out) {
   s->stack = ctx.arena->allocate_array<PairEntry>(static_cast<size_t>(s->capacity));
   s->heap = ctx.arena->allocate_array<PairEntry>(kHeapEntries);
   if (s->stack == nullptr || s->heap == nullptr) return ctx.arena->exhausted_status();
-  const bool split = ctx.executor != nullptr && ctx.executor->concurrency > 1 && !s->first_meet;
+  const bool split = has_threads(ctx.executor) && !s->first_meet;
   bool ok = false;
   if (!split) {
     ok = s->run();

@@ -826,7 +826,7 @@ struct RegionBatch {
       b.h *= 1.25;
     }
     b.inv_h = 1.0 / b.h;
-    tasks = ctx.executor != nullptr && ctx.executor->concurrency > 1
+    tasks = has_threads(ctx.executor)
                 ? (ctx.executor->concurrency < b.dims[2] ? ctx.executor->concurrency : b.dims[2])
                 : 1;
   }

@@ -1440,7 +1440,7 @@ struct HierarchyPass {
   bool traverse_in_tasks(uint64_t* candidates, bool* stop) const {
     constexpr size_t kFrontier = 768, kEnough = 256, kMinItems = 8192;
     constexpr uint32_t kMaxTasks = 16;
-    if (executor == nullptr || executor->concurrency < 2 || kept < kMinItems) return false;
+    if (!has_threads(executor) || kept < kMinItems) return false;
     PairOfNodes pending[kFrontier], next[kFrontier];
     size_t n = 1;
     pending[0] = PairOfNodes{0, 0};

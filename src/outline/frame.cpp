@@ -69,17 +69,19 @@ constexpr size_t kQuotientChunk = 16384;  // vertices a task of anterior_axis
 // anterior_axis's quotients of vertices [first, first + count) of m, moved by -c: (x, y) / r
 // in the plane, or +0 where r is 0 (adding +0 to a sum that starts at +0 changes nothing: such
 // a sum is never -0).
+Lanes2 unit_quotient(const Vec3& v, const Vec3& c, const PlaneAxes& axes) {
+  const Lanes2 xy = axes.xy(v - c);
+  const double x = xy[0], y = xy[1];
+  const double r = std::sqrt(x * x + y * y);
+  const double safe = r > 0 ? r : 1.0;  // no 0 / 0 (trapping tests), and not added
+  const Lanes2 zero = {0.0, 0.0};
+  return r > 0 ? xy / Lanes2{safe, safe} : zero;
+}
+
 void unit_quotients(const Mesh& m, size_t first, size_t count, const Vec3& c, const PlaneAxes& axes,
                     Lanes2* q) {
   const Vec3* v = m.vertices.data() + first;
-  for (size_t k = 0; k < count; ++k) {
-    const Lanes2 xy = axes.xy(v[k] - c);
-    const double x = xy[0], y = xy[1];
-    const double r = std::sqrt(x * x + y * y);
-    const double safe = r > 0 ? r : 1.0;  // no 0 / 0 (trapping tests), and not added
-    const Lanes2 zero = {0.0, 0.0};
-    q[k] = r > 0 ? xy / Lanes2{safe, safe} : zero;
-  }
+  for (size_t k = 0; k < count; ++k) q[k] = unit_quotient(v[k], c, axes);
 }
 
 }  // namespace
@@ -89,14 +91,26 @@ void unit_quotients(const Mesh& m, size_t first, size_t count, const Vec3& c, co
 // Continuous in the data (no vertex is chosen), so the lattice it orients moves with the jaws.
 // Both quotients of a vertex in one two-lane division (each lane rounds as the scalar one:
 // the same bits for half the divisions), in chunks of vertices on the executor (into the
-// arena, returned), then summed in vertex order.
+// arena, returned), then summed in vertex order; on one thread summed as they come.
 Status anterior_axis(const Context& ctx, const Mesh& upper, const Mesh& lower, const Vec3& c,
                      const Frame& f, Vec3* axis) {
-  ArenaScope scope(*ctx.arena);
   const size_t nu = upper.vertices.size(), n = nu + lower.vertices.size();
+  const PlaneAxes axes(f);
+  if (!has_threads(ctx.executor)) {  // one pass, each quotient summed as it comes (the same bits)
+    double sx = 0, sy = 0;
+    for (const Mesh* m : {&upper, &lower}) {
+      for (const Vec3& v : m->vertices) {
+        const Lanes2 q = unit_quotient(v, c, axes);
+        sx += q[0];
+        sy += q[1];
+      }
+    }
+    *axis = (f.e1 * sx + f.e2 * sy) * (1.0 / static_cast<double>(n));
+    return Status::ok();
+  }
+  ArenaScope scope(*ctx.arena);
   Lanes2* q = ctx.arena->allocate_array<Lanes2>(n);
   if (q == nullptr) return ctx.arena->exhausted_status();
-  const PlaneAxes axes(f);
   const size_t chunks_upper = (nu + kQuotientChunk - 1) / kQuotientChunk;
   const size_t chunks = chunks_upper + (n - nu + kQuotientChunk - 1) / kQuotientChunk;
   auto task = [&](uint32_t i) {
@@ -126,13 +140,46 @@ namespace {
 // the centroid's bits do not depend on the threads); the others take chunks of kLayoutChunk
 // vertices, their extent (least and greatest x and y) and heights, combined in chunk order
 // after (a strict comparison keeps the first of equal values, as one pass in vertex order
-// would: the same bits).
+// would: the same bits). On one thread, that one pass.
 constexpr size_t kLayoutChunk = 32768;
 
 struct LayoutChunk {
   Lanes2 lo = {HUGE_VAL, HUGE_VAL}, hi = {-HUGE_VAL, -HUGE_VAL};
   double h_lo = HUGE_VAL, h_hi = -HUGE_VAL;
 };
+
+// The extent and heights of vertices [first, last) of a jaw into `part` (and, given `sum`,
+// their places in the plane added to it in vertex order).
+// (The extent in locals, stored once: the heights' stores could alias *part and *sum.)
+template <bool kHeights>
+void layout_pass(const Mesh& m, const Vec3& offset, bool upper_jaw, size_t first, size_t last,
+                 const PlaneAxes& axes, const Vec3& n, double* h_out, LayoutChunk* part,
+                 Lanes2* sum) {
+  Lanes2 lo = part->lo, hi = part->hi, s = sum != nullptr ? *sum : Lanes2{0.0, 0.0};
+  double h_lo = part->h_lo, h_hi = part->h_hi;
+  const Vec3* v = m.vertices.data();
+  for (size_t k = first; k < last; ++k) {
+    const Vec3 p = v[k] + offset;
+    const Lanes2 xy = axes.xy(p);
+    lo = xy < lo ? xy : lo;
+    hi = xy > hi ? xy : hi;
+    if (sum != nullptr) s += xy;
+    if (kHeights) {
+      const double h = dot(p, n);
+      h_out[k] = h;
+      if (upper_jaw) {
+        h_lo = h < h_lo ? h : h_lo;
+      } else {
+        h_hi = h > h_hi ? h : h_hi;
+      }
+    }
+  }
+  part->lo = lo;
+  part->hi = hi;
+  part->h_lo = h_lo;
+  part->h_hi = h_hi;
+  if (sum != nullptr) *sum = s;
+}
 
 template <bool kHeights>
 Status grid_layout(Arena& arena, const Executor* executor, const Mesh& upper, const Mesh& lower,
@@ -141,45 +188,39 @@ Status grid_layout(Arena& arena, const Executor* executor, const Mesh& upper, co
   const PlaneAxes axes(f);
   const Vec3 n = f.n;
   const size_t nu = upper.vertices.size(), nl = lower.vertices.size();
-  const size_t chunks_upper = (nu + kLayoutChunk - 1) / kLayoutChunk;
-  const size_t chunks = chunks_upper + (nl + kLayoutChunk - 1) / kLayoutChunk;
-  ArenaScope scope(arena);  // the chunks' extents go when done
-  LayoutChunk* parts = arena.allocate_array<LayoutChunk>(chunks > 0 ? chunks : 1);
-  if (parts == nullptr) return arena.exhausted_status();
+  double* const h_out[2] = {kHeights ? heights[0] : nullptr, kHeights ? heights[1] : nullptr};
   Lanes2 sum = {0.0, 0.0};
-  auto task = [&](uint32_t i) {
-    if (i == 0) {
-      for (const Vec3& v : upper.vertices) sum += axes.xy(v + Vec3{});
-      for (const Vec3& v : lower.vertices) sum += axes.xy(v + lower_offset);
-      return;
-    }
-    const size_t c = i - 1;
-    const bool upper_jaw = c < chunks_upper;
-    const Mesh& m = upper_jaw ? upper : lower;
-    const Vec3 offset = upper_jaw ? Vec3{} : lower_offset;
-    const size_t first = (upper_jaw ? c : c - chunks_upper) * kLayoutChunk;
-    const size_t last = std::min(first + kLayoutChunk, m.vertices.size());
-    double* h_out = kHeights ? heights[upper_jaw ? 0 : 1] : nullptr;
-    LayoutChunk part;
-    const Vec3* v = m.vertices.data();
-    for (size_t k = first; k < last; ++k) {
-      const Vec3 p = v[k] + offset;
-      const Lanes2 xy = axes.xy(p);
-      part.lo = xy < part.lo ? xy : part.lo;
-      part.hi = xy > part.hi ? xy : part.hi;
-      if (kHeights) {
-        const double h = dot(p, n);
-        h_out[k] = h;
-        if (upper_jaw) {
-          part.h_lo = h < part.h_lo ? h : part.h_lo;
-        } else {
-          part.h_hi = h > part.h_hi ? h : part.h_hi;
-        }
+  LayoutChunk whole;
+  size_t chunks = 0;
+  ArenaScope scope(arena);  // the chunks' extents go when done
+  LayoutChunk* parts = &whole;
+  if (!has_threads(executor)) {  // one pass over both jaws
+    layout_pass<kHeights>(upper, Vec3{}, true, 0, nu, axes, n, h_out[0], &whole, &sum);
+    layout_pass<kHeights>(lower, lower_offset, false, 0, nl, axes, n, h_out[1], &whole, &sum);
+    chunks = 1;
+  } else {
+    const size_t chunks_upper = (nu + kLayoutChunk - 1) / kLayoutChunk;
+    chunks = chunks_upper + (nl + kLayoutChunk - 1) / kLayoutChunk;
+    parts = arena.allocate_array<LayoutChunk>(chunks > 0 ? chunks : 1);
+    if (parts == nullptr) return arena.exhausted_status();
+    auto task = [&](uint32_t i) {
+      if (i == 0) {
+        for (const Vec3& v : upper.vertices) sum += axes.xy(v + Vec3{});
+        for (const Vec3& v : lower.vertices) sum += axes.xy(v + lower_offset);
+        return;
       }
-    }
-    parts[c] = part;
-  };
-  parallel_for_each(executor, static_cast<uint32_t>(chunks + 1), task);
+      const size_t c = i - 1;
+      const bool upper_jaw = c < chunks_upper;
+      const size_t first = (upper_jaw ? c : c - chunks_upper) * kLayoutChunk;
+      const Mesh& m = upper_jaw ? upper : lower;
+      const size_t last = std::min(first + kLayoutChunk, m.vertices.size());
+      LayoutChunk part;
+      layout_pass<kHeights>(m, upper_jaw ? Vec3{} : lower_offset, upper_jaw, first, last, axes, n,
+                            h_out[upper_jaw ? 0 : 1], &part, nullptr);
+      parts[c] = part;
+    };
+    parallel_for_each(executor, static_cast<uint32_t>(chunks + 1), task);
+  }
   Lanes2 lo = {HUGE_VAL, HUGE_VAL}, hi = {-HUGE_VAL, -HUGE_VAL};
   double h_lo = HUGE_VAL, h_hi = -HUGE_VAL;
   for (size_t c = 0; c < chunks; ++c) {

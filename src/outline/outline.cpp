@@ -674,9 +674,8 @@ Status banded_opener(const Context& ctx, const Mesh& maxilla, const Mesh& mandib
   const uint64_t need[2] = {distance_index_bound(used[0], kept[0], io),
                             distance_index_bound(used[1], kept[1], io)};
   size_t sizes[2] = {0, 0};
-  unsigned char* base = ctx.executor != nullptr && ctx.executor->concurrency > 1
-                            ? take_arena_slices(*ctx.arena, need, sizes)
-                            : nullptr;
+  unsigned char* base =
+      has_threads(ctx.executor) ? take_arena_slices(*ctx.arena, need, sizes) : nullptr;
   if (base == nullptr) {
     for (int jaw = 0; jaw < 2; ++jaw) {
       fill_band(*jaws[jaw], near[jaw], arrays[jaw], bands[jaw]);

@@ -398,9 +398,8 @@ Status Design::write_plan_stls() {
   Arena& arena = *ctx_.arena;
   ArenaScope scope(arena);
   const size_t slice = StlWriteOptions{}.buffer_bytes + 2 * Arena::kDefaultAlignment;
-  auto* base = ctx_.executor != nullptr && ctx_.executor->concurrency > 1
-                   ? static_cast<unsigned char*>(arena.allocate(2 * slice))
-                   : nullptr;
+  auto* base =
+      has_threads(ctx_.executor) ? static_cast<unsigned char*>(arena.allocate(2 * slice)) : nullptr;
   if (base == nullptr) {  // one thread, or no room: one after the other with the run's arena
     arena.forget_failure();
     for (int k = 0; k < 2; ++k) {

@@ -138,7 +138,7 @@ Status read_mesh_file(const Context& ctx, const char* path, uint64_t max_bytes, 
   SPLINTCORE_RETURN_IF_ERROR(file.open(path, max_bytes));
   Sha256 sha;
   // With more than one thread the file is hashed beside the reading (the same digest).
-  const bool beside = hash && ctx.executor != nullptr && ctx.executor->concurrency > 1;
+  const bool beside = hash && has_threads(ctx.executor);
   std::unique_ptr<BackgroundHasher> hasher;
   if (beside) {
     hasher.reset(new BackgroundHasher(&sha));
