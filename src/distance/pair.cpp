@@ -305,6 +305,20 @@ void float_box_gaps(const float* boxes, uint32_t count, const Vec3& shift, const
   }
 }
 
+// The bits of the least float at least b (b >= 0 or +inf; beyond the floats' range: +inf).
+inline uint32_t float_bits_at_least(double b) {
+  const float f = b <= 3.4028234663852886e38 ? static_cast<float>(b) : HUGE_VALF;
+  uint32_t bits = 0;
+  std::memcpy(&bits, &f, sizeof bits);
+  return static_cast<double>(f) < b ? bits + 1 : bits;  // the next float up
+}
+
+inline double float_of_bits(uint32_t bits) {
+  float f = 0;
+  std::memcpy(&f, &bits, sizeof f);
+  return static_cast<double>(f);
+}
+
 struct PairSearch {
   const DistanceIndex* index[2] = {nullptr, nullptr};
   const float* triangle_boxes[2] = {nullptr, nullptr};  // or null: none in the index
@@ -334,10 +348,11 @@ struct PairSearch {
   size_t collect_capacity = 0, collect_count = 0;
   // Stopping at the first meeting pair (mesh_pair_meet): `done` once one is found.
   bool first_meet = false, done = false;
-  // A task of a split search (run_split): the least best2 of all its tasks so far, as the bits
-  // of a double (non-negative: their order is the doubles' order), which every task prunes by
-  // (the reach of a best found elsewhere: it prunes only pairs that cannot win either).
-  std::atomic<uint64_t>* shared = nullptr;
+  // A task of a split search (run_split): the least best2 of all its tasks so far, rounded up
+  // to a float and kept as its bits (non-negative: their order is the floats' order; 32 bits,
+  // lock-free on every target, ARMv7-M too), which every task prunes by (the reach of a bound
+  // on a best found elsewhere: it prunes only pairs that cannot win either).
+  std::atomic<uint32_t>* shared = nullptr;
   double reach_from = HUGE_VAL;  // the best2 that reach was computed from
 
   // reach2 from best2: a pair of boxes whose computed distance is at most reach may hold a
@@ -358,22 +373,19 @@ struct PairSearch {
     reach = (std::sqrt(b) + slack) * (1.0 + 0x1p-19);
     reach2 = reach * reach;
   }
-  // Publishes b to the tasks' shared best (when less): the least of the two.
+  // Publishes b to the tasks' shared best (when less): the least of b and the shared bound.
   double share(double b) {
-    uint64_t bits = 0;
-    std::memcpy(&bits, &b, sizeof bits);
-    uint64_t seen = shared->load(std::memory_order_relaxed);
+    const uint32_t bits = float_bits_at_least(b);
+    uint32_t seen = shared->load(std::memory_order_relaxed);
     while (bits < seen && !shared->compare_exchange_weak(seen, bits, std::memory_order_relaxed)) {
     }
-    if (seen < bits) std::memcpy(&b, &seen, sizeof b);
-    return b;
+    const double other = float_of_bits(seen);
+    return other < b ? other : b;
   }
   // A task's reach from a better best found by another task.
   void refresh() {
     if (shared == nullptr || collecting) return;
-    const uint64_t bits = shared->load(std::memory_order_relaxed);
-    double b = 0;
-    std::memcpy(&b, &bits, sizeof b);
+    const double b = float_of_bits(shared->load(std::memory_order_relaxed));
     if (b < reach_from) set_reach(b);
   }
 
@@ -888,13 +900,7 @@ bool run_split(Arena& arena, const Executor* executor, PairSearch* s, bool* no_r
   *no_room = *slice_overflow = false;
   const Arena::Marker start = arena.mark();
   PairSearch tasks[kSplitTasks];
-  std::atomic<uint64_t> shared{0};
-  {
-    double b = s->best2;
-    uint64_t bits = 0;
-    std::memcpy(&bits, &b, sizeof bits);
-    shared.store(bits, std::memory_order_relaxed);
-  }
+  std::atomic<uint32_t> shared{float_bits_at_least(s->best2)};
   // The pool's room after the start's pairs, in equal slices.
   const size_t used =
       s->collect_count < s->collect_capacity ? s->collect_count : s->collect_capacity;
