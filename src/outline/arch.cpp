@@ -479,23 +479,80 @@ Status allocate(Arena& arena, size_t n, double** a, double** b, double** c) {
   return *a != nullptr && *b != nullptr && *c != nullptr ? Status::ok() : arena.exhausted_status();
 }
 
+constexpr double kBandCutSlackMm = 0.01;  // over the rounding of the band cut (below)
+
+// One jaw's part of occlusal_points that reads only the jaw (a task each): its columns' depths
+// into r, the band's limit, and the band's vertices marked (their indices in band). *found:
+// the columns that show the other jaw.
+struct JawBandPart {
+  double limit = 0;
+  size_t found = 0, in_band = 0;
+};
+
+void jaw_band_part(const Mesh& m, const Vec3& offset, uint32_t jaw, const Frame& f, const Grid& g,
+                   const Plane& plane, double* r, uint32_t* band, JawBandPart* out) {
+  const size_t cells = static_cast<size_t>(g.nx) * g.ny;
+  // Distance from the plane towards the jaw's own side (>= about 0 at the tips).
+  const PlaneAxes axes(f);
+  auto depth_of = [&](const Vec3& p) {
+    const Lanes2 xy = axes.xy(p);
+    const double above = dot(p, f.n) - plane.at(xy[0] - g.cx, xy[1] - g.cy);
+    return jaw == 0 ? above : -above;
+  };
+  size_t used = 0;
+  for (size_t i = 0; i < cells; ++i) {
+    if (g.tip[jaw][i] == kNoTip) continue;
+    r[used++] = depth_of(m.vertices[g.tip[jaw][i]] + offset);
+  }
+  out->found = used;
+  if (used < kMinOcclusalCells) return;
+  std::nth_element(r, r + used / 100, r + used);
+  const double limit = r[used / 100] + kOcclusalBandMm;
+  out->limit = limit;
+  // The band's vertices marked in one pass (their indices in `band`), every k-th taken later.
+  // Most of a jaw lies far from the plane: every vertex's place in the plane lies within
+  // kMaxSpanMm of the lattice's origin (grid_layout refuses a wider extent, and the origin
+  // is the vertices' mean; the mandible's move is along n), so the plane's height under it
+  // lies within `tilt` of plane.a, and a vertex whose height lies beyond the limit from
+  // that is outside the band by its height alone (with a slack far over the rounding): the
+  // same vertices as depth_of's test of every one.
+  const double tilt =
+      (std::fabs(plane.b) + std::fabs(plane.c)) * (kMaxSpanMm + 1.0) + kBandCutSlackMm;
+  const double cut = jaw == 0 ? plane.a + limit + tilt : plane.a - limit - tilt;
+  size_t in_band = 0;
+  for (size_t k = 0; k < m.vertices.size(); ++k) {
+    const Vec3 p = m.vertices[k] + offset;
+    band[in_band] = static_cast<uint32_t>(k);
+    const double h_k = dot(p, f.n);
+    if (jaw == 0 ? h_k > cut : h_k < cut) continue;
+    in_band += depth_of(p) <= limit ? 1u : 0u;
+  }
+  out->in_band = in_band;
+}
+
 // The occlusal surfaces of both jaws: the columns within kOcclusalBandMm of the jaw's tips (the
 // hundredth lowest distance from the plane) as ArchPoints in `cells` (their extremes set the
 // picks' heights and widths), and the vertices within the same band in `line` (every k-th in
 // index order, at most kLinePoints a jaw: the centre line's points). The line takes vertices,
 // not columns, so that it moves with the jaws: which vertex a column shows can change with a
 // rounding when the jaws move, which vertices lie in the band only where one lies on its edge.
-constexpr double kBandCutSlackMm = 0.01;
-
-Status occlusal_points(Arena& arena, const Mesh& upper, const Mesh& lower, const Vec3& lower_offset,
-                       const Frame& f, const Grid& g, const Plane& plane,
+// The jaws' parts in two tasks (each its own depths and band marks), then their points in jaw
+// order: the same points as one jaw after the other.
+Status occlusal_points(const Context& ctx, const Mesh& upper, const Mesh& lower,
+                       const Vec3& lower_offset, const Frame& f, const Grid& g, const Plane& plane,
                        ArenaArray<ArchPoint>* cells_out, ArenaArray<ArchPoint>* line,
                        uint64_t counts[2]) {
+  Arena& arena = *ctx.arena;
   const size_t cells = static_cast<size_t>(g.nx) * g.ny;
-  double* r = arena.allocate_array<double>(cells);
-  uint32_t* band =
-      arena.allocate_array<uint32_t>(std::max(upper.vertices.size(), lower.vertices.size()));
-  if (r == nullptr || band == nullptr) return arena.exhausted_status();
+  const Mesh* jaws[2] = {&upper, &lower};
+  const Vec3 offsets[2] = {Vec3{}, lower_offset};
+  double* r[2];
+  uint32_t* band[2];
+  for (uint32_t jaw = 0; jaw < 2; ++jaw) {
+    r[jaw] = arena.allocate_array<double>(cells);
+    band[jaw] = arena.allocate_array<uint32_t>(jaws[jaw]->vertices.size());
+    if (r[jaw] == nullptr || band[jaw] == nullptr) return arena.exhausted_status();
+  }
   // Room for every shown column and kLinePoints vertices a jaw, reserved once (no growth).
   size_t shown = 0;
   for (uint32_t jaw = 0; jaw < 2; ++jaw) {
@@ -504,10 +561,19 @@ Status occlusal_points(Arena& arena, const Mesh& upper, const Mesh& lower, const
   if (!cells_out->reserve(shown) || !line->reserve(2 * (kLinePoints + 1))) {
     return arena.exhausted_status();
   }
+  JawBandPart parts[2];
+  auto part = [&](uint32_t jaw) {
+    jaw_band_part(*jaws[jaw], offsets[jaw], jaw, f, g, plane, r[jaw], band[jaw], &parts[jaw]);
+  };
+  parallel_for_each(ctx.executor, 2, part);
   for (uint32_t jaw = 0; jaw < 2; ++jaw) {
-    const Mesh& m = jaw == 0 ? upper : lower;
-    const Vec3 offset = jaw == 0 ? Vec3{} : lower_offset;
-    // Distance from the plane towards the jaw's own side (>= about 0 at the tips).
+    const Mesh& m = *jaws[jaw];
+    const Vec3 offset = offsets[jaw];
+    if (parts[jaw].found < kMinOcclusalCells) {
+      return make_error(StatusCode::kInvalidArgument, "outline: no teeth found on the ",
+                        jaw == 0 ? "maxilla" : "mandible", ": it shows the other jaw only ",
+                        parts[jaw].found, " columns of 0.5 mm");
+    }
     const PlaneAxes axes(f);
     auto depth_of = [&](const Vec3& p, double* x, double* y, double* h) {
       const Lanes2 xy = axes.xy(p);
@@ -517,52 +583,23 @@ Status occlusal_points(Arena& arena, const Mesh& upper, const Mesh& lower, const
       const double above = *h - plane.at(*x - g.cx, *y - g.cy);
       return jaw == 0 ? above : -above;
     };
-    size_t used = 0;
-    for (size_t i = 0; i < cells; ++i) {
-      if (g.tip[jaw][i] == kNoTip) continue;
-      double x, y, h;
-      r[used++] = depth_of(m.vertices[g.tip[jaw][i]] + offset, &x, &y, &h);
-    }
-    if (used < kMinOcclusalCells) {
-      return make_error(StatusCode::kInvalidArgument, "outline: no teeth found on the ",
-                        jaw == 0 ? "maxilla" : "mandible", ": it shows the other jaw only ", used,
-                        " columns of 0.5 mm");
-    }
-    std::nth_element(r, r + used / 100, r + used);
-    const double limit = r[used / 100] + kOcclusalBandMm;
     counts[jaw] = 0;
     for (size_t i = 0; i < cells; ++i) {
       if (g.tip[jaw][i] == kNoTip) continue;
       ArchPoint a;
       a.jaw = jaw;
-      if (depth_of(m.vertices[g.tip[jaw][i]] + offset, &a.x, &a.y, &a.h) > limit) continue;
+      if (depth_of(m.vertices[g.tip[jaw][i]] + offset, &a.x, &a.y, &a.h) > parts[jaw].limit) {
+        continue;
+      }
       if (!cells_out->push_back(a)) return arena.exhausted_status();
       ++counts[jaw];
     }
-    // The band's vertices marked in one pass (their indices in `band`), every k-th taken.
-    // Most of a jaw lies far from the plane: every vertex's place in the plane lies within
-    // kMaxSpanMm of the lattice's origin (grid_layout refuses a wider extent, and the origin
-    // is the vertices' mean; the mandible's move is along n), so the plane's height under it
-    // lies within `tilt` of plane.a, and a vertex whose height lies beyond the limit from
-    // that is outside the band by its height alone (with a slack far over the rounding): the
-    // same vertices as depth_of's test of every one.
-    const double tilt =
-        (std::fabs(plane.b) + std::fabs(plane.c)) * (kMaxSpanMm + 1.0) + kBandCutSlackMm;
-    const double cut = jaw == 0 ? plane.a + limit + tilt : plane.a - limit - tilt;
-    size_t in_band = 0;
-    for (size_t k = 0; k < m.vertices.size(); ++k) {
-      const Vec3 p = m.vertices[k] + offset;
-      band[in_band] = static_cast<uint32_t>(k);
-      const double h_k = dot(p, f.n);
-      if (jaw == 0 ? h_k > cut : h_k < cut) continue;
-      double x, y, h;
-      in_band += depth_of(p, &x, &y, &h) <= limit ? 1u : 0u;
-    }
+    const size_t in_band = parts[jaw].in_band;
     const size_t every = in_band / kLinePoints + 1;
     for (size_t i = 0; i < in_band; i += every) {
       ArchPoint a;
       a.jaw = jaw;
-      (void)depth_of(m.vertices[band[i]] + offset, &a.x, &a.y, &a.h);
+      (void)depth_of(m.vertices[band[jaw][i]] + offset, &a.x, &a.y, &a.h);
       if (!line->push_back(a)) return arena.exhausted_status();
     }
   }
@@ -972,7 +1009,7 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
   ArenaArray<ArchPoint> pts(&arena), line_pts(&arena);
   uint64_t counts[2] = {0, 0};
   SPLINTCORE_RETURN_IF_ERROR(
-      occlusal_points(arena, upper, lower, lower_offset, f, g, plane, &pts, &line_pts, counts));
+      occlusal_points(ctx, upper, lower, lower_offset, f, g, plane, &pts, &line_pts, counts));
   out->report.cells_upper = counts[0];
   out->report.cells_lower = counts[1];
   Polyline first, arch;

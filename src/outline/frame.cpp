@@ -278,16 +278,15 @@ namespace {
 // them), and no branch on the comparison (which follows no pattern): the height by a min or
 // max, the vertex by a mask, both slots written always.
 // kLaid: the vertices, in this place, are those the lattice was laid over (cell_of_laid).
+// Vertices [first, last) into `heights` and `tips` (the jaw's columns, or a part's).
 template <bool kLowest, bool kLaid>
-void fill_columns(const Mesh& m, const Vec3& offset, const Frame& frame, Grid* g) {
+void fill_columns(const Mesh& m, const Vec3& offset, const Frame& frame, const Grid& g,
+                  size_t first, size_t last, double* heights, uint32_t* tips) {
   const PlaneAxes axes(frame);
   const Vec3 n = frame.n;
-  const Grid grid = *g;
-  double* heights = grid.h[kLowest ? 0 : 1];
-  uint32_t* tips = grid.tip[kLowest ? 0 : 1];
+  const Grid grid = g;
   const Vec3* v = m.vertices.data();
-  const size_t count = m.vertices.size();
-  for (size_t k = 0; k < count; ++k) {
+  for (size_t k = first; k < last; ++k) {
     const Vec3 p = v[k] + offset;
     const Lanes2 xy = axes.xy(p);
     const size_t cell = kLaid ? grid.cell_of_laid(xy[0], xy[1]) : grid.cell_of(xy[0], xy[1]);
@@ -326,31 +325,73 @@ void fill_window(const Mesh& m, const double* vertex_h, double from, double to, 
   }
 }
 
-void clear_heights(int jaw, Grid* g) {
-  const size_t cells = static_cast<size_t>(g->nx) * g->ny;
+void clear_columns(int jaw, size_t cells, double* heights, uint32_t* tips) {
   const double none = jaw == 0 ? HUGE_VAL : -HUGE_VAL;
   for (size_t i = 0; i < cells; ++i) {
-    g->h[jaw][i] = none;
-    g->tip[jaw][i] = kNoTip;
+    heights[i] = none;
+    tips[i] = kNoTip;
+  }
+}
+
+void clear_heights(int jaw, Grid* g) {
+  clear_columns(jaw, static_cast<size_t>(g->nx) * g->ny, g->h[jaw], g->tip[jaw]);
+}
+
+// fill_columns of vertices [first, last) of jaw `jaw`, its columns cleared first.
+template <bool kLaid>
+void fill_part(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, const Grid& g,
+               size_t first, size_t last, double* heights, uint32_t* tips) {
+  clear_columns(jaw, static_cast<size_t>(g.nx) * g.ny, heights, tips);
+  if (jaw == 0) {
+    fill_columns<true, kLaid>(m, offset, f, g, first, last, heights, tips);
+  } else {
+    fill_columns<false, kLaid>(m, offset, f, g, first, last, heights, tips);
   }
 }
 
 // kLaid: as fill_columns.
 template <bool kLaid>
 void fill_heights_of(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g) {
-  clear_heights(jaw, g);
-  if (jaw == 0) {
-    fill_columns<true, kLaid>(m, offset, f, g);
-  } else {
-    fill_columns<false, kLaid>(m, offset, f, g);
-  }
+  fill_part<kLaid>(m, offset, f, jaw, *g, 0, m.vertices.size(), g->h[jaw], g->tip[jaw]);
 }
 
 }  // namespace
 
 // Jaw 0 (the maxilla) shows the mandible its lowest point of each column, jaw 1 its highest.
-void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g) {
-  fill_heights_of<false>(m, offset, f, jaw, g);
+// With threads: the first half of the vertices into the grid and the second into columns of
+// their own, in two tasks, then each column of the second half taken where it is strictly
+// beyond the first's (so of equal heights the first vertex stays, as in one pass in vertex
+// order: the same heights and tips).
+Status fill_heights(Arena& arena, const Executor* executor, const Mesh& m, const Vec3& offset,
+                    const Frame& f, int jaw, Grid* g) {
+  const size_t n = m.vertices.size(), cells = static_cast<size_t>(g->nx) * g->ny;
+  if (!has_threads(executor) || n < 2 * 4096) {
+    fill_heights_of<false>(m, offset, f, jaw, g);
+    return Status::ok();
+  }
+  ArenaScope scope(arena);
+  double* heights = arena.allocate_array<double>(cells);
+  uint32_t* tips = arena.allocate_array<uint32_t>(cells);
+  if (heights == nullptr || tips == nullptr) return arena.exhausted_status();
+  const size_t half = n / 2;
+  auto task = [&](uint32_t i) {
+    if (i == 0) {
+      fill_part<false>(m, offset, f, jaw, *g, 0, half, g->h[jaw], g->tip[jaw]);
+    } else {
+      fill_part<false>(m, offset, f, jaw, *g, half, n, heights, tips);
+    }
+  };
+  parallel_for_each(executor, 2, task);
+  double* h = g->h[jaw];
+  uint32_t* tip = g->tip[jaw];
+  for (size_t i = 0; i < cells; ++i) {
+    const bool beyond = jaw == 0 ? heights[i] < h[i] : heights[i] > h[i];
+    if (beyond) {
+      h[i] = heights[i];
+      tip[i] = tips[i];
+    }
+  }
+  return Status::ok();
 }
 
 // (Its callers laid the lattice over these vertices in these places: build_grid, and

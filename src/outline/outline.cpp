@@ -831,16 +831,15 @@ uint64_t compute_outline_bound(const Mesh& maxilla, const Mesh& mandible) {
                            4 * arena_array_bound<double>(cells) +
                            arena_array_bound<uint8_t>(maxilla_vertices) +
                            arena_array_bound<uint8_t>(mandible_vertices);
-  // The arch: the columns' distances, the band's vertex marks, the points and the band's
-  // vertices (both reserved once),
+  // The arch: each jaw's columns' distances and band's vertex marks (the two jaws in tasks),
+  // the points and the band's vertices (both reserved once),
   // the sectors, each pass's line, the picks' data and places, the projector's grid.
   const uint64_t points = 2 * cells;
   const uint64_t line_points = 2 * (kLinePoints + 1);
   const uint64_t arch =
-      arena_array_bound<double>(cells) +
-      arena_array_bound<uint32_t>(std::max(maxilla_vertices, mandible_vertices)) +
-      arena_array_bound<ArchPoint>(points) + arena_array_bound<ArchPoint>(line_points) +
-      6 * arena_array_bound<double>(kSectors) +
+      2 * arena_array_bound<double>(cells) + arena_array_bound<uint32_t>(maxilla_vertices) +
+      arena_array_bound<uint32_t>(mandible_vertices) + arena_array_bound<ArchPoint>(points) +
+      arena_array_bound<ArchPoint>(line_points) + 6 * arena_array_bound<double>(kSectors) +
       (kSmoothPasses + 1) * 9 * arena_array_bound<double>(kMaxArchPoints + 1) +
       arena_array_bound<double>(6 * kMaxPicks) + arena_array_bound<double>(kMaxPicks) +
       (kSmoothPasses + 2) * projector_bound();
@@ -882,7 +881,9 @@ Status compute_outline(const Context& ctx, const Mesh& maxilla, const Mesh& mand
     SPLINTCORE_RETURN_IF_ERROR(
         open_bite(ctx, maxilla, mandible, f, g, options, &offset, &out->report));
     // The move is along n: the columns stay; only the mandible's heights change.
-    if (out->report.opened) fill_heights(mandible, offset, f, 1, &g);
+    if (out->report.opened) {
+      SPLINTCORE_RETURN_IF_ERROR(fill_heights(arena, ctx.executor, mandible, offset, f, 1, &g));
+    }
     SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "outline", 2, 3));
     SPLINTCORE_RETURN_IF_ERROR(
         arch_and_picks(ctx, maxilla, mandible, offset, f, g, plane, options, buffers, out));

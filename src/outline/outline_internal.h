@@ -146,7 +146,9 @@ Status anterior_axis(const Context& ctx, const Mesh& upper, const Mesh& lower, c
                      const Frame& f, Vec3* axis);
 Status build_grid(Arena& arena, const Executor* executor, const Mesh& upper, const Mesh& lower,
                   const Vec3& lower_offset, const Frame& f, Grid* g);
-void fill_heights(const Mesh& m, const Vec3& offset, const Frame& f, int jaw, Grid* g);
+// Arena (with threads): a lattice's columns, returned. Errors: kArenaExhausted.
+Status fill_heights(Arena& arena, const Executor* executor, const Mesh& m, const Vec3& offset,
+                    const Frame& f, int jaw, Grid* g);
 // fill_heights of both jaws, one task each on the executor (each writes only its own
 // columns' arrays), for the vertices the lattice was laid over, in the same places (the
 // upper's as given, the lower's moved by lower_offset): cell_of_laid.
