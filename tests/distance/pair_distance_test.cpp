@@ -822,13 +822,13 @@ struct ExhaustiveResult {
 // The least (squared distance, triangle a, triangle b) over every pair, by
 // triangle_pair_distance() (the squared distance being that of its two points, 0 for meeting
 // triangles: the key the library orders by), skipping only pairs whose boxes are farther apart
-// than the best by a wide margin.
-ExhaustiveResult exhaustive(const Mesh& a, const Mesh& b, const Vec3& offset) {
+// than the best by a wide margin (with `prune`; without, every pair: all_pairs).
+ExhaustiveResult exhaustive(const Mesh& a, const Mesh& b, const Vec3& offset, bool prune = true) {
   const std::vector<TriangleCorners> x = corners_of(a, Vec3{}), y = corners_of(b, offset);
   ExhaustiveResult r;
   for (uint32_t i = 0; i < x.size(); ++i) {
     for (uint32_t j = 0; j < y.size(); ++j) {
-      if (r.d2 < HUGE_VAL && box_gap2(x[i], y[j]) > r.d2 * (1 + 1e-6) + 1e-12) continue;
+      if (prune && r.d2 < HUGE_VAL && box_gap2(x[i], y[j]) > r.d2 * (1 + 1e-6) + 1e-12) continue;
       Vec3 pa, pb;
       const double d = triangle_pair_distance(x[i].p[0], x[i].p[1], x[i].p[2], y[j].p[0], y[j].p[1],
                                               y[j].p[2], &pa, &pb);
@@ -842,18 +842,7 @@ ExhaustiveResult exhaustive(const Mesh& a, const Mesh& b, const Vec3& offset) {
 // The least (squared distance, triangle a, triangle b) over every pair, by
 // triangle_pair_distance() (0 for meeting triangles), with no pruning at all.
 ExhaustiveResult all_pairs(const Mesh& a, const Mesh& b, const Vec3& offset) {
-  const std::vector<TriangleCorners> x = corners_of(a, Vec3{}), y = corners_of(b, offset);
-  ExhaustiveResult r;
-  for (uint32_t i = 0; i < x.size(); ++i) {
-    for (uint32_t j = 0; j < y.size(); ++j) {
-      Vec3 pa, pb;
-      const double d = triangle_pair_distance(x[i].p[0], x[i].p[1], x[i].p[2], y[j].p[0], y[j].p[1],
-                                              y[j].p[2], &pa, &pb);
-      const double d2 = d == 0 ? 0 : length_squared(pa - pb);
-      if (d2 < r.d2) r = ExhaustiveResult{d2, d, i, j, pa, pb};
-    }
-  }
-  return r;
+  return exhaustive(a, b, offset, false);
 }
 
 // A flat n x n grid of unit squares at height z, two triangles a square: congruent

@@ -289,6 +289,20 @@ TEST(Autorotate, PhantomFrameInvariance) {
   }
 }
 
+// The same report, bit for bit: the angle, the opening, the transform, the contact and its
+// triangles, the steps.
+void expect_same_report(const AutorotateReport& r, const AutorotateReport& base) {
+  EXPECT_EQ(std::memcmp(&r.angle_rad, &base.angle_rad, sizeof(double)), 0)
+      << r.angle_rad << " " << base.angle_rad;
+  EXPECT_EQ(std::memcmp(&r.opening, &base.opening, sizeof(double)), 0);
+  EXPECT_EQ(std::memcmp(&r.transform, &base.transform, sizeof(RigidTransform)), 0);
+  EXPECT_EQ(r.contact_maxilla, base.contact_maxilla);
+  EXPECT_EQ(r.contact_mandible, base.contact_mandible);
+  EXPECT_EQ(r.triangle_maxilla, base.triangle_maxilla);
+  EXPECT_EQ(r.triangle_mandible, base.triangle_mandible);
+  EXPECT_EQ(r.steps, base.steps);
+}
+
 // autorotate_mandible_indexed over the caller's indexes (built with other options, or refit
 // from another mesh's tree as a plan refits them) gives autorotate_mandible's report bit for bit,
 // in autorotate_mandible_indexed_bound(); an empty jaw is refused.
@@ -316,15 +330,7 @@ TEST(Autorotate, IndexedGivesTheSameBits) {
     test::TestArena work{static_cast<size_t>(autorotate_mandible_indexed_bound())};
     SPLINTCORE_ASSERT_OK(autorotate_mandible_indexed(Context(&work.arena), upper, lower, o, &r));
     EXPECT_EQ(work.arena.used(), 0u);
-    EXPECT_EQ(std::memcmp(&r.angle_rad, &base.angle_rad, sizeof(double)), 0)
-        << r.angle_rad << " " << base.angle_rad;
-    EXPECT_EQ(std::memcmp(&r.opening, &base.opening, sizeof(double)), 0);
-    EXPECT_EQ(std::memcmp(&r.transform, &base.transform, sizeof(RigidTransform)), 0);
-    EXPECT_EQ(r.contact_maxilla, base.contact_maxilla);
-    EXPECT_EQ(r.contact_mandible, base.contact_mandible);
-    EXPECT_EQ(r.triangle_maxilla, base.triangle_maxilla);
-    EXPECT_EQ(r.triangle_mandible, base.triangle_mandible);
-    EXPECT_EQ(r.steps, base.steps);
+    expect_same_report(r, base);
   }
   test::TestArena t(size_t{8} << 20);
   Mesh empty;
@@ -363,13 +369,7 @@ TEST(Autorotate, SameBitsAtEveryThreadCount) {
       SPLINTCORE_ASSERT_OK(autorotate_mandible(Context(&work.arena, &pool->executor(), nullptr),
                                                jaws.jaw[0], jaws.jaw[1], o, &r));
       EXPECT_EQ(work.arena.used(), 0u);
-      EXPECT_EQ(std::memcmp(&r.angle_rad, &base.angle_rad, sizeof(double)), 0)
-          << r.angle_rad << " " << base.angle_rad;
-      EXPECT_EQ(std::memcmp(&r.opening, &base.opening, sizeof(double)), 0);
-      EXPECT_EQ(std::memcmp(&r.transform, &base.transform, sizeof(RigidTransform)), 0);
-      EXPECT_EQ(r.triangle_maxilla, base.triangle_maxilla);
-      EXPECT_EQ(r.triangle_mandible, base.triangle_mandible);
-      EXPECT_EQ(r.steps, base.steps);
+      expect_same_report(r, base);
     }
   }
 }
