@@ -79,13 +79,16 @@ struct SweepOptions {
   // > 0 (mm, at most a tenth of a voxel): the surface is decimated in the stream, one-sided:
   // extracted decimate_error / 2 further out (iso + decimate_error / 2), then decimated in
   // tiles of whole cell layers (at least 2^16 triangles each, a count of the data, so the
-  // bytes do not depend on the memory cap) by half-edge collapses whose quadric error
-  // (remesh.h) stays below decimate_error / 4. A tile is an open patch whose border stays;
-  // what reaches its top two cell layers is carried into the next tile and decimated again
-  // there, so no seam stays on a plane. Every vertex is an extractor vertex (float32_vertices:
-  // rounded). EXPERIMENTAL, off by default: the aim is a one-sided bound of decimate_error,
-  // but the quadric criterion (a mean of plane distances) does not hold it; measured at
-  // 0.1 mm voxels with decimate_error 0.01 mm, up to about 0.05 mm on either side (at creases
+  // bytes do not depend on the memory cap) by half-edge collapses in quadric-error order
+  // (remesh.h; limit decimate_error / 2) that keep every extractor vertex within
+  // decimate_error / 2 of the result (decimate_qem's max_distance: the vertices a tile
+  // removes are carried with the triangles it carries, so the bound is against the
+  // extractor's surface, not a carried approximation). A tile is an open patch whose border
+  // stays; what reaches its top two cell layers is carried into the next tile and decimated
+  // again there, so no seam stays on a plane. Every vertex is an extractor vertex
+  // (float32_vertices: rounded). EXPERIMENTAL, off by default: the aim is a one-sided bound
+  // of decimate_error everywhere, but between the vertices the triangles depart further:
+  // measured at 0.1 mm voxels with decimate_error 0.01 mm, up to about 0.026 mm (at creases
   // and along walls; tests/blockout/sweep_test.cpp, SweepDecimate). 0: the extractor's
   // surface, as it is.
   double decimate_error = 0;
@@ -160,7 +163,8 @@ uint64_t sweep_state_bound(uint64_t vertex_count, uint64_t triangle_count, uint3
 // so the need is known by the two-step contract (a first run's high water, docs/embedding.md).
 // Decimating, the extractor's slab is chosen within a quarter of the free arena, and above it
 // the tiles take about 400 bytes per triangle of the largest tile (peak_tile_triangles: the
-// gathered triangles and vertices, the patch, decimate_qem_bound, the carry) and, for the
+// gathered triangles and vertices, the patch, decimate_qem_bound, the carry), 36 bytes per
+// carried sample (the extractor vertices removed from the carried triangles) and, for the
 // mesh variant, the decimated output logged (24 bytes a vertex, 12 a triangle) and split once
 // more at the end.
 Status sweep_volume(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& options,

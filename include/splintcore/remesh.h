@@ -115,7 +115,31 @@ struct DecimateOptions {
   Span<const uint8_t> locked;
   // Optional output, one per input vertex: its id in `out`, or ~0u when it went.
   Span<uint32_t> vertex_map;
+  // > 0 (mm, keep_positions only): a bound on how far the input surface departs from the
+  // result, kept at samples of it: every input vertex a collapse removes, and the given
+  // `samples`. Each sample is assigned to a triangle within max_distance of it (point to
+  // closed triangle): at a collapse the samples of the triangles that change are assigned
+  // again, each to the first triangle of the new fan within reach, and a collapse that would
+  // leave one out of reach is refused (counted in rejected_distance). The input's vertices
+  // that stay lie on the result, so every input vertex ends within max_distance of it. 0: no
+  // such bound.
+  double max_distance = 0.0;
+  // Optional (max_distance only): more samples of the input surface, each with the input
+  // triangle it is assigned to (sample_triangles, one each): e.g. the input vertices an
+  // earlier decimation removed from a patch that is decimated again.
+  Span<const Vec3> samples;
+  Span<const uint32_t> sample_triangles;
+  // Optional outputs (max_distance only): the triangle of `out` each given sample, and each
+  // input vertex that went, ends assigned to (~0u for a vertex that stays).
+  Span<uint32_t> sample_map;   // one per given sample
+  Span<uint32_t> removed_map;  // one per input vertex
 };
+
+// Samples one collapse may move from the triangles that change to the new fan, and triangles
+// of that fan, at most, with max_distance: a collapse that needs more is refused (a bound on
+// the scratch memory, counted in rejected_distance).
+constexpr uint32_t kDecimateMovedSamples = 4096;
+constexpr uint32_t kDecimateFanTriangles = 256;
 
 enum class DecimateStop : uint8_t {
   kTargetReached = 0,  // at most target_triangles left (also when the input already was)
@@ -130,6 +154,7 @@ struct DecimateStats {
   uint64_t rejected_link = 0;        // refused by the link condition (each refusal counted)
   uint64_t rejected_flip = 0;        // a triangle would turn over
   uint64_t rejected_degenerate = 0;  // a triangle would be flat
+  uint64_t rejected_distance = 0;    // max_distance: a sample would be left out of reach
   uint32_t rounds = 1;               // passes over the refused edges, plus the first
   double max_error = 0.0;            // the largest error of a collapse made (mm)
   DecimateStop stop = DecimateStop::kTargetReached;
@@ -141,8 +166,12 @@ struct DecimateStats {
 // each) and 128 bytes per vertex (quadric, position, fan, valence, mark); then either the
 // input checks (half-edges bucketed by vertex) or the heap (8 bytes per edge, E = 3 T / 2), a
 // vertex remap and the output mesh (at most the input's size): 60 T + 156 V, about 140 bytes
-// per input triangle of a closed surface (V = T / 2). 0 on overflow.
-uint64_t decimate_qem_bound(uint64_t vertex_count, uint64_t triangle_count);
+// per input triangle of a closed surface (V = T / 2). With max_distance (bounded_distance)
+// also, kept throughout: a sample list per triangle and per sample (4 T + 4 (V + S), S the
+// given samples) and the scratch of one collapse (8 kDecimateMovedSamples + 80
+// kDecimateFanTriangles). 0 on overflow.
+uint64_t decimate_qem_bound(uint64_t vertex_count, uint64_t triangle_count,
+                            bool bounded_distance = false, uint64_t given_samples = 0);
 
 // Decimates `mesh` (read only) into `out`, which must be empty and bound to ctx.arena: a new
 // compact mesh (only referenced vertices, numbered in order of first use by the triangles in

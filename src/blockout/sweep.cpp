@@ -1165,7 +1165,8 @@ void setup_tiles(const Sweep& s, const SweepOptions& o, const MarchingCubesVisit
                  TileDecimator* d) {
   const VolumeGrid& g = s.mesh_grid;
   d->ctx = s.ctx;
-  d->max_error = 0.25 * o.decimate_error;
+  d->max_error = 0.5 * o.decimate_error;
+  d->max_distance = 0.5 * o.decimate_error;
   d->lo = g.origin;
   d->hi = Vec3{g.origin.x + g.spacing.x * (g.nx - 1.0), g.origin.y + g.spacing.y * (g.ny - 1.0),
                g.origin.z + g.spacing.z * (g.nz - 1.0)};

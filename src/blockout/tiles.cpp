@@ -32,11 +32,12 @@ const T* part(const uint8_t* p) {
 // and the triangles (12 bytes, then padding to 8).
 uint64_t chunk_bytes(uint64_t nv, uint64_t nt) { return 16 + 24 * nv + round8(12 * nt); }
 
-// The carry: three 32-bit counts and padding (vertices, triangles, map entries), positions
-// (24 bytes), w (8), output ids (4), beyond flags (1), triangles (12), map (4), each part
-// padded to 8.
-uint64_t carry_bytes(uint64_t nv, uint64_t nt, uint64_t nm) {
-  return 16 + 24 * nv + 8 * nv + round8(4 * nv) + round8(nv) + round8(12 * nt) + round8(4 * nm);
+// The carry: four 32-bit counts (vertices, triangles, map entries, samples), positions (24
+// bytes), w (8), output ids (4), beyond flags (1), triangles (12), map (4), the samples'
+// positions (24) and triangles (4), each part padded to 8.
+uint64_t carry_bytes(uint64_t nv, uint64_t nt, uint64_t nm, uint64_t ns) {
+  return 16 + 24 * nv + 8 * nv + round8(4 * nv) + round8(nv) + round8(12 * nt) + round8(4 * nm) +
+         24 * ns + round8(4 * ns);
 }
 
 bool beyond(const TileDecimator& d, const Vec3& p) {
@@ -159,12 +160,13 @@ void move_down(TileDecimator& d, const uint8_t* block, uint64_t block_bytes) {
 // Points the carry's arrays into the log (its last carry_bytes).
 void read_carry(TileDecimator& d) {
   const uint8_t* c = d.log + d.log_bytes - d.carry_bytes;
-  uint32_t counts[3];
+  uint32_t counts[4];
   std::memcpy(counts, c, sizeof(counts));
-  const uint64_t nv = counts[0], nt = counts[1];
+  const uint64_t nv = counts[0], nt = counts[1], nm = counts[2];
   d.carried_vertices = counts[0];
   d.carried_triangles = counts[1];
   d.prev_count = counts[2];
+  d.carried_samples = counts[3];
   c += 16;
   d.c_pos = part<Vec3>(c);
   c += 24 * nv;
@@ -177,6 +179,10 @@ void read_carry(TileDecimator& d) {
   d.c_tris = part<Triangle>(c);
   c += round8(12 * nt);
   d.prev_map = part<uint32_t>(c);
+  c += round8(4 * nm);
+  d.c_samples = part<Vec3>(c);
+  c += 24 * uint64_t{d.carried_samples};
+  d.c_sample_tri = part<uint32_t>(c);
 }
 
 // The pieces of a decimated tile the carry is written from.
@@ -188,6 +194,12 @@ struct CarryParts {
   const uint8_t* carried;    // per dec triangle
   const uint32_t* vmap;      // patch vertex -> dec vertex
   uint32_t next_nc, next_nt, n_new, nc;
+  // max_distance: the dec triangle of each carried sample and each removed patch vertex (~0u:
+  // stays), the carried index of each dec triangle, and how many samples the carry gets.
+  const uint32_t* sample_map;
+  const uint32_t* removed_map;
+  const uint32_t* carried_index;
+  uint32_t next_ns;
 };
 
 // Writes the carry (layout: carry_bytes) at c.
@@ -198,7 +210,7 @@ void write_carry(const TileDecimator& d, const CarryParts& cp, uint8_t* c) {
   const uint32_t* carry_id = cp.carry_id;
   const uint32_t next_nc = cp.next_nc, next_nt = cp.next_nt, n_new = cp.n_new, nc = cp.nc;
   const size_t dv = dec.vertices.size(), dt = dec.triangles.size();
-  const uint32_t counts[4] = {next_nc, next_nt, n_new, 0};
+  const uint32_t counts[4] = {next_nc, next_nt, n_new, cp.next_ns};
   std::memcpy(c, counts, sizeof(counts));
   Vec3* pos = part<Vec3>(c + 16);
   double* w = part<double>(c + 16 + 24 * uint64_t{next_nc});
@@ -225,6 +237,60 @@ void write_carry(const TileDecimator& d, const CarryParts& cp, uint8_t* c) {
     const uint32_t m = cp.vmap[nc + j];
     map[j] = m == kGone ? kGone : carry_id[m];
   }
+  if (cp.next_ns == 0) return;
+  // The samples of the carried triangles: the old carry's, then the removed vertices, in order.
+  Vec3* spos = part<Vec3>(reinterpret_cast<uint8_t*>(map) + round8(4 * uint64_t{n_new}));
+  uint32_t* stri = part<uint32_t>(reinterpret_cast<uint8_t*>(spos) + 24 * uint64_t{cp.next_ns});
+  uint32_t at_s = 0;
+  for (uint32_t i = 0; i < d.carried_samples; ++i) {
+    const uint32_t t = cp.sample_map[i];
+    if (cp.carried[t] == 0) continue;
+    spos[at_s] = d.c_samples[i];
+    stri[at_s++] = cp.carried_index[t];
+  }
+  for (size_t i = 0; i < p.mesh.vertices.size(); ++i) {
+    const uint32_t t = cp.removed_map[i];
+    if (t == kGone || cp.carried[t] == 0) continue;
+    spos[at_s] = p.mesh.vertices[i];
+    stri[at_s++] = cp.carried_index[t];
+  }
+  SPLINTCORE_ASSERT(at_s == cp.next_ns);
+}
+
+// Decimates the tile's patch into *dec, with the maps it gives: *vmap (patch vertex -> dec
+// vertex) and, with max_distance, *sample_map (carried sample -> dec triangle) and
+// *removed_map (patch vertex -> dec triangle, ~0u when it stays), all in the arena below dec.
+Status decimate_tile(TileDecimator& d, const Patch& p, uint32_t** vmap, uint32_t** sample_map,
+                     uint32_t** removed_map, Mesh* dec) {
+  Arena& arena = *d.ctx->arena;
+  const size_t nv = p.mesh.vertices.size();
+  *vmap = arena.allocate_array<uint32_t>(nv);
+  if (nv > 0 && *vmap == nullptr) return arena.exhausted_status();
+  DecimateOptions o;
+  o.max_error = d.max_error;
+  o.allow_boundary = true;
+  o.keep_positions = true;
+  o.locked = Span<const uint8_t>(p.locked, nv);
+  o.vertex_map = Span<uint32_t>(*vmap, nv);
+  if (d.max_distance > 0) {
+    const uint32_t ns = d.carried_samples;
+    *sample_map = arena.allocate_array<uint32_t>(ns);
+    *removed_map = arena.allocate_array<uint32_t>(nv);
+    if ((ns > 0 && *sample_map == nullptr) || (nv > 0 && *removed_map == nullptr)) {
+      return arena.exhausted_status();
+    }
+    o.max_distance = d.max_distance;
+    o.samples = Span<const Vec3>(d.c_samples, ns);
+    // The carried triangles are the patch's first (assemble): the same indices.
+    o.sample_triangles = Span<const uint32_t>(d.c_sample_tri, ns);
+    o.sample_map = Span<uint32_t>(*sample_map, ns);
+    o.removed_map = Span<uint32_t>(*removed_map, nv);
+  }
+  const Context quiet(d.ctx->arena, d.ctx->executor, nullptr);
+  DecimateStats ds;
+  SPLINTCORE_RETURN_IF_ERROR(decimate_qem(quiet, p.mesh, o, dec, &ds));
+  if (ds.max_error > d.max_collapse_error) d.max_collapse_error = ds.max_error;
+  return Status::ok();
 }
 
 // Decimates the tile; streams (or logs) the triangles below the carry band, in order, with
@@ -239,25 +305,20 @@ Status flush(TileDecimator& d, int64_t cz) {
   if (p.mesh.triangles.size() > d.peak_tile_triangles) {
     d.peak_tile_triangles = p.mesh.triangles.size();
   }
-  uint32_t* vmap = arena.allocate_array<uint32_t>(nv);
-  if (nv > 0 && vmap == nullptr) return arena.exhausted_status();
-  DecimateOptions o;
-  o.max_error = d.max_error;
-  o.allow_boundary = true;
-  o.keep_positions = true;
-  o.locked = Span<const uint8_t>(p.locked, nv);
-  o.vertex_map = Span<uint32_t>(vmap, nv);
-  const Context quiet(d.ctx->arena, d.ctx->executor, nullptr);
+  uint32_t* vmap = nullptr;
+  uint32_t* sample_map = nullptr;
+  uint32_t* removed_map = nullptr;
   Mesh dec(&arena);
-  DecimateStats ds;
-  SPLINTCORE_RETURN_IF_ERROR(decimate_qem(quiet, p.mesh, o, &dec, &ds));
-  if (ds.max_error > d.max_collapse_error) d.max_collapse_error = ds.max_error;
+  SPLINTCORE_RETURN_IF_ERROR(decimate_tile(d, p, &vmap, &sample_map, &removed_map, &dec));
+  const bool sampled = d.max_distance > 0;
   ++d.tiles;
   const size_t dv = dec.vertices.size(), dt = dec.triangles.size();
   uint32_t* source = arena.allocate_array<uint32_t>(dv);    // dec vertex -> patch vertex
   uint32_t* carry_id = arena.allocate_array<uint32_t>(dv);  // dec vertex -> next carry
   uint8_t* carried = arena.allocate_array<uint8_t>(dt);
-  if ((dv > 0 && (source == nullptr || carry_id == nullptr)) || (dt > 0 && carried == nullptr)) {
+  uint32_t* carried_index = sampled ? arena.allocate_array<uint32_t>(dt) : nullptr;
+  if ((dv > 0 && (source == nullptr || carry_id == nullptr)) ||
+      (dt > 0 && (carried == nullptr || (sampled && carried_index == nullptr)))) {
     return arena.exhausted_status();
   }
   for (size_t i = 0; i < nv; ++i) {
@@ -274,6 +335,7 @@ Status flush(TileDecimator& d, int64_t cz) {
     bool top = false;
     for (int k = 0; k < 3; ++k) top = top || (!last && p.w[source[v[k]]] >= w_cut);
     carried[t] = top ? 1 : 0;
+    if (sampled) carried_index[t] = top ? next_nt : kGone;
     if (top) {
       ++next_nt;
       for (int k = 0; k < 3; ++k) {
@@ -299,7 +361,14 @@ Status flush(TileDecimator& d, int64_t cz) {
   }
   const bool logging = d.out == nullptr;
   const uint64_t chunk = logging ? chunk_bytes(emitted_v, emitted_t) : 0;
-  const uint64_t carry = last ? 0 : carry_bytes(next_nc, next_nt, n_new);
+  uint32_t next_ns = 0;  // the samples the carried triangles take along
+  if (sampled && !last) {
+    for (uint32_t i = 0; i < d.carried_samples; ++i) next_ns += carried[sample_map[i]];
+    for (size_t i = 0; i < nv; ++i) {
+      if (removed_map[i] != kGone) next_ns += carried[removed_map[i]];
+    }
+  }
+  const uint64_t carry = last ? 0 : carry_bytes(next_nc, next_nt, n_new, next_ns);
   uint8_t* block = static_cast<uint8_t*>(arena.allocate(static_cast<size_t>(chunk + carry), 8));
   if (chunk + carry > 0 && block == nullptr) return arena.exhausted_status();
   // The final part, by first use.
@@ -339,7 +408,8 @@ Status flush(TileDecimator& d, int64_t cz) {
   d.out_triangles += emitted_t;
   // The carry: the other triangles and their vertices, and the map of this tile's new ones.
   if (!last) {
-    const CarryParts parts{&p, &dec, source, carry_id, carried, vmap, next_nc, next_nt, n_new, nc};
+    const CarryParts parts{&p,      &dec,  source, carry_id,   carried,     vmap,          next_nc,
+                           next_nt, n_new, nc,     sample_map, removed_map, carried_index, next_ns};
     write_carry(d, parts, block + chunk);
   }
   move_down(d, block, chunk + carry);
@@ -349,7 +419,7 @@ Status flush(TileDecimator& d, int64_t cz) {
   if (carry > 0) {
     read_carry(d);
   } else {
-    d.carried_vertices = d.carried_triangles = d.prev_count = 0;
+    d.carried_vertices = d.carried_triangles = d.prev_count = d.carried_samples = 0;
   }
   bind_current(d);
   return Status::ok();

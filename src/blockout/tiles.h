@@ -28,6 +28,11 @@ constexpr uint32_t kCarryLayers = 2;
 struct TileDecimator {
   const Context* ctx = nullptr;
   double max_error = 0;  // decimate_qem's (mm)
+  // decimate_qem's max_distance (mm): every extractor vertex ends within it of the result. The
+  // extractor vertices a tile removes from the triangles it carries are carried with them (as
+  // samples assigned to those triangles) and given to the next tile's decimation, so the
+  // bound holds against the extractor's surface, not against a carried approximation of it.
+  double max_distance = 0;
   // The extracted grid's box in the local frame: a vertex beyond it (a cap's) is locked, and
   // with drop_caps a triangle with all three corners beyond it is left out (as drop_caps()).
   Vec3 lo{}, hi{};
@@ -55,6 +60,9 @@ struct TileDecimator {
   const uint32_t* c_out = nullptr;
   const uint8_t* c_beyond = nullptr;
   const Triangle* c_tris = nullptr;
+  uint32_t carried_samples = 0;
+  const Vec3* c_samples = nullptr;         // positions
+  const uint32_t* c_sample_tri = nullptr;  // the carried triangle each is assigned to
   uint32_t prev_first = 0, prev_count = 0;
   const uint32_t* prev_map = nullptr;
   // This tile: its new vertices (extractor ids cur_first ..) and triangles, as they come.

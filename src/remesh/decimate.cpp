@@ -26,6 +26,7 @@
 // Quadrics are built relative to the input's bounding-box centre (well conditioned far from
 // the origin); positions stay in input coordinates, so a vertex that never moves keeps its
 // input bits.
+#include "splintcore/distance.h"
 #include "splintcore/remesh.h"
 
 namespace splintcore {
@@ -228,6 +229,22 @@ struct Decimator {
   Vec3 center{};
   Heap heap;
   bool keep = false;  // options.keep_positions
+  // max_distance: samples of the input surface, each in the list of the live triangle it is
+  // assigned to (given samples 0 .. n_given - 1, then input vertex i as n_given + i), and the
+  // scratch of one collapse: the new fan's corners and the samples' new triangles.
+  double reach2 = 0.0;  // max_distance^2; 0: off
+  uint32_t n_given = 0;
+  const Vec3* given = nullptr;
+  uint32_t* first_sample = nullptr;  // per triangle, kNone: none
+  uint32_t* next_sample = nullptr;   // per sample
+  struct FanTriangle {
+    uint32_t t;
+    Vec3 a, b, c;
+  };
+  FanTriangle* fan = nullptr;  // kDecimateFanTriangles
+  uint32_t fan_size = 0;
+  uint64_t* moved = nullptr;  // kDecimateMovedSamples: sample << 32 | triangle
+  uint32_t moved_count = 0;
 
   uint32_t origin(uint32_t h) const { return tri[h / 3].v[h % 3]; }
   uint32_t dest(uint32_t h) const { return tri[h / 3].v[(h % 3 + 1) % 3]; }
@@ -303,7 +320,7 @@ struct Decimator {
     }
   }
 
-  // 0: ok; 1: link condition; 2: flip; 3: flat.
+  // 0: ok; 1: link condition; 2: flip; 3: flat; 4: a sample out of reach (max_distance).
   int check(uint32_t h, const Vec3& p) {
     const uint32_t g = twin(h);
     const uint32_t u = origin(h), v = dest(h);
@@ -351,11 +368,85 @@ struct Decimator {
         e = next_out(e);
       } while (e != start);
     }
+    if (reach2 > 0.0 && !place_samples(h)) return 4;
     return 0;
+  }
+
+  Vec3 sample_at(uint32_t s) const { return s < n_given ? given[s] : vx[s - n_given].pos; }
+
+  // max_distance: the samples that collapsing h = (u, v) (u stays where it is) would move, v
+  // and those of v's triangles, each placed on the first triangle of the new fan within reach
+  // (u's triangles, then v's with v read as u, without h's and its twin's), in `moved`; false
+  // when one is out of reach or the scratch is too small.
+  bool place_samples(uint32_t h) {
+    const uint32_t g = twin(h), u = origin(h), v = dest(h), t0 = h / 3, t1 = g / 3;
+    const Vec3 pu = vx[u].pos;
+    fan_size = 0;
+    for (int side = 0; side < 2; ++side) {
+      const uint32_t start = vx[side == 0 ? u : v].head;
+      uint32_t e = start;
+      do {
+        const uint32_t t = e / 3;
+        if (t != t0 && t != t1) {
+          if (fan_size == kDecimateFanTriangles) return false;
+          // Corners in the triangle's order, the moving one at u.
+          Vec3 c[3];
+          for (int k = 0; k < 3; ++k) {
+            const uint32_t w = tri[t].v[k];
+            c[k] = w == v ? pu : vx[w].pos;
+          }
+          fan[fan_size++] = FanTriangle{t, c[0], c[1], c[2]};
+        }
+        e = next_out(e);
+      } while (e != start);
+    }
+    moved_count = 0;
+    if (!place(n_given + v)) return false;
+    const uint32_t start = vx[v].head;
+    uint32_t e = start;
+    do {
+      for (uint32_t s = first_sample[e / 3]; s != kNone; s = next_sample[s]) {
+        if (!place(s)) return false;
+      }
+      e = next_out(e);
+    } while (e != start);
+    return true;
+  }
+
+  // Places sample s on the first fan triangle within reach (into `moved`).
+  bool place(uint32_t s) {
+    if (moved_count == kDecimateMovedSamples) return false;
+    const Vec3 q = sample_at(s);
+    for (uint32_t i = 0; i < fan_size; ++i) {
+      const FanTriangle& f = fan[i];
+      if (length_squared(q - closest_point_on_triangle(q, f.a, f.b, f.c)) <= reach2) {
+        moved[moved_count++] = uint64_t{s} << 32 | f.t;
+        return true;
+      }
+    }
+    return false;
+  }
+
+  // After place_samples(h) passed: v's triangles lose their samples, which go where `moved`
+  // says (before the collapse changes the fans).
+  void move_samples(uint32_t h) {
+    const uint32_t v = dest(h);
+    const uint32_t start = vx[v].head;
+    uint32_t e = start;
+    do {
+      first_sample[e / 3] = kNone;
+      e = next_out(e);
+    } while (e != start);
+    for (uint32_t i = 0; i < moved_count; ++i) {
+      const uint32_t s = static_cast<uint32_t>(moved[i] >> 32), t = static_cast<uint32_t>(moved[i]);
+      next_sample[s] = first_sample[t];
+      first_sample[t] = s;
+    }
   }
 
   // Collapses edge h (origin u kept at p, destination v removed).
   void collapse(uint32_t h, const Vec3& p, uint32_t* parked) {
+    if (reach2 > 0.0) move_samples(h);
     const uint32_t g = twin(h);
     const uint32_t n0 = next_of(h), p0 = prev_of(h), n1 = next_of(g), p1 = prev_of(g);
     const uint32_t u = origin(h), v = dest(h), a = origin(p0), b = origin(p1);
@@ -522,6 +613,29 @@ struct Decimator {
     }
   }
 
+  // max_distance: the sample lists (the given samples in their triangles, in order) and the
+  // scratch of one collapse.
+  Status init_samples(Arena& arena, const DecimateOptions& options) {
+    if (!(options.max_distance > 0.0)) return Status::ok();
+    reach2 = options.max_distance * options.max_distance;
+    n_given = static_cast<uint32_t>(options.samples.size());
+    given = options.samples.data();
+    first_sample = arena.allocate_array<uint32_t>(nt);
+    next_sample = arena.allocate_array<uint32_t>(size_t{n_given} + nv);
+    fan = arena.allocate_array<FanTriangle>(kDecimateFanTriangles);
+    moved = arena.allocate_array<uint64_t>(kDecimateMovedSamples);
+    if (first_sample == nullptr || next_sample == nullptr || fan == nullptr || moved == nullptr) {
+      return arena.exhausted_status();
+    }
+    for (uint32_t t = 0; t < nt; ++t) first_sample[t] = kNone;
+    for (uint32_t i = n_given; i > 0; --i) {  // prepended last first: lists in sample order
+      const uint32_t t = options.sample_triangles[i - 1];
+      next_sample[i - 1] = first_sample[t];
+      first_sample[t] = i - 1;
+    }
+    return Status::ok();
+  }
+
   // Every edge in the heap (by its smaller half-edge), then heapified.
   void fill_heap() {
     for (uint32_t h = 0; h < 3 * nt; ++h) {
@@ -589,6 +703,7 @@ struct Decimator {
         if (verdict == 1) ++local.rejected_link;
         if (verdict == 2) ++local.rejected_flip;
         if (verdict == 3) ++local.rejected_degenerate;
+        if (verdict == 4) ++local.rejected_distance;
         continue;
       }
       collapse(into, p, &parked);
@@ -608,7 +723,8 @@ struct Decimator {
 
   // The compact output above the work: the live triangles in order, their vertices numbered
   // by first use (triangles allocated first, as move_mesh_down needs).
-  Status compact(Arena& arena, uint64_t live, Span<uint32_t> vertex_map, Mesh* result) const {
+  Status compact(Arena& arena, uint64_t live, const DecimateOptions& options, Mesh* result) const {
+    const Span<uint32_t> vertex_map = options.vertex_map;
     uint32_t* remap = arena.allocate_array<uint32_t>(nv);
     if (remap == nullptr) return arena.exhausted_status();
     for (uint32_t i = 0; i < nv; ++i) remap[i] = kNone;
@@ -620,6 +736,8 @@ struct Decimator {
       }
     }
     for (size_t i = 0; i < vertex_map.size(); ++i) vertex_map[i] = remap[i];
+    for (uint32_t& m : options.sample_map) m = kNone;
+    for (uint32_t& m : options.removed_map) m = kNone;
     const uint32_t out_t = static_cast<uint32_t>(live);
     Triangle* res_t = arena.allocate_array<Triangle>(out_t);
     Vec3* res_v = arena.allocate_array<Vec3>(out_v);
@@ -631,6 +749,15 @@ struct Decimator {
         const uint32_t v = tri[t].v[k];
         res_t[w].v[k] = remap[v];
         res_v[remap[v]] = vx[v].pos;
+      }
+      if (reach2 > 0.0) {
+        for (uint32_t q = first_sample[t]; q != kNone; q = next_sample[q]) {
+          if (q < n_given) {
+            if (!options.sample_map.empty()) options.sample_map[q] = w;
+          } else if (!options.removed_map.empty()) {
+            options.removed_map[q - n_given] = w;
+          }
+        }
       }
       ++w;
     }
@@ -658,6 +785,39 @@ Status check_decimate_input(const Mesh& mesh, const DecimateOptions& options, co
                       "decimate_qem: `locked` needs keep_positions, and it and `vertex_map` "
                       "need one entry per vertex (",
                       mesh.vertices.size(), ")");
+  }
+  if (!is_finite(options.max_distance) || !(options.max_distance >= 0.0) ||
+      (options.max_distance > 0.0 && !options.keep_positions)) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "decimate_qem: max_distance must be a finite distance >= 0 mm (and > 0 "
+                      "only with keep_positions), not ",
+                      options.max_distance);
+  }
+  const bool sampled = options.max_distance > 0.0;
+  if ((!sampled &&
+       (!options.samples.empty() || !options.sample_map.empty() || !options.removed_map.empty())) ||
+      options.sample_triangles.size() != options.samples.size() ||
+      (!options.sample_map.empty() && options.sample_map.size() != options.samples.size()) ||
+      (!options.removed_map.empty() && options.removed_map.size() != mesh.vertices.size()) ||
+      options.samples.size() > UINT32_MAX - mesh.vertices.size() - 1) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "decimate_qem: `samples`, `sample_map` and `removed_map` need "
+                      "max_distance; `sample_triangles` and `sample_map` one entry per sample (",
+                      options.samples.size(), "), `removed_map` one per vertex (",
+                      mesh.vertices.size(), ")");
+  }
+  for (size_t i = 0; i < options.samples.size(); ++i) {
+    if (options.sample_triangles[i] >= mesh.triangles.size()) {
+      return make_error(StatusCode::kInvalidArgument, "decimate_qem: sample ", i,
+                        " is assigned to triangle ", options.sample_triangles[i],
+                        " but the mesh has ", mesh.triangles.size(), " triangles")
+          .at_index(i);
+    }
+    if (!is_finite(options.samples[i])) {
+      return make_error(StatusCode::kNonFinite, "decimate_qem: sample ", i,
+                        " has a coordinate that is NaN or infinite")
+          .at_index(i);
+    }
   }
   if (options.target_triangles == 0 && options.max_error == 0.0) {
     return make_error(StatusCode::kInvalidArgument,
@@ -698,9 +858,18 @@ Status check_decimate_input(const Mesh& mesh, const DecimateOptions& options, co
 
 }  // namespace
 
-uint64_t decimate_qem_bound(uint64_t vertex_count, uint64_t triangle_count) {
+uint64_t decimate_qem_bound(uint64_t vertex_count, uint64_t triangle_count, bool bounded_distance,
+                            uint64_t given_samples) {
   uint64_t half = 0, first = 0, validation = 0, rest = 0, total = 0;
   if (!checked_mul(triangle_count, 3, &half)) return 0;
+  uint64_t samples = 0;
+  if (bounded_distance &&
+      (!checked_add(given_samples, vertex_count, &samples) ||
+       !add_alloc(&rest, triangle_count, 4) || !add_alloc(&rest, samples, 4) ||
+       !add_alloc(&rest, kDecimateFanTriangles, sizeof(Decimator::FanTriangle)) ||
+       !add_alloc(&rest, kDecimateMovedSamples, sizeof(uint64_t)))) {
+    return 0;
+  }
   if (!add_alloc(&first, triangle_count, sizeof(Face)) ||
       !add_alloc(&first, vertex_count, sizeof(VertexData)) || !add_alloc(&first, 3, 16) ||
       !add_alloc(&validation, vertex_count + 1, 4) || !add_alloc(&validation, half, 4) ||
@@ -760,13 +929,14 @@ Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions&
   }
   if (d.heap.items == nullptr) return arena.exhausted_status();
   d.init_vertices(mesh.vertices.data());
+  SPLINTCORE_RETURN_IF_ERROR(d.init_samples(arena, options));
   d.fill_heap();
 
   uint64_t live = nt;
   SPLINTCORE_RETURN_IF_ERROR(d.collapse_edges(ctx, options, &live, &local));
   // The compact output above the work, then moved down to where the top was.
   Mesh result(&arena);
-  SPLINTCORE_RETURN_IF_ERROR(d.compact(arena, live, options.vertex_map, &result));
+  SPLINTCORE_RETURN_IF_ERROR(d.compact(arena, live, options, &result));
   move_mesh_down(arena, scope.start(), result, out);
   scope.commit();
   local.output_vertices = out->vertices.size();

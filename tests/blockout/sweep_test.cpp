@@ -885,12 +885,13 @@ SideErrors sampled_errors(Arena& arena, const Mesh& a, const Mesh& b) {
 }
 
 // The decimation's error, measured (sampled both ways against the surface without it). The
-// aim is one-sided and within a tenth of a voxel; the quadric criterion (an area-weighted mean
-// of plane distances) does not hold that: measured at 0.1 mm voxels, up to about 0.05 mm
-// (half a voxel) on either side, at the cone's rim and along the walls. What is asserted here
-// is what holds now (within half a voxel, and a 4x reduction), so a change that makes it worse
-// fails; the tenth of a voxel is the next step (a max-distance criterion), and decimation
-// stays off by default until then.
+// aim is one-sided and within a tenth of a voxel. What holds: every extractor vertex within
+// decimate_error / 2 of the decimated surface (decimate_qem's max_distance, kept at the
+// vertices it removes, carried from tile to tile), asserted on the same surface (the inset
+// that puts the decimation's extraction at iso 0). What does not yet: between the vertices
+// the decimated triangles depart further, measured at 0.1 mm voxels up to about 0.026 mm
+// (creases at the cone's rim and along the walls), so decimation stays off by default; what
+// is asserted there is what holds now (within 0.3 voxel, and 4x fewer triangles).
 TEST(SweepDecimate, StaysWithinHalfAVoxelOfTheSurface) {
   TestArena ta(size_t{1} << 30);
   Context ctx(&ta.arena);
@@ -937,6 +938,40 @@ TEST(SweepDecimate, StaysWithinHalfAVoxelOfTheSurface) {
         static_cast<double>(plain.triangles.size()) / reduced.triangles.size(),
         static_cast<unsigned long long>(stats.decimated_tiles), there.outside_max, there.inside_max,
         back.inside_max, back.outside_max, o.decimate_error, v_plain, v_reduced);
+    // The bound at the extractor's vertices, on the same surface: with inset = decimate_error
+    // / 2 the decimation's extraction is at iso 0 exactly, the plain surface, so every plain
+    // vertex must lie within decimate_error / 2 of the decimated one (the distance index's
+    // closest point).
+    {
+      SweepOptions same = o;
+      same.inset = o.decimate_error / 2;
+      Mesh centred(&ta.arena);
+      SweepStats centred_stats;
+      SPLINTCORE_ASSERT_OK(
+          sweep_volume_mesh(ctx, Span<const Mesh>(sh.jaw, 1), same, &centred, &centred_stats));
+      EXPECT_EQ(centred_stats.undecimated_triangles, plain.triangles.size());
+      DistanceIndex index;
+      SPLINTCORE_ASSERT_OK(build_distance_index(ctx, centred, DistanceIndexOptions{}, &index));
+      double worst_vertex = 0;
+      for (const Vec3& q : plain.vertices) {
+        ClosestPoint cp;
+        ASSERT_TRUE(closest_point(index, q, &cp));
+        worst_vertex = std::fmax(worst_vertex, cp.distance);
+      }
+      const SideErrors on = sampled_errors(ta.arena, centred, plain);
+      const SideErrors under = sampled_errors(ta.arena, plain, centred);
+      std::printf(
+          "[ figures  ] %s, same surface: %zu -> %zu triangles; plain vertices to the decimated "
+          "surface at most %.5f mm (bound %.4f); sampled: decimated vs plain out %.5f in %.5f, "
+          "plain vs decimated in %.5f out %.5f mm\n",
+          sh.name, plain.triangles.size(), centred.triangles.size(), worst_vertex,
+          o.decimate_error / 2, on.outside_max, on.inside_max, under.inside_max, under.outside_max);
+      EXPECT_LE(worst_vertex, o.decimate_error / 2 * (1 + 1e-9));
+      EXPECT_GT(worst_vertex, o.decimate_error / 4);  // the bound is what stops it
+      // Between the vertices it is not held: a tenth of a voxel is still the aim.
+      EXPECT_LE(std::fmax(on.outside_max, on.inside_max), 0.3 * o.voxel);
+      EXPECT_LE(std::fmax(under.outside_max, under.inside_max), 0.3 * o.voxel);
+    }
     EXPECT_LT(reduced.triangles.size() * 4, plain.triangles.size());
     EXPECT_LE(there.inside_max, 0.5 * o.voxel);
     EXPECT_LE(there.outside_max, 0.5 * o.voxel);

@@ -166,6 +166,21 @@ TEST(BoundExact, DecimateQem) {
       Mesh out(&arena);
       return decimate_qem(Context(&arena), w.mesh, options, &out);
     });
+    // With the distance bound kept at samples (and three given samples on triangle 0).
+    DecimateOptions bounded = options;
+    bounded.keep_positions = true;
+    bounded.max_distance = 0.05;
+    const Triangle& t0 = w.mesh.triangles[0];
+    const Vec3 samples[3] = {w.mesh.vertices[t0.v[0]], w.mesh.vertices[t0.v[1]],
+                             w.mesh.vertices[t0.v[2]]};
+    const uint32_t homes[3] = {0, 0, 0};
+    bounded.samples = Span<const Vec3>(samples, 3);
+    bounded.sample_triangles = Span<const uint32_t>(homes, 3);
+    expect_fits(in, "decimate_qem max_distance", decimate_qem_bound(w.v(), w.t(), true, 3),
+                [&](Arena& arena) {
+                  Mesh out(&arena);
+                  return decimate_qem(Context(&arena), w.mesh, bounded, &out);
+                });
   }
 }
 

@@ -536,6 +536,147 @@ TEST(DecimateQem, ErrorLimitStopsEarly) {
   EXPECT_EQ(stats.stop, DecimateStop::kTargetReached);
 }
 
+// The squared distance from p to the closed triangle abc by brute force (the test's own:
+// the plane's foot when it falls inside, else the nearest of the three sides).
+double oracle_distance2(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  auto segment2 = [&p](const Vec3& s, const Vec3& e) {
+    const Vec3 d = e - s;
+    const double len2 = dot(d, d);
+    double t = len2 > 0 ? dot(p - s, d) / len2 : 0.0;
+    t = std::min(1.0, std::max(0.0, t));
+    const Vec3 q = s + d * t;
+    return dot(p - q, p - q);
+  };
+  const Vec3 n = cross(b - a, c - a);
+  const double n2 = dot(n, n);
+  if (n2 > 0) {
+    const double h = dot(p - a, n);
+    const Vec3 foot = p - n * (h / n2);
+    const bool inside = dot(cross(b - a, foot - a), n) >= 0 &&
+                        dot(cross(c - b, foot - b), n) >= 0 && dot(cross(a - c, foot - c), n) >= 0;
+    if (inside) return h * h / n2;
+  }
+  return std::min(segment2(a, b), std::min(segment2(b, c), segment2(c, a)));
+}
+
+// The largest distance from a point of `points` to the mesh, by brute force over every
+// triangle (boxes prune only triangles farther than the best so far).
+double oracle_worst_to_mesh(const std::vector<Vec3>& points, const Mesh& m) {
+  double worst2 = 0;
+  for (const Vec3& p : points) {
+    double best2 = HUGE_VAL;
+    for (const Triangle& t : m.triangles) {
+      const Vec3 &a = m.vertices[t.v[0]], &b = m.vertices[t.v[1]], &c = m.vertices[t.v[2]];
+      double box2 = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double lo = std::min(a[k], std::min(b[k], c[k])),
+                     hi = std::max(a[k], std::max(b[k], c[k]));
+        const double d = p[k] < lo ? lo - p[k] : (p[k] > hi ? p[k] - hi : 0.0);
+        box2 += d * d;
+      }
+      if (box2 >= best2) continue;
+      best2 = std::min(best2, oracle_distance2(p, a, b, c));
+    }
+    worst2 = std::max(worst2, best2);
+  }
+  return std::sqrt(worst2);
+}
+
+TEST(DecimateQem, MaxDistanceHoldsAtEveryInputVertex) {
+  // A torus and a sphere at a fine grid, decimated keeping positions with a distance bound
+  // and a loose quadric limit (the bound is what stops it): every input vertex within the
+  // bound of the result (the brute-force oracle), far fewer triangles, still a valid solid.
+  const Shape shapes[2] = {torus_shape(4.0, 1.5, 0.2), sphere_shape(5.0, 40)};
+  const int64_t genus[2] = {1, 0};
+  for (int k = 0; k < 2; ++k) {
+    SCOPED_TRACE(k);
+    const HostMesh h = extract(shapes[k]);
+    TestArena ta(size_t{512} << 20);
+    Mesh in = to_arena(ta.arena, h);
+    const double bound = 0.1 * shapes[k].grid.spacing.x;  // a tenth of the grid step
+    for (double limit : {0.0, bound}) {
+      SCOPED_TRACE(limit);
+      DecimateOptions o;
+      o.keep_positions = true;
+      o.max_error = limit > 0 ? limit : 1.0;  // mm; 1: no quadric limit in practice
+      o.max_distance = bound;
+      std::vector<uint32_t> removed(h.vertices.size());
+      o.removed_map = Span<uint32_t>(removed.data(), removed.size());
+      Mesh out;
+      DecimateStats stats;
+      const Arena::Marker before = ta.arena.mark();
+      SPLINTCORE_ASSERT_OK(decimate(ta.arena, in, o, &out, &stats));
+      EXPECT_GT(stats.rejected_distance, 0u);
+      EXPECT_LT(out.triangles.size() * 3, h.triangles.size()) << out.triangles.size();
+      expect_valid_solid(out, genus[k]);
+      const double worst = oracle_worst_to_mesh(h.vertices, out);
+      EXPECT_LE(worst, bound) << worst;
+      EXPECT_GT(worst, 0.5 * bound) << worst;  // the bound is what stopped it
+      // Every removed vertex is assigned to a triangle within reach of it; kept ones to none.
+      uint64_t gone = 0;
+      for (size_t i = 0; i < removed.size(); ++i) {
+        if (removed[i] == ~0u) continue;
+        ++gone;
+        ASSERT_LT(removed[i], out.triangles.size());
+        const Triangle& t = out.triangles[removed[i]];
+        EXPECT_LE(oracle_distance2(h.vertices[i], out.vertices[t.v[0]], out.vertices[t.v[1]],
+                                   out.vertices[t.v[2]]),
+                  bound * bound * (1 + 1e-12));
+      }
+      EXPECT_EQ(gone + out.vertices.size(), h.vertices.size());
+      ta.arena.rewind(before);
+    }
+  }
+}
+
+TEST(DecimateQem, MaxDistanceCarriesGivenSamples) {
+  // Decimated once, then again with the first pass's removed vertices as given samples: every
+  // original vertex stays within the bound of the second result (not twice the bound).
+  const Shape s = sphere_shape(5.0, 40);
+  const HostMesh h = extract(s);
+  TestArena ta(size_t{512} << 20);
+  Mesh in = to_arena(ta.arena, h);
+  const double bound = 0.02;
+  DecimateOptions first;
+  first.keep_positions = true;
+  first.max_error = 1.0;
+  first.max_distance = bound;
+  first.target_triangles = h.triangles.size() / 3;
+  std::vector<uint32_t> removed(h.vertices.size());
+  first.removed_map = Span<uint32_t>(removed.data(), removed.size());
+  Mesh mid;
+  SPLINTCORE_ASSERT_OK(decimate(ta.arena, in, first, &mid, nullptr));
+  std::vector<Vec3> samples;
+  std::vector<uint32_t> homes;
+  for (size_t i = 0; i < removed.size(); ++i) {
+    if (removed[i] == ~0u) continue;
+    samples.push_back(h.vertices[i]);
+    homes.push_back(removed[i]);
+  }
+  ASSERT_GT(samples.size(), 0u);
+  DecimateOptions second = first;
+  second.target_triangles = 0;
+  second.removed_map = Span<uint32_t>();
+  second.samples = Span<const Vec3>(samples.data(), samples.size());
+  second.sample_triangles = Span<const uint32_t>(homes.data(), homes.size());
+  std::vector<uint32_t> map(samples.size());
+  second.sample_map = Span<uint32_t>(map.data(), map.size());
+  Mesh out;
+  DecimateStats stats;
+  SPLINTCORE_ASSERT_OK(decimate(ta.arena, mid, second, &out, &stats));
+  EXPECT_LT(out.triangles.size(), mid.triangles.size());
+  EXPECT_LE(oracle_worst_to_mesh(h.vertices, out), bound);
+  for (size_t i = 0; i < map.size(); ++i) ASSERT_LT(map[i], out.triangles.size());
+  // Without the given samples the second pass strays further from the original.
+  DecimateOptions forgetful = second;
+  forgetful.samples = Span<const Vec3>();
+  forgetful.sample_triangles = Span<const uint32_t>();
+  forgetful.sample_map = Span<uint32_t>();
+  Mesh loose;
+  SPLINTCORE_ASSERT_OK(decimate(ta.arena, mid, forgetful, &loose, nullptr));
+  EXPECT_GT(oracle_worst_to_mesh(h.vertices, loose), bound);
+}
+
 TEST(DecimateQem, ExhaustionSweepFailsCleanlyThenMatches) {
   const Shape s = sphere_shape(3.0, 10);
   const HostMesh h = extract(s);
