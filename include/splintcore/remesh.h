@@ -115,20 +115,29 @@ struct DecimateOptions {
   Span<const uint8_t> locked;
   // Optional output, one per input vertex: its id in `out`, or ~0u when it went.
   Span<uint32_t> vertex_map;
-  // > 0 (mm, keep_positions only): a bound on how far the input surface departs from the
-  // result, kept at samples of it: every input vertex a collapse removes, and the given
-  // `samples`. Each sample is assigned to a triangle within max_distance of it (point to
-  // closed triangle): at a collapse the samples of the triangles that change are assigned
-  // again, each to the first triangle of the new fan within reach, and a collapse that would
-  // leave one out of reach is refused (counted in rejected_distance). The input's vertices
-  // that stay lie on the result, so every input vertex ends within max_distance of it. 0: no
-  // such bound.
+  // > 0 (mm, keep_positions only): a bound on how far the result and the input surface
+  // depart, kept both ways at points.
+  // - Input to result, at samples of the input: every input vertex a collapse removes, and
+  //   the given `samples`. Each is assigned to a triangle within max_distance of it (point to
+  //   closed triangle): at a collapse the samples of the triangles that change are assigned
+  //   again, each to the first triangle of the new fan within reach. The input's vertices
+  //   that stay lie on the result, so every input vertex ends within max_distance of it.
+  // - Result to input, at the midpoints of the sides and the centroid of every triangle a
+  //   collapse moves: each within max_distance of an input triangle around one of its
+  //   corners or of the moved samples (a given sample: the one it lies on, sample_sources).
+  // A collapse that fails either is refused (counted in rejected_distance). Between those
+  // points nothing is proved: the surfaces are measured there (tests). 0: no such bound.
   double max_distance = 0.0;
   // Optional (max_distance only): more samples of the input surface, each with the input
-  // triangle it is assigned to (sample_triangles, one each): e.g. the input vertices an
-  // earlier decimation removed from a patch that is decimated again.
+  // triangle it is assigned to (sample_triangles, one each) and, optionally, the one it lies
+  // on (sample_sources, ~0u: none known): e.g. the midpoints of the input's sides, or the
+  // samples an earlier decimation removed from a patch that is decimated again.
   Span<const Vec3> samples;
   Span<const uint32_t> sample_triangles;
+  Span<const uint32_t> sample_sources;
+  // Optional (max_distance only), one per input triangle: nonzero marks a triangle that is
+  // itself an approximation (e.g. carried from an earlier decimation), never measured against.
+  Span<const uint8_t> approximate;
   // Optional outputs (max_distance only): the triangle of `out` each given sample, and each
   // input vertex that went, ends assigned to (~0u for a vertex that stays).
   Span<uint32_t> sample_map;   // one per given sample
@@ -168,8 +177,8 @@ struct DecimateStats {
 // vertex remap and the output mesh (at most the input's size): 60 T + 156 V, about 140 bytes
 // per input triangle of a closed surface (V = T / 2). With max_distance (bounded_distance)
 // also, kept throughout: a sample list per triangle and per sample (4 T + 4 (V + S), S the
-// given samples) and the scratch of one collapse (8 kDecimateMovedSamples + 80
-// kDecimateFanTriangles). 0 on overflow.
+// given samples), the input triangles around each vertex (4 (V + 1) + 12 T) and the scratch
+// of one collapse (8 kDecimateMovedSamples + 96 kDecimateFanTriangles). 0 on overflow.
 uint64_t decimate_qem_bound(uint64_t vertex_count, uint64_t triangle_count,
                             bool bounded_distance = false, uint64_t given_samples = 0);
 

@@ -242,10 +242,10 @@ void write_carry(const TileDecimator& d, const CarryParts& cp, uint8_t* c) {
   Vec3* spos = part<Vec3>(reinterpret_cast<uint8_t*>(map) + round8(4 * uint64_t{n_new}));
   uint32_t* stri = part<uint32_t>(reinterpret_cast<uint8_t*>(spos) + 24 * uint64_t{cp.next_ns});
   uint32_t at_s = 0;
-  for (uint32_t i = 0; i < d.carried_samples; ++i) {
+  for (uint32_t i = 0; i < d.given_count; ++i) {
     const uint32_t t = cp.sample_map[i];
     if (cp.carried[t] == 0) continue;
-    spos[at_s] = d.c_samples[i];
+    spos[at_s] = d.given_pos[i];
     stri[at_s++] = cp.carried_index[t];
   }
   for (size_t i = 0; i < p.mesh.vertices.size(); ++i) {
@@ -255,6 +255,53 @@ void write_carry(const TileDecimator& d, const CarryParts& cp, uint8_t* c) {
     stri[at_s++] = cp.carried_index[t];
   }
   SPLINTCORE_ASSERT(at_s == cp.next_ns);
+}
+
+// The tile's given samples (TileDecimator::given_*), in the arena: the carried ones (the
+// carried triangles are the patch's first, assemble: the same indices), then per new triangle
+// the midpoints of its sides that run from the smaller id, then its centroid.
+Status gather_given(TileDecimator& d, const Patch& p) {
+  Arena& arena = *d.ctx->arena;
+  const size_t nt = p.mesh.triangles.size();
+  uint64_t count = d.carried_samples;
+  for (size_t t = d.carried_triangles; t < nt; ++t) {
+    const uint32_t* v = p.mesh.triangles[t].v;
+    count += 1u + (v[0] < v[1] ? 1u : 0u) + (v[1] < v[2] ? 1u : 0u) + (v[2] < v[0] ? 1u : 0u);
+  }
+  if (count > UINT32_MAX / 2) {
+    return make_error(StatusCode::kLimitExceeded, "sweep: a tile has ", count, " samples");
+  }
+  Vec3* pos = arena.allocate_array<Vec3>(static_cast<size_t>(count));
+  uint32_t* tri = arena.allocate_array<uint32_t>(static_cast<size_t>(count));
+  uint32_t* source = arena.allocate_array<uint32_t>(static_cast<size_t>(count));
+  if (count > 0 && (pos == nullptr || tri == nullptr || source == nullptr)) {
+    return arena.exhausted_status();
+  }
+  uint32_t at = 0;
+  for (uint32_t i = 0; i < d.carried_samples; ++i, ++at) {
+    pos[at] = d.c_samples[i];
+    tri[at] = d.c_sample_tri[i];
+    source[at] = kGone;  // on a triangle of an earlier tile
+  }
+  const Vec3* x = p.mesh.vertices.data();
+  for (size_t t = d.carried_triangles; t < nt; ++t) {
+    const uint32_t* v = p.mesh.triangles[t].v;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = v[k], b = v[(k + 1) % 3];
+      if (a >= b) continue;
+      pos[at] = (x[a] + x[b]) * 0.5;
+      source[at] = static_cast<uint32_t>(t);
+      tri[at++] = static_cast<uint32_t>(t);
+    }
+    pos[at] = (x[v[0]] + x[v[1]] + x[v[2]]) * (1.0 / 3.0);
+    source[at] = static_cast<uint32_t>(t);
+    tri[at++] = static_cast<uint32_t>(t);
+  }
+  d.given_count = at;
+  d.given_pos = pos;
+  d.given_tri = tri;
+  d.given_source = source;
+  return Status::ok();
 }
 
 // Decimates the tile's patch into *dec, with the maps it gives: *vmap (patch vertex -> dec
@@ -273,16 +320,23 @@ Status decimate_tile(TileDecimator& d, const Patch& p, uint32_t** vmap, uint32_t
   o.locked = Span<const uint8_t>(p.locked, nv);
   o.vertex_map = Span<uint32_t>(*vmap, nv);
   if (d.max_distance > 0) {
-    const uint32_t ns = d.carried_samples;
+    SPLINTCORE_RETURN_IF_ERROR(gather_given(d, p));
+    const uint32_t ns = d.given_count;
     *sample_map = arena.allocate_array<uint32_t>(ns);
     *removed_map = arena.allocate_array<uint32_t>(nv);
     if ((ns > 0 && *sample_map == nullptr) || (nv > 0 && *removed_map == nullptr)) {
       return arena.exhausted_status();
     }
     o.max_distance = d.max_distance;
-    o.samples = Span<const Vec3>(d.c_samples, ns);
-    // The carried triangles are the patch's first (assemble): the same indices.
-    o.sample_triangles = Span<const uint32_t>(d.c_sample_tri, ns);
+    o.samples = Span<const Vec3>(d.given_pos, ns);
+    o.sample_triangles = Span<const uint32_t>(d.given_tri, ns);
+    o.sample_sources = Span<const uint32_t>(d.given_source, ns);
+    // The carried triangles (the patch's first) are an earlier tile's result.
+    const size_t nt = p.mesh.triangles.size();
+    uint8_t* approximate = arena.allocate_array<uint8_t>(nt);
+    if (nt > 0 && approximate == nullptr) return arena.exhausted_status();
+    for (size_t t = 0; t < nt; ++t) approximate[t] = t < d.carried_triangles ? 1 : 0;
+    o.approximate = Span<const uint8_t>(approximate, nt);
     o.sample_map = Span<uint32_t>(*sample_map, ns);
     o.removed_map = Span<uint32_t>(*removed_map, nv);
   }
@@ -363,7 +417,7 @@ Status flush(TileDecimator& d, int64_t cz) {
   const uint64_t chunk = logging ? chunk_bytes(emitted_v, emitted_t) : 0;
   uint32_t next_ns = 0;  // the samples the carried triangles take along
   if (sampled && !last) {
-    for (uint32_t i = 0; i < d.carried_samples; ++i) next_ns += carried[sample_map[i]];
+    for (uint32_t i = 0; i < d.given_count; ++i) next_ns += carried[sample_map[i]];
     for (size_t i = 0; i < nv; ++i) {
       if (removed_map[i] != kGone) next_ns += carried[removed_map[i]];
     }

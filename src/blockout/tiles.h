@@ -63,6 +63,13 @@ struct TileDecimator {
   uint32_t carried_samples = 0;
   const Vec3* c_samples = nullptr;         // positions
   const uint32_t* c_sample_tri = nullptr;  // the carried triangle each is assigned to
+  // The tile's given samples (decimate_qem's `samples`): the carried ones, then the midpoints
+  // of the new triangles' sides and their centroids (each side once: from the triangle whose
+  // side runs from the smaller patch id), with the patch triangle each is assigned to.
+  uint32_t given_count = 0;
+  const Vec3* given_pos = nullptr;
+  const uint32_t* given_tri = nullptr;
+  const uint32_t* given_source = nullptr;  // the patch triangle each lies on (~0u: carried)
   uint32_t prev_first = 0, prev_count = 0;
   const uint32_t* prev_map = nullptr;
   // This tile: its new vertices (extractor ids cur_first ..) and triangles, as they come.

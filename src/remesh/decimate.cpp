@@ -239,11 +239,20 @@ struct Decimator {
   uint32_t* next_sample = nullptr;   // per sample
   struct FanTriangle {
     uint32_t t;
+    uint32_t corner[3];  // vertex ids (v read as u)
     Vec3 a, b, c;
   };
   FanTriangle* fan = nullptr;  // kDecimateFanTriangles
   uint32_t fan_size = 0;
-  uint64_t* moved = nullptr;  // kDecimateMovedSamples: sample << 32 | triangle
+  uint32_t fan_changed = 0;  // fan[fan_changed ..]: the triangles that move (v's)
+  // The surface the result is measured against: the input triangles (not `approximate`), the
+  // one each sample lies on (given: sample_sources; a vertex: its first such triangle).
+  const Triangle* surface_tris = nullptr;
+  const Vec3* surface_verts = nullptr;
+  const uint32_t* given_source = nullptr;  // null: none known
+  uint32_t* around_first = nullptr;        // per vertex + 1: where its input triangles start
+  uint32_t* around = nullptr;              // the input triangles (not approximate) by vertex
+  uint64_t* moved = nullptr;               // kDecimateMovedSamples: sample << 32 | triangle
   uint32_t moved_count = 0;
 
   uint32_t origin(uint32_t h) const { return tri[h / 3].v[h % 3]; }
@@ -380,46 +389,147 @@ struct Decimator {
   // when one is out of reach or the scratch is too small.
   bool place_samples(uint32_t h) {
     const uint32_t g = twin(h), u = origin(h), v = dest(h), t0 = h / 3, t1 = g / 3;
-    const Vec3 pu = vx[u].pos;
     fan_size = 0;
     for (int side = 0; side < 2; ++side) {
       const uint32_t start = vx[side == 0 ? u : v].head;
       uint32_t e = start;
       do {
         const uint32_t t = e / 3;
+        if (side == 1 && e == start) fan_changed = fan_size;
         if (t != t0 && t != t1) {
           if (fan_size == kDecimateFanTriangles) return false;
           // Corners in the triangle's order, the moving one at u.
           Vec3 c[3];
+          uint32_t id[3];
           for (int k = 0; k < 3; ++k) {
             const uint32_t w = tri[t].v[k];
-            c[k] = w == v ? pu : vx[w].pos;
+            id[k] = w == v ? u : w;
+            c[k] = vx[id[k]].pos;
           }
-          fan[fan_size++] = FanTriangle{t, c[0], c[1], c[2]};
+          fan[fan_size++] = FanTriangle{t, {id[0], id[1], id[2]}, c[0], c[1], c[2]};
         }
         e = next_out(e);
       } while (e != start);
     }
     moved_count = 0;
-    if (!place(n_given + v)) return false;
+    if (!place(n_given + v, kNone)) return false;
     const uint32_t start = vx[v].head;
     uint32_t e = start;
     do {
       for (uint32_t s = first_sample[e / 3]; s != kNone; s = next_sample[s]) {
-        if (!place(s)) return false;
+        if (!place(s, e / 3)) return false;
       }
       e = next_out(e);
     } while (e != start);
+    return fan_near_input(u);
+  }
+
+  bool near_triangle(const Vec3& x, uint32_t src) const {
+    const Triangle& t = surface_tris[src];
+    return within(x, surface_verts[t.v[0]], surface_verts[t.v[1]], surface_verts[t.v[2]]);
+  }
+  // x within reach of the closed triangle abc (a predicate, not a closest point): refused by
+  // the triangle's box or its plane; then accepted when x projects inside the triangle (the
+  // three edge planes through the normal) or lies within reach of one of its sides.
+  __attribute__((noinline)) bool within(const Vec3& x, const Vec3& a, const Vec3& b,
+                                        const Vec3& c) const {
+    double box2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double lo = std::min(a[k], std::min(b[k], c[k]));
+      const double hi = std::max(a[k], std::max(b[k], c[k]));
+      const double d = x[k] < lo ? lo - x[k] : (x[k] > hi ? x[k] - hi : 0.0);
+      box2 += d * d;
+    }
+    if (box2 > reach2) return false;
+    const Vec3 ab = b - a, bc = c - b, ca = a - c;
+    const Vec3 n = cross(ab, c - a);
+    const double n2 = length_squared(n);
+    const Vec3 ax = x - a, bx = x - b, cx = x - c;
+    const double h = dot(ax, n);
+    if (h * h > reach2 * n2) return false;
+    if (n2 > 0 && dot(cross(ab, ax), n) >= 0 && dot(cross(bc, bx), n) >= 0 &&
+        dot(cross(ca, cx), n) >= 0) {
+      return true;  // over the triangle, and within reach of its plane
+    }
+    return side_within(ax, ab) || side_within(bx, bc) || side_within(cx, ca);
+  }
+  // The point at offset `from` from a side's start within reach of the side (its vector `side`).
+  bool side_within(const Vec3& from, const Vec3& side) const {
+    const double len2 = length_squared(side);
+    const double t = dot(from, side);
+    if (!(len2 > 0) || t <= 0) return length_squared(from) <= reach2;
+    if (t >= len2) return length_squared(from - side) <= reach2;
+    // |from|^2 - t^2 / len2 <= reach2, multiplied through by len2.
+    return length_squared(from) * len2 - t * t <= reach2 * len2;
+  }
+
+  // Within reach of an input triangle around input vertex w.
+  bool near_around(const Vec3& x, uint32_t w) const {
+    for (uint32_t i = around_first[w]; i < around_first[w + 1]; ++i) {
+      if (near_triangle(x, around[i])) return true;
+    }
+    return false;
+  }
+
+  // The triangles that move, each at its sides' midpoints and its centroid, within reach of
+  // the input surface: of an input triangle that a moved sample lies on (the samples of the
+  // triangles being replaced; a conservative test: the nearest input triangle may be another).
+  // Per moved triangle its centroid and the midpoint of its side that starts at u: every new
+  // side once (the fan is consistently oriented: a side between two moved triangles runs
+  // from u in one of them; one shared with an unmoved triangle did not move).
+  bool fan_near_input(uint32_t u) const {
+    for (uint32_t i = fan_changed; i < fan_size; ++i) {
+      const FanTriangle& f = fan[i];
+      const Vec3& from_u = f.corner[0] == u ? f.b : (f.corner[1] == u ? f.c : f.a);
+      const Vec3& at_u = f.corner[0] == u ? f.a : (f.corner[1] == u ? f.b : f.c);
+      const Vec3 points[2] = {(at_u + from_u) * 0.5, ((f.a + f.b) + f.c) * (1.0 / 3.0)};
+      for (const Vec3& x : points) {
+        if (!near_input(x, f)) return false;
+      }
+    }
     return true;
   }
 
-  // Places sample s on the first fan triangle within reach (into `moved`).
-  bool place(uint32_t s) {
+  // Candidates in order: the input triangles around f's corners, then those under (or around)
+  // the samples placed on f, then those of the other moved samples (consecutive repeats of a
+  // triangle tested once).
+  bool near_input(const Vec3& x, const FanTriangle& f) const {
+    for (uint32_t w : f.corner) {
+      if (near_around(x, w)) return true;
+    }
+    for (int pass = 0; pass < 2; ++pass) {
+      uint32_t last = kNone;
+      for (uint32_t i = 0; i < moved_count; ++i) {
+        const uint32_t s = static_cast<uint32_t>(moved[i] >> 32);
+        if ((static_cast<uint32_t>(moved[i]) == f.t) != (pass == 0)) continue;
+        if (s >= n_given) {
+          if (near_around(x, s - n_given)) return true;
+        } else if (given_source != nullptr && given_source[s] != kNone && given_source[s] != last) {
+          last = given_source[s];
+          if (near_triangle(x, last)) return true;
+        }
+      }
+    }
+    return false;
+  }
+
+  // Places sample s on a fan triangle within reach (into `moved`): the one that replaces
+  // triangle `was` (its triangle so far) if that is within reach, else the first.
+  bool place(uint32_t s, uint32_t was) {
     if (moved_count == kDecimateMovedSamples) return false;
     const Vec3 q = sample_at(s);
+    for (uint32_t i = fan_changed; i < fan_size; ++i) {
+      const FanTriangle& f = fan[i];
+      if (f.t != was) continue;
+      if (within(q, f.a, f.b, f.c)) {
+        moved[moved_count++] = uint64_t{s} << 32 | f.t;
+        return true;
+      }
+      break;
+    }
     for (uint32_t i = 0; i < fan_size; ++i) {
       const FanTriangle& f = fan[i];
-      if (length_squared(q - closest_point_on_triangle(q, f.a, f.b, f.c)) <= reach2) {
+      if (f.t != was && within(q, f.a, f.b, f.c)) {
         moved[moved_count++] = uint64_t{s} << 32 | f.t;
         return true;
       }
@@ -481,6 +591,9 @@ struct Decimator {
     do {
       const uint32_t id = edge_of(e);
       if (!collapsible(id)) {
+        // E.g. v's edge to a locked vertex when u is locked too: it can no longer collapse,
+        // and its key (now infinite) must not stay in the heap.
+        detach(id, parked);
         e = next_out(e);
         continue;
       }
@@ -615,7 +728,7 @@ struct Decimator {
 
   // max_distance: the sample lists (the given samples in their triangles, in order) and the
   // scratch of one collapse.
-  Status init_samples(Arena& arena, const DecimateOptions& options) {
+  Status init_samples(Arena& arena, const Mesh& mesh, const DecimateOptions& options) {
     if (!(options.max_distance > 0.0)) return Status::ok();
     reach2 = options.max_distance * options.max_distance;
     n_given = static_cast<uint32_t>(options.samples.size());
@@ -627,6 +740,27 @@ struct Decimator {
     if (first_sample == nullptr || next_sample == nullptr || fan == nullptr || moved == nullptr) {
       return arena.exhausted_status();
     }
+    surface_tris = mesh.triangles.data();
+    surface_verts = mesh.vertices.data();
+    given_source = options.sample_sources.empty() ? nullptr : options.sample_sources.data();
+    around_first = arena.allocate_array<uint32_t>(size_t{nv} + 1);
+    around = arena.allocate_array<uint32_t>(size_t{3} * nt);
+    if (around_first == nullptr || around == nullptr) return arena.exhausted_status();
+    auto surface = [&options](uint32_t t) {
+      return options.approximate.empty() || options.approximate[t] == 0;
+    };
+    std::memset(around_first, 0, (size_t{nv} + 1) * sizeof(uint32_t));
+    for (uint32_t t = 0; t < nt; ++t) {
+      if (!surface(t)) continue;
+      for (uint32_t k : mesh.triangles[t].v) ++around_first[k + 1];
+    }
+    for (uint32_t i = 0; i < nv; ++i) around_first[i + 1] += around_first[i];
+    for (uint32_t t = 0; t < nt; ++t) {  // in triangle order within a vertex
+      if (!surface(t)) continue;
+      for (uint32_t k : mesh.triangles[t].v) around[around_first[k]++] = t;
+    }
+    for (uint32_t i = nv; i > 0; --i) around_first[i] = around_first[i - 1];
+    around_first[0] = 0;
     for (uint32_t t = 0; t < nt; ++t) first_sample[t] = kNone;
     for (uint32_t i = n_given; i > 0; --i) {  // prepended last first: lists in sample order
       const uint32_t t = options.sample_triangles[i - 1];
@@ -794,23 +928,28 @@ Status check_decimate_input(const Mesh& mesh, const DecimateOptions& options, co
                       options.max_distance);
   }
   const bool sampled = options.max_distance > 0.0;
-  if ((!sampled &&
-       (!options.samples.empty() || !options.sample_map.empty() || !options.removed_map.empty())) ||
+  if ((!sampled && (!options.samples.empty() || !options.sample_map.empty() ||
+                    !options.removed_map.empty() || !options.approximate.empty())) ||
       options.sample_triangles.size() != options.samples.size() ||
+      (!options.sample_sources.empty() &&
+       options.sample_sources.size() != options.samples.size()) ||
+      (!options.approximate.empty() && options.approximate.size() != mesh.triangles.size()) ||
       (!options.sample_map.empty() && options.sample_map.size() != options.samples.size()) ||
       (!options.removed_map.empty() && options.removed_map.size() != mesh.vertices.size()) ||
       options.samples.size() > UINT32_MAX - mesh.vertices.size() - 1) {
     return make_error(StatusCode::kInvalidArgument,
-                      "decimate_qem: `samples`, `sample_map` and `removed_map` need "
+                      "decimate_qem: `samples`, `sample_map`, `removed_map` and `approximate` need "
                       "max_distance; `sample_triangles` and `sample_map` one entry per sample (",
                       options.samples.size(), "), `removed_map` one per vertex (",
                       mesh.vertices.size(), ")");
   }
   for (size_t i = 0; i < options.samples.size(); ++i) {
-    if (options.sample_triangles[i] >= mesh.triangles.size()) {
+    if (options.sample_triangles[i] >= mesh.triangles.size() ||
+        (!options.sample_sources.empty() && options.sample_sources[i] != kNone &&
+         options.sample_sources[i] >= mesh.triangles.size())) {
       return make_error(StatusCode::kInvalidArgument, "decimate_qem: sample ", i,
-                        " is assigned to triangle ", options.sample_triangles[i],
-                        " but the mesh has ", mesh.triangles.size(), " triangles")
+                        " is assigned to (or lies on) a triangle beyond the mesh's ",
+                        mesh.triangles.size(), " triangles")
           .at_index(i);
     }
     if (!is_finite(options.samples[i])) {
@@ -866,6 +1005,7 @@ uint64_t decimate_qem_bound(uint64_t vertex_count, uint64_t triangle_count, bool
   if (bounded_distance &&
       (!checked_add(given_samples, vertex_count, &samples) ||
        !add_alloc(&rest, triangle_count, 4) || !add_alloc(&rest, samples, 4) ||
+       !add_alloc(&rest, vertex_count + 1, 4) || !add_alloc(&rest, half, 4) ||
        !add_alloc(&rest, kDecimateFanTriangles, sizeof(Decimator::FanTriangle)) ||
        !add_alloc(&rest, kDecimateMovedSamples, sizeof(uint64_t)))) {
     return 0;
@@ -929,7 +1069,7 @@ Status decimate_qem(const Context& ctx, const Mesh& mesh, const DecimateOptions&
   }
   if (d.heap.items == nullptr) return arena.exhausted_status();
   d.init_vertices(mesh.vertices.data());
-  SPLINTCORE_RETURN_IF_ERROR(d.init_samples(arena, options));
+  SPLINTCORE_RETURN_IF_ERROR(d.init_samples(arena, mesh, options));
   d.fill_heap();
 
   uint64_t live = nt;

@@ -854,9 +854,9 @@ struct SideErrors {
   size_t samples = 0;
 };
 
-// Samples of a's triangles (corners and edge midpoints) against the closed mesh b: signed
-// distance (pseudonormals), split by side.
-SideErrors sampled_errors(Arena& arena, const Mesh& a, const Mesh& b) {
+// Samples of a's triangles against the closed mesh b: signed distance (pseudonormals), split
+// by side. step 2: the corners and the sides' midpoints; step 1: the barycentric quarters too.
+SideErrors sampled_errors(Arena& arena, const Mesh& a, const Mesh& b, int step = 2) {
   Context ctx(&arena);
   ArenaScope scope(arena);
   DistanceIndex index;
@@ -866,8 +866,8 @@ SideErrors sampled_errors(Arena& arena, const Mesh& a, const Mesh& b) {
     const Vec3& p0 = a.vertices[t.v[0]];
     const Vec3& p1 = a.vertices[t.v[1]];
     const Vec3& p2 = a.vertices[t.v[2]];
-    for (int i = 0; i <= 4; i += 2) {
-      for (int j = 0; i + j <= 4; j += 2) {
+    for (int i = 0; i <= 4; i += step) {
+      for (int j = 0; i + j <= 4; j += step) {
         const int k = 4 - i - j;
         const Vec3 q = (p0 * (i / 4.0) + p1 * (j / 4.0)) + p2 * (k / 4.0);
         SignedDistance sd;
@@ -885,13 +885,16 @@ SideErrors sampled_errors(Arena& arena, const Mesh& a, const Mesh& b) {
 }
 
 // The decimation's error, measured (sampled both ways against the surface without it). The
-// aim is one-sided and within a tenth of a voxel. What holds: every extractor vertex within
-// decimate_error / 2 of the decimated surface (decimate_qem's max_distance, kept at the
-// vertices it removes, carried from tile to tile), asserted on the same surface (the inset
-// that puts the decimation's extraction at iso 0). What does not yet: between the vertices
-// the decimated triangles depart further, measured at 0.1 mm voxels up to about 0.026 mm
-// (creases at the cone's rim and along the walls), so decimation stays off by default; what
-// is asserted there is what holds now (within 0.3 voxel, and 4x fewer triangles).
+// aim is one-sided and within a tenth of a voxel: the extraction decimate_error / 2 further
+// out, decimated within decimate_error / 2 of it. decimate_qem keeps that bound at points
+// (every extractor vertex, side midpoint and centroid to the result; the midpoint of every
+// new side and the centroid of every new triangle to the extractor's surface): asserted on
+// the same surface (the inset that puts the decimation's extraction at iso 0) at the corners
+// and the sides' midpoints; between them, at the barycentric quarters, measured up to 1.6x the
+// bound (asserted within 2x). Against the plain surface (iso 0) the cone's rim differs by the
+// extractor's own error at a crease (about 0.045 mm, the same without decimation: two
+// extractions at different isos), so that comparison asserts half a voxel; decimation stays
+// off by default.
 TEST(SweepDecimate, StaysWithinHalfAVoxelOfTheSurface) {
   TestArena ta(size_t{1} << 30);
   Context ctx(&ta.arena);
@@ -958,19 +961,30 @@ TEST(SweepDecimate, StaysWithinHalfAVoxelOfTheSurface) {
         ASSERT_TRUE(closest_point(index, q, &cp));
         worst_vertex = std::fmax(worst_vertex, cp.distance);
       }
+      // Both ways at the corners and the sides' midpoints (where decimate_qem keeps the bound:
+      // the input's vertices and midpoints, the result's new sides' midpoints), then at the
+      // barycentric quarters, where nothing is proved (measured).
       const SideErrors on = sampled_errors(ta.arena, centred, plain);
       const SideErrors under = sampled_errors(ta.arena, plain, centred);
+      const SideErrors on_fine = sampled_errors(ta.arena, centred, plain, 1);
+      const SideErrors under_fine = sampled_errors(ta.arena, plain, centred, 1);
+      const double worst_kept = std::fmax(std::fmax(on.outside_max, on.inside_max),
+                                          std::fmax(under.outside_max, under.inside_max));
+      const double worst_fine =
+          std::fmax(std::fmax(on_fine.outside_max, on_fine.inside_max),
+                    std::fmax(under_fine.outside_max, under_fine.inside_max));
       std::printf(
           "[ figures  ] %s, same surface: %zu -> %zu triangles; plain vertices to the decimated "
-          "surface at most %.5f mm (bound %.4f); sampled: decimated vs plain out %.5f in %.5f, "
-          "plain vs decimated in %.5f out %.5f mm\n",
-          sh.name, plain.triangles.size(), centred.triangles.size(), worst_vertex,
-          o.decimate_error / 2, on.outside_max, on.inside_max, under.inside_max, under.outside_max);
-      EXPECT_LE(worst_vertex, o.decimate_error / 2 * (1 + 1e-9));
-      EXPECT_GT(worst_vertex, o.decimate_error / 4);  // the bound is what stops it
-      // Between the vertices it is not held: a tenth of a voxel is still the aim.
-      EXPECT_LE(std::fmax(on.outside_max, on.inside_max), 0.3 * o.voxel);
-      EXPECT_LE(std::fmax(under.outside_max, under.inside_max), 0.3 * o.voxel);
+          "surface at most %.5f mm; both ways at corners and midpoints %.5f mm, at the "
+          "barycentric quarters %.5f mm (bound %.4f)\n",
+          sh.name, plain.triangles.size(), centred.triangles.size(), worst_vertex, worst_kept,
+          worst_fine, o.decimate_error / 2);
+      const double bound = o.decimate_error / 2 * (1 + 1e-9);
+      EXPECT_LE(worst_vertex, bound);
+      EXPECT_LE(worst_kept, bound);
+      EXPECT_GT(worst_kept, o.decimate_error / 4);  // the bound is what stops it
+      // Measured 0.0073 (cone) and 0.0080 mm (torus) at 0.1 mm voxels: up to 1.6x the bound.
+      EXPECT_LE(worst_fine, 2 * o.decimate_error / 2);
     }
     EXPECT_LT(reduced.triangles.size() * 4, plain.triangles.size());
     EXPECT_LE(there.inside_max, 0.5 * o.voxel);
@@ -999,8 +1013,8 @@ TEST(SweepDecimate, SameBytesForEverySlabSizeAndThreadCount) {
       ArenaScope scope(ta.arena);
       SweepOptions o;
       o.direction = Vec3{0.2, -0.3, 1.0};
-      o.voxel = 0.1;
-      o.decimate_error = 0.01;
+      o.voxel = 0.15;  // coarser than the other tests: the bytes, not the error
+      o.decimate_error = 0.015;
       o.layers_per_tile = layers;
       HashVisitor hv;
       MarchingCubesVisitor v;
@@ -1031,8 +1045,8 @@ TEST(SweepDecimate, RunsInExactlyItsHighWaterAndFailsCleanlyBelow) {
   const Mesh torus = tilted_torus(&big.arena);
   SweepOptions o;
   o.direction = Vec3{0, 0, 1};
-  o.voxel = 0.1;
-  o.decimate_error = 0.01;
+  o.voxel = 0.15;
+  o.decimate_error = 0.015;
   o.has_region = true;
   o.region.lo = Vec3{-6, -6, 0};
   o.region.hi = Vec3{6, 6, 4};
