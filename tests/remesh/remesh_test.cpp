@@ -811,6 +811,73 @@ TEST(DecimateQem, DegenerateAndInvalidInputs) {
   EXPECT_EQ(decimate(ta.arena, tin, nothing, &none).code(), StatusCode::kInvalidArgument);
   Context ctx(&ta.arena);
   EXPECT_EQ(decimate_qem(ctx, tin, options, &copy).code(), StatusCode::kInvalidArgument);
+  // The distance bound's options: each misuse a clear kInvalidArgument (or kNonFinite for a
+  // sample), the arena untouched.
+  const Vec3 samples[2] = {Vec3{0.2, 0.2, 0}, Vec3{0.1, 0, 0.1}};
+  const uint32_t homes[2] = {0, 1};
+  const uint32_t far_home[2] = {0, 4};
+  const uint8_t approximate[4] = {0, 0, 1, 0};
+  uint32_t map[2];
+  struct Misuse {
+    const char* what;
+    void (*set)(DecimateOptions*);
+  };
+  DecimateOptions base;
+  base.target_triangles = 2;
+  base.keep_positions = true;
+  base.max_distance = 0.1;
+  const Misuse misuses[] = {
+      {"max_distance without keep_positions",
+       [](DecimateOptions* o) { o->keep_positions = false; }},
+      {"max_distance negative", [](DecimateOptions* o) { o->max_distance = -0.1; }},
+      {"max_distance NaN", [](DecimateOptions* o) { o->max_distance = std::nan(""); }},
+      {"samples without max_distance", [](DecimateOptions* o) { o->max_distance = 0; }},
+      {"sample_triangles short",
+       [](DecimateOptions* o) { o->sample_triangles = Span<const uint32_t>(); }},
+      {"sample_sources short",
+       [](DecimateOptions* o) {
+         o->sample_sources = Span<const uint32_t>(o->sample_triangles.data(), 1);
+       }},
+      {"sample_map short",
+       [](DecimateOptions* o) { o->sample_map = Span<uint32_t>(o->sample_map.data(), 1); }},
+      {"approximate short",
+       [](DecimateOptions* o) { o->approximate = Span<const uint8_t>(o->approximate.data(), 3); }},
+  };
+  for (const Misuse& m : misuses) {
+    SCOPED_TRACE(m.what);
+    DecimateOptions o = base;
+    o.samples = Span<const Vec3>(samples, 2);
+    o.sample_triangles = Span<const uint32_t>(homes, 2);
+    o.sample_map = Span<uint32_t>(map, 2);
+    o.approximate = Span<const uint8_t>(approximate, 4);
+    m.set(&o);
+    const size_t before = ta.arena.used();
+    Mesh bad;
+    EXPECT_EQ(decimate(ta.arena, tin, o, &bad).code(), StatusCode::kInvalidArgument);
+    EXPECT_EQ(ta.arena.used(), before);
+  }
+  {
+    DecimateOptions o = base;
+    o.samples = Span<const Vec3>(samples, 2);
+    o.sample_triangles = Span<const uint32_t>(far_home, 2);  // triangle 4 of 4
+    st = decimate(ta.arena, tin, o, &none);
+    EXPECT_EQ(st.code(), StatusCode::kInvalidArgument);
+    EXPECT_EQ(st.index(), 1u);
+    const Vec3 bad_samples[2] = {Vec3{0.2, 0.2, 0}, Vec3{0, std::nan(""), 0}};
+    o.samples = Span<const Vec3>(bad_samples, 2);
+    o.sample_triangles = Span<const uint32_t>(homes, 2);
+    st = decimate(ta.arena, tin, o, &none);
+    EXPECT_EQ(st.code(), StatusCode::kNonFinite);
+    EXPECT_EQ(st.index(), 1u);
+    // Well formed: the tetrahedron stays, and each sample is on the triangle it was given.
+    o.samples = Span<const Vec3>(samples, 2);
+    o.sample_map = Span<uint32_t>(map, 2);
+    Mesh kept;
+    SPLINTCORE_ASSERT_OK(decimate(ta.arena, tin, o, &kept));
+    EXPECT_EQ(kept.triangles.size(), 4u);
+    EXPECT_EQ(map[0], 0u);
+    EXPECT_EQ(map[1], 1u);
+  }
 }
 
 TEST(DecimateQem, CancelledCleanly) {
