@@ -819,6 +819,17 @@ struct ExhaustiveResult {
   Vec3 pa, pb;
 };
 
+// `x` is the answer `e` names, bit for bit, with the closest points pa and pb.
+void expect_answer(const MeshPairDistance& x, const ExhaustiveResult& e, const Vec3& pa,
+                   const Vec3& pb) {
+  EXPECT_EQ(std::memcmp(&x.distance, &e.d, sizeof(double)), 0) << x.distance << " " << e.d;
+  EXPECT_EQ(x.triangle_a, e.ta);
+  EXPECT_EQ(x.triangle_b, e.tb);
+  EXPECT_EQ(x.point_a, pa);
+  EXPECT_EQ(x.point_b, pb);
+  EXPECT_EQ(x.intersecting, e.d == 0);
+}
+
 // The least (squared distance, triangle a, triangle b) over every pair, by
 // triangle_pair_distance() (the squared distance being that of its two points, 0 for meeting
 // triangles: the key the library orders by), skipping only pairs whose boxes are farther apart
@@ -899,14 +910,8 @@ TEST(MeshPairDistance, SplitSearchAnswersAsTheSerialOneAtEveryThreadCount) {
         ASSERT_TRUE(
             mesh_pair_distance_rigid(ctx, a[k].index, b[k].index, move, HUGE_VAL, &m).is_ok());
         EXPECT_EQ(arena.arena.used(), 0u);
-        for (const MeshPairDistance& x : {r, m}) {
-          EXPECT_EQ(std::memcmp(&x.distance, &e.d, sizeof(double)), 0) << x.distance << " " << e.d;
-          EXPECT_EQ(x.triangle_a, e.ta);
-          EXPECT_EQ(x.triangle_b, e.tb);
-          EXPECT_EQ(x.point_a, serial.point_a);
-          EXPECT_EQ(x.point_b, serial.point_b);
-          EXPECT_EQ(x.intersecting, e.d == 0);
-        }
+        for (const MeshPairDistance& x : {r, m})
+          expect_answer(x, e, serial.point_a, serial.point_b);
       }
     }
   }
@@ -984,12 +989,7 @@ TEST(MeshPairDistance, DenseNearParallelSurfacesMatchExhaustiveSearch) {
       for (const MeshPairDistance& r :
            {run_pair(a, b, off), run_pair(a1, b16, off), run_pair(a, b, off, HUGE_VAL, split),
             run_pair(a1, b16, off, HUGE_VAL, split)}) {
-        EXPECT_EQ(std::memcmp(&r.distance, &e.d, sizeof(double)), 0) << r.distance << " " << e.d;
-        EXPECT_EQ(r.triangle_a, e.ta);
-        EXPECT_EQ(r.triangle_b, e.tb);
-        EXPECT_EQ(r.point_a, e.pa);
-        EXPECT_EQ(r.point_b, e.pb);
-        EXPECT_EQ(r.intersecting, e.d == 0);
+        expect_answer(r, e, e.pa, e.pb);
       }
       // A limit just above and just below the answer (e.d squared may round below e.d2).
       if (e.d > 0) {
