@@ -230,6 +230,17 @@ MeshPairDistance run_pair(const Built& a, const Built& b, const Vec3& offset,
   return r;
 }
 
+// `r` is the answer `e` is, bit for bit.
+void expect_same_pair(const MeshPairDistance& r, const MeshPairDistance& e) {
+  EXPECT_EQ(std::memcmp(&r.distance, &e.distance, sizeof(double)), 0)
+      << r.distance << " " << e.distance;
+  EXPECT_EQ(r.triangle_a, e.triangle_a);
+  EXPECT_EQ(r.triangle_b, e.triangle_b);
+  EXPECT_EQ(r.point_a, e.point_a);
+  EXPECT_EQ(r.point_b, e.point_b);
+  EXPECT_EQ(r.intersecting, e.intersecting);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Exact small cases.
 
@@ -495,13 +506,8 @@ TEST(MeshPairDistance, SameBitsAtEveryLeafSizeAndBoxKind) {
             reference.push_back(r);
             continue;
           }
-          const MeshPairDistance& e = reference[k];
-          EXPECT_EQ(std::memcmp(&r.distance, &e.distance, sizeof(double)), 0) << leaf << oriented;
-          EXPECT_EQ(r.triangle_a, e.triangle_a);
-          EXPECT_EQ(r.triangle_b, e.triangle_b);
-          EXPECT_EQ(r.point_a, e.point_a);
-          EXPECT_EQ(r.point_b, e.point_b);
-          EXPECT_EQ(r.intersecting, e.intersecting);
+          SCOPED_TRACE(testing::Message() << "leaf " << leaf << ", oriented " << oriented);
+          expect_same_pair(r, reference[k]);
         }
         first = false;
       }
@@ -598,13 +604,7 @@ TEST(MeshPairDistance, RigidMoveMatchesAMovedCopy) {
       SPLINTCORE_ASSERT_OK(
           mesh_pair_distance_rigid(Context(&s.arena), a.index, b.index, move, HUGE_VAL, &r));
       EXPECT_EQ(s.arena.used(), 0u);
-      EXPECT_EQ(std::memcmp(&r.distance, &e.distance, sizeof(double)), 0)
-          << r.distance << " " << e.distance;
-      EXPECT_EQ(r.triangle_a, e.triangle_a);
-      EXPECT_EQ(r.triangle_b, e.triangle_b);
-      EXPECT_EQ(r.point_a, e.point_a);
-      EXPECT_EQ(r.point_b, e.point_b);
-      EXPECT_EQ(r.intersecting, e.intersecting);
+      expect_same_pair(r, e);
       // The pairs within 0.5 mm of the closest, collected at this move, answer a further small
       // turn with the full search's bits (points move by well under 0.5 mm here).
       std::vector<TrianglePairIds> pool(4096);
@@ -700,12 +700,7 @@ TEST(MeshPairDistance, RefitIndexGivesTheSameBitsAsABuild) {
         for (const Vec3& off : c.offsets) {
           const MeshPairDistance r = run_pair(a, copy, off);
           const MeshPairDistance e = run_pair(a, fresh, off);
-          EXPECT_EQ(std::memcmp(&r.distance, &e.distance, sizeof(double)), 0);
-          EXPECT_EQ(r.triangle_a, e.triangle_a);
-          EXPECT_EQ(r.triangle_b, e.triangle_b);
-          EXPECT_EQ(r.point_a, e.point_a);
-          EXPECT_EQ(r.point_b, e.point_b);
-          EXPECT_EQ(r.intersecting, e.intersecting);
+          expect_same_pair(r, e);
           ++compared;
         }
         need = exact.arena.high_water();
@@ -1041,13 +1036,7 @@ TEST(MeshPairDistance, CollectedPairsAnswerNearbyMovesWithTheSameBits) {
                                             Span<const TrianglePairIds>(pool.data(), count), moved,
                                             &r)
                         .is_ok());
-        EXPECT_EQ(std::memcmp(&r.distance, &want.distance, sizeof(double)), 0)
-            << r.distance << " " << want.distance;
-        EXPECT_EQ(r.triangle_a, want.triangle_a);
-        EXPECT_EQ(r.triangle_b, want.triangle_b);
-        EXPECT_EQ(r.point_a, want.point_a);
-        EXPECT_EQ(r.point_b, want.point_b);
-        EXPECT_EQ(r.intersecting, want.intersecting);
+        expect_same_pair(r, want);
         ++scanned;
       }
     }
