@@ -970,9 +970,8 @@ TEST(SweepDecimate, StaysWithinHalfAVoxelOfTheSurface) {
       const SideErrors under_fine = sampled_errors(ta.arena, plain, centred, 1);
       const double worst_kept = std::fmax(std::fmax(on.outside_max, on.inside_max),
                                           std::fmax(under.outside_max, under.inside_max));
-      const double worst_fine =
-          std::fmax(std::fmax(on_fine.outside_max, on_fine.inside_max),
-                    std::fmax(under_fine.outside_max, under_fine.inside_max));
+      const double worst_fine = std::fmax(std::fmax(on_fine.outside_max, on_fine.inside_max),
+                                          std::fmax(under_fine.outside_max, under_fine.inside_max));
       std::printf(
           "[ figures  ] %s, same surface: %zu -> %zu triangles; plain vertices to the decimated "
           "surface at most %.5f mm; both ways at corners and midpoints %.5f mm, at the "
