@@ -431,8 +431,7 @@ struct Decimator {
   // x within reach of the closed triangle abc (a predicate, not a closest point): refused by
   // the triangle's box or its plane; then accepted when x projects inside the triangle (the
   // three edge planes through the normal) or lies within reach of one of its sides.
-  __attribute__((noinline)) bool within(const Vec3& x, const Vec3& a, const Vec3& b,
-                                        const Vec3& c) const {
+  bool within(const Vec3& x, const Vec3& a, const Vec3& b, const Vec3& c) const {
     double box2 = 0;
     for (int k = 0; k < 3; ++k) {
       const double lo = std::min(a[k], std::min(b[k], c[k]));
@@ -471,12 +470,11 @@ struct Decimator {
     return false;
   }
 
-  // The triangles that move, each at its sides' midpoints and its centroid, within reach of
-  // the input surface: of an input triangle that a moved sample lies on (the samples of the
-  // triangles being replaced; a conservative test: the nearest input triangle may be another).
-  // Per moved triangle its centroid and the midpoint of its side that starts at u: every new
-  // side once (the fan is consistently oriented: a side between two moved triangles runs
-  // from u in one of them; one shared with an unmoved triangle did not move).
+  // The triangles that move within reach of the input surface (near_input: a conservative
+  // test, the nearest input triangle may be another), each at its centroid and the midpoint
+  // of its side that starts at u: every new side once (the fan is consistently oriented: a
+  // side between two moved triangles runs from u in one of them; one shared with an unmoved
+  // triangle did not move).
   bool fan_near_input(uint32_t u) const {
     for (uint32_t i = fan_changed; i < fan_size; ++i) {
       const FanTriangle& f = fan[i];
