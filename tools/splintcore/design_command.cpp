@@ -372,16 +372,12 @@ void Design::print_outline() const {
 
 namespace {
 
-// A splint's binary STL bytes (the writer's buffer from ctx's arena): hashed, then written
-// atomically.
+// A splint's binary STL (the writer's buffer from ctx's arena), streamed to the file and
+// hashed as it goes.
 Status write_stl_file(const Context& ctx, const Mesh& m, const std::string& path,
                       std::string* hash) {
-  std::vector<uint8_t> stl(84 + 50 * m.triangles.size());
-  MemorySink sink{stl.data(), stl.size(), 0, 0};
-  SPLINTCORE_RETURN_IF_ERROR(write_stl(ctx, m, memory_sink(&sink), StlWriteOptions{}));
-  stl.resize(static_cast<size_t>(sink.size));
-  *hash = hex_sha256(stl.data(), stl.size());
-  return write_bytes_atomically(path, stl.data(), stl.size());
+  return write_hashed_atomically(
+      path, [&](const ByteSink& sink) { return write_stl(ctx, m, sink, StlWriteOptions{}); }, hash);
 }
 
 }  // namespace
@@ -587,24 +583,27 @@ int Design::run_plan() {
 // with the SHA-256 of each splint's STL as written.
 Status Design::write_plan_job(const std::string& path) {
   const char* hashes[2] = {plan_hashes_[0].c_str(), plan_hashes_[1].c_str()};
-  std::string bytes;
-  SPLINTCORE_RETURN_IF_ERROR(splintcore::write_plan_job(
-      ctx_, c_, plan_splints_[0], plan_splints_[1], hashes, cli::string_sink(&bytes), nullptr));
-  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(path, bytes));
+  SPLINTCORE_RETURN_IF_ERROR(write_hashed_atomically(
+      path,
+      [&](const ByteSink& sink) {
+        return splintcore::write_plan_job(ctx_, c_, plan_splints_[0], plan_splints_[1], hashes,
+                                          sink, nullptr);
+      },
+      &job_sha256_));
   job_path_ = path;
-  job_sha256_ = hex_sha256(bytes.data(), bytes.size());
   return Status::ok();
 }
 
 // OUTDIR/NAME ("output": {"job": NAME}): the splint on the printer's tray as a 3MF
 // (write_splint_job, design.h), with the SHA-256 of its STL as written.
 Status Design::write_splint_job(const std::string& path) {
-  std::string bytes;
-  SPLINTCORE_RETURN_IF_ERROR(splintcore::write_splint_job(ctx_, c_, splint_, splint_hash_.c_str(),
-                                                          cli::string_sink(&bytes), nullptr));
-  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(path, bytes));
+  SPLINTCORE_RETURN_IF_ERROR(write_hashed_atomically(
+      path,
+      [&](const ByteSink& sink) {
+        return splintcore::write_splint_job(ctx_, c_, splint_, splint_hash_.c_str(), sink, nullptr);
+      },
+      &job_sha256_));
   job_path_ = path;
-  job_sha256_ = hex_sha256(bytes.data(), bytes.size());
   return Status::ok();
 }
 

@@ -5,6 +5,7 @@
 
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -119,6 +120,14 @@ Status write_mesh_atomically(const Context& ctx, const Mesh& mesh, const char* p
 // Writes bytes the same way.
 Status write_bytes_atomically(const std::string& path, const void* data, size_t size);
 Status write_bytes_atomically(const std::string& path, const std::string& bytes);
+
+// Writes what `write` puts into the sink it is given (in order: the sink cannot seek) the same
+// way, streamed to the file as it comes, and the SHA-256 of those bytes (hex) into *sha256: no
+// copy of the whole file in memory (for the splints' STL and 3MF files, several MB each, that
+// copy cost more than the write; issue 32). A `write` that fails leaves no file.
+Status write_hashed_atomically(const std::string& path,
+                               const std::function<Status(const ByteSink&)>& write,
+                               std::string* sha256);
 
 }  // namespace tool
 }  // namespace splintcore
