@@ -36,10 +36,11 @@ for per_jaw in $sizes; do
     rows="$rows$(python3 - "$dir/out/report.json" "$start" "$end" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
-st = {s["stage"]: s["time_s"] for s in r["stages"]}
+run = r["run"]  # this run's figures (the report's last object)
+st = {s["stage"]: s["time_s"] for s in run["stages"]}
 print(sum(i["triangles"] for i in r["inputs"]), st.get("base", 0), st.get("boolean", 0),
-      r["design_s"], r["read_s"], float(sys.argv[3]) - float(sys.argv[2]),
-      r["peak_arena_bytes"], r["output"]["triangles"])
+      run["design_s"], run["read_s"], float(sys.argv[3]) - float(sys.argv[2]),
+      run["peak_arena_bytes"], r["output"]["triangles"])
 PY
 )
 "
