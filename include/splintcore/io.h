@@ -65,6 +65,12 @@ struct StlReadOptions {
   uint64_t max_triangles = 100'000'000;  // larger inputs are kLimitExceeded
   double max_abs_coordinate = 1.0e6;     // mm; beyond is kLimitExceeded ("wrong units?")
   size_t chunk_bytes = 64 * 1024;        // read buffer, from the arena
+  // read_stl_mesh only: a triangle whose three corners all lie strictly beyond one side of
+  // `keep` (x below keep.lo.x for all three, ..., the test of boolean_region, boolean.h) is
+  // left out as it is read, as if it were not in the file: the mesh is the others, in their
+  // order, welded (vertex ids by first use among them). Every triangle is still read and its
+  // corners checked (the same errors). Empty (the default): every triangle is kept.
+  Aabb keep;
 };
 
 struct StlInfo {
@@ -257,6 +263,10 @@ struct MeshReadOptions {
   bool round_to_float32 = true;          // see above
   bool weld = false;  // merge bit-identical vertices (weld_exact: ids by first use in the
                       // triangles; unreferenced vertices dropped). STL input is always welded.
+  // As StlReadOptions::keep, for every format: the triangles wholly beyond one side of `keep`
+  // are left out as if they were not in the file (after fan triangulation; PLY and OBJ
+  // vertices stay unless welded). Empty (the default): every triangle is kept.
+  Aabb keep;
 };
 
 struct MeshReadInfo {

@@ -279,9 +279,25 @@ struct MeshBuilder {
     return Status::ok();
   }
 
-  // Moves the mesh down to `start` (over the read buffers), welding it first if asked.
+  // Leaves out the triangles whose corners all lie beyond one side of `keep`
+  // (MeshReadOptions::keep), the others kept in their order.
+  void crop(const Aabb& keep) {
+    size_t kept = 0;
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const Triangle& tri = mesh.triangles[t];
+      const uint32_t all = keep.outcode(mesh.vertices[tri.v[0]]) &
+                           keep.outcode(mesh.vertices[tri.v[1]]) &
+                           keep.outcode(mesh.vertices[tri.v[2]]);
+      if (all == 0) mesh.triangles[kept++] = tri;
+    }
+    mesh.triangles.shrink_size(kept);
+  }
+
+  // Moves the mesh down to `start` (over the read buffers), cropped to options->keep and
+  // welded first if asked.
   Status finish(const Arena::Marker& start, Mesh* out) {
     Arena& arena = *ctx->arena;
+    if (!options->keep.empty()) crop(options->keep);
     if (!options->weld) {
       move_mesh_down(arena, start, mesh, out, /*vertices_first=*/triangles_last);
       return Status::ok();

@@ -308,6 +308,7 @@ Status read_mesh(const Context& ctx, const ByteSource& source, const MeshReadOpt
   so.max_triangles = options.max_triangles;
   so.max_abs_coordinate = options.max_abs_coordinate;
   so.chunk_bytes = options.chunk_bytes;
+  so.keep = options.keep;
   StlInfo si;
   SPLINTCORE_RETURN_IF_ERROR(read_stl_mesh(ctx, replay, so, out, &si));
   info->format = format;

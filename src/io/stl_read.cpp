@@ -122,6 +122,26 @@ Status binary_corner_error(const uint8_t* corners, const StlReadOptions& options
 }
 
 // Fills `in` for the record of triangle t (of `declared`), or says where the file ends.
+// The three corners of a binary record (36 bytes of float32) all lie strictly beyond one side
+// of `keep` (StlReadOptions::keep). A NaN corner is beyond none (its error comes after).
+bool beyond_one_side(const Aabb& keep, const uint8_t* corners) {
+  uint32_t all = 63;
+  for (int k = 0; k < 3; ++k) {
+    const uint8_t* c = corners + 12 * k;
+    const Vec3 p(static_cast<double>(load_f32(c)), static_cast<double>(load_f32(c + 4)),
+                 static_cast<double>(load_f32(c + 8)));
+    all &= keep.outcode(p);
+  }
+  return all != 0;
+}
+
+// Every coordinate of a record's corners within the limit (abs_limit_bits): finite, in range.
+bool corners_within(const uint8_t* corners, uint32_t limit) {
+  uint32_t over = 0;
+  for (int k = 0; k < 9; ++k) over |= limit - (bits_at(corners + 4 * k) & 0x7fffffffu);
+  return (over & 0x80000000u) == 0;
+}
+
 Status fill_record(Reader& in, uint64_t t, uint64_t declared) {
   SPLINTCORE_RETURN_IF_ERROR(in.fill(kBinaryRecordBytes));
   if (in.available() >= kBinaryRecordBytes) return Status::ok();
@@ -508,6 +528,8 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
   in.end = got - kBinaryHeaderBytes;
   in.base = kBinaryHeaderBytes;
   const uint32_t limit = abs_limit_bits(options.max_abs_coordinate);
+  const bool crop = !options.keep.empty();
+  size_t kept = 0;                // triangles in the mesh (all of them without a crop)
   uint64_t ahead[2 * kAhead][3];  // the prefetched corners' hashes, by triangle mod 2 kAhead
   for (uint64_t t = 0; t < declared;) {
     if ((t & 0xffff) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read", t, declared));
@@ -533,6 +555,13 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
         __builtin_prefetch(welder.first_slot(h[2]));
       }
       const uint8_t* corners = record + 12;
+      if (crop && beyond_one_side(options.keep, corners)) {
+        // Left out: its corners are still checked (the same errors as without the crop).
+        if (!corners_within(corners, limit)) {
+          return binary_corner_error(corners, options, t + i, in.offset() + kBinaryRecordBytes * i);
+        }
+        continue;
+      }
       for (int k = 0; k < 3; ++k) {
         const uint8_t* c = corners + 12 * k;
         const uint32_t x = bits_at(c), y = bits_at(c + 4), z = bits_at(c + 8);
@@ -547,8 +576,9 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
             i >= kAhead ? ahead[i % (2 * kAhead)][k] : ExactWelder::hash_bits(x, y, z);
         const uint32_t id = welder.vertex(x, y, z, h);
         if (id == ExactWelder::kFull) return arena.exhausted_status();
-        tris[t + i].v[k] = id;
+        tris[kept].v[k] = id;
       }
+      ++kept;
     }
     in.pos += static_cast<size_t>(kBinaryRecordBytes * run);
     t += run;
@@ -563,7 +593,7 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
   info->triangles = declared;
   info->bytes = in.offset();
   welder.finish(arena, above, &out->vertices);
-  out->triangles.adopt(tris, static_cast<size_t>(declared), static_cast<size_t>(declared));
+  out->triangles.adopt(tris, kept, static_cast<size_t>(declared));
   return Status::ok();
 }
 
@@ -575,6 +605,18 @@ Status read_then_weld(const Context& ctx, const ByteSource& source, const StlRea
   ArenaScope scope(arena);
   ArenaArray<SoupTriangle> soup(&arena);
   SPLINTCORE_RETURN_IF_ERROR(read_stl(ctx, source, options, &soup, info));
+  if (!options.keep.empty()) {  // the triangles left out, the others kept in their order
+    size_t kept = 0;
+    for (const SoupTriangle& t : soup) {
+      uint32_t all = 63;
+      for (const float* p : t.p) {
+        all &= options.keep.outcode(
+            Vec3(static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2])));
+      }
+      if (all == 0) soup[kept++] = t;
+    }
+    soup.shrink_size(kept);
+  }
   soup.shrink_to_fit();  // an ASCII soup grown by half again: the spare room is the weld's
   Mesh welded(&arena);
   Status s = weld_exact(ctx, soup.span(), &welded);

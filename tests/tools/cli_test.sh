@@ -272,6 +272,7 @@ expect_exit 0 "boolean difference" -- "$tool" boolean --difference "$work/base.s
 check "boolean json is one object" -- json_ok "$work/out"
 check "boolean reports a valid solid" -- grep -q '"valid_solid":true' "$work/out"
 check "boolean cut crowns" -- grep -q '"intersecting_pairs":[1-9]' "$work/out"
+check "boolean reads B cropped to A's box (fewer triangles kept than the file's)" -- python3 -c "import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if 0 < d['b_triangles_kept'] < d['b_triangles'] // 2 else 1)" "$work/out"
 expect_exit 0 "the written difference is a printable solid" -- "$tool" check "$work/cut.stl"
 cp "$work/cut.stl" "$work/cut.first"
 expect_exit 0 "boolean again, two threads" -- "$tool" boolean --difference "$work/base.stl" "$work/maxilla.stl" -o "$work/cut.stl" --threads 2
@@ -288,6 +289,8 @@ expect_exit 0 "the written splint is a printable solid" -- "$tool" check "$work/
 expect_exit 0 "boolean with a third B file far away" -- "$tool" boolean --difference "$work/base.stl" "$work/maxilla.stl" "$work/mandible.stl" "$work/maxilla.stl" -o "$work/both3.stl" --translate-b 0,0,0 --translate-b 0,0,-2 --translate-b 500,0,0
 check "a far B file changes no byte" -- cmp -s "$work/both.stl" "$work/both3.stl"
 expect_exit 0 "boolean intersection" -- "$tool" boolean --intersection "$work/base.stl" "$work/maxilla.stl" -o "$work/inter.stl"
+expect_exit 0 "boolean union (B is read whole: everywhere matters)" -- "$tool" boolean --union "$work/base.stl" "$work/maxilla.stl" -o "$work/union.stl" --json
+check "the union keeps every B triangle" -- python3 -c "import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if d['b_triangles_kept'] == d['b_triangles'] > 0 else 1)" "$work/out"
 expect_exit 0 "the written intersection is a solid" -- "$tool" check "$work/inter.stl" --no-place
 expect_exit 1 "boolean with an open A" -- "$tool" boolean --difference "$fixtures/stl/open_box_ascii.stl" "$work/maxilla.stl" -o "$work/open.stl"
 check "open A named" -- grep -q "A must be a solid" "$work/err"

@@ -29,6 +29,38 @@ else
 fi
 
 echo
+echo "== the Boolean file to file: \`splintcore boolean --difference\`, whole process, one thread"
+echo "   (B read cropped to A's box; CGAL's whole process on the 324k phantom: 0.77-1.04 s,"
+echo "   Manifold's Boolean alone on the real dentition 0.57 s: ../shared/peers.md)"
+mkdir -p "$work/p324"
+"$tool" phantom --triangles 162122 -o "$work/p324" >/dev/null
+"$tool" base "$work/p324/case.json" -o "$work/p324/base.stl" >/dev/null
+runs=("324k phantom (2 files, mandible opened 2 mm)|$work/p324/base.stl|$work/p324/maxilla.stl $work/p324/mandible.stl|--translate-b 0,0,0 --translate-b 0,0,-2")
+if [ -d "$realdata" ]; then
+  "$bench" --realdata "$realdata" --export-realcase "$work/rb" >/dev/null
+  "$tool" base "$work/rb/case.json" -o "$work/rb/base.stl" >/dev/null
+  runs+=("real dentition (31 tooth files, in occlusion)|$work/rb/base.stl|$(ls "$realdata"/maxilla/*.stl "$realdata"/mandible/*.stl | tr '\n' ' ')|")
+fi
+for row in "${runs[@]}"; do
+  IFS='|' read -r name a b extra <<<"$row"
+  # shellcheck disable=SC2086  # the file lists and options split on purpose
+  python3 - "$name" "$repeat" "$tool" boolean --difference "$a" $b $extra -o "$work/bool.stl" <<'PY'
+import json, statistics, subprocess, sys, time
+name, repeat, argv = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
+wall, last = [], None
+for _ in range(repeat):
+    t0 = time.perf_counter()
+    r = subprocess.run(argv + ["--json"], capture_output=True, text=True, check=True)
+    wall.append(time.perf_counter() - t0)
+    last = json.loads(r.stdout)
+print("%-46s median %.3f s (min %.3f): read %.3f, Boolean %.3f, check %.3f; B %d of %d "
+      "triangles kept, peak arena %d B" % (name, statistics.median(wall), min(wall),
+      last["read_s"], last["boolean_s"], last["self_check_s"], last["b_triangles_kept"],
+      last["b_triangles"], last["peak_arena_bytes"]))
+PY
+done
+
+echo
 echo "== the paper-scale phantom's sweep at 0.05 mm in 64 MiB (splintcore-bench)"
 "$bench" --filter sweep_phantom_005_64m --repeat 1 | grep -E "^bench=|^# sweep"
 

@@ -133,7 +133,7 @@ Status InputFile::read_rest() {
 }
 
 Status read_mesh_file(const Context& ctx, const char* path, uint64_t max_bytes, bool hash,
-                      Mesh* mesh, MeshFileInfo* info) {
+                      Mesh* mesh, MeshFileInfo* info, const Aabb& keep) {
   InputFile file;
   SPLINTCORE_RETURN_IF_ERROR(file.open(path, max_bytes));
   Sha256 sha;
@@ -148,6 +148,7 @@ Status read_mesh_file(const Context& ctx, const char* path, uint64_t max_bytes, 
   }
   MeshReadOptions options;
   options.weld = true;
+  options.keep = keep;
   MeshReadInfo read;
   Status s = read_mesh(ctx, file.source(), options, mesh, &read);
   if (s.is_ok() && hash) s = file.read_rest();

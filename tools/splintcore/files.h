@@ -95,9 +95,11 @@ struct MeshFileInfo {
 
 // Reads a mesh file (STL binary or ASCII, PLY, OBJ: by content, then extension) into a mesh
 // welded exactly (read_mesh with weld: PLY and OBJ meshes hold the same vertices as their STL
-// would). `info` may be null; with `hash`, info->sha256 is the file's SHA-256.
+// would). `info` may be null; with `hash`, info->sha256 is the file's SHA-256. `keep`
+// (MeshReadOptions::keep): the triangles wholly beyond one side of it are left out as they
+// are read (empty: none).
 Status read_mesh_file(const Context& ctx, const char* path, uint64_t max_bytes, bool hash,
-                      Mesh* mesh, MeshFileInfo* info);
+                      Mesh* mesh, MeshFileInfo* info, const Aabb& keep = Aabb{});
 
 // Reads several mesh files as read_mesh_file does, one after the other, into out[i] (replaced,
 // bound to ctx.arena, in the arena in order) and, when not null, infos[i]; the first error in

@@ -120,14 +120,30 @@ std::vector<OptionSpec> boolean_options(BooleanArgs* a) {
 // into one array, the triangles follow them. Peak: the files' meshes and B's triangles once
 // more (appending file after file to two growing arrays moved them up again and again: four
 // times B on the real dentition's 31 files).
-Status read_b(Run& run, const BooleanArgs& a, Mesh* b) {
+// B read file by file, each cropped as it is read to `region` (boolean_region: where B matters
+// to the Boolean; empty: everything) in the file's own frame (before its --translate-b), with a
+// micrometre to spare for the move's rounding: the triangles beyond it are never welded or held
+// (issue 29: most of the real dentition's 887k triangles are nowhere near the splint).
+Status read_b(Run& run, const BooleanArgs& a, const Aabb& region, Mesh* b,
+              uint64_t* file_triangles) {
   Arena& arena = run.arena;
   const std::vector<const char*>& files = a.common.positional;
   const Arena::Marker start = arena.mark();
-  std::vector<Mesh> parts;
-  SPLINTCORE_RETURN_IF_ERROR(
-      read_mesh_files(run.ctx, std::vector<const char*>(files.begin() + 1, files.end()),
-                      kNoInputLimit, false, &parts, nullptr));
+  const std::vector<Vec3>& moves = a.translate_b;
+  std::vector<Mesh> parts(files.size() - 1, Mesh(&arena));
+  *file_triangles = 0;
+  for (size_t f = 1; f < files.size(); ++f) {
+    const Vec3 d = moves.empty() ? Vec3{} : moves[moves.size() == 1 ? 0 : f - 1];
+    Aabb keep;
+    if (!region.empty()) {
+      const Vec3 spare{1e-3, 1e-3, 1e-3};
+      keep = Aabb{region.lo - d - spare, region.hi - d + spare};
+    }
+    MeshFileInfo info;
+    SPLINTCORE_RETURN_IF_ERROR(
+        read_mesh_file(run.ctx, files[f], kNoInputLimit, false, &parts[f - 1], &info, keep));
+    *file_triangles += info.triangles;
+  }
   uint64_t total_v = 0, total_t = 0;
   for (size_t f = 1; f < files.size(); ++f) {
     Mesh& part = parts[f - 1];
@@ -136,7 +152,6 @@ Status read_b(Run& run, const BooleanArgs& a, Mesh* b) {
     if (total_v >= (uint64_t{1} << 31) || total_t >= (uint64_t{1} << 31)) {
       return Status::error(StatusCode::kLimitExceeded, "B is too large").in_file(files[f]);
     }
-    const std::vector<Vec3>& moves = a.translate_b;
     const Vec3 d = moves.empty() ? Vec3{} : moves[moves.size() == 1 ? 0 : f - 1];
     // A moved jaw is rounded to float32, as its own STL would hold it: the Boolean keeps B's
     // vertices bit for bit, so they must be what the output file can store.
@@ -188,7 +203,8 @@ Status read_b(Run& run, const BooleanArgs& a, Mesh* b) {
 }
 
 struct BooleanResult {
-  uint64_t a_triangles = 0, b_triangles = 0;
+  uint64_t a_triangles = 0, b_triangles = 0;  // in the files
+  uint64_t b_kept = 0;                        // B's as cropped (read_b)
   BooleanStats st;
   MeshReport report;
   double t_read = 0, t_op = 0, t_check = 0, t_end = 0;
@@ -205,6 +221,7 @@ void print_boolean_json(const Run& run, const BooleanArgs& a, const BooleanResul
   j.add_status(Status::ok());
   j.add("a_triangles", r.a_triangles);
   j.add("b_triangles", r.b_triangles);
+  j.add("b_triangles_kept", r.b_kept);
   j.add("near_b_triangles", st.near_b_triangles);
   j.add("candidate_pairs", st.candidate_pairs);
   j.add("intersecting_pairs", st.intersecting_pairs);
@@ -232,10 +249,12 @@ void print_boolean_json(const Run& run, const BooleanArgs& a, const BooleanResul
 void print_boolean_text(const Run& run, const BooleanArgs& a, const BooleanResult& r) {
   const BooleanStats& st = r.st;
   const double t0 = run.start;
-  std::printf("A: %s, %llu triangles; B: %zu file(s), %llu triangles (%llu near A)\n",
-              a.common.positional[0], static_cast<unsigned long long>(r.a_triangles),
-              a.common.positional.size() - 1, static_cast<unsigned long long>(r.b_triangles),
-              static_cast<unsigned long long>(st.near_b_triangles));
+  std::printf(
+      "A: %s, %llu triangles; B: %zu file(s), %llu triangles (%llu kept as read, %llu near A)\n",
+      a.common.positional[0], static_cast<unsigned long long>(r.a_triangles),
+      a.common.positional.size() - 1, static_cast<unsigned long long>(r.b_triangles),
+      static_cast<unsigned long long>(r.b_kept),
+      static_cast<unsigned long long>(st.near_b_triangles));
   std::printf(
       "%s: %llu candidate pairs, %llu crossing, %llu touching exactly, %llu "
       "intersection points, %llu + %llu triangles cut, %u attempt(s)\n",
@@ -245,7 +264,7 @@ void print_boolean_text(const Run& run, const BooleanArgs& a, const BooleanResul
       static_cast<unsigned long long>(st.intersection_points),
       static_cast<unsigned long long>(st.cut_triangles_a),
       static_cast<unsigned long long>(st.cut_triangles_b), st.attempts);
-  if (st.attempts > 1) {
+  if (st.attempts > (st.passes > 0 ? st.passes : 1)) {  // attempts are summed over the passes
     std::printf(
         "A was nudged by (%.3g, %.3g, %.3g) mm out of a degenerate or float32-fragile "
         "configuration\n",
@@ -438,18 +457,33 @@ int run_boolean(const Command& command, int argc, char** argv) {
   Run run(command, a.common);
   if (!run.has_memory()) return run.no_memory();
 
-  Mesh ma(&run.arena), mb(&run.arena);
-  Status s = read_mesh_file(run.ctx, a.common.positional[0], kNoInputLimit, false, &ma, nullptr);
-  if (s.is_ok()) s = read_b(run, a, &mb);
-  if (!s.is_ok()) return run.reject(s);
-  BooleanResult r;
-  r.t_read = monotonic_seconds();
   BooleanOptions bo;
   bo.max_candidate_pairs = a.max_pairs;
   bo.op = kBooleanOps[a.op];
   bo.check_self_intersection = false;  // timed separately below
+  Mesh ma(&run.arena), mb(&run.arena);
+  Status s = read_mesh_file(run.ctx, a.common.positional[0], kNoInputLimit, false, &ma, nullptr);
+  if (!s.is_ok()) return run.reject(s);
+  const Arena::Marker b_start = run.arena.mark();
+  const Aabb region = boolean_region(ma, bo);
+  BooleanResult r;
+  s = read_b(run, a, region, &mb, &r.b_triangles);
+  if (!s.is_ok()) return run.reject(s);
+  r.t_read = monotonic_seconds();
   Mesh out;
   s = mesh_boolean(run.ctx, ma, mb, bo, &out, &r.st);
+  if (!s.is_ok() && !region.empty() && s.code() != StatusCode::kArenaExhausted &&
+      s.code() != StatusCode::kCancelled) {
+    // B was read cropped to where it matters: the same solid as B whole (boolean_region), its
+    // triangles in another order. A refusal is said as B whole says it, naming the files' own
+    // vertices and loops (e.g. where an open B's border meets A): B read again whole.
+    run.arena.rewind(b_start);
+    mb = Mesh(&run.arena);
+    out = Mesh();
+    r.st = BooleanStats{};
+    s = read_b(run, a, Aabb{}, &mb, &r.b_triangles);
+    if (s.is_ok()) s = mesh_boolean(run.ctx, ma, mb, bo, &out, &r.st);
+  }
   if (!s.is_ok()) return run.reject(s);
   r.t_op = monotonic_seconds();
   if (a.self_check) s = check_self_intersection(run.ctx, out);
@@ -460,7 +494,7 @@ int run_boolean(const Command& command, int argc, char** argv) {
   if (!s.is_ok()) return run.reject(s);
   r.t_end = monotonic_seconds();
   r.a_triangles = ma.triangles.size();
-  r.b_triangles = mb.triangles.size();
+  r.b_kept = mb.triangles.size();
   if (a.common.json) {
     print_boolean_json(run, a, r);
   } else {
