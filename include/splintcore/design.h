@@ -54,6 +54,12 @@ struct CasePlan {
   Vec3 hinge[2] = {};                  // the condylar points, at least 1 mm apart
   double intermediate_opening_mm = 0;  // [0, 10]
   double final_opening_mm = 0;         // [0, 10]
+  // "picks": each splint's own picks ([0] the intermediate's, [1] the final's), each pair of
+  // lists as "base"'s "upper" and "lower", on the jaws where that splint holds them. Without
+  // them the base's picks serve both splints, or "auto" outlines each splint on its own.
+  bool has_picks = false;
+  Span<const Pick> upper[2];
+  Span<const Pick> lower[2];
 };
 
 // A parsed case. Strings and arrays live in the arena the case was parsed into.
@@ -359,12 +365,14 @@ struct PlanReport {
   PlanSplintReport final_splint;
 };
 
-// The case one splint of the plan is designed from: `c` without its plan, the jaws' transforms
-// set to `r`'s (maxilla, mandible), the label's text r.label_text (`out` points into `r`).
-// `jaws` (two entries, the caller's) holds its jaw list. Errors: kInvalidArgument (not a plan
-// case, not one maxilla and one mandible, a case label but no r.label_text).
-Status plan_splint_case(const CaseFile& c, const PlanSplintReport& r, CaseJaw jaws[2],
-                        CaseFile* out);
+// The case one splint of the plan (the final one when `final_splint`, else the intermediate)
+// is designed from: `c` without its plan, the jaws' transforms set to `r`'s (maxilla,
+// mandible), the label's text r.label_text (`out` points into `r`), and with the plan's
+// "picks" that splint's picks. `jaws` (two entries, the caller's) holds its jaw list. Errors:
+// kInvalidArgument (not a plan case, not one maxilla and one mandible, a case label but no
+// r.label_text).
+Status plan_splint_case(const CaseFile& c, const PlanSplintReport& r, bool final_splint,
+                        CaseJaw jaws[2], CaseFile* out);
 
 // Both splints of case `c` (c.has_plan; jaws[i] is the mesh of c.jaws[i], as read). Each is an
 // ordinary design_splint() of plan_splint_case(): outline (automatic when the base is "auto"),

@@ -41,6 +41,20 @@ void write_scan(JsonWriter& w, const CaseScan& s) {
   w.end_object();
 }
 
+void write_picks(JsonWriter& w, const char* key, Span<const Pick> picks) {
+  w.begin_array(key);
+  for (const Pick& p : picks) {
+    w.begin_object();
+    w.add("position", p.position);
+    if (length(p.normal) > 0) w.add("normal", p.normal);
+    if (length(p.direction) > 0) w.add("direction", p.direction);
+    w.add("inner_length_mm", p.inner_length);
+    w.add("outside_length_mm", p.outside_length);
+    w.end_object();
+  }
+  w.end_array();
+}
+
 void write_plan(JsonWriter& w, const CasePlan& p) {
   w.begin_object("plan");
   w.add("sequence", p.mandible_first ? "mandible_first" : "maxilla_first");
@@ -52,11 +66,22 @@ void write_plan(JsonWriter& w, const CasePlan& p) {
   w.end_array();
   w.add("intermediate_opening_mm", p.intermediate_opening_mm);
   w.add("final_opening_mm", p.final_opening_mm);
+  if (p.has_picks) {
+    w.begin_object("picks");
+    for (int k = 0; k < 2; ++k) {
+      w.begin_object(k == 0 ? "intermediate" : "final");
+      write_picks(w, "upper", p.upper[k]);
+      write_picks(w, "lower", p.lower[k]);
+      w.end_object();
+    }
+    w.end_object();
+  }
   w.end_object();
 }
 
 }  // namespace design_detail
 
+using design_detail::write_picks;
 using design_detail::write_plan;
 using design_detail::write_scan;
 using design_detail::write_transform;
@@ -233,20 +258,6 @@ void write_jaws(JsonWriter& w, const CaseFile& c) {
   w.end_array();
 }
 
-void write_picks(JsonWriter& w, const char* key, Span<const Pick> picks) {
-  w.begin_array(key);
-  for (const Pick& p : picks) {
-    w.begin_object();
-    w.add("position", p.position);
-    if (length(p.normal) > 0) w.add("normal", p.normal);
-    if (length(p.direction) > 0) w.add("direction", p.direction);
-    w.add("inner_length_mm", p.inner_length);
-    w.add("outside_length_mm", p.outside_length);
-    w.end_object();
-  }
-  w.end_array();
-}
-
 void write_base(JsonWriter& w, const CaseFile& c) {
   w.begin_object("base");
   w.add("spacing_mm", c.base.spacing_mm);
@@ -269,8 +280,10 @@ void write_base(JsonWriter& w, const CaseFile& c) {
     w.end_object();
   } else {
     w.add("occlusal_normal", c.occlusal_normal);
-    write_picks(w, "upper", c.upper);
-    write_picks(w, "lower", c.lower);
+    if (!(c.has_plan && c.plan.has_picks)) {  // else the plan gives each splint its picks
+      write_picks(w, "upper", c.upper);
+      write_picks(w, "lower", c.lower);
+    }
   }
   w.end_object();
 }

@@ -380,6 +380,66 @@ Status parse_auto(const Reader& r, const JsonValue& a, CaseFile* out) {
 }
 
 // The base ("base": the occlusal normal, spacing, corners, default line lengths, the picks).
+// An "upper" and a "lower" pick list that pair up, from object `o` (the base, or one splint of
+// the plan's "picks", named by `where` when a list is missing).
+Status parse_pick_pair(const Reader& r, const JsonValue& o, const char* where, double inner_default,
+                       double outside_default, Span<const Pick>* upper_out,
+                       Span<const Pick>* lower_out) {
+  const JsonValue* upper = r.doc->member(o, "upper");
+  const JsonValue* lower = r.doc->member(o, "lower");
+  if (upper == nullptr || lower == nullptr) {
+    return r.fail(o, StatusCode::kInvalidArgument, where,
+                  " needs \"upper\" and \"lower\" pick lists",
+                  std::strcmp(where, "\"base\"") == 0 ? ", or \"auto\"" : "");
+  }
+  SPLINTCORE_RETURN_IF_ERROR(
+      parse_picks(r, *upper, "upper", inner_default, outside_default, upper_out));
+  SPLINTCORE_RETURN_IF_ERROR(
+      parse_picks(r, *lower, "lower", inner_default, outside_default, lower_out));
+  if (upper_out->size() != lower_out->size()) {
+    Status s =
+        r.fail(*lower, StatusCode::kInvalidArgument, "upper and lower pick lists do not pair up: ");
+    return s.append_u64(upper_out->size())
+        .append(" upper, ")
+        .append_u64(lower_out->size())
+        .append(" lower (the i-th upper pick pairs with the i-th lower pick)");
+  }
+  return Status::ok();
+}
+
+// The plan's "picks" (each splint's own: {"intermediate": {"upper", "lower"}, "final": {...}})
+// with the base's pick defaults; the base then gives no picks and no "auto".
+Status parse_plan_picks(const Reader& r, const JsonValue& base, const JsonValue& picks,
+                        double inner_default, double outside_default, CaseFile* out) {
+  const JsonDocument& doc = *r.doc;
+  static const char* const kBasePicks[] = {"upper", "lower", "auto"};
+  for (const char* key : kBasePicks) {
+    if (doc.member(base, key) != nullptr) {
+      return r.fail(*doc.member(base, key), StatusCode::kInvalidArgument,
+                    "\"plan\" gives each splint its \"picks\": leave \"", key,
+                    "\" out of \"base\" (one source of picks)");
+    }
+  }
+  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(picks, JsonType::kObject, "picks"));
+  static const char* const kSplints[] = {"intermediate", "final", nullptr};
+  SPLINTCORE_RETURN_IF_ERROR(r.known_keys(picks, kSplints, "\"plan\"'s \"picks\""));
+  for (int k = 0; k < 2; ++k) {
+    const JsonValue* splint = doc.member(picks, kSplints[k]);
+    if (splint == nullptr) {
+      return r.fail(picks, StatusCode::kInvalidArgument, "\"plan\"'s \"picks\" needs \"",
+                    kSplints[k], "\" (each splint's upper and lower picks)");
+    }
+    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*splint, JsonType::kObject, kSplints[k]));
+    static const char* const kLists[] = {"upper", "lower", nullptr};
+    SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*splint, kLists, kSplints[k]));
+    SPLINTCORE_RETURN_IF_ERROR(parse_pick_pair(
+        r, *splint, k == 0 ? "the intermediate splint's \"picks\"" : "the final splint's \"picks\"",
+        inner_default, outside_default, &out->plan.upper[k], &out->plan.lower[k]));
+  }
+  out->plan.has_picks = true;
+  return Status::ok();
+}
+
 Status parse_base(const Reader& r, const JsonValue& root, CaseFile* out) {
   const JsonDocument& doc = *r.doc;
   const JsonValue* base = doc.member(root, "base");
@@ -432,26 +492,15 @@ Status parse_base(const Reader& r, const JsonValue& root, CaseFile* out) {
   if (const JsonValue* s = doc.member(*base, "outside_length_mm")) {
     SPLINTCORE_RETURN_IF_ERROR(r.number(*s, "base.outside_length_mm", 0, &outside_default));
   }
+  const JsonValue* plan = doc.member(root, "plan");
+  if (plan != nullptr && plan->type == JsonType::kObject) {
+    if (const JsonValue* picks = doc.member(*plan, "picks")) {
+      return parse_plan_picks(r, *base, *picks, inner_default, outside_default, out);
+    }
+  }
   if (out->has_auto_outline) return Status::ok();
-  const JsonValue* upper = doc.member(*base, "upper");
-  const JsonValue* lower = doc.member(*base, "lower");
-  if (upper == nullptr || lower == nullptr) {
-    return r.fail(*base, StatusCode::kInvalidArgument,
-                  "\"base\" needs \"upper\" and \"lower\" pick lists, or \"auto\"");
-  }
-  SPLINTCORE_RETURN_IF_ERROR(
-      parse_picks(r, *upper, "upper", inner_default, outside_default, &out->upper));
-  SPLINTCORE_RETURN_IF_ERROR(
-      parse_picks(r, *lower, "lower", inner_default, outside_default, &out->lower));
-  if (out->upper.size() != out->lower.size()) {
-    Status s =
-        r.fail(*lower, StatusCode::kInvalidArgument, "upper and lower pick lists do not pair up: ");
-    return s.append_u64(out->upper.size())
-        .append(" upper, ")
-        .append_u64(out->lower.size())
-        .append(" lower (the i-th upper pick pairs with the i-th lower pick)");
-  }
-  return Status::ok();
+  return parse_pick_pair(r, *base, "\"base\"", inner_default, outside_default, &out->upper,
+                         &out->lower);
 }
 
 // The CT the seeded jaws come from ("ct").
@@ -598,9 +647,9 @@ Status parse_plan(const Reader& r, const JsonValue& root, const JsonValue& p, Ca
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(p, JsonType::kObject, "plan"));
   static const char* const kPlanKeys[] = {
       "sequence",         "maxilla", "mandible", "hinge_axis", "intermediate_opening_mm",
-      "final_opening_mm", nullptr};
+      "final_opening_mm", "picks",   nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(p, kPlanKeys, "\"plan\""));
-  for (const char* const* k = kPlanKeys; *k != nullptr; ++k) {
+  for (const char* const* k = kPlanKeys; *k != nullptr && std::strcmp(*k, "picks") != 0; ++k) {
     if (doc.member(p, *k) == nullptr) {
       return r.fail(p, StatusCode::kInvalidArgument, "\"plan\" needs \"", *k,
                     "\" (a plan gives sequence, maxilla, mandible, hinge_axis, "

@@ -15,7 +15,10 @@ void write_transform(JsonWriter& w, const RigidTransform& t, const char* key = "
 // A jaw's "scan" with every key (the defaults written out), as the case gives it.
 void write_scan(JsonWriter& w, const CaseScan& s);
 
-// "plan" with every key (all are required), as the case gives it.
+// A pick list (`key`: "upper" or "lower") with every pick's lengths written out.
+void write_picks(JsonWriter& w, const char* key, Span<const Pick> picks);
+
+// "plan" with every key (all are required; "picks" when it has them), as the case gives it.
 void write_plan(JsonWriter& w, const CasePlan& p);
 
 }  // namespace design_detail

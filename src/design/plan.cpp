@@ -402,7 +402,7 @@ Status plan_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, co
   r->mandible = compose(r->autorotation.transform, r->mandible);
   CaseJaw derived_jaws[2];
   CaseFile derived;
-  SPLINTCORE_RETURN_IF_ERROR(plan_splint_case(c, *r, derived_jaws, &derived));
+  SPLINTCORE_RETURN_IF_ERROR(plan_splint_case(c, *r, final_splint, derived_jaws, &derived));
   return plan_error(
       design_detail::design_splint_registered(
           ctx, derived, jaws, f.scans, f.any() ? f.fusion : nullptr, true, splint, &r->design),
@@ -443,8 +443,8 @@ void plan_autorotations(const Context& ctx, const CaseFile& c, Span<const Mesh> 
 
 }  // namespace design_detail
 
-Status plan_splint_case(const CaseFile& c, const PlanSplintReport& r, CaseJaw jaws[2],
-                        CaseFile* out) {
+Status plan_splint_case(const CaseFile& c, const PlanSplintReport& r, bool final_splint,
+                        CaseJaw jaws[2], CaseFile* out) {
   size_t up = 0, low = 0;
   SPLINTCORE_RETURN_IF_ERROR(plan_roles(c, &up, &low));
   jaws[up] = c.jaws[up];
@@ -459,6 +459,11 @@ Status plan_splint_case(const CaseFile& c, const PlanSplintReport& r, CaseJaw ja
   out->has_plan = false;
   if (c.has_label) out->label.text = r.label_text;
   out->jaws = Span<const CaseJaw>(jaws, 2);
+  if (c.plan.has_picks) {  // this splint's own picks
+    const int k = final_splint ? 1 : 0;
+    out->upper = c.plan.upper[k];
+    out->lower = c.plan.lower[k];
+  }
   return Status::ok();
 }
 

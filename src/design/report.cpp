@@ -411,7 +411,7 @@ Status write_plan_report(const Context& ctx, const CaseFile& c, Span<const Mesh>
   const Mesh* splints[2] = {&intermediate, &final_splint};
   char sha256[2][65] = {};
   for (int k = 0; k < 2; ++k) {
-    SPLINTCORE_RETURN_IF_ERROR(plan_splint_case(c, *parts[k], jaws_of[k], &derived[k]));
+    SPLINTCORE_RETURN_IF_ERROR(plan_splint_case(c, *parts[k], k == 1, jaws_of[k], &derived[k]));
     SPLINTCORE_RETURN_IF_ERROR(splint_sha256_of(ctx, *splints[k], files[k], sha256[k]));
   }
   JsonWriter w(sink);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "splintcore/design.h"
+#include "support/case_refusal.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -40,18 +41,7 @@ struct Case {
 void expect_refusals(const std::vector<Case>& cases) {
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
-    test::TestArena t(size_t{1} << 20);
-    ASSERT_NE(t.arena.allocate(16), nullptr);
-    const size_t used = t.arena.used();
-    CaseFile out;
-    Status s = parse_case(Context(&t.arena), c.text.data(), c.text.size(), "case.json", &out);
-    EXPECT_EQ(s.code(), c.code) << test::format(s) << "\n" << c.text;
-    EXPECT_NE(std::string(s.message()).find(c.fragment), std::string::npos) << s.message() << "\n"
-                                                                            << c.text;
-    EXPECT_STREQ(s.file(), "case.json");
-    EXPECT_EQ(t.arena.used(), used) << "a failed parse left memory in the arena";
-    EXPECT_TRUE(out.jaws.empty() && out.upper.empty() && out.lower.empty());
-    EXPECT_EQ(out.version, 0u);
+    test::expect_case_refused(c.text, c.code, c.fragment);
   }
 }
 

@@ -80,14 +80,8 @@ void resolved_case_text(const char* name, std::string* out) {
   ASSERT_NO_FATAL_FAILURE(phantom_jaws(t.arena, jaws));
   CaseFile resolved;
   SPLINTCORE_ASSERT_OK(resolve_case_outline(ctx, c, Span<const Mesh>(jaws, 2), &resolved, nullptr));
-  ByteSink sink;
-  sink.user = out;
-  sink.write = [](void* user, const uint8_t* data, size_t n) {
-    static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
-    return true;
-  };
   out->clear();
-  SPLINTCORE_ASSERT_OK(write_case(resolved, sink));
+  SPLINTCORE_ASSERT_OK(write_case(resolved, test::string_sink(out)));
 }
 
 void expect_golden_and_meshlab(const char* name, const char* key, const Designed& d) {
@@ -228,12 +222,7 @@ TEST(DesignGolden, PlanSplintsAndPrintJob) {
     expect_golden_and_meshlab(kKeys[k], kKeys[k], d);
   }
   std::string job;
-  ByteSink sink;
-  sink.user = &job;
-  sink.write = [](void* user, const uint8_t* data, size_t n) {
-    static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
-    return true;
-  };
+  ByteSink sink = test::string_sink(&job);
   Vec3 moves[2];
   const uint64_t before = t.arena.used();
   t.arena.reset_high_water();

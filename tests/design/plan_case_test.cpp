@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "splintcore/design.h"
+#include "support/case_refusal.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -70,6 +71,15 @@ struct Bad {
   const char* fragment;
 };
 
+// Each case refused with kInvalidArgument, its fragment in the message, named where (file,
+// line and column of the value); the arena as it was and no plan.
+void expect_refused(const std::vector<Bad>& cases) {
+  for (const Bad& c : cases) {
+    SCOPED_TRACE(c.name);
+    test::expect_case_refused(c.text, StatusCode::kInvalidArgument, c.fragment, true);
+  }
+}
+
 TEST(PlanCase, EveryBadKeyOrValueIsNamed) {
   const std::string good = std::string("{") + kGoodPlan + "}";
   const std::vector<Bad> cases = {
@@ -114,22 +124,108 @@ TEST(PlanCase, EveryBadKeyOrValueIsNamed) {
       {"output splint", plan_case(good, "", "", "\"output\": {\"splint\": \"s.stl\"},"),
        "leave \"splint\" out of \"output\""},
   };
-  for (const Bad& c : cases) {
-    SCOPED_TRACE(c.name);
-    test::TestArena t(size_t{1} << 20);
-    ASSERT_NE(t.arena.allocate(16), nullptr);
-    const size_t used = t.arena.used();
-    CaseFile out;
-    Status s = parse_case(Context(&t.arena), c.text.data(), c.text.size(), "case.json", &out);
-    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << test::format(s) << "\n" << c.text;
-    EXPECT_NE(std::string(s.message()).find(c.fragment), std::string::npos) << s.message() << "\n"
-                                                                            << c.text;
-    EXPECT_STREQ(s.file(), "case.json");
-    EXPECT_GT(s.line(), 0u);  // where: line and column of the value
-    EXPECT_GT(s.column(), 0u);
-    EXPECT_EQ(t.arena.used(), used) << "a failed parse left memory in the arena";
-    EXPECT_FALSE(out.has_plan);
+  expect_refused(cases);
+}
+
+// A plan case whose splints have their own picks: `picks` is the plan's "picks" value, `base`
+// the base's inside.
+std::string picks_case(const std::string& picks, const std::string& base = R"("spacing_mm": 0.5)") {
+  return std::string(R"({"splintcore_case": 1,
+ "jaws": [{"role": "maxilla", "mesh": "u.stl"}, {"role": "mandible", "mesh": "l.stl"}],
+ "base": {)") +
+         base + R"(},
+ "plan": {)" +
+         kGoodPlan + R"(, "picks": )" + picks + "}}";
+}
+
+const char* const kSplintPicks = R"({
+  "intermediate": {"upper": [{"position": [1, 2, 3]}, {"position": [4, 5, 6]}],
+                   "lower": [{"position": [1, 2, 0]}, {"position": [4, 5, 0]}]},
+  "final": {"upper": [{"position": [1, 4, 4], "inner_length_mm": 7}, {"position": [4, 7, 7]},
+                      {"position": [8, 9, 7]}],
+            "lower": [{"position": [1, 4, 0]}, {"position": [4, 7, 0]}, {"position": [8, 9, 0]}]}
+})";
+
+TEST(PlanCase, EachSplintsPicksAreReadWrittenAndGivenToItsSplint) {
+  test::TestArena t(size_t{1} << 20);
+  Context ctx(&t.arena);
+  const std::string text = picks_case(kSplintPicks, R"("spacing_mm": 0.5, "inner_length_mm": 4)");
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse_case(ctx, text.data(), text.size(), "case.json", &c));
+  ASSERT_TRUE(c.has_plan && c.plan.has_picks);
+  EXPECT_FALSE(c.has_auto_outline);
+  EXPECT_TRUE(c.upper.empty() && c.lower.empty());  // the base gives none
+  ASSERT_EQ(c.plan.upper[0].size(), 2u);
+  ASSERT_EQ(c.plan.lower[0].size(), 2u);
+  ASSERT_EQ(c.plan.upper[1].size(), 3u);
+  ASSERT_EQ(c.plan.lower[1].size(), 3u);
+  EXPECT_EQ(c.plan.upper[0][1].position.y, 5.0);
+  EXPECT_EQ(c.plan.lower[1][2].position.x, 8.0);
+  EXPECT_EQ(c.plan.upper[0][0].inner_length, 4.0);  // the base's default
+  EXPECT_EQ(c.plan.upper[1][0].inner_length, 7.0);  // the pick's own
+
+  // Each splint's case takes its own picks.
+  for (int k = 0; k < 2; ++k) {
+    PlanSplintReport r;
+    CaseJaw jaws[2];
+    CaseFile derived;
+    SPLINTCORE_ASSERT_OK(plan_splint_case(c, r, k == 1, jaws, &derived));
+    EXPECT_FALSE(derived.has_plan);
+    EXPECT_EQ(derived.upper.data(), c.plan.upper[k].data());
+    EXPECT_EQ(derived.lower.data(), c.plan.lower[k].data());
   }
+
+  // Written and read again: the same picks, still the plan's.
+  std::string written;
+  const ByteSink sink = test::string_sink(&written);
+  SPLINTCORE_ASSERT_OK(write_case(c, sink));
+  CaseFile again;
+  SPLINTCORE_ASSERT_OK(parse_case(ctx, written.data(), written.size(), "written", &again));
+  ASSERT_TRUE(again.plan.has_picks);
+  EXPECT_TRUE(again.upper.empty());
+  for (int k = 0; k < 2; ++k) {
+    ASSERT_EQ(again.plan.upper[k].size(), c.plan.upper[k].size());
+    ASSERT_EQ(again.plan.lower[k].size(), c.plan.lower[k].size());
+    for (size_t i = 0; i < c.plan.upper[k].size(); ++i) {
+      EXPECT_TRUE(again.plan.upper[k][i].position == c.plan.upper[k][i].position);
+      EXPECT_EQ(again.plan.upper[k][i].inner_length, c.plan.upper[k][i].inner_length);
+      EXPECT_TRUE(again.plan.lower[k][i].position == c.plan.lower[k][i].position);
+    }
+  }
+}
+
+TEST(PlanCase, BadSplintPicksAreNamed) {
+  const std::string picks = kSplintPicks;
+  auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string p = picks;
+    const size_t at = p.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return p.replace(at, from.size(), to);
+  };
+  const std::vector<Bad> cases = {
+      {"picks in the base too",
+       picks_case(picks,
+                  R"("upper": [{"position": [1, 2, 3]}], "lower": [{"position": [1, 2, 0]}])"),
+       "leave \"upper\" out of \"base\""},
+      {"auto too", picks_case(picks, R"("auto": {})"), "leave \"auto\" out of \"base\""},
+      {"not an object", picks_case("[1]"), "\"picks\" must be object"},
+      {"unknown splint", picks_case(replaced("\"final\"", "\"middle\"")),
+       "unknown key \"middle\" in \"plan\"'s \"picks\""},
+      {"a splint missing", picks_case(R"({"intermediate": {"upper": [], "lower": []}})"),
+       "\"plan\"'s \"picks\" needs \"final\""},
+      {"a list missing",
+       picks_case(replaced("\"lower\": [{\"position\": [1, 4, 0]}, "
+                           "{\"position\": [4, 7, 0]}, {\"position\": [8, 9, 0]}]",
+                           "\"lowr\": []")),
+       "unknown key \"lowr\" in final"},
+      {"a list left out",
+       picks_case(R"({"intermediate": {"upper": [], "lower": []}, "final": {"upper": []}})"),
+       "the final splint's \"picks\" needs \"upper\" and \"lower\" pick lists"},
+      {"lists that do not pair", picks_case(replaced(", {\"position\": [8, 9, 0]}", "")),
+       "upper and lower pick lists do not pair up: 3 upper, 2 lower"},
+      {"a bad pick", picks_case(replaced("[4, 5, 6]", "[4, 5]")), "\"position\" needs 3 numbers"},
+  };
+  expect_refused(cases);
 }
 
 }  // namespace

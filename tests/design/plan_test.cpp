@@ -138,12 +138,7 @@ TEST(DesignPlan, MaxillaFirstGivesTwoSplintsWithTheAutorotationsAngles) {
 
   // The report: the plan, then each splint with its autorotation and output.
   std::string json;
-  ByteSink sink;
-  sink.user = &json;
-  sink.write = [](void* user, const uint8_t* data, size_t n) {
-    static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
-    return true;
-  };
+  const ByteSink sink = test::string_sink(&json);
   DesignReportFiles files[2];
   files[0].splint_path = "intermediate.stl";
   files[1].splint_path = "final.stl";
@@ -168,6 +163,63 @@ TEST(DesignPlan, MaxillaFirstGivesTwoSplintsWithTheAutorotationsAngles) {
 
 // Mandible first: the intermediate splint holds the planned mandible, turned, against the
 // maxilla as before surgery; the final one is the maxilla-first plan's final splint.
+// Explicit picks (fixtures/cases/paper_scale.json's, on the phantom): the base's picks serve
+// both splints; the plan's "picks" give each splint its own. Given the same picks that way,
+// the same bytes; the final splint given its picks moved with the jaws (the upper picks by the
+// maxilla's planned move, the lower by the mandible's), the final splint changes and the
+// intermediate does not.
+TEST(DesignPlan, EachSplintsOwnPicksShapeItsBase) {
+  PlanFixture f("maxilla_first");
+  ASSERT_TRUE(f.ok);
+  Context ctx(&f.t.arena);
+  const std::vector<uint8_t> text =
+      test::read_file_bytes(std::string(SPLINTCORE_FIXTURES_DIR) + "/cases/paper_scale.json");
+  CaseFile paper;
+  SPLINTCORE_ASSERT_OK(
+      parse_case(ctx, reinterpret_cast<const char*>(text.data()), text.size(), "paper", &paper));
+  CaseFile shared = f.c;
+  shared.has_auto_outline = false;
+  shared.occlusal_normal = paper.occlusal_normal;
+  shared.upper = paper.upper;
+  shared.lower = paper.lower;
+  auto design = [&](const CaseFile& c, std::vector<uint8_t> out[2]) {
+    ArenaScope scope(f.t.arena);
+    Mesh intermediate, final_splint;
+    PlanReport r;
+    SPLINTCORE_ASSERT_OK(design_plan(ctx, c, f.span(), &intermediate, &final_splint, &r));
+    EXPECT_TRUE(r.intermediate.design.print.printable);
+    EXPECT_TRUE(r.final_splint.design.print.printable);
+    EXPECT_FALSE(r.final_splint.design.outlined);
+    out[0] = stl_bytes(f.t.arena, intermediate);
+    out[1] = stl_bytes(f.t.arena, final_splint);
+  };
+  std::vector<uint8_t> a[2], b[2], moved[2];
+  design(shared, a);
+  if (HasFatalFailure()) return;
+
+  CaseFile own = shared;
+  own.upper = Span<const Pick>();
+  own.lower = Span<const Pick>();
+  own.plan.has_picks = true;
+  for (int k = 0; k < 2; ++k) {
+    own.plan.upper[k] = paper.upper;
+    own.plan.lower[k] = paper.lower;
+  }
+  design(own, b);
+  EXPECT_EQ(b[0], a[0]);
+  EXPECT_EQ(b[1], a[1]);
+
+  std::vector<Pick> up(paper.upper.begin(), paper.upper.end());
+  std::vector<Pick> low(paper.lower.begin(), paper.lower.end());
+  for (Pick& p : up) p.position = f.c.plan.maxilla.apply_point(p.position);
+  for (Pick& p : low) p.position = f.c.plan.mandible.apply_point(p.position);
+  own.plan.upper[1] = Span<const Pick>(up.data(), up.size());
+  own.plan.lower[1] = Span<const Pick>(low.data(), low.size());
+  design(own, moved);
+  EXPECT_EQ(moved[0], a[0]);
+  EXPECT_NE(moved[1], a[1]);
+}
+
 TEST(DesignPlan, MandibleFirstMovesTheMandibleFirst) {
   PlanFixture f("mandible_first", "[1,0,0,0, 0,1,0,0.5, 0,0,1,-0.5, 0,0,0,1]");
   ASSERT_TRUE(f.ok);
@@ -190,12 +242,7 @@ TEST(DesignPlan, MandibleFirstMovesTheMandibleFirst) {
 std::string plan_report_json(const Context& ctx, const PlanFixture& f, const Mesh& a, const Mesh& b,
                              const PlanReport& r) {
   std::string json;
-  ByteSink sink;
-  sink.user = &json;
-  sink.write = [](void* user, const uint8_t* data, size_t n) {
-    static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
-    return true;
-  };
+  const ByteSink sink = test::string_sink(&json);
   DesignReportFiles files[2];
   EXPECT_TRUE(write_plan_report(ctx, f.c, f.span(), a, b, r, files, nullptr, sink).is_ok());
   return json;
@@ -306,12 +353,7 @@ void expect_same_transform(const RigidTransform& a, const RigidTransform& b) {
 
 std::string written_case(const CaseFile& c) {
   std::string text;
-  ByteSink sink;
-  sink.user = &text;
-  sink.write = [](void* user, const uint8_t* data, size_t n) {
-    static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
-    return true;
-  };
+  const ByteSink sink = test::string_sink(&text);
   EXPECT_TRUE(write_case(c, sink).is_ok());
   return text;
 }
@@ -367,17 +409,6 @@ Mesh job_tetra(Arena& arena, double size) {
   return m;
 }
 
-// A sink that appends to `out`.
-ByteSink sink_of(std::string* out) {
-  ByteSink sink;
-  sink.user = out;
-  sink.write = [](void* user, const uint8_t* data, size_t n) {
-    static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
-    return true;
-  };
-  return sink;
-}
-
 // write_plan_job on small parts: the hashes given are the ones it would compute (the same
 // bytes), other hashes give other bytes; an unknown printer, an empty splint, parts that do
 // not fit the tray side by side and a sink that refuses are errors, the arena as it was.
@@ -389,16 +420,16 @@ TEST(DesignPlan, PrintJobHashesAndErrors) {
   const Mesh a = job_tetra(t.arena, 20), b = job_tetra(t.arena, 30);
   std::string computed, given, other;
   Vec3 moves[2];
-  SPLINTCORE_ASSERT_OK(write_plan_job(ctx, c, a, b, nullptr, sink_of(&computed), moves));
+  SPLINTCORE_ASSERT_OK(write_plan_job(ctx, c, a, b, nullptr, test::string_sink(&computed), moves));
   EXPECT_GE(moves[1].x - moves[0].x, 20 + kPlanJobGapMm);  // a's box is 20 mm wide
   char hashes[2][65];
   SPLINTCORE_ASSERT_OK(splint_stl_sha256(ctx, a, hashes[0]));
   SPLINTCORE_ASSERT_OK(splint_stl_sha256(ctx, b, hashes[1]));
   const char* const right[2] = {hashes[0], hashes[1]};
-  SPLINTCORE_ASSERT_OK(write_plan_job(ctx, c, a, b, right, sink_of(&given), nullptr));
+  SPLINTCORE_ASSERT_OK(write_plan_job(ctx, c, a, b, right, test::string_sink(&given), nullptr));
   EXPECT_EQ(given, computed);
   const char* const swapped[2] = {hashes[1], hashes[0]};
-  SPLINTCORE_ASSERT_OK(write_plan_job(ctx, c, a, b, swapped, sink_of(&other), nullptr));
+  SPLINTCORE_ASSERT_OK(write_plan_job(ctx, c, a, b, swapped, test::string_sink(&other), nullptr));
   EXPECT_NE(other, computed);
 
   const Mesh wide = job_tetra(t.arena, 200);  // two of them: 405 mm, the tray 255
@@ -406,13 +437,13 @@ TEST(DesignPlan, PrintJobHashesAndErrors) {
   std::string unused;
   CaseFile unknown = c;
   unknown.printer = "nope";
-  Status s = write_plan_job(ctx, unknown, a, b, nullptr, sink_of(&unused), nullptr);
+  Status s = write_plan_job(ctx, unknown, a, b, nullptr, test::string_sink(&unused), nullptr);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(std::string(s.message()).find("nope"), std::string::npos) << s.message();
-  s = write_plan_job(ctx, c, a, Mesh(), nullptr, sink_of(&unused), nullptr);
+  s = write_plan_job(ctx, c, a, Mesh(), nullptr, test::string_sink(&unused), nullptr);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(std::string(s.message()).find("final splint is empty"), std::string::npos);
-  s = write_plan_job(ctx, c, wide, wide, nullptr, sink_of(&unused), nullptr);
+  s = write_plan_job(ctx, c, wide, wide, nullptr, test::string_sink(&unused), nullptr);
   EXPECT_EQ(s.code(), StatusCode::kLimitExceeded) << test::format(s);
   ByteSink refuse;
   refuse.write = [](void*, const uint8_t*, size_t) { return false; };
@@ -434,27 +465,27 @@ TEST(DesignPlan, OneSplintsPrintJob) {
   {
     test::TestArena exact{static_cast<size_t>(splint_job_bound(c, a))};
     Vec3 move;
-    SPLINTCORE_ASSERT_OK(
-        write_splint_job(Context(&exact.arena), c, a, nullptr, sink_of(&computed), &move));
+    SPLINTCORE_ASSERT_OK(write_splint_job(Context(&exact.arena), c, a, nullptr,
+                                          test::string_sink(&computed), &move));
     EXPECT_GE(move.x + 0.0, 0.0);  // placed on the tray, whose corner is the origin
     EXPECT_EQ(exact.arena.used(), 0u);
   }
   char hash[65];
   SPLINTCORE_ASSERT_OK(splint_stl_sha256(ctx, a, hash));
-  SPLINTCORE_ASSERT_OK(write_splint_job(ctx, c, a, hash, sink_of(&given), nullptr));
+  SPLINTCORE_ASSERT_OK(write_splint_job(ctx, c, a, hash, test::string_sink(&given), nullptr));
   EXPECT_EQ(given, computed);
   CaseFile no_id = c;
   no_id.case_id = "";
-  SPLINTCORE_ASSERT_OK(write_splint_job(ctx, no_id, a, hash, sink_of(&unnamed), nullptr));
+  SPLINTCORE_ASSERT_OK(write_splint_job(ctx, no_id, a, hash, test::string_sink(&unnamed), nullptr));
   EXPECT_NE(unnamed, computed);  // another object name and no case id metadata
   const size_t used = t.arena.used();
   std::string unused;
-  Status s = write_splint_job(ctx, c, Mesh(), nullptr, sink_of(&unused), nullptr);
+  Status s = write_splint_job(ctx, c, Mesh(), nullptr, test::string_sink(&unused), nullptr);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(std::string(s.message()).find("the splint is empty"), std::string::npos) << s.message();
   CaseFile unknown = c;
   unknown.printer = "nope";
-  s = write_splint_job(ctx, unknown, a, nullptr, sink_of(&unused), nullptr);
+  s = write_splint_job(ctx, unknown, a, nullptr, test::string_sink(&unused), nullptr);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
   EXPECT_EQ(t.arena.used(), used);
 }
@@ -568,7 +599,8 @@ TEST(DesignPlan, SameBytesAndAutorotationsAtOneTwoAndThreeThreads) {
       const std::vector<uint8_t> sa = stl_bytes(f.t.arena, a), sb = stl_bytes(f.t.arena, b);
       out[0].assign(sa.begin(), sa.end());
       out[1].assign(sb.begin(), sb.end());
-      SPLINTCORE_ASSERT_OK(write_plan_job(ctx, f.c, a, b, nullptr, sink_of(&out[2]), nullptr));
+      SPLINTCORE_ASSERT_OK(
+          write_plan_job(ctx, f.c, a, b, nullptr, test::string_sink(&out[2]), nullptr));
       CaseFile far = f.c;
       far.plan.hinge[0] = Vec3{0, 0, -50};  // a vertical axis: no closing sense
       far.plan.hinge[1] = Vec3{0, 0, 50};

@@ -344,12 +344,7 @@ TEST(Outline, ResolvedCaseDesignsTheSameBytes) {
     SPLINTCORE_ASSERT_OK(
         resolve_case_outline(ctx, c, Span<const Mesh>(jaws, 2), &resolved, nullptr));
     std::string written;
-    ByteSink sink;
-    sink.user = &written;
-    sink.write = [](void* user, const uint8_t* data, size_t n) {
-      static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
-      return true;
-    };
+    ByteSink sink = test::string_sink(&written);
     // The auto case itself written and read back: the same options, distal ends bit for bit.
     SPLINTCORE_ASSERT_OK(write_case(c, sink));
     CaseFile unresolved;

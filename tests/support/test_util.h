@@ -169,6 +169,17 @@ inline Status mesh_to_bytes(Arena& arena, const Mesh& mesh, StlFormat format,
   return s;
 }
 
+// A sink that appends what it is given to *out.
+inline ByteSink string_sink(std::string* out) {
+  ByteSink sink;
+  sink.user = out;
+  sink.write = [](void* user, const uint8_t* data, size_t n) {
+    static_cast<std::string*>(user)->append(reinterpret_cast<const char*>(data), n);
+    return true;
+  };
+  return sink;
+}
+
 inline std::string sha256_hex(const void* data, size_t n) {
   Sha256 sha;
   sha.update(data, n);
