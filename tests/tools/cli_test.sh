@@ -261,6 +261,34 @@ check "the plan fixture's job: the STLs' triangles and volumes, on the tray 5 mm
   python3 "$(dirname "$0")/check_3mf.py" "$work/plan-fixture/job.3mf" 2 255 252 5 \
   --height 200 --stl "$work/plan-fixture/intermediate.stl" "$work/plan-fixture/final.stl"
 check "the plan fixture's report names each splint's label" -- grep -q '"intermediate":{.*"label_text":"INT P1".*"final":{.*"label_text":"FIN P1"' "$work/plan-fixture/report.json"
+# The same plan with each splint's own picks (the plan's "picks"): the paper-scale picks for
+# the intermediate splint, the same picks moved with the jaws (the upper by the maxilla's move,
+# the lower by the mandible's) for the final one.
+python3 - "$fixtures/cases/plan.json" "$fixtures/cases/paper_scale.json" "$work/plan-picks.json" <<'PY'
+import json, sys
+plan, paper = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
+def moved(picks, m):
+    out = []
+    for p in picks:
+        x, y, z = p["position"]
+        q = dict(p)
+        q["position"] = [m[4 * i] * x + m[4 * i + 1] * y + m[4 * i + 2] * z + m[4 * i + 3] for i in range(3)]
+        out.append(q)
+    return out
+plan["base"] = {"spacing_mm": 0.5, "occlusal_normal": paper["base"]["occlusal_normal"]}
+up, low = paper["base"]["upper"], paper["base"]["lower"]
+plan["plan"]["picks"] = {"intermediate": {"upper": up, "lower": low},
+                         "final": {"upper": moved(up, plan["plan"]["maxilla"]),
+                                   "lower": moved(low, plan["plan"]["mandible"])}}
+json.dump(plan, open(sys.argv[3], "w"), indent=1)
+plan["base"]["upper"], plan["base"]["lower"] = up, low  # two sources of picks: refused
+json.dump(plan, open(sys.argv[3].replace(".json", "-both.json"), "w"), indent=1)
+PY
+expect_exit 0 "design a plan whose splints have their own picks" -- "$tool" design "$work/plan-picks.json" -o "$work/plan-picks"
+expect_exit 0 "its final splint is printable" -- "$tool" check "$work/plan-picks/final.stl"
+check "its report gives each splint's picks" -- grep -q '"plan":{.*"picks":{"intermediate":{"upper":\[.*"final":{"upper":\[' "$work/plan-picks/report.json"
+expect_exit 1 "a plan with its own picks and the base's too" -- "$tool" design "$work/plan-picks-both.json" -o "$work/plan-both"
+check "the base's picks are named" -- grep -q 'leave "upper" out of "base"' "$work/err"
 
 expect_exit 0 "base for the Boolean" -- "$tool" base "$fixtures/cases/paper_scale.json" -o "$work/base.stl"
 expect_exit 2 "boolean without an operation" -- "$tool" boolean "$work/base.stl" "$work/maxilla.stl" -o "$work/cut.stl"
