@@ -112,6 +112,11 @@ struct Aabb {
                                 (p.y < lo.y ? 4u : 0u) | (p.y > hi.y ? 8u : 0u) |
                                 (p.z < lo.z ? 16u : 0u) | (p.z > hi.z ? 32u : 0u));
   }
+  // The triangle a, b, c lies wholly beyond one side of the box (its corners share an outcode
+  // bit): it cannot meet the box. A NaN corner is beyond no side.
+  bool beyond_one_side(const Vec3& a, const Vec3& b, const Vec3& c) const {
+    return (outcode(a) & outcode(b) & outcode(c)) != 0;
+  }
 };
 
 // ---------------------------------------------------------------------------------------------

@@ -48,10 +48,12 @@ struct MemorySink {
 };
 ByteSink memory_sink(MemorySink* state, const char* name = "memory");
 
-// A sink that only hashes (SHA-256) and counts what passes through. Not seekable.
+// A sink that hashes (SHA-256) and counts what passes through, and passes it on to `next` when
+// that has a write (else it only hashes). Not seekable.
 struct HashSink {
   Sha256 sha;
   uint64_t size = 0;
+  ByteSink next;
 };
 ByteSink hash_sink(HashSink* state);
 

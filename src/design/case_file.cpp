@@ -379,7 +379,6 @@ Status parse_auto(const Reader& r, const JsonValue& a, CaseFile* out) {
   return Status::ok();
 }
 
-// The base ("base": the occlusal normal, spacing, corners, default line lengths, the picks).
 // An "upper" and a "lower" pick list that pair up, from object `o` (the base, or one splint of
 // the plan's "picks", named by `where` when a list is missing).
 Status parse_pick_pair(const Reader& r, const JsonValue& o, const char* where, double inner_default,
@@ -440,6 +439,8 @@ Status parse_plan_picks(const Reader& r, const JsonValue& base, const JsonValue&
   return Status::ok();
 }
 
+// The base ("base": the occlusal normal, spacing, corners, default line lengths, the picks, or
+// the plan's picks for each splint).
 Status parse_base(const Reader& r, const JsonValue& root, CaseFile* out) {
   const JsonDocument& doc = *r.doc;
   const JsonValue* base = doc.member(root, "base");

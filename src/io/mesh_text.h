@@ -285,10 +285,10 @@ struct MeshBuilder {
     size_t kept = 0;
     for (size_t t = 0; t < mesh.triangles.size(); ++t) {
       const Triangle& tri = mesh.triangles[t];
-      const uint32_t all = keep.outcode(mesh.vertices[tri.v[0]]) &
-                           keep.outcode(mesh.vertices[tri.v[1]]) &
-                           keep.outcode(mesh.vertices[tri.v[2]]);
-      if (all == 0) mesh.triangles[kept++] = tri;
+      if (!keep.beyond_one_side(mesh.vertices[tri.v[0]], mesh.vertices[tri.v[1]],
+                                mesh.vertices[tri.v[2]])) {
+        mesh.triangles[kept++] = tri;
+      }
     }
     mesh.triangles.shrink_size(kept);
   }

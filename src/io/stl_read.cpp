@@ -121,18 +121,11 @@ Status binary_corner_error(const uint8_t* corners, const StlReadOptions& options
   return Status::ok();  // not reached: some corner is over the limit
 }
 
-// Fills `in` for the record of triangle t (of `declared`), or says where the file ends.
-// The three corners of a binary record (36 bytes of float32) all lie strictly beyond one side
-// of `keep` (StlReadOptions::keep). A NaN corner is beyond none (its error comes after).
-bool beyond_one_side(const Aabb& keep, const uint8_t* corners) {
-  uint32_t all = 63;
-  for (int k = 0; k < 3; ++k) {
-    const uint8_t* c = corners + 12 * k;
-    const Vec3 p(static_cast<double>(load_f32(c)), static_cast<double>(load_f32(c + 4)),
-                 static_cast<double>(load_f32(c + 8)));
-    all &= keep.outcode(p);
-  }
-  return all != 0;
+// Corner k of a binary record's corners (36 bytes of float32), exactly.
+Vec3 record_corner(const uint8_t* corners, int k) {
+  const uint8_t* c = corners + 12 * k;
+  return Vec3(static_cast<double>(load_f32(c)), static_cast<double>(load_f32(c + 4)),
+              static_cast<double>(load_f32(c + 8)));
 }
 
 // Every coordinate of a record's corners within the limit (abs_limit_bits): finite, in range.
@@ -142,6 +135,7 @@ bool corners_within(const uint8_t* corners, uint32_t limit) {
   return (over & 0x80000000u) == 0;
 }
 
+// Fills `in` for the record of triangle t (of `declared`), or says where the file ends.
 Status fill_record(Reader& in, uint64_t t, uint64_t declared) {
   SPLINTCORE_RETURN_IF_ERROR(in.fill(kBinaryRecordBytes));
   if (in.available() >= kBinaryRecordBytes) return Status::ok();
@@ -555,7 +549,8 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
         __builtin_prefetch(welder.first_slot(h[2]));
       }
       const uint8_t* corners = record + 12;
-      if (crop && beyond_one_side(options.keep, corners)) {
+      if (crop && options.keep.beyond_one_side(record_corner(corners, 0), record_corner(corners, 1),
+                                               record_corner(corners, 2))) {
         // Left out: its corners are still checked (the same errors as without the crop).
         if (!corners_within(corners, limit)) {
           return binary_corner_error(corners, options, t + i, in.offset() + kBinaryRecordBytes * i);
@@ -606,14 +601,14 @@ Status read_then_weld(const Context& ctx, const ByteSource& source, const StlRea
   ArenaArray<SoupTriangle> soup(&arena);
   SPLINTCORE_RETURN_IF_ERROR(read_stl(ctx, source, options, &soup, info));
   if (!options.keep.empty()) {  // the triangles left out, the others kept in their order
+    auto corner = [](const float* p) {
+      return Vec3(static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2]));
+    };
     size_t kept = 0;
     for (const SoupTriangle& t : soup) {
-      uint32_t all = 63;
-      for (const float* p : t.p) {
-        all &= options.keep.outcode(
-            Vec3(static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2])));
+      if (!options.keep.beyond_one_side(corner(t.p[0]), corner(t.p[1]), corner(t.p[2]))) {
+        soup[kept++] = t;
       }
-      if (all == 0) soup[kept++] = t;
     }
     soup.shrink_size(kept);
   }

@@ -34,7 +34,7 @@ bool hash_write(void* user, const uint8_t* data, size_t bytes) {
   HashSink* s = static_cast<HashSink*>(user);
   s->sha.update(data, bytes);
   s->size += bytes;
-  return true;
+  return s->next.write == nullptr || s->next.write(s->next.user, data, bytes);
 }
 }  // namespace
 
@@ -60,7 +60,7 @@ ByteSink hash_sink(HashSink* state) {
   ByteSink sink;
   sink.write = hash_write;
   sink.user = state;
-  sink.name = "sha256";
+  sink.name = state->next.name != nullptr ? state->next.name : "sha256";
   return sink;
 }
 

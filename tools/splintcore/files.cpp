@@ -223,33 +223,14 @@ Status write_bytes_atomically(const std::string& path, const std::string& bytes)
   return write_bytes_atomically(path, bytes.data(), bytes.size());
 }
 
-namespace {
-
-// A sink that hashes what it forwards.
-struct HashingSink {
-  ByteSink inner;
-  Sha256 sha;
-  static bool write(void* user, const uint8_t* data, size_t bytes) {
-    HashingSink* h = static_cast<HashingSink*>(user);
-    h->sha.update(data, bytes);
-    return h->inner.write(h->inner.user, data, bytes);
-  }
-};
-
-}  // namespace
-
 Status write_hashed_atomically(const std::string& path,
                                const std::function<Status(const ByteSink&)>& write,
                                std::string* sha256) {
   AtomicFile file;
   SPLINTCORE_RETURN_IF_ERROR(file.open(path.c_str()));
-  HashingSink h;
-  h.inner = file.sink();
-  ByteSink sink;
-  sink.write = &HashingSink::write;
-  sink.user = &h;
-  sink.name = h.inner.name;
-  SPLINTCORE_RETURN_IF_ERROR(write(sink));  // ~AtomicFile cleans up
+  HashSink h;  // hashes what it passes on to the file
+  h.next = file.sink();
+  SPLINTCORE_RETURN_IF_ERROR(write(hash_sink(&h)));  // ~AtomicFile cleans up
   SPLINTCORE_RETURN_IF_ERROR(file.commit());
   uint8_t digest[32];
   h.sha.finish(digest);

@@ -113,7 +113,7 @@ const char kBooleanUsage[] =
     "it moves each in order: e.g. 0,0,0 then 0,0,-2 opens the bite; moved vertices are rounded\n"
     "to float32, as a moved jaw's STL would hold them). For --difference and --intersection\n"
     "B is read cropped to where it can matter (A's box, with room for the nudges): the\n"
-    "triangles beyond it are never welded or held (--json's b_triangles counts those kept),\n"
+    "triangles beyond it are never welded or held (--json's b_triangles_kept counts the rest),\n"
     "the same solid as with B whole; a refusal is said as B whole says it. Both are split along\n"
     "their intersection with exact predicates, re-triangulated, classified and assembled; the\n"
     "jaw's own triangles form the imprint, its vertices copied bit for bit. The result is\n"

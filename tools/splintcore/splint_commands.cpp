@@ -113,27 +113,31 @@ std::vector<OptionSpec> boolean_options(BooleanArgs* a) {
   };
 }
 
+// The move of B file f (1..): its --translate-b (one for every file, or one per file).
+Vec3 b_move(const BooleanArgs& a, size_t f) {
+  const std::vector<Vec3>& moves = a.translate_b;
+  return moves.empty() ? Vec3{} : moves[moves.size() == 1 ? 0 : f - 1];
+}
+
 // B: the shells of every file after A, in order, in one mesh, each file moved by its
-// --translate-b. The files are read into the arena, in order (read_mesh_files: in tasks with
-// more than one thread); then B is made where
-// they lie: the triangles (renumbered) go to a scratch copy above them, the vertices move down
-// into one array, the triangles follow them. Peak: the files' meshes and B's triangles once
-// more (appending file after file to two growing arrays moved them up again and again: four
-// times B on the real dentition's 31 files).
-// B read file by file, each cropped as it is read to `region` (boolean_region: where B matters
-// to the Boolean; empty: everything) in the file's own frame (before its --translate-b), with a
-// micrometre to spare for the move's rounding: the triangles beyond it are never welded or held
-// (issue 29: most of the real dentition's 887k triangles are nowhere near the splint).
+// --translate-b. The files are read into the arena one after the other, each cropped as it is
+// read to `region` (boolean_region: where B matters to the Boolean; empty: everything) in the
+// file's own frame (before its move), with a micrometre to spare for the move's rounding: the
+// triangles beyond it are never welded or held (issue 29: most of the real dentition's 887k
+// triangles are nowhere near the splint). Then B is made where they lie: the triangles
+// (renumbered) go to a scratch copy above them, the vertices move down into one array, the
+// triangles follow them. Peak: the files' meshes and B's triangles once more (appending file
+// after file to two growing arrays moved them up again and again: four times B on the real
+// dentition's 31 files). *file_triangles: the files' triangles, cropped or not.
 Status read_b(Run& run, const BooleanArgs& a, const Aabb& region, Mesh* b,
               uint64_t* file_triangles) {
   Arena& arena = run.arena;
   const std::vector<const char*>& files = a.common.positional;
   const Arena::Marker start = arena.mark();
-  const std::vector<Vec3>& moves = a.translate_b;
   std::vector<Mesh> parts(files.size() - 1, Mesh(&arena));
   *file_triangles = 0;
   for (size_t f = 1; f < files.size(); ++f) {
-    const Vec3 d = moves.empty() ? Vec3{} : moves[moves.size() == 1 ? 0 : f - 1];
+    const Vec3 d = b_move(a, f);
     Aabb keep;
     if (!region.empty()) {
       const Vec3 spare{1e-3, 1e-3, 1e-3};
@@ -152,7 +156,7 @@ Status read_b(Run& run, const BooleanArgs& a, const Aabb& region, Mesh* b,
     if (total_v >= (uint64_t{1} << 31) || total_t >= (uint64_t{1} << 31)) {
       return Status::error(StatusCode::kLimitExceeded, "B is too large").in_file(files[f]);
     }
-    const Vec3 d = moves.empty() ? Vec3{} : moves[moves.size() == 1 ? 0 : f - 1];
+    const Vec3 d = b_move(a, f);
     // A moved jaw is rounded to float32, as its own STL would hold it: the Boolean keeps B's
     // vertices bit for bit, so they must be what the output file can store.
     for (Vec3& v : part.vertices) {
@@ -465,7 +469,9 @@ int run_boolean(const Command& command, int argc, char** argv) {
   Status s = read_mesh_file(run.ctx, a.common.positional[0], kNoInputLimit, false, &ma, nullptr);
   if (!s.is_ok()) return run.reject(s);
   const Arena::Marker b_start = run.arena.mark();
-  const Aabb region = boolean_region(ma, bo);
+  // Where B matters; the union's is everywhere (infinite bounds): B is then read whole.
+  Aabb region = boolean_region(ma, bo);
+  if (!is_finite(region.lo) || !is_finite(region.hi)) region = Aabb{};
   BooleanResult r;
   s = read_b(run, a, region, &mb, &r.b_triangles);
   if (!s.is_ok()) return run.reject(s);
