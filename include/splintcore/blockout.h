@@ -177,6 +177,60 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
                          Mesh* out, SweepStats* stats = nullptr);
 
 // ---------------------------------------------------------------------------------------------
+// The swept volume's boundary exactly, from the jaw's own triangles (issue 29), for a region.
+//
+// Along d the swept volume S of a closed jaw J is the union of the prisms T + t d (t >= 0) of
+// J's front triangles T (those facing against d): a point p is in S when the half-line from p
+// against d meets J, and the last front triangle it crosses on its way out of J lies below p.
+// So S's boundary near a region is those front triangles, exact (the jaw's own vertices, bit
+// for bit), and a wall along d hanging from each of their edges whose other triangle is not a
+// front triangle (the silhouettes along d, where the front side turns away), with no voxels
+// and no inset. Front triangles whose prism cannot reach the region (all corners strictly
+// beyond a side of it that moving along d never comes back to) are left out; the walls end
+// beyond the region. What comes out is an open surface (one shell per connected patch of front
+// triangles, with its walls): its border (the walls' tops and the edges where triangles were
+// left out) lies outside the region, which is what mesh_boolean takes of an open B whose
+// border lies outside A (pass boolean_region(A) as the region). Patches of front triangles
+// that overlap along d (adjacent teeth, a cusp over a fold) are separate shells that overlap,
+// which mesh_boolean unites (its groups). For an open jaw (a scan) this is the sweep of its
+// front side, which is the scan's sweep wherever the scan's border lies beyond the region.
+//
+// EXPERIMENTAL: each shell must be a valid open surface, which holds where a patch of front
+// triangles is a height field along d (no two of its triangles overlap seen along d). Where it
+// folds over itself (a small back-facing pocket inside a front region, or the zigzag of a
+// tessellated silhouette: measured on the real dentition, 10 of the maxilla's 17 shells and 7
+// of the mandible's 17 cross themselves; on the phantom's mandible all 14 do, its maxilla's none)
+// a wall crosses the front triangles above it, and the Boolean refuses (blockout with
+// BlockoutOptions::exact says so). Resolving that (splitting such patches into shells that
+// the Boolean's groups unite, or exact hidden-surface removal) is what is left before the
+// design can use it. Where the front triangles around a vertex form two fans or more, their
+// walls share the edge above it (ExactSweepStats::pinched_vertices): more than two triangles
+// on one edge.
+struct ExactSweepStats {
+  Vec3 direction{};               // d, normalised
+  uint64_t front_triangles = 0;   // facing against d (exact sign of the normal along d)
+  uint64_t kept_triangles = 0;    // front triangles whose prism can reach the region
+  uint64_t walls = 0;             // edges with a wall (two triangles each)
+  uint64_t top_vertices = 0;      // the walls' upper corners (rounded to float32)
+  uint64_t pinched_vertices = 0;  // vertices with more than two walls
+};
+
+// Arena bytes sweep_exact_mesh takes at most for a jaw of these sizes (output included).
+uint64_t sweep_exact_bound(uint64_t vertex_count, uint64_t triangle_count);
+
+// The open surface described above into `out` (empty): the kept front triangles (the jaw's
+// vertices, renumbered in input order, with its orientation) then two triangles per wall
+// edge (a, b) of a kept triangle: (b, a, a') and (b, a', b'), where a' is a moved along d to
+// beyond the region's face that d points through most (by its largest extent, at least
+// 1 mm, past it) and rounded to float32. Deterministic: input order throughout. Errors:
+// kInvalidArgument (out not empty, a zero or non-finite direction, an empty or non-finite
+// region), kInvalidMesh (a vertex id out of range: the triangle), kNonFinite (a vertex),
+// kLimitExceeded (a wall's top beyond float32), kArenaExhausted. Arena: sweep_exact_bound;
+// only `out` stays.
+Status sweep_exact_mesh(const Context& ctx, const Mesh& jaw, const Vec3& direction,
+                        const Aabb& region, Mesh* out, ExactSweepStats* stats = nullptr);
+
+// ---------------------------------------------------------------------------------------------
 // Interference elimination: the splint minus the jaws' swept volume.
 
 struct BlockoutOptions {
@@ -191,10 +245,18 @@ struct BlockoutOptions {
   // the jaw, outside the splint, and is left out). false: the whole swept surface in the
   // splint's box (for comparison). Not with decimation (decimate_error > 0).
   bool filter_near_splint = true;
+  // EXPERIMENTAL (see sweep_exact_mesh: jaws whose front side folds over are refused). The
+  // swept volume's exact boundary (sweep_exact_mesh over boolean_region(splint)) instead of
+  // the sampled one: no voxels, no inset, no retries; sweep.direction is used, the other sweep
+  // options are not (an offset is refused: a spacer is the sampled sweep's). One jaw with
+  // triangles at a time (jaws without triangles are passed over). The splint may be the base
+  // itself: the exact sweep holds the jaw, its front triangles are the imprint.
+  bool exact = false;
 };
 
 struct BlockoutStats {
   SweepStats sweep;
+  ExactSweepStats exact;         // BlockoutOptions::exact
   uint64_t swept_triangles = 0;  // the swept volume's mesh inside the splint's bounds
   BooleanStats boolean;
   uint32_t attempts = 0;   // 1 + the retries with a deeper inset (or larger offset)

@@ -194,6 +194,11 @@ double incircle(double ax, double ay, double bx, double by, double cx, double cy
 // < 0 above, 0 when coplanar. Equals det[a - d; b - d; c - d] in exact arithmetic.
 double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
 
+// > 0 when the triangle a, b, c (counter-clockwise seen from outside) faces along the direction
+// d, < 0 when it faces against it, 0 when d lies in its plane: ((b - a) x (c - a)) . d in exact
+// arithmetic (d is a direction, not a point; the same range as orient3d).
+double normal_dot(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
+
 inline int sign_of(double v) { return (v > 0) - (v < 0); }
 
 // True when a, b, c are exactly collinear (including coincident points): all three

@@ -276,6 +276,58 @@ Status sweep_near_splint(const Context& ctx, const Mesh& splint, const Aabb& bou
   return Status::ok();
 }
 
+// BlockoutOptions::exact: the splint minus the exact swept boundary of the one jaw with
+// triangles (the others only anchor the sampled sweep's lattice).
+Status blockout_exact(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
+                      const BlockoutOptions& options, Mesh* result, BlockoutStats* st) {
+  if (options.sweep.offset > 0) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "blockout: the exact sweep has no offset (a spacer is the sampled one's)");
+  }
+  const Mesh* jaw = nullptr;
+  for (const Mesh& m : jaws) {
+    if (m.triangles.empty()) continue;
+    if (jaw != nullptr) {
+      return make_error(StatusCode::kInvalidArgument,
+                        "blockout: the exact sweep takes one jaw with triangles at a time");
+    }
+    jaw = &m;
+  }
+  BooleanOptions bo = options.boolean;
+  bo.op = BooleanOp::kDifference;
+  bo.b_border_outside_a = true;  // the walls end beyond the region, left-out parts lie beyond it
+  st->attempts = 1;
+  ArenaScope scope(*ctx.arena);
+  Mesh swept;
+  if (jaw != nullptr) {
+    SPLINTCORE_RETURN_IF_ERROR(sweep_exact_mesh(ctx, *jaw, options.sweep.direction,
+                                                boolean_region(splint, bo), &swept, &st->exact));
+  }
+  st->swept_triangles = swept.triangles.size();
+  Mesh out;
+  if (swept.triangles.empty()) {
+    out.bind(ctx.arena);
+    if (!out.triangles.resize(splint.triangles.size()) ||
+        !out.vertices.resize(splint.vertices.size())) {
+      return ctx.arena->exhausted_status();
+    }
+    for (size_t i = 0; i < splint.triangles.size(); ++i) out.triangles[i] = splint.triangles[i];
+    for (size_t i = 0; i < splint.vertices.size(); ++i) out.vertices[i] = splint.vertices[i];
+  } else {
+    Status s = mesh_boolean(ctx, splint, swept, bo, &out, &st->boolean);
+    if (!s.is_ok() && s.code() != StatusCode::kArenaExhausted &&
+        s.code() != StatusCode::kCancelled) {
+      s.append(
+          " (exact sweep: where the jaw's front triangles fold over along the direction, "
+          "their walls cross them, which the Boolean cannot take; the voxel sweep can)");
+    }
+    SPLINTCORE_RETURN_IF_ERROR(s);
+  }
+  move_mesh_down(*ctx.arena, scope.start(), out, result);
+  scope.commit();
+  return Status::ok();
+}
+
 }  // namespace
 
 Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
@@ -296,6 +348,18 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
     return make_error(StatusCode::kInvalidArgument, "blockout: the splint has no vertices");
   }
   ArenaScope scope(arena);  // on an error the arena is as it was
+  if (options.exact) {
+    const Status e = blockout_exact(ctx, splint, jaws, options, out, st);
+    if (e.is_ok()) {
+      scope.commit();
+      return e;
+    }
+    out->bind(&arena);
+    if (e.code() == StatusCode::kArenaExhausted || e.code() == StatusCode::kCancelled) return e;
+    Status named = make_error(e.code(), "blockout: ", e.message());
+    if (e.index() != kNoPosition) named.at_index(e.index());
+    return named;
+  }
   const int kAttempts = 4;
   Mesh result;
   Status s;

@@ -513,6 +513,33 @@ double incircle_adapt(double ax, double ay, double bx, double by, double cx, dou
   return incircle_exact(ax, ay, bx, by, cx, cy, dx, dy);
 }
 
+// ((b - a) x (c - a)) . d exactly, as a x b + b x c + c x a (each 2x2 minor of input
+// coordinates is exact as four components) scaled by d's coordinates.
+double normal_dot_exact(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const double pa[3] = {a.x, a.y, a.z}, pb[3] = {b.x, b.y, b.z}, pc[3] = {c.x, c.y, c.z};
+  const double pd[3] = {d.x, d.y, d.z};
+  double sum[72];
+  int sum_len = 0;
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3, k = (i + 2) % 3;
+    double ab[4], bc[4], ca[4], abbc[8], n[12], scaled[24], next[72];
+    two_by_two(pa[j], pb[k], pa[k], pb[j], ab);
+    two_by_two(pb[j], pc[k], pb[k], pc[j], bc);
+    two_by_two(pc[j], pa[k], pc[k], pa[j], ca);
+    const int abbc_len = fast_expansion_sum_zeroelim(4, ab, 4, bc, abbc);
+    const int n_len = fast_expansion_sum_zeroelim(abbc_len, abbc, 4, ca, n);
+    const int scaled_len = scale_expansion_zeroelim(n_len, n, pd[i], scaled);
+    if (sum_len == 0) {
+      for (int m = 0; m < scaled_len; ++m) sum[m] = scaled[m];
+      sum_len = scaled_len;
+      continue;
+    }
+    sum_len = fast_expansion_sum_zeroelim(sum_len, sum, scaled_len, scaled, next);
+    for (int m = 0; m < sum_len; ++m) sum[m] = next[m];
+  }
+  return sum[sum_len - 1];
+}
+
 }  // namespace
 
 double orient2d(double ax, double ay, double bx, double by, double cx, double cy) {
@@ -569,6 +596,22 @@ bool collinear3d(const Vec3& a, const Vec3& b, const Vec3& c) {
   return orient2d(a.x, a.y, b.x, b.y, c.x, c.y) == 0.0 &&
          orient2d(a.y, a.z, b.y, b.z, c.y, c.z) == 0.0 &&
          orient2d(a.z, a.x, b.z, b.x, c.z, c.x) == 0.0;
+}
+
+double normal_dot(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z;
+  const double vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
+  const double uyvz = uy * vz, uzvy = uz * vy, uzvx = uz * vx;
+  const double uxvz = ux * vz, uxvy = ux * vy, uyvx = uy * vx;
+  const double det = d.x * (uyvz - uzvy) + d.y * (uzvx - uxvz) + d.z * (uxvy - uyvx);
+  // orient3d's bound: the same products of rounded differences, the third row exact here.
+  const double permanent = (magnitude(uyvz) + magnitude(uzvy)) * magnitude(d.x) +
+                           (magnitude(uzvx) + magnitude(uxvz)) * magnitude(d.y) +
+                           (magnitude(uxvy) + magnitude(uyvx)) * magnitude(d.z);
+  const double errbound = kO3dErrBoundA * permanent;
+  if (det > errbound || -det > errbound) return det;
+  if (permanent == 0.0) return 0.0;
+  return normal_dot_exact(a, b, c, d);
 }
 
 }  // namespace splintcore

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,7 @@
 #include "splintcore/distance.h"
 #include "splintcore/io.h"
 #include "splintcore/platform.h"
+#include "support/phantom_jaws.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -762,6 +764,238 @@ TEST(Blockout, IndependentCheckFindsTheUndercutBeforeAndNoneAfter) {
     EXPECT_GT(std::sqrt(p.x * p.x + p.y * p.y), 5.0 - o.sweep.inset - 0.03) << p.x << " " << p.y;
   }
   EXPECT_EQ(after.lines_through_jaw, before.lines_through_jaw);
+}
+
+// The exact sweep (sweep_exact_mesh) of the big-end-up frustum along its axis: its one front
+// face is the top cap (facing +z, against d = -z), its silhouette the rim; the surface is the
+// cap and a wall down from each rim edge to beyond the region, open only at the walls' ends.
+TEST(ExactSweep, BigEndUpConeGivesItsCapAndWallsOpenOnlyBeyondTheRegion) {
+  TestArena ta(size_t{1} << 28);
+  Context ctx(&ta.arena);
+  Mesh cone(&ta.arena);
+  const uint32_t n = 360;
+  frustum(&cone, 3.0, 5.0, 0.0, 8.0, n);
+  for (Vec3& p : cone.vertices) ASSERT_TRUE(round_to_float32(&p));
+  const Aabb region{Vec3{-7, -7, 4}, Vec3{7, 7, 10}};
+  Mesh swept;
+  ExactSweepStats st;
+  SPLINTCORE_ASSERT_OK(sweep_exact_mesh(ctx, cone, Vec3{0, 0, -2}, region, &swept, &st));
+  EXPECT_EQ(st.front_triangles, n);  // the top cap's fan
+  EXPECT_EQ(st.kept_triangles, n);
+  EXPECT_EQ(st.walls, n);
+  EXPECT_EQ(st.top_vertices, n);
+  EXPECT_EQ(st.pinched_vertices, 0u);
+  EXPECT_EQ(st.direction.z, -1.0);
+  ASSERT_EQ(swept.triangles.size(), 3u * n);
+  ASSERT_EQ(swept.vertices.size(), 2u * n + 1);
+  // Every edge twice, once each way, but the walls' ends, whose corners lie beyond the region.
+  std::vector<std::array<uint32_t, 2>> edges;
+  for (const Triangle& t : swept.triangles) {
+    for (int k = 0; k < 3; ++k) edges.push_back({t.v[k], t.v[(k + 1) % 3]});
+  }
+  std::sort(edges.begin(), edges.end());
+  size_t border = 0;
+  for (const auto& e : edges) {
+    EXPECT_EQ(std::count(edges.begin(), edges.end(), e), 1);
+    if (std::binary_search(edges.begin(), edges.end(), std::array<uint32_t, 2>{e[1], e[0]})) {
+      continue;
+    }
+    ++border;
+    for (uint32_t v : e) EXPECT_LT(swept.vertices[v].z, region.lo.z - 1) << v;
+  }
+  EXPECT_EQ(border, n);
+  // The cap's vertices are the cone's, bit for bit; the tops sit straight below them.
+  for (size_t v = 0; v < swept.vertices.size(); ++v) {
+    EXPECT_TRUE(is_float32_exact(swept.vertices[v])) << v;
+  }
+  SelfIntersectionReport si;
+  SPLINTCORE_ASSERT_OK(find_self_intersections(ctx, swept, 0, &si));
+  EXPECT_FALSE(si.self_intersecting());
+}
+
+// The exact blockout of that cone from a box (the splint may be the base itself: the sweep
+// holds the jaw): the cylinder below the rim comes out exactly, the volume is the box's less
+// the rim polygon's area times the box's height below the cap, and the independent line check finds
+// no line locked, with no inset (the voxel sweep leaves its inset's worth).
+TEST(ExactSweep, BlockoutOfTheConeIsTheBoxLessTheRimsCylinderAndUnlocked) {
+  TestArena ta(size_t{1} << 30);
+  Context ctx(&ta.arena);
+  Mesh cone(&ta.arena);
+  const uint32_t n = 360;
+  frustum(&cone, 3.0, 5.0, 0.0, 8.0, n);
+  for (Vec3& p : cone.vertices) ASSERT_TRUE(round_to_float32(&p));
+  const float lo[3] = {-7, -7, 4}, hi[3] = {7, 7, 10};
+  Mesh box = box_mesh(&ta.arena, lo, hi);
+  BlockoutOptions o;
+  o.exact = true;
+  o.sweep.direction = Vec3{0, 0, -1};
+  Mesh blocked;
+  BlockoutStats st;
+  SPLINTCORE_ASSERT_OK(blockout(ctx, box, Span<const Mesh>(&cone, 1), o, &blocked, &st));
+  EXPECT_EQ(st.swept_triangles, 3u * n);
+  EXPECT_EQ(st.attempts, 1u);
+  MeshReport report;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, blocked, &report));
+  EXPECT_TRUE(report.closed() && report.edge_manifold() && report.outward());
+  EXPECT_TRUE(st.boolean.self_intersection_checked);
+  // The rim polygon (the cone's top ring, float32) by the shoelace formula.
+  double area = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const Vec3& p = cone.vertices[n + i];
+    const Vec3& q = cone.vertices[n + (i + 1) % n];
+    area += p.x * q.y - q.x * p.y;
+  }
+  area /= 2;
+  // The cone never rises above its cap (z = 8): the box keeps its top 2 mm.
+  const double expected = 14.0 * 14.0 * 6.0 - area * 4.0;
+  std::printf(
+      "[ figures  ] exact blockout of the cone: volume %.9f, expected %.9f; %zu "
+      "triangles\n",
+      mesh_volume(blocked), expected, blocked.triangles.size());
+  EXPECT_NEAR(mesh_volume(blocked), expected, 1e-9 * expected);
+  const Vec3 d{0, 0, -1}, u{1, 0, 0}, v{0, 1, 0}, c{0, 0, 5};
+  const LockReport after = lock_report(ta.arena, blocked, cone, d, u, v, c, 6.0, 60, 1e-6);
+  EXPECT_GT(after.lines_through_jaw, 1000u);
+  EXPECT_EQ(after.locked_lines, 0u) << after.longest;
+}
+
+// Front triangles whose prism cannot reach the region are left out, with no wall where they
+// were (the shell is open there, beyond the region); a direction along which the region lies
+// ahead keeps them. A tilted direction still gives a valid open surface.
+TEST(ExactSweep, TrianglesThatCannotReachTheRegionAreLeftOut) {
+  TestArena ta(size_t{1} << 28);
+  Context ctx(&ta.arena);
+  // A strip of 20 unit squares along x at z = 0, facing down (each a box's bottom face).
+  Mesh fine(&ta.arena);
+  {
+    std::vector<SoupTriangle> soup;
+    for (int i = 0; i < 20; ++i) {
+      const float a[3] = {static_cast<float>(i), 0, 0}, b[3] = {static_cast<float>(i + 1), 2, 2};
+      for (const SoupTriangle& t : shapes::box(a, b)) {
+        const bool bottom = t.p[0][2] == 0 && t.p[1][2] == 0 && t.p[2][2] == 0;
+        if (bottom) soup.push_back(t);
+      }
+    }
+    SPLINTCORE_ASSERT_OK(
+        weld_exact(ctx, Span<const SoupTriangle>(soup.data(), soup.size()), &fine));
+  }
+  const Aabb region{Vec3{-1, -1, 1}, Vec3{10.5f, 3, 5}};
+  Mesh up;
+  ExactSweepStats st;
+  SPLINTCORE_ASSERT_OK(sweep_exact_mesh(ctx, fine, Vec3{0, 0, 1}, region, &up, &st));
+  EXPECT_EQ(st.front_triangles, 40u);
+  EXPECT_EQ(st.kept_triangles, 22u);  // the slabs from x = 0 to 11 (the last one reaches 10.5)
+  EXPECT_EQ(st.walls, 2u * 11 + 1);   // the strip's sides and its end at x = 0; none at x = 11
+  for (const Triangle& t : up.triangles) {
+    for (uint32_t v : t.v) EXPECT_LE(up.vertices[v].x, 11.0);
+  }
+  // Along +x the region lies ahead of every slab beyond it: all are kept.
+  Mesh along;
+  ExactSweepStats st2;
+  SPLINTCORE_ASSERT_OK(sweep_exact_mesh(ctx, fine, Vec3{-1, 0, 1}, region, &along, &st2));
+  EXPECT_EQ(st2.kept_triangles, 40u);
+  SelfIntersectionReport si;
+  SPLINTCORE_ASSERT_OK(find_self_intersections(ctx, along, 0, &si));
+  EXPECT_FALSE(si.self_intersecting());
+}
+
+// The phantom's jaws at 20k triangles under a slab where the splint would be: the maxilla's
+// front side is a height field along d, its exact blockout a valid solid that the independent
+// line check finds unlocked; the mandible's folds over (its tessellated silhouettes zigzag),
+// its walls cross its front triangles, and the exact blockout refuses it, saying so.
+TEST(ExactSweep, PhantomMaxillaIsUnlockedAndTheFoldedMandibleIsRefused) {
+  TestArena ta(size_t{1} << 30);
+  Context ctx(&ta.arena);
+  Mesh jaws[2];
+  ASSERT_TRUE(test::phantom_jaw_meshes(ta.arena, 20000, jaws));
+  const float lo[3] = {-28.5f, -8, -1.6f}, hi[3] = {28.5f, 45.5f, 1.6f};
+  Mesh slab = box_mesh(&ta.arena, lo, hi);
+  BlockoutOptions o;
+  o.exact = true;
+  o.sweep.direction = Vec3{0, 0, 1};
+  Mesh blocked;
+  BlockoutStats st;
+  SPLINTCORE_ASSERT_OK(blockout(ctx, slab, Span<const Mesh>(&jaws[0], 1), o, &blocked, &st));
+  EXPECT_EQ(st.exact.pinched_vertices, 0u);
+  EXPECT_GT(st.exact.walls, 100u);
+  MeshReport report;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, blocked, &report));
+  EXPECT_TRUE(require_valid_solid(report).is_ok());
+  const Vec3 d{0, 0, 1}, u{1, 0, 0}, v{0, 1, 0}, c{0, 18, 0};
+  const LockReport lock = lock_report(ta.arena, blocked, jaws[0], d, u, v, c, 27.0, 120, 1e-4);
+  std::printf(
+      "[ figures  ] exact blockout of the phantom maxilla: %zu triangles (%llu swept), "
+      "%zu lines through the jaw, %zu locked (longest %.2g mm)\n",
+      blocked.triangles.size(), static_cast<unsigned long long>(st.swept_triangles),
+      lock.lines_through_jaw, lock.locked_lines, lock.longest);
+  EXPECT_GT(lock.lines_through_jaw, 3000u);
+  EXPECT_EQ(lock.locked_lines, 0u);
+  // The check can fail: the plain imprint (slab minus jaw) is locked on its undercuts.
+  Mesh plain;
+  SPLINTCORE_ASSERT_OK(mesh_boolean(ctx, slab, jaws[0], BooleanOptions{}, &plain, nullptr));
+  const LockReport before = lock_report(ta.arena, plain, jaws[0], d, u, v, c, 27.0, 120, 1e-4);
+  std::printf("[ figures  ] the plain imprint: %zu lines locked (longest %.3f mm)\n",
+              before.locked_lines, before.longest);
+  EXPECT_GT(before.locked_lines, 50u);
+
+  o.sweep.direction = Vec3{0, 0, -1};
+  Mesh refused;
+  const Status s = blockout(ctx, slab, Span<const Mesh>(&jaws[1], 1), o, &refused, &st);
+  EXPECT_FALSE(s.is_ok());
+  EXPECT_NE(std::strstr(s.message(), "fold over"), nullptr) << s.message();
+  EXPECT_TRUE(refused.triangles.empty());
+}
+
+TEST(ExactSweep, BadInputIsNamedAndTheArenaBoundHolds) {
+  TestArena ta(size_t{1} << 28);
+  Context ctx(&ta.arena);
+  Mesh cone(&ta.arena);
+  frustum(&cone, 3.0, 5.0, 0.0, 8.0, 64);
+  const Aabb region{Vec3{-7, -7, 4}, Vec3{7, 7, 10}};
+  Mesh out;
+  EXPECT_EQ(sweep_exact_mesh(ctx, cone, Vec3{0, 0, 0}, region, &out).code(),
+            StatusCode::kInvalidArgument);
+  EXPECT_EQ(sweep_exact_mesh(ctx, cone, Vec3{0, std::nan(""), 1}, region, &out).code(),
+            StatusCode::kInvalidArgument);
+  EXPECT_EQ(sweep_exact_mesh(ctx, cone, Vec3{0, 0, 1}, Aabb{}, &out).code(),
+            StatusCode::kInvalidArgument);
+  Mesh bad(&ta.arena);
+  for (const Vec3& p : cone.vertices) ASSERT_TRUE(bad.vertices.push_back(p));
+  for (const Triangle& t : cone.triangles) ASSERT_TRUE(bad.triangles.push_back(t));
+  bad.triangles[5].v[1] = 9999;
+  Status s = sweep_exact_mesh(ctx, bad, Vec3{0, 0, 1}, region, &out);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_EQ(s.index(), 5u);
+  bad.triangles[5] = cone.triangles[5];
+  bad.vertices[7].y = std::numeric_limits<double>::infinity();
+  s = sweep_exact_mesh(ctx, bad, Vec3{0, 0, 1}, region, &out);
+  EXPECT_EQ(s.code(), StatusCode::kNonFinite);
+  EXPECT_EQ(s.index(), 7u);
+  EXPECT_TRUE(out.triangles.empty() && out.vertices.empty());
+  // In exactly the bound's bytes it runs; the output is the same as with room to spare.
+  Mesh roomy;
+  SPLINTCORE_ASSERT_OK(sweep_exact_mesh(ctx, cone, Vec3{0, 0, -1}, region, &roomy));
+  const uint64_t need = sweep_exact_bound(cone.vertices.size(), cone.triangles.size());
+  std::vector<unsigned char> buffer(static_cast<size_t>(need));
+  Arena exact(buffer.data(), buffer.size());
+  Context ectx(&exact);
+  Mesh tight;
+  SPLINTCORE_ASSERT_OK(sweep_exact_mesh(ectx, cone, Vec3{0, 0, -1}, region, &tight));
+  ASSERT_EQ(tight.triangles.size(), roomy.triangles.size());
+  EXPECT_EQ(std::memcmp(tight.triangles.data(), roomy.triangles.data(),
+                        roomy.triangles.size() * sizeof(Triangle)),
+            0);
+  EXPECT_EQ(std::memcmp(tight.vertices.data(), roomy.vertices.data(),
+                        roomy.vertices.size() * sizeof(Vec3)),
+            0);
+  // Too small an arena: a clean status, nothing left behind.
+  std::vector<unsigned char> small(2048);
+  Arena tiny(small.data(), small.size());
+  Context tctx(&tiny);
+  Mesh none;
+  EXPECT_EQ(sweep_exact_mesh(tctx, cone, Vec3{0, 0, -1}, region, &none).code(),
+            StatusCode::kArenaExhausted);
+  EXPECT_EQ(tiny.used(), 0u);
 }
 
 }  // namespace

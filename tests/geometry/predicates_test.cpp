@@ -1278,3 +1278,45 @@ TEST(Predicates, IncircleResultBitsArePinned) {
 }
 
 }  // namespace
+
+namespace {
+
+// normal_dot(a, b, c, d) = ((b - a) x (c - a)) . d = -orient3d(a, b, c, a + d): with a and d
+// dyadic (so a + d is an exact double) the oracle's orient3d sign decides it. c starts in
+// the plane through a, b along d (normal_dot exactly 0), then moves by a few ulps.
+TEST(Predicates, NormalDotNearDegenerateMatchesOracle) {
+  Rng rng(4010);
+  int wrong = 0, zero = 0, naive_wrong = 0;
+  for (int n = 0; n < 60000; ++n) {
+    const Vec3 a{rng.dyadic(-(1 << 20), 1 << 20, -12, -8), rng.dyadic(-(1 << 20), 1 << 20, -12, -8),
+                 rng.dyadic(-(1 << 20), 1 << 20, -12, -8)};
+    const Vec3 d{rng.dyadic(-(1 << 10), 1 << 10, -10, -10),
+                 rng.dyadic(-(1 << 10), 1 << 10, -10, -10),
+                 rng.dyadic(-(1 << 10), 1 << 10, -10, -10)};
+    const Vec3 b{rng.float32(-100, 100), rng.float32(-100, 100), rng.float32(-100, 100)};
+    const double s = rng.dyadic(-64, 64, -6, -6), t = rng.dyadic(-64, 64, -6, -6);
+    Vec3 c = a + (b - a) * s + d * t;  // rounded: near the plane, often on it
+    if (n % 2 == 1) {
+      const int axis = rng.small(0, 2);
+      c[axis] = ulps(c[axis], rng.small(-3, 3));
+    }
+    const Vec3 p = a + d;
+    const int expected = -exact_orient3d_sign(a, b, c, p);
+    const int got = sign_of(splintcore::normal_dot(a, b, c, d));
+    wrong += got != expected ? 1 : 0;
+    zero += expected == 0 ? 1 : 0;
+    const Vec3 u = b - a, v = c - a;
+    const double naive = (u.y * v.z - u.z * v.y) * d.x + (u.z * v.x - u.x * v.z) * d.y +
+                         (u.x * v.y - u.y * v.x) * d.z;
+    naive_wrong += sign_of(naive) != expected ? 1 : 0;
+  }
+  std::printf(
+      "[ figures  ] normal_dot near its plane: 60000 cases, %d exactly 0, %d wrong, "
+      "naive double %d wrong\n",
+      zero, wrong, naive_wrong);
+  EXPECT_EQ(wrong, 0);
+  EXPECT_GT(zero, 100);
+  EXPECT_GT(naive_wrong, 0);
+}
+
+}  // namespace
