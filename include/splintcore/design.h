@@ -90,6 +90,12 @@ struct CaseFile {
   // surface of each jaw's swept volume instead of the jaw's own triangles (the inset is then 0).
   bool has_blockout = false;
   SweepOptions blockout;
+  // "method": "exact" (blockout.h, BlockoutOptions::exact): each jaw's swept volume is its
+  // exact boundary, the jaw's own front triangles and walls along the direction, instead of
+  // the voxel sweep's; the imprint is then made by the blockout alone (the Boolean base minus
+  // jaws is not run), and voxel, inset, closing_radius and clearance do not apply. Default
+  // "voxel".
+  bool blockout_exact = false;
   // The wall-thickness check ("min_thickness", mm; 0: not run): thin spots are reported
   // (DesignReport::thickness), not refused.
   double min_thickness = 0;
@@ -270,6 +276,9 @@ struct DesignReport {
   // With a clearance the imprint is the swept volumes' offset surface: the Boolean base minus
   // jaws is not run (the jaws lie inside what the blockout removes) and `boolean` stays zero.
   bool imprint_offset = false;
+  // With "method": "exact" likewise: the imprint is the jaws' exact swept boundary (their
+  // front triangles and walls), made by the blockout alone; `boolean` stays zero.
+  bool imprint_swept = false;
   bool labelled = false;  // the case has "label"
   LabelStats label;
   bool thickness_checked = false;  // the case has "min_thickness"

@@ -318,8 +318,8 @@ Status blockout_exact(const Context& ctx, const Mesh& splint, Span<const Mesh> j
     if (!s.is_ok() && s.code() != StatusCode::kArenaExhausted &&
         s.code() != StatusCode::kCancelled) {
       s.append(
-          " (exact sweep: where the jaw's front triangles fold over along the direction, "
-          "their walls cross them, which the Boolean cannot take; the voxel sweep can)");
+          " (exact sweep: a fold of the jaw's front side along the direction that its "
+          "rounds did not resolve lets a wall cross it; the voxel method takes such jaws)");
     }
     SPLINTCORE_RETURN_IF_ERROR(s);
   }

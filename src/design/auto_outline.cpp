@@ -292,13 +292,17 @@ void write_later_stages(JsonWriter& w, const CaseFile& c) {
   if (c.has_insertion_direction) w.add("insertion_direction", c.insertion_direction);
   if (c.has_blockout) {
     w.begin_object("blockout");
-    w.add("voxel", c.blockout.voxel);
-    if (c.blockout.offset > 0) {
-      w.add("clearance", c.blockout.offset);
+    if (c.blockout_exact) {
+      w.add("method", "exact");
     } else {
-      w.add("inset", c.blockout.inset);
+      w.add("voxel", c.blockout.voxel);
+      if (c.blockout.offset > 0) {
+        w.add("clearance", c.blockout.offset);
+      } else {
+        w.add("inset", c.blockout.inset);
+      }
+      w.add("closing_radius", c.blockout.closing_radius);
     }
-    w.add("closing_radius", c.blockout.closing_radius);
     w.end_object();
   }
   if (c.ct_volume != nullptr) {

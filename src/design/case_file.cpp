@@ -563,8 +563,8 @@ Status parse_ct(const Reader& r, const JsonValue* ct, CaseFile* out) {
 Status parse_blockout(const Reader& r, const JsonValue* b, CaseFile* out) {
   const JsonDocument& doc = *r.doc;
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*b, JsonType::kObject, "blockout"));
-  static const char* const kBlockoutKeys[] = {"voxel", "inset", "closing_radius", "clearance",
-                                              nullptr};
+  static const char* const kBlockoutKeys[] = {"voxel",     "inset",  "closing_radius",
+                                              "clearance", "method", nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(*b, kBlockoutKeys, "\"blockout\""));
   if (!out->has_insertion_direction && !out->has_auto_outline) {
     return r.fail(*b, StatusCode::kInvalidArgument,
@@ -572,6 +572,23 @@ Status parse_blockout(const Reader& r, const JsonValue* b, CaseFile* out) {
                   "or the automatic outline");
   }
   out->has_blockout = true;
+  if (const JsonValue* m = doc.member(*b, "method")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*m, JsonType::kString, "blockout.method"));
+    const bool exact = std::strcmp(m->string, "exact") == 0;
+    if (!exact && std::strcmp(m->string, "voxel") != 0) {
+      return r.fail(*m, StatusCode::kInvalidArgument,
+                    "\"blockout.method\" must be \"exact\" or \"voxel\"");
+    }
+    out->blockout_exact = exact;
+    static const char* const kVoxelOnly[] = {"voxel", "inset", "closing_radius", "clearance"};
+    for (const char* key : kVoxelOnly) {
+      const JsonValue* v = doc.member(*b, key);
+      if (exact && v != nullptr) {
+        return r.fail(*v, StatusCode::kInvalidArgument, "\"blockout.", key,
+                      "\" is for the voxel method (\"method\": \"exact\" has no voxels)");
+      }
+    }
+  }
   if (const JsonValue* bv = doc.member(*b, "voxel")) {
     SPLINTCORE_RETURN_IF_ERROR(r.number(*bv, "blockout.voxel", 0, &out->blockout.voxel));
   }

@@ -301,6 +301,7 @@ Status blockout_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws
   bl.sweep = c.blockout;  // voxel, inset, closing radius, offset as the case gives them
   bl.sweep.direction = mandible ? -c.insertion_direction : c.insertion_direction;
   bl.boolean.check_self_intersection = check;
+  bl.exact = c.blockout_exact;
   Mesh blocked;
   const Status s = blockout(ctx, *cut, Span<const Mesh>(swept_jaws, jaws.size()), bl, &blocked,
                             &report->blockout[j]);
@@ -707,10 +708,12 @@ Status design_detail::design_splint_registered(const Context& ctx, const CaseFil
   Mesh cut;
   // Where the splint sits with nothing of use above it (blockout_jaws moves its results there).
   Arena::Marker cut_low = before_base;
-  if (c.has_blockout && c.blockout.offset > 0) {
+  if (c.has_blockout && (c.blockout.offset > 0 || c.blockout_exact)) {
     // A spacer: the imprint is the swept volumes' offset surface, which holds each jaw, so
     // subtracting the jaws themselves first would only cut what the blockout removes anyway.
-    report->imprint_offset = true;
+    // The exact swept boundary holds the jaw too: its front triangles are the imprint.
+    report->imprint_offset = c.blockout.offset > 0;
+    report->imprint_swept = c.blockout_exact;
     cut = base;
     cut_low = arena.mark();
   } else {

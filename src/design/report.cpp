@@ -110,7 +110,8 @@ void write_parameters(JsonWriter& w, const CaseFile& c, const DesignReport& repo
     for (uint32_t n : files.ct_size) w.add(nullptr, n);
     w.end_array();
   }
-  if (c.has_blockout) {
+  if (c.has_blockout && c.blockout_exact) w.add("blockout_method", "exact");
+  if (c.has_blockout && !c.blockout_exact) {
     w.add("blockout_voxel_mm", c.blockout.voxel);
     w.add("blockout_inset_mm", c.blockout.inset);
     w.add("blockout_closing_radius_mm", c.blockout.closing_radius);
@@ -128,6 +129,23 @@ void write_parameters(JsonWriter& w, const CaseFile& c, const DesignReport& repo
   w.end_object();
 }
 
+// One jaw's exact blockout (the object is open; this closes it).
+void write_exact_blockout(JsonWriter& w, const BlockoutStats& b, double removed_mm3) {
+  const ExactSweepStats& e = b.exact;
+  w.add("method", "exact");
+  w.add("direction", e.direction);
+  w.add("front_triangles", e.front_triangles);
+  w.add("kept_front_triangles", e.kept_triangles);
+  w.add("walls", e.walls);
+  w.add("fold_vertices", e.fold_vertices);
+  w.add("back_triangles_taken_in", e.absorbed_triangles);
+  w.add("swept_triangles", b.swept_triangles);
+  w.add("passes", b.boolean.passes);
+  w.add("intersecting_pairs", b.boolean.intersecting_pairs);
+  w.add("removed_volume_mm3", removed_mm3);
+  w.end_object();
+}
+
 void write_blockout(JsonWriter& w, const CaseFile& c, const DesignReport& report) {
   // Interference elimination, per jaw in case order.
   w.begin_array("blockout");
@@ -135,6 +153,10 @@ void write_blockout(JsonWriter& w, const CaseFile& c, const DesignReport& report
     const BlockoutStats& b = report.blockout[i];
     w.begin_object();
     w.add("role", c.jaws[i].role);
+    if (c.blockout_exact) {
+      write_exact_blockout(w, b, report.blockout_removed_mm3[i]);
+      continue;
+    }
     w.add("direction", b.sweep.axis_w);
     w.begin_array("grid");
     w.add(nullptr, b.sweep.nx);
@@ -221,8 +243,9 @@ void write_checks(JsonWriter& w, const CaseFile& c, const DesignReport& report) 
   w.add("boolean_attempts", report.boolean.attempts);
   w.add("boolean_nudge_mm", report.boolean.nudge);
   if (report.blockout_jaws > 0) write_blockout(w, c, report);
-  w.add("imprint",
-        report.imprint_offset ? "clearance offset of the swept volume" : "jaw triangles");
+  w.add("imprint", report.imprint_offset  ? "clearance offset of the swept volume"
+                   : report.imprint_swept ? "exact swept volume (jaw front triangles and walls)"
+                                          : "jaw triangles");
   if (report.labelled) {
     const LabelStats& l = report.label;
     w.begin_object("label");

@@ -930,6 +930,48 @@ TEST(CaseFile, BlockoutTakesItsDefaultsAndChecksItsRanges) {
   }
 }
 
+TEST(CaseFile, BlockoutMethodIsExactOrVoxelAndExactTakesNoVoxelKeys) {
+  test::TestArena a(size_t{1} << 20);
+  CaseFile c;
+  const std::string dir = "\"insertion_direction\": [0, 0, 1],\n";
+  SPLINTCORE_ASSERT_OK(parse(a.arena, with_root(dir + "\"blockout\": {},\n").text(), &c));
+  EXPECT_FALSE(c.blockout_exact);
+  SPLINTCORE_ASSERT_OK(
+      parse(a.arena, with_root(dir + "\"blockout\": {\"method\": \"exact\"},\n").text(), &c));
+  EXPECT_TRUE(c.has_blockout);
+  EXPECT_TRUE(c.blockout_exact);
+  // write_case gives it back, and nothing of the voxel method.
+  std::string written;
+  SPLINTCORE_ASSERT_OK(write_case(c, test::string_sink(&written)));
+  EXPECT_NE(written.find("\"blockout\":{\"method\":\"exact\"}"), std::string::npos) << written;
+  EXPECT_EQ(written.find("inset"), std::string::npos) << written;
+  CaseFile again;
+  SPLINTCORE_ASSERT_OK(parse(a.arena, written, &again));
+  EXPECT_TRUE(again.blockout_exact);
+  SPLINTCORE_ASSERT_OK(parse(
+      a.arena, with_root(dir + "\"blockout\": {\"method\": \"voxel\", \"voxel\": 0.2},\n").text(),
+      &c));
+  EXPECT_FALSE(c.blockout_exact);
+  EXPECT_EQ(c.blockout.voxel, 0.2);
+  const char* bad[] = {
+      "\"blockout\": {\"method\": \"sampled\"},\n",
+      "\"blockout\": {\"method\": 1},\n",
+      "\"blockout\": {\"method\": \"exact\", \"voxel\": 0.1},\n",
+      "\"blockout\": {\"method\": \"exact\", \"inset\": 0.05},\n",
+      "\"blockout\": {\"clearance\": 0.2, \"method\": \"exact\"},\n",
+      "\"blockout\": {\"method\": \"exact\", \"closing_radius\": 0.5},\n",
+  };
+  const char* names[] = {"\"exact\" or \"voxel\"", "blockout.method",    "blockout.voxel",
+                         "blockout.inset",         "blockout.clearance", "blockout.closing_radius"};
+  for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); ++i) {
+    SCOPED_TRACE(bad[i]);
+    const Status s = parse(a.arena, with_root(dir + bad[i]).text(), &c);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << test::format(s);
+    EXPECT_NE(std::string(s.message()).find(names[i]), std::string::npos) << s.message();
+    EXPECT_NE(s.line(), kNoPosition);
+  }
+}
+
 }  // namespace
 }  // namespace splintcore
 

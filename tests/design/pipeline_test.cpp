@@ -10,6 +10,7 @@
 #include "splintcore/design.h"
 #include "support/phantom_jaws.h"
 #include "support/test_util.h"
+#include "support/undercut_lines.h"
 
 namespace splintcore {
 namespace {
@@ -147,6 +148,92 @@ TEST(DesignPipeline, BlockoutRemovesInterferenceAndStaysPrintable) {
   EXPECT_LE(v_blocked, v_plain);
   EXPECT_NEAR(v_plain - v_blocked, r.blockout_removed_mm3[0] + r.blockout_removed_mm3[1], 1e-6);
   // Run twice: the same bytes.
+  Mesh again;
+  DesignReport r2;
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &again, &r2));
+  std::vector<uint8_t> a, b;
+  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(f.t.arena, blocked, StlFormat::kBinary, &a));
+  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(f.t.arena, again, StlFormat::kBinary, &b));
+  EXPECT_EQ(a, b);
+}
+
+// "method": "exact": the jaws' Boolean is not run (the exact sweep holds each jaw), each jaw's
+// front triangles and walls are subtracted from the base; the splint is printable, holds less
+// than the plain splint and than the voxel blockout's at 0.2 mm (whose inset leaves undercut),
+// and the independent line check finds no line locked, where the plain splint has many; the
+// same bytes twice.
+TEST(DesignPipeline, ExactBlockoutSkipsTheJawsBooleanAndRemovesTheUndercuts) {
+  CaseAndJaws f;
+  ASSERT_TRUE(f.ok);
+  Mesh plain;
+  DesignReport r0;
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2), &plain, &r0));
+  CaseFile c = f.c;
+  c.has_blockout = true;
+  c.blockout_exact = true;
+  Mesh blocked;
+  DesignReport r;
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &blocked, &r));
+  EXPECT_TRUE(r.imprint_swept);
+  EXPECT_FALSE(r.imprint_offset);
+  EXPECT_EQ(r.boolean.intersecting_pairs, 0u);
+  EXPECT_TRUE(r.print.printable);
+  EXPECT_TRUE(r.self_intersection_checked);
+  ASSERT_EQ(r.blockout_jaws, 2u);
+  EXPECT_EQ(r.blockout[0].exact.direction, c.insertion_direction);
+  EXPECT_EQ(r.blockout[1].exact.direction, -c.insertion_direction);
+  for (int j = 0; j < 2; ++j) {
+    EXPECT_GT(r.blockout[j].exact.kept_triangles, 0u);
+    EXPECT_GT(r.blockout[j].exact.walls, 0u);
+  }
+  CaseFile voxel = f.c;
+  voxel.has_blockout = true;
+  voxel.blockout.voxel = 0.2;
+  voxel.blockout.inset = 0.1;
+  Mesh sampled;
+  DesignReport rv;
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), voxel, Span<const Mesh>(f.jaws, 2), &sampled, &rv));
+  double v_plain = 0, v_exact = 0, v_voxel = 0;
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(Context(&f.t.arena), plain, &v_plain));
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(Context(&f.t.arena), blocked, &v_exact));
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(Context(&f.t.arena), sampled, &v_voxel));
+  std::printf(
+      "[ figures  ] splint volume: plain %.4f, exact blockout %.4f, voxel 0.2 mm %.4f "
+      "mm^3; triangles %zu, %zu, %zu\n",
+      v_plain, v_exact, v_voxel, plain.triangles.size(), blocked.triangles.size(),
+      sampled.triangles.size());
+  EXPECT_LT(v_exact, v_plain);
+  EXPECT_LT(v_exact, v_voxel);  // the voxel sweep leaves its inset of undercut
+  // The independent line check, each jaw as the design moves it, along the way it leaves.
+  for (int j = 0; j < 2; ++j) {
+    Mesh jaw(&f.t.arena);
+    for (const Vec3& p : f.jaws[j].vertices) {
+      Vec3 q = c.jaws[j].transform.apply_point(p);
+      ASSERT_TRUE(round_to_float32(&q));
+      ASSERT_TRUE(jaw.vertices.push_back(q));
+    }
+    for (const Triangle& t : f.jaws[j].triangles) ASSERT_TRUE(jaw.triangles.push_back(t));
+    const Vec3 d = j == 0 ? c.insertion_direction : -c.insertion_direction;
+    const Vec3 u{1, 0, 0}, v{0, 1, 0}, at{0, 18, 0};
+    const test::LockReport before =
+        test::lock_report(f.t.arena, plain, jaw, d, u, v, at, 27.0, 100, 1e-4);
+    const test::LockReport exact =
+        test::lock_report(f.t.arena, blocked, jaw, d, u, v, at, 27.0, 100, 1e-4);
+    const test::LockReport voxel_lock =
+        test::lock_report(f.t.arena, sampled, jaw, d, u, v, at, 27.0, 100, 1e-4);
+    std::printf(
+        "[ figures  ] jaw %d: %zu lines through it; locked: plain %zu (longest %.3f mm), "
+        "exact %zu (%.2g mm), voxel %zu (%.3f mm)\n",
+        j, before.lines_through_jaw, before.locked_lines, before.longest, exact.locked_lines,
+        exact.longest, voxel_lock.locked_lines, voxel_lock.longest);
+    EXPECT_GE(before.locked_lines, 5u);
+    EXPECT_GT(exact.lines_through_jaw, 1000u);
+    EXPECT_EQ(exact.locked_lines, 0u);
+  }
   Mesh again;
   DesignReport r2;
   SPLINTCORE_ASSERT_OK(

@@ -714,13 +714,25 @@ void Design::print_summary() const {
   if (report.imprint_offset) {
     std::printf("imprint: a %.3g mm clearance around each jaw's swept volume\n",
                 c_.blockout.offset);
+  } else if (report.imprint_swept) {
+    std::printf("imprint: each jaw's exact swept volume (its front triangles and walls)\n");
   } else {
     std::printf("boolean: %llu crossing pairs, %llu intersection points, %u attempt(s)\n",
                 static_cast<unsigned long long>(report.boolean.intersecting_pairs),
                 static_cast<unsigned long long>(report.boolean.intersection_points),
                 report.boolean.attempts);
   }
-  for (uint32_t i = 0; i < report.blockout_jaws; ++i) {
+  for (uint32_t i = 0; i < report.blockout_jaws && c_.blockout_exact; ++i) {
+    const ExactSweepStats& e = report.blockout[i].exact;
+    std::printf(
+        "blockout (%s, exact): %llu of %llu front triangles kept, %llu walls, %llu fold "
+        "vertices, %llu swept triangles\n",
+        c_.jaws[i].role, static_cast<unsigned long long>(e.kept_triangles),
+        static_cast<unsigned long long>(e.front_triangles),
+        static_cast<unsigned long long>(e.walls), static_cast<unsigned long long>(e.fold_vertices),
+        static_cast<unsigned long long>(report.blockout[i].swept_triangles));
+  }
+  for (uint32_t i = 0; i < report.blockout_jaws && !c_.blockout_exact; ++i) {
     std::printf(
         "blockout (%s): %.4f mm^3 of interference removed, %llu swept triangles, "
         "inset %.3g mm\n",
