@@ -69,131 +69,99 @@ Status classify_triangles(const Mesh& jaw, const Vec3& d, const Aabb& region, ui
   return Status::ok();
 }
 
-// One round's view of the surface: the triangles with a corner in it (`tris`, input order),
-// their half-edges' twins, the walls, and per vertex of the surface (by rank) its triangles
-// among `tris` and the other ends of its walls.
-struct Round {
-  ArenaArray<uint32_t> tris;
-  uint32_t* twin = nullptr;  // per half-edge 3 * i + k of tris[i]: the twin's, or kUnset
-  uint8_t* walls = nullptr;  // per tris[i]: bit k, a wall hangs from edge k
-  uint32_t* rank = nullptr;  // per jaw vertex: its place among the surface's, or kUnset
-  uint32_t vertex_count = 0;
-  uint32_t* star_start = nullptr;  // vertex_count + 1 offsets into star
-  uint32_t* star = nullptr;        // indices into tris
-  uint32_t* wall_ends = nullptr;   // 2 per vertex: its first two walls' other ends (jaw ids)
+// The surface's state: every jaw triangle's part (cls), its vertices' triangles (a table over
+// the whole jaw, built once: the rounds only change parts), and per round the walls (a bit
+// per edge of the surface's triangles) and per jaw vertex its walls' other ends.
+struct Surface {
+  const Mesh* jaw = nullptr;
+  uint8_t* cls = nullptr;
+  uint32_t* star_start = nullptr;  // nv + 1 offsets into star
+  uint32_t* star = nullptr;        // triangle ids, in input order per vertex
+  uint8_t* walls = nullptr;        // per triangle: bit k, a wall hangs from edge k
+  uint32_t* wall_ends = nullptr;   // 2 per vertex: its first two walls' other ends
   uint8_t* wall_degree = nullptr;  // walls at the vertex (saturating)
-  uint32_t* seen = nullptr;        // per tris[i]: the last ring_triangles call that took it
+  uint32_t* seen = nullptr;        // per triangle: the last ring_triangles call that took it
   uint32_t calls = 0;
 };
 
-// The triangles with a corner on the surface and their half-edges' twins (the half-edge the
-// other way along the same edge, first found; kUnset on a border).
-Status pair_half_edges(Arena& arena, const Mesh& jaw, const uint32_t* used, Round* r) {
-  size_t count = 0;
+// The vertex -> triangles table of the whole jaw (counting, then filling in input order).
+Status build_stars(Arena& arena, const Mesh& jaw, Surface* f) {
+  const size_t nv = jaw.vertices.size(), nt = jaw.triangles.size();
+  if (nt > 0x55555555u) {
+    return make_error(StatusCode::kLimitExceeded, "exact sweep: ", nt,
+                      " triangles (at most 2^32 / 3)");
+  }
+  f->star_start = arena.allocate_array<uint32_t>(nv + 1);
+  f->star = arena.allocate_array<uint32_t>(3 * nt + 1);
+  uint32_t* fill = arena.allocate_array<uint32_t>(nv + 1);
+  f->walls = arena.allocate_array<uint8_t>(nt + 1);
+  f->seen = arena.allocate_array<uint32_t>(nt + 1);
+  f->wall_ends = arena.allocate_array<uint32_t>(2 * nv + 1);
+  f->wall_degree = arena.allocate_array<uint8_t>(nv + 1);
+  if (f->star_start == nullptr || f->star == nullptr || fill == nullptr || f->walls == nullptr ||
+      f->seen == nullptr || f->wall_ends == nullptr || f->wall_degree == nullptr) {
+    return arena.exhausted_status();
+  }
+  std::memset(f->star_start, 0, (nv + 1) * sizeof(uint32_t));
+  std::memset(f->seen, 0, (nt + 1) * sizeof(uint32_t));
   for (const Triangle& g : jaw.triangles) {
-    count += used[g.v[0]] != kUnset || used[g.v[1]] != kUnset || used[g.v[2]] != kUnset ? 1 : 0;
+    for (uint32_t v : g.v) ++f->star_start[v + 1];
   }
-  if (count > 0x55555555u) {
-    return make_error(StatusCode::kLimitExceeded, "exact sweep: ", count,
-                      " triangles near the surface (at most 2^32 / 3)");
-  }
-  ArenaArray<KeyIndex> edges(&arena);
-  if (!r->tris.reserve(count) || !edges.reserve(3 * count)) return arena.exhausted_status();
-  r->twin = arena.allocate_array<uint32_t>(3 * count + 1);
-  if (r->twin == nullptr) return arena.exhausted_status();
-  for (size_t t = 0; t < jaw.triangles.size(); ++t) {
-    const Triangle& g = jaw.triangles[t];
-    if (used[g.v[0]] == kUnset && used[g.v[1]] == kUnset && used[g.v[2]] == kUnset) continue;
-    const uint32_t i = static_cast<uint32_t>(r->tris.size());
-    (void)r->tris.push_back(static_cast<uint32_t>(t));
-    for (uint32_t k = 0; k < 3; ++k) {
-      const uint64_t u = g.v[k], v = g.v[(k + 1) % 3];
-      (void)edges.push_back(KeyIndex{u < v ? (u << 32) | v : (v << 32) | u, 3 * i + k, 0});
-      r->twin[3 * i + k] = kUnset;
-    }
-  }
-  SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena, edges.span()));
-  const auto from = [&](uint32_t h) { return jaw.triangles[r->tris[h / 3]].v[h % 3]; };
-  for (size_t a = 0, n = edges.size(); a < n;) {
-    size_t b = a + 1;
-    while (b < n && edges[b].key == edges[a].key) ++b;
-    for (size_t x = a; x < b; ++x) {
-      for (size_t y = a; y < b && r->twin[edges[x].index] == kUnset; ++y) {
-        const uint32_t hx = edges[x].index, hy = edges[y].index;
-        if (from(hx) != from(hy)) r->twin[hx] = hy;  // same key, other direction
-      }
-    }
-    a = b;
+  for (size_t v = 0; v < nv; ++v) f->star_start[v + 1] += f->star_start[v];
+  std::memcpy(fill, f->star_start, (nv + 1) * sizeof(uint32_t));
+  for (size_t t = 0; t < nt; ++t) {
+    for (uint32_t v : jaw.triangles[t].v) f->star[fill[v]++] = static_cast<uint32_t>(t);
   }
   return Status::ok();
 }
 
-// Walls (edges of the surface's triangles whose twin is neither on the surface nor a front
-// triangle left out), the ranks, stars and wall ends of the surface's vertices.
-Status build_round(Arena& arena, const Mesh& jaw, const uint8_t* cls, const uint32_t* used,
-                   Round* r) {
-  SPLINTCORE_RETURN_IF_ERROR(pair_half_edges(arena, jaw, used, r));
-  const size_t nt = r->tris.size(), nv = jaw.vertices.size();
-  r->walls = arena.allocate_array<uint8_t>(nt + 1);
-  r->rank = arena.allocate_array<uint32_t>(nv + 1);
-  if (r->walls == nullptr || r->rank == nullptr) return arena.exhausted_status();
-  r->vertex_count = 0;
-  for (size_t v = 0; v < nv; ++v) r->rank[v] = used[v] != kUnset ? r->vertex_count++ : kUnset;
-  const uint32_t n = r->vertex_count;
-  r->star_start = arena.allocate_array<uint32_t>(n + 1);
-  r->wall_ends = arena.allocate_array<uint32_t>(2 * size_t{n} + 1);
-  r->wall_degree = arena.allocate_array<uint8_t>(n + 1);
-  r->star = arena.allocate_array<uint32_t>(3 * nt + 1);
-  r->seen = arena.allocate_array<uint32_t>(nt + 1);
-  if (r->star_start == nullptr || r->wall_ends == nullptr || r->wall_degree == nullptr ||
-      r->star == nullptr || r->seen == nullptr) {
-    return arena.exhausted_status();
+// The triangle across edge k of triangle t (the edge the other way round, first in the star
+// of its far end), or kUnset on a border.
+uint32_t across(const Surface& f, uint32_t t, uint32_t k) {
+  const Mesh& jaw = *f.jaw;
+  const uint32_t a = jaw.triangles[t].v[k], b = jaw.triangles[t].v[(k + 1) % 3];
+  for (uint32_t j = f.star_start[b]; j < f.star_start[b + 1]; ++j) {
+    const Triangle& g = jaw.triangles[f.star[j]];
+    for (uint32_t m = 0; m < 3; ++m) {
+      if (g.v[m] == b && g.v[(m + 1) % 3] == a) return f.star[j];
+    }
   }
-  std::memset(r->seen, 0, (nt + 1) * sizeof(uint32_t));
-  std::memset(r->star_start, 0, (n + 1) * sizeof(uint32_t));
-  std::memset(r->wall_degree, 0, n + 1);
-  for (size_t i = 0; i < nt; ++i) {
-    const Triangle& g = jaw.triangles[r->tris[i]];
-    r->walls[i] = 0;
+  return kUnset;
+}
+
+// The walls (edges of the surface's triangles whose other triangle is neither on the surface
+// nor a front triangle left out) and, per vertex, their other ends.
+void find_walls(Surface* f) {
+  const Mesh& jaw = *f->jaw;
+  std::memset(f->wall_degree, 0, jaw.vertices.size() + 1);
+  const auto add_end = [&](uint32_t at, uint32_t end) {
+    if (f->wall_degree[at] < 2) f->wall_ends[2 * at + f->wall_degree[at]] = end;
+    if (f->wall_degree[at] < 255) ++f->wall_degree[at];
+  };
+  for (size_t t = 0; t < jaw.triangles.size(); ++t) {
+    f->walls[t] = 0;
+    if (!in_patch(f->cls[t])) continue;
     for (uint32_t k = 0; k < 3; ++k) {
-      if (r->rank[g.v[k]] != kUnset) ++r->star_start[r->rank[g.v[k]] + 1];
-      if (!in_patch(cls[r->tris[i]])) continue;
-      const uint32_t tw = r->twin[3 * i + k];
-      const uint8_t other = tw == kUnset ? kBack : cls[r->tris[tw / 3]];
+      const uint32_t o = across(*f, static_cast<uint32_t>(t), k);
+      const uint8_t other = o == kUnset ? kBack : f->cls[o];
       if (in_patch(other) || other == kFrontCulled) continue;
-      r->walls[i] |= static_cast<uint8_t>(1u << k);
-      const uint32_t a = g.v[k], b = g.v[(k + 1) % 3];
-      const auto add_end = [&](uint32_t at, uint32_t end) {
-        const uint32_t ra = r->rank[at];
-        if (r->wall_degree[ra] < 2) r->wall_ends[2 * ra + r->wall_degree[ra]] = end;
-        if (r->wall_degree[ra] < 255) ++r->wall_degree[ra];
-      };
+      f->walls[t] |= static_cast<uint8_t>(1u << k);
+      const uint32_t a = jaw.triangles[t].v[k], b = jaw.triangles[t].v[(k + 1) % 3];
       add_end(a, b);
       add_end(b, a);
     }
   }
-  for (uint32_t v = 0; v < n; ++v) r->star_start[v + 1] += r->star_start[v];
-  uint32_t* fill = arena.allocate_array<uint32_t>(n + 1);
-  if (fill == nullptr) return arena.exhausted_status();
-  std::memcpy(fill, r->star_start, (n + 1) * sizeof(uint32_t));
-  for (size_t i = 0; i < nt; ++i) {
-    const Triangle& g = jaw.triangles[r->tris[i]];
-    for (int k = 0; k < 3; ++k) {
-      if (r->rank[g.v[k]] != kUnset) r->star[fill[r->rank[g.v[k]]]++] = static_cast<uint32_t>(i);
-    }
-  }
-  return Status::ok();
 }
 
 // Whether, seen along d, the wall from jaw vertex v towards s runs inside the corner at v of
-// a triangle of the surface around v (other than those on the edge): the surface overlaps
-// its own wall there.
-bool wall_inside_fan(const Mesh& jaw, const uint8_t* cls, const Round& r, uint32_t v,
-                     uint32_t rank_v, uint32_t s, const Vec3& d) {
+// a triangle of the surface around v (other than those on the edge) that lies above the edge
+// there: the surface overlaps its own wall.
+bool wall_inside_fan(const Surface& f, uint32_t v, uint32_t s, const Vec3& d) {
+  const Mesh& jaw = *f.jaw;
   const Vec3& pv = jaw.vertices[v];
-  for (uint32_t j = r.star_start[rank_v]; j < r.star_start[rank_v + 1]; ++j) {
-    const uint32_t t = r.tris[r.star[j]];
-    if (!in_patch(cls[t])) continue;
+  for (uint32_t j = f.star_start[v]; j < f.star_start[v + 1]; ++j) {
+    const uint32_t t = f.star[j];
+    if (!in_patch(f.cls[t])) continue;
     const Triangle& g = jaw.triangles[t];
     const int k = g.v[0] == v ? 0 : (g.v[1] == v ? 1 : 2);
     const uint32_t p = g.v[(k + 1) % 3], q = g.v[(k + 2) % 3];
@@ -228,28 +196,26 @@ bool wall_top(const Vec3& p, const Vec3& d, const Aabb& region, Vec3* top) {
   return round_to_float32(top);
 }
 
-// The surface's triangles within kRings rings of jaw vertex v (indices into r.tris, at most
-// kRingCap of them, in the order found), for the wall test below.
+// The surface's triangles within kRings rings of jaw vertex v (at most kRingCap of them, in
+// the order found), for the wall test below.
 constexpr int kRings = 8;
 constexpr uint32_t kRingCap = 1024;
-uint32_t ring_triangles(const Mesh& jaw, const uint8_t* cls, Round& r, uint32_t v, uint32_t* out) {
+uint32_t ring_triangles(Surface& f, uint32_t v, uint32_t* out) {
   uint32_t count = 0, done = 0;
-  const uint32_t call = ++r.calls;
+  const uint32_t call = ++f.calls;
   const auto add_star = [&](uint32_t vertex) {
-    const uint32_t rv = r.rank[vertex];
-    if (rv == kUnset) return;
-    for (uint32_t j = r.star_start[rv]; j < r.star_start[rv + 1] && count < kRingCap; ++j) {
-      const uint32_t i = r.star[j];
-      if (!in_patch(cls[r.tris[i]]) || r.seen[i] == call) continue;
-      r.seen[i] = call;
-      out[count++] = i;
+    for (uint32_t j = f.star_start[vertex]; j < f.star_start[vertex + 1] && count < kRingCap; ++j) {
+      const uint32_t t = f.star[j];
+      if (!in_patch(f.cls[t]) || f.seen[t] == call) continue;
+      f.seen[t] = call;
+      out[count++] = t;
     }
   };
   add_star(v);
   for (int ring = 1; ring < kRings; ++ring) {
     const uint32_t end = count;
     for (; done < end; ++done) {
-      for (uint32_t w : jaw.triangles[r.tris[out[done]]].v) add_star(w);
+      for (uint32_t w : f.jaw->triangles[out[done]].v) add_star(w);
     }
   }
   return count;
@@ -258,14 +224,14 @@ uint32_t ring_triangles(const Mesh& jaw, const uint8_t* cls, Round& r, uint32_t 
 // Whether the wall from jaw vertex v to s (as emitted: tops rounded) meets a triangle of the
 // surface near v that has neither corner of the edge: the surface overhangs its own wall
 // further than the corner test above sees.
-bool wall_meets_ring(const Mesh& jaw, const uint8_t* cls, Round& r, uint32_t v, uint32_t s,
-                     const Vec3& d, const Aabb& region) {
+bool wall_meets_ring(Surface& f, uint32_t v, uint32_t s, const Vec3& d, const Aabb& region) {
+  const Mesh& jaw = *f.jaw;
   Vec3 vt, st;
   if (!wall_top(jaw.vertices[v], d, region, &vt) || !wall_top(jaw.vertices[s], d, region, &st)) {
     return false;  // the output says so
   }
   uint32_t ring[kRingCap];
-  const uint32_t n = ring_triangles(jaw, cls, r, v, ring);
+  const uint32_t n = ring_triangles(f, v, ring);
   const Vec3& pv = jaw.vertices[v];
   const Vec3& ps = jaw.vertices[s];
   Aabb wall;
@@ -274,7 +240,7 @@ bool wall_meets_ring(const Mesh& jaw, const uint8_t* cls, Round& r, uint32_t v, 
   wall.add(vt);
   wall.add(st);
   for (uint32_t i = 0; i < n; ++i) {
-    const Triangle& g = jaw.triangles[r.tris[ring[i]]];
+    const Triangle& g = jaw.triangles[ring[i]];
     bool shares = false;
     for (uint32_t w : g.v) shares = shares || w == v || w == s;
     if (shares) continue;
@@ -294,79 +260,99 @@ bool wall_meets_ring(const Mesh& jaw, const uint8_t* cls, Round& r, uint32_t v, 
 }
 
 // Vertices whose walls the surface around them overlaps (or with more than two walls): their
-// back triangles join the surface. Returns how many vertices did so.
-uint32_t absorb_folds(const Mesh& jaw, Round& r, const Vec3& d, const Aabb& region, uint8_t* cls,
-                      uint32_t* used) {
-  uint32_t folds = 0;
-  for (size_t v = 0; v < jaw.vertices.size(); ++v) {
-    const uint32_t rv = r.rank[v];
-    if (rv == kUnset || r.wall_degree[rv] == 0) continue;
-    bool fold = r.wall_degree[rv] > 2;
-    for (uint32_t w = 0; w < r.wall_degree[rv] && w < 2 && !fold; ++w) {
-      const uint32_t end = r.wall_ends[2 * rv + w];
-      fold = wall_inside_fan(jaw, cls, r, static_cast<uint32_t>(v), rv, end, d) ||
-             wall_meets_ring(jaw, cls, r, static_cast<uint32_t>(v), end, d, region);
+// back triangles join the surface. A vertex found clean stays clean until a triangle within
+// its rings joins (then every vertex around that triangle is tested again): state[v] is
+// kClean or not, per jaw vertex. `folds` holds the round's fold vertices (room for one per jaw
+// vertex). Returns how many vertices were folds.
+constexpr uint8_t kClean = 1;
+uint32_t absorb_folds(Surface& f, const Vec3& d, const Aabb& region, uint32_t* used, uint8_t* state,
+                      uint32_t* folds) {
+  const Mesh& jaw = *f.jaw;
+  uint32_t count = 0;
+  for (uint32_t v = 0; v < jaw.vertices.size(); ++v) {
+    if (f.wall_degree[v] == 0 || state[v] == kClean) continue;
+    bool fold = f.wall_degree[v] > 2;
+    for (uint32_t w = 0; w < f.wall_degree[v] && w < 2 && !fold; ++w) {
+      const uint32_t end = f.wall_ends[2 * v + w];
+      fold = wall_inside_fan(f, v, end, d) || wall_meets_ring(f, v, end, d, region);
     }
-    if (!fold) continue;
-    ++folds;
-    for (uint32_t j = r.star_start[rv]; j < r.star_start[rv + 1]; ++j) {
-      const uint32_t t = r.tris[r.star[j]];
-      if (cls[t] != kBack) continue;
-      cls[t] = kAbsorbed;
-      for (int k = 0; k < 3; ++k) {
-        if (used[jaw.triangles[t].v[k]] == kUnset) used[jaw.triangles[t].v[k]] = 0;
+    if (fold) {
+      folds[count++] = v;
+    } else {
+      state[v] = kClean;
+    }
+  }
+  uint32_t ring[kRingCap];
+  for (uint32_t i = 0; i < count; ++i) {
+    const uint32_t v = folds[i];
+    for (uint32_t j = f.star_start[v]; j < f.star_start[v + 1]; ++j) {
+      const uint32_t t = f.star[j];
+      if (f.cls[t] != kBack) continue;
+      f.cls[t] = kAbsorbed;
+      for (uint32_t w : jaw.triangles[t].v) {
+        used[w] = 0;
+        const uint32_t n = ring_triangles(f, w, ring);
+        for (uint32_t m = 0; m < n; ++m) {
+          for (uint32_t x : jaw.triangles[ring[m]].v) state[x] = 0;
+        }
       }
     }
   }
-  return folds;
+  return count;
 }
 
-// The output from the final round: the surface's triangles in input order, then two per wall;
-// the surface's vertices in input order, then the walls' tops in the order the walls come.
-Status emit_surface(Arena& arena, const Mesh& jaw, const uint8_t* cls, const Round& r,
-                    const Vec3& d, const Aabb& region, Mesh* result, ExactSweepStats* st) {
-  const uint32_t n = r.vertex_count;
+// The output: the surface's triangles in input order, then two per wall; the surface's
+// vertices in input order (used[v]: its rank), then the walls' tops in the order the walls
+// come.
+Status emit_surface(Arena& arena, const Surface& f, uint32_t* used, const Vec3& d,
+                    const Aabb& region, Mesh* result, ExactSweepStats* st) {
+  const Mesh& jaw = *f.jaw;
+  const size_t nv = jaw.vertices.size(), nt = jaw.triangles.size();
+  uint32_t n = 0;
+  for (size_t v = 0; v < nv; ++v) {
+    if (used[v] != kUnset) used[v] = n++;
+  }
   uint32_t* top = arena.allocate_array<uint32_t>(n + 1);
   if (top == nullptr) return arena.exhausted_status();
   for (uint32_t v = 0; v < n; ++v) top[v] = kUnset;
   uint64_t patch = 0;
   uint32_t tops = 0;
-  for (size_t i = 0; i < r.tris.size(); ++i) {
-    const Triangle& g = jaw.triangles[r.tris[i]];
-    patch += in_patch(cls[r.tris[i]]) ? 1u : 0u;
+  for (size_t t = 0; t < nt; ++t) {
+    const Triangle& g = jaw.triangles[t];
+    patch += in_patch(f.cls[t]) ? 1u : 0u;
     for (int k = 0; k < 3; ++k) {
-      if ((r.walls[i] & (1u << k)) == 0) continue;
+      if ((f.walls[t] & (1u << k)) == 0) continue;
       ++st->walls;
       for (int c = 0; c < 2; ++c) {
-        const uint32_t v = r.rank[g.v[(k + c) % 3]];
+        const uint32_t v = used[g.v[(k + c) % 3]];
         if (top[v] == kUnset) top[v] = n + tops++;
       }
     }
   }
-  for (uint32_t v = 0; v < n; ++v) st->pinched_vertices += r.wall_degree[v] > 2 ? 1u : 0u;
+  for (size_t v = 0; v < nv; ++v) st->pinched_vertices += f.wall_degree[v] > 2 ? 1u : 0u;
   st->top_vertices = tops;
   result->bind(&arena);
   if (!result->triangles.reserve(patch + 2 * st->walls) ||
       !result->vertices.resize(static_cast<size_t>(n) + tops)) {
     return arena.exhausted_status();
   }
-  for (size_t i = 0; i < r.tris.size(); ++i) {
-    const Triangle& g = jaw.triangles[r.tris[i]];
-    if (!in_patch(cls[r.tris[i]])) continue;
-    (void)result->triangles.push_back(Triangle{{r.rank[g.v[0]], r.rank[g.v[1]], r.rank[g.v[2]]}});
+  for (size_t t = 0; t < nt; ++t) {
+    const Triangle& g = jaw.triangles[t];
+    if (!in_patch(f.cls[t])) continue;
+    (void)result->triangles.push_back(Triangle{{used[g.v[0]], used[g.v[1]], used[g.v[2]]}});
   }
-  for (size_t i = 0; i < r.tris.size(); ++i) {
-    const Triangle& g = jaw.triangles[r.tris[i]];
+  for (size_t t = 0; t < nt; ++t) {
+    const Triangle& g = jaw.triangles[t];
     for (int k = 0; k < 3; ++k) {
-      if ((r.walls[i] & (1u << k)) == 0) continue;
-      const uint32_t a = r.rank[g.v[k]], b = r.rank[g.v[(k + 1) % 3]];
+      if ((f.walls[t] & (1u << k)) == 0) continue;
+      const uint32_t a = used[g.v[k]], b = used[g.v[(k + 1) % 3]];
       // The wall shares the edge a -> b the other way: (b, a, a'), (b, a', b').
       (void)result->triangles.push_back(Triangle{{b, a, top[a]}});
       (void)result->triangles.push_back(Triangle{{b, top[a], top[b]}});
     }
   }
-  for (size_t v = 0; v < jaw.vertices.size(); ++v) {
-    const uint32_t rv = r.rank[v];
+  for (size_t v = 0; v < nv; ++v) {
+    const uint32_t rv = used[v];
     if (rv == kUnset) continue;
     result->vertices[rv] = jaw.vertices[v];
     if (top[rv] != kUnset && !wall_top(jaw.vertices[v], d, region, &result->vertices[top[rv]])) {
@@ -381,13 +367,11 @@ Status emit_surface(Arena& arena, const Mesh& jaw, const uint8_t* cls, const Rou
 }  // namespace
 
 uint64_t sweep_exact_bound(uint64_t vertex_count, uint64_t triangle_count) {
-  // A class byte per triangle, a mark and a rank per vertex; a round: per triangle near the
-  // surface an id, three half-edges and their sort's scratch (16 bytes each), three twins,
-  // three star entries and a wall byte; per vertex a star offset, its fill, two wall ends and
-  // a degree byte, then the tops; the output at most the triangles with 2 walls each and the
-  // vertices twice (the surface can hold every triangle at worst).
-  return triangle_count * (1 + 4 + 96 + 12 + 12 + 1 + 3 * 12) + vertex_count * (4 + 4 + 18 + 4) +
-         vertex_count * 48 + 8192;
+  // Per triangle its part, three star entries, a wall byte and a ring stamp (18 bytes); per
+  // vertex a mark, a state, a star offset and its fill, two wall ends, a degree, a fold entry
+  // and a top id (30); the output at most every triangle with three walls (7 triangles, 84
+  // bytes) and every vertex with a top (48); the arena's alignment of each array.
+  return triangle_count * (18 + 84) + vertex_count * (30 + 48) + 4096;
 }
 
 Status sweep_exact_mesh(const Context& ctx, const Mesh& jaw, const Vec3& direction,
@@ -416,24 +400,27 @@ Status sweep_exact_mesh(const Context& ctx, const Mesh& jaw, const Vec3& directi
   const size_t nv = jaw.vertices.size(), nt = jaw.triangles.size();
   uint8_t* cls = arena.allocate_array<uint8_t>(nt + 1);
   uint32_t* used = arena.allocate_array<uint32_t>(nv + 1);
-  if (cls == nullptr || used == nullptr) return arena.exhausted_status();
+  uint8_t* state = arena.allocate_array<uint8_t>(nv + 1);
+  if (cls == nullptr || used == nullptr || state == nullptr) return arena.exhausted_status();
+  std::memset(state, 0, nv + 1);
   SPLINTCORE_RETURN_IF_ERROR(classify_triangles(jaw, d, region, cls, used, st));
-  const Arena::Marker rounds = arena.mark();
-  Round r;
+  Surface f;
+  f.jaw = &jaw;
+  f.cls = cls;
+  SPLINTCORE_RETURN_IF_ERROR(build_stars(arena, jaw, &f));
+  uint32_t* fold_list = arena.allocate_array<uint32_t>(nv + 1);
+  if (fold_list == nullptr) return arena.exhausted_status();
   for (int round = 0;; ++round) {
-    arena.rewind(rounds);
-    r = Round();
-    r.tris.bind(&arena);
-    SPLINTCORE_RETURN_IF_ERROR(build_round(arena, jaw, cls, used, &r));
+    find_walls(&f);
     if (round == kMaxRounds) break;
-    const uint32_t folds = absorb_folds(jaw, r, d, region, cls, used);
+    const uint32_t folds = absorb_folds(f, d, region, used, state, fold_list);
     if (folds == 0) break;
     st->fold_vertices += folds;
     ++st->fold_rounds;
   }
   for (size_t t = 0; t < nt; ++t) st->absorbed_triangles += cls[t] == kAbsorbed ? 1u : 0u;
   Mesh result;
-  SPLINTCORE_RETURN_IF_ERROR(emit_surface(arena, jaw, cls, r, d, region, &result, st));
+  SPLINTCORE_RETURN_IF_ERROR(emit_surface(arena, f, used, d, region, &result, st));
   move_mesh_down(arena, scope.start(), result, out);
   scope.commit();
   return Status::ok();
