@@ -93,8 +93,8 @@ struct CaseFile {
   // "method": "exact" (blockout.h, BlockoutOptions::exact): each jaw's swept volume is its
   // exact boundary, the jaw's own front triangles and walls along the direction, instead of
   // the voxel sweep's; the imprint is then made by the blockout alone (the Boolean base minus
-  // jaws is not run), and voxel, inset, closing_radius and clearance do not apply. The case
-  // file's default when it gives none of those keys (else "voxel"); false here by default.
+  // jaws is not run), and voxel, inset, closing_radius and clearance do not apply. Default
+  // "voxel".
   bool blockout_exact = false;
   // The wall-thickness check ("min_thickness", mm; 0: not run): thin spots are reported
   // (DesignReport::thickness), not refused.

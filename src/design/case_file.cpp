@@ -572,14 +572,6 @@ Status parse_blockout(const Reader& r, const JsonValue* b, CaseFile* out) {
                   "or the automatic outline");
   }
   out->has_blockout = true;
-  // The method: "exact" unless the object gives a key of the voxel method (which then is
-  // "voxel"); given, it must agree with the keys.
-  static const char* const kVoxelOnly[] = {"voxel", "inset", "closing_radius", "clearance"};
-  const JsonValue* voxel_key = nullptr;
-  for (const char* key : kVoxelOnly) {
-    if (voxel_key == nullptr) voxel_key = doc.member(*b, key);
-  }
-  out->blockout_exact = voxel_key == nullptr;
   if (const JsonValue* m = doc.member(*b, "method")) {
     SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*m, JsonType::kString, "blockout.method"));
     const bool exact = std::strcmp(m->string, "exact") == 0;
@@ -588,6 +580,7 @@ Status parse_blockout(const Reader& r, const JsonValue* b, CaseFile* out) {
                     "\"blockout.method\" must be \"exact\" or \"voxel\"");
     }
     out->blockout_exact = exact;
+    static const char* const kVoxelOnly[] = {"voxel", "inset", "closing_radius", "clearance"};
     for (const char* key : kVoxelOnly) {
       const JsonValue* v = doc.member(*b, key);
       if (exact && v != nullptr) {
