@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# Issue 29, the exact blockout on the real CBCT dentition (../shared/realdata, not in the
+# repository: exits 77, skipped, without it): the case tools/bench/issue29.sh designs (spacing
+# 0.5 mm, "auto" with a 2 mm bite opening) with "blockout": {"method": "exact"}, designed in
+# 64 MiB on one thread, with 1 GiB, and on two threads: the splint is a closed, valid solid
+# (splintcore check), the same bytes every way, the report says the exact method ran on both
+# jaws and checked the result, within the cap.
+#   usage: realdata_exact_blockout_test.sh SPLINTCORE SPLINTCORE_BENCH REALDATA_DIR
+# shellcheck source=realdata_steps.sh
+source "$(dirname "$0")/realdata_steps.sh"
+step "export the real case" "$bench" --realdata "$real" --export-realcase "$work/rc"
+step "the automatic case with the exact blockout" python3 - "$work/rc/exact.json" <<'PY'
+import json, sys
+c = {"splintcore_case": 1, "case_id": "realdata-patient26", "units": "mm",
+     "jaws": [{"role": "maxilla", "mesh": "maxilla.stl"},
+              {"role": "mandible", "mesh": "mandible.stl"}],
+     "base": {"spacing_mm": 0.5, "auto": {"bite_opening_mm": 2}}, "printer": "eden260",
+     "blockout": {"method": "exact"},
+     "output": {"splint": "splint.stl", "report": "report.json"}}
+json.dump(c, open(sys.argv[1], "w"))
+PY
+step "design it in 64M" "$tool" design "$work/rc/exact.json" -o "$work/d" --memory-cap 64M
+cat "$work/out"
+step "design it with 1 GiB" "$tool" design "$work/rc/exact.json" -o "$work/big" --memory-cap 1G
+step "design it on two threads" "$tool" design "$work/rc/exact.json" -o "$work/t2" \
+  --memory-cap 64M --threads 2
+step "the splint written is a printable solid" "$tool" check "$work/d/splint.stl"
+cat "$work/out"
+step "the same bytes with 1 GiB" cmp "$work/big/splint.stl" "$work/d/splint.stl"
+step "the same bytes on two threads" cmp "$work/t2/splint.stl" "$work/d/splint.stl"
+step "the report: outlined, blockout on both jaws, checked, within the cap" \
+  blockout_report "$work/d/report.json" "$((64 << 20))" auto
+cat "$work/out"
+step "the report: the exact method on both jaws, the jaws' own Boolean not run" python3 - \
+  "$work/d/report.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+c = r["checks"]
+assert r["parameters"]["blockout_method"] == "exact", r["parameters"]
+assert c["imprint"].startswith("exact swept volume"), c["imprint"]
+assert c["boolean_intersecting_pairs"] == 0, c
+for b in c["blockout"]:
+    assert b["method"] == "exact" and b["walls"] > 0 and b["kept_front_triangles"] > 0, b
+    print(b["role"], "front", b["front_triangles"], "kept", b["kept_front_triangles"], "walls",
+          b["walls"], "folds", b["fold_vertices"], "taken in", b["back_triangles_taken_in"])
+PY
+cat "$work/out"
+exit $failed
