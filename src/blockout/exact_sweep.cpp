@@ -129,26 +129,63 @@ uint32_t across(const Surface& f, uint32_t t, uint32_t k) {
   return kUnset;
 }
 
-// The walls (edges of the surface's triangles whose other triangle is neither on the surface
-// nor a front triangle left out) and, per vertex, their other ends.
+// The walls of triangle t: bit k when its edge k has a wall (t on the surface, the triangle
+// across neither on it nor a front triangle left out).
+uint8_t wall_bits(const Surface& f, uint32_t t) {
+  if (!in_patch(f.cls[t])) return 0;
+  uint8_t bits = 0;
+  for (uint32_t k = 0; k < 3; ++k) {
+    const uint32_t o = across(f, t, k);
+    const uint8_t other = o == kUnset ? kBack : f.cls[o];
+    if (!in_patch(other) && other != kFrontCulled) bits = static_cast<uint8_t>(bits | (1u << k));
+  }
+  return bits;
+}
+
+// Vertex v's walls: their count and the other ends of the first two, in the order of v's
+// triangles and their edges.
+void vertex_walls(Surface* f, uint32_t v) {
+  const Mesh& jaw = *f->jaw;
+  f->wall_degree[v] = 0;
+  for (uint32_t j = f->star_start[v]; j < f->star_start[v + 1]; ++j) {
+    const uint32_t t = f->star[j];
+    for (uint32_t k = 0; k < 3; ++k) {
+      if ((f->walls[t] & (1u << k)) == 0) continue;
+      const uint32_t a = jaw.triangles[t].v[k], b = jaw.triangles[t].v[(k + 1) % 3];
+      if (a != v && b != v) continue;
+      if (f->wall_degree[v] < 2) f->wall_ends[2 * v + f->wall_degree[v]] = a == v ? b : a;
+      if (f->wall_degree[v] < 255) ++f->wall_degree[v];
+    }
+  }
+}
+
+// All the walls (edges of the surface's triangles whose other triangle is neither on the
+// surface nor a front triangle left out) and, per vertex, their other ends.
 void find_walls(Surface* f) {
   const Mesh& jaw = *f->jaw;
-  std::memset(f->wall_degree, 0, jaw.vertices.size() + 1);
-  const auto add_end = [&](uint32_t at, uint32_t end) {
-    if (f->wall_degree[at] < 2) f->wall_ends[2 * at + f->wall_degree[at]] = end;
-    if (f->wall_degree[at] < 255) ++f->wall_degree[at];
-  };
-  for (size_t t = 0; t < jaw.triangles.size(); ++t) {
-    f->walls[t] = 0;
-    if (!in_patch(f->cls[t])) continue;
+  for (uint32_t t = 0; t < jaw.triangles.size(); ++t) f->walls[t] = wall_bits(*f, t);
+  for (uint32_t v = 0; v < jaw.vertices.size(); ++v) vertex_walls(f, v);
+}
+
+// The walls again where triangles joined the surface: theirs, their neighbours', and then
+// the vertices of all of those.
+void update_walls(Surface* f, const uint32_t* joined, uint32_t count) {
+  const Mesh& jaw = *f->jaw;
+  for (uint32_t i = 0; i < count; ++i) {
+    const uint32_t t = joined[i];
+    f->walls[t] = wall_bits(*f, t);
     for (uint32_t k = 0; k < 3; ++k) {
-      const uint32_t o = across(*f, static_cast<uint32_t>(t), k);
-      const uint8_t other = o == kUnset ? kBack : f->cls[o];
-      if (in_patch(other) || other == kFrontCulled) continue;
-      f->walls[t] |= static_cast<uint8_t>(1u << k);
-      const uint32_t a = jaw.triangles[t].v[k], b = jaw.triangles[t].v[(k + 1) % 3];
-      add_end(a, b);
-      add_end(b, a);
+      const uint32_t o = across(*f, t, k);
+      if (o != kUnset) f->walls[o] = wall_bits(*f, o);
+    }
+  }
+  for (uint32_t i = 0; i < count; ++i) {
+    const uint32_t t = joined[i];
+    for (uint32_t v : jaw.triangles[t].v) vertex_walls(f, v);
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t o = across(*f, t, k);
+      if (o == kUnset) continue;
+      for (uint32_t v : jaw.triangles[o].v) vertex_walls(f, v);
     }
   }
 }
@@ -266,7 +303,7 @@ bool wall_meets_ring(Surface& f, uint32_t v, uint32_t s, const Vec3& d, const Aa
 // vertex). Returns how many vertices were folds.
 constexpr uint8_t kClean = 1;
 uint32_t absorb_folds(Surface& f, const Vec3& d, const Aabb& region, uint32_t* used, uint8_t* state,
-                      uint32_t* folds) {
+                      uint32_t* folds, uint32_t* joined, uint32_t* joined_count) {
   const Mesh& jaw = *f.jaw;
   uint32_t count = 0;
   for (uint32_t v = 0; v < jaw.vertices.size(); ++v) {
@@ -289,6 +326,7 @@ uint32_t absorb_folds(Surface& f, const Vec3& d, const Aabb& region, uint32_t* u
       const uint32_t t = f.star[j];
       if (f.cls[t] != kBack) continue;
       f.cls[t] = kAbsorbed;
+      joined[(*joined_count)++] = t;
       for (uint32_t w : jaw.triangles[t].v) {
         used[w] = 0;
         const uint32_t n = ring_triangles(f, w, ring);
@@ -367,11 +405,12 @@ Status emit_surface(Arena& arena, const Surface& f, uint32_t* used, const Vec3& 
 }  // namespace
 
 uint64_t sweep_exact_bound(uint64_t vertex_count, uint64_t triangle_count) {
-  // Per triangle its part, three star entries, a wall byte and a ring stamp (18 bytes); per
+  // Per triangle its part, three star entries, a wall byte, a ring stamp and a place in a
+  // round's list of joined triangles (22 bytes); per
   // vertex a mark, a state, a star offset and its fill, two wall ends, a degree, a fold entry
   // and a top id (30); the output at most every triangle with three walls (7 triangles, 84
   // bytes) and every vertex with a top (48); the arena's alignment of each array.
-  return triangle_count * (18 + 84) + vertex_count * (30 + 48) + 4096;
+  return triangle_count * (22 + 84) + vertex_count * (30 + 48) + 4096;
 }
 
 Status sweep_exact_mesh(const Context& ctx, const Mesh& jaw, const Vec3& direction,
@@ -409,12 +448,15 @@ Status sweep_exact_mesh(const Context& ctx, const Mesh& jaw, const Vec3& directi
   f.cls = cls;
   SPLINTCORE_RETURN_IF_ERROR(build_stars(arena, jaw, &f));
   uint32_t* fold_list = arena.allocate_array<uint32_t>(nv + 1);
-  if (fold_list == nullptr) return arena.exhausted_status();
-  for (int round = 0;; ++round) {
-    find_walls(&f);
-    if (round == kMaxRounds) break;
-    const uint32_t folds = absorb_folds(f, d, region, used, state, fold_list);
+  uint32_t* joined = arena.allocate_array<uint32_t>(nt + 1);
+  if (fold_list == nullptr || joined == nullptr) return arena.exhausted_status();
+  find_walls(&f);
+  for (int round = 0; round < kMaxRounds; ++round) {
+    uint32_t joined_count = 0;
+    const uint32_t folds =
+        absorb_folds(f, d, region, used, state, fold_list, joined, &joined_count);
     if (folds == 0) break;
+    update_walls(&f, joined, joined_count);
     st->fold_vertices += folds;
     ++st->fold_rounds;
   }
