@@ -4,6 +4,7 @@
 // the front fan around a vertex overlaps one of its walls seen along d, the back triangles
 // around it join the patch.
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 
 #include "splintcore/blockout.h"
@@ -369,8 +370,13 @@ Status emit_surface(Arena& arena, const Surface& f, uint32_t* used, const Vec3& 
   }
   for (size_t v = 0; v < nv; ++v) st->pinched_vertices += f.wall_degree[v] > 2 ? 1u : 0u;
   st->top_vertices = tops;
+  const uint64_t out_triangles = patch + 2 * st->walls;
+  if (out_triangles > 0xffffffffu || out_triangles > SIZE_MAX) {
+    return make_error(StatusCode::kLimitExceeded, "exact sweep: ", out_triangles,
+                      " triangles out (at most 2^32 - 1)");
+  }
   result->bind(&arena);
-  if (!result->triangles.reserve(patch + 2 * st->walls) ||
+  if (!result->triangles.reserve(static_cast<size_t>(out_triangles)) ||
       !result->vertices.resize(static_cast<size_t>(n) + tops)) {
     return arena.exhausted_status();
   }
