@@ -276,6 +276,27 @@ Status sweep_near_splint(const Context& ctx, const Mesh& splint, const Aabb& bou
   return Status::ok();
 }
 
+// A copy of the splint in the arena, for when nothing is swept near it (the caller's splint
+// stays theirs).
+Status copy_splint(Arena& arena, const Mesh& splint, Mesh* out) {
+  out->bind(&arena);
+  if (!out->triangles.resize(splint.triangles.size()) ||
+      !out->vertices.resize(splint.vertices.size())) {
+    return arena.exhausted_status();
+  }
+  for (size_t i = 0; i < splint.triangles.size(); ++i) out->triangles[i] = splint.triangles[i];
+  for (size_t i = 0; i < splint.vertices.size(); ++i) out->vertices[i] = splint.vertices[i];
+  return Status::ok();
+}
+
+// An error of a stage, named as the blockout's (the arena's and cancellation's pass as they are).
+Status blockout_error(const Status& s) {
+  if (s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) return s;
+  Status e = make_error(s.code(), "blockout: ", s.message());
+  if (s.index() != kNoPosition) e.at_index(s.index());
+  return e;
+}
+
 // BlockoutOptions::exact: the splint minus the exact swept boundary of the one jaw with
 // triangles (the others only anchor the sampled sweep's lattice).
 Status blockout_exact(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
@@ -306,13 +327,7 @@ Status blockout_exact(const Context& ctx, const Mesh& splint, Span<const Mesh> j
   st->swept_triangles = swept.triangles.size();
   Mesh out;
   if (swept.triangles.empty()) {
-    out.bind(ctx.arena);
-    if (!out.triangles.resize(splint.triangles.size()) ||
-        !out.vertices.resize(splint.vertices.size())) {
-      return ctx.arena->exhausted_status();
-    }
-    for (size_t i = 0; i < splint.triangles.size(); ++i) out.triangles[i] = splint.triangles[i];
-    for (size_t i = 0; i < splint.vertices.size(); ++i) out.vertices[i] = splint.vertices[i];
+    SPLINTCORE_RETURN_IF_ERROR(copy_splint(*ctx.arena, splint, &out));
   } else {
     Status s = mesh_boolean(ctx, splint, swept, bo, &out, &st->boolean);
     if (!s.is_ok() && s.code() != StatusCode::kArenaExhausted &&
@@ -355,10 +370,7 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
       return e;
     }
     out->bind(&arena);
-    if (e.code() == StatusCode::kArenaExhausted || e.code() == StatusCode::kCancelled) return e;
-    Status named = make_error(e.code(), "blockout: ", e.message());
-    if (e.index() != kNoPosition) named.at_index(e.index());
-    return named;
+    return blockout_error(e);
   }
   const int kAttempts = 4;
   Mesh result;
@@ -396,16 +408,7 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
     }
     if (!s.is_ok()) break;
     if (swept.triangles.empty()) {
-      // Nothing reaches the splint: a copy (the caller's splint stays theirs).
-      result.bind(&arena);
-      if (!result.triangles.resize(splint.triangles.size()) ||
-          !result.vertices.resize(splint.vertices.size())) {
-        s = arena.exhausted_status();
-        break;
-      }
-      for (size_t i = 0; i < splint.triangles.size(); ++i)
-        result.triangles[i] = splint.triangles[i];
-      for (size_t i = 0; i < splint.vertices.size(); ++i) result.vertices[i] = splint.vertices[i];
+      s = copy_splint(arena, splint, &result);  // nothing reaches the splint
       break;
     }
     BooleanOptions bo = options.boolean;
@@ -421,10 +424,7 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
   }
   if (!s.is_ok()) {
     out->bind(&arena);
-    if (s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) return s;
-    Status e = make_error(s.code(), "blockout: ", s.message());
-    if (s.index() != kNoPosition) e.at_index(s.index());
-    return e;
+    return blockout_error(s);
   }
   move_mesh_down(arena, scope.start(), result, out);
   scope.commit();
