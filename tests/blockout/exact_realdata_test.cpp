@@ -14,6 +14,7 @@
 
 #include "splintcore/blockout.h"
 #include "splintcore/design.h"
+#include "support/frame_moves.h"
 #include "support/real_jaws.h"
 #include "support/test_util.h"
 #include "support/undercut_lines.h"
@@ -50,13 +51,7 @@ TEST(ExactBlockoutRealData, NoLineLockedOnEitherJaw) {
   SPLINTCORE_ASSERT_OK(
       resolve_case_outline(ctx, c[1], Span<const Mesh>(real.jaw, 2), &resolved, nullptr));
   for (int j = 0; j < 2; ++j) {
-    Mesh jaw(&ta.arena);
-    for (const Vec3& p : real.jaw[j].vertices) {
-      Vec3 q = resolved.jaws[j].transform.apply_point(p);
-      ASSERT_TRUE(round_to_float32(&q));
-      ASSERT_TRUE(jaw.vertices.push_back(q));
-    }
-    for (const Triangle& t : real.jaw[j].triangles) ASSERT_TRUE(jaw.triangles.push_back(t));
+    const Mesh jaw = test::moved_mesh(ta.arena, real.jaw[j], resolved.jaws[j].transform);
     const Vec3 d = j == 0 ? resolved.insertion_direction : -resolved.insertion_direction;
     // Lines across d through the arch's box.
     Aabb box;

@@ -8,6 +8,7 @@
 
 #include "common/phantom.h"
 #include "splintcore/design.h"
+#include "support/frame_moves.h"
 #include "support/phantom_jaws.h"
 #include "support/test_util.h"
 #include "support/undercut_lines.h"
@@ -210,13 +211,7 @@ TEST(DesignPipeline, ExactBlockoutSkipsTheJawsBooleanAndRemovesTheUndercuts) {
   EXPECT_LT(v_exact, v_voxel);  // the voxel sweep leaves its inset of undercut
   // The independent line check, each jaw as the design moves it, along the way it leaves.
   for (int j = 0; j < 2; ++j) {
-    Mesh jaw(&f.t.arena);
-    for (const Vec3& p : f.jaws[j].vertices) {
-      Vec3 q = c.jaws[j].transform.apply_point(p);
-      ASSERT_TRUE(round_to_float32(&q));
-      ASSERT_TRUE(jaw.vertices.push_back(q));
-    }
-    for (const Triangle& t : f.jaws[j].triangles) ASSERT_TRUE(jaw.triangles.push_back(t));
+    const Mesh jaw = test::moved_mesh(f.t.arena, f.jaws[j], c.jaws[j].transform);
     const Vec3 d = j == 0 ? c.insertion_direction : -c.insertion_direction;
     const Vec3 u{1, 0, 0}, v{0, 1, 0}, at{0, 18, 0};
     const test::LockReport before =
@@ -254,17 +249,6 @@ TEST(DesignPipeline, ExactBlockoutSkipsTheJawsBooleanAndRemovesTheUndercuts) {
 namespace splintcore {
 namespace {
 
-Mesh moved_jaw(Arena& arena, const Mesh& jaw, const RigidTransform& x) {
-  Mesh m(&arena);
-  for (const Vec3& v : jaw.vertices) {
-    Vec3 p = x.apply_point(v);
-    EXPECT_TRUE(round_to_float32(&p));
-    (void)m.vertices.push_back(p);
-  }
-  for (const Triangle& t : jaw.triangles) (void)m.triangles.push_back(t);
-  return m;
-}
-
 TEST(DesignOptions, ClearanceKeepsTheSpacerBetweenJawAndSplint) {
   CaseAndJaws f;
   ASSERT_TRUE(f.ok);
@@ -287,7 +271,7 @@ TEST(DesignOptions, ClearanceKeepsTheSpacerBetweenJawAndSplint) {
   // piecewise-linear error), and the imprint comes that close: the spacer is there.
   double nearest = HUGE_VAL;
   for (int j = 0; j < 2; ++j) {
-    const Mesh jaw = moved_jaw(f.t.arena, f.jaws[j], c.jaws[j].transform);
+    const Mesh jaw = test::moved_mesh(f.t.arena, f.jaws[j], c.jaws[j].transform);
     DistanceIndex index;
     SPLINTCORE_ASSERT_OK(build_distance_index(Context(&f.t.arena), jaw, {}, &index));
     for (const Vec3& p : splint.vertices) {

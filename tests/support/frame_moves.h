@@ -55,6 +55,19 @@ inline double one_sided(const Mesh& a, const Mesh& b, Arena& arena) {
   return worst;
 }
 
+// The mesh moved by x with its vertices rounded to float32, as the design moves a jaw (the
+// triangles are the same). A vertex beyond float32 range fails the calling test.
+inline Mesh moved_mesh(Arena& arena, const Mesh& mesh, const RigidTransform& x) {
+  Mesh m(&arena);
+  for (const Vec3& v : mesh.vertices) {
+    Vec3 p = x.apply_point(v);
+    EXPECT_TRUE(round_to_float32(&p));
+    EXPECT_TRUE(m.vertices.push_back(p));
+  }
+  for (const Triangle& t : mesh.triangles) EXPECT_TRUE(m.triangles.push_back(t));
+  return m;
+}
+
 }  // namespace test
 }  // namespace splintcore
 

@@ -12,16 +12,8 @@
 source "$(dirname "$0")/realdata_steps.sh"
 cap=64M
 step "export the real case" "$bench" --realdata "$real" --export-realcase "$work/rc"
-step "the automatic case with the blockout" python3 - "$work/rc/auto_blockout.json" <<'PY'
-import json, sys
-c = {"splintcore_case": 1, "case_id": "realdata-patient26", "units": "mm",
-     "jaws": [{"role": "maxilla", "mesh": "maxilla.stl"},
-              {"role": "mandible", "mesh": "mandible.stl"}],
-     "base": {"spacing_mm": 0.5, "auto": {"bite_opening_mm": 2}}, "printer": "eden260",
-     "blockout": {"voxel": 0.1},
-     "output": {"splint": "splint.stl", "report": "report.json"}}
-json.dump(c, open(sys.argv[1], "w"))
-PY
+step "the automatic case with the blockout" \
+  auto_case "$work/rc/auto_blockout.json" '{"voxel": 0.1}'
 step "design it with 1 GiB" "$tool" design "$work/rc/auto_blockout.json" -o "$work/big" \
   --memory-cap 1G
 step "design it in $cap" "$tool" design "$work/rc/auto_blockout.json" -o "$work/d" \

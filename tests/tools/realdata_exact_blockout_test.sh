@@ -9,16 +9,8 @@
 # shellcheck source=realdata_steps.sh
 source "$(dirname "$0")/realdata_steps.sh"
 step "export the real case" "$bench" --realdata "$real" --export-realcase "$work/rc"
-step "the automatic case with the exact blockout" python3 - "$work/rc/exact.json" <<'PY'
-import json, sys
-c = {"splintcore_case": 1, "case_id": "realdata-patient26", "units": "mm",
-     "jaws": [{"role": "maxilla", "mesh": "maxilla.stl"},
-              {"role": "mandible", "mesh": "mandible.stl"}],
-     "base": {"spacing_mm": 0.5, "auto": {"bite_opening_mm": 2}}, "printer": "eden260",
-     "blockout": {"method": "exact"},
-     "output": {"splint": "splint.stl", "report": "report.json"}}
-json.dump(c, open(sys.argv[1], "w"))
-PY
+step "the automatic case with the exact blockout" \
+  auto_case "$work/rc/exact.json" '{"method": "exact"}'
 step "design it in 64M" "$tool" design "$work/rc/exact.json" -o "$work/d" --memory-cap 64M
 cat "$work/out"
 step "design it with 1 GiB" "$tool" design "$work/rc/exact.json" -o "$work/big" --memory-cap 1G

@@ -1,6 +1,6 @@
 # The start of the real-data shell tests (realdata_cli_test.sh, realdata_blockout_test.sh,
-# realdata_auto_blockout_test.sh),
-# sourced by them with their arguments SPLINTCORE SPLINTCORE_BENCH REALDATA_DIR: skipped (exit
+# realdata_auto_blockout_test.sh, realdata_exact_blockout_test.sh), sourced by them with their
+# arguments SPLINTCORE SPLINTCORE_BENCH REALDATA_DIR: skipped (exit
 # 77) without ../shared/realdata, a work folder removed at exit, and `step WHAT COMMAND...`,
 # which prints ok or FAILED (then the command's output) and sets $failed.
 set -u
@@ -19,6 +19,21 @@ step() {  # what command...
   else
     echo "FAILED: $what"; cat "$work/out" "$work/err"; failed=1
   fi
+}
+
+# auto_case FILE BLOCKOUT: the exported real case (spacing 0.5 mm, "auto" outline with a 2 mm
+# bite opening) with the blockout object BLOCKOUT (JSON), written to FILE.
+auto_case() {
+  python3 - "$@" <<'PY'
+import json, sys
+c = {"splintcore_case": 1, "case_id": "realdata-patient26", "units": "mm",
+     "jaws": [{"role": "maxilla", "mesh": "maxilla.stl"},
+              {"role": "mandible", "mesh": "mandible.stl"}],
+     "base": {"spacing_mm": 0.5, "auto": {"bite_opening_mm": 2}}, "printer": "eden260",
+     "blockout": json.loads(sys.argv[2]),
+     "output": {"splint": "splint.stl", "report": "report.json"}}
+json.dump(c, open(sys.argv[1], "w"))
+PY
 }
 
 # blockout_report REPORT CAP_BYTES [auto]: the report of a design with the blockout says it ran
