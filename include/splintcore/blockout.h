@@ -222,6 +222,13 @@ struct ExactSweepStats {
   uint64_t fold_vertices = 0;     // vertices whose fan overlapped a wall (back triangles taken in)
   uint64_t absorbed_triangles = 0;  // back triangles taken into the surface there
   uint32_t fold_rounds = 0;         // rounds that took some in
+  // Set by blockout (BlockoutOptions::exact), which checks the output's shells for
+  // self-crossing where its Boolean takes them before it runs: the shells meeting the region,
+  // the pairs their exact checks examined, and the shells that cross only outside the splint
+  // (such a crossing is not part of the result).
+  uint64_t shells = 0;
+  uint64_t shell_check_candidates = 0;
+  uint64_t shells_crossing_outside = 0;
 };
 
 // Arena bytes sweep_exact_mesh takes at most for a jaw of these sizes (output included).

@@ -62,6 +62,12 @@ struct CasePlan {
   Span<const Pick> lower[2];
 };
 
+// How a case's blockout sweeps each jaw (CaseFile::blockout_method says each).
+enum class BlockoutMethod : uint8_t { kAuto, kExact, kVoxel };
+
+// The case file's name of a method: "auto", "exact", "voxel".
+const char* blockout_method_name(BlockoutMethod m);
+
 // A parsed case. Strings and arrays live in the arena the case was parsed into.
 struct CaseFile {
   uint32_t version = 0;
@@ -90,12 +96,21 @@ struct CaseFile {
   // surface of each jaw's swept volume instead of the jaw's own triangles (the inset is then 0).
   bool has_blockout = false;
   SweepOptions blockout;
-  // "method": "exact" (blockout.h, BlockoutOptions::exact): each jaw's swept volume is its
-  // exact boundary, the jaw's own front triangles and walls along the direction, instead of
-  // the voxel sweep's; the imprint is then made by the blockout alone (the Boolean base minus
-  // jaws is not run), and voxel, inset, closing_radius and clearance do not apply. Default
-  // "voxel".
-  bool blockout_exact = false;
+  // "method" (the blockout's sweep):
+  // - kExact, "exact" (blockout.h, BlockoutOptions::exact): each jaw's swept volume is its
+  //   exact boundary, the jaw's own front triangles and walls along the direction; the imprint
+  //   is then made by the blockout alone (the Boolean base minus jaws is not run), and voxel,
+  //   inset, closing_radius and clearance do not apply. Where a jaw's swept surface would cross
+  //   itself (an overhang along the direction further than the sweep's fold rounds reach) the
+  //   design is refused (kUnsupported, with where).
+  // - kVoxel, "voxel": the sampled sweep above (voxel, inset, closing_radius, clearance).
+  // - kAuto, "auto": kExact, and where the exact sweep refuses a jaw the whole design again
+  //   with kVoxel from the base, the refusal kept in DesignReport::blockout_fallback. The
+  //   voxel keys then set the fallback's sweep; a clearance is refused (the spacer is the
+  //   sampled sweep's: say "voxel").
+  // A case file without "method" is kAuto when the object names no voxel key (voxel, inset,
+  // closing_radius, clearance: "blockout": {} is kAuto), else kVoxel.
+  BlockoutMethod blockout_method = BlockoutMethod::kAuto;
   // The wall-thickness check ("min_thickness", mm; 0: not run): thin spots are reported
   // (DesignReport::thickness), not refused.
   double min_thickness = 0;
@@ -279,6 +294,9 @@ struct DesignReport {
   // With "method": "exact" likewise: the imprint is the jaws' exact swept boundary (their
   // front triangles and walls), made by the blockout alone; `boolean` stays zero.
   bool imprint_swept = false;
+  // kAuto made the splint with voxels: why the exact sweep was refused (its status message,
+  // naming where); "" otherwise.
+  char blockout_fallback[Status::kMessageCapacity] = {};
   bool labelled = false;  // the case has "label"
   LabelStats label;
   bool thickness_checked = false;  // the case has "min_thickness"

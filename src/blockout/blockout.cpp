@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "core/union_find.h"
 #include "splintcore/blockout.h"
 #include "splintcore/distance.h"
 
@@ -297,6 +298,92 @@ Status blockout_error(const Status& s) {
   return e;
 }
 
+// The exact sweep's shells (its triangles connected through shared vertices: patches that
+// overlap are separate shells, which the Boolean's groups unite) each checked exactly for
+// self-crossing where the Boolean takes them: within the region (the splint's box as the
+// Boolean widens it) and, for a shell found crossing there, among its triangles not wholly
+// outside the splint by kShellReach (triangle_side), since a crossing is part of the result
+// only where both triangles reach into the splint (the real maxilla's case: walls meeting
+// front triangles in the air above the base). A crossing left is refused (kUnsupported, with
+// where) before the Boolean would spend its nudges on it. Arena: a union-find entry and a
+// shell start per vertex, a triangle copy per triangle, find_self_intersections_bound of the
+// largest shell, and for a shell crossing the splint's distance index (distance_index_bound);
+// all rewound.
+constexpr double kShellReach = 0.01;  // mm: what the Boolean's nudges of A may move it, and more
+
+Status check_swept_shells(const Context& ctx, const Mesh& swept, const Mesh& splint,
+                          const Aabb& region, ExactSweepStats* st) {
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);  // all rewound
+  const uint32_t nv = static_cast<uint32_t>(swept.vertices.size());
+  UnionFind shells;
+  uint32_t* start = arena.allocate_array<uint32_t>(static_cast<size_t>(nv) + 2);
+  Triangle* order = arena.allocate_array<Triangle>(swept.triangles.size() + 1);
+  if (!shells.init(arena, nv) || start == nullptr || order == nullptr) {
+    return arena.exhausted_status();
+  }
+  for (const Triangle& g : swept.triangles) {
+    (void)shells.unite(g.v[0], g.v[1]);
+    (void)shells.unite(g.v[0], g.v[2]);
+  }
+  const auto meets_region = [&](const Triangle& g) {
+    Aabb box;
+    for (uint32_t v : g.v) box.add(swept.vertices[v]);
+    return box.lo.x <= region.hi.x && box.hi.x >= region.lo.x && box.lo.y <= region.hi.y &&
+           box.hi.y >= region.lo.y && box.lo.z <= region.hi.z && box.hi.z >= region.lo.z;
+  };
+  std::memset(start, 0, (static_cast<size_t>(nv) + 2) * sizeof(uint32_t));
+  for (const Triangle& g : swept.triangles) {
+    if (meets_region(g)) ++start[shells.find(g.v[0]) + 2];
+  }
+  for (uint32_t v = 0; v < nv; ++v) start[v + 2] += start[v + 1];
+  for (const Triangle& g : swept.triangles) {
+    if (meets_region(g)) order[start[shells.find(g.v[0]) + 1]++] = g;
+  }
+  DistanceIndex index;
+  bool indexed = false;
+  // start[r] .. start[r + 1]: the shell of root r, in the sweep's order.
+  for (uint32_t r = 0; r < nv; ++r) {
+    uint32_t count = start[r + 1] - start[r];
+    if (count == 0) continue;
+    ++st->shells;
+    Triangle* tris = order + start[r];
+    SelfIntersectionReport rep;
+    SPLINTCORE_RETURN_IF_ERROR(find_self_intersections(
+        ctx, mesh_view(swept.vertices.span(), Span<const Triangle>(tris, count)), 1, &rep));
+    st->shell_check_candidates += rep.candidate_pairs;
+    if (!rep.self_intersecting()) continue;
+    if (!indexed) {
+      SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, splint, DistanceIndexOptions{}, &index));
+      indexed = true;
+    }
+    uint32_t kept = 0, seed = kNoNeighbor;
+    for (uint32_t i = 0; i < count; ++i) {
+      const Triangle g = tris[i];
+      const Vec3 &a = swept.vertices[g.v[0]], &b = swept.vertices[g.v[1]],
+                 &c = swept.vertices[g.v[2]];
+      if (triangle_side(index, a, b, c, kShellReach, &seed) != TriangleSide::kOutside) {
+        tris[kept++] = g;
+      }
+    }
+    count = kept;
+    SPLINTCORE_RETURN_IF_ERROR(find_self_intersections(
+        ctx, mesh_view(swept.vertices.span(), Span<const Triangle>(tris, count)), 1, &rep));
+    st->shell_check_candidates += rep.candidate_pairs;
+    if (!rep.self_intersecting()) {
+      ++st->shells_crossing_outside;
+      continue;
+    }
+    const auto um = [](double x) { return std::floor(x * 1000 + 0.5) / 1000; };
+    const Vec3& p = swept.vertices[tris[rep.first_b].v[0]];
+    return make_error(StatusCode::kUnsupported, "exact sweep: its surface crosses itself inside ",
+                      "the splint near (", um(p.x), ", ", um(p.y), ", ", um(p.z),
+                      "): a wall meets the jaw's front side further than the fold rounds ",
+                      "reach (an overhang along the direction)");
+  }
+  return Status::ok();
+}
+
 // BlockoutOptions::exact: the splint minus the exact swept boundary of the one jaw with
 // triangles (the others only anchor the sampled sweep's lattice).
 Status blockout_exact(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
@@ -325,6 +412,8 @@ Status blockout_exact(const Context& ctx, const Mesh& splint, Span<const Mesh> j
                                                 boolean_region(splint, bo), &swept, &st->exact));
   }
   st->swept_triangles = swept.triangles.size();
+  SPLINTCORE_RETURN_IF_ERROR(
+      check_swept_shells(ctx, swept, splint, boolean_region(splint, bo), &st->exact));
   Mesh out;
   if (swept.triangles.empty()) {
     SPLINTCORE_RETURN_IF_ERROR(copy_splint(*ctx.arena, splint, &out));

@@ -572,21 +572,38 @@ Status parse_blockout(const Reader& r, const JsonValue* b, CaseFile* out) {
                   "or the automatic outline");
   }
   out->has_blockout = true;
+  static const char* const kVoxelKeys[] = {"voxel", "inset", "closing_radius", "clearance"};
+  const JsonValue* voxel_key = nullptr;
+  for (const char* key : kVoxelKeys) {
+    if (voxel_key == nullptr) voxel_key = doc.member(*b, key);
+  }
+  out->blockout_method = voxel_key != nullptr ? BlockoutMethod::kVoxel : BlockoutMethod::kAuto;
   if (const JsonValue* m = doc.member(*b, "method")) {
     SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*m, JsonType::kString, "blockout.method"));
-    const bool exact = std::strcmp(m->string, "exact") == 0;
-    if (!exact && std::strcmp(m->string, "voxel") != 0) {
-      return r.fail(*m, StatusCode::kInvalidArgument,
-                    "\"blockout.method\" must be \"exact\" or \"voxel\"");
+    const BlockoutMethod methods[] = {BlockoutMethod::kAuto, BlockoutMethod::kExact,
+                                      BlockoutMethod::kVoxel};
+    bool known = false;
+    for (BlockoutMethod x : methods) {
+      if (std::strcmp(m->string, blockout_method_name(x)) != 0) continue;
+      out->blockout_method = x;
+      known = true;
     }
-    out->blockout_exact = exact;
-    static const char* const kVoxelOnly[] = {"voxel", "inset", "closing_radius", "clearance"};
-    for (const char* key : kVoxelOnly) {
+    if (!known) {
+      return r.fail(*m, StatusCode::kInvalidArgument,
+                    "\"blockout.method\" must be \"auto\", \"exact\" or \"voxel\"");
+    }
+    for (const char* key : kVoxelKeys) {
       const JsonValue* v = doc.member(*b, key);
-      if (exact && v != nullptr) {
+      if (out->blockout_method == BlockoutMethod::kExact && v != nullptr) {
         return r.fail(*v, StatusCode::kInvalidArgument, "\"blockout.", key,
                       "\" is for the voxel method (\"method\": \"exact\" has no voxels)");
       }
+    }
+    const JsonValue* clearance = doc.member(*b, "clearance");
+    if (out->blockout_method == BlockoutMethod::kAuto && clearance != nullptr) {
+      return r.fail(*clearance, StatusCode::kInvalidArgument,
+                    "\"blockout.clearance\" is the voxel method's (the spacer is the sampled "
+                    "sweep's): say \"method\": \"voxel\"");
     }
   }
   if (const JsonValue* bv = doc.member(*b, "voxel")) {
@@ -975,6 +992,15 @@ Status build_case_base(const Context& ctx, const CaseFile& c, Mesh* out, BaseRep
       build_splint_base(ctx, upper.span(), lower.span(), c.base, out, report));
   scope.commit();
   return Status::ok();
+}
+
+const char* blockout_method_name(BlockoutMethod m) {
+  switch (m) {
+    case BlockoutMethod::kAuto: return "auto";
+    case BlockoutMethod::kExact: return "exact";
+    case BlockoutMethod::kVoxel: return "voxel";
+  }
+  return "unknown";
 }
 
 }  // namespace splintcore

@@ -1,6 +1,7 @@
 // The design pipeline (design.h): the jaws moved by the plan, the base, the Boolean difference,
 // blockout or a spacer, the label, the thickness and printer checks. design_splint reads as
 // that list; each stage with more than a call is a function of its own below.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -301,7 +302,7 @@ Status blockout_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws
   bl.sweep = c.blockout;  // voxel, inset, closing radius, offset as the case gives them
   bl.sweep.direction = mandible ? -c.insertion_direction : c.insertion_direction;
   bl.boolean.check_self_intersection = check;
-  bl.exact = c.blockout_exact;
+  bl.exact = report->imprint_swept;  // the method cut_base resolved
   Mesh blocked;
   const Status s = blockout(ctx, *cut, Span<const Mesh>(swept_jaws, jaws.size()), bl, &blocked,
                             &report->blockout[j]);
@@ -612,6 +613,73 @@ Status design_detail::register_case_scans(const Context& ctx, const CaseFile& c,
 
 namespace {
 
+// The base, the imprint and the blockout, with the exact sweep (`exact`) or without it.
+Status cut_base_with(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, bool exact,
+                     Mesh* cut, DesignReport* report) {
+  Arena& arena = *ctx.arena;
+  const auto stage = [&](const char* name) { return report_progress(ctx, name, 0, 1); };
+  const Arena::Marker before_base = arena.mark();
+  // The base, then the Boolean: the base's temporaries go, the base stays until the result is
+  // moved down over everything.
+  SPLINTCORE_RETURN_IF_ERROR(stage("design: base"));
+  Mesh base(&arena);
+  SPLINTCORE_RETURN_IF_ERROR(stage_error(build_case_base(ctx, c, &base, &report->base), "base"));
+  // Where the splint sits with nothing of use above it (blockout_jaws moves its results there).
+  Arena::Marker cut_low = before_base;
+  if (c.has_blockout && (c.blockout.offset > 0 || exact)) {
+    // A spacer: the imprint is the swept volumes' offset surface, which holds each jaw, so
+    // subtracting the jaws themselves first would only cut what the blockout removes anyway.
+    // The exact swept boundary holds the jaw too: its front triangles are the imprint.
+    report->imprint_offset = c.blockout.offset > 0;
+    report->imprint_swept = exact;
+    *cut = base;
+    cut_low = arena.mark();
+  } else {
+    SPLINTCORE_RETURN_IF_ERROR(stage("design: boolean"));
+    SPLINTCORE_RETURN_IF_ERROR(subtract_jaws(ctx, c, jaws, before_base, &base, cut, report));
+  }
+  if (c.has_blockout) {
+    SPLINTCORE_RETURN_IF_ERROR(stage("design: blockout"));
+    SPLINTCORE_RETURN_IF_ERROR(blockout_jaws(ctx, c, jaws, cut_low, cut, report));
+  }
+  return Status::ok();
+}
+
+// cut_base_with with the case's blockout method resolved (CaseFile::blockout_method): the exact
+// sweep for kExact and kAuto (not with a clearance: the spacer is the sampled sweep's). When
+// kAuto's exact sweep is refused (kUnsupported: a jaw's swept surface would cross itself, or
+// its Boolean could not resolve a configuration), everything from the base is made again with
+// voxels, from where the arena was, and the report says why (blockout_fallback).
+Status cut_base(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* cut,
+                DesignReport* report) {
+  Arena& arena = *ctx.arena;
+  const Arena::Marker start = arena.mark();
+  const bool exact =
+      c.has_blockout && c.blockout.offset == 0 && c.blockout_method != BlockoutMethod::kVoxel;
+  const Status s = cut_base_with(ctx, c, jaws, exact, cut, report);
+  if (s.is_ok() || !exact || c.blockout_method != BlockoutMethod::kAuto ||
+      s.code() != StatusCode::kUnsupported) {
+    return s;
+  }
+  arena.rewind(start);
+  *cut = Mesh();
+  report->base = BaseReport{};
+  report->boolean = BooleanStats{};
+  for (uint32_t j = 0; j < DesignReport::kMaxBlockoutJaws; ++j) {
+    report->blockout[j] = BlockoutStats{};
+    report->blockout_removed_mm3[j] = 0;
+  }
+  report->blockout_jaws = 0;
+  report->imprint_offset = report->imprint_swept = false;
+  report->self_intersection_checked = false;
+  report->self_intersection_checked_by = "";
+  report->self_intersection_candidates = 0;
+  const size_t n = std::min(std::strlen(s.message()), sizeof report->blockout_fallback - 1);
+  std::memcpy(report->blockout_fallback, s.message(), n);
+  report->blockout_fallback[n] = '\0';
+  return cut_base_with(ctx, c, jaws, false, cut, report);
+}
+
 // Checks what design_splint takes before anything is allocated.
 Status check_design_inputs(const CaseFile& c, Span<const Mesh> jaws, const Mesh& splint,
                            const PrinterProfile** profile) {
@@ -697,33 +765,9 @@ Status design_detail::design_splint_registered(const Context& ctx, const CaseFil
   const Span<const Mesh> jaws = fusing ? Span<const Mesh>(fused, jaws_given.size()) : jaws_given;
 
   SPLINTCORE_RETURN_IF_ERROR(stage("design: jaws"));
-  const Arena::Marker before_base = arena.mark();
   SPLINTCORE_RETURN_IF_ERROR(check_jaws(ctx, c, jaws));
-
-  // The base, then the Boolean: the base's temporaries go, the base stays until the result is
-  // moved down over everything.
-  SPLINTCORE_RETURN_IF_ERROR(stage("design: base"));
-  Mesh base(&arena);
-  SPLINTCORE_RETURN_IF_ERROR(stage_error(build_case_base(ctx, c, &base, &report->base), "base"));
   Mesh cut;
-  // Where the splint sits with nothing of use above it (blockout_jaws moves its results there).
-  Arena::Marker cut_low = before_base;
-  if (c.has_blockout && (c.blockout.offset > 0 || c.blockout_exact)) {
-    // A spacer: the imprint is the swept volumes' offset surface, which holds each jaw, so
-    // subtracting the jaws themselves first would only cut what the blockout removes anyway.
-    // The exact swept boundary holds the jaw too: its front triangles are the imprint.
-    report->imprint_offset = c.blockout.offset > 0;
-    report->imprint_swept = c.blockout_exact;
-    cut = base;
-    cut_low = arena.mark();
-  } else {
-    SPLINTCORE_RETURN_IF_ERROR(stage("design: boolean"));
-    SPLINTCORE_RETURN_IF_ERROR(subtract_jaws(ctx, c, jaws, before_base, &base, &cut, report));
-  }
-  if (c.has_blockout) {
-    SPLINTCORE_RETURN_IF_ERROR(stage("design: blockout"));
-    SPLINTCORE_RETURN_IF_ERROR(blockout_jaws(ctx, c, jaws, cut_low, &cut, report));
-  }
+  SPLINTCORE_RETURN_IF_ERROR(cut_base(ctx, c, jaws, &cut, report));
   if (c.has_label) {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: label"));
     SPLINTCORE_RETURN_IF_ERROR(label_splint(ctx, c, &cut, report));

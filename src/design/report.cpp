@@ -110,8 +110,8 @@ void write_parameters(JsonWriter& w, const CaseFile& c, const DesignReport& repo
     for (uint32_t n : files.ct_size) w.add(nullptr, n);
     w.end_array();
   }
-  if (c.has_blockout && c.blockout_exact) w.add("blockout_method", "exact");
-  if (c.has_blockout && !c.blockout_exact) {
+  if (c.has_blockout) w.add("blockout_method", blockout_method_name(c.blockout_method));
+  if (c.has_blockout && c.blockout_method != BlockoutMethod::kExact) {
     w.add("blockout_voxel_mm", c.blockout.voxel);
     w.add("blockout_inset_mm", c.blockout.inset);
     w.add("blockout_closing_radius_mm", c.blockout.closing_radius);
@@ -134,6 +134,8 @@ void write_exact_blockout(JsonWriter& w, const BlockoutStats& b, double removed_
   const ExactSweepStats& e = b.exact;
   w.add("method", "exact");
   w.add("direction", e.direction);
+  w.add("shells_checked", e.shells);
+  w.add("shells_crossing_only_outside_splint", e.shells_crossing_outside);
   w.add("front_triangles", e.front_triangles);
   w.add("kept_front_triangles", e.kept_triangles);
   w.add("walls", e.walls);
@@ -154,7 +156,7 @@ void write_blockout(JsonWriter& w, const CaseFile& c, const DesignReport& report
     const BlockoutStats& b = report.blockout[i];
     w.begin_object();
     w.add("role", c.jaws[i].role);
-    if (c.blockout_exact) {
+    if (report.imprint_swept) {
       write_exact_blockout(w, b, report.blockout_removed_mm3[i]);
       continue;
     }
@@ -243,7 +245,11 @@ void write_checks(JsonWriter& w, const CaseFile& c, const DesignReport& report) 
   w.add("boolean_intersection_points", report.boolean.intersection_points);
   w.add("boolean_attempts", report.boolean.attempts);
   w.add("boolean_nudge_mm", report.boolean.nudge);
-  if (report.blockout_jaws > 0) write_blockout(w, c, report);
+  if (report.blockout_jaws > 0) {
+    w.add("blockout_method_used", report.imprint_swept ? "exact" : "voxel");
+    if (report.blockout_fallback[0] != '\0') w.add("blockout_fallback", report.blockout_fallback);
+    write_blockout(w, c, report);
+  }
   w.add("imprint", report.imprint_offset  ? "clearance offset of the swept volume"
                    : report.imprint_swept ? "exact swept volume (jaw front triangles and walls)"
                                           : "jaw triangles");

@@ -45,7 +45,7 @@ TEST(ExactBlockoutRealData, NoLineLockedOnEitherJaw) {
     SPLINTCORE_ASSERT_OK(design_splint(ctx, c[i], Span<const Mesh>(real.jaw, 2), &splint[i], &r));
     EXPECT_EQ(r.imprint_swept, i == 1);
   }
-  EXPECT_TRUE(c[1].blockout_exact);
+  EXPECT_EQ(c[1].blockout_method, BlockoutMethod::kExact);
   // Where the outline put the jaws (the mandible opened by the bite), and the direction.
   CaseFile resolved;
   SPLINTCORE_ASSERT_OK(

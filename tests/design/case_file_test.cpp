@@ -930,28 +930,48 @@ TEST(CaseFile, BlockoutTakesItsDefaultsAndChecksItsRanges) {
   }
 }
 
-TEST(CaseFile, BlockoutMethodIsExactOrVoxelAndExactTakesNoVoxelKeys) {
+TEST(CaseFile, BlockoutMethodIsAutoExactOrVoxelAndExactTakesNoVoxelKeys) {
   test::TestArena a(size_t{1} << 20);
   CaseFile c;
   const std::string dir = "\"insertion_direction\": [0, 0, 1],\n";
-  SPLINTCORE_ASSERT_OK(parse(a.arena, with_root(dir + "\"blockout\": {},\n").text(), &c));
-  EXPECT_FALSE(c.blockout_exact);
+  // Without "method": auto unless a voxel key is named.
+  const char* blockouts[] = {"{}",
+                             "{\"voxel\": 0.2}",
+                             "{\"inset\": 0.05}",
+                             "{\"closing_radius\": 0.5}",
+                             "{\"clearance\": 0.2}",
+                             "{\"method\": \"auto\", \"voxel\": 0.2}"};
+  const BlockoutMethod methods[] = {BlockoutMethod::kAuto,  BlockoutMethod::kVoxel,
+                                    BlockoutMethod::kVoxel, BlockoutMethod::kVoxel,
+                                    BlockoutMethod::kVoxel, BlockoutMethod::kAuto};
+  for (size_t i = 0; i < sizeof(blockouts) / sizeof(blockouts[0]); ++i) {
+    SCOPED_TRACE(blockouts[i]);
+    c = CaseFile{};
+    SPLINTCORE_ASSERT_OK(
+        parse(a.arena, with_root(dir + "\"blockout\": " + blockouts[i] + ",\n").text(), &c));
+    EXPECT_TRUE(c.has_blockout);
+    EXPECT_EQ(c.blockout_method, methods[i]);
+    // write_case gives the same method back.
+    std::string written;
+    SPLINTCORE_ASSERT_OK(write_case(c, test::string_sink(&written)));
+    CaseFile again;
+    SPLINTCORE_ASSERT_OK(parse(a.arena, written, &again));
+    EXPECT_EQ(again.blockout_method, methods[i]) << written;
+    EXPECT_EQ(again.blockout.voxel, c.blockout.voxel);
+  }
+  EXPECT_EQ(c.blockout.voxel, 0.2);  // auto's voxel keys are its fallback's
   SPLINTCORE_ASSERT_OK(
       parse(a.arena, with_root(dir + "\"blockout\": {\"method\": \"exact\"},\n").text(), &c));
-  EXPECT_TRUE(c.has_blockout);
-  EXPECT_TRUE(c.blockout_exact);
+  EXPECT_EQ(c.blockout_method, BlockoutMethod::kExact);
   // write_case gives it back, and nothing of the voxel method.
   std::string written;
   SPLINTCORE_ASSERT_OK(write_case(c, test::string_sink(&written)));
   EXPECT_NE(written.find("\"blockout\":{\"method\":\"exact\"}"), std::string::npos) << written;
   EXPECT_EQ(written.find("inset"), std::string::npos) << written;
-  CaseFile again;
-  SPLINTCORE_ASSERT_OK(parse(a.arena, written, &again));
-  EXPECT_TRUE(again.blockout_exact);
   SPLINTCORE_ASSERT_OK(parse(
       a.arena, with_root(dir + "\"blockout\": {\"method\": \"voxel\", \"voxel\": 0.2},\n").text(),
       &c));
-  EXPECT_FALSE(c.blockout_exact);
+  EXPECT_EQ(c.blockout_method, BlockoutMethod::kVoxel);
   EXPECT_EQ(c.blockout.voxel, 0.2);
   const char* bad[] = {
       "\"blockout\": {\"method\": \"sampled\"},\n",
@@ -960,9 +980,15 @@ TEST(CaseFile, BlockoutMethodIsExactOrVoxelAndExactTakesNoVoxelKeys) {
       "\"blockout\": {\"method\": \"exact\", \"inset\": 0.05},\n",
       "\"blockout\": {\"clearance\": 0.2, \"method\": \"exact\"},\n",
       "\"blockout\": {\"method\": \"exact\", \"closing_radius\": 0.5},\n",
+      "\"blockout\": {\"method\": \"auto\", \"clearance\": 0.2},\n",
   };
-  const char* names[] = {"\"exact\" or \"voxel\"", "blockout.method",    "blockout.voxel",
-                         "blockout.inset",         "blockout.clearance", "blockout.closing_radius"};
+  const char* names[] = {"\"auto\", \"exact\" or \"voxel\"",
+                         "blockout.method",
+                         "blockout.voxel",
+                         "blockout.inset",
+                         "blockout.clearance",
+                         "blockout.closing_radius",
+                         "say \"method\": \"voxel\""};
   for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); ++i) {
     SCOPED_TRACE(bad[i]);
     const Status s = parse(a.arena, with_root(dir + bad[i]).text(), &c);

@@ -135,6 +135,7 @@ TEST(DesignGolden, FirmwareBlockoutTenthMillimetreIn16MiB) {
   CaseFile c;
   SPLINTCORE_ASSERT_OK(parse_case(ctx, text.data(), text.size(), "paper_scale.json", &c));
   c.has_blockout = true;
+  c.blockout_method = BlockoutMethod::kVoxel;
   c.blockout.voxel = 0.1;
   c.blockout.inset = 0.05;
   c.blockout.closing_radius = 0;

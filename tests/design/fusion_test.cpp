@@ -239,6 +239,7 @@ TEST(DesignFusion, BlockoutSweepsTheScan) {
   Fused f;
   ASSERT_TRUE(f.ok);
   f.c.has_blockout = true;
+  f.c.blockout_method = BlockoutMethod::kVoxel;
   f.c.blockout.voxel = 0.2;
   f.c.blockout.inset = 0.1;
   Mesh splint;

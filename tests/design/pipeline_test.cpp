@@ -132,6 +132,7 @@ TEST(DesignPipeline, BlockoutRemovesInterferenceAndStaysPrintable) {
   EXPECT_EQ(r0.blockout_jaws, 0u);
   CaseFile c = f.c;
   c.has_blockout = true;
+  c.blockout_method = BlockoutMethod::kVoxel;
   c.blockout.voxel = 0.2;
   c.blockout.inset = 0.1;
   Mesh blocked;
@@ -173,7 +174,7 @@ TEST(DesignPipeline, ExactBlockoutSkipsTheJawsBooleanAndRemovesTheUndercuts) {
       design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2), &plain, &r0));
   CaseFile c = f.c;
   c.has_blockout = true;
-  c.blockout_exact = true;
+  c.blockout_method = BlockoutMethod::kExact;
   Mesh blocked;
   DesignReport r;
   SPLINTCORE_ASSERT_OK(
@@ -192,6 +193,7 @@ TEST(DesignPipeline, ExactBlockoutSkipsTheJawsBooleanAndRemovesTheUndercuts) {
   }
   CaseFile voxel = f.c;
   voxel.has_blockout = true;
+  voxel.blockout_method = BlockoutMethod::kVoxel;
   voxel.blockout.voxel = 0.2;
   voxel.blockout.inset = 0.1;
   Mesh sampled;
@@ -254,6 +256,7 @@ TEST(DesignOptions, ClearanceKeepsTheSpacerBetweenJawAndSplint) {
   ASSERT_TRUE(f.ok);
   CaseFile c = f.c;
   c.has_blockout = true;
+  c.blockout_method = BlockoutMethod::kVoxel;
   c.blockout.voxel = 0.3;
   c.blockout.inset = 0;
   c.blockout.offset = 0.6;

@@ -1065,6 +1065,7 @@ void bench_blockout(Harness& h, Arena& arena, const std::string& fixtures) {
   }
   if (!phantom_jaws(h, arena, m, 87000, jaws)) return;
   c.has_blockout = true;
+  c.blockout_method = BlockoutMethod::kVoxel;
   c.blockout.voxel = 0.1;
   c.blockout.inset = 0.05;
   DesignReport report;

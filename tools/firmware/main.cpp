@@ -224,6 +224,7 @@ Status run_design(Arena& arena, const Progress& progress, const char* stage,
   SPLINTCORE_RETURN_IF_ERROR(parse_builtin_case(ctx, &c));
   if (blockout_voxel > 0) {
     c.has_blockout = true;
+    c.blockout_method = BlockoutMethod::kVoxel;
     c.blockout.voxel = blockout_voxel;
     c.blockout.inset = blockout_voxel / 2;
     c.blockout.closing_radius = 0;

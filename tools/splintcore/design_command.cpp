@@ -722,7 +722,11 @@ void Design::print_summary() const {
                 static_cast<unsigned long long>(report.boolean.intersection_points),
                 report.boolean.attempts);
   }
-  for (uint32_t i = 0; i < report.blockout_jaws && c_.blockout_exact; ++i) {
+  if (report.blockout_fallback[0] != '\0') {
+    std::printf("blockout: made with voxels, the exact sweep being refused: %s\n",
+                report.blockout_fallback);
+  }
+  for (uint32_t i = 0; i < report.blockout_jaws && report.imprint_swept; ++i) {
     const ExactSweepStats& e = report.blockout[i].exact;
     std::printf(
         "blockout (%s, exact): %llu of %llu front triangles kept, %llu walls, %llu fold "
@@ -732,7 +736,7 @@ void Design::print_summary() const {
         static_cast<unsigned long long>(e.walls), static_cast<unsigned long long>(e.fold_vertices),
         static_cast<unsigned long long>(report.blockout[i].swept_triangles));
   }
-  for (uint32_t i = 0; i < report.blockout_jaws && !c_.blockout_exact; ++i) {
+  for (uint32_t i = 0; i < report.blockout_jaws && !report.imprint_swept; ++i) {
     std::printf(
         "blockout (%s): %.4f mm^3 of interference removed, %llu swept triangles, "
         "inset %.3g mm\n",
