@@ -222,6 +222,8 @@ struct ExactSweepStats {
   uint64_t fold_vertices = 0;     // vertices whose fan overlapped a wall (back triangles taken in)
   uint64_t absorbed_triangles = 0;  // back triangles taken into the surface there
   uint32_t fold_rounds = 0;         // rounds that took some in
+  uint64_t pockets_checked = 0;     // taken-in triangles whose unswept pocket was checked
+  uint64_t pockets_shallow = 0;     // of them wider than the bound but no deeper than it
   // Set by blockout (BlockoutOptions::exact), which checks the output's shells for
   // self-crossing where its Boolean takes them before it runs: the shells meeting the region,
   // the pairs their exact checks examined, and the shells that cross only outside the splint

@@ -340,6 +340,56 @@ uint32_t absorb_folds(Surface& f, const Vec3& d, const Aabb& region, uint32_t* u
   return count;
 }
 
+// The most undercut a fold may leave unswept. A back triangle taken into the surface leaves the
+// column above it (along d, up to the front side over it) out of the swept volume: its
+// cross-section lies within the triangle seen along d. At a fold of the tessellation (a
+// sliver between two front fans on a side nearly parallel to d) that is a fin micrometres
+// wide (at most 0.040 mm on the real maxilla, 0.026 mm on the mandible, measured); at a real
+// overhang (a neck band under a crown) it is the undercut itself, and the sweep must not pass
+// it off as resolved. 0.05 mm is the undercut the voxel method leaves everywhere by default
+// (its inset, half its 0.1 mm voxel), and about the printer's dot (0.042 mm on the Eden260).
+constexpr double kFoldPocket = 0.05;
+
+// Every back triangle taken in whose prism can reach the region is checked: seen along d it
+// is at most kFoldPocket wide (twice its area over its longest side, in doubles), or the
+// segment from its centroid kFoldPocket along d meets a surface triangle within the rings
+// (segment_intersects_triangle: the pocket is no deeper). Returns the first taken-in triangle
+// that is neither, or kUnset.
+uint32_t deep_pocket(Surface& f, const Vec3& d, const Aabb& region, ExactSweepStats* st) {
+  const Mesh& jaw = *f.jaw;
+  uint32_t ring[kRingCap];
+  for (uint32_t t = 0; t < jaw.triangles.size(); ++t) {
+    if (f.cls[t] != kAbsorbed) continue;
+    const Triangle& g = jaw.triangles[t];
+    const Vec3 p[3] = {jaw.vertices[g.v[0]], jaw.vertices[g.v[1]], jaw.vertices[g.v[2]]};
+    if (prism_misses(p, d, region)) continue;
+    ++st->pockets_checked;
+    Vec3 seen[3];
+    for (int k = 0; k < 3; ++k) seen[k] = p[k] - d * dot(p[k], d);
+    const Vec3 n = cross(seen[1] - seen[0], seen[2] - seen[0]);
+    double longest = 0;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 e = seen[(k + 1) % 3] - seen[k];
+      longest = std::fmax(longest, dot(e, e));
+    }
+    const double width = std::sqrt(dot(n, n)) / std::sqrt(longest);
+    if (width <= kFoldPocket) continue;  // longest > 0 then (else width is NaN)
+    const Vec3 c = (p[0] + p[1] + p[2]) * (1.0 / 3);
+    const Vec3 q = c + d * kFoldPocket;
+    const uint32_t count = ring_triangles(f, g.v[0], ring);
+    bool covered = false;
+    for (uint32_t i = 0; i < count && !covered; ++i) {
+      if (ring[i] == t) continue;
+      const Triangle& h = jaw.triangles[ring[i]];
+      covered = segment_intersects_triangle(c, q, jaw.vertices[h.v[0]], jaw.vertices[h.v[1]],
+                                            jaw.vertices[h.v[2]]);
+    }
+    if (!covered) return t;
+    ++st->pockets_shallow;
+  }
+  return kUnset;
+}
+
 // The output: the surface's triangles in input order, then two per wall; the surface's
 // vertices in input order (used[v]: its rank), then the walls' tops in the order the walls
 // come.
@@ -467,6 +517,16 @@ Status sweep_exact_mesh(const Context& ctx, const Mesh& jaw, const Vec3& directi
     ++st->fold_rounds;
   }
   for (size_t t = 0; t < nt; ++t) st->absorbed_triangles += cls[t] == kAbsorbed ? 1u : 0u;
+  const uint32_t deep = deep_pocket(f, d, region, st);
+  if (deep != kUnset) {
+    const auto um = [](double x) { return std::floor(x * 1000 + 0.5) / 1000; };
+    const Vec3& p = jaw.vertices[jaw.triangles[deep].v[0]];
+    return make_error(StatusCode::kUnsupported, "exact sweep: the fold taken in at jaw triangle ",
+                      deep, " near (", um(p.x), ", ", um(p.y), ", ", um(p.z),
+                      ") would leave more than ", kFoldPocket,
+                      " mm of undercut unswept (an overhang along the direction)")
+        .at_index(deep);
+  }
   Mesh result;
   SPLINTCORE_RETURN_IF_ERROR(emit_surface(arena, f, used, d, region, &result, st));
   move_mesh_down(arena, scope.start(), result, out);

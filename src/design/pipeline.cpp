@@ -24,10 +24,15 @@ void note_self_check(DesignReport* report, const BooleanStats& stats, const char
   report->self_intersection_candidates = stats.self_intersection_candidates;
 }
 
-// A stage's error with the stage named first; ok, running out and cancelling pass unchanged.
+// A stage's error with the stage named first (unless it already is: blockout names itself);
+// ok, running out and cancelling pass unchanged.
 Status stage_error(const Status& s, const char* stage) {
   if (s.is_ok()) return s;
   if (s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) return s;
+  const size_t n = std::strlen(stage);
+  if (std::strncmp(s.message(), stage, n) == 0 && std::strncmp(s.message() + n, ": ", 2) == 0) {
+    return s;
+  }
   Status e = make_error(s.code(), stage, ": ", s.message());
   if (s.index() != kNoPosition) e.at_index(s.index());
   return e;

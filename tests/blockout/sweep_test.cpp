@@ -887,6 +887,36 @@ TEST(ExactSweep, PhantomJawsAreUnlockedFoldsIncluded) {
   }
 }
 
+// A slab reaching up the phantom's necks (its crowns are big-end-up, the gum ridge wider
+// above): taking the neck band in as a fold would leave the undercut itself unswept, so the
+// exact sweep stops (kUnsupported, naming the triangle and where), and so does the blockout;
+// the slab as deep as the design's base is swept (the test above).
+TEST(ExactSweep, AnOverhangIsRefusedNotTakenInAsAFold) {
+  TestArena ta(size_t{1} << 30);
+  Context ctx(&ta.arena);
+  Mesh jaws[2];
+  ASSERT_TRUE(test::phantom_jaw_meshes(ta.arena, 20000, jaws));
+  const float lo[3] = {-28.5f, -8, -1.6f}, hi[3] = {28.5f, 45.5f, 5.0f};
+  Mesh slab = box_mesh(&ta.arena, lo, hi);
+  const Aabb region = boolean_region(slab, BooleanOptions{});
+  Mesh swept;
+  ExactSweepStats es;
+  const Status s = sweep_exact_mesh(ctx, jaws[0], Vec3{0, 0, 1}, region, &swept, &es);
+  EXPECT_EQ(s.code(), StatusCode::kUnsupported) << test::format(s);
+  EXPECT_NE(std::strstr(s.message(), "mm of undercut unswept"), nullptr) << s.message();
+  EXPECT_NE(s.index(), kNoPosition);
+  EXPECT_TRUE(swept.triangles.empty());
+  EXPECT_GT(es.absorbed_triangles, 100u);  // the rounds took the band in before the check
+  BlockoutOptions o;
+  o.exact = true;
+  o.sweep.direction = Vec3{0, 0, 1};
+  Mesh blocked;
+  const Status b = blockout(ctx, slab, Span<const Mesh>(&jaws[0], 1), o, &blocked, nullptr);
+  EXPECT_EQ(b.code(), StatusCode::kUnsupported) << test::format(b);
+  EXPECT_EQ(std::strncmp(b.message(), "blockout: exact sweep:", 22), 0) << b.message();
+  EXPECT_TRUE(blocked.triangles.empty());
+}
+
 TEST(ExactSweep, BadInputIsNamedAndTheArenaBoundHolds) {
   TestArena ta(size_t{1} << 28);
   Context ctx(&ta.arena);

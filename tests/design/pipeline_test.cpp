@@ -241,6 +241,93 @@ TEST(DesignPipeline, ExactBlockoutSkipsTheJawsBooleanAndRemovesTheUndercuts) {
   EXPECT_EQ(a, b);
 }
 
+// The case with its base sunk `depth` mm further into each jaw (the picks moved along the
+// occlusal normal), the blockout "auto" with a 0.3 mm voxel sweep as its fallback.
+CaseFile sunk_case(const CaseAndJaws& f, double depth, std::vector<Pick>* upper,
+                   std::vector<Pick>* lower) {
+  CaseFile c = f.c;
+  upper->assign(c.upper.begin(), c.upper.end());
+  lower->assign(c.lower.begin(), c.lower.end());
+  for (Pick& p : *upper) p.position = p.position + c.occlusal_normal * depth;
+  for (Pick& p : *lower) p.position = p.position - c.occlusal_normal * depth;
+  c.upper = Span<const Pick>(upper->data(), upper->size());
+  c.lower = Span<const Pick>(lower->data(), lower->size());
+  c.has_blockout = true;
+  c.blockout_method = BlockoutMethod::kAuto;
+  c.blockout.voxel = 0.3;
+  c.blockout.inset = 0.15;
+  return c;
+}
+
+// "auto" (the case file's default): the exact sweep while it holds. With the base 2 mm deeper
+// the crowns' walls and folds are resolved exactly and no line is locked. With 2.5 mm the
+// base reaches the phantom's necks (its crowns are big-end-up): taking the neck band in would
+// leave the undercut itself unswept, so the exact sweep stops (kUnsupported, where), and
+// "auto" gives exactly the splint of the voxel method, saying why.
+TEST(DesignPipeline, AutoBlockoutIsExactUnlessItsSweepStopsThenVoxels) {
+  CaseAndJaws f;
+  ASSERT_TRUE(f.ok);
+  std::vector<Pick> up, lo;
+  const CaseFile c2 = sunk_case(f, 2.0, &up, &lo);
+  Mesh exact;
+  DesignReport r2;
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), c2, Span<const Mesh>(f.jaws, 2), &exact, &r2));
+  EXPECT_TRUE(r2.imprint_swept);
+  EXPECT_STREQ(r2.blockout_fallback, "");
+  CaseFile plain_case = c2;
+  plain_case.has_blockout = false;
+  Mesh plain;
+  DesignReport rp;
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), plain_case, Span<const Mesh>(f.jaws, 2), &plain, &rp));
+  for (int j = 0; j < 2; ++j) {
+    const Mesh jaw = test::moved_mesh(f.t.arena, f.jaws[j], c2.jaws[j].transform);
+    const Vec3 d = j == 0 ? c2.insertion_direction : -c2.insertion_direction;
+    const test::LockReport lock = test::lock_report(f.t.arena, exact, jaw, d, Vec3{1, 0, 0},
+                                                    Vec3{0, 1, 0}, Vec3{0, 18, 0}, 27.0, 100, 1e-4);
+    EXPECT_GT(lock.lines_through_jaw, 1000u);
+    EXPECT_EQ(lock.locked_lines, 0u) << "jaw " << j << ": " << lock.longest;
+    const test::LockReport before = test::lock_report(
+        f.t.arena, plain, jaw, d, Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 18, 0}, 27.0, 100, 1e-4);
+    EXPECT_GE(before.locked_lines, 5u) << "jaw " << j;  // the check sees undercuts there
+    std::printf("[ figures  ] base 2 mm deeper, jaw %d: locked lines plain %zu, exact %zu\n", j,
+                before.locked_lines, lock.locked_lines);
+  }
+  std::vector<Pick> up25, lo25;
+  CaseFile c = sunk_case(f, 2.5, &up25, &lo25);
+  Mesh fallback;
+  DesignReport r;
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &fallback, &r));
+  EXPECT_FALSE(r.imprint_swept);
+  EXPECT_NE(std::strstr(r.blockout_fallback, "undercut unswept"), nullptr) << r.blockout_fallback;
+  ASSERT_EQ(r.blockout_jaws, 2u);
+  EXPECT_EQ(r.blockout[0].inset_used, 0.15);
+  EXPECT_GT(r.boolean.intersecting_pairs, 0u);  // the jaws' Boolean ran, for the voxel method
+  EXPECT_TRUE(r.print.printable);
+  c.blockout_method = BlockoutMethod::kVoxel;
+  Mesh voxel;
+  DesignReport rv;
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &voxel, &rv));
+  std::vector<uint8_t> a, b;
+  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(f.t.arena, fallback, StlFormat::kBinary, &a));
+  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(f.t.arena, voxel, StlFormat::kBinary, &b));
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(r.self_intersection_candidates, rv.self_intersection_candidates);
+  // "exact" stops there, naming the jaw and the fold, and leaves no splint.
+  c.blockout_method = BlockoutMethod::kExact;
+  Mesh none;
+  DesignReport rx;
+  const Status s = design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &none, &rx);
+  EXPECT_EQ(s.code(), StatusCode::kUnsupported) << test::format(s);
+  EXPECT_NE(std::strstr(s.message(), "exact sweep: the fold taken in at jaw triangle"), nullptr)
+      << s.message();
+  EXPECT_NE(std::strstr(s.message(), "(jaw 0, maxilla)"), nullptr) << s.message();
+  EXPECT_TRUE(none.triangles.empty());
+}
+
 }  // namespace
 }  // namespace splintcore
 
