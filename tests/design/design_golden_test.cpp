@@ -121,6 +121,21 @@ TEST(DesignGolden, BlockoutRoundedLabelledOnTheTray) {
   expect_golden_and_meshlab("blockout", "design:blockout-phantom6000", d);
 }
 
+// The default blockout ("blockout": {}, "auto"): the exact swept boundary of each jaw, with
+// the same options as above; its bytes pinned (and on AArch64, ARMv7).
+TEST(DesignGolden, ExactBlockoutRoundedLabelledOnTheTray) {
+  Designed d;
+  ASSERT_NO_FATAL_FAILURE(design_case("exact.json", &d));
+  EXPECT_EQ(d.report.blockout_jaws, 2u);
+  EXPECT_TRUE(d.report.imprint_swept);
+  EXPECT_STREQ(d.report.blockout_fallback, "");
+  EXPECT_EQ(d.report.boolean.intersecting_pairs, 0u);  // the jaws' own Boolean is not run
+  EXPECT_TRUE(d.report.placed_on_tray);
+  EXPECT_TRUE(d.report.labelled);
+  EXPECT_TRUE(d.report.print.printable);
+  expect_golden_and_meshlab("exact", "design:exact-phantom6000", d);
+}
+
 // The firmware example's third stage (tools/firmware/main.cpp, issue 29): the paper-scale case
 // with blockout on a 0.1 mm grid (inset 0.05 mm, no closing), designed in an arena of exactly
 // the board's 16 MiB (the jaws in an arena of their own, as the board's come from flash). Its

@@ -727,6 +727,15 @@ report_keys_documented() {
 }
 check "report: every key is documented" -- report_keys_documented "$work/opts/out/report.json"
 expect_exit 0 "the splint on the tray is a printable solid as placed" -- "$tool" check "$work/opts/out/splint.stl" --no-place
+# The same options with the default blockout ("blockout": {}: the exact swept boundary).
+cp "$fixtures/cases/exact.json" "$work/opts/case.json"
+expect_exit 0 "design with the default blockout" -- "$tool" design "$work/opts/case.json" -o "$work/opts/exact"
+check "summary: the exact blockout on both jaws" -- test "$(grep -c '^blockout (.*, exact): ' "$work/out")" -eq 2
+check "the default blockout has the golden bytes" -- grep -q "\"splint_sha256\":\"$(grep " design:exact-phantom6000$" "$fixtures/golden.sha256" | cut -d' ' -f1)\"" "$work/opts/exact/report.json"
+check "report: auto asked, exact used, in the case's 64M" -- grep -q '"blockout_method":"auto"' "$work/opts/exact/report.json"
+check "report: exact used" -- grep -q '"blockout_method_used":"exact","blockout":\[{"role":"maxilla","method":"exact"' "$work/opts/exact/report.json"
+check "report: the case's 64M applied" -- grep -q '"memory_cap_bytes":67108864,"memory_cap_from":"case"' "$work/opts/exact/report.json"
+check "report (exact): every key is documented" -- report_keys_documented "$work/opts/exact/report.json"
 sed 's/"text": "PHANTOM-01"/"text": "50%"/' "$fixtures/cases/blockout.json" >"$work/opts/case.json"
 expect_exit 1 "a label the font cannot write" -- "$tool" design "$work/opts/case.json" -o "$work/opts/bad"
 check "the error names the character" -- grep -q "label.*'%'" "$work/err"

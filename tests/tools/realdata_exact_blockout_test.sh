@@ -2,7 +2,8 @@
 # Issue 29, the exact blockout on the real CBCT dentition (../shared/realdata, not in the
 # repository: exits 77, skipped, without it): the case tools/bench/issue29.sh designs (spacing
 # 0.5 mm, "auto" with a 2 mm bite opening) with "blockout": {"method": "exact"}, designed in
-# 64 MiB on one thread, with 1 GiB, and on two threads: the splint is a closed, valid solid
+# 64 MiB on one thread, with 1 GiB, on two threads, and with the default "blockout": {}
+# ("auto", which is exact here): the splint is a closed, valid solid
 # (splintcore check), the same bytes every way, the report says the exact method ran on both
 # jaws and checked the result, within the cap.
 #   usage: realdata_exact_blockout_test.sh SPLINTCORE SPLINTCORE_BENCH REALDATA_DIR
@@ -20,6 +21,12 @@ step "the splint written is a printable solid" "$tool" check "$work/d/splint.stl
 cat "$work/out"
 step "the same bytes with 1 GiB" cmp "$work/big/splint.stl" "$work/d/splint.stl"
 step "the same bytes on two threads" cmp "$work/t2/splint.stl" "$work/d/splint.stl"
+# The default ("blockout": {}, "auto") is the exact method here: the same splint.
+step "the automatic case with the default blockout" auto_case "$work/rc/default.json" '{}'
+step "design it in 64M" "$tool" design "$work/rc/default.json" -o "$work/default" \
+  --memory-cap 64M
+step "the default gives the exact method's bytes" cmp "$work/default/splint.stl" \
+  "$work/d/splint.stl"
 step "the report: outlined, blockout on both jaws, checked, within the cap" \
   blockout_report "$work/d/report.json" "$((64 << 20))" auto
 cat "$work/out"
