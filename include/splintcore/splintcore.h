@@ -305,6 +305,17 @@ sc_status sc_blockout(sc_context* ctx, const sc_mesh* splint, const sc_mesh* con
                       size_t jaw_count, const double direction[3], double voxel, double inset,
                       sc_mesh** out);
 
+/* The same with the swept volume's exact boundary (blockout.h, BlockoutOptions::exact): the
+ * jaw's own front triangles (facing against `direction`) and walls along it, no voxels and no
+ * inset. Exactly one of the jaws has triangles (join a jaw's files first; the others' are
+ * ignored); it holds the jaw itself, so give it the splint before the jaw is subtracted.
+ * Arena: sweep_exact_bound of the jaw, the shell check and the Boolean's; only the result
+ * stays. Errors: those of sc_mesh_boolean, and SC_UNSUPPORTED where the jaw's swept surface
+ * would cross itself inside the splint or a fold would leave more than 0.05 mm of undercut
+ * (an overhang along the direction: the message says where; sc_blockout takes such jaws). */
+sc_status sc_blockout_exact(sc_context* ctx, const sc_mesh* splint, const sc_mesh* const* jaws,
+                            size_t jaw_count, const double direction[3], sc_mesh** out);
+
 /* ------------------------------------------------------------------------------------------ */
 /* Scan-CT fusion (registration.h): the rigid motion placing an intraoral scan onto a CT jaw. */
 
@@ -354,6 +365,11 @@ size_t sc_case_jaw_count(const sc_case* c); /* 0 for NULL */
 const char* sc_case_jaw_role(const sc_case* c, size_t index);
 const char* sc_case_jaw_mesh(const sc_case* c, size_t index);
 
+/* sc_case_params.blockout_method */
+#define SC_BLOCKOUT_AUTO 0
+#define SC_BLOCKOUT_EXACT 1
+#define SC_BLOCKOUT_VOXEL 2
+
 /* The parameters a caller may read and change after parsing. Flags are 0 or 1. */
 typedef struct sc_case_params {
   double spacing_mm;        /* base: distance between sections (> 0) */
@@ -365,7 +381,11 @@ typedef struct sc_case_params {
   double blockout_voxel_mm;      /* 0.01 .. 1 */
   double blockout_inset_mm;      /* 0 .. 1.99 voxel */
   double blockout_closing_mm;    /* 0, or 2 .. 10 voxel */
-  const char* printer;           /* a built-in profile name ("eden260"); static text */
+  /* blockout "method" (docs/case-format.md): SC_BLOCKOUT_AUTO (the exact sweep, the voxel one
+   * where it stops; the voxel fields are the fallback's), SC_BLOCKOUT_EXACT, SC_BLOCKOUT_VOXEL.
+   * As parsed: a case's "blockout" naming no voxel key is AUTO, one naming one VOXEL. */
+  int blockout_method;
+  const char* printer; /* a built-in profile name ("eden260"); static text */
   /* The automatic outline ("base": {"auto": {...}}, docs/case-format.md): the picks, the
    * occlusal normal, the bite opening and (unless given) the insertion direction are computed
    * from the jaws by sc_design and sc_outline. The options are checked only when auto_outline
@@ -490,6 +510,9 @@ typedef struct sc_design_report {
   uint32_t blockout_jaws; /* jaws blocked out (0 without blockout) */
   double blockout_removed_mm3[SC_MAX_BLOCKOUT_JAWS];
   uint32_t blockout_attempts[SC_MAX_BLOCKOUT_JAWS];
+  /* With a blockout, the method that made the splint: SC_BLOCKOUT_EXACT or SC_BLOCKOUT_VOXEL
+   * (with AUTO, VOXEL when the exact sweep stopped: sc_design_write_report says why). */
+  int blockout_method_used;
   int printable;
   int fits;         /* fits the tray as placed */
   int fits_rotated; /* fits after a 90 degree turn about z */

@@ -47,6 +47,10 @@ static_assert(sizeof(sc_context) + alignof(sc_context) - 1 <= SC_CONTEXT_BYTES,
               "SC_CONTEXT_BYTES is too small for this platform");
 static_assert(static_cast<int>(StatusCode::kInternal) == SC_INTERNAL, "codes mirror StatusCode");
 static_assert(static_cast<int>(StatusCode::kArenaExhausted) == SC_ARENA_EXHAUSTED, "codes");
+static_assert(static_cast<int>(BlockoutMethod::kAuto) == SC_BLOCKOUT_AUTO &&
+                  static_cast<int>(BlockoutMethod::kExact) == SC_BLOCKOUT_EXACT &&
+                  static_cast<int>(BlockoutMethod::kVoxel) == SC_BLOCKOUT_VOXEL,
+              "blockout methods mirror BlockoutMethod");
 static_assert(static_cast<int>(StatusCode::kInvalidMesh) == SC_INVALID_MESH, "codes");
 static_assert(DesignReport::kMaxBlockoutJaws == SC_MAX_BLOCKOUT_JAWS, "report sizes agree");
 static_assert(DesignReport::kMaxFusedJaws == SC_MAX_BLOCKOUT_JAWS, "fusion report sizes agree");
@@ -254,6 +258,12 @@ Status check_params(const sc_case_params& p, const PrinterProfile** profile) {
       return make_error(StatusCode::kInvalidArgument,
                         "sc_case_set_params: blockout needs insertion_direction (the splint is "
                         "seated along it) or the automatic outline");
+    }
+    if (p.blockout_method != SC_BLOCKOUT_AUTO && p.blockout_method != SC_BLOCKOUT_EXACT &&
+        p.blockout_method != SC_BLOCKOUT_VOXEL) {
+      return make_error(StatusCode::kInvalidArgument, "sc_case_set_params: blockout_method is ",
+                        static_cast<int64_t>(p.blockout_method),
+                        ", must be SC_BLOCKOUT_AUTO, SC_BLOCKOUT_EXACT or SC_BLOCKOUT_VOXEL");
     }
     const double v = p.blockout_voxel_mm;
     SPLINTCORE_RETURN_IF_ERROR(check_range("blockout_voxel_mm", v, "blockout.voxel"));
@@ -762,6 +772,24 @@ sc_status sc_blockout(sc_context* ctx, const sc_mesh* splint, const sc_mesh* con
   });
 }
 
+sc_status sc_blockout_exact(sc_context* ctx, const sc_mesh* splint, const sc_mesh* const* jaws,
+                            size_t jaw_count, const double direction[3], sc_mesh** out) {
+  if (ctx == nullptr || splint == nullptr || out == nullptr || direction == nullptr) {
+    return null_argument(ctx, "sc_blockout_exact", "the splint, the direction or the output");
+  }
+  *out = nullptr;
+  Mesh local[kMaxOperationMeshes];
+  Status s = gather_meshes(jaws, jaw_count, "sc_blockout_exact", local, kMaxOperationMeshes);
+  if (!s.is_ok()) return keep(ctx, s);
+  BlockoutOptions o;
+  o.sweep.direction = vec(direction);
+  o.exact = true;
+  const Context core = core_context(ctx);
+  return new_mesh(ctx, out, [&](Mesh* m) {
+    return blockout(core, splint->mesh, Span<const Mesh>(local, jaw_count), o, m, nullptr);
+  });
+}
+
 sc_status sc_case_parse(sc_context* ctx, const char* text, size_t length, const char* name,
                         sc_case** out) {
   if (ctx == nullptr || out == nullptr || (text == nullptr && length > 0)) {
@@ -806,6 +834,7 @@ sc_status sc_case_get_params(sc_context* ctx, const sc_case* c, sc_case_params* 
   out->blockout_voxel_mm = f.blockout.voxel;
   out->blockout_inset_mm = f.blockout.inset;
   out->blockout_closing_mm = f.blockout.closing_radius;
+  out->blockout_method = static_cast<int>(f.blockout_method);  // the same numbering
   out->printer = f.printer;
   out->auto_outline = f.has_auto_outline ? 1 : 0;
   out->auto_indentation_depth_mm = f.outline.indentation_depth_mm;
@@ -842,6 +871,7 @@ sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* 
     f.blockout.voxel = params->blockout_voxel_mm;
     f.blockout.inset = params->blockout_inset_mm;
     f.blockout.closing_radius = params->blockout_closing_mm;
+    f.blockout_method = static_cast<BlockoutMethod>(params->blockout_method);
   }
   f.printer = profile->name;  // static text: the caller's string need not outlive the case
   f.has_auto_outline = params->auto_outline != 0;
@@ -1001,6 +1031,7 @@ sc_status sc_design_scans(sc_context* ctx, const sc_case* c, const sc_mesh* cons
   report->boolean_nudge_mm[1] = r.boolean.nudge.y;
   report->boolean_nudge_mm[2] = r.boolean.nudge.z;
   report->blockout_jaws = r.blockout_jaws;
+  report->blockout_method_used = r.imprint_swept ? SC_BLOCKOUT_EXACT : SC_BLOCKOUT_VOXEL;
   for (uint32_t i = 0; i < r.blockout_jaws && i < SC_MAX_BLOCKOUT_JAWS; ++i) {
     report->blockout_removed_mm3[i] = r.blockout_removed_mm3[i];
     report->blockout_attempts[i] = r.blockout[i].attempts;

@@ -458,6 +458,18 @@ static void test_operations(void) {
     CHECK(r.valid_solid == 1);
     CHECK(r.volume_mm3 < 8.0 - 0.3 && r.volume_mm3 > 8.0 - 0.5);
     printf("blockout of a box: %.4f mm^3 left of 8\n", r.volume_mm3);
+    /* The exact sweep: the tooth's prism inside the splint, exactly 1 x 1 x 0.5 (the tooth
+     * is not subtracted first: the sweep holds it). */
+    {
+      sc_mesh* exact = NULL;
+      CHECK(sc_blockout_exact(f.ctx, a, jaws, 1, NULL, &exact) == SC_INVALID_ARGUMENT);
+      CHECK(exact == NULL);
+      CHECK_OK(f.ctx, sc_blockout_exact(f.ctx, a, jaws, 1, up, &exact));
+      CHECK_OK(f.ctx, sc_mesh_check(f.ctx, exact, &r));
+      CHECK(r.valid_solid == 1);
+      CHECK(r.volume_mm3 > 7.5 - 1e-9 && r.volume_mm3 < 7.5 + 1e-9);
+      printf("exact blockout of a box: %.6f mm^3 left of 8\n", r.volume_mm3);
+    }
   }
   g_counting = 0;
   close_fixture(&f);
@@ -580,6 +592,11 @@ static void test_case_params(const Bytes* case_text) {
   CHECK(sc_case_set_params(f.ctx, c, &q) == SC_INVALID_ARGUMENT);
   last_message(f.ctx, text, sizeof text);
   CHECK(contains(text, "blockout_voxel_mm"));
+  q.blockout_voxel_mm = p.blockout_voxel_mm;
+  q.blockout_method = 3;
+  CHECK(sc_case_set_params(f.ctx, c, &q) == SC_INVALID_ARGUMENT);
+  last_message(f.ctx, text, sizeof text);
+  CHECK(contains(text, "blockout_method"));
   /* Nothing changed by the failures; a valid change sticks. */
   CHECK_OK(f.ctx, sc_case_get_params(f.ctx, c, &q));
   CHECK(q.blockout == 0 && q.has_insertion_direction == p.has_insertion_direction);
@@ -713,6 +730,8 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
     g_counting = 0;
     if (blocked_splint != NULL) {
       CHECK(blocked.blockout_jaws == 2);
+      CHECK(p.blockout_method == SC_BLOCKOUT_AUTO); /* the case's default: exact here */
+      CHECK(blocked.blockout_method_used == SC_BLOCKOUT_EXACT);
       CHECK(blocked.blockout_removed_mm3[0] >= 0 && blocked.blockout_removed_mm3[1] >= 0);
       CHECK(blocked.blockout_removed_mm3[0] + blocked.blockout_removed_mm3[1] > 0);
       CHECK(blocked.splint_volume_mm3 < report.splint_volume_mm3);

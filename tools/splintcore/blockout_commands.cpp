@@ -24,6 +24,7 @@ struct SweepArgs {
   double closing = 0;
   bool ascii = false;
   bool self_check = true;  // blockout only
+  bool exact = false;      // blockout only: the exact swept boundary, no voxels
 };
 
 // `sweep`'s options, or (`blockout` true) `blockout`'s, in the order their --help lists them.
@@ -52,6 +53,7 @@ std::vector<OptionSpec> sweep_options(SweepArgs* a, bool blockout) {
   if (blockout) {
     specs.push_back(
         clear_flag("--no-self-check", &a->self_check, "skip the self-intersection check"));
+    specs.push_back(flag("--exact", &a->exact, "the exact swept boundary, no voxels"));
   }
   return specs;
 }
@@ -60,6 +62,12 @@ std::vector<OptionSpec> sweep_options(SweepArgs* a, bool blockout) {
 std::string sweep_usage_problem(const SweepArgs& a, const char* name, const char* output) {
   if (a.output == nullptr) return std::string(name) + " needs -o " + output;
   if (!a.has_direction) return std::string(name) + " needs --direction X,Y,Z";
+  if (a.exact) {
+    if (a.voxel > 0 || a.inset >= 0 || a.closing > 0) {
+      return std::string(name) + " --exact has no voxels: no --voxel, --inset or --close";
+    }
+    return "";
+  }
   if (!(a.voxel > 0)) return std::string(name) + " needs --voxel H (mm, > 0)";
   return "";
 }
@@ -146,6 +154,32 @@ void print_sweep_report(const Run& run, const SweepArgs& a, const std::vector<Me
               t_end - t_read, static_cast<unsigned long long>(run.peak_arena()));
 }
 
+// The jaw files as one mesh, in file order (vertex ids offset by the files before).
+Status join_meshes(const Context& ctx, const std::vector<Mesh>& meshes, Mesh* out) {
+  out->bind(ctx.arena);
+  uint64_t nv = 0, nt = 0;
+  for (const Mesh& m : meshes) {
+    nv += m.vertices.size();
+    nt += m.triangles.size();
+  }
+  if (nv > 0xffffffffu) {
+    return make_error(StatusCode::kLimitExceeded, "blockout --exact: the jaw files have ", nv,
+                      " vertices together (at most 2^32 - 1)");
+  }
+  if (!out->vertices.reserve(static_cast<size_t>(nv)) ||
+      !out->triangles.reserve(static_cast<size_t>(nt))) {
+    return ctx.arena->exhausted_status();
+  }
+  for (const Mesh& m : meshes) {
+    const uint32_t base = static_cast<uint32_t>(out->vertices.size());
+    for (const Vec3& v : m.vertices) (void)out->vertices.push_back(v);
+    for (const Triangle& t : m.triangles) {
+      (void)out->triangles.push_back(Triangle{{t.v[0] + base, t.v[1] + base, t.v[2] + base}});
+    }
+  }
+  return Status::ok();
+}
+
 struct BlockoutResult {
   BlockoutStats st;
   MeshReport report;
@@ -161,13 +195,27 @@ void print_blockout_json(const Run& run, const SweepArgs& a, const BlockoutResul
   j.add("splint", a.common.positional[0]);
   j.add("output", a.output);
   j.add_status(Status::ok());
-  j.add("direction", st.sweep.axis_w);
-  j.add("voxel_mm", a.voxel);
-  j.add("inset_mm", r.inset);
-  j.add("closing_radius_mm", a.closing);
-  add_sweep_stats(&j, st.sweep);
-  j.add("swept_triangles", st.swept_triangles);
-  j.add("cap_triangles_dropped", st.sweep.cap_triangles_dropped);
+  if (a.exact) {
+    const ExactSweepStats& e = st.exact;
+    j.add("method", "exact");
+    j.add("direction", e.direction);
+    j.add("front_triangles", e.front_triangles);
+    j.add("kept_front_triangles", e.kept_triangles);
+    j.add("walls", e.walls);
+    j.add("fold_vertices", e.fold_vertices);
+    j.add("back_triangles_taken_in", e.absorbed_triangles);
+    j.add("shells_checked", e.shells);
+    j.add("swept_triangles", st.swept_triangles);
+  } else {
+    j.add("method", "voxel");
+    j.add("direction", st.sweep.axis_w);
+    j.add("voxel_mm", a.voxel);
+    j.add("inset_mm", r.inset);
+    j.add("closing_radius_mm", a.closing);
+    add_sweep_stats(&j, st.sweep);
+    j.add("swept_triangles", st.swept_triangles);
+    j.add("cap_triangles_dropped", st.sweep.cap_triangles_dropped);
+  }
   j.add("intersecting_pairs", st.boolean.intersecting_pairs);
   j.add("removed_volume_mm3", r.removed);
   add_mesh_report(&j, r.report);
@@ -183,12 +231,24 @@ void print_blockout_text(const Run& run, const SweepArgs& a, const BlockoutResul
   const BlockoutStats& st = r.st;
   std::printf("splint: %s, %zu triangles; jaws: %zu file(s)\n", a.common.positional[0],
               r.splint_triangles, r.jaw_files);
-  std::printf(
-      "swept volume: grid %u x %u x %u of %.4g mm (+%u layers before the splint), "
-      "%llu triangles in the splint's bounds\n",
-      st.sweep.nx, st.sweep.ny, st.sweep.nz, a.voxel, st.sweep.preroll_layers,
-      static_cast<unsigned long long>(st.swept_triangles));
-  std::printf("removed: %.4f mm^3 of interference (inset %.4g mm)\n", r.removed, r.inset);
+  if (a.exact) {
+    std::printf(
+        "swept volume (exact): %llu of %llu front triangles kept, %llu walls, %llu fold "
+        "vertices, %llu triangles\n",
+        static_cast<unsigned long long>(st.exact.kept_triangles),
+        static_cast<unsigned long long>(st.exact.front_triangles),
+        static_cast<unsigned long long>(st.exact.walls),
+        static_cast<unsigned long long>(st.exact.fold_vertices),
+        static_cast<unsigned long long>(st.swept_triangles));
+    std::printf("removed: %.4f mm^3 of interference\n", r.removed);
+  } else {
+    std::printf(
+        "swept volume: grid %u x %u x %u of %.4g mm (+%u layers before the splint), "
+        "%llu triangles in the splint's bounds\n",
+        st.sweep.nx, st.sweep.ny, st.sweep.nz, a.voxel, st.sweep.preroll_layers,
+        static_cast<unsigned long long>(st.swept_triangles));
+    std::printf("removed: %.4f mm^3 of interference (inset %.4g mm)\n", r.removed, r.inset);
+  }
   print_mesh_report(r.report);
   std::printf("output: %s (%s STL)\n", a.output, a.ascii ? "ascii" : "binary");
   std::printf("time: read %.4f s, blockout %.4f s, total %.4f s; peak arena %llu bytes\n",
@@ -253,12 +313,21 @@ int run_blockout(const Command& command, int argc, char** argv) {
   r.t_read = monotonic_seconds();
   BlockoutOptions bo;
   bo.sweep.direction = a.direction;
-  bo.sweep.voxel = a.voxel;
-  bo.sweep.inset = a.inset < 0 ? 0.5 * a.voxel : a.inset;
-  bo.sweep.closing_radius = a.closing;
   bo.boolean.check_self_intersection = a.self_check;
+  bo.exact = a.exact;
+  if (!a.exact) {
+    bo.sweep.voxel = a.voxel;
+    bo.sweep.inset = a.inset < 0 ? 0.5 * a.voxel : a.inset;
+    bo.sweep.closing_radius = a.closing;
+  }
+  // The exact sweep takes one jaw: the files joined (each file's closed shells stay shells).
+  Mesh joined;
+  if (a.exact) s = join_meshes(run.ctx, jaws, &joined);
+  if (!s.is_ok()) return run.reject(s);
   Mesh out;
-  s = blockout(run.ctx, splint, Span<const Mesh>(jaws.data(), jaws.size()), bo, &out, &r.st);
+  s = a.exact
+          ? blockout(run.ctx, splint, Span<const Mesh>(&joined, 1), bo, &out, &r.st)
+          : blockout(run.ctx, splint, Span<const Mesh>(jaws.data(), jaws.size()), bo, &out, &r.st);
   if (!s.is_ok()) return run.reject(s);
   r.t_op = monotonic_seconds();
   s = check_mesh(run.ctx, out, &r.report);

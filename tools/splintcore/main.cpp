@@ -205,18 +205,26 @@ const char kSweepUsage[] =
     "memory cap that suffices and any thread count.\n";
 
 const char kBlockoutUsage[] =
-    "usage: splintcore blockout SPLINT.stl JAW.stl [JAW2.stl ...] --direction X,Y,Z --voxel H\n"
-    "                          -o OUT.stl [--close R] [--inset D] [--ascii] [--no-self-check]\n"
-    "                          [--json] [--memory-cap SIZE] [--threads N]\n"
+    "usage: splintcore blockout SPLINT.stl JAW.stl [JAW2.stl ...] --direction X,Y,Z\n"
+    "                          (--voxel H [--close R] [--inset D] | --exact) -o OUT.stl\n"
+    "                          [--ascii] [--no-self-check] [--json] [--memory-cap SIZE]\n"
+    "                          [--threads N]\n"
     "\n"
-    "Interference elimination: the splint minus the jaws' swept volume along the direction\n"
-    "(as `sweep`, cut to the splint's bounds), subtracted by the exact Boolean and checked\n"
-    "(closed, manifold, outward, float32, no self-intersection unless --no-self-check) before\n"
-    "it is written, atomically. The direction is the one the splint is seated along for these\n"
-    "jaws (for a wafer: the maxilla's is the mandible's reversed; run once per jaw). The swept\n"
-    "surface is taken --inset D mm inside (default H / 2): the splint already holds the jaw's\n"
-    "imprint, which the swept volume reproduces to within the voxel error, and the inset keeps\n"
-    "the two apart; at most D of undercut is left.\n";
+    "Interference elimination: the splint minus the jaws' swept volume along the direction,\n"
+    "subtracted by the exact Boolean and checked (closed, manifold, outward, float32, no\n"
+    "self-intersection unless --no-self-check) before it is written, atomically. The direction\n"
+    "is the one the splint is seated along for these jaws (for a wafer: the maxilla's is the\n"
+    "mandible's reversed; run once per jaw). With --voxel the swept volume is sampled (as\n"
+    "`sweep`, cut to the splint's bounds) and taken --inset D mm inside (default H / 2): the\n"
+    "splint already holds the jaw's imprint, which the swept volume reproduces to within the\n"
+    "voxel error, and the inset keeps the two apart; at most D of undercut is left. With\n"
+    "--exact it is the exact boundary instead, the jaws' own front triangles (facing against\n"
+    "the direction) and walls along it, with no voxels and no inset (the jaw files are joined\n"
+    "as one jaw). It holds the jaw itself, so give it the splint before the jaws are\n"
+    "subtracted (a cut splint's imprint coincides with it, which the Boolean can only nudge\n"
+    "apart). A jaw whose swept surface would cross itself inside the splint, or whose\n"
+    "folds would leave more than 0.05 mm of undercut (an overhang), is refused with where\n"
+    "(docs/case-format.md, blockout \"method\").\n";
 
 const char kCtPhantomUsage[] =
     "usage: splintcore ct-phantom -o PATH --format dicom|nrrd|mha [--size NX,NY,NZ]\n"
