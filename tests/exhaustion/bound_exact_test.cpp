@@ -328,8 +328,8 @@ TEST(BoundExact, CtSegmentation) {
   }
 }
 
-// The paper-scale case (fixtures/cases/paper_scale.json or blockout.json) and two phantom jaws
-// of 6,000 triangles, in an arena of their own.
+// The paper-scale case (fixtures/cases/paper_scale.json, blockout.json or exact.json) and two
+// phantom jaws of 6,000 triangles, in an arena of their own.
 struct PhantomCase {
   TestArena storage{size_t{128} << 20};
   std::vector<uint8_t> text;
@@ -356,7 +356,7 @@ struct PhantomCase {
 };
 
 TEST(BoundTwoStep, DesignBooleanBlockoutLabel) {
-  for (const char* name : {"paper_scale.json", "blockout.json"}) {
+  for (const char* name : {"paper_scale.json", "blockout.json", "exact.json"}) {
     PhantomCase pc(name);
     expect_two_step("design_splint", name, [&](Arena& arena) {
       Mesh splint(&arena);
@@ -384,6 +384,15 @@ TEST(BoundTwoStep, DesignBooleanBlockoutLabel) {
   expect_two_step("blockout", "cut, phantom maxilla, 0.3 mm", [&](Arena& arena) {
     Mesh out(&arena);
     return blockout(Context(&arena), cut, Span<const Mesh>(&pc.jaws[0], 1), bl, &out);
+  });
+  // The exact sweep's blockout takes the uncut base (the sweep holds the jaw): the sweep, the
+  // shells' check (and the splint's distance index where one crosses) and the Boolean.
+  BlockoutOptions bx;
+  bx.sweep.direction = Vec3{0, 0, 1};
+  bx.exact = true;
+  expect_two_step("blockout (exact)", "base, phantom maxilla", [&](Arena& arena) {
+    Mesh out(&arena);
+    return blockout(Context(&arena), base, Span<const Mesh>(&pc.jaws[0], 1), bx, &out);
   });
   ArenaArray<Line> upper(&pc.storage.arena), lower(&pc.storage.arena);
   SPLINTCORE_ASSERT_OK(make_lines(sctx, pc.c.upper, pc.c.occlusal_normal, "upper", &upper));
