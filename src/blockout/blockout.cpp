@@ -301,18 +301,47 @@ Status blockout_error(const Status& s) {
 // The exact sweep's shells (its triangles connected through shared vertices: patches that
 // overlap are separate shells, which the Boolean's groups unite) each checked exactly for
 // self-crossing where the Boolean takes them: within the region (the splint's box as the
-// Boolean widens it) and, for a shell found crossing there, among its triangles not wholly
-// outside the splint by kShellReach (triangle_side), since a crossing is part of the result
-// only where both triangles reach into the splint (the real maxilla's case: walls meeting
-// front triangles in the air above the base). A crossing left is refused (kUnsupported, with
-// where) before the Boolean would spend its nudges on it. Arena: a union-find entry and a
-// shell start per vertex, a triangle copy per triangle, find_self_intersections_bound of the
-// largest shell, and for a shell crossing the splint's distance index (distance_index_bound);
-// all rewound.
+// Boolean widens it). A shell found crossing there is checked again among its triangles that
+// can matter to the splint: where a wall W crosses a front triangle F of its own shell, what is
+// wrong in the shell (W above the crossing, F where the other side's prisms hide it) lies in F
+// or above it along d, in F's prism; so a triangle whose prism, up to the region's far side
+// along d, stays wholly outside the splint by kShellReach (triangle_side of the triangle, its
+// three sides and its top) is left out. On the real maxilla the walls that meet front
+// triangles do so in the air above the base (2 of 16 shells), and the splint is the Boolean's
+// alone. A crossing left is refused (kUnsupported, with where) before the Boolean would spend
+// its nudges on it. Arena: a union-find entry and a shell start per vertex, a triangle copy per
+// triangle, find_self_intersections_bound of the largest shell, and for a shell crossing the
+// splint's distance index (distance_index_bound); all rewound.
 constexpr double kShellReach = 0.01;  // mm: what the Boolean's nudges of A may move it, and more
+
+// Whether triangle abc, or its prism along d up to the plane x . d = top, comes within
+// kShellReach of the splint (or inside it): triangle_side of the triangle, each side's two
+// triangles and the top. A triangle parallel to d (a wall) is its own prism.
+bool prism_near_splint(const DistanceIndex& index, const Vec3 p[3], const Vec3& d, double top,
+                       uint32_t* seed) {
+  const auto outside = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
+    return triangle_side(index, a, b, c, kShellReach, seed) == TriangleSide::kOutside;
+  };
+  if (!outside(p[0], p[1], p[2])) return true;
+  if (normal_dot(p[0], p[1], p[2], d) == 0) return false;
+  Vec3 q[3];
+  for (int k = 0; k < 3; ++k) q[k] = p[k] + d * std::fmax(0.0, top - dot(p[k], d));
+  for (int k = 0; k < 3; ++k) {
+    const int n = (k + 1) % 3;
+    if (!outside(p[k], p[n], q[n]) || !outside(p[k], q[n], q[k])) return true;
+  }
+  return !outside(q[0], q[1], q[2]);
+}
 
 Status check_swept_shells(const Context& ctx, const Mesh& swept, const Mesh& splint,
                           const Aabb& region, ExactSweepStats* st) {
+  const Vec3 d = st->direction;
+  double top = -HUGE_VAL;  // the region's far side along d
+  for (int k = 0; k < 8; ++k) {
+    const Vec3 corner{(k & 1) ? region.hi.x : region.lo.x, (k & 2) ? region.hi.y : region.lo.y,
+                      (k & 4) ? region.hi.z : region.lo.z};
+    top = std::fmax(top, dot(corner, d));
+  }
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);  // all rewound
   const uint32_t nv = static_cast<uint32_t>(swept.vertices.size());
@@ -360,11 +389,8 @@ Status check_swept_shells(const Context& ctx, const Mesh& swept, const Mesh& spl
     uint32_t kept = 0, seed = kNoNeighbor;
     for (uint32_t i = 0; i < count; ++i) {
       const Triangle g = tris[i];
-      const Vec3 &a = swept.vertices[g.v[0]], &b = swept.vertices[g.v[1]],
-                 &c = swept.vertices[g.v[2]];
-      if (triangle_side(index, a, b, c, kShellReach, &seed) != TriangleSide::kOutside) {
-        tris[kept++] = g;
-      }
+      const Vec3 p[3] = {swept.vertices[g.v[0]], swept.vertices[g.v[1]], swept.vertices[g.v[2]]};
+      if (prism_near_splint(index, p, d, top, &seed)) tris[kept++] = g;
     }
     count = kept;
     SPLINTCORE_RETURN_IF_ERROR(find_self_intersections(
