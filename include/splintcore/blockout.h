@@ -206,9 +206,13 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
 // triangles around that foot are then taken into the surface, round after round until no
 // wall is crossed (at most 64 rounds). The surface then follows the jaw up and over the fold:
 // the thin air pocket between a taken-in back triangle and the front triangle above it (its
-// width is the fold's overlap seen along d, micrometres on the data measured) is not swept,
-// which the independent line check does not see at 1e-4 mm on the phantom and the real jaws.
-// A crossing further away than the rings is the Boolean's to refuse (blockout says why).
+// width is at most the taken-in triangle's seen along d) is not swept. Every taken-in triangle
+// whose prism can reach the region is then checked: seen along d at most 0.05 mm wide (the
+// undercut the voxel method's default inset leaves everywhere; the widest on the real jaws
+// with the automatic outline: 0.040 mm), or its pocket at most that deep; else the sweep
+// stops (kUnsupported, naming the triangle and where): a real overhang (a base reaching the
+// teeth's necks) would be taken in whole, leaving the undercut itself unswept. A crossing
+// further away than the rings is found by blockout's check of each shell (below).
 // Where the front triangles around a vertex form two fans or more, their walls would share
 // the edge above it: such vertices count as folds too (ExactSweepStats::pinched_vertices:
 // what is left of them).
@@ -243,8 +247,9 @@ uint64_t sweep_exact_bound(uint64_t vertex_count, uint64_t triangle_count);
 // 1 mm, past it) and rounded to float32. Deterministic: input order throughout. Errors:
 // kInvalidArgument (out not empty, a zero or non-finite direction, an empty or non-finite
 // region), kInvalidMesh (a vertex id out of range: the triangle), kNonFinite (a vertex),
-// kLimitExceeded (a wall's top beyond float32), kArenaExhausted. Arena: sweep_exact_bound;
-// only `out` stays.
+// kLimitExceeded (a wall's top beyond float32), kUnsupported (a fold that would leave more
+// than 0.05 mm of undercut: the taken-in triangle, as the index), kArenaExhausted. Arena:
+// sweep_exact_bound; only `out` stays.
 Status sweep_exact_mesh(const Context& ctx, const Mesh& jaw, const Vec3& direction,
                         const Aabb& region, Mesh* out, ExactSweepStats* stats = nullptr);
 
@@ -267,7 +272,11 @@ struct BlockoutOptions {
   // of the sampled one: no voxels, no inset, no retries; sweep.direction is used, the other
   // sweep options are not (an offset is refused: a spacer is the sampled sweep's). One jaw with
   // triangles at a time (jaws without triangles are passed over). The splint may be the base
-  // itself: the exact sweep holds the jaw, its front triangles are the imprint.
+  // itself: the exact sweep holds the jaw, its front triangles are the imprint. Before the
+  // Boolean each shell of the sweep that meets the region is checked exactly for crossing
+  // itself (find_self_intersections), and a shell that does, again among its triangles whose
+  // prism along d comes within 0.01 mm of the splint (triangle_side): a crossing there is
+  // refused (kUnsupported, with where; ExactSweepStats::shells, shells_crossing_outside).
   bool exact = false;
 };
 
@@ -300,7 +309,8 @@ struct BlockoutStats {
 // vertex and the swept mesh, moved down over the cells and the index; then the Boolean's; only
 // `out` stays (moved down to where the arena's top was). Errors: those of sweep_volume_mesh and
 // mesh_boolean (the latter prefixed "blockout:"), kInvalidArgument (out not empty), kLimitExceeded
-// (a swept vertex beyond float32 range).
+// (a swept vertex beyond float32 range); with `exact`, those of sweep_exact_mesh, and
+// kUnsupported for a shell of the sweep that crosses itself where it matters to the splint.
 Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
                 const BlockoutOptions& options, Mesh* out, BlockoutStats* stats = nullptr);
 
