@@ -229,9 +229,10 @@ struct ExactSweepStats {
   uint64_t pockets_checked = 0;     // taken-in triangles whose unswept pocket was checked
   uint64_t pockets_shallow = 0;     // of them wider than the bound but no deeper than it
   // Set by blockout (BlockoutOptions::exact), which checks the output's shells for
-  // self-crossing where its Boolean takes them before it runs: the shells meeting the region,
-  // the pairs their exact checks examined, and the shells that cross only outside the splint
-  // (such a crossing is not part of the result).
+  // self-crossing where its Boolean takes them before it runs: the shells with triangles
+  // checked (walls, and front triangles over their feet, in the region), the pairs their exact
+  // checks examined, and the shells that cross only where the splint is not (such a crossing
+  // is not part of the result).
   uint64_t shells = 0;
   uint64_t shell_check_candidates = 0;
   uint64_t shells_crossing_outside = 0;

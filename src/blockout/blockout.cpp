@@ -298,20 +298,21 @@ Status blockout_error(const Status& s) {
   return e;
 }
 
-// The exact sweep's shells (its triangles connected through shared vertices: patches that
-// overlap are separate shells, which the Boolean's groups unite) each checked exactly for
-// self-crossing where the Boolean takes them: within the region (the splint's box as the
-// Boolean widens it). A shell found crossing there is checked again among its triangles that
-// can matter to the splint: where a wall W crosses a front triangle F of its own shell, what is
-// wrong in the shell (W above the crossing, F where the other side's prisms hide it) lies in F
-// or above it along d, in F's prism; so a triangle whose prism, up to the region's far side
-// along d, stays wholly outside the splint by kShellReach (triangle_side of the triangle, its
-// three sides and its top) is left out. On the real maxilla the walls that meet front
-// triangles do so in the air above the base (2 of 16 shells), and the splint is the Boolean's
-// alone. A crossing left is refused (kUnsupported, with where) before the Boolean would spend
-// its nudges on it. Arena: a union-find entry and a shell start per vertex, a triangle copy per
-// triangle, find_self_intersections_bound of the largest shell, and for a shell crossing the
-// splint's distance index (distance_index_bound); all rewound.
+// The exact sweep's shells (its triangles connected through shared vertices: patches that overlap
+// are separate shells, which the Boolean's groups unite) each checked exactly for self-crossing
+// where the Boolean takes them: within the region (the splint's box as the Boolean widens it), its
+// walls and the front triangles over their feet (WallCells; the front triangles, the jaw's own, do
+// not cross each other). A shell found crossing there is checked again among those of its triangles
+// that can matter to the splint: where a wall W crosses a front triangle F of its own shell, what
+// is wrong in the shell (W above the crossing, F where the other side's prisms hide it) lies in F
+// or above it along d, in F's prism; so a triangle whose prism, up to the region's far side along
+// d, stays wholly outside the splint by kShellReach (triangle_side of the triangle, its three sides
+// and its top) is left out. On the real maxilla the walls that meet front triangles do so in the
+// air above the base (2 of the 15 shells checked), and the splint is the Boolean's alone. A
+// crossing left is refused (kUnsupported, with where) before the Boolean would spend its nudges on
+// it. Arena: a union-find entry and a shell start per vertex, a triangle copy per triangle, a byte
+// per wall cell (at most 1 MiB), find_self_intersections_bound of the largest shell, and for a
+// shell crossing the splint's distance index (distance_index_bound); all rewound.
 constexpr double kShellReach = 0.01;  // mm: what the Boolean's nudges of A may move it, and more
 
 // Whether triangle abc, or its prism along d up to the plane x . d = top, comes within
@@ -332,6 +333,81 @@ bool prism_near_splint(const DistanceIndex& index, const Vec3 p[3], const Vec3& 
   }
   return !outside(q[0], q[1], q[2]);
 }
+
+// The cells, seen along d over the region, that the walls' feet pass through (their boxes, a
+// micrometre wider: a wall's top is its foot moved along d and rounded to float32). A wall is
+// the strip above its foot, so a front triangle it meets overlaps its foot seen along d: only
+// the front triangles over a marked cell can meet a wall (front triangles do not cross each
+// other: they are the jaw's). Arena: a byte per cell, at most 1024 x 1024 cells.
+struct WallCells {
+  Vec3 u{}, v{};
+  double u0 = 0, v0 = 0, cell = 1;
+  int64_t nu = 0, nv = 0;
+  uint8_t* marked = nullptr;
+
+  Status build(Arena& arena, const Mesh& swept, size_t first_wall, const Vec3& d,
+               const Aabb& region) {
+    u = std::fabs(d.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+    u = u - d * dot(u, d);
+    u = u * (1.0 / std::sqrt(dot(u, u)));
+    v = cross(d, u);
+    double u1 = -HUGE_VAL, v1 = -HUGE_VAL;
+    u0 = v0 = HUGE_VAL;
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 c{(k & 1) ? region.hi.x : region.lo.x, (k & 2) ? region.hi.y : region.lo.y,
+                   (k & 4) ? region.hi.z : region.lo.z};
+      u0 = std::fmin(u0, dot(c, u));
+      u1 = std::fmax(u1, dot(c, u));
+      v0 = std::fmin(v0, dot(c, v));
+      v1 = std::fmax(v1, dot(c, v));
+    }
+    cell = std::fmax(0.25, std::fmax(u1 - u0, v1 - v0) / 1000);
+    nu = static_cast<int64_t>((u1 - u0) / cell) + 1;
+    nv = static_cast<int64_t>((v1 - v0) / cell) + 1;
+    marked = arena.allocate_array<uint8_t>(static_cast<size_t>(nu * nv));
+    if (marked == nullptr) return arena.exhausted_status();
+    std::memset(marked, 0, static_cast<size_t>(nu * nv));
+    for (size_t w = first_wall; w < swept.triangles.size(); w += 2) {
+      const Triangle& g = swept.triangles[w];  // (b, a, a'): its foot is b a
+      const Vec3 p[2] = {swept.vertices[g.v[0]], swept.vertices[g.v[1]]};
+      int64_t lo[2], hi[2];
+      range(p, 2, 1e-3, lo, hi);
+      for (int64_t j = lo[1]; j <= hi[1]; ++j) {
+        for (int64_t i = lo[0]; i <= hi[0]; ++i) marked[j * nu + i] = 1;
+      }
+    }
+    return Status::ok();
+  }
+  // The cells (clamped) that the points' box, `margin` wider, covers seen along d.
+  void range(const Vec3* p, int n, double margin, int64_t lo[2], int64_t hi[2]) const {
+    double a0 = HUGE_VAL, a1 = -HUGE_VAL, b0 = HUGE_VAL, b1 = -HUGE_VAL;
+    for (int k = 0; k < n; ++k) {
+      a0 = std::fmin(a0, dot(p[k], u));
+      a1 = std::fmax(a1, dot(p[k], u));
+      b0 = std::fmin(b0, dot(p[k], v));
+      b1 = std::fmax(b1, dot(p[k], v));
+    }
+    const auto at = [&](double x, double origin, int64_t count) {
+      const double c = std::floor((x - origin) / cell);
+      return c < 0 ? int64_t{0}
+                   : (c >= static_cast<double>(count) ? count - 1 : static_cast<int64_t>(c));
+    };
+    lo[0] = at(a0 - margin, u0, nu);
+    hi[0] = at(a1 + margin, u0, nu);
+    lo[1] = at(b0 - margin, v0, nv);
+    hi[1] = at(b1 + margin, v0, nv);
+  }
+  bool near(const Vec3 p[3]) const {
+    int64_t lo[2], hi[2];
+    range(p, 3, 1e-3, lo, hi);
+    for (int64_t j = lo[1]; j <= hi[1]; ++j) {
+      for (int64_t i = lo[0]; i <= hi[0]; ++i) {
+        if (marked[j * nu + i] != 0) return true;
+      }
+    }
+    return false;
+  }
+};
 
 Status check_swept_shells(const Context& ctx, const Mesh& swept, const Mesh& splint,
                           const Aabb& region, ExactSweepStats* st) {
@@ -355,19 +431,30 @@ Status check_swept_shells(const Context& ctx, const Mesh& swept, const Mesh& spl
     (void)shells.unite(g.v[0], g.v[1]);
     (void)shells.unite(g.v[0], g.v[2]);
   }
-  const auto meets_region = [&](const Triangle& g) {
+  // The surface's triangles come first, then two per wall (sweep_exact_mesh).
+  const size_t first_wall = static_cast<size_t>(st->kept_triangles + st->absorbed_triangles);
+  WallCells cells;
+  SPLINTCORE_RETURN_IF_ERROR(cells.build(arena, swept, first_wall, d, region));
+  // A triangle checked: meeting the region, and a wall or a front triangle over a wall's foot.
+  const auto checked = [&](size_t t) {
+    const Triangle& g = swept.triangles[t];
+    const Vec3 p[3] = {swept.vertices[g.v[0]], swept.vertices[g.v[1]], swept.vertices[g.v[2]]};
     Aabb box;
-    for (uint32_t v : g.v) box.add(swept.vertices[v]);
-    return box.lo.x <= region.hi.x && box.hi.x >= region.lo.x && box.lo.y <= region.hi.y &&
-           box.hi.y >= region.lo.y && box.lo.z <= region.hi.z && box.hi.z >= region.lo.z;
+    for (const Vec3& q : p) box.add(q);
+    if (!(box.lo.x <= region.hi.x && box.hi.x >= region.lo.x && box.lo.y <= region.hi.y &&
+          box.hi.y >= region.lo.y && box.lo.z <= region.hi.z && box.hi.z >= region.lo.z)) {
+      return false;
+    }
+    return t >= first_wall || cells.near(p);
   };
   std::memset(start, 0, (static_cast<size_t>(nv) + 2) * sizeof(uint32_t));
-  for (const Triangle& g : swept.triangles) {
-    if (meets_region(g)) ++start[shells.find(g.v[0]) + 2];
+  for (size_t t = 0; t < swept.triangles.size(); ++t) {
+    if (checked(t)) ++start[shells.find(swept.triangles[t].v[0]) + 2];
   }
   for (uint32_t v = 0; v < nv; ++v) start[v + 2] += start[v + 1];
-  for (const Triangle& g : swept.triangles) {
-    if (meets_region(g)) order[start[shells.find(g.v[0]) + 1]++] = g;
+  for (size_t t = 0; t < swept.triangles.size(); ++t) {
+    const Triangle& g = swept.triangles[t];
+    if (checked(t)) order[start[shells.find(g.v[0]) + 1]++] = g;
   }
   DistanceIndex index;
   bool indexed = false;
