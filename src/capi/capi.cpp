@@ -752,42 +752,43 @@ sc_status sc_sweep(sc_context* ctx, const sc_mesh* const* jaws, size_t jaw_count
   });
 }
 
-sc_status sc_blockout(sc_context* ctx, const sc_mesh* splint, const sc_mesh* const* jaws,
-                      size_t jaw_count, const double direction[3], double voxel, double inset,
-                      sc_mesh** out) {
+namespace {
+
+// sc_blockout and sc_blockout_exact: the arguments checked, the jaws gathered, blockout run with
+// `o` (its direction set here) into a new mesh.
+sc_status blockout_into(sc_context* ctx, const char* name, const sc_mesh* splint,
+                        const sc_mesh* const* jaws, size_t jaw_count, const double direction[3],
+                        BlockoutOptions o, sc_mesh** out) {
   if (ctx == nullptr || splint == nullptr || out == nullptr || direction == nullptr) {
-    return null_argument(ctx, "sc_blockout", "the splint, the direction or the output");
+    return null_argument(ctx, name, "the splint, the direction or the output");
   }
   *out = nullptr;
   Mesh local[kMaxOperationMeshes];
-  Status s = gather_meshes(jaws, jaw_count, "sc_blockout", local, kMaxOperationMeshes);
+  Status s = gather_meshes(jaws, jaw_count, name, local, kMaxOperationMeshes);
   if (!s.is_ok()) return keep(ctx, s);
-  BlockoutOptions o;
   o.sweep.direction = vec(direction);
-  o.sweep.voxel = voxel;
-  o.sweep.inset = inset;
   const Context core = core_context(ctx);
   return new_mesh(ctx, out, [&](Mesh* m) {
     return blockout(core, splint->mesh, Span<const Mesh>(local, jaw_count), o, m, nullptr);
   });
 }
 
+}  // namespace
+
+sc_status sc_blockout(sc_context* ctx, const sc_mesh* splint, const sc_mesh* const* jaws,
+                      size_t jaw_count, const double direction[3], double voxel, double inset,
+                      sc_mesh** out) {
+  BlockoutOptions o;
+  o.sweep.voxel = voxel;
+  o.sweep.inset = inset;
+  return blockout_into(ctx, "sc_blockout", splint, jaws, jaw_count, direction, o, out);
+}
+
 sc_status sc_blockout_exact(sc_context* ctx, const sc_mesh* splint, const sc_mesh* const* jaws,
                             size_t jaw_count, const double direction[3], sc_mesh** out) {
-  if (ctx == nullptr || splint == nullptr || out == nullptr || direction == nullptr) {
-    return null_argument(ctx, "sc_blockout_exact", "the splint, the direction or the output");
-  }
-  *out = nullptr;
-  Mesh local[kMaxOperationMeshes];
-  Status s = gather_meshes(jaws, jaw_count, "sc_blockout_exact", local, kMaxOperationMeshes);
-  if (!s.is_ok()) return keep(ctx, s);
   BlockoutOptions o;
-  o.sweep.direction = vec(direction);
   o.exact = true;
-  const Context core = core_context(ctx);
-  return new_mesh(ctx, out, [&](Mesh* m) {
-    return blockout(core, splint->mesh, Span<const Mesh>(local, jaw_count), o, m, nullptr);
-  });
+  return blockout_into(ctx, "sc_blockout_exact", splint, jaws, jaw_count, direction, o, out);
 }
 
 sc_status sc_case_parse(sc_context* ctx, const char* text, size_t length, const char* name,
