@@ -34,6 +34,16 @@ struct CaseAndJaws {
   }
 };
 
+// The case with the voxel blockout at `voxel` mm, the swept surface `inset` mm inside.
+CaseFile voxel_blockout(const CaseFile& c, double voxel, double inset) {
+  CaseFile v = c;
+  v.has_blockout = true;
+  v.blockout_method = BlockoutMethod::kVoxel;
+  v.blockout.voxel = voxel;
+  v.blockout.inset = inset;
+  return v;
+}
+
 TEST(DesignPipeline, PaperScaleCaseGivesTheGoldenSplint) {
   CaseAndJaws f;
   ASSERT_TRUE(f.ok);
@@ -130,11 +140,7 @@ TEST(DesignPipeline, BlockoutRemovesInterferenceAndStaysPrintable) {
   SPLINTCORE_ASSERT_OK(
       design_splint(Context(&f.t.arena), f.c, Span<const Mesh>(f.jaws, 2), &plain, &r0));
   EXPECT_EQ(r0.blockout_jaws, 0u);
-  CaseFile c = f.c;
-  c.has_blockout = true;
-  c.blockout_method = BlockoutMethod::kVoxel;
-  c.blockout.voxel = 0.2;
-  c.blockout.inset = 0.1;
+  const CaseFile c = voxel_blockout(f.c, 0.2, 0.1);
   Mesh blocked;
   DesignReport r;
   SPLINTCORE_ASSERT_OK(
@@ -191,11 +197,7 @@ TEST(DesignPipeline, ExactBlockoutSkipsTheJawsBooleanAndRemovesTheUndercuts) {
     EXPECT_GT(r.blockout[j].exact.kept_triangles, 0u);
     EXPECT_GT(r.blockout[j].exact.walls, 0u);
   }
-  CaseFile voxel = f.c;
-  voxel.has_blockout = true;
-  voxel.blockout_method = BlockoutMethod::kVoxel;
-  voxel.blockout.voxel = 0.2;
-  voxel.blockout.inset = 0.1;
+  const CaseFile voxel = voxel_blockout(f.c, 0.2, 0.1);
   Mesh sampled;
   DesignReport rv;
   SPLINTCORE_ASSERT_OK(
