@@ -260,16 +260,15 @@ uint32_t ring_triangles(Surface& f, uint32_t v, uint32_t* out) {
 }
 
 // Whether the wall from jaw vertex v to s (as emitted: tops rounded) meets a triangle of the
-// surface near v that has neither corner of the edge: the surface overhangs its own wall
-// further than the corner test above sees.
-bool wall_meets_ring(Surface& f, uint32_t v, uint32_t s, const Vec3& d, const Aabb& region) {
+// surface near v (`ring`, v's ring_triangles) that has neither corner of the edge: the surface
+// overhangs its own wall further than the corner test above sees.
+bool wall_meets_ring(const Surface& f, uint32_t v, uint32_t s, const Vec3& d, const Aabb& region,
+                     const uint32_t* ring, uint32_t n) {
   const Mesh& jaw = *f.jaw;
   Vec3 vt, st;
   if (!wall_top(jaw.vertices[v], d, region, &vt) || !wall_top(jaw.vertices[s], d, region, &st)) {
     return false;  // the output says so
   }
-  uint32_t ring[kRingCap];
-  const uint32_t n = ring_triangles(f, v, ring);
   const Vec3& pv = jaw.vertices[v];
   const Vec3& ps = jaw.vertices[s];
   Aabb wall;
@@ -297,22 +296,61 @@ bool wall_meets_ring(Surface& f, uint32_t v, uint32_t s, const Vec3& d, const Aa
   return false;
 }
 
+// Marks for recheck (state 0) every jaw vertex of a surface triangle within kRings rings of a
+// vertex of the round's joined triangles: one breadth-first search from all of them at once,
+// over the round's whole surface, in `queue` (room for every jaw vertex). Rings of vertices
+// that reach each other are walked once, where a ring per corner walked them up to six times.
+constexpr uint8_t kQueued = 2;
+void reset_around(Surface& f, const uint32_t* joined, uint32_t joined_count, uint8_t* state,
+                  uint32_t* queue) {
+  const Mesh& jaw = *f.jaw;
+  uint32_t end = 0;
+  const auto push = [&](uint32_t w) {
+    if (state[w] == kQueued) return;
+    state[w] = kQueued;
+    queue[end++] = w;
+  };
+  for (uint32_t i = 0; i < joined_count; ++i) {
+    for (uint32_t w : jaw.triangles[joined[i]].v) push(w);
+  }
+  const uint32_t call = ++f.calls;
+  uint32_t done = 0;
+  for (int ring = 0; ring < kRings; ++ring) {
+    const uint32_t level_end = end;
+    for (; done < level_end; ++done) {
+      const uint32_t w = queue[done];
+      for (uint32_t j = f.star_start[w]; j < f.star_start[w + 1]; ++j) {
+        const uint32_t t = f.star[j];
+        if (!in_patch(f.cls[t]) || f.seen[t] == call) continue;
+        f.seen[t] = call;
+        for (uint32_t x : jaw.triangles[t].v) push(x);
+      }
+    }
+  }
+  for (uint32_t i = 0; i < end; ++i) state[queue[i]] = 0;
+}
+
 // Vertices whose walls the surface around them overlaps (or with more than two walls): their
 // back triangles join the surface. A vertex found clean stays clean until a triangle within
-// its rings joins (then every vertex around that triangle is tested again): state[v] is
-// kClean or not, per jaw vertex. `folds` holds the round's fold vertices (room for one per jaw
-// vertex). Returns how many vertices were folds.
+// its rings joins (then every vertex around that triangle is tested again: reset_around):
+// state[v] is kClean or not, per jaw vertex. `folds` holds the round's fold vertices (room for
+// one per jaw vertex; reset_around's queue after). Returns how many vertices were folds.
 constexpr uint8_t kClean = 1;
 uint32_t absorb_folds(Surface& f, const Vec3& d, const Aabb& region, uint32_t* used, uint8_t* state,
                       uint32_t* folds, uint32_t* joined, uint32_t* joined_count) {
   const Mesh& jaw = *f.jaw;
   uint32_t count = 0;
+  uint32_t ring[kRingCap];
   for (uint32_t v = 0; v < jaw.vertices.size(); ++v) {
     if (f.wall_degree[v] == 0 || state[v] == kClean) continue;
     bool fold = f.wall_degree[v] > 2;
+    uint32_t n = kUnset;  // v's ring, found once for both its walls
     for (uint32_t w = 0; w < f.wall_degree[v] && w < 2 && !fold; ++w) {
       const uint32_t end = f.wall_ends[2 * v + w];
-      fold = wall_inside_fan(f, v, end, d) || wall_meets_ring(f, v, end, d, region);
+      fold = wall_inside_fan(f, v, end, d);
+      if (fold) break;
+      if (n == kUnset) n = ring_triangles(f, v, ring);
+      fold = wall_meets_ring(f, v, end, d, region, ring, n);
     }
     if (fold) {
       folds[count++] = v;
@@ -320,7 +358,6 @@ uint32_t absorb_folds(Surface& f, const Vec3& d, const Aabb& region, uint32_t* u
       state[v] = kClean;
     }
   }
-  uint32_t ring[kRingCap];
   for (uint32_t i = 0; i < count; ++i) {
     const uint32_t v = folds[i];
     for (uint32_t j = f.star_start[v]; j < f.star_start[v + 1]; ++j) {
@@ -328,15 +365,10 @@ uint32_t absorb_folds(Surface& f, const Vec3& d, const Aabb& region, uint32_t* u
       if (f.cls[t] != kBack) continue;
       f.cls[t] = kAbsorbed;
       joined[(*joined_count)++] = t;
-      for (uint32_t w : jaw.triangles[t].v) {
-        used[w] = 0;
-        const uint32_t n = ring_triangles(f, w, ring);
-        for (uint32_t m = 0; m < n; ++m) {
-          for (uint32_t x : jaw.triangles[ring[m]].v) state[x] = 0;
-        }
-      }
+      for (uint32_t w : jaw.triangles[t].v) used[w] = 0;
     }
   }
+  reset_around(f, joined, *joined_count, state, folds);
   return count;
 }
 
