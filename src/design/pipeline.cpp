@@ -654,7 +654,8 @@ Status cut_base_with(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
 // sweep for kExact and kAuto (not with a clearance: the spacer is the sampled sweep's). When
 // kAuto's exact sweep is refused (kUnsupported: a jaw's swept surface would cross itself, or
 // its Boolean could not resolve a configuration), everything from the base is made again with
-// voxels, from where the arena was, and the report says why (blockout_fallback).
+// voxels, from where the arena was, and the report says why (blockout_fallback); if the voxels
+// fail too, their error says it.
 Status cut_base(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* cut,
                 DesignReport* report) {
   Arena& arena = *ctx.arena;
@@ -682,7 +683,11 @@ Status cut_base(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Me
   const size_t n = std::min(std::strlen(s.message()), sizeof report->blockout_fallback - 1);
   std::memcpy(report->blockout_fallback, s.message(), n);
   report->blockout_fallback[n] = '\0';
-  return cut_base_with(ctx, c, jaws, false, cut, report);
+  Status voxels = cut_base_with(ctx, c, jaws, false, cut, report);
+  // No report is written for a failed design: the error says why voxels were tried at all
+  // (after its own text, which says what to do; the Status truncates at its capacity).
+  if (!voxels.is_ok()) voxels.append("; \"auto\" had fallen back to voxels: ").append(s.message());
+  return voxels;
 }
 
 // Checks what design_splint takes before anything is allocated.

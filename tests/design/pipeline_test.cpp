@@ -328,6 +328,31 @@ TEST(DesignPipeline, AutoBlockoutIsExactUnlessItsSweepStopsThenVoxels) {
       << s.message();
   EXPECT_NE(std::strstr(s.message(), "(jaw 0, maxilla)"), nullptr) << s.message();
   EXPECT_TRUE(none.triangles.empty());
+  // "auto" in room for its exact attempt but not for the voxels: the voxels' error, which
+  // says why they were tried (no report is written for a failed design).
+  size_t need[2] = {0, 0};
+  const BlockoutMethod methods[2] = {BlockoutMethod::kExact, BlockoutMethod::kVoxel};
+  for (int m = 0; m < 2; ++m) {
+    test::TestArena ta(size_t{256} << 20);
+    c.blockout_method = methods[m];
+    Mesh out;
+    DesignReport rm;
+    (void)design_splint(Context(&ta.arena), c, Span<const Mesh>(f.jaws, 2), &out, &rm);
+    need[m] = ta.arena.high_water();
+  }
+  ASSERT_LT(need[0], need[1]);
+  test::TestArena between(need[0] + (need[1] - need[0]) / 2);
+  c.blockout_method = BlockoutMethod::kAuto;
+  Mesh short_of_room;
+  DesignReport rs;
+  const Status st =
+      design_splint(Context(&between.arena), c, Span<const Mesh>(f.jaws, 2), &short_of_room, &rs);
+  EXPECT_EQ(st.code(), StatusCode::kArenaExhausted) << test::format(st);
+  EXPECT_NE(
+      std::strstr(st.message(), "; \"auto\" had fallen back to voxels: blockout: exact sweep"),
+      nullptr)
+      << st.message();
+  EXPECT_TRUE(short_of_room.triangles.empty());
 }
 
 }  // namespace
