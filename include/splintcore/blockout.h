@@ -211,7 +211,8 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
 // undercut the voxel method's default inset leaves everywhere; the widest on the real jaws
 // with the automatic outline: 0.040 mm), or its pocket at most that deep; else the sweep
 // stops (kUnsupported, naming the triangle and where): a real overhang (a base reaching the
-// teeth's necks) would be taken in whole, leaving the undercut itself unswept. A crossing
+// teeth's necks) would be taken in whole, leaving the undercut itself unswept; unless the
+// caller's ExactPocketTest finds nothing of use in its column (below). A crossing
 // further away than the rings is found by blockout's check of each shell (below).
 // Where the front triangles around a vertex form two fans or more, their walls would share
 // the edge above it: such vertices count as folds too (ExactSweepStats::pinched_vertices:
@@ -228,6 +229,7 @@ struct ExactSweepStats {
   uint32_t fold_rounds = 0;         // rounds that took some in
   uint64_t pockets_checked = 0;     // taken-in triangles whose unswept pocket was checked
   uint64_t pockets_shallow = 0;     // of them wider than the bound but no deeper than it
+  uint64_t pockets_clear = 0;  // of them deeper, but with nothing in their column (ExactPocketTest)
   // Set by blockout (BlockoutOptions::exact), which checks the output's shells for
   // self-crossing where its Boolean takes them before it runs: the shells with triangles
   // checked (walls, and front triangles over their feet, in the region), the pairs their exact
@@ -238,7 +240,18 @@ struct ExactSweepStats {
   uint64_t shells_crossing_outside = 0;
 };
 
-// Arena bytes sweep_exact_mesh takes at most for a jaw of these sizes (output included).
+// A pocket wider and deeper than the bound matters only where something would be left in it:
+// `clear` answers, for such a taken-in triangle p, whether its prism along d up to the region's
+// far side holds nothing of use (blockout: neither comes within 0.01 mm of the splint nor holds
+// a part of it, as its shell check asks of a crossing). It may take arena memory (rewound with
+// the sweep's temporaries).
+struct ExactPocketTest {
+  Status (*clear)(void* user, const Vec3 p[3], bool* is_clear) = nullptr;
+  void* user = nullptr;
+};
+
+// Arena bytes sweep_exact_mesh takes at most for a jaw of these sizes (output included; what
+// an ExactPocketTest takes is the caller's).
 uint64_t sweep_exact_bound(uint64_t vertex_count, uint64_t triangle_count);
 
 // The open surface described above into `out` (empty): the kept front triangles (the jaw's
@@ -249,10 +262,12 @@ uint64_t sweep_exact_bound(uint64_t vertex_count, uint64_t triangle_count);
 // kInvalidArgument (out not empty, a zero or non-finite direction, an empty or non-finite
 // region), kInvalidMesh (a vertex id out of range: the triangle), kNonFinite (a vertex),
 // kLimitExceeded (a wall's top beyond float32), kUnsupported (a fold that would leave more
-// than 0.05 mm of undercut: the taken-in triangle, as the index), kArenaExhausted. Arena:
-// sweep_exact_bound; only `out` stays.
+// than 0.05 mm of undercut that `pockets`, if given, does not find clear: the taken-in
+// triangle, as the index), kArenaExhausted, what `pockets` returns. Arena: sweep_exact_bound;
+// only `out` stays.
 Status sweep_exact_mesh(const Context& ctx, const Mesh& jaw, const Vec3& direction,
-                        const Aabb& region, Mesh* out, ExactSweepStats* stats = nullptr);
+                        const Aabb& region, Mesh* out, ExactSweepStats* stats = nullptr,
+                        const ExactPocketTest* pockets = nullptr);
 
 // ---------------------------------------------------------------------------------------------
 // Interference elimination: the splint minus the jaws' swept volume.
@@ -276,8 +291,11 @@ struct BlockoutOptions {
   // itself: the exact sweep holds the jaw, its front triangles are the imprint. Before the
   // Boolean each shell of the sweep that meets the region is checked exactly for crossing
   // itself (find_self_intersections), and a shell that does, again among its triangles whose
-  // prism along d comes within 0.01 mm of the splint (triangle_side): a crossing there is
-  // refused (kUnsupported, with where; ExactSweepStats::shells, shells_crossing_outside).
+  // prism along d comes within 0.01 mm of the splint (triangle_side) or holds a part of it (a
+  // shell of the splint whose box lies within the prism's): a crossing there is refused
+  // (kUnsupported, with where; ExactSweepStats::shells, shells_crossing_outside). A fold's
+  // pocket wider and deeper than 0.05 mm is taken only where its prism is not near the splint
+  // in that sense (ExactPocketTest; ExactSweepStats::pockets_clear).
   bool exact = false;
 };
 

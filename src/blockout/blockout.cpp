@@ -306,33 +306,82 @@ Status blockout_error(const Status& s) {
 // that can matter to the splint: where a wall W crosses a front triangle F of its own shell, what
 // is wrong in the shell (W above the crossing, F where the other side's prisms hide it) lies in F
 // or above it along d, in F's prism; so a triangle whose prism, up to the region's far side along
-// d, stays wholly outside the splint by kShellReach (triangle_side of the triangle, its three sides
-// and its top) is left out. On the real maxilla the walls that meet front triangles do so in the
+// d, is not near the splint (SplintNear, below) is left out. On the real maxilla the walls that meet front triangles do so in the
 // air above the base (2 of the 15 shells checked), and the splint is the Boolean's alone. A
 // crossing left is refused (kUnsupported, with where) before the Boolean would spend its nudges on
 // it. Arena: a union-find entry and a shell start per vertex, a triangle copy per triangle, a byte
 // per wall cell (at most 1 MiB), find_self_intersections_bound of the largest shell, and for a
-// shell crossing the splint's distance index (distance_index_bound); all rewound.
+// shell crossing SplintNear; all rewound.
 constexpr double kShellReach = 0.01;  // mm: what the Boolean's nudges of A may move it, and more
 
-// Whether triangle abc, or its prism along d up to the plane x . d = top, comes within
-// kShellReach of the splint (or inside it): triangle_side of the triangle, each side's two
-// triangles and the top. A triangle parallel to d (a wall) is its own prism.
-bool prism_near_splint(const DistanceIndex& index, const Vec3 p[3], const Vec3& d, double top,
-                       uint32_t* seed) {
-  const auto outside = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
-    return triangle_side(index, a, b, c, kShellReach, seed) == TriangleSide::kOutside;
-  };
-  if (!outside(p[0], p[1], p[2])) return true;
-  if (normal_dot(p[0], p[1], p[2], d) == 0) return false;
-  Vec3 q[3];
-  for (int k = 0; k < 3; ++k) q[k] = p[k] + d * std::fmax(0.0, top - dot(p[k], d));
-  for (int k = 0; k < 3; ++k) {
-    const int n = (k + 1) % 3;
-    if (!outside(p[k], p[n], q[n]) || !outside(p[k], q[n], q[k])) return true;
+// What the checks ask of the splint: whether triangle abc, or its prism along d up to the plane
+// x . d = top, comes within kShellReach of the splint or holds part of it: triangle_side of the
+// triangle, each side's two triangles and the top (the splint's surface near or crossing them,
+// or one of them inside it), or a shell of the splint whose box lies within the prism's box (a
+// part wholly inside the prism, which its faces would not see). A triangle parallel to d (a
+// wall) is its own prism. Built at the first question (the splint's distance index, and a box
+// per shell); arena: distance_index_bound, a union-find entry per vertex and a box per shell.
+struct SplintNear {
+  const Context* ctx = nullptr;
+  const Mesh* splint = nullptr;
+  DistanceIndex index;
+  Aabb* shell_boxes = nullptr;
+  uint32_t shells = 0;
+  bool built = false;
+  uint32_t seed = kNoNeighbor;
+
+  Status build() {
+    Arena& arena = *ctx->arena;
+    SPLINTCORE_RETURN_IF_ERROR(build_distance_index(*ctx, *splint, DistanceIndexOptions{}, &index));
+    const uint32_t nv = static_cast<uint32_t>(splint->vertices.size());
+    UnionFind parts;
+    uint32_t* root_box = arena.allocate_array<uint32_t>(static_cast<size_t>(nv) + 1);
+    if (!parts.init(arena, nv) || root_box == nullptr) return arena.exhausted_status();
+    for (const Triangle& g : splint->triangles) {
+      (void)parts.unite(g.v[0], g.v[1]);
+      (void)parts.unite(g.v[0], g.v[2]);
+    }
+    for (uint32_t v = 0; v < nv; ++v) {
+      if (parts.find(v) == v) root_box[v] = shells++;
+    }
+    shell_boxes = arena.allocate_array<Aabb>(static_cast<size_t>(shells) + 1);
+    if (shell_boxes == nullptr) return arena.exhausted_status();
+    for (uint32_t i = 0; i < shells; ++i) shell_boxes[i] = Aabb{};
+    for (uint32_t v = 0; v < nv; ++v) shell_boxes[root_box[parts.find(v)]].add(splint->vertices[v]);
+    built = true;
+    return Status::ok();
   }
-  return !outside(q[0], q[1], q[2]);
-}
+
+  Status prism_near(const Vec3 p[3], const Vec3& d, double top, bool* near) {
+    if (!built) SPLINTCORE_RETURN_IF_ERROR(build());
+    const auto outside = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
+      return triangle_side(index, a, b, c, kShellReach, &seed) == TriangleSide::kOutside;
+    };
+    *near = true;
+    if (!outside(p[0], p[1], p[2])) return Status::ok();
+    Aabb box;
+    for (int k = 0; k < 3; ++k) box.add(p[k]);
+    if (normal_dot(p[0], p[1], p[2], d) != 0) {
+      Vec3 q[3];
+      for (int k = 0; k < 3; ++k) q[k] = p[k] + d * std::fmax(0.0, top - dot(p[k], d));
+      for (int k = 0; k < 3; ++k) {
+        const int n = (k + 1) % 3;
+        if (!outside(p[k], p[n], q[n]) || !outside(p[k], q[n], q[k])) return Status::ok();
+        box.add(q[k]);
+      }
+      if (!outside(q[0], q[1], q[2])) return Status::ok();
+    }
+    for (uint32_t i = 0; i < shells; ++i) {
+      const Aabb& b = shell_boxes[i];
+      if (b.lo.x >= box.lo.x && b.lo.y >= box.lo.y && b.lo.z >= box.lo.z && b.hi.x <= box.hi.x &&
+          b.hi.y <= box.hi.y && b.hi.z <= box.hi.z) {
+        return Status::ok();
+      }
+    }
+    *near = false;
+    return Status::ok();
+  }
+};
 
 // The cells, seen along d over the region, that the walls' feet pass through (their boxes, a
 // micrometre wider: a wall's top is its foot moved along d and rounded to float32). A wall is
@@ -409,15 +458,39 @@ struct WallCells {
   }
 };
 
-Status check_swept_shells(const Context& ctx, const Mesh& swept, const Mesh& splint,
-                          const Aabb& region, ExactSweepStats* st) {
-  const Vec3 d = st->direction;
-  double top = -HUGE_VAL;  // the region's far side along d
+// The region's far side along d: the largest x . d over its corners.
+double far_side(const Aabb& region, const Vec3& d) {
+  double top = -HUGE_VAL;
   for (int k = 0; k < 8; ++k) {
     const Vec3 corner{(k & 1) ? region.hi.x : region.lo.x, (k & 2) ? region.hi.y : region.lo.y,
                       (k & 4) ? region.hi.z : region.lo.z};
     top = std::fmax(top, dot(corner, d));
   }
+  return top;
+}
+
+// The exact sweep's ExactPocketTest: a fold's pocket too deep for its bound is clear when the
+// taken-in triangle's prism along d, up to the region's far side, is not near the splint
+// (SplintNear: what a pocket leaves unswept lies in that column). SplintNear is built at the
+// first such pocket, in the sweep's temporaries.
+struct PocketClear {
+  SplintNear near;
+  Vec3 d{};
+  double top = 0;
+
+  static Status clear(void* user, const Vec3 p[3], bool* is_clear) {
+    PocketClear& c = *static_cast<PocketClear*>(user);
+    bool near = true;
+    SPLINTCORE_RETURN_IF_ERROR(c.near.prism_near(p, c.d, c.top, &near));
+    *is_clear = !near;
+    return Status::ok();
+  }
+};
+
+Status check_swept_shells(const Context& ctx, const Mesh& swept, const Mesh& splint,
+                          const Aabb& region, ExactSweepStats* st) {
+  const Vec3 d = st->direction;
+  const double top = far_side(region, d);
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);  // all rewound
   const uint32_t nv = static_cast<uint32_t>(swept.vertices.size());
@@ -456,8 +529,9 @@ Status check_swept_shells(const Context& ctx, const Mesh& swept, const Mesh& spl
     const Triangle& g = swept.triangles[t];
     if (checked(t)) order[start[shells.find(g.v[0]) + 1]++] = g;
   }
-  DistanceIndex index;
-  bool indexed = false;
+  SplintNear near;
+  near.ctx = &ctx;
+  near.splint = &splint;
   // start[r] .. start[r + 1]: the shell of root r, in the sweep's order.
   for (uint32_t r = 0; r < nv; ++r) {
     uint32_t count = start[r + 1] - start[r];
@@ -469,15 +543,13 @@ Status check_swept_shells(const Context& ctx, const Mesh& swept, const Mesh& spl
         ctx, mesh_view(swept.vertices.span(), Span<const Triangle>(tris, count)), 1, &rep));
     st->shell_check_candidates += rep.candidate_pairs;
     if (!rep.self_intersecting()) continue;
-    if (!indexed) {
-      SPLINTCORE_RETURN_IF_ERROR(build_distance_index(ctx, splint, DistanceIndexOptions{}, &index));
-      indexed = true;
-    }
-    uint32_t kept = 0, seed = kNoNeighbor;
+    uint32_t kept = 0;
     for (uint32_t i = 0; i < count; ++i) {
       const Triangle g = tris[i];
       const Vec3 p[3] = {swept.vertices[g.v[0]], swept.vertices[g.v[1]], swept.vertices[g.v[2]]};
-      if (prism_near_splint(index, p, d, top, &seed)) tris[kept++] = g;
+      bool is_near = true;
+      SPLINTCORE_RETURN_IF_ERROR(near.prism_near(p, d, top, &is_near));
+      if (is_near) tris[kept++] = g;
     }
     count = kept;
     SPLINTCORE_RETURN_IF_ERROR(find_self_intersections(
@@ -521,8 +593,18 @@ Status blockout_exact(const Context& ctx, const Mesh& splint, Span<const Mesh> j
   ArenaScope scope(*ctx.arena);
   Mesh swept;
   if (jaw != nullptr) {
-    SPLINTCORE_RETURN_IF_ERROR(sweep_exact_mesh(ctx, *jaw, options.sweep.direction,
-                                                boolean_region(splint, bo), &swept, &st->exact));
+    const Aabb region = boolean_region(splint, bo);
+    PocketClear clear;
+    clear.near.ctx = &ctx;
+    clear.near.splint = &splint;
+    const Vec3 dir = options.sweep.direction;
+    clear.d = dir * (1.0 / std::sqrt(dot(dir, dir)));  // as the sweep normalises it
+    clear.top = far_side(region, clear.d);
+    ExactPocketTest pockets;
+    pockets.clear = PocketClear::clear;
+    pockets.user = &clear;
+    SPLINTCORE_RETURN_IF_ERROR(
+        sweep_exact_mesh(ctx, *jaw, dir, region, &swept, &st->exact, &pockets));
   }
   st->swept_triangles = swept.triangles.size();
   SPLINTCORE_RETURN_IF_ERROR(

@@ -385,10 +385,12 @@ constexpr double kFoldPocket = 0.05;
 // Every back triangle taken in whose prism can reach the region is checked: seen along d it
 // is at most kFoldPocket wide (twice its area over its longest side, in doubles), or the
 // segment from its centroid kFoldPocket along d meets a surface triangle within the rings
-// (segment_intersects_triangle: the pocket is no deeper). Returns the first taken-in triangle
-// that is neither, or kUnset.
-uint32_t deep_pocket(Surface& f, const Vec3& d, const Aabb& region, ExactSweepStats* st) {
+// (segment_intersects_triangle: the pocket is no deeper), or `pockets` finds its column clear.
+// *deep: the first taken-in triangle that is none of these, or kUnset.
+Status deep_pocket(Surface& f, const Vec3& d, const Aabb& region, const ExactPocketTest* pockets,
+                   ExactSweepStats* st, uint32_t* deep) {
   const Mesh& jaw = *f.jaw;
+  *deep = kUnset;
   uint32_t ring[kRingCap];
   for (uint32_t t = 0; t < jaw.triangles.size(); ++t) {
     if (f.cls[t] != kAbsorbed) continue;
@@ -416,10 +418,21 @@ uint32_t deep_pocket(Surface& f, const Vec3& d, const Aabb& region, ExactSweepSt
       covered = segment_intersects_triangle(c, q, jaw.vertices[h.v[0]], jaw.vertices[h.v[1]],
                                             jaw.vertices[h.v[2]]);
     }
-    if (!covered) return t;
-    ++st->pockets_shallow;
+    if (covered) {
+      ++st->pockets_shallow;
+      continue;
+    }
+    bool clear = false;
+    if (pockets != nullptr && pockets->clear != nullptr) {
+      SPLINTCORE_RETURN_IF_ERROR(pockets->clear(pockets->user, p, &clear));
+    }
+    if (!clear) {
+      *deep = t;
+      return Status::ok();
+    }
+    ++st->pockets_clear;
   }
-  return kUnset;
+  return Status::ok();
 }
 
 // The output: the surface's triangles in input order, then two per wall; the surface's
@@ -502,7 +515,8 @@ uint64_t sweep_exact_bound(uint64_t vertex_count, uint64_t triangle_count) {
 }
 
 Status sweep_exact_mesh(const Context& ctx, const Mesh& jaw, const Vec3& direction,
-                        const Aabb& region, Mesh* out, ExactSweepStats* stats) {
+                        const Aabb& region, Mesh* out, ExactSweepStats* stats,
+                        const ExactPocketTest* pockets) {
   SPLINTCORE_ASSERT(ctx.arena != nullptr && out != nullptr);
   ExactSweepStats local;
   ExactSweepStats* st = stats != nullptr ? stats : &local;
@@ -549,7 +563,8 @@ Status sweep_exact_mesh(const Context& ctx, const Mesh& jaw, const Vec3& directi
     ++st->fold_rounds;
   }
   for (size_t t = 0; t < nt; ++t) st->absorbed_triangles += cls[t] == kAbsorbed ? 1u : 0u;
-  const uint32_t deep = deep_pocket(f, d, region, st);
+  uint32_t deep = kUnset;
+  SPLINTCORE_RETURN_IF_ERROR(deep_pocket(f, d, region, pockets, st, &deep));
   if (deep != kUnset) {
     const auto um = [](double x) { return std::floor(x * 1000 + 0.5) / 1000; };
     const Vec3& p = jaw.vertices[jaw.triangles[deep].v[0]];

@@ -142,6 +142,7 @@ void write_exact_blockout(JsonWriter& w, const BlockoutStats& b, double removed_
   w.add("fold_vertices", e.fold_vertices);
   w.add("back_triangles_taken_in", e.absorbed_triangles);
   w.add("fold_rounds", e.fold_rounds);
+  w.add("fold_pockets_clear_of_splint", e.pockets_clear);
   w.add("swept_triangles", b.swept_triangles);
   w.add("passes", b.boolean.passes);
   w.add("intersecting_pairs", b.boolean.intersecting_pairs);

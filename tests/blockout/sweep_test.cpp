@@ -917,6 +917,107 @@ TEST(ExactSweep, AnOverhangIsRefusedNotTakenInAsAFold) {
   EXPECT_TRUE(blocked.triangles.empty());
 }
 
+// The neck band's pockets again, now with the splint a plate that only the crowns' tips
+// reach and a pillar beside the arch reaching above the necks: the region (the splint's box)
+// takes the band in, but no pocket's column along d meets the splint, so the blockout takes
+// them in (ExactPocketTest) where the sweep alone stops; the tips' imprint is cut, the pillar
+// is left whole, nothing is locked.
+TEST(ExactSweep, PocketsClearOfTheSplintAreTakenIn) {
+  TestArena ta(size_t{1} << 30);
+  Context ctx(&ta.arena);
+  Mesh jaws[2];
+  ASSERT_TRUE(test::phantom_jaw_meshes(ta.arena, 20000, jaws));
+  double tips = HUGE_VAL;  // the crowns' lowest point
+  for (const Vec3& p : jaws[0].vertices) tips = std::fmin(tips, p.z);
+  const float lo[3] = {-28.5f, -8, -3}, hi[3] = {28.5f, 45.5f, static_cast<float>(tips + 0.3)};
+  const float plo[3] = {27.5f, -8, 2}, phi[3] = {28.5f, -7, 5};
+  Mesh plate = box_mesh(&ta.arena, lo, hi);
+  Mesh splint = box_mesh(&ta.arena, lo, hi);
+  const Mesh pillar = box_mesh(&ta.arena, plo, phi);
+  const uint32_t first = static_cast<uint32_t>(splint.vertices.size());
+  for (const Vec3& p : pillar.vertices) ASSERT_TRUE(splint.vertices.push_back(p));
+  for (const Triangle& t : pillar.triangles) {
+    ASSERT_TRUE(
+        splint.triangles.push_back(Triangle{{t.v[0] + first, t.v[1] + first, t.v[2] + first}}));
+  }
+  const Vec3 d{0, 0, 1};
+  Mesh swept;
+  ExactSweepStats es;
+  const Status s =
+      sweep_exact_mesh(ctx, jaws[0], d, boolean_region(splint, BooleanOptions{}), &swept, &es);
+  EXPECT_EQ(s.code(), StatusCode::kUnsupported) << test::format(s);
+  BlockoutOptions o;
+  o.exact = true;
+  o.sweep.direction = d;
+  Mesh alone, blocked;
+  BlockoutStats sa, st;
+  SPLINTCORE_ASSERT_OK(blockout(ctx, plate, Span<const Mesh>(&jaws[0], 1), o, &alone, &sa));
+  SPLINTCORE_ASSERT_OK(blockout(ctx, splint, Span<const Mesh>(&jaws[0], 1), o, &blocked, &st));
+  EXPECT_EQ(sa.exact.pockets_clear, 0u);
+  EXPECT_GT(st.exact.pockets_clear, 10u);
+  EXPECT_GT(st.exact.absorbed_triangles, sa.exact.absorbed_triangles + 100);  // the band
+  MeshReport alone_report, report;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, alone, &alone_report));
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, blocked, &report));
+  EXPECT_TRUE(require_valid_solid(report).is_ok());
+  EXPECT_EQ(report.shells, alone_report.shells + 1);
+  EXPECT_NEAR(report.volume, alone_report.volume + 3.0, 1e-6);  // the pillar, 1 x 1 x 3 mm
+  const double whole = 57.0 * 53.5 * (static_cast<double>(hi[2]) + 3);
+  EXPECT_LT(alone_report.volume, whole - 1.0);  // the tips' imprint
+  const Vec3 u{1, 0, 0}, v{0, 1, 0}, c{0, 18, 0};
+  const LockReport lock = lock_report(ta.arena, blocked, jaws[0], d, u, v, c, 27.0, 120, 1e-4);
+  std::printf(
+      "[ figures  ] plate and pillar: %llu of %llu taken-in triangles' pockets wider and deeper "
+      "than the bound, clear of the splint; the imprint %.3f mm^3; %zu lines through the jaw, "
+      "%zu locked\n",
+      static_cast<unsigned long long>(st.exact.pockets_clear),
+      static_cast<unsigned long long>(st.exact.absorbed_triangles), whole - alone_report.volume,
+      lock.lines_through_jaw, lock.locked_lines);
+  EXPECT_GT(lock.lines_through_jaw, 3000u);
+  EXPECT_EQ(lock.locked_lines, 0u);
+  // A speck of splint (a 2 um cube) floating in one such pocket's column, 0.5 mm above its
+  // triangle, further from the column's sides than the reach: no face of the prism comes near
+  // it, but the splint is there, and the pocket is refused, by name.
+  struct Asked {
+    static Status clear(void* user, const Vec3 p[3], bool* is_clear) {
+      if (static_cast<std::vector<Vec3>*>(user)->empty()) {
+        static_cast<std::vector<Vec3>*>(user)->assign(p, p + 3);
+      }
+      *is_clear = true;
+      return Status::ok();
+    }
+  };
+  std::vector<Vec3> pocket;
+  ExactPocketTest asked;
+  asked.clear = Asked::clear;
+  asked.user = &pocket;
+  Mesh taken;
+  SPLINTCORE_ASSERT_OK(sweep_exact_mesh(ctx, jaws[0], d, boolean_region(splint, BooleanOptions{}),
+                                        &taken, nullptr, &asked));
+  ASSERT_EQ(pocket.size(), 3u);
+  const Vec3 at = (pocket[0] + pocket[1] + pocket[2]) * (1.0 / 3) + d * 0.5;
+  const float slo[3] = {static_cast<float>(at.x - 1e-3), static_cast<float>(at.y - 1e-3),
+                        static_cast<float>(at.z - 1e-3)};
+  const float shi[3] = {static_cast<float>(at.x + 1e-3), static_cast<float>(at.y + 1e-3),
+                        static_cast<float>(at.z + 1e-3)};
+  const Mesh speck = box_mesh(&ta.arena, slo, shi);
+  for (int k = 0; k < 2; ++k) {  // the speck is within the triangle's box seen along d (z)
+    EXPECT_GT(slo[k], std::fmin(pocket[0][k], std::fmin(pocket[1][k], pocket[2][k])));
+    EXPECT_LT(shi[k], std::fmax(pocket[0][k], std::fmax(pocket[1][k], pocket[2][k])));
+  }
+  const uint32_t at_speck = static_cast<uint32_t>(splint.vertices.size());
+  for (const Vec3& p : speck.vertices) ASSERT_TRUE(splint.vertices.push_back(p));
+  for (const Triangle& t : speck.triangles) {
+    ASSERT_TRUE(splint.triangles.push_back(
+        Triangle{{t.v[0] + at_speck, t.v[1] + at_speck, t.v[2] + at_speck}}));
+  }
+  Mesh refused;
+  const Status r = blockout(ctx, splint, Span<const Mesh>(&jaws[0], 1), o, &refused, nullptr);
+  EXPECT_EQ(r.code(), StatusCode::kUnsupported) << test::format(r);
+  EXPECT_NE(std::strstr(r.message(), "mm of undercut unswept"), nullptr) << r.message();
+  EXPECT_TRUE(refused.triangles.empty());
+}
+
 // An open helicoid, 1.25 turns rising 1 mm a turn between radii 1 and 2 (float32 vertices),
 // facing +z: seen along -z its last quarter turn lies over its first, so one front patch
 // overhangs itself a whole turn away (far beyond the fold rounds' rings), and the walls of its

@@ -3,7 +3,7 @@
 # repository: exits 77, skipped, without it): the case tools/bench/issue29.sh designs (spacing
 # 0.5 mm, "auto" with a 2 mm bite opening) with "blockout": {"method": "exact"}, designed in
 # 64 MiB on one thread, with 1 GiB, on two threads, and with the default "blockout": {}
-# ("auto", which is exact here): the splint is a closed, valid solid
+# ("auto", which is exact here), and with a base 3 mm deep: the splint is a closed, valid solid
 # (splintcore check), the same bytes every way, the report says the exact method ran on both
 # jaws and checked the result, within the cap.
 #   usage: realdata_exact_blockout_test.sh SPLINTCORE SPLINTCORE_BENCH REALDATA_DIR
@@ -42,6 +42,25 @@ for b in c["blockout"]:
     assert b["method"] == "exact" and b["walls"] > 0 and b["kept_front_triangles"] > 0, b
     print(b["role"], "front", b["front_triangles"], "kept", b["kept_front_triangles"], "walls",
           b["walls"], "folds", b["fold_vertices"], "taken in", b["back_triangles_taken_in"])
+PY
+cat "$work/out"
+# The base 3 mm deep (the default is 2): the fold rounds take in triangles whose pockets are wider
+# and deeper than 0.05 mm, but none with the base in its column, so the design stays exact.
+step "the automatic case with a base 3 mm deep" auto_case "$work/rc/deep.json" '{}' 3
+step "design it in 64M" "$tool" design "$work/rc/deep.json" -o "$work/deep" --memory-cap 64M
+step "the splint written is a printable solid" "$tool" check "$work/deep/splint.stl"
+step "the report: exact on both jaws, pockets clear of the base, within the cap" \
+  blockout_report "$work/deep/report.json" "$((64 << 20))" auto
+step "the report: the exact method, pockets clear of the base counted" python3 - \
+  "$work/deep/report.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+c = r["checks"]
+assert c["blockout_method_used"] == "exact" and "blockout_fallback" not in c, c
+clear = [b["fold_pockets_clear_of_splint"] for b in c["blockout"]]
+assert sum(clear) > 0, clear
+print("pockets clear of the base", clear, "taken in",
+      [b["back_triangles_taken_in"] for b in c["blockout"]])
 PY
 cat "$work/out"
 exit $failed

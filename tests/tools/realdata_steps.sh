@@ -21,8 +21,9 @@ step() {  # what command...
   fi
 }
 
-# auto_case FILE BLOCKOUT: the exported real case (spacing 0.5 mm, "auto" outline with a 2 mm
-# bite opening) with the blockout object BLOCKOUT (JSON), written to FILE.
+# auto_case FILE BLOCKOUT [DEPTH]: the exported real case (spacing 0.5 mm, "auto" outline with a
+# 2 mm bite opening; DEPTH: its indentation_depth_mm) with the blockout object BLOCKOUT (JSON),
+# written to FILE.
 auto_case() {
   python3 - "$@" <<'PY'
 import json, sys
@@ -32,6 +33,8 @@ c = {"splintcore_case": 1, "case_id": "realdata-patient26", "units": "mm",
      "base": {"spacing_mm": 0.5, "auto": {"bite_opening_mm": 2}}, "printer": "eden260",
      "blockout": json.loads(sys.argv[2]),
      "output": {"splint": "splint.stl", "report": "report.json"}}
+if len(sys.argv) > 3:
+    c["base"]["auto"]["indentation_depth_mm"] = float(sys.argv[3])
 json.dump(c, open(sys.argv[1], "w"))
 PY
 }

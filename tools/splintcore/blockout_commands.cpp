@@ -204,6 +204,7 @@ void print_blockout_json(const Run& run, const SweepArgs& a, const BlockoutResul
     j.add("walls", e.walls);
     j.add("fold_vertices", e.fold_vertices);
     j.add("back_triangles_taken_in", e.absorbed_triangles);
+    j.add("fold_pockets_clear_of_splint", e.pockets_clear);
     j.add("shells_checked", e.shells);
     j.add("swept_triangles", st.swept_triangles);
   } else {
