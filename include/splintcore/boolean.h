@@ -116,6 +116,9 @@ struct BooleanStats {
   bool self_intersection_checked = false;
   uint32_t attempts = 0;  // 1 + the nudges tried
   Vec3 nudge{};           // A's translation in the returned result
+  // How far A's own faces moved in the returned result: with several passes every pass's nudge
+  // added (each moves all that came before it), else nudge.
+  Vec3 nudge_sum{};
   // B's shells (components through shared vertices), the groups of shells that overlap no
   // other shell of their group where it matters, and the corefinement runs made (1 for one
   // group; see mesh_boolean). With several passes the counts above are summed over the

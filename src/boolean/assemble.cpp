@@ -486,6 +486,7 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
       for (const Triangle& t : a.triangles) (void)moved.triangles.push_back(t);
       pa = &moved;
       stats->nudge = d;
+      stats->nudge_sum = d;
     }
     stats->attempts = attempt + 1;
     Inputs in;

@@ -554,6 +554,7 @@ void add_stats(const BooleanStats& p, BooleanStats* total) {
   total->output_triangles_a = p.output_triangles_a;
   total->self_intersection_checked = p.self_intersection_checked;  // the final pass's result
   total->nudge = p.nudge;
+  total->nudge_sum = total->nudge_sum + p.nudge_sum;
 }
 
 // The box that matters for the difference and the intersection: A's, widened by what a nudge

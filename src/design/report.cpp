@@ -146,6 +146,7 @@ void write_exact_blockout(JsonWriter& w, const BlockoutStats& b, double removed_
   w.add("swept_triangles", b.swept_triangles);
   w.add("passes", b.boolean.passes);
   w.add("intersecting_pairs", b.boolean.intersecting_pairs);
+  w.add("nudge_mm", b.boolean.nudge_sum);
   w.add("removed_volume_mm3", removed_mm3);
   w.end_object();
 }
@@ -172,6 +173,7 @@ void write_blockout(JsonWriter& w, const CaseFile& c, const DesignReport& report
     w.add("attempts", b.attempts);
     w.add("inset_mm", b.inset_used);
     if (report.imprint_offset) w.add("clearance_mm", b.offset_used);
+    w.add("nudge_mm", b.boolean.nudge_sum);
     w.add("removed_volume_mm3", report.blockout_removed_mm3[i]);
     w.end_object();
   }

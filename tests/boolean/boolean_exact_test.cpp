@@ -206,6 +206,7 @@ void check_case(Arena& arena, const Case& c, bool float32, bool check_identities
       EXPECT_GT(n.stats.attempts, 1u) << label;
     }
     EXPECT_LT(length(n.stats.nudge), 1e-3) << label;
+    EXPECT_TRUE(n.stats.nudge_sum == n.stats.nudge) << label;  // one group, one pass
     // Translating A by t changes each result's volume by at most |t| * area(A).
     EXPECT_NEAR(
         n.volume, c.volume[op],
