@@ -34,6 +34,14 @@ struct CaseAndJaws {
   }
 };
 
+// Two designs that must be the same: their binary STL bytes compared.
+void expect_same_stl_bytes(Arena& arena, const Mesh& a, const Mesh& b) {
+  std::vector<uint8_t> x, y;
+  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(arena, a, StlFormat::kBinary, &x));
+  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(arena, b, StlFormat::kBinary, &y));
+  EXPECT_EQ(x, y);
+}
+
 // The case with the voxel blockout at `voxel` mm, the swept surface `inset` mm inside.
 CaseFile voxel_blockout(const CaseFile& c, double voxel, double inset) {
   CaseFile v = c;
@@ -160,10 +168,7 @@ TEST(DesignPipeline, BlockoutRemovesInterferenceAndStaysPrintable) {
   DesignReport r2;
   SPLINTCORE_ASSERT_OK(
       design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &again, &r2));
-  std::vector<uint8_t> a, b;
-  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(f.t.arena, blocked, StlFormat::kBinary, &a));
-  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(f.t.arena, again, StlFormat::kBinary, &b));
-  EXPECT_EQ(a, b);
+  expect_same_stl_bytes(f.t.arena, blocked, again);
 }
 
 // "method": "exact": the jaws' Boolean is not run (the exact sweep holds each jaw), each jaw's
@@ -237,10 +242,7 @@ TEST(DesignPipeline, ExactBlockoutSkipsTheJawsBooleanAndRemovesTheUndercuts) {
   DesignReport r2;
   SPLINTCORE_ASSERT_OK(
       design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &again, &r2));
-  std::vector<uint8_t> a, b;
-  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(f.t.arena, blocked, StlFormat::kBinary, &a));
-  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(f.t.arena, again, StlFormat::kBinary, &b));
-  EXPECT_EQ(a, b);
+  expect_same_stl_bytes(f.t.arena, blocked, again);
 }
 
 // The case with its base sunk `depth` mm further into each jaw (the picks moved along the
@@ -313,10 +315,7 @@ TEST(DesignPipeline, AutoBlockoutIsExactUnlessItsSweepStopsThenVoxels) {
   DesignReport rv;
   SPLINTCORE_ASSERT_OK(
       design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &voxel, &rv));
-  std::vector<uint8_t> a, b;
-  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(f.t.arena, fallback, StlFormat::kBinary, &a));
-  SPLINTCORE_ASSERT_OK(test::mesh_to_bytes(f.t.arena, voxel, StlFormat::kBinary, &b));
-  EXPECT_EQ(a, b);
+  expect_same_stl_bytes(f.t.arena, fallback, voxel);
   EXPECT_EQ(r.self_intersection_candidates, rv.self_intersection_candidates);
   // "exact" stops there, naming the jaw and the fold, and leaves no splint.
   c.blockout_method = BlockoutMethod::kExact;
