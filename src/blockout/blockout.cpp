@@ -306,12 +306,12 @@ Status blockout_error(const Status& s) {
 // that can matter to the splint: where a wall W crosses a front triangle F of its own shell, what
 // is wrong in the shell (W above the crossing, F where the other side's prisms hide it) lies in F
 // or above it along d, in F's prism; so a triangle whose prism, up to the region's far side along
-// d, is not near the splint (SplintNear, below) is left out. On the real maxilla the walls that meet front triangles do so in the
-// air above the base (2 of the 15 shells checked), and the splint is the Boolean's alone. A
-// crossing left is refused (kUnsupported, with where) before the Boolean would spend its nudges on
-// it. Arena: a union-find entry and a shell start per vertex, a triangle copy per triangle, a byte
-// per wall cell (at most 1 MiB), find_self_intersections_bound of the largest shell, and for a
-// shell crossing SplintNear; all rewound.
+// d, is not near the splint (SplintNear, below) is left out. On the real maxilla the walls that
+// meet front triangles do so in the air above the base (2 of the 15 shells checked), and the splint
+// is the Boolean's alone. A crossing left is refused (kUnsupported, with where) before the Boolean
+// would spend its nudges on it. Arena: a union-find entry and a shell start per vertex, a triangle
+// copy per triangle, a byte per wall cell (at most 1 MiB), find_self_intersections_bound of the
+// largest shell, and for a shell crossing SplintNear; all rewound.
 constexpr double kShellReach = 0.01;  // mm: what the Boolean's nudges of A may move it, and more
 
 // What the checks ask of the splint: whether triangle abc, or its prism along d up to the plane
