@@ -104,10 +104,12 @@ struct CaseFile {
   //   itself (an overhang along the direction further than the sweep's fold rounds reach) the
   //   design is refused (kUnsupported, with where).
   // - kVoxel, "voxel": the sampled sweep above (voxel, inset, closing_radius, clearance).
-  // - kAuto, "auto": kExact, and where the exact sweep refuses a jaw the whole design again
-  //   with kVoxel from the base, the refusal kept in DesignReport::blockout_fallback. The
-  //   voxel keys then set the fallback's sweep; a clearance is refused (the spacer is the
-  //   sampled sweep's: say "voxel").
+  // - kAuto, "auto": kExact, and a jaw whose exact sweep is refused is made with kVoxel
+  //   instead, after the others (its own imprint by the Boolean, then the sampled sweep); the
+  //   other jaws stay exact (DesignReport::blockout_exact). When every jaw is refused, the
+  //   whole design again with kVoxel from the base (the bytes of kVoxel). The first refusal is
+  //   kept in DesignReport::blockout_fallback. The voxel keys set the fallback's sweep; a
+  //   clearance is refused (the spacer is the sampled sweep's: say "voxel").
   // A case file without "method" is kAuto when the object names no voxel key (voxel, inset,
   // closing_radius, clearance: "blockout": {} is kAuto), else kVoxel.
   BlockoutMethod blockout_method = BlockoutMethod::kAuto;
@@ -291,11 +293,14 @@ struct DesignReport {
   // With a clearance the imprint is the swept volumes' offset surface: the Boolean base minus
   // jaws is not run (the jaws lie inside what the blockout removes) and `boolean` stays zero.
   bool imprint_offset = false;
-  // With "method": "exact" likewise: the imprint is the jaws' exact swept boundary (their
-  // front triangles and walls), made by the blockout alone; `boolean` stays zero.
+  // With "method": "exact" or "auto" likewise: the imprint is the jaws' exact swept boundary
+  // (their front triangles and walls), made by the blockout alone; `boolean` stays zero unless
+  // kAuto made a jaw with voxels (then it is that jaw's imprint's Boolean, the last one's).
   bool imprint_swept = false;
-  // kAuto made the splint with voxels: why the exact sweep was refused (its status message,
-  // naming where); "" otherwise.
+  // Per jaw in case order: its blockout used the exact sweep (else the sampled one).
+  bool blockout_exact[kMaxBlockoutJaws] = {};
+  // kAuto made a jaw with voxels: why its exact sweep was refused (the first such jaw's status
+  // message, naming where); "" otherwise.
   char blockout_fallback[Status::kMessageCapacity] = {};
   bool labelled = false;  // the case has "label"
   LabelStats label;

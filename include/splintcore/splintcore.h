@@ -369,6 +369,8 @@ const char* sc_case_jaw_mesh(const sc_case* c, size_t index);
 #define SC_BLOCKOUT_AUTO 0
 #define SC_BLOCKOUT_EXACT 1
 #define SC_BLOCKOUT_VOXEL 2
+/* sc_design_report.blockout_method_used only: AUTO made some jaws exactly, some with voxels */
+#define SC_BLOCKOUT_MIXED 3
 
 /* The parameters a caller may read and change after parsing. Flags are 0 or 1. */
 typedef struct sc_case_params {
@@ -510,8 +512,9 @@ typedef struct sc_design_report {
   uint32_t blockout_jaws; /* jaws blocked out (0 without blockout) */
   double blockout_removed_mm3[SC_MAX_BLOCKOUT_JAWS];
   uint32_t blockout_attempts[SC_MAX_BLOCKOUT_JAWS];
-  /* With a blockout, the method that made the splint: SC_BLOCKOUT_EXACT or SC_BLOCKOUT_VOXEL
-   * (with AUTO, VOXEL when the exact sweep stopped: sc_design_write_report says why). */
+  /* With a blockout, the method that made the splint: SC_BLOCKOUT_EXACT, SC_BLOCKOUT_VOXEL, or
+   * with AUTO SC_BLOCKOUT_MIXED when the exact sweep stopped for some jaws only (those jaws are
+   * made with voxels; sc_design_write_report says which and why). */
   int blockout_method_used;
   int printable;
   int fits;         /* fits the tray as placed */

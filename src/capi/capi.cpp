@@ -1032,7 +1032,11 @@ sc_status sc_design_scans(sc_context* ctx, const sc_case* c, const sc_mesh* cons
   report->boolean_nudge_mm[1] = r.boolean.nudge.y;
   report->boolean_nudge_mm[2] = r.boolean.nudge.z;
   report->blockout_jaws = r.blockout_jaws;
-  report->blockout_method_used = r.imprint_swept ? SC_BLOCKOUT_EXACT : SC_BLOCKOUT_VOXEL;
+  uint32_t exact_jaws = 0;
+  for (uint32_t i = 0; i < r.blockout_jaws; ++i) exact_jaws += r.blockout_exact[i] ? 1u : 0u;
+  report->blockout_method_used = exact_jaws == r.blockout_jaws ? SC_BLOCKOUT_EXACT
+                                 : exact_jaws == 0             ? SC_BLOCKOUT_VOXEL
+                                                               : SC_BLOCKOUT_MIXED;
   for (uint32_t i = 0; i < r.blockout_jaws && i < SC_MAX_BLOCKOUT_JAWS; ++i) {
     report->blockout_removed_mm3[i] = r.blockout_removed_mm3[i];
     report->blockout_attempts[i] = r.blockout[i].attempts;

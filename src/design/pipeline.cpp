@@ -289,11 +289,12 @@ Status moved_vertices(const Context& ctx, const CaseFile& c, Span<const Mesh> ja
   return Status::ok();
 }
 
-// One jaw's blockout (blockout_jaws), run with `check` the Boolean's own self-intersection
-// check (the blockout's answer alone) or without it; the result moved down to `start` over
-// the jaw's temporaries.
+// One jaw's blockout (blockout_jaws), with the exact sweep (`exact`) or the sampled one, run
+// with `check` the Boolean's own self-intersection check (the blockout's answer alone) or
+// without it; the result moved down to `start` over the jaw's temporaries.
 Status blockout_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, size_t j,
-                    const Arena::Marker& start, bool check, Mesh* cut, DesignReport* report) {
+                    const Arena::Marker& start, bool exact, bool check, Mesh* cut,
+                    DesignReport* report) {
   Mesh swept_jaws[DesignReport::kMaxBlockoutJaws];
   for (size_t k = 0; k < jaws.size(); ++k) {
     Span<const Vec3> v;
@@ -307,7 +308,7 @@ Status blockout_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws
   bl.sweep = c.blockout;  // voxel, inset, closing radius, offset as the case gives them
   bl.sweep.direction = mandible ? -c.insertion_direction : c.insertion_direction;
   bl.boolean.check_self_intersection = check;
-  bl.exact = report->imprint_swept;  // the method cut_base resolved
+  bl.exact = exact;
   Mesh blocked;
   const Status s = blockout(ctx, *cut, Span<const Mesh>(swept_jaws, jaws.size()), bl, &blocked,
                             &report->blockout[j]);
@@ -321,6 +322,58 @@ Status blockout_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws
   report->blockout_removed_mm3[j] = mesh_volume(*cut) - mesh_volume(blocked);
   move_mesh_down(*ctx.arena, start, blocked, cut);
   return Status::ok();
+}
+
+// One jaw's blockout as blockout_jaws runs it: blockout_one without the Boolean's check, then
+// the result's exact self-intersection check, and on a crossing blockout_one again with it.
+Status blockout_checked(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, size_t j,
+                        bool exact, Mesh* cut, DesignReport* report) {
+  Arena& arena = *ctx.arena;
+  const Arena::Marker start = arena.mark();
+  const Mesh before = *cut;
+  SPLINTCORE_RETURN_IF_ERROR(blockout_one(ctx, c, jaws, j, start, exact, false, cut, report));
+  BooleanStats& bs = report->blockout[j].boolean;
+  SelfIntersectionReport si;
+  // No swept triangle reached the splint: no Boolean ran, the splint is as it was.
+  if (report->blockout[j].swept_triangles > 0) {
+    SPLINTCORE_RETURN_IF_ERROR(stage_error(find_self_intersections(ctx, *cut, 1, &si), "blockout"));
+  }
+  if (si.self_intersecting()) {
+    arena.rewind(start);
+    *cut = before;
+    SPLINTCORE_RETURN_IF_ERROR(blockout_one(ctx, c, jaws, j, start, exact, true, cut, report));
+  } else if (report->blockout[j].swept_triangles > 0) {
+    bs.self_intersection_checked = true;
+    bs.self_intersection_candidates = si.candidate_pairs;
+  }
+  return Status::ok();
+}
+
+Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                     const Arena::Marker& low, Mesh* base, Mesh* cut, DesignReport* report,
+                     bool base_kept);
+
+// kAuto's fallback for jaw j, whose exact blockout was refused (`why`, the design's first
+// refusal): the jaw's own imprint (subtract_jaws with the case of that jaw alone and *cut, below
+// the arena's top, as its base) then its sampled blockout. An error then says why voxels were
+// tried at all (no report is written for a failed design; the Status truncates at its capacity).
+Status blockout_with_voxels(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, size_t j,
+                            const Status& why, Mesh* cut, DesignReport* report) {
+  if (report->blockout_fallback[0] == '\0') {
+    const size_t n = std::min(std::strlen(why.message()), sizeof report->blockout_fallback - 1);
+    std::memcpy(report->blockout_fallback, why.message(), n);
+    report->blockout_fallback[n] = '\0';
+  }
+  report->blockout[j] = BlockoutStats{};
+  CaseFile one = c;
+  one.jaws = Span<const CaseJaw>(&c.jaws[j], 1);
+  Mesh splint = *cut;
+  *cut = Mesh();
+  Status s = subtract_jaws(ctx, one, Span<const Mesh>(&jaws[j], 1), ctx.arena->mark(), &splint, cut,
+                           report, true);
+  if (s.is_ok()) s = blockout_checked(ctx, c, jaws, j, false, cut, report);
+  if (!s.is_ok()) s.append("; \"auto\" had fallen back to voxels: ").append(why.message());
+  return s;
 }
 
 // Interference elimination, jaw by jaw: each jaw's part of B swept along the direction it
@@ -337,6 +390,11 @@ Status blockout_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws
 // subtract_jaws does for the first Boolean: on the real dentition that keeps the blockout in
 // 64 MiB. Should it find a crossing, the jaw's blockout runs again with the check inside the
 // Boolean (where a crossing makes it nudge and retry): the answer is the blockout's alone.
+// On the exact path (report->imprint_swept) each jaw's sweep is exact. With kAuto a jaw whose
+// exact sweep is refused (kUnsupported) is passed over, the splint left as it was; once every
+// jaw has been tried, the refused ones are made with voxels (blockout_with_voxels), the others
+// staying exact, unless every jaw was refused: then the first refusal is returned, and
+// cut_base makes the whole design with voxels (the bytes of "voxel").
 Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                      const Arena::Marker& low, Mesh* cut, DesignReport* report) {
   if (jaws.size() > DesignReport::kMaxBlockoutJaws) {
@@ -344,31 +402,43 @@ Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
                       DesignReport::kMaxBlockoutJaws, " jaws, the case has ", jaws.size());
   }
   Arena& arena = *ctx.arena;
-  for (size_t j = 0; j < jaws.size(); ++j) {
-    const Arena::Marker start = arena.mark();
-    const Mesh before = *cut;
-    SPLINTCORE_RETURN_IF_ERROR(blockout_one(ctx, c, jaws, j, start, false, cut, report));
-    BooleanStats& bs = report->blockout[j].boolean;
-    SelfIntersectionReport si;
-    // No swept triangle reached the splint: no Boolean ran, the splint is as it was.
-    if (report->blockout[j].swept_triangles > 0) {
-      SPLINTCORE_RETURN_IF_ERROR(
-          stage_error(find_self_intersections(ctx, *cut, 1, &si), "blockout"));
-    }
-    if (si.self_intersecting()) {
-      arena.rewind(start);
-      *cut = before;
-      SPLINTCORE_RETURN_IF_ERROR(blockout_one(ctx, c, jaws, j, start, true, cut, report));
-    } else if (report->blockout[j].swept_triangles > 0) {
-      bs.self_intersection_checked = true;
-      bs.self_intersection_candidates = si.candidate_pairs;
-    }
-    report->blockout_jaws = static_cast<uint32_t>(j + 1);
-    note_self_check(report, bs, "blockout");
+  const auto settle = [&](size_t j) {  // jaw j done: its result moved down to `low`
+    report->blockout_jaws = std::max(report->blockout_jaws, static_cast<uint32_t>(j + 1));
+    note_self_check(report, report->blockout[j].boolean, "blockout");
     // The previous splint is no retry's input any more: the next jaw starts from `low`.
     Mesh moved;
     move_mesh_down(arena, low, *cut, &moved);
     *cut = moved;
+  };
+  size_t refused[DesignReport::kMaxBlockoutJaws];
+  size_t refusals = 0;
+  Status first_refusal;
+  for (size_t j = 0; j < jaws.size(); ++j) {
+    const Arena::Marker start = arena.mark();
+    const Mesh before = *cut;
+    const bool exact = report->imprint_swept;
+    report->blockout_exact[j] = exact;
+    const Status s = blockout_checked(ctx, c, jaws, j, exact, cut, report);
+    if (!s.is_ok()) {
+      if (!exact || c.blockout_method != BlockoutMethod::kAuto ||
+          s.code() != StatusCode::kUnsupported) {
+        return s;
+      }
+      arena.rewind(start);
+      *cut = before;
+      report->blockout[j] = BlockoutStats{};
+      report->blockout_exact[j] = false;
+      if (refusals == 0) first_refusal = s;
+      refused[refusals++] = j;
+      continue;
+    }
+    settle(j);
+  }
+  if (refusals > 0 && refusals == jaws.size()) return first_refusal;
+  for (size_t i = 0; i < refusals; ++i) {
+    SPLINTCORE_RETURN_IF_ERROR(
+        blockout_with_voxels(ctx, c, jaws, refused[i], first_refusal, cut, report));
+    settle(refused[i]);
   }
   return Status::ok();
 }
@@ -428,7 +498,8 @@ Status label_splint(const Context& ctx, const CaseFile& c, Mesh* cut, DesignRepo
 // again with the check inside, where a crossing makes it nudge A and try again: the answer is
 // the one the Boolean alone gives. *base is the arena's top at entry, above `low`.
 Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
-                     const Arena::Marker& low, Mesh* base, Mesh* cut, DesignReport* report) {
+                     const Arena::Marker& low, Mesh* base, Mesh* cut, DesignReport* report,
+                     bool base_kept) {
   Arena& arena = *ctx.arena;
   BooleanOptions bo;
   bo.op = BooleanOp::kDifference;
@@ -445,17 +516,22 @@ Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   Mesh moved;
   move_mesh_down(arena, low, *cut, &moved);
   *cut = moved;
-  *base = Mesh();
+  const Mesh kept_base = *base;
+  if (!base_kept) *base = Mesh();
   SelfIntersectionReport si;
   SPLINTCORE_RETURN_IF_ERROR(stage_error(find_self_intersections(ctx, *cut, 1, &si), "boolean"));
   if (si.self_intersecting()) {
     arena.rewind(low);
     *cut = Mesh();
-    *base = Mesh(&arena);
-    SPLINTCORE_RETURN_IF_ERROR(stage_error(build_case_base(ctx, c, base, &report->base), "base"));
+    if (base_kept) {
+      *base = kept_base;
+    } else {
+      *base = Mesh(&arena);
+      SPLINTCORE_RETURN_IF_ERROR(stage_error(build_case_base(ctx, c, base, &report->base), "base"));
+    }
     bo.check_self_intersection = true;
     SPLINTCORE_RETURN_IF_ERROR(subtract());
-    *base = Mesh();
+    if (!base_kept) *base = Mesh();
   } else {
     report->boolean.self_intersection_checked = true;
     report->boolean.self_intersection_candidates = si.candidate_pairs;
@@ -641,7 +717,7 @@ Status cut_base_with(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
     cut_low = arena.mark();
   } else {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: boolean"));
-    SPLINTCORE_RETURN_IF_ERROR(subtract_jaws(ctx, c, jaws, before_base, &base, cut, report));
+    SPLINTCORE_RETURN_IF_ERROR(subtract_jaws(ctx, c, jaws, before_base, &base, cut, report, false));
   }
   if (c.has_blockout) {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: blockout"));
@@ -651,11 +727,13 @@ Status cut_base_with(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
 }
 
 // cut_base_with with the case's blockout method resolved (CaseFile::blockout_method): the exact
-// sweep for kExact and kAuto (not with a clearance: the spacer is the sampled sweep's). When
-// kAuto's exact sweep is refused (kUnsupported: a jaw's swept surface would cross itself, or
-// its Boolean could not resolve a configuration), everything from the base is made again with
-// voxels, from where the arena was, and the report says why (blockout_fallback); if the voxels
-// fail too, their error says it.
+// sweep for kExact and kAuto (not with a clearance: the spacer is the sampled sweep's). With
+// kAuto a jaw whose exact sweep is refused (kUnsupported: its swept surface would cross itself
+// in the splint, a fold would leave undercut there, or its Boolean could not resolve a
+// configuration) is made with voxels, the other jaws staying exact (blockout_jaws); when every
+// jaw is refused, everything from the base is made again with voxels, from where the arena was
+// (the bytes of "voxel"). The report says why (blockout_fallback) and which jaws
+// (blockout_exact); if the voxels fail too, their error says it.
 Status cut_base(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* cut,
                 DesignReport* report) {
   Arena& arena = *ctx.arena;
@@ -674,6 +752,7 @@ Status cut_base(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Me
   for (uint32_t j = 0; j < DesignReport::kMaxBlockoutJaws; ++j) {
     report->blockout[j] = BlockoutStats{};
     report->blockout_removed_mm3[j] = 0;
+    report->blockout_exact[j] = false;
   }
   report->blockout_jaws = 0;
   report->imprint_offset = report->imprint_swept = false;

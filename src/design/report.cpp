@@ -158,10 +158,11 @@ void write_blockout(JsonWriter& w, const CaseFile& c, const DesignReport& report
     const BlockoutStats& b = report.blockout[i];
     w.begin_object();
     w.add("role", c.jaws[i].role);
-    if (report.imprint_swept) {
+    if (report.blockout_exact[i]) {
       write_exact_blockout(w, b, report.blockout_removed_mm3[i]);
       continue;
     }
+    w.add("method", "voxel");
     w.add("direction", b.sweep.axis_w);
     w.begin_array("grid");
     w.add(nullptr, b.sweep.nx);
@@ -248,14 +249,22 @@ void write_checks(JsonWriter& w, const CaseFile& c, const DesignReport& report) 
   w.add("boolean_intersection_points", report.boolean.intersection_points);
   w.add("boolean_attempts", report.boolean.attempts);
   w.add("boolean_nudge_mm", report.boolean.nudge);
+  uint32_t exact_jaws = 0;
+  for (uint32_t i = 0; i < report.blockout_jaws; ++i)
+    exact_jaws += report.blockout_exact[i] ? 1u : 0u;
   if (report.blockout_jaws > 0) {
-    w.add("blockout_method_used", report.imprint_swept ? "exact" : "voxel");
+    w.add("blockout_method_used", exact_jaws == report.blockout_jaws ? "exact"
+                                  : exact_jaws == 0                  ? "voxel"
+                                                                     : "exact and voxel");
     if (report.blockout_fallback[0] != '\0') w.add("blockout_fallback", report.blockout_fallback);
     write_blockout(w, c, report);
   }
-  w.add("imprint", report.imprint_offset  ? "clearance offset of the swept volume"
-                   : report.imprint_swept ? "exact swept volume (jaw front triangles and walls)"
-                                          : "jaw triangles");
+  w.add("imprint", report.imprint_offset   ? "clearance offset of the swept volume"
+                   : !report.imprint_swept ? "jaw triangles"
+                   : exact_jaws == report.blockout_jaws
+                       ? "exact swept volume (jaw front triangles and walls)"
+                       : "exact swept volume (jaw front triangles and walls); jaw triangles where "
+                         "a jaw was blocked out with voxels");
   if (report.labelled) {
     const LabelStats& l = report.label;
     w.begin_object("label");

@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 
+#include "common/cli.h"
 #include "common/phantom.h"
 #include "splintcore/design.h"
 #include "support/frame_moves.h"
@@ -248,12 +249,14 @@ TEST(DesignPipeline, ExactBlockoutSkipsTheJawsBooleanAndRemovesTheUndercuts) {
 // The case with its base sunk `depth` mm further into each jaw (the picks moved along the
 // occlusal normal), the blockout "auto" with a 0.3 mm voxel sweep as its fallback.
 CaseFile sunk_case(const CaseAndJaws& f, double depth, std::vector<Pick>* upper,
-                   std::vector<Pick>* lower) {
+                   std::vector<Pick>* lower, double lower_depth = -1) {
   CaseFile c = f.c;
   upper->assign(c.upper.begin(), c.upper.end());
   lower->assign(c.lower.begin(), c.lower.end());
   for (Pick& p : *upper) p.position = p.position + c.occlusal_normal * depth;
-  for (Pick& p : *lower) p.position = p.position - c.occlusal_normal * depth;
+  for (Pick& p : *lower) {
+    p.position = p.position - c.occlusal_normal * (lower_depth < 0 ? depth : lower_depth);
+  }
   c.upper = Span<const Pick>(upper->data(), upper->size());
   c.lower = Span<const Pick>(lower->data(), lower->size());
   c.has_blockout = true;
@@ -304,7 +307,8 @@ TEST(DesignPipeline, AutoBlockoutIsExactUnlessItsSweepStopsThenVoxels) {
   DesignReport r;
   SPLINTCORE_ASSERT_OK(
       design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &fallback, &r));
-  EXPECT_FALSE(r.imprint_swept);
+  EXPECT_FALSE(r.imprint_swept);  // both jaws refused: the whole design with voxels
+  EXPECT_FALSE(r.blockout_exact[0] || r.blockout_exact[1]);
   EXPECT_NE(std::strstr(r.blockout_fallback, "undercut unswept"), nullptr) << r.blockout_fallback;
   ASSERT_EQ(r.blockout_jaws, 2u);
   EXPECT_EQ(r.blockout[0].inset_used, 0.15);
@@ -352,6 +356,69 @@ TEST(DesignPipeline, AutoBlockoutIsExactUnlessItsSweepStopsThenVoxels) {
       nullptr)
       << st.message();
   EXPECT_TRUE(short_of_room.triangles.empty());
+}
+
+// "auto" with the upper base 2.5 mm deeper (the maxilla's exact sweep refused) and the lower
+// 2 mm (the mandible's exact): the maxilla is made with voxels (its own imprint by the
+// Boolean, then the sampled sweep), the mandible stays exact, and the report says which and why.
+TEST(DesignPipeline, AutoBlockoutFallsBackOnlyForTheJawItsSweepRefuses) {
+  CaseAndJaws f;
+  ASSERT_TRUE(f.ok);
+  std::vector<Pick> up, lo;
+  const CaseFile c = sunk_case(f, 2.5, &up, &lo, 2.0);
+  Mesh mixed, again;
+  DesignReport r, r2;
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &mixed, &r));
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &again, &r2));
+  expect_same_stl_bytes(f.t.arena, mixed, again);
+  EXPECT_TRUE(r.imprint_swept);
+  ASSERT_EQ(r.blockout_jaws, 2u);
+  EXPECT_FALSE(r.blockout_exact[0]);
+  EXPECT_TRUE(r.blockout_exact[1]);
+  EXPECT_NE(std::strstr(r.blockout_fallback, "undercut unswept"), nullptr) << r.blockout_fallback;
+  EXPECT_NE(std::strstr(r.blockout_fallback, "(jaw 0, maxilla)"), nullptr) << r.blockout_fallback;
+  EXPECT_GT(r.boolean.intersecting_pairs, 0u);  // the maxilla's own imprint
+  EXPECT_EQ(r.blockout[0].inset_used, 0.15);
+  EXPECT_GT(r.blockout[1].exact.walls, 0u);
+  EXPECT_TRUE(r.print.printable);
+  MeshReport mr;
+  SPLINTCORE_ASSERT_OK(check_mesh(Context(&f.t.arena), mixed, &mr));
+  EXPECT_TRUE(require_valid_solid(mr).is_ok());
+  // The mandible as exact as alone; the maxilla's undercuts left by the 0.3 mm voxels no more
+  // than the all-voxel design's.
+  CaseFile voxel_case = c;
+  voxel_case.blockout_method = BlockoutMethod::kVoxel;
+  Mesh voxel;
+  DesignReport rv;
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&f.t.arena), voxel_case, Span<const Mesh>(f.jaws, 2), &voxel, &rv));
+  for (int j = 0; j < 2; ++j) {
+    const Mesh jaw = test::moved_mesh(f.t.arena, f.jaws[j], c.jaws[j].transform);
+    const Vec3 d = j == 0 ? c.insertion_direction : -c.insertion_direction;
+    const test::LockReport lock = test::lock_report(f.t.arena, mixed, jaw, d, Vec3{1, 0, 0},
+                                                    Vec3{0, 1, 0}, Vec3{0, 18, 0}, 27.0, 100, 1e-4);
+    const test::LockReport all_voxel = test::lock_report(
+        f.t.arena, voxel, jaw, d, Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 18, 0}, 27.0, 100, 1e-4);
+    std::printf("[ figures  ] jaw %d (%s): locked lines %zu (longest %.3g mm), all voxels %zu\n", j,
+                r.blockout_exact[j] ? "exact" : "voxel", lock.locked_lines, lock.longest,
+                all_voxel.locked_lines);
+    EXPECT_GT(lock.lines_through_jaw, 1000u);
+    if (j == 1) {
+      EXPECT_EQ(lock.locked_lines, 0u);
+    }
+    EXPECT_LE(lock.locked_lines, all_voxel.locked_lines);
+  }
+  std::string json;
+  SPLINTCORE_ASSERT_OK(write_design_report(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2),
+                                           mixed, r, DesignReportFiles{}, nullptr,
+                                           cli::string_sink(&json)));
+  for (const char* key : {"\"blockout_method_used\":\"exact and voxel\"",
+                          "\"blockout_fallback\":", "\"role\":\"maxilla\",\"method\":\"voxel\"",
+                          "\"role\":\"mandible\",\"method\":\"exact\""}) {
+    EXPECT_NE(json.find(key), std::string::npos) << key;
+  }
 }
 
 }  // namespace

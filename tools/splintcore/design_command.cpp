@@ -723,10 +723,19 @@ void Design::print_summary() const {
                 report.boolean.attempts);
   }
   if (report.blockout_fallback[0] != '\0') {
-    std::printf("blockout: made with voxels, the exact sweep being refused: %s\n",
+    std::printf("blockout: with voxels where the exact sweep was refused: %s\n",
                 report.blockout_fallback);
   }
-  for (uint32_t i = 0; i < report.blockout_jaws && report.imprint_swept; ++i) {
+  for (uint32_t i = 0; i < report.blockout_jaws; ++i) {
+    if (!report.blockout_exact[i]) {
+      std::printf(
+          "blockout (%s): %.4f mm^3 of interference removed, %llu swept triangles, "
+          "inset %.3g mm\n",
+          c_.jaws[i].role, report.blockout_removed_mm3[i],
+          static_cast<unsigned long long>(report.blockout[i].swept_triangles),
+          report.blockout[i].inset_used);
+      continue;
+    }
     const ExactSweepStats& e = report.blockout[i].exact;
     std::printf(
         "blockout (%s, exact): %llu of %llu front triangles kept, %llu walls, %llu fold "
@@ -735,14 +744,6 @@ void Design::print_summary() const {
         static_cast<unsigned long long>(e.front_triangles),
         static_cast<unsigned long long>(e.walls), static_cast<unsigned long long>(e.fold_vertices),
         static_cast<unsigned long long>(report.blockout[i].swept_triangles));
-  }
-  for (uint32_t i = 0; i < report.blockout_jaws && !report.imprint_swept; ++i) {
-    std::printf(
-        "blockout (%s): %.4f mm^3 of interference removed, %llu swept triangles, "
-        "inset %.3g mm\n",
-        c_.jaws[i].role, report.blockout_removed_mm3[i],
-        static_cast<unsigned long long>(report.blockout[i].swept_triangles),
-        report.blockout[i].inset_used);
   }
   if (report.labelled) {
     std::printf("label: \"%s\" %s, %u glyphs, %.1f mm long\n", report.label.text,
