@@ -27,6 +27,20 @@ using test::TestArena;
 
 constexpr double kPi = 3.14159265358979323846;
 
+// `part` appended to `m`, its vertex ids shifted: a splint of several shells. False when the
+// arena is exhausted.
+bool append_mesh(Mesh* m, const Mesh& part) {
+  const uint32_t first = static_cast<uint32_t>(m->vertices.size());
+  for (const Vec3& p : part.vertices) {
+    if (!m->vertices.push_back(p)) return false;
+  }
+  for (Triangle t : part.triangles) {
+    for (uint32_t& v : t.v) v += first;
+    if (!m->triangles.push_back(t)) return false;
+  }
+  return true;
+}
+
 // A closed, outward frustum: radius r0 at z = z0, r1 at z = z1, n sides, capped.
 void frustum(Mesh* m, double r0, double r1, double z0, double z1, uint32_t n,
              const RigidTransform* move = nullptr) {
@@ -438,12 +452,7 @@ TEST(Blockout, NearSplintFilterGivesTheSameSolid) {
     const float lo1[3] = {2, -7, 4}, hi1[3] = {7, 7, 10};
     Mesh splint = box_mesh(&ta.arena, lo0, hi0);
     const Mesh right = box_mesh(&ta.arena, lo1, hi1);
-    const uint32_t base = static_cast<uint32_t>(splint.vertices.size());
-    for (const Vec3& p : right.vertices) ASSERT_TRUE(splint.vertices.push_back(p));
-    for (Triangle t : right.triangles) {
-      for (uint32_t& v : t.v) v += base;
-      ASSERT_TRUE(splint.triangles.push_back(t));
-    }
+    ASSERT_TRUE(append_mesh(&splint, right));
     BlockoutOptions o;
     o.sweep.direction = Vec3{0, 0, -1};
     o.sweep.voxel = 0.1;
@@ -934,12 +943,7 @@ TEST(ExactSweep, PocketsClearOfTheSplintAreTakenIn) {
   Mesh plate = box_mesh(&ta.arena, lo, hi);
   Mesh splint = box_mesh(&ta.arena, lo, hi);
   const Mesh pillar = box_mesh(&ta.arena, plo, phi);
-  const uint32_t first = static_cast<uint32_t>(splint.vertices.size());
-  for (const Vec3& p : pillar.vertices) ASSERT_TRUE(splint.vertices.push_back(p));
-  for (const Triangle& t : pillar.triangles) {
-    ASSERT_TRUE(
-        splint.triangles.push_back(Triangle{{t.v[0] + first, t.v[1] + first, t.v[2] + first}}));
-  }
+  ASSERT_TRUE(append_mesh(&splint, pillar));
   const Vec3 d{0, 0, 1};
   Mesh swept;
   ExactSweepStats es;
@@ -1005,12 +1009,7 @@ TEST(ExactSweep, PocketsClearOfTheSplintAreTakenIn) {
     EXPECT_GT(slo[k], std::fmin(pocket[0][k], std::fmin(pocket[1][k], pocket[2][k])));
     EXPECT_LT(shi[k], std::fmax(pocket[0][k], std::fmax(pocket[1][k], pocket[2][k])));
   }
-  const uint32_t at_speck = static_cast<uint32_t>(splint.vertices.size());
-  for (const Vec3& p : speck.vertices) ASSERT_TRUE(splint.vertices.push_back(p));
-  for (const Triangle& t : speck.triangles) {
-    ASSERT_TRUE(splint.triangles.push_back(
-        Triangle{{t.v[0] + at_speck, t.v[1] + at_speck, t.v[2] + at_speck}}));
-  }
+  ASSERT_TRUE(append_mesh(&splint, speck));
   Mesh refused;
   const Status r = blockout(ctx, splint, Span<const Mesh>(&jaws[0], 1), o, &refused, nullptr);
   EXPECT_EQ(r.code(), StatusCode::kUnsupported) << test::format(r);
@@ -1074,12 +1073,7 @@ TEST(ExactSweep, AShellCrossingItselfIsRefusedOnlyWhereItMeetsTheSplint) {
   const float plo[3] = {2.75f, 2.75f, -3}, phi[3] = {3, 3, 1};
   Mesh splint = box_mesh(&ta.arena, lo, hi);
   const Mesh pillar = box_mesh(&ta.arena, plo, phi);
-  const uint32_t base = static_cast<uint32_t>(splint.vertices.size());
-  for (const Vec3& p : pillar.vertices) ASSERT_TRUE(splint.vertices.push_back(p));
-  for (const Triangle& t : pillar.triangles) {
-    ASSERT_TRUE(
-        splint.triangles.push_back(Triangle{{t.v[0] + base, t.v[1] + base, t.v[2] + base}}));
-  }
+  ASSERT_TRUE(append_mesh(&splint, pillar));
   Mesh out;
   BlockoutStats st;
   SPLINTCORE_ASSERT_OK(blockout(ctx, splint, Span<const Mesh>(&jaw, 1), o, &out, &st));
