@@ -741,6 +741,46 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
              blocked.blockout_removed_mm3[0], blocked.blockout_removed_mm3[1]);
     }
     sc_arena_rewind(f.ctx, mark);
+    /* "auto" with the upper picks 2.5 mm deeper along the occlusal normal (+z here) and the
+     * lower 2 mm: the maxilla's exact sweep is refused, the mandible's holds
+     * (DesignPipeline.AutoBlockoutFallsBackOnlyForTheJawItsSweepRefuses): SC_BLOCKOUT_MIXED. */
+    {
+      size_t n = sc_case_pick_count(c, SC_PICKS_UPPER), k;
+      int side;
+      double* saved = (double*)malloc(2 * n * 3 * sizeof(double)); /* to restore exactly */
+      p.blockout_voxel_mm = 0.3;
+      p.blockout_inset_mm = 0.15;
+      CHECK_OK(f.ctx, sc_case_set_params(f.ctx, c, &p));
+      CHECK(n > 0 && sc_case_pick_count(c, SC_PICKS_LOWER) == n);
+      for (side = 0; side < 2; ++side) {
+        for (k = 0; k < n; ++k) {
+          double q[3], inner, outside;
+          CHECK(sc_case_pick(c, side, k, q, NULL, &inner, &outside) == 1);
+          memcpy(saved + (side * n + k) * 3, q, sizeof q);
+          q[2] += side == SC_PICKS_UPPER ? 2.5 : -2.0;
+          CHECK_OK(f.ctx, sc_case_set_pick(f.ctx, c, side, k, q, NULL, inner, outside));
+        }
+      }
+      blocked_splint = NULL;
+      CHECK_OK(f.ctx, sc_design(f.ctx, c, jaws, 2, &blocked_splint, &blocked));
+      if (blocked_splint != NULL) {
+        CHECK(blocked.blockout_jaws == 2);
+        CHECK(blocked.blockout_method_used == SC_BLOCKOUT_MIXED);
+        CHECK(blocked.printable == 1);
+        printf("design with the base sunk 2.5 and 2 mm: blockout method %d (mixed)\n",
+               blocked.blockout_method_used);
+      }
+      sc_arena_rewind(f.ctx, mark);
+      for (side = 0; side < 2; ++side) {
+        for (k = 0; k < n; ++k) {
+          double inner, outside;
+          CHECK(sc_case_pick(c, side, k, NULL, NULL, &inner, &outside) == 1);
+          CHECK_OK(f.ctx, sc_case_set_pick(f.ctx, c, side, k, saved + (side * n + k) * 3, NULL,
+                                           inner, outside));
+        }
+      }
+      free(saved);
+    }
     p.blockout = 0;
     CHECK_OK(f.ctx, sc_case_set_params(f.ctx, c, &p));
   }

@@ -715,7 +715,18 @@ void Design::print_summary() const {
     std::printf("imprint: a %.3g mm clearance around each jaw's swept volume\n",
                 c_.blockout.offset);
   } else if (report.imprint_swept) {
-    std::printf("imprint: each jaw's exact swept volume (its front triangles and walls)\n");
+    uint32_t exact = 0;
+    for (uint32_t i = 0; i < report.blockout_jaws; ++i) exact += report.blockout_exact[i] ? 1 : 0;
+    if (exact == report.blockout_jaws) {
+      std::printf("imprint: each jaw's exact swept volume (its front triangles and walls)\n");
+    } else {  // "auto" fell back for some jaws: theirs is the jaw's own Boolean, then voxels
+      std::printf(
+          "imprint: %u jaw(s) by their exact swept volume, %u by the jaw's own Boolean (%llu "
+          "crossing pairs, %u attempt(s)) before the voxel blockout\n",
+          exact, report.blockout_jaws - exact,
+          static_cast<unsigned long long>(report.boolean.intersecting_pairs),
+          report.boolean.attempts);
+    }
   } else {
     std::printf("boolean: %llu crossing pairs, %llu intersection points, %u attempt(s)\n",
                 static_cast<unsigned long long>(report.boolean.intersecting_pairs),
