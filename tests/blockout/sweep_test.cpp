@@ -1271,9 +1271,9 @@ SideErrors sampled_errors(Arena& arena, const Mesh& a, const Mesh& b, int step =
 // (every extractor vertex, side midpoint and centroid to the result; the midpoint of every
 // new side and the centroid of every new triangle to the extractor's surface): asserted on
 // the same surface (the inset that puts the decimation's extraction at iso 0) at the corners
-// and the sides' midpoints; between them, at the barycentric quarters, measured up to 1.6x the
+// and the sides' midpoints; between them, at the barycentric quarters, measured up to 1.7x the
 // bound (asserted within 2x). Against the plain surface (iso 0) the cone's rim differs by the
-// extractor's own error at a crease (about 0.045 mm, the same without decimation: two
+// extractor's own error at a crease (0.045-0.051 mm, the same without decimation: two
 // extractions at different isos), so that comparison asserts half a voxel; decimation stays
 // off by default.
 TEST(SweepDecimate, StaysWithinHalfAVoxelOfTheSurface) {
@@ -1288,8 +1288,10 @@ TEST(SweepDecimate, StaysWithinHalfAVoxelOfTheSurface) {
     Vec3 direction;
     double voxel;
   };
-  const Shape shapes[] = {{"tilted cone", &cone, {0.2, -0.1, -1}, 0.1},
-                          {"torus", &torus, {0.1, 0.2, 1}, 0.1}};
+  // 0.15 mm voxels (0.1 took 80 s in Release, 2.2x the triangles): the bounds are relative to
+  // the voxel.
+  const Shape shapes[] = {{"tilted cone", &cone, {0.2, -0.1, -1}, 0.15},
+                          {"torus", &torus, {0.1, 0.2, 1}, 0.15}};
   for (const Shape& sh : shapes) {
     SCOPED_TRACE(sh.name);
     ArenaScope scope(ta.arena);
@@ -1362,7 +1364,7 @@ TEST(SweepDecimate, StaysWithinHalfAVoxelOfTheSurface) {
       EXPECT_LE(worst_vertex, bound);
       EXPECT_LE(worst_kept, bound);
       EXPECT_GT(worst_kept, o.decimate_error / 4);  // the bound is what stops it
-      // Measured 0.0073 (cone) and 0.0080 mm (torus) at 0.1 mm voxels: up to 1.6x the bound.
+      // Measured 0.0111 (cone) and 0.0125 mm (torus) at 0.15 mm voxels: up to 1.7x the bound.
       EXPECT_LE(worst_fine, 2 * o.decimate_error / 2);
     }
     EXPECT_LT(reduced.triangles.size() * 4, plain.triangles.size());
