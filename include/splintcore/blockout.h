@@ -315,9 +315,12 @@ struct BlockoutStats {
 // float32 (as the Boolean's B), then subtracted with mesh_boolean, whose checks the result
 // passes (closed, manifold, outward, float32-exact, optionally no self-intersection). When
 // the Boolean meets a configuration it cannot resolve even with its own nudges of A, the swept
-// surface is taken again 1/64 voxel deeper, up to three times (BlockoutStats::attempts and
-// inset_used say what was used; the inset stays below two voxels); with an offset (a spacer),
-// 1/64 voxel further out instead (offset_used). A splint the sweep does not reach comes back
+// surface is taken again deeper, up to three times: 1/64, 1/4 and 1/2 voxel past the inset
+// asked for (the last two for a sampled surface that crosses the jaw's imprint at shallow
+// angles all along, as under a deep base; BlockoutStats::attempts and inset_used say what was
+// used, and at most that much undercut is left; the inset stays below two voxels); with an
+// offset (a spacer), 1/64 voxel further out each time instead (offset_used): a clearance is the
+// fit asked for, not grown by the retries. A splint the sweep does not reach comes back
 // unchanged (copied). For a wafer between two jaws call it once per jaw: the maxilla's direction is
 // the mandible's reversed. Memory: with filter_near_splint a byte per cell of 5 voxels over the
 // splint's box grown by two cells and the splint's distance index (distance_index_bound), the

@@ -361,6 +361,57 @@ TEST(Blockout, UndercutOfABigEndUpConeIsRemoved) {
   }
 }
 
+// When the Boolean cannot subtract the swept surface at the inset asked for, the retries take
+// it deeper: 1/64 voxel, then a quarter and a half voxel more (BlockoutStats::inset_used). The
+// splint here already holds each cone's swept surface: the left one's at the inset asked for,
+// the right one's 1/64 voxel deeper (each made by the blockout itself, so its triangles are the
+// sweep's, bit for bit). The blockout of both cones at that inset meets the left imprint
+// coincident with its surface, the first retry the right one; the second retry, a quarter
+// voxel deeper, meets neither.
+TEST(Blockout, RetriesTakeTheSweptSurfaceDeeperUntilTheBooleanResolves) {
+  TestArena ta(size_t{1} << 30);
+  Context ctx(&ta.arena);
+  Mesh cones[2] = {Mesh(&ta.arena), Mesh(&ta.arena)};
+  for (int k = 0; k < 2; ++k) {
+    frustum(&cones[k], 3.0, 5.0, 0.0, 8.0, 180);
+    for (Vec3& p : cones[k].vertices) {
+      p.x += k == 0 ? -7.0 : 7.0;
+      ASSERT_TRUE(round_to_float32(&p));
+    }
+  }
+  const float lo[3] = {-14, -7, 4}, hi[3] = {14, 7, 10};
+  Mesh splint = box_mesh(&ta.arena, lo, hi);
+  BlockoutOptions o;
+  o.sweep.direction = Vec3{0, 0, -1};
+  o.sweep.voxel = 0.2;
+  o.sweep.inset = 0.1;
+  Mesh held[2];
+  for (int k = 0; k < 2; ++k) {
+    BlockoutOptions ok = o;
+    ok.sweep.inset = o.sweep.inset + k * (o.sweep.voxel / 64);
+    BlockoutStats st;
+    SPLINTCORE_ASSERT_OK(blockout(ctx, k == 0 ? splint : held[0], Span<const Mesh>(&cones[k], 1),
+                                  ok, &held[k], &st));
+    EXPECT_EQ(st.attempts, 1u) << k;  // the imprint at exactly the inset asked for
+  }
+  // Without the Boolean's own nudges (with them it gets past the coincidence here, at its
+  // ninth attempt), so that only the blockout's retries can.
+  o.boolean.max_nudges = 0;
+  Mesh out;
+  BlockoutStats st;
+  SPLINTCORE_ASSERT_OK(blockout(ctx, held[1], Span<const Mesh>(cones, 2), o, &out, &st));
+  EXPECT_EQ(st.attempts, 3u);
+  EXPECT_EQ(st.inset_used, o.sweep.inset + o.sweep.voxel / 4);
+  EXPECT_EQ(st.boolean.attempts, 1u);
+  double before = 0, after = 0;
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, held[1], &before));
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, out, &after));
+  // The deeper swept surface lies in the cavities already cut: nothing more to take.
+  EXPECT_NEAR(after, before, 1e-6 * before);
+  std::printf("[ figures  ] both cones: %u attempts, inset %.4f mm; volume %.6f -> %.6f mm^3\n",
+              st.attempts, st.inset_used, before, after);
+}
+
 TEST(Blockout, SplintOutOfReachComesBackUnchanged) {
   TestArena ta(size_t{256} << 20);
   Context ctx(&ta.arena);
