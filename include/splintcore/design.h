@@ -320,6 +320,10 @@ struct DesignReport {
   uint64_t self_intersection_candidates = 0;  // the pairs that check tested
 };
 
+// How many of report.blockout_jaws used their exact sweep (blockout_exact): all of them is an
+// exact blockout, none a voxel one, anything between a mixed one ("method": "auto").
+uint32_t exact_blockout_jaws(const DesignReport& report);
+
 // The splint for case `c` from its jaws (jaws[i] is the mesh of c.jaws[i], as read: it is not
 // changed). Each jaw is moved by its transform and rounded to float32 (what a moved jaw's STL
 // holds; the Boolean keeps these bits), the base is built, the jaws are subtracted (only their

@@ -1032,8 +1032,7 @@ sc_status sc_design_scans(sc_context* ctx, const sc_case* c, const sc_mesh* cons
   report->boolean_nudge_mm[1] = r.boolean.nudge.y;
   report->boolean_nudge_mm[2] = r.boolean.nudge.z;
   report->blockout_jaws = r.blockout_jaws;
-  uint32_t exact_jaws = 0;
-  for (uint32_t i = 0; i < r.blockout_jaws; ++i) exact_jaws += r.blockout_exact[i] ? 1u : 0u;
+  const uint32_t exact_jaws = exact_blockout_jaws(r);
   report->blockout_method_used = exact_jaws == r.blockout_jaws ? SC_BLOCKOUT_EXACT
                                  : exact_jaws == 0             ? SC_BLOCKOUT_VOXEL
                                                                : SC_BLOCKOUT_MIXED;

@@ -10,6 +10,13 @@
 
 namespace splintcore {
 
+uint32_t exact_blockout_jaws(const DesignReport& report) {
+  uint32_t exact = 0;
+  for (uint32_t i = 0; i < report.blockout_jaws && i < DesignReport::kMaxBlockoutJaws; ++i)
+    exact += report.blockout_exact[i] ? 1u : 0u;
+  return exact;
+}
+
 using design_detail::write_plan;
 using design_detail::write_transform;
 
@@ -249,9 +256,7 @@ void write_checks(JsonWriter& w, const CaseFile& c, const DesignReport& report) 
   w.add("boolean_intersection_points", report.boolean.intersection_points);
   w.add("boolean_attempts", report.boolean.attempts);
   w.add("boolean_nudge_mm", report.boolean.nudge);
-  uint32_t exact_jaws = 0;
-  for (uint32_t i = 0; i < report.blockout_jaws; ++i)
-    exact_jaws += report.blockout_exact[i] ? 1u : 0u;
+  const uint32_t exact_jaws = exact_blockout_jaws(report);
   if (report.blockout_jaws > 0) {
     w.add("blockout_method_used", exact_jaws == report.blockout_jaws ? "exact"
                                   : exact_jaws == 0                  ? "voxel"

@@ -309,6 +309,7 @@ TEST(DesignPipeline, AutoBlockoutIsExactUnlessItsSweepStopsThenVoxels) {
       design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &fallback, &r));
   EXPECT_FALSE(r.imprint_swept);  // both jaws refused: the whole design with voxels
   EXPECT_FALSE(r.blockout_exact[0] || r.blockout_exact[1]);
+  EXPECT_EQ(exact_blockout_jaws(r), 0u);
   EXPECT_NE(std::strstr(r.blockout_fallback, "undercut unswept"), nullptr) << r.blockout_fallback;
   ASSERT_EQ(r.blockout_jaws, 2u);
   EXPECT_EQ(r.blockout[0].inset_used, 0.15);
@@ -377,6 +378,7 @@ TEST(DesignPipeline, AutoBlockoutFallsBackOnlyForTheJawItsSweepRefuses) {
   ASSERT_EQ(r.blockout_jaws, 2u);
   EXPECT_FALSE(r.blockout_exact[0]);
   EXPECT_TRUE(r.blockout_exact[1]);
+  EXPECT_EQ(exact_blockout_jaws(r), 1u);  // mixed: report.json's "exact and voxel"
   EXPECT_NE(std::strstr(r.blockout_fallback, "undercut unswept"), nullptr) << r.blockout_fallback;
   EXPECT_NE(std::strstr(r.blockout_fallback, "(jaw 0, maxilla)"), nullptr) << r.blockout_fallback;
   EXPECT_GT(r.boolean.intersecting_pairs, 0u);  // the maxilla's own imprint

@@ -715,8 +715,7 @@ void Design::print_summary() const {
     std::printf("imprint: a %.3g mm clearance around each jaw's swept volume\n",
                 c_.blockout.offset);
   } else if (report.imprint_swept) {
-    uint32_t exact = 0;
-    for (uint32_t i = 0; i < report.blockout_jaws; ++i) exact += report.blockout_exact[i] ? 1 : 0;
+    const uint32_t exact = exact_blockout_jaws(report);
     if (exact == report.blockout_jaws) {
       std::printf("imprint: each jaw's exact swept volume (its front triangles and walls)\n");
     } else {  // "auto" fell back for some jaws: theirs is the jaw's own Boolean, then voxels
