@@ -503,7 +503,11 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
     BooleanRun run(ctx, in, bp, options, stats);
     run.set_pair_budget(budget - used);
     s = run.run(&result, attempts_start);
-    if (!s.is_ok() && s.code() != StatusCode::kCancelled && !run.unmerged_status().is_ok()) {
+    // Running out of memory or being cancelled is final, whatever the attempt without merging
+    // would have met: with more memory this attempt's result is the one returned, so a nudge
+    // here would make the bytes depend on the memory cap.
+    if (!s.is_ok() && s.code() != StatusCode::kCancelled &&
+        s.code() != StatusCode::kArenaExhausted && !run.unmerged_status().is_ok()) {
       s = run.unmerged_status();
     }
     used += stats->candidate_pairs;
