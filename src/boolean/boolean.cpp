@@ -550,6 +550,8 @@ void add_stats(const BooleanStats& p, BooleanStats* total) {
   total->winding_queries += p.winding_queries;
   total->self_intersection_candidates += p.self_intersection_candidates;
   total->attempts += p.attempts;
+  total->parallel_near_triangles += p.parallel_near_triangles;
+  total->hit_batches += p.hit_batches;
   total->output_triangles = p.output_triangles;
   total->output_triangles_a = p.output_triangles_a;
   total->self_intersection_checked = p.self_intersection_checked;  // the final pass's result

@@ -450,8 +450,12 @@ class BooleanRun {
     uint32_t* stamp = nullptr;  // the last triangle of B tested against it
     uint32_t count = 0;         // slots
   };
+  Status allocate_a_slots(uint32_t count, ASlots* out);
+  void fill_a_slot(uint32_t t, uint32_t k, const ASlots& as) const;
   Status prepare_a_slots(ASlots* out);
   size_t hits_in_parallel(const ASlots& as);
+  Status hits_serial(const ASlots& as, size_t from, size_t to);
+  Status hits_in_batches();
   Status find_hits();
   void hits_over_slots(const Arena::Marker& slots_at);
   Status add_contact(uint32_t ta, uint32_t tb);

@@ -262,14 +262,8 @@ bool for_each_listed(const Broadphase& bp, const Aabb& box, F&& f) {
 
 }  // namespace
 
-// The triangles of A that some near triangle of B may meet (listed in a cell its box covers:
-// number_a_slots, once for all attempts) get a slot: their filters, edge planes, boxes and
-// stamps (about 470 bytes each) are made for them only, from A as this attempt has it. A may be
-// large and mostly far from this B: in a later pass of mesh_boolean it is the previous result,
-// far from most of the next group of shells.
-Status BooleanRun::prepare_a_slots(ASlots* out) {
-  const uint32_t count = bp_.a_slot_count;
-  out->slot = bp_.a_slot;
+// The slots' arrays for `count` triangles of A (about 470 bytes each).
+Status BooleanRun::allocate_a_slots(uint32_t count, ASlots* out) {
   out->count = count;
   out->filters = arena_.allocate_array<PlaneFilter>(count);
   out->edges = arena_.allocate_array<EdgePlanes>(count);
@@ -279,29 +273,44 @@ Status BooleanRun::prepare_a_slots(ASlots* out) {
                     out->stamp == nullptr)) {
     return arena_.exhausted_status();
   }
+  return Status::ok();
+}
+
+// Slot k: the filters, edge planes and box of A's triangle t as this attempt has it (values of
+// t alone, whichever slot holds them), its stamp cleared.
+void BooleanRun::fill_a_slot(uint32_t t, uint32_t k, const ASlots& as) const {
+  const Mesh& a = *in_.a;
+  const Triangle& at = a.triangles[t];
+  const Vec3& p0 = a.vertices[at.v[0]];
+  const Vec3& p1 = a.vertices[at.v[1]];
+  const Vec3& p2 = a.vertices[at.v[2]];
+  as.filters[k] = plane_filter(p0, p1, p2);
+  as.edges[k] = edge_planes(p0, p1, p2);
+  as.boxes[k] = Aabb{};
+  as.boxes[k].add(p0);
+  as.boxes[k].add(p1);
+  as.boxes[k].add(p2);
+  as.stamp[k] = ~0u;
+}
+
+// The triangles of A that some near triangle of B may meet (listed in a cell its box covers:
+// number_a_slots, once for all attempts) get a slot: their filters, edge planes, boxes and
+// stamps (about 470 bytes each) are made for them only, from A as this attempt has it. A may be
+// large and mostly far from this B: in a later pass of mesh_boolean it is the previous result,
+// far from most of the next group of shells.
+Status BooleanRun::prepare_a_slots(ASlots* out) {
+  SPLINTCORE_RETURN_IF_ERROR(allocate_a_slots(bp_.a_slot_count, out));
+  out->slot = bp_.a_slot;
   // Each slot's planes and box from A as this attempt has it, in chunks of A's triangles on the
   // executor (each writes only its own slots: the same values at every thread count).
   constexpr uint32_t kChunk = 8192;
   const uint32_t nta = in_.nta;
   const uint32_t chunks = (nta + kChunk - 1) / kChunk;
-  const Mesh& a = *in_.a;
   const uint32_t* slot = bp_.a_slot;
   auto task = [&](uint32_t c) {
     const uint32_t end = nta - c * kChunk < kChunk ? nta : c * kChunk + kChunk;
     for (uint32_t t = c * kChunk; t < end; ++t) {
-      const uint32_t k = slot[t];
-      if (k == ~0u) continue;
-      const Triangle& at = a.triangles[t];
-      const Vec3& p0 = a.vertices[at.v[0]];
-      const Vec3& p1 = a.vertices[at.v[1]];
-      const Vec3& p2 = a.vertices[at.v[2]];
-      out->filters[k] = plane_filter(p0, p1, p2);
-      out->edges[k] = edge_planes(p0, p1, p2);
-      out->boxes[k] = Aabb{};
-      out->boxes[k].add(p0);
-      out->boxes[k].add(p1);
-      out->boxes[k].add(p2);
-      out->stamp[k] = ~0u;
+      if (slot[t] != ~0u) fill_a_slot(t, slot[t], *out);
     }
   };
   parallel_for_each(ctx_.executor, chunks, task);
@@ -478,24 +487,12 @@ size_t BooleanRun::hits_in_parallel(const ASlots& as) {
   return resume;
 }
 
-// Candidate pairs through the broad phase's grid; each decided exactly (intersect_pair) with A
-// as this attempt has it. With an executor a parallel prefix does most of them
-// (hits_in_parallel); this loop goes on from where it stopped, with the run's state.
-Status BooleanRun::find_hits() {
-  const uint32_t nv_in = in_.nva + in_.nvb;
-  vstate_ = arena_.allocate_array<int8_t>(nv_in);
-  if (vstate_ == nullptr && nv_in > 0) return arena_.exhausted_status();
-  if (nv_in > 0) std::memset(vstate_, 0, nv_in);
-  const Arena::Marker slots_at = arena_.mark();
-  ASlots as;
-  SPLINTCORE_RETURN_IF_ERROR(prepare_a_slots(&as));
-  st_.near_b_triangles = bp_.near_ids.size();
-  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", 0, 1));
-  hits_.bind(&arena_);
-  deg_.bind(&arena_);
-  const size_t from = hits_in_parallel(as);
+// The near triangles [from, to) of B, in order, with the run's state (contacts, errors, the
+// bound on pairs): each candidate pair decided exactly (intersect_pair) with A as this attempt
+// has it.
+Status BooleanRun::hits_serial(const ASlots& as, size_t from, size_t to) {
   Status failed;
-  for (size_t ni = from; ni < bp_.near_ids.size(); ++ni) {
+  for (size_t ni = from; ni < to; ++ni) {
     const uint32_t t = bp_.near_ids[ni];
     if (ni == from || (ni & 65535u) == 0) {
       SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", ni, bp_.near_ids.size()));
@@ -519,6 +516,126 @@ Status BooleanRun::find_hits() {
         });
     if (!done) return failed;
     SPLINTCORE_RETURN_IF_ERROR(check_pair_budget(t));
+  }
+  return Status::ok();
+}
+
+namespace {
+
+// The near triangles of B go in this many batches when A's slots for all of them do not fit.
+constexpr size_t kHitBatches = 8;
+
+// The triangles of A listed in the cells the boxes of B's near triangles [begin, end) cover,
+// each once, in `members` (the cells' order), numbered there in slot[] (UINT32_MAX before);
+// `marked` (a bit per cell, all clear) is left clear. Returns how many.
+uint32_t list_batch(const Broadphase& bp, const Mesh& b, size_t begin, size_t end, uint64_t* marked,
+                    uint32_t* slot, uint32_t* members) {
+  const Vec3* vb = b.vertices.data();
+  for (size_t ni = begin; ni < end; ++ni) {
+    uint32_t lo[3], hi[3];
+    bp.cell_range(b_box(vb, b.triangles[bp.near_ids[ni]]), lo, hi);
+    for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
+      for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
+        for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
+          const size_t c = (size_t{z} * bp.dim[1] + y) * bp.dim[0] + x;
+          marked[c >> 6] |= uint64_t{1} << (c & 63);
+        }
+      }
+    }
+  }
+  const size_t words = (size_t{bp.dim[0]} * bp.dim[1] * bp.dim[2]) / 64 + 1;
+  uint32_t count = 0;
+  for (size_t w = 0; w < words; ++w) {
+    for (uint64_t bits = marked[w]; bits != 0; bits &= bits - 1) {
+      const size_t c = w * 64 + static_cast<size_t>(__builtin_ctzll(bits));
+      for (uint32_t k = bp.start[c]; k < bp.start[c + 1]; ++k) {
+        const uint32_t ta = bp.items[k];
+        if (slot[ta] != ~0u) continue;
+        slot[ta] = count;
+        members[count++] = ta;
+      }
+    }
+    marked[w] = 0;
+  }
+  return count;
+}
+
+}  // namespace
+
+// When A's slots for all of B's near triangles would not fit (find_hits), the near triangles go
+// in kHitBatches runs, in order, each with slots for only the triangles of A its cells list (a
+// triangle of A listed by two batches gets its slot made twice): the same pairs tested in the
+// same order, so the same hits, contacts, stats and errors, in about 1/kHitBatches of the
+// slots' memory (B's near triangles come in B's order, which is mostly local: a swept
+// surface's is its extractor's) plus 8 bytes per triangle of A and a bit per cell. One thread.
+Status BooleanRun::hits_in_batches() {
+  const size_t n = bp_.near_ids.size();
+  const uint32_t nta = in_.nta;
+  const size_t words = (size_t{bp_.dim[0]} * bp_.dim[1] * bp_.dim[2]) / 64 + 1;
+  uint32_t* slot = arena_.allocate_array<uint32_t>(nta);
+  uint32_t* members = arena_.allocate_array<uint32_t>(bp_.a_slot_count);
+  uint64_t* marked = arena_.allocate_array<uint64_t>(words);
+  if (((slot == nullptr && nta > 0) || (members == nullptr && bp_.a_slot_count > 0)) ||
+      marked == nullptr) {
+    return arena_.exhausted_status();
+  }
+  if (nta > 0) std::memset(slot, 0xff, size_t{nta} * sizeof(uint32_t));
+  std::memset(marked, 0, words * sizeof(uint64_t));
+  const size_t per = n / kHitBatches + 1;
+  uint32_t most = 0;  // the largest batch's slots
+  for (size_t begin = 0; begin < n; begin += per) {
+    const size_t end = n - begin < per ? n : begin + per;
+    const uint32_t count = list_batch(bp_, *in_.b, begin, end, marked, slot, members);
+    for (uint32_t i = 0; i < count; ++i) slot[members[i]] = ~0u;
+    most = count > most ? count : most;
+  }
+  ASlots as;
+  SPLINTCORE_RETURN_IF_ERROR(allocate_a_slots(most, &as));
+  as.slot = slot;
+  for (size_t begin = 0; begin < n; begin += per) {
+    const size_t end = n - begin < per ? n : begin + per;
+    const uint32_t count = list_batch(bp_, *in_.b, begin, end, marked, slot, members);
+    for (uint32_t i = 0; i < count; ++i) fill_a_slot(members[i], i, as);
+    SPLINTCORE_RETURN_IF_ERROR(hits_serial(as, begin, end));
+    for (uint32_t i = 0; i < count; ++i) slot[members[i]] = ~0u;
+    ++st_.hit_batches;
+  }
+  return Status::ok();
+}
+
+// Candidate pairs through the broad phase's grid; each decided exactly (intersect_pair) with A
+// as this attempt has it. With an executor a parallel prefix does most of them
+// (hits_in_parallel); one thread goes on from where it stopped, with the run's state. When the
+// slots for all of A's triangles near B do not fit, B's near triangles go in batches instead
+// (hits_in_batches): everything is the same but the time and the memory.
+Status BooleanRun::find_hits() {
+  const uint32_t nv_in = in_.nva + in_.nvb;
+  vstate_ = arena_.allocate_array<int8_t>(nv_in);
+  if (vstate_ == nullptr && nv_in > 0) return arena_.exhausted_status();
+  if (nv_in > 0) std::memset(vstate_, 0, nv_in);
+  const Arena::Marker slots_at = arena_.mark();
+  // Batches when the slots would take more than half of what the arena has left (the hits
+  // grow above them), or do not fit at all.
+  const size_t left = arena_.cap() > arena_.used() ? arena_.cap() - arena_.used() : 0;
+  const uint64_t slot_bytes =
+      uint64_t{bp_.a_slot_count} * (sizeof(PlaneFilter) + sizeof(EdgePlanes) + sizeof(Aabb) + 4);
+  const bool can_batch = bp_.near_ids.size() >= kHitBatches;
+  ASlots as;
+  const Status prepared = can_batch && slot_bytes > left / 2
+                              ? Status::error(StatusCode::kArenaExhausted, "slots")
+                              : prepare_a_slots(&as);
+  st_.near_b_triangles = bp_.near_ids.size();
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", 0, 1));
+  hits_.bind(&arena_);
+  deg_.bind(&arena_);
+  if (prepared.code() == StatusCode::kArenaExhausted && can_batch) {
+    arena_.rewind(slots_at);
+    arena_.forget_failure();
+    SPLINTCORE_RETURN_IF_ERROR(hits_in_batches());
+  } else {
+    SPLINTCORE_RETURN_IF_ERROR(prepared);
+    const size_t from = hits_in_parallel(as);
+    SPLINTCORE_RETURN_IF_ERROR(hits_serial(as, from, bp_.near_ids.size()));
   }
   st_.intersecting_pairs = hits_.size();
   hits_over_slots(slots_at);

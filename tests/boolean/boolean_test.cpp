@@ -783,3 +783,73 @@ TEST(BooleanThreads, TwoThreadsFitWhereOneFits) {
 
 }  // namespace
 }  // namespace splintcore
+
+namespace splintcore {
+namespace {
+
+struct CappedRun {
+  Status status;
+  std::string bytes;
+  BooleanStats stats;
+  size_t high_water = 0;
+};
+
+// A fine sphere minus a second one, crossing it: most of A lies near B, so the slots of A's
+// triangles near B are the run's largest allocation. cap 0: ample.
+CappedRun sphere_difference(size_t cap) {
+  TestArena inputs(size_t{64} << 20);
+  const Mesh a = sphere_mesh(inputs.arena, 0.5, 96, 192, RigidTransform{});
+  const Mesh b =
+      sphere_mesh(inputs.arena, 0.48, 96, 192, rotation(0.2, 0.1, 0.3, {0.05, 0.03, 0.02}));
+  TestArena run(cap == 0 ? size_t{512} << 20 : cap);
+  CappedRun r;
+  Mesh out;
+  BooleanOptions o = opts(BooleanOp::kDifference);
+  o.check_self_intersection = false;  // the run's own peak, not its result's check
+  r.status = mesh_boolean(Context(&run.arena), a, b, o, &out, &r.stats);
+  r.high_water = run.arena.high_water();
+  if (r.status.is_ok()) {
+    r.bytes = test::sha256_hex(out.vertices.data(), out.vertices.size() * sizeof(Vec3)) +
+              test::sha256_hex(out.triangles.data(), out.triangles.size() * sizeof(Triangle));
+  }
+  return r;
+}
+
+// When the slots for all of A's triangles near B do not fit, B's near triangles go in batches:
+// the same pairs in the same order, so the same result and stats, in less memory. The least
+// cap that works (found by halving) is well under the peak with ample memory, it batches, and
+// below it the run ends cleanly.
+TEST(BooleanBatches, SameResultInLessMemory) {
+  const CappedRun full = sphere_difference(0);
+  SPLINTCORE_ASSERT_OK(full.status);
+  EXPECT_EQ(full.stats.hit_batches, 0u);
+  ASSERT_GT(full.stats.intersecting_pairs, 1000u);
+  size_t lo = 0, hi = full.high_water;
+  CappedRun least = full;
+  while (hi - lo > (size_t{1} << 14)) {
+    const size_t mid = lo + (hi - lo) / 2;
+    CappedRun r = sphere_difference(mid);
+    if (r.status.is_ok()) {
+      hi = mid;
+      least = r;
+    } else {
+      EXPECT_EQ(r.status.code(), StatusCode::kArenaExhausted) << test::format(r.status);
+      lo = mid;
+    }
+  }
+  std::printf(
+      "[ figures  ] sphere difference, %llu near triangles of B: peak %zu bytes with "
+      "ample memory, least cap %zu (%u batches)\n",
+      static_cast<unsigned long long>(full.stats.near_b_triangles), full.high_water, hi,
+      least.stats.hit_batches);
+  EXPECT_LT(hi, full.high_water * 3 / 4);
+  EXPECT_EQ(least.stats.hit_batches, 8u);
+  EXPECT_EQ(least.bytes, full.bytes);
+  EXPECT_EQ(least.stats.candidate_pairs, full.stats.candidate_pairs);
+  EXPECT_EQ(least.stats.intersecting_pairs, full.stats.intersecting_pairs);
+  EXPECT_EQ(least.stats.intersection_points, full.stats.intersection_points);
+  EXPECT_EQ(least.stats.attempts, full.stats.attempts);
+}
+
+}  // namespace
+}  // namespace splintcore
