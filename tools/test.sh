@@ -82,7 +82,7 @@ slow_geometry='^BoundTwoStep\.DesignBooleanBlockoutLabel$|^BoundExact\.(Decimate
 slow_geometry="$slow_geometry|^BlockoutMeshLab\.SweptVolume|^Blockout\.IndependentCheckFinds"
 slow_geometry="$slow_geometry|^Outline\.(RunsInItsBound|BiteOpensToTheExactDistance)"
 slow_geometry="$slow_geometry|^DesignPipeline\.AutoBlockout|^DesignOpenScans\.PhantomScansOfBoth"
-slow_geometry="$slow_geometry|^Register\.AutomaticStartRecovers"
+slow_geometry="$slow_geometry|^Register\.AutomaticStartRecovers|^Blockout\.WhenEveryRetryFails"
 slow_at_clang_o0="$slow_decimation|^DecimateQem\.MaxDistance(Holds|Carries)|^SweepDecimate\.RunsInExactly"
 slow_at_clang_o0="$slow_at_clang_o0|$slow_geometry"
 

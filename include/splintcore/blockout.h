@@ -330,7 +330,9 @@ struct BlockoutStats {
 // triangles logged above it (48 bytes each), then 4 bytes per extracted
 // vertex and the swept mesh, moved down over the cells and the index; then the Boolean's; only
 // `out` stays (moved down to where the arena's top was). Errors: those of sweep_volume_mesh and
-// mesh_boolean (the latter prefixed "blockout:"), kInvalidArgument (out not empty), kLimitExceeded
+// mesh_boolean (the latter prefixed "blockout:", and when retries ran and all failed "blockout:
+// all N attempts failed (the swept surface inset A to B mm); the last: " and the last one's
+// reason), kInvalidArgument (out not empty), kLimitExceeded
 // (a swept vertex beyond float32 range); with `exact`, those of sweep_exact_mesh, and
 // kUnsupported for a shell of the sweep that crosses itself where it matters to the splint.
 Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,

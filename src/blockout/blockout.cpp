@@ -298,6 +298,23 @@ Status blockout_error(const Status& s) {
   return e;
 }
 
+// The sampled blockout's error after its attempts (st.attempts): with retries that all failed,
+// that comes first, with the insets (or offsets) tried, then the last attempt's reason (a
+// Status is cut at its capacity, so what a person needs most comes first).
+Status attempts_error(const Status& s, const BlockoutOptions& options, const BlockoutStats& st) {
+  if (st.attempts < 2 || s.code() == StatusCode::kArenaExhausted ||
+      s.code() == StatusCode::kCancelled) {
+    return blockout_error(s);
+  }
+  const bool offset = options.sweep.offset > 0;
+  Status e = make_error(s.code(), "blockout: all ", st.attempts, " attempts failed (the swept ",
+                        "surface ", offset ? "offset " : "inset ",
+                        offset ? options.sweep.offset : options.sweep.inset, " to ",
+                        offset ? st.offset_used : st.inset_used, " mm); the last: ", s.message());
+  if (s.index() != kNoPosition) e.at_index(s.index());
+  return e;
+}
+
 // The exact sweep's shells (its triangles connected through shared vertices: patches that overlap
 // are separate shells, which the Boolean's groups unite) each checked exactly for self-crossing
 // where the Boolean takes them: within the region (the splint's box as the Boolean widens it), its
@@ -714,7 +731,7 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
   }
   if (!s.is_ok()) {
     out->bind(&arena);
-    return blockout_error(s);
+    return attempts_error(s, options, *st);
   }
   move_mesh_down(arena, scope.start(), result, out);
   scope.commit();

@@ -412,6 +412,52 @@ TEST(Blockout, RetriesTakeTheSweptSurfaceDeeperUntilTheBooleanResolves) {
               st.attempts, st.inset_used, before, after);
 }
 
+// When every retry fails too, the error says so first, with the insets tried, then the last
+// attempt's reason: four cones, the splint already holding each one's swept surface at one of
+// the four insets the attempts use, so that each attempt (the Boolean's nudges off) meets one
+// exactly coincident.
+TEST(Blockout, WhenEveryRetryFailsTheErrorSaysWhichInsetsWereTried) {
+  TestArena ta(size_t{1} << 30);
+  Context ctx(&ta.arena);
+  Mesh cones[4] = {Mesh(&ta.arena), Mesh(&ta.arena), Mesh(&ta.arena), Mesh(&ta.arena)};
+  for (int k = 0; k < 4; ++k) {
+    frustum(&cones[k], 3.0, 5.0, 0.0, 8.0, 60);
+    for (Vec3& p : cones[k].vertices) {
+      p.x += -21.0 + 14.0 * k;
+      ASSERT_TRUE(round_to_float32(&p));
+    }
+  }
+  const float lo[3] = {-28, -7, 4}, hi[3] = {28, 7, 10};
+  Mesh held = box_mesh(&ta.arena, lo, hi);
+  BlockoutOptions o;
+  o.sweep.direction = Vec3{0, 0, -1};
+  o.sweep.voxel = 0.4;
+  o.sweep.inset = 0.2;
+  const double steps[4] = {0, 1.0 / 64, 1.0 / 4, 1.0 / 2};
+  for (int k = 0; k < 4; ++k) {
+    BlockoutOptions ok = o;
+    ok.sweep.inset = o.sweep.inset + steps[k] * o.sweep.voxel;
+    BlockoutStats st;
+    Mesh next;
+    SPLINTCORE_ASSERT_OK(blockout(ctx, held, Span<const Mesh>(&cones[k], 1), ok, &next, &st));
+    EXPECT_EQ(st.attempts, 1u) << k;
+    held = next;
+  }
+  o.boolean.max_nudges = 0;
+  Mesh out;
+  BlockoutStats st;
+  const Status s = blockout(ctx, held, Span<const Mesh>(cones, 4), o, &out, &st);
+  ASSERT_EQ(s.code(), StatusCode::kUnsupported) << test::format(s);
+  EXPECT_EQ(st.attempts, 4u);
+  EXPECT_NE(std::strstr(s.message(),
+                        "blockout: all 4 attempts failed (the swept surface inset "
+                        "0.2 to 0.4 mm); the last: "),
+            nullptr)
+      << s.message();
+  EXPECT_TRUE(out.triangles.empty());
+  std::printf("[ figures  ] %s\n", s.message());
+}
+
 TEST(Blockout, SplintOutOfReachComesBackUnchanged) {
   TestArena ta(size_t{256} << 20);
   Context ctx(&ta.arena);
