@@ -361,6 +361,35 @@ TEST(Blockout, UndercutOfABigEndUpConeIsRemoved) {
   }
 }
 
+// `count` cones (frustums of radius 3 to 5 and 8 high, `segments` sides) in a row along x,
+// 14 mm apart and centred on x = 0, in float32.
+void cones_in_a_row(Mesh* cones, int count, int segments) {
+  for (int k = 0; k < count; ++k) {
+    frustum(&cones[k], 3.0, 5.0, 0.0, 8.0, segments);
+    for (Vec3& p : cones[k].vertices) {
+      p.x += 14.0 * k - 7.0 * (count - 1);
+      ASSERT_TRUE(round_to_float32(&p));
+    }
+  }
+}
+
+// `splint` holding cone k's swept surface at the inset o.sweep.inset + steps[k] voxels, each
+// made by a blockout of its own (one attempt each: the imprint at exactly that inset, its
+// triangles the sweep's, bit for bit).
+void hold_imprints(const Context& ctx, const Mesh& splint, const Mesh* cones, int count,
+                   const BlockoutOptions& o, const double* steps, Mesh* held) {
+  *held = splint;
+  for (int k = 0; k < count; ++k) {
+    BlockoutOptions ok = o;
+    ok.sweep.inset = o.sweep.inset + steps[k] * o.sweep.voxel;
+    BlockoutStats st;
+    Mesh next;
+    SPLINTCORE_ASSERT_OK(blockout(ctx, *held, Span<const Mesh>(&cones[k], 1), ok, &next, &st));
+    EXPECT_EQ(st.attempts, 1u) << k;
+    *held = next;
+  }
+}
+
 // When the Boolean cannot subtract the swept surface at the inset asked for, the retries take
 // it deeper: 1/64 voxel, then a quarter and a half voxel more (BlockoutStats::inset_used). The
 // splint here already holds each cone's swept surface: the left one's at the inset asked for,
@@ -372,39 +401,26 @@ TEST(Blockout, RetriesTakeTheSweptSurfaceDeeperUntilTheBooleanResolves) {
   TestArena ta(size_t{1} << 30);
   Context ctx(&ta.arena);
   Mesh cones[2] = {Mesh(&ta.arena), Mesh(&ta.arena)};
-  for (int k = 0; k < 2; ++k) {
-    frustum(&cones[k], 3.0, 5.0, 0.0, 8.0, 180);
-    for (Vec3& p : cones[k].vertices) {
-      p.x += k == 0 ? -7.0 : 7.0;
-      ASSERT_TRUE(round_to_float32(&p));
-    }
-  }
+  cones_in_a_row(cones, 2, 180);
   const float lo[3] = {-14, -7, 4}, hi[3] = {14, 7, 10};
-  Mesh splint = box_mesh(&ta.arena, lo, hi);
   BlockoutOptions o;
   o.sweep.direction = Vec3{0, 0, -1};
   o.sweep.voxel = 0.2;
   o.sweep.inset = 0.1;
-  Mesh held[2];
-  for (int k = 0; k < 2; ++k) {
-    BlockoutOptions ok = o;
-    ok.sweep.inset = o.sweep.inset + k * (o.sweep.voxel / 64);
-    BlockoutStats st;
-    SPLINTCORE_ASSERT_OK(blockout(ctx, k == 0 ? splint : held[0], Span<const Mesh>(&cones[k], 1),
-                                  ok, &held[k], &st));
-    EXPECT_EQ(st.attempts, 1u) << k;  // the imprint at exactly the inset asked for
-  }
+  const double steps[2] = {0, 1.0 / 64};
+  Mesh held;
+  hold_imprints(ctx, box_mesh(&ta.arena, lo, hi), cones, 2, o, steps, &held);
   // Without the Boolean's own nudges (with them it gets past the coincidence here, at its
   // ninth attempt), so that only the blockout's retries can.
   o.boolean.max_nudges = 0;
   Mesh out;
   BlockoutStats st;
-  SPLINTCORE_ASSERT_OK(blockout(ctx, held[1], Span<const Mesh>(cones, 2), o, &out, &st));
+  SPLINTCORE_ASSERT_OK(blockout(ctx, held, Span<const Mesh>(cones, 2), o, &out, &st));
   EXPECT_EQ(st.attempts, 3u);
   EXPECT_EQ(st.inset_used, o.sweep.inset + o.sweep.voxel / 4);
   EXPECT_EQ(st.boolean.attempts, 1u);
   double before = 0, after = 0;
-  SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, held[1], &before));
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, held, &before));
   SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, out, &after));
   // The deeper swept surface lies in the cavities already cut: nothing more to take.
   EXPECT_NEAR(after, before, 1e-6 * before);
@@ -420,29 +436,15 @@ TEST(Blockout, WhenEveryRetryFailsTheErrorSaysWhichInsetsWereTried) {
   TestArena ta(size_t{1} << 30);
   Context ctx(&ta.arena);
   Mesh cones[4] = {Mesh(&ta.arena), Mesh(&ta.arena), Mesh(&ta.arena), Mesh(&ta.arena)};
-  for (int k = 0; k < 4; ++k) {
-    frustum(&cones[k], 3.0, 5.0, 0.0, 8.0, 60);
-    for (Vec3& p : cones[k].vertices) {
-      p.x += -21.0 + 14.0 * k;
-      ASSERT_TRUE(round_to_float32(&p));
-    }
-  }
+  cones_in_a_row(cones, 4, 60);
   const float lo[3] = {-28, -7, 4}, hi[3] = {28, 7, 10};
-  Mesh held = box_mesh(&ta.arena, lo, hi);
   BlockoutOptions o;
   o.sweep.direction = Vec3{0, 0, -1};
   o.sweep.voxel = 0.4;
   o.sweep.inset = 0.2;
   const double steps[4] = {0, 1.0 / 64, 1.0 / 4, 1.0 / 2};
-  for (int k = 0; k < 4; ++k) {
-    BlockoutOptions ok = o;
-    ok.sweep.inset = o.sweep.inset + steps[k] * o.sweep.voxel;
-    BlockoutStats st;
-    Mesh next;
-    SPLINTCORE_ASSERT_OK(blockout(ctx, held, Span<const Mesh>(&cones[k], 1), ok, &next, &st));
-    EXPECT_EQ(st.attempts, 1u) << k;
-    held = next;
-  }
+  Mesh held;
+  hold_imprints(ctx, box_mesh(&ta.arena, lo, hi), cones, 4, o, steps, &held);
   o.boolean.max_nudges = 0;
   Mesh out;
   BlockoutStats st;
