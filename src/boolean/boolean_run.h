@@ -572,6 +572,10 @@ Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double
 // bp->a_slot and a_slot_count for B as the run has it (its near triangles bp->near_ids), over
 // nta triangles of A. Arena: 4 bytes per triangle of A (kept), and one bit per cell (returned).
 Status number_a_slots(Arena& arena, const Mesh& b, uint32_t nta, Broadphase* bp);
+// Sets the bit (marked: one per grid cell) of every cell that the box of one of B's near
+// triangles near_ids[begin, end) covers (number_a_slots; the hits' batches).
+void mark_near_cells(const Broadphase& bp, const Mesh& b, size_t begin, size_t end,
+                     uint64_t* marked);
 
 }  // namespace boolean_detail
 }  // namespace splintcore

@@ -151,6 +151,23 @@ Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double
                  : near_triangles_of_b<true>(arena, b, float32_output, bp);
 }
 
+void mark_near_cells(const Broadphase& bp, const Mesh& b, size_t begin, size_t end,
+                     uint64_t* marked) {
+  const Vec3* vb = b.vertices.data();
+  for (size_t ni = begin; ni < end; ++ni) {
+    uint32_t lo[3], hi[3];
+    bp.cell_range(b_box(vb, b.triangles[bp.near_ids[ni]]), lo, hi);
+    for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
+      for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
+        for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
+          const size_t c = (size_t{z} * bp.dim[1] + y) * bp.dim[0] + x;
+          marked[c >> 6] |= uint64_t{1} << (c & 63);
+        }
+      }
+    }
+  }
+}
+
 // The cells the boxes of B's near triangles cover are marked (a bit each), then every triangle
 // of A those cells list gets a slot, in A's order. A nudge moves A, not the grid or B: one
 // numbering serves every attempt.
@@ -164,20 +181,7 @@ Status number_a_slots(Arena& arena, const Mesh& b, uint32_t nta, Broadphase* bp)
     uint64_t* marked = arena.allocate_array<uint64_t>(cells / 64 + 1);
     if (marked == nullptr) return arena.exhausted_status();
     std::memset(marked, 0, (cells / 64 + 1) * sizeof(uint64_t));
-    const Vec3* vb = b.vertices.data();
-    for (size_t ni = 0; ni < bp->near_ids.size(); ++ni) {
-      const Aabb box = b_box(vb, b.triangles[bp->near_ids[ni]]);
-      uint32_t lo[3], hi[3];
-      bp->cell_range(box, lo, hi);
-      for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
-        for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
-          for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
-            const size_t c = (size_t{z} * bp->dim[1] + y) * bp->dim[0] + x;
-            marked[c >> 6] |= uint64_t{1} << (c & 63);
-          }
-        }
-      }
-    }
+    mark_near_cells(*bp, b, 0, bp->near_ids.size(), marked);
     for (size_t c = 0; c < cells; ++c) {
       if ((marked[c >> 6] >> (c & 63) & 1u) == 0) continue;
       for (uint32_t k = bp->start[c]; k < bp->start[c + 1]; ++k) slot[bp->items[k]] = 0;

@@ -530,19 +530,7 @@ constexpr size_t kHitBatches = 8;
 // `marked` (a bit per cell, all clear) is left clear. Returns how many.
 uint32_t list_batch(const Broadphase& bp, const Mesh& b, size_t begin, size_t end, uint64_t* marked,
                     uint32_t* slot, uint32_t* members) {
-  const Vec3* vb = b.vertices.data();
-  for (size_t ni = begin; ni < end; ++ni) {
-    uint32_t lo[3], hi[3];
-    bp.cell_range(b_box(vb, b.triangles[bp.near_ids[ni]]), lo, hi);
-    for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
-      for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
-        for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
-          const size_t c = (size_t{z} * bp.dim[1] + y) * bp.dim[0] + x;
-          marked[c >> 6] |= uint64_t{1} << (c & 63);
-        }
-      }
-    }
-  }
+  mark_near_cells(bp, b, begin, end, marked);
   const size_t words = (size_t{bp.dim[0]} * bp.dim[1] * bp.dim[2]) / 64 + 1;
   uint32_t count = 0;
   for (size_t w = 0; w < words; ++w) {
@@ -620,20 +608,25 @@ Status BooleanRun::find_hits() {
   const uint64_t slot_bytes =
       uint64_t{bp_.a_slot_count} * (sizeof(PlaneFilter) + sizeof(EdgePlanes) + sizeof(Aabb) + 4);
   const bool can_batch = bp_.near_ids.size() >= kHitBatches;
+  bool batches = can_batch && slot_bytes > left / 2;
   ASlots as;
-  const Status prepared = can_batch && slot_bytes > left / 2
-                              ? Status::error(StatusCode::kArenaExhausted, "slots")
-                              : prepare_a_slots(&as);
+  if (!batches) {
+    const Status prepared = prepare_a_slots(&as);
+    if (prepared.code() == StatusCode::kArenaExhausted && can_batch) {
+      arena_.rewind(slots_at);
+      arena_.forget_failure();
+      batches = true;
+    } else {
+      SPLINTCORE_RETURN_IF_ERROR(prepared);
+    }
+  }
   st_.near_b_triangles = bp_.near_ids.size();
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx_, "boolean: hits", 0, 1));
   hits_.bind(&arena_);
   deg_.bind(&arena_);
-  if (prepared.code() == StatusCode::kArenaExhausted && can_batch) {
-    arena_.rewind(slots_at);
-    arena_.forget_failure();
+  if (batches) {
     SPLINTCORE_RETURN_IF_ERROR(hits_in_batches());
   } else {
-    SPLINTCORE_RETURN_IF_ERROR(prepared);
     const size_t from = hits_in_parallel(as);
     SPLINTCORE_RETURN_IF_ERROR(hits_serial(as, from, bp_.near_ids.size()));
   }
