@@ -418,6 +418,17 @@ inline Dop triangle_dop(const Grid& g, const Vec3& a, const Vec3& b, const Vec3&
   return dop_of(lo, hi);
 }
 
+// Lane x of triangle_dop(g, a, b, c) alone (the same arithmetic, so the same values): the slabs'
+// membership and owners (find_self_intersections' slab passes).
+inline void x_cells(const Grid& g, const Vec3& a, const Vec3& b, const Vec3& c, int* lo, int* hi) {
+  const double l = a.x < b.x ? a.x : b.x;
+  const double h = b.x < a.x ? a.x : b.x;
+  const double least = l < c.x ? l : c.x;
+  const double most = c.x < h ? h : c.x;
+  *lo = static_cast<int>((least - g.origin[0]) * g.scale[0]) - 32000 - g.margin[0];
+  *hi = static_cast<int>((most - g.origin[0]) * g.scale[0]) - 32000 + g.margin[0];
+}
+
 // ---- the triangles, in Morton order -------------------------------------------------------------
 // Each with its plane's normal (for the filters and the stars; the rest of the plane filter,
 // the magnitudes of the normal's terms, is made again where needed from the corners) and,
@@ -691,6 +702,12 @@ inline uint32_t overlapping_lanes(const Dop& d, const Leaf& b) {
   apart |= SPLINTCORE_AXIS(4) | SPLINTCORE_AXIS(5) | SPLINTCORE_AXIS(6);
 #undef SPLINTCORE_AXIS
   return ~lane_bits(apart) & 0xffu;
+}
+
+// The lanes of leaf b whose x minimum is `from` or more (a slab's own pairs).
+inline uint32_t lanes_from(const Leaf& b, int from) {
+  const int16_t f = static_cast<int16_t>(from);
+  return lane_bits(load8(b.lo[0]) >= Lanes8{f, f, f, f, f, f, f, f});
 }
 
 // The lanes of leaf b whose triangle uses one of the vertex ids c[0..2].
@@ -968,6 +985,12 @@ struct HierarchyPass {
   uint32_t sub_count = 0;
   uint32_t above[2 * kSubtrees] = {};
   uint32_t above_count = 0;
+  // A slab pass (hierarchy_in_slabs): only the triangles whose quantized x extent (x_cells)
+  // meets slab_lo .. slab_hi, and only the pairs whose larger x minimum is slab_lo or more (the
+  // pairs of this slab, each counted in one slab only). The vertices' DOPs are not kept then.
+  bool in_slab = false;
+  int slab_lo = INT16_MIN, slab_hi = INT16_MAX;
+  uint32_t progress_from = 0, progress_to = 0;  // the share of nt a slab reports, see walk
 
   HierarchyPass(Arena& a, const Vec3* vertices, size_t vertex_count, const Triangle* triangles,
                 size_t triangle_count, const Grid& quantization, Tally* counts,
@@ -981,6 +1004,16 @@ struct HierarchyPass {
         tally(counts),
         executor(runs) {}
 
+  // Is triangle t one of this pass's items?
+  bool kept_here(size_t t) const {
+    const Triangle& tri = tris[t];
+    if (skipped(v, tri, true)) return false;
+    if (!in_slab) return true;
+    int lo, hi;
+    x_cells(grid, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], &lo, &hi);
+    return lo <= slab_hi && hi >= slab_lo;
+  }
+
   // 1. The kept triangles counted, the room for their items and Morton codes: these stay
   // below the sort's arrays and the star lists, which go before the tree is made (the arena
   // is a stack). The items' DOPs are not kept beside them: the leaves hold them.
@@ -988,7 +1021,7 @@ struct HierarchyPass {
     auto count = [&](uint32_t r) {
       uint32_t k = 0;
       for (size_t t = run_start(nt, r); t < run_start(nt, r + 1); ++t) {
-        k += skipped(v, tris[t], true) ? 0u : 1u;
+        k += kept_here(t) ? 1u : 0u;
       }
       run_kept[r] = k;
     };
@@ -1006,8 +1039,8 @@ struct HierarchyPass {
   Status sort_triangles() {
     order = arena.allocate_array<uint64_t>(kept);
     uint64_t* scratch = arena.allocate_array<uint64_t>(kept);
-    vd = arena.allocate_array<Dop>(nv);
-    if (order == nullptr || scratch == nullptr || (vd == nullptr && nv > 0)) {
+    vd = in_slab ? nullptr : arena.allocate_array<Dop>(nv);
+    if (order == nullptr || scratch == nullptr || (vd == nullptr && nv > 0 && !in_slab)) {
       return arena.exhausted_status();
     }
     auto dops = [&](uint32_t r) {
@@ -1015,7 +1048,7 @@ struct HierarchyPass {
         vd[i] = point_dop(grid, v[i]);
       }
     };
-    parallel_for_each(executor, kRuns, dops);
+    if (!in_slab) parallel_for_each(executor, kRuns, dops);
     uint32_t first[kRuns];  // of each run's keys
     for (uint32_t r = 0, at = 0; r < kRuns; ++r) {
       first[r] = at;
@@ -1025,8 +1058,9 @@ struct HierarchyPass {
       uint32_t at = first[r];
       for (size_t t = run_start(nt, r); t < run_start(nt, r + 1); ++t) {
         const Triangle& tri = tris[t];
-        if (skipped(v, tri, true)) continue;
-        const Dop d = triangle_dop(vd[tri.v[0]], vd[tri.v[1]], vd[tri.v[2]]);
+        if (!kept_here(t)) continue;
+        const Dop d = vd != nullptr ? triangle_dop(vd[tri.v[0]], vd[tri.v[1]], vd[tri.v[2]])
+                                    : triangle_dop(grid, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]);
         order[at++] = uint64_t{morton_code(d)} << 32 | t;
       }
       SPLINTCORE_ASSERT(at == first[r] + run_kept[r]);
@@ -1340,6 +1374,7 @@ struct HierarchyPass {
       if (lanes == 0) break;
       const uint32_t si = a.first + i;
       uint32_t bits = overlapping_lanes(lane_dop(a, i), b) & lanes;
+      if (a.lo[0][i] < slab_lo) bits &= lanes_from(b, slab_lo);  // another slab's pairs
       if (bits == 0) continue;
       *tested += static_cast<uint64_t>(bit_count(bits));
       const Item& s = items[si];
@@ -1391,7 +1426,8 @@ struct HierarchyPass {
   }
 
   // The pairs below `start`, depth first, into *found and *tested; with ctx, progress
-  // (and a cancel) every 65,536 steps. *stop: the tally is full.
+  // (and a cancel) every 65,536 steps (a slab's: its done items, from progress_from, kept
+  // below progress_to). *stop: the tally is full.
   Status walk(const Context* ctx, const PairOfNodes& start, Tally* found, uint64_t* tested,
               uint32_t* done, bool* stop) const {
     constexpr int kMaxStack = 4 * kMaxHeight + 8;
@@ -1401,7 +1437,9 @@ struct HierarchyPass {
     uint64_t steps = 0;
     while (top > 0 && !*stop) {
       if (ctx != nullptr && (++steps & 0xffff) == 0) {
-        SPLINTCORE_RETURN_IF_ERROR(report_progress(*ctx, "self-intersection", *done, nt));
+        uint64_t at = *done;
+        if (in_slab) at = at + progress_from < progress_to ? at + progress_from : progress_to;
+        SPLINTCORE_RETURN_IF_ERROR(report_progress(*ctx, "self-intersection", at, nt));
       }
       const PairOfNodes p = stack[--top];
       SPLINTCORE_ASSERT(top + 3 <= kMaxStack);
@@ -1497,16 +1535,32 @@ struct HierarchyPass {
   }
 };
 
-// The hierarchy pass: every pair of non-skipped triangles whose DOPs overlap, counted all, or
-// stopped (*stopped set) once tally->max_pairs is reached. Needs coordinates within the range
-// (radius >= 0), nv <= 3 nt (the memory bound) and nv < 2^32 - 1 (UINT32_MAX is no vertex id).
+// A slab of the x axis in quantized cells (see HierarchyPass::in_slab), and the share of the
+// progress its walk reports.
+struct Slab {
+  int lo, hi;
+  uint32_t progress_from, progress_to;
+};
+
+// The hierarchy pass: every pair of non-skipped triangles whose DOPs overlap (with a slab: of
+// the slab's), counted all, or stopped (*stopped set) once tally->max_pairs is reached. Needs
+// coordinates within the range (radius >= 0), nv <= 3 nt (the memory bound) and nv < 2^32 - 1
+// (UINT32_MAX is no vertex id).
 Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triangle* tris, size_t nt,
-                      double radius, const Grid& grid, Tally* tally, bool* stopped) {
+                      double radius, const Grid& grid, const Slab* slab, Tally* tally,
+                      bool* stopped) {
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
   *stopped = false;
   SPLINTCORE_ASSERT(nv <= 3 * nt && nv < UINT32_MAX);
   HierarchyPass pass(arena, v, nv, tris, nt, grid, tally, ctx.executor);
+  if (slab != nullptr) {
+    pass.in_slab = true;
+    pass.slab_lo = slab->lo;
+    pass.slab_hi = slab->hi;
+    pass.progress_from = slab->progress_from;
+    pass.progress_to = slab->progress_to;
+  }
   SPLINTCORE_RETURN_IF_ERROR(pass.allocate_items());
   if (pass.kept == 0) return Status::ok();
   {
@@ -1524,21 +1578,97 @@ Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triang
   return pass.traverse(ctx, stopped);
 }
 
+// The most a hierarchy pass over `kept` items takes: the items and their codes, and above them
+// in turn the keys, scratch and the DOPs of `dop_vertices` vertices (nv, or none in a slab),
+// the star lists of nv vertices, and the leaves (every one but a lone root holds kMinLeaf items
+// or more) with the nodes (one fewer than twice the leaves); each array's alignment.
+uint64_t pass_bound(uint64_t kept, uint64_t dop_vertices, uint64_t nv) {
+  const uint64_t sorting = kept * 2 * sizeof(uint64_t) + dop_vertices * sizeof(Dop);
+  const uint64_t stars =
+      (nv + 1) * sizeof(uint32_t) + 3 * kept * sizeof(uint32_t) + nv + kept * sizeof(Vec3);
+  const uint64_t nodes = (kept / kMinLeaf + 1) * (2 * sizeof(Node) + sizeof(Leaf));
+  uint64_t above = sorting > stars ? sorting : stars;
+  above = above > nodes ? above : nodes;
+  return kept * (sizeof(Item) + sizeof(uint32_t)) + above + 10 * 64;
+}
+
+// The hierarchy pass in slabs along x, when the whole pass does not fit in what the arena has
+// left: the x axis's cells in bins (16 to 2048 of them, about a bin for 16 triangles, so that
+// the counts take little room beside a small mesh's pass), and each slab as many bins as the
+// pass over its
+// triangles (those whose x extent meets it) is sure to fit (pass_bound; a bin that alone does
+// not is tried all the same). A pair whose DOPs overlap belongs to the slab that holds the larger
+// of their x minima: both triangles reach it (each one's extent holds both minima's larger,
+// up to the smaller maximum), so it is found there, and only there. The counts, candidates and
+// smallest pair are those of the whole pass; so is stopping (the tally goes on from slab to
+// slab). A star is cleared from the slab's triangles that use it: a subset of a star that is
+// a single fan turning once is certainly embedded too, and the pairs a slab tests are of its
+// triangles. The cost: each slab scans all triangles, and the triangles that cross a boundary
+// are in two slabs' hierarchies.
+inline uint32_t slab_bin(int cell, int shift, uint32_t bins) {
+  const int b = (cell + 32768) >> shift;
+  return b < 0 ? 0u : (b >= static_cast<int>(bins) ? bins - 1 : static_cast<uint32_t>(b));
+}
+
+Status hierarchy_in_slabs(const Context& ctx, const Vec3* v, size_t nv, const Triangle* tris,
+                          size_t nt, double radius, const Grid& grid, Tally* tally, bool* stopped) {
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);
+  // lo_below[b]: the kept triangles whose x minimum's bin is below b; hi_below[b] the same for
+  // the maximum. Slab b0 .. b1 holds lo_below[b1 + 1] - hi_below[b0] (a triangle whose maximum
+  // is below b0 has its minimum there too).
+  uint32_t bins = 16;
+  int shift = 12;  // 65536 cells over the bins
+  while (bins < 2048 && uint64_t{bins} * 16 < nt) {
+    bins *= 2;
+    --shift;
+  }
+  uint32_t* lo_below = arena.allocate_array<uint32_t>(bins + 1);
+  uint32_t* hi_below = arena.allocate_array<uint32_t>(bins + 1);
+  if (lo_below == nullptr || hi_below == nullptr) return arena.exhausted_status();
+  for (uint32_t b = 0; b <= bins; ++b) lo_below[b] = hi_below[b] = 0;
+  for (size_t t = 0; t < nt; ++t) {
+    const Triangle& tri = tris[t];
+    if (skipped(v, tri, true)) continue;
+    int lo, hi;
+    x_cells(grid, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], &lo, &hi);
+    ++lo_below[slab_bin(lo, shift, bins) + 1];
+    ++hi_below[slab_bin(hi, shift, bins) + 1];
+  }
+  for (uint32_t b = 0; b < bins; ++b) {
+    lo_below[b + 1] += lo_below[b];
+    hi_below[b + 1] += hi_below[b];
+  }
+  const size_t left = arena.cap() > arena.used() ? arena.cap() - arena.used() : 0;
+  uint64_t most = 0, beyond = uint64_t{nt} + 1;  // fits, does not
+  while (most + 1 < beyond) {
+    const uint64_t mid = most + (beyond - most) / 2;
+    if (pass_bound(mid, 0, nv) <= left) {
+      most = mid;
+    } else {
+      beyond = mid;
+    }
+  }
+  for (uint32_t b0 = 0; b0 < bins;) {
+    uint32_t b1 = b0;
+    while (b1 + 1 < bins && lo_below[b1 + 2] - hi_below[b0] <= most) ++b1;
+    const Slab slab{static_cast<int>(b0 << shift) - 32768,
+                    static_cast<int>(((b1 + 1) << shift) - 1) - 32768, lo_below[b0],
+                    lo_below[b1 + 1]};
+    SPLINTCORE_RETURN_IF_ERROR(
+        hierarchy_pass(ctx, v, nv, tris, nt, radius, grid, &slab, tally, stopped));
+    if (*stopped) return Status::ok();
+    b0 = b1 + 1;
+  }
+  return Status::ok();
+}
+
 }  // namespace
 
 uint64_t find_self_intersections_bound(uint64_t triangle_count) {
   const uint64_t n = triangle_count;
-  // The hierarchy pass: the items and their codes, and above them in turn the keys, scratch
-  // and vertices' DOPs (at most 3n vertices), the star lists, and the leaves (every one but a
-  // lone root holds kMinLeaf items or more) with the nodes (one fewer than twice the leaves).
-  const uint64_t sorting = n * (2 * sizeof(uint64_t) + 3 * sizeof(Dop));
-  const uint64_t stars =
-      (3 * n + 1) * sizeof(uint32_t) + 3 * n * sizeof(uint32_t) + 3 * n + n * sizeof(Vec3);
-  const uint64_t leaves = n / kMinLeaf + 1;
-  const uint64_t nodes = leaves * (2 * sizeof(Node) + sizeof(Leaf));
-  uint64_t above = sorting > stars ? sorting : stars;
-  above = above > nodes ? above : nodes;
-  const uint64_t tree = n * (sizeof(Item) + sizeof(uint32_t)) + above + 10 * 64;
+  // The whole hierarchy pass (at most 3n vertices).
+  const uint64_t tree = pass_bound(n, 3 * n, 3 * n);
   // The sweep: keys, planes, DOPs, boxes.
   const uint64_t sweep_bytes =
       n * (2 * sizeof(KeyIndex) + sizeof(Plane) + sizeof(Dop) + 56) + 6 * 64;
@@ -1574,7 +1704,26 @@ Status find_self_intersections(const Context& ctx, const Mesh& mesh, uint64_t ma
     // All pairs are counted unless there are more than max_pairs: the pass stops at one more.
     Tally all{report, max_pairs != 0 && max_pairs != UINT64_MAX ? max_pairs + 1 : 0};
     bool stopped = false;
-    SPLINTCORE_RETURN_IF_ERROR(hierarchy_pass(ctx, v, nv, tris, nt, radius, grid, &all, &stopped));
+    // The whole pass, or in slabs when it does not fit (the same answer in less memory): at
+    // once when its sort alone (items, codes, keys and the vertices' DOPs) would not.
+    Arena& arena = *ctx.arena;
+    const size_t left = arena.cap() > arena.used() ? arena.cap() - arena.used() : 0;
+    const uint64_t sort_needs =
+        uint64_t{nt} * (sizeof(Item) + 5 * sizeof(uint32_t)) + uint64_t{nv} * sizeof(Dop);
+    bool in_slabs = sort_needs > left;
+    if (!in_slabs) {
+      const Status whole =
+          hierarchy_pass(ctx, v, nv, tris, nt, radius, grid, nullptr, &all, &stopped);
+      in_slabs = whole.code() == StatusCode::kArenaExhausted;
+      if (!in_slabs) SPLINTCORE_RETURN_IF_ERROR(whole);
+    }
+    if (in_slabs) {
+      arena.forget_failure();
+      *report = SelfIntersectionReport{};
+      all = Tally{report, all.max_pairs};
+      SPLINTCORE_RETURN_IF_ERROR(
+          hierarchy_in_slabs(ctx, v, nv, tris, nt, radius, grid, &all, &stopped));
+    }
     if (!stopped) return Status::ok();
     *report = SelfIntersectionReport{};
   }

@@ -358,11 +358,18 @@ struct PhantomCase {
 TEST(BoundTwoStep, DesignBooleanBlockoutLabel) {
   for (const char* name : {"paper_scale.json", "blockout.json", "exact.json"}) {
     PhantomCase pc(name);
-    expect_two_step("design_splint", name, [&](Arena& arena) {
-      Mesh splint(&arena);
-      DesignReport report;
-      return design_splint(Context(&arena), pc.c, Span<const Mesh>(pc.jaws, 2), &splint, &report);
-    });
+    std::string result;
+    expect_two_step(
+        "design_splint", name,
+        [&](Arena& arena) {
+          Mesh splint(&arena);
+          DesignReport report;
+          const Status s =
+              design_splint(Context(&arena), pc.c, Span<const Mesh>(pc.jaws, 2), &splint, &report);
+          result = test::mesh_sha256(splint);
+          return s;
+        },
+        true, &result);
   }
   // The stages on their own: the base minus the maxilla, its blockout, a label on it.
   PhantomCase pc("paper_scale.json");
@@ -373,27 +380,44 @@ TEST(BoundTwoStep, DesignBooleanBlockoutLabel) {
   Mesh cut(&pc.storage.arena);
   BooleanOptions bo;
   SPLINTCORE_ASSERT_OK(mesh_boolean(sctx, base, pc.jaws[0], bo, &cut, nullptr));
-  expect_two_step("mesh_boolean", "base - phantom maxilla", [&](Arena& arena) {
-    Mesh out(&arena);
-    return mesh_boolean(Context(&arena), base, pc.jaws[0], bo, &out, nullptr);
-  });
+  std::string result;
+  expect_two_step(
+      "mesh_boolean", "base - phantom maxilla",
+      [&](Arena& arena) {
+        Mesh out(&arena);
+        const Status s = mesh_boolean(Context(&arena), base, pc.jaws[0], bo, &out, nullptr);
+        result = test::mesh_sha256(out);
+        return s;
+      },
+      true, &result);
   BlockoutOptions bl;
   bl.sweep.direction = Vec3{0, 0, 1};
   bl.sweep.voxel = 0.3;
   bl.sweep.inset = 0.15;
-  expect_two_step("blockout", "cut, phantom maxilla, 0.3 mm", [&](Arena& arena) {
-    Mesh out(&arena);
-    return blockout(Context(&arena), cut, Span<const Mesh>(&pc.jaws[0], 1), bl, &out);
-  });
+  expect_two_step(
+      "blockout", "cut, phantom maxilla, 0.3 mm",
+      [&](Arena& arena) {
+        Mesh out(&arena);
+        const Status s = blockout(Context(&arena), cut, Span<const Mesh>(&pc.jaws[0], 1), bl, &out);
+        result = test::mesh_sha256(out);
+        return s;
+      },
+      true, &result);
   // The exact sweep's blockout takes the uncut base (the sweep holds the jaw): the sweep, the
   // shells' check (and the splint's distance index where one crosses) and the Boolean.
   BlockoutOptions bx;
   bx.sweep.direction = Vec3{0, 0, 1};
   bx.exact = true;
-  expect_two_step("blockout (exact)", "base, phantom maxilla", [&](Arena& arena) {
-    Mesh out(&arena);
-    return blockout(Context(&arena), base, Span<const Mesh>(&pc.jaws[0], 1), bx, &out);
-  });
+  expect_two_step(
+      "blockout (exact)", "base, phantom maxilla",
+      [&](Arena& arena) {
+        Mesh out(&arena);
+        const Status s =
+            blockout(Context(&arena), base, Span<const Mesh>(&pc.jaws[0], 1), bx, &out);
+        result = test::mesh_sha256(out);
+        return s;
+      },
+      true, &result);
   ArenaArray<Line> upper(&pc.storage.arena), lower(&pc.storage.arena);
   SPLINTCORE_ASSERT_OK(make_lines(sctx, pc.c.upper, pc.c.occlusal_normal, "upper", &upper));
   SPLINTCORE_ASSERT_OK(make_lines(sctx, pc.c.lower, pc.c.occlusal_normal, "lower", &lower));

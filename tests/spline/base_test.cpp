@@ -246,12 +246,17 @@ TEST(SplintBase, ArenaExhaustionIsCleanAtEveryCap) {
   std::vector<Pick> up, lo;
   prism(4, 10.0, 2.0, 2.0, 2.0, &up, &lo);
   size_t need = 0;
+  std::string want;
   {
     TestArena big;
     Built b = build(big, up, lo);
     ASSERT_TRUE(b.status.is_ok());
     need = big.arena.high_water();
+    want = test::mesh_sha256(b.mesh);
   }
+  // Below the ample peak: a clean failure, or (the final self-intersection check in slabs) the
+  // same base; once it works, every larger cap works.
+  size_t first_success = 0;
   for (size_t cap = 0; cap < need; cap += 64) {
     std::vector<unsigned char> buffer(cap + 1);
     Arena arena(buffer.data(), cap);
@@ -263,6 +268,12 @@ TEST(SplintBase, ArenaExhaustionIsCleanAtEveryCap) {
     Mesh m(&arena);
     BaseReport r;
     if (s.is_ok()) s = build_splint_base(ctx, ul.span(), ll.span(), BaseParams{}, &m, &r);
+    if (s.is_ok()) {
+      if (first_success == 0) first_success = cap;
+      EXPECT_EQ(test::mesh_sha256(m), want) << cap;
+      continue;
+    }
+    EXPECT_EQ(first_success, 0u) << "failed at " << cap << " after working at " << first_success;
     ASSERT_EQ(s.code(), StatusCode::kArenaExhausted) << cap << ": " << test::format(s);
     ASSERT_NE(std::strstr(s.message(), "arena exhausted: need "), nullptr);
   }

@@ -190,6 +190,12 @@ inline std::string sha256_hex(const void* data, size_t n) {
   return hex;
 }
 
+// A mesh's bytes, vertices then triangles, as two digests (for "the same result" checks).
+inline std::string mesh_sha256(const Mesh& m) {
+  return sha256_hex(m.vertices.data(), m.vertices.size() * sizeof(Vec3)) +
+         sha256_hex(m.triangles.data(), m.triangles.size() * sizeof(Triangle));
+}
+
 inline std::vector<uint8_t> read_file_bytes(const std::string& path) {
   std::vector<uint8_t> out;
   std::FILE* f = std::fopen(path.c_str(), "rb");
