@@ -179,8 +179,10 @@ uint64_t find_self_intersections_bound(uint64_t triangle_count);
 // are used). When the whole hierarchy does not fit in what the arena has left, it is made and
 // walked in slabs along x, as many as that needs (each pair counted in one slab only): the same
 // report in far less memory (about 6% of the whole pass's peak on 10-20k-triangle meshes in
-// SelfIntersection.SlabsGiveTheSameReportInLessMemory), at some cost in time. The sweep that
-// answers when more than max_pairs pairs conflict needs its own ~180 bytes a triangle.
+// SelfIntersection.SlabsGiveTheSameReportInLessMemory), at some cost in time. When more than
+// max_pairs pairs conflict, two more passes find the sweep's answer (32 bytes more a pair
+// asked for); the sweep itself (about 180 bytes a triangle) runs only for max_pairs above
+// 65,536, coordinates beyond the filters' range, or more than three vertices a triangle.
 // Errors: kArenaExhausted, kInvalidMesh (index out of range), kCancelled.
 Status find_self_intersections(const Context& ctx, const Mesh& mesh, uint64_t max_pairs,
                                SelfIntersectionReport* report);

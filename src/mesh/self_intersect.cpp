@@ -19,8 +19,9 @@
 // Every filter only ever proves "no conflict"; anything it cannot prove goes to the exact
 // tests, so the answer is exact. Results do not depend on the traversal: every conflicting
 // pair is counted, the first pair is the smallest. Only when max_pairs stops the count early
-// does the order of discovery matter; then the sweep over boxes sorted by x (this function's
-// original algorithm) answers, so the pairs reported are the ones it always reported.
+// does the order of discovery matter; then the answer is that of the sweep over boxes sorted
+// by x (this function's original algorithm), the pairs it always reported: found by two more
+// passes of the hierarchy (Pass::first_in_sweep_order), or by the sweep itself.
 #include "splintcore/mesh.h"
 
 #include "geometry/float_bounds.h"
@@ -784,13 +785,82 @@ inline uint32_t morton_code(const Dop& d) {
 // ---- the two passes
 // ---------------------------------------------------------------------------------
 
+// A triangle's place in the sweep's order (sweep(): keyed by its box's x minimum, computed as
+// there, in a stable sort: equal keys by triangle id), and a pair's: its earlier triangle's
+// place, then the later's (the sweep meets pairs in that order).
+struct SweepPlace {
+  uint64_t key;
+  uint32_t t;
+};
+inline SweepPlace sweep_place(const Vec3* v, const Triangle* tris, uint32_t t) {
+  const Vec3 &a = v[tris[t].v[0]], &b = v[tris[t].v[1]], &c = v[tris[t].v[2]];
+  const double lo = a.x < b.x ? a.x : b.x;
+  return SweepPlace{order_key(lo < c.x ? lo : c.x), t};
+}
+inline bool before(const SweepPlace& p, const SweepPlace& q) {
+  return p.key < q.key || (p.key == q.key && p.t < q.t);
+}
+struct SweepPair {
+  SweepPlace first, second;
+};
+inline SweepPair sweep_pair(const SweepPlace& p, const SweepPlace& q) {
+  return before(p, q) ? SweepPair{p, q} : SweepPair{q, p};
+}
+inline bool before(const SweepPair& x, const SweepPair& y) {
+  if (before(x.first, y.first)) return true;
+  if (before(y.first, x.first)) return false;
+  return before(x.second, y.second);
+}
+
+// The `size` first pairs in the sweep's order among those offered: a max-heap of them.
+struct SweepFirst {
+  const Vec3* v;
+  const Triangle* tris;
+  SweepPair* heap;
+  uint64_t size;
+  uint64_t count = 0;
+  void offer(uint32_t s, uint32_t t) {
+    const SweepPair p = sweep_pair(sweep_place(v, tris, s), sweep_place(v, tris, t));
+    if (count < size) {
+      uint64_t i = count++;
+      while (i > 0 && before(heap[(i - 1) / 2], p)) {
+        heap[i] = heap[(i - 1) / 2];
+        i = (i - 1) / 2;
+      }
+      heap[i] = p;
+      return;
+    }
+    if (!before(p, heap[0])) return;
+    uint64_t i = 0;  // p replaces the root and goes down
+    for (;;) {
+      const uint64_t l = 2 * i + 1, r = l + 1;
+      uint64_t next = i;
+      const SweepPair* largest = &p;
+      if (l < count && before(*largest, heap[l])) {
+        next = l;
+        largest = &heap[l];
+      }
+      if (r < count && before(*largest, heap[r])) next = r;
+      if (next == i) break;
+      heap[i] = heap[next];
+      i = next;
+    }
+    heap[i] = p;
+  }
+};
+
 // The tally both passes keep.
 struct Tally {
   SelfIntersectionReport* report;
   uint64_t max_pairs;
   bool have_first = false;
+  SweepFirst* sweep_first = nullptr;  // set: the pairs go there (and nothing stops)
   // Counts a conflicting pair; true when max_pairs is reached.
   bool add(uint32_t s, uint32_t t) {
+    if (sweep_first != nullptr) {
+      sweep_first->offer(s, t);
+      return false;
+    }
     ++report->intersecting_pairs;
     const uint32_t a = s < t ? s : t, b = s < t ? t : s;
     if (!have_first || a < report->first_a || (a == report->first_a && b < report->first_b)) {
@@ -991,6 +1061,9 @@ struct HierarchyPass {
   bool in_slab = false;
   int slab_lo = INT16_MIN, slab_hi = INT16_MAX;
   uint32_t progress_from = 0, progress_to = 0;  // the share of nt a slab reports, see walk
+  // Set: only count the candidates that come in the sweep's order no later than this pair
+  // (first_in_sweep_order), testing none.
+  const SweepPair* count_until = nullptr;
 
   HierarchyPass(Arena& a, const Vec3* vertices, size_t vertex_count, const Triangle* triangles,
                 size_t triangle_count, const Grid& quantization, Tally* counts,
@@ -1376,6 +1449,10 @@ struct HierarchyPass {
       uint32_t bits = overlapping_lanes(lane_dop(a, i), b) & lanes;
       if (a.lo[0][i] < slab_lo) bits &= lanes_from(b, slab_lo);  // another slab's pairs
       if (bits == 0) continue;
+      if (count_until != nullptr) {
+        *tested += count_before(si, b.first, bits);
+        continue;
+      }
       *tested += static_cast<uint64_t>(bit_count(bits));
       const Item& s = items[si];
       const uint32_t cleared_ids[3] = {(s.cleared & 1u) != 0 ? s.tri.v[0] : UINT32_MAX,
@@ -1389,6 +1466,19 @@ struct HierarchyPass {
       }
     }
     return false;
+  }
+
+  // The pairs of item si with items first + j, j a bit of `bits`, that the sweep meets no
+  // later than *count_until.
+  uint64_t count_before(uint32_t si, uint32_t first, uint32_t bits) const {
+    const SweepPlace p = sweep_place(v, tris, items[si].id);
+    uint64_t n = 0;
+    while (bits != 0) {
+      const uint32_t j = first + static_cast<uint32_t>(lowest_bit(bits));
+      bits &= bits - 1;
+      n += before(*count_until, sweep_pair(p, sweep_place(v, tris, items[j].id))) ? 0u : 1u;
+    }
+    return n;
   }
 
   // 7. Traversal of the hierarchy against itself: (i, i) stands for the pairs within node i,
@@ -1460,7 +1550,9 @@ struct HierarchyPass {
   Status traverse(const Context& ctx, bool* stopped) {
     uint64_t candidates = 0;
     bool stop = false;
-    if (!traverse_in_tasks(&candidates, &stop)) {
+    // (Tasks keep tallies of their own: the sweep's order is kept on one thread.)
+    const bool serial = tally->sweep_first != nullptr || count_until != nullptr;
+    if (serial || !traverse_in_tasks(&candidates, &stop)) {
       uint32_t done = 0;  // triangles whose leaf is done with itself (for progress)
       SPLINTCORE_RETURN_IF_ERROR(walk(&ctx, PairOfNodes{0, 0}, tally, &candidates, &done, &stop));
     }
@@ -1535,6 +1627,8 @@ struct HierarchyPass {
   }
 };
 
+constexpr uint64_t kMostSweepFirst = 65536;  // Pass::first_in_sweep_order's max_pairs
+
 // A slab of the x axis in quantized cells (see HierarchyPass::in_slab), and the share of the
 // progress its walk reports.
 struct Slab {
@@ -1547,13 +1641,14 @@ struct Slab {
 // coordinates within the range (radius >= 0), nv <= 3 nt (the memory bound) and nv < 2^32 - 1
 // (UINT32_MAX is no vertex id).
 Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triangle* tris, size_t nt,
-                      double radius, const Grid& grid, const Slab* slab, Tally* tally,
-                      bool* stopped) {
+                      double radius, const Grid& grid, const Slab* slab,
+                      const SweepPair* count_until, Tally* tally, bool* stopped) {
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
   *stopped = false;
   SPLINTCORE_ASSERT(nv <= 3 * nt && nv < UINT32_MAX);
   HierarchyPass pass(arena, v, nv, tris, nt, grid, tally, ctx.executor);
+  pass.count_until = count_until;
   if (slab != nullptr) {
     pass.in_slab = true;
     pass.slab_lo = slab->lo;
@@ -1611,7 +1706,8 @@ inline uint32_t slab_bin(int cell, int shift, uint32_t bins) {
 }
 
 Status hierarchy_in_slabs(const Context& ctx, const Vec3* v, size_t nv, const Triangle* tris,
-                          size_t nt, double radius, const Grid& grid, Tally* tally, bool* stopped) {
+                          size_t nt, double radius, const Grid& grid, const SweepPair* count_until,
+                          Tally* tally, bool* stopped) {
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
   // lo_below[b]: the kept triangles whose x minimum's bin is below b; hi_below[b] the same for
@@ -1656,7 +1752,7 @@ Status hierarchy_in_slabs(const Context& ctx, const Vec3* v, size_t nv, const Tr
                     static_cast<int>(((b1 + 1) << shift) - 1) - 32768, lo_below[b0],
                     lo_below[b1 + 1]};
     SPLINTCORE_RETURN_IF_ERROR(
-        hierarchy_pass(ctx, v, nv, tris, nt, radius, grid, &slab, tally, stopped));
+        hierarchy_pass(ctx, v, nv, tris, nt, radius, grid, &slab, count_until, tally, stopped));
     if (*stopped) return Status::ok();
     b0 = b1 + 1;
   }
@@ -1664,6 +1760,70 @@ Status hierarchy_in_slabs(const Context& ctx, const Vec3* v, size_t nv, const Tr
 }
 
 }  // namespace
+
+// The hierarchy over a mesh's triangles, whole or in slabs.
+struct Pass {
+  const Context& ctx;
+  const Vec3* v;
+  size_t nv;
+  const Triangle* tris;
+  size_t nt;
+  double radius;
+  const Grid& grid;
+
+  // The whole pass, or in slabs when it does not fit (the same answer in less memory): at
+  // once when its sort alone (items, codes, keys and the vertices' DOPs) would not.
+  Status run(const SweepPair* count_until, Tally* tally, bool* stopped) const {
+    Arena& arena = *ctx.arena;
+    const size_t left = arena.cap() > arena.used() ? arena.cap() - arena.used() : 0;
+    const uint64_t sort_needs =
+        uint64_t{nt} * (sizeof(Item) + 5 * sizeof(uint32_t)) + uint64_t{nv} * sizeof(Dop);
+    bool in_slabs = sort_needs > left;
+    const SelfIntersectionReport before = *tally->report;
+    if (!in_slabs) {
+      const Status whole =
+          hierarchy_pass(ctx, v, nv, tris, nt, radius, grid, nullptr, count_until, tally, stopped);
+      in_slabs = whole.code() == StatusCode::kArenaExhausted;
+      if (!in_slabs) return whole;
+    }
+    arena.forget_failure();
+    *tally->report = before;  // (nothing is counted before the pass's memory is all taken)
+    return hierarchy_in_slabs(ctx, v, nv, tris, nt, radius, grid, count_until, tally, stopped);
+  }
+
+  // The report of the sweep (sweep()) when more than max_pairs > 0 pairs conflict: it stops
+  // at the max_pairs-th conflicting pair it meets, P, having counted the candidates (pairs of
+  // overlapping DOPs, as here) it met up to P, and its first pair is the smallest of the pairs
+  // it counted. Here: a pass that keeps the max_pairs first conflicting pairs in the sweep's
+  // order (SweepFirst), then one that counts the candidates no later than P, the last of them.
+  // Memory: a pass's, and 32 bytes per pair kept.
+  Status first_in_sweep_order(uint64_t max_pairs, SelfIntersectionReport* report) const {
+    Arena& arena = *ctx.arena;
+    ArenaScope scope(arena);
+    SweepPair* heap = arena.allocate_array<SweepPair>(static_cast<size_t>(max_pairs));
+    if (heap == nullptr) return arena.exhausted_status();
+    SweepFirst first{v, tris, heap, max_pairs};
+    SelfIntersectionReport unused;
+    Tally keep{&unused, 0};
+    keep.sweep_first = &first;
+    bool stopped = false;
+    SPLINTCORE_RETURN_IF_ERROR(run(nullptr, &keep, &stopped));
+    SPLINTCORE_ASSERT(first.count == max_pairs);  // (more than max_pairs conflict)
+    const SweepPair last = heap[0];
+    Tally count{report, 0};
+    SPLINTCORE_RETURN_IF_ERROR(run(&last, &count, &stopped));
+    report->intersecting_pairs = max_pairs;
+    for (uint64_t i = 0; i < max_pairs; ++i) {
+      const uint32_t s = heap[i].first.t, t = heap[i].second.t;
+      const uint32_t a = s < t ? s : t, b = s < t ? t : s;
+      if (i == 0 || a < report->first_a || (a == report->first_a && b < report->first_b)) {
+        report->first_a = a;
+        report->first_b = b;
+      }
+    }
+    return Status::ok();
+  }
+};
 
 uint64_t find_self_intersections_bound(uint64_t triangle_count) {
   const uint64_t n = triangle_count;
@@ -1704,31 +1864,16 @@ Status find_self_intersections(const Context& ctx, const Mesh& mesh, uint64_t ma
     // All pairs are counted unless there are more than max_pairs: the pass stops at one more.
     Tally all{report, max_pairs != 0 && max_pairs != UINT64_MAX ? max_pairs + 1 : 0};
     bool stopped = false;
-    // The whole pass, or in slabs when it does not fit (the same answer in less memory): at
-    // once when its sort alone (items, codes, keys and the vertices' DOPs) would not.
-    Arena& arena = *ctx.arena;
-    const size_t left = arena.cap() > arena.used() ? arena.cap() - arena.used() : 0;
-    const uint64_t sort_needs =
-        uint64_t{nt} * (sizeof(Item) + 5 * sizeof(uint32_t)) + uint64_t{nv} * sizeof(Dop);
-    bool in_slabs = sort_needs > left;
-    if (!in_slabs) {
-      const Status whole =
-          hierarchy_pass(ctx, v, nv, tris, nt, radius, grid, nullptr, &all, &stopped);
-      in_slabs = whole.code() == StatusCode::kArenaExhausted;
-      if (!in_slabs) SPLINTCORE_RETURN_IF_ERROR(whole);
-    }
-    if (in_slabs) {
-      arena.forget_failure();
-      *report = SelfIntersectionReport{};
-      all = Tally{report, all.max_pairs};
-      SPLINTCORE_RETURN_IF_ERROR(
-          hierarchy_in_slabs(ctx, v, nv, tris, nt, radius, grid, &all, &stopped));
-    }
+    const Pass pass{ctx, v, nv, tris, nt, radius, grid};
+    SPLINTCORE_RETURN_IF_ERROR(pass.run(nullptr, &all, &stopped));
     if (!stopped) return Status::ok();
     *report = SelfIntersectionReport{};
+    // More than max_pairs: which pairs count then depends on the order of discovery. The
+    // answer is the sweep's (below), found by the hierarchy in its memory.
+    if (max_pairs <= kMostSweepFirst) return pass.first_in_sweep_order(max_pairs, report);
   }
-  // More than max_pairs (which pairs count then depends on the order of discovery: answer in
-  // the sweep's order, as before), or more vertices than the hierarchy's memory bound allows.
+  // More than max_pairs, too many of them for the hierarchy's answer, or more vertices than
+  // the hierarchy's memory bound allows: the sweep, whose order of discovery is the answer.
   Tally tally{report, max_pairs};
   return sweep(ctx, v, tris, nt, &grid, &tally);
 }

@@ -727,22 +727,36 @@ TEST(SelfIntersection, LargePerturbedTorusMatchesBruteForce) {
 }
 
 // The hierarchy and the sweep over boxes (taken when a mesh has more than three vertices a
-// triangle) report the same pairs, first pair and candidates.
+// triangle) report the same pairs, first pair and candidates; with max_pairs below the pairs
+// there are, the hierarchy's answer in the sweep's order (the first max_pairs pairs the sweep
+// meets, and the candidates it met up to the last of them) is the sweep's.
 TEST(SelfIntersection, HierarchyAndSweepAgree) {
   TestArena t;
   std::vector<SoupTriangle> boxes = box_soup(0, 0, 0, 2, 2, 2);
   for (const SoupTriangle& q : box_soup(1, 1, 1, 3, 3, 3)) boxes.push_back(q);
-  const std::vector<std::vector<SoupTriangle>> soups = {shapes::torus(32, 16, 10, 3),
-                                                        octasphere(12, 4.0), boxes};
-  for (const auto& soup : soups) {
-    Mesh mesh = welded(t, soup);
-    const SelfIntersectionReport h = run(mesh);
-    const SelfIntersectionReport s = run(with_unreferenced_copies(t, mesh));
-    EXPECT_EQ(h.intersecting_pairs, s.intersecting_pairs);
-    EXPECT_EQ(h.first_a, s.first_a);
-    EXPECT_EQ(h.first_b, s.first_b);
-    EXPECT_EQ(h.candidate_pairs, s.candidate_pairs);
-    EXPECT_GT(h.candidate_pairs, 0u);
+  Mesh pushed = welded(t, shapes::torus(48, 24, 10, 3));
+  std::mt19937_64 rng(5);
+  for (int i = 0; i < 12; ++i) {
+    Vec3& p = pushed.vertices[rng() % pushed.vertices.size()];
+    p = p + Vec3{static_cast<double>(rng() % 9) * 0.5 - 2.0,
+                 static_cast<double>(rng() % 9) * 0.5 - 2.0, static_cast<double>(rng() % 5) - 2.0};
+  }
+  const Mesh meshes[4] = {welded(t, shapes::torus(32, 16, 10, 3)), welded(t, octasphere(12, 4.0)),
+                          welded(t, boxes), pushed};
+  for (int m = 0; m < 4; ++m) {
+    const Mesh& mesh = meshes[m];
+    const Mesh sweep_only = with_unreferenced_copies(t, mesh);
+    const uint64_t all = run(mesh).intersecting_pairs;
+    EXPECT_EQ(all > 0, m >= 2) << m;
+    for (uint64_t k : {uint64_t{0}, uint64_t{1}, uint64_t{2}, uint64_t{3}, uint64_t{7}, all / 2}) {
+      const SelfIntersectionReport h = run(mesh, k);
+      const SelfIntersectionReport s = run(sweep_only, k);
+      EXPECT_EQ(h.intersecting_pairs, s.intersecting_pairs) << m << ", max_pairs " << k;
+      EXPECT_EQ(h.first_a, s.first_a) << m << ", max_pairs " << k;
+      EXPECT_EQ(h.first_b, s.first_b) << m << ", max_pairs " << k;
+      EXPECT_EQ(h.candidate_pairs, s.candidate_pairs) << m << ", max_pairs " << k;
+      EXPECT_GT(h.candidate_pairs, 0u);
+    }
   }
 }
 
@@ -859,7 +873,8 @@ TEST(SelfIntersection, ArenaExhaustionSweep) {
 }
 
 // When the whole pass does not fit, the slabs along x give the same report (every pair counted
-// in one slab only: the same candidates) in a fraction of the memory, at every thread count.
+// in one slab only: the same candidates) in a fraction of the memory, at every thread count;
+// with max_pairs below the pairs there are, too.
 TEST(SelfIntersection, SlabsGiveTheSameReportInLessMemory) {
   TestArena t;
   Mesh torus = welded(t, shapes::torus(96, 48, 10, 3));
@@ -880,10 +895,11 @@ TEST(SelfIntersection, SlabsGiveTheSameReportInLessMemory) {
     const Mesh& mesh = meshes[m];
     const SelfIntersectionReport whole = run(mesh);
     EXPECT_EQ(whole.intersecting_pairs > 0, m > 0) << names[m];
-    auto attempt = [&](size_t cap, const Executor* executor, SelfIntersectionReport* r) {
+    auto attempt = [&](size_t cap, const Executor* executor, SelfIntersectionReport* r,
+                       uint64_t max_pairs = 0) {
       Arena arena(base, cap);
       const Context ctx(&arena, executor, nullptr);
-      const Status s = find_self_intersections(ctx, mesh, 0, r);
+      const Status s = find_self_intersections(ctx, mesh, max_pairs, r);
       EXPECT_EQ(arena.used(), 0u);
       EXPECT_LE(arena.high_water(), cap);
       if (!s.is_ok()) {
@@ -917,6 +933,17 @@ TEST(SelfIntersection, SlabsGiveTheSameReportInLessMemory) {
         EXPECT_EQ(r.first_b, whole.first_b) << names[m] << ", cap " << cap;
         EXPECT_EQ(r.candidate_pairs, whole.candidate_pairs) << names[m] << ", cap " << cap;
       }
+    }
+    // Fewer pairs asked for than there are: the sweep's first pairs, found in slabs too (a
+    // pair kept takes 32 bytes more).
+    for (uint64_t k : {uint64_t{1}, uint64_t{3}}) {
+      const SelfIntersectionReport ample = run(mesh, k);
+      SelfIntersectionReport r;
+      ASSERT_EQ(attempt(works + 1024, nullptr, &r, k), 0u) << names[m] << ", max_pairs " << k;
+      EXPECT_EQ(r.intersecting_pairs, ample.intersecting_pairs) << names[m] << ", " << k;
+      EXPECT_EQ(r.first_a, ample.first_a) << names[m] << ", max_pairs " << k;
+      EXPECT_EQ(r.first_b, ample.first_b) << names[m] << ", max_pairs " << k;
+      EXPECT_EQ(r.candidate_pairs, ample.candidate_pairs) << names[m] << ", max_pairs " << k;
     }
     SelfIntersectionReport r;
     const size_t need = attempt(works - 1, nullptr, &r);
