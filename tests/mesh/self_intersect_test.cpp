@@ -726,6 +726,32 @@ TEST(SelfIntersection, LargePerturbedTorusMatchesBruteForce) {
   for (uint64_t k : {uint64_t{1}, uint64_t{3}}) expect_original_order(mesh, k, "perturbed torus");
 }
 
+// Moves `count` vertices of *mesh, picked at random (seed), by up to 2 mm along each axis: a
+// torus pushed through itself in places.
+void push_vertices(uint64_t seed, int count, Mesh* mesh) {
+  std::mt19937_64 rng(seed);
+  for (int i = 0; i < count; ++i) {
+    Vec3& p = mesh->vertices[rng() % mesh->vertices.size()];
+    p = p + Vec3{static_cast<double>(rng() % 9) * 0.5 - 2.0,
+                 static_cast<double>(rng() % 9) * 0.5 - 2.0, static_cast<double>(rng() % 5) - 2.0};
+  }
+}
+
+// A clean octasphere of 12,800 triangles, a torus of 9,216 with vertices pushed through it,
+// and a sphere and a torus crossing in one mesh.
+struct ThreeMeshes {
+  static constexpr const char* kNames[3] = {"octasphere", "pushed torus", "sphere and torus"};
+  Mesh meshes[3];
+  explicit ThreeMeshes(TestArena& t) {
+    meshes[0] = welded(t, octasphere(40, 5.0));
+    meshes[1] = welded(t, shapes::torus(96, 48, 10, 3));
+    push_vertices(11, 30, &meshes[1]);
+    std::vector<SoupTriangle> both = octasphere(40, 5.0);
+    for (const SoupTriangle& q : shapes::torus(96, 48, 6, 2)) both.push_back(q);
+    meshes[2] = welded(t, both);
+  }
+};
+
 // The hierarchy and the sweep over boxes (taken when a mesh has more than three vertices a
 // triangle) report the same pairs, first pair and candidates; with max_pairs below the pairs
 // there are, the hierarchy's answer in the sweep's order (the first max_pairs pairs the sweep
@@ -735,12 +761,7 @@ TEST(SelfIntersection, HierarchyAndSweepAgree) {
   std::vector<SoupTriangle> boxes = box_soup(0, 0, 0, 2, 2, 2);
   for (const SoupTriangle& q : box_soup(1, 1, 1, 3, 3, 3)) boxes.push_back(q);
   Mesh pushed = welded(t, shapes::torus(48, 24, 10, 3));
-  std::mt19937_64 rng(5);
-  for (int i = 0; i < 12; ++i) {
-    Vec3& p = pushed.vertices[rng() % pushed.vertices.size()];
-    p = p + Vec3{static_cast<double>(rng() % 9) * 0.5 - 2.0,
-                 static_cast<double>(rng() % 9) * 0.5 - 2.0, static_cast<double>(rng() % 5) - 2.0};
-  }
+  push_vertices(5, 12, &pushed);
   const Mesh meshes[4] = {welded(t, shapes::torus(32, 16, 10, 3)), welded(t, octasphere(12, 4.0)),
                           welded(t, boxes), pushed};
   for (int m = 0; m < 4; ++m) {
@@ -877,17 +898,9 @@ TEST(SelfIntersection, ArenaExhaustionSweep) {
 // with max_pairs below the pairs there are, too.
 TEST(SelfIntersection, SlabsGiveTheSameReportInLessMemory) {
   TestArena t;
-  Mesh torus = welded(t, shapes::torus(96, 48, 10, 3));
-  std::mt19937_64 rng(11);
-  for (int i = 0; i < 30; ++i) {
-    Vec3& p = torus.vertices[rng() % torus.vertices.size()];
-    p = p + Vec3{static_cast<double>(rng() % 9) * 0.5 - 2.0,
-                 static_cast<double>(rng() % 9) * 0.5 - 2.0, static_cast<double>(rng() % 5) - 2.0};
-  }
-  std::vector<SoupTriangle> both = octasphere(40, 5.0);
-  for (const SoupTriangle& q : shapes::torus(96, 48, 6, 2)) both.push_back(q);
-  const Mesh meshes[3] = {welded(t, octasphere(40, 5.0)), torus, welded(t, both)};
-  const char* names[3] = {"octasphere", "pushed torus", "sphere and torus"};
+  const ThreeMeshes three(t);
+  const Mesh* meshes = three.meshes;
+  const char* const* names = ThreeMeshes::kNames;
   std::vector<unsigned char> memory(size_t{8} << 20);
   unsigned char* base = memory.data();
   base += (64 - reinterpret_cast<uintptr_t>(base) % 64) % 64;
@@ -988,23 +1001,14 @@ TEST(SelfIntersection, EmptyMeshBadIndexAndCancellation) {
 
 // The traversal in tasks (more than 8,192 triangles and an executor) gives the report one
 // thread gives, pairs, first pair and candidates, whether it counts all, stops at max_pairs
-// (then the sweep answers) or finds nothing: a clean octasphere of 12,800 triangles, a torus of
+// (then in the sweep's order) or finds nothing: a clean octasphere of 12,800 triangles, a torus of
 // 9,216 with vertices pushed through it, and both in one mesh.
 TEST(SelfIntersection, SameReportAtEveryThreadCount) {
   TestArena t;
-  Mesh sphere = welded(t, octasphere(40, 5.0));
-  Mesh torus = welded(t, shapes::torus(96, 48, 10, 3));
-  ASSERT_GE(torus.triangles.size(), 8192u);
-  std::mt19937_64 rng(11);
-  for (int i = 0; i < 30; ++i) {
-    Vec3& p = torus.vertices[rng() % torus.vertices.size()];
-    p = p + Vec3{static_cast<double>(rng() % 9) * 0.5 - 2.0,
-                 static_cast<double>(rng() % 9) * 0.5 - 2.0, static_cast<double>(rng() % 5) - 2.0};
-  }
-  std::vector<SoupTriangle> both = octasphere(40, 5.0);
-  for (const SoupTriangle& q : shapes::torus(96, 48, 6, 2)) both.push_back(q);
-  const Mesh meshes[3] = {sphere, torus, welded(t, both)};
-  const char* names[3] = {"octasphere", "pushed torus", "sphere and torus"};
+  const ThreeMeshes three(t);
+  const Mesh* meshes = three.meshes;
+  const char* const* names = ThreeMeshes::kNames;
+  ASSERT_GE(meshes[1].triangles.size(), 8192u);
   for (int m = 0; m < 3; ++m) {
     for (uint64_t max_pairs : {uint64_t{0}, uint64_t{1}, uint64_t{7}}) {
       const SelfIntersectionReport one = run(meshes[m], max_pairs);
