@@ -198,6 +198,11 @@ double triangle_pair_distance(const Vec3& a0, const Vec3& a1, const Vec3& a2, co
 // 0 sums every triangle exactly (in leaf order).
 double winding_number(const DistanceIndex& index, const Vec3& q, double beta = 2.0);
 
+// The same number with no index: every triangle's solid angle, exactly as above, summed in
+// triangle order. O(triangles) a query and no memory: cheaper than an index for a handful of
+// queries (the Boolean's classification asks one or two a side).
+double winding_number_direct(const Mesh& mesh, const Vec3& q);
+
 // Signed distance: negative inside. With kPseudonormal the sign is that of
 // (q - closest) . pseudonormal of the closest feature; with kWindingNumber it is inside when
 // the winding number is >= 0.5. Points on the surface get +0. kAuto picks as documented.

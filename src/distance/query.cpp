@@ -603,6 +603,15 @@ double winding_number(const DistanceIndex& index, const Vec3& q, double beta) {
   return sum / kFourPi;
 }
 
+double winding_number_direct(const Mesh& mesh, const Vec3& q) {
+  const Vec3* v = mesh.vertices.data();
+  double sum = 0;
+  for (const Triangle& tri : mesh.triangles) {
+    sum += solid_angle(q, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]);
+  }
+  return sum / kFourPi;
+}
+
 namespace {
 // The sign for q whose closest point is already in out->closest.
 void finish_signed(const DistanceIndex& index, const Vec3& q, SignMethod method,

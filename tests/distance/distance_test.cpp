@@ -1185,6 +1185,8 @@ TEST(DistanceWinding, HierarchicalMatchesExactOnClosedMeshes) {
                       rng.unit() * std::pow(10.0, -rng.uniform(1, 6));
       const double e = winding_number(b->index, p, 0), h = winding_number(b->index, p, 2);
       ASSERT_LT(std::min(std::fabs(e), std::fabs(e - 1)), 1e-9) << c.name;
+      // With no index: the same solid angles in another order.
+      ASSERT_NEAR(winding_number_direct(b->mesh, p), e, 1e-12) << c.name;
       ASSERT_EQ(e >= 0.5, h >= 0.5) << c.name << " exact " << e << " hierarchical " << h;
       ASSERT_LT(std::min(std::fabs(h), std::fabs(h - 1)), 0.25) << c.name;
       worst_near = std::max(worst_near, std::fabs(e - h));
@@ -1224,6 +1226,7 @@ TEST(DistanceWinding, SphereWithAHole) {
     const double w = winding_number(b->index, p), we = winding_number(b->index, p, 0);
     EXPECT_EQ(w >= 0.5, well_inside) << r << " " << w;
     EXPECT_EQ(we >= 0.5, well_inside) << r << " " << we;
+    EXPECT_NEAR(winding_number_direct(b->mesh, p), we, 1e-12) << r;
     SignedDistance sd;
     ASSERT_TRUE(signed_distance(b->index, p, SignMethod::kAuto, &sd));
     EXPECT_EQ(sd.method, SignMethod::kWindingNumber);
@@ -1237,6 +1240,7 @@ TEST(DistanceWinding, SphereWithAHole) {
   const double w = winding_number(b->index, Vec3{0, 0, 0.9 * R}, 0);
   EXPECT_GT(w, 0.1);
   EXPECT_LT(w, 0.9);
+  EXPECT_NEAR(winding_number_direct(b->mesh, Vec3{0, 0, 0.9 * R}), w, 1e-12);
 }
 
 // The real lower half-arch (teeth 17..24), one mesh, 5% of its triangles removed.
