@@ -935,6 +935,14 @@ inline bool skipped(const Vec3* v, const Triangle& tri, bool filters) {
   return collinear3d(a, b, c);
 }
 
+// A triangle the hierarchy keeps (not skipped, with the filters), with its x cells (x_cells):
+// the slabs' histogram and their membership (HierarchyPass::kept_here).
+inline bool kept_x_cells(const Grid& g, const Vec3* v, const Triangle& tri, int* lo, int* hi) {
+  if (skipped(v, tri, true)) return false;
+  x_cells(g, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], lo, hi);
+  return true;
+}
+
 // The sweep over boxes sorted by their x minimum (the original algorithm, and its order of
 // discovery): every pair of non-skipped triangles whose boxes overlap, in that order, stopping
 // at max_pairs. With a grid (coordinates within the range), the candidates are the pairs whose
@@ -1079,12 +1087,9 @@ struct HierarchyPass {
 
   // Is triangle t one of this pass's items?
   bool kept_here(size_t t) const {
-    const Triangle& tri = tris[t];
-    if (skipped(v, tri, true)) return false;
-    if (!in_slab) return true;
+    if (!in_slab) return !skipped(v, tris[t], true);
     int lo, hi;
-    x_cells(grid, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], &lo, &hi);
-    return lo <= slab_hi && hi >= slab_lo;
+    return kept_x_cells(grid, v, tris[t], &lo, &hi) && lo <= slab_hi && hi >= slab_lo;
   }
 
   // 1. The kept triangles counted, the room for their items and Morton codes: these stay
@@ -1724,10 +1729,8 @@ Status hierarchy_in_slabs(const Context& ctx, const Vec3* v, size_t nv, const Tr
   if (lo_below == nullptr || hi_below == nullptr) return arena.exhausted_status();
   for (uint32_t b = 0; b <= bins; ++b) lo_below[b] = hi_below[b] = 0;
   for (size_t t = 0; t < nt; ++t) {
-    const Triangle& tri = tris[t];
-    if (skipped(v, tri, true)) continue;
     int lo, hi;
-    x_cells(grid, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], &lo, &hi);
+    if (!kept_x_cells(grid, v, tris[t], &lo, &hi)) continue;
     ++lo_below[slab_bin(lo, shift, bins) + 1];
     ++hi_below[slab_bin(hi, shift, bins) + 1];
   }

@@ -88,8 +88,7 @@ Result difference(const Mesh& a, const Mesh& b, uint32_t max_nudges) {
   EXPECT_TRUE(find_self_intersections(Context(&arena), out, 1, &si).is_ok());
   EXPECT_FALSE(si.self_intersecting()) << si.first_a << " " << si.first_b;
   r.volume = rep.volume;
-  r.bytes = test::sha256_hex(out.vertices.data(), out.vertices.size() * sizeof(Vec3)) +
-            test::sha256_hex(out.triangles.data(), out.triangles.size() * sizeof(Triangle));
+  r.bytes = test::mesh_sha256(out);
   return r;
 }
 

@@ -407,9 +407,7 @@ TEST(BooleanTest, SameBytesEveryRun) {
     Mesh out;
     SPLINTCORE_ASSERT_OK(
         mesh_boolean(Context(&arena), a, b, opts(BooleanOp::kDifference), &out, nullptr));
-    const std::string h =
-        test::sha256_hex(out.vertices.data(), out.vertices.size() * sizeof(Vec3)) +
-        test::sha256_hex(out.triangles.data(), out.triangles.size() * sizeof(Triangle));
+    const std::string h = test::mesh_sha256(out);
     if (run == 0)
       first = h;
     else
@@ -703,8 +701,7 @@ ThreadedRun threaded_difference(const Vec3& box_hi, unsigned threads, size_t cap
   r.status = mesh_boolean(ctx, a, b, o, &out, &r.stats);
   r.high_water = run.arena.high_water();
   if (r.status.is_ok()) {
-    r.bytes = test::sha256_hex(out.vertices.data(), out.vertices.size() * sizeof(Vec3)) +
-              test::sha256_hex(out.triangles.data(), out.triangles.size() * sizeof(Triangle));
+    r.bytes = test::mesh_sha256(out);
   }
   return r;
 }
@@ -819,8 +816,7 @@ CappedRun sphere_difference(size_t cap) {
   r.status = mesh_boolean(Context(&run.arena), a, b, o, &out, &r.stats);
   r.high_water = run.arena.high_water();
   if (r.status.is_ok()) {
-    r.bytes = test::sha256_hex(out.vertices.data(), out.vertices.size() * sizeof(Vec3)) +
-              test::sha256_hex(out.triangles.data(), out.triangles.size() * sizeof(Triangle));
+    r.bytes = test::mesh_sha256(out);
   }
   return r;
 }

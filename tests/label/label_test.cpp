@@ -101,11 +101,6 @@ MeshReport report_of(TestArena& t, const Mesh& m) {
   return r;
 }
 
-std::string mesh_hash(const Mesh& m) {
-  std::string h = test::sha256_hex(m.vertices.data(), m.vertices.size() * sizeof(Vec3));
-  return h + test::sha256_hex(m.triangles.data(), m.triangles.size() * sizeof(Triangle));
-}
-
 // ---------------------------------------------------------------------------------------------
 // The font.
 
@@ -456,7 +451,7 @@ TEST(LabelTest, SameBytesTwice) {
     TestArena t(size_t{256} << 20);
     Labelled l = run(t, o);
     ASSERT_TRUE(l.status.is_ok()) << test::format(l.status);
-    hashes[i] = mesh_hash(l.mesh);
+    hashes[i] = test::mesh_sha256(l.mesh);
   }
   EXPECT_EQ(hashes[0], hashes[1]);
 }
@@ -472,7 +467,7 @@ TEST(LabelTest, ArenaExhaustionIsCleanAtEveryCapTried) {
     Labelled l = run(t, o);
     ASSERT_TRUE(l.status.is_ok()) << test::format(l.status);
     need = t.arena.high_water();
-    reference = mesh_hash(l.mesh);
+    reference = test::mesh_sha256(l.mesh);
   }
   // Coarse steps over the whole range (each try is a full label), then the exact need.
   for (size_t k = 0; k < 24; ++k) {
@@ -494,7 +489,7 @@ TEST(LabelTest, ArenaExhaustionIsCleanAtEveryCapTried) {
   TestArena t(need);
   Labelled l = run(t, o);
   ASSERT_TRUE(l.status.is_ok()) << test::format(l.status);
-  EXPECT_EQ(mesh_hash(l.mesh), reference);
+  EXPECT_EQ(test::mesh_sha256(l.mesh), reference);
 }
 
 }  // namespace
