@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# Issue 29's table in one run: reading and checking against admesh, the Booleans, and the
-# blockout and spacer of the real case at 0.1 mm in a 64 MiB cap, with peak arena where the
-# program reports one. Each row is measured here, now, by the command named beside it.
+# Issue 29's table in one run: reading and checking against admesh, the Booleans (and the
+# pair from Manifold's bug reports), the blockout and spacer of the real case at 0.1 mm in a
+# 64 MiB cap, with peak arena where the program reports one, and the least cap of the real
+# 4 mm design (a bisection: about a minute more). Each row is measured here, now, by the
+# command named beside it.
 #   bash tools/bench/issue29.sh [BUILD_DIR] [REPEAT] [REALDATA_DIR]
 # Rows that need the real dentition (../shared/realdata) say so and are skipped without it.
 # CGAL and Manifold are not Debian packages with a command-line Boolean: their figures are in
@@ -59,6 +61,29 @@ print("%-46s median %.3f s (min %.3f): read %.3f, Boolean %.3f, check %.3f; B %d
       last["b_triangles"], last["peak_arena_bytes"]))
 PY
 done
+
+echo
+echo "== the pair from Manifold's bug reports (about 20k + 12k triangles): \`boolean --union\`, whole"
+echo "   process, one thread; it must answer, either way, in under a second"
+twin=$realdata/../manifold-bugreports
+if [ -f "$twin/Generic_Twin_7081.1.t0_left.obj" ]; then
+  python3 - "$tool" "$twin" "$repeat" "$work/twin.stl" <<'PY'
+import statistics, subprocess, sys, time
+tool, d, repeat, out = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
+argv = [tool, "boolean", "--union", d + "/Generic_Twin_7081.1.t0_left.obj",
+        d + "/Generic_Twin_7081.1.t0_right.obj", "-o", out]
+wall = []
+for _ in range(repeat):
+    t0 = time.perf_counter()
+    r = subprocess.run(argv, capture_output=True, text=True)
+    wall.append(time.perf_counter() - t0)
+said = "ok" if r.returncode == 0 else (r.stderr.strip().splitlines() or ["?"])[-1][:100]
+print("median %.3f s (min %.3f), exit %d: %s" % (statistics.median(wall), min(wall),
+                                                 r.returncode, said))
+PY
+else
+  echo "no Manifold pair at $twin: skipped"
+fi
 
 echo
 echo "== the paper-scale phantom's sweep at 0.05 mm in 64 MiB (splintcore-bench)"
@@ -144,4 +169,49 @@ for name, blockout in rows:
         used, ", the exact sweep stopped" if "blockout_fallback" in rep["checks"] else "")
     print("%-36s %9.3f %14s %11s  ok%s" % (name, wall, find(rep, "peak_arena_bytes"),
                                           rep.get("output", {}).get("triangles"), how))
+PY
+
+# The least --memory-cap the real 4 mm design runs in, by bisection (each run about 7 s), with
+# the splint's bytes checked against the run at 1G at every cap that works: the bytes must not
+# depend on the cap, and every cap above one that works must work (issue 29's 64 MiB goal).
+echo
+echo "== the real case, base 4 mm deep, default blockout: the least --memory-cap that works"
+python3 - "$tool" "$work/case" <<'PY'
+import hashlib, json, os, subprocess, sys
+tool, case = sys.argv[1], sys.argv[2]
+c = json.load(open(os.path.join(case, "c.json")))
+c["base"]["auto"]["indentation_depth_mm"] = 4
+c["blockout"] = {}
+path = os.path.join(case, "deep4.json")
+json.dump(c, open(path, "w"))
+def run(cap):
+    out = os.path.join(case, "least")
+    r = subprocess.run([tool, "design", path, "-o", out, "--memory-cap", str(cap)],
+                       capture_output=True, text=True)
+    if r.returncode != 0:
+        return None, None
+    rep = json.load(open(os.path.join(out, "report.json")))
+    return hashlib.sha256(open(os.path.join(out, "splint.stl"), "rb").read()).hexdigest(), rep
+ample, rep = run(1 << 30)
+if ample is None:
+    print("fails at 1G")
+    sys.exit(0)
+peak = rep["run"]["peak_arena_bytes"]
+lo, hi = 64 << 20, peak  # fails (or is the goal), works
+first, _ = run(lo)
+if first is not None:
+    print("works at 64 MiB: %s" % ("the same bytes" if first == ample else "DIFFERENT BYTES"))
+    sys.exit(0)
+while hi - lo > (256 << 10):
+    mid = (lo + hi) // 2
+    h, _ = run(mid)
+    if h is not None and h != ample:
+        print("DIFFERENT BYTES at %d" % mid)
+        sys.exit(1)
+    if h is None:
+        lo = mid
+    else:
+        hi = mid
+print("peak at 1G %d B (splint %s...); least cap %d B (within 256 KiB), fails at 64 MiB" % (
+    peak, ample[:8], hi))
 PY
