@@ -638,18 +638,23 @@ Status BooleanRun::find_hits() {
 // The slots of A (about 470 bytes per triangle of A near B, a fifth of the blockout's Boolean
 // on the real dentition) are done with once the hits are found: when the hits are all that
 // lies above them (no contact recorded, and all in the arena's block of `slots_at`), the hits
-// move down over them, with the same capacity, and the rest of the run has that room.
+// move down over them, and the rest of the run has that room. Nothing is added to the hits
+// after this, so they keep no spare capacity (push_back's growth left up to a third of them):
+// otherwise it is given back where they lie when they are the arena's top.
 void BooleanRun::hits_over_slots(const Arena::Marker& slots_at) {
-  if (deg_.data() != nullptr || alias_ != nullptr || arena_.mark().block != slots_at.block) return;
-  const size_t size = hits_.size(), capacity = hits_.capacity();
+  if (deg_.data() != nullptr || alias_ != nullptr || arena_.mark().block != slots_at.block) {
+    hits_.shrink_to_fit();
+    return;
+  }
+  const size_t size = hits_.size();
   const Hit* old = hits_.data();
   arena_.rewind(slots_at);
   hits_.bind(&arena_);
-  if (capacity == 0) return;
-  Hit* moved = arena_.allocate_array<Hit>(capacity);  // where the slots began: it fits
+  if (size == 0) return;
+  Hit* moved = arena_.allocate_array<Hit>(size);  // where the slots began: it fits
   SPLINTCORE_ASSERT(moved != nullptr && moved <= old);
   std::memmove(static_cast<void*>(moved), old, size * sizeof(Hit));
-  hits_.adopt(moved, size, capacity);
+  hits_.adopt(moved, size, size);
 }
 
 namespace {

@@ -1278,7 +1278,12 @@ Status BooleanRun::split_with_merges() {
     const Arena::Marker mark = arena_.mark();
     n_noted_ = 0;
     const Status s = split_triangles();
-    if (n_noted_ == 0 || s.code() == StatusCode::kArenaExhausted) return s;
+    if (n_noted_ == 0 || s.code() == StatusCode::kArenaExhausted) {
+      // The room reserved for the pieces is their most (piece_room); what they left of it
+      // goes back before classify and assemble allocate above them.
+      tris_.shrink_to_fit();
+      return s;
+    }
     // Had the points been refused, this first failure would have been the end.
     if (round == 0 && unmerged_.is_ok()) unmerged_ = s;
     if (round + 1 == kRounds || noted_overflow_) return s;
