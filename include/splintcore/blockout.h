@@ -129,6 +129,9 @@ struct SweepStats {
   uint64_t corrected_samples = 0;      // inside samples given an extrapolated value
   uint64_t cap_triangles_dropped = 0;  // open_at_region: the caps' triangles left out
   uint64_t filtered_triangles = 0;     // keep_triangle: the other triangles it left out
+  // keep_triangle: the kept triangles' log at its end (12 bytes a triangle, 16 a vertex each
+  // time it is logged: once, or again when the log's cache had forgotten it).
+  uint64_t log_bytes = 0;
   // keep_triangle: the extraction ran again with the full id pool (a layer crossed more edges
   // than the quarter of it the first run has; the bytes are the same either way).
   bool full_id_pool = false;
@@ -326,9 +329,11 @@ struct BlockoutStats {
 // splint's box grown by two cells and the splint's distance index (distance_index_bound), the
 // sweep's state and extractor (a slab of one layer beside the carried one), a batch of
 // kSweepKeepBatch triangles waiting for the filter (49 bytes each) and four copies of its
-// window (1,024 ids and boxes, 52 KB each; the filter runs in the executor's tasks), the kept swept
-// triangles logged above it (48 bytes each), then 4 bytes per extracted
-// vertex and the swept mesh, moved down over the cells and the index; then the Boolean's; only
+// window (1,024 ids and boxes, 52 KB each; the filter runs in the executor's tasks), a 64 KB
+// cache of the vertices logged, the kept swept triangles logged above it (12 bytes each, and
+// 16 for each vertex the first time a kept triangle uses it: about 20 bytes a triangle), then
+// 4 bytes per extracted vertex and the swept mesh, moved down over the cells and the index;
+// then the Boolean's; only
 // `out` stays (moved down to where the arena's top was). Errors: those of sweep_volume_mesh and
 // mesh_boolean (the latter prefixed "blockout:", and when retries ran and all failed "blockout:
 // all N attempts failed (the swept surface inset A to B mm); the last: " and the last one's

@@ -992,29 +992,53 @@ MarchingCubesOptions extraction_options(const Sweep& s, const SweepOptions& o) {
 // --- the open surface filtered in the stream (SweepOptions::keep_triangle) ---------------------
 //
 // The extractor's triangles are tested as they come: those beyond the grid (the caps, as
-// drop_caps()) and those keep_triangle() refuses are left out; the rest are logged with their
-// extractor ids and corners (jaws' frame, float32) in one array growing above the extractor's
-// working set. After the extraction the log is moved down to the arena's top, the kept
-// vertices are numbered by first use (a map of the extractor's ids) and the mesh is built
-// above it, triangles before vertices, to be moved down (move_mesh_down).
+// drop_caps()) and those keep_triangle() refuses are left out; the rest are logged in one
+// array of 32-bit words growing above the extractor's working set: a kept triangle as its
+// three extractor ids, each new vertex's corner (jaws' frame, float32) before the first kept
+// triangle that uses it, as [id | kVertexTag, x, y, z]. "New" is as far as a direct-mapped
+// cache of the ids logged recently knows (kSeenSlots): a vertex it has forgotten is logged
+// again, with the same bits (the extractor gives a vertex the same corner in every triangle).
+// About 20 bytes a kept triangle, where its ids and three corners took 48. After the
+// extraction the log is moved down to the arena's top, the kept vertices are numbered by
+// first use (a map of the extractor's ids) and the mesh is built above it, triangles before
+// vertices, to be moved down (move_mesh_down).
 
 struct KeptTriangle {
   uint32_t v[3];
   float p[9];
 };
 
+constexpr uint32_t kVertexTag = 0x80000000u;  // a log word that starts a vertex's record
+constexpr uint32_t kSeenSlots = 1u << 14;     // the cache of logged vertices (64 KB)
+
 struct KeepLog {
   const Sweep* s = nullptr;
   const SweepOptions* o = nullptr;
-  Vec3 lo{}, hi{};  // the extracted grid's box (local frame)
-  ArenaArray<KeptTriangle> kept;
+  Vec3 lo{}, hi{};             // the extracted grid's box (local frame)
+  ArenaArray<uint32_t> words;  // the log (see the top)
   uint64_t caps = 0, left_out = 0;
   // The triangles waiting for keep_triangle (kSweepKeepBatch, from the arena before the
-  // extraction) and its answers.
+  // extraction) and its answers (bit 0; bits 1-3: which corners' vertices go in the log).
   KeptTriangle* batch = nullptr;
   uint8_t* keep = nullptr;
   uint32_t waiting = 0;
+  uint32_t* seen = nullptr;  // kSeenSlots: id + 1 of a vertex logged, at id's slot; 0: none
 };
+
+// Marks the corners of kept triangle k whose vertices the log does not hold yet (as far as
+// the cache knows) in bits 1-3 of *flags, and notes them logged; their words (3 for the
+// triangle, 4 for each such vertex).
+inline uint32_t note_new_corners(KeepLog& log, const KeptTriangle& k, uint8_t* flags) {
+  uint32_t words = 3;
+  for (int i = 0; i < 3; ++i) {
+    uint32_t& slot = log.seen[k.v[i] & (kSeenSlots - 1)];
+    if (slot == k.v[i] + 1) continue;
+    slot = k.v[i] + 1;
+    *flags = static_cast<uint8_t>(*flags | (2u << i));
+    words += 4;
+  }
+  return words;
+}
 
 inline Vec3 kept_corner(const KeptTriangle& k, int i) {
   return Vec3{static_cast<double>(k.p[3 * i]), static_cast<double>(k.p[3 * i + 1]),
@@ -1046,15 +1070,28 @@ Status flush_batch(KeepLog& log) {
   };
   parallel_for_each(runs > 1 ? ex : nullptr, runs, run);
   log.waiting = 0;
-  size_t at = log.kept.size();
-  size_t keeping = 0;
-  for (uint32_t i = 0; i < n; ++i) keeping += log.keep[i];
+  size_t at = log.words.size();
+  size_t keeping = 0, words = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    if (log.keep[i] == 0) continue;
+    ++keeping;
+    words += note_new_corners(log, log.batch[i], &log.keep[i]);
+  }
   log.left_out += n - keeping;
   // Grown to the exact size (in place: the log is the arena's top during the extraction), so
   // the arena's high water depends on the input alone, never on the room there was.
-  if (!log.kept.resize(at + keeping)) return log.kept.arena()->exhausted_status();
+  if (!log.words.resize(at + words)) return log.words.arena()->exhausted_status();
+  uint32_t* w = log.words.data();
   for (uint32_t i = 0; i < n; ++i) {
-    if (log.keep[i] != 0) log.kept[at++] = log.batch[i];
+    if (log.keep[i] == 0) continue;
+    const KeptTriangle& k = log.batch[i];
+    for (int c = 0; c < 3; ++c) {
+      if ((log.keep[i] & (2u << c)) == 0) continue;
+      w[at++] = k.v[c] | kVertexTag;
+      std::memcpy(w + at, k.p + 3 * c, 3 * sizeof(float));
+      at += 3;
+    }
+    for (int c = 0; c < 3; ++c) w[at++] = k.v[c];
   }
   return Status::ok();
 }
@@ -1085,6 +1122,10 @@ Status log_kept(void* user, const Triangle& t, const Vec3& a, const Vec3& b, con
   // values as w).
   KeptTriangle& k = log.batch[log.waiting++];
   for (int i = 0; i < 3; ++i) {
+    if (t.v[i] >= kVertexTag) {
+      return make_error(StatusCode::kLimitExceeded,
+                        "sweep: more than 2^31 vertices extracted (a coarser voxel?)");
+    }
     k.v[i] = t.v[i];
     k.p[3 * i] = static_cast<float>(w[i].x);
     k.p[3 * i + 1] = static_cast<float>(w[i].y);
@@ -1093,15 +1134,19 @@ Status log_kept(void* user, const Triangle& t, const Vec3& a, const Vec3& b, con
   return log.waiting == kSweepKeepBatch ? flush_batch(log) : Status::ok();
 }
 
-// The logged triangles (above the arena's top) as a mesh above it: triangles, then vertices.
-// Memory: the log moved down (48 bytes a kept triangle), 4 bytes per extractor vertex, the
-// mesh (12 bytes a triangle, 24 a vertex).
+// The log (above the arena's top) as a mesh above it: triangles, then vertices. Memory: the log
+// moved down (about 20 bytes a kept triangle), 4 bytes per extractor vertex, the mesh (12 bytes a
+// triangle, 24 a vertex).
 Status build_kept_mesh(Arena& arena, const KeepLog& log, uint64_t extractor_vertices, Mesh* mesh) {
-  const size_t n = log.kept.size();
-  KeptTriangle* recs = arena.allocate_array<KeptTriangle>(n > 0 ? n : 1);
-  if (recs == nullptr) return arena.exhausted_status();
-  if (n > 0 && recs != log.kept.data()) {
-    std::memmove(static_cast<void*>(recs), log.kept.data(), n * sizeof(KeptTriangle));
+  const size_t nw = log.words.size();
+  uint32_t* w = arena.allocate_array<uint32_t>(nw > 0 ? nw : 1);
+  if (w == nullptr) return arena.exhausted_status();
+  if (nw > 0 && w != log.words.data()) {
+    std::memmove(static_cast<void*>(w), log.words.data(), nw * sizeof(uint32_t));
+  }
+  size_t n = 0;
+  for (size_t i = 0; i < nw; i += (w[i] & kVertexTag) != 0 ? 4 : 3) {
+    n += (w[i] & kVertexTag) != 0 ? 0 : 1;
   }
   const size_t nv = static_cast<size_t>(extractor_vertices);
   uint32_t* remap = arena.allocate_array<uint32_t>(nv > 0 ? nv : 1);
@@ -1109,22 +1154,34 @@ Status build_kept_mesh(Arena& arena, const KeepLog& log, uint64_t extractor_vert
   if (remap == nullptr || tris == nullptr) return arena.exhausted_status();
   for (size_t i = 0; i < nv; ++i) remap[i] = ~uint32_t{0};
   uint32_t next = 0;
-  for (size_t t = 0; t < n; ++t) {
-    for (int k = 0; k < 3; ++k) {
-      SPLINTCORE_ASSERT(recs[t].v[k] < nv);
-      uint32_t& id = remap[recs[t].v[k]];
+  size_t t = 0;
+  for (size_t i = 0; i < nw;) {
+    if ((w[i] & kVertexTag) != 0) {
+      i += 4;
+      continue;
+    }
+    for (int k = 0; k < 3; ++k, ++i) {
+      SPLINTCORE_ASSERT(w[i] < nv);
+      uint32_t& id = remap[w[i]];
       if (id == ~uint32_t{0}) id = next++;
       tris[t].v[k] = id;
     }
+    ++t;
   }
   Vec3* verts = arena.allocate_array<Vec3>(next > 0 ? next : 1);
   if (verts == nullptr) return arena.exhausted_status();
-  for (size_t t = 0; t < n; ++t) {
-    for (int k = 0; k < 3; ++k) {
-      const float* q = recs[t].p + 3 * k;
-      verts[tris[t].v[k]] =
-          Vec3{static_cast<double>(q[0]), static_cast<double>(q[1]), static_cast<double>(q[2])};
+  for (size_t i = 0; i < nw;) {
+    if ((w[i] & kVertexTag) == 0) {
+      i += 3;
+      continue;
     }
+    const uint32_t id = w[i] & ~kVertexTag;
+    SPLINTCORE_ASSERT(id < nv && remap[id] != ~uint32_t{0});  // a triangle after it uses it
+    float q[3];
+    std::memcpy(q, w + i + 1, sizeof q);
+    verts[remap[id]] =
+        Vec3{static_cast<double>(q[0]), static_cast<double>(q[1]), static_cast<double>(q[2])};
+    i += 4;
   }
   mesh->triangles.adopt(tris, n, n);
   mesh->vertices.adopt(verts, next, next);
@@ -1145,8 +1202,12 @@ Status extract_kept(Sweep& s, const SweepOptions& o, uint64_t pool_share, Mesh* 
                 g.origin.z + g.spacing.z * (g.nz - 1.0)};
   log.batch = arena.allocate_array<KeptTriangle>(kSweepKeepBatch);
   log.keep = arena.allocate_array<uint8_t>(kSweepKeepBatch);
-  if (log.batch == nullptr || log.keep == nullptr) return arena.exhausted_status();
-  log.kept.bind(&arena);
+  log.seen = arena.allocate_array<uint32_t>(kSeenSlots);
+  if (log.batch == nullptr || log.keep == nullptr || log.seen == nullptr) {
+    return arena.exhausted_status();
+  }
+  std::memset(log.seen, 0, kSeenSlots * sizeof(uint32_t));
+  log.words.bind(&arena);
   MarchingCubesVisitor visitor;
   visitor.triangle = log_kept;
   visitor.layer_done = flush_layer;
@@ -1158,6 +1219,7 @@ Status extract_kept(Sweep& s, const SweepOptions& o, uint64_t pool_share, Mesh* 
   SPLINTCORE_ASSERT(log.waiting == 0);  // flushed at each layer's end
   st->cap_triangles_dropped = log.caps;
   st->filtered_triangles = log.left_out;
+  st->log_bytes = log.words.size() * sizeof(uint32_t);
   return build_kept_mesh(arena, log, st->extraction.vertices, mesh);
 }
 

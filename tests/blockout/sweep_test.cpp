@@ -630,6 +630,34 @@ TEST(Sweep, FilteredSweepRunsAgainWithTheFullIdPoolWhenALayerNeedsIt) {
                            triangles[0].size() * sizeof(Triangle)));
 }
 
+TEST(Sweep, FilteredLogGivesTheUnfilteredSurfaceWhenItKeepsAll) {
+  // The filtered sweep logs each vertex's corner once (or again when the log's cache has
+  // forgotten it): keeping every triangle, the mesh is the unfiltered variant's with its
+  // corners rounded to float32 (SweepOptions::keep_triangle), byte for byte, here with more
+  // vertices than the cache has slots.
+  TestArena ta(size_t{512} << 20);
+  Context ctx(&ta.arena);
+  const float lo[3] = {-4, -4, 0}, hi[3] = {4, 4, 1};
+  Mesh slab = box_mesh(&ta.arena, lo, hi);
+  SweepOptions o = filtered_slab_options(Vec3{0, 0, -1}, 0.02, keep_all);
+  Mesh kept(&ta.arena);
+  SweepStats st;
+  SPLINTCORE_ASSERT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(&slab, 1), o, &kept, &st));
+  EXPECT_EQ(st.filtered_triangles, 0u);
+  ASSERT_GT(kept.vertices.size(), size_t{1} << 15);
+  // Every vertex at least once, each record 16 bytes; under half the 48 bytes a triangle the
+  // log took when it held every triangle's corners.
+  const uint64_t tri_bytes = 12 * kept.triangles.size();
+  EXPECT_GE(st.log_bytes, tri_bytes + 16 * kept.vertices.size());
+  EXPECT_EQ((st.log_bytes - tri_bytes) % 16, 0u);
+  EXPECT_LT(st.log_bytes, 2 * tri_bytes);
+  o.keep_triangle = nullptr;
+  Mesh all(&ta.arena);
+  SPLINTCORE_ASSERT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(&slab, 1), o, &all, nullptr));
+  for (Vec3& p : all.vertices) ASSERT_TRUE(round_to_float32(&p));
+  EXPECT_EQ(test::mesh_sha256(kept), test::mesh_sha256(all));
+}
+
 #if defined(SPLINTCORE_WITH_PLATFORM)
 // A filter that keeps the triangles left of x = 0.3 and counts its calls (one user a task).
 struct CountingFilter {
