@@ -417,6 +417,17 @@ Status copy_near_b(Arena& arena, const Mesh& b, boolean_detail::Broadphase* bp, 
   return Status::ok();
 }
 
+// Is A, moved by d and rounded to float32, A itself, bit for bit (d zero, A's coordinates
+// float32 values, none of them -0.0, which adding +0.0 makes +0.0)?
+bool moves_to_itself(const Mesh& a, const Vec3& d) {
+  if (d.x != 0 || d.y != 0 || d.z != 0) return false;
+  for (const Vec3& v : a.vertices) {
+    Vec3 p = v + d;
+    if (!round_to_float32(&p) || std::memcmp(&p, &v, sizeof(Vec3)) != 0) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
@@ -464,26 +475,26 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
     Mesh moved;
     const Mesh* pa = &a;
     // For STL output A is used as it will be written: rounded to float32 (a no-op for A read
-    // from STL), after the nudge (a nudge can carry a coordinate into a coarser binade).
-    if (attempt > 0 || options.float32_output) {
-      const Vec3 d{attempt * step, 3.0 * attempt * step, 7.0 * attempt * step};
-      moved.bind(&arena);
-      if (!moved.vertices.reserve(a.vertices.size()) ||
-          !moved.triangles.reserve(a.triangles.size())) {
+    // from STL, which is then used as it is), after the nudge (a nudge can carry a coordinate
+    // into a coarser binade). The moved A shares A's triangles: only its vertices are new.
+    const Vec3 d{attempt * step, 3.0 * attempt * step, 7.0 * attempt * step};
+    if (attempt > 0 || (options.float32_output && !moves_to_itself(a, d))) {
+      Vec3* v = arena.allocate_array<Vec3>(a.vertices.size());
+      if (v == nullptr && !a.vertices.empty()) {
         s = arena.exhausted_status();
         break;
       }
       bool in_range = true;
-      for (const Vec3& v : a.vertices) {
-        Vec3 p = v + d;
+      for (size_t i = 0; i < a.vertices.size(); ++i) {
+        Vec3 p = a.vertices[i] + d;
         if (options.float32_output) in_range = round_to_float32(&p) && in_range;
-        (void)moved.vertices.push_back(p);
+        v[i] = p;
       }
       if (!in_range) {
         s = Status::error(StatusCode::kLimitExceeded, "A has a coordinate beyond float32 range");
         break;
       }
-      for (const Triangle& t : a.triangles) (void)moved.triangles.push_back(t);
+      moved = mesh_view(Span<const Vec3>(v, a.vertices.size()), a.triangles.span());
       pa = &moved;
       stats->nudge = d;
       stats->nudge_sum = d;
