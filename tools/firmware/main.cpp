@@ -39,7 +39,7 @@ using namespace splintcore;
 constexpr size_t kStlBufferBytes = 4096;  // the STL writer's chunk (from the arena)
 #if defined(SPLINTCORE_FIRMWARE_WITH_JAWS)
 constexpr size_t kStlReadChunkBytes = 8192;
-// The grid of issue 29's firmware row (the case format allows 0.01 .. 1 mm): about 16.4 MB at
+// The grid of issue 29's firmware row (the case format allows 0.01 .. 1 mm): about 14.0 MB at
 // its peak, in the board's 16 MiB PSRAM (docs/embedding.md).
 constexpr double kBlockoutVoxelMm = 0.1;
 #endif
