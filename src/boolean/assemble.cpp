@@ -421,9 +421,18 @@ Status copy_near_b(Arena& arena, const Mesh& b, boolean_detail::Broadphase* bp, 
 // float32 values, none of them -0.0, which adding +0.0 makes +0.0)?
 bool moves_to_itself(const Mesh& a, const Vec3& d) {
   if (d.x != 0 || d.y != 0 || d.z != 0) return false;
+  const auto same_bits = [](double x, double y) {
+    uint64_t bx, by;
+    std::memcpy(&bx, &x, sizeof bx);
+    std::memcpy(&by, &y, sizeof by);
+    return bx == by;
+  };
   for (const Vec3& v : a.vertices) {
     Vec3 p = v + d;
-    if (!round_to_float32(&p) || std::memcmp(&p, &v, sizeof(Vec3)) != 0) return false;
+    if (!round_to_float32(&p) || !same_bits(p.x, v.x) || !same_bits(p.y, v.y) ||
+        !same_bits(p.z, v.z)) {
+      return false;
+    }
   }
   return true;
 }
@@ -479,8 +488,8 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
     // into a coarser binade). The moved A shares A's triangles: only its vertices are new.
     const Vec3 d{attempt * step, 3.0 * attempt * step, 7.0 * attempt * step};
     if (attempt > 0 || (options.float32_output && !moves_to_itself(a, d))) {
-      Vec3* v = arena.allocate_array<Vec3>(a.vertices.size());
-      if (v == nullptr && !a.vertices.empty()) {
+      Vec3* v = arena.allocate_array<Vec3>(a.vertices.empty() ? 1 : a.vertices.size());
+      if (v == nullptr) {
         s = arena.exhausted_status();
         break;
       }
