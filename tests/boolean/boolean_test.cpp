@@ -433,29 +433,16 @@ TEST(BooleanTest, ArenaExhaustionIsCleanAtEveryCap) {
   }
   // Below its ample peak a run fails cleanly, or (its final check in slabs, its hits in
   // batches) gives the same bytes; once it works, every larger cap works.
-  int failures = 0;
-  size_t first_success = 0;
-  for (size_t cap = 0; cap < need; cap += (need / 300) + 1) {
-    std::vector<unsigned char> buf(cap + 1);
-    Arena small(buf.data(), cap);
-    Mesh out;
-    Status s = mesh_boolean(Context(&small), a, b, opts(BooleanOp::kDifference), &out, nullptr);
-    if (s.is_ok()) {
-      if (first_success == 0) first_success = cap;
-      EXPECT_EQ(test::mesh_sha256(out), want) << cap;
-      continue;
-    }
-    EXPECT_EQ(first_success, 0u) << "failed at " << cap << " after working at " << first_success;
-    EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << cap << test::format(s);
-    EXPECT_EQ(small.used(), 0u);
-    ++failures;
-  }
+  const test::CapsTried c = test::expect_clean_or_same(
+      test::caps_below(need, need / 300 + 1), want, [&](Arena& small, Mesh* out) {
+        return mesh_boolean(Context(&small), a, b, opts(BooleanOp::kDifference), out, nullptr);
+      });
   std::vector<unsigned char> buf(need);
   Arena exact(buf.data(), need);
   Mesh out;
   SPLINTCORE_EXPECT_OK(
       mesh_boolean(Context(&exact), a, b, opts(BooleanOp::kDifference), &out, nullptr));
-  EXPECT_GT(failures, 100);
+  EXPECT_GT(c.failed, 100);
 }
 
 TEST(BooleanTest, RejectsOpenA) {

@@ -286,29 +286,14 @@ TEST(DesignFusion, ArenaExhaustionIsCleanAtEveryCapTried) {
   // Below the ample peak (one byte under it too): a clean failure that leaves the arena as it
   // was, or (the self-intersection check in slabs) the same splint; once a cap works, every
   // larger one does.
-  int failed = 0;
-  size_t first_success = 0;
-  const auto try_cap = [&](size_t cap) {
-    std::vector<unsigned char> buf(cap + 1);
-    Arena small(buf.data(), cap);
-    Mesh splint;
+  std::vector<size_t> caps = test::caps_below(need, need / 12 + 1);
+  caps.push_back(need - 1);
+  const test::CapsTried c = test::expect_clean_or_same(caps, want, [&](Arena& a, Mesh* splint) {
     DesignReport r;
-    const Status s = design_splint(Context(&small), f.c, Span<const Mesh>(f.jaws, 2),
-                                   Span<const Mesh>(f.scans, 2), &splint, &r);
-    if (s.is_ok()) {
-      if (first_success == 0) first_success = cap;
-      EXPECT_EQ(test::mesh_sha256(splint), want) << cap;
-      return;
-    }
-    ++failed;
-    EXPECT_EQ(first_success, 0u) << "failed at " << cap << " after working at " << first_success;
-    ASSERT_EQ(s.code(), StatusCode::kArenaExhausted) << cap << " " << test::format(s);
-    EXPECT_EQ(small.used(), 0u);
-    EXPECT_TRUE(splint.triangles.empty());
-  };
-  for (size_t cap = 0; cap < need; cap += need / 12 + 1) try_cap(cap);
-  try_cap(need - 1);
-  EXPECT_GE(failed, 9) << "the design worked at " << first_success << " of " << need;
+    return design_splint(Context(&a), f.c, Span<const Mesh>(f.jaws, 2),
+                         Span<const Mesh>(f.scans, 2), splint, &r);
+  });
+  EXPECT_GE(c.failed, 9) << "the design worked at " << c.first_success << " of " << need;
   std::vector<unsigned char> buf(need);
   Arena exact(buf.data(), need);
   Mesh splint;

@@ -120,34 +120,19 @@ TEST(DesignPipeline, ArenaExhaustionIsCleanAtEveryCapTried) {
   // Below the ample peak: a clean failure that leaves the arena as it was, or (a stage that
   // works in less when it must: the self-intersection check in slabs) the same splint; once a
   // cap works, every larger one does.
-  int tried = 0, failed = 0;
-  size_t first_success = 0;
-  for (size_t cap = 0; cap < need; cap += need / 40 + 1) {
-    std::vector<unsigned char> buf(cap + 1);
-    Arena small(buf.data(), cap);
-    Mesh splint;
-    DesignReport r;
-    Status s = design_splint(Context(&small), f.c, Span<const Mesh>(f.jaws, 2), &splint, &r);
-    ++tried;
-    if (s.is_ok()) {
-      if (first_success == 0) first_success = cap;
-      EXPECT_EQ(test::mesh_sha256(splint), want) << cap;
-      continue;
-    }
-    ++failed;
-    EXPECT_EQ(first_success, 0u) << "failed at " << cap << " after working at " << first_success;
-    ASSERT_EQ(s.code(), StatusCode::kArenaExhausted) << cap << " " << test::format(s);
-    EXPECT_EQ(small.used(), 0u);
-    EXPECT_TRUE(splint.triangles.empty());
-  }
-  EXPECT_GE(failed, 30) << "the design worked at " << first_success << " of " << need;
+  const test::CapsTried c = test::expect_clean_or_same(
+      test::caps_below(need, need / 40 + 1), want, [&](Arena& a, Mesh* splint) {
+        DesignReport r;
+        return design_splint(Context(&a), f.c, Span<const Mesh>(f.jaws, 2), splint, &r);
+      });
+  EXPECT_GE(c.failed, 30) << "the design worked at " << c.first_success << " of " << need;
   std::vector<unsigned char> buf(need);
   Arena exact(buf.data(), need);
   Mesh splint;
   DesignReport r;
   SPLINTCORE_EXPECT_OK(
       design_splint(Context(&exact), f.c, Span<const Mesh>(f.jaws, 2), &splint, &r));
-  EXPECT_GE(tried, 40);
+  EXPECT_GE(c.tried, 40);
 }
 
 }  // namespace

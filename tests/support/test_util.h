@@ -196,6 +196,49 @@ inline std::string mesh_sha256(const Mesh& m) {
          sha256_hex(m.triangles.data(), m.triangles.size() * sizeof(Triangle));
 }
 
+// What a run at caps below its ample peak did (expect_clean_or_same).
+struct CapsTried {
+  int tried = 0;
+  int failed = 0;
+  size_t first_success = 0;  // the first cap that worked, 0 if none did
+};
+
+// Runs `run(arena, &mesh)` in an arena of each cap of `caps` (ascending, each below the ample
+// run's peak). Each run must fail cleanly (kArenaExhausted, the arena as it was, no triangles)
+// or, where a stage works in less when it must (the self-intersection check in slabs, the
+// Boolean's hits in batches), give the ample run's mesh (mesh_sha256 `want`); once a cap works,
+// every larger one must.
+template <class Run>
+CapsTried expect_clean_or_same(const std::vector<size_t>& caps, const std::string& want, Run run) {
+  CapsTried c;
+  for (const size_t cap : caps) {
+    std::vector<unsigned char> buf(cap + 1);
+    Arena small(buf.data(), cap);
+    Mesh out;
+    const Status s = run(small, &out);
+    ++c.tried;
+    if (s.is_ok()) {
+      if (c.first_success == 0) c.first_success = cap;
+      EXPECT_EQ(mesh_sha256(out), want) << "cap " << cap;
+      continue;
+    }
+    ++c.failed;
+    EXPECT_EQ(c.first_success, 0u)
+        << "failed at " << cap << " after working at " << c.first_success;
+    EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << "cap " << cap << ": " << format(s);
+    EXPECT_EQ(small.used(), 0u) << "cap " << cap;
+    EXPECT_TRUE(out.triangles.empty()) << "cap " << cap;
+  }
+  return c;
+}
+
+// 0, step, 2 step... up to but not including `end`.
+inline std::vector<size_t> caps_below(size_t end, size_t step) {
+  std::vector<size_t> caps;
+  for (size_t cap = 0; cap < end; cap += step) caps.push_back(cap);
+  return caps;
+}
+
 inline std::vector<uint8_t> read_file_bytes(const std::string& path) {
   std::vector<uint8_t> out;
   std::FILE* f = std::fopen(path.c_str(), "rb");
