@@ -5,7 +5,7 @@
 #   SPLINTCORE_COVERAGE_FILTER='-Realdata|Meshlab' bash tools/coverage.sh   (gtest filter)
 #   bash tools/coverage.sh --report build-dir   the report alone, from the profiles a test run
 #                                               of an instrumented build left there (the
-#                                               clang-O0 job of tools/test.sh: it is built with
+#                                               asan job of tools/test.sh: it is built with
 #                                               coverage_flags below and runs ctest with
 #                                               LLVM_PROFILE_FILE=build-dir/coverage-%4m.profraw)
 # Prints llvm-cov's per-file report for src/ (lines, regions, branches), then the parsers'

@@ -30,9 +30,9 @@
 #                                  peak arena (about 4 min for both)
 #   bash tools/test.sh coverage    llvm-cov line and branch coverage per file (tools/coverage.sh);
 #                                  fails when a parser is under 95% branch coverage. In the
-#                                  default list the clang-O0 job is built instrumented and
-#                                  gives this report from its own test run (about 2-3
-#                                  min from a clean build dir on a quiet machine)
+#                                  default list the asan job is built instrumented and gives
+#                                  this report from its own test run (about 2-3 min from a
+#                                  clean build dir on a quiet machine)
 # Optional jobs, not in the default list (cross builds run under qemu-user, about 27 min):
 #   bash tools/test.sh aarch64 armv7
 #   bash tools/test.sh tsan        ThreadSanitizer: the executor's tests and the tool at 2
@@ -70,33 +70,22 @@ realdata_tests='RealData\.|\.Real[A-Z]'
 # The experimental sweep decimation's bytes across slab sizes and threads, and its blockout
 # under the independent line check, run at -O2 only (gcc-O2, and clang-O2 for the bytes): at -O0
 # and under ASan they were the longest tests (132 s and 124 s at clang -O0, 66 s and 40 s under
-# ASan), and the decimation's own arena test still runs under ASan. The clang -O0 build also
-# leaves the QEM decimation's two distance properties and that arena test to ASan and -O2 (50,
-# 22 and 30 s there): the build is for coverage, and they are not parsers'.
+# ASan), and the decimation's own arena test still runs under ASan.
 slow_decimation='^SweepDecimate\.SameBytes|^Blockout\.DecimatedSweep'
-# The clang -O0 job (coverage, and clang's -O0 bytes) also leaves to gcc-O2 and ASan the
-# longest tests that neither pin bytes nor reach a parser: arena bounds of the whole design,
-# the blockout's oracles, the outline's bite and the automatic registration (8-27 s each there,
-# about 150 s of test time, 75 s of the job's wall clock on two cores).
-slow_geometry='^BoundTwoStep\.DesignBooleanBlockoutLabel$|^BoundExact\.(DecimateQem|BuildDistanceIndex)$'
-slow_geometry="$slow_geometry|^BlockoutMeshLab\.SweptVolume|^Blockout\.IndependentCheckFinds"
-slow_geometry="$slow_geometry|^Outline\.(RunsInItsBound|BiteOpensToTheExactDistance)"
-slow_geometry="$slow_geometry|^DesignPipeline\.AutoBlockout|^DesignOpenScans\.PhantomScansOfBoth"
-slow_geometry="$slow_geometry|^Register\.AutomaticStartRecovers|^Blockout\.WhenEveryRetryFails"
-slow_at_clang_o0="$slow_decimation|^DecimateQem\.MaxDistance(Holds|Carries)|^SweepDecimate\.RunsInExactly"
-slow_at_clang_o0="$slow_at_clang_o0|$slow_geometry"
 
-# The whole suite runs with g++ -O2 (every test), clang++ -O0 with coverage and clang++ -O1
-# with ASan and UBSan (every test but the two groups above). g++ -O0 and clang++ -O2 run the
-# tests that pin or compare output bytes (the goldens, same bytes at every thread count and run,
-# the command line and the C API): the build with -Werror and the bytes are what those two
-# builds add; running the rest a second time per compiler took about 6 minutes of CI.
-# Those two builds compile only the test files that hold these tests (-DSPLINTCORE_BYTES_ONLY=ON,
+# The whole suite runs with g++ -O2 (every test) and with clang++ -O1, ASan, UBSan and coverage
+# instrumentation (every test but the groups above; its profiles give the coverage report).
+# g++ -O0, clang++ -O0 and clang++ -O2 run the tests that pin or compare output bytes (the
+# goldens, same bytes at every thread count and run, the command line and the C API): the
+# build with -Werror and the bytes are what those builds add; running the rest a third and a
+# fourth time took about 6 minutes of CI each.
+# Those builds compile only the test files that hold these tests (-DSPLINTCORE_BYTES_ONLY=ON,
 # tests/CMakeLists.txt; about two thirds of each build's time was the tests' compile); a bytes
 # job that finds the gcc-O2 job's full build checks it has every such test.
-# (clang++ -O0 running only the byte tests and the parsers' own tests was tried: the parsers'
-# branch coverage then fell under the 95% gate, case_file.cpp to 89.8%, as part of it is reached
-# only through the pipeline's tests.)
+# (Until 2026-12 the clang -O0 build ran the whole suite for the coverage, and the ASan build
+# again: one instrumented build and one run now serve both. A clang -O0 run of the byte tests
+# and the parsers' own tests alone was too little for the gate: case_file.cpp fell to 89.8%,
+# as part of it is reached only through the pipeline's tests.)
 bytes_tests='Golden|SameBytes|SameBits|Determinis|Pinned|Thread|^cli\.|^capi\.|^Sha256\.'
 bytes_names() {  # build-dir: the names of the byte tests a job runs there, sorted
   (cd "$1" && ctest -N -R "$bytes_tests" -E "$slow_properties|$realdata_tests") |
@@ -113,7 +102,8 @@ run_ctest_job() {  # name cxx build_type extra-cmake-args...
             bytes_only=1 ;;
     clang-O2) exclude=(-R "$bytes_tests" -E "$slow_properties|$realdata_tests")
               bytes_only=1 ;;
-    clang-O0) exclude=(-E "$slow_properties|$realdata_tests|$slow_at_clang_o0") ;;
+    clang-O0) exclude=(-R "$bytes_tests" -E "$slow_properties|$realdata_tests|$slow_decimation")
+              bytes_only=1 ;;
     asan) exclude=(-E "$slow_properties|$realdata_tests|$slow_decimation") ;;
     tsan) exclude=(-R 'Thread|Parallel|Executor') ;;  # the tests that run the executor's tasks
     *) exclude=(-E "$slow_properties|$realdata_tests") ;;
@@ -534,20 +524,25 @@ lint_job() {
   return $rc
 }
 
-# clang-O0 is built with coverage instrumentation (the counters change no arithmetic: the golden
-# hashes are checked in this build too) and its test run leaves the profiles for the coverage
-# report: one clang -O0 build and one test run serve both, where they were two builds and two
-# runs (about 5 minutes of CI).
+# The asan job is built with coverage instrumentation too (the counters change no arithmetic,
+# and clang's counters are placed before the optimiser, so -O1 counts as -O0 does) and its
+# test run leaves the profiles for the coverage report: one build and one test run serve
+# both, where they were two full builds and two full runs (the clang-O0 job's, about 3.5
+# minutes more of CI). -O1 -g1 (line tables): half the compile time of -O2 -g, the same
+# findings (ASan's own recommendation is -O1), stack traces still name file and line. clang++:
+# UBSan on the test files costs it little, where g++ took 2x the time of ASan alone.
 ctest_profile=""
-clang_o0_job() {
-  local dir=build/ci-clang-O0 flags="-fprofile-instr-generate -fcoverage-mapping" rc=0
-  ensure_packages clang llvm libclang-rt-14-dev || return 1  # the profile runtime (libclang_rt.profile)
+asan_job() {
+  local dir=build/ci-asan flags="-fprofile-instr-generate -fcoverage-mapping" rc=0
+  # The sanitizer and the profile runtimes.
+  ensure_packages clang llvm libclang-rt-14-dev || return 1
   rm -f "$dir"/coverage-*.profraw
   ctest_profile="$PWD/$dir/coverage-%4m.profraw"
-  run_ctest_job clang-O0 clang++ Debug "-DCMAKE_CXX_FLAGS=$flags" \
+  run_ctest_job asan clang++ RelWithDebInfo -DSPLINTCORE_SANITIZE=ON \
+    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" "-DCMAKE_CXX_FLAGS=$flags" \
     "-DCMAKE_EXE_LINKER_FLAGS=$flags" || rc=1
   ctest_profile=""
-  echo "--- coverage of the clang-O0 test run (tools/coverage.sh --report $dir)"
+  echo "--- coverage of the asan test run (tools/coverage.sh --report $dir)"
   if SPLINTCORE_COVERAGE_MIN_BRANCH="${SPLINTCORE_COVERAGE_MIN_BRANCH:-95}" \
        bash tools/coverage.sh --report "$dir"; then
     total_passed=$((total_passed + 1))
@@ -593,14 +588,9 @@ for job in $jobs; do
   case $job in
     gcc-O0) run_ctest_job "$job" g++ Debug -DSPLINTCORE_BYTES_ONLY=ON ;;
     gcc-O2) run_ctest_job "$job" g++ Release ;;
-    clang-O0) clang_o0_job ;;
+    clang-O0) run_ctest_job "$job" clang++ Debug -DSPLINTCORE_BYTES_ONLY=ON ;;
     clang-O2) run_ctest_job "$job" clang++ Release -DSPLINTCORE_BYTES_ONLY=ON ;;
-    # -O1 -g1 (line tables): half the compile time of -O2 -g, the same findings (ASan's own
-    # recommendation is -O1), stack traces still name file and line. clang++: UBSan on the
-    # test files costs it little, where g++ took 2x the time of ASan alone.
-    asan) ensure_packages clang libclang-rt-14-dev &&  # the sanitizer runtimes
-          run_ctest_job "$job" clang++ RelWithDebInfo -DSPLINTCORE_SANITIZE=ON \
-            "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" ;;
+    asan) asan_job ;;
     core) core_job ;;
     fuzz) fuzz_job ;;
     lint) lint_job ;;
