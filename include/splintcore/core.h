@@ -187,6 +187,17 @@ struct AllocatorHooks {
   void* user = nullptr;
 };
 
+// Buffer mode: `touch(user, begin, bytes)` is told of each stretch of the buffer before the
+// arena hands any of it out for the first time, from the buffer's start on, in stretches of at
+// least `step` bytes (or what is left of the buffer). A hosted tool prefaults them
+// (arena_prefault_hook, platform.h): one system call where the first writes would take a
+// page fault each 4 KiB. It changes nothing the arena hands out.
+struct TouchHook {
+  void (*touch)(void* user, void* begin, size_t bytes) = nullptr;
+  void* user = nullptr;
+  size_t step = size_t{4} << 20;
+};
+
 class Arena {
  public:
   static constexpr size_t kDefaultAlignment = 16;
@@ -245,10 +256,15 @@ class Arena {
   // Hooks mode: give back blocks that rewind() left cached above the current top.
   void release_unused_blocks();
 
+  // Buffer mode (TouchHook); ignored in hooks mode. The stretch below the top is told at once.
+  void set_touch_hook(const TouchHook& hook);
+
  private:
   struct Block;
   void note_failure(size_t need);
   bool new_block(size_t min_payload, size_t alignment);
+  void new_high_water();
+  void touch_up_to(size_t end);
 
   Block* current_ = nullptr;  // block the top is in (header of 48 bytes at most)
   size_t offset_ = 0;         // top within current_ payload
@@ -259,6 +275,8 @@ class Arena {
   size_t block_bytes_ = 0;
   size_t last_need_ = 0;
   AllocatorHooks hooks_{};
+  TouchHook touch_{};
+  size_t touched_ = 0;  // buffer mode: bytes of the buffer told to touch_
   bool owns_blocks_ = false;
   bool failing_ = false;  // the last request failed (needs add up until a success or rewind)
   alignas(16) unsigned char root_storage_[48];  // the Block header for buffer mode

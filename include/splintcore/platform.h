@@ -104,6 +104,15 @@ double monotonic_seconds();
 void* acquire_arena_memory(uint64_t bytes);
 void release_arena_memory(void* p, uint64_t bytes);
 
+// A touch hook (core.h) for an arena over that memory: each stretch the arena is about to use
+// for the first time is prefaulted (madvise MADV_POPULATE_WRITE, Linux 5.14 on; elsewhere, or
+// when it fails, the pages fault in as they are written, as without the hook). Measured on
+// the project's 2-core VM (perf stat -r 15, alternated): `check` of the 543k phantom maxilla
+// 6,980 page faults and 0.172-0.177 s without it, 129 and 0.120-0.125 s with it; a fault here
+// costs about 5 us, mostly the guest's exception entry and exit, and zeroing the page about
+// 0.4 us.
+TouchHook arena_prefault_hook();
+
 }  // namespace splintcore
 
 #endif  // SPLINTCORE_PLATFORM_H

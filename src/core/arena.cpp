@@ -127,7 +127,7 @@ void* Arena::allocate(size_t bytes, size_t alignment) {
       failing_ = false;
       offset_ = start + bytes;
       used_ = current_->used_before + offset_;
-      if (used_ > high_water_) high_water_ = used_;
+      if (used_ > high_water_) new_high_water();
       return current_->payload + start;
     }
     if (!owns_blocks_) {
@@ -147,6 +147,29 @@ void* Arena::allocate(size_t bytes, size_t alignment) {
   return allocate(bytes, alignment);
 }
 
+// A new high water; in buffer mode with a touch hook, the buffer up to it told first.
+void Arena::new_high_water() {
+  high_water_ = used_;
+  if (touch_.touch != nullptr && used_ > touched_) touch_up_to(used_);
+}
+
+// Tells touch_ of the buffer from touched_ to `end`, at least a step of it (less at the end).
+void Arena::touch_up_to(size_t end) {
+  const size_t room = current_->payload_bytes - touched_;
+  const size_t want = end - touched_ > touch_.step ? end - touched_ : touch_.step;
+  const size_t bytes = want < room ? want : room;
+  touch_.touch(touch_.user, current_->payload + touched_, bytes);
+  touched_ += bytes;
+}
+
+void Arena::set_touch_hook(const TouchHook& hook) {
+  if (owns_blocks_ || current_->payload == nullptr) return;
+  touch_ = hook;
+  if (touch_.step == 0) touch_.step = 1;
+  touched_ = 0;
+  if (touch_.touch != nullptr && used_ > 0) touch_up_to(used_);
+}
+
 bool Arena::try_extend(void* pointer, size_t old_bytes, size_t new_bytes) {
   // An opportunistic attempt: failing here is not a failure of the caller (who then copies),
   // so nothing is noted.
@@ -159,7 +182,7 @@ bool Arena::try_extend(void* pointer, size_t old_bytes, size_t new_bytes) {
   failing_ = false;
   offset_ = start + new_bytes;
   used_ = current_->used_before + offset_;
-  if (used_ > high_water_) high_water_ = used_;
+  if (used_ > high_water_) new_high_water();
   return true;
 }
 

@@ -1,5 +1,6 @@
 // Memory for a tool's arena, mapped from the operating system (the hosted layer only).
 #include <sys/mman.h>
+#include <unistd.h>
 
 #include <cstdint>
 
@@ -47,6 +48,29 @@ void* acquire_arena_memory(uint64_t bytes) {
   if (tail > 0)
     (void)::munmap(reinterpret_cast<void*>(aligned + static_cast<uintptr_t>(size)), tail);
   return reinterpret_cast<void*>(aligned);
+}
+
+namespace {
+void prefault(void*, void* begin, size_t bytes) {
+#ifdef MADV_POPULATE_WRITE
+  // The stretch starts anywhere in a page: madvise takes whole pages.
+  static const long kPage = ::sysconf(_SC_PAGESIZE);
+  const uintptr_t page = kPage > 0 ? static_cast<uintptr_t>(kPage) : 4096;
+  const uintptr_t start = reinterpret_cast<uintptr_t>(begin) & ~(page - 1);
+  const uintptr_t end = reinterpret_cast<uintptr_t>(begin) + bytes;
+  (void)::madvise(reinterpret_cast<void*>(start), static_cast<size_t>(end - start),
+                  MADV_POPULATE_WRITE);
+#else
+  (void)begin;
+  (void)bytes;
+#endif
+}
+}  // namespace
+
+TouchHook arena_prefault_hook() {
+  TouchHook h;
+  h.touch = &prefault;
+  return h;
 }
 
 void release_arena_memory(void* p, uint64_t bytes) {

@@ -1,5 +1,10 @@
+#include <sys/mman.h>
+#include <unistd.h>
+
 #include <cstdint>
 #include <cstdlib>
+#include <utility>
+#include <vector>
 
 #include "splintcore/platform.h"
 #include "support/test_util.h"
@@ -186,6 +191,132 @@ TEST(ArenaMemory, MappedAlignedWritableAndGivenBack) {
   EXPECT_EQ(acquire_arena_memory(0), nullptr);
   EXPECT_EQ(acquire_arena_memory(UINT64_MAX), nullptr);
   release_arena_memory(nullptr, 1);  // nothing to give back
+}
+
+// The touch hook: the buffer told from its start on, in steps, before any of it is handed out;
+// never past the buffer's end; the allocations exactly those of an arena without it.
+struct Touches {
+  std::vector<std::pair<size_t, size_t>> stretches;  // offset from the buffer's start, bytes
+  const unsigned char* base = nullptr;
+  static void note(void* user, void* begin, size_t bytes) {
+    Touches* t = static_cast<Touches*>(user);
+    t->stretches.emplace_back(static_cast<size_t>(static_cast<unsigned char*>(begin) - t->base),
+                              bytes);
+  }
+  size_t end() const {
+    return stretches.empty() ? 0 : stretches.back().first + stretches.back().second;
+  }
+};
+
+TEST(Arena, TouchHookIsToldOfTheBufferAheadOfEveryAllocation) {
+  constexpr size_t kCap = 10000, kStep = 1024;
+  alignas(64) static unsigned char plain_buffer[kCap], touched_buffer[kCap];
+  Arena plain(plain_buffer, kCap), touched(touched_buffer, kCap);
+  Touches t;
+  t.base = touched_buffer;
+  TouchHook hook;
+  hook.touch = &Touches::note;
+  hook.user = &t;
+  hook.step = kStep;
+  touched.set_touch_hook(hook);
+  EXPECT_TRUE(t.stretches.empty());  // nothing used yet
+  const size_t sizes[] = {10, 1000, 3, 3000, 1, 2500, 16, 900, 5000};
+  for (const size_t n : sizes) {
+    unsigned char* a = static_cast<unsigned char*>(plain.allocate(n));
+    unsigned char* b = static_cast<unsigned char*>(touched.allocate(n));
+    ASSERT_EQ(a == nullptr, b == nullptr) << n;
+    if (a != nullptr) {
+      EXPECT_EQ(a - plain_buffer, b - touched_buffer) << n;
+    }
+    EXPECT_EQ(plain.used(), touched.used());
+    EXPECT_GE(t.end(), touched.high_water()) << n;
+    if (n == 1) {
+      // A rewind and a smaller run under the high water tells nothing new.
+      const size_t told = t.stretches.size();
+      const Arena::Marker m = touched.mark();
+      (void)touched.allocate(8);
+      touched.rewind(m);
+      EXPECT_EQ(t.stretches.size(), told);
+    }
+  }
+  // Growing the top in place is a use too.
+  void* top = touched.allocate(16);
+  ASSERT_NE(top, nullptr);
+  const size_t before = t.end();
+  ASSERT_TRUE(touched.try_extend(top, 16, 16 + (before - touched.used()) + 100));
+  EXPECT_GE(t.end(), touched.high_water());
+  ASSERT_FALSE(t.stretches.empty());
+  size_t at = 0;
+  for (size_t i = 0; i < t.stretches.size(); ++i) {
+    EXPECT_EQ(t.stretches[i].first, at) << i;  // from the start, no gap, no overlap
+    at += t.stretches[i].second;
+    if (at < kCap) {
+      EXPECT_GE(t.stretches[i].second, kStep) << i;  // whole steps but the last
+    }
+  }
+  EXPECT_LE(at, kCap);
+  // A hook set on an arena in use is told of what is used at once.
+  Arena later(plain_buffer, kCap);
+  (void)later.allocate(3000);
+  Touches t2;
+  t2.base = plain_buffer;
+  hook.user = &t2;
+  later.set_touch_hook(hook);
+  ASSERT_EQ(t2.stretches.size(), 1u);
+  EXPECT_EQ(t2.stretches[0], std::make_pair(size_t{0}, size_t{3000}));
+}
+
+TEST(Arena, TouchHookIsNotCalledInHooksMode) {
+  test::TestArena backing(size_t{1} << 20);
+  AllocatorHooks h;
+  h.allocate = [](void* user, size_t bytes) { return static_cast<Arena*>(user)->allocate(bytes); };
+  h.release = [](void*, void*, size_t) {};
+  h.user = &backing.arena;
+  Arena arena(h, size_t{1} << 20, 4096);
+  Touches t;
+  TouchHook hook;
+  hook.touch = &Touches::note;
+  hook.user = &t;
+  arena.set_touch_hook(hook);
+  EXPECT_NE(arena.allocate(10000), nullptr);
+  EXPECT_TRUE(t.stretches.empty());
+}
+
+// The tools' hook prefaults: the pages the arena is about to hand out are resident (mincore)
+// before anything is written to them, and those beyond the last stretch are not.
+TEST(ArenaMemory, PrefaultHookMakesThePagesAheadResident) {
+  const uint64_t bytes = uint64_t{16} << 20;
+  void* p = acquire_arena_memory(bytes);
+  ASSERT_NE(p, nullptr);
+  const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
+  std::vector<unsigned char> resident((bytes + page - 1) / page);
+  const auto count = [&](size_t from, size_t to) {
+    EXPECT_EQ(::mincore(p, static_cast<size_t>(bytes), resident.data()), 0);
+    size_t n = 0;
+    for (size_t i = from / page; i < to / page; ++i) n += resident[i] & 1u;
+    return n;
+  };
+  ASSERT_EQ(count(0, static_cast<size_t>(bytes)), 0u);
+  // Is MADV_POPULATE_WRITE there (Linux 5.14 on)? Without it the hook does nothing.
+#ifdef MADV_POPULATE_WRITE
+  const bool populates = ::madvise(p, page, MADV_POPULATE_WRITE) == 0;
+#else
+  const bool populates = false;
+#endif
+  if (!populates) {
+    release_arena_memory(p, bytes);
+    GTEST_SKIP() << "no MADV_POPULATE_WRITE on this system";
+  }
+  Arena arena(p, static_cast<size_t>(bytes));
+  arena.set_touch_hook(arena_prefault_hook());  // step: 4 MiB
+  const size_t mib = size_t{1} << 20;
+  ASSERT_NE(arena.allocate(5 * mib), nullptr);  // more than a step: told at once
+  EXPECT_EQ(count(0, 5 * mib), 5 * mib / page);
+  EXPECT_EQ(count(5 * mib, 16 * mib), 0u);
+  ASSERT_NE(arena.allocate(1), nullptr);  // past it: a step more
+  EXPECT_EQ(count(0, 9 * mib), 9 * mib / page);
+  EXPECT_EQ(count(9 * mib, 16 * mib), 0u);
+  release_arena_memory(p, bytes);
 }
 
 }  // namespace

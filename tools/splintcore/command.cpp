@@ -72,7 +72,10 @@ Run::Run(const Command& c, const CommonArgs& a)
       arena(memory.buffer, memory.buffer != nullptr ? static_cast<size_t>(a.memory_cap) : 0),
       threads(static_cast<unsigned>(a.threads)),
       ctx(&arena, &threads.executor(), nullptr),
-      start(monotonic_seconds()) {}
+      start(monotonic_seconds()) {
+  // The arena's pages prefaulted a few MiB at a time, as it first reaches them.
+  arena.set_touch_hook(arena_prefault_hook());
+}
 
 int Run::no_memory() const {
   return rejected(args, command,

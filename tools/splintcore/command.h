@@ -86,8 +86,10 @@ class CommandLine {
 };
 
 // The arena for a run: one block of the cap (acquire_arena_memory, platform.h), committed by
-// the OS only as it is touched. Its 2 MiB alignment covers Arena::kDefaultAlignment (malloc
-// gives only 8 on 32-bit ARM, which would shift the arena's padding and its reported figures).
+// the OS only as it is touched; Run's arena prefaults it a few MiB ahead of its high water
+// (arena_prefault_hook), so what a run commits is its peak arena and at most a step more. Its 2 MiB
+// alignment covers Arena::kDefaultAlignment (malloc gives only 8 on 32-bit ARM, which would shift
+// the arena's padding and its reported figures).
 struct RunMemory {
   void* buffer = nullptr;
   uint64_t bytes = 0;
