@@ -18,6 +18,23 @@ uint64_t mapped_size(uint64_t bytes) {
   return rounded > SIZE_MAX - kHuge ? 0 : rounded;
 }
 
+// The touch hook of arena_prefault_hook(): the pages of [begin, begin + bytes) made resident
+// in one system call; where MADV_POPULATE_WRITE is missing or refused they fault in on use.
+void prefault(void*, void* begin, size_t bytes) {
+#ifdef MADV_POPULATE_WRITE
+  // The stretch starts anywhere in a page: madvise takes whole pages.
+  static const long kPage = ::sysconf(_SC_PAGESIZE);
+  const uintptr_t page = kPage > 0 ? static_cast<uintptr_t>(kPage) : 4096;
+  const uintptr_t start = reinterpret_cast<uintptr_t>(begin) & ~(page - 1);
+  const uintptr_t end = reinterpret_cast<uintptr_t>(begin) + bytes;
+  (void)::madvise(reinterpret_cast<void*>(start), static_cast<size_t>(end - start),
+                  MADV_POPULATE_WRITE);
+#else
+  (void)begin;
+  (void)bytes;
+#endif
+}
+
 }  // namespace
 
 // Mapped, not taken from malloc: the block is the tool's whole arena (1 GiB by default), which
@@ -49,23 +66,6 @@ void* acquire_arena_memory(uint64_t bytes) {
     (void)::munmap(reinterpret_cast<void*>(aligned + static_cast<uintptr_t>(size)), tail);
   return reinterpret_cast<void*>(aligned);
 }
-
-namespace {
-void prefault(void*, void* begin, size_t bytes) {
-#ifdef MADV_POPULATE_WRITE
-  // The stretch starts anywhere in a page: madvise takes whole pages.
-  static const long kPage = ::sysconf(_SC_PAGESIZE);
-  const uintptr_t page = kPage > 0 ? static_cast<uintptr_t>(kPage) : 4096;
-  const uintptr_t start = reinterpret_cast<uintptr_t>(begin) & ~(page - 1);
-  const uintptr_t end = reinterpret_cast<uintptr_t>(begin) + bytes;
-  (void)::madvise(reinterpret_cast<void*>(start), static_cast<size_t>(end - start),
-                  MADV_POPULATE_WRITE);
-#else
-  (void)begin;
-  (void)bytes;
-#endif
-}
-}  // namespace
 
 TouchHook arena_prefault_hook() {
   TouchHook h;
