@@ -11,6 +11,7 @@ option(SPLINTCORE_SANITIZE "Build with AddressSanitizer and UndefinedBehaviorSan
 option(SPLINTCORE_CORE_NO_EXCEPTIONS "Build the core library with -fno-exceptions -fno-rtti" ON)
 option(SPLINTCORE_FUZZ "Build libFuzzer targets (clang only)" OFF)
 option(SPLINTCORE_TSAN "Build with ThreadSanitizer (the executor's tasks; tools/test.sh tsan)" OFF)
+option(SPLINTCORE_COVERAGE "clang source-based coverage of the library (tools/coverage.sh)" OFF)
 
 set(SPLINTCORE_WARNINGS
   -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wsign-conversion
@@ -39,6 +40,14 @@ add_compile_options(${SPLINTCORE_FP_FLAGS})
 if(SPLINTCORE_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
   add_link_options(-fsanitize=address,undefined)
+endif()
+
+# Coverage counts the library's code only (the report is of src/): the library's files are
+# compiled with the counters (CMakeLists.txt), every program links the profile runtime. Test
+# files compiled without them build about 10% faster under ASan and run no counters of their own.
+if(SPLINTCORE_COVERAGE)
+  set(SPLINTCORE_COVERAGE_FLAGS -fprofile-instr-generate -fcoverage-mapping)
+  add_link_options(-fprofile-instr-generate)
 endif()
 
 if(SPLINTCORE_TSAN)

@@ -6,7 +6,7 @@
 #   bash tools/coverage.sh --report build-dir   the report alone, from the profiles a test run
 #                                               of an instrumented build left there (the
 #                                               asan job of tools/test.sh: it is built with
-#                                               coverage_flags below and runs ctest with
+#                                               -DSPLINTCORE_COVERAGE=ON and runs ctest with
 #                                               LLVM_PROFILE_FILE=build-dir/coverage-%4m.profraw)
 # Prints llvm-cov's per-file report for src/ (lines, regions, branches), then the parsers'
 # figures on their own (issue 9 asks for >= 95% branch coverage of every parser of outside
@@ -28,9 +28,8 @@ if [ -z "$llvm_profdata" ] || [ -z "$llvm_cov" ]; then
 fi
 rc=0
 if [ "$report_only" -eq 0 ]; then
-  flags="-fprofile-instr-generate -fcoverage-mapping"
   cmake -S . -B "$dir" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=Debug \
-    -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="$flags" >"$dir.configure.log" 2>&1 \
+    -DSPLINTCORE_COVERAGE=ON >"$dir.configure.log" 2>&1 \
     || { cat "$dir.configure.log"; exit 1; }
   cmake --build "$dir" -j "$par" --target splintcore_tests >"$dir.build.log" 2>&1 \
     || { tail -n 40 "$dir.build.log"; exit 1; }
