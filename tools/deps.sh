@@ -1,11 +1,24 @@
 # Sourced by tools/demo.sh and tools/test.sh: installs Debian packages that are missing.
 # usage: ensure_packages pkg...   (apt-get as root, or through sudo; otherwise says what to do)
+
+# The packages of pkg... that are not installed, on one line (each once).
+missing_packages() {
+  local p seen=" " out=()
+  for p in "$@"; do
+    case $seen in *" $p "*) continue ;; esac
+    seen="$seen$p "
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || out+=("$p")
+  done
+  echo "${out[*]}"
+}
+
+packages_installed() {  # pkg...: true when every one is installed
+  [ -z "$(missing_packages "$@")" ]
+}
+
 ensure_packages() {
   local missing=()
-  local p
-  for p in "$@"; do
-    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-  done
+  read -r -a missing <<<"$(missing_packages "$@")"
   [ ${#missing[@]} -eq 0 ] && return 0
   echo "installing: ${missing[*]}"
   local sudo=""

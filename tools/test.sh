@@ -42,7 +42,39 @@
 set -u
 cd "$(dirname "$0")/.."
 . tools/deps.sh
-ensure_packages g++ clang cmake make pkg-config python3 libgtest-dev meshlab xvfb xauth || exit 1
+
+# What each job installs when missing (apt), beside the build tools every job needs.
+job_packages() {  # job
+  case $1 in
+    gcc-*|core) ;;
+    clang-*) echo clang ;;
+    asan|coverage) echo clang llvm libclang-rt-14-dev ;;
+    tsan|fuzz) echo clang libclang-rt-14-dev ;;
+    baremetal) echo gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib \
+                    binutils-arm-none-eabi qemu-system-arm ;;
+    aarch64*) echo g++-aarch64-linux-gnu qemu-user ;;
+    armv7*) echo g++-arm-linux-gnueabihf qemu-user ;;
+    cross-golden) echo g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user ;;
+    lint) echo clang clang-tidy clang-format cppcheck universal-ctags ;;
+  esac
+}
+# What the full test suite needs besides (the MeshLab oracle's tests, in a virtual display).
+suite_packages="meshlab xvfb xauth"
+
+# The build tools first; the rest of what the jobs need is installed in the background while
+# the first job builds (on a fresh Debian 12 machine the installs took about 3.5 minutes, one
+# after another between the jobs). need_packages waits for that install before it looks.
+apt_bg=""
+apt_bg_log=build/apt-background.log
+ensure_packages g++ cmake make pkg-config python3 libgtest-dev || exit 1
+need_packages() {  # pkg...
+  packages_installed "$@" && return 0
+  if [ -n "$apt_bg" ]; then
+    wait "$apt_bg" || echo "the background install failed ($apt_bg_log): installing here"
+    apt_bg=""
+  fi
+  ensure_packages "$@"
+}
 
 mkdir -p build
 # The default list ends with static analysis and a short fuzz of every target (5 s each,
@@ -116,6 +148,7 @@ run_ctest_job() {  # name cxx build_type extra-cmake-args...
     *) exclude=(-E "$slow_properties|$realdata_tests") ;;
   esac
   echo "=== $name: $cxx $type $*"
+  need_packages $(job_packages "$name") || return 1
   if ! cmake -S . -B "$dir" -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_BUILD_TYPE="$type" "$@" \
        >"$dir.configure.log" 2>&1; then
     mkdir -p "$dir"; cat "$dir.configure.log"; return 1
@@ -125,6 +158,7 @@ run_ctest_job() {  # name cxx build_type extra-cmake-args...
     return 1
   fi
   local log=$dir.ctest.log
+  [ "$bytes_only" = 1 ] || need_packages $suite_packages || return 1
   (cd "$dir" && ${ctest_profile:+env LLVM_PROFILE_FILE="$ctest_profile"} \
      ctest --output-on-failure -j "$par" --timeout 600 "${exclude[@]}") >"$log" 2>&1
   local rc=$?
@@ -159,7 +193,7 @@ cross_job() {  # name toolchain-file cross-triple
   local name=$1 toolchain=$2 triple=$3
   local dir=build/ci-$name
   echo "=== $name: $toolchain, tests under qemu-user"
-  ensure_packages "g++-$triple" qemu-user libgtest-dev || return 1
+  need_packages $(job_packages "$name") || return 1
   if ! cmake -S . -B "$dir" -DCMAKE_TOOLCHAIN_FILE="$toolchain" -DCMAKE_BUILD_TYPE=Release \
        -DSPLINTCORE_GTEST_SOURCE_DIR=/usr/src/googletest >"$dir.configure.log" 2>&1; then
     mkdir -p "$dir"; cat "$dir.configure.log"; return 1
@@ -247,8 +281,7 @@ baremetal_job() {
   local dir=build/ci-baremetal host=$fw_host t0=$SECONDS
   echo "=== baremetal: Cortex-M7 core (cmake/toolchain-cortex-m7.cmake, -fno-exceptions -fno-rtti," \
     "no platform layer), the firmware example under qemu-system-arm -M mps2-an500"
-  ensure_packages gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib \
-    binutils-arm-none-eabi qemu-system-arm g++ cmake python3 || return 1
+  need_packages $(job_packages baremetal) || return 1
   # Host side: `splintcore phantom` writes the jaws the example embeds; the example as an
   # x86-64 process is the reference for the blockout stage. The gcc-O2 job's build is the same
   # configuration (g++, Release): it serves when it is there, else a tree of its own is built.
@@ -348,7 +381,7 @@ cross_golden_job() {  # name toolchain-file cross-triple qemu
   local name=$1 toolchain=$2 triple=$3 qemu=$4
   local dir=build/ci-$name t0=$SECONDS
   echo "=== $name: $toolchain, the golden-hash tests and the firmware example under $qemu"
-  ensure_packages "g++-$triple" qemu-user libgtest-dev || return 1
+  need_packages $(job_packages "$name") || return 1
   # SPLINTCORE_CROSS_WERROR=OFF: warnings do not stop the build (to see the hashes while a
   # 32-bit conversion warning is being fixed); the default keeps -Werror.
   if ! cmake -S . -B "$dir" -DCMAKE_TOOLCHAIN_FILE="$toolchain" -DCMAKE_BUILD_TYPE=Release \
@@ -426,7 +459,8 @@ fuzz_job() {
   # input in build/ci-fuzz/artifacts/<target>/ and fails the job.
   local dir=build/ci-fuzz seconds=${SPLINTCORE_FUZZ_SECONDS:-60}
   echo "=== fuzz: clang++ -fsanitize=fuzzer,address,undefined, ${seconds}s per target"
-  ensure_packages clang libclang-rt-14-dev || return 1  # the libFuzzer and sanitizer runtimes
+  # The libFuzzer and sanitizer runtimes.
+  need_packages $(job_packages fuzz) || return 1
   if ! cmake -S . -B "$dir" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
        -DSPLINTCORE_FUZZ=ON >"$dir.configure.log" 2>&1; then
     mkdir -p "$dir"; cat "$dir.configure.log"; return 1
@@ -481,7 +515,7 @@ lint_job() {
   # from either fails the job. compile_commands.json comes from a configure-only build dir.
   local dir=build/ci-lint
   echo "=== lint: the floors (tools/check_layers.py), the layout (clang-format), function lengths (tools/function_sizes.py), clang-tidy (.clang-tidy) and cppcheck over src/ include/ tools/"
-  ensure_packages clang clang-tidy clang-format cppcheck python3 universal-ctags || return 1
+  need_packages $(job_packages lint) || return 1
   local layers_rc=0 layers
   layers=$(python3 tools/check_layers.py) || layers_rc=1
   printf '%s\n' "$layers" | tail -n 12
@@ -542,7 +576,7 @@ ctest_profile=""
 asan_job() {
   local dir=build/ci-asan rc=0
   # The sanitizer and the profile runtimes.
-  ensure_packages clang llvm libclang-rt-14-dev || return 1
+  need_packages $(job_packages asan) || return 1
   rm -f "$dir"/coverage-*.profraw
   ctest_profile="$PWD/$dir/coverage-%4m.profraw"
   run_ctest_job asan clang++ RelWithDebInfo -DSPLINTCORE_SANITIZE=ON \
@@ -564,7 +598,7 @@ asan_job() {
 # (tests/tools/tsan_cli_test.sh: its bytes against the gcc-O2 job's tool when built, else this
 # build's own at one thread).
 tsan_job() {
-  ensure_packages clang libclang-rt-14-dev || return 1
+  need_packages $(job_packages tsan) || return 1
   run_ctest_job tsan clang++ RelWithDebInfo -DSPLINTCORE_TSAN=ON || return 1
   local plain=build/ci-gcc-O2/tools/splintcore
   [ -x "$plain" ] || plain=build/ci-tsan/tools/splintcore
@@ -579,7 +613,8 @@ coverage_job() {
   # Fails when a parser of outside bytes (JSON, case, STL, PLY, OBJ, the CT readers) is under
   # SPLINTCORE_COVERAGE_MIN_BRANCH percent branch coverage (default 95, issue 9); prints the table.
   echo "=== coverage: clang -fprofile-instr-generate -fcoverage-mapping, llvm-cov report"
-  ensure_packages clang llvm libclang-rt-14-dev || return 1  # the profile runtime (libclang_rt.profile)
+  # The profile runtime (libclang_rt.profile).
+  need_packages $(job_packages coverage) || return 1
   if SPLINTCORE_JOBS="$par" SPLINTCORE_COVERAGE_MIN_BRANCH="${SPLINTCORE_COVERAGE_MIN_BRANCH:-95}" \
        bash tools/coverage.sh build/ci-coverage; then
     total_passed=$((total_passed + 1))
@@ -587,6 +622,14 @@ coverage_job() {
     total_failed=$((total_failed + 1)); return 1
   fi
 }
+
+later_packages=$suite_packages
+for job in $jobs; do later_packages="$later_packages $(job_packages "$job")"; done
+if ! packages_installed $later_packages; then
+  echo "installing in the background ($apt_bg_log): $(missing_packages $later_packages)"
+  (ensure_packages $later_packages) >"$apt_bg_log" 2>&1 &
+  apt_bg=$!
+fi
 
 job_times=""
 for job in $jobs; do
@@ -625,6 +668,7 @@ if [ "${bm_pending:-0}" = 1 ]; then  # the board's run, started by the baremetal
   job_times="$job_times baremetal-qemu-wait $((SECONDS - job_start))s"
 fi
 
+[ -z "$apt_bg" ] || wait "$apt_bg"  # no job needed what it installs: it ends before the script
 echo
 if [ -n "$cross_table" ]; then
   echo "target         triple                 (x86-64 golden hashes: fixtures/golden.sha256 and the tests)"
