@@ -289,23 +289,47 @@ Status moved_vertices(const Context& ctx, const CaseFile& c, Span<const Mesh> ja
   return Status::ok();
 }
 
+// The sampled sweep's jaws in blockout_one's order (the swept jaw first, then the others) and
+// where B holds their vertices (SweepOptions::jaw_vertex): moved as they are read, not copied.
+struct SweptJaws {
+  const CaseFile* c;
+  Span<const Mesh> jaws;
+  size_t order[DesignReport::kMaxBlockoutJaws];  // the sweep's jaw k is the design's order[k]
+
+  static Vec3 vertex(const void* user, size_t k, size_t i) {
+    const SweptJaws& s = *static_cast<const SweptJaws*>(user);
+    Vec3 p;
+    (void)b_vertex(*s.c, s.jaws, s.order[k], i, &p);  // in float32 range: check_jaws
+    return p;
+  }
+};
+
 // One jaw's blockout (blockout_jaws), with the exact sweep (`exact`) or the sampled one, run
 // with `check` the Boolean's own self-intersection check (the blockout's answer alone) or
-// without it; the result moved down to `start` over the jaw's temporaries.
+// without it; the result moved down to `start` over the jaw's temporaries. The exact sweep
+// gets jaw j alone, moved (a copy when the move changes its bits); the sampled one gets every
+// jaw, jaw j first with its triangles, the others' vertices only (they anchor its lattice, as
+// B's vertices did), moved as it reads them (SweptJaws).
 Status blockout_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, size_t j,
                     const Arena::Marker& start, bool exact, bool check, Mesh* cut,
                     DesignReport* report) {
   Mesh swept_jaws[DesignReport::kMaxBlockoutJaws];
+  SweptJaws moves{&c, jaws, {}};
   for (size_t k = 0; k < jaws.size(); ++k) {
-    Span<const Vec3> v;
-    SPLINTCORE_RETURN_IF_ERROR(moved_vertices(ctx, c, jaws, k, &v));
-    // The jaw swept first, then the others' vertices.
     const size_t at = k == j ? 0 : (k < j ? k + 1 : k);
+    moves.order[at] = k;
+    if (exact && k != j) continue;  // an empty mesh
+    Span<const Vec3> v = jaws[k].vertices.span();
+    if (exact) SPLINTCORE_RETURN_IF_ERROR(moved_vertices(ctx, c, jaws, k, &v));
     swept_jaws[at] = mesh_view(v, k == j ? jaws[k].triangles.span() : Span<const Triangle>());
   }
   const bool mandible = std::strcmp(c.jaws[j].role, "mandible") == 0;
   BlockoutOptions bl;
   bl.sweep = c.blockout;  // voxel, inset, closing radius, offset as the case gives them
+  if (!exact) {
+    bl.sweep.jaw_vertex = SweptJaws::vertex;
+    bl.sweep.jaw_vertex_user = &moves;
+  }
   bl.sweep.direction = mandible ? -c.insertion_direction : c.insertion_direction;
   bl.boolean.check_self_intersection = check;
   bl.exact = exact;

@@ -712,6 +712,68 @@ TEST(Sweep, FilterInTasksSameBytesForEveryThreadCount) {
 }
 #endif
 
+// SweepOptions::jaw_vertex: the jaws read through a move give the bytes of the sweep of moved
+// copies (the design passes its jaws so, not copied), with a second jaw of vertices only that
+// anchors the lattice; a hook that gives a non-finite vertex is refused, naming it.
+struct MovedJaws {
+  const Mesh* jaws;
+  RigidTransform move[2];
+  static Vec3 vertex(const void* user, size_t j, size_t i) {
+    const MovedJaws& m = *static_cast<const MovedJaws*>(user);
+    return m.move[j].apply_point(m.jaws[j].vertices[i]);
+  }
+  static Vec3 broken(const void* user, size_t j, size_t i) {
+    return j == 1 && i == 5 ? Vec3{0, std::numeric_limits<double>::quiet_NaN(), 0}
+                            : vertex(user, j, i);
+  }
+};
+
+TEST(Sweep, JawVertexHookGivesTheBytesOfMovedCopies) {
+  TestArena ta(size_t{256} << 20);
+  Context ctx(&ta.arena);
+  Mesh jaws[2] = {Mesh(&ta.arena), Mesh(&ta.arena)};
+  frustum(&jaws[0], 2.0, 3.0, 0.0, 4.0, 60);
+  frustum(&jaws[1], 1.0, 1.0, -6.0, -5.0, 8);  // beyond the first: it moves the lattice
+  jaws[1].triangles.clear();
+  MovedJaws moved{jaws, {}};
+  moved.move[0] = RigidTransform::translation(Vec3{0.3, -0.7, 2.0});
+  moved.move[0].r[0][0] = moved.move[0].r[1][1] = 0.0;  // a quarter turn about z
+  moved.move[0].r[0][1] = -1.0;
+  moved.move[0].r[1][0] = 1.0;
+  moved.move[1] = RigidTransform::translation(Vec3{0.05, 0.11, -0.4});
+  Mesh copies[2] = {Mesh(&ta.arena), Mesh(&ta.arena)};
+  for (int j = 0; j < 2; ++j) {
+    for (size_t i = 0; i < jaws[j].vertices.size(); ++i) {
+      ASSERT_TRUE(copies[j].vertices.push_back(MovedJaws::vertex(&moved, j, i)));
+    }
+    for (const Triangle& t : jaws[j].triangles) ASSERT_TRUE(copies[j].triangles.push_back(t));
+  }
+  SweepOptions o;
+  o.direction = Vec3{0.1, 0.2, -1};
+  o.voxel = 0.25;
+  o.extent = 2.0;
+  Mesh want(&ta.arena);
+  SPLINTCORE_ASSERT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(copies, 2), o, &want));
+  ASSERT_GT(want.triangles.size(), 1000u);
+  SweepOptions hooked = o;
+  hooked.jaw_vertex = MovedJaws::vertex;
+  hooked.jaw_vertex_user = &moved;
+  Mesh got(&ta.arena);
+  SPLINTCORE_ASSERT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(jaws, 2), hooked, &got));
+  EXPECT_EQ(test::mesh_sha256(got), test::mesh_sha256(want));
+  // The jaws as they are make another surface (the hook is what moved them).
+  Mesh unmoved(&ta.arena);
+  SPLINTCORE_ASSERT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(jaws, 2), o, &unmoved));
+  EXPECT_NE(test::mesh_sha256(unmoved), test::mesh_sha256(want));
+  hooked.jaw_vertex = MovedJaws::broken;
+  Mesh bad(&ta.arena);
+  const Status st = sweep_volume_mesh(ctx, Span<const Mesh>(jaws, 2), hooked, &bad);
+  EXPECT_EQ(st.code(), StatusCode::kNonFinite);
+  EXPECT_EQ(st.index(), 5u);
+  EXPECT_NE(std::string(st.message()).find("jaw 1 has a non-finite vertex"), std::string::npos)
+      << st.message();
+}
+
 TEST(Sweep, RegionGivesTheSameSurfaceInsideIt) {
   // Cutting the grid to a region changes nothing inside it: the samples are the same lattice
   // points with the same values, so the clipped surface's vertices away from the region's caps
