@@ -46,8 +46,9 @@ uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count) {
   // sides that first use their edge, the triangles of edges with 3+ uses (the duplicate
   // search), and the union-find of the boundary edges' vertices (the loops). Then the largest of
   // three phases, each returned before the next: the edge pass (buckets, half-edges, tallies), the
-  // shell counts (per shell root; a vertex stamp; the (vertex, shell) pairs of vertices in several
-  // shells, with their sort scratch), the duplicate search (keys and scratch for the collected
+  // shell counts (a shell number per root triangle; a vertex stamp; counts per shell, one shell
+  // per triangle at most; the (vertex, shell) pairs of vertices in several shells, with their
+  // sort scratch), the duplicate search (keys and scratch for the collected
   // triangles).
   const uint64_t v = vertex_count, t = triangle_count;
   const uint64_t kept = arena_array_bound<uint8_t>(v) + arena_array_bound<uint32_t>(t) +
@@ -55,7 +56,8 @@ uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count) {
                         arena_array_bound<uint32_t>(v);
   const uint64_t edges = arena_array_bound<uint32_t>(v + 1) + arena_array_bound<uint32_t>(3 * t) +
                          arena_array_bound<uint64_t>(v) + arena_array_bound<uint32_t>(v);
-  const uint64_t shells = arena_array_bound<uint32_t>(3 * t) + arena_array_bound<uint32_t>(v) +
+  const uint64_t shells = arena_array_bound<uint32_t>(t) + arena_array_bound<uint32_t>(v) +
+                          arena_array_bound<uint32_t>(3 * t) +
                           2 * arena_array_bound<uint64_t>(3 * t);
   const uint64_t duplicates = 3 * arena_array_bound<KeyIndex>(t);
   const uint64_t phase = edges > shells ? edges : shells;
@@ -273,26 +275,33 @@ struct EdgePass {
 };
 
 // Shells and Euler characteristic: distinct (shell, vertex) pairs, edges and faces counted per
-// shell (indexed by the shell's root triangle, in counts[3 root + 0/1/2]); the genus when every
-// shell is a closed orientable surface. A vertex is stamped with the shell that first uses it;
-// a vertex used by other shells too (rare: shells touching at a vertex) gives (vertex, shell)
-// pairs, sorted to count each once.
+// shell (shells numbered in order of their root triangle: shell_of[root], written and read
+// only at roots; in counts[3 shell + 0/1/2]); the genus when every shell is a closed
+// orientable surface. A vertex is stamped with the shell that first uses it; a vertex used by
+// other shells too (rare: shells touching at a vertex) gives (vertex, shell) pairs, sorted to
+// count each once.
 Status count_shells(Arena& arena, const Mesh& mesh, const uint8_t* first_use, UnionFind* shells,
                     MeshReport* r) {
   ArenaScope scope(arena);
   const Triangle* tris = mesh.triangles.data();
   const uint32_t tri_count = static_cast<uint32_t>(r->triangle_count);
   const uint32_t nv = static_cast<uint32_t>(r->vertex_count);
-  uint32_t* counts = arena.allocate_array<uint32_t>(size_t{3} * tri_count);
+  uint32_t* shell_of = arena.allocate_array<uint32_t>(tri_count);
   uint32_t* stamp = arena.allocate_array<uint32_t>(nv);
-  if ((counts == nullptr && tri_count > 0) || (stamp == nullptr && nv > 0)) {
+  if ((shell_of == nullptr && tri_count > 0) || (stamp == nullptr && nv > 0)) {
     return arena.exhausted_status();
   }
-  std::memset(counts, 0, size_t{3} * tri_count * sizeof(uint32_t));
-  std::memset(stamp, 0xff, size_t{nv} * sizeof(uint32_t));
+  uint32_t shell_count = 0;
+  for (uint32_t t = 0; t < tri_count; ++t) {
+    if (shells->is_root(t)) shell_of[t] = shell_count++;
+  }
+  uint32_t* counts = arena.allocate_array<uint32_t>(size_t{3} * shell_count);
+  if (counts == nullptr && shell_count > 0) return arena.exhausted_status();
+  if (shell_count > 0) std::memset(counts, 0, size_t{3} * shell_count * sizeof(uint32_t));
+  if (nv > 0) std::memset(stamp, 0xff, size_t{nv} * sizeof(uint32_t));
   uint64_t others = 0;
   for (uint32_t t = 0; t < tri_count; ++t) {
-    const uint32_t root = shells->find(t);
+    const uint32_t root = shell_of[shells->find(t)];
     uint32_t* c = counts + 3 * size_t{root};
     ++c[2];
     c[1] += (first_use[t] & 1u) + ((first_use[t] >> 1) & 1u) + (first_use[t] >> 2);  // 3 bits
@@ -311,7 +320,7 @@ Status count_shells(Arena& arena, const Mesh& mesh, const uint8_t* first_use, Un
     if (pairs == nullptr || scratch == nullptr) return arena.exhausted_status();
     size_t n = 0;
     for (uint32_t t = 0; t < tri_count; ++t) {
-      const uint32_t root = shells->find(t);
+      const uint32_t root = shell_of[shells->find(t)];
       for (uint32_t v : tris[t].v) {
         if (stamp[v] != root) pairs[n++] = (uint64_t{v} << 32) | root;
       }
@@ -324,11 +333,10 @@ Status count_shells(Arena& arena, const Mesh& mesh, const uint8_t* first_use, Un
   bool genus_defined = r->boundary_edges == 0 && r->nonmanifold_edges == 0 &&
                        r->orientation_conflicts == 0 && tri_count > 0;
   int64_t genus = 0, total_v = 0;
-  for (uint32_t t = 0; t < tri_count; ++t) {
-    if (!shells->is_root(t)) continue;
+  for (uint32_t i = 0; i < shell_count; ++i) {
     ++r->shells;
-    const int64_t v = counts[3 * size_t{t}], e = counts[3 * size_t{t} + 1];
-    const int64_t chi = v - e + counts[3 * size_t{t} + 2];
+    const int64_t v = counts[3 * size_t{i}], e = counts[3 * size_t{i} + 1];
+    const int64_t chi = v - e + counts[3 * size_t{i} + 2];
     total_v += v;
     if (chi > 2 || (2 - chi) % 2 != 0) genus_defined = false;
     genus += (2 - chi) / 2;
