@@ -339,8 +339,8 @@ struct BlockoutStats {
 // window (1,024 ids and boxes, 52 KB each; the filter runs in the executor's tasks), a 64 KB
 // cache of the vertices logged, the kept swept triangles logged above it (12 bytes each, and
 // 16 for each vertex the first time a kept triangle uses it: about 20 bytes a triangle), then
-// 4 bytes per extracted vertex and the swept mesh, moved down over the cells and the index;
-// then the Boolean's; only
+// the swept triangles and the larger of 4 bytes per extracted vertex and the swept vertices,
+// moved down over the cells and the index; then the Boolean's; only
 // `out` stays (moved down to where the arena's top was). Errors: those of sweep_volume_mesh and
 // mesh_boolean (the latter prefixed "blockout:", and when retries ran and all failed "blockout:
 // all N attempts failed (the swept surface inset A to B mm); the last: " and the last one's

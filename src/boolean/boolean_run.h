@@ -465,6 +465,7 @@ class BooleanRun {
   Status record_contact(const detail::Contact& c, const DegPoint name[6], int i, int j,
                         uint8_t kind, uint32_t ta, uint32_t tb);
   Status number_points();
+  void points_over_items(const Arena::Marker& items_at);
   Status number_degenerate_points();
   Status check_points_apart();
   Status sort_points_by_position(KeyIndex* keys, uint32_t np);
@@ -543,8 +544,11 @@ class BooleanRun {
   Record* rec_ = nullptr;      // 2 per hit
   KeyIndex* order_ = nullptr;  // records sorted by triangle
   ArenaArray<OutTri> tris_;    // pieces of cut triangles, by triangle id
-  int8_t* vstate_ = nullptr;   // per input vertex: +1 inside the other, -1 outside,
-                               // kVertexOn on the other surface
+  // Where the pieces begin: nothing the run keeps lies above them until assemble, which puts
+  // its output there once they are written out.
+  Arena::Marker pieces_at_;
+  int8_t* vstate_ = nullptr;  // per input vertex: +1 inside the other, -1 outside,
+                              // kVertexOn on the other surface
   // Degenerate contacts, resolved exactly (add_contact): their records, sorted by triangle
   // before the split; B's vertices that coincide with A's (alias_: the A vertex, or ~0u;
   // allocated at the first one); per triangle (nta + ntb): kUncut, kDecided (has constraints),

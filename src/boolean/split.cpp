@@ -1163,6 +1163,7 @@ Status BooleanRun::split_triangles() {
     return make_error(StatusCode::kLimitExceeded, "too many triangles for 32-bit ids: ", total);
   }
   tris_.bind(&arena_);
+  pieces_at_ = arena_.mark();
   if (!tris_.reserve(static_cast<size_t>(total))) return arena_.exhausted_status();
 
   Status first;  // the first triangle that failed on points noted to merge

@@ -7,6 +7,8 @@
 // exact sweep's fold rounds do not suffice yet: blockout.h.)
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -70,6 +72,92 @@ TEST(ExactBlockoutRealData, NoLineLockedOnEitherJaw) {
         "[ figures  ] real jaw %d: the exact design's splint: %zu lines through the "
         "jaw, %zu locked (longest %.2g mm)\n",
         j, design.lines_through_jaw, design.locked_lines, design.longest);
+  }
+}
+
+// Issue 29: the case with a base 4 mm deep (to the necks), default blockout ("auto": the
+// maxilla exact, the mandible refused there and made with voxels), in a 64 MiB arena that also
+// holds the two jaws (887k triangles, 21 MB), as `splintcore design --memory-cap 64M` runs it:
+// the same splint as with room to spare, closed, manifold and outward; then the independent
+// line check on both jaws.
+// Known defects this test pins rather than hides (the issue's notes, 2026-12-03): the splint
+// has two crumbs beside its one real shell (26 and 8 triangles, each under 1e-4 mm^3), and
+// a few lines stay locked by more than 0.01 mm plus the inset the jaw's blockout used (the
+// Boolean's nudges, about 5e-4 mm, account for the many below 0.01 mm): 1 of 3,948 on the
+// maxilla (0.88 mm, the exact sweep) and 14 of 4,020 on the mandible (up to 1.8 mm, voxels),
+// where the splint goes on past where a line leaves the tooth. The bounds below are today's
+// counts: a change that makes them worse fails here; the goal is none.
+TEST(ExactBlockoutRealData, DeepBaseIn64MiB) {
+  const test::RealJaws& real = test::real_jaws();
+  if (!real.ok) GTEST_SKIP() << "no real data at " << SPLINTCORE_REALDATA_DIR;
+  test::TestArena ta(size_t{1} << 30);
+  Context ctx(&ta.arena);
+  const char* text =
+      R"({"splintcore_case": 1, "case_id": "real", "units": "mm",
+          "jaws": [{"role": "maxilla", "mesh": "maxilla.stl"},
+                   {"role": "mandible", "mesh": "mandible.stl"}],
+          "base": {"spacing_mm": 0.5, "auto": {"bite_opening_mm": 2, "indentation_depth_mm": 4}},
+          "printer": "eden260", "blockout": {}})";
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse_case(ctx, text, std::strlen(text), "real", &c));
+  Mesh reference;
+  DesignReport r0;
+  SPLINTCORE_ASSERT_OK(design_splint(ctx, c, Span<const Mesh>(real.jaw, 2), &reference, &r0));
+  test::TestArena small(size_t{64} << 20);
+  Mesh jaws[2];
+  for (int j = 0; j < 2; ++j) {
+    jaws[j].bind(&small.arena);
+    ASSERT_TRUE(jaws[j].vertices.resize(real.jaw[j].vertices.size()));
+    ASSERT_TRUE(jaws[j].triangles.resize(real.jaw[j].triangles.size()));
+    std::copy(real.jaw[j].vertices.begin(), real.jaw[j].vertices.end(), jaws[j].vertices.begin());
+    std::copy(real.jaw[j].triangles.begin(), real.jaw[j].triangles.end(),
+              jaws[j].triangles.begin());
+  }
+  Mesh splint;
+  DesignReport report;
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&small.arena), c, Span<const Mesh>(jaws, 2), &splint, &report));
+  std::printf("[ figures  ] real case 4 mm deep in 64 MiB: peak arena %zu bytes\n",
+              small.arena.high_water());
+  ASSERT_EQ(report.blockout_jaws, 2u);
+  EXPECT_TRUE(report.blockout_exact[0]);
+  EXPECT_FALSE(report.blockout_exact[1]);  // the refusal that makes this case need the voxels
+  EXPECT_TRUE(report.self_intersection_checked);
+  ASSERT_EQ(splint.triangles.size(), reference.triangles.size());
+  ASSERT_EQ(splint.vertices.size(), reference.vertices.size());
+  EXPECT_TRUE(
+      std::equal(splint.vertices.begin(), splint.vertices.end(), reference.vertices.begin()));
+  EXPECT_EQ(std::memcmp(splint.triangles.data(), reference.triangles.data(),
+                        splint.triangles.size() * sizeof(Triangle)),
+            0);
+  MeshReport check;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, splint, &check));
+  EXPECT_TRUE(require_valid_solid(check).is_ok());
+  EXPECT_LE(check.shells, 3u);  // the splint and two crumbs (above)
+  CaseFile resolved;
+  SPLINTCORE_ASSERT_OK(
+      resolve_case_outline(ctx, c, Span<const Mesh>(real.jaw, 2), &resolved, nullptr));
+  Aabb box;
+  for (const Vec3& p : splint.vertices) box.add(p);
+  const size_t known_locked[2] = {1, 14};
+  for (int j = 0; j < 2; ++j) {
+    const Mesh jaw = test::moved_mesh(ta.arena, real.jaw[j], resolved.jaws[j].transform);
+    const Vec3 d = j == 0 ? resolved.insertion_direction : -resolved.insertion_direction;
+    Vec3 u = std::fabs(d.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+    u = u - d * dot(u, d);
+    u = u * (1.0 / std::sqrt(dot(u, u)));
+    const Vec3 v = cross(d, u);
+    const Vec3 e = box.extent();
+    const double half = 0.5 * std::sqrt(dot(e, e));
+    const double allowed = 0.01 + (report.blockout_exact[j] ? 0.0 : report.blockout[j].inset_used);
+    const test::LockReport lock =
+        test::lock_report(ta.arena, splint, jaw, d, u, v, box.center(), half, 200, allowed);
+    EXPECT_GT(lock.lines_through_jaw, 3000u);
+    EXPECT_LE(lock.locked_lines, known_locked[j]) << j << ": longest " << lock.longest;
+    std::printf(
+        "[ figures  ] real jaw %d, base 4 mm deep: %zu lines through the jaw, %zu locked by "
+        "more than %.3g mm (longest %.2g mm)\n",
+        j, lock.lines_through_jaw, lock.locked_lines, allowed, lock.longest);
   }
 }
 
