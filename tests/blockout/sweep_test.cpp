@@ -188,6 +188,55 @@ TEST(Sweep, SameBytesForEverySlabSize) {
 }
 
 #if defined(SPLINTCORE_WITH_PLATFORM)
+// sweep_state_bound is what the sweep's state takes at most: in an arena of exactly that plus
+// one layer's extractor (marching_cubes_bound(grid, 1), the least slab it picks) the streamed
+// sweep runs, with the bytes it gives with room to spare; jaws given as two meshes are summed.
+TEST(Sweep, RunsInItsStateBoundAndOneExtractorLayer) {
+  TestArena ta(size_t{64} << 20);
+  Mesh jaws[2] = {Mesh(&ta.arena), Mesh(&ta.arena)};
+  frustum(&jaws[0], 2.0, 3.0, 0.0, 4.0, 90);
+  RigidTransform aside;
+  aside.t = Vec3{7.0, 1.0, 0.5};
+  frustum(&jaws[1], 1.5, 2.5, 0.0, 3.0, 40, &aside);
+  SweepOptions o;
+  o.direction = Vec3{0.2, -0.3, 1.0};
+  o.voxel = 0.25;
+  auto run = [&](Arena& arena, SweepStats* stats, std::string* hex) {
+    HashVisitor hv;
+    MarchingCubesVisitor v;
+    v.triangle = HashVisitor::triangle;
+    v.user = &hv;
+    const Status s = sweep_volume(Context(&arena), Span<const Mesh>(jaws, 2), o, v, stats);
+    *hex = hv.hex();
+    return s;
+  };
+  SweepStats roomy;
+  std::string reference;
+  SPLINTCORE_ASSERT_OK(run(ta.arena, &roomy, &reference));
+  ASSERT_GT(roomy.nx, 10u);
+  ASSERT_GT(roomy.extraction.triangles, 1000u);
+  VolumeGrid grid;
+  grid.nx = roomy.nx;
+  grid.ny = roomy.ny;
+  grid.nz = roomy.nz;
+  const uint64_t vertices = jaws[0].vertices.size() + jaws[1].vertices.size();
+  const uint64_t triangles = jaws[0].triangles.size() + jaws[1].triangles.size();
+  const uint64_t need =
+      sweep_state_bound(vertices, triangles, roomy.nx, roomy.ny) + marching_cubes_bound(grid, 1);
+  std::vector<unsigned char> buffer(static_cast<size_t>(need));
+  Arena exact(buffer.data(), buffer.size());
+  SweepStats tight;
+  std::string hex;
+  SPLINTCORE_ASSERT_OK(run(exact, &tight, &hex));
+  EXPECT_EQ(hex, reference);
+  EXPECT_EQ(exact.used(), 0u);
+  std::printf(
+      "[ figures  ] sweep of %llu triangles on %u x %u columns: bound %llu bytes, high "
+      "water %zu bytes, %u layers a slab\n",
+      static_cast<unsigned long long>(triangles), roomy.nx, roomy.ny,
+      static_cast<unsigned long long>(need), exact.high_water(), tight.extraction.layers_per_tile);
+}
+
 TEST(Sweep, SameBytesForEveryThreadCount) {
   TestArena ta(size_t{256} << 20);
   Mesh cone(&ta.arena);
