@@ -19,6 +19,7 @@
 #include <cstdlib>
 #endif
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -194,6 +195,18 @@ inline std::string sha256_hex(const void* data, size_t n) {
 inline std::string mesh_sha256(const Mesh& m) {
   return sha256_hex(m.vertices.data(), m.vertices.size() * sizeof(Vec3)) +
          sha256_hex(m.triangles.data(), m.triangles.size() * sizeof(Triangle));
+}
+
+// A copy of `from` in `arena` (e.g. the real jaws moved into a small arena that must also hold
+// them); false when the arena is exhausted.
+inline bool copy_mesh(Arena& arena, const Mesh& from, Mesh* to) {
+  to->bind(&arena);
+  if (!to->vertices.resize(from.vertices.size()) || !to->triangles.resize(from.triangles.size())) {
+    return false;
+  }
+  std::copy(from.vertices.begin(), from.vertices.end(), to->vertices.begin());
+  std::copy(from.triangles.begin(), from.triangles.end(), to->triangles.begin());
+  return true;
 }
 
 // What a run at caps below its ample peak did (expect_clean_or_same).

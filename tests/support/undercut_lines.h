@@ -24,6 +24,14 @@ struct LockReport {
   std::vector<Vec3> locked_at;  // a point of each locked line (in the plane through center)
 };
 
+// Two unit vectors across d (u, v, d right-handed): the plane the lines start from.
+inline void axes_across(const Vec3& d, Vec3* u, Vec3* v) {
+  Vec3 a = std::fabs(d.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+  a = a - d * dot(a, d);
+  *u = a * (1.0 / std::sqrt(dot(a, a)));
+  *v = cross(d, *u);
+}
+
 inline std::vector<double> crossings(const DistanceIndex& index, const Vec3& origin, const Vec3& d,
                                      double length) {
   std::vector<double> ts;
