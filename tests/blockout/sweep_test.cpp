@@ -370,6 +370,34 @@ Mesh box_mesh(Arena* arena, const float lo[3], const float hi[3]) {
   return m;
 }
 
+// The line check's depth across d (undercut_lines.h) on a unit cube leaving along +z: a point
+// above the cube lies in its sweep as deep as its distance to the nearest side wall; a point
+// beside it is not in the sweep at all.
+TEST(UndercutLines, LateralDepthIsTheDistanceToTheSweepsWall) {
+  TestArena ta(size_t{64} << 20);
+  Context ctx(&ta.arena);
+  const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+  const Mesh cube = box_mesh(&ta.arena, lo, hi);
+  DistanceIndex index;
+  SPLINTCORE_ASSERT_OK(build_distance_index(ctx, cube, DistanceIndexOptions{}, &index));
+  const Vec3 d{0, 0, 1}, u{1, 0, 0}, v{0, 1, 0};
+  const double step = 0.005, slack = 1e-9;  // (r is a multiple of step, rounded)
+  // Lines from z = -1; the point is at z = 2.5 (t = 3.5), above the cube.
+  const auto depth = [&](double x, double y) {
+    return test::lateral_depth(index, Vec3{x, y, -1}, 3.5, d, u, v, 10.0, step, 2.0);
+  };
+  const double near_wall = depth(0.95, 0.5), centre = depth(0.5, 0.5), corner = depth(0.9, 0.8);
+  EXPECT_GT(near_wall, 0.05 - step);
+  EXPECT_LE(near_wall, 0.05 + step + slack);
+  EXPECT_GT(centre, 0.5 - step);
+  EXPECT_LE(centre, 0.5 + step + slack);
+  EXPECT_GT(corner, 0.1 - step);
+  EXPECT_LE(corner, 0.1 + step + slack);
+  EXPECT_EQ(depth(1.2, 0.5), step);  // outside the sweep: the first move frees it
+  // Below the cube's bottom (t = 0.5) nothing of the cube lies before it: out of the sweep.
+  EXPECT_EQ(test::lateral_depth(index, Vec3{0.5, 0.5, -1}, 0.5, d, u, v, 10.0, step, 2.0), step);
+}
+
 TEST(Blockout, UndercutOfABigEndUpConeIsRemoved) {
   // A splint (a box) over the top half of a big-end-up frustum: the cavity the Boolean leaves
   // narrows towards the opening (r 4 at the box's bottom, 5 at the cone's top), so the splint

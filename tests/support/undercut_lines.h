@@ -22,6 +22,9 @@ struct LockReport {
   size_t locked_lines = 0;
   size_t lines_through_jaw = 0;
   std::vector<Vec3> locked_at;  // a point of each locked line (in the plane through center)
+  // With lock_report's `depth_step` > 0, per locked line: how deep its splint lies inside the
+  // jaw's sweep across d (lateral_depth below), the largest over samples of its stretches.
+  std::vector<double> depth;
 };
 
 // Two unit vectors across d (u, v, d right-handed): the plane the lines start from.
@@ -44,9 +47,45 @@ inline std::vector<double> crossings(const DistanceIndex& index, const Vec3& ori
   return ts;
 }
 
+// How far across d a point q of a line (origin + t_q d) lies inside the jaw's sweep: the least
+// radius r, in steps of `step` up to `most` (returned when nothing frees it), at which one of
+// 32 directions across d (u, v) moves q out of the sweep: its line then meets the jaw first
+// beyond q, or not at all. An undercut's depth as the splint must flex to pass it, which the
+// sampled sweep's inset bounds (the length along d, which lock_report counts, is not: a line
+// grazing a wall runs the wall's height inside an inset's sheet).
+inline double lateral_depth(const DistanceIndex& jaw, const Vec3& origin, double t_q, const Vec3& d,
+                            const Vec3& u, const Vec3& v, double length, double step, double most) {
+  for (int i = 1; i * step < most; ++i) {
+    const double r = i * step;
+    for (int k = 0; k < 32; ++k) {
+      const double a = 6.283185307179586 * k / 32;
+      const Vec3 w = u * (r * std::cos(a)) + v * (r * std::sin(a));
+      RayHit hit;
+      if (!ray_intersect(jaw, origin + w, d, length, &hit) || hit.t > t_q) return r;
+    }
+  }
+  return most;
+}
+
+// The largest lateral_depth over 8 samples of each stretch of splint beyond the jaw's first
+// point (crossings `st`), up to 2 mm.
+inline double stretch_depth(const DistanceIndex& jaw, const Vec3& origin, const Vec3& d,
+                            const Vec3& u, const Vec3& v, double length,
+                            const std::vector<double>& st, double first_jaw, double step) {
+  double deepest = 0;
+  for (size_t k = 0; k + 1 < st.size(); k += 2) {
+    const double lo = std::fmax(st[k], first_jaw), hi = st[k + 1];
+    for (int i = 0; hi > lo && i < 8; ++i) {
+      const double t = lo + (hi - lo) * (i + 0.5) / 8;
+      deepest = std::fmax(deepest, lateral_depth(jaw, origin, t, d, u, v, length, step, 2.0));
+    }
+  }
+  return deepest;
+}
+
 inline LockReport lock_report(Arena& arena, const Mesh& splint, const Mesh& jaw, const Vec3& d,
                               const Vec3& u, const Vec3& v, const Vec3& center, double half,
-                              uint32_t n, double tolerance) {
+                              uint32_t n, double tolerance, double depth_step = 0) {
   Context ctx(&arena);
   DistanceIndex si, ji;
   EXPECT_TRUE(build_distance_index(ctx, splint, DistanceIndexOptions{}, &si).is_ok());
@@ -73,6 +112,8 @@ inline LockReport lock_report(Arena& arena, const Mesh& splint, const Mesh& jaw,
       if (beyond > tolerance) {
         ++r.locked_lines;
         r.locked_at.push_back(center + u * a + v * b);
+        if (depth_step > 0)
+          r.depth.push_back(stretch_depth(ji, origin, d, u, v, reach, st, first_jaw, depth_step));
       }
     }
   }
