@@ -310,6 +310,9 @@ struct DesignReport {
   // before the design, so the splint comes out on the tray (centred, bottom at z = 0).
   bool placed_on_tray = false;
   Vec3 tray_translation{};
+  // The splint's shells under the printer's min_wall_mm cubed, all but the largest, taken out
+  // before the printer check (remove_small_shells): crumbs a Boolean can leave.
+  SmallShells crumbs;
   PrintCheck print;
   const char* printer = "";  // the profile used
   // The splint as returned was checked exactly for self-intersections, and has none, by the
@@ -335,7 +338,9 @@ uint32_t exact_blockout_jaws(const DesignReport& report);
 // empty. Stage progress goes to ctx.progress, in this order, each stage only when the case
 // asks for it: "design: fusion" (the overload with scans, below), "design: jaws", "design: base",
 // "design: boolean", "design: blockout", "design: label", "design: thickness", "design: printer",
-// then "design: done" (once the splint is made, too late to cancel). Errors: those of the stages
+// then "design: done" (once the splint is made, too late to cancel). Before the thickness and
+// printer checks, shells of the splint smaller than the printer's min_wall_mm cubed (all but
+// the largest) are taken out: report->crumbs. Errors: those of the stages
 // (naming the stage and, for a jaw, its index and role), kInvalidArgument (jaw count differs from
 // the case, unknown printer, a case with "plan": design_plan() makes its splints), kNonFinite (a
 // jaw vertex that is NaN or infinite), kLimitExceeded (a jaw moved beyond float32 range),

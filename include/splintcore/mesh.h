@@ -255,6 +255,26 @@ uint64_t prepare_scan_bound(uint64_t vertex_count, uint64_t triangle_count);
 Status prepare_scan(const Context& ctx, const Mesh& mesh, const PrepareOptions& options, Mesh* out,
                     PrepareReport* report);
 
+// What remove_small_shells() took out.
+struct SmallShells {
+  uint64_t removed = 0;         // shells
+  uint64_t triangles = 0;       // their triangles
+  double volume_mm3 = 0;        // the sum of their |volume|
+  double largest_kept_mm3 = 0;  // the volume of the largest shell (always kept)
+};
+
+// Arena bytes remove_small_shells() takes at most (all of it given back): 16 a vertex.
+uint64_t remove_small_shells_bound(uint64_t vertex_count);
+
+// Takes out of *mesh, in place, every shell (a set of triangles joined through shared
+// vertices) whose |volume| is below `min_volume` (mm^3), except the largest: e.g. the crumbs a
+// Boolean of nearly touching surfaces can leave beside a part. The kept triangles and vertices
+// stay in their order (renumbered); with nothing to take out the mesh is not touched. Vertices
+// no triangle uses are kept. Volumes are the divergence sums in triangle order (mesh_volume's,
+// about the box centre), so the choice is the same on every platform. Errors: kInvalidMesh (an
+// index out of range: named), kArenaExhausted (then *mesh is unchanged).
+Status remove_small_shells(const Context& ctx, double min_volume, Mesh* mesh, SmallShells* removed);
+
 // Applies a rigid transform to every vertex in place.
 void transform_mesh(const RigidTransform& x, Mesh* mesh);
 

@@ -885,6 +885,11 @@ Status design_detail::design_splint_registered(const Context& ctx, const CaseFil
     SPLINTCORE_RETURN_IF_ERROR(stage("design: label"));
     SPLINTCORE_RETURN_IF_ERROR(label_splint(ctx, c, &cut, report));
   }
+  // Shells too small to print apart (under the printer's thinnest wall cubed), the crumbs a
+  // Boolean of nearly touching surfaces can leave beside the splint, are taken out and counted.
+  const double wall = profile->min_wall_mm;
+  SPLINTCORE_RETURN_IF_ERROR(stage_error(
+      remove_small_shells(ctx, wall * wall * wall, &cut, &report->crumbs), "crumb removal"));
   if (c.min_thickness > 0) {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: thickness"));
     SPLINTCORE_RETURN_IF_ERROR(stage_error(

@@ -289,6 +289,8 @@ void write_checks(JsonWriter& w, const CaseFile& c, const DesignReport& report) 
   w.add("edge_manifold", report.print.mesh.edge_manifold());
   w.add("outward", report.print.mesh.outward());
   w.add("shells", report.print.mesh.shells);
+  w.add("crumbs_removed", report.crumbs.removed);
+  w.add("crumbs_volume_mm3", report.crumbs.volume_mm3);
   w.add("fits_tray", report.print.fits);
   w.add("fits_tray_rotated", report.print.fits_rotated);
   w.add("layers", report.print.layers);

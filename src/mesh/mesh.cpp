@@ -3,6 +3,10 @@
 // are the same on every platform.
 #include "splintcore/mesh.h"
 
+#include <cmath>
+
+#include "core/union_find.h"
+
 namespace splintcore {
 
 Aabb mesh_bounds(const Mesh& mesh) {
@@ -32,6 +36,91 @@ double mesh_volume(const Mesh& mesh) {
 
 void transform_mesh(const RigidTransform& x, Mesh* mesh) {
   for (Vec3& v : mesh->vertices) v = x.apply_point(v);
+}
+
+uint64_t remove_small_shells_bound(uint64_t vertex_count) {
+  return arena_array_bound<uint32_t>(vertex_count) + arena_array_bound<double>(vertex_count) +
+         arena_array_bound<uint32_t>(vertex_count);
+}
+
+Status remove_small_shells(const Context& ctx, double min_volume, Mesh* mesh,
+                           SmallShells* removed) {
+  *removed = SmallShells{};
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);
+  const uint64_t nv64 = mesh->vertices.size(), nt = mesh->triangles.size();
+  if (nv64 >= UINT32_MAX) {
+    return make_error(StatusCode::kLimitExceeded, "too many vertices for 32-bit ids: ", nv64);
+  }
+  const uint32_t nv = static_cast<uint32_t>(nv64);
+  Triangle* tris = mesh->triangles.data();
+  for (uint64_t t = 0; t < nt; ++t) {
+    for (uint32_t k : tris[t].v) {
+      if (k >= nv) {
+        return make_error(StatusCode::kInvalidMesh, "triangle ", t, " refers to vertex ", k,
+                          " but the mesh has ", nv, " vertices")
+            .at_index(t);
+      }
+    }
+  }
+  // Shells: the vertices' components; per root, six times its volume and its triangles.
+  UnionFind shells;
+  if (!shells.init(arena, nv)) return arena.exhausted_status();
+  double* six_volume = arena.allocate_array<double>(nv);
+  uint32_t* count = arena.allocate_array<uint32_t>(nv);  // then per vertex its new id, or kGone
+  if ((six_volume == nullptr || count == nullptr) && nv > 0) return arena.exhausted_status();
+  for (uint64_t t = 0; t < nt; ++t) {
+    shells.unite(tris[t].v[0], tris[t].v[1]);
+    shells.unite(tris[t].v[1], tris[t].v[2]);
+  }
+  for (uint32_t i = 0; i < nv; ++i) six_volume[i] = 0, count[i] = 0;
+  const Vec3 c = mesh_bounds(*mesh).center();
+  const Vec3* v = mesh->vertices.data();
+  for (uint64_t t = 0; t < nt; ++t) {
+    const uint32_t* k = tris[t].v;
+    const uint32_t root = shells.find(k[0]);
+    six_volume[root] += dot(v[k[0]] - c, cross(v[k[1]] - c, v[k[2]] - c));
+    ++count[root];
+  }
+  uint32_t largest = nv;  // the shell of the largest volume (the first such root)
+  for (uint32_t i = 0; i < nv; ++i) {
+    if (count[i] > 0 && (largest == nv || six_volume[i] > six_volume[largest])) largest = i;
+  }
+  if (largest == nv) return Status::ok();  // no triangles
+  removed->largest_kept_mm3 = six_volume[largest] / 6.0;
+  constexpr uint32_t kGone = ~uint32_t{0};
+  for (uint32_t i = 0; i < nv; ++i) {
+    const bool small = count[i] > 0 && i != largest && std::fabs(six_volume[i]) < 6.0 * min_volume;
+    if (small) {
+      ++removed->removed;
+      removed->triangles += count[i];
+      removed->volume_mm3 += std::fabs(six_volume[i]) / 6.0;
+    }
+    count[i] = small ? kGone : 0;  // per root now: taken out or not
+  }
+  if (removed->removed == 0) return Status::ok();
+  // New vertex ids in order, the kept vertices moved down to them; then the kept triangles.
+  uint32_t next = 0;
+  Vec3* verts = mesh->vertices.data();
+  for (uint32_t i = 0; i < nv; ++i) {
+    const uint32_t root = shells.find(i);
+    if (count[root] == kGone && root != i) {
+      count[i] = kGone;
+      continue;
+    }
+    if (count[i] == kGone) continue;  // a root taken out (its mark stays for its members)
+    verts[next] = verts[i];
+    count[i] = next++;
+  }
+  uint64_t kept = 0;
+  for (uint64_t t = 0; t < nt; ++t) {
+    const uint32_t* k = tris[t].v;
+    if (count[k[0]] == kGone) continue;
+    tris[kept++] = Triangle{{count[k[0]], count[k[1]], count[k[2]]}};
+  }
+  mesh->vertices.shrink_size(next);
+  mesh->triangles.shrink_size(kept);
+  return Status::ok();
 }
 
 void move_mesh_down(Arena& arena, const Arena::Marker& start, const Mesh& mesh, Mesh* out,

@@ -77,8 +77,9 @@ TEST(ExactBlockoutRealData, NoLineLockedOnEitherJaw) {
 // holds the two jaws (887k triangles, 21 MB), as `splintcore design --memory-cap 64M` runs it:
 // the same splint as with room to spare, closed, manifold and outward; then the independent
 // line check on both jaws.
-// What the line check finds here (the notes, 2026-12-03): the splint has two crumbs
-// beside its one real shell (26 and 8 triangles, each under 1e-4 mm^3); below 0.01 mm many
+// What the line check finds here (the notes, 2026-12-03): the Boolean leaves two crumbs
+// beside the splint (26 and 8 triangles, each under 1e-4 mm^3), which the design takes out
+// (DesignReport::crumbs); below 0.01 mm many
 // lines touch the jaw (the Boolean's nudges, about 5e-4 mm, moved the splint); beyond it plus
 // the voxel jaw's inset, 1 line of 3,948 on the maxilla (0.88 mm long along d) and 14 of 4,020
 // on the mandible (up to 1.8 mm). A length along d is not what either method bounds: a line
@@ -123,7 +124,11 @@ TEST(ExactBlockoutRealData, DeepBaseIn64MiB) {
   MeshReport check;
   SPLINTCORE_ASSERT_OK(check_mesh(ctx, splint, &check));
   EXPECT_TRUE(require_valid_solid(check).is_ok());
-  EXPECT_LE(check.shells, 3u);  // the splint and two crumbs (above)
+  // Two crumbs (above) were taken out: the splint is one piece.
+  EXPECT_EQ(check.shells, 1u);
+  EXPECT_EQ(report.crumbs.removed, 2u);
+  EXPECT_LT(report.crumbs.volume_mm3, 1e-3);
+  EXPECT_EQ(report.print.mesh.shells, 1u);
   CaseFile resolved;
   SPLINTCORE_ASSERT_OK(
       resolve_case_outline(ctx, c, Span<const Mesh>(real.jaw, 2), &resolved, nullptr));

@@ -102,6 +102,23 @@ TEST(BoundExact, CheckMesh) {
   }
 }
 
+TEST(BoundExact, RemoveSmallShells) {
+  for (const Input& in : inputs()) {
+    Welded w(in);
+    // Every shell but the largest taken out (the real dentition: 30 of its 31 teeth), from a
+    // copy outside the arena measured.
+    TestArena copy(static_cast<size_t>(w.v() * sizeof(Vec3) + w.t() * sizeof(Triangle)) + 4096);
+    const Arena::Marker empty = copy.arena.mark();
+    expect_fits(in, "remove_small_shells", remove_small_shells_bound(w.v()), [&](Arena& arena) {
+      copy.arena.rewind(empty);
+      Mesh mesh;
+      if (!test::copy_mesh(copy.arena, w.mesh, &mesh)) return copy.arena.exhausted_status();
+      SmallShells removed;
+      return remove_small_shells(Context(&arena), 1e30, &mesh, &removed);
+    });
+  }
+}
+
 TEST(BoundExact, PrepareScan) {
   for (const Input& in : inputs()) {
     Welded w(in);

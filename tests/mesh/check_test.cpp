@@ -4,6 +4,8 @@
 #include <map>
 #include <random>
 #include <set>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "support/test_util.h"
@@ -444,6 +446,92 @@ TEST(CheckClosedOriented, HubVertexOfAHundredThousandTrianglesAndFirstBadEdge) {
     }
   }
   EXPECT_EQ(tri, first_user);
+}
+
+// remove_small_shells: a 2 x 3 x 4 box with a crumb (a 0.1 mm cube) beside it and a void (an
+// inside-out 0.2 mm cube) inside it, the crumb's triangles first (so its vertices have the
+// first ids and the box's are renumbered).
+std::vector<SoupTriangle> box_with_crumbs() {
+  const float clo[3] = {5, 5, 5}, chi[3] = {5.1f, 5.1f, 5.1f};
+  const float vlo[3] = {1, 1, 1}, vhi[3] = {1.2f, 1.2f, 1.2f};
+  std::vector<SoupTriangle> soup = shapes::box(clo, chi);
+  for (const SoupTriangle& t : unit_box()) soup.push_back(t);
+  for (SoupTriangle t : shapes::box(vlo, vhi)) {
+    for (int k = 0; k < 3; ++k) std::swap(t.p[1][k], t.p[2][k]);
+    soup.push_back(t);
+  }
+  return soup;
+}
+
+TEST(SmallShells, CrumbAndVoidGoTheBoxStaysBitForBit) {
+  TestArena t;
+  Context ctx(&t.arena);
+  Mesh mesh, alone;
+  SPLINTCORE_ASSERT_OK(test::mesh_from_soup(t.arena, box_with_crumbs(), &mesh));
+  SPLINTCORE_ASSERT_OK(test::mesh_from_soup(t.arena, unit_box(), &alone));
+  ASSERT_EQ(mesh.triangles.size(), 36u);
+  SmallShells removed;
+  SPLINTCORE_ASSERT_OK(remove_small_shells(ctx, 0.01, &mesh, &removed));
+  EXPECT_EQ(removed.removed, 2u);
+  EXPECT_EQ(removed.triangles, 24u);
+  EXPECT_NEAR(removed.volume_mm3, 0.001 + 0.008, 1e-6);
+  EXPECT_DOUBLE_EQ(removed.largest_kept_mm3, 24.0);
+  // What is left is the box as welded alone: the same vertices, ids and triangle order.
+  EXPECT_EQ(test::mesh_sha256(mesh), test::mesh_sha256(alone));
+  MeshReport r;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, mesh, &r));
+  EXPECT_TRUE(r.is_valid_solid());
+}
+
+TEST(SmallShells, NothingBelowTheBoundLeavesTheMeshAlone) {
+  TestArena t;
+  Context ctx(&t.arena);
+  Mesh mesh;
+  SPLINTCORE_ASSERT_OK(test::mesh_from_soup(t.arena, box_with_crumbs(), &mesh));
+  const std::string before = test::mesh_sha256(mesh);
+  SmallShells removed;
+  SPLINTCORE_ASSERT_OK(remove_small_shells(ctx, 1e-4, &mesh, &removed));  // under 0.001 mm^3
+  EXPECT_EQ(removed.removed, 0u);
+  EXPECT_EQ(test::mesh_sha256(mesh), before);
+  // The largest shell stays whatever the bound: here the crumb alone.
+  Mesh crumb;
+  const float lo[3] = {5, 5, 5}, hi[3] = {5.1f, 5.1f, 5.1f};
+  SPLINTCORE_ASSERT_OK(test::mesh_from_soup(t.arena, shapes::box(lo, hi), &crumb));
+  SPLINTCORE_ASSERT_OK(remove_small_shells(ctx, 1e9, &crumb, &removed));
+  EXPECT_EQ(removed.removed, 0u);
+  EXPECT_EQ(crumb.triangles.size(), 12u);
+}
+
+TEST(SmallShells, RunsInItsBoundAndLessIsACleanError) {
+  TestArena t;
+  Mesh mesh;
+  SPLINTCORE_ASSERT_OK(test::mesh_from_soup(t.arena, box_with_crumbs(), &mesh));
+  const std::string before = test::mesh_sha256(mesh);
+  const uint64_t bound = remove_small_shells_bound(mesh.vertices.size());
+  SmallShells removed;
+  {
+    // A byte short of the three arrays themselves (the bound adds their alignment slack).
+    TestArena tight(16 * mesh.vertices.size() - 1);
+    const Status s = remove_small_shells(Context(&tight.arena), 0.01, &mesh, &removed);
+    EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << test::format(s);
+    EXPECT_EQ(test::mesh_sha256(mesh), before);
+  }
+  TestArena exact(static_cast<size_t>(bound));
+  SPLINTCORE_ASSERT_OK(remove_small_shells(Context(&exact.arena), 0.01, &mesh, &removed));
+  EXPECT_EQ(removed.removed, 2u);
+  EXPECT_EQ(exact.arena.used(), 0u);  // all given back
+}
+
+TEST(SmallShells, AnIndexOutOfRangeIsNamed) {
+  TestArena t;
+  Mesh mesh;
+  SPLINTCORE_ASSERT_OK(test::mesh_from_soup(t.arena, unit_box(), &mesh));
+  mesh.triangles[7].v[2] = 99;
+  SmallShells removed;
+  const Status s = remove_small_shells(Context(&t.arena), 0.01, &mesh, &removed);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_NE(test::format(s).find("triangle 7 refers to vertex 99"), std::string::npos)
+      << test::format(s);
 }
 
 }  // namespace

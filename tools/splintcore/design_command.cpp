@@ -773,6 +773,12 @@ void Design::print_summary() const {
           t.spot_count);
     }
   }
+  if (report.crumbs.removed > 0) {
+    std::printf(
+        "crumbs: %llu separate shell(s) of %.3g mm^3 in all taken out (under the printer's "
+        "thinnest wall cubed)\n",
+        static_cast<unsigned long long>(report.crumbs.removed), report.crumbs.volume_mm3);
+  }
   std::printf(
       "splint: %zu triangles, %.3f mm^3, closed, manifold, no self-intersection; "
       "printable on %s (%s%s)\n",
