@@ -530,6 +530,10 @@ typedef struct sc_design_report {
   double fusion_rms_mm[SC_MAX_BLOCKOUT_JAWS];
   double fusion_overlap[SC_MAX_BLOCKOUT_JAWS];
   double fusion_transform[SC_MAX_BLOCKOUT_JAWS][16];
+  /* Shells of the splint under the printer's thinnest wall cubed (all but the largest), taken
+   * out before the printer check, and their total volume: crumbs a Boolean can leave. */
+  uint64_t crumbs_removed;
+  double crumbs_volume_mm3;
 } sc_design_report;
 
 /* Designs the splint for `c` from `jaws` (jaws[i] is the mesh of the case's jaw i, as read; it

@@ -1047,6 +1047,8 @@ sc_status sc_design_scans(sc_context* ctx, const sc_case* c, const sc_mesh* cons
   report->extent_mm[1] = r.print.extent.y;
   report->extent_mm[2] = r.print.extent.z;
   report->layers = r.print.layers;
+  report->crumbs_removed = r.crumbs.removed;
+  report->crumbs_volume_mm3 = r.crumbs.volume_mm3;
   report->printer = r.printer;
   report->outlined = r.outlined ? 1 : 0;
   for (size_t i = 0; i < jaw_count && i < DesignReport::kMaxFusedJaws; ++i) {

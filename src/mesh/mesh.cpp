@@ -48,13 +48,14 @@ Status remove_small_shells(const Context& ctx, double min_volume, Mesh* mesh,
   *removed = SmallShells{};
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
-  const uint64_t nv64 = mesh->vertices.size(), nt = mesh->triangles.size();
+  const uint64_t nv64 = mesh->vertices.size();
+  const size_t nt = mesh->triangles.size();
   if (nv64 >= UINT32_MAX) {
     return make_error(StatusCode::kLimitExceeded, "too many vertices for 32-bit ids: ", nv64);
   }
   const uint32_t nv = static_cast<uint32_t>(nv64);
   Triangle* tris = mesh->triangles.data();
-  for (uint64_t t = 0; t < nt; ++t) {
+  for (size_t t = 0; t < nt; ++t) {
     for (uint32_t k : tris[t].v) {
       if (k >= nv) {
         return make_error(StatusCode::kInvalidMesh, "triangle ", t, " refers to vertex ", k,
@@ -69,14 +70,14 @@ Status remove_small_shells(const Context& ctx, double min_volume, Mesh* mesh,
   double* six_volume = arena.allocate_array<double>(nv);
   uint32_t* count = arena.allocate_array<uint32_t>(nv);  // then per vertex its new id, or kGone
   if ((six_volume == nullptr || count == nullptr) && nv > 0) return arena.exhausted_status();
-  for (uint64_t t = 0; t < nt; ++t) {
+  for (size_t t = 0; t < nt; ++t) {
     shells.unite(tris[t].v[0], tris[t].v[1]);
     shells.unite(tris[t].v[1], tris[t].v[2]);
   }
   for (uint32_t i = 0; i < nv; ++i) six_volume[i] = 0, count[i] = 0;
   const Vec3 c = mesh_bounds(*mesh).center();
   const Vec3* v = mesh->vertices.data();
-  for (uint64_t t = 0; t < nt; ++t) {
+  for (size_t t = 0; t < nt; ++t) {
     const uint32_t* k = tris[t].v;
     const uint32_t root = shells.find(k[0]);
     six_volume[root] += dot(v[k[0]] - c, cross(v[k[1]] - c, v[k[2]] - c));
@@ -112,8 +113,8 @@ Status remove_small_shells(const Context& ctx, double min_volume, Mesh* mesh,
     verts[next] = verts[i];
     count[i] = next++;
   }
-  uint64_t kept = 0;
-  for (uint64_t t = 0; t < nt; ++t) {
+  size_t kept = 0;
+  for (size_t t = 0; t < nt; ++t) {
     const uint32_t* k = tris[t].v;
     if (count[k[0]] == kGone) continue;
     tris[kept++] = Triangle{{count[k[0]], count[k[1]], count[k[2]]}};

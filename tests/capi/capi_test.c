@@ -667,6 +667,7 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
   high_water = sc_arena_high_water(f.ctx);
   CHECK(calls > 0 && g_saw_boolean);
   CHECK(report.printable == 1);
+  CHECK(report.crumbs_removed == 0 && report.crumbs_volume_mm3 == 0); /* one piece */
   CHECK(report.jaw_triangles == 12000);
   CHECK(report.splint_triangles == sc_mesh_triangle_count(splint));
   CHECK(report.boolean_intersecting_pairs > 0);
