@@ -272,7 +272,8 @@ uint64_t remove_small_shells_bound(uint64_t vertex_count);
 // stay in their order (renumbered); with nothing to take out the mesh is not touched. Vertices
 // no triangle uses are kept. Volumes are the divergence sums in triangle order (mesh_volume's,
 // about the box centre), so the choice is the same on every platform. Errors: kInvalidMesh (an
-// index out of range: named), kArenaExhausted (then *mesh is unchanged).
+// index out of range: named), kLimitExceeded (2^32 - 1 vertices or more), kArenaExhausted;
+// on an error *mesh is unchanged.
 Status remove_small_shells(const Context& ctx, double min_volume, Mesh* mesh, SmallShells* removed);
 
 // Applies a rigid transform to every vertex in place.
