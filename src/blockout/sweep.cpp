@@ -316,10 +316,15 @@ Status make_raw_layer(Sweep& s, uint32_t k) {
     if (!s.active.push_back(s.next_tri)) return s.ctx->arena->exhausted_status();
     ++s.next_tri;
   }
+  // A triangle wholly below the segment has given every column all it can: a column in its
+  // shadow met it at an earlier layer (it is inside), and along any other column the distance
+  // to it grows with w above its top (the square's derivative is 2 (w - w of the closest
+  // point) > 0), so the segment that held the column's closest approach (at a height within
+  // the triangle's, while it was active) gave the least; this segment is farther.
   size_t kept = 0;
   for (size_t n = 0; n < s.active.size(); ++n) {
     const uint32_t t = s.active[n];
-    if (s.tri_wmax[t] < w_lo - s.band) continue;  // passed for good
+    if (s.tri_wmax[t] < w_lo) continue;  // passed for good
     s.active[kept++] = t;
   }
   s.active.shrink_size(kept);
