@@ -266,10 +266,26 @@ size_t triangles_meeting_box(const DistanceIndex& index, const Aabb& box, uint32
 // boxes; the answer never depends on it. `boxes` (or null), ids' bounds as
 // triangles_meeting_box gives them, spare computing them for each query (the same filters, the
 // same bits). Needs a full index (not pairs_only). No arena.
+//
+// `hint` (or null): a point off the surface and its side (kInside or kOutside; kNear: none yet),
+// which the call sets to a and its side whenever it answers kInside or kOutside. Give one only
+// when every triangle that meets the segment from hint->point to a is among ids (e.g. both lie
+// in the box ids were found for), on a mesh that is closed_manifold and does not cross itself
+// (the caller's to know: a splint from the Boolean). Then abc's reach is tested among ids
+// first, and a's side is the hint's, changed by each triangle the segment crosses (exact
+// orient3d signs; a segment that touches an edge, a corner or a plane is not counted, and the
+// closest point decides instead): for the next triangle of a surface streamed out in order,
+// a few exact signs instead of a closest-point search. The answer is the same; *closest is
+// then left as it was.
+struct SideHint {
+  Vec3 point{};
+  TriangleSide side = TriangleSide::kNear;
+};
 bool triangle_side_among(const DistanceIndex& index, const uint32_t* ids, size_t count,
                          double window_reach, const Vec3& a, const Vec3& b, const Vec3& c,
                          double reach, TriangleSide* side, ClosestPoint* closest = nullptr,
-                         uint32_t seed = kNoNeighbor, const Aabb* boxes = nullptr);
+                         uint32_t seed = kNoNeighbor, const Aabb* boxes = nullptr,
+                         SideHint* hint = nullptr);
 
 // Every triangle whose bounds overlap `box`, appended to `out` in ascending id order.
 Status triangles_in_box(const Context& ctx, const DistanceIndex& index, const Aabb& box,

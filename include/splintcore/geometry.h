@@ -216,6 +216,14 @@ bool collinear3d(const Vec3& a, const Vec3& b, const Vec3& c);
 bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
                                  const Vec3& c);
 
+// How the closed segment pq meets the closed triangle abc, for counting crossings: kMisses (no
+// common point), kCrosses (p and q strictly on opposite sides of abc's plane and the segment
+// through abc's interior, away from its edges), else kTouches (it meets an edge or a corner,
+// an endpoint lies in the plane, or abc is degenerate): a crossing count is then not decided.
+enum class SegmentCrossing : uint8_t { kMisses, kCrosses, kTouches };
+SegmentCrossing segment_crossing(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
+                                 const Vec3& c);
+
 // Do the closed triangles abc and def meet (touching counts)?
 bool triangles_intersect(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, const Vec3& e,
                          const Vec3& f);

@@ -38,6 +38,17 @@ constexpr uint8_t kSurface = 1, kOutside = 2, kNear = 4, kGrowX = 8, kGrowY = 16
 constexpr double kWindowVoxels = 1.5;
 constexpr double kWindowReachVoxels = 1.5;
 constexpr size_t kWindowTriangles = 1024;
+// Points whose side is known, kHintSlots a task, by the cube (of the window's growth a side)
+// they lie in: when the window moves on (a new row of cells), one from the same cube lies in it
+// and may start the count of crossings (triangle_side_among's hint) instead of a closest-point
+// search.
+constexpr uint32_t kHintSlots = 1024;
+// A hint in a slot: the swept triangles' corners are float32 (the extractor's log), so a point
+// is kept in 12 bytes, exactly.
+struct KeptHint {
+  float p[3] = {0, 0, 0};
+  TriangleSide side = TriangleSide::kNear;
+};
 // The filter's copies for the extractor's tasks (SweepOptions::keep_tasks).
 constexpr uint32_t kKeepTasks = 4;
 
@@ -55,7 +66,32 @@ struct NearSplint {
   Aabb* window_boxes = nullptr;  // the window's triangles' bounds (kWindowTriangles)
   mutable Aabb window;
   mutable size_t window_count = 0;  // kWindowTriangles + 1: too many, the tree answers
+  mutable SideHint hint;            // the last side found, while it lies in the window
+  KeptHint* hints = nullptr;        // kHintSlots (see above)
 };
+
+// The slot of hints for the cube that holds p.
+KeptHint& hint_slot(const NearSplint& g, const Vec3& p) {
+  uint32_t h = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double f = std::floor((p[k] - g.origin[k]) / g.window_grow);
+    const int64_t i = f < 0 ? -1 : (f > 1e9 ? 1000000000 : static_cast<int64_t>(f));
+    h = h * 0x9E3779B1u + static_cast<uint32_t>(i);
+  }
+  return g.hints[(h ^ (h >> 15)) & (kHintSlots - 1)];
+}
+
+// p's side (not kNear), into its slot when p is float32 (the swept triangles' corners are).
+void keep_hint(const NearSplint& g, const Vec3& p, TriangleSide side) {
+  const float f[3] = {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)};
+  if (side == TriangleSide::kNear || static_cast<double>(f[0]) != p.x ||
+      static_cast<double>(f[1]) != p.y || static_cast<double>(f[2]) != p.z) {
+    return;
+  }
+  KeptHint& slot = hint_slot(g, p);
+  for (int k = 0; k < 3; ++k) slot.p[k] = f[k];
+  slot.side = side;
+}
 
 // The fine test of a swept triangle near the splint's surface (see the top): from the window
 // when it holds the triangle and decides, else by the tree.
@@ -70,16 +106,31 @@ TriangleSide fine_side(const NearSplint& g, const Aabb& box, const Vec3& p, cons
           triangles_meeting_box(*g.index, Aabb{g.window.lo - reach, g.window.hi + reach},
                                 g.window_ids, kWindowTriangles, g.window_boxes);
     }
+    // The hint's point and p lie in the window, and so does the segment between them: every
+    // splint triangle it meets is among the window's.
+    if (g.hint.side == TriangleSide::kNear || !g.window.contains(g.hint.point)) {
+      const KeptHint& kept = hint_slot(g, p);
+      const Vec3 at{kept.p[0], kept.p[1], kept.p[2]};
+      g.hint = kept.side != TriangleSide::kNear && g.window.contains(at) ? SideHint{at, kept.side}
+                                                                         : SideHint{};
+    }
     TriangleSide side = TriangleSide::kOutside;
     ClosestPoint closest;
+    closest.triangle = g.seed;
     if (g.window_count <= kWindowTriangles &&
         triangle_side_among(*g.index, g.window_ids, g.window_count, g.window_reach, p, q, r,
-                            g.reach, &side, &closest, g.seed, g.window_boxes)) {
+                            g.reach, &side, &closest, g.seed, g.window_boxes, &g.hint)) {
       g.seed = closest.triangle;
+      keep_hint(g, p, side);
       return side;
     }
   }
-  return triangle_side(*g.index, p, q, r, g.reach, &g.seed);
+  const TriangleSide side = triangle_side(*g.index, p, q, r, g.reach, &g.seed);
+  if (g.hints != nullptr) {
+    g.hint = side != TriangleSide::kNear ? SideHint{p, side} : SideHint{};
+    keep_hint(g, p, side);
+  }
+  return side;
 }
 
 inline size_t cell_at(const NearSplint& g, int64_t x, int64_t y, int64_t z) {
@@ -126,8 +177,9 @@ bool near_splint(const void* user, const Vec3& p, const Vec3& q, const Vec3& r) 
   // Near the surface: kept when it comes within reach of a splint triangle (meeting included,
   // decided exactly); else it lies at least that far from the surface, wholly on the side of
   // its first corner. The extractor's triangles come in order, each near the one before it:
-  // a window of splint triangles serves the next ones, and the previous answer seeds the tree's
-  // query (the answer depends on neither).
+  // a window of splint triangles serves the next ones, the last side found nearby (a hint: the
+  // splint is closed and does not cross itself) gives the next one's by counting crossings, and
+  // the previous answer seeds the tree's query (the answer depends on none of them).
   return fine_side(g, box, p, q, r) != TriangleSide::kOutside;
 }
 
@@ -261,9 +313,12 @@ Status sweep_near_splint(const Context& ctx, const Mesh& splint, const Aabb& bou
     tasks[i] = near;
     tasks[i].window_ids = arena.allocate_array<uint32_t>(kWindowTriangles);
     tasks[i].window_boxes = arena.allocate_array<Aabb>(kWindowTriangles);
-    if (tasks[i].window_ids == nullptr || tasks[i].window_boxes == nullptr) {
+    tasks[i].hints = arena.allocate_array<KeptHint>(kHintSlots);
+    if (tasks[i].window_ids == nullptr || tasks[i].window_boxes == nullptr ||
+        tasks[i].hints == nullptr) {
       return arena.exhausted_status();
     }
+    for (uint32_t k = 0; k < kHintSlots; ++k) tasks[i].hints[k] = KeptHint{};
     users[i] = &tasks[i];
   }
   so.keep_triangle = near_splint;

@@ -851,6 +851,17 @@ bool triangle_within_reach_boxed(const Mesh& mesh, uint32_t t, const Vec3& a, co
       return false;
     }
   }
+  // The same with the roles swapped: t wholly on one side of abc's plane, farther than reach.
+  const Vec3 m = cross(b - a, c - a);
+  const double mlen = std::sqrt(dot(m, m));
+  if (mlen > 0) {
+    const double limit = (reach + 1e-9 * (1.0 + std::fabs(dot(m, a)) / mlen)) * mlen;
+    const double d0 = dot(m, v[tri.v[0]] - a), d1 = dot(m, v[tri.v[1]] - a),
+                 d2 = dot(m, v[tri.v[2]] - a);
+    if ((d0 > limit && d1 > limit && d2 > limit) || (d0 < -limit && d1 < -limit && d2 < -limit)) {
+      return false;
+    }
+  }
   return triangle_pair_distance(a, b, c, v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], nullptr, nullptr) <
          reach;
 }
@@ -917,12 +928,84 @@ TriangleSide side_from_closest(const DistanceIndex& index, const Vec3& a, const 
 
 }  // namespace
 
+namespace {
+
+// Does some triangle among ids come within reach of abc (exact)?
+bool near_among(const Mesh& mesh, const uint32_t* ids, size_t count, const Aabb* boxes,
+                const Vec3& a, const Vec3& b, const Vec3& c, double reach) {
+  const Aabb box = reach_box(a, b, c, reach);
+  for (size_t i = 0; i < count; ++i) {
+    if (boxes != nullptr
+            ? boxes[i].overlaps(box) && triangle_within_reach_boxed(mesh, ids[i], a, b, c, reach)
+            : triangle_within_reach(mesh, ids[i], box, a, b, c, reach)) {
+      return true;
+    }
+  }
+  return false;
+}
+
+// With a hint (the caller's conditions, triangle_side_among): whether some triangle among ids
+// comes within reach of abc (exact), and else, in the same pass, a's side from the hint's: the
+// parity of the triangles the segment from the hint's point to a crosses. kNear, or a's side,
+// or none (the segment touches a triangle: not decided so).
+bool hinted_side(const Mesh& mesh, const uint32_t* ids, size_t count, const Aabb* boxes,
+                 const SideHint& hint, const Vec3& a, const Vec3& b, const Vec3& c, double reach,
+                 bool* near, TriangleSide* side) {
+  const Aabb box = reach_box(a, b, c, reach);
+  Aabb seg;
+  seg.add(hint.point);
+  seg.add(a);
+  const Vec3* v = mesh.vertices.data();
+  bool flip = false, decided = hint.side != TriangleSide::kNear;
+  for (size_t i = 0; i < count; ++i) {
+    const Aabb tb = boxes != nullptr ? boxes[i] : triangle_box(mesh, ids[i]);
+    if (tb.overlaps(box) && triangle_within_reach_boxed(mesh, ids[i], a, b, c, reach)) {
+      *near = true;
+      return true;
+    }
+    if (!decided || !tb.overlaps(seg)) continue;
+    const Triangle& t = mesh.triangles[ids[i]];
+    switch (segment_crossing(hint.point, a, v[t.v[0]], v[t.v[1]], v[t.v[2]])) {
+      case SegmentCrossing::kMisses: break;
+      case SegmentCrossing::kCrosses: flip = !flip; break;
+      case SegmentCrossing::kTouches: decided = false; break;
+    }
+  }
+  *near = false;
+  if (!decided) return false;
+  const bool inside = (hint.side == TriangleSide::kInside) != flip;
+  *side = inside ? TriangleSide::kInside : TriangleSide::kOutside;
+  return true;
+}
+
+}  // namespace
+
 bool triangle_side_among(const DistanceIndex& index, const uint32_t* ids, size_t count,
                          double window_reach, const Vec3& a, const Vec3& b, const Vec3& c,
                          double reach, TriangleSide* side, ClosestPoint* closest, uint32_t seed,
-                         const Aabb* boxes) {
+                         const Aabb* boxes, SideHint* hint) {
   SPLINTCORE_ASSERT(index.vertex_start.size() > 0 && reach <= window_reach);
   if (count == 0) return false;
+  const Mesh& mesh = *index.mesh;
+  // With a hint: abc's reach among ids (every triangle within reach of abc is among them),
+  // then a's side from the hint's. The same answer as below: there kNear is exactly "some
+  // triangle within reach" too (a triangle within reach of abc is within reach + extent of a),
+  // and otherwise a's side, which is the side a closed surface that does not cross itself puts
+  // it on, as the parity of crossings does.
+  bool near_known = false;
+  if (hint != nullptr && index.closed_manifold) {
+    bool near = false;
+    const bool decided = hinted_side(mesh, ids, count, boxes, *hint, a, b, c, reach, &near, side);
+    if (near) {
+      *side = TriangleSide::kNear;
+      return true;
+    }
+    near_known = true;
+    if (decided) {
+      *hint = SideHint{a, *side};
+      return true;
+    }
+  }
   // a's closest triangle among ids: every other triangle's box misses abc's box grown by
   // window_reach, so it lies at least window_reach from a; closer than that (with a margin far
   // above the rounding), the best among ids is the best of all, the same (distance, triangle)
@@ -930,7 +1013,7 @@ bool triangle_side_among(const DistanceIndex& index, const uint32_t* ids, size_t
   // The seed first: the least (distance, id) over the seed and ids is the least over ids
   // whenever that is nearer than window_reach (a seed that near is among ids).
   ClosestSearch search(index, a, HUGE_VAL);
-  if (seed < index.mesh->triangles.size()) search.consider(seed);
+  if (seed < mesh.triangles.size()) search.consider(seed);
   if (boxes != nullptr) {
     for (size_t i = 0; i < count; ++i) search.consider_boxed(ids[i], boxes[i]);
   } else {
@@ -942,17 +1025,10 @@ bool triangle_side_among(const DistanceIndex& index, const uint32_t* ids, size_t
   sd.closest = search.best;
   if (closest != nullptr) *closest = search.best;
   const auto near = [&] {
-    const Aabb box = reach_box(a, b, c, reach);
-    for (size_t i = 0; i < count; ++i) {
-      if (boxes != nullptr ? boxes[i].overlaps(box) &&
-                                 triangle_within_reach_boxed(*index.mesh, ids[i], a, b, c, reach)
-                           : triangle_within_reach(*index.mesh, ids[i], box, a, b, c, reach)) {
-        return true;
-      }
-    }
-    return false;
+    return !near_known && near_among(mesh, ids, count, boxes, a, b, c, reach);
   };
   *side = side_from_closest(index, a, b, c, reach, near, &sd);
+  if (hint != nullptr && *side != TriangleSide::kNear) *hint = SideHint{a, *side};
   return true;
 }
 

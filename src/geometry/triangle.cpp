@@ -129,6 +129,22 @@ bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, co
   return segment_meets(p, q, sp, sq, a, b, c);
 }
 
+SegmentCrossing segment_crossing(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
+                                 const Vec3& c) {
+  const int sp = sign_of(orient3d(a, b, c, p));
+  const int sq = sign_of(orient3d(a, b, c, q));
+  if (sp * sq > 0) return SegmentCrossing::kMisses;  // both strictly on one side
+  if (sp == 0 || sq == 0) return SegmentCrossing::kTouches;
+  // pq crosses the plane at one point X; the line sees each edge with X's side of it.
+  const int s1 = sign_of(orient3d(p, q, a, b));
+  const int s2 = sign_of(orient3d(p, q, b, c));
+  const int s3 = sign_of(orient3d(p, q, c, a));
+  const bool has_pos = s1 > 0 || s2 > 0 || s3 > 0;
+  const bool has_neg = s1 < 0 || s2 < 0 || s3 < 0;
+  if (has_pos && has_neg) return SegmentCrossing::kMisses;  // X strictly outside an edge
+  return s1 != 0 && s2 != 0 && s3 != 0 ? SegmentCrossing::kCrosses : SegmentCrossing::kTouches;
+}
+
 bool triangles_intersect(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, const Vec3& e,
                          const Vec3& f) {
   // Quick rejection: def strictly on one side of abc's plane, or abc of def's.

@@ -1734,6 +1734,104 @@ TEST(DistanceTriangle, SideAmongAWindowIsTriangleSide) {
   EXPECT_GT(overflowed, 5 * kEffort);
 }
 
+// triangle_side_among with a hint (the blockout's stream): the window holds every triangle of
+// the shape, so the segment from any hint holds only triangles among them. Query triangles
+// come along a random walk, each near the one before, and every answer is triangle_side's.
+// Most are answered from the hint (the closest point is then left as it was: kNear from the
+// window's reach test, a side from the crossings); the first of each shape from the closest
+// point. On the box, a segment from the hint through the top face's diagonal edge (a touch,
+// not counted) is answered from the closest point, with the same answer.
+TEST(DistanceTriangle, SideAmongWithAHintIsTriangleSide) {
+  Rng rng(0x5eed007a);
+  int hinted = 0, near_first = 0, searched = 0, crossed = 0;
+  for (const auto& shape : query_shapes(rng)) {
+    auto b = build(shape.second, 4);
+    if (!b->index.closed_manifold) continue;
+    const Mesh& m = b->mesh;
+    const Aabb bounds = bounds_of(m);
+    const double size = length(bounds.extent());
+    const uint32_t nt = static_cast<uint32_t>(m.triangles.size());
+    std::vector<uint32_t> ids(nt);
+    std::vector<Aabb> boxes(nt);
+    const Vec3 pad{size, size, size};
+    ASSERT_EQ(triangles_meeting_box(b->index, Aabb{bounds.lo - pad, bounds.hi + pad}, ids.data(),
+                                    nt, boxes.data()),
+              size_t{nt});
+    const uint32_t untouched = nt + 1;
+    SideHint hint;
+    const auto answer = [&](const Vec3& p, const Vec3& q, const Vec3& r, double reach,
+                            bool* from_hint) {
+      uint32_t seed = kNoNeighbor;
+      const TriangleSide want = triangle_side(b->index, p, q, r, reach, &seed);
+      const SideHint before = hint;
+      TriangleSide side = TriangleSide::kNear;
+      ClosestPoint closest;
+      closest.triangle = untouched;
+      EXPECT_TRUE(triangle_side_among(b->index, ids.data(), nt, 10 * size, p, q, r, reach, &side,
+                                      &closest, kNoNeighbor, boxes.data(), &hint));
+      EXPECT_EQ(static_cast<int>(side), static_cast<int>(want)) << shape.first;
+      *from_hint = closest.triangle == untouched;
+      if (side == TriangleSide::kNear) {
+        EXPECT_TRUE(std::memcmp(&hint, &before, sizeof hint) == 0);  // kept as it was
+      } else {
+        EXPECT_TRUE(hint.point == p && hint.side == side);
+      }
+      return side;
+    };
+    Vec3 c = (bounds.lo + bounds.hi) * 0.5;
+    for (int i = 0; i < 200 * kEffort; ++i) {
+      const Vec3 step = c + rng.unit() * (size * 0.03);
+      if (step.x > bounds.lo.x - 0.2 * size && step.x < bounds.hi.x + 0.2 * size &&
+          step.y > bounds.lo.y - 0.2 * size && step.y < bounds.hi.y + 0.2 * size &&
+          step.z > bounds.lo.z - 0.2 * size && step.z < bounds.hi.z + 0.2 * size) {
+        c = step;
+      }
+      const double spread = size * 0.005;
+      const Vec3 p = c + rng.unit() * spread, q = c + rng.unit() * spread,
+                 r = c + rng.unit() * spread;
+      const Vec3 before = hint.point;
+      bool from_hint = false;
+      const TriangleSide side = answer(p, q, r, size * 0.002, &from_hint);
+      if (!from_hint) {
+        ++searched;
+      } else if (side == TriangleSide::kNear) {
+        ++near_first;
+      } else {
+        ++hinted;
+        // Whether the segment from the hint crossed the surface: the side changed.
+        const bool was_inside = winding_number(b->index, before, 0.0) >= 0.5;
+        if (i > 0 && was_inside != (side == TriangleSide::kInside)) {
+          ++crossed;
+        }
+      }
+    }
+    if (shape.first == "box") {
+      // The box's top face (z = 0.5) is two triangles split along a diagonal, and both
+      // diagonals pass through the face's centre (0.375, 0.25).
+      bool from_hint = true;
+      hint = SideHint{Vec3{0.375, 0.25, 1}, TriangleSide::kOutside};
+      EXPECT_EQ(static_cast<int>(answer(Vec3{0.375, 0.25, 0}, Vec3{0.4, 0.25, 0},
+                                        Vec3{0.375, 0.3, 0}, 0.01, &from_hint)),
+                static_cast<int>(TriangleSide::kInside));
+      EXPECT_FALSE(from_hint);
+      // Off the diagonal, the same crossing counts.
+      hint = SideHint{Vec3{0.5, 0.25, 1}, TriangleSide::kOutside};
+      EXPECT_EQ(static_cast<int>(answer(Vec3{0.5, 0.25, 0}, Vec3{0.55, 0.25, 0}, Vec3{0.5, 0.3, 0},
+                                        0.01, &from_hint)),
+                static_cast<int>(TriangleSide::kInside));
+      EXPECT_TRUE(from_hint);
+    }
+  }
+  std::printf(
+      "[ figures  ] from the hint: %d sides (%d across the surface), %d near; from the "
+      "closest point: %d\n",
+      hinted, crossed, near_first, searched);
+  EXPECT_GT(hinted, 100 * kEffort);
+  EXPECT_GT(crossed, 5 * kEffort);
+  EXPECT_GT(near_first, 5 * kEffort);
+  EXPECT_GE(searched, 3);  // the first of each closed shape at least
+}
+
 TEST(DistanceBox, TrianglesInBoxMatchBruteForce) {
   Rng rng(0x5eed0042);
   for (const auto& shape : query_shapes(rng)) {

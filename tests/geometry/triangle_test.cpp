@@ -615,6 +615,27 @@ bool check_st(Tally& t, const Vec3& p, const Vec3& q, const Vec3* tri) {
   const bool got[3] = {segment_intersects_triangle(p, q, a, b, c),
                        segment_intersects_triangle(q, p, b, c, a),
                        segment_intersects_triangle(p, q, c, b, a)};
+  // segment_crossing against the oracle's answer and exact signs: a crossing meets abc with p
+  // and q strictly on opposite sides and the line pq off every edge's line; a miss does not
+  // meet it; a touch meets it, or has an endpoint in abc's plane, or abc is degenerate.
+  {
+    const int sp = exact_orient3d_sign(a, b, c, p), sq = exact_orient3d_sign(a, b, c, q);
+    const splintcore::SegmentCrossing crossing = splintcore::segment_crossing(p, q, a, b, c);
+    bool right = true;
+    switch (crossing) {
+      case splintcore::SegmentCrossing::kMisses: right = !expected; break;
+      case splintcore::SegmentCrossing::kCrosses:
+        right = expected && sp * sq < 0 && exact_orient3d_sign(p, q, a, b) != 0 &&
+                exact_orient3d_sign(p, q, b, c) != 0 && exact_orient3d_sign(p, q, c, a) != 0;
+        break;
+      case splintcore::SegmentCrossing::kTouches: right = expected || sp == 0 || sq == 0; break;
+    }
+    if (!right && ++t.wrong <= 5) {
+      ADD_FAILURE() << t.name << ": segment_crossing says " << static_cast<int>(crossing)
+                    << ", oracle " << expected << " for segment " << hex(p) << " " << hex(q)
+                    << " triangle " << hex(a) << " " << hex(b) << " " << hex(c);
+    }
+  }
   for (int k = 0; k < 3; ++k) {
     if (got[k] != expected) {
       if (++t.wrong <= 5) {
@@ -1088,6 +1109,37 @@ TEST(SegmentIntersectsTriangle, RandomSegmentsInSmallBoxesAgreeWithOracle) {
     total += t.cases;
   }
   EXPECT_EQ(total, 7 * per_kind);
+}
+
+// segment_crossing on a triangle in the plane z = 0, each outcome built exactly.
+TEST(SegmentCrossing, CrossesMissesAndTouches) {
+  using splintcore::segment_crossing;
+  using splintcore::SegmentCrossing;
+  const Vec3 a{0, 0, 0}, b{4, 0, 0}, c{0, 4, 0};
+  const auto at = [&](const Vec3& p, const Vec3& q) { return segment_crossing(p, q, a, b, c); };
+  // Through the interior, either way round, and slanted.
+  EXPECT_EQ(at({1, 1, -1}, {1, 1, 1}), SegmentCrossing::kCrosses);
+  EXPECT_EQ(at({1, 1, 1}, {1, 1, -1}), SegmentCrossing::kCrosses);
+  EXPECT_EQ(at({0.5, 0.5, -2}, {1.5, 1, 3}), SegmentCrossing::kCrosses);
+  // Both ends on one side; through the plane outside the triangle; short of the plane.
+  EXPECT_EQ(at({1, 1, 0.5}, {1, 1, 2}), SegmentCrossing::kMisses);
+  EXPECT_EQ(at({3, 3, -1}, {3, 3, 1}), SegmentCrossing::kMisses);
+  EXPECT_EQ(at({-1, 1, -1}, {-1, 1, 1}), SegmentCrossing::kMisses);
+  // Through an edge, through a corner, an end in the plane (inside and outside the triangle),
+  // lying in the plane, and a degenerate triangle: none of them is counted.
+  EXPECT_EQ(at({2, 0, -1}, {2, 0, 1}), SegmentCrossing::kTouches);
+  EXPECT_EQ(at({2, 2, -1}, {2, 2, 1}), SegmentCrossing::kTouches);
+  EXPECT_EQ(at({4, 0, -1}, {4, 0, 1}), SegmentCrossing::kTouches);
+  EXPECT_EQ(at({1, 1, 0}, {1, 1, 1}), SegmentCrossing::kTouches);
+  EXPECT_EQ(at({5, 5, 0}, {1, 1, 1}), SegmentCrossing::kTouches);
+  EXPECT_EQ(at({-1, 1, 0}, {5, 1, 0}), SegmentCrossing::kTouches);
+  EXPECT_EQ(segment_crossing({1, 0, -1}, {1, 0, 1}, a, b, Vec3{2, 0, 0}),
+            SegmentCrossing::kTouches);
+  // One ulp off the edge x + y = 4 inside: a crossing; on it: a touch; one ulp outside: a miss.
+  const double below = std::nextafter(2.0, 0.0), above = std::nextafter(2.0, 4.0);
+  EXPECT_EQ(at({2, below, -1}, {2, below, 1}), SegmentCrossing::kCrosses);
+  EXPECT_EQ(at({2, 2, -1}, {2, 2, 1}), SegmentCrossing::kTouches);
+  EXPECT_EQ(at({2, above, -1}, {2, above, 1}), SegmentCrossing::kMisses);
 }
 
 TEST(SegmentIntersectsTriangle, AdversarialContactsAndUlpPerturbations) {
