@@ -200,10 +200,15 @@ void sweep_rows(Sweep& s, double w_lo, double w_hi, int64_t y_begin, int64_t y_e
     const Vec3& a = s.vertices[tri.v[0]];
     const Vec3& b = s.vertices[tri.v[1]];
     const Vec3& c = s.vertices[tri.v[2]];
-    const double xmin = std::fmin(a.x, std::fmin(b.x, c.x)) - s.band;
-    const double xmax = std::fmax(a.x, std::fmax(b.x, c.x)) + s.band;
-    const double ymin = std::fmin(a.y, std::fmin(b.y, c.y)) - s.band;
-    const double ymax = std::fmax(a.y, std::fmax(b.y, c.y)) + s.band;
+    // The shadow's box (exact: least and most corner coordinates) and that grown by the band.
+    const double sx0 = std::fmin(a.x, std::fmin(b.x, c.x)),
+                 sx1 = std::fmax(a.x, std::fmax(b.x, c.x));
+    const double sy0 = std::fmin(a.y, std::fmin(b.y, c.y)),
+                 sy1 = std::fmax(a.y, std::fmax(b.y, c.y));
+    const double xmin = sx0 - s.band;
+    const double xmax = sx1 + s.band;
+    const double ymin = sy0 - s.band;
+    const double ymax = sy1 + s.band;
     const double fx0 = std::ceil((xmin - s.lattice.x) / g.spacing.x) - static_cast<double>(s.ix0);
     const double fx1 = std::floor((xmax - s.lattice.x) / g.spacing.x) - static_cast<double>(s.ix0);
     const double fy0 = std::ceil((ymin - s.lattice.y) / g.spacing.y) - static_cast<double>(s.iy0);
@@ -235,8 +240,10 @@ void sweep_rows(Sweep& s, double w_lo, double w_hi, int64_t y_begin, int64_t y_e
           d2 = segment_triangle_d2(p, q, a, b, c);
         } else {
           // The triangle faces against w (clockwise seen from +w): the column is in its
-          // closed projection when no edge has the column strictly on its left.
-          const bool in_projection = orient2d(a.x, a.y, b.x, b.y, px, py) <= 0 &&
+          // closed projection when no edge has the column strictly on its left (and never
+          // outside the shadow's box).
+          const bool in_projection = px >= sx0 && px <= sx1 && py >= sy0 && py <= sy1 &&
+                                     orient2d(a.x, a.y, b.x, b.y, px, py) <= 0 &&
                                      orient2d(b.x, b.y, c.x, c.y, px, py) <= 0 &&
                                      orient2d(c.x, c.y, a.x, a.y, px, py) <= 0;
           if (in_projection) {
