@@ -292,7 +292,11 @@ struct BlockoutOptions {
   // border then lies outside the splint (the Boolean's rule for an open B): the same solid,
   // with a few percent of the swept mesh (the imprint the sweep reproduces lies just inside
   // the jaw, outside the splint, and is left out). false: the whole swept surface in the
-  // splint's box (for comparison). Not with decimation (decimate_error > 0).
+  // splint's box (for comparison). Not with decimation (decimate_error > 0). Near the surface
+  // a swept triangle's side is found by counting the splint's triangles crossed on the way from
+  // a point nearby whose side is known (SideHint, distance.h), which gives the closest point's
+  // side on a splint that is a solid (closed, manifold, not crossing itself: as the Boolean
+  // and the design leave it); the first of each place takes the closest point.
   bool filter_near_splint = true;
   // The swept volume's exact boundary (sweep_exact_mesh over boolean_region(splint)) instead
   // of the sampled one: no voxels, no inset, no retries; sweep.direction is used, the other
