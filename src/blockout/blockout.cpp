@@ -110,7 +110,8 @@ TriangleSide fine_side(const NearSplint& g, const Aabb& box, const Vec3& p, cons
     // splint triangle it meets is among the window's.
     if (g.hint.side == TriangleSide::kNear || !g.window.contains(g.hint.point)) {
       const KeptHint& kept = hint_slot(g, p);
-      const Vec3 at{kept.p[0], kept.p[1], kept.p[2]};
+      const Vec3 at{static_cast<double>(kept.p[0]), static_cast<double>(kept.p[1]),
+                    static_cast<double>(kept.p[2])};
       g.hint = kept.side != TriangleSide::kNear && g.window.contains(at) ? SideHint{at, kept.side}
                                                                          : SideHint{};
     }
