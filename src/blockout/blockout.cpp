@@ -117,7 +117,7 @@ TriangleSide fine_side(const NearSplint& g, const Aabb& box, const Vec3& p, cons
     }
     TriangleSide side = TriangleSide::kOutside;
     ClosestPoint closest;
-    closest.triangle = g.seed;
+    closest.triangle = g.seed;  // left so when the hint decides: the seed stays
     if (g.window_count <= kWindowTriangles &&
         triangle_side_among(*g.index, g.window_ids, g.window_count, g.window_reach, p, q, r,
                             g.reach, &side, &closest, g.seed, g.window_boxes, &g.hint)) {
