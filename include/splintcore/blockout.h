@@ -187,6 +187,66 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
                          Mesh* out, SweepStats* stats = nullptr);
 
 // ---------------------------------------------------------------------------------------------
+// The swept volume as a height field over the plane across d (issue 29), for a region.
+//
+// S is closed along d (p in S gives p + t d in S), so in the local frame (u, v, w = p . d) it is
+// { w >= h(u, v) }, h the first contact of the column (u, v) with the jaws (+infinity where the
+// column misses them), and its boundary is the graph of h: one sheet that cannot cross itself,
+// whatever the jaws' folds and overhangs, with vertical steps where h jumps (a crown's widest
+// over the gum). The graph is sampled on a square grid of the voxel's spacing (2^k cells a side,
+// covering the region's shadow and two cells more), and meshed as a triangulated irregular
+// network of right triangles (longest-edge bisection): a triangle is split while a grid vertex
+// under it departs from it by more than half the tolerance, so flat parts take few triangles and
+// steps the finest. The surface is conservative: it lies nowhere above h, so the splint keeps
+// no undercut, and at most the tolerance plus a grid cell's departure below it:
+// - each grid vertex starts at h of its column (the least height of the jaw triangles whose
+//   shadow holds it, exact orient2d for the holding), and where the jaws lie above the region
+//   (or nowhere) at a height 2 voxels and 1 mm above it;
+// - each finest triangle of the grid (half a cell, the diagonal as the network cuts it) is
+//   clipped against every jaw triangle over it; where the plane through its corners rises above
+//   that jaw triangle inside the clip (a cusp between samples, a step, the shadow's edge), its
+//   corners are lowered by the most it rises (HeightfieldStats::max_lowering);
+// - the network's vertices are then the grid's, taken half the tolerance lower, so that the
+//   triangles, within half the tolerance of the grid both ways, lie below it.
+// The output's float32 rounding (with float32_vertices) is covered by a further 2^-20 of the
+// largest coordinate. Uses SweepOptions' direction, voxel, region (required), jaw_vertex and
+// float32_vertices; the rest are not used (no inset, offset or closing).
+struct HeightfieldStats {
+  uint32_t cells = 0;                 // grid cells a side (a power of two)
+  uint64_t triangles_in = 0;          // jaw triangles whose shadow meets the grid
+  uint64_t covered_vertices = 0;      // grid vertices whose column meets a jaw below the top
+  uint64_t clipped_pairs = 0;         // (jaw triangle, half cell) pairs clipped
+  uint64_t lowered_vertices = 0;      // grid vertices lowered by a clip
+  double max_lowering = 0;            // mm, the most a vertex was lowered
+  uint64_t network_triangles = 0;     // the output's triangles
+  Vec3 axis_u{}, axis_v{}, axis_w{};  // the local frame in the jaws' frame (axis_w = d)
+};
+
+struct HeightfieldOptions {
+  double tolerance = 0;  // mm, > 0 and at most the voxel: the network's (both ways, halved)
+  double lower = 0;      // mm, >= 0: the whole surface taken that much lower still (a retry's)
+  // The grid's origin moved back by this share of a cell along u and v ([0, 1)): a retry's
+  // other grid, whose vertical steps stand elsewhere.
+  double shift_u = 0, shift_v = 0;
+};
+
+// Arena bytes sweep_heightfield_mesh takes for a grid of `cells` a side, besides its output
+// (24 bytes a vertex, 12 a triangle): 16 bytes a grid vertex.
+uint64_t sweep_heightfield_bound(uint32_t cells);
+
+// The graph above as an open surface (its normals against d, out of S) into `out` (empty), in
+// the jaws' frame; its border is the grid's edge, outside the region. Only the jaws' triangles
+// facing against d are taken (as the sampled sweep's: on a closed jaw nothing else is a first
+// contact). Deterministic, serial. Errors: kInvalidArgument (out not empty, no region, an
+// empty or non-finite region, a bad direction, voxel or option, no triangles), kLimitExceeded
+// (more than 4096 cells a side: a larger voxel or a smaller region; a vertex beyond float32),
+// kNonFinite (a jaw vertex), kInvalidMesh (a vertex id out of range), kArenaExhausted,
+// kCancelled. Progress: "heightfield".
+Status sweep_heightfield_mesh(const Context& ctx, Span<const Mesh> jaws,
+                              const SweepOptions& options, const HeightfieldOptions& height,
+                              Mesh* out, HeightfieldStats* stats = nullptr);
+
+// ---------------------------------------------------------------------------------------------
 // The swept volume's boundary exactly, from the jaw's own triangles (issue 29), for a region.
 //
 // Along d the swept volume S of a closed jaw J is the union of the prisms T + t d (t >= 0) of
@@ -311,11 +371,17 @@ struct BlockoutOptions {
   // pocket wider and deeper than 0.05 mm is taken only where its prism is not near the splint
   // in that sense (ExactPocketTest; ExactSweepStats::pockets_clear).
   bool exact = false;
+  // The swept volume as a height field (sweep_heightfield_mesh over the splint's bounds, the
+  // voxel its grid) instead, subtracted once: no inset, no retries, nothing left undercut;
+  // sweep.inset, offset and closing_radius must be 0. Every jaw with triangles is swept.
+  bool heightfield = false;
+  double heightfield_tolerance = 0;  // mm; 0: a tenth of the voxel
 };
 
 struct BlockoutStats {
   SweepStats sweep;
   ExactSweepStats exact;         // BlockoutOptions::exact
+  HeightfieldStats heightfield;  // BlockoutOptions::heightfield
   uint64_t swept_triangles = 0;  // the swept volume's mesh inside the splint's bounds
   BooleanStats boolean;
   uint32_t attempts = 0;   // 1 + the retries with a deeper inset (or larger offset)

@@ -63,9 +63,11 @@ struct CasePlan {
 };
 
 // How a case's blockout sweeps each jaw (CaseFile::blockout_method says each).
-enum class BlockoutMethod : uint8_t { kAuto, kExact, kVoxel };
+// kHeightfield: the swept volume as a height field over the voxel grid (blockout.h,
+// sweep_heightfield_mesh), no inset, nothing left undercut.
+enum class BlockoutMethod : uint8_t { kAuto = 0, kExact = 1, kVoxel = 2, kHeightfield = 4 };
 
-// The case file's name of a method: "auto", "exact", "voxel".
+// The case file's name of a method: "auto", "exact", "voxel", "heightfield".
 const char* blockout_method_name(BlockoutMethod m);
 
 // A parsed case. Strings and arrays live in the arena the case was parsed into.
@@ -297,6 +299,8 @@ struct DesignReport {
   // (their front triangles and walls), made by the blockout alone; `boolean` stays zero unless
   // kAuto made a jaw with voxels (then it is that jaw's imprint's Boolean, the last one's).
   bool imprint_swept = false;
+  // With "method": "heightfield" likewise: the imprint is the height field's surface.
+  bool imprint_heightfield = false;
   // Per jaw in case order: its blockout used the exact sweep (else the sampled one).
   bool blockout_exact[kMaxBlockoutJaws] = {};
   // kAuto made a jaw with voxels: why its exact sweep was refused (the first such jaw's status

@@ -371,6 +371,7 @@ const char* sc_case_jaw_mesh(const sc_case* c, size_t index);
 #define SC_BLOCKOUT_VOXEL 2
 /* sc_design_report.blockout_method_used only: AUTO made some jaws exactly, some with voxels */
 #define SC_BLOCKOUT_MIXED 3
+#define SC_BLOCKOUT_HEIGHTFIELD 4
 
 /* The parameters a caller may read and change after parsing. Flags are 0 or 1. */
 typedef struct sc_case_params {
@@ -384,7 +385,8 @@ typedef struct sc_case_params {
   double blockout_inset_mm;      /* 0 .. 1.99 voxel */
   double blockout_closing_mm;    /* 0, or 2 .. 10 voxel */
   /* blockout "method" (docs/case-format.md): SC_BLOCKOUT_AUTO (the exact sweep, the voxel one
-   * where it stops; the voxel fields are the fallback's), SC_BLOCKOUT_EXACT, SC_BLOCKOUT_VOXEL.
+   * where it stops; the voxel fields are the fallback's), SC_BLOCKOUT_EXACT, SC_BLOCKOUT_VOXEL,
+   * SC_BLOCKOUT_HEIGHTFIELD (the voxel is its grid; inset and closing are not used).
    * As parsed: a case's "blockout" naming no voxel key is AUTO, one naming one VOXEL. */
   int blockout_method;
   const char* printer; /* a built-in profile name ("eden260"); static text */

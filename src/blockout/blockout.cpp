@@ -699,6 +699,60 @@ Status blockout_exact(const Context& ctx, const Mesh& splint, Span<const Mesh> j
   return Status::ok();
 }
 
+// The height-field blockout (BlockoutOptions::heightfield): the swept surface over the
+// splint's bounds, subtracted once; its border is the grid's edge, beyond the splint's box.
+Status blockout_heightfield(const Context& ctx, const Mesh& splint, const Aabb& bounds,
+                            Span<const Mesh> jaws, const BlockoutOptions& options, Mesh* result,
+                            BlockoutStats* st) {
+  if (options.sweep.offset > 0 || options.sweep.inset > 0 || options.sweep.closing_radius > 0) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "blockout: the height field takes no inset, offset or closing");
+  }
+  SweepOptions so = options.sweep;
+  so.has_region = true;
+  so.region = bounds;
+  so.float32_vertices = true;
+  ArenaScope scope(*ctx.arena);
+  const double tolerance =
+      options.heightfield_tolerance > 0 ? options.heightfield_tolerance : 0.1 * so.voxel;
+  BooleanOptions bo = options.boolean;
+  bo.op = BooleanOp::kDifference;
+  bo.b_border_outside_a = true;
+  // As the sampled blockout's retries: a configuration the Boolean cannot resolve (two of its
+  // points rounded together) is met again on a grid moved by a share of a cell, 1/64 voxel
+  // lower, then a quarter and half a voxel.
+  constexpr int kAttempts = 4;
+  constexpr double kLower[kAttempts] = {0, 1.0 / 64, 1.0 / 4, 1.0 / 2};
+  constexpr double kShiftU[kAttempts] = {0, 0.375, 0.625, 0.125};
+  constexpr double kShiftV[kAttempts] = {0, 0.25, 0.75, 0.5};
+  Status s;
+  Mesh out;
+  for (int attempt = 0; attempt < kAttempts; ++attempt) {
+    ctx.arena->rewind(scope.start());
+    out = Mesh();
+    st->attempts = static_cast<uint32_t>(attempt + 1);
+    st->inset_used = kLower[attempt] * so.voxel;
+    Mesh swept;
+    HeightfieldOptions ho;
+    ho.tolerance = tolerance;
+    ho.lower = st->inset_used;
+    ho.shift_u = kShiftU[attempt];
+    ho.shift_v = kShiftV[attempt];
+    s = sweep_heightfield_mesh(ctx, jaws, so, ho, &swept, &st->heightfield);
+    if (!s.is_ok()) return s;
+    st->swept_triangles = swept.triangles.size();
+    s = mesh_boolean(ctx, splint, swept, bo, &out, &st->boolean);
+    if (s.is_ok() || s.code() == StatusCode::kArenaExhausted ||
+        s.code() == StatusCode::kCancelled || s.code() == StatusCode::kInvalidArgument) {
+      break;
+    }
+  }
+  if (!s.is_ok()) return attempts_error(s, options, *st);
+  move_mesh_down(*ctx.arena, scope.start(), out, result);
+  scope.commit();
+  return Status::ok();
+}
+
 }  // namespace
 
 Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
@@ -719,6 +773,15 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
     return make_error(StatusCode::kInvalidArgument, "blockout: the splint has no vertices");
   }
   ArenaScope scope(arena);  // on an error the arena is as it was
+  if (options.heightfield) {
+    const Status e = blockout_heightfield(ctx, splint, bounds, jaws, options, out, st);
+    if (e.is_ok()) {
+      scope.commit();
+      return e;
+    }
+    out->bind(&arena);
+    return blockout_error(e);
+  }
   if (options.exact) {
     const Status e = blockout_exact(ctx, splint, jaws, options, out, st);
     if (e.is_ok()) {

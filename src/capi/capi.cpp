@@ -49,7 +49,8 @@ static_assert(static_cast<int>(StatusCode::kInternal) == SC_INTERNAL, "codes mir
 static_assert(static_cast<int>(StatusCode::kArenaExhausted) == SC_ARENA_EXHAUSTED, "codes");
 static_assert(static_cast<int>(BlockoutMethod::kAuto) == SC_BLOCKOUT_AUTO &&
                   static_cast<int>(BlockoutMethod::kExact) == SC_BLOCKOUT_EXACT &&
-                  static_cast<int>(BlockoutMethod::kVoxel) == SC_BLOCKOUT_VOXEL,
+                  static_cast<int>(BlockoutMethod::kVoxel) == SC_BLOCKOUT_VOXEL &&
+                  static_cast<int>(BlockoutMethod::kHeightfield) == SC_BLOCKOUT_HEIGHTFIELD,
               "blockout methods mirror BlockoutMethod");
 static_assert(static_cast<int>(StatusCode::kInvalidMesh) == SC_INVALID_MESH, "codes");
 static_assert(DesignReport::kMaxBlockoutJaws == SC_MAX_BLOCKOUT_JAWS, "report sizes agree");
@@ -260,10 +261,11 @@ Status check_params(const sc_case_params& p, const PrinterProfile** profile) {
                         "seated along it) or the automatic outline");
     }
     if (p.blockout_method != SC_BLOCKOUT_AUTO && p.blockout_method != SC_BLOCKOUT_EXACT &&
-        p.blockout_method != SC_BLOCKOUT_VOXEL) {
+        p.blockout_method != SC_BLOCKOUT_VOXEL && p.blockout_method != SC_BLOCKOUT_HEIGHTFIELD) {
       return make_error(StatusCode::kInvalidArgument, "sc_case_set_params: blockout_method is ",
                         static_cast<int64_t>(p.blockout_method),
-                        ", must be SC_BLOCKOUT_AUTO, SC_BLOCKOUT_EXACT or SC_BLOCKOUT_VOXEL");
+                        ", must be SC_BLOCKOUT_AUTO, SC_BLOCKOUT_EXACT, SC_BLOCKOUT_VOXEL or "
+                        "SC_BLOCKOUT_HEIGHTFIELD");
     }
     const double v = p.blockout_voxel_mm;
     SPLINTCORE_RETURN_IF_ERROR(check_range("blockout_voxel_mm", v, "blockout.voxel"));
@@ -873,6 +875,11 @@ sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* 
     f.blockout.inset = params->blockout_inset_mm;
     f.blockout.closing_radius = params->blockout_closing_mm;
     f.blockout_method = static_cast<BlockoutMethod>(params->blockout_method);
+    // The height field has no inset and no closing: what the fields hold is not used.
+    if (f.blockout_method == BlockoutMethod::kHeightfield) {
+      f.blockout.inset = 0;
+      f.blockout.closing_radius = 0;
+    }
   }
   f.printer = profile->name;  // static text: the caller's string need not outlive the case
   f.has_auto_outline = params->auto_outline != 0;
@@ -1033,9 +1040,10 @@ sc_status sc_design_scans(sc_context* ctx, const sc_case* c, const sc_mesh* cons
   report->boolean_nudge_mm[2] = r.boolean.nudge.z;
   report->blockout_jaws = r.blockout_jaws;
   const uint32_t exact_jaws = exact_blockout_jaws(r);
-  report->blockout_method_used = exact_jaws == r.blockout_jaws ? SC_BLOCKOUT_EXACT
-                                 : exact_jaws == 0             ? SC_BLOCKOUT_VOXEL
-                                                               : SC_BLOCKOUT_MIXED;
+  report->blockout_method_used = r.imprint_heightfield           ? SC_BLOCKOUT_HEIGHTFIELD
+                                 : exact_jaws == r.blockout_jaws ? SC_BLOCKOUT_EXACT
+                                 : exact_jaws == 0               ? SC_BLOCKOUT_VOXEL
+                                                                 : SC_BLOCKOUT_MIXED;
   for (uint32_t i = 0; i < r.blockout_jaws && i < SC_MAX_BLOCKOUT_JAWS; ++i) {
     report->blockout_removed_mm3[i] = r.blockout_removed_mm3[i];
     report->blockout_attempts[i] = r.blockout[i].attempts;

@@ -296,7 +296,9 @@ void write_later_stages(JsonWriter& w, const CaseFile& c) {
     if (c.blockout_method != BlockoutMethod::kVoxel) {
       w.add("method", blockout_method_name(c.blockout_method));
     }
-    if (c.blockout_method != BlockoutMethod::kExact) {
+    if (c.blockout_method == BlockoutMethod::kHeightfield) {
+      w.add("voxel", c.blockout.voxel);
+    } else if (c.blockout_method != BlockoutMethod::kExact) {
       w.add("voxel", c.blockout.voxel);
       if (c.blockout.offset > 0) {
         w.add("clearance", c.blockout.offset);

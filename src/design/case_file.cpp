@@ -39,7 +39,7 @@ const CaseNumber kCaseNumbers[] = {
     {"ct.decimate", "triangles", 4, 1e9, false, kNoCap, true, "none", ""},
     {"blockout.voxel", "mm", 0.01, 1, false, kNoCap, false, "0.1", ""},
     {"blockout.inset", "mm", 0, 1.99, true, kNoCap, false, "half the voxel (0 with clearance)",
-     "not with clearance"},
+     "not with clearance or \"heightfield\""},
     {"blockout.closing_radius", "mm", 0, 10, true, kNoCap, false, "0", "0 or at least 2 voxels"},
     {"blockout.clearance", "mm", 0, 20, true, 2.0, false, "0", ""},
     {"label.height_mm", "mm", 0.5, 20, false, kNoCap, false, "2.5", ""},
@@ -581,7 +581,7 @@ Status parse_blockout(const Reader& r, const JsonValue* b, CaseFile* out) {
   if (const JsonValue* m = doc.member(*b, "method")) {
     SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*m, JsonType::kString, "blockout.method"));
     const BlockoutMethod methods[] = {BlockoutMethod::kAuto, BlockoutMethod::kExact,
-                                      BlockoutMethod::kVoxel};
+                                      BlockoutMethod::kVoxel, BlockoutMethod::kHeightfield};
     bool known = false;
     for (BlockoutMethod x : methods) {
       if (std::strcmp(m->string, blockout_method_name(x)) != 0) continue;
@@ -590,13 +590,20 @@ Status parse_blockout(const Reader& r, const JsonValue* b, CaseFile* out) {
     }
     if (!known) {
       return r.fail(*m, StatusCode::kInvalidArgument,
-                    "\"blockout.method\" must be \"auto\", \"exact\" or \"voxel\"");
+                    "\"blockout.method\" must be \"auto\", \"exact\", \"voxel\" or "
+                    "\"heightfield\"");
     }
     for (const char* key : kVoxelKeys) {
       const JsonValue* v = doc.member(*b, key);
       if (out->blockout_method == BlockoutMethod::kExact && v != nullptr) {
         return r.fail(*v, StatusCode::kInvalidArgument, "\"blockout.", key,
                       "\" is for the voxel method (\"method\": \"exact\" has no voxels)");
+      }
+      if (out->blockout_method == BlockoutMethod::kHeightfield && v != nullptr &&
+          std::strcmp(key, "voxel") != 0) {
+        return r.fail(*v, StatusCode::kInvalidArgument, "\"blockout.", key,
+                      "\" is for the voxel method (\"method\": \"heightfield\" takes only "
+                      "\"voxel\", its grid)");
       }
     }
     const JsonValue* clearance = doc.member(*b, "clearance");
@@ -614,7 +621,10 @@ Status parse_blockout(const Reader& r, const JsonValue* b, CaseFile* out) {
     SPLINTCORE_RETURN_IF_ERROR(
         r.number(*bl, "blockout.clearance", out->blockout.voxel, &out->blockout.offset));
   }
-  out->blockout.inset = out->blockout.offset > 0 ? 0 : 0.5 * out->blockout.voxel;
+  out->blockout.inset =
+      out->blockout.offset > 0 || out->blockout_method == BlockoutMethod::kHeightfield
+          ? 0
+          : 0.5 * out->blockout.voxel;
   if (const JsonValue* bi = doc.member(*b, "inset")) {
     SPLINTCORE_RETURN_IF_ERROR(
         r.number(*bi, "blockout.inset", out->blockout.voxel, &out->blockout.inset));
@@ -999,6 +1009,7 @@ const char* blockout_method_name(BlockoutMethod m) {
     case BlockoutMethod::kAuto: return "auto";
     case BlockoutMethod::kExact: return "exact";
     case BlockoutMethod::kVoxel: return "voxel";
+    case BlockoutMethod::kHeightfield: return "heightfield";
   }
   return "unknown";
 }

@@ -333,6 +333,7 @@ Status blockout_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws
   bl.sweep.direction = mandible ? -c.insertion_direction : c.insertion_direction;
   bl.boolean.check_self_intersection = check;
   bl.exact = exact;
+  bl.heightfield = c.blockout_method == BlockoutMethod::kHeightfield;
   Mesh blocked;
   const Status s = blockout(ctx, *cut, Span<const Mesh>(swept_jaws, jaws.size()), bl, &blocked,
                             &report->blockout[j]);
@@ -731,12 +732,15 @@ Status cut_base_with(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   SPLINTCORE_RETURN_IF_ERROR(stage_error(build_case_base(ctx, c, &base, &report->base), "base"));
   // Where the splint sits with nothing of use above it (blockout_jaws moves its results there).
   Arena::Marker cut_low = before_base;
-  if (c.has_blockout && (c.blockout.offset > 0 || exact)) {
+  const bool heightfield = c.has_blockout && c.blockout_method == BlockoutMethod::kHeightfield;
+  if (c.has_blockout && (c.blockout.offset > 0 || exact || heightfield)) {
     // A spacer: the imprint is the swept volumes' offset surface, which holds each jaw, so
     // subtracting the jaws themselves first would only cut what the blockout removes anyway.
-    // The exact swept boundary holds the jaw too: its front triangles are the imprint.
+    // The exact swept boundary holds the jaw too: its front triangles are the imprint. The
+    // height field lies below the jaw's first contact everywhere: its surface is the imprint.
     report->imprint_offset = c.blockout.offset > 0;
     report->imprint_swept = exact;
+    report->imprint_heightfield = heightfield;
     *cut = base;
     cut_low = arena.mark();
   } else {
@@ -762,8 +766,9 @@ Status cut_base(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Me
                 DesignReport* report) {
   Arena& arena = *ctx.arena;
   const Arena::Marker start = arena.mark();
-  const bool exact =
-      c.has_blockout && c.blockout.offset == 0 && c.blockout_method != BlockoutMethod::kVoxel;
+  const bool exact = c.has_blockout && c.blockout.offset == 0 &&
+                     c.blockout_method != BlockoutMethod::kVoxel &&
+                     c.blockout_method != BlockoutMethod::kHeightfield;
   const Status s = cut_base_with(ctx, c, jaws, exact, cut, report);
   if (s.is_ok() || !exact || c.blockout_method != BlockoutMethod::kAuto ||
       s.code() != StatusCode::kUnsupported) {
@@ -779,7 +784,7 @@ Status cut_base(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Me
     report->blockout_exact[j] = false;
   }
   report->blockout_jaws = 0;
-  report->imprint_offset = report->imprint_swept = false;
+  report->imprint_offset = report->imprint_swept = report->imprint_heightfield = false;
   report->self_intersection_checked = false;
   report->self_intersection_checked_by = "";
   report->self_intersection_candidates = 0;

@@ -118,7 +118,9 @@ void write_parameters(JsonWriter& w, const CaseFile& c, const DesignReport& repo
     w.end_array();
   }
   if (c.has_blockout) w.add("blockout_method", blockout_method_name(c.blockout_method));
-  if (c.has_blockout && c.blockout_method != BlockoutMethod::kExact) {
+  if (c.has_blockout && c.blockout_method == BlockoutMethod::kHeightfield) {
+    w.add("blockout_voxel_mm", c.blockout.voxel);
+  } else if (c.has_blockout && c.blockout_method != BlockoutMethod::kExact) {
     w.add("blockout_voxel_mm", c.blockout.voxel);
     w.add("blockout_inset_mm", c.blockout.inset);
     w.add("blockout_closing_radius_mm", c.blockout.closing_radius);
@@ -158,6 +160,25 @@ void write_exact_blockout(JsonWriter& w, const BlockoutStats& b, double removed_
   w.end_object();
 }
 
+void write_heightfield_blockout(JsonWriter& w, const BlockoutStats& b, double removed_mm3) {
+  const HeightfieldStats& h = b.heightfield;
+  w.add("method", "heightfield");
+  w.add("direction", h.axis_w);
+  w.add("grid_cells", h.cells);
+  w.add("front_triangles", h.triangles_in);
+  w.add("covered_grid_vertices", h.covered_vertices);
+  w.add("clipped_pairs", h.clipped_pairs);
+  w.add("lowered_grid_vertices", h.lowered_vertices);
+  w.add("max_lowering_mm", h.max_lowering);
+  w.add("swept_triangles", b.swept_triangles);
+  w.add("intersecting_pairs", b.boolean.intersecting_pairs);
+  w.add("attempts", b.attempts);
+  w.add("lowered_mm", b.inset_used);
+  w.add("nudge_mm", b.boolean.nudge_sum);
+  w.add("removed_volume_mm3", removed_mm3);
+  w.end_object();
+}
+
 void write_blockout(JsonWriter& w, const CaseFile& c, const DesignReport& report) {
   // Interference elimination, per jaw in case order.
   w.begin_array("blockout");
@@ -167,6 +188,10 @@ void write_blockout(JsonWriter& w, const CaseFile& c, const DesignReport& report
     w.add("role", c.jaws[i].role);
     if (report.blockout_exact[i]) {
       write_exact_blockout(w, b, report.blockout_removed_mm3[i]);
+      continue;
+    }
+    if (report.imprint_heightfield) {
+      write_heightfield_blockout(w, b, report.blockout_removed_mm3[i]);
       continue;
     }
     w.add("method", "voxel");
@@ -258,14 +283,16 @@ void write_checks(JsonWriter& w, const CaseFile& c, const DesignReport& report) 
   w.add("boolean_nudge_mm", report.boolean.nudge);
   const uint32_t exact_jaws = exact_blockout_jaws(report);
   if (report.blockout_jaws > 0) {
-    w.add("blockout_method_used", exact_jaws == report.blockout_jaws ? "exact"
-                                  : exact_jaws == 0                  ? "voxel"
-                                                                     : "exact and voxel");
+    w.add("blockout_method_used", report.imprint_heightfield           ? "heightfield"
+                                  : exact_jaws == report.blockout_jaws ? "exact"
+                                  : exact_jaws == 0                    ? "voxel"
+                                                                       : "exact and voxel");
     if (report.blockout_fallback[0] != '\0') w.add("blockout_fallback", report.blockout_fallback);
     write_blockout(w, c, report);
   }
-  w.add("imprint", report.imprint_offset   ? "clearance offset of the swept volume"
-                   : !report.imprint_swept ? "jaw triangles"
+  w.add("imprint", report.imprint_heightfield ? "height field of the swept volume"
+                   : report.imprint_offset    ? "clearance offset of the swept volume"
+                   : !report.imprint_swept    ? "jaw triangles"
                    : exact_jaws == report.blockout_jaws
                        ? "exact swept volume (jaw front triangles and walls)"
                        : "exact swept volume (jaw front triangles and walls); jaw triangles where "

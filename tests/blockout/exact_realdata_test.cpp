@@ -163,5 +163,69 @@ TEST(ExactBlockoutRealData, DeepBaseIn64MiB) {
   }
 }
 
+// The height-field blockout ("method": "heightfield", blockout.h) on the same 4 mm deep base,
+// in 64 MiB with the jaws: both jaws by the height field (nothing falls back), a valid solid in
+// one piece, and the independent line check finds no line locked on either jaw at all (1e-4
+// mm): the height field lies below every column's first contact, so it leaves no undercut and
+// needs no depth bound across d.
+TEST(HeightfieldBlockoutRealData, DeepBaseIn64MiBLocksNoLine) {
+  const test::RealJaws& real = test::real_jaws();
+  if (!real.ok) GTEST_SKIP() << "no real data at " << SPLINTCORE_REALDATA_DIR;
+  test::TestArena ta(size_t{1} << 30);
+  Context ctx(&ta.arena);
+  const char* text =
+      R"({"splintcore_case": 1, "case_id": "real", "units": "mm",
+          "jaws": [{"role": "maxilla", "mesh": "maxilla.stl"},
+                   {"role": "mandible", "mesh": "mandible.stl"}],
+          "base": {"spacing_mm": 0.5, "auto": {"bite_opening_mm": 2, "indentation_depth_mm": 4}},
+          "printer": "eden260", "blockout": {"method": "heightfield", "voxel": 0.1}})";
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse_case(ctx, text, std::strlen(text), "real", &c));
+  EXPECT_EQ(c.blockout_method, BlockoutMethod::kHeightfield);
+  EXPECT_EQ(c.blockout.inset, 0.0);
+  test::TestArena small(size_t{64} << 20);
+  Mesh jaws[2];
+  for (int j = 0; j < 2; ++j) ASSERT_TRUE(test::copy_mesh(small.arena, real.jaw[j], &jaws[j]));
+  Mesh splint;
+  DesignReport report;
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&small.arena), c, Span<const Mesh>(jaws, 2), &splint, &report));
+  std::printf(
+      "[ figures  ] real case 4 mm deep, height field, in 64 MiB: peak arena %zu bytes, "
+      "%zu triangles\n",
+      small.arena.high_water(), splint.triangles.size());
+  ASSERT_EQ(report.blockout_jaws, 2u);
+  EXPECT_TRUE(report.imprint_heightfield);
+  EXPECT_FALSE(report.blockout_exact[0] || report.blockout_exact[1]);
+  EXPECT_EQ(report.boolean.intersecting_pairs, 0u);  // the jaws are not subtracted first
+  EXPECT_TRUE(report.self_intersection_checked);
+  MeshReport check;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, splint, &check));
+  EXPECT_TRUE(require_valid_solid(check).is_ok());
+  EXPECT_EQ(report.print.mesh.shells, 1u);
+  CaseFile resolved;
+  SPLINTCORE_ASSERT_OK(
+      resolve_case_outline(ctx, c, Span<const Mesh>(real.jaw, 2), &resolved, nullptr));
+  Aabb box;
+  for (const Vec3& p : splint.vertices) box.add(p);
+  for (int j = 0; j < 2; ++j) {
+    EXPECT_GT(report.blockout[j].heightfield.network_triangles, 10000u);
+    const Mesh jaw = test::moved_mesh(ta.arena, real.jaw[j], resolved.jaws[j].transform);
+    const Vec3 d = j == 0 ? resolved.insertion_direction : -resolved.insertion_direction;
+    Vec3 u, v;
+    test::axes_across(d, &u, &v);
+    const Vec3 e = box.extent();
+    const double half = 0.5 * std::sqrt(dot(e, e));
+    const test::LockReport lock =
+        test::lock_report(ta.arena, splint, jaw, d, u, v, box.center(), half, 200, 1e-4);
+    EXPECT_GT(lock.lines_through_jaw, 3000u);
+    EXPECT_EQ(lock.locked_lines, 0u) << lock.longest;
+    std::printf(
+        "[ figures  ] real jaw %d, base 4 mm deep, height field: %zu lines through the "
+        "jaw, %zu locked (longest %.2g mm)\n",
+        j, lock.lines_through_jaw, lock.locked_lines, lock.longest);
+  }
+}
+
 }  // namespace
 }  // namespace splintcore

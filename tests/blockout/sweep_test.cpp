@@ -1779,5 +1779,266 @@ TEST(Blockout, DecimatedSweepPassesTheIndependentCheck) {
   EXPECT_LT(stats.swept_triangles * 4, stats.sweep.undecimated_triangles);
 }
 
+// ---- the height field (sweep_heightfield_mesh, BlockoutOptions::heightfield)
+
+// The big-end-up cone's height field along -z over a box: an open sheet whose border is the
+// grid's edge outside the region, every edge of it used once each way; flat over the cap and
+// within the tolerance above it (z from 8 up: w = -z lies below h = -8), nowhere below it.
+TEST(Heightfield, ConeGivesAnOpenSheetOverTheCapWithinTheTolerance) {
+  TestArena ta(size_t{256} << 20);
+  Context ctx(&ta.arena);
+  Mesh cone(&ta.arena);
+  frustum(&cone, 3.0, 5.0, 0.0, 8.0, 360);
+  SweepOptions o;
+  o.direction = Vec3{0, 0, -1};
+  o.voxel = 0.1;
+  o.has_region = true;
+  o.region = Aabb{Vec3{-7, -7, 4}, Vec3{7, 7, 10}};
+  HeightfieldOptions ho;
+  ho.tolerance = 0.01;
+  Mesh sheet;
+  HeightfieldStats st;
+  SPLINTCORE_ASSERT_OK(sweep_heightfield_mesh(ctx, Span<const Mesh>(&cone, 1), o, ho, &sheet, &st));
+  EXPECT_EQ(st.cells, 256u);              // 14 mm / 0.1 + 5 cells, to the next power of two
+  EXPECT_EQ(st.triangles_in, 360u);       // the top cap's fan faces against d
+  EXPECT_GT(st.covered_vertices, 7000u);  // about pi 50^2
+  std::vector<std::array<uint32_t, 2>> edges;
+  for (const Triangle& t : sheet.triangles) {
+    for (int k = 0; k < 3; ++k) edges.push_back({t.v[k], t.v[(k + 1) % 3]});
+  }
+  std::sort(edges.begin(), edges.end());
+  size_t border = 0;
+  for (size_t i = 0; i < edges.size(); ++i) {
+    ASSERT_TRUE(i == 0 || edges[i] != edges[i - 1]) << "an edge used twice the same way";
+    if (std::binary_search(edges.begin(), edges.end(),
+                           std::array<uint32_t, 2>{edges[i][1], edges[i][0]})) {
+      continue;
+    }
+    ++border;
+    for (uint32_t v : edges[i]) {
+      const Vec3& p = sheet.vertices[v];
+      EXPECT_TRUE(std::fabs(p.x) > 7 || std::fabs(p.y) > 7) << p.x << " " << p.y;
+    }
+  }
+  EXPECT_GT(border, 0u);
+  // The flat cap: every vertex over it between 8 and 8 + tolerance (+ the float32 margin).
+  size_t over_cap = 0;
+  for (const Vec3& p : sheet.vertices) {
+    const double r = std::sqrt(p.x * p.x + p.y * p.y);
+    if (r > 4.6) continue;
+    ++over_cap;
+    EXPECT_GT(p.z, 8.0);
+    EXPECT_LE(p.z, 8.0 + ho.tolerance + 1e-4);
+  }
+  EXPECT_GT(over_cap, 2u);
+  // Few triangles where it is flat: far fewer than the grid's 2 * 256^2.
+  std::printf(
+      "[ figures  ] heightfield of the cone: %zu triangles, %zu vertices, %llu lowered "
+      "grid vertices (at most %.3f mm)\n",
+      sheet.triangles.size(), sheet.vertices.size(),
+      static_cast<unsigned long long>(st.lowered_vertices), st.max_lowering);
+  EXPECT_LT(sheet.triangles.size(), size_t{2} * 256 * 256 / 4);
+  // The same bytes again.
+  Mesh again;
+  SPLINTCORE_ASSERT_OK(sweep_heightfield_mesh(ctx, Span<const Mesh>(&cone, 1), o, ho, &again));
+  EXPECT_EQ(test::mesh_sha256(again), test::mesh_sha256(sheet));
+}
+
+// The height-field blockout of the cone from a box: a valid solid, the independent line check
+// finds no line locked (nothing is left undercut, no inset), and it cuts at most a little more
+// than the exact cylinder: the tolerance over the cap, about two cells around the rim.
+TEST(Heightfield, BlockoutOfTheConeLeavesNoUndercutAndCutsLittleMore) {
+  TestArena ta(size_t{1} << 30);
+  Context ctx(&ta.arena);
+  Mesh cone(&ta.arena);
+  const uint32_t n = 360;
+  frustum(&cone, 3.0, 5.0, 0.0, 8.0, n);
+  for (Vec3& p : cone.vertices) ASSERT_TRUE(round_to_float32(&p));
+  const float lo[3] = {-7, -7, 4}, hi[3] = {7, 7, 10};
+  Mesh box = box_mesh(&ta.arena, lo, hi);
+  BlockoutOptions o;
+  o.heightfield = true;
+  o.sweep.direction = Vec3{0, 0, -1};
+  o.sweep.voxel = 0.1;
+  o.sweep.inset = 0;
+  Mesh blocked;
+  BlockoutStats st;
+  SPLINTCORE_ASSERT_OK(blockout(ctx, box, Span<const Mesh>(&cone, 1), o, &blocked, &st));
+  EXPECT_EQ(st.attempts, 1u);
+  EXPECT_EQ(st.swept_triangles, st.heightfield.network_triangles);
+  MeshReport report;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, blocked, &report));
+  EXPECT_TRUE(report.closed() && report.edge_manifold() && report.outward());
+  double area = 0;  // the rim polygon, as the exact test
+  for (uint32_t i = 0; i < n; ++i) {
+    const Vec3& p = cone.vertices[n + i];
+    const Vec3& q = cone.vertices[n + (i + 1) % n];
+    area += p.x * q.y - q.x * p.y;
+  }
+  area /= 2;
+  const double exact = 14.0 * 14.0 * 6.0 - area * 4.0;
+  const double volume = mesh_volume(blocked);
+  std::printf(
+      "[ figures  ] heightfield blockout of the cone: volume %.6f, exact %.6f (%.4f "
+      "mm^3 more cut), %zu triangles\n",
+      volume, exact, exact - volume, blocked.triangles.size());
+  EXPECT_LT(volume, exact);  // it cuts no less
+  // At most the tolerance over the cap's disc and two cells' ring around the rim, 4 mm tall.
+  const double rim = 2 * kPi * 5.0;
+  EXPECT_GT(volume, exact - (area * 0.0101 + rim * 2 * 0.1 * 4.0));
+  const Vec3 d{0, 0, -1}, u{1, 0, 0}, v{0, 1, 0}, c{0, 0, 5};
+  const LockReport after = lock_report(ta.arena, blocked, cone, d, u, v, c, 6.0, 60, 1e-6);
+  EXPECT_GT(after.lines_through_jaw, 1000u);
+  EXPECT_EQ(after.locked_lines, 0u) << after.longest;
+}
+
+// A tilted, overhanging pair (a torus leaning over a frustum) along a slanted direction: the
+// height field never crosses itself, the blockout is a valid solid, and no line is locked.
+TEST(Heightfield, SlantedOverhangsGiveAValidUnlockedSolid) {
+  TestArena ta(size_t{1} << 30);
+  Context ctx(&ta.arena);
+  Mesh jaws[2] = {Mesh(&ta.arena), Mesh(&ta.arena)};
+  frustum(&jaws[0], 2.0, 3.0, 0.0, 4.0, 90);
+  RigidTransform aside =
+      rotation_about_axis(Vec3{0, 0, 0}, Vec3{0.7071067811865476, 0.7071067811865476, 0}, 0.5);
+  aside.t = Vec3{3, 0, 1};
+  frustum(&jaws[1], 1.5, 2.5, 0.0, 3.0, 40, &aside);
+  for (Mesh& m : jaws) {
+    for (Vec3& p : m.vertices) ASSERT_TRUE(round_to_float32(&p));
+  }
+  const float lo[3] = {-5, -5, 2}, hi[3] = {8, 5, 7};
+  Mesh box = box_mesh(&ta.arena, lo, hi);
+  const Vec3 d = Vec3{0.2, -0.1, -1} * (1.0 / std::sqrt(1.05));
+  BlockoutOptions o;
+  o.heightfield = true;
+  o.sweep.direction = d;
+  o.sweep.voxel = 0.05;
+  o.sweep.inset = 0;
+  Mesh blocked;
+  BlockoutStats st;
+  SPLINTCORE_ASSERT_OK(blockout(ctx, box, Span<const Mesh>(jaws, 2), o, &blocked, &st));
+  MeshReport report;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, blocked, &report));
+  EXPECT_TRUE(report.closed() && report.edge_manifold() && report.outward());
+  SelfIntersectionReport si;
+  SPLINTCORE_ASSERT_OK(find_self_intersections(ctx, blocked, 0, &si));
+  EXPECT_FALSE(si.self_intersecting());
+  Mesh both(&ta.arena);
+  for (const Mesh& m : jaws) {
+    const uint32_t base = static_cast<uint32_t>(both.vertices.size());
+    for (const Vec3& p : m.vertices) ASSERT_TRUE(both.vertices.push_back(p));
+    for (const Triangle& t : m.triangles) {
+      ASSERT_TRUE(
+          both.triangles.push_back(Triangle{{t.v[0] + base, t.v[1] + base, t.v[2] + base}}));
+    }
+  }
+  Vec3 u, v;
+  test::axes_across(d, &u, &v);
+  const LockReport after =
+      lock_report(ta.arena, blocked, both, d, u, v, Vec3{1.5, 0, 4}, 7.0, 70, 1e-6);
+  EXPECT_GT(after.lines_through_jaw, 500u);
+  EXPECT_EQ(after.locked_lines, 0u) << after.longest;
+}
+
+// The two-step contract: a first run's high water, then exactly that much works and less
+// fails cleanly; the high water is the bound (16 bytes a grid vertex) plus the output.
+TEST(Heightfield, RunsInItsHighWaterAndFailsCleanlyBelow) {
+  TestArena big(size_t{256} << 20);
+  Mesh cone(&big.arena);
+  frustum(&cone, 3.0, 5.0, 0.0, 8.0, 120);
+  SweepOptions o;
+  o.direction = Vec3{0.1, 0, -1};
+  o.voxel = 0.1;
+  o.has_region = true;
+  o.region = Aabb{Vec3{-7, -7, 4}, Vec3{7, 7, 10}};
+  HeightfieldOptions ho;
+  ho.tolerance = 0.01;
+  size_t need = 0, triangles = 0, vertices = 0;
+  uint32_t cells = 0;
+  {
+    TestArena ta(size_t{256} << 20);
+    Context ctx(&ta.arena);
+    Mesh out;
+    HeightfieldStats st;
+    SPLINTCORE_ASSERT_OK(sweep_heightfield_mesh(ctx, Span<const Mesh>(&cone, 1), o, ho, &out, &st));
+    need = ta.arena.high_water();
+    triangles = out.triangles.size();
+    vertices = out.vertices.size();
+    cells = st.cells;
+  }
+  const uint64_t bound = sweep_heightfield_bound(cells) + 24 * uint64_t{vertices} +
+                         12 * uint64_t{triangles} + 4 * Arena::kDefaultAlignment;
+  EXPECT_LE(need, bound);
+  EXPECT_GT(need, sweep_heightfield_bound(cells) - 4 * Arena::kDefaultAlignment);
+  {
+    TestArena ta(need);
+    Context ctx(&ta.arena);
+    Mesh out;
+    SPLINTCORE_EXPECT_OK(sweep_heightfield_mesh(ctx, Span<const Mesh>(&cone, 1), o, ho, &out));
+    EXPECT_EQ(out.triangles.size(), triangles);
+  }
+  for (size_t cap : {need - 1, need / 2, need / 8}) {
+    TestArena ta(cap);
+    Context ctx(&ta.arena);
+    Mesh out;
+    const Status s = sweep_heightfield_mesh(ctx, Span<const Mesh>(&cone, 1), o, ho, &out);
+    EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << test::format(s);
+    EXPECT_EQ(ta.arena.used(), 0u);
+    EXPECT_TRUE(out.triangles.empty() && out.vertices.empty());
+  }
+}
+
+TEST(Heightfield, RefusesWhatItCannotDo) {
+  TestArena ta(size_t{64} << 20);
+  Context ctx(&ta.arena);
+  Mesh cone(&ta.arena);
+  frustum(&cone, 3.0, 5.0, 0.0, 8.0, 60);
+  SweepOptions o;
+  o.direction = Vec3{0, 0, -1};
+  o.voxel = 0.1;
+  HeightfieldOptions ho;
+  ho.tolerance = 0.01;
+  const Span<const Mesh> jaws(&cone, 1);
+  Mesh out;
+  Status s = sweep_heightfield_mesh(ctx, jaws, o, ho, &out);  // no region
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::strstr(s.message(), "region"), nullptr) << s.message();
+  o.has_region = true;
+  o.region = Aabb{Vec3{-7, -7, 4}, Vec3{7, 7, 10}};
+  ho.tolerance = 0.2;  // above the voxel
+  s = sweep_heightfield_mesh(ctx, jaws, o, ho, &out);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::strstr(s.message(), "tolerance"), nullptr) << s.message();
+  ho.tolerance = 0.01;
+  ho.shift_u = 1.0;
+  EXPECT_EQ(sweep_heightfield_mesh(ctx, jaws, o, ho, &out).code(), StatusCode::kInvalidArgument);
+  ho.shift_u = 0;
+  o.voxel = 0.003;  // 14 mm: 4672 voxels across
+  ho.tolerance = 0.001;
+  s = sweep_heightfield_mesh(ctx, jaws, o, ho, &out);
+  EXPECT_EQ(s.code(), StatusCode::kLimitExceeded);
+  EXPECT_NE(std::strstr(s.message(), "larger voxel"), nullptr) << s.message();
+  o.voxel = 0.1;
+  ho.tolerance = 0.01;
+  const size_t used = ta.arena.used();
+  cone.vertices[5].x = std::nan("");
+  s = sweep_heightfield_mesh(ctx, jaws, o, ho, &out);
+  EXPECT_EQ(s.code(), StatusCode::kNonFinite);
+  EXPECT_EQ(s.index(), 5u);
+  EXPECT_EQ(ta.arena.used(), used);
+  EXPECT_TRUE(out.triangles.empty());
+  BlockoutOptions b;
+  b.heightfield = true;
+  b.sweep.voxel = 0.1;
+  b.sweep.inset = 0.05;  // the height field has no inset
+  cone.vertices[5].x = 1;
+  const float lo[3] = {-7, -7, 4}, hi[3] = {7, 7, 10};
+  Mesh box = box_mesh(&ta.arena, lo, hi);
+  Mesh blocked;
+  s = blockout(ctx, box, jaws, b, &blocked);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::strstr(s.message(), "no inset"), nullptr) << s.message();
+}
+
 }  // namespace
 }  // namespace splintcore

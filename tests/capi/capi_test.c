@@ -742,6 +742,26 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
              blocked.blockout_removed_mm3[0], blocked.blockout_removed_mm3[1]);
     }
     sc_arena_rewind(f.ctx, mark);
+    /* The height field: the same case, its own method reported back; the inset given is not
+     * used (the height field has none). */
+    {
+      sc_design_report height;
+      sc_mesh* height_splint = NULL;
+      p.blockout_method = SC_BLOCKOUT_HEIGHTFIELD;
+      CHECK_OK(f.ctx, sc_case_set_params(f.ctx, c, &p));
+      CHECK_OK(f.ctx, sc_design(f.ctx, c, jaws, 2, &height_splint, &height));
+      if (height_splint != NULL) {
+        CHECK(height.blockout_jaws == 2);
+        CHECK(height.blockout_method_used == SC_BLOCKOUT_HEIGHTFIELD);
+        CHECK(height.blockout_removed_mm3[0] + height.blockout_removed_mm3[1] > 0);
+        CHECK(height.splint_volume_mm3 < report.splint_volume_mm3);
+        printf("design with the height field: %llu triangles, %.3f mm^3\n",
+               (unsigned long long)height.splint_triangles, height.splint_volume_mm3);
+      }
+      sc_arena_rewind(f.ctx, mark);
+      p.blockout_method = SC_BLOCKOUT_AUTO;
+      CHECK_OK(f.ctx, sc_case_set_params(f.ctx, c, &p));
+    }
     /* "auto" with the upper picks 2.5 mm deeper along the occlusal normal (+z here) and the
      * lower 2 mm: the maxilla's exact sweep is refused, the mandible's holds
      * (DesignPipeline.AutoBlockoutFallsBackOnlyForTheJawItsSweepRefuses): SC_BLOCKOUT_MIXED. */

@@ -930,7 +930,7 @@ TEST(CaseFile, BlockoutTakesItsDefaultsAndChecksItsRanges) {
   }
 }
 
-TEST(CaseFile, BlockoutMethodIsAutoExactOrVoxelAndExactTakesNoVoxelKeys) {
+TEST(CaseFile, BlockoutMethodIsAutoExactVoxelOrHeightfieldAndExactTakesNoVoxelKeys) {
   test::TestArena a(size_t{1} << 20);
   CaseFile c;
   const std::string dir = "\"insertion_direction\": [0, 0, 1],\n";
@@ -940,10 +940,13 @@ TEST(CaseFile, BlockoutMethodIsAutoExactOrVoxelAndExactTakesNoVoxelKeys) {
                              "{\"inset\": 0.05}",
                              "{\"closing_radius\": 0.5}",
                              "{\"clearance\": 0.2}",
-                             "{\"method\": \"auto\", \"voxel\": 0.2}"};
-  const BlockoutMethod methods[] = {BlockoutMethod::kAuto,  BlockoutMethod::kVoxel,
-                                    BlockoutMethod::kVoxel, BlockoutMethod::kVoxel,
-                                    BlockoutMethod::kVoxel, BlockoutMethod::kAuto};
+                             "{\"method\": \"auto\", \"voxel\": 0.2}",
+                             "{\"method\": \"heightfield\"}",
+                             "{\"method\": \"heightfield\", \"voxel\": 0.2}"};
+  const BlockoutMethod methods[] = {BlockoutMethod::kAuto,        BlockoutMethod::kVoxel,
+                                    BlockoutMethod::kVoxel,       BlockoutMethod::kVoxel,
+                                    BlockoutMethod::kVoxel,       BlockoutMethod::kAuto,
+                                    BlockoutMethod::kHeightfield, BlockoutMethod::kHeightfield};
   for (size_t i = 0; i < sizeof(blockouts) / sizeof(blockouts[0]); ++i) {
     SCOPED_TRACE(blockouts[i]);
     c = CaseFile{};
@@ -958,6 +961,11 @@ TEST(CaseFile, BlockoutMethodIsAutoExactOrVoxelAndExactTakesNoVoxelKeys) {
     SPLINTCORE_ASSERT_OK(parse(a.arena, written, &again));
     EXPECT_EQ(again.blockout_method, methods[i]) << written;
     EXPECT_EQ(again.blockout.voxel, c.blockout.voxel);
+    // The height field has no inset (nor does anything it writes back).
+    if (methods[i] == BlockoutMethod::kHeightfield) {
+      EXPECT_EQ(c.blockout.inset, 0.0);
+      EXPECT_EQ(written.find("inset"), std::string::npos) << written;
+    }
   }
   EXPECT_EQ(c.blockout.voxel, 0.2);  // auto's voxel keys are its fallback's
   SPLINTCORE_ASSERT_OK(
@@ -981,14 +989,18 @@ TEST(CaseFile, BlockoutMethodIsAutoExactOrVoxelAndExactTakesNoVoxelKeys) {
       "\"blockout\": {\"clearance\": 0.2, \"method\": \"exact\"},\n",
       "\"blockout\": {\"method\": \"exact\", \"closing_radius\": 0.5},\n",
       "\"blockout\": {\"method\": \"auto\", \"clearance\": 0.2},\n",
+      "\"blockout\": {\"method\": \"heightfield\", \"inset\": 0.05},\n",
+      "\"blockout\": {\"method\": \"heightfield\", \"clearance\": 0.1},\n",
   };
-  const char* names[] = {"\"auto\", \"exact\" or \"voxel\"",
+  const char* names[] = {"\"auto\", \"exact\", \"voxel\" or \"heightfield\"",
                          "blockout.method",
                          "blockout.voxel",
                          "blockout.inset",
                          "blockout.clearance",
                          "blockout.closing_radius",
-                         "say \"method\": \"voxel\""};
+                         "say \"method\": \"voxel\"",
+                         "blockout.inset",
+                         "blockout.clearance"};
   for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); ++i) {
     SCOPED_TRACE(bad[i]);
     const Status s = parse(a.arena, with_root(dir + bad[i]).text(), &c);

@@ -133,13 +133,15 @@ rows = [("plain splint", None), ("blockout default ({}: auto)", {}),
         ("blockout auto, base 3 mm deep", {"deep": 3}),
         ("blockout auto, base 4 mm deep", {"deep": 4}),
         ("blockout voxel 0.1", {"voxel": 0.1}),
+        ("blockout heightfield 0.1", {"method": "heightfield", "voxel": 0.1}),
+        ("heightfield, base 4 mm deep", {"deep": 4, "method": "heightfield", "voxel": 0.1}),
         ("spacer (clearance 0.1, voxel 0.1)", {"voxel": 0.1, "clearance": 0.1})]
 print("%-36s %9s %14s %11s  %s" % ("case", "wall (s)", "peak arena (B)", "triangles", "result"))
 for name, blockout in rows:
     c = json.loads(json.dumps(base))
     if blockout is not None and "deep" in blockout:  # a base reaching the necks (4 mm: voxels)
         c["base"]["auto"]["indentation_depth_mm"] = blockout["deep"]
-        blockout = {}
+        blockout = {k: v for k, v in blockout.items() if k != "deep"}
     if blockout is not None:
         c["blockout"] = blockout
     path = os.path.join(case, "c.json")

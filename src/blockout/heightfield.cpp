@@ -1,0 +1,597 @@
+// The swept volume as a height field over the plane across the direction (blockout.h says what
+// and why): the first contact of each grid column with the jaws, lowered where the grid's
+// interpolation would rise above the jaws, then a triangulated irregular network of right
+// triangles (longest-edge bisection) within the tolerance of it, one-sided.
+//
+// The network's hierarchy over a square of 2^k cells: the square is cut along its main
+// diagonal into two right triangles; a right triangle is cut at the midpoint of its
+// hypotenuse into two, the midpoint being a grid vertex down to triangles of half a cell. So
+// the cell with lower-left corner (i, j) is cut along its main diagonal when i + j is even,
+// along the other one when odd, and a square of 2s cells at (2s i, 2s j) likewise. The two
+// triangles that share a hypotenuse (a diamond) are cut together, at its midpoint m, when
+// E[m] exceeds half the tolerance: E[m] is the most any grid vertex under either departs from
+// its plane, and at least E of the diamonds its cut makes (its children), so a triangle that
+// stays whole has every grid vertex under it within half the tolerance, and neighbours never
+// leave a vertex on one side only (no cracks). Only the comparison is used, so E is exact up
+// to half the tolerance and merely known to exceed it beyond (a child's that does, or the
+// first vertex found past it): the coarse levels, which the steps cut anyway, scan little.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <utility>
+
+#include "blockout/frame.h"
+#include "splintcore/blockout.h"
+
+namespace splintcore {
+
+namespace {
+
+constexpr uint32_t kMaxCells = 4096;
+// The relative rounding allowed for in a plane's value (a few thousand ulps).
+constexpr double kRelative = 1e-12;
+
+struct Grid {
+  Frame frame;
+  double u0 = 0, v0 = 0;  // local u, v of grid vertex (0, 0)
+  double cell = 0;        // mm
+  double top = 0;         // local w of the columns that meet nothing below it
+  double margin = 0;      // mm: the float32 rounding of the output, covered
+  uint32_t n = 0;         // cells a side
+  size_t at(uint32_t x, uint32_t y) const { return size_t{y} * (n + 1) + x; }
+};
+
+// A jaw triangle in grid coordinates (x = (u - u0) / cell, y likewise, w in mm),
+// counter-clockwise.
+struct GridTriangle {
+  double x[3], y[3], w[3];
+  double wmin, wmax;
+  double gx, gy;  // the plane's slope per grid unit
+  double slack;   // rounding of plane() allowed for
+  bool ill;       // nearly vertical: its plane is not evaluated, wmin stands for it
+  double plane(double px, double py) const { return w[0] + gx * (px - x[0]) + gy * (py - y[0]); }
+  // A value at most the triangle's height at a point of it (px, py).
+  double below(double px, double py) const {
+    if (ill) return wmin;
+    const double p = plane(px, py) - slack;
+    return p > wmin ? p : wmin;
+  }
+};
+
+Status check_heightfield_arguments(const SweepOptions& o, const HeightfieldOptions& ho,
+                                   const Mesh& out) {
+  if (!out.vertices.empty() || !out.triangles.empty()) {
+    return make_error(StatusCode::kInvalidArgument, "heightfield: the output mesh must be empty");
+  }
+  if (!o.has_region || o.region.empty() || !is_finite(o.region.lo) || !is_finite(o.region.hi)) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "heightfield: a finite, non-empty region is needed");
+  }
+  if (!(o.voxel > 0) || !std::isfinite(o.voxel)) {
+    return make_error(StatusCode::kInvalidArgument, "heightfield: the voxel must be > 0 (mm)");
+  }
+  if (!(ho.tolerance > 0) || !(ho.tolerance <= o.voxel)) {
+    return make_error(StatusCode::kInvalidArgument, "heightfield: the tolerance (", ho.tolerance,
+                      " mm) must be > 0 and at most the voxel (", o.voxel, " mm)");
+  }
+  if (!(ho.lower >= 0) || !std::isfinite(ho.lower) || !(ho.shift_u >= 0 && ho.shift_u < 1) ||
+      !(ho.shift_v >= 0 && ho.shift_v < 1)) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "heightfield: lower must be >= 0 mm and the shifts in [0, 1)");
+  }
+  return Status::ok();
+}
+
+// The grid over the region's shadow (its eight corners in the local frame) and two cells more
+// (three with a shift).
+Status make_grid(const SweepOptions& o, const HeightfieldOptions& ho, Grid* g) {
+  SPLINTCORE_RETURN_IF_ERROR(make_frame(o.direction, &g->frame));
+  Aabb local;
+  double largest = 0;
+  for (int k = 0; k < 8; ++k) {
+    const Vec3 c{(k & 1) ? o.region.hi.x : o.region.lo.x, (k & 2) ? o.region.hi.y : o.region.lo.y,
+                 (k & 4) ? o.region.hi.z : o.region.lo.z};
+    local.add(to_local(g->frame, c));
+    largest =
+        std::fmax(largest, std::fmax(std::fabs(c.x), std::fmax(std::fabs(c.y), std::fabs(c.z))));
+  }
+  g->cell = o.voxel;
+  const double across = std::fmax(local.hi.x - local.lo.x, local.hi.y - local.lo.y) / o.voxel + 5.0;
+  uint32_t n = 1;
+  while (static_cast<double>(n) < across && n <= kMaxCells) n *= 2;
+  if (n > kMaxCells) {
+    return make_error(StatusCode::kLimitExceeded, "heightfield: the region is ", across,
+                      " voxels across, at most ", kMaxCells,
+                      " are taken: a larger voxel or a smaller region");
+  }
+  g->n = n;
+  g->u0 = local.lo.x - (2 + ho.shift_u) * o.voxel;
+  g->v0 = local.lo.y - (2 + ho.shift_v) * o.voxel;
+  g->top = local.hi.z + 2 * o.voxel + 1.0;
+  // Grid points reach a few cells and the top beyond the region: the largest coordinate of
+  // the output is below largest + its diagonal, whose float32 rounding is below 2^-24 of it.
+  const double reach = largest + (local.hi.x - local.lo.x) + (local.hi.y - local.lo.y) +
+                       (local.hi.z - local.lo.z) + 8 * o.voxel + 2.0;
+  g->margin = std::ldexp(reach, -20);
+  return Status::ok();
+}
+
+// Jaw triangle t of jaw j in grid coordinates; false when it does not face against d
+// (exactly: its shadow turns clockwise seen from +w) or its shadow misses the grid.
+bool grid_triangle(const Grid& g, const SweepOptions& o, Span<const Mesh> jaws, size_t j,
+                   const Triangle& t, GridTriangle* out) {
+  GridTriangle& q = *out;
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 p =
+        to_local(g.frame, o.jaw_vertex != nullptr ? o.jaw_vertex(o.jaw_vertex_user, j, t.v[k])
+                                                  : jaws[j].vertices[t.v[k]]);
+    q.x[k] = (p.x - g.u0) / g.cell;
+    q.y[k] = (p.y - g.v0) / g.cell;
+    q.w[k] = p.z;
+  }
+  // Facing against d (w) is clockwise seen from +w; the rest cannot be a first contact.
+  const double side = orient2d(q.x[0], q.y[0], q.x[1], q.y[1], q.x[2], q.y[2]);
+  if (side >= 0) return false;
+  std::swap(q.x[1], q.x[2]);
+  std::swap(q.y[1], q.y[2]);
+  std::swap(q.w[1], q.w[2]);
+  const double xlo = std::fmin(q.x[0], std::fmin(q.x[1], q.x[2]));
+  const double xhi = std::fmax(q.x[0], std::fmax(q.x[1], q.x[2]));
+  const double ylo = std::fmin(q.y[0], std::fmin(q.y[1], q.y[2]));
+  const double yhi = std::fmax(q.y[0], std::fmax(q.y[1], q.y[2]));
+  const double n = static_cast<double>(g.n);
+  if (xhi < 0 || yhi < 0 || xlo > n || ylo > n) return false;
+  q.wmin = std::fmin(q.w[0], std::fmin(q.w[1], q.w[2]));
+  q.wmax = std::fmax(q.w[0], std::fmax(q.w[1], q.w[2]));
+  const double ax = q.x[1] - q.x[0], ay = q.y[1] - q.y[0];
+  const double bx = q.x[2] - q.x[0], by = q.y[2] - q.y[0];
+  const double aw = q.w[1] - q.w[0], bw = q.w[2] - q.w[0];
+  const double area2 = ax * by - ay * bx;
+  q.ill = !(area2 > 1e-9);
+  q.gx = q.ill ? 0 : (aw * by - bw * ay) / area2;
+  q.gy = q.ill ? 0 : (bw * ax - aw * bx) / area2;
+  q.slack = kRelative * (std::fabs(q.w[0]) + (std::fabs(q.gx) + std::fabs(q.gy)) * (n + 2));
+  return true;
+}
+
+// The index range of grid lines [lo, hi] meets, within 0 .. n; false when none.
+bool line_range(double lo, double hi, uint32_t n, uint32_t* first, uint32_t* last) {
+  const double a = std::ceil(lo), b = std::floor(hi);
+  if (b < 0 || a > static_cast<double>(n) || a > b) return false;
+  *first = a < 0 ? 0 : static_cast<uint32_t>(a);
+  *last = b > static_cast<double>(n) ? n : static_cast<uint32_t>(b);
+  return true;
+}
+
+// Pass 1: h at every grid vertex, the least height of the jaw triangles whose shadow holds
+// it (closed, exact orient2d), at most the top.
+void first_contact(const Grid& g, const GridTriangle& q, double* h, uint64_t* covered) {
+  uint32_t x0, x1, y0, y1;
+  if (!line_range(std::fmin(q.x[0], std::fmin(q.x[1], q.x[2])),
+                  std::fmax(q.x[0], std::fmax(q.x[1], q.x[2])), g.n, &x0, &x1) ||
+      !line_range(std::fmin(q.y[0], std::fmin(q.y[1], q.y[2])),
+                  std::fmax(q.y[0], std::fmax(q.y[1], q.y[2])), g.n, &y0, &y1)) {
+    return;
+  }
+  for (uint32_t y = y0; y <= y1; ++y) {
+    const double py = y;
+    for (uint32_t x = x0; x <= x1; ++x) {
+      const double px = x;
+      if (orient2d(q.x[0], q.y[0], q.x[1], q.y[1], px, py) < 0 ||
+          orient2d(q.x[1], q.y[1], q.x[2], q.y[2], px, py) < 0 ||
+          orient2d(q.x[2], q.y[2], q.x[0], q.y[0], px, py) < 0) {
+        continue;
+      }
+      const double w = q.below(px, py);
+      double& slot = h[g.at(x, y)];
+      if (w < slot) {
+        if (slot == g.top) ++*covered;
+        slot = w;
+      }
+    }
+  }
+}
+
+// The convex polygon p (count corners, counter-clockwise) clipped to the left of a -> b.
+int clip_left(const double* px, const double* py, int count, double ax, double ay, double bx,
+              double by, double* ox, double* oy) {
+  int out = 0;
+  const double ex = bx - ax, ey = by - ay;
+  for (int i = 0; i < count; ++i) {
+    const int k = i + 1 == count ? 0 : i + 1;
+    const double si = ex * (py[i] - ay) - ey * (px[i] - ax);
+    const double sk = ex * (py[k] - ay) - ey * (px[k] - ax);
+    if (si >= 0) {
+      ox[out] = px[i];
+      oy[out++] = py[i];
+    }
+    if ((si >= 0) != (sk >= 0)) {
+      const double t = si / (si - sk);
+      ox[out] = px[i] + t * (px[k] - px[i]);
+      oy[out++] = py[i] + t * (py[k] - py[i]);
+    }
+  }
+  return out;
+}
+
+// How far the plane through the half cell's corners (cx, cy: counter-clockwise, their h)
+// rises above jaw triangle q where the two overlap (0 when nowhere), rounding included.
+double rise_above(const GridTriangle& q, const double* cx, const double* cy, const double* ch) {
+  double ax[9], ay[9], bx[9], by[9];
+  int count = clip_left(q.x, q.y, 3, cx[0], cy[0], cx[1], cy[1], ax, ay);
+  count = clip_left(ax, ay, count, cx[1], cy[1], cx[2], cy[2], bx, by);
+  count = clip_left(bx, by, count, cx[2], cy[2], cx[0], cy[0], ax, ay);
+  if (count == 0) return 0;
+  // The corners' plane: the half cell's legs are unit steps, its doubled area +-1.
+  const double ux = cx[1] - cx[0], uy = cy[1] - cy[0], vx = cx[2] - cx[0], vy = cy[2] - cy[0];
+  const double uh = ch[1] - ch[0], vh = ch[2] - ch[0];
+  const double area2 = ux * vy - uy * vx;
+  const double hx = (uh * vy - vh * uy) / area2, hy = (vh * ux - uh * vx) / area2;
+  const double slack = kRelative * (std::fabs(ch[0]) + std::fabs(ch[1]) + std::fabs(ch[2]) +
+                                    std::fabs(hx) + std::fabs(hy));
+  double most = 0;
+  for (int i = 0; i < count; ++i) {
+    const double plane = ch[0] + hx * (ax[i] - cx[0]) + hy * (ay[i] - cy[0]);
+    const double rise = plane + slack - q.below(ax[i], ay[i]);
+    if (rise > most) most = rise;
+  }
+  return most;
+}
+
+// The two half cells of cell (i, j), each as three corners counter-clockwise.
+void half_cells(uint32_t i, uint32_t j, uint32_t corner[2][3][2]) {
+  const uint32_t a[2] = {i, j}, b[2] = {i + 1, j}, c[2] = {i + 1, j + 1}, d[2] = {i, j + 1};
+  const uint32_t* order[2][3];
+  if (((i + j) & 1u) == 0) {  // main diagonal a-c
+    order[0][0] = a, order[0][1] = b, order[0][2] = c;
+    order[1][0] = a, order[1][1] = c, order[1][2] = d;
+  } else {  // b-d
+    order[0][0] = a, order[0][1] = b, order[0][2] = d;
+    order[1][0] = b, order[1][1] = c, order[1][2] = d;
+  }
+  for (int h = 0; h < 2; ++h) {
+    for (int k = 0; k < 3; ++k) {
+      corner[h][k][0] = order[h][k][0];
+      corner[h][k][1] = order[h][k][1];
+    }
+  }
+}
+
+// Pass 2: every half cell under jaw triangle q clipped against it; its corners' lowering
+// raised to how far their plane rises above q there (float, rounded up).
+void lower_under(const Grid& g, const GridTriangle& q, const double* h, float* low,
+                 HeightfieldStats* st) {
+  uint32_t x0, x1, y0, y1;
+  const double xlo = std::fmin(q.x[0], std::fmin(q.x[1], q.x[2]));
+  const double xhi = std::fmax(q.x[0], std::fmax(q.x[1], q.x[2]));
+  const double ylo = std::fmin(q.y[0], std::fmin(q.y[1], q.y[2]));
+  const double yhi = std::fmax(q.y[0], std::fmax(q.y[1], q.y[2]));
+  if (!line_range(std::floor(xlo), std::ceil(xhi) - 1, g.n - 1, &x0, &x1) ||
+      !line_range(std::floor(ylo), std::ceil(yhi) - 1, g.n - 1, &y0, &y1)) {
+    return;
+  }
+  uint32_t corner[2][3][2];
+  for (uint32_t j = y0; j <= y1; ++j) {
+    for (uint32_t i = x0; i <= x1; ++i) {
+      half_cells(i, j, corner);
+      for (int hc = 0; hc < 2; ++hc) {
+        double cx[3], cy[3], ch[3];
+        size_t id[3];
+        for (int k = 0; k < 3; ++k) {
+          cx[k] = corner[hc][k][0];
+          cy[k] = corner[hc][k][1];
+          id[k] = g.at(corner[hc][k][0], corner[hc][k][1]);
+          ch[k] = h[id[k]];
+        }
+        // The corners' plane nowhere above q's over the whole half cell (both linear: at
+        // its corners): nothing to clip.
+        if (!q.ill) {
+          double most = -HUGE_VAL;
+          for (int k = 0; k < 3; ++k) {
+            most = std::fmax(most, ch[k] + kRelative * std::fabs(ch[k]) - q.plane(cx[k], cy[k]));
+          }
+          if (most + q.slack <= 0) continue;
+        }
+        ++st->clipped_pairs;
+        const double rise = rise_above(q, cx, cy, ch);
+        if (!(rise > 0)) continue;
+        float f = static_cast<float>(rise);
+        if (static_cast<double>(f) < rise) f = std::nextafter(f, HUGE_VALF);
+        for (size_t k : id) {
+          if (f > low[k]) low[k] = f;
+        }
+      }
+    }
+  }
+}
+
+Status rasterize(const Context& ctx, const Grid& g, Span<const Mesh> jaws, const SweepOptions& o,
+                 bool lowering, double* h, float* low, HeightfieldStats* st) {
+  GridTriangle q;
+  uint64_t done = 0, total = 0;
+  for (const Mesh& m : jaws) total += m.triangles.size();
+  for (size_t j = 0; j < jaws.size(); ++j) {
+    const Mesh& jaw = jaws[j];
+    for (size_t t = 0; t < jaw.triangles.size(); ++t, ++done) {
+      if ((done & 0xffff) == 0) {
+        SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "heightfield", done, total));
+      }
+      const Triangle& tri = jaw.triangles[t];
+      if (tri.v[0] >= jaw.vertices.size() || tri.v[1] >= jaw.vertices.size() ||
+          tri.v[2] >= jaw.vertices.size()) {
+        return make_error(StatusCode::kInvalidMesh, "heightfield: triangle ", t, " of jaw ", j,
+                          " refers to a vertex that does not exist")
+            .at_index(t);
+      }
+      if (!grid_triangle(g, o, jaws, j, tri, &q)) continue;
+      if (lowering) {
+        lower_under(g, q, h, low, st);
+      } else {
+        ++st->triangles_in;
+        first_contact(g, q, h, &st->covered_vertices);
+      }
+    }
+  }
+  return Status::ok();
+}
+
+// ---- the network
+
+struct Tri {
+  uint32_t a[2], b[2], c[2];  // b the right angle, a-c the hypotenuse
+};
+
+// The most a grid vertex of triangle t departs from the plane through its corners (h), or
+// the first departure found above `limit` (all the network asks is whether it exceeds it).
+double departure(const Grid& g, const double* h, const Tri& t, double limit) {
+  const int64_t ax = t.a[0], ay = t.a[1], bx = t.b[0], by = t.b[1], cx = t.c[0], cy = t.c[1];
+  const double ha = h[g.at(t.a[0], t.a[1])], hb = h[g.at(t.b[0], t.b[1])];
+  const double hc = h[g.at(t.c[0], t.c[1])];
+  const int64_t area2 = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
+  const double inv = 1.0 / static_cast<double>(area2);
+  const double gx =
+      ((hb - ha) * static_cast<double>(cy - ay) - (hc - ha) * static_cast<double>(by - ay)) * inv;
+  const double gy =
+      ((hc - ha) * static_cast<double>(bx - ax) - (hb - ha) * static_cast<double>(cx - ax)) * inv;
+  const int64_t x0 = std::min(ax, std::min(bx, cx)), x1 = std::max(ax, std::max(bx, cx));
+  const int64_t y0 = std::min(ay, std::min(by, cy)), y1 = std::max(ay, std::max(by, cy));
+  const int64_t s = area2 > 0 ? 1 : -1;
+  double most = 0;
+  for (int64_t y = y0; y <= y1; ++y) {
+    for (int64_t x = x0; x <= x1; ++x) {
+      if (s * ((bx - ax) * (y - ay) - (by - ay) * (x - ax)) < 0 ||
+          s * ((cx - bx) * (y - by) - (cy - by) * (x - bx)) < 0 ||
+          s * ((ax - cx) * (y - cy) - (ay - cy) * (x - cx)) < 0) {
+        continue;
+      }
+      const double p = ha + gx * static_cast<double>(x - ax) + gy * static_cast<double>(y - ay);
+      const double d = std::fabs(h[g.at(static_cast<uint32_t>(x), static_cast<uint32_t>(y))] - p);
+      if (d > most) most = d;
+    }
+    if (most > limit) return most;
+  }
+  return most;
+}
+
+inline void raise_to(float* e, size_t at, double value) {
+  float f = static_cast<float>(value);
+  if (static_cast<double>(f) < value) f = std::nextafter(f, HUGE_VALF);
+  if (f > e[at]) e[at] = f;
+}
+
+// E of the axis diamonds of half length s (hypotenuse along x, dir 0, or y, dir 1): m on a
+// line of the 2s lattice halfway between two of its points; their children are the diagonal
+// diamonds of half size s / 2. E above `limit` is only known to be above it: a child's above
+// it is the diamond's, and its own triangles are then not scanned.
+void axis_diamonds(const Grid& g, const double* h, uint32_t s, int dir, double limit, float* e) {
+  const uint32_t n = g.n, s2 = 2 * s;
+  for (uint32_t p = 0; p <= n; p += s2) {   // the line
+    for (uint32_t r = s; r < n; r += s2) {  // halfway along it
+      const uint32_t mx = dir == 0 ? r : p, my = dir == 0 ? p : r;
+      const size_t m = g.at(mx, my);
+      Tri t[2];
+      int sides = 0;
+      for (int side = -1; side <= 1; side += 2) {
+        const int64_t ox = dir == 0 ? 0 : side * int64_t{s};
+        const int64_t oy = dir == 0 ? side * int64_t{s} : 0;
+        const int64_t apx = mx + ox, apy = my + oy;
+        if (apx < 0 || apy < 0 || apx > n || apy > n) continue;
+        Tri& u = t[sides++];
+        u.a[0] = dir == 0 ? mx - s : mx, u.a[1] = dir == 0 ? my : my - s;
+        u.c[0] = dir == 0 ? mx + s : mx, u.c[1] = dir == 0 ? my : my + s;
+        u.b[0] = static_cast<uint32_t>(apx), u.b[1] = static_cast<uint32_t>(apy);
+        if (s < 2) continue;  // its children are half cells
+        for (int k = -1; k <= 1; k += 2) {
+          const int64_t cx = mx + (dir == 0 ? k * int64_t{s / 2} : ox / 2);
+          const int64_t cy = my + (dir == 0 ? oy / 2 : k * int64_t{s / 2});
+          const float child = e[g.at(static_cast<uint32_t>(cx), static_cast<uint32_t>(cy))];
+          if (child > e[m]) e[m] = child;
+        }
+      }
+      for (int i = 0; i < sides && !(static_cast<double>(e[m]) > limit); ++i) {
+        raise_to(e, m, departure(g, h, t[i], limit));
+      }
+    }
+  }
+}
+
+// E of the diagonal diamonds of half size s: m the centre of a square of 2s cells at
+// (2s i, 2s j), cut along its main diagonal when i + j is even; their children are the axis
+// diamonds of half length s around m. (Above `limit` as axis_diamonds.)
+void diagonal_diamonds(const Grid& g, const double* h, uint32_t s, double limit, float* e) {
+  const uint32_t n = g.n, s2 = 2 * s;
+  for (uint32_t my = s; my < n; my += s2) {
+    for (uint32_t mx = s; mx < n; mx += s2) {
+      const size_t m = g.at(mx, my);
+      const uint32_t child[4][2] = {{mx - s, my}, {mx + s, my}, {mx, my - s}, {mx, my + s}};
+      for (const auto& c : child) {
+        const float v = e[g.at(c[0], c[1])];
+        if (v > e[m]) e[m] = v;
+      }
+      const bool main = (((mx / s2) + (my / s2)) & 1u) == 0;
+      Tri t;
+      t.a[0] = mx - s, t.a[1] = main ? my - s : my + s;
+      t.c[0] = mx + s, t.c[1] = main ? my + s : my - s;
+      for (int side = 0; side < 2 && !(static_cast<double>(e[m]) > limit); ++side) {
+        t.b[0] = side == 0 ? mx + s : mx - s;
+        t.b[1] = main ? (side == 0 ? my - s : my + s) : (side == 0 ? my + s : my - s);
+        raise_to(e, m, departure(g, h, t, limit));
+      }
+    }
+  }
+}
+
+// E[m] of every diamond, level by level from the finest.
+void diamond_errors(const Grid& g, const double* h, double limit, float* e) {
+  std::memset(e, 0, sizeof(float) * size_t{g.n + 1} * (g.n + 1));
+  for (uint32_t s = 1; s < g.n; s *= 2) {
+    axis_diamonds(g, h, s, 0, limit, e);
+    axis_diamonds(g, h, s, 1, limit, e);
+    diagonal_diamonds(g, h, s, limit, e);
+  }
+}
+
+// Walks the network: the two halves of the square, each cut while its diamond's error exceeds
+// `limit`, depth first (the first child first); visit(t) for each triangle kept.
+template <typename Visit>
+void walk_network(const Grid& g, const float* e, double limit, Visit visit) {
+  const uint32_t n = g.n;
+  Tri stack[64];
+  int top = 0;
+  stack[top++] = Tri{{n, n}, {0, n}, {0, 0}};
+  stack[top++] = Tri{{0, 0}, {n, 0}, {n, n}};
+  while (top > 0) {
+    const Tri t = stack[--top];
+    const uint32_t dx = t.a[0] > t.c[0] ? t.a[0] - t.c[0] : t.c[0] - t.a[0];
+    const uint32_t dy = t.a[1] > t.c[1] ? t.a[1] - t.c[1] : t.c[1] - t.a[1];
+    const bool leaf = dx == 1 && dy == 1;
+    const uint32_t m[2] = {(t.a[0] + t.c[0]) / 2, (t.a[1] + t.c[1]) / 2};
+    if (leaf || !(static_cast<double>(e[g.at(m[0], m[1])]) > limit)) {
+      visit(t);
+      continue;
+    }
+    // Second child pushed first, so the first is walked first.
+    stack[top++] = Tri{{t.b[0], t.b[1]}, {m[0], m[1]}, {t.c[0], t.c[1]}};
+    stack[top++] = Tri{{t.a[0], t.a[1]}, {m[0], m[1]}, {t.b[0], t.b[1]}};
+  }
+}
+
+// The network as a mesh: vertices numbered by first use, triangles oriented against w.
+Status build_network(const Context& ctx, const Grid& g, const double* h, const float* e,
+                     double limit, bool float32, Mesh* out) {
+  Arena& arena = *ctx.arena;
+  const size_t count = size_t{g.n + 1} * (g.n + 1);
+  uint32_t* id = arena.allocate_array<uint32_t>(count);
+  if (id == nullptr) return arena.exhausted_status();
+  std::memset(id, 0xff, count * sizeof(uint32_t));
+  uint32_t vertices = 0;
+  size_t triangles = 0;
+  walk_network(g, e, limit, [&](const Tri& t) {
+    for (const uint32_t* p : {t.a, t.b, t.c}) {
+      uint32_t& slot = id[g.at(p[0], p[1])];
+      if (slot == UINT32_MAX) slot = vertices++;
+    }
+    ++triangles;
+  });
+  out->bind(&arena);
+  if (!out->vertices.resize(vertices) || !out->triangles.resize(triangles)) {
+    return arena.exhausted_status();
+  }
+  for (uint32_t y = 0; y <= g.n; ++y) {
+    for (uint32_t x = 0; x <= g.n; ++x) {
+      const size_t k = g.at(x, y);
+      if (id[k] == UINT32_MAX) continue;
+      Vec3 p = to_world(g.frame, Vec3{g.u0 + g.cell * x, g.v0 + g.cell * y, h[k]});
+      if (float32 && !round_to_float32(&p)) {
+        return make_error(StatusCode::kLimitExceeded,
+                          "heightfield: a vertex is beyond float32 range")
+            .at_index(id[k]);
+      }
+      out->vertices[id[k]] = p;
+    }
+  }
+  size_t k = 0;
+  walk_network(g, e, limit, [&](const Tri& t) {
+    const int64_t cross = (int64_t{t.b[0]} - t.a[0]) * (int64_t{t.c[1]} - t.a[1]) -
+                          (int64_t{t.b[1]} - t.a[1]) * (int64_t{t.c[0]} - t.a[0]);
+    const uint32_t ia = id[g.at(t.a[0], t.a[1])], ib = id[g.at(t.b[0], t.b[1])];
+    const uint32_t ic = id[g.at(t.c[0], t.c[1])];
+    // Counter-clockwise seen from +w has its normal along w: reversed, against it.
+    out->triangles[k++] = cross > 0 ? Triangle{{ia, ic, ib}} : Triangle{{ia, ib, ic}};
+  });
+  return Status::ok();
+}
+
+// Every jaw vertex finite (they are read again by each pass).
+Status check_jaw_vertices(Span<const Mesh> jaws, const SweepOptions& o) {
+  for (size_t j = 0; j < jaws.size(); ++j) {
+    for (size_t i = 0; i < jaws[j].vertices.size(); ++i) {
+      const Vec3 p =
+          o.jaw_vertex != nullptr ? o.jaw_vertex(o.jaw_vertex_user, j, i) : jaws[j].vertices[i];
+      if (!is_finite(p)) {
+        return make_error(StatusCode::kNonFinite, "heightfield: jaw ", j,
+                          " has a non-finite vertex")
+            .at_index(i);
+      }
+    }
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+uint64_t sweep_heightfield_bound(uint32_t cells) {
+  const uint64_t side = uint64_t{cells} + 1;
+  return side * side * 16 + 3 * Arena::kDefaultAlignment;
+}
+
+Status sweep_heightfield_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
+                              const HeightfieldOptions& ho, Mesh* out, HeightfieldStats* stats) {
+  SPLINTCORE_ASSERT(ctx.arena != nullptr && out != nullptr);
+  HeightfieldStats local;
+  HeightfieldStats* st = stats != nullptr ? stats : &local;
+  *st = HeightfieldStats{};
+  SPLINTCORE_RETURN_IF_ERROR(check_heightfield_arguments(o, ho, *out));
+  size_t triangle_count = 0;
+  for (const Mesh& m : jaws) triangle_count += m.triangles.size();
+  if (triangle_count == 0) {
+    return make_error(StatusCode::kInvalidArgument, "heightfield: the jaws have no triangles");
+  }
+  Grid g;
+  SPLINTCORE_RETURN_IF_ERROR(make_grid(o, ho, &g));
+  st->cells = g.n;
+  st->axis_u = g.frame.u, st->axis_v = g.frame.v, st->axis_w = g.frame.w;
+  SPLINTCORE_RETURN_IF_ERROR(check_jaw_vertices(jaws, o));
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);
+  const size_t count = size_t{g.n + 1} * (g.n + 1);
+  double* h = arena.allocate_array<double>(count);
+  float* low = arena.allocate_array<float>(count);
+  if (h == nullptr || low == nullptr) return arena.exhausted_status();
+  for (size_t k = 0; k < count; ++k) h[k] = g.top;
+  std::memset(low, 0, count * sizeof(float));
+  SPLINTCORE_RETURN_IF_ERROR(rasterize(ctx, g, jaws, o, false, h, low, st));
+  SPLINTCORE_RETURN_IF_ERROR(rasterize(ctx, g, jaws, o, true, h, low, st));
+  // The grid lowered by its rises, the margin, half the tolerance and `lower`; low becomes E.
+  const double shift = g.margin + 0.5 * ho.tolerance + ho.lower;
+  for (size_t k = 0; k < count; ++k) {
+    if (low[k] > 0) {
+      ++st->lowered_vertices;
+      st->max_lowering = std::fmax(st->max_lowering, static_cast<double>(low[k]));
+    }
+    h[k] = h[k] - static_cast<double>(low[k]) - shift;
+  }
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "heightfield", 1, 2));
+  float* e = low;
+  diamond_errors(g, h, 0.5 * ho.tolerance, e);
+  SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "heightfield", 2, 2));
+  Mesh built;
+  SPLINTCORE_RETURN_IF_ERROR(
+      build_network(ctx, g, h, e, 0.5 * ho.tolerance, o.float32_vertices, &built));
+  st->network_triangles = built.triangles.size();
+  move_mesh_down(arena, scope.start(), built, out, true);
+  scope.commit();
+  return Status::ok();
+}
+
+}  // namespace splintcore
