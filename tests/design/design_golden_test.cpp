@@ -136,6 +136,21 @@ TEST(DesignGolden, ExactBlockoutRoundedLabelledOnTheTray) {
   expect_golden_and_meshlab("exact", "design:exact-phantom6000", d);
 }
 
+// The height field ("method": "heightfield", voxel 0.1 mm) with the same options: the jaws are
+// not subtracted first, nothing is left undercut; its bytes pinned (and on AArch64, ARMv7).
+TEST(DesignGolden, HeightfieldBlockoutRoundedLabelledOnTheTray) {
+  Designed d;
+  ASSERT_NO_FATAL_FAILURE(design_case("heightfield.json", &d));
+  EXPECT_EQ(d.report.blockout_jaws, 2u);
+  EXPECT_TRUE(d.report.imprint_heightfield);
+  EXPECT_EQ(d.report.boolean.intersecting_pairs, 0u);
+  for (int j = 0; j < 2; ++j) EXPECT_GT(d.report.blockout[j].heightfield.network_triangles, 0u);
+  EXPECT_TRUE(d.report.placed_on_tray);
+  EXPECT_TRUE(d.report.labelled);
+  EXPECT_TRUE(d.report.print.printable);
+  expect_golden_and_meshlab("heightfield", "design:heightfield-phantom6000", d);
+}
+
 // The firmware example's third stage (tools/firmware/main.cpp, issue 29): the paper-scale case
 // with blockout on a 0.1 mm grid (inset 0.05 mm, no closing), designed in an arena of exactly
 // the board's 16 MiB (the jaws in an arena of their own, as the board's come from flash). Its

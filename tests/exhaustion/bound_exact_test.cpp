@@ -345,7 +345,8 @@ TEST(BoundExact, CtSegmentation) {
   }
 }
 
-// The paper-scale case (fixtures/cases/paper_scale.json, blockout.json or exact.json) and two
+// The paper-scale case (fixtures/cases/paper_scale.json, blockout.json, exact.json or
+// heightfield.json) and two
 // phantom jaws of 6,000 triangles, in an arena of their own.
 struct PhantomCase {
   TestArena storage{size_t{128} << 20};
@@ -373,7 +374,7 @@ struct PhantomCase {
 };
 
 TEST(BoundTwoStep, DesignBooleanBlockoutLabel) {
-  for (const char* name : {"paper_scale.json", "blockout.json", "exact.json"}) {
+  for (const char* name : {"paper_scale.json", "blockout.json", "exact.json", "heightfield.json"}) {
     PhantomCase pc(name);
     std::string result;
     expect_two_step(
