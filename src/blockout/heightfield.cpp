@@ -183,10 +183,10 @@ void first_contact(const Grid& g, const GridTriangle& q, double* h, uint64_t* co
         continue;
       }
       const double w = q.below(px, py);
-      double& slot = h[g.at(x, y)];
-      if (w < slot) {
-        if (slot == g.top) ++*covered;
-        slot = w;
+      const size_t k = g.at(x, y);
+      if (w < h[k]) {
+        if (h[k] == g.top) ++*covered;
+        h[k] = w;
       }
     }
   }
