@@ -744,6 +744,14 @@ check "report: auto asked, exact used, in the case's 64M" -- grep -q '"blockout_
 check "report: exact used" -- grep -q '"blockout_method_used":"exact","blockout":\[{"role":"maxilla","method":"exact"' "$work/opts/exact/report.json"
 check "report: the case's 64M applied" -- grep -q '"memory_cap_bytes":67108864,"memory_cap_from":"case"' "$work/opts/exact/report.json"
 check "report (exact): every key is documented" -- report_keys_documented "$work/opts/exact/report.json"
+# The same options with the height field ("method": "heightfield", 0.1 mm): its golden bytes,
+# its own report keys, documented.
+cp "$fixtures/cases/heightfield.json" "$work/opts/case.json"
+expect_exit 0 "design with the height field" -- "$tool" design "$work/opts/case.json" -o "$work/opts/height"
+check "the height field has the golden bytes" -- grep -q "\"splint_sha256\":\"$(grep " design:heightfield-phantom6000$" "$fixtures/golden.sha256" | cut -d' ' -f1)\"" "$work/opts/height/report.json"
+check "report: heightfield used" -- grep -q '"blockout_method_used":"heightfield","blockout":\[{"role":"maxilla","method":"heightfield"' "$work/opts/height/report.json"
+check "report: the height field's imprint" -- grep -q '"imprint":"height field of the swept volume"' "$work/opts/height/report.json"
+check "report (heightfield): every key is documented" -- report_keys_documented "$work/opts/height/report.json"
 sed 's/"text": "PHANTOM-01"/"text": "50%"/' "$fixtures/cases/blockout.json" >"$work/opts/case.json"
 expect_exit 1 "a label the font cannot write" -- "$tool" design "$work/opts/case.json" -o "$work/opts/bad"
 check "the error names the character" -- grep -q "label.*'%'" "$work/err"
