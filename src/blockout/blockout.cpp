@@ -699,6 +699,11 @@ Status blockout_exact(const Context& ctx, const Mesh& splint, Span<const Mesh> j
   return Status::ok();
 }
 
+// The blockouts' retries, in voxels past the first attempt: the sampled sweep's deeper insets,
+// the height field's lower surfaces (see blockout() and blockout_heightfield()).
+constexpr int kAttempts = 4;
+constexpr double kRetrySteps[kAttempts] = {0, 1.0 / 64, 1.0 / 4, 1.0 / 2};
+
 // The height-field blockout (BlockoutOptions::heightfield): the swept surface over the
 // splint's bounds, subtracted once; its border is the grid's edge, beyond the splint's box.
 Status blockout_heightfield(const Context& ctx, const Mesh& splint, const Aabb& bounds,
@@ -718,11 +723,9 @@ Status blockout_heightfield(const Context& ctx, const Mesh& splint, const Aabb& 
   BooleanOptions bo = options.boolean;
   bo.op = BooleanOp::kDifference;
   bo.b_border_outside_a = true;
-  // As the sampled blockout's retries: a configuration the Boolean cannot resolve (two of its
-  // points rounded together) is met again on a grid moved by a share of a cell, 1/64 voxel
-  // lower, then a quarter and half a voxel.
-  constexpr int kAttempts = 4;
-  constexpr double kLower[kAttempts] = {0, 1.0 / 64, 1.0 / 4, 1.0 / 2};
+  // As the sampled blockout's retries (kRetrySteps, the same voxels lower): a configuration the
+  // Boolean cannot resolve (two of its points rounded together) is met again on a grid moved by
+  // a share of a cell, 1/64 voxel lower, then a quarter and half a voxel.
   constexpr double kShiftU[kAttempts] = {0, 0.375, 0.625, 0.125};
   constexpr double kShiftV[kAttempts] = {0, 0.25, 0.75, 0.5};
   Status s;
@@ -731,7 +734,7 @@ Status blockout_heightfield(const Context& ctx, const Mesh& splint, const Aabb& 
     ctx.arena->rewind(scope.start());
     out = Mesh();
     st->attempts = static_cast<uint32_t>(attempt + 1);
-    st->inset_used = kLower[attempt] * so.voxel;
+    st->inset_used = kRetrySteps[attempt] * so.voxel;
     Mesh swept;
     HeightfieldOptions ho;
     ho.tolerance = tolerance;
@@ -797,8 +800,6 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
   // real dentition with the base 5 mm deep every Boolean attempt at 0.05 and 0.0516 mm met a
   // contact it could not triangulate; 0.08 mm had none). What is left of undercut is at most
   // the inset used (BlockoutStats::inset_used).
-  constexpr int kAttempts = 4;
-  constexpr double kInsetSteps[kAttempts] = {0, 1.0 / 64, 1.0 / 4, 1.0 / 2};
   Mesh result;
   Status s;
   for (int attempt = 0; attempt < kAttempts; ++attempt) {
@@ -814,7 +815,7 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
       so.offset = options.sweep.offset + attempt * (options.sweep.voxel / 64);
       if (attempt > 0 && !(so.offset <= 20 * so.voxel)) break;
     } else {
-      so.inset = options.sweep.inset + kInsetSteps[attempt] * options.sweep.voxel;
+      so.inset = options.sweep.inset + kRetrySteps[attempt] * options.sweep.voxel;
       if (attempt > 0 && !(so.inset < 2 * so.voxel)) break;
     }
     st->attempts = static_cast<uint32_t>(attempt + 1);

@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "splintcore/blockout.h"
 #include "splintcore/core.h"
 #include "splintcore/geometry.h"
 
@@ -62,6 +63,11 @@ inline Vec3 to_world(const Frame& f, const Vec3& p) {
   const Vec3 b = f.v * p.y;
   const Vec3 c = f.w * p.z;
   return (a + b) + c;
+}
+
+// Vertex i of jaw j where the sweep takes it (SweepOptions::jaw_vertex, else the jaw's own).
+inline Vec3 jaw_point(const SweepOptions& o, Span<const Mesh> jaws, size_t j, size_t i) {
+  return o.jaw_vertex != nullptr ? o.jaw_vertex(o.jaw_vertex_user, j, i) : jaws[j].vertices[i];
 }
 
 }  // namespace splintcore

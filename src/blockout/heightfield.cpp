@@ -122,9 +122,7 @@ bool grid_triangle(const Grid& g, const SweepOptions& o, Span<const Mesh> jaws, 
                    const Triangle& t, GridTriangle* out) {
   GridTriangle& q = *out;
   for (int k = 0; k < 3; ++k) {
-    const Vec3 p =
-        to_local(g.frame, o.jaw_vertex != nullptr ? o.jaw_vertex(o.jaw_vertex_user, j, t.v[k])
-                                                  : jaws[j].vertices[t.v[k]]);
+    const Vec3 p = to_local(g.frame, jaw_point(o, jaws, j, t.v[k]));
     q.x[k] = (p.x - g.u0) / g.cell;
     q.y[k] = (p.y - g.v0) / g.cell;
     q.w[k] = p.z;
@@ -526,8 +524,7 @@ Status build_network(const Context& ctx, const Grid& g, const double* h, const f
 Status check_jaw_vertices(Span<const Mesh> jaws, const SweepOptions& o) {
   for (size_t j = 0; j < jaws.size(); ++j) {
     for (size_t i = 0; i < jaws[j].vertices.size(); ++i) {
-      const Vec3 p =
-          o.jaw_vertex != nullptr ? o.jaw_vertex(o.jaw_vertex_user, j, i) : jaws[j].vertices[i];
+      const Vec3 p = jaw_point(o, jaws, j, i);
       if (!is_finite(p)) {
         return make_error(StatusCode::kNonFinite, "heightfield: jaw ", j,
                           " has a non-finite vertex")

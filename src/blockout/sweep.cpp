@@ -543,11 +543,6 @@ Status check_sweep_options(const SweepOptions& o) {
   return Status::ok();
 }
 
-// Vertex i of jaw j as the sweep takes it (SweepOptions::jaw_vertex).
-Vec3 jaw_point(const SweepOptions& o, Span<const Mesh> jaws, size_t j, size_t i) {
-  return o.jaw_vertex != nullptr ? o.jaw_vertex(o.jaw_vertex_user, j, i) : jaws[j].vertices[i];
-}
-
 // The jaws' box in the local frame (all their vertices: its corner anchors the lattice, so a
 // region sees the samples of the whole sweep) and their counts.
 Status jaws_box(Span<const Mesh> jaws, const SweepOptions& o, const Frame& frame, Aabb* box,

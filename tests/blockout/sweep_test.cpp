@@ -68,6 +68,17 @@ void frustum(Mesh* m, double r0, double r1, double z0, double z1, uint32_t n,
   }
 }
 
+// The area of frustum()'s top ring (its vertices n .. 2n - 1) by the shoelace formula.
+double rim_area(const Mesh& cone, uint32_t n) {
+  double area = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const Vec3& p = cone.vertices[n + i];
+    const Vec3& q = cone.vertices[n + (i + 1) % n];
+    area += p.x * q.y - q.x * p.y;
+  }
+  return area / 2;
+}
+
 struct Errors {
   double mean = 0, max = 0;
   size_t count = 0;
@@ -1057,14 +1068,7 @@ TEST(ExactSweep, BlockoutOfTheConeIsTheBoxLessTheRimsCylinderAndUnlocked) {
   SPLINTCORE_ASSERT_OK(check_mesh(ctx, blocked, &report));
   EXPECT_TRUE(report.closed() && report.edge_manifold() && report.outward());
   EXPECT_TRUE(st.boolean.self_intersection_checked);
-  // The rim polygon (the cone's top ring, float32) by the shoelace formula.
-  double area = 0;
-  for (uint32_t i = 0; i < n; ++i) {
-    const Vec3& p = cone.vertices[n + i];
-    const Vec3& q = cone.vertices[n + (i + 1) % n];
-    area += p.x * q.y - q.x * p.y;
-  }
-  area /= 2;
+  const double area = rim_area(cone, n);
   // The cone never rises above its cap (z = 8): the box keeps its top 2 mm.
   const double expected = 14.0 * 14.0 * 6.0 - area * 4.0;
   std::printf(
@@ -1869,13 +1873,7 @@ TEST(Heightfield, BlockoutOfTheConeLeavesNoUndercutAndCutsLittleMore) {
   MeshReport report;
   SPLINTCORE_ASSERT_OK(check_mesh(ctx, blocked, &report));
   EXPECT_TRUE(report.closed() && report.edge_manifold() && report.outward());
-  double area = 0;  // the rim polygon, as the exact test
-  for (uint32_t i = 0; i < n; ++i) {
-    const Vec3& p = cone.vertices[n + i];
-    const Vec3& q = cone.vertices[n + (i + 1) % n];
-    area += p.x * q.y - q.x * p.y;
-  }
-  area /= 2;
+  const double area = rim_area(cone, n);
   const double exact = 14.0 * 14.0 * 6.0 - area * 4.0;
   const double volume = mesh_volume(blocked);
   std::printf(
