@@ -214,6 +214,7 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
 struct HeightfieldStats {
   uint32_t cells = 0;                 // grid cells a side (a power of two)
   uint64_t triangles_in = 0;          // jaw triangles whose shadow meets the grid
+  uint64_t offset_pieces = 0;         // with an offset: the planar pieces of its polytope
   uint64_t covered_vertices = 0;      // grid vertices whose column meets a jaw below the top
   uint64_t clipped_pairs = 0;         // (jaw triangle, half cell) pairs clipped
   uint64_t lowered_vertices = 0;      // grid vertices lowered by a clip
@@ -231,8 +232,9 @@ struct HeightfieldOptions {
 };
 
 // Arena bytes sweep_heightfield_mesh takes for a grid of `cells` a side, besides its output
-// (24 bytes a vertex, 12 a triangle): 16 bytes a grid vertex.
-uint64_t sweep_heightfield_bound(uint32_t cells);
+// (24 bytes a vertex, 12 a triangle): 16 bytes a grid vertex; with an offset, the jaws'
+// vertex count as `offset_vertices`: 4 bytes a vertex and the polytope's 11 KB more.
+uint64_t sweep_heightfield_bound(uint32_t cells, uint64_t offset_vertices = 0);
 
 // The graph above as an open surface (its normals against d, out of S) into `out` (empty), in
 // the jaws' frame; its border is the grid's edge, outside the region. Only the jaws' triangles

@@ -709,9 +709,9 @@ constexpr double kRetrySteps[kAttempts] = {0, 1.0 / 64, 1.0 / 4, 1.0 / 2};
 Status blockout_heightfield(const Context& ctx, const Mesh& splint, const Aabb& bounds,
                             Span<const Mesh> jaws, const BlockoutOptions& options, Mesh* result,
                             BlockoutStats* st) {
-  if (options.sweep.offset > 0 || options.sweep.inset > 0 || options.sweep.closing_radius > 0) {
+  if (options.sweep.inset > 0 || options.sweep.closing_radius > 0) {
     return make_error(StatusCode::kInvalidArgument,
-                      "blockout: the height field takes no inset, offset or closing");
+                      "blockout: the height field takes no inset or closing");
   }
   SweepOptions so = options.sweep;
   so.has_region = true;
@@ -725,20 +725,24 @@ Status blockout_heightfield(const Context& ctx, const Mesh& splint, const Aabb& 
   bo.b_border_outside_a = true;
   // As the sampled blockout's retries (kRetrySteps, the same voxels lower): a configuration the
   // Boolean cannot resolve (two of its points rounded together) is met again on a grid moved by
-  // a share of a cell, 1/64 voxel lower, then a quarter and half a voxel.
+  // a share of a cell, 1/64 voxel lower, then a quarter and half a voxel; with an offset (a
+  // spacer) 1/64 voxel further out each time instead, as the sampled spacer's (offset_used).
   constexpr double kShiftU[kAttempts] = {0, 0.375, 0.625, 0.125};
   constexpr double kShiftV[kAttempts] = {0, 0.25, 0.75, 0.5};
+  const bool offset = so.offset > 0;
   Status s;
   Mesh out;
   for (int attempt = 0; attempt < kAttempts; ++attempt) {
     ctx.arena->rewind(scope.start());
     out = Mesh();
     st->attempts = static_cast<uint32_t>(attempt + 1);
-    st->inset_used = kRetrySteps[attempt] * so.voxel;
+    const double lower = (offset ? attempt / 64.0 : kRetrySteps[attempt]) * so.voxel;
+    st->inset_used = lower;  // the height field's lowering (its report's lowered_mm)
+    st->offset_used = offset ? so.offset + lower : 0;
     Mesh swept;
     HeightfieldOptions ho;
     ho.tolerance = tolerance;
-    ho.lower = st->inset_used;
+    ho.lower = lower;
     ho.shift_u = kShiftU[attempt];
     ho.shift_v = kShiftV[attempt];
     s = sweep_heightfield_mesh(ctx, jaws, so, ho, &swept, &st->heightfield);

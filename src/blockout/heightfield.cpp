@@ -21,6 +21,7 @@
 #include <utility>
 
 #include "blockout/frame.h"
+#include "blockout/offset_ball.h"
 #include "splintcore/blockout.h"
 
 namespace splintcore {
@@ -74,6 +75,10 @@ Status check_heightfield_arguments(const SweepOptions& o, const HeightfieldOptio
     return make_error(StatusCode::kInvalidArgument, "heightfield: the tolerance (", ho.tolerance,
                       " mm) must be > 0 and at most the voxel (", o.voxel, " mm)");
   }
+  if (!(o.offset >= 0) || !(o.offset <= 20 * o.voxel) || o.inset != 0 || o.closing_radius != 0) {
+    return make_error(StatusCode::kInvalidArgument, "heightfield: the offset (", o.offset,
+                      " mm) must be >= 0 and at most 20 voxels; no inset or closing");
+  }
   if (!(ho.lower >= 0) || !std::isfinite(ho.lower) || !(ho.shift_u >= 0 && ho.shift_u < 1) ||
       !(ho.shift_v >= 0 && ho.shift_v < 1)) {
     return make_error(StatusCode::kInvalidArgument,
@@ -116,23 +121,25 @@ Status make_grid(const SweepOptions& o, const HeightfieldOptions& ho, Grid* g) {
   return Status::ok();
 }
 
-// Jaw triangle t of jaw j in grid coordinates; false when it does not face against d
-// (exactly: its shadow turns clockwise seen from +w) or its shadow misses the grid.
-bool grid_triangle(const Grid& g, const SweepOptions& o, Span<const Mesh> jaws, size_t j,
-                   const Triangle& t, GridTriangle* out) {
-  GridTriangle& q = *out;
+// Corners in the local frame (mm) into grid coordinates, as given.
+void to_grid(const Grid& g, const Vec3 p[3], GridTriangle* q) {
   for (int k = 0; k < 3; ++k) {
-    const Vec3 p = to_local(g.frame, jaw_point(o, jaws, j, t.v[k]));
-    q.x[k] = (p.x - g.u0) / g.cell;
-    q.y[k] = (p.y - g.v0) / g.cell;
-    q.w[k] = p.z;
+    q->x[k] = (p[k].x - g.u0) / g.cell;
+    q->y[k] = (p[k].y - g.v0) / g.cell;
+    q->w[k] = p[k].z;
   }
-  // Facing against d (w) is clockwise seen from +w; the rest cannot be a first contact.
-  const double side = orient2d(q.x[0], q.y[0], q.x[1], q.y[1], q.x[2], q.y[2]);
-  if (side >= 0) return false;
-  std::swap(q.x[1], q.x[2]);
-  std::swap(q.y[1], q.y[2]);
-  std::swap(q.w[1], q.w[2]);
+}
+
+// Corners 1 and 2 swapped: the other turn.
+void swap_turn(GridTriangle* q) {
+  std::swap(q->x[1], q->x[2]);
+  std::swap(q->y[1], q->y[2]);
+  std::swap(q->w[1], q->w[2]);
+}
+
+// The rest of q from its corners (counter-clockwise); false when its shadow misses the grid.
+bool finish_triangle(const Grid& g, GridTriangle* out) {
+  GridTriangle& q = *out;
   const double xlo = std::fmin(q.x[0], std::fmin(q.x[1], q.x[2]));
   const double xhi = std::fmax(q.x[0], std::fmax(q.x[1], q.x[2]));
   const double ylo = std::fmin(q.y[0], std::fmin(q.y[1], q.y[2]));
@@ -150,6 +157,30 @@ bool grid_triangle(const Grid& g, const SweepOptions& o, Span<const Mesh> jaws, 
   q.gy = q.ill ? 0 : (bw * ax - aw * bx) / area2;
   q.slack = kRelative * (std::fabs(q.w[0]) + (std::fabs(q.gx) + std::fabs(q.gy)) * (n + 2));
   return true;
+}
+
+// Jaw triangle t of jaw j in the local frame (p) and in grid coordinates; false when it does
+// not face against d (exactly: its shadow turns clockwise seen from +w) or, without an
+// offset, its shadow misses the grid.
+bool grid_triangle(const Grid& g, const SweepOptions& o, Span<const Mesh> jaws, size_t j,
+                   const Triangle& t, Vec3 p[3], GridTriangle* q) {
+  for (int k = 0; k < 3; ++k) p[k] = to_local(g.frame, jaw_point(o, jaws, j, t.v[k]));
+  to_grid(g, p, q);
+  // Facing against d (w) is clockwise seen from +w; the rest cannot be a first contact.
+  if (orient2d(q->x[0], q->y[0], q->x[1], q->y[1], q->x[2], q->y[2]) >= 0) return false;
+  swap_turn(q);
+  return finish_triangle(g, q) || o.offset > 0;
+}
+
+// A piece of the offset (offset_ball.h) in grid coordinates; false when its shadow has no
+// area (a vertical piece: its lowest points are its neighbours') or misses the grid.
+bool piece_triangle(const Grid& g, const Vec3& a, const Vec3& b, const Vec3& c, GridTriangle* q) {
+  const Vec3 p[3] = {a, b, c};
+  to_grid(g, p, q);
+  const double side = orient2d(q->x[0], q->y[0], q->x[1], q->y[1], q->x[2], q->y[2]);
+  if (side == 0) return false;
+  if (side < 0) swap_turn(q);
+  return finish_triangle(g, q);
 }
 
 // The index range of grid lines [lo, hi] meets, within 0 .. n; false when none.
@@ -303,15 +334,48 @@ void lower_under(const Grid& g, const GridTriangle& q, const double* h, float* l
   }
 }
 
-Status rasterize(const Context& ctx, const Grid& g, Span<const Mesh> jaws, const SweepOptions& o,
-                 bool lowering, double* h, float* low, HeightfieldStats* st) {
+// One pass over a triangle (the jaw's or an offset piece).
+void pass_over(const Grid& g, const GridTriangle& q, bool lowering, double* h, float* low,
+               HeightfieldStats* st) {
+  if (lowering) {
+    lower_under(g, q, h, low, st);
+  } else {
+    first_contact(g, q, h, &st->covered_vertices);
+  }
+}
+
+// Whether front triangle p (local frame), grown by the ball's reach, can meet the grid.
+bool near_grid(const Grid& g, const OffsetBall& ball, const Vec3 p[3]) {
+  const double reach = ball.reach / g.cell + 1;
+  const double n = static_cast<double>(g.n);
+  for (int axis = 0; axis < 2; ++axis) {
+    const double o = axis == 0 ? g.u0 : g.v0;
+    double lo = HUGE_VAL, hi = -HUGE_VAL;
+    for (int k = 0; k < 3; ++k) {
+      const double c = ((axis == 0 ? p[k].x : p[k].y) - o) / g.cell;
+      lo = c < lo ? c : lo;
+      hi = c > hi ? c : hi;
+    }
+    if (hi + reach < 0 || lo - reach > n) return false;
+  }
+  return true;
+}
+
+// Calls visit(j, p, q) for each front triangle of jaw j (p its corners in the local frame, as
+// the jaw turns them; q in grid coordinates, counter-clockwise, only without an offset), in
+// input order, with the progress and the vertex ids checked.
+template <typename Visit>
+Status each_front(const Context& ctx, const Grid& g, Span<const Mesh> jaws, const SweepOptions& o,
+                  Visit visit) {
   GridTriangle q;
+  Vec3 p[3];
   uint64_t done = 0, total = 0;
   for (const Mesh& m : jaws) total += m.triangles.size();
+  const uint64_t every = o.offset > 0 ? 0xfff : 0xffff;
   for (size_t j = 0; j < jaws.size(); ++j) {
     const Mesh& jaw = jaws[j];
     for (size_t t = 0; t < jaw.triangles.size(); ++t, ++done) {
-      if ((done & 0xffff) == 0) {
+      if ((done & every) == 0) {
         SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "heightfield", done, total));
       }
       const Triangle& tri = jaw.triangles[t];
@@ -321,14 +385,77 @@ Status rasterize(const Context& ctx, const Grid& g, Span<const Mesh> jaws, const
                           " refers to a vertex that does not exist")
             .at_index(t);
       }
-      if (!grid_triangle(g, o, jaws, j, tri, &q)) continue;
-      if (lowering) {
-        lower_under(g, q, h, low, st);
-      } else {
-        ++st->triangles_in;
-        first_contact(g, q, h, &st->covered_vertices);
-      }
+      if (grid_triangle(g, o, jaws, j, tri, p, &q)) visit(j, tri, p, q);
     }
+  }
+  return Status::ok();
+}
+
+// Pass 1 (first contacts) or 2 (lowering) over the jaws' front triangles.
+Status rasterize(const Context& ctx, const Grid& g, Span<const Mesh> jaws, const SweepOptions& o,
+                 bool lowering, double* h, float* low, HeightfieldStats* st) {
+  return each_front(ctx, g, jaws, o,
+                    [&](size_t, const Triangle&, const Vec3*, const GridTriangle& q) {
+                      if (!lowering) ++st->triangles_in;
+                      pass_over(g, q, lowering, h, low, st);
+                    });
+}
+
+// The offset: the polytope, and for each jaw vertex (all jaws in order) the faces of Q that its
+// front triangles near the grid all leave to it (offset_ball.h: support_faces), kSeen marking
+// the vertices of such triangles.
+struct Offset {
+  static constexpr uint32_t kSeen = 1u << 31;
+  const OffsetBall* ball = nullptr;
+  uint32_t* faces = nullptr;
+};
+
+size_t first_vertex(Span<const Mesh> jaws, size_t j) {
+  size_t first = 0;
+  for (size_t i = 0; i < j; ++i) first += jaws[i].vertices.size();
+  return first;
+}
+
+// The vertices' faces (Offset::faces, zeroed), and the front triangles counted.
+Status offset_faces(const Context& ctx, const Grid& g, Span<const Mesh> jaws, const SweepOptions& o,
+                    const Offset& offset, HeightfieldStats* st) {
+  size_t jaw = 0, first = 0;
+  return each_front(ctx, g, jaws, o,
+                    [&](size_t j, const Triangle& tri, const Vec3* p, const GridTriangle&) {
+                      if (!near_grid(g, *offset.ball, p)) return;
+                      ++st->triangles_in;
+                      if (j != jaw) jaw = j, first = first_vertex(jaws, j);
+                      for (int k = 0; k < 3; ++k) {
+                        uint32_t& f = offset.faces[first + tri.v[k]];
+                        const uint32_t mine = support_faces(*offset.ball, p, k) | Offset::kSeen;
+                        f = (f & Offset::kSeen) != 0 ? (f & mine) : mine;
+                      }
+                    });
+}
+
+// Pass 1 or 2 over the offset's pieces: those of the front triangles near the grid and their
+// edges, then those of the vertices (their faces).
+Status rasterize_offset(const Context& ctx, const Grid& g, Span<const Mesh> jaws,
+                        const SweepOptions& o, const Offset& offset, bool lowering, double* h,
+                        float* low, HeightfieldStats* st) {
+  const OffsetBall& ball = *offset.ball;
+  GridTriangle q;
+  auto piece = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
+    if (!lowering) ++st->offset_pieces;
+    if (piece_triangle(g, a, b, c, &q)) pass_over(g, q, lowering, h, low, st);
+  };
+  SPLINTCORE_RETURN_IF_ERROR(
+      each_front(ctx, g, jaws, o, [&](size_t, const Triangle&, const Vec3* p, const GridTriangle&) {
+        if (near_grid(g, ball, p)) triangle_pieces(ball, p, piece);
+      }));
+  size_t first = 0;
+  for (size_t j = 0; j < jaws.size(); ++j) {
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "heightfield", j, jaws.size()));
+    for (size_t i = 0; i < jaws[j].vertices.size(); ++i) {
+      const uint32_t f = offset.faces[first + i] & ~Offset::kSeen;
+      if (f != 0) vertex_pieces(ball, to_local(g.frame, jaw_point(o, jaws, j, i)), f, piece);
+    }
+    first += jaws[j].vertices.size();
   }
   return Status::ok();
 }
@@ -537,9 +664,12 @@ Status check_jaw_vertices(Span<const Mesh> jaws, const SweepOptions& o) {
 
 }  // namespace
 
-uint64_t sweep_heightfield_bound(uint32_t cells) {
+uint64_t sweep_heightfield_bound(uint32_t cells, uint64_t offset_vertices) {
   const uint64_t side = uint64_t{cells} + 1;
-  return side * side * 16 + 3 * Arena::kDefaultAlignment;
+  const uint64_t offset =
+      offset_vertices > 0 ? sizeof(OffsetBall) + 4 * offset_vertices + 2 * Arena::kDefaultAlignment
+                          : 0;
+  return side * side * 16 + 3 * Arena::kDefaultAlignment + offset;
 }
 
 Status sweep_heightfield_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
@@ -567,8 +697,23 @@ Status sweep_heightfield_mesh(const Context& ctx, Span<const Mesh> jaws, const S
   if (h == nullptr || low == nullptr) return arena.exhausted_status();
   for (size_t k = 0; k < count; ++k) h[k] = g.top;
   std::memset(low, 0, count * sizeof(float));
-  SPLINTCORE_RETURN_IF_ERROR(rasterize(ctx, g, jaws, o, false, h, low, st));
-  SPLINTCORE_RETURN_IF_ERROR(rasterize(ctx, g, jaws, o, true, h, low, st));
+  if (o.offset > 0) {
+    size_t vertices = 0;
+    for (const Mesh& m : jaws) vertices += m.vertices.size();
+    Offset offset;
+    OffsetBall* ball = arena.allocate_array<OffsetBall>(1);
+    offset.faces = arena.allocate_array<uint32_t>(vertices);
+    if (ball == nullptr || offset.faces == nullptr) return arena.exhausted_status();
+    make_offset_ball(o.offset, ball);
+    offset.ball = ball;
+    std::memset(offset.faces, 0, vertices * sizeof(uint32_t));
+    SPLINTCORE_RETURN_IF_ERROR(offset_faces(ctx, g, jaws, o, offset, st));
+    SPLINTCORE_RETURN_IF_ERROR(rasterize_offset(ctx, g, jaws, o, offset, false, h, low, st));
+    SPLINTCORE_RETURN_IF_ERROR(rasterize_offset(ctx, g, jaws, o, offset, true, h, low, st));
+  } else {
+    SPLINTCORE_RETURN_IF_ERROR(rasterize(ctx, g, jaws, o, false, h, low, st));
+    SPLINTCORE_RETURN_IF_ERROR(rasterize(ctx, g, jaws, o, true, h, low, st));
+  }
   // The grid lowered by its rises, the margin, half the tolerance and `lower`; low becomes E.
   const double shift = g.margin + 0.5 * ho.tolerance + ho.lower;
   for (size_t k = 0; k < count; ++k) {

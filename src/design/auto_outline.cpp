@@ -298,6 +298,7 @@ void write_later_stages(JsonWriter& w, const CaseFile& c) {
     }
     if (c.blockout_method == BlockoutMethod::kHeightfield) {
       w.add("voxel", c.blockout.voxel);
+      if (c.blockout.offset > 0) w.add("clearance", c.blockout.offset);
     } else if (c.blockout_method != BlockoutMethod::kExact) {
       w.add("voxel", c.blockout.voxel);
       if (c.blockout.offset > 0) {

@@ -600,17 +600,17 @@ Status parse_blockout(const Reader& r, const JsonValue* b, CaseFile* out) {
                       "\" is for the voxel method (\"method\": \"exact\" has no voxels)");
       }
       if (out->blockout_method == BlockoutMethod::kHeightfield && v != nullptr &&
-          std::strcmp(key, "voxel") != 0) {
+          std::strcmp(key, "voxel") != 0 && std::strcmp(key, "clearance") != 0) {
         return r.fail(*v, StatusCode::kInvalidArgument, "\"blockout.", key,
                       "\" is for the voxel method (\"method\": \"heightfield\" takes only "
-                      "\"voxel\", its grid)");
+                      "\"voxel\", its grid, and \"clearance\")");
       }
     }
     const JsonValue* clearance = doc.member(*b, "clearance");
     if (out->blockout_method == BlockoutMethod::kAuto && clearance != nullptr) {
       return r.fail(*clearance, StatusCode::kInvalidArgument,
-                    "\"blockout.clearance\" is the voxel method's (the spacer is the sampled "
-                    "sweep's): say \"method\": \"voxel\"");
+                    "\"blockout.clearance\" needs a method with a spacer: say \"method\": "
+                    "\"voxel\" or \"heightfield\"");
     }
   }
   if (const JsonValue* bv = doc.member(*b, "voxel")) {

@@ -120,6 +120,7 @@ void write_parameters(JsonWriter& w, const CaseFile& c, const DesignReport& repo
   if (c.has_blockout) w.add("blockout_method", blockout_method_name(c.blockout_method));
   if (c.has_blockout && c.blockout_method == BlockoutMethod::kHeightfield) {
     w.add("blockout_voxel_mm", c.blockout.voxel);
+    w.add("clearance_mm", c.blockout.offset);
   } else if (c.has_blockout && c.blockout_method != BlockoutMethod::kExact) {
     w.add("blockout_voxel_mm", c.blockout.voxel);
     w.add("blockout_inset_mm", c.blockout.inset);
@@ -166,6 +167,7 @@ void write_heightfield_blockout(JsonWriter& w, const BlockoutStats& b, double re
   w.add("direction", h.axis_w);
   w.add("grid_cells", h.cells);
   w.add("front_triangles", h.triangles_in);
+  w.add("clearance_pieces", h.offset_pieces);
   w.add("covered_grid_vertices", h.covered_vertices);
   w.add("clipped_pairs", h.clipped_pairs);
   w.add("lowered_grid_vertices", h.lowered_vertices);
@@ -174,6 +176,7 @@ void write_heightfield_blockout(JsonWriter& w, const BlockoutStats& b, double re
   w.add("intersecting_pairs", b.boolean.intersecting_pairs);
   w.add("attempts", b.attempts);
   w.add("lowered_mm", b.inset_used);
+  w.add("clearance_used_mm", b.offset_used);
   w.add("nudge_mm", b.boolean.nudge_sum);
   w.add("removed_volume_mm3", removed_mm3);
   w.end_object();
@@ -290,9 +293,11 @@ void write_checks(JsonWriter& w, const CaseFile& c, const DesignReport& report) 
     if (report.blockout_fallback[0] != '\0') w.add("blockout_fallback", report.blockout_fallback);
     write_blockout(w, c, report);
   }
-  w.add("imprint", report.imprint_heightfield ? "height field of the swept volume"
-                   : report.imprint_offset    ? "clearance offset of the swept volume"
-                   : !report.imprint_swept    ? "jaw triangles"
+  w.add("imprint", report.imprint_heightfield && report.imprint_offset
+                       ? "height field of the swept volume's clearance offset"
+                   : report.imprint_heightfield ? "height field of the swept volume"
+                   : report.imprint_offset      ? "clearance offset of the swept volume"
+                   : !report.imprint_swept      ? "jaw triangles"
                    : exact_jaws == report.blockout_jaws
                        ? "exact swept volume (jaw front triangles and walls)"
                        : "exact swept volume (jaw front triangles and walls); jaw triangles where "

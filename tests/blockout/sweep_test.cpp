@@ -16,6 +16,7 @@
 #include "splintcore/distance.h"
 #include "splintcore/io.h"
 #include "splintcore/platform.h"
+#include "support/distance_oracle.h"
 #include "support/phantom_jaws.h"
 #include "support/test_util.h"
 #include "support/undercut_lines.h"
@@ -1984,6 +1985,145 @@ TEST(Heightfield, RunsInItsHighWaterAndFailsCleanlyBelow) {
     EXPECT_EQ(ta.arena.used(), 0u);
     EXPECT_TRUE(out.triangles.empty() && out.vertices.empty());
   }
+}
+
+// The least and the largest brute-force distance to `jaws` of the sheet's points that `keep`
+// takes: its vertices and its triangles' centroids.
+struct Reach {
+  double least = HUGE_VAL, most = 0;
+  size_t points = 0;
+};
+template <typename Keep>
+Reach sheet_reach(const Mesh& sheet, const Mesh& jaws, Keep keep) {
+  Reach r;
+  auto take = [&](const Vec3& p) {
+    if (!keep(p)) return;
+    const double d = test::oracle_distance_to_mesh(p, jaws);
+    r.least = std::min(r.least, d);
+    r.most = std::max(r.most, d);
+    ++r.points;
+  };
+  for (const Vec3& p : sheet.vertices) take(p);
+  for (const Triangle& t : sheet.triangles) {
+    take((sheet.vertices[t.v[0]] + sheet.vertices[t.v[1]] + sheet.vertices[t.v[2]]) * (1.0 / 3));
+  }
+  return r;
+}
+
+// The height field of the offset solid S + B(c) (a spacer): over the cone's flat cap exactly c
+// out (the polytope's bottom face is tangent to the ball) within the tolerance; no point of the
+// sheet comes nearer the jaw than c (brute-force distances), and near the jaw it stays within
+// the polytope's reach (1.0718 c) and the tolerance of it.
+TEST(Heightfield, OffsetKeepsTheClearanceOverTheCone) {
+  TestArena ta(size_t{256} << 20);
+  Context ctx(&ta.arena);
+  Mesh cone(&ta.arena);
+  frustum(&cone, 3.0, 5.0, 0.0, 8.0, 360);
+  SweepOptions o;
+  o.direction = Vec3{0, 0, -1};
+  o.voxel = 0.1;
+  o.offset = 0.1;
+  o.has_region = true;
+  o.region = Aabb{Vec3{-7, -7, 4}, Vec3{7, 7, 10}};
+  HeightfieldOptions ho;
+  ho.tolerance = 0.01;
+  Mesh sheet;
+  HeightfieldStats st;
+  SPLINTCORE_ASSERT_OK(sweep_heightfield_mesh(ctx, Span<const Mesh>(&cone, 1), o, ho, &sheet, &st));
+  EXPECT_EQ(st.triangles_in, 360u);
+  EXPECT_GT(st.offset_pieces, 360u * 20);
+  size_t over_cap = 0;
+  for (const Vec3& p : sheet.vertices) {
+    if (std::sqrt(p.x * p.x + p.y * p.y) > 4.6) continue;
+    ++over_cap;
+    EXPECT_GE(p.z, 8.0 + o.offset);
+    EXPECT_LE(p.z, 8.0 + o.offset + ho.tolerance + 1e-4);
+  }
+  EXPECT_GT(over_cap, 2u);
+  const Reach all = sheet_reach(sheet, cone, [&](const Vec3& p) { return o.region.contains(p); });
+  EXPECT_GT(all.points, 1000u);
+  EXPECT_GE(all.least, o.offset * (1 - 1e-6)) << all.least;
+  // Above the cap to two cells from its rim (not the step lowered beyond it): within the reach.
+  const Reach near = sheet_reach(sheet, cone, [](const Vec3& p) {
+    return p.z < 8.5 && std::sqrt(p.x * p.x + p.y * p.y) < 4.8;
+  });
+  EXPECT_GT(near.points, 100u);
+  EXPECT_LE(near.most, 1.0718 * o.offset + ho.tolerance + 1e-4) << near.most;
+  std::printf(
+      "[ figures  ] offset height field of the cone (c 0.1 mm): %zu triangles, %llu pieces, "
+      "distance to the jaw %.5f .. %.5f mm over the cap, least %.5f mm in the region\n",
+      sheet.triangles.size(), static_cast<unsigned long long>(st.offset_pieces), near.least,
+      near.most, all.least);
+}
+
+// A spacer by the height field: the box less the cone's offset sweep is a valid solid, no line
+// along d is locked, and no point of its surface comes nearer the jaw than the clearance.
+TEST(Heightfield, SpacerBlockoutIsAValidSolidWithItsClearance) {
+  TestArena ta(size_t{1} << 30);
+  Context ctx(&ta.arena);
+  Mesh cone(&ta.arena);
+  frustum(&cone, 3.0, 5.0, 0.0, 8.0, 90);
+  for (Vec3& p : cone.vertices) ASSERT_TRUE(round_to_float32(&p));
+  const float lo[3] = {-7, -7, 4}, hi[3] = {7, 7, 10};
+  Mesh box = box_mesh(&ta.arena, lo, hi);
+  BlockoutOptions o;
+  o.heightfield = true;
+  o.sweep.direction = Vec3{0, 0, -1};
+  o.sweep.voxel = 0.1;
+  o.sweep.inset = 0;
+  o.sweep.offset = 0.1;
+  Mesh blocked;
+  BlockoutStats st;
+  SPLINTCORE_ASSERT_OK(blockout(ctx, box, Span<const Mesh>(&cone, 1), o, &blocked, &st));
+  EXPECT_GE(st.offset_used, 0.1);
+  MeshReport report;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, blocked, &report));
+  EXPECT_TRUE(report.closed() && report.edge_manifold() && report.outward());
+  const Reach r = sheet_reach(blocked, cone, [](const Vec3&) { return true; });
+  EXPECT_GE(r.least, 0.1 * (1 - 1e-6)) << r.least;
+  EXPECT_LE(r.least, 0.1 * 1.0718 + 0.01) << r.least;
+  const Vec3 d{0, 0, -1}, u{1, 0, 0}, v{0, 1, 0}, c{0, 0, 5};
+  const LockReport after = lock_report(ta.arena, blocked, cone, d, u, v, c, 6.0, 60, 1e-6);
+  EXPECT_GT(after.lines_through_jaw, 1000u);
+  EXPECT_EQ(after.locked_lines, 0u) << after.longest;
+}
+
+// Overhangs along a slanted direction with sharp edges and corners (the pieces of the
+// polytope's edges and faces): no point of the sheet nearer the jaws than the offset, and the
+// nearest within the reach and tolerance of it; the same bytes again.
+TEST(Heightfield, OffsetKeepsTheClearanceAlongSlantedOverhangs) {
+  TestArena ta(size_t{512} << 20);
+  Context ctx(&ta.arena);
+  Mesh jaws(&ta.arena);
+  frustum(&jaws, 2.0, 3.0, 0.0, 4.0, 7);
+  Mesh tilted(&ta.arena);
+  RigidTransform aside =
+      rotation_about_axis(Vec3{0, 0, 0}, Vec3{0.7071067811865476, 0.7071067811865476, 0}, 0.5);
+  aside.t = Vec3{3, 0, 1};
+  frustum(&tilted, 1.5, 2.5, 0.0, 3.0, 5, &aside);
+  ASSERT_TRUE(append_mesh(&jaws, tilted));
+  SweepOptions o;
+  o.direction = Vec3{0.2, -0.1, -1} * (1.0 / std::sqrt(1.05));
+  o.voxel = 0.05;
+  o.offset = 0.25;
+  o.has_region = true;
+  o.region = Aabb{Vec3{-5, -5, 2}, Vec3{8, 5, 7}};
+  HeightfieldOptions ho;
+  ho.tolerance = 0.005;
+  Mesh sheet;
+  HeightfieldStats st;
+  SPLINTCORE_ASSERT_OK(sweep_heightfield_mesh(ctx, Span<const Mesh>(&jaws, 1), o, ho, &sheet, &st));
+  const Reach r = sheet_reach(sheet, jaws, [&](const Vec3& p) { return o.region.contains(p); });
+  EXPECT_GT(r.points, 1000u);
+  EXPECT_GE(r.least, o.offset * (1 - 1e-6)) << r.least;
+  EXPECT_LE(r.least, 1.0718 * o.offset + ho.tolerance) << r.least;
+  std::printf(
+      "[ figures  ] offset height field of slanted overhangs (c 0.25 mm): %zu triangles, "
+      "least distance %.5f mm\n",
+      sheet.triangles.size(), r.least);
+  Mesh again;
+  SPLINTCORE_ASSERT_OK(sweep_heightfield_mesh(ctx, Span<const Mesh>(&jaws, 1), o, ho, &again));
+  EXPECT_EQ(test::mesh_sha256(again), test::mesh_sha256(sheet));
 }
 
 TEST(Heightfield, RefusesWhatItCannotDo) {

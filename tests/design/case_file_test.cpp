@@ -942,11 +942,12 @@ TEST(CaseFile, BlockoutMethodIsAutoExactVoxelOrHeightfieldAndExactTakesNoVoxelKe
                              "{\"clearance\": 0.2}",
                              "{\"method\": \"auto\", \"voxel\": 0.2}",
                              "{\"method\": \"heightfield\"}",
+                             "{\"method\": \"heightfield\", \"clearance\": 0.15}",
                              "{\"method\": \"heightfield\", \"voxel\": 0.2}"};
-  const BlockoutMethod methods[] = {BlockoutMethod::kAuto,        BlockoutMethod::kVoxel,
-                                    BlockoutMethod::kVoxel,       BlockoutMethod::kVoxel,
-                                    BlockoutMethod::kVoxel,       BlockoutMethod::kAuto,
-                                    BlockoutMethod::kHeightfield, BlockoutMethod::kHeightfield};
+  const BlockoutMethod methods[] = {
+      BlockoutMethod::kAuto,        BlockoutMethod::kVoxel,       BlockoutMethod::kVoxel,
+      BlockoutMethod::kVoxel,       BlockoutMethod::kVoxel,       BlockoutMethod::kAuto,
+      BlockoutMethod::kHeightfield, BlockoutMethod::kHeightfield, BlockoutMethod::kHeightfield};
   for (size_t i = 0; i < sizeof(blockouts) / sizeof(blockouts[0]); ++i) {
     SCOPED_TRACE(blockouts[i]);
     c = CaseFile{};
@@ -961,6 +962,7 @@ TEST(CaseFile, BlockoutMethodIsAutoExactVoxelOrHeightfieldAndExactTakesNoVoxelKe
     SPLINTCORE_ASSERT_OK(parse(a.arena, written, &again));
     EXPECT_EQ(again.blockout_method, methods[i]) << written;
     EXPECT_EQ(again.blockout.voxel, c.blockout.voxel);
+    EXPECT_EQ(again.blockout.offset, c.blockout.offset);  // the clearance
     // The height field has no inset (nor does anything it writes back).
     if (methods[i] == BlockoutMethod::kHeightfield) {
       EXPECT_EQ(c.blockout.inset, 0.0);
@@ -990,7 +992,7 @@ TEST(CaseFile, BlockoutMethodIsAutoExactVoxelOrHeightfieldAndExactTakesNoVoxelKe
       "\"blockout\": {\"method\": \"exact\", \"closing_radius\": 0.5},\n",
       "\"blockout\": {\"method\": \"auto\", \"clearance\": 0.2},\n",
       "\"blockout\": {\"method\": \"heightfield\", \"inset\": 0.05},\n",
-      "\"blockout\": {\"method\": \"heightfield\", \"clearance\": 0.1},\n",
+      "\"blockout\": {\"method\": \"heightfield\", \"closing_radius\": 0.5},\n",
   };
   const char* names[] = {"\"auto\", \"exact\", \"voxel\" or \"heightfield\"",
                          "blockout.method",
@@ -1000,7 +1002,7 @@ TEST(CaseFile, BlockoutMethodIsAutoExactVoxelOrHeightfieldAndExactTakesNoVoxelKe
                          "blockout.closing_radius",
                          "say \"method\": \"voxel\"",
                          "blockout.inset",
-                         "blockout.clearance"};
+                         "blockout.closing_radius"};
   for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); ++i) {
     SCOPED_TRACE(bad[i]);
     const Status s = parse(a.arena, with_root(dir + bad[i]).text(), &c);
