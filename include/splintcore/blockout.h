@@ -209,8 +209,15 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
 // - the network's vertices are then the grid's, taken half the tolerance lower, so that the
 //   triangles, within half the tolerance of the grid both ways, lie below it.
 // The output's float32 rounding (with float32_vertices) is covered by a further 2^-20 of the
-// largest coordinate. Uses SweepOptions' direction, voxel, region (required), jaw_vertex and
-// float32_vertices; the rest are not used (no inset, offset or closing).
+// largest coordinate. Uses SweepOptions' direction, voxel, region (required), offset, jaw_vertex
+// and float32_vertices; the rest are not used (inset and closing must be 0).
+// With an offset c (0 < c <= 20 voxels: a spacer) it is the height field of S grown by c: each
+// front triangle T is replaced by the planar pieces of T + Q, Q a 12-sided lathe circumscribed
+// about the lower half ball of radius c (src/blockout/offset_ball.h: T moved out, its edges'
+// belts, and its corners' faces of Q where every front triangle around the corner leaves them),
+// rasterized as the triangles are; the surface is then nowhere nearer the jaws than c (it lies
+// below the first contact of S + Q, which holds S + the ball), and at most 0.0718 c beyond the
+// offset surface besides the tolerance and the lowering. About 30 pieces a front triangle.
 struct HeightfieldStats {
   uint32_t cells = 0;                 // grid cells a side (a power of two)
   uint64_t triangles_in = 0;          // jaw triangles whose shadow meets the grid
@@ -362,12 +369,12 @@ struct BlockoutOptions {
   bool filter_near_splint = true;
   // The swept volume's exact boundary (sweep_exact_mesh over boolean_region(splint)) instead
   // of the sampled one: no voxels, no inset, no retries; sweep.direction is used, the other
-  // sweep options are not (an offset is refused: a spacer is the sampled sweep's). One jaw with
-  // triangles at a time (jaws without triangles are passed over). The splint may be the base
-  // itself: the exact sweep holds the jaw, its front triangles are the imprint. Before the
-  // Boolean each shell of the sweep that meets the region is checked exactly for crossing
-  // itself (find_self_intersections), and a shell that does, again among its triangles whose
-  // prism along d comes within 0.01 mm of the splint (triangle_side) or holds a part of it (a
+  // sweep options are not (an offset is refused: a spacer is the sampled sweep's or the height
+  // field's). One jaw with triangles at a time (jaws without triangles are passed over). The splint
+  // may be the base itself: the exact sweep holds the jaw, its front triangles are the imprint.
+  // Before the Boolean each shell of the sweep that meets the region is checked exactly for
+  // crossing itself (find_self_intersections), and a shell that does, again among its triangles
+  // whose prism along d comes within 0.01 mm of the splint (triangle_side) or holds a part of it (a
   // shell of the splint whose box lies within the prism's): a crossing there is refused
   // (kUnsupported, with where; ExactSweepStats::shells, shells_crossing_outside). A fold's
   // pocket wider and deeper than 0.05 mm is taken only where its prism is not near the splint
@@ -375,7 +382,9 @@ struct BlockoutOptions {
   bool exact = false;
   // The swept volume as a height field (sweep_heightfield_mesh over the splint's bounds, the
   // voxel its grid) instead, subtracted once: no inset, no retries, nothing left undercut;
-  // sweep.inset, offset and closing_radius must be 0. Every jaw with triangles is swept.
+  // sweep.inset and closing_radius must be 0; sweep.offset is a spacer (the height field of the
+  // offset solid; a retry is 1/64 voxel further out each time, offset_used). Every jaw with
+  // triangles is swept.
   bool heightfield = false;
   double heightfield_tolerance = 0;  // mm; 0: a tenth of the voxel
 };

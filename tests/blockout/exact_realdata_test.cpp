@@ -15,6 +15,7 @@
 
 #include "splintcore/blockout.h"
 #include "splintcore/design.h"
+#include "splintcore/distance.h"
 #include "support/frame_moves.h"
 #include "support/real_jaws.h"
 #include "support/test_util.h"
@@ -224,6 +225,70 @@ TEST(HeightfieldBlockoutRealData, DeepBaseIn64MiBLocksNoLine) {
         "[ figures  ] real jaw %d, base 4 mm deep, height field: %zu lines through the "
         "jaw, %zu locked (longest %.2g mm)\n",
         j, lock.lines_through_jaw, lock.locked_lines, lock.longest);
+  }
+}
+
+// The spacer by the height field ("method": "heightfield", "clearance": 0.1) on the real case:
+// designed in 64 MiB with the jaws, a valid solid in one piece, with at most twice the plain
+// splint's triangles (the plain "auto" design of the same case), and the least distance from
+// the splint's surface to each moved jaw (every triangle pair, mesh_pair_distance) is at least
+// the clearance, and within the polytope's reach (1.0718 c) and the tolerance of it.
+TEST(HeightfieldBlockoutRealData, SpacerIn64MiBKeepsItsClearance) {
+  const test::RealJaws& real = test::real_jaws();
+  if (!real.ok) GTEST_SKIP() << "no real data at " << SPLINTCORE_REALDATA_DIR;
+  test::TestArena ta(size_t{1} << 30);
+  Context ctx(&ta.arena);
+  const std::string head =
+      R"({"splintcore_case": 1, "case_id": "real", "units": "mm",
+          "jaws": [{"role": "maxilla", "mesh": "maxilla.stl"},
+                   {"role": "mandible", "mesh": "mandible.stl"}],
+          "base": {"spacing_mm": 0.5, "auto": {"bite_opening_mm": 2}},
+          "printer": "eden260", "blockout": )";
+  Mesh splint[2];
+  DesignReport report[2];
+  CaseFile c[2];
+  const std::string blockouts[2] = {
+      R"({}})", R"({"method": "heightfield", "voxel": 0.1, "clearance": 0.1}})"};
+  for (int k = 0; k < 2; ++k) {
+    const std::string text = head + blockouts[k];
+    SPLINTCORE_ASSERT_OK(parse_case(ctx, text.data(), text.size(), "real", &c[k]));
+    test::TestArena small(size_t{64} << 20);
+    Mesh jaws[2];
+    for (int j = 0; j < 2; ++j) ASSERT_TRUE(test::copy_mesh(small.arena, real.jaw[j], &jaws[j]));
+    Mesh out;
+    SPLINTCORE_ASSERT_OK(
+        design_splint(Context(&small.arena), c[k], Span<const Mesh>(jaws, 2), &out, &report[k]));
+    ASSERT_TRUE(test::copy_mesh(ta.arena, out, &splint[k]));
+    if (k == 1) {
+      std::printf(
+          "[ figures  ] real case, height-field spacer 0.1 mm, in 64 MiB: peak arena %zu bytes, "
+          "%zu triangles (plain: %zu)\n",
+          small.arena.high_water(), splint[1].triangles.size(), splint[0].triangles.size());
+    }
+  }
+  EXPECT_TRUE(report[1].imprint_heightfield && report[1].imprint_offset);
+  EXPECT_LE(splint[1].triangles.size(), 2 * splint[0].triangles.size());
+  MeshReport check;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, splint[1], &check));
+  EXPECT_TRUE(require_valid_solid(check).is_ok());
+  EXPECT_EQ(report[1].print.mesh.shells, 1u);
+  CaseFile resolved;
+  SPLINTCORE_ASSERT_OK(
+      resolve_case_outline(ctx, c[1], Span<const Mesh>(real.jaw, 2), &resolved, nullptr));
+  DistanceIndexOptions io;
+  io.pairs_only = true;
+  DistanceIndex si;
+  SPLINTCORE_ASSERT_OK(build_distance_index(ctx, splint[1], io, &si));
+  for (int j = 0; j < 2; ++j) {
+    const Mesh jaw = test::moved_mesh(ta.arena, real.jaw[j], resolved.jaws[j].transform);
+    DistanceIndex ji;
+    SPLINTCORE_ASSERT_OK(build_distance_index(ctx, jaw, io, &ji));
+    MeshPairDistance least;
+    SPLINTCORE_ASSERT_OK(mesh_pair_distance(ctx, si, ji, Vec3{}, 1.0, &least));
+    EXPECT_GE(least.distance, 0.1 * (1 - 1e-6)) << "jaw " << j;
+    EXPECT_LE(least.distance, 0.1 * 1.0718 + 0.01) << "jaw " << j;
+    std::printf("[ figures  ] real jaw %d, height-field spacer 0.1 mm: least distance %.6f mm\n", j,
+                least.distance);
   }
 }
 

@@ -1945,45 +1945,52 @@ TEST(Heightfield, RunsInItsHighWaterAndFailsCleanlyBelow) {
   TestArena big(size_t{256} << 20);
   Mesh cone(&big.arena);
   frustum(&cone, 3.0, 5.0, 0.0, 8.0, 120);
-  SweepOptions o;
-  o.direction = Vec3{0.1, 0, -1};
-  o.voxel = 0.1;
-  o.has_region = true;
-  o.region = Aabb{Vec3{-7, -7, 4}, Vec3{7, 7, 10}};
-  HeightfieldOptions ho;
-  ho.tolerance = 0.01;
-  size_t need = 0, triangles = 0, vertices = 0;
-  uint32_t cells = 0;
-  {
-    TestArena ta(size_t{256} << 20);
-    Context ctx(&ta.arena);
-    Mesh out;
-    HeightfieldStats st;
-    SPLINTCORE_ASSERT_OK(sweep_heightfield_mesh(ctx, Span<const Mesh>(&cone, 1), o, ho, &out, &st));
-    need = ta.arena.high_water();
-    triangles = out.triangles.size();
-    vertices = out.vertices.size();
-    cells = st.cells;
-  }
-  const uint64_t bound = sweep_heightfield_bound(cells) + 24 * uint64_t{vertices} +
-                         12 * uint64_t{triangles} + 4 * Arena::kDefaultAlignment;
-  EXPECT_LE(need, bound);
-  EXPECT_GT(need, sweep_heightfield_bound(cells) - 4 * Arena::kDefaultAlignment);
-  {
-    TestArena ta(need);
-    Context ctx(&ta.arena);
-    Mesh out;
-    SPLINTCORE_EXPECT_OK(sweep_heightfield_mesh(ctx, Span<const Mesh>(&cone, 1), o, ho, &out));
-    EXPECT_EQ(out.triangles.size(), triangles);
-  }
-  for (size_t cap : {need - 1, need / 2, need / 8}) {
-    TestArena ta(cap);
-    Context ctx(&ta.arena);
-    Mesh out;
-    const Status s = sweep_heightfield_mesh(ctx, Span<const Mesh>(&cone, 1), o, ho, &out);
-    EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << test::format(s);
-    EXPECT_EQ(ta.arena.used(), 0u);
-    EXPECT_TRUE(out.triangles.empty() && out.vertices.empty());
+  // Without and with an offset (the spacer's 4 bytes a jaw vertex and polytope).
+  for (double offset : {0.0, 0.2}) {
+    SCOPED_TRACE(offset);
+    SweepOptions o;
+    o.direction = Vec3{0.1, 0, -1};
+    o.voxel = 0.1;
+    o.offset = offset;
+    o.has_region = true;
+    o.region = Aabb{Vec3{-7, -7, 4}, Vec3{7, 7, 10}};
+    HeightfieldOptions ho;
+    ho.tolerance = 0.01;
+    size_t need = 0, triangles = 0, vertices = 0;
+    uint32_t cells = 0;
+    {
+      TestArena ta(size_t{256} << 20);
+      Context ctx(&ta.arena);
+      Mesh out;
+      HeightfieldStats st;
+      SPLINTCORE_ASSERT_OK(
+          sweep_heightfield_mesh(ctx, Span<const Mesh>(&cone, 1), o, ho, &out, &st));
+      need = ta.arena.high_water();
+      triangles = out.triangles.size();
+      vertices = out.vertices.size();
+      cells = st.cells;
+    }
+    const uint64_t grid = sweep_heightfield_bound(cells, offset > 0 ? cone.vertices.size() : 0);
+    const uint64_t bound = grid + 24 * uint64_t{vertices} + 12 * uint64_t{triangles} +
+                           4 * Arena::kDefaultAlignment;
+    EXPECT_LE(need, bound);
+    EXPECT_GT(need, grid - 4 * Arena::kDefaultAlignment);
+    {
+      TestArena ta(need);
+      Context ctx(&ta.arena);
+      Mesh out;
+      SPLINTCORE_EXPECT_OK(sweep_heightfield_mesh(ctx, Span<const Mesh>(&cone, 1), o, ho, &out));
+      EXPECT_EQ(out.triangles.size(), triangles);
+    }
+    for (size_t cap : {need - 1, need / 2, need / 8}) {
+      TestArena ta(cap);
+      Context ctx(&ta.arena);
+      Mesh out;
+      const Status s = sweep_heightfield_mesh(ctx, Span<const Mesh>(&cone, 1), o, ho, &out);
+      EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << test::format(s);
+      EXPECT_EQ(ta.arena.used(), 0u);
+      EXPECT_TRUE(out.triangles.empty() && out.vertices.empty());
+    }
   }
 }
 
@@ -2148,6 +2155,11 @@ TEST(Heightfield, RefusesWhatItCannotDo) {
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(std::strstr(s.message(), "tolerance"), nullptr) << s.message();
   ho.tolerance = 0.01;
+  o.offset = 2.5;  // above 20 voxels
+  s = sweep_heightfield_mesh(ctx, jaws, o, ho, &out);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::strstr(s.message(), "offset"), nullptr) << s.message();
+  o.offset = 0;
   ho.shift_u = 1.0;
   EXPECT_EQ(sweep_heightfield_mesh(ctx, jaws, o, ho, &out).code(), StatusCode::kInvalidArgument);
   ho.shift_u = 0;

@@ -151,6 +151,24 @@ TEST(DesignGolden, HeightfieldBlockoutRoundedLabelledOnTheTray) {
   expect_golden_and_meshlab("heightfield", "design:heightfield-phantom6000", d);
 }
 
+// The spacer as the height field of the offset solid ("method": "heightfield", a 0.2 mm
+// clearance on a 0.1 mm grid, spacer.json otherwise): the jaws are not subtracted first; its
+// bytes pinned (and on AArch64, ARMv7).
+TEST(DesignGolden, HeightfieldSpacerOnTheTray) {
+  Designed d;
+  ASSERT_NO_FATAL_FAILURE(design_case("heightfield_spacer.json", &d));
+  EXPECT_EQ(d.report.blockout_jaws, 2u);
+  EXPECT_TRUE(d.report.imprint_heightfield && d.report.imprint_offset);
+  EXPECT_EQ(d.report.boolean.intersecting_pairs, 0u);
+  for (int j = 0; j < 2; ++j) {
+    EXPECT_GT(d.report.blockout[j].heightfield.offset_pieces, 0u);
+    EXPECT_GE(d.report.blockout[j].offset_used, 0.2);
+  }
+  EXPECT_TRUE(d.report.placed_on_tray);
+  EXPECT_TRUE(d.report.print.printable);
+  expect_golden_and_meshlab("heightfield_spacer", "design:heightfield_spacer-phantom6000", d);
+}
+
 // The firmware example's third stage (tools/firmware/main.cpp, issue 29): the paper-scale case
 // with blockout on a 0.1 mm grid (inset 0.05 mm, no closing), designed in an arena of exactly
 // the board's 16 MiB (the jaws in an arena of their own, as the board's come from flash). Its

@@ -346,7 +346,7 @@ TEST(BoundExact, CtSegmentation) {
 }
 
 // The paper-scale case (fixtures/cases/paper_scale.json, blockout.json, exact.json or
-// heightfield.json) and two
+// heightfield.json, heightfield_spacer.json) and two
 // phantom jaws of 6,000 triangles, in an arena of their own.
 struct PhantomCase {
   TestArena storage{size_t{128} << 20};
@@ -374,7 +374,8 @@ struct PhantomCase {
 };
 
 TEST(BoundTwoStep, DesignBooleanBlockoutLabel) {
-  for (const char* name : {"paper_scale.json", "blockout.json", "exact.json", "heightfield.json"}) {
+  for (const char* name : {"paper_scale.json", "blockout.json", "exact.json", "heightfield.json",
+                           "heightfield_spacer.json"}) {
     PhantomCase pc(name);
     std::string result;
     expect_two_step(
