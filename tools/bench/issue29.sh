@@ -135,7 +135,9 @@ rows = [("plain splint", None), ("blockout default ({}: auto)", {}),
         ("blockout voxel 0.1", {"voxel": 0.1}),
         ("blockout heightfield 0.1", {"method": "heightfield", "voxel": 0.1}),
         ("heightfield, base 4 mm deep", {"deep": 4, "method": "heightfield", "voxel": 0.1}),
-        ("spacer (clearance 0.1, voxel 0.1)", {"voxel": 0.1, "clearance": 0.1})]
+        ("spacer (clearance 0.1, voxel 0.1)", {"voxel": 0.1, "clearance": 0.1}),
+        ("spacer heightfield (clearance 0.1)",
+         {"method": "heightfield", "voxel": 0.1, "clearance": 0.1})]
 print("%-36s %9s %14s %11s  %s" % ("case", "wall (s)", "peak arena (B)", "triangles", "result"))
 for name, blockout in rows:
     c = json.loads(json.dumps(base))
