@@ -206,6 +206,8 @@ void first_contact(const Grid& g, const GridTriangle& q, double* h, uint64_t* co
     const double py = y;
     for (uint32_t x = x0; x <= x1; ++x) {
       const double px = x;
+      // below() is at least wmin: a vertex already at or under it keeps its h.
+      if (!(q.wmin < h[g.at(x, y)])) continue;
       if (orient2d(q.x[0], q.y[0], q.x[1], q.y[1], px, py) < 0 ||
           orient2d(q.x[1], q.y[1], q.x[2], q.y[2], px, py) < 0 ||
           orient2d(q.x[2], q.y[2], q.x[0], q.y[0], px, py) < 0) {
@@ -317,7 +319,8 @@ void lower_under(const Grid& g, const GridTriangle& q, const double* h, float* l
         if (!q.ill) {
           double most = -HUGE_VAL;
           for (int k = 0; k < 3; ++k) {
-            most = std::fmax(most, ch[k] + kRelative * std::fabs(ch[k]) - q.plane(cx[k], cy[k]));
+            const double d = ch[k] + kRelative * std::fabs(ch[k]) - q.plane(cx[k], cy[k]);
+            most = d > most ? d : most;
           }
           if (most + q.slack <= 0) continue;
         }
