@@ -370,7 +370,7 @@ bool near_grid(const Grid& g, const OffsetBall& ball, const Vec3 p[3]) {
 template <typename Visit>
 Status each_front(const Context& ctx, const Grid& g, Span<const Mesh> jaws, const SweepOptions& o,
                   Visit visit) {
-  GridTriangle q;
+  GridTriangle q{};
   Vec3 p[3];
   uint64_t done = 0, total = 0;
   for (const Mesh& m : jaws) total += m.triangles.size();
@@ -442,7 +442,7 @@ Status rasterize_offset(const Context& ctx, const Grid& g, Span<const Mesh> jaws
                         const SweepOptions& o, const Offset& offset, bool lowering, double* h,
                         float* low, HeightfieldStats* st) {
   const OffsetBall& ball = *offset.ball;
-  GridTriangle q;
+  GridTriangle q{};
   auto piece = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
     if (!lowering) ++st->offset_pieces;
     if (piece_triangle(g, a, b, c, &q)) pass_over(g, q, lowering, h, low, st);
@@ -698,7 +698,7 @@ Status sweep_heightfield_mesh(const Context& ctx, Span<const Mesh> jaws, const S
   double* h = arena.allocate_array<double>(count);
   float* low = arena.allocate_array<float>(count);
   if (h == nullptr || low == nullptr) return arena.exhausted_status();
-  for (size_t k = 0; k < count; ++k) h[k] = g.top;
+  std::fill_n(h, count, g.top);
   std::memset(low, 0, count * sizeof(float));
   if (o.offset > 0) {
     size_t vertices = 0;
