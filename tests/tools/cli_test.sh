@@ -752,6 +752,14 @@ check "the height field has the golden bytes" -- grep -q "\"splint_sha256\":\"$(
 check "report: heightfield used" -- grep -q '"blockout_method_used":"heightfield","blockout":\[{"role":"maxilla","method":"heightfield"' "$work/opts/height/report.json"
 check "report: the height field's imprint" -- grep -q '"imprint":"height field of the swept volume"' "$work/opts/height/report.json"
 check "report (heightfield): every key is documented" -- report_keys_documented "$work/opts/height/report.json"
+# The height-field spacer (heightfield_spacer.json: 0.2 mm on 0.1 mm, the case's 64M): its
+# golden bytes, the clearance in the report, documented.
+cp "$fixtures/cases/heightfield_spacer.json" "$work/opts/case.json"
+expect_exit 0 "design the height-field spacer" -- "$tool" design "$work/opts/case.json" -o "$work/opts/hspacer"
+check "the height-field spacer has the golden bytes" -- grep -q "\"splint_sha256\":\"$(grep " design:heightfield_spacer-phantom6000$" "$fixtures/golden.sha256" | cut -d' ' -f1)\"" "$work/opts/hspacer/report.json"
+check "report: the spacer's imprint, in the case's 64M" -- grep -q '"imprint":"height field of the swept volume.s clearance offset"' "$work/opts/hspacer/report.json"
+check "report: the clearance used" -- grep -q '"clearance_used_mm":0.2' "$work/opts/hspacer/report.json"
+check "report (heightfield spacer): every key is documented" -- report_keys_documented "$work/opts/hspacer/report.json"
 sed 's/"text": "PHANTOM-01"/"text": "50%"/' "$fixtures/cases/blockout.json" >"$work/opts/case.json"
 expect_exit 1 "a label the font cannot write" -- "$tool" design "$work/opts/case.json" -o "$work/opts/bad"
 check "the error names the character" -- grep -q "label.*'%'" "$work/err"
