@@ -382,6 +382,16 @@ Mesh box_mesh(Arena* arena, const float lo[3], const float hi[3]) {
   return m;
 }
 
+// The independent line check on the cone blocked out along -z (the tests below): lines
+// through the jaw, none locked by more than 1e-6 mm.
+void expect_cone_unlocked(Arena* arena, const Mesh& blocked, const Mesh& cone) {
+  const Vec3 d{0, 0, -1}, u{1, 0, 0}, v{0, 1, 0}, c{0, 0, 5};
+  const test::LockReport after =
+      test::lock_report(*arena, blocked, cone, d, u, v, c, 6.0, 60, 1e-6);
+  EXPECT_GT(after.lines_through_jaw, 1000u);
+  EXPECT_EQ(after.locked_lines, 0u) << after.longest;
+}
+
 // The line check's depth across d (undercut_lines.h) on a unit cube leaving along +z: a point
 // above the cube lies in its sweep as deep as its distance to the nearest side wall; a point
 // beside it is not in the sweep at all.
@@ -1077,10 +1087,7 @@ TEST(ExactSweep, BlockoutOfTheConeIsTheBoxLessTheRimsCylinderAndUnlocked) {
       "triangles\n",
       mesh_volume(blocked), expected, blocked.triangles.size());
   EXPECT_NEAR(mesh_volume(blocked), expected, 1e-9 * expected);
-  const Vec3 d{0, 0, -1}, u{1, 0, 0}, v{0, 1, 0}, c{0, 0, 5};
-  const LockReport after = lock_report(ta.arena, blocked, cone, d, u, v, c, 6.0, 60, 1e-6);
-  EXPECT_GT(after.lines_through_jaw, 1000u);
-  EXPECT_EQ(after.locked_lines, 0u) << after.longest;
+  expect_cone_unlocked(&ta.arena, blocked, cone);
 }
 
 // Front triangles whose prism cannot reach the region are left out, with no wall where they
@@ -1885,10 +1892,7 @@ TEST(Heightfield, BlockoutOfTheConeLeavesNoUndercutAndCutsLittleMore) {
   // At most the tolerance over the cap's disc and two cells' ring around the rim, 4 mm tall.
   const double rim = 2 * kPi * 5.0;
   EXPECT_GT(volume, exact - (area * 0.0101 + rim * 2 * 0.1 * 4.0));
-  const Vec3 d{0, 0, -1}, u{1, 0, 0}, v{0, 1, 0}, c{0, 0, 5};
-  const LockReport after = lock_report(ta.arena, blocked, cone, d, u, v, c, 6.0, 60, 1e-6);
-  EXPECT_GT(after.lines_through_jaw, 1000u);
-  EXPECT_EQ(after.locked_lines, 0u) << after.longest;
+  expect_cone_unlocked(&ta.arena, blocked, cone);
 }
 
 // A tilted, overhanging pair (a torus leaning over a frustum) along a slanted direction: the
@@ -1971,8 +1975,8 @@ TEST(Heightfield, RunsInItsHighWaterAndFailsCleanlyBelow) {
       cells = st.cells;
     }
     const uint64_t grid = sweep_heightfield_bound(cells, offset > 0 ? cone.vertices.size() : 0);
-    const uint64_t bound = grid + 24 * uint64_t{vertices} + 12 * uint64_t{triangles} +
-                           4 * Arena::kDefaultAlignment;
+    const uint64_t bound =
+        grid + 24 * uint64_t{vertices} + 12 * uint64_t{triangles} + 4 * Arena::kDefaultAlignment;
     EXPECT_LE(need, bound);
     EXPECT_GT(need, grid - 4 * Arena::kDefaultAlignment);
     {
@@ -2089,10 +2093,7 @@ TEST(Heightfield, SpacerBlockoutIsAValidSolidWithItsClearance) {
   const Reach r = sheet_reach(blocked, cone, [](const Vec3&) { return true; });
   EXPECT_GE(r.least, 0.1 * (1 - 1e-6)) << r.least;
   EXPECT_LE(r.least, 0.1 * 1.0718 + 0.01) << r.least;
-  const Vec3 d{0, 0, -1}, u{1, 0, 0}, v{0, 1, 0}, c{0, 0, 5};
-  const LockReport after = lock_report(ta.arena, blocked, cone, d, u, v, c, 6.0, 60, 1e-6);
-  EXPECT_GT(after.lines_through_jaw, 1000u);
-  EXPECT_EQ(after.locked_lines, 0u) << after.longest;
+  expect_cone_unlocked(&ta.arena, blocked, cone);
 }
 
 // Overhangs along a slanted direction with sharp edges and corners (the pieces of the
