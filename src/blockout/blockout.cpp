@@ -703,6 +703,8 @@ Status blockout_exact(const Context& ctx, const Mesh& splint, Span<const Mesh> j
 // the height field's lower surfaces (see blockout() and blockout_heightfield()).
 constexpr int kAttempts = 4;
 constexpr double kRetrySteps[kAttempts] = {0, 1.0 / 64, 1.0 / 4, 1.0 / 2};
+// A spacer's retries (either blockout): this much of a voxel further out each time.
+constexpr double kOffsetRetryStep = 1.0 / 64;
 
 // The height-field blockout (BlockoutOptions::heightfield): the swept surface over the
 // splint's bounds, subtracted once; its border is the grid's edge, beyond the splint's box.
@@ -736,7 +738,8 @@ Status blockout_heightfield(const Context& ctx, const Mesh& splint, const Aabb& 
     ctx.arena->rewind(scope.start());
     out = Mesh();
     st->attempts = static_cast<uint32_t>(attempt + 1);
-    const double lower = (offset ? attempt / 64.0 : kRetrySteps[attempt]) * so.voxel;
+    const double lower =
+        offset ? attempt * (so.voxel * kOffsetRetryStep) : kRetrySteps[attempt] * so.voxel;
     st->inset_used = lower;  // the height field's lowering (its report's lowered_mm)
     st->offset_used = offset ? so.offset + lower : 0;
     Mesh swept;
@@ -816,7 +819,7 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
     if (so.edge_margin < 1.0 / 16) so.edge_margin = 1.0 / 16;
     so.float32_vertices = true;  // rounded below anyway; decimating, before the decimation
     if (options.sweep.offset > 0) {
-      so.offset = options.sweep.offset + attempt * (options.sweep.voxel / 64);
+      so.offset = options.sweep.offset + attempt * (options.sweep.voxel * kOffsetRetryStep);
       if (attempt > 0 && !(so.offset <= 20 * so.voxel)) break;
     } else {
       so.inset = options.sweep.inset + kRetrySteps[attempt] * options.sweep.voxel;

@@ -137,15 +137,20 @@ void swap_turn(GridTriangle* q) {
   std::swap(q->w[1], q->w[2]);
 }
 
-// The rest of q from its corners (counter-clockwise); false when its shadow misses the grid.
-bool finish_triangle(const Grid& g, GridTriangle* out) {
-  GridTriangle& q = *out;
+// Whether q's shadow (its corners in grid coordinates), grown by `margin` cells, meets the grid.
+bool meets_grid(const Grid& g, const GridTriangle& q, double margin) {
   const double xlo = std::fmin(q.x[0], std::fmin(q.x[1], q.x[2]));
   const double xhi = std::fmax(q.x[0], std::fmax(q.x[1], q.x[2]));
   const double ylo = std::fmin(q.y[0], std::fmin(q.y[1], q.y[2]));
   const double yhi = std::fmax(q.y[0], std::fmax(q.y[1], q.y[2]));
   const double n = static_cast<double>(g.n);
-  if (xhi < 0 || yhi < 0 || xlo > n || ylo > n) return false;
+  return !(xhi + margin < 0 || yhi + margin < 0 || xlo - margin > n || ylo - margin > n);
+}
+
+// The rest of q from its corners (counter-clockwise); false when its shadow misses the grid.
+bool finish_triangle(const Grid& g, GridTriangle* out) {
+  GridTriangle& q = *out;
+  if (!meets_grid(g, q, 0)) return false;
   q.wmin = std::fmin(q.w[0], std::fmin(q.w[1], q.w[2]));
   q.wmax = std::fmax(q.w[0], std::fmax(q.w[1], q.w[2]));
   const double ax = q.x[1] - q.x[0], ay = q.y[1] - q.y[0];
@@ -155,13 +160,15 @@ bool finish_triangle(const Grid& g, GridTriangle* out) {
   q.ill = !(area2 > 1e-9);
   q.gx = q.ill ? 0 : (aw * by - bw * ay) / area2;
   q.gy = q.ill ? 0 : (bw * ax - aw * bx) / area2;
-  q.slack = kRelative * (std::fabs(q.w[0]) + (std::fabs(q.gx) + std::fabs(q.gy)) * (n + 2));
+  q.slack = kRelative * (std::fabs(q.w[0]) +
+                         (std::fabs(q.gx) + std::fabs(q.gy)) * (static_cast<double>(g.n) + 2));
   return true;
 }
 
 // Jaw triangle t of jaw j in the local frame (p) and in grid coordinates; false when it does
 // not face against d (exactly: its shadow turns clockwise seen from +w) or, without an
-// offset, its shadow misses the grid.
+// offset, its shadow misses the grid. With an offset only q's corners are set (its pieces are
+// what the passes take).
 bool grid_triangle(const Grid& g, const SweepOptions& o, Span<const Mesh> jaws, size_t j,
                    const Triangle& t, Vec3 p[3], GridTriangle* q) {
   for (int k = 0; k < 3; ++k) p[k] = to_local(g.frame, jaw_point(o, jaws, j, t.v[k]));
@@ -169,7 +176,7 @@ bool grid_triangle(const Grid& g, const SweepOptions& o, Span<const Mesh> jaws, 
   // Facing against d (w) is clockwise seen from +w; the rest cannot be a first contact.
   if (orient2d(q->x[0], q->y[0], q->x[1], q->y[1], q->x[2], q->y[2]) >= 0) return false;
   swap_turn(q);
-  return finish_triangle(g, q) || o.offset > 0;
+  return o.offset > 0 || finish_triangle(g, q);
 }
 
 // A piece of the offset (offset_ball.h) in grid coordinates; false when its shadow has no
@@ -347,23 +354,6 @@ void pass_over(const Grid& g, const GridTriangle& q, bool lowering, double* h, f
   }
 }
 
-// Whether front triangle p (local frame), grown by the ball's reach, can meet the grid.
-bool near_grid(const Grid& g, const OffsetBall& ball, const Vec3 p[3]) {
-  const double reach = ball.reach / g.cell + 1;
-  const double n = static_cast<double>(g.n);
-  for (int axis = 0; axis < 2; ++axis) {
-    const double o = axis == 0 ? g.u0 : g.v0;
-    double lo = HUGE_VAL, hi = -HUGE_VAL;
-    for (int k = 0; k < 3; ++k) {
-      const double c = ((axis == 0 ? p[k].x : p[k].y) - o) / g.cell;
-      lo = c < lo ? c : lo;
-      hi = c > hi ? c : hi;
-    }
-    if (hi + reach < 0 || lo - reach > n) return false;
-  }
-  return true;
-}
-
 // Calls visit(j, p, q) for each front triangle of jaw j (p its corners in the local frame, as
 // the jaw turns them; q in grid coordinates, counter-clockwise, only without an offset), in
 // input order, with the progress and the vertex ids checked.
@@ -424,8 +414,8 @@ Status offset_faces(const Context& ctx, const Grid& g, Span<const Mesh> jaws, co
                     const Offset& offset, HeightfieldStats* st) {
   size_t jaw = 0, first = 0;
   return each_front(ctx, g, jaws, o,
-                    [&](size_t j, const Triangle& tri, const Vec3* p, const GridTriangle&) {
-                      if (!near_grid(g, *offset.ball, p)) return;
+                    [&](size_t j, const Triangle& tri, const Vec3* p, const GridTriangle& q) {
+                      if (!meets_grid(g, q, offset.ball->reach / g.cell + 1)) return;
                       ++st->triangles_in;
                       if (j != jaw) jaw = j, first = first_vertex(jaws, j);
                       for (int k = 0; k < 3; ++k) {
@@ -447,9 +437,9 @@ Status rasterize_offset(const Context& ctx, const Grid& g, Span<const Mesh> jaws
     if (!lowering) ++st->offset_pieces;
     if (piece_triangle(g, a, b, c, &q)) pass_over(g, q, lowering, h, low, st);
   };
-  SPLINTCORE_RETURN_IF_ERROR(
-      each_front(ctx, g, jaws, o, [&](size_t, const Triangle&, const Vec3* p, const GridTriangle&) {
-        if (near_grid(g, ball, p)) triangle_pieces(ball, p, piece);
+  SPLINTCORE_RETURN_IF_ERROR(each_front(
+      ctx, g, jaws, o, [&](size_t, const Triangle&, const Vec3* p, const GridTriangle& t) {
+        if (meets_grid(g, t, ball.reach / g.cell + 1)) triangle_pieces(ball, p, piece);
       }));
   size_t first = 0;
   for (size_t j = 0; j < jaws.size(); ++j) {
