@@ -106,14 +106,18 @@ struct CaseFile {
   //   itself (an overhang along the direction further than the sweep's fold rounds reach) the
   //   design is refused (kUnsupported, with where).
   // - kVoxel, "voxel": the sampled sweep above (voxel, inset, closing_radius, clearance).
-  // - kAuto, "auto": kExact, and a jaw whose exact sweep is refused is made with kVoxel
-  //   instead, after the others (its own imprint by the Boolean, then the sampled sweep); the
-  //   other jaws stay exact (DesignReport::blockout_exact). When every jaw is refused, the
-  //   whole design again with kVoxel from the base (the bytes of kVoxel). The first refusal is
-  //   kept in DesignReport::blockout_fallback. The voxel keys set the fallback's sweep; a
-  //   clearance is refused (the spacer is the sampled sweep's: say "voxel").
-  // A case file without "method" is kAuto when the object names no voxel key (voxel, inset,
-  // closing_radius, clearance: "blockout": {} is kAuto), else kVoxel.
+  // - kHeightfield, "heightfield": the swept volume's height field on a grid of `voxel`
+  //   (BlockoutOptions::heightfield; with a clearance, that of its offset); no inset, no
+  //   closing.
+  // - kAuto, "auto": kExact, and a jaw whose exact sweep is refused is made with kHeightfield
+  //   instead, after the others (on the voxel's grid; the height field holds the jaw, so no
+  //   jaw is subtracted); the other jaws stay exact (DesignReport::blockout_exact,
+  //   blockout_heightfield). When every jaw is refused, the whole design again with
+  //   kHeightfield from the base (the bytes of kHeightfield). The first refusal is kept in
+  //   DesignReport::blockout_fallback. Inset, closing radius and clearance are refused.
+  // A case file without "method" is kVoxel when the object names inset or closing_radius,
+  // else kHeightfield when it names clearance (the spacer), else kAuto ("blockout": {} and
+  // {"voxel": 0.1} are kAuto).
   BlockoutMethod blockout_method = BlockoutMethod::kAuto;
   // The wall-thickness check ("min_thickness", mm; 0: not run): thin spots are reported
   // (DesignReport::thickness), not refused.
@@ -296,15 +300,19 @@ struct DesignReport {
   // jaws is not run (the jaws lie inside what the blockout removes) and `boolean` stays zero.
   bool imprint_offset = false;
   // With "method": "exact" or "auto" likewise: the imprint is the jaws' exact swept boundary
-  // (their front triangles and walls), made by the blockout alone; `boolean` stays zero unless
-  // kAuto made a jaw with voxels (then it is that jaw's imprint's Boolean, the last one's).
+  // (their front triangles and walls), made by the blockout alone (`boolean` stays zero), and
+  // the height field's surface where kAuto made a jaw with it.
   bool imprint_swept = false;
-  // With "method": "heightfield" likewise: the imprint is the height field's surface.
+  // With "method": "heightfield" likewise: the imprint is the height field's surface (also
+  // when kAuto made every jaw with it).
   bool imprint_heightfield = false;
-  // Per jaw in case order: its blockout used the exact sweep (else the sampled one).
+  // Per jaw in case order: its blockout used the exact sweep; kAuto made it with the height
+  // field after its exact sweep was refused (imprint_swept is then still true). Neither: the
+  // sampled sweep, or the height field of the whole design (imprint_heightfield).
   bool blockout_exact[kMaxBlockoutJaws] = {};
-  // kAuto made a jaw with voxels: why its exact sweep was refused (the first such jaw's status
-  // message, naming where); "" otherwise.
+  bool blockout_heightfield[kMaxBlockoutJaws] = {};
+  // kAuto made a jaw with the height field: why its exact sweep was refused (the first such
+  // jaw's status message, naming where); "" otherwise.
   char blockout_fallback[Status::kMessageCapacity] = {};
   bool labelled = false;  // the case has "label"
   LabelStats label;
@@ -328,7 +336,7 @@ struct DesignReport {
 };
 
 // How many of report.blockout_jaws used their exact sweep (blockout_exact): all of them is an
-// exact blockout, none a voxel one, anything between a mixed one ("method": "auto").
+// exact blockout, anything between a mixed one ("method": "auto": exact and height field).
 uint32_t exact_blockout_jaws(const DesignReport& report);
 
 // The splint for case `c` from its jaws (jaws[i] is the mesh of c.jaws[i], as read: it is not

@@ -369,7 +369,8 @@ const char* sc_case_jaw_mesh(const sc_case* c, size_t index);
 #define SC_BLOCKOUT_AUTO 0
 #define SC_BLOCKOUT_EXACT 1
 #define SC_BLOCKOUT_VOXEL 2
-/* sc_design_report.blockout_method_used only: AUTO made some jaws exactly, some with voxels */
+/* sc_design_report.blockout_method_used only: AUTO made some jaws exactly, some with the
+ * height field */
 #define SC_BLOCKOUT_MIXED 3
 #define SC_BLOCKOUT_HEIGHTFIELD 4
 
@@ -384,10 +385,11 @@ typedef struct sc_case_params {
   double blockout_voxel_mm;      /* 0.01 .. 1 */
   double blockout_inset_mm;      /* 0 .. 1.99 voxel */
   double blockout_closing_mm;    /* 0, or 2 .. 10 voxel */
-  /* blockout "method" (docs/case-format.md): SC_BLOCKOUT_AUTO (the exact sweep, the voxel one
-   * where it stops; the voxel fields are the fallback's), SC_BLOCKOUT_EXACT, SC_BLOCKOUT_VOXEL,
-   * SC_BLOCKOUT_HEIGHTFIELD (the voxel is its grid; inset and closing are not used).
-   * As parsed: a case's "blockout" naming no voxel key is AUTO, one naming one VOXEL. */
+  /* blockout "method" (docs/case-format.md): SC_BLOCKOUT_AUTO (the exact sweep, the height
+   * field where it stops, on the voxel's grid), SC_BLOCKOUT_EXACT, SC_BLOCKOUT_VOXEL,
+   * SC_BLOCKOUT_HEIGHTFIELD (the voxel is its grid); inset and closing are used by VOXEL only.
+   * As parsed: a case's "blockout" naming "inset" or "closing_radius" is VOXEL, else one
+   * naming "clearance" HEIGHTFIELD, else AUTO (unless it names its "method"). */
   int blockout_method;
   const char* printer; /* a built-in profile name ("eden260"); static text */
   /* The automatic outline ("base": {"auto": {...}}, docs/case-format.md): the picks, the
@@ -514,9 +516,10 @@ typedef struct sc_design_report {
   uint32_t blockout_jaws; /* jaws blocked out (0 without blockout) */
   double blockout_removed_mm3[SC_MAX_BLOCKOUT_JAWS];
   uint32_t blockout_attempts[SC_MAX_BLOCKOUT_JAWS];
-  /* With a blockout, the method that made the splint: SC_BLOCKOUT_EXACT, SC_BLOCKOUT_VOXEL, or
-   * with AUTO SC_BLOCKOUT_MIXED when the exact sweep stopped for some jaws only (those jaws are
-   * made with voxels; sc_design_write_report says which and why). */
+  /* With a blockout, the method that made the splint: SC_BLOCKOUT_EXACT, SC_BLOCKOUT_VOXEL,
+   * SC_BLOCKOUT_HEIGHTFIELD (also AUTO's when the exact sweep stopped for every jaw), or with
+   * AUTO SC_BLOCKOUT_MIXED when it stopped for some jaws only (those jaws are made with the
+   * height field; sc_design_write_report says which and why). */
   int blockout_method_used;
   int printable;
   int fits;         /* fits the tray as placed */

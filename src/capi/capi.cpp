@@ -875,8 +875,10 @@ sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* 
     f.blockout.inset = params->blockout_inset_mm;
     f.blockout.closing_radius = params->blockout_closing_mm;
     f.blockout_method = static_cast<BlockoutMethod>(params->blockout_method);
-    // The height field has no inset and no closing: what the fields hold is not used.
-    if (f.blockout_method == BlockoutMethod::kHeightfield) {
+    // The height field (AUTO's fallback too) has no inset and no closing: what the fields
+    // hold is not used.
+    if (f.blockout_method == BlockoutMethod::kHeightfield ||
+        f.blockout_method == BlockoutMethod::kAuto) {
       f.blockout.inset = 0;
       f.blockout.closing_radius = 0;
     }

@@ -292,11 +292,9 @@ void write_later_stages(JsonWriter& w, const CaseFile& c) {
   if (c.has_insertion_direction) w.add("insertion_direction", c.insertion_direction);
   if (c.has_blockout) {
     w.begin_object("blockout");
-    // "voxel" is what voxel keys without a method say.
-    if (c.blockout_method != BlockoutMethod::kVoxel) {
-      w.add("method", blockout_method_name(c.blockout_method));
-    }
-    if (c.blockout_method == BlockoutMethod::kHeightfield) {
+    w.add("method", blockout_method_name(c.blockout_method));
+    if (c.blockout_method == BlockoutMethod::kHeightfield ||
+        c.blockout_method == BlockoutMethod::kAuto) {
       w.add("voxel", c.blockout.voxel);
       if (c.blockout.offset > 0) w.add("clearance", c.blockout.offset);
     } else if (c.blockout_method != BlockoutMethod::kExact) {

@@ -39,7 +39,7 @@ const CaseNumber kCaseNumbers[] = {
     {"ct.decimate", "triangles", 4, 1e9, false, kNoCap, true, "none", ""},
     {"blockout.voxel", "mm", 0.01, 1, false, kNoCap, false, "0.1", ""},
     {"blockout.inset", "mm", 0, 1.99, true, kNoCap, false, "half the voxel (0 with clearance)",
-     "not with clearance or \"heightfield\""},
+     "only with \"voxel\", not with clearance"},
     {"blockout.closing_radius", "mm", 0, 10, true, kNoCap, false, "0", "0 or at least 2 voxels"},
     {"blockout.clearance", "mm", 0, 20, true, 2.0, false, "0", ""},
     {"label.height_mm", "mm", 0.5, 20, false, kNoCap, false, "2.5", ""},
@@ -573,11 +573,13 @@ Status parse_blockout(const Reader& r, const JsonValue* b, CaseFile* out) {
   }
   out->has_blockout = true;
   static const char* const kVoxelKeys[] = {"voxel", "inset", "closing_radius", "clearance"};
-  const JsonValue* voxel_key = nullptr;
-  for (const char* key : kVoxelKeys) {
-    if (voxel_key == nullptr) voxel_key = doc.member(*b, key);
-  }
-  out->blockout_method = voxel_key != nullptr ? BlockoutMethod::kVoxel : BlockoutMethod::kAuto;
+  // Without "method": "voxel" when a key only it takes is named, the height field's spacer
+  // with a clearance, else "auto" (whose fallback, the height field, takes the voxel as grid).
+  const bool voxel_only =
+      doc.member(*b, "inset") != nullptr || doc.member(*b, "closing_radius") != nullptr;
+  out->blockout_method = voxel_only                               ? BlockoutMethod::kVoxel
+                         : doc.member(*b, "clearance") != nullptr ? BlockoutMethod::kHeightfield
+                                                                  : BlockoutMethod::kAuto;
   if (const JsonValue* m = doc.member(*b, "method")) {
     SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*m, JsonType::kString, "blockout.method"));
     const BlockoutMethod methods[] = {BlockoutMethod::kAuto, BlockoutMethod::kExact,
@@ -605,6 +607,12 @@ Status parse_blockout(const Reader& r, const JsonValue* b, CaseFile* out) {
                       "\" is for the voxel method (\"method\": \"heightfield\" takes only "
                       "\"voxel\", its grid, and \"clearance\")");
       }
+      if (out->blockout_method == BlockoutMethod::kAuto && v != nullptr &&
+          std::strcmp(key, "voxel") != 0 && std::strcmp(key, "clearance") != 0) {
+        return r.fail(*v, StatusCode::kInvalidArgument, "\"blockout.", key,
+                      "\" is for the voxel method (\"method\": \"auto\" falls back to the "
+                      "height field, which takes only \"voxel\", its grid)");
+      }
     }
     const JsonValue* clearance = doc.member(*b, "clearance");
     if (out->blockout_method == BlockoutMethod::kAuto && clearance != nullptr) {
@@ -621,10 +629,9 @@ Status parse_blockout(const Reader& r, const JsonValue* b, CaseFile* out) {
     SPLINTCORE_RETURN_IF_ERROR(
         r.number(*bl, "blockout.clearance", out->blockout.voxel, &out->blockout.offset));
   }
-  out->blockout.inset =
-      out->blockout.offset > 0 || out->blockout_method == BlockoutMethod::kHeightfield
-          ? 0
-          : 0.5 * out->blockout.voxel;
+  out->blockout.inset = out->blockout_method == BlockoutMethod::kVoxel && out->blockout.offset == 0
+                            ? 0.5 * out->blockout.voxel
+                            : 0;
   if (const JsonValue* bi = doc.member(*b, "inset")) {
     SPLINTCORE_RETURN_IF_ERROR(
         r.number(*bi, "blockout.inset", out->blockout.voxel, &out->blockout.inset));

@@ -374,30 +374,34 @@ Status blockout_checked(const Context& ctx, const CaseFile& c, Span<const Mesh> 
   return Status::ok();
 }
 
-Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
-                     const Arena::Marker& low, Mesh* base, Mesh* cut, DesignReport* report,
-                     bool base_kept);
+// The case as "auto" falls back on it: the height field on the voxel's grid (no inset, no
+// closing: the parser and sc_case_set_params give "auto" none).
+CaseFile heightfield_fallback(const CaseFile& c) {
+  CaseFile h = c;
+  h.blockout_method = BlockoutMethod::kHeightfield;
+  h.blockout.inset = 0;
+  h.blockout.closing_radius = 0;
+  return h;
+}
 
 // kAuto's fallback for jaw j, whose exact blockout was refused (`why`, the design's first
-// refusal): the jaw's own imprint (subtract_jaws with the case of that jaw alone and *cut, below
-// the arena's top, as its base) then its sampled blockout. An error then says why voxels were
-// tried at all (no report is written for a failed design; the Status truncates at its capacity).
-Status blockout_with_voxels(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, size_t j,
-                            const Status& why, Mesh* cut, DesignReport* report) {
+// refusal): the height field of its swept volume cut from the splint as it is (the height field
+// holds the jaw, as the exact sweeps of the others do: no jaw was subtracted). An error then
+// says why the height field was tried at all (no report is written for a failed design; the
+// Status truncates at its capacity).
+Status blockout_with_heightfield(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                                 size_t j, const Status& why, Mesh* cut, DesignReport* report) {
   if (report->blockout_fallback[0] == '\0') {
     const size_t n = std::min(std::strlen(why.message()), sizeof report->blockout_fallback - 1);
     std::memcpy(report->blockout_fallback, why.message(), n);
     report->blockout_fallback[n] = '\0';
   }
   report->blockout[j] = BlockoutStats{};
-  CaseFile one = c;
-  one.jaws = Span<const CaseJaw>(&c.jaws[j], 1);
-  Mesh splint = *cut;
-  *cut = Mesh();
-  Status s = subtract_jaws(ctx, one, Span<const Mesh>(&jaws[j], 1), ctx.arena->mark(), &splint, cut,
-                           report, true);
-  if (s.is_ok()) s = blockout_checked(ctx, c, jaws, j, false, cut, report);
-  if (!s.is_ok()) s.append("; \"auto\" had fallen back to voxels: ").append(why.message());
+  report->blockout_heightfield[j] = true;
+  Status s = blockout_checked(ctx, heightfield_fallback(c), jaws, j, false, cut, report);
+  if (!s.is_ok()) {
+    s.append("; \"auto\" had fallen back to the height field: ").append(why.message());
+  }
   return s;
 }
 
@@ -417,9 +421,10 @@ Status blockout_with_voxels(const Context& ctx, const CaseFile& c, Span<const Me
 // Boolean (where a crossing makes it nudge and retry): the answer is the blockout's alone.
 // On the exact path (report->imprint_swept) each jaw's sweep is exact. With kAuto a jaw whose
 // exact sweep is refused (kUnsupported) is passed over, the splint left as it was; once every
-// jaw has been tried, the refused ones are made with voxels (blockout_with_voxels), the others
-// staying exact, unless every jaw was refused: then the first refusal is returned, and
-// cut_base makes the whole design with voxels (the bytes of "voxel").
+// jaw has been tried, the refused ones are made with the height field
+// (blockout_with_heightfield), the others staying exact, unless every jaw was refused: then the
+// first refusal is returned, and cut_base makes the whole design with the height field (the
+// bytes of "heightfield").
 Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                      const Arena::Marker& low, Mesh* cut, DesignReport* report) {
   if (jaws.size() > DesignReport::kMaxBlockoutJaws) {
@@ -462,7 +467,7 @@ Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   if (refusals > 0 && refusals == jaws.size()) return first_refusal;
   for (size_t i = 0; i < refusals; ++i) {
     SPLINTCORE_RETURN_IF_ERROR(
-        blockout_with_voxels(ctx, c, jaws, refused[i], first_refusal, cut, report));
+        blockout_with_heightfield(ctx, c, jaws, refused[i], first_refusal, cut, report));
     settle(refused[i]);
   }
   return Status::ok();
@@ -523,8 +528,7 @@ Status label_splint(const Context& ctx, const CaseFile& c, Mesh* cut, DesignRepo
 // again with the check inside, where a crossing makes it nudge A and try again: the answer is
 // the one the Boolean alone gives. *base is the arena's top at entry, above `low`.
 Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
-                     const Arena::Marker& low, Mesh* base, Mesh* cut, DesignReport* report,
-                     bool base_kept) {
+                     const Arena::Marker& low, Mesh* base, Mesh* cut, DesignReport* report) {
   Arena& arena = *ctx.arena;
   BooleanOptions bo;
   bo.op = BooleanOp::kDifference;
@@ -541,22 +545,17 @@ Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   Mesh moved;
   move_mesh_down(arena, low, *cut, &moved);
   *cut = moved;
-  const Mesh kept_base = *base;
-  if (!base_kept) *base = Mesh();
+  *base = Mesh();
   SelfIntersectionReport si;
   SPLINTCORE_RETURN_IF_ERROR(stage_error(find_self_intersections(ctx, *cut, 1, &si), "boolean"));
   if (si.self_intersecting()) {
     arena.rewind(low);
     *cut = Mesh();
-    if (base_kept) {
-      *base = kept_base;
-    } else {
-      *base = Mesh(&arena);
-      SPLINTCORE_RETURN_IF_ERROR(stage_error(build_case_base(ctx, c, base, &report->base), "base"));
-    }
+    *base = Mesh(&arena);
+    SPLINTCORE_RETURN_IF_ERROR(stage_error(build_case_base(ctx, c, base, &report->base), "base"));
     bo.check_self_intersection = true;
     SPLINTCORE_RETURN_IF_ERROR(subtract());
-    if (!base_kept) *base = Mesh();
+    *base = Mesh();
   } else {
     report->boolean.self_intersection_checked = true;
     report->boolean.self_intersection_candidates = si.candidate_pairs;
@@ -745,7 +744,7 @@ Status cut_base_with(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
     cut_low = arena.mark();
   } else {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: boolean"));
-    SPLINTCORE_RETURN_IF_ERROR(subtract_jaws(ctx, c, jaws, before_base, &base, cut, report, false));
+    SPLINTCORE_RETURN_IF_ERROR(subtract_jaws(ctx, c, jaws, before_base, &base, cut, report));
   }
   if (c.has_blockout) {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: blockout"));
@@ -755,13 +754,13 @@ Status cut_base_with(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
 }
 
 // cut_base_with with the case's blockout method resolved (CaseFile::blockout_method): the exact
-// sweep for kExact and kAuto (not with a clearance: the spacer is the sampled sweep's). With
-// kAuto a jaw whose exact sweep is refused (kUnsupported: its swept surface would cross itself
-// in the splint, a fold would leave undercut there, or its Boolean could not resolve a
-// configuration) is made with voxels, the other jaws staying exact (blockout_jaws); when every
-// jaw is refused, everything from the base is made again with voxels, from where the arena was
-// (the bytes of "voxel"). The report says why (blockout_fallback) and which jaws
-// (blockout_exact); if the voxels fail too, their error says it.
+// sweep for kExact and kAuto (never with a clearance). With kAuto a jaw whose exact sweep is
+// refused (kUnsupported: its swept surface would cross itself in the splint, a fold would leave
+// undercut there, or its Boolean could not resolve a configuration) is made with the height
+// field, the other jaws staying exact (blockout_jaws); when every jaw is refused, everything
+// from the base is made again with the height field, from where the arena was (the bytes of
+// "heightfield"). The report says why (blockout_fallback) and which jaws (blockout_exact,
+// blockout_heightfield); if the height field fails too, its error says it.
 Status cut_base(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* cut,
                 DesignReport* report) {
   Arena& arena = *ctx.arena;
@@ -781,7 +780,7 @@ Status cut_base(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Me
   for (uint32_t j = 0; j < DesignReport::kMaxBlockoutJaws; ++j) {
     report->blockout[j] = BlockoutStats{};
     report->blockout_removed_mm3[j] = 0;
-    report->blockout_exact[j] = false;
+    report->blockout_exact[j] = report->blockout_heightfield[j] = false;
   }
   report->blockout_jaws = 0;
   report->imprint_offset = report->imprint_swept = report->imprint_heightfield = false;
@@ -791,11 +790,13 @@ Status cut_base(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Me
   const size_t n = std::min(std::strlen(s.message()), sizeof report->blockout_fallback - 1);
   std::memcpy(report->blockout_fallback, s.message(), n);
   report->blockout_fallback[n] = '\0';
-  Status voxels = cut_base_with(ctx, c, jaws, false, cut, report);
-  // No report is written for a failed design: the error says why voxels were tried at all
-  // (after its own text, which says what to do; the Status truncates at its capacity).
-  if (!voxels.is_ok()) voxels.append("; \"auto\" had fallen back to voxels: ").append(s.message());
-  return voxels;
+  Status field = cut_base_with(ctx, heightfield_fallback(c), jaws, false, cut, report);
+  // No report is written for a failed design: the error says why the height field was tried at
+  // all (after its own text, which says what to do; the Status truncates at its capacity).
+  if (!field.is_ok()) {
+    field.append("; \"auto\" had fallen back to the height field: ").append(s.message());
+  }
+  return field;
 }
 
 // Checks what design_splint takes before anything is allocated.

@@ -121,7 +121,9 @@ void write_parameters(JsonWriter& w, const CaseFile& c, const DesignReport& repo
   if (c.has_blockout && c.blockout_method == BlockoutMethod::kHeightfield) {
     w.add("blockout_voxel_mm", c.blockout.voxel);
     w.add("clearance_mm", c.blockout.offset);
-  } else if (c.has_blockout && c.blockout_method != BlockoutMethod::kExact) {
+  } else if (c.has_blockout && c.blockout_method == BlockoutMethod::kAuto) {
+    w.add("blockout_voxel_mm", c.blockout.voxel);  // the fallback's grid
+  } else if (c.has_blockout && c.blockout_method == BlockoutMethod::kVoxel) {
     w.add("blockout_voxel_mm", c.blockout.voxel);
     w.add("blockout_inset_mm", c.blockout.inset);
     w.add("blockout_closing_radius_mm", c.blockout.closing_radius);
@@ -193,7 +195,7 @@ void write_blockout(JsonWriter& w, const CaseFile& c, const DesignReport& report
       write_exact_blockout(w, b, report.blockout_removed_mm3[i]);
       continue;
     }
-    if (report.imprint_heightfield) {
+    if (report.imprint_heightfield || report.blockout_heightfield[i]) {
       write_heightfield_blockout(w, b, report.blockout_removed_mm3[i]);
       continue;
     }
@@ -289,7 +291,7 @@ void write_checks(JsonWriter& w, const CaseFile& c, const DesignReport& report) 
     w.add("blockout_method_used", report.imprint_heightfield           ? "heightfield"
                                   : exact_jaws == report.blockout_jaws ? "exact"
                                   : exact_jaws == 0                    ? "voxel"
-                                                                       : "exact and voxel");
+                                                                       : "exact and heightfield");
     if (report.blockout_fallback[0] != '\0') w.add("blockout_fallback", report.blockout_fallback);
     write_blockout(w, c, report);
   }
@@ -300,8 +302,8 @@ void write_checks(JsonWriter& w, const CaseFile& c, const DesignReport& report) 
                    : !report.imprint_swept      ? "jaw triangles"
                    : exact_jaws == report.blockout_jaws
                        ? "exact swept volume (jaw front triangles and walls)"
-                       : "exact swept volume (jaw front triangles and walls); jaw triangles where "
-                         "a jaw was blocked out with voxels");
+                       : "exact swept volume (jaw front triangles and walls); height field of "
+                         "the swept volume where a jaw's exact sweep stopped");
   if (report.labelled) {
     const LabelStats& l = report.label;
     w.begin_object("label");

@@ -74,24 +74,21 @@ TEST(ExactBlockoutRealData, NoLineLockedOnEitherJaw) {
 }
 
 // Issue 29: the case with a base 4 mm deep (to the necks), default blockout ("auto": the
-// maxilla exact, the mandible refused there and made with voxels), in a 64 MiB arena that also
-// holds the two jaws (887k triangles, 21 MB), as `splintcore design --memory-cap 64M` runs it:
-// the same splint as with room to spare, closed, manifold and outward; then the independent
-// line check on both jaws.
-// What the line check finds here (the issue's notes, 2026-12-03): the Boolean leaves two crumbs
-// beside the splint (26 and 8 triangles, each under 1e-4 mm^3), which the design takes out
-// (DesignReport::crumbs); below 0.01 mm many
-// lines touch the jaw (the Boolean's nudges, about 5e-4 mm, moved the splint); beyond it plus
-// the voxel jaw's inset, 1 line of 3,948 on the maxilla (0.88 mm long along d) and 14 of 4,020
-// on the mandible (up to 1.8 mm). A length along d is not what either method bounds: a line
-// that grazes a tooth's wall runs up the wall inside the voxel sweep's inset sheet for the
-// wall's height. What they bound is the depth across d, how far the splint must flex to pass:
-// the voxel sweep's inset, and the exact sweep's taken-in pockets, at most 0.05 mm wide
-// (blockout.h). So every locked line's splint is measured across d (lateral_depth: the least
-// move across d that takes a point of it out of the jaw's sweep, to 0.005 mm) and held to that
-// bound: measured 0.020 mm on the maxilla, at most 0.050 mm on the mandible (inset 0.05).
-// (The same on other depths, measured once: base 3 mm deep with voxels, 0.040 and 0.030 mm
-// against insets 0.075 and 0.05; 2 mm, 0.005 and none; exact at 3 mm, 0.025 mm.)
+// maxilla exact, the mandible refused there and made with the height field on its 0.1 mm grid),
+// in a 64 MiB arena that also holds the two jaws (887k triangles, 21 MB), as `splintcore design
+// --memory-cap 64M` runs it: the same splint as with room to spare, closed, manifold and
+// outward; then the independent line check on both jaws.
+// What the line check finds: the Boolean leaves two crumbs beside the splint (each under 1e-4
+// mm^3), which the design takes out (DesignReport::crumbs); below 0.01 mm many lines touch the
+// jaw (the Boolean's nudges, about 5e-4 mm, moved the splint). A length along d is not what the
+// exact method bounds: a line that grazes a tooth's wall runs up the wall for the wall's height.
+// What it bounds is the depth across d, how far the splint must flex to pass: the exact sweep's
+// taken-in pockets, at most 0.05 mm wide (blockout.h). So every locked line's splint is
+// measured across d (lateral_depth: the least move across d that takes a point of it out of the
+// jaw's sweep, to 0.005 mm) and held to that bound; the height field leaves none (it lies below
+// every column's first contact). Measured 0.020 mm on the maxilla (2026-12-03); until
+// 2026-12-04 "auto" fell back to voxels, whose inset (0.05 mm) left the mandible locked lines
+// up to 0.050 mm deep across d.
 TEST(ExactBlockoutRealData, DeepBaseIn64MiB) {
   const test::RealJaws& real = test::real_jaws();
   if (!real.ok) GTEST_SKIP() << "no real data at " << SPLINTCORE_REALDATA_DIR;
@@ -119,7 +116,8 @@ TEST(ExactBlockoutRealData, DeepBaseIn64MiB) {
               small.arena.high_water());
   ASSERT_EQ(report.blockout_jaws, 2u);
   EXPECT_TRUE(report.blockout_exact[0]);
-  EXPECT_FALSE(report.blockout_exact[1]);  // the refusal that makes this case need the voxels
+  EXPECT_FALSE(report.blockout_exact[1]);  // the refusal that makes this case fall back
+  EXPECT_TRUE(report.blockout_heightfield[1]);
   EXPECT_TRUE(report.self_intersection_checked);
   EXPECT_EQ(test::mesh_sha256(splint), test::mesh_sha256(reference));  // the same bytes
   MeshReport check;
@@ -143,8 +141,8 @@ TEST(ExactBlockoutRealData, DeepBaseIn64MiB) {
     test::axes_across(d, &u, &v);
     const Vec3 e = box.extent();
     const double half = 0.5 * std::sqrt(dot(e, e));
-    const double across = report.blockout_exact[j] ? 0.05 : report.blockout[j].inset_used;
-    const double allowed = 0.01 + (report.blockout_exact[j] ? 0.0 : across);
+    const double across = report.blockout_exact[j] ? 0.05 : 0.0;  // the height field: none
+    const double allowed = 0.01;
     const test::LockReport lock =
         test::lock_report(ta.arena, splint, jaw, d, u, v, box.center(), half, 200, allowed, kStep);
     EXPECT_GT(lock.lines_through_jaw, 3000u);

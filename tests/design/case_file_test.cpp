@@ -902,7 +902,7 @@ TEST(CaseFile, BlockoutTakesItsDefaultsAndChecksItsRanges) {
   SPLINTCORE_ASSERT_OK(parse(a.arena, with_root(dir + "\"blockout\": {},\n").text(), &c));
   EXPECT_TRUE(c.has_blockout);
   EXPECT_EQ(c.blockout.voxel, 0.1);
-  EXPECT_EQ(c.blockout.inset, 0.05);
+  EXPECT_EQ(c.blockout.inset, 0.0);  // "auto": its fallback, the height field, has none
   EXPECT_EQ(c.blockout.closing_radius, 0.0);
   SPLINTCORE_ASSERT_OK(parse(
       a.arena, with_root(dir + "\"blockout\": {\"voxel\": 0.2, \"closing_radius\": 0.5},\n").text(),
@@ -934,7 +934,8 @@ TEST(CaseFile, BlockoutMethodIsAutoExactVoxelOrHeightfieldAndExactTakesNoVoxelKe
   test::TestArena a(size_t{1} << 20);
   CaseFile c;
   const std::string dir = "\"insertion_direction\": [0, 0, 1],\n";
-  // Without "method": auto unless a voxel key is named.
+  // Without "method": voxel when inset or closing_radius is named, else heightfield with a
+  // clearance, else auto (the voxel is auto's fallback's grid).
   const char* blockouts[] = {"{}",
                              "{\"voxel\": 0.2}",
                              "{\"inset\": 0.05}",
@@ -945,8 +946,8 @@ TEST(CaseFile, BlockoutMethodIsAutoExactVoxelOrHeightfieldAndExactTakesNoVoxelKe
                              "{\"method\": \"heightfield\", \"clearance\": 0.15}",
                              "{\"method\": \"heightfield\", \"voxel\": 0.2}"};
   const BlockoutMethod methods[] = {
-      BlockoutMethod::kAuto,        BlockoutMethod::kVoxel,       BlockoutMethod::kVoxel,
-      BlockoutMethod::kVoxel,       BlockoutMethod::kVoxel,       BlockoutMethod::kAuto,
+      BlockoutMethod::kAuto,        BlockoutMethod::kAuto,        BlockoutMethod::kVoxel,
+      BlockoutMethod::kVoxel,       BlockoutMethod::kHeightfield, BlockoutMethod::kAuto,
       BlockoutMethod::kHeightfield, BlockoutMethod::kHeightfield, BlockoutMethod::kHeightfield};
   for (size_t i = 0; i < sizeof(blockouts) / sizeof(blockouts[0]); ++i) {
     SCOPED_TRACE(blockouts[i]);
@@ -963,8 +964,8 @@ TEST(CaseFile, BlockoutMethodIsAutoExactVoxelOrHeightfieldAndExactTakesNoVoxelKe
     EXPECT_EQ(again.blockout_method, methods[i]) << written;
     EXPECT_EQ(again.blockout.voxel, c.blockout.voxel);
     EXPECT_EQ(again.blockout.offset, c.blockout.offset);  // the clearance
-    // The height field has no inset (nor does anything it writes back).
-    if (methods[i] == BlockoutMethod::kHeightfield) {
+    // The height field (auto's fallback too) has no inset (nor does anything it writes back).
+    if (methods[i] != BlockoutMethod::kVoxel) {
       EXPECT_EQ(c.blockout.inset, 0.0);
       EXPECT_EQ(written.find("inset"), std::string::npos) << written;
     }
@@ -993,6 +994,8 @@ TEST(CaseFile, BlockoutMethodIsAutoExactVoxelOrHeightfieldAndExactTakesNoVoxelKe
       "\"blockout\": {\"method\": \"auto\", \"clearance\": 0.2},\n",
       "\"blockout\": {\"method\": \"heightfield\", \"inset\": 0.05},\n",
       "\"blockout\": {\"method\": \"heightfield\", \"closing_radius\": 0.5},\n",
+      "\"blockout\": {\"method\": \"auto\", \"inset\": 0.05},\n",
+      "\"blockout\": {\"closing_radius\": 0.5, \"method\": \"auto\"},\n",
   };
   const char* names[] = {"\"auto\", \"exact\", \"voxel\" or \"heightfield\"",
                          "blockout.method",
@@ -1002,6 +1005,8 @@ TEST(CaseFile, BlockoutMethodIsAutoExactVoxelOrHeightfieldAndExactTakesNoVoxelKe
                          "blockout.closing_radius",
                          "say \"method\": \"voxel\"",
                          "blockout.inset",
+                         "blockout.closing_radius",
+                         "\"auto\" falls back to the height field",
                          "blockout.closing_radius"};
   for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); ++i) {
     SCOPED_TRACE(bad[i]);

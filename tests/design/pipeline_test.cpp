@@ -247,7 +247,7 @@ TEST(DesignPipeline, ExactBlockoutSkipsTheJawsBooleanAndRemovesTheUndercuts) {
 }
 
 // The case with its base sunk `depth` mm further into each jaw (the picks moved along the
-// occlusal normal), the blockout "auto" with a 0.3 mm voxel sweep as its fallback.
+// occlusal normal), the blockout "auto" with a 0.3 mm grid for its height-field fallback.
 CaseFile sunk_case(const CaseAndJaws& f, double depth, std::vector<Pick>* upper,
                    std::vector<Pick>* lower, double lower_depth = -1) {
   CaseFile c = f.c;
@@ -262,16 +262,26 @@ CaseFile sunk_case(const CaseAndJaws& f, double depth, std::vector<Pick>* upper,
   c.has_blockout = true;
   c.blockout_method = BlockoutMethod::kAuto;
   c.blockout.voxel = 0.3;
-  c.blockout.inset = 0.15;
+  c.blockout.inset = 0;
   return c;
+}
+
+// The independent line check of `splint` against each moved jaw (lines along the jaw's
+// direction through a 27 mm disc of 100 x 100 lines).
+test::LockReport jaw_lock(CaseAndJaws& f, const CaseFile& c, const Mesh& splint, int j) {
+  const Mesh jaw = test::moved_mesh(f.t.arena, f.jaws[j], c.jaws[j].transform);
+  const Vec3 d = j == 0 ? c.insertion_direction : -c.insertion_direction;
+  return test::lock_report(f.t.arena, splint, jaw, d, Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 18, 0},
+                           27.0, 100, 1e-4);
 }
 
 // "auto" (the case file's default): the exact sweep while it holds. With the base 2 mm deeper
 // the crowns' walls and folds are resolved exactly and no line is locked. With 2.5 mm the
 // base reaches the phantom's necks (its crowns are big-end-up): taking the neck band in would
 // leave the undercut itself unswept, so the exact sweep stops (kUnsupported, where), and
-// "auto" gives exactly the splint of the voxel method, saying why.
-TEST(DesignPipeline, AutoBlockoutIsExactUnlessItsSweepStopsThenVoxels) {
+// "auto" gives exactly the splint of the height field on its grid, saying why; that leaves no
+// line locked either.
+TEST(DesignPipeline, AutoBlockoutIsExactUnlessItsSweepStopsThenTheHeightField) {
   CaseAndJaws f;
   ASSERT_TRUE(f.ok);
   std::vector<Pick> up, lo;
@@ -289,14 +299,10 @@ TEST(DesignPipeline, AutoBlockoutIsExactUnlessItsSweepStopsThenVoxels) {
   SPLINTCORE_ASSERT_OK(
       design_splint(Context(&f.t.arena), plain_case, Span<const Mesh>(f.jaws, 2), &plain, &rp));
   for (int j = 0; j < 2; ++j) {
-    const Mesh jaw = test::moved_mesh(f.t.arena, f.jaws[j], c2.jaws[j].transform);
-    const Vec3 d = j == 0 ? c2.insertion_direction : -c2.insertion_direction;
-    const test::LockReport lock = test::lock_report(f.t.arena, exact, jaw, d, Vec3{1, 0, 0},
-                                                    Vec3{0, 1, 0}, Vec3{0, 18, 0}, 27.0, 100, 1e-4);
+    const test::LockReport lock = jaw_lock(f, c2, exact, j);
     EXPECT_GT(lock.lines_through_jaw, 1000u);
     EXPECT_EQ(lock.locked_lines, 0u) << "jaw " << j << ": " << lock.longest;
-    const test::LockReport before = test::lock_report(
-        f.t.arena, plain, jaw, d, Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 18, 0}, 27.0, 100, 1e-4);
+    const test::LockReport before = jaw_lock(f, c2, plain, j);
     EXPECT_GE(before.locked_lines, 5u) << "jaw " << j;  // the check sees undercuts there
     std::printf("[ figures  ] base 2 mm deeper, jaw %d: locked lines plain %zu, exact %zu\n", j,
                 before.locked_lines, lock.locked_lines);
@@ -307,21 +313,27 @@ TEST(DesignPipeline, AutoBlockoutIsExactUnlessItsSweepStopsThenVoxels) {
   DesignReport r;
   SPLINTCORE_ASSERT_OK(
       design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &fallback, &r));
-  EXPECT_FALSE(r.imprint_swept);  // both jaws refused: the whole design with voxels
+  EXPECT_FALSE(r.imprint_swept);  // both jaws refused: the whole design with the height field
+  EXPECT_TRUE(r.imprint_heightfield);
   EXPECT_FALSE(r.blockout_exact[0] || r.blockout_exact[1]);
   EXPECT_EQ(exact_blockout_jaws(r), 0u);
   EXPECT_NE(std::strstr(r.blockout_fallback, "undercut unswept"), nullptr) << r.blockout_fallback;
   ASSERT_EQ(r.blockout_jaws, 2u);
-  EXPECT_EQ(r.blockout[0].inset_used, 0.15);
-  EXPECT_GT(r.boolean.intersecting_pairs, 0u);  // the jaws' Boolean ran, for the voxel method
+  EXPECT_GT(r.blockout[0].heightfield.cells, 0u);
+  EXPECT_EQ(r.boolean.intersecting_pairs, 0u);  // no jaw subtracted: the height field holds it
   EXPECT_TRUE(r.print.printable);
-  c.blockout_method = BlockoutMethod::kVoxel;
-  Mesh voxel;
-  DesignReport rv;
+  for (int j = 0; j < 2; ++j) {
+    const test::LockReport lock = jaw_lock(f, c, fallback, j);
+    EXPECT_GT(lock.lines_through_jaw, 1000u);
+    EXPECT_EQ(lock.locked_lines, 0u) << "jaw " << j << ": " << lock.longest;
+  }
+  c.blockout_method = BlockoutMethod::kHeightfield;
+  Mesh field;
+  DesignReport rh;
   SPLINTCORE_ASSERT_OK(
-      design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &voxel, &rv));
-  expect_same_stl_bytes(f.t.arena, fallback, voxel);
-  EXPECT_EQ(r.self_intersection_candidates, rv.self_intersection_candidates);
+      design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &field, &rh));
+  expect_same_stl_bytes(f.t.arena, fallback, field);
+  EXPECT_EQ(r.self_intersection_candidates, rh.self_intersection_candidates);
   // "exact" stops there, naming the jaw and the fold, and leaves no splint.
   c.blockout_method = BlockoutMethod::kExact;
   Mesh none;
@@ -332,10 +344,12 @@ TEST(DesignPipeline, AutoBlockoutIsExactUnlessItsSweepStopsThenVoxels) {
       << s.message();
   EXPECT_NE(std::strstr(s.message(), "(jaw 0, maxilla)"), nullptr) << s.message();
   EXPECT_TRUE(none.triangles.empty());
-  // "auto" in room for its exact attempt but not for the voxels: the voxels' error, which
-  // says why they were tried (no report is written for a failed design).
+  // "auto" in room for its exact attempt but not for the height field (on a grid fine enough
+  // to need more): the height field's error, which says why it was tried (no report is written
+  // for a failed design).
+  c.blockout.voxel = 0.05;
   size_t need[2] = {0, 0};
-  const BlockoutMethod methods[2] = {BlockoutMethod::kExact, BlockoutMethod::kVoxel};
+  const BlockoutMethod methods[2] = {BlockoutMethod::kExact, BlockoutMethod::kHeightfield};
   for (int m = 0; m < 2; ++m) {
     test::TestArena ta(size_t{256} << 20);
     c.blockout_method = methods[m];
@@ -352,16 +366,17 @@ TEST(DesignPipeline, AutoBlockoutIsExactUnlessItsSweepStopsThenVoxels) {
   const Status st =
       design_splint(Context(&between.arena), c, Span<const Mesh>(f.jaws, 2), &short_of_room, &rs);
   EXPECT_EQ(st.code(), StatusCode::kArenaExhausted) << test::format(st);
-  EXPECT_NE(
-      std::strstr(st.message(), "; \"auto\" had fallen back to voxels: blockout: exact sweep"),
-      nullptr)
+  EXPECT_NE(std::strstr(st.message(),
+                        "; \"auto\" had fallen back to the height field: blockout: exact sweep"),
+            nullptr)
       << st.message();
   EXPECT_TRUE(short_of_room.triangles.empty());
 }
 
 // "auto" with the upper base 2.5 mm deeper (the maxilla's exact sweep refused) and the lower
-// 2 mm (the mandible's exact): the maxilla is made with voxels (its own imprint by the
-// Boolean, then the sampled sweep), the mandible stays exact, and the report says which and why.
+// 2 mm (the mandible's exact): the maxilla is made with the height field (after the mandible,
+// from the splint as the exact sweep left it: no jaw is subtracted), the mandible stays exact,
+// and the report says which and why. Neither jaw locks a line.
 TEST(DesignPipeline, AutoBlockoutFallsBackOnlyForTheJawItsSweepRefuses) {
   CaseAndJaws f;
   ASSERT_TRUE(f.ok);
@@ -375,50 +390,50 @@ TEST(DesignPipeline, AutoBlockoutFallsBackOnlyForTheJawItsSweepRefuses) {
       design_splint(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), &again, &r2));
   expect_same_stl_bytes(f.t.arena, mixed, again);
   EXPECT_TRUE(r.imprint_swept);
+  EXPECT_FALSE(r.imprint_heightfield);
   ASSERT_EQ(r.blockout_jaws, 2u);
   EXPECT_FALSE(r.blockout_exact[0]);
+  EXPECT_TRUE(r.blockout_heightfield[0]);
   EXPECT_TRUE(r.blockout_exact[1]);
-  EXPECT_EQ(exact_blockout_jaws(r), 1u);  // mixed: report.json's "exact and voxel"
+  EXPECT_FALSE(r.blockout_heightfield[1]);
+  EXPECT_EQ(exact_blockout_jaws(r), 1u);  // mixed: report.json's "exact and heightfield"
   EXPECT_NE(std::strstr(r.blockout_fallback, "undercut unswept"), nullptr) << r.blockout_fallback;
   EXPECT_NE(std::strstr(r.blockout_fallback, "(jaw 0, maxilla)"), nullptr) << r.blockout_fallback;
-  EXPECT_GT(r.boolean.intersecting_pairs, 0u);  // the maxilla's own imprint
-  EXPECT_EQ(r.blockout[0].inset_used, 0.15);
+  EXPECT_EQ(r.boolean.intersecting_pairs, 0u);  // no jaw's own Boolean
+  EXPECT_GT(r.blockout[0].heightfield.cells, 0u);
   EXPECT_GT(r.blockout[1].exact.walls, 0u);
   EXPECT_TRUE(r.print.printable);
   MeshReport mr;
   SPLINTCORE_ASSERT_OK(check_mesh(Context(&f.t.arena), mixed, &mr));
   EXPECT_TRUE(require_valid_solid(mr).is_ok());
-  // The mandible as exact as alone; the maxilla's undercuts left by the 0.3 mm voxels no more
-  // than the all-voxel design's.
+  // No line locked on either jaw; the 0.3 mm voxels with their half-voxel inset, for
+  // comparison, leave some.
   CaseFile voxel_case = c;
   voxel_case.blockout_method = BlockoutMethod::kVoxel;
+  voxel_case.blockout.inset = 0.15;
   Mesh voxel;
   DesignReport rv;
   SPLINTCORE_ASSERT_OK(
       design_splint(Context(&f.t.arena), voxel_case, Span<const Mesh>(f.jaws, 2), &voxel, &rv));
   for (int j = 0; j < 2; ++j) {
-    const Mesh jaw = test::moved_mesh(f.t.arena, f.jaws[j], c.jaws[j].transform);
-    const Vec3 d = j == 0 ? c.insertion_direction : -c.insertion_direction;
-    const test::LockReport lock = test::lock_report(f.t.arena, mixed, jaw, d, Vec3{1, 0, 0},
-                                                    Vec3{0, 1, 0}, Vec3{0, 18, 0}, 27.0, 100, 1e-4);
-    const test::LockReport all_voxel = test::lock_report(
-        f.t.arena, voxel, jaw, d, Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 18, 0}, 27.0, 100, 1e-4);
+    const test::LockReport lock = jaw_lock(f, c, mixed, j);
+    const test::LockReport all_voxel = jaw_lock(f, c, voxel, j);
     std::printf("[ figures  ] jaw %d (%s): locked lines %zu (longest %.3g mm), all voxels %zu\n", j,
-                r.blockout_exact[j] ? "exact" : "voxel", lock.locked_lines, lock.longest,
+                r.blockout_exact[j] ? "exact" : "height field", lock.locked_lines, lock.longest,
                 all_voxel.locked_lines);
     EXPECT_GT(lock.lines_through_jaw, 1000u);
-    if (j == 1) {
-      EXPECT_EQ(lock.locked_lines, 0u);
-    }
-    EXPECT_LE(lock.locked_lines, all_voxel.locked_lines);
+    EXPECT_EQ(lock.locked_lines, 0u) << "jaw " << j << ": " << lock.longest;
   }
   std::string json;
   SPLINTCORE_ASSERT_OK(write_design_report(Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2),
                                            mixed, r, DesignReportFiles{}, nullptr,
                                            cli::string_sink(&json)));
-  for (const char* key : {"\"blockout_method_used\":\"exact and voxel\"",
-                          "\"blockout_fallback\":", "\"role\":\"maxilla\",\"method\":\"voxel\"",
-                          "\"role\":\"mandible\",\"method\":\"exact\""}) {
+  for (const char* key :
+       {"\"blockout_method_used\":\"exact and heightfield\"",
+        "\"blockout_fallback\":", "\"role\":\"maxilla\",\"method\":\"heightfield\"",
+        "\"role\":\"mandible\",\"method\":\"exact\"",
+        "\"imprint\":\"exact swept volume (jaw front triangles and walls); height field of the "
+        "swept volume where a jaw's exact sweep stopped\""}) {
     EXPECT_NE(json.find(key), std::string::npos) << key;
   }
 }

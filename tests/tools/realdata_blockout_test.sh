@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Issue 29, the whole design in 64 MiB with the blockout: the real CBCT dentition
 # (../shared/realdata, not in the repository: exits 77, skipped, without it), exported by
-# splintcore-bench as a case (its 14 + 14 picks) with "blockout": {"voxel": 0.1}, designed with
+# splintcore-bench as a case (its 14 + 14 picks) with "blockout": {"method": "voxel", "voxel": 0.1}
+# (the sampled sweep; without "method" the same object is "auto", the exact sweep), designed with
 # --memory-cap 64M (the case's own memory_cap is 1G: the flag wins); the splint written must be a
 # closed, valid solid (splintcore check), and the report must say the blockout ran on both
 # jaws and checked the result for self-intersections.
@@ -13,7 +14,7 @@ step "export the real case" "$bench" --realdata "$real" --export-realcase "$work
 step "the case with the blockout" python3 -c '
 import json, sys
 c = json.load(open(sys.argv[1]))
-c["blockout"] = {"voxel": 0.1}
+c["blockout"] = {"method": "voxel", "voxel": 0.1}
 json.dump(c, open(sys.argv[2], "w"))' "$work/rc/case.json" "$work/rc/blockout.json"
 step "design the real case with the blockout in 64 MiB" \
   "$tool" design "$work/rc/blockout.json" -o "$work/d" --memory-cap 64M

@@ -132,12 +132,13 @@ rows = [("plain splint", None), ("blockout default ({}: auto)", {}),
         ("blockout exact", {"method": "exact"}),
         ("blockout auto, base 3 mm deep", {"deep": 3}),
         ("blockout auto, base 4 mm deep", {"deep": 4}),
-        ("blockout voxel 0.1", {"voxel": 0.1}),
+        ("blockout {voxel: 0.1} (auto)", {"voxel": 0.1}),
+        ("blockout method voxel 0.1", {"method": "voxel", "voxel": 0.1}),
         ("blockout heightfield 0.1", {"method": "heightfield", "voxel": 0.1}),
         ("heightfield, base 4 mm deep", {"deep": 4, "method": "heightfield", "voxel": 0.1}),
-        ("spacer (clearance 0.1, voxel 0.1)", {"voxel": 0.1, "clearance": 0.1}),
-        ("spacer heightfield (clearance 0.1)",
-         {"method": "heightfield", "voxel": 0.1, "clearance": 0.1})]
+        ("spacer {voxel: 0.1, clearance: 0.1}", {"voxel": 0.1, "clearance": 0.1}),
+        ("spacer method voxel (clearance 0.1)",
+         {"method": "voxel", "voxel": 0.1, "clearance": 0.1})]
 print("%-36s %9s %14s %11s  %s" % ("case", "wall (s)", "peak arena (B)", "triangles", "result"))
 for name, blockout in rows:
     c = json.loads(json.dumps(base))

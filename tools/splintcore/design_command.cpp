@@ -718,14 +718,13 @@ void Design::print_summary() const {
     const uint32_t exact = exact_blockout_jaws(report);
     if (exact == report.blockout_jaws) {
       std::printf("imprint: each jaw's exact swept volume (its front triangles and walls)\n");
-    } else {  // "auto" fell back for some jaws: theirs is the jaw's own Boolean, then voxels
+    } else {  // "auto" fell back to the height field for some jaws
       std::printf(
-          "imprint: %u jaw(s) by their exact swept volume, %u by the jaw's own Boolean (%llu "
-          "crossing pairs, %u attempt(s)) before the voxel blockout\n",
-          exact, report.blockout_jaws - exact,
-          static_cast<unsigned long long>(report.boolean.intersecting_pairs),
-          report.boolean.attempts);
+          "imprint: %u jaw(s) by their exact swept volume, %u by the height field of theirs\n",
+          exact, report.blockout_jaws - exact);
     }
+  } else if (report.imprint_heightfield) {
+    std::printf("imprint: the height field of each jaw's swept volume\n");
   } else {
     std::printf("boolean: %llu crossing pairs, %llu intersection points, %u attempt(s)\n",
                 static_cast<unsigned long long>(report.boolean.intersecting_pairs),
@@ -733,10 +732,19 @@ void Design::print_summary() const {
                 report.boolean.attempts);
   }
   if (report.blockout_fallback[0] != '\0') {
-    std::printf("blockout: with voxels where the exact sweep was refused: %s\n",
+    std::printf("blockout: with the height field where the exact sweep was refused: %s\n",
                 report.blockout_fallback);
   }
   for (uint32_t i = 0; i < report.blockout_jaws; ++i) {
+    if (report.imprint_heightfield || report.blockout_heightfield[i]) {
+      std::printf(
+          "blockout (%s, height field): %.4f mm^3 of interference removed, %llu swept "
+          "triangles, lowered %.3g mm\n",
+          c_.jaws[i].role, report.blockout_removed_mm3[i],
+          static_cast<unsigned long long>(report.blockout[i].swept_triangles),
+          report.blockout[i].inset_used);
+      continue;
+    }
     if (!report.blockout_exact[i]) {
       std::printf(
           "blockout (%s): %.4f mm^3 of interference removed, %llu swept triangles, "
