@@ -601,17 +601,15 @@ Status parse_blockout(const Reader& r, const JsonValue* b, CaseFile* out) {
         return r.fail(*v, StatusCode::kInvalidArgument, "\"blockout.", key,
                       "\" is for the voxel method (\"method\": \"exact\" has no voxels)");
       }
-      if (out->blockout_method == BlockoutMethod::kHeightfield && v != nullptr &&
+      // Inset and closing radius: the height field (auto's fallback too) has neither.
+      const bool field = out->blockout_method == BlockoutMethod::kHeightfield;
+      if ((field || out->blockout_method == BlockoutMethod::kAuto) && v != nullptr &&
           std::strcmp(key, "voxel") != 0 && std::strcmp(key, "clearance") != 0) {
         return r.fail(*v, StatusCode::kInvalidArgument, "\"blockout.", key,
-                      "\" is for the voxel method (\"method\": \"heightfield\" takes only "
-                      "\"voxel\", its grid, and \"clearance\")");
-      }
-      if (out->blockout_method == BlockoutMethod::kAuto && v != nullptr &&
-          std::strcmp(key, "voxel") != 0 && std::strcmp(key, "clearance") != 0) {
-        return r.fail(*v, StatusCode::kInvalidArgument, "\"blockout.", key,
-                      "\" is for the voxel method (\"method\": \"auto\" falls back to the "
-                      "height field, which takes only \"voxel\", its grid)");
+                      field ? "\" is for the voxel method (\"method\": \"heightfield\" takes "
+                              "only \"voxel\", its grid, and \"clearance\")"
+                            : "\" is for the voxel method (\"method\": \"auto\" falls back to "
+                              "the height field, which takes only \"voxel\", its grid)");
       }
     }
     const JsonValue* clearance = doc.member(*b, "clearance");

@@ -384,6 +384,14 @@ CaseFile heightfield_fallback(const CaseFile& c) {
   return h;
 }
 
+// Keeps why kAuto fell back (the first refusal's message) in the report, unless it has one.
+void note_fallback(const Status& why, DesignReport* report) {
+  if (report->blockout_fallback[0] != '\0') return;
+  const size_t n = std::min(std::strlen(why.message()), sizeof report->blockout_fallback - 1);
+  std::memcpy(report->blockout_fallback, why.message(), n);
+  report->blockout_fallback[n] = '\0';
+}
+
 // kAuto's fallback for jaw j, whose exact blockout was refused (`why`, the design's first
 // refusal): the height field of its swept volume cut from the splint as it is (the height field
 // holds the jaw, as the exact sweeps of the others do: no jaw was subtracted). An error then
@@ -391,11 +399,7 @@ CaseFile heightfield_fallback(const CaseFile& c) {
 // Status truncates at its capacity).
 Status blockout_with_heightfield(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                                  size_t j, const Status& why, Mesh* cut, DesignReport* report) {
-  if (report->blockout_fallback[0] == '\0') {
-    const size_t n = std::min(std::strlen(why.message()), sizeof report->blockout_fallback - 1);
-    std::memcpy(report->blockout_fallback, why.message(), n);
-    report->blockout_fallback[n] = '\0';
-  }
+  note_fallback(why, report);
   report->blockout[j] = BlockoutStats{};
   report->blockout_heightfield[j] = true;
   Status s = blockout_checked(ctx, heightfield_fallback(c), jaws, j, false, cut, report);
@@ -787,9 +791,7 @@ Status cut_base(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Me
   report->self_intersection_checked = false;
   report->self_intersection_checked_by = "";
   report->self_intersection_candidates = 0;
-  const size_t n = std::min(std::strlen(s.message()), sizeof report->blockout_fallback - 1);
-  std::memcpy(report->blockout_fallback, s.message(), n);
-  report->blockout_fallback[n] = '\0';
+  note_fallback(s, report);
   Status field = cut_base_with(ctx, heightfield_fallback(c), jaws, false, cut, report);
   // No report is written for a failed design: the error says why the height field was tried at
   // all (after its own text, which says what to do; the Status truncates at its capacity).
