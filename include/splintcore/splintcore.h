@@ -389,7 +389,8 @@ typedef struct sc_case_params {
    * field where it stops, on the voxel's grid), SC_BLOCKOUT_EXACT, SC_BLOCKOUT_VOXEL,
    * SC_BLOCKOUT_HEIGHTFIELD (the voxel is its grid); inset and closing are used by VOXEL only.
    * As parsed: a case's "blockout" naming "inset" or "closing_radius" is VOXEL, else one
-   * naming "clearance" HEIGHTFIELD, else AUTO (unless it names its "method"). */
+   * naming "clearance" HEIGHTFIELD, else AUTO (unless it names its "method"); an AUTO or
+   * HEIGHTFIELD case reads back inset 0: give one when switching it to VOXEL. */
   int blockout_method;
   const char* printer; /* a built-in profile name ("eden260"); static text */
   /* The automatic outline ("base": {"auto": {...}}, docs/case-format.md): the picks, the

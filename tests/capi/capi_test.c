@@ -763,7 +763,8 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
       CHECK_OK(f.ctx, sc_case_set_params(f.ctx, c, &p));
     }
     /* "auto" with the upper picks 2.5 mm deeper along the occlusal normal (+z here) and the
-     * lower 2 mm: the maxilla's exact sweep is refused, the mandible's holds
+     * lower 2 mm: the maxilla's exact sweep is refused (that jaw is made by the height field on
+     * the 0.3 mm grid; the inset is not used), the mandible's holds
      * (DesignPipeline.AutoBlockoutFallsBackOnlyForTheJawItsSweepRefuses): SC_BLOCKOUT_MIXED. */
     {
       size_t n = sc_case_pick_count(c, SC_PICKS_UPPER), k;
