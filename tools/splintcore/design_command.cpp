@@ -736,22 +736,14 @@ void Design::print_summary() const {
                 report.blockout_fallback);
   }
   for (uint32_t i = 0; i < report.blockout_jaws; ++i) {
-    if (report.imprint_heightfield || report.blockout_heightfield[i]) {
+    if (!report.blockout_exact[i]) {  // the height field lowers where the voxels inset
+      const bool field = report.imprint_heightfield || report.blockout_heightfield[i];
       std::printf(
-          "blockout (%s, height field): %.4f mm^3 of interference removed, %llu swept "
-          "triangles, lowered %.3g mm\n",
-          c_.jaws[i].role, report.blockout_removed_mm3[i],
+          "blockout (%s%s): %.4f mm^3 of interference removed, %llu swept triangles, %s %.3g "
+          "mm\n",
+          c_.jaws[i].role, field ? ", height field" : "", report.blockout_removed_mm3[i],
           static_cast<unsigned long long>(report.blockout[i].swept_triangles),
-          report.blockout[i].inset_used);
-      continue;
-    }
-    if (!report.blockout_exact[i]) {
-      std::printf(
-          "blockout (%s): %.4f mm^3 of interference removed, %llu swept triangles, "
-          "inset %.3g mm\n",
-          c_.jaws[i].role, report.blockout_removed_mm3[i],
-          static_cast<unsigned long long>(report.blockout[i].swept_triangles),
-          report.blockout[i].inset_used);
+          field ? "lowered" : "inset", report.blockout[i].inset_used);
       continue;
     }
     const ExactSweepStats& e = report.blockout[i].exact;
