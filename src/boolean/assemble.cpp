@@ -471,7 +471,7 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
   const bool bounded = options.op != BooleanOp::kUnion && bp.near_ids.size() < b.triangles.size();
   if (s.is_ok() && bounded) s = copy_near_b(arena, b, &bp, &near);
   const Mesh& run_b = bounded ? near.mesh : b;
-  if (s.is_ok()) s = number_a_slots(arena, run_b, static_cast<uint32_t>(a.triangles.size()), &bp);
+  if (s.is_ok()) s = number_a_slots(arena, static_cast<uint32_t>(a.triangles.size()), &bp);
   if (!s.is_ok()) return s;
   const Arena::Marker attempts_start = arena.mark();
   const uint64_t budget =

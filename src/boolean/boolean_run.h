@@ -573,11 +573,11 @@ Point make_point(const Inputs& in, const PointKey& key);
 // b_valid: B's indices are known to be in range and its vertices finite (not checked again).
 Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double reach,
                         bool float32_output, bool b_valid, Broadphase* bp);
-// bp->a_slot and a_slot_count for B as the run has it (its near triangles bp->near_ids), over
-// nta triangles of A. Arena: 4 bytes per triangle of A (kept), and one bit per cell (returned).
-Status number_a_slots(Arena& arena, const Mesh& b, uint32_t nta, Broadphase* bp);
+// bp->a_slot and a_slot_count over nta triangles of A: a slot for each triangle the grid lists.
+// Arena: 4 bytes per triangle of A (kept).
+Status number_a_slots(Arena& arena, uint32_t nta, Broadphase* bp);
 // Sets the bit (marked: one per grid cell) of every cell that the box of one of B's near
-// triangles near_ids[begin, end) covers (number_a_slots; the hits' batches).
+// triangles near_ids[begin, end) covers (the grid's lists; the hits' batches).
 void mark_near_cells(const Broadphase& bp, const Mesh& b, size_t begin, size_t end,
                      uint64_t* marked);
 

@@ -29,18 +29,40 @@ void size_grid(uint32_t nta, Broadphase* bp) {
   bp->inv_h = 1.0 / h;
 }
 
+// Whether a cell of [lo, hi] (cell_range) is marked; true also when the range has more than
+// 64 cells (not worth the look: triangle_cells then filters each cell).
+bool range_marked(const Broadphase& bp, const uint64_t* marked, const uint32_t lo[3],
+                  const uint32_t hi[3]) {
+  if (uint64_t{hi[0] - lo[0] + 1} * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1) > 64) return true;
+  for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
+    for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
+      const size_t row = (size_t{z} * bp.dim[1] + y) * bp.dim[0];
+      for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
+        if ((marked[(row + x) >> 6] >> ((row + x) & 63) & 1u) != 0) return true;
+      }
+    }
+  }
+  return false;
+}
+
 // The grid's cell lists (bp->start, bp->items): the cells each triangle of A may meet
-// (triangle_cells, with `reach`: every attempt's A). One pass over the triangles counts the
-// cells and notes them in order (triangle by triangle, above the lists); the notes are then
-// sorted into the lists by cell (a counting sort, each cell's triangles ascending) and the
-// lists moved down over them.
-Status list_cells(Arena& arena, const Mesh& a, double reach, Broadphase* bp) {
+// (triangle_cells, with `reach`: every attempt's A) among those the boxes of B's near
+// triangles cover (mark_near_cells: the only cells a pair test or a batch reads), so that
+// the part of A far from B (a later pass's A: the imprints of the groups before) costs a box
+// each. One pass over the triangles counts the cells and notes them in order (triangle by
+// triangle, above the lists); the notes are then sorted into the lists by cell (a counting
+// sort, each cell's triangles ascending) and the lists moved down over them.
+Status list_cells(Arena& arena, const Mesh& a, const Mesh& b, double reach, Broadphase* bp) {
   const uint32_t nta = static_cast<uint32_t>(a.triangles.size());
   const size_t cells = size_t{bp->dim[0]} * bp->dim[1] * bp->dim[2];
   uint32_t* start = arena.allocate_array<uint32_t>(cells + 1);
   if (start == nullptr) return arena.exhausted_status();
   std::memset(start, 0, (cells + 1) * sizeof(uint32_t));
   const Arena::Marker notes_at = arena.mark();
+  uint64_t* marked = arena.allocate_array<uint64_t>(cells / 64 + 1);
+  if (marked == nullptr) return arena.exhausted_status();
+  std::memset(marked, 0, (cells / 64 + 1) * sizeof(uint64_t));
+  mark_near_cells(*bp, b, 0, bp->near_ids.size(), marked);
   uint32_t* note_end = arena.allocate_array<uint32_t>(nta);  // per triangle: end of its notes
   if (note_end == nullptr && nta > 0) return arena.exhausted_status();
   ArenaArray<uint32_t> notes(&arena);  // the cells, triangle by triangle
@@ -50,17 +72,29 @@ Status list_cells(Arena& arena, const Mesh& a, double reach, Broadphase* bp) {
   bool fits = true;
   for (uint32_t t = 0; t < nta && fits; ++t) {
     const Triangle& at = a.triangles[t];
+    const Vec3 &p0 = a.vertices[at.v[0]], &p1 = a.vertices[at.v[1]], &p2 = a.vertices[at.v[2]];
+    // triangle_cells keeps to the cells of the box widened by reach.
+    Aabb box;
+    box.add(p0);
+    box.add(p1);
+    box.add(p2);
+    box.lo = box.lo - Vec3{reach, reach, reach};
+    box.hi = box.hi + Vec3{reach, reach, reach};
+    uint32_t lo[3], hi[3];
+    bp->cell_range(box, lo, hi);
     int w = 2;
-    triangle_cells(
-        *bp, a.vertices[at.v[0]], a.vertices[at.v[1]], a.vertices[at.v[2]], reach, &w,
-        [](uint32_t, uint32_t, uint32_t) {},
-        [&](uint32_t iu, uint32_t iv, uint32_t k0, uint32_t k1) {
-          size_t c = iu * stride[(w + 1) % 3] + iv * stride[(w + 2) % 3] + k0 * stride[w];
-          for (uint32_t k = k0; k <= k1 && fits; ++k, c += stride[w]) {
-            ++start[c + 1];
-            fits = notes.push_back(static_cast<uint32_t>(c));
-          }
-        });
+    if (range_marked(*bp, marked, lo, hi)) {
+      triangle_cells(
+          *bp, p0, p1, p2, reach, &w, [](uint32_t, uint32_t, uint32_t) {},
+          [&](uint32_t iu, uint32_t iv, uint32_t k0, uint32_t k1) {
+            size_t c = iu * stride[(w + 1) % 3] + iv * stride[(w + 2) % 3] + k0 * stride[w];
+            for (uint32_t k = k0; k <= k1 && fits; ++k, c += stride[w]) {
+              if ((marked[c >> 6] >> (c & 63) & 1u) == 0) continue;
+              ++start[c + 1];
+              fits = notes.push_back(static_cast<uint32_t>(c));
+            }
+          });
+    }
     note_end[t] = static_cast<uint32_t>(notes.size());
   }
   if (!fits) return arena.exhausted_status();
@@ -145,10 +179,10 @@ Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double
   abox.hi = abox.hi + Vec3{reach, reach, reach};
   bp->abox = abox;
   size_grid(nta, bp);
-  SPLINTCORE_RETURN_IF_ERROR(list_cells(arena, a, reach, bp));
+  SPLINTCORE_RETURN_IF_ERROR(b_valid ? near_triangles_of_b<false>(arena, b, float32_output, bp)
+                                     : near_triangles_of_b<true>(arena, b, float32_output, bp));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "boolean: cull", 0, 1));
-  return b_valid ? near_triangles_of_b<false>(arena, b, float32_output, bp)
-                 : near_triangles_of_b<true>(arena, b, float32_output, bp);
+  return list_cells(arena, a, b, reach, bp);
 }
 
 void mark_near_cells(const Broadphase& bp, const Mesh& b, size_t begin, size_t end,
@@ -168,25 +202,15 @@ void mark_near_cells(const Broadphase& bp, const Mesh& b, size_t begin, size_t e
   }
 }
 
-// The cells the boxes of B's near triangles cover are marked (a bit each), then every triangle
-// of A those cells list gets a slot, in A's order. A nudge moves A, not the grid or B: one
+// Every triangle of A the grid lists gets a slot, in A's order: the lists hold only the cells
+// the boxes of B's near triangles cover (list_cells). A nudge moves A, not the grid or B: one
 // numbering serves every attempt.
-Status number_a_slots(Arena& arena, const Mesh& b, uint32_t nta, Broadphase* bp) {
+Status number_a_slots(Arena& arena, uint32_t nta, Broadphase* bp) {
   uint32_t* slot = arena.allocate_array<uint32_t>(nta);
   if (slot == nullptr && nta > 0) return arena.exhausted_status();
   if (nta > 0) std::memset(slot, 0xff, size_t{nta} * sizeof(uint32_t));
-  {
-    ArenaScope marks_scope(arena);
-    const size_t cells = size_t{bp->dim[0]} * bp->dim[1] * bp->dim[2];
-    uint64_t* marked = arena.allocate_array<uint64_t>(cells / 64 + 1);
-    if (marked == nullptr) return arena.exhausted_status();
-    std::memset(marked, 0, (cells / 64 + 1) * sizeof(uint64_t));
-    mark_near_cells(*bp, b, 0, bp->near_ids.size(), marked);
-    for (size_t c = 0; c < cells; ++c) {
-      if ((marked[c >> 6] >> (c & 63) & 1u) == 0) continue;
-      for (uint32_t k = bp->start[c]; k < bp->start[c + 1]; ++k) slot[bp->items[k]] = 0;
-    }
-  }
+  const size_t cells = size_t{bp->dim[0]} * bp->dim[1] * bp->dim[2];
+  for (uint32_t k = 0; k < bp->start[cells]; ++k) slot[bp->items[k]] = 0;
   uint32_t count = 0;
   for (uint32_t t = 0; t < nta; ++t) {
     if (slot[t] != ~0u) slot[t] = count++;
