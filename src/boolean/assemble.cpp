@@ -180,7 +180,7 @@ Status BooleanRun::check_merged_fans(const Triangle* tris, size_t nt, const uint
 }
 
 Status BooleanRun::run(Mesh* result, const Arena::Marker& result_at) {
-  {
+  if (!in_.a_solid) {
     Status s = check_closed_oriented(ctx_, *in_.a, nullptr);
     if (s.code() == StatusCode::kArenaExhausted) return s;
     if (!s.is_ok()) {
@@ -451,7 +451,7 @@ bool moves_to_itself(const Mesh& a, const Vec3& d) {
 
 Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
                            const BooleanOptions& options, Mesh* out, BooleanStats* stats,
-                           bool b_valid) {
+                           bool b_valid, bool a_solid) {
   using namespace boolean_detail;
   Arena& arena = *ctx.arena;
   BooleanStats local{};
@@ -521,6 +521,7 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
     stats->attempts = attempt + 1;
     Inputs in;
     in.a = pa;
+    in.a_solid = a_solid && pa == &a;
     in.b = &run_b;
     in.b_whole = &b;
     in.b_vertex_ids = near.vertex_ids;

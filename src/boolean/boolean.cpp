@@ -669,6 +669,7 @@ Status run_passes(const Context& ctx, const Mesh& a, const Mesh& b, const Shells
     g = 1;
   }
   uint32_t done = 0;
+  bool first_checked = false;  // *first is an earlier pass's result (its run checked it a solid)
   for (uint32_t pass = 0; pass < passes; ++pass) {
     const bool last = pass + 1 == passes;
     Mesh operand;
@@ -677,6 +678,7 @@ Status run_passes(const Context& ctx, const Mesh& a, const Mesh& b, const Shells
     if (intersection && last) {
       second = first;  // A n (the union of the groups)
       first = &a;
+      first_checked = false;
     } else {
       SPLINTCORE_RETURN_IF_ERROR(group_mesh(arena, b, sh, group, g++, remap, &operand));
       if (intersection) o.op = BooleanOp::kUnion;
@@ -687,7 +689,7 @@ Status run_passes(const Context& ctx, const Mesh& a, const Mesh& b, const Shells
     Mesh result;
     BooleanStats ps;
     // (The groups are copies of B's valid shells; the intersection's union a checked result.)
-    Status s = mesh_boolean_single(ctx, *first, *second, o, &result, &ps, true);
+    Status s = mesh_boolean_single(ctx, *first, *second, o, &result, &ps, true, first_checked);
     add_stats(ps, &total);
     if (!s.is_ok()) {
       s.append(" (pass ").append_u64(pass + 1).append(" of ").append_u64(passes);
@@ -702,6 +704,7 @@ Status run_passes(const Context& ctx, const Mesh& a, const Mesh& b, const Shells
     move_mesh_down(arena, base, result, &moved);
     current = moved;
     first = &current;
+    first_checked = !current.triangles.empty();
     done = pass + 1;
     // Nothing is left of A: the later groups can only take from nothing (and an empty mesh
     // is not a solid that a next pass could take as A).
@@ -743,7 +746,7 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b, const Bool
   if (groups == 1) {
     // One run, with the arena as the caller gave it (it rewinds itself on an error).
     arena.rewind(scope.start());
-    s = mesh_boolean_single(ctx, a, b, options, out, stats, usable);
+    s = mesh_boolean_single(ctx, a, b, options, out, stats, usable, false);
     scope.commit();
   } else if (options.float32_output && !(s = check_b_float32(b, region)).is_ok()) {
     return s;

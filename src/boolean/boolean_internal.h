@@ -72,10 +72,12 @@ inline Status b_not_float32(uint32_t t) {
 // the caller sets them). Arena, errors and the result's placement: as mesh_boolean (the result
 // is moved down to the arena's top at entry; on an error the arena is as it was, *out empty).
 // b_valid: B's indices are known to be in range and its vertices finite (mesh_boolean's
-// find_shells found them so): the broad phase does not check them again.
+// find_shells found them so): the broad phase does not check them again. a_solid: A is known
+// to be a solid (an earlier pass's result, checked by its run): an attempt that uses A as it
+// is does not check it again.
 Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
                            const BooleanOptions& options, Mesh* out, BooleanStats* stats,
-                           bool b_valid);
+                           bool b_valid, bool a_solid);
 
 }  // namespace splintcore
 

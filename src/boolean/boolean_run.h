@@ -45,6 +45,7 @@ struct Inputs {
   const Mesh* b_whole = nullptr;
   const uint32_t* b_vertex_ids = nullptr;    // null: b is B itself
   const uint32_t* b_triangle_ids = nullptr;  // null: b is B itself
+  bool a_solid = false;                      // a is known to be a solid (not checked again)
 
   // B's own id of vertex (triangle) i of b, for messages.
   uint32_t b_vertex(uint32_t i) const { return b_vertex_ids != nullptr ? b_vertex_ids[i] : i; }
