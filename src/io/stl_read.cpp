@@ -33,13 +33,6 @@ inline uint32_t load_u32(const uint8_t* p) {
   return uint32_t{p[0]} | (uint32_t{p[1]} << 8) | (uint32_t{p[2]} << 16) | (uint32_t{p[3]} << 24);
 }
 
-inline float load_f32(const uint8_t* p) {
-  uint32_t bits = load_u32(p);
-  float f;
-  std::memcpy(&f, &bits, sizeof(f));
-  return f;
-}
-
 // A little-endian float32's bits: one 4-byte load on a little-endian host.
 inline uint32_t bits_at(const uint8_t* p) {
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
@@ -49,6 +42,13 @@ inline uint32_t bits_at(const uint8_t* p) {
 #else
   return load_u32(p);
 #endif
+}
+
+inline float load_f32(const uint8_t* p) {
+  const uint32_t bits = bits_at(p);
+  float f;
+  std::memcpy(&f, &bits, sizeof(f));
+  return f;
 }
 
 Status located(Status s, const ByteSource& source) {
@@ -525,6 +525,7 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
   const bool crop = !options.keep.empty();
   size_t kept = 0;                // triangles in the mesh (all of them without a crop)
   uint64_t ahead[2 * kAhead][3];  // the prefetched corners' hashes, by triangle mod 2 kAhead
+  bool ahead_out[2 * kAhead];     // and whether the crop leaves that triangle out (no hashes)
   for (uint64_t t = 0; t < declared;) {
     if ((t & 0xffff) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read", t, declared));
     if (in.available() < kBinaryRecordBytes) {
@@ -540,17 +541,22 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
       // copy a `rep movs`, whose start-up cost was a third of this loop's time).
       if (i + kAhead < run) {  // the slots of a triangle ahead; its hashes kept for then
         const uint8_t* c = record + kAhead * kBinaryRecordBytes + 12;
-        uint64_t* h = ahead[(i + kAhead) % (2 * kAhead)];
-        for (int k = 0; k < 3; ++k, c += 12) {
+        const size_t slot = (i + kAhead) % (2 * kAhead);
+        // (With a crop most triangles are left out: the test moves here, before the hashes.)
+        ahead_out[slot] =
+            crop && options.keep.beyond_one_side(record_corner(c, 0), record_corner(c, 1),
+                                                 record_corner(c, 2));
+        uint64_t* h = ahead[slot];
+        for (int k = 0; k < 3 && !ahead_out[slot]; ++k, c += 12) {
           h[k] = ExactWelder::hash_bits(bits_at(c), bits_at(c + 4), bits_at(c + 8));
+          __builtin_prefetch(welder.first_slot(h[k]));
         }
-        __builtin_prefetch(welder.first_slot(h[0]));
-        __builtin_prefetch(welder.first_slot(h[1]));
-        __builtin_prefetch(welder.first_slot(h[2]));
       }
       const uint8_t* corners = record + 12;
-      if (crop && options.keep.beyond_one_side(record_corner(corners, 0), record_corner(corners, 1),
-                                               record_corner(corners, 2))) {
+      if (crop && (i >= kAhead ? ahead_out[i % (2 * kAhead)]
+                               : options.keep.beyond_one_side(record_corner(corners, 0),
+                                                              record_corner(corners, 1),
+                                                              record_corner(corners, 2)))) {
         // Left out: its corners are still checked (the same errors as without the crop).
         if (!corners_within(corners, limit)) {
           return binary_corner_error(corners, options, t + i, in.offset() + kBinaryRecordBytes * i);

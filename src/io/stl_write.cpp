@@ -14,11 +14,16 @@ constexpr size_t kRecordBytes = 50;
 constexpr double kFloatMax = static_cast<double>(FLT_MAX);
 constexpr size_t kMaxAsciiFacetBytes = 512;  // 12 numbers of at most ~16 chars plus keywords
 
+// Little-endian: one 4-byte store on a little-endian host.
 inline void store_u32(uint8_t* p, uint32_t v) {
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  std::memcpy(p, &v, sizeof(v));
+#else
   p[0] = static_cast<uint8_t>(v);
   p[1] = static_cast<uint8_t>(v >> 8);
   p[2] = static_cast<uint8_t>(v >> 16);
   p[3] = static_cast<uint8_t>(v >> 24);
+#endif
 }
 
 inline void store_f32(uint8_t* p, float f) {
