@@ -128,11 +128,27 @@ Vec3 record_corner(const uint8_t* corners, int k) {
               static_cast<double>(load_f32(c + 8)));
 }
 
-// Every coordinate of a record's corners within the limit (abs_limit_bits): finite, in range.
+// Two little-endian float32s' bits, the first in the low half.
+inline uint64_t pair_at(const uint8_t* p) {
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  uint64_t bits;
+  std::memcpy(&bits, p, sizeof(bits));
+  return bits;
+#else
+  return uint64_t{load_u32(p + 4)} << 32 | load_u32(p);
+#endif
+}
+
+// Every coordinate of a record's corners within the limit (abs_limit_bits, below 2^31):
+// finite, in range. Two coordinates at a time: limit - magnitude sets a half's top bit
+// exactly when that magnitude is over the limit; a borrow out of the low half, which can
+// spoil the high half's answer, only comes when the low half is over, its own bit set.
 bool corners_within(const uint8_t* corners, uint32_t limit) {
-  uint32_t over = 0;
-  for (int k = 0; k < 9; ++k) over |= limit - (bits_at(corners + 4 * k) & 0x7fffffffu);
-  return (over & 0x80000000u) == 0;
+  const uint64_t limits = uint64_t{limit} << 32 | limit;
+  uint64_t over = 0;
+  for (int k = 0; k < 4; ++k) over |= limits - (pair_at(corners + 8 * k) & 0x7fffffff7fffffffu);
+  over |= limit - (bits_at(corners + 32) & 0x7fffffffu);
+  return (over & 0x8000000080000000u) == 0;
 }
 
 // Fills `in` for the record of triangle t (of `declared`), or says where the file ends.

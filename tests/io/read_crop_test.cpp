@@ -189,23 +189,33 @@ TEST(ReadCrop, CornersOfLeftOutTrianglesAreStillChecked) {
   test::TestArena t(size_t{16} << 20);
   std::vector<SoupTriangle> soup = shapes::torus(24, 12, 10, 3);
   const Aabb box{Vec3{0, -20, -20}, Vec3{20, 20, 20}};
-  // The last triangle wholly beyond the box's low x side, one coordinate then made NaN, then
-  // huge: the same error (and place) as reading it whole.
+  // The last triangle wholly beyond the box's low x side, each of its nine coordinates in
+  // turn then made NaN, huge or infinite: the same error (and place) as reading it whole.
+  // (The check of a left-out triangle takes two coordinates at a time: every position, and
+  // the first of a pair over the limit while the second is at it, are tried.)
   size_t far = soup.size();
   for (size_t i = 0; i < soup.size(); ++i) {
     if (left_out(soup[i], box)) far = i;
   }
   ASSERT_LT(far, soup.size());
-  for (const float bad : {std::nanf(""), 1e30f}) {
-    std::vector<SoupTriangle> broken = soup;
-    broken[far].p[1][2] = bad;
-    ASSERT_TRUE(left_out(broken[far], box));  // x alone puts it beyond
-    const std::vector<uint8_t> bytes = test::binary_stl(broken);
-    const Read whole = read(t.arena, bytes, "a.stl", Aabb{});
-    const Read cropped = read(t.arena, bytes, "a.stl", box);
-    ASSERT_FALSE(whole.status.is_ok());
-    EXPECT_EQ(cropped.status.code(), whole.status.code());
-    EXPECT_EQ(test::format(cropped.status), test::format(whole.status));
+  for (int c = 0; c < 9; ++c) {
+    for (const float bad : {std::nanf(""), 1e30f, -1e30f, -INFINITY}) {
+      std::vector<SoupTriangle> broken = soup;
+      broken[far].p[c / 3][c % 3] = bad;
+      // A bad y or z leaves it beyond the low x side; a bad x may not (a NaN corner is beyond
+      // no side): then the triangle is read, and its corner checked there.
+      if (c % 3 != 0) {
+        ASSERT_TRUE(left_out(broken[far], box));
+      }
+      // The next coordinate at the limit exactly (max_abs_coordinate, 1e6 mm by default).
+      if (c < 8) broken[far].p[(c + 1) / 3][(c + 1) % 3] = 1.0e6f;
+      const std::vector<uint8_t> bytes = test::binary_stl(broken);
+      const Read whole = read(t.arena, bytes, "a.stl", Aabb{});
+      const Read cropped = read(t.arena, bytes, "a.stl", box);
+      ASSERT_FALSE(whole.status.is_ok());
+      EXPECT_EQ(cropped.status.code(), whole.status.code()) << c;
+      EXPECT_EQ(test::format(cropped.status), test::format(whole.status)) << c;
+    }
   }
 }
 
