@@ -465,6 +465,7 @@ int run_boolean(const Command& command, int argc, char** argv) {
   bo.max_candidate_pairs = a.max_pairs;
   bo.op = kBooleanOps[a.op];
   bo.check_self_intersection = false;  // timed separately below
+  const Arena::Marker a_start = run.arena.mark();
   Mesh ma(&run.arena), mb(&run.arena);
   Status s = read_mesh_file(run.ctx, a.common.positional[0], kNoInputLimit, false, &ma, nullptr);
   if (!s.is_ok()) return run.reject(s);
@@ -491,6 +492,14 @@ int run_boolean(const Command& command, int argc, char** argv) {
     if (s.is_ok()) s = mesh_boolean(run.ctx, ma, mb, bo, &out, &r.st);
   }
   if (!s.is_ok()) return run.reject(s);
+  r.a_triangles = ma.triangles.size();
+  r.b_kept = mb.triangles.size();
+  // A and B are done with: the result down over them, so that the checks' memory comes on
+  // top of the result alone (the checks make the run's high water: the real dentition's
+  // 4.6 MB of B is 4.6 MB less memory touched).
+  Mesh low;
+  move_mesh_down(run.arena, a_start, out, &low);
+  out = low;
   r.t_op = monotonic_seconds();
   if (a.self_check) s = check_self_intersection(run.ctx, out);
   if (!s.is_ok()) return run.reject(s);
@@ -499,8 +508,6 @@ int run_boolean(const Command& command, int argc, char** argv) {
   if (s.is_ok()) s = write_mesh_atomically(run.ctx, out, a.output, a.ascii);
   if (!s.is_ok()) return run.reject(s);
   r.t_end = monotonic_seconds();
-  r.a_triangles = ma.triangles.size();
-  r.b_kept = mb.triangles.size();
   if (a.common.json) {
     print_boolean_json(run, a, r);
   } else {
