@@ -166,8 +166,9 @@ Status near_triangles_of_b(Arena& arena, const Mesh& b, bool float32_output, Bro
 
 }  // namespace
 
-// Candidate pairs through a uniform grid over A's box: each cell lists the triangles of A
-// that may meet it (A is the small mesh: the splint base). A triangle of B looks
+// Candidate pairs through a uniform grid over A's box: each cell that the box of a near
+// triangle of B covers lists the triangles of A that may meet it (A is the small mesh: the
+// splint base; B's near triangles are found first). A triangle of B looks
 // only at the cells its box covers, so B's many triangles far from A's surface cost a few
 // comparisons each.
 Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double reach,
