@@ -193,9 +193,11 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
 // { w >= h(u, v) }, h the first contact of the column (u, v) with the jaws (+infinity where the
 // column misses them), and its boundary is the graph of h: one sheet that cannot cross itself,
 // whatever the jaws' folds and overhangs, with vertical steps where h jumps (a crown's widest
-// over the gum). The graph is sampled on a square grid of the voxel's spacing (2^k cells a side,
-// covering the region's shadow and two cells more), and meshed as a triangulated irregular
-// network of right triangles (longest-edge bisection): a triangle is split while a grid vertex
+// over the gum). The graph is sampled on a grid of the voxel's spacing covering the region's
+// shadow and two cells more: a row of squares of 2^k cells a side (the largest power of two at
+// most an eighth of the shadow's longer side, at least 1), as many along u and v as cover it;
+// and meshed as a triangulated irregular network of right triangles (longest-edge bisection,
+// from the squares' diagonals; one lattice over the grid): a triangle is split while a grid vertex
 // under it departs from it by more than half the tolerance, so flat parts take few triangles and
 // steps the finest. The surface is conservative: it lies nowhere above h, so the splint keeps
 // no undercut, and at most the tolerance plus a grid cell's departure below it:
@@ -219,7 +221,8 @@ Status sweep_volume_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepO
 // below the first contact of S + Q, which holds S + the ball), and at most 0.0718 c beyond the
 // offset surface besides the tolerance and the lowering. About 30 pieces a front triangle.
 struct HeightfieldStats {
-  uint32_t cells = 0;                 // grid cells a side (a power of two)
+  uint32_t cells_u = 0, cells_v = 0;  // grid cells along u and along v (whole squares)
+  uint32_t square_cells = 0;          // the squares' cells a side (a power of two)
   uint64_t triangles_in = 0;          // jaw triangles whose shadow meets the grid
   uint64_t offset_pieces = 0;         // with an offset: the planar pieces of its polytope
   uint64_t covered_vertices = 0;      // grid vertices whose column meets a jaw below the top
@@ -238,19 +241,20 @@ struct HeightfieldOptions {
   double shift_u = 0, shift_v = 0;
 };
 
-// Arena bytes sweep_heightfield_mesh takes for a grid of `cells` a side, besides its output
-// (24 bytes a vertex, 12 a triangle): 16 bytes a grid vertex; with an offset, the jaws'
-// vertex count as `offset_vertices`: 4 bytes a vertex and the polytope's 11 KB more.
-uint64_t sweep_heightfield_bound(uint32_t cells, uint64_t offset_vertices = 0);
+// Arena bytes sweep_heightfield_mesh takes for a grid of cells_u by cells_v cells
+// (HeightfieldStats), besides its output (24 bytes a vertex, 12 a triangle): 16 bytes a grid
+// vertex; with an offset, the jaws' vertex count as `offset_vertices`: 4 bytes a vertex and the
+// polytope's 11 KB more.
+uint64_t sweep_heightfield_bound(uint32_t cells_u, uint32_t cells_v, uint64_t offset_vertices = 0);
 
 // The graph above as an open surface (its normals against d, out of S) into `out` (empty), in
 // the jaws' frame; its border is the grid's edge, outside the region. Only the jaws' triangles
 // facing against d are taken (as the sampled sweep's: on a closed jaw nothing else is a first
 // contact). Deterministic, serial. Errors: kInvalidArgument (out not empty, no region, an
 // empty or non-finite region, a bad direction, voxel or option, no triangles), kLimitExceeded
-// (more than 4096 cells a side: a larger voxel or a smaller region; a vertex beyond float32),
-// kNonFinite (a jaw vertex), kInvalidMesh (a vertex id out of range), kArenaExhausted,
-// kCancelled. Progress: "heightfield".
+// (a shadow more than 4096 cells across: a larger voxel or a smaller region; a vertex beyond
+// float32), kNonFinite (a jaw vertex), kInvalidMesh (a vertex id out of range),
+// kArenaExhausted, kCancelled. Progress: "heightfield".
 Status sweep_heightfield_mesh(const Context& ctx, Span<const Mesh> jaws,
                               const SweepOptions& options, const HeightfieldOptions& height,
                               Mesh* out, HeightfieldStats* stats = nullptr);

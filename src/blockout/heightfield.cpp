@@ -3,11 +3,13 @@
 // interpolation would rise above the jaws, then a triangulated irregular network of right
 // triangles (longest-edge bisection) within the tolerance of it, one-sided.
 //
-// The network's hierarchy over a square of 2^k cells: the square is cut along its main
-// diagonal into two right triangles; a right triangle is cut at the midpoint of its
-// hypotenuse into two, the midpoint being a grid vertex down to triangles of half a cell. So
-// the cell with lower-left corner (i, j) is cut along its main diagonal when i + j is even,
-// along the other one when odd, and a square of 2s cells at (2s i, 2s j) likewise. The two
+// The network's hierarchy over a row of squares of 2^k cells (the grid, a rectangle): square
+// (i, j) is cut along its main diagonal into two right triangles when i + j is even, along
+// the other one when odd; a right triangle is cut at the midpoint of its hypotenuse into two,
+// the midpoint being a grid vertex down to triangles of half a cell. So the cell with
+// lower-left corner (i, j) is cut along its main diagonal when i + j is even, along the other
+// one when odd, and a square of 2s cells at (2s i, 2s j) likewise, the squares included: one
+// lattice over the whole grid, whatever the squares' size. The two
 // triangles that share a hypotenuse (a diamond) are cut together, at its midpoint m, when
 // E[m] exceeds half the tolerance: E[m] is the most any grid vertex under either departs from
 // its plane, and at least E of the diamonds its cut makes (its children), so a triangle that
@@ -34,12 +36,15 @@ constexpr double kRelative = 1e-12;
 
 struct Grid {
   Frame frame;
-  double u0 = 0, v0 = 0;  // local u, v of grid vertex (0, 0)
-  double cell = 0;        // mm
-  double top = 0;         // local w of the columns that meet nothing below it
-  double margin = 0;      // mm: the float32 rounding of the output, covered
-  uint32_t n = 0;         // cells a side
-  size_t at(uint32_t x, uint32_t y) const { return size_t{y} * (n + 1) + x; }
+  double u0 = 0, v0 = 0;    // local u, v of grid vertex (0, 0)
+  double cell = 0;          // mm
+  double top = 0;           // local w of the columns that meet nothing below it
+  double margin = 0;        // mm: the float32 rounding of the output, covered
+  uint32_t nx = 0, ny = 0;  // cells along u and v: whole squares
+  uint32_t square = 0;      // the squares' cells a side (a power of two)
+  size_t at(uint32_t x, uint32_t y) const { return size_t{y} * (nx + 1) + x; }
+  size_t vertices() const { return size_t{nx + 1} * (ny + 1); }
+  uint32_t span() const { return nx > ny ? nx : ny; }
 };
 
 // A jaw triangle in grid coordinates (x = (u - u0) / cell, y likewise, w in mm),
@@ -88,7 +93,10 @@ Status check_heightfield_arguments(const SweepOptions& o, const HeightfieldOptio
 }
 
 // The grid over the region's shadow (its eight corners in the local frame) and two cells more
-// (three with a shift).
+// (three with a shift): squares of the largest power of two cells a side that is at most an
+// eighth of the longer side (at least 1), as many along u and along v as cover it (so the grid
+// is at most an eighth longer than needed along either side: a square grid over a long
+// region's shadow held mostly columns that meet nothing).
 Status make_grid(const SweepOptions& o, const HeightfieldOptions& ho, Grid* g) {
   SPLINTCORE_RETURN_IF_ERROR(make_frame(o.direction, &g->frame));
   Aabb local;
@@ -101,15 +109,19 @@ Status make_grid(const SweepOptions& o, const HeightfieldOptions& ho, Grid* g) {
         std::fmax(largest, std::fmax(std::fabs(c.x), std::fmax(std::fabs(c.y), std::fabs(c.z))));
   }
   g->cell = o.voxel;
-  const double across = std::fmax(local.hi.x - local.lo.x, local.hi.y - local.lo.y) / o.voxel + 5.0;
-  uint32_t n = 1;
-  while (static_cast<double>(n) < across && n <= kMaxCells) n *= 2;
-  if (n > kMaxCells) {
+  const double across_u = (local.hi.x - local.lo.x) / o.voxel + 5.0;
+  const double across_v = (local.hi.y - local.lo.y) / o.voxel + 5.0;
+  const double across = std::fmax(across_u, across_v);
+  if (!(across <= kMaxCells)) {
     return make_error(StatusCode::kLimitExceeded, "heightfield: the region is ", across,
                       " voxels across, at most ", kMaxCells,
                       " are taken: a larger voxel or a smaller region");
   }
-  g->n = n;
+  uint32_t square = 1;
+  while (2.0 * square <= across / 8) square *= 2;
+  g->square = square;
+  g->nx = square * static_cast<uint32_t>(std::ceil(across_u / square));
+  g->ny = square * static_cast<uint32_t>(std::ceil(across_v / square));
   g->u0 = local.lo.x - (2 + ho.shift_u) * o.voxel;
   g->v0 = local.lo.y - (2 + ho.shift_v) * o.voxel;
   g->top = local.hi.z + 2 * o.voxel + 1.0;
@@ -143,8 +155,8 @@ bool meets_grid(const Grid& g, const GridTriangle& q, double margin) {
   const double xhi = std::fmax(q.x[0], std::fmax(q.x[1], q.x[2]));
   const double ylo = std::fmin(q.y[0], std::fmin(q.y[1], q.y[2]));
   const double yhi = std::fmax(q.y[0], std::fmax(q.y[1], q.y[2]));
-  const double n = static_cast<double>(g.n);
-  return !(xhi + margin < 0 || yhi + margin < 0 || xlo - margin > n || ylo - margin > n);
+  return !(xhi + margin < 0 || yhi + margin < 0 || xlo - margin > static_cast<double>(g.nx) ||
+           ylo - margin > static_cast<double>(g.ny));
 }
 
 // The rest of q from its corners (counter-clockwise); false when its shadow misses the grid.
@@ -161,7 +173,7 @@ bool finish_triangle(const Grid& g, GridTriangle* out) {
   q.gx = q.ill ? 0 : (aw * by - bw * ay) / area2;
   q.gy = q.ill ? 0 : (bw * ax - aw * bx) / area2;
   q.slack = kRelative * (std::fabs(q.w[0]) +
-                         (std::fabs(q.gx) + std::fabs(q.gy)) * (static_cast<double>(g.n) + 2));
+                         (std::fabs(q.gx) + std::fabs(q.gy)) * (static_cast<double>(g.span()) + 2));
   return true;
 }
 
@@ -204,9 +216,9 @@ bool line_range(double lo, double hi, uint32_t n, uint32_t* first, uint32_t* las
 void first_contact(const Grid& g, const GridTriangle& q, double* h, uint64_t* covered) {
   uint32_t x0, x1, y0, y1;
   if (!line_range(std::fmin(q.x[0], std::fmin(q.x[1], q.x[2])),
-                  std::fmax(q.x[0], std::fmax(q.x[1], q.x[2])), g.n, &x0, &x1) ||
+                  std::fmax(q.x[0], std::fmax(q.x[1], q.x[2])), g.nx, &x0, &x1) ||
       !line_range(std::fmin(q.y[0], std::fmin(q.y[1], q.y[2])),
-                  std::fmax(q.y[0], std::fmax(q.y[1], q.y[2])), g.n, &y0, &y1)) {
+                  std::fmax(q.y[0], std::fmax(q.y[1], q.y[2])), g.ny, &y0, &y1)) {
     return;
   }
   for (uint32_t y = y0; y <= y1; ++y) {
@@ -304,8 +316,8 @@ void lower_under(const Grid& g, const GridTriangle& q, const double* h, float* l
   const double xhi = std::fmax(q.x[0], std::fmax(q.x[1], q.x[2]));
   const double ylo = std::fmin(q.y[0], std::fmin(q.y[1], q.y[2]));
   const double yhi = std::fmax(q.y[0], std::fmax(q.y[1], q.y[2]));
-  if (!line_range(std::floor(xlo), std::ceil(xhi) - 1, g.n - 1, &x0, &x1) ||
-      !line_range(std::floor(ylo), std::ceil(yhi) - 1, g.n - 1, &y0, &y1)) {
+  if (!line_range(std::floor(xlo), std::ceil(xhi) - 1, g.nx - 1, &x0, &x1) ||
+      !line_range(std::floor(ylo), std::ceil(yhi) - 1, g.ny - 1, &y0, &y1)) {
     return;
   }
   uint32_t corner[2][3][2];
@@ -502,9 +514,10 @@ inline void raise_to(float* e, size_t at, double value) {
 // diamonds of half size s / 2. E above `limit` is only known to be above it: a child's above
 // it is the diamond's, and its own triangles are then not scanned.
 void axis_diamonds(const Grid& g, const double* h, uint32_t s, int dir, double limit, float* e) {
-  const uint32_t n = g.n, s2 = 2 * s;
-  for (uint32_t p = 0; p <= n; p += s2) {   // the line
-    for (uint32_t r = s; r < n; r += s2) {  // halfway along it
+  const uint32_t s2 = 2 * s;
+  const uint32_t lines = dir == 0 ? g.ny : g.nx, along = dir == 0 ? g.nx : g.ny;
+  for (uint32_t p = 0; p <= lines; p += s2) {   // the line
+    for (uint32_t r = s; r < along; r += s2) {  // halfway along it
       const uint32_t mx = dir == 0 ? r : p, my = dir == 0 ? p : r;
       const size_t m = g.at(mx, my);
       Tri t[2];
@@ -513,7 +526,7 @@ void axis_diamonds(const Grid& g, const double* h, uint32_t s, int dir, double l
         const int64_t ox = dir == 0 ? 0 : side * int64_t{s};
         const int64_t oy = dir == 0 ? side * int64_t{s} : 0;
         const int64_t apx = mx + ox, apy = my + oy;
-        if (apx < 0 || apy < 0 || apx > n || apy > n) continue;
+        if (apx < 0 || apy < 0 || apx > g.nx || apy > g.ny) continue;
         Tri& u = t[sides++];
         u.a[0] = dir == 0 ? mx - s : mx, u.a[1] = dir == 0 ? my : my - s;
         u.c[0] = dir == 0 ? mx + s : mx, u.c[1] = dir == 0 ? my : my + s;
@@ -537,9 +550,9 @@ void axis_diamonds(const Grid& g, const double* h, uint32_t s, int dir, double l
 // (2s i, 2s j), cut along its main diagonal when i + j is even; their children are the axis
 // diamonds of half length s around m. (Above `limit` as axis_diamonds.)
 void diagonal_diamonds(const Grid& g, const double* h, uint32_t s, double limit, float* e) {
-  const uint32_t n = g.n, s2 = 2 * s;
-  for (uint32_t my = s; my < n; my += s2) {
-    for (uint32_t mx = s; mx < n; mx += s2) {
+  const uint32_t s2 = 2 * s;
+  for (uint32_t my = s; my < g.ny; my += s2) {
+    for (uint32_t mx = s; mx < g.nx; mx += s2) {
       const size_t m = g.at(mx, my);
       const uint32_t child[4][2] = {{mx - s, my}, {mx + s, my}, {mx, my - s}, {mx, my + s}};
       for (const auto& c : child) {
@@ -559,25 +572,32 @@ void diagonal_diamonds(const Grid& g, const double* h, uint32_t s, double limit,
   }
 }
 
-// E[m] of every diamond, level by level from the finest.
+// E[m] of every diamond, level by level from the finest up to the squares' own.
 void diamond_errors(const Grid& g, const double* h, double limit, float* e) {
-  std::memset(e, 0, sizeof(float) * size_t{g.n + 1} * (g.n + 1));
-  for (uint32_t s = 1; s < g.n; s *= 2) {
+  std::memset(e, 0, sizeof(float) * g.vertices());
+  for (uint32_t s = 1; s < g.square; s *= 2) {
     axis_diamonds(g, h, s, 0, limit, e);
     axis_diamonds(g, h, s, 1, limit, e);
     diagonal_diamonds(g, h, s, limit, e);
   }
 }
 
-// Walks the network: the two halves of the square, each cut while its diamond's error exceeds
-// `limit`, depth first (the first child first); visit(t) for each triangle kept.
+// The part of the network in the square of g.square cells at (x0, y0): its two halves (cut
+// along the main diagonal when the square's i + j is even), each cut while its diamond's
+// error exceeds `limit`, depth first (the first child first); visit(t) for each triangle kept.
 template <typename Visit>
-void walk_network(const Grid& g, const float* e, double limit, Visit visit) {
-  const uint32_t n = g.n;
+void walk_square(const Grid& g, const float* e, double limit, uint32_t x0, uint32_t y0,
+                 Visit visit) {
+  const uint32_t x1 = x0 + g.square, y1 = y0 + g.square;
   Tri stack[64];
   int top = 0;
-  stack[top++] = Tri{{n, n}, {0, n}, {0, 0}};
-  stack[top++] = Tri{{0, 0}, {n, 0}, {n, n}};
+  if ((((x0 / g.square) + (y0 / g.square)) & 1u) == 0) {
+    stack[top++] = Tri{{x1, y1}, {x0, y1}, {x0, y0}};
+    stack[top++] = Tri{{x0, y0}, {x1, y0}, {x1, y1}};
+  } else {
+    stack[top++] = Tri{{x1, y0}, {x1, y1}, {x0, y1}};
+    stack[top++] = Tri{{x0, y1}, {x0, y0}, {x1, y0}};
+  }
   while (top > 0) {
     const Tri t = stack[--top];
     const uint32_t dx = t.a[0] > t.c[0] ? t.a[0] - t.c[0] : t.c[0] - t.a[0];
@@ -594,11 +614,23 @@ void walk_network(const Grid& g, const float* e, double limit, Visit visit) {
   }
 }
 
+// Walks the network: square by square (along u, then v), the two halves of each, each cut
+// while its diamond's error exceeds `limit`, depth first (the first child first); visit(t) for
+// each triangle kept.
+template <typename Visit>
+void walk_network(const Grid& g, const float* e, double limit, Visit visit) {
+  for (uint32_t y0 = 0; y0 < g.ny; y0 += g.square) {
+    for (uint32_t x0 = 0; x0 < g.nx; x0 += g.square) {
+      walk_square(g, e, limit, x0, y0, visit);
+    }
+  }
+}
+
 // The network as a mesh: vertices numbered by first use, triangles oriented against w.
 Status build_network(const Context& ctx, const Grid& g, const double* h, const float* e,
                      double limit, bool float32, Mesh* out) {
   Arena& arena = *ctx.arena;
-  const size_t count = size_t{g.n + 1} * (g.n + 1);
+  const size_t count = g.vertices();
   uint32_t* id = arena.allocate_array<uint32_t>(count);
   if (id == nullptr) return arena.exhausted_status();
   std::memset(id, 0xff, count * sizeof(uint32_t));
@@ -615,8 +647,8 @@ Status build_network(const Context& ctx, const Grid& g, const double* h, const f
   if (!out->vertices.resize(vertices) || !out->triangles.resize(triangles)) {
     return arena.exhausted_status();
   }
-  for (uint32_t y = 0; y <= g.n; ++y) {
-    for (uint32_t x = 0; x <= g.n; ++x) {
+  for (uint32_t y = 0; y <= g.ny; ++y) {
+    for (uint32_t x = 0; x <= g.nx; ++x) {
       const size_t k = g.at(x, y);
       if (id[k] == UINT32_MAX) continue;
       Vec3 p = to_world(g.frame, Vec3{g.u0 + g.cell * x, g.v0 + g.cell * y, h[k]});
@@ -657,12 +689,12 @@ Status check_jaw_vertices(Span<const Mesh> jaws, const SweepOptions& o) {
 
 }  // namespace
 
-uint64_t sweep_heightfield_bound(uint32_t cells, uint64_t offset_vertices) {
-  const uint64_t side = uint64_t{cells} + 1;
+uint64_t sweep_heightfield_bound(uint32_t cells_u, uint32_t cells_v, uint64_t offset_vertices) {
   const uint64_t offset =
       offset_vertices > 0 ? sizeof(OffsetBall) + 4 * offset_vertices + 2 * Arena::kDefaultAlignment
                           : 0;
-  return side * side * 16 + 3 * Arena::kDefaultAlignment + offset;
+  return (uint64_t{cells_u} + 1) * (uint64_t{cells_v} + 1) * 16 + 3 * Arena::kDefaultAlignment +
+         offset;
 }
 
 Status sweep_heightfield_mesh(const Context& ctx, Span<const Mesh> jaws, const SweepOptions& o,
@@ -679,12 +711,14 @@ Status sweep_heightfield_mesh(const Context& ctx, Span<const Mesh> jaws, const S
   }
   Grid g;
   SPLINTCORE_RETURN_IF_ERROR(make_grid(o, ho, &g));
-  st->cells = g.n;
+  st->cells_u = g.nx;
+  st->cells_v = g.ny;
+  st->square_cells = g.square;
   st->axis_u = g.frame.u, st->axis_v = g.frame.v, st->axis_w = g.frame.w;
   SPLINTCORE_RETURN_IF_ERROR(check_jaw_vertices(jaws, o));
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);
-  const size_t count = size_t{g.n + 1} * (g.n + 1);
+  const size_t count = g.vertices();
   double* h = arena.allocate_array<double>(count);
   float* low = arena.allocate_array<float>(count);
   if (h == nullptr || low == nullptr) return arena.exhausted_status();

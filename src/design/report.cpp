@@ -167,7 +167,11 @@ void write_heightfield_blockout(JsonWriter& w, const BlockoutStats& b, double re
   const HeightfieldStats& h = b.heightfield;
   w.add("method", "heightfield");
   w.add("direction", h.axis_w);
-  w.add("grid_cells", h.cells);
+  w.begin_array("grid_cells");
+  w.add(nullptr, h.cells_u);
+  w.add(nullptr, h.cells_v);
+  w.end_array();
+  w.add("grid_square_cells", h.square_cells);
   w.add("front_triangles", h.triangles_in);
   w.add("clearance_pieces", h.offset_pieces);
   w.add("covered_grid_vertices", h.covered_vertices);

@@ -1811,7 +1811,10 @@ TEST(Heightfield, ConeGivesAnOpenSheetOverTheCapWithinTheTolerance) {
   Mesh sheet;
   HeightfieldStats st;
   SPLINTCORE_ASSERT_OK(sweep_heightfield_mesh(ctx, Span<const Mesh>(&cone, 1), o, ho, &sheet, &st));
-  EXPECT_EQ(st.cells, 256u);              // 14 mm / 0.1 + 5 cells, to the next power of two
+  // 14 mm / 0.1 + 5 = 145 cells: squares of 16 (at most 145 / 8), 10 of them each way.
+  EXPECT_EQ(st.square_cells, 16u);
+  EXPECT_EQ(st.cells_u, 160u);
+  EXPECT_EQ(st.cells_v, 160u);
   EXPECT_EQ(st.triangles_in, 360u);       // the top cap's fan faces against d
   EXPECT_GT(st.covered_vertices, 7000u);  // about pi 50^2
   std::vector<std::array<uint32_t, 2>> edges;
@@ -1961,7 +1964,7 @@ TEST(Heightfield, RunsInItsHighWaterAndFailsCleanlyBelow) {
     HeightfieldOptions ho;
     ho.tolerance = 0.01;
     size_t need = 0, triangles = 0, vertices = 0;
-    uint32_t cells = 0;
+    uint32_t cells_u = 0, cells_v = 0;
     {
       TestArena ta(size_t{256} << 20);
       Context ctx(&ta.arena);
@@ -1972,9 +1975,11 @@ TEST(Heightfield, RunsInItsHighWaterAndFailsCleanlyBelow) {
       need = ta.arena.high_water();
       triangles = out.triangles.size();
       vertices = out.vertices.size();
-      cells = st.cells;
+      cells_u = st.cells_u;
+      cells_v = st.cells_v;
     }
-    const uint64_t grid = sweep_heightfield_bound(cells, offset > 0 ? cone.vertices.size() : 0);
+    const uint64_t grid =
+        sweep_heightfield_bound(cells_u, cells_v, offset > 0 ? cone.vertices.size() : 0);
     const uint64_t bound =
         grid + 24 * uint64_t{vertices} + 12 * uint64_t{triangles} + 4 * Arena::kDefaultAlignment;
     EXPECT_LE(need, bound);

@@ -319,7 +319,7 @@ TEST(DesignPipeline, AutoBlockoutIsExactUnlessItsSweepStopsThenTheHeightField) {
   EXPECT_EQ(exact_blockout_jaws(r), 0u);
   EXPECT_NE(std::strstr(r.blockout_fallback, "undercut unswept"), nullptr) << r.blockout_fallback;
   ASSERT_EQ(r.blockout_jaws, 2u);
-  EXPECT_GT(r.blockout[0].heightfield.cells, 0u);
+  EXPECT_GT(r.blockout[0].heightfield.cells_u, 0u);
   EXPECT_EQ(r.boolean.intersecting_pairs, 0u);  // no jaw subtracted: the height field holds it
   EXPECT_TRUE(r.print.printable);
   for (int j = 0; j < 2; ++j) {
@@ -400,7 +400,7 @@ TEST(DesignPipeline, AutoBlockoutFallsBackOnlyForTheJawItsSweepRefuses) {
   EXPECT_NE(std::strstr(r.blockout_fallback, "undercut unswept"), nullptr) << r.blockout_fallback;
   EXPECT_NE(std::strstr(r.blockout_fallback, "(jaw 0, maxilla)"), nullptr) << r.blockout_fallback;
   EXPECT_EQ(r.boolean.intersecting_pairs, 0u);  // no jaw's own Boolean
-  EXPECT_GT(r.blockout[0].heightfield.cells, 0u);
+  EXPECT_GT(r.blockout[0].heightfield.cells_u, 0u);
   EXPECT_GT(r.blockout[1].exact.walls, 0u);
   EXPECT_TRUE(r.print.printable);
   MeshReport mr;

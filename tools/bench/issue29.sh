@@ -123,6 +123,28 @@ print("median %.3f s (min %.3f), peak arena %d B, %d triangles; swept %s" % (
 PY
 
 echo
+echo "== the same phantom with the height field at 0.05 mm, --memory-cap 64M, whole process (one run)"
+python3 - "$tool" "$work/p272" <<'PY'
+import json, subprocess, sys, time
+tool, d = sys.argv[1], sys.argv[2]
+c = json.load(open(d + "/case.json"))
+c["blockout"] = {"method": "heightfield", "voxel": 0.05}
+c["output"] = {"splint": "splint.stl", "report": "report.json"}
+json.dump(c, open(d + "/hf005.json", "w"))
+t0 = time.perf_counter()
+r = subprocess.run([tool, "design", d + "/hf005.json", "-o", d + "/hf", "--memory-cap", "64M"],
+                   capture_output=True, text=True)
+wall = time.perf_counter() - t0
+if r.returncode != 0:
+    print("%.3f s: %s" % (wall, (r.stderr.strip().splitlines() or ["?"])[-1][:120]))
+else:
+    rep = json.load(open(d + "/hf/report.json"))
+    print("%.3f s, peak arena %d B, %d triangles; grids %s" % (
+        wall, rep["run"]["peak_arena_bytes"], rep["output"]["triangles"],
+        [b["grid_cells"] for b in rep["checks"]["blockout"]]))
+PY
+
+echo
 echo "== the real case, file to file, blockout and spacer at 0.1 mm, --memory-cap 64M"
 if [ ! -d "$realdata" ]; then
   echo "no real data at $realdata: skipped"
