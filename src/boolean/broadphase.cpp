@@ -73,15 +73,8 @@ Status list_cells(Arena& arena, const Mesh& a, const Mesh& b, double reach, Broa
   for (uint32_t t = 0; t < nta && fits; ++t) {
     const Triangle& at = a.triangles[t];
     const Vec3 &p0 = a.vertices[at.v[0]], &p1 = a.vertices[at.v[1]], &p2 = a.vertices[at.v[2]];
-    // triangle_cells keeps to the cells of the box widened by reach.
-    Aabb box;
-    box.add(p0);
-    box.add(p1);
-    box.add(p2);
-    box.lo = box.lo - Vec3{reach, reach, reach};
-    box.hi = box.hi + Vec3{reach, reach, reach};
     uint32_t lo[3], hi[3];
-    bp->cell_range(box, lo, hi);
+    bp->cell_range(reach_box(p0, p1, p2, reach), lo, hi);  // triangle_cells keeps to them
     int w = 2;
     if (range_marked(*bp, marked, lo, hi)) {
       triangle_cells(
