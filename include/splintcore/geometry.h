@@ -119,6 +119,17 @@ struct Aabb {
   }
 };
 
+// The box of triangle abc grown by `reach` along each axis.
+inline Aabb reach_box(const Vec3& a, const Vec3& b, const Vec3& c, double reach) {
+  Aabb box;
+  box.add(a);
+  box.add(b);
+  box.add(c);
+  box.lo = box.lo - Vec3{reach, reach, reach};
+  box.hi = box.hi + Vec3{reach, reach, reach};
+  return box;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Rigid transform: p' = R p + t, R a rotation (orthonormal, det +1).
 

@@ -298,18 +298,6 @@ inline Aabb b_box(const Vec3* vb, const Triangle& tri) {
   return box;
 }
 
-// The box of triangle (p0, p1, p2) widened by `reach` along each axis (triangle_cells keeps to
-// its cells).
-inline Aabb reach_box(const Vec3& p0, const Vec3& p1, const Vec3& p2, double reach) {
-  Aabb box;
-  box.add(p0);
-  box.add(p1);
-  box.add(p2);
-  box.lo = box.lo - Vec3{reach, reach, reach};
-  box.hi = box.hi + Vec3{reach, reach, reach};
-  return box;
-}
-
 // A grid coordinate as a cell index along an axis of `dim` cells (clamped to the grid).
 inline uint32_t grid_cell(double x, uint32_t dim) {
   return x <= 0.0 ? 0u : (x >= dim - 1.0 ? dim - 1 : static_cast<uint32_t>(x));

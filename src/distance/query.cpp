@@ -813,17 +813,6 @@ Aabb triangle_box(const Mesh& mesh, uint32_t t) {
   return tb;
 }
 
-// abc's box grown by reach.
-Aabb reach_box(const Vec3& a, const Vec3& b, const Vec3& c, double reach) {
-  Aabb box;
-  box.add(a);
-  box.add(b);
-  box.add(c);
-  box.lo = box.lo - Vec3{reach, reach, reach};
-  box.hi = box.hi + Vec3{reach, reach, reach};
-  return box;
-}
-
 // Does triangle t of `mesh` come within reach of abc (`box`: reach_box(a, b, c, reach))?
 // triangle_within_reach() once t's box is known to meet abc's reach box.
 bool triangle_within_reach_boxed(const Mesh& mesh, uint32_t t, const Vec3& a, const Vec3& b,
