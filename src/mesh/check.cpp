@@ -7,6 +7,8 @@
 // components of triangles joined through edges (union-find); per shell, Euler's V - E + F =
 // 2 - 2g gives the genus of a closed orientable surface. Duplicate triangles share the edge of
 // their two smallest ids. Degeneracy is decided exactly (collinear3d).
+#include <cmath>
+
 #include "core/union_find.h"
 #include "geometry/orient2d_stage_a.h"
 #include "splintcore/mesh.h"
@@ -90,28 +92,69 @@ Status check_indices(const Mesh& mesh, uint8_t* referenced, MeshReport* r) {
   return Status::ok();
 }
 
+// Two doubles in one SSE2 register (GCC's and clang's vector extension; NEON on AArch64,
+// two scalars where there is neither): each lane rounds as the scalar operation would, and
+// -ffp-contract=off holds for vectors too, so a lane's value has the scalar code's bits.
+typedef double Lanes2 __attribute__((vector_size(16)));
+
 // Degenerate triangles (repeated ids or exactly flat), the area and the volume, with
 // mesh_area()'s and mesh_volume()'s arithmetic in their order (the same bits), r->bounds being
 // set. Writes only those fields of *r: it runs beside the edge pass (check_topology).
+// Two triangles at a time, one per lane (the last one alone in both when the count is odd),
+// summed one after the other in triangle order. Flat: the z component of the area's cross
+// product, (p1 - p0) x (p2 - p0), is orient2d(p1, p2, p0) in x-y as its first stage computes
+// it (orient2d_stage_a.h; a rotation of p0, p1, p2, so the same orientation): when its rounded
+// value is beyond that stage's error bound, the triangle is certainly not flat; otherwise
+// collinear3d decides exactly. (With the two products of opposite signs, or one of them zero,
+// the value is beyond the bound exactly when it is nonzero: the stage's own shortcuts.)
 void check_geometry(const Mesh& mesh, MeshReport* r) {
   const Triangle* tris = mesh.triangles.data();
   const Vec3* verts = mesh.vertices.data();
   const Vec3 c = r->bounds.center();
+  const uint32_t n = static_cast<uint32_t>(r->triangle_count);
+  const Lanes2 cx = {c.x, c.x}, cy = {c.y, c.y}, cz = {c.z, c.z}, zero = {0.0, 0.0};
+  const Lanes2 bound = {detail::kCcwErrBoundA, detail::kCcwErrBoundA};
   double area = 0.0, volume = 0.0;
-  for (uint32_t t = 0; t < r->triangle_count; ++t) {
+  for (uint32_t t = 0; t < n; t += 2) {
+    const uint32_t u = t + 1 < n ? t + 1 : t;
     const uint32_t* v = tris[t].v;
-    const Vec3 &p0 = verts[v[0]], &p1 = verts[v[1]], &p2 = verts[v[2]];
-    // collinear3d's first test is orient2d in x-y: its first stage, inline, decides almost every
-    // triangle (not flat when it shows that orientation nonzero).
-    const detail::Orient2dStageA xy = detail::orient2d_stage_a(p0.x, p0.y, p1.x, p1.y, p2.x, p2.y);
-    const bool degenerate = v[0] == v[1] || v[1] == v[2] || v[2] == v[0] ||
-                            (!(xy.certain && xy.det != 0.0) && collinear3d(p0, p1, p2));
-    if (degenerate) {
-      if (r->degenerate_triangles == 0) r->first_degenerate_triangle = t;
-      ++r->degenerate_triangles;
+    const uint32_t* w = tris[u].v;
+    const Vec3 &a0 = verts[v[0]], &a1 = verts[v[1]], &a2 = verts[v[2]];
+    const Vec3 &b0 = verts[w[0]], &b1 = verts[w[1]], &b2 = verts[w[2]];
+    const Lanes2 x0 = {a0.x, b0.x}, y0 = {a0.y, b0.y}, z0 = {a0.z, b0.z};
+    const Lanes2 x1 = {a1.x, b1.x}, y1 = {a1.y, b1.y}, z1 = {a1.z, b1.z};
+    const Lanes2 x2 = {a2.x, b2.x}, y2 = {a2.y, b2.y}, z2 = {a2.z, b2.z};
+    // Area: 0.5 * length(cross(p1 - p0, p2 - p0)).
+    const Lanes2 ex = x1 - x0, ey = y1 - y0, ez = z1 - z0;
+    const Lanes2 fx = x2 - x0, fy = y2 - y0, fz = z2 - z0;
+    const Lanes2 kx = ey * fz - ez * fy, ky = ez * fx - ex * fz;
+    const Lanes2 left = ex * fy, right = ey * fx;
+    const Lanes2 kz = left - right;
+    const Lanes2 len2 = (kx * kx + ky * ky) + kz * kz;
+    // Volume: dot(p0 - c, cross(p1 - c, p2 - c)).
+    const Lanes2 qx0 = x0 - cx, qy0 = y0 - cy, qz0 = z0 - cz;
+    const Lanes2 qx1 = x1 - cx, qy1 = y1 - cy, qz1 = z1 - cz;
+    const Lanes2 qx2 = x2 - cx, qy2 = y2 - cy, qz2 = z2 - cz;
+    const Lanes2 mx = qy1 * qz2 - qz1 * qy2, my = qz1 * qx2 - qx1 * qz2, mz = qx1 * qy2 - qy1 * qx2;
+    const Lanes2 six = (qx0 * mx + qy0 * my) + qz0 * mz;
+    // Flat: |kz| beyond the bound on |left| + |right| (negation and comparison are exact).
+    const Lanes2 abs_kz = kz < zero ? -kz : kz;
+    const Lanes2 sum = (left < zero ? -left : left) + (right < zero ? -right : right);
+    const Lanes2 err = bound * sum;
+    const bool sure[2] = {abs_kz[0] > err[0], abs_kz[1] > err[1]};
+    const Vec3* p[2][3] = {{&a0, &a1, &a2}, {&b0, &b1, &b2}};
+    const uint32_t* ids[2] = {v, w};
+    for (uint32_t lane = 0; lane < (u != t ? 2u : 1u); ++lane) {
+      const uint32_t* id = ids[lane];
+      const bool degenerate = id[0] == id[1] || id[1] == id[2] || id[2] == id[0] ||
+                              (!sure[lane] && collinear3d(*p[lane][0], *p[lane][1], *p[lane][2]));
+      if (degenerate) {
+        if (r->degenerate_triangles == 0) r->first_degenerate_triangle = t + lane;
+        ++r->degenerate_triangles;
+      }
+      area += 0.5 * std::sqrt(len2[lane]);
+      volume += six[lane];
     }
-    area += 0.5 * length(cross(p1 - p0, p2 - p0));
-    volume += dot(p0 - c, cross(p1 - c, p2 - c));
   }
   r->area = area;
   r->volume = volume / 6.0;
@@ -228,19 +271,26 @@ struct EdgePass {
   }
 
   void run_bucket(uint32_t lo, uint32_t begin, uint32_t end) {
-    bool collecting = false;
+    // The larger ends of a bucket's uses, kept from the first loop for the second when the
+    // bucket is small (as nearly all are: a vertex's sides), else read again.
+    constexpr uint32_t kKept = 32;
+    uint32_t kept_hi[kKept];
+    const bool keep = end - begin <= kKept;
     for (uint32_t i = begin; i < end; ++i) {
       const uint32_t use = a.half[i];
       const uint32_t t = use >> 2;
       const uint32_t from = start_of(use), hi = from ^ end_of(use) ^ lo;  // lo is one end
+      if (keep) kept_hi[i - begin] = hi;
       // Forward: the side runs from the smaller id (always, for a side lo -> lo).
-      a.tally[hi] += from == lo ? 1u : (uint64_t{1} << 32);
-      if (a.tally[hi] != 1u && a.tally[hi] != (uint64_t{1} << 32)) shells->unite(a.last[hi], t);
+      const uint64_t tally = a.tally[hi] + (from == lo ? 1u : (uint64_t{1} << 32));
+      a.tally[hi] = tally;
+      if (tally != 1u && tally != (uint64_t{1} << 32)) shells->unite(a.last[hi], t);
       a.last[hi] = t;
     }
+    bool collecting = false;
     for (uint32_t i = begin; i < end; ++i) {
       const uint32_t use = a.half[i];
-      const uint32_t hi = start_of(use) ^ end_of(use) ^ lo;
+      const uint32_t hi = keep ? kept_hi[i - begin] : start_of(use) ^ end_of(use) ^ lo;
       const uint64_t count = a.tally[hi];
       if (count == 0) continue;  // a later use of an edge already read
       if (count != kCollecting) {

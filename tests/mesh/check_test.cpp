@@ -150,9 +150,11 @@ TEST(CheckMesh, NonManifoldEdgeDegenerateAndDuplicateTriangles) {
   EXPECT_EQ(r.first_duplicate_triangle, 14u);
 }
 
-// The check decides most triangles with an inline copy of orient2d's filter before collinear3d:
-// the degenerate count must be collinear3d's on triangles flat in x-y but not in 3D (vertical),
-// nearly flat ones (filter undecided), exactly collinear ones off the axes, and random ones.
+// The check decides most triangles with orient2d's first stage (on the area's cross product,
+// two triangles at a time) before collinear3d: the degenerate count must be collinear3d's on
+// triangles flat in x-y but not in 3D (vertical), nearly flat ones (filter undecided), exactly
+// collinear ones off the axes, and random ones; an odd count (the last triangle alone); the
+// area and volume the bits of mesh_area() and mesh_volume().
 TEST(CheckMesh, DegenerateCountIsCollinear3dOnEveryTriangle) {
   TestArena t;
   std::mt19937 rng(29);
@@ -160,7 +162,7 @@ TEST(CheckMesh, DegenerateCountIsCollinear3dOnEveryTriangle) {
   Mesh mesh(&t.arena);
   std::vector<Vec3> v;
   std::vector<Triangle> tris;
-  for (uint32_t i = 0; i < 4000; ++i) {
+  for (uint32_t i = 0; i < 4001; ++i) {
     const Vec3 a{coord(rng), coord(rng), coord(rng)};
     Vec3 b{coord(rng), coord(rng), coord(rng)};
     Vec3 c{coord(rng), coord(rng), coord(rng)};
@@ -205,6 +207,14 @@ TEST(CheckMesh, DegenerateCountIsCollinear3dOnEveryTriangle) {
   ASSERT_TRUE(check_mesh(ctx, mesh, &r).is_ok());
   EXPECT_EQ(r.degenerate_triangles, expected);
   EXPECT_EQ(r.first_degenerate_triangle, first);
+  EXPECT_EQ(r.area, mesh_area(mesh));
+  EXPECT_EQ(r.volume, mesh_volume(mesh));
+  // The last triangle (alone in its pair) counts: made flat, it is the last one found.
+  mesh.vertices[mesh.triangles[4000].v[2]] = mesh.vertices[mesh.triangles[4000].v[0]];
+  MeshReport flat;
+  ASSERT_TRUE(check_mesh(ctx, mesh, &flat).is_ok());
+  EXPECT_EQ(flat.degenerate_triangles,
+            expected + (collinear3d(v[12000], v[12001], v[12002]) ? 0u : 1u));
 }
 
 TEST(CheckMesh, TwoShellsAndOutOfRangeIndex) {
