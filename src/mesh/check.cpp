@@ -270,57 +270,79 @@ struct EdgePass {
     }
   }
 
-  void run_bucket(uint32_t lo, uint32_t begin, uint32_t end) {
+  // One bucket; returns how many of its edges have one use each way (the common edge, handled
+  // here; classify() counts the others). The members it uses are copied into locals first: a
+  // store to first_use (bytes) could alias any member, which would then be read again after it.
+  uint64_t run_bucket(uint32_t lo, uint32_t begin, uint32_t end) {
+    const Triangle* const tr = tris;
+    const uint32_t* const half = a.half;
+    uint64_t* const tallies = a.tally;
+    uint32_t* const lasts = a.last;
+    uint8_t* const first = first_use;
     // The larger ends of a bucket's uses, kept from the first loop for the second when the
     // bucket is small (as nearly all are: a vertex's sides), else read again.
     constexpr uint32_t kKept = 32;
     uint32_t kept_hi[kKept];
     const bool keep = end - begin <= kKept;
     for (uint32_t i = begin; i < end; ++i) {
-      const uint32_t use = a.half[i];
+      const uint32_t use = half[i];
       const uint32_t t = use >> 2;
       const uint32_t from = start_of(use), hi = from ^ end_of(use) ^ lo;  // lo is one end
       if (keep) kept_hi[i - begin] = hi;
       // Forward: the side runs from the smaller id (always, for a side lo -> lo).
-      const uint64_t tally = a.tally[hi] + (from == lo ? 1u : (uint64_t{1} << 32));
-      a.tally[hi] = tally;
-      if (tally != 1u && tally != (uint64_t{1} << 32)) shells->unite(a.last[hi], t);
-      a.last[hi] = t;
+      const uint64_t tally = tallies[hi] + (from == lo ? 1u : (uint64_t{1} << 32));
+      tallies[hi] = tally;
+      if (tally != 1u && tally != (uint64_t{1} << 32)) shells->unite(lasts[hi], t);
+      lasts[hi] = t;
     }
+    constexpr uint64_t kOneEach = (uint64_t{1} << 32) | 1u;
+    uint64_t paired = 0;
     bool collecting = false;
     for (uint32_t i = begin; i < end; ++i) {
-      const uint32_t use = a.half[i];
+      const uint32_t use = half[i];
       const uint32_t hi = keep ? kept_hi[i - begin] : start_of(use) ^ end_of(use) ^ lo;
-      const uint64_t count = a.tally[hi];
+      const uint64_t count = tallies[hi];
       if (count == 0) continue;  // a later use of an edge already read
+      if (count == kOneEach) {   // classify's last case, inline
+        const uint32_t t = use >> 2, other = lasts[hi];
+        first[t] = static_cast<uint8_t>(first[t] | (1u << (use & 3u)));
+        ++paired;
+        if (third(tr[t].v, lo, hi) == third(tr[other].v, lo, hi)) pair_duplicate(t, other, lo, hi);
+        tallies[hi] = 0;
+        continue;
+      }
       if (count != kCollecting) {
         classify(lo, hi, use, count);
         const uint64_t uses = (count & 0xffffffffu) + (count >> 32);
         if (uses <= 2) {
-          a.tally[hi] = 0;
+          tallies[hi] = 0;
           continue;
         }
-        a.tally[hi] = kCollecting;
+        tallies[hi] = kCollecting;
         collecting = true;
       }
       if (candidate(use >> 2, use & 3u, lo, hi)) collected[collected_count++] = use >> 2;
     }
-    if (!collecting) return;
-    for (uint32_t i = begin; i < end; ++i) {
-      a.tally[start_of(a.half[i]) ^ end_of(a.half[i]) ^ lo] = 0;
+    if (collecting) {
+      for (uint32_t i = begin; i < end; ++i) {
+        tallies[start_of(half[i]) ^ end_of(half[i]) ^ lo] = 0;
+      }
     }
+    return paired;
   }
 
   void run() {
     bucket();
     std::memset(a.tally, 0, size_t{vertex_count} * sizeof(uint64_t));
     std::memset(first_use, 0, tri_count);
+    uint64_t paired = 0;
     uint32_t begin = 0;
     for (uint32_t lo = 0; lo < vertex_count; ++lo) {
       const uint32_t end = a.start[lo];  // the fill left the bucket's end here
-      if (end > begin) run_bucket(lo, begin, end);
+      if (end > begin) paired += run_bucket(lo, begin, end);
       begin = end;
     }
+    r->edge_count += paired;
   }
 };
 
