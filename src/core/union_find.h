@@ -9,13 +9,23 @@ namespace splintcore {
 
 class UnionFind {
  public:
-  // Takes n entries from the arena; false when it is exhausted.
+  // Takes n entries from the arena, every one a set of its own; false when it is exhausted.
   [[nodiscard]] bool init(Arena& arena, uint32_t n) {
+    if (!allocate(arena, n)) return false;
+    reset();
+    return true;
+  }
+  // Takes n entries from the arena without setting them (reset() does, before any other use):
+  // for a union-find that is rarely needed, whose memory is then never touched.
+  [[nodiscard]] bool allocate(Arena& arena, uint32_t n) {
     parent_ = arena.allocate_array<uint32_t>(n);
     if (parent_ == nullptr && n > 0) return false;
-    for (uint32_t i = 0; i < n; ++i) parent_[i] = i;
     size_ = n;
     return true;
+  }
+  // Every entry a set of its own.
+  void reset() {
+    for (uint32_t i = 0; i < size_; ++i) parent_[i] = i;
   }
   uint32_t find(uint32_t x) {
     SPLINTCORE_ASSERT(x < size_);

@@ -180,7 +180,8 @@ struct EdgePass {
   uint32_t* collected;
   uint32_t collected_count = 0;
   MeshReport* r;
-  UnionFind* border = nullptr;   // per vertex: the components of the boundary edges
+  UnionFind* border = nullptr;   // per vertex: the components of the boundary edges (reset
+                                 // at the first one)
   uint8_t* on_border = nullptr;  // per vertex: bit 1 set when a boundary edge ends there
 
   // A use's two ends (side k of triangle t runs from v[k] to v[k + 1 mod 3]).
@@ -254,6 +255,7 @@ struct EdgePass {
     ++r->edge_count;
     if (uses == 1) {
       note(&r->first_boundary_edge, r->boundary_edges, lo, hi, t);
+      if (r->boundary_edges == 0) border->reset();  // (untouched until an edge is open)
       ++r->boundary_edges;
       border->unite(lo, hi);
       on_border[lo] |= 2u;
@@ -478,8 +480,8 @@ Status check_topology(const Context& ctx, const Mesh& mesh, uint8_t* on_border, 
   if ((first_use == nullptr || collected == nullptr) && tri_count > 0) {
     return arena.exhausted_status();
   }
-  UnionFind border;
-  if (!border.init(arena, nv)) return arena.exhausted_status();
+  UnionFind border;  // set up (and its memory touched) at the first boundary edge
+  if (!border.allocate(arena, nv)) return arena.exhausted_status();
   uint32_t collected_count = 0;
   {
     ArenaScope scope(arena);
