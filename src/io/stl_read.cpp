@@ -527,15 +527,25 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
   const Arena::Marker above = arena.mark();
   Reader in;
   in.source = &source;
-  in.cap = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
   ExactWelder welder;
   if (!welder.init(arena, declared)) return arena.exhausted_status();
-  in.buf = arena.allocate_array<uint8_t>(in.cap);
-  if (in.buf == nullptr) return arena.exhausted_status();
   std::memcpy(info->header, head, 80);
   info->header[80] = '\0';
-  std::memcpy(in.buf, head + kBinaryHeaderBytes, got - kBinaryHeaderBytes);
-  in.end = got - kBinaryHeaderBytes;
+  // The records: where a memory source holds them (no copy, no buffer), else read into the
+  // buffer chunk by chunk.
+  const uint8_t* records = meshio::take_memory_bytes(source);
+  if (records != nullptr) {
+    records += kBinaryHeaderBytes;
+    in.cap = in.end = static_cast<size_t>(kBinaryRecordBytes * declared);
+    in.at_eof = true;  // (so nothing is ever read into `in`)
+  } else {
+    in.cap = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
+    in.buf = arena.allocate_array<uint8_t>(in.cap);
+    if (in.buf == nullptr) return arena.exhausted_status();
+    std::memcpy(in.buf, head + kBinaryHeaderBytes, got - kBinaryHeaderBytes);
+    in.end = got - kBinaryHeaderBytes;
+    records = in.buf;
+  }
   in.base = kBinaryHeaderBytes;
   const uint32_t limit = abs_limit_bits(options.max_abs_coordinate);
   const bool crop = !options.keep.empty();
@@ -551,7 +561,7 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
     uint64_t run = in.available() / kBinaryRecordBytes;
     run = run < declared - t ? run : declared - t;
     run = run < 0x10000 - (t & 0xffff) ? run : 0x10000 - (t & 0xffff);
-    const uint8_t* record = in.buf + in.pos;
+    const uint8_t* record = records + in.pos;
     for (uint64_t i = 0; i < run; ++i, record += kBinaryRecordBytes) {
       // Each coordinate loaded where it is used, never copied into an array (GCC makes such a
       // copy a `rep movs`, whose start-up cost was a third of this loop's time).

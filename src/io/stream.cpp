@@ -1,4 +1,5 @@
 // Byte sources and sinks over memory, and a hashing sink.
+#include "io/mesh_text.h"
 #include "splintcore/io.h"
 
 namespace splintcore {
@@ -46,6 +47,16 @@ ByteSource memory_source(MemorySource* state, const char* name) {
   source.name = name;
   return source;
 }
+
+namespace meshio {
+const uint8_t* take_memory_bytes(const ByteSource& source) {
+  if (source.read != memory_read) return nullptr;
+  MemorySource* s = static_cast<MemorySource*>(source.user);
+  if (s->max_chunk != 0 || s->size != source.size || s->position > s->size) return nullptr;
+  s->position = s->size;
+  return s->data;
+}
+}  // namespace meshio
 
 ByteSink memory_sink(MemorySink* state, const char* name) {
   ByteSink sink;

@@ -375,6 +375,58 @@ TEST(StlCoverage, WeldedBinaryPath) {
   EXPECT_GT(read_stl_mesh_bound(10, StlReadOptions{}), 0u);
 }
 
+// A sized binary STL from a memory source is welded where its bytes lie (no read buffer): the
+// same mesh as through the read buffer (a source giving small chunks, and a wrapper source,
+// which must never be taken for the memory it wraps), the source read to its end, and the
+// buffer's memory not used.
+TEST(StlCoverage, WeldedBinaryInPlaceAndThroughTheBufferAgree) {
+  std::vector<SoupTriangle> soup;
+  for (int i = 0; i < 300; ++i) {  // a strip: each triangle shares two corners with the last
+    const float x = static_cast<float>(i / 2), y = static_cast<float>(i % 2);
+    soup.push_back(SoupTriangle{{{x, y, 0}, {x + 1, 0, 0.5f}, {x, 1 - y, 0.25f * x}}});
+  }
+  const std::vector<uint8_t> bytes = test::binary_stl(soup);
+  struct Wrapper {
+    ByteSource inner;
+    static int64_t read(void* user, uint8_t* buffer, size_t capacity) {
+      const ByteSource& in = static_cast<Wrapper*>(user)->inner;
+      return in.read(in.user, buffer, capacity);
+    }
+  };
+  size_t peak[3] = {};
+  std::vector<Vec3> vertices[3];
+  std::vector<Triangle> triangles[3];
+  for (int how = 0; how < 3; ++how) {
+    SCOPED_TRACE(how);
+    test::TestArena t(size_t{1} << 20);
+    MemorySource ms{bytes.data(), bytes.size(), 0, how == 1 ? size_t{7} : size_t{0}};
+    ByteSource source = memory_source(&ms, "strip.stl");
+    Wrapper w{source};
+    if (how == 2) {
+      source.read = &Wrapper::read;  // a copy with its own read, as wrappers make them
+      source.user = &w;
+    }
+    Mesh m(&t.arena);
+    SPLINTCORE_ASSERT_OK(read_stl_mesh(Context(&t.arena), source, StlReadOptions{}, &m, nullptr));
+    EXPECT_EQ(ms.position, bytes.size());
+    peak[how] = t.arena.high_water();
+    vertices[how].assign(m.vertices.begin(), m.vertices.end());
+    triangles[how].assign(m.triangles.begin(), m.triangles.end());
+  }
+  EXPECT_EQ(triangles[0].size(), soup.size());
+  for (int how = 1; how < 3; ++how) {
+    ASSERT_EQ(vertices[how].size(), vertices[0].size());
+    ASSERT_EQ(triangles[how].size(), triangles[0].size());
+    for (size_t i = 0; i < vertices[0].size(); ++i) {
+      EXPECT_EQ(std::memcmp(&vertices[how][i], &vertices[0][i], sizeof(Vec3)), 0) << i;
+    }
+    for (size_t i = 0; i < triangles[0].size(); ++i) {
+      EXPECT_EQ(std::memcmp(&triangles[how][i], &triangles[0][i], sizeof(Triangle)), 0) << i;
+    }
+    EXPECT_GE(peak[how], peak[0] + 4096) << how;  // the read buffer, at least 4096 bytes
+  }
+}
+
 // A bad coordinate in any corner of a triangle past the welded reader's prefetch distance (and
 // in the first ones): the welded path (read_stl_mesh, size known) and the soup path (read_stl)
 // give the same code, message and byte offset, the offset of the corner's first coordinate.
@@ -393,17 +445,19 @@ TEST(StlCoverage, WeldedBinaryPathLocatesBadCorners) {
           broken[static_cast<size_t>(t)].p[k][a] = bad;
           const std::vector<uint8_t> bytes = test::binary_stl(broken);
           const Read r = read(std::string(bytes.begin(), bytes.end()));
-          test::TestArena arena(size_t{1} << 20);
-          MemorySource ms{bytes.data(), bytes.size(), 0, 0};
-          Mesh m(&arena.arena);
-          const Status s = read_stl_mesh(Context(&arena.arena), memory_source(&ms, "t.stl"),
-                                         StlReadOptions{}, &m, nullptr);
-          EXPECT_FALSE(s.is_ok());
-          EXPECT_EQ(s.code(), r.status.code()) << test::format(s);
-          EXPECT_STREQ(s.message(), r.status.message());
-          EXPECT_EQ(s.byte_offset(), 84u + 50u * static_cast<uint64_t>(t) + 12u + 12u * k);
-          EXPECT_EQ(r.status.byte_offset(), s.byte_offset());
-          EXPECT_TRUE(m.triangles.empty() && m.vertices.empty());
+          for (const size_t chunk : {size_t{0}, size_t{13}}) {  // in place; through the buffer
+            test::TestArena arena(size_t{1} << 20);
+            MemorySource ms{bytes.data(), bytes.size(), 0, chunk};
+            Mesh m(&arena.arena);
+            const Status s = read_stl_mesh(Context(&arena.arena), memory_source(&ms, "t.stl"),
+                                           StlReadOptions{}, &m, nullptr);
+            EXPECT_FALSE(s.is_ok());
+            EXPECT_EQ(s.code(), r.status.code()) << test::format(s);
+            EXPECT_STREQ(s.message(), r.status.message());
+            EXPECT_EQ(s.byte_offset(), 84u + 50u * static_cast<uint64_t>(t) + 12u + 12u * k);
+            EXPECT_EQ(r.status.byte_offset(), s.byte_offset());
+            EXPECT_TRUE(m.triangles.empty() && m.vertices.empty());
+          }
         }
       }
     }
