@@ -354,24 +354,13 @@ struct EdgePass {
 // orientable surface. A vertex is stamped with the shell that first uses it; a vertex used by
 // other shells too (rare: shells touching at a vertex) gives (vertex, shell) pairs, sorted to
 // count each once.
-Status count_shells(Arena& arena, const Mesh& mesh, const uint8_t* first_use, UnionFind* shells,
-                    MeshReport* r) {
-  ArenaScope scope(arena);
+// count_shells' counts with several shells: per triangle, its shell's faces, edges and
+// first-seen vertices; then the (vertex, shell) pairs of vertices in several shells.
+Status count_per_shell(Arena& arena, const Mesh& mesh, const uint8_t* first_use, UnionFind* shells,
+                       const uint32_t* shell_of, uint32_t* stamp, uint32_t* counts) {
   const Triangle* tris = mesh.triangles.data();
-  const uint32_t tri_count = static_cast<uint32_t>(r->triangle_count);
-  const uint32_t nv = static_cast<uint32_t>(r->vertex_count);
-  uint32_t* shell_of = arena.allocate_array<uint32_t>(tri_count);
-  uint32_t* stamp = arena.allocate_array<uint32_t>(nv);
-  if ((shell_of == nullptr && tri_count > 0) || (stamp == nullptr && nv > 0)) {
-    return arena.exhausted_status();
-  }
-  uint32_t shell_count = 0;
-  for (uint32_t t = 0; t < tri_count; ++t) {
-    if (shells->is_root(t)) shell_of[t] = shell_count++;
-  }
-  uint32_t* counts = arena.allocate_array<uint32_t>(size_t{3} * shell_count);
-  if (counts == nullptr && shell_count > 0) return arena.exhausted_status();
-  if (shell_count > 0) std::memset(counts, 0, size_t{3} * shell_count * sizeof(uint32_t));
+  const uint32_t tri_count = static_cast<uint32_t>(mesh.triangles.size());
+  const uint32_t nv = static_cast<uint32_t>(mesh.vertices.size());
   if (nv > 0) std::memset(stamp, 0xff, size_t{nv} * sizeof(uint32_t));
   uint64_t others = 0;
   for (uint32_t t = 0; t < tri_count; ++t) {
@@ -388,21 +377,50 @@ Status count_shells(Arena& arena, const Mesh& mesh, const uint8_t* first_use, Un
       }
     }
   }
-  if (others > 0) {
-    uint64_t* pairs = arena.allocate_array<uint64_t>(static_cast<size_t>(others));
-    uint64_t* scratch = arena.allocate_array<uint64_t>(static_cast<size_t>(others));
-    if (pairs == nullptr || scratch == nullptr) return arena.exhausted_status();
-    size_t n = 0;
-    for (uint32_t t = 0; t < tri_count; ++t) {
-      const uint32_t root = shell_of[shells->find(t)];
-      for (uint32_t v : tris[t].v) {
-        if (stamp[v] != root) pairs[n++] = (uint64_t{v} << 32) | root;
-      }
+  if (others == 0) return Status::ok();
+  uint64_t* pairs = arena.allocate_array<uint64_t>(static_cast<size_t>(others));
+  uint64_t* scratch = arena.allocate_array<uint64_t>(static_cast<size_t>(others));
+  if (pairs == nullptr || scratch == nullptr) return arena.exhausted_status();
+  size_t n = 0;
+  for (uint32_t t = 0; t < tri_count; ++t) {
+    const uint32_t root = shell_of[shells->find(t)];
+    for (uint32_t v : tris[t].v) {
+      if (stamp[v] != root) pairs[n++] = (uint64_t{v} << 32) | root;
     }
-    radix_sort_bits(Span<uint64_t>(pairs, n), Span<uint64_t>(scratch, n), 0, 64);
-    for (size_t i = 0; i < n; ++i) {
-      if (i == 0 || pairs[i] != pairs[i - 1]) ++counts[3 * (pairs[i] & 0xffffffffu)];
-    }
+  }
+  radix_sort_bits(Span<uint64_t>(pairs, n), Span<uint64_t>(scratch, n), 0, 64);
+  for (size_t i = 0; i < n; ++i) {
+    if (i == 0 || pairs[i] != pairs[i - 1]) ++counts[3 * (pairs[i] & 0xffffffffu)];
+  }
+  return Status::ok();
+}
+
+Status count_shells(Arena& arena, const Mesh& mesh, const uint8_t* first_use, UnionFind* shells,
+                    MeshReport* r) {
+  ArenaScope scope(arena);
+  const uint32_t tri_count = static_cast<uint32_t>(r->triangle_count);
+  const uint32_t nv = static_cast<uint32_t>(r->vertex_count);
+  uint32_t* shell_of = arena.allocate_array<uint32_t>(tri_count);
+  uint32_t* stamp = arena.allocate_array<uint32_t>(nv);
+  if ((shell_of == nullptr && tri_count > 0) || (stamp == nullptr && nv > 0)) {
+    return arena.exhausted_status();
+  }
+  uint32_t shell_count = 0;
+  for (uint32_t t = 0; t < tri_count; ++t) {
+    if (shells->is_root(t)) shell_of[t] = shell_count++;
+  }
+  uint32_t* counts = arena.allocate_array<uint32_t>(size_t{3} * shell_count);
+  if (counts == nullptr && shell_count > 0) return arena.exhausted_status();
+  if (shell_count == 1) {
+    // One shell (the usual case): its counts are the mesh's, every referenced vertex, every
+    // edge and every triangle, with no pass over the triangles.
+    counts[0] = static_cast<uint32_t>(r->vertex_count - r->unreferenced_vertices);
+    counts[1] = static_cast<uint32_t>(r->edge_count);
+    counts[2] = tri_count;
+  } else if (shell_count > 1) {
+    std::memset(counts, 0, size_t{3} * shell_count * sizeof(uint32_t));
+    SPLINTCORE_RETURN_IF_ERROR(
+        count_per_shell(arena, mesh, first_use, shells, shell_of, stamp, counts));
   }
   bool genus_defined = r->boundary_edges == 0 && r->nonmanifold_edges == 0 &&
                        r->orientation_conflicts == 0 && tri_count > 0;
