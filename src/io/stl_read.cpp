@@ -514,10 +514,31 @@ Status read_head(const ByteSource& source, uint8_t* head, size_t cap, size_t* go
   return Status::ok();
 }
 
-// The binary STL welded straight from the read buffer: the triangles, the weld's positions
-// and table, the read buffer; no soup. The vertices usually stay where they were reserved.
-// Only for a source whose size confirms the header's count (read_stl_mesh checks), so the
-// errors left are the ones read_binary gives past its header, with the same text.
+// Where read_binary_welded finds the records (the first at `in->base`, 84): where a memory
+// source holds them (no copy, no buffer), else in a buffer `in` reads them into chunk by chunk,
+// the head's bytes past the header first. Null when the arena has no room for the buffer.
+const uint8_t* binary_records(Arena& arena, const uint8_t* head, size_t got, uint64_t declared,
+                              const StlReadOptions& options, Reader* in) {
+  in->base = kBinaryHeaderBytes;
+  const uint8_t* whole = meshio::take_memory_bytes(*in->source);
+  if (whole != nullptr) {
+    in->cap = in->end = static_cast<size_t>(kBinaryRecordBytes * declared);
+    in->at_eof = true;  // (so nothing is ever read into `in`)
+    return whole + kBinaryHeaderBytes;
+  }
+  in->cap = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
+  in->buf = arena.allocate_array<uint8_t>(in->cap);
+  if (in->buf == nullptr) return nullptr;
+  std::memcpy(in->buf, head + kBinaryHeaderBytes, got - kBinaryHeaderBytes);
+  in->end = got - kBinaryHeaderBytes;
+  return in->buf;
+}
+
+// The binary STL welded straight from its records (where a memory source holds them, or the
+// read buffer): the triangles, the weld's positions and table, the read buffer; no soup. The
+// vertices usually stay where they were reserved. Only for a source whose size confirms the
+// header's count (read_stl_mesh checks), so the errors left are the ones read_binary gives
+// past its header, with the same text.
 Status read_binary_welded(const Context& ctx, const ByteSource& source, const uint8_t* head,
                           size_t got, const StlReadOptions& options, Mesh* out, StlInfo* info) {
   Arena& arena = *ctx.arena;
@@ -531,22 +552,8 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
   if (!welder.init(arena, declared)) return arena.exhausted_status();
   std::memcpy(info->header, head, 80);
   info->header[80] = '\0';
-  // The records: where a memory source holds them (no copy, no buffer), else read into the
-  // buffer chunk by chunk.
-  const uint8_t* records = meshio::take_memory_bytes(source);
-  if (records != nullptr) {
-    records += kBinaryHeaderBytes;
-    in.cap = in.end = static_cast<size_t>(kBinaryRecordBytes * declared);
-    in.at_eof = true;  // (so nothing is ever read into `in`)
-  } else {
-    in.cap = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
-    in.buf = arena.allocate_array<uint8_t>(in.cap);
-    if (in.buf == nullptr) return arena.exhausted_status();
-    std::memcpy(in.buf, head + kBinaryHeaderBytes, got - kBinaryHeaderBytes);
-    in.end = got - kBinaryHeaderBytes;
-    records = in.buf;
-  }
-  in.base = kBinaryHeaderBytes;
+  const uint8_t* records = binary_records(arena, head, got, declared, options, &in);
+  if (records == nullptr) return arena.exhausted_status();
   const uint32_t limit = abs_limit_bits(options.max_abs_coordinate);
   const bool crop = !options.keep.empty();
   size_t kept = 0;                // triangles in the mesh (all of them without a crop)
