@@ -91,6 +91,14 @@ bool ExactWelder::init(Arena& arena, uint64_t triangle_count) {
   return true;
 }
 
+uint32_t ExactWelder::add_vertex(double x, double y, double z, uint32_t tag, uint64_t slot) {
+  const uint32_t id = static_cast<uint32_t>(positions_.size());
+  if (!positions_.push_back(Vec3{x + 0.0, y + 0.0, z + 0.0})) return kFull;
+  table_[slot] = tag | (id + 1);
+  if (positions_.size() > grow_at_) grow();
+  return id;
+}
+
 void ExactWelder::grow() {
   const uint64_t slots = 2 * (mask_ + 1);
   mask_ = slots - 1;
