@@ -579,10 +579,14 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
         ahead_out[slot] =
             crop && options.keep.beyond_one_side(record_corner(c, 0), record_corner(c, 1),
                                                  record_corner(c, 2));
-        uint64_t* h = ahead[slot];
-        for (int k = 0; k < 3 && !ahead_out[slot]; ++k, c += 12) {
-          h[k] = ExactWelder::hash_bits(bits_at(c), bits_at(c + 4), bits_at(c + 8));
-          __builtin_prefetch(welder.first_slot(h[k]));
+        if (!ahead_out[slot]) {
+          uint64_t* h = ahead[slot];
+          h[0] = ExactWelder::hash_bits(bits_at(c), bits_at(c + 4), bits_at(c + 8));
+          h[1] = ExactWelder::hash_bits(bits_at(c + 12), bits_at(c + 16), bits_at(c + 20));
+          h[2] = ExactWelder::hash_bits(bits_at(c + 24), bits_at(c + 28), bits_at(c + 32));
+          __builtin_prefetch(welder.first_slot(h[0]));
+          __builtin_prefetch(welder.first_slot(h[1]));
+          __builtin_prefetch(welder.first_slot(h[2]));
         }
       }
       const uint8_t* corners = record + 12;
