@@ -535,12 +535,24 @@ sc_status sc_mesh_read_stl(sc_context* ctx, const sc_source* source,
                                   "sc_mesh_read_stl: chunk_bytes must be > 0"));
     }
   }
-  const ByteSource src = core_source(source);
+  ByteSource src = core_source(source);
+  // An sc_memory_source is read as the library's memory_source (a sized binary STL is then
+  // welded where it lies, with no copy); its position is left where reading left it.
+  sc_memory_source_state* state =
+      source->read == &memory_read ? static_cast<sc_memory_source_state*>(source->user) : nullptr;
+  MemorySource memory;
+  if (state != nullptr) {
+    memory = MemorySource{state->data, state->size, state->position, 0};
+    src = memory_source(&memory, src.name);
+    src.size = source->size;
+  }
   const Context core = core_context(ctx);
-  return new_mesh(ctx, out, [&](Mesh* m) {
+  const sc_status st = new_mesh(ctx, out, [&](Mesh* m) {
     m->bind(&ctx->arena);
     return read_stl_mesh(core, src, o, m, nullptr);
   });
+  if (state != nullptr) state->position = memory.position;
+  return st;
 }
 
 sc_status sc_mesh_from_arrays(sc_context* ctx, const double* vertices, uint32_t vertex_count,

@@ -81,12 +81,13 @@ struct PeekSource {
   }
 };
 
-// When `source` is a memory_source() (src/io/stream.cpp) that gives whole chunks (max_chunk 0)
-// and holds all source.size bytes: those bytes from the start, where they are, and the source
-// marked read to its end (a reader then parses them in place, with no copy). Otherwise null,
-// the source untouched: a source made by copying one and replacing its read (a wrapper) is
-// never taken for the memory it wraps. For a reader that takes the whole source.
-const uint8_t* take_memory_bytes(const ByteSource& source);
+// When `source` is a memory_source() (src/io/stream.cpp) that gives whole chunks (max_chunk 0),
+// holds all source.size bytes and has been read from its start for `consumed` bytes so far:
+// those bytes from the start, where they are, and the source marked read to its end (a reader
+// then parses them in place, with no copy). Otherwise null, the source untouched: a source
+// made by copying one and replacing its read (a wrapper) is never taken for the memory it
+// wraps. For a reader that takes the whole source.
+const uint8_t* take_memory_bytes(const ByteSource& source, uint64_t consumed);
 
 inline Status located(Status s, const ByteSource& source) {
   if (!s.is_ok() && source.name != nullptr && s.file()[0] == '\0') s.in_file(source.name);

@@ -520,7 +520,7 @@ Status read_head(const ByteSource& source, uint8_t* head, size_t cap, size_t* go
 const uint8_t* binary_records(Arena& arena, const uint8_t* head, size_t got, uint64_t declared,
                               const StlReadOptions& options, Reader* in) {
   in->base = kBinaryHeaderBytes;
-  const uint8_t* whole = meshio::take_memory_bytes(*in->source);
+  const uint8_t* whole = meshio::take_memory_bytes(*in->source, got);
   if (whole != nullptr) {
     in->cap = in->end = static_cast<size_t>(kBinaryRecordBytes * declared);
     in->at_eof = true;  // (so nothing is ever read into `in`)

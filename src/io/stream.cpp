@@ -49,10 +49,13 @@ ByteSource memory_source(MemorySource* state, const char* name) {
 }
 
 namespace meshio {
-const uint8_t* take_memory_bytes(const ByteSource& source) {
+const uint8_t* take_memory_bytes(const ByteSource& source, uint64_t consumed) {
   if (source.read != memory_read) return nullptr;
   MemorySource* s = static_cast<MemorySource*>(source.user);
-  if (s->max_chunk != 0 || s->size != source.size || s->position > s->size) return nullptr;
+  if (s->max_chunk != 0 || s->size != source.size || s->position != consumed ||
+      consumed > s->size) {
+    return nullptr;
+  }
   s->position = s->size;
   return s->data;
 }

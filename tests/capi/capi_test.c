@@ -218,6 +218,12 @@ static void test_arena_exhaustion(const Bytes* torus) {
   }
 }
 
+/* A C source over another that hands out at most 37 bytes a read (not a memory source). */
+static int64_t short_read(void* user, uint8_t* buffer, size_t capacity) {
+  const sc_source* inner = (const sc_source*)user;
+  return inner->read(inner->user, buffer, capacity < 37 ? capacity : 37);
+}
+
 static void test_round_trip(const Bytes* torus) {
   Fixture f = open_fixture((size_t)16 << 20);
   sc_mesh *a = NULL, *b = NULL, *c = NULL;
@@ -266,6 +272,28 @@ static void test_round_trip(const Bytes* torus) {
   CHECK_OK(f.ctx, sc_mesh_copy_triangles(f.ctx, a, ta, 3 * 2304));
   CHECK_OK(f.ctx, sc_mesh_copy_triangles(f.ctx, b, tb, 3 * 2304));
   CHECK(memcmp(ta, tb, sizeof(uint32_t) * 3 * 2304) == 0);
+  /* A memory source (welded where its bytes lie) and a source giving 37 bytes a read: the same
+   * mesh, and both sources read to their end. */
+  {
+    sc_memory_source_state whole_state, inner_state;
+    sc_source whole = sc_memory_source(&whole_state, torus->data, torus->size, "whole");
+    sc_source inner = sc_memory_source(&inner_state, torus->data, torus->size, "inner");
+    sc_source chunked = {short_read, NULL, 0, "chunked"};
+    sc_mesh *w = NULL, *k = NULL;
+    chunked.user = &inner;
+    chunked.size = torus->size;
+    CHECK_OK(f.ctx, sc_mesh_read_stl(f.ctx, &whole, NULL, &w));
+    CHECK_OK(f.ctx, sc_mesh_read_stl(f.ctx, &chunked, NULL, &k));
+    CHECK(whole_state.position == torus->size && inner_state.position == torus->size);
+    CHECK(sc_mesh_vertex_count(w) == nv && sc_mesh_vertex_count(k) == nv);
+    CHECK_OK(f.ctx, sc_mesh_copy_vertices(f.ctx, w, va, 3 * 2000));
+    CHECK_OK(f.ctx, sc_mesh_copy_vertices(f.ctx, k, vb, 3 * 2000));
+    CHECK(memcmp(va, vb, sizeof(double) * 3 * (size_t)nv) == 0);
+    CHECK_OK(f.ctx, sc_mesh_copy_triangles(f.ctx, w, ta, 3 * 2304));
+    CHECK_OK(f.ctx, sc_mesh_copy_triangles(f.ctx, k, tb, 3 * 2304));
+    CHECK(memcmp(ta, tb, sizeof(uint32_t) * 3 * 2304) == 0);
+    CHECK_OK(f.ctx, sc_mesh_copy_vertices(f.ctx, a, va, 3 * 2000));
+  }
   CHECK(sc_mesh_copy_vertices(f.ctx, a, va, 5) == SC_INVALID_ARGUMENT);
   last_message(f.ctx, text, sizeof text);
   CHECK(contains(text, "holds 5 doubles"));
