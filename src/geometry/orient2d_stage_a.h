@@ -1,8 +1,9 @@
 // splintcore geometry, internal: the first stage of orient2d (J. R. Shewchuk, "Adaptive
 // precision floating-point arithmetic and fast robust geometric predicates", 1997, section
-// 4.3: the rounded determinant and its error bound ccwerrboundA), shared by orient2d() in
-// predicates.cpp and the mesh check's flat-triangle test (src/mesh/check.cpp), which skips
-// collinear3d when this stage already shows the x-y orientation nonzero.
+// 4.3: the rounded determinant and its error bound ccwerrboundA), for orient2d() in
+// predicates.cpp. The mesh check's flat-triangle test (src/mesh/check.cpp) uses the bound on
+// its own products (two triangles at a time), skipping collinear3d when it already shows the
+// x-y orientation nonzero.
 #ifndef SPLINTCORE_SRC_GEOMETRY_ORIENT2D_STAGE_A_H
 #define SPLINTCORE_SRC_GEOMETRY_ORIENT2D_STAGE_A_H
 
