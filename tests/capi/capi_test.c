@@ -218,6 +218,19 @@ static void test_arena_exhaustion(const Bytes* torus) {
   }
 }
 
+/* Meshes x and y of the round trip (2304 triangles, nv vertices) have the same vertices and
+ * triangles, copied out into the buffers given. */
+static void expect_same_mesh(sc_context* ctx, const sc_mesh* x, const sc_mesh* y, uint64_t nv,
+                             double* vx, double* vy, uint32_t* tx, uint32_t* ty) {
+  CHECK(sc_mesh_vertex_count(x) == nv && sc_mesh_vertex_count(y) == nv);
+  CHECK_OK(ctx, sc_mesh_copy_vertices(ctx, x, vx, 3 * 2000));
+  CHECK_OK(ctx, sc_mesh_copy_vertices(ctx, y, vy, 3 * 2000));
+  CHECK(memcmp(vx, vy, sizeof(double) * 3 * (size_t)nv) == 0);
+  CHECK_OK(ctx, sc_mesh_copy_triangles(ctx, x, tx, 3 * 2304));
+  CHECK_OK(ctx, sc_mesh_copy_triangles(ctx, y, ty, 3 * 2304));
+  CHECK(memcmp(tx, ty, sizeof(uint32_t) * 3 * 2304) == 0);
+}
+
 /* A C source over another that hands out at most 37 bytes a read (not a memory source). */
 static int64_t short_read(void* user, uint8_t* buffer, size_t capacity) {
   const sc_source* inner = (const sc_source*)user;
@@ -266,12 +279,7 @@ static void test_round_trip(const Bytes* torus) {
   CHECK_OK(f.ctx, sc_mesh_write_stl(f.ctx, b, &k2, NULL));
   CHECK(s2.size == s1.size && memcmp(out1, out2, stl_size) == 0);
   /* Copy-out: the same vertices and triangles both ways. */
-  CHECK_OK(f.ctx, sc_mesh_copy_vertices(f.ctx, a, va, 3 * 2000));
-  CHECK_OK(f.ctx, sc_mesh_copy_vertices(f.ctx, b, vb, 3 * 2000));
-  CHECK(memcmp(va, vb, sizeof(double) * 3 * (size_t)nv) == 0);
-  CHECK_OK(f.ctx, sc_mesh_copy_triangles(f.ctx, a, ta, 3 * 2304));
-  CHECK_OK(f.ctx, sc_mesh_copy_triangles(f.ctx, b, tb, 3 * 2304));
-  CHECK(memcmp(ta, tb, sizeof(uint32_t) * 3 * 2304) == 0);
+  expect_same_mesh(f.ctx, a, b, nv, va, vb, ta, tb);
   /* A memory source (welded where its bytes lie) and a source giving 37 bytes a read: the same
    * mesh, and both sources read to their end. */
   {
@@ -285,13 +293,7 @@ static void test_round_trip(const Bytes* torus) {
     CHECK_OK(f.ctx, sc_mesh_read_stl(f.ctx, &whole, NULL, &w));
     CHECK_OK(f.ctx, sc_mesh_read_stl(f.ctx, &chunked, NULL, &k));
     CHECK(whole_state.position == torus->size && inner_state.position == torus->size);
-    CHECK(sc_mesh_vertex_count(w) == nv && sc_mesh_vertex_count(k) == nv);
-    CHECK_OK(f.ctx, sc_mesh_copy_vertices(f.ctx, w, va, 3 * 2000));
-    CHECK_OK(f.ctx, sc_mesh_copy_vertices(f.ctx, k, vb, 3 * 2000));
-    CHECK(memcmp(va, vb, sizeof(double) * 3 * (size_t)nv) == 0);
-    CHECK_OK(f.ctx, sc_mesh_copy_triangles(f.ctx, w, ta, 3 * 2304));
-    CHECK_OK(f.ctx, sc_mesh_copy_triangles(f.ctx, k, tb, 3 * 2304));
-    CHECK(memcmp(ta, tb, sizeof(uint32_t) * 3 * 2304) == 0);
+    expect_same_mesh(f.ctx, w, k, nv, va, vb, ta, tb);
     CHECK_OK(f.ctx, sc_mesh_copy_vertices(f.ctx, a, va, 3 * 2000));
   }
   CHECK(sc_mesh_copy_vertices(f.ctx, a, va, 5) == SC_INVALID_ARGUMENT);
