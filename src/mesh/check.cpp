@@ -281,16 +281,10 @@ struct EdgePass {
     uint64_t* const tallies = a.tally;
     uint32_t* const lasts = a.last;
     uint8_t* const first = first_use;
-    // The larger ends of a bucket's uses, kept from the first loop for the second when the
-    // bucket is small (as nearly all are: a vertex's sides), else read again.
-    constexpr uint32_t kKept = 32;
-    uint32_t kept_hi[kKept];
-    const bool keep = end - begin <= kKept;
     for (uint32_t i = begin; i < end; ++i) {
       const uint32_t use = half[i];
       const uint32_t t = use >> 2;
       const uint32_t from = start_of(use), hi = from ^ end_of(use) ^ lo;  // lo is one end
-      if (keep) kept_hi[i - begin] = hi;
       // Forward: the side runs from the smaller id (always, for a side lo -> lo).
       const uint64_t tally = tallies[hi] + (from == lo ? 1u : (uint64_t{1} << 32));
       tallies[hi] = tally;
@@ -302,7 +296,7 @@ struct EdgePass {
     bool collecting = false;
     for (uint32_t i = begin; i < end; ++i) {
       const uint32_t use = half[i];
-      const uint32_t hi = keep ? kept_hi[i - begin] : start_of(use) ^ end_of(use) ^ lo;
+      const uint32_t hi = start_of(use) ^ end_of(use) ^ lo;
       const uint64_t count = tallies[hi];
       if (count == 0) continue;  // a later use of an edge already read
       if (count == kOneEach) {   // classify's last case, inline
