@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "geometry/lanes2.h"
 #include "splintcore/distance.h"
 
 namespace splintcore {
@@ -141,10 +142,6 @@ inline void load_triangle(const Mesh& mesh, uint32_t t, const Vec3& shift, Trian
   out->lo = min_vec(min_vec(out->p[0], out->p[1]), out->p[2]);
   out->hi = max_vec(max_vec(out->p[0], out->p[1]), out->p[2]);
 }
-
-// Two doubles in one SSE2 register (GCC's and clang's vector extension): each lane rounds as
-// the scalar operation would.
-typedef double Lanes2 __attribute__((vector_size(16)));
 
 // Squared distance between the boxes [alo, ahi] and [blo, bhi] as computed (the caller's
 // margin covers the rounding): on each axis the gap blo - ahi when blo > ahi, alo - bhi when

@@ -22,11 +22,9 @@ using detail::settle_closest;
 constexpr uint32_t kStack = detail::kTraversalStack;
 constexpr double kFourPi = 12.566370614359172954;
 
-// Four lanes of float (two of double: query_internal.h), GCC and Clang vector extensions.
+// Four lanes of float (two of double: geometry/lanes2.h), GCC and Clang vector extensions.
 typedef float Float4 __attribute__((vector_size(16)));
 typedef int32_t Mask4 __attribute__((vector_size(16)));
-using detail::Double2;
-using detail::Mask2;
 
 inline Float4 load4(const float x[4]) {
   Float4 r;
@@ -37,14 +35,14 @@ inline Float4 load4(const float x[4]) {
 inline Float4 positive_part(Float4 x) {
   return reinterpret_cast<Float4>((x > Float4{}) & reinterpret_cast<Mask4>(x));
 }
-inline Double2 positive_part(Double2 x) {
-  return reinterpret_cast<Double2>((x > Double2{}) & reinterpret_cast<Mask2>(x));
+inline Lanes2 positive_part(Lanes2 x) {
+  return reinterpret_cast<Lanes2>((x > Lanes2{}) & reinterpret_cast<Mask2>(x));
 }
 // The gap along one axis between x and the span of p0, p1, p2 (a triangle's box), in two lanes:
 // what consider() computes for one triangle (closest_within below).
-inline Double2 pair_gap(const Double2& x, const Double2& p0, const Double2& p1, const Double2& p2) {
-  const Double2 lo01 = p1 < p0 ? p1 : p0, hi01 = p1 > p0 ? p1 : p0;
-  const Double2 lo = p2 < lo01 ? p2 : lo01, hi = p2 > hi01 ? p2 : hi01;
+inline Lanes2 pair_gap(const Lanes2& x, const Lanes2& p0, const Lanes2& p1, const Lanes2& p2) {
+  const Lanes2 lo01 = p1 < p0 ? p1 : p0, hi01 = p1 > p0 ? p1 : p0;
+  const Lanes2 lo = p2 < lo01 ? p2 : lo01, hi = p2 > hi01 ? p2 : hi01;
   return positive_part(lo - x) + positive_part(x - hi);
 }
 
@@ -316,7 +314,7 @@ struct ClosestSearch {
   bool found = false;
   uint32_t best_tri = 0;
   ClosestPoint best;
-  const Double2 q2x, q2y, q2z;  // q in both lanes, for consider_leaf()
+  const Lanes2 q2x, q2y, q2z;  // q in both lanes, for consider_leaf()
 
   ClosestSearch(const DistanceIndex& index, const Vec3& query, double limit)
       : mesh(*index.mesh),
@@ -413,13 +411,10 @@ struct ClosestSearch {
       const Triangle &s0 = tris[t0], &s1 = tris[t1];
       const Vec3 &a0 = v[s0.v[0]], &b0 = v[s0.v[1]], &c0 = v[s0.v[2]];
       const Vec3 &a1 = v[s1.v[0]], &b1 = v[s1.v[1]], &c1 = v[s1.v[2]];
-      const Double2 gx =
-          pair_gap(q2x, Double2{a0.x, a1.x}, Double2{b0.x, b1.x}, Double2{c0.x, c1.x});
-      const Double2 gy =
-          pair_gap(q2y, Double2{a0.y, a1.y}, Double2{b0.y, b1.y}, Double2{c0.y, c1.y});
-      const Double2 gz =
-          pair_gap(q2z, Double2{a0.z, a1.z}, Double2{b0.z, b1.z}, Double2{c0.z, c1.z});
-      const Double2 g2 = gx * gx + gy * gy + gz * gz;
+      const Lanes2 gx = pair_gap(q2x, Lanes2{a0.x, a1.x}, Lanes2{b0.x, b1.x}, Lanes2{c0.x, c1.x});
+      const Lanes2 gy = pair_gap(q2y, Lanes2{a0.y, a1.y}, Lanes2{b0.y, b1.y}, Lanes2{c0.y, c1.y});
+      const Lanes2 gz = pair_gap(q2z, Lanes2{a0.z, a1.z}, Lanes2{b0.z, b1.z}, Lanes2{c0.z, c1.z});
+      const Lanes2 g2 = gx * gx + gy * gy + gz * gz;
       if (!(g2[0] > best2 * (1.0 + 0x1p-40))) consider_near(t0, a0, b0, c0);
       if (j + 1 < end && !(g2[1] > best2 * (1.0 + 0x1p-40))) consider_near(t1, a1, b1, c1);
     }

@@ -3,19 +3,11 @@
 #ifndef SPLINTCORE_SRC_DISTANCE_QUERY_INTERNAL_H
 #define SPLINTCORE_SRC_DISTANCE_QUERY_INTERNAL_H
 
+#include "geometry/lanes2.h"
 #include "splintcore/distance.h"
 
 namespace splintcore {
 namespace detail {
-
-// Two lanes of double: GCC and Clang vector extensions (as in src/mesh/self_intersect.cpp),
-// SSE2 on x86-64, NEON on AArch64, lowered to scalar code where there is neither (Cortex-M7).
-// The library is built with -fno-tree-slp-vectorize (cmake/SplintcoreFlags.cmake), so the
-// compiler would not pack such loops itself. Each lane does the operations the scalar code
-// would, in the same order, and -ffp-contract=off holds for vectors too: the values are the
-// same bits as scalar code's on every platform.
-typedef double Double2 __attribute__((vector_size(16)));
-typedef int64_t Mask2 __attribute__((vector_size(16)));
 
 // Traversal stacks: a 4-wide node pushes at most three children more than it pops, and the
 // tree is at most 128 levels deep (checked when it is built).

@@ -49,8 +49,6 @@ namespace splintcore {
 namespace {
 
 using detail::closest_within;
-using detail::Double2;
-using detail::Mask2;
 using detail::RegionAnswer;
 using detail::settle_closest;
 
@@ -66,7 +64,7 @@ constexpr const char* kStage = "closest points, by regions";
 // The region lies in dot(n, x) <= off. Each value is held twice, as the two lanes that
 // offer_list() tests two queries with (broadcast once here, not for every pair of queries).
 struct Plane {
-  Double2 nx{}, ny{}, nz{}, off{};
+  Lanes2 nx{}, ny{}, nz{}, off{};
   Plane() = default;
   Plane(const Vec3& n, double o) : nx{n.x, n.x}, ny{n.y, n.y}, nz{n.z, n.z}, off{o, o} {}
   Vec3 normal() const { return Vec3{nx[0], ny[0], nz[0]}; }
@@ -588,7 +586,7 @@ void offer_list(const Scan& s, const TriangleRegions& tr, const uint32_t* at, ui
   const double* const cz = b.coord[2];
   for (uint32_t k = 0; k < count; k += 2) {
     const uint32_t j0 = at[k], j1 = k + 1 < count ? at[k + 1] : j0;
-    const Double2 x = {cx[j0], cx[j1]}, y = {cy[j0], cy[j1]}, z = {cz[j0], cz[j1]};
+    const Lanes2 x = {cx[j0], cx[j1]}, y = {cy[j0], cy[j1]}, z = {cz[j0], cz[j1]};
     uint32_t in0 = 0, in1 = 0;
     for (uint32_t i = 0; i < tr.count; ++i) {
       const Region& g = tr.regions[i];
@@ -605,8 +603,8 @@ void offer_list(const Scan& s, const TriangleRegions& tr, const uint32_t* at, ui
   }
 }
 
-inline Double2 load2(const double* p) {
-  Double2 r;
+inline Lanes2 load2(const double* p) {
+  Lanes2 r;
   std::memcpy(&r, p, sizeof(r));
   return r;
 }
@@ -628,10 +626,10 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3],
   const double* const along_u = b.coord[u];
   const double* const along_w = b.coord[w];
   const double* const along_z = b.coord[ax];
-  const Double2 ru = {box.ru, box.ru}, rw = {box.rw, box.rw};
+  const Lanes2 ru = {box.ru, box.ru}, rw = {box.rw, box.rw};
   const Vec3 &blo = box.bounds.lo, &bhi = box.bounds.hi;
-  const Double2 u0 = {blo.x, blo.x}, u1 = {bhi.x, bhi.x}, w0 = {blo.y, blo.y}, w1 = {bhi.y, bhi.y};
-  const Double2 z0 = {blo.z, blo.z}, z1 = {bhi.z, bhi.z};
+  const Lanes2 u0 = {blo.x, blo.x}, u1 = {bhi.x, bhi.x}, w0 = {blo.y, blo.y}, w1 = {bhi.y, bhi.y};
+  const Lanes2 z0 = {blo.z, blo.z}, z1 = {bhi.z, bhi.z};
   const uint32_t* const start = b.start;
   constexpr uint32_t kHits = 256;
   uint32_t hits[kHits];
@@ -695,8 +693,8 @@ void walk(const Scan& s, const ShearedBox& box, const uint32_t cell_lo[3],
           const uint32_t end = start[row + hi[0] + 1];
           for (uint32_t j = start[row + lo[0]]; j < end; j += 2) {
             if (hit_count + 2 > kHits) flush();
-            const Double2 qz = load2(along_z + j);
-            const Double2 qu = load2(along_u + j) - ru * qz, qw = load2(along_w + j) - rw * qz;
+            const Lanes2 qz = load2(along_z + j);
+            const Lanes2 qu = load2(along_u + j) - ru * qz, qw = load2(along_w + j) - rw * qz;
             Mask2 in = (qu >= u0) & (qu <= u1) & (qw >= w0) & (qw <= w1);
             if (decltype(along_ax)::value) in &= (qz >= z0) & (qz <= z1);
             hits[hit_count] = j;

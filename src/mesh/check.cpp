@@ -10,6 +10,7 @@
 #include <cmath>
 
 #include "core/union_find.h"
+#include "geometry/lanes2.h"
 #include "geometry/orient2d_stage_a.h"
 #include "splintcore/mesh.h"
 
@@ -91,11 +92,6 @@ Status check_indices(const Mesh& mesh, uint8_t* referenced, MeshReport* r) {
   r->unreferenced_vertices = nv - referenced_count;
   return Status::ok();
 }
-
-// Two doubles in one SSE2 register (GCC's and clang's vector extension; NEON on AArch64,
-// two scalars where there is neither): each lane rounds as the scalar operation would, and
-// -ffp-contract=off holds for vectors too, so a lane's value has the scalar code's bits.
-typedef double Lanes2 __attribute__((vector_size(16)));
 
 // Degenerate triangles (repeated ids or exactly flat), the area and the volume, with
 // mesh_area()'s and mesh_volume()'s arithmetic in their order (the same bits), r->bounds being

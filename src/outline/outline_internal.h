@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "geometry/lanes2.h"
 #include "splintcore/outline.h"
 
 namespace splintcore {
@@ -60,11 +61,8 @@ struct Frame {
   Vec3 n{0, 0, 1}, e1{1, 0, 0}, e2{0, 1, 0};
 };
 
-// Two doubles in one SSE2 register (GCC's and clang's vector extension; elsewhere two scalars):
-// each lane rounds as the scalar operation would, so a pair of dot products computed in lanes
-// has the scalar dot()'s bits, for half the multiplications and additions.
-typedef double Lanes2 __attribute__((vector_size(16)));
-
+// (A pair of dot products computed in lanes, geometry/lanes2.h, has the scalar dot()'s bits,
+// for half the multiplications and additions.)
 // (dot(p, e1), dot(p, e2)) of a frame, in lanes: the same bits as the two dot() calls (each
 // lane's sum in dot()'s order, x then y then z).
 struct PlaneAxes {
