@@ -10,6 +10,7 @@
 // reserved. Every error carries the byte offset (binary) or line and column (ASCII).
 #include <cfloat>
 #include <charconv>
+#include <cmath>
 
 #include "io/mesh_text.h"
 #include "mesh/exact_weld.h"
@@ -121,13 +122,6 @@ Status binary_corner_error(const uint8_t* corners, const StlReadOptions& options
   return Status::ok();  // not reached: some corner is over the limit
 }
 
-// Corner k of a binary record's corners (36 bytes of float32), exactly.
-Vec3 record_corner(const uint8_t* corners, int k) {
-  const uint8_t* c = corners + 12 * k;
-  return Vec3(static_cast<double>(load_f32(c)), static_cast<double>(load_f32(c + 4)),
-              static_cast<double>(load_f32(c + 8)));
-}
-
 // Two little-endian float32s' bits, the first in the low half.
 inline uint64_t pair_at(const uint8_t* p) {
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
@@ -138,6 +132,47 @@ inline uint64_t pair_at(const uint8_t* p) {
   return uint64_t{load_u32(p + 4)} << 32 | load_u32(p);
 #endif
 }
+
+// The crop (StlReadOptions::keep) as float32, for the records' own corners: lo rounded up and
+// hi down to float32, so that for every float x (infinities too) x < lo exactly when x < lo's
+// float (no float lies between lo and it) and x > hi when x > hi's; NaN fails both, as it
+// does Aabb::outcode. Four lanes, the fourth never beyond (-inf, +inf): a triangle is left
+// out when, on some axis, its three corners are all below or all above, the same test as
+// keep.beyond_one_side on the corners widened to double.
+typedef float Floats4 __attribute__((vector_size(16)));
+typedef int32_t Ints4 __attribute__((vector_size(16)));
+typedef uint64_t Pairs2 __attribute__((vector_size(16)));
+
+struct FloatCrop {
+  Floats4 lo, hi;
+
+  static float rounded_up(double x) {
+    if (std::isnan(x) || std::isinf(x)) return static_cast<float>(x);
+    if (x > static_cast<double>(FLT_MAX)) return HUGE_VALF;
+    if (x < -static_cast<double>(FLT_MAX)) return -FLT_MAX;
+    const float f = static_cast<float>(x);
+    return static_cast<double>(f) < x ? std::nextafter(f, HUGE_VALF) : f;
+  }
+  static float rounded_down(double x) { return -rounded_up(-x); }
+
+  explicit FloatCrop(const Aabb& keep)
+      : lo{rounded_up(keep.lo.x), rounded_up(keep.lo.y), rounded_up(keep.lo.z), -HUGE_VALF},
+        hi{rounded_down(keep.hi.x), rounded_down(keep.hi.y), rounded_down(keep.hi.z), HUGE_VALF} {}
+
+  // A corner's x, y, z in lanes 0-2 (lane 3: 0), loaded as 8 + 4 bytes.
+  static Floats4 corner(const uint8_t* c) {
+    const Pairs2 xyz = {pair_at(c), bits_at(c + 8)};
+    Floats4 out;
+    std::memcpy(&out, &xyz, sizeof(out));
+    return out;
+  }
+  // The record's corners (36 bytes from `corners`) all beyond one side?
+  bool beyond_one_side(const uint8_t* corners) const {
+    const Floats4 a = corner(corners), b = corner(corners + 12), c = corner(corners + 24);
+    const Ints4 out = ((a < lo) & (b < lo) & (c < lo)) | ((a > hi) & (b > hi) & (c > hi));
+    return (out[0] | out[1] | out[2]) != 0;
+  }
+};
 
 // Every coordinate of a record's corners within the limit (abs_limit_bits, below 2^31):
 // finite, in range. Two coordinates at a time: limit - magnitude sets a half's top bit
@@ -556,6 +591,7 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
   if (records == nullptr) return arena.exhausted_status();
   const uint32_t limit = abs_limit_bits(options.max_abs_coordinate);
   const bool crop = !options.keep.empty();
+  const FloatCrop keep(options.keep);
   size_t kept = 0;                // triangles in the mesh (all of them without a crop)
   uint64_t ahead[2 * kAhead][3];  // the prefetched corners' hashes, by triangle mod 2 kAhead
   bool ahead_out[2 * kAhead];     // and whether the crop leaves that triangle out (no hashes)
@@ -576,9 +612,7 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
         const uint8_t* c = record + kAhead * kBinaryRecordBytes + 12;
         const size_t slot = (i + kAhead) % (2 * kAhead);
         // (With a crop most triangles are left out: the test moves here, before the hashes.)
-        ahead_out[slot] =
-            crop && options.keep.beyond_one_side(record_corner(c, 0), record_corner(c, 1),
-                                                 record_corner(c, 2));
+        ahead_out[slot] = crop && keep.beyond_one_side(c);
         if (!ahead_out[slot]) {
           uint64_t* h = ahead[slot];
           h[0] = ExactWelder::hash_bits(bits_at(c), bits_at(c + 4), bits_at(c + 8));
@@ -590,10 +624,7 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
         }
       }
       const uint8_t* corners = record + 12;
-      if (crop && (i >= kAhead ? ahead_out[i % (2 * kAhead)]
-                               : options.keep.beyond_one_side(record_corner(corners, 0),
-                                                              record_corner(corners, 1),
-                                                              record_corner(corners, 2)))) {
+      if (crop && (i >= kAhead ? ahead_out[i % (2 * kAhead)] : keep.beyond_one_side(corners))) {
         // Left out: its corners are still checked (the same errors as without the crop).
         if (!corners_within(corners, limit)) {
           return binary_corner_error(corners, options, t + i, in.offset() + kBinaryRecordBytes * i);

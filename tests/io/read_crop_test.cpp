@@ -157,6 +157,57 @@ TEST(ReadCrop, StlGivesTheFileWithoutTheTrianglesBeyondTheBox) {
   EXPECT_EQ(kept_by(soup, boxes().back()).size(), 0u);
 }
 
+// The binary reader tests its records' float corners against the box's sides rounded to
+// float32 (lo up, hi down): sides exactly on a corner's float, a double's hair either side of
+// it, halfway between two floats, and beyond float32's range (or infinite) must leave out
+// the triangles the test in double does, no more and no fewer.
+TEST(ReadCrop, SidesBetweenAndOnFloatsDecideAsInDouble) {
+  test::TestArena t(size_t{16} << 20);
+  // Small triangles whose x, y and z run over consecutive floats about 1.5 and -2.25.
+  std::vector<SoupTriangle> soup;
+  const float bases[2] = {1.5f, -2.25f};
+  for (float base : bases) {
+    float f = std::nextafter(std::nextafter(base, -HUGE_VALF), -HUGE_VALF);
+    for (int i = 0; i < 5; ++i, f = std::nextafter(f, HUGE_VALF)) {
+      const float g = std::nextafter(f, HUGE_VALF);
+      soup.push_back(SoupTriangle{{{f, f, f}, {g, f, f}, {f, g, f}}});
+      soup.push_back(SoupTriangle{{{f, f, f}, {f, f, g}, {g, g, g}}});
+    }
+  }
+  std::vector<double> sides;
+  for (float base : bases) {
+    for (float f = std::nextafter(base, -HUGE_VALF); f <= std::nextafter(base, HUGE_VALF);
+         f = std::nextafter(f, HUGE_VALF)) {
+      const double d = static_cast<double>(f),
+                   up = static_cast<double>(std::nextafter(f, HUGE_VALF));
+      sides.insert(sides.end(), {d, std::nextafter(d, -HUGE_VAL), std::nextafter(d, HUGE_VAL),
+                                 d + (up - d) / 2});
+    }
+  }
+  const double far = 1e300;
+  const std::vector<uint8_t> binary = test::binary_stl(soup);
+  size_t cases = 0, left_out_any = 0, kept_any = 0;
+  for (double side : sides) {
+    // The side as lo (on each axis in turn, the others open) and as hi.
+    for (int axis = 0; axis < 3; ++axis) {
+      for (int as_hi = 0; as_hi < 2; ++as_hi) {
+        double lo[3] = {-far, -HUGE_VAL, -far}, hi[3] = {far, HUGE_VAL, far};
+        (as_hi != 0 ? hi : lo)[axis] = side;
+        const Aabb box{Vec3{lo[0], lo[1], lo[2]}, Vec3{hi[0], hi[1], hi[2]}};
+        const std::vector<SoupTriangle> kept = kept_by(soup, box);
+        SCOPED_TRACE("case " + std::to_string(cases++));
+        expect_same_mesh(read(t.arena, binary, "a.stl", box),
+                         read(t.arena, test::binary_stl(kept), "want.stl", Aabb{}));
+        left_out_any += kept.size() < soup.size() ? 1 : 0;
+        kept_any += kept.empty() ? 0 : 1;
+      }
+    }
+  }
+  // The sides do cut between the triangles: some cases leave some out, some keep some.
+  EXPECT_GT(left_out_any, cases / 4);
+  EXPECT_GT(kept_any, cases / 4);
+}
+
 TEST(ReadCrop, PlyAndObjLeaveOutTheSameTriangles) {
   test::TestArena t(size_t{64} << 20);
   const std::vector<SoupTriangle> soup = shapes::torus(40, 20, 10, 3);
