@@ -281,11 +281,22 @@ struct Broadphase {
   uint32_t a_slot_count = 0;
 
   void cell_range(const Aabb& box, uint32_t lo[3], uint32_t hi[3]) const {
+    const double blo[3] = {box.lo.x, box.lo.y, box.lo.z}, bhi[3] = {box.hi.x, box.hi.y, box.hi.z};
+    const double glo[3] = {abox.lo.x, abox.lo.y, abox.lo.z};
     for (int k = 0; k < 3; ++k) {
-      const double l = (box.lo[k] - abox.lo[k]) * inv_h, u = (box.hi[k] - abox.lo[k]) * inv_h;
-      lo[k] = l <= 0.0 ? 0u : (l >= dim[k] - 1.0 ? dim[k] - 1 : static_cast<uint32_t>(l));
-      hi[k] = u <= 0.0 ? 0u : (u >= dim[k] - 1.0 ? dim[k] - 1 : static_cast<uint32_t>(u));
+      lo[k] = grid_cell((blo[k] - glo[k]) * inv_h, dim[k]);
+      hi[k] = grid_cell((bhi[k] - glo[k]) * inv_h, dim[k]);
     }
+  }
+
+  // A grid coordinate as a cell index along an axis of `cells` cells, clamped to the grid:
+  // 0 at or below 0 (and for NaN), cells - 1 at or above cells - 1, else x truncated. Clamped
+  // in double first (max, min: no branch), then truncated, which is exact on the clamped value.
+  static uint32_t grid_cell(double x, uint32_t cells) {
+    const double last = static_cast<double>(cells - 1);
+    double c = x > 0.0 ? x : 0.0;
+    c = c < last ? c : last;
+    return static_cast<uint32_t>(c);
   }
 };
 
@@ -299,9 +310,7 @@ inline Aabb b_box(const Vec3* vb, const Triangle& tri) {
 }
 
 // A grid coordinate as a cell index along an axis of `dim` cells (clamped to the grid).
-inline uint32_t grid_cell(double x, uint32_t dim) {
-  return x <= 0.0 ? 0u : (x >= dim - 1.0 ? dim - 1 : static_cast<uint32_t>(x));
-}
+inline uint32_t grid_cell(double x, uint32_t dim) { return Broadphase::grid_cell(x, dim); }
 
 // The cells of the grid that triangle (p0, p1, p2) may meet, also when moved by up to `reach`
 // along each axis: a superset, every rounding covered by a pad. Long thin triangles (CAD

@@ -114,8 +114,8 @@ Status list_cells(Arena& arena, const Mesh& a, const Mesh& b, double reach, Broa
 // B's triangles near A's box (bp->near_b, bp->near_ids), B's indices and finiteness checked
 // (unless b_valid: mesh_boolean's find_shells checked them already), and with float32 output
 // the near ones checked float32. B's vertices are tested against the box once (6 outcode bits,
-// 64 when not finite); a triangle is near when no side of the box has all three of its corners
-// beyond it.
+// 64 when not finite, 128 when not float32 and that matters); a triangle is near when no side of
+// the box has all three of its corners beyond it.
 template <bool kChecked>
 Status near_triangles_of_b(Arena& arena, const Mesh& b, bool float32_output, Broadphase* bp) {
   const uint32_t ntb = static_cast<uint32_t>(b.triangles.size());
@@ -129,7 +129,8 @@ Status near_triangles_of_b(Arena& arena, const Mesh& b, bool float32_output, Bro
   const Vec3* vb = b.vertices.data();
   for (uint32_t v = 0; v < nvb; ++v) {
     const Vec3& p = vb[v];
-    outcode[v] = static_cast<uint8_t>(abox.outcode(p) | (!kChecked || is_finite(p) ? 0 : 64));
+    outcode[v] = static_cast<uint8_t>(abox.outcode(p) | (!kChecked || is_finite(p) ? 0 : 64) |
+                                      (!float32_output || is_float32_exact(p) ? 0 : 128));
   }
   bp->near_ids.bind(&arena);
   for (uint32_t t = 0; t < ntb; ++t) {
@@ -148,10 +149,7 @@ Status near_triangles_of_b(Arena& arena, const Mesh& b, bool float32_output, Bro
     const bool is_near = ((o0 & o1 & o2) & 63u) == 0;
     bp->near_b[t] = is_near ? 1 : 0;
     if (!is_near) continue;
-    if (float32_output && !(is_float32_exact(vb[tri.v[0]]) && is_float32_exact(vb[tri.v[1]]) &&
-                            is_float32_exact(vb[tri.v[2]]))) {
-      return b_not_float32(t);
-    }
+    if (((o0 | o1 | o2) & 128u) != 0) return b_not_float32(t);
     if (!bp->near_ids.push_back(t)) return arena.exhausted_status();
   }
   return Status::ok();
