@@ -309,9 +309,6 @@ inline Aabb b_box(const Vec3* vb, const Triangle& tri) {
   return box;
 }
 
-// A grid coordinate as a cell index along an axis of `dim` cells (clamped to the grid).
-inline uint32_t grid_cell(double x, uint32_t dim) { return Broadphase::grid_cell(x, dim); }
-
 // The cells of the grid that triangle (p0, p1, p2) may meet, also when moved by up to `reach`
 // along each axis: a superset, every rounding covered by a pad. Long thin triangles (CAD
 // meshes) meet a line of cells where their boxes cover a sheet or a block, so the triangle
@@ -397,8 +394,8 @@ void triangle_cells(const Broadphase& bp, const Vec3& p0, const Vec3& p1, const 
     }
     uint32_t v0 = 1, v1 = 0;
     if (vmin <= vmax) {
-      v0 = grid_cell((vmin - pad - glo[v]) * inv_h, bp.dim[v]);
-      v1 = grid_cell((vmax + pad - glo[v]) * inv_h, bp.dim[v]);
+      v0 = Broadphase::grid_cell((vmin - pad - glo[v]) * inv_h, bp.dim[v]);
+      v1 = Broadphase::grid_cell((vmax + pad - glo[v]) * inv_h, bp.dim[v]);
       v0 = v0 < lo[v] ? lo[v] : v0;
       v1 = v1 > hi[v] ? hi[v] : v1;
     }
@@ -411,8 +408,8 @@ void triangle_cells(const Broadphase& bp, const Vec3& p0, const Vec3& p1, const 
       const double b0 = sv * (c0 - q[0][v]), b1 = sv * (c1 - q[0][v]);
       const double wmin = q[0][w] - amax - (b0 > b1 ? b0 : b1);
       const double wmax = q[0][w] - amin - (b0 < b1 ? b0 : b1);
-      uint32_t k0 = grid_cell((wmin - pad_w - glo[w]) * inv_h, bp.dim[w]);
-      uint32_t k1 = grid_cell((wmax + pad_w - glo[w]) * inv_h, bp.dim[w]);
+      uint32_t k0 = Broadphase::grid_cell((wmin - pad_w - glo[w]) * inv_h, bp.dim[w]);
+      uint32_t k1 = Broadphase::grid_cell((wmax + pad_w - glo[w]) * inv_h, bp.dim[w]);
       k0 = k0 < lo[w] ? lo[w] : k0;
       k1 = k1 > hi[w] ? hi[w] : k1;
       column(iu, iv, k0, k1);  // k0 > k1: none

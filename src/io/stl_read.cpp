@@ -159,12 +159,17 @@ struct FloatCrop {
       : lo{rounded_up(keep.lo.x), rounded_up(keep.lo.y), rounded_up(keep.lo.z), -HUGE_VALF},
         hi{rounded_down(keep.hi.x), rounded_down(keep.hi.y), rounded_down(keep.hi.z), HUGE_VALF} {}
 
-  // A corner's x, y, z in lanes 0-2 (lane 3: 0), loaded as 8 + 4 bytes.
+  // A corner's x, y, z in lanes 0-2 (lane 3: 0), loaded as 8 + 4 bytes on a little-endian
+  // host (where a lane's low half comes first).
   static Floats4 corner(const uint8_t* c) {
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
     const Pairs2 xyz = {pair_at(c), bits_at(c + 8)};
     Floats4 out;
     std::memcpy(&out, &xyz, sizeof(out));
     return out;
+#else
+    return Floats4{load_f32(c), load_f32(c + 4), load_f32(c + 8), 0.0f};
+#endif
   }
   // The record's corners (36 bytes from `corners`) all beyond one side?
   bool beyond_one_side(const uint8_t* corners) const {
