@@ -171,25 +171,24 @@ struct FloatCrop {
     return Floats4{load_f32(c), load_f32(c + 4), load_f32(c + 8), 0.0f};
 #endif
   }
-  // The record's corners (36 bytes from `corners`) all beyond one side?
-  bool beyond_one_side(const uint8_t* corners) const {
+  // Is the record's triangle (its corners: 36 bytes from `corners`) left out: all three
+  // corners beyond one side, and each within `limit` (abs_limit_bits: a magnitude's bits above
+  // it are over, infinities and NaN too)? One beyond with a corner over the limit is not: the
+  // kept path names that corner, as the read without the crop does.
+  bool left_out(const uint8_t* corners, uint32_t limit) const {
     const Floats4 a = corner(corners), b = corner(corners + 12), c = corner(corners + 24);
-    const Ints4 out = ((a < lo) & (b < lo) & (c < lo)) | ((a > hi) & (b > hi) & (c > hi));
-    return (out[0] | out[1] | out[2]) != 0;
+    const Ints4 beyond = ((a < lo) & (b < lo) & (c < lo)) | ((a > hi) & (b > hi) & (c > hi));
+    Ints4 bits[3];
+    std::memcpy(&bits[0], &a, sizeof(a));
+    std::memcpy(&bits[1], &b, sizeof(b));
+    std::memcpy(&bits[2], &c, sizeof(c));
+    const int32_t l = static_cast<int32_t>(limit);  // below 2^31, as every magnitude
+    const Ints4 magnitude = {0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff}, most = {l, l, l, l};
+    const Ints4 over = ((bits[0] & magnitude) > most) | ((bits[1] & magnitude) > most) |
+                       ((bits[2] & magnitude) > most);
+    return (beyond[0] | beyond[1] | beyond[2]) != 0 && (over[0] | over[1] | over[2]) == 0;
   }
 };
-
-// Every coordinate of a record's corners within the limit (abs_limit_bits, below 2^31):
-// finite, in range. Two coordinates at a time: limit - magnitude sets a half's top bit
-// exactly when that magnitude is over the limit; a borrow out of the low half, which can
-// spoil the high half's answer, only comes when the low half is over, its own bit set.
-bool corners_within(const uint8_t* corners, uint32_t limit) {
-  const uint64_t limits = uint64_t{limit} << 32 | limit;
-  uint64_t over = 0;
-  for (int k = 0; k < 4; ++k) over |= limits - (pair_at(corners + 8 * k) & 0x7fffffff7fffffffu);
-  over |= limit - (bits_at(corners + 32) & 0x7fffffffu);
-  return (over & 0x8000000080000000u) == 0;
-}
 
 // Fills `in` for the record of triangle t (of `declared`), or says where the file ends.
 Status fill_record(Reader& in, uint64_t t, uint64_t declared) {
@@ -617,7 +616,7 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
         const uint8_t* c = record + kAhead * kBinaryRecordBytes + 12;
         const size_t slot = (i + kAhead) % (2 * kAhead);
         // (With a crop most triangles are left out: the test moves here, before the hashes.)
-        ahead_out[slot] = crop && keep.beyond_one_side(c);
+        ahead_out[slot] = crop && keep.left_out(c, limit);
         if (!ahead_out[slot]) {
           uint64_t* h = ahead[slot];
           h[0] = ExactWelder::hash_bits(bits_at(c), bits_at(c + 4), bits_at(c + 8));
@@ -629,11 +628,8 @@ Status read_binary_welded(const Context& ctx, const ByteSource& source, const ui
         }
       }
       const uint8_t* corners = record + 12;
-      if (crop && (i >= kAhead ? ahead_out[i % (2 * kAhead)] : keep.beyond_one_side(corners))) {
-        // Left out: its corners are still checked (the same errors as without the crop).
-        if (!corners_within(corners, limit)) {
-          return binary_corner_error(corners, options, t + i, in.offset() + kBinaryRecordBytes * i);
-        }
+      // Left out: its corners were checked too (the same errors as without the crop).
+      if (crop && (i >= kAhead ? ahead_out[i % (2 * kAhead)] : keep.left_out(corners, limit))) {
         continue;
       }
       for (int k = 0; k < 3; ++k) {

@@ -242,8 +242,8 @@ TEST(ReadCrop, CornersOfLeftOutTrianglesAreStillChecked) {
   const Aabb box{Vec3{0, -20, -20}, Vec3{20, 20, 20}};
   // The last triangle wholly beyond the box's low x side, each of its nine coordinates in
   // turn then made NaN, huge or infinite: the same error (and place) as reading it whole.
-  // (The check of a left-out triangle takes two coordinates at a time: every position, and
-  // the first of a pair over the limit while the second is at it, are tried.)
+  // (Every position is tried, each with the next coordinate at the limit exactly: however
+  // the check of a left-out triangle groups the coordinates, one over the limit is found.)
   size_t far = soup.size();
   for (size_t i = 0; i < soup.size(); ++i) {
     if (left_out(soup[i], box)) far = i;
