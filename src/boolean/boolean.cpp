@@ -281,10 +281,11 @@ struct RegionGrid {
     inv_h = 1.0 / h;
   }
   void range(const Aabb& box, uint32_t lo[3], uint32_t hi[3]) const {
+    const double blo[3] = {box.lo.x, box.lo.y, box.lo.z}, bhi[3] = {box.hi.x, box.hi.y, box.hi.z};
+    const double glo[3] = {region.lo.x, region.lo.y, region.lo.z};
     for (int k = 0; k < 3; ++k) {
-      const double l = (box.lo[k] - region.lo[k]) * inv_h, u = (box.hi[k] - region.lo[k]) * inv_h;
-      lo[k] = l <= 0.0 ? 0u : (l >= dim[k] - 1.0 ? dim[k] - 1 : static_cast<uint32_t>(l));
-      hi[k] = u <= 0.0 ? 0u : (u >= dim[k] - 1.0 ? dim[k] - 1 : static_cast<uint32_t>(u));
+      lo[k] = grid_cell((blo[k] - glo[k]) * inv_h, dim[k]);
+      hi[k] = grid_cell((bhi[k] - glo[k]) * inv_h, dim[k]);
     }
   }
   size_t cells() const { return size_t{dim[0]} * dim[1] * dim[2]; }

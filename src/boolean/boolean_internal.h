@@ -56,6 +56,17 @@ inline Status check_boolean_arguments(const Mesh& a, const Mesh& b, const Mesh& 
 Status refuse_open_border_in_a(const Context& ctx, const Mesh& a, const Mesh& b, const Aabb& region,
                                bool b_valid);
 
+// A grid coordinate as a cell index along an axis of `cells` cells, clamped to the grid: 0 at
+// or below 0 (and for NaN), cells - 1 at or above cells - 1, else x truncated. Clamped in
+// double first (max, min: no branch), then truncated, which is exact on the clamped value.
+// (The broad phase's grid and the shells' grid.)
+inline uint32_t grid_cell(double x, uint32_t cells) {
+  const double last = static_cast<double>(cells - 1);
+  double c = x > 0.0 ? x : 0.0;
+  c = c < last ? c : last;
+  return static_cast<uint32_t>(c);
+}
+
 // Triangle t of B has a vertex that is not a float32 value, with float32 output.
 inline Status b_not_float32(uint32_t t) {
   return make_error(StatusCode::kInvalidArgument, "triangle ", t,

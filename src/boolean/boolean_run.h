@@ -288,16 +288,6 @@ struct Broadphase {
       hi[k] = grid_cell((bhi[k] - glo[k]) * inv_h, dim[k]);
     }
   }
-
-  // A grid coordinate as a cell index along an axis of `cells` cells, clamped to the grid:
-  // 0 at or below 0 (and for NaN), cells - 1 at or above cells - 1, else x truncated. Clamped
-  // in double first (max, min: no branch), then truncated, which is exact on the clamped value.
-  static uint32_t grid_cell(double x, uint32_t cells) {
-    const double last = static_cast<double>(cells - 1);
-    double c = x > 0.0 ? x : 0.0;
-    c = c < last ? c : last;
-    return static_cast<uint32_t>(c);
-  }
 };
 
 // The box of B's triangle `tri` (vertices vb).
@@ -394,8 +384,8 @@ void triangle_cells(const Broadphase& bp, const Vec3& p0, const Vec3& p1, const 
     }
     uint32_t v0 = 1, v1 = 0;
     if (vmin <= vmax) {
-      v0 = Broadphase::grid_cell((vmin - pad - glo[v]) * inv_h, bp.dim[v]);
-      v1 = Broadphase::grid_cell((vmax + pad - glo[v]) * inv_h, bp.dim[v]);
+      v0 = grid_cell((vmin - pad - glo[v]) * inv_h, bp.dim[v]);
+      v1 = grid_cell((vmax + pad - glo[v]) * inv_h, bp.dim[v]);
       v0 = v0 < lo[v] ? lo[v] : v0;
       v1 = v1 > hi[v] ? hi[v] : v1;
     }
@@ -408,8 +398,8 @@ void triangle_cells(const Broadphase& bp, const Vec3& p0, const Vec3& p1, const 
       const double b0 = sv * (c0 - q[0][v]), b1 = sv * (c1 - q[0][v]);
       const double wmin = q[0][w] - amax - (b0 > b1 ? b0 : b1);
       const double wmax = q[0][w] - amin - (b0 < b1 ? b0 : b1);
-      uint32_t k0 = Broadphase::grid_cell((wmin - pad_w - glo[w]) * inv_h, bp.dim[w]);
-      uint32_t k1 = Broadphase::grid_cell((wmax + pad_w - glo[w]) * inv_h, bp.dim[w]);
+      uint32_t k0 = grid_cell((wmin - pad_w - glo[w]) * inv_h, bp.dim[w]);
+      uint32_t k1 = grid_cell((wmax + pad_w - glo[w]) * inv_h, bp.dim[w]);
       k0 = k0 < lo[w] ? lo[w] : k0;
       k1 = k1 > hi[w] ? hi[w] : k1;
       column(iu, iv, k0, k1);  // k0 > k1: none
