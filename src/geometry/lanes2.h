@@ -5,7 +5,9 @@
 // -fno-tree-slp-vectorize (cmake/SplintcoreFlags.cmake), so the compiler would not pack such
 // loops itself. Each lane does the operations the scalar code would, in the same order, and
 // -ffp-contract=off holds for vectors too: the values are the same bits as scalar code's on
-// every platform.
+// every platform. Also the other 16-byte lanes more than one file uses: four floats, four
+// int32 (a comparison of four floats or int32s) and two uint64 halves (the STL reader's crop,
+// the self-intersection check's masks).
 #ifndef SPLINTCORE_SRC_GEOMETRY_LANES2_H
 #define SPLINTCORE_SRC_GEOMETRY_LANES2_H
 
@@ -15,6 +17,9 @@ namespace splintcore {
 
 typedef double Lanes2 __attribute__((vector_size(16)));
 typedef int64_t Mask2 __attribute__((vector_size(16)));  // a comparison of two Lanes2
+typedef float Floats4 __attribute__((vector_size(16)));
+typedef int32_t Mask4 __attribute__((vector_size(16)));  // a comparison of four Floats4 or int32s
+typedef uint64_t Halves __attribute__((vector_size(16)));
 
 }  // namespace splintcore
 

@@ -12,6 +12,7 @@
 #include <charconv>
 #include <cmath>
 
+#include "geometry/lanes2.h"
 #include "io/mesh_text.h"
 #include "mesh/exact_weld.h"
 #include "splintcore/io.h"
@@ -139,10 +140,6 @@ inline uint64_t pair_at(const uint8_t* p) {
 // does Aabb::outcode. Four lanes, the fourth never beyond (-inf, +inf): a triangle is left
 // out when, on some axis, its three corners are all below or all above, the same test as
 // keep.beyond_one_side on the corners widened to double.
-typedef float Floats4 __attribute__((vector_size(16)));
-typedef int32_t Ints4 __attribute__((vector_size(16)));
-typedef uint64_t Pairs2 __attribute__((vector_size(16)));
-
 struct FloatCrop {
   Floats4 lo, hi;
 
@@ -163,7 +160,7 @@ struct FloatCrop {
   // host (where a lane's low half comes first).
   static Floats4 corner(const uint8_t* c) {
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-    const Pairs2 xyz = {pair_at(c), bits_at(c + 8)};
+    const Halves xyz = {pair_at(c), bits_at(c + 8)};
     Floats4 out;
     std::memcpy(&out, &xyz, sizeof(out));
     return out;
@@ -177,14 +174,14 @@ struct FloatCrop {
   // kept path names that corner, as the read without the crop does.
   bool left_out(const uint8_t* corners, uint32_t limit) const {
     const Floats4 a = corner(corners), b = corner(corners + 12), c = corner(corners + 24);
-    const Ints4 beyond = ((a < lo) & (b < lo) & (c < lo)) | ((a > hi) & (b > hi) & (c > hi));
-    Ints4 bits[3];
+    const Mask4 beyond = ((a < lo) & (b < lo) & (c < lo)) | ((a > hi) & (b > hi) & (c > hi));
+    Mask4 bits[3];
     std::memcpy(&bits[0], &a, sizeof(a));
     std::memcpy(&bits[1], &b, sizeof(b));
     std::memcpy(&bits[2], &c, sizeof(c));
     const int32_t l = static_cast<int32_t>(limit);  // below 2^31, as every magnitude
-    const Ints4 magnitude = {0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff}, most = {l, l, l, l};
-    const Ints4 over = ((bits[0] & magnitude) > most) | ((bits[1] & magnitude) > most) |
+    const Mask4 magnitude = {0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff}, most = {l, l, l, l};
+    const Mask4 over = ((bits[0] & magnitude) > most) | ((bits[1] & magnitude) > most) |
                        ((bits[2] & magnitude) > most);
     return (beyond[0] | beyond[1] | beyond[2]) != 0 && (over[0] | over[1] | over[2]) == 0;
   }

@@ -25,6 +25,7 @@
 #include "splintcore/mesh.h"
 
 #include "geometry/float_bounds.h"
+#include "geometry/lanes2.h"
 #include "geometry/plane_filter.h"
 
 namespace splintcore {
@@ -233,8 +234,7 @@ bool conflict(const Vec3* v, const Triangle& s, const Triangle& t, const Plane& 
 // answers as scalar code would, on every platform.
 typedef int16_t Lanes8 __attribute__((vector_size(16)));
 typedef uint32_t Ids4 __attribute__((vector_size(16)));
-typedef int32_t Mask4 __attribute__((vector_size(16)));
-typedef uint64_t Halves __attribute__((vector_size(16)));
+// (Mask4 and Halves: geometry/lanes2.h.)
 
 #if defined(__clang__) || __GNUC__ >= 12
 #define SPLINTCORE_SPLAT8(x, k) __builtin_shufflevector(x, x, k, k, k, k, k, k, k, k)
