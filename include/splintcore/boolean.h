@@ -22,19 +22,21 @@
 // matters (their boxes meet inside A's box for the difference and the intersection, anywhere
 // for the union; then exactly: their triangles meet, touching included, or one lies inside
 // the other by winding number) are put in different groups, greedily in shell order, and the
-// groups are applied one corefinement pass each: A - B = ((A - G1) - G2) - ..., A + B =
+// groups are applied one corefinement pass each, fewest triangles first (each pass's first
+// operand holds the imprints of the passes before): A - B = ((A - G1) - G2) - ..., A + B =
 // ((A + G1) + G2) + ..., A * B = A * ((G1 + G2) + ...) (not A - (A - B), whose operands share
-// A's faces). With one group (no overlap where it matters) it is exactly one pass, the same
-// bytes as before groups existed. Intermediate results are checked closed and oriented, only
-// the final one for self-intersection; a nudge (below) of a later pass moves the previous
-// result (for the intersection's unions, the union of groups so far). For the intersection
-// with several groups the shells near A must be closed (they become the first operand of a
-// union). BooleanStats::shells, shell_groups and passes say what was done. B may be open (a
-// scan) when its border lies outside A; an open B whose border meets or enters A is refused
-// up front (kInvalidMesh: "B is open: N boundary edges in M loops; its border meets A at
-// vertex i (x, y, z): ..."; at_index: i; decided exactly for B's boundary edges in A's box,
-// which costs A's distance index then). With float32 output B's vertices must be float32
-// values (as read from STL; a moved jaw must be rounded first), since they are kept bit for
+// A's faces). When that order fails (other than for memory or a cancel), the greedy order is
+// tried as well, and its error is the one returned when both fail. With one group (no
+// overlap where it matters) it is exactly one pass, the same bytes as before groups existed.
+// Intermediate results are checked closed and oriented, only the final one for self-intersection; a
+// nudge (below) of a later pass moves the previous result (for the intersection's unions, the union
+// of groups so far). For the intersection with several groups the shells near A must be closed
+// (they become the first operand of a union). BooleanStats::shells, shell_groups and passes say
+// what was done. B may be open (a scan) when its border lies outside A; an open B whose border
+// meets or enters A is refused up front (kInvalidMesh: "B is open: N boundary edges in M loops; its
+// border meets A at vertex i (x, y, z): ..."; at_index: i; decided exactly for B's boundary edges
+// in A's box, which costs A's distance index then). With float32 output B's vertices must be
+// float32 values (as read from STL; a moved jaw must be rounded first), since they are kept bit for
 // bit.
 #ifndef SPLINTCORE_BOOLEAN_H
 #define SPLINTCORE_BOOLEAN_H
@@ -114,7 +116,7 @@ struct BooleanStats {
   // The returned result was checked exactly for self-intersections and has none
   // (options.check_self_intersection; with several passes, the final pass's result).
   bool self_intersection_checked = false;
-  uint32_t attempts = 0;  // 1 + the nudges tried
+  uint32_t attempts = 0;  // 1 + the nudges tried (with both orders of the passes: both's)
   Vec3 nudge{};           // A's translation in the returned result
   // How far A's own faces moved in the returned result: with several passes every pass's nudge
   // added (each moves all that came before it), else nudge.

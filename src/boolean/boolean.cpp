@@ -29,7 +29,11 @@
 //   A. Van Oosterom, J. Strackee, "The Solid Angle of a Plane Triangle", IEEE TBME 30(2), 1983
 //   (with deterministic_atan2: the same bits everywhere). The surfaces being disjoint, the
 //   tested vertex is off the other surface, so the sum is within rounding of an integer.
-// - Grouping: greedy colouring of the overlap graph in shell order (deterministic).
+// - Grouping: greedy colouring of the overlap graph in shell order (deterministic). The groups
+//   are applied fewest triangles first: each pass's A holds the imprints of the passes before,
+//   so the order that puts the largest group last does the least work, as a shortest job
+//   first schedule does (the greedy order fills the first group most); when it fails, the
+//   greedy order is tried too.
 #include "boolean/boolean_internal.h"
 #include "geometry/plane_filter.h"
 
@@ -574,13 +578,36 @@ Aabb region_of_a(const Mesh& a, uint32_t max_nudges) {
 
 namespace {
 
+// The order of the passes by the groups' triangles, fewest first (ties in the greedy order):
+// by_size[p] is the group of pass p. Each pass takes the result of the passes before as its A,
+// imprints and all, so the largest group is best applied last (on the real dentition's 30
+// teeth, two groups of 161,219 and 31,345 triangles: the second pass's A has 23,780 triangles
+// this way, 113,828 the greedy way, and the Boolean takes 18% fewer instructions). `size`:
+// scratch for `groups`. An insertion sort: every group is a whole pass of the Boolean.
+void order_groups_by_size(const Shells& sh, const uint32_t* group, uint32_t groups, KeyIndex* size,
+                          uint32_t* by_size) {
+  for (uint32_t g = 0; g < groups; ++g) size[g] = KeyIndex{0, g, 0};
+  for (uint32_t s = 0; s < sh.count; ++s) {
+    if (group[s] != kNone) size[group[s]].key += sh.start[s + 1] - sh.start[s];
+  }
+  for (uint32_t i = 1; i < groups; ++i) {
+    const KeyIndex x = size[i];
+    uint32_t j = i;
+    for (; j > 0 && size[j - 1].key > x.key; --j) size[j] = size[j - 1];
+    size[j] = x;
+  }
+  for (uint32_t p = 0; p < groups; ++p) by_size[p] = size[p].index;
+}
+
 // Which group each of B's shells goes in (kNone: it cannot matter: for all but the union,
 // a shell away from A's region) and how many groups there are. Shells whose boxes meet where
 // it matters are tested exactly; overlapping ones go in different groups, greedily in shell
-// order (the first group none of the earlier overlapping shells is in). The arrays stay in
-// the arena; one group when no two shells overlap.
+// order (the first group none of the earlier overlapping shells is in); *by_size_out: the
+// groups fewest triangles first (order_groups_by_size). The arrays stay in the arena; one
+// group when no two shells overlap.
 Status group_shells(const Context& ctx, const Mesh& b, const Shells& sh, const Aabb& region,
-                    bool everywhere, uint32_t** group_out, uint32_t* groups_out) {
+                    bool everywhere, uint32_t** group_out, uint32_t* groups_out,
+                    uint32_t** by_size_out) {
   Arena& arena = *ctx.arena;
   uint32_t* group = arena.allocate_array<uint32_t>(sh.count);
   KeyIndex* order = arena.allocate_array<KeyIndex>(sh.count);
@@ -627,6 +654,9 @@ Status group_shells(const Context& ctx, const Mesh& b, const Shells& sh, const A
       groups = g + 1 > groups ? g + 1 : groups;
     }
   }
+  // (order and stamp are done with: groups <= shells.)
+  order_groups_by_size(sh, group, groups, order, stamp);
+  *by_size_out = stamp;
   *group_out = group;
   *groups_out = groups;
   return Status::ok();
@@ -647,13 +677,15 @@ Status check_b_float32(const Mesh& b, const Aabb& region) {
   return Status::ok();
 }
 
-// Several groups: one run each, the result of one the first operand of the next (for the
+// Several groups: one run each, in `order` (order[p]: the group of pass p; null: the groups'
+// own order), the result of one the first operand of the next (for the
 // intersection: the union of the groups first, then A and that union). Arena layout:
 // [shells][current result][group mesh][this pass's result]; each result is moved down over
 // the previous one and the group; the last down to `start`, into *out.
 Status run_passes(const Context& ctx, const Mesh& a, const Mesh& b, const Shells& sh,
-                  const uint32_t* group, uint32_t groups, const BooleanOptions& options,
-                  const Arena::Marker& start, Mesh* out, BooleanStats* stats) {
+                  const uint32_t* group, uint32_t groups, const uint32_t* order,
+                  const BooleanOptions& options, const Arena::Marker& start, Mesh* out,
+                  BooleanStats* stats) {
   Arena& arena = *ctx.arena;
   uint32_t* remap = arena.allocate_array<uint32_t>(b.vertices.size());
   if (remap == nullptr && !b.vertices.empty()) return arena.exhausted_status();
@@ -665,7 +697,8 @@ Status run_passes(const Context& ctx, const Mesh& a, const Mesh& b, const Shells
   const Mesh* first = &a;
   uint32_t g = 0;
   if (intersection) {
-    SPLINTCORE_RETURN_IF_ERROR(group_mesh(arena, b, sh, group, 0, remap, &current));
+    SPLINTCORE_RETURN_IF_ERROR(
+        group_mesh(arena, b, sh, group, order != nullptr ? order[0] : 0, remap, &current));
     first = &current;
     g = 1;
   }
@@ -681,7 +714,9 @@ Status run_passes(const Context& ctx, const Mesh& a, const Mesh& b, const Shells
       first = &a;
       first_checked = false;
     } else {
-      SPLINTCORE_RETURN_IF_ERROR(group_mesh(arena, b, sh, group, g++, remap, &operand));
+      SPLINTCORE_RETURN_IF_ERROR(
+          group_mesh(arena, b, sh, group, order != nullptr ? order[g] : g, remap, &operand));
+      ++g;
       if (intersection) o.op = BooleanOp::kUnion;
     }
     // Intermediate results are checked closed and oriented by the run; the exact
@@ -717,6 +752,30 @@ Status run_passes(const Context& ctx, const Mesh& a, const Mesh& b, const Shells
   return Status::ok();
 }
 
+// The passes fewest triangles first (by_size); when that fails other than for memory or a
+// cancel, and the greedy order differs, the greedy order as before the order by size (a group
+// applied to a result the others have already cut can pass where it fails on A itself, and
+// the other way round: the real case's exact sweep with a base 4 mm deep needs the greedy
+// order). Its error is the one returned when both fail.
+Status run_passes_in_order(const Context& ctx, const Mesh& a, const Mesh& b, const Shells& sh,
+                           const uint32_t* group, uint32_t groups, const uint32_t* by_size,
+                           const BooleanOptions& options, const Arena::Marker& start, Mesh* out,
+                           BooleanStats* stats) {
+  const Arena::Marker m = ctx.arena->mark();
+  Status s = run_passes(ctx, a, b, sh, group, groups, by_size, options, start, out, stats);
+  if (s.is_ok() || s.code() == StatusCode::kArenaExhausted || s.code() == StatusCode::kCancelled) {
+    return s;
+  }
+  uint32_t p = 0;
+  while (p < groups && by_size[p] == p) ++p;
+  if (p == groups) return s;
+  const uint32_t tried = stats->attempts;
+  ctx.arena->rewind(m);
+  s = run_passes(ctx, a, b, sh, group, groups, nullptr, options, start, out, stats);
+  stats->attempts += tried;
+  return s;
+}
+
 }  // namespace
 
 Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b, const BooleanOptions& options,
@@ -738,10 +797,11 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b, const Bool
     SPLINTCORE_RETURN_IF_ERROR(refuse_open_border_in_a(ctx, a, b, region, usable));
   }
   uint32_t* group = nullptr;
+  uint32_t* by_size = nullptr;
   uint32_t groups = 1;
   if (usable && sh.count > 1) {
-    SPLINTCORE_RETURN_IF_ERROR(
-        group_shells(ctx, b, sh, region, options.op == BooleanOp::kUnion, &group, &groups));
+    SPLINTCORE_RETURN_IF_ERROR(group_shells(ctx, b, sh, region, options.op == BooleanOp::kUnion,
+                                            &group, &groups, &by_size));
   }
   Status s;
   if (groups == 1) {
@@ -752,7 +812,8 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b, const Bool
   } else if (options.float32_output && !(s = check_b_float32(b, region)).is_ok()) {
     return s;
   } else {
-    s = run_passes(ctx, a, b, sh, group, groups, options, scope.start(), out, stats);
+    s = run_passes_in_order(ctx, a, b, sh, group, groups, by_size, options, scope.start(), out,
+                            stats);
     if (s.is_ok()) scope.commit();
   }
   stats->shells = sh.count;

@@ -367,6 +367,93 @@ TEST(BooleanShells, FineShellsOverlapAndApart) {
   expect_volume(d.volume, w.volume);
 }
 
+// The passes go fewest triangles first (each pass's A holds the imprints of the passes
+// before): B's first shell, a fine sphere, is the greedy order's first group, the coarse box
+// overlapping it the second, and the box is applied first. The same bytes as the two
+// differences made one after the other in that order, and not the bytes of the other order
+// (so the test can tell them apart); the same volume both ways.
+TEST(BooleanShells, TheGroupWithFewerTrianglesPassesFirst) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = boxes_mesh(arena, {kA});
+  const Box small{{1.640625, 1.296875, 0.265625}, {3.421875, 2.234375, 1.703125}};
+  Mesh sphere(&arena), b(&arena);
+  add_sphere(Vec3{1.3, 1.6, 1.7}, 0.9, 24, 48, &sphere);
+  add_sphere(Vec3{1.3, 1.6, 1.7}, 0.9, 24, 48, &b);
+  add_box(small, &b);
+  const Mesh box = boxes_mesh(arena, {small});
+  const Outcome r = run(arena, a, b, BooleanOp::kDifference);
+  ASSERT_TRUE(r.status.is_ok()) << test::format(r.status);
+  EXPECT_EQ(r.stats.shell_groups, 2u);
+  EXPECT_EQ(r.stats.passes, 2u);
+  auto two_steps = [&](const Mesh& first, const Mesh& second) {
+    BooleanOptions o;
+    o.float32_output = false;
+    Mesh cut;
+    EXPECT_TRUE(mesh_boolean(Context(&arena), a, first, o, &cut, nullptr).is_ok());
+    return run(arena, cut, second, BooleanOp::kDifference);
+  };
+  const Outcome box_first = two_steps(box, sphere);
+  const Outcome sphere_first = two_steps(sphere, box);
+  ASSERT_TRUE(box_first.status.is_ok() && sphere_first.status.is_ok());
+  EXPECT_TRUE(r.bytes == box_first.bytes) << "not the box first";
+  EXPECT_TRUE(r.bytes != sphere_first.bytes) << "the two orders give the same bytes";
+  expect_volume(r.volume, sphere_first.volume);
+}
+
+// Appends to m two tetrahedra with the apex p in common (one shell, through p), each outward:
+// bases q[0..2] and q[3..5].
+void add_two_tetrahedra(const Vec3& p, const Vec3 (&q)[6], Mesh* m) {
+  const uint32_t o = static_cast<uint32_t>(m->vertices.size());
+  ASSERT_TRUE(m->vertices.push_back(p));
+  for (const Vec3& v : q) ASSERT_TRUE(m->vertices.push_back(v));
+  for (uint32_t k = 0; k < 2; ++k) {
+    const uint32_t b = o + 1 + 3 * k;
+    const bool flip = dot(cross(q[3 * k] - p, q[3 * k + 1] - p), q[3 * k + 2] - p) > 0;
+    const uint32_t f[4][3] = {{o, b, b + 1}, {o, b + 1, b + 2}, {o, b + 2, b}, {b, b + 2, b + 1}};
+    for (const auto& t : f) {
+      ASSERT_TRUE(m->triangles.push_back(flip ? Triangle{{t[0], t[2], t[1]}}
+                                              : Triangle{{t[0], t[1], t[2]}}));
+    }
+  }
+}
+
+// An order that fails is not the end: B's second shell (two tetrahedra that overlap each
+// other, joined at their apex, inside a sphere through A's face x = 4) is applied first by
+// size and breaks the re-triangulation of A there, with every nudge; the sphere first, the
+// greedy order, cuts that part of A away and the tetrahedra then meet nothing of A. The
+// greedy order's bytes, with the failed order's attempts counted.
+TEST(BooleanShells, WhenTheOrderBySizeFailsTheGreedyOrderIsTried) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = boxes_mesh(arena, {kA});
+  const Vec3 c{4.1, 2.0, 2.0}, p{4.05, 2.0, 2.0};
+  const Vec3 q[6] = {{3.3, 1.7, 1.75},  {3.3, 2.3, 1.8},    {3.3, 2.0, 2.3},
+                     {3.35, 1.85, 1.6}, {3.35, 2.45, 1.95}, {3.37, 1.8, 2.2}};
+  Mesh sphere(&arena), tetrahedra(&arena), b(&arena);
+  add_sphere(c, 1.2, 24, 48, &sphere);
+  add_two_tetrahedra(p, q, &tetrahedra);
+  add_sphere(c, 1.2, 24, 48, &b);
+  add_two_tetrahedra(p, q, &b);
+  const Outcome r = run(arena, a, b, BooleanOp::kDifference);
+  ASSERT_TRUE(r.status.is_ok()) << test::format(r.status);
+  EXPECT_EQ(r.stats.shell_groups, 2u);
+  EXPECT_GT(r.stats.attempts, 2u + BooleanOptions{}.max_nudges) << "the failed order's attempts";
+  BooleanOptions o;
+  o.float32_output = false;
+  {
+    ArenaScope scope(arena);
+    Mesh cut;
+    const Status s = mesh_boolean(Context(&arena), a, tetrahedra, o, &cut, nullptr);
+    EXPECT_FALSE(s.is_ok()) << "the tetrahedra first no longer fail: this tests nothing";
+  }
+  Mesh cut;
+  SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&arena), a, sphere, o, &cut, nullptr));
+  const Outcome greedy = run(arena, cut, tetrahedra, BooleanOp::kDifference);
+  ASSERT_TRUE(greedy.status.is_ok()) << test::format(greedy.status);
+  EXPECT_TRUE(r.bytes == greedy.bytes);
+}
+
 // B without its triangles whose corners all lie beyond one side of `r` (strictly), and the
 // vertices only they use; the rest in their order (written here, not taken from the design).
 Mesh cropped(Arena& arena, const Mesh& b, const Aabb& r) {
