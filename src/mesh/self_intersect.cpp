@@ -1445,10 +1445,17 @@ struct HierarchyPass {
   // against all of b at once; those that share a cleared vertex dropped (their stars are
   // embedded), the rest decided one by one, counted in *candidates. True when the tally is
   // full.
-  bool leaf_pairs(const Leaf& a, const Leaf& b, bool same, Tally* found, uint64_t* tested) const {
+  bool leaf_pairs(const Leaf& a, const Leaf& b, const Dop& da, const Dop& db, bool same,
+                  Tally* found, uint64_t* tested) const {
     const uint32_t valid = (1u << b.count) - 1;
-    for (uint32_t i = 0; i < a.count; ++i) {
-      const uint32_t lanes = same ? valid & ~((2u << i) - 1) : valid;
+    // Two leaves: only the triangles of each whose DOP overlaps the other leaf's (its node's
+    // DOP, the union of its lanes') can overlap one of its triangles.
+    uint32_t rows = (1u << a.count) - 1;
+    const uint32_t cols = same ? valid : valid & overlapping_lanes(da, b);
+    if (!same) rows &= overlapping_lanes(db, a);
+    for (; rows != 0; rows &= rows - 1) {
+      const uint32_t i = static_cast<uint32_t>(lowest_bit(rows));
+      const uint32_t lanes = same ? valid & ~((2u << i) - 1) : cols;
       if (lanes == 0) break;
       const uint32_t si = a.first + i;
       uint32_t bits = overlapping_lanes(lane_dop(a, i), b) & lanes;
@@ -1544,7 +1551,9 @@ struct HierarchyPass {
         continue;
       }
       const Node& na = nodes[p.a];
-      *stop = leaf_pairs(leaves[na.leaf], leaves[nodes[p.b].leaf], p.a == p.b, found, tested);
+      const Node& nb = nodes[p.b];
+      *stop =
+          leaf_pairs(leaves[na.leaf], leaves[nb.leaf], na.dop, nb.dop, p.a == p.b, found, tested);
       if (p.a == p.b) *done += na.count;
     }
     return Status::ok();
