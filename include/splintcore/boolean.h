@@ -96,6 +96,13 @@ struct BooleanOptions {
   // blockout's swept surface leaves thousands of such islands near the splint). The border
   // must lie outside A as any nudge moves it (the blockout's eighth of a voxel is far more).
   bool b_border_outside_a = false;
+  // When not null: the returned result's check_mesh report (mesh.h), made by the result check
+  // in place of its own edge pass (the same decisions; check_mesh's memory, about 40 bytes a
+  // triangle, for the edge pass's 24), so that a caller who reports on the result does not pay
+  // for a second pass over its edges. BooleanStats::result_report_made says whether it was
+  // made: not when that memory was not there (the check then pairs the edges its own way, with
+  // the same result) or the call failed.
+  MeshReport* result_report = nullptr;
 };
 
 struct BooleanStats {
@@ -116,8 +123,9 @@ struct BooleanStats {
   // The returned result was checked exactly for self-intersections and has none
   // (options.check_self_intersection; with several passes, the final pass's result).
   bool self_intersection_checked = false;
-  uint32_t attempts = 0;  // 1 + the nudges tried (with both orders of the passes: both's)
-  Vec3 nudge{};           // A's translation in the returned result
+  bool result_report_made = false;  // *options.result_report holds the returned result's report
+  uint32_t attempts = 0;            // 1 + the nudges tried (with both orders of the passes: both's)
+  Vec3 nudge{};                     // A's translation in the returned result
   // How far A's own faces moved in the returned result: with several passes every pass's nudge
   // added (each moves all that came before it), else nudge.
   Vec3 nudge_sum{};

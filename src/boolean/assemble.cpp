@@ -283,6 +283,35 @@ Status edges_paired(Arena& arena, const Mesh& mesh, bool* paired) {
   return Status::ok();
 }
 
+// Whether every edge of the result is used by exactly two triangles in opposite directions and
+// no triangle repeats a vertex (edges_paired's answer; false also when it could not tell),
+// through check_mesh when the caller asked for the result's report (options_.result_report):
+// then a degenerate triangle, which edges_paired does not look for, also answers false, which
+// sends the caller to check_closed_oriented as a flat triangle does (the same decisions).
+Status BooleanRun::pair_result_edges(const Mesh& result, bool* paired) {
+  *paired = false;
+  st_.result_report_made = false;
+  if (options_.result_report != nullptr) {
+    MeshReport& r = *options_.result_report;
+    const Status e = check_mesh(ctx_, result, &r);
+    if (e.is_ok()) {
+      st_.result_report_made = true;
+      *paired = r.boundary_edges == 0 && r.nonmanifold_edges == 0 && r.orientation_conflicts == 0 &&
+                r.degenerate_triangles == 0;
+      return Status::ok();
+    }
+    if (e.code() != StatusCode::kArenaExhausted) return e;
+    arena_.forget_failure();  // the edge pass below needs less
+  }
+  const Status e = edges_paired(arena_, result, paired);
+  if (!e.is_ok()) {
+    if (e.code() != StatusCode::kArenaExhausted) return e;
+    arena_.forget_failure();  // check_closed_oriented's own request is the one to report
+    *paired = false;
+  }
+  return Status::ok();
+}
+
 // The result as the file will hold it: no two intersection points rounded together, every
 // edge used exactly twice in opposite directions (closed, edge-manifold, oriented), no flat
 // triangle (exact), positive volume; then, when asked, no self-intersection. Linear except for
@@ -305,14 +334,7 @@ Status BooleanRun::check_result(Mesh* result) {
   // same answer, faster); only when one fails (or edges_paired runs out of arena) does
   // check_closed_oriented itself run, so every error, and the order of the checks, is as before.
   bool paired = false;
-  {
-    const Status e = edges_paired(arena_, *result, &paired);
-    if (!e.is_ok()) {
-      if (e.code() != StatusCode::kArenaExhausted) return e;
-      arena_.forget_failure();  // check_closed_oriented's own request is the one to report
-      paired = false;
-    }
-  }
+  SPLINTCORE_RETURN_IF_ERROR(pair_result_edges(*result, &paired));
   Status s;
   if (!paired || find_flat_triangle(*result) != kNoTriangle || !(mesh_volume(*result) > 0)) {
     double volume = 0;

@@ -560,6 +560,7 @@ void add_stats(const BooleanStats& p, BooleanStats* total) {
   total->output_triangles = p.output_triangles;
   total->output_triangles_a = p.output_triangles_a;
   total->self_intersection_checked = p.self_intersection_checked;  // the final pass's result
+  total->result_report_made = p.result_report_made;
   total->nudge = p.nudge;
   total->nudge_sum = total->nudge_sum + p.nudge_sum;
 }
@@ -721,7 +722,10 @@ Status run_passes(const Context& ctx, const Mesh& a, const Mesh& b, const Shells
     }
     // Intermediate results are checked closed and oriented by the run; the exact
     // self-intersection check is left to the final result.
-    if (!last) o.check_self_intersection = false;
+    if (!last) {
+      o.check_self_intersection = false;
+      o.result_report = nullptr;
+    }
     Mesh result;
     BooleanStats ps;
     // (The groups are copies of B's valid shells; the intersection's union a checked result.)

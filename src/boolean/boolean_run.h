@@ -504,6 +504,7 @@ class BooleanRun {
   int8_t uncut_state(uint32_t t, const uint32_t c[3]) const;
   Status classify();
   Status assemble(Mesh* result);
+  Status pair_result_edges(const Mesh& result, bool* paired);
   Status check_result(Mesh* result);
   Status check_merged_fans(const Triangle* tris, size_t nt, const uint32_t* remap, uint32_t nv);
   struct FloodSide;  // classify.cpp: one mesh's flood, one method per stage

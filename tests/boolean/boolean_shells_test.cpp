@@ -454,6 +454,73 @@ TEST(BooleanShells, WhenTheOrderBySizeFailsTheGreedyOrderIsTried) {
   EXPECT_TRUE(r.bytes == greedy.bytes);
 }
 
+// Every figure of two reports the same (the first offenders too).
+void expect_same_report(const MeshReport& x, const MeshReport& y) {
+  EXPECT_EQ(x.vertex_count, y.vertex_count);
+  EXPECT_EQ(x.triangle_count, y.triangle_count);
+  EXPECT_EQ(x.unreferenced_vertices, y.unreferenced_vertices);
+  EXPECT_EQ(x.edge_count, y.edge_count);
+  EXPECT_EQ(x.boundary_edges, y.boundary_edges);
+  EXPECT_EQ(x.boundary_loops, y.boundary_loops);
+  EXPECT_EQ(x.nonmanifold_edges, y.nonmanifold_edges);
+  EXPECT_EQ(x.orientation_conflicts, y.orientation_conflicts);
+  EXPECT_EQ(x.degenerate_triangles, y.degenerate_triangles);
+  EXPECT_EQ(x.duplicate_triangles, y.duplicate_triangles);
+  EXPECT_EQ(x.shells, y.shells);
+  EXPECT_EQ(x.euler_characteristic, y.euler_characteristic);
+  EXPECT_EQ(x.genus, y.genus);
+  EXPECT_EQ(x.area, y.area);
+  EXPECT_EQ(x.volume, y.volume);
+  EXPECT_TRUE(x.bounds.lo == y.bounds.lo && x.bounds.hi == y.bounds.hi);
+}
+
+// BooleanOptions::result_report: check_mesh's report of the returned result, made by the
+// result check itself (a fine sphere with a box cut off its side: the result is mostly A, so
+// that check_mesh's memory, at the end, is the run's peak). At every arena cap that gives a
+// result, the result is the same bytes as without the report, and the report, when made, is
+// check_mesh's; some caps are too small for check_mesh's memory but not for the check's own
+// edge pass: the result all the same, without the report. (Without the self-intersection
+// check, whose memory would come after and hide check_mesh's.)
+TEST(BooleanShells, TheResultCheckMakesTheResultsReport) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a(&arena);
+  add_sphere(Vec3{2, 2, 2}, 1.5, 48, 96, &a);
+  const Mesh b = boxes_mesh(arena, {Box{{3.2, 1.5, 1.5}, {4, 2.5, 2.5}}});
+  const Outcome plain = run(arena, a, b, BooleanOp::kDifference);
+  ASSERT_TRUE(plain.status.is_ok()) << test::format(plain.status);
+  BooleanOptions o;
+  o.float32_output = false;
+  o.check_self_intersection = false;
+  MeshReport report;
+  o.result_report = &report;
+  int made = 0, not_made = 0;
+  for (size_t cap = 4096; cap <= (size_t{4} << 20); cap += 4096) {
+    TestArena small(cap);
+    Mesh ca, cb, out;
+    if (!test::copy_mesh(small.arena, a, &ca) || !test::copy_mesh(small.arena, b, &cb)) continue;
+    BooleanStats st;
+    report = MeshReport{};
+    if (!mesh_boolean(Context(&small.arena), ca, cb, o, &out, &st).is_ok()) continue;
+    const uint8_t* v = reinterpret_cast<const uint8_t*>(out.vertices.data());
+    const uint8_t* t = reinterpret_cast<const uint8_t*>(out.triangles.data());
+    std::vector<uint8_t> bytes(v, v + out.vertices.size() * sizeof(Vec3));
+    bytes.insert(bytes.end(), t, t + out.triangles.size() * sizeof(Triangle));
+    EXPECT_TRUE(bytes == plain.bytes) << "cap " << cap;
+    if (!st.result_report_made) {
+      ++not_made;
+      continue;
+    }
+    ++made;
+    MeshReport again;
+    SPLINTCORE_ASSERT_OK(check_mesh(Context(&arena), out, &again));
+    expect_same_report(report, again);
+    if (made > 1 && not_made > 0) break;
+  }
+  EXPECT_GT(made, 0);
+  EXPECT_GT(not_made, 0) << "no cap left the report out";
+}
+
 // B without its triangles whose corners all lie beyond one side of `r` (strictly), and the
 // vertices only they use; the rest in their order (written here, not taken from the design).
 Mesh cropped(Arena& arena, const Mesh& b, const Aabb& r) {
