@@ -37,13 +37,12 @@ inline void store_f32(uint8_t* p, float f) {
 // since converting an out-of-range double to float is undefined behaviour. False when the
 // value is not finite or beyond float32 range.
 inline bool to_float(const Vec3& v, float out[3]) {
-  const double c[3] = {v.x, v.y, v.z};
-  bool ok = true;
-  for (int a = 0; a < 3; ++a) {
-    // Also false for NaN; infinities fail the range test.
-    ok = ok && c[a] <= kFloatMax && c[a] >= -kFloatMax;
-    out[a] = ok ? static_cast<float>(c[a]) : 0.0f;
-  }
+  // Also false for NaN; infinities fail the range test. (Without branches: each test alone.)
+  const bool ok = (v.x <= kFloatMax) & (v.x >= -kFloatMax) & (v.y <= kFloatMax) &
+                  (v.y >= -kFloatMax) & (v.z <= kFloatMax) & (v.z >= -kFloatMax);
+  out[0] = ok ? static_cast<float>(v.x) : 0.0f;
+  out[1] = ok ? static_cast<float>(v.y) : 0.0f;
+  out[2] = ok ? static_cast<float>(v.z) : 0.0f;
   return ok;
 }
 
