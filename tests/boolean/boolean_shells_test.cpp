@@ -472,6 +472,16 @@ void expect_same_report(const MeshReport& x, const MeshReport& y) {
   EXPECT_EQ(x.area, y.area);
   EXPECT_EQ(x.volume, y.volume);
   EXPECT_TRUE(x.bounds.lo == y.bounds.lo && x.bounds.hi == y.bounds.hi);
+  const EdgeRef* ex[3] = {&x.first_boundary_edge, &x.first_nonmanifold_edge,
+                          &x.first_orientation_conflict};
+  const EdgeRef* ey[3] = {&y.first_boundary_edge, &y.first_nonmanifold_edge,
+                          &y.first_orientation_conflict};
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_TRUE(ex[i]->v0 == ey[i]->v0 && ex[i]->v1 == ey[i]->v1 &&
+                ex[i]->triangle == ey[i]->triangle);
+  }
+  EXPECT_EQ(x.first_degenerate_triangle, y.first_degenerate_triangle);
+  EXPECT_EQ(x.first_duplicate_triangle, y.first_duplicate_triangle);
 }
 
 // BooleanOptions::result_report: check_mesh's report of the returned result, made by the
