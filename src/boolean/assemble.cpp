@@ -335,8 +335,15 @@ Status BooleanRun::check_result(Mesh* result) {
   // check_closed_oriented itself run, so every error, and the order of the checks, is as before.
   bool paired = false;
   SPLINTCORE_RETURN_IF_ERROR(pair_result_edges(*result, &paired));
+  // With the caller's report made, paired says too that no triangle is flat (its degenerate
+  // triangles are find_flat_triangle's, exactly: collinear3d) and the report's volume is
+  // mesh_volume's, the same arithmetic in the same order: neither scan is needed again.
+  const MeshReport* report = st_.result_report_made ? options_.result_report : nullptr;
+  const bool solid = report != nullptr ? paired && report->volume > 0
+                                       : paired && find_flat_triangle(*result) == kNoTriangle &&
+                                             mesh_volume(*result) > 0;
   Status s;
-  if (!paired || find_flat_triangle(*result) != kNoTriangle || !(mesh_volume(*result) > 0)) {
+  if (!solid) {
     double volume = 0;
     s = check_closed_oriented(ctx_, *result, &volume);
   }
