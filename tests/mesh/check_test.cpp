@@ -334,29 +334,6 @@ MeshReport model_report(const Mesh& mesh) {
   return r;
 }
 
-void expect_same_topology(const MeshReport& got, const MeshReport& want) {
-  EXPECT_EQ(got.edge_count, want.edge_count);
-  EXPECT_EQ(got.boundary_edges, want.boundary_edges);
-  EXPECT_EQ(got.nonmanifold_edges, want.nonmanifold_edges);
-  EXPECT_EQ(got.orientation_conflicts, want.orientation_conflicts);
-  EXPECT_EQ(got.duplicate_triangles, want.duplicate_triangles);
-  EXPECT_EQ(got.shells, want.shells);
-  EXPECT_EQ(got.euler_characteristic, want.euler_characteristic);
-  EXPECT_EQ(got.genus, want.genus);
-  const EdgeRef* g[3] = {&got.first_boundary_edge, &got.first_nonmanifold_edge,
-                         &got.first_orientation_conflict};
-  const EdgeRef* w[3] = {&want.first_boundary_edge, &want.first_nonmanifold_edge,
-                         &want.first_orientation_conflict};
-  for (int i = 0; i < 3; ++i) {
-    EXPECT_EQ(g[i]->v0, w[i]->v0) << i;
-    EXPECT_EQ(g[i]->v1, w[i]->v1) << i;
-    EXPECT_EQ(g[i]->triangle, w[i]->triangle) << i;
-  }
-  if (want.duplicate_triangles > 0) {
-    EXPECT_EQ(got.first_duplicate_triangle, want.first_duplicate_triangle);
-  }
-}
-
 // Random index triples over few vertices: non-manifold edges, repeated ids, duplicates in any
 // order, shells touching at a vertex, conflicts; and closed meshes with triangles appended.
 TEST(CheckMesh, PropertyEdgePassAgreesWithAPlainModel) {
@@ -388,7 +365,7 @@ TEST(CheckMesh, PropertyEdgePassAgreesWithAPlainModel) {
     MeshReport got;
     ASSERT_TRUE(check_mesh(Context(&t.arena), mesh, &got).is_ok());
     SCOPED_TRACE(round);
-    expect_same_topology(got, model_report(mesh));
+    test::expect_same_topology(got, model_report(mesh));
     // The measures are taken in the check's own pass: the same bits as the functions.
     EXPECT_EQ(got.area, mesh_area(mesh));
     EXPECT_EQ(got.volume, mesh_volume(mesh));

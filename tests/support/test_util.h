@@ -294,6 +294,31 @@ inline std::string golden_hash(const std::string& key) {
 }
 #endif
 
+// Two mesh reports' topology the same: edges, borders, shells, Euler characteristic, genus, and
+// the first offending edges (and the first duplicate, when there is one).
+inline void expect_same_topology(const MeshReport& got, const MeshReport& want) {
+  EXPECT_EQ(got.edge_count, want.edge_count);
+  EXPECT_EQ(got.boundary_edges, want.boundary_edges);
+  EXPECT_EQ(got.nonmanifold_edges, want.nonmanifold_edges);
+  EXPECT_EQ(got.orientation_conflicts, want.orientation_conflicts);
+  EXPECT_EQ(got.duplicate_triangles, want.duplicate_triangles);
+  EXPECT_EQ(got.shells, want.shells);
+  EXPECT_EQ(got.euler_characteristic, want.euler_characteristic);
+  EXPECT_EQ(got.genus, want.genus);
+  const EdgeRef* g[3] = {&got.first_boundary_edge, &got.first_nonmanifold_edge,
+                         &got.first_orientation_conflict};
+  const EdgeRef* w[3] = {&want.first_boundary_edge, &want.first_nonmanifold_edge,
+                         &want.first_orientation_conflict};
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(g[i]->v0, w[i]->v0) << i;
+    EXPECT_EQ(g[i]->v1, w[i]->v1) << i;
+    EXPECT_EQ(g[i]->triangle, w[i]->triangle) << i;
+  }
+  if (want.duplicate_triangles > 0) {
+    EXPECT_EQ(got.first_duplicate_triangle, want.first_duplicate_triangle);
+  }
+}
+
 }  // namespace test
 }  // namespace splintcore
 
