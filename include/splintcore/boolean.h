@@ -97,8 +97,9 @@ struct BooleanOptions {
   // must lie outside A as any nudge moves it (the blockout's eighth of a voxel is far more).
   bool b_border_outside_a = false;
   // When not null: the returned result's check_mesh report (mesh.h), made by the result check
-  // in place of its own edge pass (the same decisions; check_mesh's memory, about 40 bytes a
-  // triangle, for the edge pass's 24), so that a caller who reports on the result does not pay
+  // in place of its own edge pass (the same decisions; check_mesh's memory, check_mesh_bound:
+  // about 69 bytes a triangle and 21 a vertex, for the edge pass's 12 and 12; 2.8 MB more at
+  // the real dentition's peak), so that a caller who reports on the result does not pay
   // for a second pass over its edges. BooleanStats::result_report_made says whether it was
   // made: not when that memory was not there (the check then pairs the edges its own way, with
   // the same result) or the call failed.
