@@ -157,8 +157,9 @@ struct BooleanStats {
 // all of it is returned before the one pass when there is one group. With several groups it
 // stays (with 4 more bytes per vertex of B) below the passes, and each pass also has the
 // previous result and one group's copy of its shells below it. A pass (difference and
-// intersection) works on a copy of B's triangles near A: 4 bytes per vertex of B, then about
-// 28 per near vertex and 17 per near triangle, the run's own arrays sized by the near part;
+// intersection) where half of B's triangles or fewer are near A works on a copy of those: 4
+// bytes per vertex of B, then about 28 per near vertex and 17 per near triangle, the run's own
+// arrays sized by the near part (with more near, on B itself: the same result);
 // its result is checked after it has been moved down over the run's temporaries (the exact
 // self-intersection check: about 270 bytes per result triangle). Threads: with ctx.executor
 // the pair tests of the near triangles of B run in tasks (each with 4 bytes per triangle of A

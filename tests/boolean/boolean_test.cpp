@@ -250,6 +250,46 @@ TEST(BooleanTest, TwoShellsInB) {
   EXPECT_NEAR(i.volume, d1.volume + d2.volume, 1e-12);
 }
 
+// B's triangles near A are copied out when they are half of B or less, and B is used as it is
+// when more are near: either way the result's bytes are those of the near shell alone (the
+// copy renumbers in B's order; far shells before it only offset its ids).
+TEST(BooleanTest, FarShellsOfBChangeNoByteWhetherOrNotNearBIsCopied) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  Mesh tooth = sphere_mesh(arena, 0.45, 16, 32, rotation(0.3, -0.2, 0.7, {0.52, 0.47, 0.93}));
+  const Mesh far_big = sphere_mesh(arena, 0.45, 16, 32, rotation(0, 0, 0, {5, 5, 5}));
+  const Mesh far_small = sphere_mesh(arena, 0.3, 6, 12, rotation(0, 0, 0, {-4, 5, 0}));
+  Mesh mostly_far(&arena);  // its near triangles copied
+  append_mesh(far_big, &mostly_far);
+  append_mesh(tooth, &mostly_far);
+  append_mesh(sphere_mesh(arena, 0.45, 16, 32, rotation(0, 0, 0, {0.5, 4, 0.5})), &mostly_far);
+  append_mesh(sphere_mesh(arena, 0.45, 16, 32, rotation(0, 0, 0, {4, 0.5, 0.5})), &mostly_far);
+  Mesh mostly_near(&arena);  // used as it is, the tooth's ids offset
+  append_mesh(far_small, &mostly_near);
+  append_mesh(tooth, &mostly_near);
+  ASSERT_LT(4 * far_small.triangles.size(), tooth.triangles.size());
+  std::string hash[3];
+  uint64_t near[3] = {};
+  const Mesh* bs[3] = {&tooth, &mostly_far, &mostly_near};
+  for (int k = 0; k < 3; ++k) {
+    ArenaScope scope(arena);
+    Mesh out;
+    BooleanStats st;
+    SPLINTCORE_ASSERT_OK(
+        mesh_boolean(Context(&arena), a, *bs[k], opts(BooleanOp::kDifference), &out, &st));
+    near[k] = st.near_b_triangles;
+    hash[k] = test::mesh_sha256(out);
+  }
+  // The tooth: more than half of it near A's box, a quarter of mostly_far.
+  EXPECT_GT(2 * near[0], tooth.triangles.size());
+  EXPECT_LE(2 * near[1], mostly_far.triangles.size());
+  EXPECT_EQ(near[1], near[0]);
+  EXPECT_EQ(near[2], near[0]);
+  EXPECT_EQ(hash[1], hash[0]);
+  EXPECT_EQ(hash[2], hash[0]);
+}
+
 // One edge of A (the box's edge along x) crosses the surfaces of many small spheres of B: 40
 // points on one edge of A take the two-pass numbering of the intersection points (runs of
 // one edge longer than 32), 20 the insertion path; both give valid results with the volume
@@ -751,16 +791,20 @@ TEST(BooleanThreads, TheBoundIsPassedAtTheSameTriangle) {
 // The tasks' memory is extra, taken only when the arena has it: at every cap two threads
 // succeed where one does, with the same bytes, and run out where one runs out.
 TEST(BooleanThreads, TwoThreadsFitWhereOneFits) {
-  const ThreadedRun one = threaded_difference({1, 1, 1}, 0, 0, 0);
+  // A box low enough that fewer than half of the sphere's 16,128 triangles are near it: the run
+  // works on a copy of those, and some caps fit the run on one thread but not the tasks'.
+  const ThreadedRun one = threaded_difference({1, 1, 0.75}, 0, 0, 0);
   SPLINTCORE_ASSERT_OK(one.status);
-  const ThreadedRun two = threaded_difference({1, 1, 1}, 2, one.high_water, 0);
+  ASSERT_LE(one.stats.near_b_triangles, 16128u / 2);
+  ASSERT_GT(one.stats.near_b_triangles, 4096u);  // enough for the tasks
+  const ThreadedRun two = threaded_difference({1, 1, 0.75}, 2, one.high_water, 0);
   expect_same_run(two, one, 2);
   EXPECT_GT(two.stats.parallel_near_triangles, 0u);
   bool fell_back = false;
   for (size_t k = 1; k <= 32; ++k) {
     const size_t cap = one.high_water * k / 32;
-    const ThreadedRun serial = threaded_difference({1, 1, 1}, 0, cap, 0);
-    const ThreadedRun parallel = threaded_difference({1, 1, 1}, 2, cap, 0);
+    const ThreadedRun serial = threaded_difference({1, 1, 0.75}, 0, cap, 0);
+    const ThreadedRun parallel = threaded_difference({1, 1, 0.75}, 2, cap, 0);
     EXPECT_EQ(parallel.status.code(), serial.status.code()) << "cap " << cap;
     EXPECT_STREQ(parallel.status.message(), serial.status.message()) << "cap " << cap;
     EXPECT_EQ(parallel.bytes, serial.bytes) << "cap " << cap;
