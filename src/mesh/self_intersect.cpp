@@ -28,6 +28,10 @@
 #include "geometry/lanes2.h"
 #include "geometry/plane_filter.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace splintcore {
 
 namespace {
@@ -247,7 +251,24 @@ inline bool no_lane(Lanes8 m) {
   return (h[0] | h[1]) == 0;
 }
 
-// Bit j set when lane j is (m: lanes all ones or all zeros).
+// Bit j set when lane j is (m: lanes all ones or all zeros). On x86-64 the lanes are packed
+// to bytes (saturating: -1 stays -1, 0 stays 0) and their sign bits taken in one instruction
+// (pmovmskb), where the portable form takes eight: the walk asks this of every row of a leaf
+// (about 25M instructions of 465M on the real dentition's result). The same bits either way.
+#if defined(__SSE2__)
+inline uint32_t lane_bits(Lanes8 m) {
+  __m128i x;
+  std::memcpy(&x, &m, sizeof(x));
+  return static_cast<uint32_t>(_mm_movemask_epi8(_mm_packs_epi16(x, x))) & 0xffu;
+}
+inline uint32_t lane_bits(Mask4 lo, Mask4 hi) {  // lanes 0-3, then 4-7
+  __m128i a, b;
+  std::memcpy(&a, &lo, sizeof(a));
+  std::memcpy(&b, &hi, sizeof(b));
+  const __m128i w = _mm_packs_epi32(a, b);
+  return static_cast<uint32_t>(_mm_movemask_epi8(_mm_packs_epi16(w, w))) & 0xffu;
+}
+#else
 inline uint32_t lane_bits(Lanes8 m) {
   const Halves h = reinterpret_cast<Halves>(m & Lanes8{1, 2, 4, 8, 16, 32, 64, 128});
   uint64_t x = h[0] | h[1];
@@ -261,6 +282,7 @@ inline uint32_t lane_bits(Mask4 lo, Mask4 hi) {  // lanes 0-3, then 4-7
   const uint64_t x = a[0] | a[1] | b[0] | b[1];
   return static_cast<uint32_t>((x | (x >> 32)) & 0xffu);
 }
+#endif
 
 inline int lowest_bit(uint32_t x) { return __builtin_ctz(x); }
 inline int bit_count(uint32_t x) {  // (no popcount instruction in the x86-64 baseline)
