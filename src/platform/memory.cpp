@@ -73,6 +73,76 @@ TouchHook arena_prefault_hook() {
   return h;
 }
 
+ArenaToucher::ArenaToucher(void* buffer, size_t bytes, size_t ahead)
+    : buffer_(static_cast<unsigned char*>(buffer)),
+      bytes_(buffer != nullptr ? bytes : 0),
+      ahead_(ahead) {
+  if (bytes_ == 0) return;
+  target_ = ahead_ < bytes_ ? ahead_ : bytes_;
+  thread_ = std::thread([this] { loop(); });
+}
+
+ArenaToucher::~ArenaToucher() {
+  if (!thread_.joinable()) return;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  more_.notify_one();
+  thread_.join();
+}
+
+TouchHook ArenaToucher::hook() {
+  if (bytes_ == 0) return arena_prefault_hook();
+  TouchHook h;
+  h.touch = &ArenaToucher::touch;
+  h.user = this;
+  return h;
+}
+
+// The arena is about to use [begin, begin + bytes): the target moved to `ahead` beyond it,
+// then a wait until the thread has touched all of it.
+void ArenaToucher::touch(void* self, void* begin, size_t bytes) {
+  ArenaToucher* t = static_cast<ArenaToucher*>(self);
+  const size_t end = static_cast<size_t>(static_cast<unsigned char*>(begin) - t->buffer_) + bytes;
+  std::unique_lock<std::mutex> lock(t->mutex_);
+  const size_t want = t->bytes_ - end > t->ahead_ ? end + t->ahead_ : t->bytes_;
+  if (want > t->target_) {
+    t->target_ = want;
+    t->more_.notify_one();
+  }
+  t->done_.wait(lock, [t, end] { return t->done_bytes_ >= end; });
+}
+
+// A MiB at a time: prefaulted, then a byte of each page read (the host maps the page then).
+void ArenaToucher::loop() {
+  constexpr size_t kChunk = size_t{1} << 20;
+  static const long kPage = ::sysconf(_SC_PAGESIZE);
+  const size_t page = kPage > 0 ? static_cast<size_t>(kPage) : 4096;
+  unsigned sink = 0;
+  for (;;) {
+    size_t from, to;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      more_.wait(lock, [this] { return stopping_ || done_bytes_ < target_; });
+      if (stopping_) break;
+      from = done_bytes_;
+      to = target_ - from > kChunk ? from + kChunk : target_;
+    }
+    prefault(nullptr, buffer_ + from, to - from);
+    const volatile unsigned char* p = buffer_;
+    // (From the first page that starts in the chunk: one starting before it was read with
+    // the chunk before, and may be in the arena's use now.)
+    for (size_t i = (from + page - 1) / page * page; i < to; i += page) sink += p[i];
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_bytes_ = to;
+    }
+    done_.notify_all();
+  }
+  static_cast<void>(sink);
+}
+
 void release_arena_memory(void* p, uint64_t bytes) {
   const uint64_t size = mapped_size(bytes);
   if (p != nullptr && size != 0) (void)::munmap(p, static_cast<size_t>(size));

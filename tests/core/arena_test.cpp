@@ -319,5 +319,54 @@ TEST(ArenaMemory, PrefaultHookMakesThePagesAheadResident) {
   release_arena_memory(p, bytes);
 }
 
+// The tools' toucher (two threads or more): what the arena hands out is resident when it is
+// handed out, and the thread never goes past `ahead` beyond the furthest point the arena has
+// reached (nor past the buffer); without memory it is the prefault hook, with no thread.
+TEST(ArenaMemory, ToucherStaysAheadOfTheArenaAndNoFurther) {
+  const uint64_t bytes = uint64_t{16} << 20;
+  const size_t mib = size_t{1} << 20;
+  EXPECT_EQ(ArenaToucher(nullptr, 0, mib).hook().touch, arena_prefault_hook().touch);
+  alignas(64) static unsigned char idle[4096];  // (never written)
+  for (int i = 0; i < 20; ++i) ArenaToucher started_and_stopped(idle, sizeof(idle), 1);
+  void* p = acquire_arena_memory(bytes);
+  ASSERT_NE(p, nullptr);
+  const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
+  std::vector<unsigned char> resident((bytes + page - 1) / page);
+  const auto count = [&](size_t from, size_t to) {
+    EXPECT_EQ(::mincore(p, static_cast<size_t>(bytes), resident.data()), 0);
+    size_t n = 0;
+    for (size_t i = from / page; i < to / page; ++i) n += resident[i] & 1u;
+    return n;
+  };
+  {
+    ArenaToucher toucher(p, static_cast<size_t>(bytes), 2 * mib);
+    Arena arena(p, static_cast<size_t>(bytes));
+    arena.set_touch_hook(toucher.hook());  // step: 4 MiB
+    unsigned char* a = static_cast<unsigned char*>(arena.allocate(5 * mib));
+    ASSERT_NE(a, nullptr);
+    EXPECT_EQ(count(0, 5 * mib), 5 * mib / page);  // before any of it is written
+    a[0] = 1;
+    a[5 * mib - 1] = 2;
+    ASSERT_NE(arena.allocate(1), nullptr);  // past it: a step more
+    EXPECT_EQ(count(0, 9 * mib), 9 * mib / page);
+    EXPECT_EQ(a[0] + a[5 * mib - 1], 3);
+  }                                          // the thread stopped
+  EXPECT_EQ(count(11 * mib, 16 * mib), 0u);  // 9 MiB reached, 2 ahead
+  release_arena_memory(p, bytes);
+  // Ahead of everything: the thread stops at the buffer's end.
+  p = acquire_arena_memory(bytes);
+  ASSERT_NE(p, nullptr);
+  {
+    ArenaToucher toucher(p, 3 * mib, 64 * mib);
+    Arena arena(p, 3 * mib);
+    arena.set_touch_hook(toucher.hook());
+    EXPECT_NE(arena.allocate(3 * mib), nullptr);
+    EXPECT_EQ(arena.allocate(1), nullptr);
+  }
+  EXPECT_EQ(count(0, 3 * mib), 3 * mib / page);
+  EXPECT_EQ(count(3 * mib, 16 * mib), 0u);
+  release_arena_memory(p, bytes);
+}
+
 }  // namespace
 }  // namespace splintcore

@@ -107,6 +107,7 @@ struct Run {
   const char* command;
   const CommonArgs& args;
   RunMemory memory;
+  ArenaToucher toucher;  // with --threads 2 or more (see Run::Run)
   Arena arena;
   ThreadExecutor threads;
   Context ctx;
