@@ -66,9 +66,11 @@ int rejected(const CommonArgs& args, const char* command, const Status& s, const
 }
 
 // How far ahead of the arena's furthest point ArenaToucher keeps the memory touched. The real
-// dentition's Boolean reaches 15 MiB of its 22 MiB peak while it reads its files (its first
-// 40 ms); at --threads 2, 4 and 8 MiB were as fast as 16 and 32 (12 rounds each, alternated).
-constexpr size_t kTouchAhead = size_t{8} << 20;
+// dentition's Boolean reaches 15 MiB of its 23 MiB peak while it reads its files (its first
+// 40 ms). At --threads 2, 4 MiB was as fast as 8, 16 and 32 (12 and 16 rounds, alternated) and
+// 2 MiB slower; what is touched beyond the peak is the thread's time lost, beside the
+// self-intersection check's two threads.
+constexpr size_t kTouchAhead = size_t{4} << 20;
 
 Run::Run(const Command& c, const CommonArgs& a)
     : command(c.name),
