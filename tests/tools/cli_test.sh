@@ -326,6 +326,37 @@ check "no output after an open A" -- test ! -e "$work/open.stl"
 expect_exit 1 "boolean under a tiny memory cap" -- "$tool" boolean --difference "$work/base.stl" "$work/maxilla.stl" -o "$work/small.stl" --memory-cap 300K
 check "tiny cap says arena exhausted" -- grep -qi "arena exhausted" "$work/err"
 check "no output after exhaustion" -- test ! -e "$work/small.stl"
+# A of two closed boxes that overlap (each a solid: their faces cross), B far away: the
+# result is A, which self-intersects; the check refuses it at one thread and at two (where
+# the file is written beside the check): exit 1, nothing left in the directory.
+mkdir -p "$work/si"
+python3 - "$work/si/a.stl" "$work/si/b.stl" <<'PY'
+import sys
+def box(lo, hi):
+    x = (lo[0], hi[0]); y = (lo[1], hi[1]); z = (lo[2], hi[2])
+    c = [(x[i & 1], y[(i >> 1) & 1], z[i >> 2]) for i in range(8)]
+    quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    tris = []
+    for a, b, e, d in quads:
+        tris += [(c[a], c[b], c[e]), (c[a], c[e], c[d])]
+    return tris
+def write(path, tris):
+    with open(path, "w") as f:
+        f.write("solid t\n")
+        for t in tris:
+            f.write(" facet normal 0 0 0\n  outer loop\n")
+            for v in t:
+                f.write("   vertex %g %g %g\n" % v)
+            f.write("  endloop\n endfacet\n")
+        f.write("endsolid t\n")
+write(sys.argv[1], box((0, 0, 0), (2, 2, 2)) + box((1, 1, 1), (3, 3, 3)))
+write(sys.argv[2], box((10, 10, 10), (11, 11, 11)))
+PY
+for t in 1 2; do
+  expect_exit 1 "boolean whose result self-intersects, $t thread(s)" -- "$tool" boolean --difference "$work/si/a.stl" "$work/si/b.stl" -o "$work/si/out.stl" --threads "$t"
+  check "the self-intersection named, $t thread(s)" -- grep -q "self-intersects" "$work/err"
+  check "nothing left after it, $t thread(s)" -- test "$(ls "$work/si")" = "$(printf 'a.stl\nb.stl')"
+done
 expect_exit 1 "boolean on a missing file" -- "$tool" boolean --difference "$work/base.stl" "$work/none.stl" -o "$work/none-out.stl"
 
 # Interference elimination (issue 6): the swept volume streamed to STL, and the splint minus it.
