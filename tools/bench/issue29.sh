@@ -32,6 +32,7 @@ fi
 
 echo
 echo "== the Boolean file to file: \`splintcore boolean --difference\`, whole process, one thread"
+echo "   (the last row two: the arena's memory is then touched ahead on a thread of its own)"
 echo "   (B read cropped to A's box; CGAL's whole process on the 324k phantom: 0.77-1.04 s,"
 echo "   Manifold's Boolean alone on the real dentition 0.57 s: ../shared/peers.md)"
 mkdir -p "$work/p324"
@@ -41,7 +42,9 @@ runs=("324k phantom (2 files, mandible opened 2 mm)|$work/p324/base.stl|$work/p3
 if [ -d "$realdata" ]; then
   "$bench" --realdata "$realdata" --export-realcase "$work/rb" >/dev/null
   "$tool" base "$work/rb/case.json" -o "$work/rb/base.stl" >/dev/null
-  runs+=("real dentition (31 tooth files, in occlusion)|$work/rb/base.stl|$(ls "$realdata"/maxilla/*.stl "$realdata"/mandible/*.stl | tr '\n' ' ')|")
+  teeth=$(ls "$realdata"/maxilla/*.stl "$realdata"/mandible/*.stl | tr '\n' ' ')
+  runs+=("real dentition (31 tooth files, in occlusion)|$work/rb/base.stl|$teeth|")
+  runs+=("the same at --threads 2|$work/rb/base.stl|$teeth|--threads 2")
 fi
 for row in "${runs[@]}"; do
   IFS='|' read -r name a b extra <<<"$row"
