@@ -282,6 +282,16 @@ TEST(Arena, TouchHookIsNotCalledInHooksMode) {
   EXPECT_TRUE(t.stretches.empty());
 }
 
+// The pages of [from, to) (whole pages) of the mapping at p, `bytes` long, that are resident.
+size_t resident_pages(void* p, uint64_t bytes, size_t from, size_t to) {
+  const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
+  std::vector<unsigned char> resident((bytes + page - 1) / page);
+  EXPECT_EQ(::mincore(p, static_cast<size_t>(bytes), resident.data()), 0);
+  size_t n = 0;
+  for (size_t i = from / page; i < to / page; ++i) n += resident[i] & 1u;
+  return n;
+}
+
 // The tools' hook prefaults: the pages the arena is about to hand out are resident (mincore)
 // before anything is written to them, and those beyond the last stretch are not.
 TEST(ArenaMemory, PrefaultHookMakesThePagesAheadResident) {
@@ -289,13 +299,7 @@ TEST(ArenaMemory, PrefaultHookMakesThePagesAheadResident) {
   void* p = acquire_arena_memory(bytes);
   ASSERT_NE(p, nullptr);
   const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
-  std::vector<unsigned char> resident((bytes + page - 1) / page);
-  const auto count = [&](size_t from, size_t to) {
-    EXPECT_EQ(::mincore(p, static_cast<size_t>(bytes), resident.data()), 0);
-    size_t n = 0;
-    for (size_t i = from / page; i < to / page; ++i) n += resident[i] & 1u;
-    return n;
-  };
+  const auto count = [&](size_t from, size_t to) { return resident_pages(p, bytes, from, to); };
   ASSERT_EQ(count(0, static_cast<size_t>(bytes)), 0u);
   // Is MADV_POPULATE_WRITE there (Linux 5.14 on)? Without it the hook does nothing.
 #ifdef MADV_POPULATE_WRITE
@@ -331,13 +335,7 @@ TEST(ArenaMemory, ToucherStaysAheadOfTheArenaAndNoFurther) {
   void* p = acquire_arena_memory(bytes);
   ASSERT_NE(p, nullptr);
   const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
-  std::vector<unsigned char> resident((bytes + page - 1) / page);
-  const auto count = [&](size_t from, size_t to) {
-    EXPECT_EQ(::mincore(p, static_cast<size_t>(bytes), resident.data()), 0);
-    size_t n = 0;
-    for (size_t i = from / page; i < to / page; ++i) n += resident[i] & 1u;
-    return n;
-  };
+  const auto count = [&](size_t from, size_t to) { return resident_pages(p, bytes, from, to); };
   {
     ArenaToucher toucher(p, static_cast<size_t>(bytes), 2 * mib);
     Arena arena(p, static_cast<size_t>(bytes));
