@@ -125,7 +125,8 @@ TouchHook arena_prefault_hook();
 // only memory the thread has finished with is handed out: the two never share a byte at
 // the same time. Nothing the arena hands out changes (its bytes are the kernel's zeros
 // either way). The thread stops when the toucher is destroyed (before the memory is given
-// back). With `bytes` 0 there is no thread and hook() is arena_prefault_hook().
+// back). An arena over more than `bytes` uses the rest as it is. With `bytes` 0 there is no
+// thread and hook() is arena_prefault_hook().
 class ArenaToucher {
  public:
   ArenaToucher(void* buffer, size_t bytes, size_t ahead);

@@ -101,10 +101,12 @@ TouchHook ArenaToucher::hook() {
 }
 
 // The arena is about to use [begin, begin + bytes): the target moved to `ahead` beyond it,
-// then a wait until the thread has touched all of it.
+// then a wait until the thread has touched all of it (of it within the toucher's bytes: an
+// arena over more than those uses the rest as it is).
 void ArenaToucher::touch(void* self, void* begin, size_t bytes) {
   ArenaToucher* t = static_cast<ArenaToucher*>(self);
-  const size_t end = static_cast<size_t>(static_cast<unsigned char*>(begin) - t->buffer_) + bytes;
+  size_t end = static_cast<size_t>(static_cast<unsigned char*>(begin) - t->buffer_) + bytes;
+  if (end > t->bytes_) end = t->bytes_;
   std::unique_lock<std::mutex> lock(t->mutex_);
   const size_t want = t->bytes_ - end > t->ahead_ ? end + t->ahead_ : t->bytes_;
   if (want > t->target_) {
