@@ -498,7 +498,7 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
   if (s.is_ok()) s = build_broadphase(ctx, a, b, reach, options.float32_output, b_valid, &bp);
   NearB near;
   // The copy pays when most of B is far (its 17 bytes a near triangle and 28 a near vertex
-  // against the run's arrays over all of B): not when half of B or more is near (the real
+  // against the run's arrays over all of B): not when more than half of B is near (the real
   // dentition's second pass: 161,098 of 161,219 triangles, 5.3 MB of copy for nothing).
   const bool bounded =
       options.op != BooleanOp::kUnion && bp.near_ids.size() <= b.triangles.size() / 2;

@@ -18,13 +18,18 @@ uint64_t mapped_size(uint64_t bytes) {
   return rounded > SIZE_MAX - kHuge ? 0 : rounded;
 }
 
+// The system's page size (4 KiB where it cannot say).
+size_t page_size() {
+  static const long kPage = ::sysconf(_SC_PAGESIZE);
+  return kPage > 0 ? static_cast<size_t>(kPage) : 4096;
+}
+
 // The touch hook of arena_prefault_hook(): the pages of [begin, begin + bytes) made resident
 // in one system call; where MADV_POPULATE_WRITE is missing or refused they fault in on use.
 void prefault(void*, void* begin, size_t bytes) {
 #ifdef MADV_POPULATE_WRITE
   // The stretch starts anywhere in a page: madvise takes whole pages.
-  static const long kPage = ::sysconf(_SC_PAGESIZE);
-  const uintptr_t page = kPage > 0 ? static_cast<uintptr_t>(kPage) : 4096;
+  const uintptr_t page = page_size();
   const uintptr_t start = reinterpret_cast<uintptr_t>(begin) & ~(page - 1);
   const uintptr_t end = reinterpret_cast<uintptr_t>(begin) + bytes;
   (void)::madvise(reinterpret_cast<void*>(start), static_cast<size_t>(end - start),
@@ -119,8 +124,7 @@ void ArenaToucher::touch(void* self, void* begin, size_t bytes) {
 // A MiB at a time: prefaulted, then a byte of each page read (the host maps the page then).
 void ArenaToucher::loop() {
   constexpr size_t kChunk = size_t{1} << 20;
-  static const long kPage = ::sysconf(_SC_PAGESIZE);
-  const size_t page = kPage > 0 ? static_cast<size_t>(kPage) : 4096;
+  const size_t page = page_size();
   unsigned sink = 0;
   for (;;) {
     size_t from, to;
