@@ -10,6 +10,7 @@ namespace splintcore {
 namespace {
 
 constexpr uint64_t kHuge = uint64_t{2} << 20;
+constexpr size_t kTouchChunk = size_t{1} << 20;  // ArenaToucher's unit of work, and its hook's step
 
 // The size actually mapped for `bytes`: whole 2 MiB pages; 0 when that does not fit.
 uint64_t mapped_size(uint64_t bytes) {
@@ -102,6 +103,7 @@ TouchHook ArenaToucher::hook() {
   TouchHook h;
   h.touch = &ArenaToucher::touch;
   h.user = this;
+  h.step = kTouchChunk;  // (see platform.h)
   return h;
 }
 
@@ -123,7 +125,7 @@ void ArenaToucher::touch(void* self, void* begin, size_t bytes) {
 
 // A MiB at a time: prefaulted, then a byte of each page read (the host maps the page then).
 void ArenaToucher::loop() {
-  constexpr size_t kChunk = size_t{1} << 20;
+  constexpr size_t kChunk = kTouchChunk;
   const size_t page = page_size();
   unsigned sink = 0;
   for (;;) {
