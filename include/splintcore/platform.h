@@ -36,6 +36,12 @@ class FileSource {
 // Output written atomically: bytes go to a temporary file in the destination's folder; commit()
 // flushes, syncs and renames it over the destination. Anything else (an error, a destructor
 // without commit) removes the temporary file, so a failed run never leaves an output behind.
+// On Linux the disk writes start while the rest is being written: each MiB written is handed
+// to the kernel's writeback (sync_file_range, SYNC_FILE_RANGE_WRITE: it starts the writes and
+// waits for none), so commit()'s fsync waits for the last of them, not all. Measured on the
+// project's VM (ext4), for the real dentition's 6.7 MB result: fsync 7.6-9.4 ms after a plain
+// write, 5.7-7.1 ms with the writeback started as it goes (12 runs); the boolean command at
+// --threads 2, whole process, 16 alternated rounds: median 162.5 -> 158.3 ms.
 class AtomicFile {
  public:
   AtomicFile() = default;
@@ -45,11 +51,23 @@ class AtomicFile {
 
   Status open(const char* path);
   ByteSink sink();  // seekable
+  // Optional, once everything is written: flushes, and starts the fsync on a thread of its
+  // own, so that the wait for the disk overlaps what the caller does next (the boolean command
+  // checks its result meanwhile: median 154.8 -> 150.8 ms for the real dentition at --threads
+  // 2, whole process, 16 alternated rounds). commit() waits for it; so do abort() and the
+  // destructor. Nothing may be written after it.
+  Status sync_in_background();
   Status commit();
   void abort();
 
  private:
+  static bool write(void* self, const uint8_t* data, size_t bytes);
+  static bool seek(void* self, uint64_t offset);
+
   std::FILE* file_ = nullptr;
+  std::thread syncer_;    // sync_in_background()'s fsync, when started
+  int sync_errno_ = 0;    // its errno (0: synced), read once it is joined
+  uint64_t started_ = 0;  // the bytes before this have had their writeback started
   char path_[4096] = {};
   char temp_path_[4096 + 32] = {};
   bool failed_ = false;

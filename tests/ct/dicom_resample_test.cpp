@@ -30,18 +30,7 @@ using cli::CtPhantom;
 using cli::CtPhantomOptions;
 using test::TestArena;
 
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const char* name) {
-    path = fs::temp_directory_path() /
-           (std::string("splintcore_resample_") + name + "_" + std::to_string(::getpid()));
-    fs::remove_all(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
+using test::TempDir;
 
 // A volume's slices written as a DICOM series at `positions`, read back (voxels copied out).
 using ReadBack = test::DicomRead;
@@ -188,7 +177,7 @@ TEST(CtDicomResample, FifteenDegreeGantryTiltMatchesTheUntiltedPhantom) {
   const CtVolume t = volume_of(&tilted, nx, ny, nz, f, spacing, positions[0]);
   const CtVolume u =
       volume_of(&untilted, nx, ny, nz, f, spacing, f.origin + f.axis_y * (24 * half_row));
-  TempDir dir("tilt");
+  TempDir dir("resample", "tilt");
   write_series(t, positions, dir);
   ReadBack r = read_folder(dir.path.string(), size_t{64} << 20);
   SPLINTCORE_ASSERT_OK(r.status);
@@ -279,7 +268,7 @@ TEST(CtDicomResample, UnevenSpacingAndAMissingSliceMatchTheEvenPhantom) {
   const CtVolume in = volume_of(&uneven, nx, ny, static_cast<uint32_t>(taken.size()), f,
                                 Vec3{0.5, 0.5, 0.5}, f.origin);
   const CtVolume e = volume_of(&even, nx, ny, nz, f, Vec3{0.5, 0.5, 0.5}, f.origin);
-  TempDir dir("uneven");
+  TempDir dir("resample", "uneven");
   write_series(in, positions, dir);
   ReadBack r = read_folder(dir.path.string(), size_t{64} << 20);
   SPLINTCORE_ASSERT_OK(r.status);
@@ -324,7 +313,7 @@ TEST(CtDicomResample, ExactArenaAndRefusals) {
   CtVolume frame;
   const CtVolume v = volume_of(&hu, nx, ny, nz, frame, Vec3{0.5, 0.5, 1.0}, Vec3{0, 0, 0});
   std::vector<Vec3> positions = {Vec3{0, 0, 0}, Vec3{0, 0.3, 1}, Vec3{0, 0.6, 2}, Vec3{0, 1.2, 4}};
-  TempDir dir("small");
+  TempDir dir("resample", "small");
   write_series(v, positions, dir);
   ReadBack r = read_folder(dir.path.string(), size_t{1} << 20);
   SPLINTCORE_ASSERT_OK(r.status);
@@ -343,7 +332,7 @@ TEST(CtDicomResample, ExactArenaAndRefusals) {
             std::string::npos)
       << test::format(refused.status);
 
-  TempDir far("far");
+  TempDir far("resample", "far");
   positions.back() = Vec3{0, 1.2, 6.5};  // 4.5 mm after a median of 1
   write_series(v, positions, far);
   r = read_folder(far.path.string(), size_t{1} << 20);

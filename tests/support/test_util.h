@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -35,8 +36,28 @@
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
 
+#include <unistd.h>
+
 namespace splintcore {
 namespace test {
+
+// A fresh folder in the system's temporary folder (splintcore_PREFIX_NAME_PID), removed with
+// everything in it when the test is done.
+struct TempDir {
+  std::filesystem::path path;
+  TempDir(const char* prefix, const char* name) {
+    path = std::filesystem::temp_directory_path() /
+           (std::string("splintcore_") + prefix + "_" + name + "_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+};
 
 // Sweeps over every cut or cap of an input, and long random properties, take every
 // kSweepStep-th point under the sanitizers (CI's asan job, SPLINTCORE_TEST_SANITIZED): the

@@ -200,12 +200,19 @@ const char* encoding_name(MeshFormat format) {
   return text ? "ascii" : "binary";
 }
 
-Status write_mesh_atomically(const Context& ctx, const Mesh& mesh, const char* path, bool ascii) {
-  AtomicFile out;
-  SPLINTCORE_RETURN_IF_ERROR(out.open(path));
+Status write_mesh_uncommitted(const Context& ctx, const Mesh& mesh, const char* path, bool ascii,
+                              AtomicFile* file) {
+  SPLINTCORE_RETURN_IF_ERROR(file->open(path));
   StlWriteOptions wo;
   wo.format = ascii ? StlFormat::kAscii : StlFormat::kBinary;
-  SPLINTCORE_RETURN_IF_ERROR(write_stl(ctx, mesh, out.sink(), wo));  // ~AtomicFile cleans up
+  const Status s = write_stl(ctx, mesh, file->sink(), wo);
+  if (!s.is_ok()) file->abort();
+  return s;
+}
+
+Status write_mesh_atomically(const Context& ctx, const Mesh& mesh, const char* path, bool ascii) {
+  AtomicFile out;
+  SPLINTCORE_RETURN_IF_ERROR(write_mesh_uncommitted(ctx, mesh, path, ascii, &out));
   return out.commit();
 }
 

@@ -122,6 +122,11 @@ const char* encoding_name(MeshFormat format);
 // only when everything succeeded.
 Status write_mesh_atomically(const Context& ctx, const Mesh& mesh, const char* path, bool ascii);
 
+// The same without the commit: `file` opened on `path` and the STL written into it; the
+// caller commits it (or it is removed: on an error here, by abort() or the destructor).
+Status write_mesh_uncommitted(const Context& ctx, const Mesh& mesh, const char* path, bool ascii,
+                              AtomicFile* file);
+
 // Writes bytes the same way.
 Status write_bytes_atomically(const std::string& path, const void* data, size_t size);
 Status write_bytes_atomically(const std::string& path, const std::string& bytes);

@@ -1,0 +1,111 @@
+// The hosted layer's atomic output (AtomicFile): what is in place after a commit, and that
+// nothing is left behind otherwise, with and without the fsync started in the background.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "splintcore/platform.h"
+#include "support/test_util.h"
+
+namespace splintcore {
+namespace {
+
+namespace fs = std::filesystem;
+using test::TempDir;
+
+// Bytes that differ from one offset to the next (a torn or misplaced write shows).
+std::vector<uint8_t> pattern(size_t n) {
+  std::vector<uint8_t> b(n);
+  for (size_t i = 0; i < n; ++i) b[i] = static_cast<uint8_t>(i * 131 + i / 977);
+  return b;
+}
+
+std::vector<uint8_t> contents(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+size_t entries(const fs::path& dir) {
+  size_t n = 0;
+  for (const auto& e : fs::directory_iterator(dir)) n += e.exists() ? 1 : 0;
+  return n;
+}
+
+// Writes `bytes` in 64,000-byte pieces (the STL writer's), then goes back and patches 4 bytes
+// at offset 80 (as a binary STL of unknown count does): more than the writeback's MiB step,
+// so the writeback is started several times and once before the seek.
+void write_pieces(AtomicFile* f, std::vector<uint8_t>* bytes) {
+  const ByteSink sink = f->sink();
+  for (size_t at = 0; at < bytes->size(); at += 64000) {
+    const size_t n = bytes->size() - at < 64000 ? bytes->size() - at : 64000;
+    ASSERT_TRUE(sink.write(sink.user, bytes->data() + at, n));
+  }
+  const uint8_t patch[4] = {1, 2, 3, 4};
+  ASSERT_TRUE(sink.seek(sink.user, 80));
+  ASSERT_TRUE(sink.write(sink.user, patch, 4));
+  ASSERT_TRUE(sink.seek(sink.user, bytes->size()));
+  std::copy(patch, patch + 4, bytes->begin() + 80);
+}
+
+TEST(AtomicFile, CommitPutsTheBytesInPlaceWithOrWithoutTheBackgroundSync) {
+  TempDir dir("file", "commit");
+  for (int background = 0; background < 2; ++background) {
+    const fs::path out = dir.path / ("out" + std::to_string(background) + ".bin");
+    std::vector<uint8_t> bytes = pattern((size_t{5} << 20) + 12345);
+    AtomicFile f;
+    SPLINTCORE_ASSERT_OK(f.open(out.string().c_str()));
+    write_pieces(&f, &bytes);
+    EXPECT_FALSE(fs::exists(out));  // only the temporary file so far
+    if (background == 1) {
+      SPLINTCORE_ASSERT_OK(f.sync_in_background());
+      EXPECT_FALSE(fs::exists(out));
+      EXPECT_FALSE(f.sync_in_background().is_ok());  // once
+    }
+    SPLINTCORE_ASSERT_OK(f.commit());
+    EXPECT_TRUE(contents(out) == bytes) << "background " << background;
+    EXPECT_EQ(entries(dir.path), static_cast<size_t>(background + 1));  // no temporary left
+  }
+}
+
+TEST(AtomicFile, AbortOrDestructionAfterTheBackgroundSyncLeavesNothing) {
+  TempDir dir("file", "abort");
+  const fs::path out = dir.path / "out.bin";
+  std::vector<uint8_t> bytes = pattern(size_t{3} << 20);
+  {
+    AtomicFile f;
+    SPLINTCORE_ASSERT_OK(f.open(out.string().c_str()));
+    write_pieces(&f, &bytes);
+    SPLINTCORE_ASSERT_OK(f.sync_in_background());
+    EXPECT_EQ(entries(dir.path), 1u);  // the temporary file
+    f.abort();
+    EXPECT_EQ(entries(dir.path), 0u);
+    EXPECT_FALSE(f.commit().is_ok());  // nothing left to commit
+  }
+  {
+    AtomicFile f;
+    SPLINTCORE_ASSERT_OK(f.open(out.string().c_str()));
+    write_pieces(&f, &bytes);
+    SPLINTCORE_ASSERT_OK(f.sync_in_background());
+  }  // destroyed while (or after) syncing
+  EXPECT_EQ(entries(dir.path), 0u);
+  // An earlier file of that name stays as it was when a later one is not committed.
+  const std::vector<uint8_t> first = pattern(1000);
+  {
+    AtomicFile f;
+    SPLINTCORE_ASSERT_OK(f.open(out.string().c_str()));
+    const ByteSink sink = f.sink();
+    ASSERT_TRUE(sink.write(sink.user, first.data(), first.size()));
+    SPLINTCORE_ASSERT_OK(f.commit());
+  }
+  {
+    AtomicFile f;
+    SPLINTCORE_ASSERT_OK(f.open(out.string().c_str()));
+    write_pieces(&f, &bytes);
+    SPLINTCORE_ASSERT_OK(f.sync_in_background());
+  }
+  EXPECT_TRUE(contents(out) == first);
+  EXPECT_EQ(entries(dir.path), 1u);
+}
+
+}  // namespace
+}  // namespace splintcore
