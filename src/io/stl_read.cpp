@@ -183,7 +183,8 @@ struct FloatCrop {
     const Mask4 magnitude = {0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff}, most = {l, l, l, l};
     const Mask4 over = ((bits[0] & magnitude) > most) | ((bits[1] & magnitude) > most) |
                        ((bits[2] & magnitude) > most);
-    return (beyond[0] | beyond[1] | beyond[2]) != 0 && (over[0] | over[1] | over[2]) == 0;
+    // (Lane 3 is never beyond: lo's is -inf and hi's +inf; nor over: its bits are 0.)
+    return mask4_bits(beyond) != 0 && mask4_bits(over) == 0;
   }
 };
 
