@@ -624,6 +624,34 @@ TEST(BooleanOpenB, BorderInsideAIsRefusedUpFrontAndOutsideAWorks) {
   EXPECT_LT(ok.volume, 1.0 / 6);
 }
 
+// The open-border check runs in ranges on the executor (its outcodes, edge counts and
+// fingerprints, and the keys of an open B): the same refusal, word for word, at every thread
+// count. B: a fine sphere (16,256 triangles, so that every range has some) without one
+// triangle of its south cap, which lies inside A.
+TEST(BooleanOpenB, TheRefusalIsTheSameAtEveryThreadCount) {
+  TestArena inputs(size_t{64} << 20);
+  Mesh a = box_mesh(inputs.arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  Mesh b =
+      sphere_mesh(inputs.arena, 0.45, 64, 128, RigidTransform::translation({0.52, 0.47, 0.93}));
+  ASSERT_LT(b.vertices[b.triangles[b.triangles.size() - 1].v[0]].z, 0.5);
+  b.triangles.pop_back();
+  std::string first;
+  for (unsigned threads : {0u, 1u, 2u, 3u}) {
+    TestArena run(size_t{64} << 20);
+    ThreadExecutor pool(threads == 0 ? 1 : threads);
+    const Context ctx(&run.arena, threads == 0 ? nullptr : &pool.executor(), nullptr);
+    Mesh out;
+    const Status s = mesh_boolean(ctx, a, b, opts(BooleanOp::kDifference), &out, nullptr);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidMesh) << threads << " threads: " << test::format(s);
+    const std::string m = s.message();
+    EXPECT_NE(m.find("B is open: 3 boundary edges in 1 loop; its border meets A at vertex "),
+              std::string::npos)
+        << m;
+    if (threads == 0) first = m;
+    EXPECT_EQ(m, first) << threads << " threads";
+  }
+}
+
 // With b_border_outside_a, B's uncut parts that reach the border of its near triangles are
 // outside A without a winding number (the blockout's swept surface leaves thousands of such
 // islands near the splint); a closed uncut part still takes one. A: two boxes with a gap in
