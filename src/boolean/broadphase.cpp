@@ -45,6 +45,43 @@ bool range_marked(const Broadphase& bp, const uint64_t* marked, const uint32_t l
   return false;
 }
 
+constexpr size_t kParallelMarkMin = 4096;  // near triangles of B below which one thread marks
+constexpr uint32_t kMaxMarkTasks = 8;
+
+// mark_near_cells for all of B's near triangles, on the executor when it has threads: each
+// task a range of them into a bitmap of its own (the first task's is `marked`), the others
+// then ORed into it: the same bits as one pass. The extra bitmaps are above everything (the
+// caller rewinds them); where they do not fit, one thread marks all, as it would without the
+// executor. (The real dentition's second pass: 161k near triangles, 45M instructions.)
+void mark_all_near_cells(const Context& ctx, const Broadphase& bp, const Mesh& b, size_t words,
+                         uint64_t* marked) {
+  const size_t n = bp.near_ids.size();
+  const Executor* executor = ctx.executor;
+  if (!has_threads(executor) || n < kParallelMarkMin) {
+    mark_near_cells(bp, b, 0, n, marked);
+    return;
+  }
+  const uint32_t tasks =
+      executor->concurrency < kMaxMarkTasks ? executor->concurrency : kMaxMarkTasks;
+  Arena& arena = *ctx.arena;
+  uint64_t* extra = arena.allocate_array<uint64_t>(words * (tasks - 1));
+  if (extra == nullptr) {
+    arena.forget_failure();
+    mark_near_cells(bp, b, 0, n, marked);
+    return;
+  }
+  auto task = [&](uint32_t i) {
+    uint64_t* bits = i == 0 ? marked : extra + words * (i - 1);
+    if (i > 0) std::memset(bits, 0, words * sizeof(uint64_t));
+    mark_near_cells(bp, b, n * i / tasks, n * (i + 1) / tasks, bits);
+  };
+  parallel_for_each(executor, tasks, task);
+  for (uint32_t i = 1; i < tasks; ++i) {
+    const uint64_t* bits = extra + words * (i - 1);
+    for (size_t w = 0; w < words; ++w) marked[w] |= bits[w];
+  }
+}
+
 // The grid's cell lists (bp->start, bp->items): the cells each triangle of A may meet
 // (triangle_cells, with `reach`: every attempt's A) among those the boxes of B's near
 // triangles cover (mark_near_cells: the only cells a pair test or a batch reads), so that
@@ -52,17 +89,19 @@ bool range_marked(const Broadphase& bp, const uint64_t* marked, const uint32_t l
 // each. One pass over the triangles counts the cells and notes them in order (triangle by
 // triangle, above the lists); the notes are then sorted into the lists by cell (a counting
 // sort, each cell's triangles ascending) and the lists moved down over them.
-Status list_cells(Arena& arena, const Mesh& a, const Mesh& b, double reach, Broadphase* bp) {
+Status list_cells(const Context& ctx, const Mesh& a, const Mesh& b, double reach, Broadphase* bp) {
+  Arena& arena = *ctx.arena;
   const uint32_t nta = static_cast<uint32_t>(a.triangles.size());
   const size_t cells = size_t{bp->dim[0]} * bp->dim[1] * bp->dim[2];
   uint32_t* start = arena.allocate_array<uint32_t>(cells + 1);
   if (start == nullptr) return arena.exhausted_status();
   std::memset(start, 0, (cells + 1) * sizeof(uint32_t));
   const Arena::Marker notes_at = arena.mark();
-  uint64_t* marked = arena.allocate_array<uint64_t>(cells / 64 + 1);
+  const size_t words = cells / 64 + 1;
+  uint64_t* marked = arena.allocate_array<uint64_t>(words);
   if (marked == nullptr) return arena.exhausted_status();
-  std::memset(marked, 0, (cells / 64 + 1) * sizeof(uint64_t));
-  mark_near_cells(*bp, b, 0, bp->near_ids.size(), marked);
+  std::memset(marked, 0, words * sizeof(uint64_t));
+  mark_all_near_cells(ctx, *bp, b, words, marked);
   uint32_t* note_end = arena.allocate_array<uint32_t>(nta);  // per triangle: end of its notes
   if (note_end == nullptr && nta > 0) return arena.exhausted_status();
   ArenaArray<uint32_t> notes(&arena);  // the cells, triangle by triangle
@@ -174,7 +213,7 @@ Status build_broadphase(const Context& ctx, const Mesh& a, const Mesh& b, double
   SPLINTCORE_RETURN_IF_ERROR(b_valid ? near_triangles_of_b<false>(arena, b, float32_output, bp)
                                      : near_triangles_of_b<true>(arena, b, float32_output, bp));
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "boolean: cull", 0, 1));
-  return list_cells(arena, a, b, reach, bp);
+  return list_cells(ctx, a, b, reach, bp);
 }
 
 void mark_near_cells(const Broadphase& bp, const Mesh& b, size_t begin, size_t end,
