@@ -76,6 +76,27 @@ void facet_normal(const float p[3][3], float n[3]) {
   n[2] = static_cast<float>(m.z);
 }
 
+// The binary record of triangle (a, b, c) at `out` (50 bytes); false, with nothing written,
+// when a corner cannot be written (not finite, beyond float32: add() names it).
+bool encode_binary(const Vec3& a, const Vec3& b, const Vec3& c, uint8_t* out) {
+  float p[3][3];
+  if (!to_float(a, p[0]) || !to_float(b, p[1]) || !to_float(c, p[2])) return false;
+  float n[3];
+  facet_normal(p, n);
+  for (int a3 = 0; a3 < 3; ++a3) store_f32(out + 4 * a3, n[a3]);
+  for (int k = 0; k < 3; ++k) {
+    for (int a3 = 0; a3 < 3; ++a3) store_f32(out + 12 + 12 * k + 4 * a3, p[k][a3]);
+  }
+  out[48] = 0;
+  out[49] = 0;
+  return true;
+}
+
+// A mesh's binary records are encoded in tasks (StlWriter::add_mesh) when the writer's buffer
+// holds at least this many: fewer, larger batches (each is one run of the executor).
+constexpr size_t kTaskBatchRecords = 8192;
+constexpr uint32_t kMaxWriteTasks = 16;
+
 size_t put_text(uint8_t* out, const char* text) {
   size_t n = std::strlen(text);
   std::memcpy(out, text, n);
@@ -186,20 +207,15 @@ Status StlWriter::add(const Vec3& a, const Vec3& b, const Vec3& c) {
       return unwritable(*corners[k], written_, k);
     }
   }
-  float n[3];
-  facet_normal(p, n);
   const size_t need = binary_ ? kRecordBytes : kMaxAsciiFacetBytes;
   if (capacity_ - used_ < need) SPLINTCORE_RETURN_IF_ERROR(flush());
   uint8_t* out = buffer_ + used_;
   if (binary_) {
-    for (int a3 = 0; a3 < 3; ++a3) store_f32(out + 4 * a3, n[a3]);
-    for (int k = 0; k < 3; ++k) {
-      for (int a3 = 0; a3 < 3; ++a3) store_f32(out + 12 + 12 * k + 4 * a3, p[k][a3]);
-    }
-    out[48] = 0;
-    out[49] = 0;
+    (void)encode_binary(a, b, c, out);  // (its corners are writable: checked above)
     used_ += kRecordBytes;
   } else {
+    float n[3];
+    facet_normal(p, n);
     size_t m = put_text(out, "  facet normal");
     m += put_triple(out + m, n);
     m += put_text(out + m, "    outer loop\n");
@@ -243,25 +259,82 @@ Status StlWriter::finish() {
   return Status::ok();
 }
 
-Status write_stl(const Context& ctx, const Mesh& mesh, const ByteSink& sink,
-                 const StlWriteOptions& options) {
-  ArenaScope scope(*ctx.arena);
-  StlWriter writer;
-  SPLINTCORE_RETURN_IF_ERROR(writer.begin(ctx, sink, options, mesh.triangles.size()));
+// Triangles [t, end) of the mesh encoded in tasks at the buffer's end, as add() would encode
+// them one by one; the first that add() would refuse (or whose indices are out of range) and
+// everything after it are left out. Returns how many were encoded (from t on).
+size_t StlWriter::encode_in_tasks(const Executor* executor, const Mesh& mesh, size_t t,
+                                  size_t end) {
   const Vec3* v = mesh.vertices.data();
   const size_t nv = mesh.vertices.size();
-  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+  uint8_t* out = buffer_ + used_;
+  uint32_t tasks = executor->concurrency < kMaxWriteTasks ? executor->concurrency : kMaxWriteTasks;
+  size_t stop[kMaxWriteTasks];
+  auto task = [&](uint32_t i) {
+    const size_t from = t + (end - t) * i / tasks, to = t + (end - t) * (i + 1) / tasks;
+    stop[i] = to;
+    for (size_t k = from; k < to; ++k) {
+      const Triangle& tri = mesh.triangles[k];
+      if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv ||
+          !encode_binary(v[tri.v[0]], v[tri.v[1]], v[tri.v[2]], out + kRecordBytes * (k - t))) {
+        stop[i] = k;
+        return;
+      }
+    }
+  };
+  parallel_for_each(executor, tasks, task);
+  size_t done = end;
+  for (uint32_t i = 0; i < tasks && done == end; ++i) {
+    if (stop[i] != t + (end - t) * (i + 1) / tasks) done = stop[i];
+  }
+  return done - t;
+}
+
+Status StlWriter::add_mesh(const Context& ctx, const Mesh& mesh) {
+  const Vec3* v = mesh.vertices.data();
+  const size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
+  const bool tasks =
+      binary_ && has_threads(ctx.executor) && capacity_ >= kTaskBatchRecords * kRecordBytes + 84;
+  for (size_t t = 0; t < nt;) {
+    if ((t & 0xffff) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "write", t, nt));
+    if (tasks && open_) {
+      // A batch: what the buffer holds, up to the next progress report, the declared count
+      // and the format's limit (add() says what is wrong past them).
+      if ((capacity_ - used_) / kRecordBytes < kTaskBatchRecords) {
+        SPLINTCORE_RETURN_IF_ERROR(flush());
+      }
+      size_t end = t + (capacity_ - used_) / kRecordBytes;
+      const size_t next_report = (t | 0xffff) + 1;
+      end = end < next_report ? end : next_report;
+      end = end < nt ? end : nt;
+      const uint64_t limit = count_known_ && declared_ < UINT32_MAX ? declared_ : UINT32_MAX;
+      const uint64_t room = limit > written_ ? limit - written_ : 0;
+      end = end - t < room ? end : t + static_cast<size_t>(room);
+      if (end > t) {
+        const size_t done = encode_in_tasks(ctx.executor, mesh, t, end);
+        used_ += kRecordBytes * done;
+        written_ += done;
+        t += done;
+        if (t == end) continue;  // else triangle t is refused below, as add() refuses it
+      }
+    }
     const Triangle& tri = mesh.triangles[t];
     if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) {
       return make_error(StatusCode::kInvalidMesh, "triangle ", t,
                         " refers to a vertex that does not exist")
           .at_index(t);
     }
-    if ((t & 0xffff) == 0) {
-      SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "write", t, mesh.triangles.size()));
-    }
-    SPLINTCORE_RETURN_IF_ERROR(writer.add(v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]));
+    SPLINTCORE_RETURN_IF_ERROR(add(v[tri.v[0]], v[tri.v[1]], v[tri.v[2]]));
+    ++t;
   }
+  return Status::ok();
+}
+
+Status write_stl(const Context& ctx, const Mesh& mesh, const ByteSink& sink,
+                 const StlWriteOptions& options) {
+  ArenaScope scope(*ctx.arena);
+  StlWriter writer;
+  SPLINTCORE_RETURN_IF_ERROR(writer.begin(ctx, sink, options, mesh.triangles.size()));
+  SPLINTCORE_RETURN_IF_ERROR(writer.add_mesh(ctx, mesh));
   return writer.finish();
 }
 

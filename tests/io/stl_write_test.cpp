@@ -19,6 +19,7 @@
 #include "splintcore/core.h"
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
+#include "splintcore/platform.h"
 #include "support/test_util.h"
 
 namespace {
@@ -33,6 +34,7 @@ using splintcore::kUnknownSize;
 using splintcore::MemorySink;
 using splintcore::MemorySource;
 using splintcore::Mesh;
+using splintcore::Progress;
 using splintcore::SoupTriangle;
 using splintcore::Status;
 using splintcore::StatusCode;
@@ -40,6 +42,7 @@ using splintcore::StlFormat;
 using splintcore::StlReadOptions;
 using splintcore::StlWriteOptions;
 using splintcore::StlWriter;
+using splintcore::ThreadExecutor;
 using splintcore::Triangle;
 using splintcore::Vec3;
 using splintcore::test::format;
@@ -716,6 +719,68 @@ TEST(StlWriteTest, AsciiSolidName) {
     o.format = StlFormat::kBinary;
     StlWriter wb;
     SPLINTCORE_EXPECT_OK(wb.begin(ctx, out.sink(), o, 0));
+  }
+}
+
+// add_mesh encodes binary records in tasks when the executor has threads and the buffer holds
+// 8,192 records or more: the same bytes, the same progress reports and the same error (with
+// what the sink got before it) as one thread, at every thread count. 70,000 triangles: past a
+// progress report (65,536) and over several batches, in the smallest task buffer (409,684
+// bytes) and a larger one; a NaN corner and an index out of range inside a batch.
+TEST(StlWriteTest, RecordsEncodedInTasksAreTheSameAsOneByOne) {
+  const std::vector<Tri> tris = random_tris(11, 70000);
+  struct Seen {
+    std::vector<uint64_t> done;
+    static bool report(void* user, const char* stage, uint64_t done, uint64_t) {
+      if (std::strcmp(stage, "write") == 0) static_cast<Seen*>(user)->done.push_back(done);
+      return true;
+    }
+  };
+  for (int fault = 0; fault < 3; ++fault) {
+    for (size_t buffer : {size_t{409684}, size_t{1} << 20}) {
+      SCOPED_TRACE("fault " + std::to_string(fault) + ", buffer " + std::to_string(buffer));
+      std::vector<uint8_t> first_bytes;
+      std::vector<uint64_t> first_done;
+      std::string first_status;
+      for (unsigned threads : {0u, 1u, 2u, 3u}) {
+        Arena& arena = shared_arena();
+        ArenaScope scope(arena);
+        Mesh mesh;
+        mesh_of(tris, arena, &mesh);
+        if (fault == 1) mesh.vertices[3 * 50001 + 2].y = std::numeric_limits<double>::quiet_NaN();
+        if (fault == 2) mesh.triangles[30001].v[1] = static_cast<uint32_t>(mesh.vertices.size());
+        ThreadExecutor pool(threads == 0 ? 1 : threads);
+        Seen seen;
+        Progress progress;
+        progress.report = &Seen::report;
+        progress.user = &seen;
+        const Context ctx(&arena, threads == 0 ? nullptr : &pool.executor(), &progress);
+        Output o;
+        StlWriteOptions options;
+        options.buffer_bytes = buffer;
+        const Status s = splintcore::write_stl(ctx, mesh, o.sink(), options);
+        EXPECT_EQ(s.is_ok(), fault == 0) << format(s);
+        if (fault > 0) {
+          EXPECT_EQ(s.index(), fault == 1 ? 50001u : 30001u);
+        }
+        if (threads == 0) {
+          first_bytes = o.bytes();
+          first_done = seen.done;
+          first_status = format(s);
+          if (fault == 0) {
+            EXPECT_EQ(first_bytes.size(), 84u + 50u * tris.size());
+          }
+          continue;
+        }
+        EXPECT_TRUE(o.bytes() == first_bytes) << threads << " threads";
+        EXPECT_EQ(seen.done, first_done) << threads << " threads";
+        EXPECT_EQ(format(s), first_status) << threads << " threads";
+      }
+      // (A fault stops the writing before the second report.)
+      const std::vector<uint64_t> reports =
+          fault == 0 ? std::vector<uint64_t>{0, 65536} : std::vector<uint64_t>{0};
+      EXPECT_EQ(first_done, reports);
+    }
   }
 }
 

@@ -200,11 +200,19 @@ const char* encoding_name(MeshFormat format) {
   return text ? "ascii" : "binary";
 }
 
+constexpr size_t kTaskWriteBuffer = size_t{1} << 20;
+
 Status write_mesh_uncommitted(const Context& ctx, const Mesh& mesh, const char* path, bool ascii,
                               AtomicFile* file) {
   SPLINTCORE_RETURN_IF_ERROR(file->open(path));
   StlWriteOptions wo;
   wo.format = ascii ? StlFormat::kAscii : StlFormat::kBinary;
+  // With threads, a buffer large enough for the records to be encoded in tasks (add_mesh),
+  // where the arena has room to spare for it.
+  const Arena& arena = *ctx.arena;
+  if (has_threads(ctx.executor) && arena.cap() - arena.used() >= kTaskWriteBuffer * 4) {
+    wo.buffer_bytes = kTaskWriteBuffer;
+  }
   const Status s = write_stl(ctx, mesh, file->sink(), wo);
   if (!s.is_ok()) file->abort();
   return s;
