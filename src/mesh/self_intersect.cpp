@@ -353,45 +353,96 @@ struct Grid {
   int margin[kLanes];
 };
 
-// Over all the vertices (radius: their largest coordinate magnitude). The bounds of each run,
-// then of the runs in order: the same values (and the first of equal ones) as one scan.
-Grid grid_of(const Executor* executor, const Vec3* v, size_t nv, double radius) {
+// One scan of the mesh in runs on the executor (one run of tasks for what were three scans):
+// each run's first triangle that refers to a vertex that does not exist, its vertices'
+// largest coordinate magnitude (-1: one outside the exact range, exact_radius()) and their
+// lanes' bounds (grid()). Each answer is the same, however the runs are shared out, as one
+// scan's.
+struct MeshScan {
+  size_t bad[kRuns];
+  double radius[kRuns];
   double run_lo[kRuns][kLanes], run_hi[kRuns][kLanes];
-  auto bounds = [&](uint32_t r) {
-    double u[kLanes];
-    const size_t first = run_start(nv, r);
-    for (size_t i = first; i < run_start(nv, r + 1); ++i) {
-      project(v[i], u);
-      for (int k = 0; k < kLanes; ++k) {
-        run_lo[r][k] = i == first || u[k] < run_lo[r][k] ? u[k] : run_lo[r][k];
-        run_hi[r][k] = i == first || u[k] > run_hi[r][k] ? u[k] : run_hi[r][k];
+
+  void run(const Executor* executor, const Vec3* v, size_t nv, const Triangle* tris, size_t nt) {
+    auto scan = [&](uint32_t r) {
+      bad[r] = nt;
+      for (size_t t = run_start(nt, r); t < run_start(nt, r + 1); ++t) {
+        const Triangle& tri = tris[t];
+        if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) {
+          bad[r] = t;
+          break;
+        }
       }
+      double largest = 0.0, u[kLanes];
+      const size_t first = run_start(nv, r);
+      for (size_t i = first; i < run_start(nv, r + 1); ++i) {
+        for (int a = 0; a < 3; ++a) {
+          const double x = std::fabs(v[i][a]);
+          if (x != 0.0 && !(x >= 0x1p-306 && x <= 0x1p100)) {  // NaN fails too
+            radius[r] = -1.0;
+            return;  // (no bounds: there is no grid then)
+          }
+          largest = x > largest ? x : largest;
+        }
+        project(v[i], u);
+        for (int k = 0; k < kLanes; ++k) {
+          run_lo[r][k] = i == first || u[k] < run_lo[r][k] ? u[k] : run_lo[r][k];
+          run_hi[r][k] = i == first || u[k] > run_hi[r][k] ? u[k] : run_hi[r][k];
+        }
+      }
+      radius[r] = largest;
+    };
+    parallel_for_each(executor, kRuns, scan);
+  }
+
+  // The first triangle that refers to a vertex that does not exist (nt: none): the first
+  // run's first.
+  size_t first_bad(size_t nt) const {
+    for (size_t t : bad) {
+      if (t != nt) return t;
     }
-  };
-  parallel_for_each(executor, kRuns, bounds);
-  double lo[kLanes], hi[kLanes];
-  for (int k = 0; k < kLanes; ++k) lo[k] = hi[k] = 0.0;
-  bool any = false;
-  for (uint32_t r = 0; r < kRuns; ++r) {
-    if (run_start(nv, r) == run_start(nv, r + 1)) continue;
+    return nt;
+  }
+
+  // The largest coordinate magnitude when every coordinate is finite and, when nonzero, within
+  // [2^-306, 2^100] (orient3d's exact range, geometry.h, and well inside float's and the DOP
+  // grid's), so that every filter's bound holds and every exact test is exact; -1 otherwise.
+  double exact_radius() const {
+    double largest = 0.0;
+    for (double x : radius) {
+      if (x < 0.0) return -1.0;
+      largest = x > largest ? x : largest;
+    }
+    return largest;
+  }
+
+  // The grid over all the vertices (radius: exact_radius(), not -1): the bounds of the runs
+  // in order, the same values (and the first of equal ones) as one scan.
+  Grid grid(size_t nv, double exact) const {
+    double lo[kLanes], hi[kLanes];
+    for (int k = 0; k < kLanes; ++k) lo[k] = hi[k] = 0.0;
+    bool any = false;
+    for (uint32_t r = 0; r < kRuns; ++r) {
+      if (run_start(nv, r) == run_start(nv, r + 1)) continue;
+      for (int k = 0; k < kLanes; ++k) {
+        lo[k] = !any || run_lo[r][k] < lo[k] ? run_lo[r][k] : lo[k];
+        hi[k] = !any || run_hi[r][k] > hi[k] ? run_hi[r][k] : hi[k];
+      }
+      any = true;
+    }
+    Grid g;
     for (int k = 0; k < kLanes; ++k) {
-      lo[k] = !any || run_lo[r][k] < lo[k] ? run_lo[r][k] : lo[k];
-      hi[k] = !any || run_hi[r][k] > hi[k] ? run_hi[r][k] : hi[k];
+      const double error = kErrorUnits[k] * 0x1p-53 * exact * (1.0 + 1e-9);
+      const double extent = hi[k] - lo[k];
+      double scale = k < kAxes && extent > 0.0 ? 64000.0 / extent : 0.0;
+      if (error * scale > 600.0) scale = 600.0 / error;  // margins stay within 16 bits
+      g.origin[k] = lo[k];
+      g.scale[k] = scale;
+      g.margin[k] = k < kAxes ? 2 + static_cast<int>(error * scale) : 0;  // 1 + ceil(E scale)
     }
-    any = true;
+    return g;
   }
-  Grid g;
-  for (int k = 0; k < kLanes; ++k) {
-    const double error = kErrorUnits[k] * 0x1p-53 * radius * (1.0 + 1e-9);
-    const double extent = hi[k] - lo[k];
-    double scale = k < kAxes && extent > 0.0 ? 64000.0 / extent : 0.0;
-    if (error * scale > 600.0) scale = 600.0 / error;  // margins stay within 16 bits
-    g.origin[k] = lo[k];
-    g.scale[k] = scale;
-    g.margin[k] = k < kAxes ? 2 + static_cast<int>(error * scale) : 0;  // 1 + ceil(E scale)
-  }
-  return g;
-}
+};
 
 // A DOP from its lanes' bounds.
 inline Dop dop_of(const int16_t (&lo)[kLanes], const int16_t (&hi)[kLanes]) {
@@ -893,56 +944,6 @@ struct Tally {
     return max_pairs != 0 && report->intersecting_pairs >= max_pairs;
   }
 };
-
-// The largest coordinate magnitude when every coordinate is finite and, when nonzero, within
-// [2^-306, 2^100] (orient3d's exact range, geometry.h, and well inside float's and the DOP
-// grid's), so that every filter's bound holds and every exact test is exact; -1 otherwise.
-// In runs on the executor (the largest of the runs' largest, or -1 when any run fails).
-double exact_range_radius(const Executor* executor, const Vec3* v, size_t n) {
-  double run_radius[kRuns];
-  auto scan = [&](uint32_t r) {
-    double radius = 0.0;
-    for (size_t i = run_start(n, r); i < run_start(n, r + 1); ++i) {
-      for (int a = 0; a < 3; ++a) {
-        const double x = std::fabs(v[i][a]);
-        if (x != 0.0 && !(x >= 0x1p-306 && x <= 0x1p100)) {  // NaN fails too
-          run_radius[r] = -1.0;
-          return;
-        }
-        radius = x > radius ? x : radius;
-      }
-    }
-    run_radius[r] = radius;
-  };
-  parallel_for_each(executor, kRuns, scan);
-  double radius = 0.0;
-  for (double x : run_radius) {
-    if (x < 0.0) return -1.0;
-    radius = x > radius ? x : radius;
-  }
-  return radius;
-}
-
-// The first triangle that refers to a vertex that does not exist (nt: none), in runs on the
-// executor: the first run's first.
-size_t first_bad_triangle(const Executor* executor, const Triangle* tris, size_t nt, size_t nv) {
-  size_t run_bad[kRuns];
-  auto scan = [&](uint32_t r) {
-    run_bad[r] = nt;
-    for (size_t t = run_start(nt, r); t < run_start(nt, r + 1); ++t) {
-      const Triangle& tri = tris[t];
-      if (tri.v[0] >= nv || tri.v[1] >= nv || tri.v[2] >= nv) {
-        run_bad[r] = t;
-        return;
-      }
-    }
-  };
-  parallel_for_each(executor, kRuns, scan);
-  for (size_t t : run_bad) {
-    if (t != nt) return t;
-  }
-  return nt;
-}
 
 // Degenerate: a repeated vertex id, or collinear corners (exactly; with `filters`, a component
 // of the normal that orient2d's filter finds nonzero settles most triangles first).
@@ -1879,21 +1880,23 @@ Status find_self_intersections(const Context& ctx, const Mesh& mesh, uint64_t ma
   }
   const Vec3* v = mesh.vertices.data();
   const Triangle* tris = mesh.triangles.data();
-  const size_t bad = first_bad_triangle(ctx.executor, tris, nt, nv);
+  MeshScan scan;
+  scan.run(ctx.executor, v, nv, tris, nt);
+  const size_t bad = scan.first_bad(nt);
   if (bad != nt) {
     return make_error(StatusCode::kInvalidMesh, "triangle ", bad,
                       " refers to a vertex that does not exist")
         .at_index(bad);
   }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "self-intersection", 0, nt));
-  const double radius = exact_range_radius(ctx.executor, v, nv);
+  const double radius = scan.exact_radius();
   if (radius < 0.0) {
     // Non-finite or extreme coordinates: no filter bound holds and nothing is exact there;
     // the sweep over boxes answers as it always has.
     Tally tally{report, max_pairs};
     return sweep(ctx, v, tris, nt, nullptr, &tally);
   }
-  const Grid grid = grid_of(ctx.executor, v, nv, radius);
+  const Grid grid = scan.grid(nv, radius);
   if (nv <= 3 * nt && nv < UINT32_MAX) {
     // All pairs are counted unless there are more than max_pairs: the pass stops at one more.
     Tally all{report, max_pairs != 0 && max_pairs != UINT64_MAX ? max_pairs + 1 : 0};
