@@ -336,21 +336,23 @@ TEST(ArenaMemory, ToucherStaysAheadOfTheArenaAndNoFurther) {
   ASSERT_NE(p, nullptr);
   const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
   const auto count = [&](size_t from, size_t to) { return resident_pages(p, bytes, from, to); };
+  const size_t step = mib / 4;  // the hook's
   {
     ArenaToucher toucher(p, static_cast<size_t>(bytes), 2 * mib);
     Arena arena(p, static_cast<size_t>(bytes));
-    ASSERT_EQ(toucher.hook().step, mib);
+    ASSERT_EQ(toucher.hook().step, step);
     arena.set_touch_hook(toucher.hook());
     unsigned char* a = static_cast<unsigned char*>(arena.allocate(5 * mib));
     ASSERT_NE(a, nullptr);
     EXPECT_EQ(count(0, 5 * mib), 5 * mib / page);  // before any of it is written
     a[0] = 1;
     a[5 * mib - 1] = 2;
-    ASSERT_NE(arena.allocate(1), nullptr);  // past it: a step (a MiB) more
-    EXPECT_EQ(count(0, 6 * mib), 6 * mib / page);
+    ASSERT_NE(arena.allocate(1), nullptr);  // past it: a step more
+    EXPECT_EQ(count(0, 5 * mib + step), (5 * mib + step) / page);
     EXPECT_EQ(a[0] + a[5 * mib - 1], 3);
-  }                                         // the thread stopped
-  EXPECT_EQ(count(8 * mib, 16 * mib), 0u);  // 6 MiB reached, 2 ahead
+  }  // the thread stopped
+  // 5 MiB and a step reached, 2 MiB ahead: nothing from 7 MiB and a step on.
+  EXPECT_EQ(count(7 * mib + step, 16 * mib), 0u);
   release_arena_memory(p, bytes);
   // Ahead of everything: the thread stops at the end of its bytes; an arena over more uses
   // the rest as it is (and does not wait for it).
