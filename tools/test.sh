@@ -144,7 +144,7 @@ run_ctest_job() {  # name cxx build_type extra-cmake-args...
     clang-O0) exclude=(-R "$bytes_tests" -E "$slow_properties|$realdata_tests|$slow_decimation")
               bytes_only=1 ;;
     asan) exclude=(-E "$slow_properties|$realdata_tests|$slow_decimation|$asan_long") ;;
-    tsan) exclude=(-R 'Thread|Parallel|Executor|ArenaMemory') ;;  # those that run threads
+    tsan) exclude=(-R 'Thread|Parallel|Executor|ArenaMemory|AtomicFile|InTasks') ;;  # those that run threads
     *) exclude=(-E "$slow_properties|$realdata_tests") ;;
   esac
   echo "=== $name: $cxx $type $*"
