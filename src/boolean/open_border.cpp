@@ -21,7 +21,8 @@ namespace splintcore {
 namespace {
 
 // The sides of B's triangles [begin, end) whose edges meet the region, as (smaller id << 32 |
-// larger id), into keys (when not null); their count, and the XOR of their hashes.
+// larger id), into keys (kList); their count, and the XOR of their hashes.
+template <bool kList>
 size_t near_edges(const Mesh& b, size_t begin, size_t end, const uint8_t* code, uint64_t* keys,
                   uint64_t* fingerprint) {
   size_t n = 0;
@@ -32,7 +33,7 @@ size_t near_edges(const Mesh& b, size_t begin, size_t end, const uint8_t* code, 
       const uint32_t p = tri.v[k], q = tri.v[(k + 1) % 3];
       if (p == q || (code[p] & code[q]) != 0) continue;
       const uint64_t key = p < q ? (uint64_t{p} << 32 | q) : (uint64_t{q} << 32 | p);
-      if (keys != nullptr) keys[n] = key;
+      if (kList) keys[n] = key;
       *fingerprint ^= hash_mix(key);
       ++n;
     }
@@ -52,8 +53,9 @@ class NearEdges {
   void outcodes(const Aabb& region) {
     const Vec3* v = b_.vertices.data();
     const size_t nv = b_.vertices.size();
-    auto task = [&](uint32_t i) {
-      for (size_t k = part(nv, i); k < part(nv, i + 1); ++k) code_[k] = region.outcode(v[k]);
+    uint8_t* code = code_;  // (a local: a byte stored through a member could alias the member)
+    auto task = [v, nv, code, &region](uint32_t i) {
+      for (size_t k = part(nv, i); k < part(nv, i + 1); ++k) code[k] = region.outcode(v[k]);
     };
     parallel_for_each(executor_, kRanges, task);
   }
@@ -78,8 +80,10 @@ class NearEdges {
     const size_t nt = b_.triangles.size();
     auto task = [&](uint32_t i) {
       uint64_t f = 0;
-      count_[i] = near_edges(b_, part(nt, i), part(nt, i + 1), code_,
-                             keys != nullptr ? keys + start_[i] : nullptr, &f);
+      count_[i] =
+          keys != nullptr
+              ? near_edges<true>(b_, part(nt, i), part(nt, i + 1), code_, keys + start_[i], &f)
+              : near_edges<false>(b_, part(nt, i), part(nt, i + 1), code_, nullptr, &f);
       fingerprint_[i] = f;
     };
     parallel_for_each(executor_, kRanges, task);

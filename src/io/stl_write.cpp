@@ -201,17 +201,19 @@ Status StlWriter::add(const Vec3& a, const Vec3& b, const Vec3& c) {
   }
   float p[3][3];
   const Vec3* corners[3] = {&a, &b, &c};
-  for (int k = 0; k < 3; ++k) {
-    if (!to_float(*corners[k], p[k])) {
-      open_ = false;  // the output is incomplete: no finish() may seal it
-      return unwritable(*corners[k], written_, k);
-    }
+  uint8_t record[kRecordBytes];
+  if (!(binary_ ? encode_binary(a, b, c, record)
+                : to_float(a, p[0]) && to_float(b, p[1]) && to_float(c, p[2]))) {
+    int k = 0;
+    while (to_float(*corners[k], p[k])) ++k;
+    open_ = false;  // the output is incomplete: no finish() may seal it
+    return unwritable(*corners[k], written_, k);
   }
   const size_t need = binary_ ? kRecordBytes : kMaxAsciiFacetBytes;
   if (capacity_ - used_ < need) SPLINTCORE_RETURN_IF_ERROR(flush());
   uint8_t* out = buffer_ + used_;
   if (binary_) {
-    (void)encode_binary(a, b, c, out);  // (its corners are writable: checked above)
+    std::memcpy(out, record, kRecordBytes);
     used_ += kRecordBytes;
   } else {
     float n[3];
