@@ -497,6 +497,12 @@ inline bool has_threads(const Executor* executor) {
   return executor != nullptr && executor->concurrency > 1;
 }
 
+// Where task i of `tasks` starts when n things are shared out in order: task i does
+// [task_start(n, i, tasks), task_start(n, i + 1, tasks)).
+inline size_t task_start(size_t n, uint32_t i, uint32_t tasks) {
+  return static_cast<size_t>(uint64_t{n} * i / tasks);
+}
+
 void parallel_for(const Executor* executor, uint32_t count, TaskFunction task, void* context);
 
 template <class F>

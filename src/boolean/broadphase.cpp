@@ -73,7 +73,7 @@ void mark_all_near_cells(const Context& ctx, const Broadphase& bp, const Mesh& b
   auto task = [&](uint32_t i) {
     uint64_t* bits = i == 0 ? marked : extra + words * (i - 1);
     if (i > 0) std::memset(bits, 0, words * sizeof(uint64_t));
-    mark_near_cells(bp, b, n * i / tasks, n * (i + 1) / tasks, bits);
+    mark_near_cells(bp, b, task_start(n, i, tasks), task_start(n, i + 1, tasks), bits);
   };
   parallel_for_each(executor, tasks, task);
   for (uint32_t i = 1; i < tasks; ++i) {

@@ -75,7 +75,7 @@ class NearEdges {
 
  private:
   static constexpr uint32_t kRanges = 8;
-  static size_t part(size_t n, uint32_t i) { return n / kRanges * i + n % kRanges * i / kRanges; }
+  static size_t part(size_t n, uint32_t i) { return task_start(n, i, kRanges); }
   void run(uint64_t* keys) {
     const size_t nt = b_.triangles.size();
     auto task = [&](uint32_t i) {

@@ -272,7 +272,8 @@ size_t StlWriter::encode_in_tasks(const Executor* executor, const Mesh& mesh, si
   uint32_t tasks = executor->concurrency < kMaxWriteTasks ? executor->concurrency : kMaxWriteTasks;
   size_t stop[kMaxWriteTasks];
   auto task = [&](uint32_t i) {
-    const size_t from = t + (end - t) * i / tasks, to = t + (end - t) * (i + 1) / tasks;
+    const size_t from = t + task_start(end - t, i, tasks),
+                 to = t + task_start(end - t, i + 1, tasks);
     stop[i] = to;
     for (size_t k = from; k < to; ++k) {
       const Triangle& tri = mesh.triangles[k];
@@ -286,7 +287,7 @@ size_t StlWriter::encode_in_tasks(const Executor* executor, const Mesh& mesh, si
   parallel_for_each(executor, tasks, task);
   size_t done = end;
   for (uint32_t i = 0; i < tasks && done == end; ++i) {
-    if (stop[i] != t + (end - t) * (i + 1) / tasks) done = stop[i];
+    if (stop[i] != t + task_start(end - t, i + 1, tasks)) done = stop[i];
   }
   return done - t;
 }

@@ -342,9 +342,7 @@ constexpr double kErrorUnits[kLanes] = {0, 0, 0, 5, 5, 5, 5, 0};
 // on the executor: run r of n things is n * r / kRuns .. n * (r + 1) / kRuns - 1. Every stage gives
 // the same result however it is cut, so the results do not depend on the thread count.
 constexpr uint32_t kRuns = 8;
-inline size_t run_start(size_t n, uint32_t r) {
-  return static_cast<size_t>(uint64_t{n} * r / kRuns);
-}
+inline size_t run_start(size_t n, uint32_t r) { return task_start(n, r, kRuns); }
 
 // The quantization of each direction (the pad lane: scale 0, margin 0).
 struct Grid {
