@@ -204,8 +204,8 @@ Status StlWriter::add(const Vec3& a, const Vec3& b, const Vec3& c) {
   uint8_t record[kRecordBytes];
   if (!(binary_ ? encode_binary(a, b, c, record)
                 : to_float(a, p[0]) && to_float(b, p[1]) && to_float(c, p[2]))) {
-    int k = 0;
-    while (to_float(*corners[k], p[k])) ++k;
+    int k = 0;  // the first corner that cannot be written (the last when the others can)
+    while (k < 2 && to_float(*corners[k], p[k])) ++k;
     open_ = false;  // the output is incomplete: no finish() may seal it
     return unwritable(*corners[k], written_, k);
   }
