@@ -418,6 +418,19 @@ sc_status sc_case_get_params(sc_context* ctx, const sc_case* c, sc_case_params* 
  * The printer name must stay valid while the case is used (a string literal or the value
  * sc_case_get_params gave). No arena. Errors: SC_INVALID_ARGUMENT (naming the parameter). */
 sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* params);
+/* A case with a clearance keeps it through sc_case_set_params only with blockout on and
+ * SC_BLOCKOUT_VOXEL (inset 0) or SC_BLOCKOUT_HEIGHTFIELD, within 20 voxels: other parameters
+ * are refused (the message names the clearance; set it to 0 first). */
+
+/* The spacer between teeth and splint ("blockout": {"clearance"}, mm; docs/case-format.md):
+ * the imprint is the surface that far outside each jaw's swept volume. 0: none (also without
+ * blockout). sc_case_get_blockout_clearance writes it to *out_mm. sc_case_set_blockout_clearance
+ * sets it: 0 always; otherwise the case needs blockout with SC_BLOCKOUT_VOXEL (inset 0) or
+ * SC_BLOCKOUT_HEIGHTFIELD (set them with sc_case_set_params first), and mm within the case
+ * file's range (0 to 20 voxels, at most 2 mm). On error nothing changes. No arena.
+ * Errors: SC_INVALID_ARGUMENT (naming the value or the parameter in the way). */
+sc_status sc_case_get_blockout_clearance(sc_context* ctx, const sc_case* c, double* out_mm);
+sc_status sc_case_set_blockout_clearance(sc_context* ctx, sc_case* c, double mm);
 
 /* Writes the case as a case file (JSON, format version 1; write_case of design.h) to `sink`:
  * every key it uses, numbers as the shortest text that reads back to the same double, so that

@@ -287,6 +287,30 @@ Status check_params(const sc_case_params& p, const PrinterProfile** profile) {
   return Status::ok();
 }
 
+// A clearance of `mm` with these blockout parameters, as a case file could say it: none, or
+// blockout with the voxel method (inset 0) or the height field, within 20 voxels (at most 2 mm).
+// Errors name `function` and, when another parameter is in the way, the clearance.
+Status check_clearance(const char* function, double mm, const sc_case_params& p) {
+  if (mm == 0) return Status::ok();
+  SPLINTCORE_RETURN_IF_ERROR(check_range_of(function, "the clearance in mm", mm,
+                                            "blockout.clearance", p.blockout_voxel_mm));
+  if (p.blockout == 0) {
+    return make_error(StatusCode::kInvalidArgument, function, ": a clearance (", mm,
+                      " mm) needs blockout (turn it on with sc_case_set_params)");
+  }
+  if (p.blockout_method != SC_BLOCKOUT_VOXEL && p.blockout_method != SC_BLOCKOUT_HEIGHTFIELD) {
+    return make_error(StatusCode::kInvalidArgument, function, ": a clearance (", mm,
+                      " mm) needs blockout_method SC_BLOCKOUT_VOXEL or SC_BLOCKOUT_HEIGHTFIELD "
+                      "(set the clearance to 0 first with sc_case_set_blockout_clearance)");
+  }
+  if (p.blockout_method == SC_BLOCKOUT_VOXEL && p.blockout_inset_mm != 0) {
+    return make_error(StatusCode::kInvalidArgument, function, ": blockout_inset_mm (",
+                      p.blockout_inset_mm, ") and a clearance (", mm,
+                      " mm) exclude each other: set one of them to 0");
+  }
+  return Status::ok();
+}
+
 // The case's upper or lower picks, or nullptr (NULL case, unknown `which`).
 const Span<const Pick>* case_picks(const sc_case* c, int which) {
   if (c == nullptr) return nullptr;
@@ -868,9 +892,13 @@ sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* 
     return null_argument(ctx, "sc_case_set_params", "the case or the parameters");
   }
   const PrinterProfile* profile = nullptr;
-  const Status s = check_params(*params, &profile);
-  if (!s.is_ok()) return keep(ctx, s);
+  Status s = check_params(*params, &profile);
   CaseFile& f = c->c;
+  // The case's clearance stays with blockout on (without it, the case has none).
+  if (s.is_ok() && params->blockout != 0) {
+    s = check_clearance("sc_case_set_params", f.blockout.offset, *params);
+  }
+  if (!s.is_ok()) return keep(ctx, s);
   if (params->auto_outline == 0 && (f.upper.empty() || f.lower.empty())) {
     return keep(ctx, Status::error(StatusCode::kInvalidArgument,
                                    "sc_case_set_params: auto_outline is off but the case has no "
@@ -882,6 +910,7 @@ sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* 
   f.has_insertion_direction = params->has_insertion_direction != 0;
   if (f.has_insertion_direction) f.insertion_direction = vec(params->insertion_direction);
   f.has_blockout = params->blockout != 0;
+  if (!f.has_blockout) f.blockout.offset = 0;
   if (f.has_blockout) {
     f.blockout.voxel = params->blockout_voxel_mm;
     f.blockout.inset = params->blockout_inset_mm;
@@ -911,6 +940,25 @@ sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* 
     f.outline.survey = params->auto_survey != 0;
   }
   return keep(ctx, Status::ok());
+}
+
+sc_status sc_case_get_blockout_clearance(sc_context* ctx, const sc_case* c, double* out_mm) {
+  if (ctx == nullptr || c == nullptr || out_mm == nullptr) {
+    return null_argument(ctx, "sc_case_get_blockout_clearance", "the case or the output");
+  }
+  *out_mm = c->c.has_blockout ? c->c.blockout.offset : 0;
+  return keep(ctx, Status::ok());
+}
+
+sc_status sc_case_set_blockout_clearance(sc_context* ctx, sc_case* c, double mm) {
+  if (ctx == nullptr || c == nullptr) {
+    return null_argument(ctx, "sc_case_set_blockout_clearance", "the case");
+  }
+  sc_case_params p;
+  (void)sc_case_get_params(ctx, c, &p);
+  const Status s = check_clearance("sc_case_set_blockout_clearance", mm, p);
+  if (s.is_ok()) c->c.blockout.offset = mm;
+  return keep(ctx, s);
 }
 
 sc_status sc_case_write(sc_context* ctx, const sc_case* c, const sc_sink* sink) {

@@ -585,6 +585,106 @@ static void read_golden(const char* key, char out[65]) {
   free(b.data);
 }
 
+/* The clearance (sc_case_set_blockout_clearance): refused without blockout, with a method that
+ * takes none, beside an inset, out of range (nothing changed); kept by sc_case_set_params only
+ * where it applies; dropped with blockout; written and read back by the case file. */
+static void test_clearance_params(sc_context* ctx, sc_case* c) {
+  sc_case_params p, q;
+  double mm = -1;
+  char text[512];
+  unsigned char written[8192];
+  sc_memory_sink_state ws;
+  sc_sink sink = sc_memory_sink(&ws, written, sizeof written - 1, "case.json");
+  sc_case* reread = NULL;
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &p));
+  CHECK(p.blockout == 0);
+  CHECK_OK(ctx, sc_case_get_blockout_clearance(ctx, c, &mm));
+  CHECK(mm == 0);
+  CHECK(sc_case_set_blockout_clearance(ctx, c, 0.1) == SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "sc_case_set_blockout_clearance") && contains(text, "needs blockout"));
+  CHECK(sc_case_get_blockout_clearance(ctx, c, NULL) == SC_INVALID_ARGUMENT);
+  q = p;
+  q.has_insertion_direction = 1;
+  q.insertion_direction[0] = 0;
+  q.insertion_direction[1] = 0;
+  q.insertion_direction[2] = 1;
+  q.blockout = 1;
+  q.blockout_voxel_mm = 0.1;
+  q.blockout_inset_mm = 0.05;
+  q.blockout_closing_mm = 0;
+  q.blockout_method = SC_BLOCKOUT_EXACT;
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &q));
+  CHECK(sc_case_set_blockout_clearance(ctx, c, 0.1) == SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "SC_BLOCKOUT_HEIGHTFIELD"));
+  q.blockout_method = SC_BLOCKOUT_VOXEL;
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &q));
+  CHECK(sc_case_set_blockout_clearance(ctx, c, 0.1) == SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "blockout_inset_mm"));
+  q.blockout_method = SC_BLOCKOUT_HEIGHTFIELD;
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &q));
+  CHECK(sc_case_set_blockout_clearance(ctx, c, 2.5) == SC_INVALID_ARGUMENT); /* 2 mm at most */
+  CHECK(sc_case_set_blockout_clearance(ctx, c, -0.1) == SC_INVALID_ARGUMENT);
+  CHECK_OK(ctx, sc_case_get_blockout_clearance(ctx, c, &mm));
+  CHECK(mm == 0);
+  CHECK_OK(ctx, sc_case_set_blockout_clearance(ctx, c, 0.3));
+  CHECK_OK(ctx, sc_case_get_blockout_clearance(ctx, c, &mm));
+  CHECK(mm == 0.3);
+  /* The parameters that would drop it are refused, naming it; a finer voxel than 20 per
+   * clearance too. Nothing changes. */
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &q));
+  CHECK(q.blockout_inset_mm == 0);
+  q.blockout_method = SC_BLOCKOUT_EXACT;
+  CHECK(sc_case_set_params(ctx, c, &q) == SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "sc_case_set_params") && contains(text, "clearance"));
+  q.blockout_method = SC_BLOCKOUT_AUTO;
+  CHECK(sc_case_set_params(ctx, c, &q) == SC_INVALID_ARGUMENT);
+  q.blockout_method = SC_BLOCKOUT_VOXEL;
+  q.blockout_inset_mm = 0.05;
+  CHECK(sc_case_set_params(ctx, c, &q) == SC_INVALID_ARGUMENT);
+  q.blockout_inset_mm = 0;
+  q.blockout_voxel_mm = 0.01; /* 0.3 mm is 30 voxels */
+  CHECK(sc_case_set_params(ctx, c, &q) == SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "clearance"));
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &q));
+  CHECK(q.blockout_method == SC_BLOCKOUT_HEIGHTFIELD && q.blockout_voxel_mm == 0.1);
+  /* The voxel method with inset 0 keeps it. */
+  q.blockout_method = SC_BLOCKOUT_VOXEL;
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &q));
+  CHECK_OK(ctx, sc_case_get_blockout_clearance(ctx, c, &mm));
+  CHECK(mm == 0.3);
+  /* Written and read back: the same clearance and method. */
+  CHECK_OK(ctx, sc_case_write(ctx, c, &sink));
+  written[ws.size] = 0;
+  CHECK(contains((const char*)written, "\"clearance\""));
+  CHECK_OK(ctx, sc_case_parse(ctx, (const char*)written, (size_t)ws.size, "case.json", &reread));
+  if (reread != NULL) {
+    CHECK_OK(ctx, sc_case_get_blockout_clearance(ctx, reread, &mm));
+    CHECK(mm == 0.3);
+    CHECK_OK(ctx, sc_case_get_params(ctx, reread, &q));
+    CHECK(q.blockout_method == SC_BLOCKOUT_VOXEL && q.blockout_inset_mm == 0);
+  }
+  /* Blockout off drops it; 0 is always taken. */
+  CHECK_OK(ctx, sc_case_set_blockout_clearance(ctx, c, 0));
+  CHECK_OK(ctx, sc_case_set_blockout_clearance(ctx, c, 0.3));
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &q));
+  q.blockout = 0;
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &q));
+  CHECK_OK(ctx, sc_case_get_blockout_clearance(ctx, c, &mm));
+  CHECK(mm == 0);
+  q.blockout = 1;
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &q));
+  CHECK_OK(ctx, sc_case_get_blockout_clearance(ctx, c, &mm));
+  CHECK(mm == 0);
+  CHECK_OK(ctx, sc_case_set_blockout_clearance(ctx, c, 0));
+  /* As it was. */
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &p));
+}
+
 static void test_case_params(const Bytes* case_text) {
   Fixture f = open_fixture((size_t)1 << 20);
   sc_case* c = NULL;
@@ -634,6 +734,7 @@ static void test_case_params(const Bytes* case_text) {
   CHECK_OK(f.ctx, sc_case_set_params(f.ctx, c, &q));
   CHECK_OK(f.ctx, sc_case_get_params(f.ctx, c, &p));
   CHECK(p.spacing_mm == 0.5);
+  test_clearance_params(f.ctx, c);
   /* A broken case: the line is named. */
   {
     static const char kBad[] = "{\n  \"splintcore_case\": 1,\n  \"bogus\": 2\n}";
@@ -643,6 +744,55 @@ static void test_case_params(const Bytes* case_text) {
   last_message(f.ctx, text, sizeof text);
   CHECK(contains(text, "bad.json:"));
   close_fixture(&f);
+}
+
+/* The splint's binary STL hashed (the bytes are the splint). */
+static void splint_hash(sc_context* ctx, const sc_mesh* splint, char out[65]) {
+  const size_t cap = (size_t)sc_stl_binary_size(sc_mesh_triangle_count(splint));
+  unsigned char* stl = (unsigned char*)malloc(cap);
+  sc_memory_sink_state state;
+  sc_sink sink = sc_memory_sink(&state, stl, cap, "splint.stl");
+  out[0] = '\0';
+  g_counting = 1;
+  CHECK_OK(ctx, sc_mesh_write_stl(ctx, splint, &sink, NULL));
+  g_counting = 0;
+  sc_sha256_hex(stl, (size_t)state.size, out);
+  free(stl);
+}
+
+/* A spacer through the C API (sc_case_set_blockout_clearance) on the height-field case: the
+ * imprint moves out by the clearance, so the splint keeps less volume than without; the case
+ * written and read back designs the same bytes (what the clearance says is what the file
+ * says). The case and the arena are left as they were. */
+static void test_design_clearance(sc_context* ctx, sc_case* c, const sc_mesh* const* jaws,
+                                  const sc_design_report* without) {
+  sc_arena_mark mark = sc_arena_mark_get(ctx);
+  sc_design_report spaced, again;
+  sc_mesh *spaced_splint = NULL, *again_splint = NULL;
+  sc_case* reread = NULL;
+  char hash[65] = "", reread_hash[65] = "-";
+  static unsigned char written[8192];
+  sc_memory_sink_state ws;
+  sc_sink sink = sc_memory_sink(&ws, written, sizeof written, "case.json");
+  CHECK_OK(ctx, sc_case_set_blockout_clearance(ctx, c, 0.2));
+  CHECK_OK(ctx, sc_case_write(ctx, c, &sink));
+  CHECK_OK(ctx, sc_case_parse(ctx, (const char*)written, (size_t)ws.size, "case.json", &reread));
+  CHECK_OK(ctx, sc_design(ctx, c, jaws, 2, &spaced_splint, &spaced));
+  if (spaced_splint != NULL) {
+    CHECK(spaced.blockout_method_used == SC_BLOCKOUT_HEIGHTFIELD && spaced.printable == 1);
+    CHECK(spaced.splint_volume_mm3 < without->splint_volume_mm3);
+    splint_hash(ctx, spaced_splint, hash);
+    printf("design with a 0.2 mm clearance: %llu triangles, %.3f mm^3 (without: %.3f)\n",
+           (unsigned long long)spaced.splint_triangles, spaced.splint_volume_mm3,
+           without->splint_volume_mm3);
+  }
+  if (reread != NULL) {
+    CHECK_OK(ctx, sc_design(ctx, reread, jaws, 2, &again_splint, &again));
+    if (again_splint != NULL) splint_hash(ctx, again_splint, reread_hash);
+  }
+  CHECK(strcmp(hash, reread_hash) == 0);
+  CHECK_OK(ctx, sc_case_set_blockout_clearance(ctx, c, 0));
+  sc_arena_rewind(ctx, mark);
 }
 
 static void test_design(const Bytes* case_text, const char* jaws_dir) {
@@ -789,6 +939,7 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
                (unsigned long long)height.splint_triangles, height.splint_volume_mm3);
       }
       sc_arena_rewind(f.ctx, mark);
+      if (height_splint != NULL) test_design_clearance(f.ctx, c, jaws, &height);
       p.blockout_method = SC_BLOCKOUT_AUTO;
       CHECK_OK(f.ctx, sc_case_set_params(f.ctx, c, &p));
     }
@@ -987,20 +1138,6 @@ static const char kAutoCase[] =
     "           \"transform\": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, -2.0, 0, 0, 0, 1]}],\n"
     " \"base\": {\"spacing_mm\": 0.42, \"auto\": {}},\n"
     " \"printer\": \"eden260\"}\n";
-
-/* The splint's binary STL hashed (the bytes are the splint). */
-static void splint_hash(sc_context* ctx, const sc_mesh* splint, char out[65]) {
-  const size_t cap = (size_t)sc_stl_binary_size(sc_mesh_triangle_count(splint));
-  unsigned char* stl = (unsigned char*)malloc(cap);
-  sc_memory_sink_state state;
-  sc_sink sink = sc_memory_sink(&state, stl, cap, "splint.stl");
-  out[0] = '\0';
-  g_counting = 1;
-  CHECK_OK(ctx, sc_mesh_write_stl(ctx, splint, &sink, NULL));
-  g_counting = 0;
-  sc_sha256_hex(stl, (size_t)state.size, out);
-  free(stl);
-}
 
 /* The auto case's parameters: read, refused out of range, not switched off without picks. */
 static void test_auto_params(sc_context* ctx, sc_case* c) {
