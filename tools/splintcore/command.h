@@ -107,7 +107,7 @@ struct Run {
   const char* command;
   const CommonArgs& args;
   RunMemory memory;
-  ArenaToucher toucher;  // with --threads 2 or more (see Run::Run)
+  ArenaToucher toucher;  // where the machine has a second core (see touched_bytes)
   Arena arena;
   ThreadExecutor threads;
   Context ctx;
