@@ -32,7 +32,8 @@ fi
 
 echo
 echo "== the Boolean file to file: \`splintcore boolean --difference\`, whole process, one thread"
-echo "   (the last row two: the arena's memory is then touched ahead on a thread of its own)"
+echo "   (the last row two; with a second core the arena's memory is touched ahead on a thread"
+echo "   of its own at any --threads, and one core alone is the row pinned by taskset -c 0)"
 echo "   (B read cropped to A's box; CGAL's whole process on the 324k phantom: 0.77-1.04 s,"
 echo "   Manifold's Boolean alone on the real dentition 0.57 s: ../shared/peers.md)"
 mkdir -p "$work/p324"
@@ -44,12 +45,15 @@ if [ -d "$realdata" ]; then
   "$tool" base "$work/rb/case.json" -o "$work/rb/base.stl" >/dev/null
   teeth=$(ls "$realdata"/maxilla/*.stl "$realdata"/mandible/*.stl | tr '\n' ' ')
   runs+=("real dentition (31 tooth files, in occlusion)|$work/rb/base.stl|$teeth|")
+  if command -v taskset >/dev/null; then
+    runs+=("the same on one core (taskset -c 0)|$work/rb/base.stl|$teeth||taskset -c 0")
+  fi
   runs+=("the same at --threads 2|$work/rb/base.stl|$teeth|--threads 2")
 fi
 for row in "${runs[@]}"; do
-  IFS='|' read -r name a b extra <<<"$row"
+  IFS='|' read -r name a b extra pin <<<"$row"
   # shellcheck disable=SC2086  # the file lists and options split on purpose
-  python3 - "$name" "$repeat" "$tool" boolean --difference "$a" $b $extra -o "$work/bool.stl" <<'PY'
+  python3 - "$name" "$repeat" $pin "$tool" boolean --difference "$a" $b $extra -o "$work/bool.stl" <<'PY'
 import json, statistics, subprocess, sys, time
 name, repeat, argv = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
 wall, last = [], None
