@@ -71,7 +71,8 @@ struct StlReadOptions {
   // `keep` (x below keep.lo.x for all three, ..., the test of boolean_region, boolean.h) is
   // left out as it is read, as if it were not in the file: the mesh is the others, in their
   // order, welded (vertex ids by first use among them). Every triangle is still read and its
-  // corners checked (the same errors). Empty (the default): every triangle is kept.
+  // corners checked (the same errors). Empty (the default): every triangle is kept. The mesh
+  // then holds the arena the file without them would (the read's peak is the whole file's).
   Aabb keep;
 };
 

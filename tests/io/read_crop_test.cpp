@@ -111,6 +111,21 @@ Read read(Arena& arena, const std::vector<uint8_t>& bytes, const char* name, con
   return r;
 }
 
+// The arena a binary read of known size leaves held (its mesh), `keep` its crop.
+size_t held_after_read(Arena& arena, const std::vector<uint8_t>& bytes, const Aabb& keep) {
+  ArenaScope scope(arena);
+  const size_t before = arena.used();
+  MemorySource ms{bytes.data(), bytes.size(), 0, 0};
+  const ByteSource source = memory_source(&ms, "held.stl");
+  MeshReadOptions o;
+  o.weld = true;
+  o.keep = keep;
+  Mesh m(&arena);
+  MeshReadInfo info;
+  EXPECT_TRUE(read_mesh(Context(&arena), source, o, &m, &info).is_ok());
+  return arena.used() - before;
+}
+
 void expect_same_mesh(const Read& got, const Read& want) {
   ASSERT_TRUE(got.status.is_ok()) << test::format(got.status);
   ASSERT_TRUE(want.status.is_ok()) << test::format(want.status);
@@ -150,6 +165,12 @@ TEST(ReadCrop, StlGivesTheFileWithoutTheTrianglesBeyondTheBox) {
     expect_same_mesh(read(t.arena, ascii, "a.stl", box), want);
     // The file's triangles are still counted as read.
     EXPECT_EQ(read(t.arena, binary, "a.stl", box).info.triangles, soup.size());
+    // And the mesh holds no more of the arena than the file without them would: the room
+    // reserved for the triangles left out is given back (the real dentition's files: 8.3 MB).
+    if (!kept.empty()) {
+      EXPECT_EQ(held_after_read(t.arena, binary, box),
+                held_after_read(t.arena, test::binary_stl(kept), Aabb{}));
+    }
   }
   // The box that holds everything and the empty default keep the whole file.
   expect_same_mesh(read(t.arena, binary, "a.stl", boxes()[0]),
