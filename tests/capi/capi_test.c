@@ -1484,20 +1484,6 @@ typedef struct PlanRun {
   sc_plan_report report;
 } PlanRun;
 
-/* The SHA-256 of the binary STL of `m`. */
-static void mesh_sha256(sc_context* ctx, const sc_mesh* m, char out[65]) {
-  const size_t cap = (size_t)sc_stl_binary_size(sc_mesh_triangle_count(m));
-  unsigned char* stl = (unsigned char*)malloc(cap);
-  sc_memory_sink_state state;
-  sc_sink sink = sc_memory_sink(&state, stl, cap, "splint.stl");
-  out[0] = '\0';
-  g_counting = 1;
-  CHECK_OK(ctx, sc_mesh_write_stl(ctx, m, &sink, NULL));
-  sc_sha256_hex(stl, (size_t)state.size, out);
-  g_counting = 0;
-  free(stl);
-}
-
 /* run_plan calls sc_design_plan_scans (with no scan for either jaw) instead. */
 static int g_plan_scans = 0;
 
@@ -1533,7 +1519,7 @@ static PlanRun run_plan(size_t arena_bytes, const Bytes* case_text, const Bytes 
   g_counting = 0;
   run.high_water = sc_arena_high_water(f.ctx);
   if (run.status == SC_OK) {
-    for (i = 0; i < 2; ++i) mesh_sha256(f.ctx, splints[i], run.sha256[i]);
+    for (i = 0; i < 2; ++i) splint_hash(f.ctx, splints[i], run.sha256[i]);
     sc_sha256_hex(job, (size_t)job_state.size, run.sha256[2]);
   } else {
     char text[512];
