@@ -585,6 +585,16 @@ static void read_golden(const char* key, char out[65]) {
   free(b.data);
 }
 
+/* Blockout switched on along +z with a voxel of `voxel_mm` (the case's other values kept). */
+static void blockout_along_z(sc_case_params* q, double voxel_mm) {
+  q->has_insertion_direction = 1;
+  q->insertion_direction[0] = 0;
+  q->insertion_direction[1] = 0;
+  q->insertion_direction[2] = 1;
+  q->blockout = 1;
+  q->blockout_voxel_mm = voxel_mm;
+}
+
 /* The clearance (sc_case_set_blockout_clearance): refused without blockout, with a method that
  * takes none, beside an inset, out of range (nothing changed); kept by sc_case_set_params only
  * where it applies; dropped with blockout; written and read back by the case file. */
@@ -605,12 +615,7 @@ static void test_clearance_params(sc_context* ctx, sc_case* c) {
   CHECK(contains(text, "sc_case_set_blockout_clearance") && contains(text, "needs blockout"));
   CHECK(sc_case_get_blockout_clearance(ctx, c, NULL) == SC_INVALID_ARGUMENT);
   q = p;
-  q.has_insertion_direction = 1;
-  q.insertion_direction[0] = 0;
-  q.insertion_direction[1] = 0;
-  q.insertion_direction[2] = 1;
-  q.blockout = 1;
-  q.blockout_voxel_mm = 0.1;
+  blockout_along_z(&q, 0.1);
   q.blockout_inset_mm = 0.05;
   q.blockout_closing_mm = 0;
   q.blockout_method = SC_BLOCKOUT_EXACT;
@@ -713,12 +718,7 @@ static void test_case_params(const Bytes* case_text) {
   last_message(f.ctx, text, sizeof text);
   CHECK(contains(text, "insertion_direction"));
   q = p;
-  q.has_insertion_direction = 1;
-  q.insertion_direction[0] = 0;
-  q.insertion_direction[1] = 0;
-  q.insertion_direction[2] = 1;
-  q.blockout = 1;
-  q.blockout_voxel_mm = 5; /* out of range */
+  blockout_along_z(&q, 5); /* the voxel out of range */
   CHECK(sc_case_set_params(f.ctx, c, &q) == SC_INVALID_ARGUMENT);
   last_message(f.ctx, text, sizeof text);
   CHECK(contains(text, "blockout_voxel_mm"));
