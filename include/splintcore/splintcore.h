@@ -619,6 +619,17 @@ sc_status sc_design_write_report(sc_context* ctx, const sc_case* c, const sc_mes
                                  size_t jaw_count, const sc_mesh* splint,
                                  const sc_report_files* files, const sc_sink* sink);
 
+/* What the blockout of jaw `jaw` (case order) used for `splint` (a handle from sc_design or
+ * sc_design_scans), as report.json's "blockout" entry for that jaw says it: *lowered_mm, the
+ * voxel sweep's inset ("inset_mm") or the height field's lowering ("lowered_mm"), the case's
+ * or, after a retry, more; *clearance_mm, the spacer made ("clearance_mm", "clearance_used_mm"):
+ * the case's clearance or, after a retry, 1/64 voxel more each time; 0 without one. The exact
+ * sweep uses neither: both 0. Either pointer may be NULL. Nothing is allocated. Errors:
+ * SC_INVALID_ARGUMENT (a splint not from sc_design, a jaw the design did not block out: the
+ * message gives how many it did). */
+sc_status sc_design_blockout_used(sc_context* ctx, const sc_mesh* splint, size_t jaw,
+                                  double* lowered_mm, double* clearance_mm);
+
 /* ------------------------------------------------------------------------------------------ */
 /* Two-jaw surgery (issue 32): the intermediate and the final splint of a case with "plan"
  * (docs/case-format.md, "Plan"; design_plan in design.h). */

@@ -1171,6 +1171,28 @@ sc_status sc_design_write_report(sc_context* ctx, const sc_case* c, const sc_mes
                                        splint->mesh, *splint->design, f, nullptr, core_sink(sink)));
 }
 
+sc_status sc_design_blockout_used(sc_context* ctx, const sc_mesh* splint, size_t jaw,
+                                  double* lowered_mm, double* clearance_mm) {
+  if (ctx == nullptr || splint == nullptr) {
+    return null_argument(ctx, "sc_design_blockout_used", "the splint");
+  }
+  if (splint->design == nullptr) {
+    return keep(ctx,
+                Status::error(StatusCode::kInvalidArgument,
+                              "sc_design_blockout_used: the splint was not made by sc_design"));
+  }
+  const DesignReport& r = *splint->design;
+  if (jaw >= r.blockout_jaws) {
+    return keep(ctx, make_error(StatusCode::kInvalidArgument, "sc_design_blockout_used: jaw ",
+                                uint64_t{jaw}, " was not blocked out (the design blocked out ",
+                                r.blockout_jaws, " jaw(s))"));
+  }
+  const BlockoutStats& b = r.blockout[jaw];
+  if (lowered_mm != nullptr) *lowered_mm = b.inset_used;
+  if (clearance_mm != nullptr) *clearance_mm = b.offset_used;
+  return keep(ctx, Status::ok());
+}
+
 sc_status sc_design_plan(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
                          size_t jaw_count, sc_mesh** intermediate, sc_mesh** final_splint,
                          const sc_sink* job, sc_plan_report* report) {

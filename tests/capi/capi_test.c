@@ -764,6 +764,46 @@ static void splint_hash(sc_context* ctx, const sc_mesh* splint, char out[65]) {
  * imprint moves out by the clearance, so the splint keeps less volume than without; the case
  * written and read back designs the same bytes (what the clearance says is what the file
  * says). The case and the arena are left as they were. */
+/* sc_design_blockout_used gives, for each jaw, the values report.json's "blockout" entry of that
+ * jaw holds under `lowered` and `clearance` (the n-th such keys in the report are jaw n's;
+ * `clearance` NULL: the report has none, and the clearance is 0). */
+static void check_blockout_used(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
+                                const sc_mesh* splint, const char* lowered, const char* clearance) {
+  static unsigned char json[(size_t)1 << 20];
+  sc_memory_sink_state state;
+  sc_sink sink = sc_memory_sink(&state, json, sizeof json - 1, "report");
+  const char *at_lowered, *at_clearance;
+  size_t jaw;
+  CHECK_OK(ctx, sc_design_write_report(ctx, c, jaws, 2, splint, NULL, &sink));
+  json[state.size < sizeof json ? state.size : 0] = 0;
+  at_lowered = strstr((const char*)json, "\"blockout\":[");
+  at_clearance = at_lowered;
+  CHECK(at_lowered != NULL);
+  for (jaw = 0; jaw < 2 && at_lowered != NULL && at_clearance != NULL; ++jaw) {
+    double low = -1, clear = -1;
+    CHECK_OK(ctx, sc_design_blockout_used(ctx, splint, jaw, &low, &clear));
+    at_lowered = strstr(at_lowered + 1, lowered);
+    if (clearance != NULL) at_clearance = strstr(at_clearance + 1, clearance);
+    CHECK(at_lowered != NULL && at_clearance != NULL);
+    if (at_lowered == NULL || at_clearance == NULL) break;
+    CHECK(strtod(at_lowered + strlen(lowered), NULL) == low);
+    CHECK(clearance != NULL ? strtod(at_clearance + strlen(clearance), NULL) == clear : clear == 0);
+    printf("jaw %u: lowered %.9g mm, clearance %.9g mm, as the report says\n", (unsigned)jaw, low,
+           clear);
+  }
+  /* Either output may be NULL; a jaw beyond those blocked out and a splint without a design
+   * record are refused, the outputs untouched. */
+  CHECK_OK(ctx, sc_design_blockout_used(ctx, splint, 1, NULL, NULL));
+  {
+    double untouched = 7;
+    CHECK(refused_with(ctx, sc_design_blockout_used(ctx, splint, 2, &untouched, NULL),
+                       "jaw 2 was not blocked out (the design blocked out 2 jaw(s))"));
+    CHECK(refused_with(ctx, sc_design_blockout_used(ctx, jaws[0], 0, &untouched, NULL),
+                       "not made by sc_design"));
+    CHECK(untouched == 7);
+  }
+}
+
 static void test_design_clearance(sc_context* ctx, sc_case* c, const sc_mesh* const* jaws,
                                   const sc_design_report* without) {
   sc_arena_mark mark = sc_arena_mark_get(ctx);
@@ -785,6 +825,7 @@ static void test_design_clearance(sc_context* ctx, sc_case* c, const sc_mesh* co
     printf("design with a 0.2 mm clearance: %llu triangles, %.3f mm^3 (without: %.3f)\n",
            (unsigned long long)spaced.splint_triangles, spaced.splint_volume_mm3,
            without->splint_volume_mm3);
+    check_blockout_used(ctx, c, jaws, spaced_splint, "\"lowered_mm\":", "\"clearance_used_mm\":");
   }
   if (reread != NULL) {
     CHECK_OK(ctx, sc_design(ctx, reread, jaws, 2, &again_splint, &again));
@@ -940,6 +981,21 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
       }
       sc_arena_rewind(f.ctx, mark);
       if (height_splint != NULL) test_design_clearance(f.ctx, c, jaws, &height);
+      /* The voxel sweep lowered into the jaws by the inset (or more, after a retry), as the
+       * report says it. */
+      p.blockout_method = SC_BLOCKOUT_VOXEL;
+      CHECK_OK(f.ctx, sc_case_set_params(f.ctx, c, &p));
+      height_splint = NULL;
+      CHECK_OK(f.ctx, sc_design(f.ctx, c, jaws, 2, &height_splint, &height));
+      if (height_splint != NULL) {
+        double lowered = 0;
+        CHECK(height.blockout_method_used == SC_BLOCKOUT_VOXEL);
+        CHECK_OK(f.ctx, sc_design_blockout_used(f.ctx, height_splint, 0, &lowered, NULL));
+        CHECK(lowered >= p.blockout_inset_mm &&
+              lowered < p.blockout_inset_mm + p.blockout_voxel_mm);
+        check_blockout_used(f.ctx, c, jaws, height_splint, "\"inset_mm\":", NULL);
+      }
+      sc_arena_rewind(f.ctx, mark);
       p.blockout_method = SC_BLOCKOUT_AUTO;
       CHECK_OK(f.ctx, sc_case_set_params(f.ctx, c, &p));
     }
