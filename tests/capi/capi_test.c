@@ -760,10 +760,6 @@ static void splint_hash(sc_context* ctx, const sc_mesh* splint, char out[65]) {
   free(stl);
 }
 
-/* A spacer through the C API (sc_case_set_blockout_clearance) on the height-field case: the
- * imprint moves out by the clearance, so the splint keeps less volume than without; the case
- * written and read back designs the same bytes (what the clearance says is what the file
- * says). The case and the arena are left as they were. */
 /* sc_design_blockout_used gives, for each jaw, the values report.json's "blockout" entry of that
  * jaw holds under `lowered` and `clearance` (the n-th such keys in the report are jaw n's;
  * `clearance` NULL: the report has none, and the clearance is 0). */
@@ -804,6 +800,10 @@ static void check_blockout_used(sc_context* ctx, const sc_case* c, const sc_mesh
   }
 }
 
+/* A spacer through the C API (sc_case_set_blockout_clearance) on the height-field case: the
+ * imprint moves out by the clearance, so the splint keeps less volume than without; the case
+ * written and read back designs the same bytes (what the clearance says is what the file
+ * says). The case and the arena are left as they were. */
 static void test_design_clearance(sc_context* ctx, sc_case* c, const sc_mesh* const* jaws,
                                   const sc_design_report* without) {
   sc_arena_mark mark = sc_arena_mark_get(ctx);
@@ -983,19 +983,22 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
       if (height_splint != NULL) test_design_clearance(f.ctx, c, jaws, &height);
       /* The voxel sweep lowered into the jaws by the inset (or more, after a retry), as the
        * report says it. */
-      p.blockout_method = SC_BLOCKOUT_VOXEL;
-      CHECK_OK(f.ctx, sc_case_set_params(f.ctx, c, &p));
-      height_splint = NULL;
-      CHECK_OK(f.ctx, sc_design(f.ctx, c, jaws, 2, &height_splint, &height));
-      if (height_splint != NULL) {
-        double lowered = 0;
-        CHECK(height.blockout_method_used == SC_BLOCKOUT_VOXEL);
-        CHECK_OK(f.ctx, sc_design_blockout_used(f.ctx, height_splint, 0, &lowered, NULL));
-        CHECK(lowered >= p.blockout_inset_mm &&
-              lowered < p.blockout_inset_mm + p.blockout_voxel_mm);
-        check_blockout_used(f.ctx, c, jaws, height_splint, "\"inset_mm\":", NULL);
+      {
+        sc_design_report voxel;
+        sc_mesh* voxel_splint = NULL;
+        p.blockout_method = SC_BLOCKOUT_VOXEL;
+        CHECK_OK(f.ctx, sc_case_set_params(f.ctx, c, &p));
+        CHECK_OK(f.ctx, sc_design(f.ctx, c, jaws, 2, &voxel_splint, &voxel));
+        if (voxel_splint != NULL) {
+          double lowered = 0;
+          CHECK(voxel.blockout_method_used == SC_BLOCKOUT_VOXEL);
+          CHECK_OK(f.ctx, sc_design_blockout_used(f.ctx, voxel_splint, 0, &lowered, NULL));
+          CHECK(lowered >= p.blockout_inset_mm &&
+                lowered < p.blockout_inset_mm + p.blockout_voxel_mm);
+          check_blockout_used(f.ctx, c, jaws, voxel_splint, "\"inset_mm\":", NULL);
+        }
+        sc_arena_rewind(f.ctx, mark);
       }
-      sc_arena_rewind(f.ctx, mark);
       p.blockout_method = SC_BLOCKOUT_AUTO;
       CHECK_OK(f.ctx, sc_case_set_params(f.ctx, c, &p));
     }
