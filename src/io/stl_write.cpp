@@ -58,7 +58,7 @@ Status unwritable(const Vec3& v, uint64_t triangle, int corner) {
 }
 
 // The facet normal of the triangle as written (from the float32 corners).
-void facet_normal(const float p[3][3], float n[3]) {
+inline void facet_normal(const float p[3][3], float n[3]) {
   auto corner = [&](int k) {
     return Vec3{static_cast<double>(p[k][0]), static_cast<double>(p[k][1]),
                 static_cast<double>(p[k][2])};
@@ -76,17 +76,26 @@ void facet_normal(const float p[3][3], float n[3]) {
   n[2] = static_cast<float>(m.z);
 }
 
+// Three floats at `out` as store_f32 stores them (spelt out: GCC at -O2 keeps a loop).
+inline void store_f32x3(uint8_t* out, const float f[3]) {
+  store_f32(out, f[0]);
+  store_f32(out + 4, f[1]);
+  store_f32(out + 8, f[2]);
+}
+
 // The binary record of triangle (a, b, c) at `out` (50 bytes); false, with nothing written,
-// when a corner cannot be written (not finite, beyond float32: add() names it).
-bool encode_binary(const Vec3& a, const Vec3& b, const Vec3& c, uint8_t* out) {
+// when a corner cannot be written (not finite, beyond float32: add() names it). All three
+// corners are tested before the one branch (they are writable but for a broken mesh).
+inline bool encode_binary(const Vec3& a, const Vec3& b, const Vec3& c, uint8_t* out) {
   float p[3][3];
-  if (!to_float(a, p[0]) || !to_float(b, p[1]) || !to_float(c, p[2])) return false;
+  const bool a_ok = to_float(a, p[0]), b_ok = to_float(b, p[1]), c_ok = to_float(c, p[2]);
+  if (!(a_ok && b_ok && c_ok)) return false;
   float n[3];
   facet_normal(p, n);
-  for (int a3 = 0; a3 < 3; ++a3) store_f32(out + 4 * a3, n[a3]);
-  for (int k = 0; k < 3; ++k) {
-    for (int a3 = 0; a3 < 3; ++a3) store_f32(out + 12 + 12 * k + 4 * a3, p[k][a3]);
-  }
+  store_f32x3(out, n);
+  store_f32x3(out + 12, p[0]);
+  store_f32x3(out + 24, p[1]);
+  store_f32x3(out + 36, p[2]);
   out[48] = 0;
   out[49] = 0;
   return true;
@@ -269,7 +278,9 @@ size_t StlWriter::encode_in_tasks(const Executor* executor, const Mesh& mesh, si
   const Vec3* v = mesh.vertices.data();
   const size_t nv = mesh.vertices.size();
   uint8_t* out = buffer_ + used_;
-  uint32_t tasks = executor->concurrency < kMaxWriteTasks ? executor->concurrency : kMaxWriteTasks;
+  uint32_t tasks = !has_threads(executor)                   ? 1u
+                   : executor->concurrency < kMaxWriteTasks ? executor->concurrency
+                                                            : kMaxWriteTasks;
   size_t stop[kMaxWriteTasks];
   auto task = [&](uint32_t i) {
     const size_t from = t + task_start(end - t, i, tasks),
@@ -295,14 +306,17 @@ size_t StlWriter::encode_in_tasks(const Executor* executor, const Mesh& mesh, si
 Status StlWriter::add_mesh(const Context& ctx, const Mesh& mesh) {
   const Vec3* v = mesh.vertices.data();
   const size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
+  // Binary records go in batches straight into the buffer (in tasks when worth it), not
+  // through add() one by one.
   const bool tasks =
-      binary_ && has_threads(ctx.executor) && capacity_ >= kTaskBatchRecords * kRecordBytes + 84;
+      has_threads(ctx.executor) && capacity_ >= kTaskBatchRecords * kRecordBytes + 84;
+  const size_t least_batch = tasks ? kTaskBatchRecords : 1;
   for (size_t t = 0; t < nt;) {
     if ((t & 0xffff) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "write", t, nt));
-    if (tasks && open_) {
+    if (binary_ && open_) {
       // A batch: what the buffer holds, up to the next progress report, the declared count
       // and the format's limit (add() says what is wrong past them).
-      if ((capacity_ - used_) / kRecordBytes < kTaskBatchRecords) {
+      if ((capacity_ - used_) / kRecordBytes < least_batch) {
         SPLINTCORE_RETURN_IF_ERROR(flush());
       }
       size_t end = t + (capacity_ - used_) / kRecordBytes;
@@ -313,7 +327,7 @@ Status StlWriter::add_mesh(const Context& ctx, const Mesh& mesh) {
       const uint64_t room = limit > written_ ? limit - written_ : 0;
       end = end - t < room ? end : t + static_cast<size_t>(room);
       if (end > t) {
-        const size_t done = encode_in_tasks(ctx.executor, mesh, t, end);
+        const size_t done = encode_in_tasks(tasks ? ctx.executor : nullptr, mesh, t, end);
         used_ += kRecordBytes * done;
         written_ += done;
         t += done;

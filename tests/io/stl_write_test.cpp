@@ -722,11 +722,13 @@ TEST(StlWriteTest, AsciiSolidName) {
   }
 }
 
-// add_mesh encodes binary records in tasks when the executor has threads and the buffer holds
-// 8,192 records or more: the same bytes, the same progress reports and the same error (with
-// what the sink got before it) as one thread, at every thread count. 70,000 triangles: past a
-// progress report (65,536) and over several batches, in the smallest task buffer (409,684
-// bytes) and a larger one; a NaN corner and an index out of range inside a batch.
+// add_mesh encodes binary records in batches straight into the buffer, in tasks when the
+// executor has threads and the buffer holds 8,192 records or more: the same bytes and the
+// same error (with what the sink got before it) as add() one by one, and the same progress
+// reports at every thread count. 70,000 triangles: past a progress report (65,536) and over
+// several batches, in the smallest buffer (4,096 bytes), the default (64,000), the smallest
+// task buffer (409,684) and a larger one; a NaN corner and an index out of range (which
+// add() cannot be given: add_mesh names it) inside a batch.
 TEST(StlWriteTest, RecordsEncodedInTasksAreTheSameAsOneByOne) {
   const std::vector<Tri> tris = random_tris(11, 70000);
   struct Seen {
@@ -737,8 +739,28 @@ TEST(StlWriteTest, RecordsEncodedInTasksAreTheSameAsOneByOne) {
     }
   };
   for (int fault = 0; fault < 3; ++fault) {
-    for (size_t buffer : {size_t{409684}, size_t{1} << 20}) {
+    for (size_t buffer : {size_t{4096}, size_t{64000}, size_t{409684}, size_t{1} << 20}) {
       SCOPED_TRACE("fault " + std::to_string(fault) + ", buffer " + std::to_string(buffer));
+      StlWriteOptions options;
+      options.buffer_bytes = buffer;
+      std::vector<Tri> one_by_one = tris;
+      if (fault == 1) one_by_one[50001].c.y = std::numeric_limits<double>::quiet_NaN();
+      std::vector<uint8_t> added_bytes;  // what the sink got, also when add() refused
+      Status added;
+      {
+        Arena& arena = shared_arena();
+        ArenaScope scope(arena);
+        const Context ctx(&arena);
+        Output o;
+        StlWriter writer;
+        added = writer.begin(ctx, o.sink(), options, one_by_one.size());
+        for (size_t t = 0; t < one_by_one.size() && added.is_ok(); ++t) {
+          added = writer.add(one_by_one[t].a, one_by_one[t].b, one_by_one[t].c);
+        }
+        if (added.is_ok()) added = writer.finish();
+        added_bytes = o.bytes();
+      }
+      EXPECT_EQ(added.is_ok(), fault != 1) << format(added);
       std::vector<uint8_t> first_bytes;
       std::vector<uint64_t> first_done;
       std::string first_status;
@@ -756,8 +778,6 @@ TEST(StlWriteTest, RecordsEncodedInTasksAreTheSameAsOneByOne) {
         progress.user = &seen;
         const Context ctx(&arena, threads == 0 ? nullptr : &pool.executor(), &progress);
         Output o;
-        StlWriteOptions options;
-        options.buffer_bytes = buffer;
         const Status s = splintcore::write_stl(ctx, mesh, o.sink(), options);
         EXPECT_EQ(s.is_ok(), fault == 0) << format(s);
         if (fault > 0) {
@@ -769,6 +789,10 @@ TEST(StlWriteTest, RecordsEncodedInTasksAreTheSameAsOneByOne) {
           first_status = format(s);
           if (fault == 0) {
             EXPECT_EQ(first_bytes.size(), 84u + 50u * tris.size());
+          }
+          if (fault != 2) {  // add() wrote the same before it stopped, and said the same
+            EXPECT_TRUE(first_bytes == added_bytes);
+            EXPECT_EQ(first_status, format(added));
           }
           continue;
         }
