@@ -632,6 +632,36 @@ TEST(BooleanShells, SameBytesEveryRunAndFloat32) {
   }
 }
 
+// With float32 output, B's vertices must be float32 values where they matter (near A's
+// region), checked on B itself before the passes so that the error names B's own triangle: a
+// vertex nudged off the float32 grid in a shell apart from A changes nothing, in a shell that
+// overlaps another near A it is refused at the first triangle of B that uses it.
+TEST(BooleanShells, AVertexThatIsNotFloat32MattersOnlyNearA) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = boxes_mesh(arena, {kA});
+  const Box far{{10, 10, 10}, {11, 11, 11}};
+  for (uint32_t nudged : {17u, 9u}) {  // of the far box; of kB2
+    SCOPED_TRACE("vertex " + std::to_string(nudged));
+    Mesh b = boxes_mesh(arena, {kB1, kB2, far});
+    b.vertices[nudged].x += 0x1p-40;
+    const Outcome r = run(arena, a, b, BooleanOp::kDifference, true);
+    if (nudged == 17) {
+      ASSERT_TRUE(r.status.is_ok()) << test::format(r.status);
+      EXPECT_EQ(r.stats.shell_groups, 2u);
+      continue;
+    }
+    uint32_t first = 0;
+    while (first < b.triangles.size() && b.triangles[first].v[0] != nudged &&
+           b.triangles[first].v[1] != nudged && b.triangles[first].v[2] != nudged) {
+      ++first;
+    }
+    EXPECT_EQ(r.status.code(), StatusCode::kInvalidArgument) << test::format(r.status);
+    EXPECT_EQ(r.status.index(), first);
+    EXPECT_NE(std::string(r.status.message()).find("not a float32 value"), std::string::npos);
+  }
+}
+
 // Every cap from nothing to enough: a clean kArenaExhausted (arena as at entry, output empty)
 // or the same bytes as with room to spare.
 TEST(BooleanShells, ArenaExhaustionIsCleanAtEveryCap) {
