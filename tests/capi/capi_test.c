@@ -760,6 +760,16 @@ static void splint_hash(sc_context* ctx, const sc_mesh* splint, char out[65]) {
   free(stl);
 }
 
+/* The case designed with blockout method `method`, the rest of *p as it is (p keeps the
+ * method). */
+static void design_with_method(sc_context* ctx, sc_case* c, const sc_mesh* const* jaws,
+                               sc_case_params* p, int method, sc_mesh** splint,
+                               sc_design_report* report) {
+  p->blockout_method = method;
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, p));
+  CHECK_OK(ctx, sc_design(ctx, c, jaws, 2, splint, report));
+}
+
 /* sc_design_blockout_used gives, for each jaw, the values report.json's "blockout" entry of that
  * jaw holds under `lowered` and `clearance` (the n-th such keys in the report are jaw n's;
  * `clearance` NULL: the report has none, and the clearance is 0). */
@@ -968,9 +978,7 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
     {
       sc_design_report height;
       sc_mesh* height_splint = NULL;
-      p.blockout_method = SC_BLOCKOUT_HEIGHTFIELD;
-      CHECK_OK(f.ctx, sc_case_set_params(f.ctx, c, &p));
-      CHECK_OK(f.ctx, sc_design(f.ctx, c, jaws, 2, &height_splint, &height));
+      design_with_method(f.ctx, c, jaws, &p, SC_BLOCKOUT_HEIGHTFIELD, &height_splint, &height);
       if (height_splint != NULL) {
         CHECK(height.blockout_jaws == 2);
         CHECK(height.blockout_method_used == SC_BLOCKOUT_HEIGHTFIELD);
@@ -986,9 +994,7 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
       {
         sc_design_report voxel;
         sc_mesh* voxel_splint = NULL;
-        p.blockout_method = SC_BLOCKOUT_VOXEL;
-        CHECK_OK(f.ctx, sc_case_set_params(f.ctx, c, &p));
-        CHECK_OK(f.ctx, sc_design(f.ctx, c, jaws, 2, &voxel_splint, &voxel));
+        design_with_method(f.ctx, c, jaws, &p, SC_BLOCKOUT_VOXEL, &voxel_splint, &voxel);
         if (voxel_splint != NULL) {
           double lowered = 0;
           CHECK(voxel.blockout_method_used == SC_BLOCKOUT_VOXEL);
