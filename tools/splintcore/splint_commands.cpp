@@ -135,6 +135,7 @@ Status read_b(Run& run, const BooleanArgs& a, const Aabb& region, Mesh* b,
   const std::vector<const char*>& files = a.common.positional;
   const Arena::Marker start = arena.mark();
   std::vector<Mesh> parts(files.size() - 1, Mesh(&arena));
+  std::vector<MeshFormat> formats(files.size() - 1);
   *file_triangles = 0;
   for (size_t f = 1; f < files.size(); ++f) {
     const Vec3 d = b_move(a, f);
@@ -147,6 +148,7 @@ Status read_b(Run& run, const BooleanArgs& a, const Aabb& region, Mesh* b,
     SPLINTCORE_RETURN_IF_ERROR(
         read_mesh_file(run.ctx, files[f], kNoInputLimit, false, &parts[f - 1], &info, keep));
     *file_triangles += info.triangles;
+    formats[f - 1] = info.format;
   }
   uint64_t total_v = 0, total_t = 0;
   for (size_t f = 1; f < files.size(); ++f) {
@@ -158,7 +160,10 @@ Status read_b(Run& run, const BooleanArgs& a, const Aabb& region, Mesh* b,
     }
     const Vec3 d = b_move(a, f);
     // A moved jaw is rounded to float32, as its own STL would hold it: the Boolean keeps B's
-    // vertices bit for bit, so they must be what the output file can store.
+    // vertices bit for bit, so they must be what the output file can store. A binary STL that
+    // stays where it is holds them already (its floats, with no -0: the exact weld's +0.0).
+    const bool unmoved = d.x == 0.0 && d.y == 0.0 && d.z == 0.0;
+    if (unmoved && formats[f - 1] == MeshFormat::kStlBinary) continue;
     for (Vec3& v : part.vertices) {
       v = v + d;
       if (!round_to_float32(&v)) {
