@@ -637,10 +637,11 @@ struct Diff {  // a rounded difference of two vertices (plain: arrays of it are 
   double x, y, z;
 };
 
-// An item's normal and its terms' magnitudes (its plane filter's n and nabs, see Plane).
+// A triangle's normal and its terms' magnitudes (a plane filter's n and nabs, see Plane;
+// plain, as Diff).
 struct Normal {
-  Vec3 n;
-  Vec3 nabs;
+  Diff n;
+  Diff nabs;
 };
 
 // The certain sign of d . (p x q) for rounded differences p, q and an exact d (Shewchuk's
@@ -657,15 +658,16 @@ inline int sure_triple(const Vec3& d, const Diff& p, const Diff& q) {
   return det > bound ? 1 : (det < -bound ? -1 : 0);
 }
 
-// Do the star's k triangles (items `star`, in any order) certainly all face d, and does the
-// fan turn once around o (e: u_i - o for i = 0, 2, 3, .., k - 2 in fan order)?
-bool fan_turns_once(const Vec3& d, const Normal* normals, const uint32_t* star, const Diff* e,
-                    uint32_t k) {
+// Do the fan's k triangles (o, u_i, u_i+1) (normals: theirs) certainly all face d, and does
+// the fan turn once around o (e: u_i - o in fan order)?
+bool fan_turns_once(const Vec3& d, const Normal* normals, const Diff* e, uint32_t k) {
   const Vec3 dabs{std::fabs(d.x), std::fabs(d.y), std::fabs(d.z)};
   for (uint32_t i = 0; i < k; ++i) {
-    // d . n is det[b - a, c - a, d]: the plane filter's bound, with d for x - a.
-    const Normal& nm = normals[star[i]];
-    if (!(dot(d, nm.n) > kPlaneFilter * dot(dabs, nm.nabs) + 0x1p-1000)) {
+    // d . n is det[u_i - o, u_i+1 - o, d]: the plane filter's bound, with d for x - a.
+    const Normal& nm = normals[i];
+    const double along = d.x * nm.n.x + d.y * nm.n.y + d.z * nm.n.z;
+    const double terms = dabs.x * nm.nabs.x + dabs.y * nm.nabs.y + dabs.z * nm.nabs.z;
+    if (!(along > kPlaneFilter * terms + 0x1p-1000)) {
       return false;
     }
   }
@@ -691,9 +693,8 @@ inline uint32_t equal_lanes(const uint32_t* ids, uint32_t groups, uint32_t x) {
 }
 
 // Is the star of vertex o (items `star`: every non-degenerate triangle using o) certainly
-// embedded? (normals: the items'.)
-bool star_embedded(const Vec3* v, const Item* items, const Normal* normals, uint32_t o,
-                   const uint32_t* star, uint32_t k) {
+// embedded?
+bool star_embedded(const Vec3* v, const Item* items, uint32_t o, const uint32_t* star, uint32_t k) {
   if (k < 3 || k > kMaxStar) return false;
   // Each triangle as (o, from, to), in its winding; the lanes past k hold o, which is
   // neither (the triangles are not degenerate).
@@ -721,19 +722,32 @@ bool star_embedded(const Vec3* v, const Item* items, const Normal* normals, uint
   if (at != 0) return false;
   Diff e[kMaxStar];
   const Vec3& po = v[o];
-  for (uint32_t i = 0; i + 1 < k; ++i) {
-    if (i == 1) continue;  // (not needed)
+  for (uint32_t i = 0; i < k; ++i) {
     const Vec3& u = v[ring[i]];
     e[i] = Diff{u.x - po.x, u.y - po.y, u.z - po.z};
+  }
+  // Triangle i of the fan is (o, u_i, u_i+1), a rotation of its corners: its normal and the
+  // magnitudes of its terms as plane_filter makes them from corner o.
+  Normal normals[kMaxStar];
+  for (uint32_t i = 0; i < k; ++i) {
+    const Diff& p = e[i];
+    const Diff& q = e[i + 1 == k ? 0 : i + 1];
+    const double m0 = p.y * q.z, m1 = p.z * q.y, m2 = p.z * q.x, m3 = p.x * q.z, m4 = p.x * q.y,
+                 m5 = p.y * q.x;
+    normals[i].n = Diff{m0 - m1, m2 - m3, m4 - m5};
+    normals[i].nabs = Diff{std::fabs(m0) + std::fabs(m1), std::fabs(m2) + std::fabs(m3),
+                           std::fabs(m4) + std::fabs(m5)};
   }
   // The direction: the sum of the normals, or when that fails (a sharp fold between big and
   // small triangles leaves the small ones edge-on), of the normals scaled alike.
   Vec3 d{};
-  for (uint32_t i = 0; i < k; ++i) d = d + normals[star[i]].n;
-  if (fan_turns_once(scaled_to_unit_max(d), normals, star, e, k)) return true;
+  for (uint32_t i = 0; i < k; ++i) d = d + Vec3{normals[i].n.x, normals[i].n.y, normals[i].n.z};
+  if (fan_turns_once(scaled_to_unit_max(d), normals, e, k)) return true;
   d = Vec3{};
-  for (uint32_t i = 0; i < k; ++i) d = d + scaled_to_unit_max(normals[star[i]].n);
-  return fan_turns_once(scaled_to_unit_max(d), normals, star, e, k);
+  for (uint32_t i = 0; i < k; ++i) {
+    d = d + scaled_to_unit_max(Vec3{normals[i].n.x, normals[i].n.y, normals[i].n.z});
+  }
+  return fan_turns_once(scaled_to_unit_max(d), normals, e, k);
 }
 
 // ---- the hierarchy
@@ -1218,25 +1232,16 @@ struct HierarchyPass {
     return Status::ok();
   }
 
-  // 4. Stars: per-vertex lists of items by counting sort, then each star checked (with the
-  // rest of each item's plane filter made once: a triangle is in three stars).
+  // 4. Stars: per-vertex lists of items by counting sort, then each star checked (its
+  // triangles' normals made there, from the differences the fan test takes anyway).
   Status clear_stars() {
     ArenaScope star_scope(arena);
     uint32_t* start = arena.allocate_array<uint32_t>(nv + 1);
     uint32_t* list = arena.allocate_array<uint32_t>(3 * size_t{kept});
     uint8_t* cleared = arena.allocate_array<uint8_t>(nv);
-    Normal* normals = arena.allocate_array<Normal>(kept);
-    if (start == nullptr || list == nullptr || (cleared == nullptr && nv > 0) ||
-        normals == nullptr) {
+    if (start == nullptr || list == nullptr || (cleared == nullptr && nv > 0)) {
       return arena.exhausted_status();
     }
-    auto planes = [&](uint32_t r) {
-      for (size_t i = run_start(kept, r); i < run_start(kept, r + 1); ++i) {
-        const Plane plane = plane_of(v, items[i]);
-        normals[i] = Normal{plane.n, plane.nabs};
-      }
-    };
-    parallel_for_each(executor, kRuns, planes);
     for (size_t i = 0; i <= nv; ++i) start[i] = 0;
     for (uint32_t i = 0; i < kept; ++i) {
       for (uint32_t id : items[i].tri.v) ++start[id + 1];
@@ -1249,8 +1254,8 @@ struct HierarchyPass {
     auto stars = [&](uint32_t r) {
       for (size_t i = run_start(nv, r); i < run_start(nv, r + 1); ++i) {
         const uint32_t begin = i == 0 ? 0 : start[i - 1];
-        cleared[i] = star_embedded(v, items, normals, static_cast<uint32_t>(i), list + begin,
-                                   start[i] - begin);
+        cleared[i] =
+            star_embedded(v, items, static_cast<uint32_t>(i), list + begin, start[i] - begin);
       }
     };
     parallel_for_each(executor, kRuns, stars);
@@ -1730,8 +1735,7 @@ Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triang
 // or more) with the nodes (one fewer than twice the leaves); each array's alignment.
 uint64_t pass_bound(uint64_t kept, uint64_t dop_vertices, uint64_t nv) {
   const uint64_t sorting = kept * 2 * sizeof(uint64_t) + dop_vertices * sizeof(Dop);
-  const uint64_t stars =
-      (nv + 1) * sizeof(uint32_t) + 3 * kept * sizeof(uint32_t) + nv + kept * sizeof(Normal);
+  const uint64_t stars = (nv + 1) * sizeof(uint32_t) + 3 * kept * sizeof(uint32_t) + nv;
   const uint64_t nodes = (kept / kMinLeaf + 1) * (2 * sizeof(Node) + sizeof(Leaf));
   uint64_t above = sorting > stars ? sorting : stars;
   above = above > nodes ? above : nodes;
