@@ -692,20 +692,21 @@ inline uint32_t equal_lanes(const uint32_t* ids, uint32_t groups, uint32_t x) {
   return bits;
 }
 
-// Is the star of vertex o (items `star`: every non-degenerate triangle using o) certainly
-// embedded?
-bool star_embedded(const Vec3* v, const Item* items, uint32_t o, const uint32_t* star, uint32_t k) {
+// A triangle of the star of vertex o as (o, from, to), in its winding.
+struct Wing {
+  uint32_t from, to;
+};
+
+// Is the star of vertex o (`star`: every non-degenerate triangle using o) certainly embedded?
+bool star_embedded(const Vec3* v, uint32_t o, const Wing* star, uint32_t k) {
   if (k < 3 || k > kMaxStar) return false;
-  // Each triangle as (o, from, to), in its winding; the lanes past k hold o, which is
-  // neither (the triangles are not degenerate).
+  // The lanes past k hold o, which is neither end of a wing (the triangles are not degenerate).
   static_assert(kMaxStar % 4 == 0, "whole groups of four");
   uint32_t from[kMaxStar], to[kMaxStar];
   const uint32_t groups = (k + 3) / 4;
   for (uint32_t i = 0; i < k; ++i) {
-    const Triangle& t = items[star[i]].tri;
-    const int c = t.v[0] == o ? 0 : (t.v[1] == o ? 1 : 2);
-    from[i] = t.v[c == 2 ? 0 : c + 1];
-    to[i] = t.v[c == 0 ? 2 : c - 1];
+    from[i] = star[i].from;
+    to[i] = star[i].to;
   }
   for (uint32_t i = k; i < 4 * groups; ++i) from[i] = o;
   // Chain: the next triangle starts where this one ends, and only one does. Coming back to
@@ -1232,12 +1233,13 @@ struct HierarchyPass {
     return Status::ok();
   }
 
-  // 4. Stars: per-vertex lists of items by counting sort, then each star checked (its
-  // triangles' normals made there, from the differences the fan test takes anyway).
+  // 4. Stars: per-vertex lists of the items' wings by counting sort (the wings, not the
+  // items: read in the vertices' order, the items would come from all over), then each star
+  // checked (its triangles' normals made there, from the differences the fan test takes).
   Status clear_stars() {
     ArenaScope star_scope(arena);
     uint32_t* start = arena.allocate_array<uint32_t>(nv + 1);
-    uint32_t* list = arena.allocate_array<uint32_t>(3 * size_t{kept});
+    Wing* list = arena.allocate_array<Wing>(3 * size_t{kept});
     uint8_t* cleared = arena.allocate_array<uint8_t>(nv);
     if (start == nullptr || list == nullptr || (cleared == nullptr && nv > 0)) {
       return arena.exhausted_status();
@@ -1248,14 +1250,16 @@ struct HierarchyPass {
     }
     for (size_t i = 0; i < nv; ++i) start[i + 1] += start[i];
     for (uint32_t i = 0; i < kept; ++i) {
-      for (uint32_t id : items[i].tri.v) list[start[id]++] = i;
+      const uint32_t a = items[i].tri.v[0], b = items[i].tri.v[1], c = items[i].tri.v[2];
+      list[start[a]++] = Wing{b, c};
+      list[start[b]++] = Wing{c, a};
+      list[start[c]++] = Wing{a, b};
     }
     // start[i] is now the end of vertex i's list, the start of vertex i + 1's.
     auto stars = [&](uint32_t r) {
       for (size_t i = run_start(nv, r); i < run_start(nv, r + 1); ++i) {
         const uint32_t begin = i == 0 ? 0 : start[i - 1];
-        cleared[i] =
-            star_embedded(v, items, static_cast<uint32_t>(i), list + begin, start[i] - begin);
+        cleared[i] = star_embedded(v, static_cast<uint32_t>(i), list + begin, start[i] - begin);
       }
     };
     parallel_for_each(executor, kRuns, stars);
@@ -1735,7 +1739,7 @@ Status hierarchy_pass(const Context& ctx, const Vec3* v, size_t nv, const Triang
 // or more) with the nodes (one fewer than twice the leaves); each array's alignment.
 uint64_t pass_bound(uint64_t kept, uint64_t dop_vertices, uint64_t nv) {
   const uint64_t sorting = kept * 2 * sizeof(uint64_t) + dop_vertices * sizeof(Dop);
-  const uint64_t stars = (nv + 1) * sizeof(uint32_t) + 3 * kept * sizeof(uint32_t) + nv;
+  const uint64_t stars = (nv + 1) * sizeof(uint32_t) + 3 * kept * sizeof(Wing) + nv;
   const uint64_t nodes = (kept / kMinLeaf + 1) * (2 * sizeof(Node) + sizeof(Leaf));
   uint64_t above = sorting > stars ? sorting : stars;
   above = above > nodes ? above : nodes;
