@@ -1552,14 +1552,16 @@ struct HierarchyPass {
   int open(const PairOfNodes& p, PairOfNodes out[3]) const {
     const Node& na = nodes[p.a];
     const Node& nb = nodes[p.b];
-    int n = 0;
+    // (The pairs are written whether they overlap or not, and the count advanced by whether
+    // they do: the overlaps are a coin toss to the branch predictor.)
     if (p.a == p.b) {
       if (na.right == 0) return -1;
       const uint32_t l = p.a + 1, r = na.right;
-      if (dops_overlap(nodes[l].dop, nodes[r].dop)) out[n++] = PairOfNodes{l, r};
-      out[n++] = PairOfNodes{r, r};
-      out[n++] = PairOfNodes{l, l};
-      return n;
+      const int both = dops_overlap(nodes[l].dop, nodes[r].dop) ? 1 : 0;
+      out[0] = PairOfNodes{l, r};
+      out[both] = PairOfNodes{r, r};
+      out[both + 1] = PairOfNodes{l, l};
+      return both + 2;
     }
     if (na.right == 0 && nb.right == 0) return -1;
     // Open the larger node.
@@ -1568,9 +1570,11 @@ struct HierarchyPass {
     const uint32_t opened = open_a ? p.a : p.b;
     const Dop& other = nodes[keep].dop;
     const uint32_t l = opened + 1, r = nodes[opened].right;
-    if (dops_overlap(nodes[r].dop, other)) out[n++] = PairOfNodes{r, keep};
-    if (dops_overlap(nodes[l].dop, other)) out[n++] = PairOfNodes{l, keep};
-    return n;
+    const int with_r = dops_overlap(nodes[r].dop, other) ? 1 : 0;
+    const int with_l = dops_overlap(nodes[l].dop, other) ? 1 : 0;
+    out[0] = PairOfNodes{r, keep};
+    out[with_r] = PairOfNodes{l, keep};
+    return with_r + with_l;
   }
 
   // The pairs below `start`, depth first, into *found and *tested; with ctx, progress
