@@ -662,17 +662,14 @@ inline int sure_triple(const Vec3& d, const Diff& p, const Diff& q) {
 // the fan turn once around o (e: u_i - o in fan order)?
 bool fan_turns_once(const Vec3& d, const Normal* normals, const Diff* e, uint32_t k) {
   const Vec3 dabs{std::fabs(d.x), std::fabs(d.y), std::fabs(d.z)};
-  for (uint32_t i = 0; i < k; ++i) {
+  bool turned = false;                // past the direction opposite u_0
+  for (uint32_t i = 0; i < k; ++i) {  // (one loop for both tests: see star_embedded)
     // d . n is det[u_i - o, u_i+1 - o, d]: the plane filter's bound, with d for x - a.
     const Normal& nm = normals[i];
     const double along = d.x * nm.n.x + d.y * nm.n.y + d.z * nm.n.z;
     const double terms = dabs.x * nm.nabs.x + dabs.y * nm.nabs.y + dabs.z * nm.nabs.z;
-    if (!(along > kPlaneFilter * terms + 0x1p-1000)) {
-      return false;
-    }
-  }
-  bool turned = false;  // past the direction opposite u_0
-  for (uint32_t i = 2; i + 1 < k; ++i) {
+    if (!(along > kPlaneFilter * terms + 0x1p-1000)) return false;
+    if (i < 2 || i + 1 >= k) continue;
     const int side = sure_triple(d, e[0], e[i]);
     if (side == 0 || (side > 0 && turned)) return false;
     turned = side < 0;
@@ -697,6 +694,16 @@ struct Wing {
   uint32_t from, to;
 };
 
+// The normal of the triangle (o, p + o, q + o) and the magnitudes of its terms, as
+// plane_filter makes them from corner o (p, q: the other corners less o, rounded).
+inline Normal fan_normal(const Diff& p, const Diff& q) {
+  const double m0 = p.y * q.z, m1 = p.z * q.y, m2 = p.z * q.x, m3 = p.x * q.z, m4 = p.x * q.y,
+               m5 = p.y * q.x;
+  return Normal{Diff{m0 - m1, m2 - m3, m4 - m5},
+                Diff{std::fabs(m0) + std::fabs(m1), std::fabs(m2) + std::fabs(m3),
+                     std::fabs(m4) + std::fabs(m5)}};
+}
+
 // Is the star of vertex o (`star`: every non-degenerate triangle using o) certainly embedded?
 bool star_embedded(const Vec3* v, uint32_t o, const Wing* star, uint32_t k) {
   if (k < 3 || k > kMaxStar) return false;
@@ -704,45 +711,37 @@ bool star_embedded(const Vec3* v, uint32_t o, const Wing* star, uint32_t k) {
   static_assert(kMaxStar % 4 == 0, "whole groups of four");
   uint32_t from[kMaxStar], to[kMaxStar];
   const uint32_t groups = (k + 3) / 4;
-  for (uint32_t i = 0; i < k; ++i) {
-    from[i] = star[i].from;
-    to[i] = star[i].to;
+  for (uint32_t i = 0; i < 4 * groups; ++i) {
+    from[i] = i < k ? star[i].from : o;
+    to[i] = i < k ? star[i].to : o;
   }
-  for (uint32_t i = k; i < 4 * groups; ++i) from[i] = o;
   // Chain: the next triangle starts where this one ends, and only one does. Coming back to
-  // the first after exactly k steps, without coming back earlier, visits each once.
-  uint32_t ring[kMaxStar];  // u_i, in fan order
+  // the first after exactly k steps, without coming back earlier, visits each once. On the
+  // way, e_i = u_i - o in fan order, and the normal of triangle i - 1 of the fan, (o, u_i-1,
+  // u_i), a rotation of its corners (fan_normal): one loop, not five (each loop's end is a
+  // branch the predictor misses when the stars' sizes vary).
+  Diff e[kMaxStar];
+  Normal normals[kMaxStar];
+  Vec3 d{};  // their sum, in order
+  const Vec3& po = v[o];
   uint32_t at = 0;
   for (uint32_t step = 0; step < k; ++step) {
     if (step > 0 && at == 0) return false;
-    ring[step] = from[at];
+    const Vec3& u = v[from[at]];
+    e[step] = Diff{u.x - po.x, u.y - po.y, u.z - po.z};
+    if (step > 0) {
+      normals[step - 1] = fan_normal(e[step - 1], e[step]);
+      d = d + Vec3{normals[step - 1].n.x, normals[step - 1].n.y, normals[step - 1].n.z};
+    }
     const uint32_t next = equal_lanes(from, groups, to[at]);
     if (next == 0 || (next & (next - 1)) != 0) return false;  // none, or more than one
     at = static_cast<uint32_t>(lowest_bit(next));
   }
   if (at != 0) return false;
-  Diff e[kMaxStar];
-  const Vec3& po = v[o];
-  for (uint32_t i = 0; i < k; ++i) {
-    const Vec3& u = v[ring[i]];
-    e[i] = Diff{u.x - po.x, u.y - po.y, u.z - po.z};
-  }
-  // Triangle i of the fan is (o, u_i, u_i+1), a rotation of its corners: its normal and the
-  // magnitudes of its terms as plane_filter makes them from corner o.
-  Normal normals[kMaxStar];
-  for (uint32_t i = 0; i < k; ++i) {
-    const Diff& p = e[i];
-    const Diff& q = e[i + 1 == k ? 0 : i + 1];
-    const double m0 = p.y * q.z, m1 = p.z * q.y, m2 = p.z * q.x, m3 = p.x * q.z, m4 = p.x * q.y,
-                 m5 = p.y * q.x;
-    normals[i].n = Diff{m0 - m1, m2 - m3, m4 - m5};
-    normals[i].nabs = Diff{std::fabs(m0) + std::fabs(m1), std::fabs(m2) + std::fabs(m3),
-                           std::fabs(m4) + std::fabs(m5)};
-  }
+  normals[k - 1] = fan_normal(e[k - 1], e[0]);
+  d = d + Vec3{normals[k - 1].n.x, normals[k - 1].n.y, normals[k - 1].n.z};
   // The direction: the sum of the normals, or when that fails (a sharp fold between big and
   // small triangles leaves the small ones edge-on), of the normals scaled alike.
-  Vec3 d{};
-  for (uint32_t i = 0; i < k; ++i) d = d + Vec3{normals[i].n.x, normals[i].n.y, normals[i].n.z};
   if (fan_turns_once(scaled_to_unit_max(d), normals, e, k)) return true;
   d = Vec3{};
   for (uint32_t i = 0; i < k; ++i) {
