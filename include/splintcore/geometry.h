@@ -97,9 +97,12 @@ struct Aabb {
   }
   Vec3 extent() const { return empty() ? Vec3{} : hi - lo; }
   Vec3 center() const { return empty() ? Vec3{} : (lo + hi) * 0.5; }
+  // (All six compared, without a branch: which boxes overlap is data the branch predictor
+  // cannot learn.)
   bool overlaps(const Aabb& b) const {
-    return lo.x <= b.hi.x && b.lo.x <= hi.x && lo.y <= b.hi.y && b.lo.y <= hi.y && lo.z <= b.hi.z &&
-           b.lo.z <= hi.z;
+    return static_cast<bool>(static_cast<int>(lo.x <= b.hi.x) & static_cast<int>(b.lo.x <= hi.x) &
+                             static_cast<int>(lo.y <= b.hi.y) & static_cast<int>(b.lo.y <= hi.y) &
+                             static_cast<int>(lo.z <= b.hi.z) & static_cast<int>(b.lo.z <= hi.z));
   }
   bool contains(const Vec3& p) const {
     return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;

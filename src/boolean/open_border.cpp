@@ -32,7 +32,8 @@ size_t near_edges(const Mesh& b, size_t begin, size_t end, const uint8_t* code, 
     for (int k = 0; k < 3; ++k) {
       const uint32_t p = tri.v[k], q = tri.v[(k + 1) % 3];
       if (p == q || (code[p] & code[q]) != 0) continue;
-      const uint64_t key = p < q ? (uint64_t{p} << 32 | q) : (uint64_t{q} << 32 | p);
+      const uint32_t lo = p < q ? p : q;  // (a select, not a branch: p < q is a coin toss)
+      const uint64_t key = uint64_t{lo} << 32 | (p ^ q ^ lo);
       if (kList) keys[n] = key;
       *fingerprint ^= hash_mix(key);
       ++n;
