@@ -545,7 +545,8 @@ inline void extent_along(const Vec3& m, const Vec3& a, const Vec3& b, const Vec3
 
 inline Vec3 scaled_to_unit_max(const Vec3& m) {
   const double x = std::fabs(m.x), y = std::fabs(m.y), z = std::fabs(m.z);
-  const double big = x > y ? (x > z ? x : z) : (y > z ? y : z);
+  const double xy = x > y ? x : y;  // (the same as nested choices, as maxima: no branch)
+  const double big = xy > z ? xy : z;
   if (!(big > 0.0)) return Vec3{};
   return Vec3{m.x / big, m.y / big, m.z / big};
 }
@@ -569,7 +570,10 @@ void fill_item(const Vec3* v, const Triangle& tri, uint32_t id, double error, It
   item->unused = 0;
   const Vec3 e[3] = {p[1] - p[0], p[2] - p[1], p[0] - p[2]};
   const double len[3] = {dot(e[0], e[0]), dot(e[1], e[1]), dot(e[2], e[2])};
-  const uint32_t k = len[0] >= len[1] ? (len[0] >= len[2] ? 0 : 2) : (len[1] >= len[2] ? 1 : 2);
+  // (Selects, not branches: which edge is longest is a coin toss to the predictor.)
+  const bool l01 = len[0] >= len[1], l02 = len[0] >= len[2], l12 = len[1] >= len[2];
+  const uint32_t k = (1u - static_cast<uint32_t>(l01 && l02)) *  // 0, or then 1 or 2
+                     (2u - static_cast<uint32_t>(!l01 && l12));
   // Components within [-1, 1]: in float range whatever the coordinates (R^3 would not be).
   const Vec3 m = scaled_to_unit_max(cross(plane.n, e[k]));
   item->longest = static_cast<uint8_t>(k);
