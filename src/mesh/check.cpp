@@ -22,6 +22,12 @@ namespace {
 // tallies hold forward uses in the low 32 bits and backward uses in the high 32 bits.
 constexpr uint64_t kCollecting = ~uint64_t{0};
 
+// The smaller of a and b by a mask, not a branch (compilers branch on a ?: that picks an array
+// index, and which end of an edge is smaller is a coin toss to the branch predictor).
+inline uint32_t min2(uint32_t a, uint32_t b) {
+  return b ^ ((a ^ b) & (0u - static_cast<uint32_t>(a < b)));
+}
+
 inline uint32_t min3(uint32_t a, uint32_t b, uint32_t c) {
   const uint32_t m = a < b ? a : b;
   return m < c ? m : c;
@@ -192,17 +198,17 @@ struct EdgePass {
     std::memset(start, 0, (size_t{vertex_count} + 1) * sizeof(uint32_t));
     for (uint32_t t = 0; t < tri_count; ++t) {
       const uint32_t* v = tris[t].v;
-      ++start[(v[0] < v[1] ? v[0] : v[1]) + 1];
-      ++start[(v[1] < v[2] ? v[1] : v[2]) + 1];
-      ++start[(v[2] < v[0] ? v[2] : v[0]) + 1];
+      ++start[min2(v[0], v[1]) + 1];
+      ++start[min2(v[1], v[2]) + 1];
+      ++start[min2(v[2], v[0]) + 1];
     }
     for (uint32_t i = 0; i < vertex_count; ++i) start[i + 1] += start[i];
     // start[lo] is now where bucket lo begins; filling advances it to where it ends.
     for (uint32_t t = 0; t < tri_count; ++t) {
       const uint32_t v0 = tris[t].v[0], v1 = tris[t].v[1], v2 = tris[t].v[2];
-      a.half[start[v0 < v1 ? v0 : v1]++] = t << 2;
-      a.half[start[v1 < v2 ? v1 : v2]++] = t << 2 | 1u;
-      a.half[start[v2 < v0 ? v2 : v0]++] = t << 2 | 2u;
+      a.half[start[min2(v0, v1)]++] = t << 2;
+      a.half[start[min2(v1, v2)]++] = t << 2 | 1u;
+      a.half[start[min2(v2, v0)]++] = t << 2 | 2u;
     }
   }
 
