@@ -283,10 +283,13 @@ struct Broadphase {
   void cell_range(const Aabb& box, uint32_t lo[3], uint32_t hi[3]) const {
     const double blo[3] = {box.lo.x, box.lo.y, box.lo.z}, bhi[3] = {box.hi.x, box.hi.y, box.hi.z};
     const double glo[3] = {abox.lo.x, abox.lo.y, abox.lo.z};
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = grid_cell((blo[k] - glo[k]) * inv_h, dim[k]);
-      hi[k] = grid_cell((bhi[k] - glo[k]) * inv_h, dim[k]);
-    }
+    // (Three times written out: a loop's end is a branch, taken once in three.)
+    lo[0] = grid_cell((blo[0] - glo[0]) * inv_h, dim[0]);
+    hi[0] = grid_cell((bhi[0] - glo[0]) * inv_h, dim[0]);
+    lo[1] = grid_cell((blo[1] - glo[1]) * inv_h, dim[1]);
+    hi[1] = grid_cell((bhi[1] - glo[1]) * inv_h, dim[1]);
+    lo[2] = grid_cell((blo[2] - glo[2]) * inv_h, dim[2]);
+    hi[2] = grid_cell((bhi[2] - glo[2]) * inv_h, dim[2]);
   }
 };
 
