@@ -648,16 +648,24 @@ struct Normal {
   Diff nabs;
 };
 
-// The certain sign of d . (p x q) for rounded differences p, q and an exact d (Shewchuk's
-// orient3d bound: the same sum of coordinates times 2x2 minors), or 0. The absolute term
-// covers products that underflow (d is scaled so that its largest component is 1).
-inline int sure_triple(const Vec3& d, const Diff& p, const Diff& q) {
+// The normal p x q of the triangle (o, p + o, q + o) and the magnitudes of its terms, as
+// plane_filter makes them from corner o (p, q: the other corners less o, rounded).
+inline Normal fan_normal(const Diff& p, const Diff& q) {
   const double m0 = p.y * q.z, m1 = p.z * q.y, m2 = p.z * q.x, m3 = p.x * q.z, m4 = p.x * q.y,
                m5 = p.y * q.x;
-  const double det = d.x * (m0 - m1) + d.y * (m2 - m3) + d.z * (m4 - m5);
-  const double permanent = std::fabs(d.x) * (std::fabs(m0) + std::fabs(m1)) +
-                           std::fabs(d.y) * (std::fabs(m2) + std::fabs(m3)) +
-                           std::fabs(d.z) * (std::fabs(m4) + std::fabs(m5));
+  return Normal{Diff{m0 - m1, m2 - m3, m4 - m5},
+                Diff{std::fabs(m0) + std::fabs(m1), std::fabs(m2) + std::fabs(m3),
+                     std::fabs(m4) + std::fabs(m5)}};
+}
+
+// The certain sign of d . (p x q) for the normal fan_normal(p, q) made and an exact d (dabs:
+// its magnitudes), or 0: d . n is det[p, q, d], and its rounding error is below Shewchuk's
+// orient3d bound (the same sum of coordinates times 2x2 minors: dabs . nabs; the plane
+// filter's bound, with d for x - a). The absolute term covers products that underflow (d is
+// scaled so that its largest component is 1).
+inline int sure_sign(const Vec3& d, const Vec3& dabs, const Normal& nm) {
+  const double det = d.x * nm.n.x + d.y * nm.n.y + d.z * nm.n.z;
+  const double permanent = dabs.x * nm.nabs.x + dabs.y * nm.nabs.y + dabs.z * nm.nabs.z;
   const double bound = kPlaneFilter * permanent + 0x1p-1000;
   return det > bound ? 1 : (det < -bound ? -1 : 0);
 }
@@ -668,13 +676,9 @@ bool fan_turns_once(const Vec3& d, const Normal* normals, const Diff* e, uint32_
   const Vec3 dabs{std::fabs(d.x), std::fabs(d.y), std::fabs(d.z)};
   bool turned = false;                // past the direction opposite u_0
   for (uint32_t i = 0; i < k; ++i) {  // (one loop for both tests: see star_embedded)
-    // d . n is det[u_i - o, u_i+1 - o, d]: the plane filter's bound, with d for x - a.
-    const Normal& nm = normals[i];
-    const double along = d.x * nm.n.x + d.y * nm.n.y + d.z * nm.n.z;
-    const double terms = dabs.x * nm.nabs.x + dabs.y * nm.nabs.y + dabs.z * nm.nabs.z;
-    if (!(along > kPlaneFilter * terms + 0x1p-1000)) return false;
+    if (sure_sign(d, dabs, normals[i]) != 1) return false;
     if (i < 2 || i + 1 >= k) continue;
-    const int side = sure_triple(d, e[0], e[i]);
+    const int side = sure_sign(d, dabs, fan_normal(e[0], e[i]));
     if (side == 0 || (side > 0 && turned)) return false;
     turned = side < 0;
   }
@@ -697,16 +701,6 @@ inline uint32_t equal_lanes(const uint32_t* ids, uint32_t groups, uint32_t x) {
 struct Wing {
   uint32_t from, to;
 };
-
-// The normal of the triangle (o, p + o, q + o) and the magnitudes of its terms, as
-// plane_filter makes them from corner o (p, q: the other corners less o, rounded).
-inline Normal fan_normal(const Diff& p, const Diff& q) {
-  const double m0 = p.y * q.z, m1 = p.z * q.y, m2 = p.z * q.x, m3 = p.x * q.z, m4 = p.x * q.y,
-               m5 = p.y * q.x;
-  return Normal{Diff{m0 - m1, m2 - m3, m4 - m5},
-                Diff{std::fabs(m0) + std::fabs(m1), std::fabs(m2) + std::fabs(m3),
-                     std::fabs(m4) + std::fabs(m5)}};
-}
 
 // Is the star of vertex o (`star`: every non-degenerate triangle using o) certainly embedded?
 bool star_embedded(const Vec3* v, uint32_t o, const Wing* star, uint32_t k) {
