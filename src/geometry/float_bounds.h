@@ -10,9 +10,6 @@
 
 namespace splintcore {
 
-// Float bounds that contain the double value: rounded down for lo, up for hi (beyond float
-// range: the largest float or infinity, never an out-of-range conversion, which would be
-// undefined).
 // f, or with `step` the float next to it towards +infinity (up) or -infinity, by its bits (finite
 // f only; the library call costs more than everything else in the bounds pass; from a zero, the
 // smallest subnormal of the right sign). Whether the conversion rounded the wrong way is a coin
@@ -28,6 +25,10 @@ inline float float_step_if(float f, bool step, bool up) {
   std::memcpy(&f, &bits, sizeof(f));
   return f;
 }
+
+// Float bounds that contain the double value: rounded down for lo, up for hi (beyond float
+// range: the largest float or infinity, never an out-of-range conversion, which would be
+// undefined).
 inline float float_down(double x) {
   constexpr double kMax = 3.4028234663852886e38;  // FLT_MAX
   if (x > kMax) return static_cast<float>(kMax);
