@@ -241,8 +241,10 @@ Status write_ply(const Mesh& mesh, Span<const uint8_t> rgb, const ByteSink& sink
 // - Arena: on success only the mesh stays (read buffers are reclaimed): 24 bytes per vertex
 //   and 12 per triangle. While reading, at most the buffers plus, when the source size is
 //   unknown or vertex and face records interleave (OBJ), up to about three times the final
-//   mesh (arrays grow by half again). With options.weld, plus weld_exact_bound(triangles)
-//   and a 36-byte-per-triangle soup. There is no a-priori bound: the need of a file is the
+//   mesh (arrays grow by half again). With options.weld, plus 28 bytes a vertex read and
+//   the weld's table (4 bytes a slot; a power of two, at least 1.5 slots a vertex): the
+//   vertices are welded in place, hashed once each (the same mesh as weld_exact() of the
+//   triangles' corners). There is no a-priori bound: the need of a file is the
 //   arena's high water after a first read (the two-step contract, docs/embedding.md), and the
 //   same file then reads in exactly that many bytes.
 // - Never trusts a count: PLY element counts are checked against the limits, and (when the

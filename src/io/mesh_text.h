@@ -8,6 +8,7 @@
 #include <charconv>
 #include <system_error>
 
+#include "mesh/exact_weld.h"
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
 
@@ -306,23 +307,10 @@ struct MeshBuilder {
   Status finish(const Arena::Marker& start, Mesh* out) {
     Arena& arena = *ctx->arena;
     if (!options->keep.empty()) crop(options->keep);
-    if (!options->weld) {
-      move_mesh_down(arena, start, mesh, out, /*vertices_first=*/triangles_last);
-      return Status::ok();
-    }
-    // Exact weld through the STL path: each triangle as float32 corners (exact, since the
-    // coordinates were rounded to float32), so PLY, OBJ and STL weld identically.
-    ArenaArray<SoupTriangle> soup(&arena);
-    if (!soup.resize(mesh.triangles.size())) return arena.exhausted_status();
-    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-      for (int k = 0; k < 3; ++k) {
-        const Vec3& v = mesh.vertices[mesh.triangles[t].v[k]];
-        for (int a = 0; a < 3; ++a) soup[t].p[k][a] = static_cast<float>(v[a]);
-      }
-    }
-    Mesh welded(&arena);
-    SPLINTCORE_RETURN_IF_ERROR(weld_exact(*ctx, soup.span(), &welded));
-    move_mesh_down(arena, start, welded, out);  // weld_exact allocates triangles first
+    // The exact weld of the triangles' float32 corners (exact, since the coordinates were
+    // rounded to float32), so PLY, OBJ and STL weld identically; in place, a hash a vertex.
+    if (options->weld) SPLINTCORE_RETURN_IF_ERROR(weld_indexed_exact(*ctx, &mesh));
+    move_mesh_down(arena, start, mesh, out, /*vertices_first=*/triangles_last);
     return Status::ok();
   }
 };

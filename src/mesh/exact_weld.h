@@ -21,6 +21,8 @@ class ExactWelder {
   // Reserves the positions (for about one vertex per two triangles), then allocates the table;
   // false when the arena is exhausted. `triangle_count` <= (2^32 - 2) / 3.
   [[nodiscard]] bool init(Arena& arena, uint64_t triangle_count);
+  // The same for at most `corners` corners (<= 2^32 - 2), about `expected` of them distinct.
+  [[nodiscard]] bool init_corners(Arena& arena, uint64_t corners, uint64_t expected);
 
   // The id add() gives when the arena is exhausted (the positions could not grow).
   static constexpr uint32_t kFull = ~uint32_t{0};
@@ -121,6 +123,16 @@ class ExactWelder {
 
 // Slots of the exact weld's table for `corners` corners (a power of two, at least 1.5 a corner).
 uint64_t exact_weld_table_slots(uint64_t corners);
+
+// weld_exact() of an indexed mesh's triangles, in place: `mesh` (its coordinates float32
+// values, finite) ends up with the vertices and triangles weld_exact() gives for its triangles
+// as a soup (ids by first use in the triangles, unreferenced vertices dropped, -0 as +0), but
+// the weld hashes each vertex once, not each corner, and no soup is made. The triangles'
+// indices must be in range. Temporaries above the mesh are given back; the vertex array keeps
+// its capacity. Arena: at most weld_indexed_exact_bound(vertex count). Errors: kArenaExhausted,
+// kLimitExceeded (as weld_exact), kCancelled.
+Status weld_indexed_exact(const Context& ctx, Mesh* mesh);
+uint64_t weld_indexed_exact_bound(uint64_t vertex_count);
 
 }  // namespace splintcore
 

@@ -22,11 +22,17 @@ inline Vec3 to_vec3(const float* p) {
           static_cast<double>(p[2]) + 0.0};
 }
 
-Status check_soup(Span<const SoupTriangle> soup) {
-  if (soup.size() > (uint64_t{UINT32_MAX} - 1) / 3) {
-    return make_error(StatusCode::kLimitExceeded, "mesh has ", soup.size(), " triangles; at most ",
+// The exact weld's limit: an id for every corner in 32 bits.
+Status check_triangle_count(uint64_t count) {
+  if (count > (uint64_t{UINT32_MAX} - 1) / 3) {
+    return make_error(StatusCode::kLimitExceeded, "mesh has ", count, " triangles; at most ",
                       (uint64_t{UINT32_MAX} - 1) / 3, " are supported (32-bit vertex ids)");
   }
+  return Status::ok();
+}
+
+Status check_soup(Span<const SoupTriangle> soup) {
+  SPLINTCORE_RETURN_IF_ERROR(check_triangle_count(soup.size()));
   for (size_t t = 0; t < soup.size(); ++t) {
     for (int k = 0; k < 3; ++k) {
       for (int a = 0; a < 3; ++a) {
@@ -71,18 +77,21 @@ uint64_t expected_vertices(uint64_t triangle_count) {
 }  // namespace
 
 bool ExactWelder::init(Arena& arena, uint64_t triangle_count) {
+  return init_corners(arena, 3 * triangle_count, expected_vertices(triangle_count));
+}
+
+bool ExactWelder::init_corners(Arena& arena, uint64_t corners, uint64_t expected) {
   // The positions first, where they stay unless they outgrow the reserve (then they move to
   // the top of the arena and grow there).
   positions_.bind(&arena);
-  if (!positions_.reserve(static_cast<size_t>(expected_vertices(triangle_count)))) return false;
+  if (!positions_.reserve(static_cast<size_t>(expected))) return false;
   reserved_ = positions_.data();
   after_reserve_ = arena.mark();
-  table_slots_ = exact_weld_table_slots(3 * triangle_count);
+  table_slots_ = exact_weld_table_slots(corners);
   table_ = arena.allocate_array<uint32_t>(static_cast<size_t>(table_slots_));
   if (table_ == nullptr) return false;
   id_mask_ = 1;
-  while (id_mask_ < 3 * triangle_count + 1 && id_mask_ != UINT32_MAX) id_mask_ = 2 * id_mask_ + 1;
-  const uint64_t expected = expected_vertices(triangle_count);
+  while (id_mask_ < corners + 1 && id_mask_ != UINT32_MAX) id_mask_ = 2 * id_mask_ + 1;
   uint64_t slots = 16;
   while (slots < expected + expected / 2 && slots < table_slots_) slots <<= 1;
   mask_ = slots - 1;
@@ -141,6 +150,72 @@ uint64_t weld_exact_bound(uint64_t triangle_count) {
          arena_array_bound<Vec3>(expected_vertices(triangle_count)) +
          arena_array_bound<uint32_t>(exact_weld_table_slots(corners)) +
          arena_array_bound<Vec3>(corners);
+}
+
+// Per vertex its distinct vertex, the welder's positions (one per vertex at most) and its
+// table (the table is given back before the ids by first use are allocated, but it may be
+// smaller than them).
+uint64_t weld_indexed_exact_bound(uint64_t vertex_count) {
+  const uint64_t table = arena_array_bound<uint32_t>(exact_weld_table_slots(vertex_count));
+  const uint64_t ids = arena_array_bound<uint32_t>(vertex_count);
+  return arena_array_bound<uint32_t>(vertex_count) + arena_array_bound<Vec3>(vertex_count) +
+         (table > ids ? table : ids);
+}
+
+Status weld_indexed_exact(const Context& ctx, Mesh* mesh) {
+  Arena& arena = *ctx.arena;
+  SPLINTCORE_RETURN_IF_ERROR(check_triangle_count(mesh->triangles.size()));
+  const uint32_t nv = static_cast<uint32_t>(mesh->vertices.size());  // (ids are 32-bit)
+  ArenaScope scope(arena);
+  // Each vertex's distinct vertex (ids by first appearance in the vertex array).
+  uint32_t* distinct = arena.allocate_array<uint32_t>(nv);
+  if (distinct == nullptr && nv > 0) return arena.exhausted_status();
+  const Arena::Marker welder_start = arena.mark();
+  ExactWelder welder;
+  if (!welder.init_corners(arena, nv, nv)) return arena.exhausted_status();
+  const Vec3* in = mesh->vertices.data();
+  auto bits = [](double coordinate) {  // a float32 value's bits (the conversion is exact)
+    const float f = static_cast<float>(coordinate);
+    uint32_t b;
+    std::memcpy(&b, &f, sizeof(b));
+    return b;
+  };
+  for (uint32_t i = 0; i < nv; ++i) {
+    if ((i & 0xffff) == 0) SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "weld", i, nv));
+    if (i + 32 < nv) {  // the slot of a vertex ahead, about a memory latency
+      const Vec3& a = in[i + 32];
+      __builtin_prefetch(
+          welder.first_slot(ExactWelder::hash_bits(bits(a.x), bits(a.y), bits(a.z))));
+    }
+    const uint32_t x = bits(in[i].x), y = bits(in[i].y), z = bits(in[i].z);
+    const uint32_t id = welder.vertex(x, y, z, ExactWelder::hash_bits(x, y, z));
+    if (id == ExactWelder::kFull) return arena.exhausted_status();
+    distinct[i] = id;
+  }
+  ArenaArray<Vec3> positions(&arena);
+  welder.finish(arena, welder_start, &positions);  // (the table given back)
+  // Ids by first use in the triangles, as weld_exact() hands them out: the first corner of a
+  // distinct vertex takes the next id, and its position goes there in the vertex array (the
+  // input positions are no longer read; a vertex never used is dropped).
+  const uint32_t nd = static_cast<uint32_t>(positions.size());
+  uint32_t* first = arena.allocate_array<uint32_t>(nd);
+  if (first == nullptr && nd > 0) return arena.exhausted_status();
+  if (nd > 0) std::memset(first, 0xff, size_t{nd} * sizeof(uint32_t));
+  Vec3* out = mesh->vertices.data();
+  Triangle* tris = mesh->triangles.data();
+  uint32_t used = 0;
+  for (size_t t = 0; t < mesh->triangles.size(); ++t) {
+    for (uint32_t& v : tris[t].v) {
+      const uint32_t d = distinct[v];
+      if (first[d] == UINT32_MAX) {
+        out[used] = positions[d];
+        first[d] = used++;
+      }
+      v = first[d];
+    }
+  }
+  mesh->vertices.shrink_size(used);
+  return Status::ok();
 }
 
 // The triangles, the sort keys, then either the radix sort's scratch (returned) or the
