@@ -343,6 +343,49 @@ Status face_too_small(uint64_t face, uint64_t corners) {
 // ---------------------------------------------------------------------------------------------
 // Binary records.
 
+// The N bytes at p as an unsigned integer, little- or big-endian (compilers make each a load).
+template <size_t N>
+inline uint64_t load_le(const uint8_t* p) {
+  uint64_t bits = 0;
+  for (size_t k = 0; k < N; ++k) bits |= uint64_t{p[k]} << (8 * k);
+  return bits;
+}
+template <size_t N>
+inline uint64_t load_be(const uint8_t* p) {
+  uint64_t bits = 0;
+  for (size_t k = 0; k < N; ++k) bits = (bits << 8) | p[k];
+  return bits;
+}
+template <size_t N>
+inline uint64_t load_bits(const uint8_t* p, bool big) {
+  return big ? load_be<N>(p) : load_le<N>(p);
+}
+
+// The value of `type` whose bytes start at p: integers to *i, reals (and integers) to *d.
+inline void decode_value(const uint8_t* p, uint8_t type, bool big, int64_t* i, double* d) {
+  switch (type) {
+    case kInt8: *i = static_cast<int64_t>(p[0]) - ((p[0] & 0x80u) != 0 ? 256 : 0); break;
+    case kUInt8: *i = static_cast<int64_t>(p[0]); break;
+    case kInt16: *i = static_cast<int16_t>(static_cast<uint16_t>(load_bits<2>(p, big))); break;
+    case kUInt16: *i = static_cast<int64_t>(load_bits<2>(p, big)); break;
+    case kInt32: *i = static_cast<int32_t>(static_cast<uint32_t>(load_bits<4>(p, big))); break;
+    case kUInt32: *i = static_cast<int64_t>(load_bits<4>(p, big)); break;
+    case kFloat32: {
+      const uint32_t b32 = static_cast<uint32_t>(load_bits<4>(p, big));
+      float f;
+      std::memcpy(&f, &b32, 4);
+      *d = static_cast<double>(f);
+      return;
+    }
+    default: {
+      const uint64_t b64 = load_bits<8>(p, big);
+      std::memcpy(d, &b64, 8);
+      return;
+    }
+  }
+  *d = static_cast<double>(*i);
+}
+
 struct BinaryIn {
   Reader* in = nullptr;
   bool big = false;
@@ -359,33 +402,8 @@ struct BinaryIn {
             .at_index(record);
       }
     }
-    const uint8_t* p = in->buf + in->pos;
-    uint64_t bits = 0;
-    for (size_t k = 0; k < n; ++k) {
-      const uint64_t byte = p[big ? k : n - 1 - k];
-      bits = (bits << 8) | byte;
-    }
+    decode_value(in->buf + in->pos, type, big, i, d);
     in->pos += n;
-    switch (type) {
-      case kInt8: *i = static_cast<int64_t>(bits) - ((bits & 0x80u) != 0 ? 256 : 0); break;
-      case kUInt8: *i = static_cast<int64_t>(bits); break;
-      case kInt16: *i = static_cast<int16_t>(bits); break;
-      case kUInt16: *i = static_cast<int64_t>(bits); break;
-      case kInt32: *i = static_cast<int32_t>(static_cast<uint32_t>(bits)); break;
-      case kUInt32: *i = static_cast<int64_t>(bits); break;
-      case kFloat32: {
-        const uint32_t b32 = static_cast<uint32_t>(bits);
-        float f;
-        std::memcpy(&f, &b32, 4);
-        *d = static_cast<double>(f);
-        return Status::ok();
-      }
-      default: {
-        std::memcpy(d, &bits, 8);
-        return Status::ok();
-      }
-    }
-    *d = static_cast<double>(*i);
     return Status::ok();
   }
 
@@ -409,6 +427,119 @@ struct BinaryIn {
   }
 };
 
+// Record r of element e, value by value (each refilling the buffer as needed): the way for a
+// record that crosses the buffer's end, and the one that reports a truncated file.
+Status binary_record_by_values(Body& body, BinaryIn& b, const Element& e, uint64_t r) {
+  const Header& h = *body.header;
+  const uint64_t record_byte = b.in->offset();
+  Vec3 v;
+  for (uint32_t pi = e.first; pi < e.first + e.properties; ++pi) {
+    const Property& p = h.properties[pi];
+    int64_t i = 0;
+    double d = 0;
+    if (p.count_type == kNone) {
+      if (p.role == kSkip) {
+        SPLINTCORE_RETURN_IF_ERROR(b.skip(kTypeBytes[p.type], e, r));
+      } else {
+        SPLINTCORE_RETURN_IF_ERROR(b.value(p.type, &i, &d, e, r));
+        v[p.role - kX] = body.coordinate(d);
+      }
+      continue;
+    }
+    int64_t n = 0;
+    SPLINTCORE_RETURN_IF_ERROR(b.value(p.count_type, &n, &d, e, r));
+    if (n < 0) {
+      return make_error(StatusCode::kParseError, e.name, " ", r, " has a list of ", n, " items")
+          .at_byte(record_byte)
+          .at_index(r);
+    }
+    if (p.role != kIndices) {
+      SPLINTCORE_RETURN_IF_ERROR(b.skip(static_cast<uint64_t>(n) * kTypeBytes[p.type], e, r));
+      continue;
+    }
+    if (n < 3) return face_too_small(r, static_cast<uint64_t>(n)).at_byte(record_byte);
+    Fan fan;
+    for (int64_t k = 0; k < n; ++k) {
+      SPLINTCORE_RETURN_IF_ERROR(b.value(p.type, &i, &d, e, r));
+      Status s = body.corner(&fan, i, r);
+      if (!s.is_ok()) return s.at_byte(record_byte);
+    }
+  }
+  if (e.kind == kVertex) {
+    Status s = body.mesh->add_vertex(v, r);
+    if (!s.is_ok()) return s.at_byte(record_byte);
+  }
+  return Status::ok();
+}
+
+// The bytes of record r of element e when all of them are in the buffer (its lists' counts
+// read there), so it can be decoded in place; 0 when they are not, or a count is negative
+// (binary_record_by_values then reads it, and reports that).
+size_t whole_record_bytes(const Header& h, const Reader& in, bool big, const Element& e) {
+  const uint8_t* p = in.buf + in.pos;
+  const size_t available = in.available();
+  size_t size = 0;
+  for (uint32_t pi = e.first; pi < e.first + e.properties; ++pi) {
+    const Property& prop = h.properties[pi];
+    if (prop.count_type == kNone) {
+      size += kTypeBytes[prop.type];
+      continue;
+    }
+    if (available - (size < available ? size : available) < kTypeBytes[prop.count_type]) return 0;
+    int64_t n = 0;
+    double d = 0;
+    decode_value(p + size, prop.count_type, big, &n, &d);
+    if (n < 0) return 0;
+    // (A count is below 2^32 and an item at most 8 bytes: no overflow.)
+    size += kTypeBytes[prop.count_type] + static_cast<size_t>(n) * kTypeBytes[prop.type];
+  }
+  return size <= available ? size : 0;
+}
+
+// Record r of element e decoded in place: `bytes` of it (whole_record_bytes) in the buffer.
+// The same values, in the same order, with the same checks and errors as
+// binary_record_by_values.
+Status binary_record_in_place(Body& body, Reader& in, bool big, const Element& e, uint64_t r,
+                              size_t bytes) {
+  const Header& h = *body.header;
+  const uint64_t record_byte = in.offset();
+  const uint8_t* q = in.buf + in.pos;
+  in.pos += bytes;
+  Vec3 v;
+  for (uint32_t pi = e.first; pi < e.first + e.properties; ++pi) {
+    const Property& p = h.properties[pi];
+    int64_t i = 0;
+    double d = 0;
+    if (p.count_type == kNone) {
+      if (p.role != kSkip) {
+        decode_value(q, p.type, big, &i, &d);
+        v[p.role - kX] = body.coordinate(d);
+      }
+      q += kTypeBytes[p.type];
+      continue;
+    }
+    int64_t n = 0;
+    decode_value(q, p.count_type, big, &n, &d);  // (not negative: whole_record_bytes)
+    q += kTypeBytes[p.count_type];
+    if (p.role != kIndices) {
+      q += static_cast<size_t>(n) * kTypeBytes[p.type];
+      continue;
+    }
+    if (n < 3) return face_too_small(r, static_cast<uint64_t>(n)).at_byte(record_byte);
+    Fan fan;
+    for (int64_t k = 0; k < n; ++k, q += kTypeBytes[p.type]) {
+      decode_value(q, p.type, big, &i, &d);
+      Status s = body.corner(&fan, i, r);
+      if (!s.is_ok()) return s.at_byte(record_byte);
+    }
+  }
+  if (e.kind == kVertex) {
+    Status s = body.mesh->add_vertex(v, r);
+    if (!s.is_ok()) return s.at_byte(record_byte);
+  }
+  return Status::ok();
+}
+
 Status read_binary_body(Body& body, Reader& in) {
   const Header& h = *body.header;
   BinaryIn b;
@@ -420,44 +551,11 @@ Status read_binary_body(Body& body, Reader& in) {
       if ((r & 0xffff) == 0)
         SPLINTCORE_RETURN_IF_ERROR(
             report_progress(*body.ctx, "read", in.offset(), in.source->size));
-      const uint64_t record_byte = in.offset();
-      Vec3 v;
-      for (uint32_t pi = e.first; pi < e.first + e.properties; ++pi) {
-        const Property& p = h.properties[pi];
-        int64_t i = 0;
-        double d = 0;
-        if (p.count_type == kNone) {
-          if (p.role == kSkip) {
-            SPLINTCORE_RETURN_IF_ERROR(b.skip(kTypeBytes[p.type], e, r));
-          } else {
-            SPLINTCORE_RETURN_IF_ERROR(b.value(p.type, &i, &d, e, r));
-            v[p.role - kX] = body.coordinate(d);
-          }
-          continue;
-        }
-        int64_t n = 0;
-        SPLINTCORE_RETURN_IF_ERROR(b.value(p.count_type, &n, &d, e, r));
-        if (n < 0) {
-          return make_error(StatusCode::kParseError, e.name, " ", r, " has a list of ", n, " items")
-              .at_byte(record_byte)
-              .at_index(r);
-        }
-        if (p.role != kIndices) {
-          SPLINTCORE_RETURN_IF_ERROR(b.skip(static_cast<uint64_t>(n) * kTypeBytes[p.type], e, r));
-          continue;
-        }
-        if (n < 3) return face_too_small(r, static_cast<uint64_t>(n)).at_byte(record_byte);
-        Fan fan;
-        for (int64_t k = 0; k < n; ++k) {
-          SPLINTCORE_RETURN_IF_ERROR(b.value(p.type, &i, &d, e, r));
-          Status s = body.corner(&fan, i, r);
-          if (!s.is_ok()) return s.at_byte(record_byte);
-        }
-      }
-      if (e.kind == kVertex) {
-        Status s = body.mesh->add_vertex(v, r);
-        if (!s.is_ok()) return s.at_byte(record_byte);
-      }
+      // Most records lie whole in the buffer: decoded there; the one across its end, value by
+      // value.
+      const size_t bytes = whole_record_bytes(h, in, b.big, e);
+      SPLINTCORE_RETURN_IF_ERROR(bytes > 0 ? binary_record_in_place(body, in, b.big, e, r, bytes)
+                                           : binary_record_by_values(body, b, e, r));
     }
   }
   SPLINTCORE_RETURN_IF_ERROR(in.fill(1));
