@@ -185,13 +185,65 @@ void bench_stl(Harness& h, Arena& arena, const char* label, const std::vector<ui
   }
 }
 
+// The same mesh as a binary PLY and as an OBJ (the indexed formats intraoral scanners export),
+// read and welded as `splintcore check` reads them (read_mesh with weld).
+void bench_indexed_formats(Harness& h, Arena& arena, const char* label,
+                           const std::vector<uint8_t>& stl) {
+  const std::string ply_name = std::string("ply_read_weld") + label;
+  const std::string obj_name = std::string("obj_read_weld") + label;
+  if (!h.wanted(ply_name.c_str()) && !h.wanted(obj_name.c_str())) return;
+  Context ctx(&arena);
+  const Arena::Marker m = arena.mark();
+  Mesh mesh(&arena);
+  MemorySource ms{stl.data(), stl.size(), 0, 0};
+  Status s = read_stl_mesh(ctx, memory_source(&ms), StlReadOptions{}, &mesh, nullptr);
+  std::string ply;
+  if (s.is_ok()) s = write_ply(mesh, Span<const uint8_t>(), cli::string_sink(&ply));
+  if (!s.is_ok()) {
+    cli::print_error(s);
+    h.failed = true;
+    arena.rewind(m);
+    return;
+  }
+  std::string obj;
+  char line[128];
+  for (const Vec3& v : mesh.vertices) {
+    // %.9g: a float32 value's shortest exact decimal is at most 9 digits.
+    obj.append(line, static_cast<size_t>(
+                         std::snprintf(line, sizeof(line), "v %.9g %.9g %.9g\n", v.x, v.y, v.z)));
+  }
+  for (const Triangle& t : mesh.triangles) {
+    obj.append(line, static_cast<size_t>(std::snprintf(line, sizeof(line), "f %u %u %u\n",
+                                                       t.v[0] + 1, t.v[1] + 1, t.v[2] + 1)));
+  }
+  const uint64_t triangles = mesh.triangles.size();
+  arena.rewind(m);
+  for (const std::string* file : {&ply, &obj}) {
+    const std::string& name = file == &ply ? ply_name : obj_name;
+    if (!h.wanted(name.c_str())) continue;
+    const uint8_t* bytes = reinterpret_cast<const uint8_t*>(file->data());
+    Result r = h.measure(name.c_str(), triangles, arena, [&](Arena& a) {
+      Context c(&a);
+      MemorySource source{bytes, file->size(), 0, 0};
+      MeshReadOptions options;
+      options.weld = true;
+      Mesh read(&a);
+      return read_mesh(c, memory_source(&source), options, &read, nullptr);
+    });
+    std::printf("# %s: %.2f GB/s (%zu bytes per run, median)\n", name.c_str(),
+                static_cast<double>(file->size()) / r.median / 1e9, file->size());
+  }
+}
+
 // The phantom maxilla of `splintcore phantom --triangles 543530` (the paper's largest jaw) as
-// the binary STL that command writes: read, weld and check at that size.
+// the binary STL that command writes: read, weld and check at that size; then the same mesh
+// read from PLY and OBJ.
 void bench_stl_phantom(Harness& h, Arena& arena) {
   const char* label = "_phantom_543k";
-  const char* names[3] = {"stl_read_weld_phantom_543k", "mesh_check_phantom_543k",
-                          "stl_read_check_phantom_543k"};
-  if (!h.wanted(names[0]) && !h.wanted(names[1]) && !h.wanted(names[2])) return;
+  const char* names[5] = {"stl_read_weld_phantom_543k", "mesh_check_phantom_543k",
+                          "stl_read_check_phantom_543k", "ply_read_weld_phantom_543k",
+                          "obj_read_weld_phantom_543k"};
+  if (std::none_of(names, names + 5, [&](const char* n) { return h.wanted(n); })) return;
   phantom::JawMesh jaw;
   phantom::PhantomOptions po;
   po.target_triangles = 543530;
@@ -211,8 +263,10 @@ void bench_stl_phantom(Harness& h, Arena& arena) {
     }
   }
   const Arena::Marker m = arena.mark();
-  bench_stl(h, arena, label, to_binary_stl(soup));
+  const std::vector<uint8_t> stl = to_binary_stl(soup);
+  bench_stl(h, arena, label, stl);
   arena.rewind(m);
+  bench_indexed_formats(h, arena, label, stl);
 }
 
 // The initial splint base at the paper's scale (fixtures/cases/paper_scale.json: 2,612
