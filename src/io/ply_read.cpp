@@ -540,6 +540,80 @@ Status binary_record_in_place(Body& body, Reader& in, bool big, const Element& e
   return Status::ok();
 }
 
+// The face element of the usual layout, a list of 4-byte indices and nothing else: its
+// triangles (lists of 3) from record *r on, while they lie whole in the buffer and their
+// indices are in range, up to record `end`; *r is left at the first record not read (a
+// polygon, a bad count or index, the buffer's end), which the general path then reads, errors
+// included. The same triangles and errors as corner().
+Status triangle_run(Body& body, Reader& in, bool big, const Property& list, uint64_t* r,
+                    uint64_t end) {
+  const size_t count_bytes = kTypeBytes[list.count_type], bytes = count_bytes + 12;
+  const bool is_signed = list.type == kInt32;
+  for (; *r < end && in.available() >= bytes; ++*r) {
+    const uint8_t* q = in.buf + in.pos;
+    int64_t n = 0;
+    double d = 0;
+    decode_value(q, list.count_type, big, &n, &d);
+    const uint32_t i0 = static_cast<uint32_t>(load_bits<4>(q + count_bytes, big));
+    const uint32_t i1 = static_cast<uint32_t>(load_bits<4>(q + count_bytes + 4, big));
+    const uint32_t i2 = static_cast<uint32_t>(load_bits<4>(q + count_bytes + 8, big));
+    const uint32_t sign = is_signed ? 0x80000000u : 0u;  // a negative int32
+    const uint64_t top = body.vertex_count;
+    if (n != 3 || ((i0 | i1 | i2) & sign) != 0 || i0 >= top || i1 >= top || i2 >= top) break;
+    const uint64_t record_byte = in.offset();
+    in.pos += bytes;
+    Status s = body.mesh->add_triangle(i0, i1, i2, *r);
+    if (!s.is_ok()) return s.at_byte(record_byte);
+  }
+  return Status::ok();
+}
+
+// The vertex element of the usual layout, scalars only with x, y and z float32: where each
+// coordinate lies in its record, and the record's size; size 0 for any other element.
+struct VertexLayout {
+  size_t at[3] = {0, 0, 0};
+  size_t size = 0;
+};
+
+VertexLayout vertex_layout(const Header& h, const Element& e) {
+  VertexLayout l;
+  if (e.kind != kVertex) return l;
+  size_t size = 0;
+  for (uint32_t pi = e.first; pi < e.first + e.properties; ++pi) {
+    const Property& p = h.properties[pi];
+    if (p.count_type != kNone) return l;
+    if (p.role != kSkip) {
+      if (p.type != kFloat32) return l;
+      l.at[p.role - kX] = size;
+    }
+    size += kTypeBytes[p.type];
+  }
+  l.size = size;
+  return l;
+}
+
+// The vertices from record *r on while they lie whole in the buffer, up to record `end`, as
+// the general path reads them (the same values, checks and errors); *r is left at the first
+// record not read.
+Status vertex_run(Body& body, Reader& in, bool big, const VertexLayout& l, uint64_t* r,
+                  uint64_t end) {
+  for (; *r < end && in.available() >= l.size; ++*r) {
+    const uint8_t* q = in.buf + in.pos;
+    const uint64_t record_byte = in.offset();
+    in.pos += l.size;
+    Vec3 v;
+    for (int a = 0; a < 3; ++a) {
+      const uint32_t bits = static_cast<uint32_t>(load_bits<4>(q + l.at[a], big));
+      float f;
+      std::memcpy(&f, &bits, 4);
+      v[a] = body.coordinate(static_cast<double>(f));
+    }
+    Status s = body.mesh->add_vertex(v, *r);
+    if (!s.is_ok()) return s.at_byte(record_byte);
+  }
+  return Status::ok();
+}
+
 Status read_binary_body(Body& body, Reader& in) {
   const Header& h = *body.header;
   BinaryIn b;
@@ -547,10 +621,24 @@ Status read_binary_body(Body& body, Reader& in) {
   b.big = h.format == MeshFormat::kPlyBinaryBigEndian;
   for (uint32_t ei = 0; ei < h.element_count; ++ei) {
     const Element& e = h.elements[ei];
+    const Property& first = h.properties[e.first];
+    const bool triangles = e.properties == 1 && first.role == kIndices &&
+                           first.count_type != kNone && kTypeBytes[first.type] == 4;
+    const VertexLayout vertices = vertex_layout(h, e);
     for (uint64_t r = 0; r < e.count; ++r) {
       if ((r & 0xffff) == 0)
         SPLINTCORE_RETURN_IF_ERROR(
             report_progress(*body.ctx, "read", in.offset(), in.source->size));
+      // The usual layouts in runs up to the next progress report; what they leave, below.
+      if (triangles || vertices.size > 0) {
+        const uint64_t end = (r | 0xffff) + 1 < e.count ? (r | 0xffff) + 1 : e.count;
+        SPLINTCORE_RETURN_IF_ERROR(triangles ? triangle_run(body, in, b.big, first, &r, end)
+                                             : vertex_run(body, in, b.big, vertices, &r, end));
+        if (r == end) {
+          --r;  // (the loop's ++r moves on to `end`)
+          continue;
+        }
+      }
       // Most records lie whole in the buffer: decoded there; the one across its end, value by
       // value.
       const size_t bytes = whole_record_bytes(h, in, b.big, e);

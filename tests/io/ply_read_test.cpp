@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -299,6 +300,106 @@ TEST(PlyRead, WeldMergesExactDuplicates) {
   EXPECT_EQ(read(text, p).status.code(), StatusCode::kInvalidArgument);
   r = read(text);
   EXPECT_EQ(r.vertices.size(), 6u);  // not welded: as given
+}
+
+// A random binary PLY: vertices with x, y, z float32 among other properties (or, for some
+// seeds, a double or a list, the layouts the in-buffer runs leave to the general path), faces
+// of 3 corners (some polygons) with a count of any integer type and int or uint indices (for
+// some seeds a second face property), a few bad records (an index out of range or negative, a
+// face of 2 corners, a NaN) and, for some seeds, the file cut short.
+std::string random_binary_ply(uint32_t seed) {
+  std::mt19937 rng(seed);
+  auto coin = [&](int in) { return std::uniform_int_distribution<int>(0, in - 1)(rng) == 0; };
+  const bool big = coin(2);
+  const bool plain_vertex = !coin(4), plain_face = !coin(4);
+  const char* count_type = coin(2) ? "uchar" : coin(2) ? "ushort" : "int";
+  const size_t count_bytes = count_type[0] == 'u' && count_type[1] == 'c' ? 1
+                             : count_type[1] == 's'                       ? 2
+                                                                          : 4;
+  const bool signed_index = coin(2);
+  const uint32_t nv = 3 + std::uniform_int_distribution<uint32_t>(0, 200)(rng);
+  const uint32_t nf = std::uniform_int_distribution<uint32_t>(0, 300)(rng);
+  std::string out =
+      std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
+      " 1.0\nelement vertex " + std::to_string(nv) +
+      "\nproperty uchar red\nproperty float x\nproperty float y\n" +
+      (plain_vertex ? "property float z\n" : "property double z\n") +
+      "property short quality\nelement face " + std::to_string(nf) + "\nproperty list " +
+      count_type + (signed_index ? " int" : " uint") + " vertex_indices\n" +
+      (plain_face ? "" : "property float weight\n") + "end_header\n";
+  auto put = [&](uint64_t bits, size_t n) {
+    for (size_t k = 0; k < n; ++k) {
+      out.push_back(static_cast<char>(bits >> (8 * (big ? n - 1 - k : k))));
+    }
+  };
+  auto put_float = [&](float f) {
+    uint32_t bits;
+    std::memcpy(&bits, &f, 4);
+    put(bits, 4);
+  };
+  std::uniform_real_distribution<float> coordinate(-50.0f, 50.0f);
+  for (uint32_t v = 0; v < nv; ++v) {
+    put(v & 0xff, 1);
+    put_float(coordinate(rng));
+    put_float(coin(300) ? std::numeric_limits<float>::quiet_NaN() : coordinate(rng));
+    if (plain_vertex) {
+      put_float(coordinate(rng));
+    } else {
+      const double z = static_cast<double>(coordinate(rng));
+      uint64_t bits;
+      std::memcpy(&bits, &z, 8);
+      put(bits, 8);
+    }
+    put(v & 0xffff, 2);
+  }
+  std::uniform_int_distribution<uint32_t> index(0, nv - 1);
+  for (uint32_t f = 0; f < nf; ++f) {
+    const uint32_t corners = coin(10) ? 4 + static_cast<uint32_t>(coin(2)) : coin(400) ? 2 : 3;
+    put(corners, count_bytes);
+    for (uint32_t k = 0; k < corners; ++k) {
+      uint32_t i = index(rng);
+      if (coin(800)) i = nv + static_cast<uint32_t>(coin(2));  // out of range
+      if (coin(800)) i = 0xffffffffu;                          // -1 as int, 2^32 - 1 as uint
+      put(i, 4);
+    }
+    if (!plain_face) put_float(0.5f);
+  }
+  if (coin(5)) out.resize(out.size() - std::uniform_int_distribution<size_t>(1, 40)(rng));
+  return out;
+}
+
+// The runs that read whole records in the buffer (the usual layouts), the in-place decoding of
+// the others, and the value-by-value path (a source that gives one byte at a time, so no
+// record is ever whole in the buffer) read the same meshes and report the same errors.
+TEST(PlyRead, RecordsInTheBufferReadAsValueByValue) {
+  int errors = 0;
+  for (uint32_t seed = 1; seed <= 300; ++seed) {
+    const std::string file = random_binary_ply(seed);
+    Params by_values;
+    by_values.max_chunk = 1;
+    const Result a = read(file, by_values);
+    for (size_t chunk : {size_t{0}, size_t{97}, size_t{4096}}) {
+      Params p;
+      p.max_chunk = chunk;
+      p.options.weld = (seed & 1) != 0;
+      by_values.options.weld = p.options.weld;
+      const Result w = p.options.weld ? read(file, by_values) : a;
+      const Result b = read(file, p);
+      ASSERT_EQ(b.status.code(), w.status.code()) << "seed " << seed << ": " << format(b.status);
+      EXPECT_STREQ(b.status.message(), w.status.message()) << "seed " << seed;
+      EXPECT_EQ(b.status.byte_offset(), w.status.byte_offset()) << "seed " << seed;
+      EXPECT_EQ(b.status.index(), w.status.index()) << "seed " << seed;
+      EXPECT_TRUE(same_vertices(b.vertices, w.vertices)) << "seed " << seed;
+      ASSERT_EQ(b.triangles.size(), w.triangles.size()) << "seed " << seed;
+      for (size_t t = 0; t < b.triangles.size(); ++t) {
+        for (int k = 0; k < 3; ++k) EXPECT_EQ(b.triangles[t].v[k], w.triangles[t].v[k]);
+      }
+    }
+    errors += a.status.is_ok() ? 0 : 1;
+  }
+  // Both kinds of file are there: read whole, and refused.
+  EXPECT_GT(errors, 30);
+  EXPECT_LT(errors, 270);
 }
 
 TEST(PlyRead, EveryTruncationIsACleanError) {
