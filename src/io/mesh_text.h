@@ -138,14 +138,17 @@ inline bool parse_integer(const char* first, const char* last, int64_t* out) {
   return r.ec == std::errc() && r.ptr == last;  // from_chars fails on an empty range
 }
 
-// Lines of text from a Reader into a buffer of `cap` bytes (the line end is not kept; a '\r'
-// before it is dropped). Lines are numbered from 1.
+// Lines of text from a Reader (the line end is not kept; a '\r' before it is dropped), at most
+// `cap` bytes each. Lines are numbered from 1. A line that lies whole in the reader's buffer
+// is read there; one across its end is copied into `text` (cap bytes) as it is read.
 struct LineReader {
   Reader* in = nullptr;
-  char* text = nullptr;
+  char* text = nullptr;        // the copies' buffer
+  const char* line = nullptr;  // the line: in the reader's buffer or in `text`; valid until
+                               // the next read from `in`
   size_t cap = 0;
   size_t length = 0;
-  uint64_t number = 0;      // of the line in `text`
+  uint64_t number = 0;      // of the line in `line`
   uint64_t start_byte = 0;  // its offset in the input
 
   // Reads the next line; *got = false at the end of the input (no more bytes at all).
@@ -157,6 +160,17 @@ struct LineReader {
     if (in->available() == 0) return Status::ok();
     ++number;
     start_byte = in->offset();
+    const uint8_t* at = in->buf + in->pos;
+    const void* end = std::memchr(at, '\n', in->available());
+    if (end != nullptr && static_cast<size_t>(static_cast<const uint8_t*>(end) - at) <= cap) {
+      line = reinterpret_cast<const char*>(at);
+      length = static_cast<size_t>(static_cast<const uint8_t*>(end) - at);
+      in->pos += length + 1;
+      if (length > 0 && line[length - 1] == '\r') --length;
+      *got = true;
+      return Status::ok();
+    }
+    line = text;
     for (;;) {
       if (in->available() == 0) {
         SPLINTCORE_RETURN_IF_ERROR(in->fill(1));

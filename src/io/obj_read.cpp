@@ -160,7 +160,7 @@ Status read_obj_located(const Context& ctx, const ByteSource& source,
     if ((lines.number & 0xffff) == 0) {
       SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "read", in.offset(), source.size));
     }
-    Tokens t(lines.text, lines.length);
+    Tokens t(lines.line, lines.length);
     if (!t.next() || t.token[0] == '#') continue;
     if (t.is("v")) {
       SPLINTCORE_RETURN_IF_ERROR(obj.vertex(t));

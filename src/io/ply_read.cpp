@@ -234,7 +234,7 @@ Status check_header(const LineReader& lines, const Header& h) {
 Status parse_header(LineReader& lines, Header* h) {
   bool got = false;
   SPLINTCORE_RETURN_IF_ERROR(lines.next(&got));
-  if (!got || lines.length != 3 || std::memcmp(lines.text, "ply", 3) != 0) {
+  if (!got || lines.length != 3 || std::memcmp(lines.line, "ply", 3) != 0) {
     return make_error(StatusCode::kParseError, "not a PLY file: the first line must be 'ply'")
         .at_line(1, 1)
         .at_byte(0);
@@ -246,7 +246,7 @@ Status parse_header(LineReader& lines, Header* h) {
           .at_line(lines.number + 1, 1)
           .at_byte(lines.in->offset());
     }
-    Tokens t(lines.text, lines.length);
+    Tokens t(lines.line, lines.length);
     if (!t.next()) continue;  // a blank line
     if (t.is("comment") || t.is("obj_info")) continue;
     if (t.is("end_header")) {
@@ -707,10 +707,10 @@ Status read_ascii_body(Body& body, LineReader& lines) {
               .at_byte(lines.in->offset())
               .at_index(r);
         }
-        Tokens probe(lines.text, lines.length);
+        Tokens probe(lines.line, lines.length);
         if (probe.next()) break;
       }
-      Tokens t(lines.text, lines.length);
+      Tokens t(lines.line, lines.length);
       Vec3 v;
       for (uint32_t pi = e.first; pi < e.first + e.properties; ++pi) {
         const Property& p = h.properties[pi];
@@ -767,7 +767,7 @@ Status read_ascii_body(Body& body, LineReader& lines) {
   for (;;) {
     SPLINTCORE_RETURN_IF_ERROR(lines.next(&got));
     if (!got) break;
-    Tokens t(lines.text, lines.length);
+    Tokens t(lines.line, lines.length);
     if (t.next()) {
       return token_error(StatusCode::kParseError, lines, t,
                          "ASCII PLY has data after its last element");
