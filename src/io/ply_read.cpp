@@ -623,7 +623,8 @@ Status read_binary_body(Body& body, Reader& in) {
     const Element& e = h.elements[ei];
     const Property& first = h.properties[e.first];
     const bool triangles = e.properties == 1 && first.role == kIndices &&
-                           first.count_type != kNone && kTypeBytes[first.type] == 4;
+                           first.count_type != kNone &&
+                           (first.type == kInt32 || first.type == kUInt32);
     const VertexLayout vertices = vertex_layout(h, e);
     for (uint64_t r = 0; r < e.count; ++r) {
       if ((r & 0xffff) == 0)
