@@ -130,7 +130,7 @@ uint64_t exact_weld_table_slots(uint64_t corners);
 // the weld hashes each vertex once, not each corner, and no soup is made. The triangles'
 // indices must be in range. Temporaries above the mesh are given back; the vertex array keeps
 // its capacity. Arena: at most weld_indexed_exact_bound(vertex count). Errors: kArenaExhausted,
-// kLimitExceeded (as weld_exact), kCancelled.
+// kLimitExceeded (as weld_exact's; or 2^32 - 1 vertices or more), kCancelled.
 Status weld_indexed_exact(const Context& ctx, Mesh* mesh);
 uint64_t weld_indexed_exact_bound(uint64_t vertex_count);
 

@@ -165,7 +165,12 @@ uint64_t weld_indexed_exact_bound(uint64_t vertex_count) {
 Status weld_indexed_exact(const Context& ctx, Mesh* mesh) {
   Arena& arena = *ctx.arena;
   SPLINTCORE_RETURN_IF_ERROR(check_triangle_count(mesh->triangles.size()));
-  const uint32_t nv = static_cast<uint32_t>(mesh->vertices.size());  // (ids are 32-bit)
+  if (mesh->vertices.size() > uint64_t{UINT32_MAX} - 1) {
+    return make_error(StatusCode::kLimitExceeded, "mesh has ", mesh->vertices.size(),
+                      " vertices; at most ", uint64_t{UINT32_MAX} - 1,
+                      " are supported (32-bit vertex ids)");
+  }
+  const uint32_t nv = static_cast<uint32_t>(mesh->vertices.size());
   ArenaScope scope(arena);
   // Each vertex's distinct vertex (ids by first appearance in the vertex array).
   uint32_t* distinct = arena.allocate_array<uint32_t>(nv);
