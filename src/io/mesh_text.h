@@ -134,6 +134,20 @@ inline StatusCode parse_real(const char* first, const char* last, bool as_float,
 // A decimal integer token with an optional sign; false when malformed or beyond int64.
 inline bool parse_integer(const char* first, const char* last, int64_t* out) {
   if (first != last && *first == '+' && last - first > 1 && first[1] != '-') ++first;
+  // Up to 18 digits (an optional '-' before them) cannot overflow: summed here, the common
+  // case (face corners); anything else as from_chars decides.
+  const bool minus = first != last && *first == '-';
+  const char* digits = first + (minus ? 1 : 0);
+  if (last - digits >= 1 && last - digits <= 18) {
+    int64_t value = 0;
+    const char* p = digits;
+    for (; p < last && static_cast<unsigned>(*p - '0') <= 9u; ++p) value = 10 * value + (*p - '0');
+    if (p == last) {
+      *out = minus ? -value : value;
+      return true;
+    }
+    return false;  // a character that is not a digit (from_chars too stops there)
+  }
   auto r = std::from_chars(first, last, *out, 10);
   return r.ec == std::errc() && r.ptr == last;  // from_chars fails on an empty range
 }

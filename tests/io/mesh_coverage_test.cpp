@@ -5,7 +5,9 @@
 // leave the arena where it was. A cap sweep reaches every allocation failure of the readers.
 #include <gtest/gtest.h>
 
+#include <charconv>
 #include <cstring>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -106,6 +108,38 @@ TEST(MeshTextCoverage, NumbersAndIntegers) {
   EXPECT_FALSE(integer(""));
   EXPECT_FALSE(integer("5x"));
   EXPECT_FALSE(integer("99999999999999999999"));
+}
+
+// parse_integer sums short digit runs itself: on random tokens (signs, digits, lengths 0 to 24,
+// a stray character) it answers as std::from_chars does on the token (after a leading '+'
+// that is not followed by a sign is dropped).
+TEST(MeshTextCoverage, ParseIntegerAnswersAsFromChars) {
+  std::mt19937 rng(29);
+  const char alphabet[] = "0123456789012345678901234567890123456789-+x/ ";
+  std::uniform_int_distribution<size_t> length(0, 24), pick(0, sizeof(alphabet) - 2);
+  int accepted = 0;
+  for (int n = 0; n < 200000; ++n) {
+    std::string token(length(rng), '0');
+    for (char& c : token) c = alphabet[pick(rng)];
+    if (n % 2 == 0 && !token.empty()) {  // half of them digits only, after a sign or not
+      for (size_t k = 1; k < token.size(); ++k) token[k] = static_cast<char>('0' + pick(rng) % 10);
+    }
+    const char* first = token.data();
+    const char* last = first + token.size();
+    int64_t ours = -1;
+    const bool ok = meshio::parse_integer(first, last, &ours);
+    const char* from = first;
+    if (from != last && *from == '+' && last - from > 1 && from[1] != '-') ++from;
+    int64_t theirs = -1;
+    const auto r = std::from_chars(from, last, theirs, 10);
+    const bool expected = r.ec == std::errc() && r.ptr == last;
+    ASSERT_EQ(ok, expected) << "'" << token << "'";
+    if (ok) {
+      EXPECT_EQ(ours, theirs) << "'" << token << "'";
+      ++accepted;
+    }
+  }
+  EXPECT_GT(accepted, 50000);
 }
 
 TEST(MeshTextCoverage, ArgumentsAreChecked) {
