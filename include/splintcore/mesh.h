@@ -117,7 +117,7 @@ struct MeshReport {
   }
 };
 
-// Bytes check_mesh() takes from the arena at most: about 69 per triangle plus 21 per vertex
+// Bytes check_mesh() takes from the arena at most: about 69 per triangle plus 5 per vertex
 // (the worst case is shells touching at many vertices), all returned before it finishes.
 // Linear time: the edges are counted in buckets by vertex, not sorted.
 uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count);

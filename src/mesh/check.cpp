@@ -52,23 +52,23 @@ struct EdgeArrays {
 
 uint64_t check_mesh_bound(uint64_t vertex_count, uint64_t triangle_count) {
   // Kept through the check: the referenced flags, the union-find of shells, per triangle the
-  // sides that first use their edge, the triangles of edges with 3+ uses (the duplicate
-  // search), and the union-find of the boundary edges' vertices (the loops). Then the largest of
-  // three phases, each returned before the next: the edge pass (buckets, half-edges, tallies), the
-  // shell counts (a shell number per root triangle; a vertex stamp; counts per shell, one shell
-  // per triangle at most; the (vertex, shell) pairs of vertices in several shells, with their
-  // sort scratch), the duplicate search (keys and scratch for the collected
-  // triangles).
+  // sides that first use their edge. Then the largest of three phases, each returned before the
+  // next: the edge pass (buckets, half-edges, tallies, last users; and, taken at their first
+  // need, the union-find of the boundary edges' vertices (the loops) and the triangles of edges
+  // with 3+ uses), the duplicate search (those triangles, moved down, with keys and scratch),
+  // the shell counts (a shell number per root triangle; a vertex stamp; counts per shell, one
+  // shell per triangle at most; the (vertex, shell) pairs of vertices in several shells, with
+  // their sort scratch).
   const uint64_t v = vertex_count, t = triangle_count;
   const uint64_t kept = arena_array_bound<uint8_t>(v) + arena_array_bound<uint32_t>(t) +
-                        arena_array_bound<uint8_t>(t) + arena_array_bound<uint32_t>(t) +
-                        arena_array_bound<uint32_t>(v);
+                        arena_array_bound<uint8_t>(t);
   const uint64_t edges = arena_array_bound<uint32_t>(v + 1) + arena_array_bound<uint32_t>(3 * t) +
-                         arena_array_bound<uint64_t>(v) + arena_array_bound<uint32_t>(v);
+                         arena_array_bound<uint64_t>(v) + arena_array_bound<uint32_t>(v) +
+                         arena_array_bound<uint32_t>(v) + arena_array_bound<uint32_t>(t);
+  const uint64_t duplicates = arena_array_bound<uint32_t>(t) + 3 * arena_array_bound<KeyIndex>(t);
   const uint64_t shells = arena_array_bound<uint32_t>(t) + arena_array_bound<uint32_t>(v) +
                           arena_array_bound<uint32_t>(3 * t) +
                           2 * arena_array_bound<uint64_t>(3 * t);
-  const uint64_t duplicates = 3 * arena_array_bound<KeyIndex>(t);
   const uint64_t phase = edges > shells ? edges : shells;
   return kept + (phase > duplicates ? phase : duplicates);
 }
@@ -179,12 +179,23 @@ struct EdgePass {
   EdgeArrays a;
   UnionFind* shells;
   uint8_t* first_use;
-  uint32_t* collected;
-  uint32_t collected_count = 0;
   MeshReport* r;
-  UnionFind* border = nullptr;   // per vertex: the components of the boundary edges (reset
-                                 // at the first one)
+  Arena* arena = nullptr;         // for what only some meshes need: border, collected
+  uint32_t* collected = nullptr;  // T, taken at the first candidate
+  uint32_t collected_count = 0;
+  UnionFind* border = nullptr;   // per vertex: the components of the boundary edges (taken at
+                                 // the first one)
   uint8_t* on_border = nullptr;  // per vertex: bit 1 set when a boundary edge ends there
+  bool exhausted = false;        // the arena could not give border or collected
+
+  // Triangle t into `collected` (taken from the arena the first time).
+  void collect(uint32_t t) {
+    if (collected == nullptr) {
+      collected = arena->allocate_array<uint32_t>(tri_count);
+      if (collected == nullptr) exhausted = true;
+    }
+    if (collected != nullptr) collected[collected_count++] = t;
+  }
 
   // A use's two ends (side k of triangle t runs from v[k] to v[k + 1 mod 3]).
   uint32_t start_of(uint32_t use) const { return tris[use >> 2].v[use & 3u]; }
@@ -257,9 +268,9 @@ struct EdgePass {
     ++r->edge_count;
     if (uses == 1) {
       note(&r->first_boundary_edge, r->boundary_edges, lo, hi, t);
-      if (r->boundary_edges == 0) border->reset();  // (untouched until an edge is open)
+      if (r->boundary_edges == 0 && !border->init(*arena, vertex_count)) exhausted = true;
       ++r->boundary_edges;
-      border->unite(lo, hi);
+      if (!exhausted) border->unite(lo, hi);  // (else the check fails anyway)
       on_border[lo] |= 2u;
       on_border[hi] |= 2u;
     } else if (uses > 2) {
@@ -319,7 +330,7 @@ struct EdgePass {
         tallies[hi] = kCollecting;
         collecting = true;
       }
-      if (candidate(use >> 2, use & 3u, lo, hi)) collected[collected_count++] = use >> 2;
+      if (candidate(use >> 2, use & 3u, lo, hi)) collect(use >> 2);
     }
     if (collecting) {
       for (uint32_t i = begin; i < end; ++i) {
@@ -490,17 +501,14 @@ Status check_topology(const Context& ctx, const Mesh& mesh, uint8_t* on_border, 
   UnionFind shells;
   if (!shells.init(arena, tri_count)) return arena.exhausted_status();
   uint8_t* first_use = arena.allocate_array<uint8_t>(tri_count);
-  uint32_t* collected = arena.allocate_array<uint32_t>(tri_count);
-  if ((first_use == nullptr || collected == nullptr) && tri_count > 0) {
-    return arena.exhausted_status();
-  }
-  UnionFind border;  // set up (and its memory touched) at the first boundary edge
-  if (!border.allocate(arena, nv)) return arena.exhausted_status();
+  if (first_use == nullptr && tri_count > 0) return arena.exhausted_status();
   uint32_t collected_count = 0;
+  const uint32_t* collected = nullptr;  // where the edge pass left them
   {
     ArenaScope scope(arena);
-    EdgePass pass{
-        mesh.triangles.data(), tri_count, nv, EdgeArrays{}, &shells, first_use, collected, 0, r};
+    UnionFind border;  // taken at the first boundary edge
+    EdgePass pass{mesh.triangles.data(), tri_count, nv, EdgeArrays{}, &shells, first_use, r};
+    pass.arena = &arena;
     pass.border = &border;
     pass.on_border = on_border;
     pass.a.start = arena.allocate_array<uint32_t>(size_t{nv} + 1);
@@ -521,12 +529,22 @@ Status check_topology(const Context& ctx, const Mesh& mesh, uint8_t* on_border, 
       }
     };
     parallel_for_each(ctx.executor, 2, task);
+    if (pass.exhausted) return arena.exhausted_status();
+    count_boundary_loops(&border, on_border, r);
     collected_count = pass.collected_count;
+    collected = pass.collected;
   }
-  count_boundary_loops(&border, on_border, r);
+  if (collected_count > 0) {
+    // Moved down over the edge pass's arrays (given back), as move_mesh_down moves a mesh,
+    // for the duplicate search.
+    ArenaScope scope(arena);
+    uint32_t* moved = arena.allocate_array<uint32_t>(collected_count);
+    if (moved == nullptr) return arena.exhausted_status();
+    std::memmove(moved, collected, size_t{collected_count} * sizeof(uint32_t));
+    SPLINTCORE_RETURN_IF_ERROR(count_collected_duplicates(arena, mesh, moved, collected_count, r));
+  }
   SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "check", 2, 4));
-  SPLINTCORE_RETURN_IF_ERROR(count_shells(arena, mesh, first_use, &shells, r));
-  return count_collected_duplicates(arena, mesh, collected, collected_count, r);
+  return count_shells(arena, mesh, first_use, &shells, r);
 }
 
 }  // namespace

@@ -348,6 +348,26 @@ TEST(ExhaustionSweep, Mesh) {
     }
     return r;
   });
+  // With a hole (a boundary loop) and a triangle twice (edges of 3 uses, a duplicate): the
+  // check takes the boundary's union-find and the collected triangles only when it meets them.
+  std::vector<SoupTriangle> faulty(soup.begin() + 1, soup.end());
+  faulty.push_back(soup[40]);
+  HeldMesh flawed(faulty);
+  sweep("check_mesh (a hole, a duplicate)", [&](Arena& a) {
+    OpRun r;
+    MeshReport report;
+    r.status = check_mesh(Context(&a), flawed.mesh, &report);
+    if (r.status.is_ok()) {
+      EXPECT_EQ(report.boundary_loops, 1u);
+      EXPECT_EQ(report.duplicate_triangles, 1u);
+      EXPECT_GT(report.nonmanifold_edges, 0u);
+      const uint64_t f[] = {report.edge_count,          report.boundary_edges,
+                            report.boundary_loops,      report.nonmanifold_edges,
+                            report.duplicate_triangles, report.shells};
+      append_bytes(&r.output, f, 6);
+    }
+    return r;
+  });
   sweep("check_closed_oriented", [&](Arena& a) {
     OpRun r;
     double volume = 0;
