@@ -427,11 +427,29 @@ struct BinaryIn {
   }
 };
 
-// Record r of element e, value by value (each refilling the buffer as needed): the way for a
-// record that crosses the buffer's end, and the one that reports a truncated file.
-Status binary_record_by_values(Body& body, BinaryIn& b, const Element& e, uint64_t r) {
+// The values of a record that lies whole in the buffer, decoded where they are (as BinaryIn
+// reads them, but never refilling, so never failing).
+struct InPlace {
+  const uint8_t* q = nullptr;
+  bool big = false;
+
+  Status value(uint8_t type, int64_t* i, double* d, const Element&, uint64_t) {
+    decode_value(q, type, big, i, d);
+    q += kTypeBytes[type];
+    return Status::ok();
+  }
+  Status skip(uint64_t bytes, const Element&, uint64_t) {
+    q += bytes;
+    return Status::ok();
+  }
+};
+
+// Record r of element e, starting at byte record_byte, its values from `b`: a BinaryIn
+// (value by value, each refilling the buffer as needed: the way for a record across the
+// buffer's end, and the one that reports a truncated file) or an InPlace.
+template <class Values>
+Status binary_record(Body& body, Values& b, const Element& e, uint64_t r, uint64_t record_byte) {
   const Header& h = *body.header;
-  const uint64_t record_byte = b.in->offset();
   Vec3 v;
   for (uint32_t pi = e.first; pi < e.first + e.properties; ++pi) {
     const Property& p = h.properties[pi];
@@ -474,7 +492,7 @@ Status binary_record_by_values(Body& body, BinaryIn& b, const Element& e, uint64
 
 // The bytes of record r of element e when all of them are in the buffer (its lists' counts
 // read there), so it can be decoded in place; 0 when they are not, or a count is negative
-// (binary_record_by_values then reads it, and reports that).
+// (BinaryIn then reads it, and reports that).
 size_t whole_record_bytes(const Header& h, const Reader& in, bool big, const Element& e) {
   const uint8_t* p = in.buf + in.pos;
   const size_t available = in.available();
@@ -494,50 +512,6 @@ size_t whole_record_bytes(const Header& h, const Reader& in, bool big, const Ele
     size += kTypeBytes[prop.count_type] + static_cast<size_t>(n) * kTypeBytes[prop.type];
   }
   return size <= available ? size : 0;
-}
-
-// Record r of element e decoded in place: `bytes` of it (whole_record_bytes) in the buffer.
-// The same values, in the same order, with the same checks and errors as
-// binary_record_by_values.
-Status binary_record_in_place(Body& body, Reader& in, bool big, const Element& e, uint64_t r,
-                              size_t bytes) {
-  const Header& h = *body.header;
-  const uint64_t record_byte = in.offset();
-  const uint8_t* q = in.buf + in.pos;
-  in.pos += bytes;
-  Vec3 v;
-  for (uint32_t pi = e.first; pi < e.first + e.properties; ++pi) {
-    const Property& p = h.properties[pi];
-    int64_t i = 0;
-    double d = 0;
-    if (p.count_type == kNone) {
-      if (p.role != kSkip) {
-        decode_value(q, p.type, big, &i, &d);
-        v[p.role - kX] = body.coordinate(d);
-      }
-      q += kTypeBytes[p.type];
-      continue;
-    }
-    int64_t n = 0;
-    decode_value(q, p.count_type, big, &n, &d);  // (not negative: whole_record_bytes)
-    q += kTypeBytes[p.count_type];
-    if (p.role != kIndices) {
-      q += static_cast<size_t>(n) * kTypeBytes[p.type];
-      continue;
-    }
-    if (n < 3) return face_too_small(r, static_cast<uint64_t>(n)).at_byte(record_byte);
-    Fan fan;
-    for (int64_t k = 0; k < n; ++k, q += kTypeBytes[p.type]) {
-      decode_value(q, p.type, big, &i, &d);
-      Status s = body.corner(&fan, i, r);
-      if (!s.is_ok()) return s.at_byte(record_byte);
-    }
-  }
-  if (e.kind == kVertex) {
-    Status s = body.mesh->add_vertex(v, r);
-    if (!s.is_ok()) return s.at_byte(record_byte);
-  }
-  return Status::ok();
 }
 
 // The face element of the usual layout, a list of 4-byte indices and nothing else: its
@@ -642,9 +616,15 @@ Status read_binary_body(Body& body, Reader& in) {
       }
       // Most records lie whole in the buffer: decoded there; the one across its end, value by
       // value.
+      const uint64_t record_byte = in.offset();
       const size_t bytes = whole_record_bytes(h, in, b.big, e);
-      SPLINTCORE_RETURN_IF_ERROR(bytes > 0 ? binary_record_in_place(body, in, b.big, e, r, bytes)
-                                           : binary_record_by_values(body, b, e, r));
+      if (bytes > 0) {
+        InPlace values{in.buf + in.pos, b.big};
+        in.pos += bytes;
+        SPLINTCORE_RETURN_IF_ERROR(binary_record(body, values, e, r, record_byte));
+      } else {
+        SPLINTCORE_RETURN_IF_ERROR(binary_record(body, b, e, r, record_byte));
+      }
     }
   }
   SPLINTCORE_RETURN_IF_ERROR(in.fill(1));
