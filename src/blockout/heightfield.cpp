@@ -264,25 +264,53 @@ int clip_left(const double* px, const double* py, int count, double ax, double a
   return out;
 }
 
-// How far the plane through the half cell's corners (cx, cy: counter-clockwise, their h)
-// rises above jaw triangle q where the two overlap (0 when nowhere), rounding included.
-double rise_above(const GridTriangle& q, const double* cx, const double* cy, const double* ch) {
+// The plane through a half cell's corners (cx, cy: counter-clockwise, their h), with the
+// rounding allowed for in its value.
+struct CellPlane {
+  double x0, y0, h0, hx, hy, slack;
+  CellPlane(const double* cx, const double* cy, const double* ch)
+      : x0(cx[0]), y0(cy[0]), h0(ch[0]) {
+    // The half cell's legs are unit steps, its doubled area +-1.
+    const double ux = cx[1] - cx[0], uy = cy[1] - cy[0], vx = cx[2] - cx[0], vy = cy[2] - cy[0];
+    const double uh = ch[1] - ch[0], vh = ch[2] - ch[0];
+    const double area2 = ux * vy - uy * vx;
+    hx = (uh * vy - vh * uy) / area2;
+    hy = (vh * ux - uh * vx) / area2;
+    slack = kRelative * (std::fabs(ch[0]) + std::fabs(ch[1]) + std::fabs(ch[2]) + std::fabs(hx) +
+                         std::fabs(hy));
+  }
+  double at(double x, double y) const { return h0 + hx * (x - x0) + hy * (y - y0); }
+};
+
+// Whether the half cell's plane stays below jaw triangle q wherever they overlap by more than
+// rise_above's slack and rounding, judged at q's corners: rise_above's rise is at most the
+// linear (plane + slack) - (q's plane - q's slack) (or - wmin when q is ill), whose most over
+// the overlap (inside q) is at one of q's corners. The allowance doubles both slacks and adds
+// the plane's value's rounding out to q's corners (up to the grid's span away). Pieces of a
+// clearance are small and steep: the corners of the half cell often see their planes cross
+// where the two do not overlap.
+bool below_at_corners(const GridTriangle& q, const CellPlane& c, double span) {
+  double most = -HUGE_VAL;
+  for (int k = 0; k < 3; ++k) {
+    const double d = c.at(q.x[k], q.y[k]) - (q.ill ? q.wmin : q.plane(q.x[k], q.y[k]));
+    most = d > most ? d : most;
+  }
+  const double allowance =
+      2 * (c.slack + q.slack + kRelative * (std::fabs(c.hx) + std::fabs(c.hy)) * (span + 2));
+  return most + allowance <= 0;
+}
+
+// How far the plane c through the half cell's corners (cx, cy: counter-clockwise) rises above
+// jaw triangle q where the two overlap (0 when nowhere), rounding included.
+double rise_above(const GridTriangle& q, const double* cx, const double* cy, const CellPlane& c) {
   double ax[9], ay[9], bx[9], by[9];
   int count = clip_left(q.x, q.y, 3, cx[0], cy[0], cx[1], cy[1], ax, ay);
   count = clip_left(ax, ay, count, cx[1], cy[1], cx[2], cy[2], bx, by);
   count = clip_left(bx, by, count, cx[2], cy[2], cx[0], cy[0], ax, ay);
   if (count == 0) return 0;
-  // The corners' plane: the half cell's legs are unit steps, its doubled area +-1.
-  const double ux = cx[1] - cx[0], uy = cy[1] - cy[0], vx = cx[2] - cx[0], vy = cy[2] - cy[0];
-  const double uh = ch[1] - ch[0], vh = ch[2] - ch[0];
-  const double area2 = ux * vy - uy * vx;
-  const double hx = (uh * vy - vh * uy) / area2, hy = (vh * ux - uh * vx) / area2;
-  const double slack = kRelative * (std::fabs(ch[0]) + std::fabs(ch[1]) + std::fabs(ch[2]) +
-                                    std::fabs(hx) + std::fabs(hy));
   double most = 0;
   for (int i = 0; i < count; ++i) {
-    const double plane = ch[0] + hx * (ax[i] - cx[0]) + hy * (ay[i] - cy[0]);
-    const double rise = plane + slack - q.below(ax[i], ay[i]);
+    const double rise = c.at(ax[i], ay[i]) + c.slack - q.below(ax[i], ay[i]);
     if (rise > most) most = rise;
   }
   return most;
@@ -343,8 +371,10 @@ void lower_under(const Grid& g, const GridTriangle& q, const double* h, float* l
           }
           if (most + q.slack <= 0) continue;
         }
+        const CellPlane plane(cx, cy, ch);
+        if (below_at_corners(q, plane, static_cast<double>(g.span()))) continue;
         ++st->clipped_pairs;
-        const double rise = rise_above(q, cx, cy, ch);
+        const double rise = rise_above(q, cx, cy, plane);
         if (!(rise > 0)) continue;
         float f = static_cast<float>(rise);
         if (static_cast<double>(f) < rise) f = std::nextafter(f, HUGE_VALF);
