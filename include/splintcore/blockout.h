@@ -244,13 +244,17 @@ struct HeightfieldOptions {
 // Arena bytes sweep_heightfield_mesh takes for a grid of cells_u by cells_v cells
 // (HeightfieldStats), besides its output (24 bytes a vertex, 12 a triangle): 16 bytes a grid
 // vertex; with an offset, the jaws' vertex count as `offset_vertices`: 4 bytes a vertex and the
-// polytope's 11 KB more.
+// polytope's 11 KB more. With an executor that has threads, 12 bytes a grid vertex more where
+// the arena has them let the passes run in two halves side by side; without them they run
+// serially, to the same bytes, so this bound holds either way.
 uint64_t sweep_heightfield_bound(uint32_t cells_u, uint32_t cells_v, uint64_t offset_vertices = 0);
 
 // The graph above as an open surface (its normals against d, out of S) into `out` (empty), in
 // the jaws' frame; its border is the grid's edge, outside the region. Only the jaws' triangles
 // facing against d are taken (as the sampled sweep's: on a closed jaw nothing else is a first
-// contact). Deterministic, serial. Errors: kInvalidArgument (out not empty, no region, an
+// contact). Deterministic: the same bytes serially and on an executor (its two passes, the
+// first contacts and the lowering, each in two halves of the triangles and pieces, merged as
+// the least height and the most lowering). Errors: kInvalidArgument (out not empty, no region, an
 // empty or non-finite region, a bad direction, voxel or option, no triangles), kLimitExceeded
 // (a shadow more than 4096 cells across: a larger voxel or a smaller region; a vertex beyond
 // float32), kNonFinite (a jaw vertex), kInvalidMesh (a vertex id out of range),

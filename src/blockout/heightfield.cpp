@@ -213,7 +213,7 @@ bool line_range(double lo, double hi, uint32_t n, uint32_t* first, uint32_t* las
 
 // Pass 1: h at every grid vertex, the least height of the jaw triangles whose shadow holds
 // it (closed, exact orient2d), at most the top.
-void first_contact(const Grid& g, const GridTriangle& q, double* h, uint64_t* covered) {
+void first_contact(const Grid& g, const GridTriangle& q, double* h) {
   uint32_t x0, x1, y0, y1;
   if (!line_range(std::fmin(q.x[0], std::fmin(q.x[1], q.x[2])),
                   std::fmax(q.x[0], std::fmax(q.x[1], q.x[2])), g.nx, &x0, &x1) ||
@@ -234,10 +234,7 @@ void first_contact(const Grid& g, const GridTriangle& q, double* h, uint64_t* co
       }
       const double w = q.below(px, py);
       const size_t k = g.at(x, y);
-      if (w < h[k]) {
-        if (h[k] == g.top) ++*covered;
-        h[k] = w;
-      }
+      if (w < h[k]) h[k] = w;
     }
   }
 }
@@ -386,33 +383,38 @@ void lower_under(const Grid& g, const GridTriangle& q, const double* h, float* l
   }
 }
 
+// What one share of a pass writes: h and low (the first share the grid's; a second share, on
+// the executor's other thread, its own copies, merged after the pass), the pass's counts.
+struct PassShare {
+  double* h = nullptr;
+  float* low = nullptr;
+  HeightfieldStats st;
+};
+
 // One pass over a triangle (the jaw's or an offset piece).
-void pass_over(const Grid& g, const GridTriangle& q, bool lowering, double* h, float* low,
-               HeightfieldStats* st) {
+void pass_over(const Grid& g, const GridTriangle& q, bool lowering, PassShare* s) {
   if (lowering) {
-    lower_under(g, q, h, low, st);
+    lower_under(g, q, s->h, s->low, &s->st);
   } else {
-    first_contact(g, q, h, &st->covered_vertices);
+    first_contact(g, q, s->h);
   }
 }
 
 // Calls visit(j, p, q) for each front triangle of jaw j (p its corners in the local frame, as
-// the jaw turns them; q in grid coordinates, counter-clockwise, only without an offset), in
-// input order, with the progress and the vertex ids checked.
+// the jaw turns them; q in grid coordinates, counter-clockwise, only without an offset) among
+// the jaws' triangles numbered begin .. end - 1 (all jaws in order), in that order, with the
+// vertex ids checked.
 template <typename Visit>
-Status each_front(const Context& ctx, const Grid& g, Span<const Mesh> jaws, const SweepOptions& o,
-                  Visit visit) {
+Status each_front(const Grid& g, Span<const Mesh> jaws, const SweepOptions& o, uint64_t begin,
+                  uint64_t end, Visit visit) {
   GridTriangle q{};
   Vec3 p[3];
-  uint64_t done = 0, total = 0;
-  for (const Mesh& m : jaws) total += m.triangles.size();
-  const uint64_t every = o.offset > 0 ? 0xfff : 0xffff;
-  for (size_t j = 0; j < jaws.size(); ++j) {
+  uint64_t first = 0;  // the number of jaw j's first triangle
+  for (size_t j = 0; j < jaws.size() && first < end; ++j) {
     const Mesh& jaw = jaws[j];
-    for (size_t t = 0; t < jaw.triangles.size(); ++t, ++done) {
-      if ((done & every) == 0) {
-        SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "heightfield", done, total));
-      }
+    const uint64_t n = jaw.triangles.size();
+    const uint64_t from = begin > first ? begin - first : 0, to = end - first < n ? end - first : n;
+    for (uint64_t t = from; t < to; ++t) {
       const Triangle& tri = jaw.triangles[t];
       if (tri.v[0] >= jaw.vertices.size() || tri.v[1] >= jaw.vertices.size() ||
           tri.v[2] >= jaw.vertices.size()) {
@@ -422,18 +424,55 @@ Status each_front(const Context& ctx, const Grid& g, Span<const Mesh> jaws, cons
       }
       if (grid_triangle(g, o, jaws, j, tri, p, &q)) visit(j, tri, p, q);
     }
+    first += n;
   }
   return Status::ok();
 }
 
+// work(share, begin, end) over items 0 .. total - 1 in chunks of `chunk`, the progress
+// reported before each. With two shares each chunk's two halves run side by side on the
+// executor, the first half the first share's. The first error in item order: a share stops at
+// its first, and the first share's comes before the second's, as a serial run meets them.
+template <typename Work>
+Status in_chunks(const Context& ctx, uint64_t total, uint64_t chunk, uint32_t shares, Work work) {
+  for (uint64_t b = 0; b < total; b += chunk) {
+    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "heightfield", b, total));
+    const uint64_t e = total - b < chunk ? total : b + chunk;
+    if (shares == 1) {
+      SPLINTCORE_RETURN_IF_ERROR(work(uint32_t{0}, b, e));
+      continue;
+    }
+    const uint64_t mid = b + (e - b) / 2;
+    Status status[2];
+    auto task = [&](uint32_t i) { status[i] = work(i, i == 0 ? b : mid, i == 0 ? mid : e); };
+    parallel_for_each(ctx.executor, 2, task);
+    SPLINTCORE_RETURN_IF_ERROR(status[0]);
+    SPLINTCORE_RETURN_IF_ERROR(status[1]);
+  }
+  return Status::ok();
+}
+
+uint64_t triangle_count_of(Span<const Mesh> jaws) {
+  uint64_t n = 0;
+  for (const Mesh& m : jaws) n += m.triangles.size();
+  return n;
+}
+
+// The chunks of the passes: about the same work for both (some 30 pieces a triangle).
+uint64_t pass_chunk(const SweepOptions& o) { return o.offset > 0 ? 0x1000 : 0x10000; }
+
 // Pass 1 (first contacts) or 2 (lowering) over the jaws' front triangles.
 Status rasterize(const Context& ctx, const Grid& g, Span<const Mesh> jaws, const SweepOptions& o,
-                 bool lowering, double* h, float* low, HeightfieldStats* st) {
-  return each_front(ctx, g, jaws, o,
-                    [&](size_t, const Triangle&, const Vec3*, const GridTriangle& q) {
-                      if (!lowering) ++st->triangles_in;
-                      pass_over(g, q, lowering, h, low, st);
-                    });
+                 bool lowering, PassShare* shares, uint32_t count) {
+  auto work = [&](uint32_t i, uint64_t begin, uint64_t end) {
+    PassShare* s = &shares[i];
+    return each_front(g, jaws, o, begin, end,
+                      [&](size_t, const Triangle&, const Vec3*, const GridTriangle& q) {
+                        if (!lowering) ++s->st.triangles_in;
+                        pass_over(g, q, lowering, s);
+                      });
+  };
+  return in_chunks(ctx, triangle_count_of(jaws), pass_chunk(o), count, work);
 }
 
 // The offset: the polytope, and for each jaw vertex (all jaws in order) the faces of Q that its
@@ -451,48 +490,72 @@ size_t first_vertex(Span<const Mesh> jaws, size_t j) {
   return first;
 }
 
-// The vertices' faces (Offset::faces, zeroed), and the front triangles counted.
+// The vertices' faces (Offset::faces, zeroed), and the front triangles counted (serial: a
+// vertex's faces are those all its triangles leave).
 Status offset_faces(const Context& ctx, const Grid& g, Span<const Mesh> jaws, const SweepOptions& o,
                     const Offset& offset, HeightfieldStats* st) {
-  size_t jaw = 0, first = 0;
-  return each_front(ctx, g, jaws, o,
-                    [&](size_t j, const Triangle& tri, const Vec3* p, const GridTriangle& q) {
-                      if (!meets_grid(g, q, offset.ball->reach / g.cell + 1)) return;
-                      ++st->triangles_in;
-                      if (j != jaw) jaw = j, first = first_vertex(jaws, j);
-                      for (int k = 0; k < 3; ++k) {
-                        uint32_t& f = offset.faces[first + tri.v[k]];
-                        const uint32_t mine = support_faces(*offset.ball, p, k) | Offset::kSeen;
-                        f = (f & Offset::kSeen) != 0 ? (f & mine) : mine;
-                      }
-                    });
+  auto work = [&](uint32_t, uint64_t begin, uint64_t end) {
+    size_t jaw = 0, first = 0;
+    return each_front(g, jaws, o, begin, end,
+                      [&](size_t j, const Triangle& tri, const Vec3* p, const GridTriangle& q) {
+                        if (!meets_grid(g, q, offset.ball->reach / g.cell + 1)) return;
+                        ++st->triangles_in;
+                        if (j != jaw) jaw = j, first = first_vertex(jaws, j);
+                        for (int k = 0; k < 3; ++k) {
+                          uint32_t& f = offset.faces[first + tri.v[k]];
+                          const uint32_t mine = support_faces(*offset.ball, p, k) | Offset::kSeen;
+                          f = (f & Offset::kSeen) != 0 ? (f & mine) : mine;
+                        }
+                      });
+  };
+  return in_chunks(ctx, triangle_count_of(jaws), pass_chunk(o), 1, work);
 }
 
-// Pass 1 or 2 over the offset's pieces: those of the front triangles near the grid and their
-// edges, then those of the vertices (their faces).
-Status rasterize_offset(const Context& ctx, const Grid& g, Span<const Mesh> jaws,
-                        const SweepOptions& o, const Offset& offset, bool lowering, double* h,
-                        float* low, HeightfieldStats* st) {
-  const OffsetBall& ball = *offset.ball;
+// A share's pass over the offset's pieces as they are emitted.
+struct PieceSink {
+  const Grid& g;
+  bool lowering;
+  PassShare* s;
   GridTriangle q{};
-  auto piece = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
-    if (!lowering) ++st->offset_pieces;
-    if (piece_triangle(g, a, b, c, &q)) pass_over(g, q, lowering, h, low, st);
-  };
-  SPLINTCORE_RETURN_IF_ERROR(each_front(
-      ctx, g, jaws, o, [&](size_t, const Triangle&, const Vec3* p, const GridTriangle& t) {
-        if (meets_grid(g, t, ball.reach / g.cell + 1)) triangle_pieces(ball, p, piece);
-      }));
-  size_t first = 0;
-  for (size_t j = 0; j < jaws.size(); ++j) {
-    SPLINTCORE_RETURN_IF_ERROR(report_progress(ctx, "heightfield", j, jaws.size()));
-    for (size_t i = 0; i < jaws[j].vertices.size(); ++i) {
-      const uint32_t f = offset.faces[first + i] & ~Offset::kSeen;
-      if (f != 0) vertex_pieces(ball, to_local(g.frame, jaw_point(o, jaws, j, i)), f, piece);
-    }
-    first += jaws[j].vertices.size();
+  void operator()(const Vec3& a, const Vec3& b, const Vec3& c) {
+    if (!lowering) ++s->st.offset_pieces;
+    if (piece_triangle(g, a, b, c, &q)) pass_over(g, q, lowering, s);
   }
-  return Status::ok();
+};
+
+// Pass 1 or 2 over the offset's pieces: those of the front triangles near the grid and their
+// edges, then those of the vertices (their faces; all jaws' vertices numbered in order).
+Status rasterize_offset(const Context& ctx, const Grid& g, Span<const Mesh> jaws,
+                        const SweepOptions& o, const Offset& offset, bool lowering,
+                        PassShare* shares, uint32_t count) {
+  const OffsetBall& ball = *offset.ball;
+  auto triangles = [&](uint32_t i, uint64_t begin, uint64_t end) {
+    PieceSink piece{g, lowering, &shares[i]};
+    return each_front(g, jaws, o, begin, end,
+                      [&](size_t, const Triangle&, const Vec3* p, const GridTriangle& t) {
+                        if (meets_grid(g, t, ball.reach / g.cell + 1)) {
+                          triangle_pieces(ball, p, piece);
+                        }
+                      });
+  };
+  SPLINTCORE_RETURN_IF_ERROR(
+      in_chunks(ctx, triangle_count_of(jaws), pass_chunk(o), count, triangles));
+  auto vertices = [&](uint32_t i, uint64_t begin, uint64_t end) {
+    PieceSink piece{g, lowering, &shares[i]};
+    uint64_t first = 0;  // the number of jaw j's first vertex
+    for (size_t j = 0; j < jaws.size() && first < end; ++j) {
+      const uint64_t n = jaws[j].vertices.size();
+      const uint64_t from = begin > first ? begin - first : 0;
+      const uint64_t to = end - first < n ? end - first : n;
+      for (uint64_t v = from; v < to; ++v) {
+        const uint32_t f = offset.faces[first + v] & ~Offset::kSeen;
+        if (f != 0) vertex_pieces(ball, to_local(g.frame, jaw_point(o, jaws, j, v)), f, piece);
+      }
+      first += n;
+    }
+    return Status::ok();
+  };
+  return in_chunks(ctx, first_vertex(jaws, jaws.size()), pass_chunk(o), count, vertices);
 }
 
 // ---- the network
@@ -717,6 +780,71 @@ Status check_jaw_vertices(Span<const Mesh> jaws, const SweepOptions& o) {
   return Status::ok();
 }
 
+// A second share for the passes when the executor has threads and the arena the room (12
+// bytes a grid vertex: its h and low), else none (serial; the arena's failure forgotten).
+uint32_t second_share(const Context& ctx, size_t count, PassShare* second) {
+  if (!has_threads(ctx.executor)) return 1;
+  Arena& arena = *ctx.arena;
+  const Arena::Marker start = arena.mark();
+  second->h = arena.allocate_array<double>(count);
+  second->low = arena.allocate_array<float>(count);
+  if (second->h == nullptr || second->low == nullptr) {
+    arena.rewind(start);
+    arena.forget_failure();
+    return 1;
+  }
+  return 2;
+}
+
+// The two passes (first contacts, then the lowering) over the jaws' front triangles or, with
+// an offset, their pieces, into h (from the top) and low (from 0). With a second share each
+// pass runs in halves side by side: pass 1 takes the least h of the two shares, pass 2 the
+// most low, both exact and in any order, so h and low are those of a serial run.
+Status run_passes(const Context& ctx, const Grid& g, Span<const Mesh> jaws, const SweepOptions& o,
+                  double* h, float* low, HeightfieldStats* st) {
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);  // the offset's arrays and the second share
+  const size_t count = g.vertices();
+  Offset offset;
+  if (o.offset > 0) {
+    const size_t vertices = first_vertex(jaws, jaws.size());
+    OffsetBall* ball = arena.allocate_array<OffsetBall>(1);
+    offset.faces = arena.allocate_array<uint32_t>(vertices);
+    if (ball == nullptr || offset.faces == nullptr) return arena.exhausted_status();
+    make_offset_ball(o.offset, ball);
+    offset.ball = ball;
+    std::memset(offset.faces, 0, vertices * sizeof(uint32_t));
+    SPLINTCORE_RETURN_IF_ERROR(offset_faces(ctx, g, jaws, o, offset, st));
+  }
+  PassShare shares[2];
+  shares[0].h = h;
+  shares[0].low = low;
+  const uint32_t n = second_share(ctx, count, &shares[1]);
+  if (n == 2) {
+    std::fill_n(shares[1].h, count, g.top);
+    std::memset(shares[1].low, 0, count * sizeof(float));
+  }
+  for (int lowering = 0; lowering < 2; ++lowering) {
+    SPLINTCORE_RETURN_IF_ERROR(
+        o.offset > 0 ? rasterize_offset(ctx, g, jaws, o, offset, lowering != 0, shares, n)
+                     : rasterize(ctx, g, jaws, o, lowering != 0, shares, n));
+    if (n == 2 && lowering == 0) {
+      for (size_t k = 0; k < count; ++k) h[k] = shares[1].h[k] < h[k] ? shares[1].h[k] : h[k];
+      shares[1].h = h;  // pass 2 reads the whole h
+    } else if (n == 2) {
+      for (size_t k = 0; k < count; ++k)
+        low[k] = shares[1].low[k] > low[k] ? shares[1].low[k] : low[k];
+    }
+  }
+  for (size_t k = 0; k < count; ++k) st->covered_vertices += h[k] < g.top ? 1 : 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    st->triangles_in += shares[i].st.triangles_in;
+    st->offset_pieces += shares[i].st.offset_pieces;
+    st->clipped_pairs += shares[i].st.clipped_pairs;
+  }
+  return Status::ok();
+}
+
 }  // namespace
 
 uint64_t sweep_heightfield_bound(uint32_t cells_u, uint32_t cells_v, uint64_t offset_vertices) {
@@ -754,23 +882,7 @@ Status sweep_heightfield_mesh(const Context& ctx, Span<const Mesh> jaws, const S
   if (h == nullptr || low == nullptr) return arena.exhausted_status();
   std::fill_n(h, count, g.top);
   std::memset(low, 0, count * sizeof(float));
-  if (o.offset > 0) {
-    size_t vertices = 0;
-    for (const Mesh& m : jaws) vertices += m.vertices.size();
-    Offset offset;
-    OffsetBall* ball = arena.allocate_array<OffsetBall>(1);
-    offset.faces = arena.allocate_array<uint32_t>(vertices);
-    if (ball == nullptr || offset.faces == nullptr) return arena.exhausted_status();
-    make_offset_ball(o.offset, ball);
-    offset.ball = ball;
-    std::memset(offset.faces, 0, vertices * sizeof(uint32_t));
-    SPLINTCORE_RETURN_IF_ERROR(offset_faces(ctx, g, jaws, o, offset, st));
-    SPLINTCORE_RETURN_IF_ERROR(rasterize_offset(ctx, g, jaws, o, offset, false, h, low, st));
-    SPLINTCORE_RETURN_IF_ERROR(rasterize_offset(ctx, g, jaws, o, offset, true, h, low, st));
-  } else {
-    SPLINTCORE_RETURN_IF_ERROR(rasterize(ctx, g, jaws, o, false, h, low, st));
-    SPLINTCORE_RETURN_IF_ERROR(rasterize(ctx, g, jaws, o, true, h, low, st));
-  }
+  SPLINTCORE_RETURN_IF_ERROR(run_passes(ctx, g, jaws, o, h, low, st));
   // The grid lowered by its rises, the margin, half the tolerance and `lower`; low becomes E.
   const double shift = g.margin + 0.5 * ho.tolerance + ho.lower;
   for (size_t k = 0; k < count; ++k) {

@@ -2030,6 +2030,69 @@ Reach sheet_reach(const Mesh& sheet, const Mesh& jaws, Keep keep) {
 // out (the polytope's bottom face is tangent to the ball) within the tolerance; no point of the
 // sheet comes nearer the jaw than c (brute-force distances), and near the jaw it stays within
 // the polytope's reach (1.0718 c) and the tolerance of it.
+// With an executor the passes run in two halves side by side (each into its own h and low,
+// merged: the least h, the most low): the same mesh and counts as the serial run, bit for
+// bit, with and without an offset, over two jaws whose halves split inside the second; and
+// with an executor in an arena of the serial run's high water, where the second share may not
+// fit (the passes then run serially), the same again.
+TEST(Heightfield, PassesInTasksGiveTheSerialBytes) {
+  TestArena inputs(size_t{64} << 20);
+  Mesh jaws[2] = {Mesh(&inputs.arena), Mesh(&inputs.arena)};
+  frustum(&jaws[0], 2.0, 3.0, 0.0, 5.0, 150);
+  frustum(&jaws[1], 1.5, 2.5, -1.0, 6.0, 450);
+  for (Vec3& p : jaws[1].vertices) p.x += 3.0;
+  ThreadExecutor pool(2);
+  for (double offset : {0.0, 0.15}) {
+    SCOPED_TRACE(offset);
+    SweepOptions o;
+    o.direction = Vec3{0.05, -0.1, -1};
+    o.voxel = 0.1;
+    o.offset = offset;
+    o.has_region = true;
+    o.region = Aabb{Vec3{-4, -4, 3}, Vec3{7, 4, 8}};
+    HeightfieldOptions ho;
+    ho.tolerance = 0.01;
+    struct Run {
+      std::vector<Vec3> vertices;
+      std::vector<Triangle> triangles;
+      HeightfieldStats st;
+      size_t high_water = 0;
+    };
+    auto run = [&](const Executor* executor, size_t cap, Run* r) {
+      TestArena ta(cap);
+      Context ctx(&ta.arena, executor, nullptr);
+      Mesh out;
+      const Status s = sweep_heightfield_mesh(ctx, Span<const Mesh>(jaws, 2), o, ho, &out, &r->st);
+      r->vertices.assign(out.vertices.begin(), out.vertices.end());
+      r->triangles.assign(out.triangles.begin(), out.triangles.end());
+      r->high_water = ta.arena.high_water();
+      return s;
+    };
+    Run serial, sides, tight;
+    SPLINTCORE_ASSERT_OK(run(nullptr, size_t{256} << 20, &serial));
+    SPLINTCORE_ASSERT_OK(run(&pool.executor(), size_t{256} << 20, &sides));
+    SPLINTCORE_ASSERT_OK(run(&pool.executor(), serial.high_water, &tight));
+    EXPECT_GT(sides.high_water, serial.high_water);  // the second share was taken
+    EXPECT_GT(serial.st.lowered_vertices, 0u);
+    EXPECT_GT(serial.st.clipped_pairs, 0u);
+    for (const Run* r : {&sides, &tight}) {
+      ASSERT_EQ(r->vertices.size(), serial.vertices.size());
+      ASSERT_EQ(r->triangles.size(), serial.triangles.size());
+      EXPECT_EQ(0, std::memcmp(r->vertices.data(), serial.vertices.data(),
+                               serial.vertices.size() * sizeof(Vec3)));
+      EXPECT_EQ(0, std::memcmp(r->triangles.data(), serial.triangles.data(),
+                               serial.triangles.size() * sizeof(Triangle)));
+      EXPECT_EQ(r->st.triangles_in, serial.st.triangles_in);
+      EXPECT_EQ(r->st.offset_pieces, serial.st.offset_pieces);
+      EXPECT_EQ(r->st.covered_vertices, serial.st.covered_vertices);
+      EXPECT_EQ(r->st.clipped_pairs, serial.st.clipped_pairs);
+      EXPECT_EQ(r->st.lowered_vertices, serial.st.lowered_vertices);
+      EXPECT_EQ(r->st.max_lowering, serial.st.max_lowering);
+    }
+    EXPECT_LE(tight.high_water, serial.high_water);
+  }
+}
+
 TEST(Heightfield, OffsetKeepsTheClearanceOverTheCone) {
   TestArena ta(size_t{256} << 20);
   Context ctx(&ta.arena);
