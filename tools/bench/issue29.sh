@@ -175,11 +175,15 @@ rows = [("plain splint", None), ("blockout default ({}: auto)", {}),
         ("blockout heightfield 0.1", {"method": "heightfield", "voxel": 0.1}),
         ("heightfield, base 4 mm deep", {"deep": 4, "method": "heightfield", "voxel": 0.1}),
         ("spacer {voxel: 0.1, clearance: 0.1}", {"voxel": 0.1, "clearance": 0.1}),
+        ("the same spacer at --threads 2", {"voxel": 0.1, "clearance": 0.1, "threads": 2}),
         ("spacer method voxel (clearance 0.1)",
          {"method": "voxel", "voxel": 0.1, "clearance": 0.1})]
 print("%-36s %9s %14s %11s  %s" % ("case", "wall (s)", "peak arena (B)", "triangles", "result"))
 for name, blockout in rows:
     c = json.loads(json.dumps(base))
+    threads = (blockout or {}).get("threads", 1)
+    if blockout is not None:
+        blockout = {k: v for k, v in blockout.items() if k != "threads"}
     if blockout is not None and "deep" in blockout:  # a base reaching the necks (4 mm: voxels)
         c["base"]["auto"]["indentation_depth_mm"] = blockout["deep"]
         blockout = {k: v for k, v in blockout.items() if k != "deep"}
@@ -190,7 +194,8 @@ for name, blockout in rows:
         json.dump(c, f)
     out = os.path.join(case, "out")
     t0 = time.perf_counter()
-    r = subprocess.run([tool, "design", path, "-o", out, "--memory-cap", "64M"],
+    r = subprocess.run([tool, "design", path, "-o", out, "--memory-cap", "64M",
+                        "--threads", str(threads)],
                        capture_output=True, text=True)
     wall = time.perf_counter() - t0
     if r.returncode != 0:
