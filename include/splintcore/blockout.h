@@ -359,6 +359,15 @@ Status sweep_exact_mesh(const Context& ctx, const Mesh& jaw, const Vec3& directi
 // ---------------------------------------------------------------------------------------------
 // Interference elimination: the splint minus the jaws' swept volume.
 
+// A height-field blockout's swept surface (BlockoutOptions::heightfield_swept): the attempt
+// that made it, the height field's statistics then, and the surface, in the arena.
+struct BlockoutSwept {
+  bool held = false;
+  uint32_t attempt = 0;
+  HeightfieldStats stats;
+  Mesh mesh;
+};
+
 struct BlockoutOptions {
   SweepOptions sweep;      // direction and voxel; the region is set to the splint's bounds
   BooleanOptions boolean;  // the operation is always the difference
@@ -395,6 +404,12 @@ struct BlockoutOptions {
   // triangles is swept.
   bool heightfield = false;
   double heightfield_tolerance = 0;  // mm; 0: a tenth of the voxel
+  // With the height field, the swept surface kept for a second run with the same options but
+  // the Boolean's (BlockoutSwept): not held, the blockout leaves its swept surface there, after
+  // *out in the arena, when the arena has room for it (else not held); held, the blockout
+  // starts at its attempt with it instead of sweeping again (the sweep is deterministic: the
+  // attempts before it and the surface would be the same), the surface staying where it is.
+  BlockoutSwept* heightfield_swept = nullptr;
 };
 
 struct BlockoutStats {

@@ -706,6 +706,29 @@ constexpr double kRetrySteps[kAttempts] = {0, 1.0 / 64, 1.0 / 4, 1.0 / 2};
 // A spacer's retries (either blockout): this much of a voxel further out each time.
 constexpr double kOffsetRetryStep = 1.0 / 64;
 
+// `out` moved down to `start` with a copy of `swept` after it (kept->mesh, held): the copy is
+// made at the top first, above both, then each moves down. False, with nothing moved, when the
+// arena has no room for the copy.
+bool keep_after(Arena& arena, const Arena::Marker& start, const Mesh& swept, const Mesh& out,
+                Mesh* result, BlockoutSwept* kept) {
+  const size_t nt = swept.triangles.size(), nv = swept.vertices.size();
+  Triangle* t = arena.allocate_array<Triangle>(nt);
+  Vec3* v = arena.allocate_array<Vec3>(nv);
+  if ((t == nullptr && nt > 0) || (v == nullptr && nv > 0)) {
+    arena.forget_failure();
+    return false;
+  }
+  if (nt > 0) std::memcpy(static_cast<void*>(t), swept.triangles.data(), nt * sizeof(Triangle));
+  if (nv > 0) std::memcpy(static_cast<void*>(v), swept.vertices.data(), nv * sizeof(Vec3));
+  Mesh copy(&arena);
+  copy.triangles.adopt(t, nt, nt);
+  copy.vertices.adopt(v, nv, nv);
+  move_mesh_down(arena, start, out, result);
+  move_mesh_down(arena, arena.mark(), copy, &kept->mesh);
+  kept->held = true;
+  return true;
+}
+
 // The height-field blockout (BlockoutOptions::heightfield): the swept surface over the
 // splint's bounds, subtracted once; its border is the grid's edge, beyond the splint's box.
 Status blockout_heightfield(const Context& ctx, const Mesh& splint, const Aabb& bounds,
@@ -732,9 +755,12 @@ Status blockout_heightfield(const Context& ctx, const Mesh& splint, const Aabb& 
   constexpr double kShiftU[kAttempts] = {0, 0.375, 0.625, 0.125};
   constexpr double kShiftV[kAttempts] = {0, 0.25, 0.75, 0.5};
   const bool offset = so.offset > 0;
+  BlockoutSwept* kept = options.heightfield_swept;
+  const bool reuse = kept != nullptr && kept->held;
+  const int first = reuse ? static_cast<int>(kept->attempt) : 0;
   Status s;
-  Mesh out;
-  for (int attempt = 0; attempt < kAttempts; ++attempt) {
+  Mesh out, swept;
+  for (int attempt = first; attempt < kAttempts; ++attempt) {
     ctx.arena->rewind(scope.start());
     out = Mesh();
     st->attempts = static_cast<uint32_t>(attempt + 1);
@@ -742,14 +768,19 @@ Status blockout_heightfield(const Context& ctx, const Mesh& splint, const Aabb& 
         offset ? attempt * (so.voxel * kOffsetRetryStep) : kRetrySteps[attempt] * so.voxel;
     st->inset_used = lower;  // the height field's lowering (its report's lowered_mm)
     st->offset_used = offset ? so.offset + lower : 0;
-    Mesh swept;
     HeightfieldOptions ho;
     ho.tolerance = tolerance;
     ho.lower = lower;
     ho.shift_u = kShiftU[attempt];
     ho.shift_v = kShiftV[attempt];
-    s = sweep_heightfield_mesh(ctx, jaws, so, ho, &swept, &st->heightfield);
-    if (!s.is_ok()) return s;
+    if (reuse && attempt == first) {  // the surface this attempt made before (below the scope)
+      swept = kept->mesh;
+      st->heightfield = kept->stats;
+    } else {
+      swept = Mesh();
+      s = sweep_heightfield_mesh(ctx, jaws, so, ho, &swept, &st->heightfield);
+      if (!s.is_ok()) return s;
+    }
     st->swept_triangles = swept.triangles.size();
     s = mesh_boolean(ctx, splint, swept, bo, &out, &st->boolean);
     if (s.is_ok() || s.code() == StatusCode::kArenaExhausted ||
@@ -758,7 +789,13 @@ Status blockout_heightfield(const Context& ctx, const Mesh& splint, const Aabb& 
     }
   }
   if (!s.is_ok()) return attempts_error(s, options, *st);
-  move_mesh_down(*ctx.arena, scope.start(), out, result);
+  if (kept != nullptr && !reuse &&
+      keep_after(*ctx.arena, scope.start(), swept, out, result, kept)) {
+    kept->attempt = st->attempts - 1;
+    kept->stats = st->heightfield;
+  } else {
+    move_mesh_down(*ctx.arena, scope.start(), out, result);
+  }
   scope.commit();
   return Status::ok();
 }

@@ -311,8 +311,8 @@ struct SweptJaws {
 // jaw, jaw j first with its triangles, the others' vertices only (they anchor its lattice, as
 // B's vertices did), moved as it reads them (SweptJaws).
 Status blockout_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, size_t j,
-                    const Arena::Marker& start, bool exact, bool check, Mesh* cut,
-                    DesignReport* report) {
+                    const Arena::Marker& start, bool exact, bool check, BlockoutSwept* kept,
+                    Mesh* cut, DesignReport* report) {
   Mesh swept_jaws[DesignReport::kMaxBlockoutJaws];
   SweptJaws moves{&c, jaws, {}};
   for (size_t k = 0; k < jaws.size(); ++k) {
@@ -334,6 +334,8 @@ Status blockout_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws
   bl.boolean.check_self_intersection = check;
   bl.exact = exact;
   bl.heightfield = c.blockout_method == BlockoutMethod::kHeightfield;
+  bl.heightfield_swept = bl.heightfield ? kept : nullptr;
+  const bool was_held = kept->held;
   Mesh blocked;
   const Status s = blockout(ctx, *cut, Span<const Mesh>(swept_jaws, jaws.size()), bl, &blocked,
                             &report->blockout[j]);
@@ -346,30 +348,67 @@ Status blockout_one(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws
   }
   report->blockout_removed_mm3[j] = mesh_volume(*cut) - mesh_volume(blocked);
   move_mesh_down(*ctx.arena, start, blocked, cut);
+  if (kept->held && !was_held) {  // the swept surface kept after the result: after it again
+    move_mesh_down(*ctx.arena, ctx.arena->mark(), kept->mesh, &kept->mesh);
+  }
   return Status::ok();
 }
 
 // One jaw's blockout as blockout_jaws runs it: blockout_one without the Boolean's check, then
 // the result's exact self-intersection check, and on a crossing blockout_one again with it.
+// A height field's swept surface is kept after the result for that second run (it would be
+// the same surface: the sweep, seconds with a clearance, is not made twice) while the check
+// runs, when there is room for it beside the check; else it is given back and the check runs
+// again (the check's arrays are what keeps the blockout in 64 MiB).
 Status blockout_checked(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, size_t j,
                         bool exact, Mesh* cut, DesignReport* report) {
   Arena& arena = *ctx.arena;
   const Arena::Marker start = arena.mark();
   const Mesh before = *cut;
-  SPLINTCORE_RETURN_IF_ERROR(blockout_one(ctx, c, jaws, j, start, exact, false, cut, report));
+  BlockoutSwept kept;
+  SPLINTCORE_RETURN_IF_ERROR(
+      blockout_one(ctx, c, jaws, j, start, exact, false, &kept, cut, report));
   BooleanStats& bs = report->blockout[j].boolean;
   SelfIntersectionReport si;
   // No swept triangle reached the splint: no Boolean ran, the splint is as it was.
   if (report->blockout[j].swept_triangles > 0) {
-    SPLINTCORE_RETURN_IF_ERROR(stage_error(find_self_intersections(ctx, *cut, 1, &si), "blockout"));
+    Status s = find_self_intersections(ctx, *cut, 1, &si);
+    if (s.code() == StatusCode::kArenaExhausted && kept.held) {
+      kept.held = false;
+      Mesh moved;  // (where it is: only what lay above it is given back)
+      move_mesh_down(arena, start, *cut, &moved);
+      *cut = moved;
+      si = SelfIntersectionReport{};
+      s = find_self_intersections(ctx, *cut, 1, &si);
+    }
+    SPLINTCORE_RETURN_IF_ERROR(stage_error(s, "blockout"));
   }
   if (si.self_intersecting()) {
-    arena.rewind(start);
+    Arena::Marker from = start;
+    if (kept.held) {  // the surface down over the result, the second run above it
+      move_mesh_down(arena, start, kept.mesh, &kept.mesh);
+      from = arena.mark();
+    } else {
+      arena.rewind(start);
+    }
     *cut = before;
-    SPLINTCORE_RETURN_IF_ERROR(blockout_one(ctx, c, jaws, j, start, exact, true, cut, report));
-  } else if (report->blockout[j].swept_triangles > 0) {
-    bs.self_intersection_checked = true;
-    bs.self_intersection_candidates = si.candidate_pairs;
+    SPLINTCORE_RETURN_IF_ERROR(
+        blockout_one(ctx, c, jaws, j, from, exact, true, &kept, cut, report));
+    if (kept.held) {
+      Mesh moved;
+      move_mesh_down(arena, start, *cut, &moved);
+      *cut = moved;
+    }
+  } else {
+    if (kept.held) {
+      Mesh moved;  // the kept surface given back
+      move_mesh_down(arena, start, *cut, &moved);
+      *cut = moved;
+    }
+    if (report->blockout[j].swept_triangles > 0) {
+      bs.self_intersection_checked = true;
+      bs.self_intersection_candidates = si.candidate_pairs;
+    }
   }
   return Status::ok();
 }

@@ -265,6 +265,16 @@ TEST(HeightfieldBlockoutRealData, SpacerIn64MiBKeepsItsClearance) {
     }
   }
   EXPECT_TRUE(report[1].imprint_heightfield && report[1].imprint_offset);
+  // The mandible's result crosses itself without the Boolean's check, so its blockout runs
+  // twice, the second time (nudged) on the swept surface the first kept (BlockoutOptions::
+  // heightfield_swept): the bytes of the design that swept it twice, pinned (measured with the
+  // keeping turned off, 2026-12-06; `splintcore design` of the same case wrote the same STL
+  // before and after).
+  EXPECT_EQ(report[1].blockout[1].attempts, 1u);
+  EXPECT_GT(report[1].blockout[1].boolean.attempts, 1u);
+  EXPECT_EQ(test::mesh_sha256(splint[1]),
+            "54489a1ff933b00746fcd170ada408f966e2f519e465b3668af8229d20b2ac93"
+            "4c7d6580b1155d61720c37838364247e0318f729dbdf4b4b59198e71744cc3bb");
   EXPECT_LE(splint[1].triangles.size(), 2 * splint[0].triangles.size());
   MeshReport check;
   SPLINTCORE_ASSERT_OK(check_mesh(ctx, splint[1], &check));

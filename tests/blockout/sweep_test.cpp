@@ -2164,6 +2164,86 @@ TEST(Heightfield, SpacerBlockoutIsAValidSolidWithItsClearance) {
   expect_cone_unlocked(&ta.arena, blocked, cone);
 }
 
+// BlockoutOptions::heightfield_swept: a first run leaves its swept surface after its result;
+// a second run with the Boolean's check (as the design's after a crossing) given that surface
+// makes no sweep of its own and gives the bytes and counts of a fresh run with the check (its
+// allocations all above the kept surface, which stays as it was). Keeping it takes no more
+// than a plain run's high water: the copy fits under the Boolean's working set.
+TEST(Heightfield, BlockoutKeepsItsSweptSurfaceForASecondRun) {
+  TestArena inputs(size_t{64} << 20);
+  Mesh cone(&inputs.arena);
+  frustum(&cone, 3.0, 5.0, 0.0, 8.0, 90);
+  for (Vec3& p : cone.vertices) ASSERT_TRUE(round_to_float32(&p));
+  const float lo[3] = {-7, -7, 4}, hi[3] = {7, 7, 10};
+  const Mesh box = box_mesh(&inputs.arena, lo, hi);
+  BlockoutOptions o;
+  o.heightfield = true;
+  o.sweep.direction = Vec3{0.05, 0, -1};
+  o.sweep.voxel = 0.1;
+  o.sweep.offset = 0.1;
+  auto same = [](const Mesh& a, const Mesh& b) {
+    return a.vertices.size() == b.vertices.size() && a.triangles.size() == b.triangles.size() &&
+           std::memcmp(a.vertices.data(), b.vertices.data(), a.vertices.size() * sizeof(Vec3)) ==
+               0 &&
+           std::memcmp(a.triangles.data(), b.triangles.data(),
+                       a.triangles.size() * sizeof(Triangle)) == 0;
+  };
+  const Span<const Mesh> jaws(&cone, 1);
+  TestArena fresh(size_t{256} << 20);
+  Mesh checked;
+  BlockoutStats want;
+  SPLINTCORE_ASSERT_OK(blockout(Context(&fresh.arena), box, jaws, o, &checked, &want));
+  ASSERT_TRUE(want.boolean.self_intersection_checked);
+  ASSERT_GT(want.swept_triangles, 0u);
+
+  TestArena ta(size_t{256} << 20);
+  BlockoutSwept kept;
+  BlockoutOptions first = o;
+  first.boolean.check_self_intersection = false;
+  first.heightfield_swept = &kept;
+  Mesh unchecked;
+  BlockoutStats st1;
+  SPLINTCORE_ASSERT_OK(blockout(Context(&ta.arena), box, jaws, first, &unchecked, &st1));
+  ASSERT_TRUE(kept.held);
+  EXPECT_EQ(kept.mesh.triangles.size(), st1.swept_triangles);
+  EXPECT_EQ(kept.attempt + 1, st1.attempts);
+  EXPECT_EQ(kept.stats.clipped_pairs, st1.heightfield.clipped_pairs);
+  EXPECT_TRUE(same(unchecked, checked));  // (no crossing here: the check changes nothing)
+  const std::vector<Vec3> kept_vertices(kept.mesh.vertices.begin(), kept.mesh.vertices.end());
+  BlockoutOptions second = o;
+  second.heightfield_swept = &kept;
+  Mesh again;
+  BlockoutStats st2;
+  SPLINTCORE_ASSERT_OK(blockout(Context(&ta.arena), box, jaws, second, &again, &st2));
+  EXPECT_TRUE(same(again, checked));
+  EXPECT_EQ(st2.attempts, want.attempts);
+  EXPECT_EQ(st2.swept_triangles, want.swept_triangles);
+  EXPECT_EQ(st2.heightfield.clipped_pairs, want.heightfield.clipped_pairs);
+  EXPECT_EQ(st2.heightfield.offset_pieces, want.heightfield.offset_pieces);
+  EXPECT_EQ(st2.heightfield.network_triangles, want.heightfield.network_triangles);
+  EXPECT_EQ(st2.offset_used, want.offset_used);
+  EXPECT_TRUE(st2.boolean.self_intersection_checked);
+  EXPECT_EQ(0, std::memcmp(kept_vertices.data(), kept.mesh.vertices.data(),
+                           kept_vertices.size() * sizeof(Vec3)));
+  EXPECT_GT(static_cast<const void*>(again.triangles.data()),
+            static_cast<const void*>(kept.mesh.vertices.data()));
+
+  // In an arena of a plain run's high water.
+  BlockoutOptions unkept = first;
+  unkept.heightfield_swept = nullptr;
+  TestArena plain(size_t{256} << 20);
+  Mesh p1;
+  SPLINTCORE_ASSERT_OK(blockout(Context(&plain.arena), box, jaws, unkept, &p1, nullptr));
+  TestArena tight(plain.arena.high_water());
+  BlockoutSwept none;
+  first.heightfield_swept = &none;
+  Mesh p2;
+  SPLINTCORE_ASSERT_OK(blockout(Context(&tight.arena), box, jaws, first, &p2, nullptr));
+  EXPECT_TRUE(none.held);  // the copy fits under the Boolean's own high water
+  EXPECT_EQ(tight.arena.high_water(), plain.arena.high_water());
+  EXPECT_TRUE(same(p2, p1));
+}
+
 // Overhangs along a slanted direction with sharp edges and corners (the pieces of the
 // polytope's edges and faces): no point of the sheet nearer the jaws than the offset, and the
 // nearest within the reach and tolerance of it; the same bytes again.
