@@ -226,7 +226,9 @@ struct HeightfieldStats {
   uint64_t triangles_in = 0;          // jaw triangles whose shadow meets the grid
   uint64_t offset_pieces = 0;         // with an offset: the planar pieces of its polytope
   uint64_t covered_vertices = 0;      // grid vertices whose column meets a jaw below the top
-  uint64_t clipped_pairs = 0;         // (jaw triangle, half cell) pairs clipped
+  // (jaw triangle, half cell) pairs whose planes the tests at their corners do not part: each
+  // clipped, unless the most it could rise would not lower a corner further.
+  uint64_t clipped_pairs = 0;
   uint64_t lowered_vertices = 0;      // grid vertices lowered by a clip
   double max_lowering = 0;            // mm, the most a vertex was lowered
   uint64_t network_triangles = 0;     // the output's triangles

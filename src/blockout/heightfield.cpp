@@ -270,31 +270,38 @@ struct CellPlane {
     // The half cell's legs are unit steps, its doubled area +-1.
     const double ux = cx[1] - cx[0], uy = cy[1] - cy[0], vx = cx[2] - cx[0], vy = cy[2] - cy[0];
     const double uh = ch[1] - ch[0], vh = ch[2] - ch[0];
-    const double area2 = ux * vy - uy * vx;
-    hx = (uh * vy - vh * uy) / area2;
-    hy = (vh * ux - uh * vx) / area2;
+    const double area2 = ux * vy - uy * vx;  // exactly +-1: times it is over it, bit for bit
+    hx = (uh * vy - vh * uy) * area2;
+    hy = (vh * ux - uh * vx) * area2;
     slack = kRelative * (std::fabs(ch[0]) + std::fabs(ch[1]) + std::fabs(ch[2]) + std::fabs(hx) +
                          std::fabs(hy));
   }
   double at(double x, double y) const { return h0 + hx * (x - x0) + hy * (y - y0); }
 };
 
-// Whether the half cell's plane stays below jaw triangle q wherever they overlap by more than
-// rise_above's slack and rounding, judged at q's corners: rise_above's rise is at most the
-// linear (plane + slack) - (q's plane - q's slack) (or - wmin when q is ill), whose most over
-// the overlap (inside q) is at one of q's corners. The allowance doubles both slacks and adds
-// the plane's value's rounding out to q's corners (up to the grid's span away). Pieces of a
-// clearance are small and steep: the corners of the half cell often see their planes cross
-// where the two do not overlap.
-bool below_at_corners(const GridTriangle& q, const CellPlane& c, double span) {
+// At least the most rise_above(q, c) can give: its rise is at most the linear
+// (plane + slack) - (q's plane - q's slack) (or - wmin when q is ill), whose most over the
+// overlap (inside q) is at one of q's corners, where q's value is qp (q.plane there, or wmin).
+// The allowance doubles both slacks and adds the plane's value's rounding out to q's corners
+// (up to the grid's span away). At most 0: the half cell's plane stays below q wherever they
+// overlap. Pieces of a clearance are small and steep: the corners of the half cell often see
+// their planes cross where the two do not overlap.
+double most_rise(const GridTriangle& q, const double* qp, const CellPlane& c, double span) {
   double most = -HUGE_VAL;
   for (int k = 0; k < 3; ++k) {
-    const double d = c.at(q.x[k], q.y[k]) - (q.ill ? q.wmin : q.plane(q.x[k], q.y[k]));
+    const double d = c.at(q.x[k], q.y[k]) - qp[k];
     most = d > most ? d : most;
   }
   const double allowance =
       2 * (c.slack + q.slack + kRelative * (std::fabs(c.hx) + std::fabs(c.hy)) * (span + 2));
-  return most + allowance <= 0;
+  return most + allowance;
+}
+
+// A rise as the lowering stores it: a float, rounded up.
+float rounded_up(double rise) {
+  float f = static_cast<float>(rise);
+  if (static_cast<double>(f) < rise) f = std::nextafter(f, HUGE_VALF);
+  return f;
 }
 
 // How far the plane c through the half cell's corners (cx, cy: counter-clockwise) rises above
@@ -345,6 +352,9 @@ void lower_under(const Grid& g, const GridTriangle& q, const double* h, float* l
       !line_range(std::floor(ylo), std::ceil(yhi) - 1, g.ny - 1, &y0, &y1)) {
     return;
   }
+  double qp[3];  // q's value at its corners, as most_rise takes it
+  for (int k = 0; k < 3; ++k) qp[k] = q.ill ? q.wmin : q.plane(q.x[k], q.y[k]);
+  const double span = static_cast<double>(g.span());
   uint32_t corner[2][3][2];
   for (uint32_t j = y0; j <= y1; ++j) {
     for (uint32_t i = x0; i <= x1; ++i) {
@@ -369,12 +379,18 @@ void lower_under(const Grid& g, const GridTriangle& q, const double* h, float* l
           if (most + q.slack <= 0) continue;
         }
         const CellPlane plane(cx, cy, ch);
-        if (below_at_corners(q, plane, static_cast<double>(g.span()))) continue;
+        const double most = most_rise(q, qp, plane, span);
+        if (most <= 0) continue;
         ++st->clipped_pairs;
+        // Not clipped when even that most could not lower a corner further (the lowering
+        // takes the most, in any order: the same lowering).
+        const float bound = rounded_up(most);
+        if (bound <= low[id[0]] && bound <= low[id[1]] && bound <= low[id[2]]) {
+          continue;
+        }
         const double rise = rise_above(q, cx, cy, plane);
         if (!(rise > 0)) continue;
-        float f = static_cast<float>(rise);
-        if (static_cast<double>(f) < rise) f = std::nextafter(f, HUGE_VALF);
+        const float f = rounded_up(rise);
         for (size_t k : id) {
           if (f > low[k]) low[k] = f;
         }
