@@ -1,6 +1,9 @@
 // The Boolean run, intersection points: exact pair tests (intersect_pair), the crossing
 // segments and degenerate contacts found through the broad phase, their points named and
 // numbered (boolean_run.h).
+#include <functional>
+#include <utility>
+
 #include "boolean/boolean_run.h"
 
 namespace splintcore {
@@ -636,25 +639,63 @@ Status BooleanRun::find_hits() {
 }
 
 // The slots of A (about 470 bytes per triangle of A near B, a fifth of the blockout's Boolean
-// on the real dentition) are done with once the hits are found: when the hits are all that
-// lies above them (no contact recorded, and all in the arena's block of `slots_at`), the hits
-// move down over them, and the rest of the run has that room. Nothing is added to the hits
-// after this, so they keep no spare capacity (push_back's growth left up to a third of them):
-// otherwise it is given back where they lie when they are the arena's top.
+// on the real dentition) are done with once the hits are found: what the stage keeps above
+// them (the hits, and the contacts recorded and B's vertices aliased to A's when there are
+// any) moves down over them, lowest first (each lands at or below where it was, never on one
+// not yet moved), so the rest of the run has that room, and the stage leaves the same bytes
+// behind whether its slots were taken whole or in batches: the room there was decides only
+// that (a whole stage left above a hole of slots had failed later where the batches fit,
+// under a smaller cap). Nothing is added to the hits and contacts after this: they keep no
+// spare capacity (push_back's growth left up to a third of them). In hooks mode with the
+// stage across blocks the spare capacity is given back where they lie, when at the top.
 void BooleanRun::hits_over_slots(const Arena::Marker& slots_at) {
-  if (deg_.data() != nullptr || alias_ != nullptr || arena_.mark().block != slots_at.block) {
+  if (arena_.mark().block != slots_at.block) {
     hits_.shrink_to_fit();
+    deg_.shrink_to_fit();
     return;
   }
-  const size_t size = hits_.size();
-  const Hit* old = hits_.data();
+  struct Live {
+    const void* at;
+    size_t bytes, align;
+    void* moved;
+  };
+  Live live[3];
+  int n = 0;
+  const auto add = [&](const void* at, size_t bytes, size_t align) {
+    if (at != nullptr && bytes > 0) live[n++] = Live{at, bytes, align, nullptr};
+  };
+  add(hits_.data(), hits_.size() * sizeof(Hit), alignof(Hit));
+  add(deg_.data(), deg_.size() * sizeof(DegRecord), alignof(DegRecord));
+  add(alias_, alias_ != nullptr ? size_t{in_.nvb} * sizeof(uint32_t) : 0, alignof(uint32_t));
+  for (int i = 1; i < n; ++i) {  // by address (three at most)
+    for (int k = i; k > 0 && std::less<const void*>()(live[k].at, live[k - 1].at); --k) {
+      std::swap(live[k], live[k - 1]);
+    }
+  }
+  const size_t hit_count = hits_.size(), deg_count = deg_.size();
+  const void* hits_at = hits_.data();
+  const void* deg_at = deg_.data();
+  const void* alias_at = alias_;
   arena_.rewind(slots_at);
+  for (int i = 0; i < n; ++i) {
+    const size_t align =
+        live[i].align > Arena::kDefaultAlignment ? live[i].align : Arena::kDefaultAlignment;
+    live[i].moved = arena_.allocate(live[i].bytes, align);  // at or below where it was: it fits
+    SPLINTCORE_ASSERT(live[i].moved != nullptr &&
+                      !std::less<const void*>()(live[i].at, live[i].moved));
+    std::memmove(live[i].moved, live[i].at, live[i].bytes);
+  }
+  const auto moved = [&](const void* at) {
+    for (int i = 0; i < n; ++i) {
+      if (live[i].at == at) return live[i].moved;
+    }
+    return static_cast<void*>(nullptr);
+  };
   hits_.bind(&arena_);
-  if (size == 0) return;
-  Hit* moved = arena_.allocate_array<Hit>(size);  // where the slots began: it fits
-  SPLINTCORE_ASSERT(moved != nullptr && moved <= old);
-  std::memmove(static_cast<void*>(moved), old, size * sizeof(Hit));
-  hits_.adopt(moved, size, size);
+  deg_.bind(&arena_);
+  if (hit_count > 0) hits_.adopt(static_cast<Hit*>(moved(hits_at)), hit_count, hit_count);
+  if (deg_count > 0) deg_.adopt(static_cast<DegRecord*>(moved(deg_at)), deg_count, deg_count);
+  if (alias_at != nullptr) alias_ = static_cast<uint32_t*>(moved(alias_at));
 }
 
 namespace {

@@ -281,6 +281,49 @@ test::LockReport jaw_lock(CaseAndJaws& f, const CaseFile& c, const Mesh& splint,
 // leave the undercut itself unswept, so the exact sweep stops (kUnsupported, where), and
 // "auto" gives exactly the splint of the height field on its grid, saying why; that leaves no
 // line locked either.
+// A design works at every cap above the least that works, to the same bytes (firmware sizes
+// its arena with room to spare): caps from a run's high water down in steps of 256 KiB until
+// six have failed. The height field's design of the phantom with the base 2.5 mm deeper was the
+// counterexample: its Boolean records exact contacts, and takes A's slots whole where the arena
+// has room, in batches where it has not; until 2026-12-06 the whole slots stayed under the
+// contacts as a hole, and the design failed from 8.4 to 9.8 MB while it worked at 7.5-8.3 MB.
+TEST(DesignPipeline, HeightfieldDesignWorksAtEveryCapAboveItsLeast) {
+  CaseAndJaws f;
+  ASSERT_TRUE(f.ok);
+  std::vector<Pick> up, lo;
+  CaseFile c = sunk_case(f, 2.5, &up, &lo);
+  c.blockout_method = BlockoutMethod::kHeightfield;
+  test::TestArena big(size_t{256} << 20);
+  Mesh want;
+  DesignReport rw;
+  SPLINTCORE_ASSERT_OK(
+      design_splint(Context(&big.arena), c, Span<const Mesh>(f.jaws, 2), &want, &rw));
+  const size_t high_water = big.arena.high_water();
+  size_t works = 0, fails = 0, least = high_water;
+  for (size_t cap = high_water; cap > high_water / 4 && fails < 6; cap -= size_t{256} << 10) {
+    SCOPED_TRACE(cap);
+    test::TestArena a(cap);
+    Mesh out;
+    DesignReport r;
+    const Status s = design_splint(Context(&a.arena), c, Span<const Mesh>(f.jaws, 2), &out, &r);
+    if (!s.is_ok()) {
+      EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << test::format(s);
+      ++fails;
+      continue;
+    }
+    EXPECT_EQ(fails, 0u) << "works at " << cap << " bytes, below a cap that failed";
+    expect_same_stl_bytes(f.t.arena, want, out);
+    ++works;
+    least = cap;
+  }
+  EXPECT_GE(works, 4u);
+  EXPECT_EQ(fails, 6u);
+  std::printf(
+      "[ figures  ] height-field design, base 2.5 mm deeper: high water %zu bytes, works "
+      "down to %zu (%zu caps), fails below\n",
+      high_water, least, works);
+}
+
 TEST(DesignPipeline, AutoBlockoutIsExactUnlessItsSweepStopsThenTheHeightField) {
   CaseAndJaws f;
   ASSERT_TRUE(f.ok);
