@@ -428,9 +428,11 @@ Status each_front(const Grid& g, Span<const Mesh> jaws, const SweepOptions& o, u
   uint64_t first = 0;  // the number of jaw j's first triangle
   for (size_t j = 0; j < jaws.size() && first < end; ++j) {
     const Mesh& jaw = jaws[j];
-    const uint64_t n = jaw.triangles.size();
-    const uint64_t from = begin > first ? begin - first : 0, to = end - first < n ? end - first : n;
-    for (uint64_t t = from; t < to; ++t) {
+    const size_t n = jaw.triangles.size();
+    // (Both at most n.)
+    const size_t from = begin > first ? static_cast<size_t>(begin - first) : 0;
+    const size_t to = end - first < n ? static_cast<size_t>(end - first) : n;
+    for (size_t t = from; t < to; ++t) {
       const Triangle& tri = jaw.triangles[t];
       if (tri.v[0] >= jaw.vertices.size() || tri.v[1] >= jaw.vertices.size() ||
           tri.v[2] >= jaw.vertices.size()) {
@@ -560,10 +562,11 @@ Status rasterize_offset(const Context& ctx, const Grid& g, Span<const Mesh> jaws
     PieceSink piece{g, lowering, &shares[i]};
     uint64_t first = 0;  // the number of jaw j's first vertex
     for (size_t j = 0; j < jaws.size() && first < end; ++j) {
-      const uint64_t n = jaws[j].vertices.size();
-      const uint64_t from = begin > first ? begin - first : 0;
-      const uint64_t to = end - first < n ? end - first : n;
-      for (uint64_t v = from; v < to; ++v) {
+      const size_t n = jaws[j].vertices.size();
+      // (Both at most n.)
+      const size_t from = begin > first ? static_cast<size_t>(begin - first) : 0;
+      const size_t to = end - first < n ? static_cast<size_t>(end - first) : n;
+      for (size_t v = from; v < to; ++v) {
         const uint32_t f = offset.faces[first + v] & ~Offset::kSeen;
         if (f != 0) vertex_pieces(ball, to_local(g.frame, jaw_point(o, jaws, j, v)), f, piece);
       }
