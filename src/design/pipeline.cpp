@@ -289,6 +289,13 @@ Status moved_vertices(const Context& ctx, const CaseFile& c, Span<const Mesh> ja
   return Status::ok();
 }
 
+// *cut (above `to` in the arena) moved down to `to`, everything above it given back.
+void cut_down_to(Arena& arena, const Arena::Marker& to, Mesh* cut) {
+  Mesh moved;
+  move_mesh_down(arena, to, *cut, &moved);
+  *cut = moved;
+}
+
 // The sampled sweep's jaws in blockout_one's order (the swept jaw first, then the others) and
 // where B holds their vertices (SweepOptions::jaw_vertex): moved as they are read, not copied.
 struct SweptJaws {
@@ -375,9 +382,7 @@ Status blockout_checked(const Context& ctx, const CaseFile& c, Span<const Mesh> 
     Status s = find_self_intersections(ctx, *cut, 1, &si);
     if (s.code() == StatusCode::kArenaExhausted && kept.held) {
       kept.held = false;
-      Mesh moved;  // (where it is: only what lay above it is given back)
-      move_mesh_down(arena, start, *cut, &moved);
-      *cut = moved;
+      cut_down_to(arena, start, cut);  // (where it is: only what lay above it is given back)
       si = SelfIntersectionReport{};
       s = find_self_intersections(ctx, *cut, 1, &si);
     }
@@ -395,15 +400,11 @@ Status blockout_checked(const Context& ctx, const CaseFile& c, Span<const Mesh> 
     SPLINTCORE_RETURN_IF_ERROR(
         blockout_one(ctx, c, jaws, j, from, exact, true, &kept, cut, report));
     if (kept.held) {
-      Mesh moved;
-      move_mesh_down(arena, start, *cut, &moved);
-      *cut = moved;
+      cut_down_to(arena, start, cut);
     }
   } else {
     if (kept.held) {
-      Mesh moved;  // the kept surface given back
-      move_mesh_down(arena, start, *cut, &moved);
-      *cut = moved;
+      cut_down_to(arena, start, cut);  // the kept surface given back
     }
     if (report->blockout[j].swept_triangles > 0) {
       bs.self_intersection_checked = true;
@@ -479,9 +480,7 @@ Status blockout_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
     report->blockout_jaws = std::max(report->blockout_jaws, static_cast<uint32_t>(j + 1));
     note_self_check(report, report->blockout[j].boolean, "blockout");
     // The previous splint is no retry's input any more: the next jaw starts from `low`.
-    Mesh moved;
-    move_mesh_down(arena, low, *cut, &moved);
-    *cut = moved;
+    cut_down_to(arena, low, cut);
   };
   size_t refused[DesignReport::kMaxBlockoutJaws];
   size_t refusals = 0;
@@ -585,9 +584,7 @@ Status subtract_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
         "boolean (base minus jaws)");
   };
   SPLINTCORE_RETURN_IF_ERROR(subtract());
-  Mesh moved;
-  move_mesh_down(arena, low, *cut, &moved);
-  *cut = moved;
+  cut_down_to(arena, low, cut);
   *base = Mesh();
   SelfIntersectionReport si;
   SPLINTCORE_RETURN_IF_ERROR(stage_error(find_self_intersections(ctx, *cut, 1, &si), "boolean"));
