@@ -68,27 +68,6 @@ CtSeries ct_memory_series(CtMemoryFiles* files) {
 
 namespace ct_detail {
 
-Status Reader::fill(size_t n) {
-  SPLINTCORE_ASSERT(n <= cap);
-  if (available() >= n || at_eof) return Status::ok();
-  if (pos > 0) {
-    std::memmove(buf, buf + pos, end - pos);
-    base += pos;
-    end -= pos;
-    pos = 0;
-  }
-  while (end < n && !at_eof) {
-    int64_t got = source->read(source->user, buf + end, cap - end);
-    if (got < 0) return make_error(StatusCode::kIoError, "read failed").at_byte(base + end);
-    if (static_cast<uint64_t>(got) > cap - end) {
-      return Status::error(StatusCode::kIoError, "byte source returned more than asked");
-    }
-    if (got == 0) at_eof = true;
-    end += static_cast<size_t>(got);
-  }
-  return Status::ok();
-}
-
 void Reader::rebuffer(uint8_t* buffer, size_t capacity) {
   const size_t left = available();
   SPLINTCORE_ASSERT(left <= capacity);

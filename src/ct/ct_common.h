@@ -1,9 +1,10 @@
-// Shared parts of the CT readers (src/io/ct_*.cpp): a windowed byte reader over a ByteSource,
+// Shared parts of the CT readers (src/ct/ct_*.cpp): a windowed byte reader over a ByteSource,
 // text-header lines, locale-free number parsing, the arena budget check, and the voxel
 // conversion stored value -> HU (DICOM PS3.3 C.11.1.1.2 Modality LUT: HU = m * SV + b).
 #ifndef SPLINTCORE_SRC_CT_CT_COMMON_H
 #define SPLINTCORE_SRC_CT_CT_COMMON_H
 
+#include "io/reader.h"
 #include "splintcore/compress.h"
 #include "splintcore/ct.h"
 
@@ -13,17 +14,10 @@ namespace ct_detail {
 constexpr size_t kHeaderWindow = 1024;  // stack window for headers
 constexpr size_t kLineCapacity = 512;   // longest header line kept (longer lines: flagged)
 
-// A window over a ByteSource: buf[pos, end) holds unread bytes; base is the absolute offset of
-// buf[0]. The buffer is the caller's (a stack array for headers, an arena chunk for voxels).
-struct Reader {
-  const ByteSource* source = nullptr;
-  uint8_t* buf = nullptr;
-  size_t cap = 0;
-  size_t pos = 0;
-  size_t end = 0;
-  uint64_t base = 0;
-  bool at_eof = false;
-
+// The window over a ByteSource (io/reader.h) with what the CT readers add: a start, a larger
+// buffer, skips and header lines. The buffer is the caller's (a stack array for headers, an
+// arena chunk for voxels).
+struct Reader : meshio::Reader {
   void init(const ByteSource* s, uint8_t* buffer, size_t capacity) {
     source = s;
     buf = buffer;
@@ -32,10 +26,6 @@ struct Reader {
     base = 0;
     at_eof = false;
   }
-  uint64_t offset() const { return base + pos; }
-  size_t available() const { return end - pos; }
-  // Makes at least n (<= cap) bytes available unless the source ends first.
-  Status fill(size_t n);
   // Moves the unread bytes into a new (larger) buffer.
   void rebuffer(uint8_t* buffer, size_t capacity);
   // Skips n bytes; kTruncated (with `what`) if the source ends first.
@@ -60,6 +50,77 @@ bool parse_i64(const char* text, size_t length, int64_t* out);
 // *count is how many were found (fails on a bad number or more than max).
 bool parse_doubles(const char* text, size_t length, char extra, double* out, size_t max,
                    size_t* count);
+
+// A sample type's name in a text header (MetaImage's ElementType, NRRD's type) and its voxels.
+struct TypeName {
+  const char* name;
+  uint8_t bytes;
+  bool is_signed;
+  bool is_float;
+};
+
+// One "Key = Value" (MetaImage) or "field: value" (NRRD) header line, both parts trimmed.
+struct KeyValue {
+  const char* key;
+  size_t key_length;
+  const char* value;
+  size_t value_length;
+
+  // line[0, length) split at its separator, line[at] (at < length).
+  static KeyValue split(const char* line, size_t length, size_t at) {
+    KeyValue kv{line, at, line + at + 1, length - at - 1};
+    trim(&kv.key, &kv.key_length);
+    trim(&kv.value, &kv.value_length);
+    return kv;
+  }
+  bool is(const char* name) const { return equal_nocase(key, key_length, name); }
+  bool value_is(const char* v) const { return equal_nocase(value, value_length, v); }
+  // Exactly `wanted` numbers, apart by spaces or tabs.
+  bool numbers(double* out, size_t wanted) const {
+    size_t count = 0;
+    return parse_doubles(value, value_length, '\0', out, wanted, &count) && count == wanted;
+  }
+};
+
+// A text header (MetaImage, NRRD) read a line at a time in a fixed window of its own; errors
+// name the source and the line.
+struct HeaderLines {
+  const ByteSource& source;
+  uint8_t window[kHeaderWindow];
+  char line[kLineCapacity] = {};
+  Reader reader;
+  uint64_t budget;  // the header bytes still allowed (CtReadOptions::max_header_bytes)
+  uint64_t line_no = 0;
+
+  HeaderLines(const ByteSource& s, const CtReadOptions& options)
+      : source(s), budget(options.max_header_bytes) {
+    reader.init(&source, window, sizeof(window));
+  }
+  HeaderLines(const HeaderLines&) = delete;
+  HeaderLines& operator=(const HeaderLines&) = delete;
+
+  Status fail(Status s) const {
+    s.at_line(line_no);
+    return in_source(s, source);
+  }
+  // "bad <what> "<value>"" at the line.
+  Status bad(const KeyValue& kv, const char* what) const {
+    return fail(make_error(StatusCode::kParseError, "bad ", what, " \"")
+                    .append(kv.value, kv.value_length)
+                    .append("\""));
+  }
+  // The next line into line[0, *length), as Reader::read_line, counted in line_no.
+  Status next_line(size_t* length, bool* too_long, bool* got) {
+    const Status s = reader.read_line(line, length, too_long, got, &budget);
+    ++line_no;
+    return s.is_ok() ? s : fail(s);
+  }
+  // The error for a line that read_line flagged too long.
+  Status line_too_long() const {
+    return fail(
+        make_error(StatusCode::kParseError, "line longer than ", kLineCapacity - 1, " characters"));
+  }
+};
 
 // Checks the volume's size against the limits and computes the voxel bytes.
 Status check_size(uint64_t nx, uint64_t ny, uint64_t nz, const CtReadOptions& options,

@@ -11,12 +11,6 @@ using namespace ct_detail;
 
 namespace {
 
-struct TypeName {
-  const char* name;
-  uint8_t bytes;
-  bool is_signed;
-  bool is_float;
-};
 constexpr TypeName kTypes[] = {
     {"MET_CHAR", 1, true, false},    {"MET_UCHAR", 1, false, false}, {"MET_SHORT", 2, true, false},
     {"MET_USHORT", 2, false, false}, {"MET_INT", 4, true, false},    {"MET_UINT", 4, false, false},
@@ -35,32 +29,9 @@ bool parse_bool(const char* v, size_t n, bool* out) {
   return false;
 }
 
-// One "Key = Value" line, both parts trimmed.
-struct Entry {
-  const char* key;
-  size_t key_length;
-  const char* value;
-  size_t value_length;
-
-  bool is(const char* name) const { return equal_nocase(key, key_length, name); }
-  bool value_is(const char* v) const { return equal_nocase(value, value_length, v); }
-  // Exactly `wanted` numbers.
-  bool numbers(double* out, size_t wanted) const {
-    size_t count = 0;
-    return parse_doubles(value, value_length, '\0', out, wanted, &count) && count == wanted;
-  }
-};
-
 // The header, read a line at a time in a fixed window up to ElementDataFile (the last key),
 // each key taken by its own method. Errors name the line.
-struct MetaImageHeader {
-  const ByteSource& source;
-  uint8_t window[kHeaderWindow];
-  char line[kLineCapacity] = {};
-  Reader reader;
-  uint64_t budget;
-  uint64_t line_no = 0;
-
+struct MetaImageHeader : HeaderLines {
   // What the keys said.
   bool have_object = false, have_ndims = false, have_dims = false, have_type = false;
   bool binary = false, have_binary = false, have_spacing = false;
@@ -75,22 +46,8 @@ struct MetaImageHeader {
   char data_file[kLineCapacity] = {};
   CtInfo found;
 
-  MetaImageHeader(const ByteSource& s, const CtReadOptions& options)
-      : source(s), budget(options.max_header_bytes) {
-    reader.init(&source, window, sizeof(window));
+  MetaImageHeader(const ByteSource& s, const CtReadOptions& options) : HeaderLines(s, options) {
     found.format = CtFormat::kMetaImage;
-  }
-  MetaImageHeader(const MetaImageHeader&) = delete;
-  MetaImageHeader& operator=(const MetaImageHeader&) = delete;
-
-  Status fail(Status s) const {
-    s.at_line(line_no);
-    return in_source(s, source);
-  }
-  Status bad(const Entry& e, const char* what) const {
-    return fail(make_error(StatusCode::kParseError, "bad ", what, " \"")
-                    .append(e.value, e.value_length)
-                    .append("\""));
   }
 
   // The key lines, up to ElementDataFile (the data, when LOCAL, starts right after it).
@@ -98,36 +55,31 @@ struct MetaImageHeader {
     while (!have_data_file) {
       size_t len = 0;
       bool too_long = false, got = false;
-      Status s = reader.read_line(line, &len, &too_long, &got, &budget);
-      ++line_no;
-      if (!s.is_ok()) return fail(s);
+      SPLINTCORE_RETURN_IF_ERROR(next_line(&len, &too_long, &got));
       if (!got) {
         return fail(
             make_error(StatusCode::kTruncated, "header ends without ElementDataFile (the last key)")
                 .at_byte(reader.offset()));
       }
-      if (too_long) {
-        return fail(make_error(StatusCode::kParseError, "line longer than ", kLineCapacity - 1,
-                               " characters"));
-      }
+      if (too_long) return line_too_long();
       size_t eq = 0;
       while (eq < len && line[eq] != '=') ++eq;
-      Entry e{line, eq, nullptr, 0};
-      trim(&e.key, &e.key_length);
-      if (e.key_length == 0 && eq == len) continue;  // blank line
-      if (eq == len) return fail(make_error(StatusCode::kParseError, "expected \"Key = Value\""));
-      e.value = line + eq + 1;
-      e.value_length = len - eq - 1;
-      trim(&e.value, &e.value_length);
-      SPLINTCORE_RETURN_IF_ERROR(take(e));
+      if (eq == len) {
+        const char* text = line;
+        size_t n = len;
+        trim(&text, &n);
+        if (n == 0) continue;  // blank line
+        return fail(make_error(StatusCode::kParseError, "expected \"Key = Value\""));
+      }
+      SPLINTCORE_RETURN_IF_ERROR(take(KeyValue::split(line, len, eq)));
     }
     return Status::ok();
   }
 
   // One key, by name. Other keys (Comment, CenterOfRotation, ElementMin, Modality, ...) are
   // ignored.
-  Status take(const Entry& e) {
-    using Take = Status (MetaImageHeader::*)(const Entry&);
+  Status take(const KeyValue& e) {
+    using Take = Status (MetaImageHeader::*)(const KeyValue&);
     static constexpr struct {
       const char* key;
       Take take;
@@ -159,7 +111,7 @@ struct MetaImageHeader {
     return Status::ok();
   }
 
-  Status take_object_type(const Entry& e) {
+  Status take_object_type(const KeyValue& e) {
     if (!e.value_is("Image")) {
       return fail(make_error(StatusCode::kUnsupported, "ObjectType \"")
                       .append(e.value, e.value_length)
@@ -169,7 +121,7 @@ struct MetaImageHeader {
     return Status::ok();
   }
 
-  Status take_ndims(const Entry& e) {
+  Status take_ndims(const KeyValue& e) {
     int64_t d = 0;
     if (!parse_i64(e.value, e.value_length, &d)) return bad(e, "NDims");
     if (d != 3) {
@@ -180,7 +132,7 @@ struct MetaImageHeader {
     return Status::ok();
   }
 
-  Status take_dim_size(const Entry& e) {
+  Status take_dim_size(const KeyValue& e) {
     if (!e.numbers(dims, 3)) return bad(e, "DimSize (three integers)");
     for (double d : dims) {
       if (!(d >= 1 && d <= 4294967295.0) || d != static_cast<double>(static_cast<uint64_t>(d))) {
@@ -192,34 +144,36 @@ struct MetaImageHeader {
   }
 
   // ElementSpacing, or ElementSize while no ElementSpacing was given.
-  Status take_spacing(const Entry& e) {
+  Status take_spacing(const KeyValue& e) {
     if (!e.numbers(spacing, 3)) return bad(e, "element spacing (three numbers)");
     if (e.is("ElementSpacing")) have_spacing = true;
     geometry_line = line_no;
     return Status::ok();
   }
 
-  Status take_element_size(const Entry& e) { return have_spacing ? Status::ok() : take_spacing(e); }
+  Status take_element_size(const KeyValue& e) {
+    return have_spacing ? Status::ok() : take_spacing(e);
+  }
 
-  Status take_offset(const Entry& e) {
+  Status take_offset(const KeyValue& e) {
     if (!e.numbers(offset, 3)) return bad(e, "origin (three numbers)");
     return Status::ok();
   }
 
-  Status take_matrix(const Entry& e) {
+  Status take_matrix(const KeyValue& e) {
     if (!e.numbers(matrix, 9)) return bad(e, "direction matrix (nine numbers)");
     if (geometry_line == kNoPosition) geometry_line = line_no;
     return Status::ok();
   }
 
-  Status take_anatomical_orientation(const Entry& e) {
+  Status take_anatomical_orientation(const KeyValue& e) {
     size_t n = e.value_length < sizeof(found.space) - 1 ? e.value_length : sizeof(found.space) - 1;
     std::memcpy(found.space, e.value, n);
     found.space[n] = '\0';
     return Status::ok();
   }
 
-  Status take_element_type(const Entry& e) {
+  Status take_element_type(const KeyValue& e) {
     for (const TypeName& t : kTypes) {
       if (e.value_is(t.name)) {
         format.bytes = t.bytes;
@@ -235,7 +189,7 @@ struct MetaImageHeader {
                             "FLOAT/DOUBLE)"));
   }
 
-  Status take_channels(const Entry& e) {
+  Status take_channels(const KeyValue& e) {
     int64_t c = 0;
     if (!parse_i64(e.value, e.value_length, &c)) return bad(e, "ElementNumberOfChannels");
     if (c != 1) {
@@ -245,20 +199,20 @@ struct MetaImageHeader {
     return Status::ok();
   }
 
-  Status take_binary_data(const Entry& e) {
+  Status take_binary_data(const KeyValue& e) {
     if (!parse_bool(e.value, e.value_length, &binary)) return bad(e, "BinaryData (True or False)");
     have_binary = true;
     return Status::ok();
   }
 
-  Status take_byte_order(const Entry& e) {
+  Status take_byte_order(const KeyValue& e) {
     bool msb = false;
     if (!parse_bool(e.value, e.value_length, &msb)) return bad(e, "byte order (True or False)");
     format.big_endian = msb;
     return Status::ok();
   }
 
-  Status take_compressed_data(const Entry& e) {
+  Status take_compressed_data(const KeyValue& e) {
     bool compressed = false;
     if (!parse_bool(e.value, e.value_length, &compressed)) return bad(e, "CompressedData");
     if (compressed) {
@@ -268,14 +222,14 @@ struct MetaImageHeader {
     return Status::ok();
   }
 
-  Status take_header_size(const Entry& e) {
+  Status take_header_size(const KeyValue& e) {
     if (!parse_i64(e.value, e.value_length, &header_size) || header_size < -1) {
       return bad(e, "HeaderSize");
     }
     return Status::ok();
   }
 
-  Status take_data_file(const Entry& e) {
+  Status take_data_file(const KeyValue& e) {
     if (e.value_length == 0) return bad(e, "ElementDataFile");
     if (e.value_is("LOCAL")) {
       data_file[0] = '\0';

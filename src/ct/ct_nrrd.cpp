@@ -11,12 +11,6 @@ using namespace ct_detail;
 
 namespace {
 
-struct TypeName {
-  const char* name;
-  uint8_t bytes;
-  bool is_signed;
-  bool is_float;
-};
 constexpr TypeName kTypes[] = {
     {"signed char", 1, true, false},
     {"int8", 1, true, false},
@@ -78,28 +72,10 @@ void copy_text(char* out, size_t cap, const char* text, size_t length) {
   out[length] = '\0';
 }
 
-// One "field: value" line, both parts trimmed.
-struct Field {
-  const char* name;
-  size_t name_length;
-  const char* value;
-  size_t value_length;
-
-  bool is(const char* n) const { return equal_nocase(name, name_length, n); }
-  bool value_is(const char* v) const { return equal_nocase(value, value_length, v); }
-};
-
 // The header, read a line at a time in a fixed window: the magic line, then "field: value"
 // lines up to the blank line before the data (or the end of a detached header), each taken
 // by its own method. Errors name the line.
-struct NrrdHeader {
-  const ByteSource& source;
-  uint8_t window[kHeaderWindow];
-  char line[kLineCapacity] = {};
-  Reader reader;
-  uint64_t budget;
-  uint64_t line_no = 0;
-
+struct NrrdHeader : HeaderLines {
   // What the fields said.
   bool have_type = false, have_dimension = false, have_sizes = false, have_encoding = false;
   bool gzip = false;  // encoding gzip / gz
@@ -114,22 +90,8 @@ struct NrrdHeader {
   char data_file[kLineCapacity] = {};
   CtInfo found;
 
-  NrrdHeader(const ByteSource& s, const CtReadOptions& options)
-      : source(s), budget(options.max_header_bytes) {
-    reader.init(&source, window, sizeof(window));
+  NrrdHeader(const ByteSource& s, const CtReadOptions& options) : HeaderLines(s, options) {
     found.format = CtFormat::kNrrd;
-  }
-  NrrdHeader(const NrrdHeader&) = delete;
-  NrrdHeader& operator=(const NrrdHeader&) = delete;
-
-  Status fail(Status s) const {
-    s.at_line(line_no);
-    return in_source(s, source);
-  }
-  Status bad(const Field& f, const char* what) const {
-    return fail(make_error(StatusCode::kParseError, "bad ", what, " \"")
-                    .append(f.value, f.value_length)
-                    .append("\""));
   }
 
   // The first line: NRRD0001 to NRRD0005.
@@ -151,9 +113,7 @@ struct NrrdHeader {
     for (;;) {
       size_t len = 0;
       bool too_long = false, got = false;
-      Status s = reader.read_line(line, &len, &too_long, &got, &budget);
-      ++line_no;
-      if (!s.is_ok()) return fail(s);
+      SPLINTCORE_RETURN_IF_ERROR(next_line(&len, &too_long, &got));
       if (!got) {
         if (data_file[0] != '\0') return Status::ok();  // a detached header may end at its end
         return fail(
@@ -168,21 +128,15 @@ struct NrrdHeader {
       if (colon == len) {
         return fail(make_error(StatusCode::kParseError, "expected \"field: value\""));
       }
-      if (too_long) {
-        return fail(make_error(StatusCode::kParseError, "line longer than ", kLineCapacity - 1,
-                               " characters"));
-      }
-      Field f{line, colon, line + colon + 1, len - colon - 1};
-      trim(&f.name, &f.name_length);
-      trim(&f.value, &f.value_length);
-      SPLINTCORE_RETURN_IF_ERROR(take(f));
+      if (too_long) return line_too_long();
+      SPLINTCORE_RETURN_IF_ERROR(take(KeyValue::split(line, len, colon)));
     }
   }
 
   // One field, by name. Other fields (kinds, centerings, units, content, measurement frame,
   // ...) are ignored.
-  Status take(const Field& f) {
-    using Take = Status (NrrdHeader::*)(const Field&);
+  Status take(const KeyValue& f) {
+    using Take = Status (NrrdHeader::*)(const KeyValue&);
     static constexpr struct {
       const char* name;
       Take take;
@@ -210,7 +164,7 @@ struct NrrdHeader {
     return Status::ok();
   }
 
-  Status take_type(const Field& f) {
+  Status take_type(const KeyValue& f) {
     for (const TypeName& t : kTypes) {
       if (f.value_is(t.name)) {
         format.bytes = t.bytes;
@@ -225,7 +179,7 @@ struct NrrdHeader {
                     .append("\" is not supported (8, 16 and 32-bit integers, float, double)"));
   }
 
-  Status take_dimension(const Field& f) {
+  Status take_dimension(const KeyValue& f) {
     int64_t d = 0;
     if (!parse_i64(f.value, f.value_length, &d)) return bad(f, "dimension");
     if (d != 3) {
@@ -236,7 +190,7 @@ struct NrrdHeader {
     return Status::ok();
   }
 
-  Status take_sizes(const Field& f) {
+  Status take_sizes(const KeyValue& f) {
     double v[4];
     size_t count = 0;
     if (!parse_doubles(f.value, f.value_length, '\0', v, 4, &count) || count != 3) {
@@ -255,7 +209,7 @@ struct NrrdHeader {
     return Status::ok();
   }
 
-  Status take_encoding(const Field& f) {
+  Status take_encoding(const KeyValue& f) {
     if (f.value_is("raw") || f.value_is("gzip") || f.value_is("gz")) {
       have_encoding = true;
       gzip = !f.value_is("raw");
@@ -270,7 +224,7 @@ struct NrrdHeader {
     return bad(f, "encoding");
   }
 
-  Status take_endian(const Field& f) {
+  Status take_endian(const KeyValue& f) {
     if (f.value_is("little")) {
       format.big_endian = false;
     } else if (f.value_is("big")) {
@@ -282,7 +236,7 @@ struct NrrdHeader {
     return Status::ok();
   }
 
-  Status take_directions(const Field& f) {
+  Status take_directions(const KeyValue& f) {
     if (!parse_vectors(f.value, f.value_length, directions, 3)) {
       return fail(make_error(StatusCode::kParseError,
                              "space directions: expected three vectors (x,y,z), got \"")
@@ -294,7 +248,7 @@ struct NrrdHeader {
     return Status::ok();
   }
 
-  Status take_spacings(const Field& f) {
+  Status take_spacings(const KeyValue& f) {
     size_t count = 0;
     if (!parse_doubles(f.value, f.value_length, '\0', spacings, 3, &count) || count != 3) {
       return bad(f, "spacings (three numbers)");
@@ -303,19 +257,19 @@ struct NrrdHeader {
     return Status::ok();
   }
 
-  Status take_origin(const Field& f) {
+  Status take_origin(const KeyValue& f) {
     Vec3 o[1];
     if (!parse_vectors(f.value, f.value_length, o, 1)) return bad(f, "space origin (x,y,z)");
     origin = o[0];
     return Status::ok();
   }
 
-  Status take_space(const Field& f) {
+  Status take_space(const KeyValue& f) {
     copy_text(found.space, sizeof(found.space), f.value, f.value_length);
     return Status::ok();
   }
 
-  Status take_space_dimension(const Field& f) {
+  Status take_space_dimension(const KeyValue& f) {
     int64_t d = 0;
     if (!parse_i64(f.value, f.value_length, &d)) return bad(f, "space dimension");
     if (d != 3) {
@@ -325,7 +279,7 @@ struct NrrdHeader {
     return Status::ok();
   }
 
-  Status take_data_file(const Field& f) {
+  Status take_data_file(const KeyValue& f) {
     if (starts_with(f.value, f.value_length, "LIST") ||
         std::memchr(f.value, '%', f.value_length) != nullptr) {
       return fail(make_error(StatusCode::kUnsupported, "data file \"")
@@ -337,14 +291,14 @@ struct NrrdHeader {
     return Status::ok();
   }
 
-  Status take_byte_skip(const Field& f) {
+  Status take_byte_skip(const KeyValue& f) {
     if (!parse_i64(f.value, f.value_length, &byte_skip) || byte_skip < -1) {
       return bad(f, "byte skip");
     }
     return Status::ok();
   }
 
-  Status take_line_skip(const Field& f) {
+  Status take_line_skip(const KeyValue& f) {
     if (!parse_i64(f.value, f.value_length, &line_skip) || line_skip < 0) {
       return bad(f, "line skip");
     }
