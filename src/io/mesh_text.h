@@ -326,6 +326,36 @@ inline Status check_read_arguments(const ByteSource& source, const MeshReadOptio
   return Status::ok();
 }
 
+// The text readers' input: the chunk window over `source` (options.chunk_bytes, at least 4096)
+// and the line reader on it (lines up to options.max_line_bytes), their buffers from the arena.
+inline Status open_lines(Arena& arena, const ByteSource& source, const MeshReadOptions& options,
+                         Reader* in, LineReader* lines) {
+  in->source = &source;
+  in->cap = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
+  in->buf = arena.allocate_array<uint8_t>(in->cap);
+  lines->in = in;
+  lines->cap = options.max_line_bytes;
+  lines->text = arena.allocate_array<char>(lines->cap);
+  if (in->buf == nullptr || lines->text == nullptr) return arena.exhausted_status();
+  return Status::ok();
+}
+
+// A text reader's public entry (read_ply, read_obj): *info cleared (a local one when null), the
+// arguments checked (`who` names the function), `out` bound to the arena, then `read`, its
+// errors located in the source.
+using LocatedRead = Status (*)(const Context& ctx, const ByteSource& source,
+                               const MeshReadOptions& options, Mesh* out, MeshReadInfo* info);
+inline Status read_text_mesh(const Context& ctx, const ByteSource& source,
+                             const MeshReadOptions& options, Mesh* out, MeshReadInfo* info,
+                             const char* who, LocatedRead read) {
+  MeshReadInfo local;
+  if (info == nullptr) info = &local;
+  *info = MeshReadInfo{};
+  SPLINTCORE_RETURN_IF_ERROR(check_read_arguments(source, options, out, who));
+  out->bind(ctx.arena);
+  return located(read(ctx, source, options, out, info), source);
+}
+
 }  // namespace meshio
 }  // namespace splintcore
 

@@ -808,14 +808,8 @@ Status read_ply_located(const Context& ctx, const ByteSource& source,
   Arena& arena = *ctx.arena;
   ArenaScope scope(arena);  // on an error the arena is as it was
   Reader in;
-  in.source = &source;
-  in.cap = options.chunk_bytes < 4096 ? 4096 : options.chunk_bytes;
-  in.buf = arena.allocate_array<uint8_t>(in.cap);
   LineReader lines;
-  lines.in = &in;
-  lines.cap = options.max_line_bytes;
-  lines.text = arena.allocate_array<char>(lines.cap);
-  if (in.buf == nullptr || lines.text == nullptr) return arena.exhausted_status();
+  SPLINTCORE_RETURN_IF_ERROR(open_lines(arena, source, options, &in, &lines));
   Header h;
   SPLINTCORE_RETURN_IF_ERROR(parse_header(lines, &h));
   info->format = h.format;
@@ -846,12 +840,7 @@ Status read_ply_located(const Context& ctx, const ByteSource& source,
 
 Status read_ply(const Context& ctx, const ByteSource& source, const MeshReadOptions& options,
                 Mesh* out, MeshReadInfo* info) {
-  MeshReadInfo local;
-  if (info == nullptr) info = &local;
-  *info = MeshReadInfo{};
-  SPLINTCORE_RETURN_IF_ERROR(meshio::check_read_arguments(source, options, out, "read_ply"));
-  out->bind(ctx.arena);
-  return meshio::located(read_ply_located(ctx, source, options, out, info), source);
+  return meshio::read_text_mesh(ctx, source, options, out, info, "read_ply", read_ply_located);
 }
 
 }  // namespace splintcore
