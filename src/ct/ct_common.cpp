@@ -372,6 +372,19 @@ inline uint64_t load(const uint8_t* p, unsigned bytes, bool big_endian) {
   return v;
 }
 
+// An integer HU value as int16 (saturated; each saturation counted in *clamped).
+int16_t clamped_hu(int64_t h, uint64_t* clamped) {
+  if (h > 32767) {
+    ++*clamped;
+    return 32767;
+  }
+  if (h < -32768) {
+    ++*clamped;
+    return -32768;
+  }
+  return static_cast<int16_t>(h);
+}
+
 // The common case (16-bit little endian, no scaling): the same results as the general loop of
 // convert_voxels(), faster. Returns how many values were clamped.
 uint64_t convert_plain_le16(const uint8_t* p, uint64_t n, bool is_signed, int64_t int_intercept,
@@ -381,16 +394,7 @@ uint64_t convert_plain_le16(const uint8_t* p, uint64_t n, bool is_signed, int64_
     const uint32_t u = uint32_t{p[2 * k]} | (uint32_t{p[2 * k + 1]} << 8);
     const int64_t value =
         is_signed ? static_cast<int64_t>(static_cast<int16_t>(u)) : static_cast<int64_t>(u);
-    int64_t h = value + int_intercept;
-    if (h > 32767) {
-      h = 32767;
-      ++clamped_count;
-    }
-    if (h < -32768) {
-      h = -32768;
-      ++clamped_count;
-    }
-    o[k] = static_cast<int16_t>(h);
+    o[k] = clamped_hu(value + int_intercept, &clamped_count);
   }
   return clamped_count;
 }
@@ -466,16 +470,7 @@ Status convert_voxels(Reader& reader, const VoxelFormat& f, uint64_t count, doub
         value = static_cast<int64_t>(u);
       }
       if (integer_path) {
-        int64_t h = value + int_intercept;
-        if (h > 32767) {
-          h = 32767;
-          ++clamped_count;
-        }
-        if (h < -32768) {
-          h = -32768;
-          ++clamped_count;
-        }
-        o[k] = static_cast<int16_t>(h);
+        o[k] = clamped_hu(value + int_intercept, &clamped_count);
       } else {
         bool c = false;
         o[k] = to_hu(static_cast<double>(value), slope, intercept, &c);
