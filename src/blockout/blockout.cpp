@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "core/fminmax.h"
 #include "core/union_find.h"
 #include "splintcore/blockout.h"
 #include "splintcore/distance.h"
@@ -436,7 +437,7 @@ struct SplintNear {
     for (int k = 0; k < 3; ++k) box.add(p[k]);
     if (normal_dot(p[0], p[1], p[2], d) != 0) {
       Vec3 q[3];
-      for (int k = 0; k < 3; ++k) q[k] = p[k] + d * std::fmax(0.0, top - dot(p[k], d));
+      for (int k = 0; k < 3; ++k) q[k] = p[k] + d * max_of(0.0, top - dot(p[k], d));
       for (int k = 0; k < 3; ++k) {
         const int n = (k + 1) % 3;
         if (!outside(p[k], p[n], q[n]) || !outside(p[k], q[n], q[k])) return Status::ok();
@@ -478,12 +479,12 @@ struct WallCells {
     for (int k = 0; k < 8; ++k) {
       const Vec3 c{(k & 1) ? region.hi.x : region.lo.x, (k & 2) ? region.hi.y : region.lo.y,
                    (k & 4) ? region.hi.z : region.lo.z};
-      u0 = std::fmin(u0, dot(c, u));
-      u1 = std::fmax(u1, dot(c, u));
-      v0 = std::fmin(v0, dot(c, v));
-      v1 = std::fmax(v1, dot(c, v));
+      u0 = min_of(u0, dot(c, u));
+      u1 = max_of(u1, dot(c, u));
+      v0 = min_of(v0, dot(c, v));
+      v1 = max_of(v1, dot(c, v));
     }
-    cell = std::fmax(0.25, std::fmax(u1 - u0, v1 - v0) / 1000);
+    cell = max_of(0.25, max_of(u1 - u0, v1 - v0) / 1000);
     nu = static_cast<int64_t>((u1 - u0) / cell) + 1;
     nv = static_cast<int64_t>((v1 - v0) / cell) + 1;
     marked = arena.allocate_array<uint8_t>(static_cast<size_t>(nu * nv));
@@ -504,10 +505,10 @@ struct WallCells {
   void range(const Vec3* p, int n, double margin, int64_t lo[2], int64_t hi[2]) const {
     double a0 = HUGE_VAL, a1 = -HUGE_VAL, b0 = HUGE_VAL, b1 = -HUGE_VAL;
     for (int k = 0; k < n; ++k) {
-      a0 = std::fmin(a0, dot(p[k], u));
-      a1 = std::fmax(a1, dot(p[k], u));
-      b0 = std::fmin(b0, dot(p[k], v));
-      b1 = std::fmax(b1, dot(p[k], v));
+      a0 = min_of(a0, dot(p[k], u));
+      a1 = max_of(a1, dot(p[k], u));
+      b0 = min_of(b0, dot(p[k], v));
+      b1 = max_of(b1, dot(p[k], v));
     }
     const auto at = [&](double x, double origin, int64_t count) {
       const double c = std::floor((x - origin) / cell);

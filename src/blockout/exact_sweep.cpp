@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "core/fminmax.h"
 #include "splintcore/blockout.h"
 
 namespace splintcore {
@@ -226,7 +227,7 @@ bool wall_top(const Vec3& p, const Vec3& d, const Aabb& region, Vec3* top) {
     if (std::fabs(d[i]) > std::fabs(d[k])) k = i;
   }
   double reach = 1.0;
-  for (int i = 0; i < 3; ++i) reach = std::fmax(reach, region.hi[i] - region.lo[i]);
+  for (int i = 0; i < 3; ++i) reach = max_of(reach, region.hi[i] - region.lo[i]);
   const double plane = d[k] > 0 ? region.hi[k] + reach : region.lo[k] - reach;
   double t = (plane - p[k]) / d[k];
   if (!(t >= reach)) t = reach;
@@ -404,7 +405,7 @@ Status deep_pocket(Surface& f, const Vec3& d, const Aabb& region, const ExactPoc
     double longest = 0;
     for (int k = 0; k < 3; ++k) {
       const Vec3 e = seen[(k + 1) % 3] - seen[k];
-      longest = std::fmax(longest, dot(e, e));
+      longest = max_of(longest, dot(e, e));
     }
     const double width = std::sqrt(dot(n, n)) / std::sqrt(longest);
     if (width <= kFoldPocket) continue;  // longest > 0 then (else width is NaN)

@@ -24,6 +24,7 @@
 
 #include "blockout/frame.h"
 #include "blockout/offset_ball.h"
+#include "core/fminmax.h"
 #include "splintcore/blockout.h"
 
 namespace splintcore {
@@ -105,13 +106,12 @@ Status make_grid(const SweepOptions& o, const HeightfieldOptions& ho, Grid* g) {
     const Vec3 c{(k & 1) ? o.region.hi.x : o.region.lo.x, (k & 2) ? o.region.hi.y : o.region.lo.y,
                  (k & 4) ? o.region.hi.z : o.region.lo.z};
     local.add(to_local(g->frame, c));
-    largest =
-        std::fmax(largest, std::fmax(std::fabs(c.x), std::fmax(std::fabs(c.y), std::fabs(c.z))));
+    largest = max_of(largest, max_of(std::fabs(c.x), max_of(std::fabs(c.y), std::fabs(c.z))));
   }
   g->cell = o.voxel;
   const double across_u = (local.hi.x - local.lo.x) / o.voxel + 5.0;
   const double across_v = (local.hi.y - local.lo.y) / o.voxel + 5.0;
-  const double across = std::fmax(across_u, across_v);
+  const double across = max_of(across_u, across_v);
   if (!(across <= kMaxCells)) {
     return make_error(StatusCode::kLimitExceeded, "heightfield: the region is ", across,
                       " voxels across, at most ", kMaxCells,
@@ -151,10 +151,10 @@ void swap_turn(GridTriangle* q) {
 
 // Whether q's shadow (its corners in grid coordinates), grown by `margin` cells, meets the grid.
 bool meets_grid(const Grid& g, const GridTriangle& q, double margin) {
-  const double xlo = std::fmin(q.x[0], std::fmin(q.x[1], q.x[2]));
-  const double xhi = std::fmax(q.x[0], std::fmax(q.x[1], q.x[2]));
-  const double ylo = std::fmin(q.y[0], std::fmin(q.y[1], q.y[2]));
-  const double yhi = std::fmax(q.y[0], std::fmax(q.y[1], q.y[2]));
+  const double xlo = min_of(q.x[0], min_of(q.x[1], q.x[2]));
+  const double xhi = max_of(q.x[0], max_of(q.x[1], q.x[2]));
+  const double ylo = min_of(q.y[0], min_of(q.y[1], q.y[2]));
+  const double yhi = max_of(q.y[0], max_of(q.y[1], q.y[2]));
   return !(xhi + margin < 0 || yhi + margin < 0 || xlo - margin > static_cast<double>(g.nx) ||
            ylo - margin > static_cast<double>(g.ny));
 }
@@ -163,8 +163,8 @@ bool meets_grid(const Grid& g, const GridTriangle& q, double margin) {
 bool finish_triangle(const Grid& g, GridTriangle* out) {
   GridTriangle& q = *out;
   if (!meets_grid(g, q, 0)) return false;
-  q.wmin = std::fmin(q.w[0], std::fmin(q.w[1], q.w[2]));
-  q.wmax = std::fmax(q.w[0], std::fmax(q.w[1], q.w[2]));
+  q.wmin = min_of(q.w[0], min_of(q.w[1], q.w[2]));
+  q.wmax = max_of(q.w[0], max_of(q.w[1], q.w[2]));
   const double ax = q.x[1] - q.x[0], ay = q.y[1] - q.y[0];
   const double bx = q.x[2] - q.x[0], by = q.y[2] - q.y[0];
   const double aw = q.w[1] - q.w[0], bw = q.w[2] - q.w[0];
@@ -215,10 +215,10 @@ bool line_range(double lo, double hi, uint32_t n, uint32_t* first, uint32_t* las
 // it (closed, exact orient2d), at most the top.
 void first_contact(const Grid& g, const GridTriangle& q, double* h) {
   uint32_t x0, x1, y0, y1;
-  if (!line_range(std::fmin(q.x[0], std::fmin(q.x[1], q.x[2])),
-                  std::fmax(q.x[0], std::fmax(q.x[1], q.x[2])), g.nx, &x0, &x1) ||
-      !line_range(std::fmin(q.y[0], std::fmin(q.y[1], q.y[2])),
-                  std::fmax(q.y[0], std::fmax(q.y[1], q.y[2])), g.ny, &y0, &y1)) {
+  if (!line_range(min_of(q.x[0], min_of(q.x[1], q.x[2])), max_of(q.x[0], max_of(q.x[1], q.x[2])),
+                  g.nx, &x0, &x1) ||
+      !line_range(min_of(q.y[0], min_of(q.y[1], q.y[2])), max_of(q.y[0], max_of(q.y[1], q.y[2])),
+                  g.ny, &y0, &y1)) {
     return;
   }
   for (uint32_t y = y0; y <= y1; ++y) {
@@ -344,10 +344,10 @@ void half_cells(uint32_t i, uint32_t j, uint32_t corner[2][3][2]) {
 void lower_under(const Grid& g, const GridTriangle& q, const double* h, float* low,
                  HeightfieldStats* st) {
   uint32_t x0, x1, y0, y1;
-  const double xlo = std::fmin(q.x[0], std::fmin(q.x[1], q.x[2]));
-  const double xhi = std::fmax(q.x[0], std::fmax(q.x[1], q.x[2]));
-  const double ylo = std::fmin(q.y[0], std::fmin(q.y[1], q.y[2]));
-  const double yhi = std::fmax(q.y[0], std::fmax(q.y[1], q.y[2]));
+  const double xlo = min_of(q.x[0], min_of(q.x[1], q.x[2]));
+  const double xhi = max_of(q.x[0], max_of(q.x[1], q.x[2]));
+  const double ylo = min_of(q.y[0], min_of(q.y[1], q.y[2]));
+  const double yhi = max_of(q.y[0], max_of(q.y[1], q.y[2]));
   if (!line_range(std::floor(xlo), std::ceil(xhi) - 1, g.nx - 1, &x0, &x1) ||
       !line_range(std::floor(ylo), std::ceil(yhi) - 1, g.ny - 1, &y0, &y1)) {
     return;
@@ -907,7 +907,7 @@ Status sweep_heightfield_mesh(const Context& ctx, Span<const Mesh> jaws, const S
   for (size_t k = 0; k < count; ++k) {
     if (low[k] > 0) {
       ++st->lowered_vertices;
-      st->max_lowering = std::fmax(st->max_lowering, static_cast<double>(low[k]));
+      st->max_lowering = max_of(st->max_lowering, static_cast<double>(low[k]));
     }
     h[k] = h[k] - static_cast<double>(low[k]) - shift;
   }

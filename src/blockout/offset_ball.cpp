@@ -1,5 +1,6 @@
 // The lathe around the lower half ball (offset_ball.h).
 #include "blockout/offset_ball.h"
+#include "core/fminmax.h"
 
 #include <cmath>
 
@@ -35,7 +36,7 @@ void make_offset_ball(double r, OffsetBall* q) {
     for (int j = 0; j < n; ++j) {
       const Vec3 v{across * cs[j][0], across * cs[j][1], profile[ring][1]};
       q->vertex[ring * n + j] = v;
-      q->reach = std::fmax(q->reach, length(v));
+      q->reach = max_of(q->reach, length(v));
     }
   }
   auto at = [](int ring, int j) { return ring * n + (j % n); };
@@ -92,7 +93,7 @@ void make_offset_ball(double r, OffsetBall* q) {
 
 uint32_t support_faces(const OffsetBall& q, const Vec3 t[3], int k) {
   double size = 0;
-  for (int i = 1; i < 3; ++i) size = std::fmax(size, length(t[i] - t[0]));
+  for (int i = 1; i < 3; ++i) size = max_of(size, length(t[i] - t[0]));
   const double tie = offset_detail::kSlack * (size + 1);
   uint32_t faces = 0;
   for (int i = 0; i < OffsetBall::kFaces; ++i) {

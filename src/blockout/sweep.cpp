@@ -14,6 +14,7 @@
 
 #include "blockout/frame.h"
 #include "blockout/tiles.h"
+#include "core/fminmax.h"
 #include "splintcore/blockout.h"
 #include "splintcore/distance.h"
 
@@ -148,10 +149,8 @@ void sweep_rows(Sweep& s, double w_lo, double w_hi, int64_t y_begin, int64_t y_e
     const Vec3& b = s.vertices[tri.v[1]];
     const Vec3& c = s.vertices[tri.v[2]];
     // The shadow's box (exact: least and most corner coordinates) and that grown by the band.
-    const double sx0 = std::fmin(a.x, std::fmin(b.x, c.x)),
-                 sx1 = std::fmax(a.x, std::fmax(b.x, c.x));
-    const double sy0 = std::fmin(a.y, std::fmin(b.y, c.y)),
-                 sy1 = std::fmax(a.y, std::fmax(b.y, c.y));
+    const double sx0 = min_of(a.x, min_of(b.x, c.x)), sx1 = max_of(a.x, max_of(b.x, c.x));
+    const double sy0 = min_of(a.y, min_of(b.y, c.y)), sy1 = max_of(a.y, max_of(b.y, c.y));
     const double xmin = sx0 - s.band;
     const double xmax = sx1 + s.band;
     const double ymin = sy0 - s.band;
@@ -594,11 +593,11 @@ bool needed_triangle(const Sweep& s, const Vec3& a, const Vec3& b, const Vec3& c
   const double x_hi = g.origin.x + g.spacing.x * (g.nx - 1.0);
   const double y_hi = g.origin.y + g.spacing.y * (g.ny - 1.0);
   const double w_hi = g.origin.z + g.spacing.z * (g.nz - 1.0);
-  return std::fmax(a.x, std::fmax(b.x, c.x)) + reach >= g.origin.x &&
-         std::fmin(a.x, std::fmin(b.x, c.x)) - reach <= x_hi &&
-         std::fmax(a.y, std::fmax(b.y, c.y)) + reach >= g.origin.y &&
-         std::fmin(a.y, std::fmin(b.y, c.y)) - reach <= y_hi &&
-         std::fmin(a.z, std::fmin(b.z, c.z)) - reach <= w_hi;
+  return max_of(a.x, max_of(b.x, c.x)) + reach >= g.origin.x &&
+         min_of(a.x, min_of(b.x, c.x)) - reach <= x_hi &&
+         max_of(a.y, max_of(b.y, c.y)) + reach >= g.origin.y &&
+         min_of(a.y, min_of(b.y, c.y)) - reach <= y_hi &&
+         min_of(a.z, min_of(b.z, c.z)) - reach <= w_hi;
 }
 
 // The triangles the sweep needs (needed_triangle, in input order) with ids into
@@ -690,7 +689,7 @@ Status sort_front(Arena& arena, ArenaArray<Triangle>* front, Sweep* s) {
     if (nf > 0 && keys == nullptr) return arena.exhausted_status();
     for (size_t t = 0; t < nf; ++t) {
       const Triangle& g = tris[t];
-      const double lo = std::fmin(local[g.v[0]].z, std::fmin(local[g.v[1]].z, local[g.v[2]].z));
+      const double lo = min_of(local[g.v[0]].z, min_of(local[g.v[1]].z, local[g.v[2]].z));
       keys[t] = {double_key(lo), static_cast<uint32_t>(t), 0};
     }
     SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena, Span<KeyIndex>(keys, nf)));
@@ -717,8 +716,8 @@ Status sort_front(Arena& arena, ArenaArray<Triangle>* front, Sweep* s) {
   if (nf > 0 && (wmin == nullptr || wmax == nullptr)) return arena.exhausted_status();
   for (size_t t = 0; t < nf; ++t) {
     const Triangle& g = tris[t];
-    wmin[t] = std::fmin(local[g.v[0]].z, std::fmin(local[g.v[1]].z, local[g.v[2]].z));
-    wmax[t] = std::fmax(local[g.v[0]].z, std::fmax(local[g.v[1]].z, local[g.v[2]].z));
+    wmin[t] = min_of(local[g.v[0]].z, min_of(local[g.v[1]].z, local[g.v[2]].z));
+    wmax[t] = max_of(local[g.v[0]].z, max_of(local[g.v[1]].z, local[g.v[2]].z));
   }
   s->tris = Span<const Triangle>(tris, nf);
   s->tri_wmin = Span<const double>(wmin, nf);
@@ -751,8 +750,8 @@ Status fit_region(const SweepOptions& o, double h, Sweep* s, Vec3* lo, Vec3* hi,
   s->lattice = *lo;
   lo->x = lo->x + h * static_cast<double>(s->ix0);
   lo->y = lo->y + h * static_cast<double>(s->iy0);
-  hi->x = std::fmin(hi->x, r.hi.x + pad);
-  hi->y = std::fmin(hi->y, r.hi.y + pad);
+  hi->x = min_of(hi->x, r.hi.x + pad);
+  hi->y = min_of(hi->y, r.hi.y + pad);
   hi->z = r.hi.z + pad;
   *mesh_lo_w = r.lo.z - pad;
   if (!(lo->x <= hi->x && lo->y <= hi->y && lo->z <= hi->z)) s->empty = true;

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "core/fminmax.h"
 #include "splintcore/distance.h"
 
 #include "distance/morton.h"
@@ -852,7 +853,7 @@ bool triangle_within_reach_boxed(const Mesh& mesh, uint32_t t, const Vec3& a, co
 
 // Every point x of abc has |x - a| <= extent: a bound on how far abc reaches from a.
 double extent_from(const Vec3& a, const Vec3& b, const Vec3& c) {
-  return std::sqrt(std::fmax(length_squared(b - a), length_squared(c - a)));
+  return std::sqrt(max_of(length_squared(b - a), length_squared(c - a)));
 }
 
 }  // namespace

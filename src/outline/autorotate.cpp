@@ -7,6 +7,7 @@
 // with the mandible moved rigidly (mesh_pair_distance_rigid: each jaw's index built once).
 #include <cmath>
 
+#include "core/fminmax.h"
 #include "outline_internal.h"
 
 namespace splintcore {
@@ -146,7 +147,7 @@ bool trial_point(const Closing& c, const Rotor& rot, double limit, double* p) {
   if (!(next < HUGE_VAL)) return false;
   next += c.lean * (next - c.lo) + 0.25 * kBracketRad;
   if (c.hi < HUGE_VAL && next >= c.hi) next = c.lo + 0.5 * (c.hi - c.lo);
-  next = std::fmin(next, limit);
+  next = min_of(next, limit);
   *p = next;
   return next > c.safe();
 }
@@ -193,7 +194,7 @@ Status close_to_opening(Rotor& rot, Closing& c) {
   MeshPairDistance d;
   while (!(c.hi - c.lo <= kBracketRad)) {
     if (!(c.hi < HUGE_VAL) && c.lo >= limit) return no_contact(c, limit);
-    const double step = std::fmin(c.safe(), limit);
+    const double step = min_of(c.safe(), limit);
     if (step >= c.hi) {  // certified up to hi, where f <= 0 (rounding): the crossing is hi
       c.lo = c.hi;
       c.at_lo = c.at_hi;
@@ -221,7 +222,7 @@ Status close_to_opening(Rotor& rot, Closing& c) {
       c.flo = f;
       c.at_lo = d;
     } else {
-      c.lean = std::fmin(2 * c.lean, 1.0);  // Newton fell short: aim further
+      c.lean = min_of(2 * c.lean, 1.0);  // Newton fell short: aim further
     }
     SPLINTCORE_RETURN_IF_ERROR(maybe_pool(rot, c));
   }

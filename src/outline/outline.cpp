@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/fminmax.h"
 #include "outline_internal.h"
 
 namespace splintcore {
@@ -201,7 +202,7 @@ struct Opener {
     const bool modelled = last_distance > 0 && last_distance < HUGE_VAL;
     if (bound < HUGE_VAL && has_last && (modelled || step <= kCollectStepMm) && pool.size() > 0) {
       size_t count = 0;
-      const double margin = std::fmax(step <= kCollectStepMm ? step : 0.0, kMinPoolMarginMm);
+      const double margin = max_of(step <= kCollectStepMm ? step : 0.0, kMinPoolMarginMm);
       SPLINTCORE_RETURN_IF_ERROR(
           mesh_pair_distance_collect(ctx, upper, lower, offset, bound + margin, pool, &count, d));
       pooled = d->distance <= bound && count <= pool.size() ? count : 0;
@@ -270,17 +271,17 @@ Status advance(Opener& op, double target, double d0, double slope0, double* t_ou
     if (t_hi < HUGE_VAL) {
       if (!model || !(next <= t_hi - f_hi)) {
         next = t + (target - d) * (t_hi - t) / (f_hi - (d - target));
-        next = std::fmin(next, t_hi - f_hi);
+        next = min_of(next, t_hi - f_hi);
       }
     } else {
-      next = std::fmin(next, t + 4 * (target - d));
+      next = min_of(next, t + 4 * (target - d));
     }
-    next = std::fmax(next, safe);
+    next = max_of(next, safe);
     SPLINTCORE_RETURN_IF_ERROR(op.distance(next, &pair));
     ++*steps;
     if (pair.distance > target + kOpeningTolerance) {
       t_hi = next;
-      f_hi = std::fmin(pair.distance, op.reach) - target;  // at most the true excess
+      f_hi = min_of(pair.distance, op.reach) - target;  // at most the true excess
       kept_low = false;
       continue;
     }
@@ -330,7 +331,7 @@ Status close_to(Opener& op, double target, double d0, double slope0, double* t_o
   double below = -HUGE_VAL;  // a t known to be past the root (distance under the target)
   while (*steps < kMaxAdvanceSteps && d - target > kOpeningTolerance) {
     double next = t - (d - target);  // the conservative step
-    if (slope > 0) next = std::fmin(next, t - (d - target) / slope);
+    if (slope > 0) next = min_of(next, t - (d - target) / slope);
     if (!(next > below)) next = 0.5 * (t + below);  // inside the bracket
     SPLINTCORE_RETURN_IF_ERROR(op.distance(next, &pair));
     ++*steps;
@@ -711,7 +712,7 @@ Status open_bite(const Context& ctx, const Mesh& maxilla, const Mesh& mandible, 
   const double target = o.has_bite_opening ? o.bite_opening_mm : 0.0;
   // (A little past the target: the opening's steps past it are then measured exactly, or
   // known to be past the reach.)
-  double reach = std::fmax(target + (o.has_bite_opening ? kStepSlackMm : 0.0), kNearReachMm);
+  double reach = max_of(target + (o.has_bite_opening ? kStepSlackMm : 0.0), kNearReachMm);
   // The first bands hold the pairs within reach only while the mandible moves away (or
   // stays): enough for the distance as given and for an opening from nearer than asked.
   // Jaws that stand apart by more (a plan's autorotated jaws, a case opened by hand): the

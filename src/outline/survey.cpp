@@ -9,6 +9,7 @@
 // the best, ties to the first: deterministic.
 #include <cmath>
 
+#include "core/fminmax.h"
 #include "outline_internal.h"
 
 namespace splintcore {
@@ -39,7 +40,7 @@ Status survey_jaw(const Context& ctx, const Mesh& m, const Vec3& n, double lo, d
   auto keeps = [&](const Triangle& t) {
     const double a = dot(m.vertices[t.v[0]], n), b = dot(m.vertices[t.v[1]], n),
                  c = dot(m.vertices[t.v[2]], n);
-    return std::fmax(a, std::fmax(b, c)) >= lo && std::fmin(a, std::fmin(b, c)) <= hi;
+    return max_of(a, max_of(b, c)) >= lo && min_of(a, min_of(b, c)) <= hi;
   };
   for (const Triangle& t : m.triangles) {
     if (keeps(t)) ++kept;
@@ -96,10 +97,10 @@ Status footprint(Arena& arena, const Frame& f, Span<const Pick> upper, Span<cons
   for (size_t i = 0; i < upper.size(); ++i) {
     for (int s = 0; s < 2; ++s) {
       const Vec3 c = corner(i, s == 1);
-      x_lo = std::fmin(x_lo, px(c));
-      x_hi = std::fmax(x_hi, px(c));
-      y_lo = std::fmin(y_lo, py(c));
-      y_hi = std::fmax(y_hi, py(c));
+      x_lo = min_of(x_lo, px(c));
+      x_hi = max_of(x_hi, px(c));
+      y_lo = min_of(y_lo, py(c));
+      y_hi = max_of(y_hi, py(c));
     }
     cx += px(upper[i].position);
     cy += py(upper[i].position);
@@ -179,8 +180,8 @@ Status survey_direction(const Context& ctx, const Mesh& maxilla, const Mesh& man
   SPLINTCORE_RETURN_IF_ERROR(footprint(*ctx.arena, f, upper, lower, &columns));
   double lo = HUGE_VAL, hi = -HUGE_VAL;
   for (const Column& c : columns) {
-    lo = std::fmin(lo, c.bottom);
-    hi = std::fmax(hi, c.top);
+    lo = min_of(lo, c.bottom);
+    hi = max_of(hi, c.top);
   }
   // Tilted rays reach sideways too: the slab is widened by the tangent of the cone's angle
   // times nothing along n (the faces bound the rays' heights), so [lo, hi] is exact.
