@@ -185,7 +185,7 @@ run_ctest_job() {  # name cxx build_type extra-cmake-args...
 
 cross_table=""
 # The golden-file tests (pinned SHA-256 of output bytes), run first on their own.
-cross_golden='^(Golden\.|BooleanGolden\.|DesignGolden\.|CtGolden\.|Phantom\.BytesAreDeterministicAndPinned|MarchingCubes\.GoldenHashIsTheSameEverywhere|Sha256\.)'
+cross_golden='^(Golden\.|BooleanGolden\.|DesignGolden\.|CtGolden\.|Phantom\.BytesAreDeterministicAndPinned|MarchingCubes\.GoldenHashIsTheSameEverywhere|Sha256\.|DeterministicMinMax\.)'
 
 firmware_golden='^DesignGolden\.FirmwareBlockout'
 
