@@ -106,7 +106,7 @@ Status make_grid(const SweepOptions& o, const HeightfieldOptions& ho, Grid* g) {
     const Vec3 c{(k & 1) ? o.region.hi.x : o.region.lo.x, (k & 2) ? o.region.hi.y : o.region.lo.y,
                  (k & 4) ? o.region.hi.z : o.region.lo.z};
     local.add(to_local(g->frame, c));
-    largest = max_of(largest, max_of(std::fabs(c.x), max_of(std::fabs(c.y), std::fabs(c.z))));
+    largest = max3_of(largest, std::fabs(c.x), max_of(std::fabs(c.y), std::fabs(c.z)));
   }
   g->cell = o.voxel;
   const double across_u = (local.hi.x - local.lo.x) / o.voxel + 5.0;
@@ -151,10 +151,10 @@ void swap_turn(GridTriangle* q) {
 
 // Whether q's shadow (its corners in grid coordinates), grown by `margin` cells, meets the grid.
 bool meets_grid(const Grid& g, const GridTriangle& q, double margin) {
-  const double xlo = min_of(q.x[0], min_of(q.x[1], q.x[2]));
-  const double xhi = max_of(q.x[0], max_of(q.x[1], q.x[2]));
-  const double ylo = min_of(q.y[0], min_of(q.y[1], q.y[2]));
-  const double yhi = max_of(q.y[0], max_of(q.y[1], q.y[2]));
+  const double xlo = min3_of(q.x[0], q.x[1], q.x[2]);
+  const double xhi = max3_of(q.x[0], q.x[1], q.x[2]);
+  const double ylo = min3_of(q.y[0], q.y[1], q.y[2]);
+  const double yhi = max3_of(q.y[0], q.y[1], q.y[2]);
   return !(xhi + margin < 0 || yhi + margin < 0 || xlo - margin > static_cast<double>(g.nx) ||
            ylo - margin > static_cast<double>(g.ny));
 }
@@ -163,8 +163,8 @@ bool meets_grid(const Grid& g, const GridTriangle& q, double margin) {
 bool finish_triangle(const Grid& g, GridTriangle* out) {
   GridTriangle& q = *out;
   if (!meets_grid(g, q, 0)) return false;
-  q.wmin = min_of(q.w[0], min_of(q.w[1], q.w[2]));
-  q.wmax = max_of(q.w[0], max_of(q.w[1], q.w[2]));
+  q.wmin = min3_of(q.w[0], q.w[1], q.w[2]);
+  q.wmax = max3_of(q.w[0], q.w[1], q.w[2]);
   const double ax = q.x[1] - q.x[0], ay = q.y[1] - q.y[0];
   const double bx = q.x[2] - q.x[0], by = q.y[2] - q.y[0];
   const double aw = q.w[1] - q.w[0], bw = q.w[2] - q.w[0];
@@ -215,10 +215,10 @@ bool line_range(double lo, double hi, uint32_t n, uint32_t* first, uint32_t* las
 // it (closed, exact orient2d), at most the top.
 void first_contact(const Grid& g, const GridTriangle& q, double* h) {
   uint32_t x0, x1, y0, y1;
-  if (!line_range(min_of(q.x[0], min_of(q.x[1], q.x[2])), max_of(q.x[0], max_of(q.x[1], q.x[2])),
-                  g.nx, &x0, &x1) ||
-      !line_range(min_of(q.y[0], min_of(q.y[1], q.y[2])), max_of(q.y[0], max_of(q.y[1], q.y[2])),
-                  g.ny, &y0, &y1)) {
+  if (!line_range(min3_of(q.x[0], q.x[1], q.x[2]), max3_of(q.x[0], q.x[1], q.x[2]), g.nx, &x0,
+                  &x1) ||
+      !line_range(min3_of(q.y[0], q.y[1], q.y[2]), max3_of(q.y[0], q.y[1], q.y[2]), g.ny, &y0,
+                  &y1)) {
     return;
   }
   for (uint32_t y = y0; y <= y1; ++y) {
@@ -344,10 +344,10 @@ void half_cells(uint32_t i, uint32_t j, uint32_t corner[2][3][2]) {
 void lower_under(const Grid& g, const GridTriangle& q, const double* h, float* low,
                  HeightfieldStats* st) {
   uint32_t x0, x1, y0, y1;
-  const double xlo = min_of(q.x[0], min_of(q.x[1], q.x[2]));
-  const double xhi = max_of(q.x[0], max_of(q.x[1], q.x[2]));
-  const double ylo = min_of(q.y[0], min_of(q.y[1], q.y[2]));
-  const double yhi = max_of(q.y[0], max_of(q.y[1], q.y[2]));
+  const double xlo = min3_of(q.x[0], q.x[1], q.x[2]);
+  const double xhi = max3_of(q.x[0], q.x[1], q.x[2]);
+  const double ylo = min3_of(q.y[0], q.y[1], q.y[2]);
+  const double yhi = max3_of(q.y[0], q.y[1], q.y[2]);
   if (!line_range(std::floor(xlo), std::ceil(xhi) - 1, g.nx - 1, &x0, &x1) ||
       !line_range(std::floor(ylo), std::ceil(yhi) - 1, g.ny - 1, &y0, &y1)) {
     return;

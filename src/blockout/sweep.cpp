@@ -149,8 +149,8 @@ void sweep_rows(Sweep& s, double w_lo, double w_hi, int64_t y_begin, int64_t y_e
     const Vec3& b = s.vertices[tri.v[1]];
     const Vec3& c = s.vertices[tri.v[2]];
     // The shadow's box (exact: least and most corner coordinates) and that grown by the band.
-    const double sx0 = min_of(a.x, min_of(b.x, c.x)), sx1 = max_of(a.x, max_of(b.x, c.x));
-    const double sy0 = min_of(a.y, min_of(b.y, c.y)), sy1 = max_of(a.y, max_of(b.y, c.y));
+    const double sx0 = min3_of(a.x, b.x, c.x), sx1 = max3_of(a.x, b.x, c.x);
+    const double sy0 = min3_of(a.y, b.y, c.y), sy1 = max3_of(a.y, b.y, c.y);
     const double xmin = sx0 - s.band;
     const double xmax = sx1 + s.band;
     const double ymin = sy0 - s.band;
@@ -593,11 +593,9 @@ bool needed_triangle(const Sweep& s, const Vec3& a, const Vec3& b, const Vec3& c
   const double x_hi = g.origin.x + g.spacing.x * (g.nx - 1.0);
   const double y_hi = g.origin.y + g.spacing.y * (g.ny - 1.0);
   const double w_hi = g.origin.z + g.spacing.z * (g.nz - 1.0);
-  return max_of(a.x, max_of(b.x, c.x)) + reach >= g.origin.x &&
-         min_of(a.x, min_of(b.x, c.x)) - reach <= x_hi &&
-         max_of(a.y, max_of(b.y, c.y)) + reach >= g.origin.y &&
-         min_of(a.y, min_of(b.y, c.y)) - reach <= y_hi &&
-         min_of(a.z, min_of(b.z, c.z)) - reach <= w_hi;
+  return max3_of(a.x, b.x, c.x) + reach >= g.origin.x && min3_of(a.x, b.x, c.x) - reach <= x_hi &&
+         max3_of(a.y, b.y, c.y) + reach >= g.origin.y && min3_of(a.y, b.y, c.y) - reach <= y_hi &&
+         min3_of(a.z, b.z, c.z) - reach <= w_hi;
 }
 
 // The triangles the sweep needs (needed_triangle, in input order) with ids into
@@ -689,7 +687,7 @@ Status sort_front(Arena& arena, ArenaArray<Triangle>* front, Sweep* s) {
     if (nf > 0 && keys == nullptr) return arena.exhausted_status();
     for (size_t t = 0; t < nf; ++t) {
       const Triangle& g = tris[t];
-      const double lo = min_of(local[g.v[0]].z, min_of(local[g.v[1]].z, local[g.v[2]].z));
+      const double lo = min3_of(local[g.v[0]].z, local[g.v[1]].z, local[g.v[2]].z);
       keys[t] = {double_key(lo), static_cast<uint32_t>(t), 0};
     }
     SPLINTCORE_RETURN_IF_ERROR(radix_sort(arena, Span<KeyIndex>(keys, nf)));
@@ -716,8 +714,8 @@ Status sort_front(Arena& arena, ArenaArray<Triangle>* front, Sweep* s) {
   if (nf > 0 && (wmin == nullptr || wmax == nullptr)) return arena.exhausted_status();
   for (size_t t = 0; t < nf; ++t) {
     const Triangle& g = tris[t];
-    wmin[t] = min_of(local[g.v[0]].z, min_of(local[g.v[1]].z, local[g.v[2]].z));
-    wmax[t] = max_of(local[g.v[0]].z, max_of(local[g.v[1]].z, local[g.v[2]].z));
+    wmin[t] = min3_of(local[g.v[0]].z, local[g.v[1]].z, local[g.v[2]].z);
+    wmax[t] = max3_of(local[g.v[0]].z, local[g.v[1]].z, local[g.v[2]].z);
   }
   s->tris = Span<const Triangle>(tris, nf);
   s->tri_wmin = Span<const double>(wmin, nf);

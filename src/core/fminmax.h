@@ -15,6 +15,10 @@ namespace splintcore {
 inline double min_of(double a, double b) { return (a < b || std::isnan(b)) ? a : b; }
 inline double max_of(double a, double b) { return (a > b || std::isnan(b)) ? a : b; }
 
+// The least and the greatest of three, by the same rule (a triangle's box along one axis).
+inline double min3_of(double a, double b, double c) { return min_of(a, min_of(b, c)); }
+inline double max3_of(double a, double b, double c) { return max_of(a, max_of(b, c)); }
+
 }  // namespace splintcore
 
 #endif  // SPLINTCORE_SRC_CORE_FMINMAX_H

@@ -43,6 +43,7 @@
 #include <new>
 #include <type_traits>
 
+#include "core/fminmax.h"
 #include "distance/query_internal.h"
 
 namespace splintcore {
@@ -91,11 +92,6 @@ struct Frame {
   bool ok = false;
 };
 
-inline double max3(double a, double b, double c) {
-  const double ab = a > b ? a : b;
-  return ab > c ? ab : c;
-}
-
 // The unnormalised normal of triangle p, and whether all its angles' sines exceed 2^-10.
 inline bool well_shaped(const Vec3 p[3], Vec3* n, double* n2) {
   const Vec3 ab = p[1] - p[0], ac = p[2] - p[0], bc = p[2] - p[1];
@@ -103,7 +99,7 @@ inline bool well_shaped(const Vec3 p[3], Vec3* n, double* n2) {
   *n2 = dot(*n, *n);
   const double lab = dot(ab, ab), lac = dot(ac, ac), lbc = dot(bc, bc);
   // |n| = |ab| |ac| sin A = |ab| |bc| sin B = |ac| |bc| sin C.
-  return *n2 > max3(lab * lac, lab * lbc, lac * lbc) * 0x1p-20;
+  return *n2 > max3_of(lab * lac, lab * lbc, lac * lbc) * 0x1p-20;
 }
 
 // (Built from its values in one expression: a Frame zeroed first and then filled costs a
@@ -772,7 +768,8 @@ struct RegionBatch {
     if (usable_count < kMinQueries) return false;
     mbox = mesh_bounds(mesh);
     double scale = 0;  // of the coordinates: the mesh's, and the queries' within the band of it
-    for (int a = 0; a < 3; ++a) scale = max3(scale, std::fabs(mbox.lo[a]), std::fabs(mbox.hi[a]));
+    for (int a = 0; a < 3; ++a)
+      scale = max3_of(scale, std::fabs(mbox.lo[a]), std::fabs(mbox.hi[a]));
     double band = sampled_band(queries, usable_count);
     band = band * (1.0 + 1.0 / 16) + scale * 0x1p-30;
     scale += band;
@@ -812,7 +809,7 @@ struct RegionBatch {
   void size_grid() {
     b.lo = qbox.lo;
     Vec3 ext = qbox.hi - qbox.lo;
-    const double widest = max3(ext.x, ext.y, ext.z);
+    const double widest = max3_of(ext.x, ext.y, ext.z);
     b.h = widest > 0 ? widest * 0x1p-12 : 1.0;
     for (;;) {
       cells = 1;

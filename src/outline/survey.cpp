@@ -40,7 +40,7 @@ Status survey_jaw(const Context& ctx, const Mesh& m, const Vec3& n, double lo, d
   auto keeps = [&](const Triangle& t) {
     const double a = dot(m.vertices[t.v[0]], n), b = dot(m.vertices[t.v[1]], n),
                  c = dot(m.vertices[t.v[2]], n);
-    return max_of(a, max_of(b, c)) >= lo && min_of(a, min_of(b, c)) <= hi;
+    return max3_of(a, b, c) >= lo && min3_of(a, b, c) <= hi;
   };
   for (const Triangle& t : m.triangles) {
     if (keeps(t)) ++kept;
