@@ -60,5 +60,74 @@ TEST(Status, CancelledByProgressCallback) {
   EXPECT_NE(std::strstr(s.message(), "stage"), nullptr);
 }
 
+// Without a file the position reads "line L, column C: " (a case text or JSON given as bytes);
+// a line without a column, "line L: ".
+TEST(Status, FormatWithoutAFileNamesTheLineAndColumn) {
+  char out[256];
+  Status s = make_error(StatusCode::kParseError, "expected ','");
+  s.at_line(12, 5);
+  s.format(out, sizeof(out));
+  EXPECT_STREQ(out, "line 12, column 5: expected ','");
+  s.at_line(12);
+  s.format(out, sizeof(out));
+  EXPECT_STREQ(out, "line 12: expected ','");
+  s.in_file("case.json");
+  s.format(out, sizeof(out));
+  EXPECT_STREQ(out, "case.json:12: expected ','");
+  Status b = make_error(StatusCode::kTruncated, "ends early").at_byte(9);
+  b.at_line(3, 4);
+  b.format(out, sizeof(out));
+  EXPECT_STREQ(out, "line 3, column 4: byte 9: ends early");
+}
+
+// The codes' names are part of the outputs (report.json's "error", the C API's and the tools'
+// messages): one distinct, fixed name each, and "unknown" for a value outside the enum.
+TEST(Status, EveryCodeHasItsFixedName) {
+  const std::pair<StatusCode, const char*> names[] = {
+      {StatusCode::kOk, "ok"},
+      {StatusCode::kInvalidArgument, "invalid_argument"},
+      {StatusCode::kArenaExhausted, "arena_exhausted"},
+      {StatusCode::kParseError, "parse_error"},
+      {StatusCode::kTruncated, "truncated"},
+      {StatusCode::kNonFinite, "non_finite"},
+      {StatusCode::kLimitExceeded, "limit_exceeded"},
+      {StatusCode::kIoError, "io_error"},
+      {StatusCode::kInvalidMesh, "invalid_mesh"},
+      {StatusCode::kCancelled, "cancelled"},
+      {StatusCode::kUnsupported, "unsupported"},
+      {StatusCode::kInternal, "internal"}};
+  for (const auto& [code, name] : names) {
+    EXPECT_STREQ(status_code_name(code), name) << static_cast<int>(code);
+  }
+  // The enum's values are 0..11 in this order: the next one is not a code.
+  EXPECT_EQ(static_cast<int>(StatusCode::kInternal), 11);
+  EXPECT_STREQ(status_code_name(static_cast<StatusCode>(12)), "unknown");
+}
+
+// A failed SPLINTCORE_ASSERT ends the process after telling the handler: the default one
+// prints the expression and where it is; an embedder's handler is called instead (and the
+// process still ends: the core never continues past a broken invariant); nullptr restores the
+// default.
+TEST(StatusDeathTest, AFailedAssertionTellsTheHandlerThenAborts) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_DEATH(assert_failed("count <= cap", "src/core/arena.cpp", 42),
+               "splintcore: assertion failed: count <= cap \\(src/core/arena.cpp:42\\)");
+  EXPECT_DEATH(
+      {
+        set_assert_handler([](const char* expression, const char* file, int line) {
+          std::fprintf(stderr, "embedder saw %s at %s line %d\n", expression, file, line);
+        });
+        SPLINTCORE_ASSERT(1 + 1 == 3);
+      },
+      "embedder saw 1 \\+ 1 == 3 at .*status_test.cpp line [0-9]+");
+  EXPECT_DEATH(
+      {
+        set_assert_handler([](const char*, const char*, int) { std::fputs("first\n", stderr); });
+        set_assert_handler(nullptr);
+        assert_failed("x", "y.cpp", 7);
+      },
+      "splintcore: assertion failed: x \\(y.cpp:7\\)");
+}
+
 }  // namespace
 }  // namespace splintcore

@@ -150,6 +150,87 @@ TEST(CheckMesh, NonManifoldEdgeDegenerateAndDuplicateTriangles) {
   EXPECT_EQ(r.first_duplicate_triangle, 14u);
 }
 
+// require_valid_solid names the first defect in a fixed order (empty, open, non-manifold,
+// misoriented, degenerate, duplicate, inside out), with its count, where it is (vertices and
+// triangle) and the triangle as the status's index. The reports are a valid box's with one
+// defect each written in, then one from a real mesh: two closed tetrahedra on one edge.
+TEST(CheckMesh, RequireValidSolidNamesTheFirstDefectAndWhereItIs) {
+  TestArena t;
+  const MeshReport box = check(t, unit_box());
+  ASSERT_TRUE(require_valid_solid(box).is_ok());
+  struct Case {
+    const char* text;
+    uint64_t index;
+    void (*set)(MeshReport*);
+  };
+  const Case cases[] = {
+      {"mesh is empty: no triangles", kNoPosition,
+       [](MeshReport* r) {
+         r->triangle_count = 0;
+         r->nonmanifold_edges = 1;  // the first check wins
+       }},
+      {"mesh is not edge-manifold: 2 edges shared by 3 or more triangles, first between "
+       "vertices 3 and 7 (triangle 11)",
+       11,
+       [](MeshReport* r) {
+         r->nonmanifold_edges = 2;
+         r->first_nonmanifold_edge = EdgeRef{3, 7, 11};
+         r->orientation_conflicts = 1;
+       }},
+      {"mesh is not consistently oriented: 3 edges used twice in the same direction, first "
+       "between vertices 0 and 5 (triangle 2)",
+       2,
+       [](MeshReport* r) {
+         r->orientation_conflicts = 3;
+         r->first_orientation_conflict = EdgeRef{0, 5, 2};
+         r->degenerate_triangles = 4;
+       }},
+      {"mesh has 4 degenerate (zero-area) triangles, first is triangle 9", 9,
+       [](MeshReport* r) {
+         r->degenerate_triangles = 4;
+         r->first_degenerate_triangle = 9;
+         r->duplicate_triangles = 1;
+       }},
+      {"mesh has 1 duplicate triangles, first is triangle 10", 10,
+       [](MeshReport* r) {
+         r->duplicate_triangles = 1;
+         r->first_duplicate_triangle = 10;
+         r->volume = -1;
+       }},
+  };
+  for (const Case& c : cases) {
+    MeshReport r = box;
+    c.set(&r);
+    const Status s = require_valid_solid(r);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidMesh) << c.text;
+    EXPECT_STREQ(s.message(), c.text);
+    EXPECT_EQ(s.index(), c.index) << c.text;
+  }
+
+  // Two tetrahedra (each closed and outward) on the edge (0,0,0)-(0,0,1): four triangles
+  // use it, two each way, so it is neither a boundary nor an orientation conflict.
+  const float o[3] = {0, 0, 0}, z[3] = {0, 0, 1}, a[3] = {1, 0, 0}, b[3] = {0, 1, 0};
+  const float c[3] = {-1, 0, 0}, d[3] = {0, -1, 0};
+  auto tetra = [](const float* p0, const float* p1, const float* p2, const float* p3) {
+    // Outward when p3 is on the negative side of (p0, p1, p2).
+    return std::vector<SoupTriangle>{
+        shapes::soup_triangle(p0, p1, p2), shapes::soup_triangle(p0, p3, p1),
+        shapes::soup_triangle(p1, p3, p2), shapes::soup_triangle(p2, p3, p0)};
+  };
+  std::vector<SoupTriangle> soup = tetra(o, b, a, z);
+  for (const SoupTriangle& tri : tetra(o, d, c, z)) soup.push_back(tri);
+  const MeshReport r = check(t, soup);
+  EXPECT_EQ(r.boundary_edges, 0u);
+  EXPECT_EQ(r.orientation_conflicts, 0u);
+  EXPECT_EQ(r.nonmanifold_edges, 1u);
+  EXPECT_GT(r.volume, 0.0);
+  const Status s = require_valid_solid(r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_NE(std::strstr(s.message(), "not edge-manifold: 1 edges shared by 3 or more"), nullptr)
+      << s.message();
+  EXPECT_NE(std::strstr(s.message(), "between vertices 0 and 3"), nullptr) << s.message();
+}
+
 // The check decides most triangles with orient2d's first stage (on the area's cross product,
 // two triangles at a time) before collinear3d: the degenerate count must be collinear3d's on
 // triangles flat in x-y but not in 3D (vertical), nearly flat ones (filter undecided), exactly
@@ -433,6 +514,38 @@ TEST(CheckClosedOriented, HubVertexOfAHundredThousandTrianglesAndFirstBadEdge) {
     }
   }
   EXPECT_EQ(tri, first_user);
+}
+
+// check_closed_oriented (the Boolean's and the printer's quick gate) names an index out of
+// range (the triangle as the status's index), an inside-out solid and an empty mesh.
+TEST(CheckClosedOriented, NamesABadIndexAnInsideOutSolidAndAnEmptyMesh) {
+  TestArena t;
+  Mesh mesh;
+  ASSERT_TRUE(test::mesh_from_soup(t.arena, unit_box(), &mesh).is_ok());
+  Context ctx(&t.arena);
+  double volume = 0;
+  SPLINTCORE_ASSERT_OK(check_closed_oriented(ctx, mesh, &volume));
+  EXPECT_EQ(volume, 24.0);
+
+  const uint32_t saved = mesh.triangles[4].v[1];
+  mesh.triangles[4].v[1] = 8;  // one past the last vertex
+  Status s = check_closed_oriented(ctx, mesh, &volume);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_STREQ(s.message(), "triangle 4 refers to vertex 8 but the mesh has 8 vertices");
+  EXPECT_EQ(s.index(), 4u);
+  mesh.triangles[4].v[1] = saved;
+
+  for (Triangle& tri : mesh.triangles) std::swap(tri.v[1], tri.v[2]);
+  volume = 0;
+  s = check_closed_oriented(ctx, mesh, &volume);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_STREQ(s.message(), "mesh is inside out: volume -24 mm^3");
+  EXPECT_EQ(volume, -24.0);  // reported even when it fails
+
+  Mesh empty(&t.arena);
+  s = check_closed_oriented(ctx, empty, &volume);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_STREQ(s.message(), "mesh is empty");
 }
 
 // remove_small_shells: a 2 x 3 x 4 box with a crumb (a 0.1 mm cube) beside it and a void (an
