@@ -227,6 +227,112 @@ TEST(SplintBase, ErrorsNameThePick) {
   }
 }
 
+// What make_lines and build_splint_base refuse before they build anything, each with the
+// text a person can act on (and the pick as the status's index where there is one): the
+// occlusal normal, negative lengths, a normal along the occlusal normal, an arch whose tangent
+// is the occlusal normal, the spacing, the corner radius, lines given straight to
+// build_splint_base (not through make_lines) with a non-finite or a repeated end, a spacing
+// too fine for the sections' limit, and an output that is not empty.
+TEST(SplintBase, ParameterAndLineErrorsNameTheirCause) {
+  TestArena t;
+  std::vector<Pick> up, lo;
+  prism(5, 20.0, 2.0, 2.0, 2.0, &up, &lo);
+  auto message_of = [](const Built& b) { return std::string(b.status.message()); };
+  {
+    Built b = build(t, up, lo, BaseParams{}, Vec3{0, 0, 0});
+    EXPECT_EQ(b.status.code(), StatusCode::kInvalidArgument);
+    EXPECT_EQ(message_of(b), "occlusal normal must be a nonzero vector");
+  }
+  {
+    std::vector<Pick> bad = up;
+    bad[1].outside_length = -1;
+    Built b = build(t, bad, lo);
+    EXPECT_EQ(message_of(b), "upper pick 1: line lengths must not be negative");
+    EXPECT_EQ(b.status.index(), 1u);
+  }
+  {
+    std::vector<Pick> bad = lo;
+    bad[4].direction = Vec3{};
+    bad[4].normal = Vec3{0, 0, -3};  // along the occlusal normal: no direction in the plane
+    Built b = build(t, up, bad);
+    EXPECT_EQ(message_of(b),
+              "lower pick 4: normal is parallel to the occlusal normal: no direction in the "
+              "occlusal plane (give \"direction\")");
+    EXPECT_EQ(b.status.index(), 4u);
+  }
+  {
+    // Picks one above the other, with no normal and no direction: the arch has no outward.
+    std::vector<Pick> column;
+    for (int i = 0; i < 3; ++i) column.push_back(pick(Vec3{1, 2, 1.0 * i}, Vec3{}, 1, 1));
+    Built b = build(t, column, column);
+    EXPECT_EQ(message_of(b),
+              "upper pick 0: no direction: the arch tangent is along the occlusal normal (give "
+              "\"direction\" or \"normal\")");
+  }
+  for (double spacing : {0.0, -1.0, std::nan("")}) {
+    BaseParams p;
+    p.spacing_mm = spacing;
+    Built b = build(t, up, lo, p);
+    EXPECT_EQ(b.status.code(), StatusCode::kInvalidArgument);
+    EXPECT_EQ(message_of(b).rfind("spacing must be > 0 mm, got ", 0), 0u) << message_of(b);
+  }
+  {
+    BaseParams p;
+    p.corner_radius_mm = -0.25;
+    Built b = build(t, up, lo, p);
+    EXPECT_EQ(message_of(b), "corner radius must be >= 0 mm, got -0.25");
+  }
+  {
+    // 20 mm between 5 picks at 1e-5 mm: 500,000 sections per interval, over 2^20 in all.
+    BaseParams p;
+    p.spacing_mm = 1e-5;
+    Built b = build(t, up, lo, p);
+    EXPECT_EQ(b.status.code(), StatusCode::kLimitExceeded);
+    EXPECT_EQ(message_of(b), "more than 1048576 sections: spacing 1e-05 mm is too fine");
+    p.spacing_mm = 1e-6;  // 5,000,000 in the first interval alone
+    b = build(t, up, lo, p);
+    EXPECT_EQ(message_of(b), "spacing 1e-06 mm gives too many sections between picks 0 and 1");
+  }
+  Context ctx(&t.arena);
+  ArenaArray<Line> ul(&t.arena), ll(&t.arena);
+  SPLINTCORE_ASSERT_OK(
+      make_lines(ctx, Span<const Pick>(up.data(), up.size()), Vec3{0, 0, 1}, "upper", &ul));
+  SPLINTCORE_ASSERT_OK(
+      make_lines(ctx, Span<const Pick>(lo.data(), lo.size()), Vec3{0, 0, 1}, "lower", &ll));
+  auto direct = [&](const std::vector<Line>& u, const std::vector<Line>& l, Mesh* out) {
+    BaseReport r;
+    return build_splint_base(ctx, Span<const Line>(u.data(), u.size()),
+                             Span<const Line>(l.data(), l.size()), BaseParams{}, out, &r);
+  };
+  const std::vector<Line> u(ul.begin(), ul.end()), l(ll.begin(), ll.end());
+  {
+    std::vector<Line> bad = l;
+    bad[2].outside.y = std::numeric_limits<double>::infinity();
+    Mesh out(&t.arena);
+    const Status s = direct(u, bad, &out);
+    EXPECT_STREQ(s.message(), "lower outside end of pick 2 is not finite");
+    EXPECT_EQ(s.index(), 2u);
+    EXPECT_TRUE(out.triangles.empty());
+  }
+  {
+    std::vector<Line> bad = u;
+    bad[3].inner = bad[2].inner;
+    Mesh out(&t.arena);
+    const Status s = direct(bad, l, &out);
+    EXPECT_STREQ(s.message(), "upper inner ends of picks 2 and 3 coincide");
+    EXPECT_EQ(s.index(), 2u);
+  }
+  {
+    Mesh out(&t.arena);
+    SPLINTCORE_ASSERT_OK(direct(u, l, &out));
+    const size_t triangles = out.triangles.size();
+    const Status s = direct(u, l, &out);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+    EXPECT_STREQ(s.message(), "build_splint_base: output mesh must be empty");
+    EXPECT_EQ(out.triangles.size(), triangles);  // left as it was
+  }
+}
+
 TEST(SplintBase, AnArchFoldedBackOnItselfIsRejectedNotWritten) {
   // A hairpin: the arch turns back so that its far leg runs through its near leg.
   TestArena t;
