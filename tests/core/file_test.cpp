@@ -1,5 +1,9 @@
 // The hosted layer's atomic output (AtomicFile): what is in place after a commit, and that
 // nothing is left behind otherwise, with and without the fsync started in the background.
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -105,6 +109,80 @@ TEST(AtomicFile, AbortOrDestructionAfterTheBackgroundSyncLeavesNothing) {
   }
   EXPECT_TRUE(contents(out) == first);
   EXPECT_EQ(entries(dir.path), 1u);
+}
+
+// What AtomicFile refuses, and a commit whose rename fails (the output's name is a folder):
+// a clear error naming the file, the temporary file removed, the folder as it was.
+TEST(AtomicFile, RefusalsAndAFailedRenameLeaveNothingBehind) {
+  TempDir dir("file", "refusals");
+  AtomicFile f;
+  Status s = f.open("");
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_STREQ(s.message(), "output path is empty or too long");
+  const std::string long_path = (dir.path / std::string(4100, 'x')).string();
+  EXPECT_STREQ(f.open(long_path.c_str()).message(), "output path is empty or too long");
+  EXPECT_STREQ(f.commit().message(), "no open output file");
+  EXPECT_STREQ(f.sync_in_background().message(), "no open output file to sync");
+  EXPECT_EQ(entries(dir.path), 0u);
+
+  const fs::path folder = dir.path / "splint.stl";
+  fs::create_directories(folder / "inside");
+  SPLINTCORE_ASSERT_OK(f.open(folder.string().c_str()));
+  const std::vector<uint8_t> bytes = pattern(1000);
+  const ByteSink sink = f.sink();
+  ASSERT_TRUE(sink.write(sink.user, bytes.data(), bytes.size()));
+  EXPECT_EQ(entries(dir.path), 2u);  // the folder and the temporary file
+  s = f.commit();
+  EXPECT_EQ(s.code(), StatusCode::kIoError);
+  EXPECT_EQ(std::string(s.message()).rfind("cannot move the output into place: ", 0), 0u)
+      << s.message();
+  EXPECT_EQ(std::string(s.file()), folder.string());
+  EXPECT_EQ(entries(dir.path), 1u);  // the temporary file is gone
+  EXPECT_TRUE(fs::is_directory(folder / "inside"));
+}
+
+// FileSource and read_file: a folder is refused by name, a device is not a regular file, a
+// file over the caller's limit is refused before anything is allocated, and a path longer
+// than a status can hold keeps its end (the file's own name) in the source's name.
+TEST(FileSource, AFolderADeviceALimitAndALongPath) {
+  TempDir dir("file", "source");
+  FileSource src;
+  Status s = src.open(dir.path.string().c_str());
+  EXPECT_EQ(s.code(), StatusCode::kIoError);
+  EXPECT_EQ(std::string(s.message()), std::string("cannot read: ") + std::strerror(EISDIR));
+
+  test::TestArena t(1 << 16);
+  Span<uint8_t> out;
+  struct stat st;
+  if (::stat("/dev/null", &st) == 0 && S_ISCHR(st.st_mode)) {
+    s = read_file(t.arena, "/dev/null", 1000, &out);
+    EXPECT_EQ(s.code(), StatusCode::kUnsupported);
+    EXPECT_STREQ(s.message(), "not a regular file");
+    EXPECT_STREQ(s.file(), "/dev/null");
+  }
+
+  const fs::path file = dir.path / "case.json";
+  const std::vector<uint8_t> bytes = pattern(100);
+  std::ofstream(file, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(100));
+  const size_t used = t.arena.used();
+  s = read_file(t.arena, file.string().c_str(), 99, &out);
+  EXPECT_EQ(s.code(), StatusCode::kLimitExceeded);
+  EXPECT_STREQ(s.message(), "file is 100 bytes, over the limit of 99");
+  EXPECT_EQ(t.arena.used(), used);
+  EXPECT_TRUE(out.empty());
+  SPLINTCORE_ASSERT_OK(read_file(t.arena, file.string().c_str(), 100, &out));
+  EXPECT_TRUE(std::vector<uint8_t>(out.data(), out.data() + out.size()) == bytes);
+
+  std::string deep = dir.path.string();
+  for (int i = 0; i < 100; ++i) deep += "/.";
+  deep += "/case.json";
+  ASSERT_GT(deep.size(), Status::kFileCapacity);
+  SPLINTCORE_ASSERT_OK(src.open(deep.c_str()));
+  const std::string name = src.source().name;
+  EXPECT_EQ(name.size(), Status::kFileCapacity - 1);
+  EXPECT_EQ(name, deep.substr(deep.size() - name.size()));
+  EXPECT_EQ(src.source().size, 100u);
 }
 
 }  // namespace
