@@ -221,6 +221,79 @@ TEST(LabelTest, OptionsOutOfRangeAreErrors) {
   EXPECT_EQ(t.arena.used(), 0u);
 }
 
+// The refusals of the lines, the options' enums and the meshes, each by its text (and the
+// line as the status's index), the arena as it was: one line per list, a non-finite line, two
+// lines with the same outside points, a mode or placement outside the enums, a splint with no
+// triangles, an output that is not empty; and the modes' names.
+TEST(LabelTest, LinesEnumsAndMeshesTheLabelRefusesAreNamed) {
+  Fixture& f = fixture();
+  ASSERT_TRUE(f.ok);
+  TestArena t(size_t{16} << 20);
+  LabelOptions o;
+  o.text = "A1";
+  auto message = [&](const Labelled& l) {
+    EXPECT_EQ(t.arena.used(), 0u);
+    EXPECT_TRUE(l.mesh.vertices.empty() && l.mesh.triangles.empty());
+    return std::string(l.status.message());
+  };
+  Labelled l = run(t, o, false, f.upper.span().subspan(0, 1), f.lower.span().subspan(0, 1));
+  EXPECT_EQ(l.status.code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(message(l), "label: automatic placement needs at least 2 lines in each list, got 1");
+
+  std::vector<Line> upper(f.upper.begin(), f.upper.end()), lower(f.lower.begin(), f.lower.end());
+  auto lines = [](const std::vector<Line>& v) { return Span<const Line>(v.data(), v.size()); };
+  {
+    std::vector<Line> bad = lower;
+    bad[3].inner.z = std::nan("");
+    l = run(t, o, false, lines(upper), lines(bad));
+    EXPECT_EQ(message(l), "label: line 3 has a coordinate that is not finite");
+    EXPECT_EQ(l.status.index(), 3u);
+  }
+  {
+    std::vector<Line> bad = upper;
+    bad[5].outside = bad[4].outside;
+    bad[5].inner = bad[4].inner;
+    l = run(t, o, true, lines(bad), lines(lower));
+    EXPECT_EQ(message(l),
+              "label: lines 4 and 5 have the same outside points; the wall's curve is undefined "
+              "there");
+    EXPECT_EQ(l.status.index(), 4u);
+  }
+  {
+    LabelOptions bad = o;
+    bad.mode = static_cast<LabelMode>(7);
+    EXPECT_EQ(message(run(t, bad)), "label: unknown mode");
+    bad = o;
+    bad.placement = static_cast<LabelPlacement>(7);
+    EXPECT_EQ(message(run(t, bad)), "label: unknown placement");
+  }
+  Context ctx(&t.arena);
+  {
+    Mesh none(&t.arena);
+    Labelled e;
+    e.mesh.bind(&t.arena);
+    e.status = apply_label(ctx, none, f.upper.span(), f.lower.span(), o, &e.mesh, &e.stats);
+    EXPECT_EQ(e.status.code(), StatusCode::kInvalidMesh);
+    EXPECT_EQ(message(e), "label: the splint has no triangles");
+  }
+  {
+    TestArena held(size_t{1} << 20);
+    Mesh full(&held.arena);
+    ASSERT_TRUE(full.triangles.push_back(Triangle{{0, 1, 2}}));
+    for (bool apply : {false, true}) {
+      const Status s =
+          apply ? apply_label(ctx, f.base, f.upper.span(), f.lower.span(), o, &full, nullptr)
+                : build_label_mesh(ctx, f.base, f.upper.span(), f.lower.span(), o, &full, nullptr);
+      EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+      EXPECT_STREQ(s.message(), "label: the output mesh must be empty");
+      EXPECT_EQ(full.triangles.size(), 1u);
+      EXPECT_EQ(t.arena.used(), 0u);
+    }
+  }
+  EXPECT_STREQ(label_mode_name(LabelMode::kEngrave), "engrave");
+  EXPECT_STREQ(label_mode_name(LabelMode::kEmboss), "emboss");
+}
+
 TEST(LabelTest, TextTooTallForTheWallIsAnError) {
   ASSERT_TRUE(fixture().ok);
   TestArena t(size_t{64} << 20);
