@@ -234,7 +234,7 @@ struct PrepareReport {
   uint64_t island_triangles = 0;       //    their triangles
   uint64_t components = 0;             //    components kept
   uint64_t flipped_triangles = 0;      // 6: triangles turned
-  uint64_t flipped_components = 0;     //    components turned whole
+  uint64_t flipped_components = 0;     //    components turned whole (most triangles turned)
   uint64_t orientation_conflicts = 0;  //    edges left disagreeing (a non-orientable strip)
   uint64_t holes_filled = 0;           // 7: loops filled
   uint64_t hole_triangles = 0;         //    triangles added

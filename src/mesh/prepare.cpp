@@ -407,7 +407,12 @@ Status Prep::orient() {
   }
   decide_turns(*this, comp, c);
   for (uint32_t i = 0; i < nt; ++i) {
-    if (comp[i] == i && c[i].invert != 0 && c[i].triangles > 0) ++r->flipped_components;
+    // Turned whole: most of its triangles turned (not a seed turned to agree with the rest).
+    const Component& k = c[i];
+    if (comp[i] == i &&
+        2 * uint64_t{k.invert != 0 ? k.triangles - k.flipped : k.flipped} > k.triangles) {
+      ++r->flipped_components;
+    }
     if ((flip[i] ^ c[comp[i]].invert) == 0) continue;
     const uint32_t x = t[i].v[1];
     t[i].v[1] = t[i].v[2];

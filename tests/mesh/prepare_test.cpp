@@ -1,5 +1,6 @@
 // Scan preparation (prepare_scan, src/mesh/prepare.cpp): each step on a small planted case,
 // the arena bound run at exactly its size, and the errors.
+#include <cmath>
 #include <vector>
 
 #include "support/test_util.h"
@@ -143,6 +144,117 @@ TEST(PrepareScan, RunsInExactlyItsBoundAndRewindsOnErrors) {
   EXPECT_EQ(s.index(), 3u);
   s = prepare_scan(Context(&ta.arena), in, PrepareOptions{}, &out, &r);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+}
+
+// Step 6 and 7 on closed boxes (2 x 3 x 4 mm, 12 triangles): the seed triangle wound against
+// the other eleven is the one turned (the input's majority wins, not the seed); a box wound
+// inside out is turned whole, outward; a box missing one triangle gets it back as the fill of
+// its 3-edge hole, with the loop's winding. Each output is a valid solid of volume 24.
+TEST(PrepareScan, ClosedShellsAreTurnedOutwardAndAThreeEdgeHoleIsOneTriangle) {
+  TestArena ta;
+  const float lo[3] = {0, 0, 0}, hi[3] = {2, 3, 4};
+  Mesh box;
+  ASSERT_TRUE(test::mesh_from_soup(ta.arena, shapes::box(lo, hi), &box).is_ok());
+  auto prepared = [&](const Mesh& in, PrepareReport* r) {
+    Mesh out;
+    const Status s = prepare_scan(Context(&ta.arena), in, PrepareOptions{}, &out, r);
+    EXPECT_TRUE(s.is_ok()) << test::format(s);
+    MeshReport c;
+    EXPECT_TRUE(check_mesh(Context(&ta.arena), out, &c).is_ok());
+    EXPECT_TRUE(require_valid_solid(c).is_ok()) << require_valid_solid(c).message();
+    EXPECT_DOUBLE_EQ(c.volume, 24.0);
+    return out;
+  };
+  auto copy = [&]() {
+    Mesh m(&ta.arena);
+    for (const Vec3& v : box.vertices) EXPECT_TRUE(m.vertices.push_back(v));
+    for (const Triangle& t : box.triangles) EXPECT_TRUE(m.triangles.push_back(t));
+    return m;
+  };
+  {
+    Mesh seed_wrong = copy();
+    std::swap(seed_wrong.triangles[0].v[1], seed_wrong.triangles[0].v[2]);
+    PrepareReport r;
+    const Mesh out = prepared(seed_wrong, &r);
+    EXPECT_EQ(r.flipped_triangles, 1u);
+    EXPECT_EQ(r.flipped_components, 0u);
+    EXPECT_EQ(r.orientation_conflicts, 0u);
+    for (size_t t = 0; t < box.triangles.size(); ++t) {
+      EXPECT_EQ(out.triangles[t].v[0], box.triangles[t].v[0]) << t;  // as the box was
+      EXPECT_EQ(out.triangles[t].v[1], box.triangles[t].v[1]) << t;
+    }
+  }
+  {
+    Mesh inside_out = copy();
+    for (Triangle& t : inside_out.triangles) std::swap(t.v[1], t.v[2]);
+    PrepareReport r;
+    prepared(inside_out, &r);
+    EXPECT_EQ(r.flipped_triangles, 12u);
+    EXPECT_EQ(r.flipped_components, 1u);
+  }
+  {
+    Mesh open = copy();
+    const Triangle gone = open.triangles[7];
+    ASSERT_TRUE(open.triangles.resize(11));  // the last triangle moved into the place of 7
+    open.triangles[7] = box.triangles[11];
+    PrepareReport r;
+    const Mesh out = prepared(open, &r);
+    EXPECT_EQ(r.holes_filled, 1u);
+    EXPECT_EQ(r.hole_triangles, 1u);
+    EXPECT_EQ(r.holes_left, 0u);
+    ASSERT_EQ(out.triangles.size(), 12u);
+    EXPECT_EQ(out.vertices.size(), 8u);  // no centroid vertex for three edges
+    // The fill is the missing triangle, up to a rotation of its corners.
+    const Triangle& fill = out.triangles[11];
+    int turn = 0;
+    while (turn < 3 && fill.v[turn] != gone.v[0]) ++turn;
+    ASSERT_LT(turn, 3);
+    EXPECT_EQ(fill.v[(turn + 1) % 3], gone.v[1]);
+    EXPECT_EQ(fill.v[(turn + 2) % 3], gone.v[2]);
+  }
+}
+
+// A Moebius strip (six quads, the last joined to the first with a half turn) cannot be
+// oriented: the walk counts the edge it cannot make agree and guesses nothing; and the island
+// area must be a number >= 0.
+TEST(PrepareScan, ANonOrientableStripIsCountedAndABadIslandAreaRefused) {
+  TestArena ta;
+  Mesh strip(&ta.arena);
+  const int n = 6;
+  for (int i = 0; i < n; ++i) {
+    // Corners i (inner) and n + i (outer) of a band around the z axis, twisted half a turn.
+    const double a = 6.283185307179586 * i / n, c = std::cos(a), sn = std::sin(a);
+    const double h = std::cos(a / 2), w = std::sin(a / 2);  // the band's cross direction
+    ASSERT_TRUE(strip.vertices.push_back(Vec3{(10 - h) * c, (10 - h) * sn, -w}));
+  }
+  for (int i = 0; i < n; ++i) {
+    const double a = 6.283185307179586 * i / n, c = std::cos(a), sn = std::sin(a);
+    const double h = std::cos(a / 2), w = std::sin(a / 2);
+    ASSERT_TRUE(strip.vertices.push_back(Vec3{(10 + h) * c, (10 + h) * sn, w}));
+  }
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t j = (i + 1) % n;
+    // At the seam (i = n - 1) the half turn swaps the band's sides.
+    const uint32_t a = i, b = n + i, cj = i + 1 < n ? j : n + j, dj = i + 1 < n ? n + j : j;
+    ASSERT_TRUE(strip.triangles.push_back(Triangle{{a, b, dj}}));
+    ASSERT_TRUE(strip.triangles.push_back(Triangle{{a, dj, cj}}));
+  }
+  PrepareOptions o;
+  o.max_hole_edges = 0;
+  Mesh out;
+  PrepareReport r;
+  SPLINTCORE_ASSERT_OK(prepare_scan(Context(&ta.arena), strip, o, &out, &r));
+  EXPECT_EQ(r.components, 1u);
+  EXPECT_EQ(r.orientation_conflicts, 1u);
+  EXPECT_EQ(out.triangles.size(), 2u * n);
+
+  for (double area : {-1.0, std::nan("")}) {
+    o.min_island_area = area;
+    Mesh none;
+    const Status s = prepare_scan(Context(&ta.arena), strip, o, &none, &r);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+    EXPECT_STREQ(s.message(), "prepare_scan: min_island_area must be a number >= 0");
+  }
 }
 
 }  // namespace
