@@ -903,13 +903,43 @@ TEST(Outline, RefusalsSayWhy) {
     EXPECT_FALSE(s.is_ok());
     EXPECT_NE(std::string(s.message()).find("no dental arch"), std::string::npos) << s.message();
   }
-  // Options out of range.
+  // Options out of range: each named with its range and the value given (NaN is out of
+  // every range), the arena as it was.
   {
     OutlineOptions bad;
     bad.indentation_depth_mm = 0;
     Outline o;
     EXPECT_NE(std::string(compute_outline(ctx, jaws[0], jaws[1], bad, &o).message())
                   .find("indentation_depth_mm"),
+              std::string::npos);
+    const std::pair<void (*)(OutlineOptions*), const char*> ranges[] = {
+        {[](OutlineOptions* x) { x->overhang_mm = 10.5; },
+         "outline: overhang_mm must be in [0, 10], not 10.5"},
+        {[](OutlineOptions* x) { x->overhang_mm = std::nan(""); },
+         "outline: overhang_mm must be in [0, 10], not nan"},
+        {[](OutlineOptions* x) { x->pick_spacing_mm = 1.5; },
+         "outline: pick_spacing_mm must be in [2, 20], not 1.5"},
+        {[](OutlineOptions* x) {
+           x->has_bite_opening = true;
+           x->bite_opening_mm = 0.05;
+         },
+         "outline: bite_opening_mm must be in [0.1, 10], not 0.05"},
+        {[](OutlineOptions* x) { x->max_gap_mm = 60; },
+         "outline: max_gap_mm must be in [0.1, 50], not 60"}};
+    for (const auto& [edit, text] : ranges) {
+      OutlineOptions options;
+      edit(&options);
+      const size_t used = t.arena.used();
+      const Status s = compute_outline(ctx, jaws[0], jaws[1], options, &o);
+      EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << text;
+      EXPECT_STREQ(s.message(), text);
+      EXPECT_EQ(t.arena.used(), used);
+    }
+    // A bite opening out of range is no error when none is asked for.
+    OutlineOptions unused;
+    unused.bite_opening_mm = 0.05;
+    EXPECT_EQ(std::string(compute_outline(ctx, jaws[0], jaws[1], unused, &o).message())
+                  .find("bite_opening_mm must be"),
               std::string::npos);
   }
 }
