@@ -192,7 +192,9 @@ Status find_self_intersections(const Context& ctx, const Mesh& mesh, uint64_t ma
 // down to `start`, rewinding everything else, and points `out` at it. The mesh's triangles
 // must have been allocated before its vertices (then no destination lies above bytes not yet
 // copied; memmove handles the overlap). Never fails: the moved mesh needs no more room than it
-// had.
+// had. (In an arena of blocks whose allocator refuses a block the move needs, the arrays not
+// yet moved stay where they are, with everything below the arena's top at the call: the mesh
+// is whole, only not as low.)
 // `vertices_first`: the same for a mesh whose vertices were allocated before its triangles
 // (marching_cubes_mesh's output).
 void move_mesh_down(Arena& arena, const Arena::Marker& start, const Mesh& mesh, Mesh* out,

@@ -4,6 +4,7 @@
 #include "splintcore/mesh.h"
 
 #include <cmath>
+#include <type_traits>
 
 #include "core/union_find.h"
 
@@ -130,21 +131,28 @@ void move_mesh_down(Arena& arena, const Arena::Marker& start, const Mesh& mesh, 
   const size_t v_count = mesh.vertices.size();
   const Triangle* src_t = mesh.triangles.data();
   const Vec3* src_v = mesh.vertices.data();
+  const Arena::Marker top = arena.mark();
   arena.rewind(start);
-  Triangle* tris = nullptr;
-  Vec3* verts = nullptr;
   // The array allocated first moves first: then no destination lies above bytes not yet copied.
-  if (vertices_first) {
-    verts = arena.allocate_array<Vec3>(v_count);
-    if (v_count > 0) std::memmove(static_cast<void*>(verts), src_v, v_count * sizeof(Vec3));
-  }
-  tris = arena.allocate_array<Triangle>(t_count);
-  if (t_count > 0) std::memmove(static_cast<void*>(tris), src_t, t_count * sizeof(Triangle));
-  if (!vertices_first) {
-    verts = arena.allocate_array<Vec3>(v_count);
-    if (v_count > 0) std::memmove(static_cast<void*>(verts), src_v, v_count * sizeof(Vec3));
-  }
-  SPLINTCORE_ASSERT((tris != nullptr || t_count == 0) && (verts != nullptr || v_count == 0));
+  // In buffer mode the moved arrays always fit where they were. An arena of blocks (hooks) may
+  // need a fresh block for one and its allocator may refuse it: that array and the next stay
+  // where they are (nothing of them was overwritten), and the top goes back where it was, so
+  // the mesh is whole, only not as low as asked.
+  bool stayed = false;
+  auto move = [&](const auto* source, size_t count) {
+    using T = std::remove_const_t<std::remove_pointer_t<decltype(source)>>;
+    T* to = stayed || count == 0 ? nullptr : arena.allocate_array<T>(count);
+    if (to == nullptr) {
+      stayed = stayed || count > 0;
+      return const_cast<T*>(source);
+    }
+    std::memmove(static_cast<void*>(to), source, count * sizeof(T));
+    return to;
+  };
+  Vec3* verts = vertices_first ? move(src_v, v_count) : nullptr;
+  Triangle* tris = move(src_t, t_count);
+  if (!vertices_first) verts = move(src_v, v_count);
+  if (stayed) arena.rewind(top);
   out->bind(&arena);
   out->triangles.adopt(tris, t_count, t_count);
   out->vertices.adopt(verts, v_count, v_count);

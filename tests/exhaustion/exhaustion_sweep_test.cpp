@@ -42,6 +42,7 @@
 #include "splintcore/printer.h"
 #include "splintcore/spline.h"
 #include "splintcore/volume.h"
+#include "support/phantom_jaws.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -819,6 +820,88 @@ TEST(ExhaustionSweep, DesignSplintPaperScaleSmallPhantom) {
     if (r.status.is_ok()) append_mesh(&r.output, splint);
     return r;
   });
+}
+
+// The height-field design of the phantom (its base sunk 2.5 mm, so that the blockout cuts and
+// its Boolean checks itself) in an arena of 64 KiB blocks whose allocator refuses the Nth block
+// request, for N = 0, 1, 2... until a run asks for fewer blocks than that: every run either
+// fails cleanly (kArenaExhausted, every block given back, no splint) or, where the design has
+// another way (the swept surface not kept for a second run; the Boolean's batches), gives the
+// reference bytes. (It found move_mesh_down copying into a block the allocator had refused.)
+TEST(ExhaustionSweep, HeightfieldDesignWithEachBlockRequestRefused) {
+  const std::vector<uint8_t> text = fixture("cases/paper_scale.json");
+  test::TestArena held(size_t{64} << 20);
+  CaseFile c;
+  SPLINTCORE_ASSERT_OK(parse_case(Context(&held.arena), reinterpret_cast<const char*>(text.data()),
+                                  text.size(), "paper_scale", &c));
+  Mesh jaws[2];
+  ASSERT_TRUE(test::phantom_jaw_meshes(held.arena, 2000, jaws));
+  std::vector<Pick> up(c.upper.begin(), c.upper.end()), lo(c.lower.begin(), c.lower.end());
+  for (Pick& p : up) p.position = p.position + c.occlusal_normal * 2.5;
+  for (Pick& p : lo) p.position = p.position - c.occlusal_normal * 2.5;
+  c.upper = Span<const Pick>(up.data(), up.size());
+  c.lower = Span<const Pick>(lo.data(), lo.size());
+  c.has_blockout = true;
+  c.blockout_method = BlockoutMethod::kHeightfield;
+  c.blockout.voxel = 0.3;
+  c.blockout.inset = 0;
+  // One design; the Nth request refused (none for ~0). *reached: the run made that request.
+  auto run = [&](uint64_t fail_at, std::vector<uint8_t>* bytes, DesignReport* report,
+                 bool* reached) {
+    HookState h;
+    AllocatorHooks hooks;
+    hooks.allocate = hook_allocate;
+    hooks.release = hook_release;
+    hooks.user = &h;
+    Status s;
+    {
+      Arena arena(hooks, size_t{1} << 30, size_t{64} << 10);
+      h.fail_at = h.requests + fail_at;
+      Mesh splint;
+      s = design_splint(Context(&arena), c, Span<const Mesh>(jaws, 2), &splint, report);
+      if (s.is_ok()) append_mesh(bytes, splint);
+      if (!s.is_ok()) {
+        EXPECT_TRUE(mesh_empty(splint)) << fail_at;
+        EXPECT_EQ(arena.used(), 0u) << fail_at;
+      }
+    }
+    EXPECT_EQ(h.allocations, h.releases) << fail_at;
+    EXPECT_EQ(h.outstanding, 0u) << fail_at;
+    EXPECT_FALSE(h.mismatch) << fail_at;
+    *reached = h.requests > h.fail_at;
+    return s;
+  };
+  std::vector<uint8_t> want;
+  DesignReport report;
+  bool reached = false;
+  SPLINTCORE_ASSERT_OK(run(~uint64_t{0}, &want, &report, &reached));
+  ASSERT_GT(report.blockout[0].swept_triangles + report.blockout[1].swept_triangles, 0u);
+  ASSERT_TRUE(report.blockout[0].boolean.self_intersection_checked ||
+              report.blockout[1].boolean.self_intersection_checked);
+  uint64_t failed = 0, other_way = 0, n = 0;
+  for (; n < 10000; ++n) {
+    std::vector<uint8_t> got;
+    DesignReport r;
+    const Status s = run(n, &got, &r, &reached);
+    if (!reached) {
+      SPLINTCORE_EXPECT_OK(s);
+      EXPECT_TRUE(got == want);
+      break;
+    }
+    if (s.is_ok()) {
+      ++other_way;
+      EXPECT_TRUE(got == want) << "request " << n << " refused: other bytes";
+    } else {
+      ++failed;
+      EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << n << ": " << test::format(s);
+    }
+  }
+  EXPECT_GT(failed, 0u);
+  std::printf(
+      "[ sweep    ] height-field design, 64 KiB blocks: %llu requests refused one at a time, "
+      "%llu clean failures, %llu the same bytes another way\n",
+      static_cast<unsigned long long>(n), static_cast<unsigned long long>(failed),
+      static_cast<unsigned long long>(other_way));
 }
 
 }  // namespace
