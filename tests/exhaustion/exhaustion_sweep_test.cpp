@@ -823,11 +823,12 @@ TEST(ExhaustionSweep, DesignSplintPaperScaleSmallPhantom) {
 }
 
 // The height-field design of the phantom (its base sunk 2.5 mm, so that the blockout cuts and
-// its Boolean checks itself) in an arena of 64 KiB blocks whose allocator refuses the Nth block
-// request, for N = 0, 1, 2... until a run asks for fewer blocks than that: every run either
-// fails cleanly (kArenaExhausted, every block given back, no splint) or, where the design has
-// another way (the swept surface not kept for a second run; the Boolean's batches), gives the
-// reference bytes. (It found move_mesh_down copying into a block the allocator had refused.)
+// its Boolean checks itself), and its spacer (a 0.3 mm clearance), in an arena of 64 KiB blocks
+// whose allocator refuses the Nth block request, for N = 0, 1, 2... until a run asks for fewer
+// blocks than that: every run either fails cleanly (kArenaExhausted, every block given back, no
+// splint) or, where the design has another way (the swept surface not kept for a second run; the
+// Boolean's batches), gives the reference bytes. (It found move_mesh_down copying into a block the
+// allocator had refused.)
 TEST(ExhaustionSweep, HeightfieldDesignWithEachBlockRequestRefused) {
   const std::vector<uint8_t> text = fixture("cases/paper_scale.json");
   test::TestArena held(size_t{64} << 20);
@@ -871,37 +872,41 @@ TEST(ExhaustionSweep, HeightfieldDesignWithEachBlockRequestRefused) {
     *reached = h.requests > h.fail_at;
     return s;
   };
-  std::vector<uint8_t> want;
-  DesignReport report;
-  bool reached = false;
-  SPLINTCORE_ASSERT_OK(run(~uint64_t{0}, &want, &report, &reached));
-  ASSERT_GT(report.blockout[0].swept_triangles + report.blockout[1].swept_triangles, 0u);
-  ASSERT_TRUE(report.blockout[0].boolean.self_intersection_checked ||
-              report.blockout[1].boolean.self_intersection_checked);
-  uint64_t failed = 0, other_way = 0, n = 0;
-  for (; n < 10000; ++n) {
-    std::vector<uint8_t> got;
-    DesignReport r;
-    const Status s = run(n, &got, &r, &reached);
-    if (!reached) {
-      SPLINTCORE_EXPECT_OK(s);
-      EXPECT_TRUE(got == want);
-      break;
+  for (double offset : {0.0, 0.3}) {  // the blockout, then the spacer (a clearance)
+    SCOPED_TRACE(offset);
+    c.blockout.offset = offset;
+    std::vector<uint8_t> want;
+    DesignReport report;
+    bool reached = false;
+    SPLINTCORE_ASSERT_OK(run(~uint64_t{0}, &want, &report, &reached));
+    ASSERT_GT(report.blockout[0].swept_triangles + report.blockout[1].swept_triangles, 0u);
+    ASSERT_TRUE(report.blockout[0].boolean.self_intersection_checked ||
+                report.blockout[1].boolean.self_intersection_checked);
+    uint64_t failed = 0, other_way = 0, n = 0;
+    for (; n < 10000; ++n) {
+      std::vector<uint8_t> got;
+      DesignReport r;
+      const Status s = run(n, &got, &r, &reached);
+      if (!reached) {
+        SPLINTCORE_EXPECT_OK(s);
+        EXPECT_TRUE(got == want);
+        break;
+      }
+      if (s.is_ok()) {
+        ++other_way;
+        EXPECT_TRUE(got == want) << "request " << n << " refused: other bytes";
+      } else {
+        ++failed;
+        EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << n << ": " << test::format(s);
+      }
     }
-    if (s.is_ok()) {
-      ++other_way;
-      EXPECT_TRUE(got == want) << "request " << n << " refused: other bytes";
-    } else {
-      ++failed;
-      EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << n << ": " << test::format(s);
-    }
+    EXPECT_GT(failed, 0u);
+    std::printf(
+        "[ sweep    ] height-field design (offset %.1f mm), 64 KiB blocks: %llu requests refused "
+        "one at a time, %llu clean failures, %llu the same bytes another way\n",
+        offset, static_cast<unsigned long long>(n), static_cast<unsigned long long>(failed),
+        static_cast<unsigned long long>(other_way));
   }
-  EXPECT_GT(failed, 0u);
-  std::printf(
-      "[ sweep    ] height-field design, 64 KiB blocks: %llu requests refused one at a time, "
-      "%llu clean failures, %llu the same bytes another way\n",
-      static_cast<unsigned long long>(n), static_cast<unsigned long long>(failed),
-      static_cast<unsigned long long>(other_way));
 }
 
 }  // namespace
