@@ -143,18 +143,20 @@ Status assemble(TileDecimator& d, Patch* p) {
   return Status::ok();
 }
 
-// The log without the old carry, then `block` (the new chunk and carry), down to `base`.
-void move_down(TileDecimator& d, const uint8_t* block, uint64_t block_bytes) {
+// The log without the old carry, then `block` (the new chunk and carry), down to `base`; false
+// when an arena of blocks could not give the room (in buffer mode it is no more than was there).
+bool move_down(TileDecimator& d, const uint8_t* block, uint64_t block_bytes) {
   Arena& arena = *d.ctx->arena;
   const uint64_t keep = d.log_bytes - d.carry_bytes;
   const uint8_t* old_log = d.log;
   arena.rewind(d.base);
   uint8_t* log = static_cast<uint8_t*>(arena.allocate(static_cast<size_t>(keep + block_bytes), 8));
-  SPLINTCORE_ASSERT(log != nullptr);  // no more than was there
+  if (log == nullptr) return false;
   if (keep > 0 && log != old_log) std::memmove(log, old_log, static_cast<size_t>(keep));
   std::memmove(log + keep, block, static_cast<size_t>(block_bytes));
   d.log = log;
   d.log_bytes = keep + block_bytes;
+  return true;
 }
 
 // Points the carry's arrays into the log (its last carry_bytes).
@@ -466,7 +468,7 @@ Status flush(TileDecimator& d, int64_t cz) {
                            next_nt, n_new, nc,     sample_map, removed_map, carried_index, next_ns};
     write_carry(d, parts, block + chunk);
   }
-  move_down(d, block, chunk + carry);
+  if (!move_down(d, block, chunk + carry)) return arena.exhausted_status();
   d.carry_bytes = carry;
   d.prev_first = d.cur_first;
   d.cur_first += n_new;

@@ -9,6 +9,7 @@
 // pseudonormal", IEEE TVCG 2005).
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 
 #include "splintcore/distance.h"
 
@@ -644,26 +645,27 @@ struct IndexBuild {
   // move first, so no destination lies above bytes not yet copied; rewound bytes stay
   // readable, Arena).
   void move_tree_down(const Arena::Marker& temps) {
-    const BvhNode* wide_src = nodes;
-    const BvhDipole* wide_dipoles_src = dipoles;
-    const BvhObb* wide_obbs_src = obbs;
+    const Arena::Marker top = arena.mark();
     arena.rewind(temps);
-    nodes = arena.allocate_array<BvhNode>(node_count);
-    SPLINTCORE_ASSERT(nodes != nullptr);
-    std::memmove(static_cast<void*>(nodes), wide_src, size_t{node_count} * sizeof(BvhNode));
-    dipoles = nullptr;
-    if (wide_dipoles_src != nullptr) {
-      dipoles = arena.allocate_array<BvhDipole>(node_count);
-      SPLINTCORE_ASSERT(dipoles != nullptr);
-      std::memmove(static_cast<void*>(dipoles), wide_dipoles_src,
-                   size_t{node_count} * sizeof(BvhDipole));
-    }
-    obbs = nullptr;
-    if (wide_obbs_src != nullptr) {
-      obbs = arena.allocate_array<BvhObb>(node_count);
-      SPLINTCORE_ASSERT(obbs != nullptr);
-      std::memmove(static_cast<void*>(obbs), wide_obbs_src, size_t{node_count} * sizeof(BvhObb));
-    }
+    // In an arena of blocks the allocator may refuse a block a move needs (in buffer mode each
+    // fits where it was): that array and the ones after it stay where they are (none of them
+    // was overwritten), and the top goes back above them.
+    bool stayed = false;
+    const auto move = [&](auto* source) {
+      using T = std::remove_pointer_t<decltype(source)>;
+      if (source == nullptr) return source;
+      T* to = stayed ? nullptr : arena.allocate_array<T>(node_count);
+      if (to == nullptr) {
+        stayed = true;
+        return source;
+      }
+      std::memmove(static_cast<void*>(to), source, size_t{node_count} * sizeof(T));
+      return to;
+    };
+    nodes = move(nodes);
+    dipoles = move(dipoles);
+    obbs = move(obbs);
+    if (stayed) arena.rewind(top);
   }
 
   // Counting sort of the corners by vertex into vuses (kept, in triangle order) and `lists`,
