@@ -909,5 +909,62 @@ TEST(ExhaustionSweep, HeightfieldDesignWithEachBlockRequestRefused) {
   }
 }
 
+// The weld of a file whose corners are all distinct: its positions outgrow their reserve and
+// move down over the table at the end, a move that in an arena of 4 KiB blocks needs a block of
+// its own. Each block request refused in turn: a clean failure, or the mesh of the run with
+// none refused (before 2026-12-06 the refused move was an assertion: the process ended).
+TEST(ExhaustionSweep, WeldOfScatteredCornersWithEachBlockRequestRefused) {
+  std::vector<SoupTriangle> apart;
+  for (int copy = 0; copy < 8; ++copy) {
+    for (SoupTriangle t : torus_soup()) {
+      for (auto& corner : t.p) corner[0] += 64.0f * static_cast<float>(apart.size());
+      apart.push_back(t);
+    }
+  }
+  const std::vector<uint8_t> file = test::binary_stl(apart, "apart");
+  auto run = [&](uint64_t fail_at, std::vector<uint8_t>* bytes, bool* reached) {
+    HookState h;
+    AllocatorHooks hooks;
+    hooks.allocate = hook_allocate;
+    hooks.release = hook_release;
+    hooks.user = &h;
+    Status s;
+    {
+      Arena arena(hooks, size_t{1} << 30, 4096);
+      h.fail_at = fail_at;
+      MemorySource ms{file.data(), file.size(), 0, 0};
+      Mesh m(&arena);
+      s = read_stl_mesh(Context(&arena), memory_source(&ms), StlReadOptions{}, &m, nullptr);
+      if (s.is_ok()) append_mesh(bytes, m);
+      if (!s.is_ok()) {
+        EXPECT_TRUE(mesh_empty(m)) << fail_at;
+        EXPECT_EQ(arena.used(), 0u) << fail_at;
+      }
+    }
+    EXPECT_EQ(h.allocations, h.releases) << fail_at;
+    *reached = h.requests > fail_at;
+    return s;
+  };
+  std::vector<uint8_t> want;
+  bool reached = false;
+  SPLINTCORE_ASSERT_OK(run(~uint64_t{0}, &want, &reached));
+  ASSERT_EQ(want.size(), apart.size() * (3 * sizeof(Vec3) + sizeof(Triangle)));
+  uint64_t n = 0, failed = 0;
+  for (; n < 1000; ++n) {
+    std::vector<uint8_t> got;
+    const Status s = run(n, &got, &reached);
+    if (!reached) break;
+    if (s.is_ok()) {
+      EXPECT_TRUE(got == want) << n;
+    } else {
+      ++failed;
+      EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << test::format(s);
+    }
+  }
+  EXPECT_GT(failed, 0u);
+  std::printf("[ sweep    ] weld of %zu scattered triangles, 4 KiB blocks: %llu requests refused\n",
+              apart.size(), static_cast<unsigned long long>(n));
+}
+
 }  // namespace
 }  // namespace splintcore
