@@ -822,13 +822,61 @@ TEST(ExhaustionSweep, DesignSplintPaperScaleSmallPhantom) {
   });
 }
 
+// Refuses the Nth block request of `op` in an arena of `block_bytes` blocks, for N = 0, 1, 2...
+// until a run asks for fewer blocks than that (at most 10,000 runs). Every run must fail
+// cleanly (kArenaExhausted, the arena's top back where it was, empty outputs, every block given
+// back with its size) or, where the operation has another way, give the output of the run with
+// none refused. Returns the number of runs that failed; prints the counts.
+uint64_t refuse_each_block_request(const char* name, size_t block_bytes, const Operation& op) {
+  auto run = [&](uint64_t fail_at, bool* reached) {
+    HookState h;
+    AllocatorHooks hooks;
+    hooks.allocate = hook_allocate;
+    hooks.release = hook_release;
+    hooks.user = &h;
+    OpRun r;
+    {
+      Arena arena(hooks, size_t{1} << 30, block_bytes);
+      h.fail_at = fail_at;
+      r = op(arena);
+      if (!r.status.is_ok()) check_failure(name, r, arena, 0, "block " + std::to_string(fail_at));
+    }
+    EXPECT_EQ(h.allocations, h.releases) << name << " block " << fail_at;
+    EXPECT_EQ(h.outstanding, 0u) << name << " block " << fail_at;
+    EXPECT_FALSE(h.mismatch) << name << " block " << fail_at;
+    *reached = h.requests > fail_at;
+    return r;
+  };
+  bool reached = false;
+  const OpRun want = run(~uint64_t{0}, &reached);
+  EXPECT_TRUE(want.status.is_ok()) << name << ": " << format(want.status);
+  uint64_t n = 0, failed = 0, other_way = 0;
+  for (; n < 10000; ++n) {
+    const OpRun r = run(n, &reached);
+    if (!reached) {
+      EXPECT_TRUE(r.status.is_ok() && r.output == want.output) << name;
+      break;
+    }
+    if (r.status.is_ok()) {
+      ++other_way;
+      EXPECT_TRUE(r.output == want.output) << name << ": block " << n << " refused: other bytes";
+    } else {
+      ++failed;
+    }
+  }
+  std::printf(
+      "[ refuse   ] %s, %zu-byte blocks: %llu requests refused one at a time, %llu clean "
+      "failures, %llu the same output another way\n",
+      name, block_bytes, static_cast<unsigned long long>(n),
+      static_cast<unsigned long long>(failed), static_cast<unsigned long long>(other_way));
+  return failed;
+}
+
 // The height-field design of the phantom (its base sunk 2.5 mm, so that the blockout cuts and
-// its Boolean checks itself), and its spacer (a 0.3 mm clearance), in an arena of 64 KiB blocks
-// whose allocator refuses the Nth block request, for N = 0, 1, 2... until a run asks for fewer
-// blocks than that: every run either fails cleanly (kArenaExhausted, every block given back, no
-// splint) or, where the design has another way (the swept surface not kept for a second run; the
-// Boolean's batches), gives the reference bytes. (It found move_mesh_down copying into a block the
-// allocator had refused.)
+// its Boolean checks itself), and its spacer (a 0.3 mm clearance), in 64 KiB blocks, each
+// request refused in turn; where the design has another way it is the swept surface not kept
+// for a second run or the Boolean's batches. (It found move_mesh_down copying into a block the
+// allocator had refused: a crash.)
 TEST(ExhaustionSweep, HeightfieldDesignWithEachBlockRequestRefused) {
   const std::vector<uint8_t> text = fixture("cases/paper_scale.json");
   test::TestArena held(size_t{64} << 20);
@@ -846,73 +894,34 @@ TEST(ExhaustionSweep, HeightfieldDesignWithEachBlockRequestRefused) {
   c.blockout_method = BlockoutMethod::kHeightfield;
   c.blockout.voxel = 0.3;
   c.blockout.inset = 0;
-  // One design; the Nth request refused (none for ~0). *reached: the run made that request.
-  auto run = [&](uint64_t fail_at, std::vector<uint8_t>* bytes, DesignReport* report,
-                 bool* reached) {
-    HookState h;
-    AllocatorHooks hooks;
-    hooks.allocate = hook_allocate;
-    hooks.release = hook_release;
-    hooks.user = &h;
-    Status s;
-    {
-      Arena arena(hooks, size_t{1} << 30, size_t{64} << 10);
-      h.fail_at = h.requests + fail_at;
-      Mesh splint;
-      s = design_splint(Context(&arena), c, Span<const Mesh>(jaws, 2), &splint, report);
-      if (s.is_ok()) append_mesh(bytes, splint);
-      if (!s.is_ok()) {
-        EXPECT_TRUE(mesh_empty(splint)) << fail_at;
-        EXPECT_EQ(arena.used(), 0u) << fail_at;
-      }
-    }
-    EXPECT_EQ(h.allocations, h.releases) << fail_at;
-    EXPECT_EQ(h.outstanding, 0u) << fail_at;
-    EXPECT_FALSE(h.mismatch) << fail_at;
-    *reached = h.requests > h.fail_at;
-    return s;
-  };
   for (double offset : {0.0, 0.3}) {  // the blockout, then the spacer (a clearance)
-    SCOPED_TRACE(offset);
     c.blockout.offset = offset;
-    std::vector<uint8_t> want;
     DesignReport report;
-    bool reached = false;
-    SPLINTCORE_ASSERT_OK(run(~uint64_t{0}, &want, &report, &reached));
+    const auto design = [&](Arena& a) {
+      OpRun r;
+      Mesh splint;
+      r.status = design_splint(Context(&a), c, Span<const Mesh>(jaws, 2), &splint, &report);
+      r.outputs_empty = mesh_empty(splint);
+      if (r.status.is_ok()) append_mesh(&r.output, splint);
+      return r;
+    };
+    {
+      test::TestArena once(size_t{256} << 20);
+      SPLINTCORE_ASSERT_OK(design(once.arena).status);
+    }
     ASSERT_GT(report.blockout[0].swept_triangles + report.blockout[1].swept_triangles, 0u);
     ASSERT_TRUE(report.blockout[0].boolean.self_intersection_checked ||
                 report.blockout[1].boolean.self_intersection_checked);
-    uint64_t failed = 0, other_way = 0, n = 0;
-    for (; n < 10000; ++n) {
-      std::vector<uint8_t> got;
-      DesignReport r;
-      const Status s = run(n, &got, &r, &reached);
-      if (!reached) {
-        SPLINTCORE_EXPECT_OK(s);
-        EXPECT_TRUE(got == want);
-        break;
-      }
-      if (s.is_ok()) {
-        ++other_way;
-        EXPECT_TRUE(got == want) << "request " << n << " refused: other bytes";
-      } else {
-        ++failed;
-        EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << n << ": " << test::format(s);
-      }
-    }
-    EXPECT_GT(failed, 0u);
-    std::printf(
-        "[ sweep    ] height-field design (offset %.1f mm), 64 KiB blocks: %llu requests refused "
-        "one at a time, %llu clean failures, %llu the same bytes another way\n",
-        offset, static_cast<unsigned long long>(n), static_cast<unsigned long long>(failed),
-        static_cast<unsigned long long>(other_way));
+    EXPECT_GT(
+        refuse_each_block_request(offset > 0 ? "height-field spacer design" : "height-field design",
+                                  size_t{64} << 10, design),
+        0u);
   }
 }
 
 // The weld of a file whose corners are all distinct: its positions outgrow their reserve and
-// move down over the table at the end, a move that in an arena of 4 KiB blocks needs a block of
-// its own. Each block request refused in turn: a clean failure, or the mesh of the run with
-// none refused (before 2026-12-06 the refused move was an assertion: the process ended).
+// move down over the table at the end, a move that in 4 KiB blocks needs a block of its own
+// (before 2026-12-06 a refused one was an assertion: the process ended).
 TEST(ExhaustionSweep, WeldOfScatteredCornersWithEachBlockRequestRefused) {
   std::vector<SoupTriangle> apart;
   for (int copy = 0; copy < 8; ++copy) {
@@ -922,48 +931,18 @@ TEST(ExhaustionSweep, WeldOfScatteredCornersWithEachBlockRequestRefused) {
     }
   }
   const std::vector<uint8_t> file = test::binary_stl(apart, "apart");
-  auto run = [&](uint64_t fail_at, std::vector<uint8_t>* bytes, bool* reached) {
-    HookState h;
-    AllocatorHooks hooks;
-    hooks.allocate = hook_allocate;
-    hooks.release = hook_release;
-    hooks.user = &h;
-    Status s;
-    {
-      Arena arena(hooks, size_t{1} << 30, 4096);
-      h.fail_at = fail_at;
-      MemorySource ms{file.data(), file.size(), 0, 0};
-      Mesh m(&arena);
-      s = read_stl_mesh(Context(&arena), memory_source(&ms), StlReadOptions{}, &m, nullptr);
-      if (s.is_ok()) append_mesh(bytes, m);
-      if (!s.is_ok()) {
-        EXPECT_TRUE(mesh_empty(m)) << fail_at;
-        EXPECT_EQ(arena.used(), 0u) << fail_at;
-      }
-    }
-    EXPECT_EQ(h.allocations, h.releases) << fail_at;
-    *reached = h.requests > fail_at;
-    return s;
-  };
-  std::vector<uint8_t> want;
-  bool reached = false;
-  SPLINTCORE_ASSERT_OK(run(~uint64_t{0}, &want, &reached));
-  ASSERT_EQ(want.size(), apart.size() * (3 * sizeof(Vec3) + sizeof(Triangle)));
-  uint64_t n = 0, failed = 0;
-  for (; n < 1000; ++n) {
-    std::vector<uint8_t> got;
-    const Status s = run(n, &got, &reached);
-    if (!reached) break;
-    if (s.is_ok()) {
-      EXPECT_TRUE(got == want) << n;
-    } else {
-      ++failed;
-      EXPECT_EQ(s.code(), StatusCode::kArenaExhausted) << test::format(s);
-    }
-  }
-  EXPECT_GT(failed, 0u);
-  std::printf("[ sweep    ] weld of %zu scattered triangles, 4 KiB blocks: %llu requests refused\n",
-              apart.size(), static_cast<unsigned long long>(n));
+  EXPECT_GT(refuse_each_block_request("read_stl_mesh (no shared corner)", 4096,
+                                      [&](Arena& a) {
+                                        OpRun r;
+                                        MemorySource ms{file.data(), file.size(), 0, 0};
+                                        Mesh m(&a);
+                                        r.status = read_stl_mesh(Context(&a), memory_source(&ms),
+                                                                 StlReadOptions{}, &m, nullptr);
+                                        r.outputs_empty = mesh_empty(m);
+                                        if (r.status.is_ok()) append_mesh(&r.output, m);
+                                        return r;
+                                      }),
+            0u);
 }
 
 }  // namespace
