@@ -795,30 +795,35 @@ TEST(ExhaustionSweep, BooleanPrinterAndDesign) {
   }
 }
 
-TEST(ExhaustionSweep, DesignSplintPaperScaleSmallPhantom) {
-  const std::vector<uint8_t> text = fixture("cases/paper_scale.json");
-  test::TestArena held(size_t{64} << 20);
+// fixtures/cases/paper_scale.json with the phantom's jaws of 2,000 triangles each.
+struct PaperScaleCase {
+  test::TestArena held{size_t{64} << 20};
   CaseFile c;
-  SPLINTCORE_ASSERT_OK(parse_case(Context(&held.arena), reinterpret_cast<const char*>(text.data()),
-                                  text.size(), "paper_scale", &c));
   Mesh jaws[2];
-  for (int j = 0; j < 2; ++j) {
-    phantom::JawMesh m;
-    phantom::PhantomOptions po;
-    po.target_triangles = phantom::kMinTriangles;
-    SPLINTCORE_ASSERT_OK(
-        phantom::make_jaw(j == 0 ? phantom::Jaw::kMaxilla : phantom::Jaw::kMandible, po, &m));
-    jaws[j].bind(&held.arena);
-    SPLINTCORE_ASSERT_OK(phantom::to_mesh(m, &jaws[j]));
+  PaperScaleCase() {
+    const std::vector<uint8_t> text = fixture("cases/paper_scale.json");
+    static std::vector<uint8_t> kept;  // the case's strings point into its text
+    kept = text;
+    SPLINTCORE_EXPECT_OK(parse_case(Context(&held.arena),
+                                    reinterpret_cast<const char*>(kept.data()), kept.size(),
+                                    "paper_scale", &c));
+    EXPECT_TRUE(test::phantom_jaw_meshes(held.arena, phantom::kMinTriangles, jaws));
   }
-  sweep("design_splint (paper_scale, 2x2000)", [&](Arena& a) {
+  OpRun design(Arena& a, const CaseFile& with, DesignReport* report) const {
     OpRun r;
     Mesh splint;
-    DesignReport report;
-    r.status = design_splint(Context(&a), c, Span<const Mesh>(jaws, 2), &splint, &report);
+    r.status = design_splint(Context(&a), with, Span<const Mesh>(jaws, 2), &splint, report);
     r.outputs_empty = mesh_empty(splint);
     if (r.status.is_ok()) append_mesh(&r.output, splint);
     return r;
+  }
+};
+
+TEST(ExhaustionSweep, DesignSplintPaperScaleSmallPhantom) {
+  const PaperScaleCase p;
+  sweep("design_splint (paper_scale, 2x2000)", [&](Arena& a) {
+    DesignReport report;
+    return p.design(a, p.c, &report);
   });
 }
 
@@ -878,16 +883,11 @@ uint64_t refuse_each_block_request(const char* name, size_t block_bytes, const O
 // for a second run or the Boolean's batches. (It found move_mesh_down copying into a block the
 // allocator had refused: a crash.)
 TEST(ExhaustionSweep, HeightfieldDesignWithEachBlockRequestRefused) {
-  const std::vector<uint8_t> text = fixture("cases/paper_scale.json");
-  test::TestArena held(size_t{64} << 20);
-  CaseFile c;
-  SPLINTCORE_ASSERT_OK(parse_case(Context(&held.arena), reinterpret_cast<const char*>(text.data()),
-                                  text.size(), "paper_scale", &c));
-  Mesh jaws[2];
-  ASSERT_TRUE(test::phantom_jaw_meshes(held.arena, 2000, jaws));
+  const PaperScaleCase p;
+  CaseFile c = p.c;
   std::vector<Pick> up(c.upper.begin(), c.upper.end()), lo(c.lower.begin(), c.lower.end());
-  for (Pick& p : up) p.position = p.position + c.occlusal_normal * 2.5;
-  for (Pick& p : lo) p.position = p.position - c.occlusal_normal * 2.5;
+  for (Pick& k : up) k.position = k.position + c.occlusal_normal * 2.5;
+  for (Pick& k : lo) k.position = k.position - c.occlusal_normal * 2.5;
   c.upper = Span<const Pick>(up.data(), up.size());
   c.lower = Span<const Pick>(lo.data(), lo.size());
   c.has_blockout = true;
@@ -897,14 +897,7 @@ TEST(ExhaustionSweep, HeightfieldDesignWithEachBlockRequestRefused) {
   for (double offset : {0.0, 0.3}) {  // the blockout, then the spacer (a clearance)
     c.blockout.offset = offset;
     DesignReport report;
-    const auto design = [&](Arena& a) {
-      OpRun r;
-      Mesh splint;
-      r.status = design_splint(Context(&a), c, Span<const Mesh>(jaws, 2), &splint, &report);
-      r.outputs_empty = mesh_empty(splint);
-      if (r.status.is_ok()) append_mesh(&r.output, splint);
-      return r;
-    };
+    const auto design = [&](Arena& a) { return p.design(a, c, &report); };
     {
       test::TestArena once(size_t{256} << 20);
       SPLINTCORE_ASSERT_OK(design(once.arena).status);
