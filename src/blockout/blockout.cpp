@@ -253,13 +253,12 @@ Status mark_near_splint(Arena& arena, const Mesh& splint, const Aabb& bounds, do
   for (int k = 0; k < 3; ++k) {
     const double cells = std::floor((bounds.hi[k] - bounds.lo[k]) / g->cell) + 5;
     if (!(cells < 1048576.0)) {
-      return make_error(StatusCode::kLimitExceeded, "blockout: the splint spans ", cells,
-                        " cells of ", g->cell, " mm (at most 2^20 per axis)");
+      return make_error(StatusCode::kLimitExceeded, "the splint spans ", cells, " cells of ",
+                        g->cell, " mm (at most 2^20 per axis)");
     }
     g->n[k] = static_cast<int64_t>(cells);
     if (!checked_mul(total, static_cast<uint64_t>(cells), &total) || total > SIZE_MAX) {
-      return make_error(StatusCode::kLimitExceeded,
-                        "blockout: the splint's cell grid is too large");
+      return make_error(StatusCode::kLimitExceeded, "the splint's cell grid is too large");
     }
   }
   g->flags = arena.allocate_array<uint8_t>(static_cast<size_t>(total));
@@ -271,7 +270,7 @@ Status mark_near_splint(Arena& arena, const Mesh& splint, const Aabb& bounds, do
     for (int k = 0; k < 3; ++k) {
       if (t.v[k] >= splint.vertices.size()) {
         return make_error(StatusCode::kInvalidMesh,
-                          "blockout: a splint triangle has a vertex id out of range")
+                          "a splint triangle has a vertex id out of range")
             .at_index(i);
       }
       box.add(splint.vertices[t.v[k]]);
@@ -648,14 +647,14 @@ Status blockout_exact(const Context& ctx, const Mesh& splint, Span<const Mesh> j
                       const BlockoutOptions& options, Mesh* result, BlockoutStats* st) {
   if (options.sweep.offset > 0) {
     return make_error(StatusCode::kInvalidArgument,
-                      "blockout: the exact sweep has no offset (a spacer is the sampled one's)");
+                      "the exact sweep has no offset (a spacer is the sampled one's)");
   }
   const Mesh* jaw = nullptr;
   for (const Mesh& m : jaws) {
     if (m.triangles.empty()) continue;
     if (jaw != nullptr) {
       return make_error(StatusCode::kInvalidArgument,
-                        "blockout: the exact sweep takes one jaw with triangles at a time");
+                        "the exact sweep takes one jaw with triangles at a time");
     }
     jaw = &m;
   }
@@ -736,8 +735,7 @@ Status blockout_heightfield(const Context& ctx, const Mesh& splint, const Aabb& 
                             Span<const Mesh> jaws, const BlockoutOptions& options, Mesh* result,
                             BlockoutStats* st) {
   if (options.sweep.inset > 0 || options.sweep.closing_radius > 0) {
-    return make_error(StatusCode::kInvalidArgument,
-                      "blockout: the height field takes no inset or closing");
+    return make_error(StatusCode::kInvalidArgument, "the height field takes no inset or closing");
   }
   SweepOptions so = options.sweep;
   so.has_region = true;
@@ -874,7 +872,7 @@ Status blockout(const Context& ctx, const Mesh& splint, Span<const Mesh> jaws,
     for (size_t i = 0; i < swept.vertices.size() && s.is_ok(); ++i) {
       if (!round_to_float32(&swept.vertices[i])) {
         s = make_error(StatusCode::kLimitExceeded,
-                       "blockout: a vertex of the swept volume is beyond float32 range")
+                       "a vertex of the swept volume is beyond float32 range")
                 .at_index(i);
       }
     }

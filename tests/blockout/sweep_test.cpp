@@ -1090,6 +1090,62 @@ TEST(ExactSweep, BlockoutOfTheConeIsTheBoxLessTheRimsCylinderAndUnlocked) {
   expect_cone_unlocked(&ta.arena, blocked, cone);
 }
 
+// What blockout() refuses before it sweeps (each text pinned, the arena as it was): the exact
+// sweep with an offset or with two jaws that have triangles, an output that is not empty, a
+// splint with no vertices; and the exact sweep with no jaw triangles gives the splint back as
+// it was.
+TEST(ExactSweep, BlockoutRefusalsAndNoJawGiveTheSplintBack) {
+  TestArena ta(size_t{64} << 20);
+  Context ctx(&ta.arena);
+  Mesh cones[2] = {Mesh(&ta.arena), Mesh(&ta.arena)};
+  frustum(&cones[0], 3.0, 5.0, 0.0, 8.0, 32);
+  frustum(&cones[1], 3.0, 5.0, 20.0, 28.0, 32);
+  const float lo[3] = {-7, -7, 4}, hi[3] = {7, 7, 10};
+  const Mesh box = box_mesh(&ta.arena, lo, hi);
+  BlockoutOptions o;
+  o.exact = true;
+  o.sweep.direction = Vec3{0, 0, -1};
+  const size_t used = ta.arena.used();
+  auto refused = [&](const Mesh& splint, Span<const Mesh> jaws, const BlockoutOptions& options,
+                     Mesh* out) {
+    const Status s = blockout(ctx, splint, jaws, options, out, nullptr);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+    EXPECT_EQ(ta.arena.used(), used);
+    return std::string(s.message());
+  };
+  Mesh out;
+  BlockoutOptions spacer = o;
+  spacer.sweep.offset = 0.2;
+  EXPECT_EQ(refused(box, Span<const Mesh>(cones, 1), spacer, &out),
+            "blockout: the exact sweep has no offset (a spacer is the sampled one's)");
+  EXPECT_EQ(refused(box, Span<const Mesh>(cones, 2), o, &out),
+            "blockout: the exact sweep takes one jaw with triangles at a time");
+  EXPECT_EQ(refused(Mesh(&ta.arena), Span<const Mesh>(cones, 1), o, &out),
+            "blockout: the splint has no vertices");
+  Mesh full(&ta.arena);
+  ASSERT_TRUE(full.triangles.push_back(Triangle{{0, 1, 2}}));
+  const size_t with_full = ta.arena.used();
+  EXPECT_EQ(
+      std::string(blockout(ctx, box, Span<const Mesh>(cones, 1), o, &full, nullptr).message()),
+      "blockout: the output mesh must be empty");
+  EXPECT_EQ(ta.arena.used(), with_full);
+  // No jaw with triangles: nothing is swept, the splint comes back bit for bit.
+  Mesh bare(&ta.arena);
+  for (const Vec3& p : cones[0].vertices) ASSERT_TRUE(bare.vertices.push_back(p));
+  Mesh same;
+  BlockoutStats st;
+  SPLINTCORE_ASSERT_OK(blockout(ctx, box, Span<const Mesh>(&bare, 1), o, &same, &st));
+  EXPECT_EQ(st.swept_triangles, 0u);
+  ASSERT_EQ(same.triangles.size(), box.triangles.size());
+  ASSERT_EQ(same.vertices.size(), box.vertices.size());
+  EXPECT_EQ(std::memcmp(same.triangles.data(), box.triangles.data(),
+                        box.triangles.size() * sizeof(Triangle)),
+            0);
+  EXPECT_EQ(
+      std::memcmp(same.vertices.data(), box.vertices.data(), box.vertices.size() * sizeof(Vec3)),
+      0);
+}
+
 // Front triangles whose prism cannot reach the region are left out, with no wall where they
 // were (the shell is open there, beyond the region); a direction along which the region lies
 // ahead keeps them. A tilted direction still gives a valid open surface.
