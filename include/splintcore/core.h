@@ -315,6 +315,43 @@ class ArenaScope {
   bool committed_ = false;
 };
 
+// Moves a result's arrays down over the temporaries below them: the arena is rewound to
+// `start` (its top kept), then each move() takes the array's room from there and copies it
+// (rewound bytes stay readable, Arena). Arrays must be moved in the order they were allocated:
+// then no destination lies above bytes not yet copied. In buffer mode every array fits where
+// it was. An arena of blocks may need a fresh block for one and its allocator may refuse it:
+// that array and the ones after it stay where they are (none of them was overwritten), and the
+// mover's end puts the top back above them: the result is whole, only not as low.
+class ArenaMover {
+ public:
+  ArenaMover(Arena& arena, const Arena::Marker& start) : arena_(arena), top_(arena.mark()) {
+    arena.rewind(start);
+  }
+  ~ArenaMover() {
+    if (stayed_) arena_.rewind(top_);
+  }
+  ArenaMover(const ArenaMover&) = delete;
+  ArenaMover& operator=(const ArenaMover&) = delete;
+
+  // The array's place now: moved, or where it was (nullptr for an empty or absent array).
+  template <class T>
+  T* move(const T* source, size_t count) {
+    if (source == nullptr || count == 0) return nullptr;
+    T* to = stayed_ ? nullptr : arena_.allocate_array<T>(count);
+    if (to == nullptr) {
+      stayed_ = true;
+      return const_cast<T*>(source);  // (the caller's own array, not a constant)
+    }
+    std::memmove(static_cast<void*>(to), source, count * sizeof(T));
+    return to;
+  }
+
+ private:
+  Arena& arena_;
+  Arena::Marker top_;
+  bool stayed_ = false;
+};
+
 // Two tasks' own arenas (Arena(buffer, size), one each) carved from a caller's: `bytes`
 // rounded up to the arena's alignment, which each slice starts at (false on overflow); and two
 // slices at the top of `arena` of need[0] and need[1] bytes (rounded up, into sizes), one

@@ -641,31 +641,13 @@ struct IndexBuild {
     }
   }
 
-  // The tree down over the Morton keys at `temps` (it was allocated after them; the nodes
-  // move first, so no destination lies above bytes not yet copied; rewound bytes stay
-  // readable, Arena).
+  // The tree down over the Morton keys at `temps` (it was allocated after them, the nodes
+  // first: ArenaMover).
   void move_tree_down(const Arena::Marker& temps) {
-    const Arena::Marker top = arena.mark();
-    arena.rewind(temps);
-    // In an arena of blocks the allocator may refuse a block a move needs (in buffer mode each
-    // fits where it was): that array and the ones after it stay where they are (none of them
-    // was overwritten), and the top goes back above them.
-    bool stayed = false;
-    const auto move = [&](auto* source) {
-      using T = std::remove_pointer_t<decltype(source)>;
-      if (source == nullptr) return source;
-      T* to = stayed ? nullptr : arena.allocate_array<T>(node_count);
-      if (to == nullptr) {
-        stayed = true;
-        return source;
-      }
-      std::memmove(static_cast<void*>(to), source, size_t{node_count} * sizeof(T));
-      return to;
-    };
-    nodes = move(nodes);
-    dipoles = move(dipoles);
-    obbs = move(obbs);
-    if (stayed) arena.rewind(top);
+    ArenaMover mover(arena, temps);
+    nodes = mover.move(nodes, node_count);
+    dipoles = mover.move(dipoles, node_count);
+    obbs = mover.move(obbs, node_count);
   }
 
   // Counting sort of the corners by vertex into vuses (kept, in triangle order) and `lists`,

@@ -131,28 +131,15 @@ void move_mesh_down(Arena& arena, const Arena::Marker& start, const Mesh& mesh, 
   const size_t v_count = mesh.vertices.size();
   const Triangle* src_t = mesh.triangles.data();
   const Vec3* src_v = mesh.vertices.data();
-  const Arena::Marker top = arena.mark();
-  arena.rewind(start);
-  // The array allocated first moves first: then no destination lies above bytes not yet copied.
-  // In buffer mode the moved arrays always fit where they were. An arena of blocks (hooks) may
-  // need a fresh block for one and its allocator may refuse it: that array and the next stay
-  // where they are (nothing of them was overwritten), and the top goes back where it was, so
-  // the mesh is whole, only not as low as asked.
-  bool stayed = false;
-  auto move = [&](const auto* source, size_t count) {
-    using T = std::remove_const_t<std::remove_pointer_t<decltype(source)>>;
-    T* to = stayed || count == 0 ? nullptr : arena.allocate_array<T>(count);
-    if (to == nullptr) {
-      stayed = stayed || count > 0;
-      return const_cast<T*>(source);
-    }
-    std::memmove(static_cast<void*>(to), source, count * sizeof(T));
-    return to;
-  };
-  Vec3* verts = vertices_first ? move(src_v, v_count) : nullptr;
-  Triangle* tris = move(src_t, t_count);
-  if (!vertices_first) verts = move(src_v, v_count);
-  if (stayed) arena.rewind(top);
+  Vec3* verts = nullptr;
+  Triangle* tris = nullptr;
+  {
+    // The array allocated first moves first (ArenaMover).
+    ArenaMover mover(arena, start);
+    if (vertices_first) verts = mover.move(src_v, v_count);
+    tris = mover.move(src_t, t_count);
+    if (!vertices_first) verts = mover.move(src_v, v_count);
+  }
   out->bind(&arena);
   out->triangles.adopt(tris, t_count, t_count);
   out->vertices.adopt(verts, v_count, v_count);

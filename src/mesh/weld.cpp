@@ -134,17 +134,11 @@ void ExactWelder::finish(Arena& arena, const Arena::Marker& marker, ArenaArray<V
     vertices->adopt(reserved_, count, count);
     return;
   }
-  const Arena::Marker top = arena.mark();
-  arena.rewind(marker);
-  Vec3* target = arena.allocate_array<Vec3>(count);
-  if (target == nullptr && count > 0) {
-    // (An arena of blocks whose allocator refused the block the move needs: in buffer mode
-    // it fits above the table.) The positions stay where they are, the top above them.
-    arena.rewind(top);
-    vertices->adopt(positions_.data(), count, count);
-    return;
+  Vec3* target = nullptr;
+  {
+    ArenaMover mover(arena, marker);  // (refused in an arena of blocks: they stay, the top above)
+    target = mover.move(positions_.data(), count);
   }
-  if (count > 0) std::memmove(static_cast<void*>(target), positions_.data(), count * sizeof(Vec3));
   vertices->adopt(target, count, count);
 }
 

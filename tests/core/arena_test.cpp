@@ -148,6 +148,92 @@ TEST(Arena, HooksModeTakesBlocksUnderTheCapAndReleasesThem) {
   EXPECT_EQ(counts.live_bytes, 0u);
 }
 
+// Arrays of n values from `first` on, and whether one still holds them.
+uint32_t* filled(Arena& arena, size_t n, uint32_t first) {
+  uint32_t* a = arena.allocate_array<uint32_t>(n);
+  if (a != nullptr)
+    for (size_t i = 0; i < n; ++i) a[i] = first + static_cast<uint32_t>(i);
+  return a;
+}
+bool holds(const uint32_t* a, size_t n, uint32_t first) {
+  for (size_t i = 0; i < n; ++i)
+    if (a[i] != first + static_cast<uint32_t>(i)) return false;
+  return true;
+}
+
+TEST(ArenaMover, MovesArraysDownOverTheTemporariesInBufferMode) {
+  alignas(Arena::kDefaultAlignment) unsigned char buffer[8192];
+  Arena arena(buffer, sizeof(buffer));
+  ASSERT_NE(arena.allocate(32), nullptr);  // below the start: kept
+  const Arena::Marker start = arena.mark();
+  ASSERT_NE(filled(arena, 500, 0), nullptr);  // temporaries
+  uint32_t* a = filled(arena, 300, 1000);
+  uint32_t* b = filled(arena, 200, 5000);
+  ASSERT_NE(b, nullptr);
+  uint32_t *moved_a = nullptr, *moved_b = nullptr, *absent = nullptr;
+  {
+    ArenaMover mover(arena, start);
+    moved_a = mover.move(a, 300);
+    EXPECT_EQ(mover.move(a, 0), nullptr);  // an empty array is nowhere
+    moved_b = mover.move(b, 200);
+    EXPECT_EQ(mover.move(absent, 7), nullptr);  // nor an absent one
+  }
+  EXPECT_EQ(static_cast<void*>(moved_a), static_cast<void*>(buffer + 32));
+  EXPECT_TRUE(holds(moved_a, 300, 1000));
+  EXPECT_EQ(moved_b, moved_a + 300);  // 1,200 bytes: a multiple of the alignment
+  EXPECT_TRUE(holds(moved_b, 200, 5000));
+  EXPECT_EQ(arena.used(), 32u + 2000u);  // the temporaries given back
+}
+
+// An arena of blocks: the first moved array needs a fresh block (the one below has no room,
+// the cached one above is too small). Given, the arrays move; refused, both stay where they
+// were, the top back above them, and nothing of either is overwritten.
+TEST(ArenaMover, ArraysStayWhereTheyAreWhenTheAllocatorRefusesABlock) {
+  for (const bool refuse : {false, true}) {
+    SCOPED_TRACE(refuse ? "refused" : "given");
+    struct Hook {
+      int given = 0;
+      int limit = 1 << 30;
+    } hook;
+    const auto allocate = [](void* user, size_t bytes) -> void* {
+      auto* h = static_cast<Hook*>(user);
+      return h->given++ < h->limit ? std::malloc(bytes) : nullptr;
+    };
+    const auto release = [](void*, void* p, size_t) { std::free(p); };
+    Arena arena(AllocatorHooks{allocate, release, &hook}, 1 << 20, 4096);
+    ASSERT_NE(arena.allocate(100), nullptr);  // the first block: 100 bytes kept
+    const Arena::Marker start = arena.mark();
+    ASSERT_NE(arena.allocate(4000), nullptr);  // a temporary: the second block (4,048 bytes)
+    uint32_t* a = filled(arena, 1500, 7);      // 6,000 bytes: a third block, its own size
+    uint32_t* b = filled(arena, 50, 90000);    // a fourth block
+    ASSERT_NE(b, nullptr);
+    const int blocks = hook.given;
+    if (refuse) hook.limit = blocks;
+    const size_t top = arena.used();
+    uint32_t *moved_a = nullptr, *moved_b = nullptr;
+    {
+      ArenaMover mover(arena, start);
+      moved_a = mover.move(a, 1500);
+      moved_b = mover.move(b, 50);
+    }
+    EXPECT_EQ(hook.given, blocks + 1);  // one request for a block, given or refused
+    EXPECT_TRUE(holds(moved_a, 1500, 7));
+    EXPECT_TRUE(holds(moved_b, 50, 90000));
+    if (refuse) {
+      EXPECT_EQ(moved_a, a);
+      EXPECT_EQ(moved_b, b);
+      EXPECT_EQ(arena.used(), top);
+      uint32_t* next = filled(arena, 10, 0);  // the next allocation lands above them
+      ASSERT_NE(next, nullptr);
+      EXPECT_TRUE(holds(a, 1500, 7));
+      EXPECT_TRUE(holds(b, 50, 90000));
+    } else {
+      EXPECT_NE(moved_a, a);
+      EXPECT_LT(arena.used(), top);
+    }
+  }
+}
+
 TEST(ArenaArray, GrowsInPlaceAtTopAndCopiesOtherwise) {
   test::TestArena t(1 << 20);
   ArenaArray<int> a(&t.arena);
