@@ -159,6 +159,38 @@ void hook_release(void* user, void* pointer, size_t bytes) {
   std::free(pointer);
 }
 
+// `op` in an arena of `block_bytes` blocks whose allocator refuses the Nth block request the
+// operation makes (N = refuse, 0-based), after a first allocation of `first` bytes (so that
+// "the top is back" is tested above a non-empty arena too; none when 0). A failure must be clean
+// (check_failure); every block must go back with its size. *requests: the operation's block
+// requests (more than `refuse` when the refused one was reached).
+OpRun run_refusing_block(const char* name, const Operation& op, size_t block_bytes, size_t first,
+                         uint64_t refuse, uint64_t* requests) {
+  HookState h;
+  AllocatorHooks hooks;
+  hooks.allocate = hook_allocate;
+  hooks.release = hook_release;
+  hooks.user = &h;
+  const std::string where = "block " + std::to_string(refuse);
+  OpRun r;
+  uint64_t before = 0;
+  {
+    Arena arena(hooks, size_t{1} << 30, block_bytes);
+    if (first > 0) {
+      EXPECT_NE(arena.allocate(first), nullptr);
+    }
+    before = h.requests;
+    h.fail_at = before + refuse;
+    r = op(arena);
+    if (!r.status.is_ok()) check_failure(name, r, arena, first, where);
+  }
+  EXPECT_EQ(h.allocations, h.releases) << name << " " << where;
+  EXPECT_EQ(h.outstanding, 0u) << name << " " << where;
+  EXPECT_FALSE(h.mismatch) << name << " " << where;
+  *requests = h.requests - before;
+  return r;
+}
+
 // Failure points tried by every sweep run so far in this process (printed after each).
 Counts g_total;
 uint64_t g_operations = 0;
@@ -241,25 +273,8 @@ Counts sweep(const char* name, const Operation& op, size_t reference_cap = size_
   // (at most a few hundred blocks per run).
   const size_t block_bytes = need / 256 > 4096 ? (need / 256 + 4095) / 4096 * 4096 : 4096;
   for (uint64_t n = 0; n < 100000; ++n) {
-    HookState h;
-    AllocatorHooks hooks;
-    hooks.allocate = hook_allocate;
-    hooks.release = hook_release;
-    hooks.user = &h;
-    OpRun r;
-    {
-      Arena arena(hooks, size_t{1} << 30, block_bytes);
-      // A first allocation, so "the top is back" is tested above a non-empty arena too.
-      EXPECT_NE(arena.allocate(16), nullptr);
-      h.fail_at = h.requests + n;
-      r = op(arena);
-      if (!r.status.is_ok()) {
-        check_failure(name, r, arena, 16, "block " + std::to_string(n));
-      }
-    }
-    EXPECT_EQ(h.allocations, h.releases) << name << " block " << n;
-    EXPECT_EQ(h.outstanding, 0u) << name << " block " << n;
-    EXPECT_FALSE(h.mismatch) << name << " block " << n;
+    uint64_t requests = 0;
+    const OpRun r = run_refusing_block(name, op, block_bytes, 16, n, &requests);
     if (r.status.is_ok()) {
       EXPECT_EQ(r.output, expected) << name << " block " << n;
       break;
@@ -834,22 +849,9 @@ TEST(ExhaustionSweep, DesignSplintPaperScaleSmallPhantom) {
 // none refused. Returns the number of runs that failed; prints the counts.
 uint64_t refuse_each_block_request(const char* name, size_t block_bytes, const Operation& op) {
   auto run = [&](uint64_t fail_at, bool* reached) {
-    HookState h;
-    AllocatorHooks hooks;
-    hooks.allocate = hook_allocate;
-    hooks.release = hook_release;
-    hooks.user = &h;
-    OpRun r;
-    {
-      Arena arena(hooks, size_t{1} << 30, block_bytes);
-      h.fail_at = fail_at;
-      r = op(arena);
-      if (!r.status.is_ok()) check_failure(name, r, arena, 0, "block " + std::to_string(fail_at));
-    }
-    EXPECT_EQ(h.allocations, h.releases) << name << " block " << fail_at;
-    EXPECT_EQ(h.outstanding, 0u) << name << " block " << fail_at;
-    EXPECT_FALSE(h.mismatch) << name << " block " << fail_at;
-    *reached = h.requests > fail_at;
+    uint64_t requests = 0;
+    const OpRun r = run_refusing_block(name, op, block_bytes, 0, fail_at, &requests);
+    *reached = requests > fail_at;
     return r;
   };
   bool reached = false;
