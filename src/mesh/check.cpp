@@ -574,19 +574,26 @@ Status check_mesh(const Context& ctx, const Mesh& mesh, MeshReport* report) {
   return Status::ok();
 }
 
+namespace {
+// "s" after a count other than 1 (the messages' nouns).
+const char* plural(uint64_t count) { return count == 1 ? "" : "s"; }
+}  // namespace
+
 Status require_valid_solid(const MeshReport& r) {
   if (r.triangle_count == 0) {
     return Status::error(StatusCode::kInvalidMesh, "mesh is empty: no triangles");
   }
   if (r.boundary_edges > 0) {
     return make_error(StatusCode::kInvalidMesh, "mesh is not closed: ", r.boundary_edges,
-                      " boundary edges, first between vertices ", r.first_boundary_edge.v0, " and ",
-                      r.first_boundary_edge.v1, " (triangle ", r.first_boundary_edge.triangle, ")")
+                      " boundary edge", plural(r.boundary_edges), ", first between vertices ",
+                      r.first_boundary_edge.v0, " and ", r.first_boundary_edge.v1, " (triangle ",
+                      r.first_boundary_edge.triangle, ")")
         .at_index(r.first_boundary_edge.triangle);
   }
   if (r.nonmanifold_edges > 0) {
     return make_error(StatusCode::kInvalidMesh, "mesh is not edge-manifold: ", r.nonmanifold_edges,
-                      " edges shared by 3 or more triangles, first between "
+                      " edge", plural(r.nonmanifold_edges),
+                      " shared by 3 or more triangles, first between "
                       "vertices ",
                       r.first_nonmanifold_edge.v0, " and ", r.first_nonmanifold_edge.v1,
                       " (triangle ", r.first_nonmanifold_edge.triangle, ")")
@@ -594,8 +601,9 @@ Status require_valid_solid(const MeshReport& r) {
   }
   if (r.orientation_conflicts > 0) {
     return make_error(StatusCode::kInvalidMesh,
-                      "mesh is not consistently oriented: ", r.orientation_conflicts,
-                      " edges used twice in the same direction, first "
+                      "mesh is not consistently oriented: ", r.orientation_conflicts, " edge",
+                      plural(r.orientation_conflicts),
+                      " used twice in the same direction, first "
                       "between vertices ",
                       r.first_orientation_conflict.v0, " and ", r.first_orientation_conflict.v1,
                       " (triangle ", r.first_orientation_conflict.triangle, ")")
@@ -603,13 +611,14 @@ Status require_valid_solid(const MeshReport& r) {
   }
   if (r.degenerate_triangles > 0) {
     return make_error(StatusCode::kInvalidMesh, "mesh has ", r.degenerate_triangles,
-                      " degenerate (zero-area) triangles, first is triangle ",
-                      r.first_degenerate_triangle)
+                      " degenerate (zero-area) triangle", plural(r.degenerate_triangles),
+                      ", first is triangle ", r.first_degenerate_triangle)
         .at_index(r.first_degenerate_triangle);
   }
   if (r.duplicate_triangles > 0) {
     return make_error(StatusCode::kInvalidMesh, "mesh has ", r.duplicate_triangles,
-                      " duplicate triangles, first is triangle ", r.first_duplicate_triangle)
+                      " duplicate triangle", plural(r.duplicate_triangles), ", first is triangle ",
+                      r.first_duplicate_triangle)
         .at_index(r.first_duplicate_triangle);
   }
   if (!(r.volume > 0.0)) {

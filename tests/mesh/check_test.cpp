@@ -169,6 +169,12 @@ TEST(CheckMesh, RequireValidSolidNamesTheFirstDefectAndWhereItIs) {
          r->triangle_count = 0;
          r->nonmanifold_edges = 1;  // the first check wins
        }},
+      {"mesh is not closed: 1 boundary edge, first between vertices 1 and 2 (triangle 4)", 4,
+       [](MeshReport* r) {
+         r->boundary_edges = 1;
+         r->first_boundary_edge = EdgeRef{1, 2, 4};
+         r->nonmanifold_edges = 1;
+       }},
       {"mesh is not edge-manifold: 2 edges shared by 3 or more triangles, first between "
        "vertices 3 and 7 (triangle 11)",
        11,
@@ -191,7 +197,7 @@ TEST(CheckMesh, RequireValidSolidNamesTheFirstDefectAndWhereItIs) {
          r->first_degenerate_triangle = 9;
          r->duplicate_triangles = 1;
        }},
-      {"mesh has 1 duplicate triangles, first is triangle 10", 10,
+      {"mesh has 1 duplicate triangle, first is triangle 10", 10,
        [](MeshReport* r) {
          r->duplicate_triangles = 1;
          r->first_duplicate_triangle = 10;
@@ -226,7 +232,7 @@ TEST(CheckMesh, RequireValidSolidNamesTheFirstDefectAndWhereItIs) {
   EXPECT_GT(r.volume, 0.0);
   const Status s = require_valid_solid(r);
   EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
-  EXPECT_NE(std::strstr(s.message(), "not edge-manifold: 1 edges shared by 3 or more"), nullptr)
+  EXPECT_NE(std::strstr(s.message(), "not edge-manifold: 1 edge shared by 3 or more"), nullptr)
       << s.message();
   EXPECT_NE(std::strstr(s.message(), "between vertices 0 and 3"), nullptr) << s.message();
 }
