@@ -106,7 +106,7 @@ Status make_grid(const SweepOptions& o, const HeightfieldOptions& ho, Grid* g) {
     const Vec3 c{(k & 1) ? o.region.hi.x : o.region.lo.x, (k & 2) ? o.region.hi.y : o.region.lo.y,
                  (k & 4) ? o.region.hi.z : o.region.lo.z};
     local.add(to_local(g->frame, c));
-    largest = max3_of(largest, std::fabs(c.x), max_of(std::fabs(c.y), std::fabs(c.z)));
+    largest = max_of(largest, max3_of(std::fabs(c.x), std::fabs(c.y), std::fabs(c.z)));
   }
   g->cell = o.voxel;
   const double across_u = (local.hi.x - local.lo.x) / o.voxel + 5.0;
