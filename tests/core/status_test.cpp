@@ -1,3 +1,4 @@
+#include "splintcore/splintcore.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -127,6 +128,15 @@ TEST(StatusDeathTest, AFailedAssertionTellsTheHandlerThenAborts) {
         assert_failed("x", "y.cpp", 7);
       },
       "splintcore: assertion failed: x \\(y.cpp:7\\)");
+  // The C API's setter (splintcore.h) installs the same handler.
+  EXPECT_DEATH(
+      {
+        sc_set_assert_handler([](const char* expression, const char* file, int line) {
+          std::fprintf(stderr, "C embedder saw %s at %s:%d\n", expression, file, line);
+        });
+        assert_failed("n != nullptr", "src/capi/capi.cpp", 201);
+      },
+      "C embedder saw n != nullptr at src/capi/capi.cpp:201");
 }
 
 }  // namespace
