@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "common/phantom.h"
+#include "common/shapes.h"
 #include "registration/linalg.h"
 #include "splintcore/platform.h"
 #include "splintcore/registration.h"
@@ -424,6 +425,104 @@ TEST(Register, SameBitsAtAnyThreadCount) {
     EXPECT_EQ(x->iterations, a.iterations);
     EXPECT_EQ(x->start, a.start);
   }
+}
+
+// What register_rigid() refuses before it fits, each with the cause (and the element where
+// there is one), the arena as it was: options out of range, too few scan vertices or no CT
+// triangles, a non-finite scan vertex, a scan triangle naming a vertex out of range, no area
+// for the automatic alignment; and fit_landmarks() a non-finite pair.
+TEST(Register, RefusesBadInputsNamingTheCause) {
+  test::TestArena t(size_t{8} << 20);
+  const float lo[3] = {0, 0, 0}, hi[3] = {10, 8, 6};
+  Mesh ct(&t.arena), scan(&t.arena);
+  SPLINTCORE_ASSERT_OK(test::mesh_from_soup(t.arena, shapes::box(lo, hi), &ct));
+  // The scan: a 5 x 5 grid of points over the box's top, two triangles per square.
+  for (int j = 0; j < 5; ++j) {
+    for (int i = 0; i < 5; ++i) ASSERT_TRUE(scan.vertices.push_back(Vec3{2.0 * i, 2.0 * j, 6}));
+  }
+  for (uint32_t j = 0; j < 4; ++j) {
+    for (uint32_t i = 0; i < 4; ++i) {
+      const uint32_t a = 5 * j + i;
+      ASSERT_TRUE(scan.triangles.push_back(Triangle{{a, a + 1, a + 6}}));
+      ASSERT_TRUE(scan.triangles.push_back(Triangle{{a, a + 6, a + 5}}));
+    }
+  }
+  const auto refused = [&](const Mesh& s, const Mesh& c, const RegisterOptions& o) {
+    const size_t used = t.arena.used();
+    RegisterResult r;
+    const Status st = register_rigid(Context(&t.arena), s, c, o, &r);
+    EXPECT_EQ(t.arena.used(), used);
+    return st;
+  };
+  const char* const kOptions =
+      "registration: options out of range (overlap in (0, 1], max_rms_mm, inlier_mm and "
+      "landmark_tolerance_mm > 0, max_samples >= 16, max_iterations >= 1, min_facing in [0, 1], "
+      "toward_other_jaw finite)";
+  const double nan = std::nan("");
+  void (*const bad_options[])(RegisterOptions*) = {
+      [](RegisterOptions* o) { o->overlap = 0; },
+      [](RegisterOptions* o) { o->overlap = 1.5; },
+      [](RegisterOptions* o) { o->max_rms_mm = 0; },
+      [](RegisterOptions* o) { o->max_rms_mm = HUGE_VAL; },
+      [](RegisterOptions* o) { o->inlier_mm = std::nan(""); },
+      [](RegisterOptions* o) { o->landmark_tolerance_mm = -1; },
+      [](RegisterOptions* o) { o->max_samples = 15; },
+      [](RegisterOptions* o) { o->max_iterations = 0; },
+      [](RegisterOptions* o) { o->min_facing = 1.5; },
+      [](RegisterOptions* o) {
+        o->toward_other_jaw = Vec3{0, 0, HUGE_VAL};
+      },
+  };
+  for (size_t k = 0; k < sizeof(bad_options) / sizeof(bad_options[0]); ++k) {
+    RegisterOptions o;
+    bad_options[k](&o);
+    const Status st = refused(scan, ct, o);
+    EXPECT_EQ(st.code(), StatusCode::kInvalidArgument) << k;
+    EXPECT_STREQ(st.message(), kOptions) << k;
+  }
+  // 15 scan vertices; a CT jaw with no triangles.
+  Mesh few(&t.arena);
+  for (uint32_t i = 0; i < 15; ++i) ASSERT_TRUE(few.vertices.push_back(scan.vertices[i]));
+  Status st = refused(few, ct, RegisterOptions{});
+  EXPECT_EQ(st.code(), StatusCode::kInvalidMesh);
+  EXPECT_STREQ(st.message(),
+               "registration: the scan has 15 vertices (at least 16 needed) and the CT jaw 12 "
+               "triangles");
+  Mesh empty(&t.arena);
+  st = refused(scan, empty, RegisterOptions{});
+  EXPECT_STREQ(st.message(),
+               "registration: the scan has 25 vertices (at least 16 needed) and the CT jaw 0 "
+               "triangles");
+  scan.vertices[7].y = nan;
+  st = refused(scan, ct, RegisterOptions{});
+  EXPECT_EQ(st.code(), StatusCode::kInvalidMesh);
+  EXPECT_STREQ(st.message(), "registration: scan vertex 7 is not finite");
+  EXPECT_EQ(st.index(), 7u);
+  scan.vertices[7].y = 2;
+  scan.triangles[30].v[2] = 25;
+  st = refused(scan, ct, RegisterOptions{});
+  EXPECT_EQ(st.code(), StatusCode::kInvalidMesh);
+  EXPECT_STREQ(st.message(), "registration: scan triangle 30 names a vertex out of range");
+  EXPECT_EQ(st.index(), 30u);
+  // No triangles: no area for the automatic alignment's moments; landmarks would do.
+  Mesh points(&t.arena);
+  for (size_t i = 0; i < scan.vertices.size(); ++i) {
+    ASSERT_TRUE(points.vertices.push_back(scan.vertices[i]));
+  }
+  st = refused(points, ct, RegisterOptions{});
+  EXPECT_EQ(st.code(), StatusCode::kInvalidMesh);
+  EXPECT_STREQ(st.message(),
+               "registration: a mesh has no area (the automatic alignment needs the scan's and "
+               "the CT's triangles); give landmarks");
+  // A landmark pair with a non-finite point.
+  const LandmarkPair pairs[3] = {
+      {{0, 0, 0}, {0, 0, 0}}, {{1, 0, 0}, {1, 0, nan}}, {{0, 1, 0}, {0, 1, 0}}};
+  RigidTransform x;
+  double rms = 0;
+  st = fit_landmarks(Span<const LandmarkPair>(pairs, 3), &x, &rms);
+  EXPECT_EQ(st.code(), StatusCode::kInvalidArgument);
+  EXPECT_STREQ(st.message(), "registration: landmark pair 1 is not finite");
+  EXPECT_EQ(st.index(), 1u);
 }
 
 TEST(RegisterAlgebra, JacobiCholeskyAndQuaternions) {
