@@ -1,5 +1,6 @@
 /* The C API (include/splintcore/splintcore.h) from plain C99: contexts and arena exhaustion,
- * STL round trips through memory, mesh checks, errors with their location, the exact Boolean,
+ * STL round trips through memory, mesh checks, errors with their location, the refusals of
+ * NULL pointers and values out of range, the exact Boolean,
  * the sweep, case parameters, and the whole design of fixtures/cases/paper_scale.json with the
  * 6,000-triangle phantom jaws (written by `splintcore phantom` as a ctest fixture), whose bytes
  * must be the golden splint's; the automatic outline (sc_outline, the resolved case's picks,
@@ -1766,6 +1767,138 @@ static void test_design_plan_scans(const char* jaws_dir) {
   free(jaw_bytes[1].data);
 }
 
+/* Every entry point given a NULL where it needs a pointer: SC_INVALID_ARGUMENT, kept in the
+ * context, with a message naming the function and what was NULL; nothing allocated. Then the
+ * ranges the C layer checks itself: too many meshes or a NULL one in a list, a non-finite
+ * vertex, an output array too small, a zero read or write buffer, a bad solid name, and the
+ * case parameters' corner segments, insertion direction and closing radius. */
+static void test_null_and_range_refusals(const Bytes* torus, const Bytes* case_text) {
+  Fixture f = open_fixture((size_t)4 << 20);
+  sc_context* ctx = f.ctx;
+  sc_mesh* m = NULL;
+  sc_mesh* out = NULL;
+  sc_case* c = NULL;
+  sc_memory_sink_state sink_state;
+  unsigned char buffer[256];
+  const sc_sink sink = sc_memory_sink(&sink_state, buffer, sizeof buffer, "buffer");
+  const double z[3] = {0, 0, 1};
+  const sc_mesh* jaws[9];
+  double vertices[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  uint32_t ids[3] = {0, 1, 2};
+  sc_case_params p, q;
+  double mm = 0;
+  size_t used, i;
+  CHECK_OK(ctx, read_mesh(ctx, torus, "torus", &m));
+  CHECK_OK(ctx, sc_case_parse(ctx, (const char*)case_text->data, case_text->size,
+                              "paper_scale.json", &c));
+  used = sc_arena_used(ctx);
+  for (i = 0; i < 9; ++i) jaws[i] = m;
+  CHECK(refused_with(ctx, sc_mesh_from_arrays(ctx, NULL, 3, ids, 1, &out),
+                     "sc_mesh_from_arrays: an array with a non-zero count is NULL"));
+  CHECK(refused_with(ctx, sc_mesh_copy_vertices(ctx, NULL, vertices, 9),
+                     "sc_mesh_copy_vertices: the mesh or the output is NULL"));
+  CHECK(refused_with(ctx, sc_mesh_copy_triangles(ctx, m, NULL, 9),
+                     "sc_mesh_copy_triangles: the mesh or the output is NULL"));
+  CHECK(refused_with(ctx, sc_mesh_write_stl(ctx, m, NULL, NULL),
+                     "sc_mesh_write_stl: the mesh, the sink or its write function is NULL"));
+  CHECK(refused_with(ctx, sc_mesh_check(ctx, m, NULL), "sc_mesh_check: the mesh or the report"));
+  CHECK(refused_with(ctx, sc_mesh_boolean(ctx, m, NULL, 0, &out),
+                     "sc_mesh_boolean: a mesh or the output is NULL"));
+  CHECK(refused_with(ctx, sc_sweep(ctx, jaws, 1, NULL, 0.5, &out),
+                     "sc_sweep: the direction or the output is NULL"));
+  CHECK(refused_with(ctx, sc_register_rigid(ctx, m, m, NULL, NULL),
+                     "sc_register_rigid: the scan, the CT jaw or the result is NULL"));
+  CHECK(refused_with(ctx, sc_case_parse(ctx, NULL, 10, "x", &c),
+                     "sc_case_parse: the text or the output is NULL"));
+  CHECK(refused_with(ctx, sc_case_get_params(ctx, c, NULL),
+                     "sc_case_get_params: the case or the output is NULL"));
+  CHECK(refused_with(ctx, sc_case_set_params(ctx, c, NULL),
+                     "sc_case_set_params: the case or the parameters is NULL"));
+  CHECK(refused_with(ctx, sc_case_set_blockout_clearance(ctx, NULL, 0.1),
+                     "sc_case_set_blockout_clearance: the case is NULL"));
+  CHECK(refused_with(ctx, sc_case_write(ctx, c, NULL),
+                     "sc_case_write: the case, the sink or its write function is NULL"));
+  CHECK(refused_with(ctx, sc_design(ctx, NULL, jaws, 2, &out, NULL),
+                     "sc_design: the case or the output is NULL"));
+  CHECK(refused_with(ctx, sc_design_scans(ctx, c, jaws, jaws, 2, NULL, NULL),
+                     "sc_design_scans: the case or the output is NULL"));
+  CHECK(refused_with(ctx, sc_design_write_report(ctx, c, jaws, 2, NULL, NULL, &sink),
+                     "sc_design_write_report: the case, the splint or the sink is NULL"));
+  CHECK(refused_with(ctx, sc_design_blockout_used(ctx, NULL, 0, &mm, &mm),
+                     "sc_design_blockout_used: the splint is NULL"));
+  CHECK(refused_with(ctx, sc_design_plan(ctx, NULL, jaws, 2, &out, &out, &sink, NULL),
+                     "sc_design_plan: the case or an output is NULL"));
+  CHECK(refused_with(ctx, sc_design_plan_scans(ctx, c, jaws, jaws, 2, NULL, &out, &sink, NULL),
+                     "sc_design_plan_scans: the case or an output is NULL"));
+  {
+    sc_sink no_write = sink;
+    no_write.write = NULL;
+    CHECK(refused_with(ctx, sc_design_plan(ctx, c, jaws, 2, &out, &out, &no_write, NULL),
+                       "sc_design_plan: the job sink's write function is NULL"));
+  }
+  /* Lists of meshes. */
+  CHECK(refused_with(ctx, sc_sweep(ctx, jaws, 9, z, 0.5, &out),
+                     "sc_sweep: 9 meshes given, at most 8"));
+  CHECK(
+      refused_with(ctx, sc_sweep(ctx, NULL, 1, z, 0.5, &out), "sc_sweep: the mesh array is NULL"));
+  jaws[1] = NULL;
+  CHECK(refused_with(ctx, sc_sweep(ctx, jaws, 2, z, 0.5, &out), "sc_sweep: mesh 1 is NULL"));
+  {
+    sc_location where;
+    sc_status_location(ctx, &where);
+    CHECK(where.index == 1);
+  }
+  jaws[1] = m;
+  /* Values. */
+  vertices[4] = strtod("nan", NULL);
+  CHECK(sc_mesh_from_arrays(ctx, vertices, 3, ids, 1, &out) == SC_NON_FINITE);
+  {
+    char text[256];
+    last_message(ctx, text, sizeof text);
+    CHECK(contains(text, "sc_mesh_from_arrays: vertex 1 is not finite"));
+  }
+  CHECK(refused_with(ctx, sc_mesh_copy_triangles(ctx, m, ids, 3),
+                     "sc_mesh_copy_triangles: the output holds 3 ids, "));
+  {
+    sc_stl_read_options r = sc_stl_read_defaults();
+    sc_stl_write_options w = sc_stl_write_defaults();
+    sc_memory_source_state state;
+    sc_source src = sc_memory_source(&state, torus->data, torus->size, "torus");
+    r.chunk_bytes = 0;
+    CHECK(refused_with(ctx, sc_mesh_read_stl(ctx, &src, &r, &out),
+                       "sc_mesh_read_stl: chunk_bytes must be > 0"));
+    w.buffer_bytes = 0;
+    CHECK(refused_with(ctx, sc_mesh_write_stl(ctx, m, &sink, &w),
+                       "sc_mesh_write_stl: buffer_bytes must be > 0"));
+    w = sc_stl_write_defaults();
+    w.ascii = 1;
+    w.solid_name = "no spaces";
+    CHECK(refused_with(ctx, sc_mesh_write_stl(ctx, m, &sink, &w),
+                       "sc_mesh_write_stl: solid name \"no spaces\" is not 1..80 of"));
+  }
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &p));
+  q = p;
+  q.corner_segments = 3;
+  CHECK(refused_with(ctx, sc_case_set_params(ctx, c, &q),
+                     "sc_case_set_params: corner_segments is 3, must be 1, 2, 4, 8 or 16"));
+  q = p;
+  q.has_insertion_direction = 1;
+  q.insertion_direction[0] = q.insertion_direction[1] = q.insertion_direction[2] = 0;
+  CHECK(refused_with(ctx, sc_case_set_params(ctx, c, &q),
+                     "sc_case_set_params: insertion_direction must be finite and non-zero"));
+  q = p;
+  blockout_along_z(&q, 0.5);
+  q.blockout_method = SC_BLOCKOUT_VOXEL;
+  q.blockout_closing_mm = 0.5;
+  CHECK(refused_with(ctx, sc_case_set_params(ctx, c, &q),
+                     "sc_case_set_params: blockout_closing_mm is 0.5, must be 0 or at least two "
+                     "voxels (1)"));
+  CHECK(sc_arena_used(ctx) == used); /* nothing was kept */
+  sc_arena_reset(ctx);
+  CHECK(sc_arena_used(ctx) == 0);
+  close_fixture(&f);
+}
+
 int main(int argc, char** argv) {
   Bytes torus, case_text;
   if (argc < 2) {
@@ -1796,6 +1929,7 @@ int main(int argc, char** argv) {
   test_register(&torus);
   test_operations();
   test_case_params(&case_text);
+  test_null_and_range_refusals(&torus, &case_text);
   if (argc >= 3) {
     test_design(&case_text, argv[2]);
     test_design_scans(&case_text, argv[2]);
