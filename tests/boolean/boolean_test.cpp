@@ -916,5 +916,40 @@ TEST(BooleanBatches, SameResultInLessMemory) {
   EXPECT_EQ(least.stats.attempts, full.stats.attempts);
 }
 
+// More uncut shells than a side sums directly (kDirectWindings, 4): from the fifth winding
+// query on, the other mesh's index answers, with the same classification. A = a 20 mm box; B =
+// one cube across A's face (so that the run cuts) and eight apart from everything: six inside
+// A (cavities of the difference, gone from the union: a winding query each), two outside, far
+// from A's box (gone from the difference, kept by the union; no query). The volumes are exact
+// sums of whole cubes.
+TEST(BooleanTest, ManyUncutShellsAreClassifiedThroughTheIndex) {
+  TestArena t(size_t{16} << 20);
+  Arena& arena = t.arena;
+  const RigidTransform id;
+  const Mesh a = box_mesh(arena, {0, 0, 0}, {20, 20, 20}, id);
+  Mesh b = box_mesh(arena, {18, 8, 8}, {22, 12, 12}, id);  // 2 x 4 x 4 inside A, as much out
+  const Vec3 inside[6] = {{2, 2, 2}, {2, 2, 6}, {2, 6, 2}, {6, 2, 2}, {6, 6, 2}, {2, 6, 6}};
+  const Vec3 outside[2] = {{30, 0, 0}, {30, 5, 0}};
+  for (const Vec3& lo : inside) append_mesh(box_mesh(arena, lo, lo + Vec3{1, 1, 1}, id), &b);
+  for (const Vec3& lo : outside) append_mesh(box_mesh(arena, lo, lo + Vec3{1, 1, 1}, id), &b);
+  struct Want {
+    BooleanOp op;
+    double volume;
+    uint64_t shells;
+  };
+  const Want wants[] = {{BooleanOp::kDifference, 8000.0 - 32 - 6, 7},
+                        {BooleanOp::kUnion, 8000.0 + 32 + 2, 3}};
+  for (const Want& w : wants) {
+    ArenaScope scope(arena);
+    Mesh out;
+    BooleanStats stats;
+    SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&arena), a, b, opts(w.op), &out, &stats));
+    const MeshReport r = report_of(arena, out);
+    EXPECT_TRUE(r.is_valid_solid()) << test::format(require_valid_solid(r));
+    EXPECT_EQ(r.shells, w.shells);
+    EXPECT_NEAR(r.volume, w.volume, 1e-9);
+    EXPECT_EQ(stats.winding_queries, 6u);  // one per cube inside A's box (the others are far)
+  }
+}
 }  // namespace
 }  // namespace splintcore
