@@ -327,6 +327,67 @@ TEST(Sweep, RejectsBadOptionsAndInput) {
   Mesh empty(&ta.arena);
   EXPECT_EQ(sweep_volume(ctx, Span<const Mesh>(&empty, 1), SweepOptions{}, none).code(),
             StatusCode::kInvalidArgument);
+  // The other options' ranges, each text pinned (checked before anything is allocated), a
+  // triangle naming a vertex out of range, an empty region, and an output that is not empty.
+  struct Bad {
+    void (*set)(SweepOptions*);
+    const char* text;
+  };
+  const auto keep = [](const void*, const Vec3&, const Vec3&, const Vec3&) { return true; };
+  static bool (*const kKeep)(const void*, const Vec3&, const Vec3&, const Vec3&) = keep;
+  const Bad bad[] = {
+      {[](SweepOptions* x) { x->closing_radius = 0.1; },
+       "sweep: the closing radius must be 0 or from 2 to 10 voxels (radius 0.1 mm, voxel 0.1 "
+       "mm)"},
+      {[](SweepOptions* x) { x->inset = 0.2; },
+       "sweep: the inset must be >= 0 and below two voxels (inset 0.2 mm, voxel 0.1 mm)"},
+      {[](SweepOptions* x) { x->decimate_error = 0.02; },
+       "sweep: the decimation error must be from 0 to a tenth of a voxel (0.02 mm, voxel 0.1 "
+       "mm)"},
+      {[](SweepOptions* x) { x->keep_triangle = kKeep; },
+       "sweep: keep_triangle needs a region, open_at_region and float32_vertices, and no "
+       "decimation"},
+      {[](SweepOptions* x) { x->offset = 2.5; },
+       "sweep: the offset must be from 0 to 20 voxels, with no inset (offset 2.5 mm, inset 0 "
+       "mm, voxel 0.1 mm)"},
+      {[](SweepOptions* x) {
+         x->offset = 0.1;
+         x->inset = 0.05;
+       },
+       "sweep: the offset must be from 0 to 20 voxels, with no inset (offset 0.1 mm, inset 0.05 "
+       "mm, voxel 0.1 mm)"},
+      {[](SweepOptions* x) {
+         x->has_region = true;
+         x->region.lo = Vec3{1, 1, 1};
+         x->region.hi = Vec3{0, 0, 0};
+       },
+       "sweep: the region is empty or not finite"},
+  };
+  for (const Bad& b : bad) {
+    o = SweepOptions{};
+    b.set(&o);
+    const size_t used = ta.arena.used();
+    Mesh out(&ta.arena);
+    const Status st = sweep_volume_mesh(ctx, Span<const Mesh>(&cone, 1), o, &out);
+    EXPECT_EQ(st.code(), StatusCode::kInvalidArgument) << b.text;
+    EXPECT_STREQ(st.message(), b.text);
+    EXPECT_EQ(ta.arena.used(), used);
+  }
+  {
+    Mesh out(&ta.arena);
+    ASSERT_TRUE(out.triangles.push_back(Triangle{{0, 1, 2}}));
+    const Status st = sweep_volume_mesh(ctx, Span<const Mesh>(&cone, 1), SweepOptions{}, &out);
+    EXPECT_EQ(st.code(), StatusCode::kInvalidArgument);
+    EXPECT_STREQ(st.message(), "sweep: the output mesh must be empty");
+  }
+  Mesh two[2] = {Mesh(&ta.arena), Mesh(&ta.arena)};
+  frustum(&two[0], 2.0, 3.0, 0.0, 4.0, 16);
+  frustum(&two[1], 2.0, 3.0, 0.0, 4.0, 16);
+  two[1].triangles[5].v[1] = static_cast<uint32_t>(two[1].vertices.size());
+  Status st = sweep_volume(ctx, Span<const Mesh>(two, 2), SweepOptions{}, none);
+  EXPECT_EQ(st.code(), StatusCode::kInvalidMesh);
+  EXPECT_STREQ(st.message(), "sweep: jaw 1 triangle 5 has a vertex id out of range");
+  EXPECT_EQ(st.index(), 5u);
   cone.vertices[3].x = std::nan("");
   EXPECT_EQ(sweep_volume(ctx, Span<const Mesh>(&cone, 1), SweepOptions{}, none).code(),
             StatusCode::kNonFinite);
