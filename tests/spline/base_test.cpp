@@ -208,6 +208,38 @@ TEST(SplintBase, ErrorsNameThePick) {
     EXPECT_NE(std::strstr(b.status.message(), "between picks"), nullptr) << b.status.message();
   }
   {
+    // Both lines of pick 3 reversed (the inner and outside curves cross), with lengths and an
+    // offset that leave no section exactly flat on the way: the sections' turn changes sign
+    // between two samples.
+    std::vector<Pick> bad_up = up, bad = lo;
+    for (std::vector<Pick>* v : {&bad_up, &bad}) {
+      (*v)[3].direction = Vec3{0, -1, 0};
+      (*v)[3].inner_length = 2.0;
+      (*v)[3].outside_length = 1.7;
+      (*v)[3].position.y = 0.37;
+    }
+    Built b = build(t, bad_up, bad);
+    EXPECT_EQ(b.status.code(), StatusCode::kInvalidArgument);
+    EXPECT_STREQ(b.status.message(),
+                 "the lines fold between picks 2 and 3: the section turns over (inner and "
+                 "outside curves, or upper and lower lines, cross)");
+    EXPECT_EQ(b.status.index(), 2u);
+  }
+  {
+    // The lower line of the last pick reversed alone: the end section is a bow-tie, which no
+    // cap closes.
+    std::vector<Pick> bad = lo;
+    bad[4].direction = Vec3{0, -1, 0};
+    bad[4].inner_length = 2.0;
+    bad[4].outside_length = 1.7;
+    bad[4].position.y = 0.37;
+    Built b = build(t, up, bad);
+    EXPECT_EQ(b.status.code(), StatusCode::kInvalidArgument);
+    EXPECT_STREQ(b.status.message(),
+                 "the end section at pick 4 is not convex: cannot close the base there");
+    EXPECT_EQ(b.status.index(), 4u);
+  }
+  {
     // Upper and lower lines coincide: a flat section.
     Built b = build(t, up, up);
     EXPECT_NE(std::strstr(b.status.message(), "flat"), nullptr) << b.status.message();
