@@ -903,6 +903,25 @@ TEST(Outline, RefusalsSayWhy) {
     EXPECT_FALSE(s.is_ok());
     EXPECT_NE(std::string(s.message()).find("no dental arch"), std::string::npos) << s.message();
   }
+  // A wafer too thin to print: the bite opened 0.1 mm and each arch indented 0.1 mm leave
+  // under the 1 mm the wafer needs at the first pick; the message says what to change.
+  {
+    ArenaScope scope(t.arena);
+    OutlineOptions thin;
+    thin.indentation_depth_mm = 0.1;
+    thin.has_bite_opening = true;
+    thin.bite_opening_mm = 0.1;
+    Outline o;
+    const Status s = compute_outline(ctx, jaws[0], jaws[1], thin, &o);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+    const std::string m = s.message();
+    EXPECT_EQ(m.rfind("outline: the wafer would be 0.6", 0), 0u) << m;
+    EXPECT_NE(m.find(" mm thick at pick 0 (at least 1): the jaws are too close there; open the "
+                     "bite (\"bite_opening_mm\") or indent less"),
+              std::string::npos)
+        << m;
+    EXPECT_EQ(s.index(), 0u);
+  }
   // Options out of range: each named with its range and the value given (NaN is out of
   // every range), the arena as it was.
   {
