@@ -75,12 +75,6 @@ struct Text {
     const auto r = std::to_chars(buf, buf + sizeof buf, v);
     put(buf, static_cast<size_t>(r.ptr - buf));
   }
-  void put_float(float f) {
-    if (f == 0.0f) f = 0.0f;  // no "-0"
-    char buf[32];
-    const auto r = std::to_chars(buf, buf + sizeof buf, f);
-    put(buf, static_cast<size_t>(r.ptr - buf));
-  }
   void put_f64(double d) {
     if (d == 0.0) d = 0.0;  // no "-0"
     char buf[40];
@@ -103,7 +97,7 @@ struct Text {
 };
 
 // One vertex or triangle line, formatted on the stack and put whole (one bound check a line,
-// not one a piece): at most kVertexLine bytes (the formats of Text's put_float and put_u64).
+// not one a piece): at most kVertexLine bytes (shortest float32 and decimal integers).
 struct Line {
   char text[kVertexLine > kTriangleLine ? kVertexLine : kTriangleLine];
   size_t size = 0;
