@@ -166,15 +166,6 @@ Status moved_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, 
   return Status::ok();
 }
 
-template <class T>
-T* copy_down(Arena& arena, Span<const T> from) {
-  T* to = arena.allocate_array<T>(from.size());
-  if (to != nullptr) {
-    for (size_t i = 0; i < from.size(); ++i) to[i] = from[i];
-  }
-  return to;
-}
-
 }  // namespace
 
 Status resolve_case_outline(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
