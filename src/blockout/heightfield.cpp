@@ -25,6 +25,7 @@
 #include "blockout/frame.h"
 #include "blockout/offset_ball.h"
 #include "core/fminmax.h"
+#include "geometry/float_bounds.h"
 #include "splintcore/blockout.h"
 
 namespace splintcore {
@@ -297,13 +298,6 @@ double most_rise(const GridTriangle& q, const double* qp, const CellPlane& c, do
   return most + allowance;
 }
 
-// A rise as the lowering stores it: a float, rounded up.
-float rounded_up(double rise) {
-  float f = static_cast<float>(rise);
-  if (static_cast<double>(f) < rise) f = std::nextafter(f, HUGE_VALF);
-  return f;
-}
-
 // How far the plane c through the half cell's corners (cx, cy: counter-clockwise) rises above
 // jaw triangle q where the two overlap (0 when nowhere), rounding included.
 double rise_above(const GridTriangle& q, const double* cx, const double* cy, const CellPlane& c) {
@@ -384,13 +378,13 @@ void lower_under(const Grid& g, const GridTriangle& q, const double* h, float* l
         ++st->clipped_pairs;
         // Not clipped when even that most could not lower a corner further (the lowering
         // takes the most, in any order: the same lowering).
-        const float bound = rounded_up(most);
+        const float bound = float_up(most);
         if (bound <= low[id[0]] && bound <= low[id[1]] && bound <= low[id[2]]) {
           continue;
         }
         const double rise = rise_above(q, cx, cy, plane);
         if (!(rise > 0)) continue;
-        const float f = rounded_up(rise);
+        const float f = float_up(rise);
         for (size_t k : id) {
           if (f > low[k]) low[k] = f;
         }
@@ -616,8 +610,7 @@ double departure(const Grid& g, const double* h, const Tri& t, double limit) {
 }
 
 inline void raise_to(float* e, size_t at, double value) {
-  float f = static_cast<float>(value);
-  if (static_cast<double>(f) < value) f = std::nextafter(f, HUGE_VALF);
+  const float f = float_up(value);
   if (f > e[at]) e[at] = f;
 }
 

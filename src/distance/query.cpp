@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include "core/fminmax.h"
+#include "geometry/float_bounds.h"
 #include "splintcore/distance.h"
 
 #include "distance/morton.h"
@@ -89,8 +90,7 @@ inline float reach_float(double best_d, double qmax) {
   const double r2 = r * r * (1.0 + 0x1p-19);
   // Beyond float range (or not a number): nothing is pruned (and no out-of-range conversion).
   if (!(r2 <= 0x1p127)) return HUGE_VALF;
-  const float f = static_cast<float>(r2);
-  return static_cast<double>(f) < r2 ? std::nextafter(f, HUGE_VALF) : f;
+  return float_up(r2);
 }
 
 inline double abs_max3(const Vec3& p) {

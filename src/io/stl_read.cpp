@@ -12,6 +12,7 @@
 #include <charconv>
 #include <cmath>
 
+#include "geometry/float_bounds.h"
 #include "geometry/lanes2.h"
 #include "io/mesh_text.h"
 #include "mesh/exact_weld.h"
@@ -135,26 +136,18 @@ inline uint64_t pair_at(const uint8_t* p) {
 }
 
 // The crop (StlReadOptions::keep) as float32, for the records' own corners: lo rounded up and
-// hi down to float32, so that for every float x (infinities too) x < lo exactly when x < lo's
-// float (no float lies between lo and it) and x > hi when x > hi's; NaN fails both, as it
-// does Aabb::outcode. Four lanes, the fourth never beyond (-inf, +inf): a triangle is left
-// out when, on some axis, its three corners are all below or all above, the same test as
+// hi down to float32 (float_up, float_down), so that for every finite float x, x < lo exactly
+// when x < lo's float (no float lies between lo and it) and x > hi when x > hi's; NaN fails
+// both, as it does Aabb::outcode (a corner that is not finite is over the limit: left_out()
+// never leaves its triangle out). Four lanes, the fourth never beyond (-inf, +inf): a triangle is
+// left out when, on some axis, its three corners are all below or all above, the same test as
 // keep.beyond_one_side on the corners widened to double.
 struct FloatCrop {
   Floats4 lo, hi;
 
-  static float rounded_up(double x) {
-    if (std::isnan(x) || std::isinf(x)) return static_cast<float>(x);
-    if (x > static_cast<double>(FLT_MAX)) return HUGE_VALF;
-    if (x < -static_cast<double>(FLT_MAX)) return -FLT_MAX;
-    const float f = static_cast<float>(x);
-    return static_cast<double>(f) < x ? std::nextafter(f, HUGE_VALF) : f;
-  }
-  static float rounded_down(double x) { return -rounded_up(-x); }
-
   explicit FloatCrop(const Aabb& keep)
-      : lo{rounded_up(keep.lo.x), rounded_up(keep.lo.y), rounded_up(keep.lo.z), -HUGE_VALF},
-        hi{rounded_down(keep.hi.x), rounded_down(keep.hi.y), rounded_down(keep.hi.z), HUGE_VALF} {}
+      : lo{float_up(keep.lo.x), float_up(keep.lo.y), float_up(keep.lo.z), -HUGE_VALF},
+        hi{float_down(keep.hi.x), float_down(keep.hi.y), float_down(keep.hi.z), HUGE_VALF} {}
 
   // A corner's x, y, z in lanes 0-2 (lane 3: 0), loaded as 8 + 4 bytes on a little-endian
   // host (where a lane's low half comes first).
