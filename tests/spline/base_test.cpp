@@ -53,6 +53,15 @@ void prism(int n, double len, double a, double b, double h, std::vector<Pick>* u
   }
 }
 
+// Pick k of *v with its line turned to point along -y, `inner` and `outside` long, moved to y.
+void reverse_line(std::vector<Pick>* v, size_t k, double inner, double outside, double y) {
+  Pick& p = (*v)[k];
+  p.direction = Vec3{0, -1, 0};
+  p.inner_length = inner;
+  p.outside_length = outside;
+  p.position.y = y;
+}
+
 MeshReport checked(TestArena& t, const Mesh& m) {
   MeshReport r;
   Context ctx(&t.arena);
@@ -197,10 +206,7 @@ TEST(SplintBase, ErrorsNameThePick) {
   {
     // The lower line of pick 3 swaps ends: the section there turns over.
     std::vector<Pick> bad = lo;
-    bad[3].direction = Vec3{0, -1, 0};
-    bad[3].inner_length = 2.0;
-    bad[3].outside_length = 2.0;
-    bad[3].position.y = 0.5;
+    reverse_line(&bad, 3, 2.0, 2.0, 0.5);
     Built b = build(t, up, bad);
     EXPECT_EQ(b.status.code(), StatusCode::kInvalidArgument);
     // Named by a pick interval next to pick 3 (where the section turns over or goes flat).
@@ -212,12 +218,8 @@ TEST(SplintBase, ErrorsNameThePick) {
     // offset that leave no section exactly flat on the way: the sections' turn changes sign
     // between two samples.
     std::vector<Pick> bad_up = up, bad = lo;
-    for (std::vector<Pick>* v : {&bad_up, &bad}) {
-      (*v)[3].direction = Vec3{0, -1, 0};
-      (*v)[3].inner_length = 2.0;
-      (*v)[3].outside_length = 1.7;
-      (*v)[3].position.y = 0.37;
-    }
+    reverse_line(&bad_up, 3, 2.0, 1.7, 0.37);
+    reverse_line(&bad, 3, 2.0, 1.7, 0.37);
     Built b = build(t, bad_up, bad);
     EXPECT_EQ(b.status.code(), StatusCode::kInvalidArgument);
     EXPECT_STREQ(b.status.message(),
@@ -229,10 +231,7 @@ TEST(SplintBase, ErrorsNameThePick) {
     // The lower line of the last pick reversed alone: the end section is a bow-tie, which no
     // cap closes.
     std::vector<Pick> bad = lo;
-    bad[4].direction = Vec3{0, -1, 0};
-    bad[4].inner_length = 2.0;
-    bad[4].outside_length = 1.7;
-    bad[4].position.y = 0.37;
+    reverse_line(&bad, 4, 2.0, 1.7, 0.37);
     Built b = build(t, up, bad);
     EXPECT_EQ(b.status.code(), StatusCode::kInvalidArgument);
     EXPECT_STREQ(b.status.message(),
