@@ -9,7 +9,6 @@
 // pseudonormal", IEEE TVCG 2005).
 #include <cmath>
 #include <cstring>
-#include <type_traits>
 
 #include "splintcore/distance.h"
 

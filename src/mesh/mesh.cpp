@@ -4,7 +4,6 @@
 #include "splintcore/mesh.h"
 
 #include <cmath>
-#include <type_traits>
 
 #include "core/union_find.h"
 
