@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <random>
 #include <string>
@@ -813,6 +814,172 @@ void block(Arena& arena, const Vec3& corner, Mesh* out) {
     }
   }
   EXPECT_TRUE(test::mesh_from_soup(arena, soup, out).is_ok());
+}
+
+// Closed bands of constant height, welded into one mesh: each from z0 up to z1 over the strip
+// between its stations' inner and outer points (in the plane z = 0), walls at both ends.
+class Bands {
+ public:
+  // A band along `stations` (at least two): {inner x, inner y, outer x, outer y} (mm), the
+  // inner points on the left of the way from the first station to the last.
+  void add(const std::vector<std::array<double, 4>>& stations, double z0, double z1) {
+    const int n = static_cast<int>(stations.size()) - 1;
+    // Corner c of station k: c = 0 inner bottom, 1 outer bottom, 2 outer top, 3 inner top.
+    auto at = [&](int k, int c) {
+      const std::array<double, 4>& s = stations[static_cast<size_t>(k)];
+      const bool outer = c == 1 || c == 2;
+      return Vec3{outer ? s[2] : s[0], outer ? s[3] : s[1], c < 2 ? z0 : z1};
+    };
+    for (int k = 0; k < n; ++k) {
+      for (int c = 0; c < 4; ++c) {  // the four walls, outward
+        quad(at(k, c), at(k + 1, c), at(k + 1, (c + 1) % 4), at(k, (c + 1) % 4));
+      }
+    }
+    quad(at(0, 0), at(0, 1), at(0, 2), at(0, 3));
+    quad(at(n, 3), at(n, 2), at(n, 1), at(n, 0));
+  }
+  void weld(Arena& arena, Mesh* out) const {
+    EXPECT_TRUE(test::mesh_from_soup(arena, soup_, out).is_ok());
+    MeshReport report;
+    EXPECT_TRUE(check_mesh(Context(&arena), *out, &report).is_ok());
+    EXPECT_TRUE(report.is_valid_solid());
+  }
+
+ private:
+  void quad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+    triangle(a, b, c);
+    triangle(a, c, d);
+  }
+  void triangle(const Vec3& a, const Vec3& b, const Vec3& c) {
+    SoupTriangle st;
+    const Vec3* p[3] = {&a, &b, &c};
+    for (int k = 0; k < 3; ++k) {
+      st.p[k][0] = static_cast<float>(p[k]->x);
+      st.p[k][1] = static_cast<float>(p[k]->y);
+      st.p[k][2] = static_cast<float>(p[k]->z);
+    }
+    soup_.push_back(st);
+  }
+  std::vector<SoupTriangle> soup_;
+};
+
+// A horseshoe: the ring between radii r - 1 and r + 1 mm around the origin from angle a0 to
+// a1 (radians, counter-clockwise) in `segments` steps, from z0 up to z1.
+void horseshoe(Arena& arena, double r, double a0, double a1, int segments, double z0, double z1,
+               Mesh* out) {
+  std::vector<std::array<double, 4>> stations;
+  for (int k = 0; k <= segments; ++k) {
+    const double a = a0 + (a1 - a0) * k / segments, c = std::cos(a), s = std::sin(a);
+    stations.push_back({(r - 1) * c, (r - 1) * s, (r + 1) * c, (r + 1) * s});
+  }
+  Bands bands;
+  bands.add(stations, z0, z1);
+  bands.weld(arena, out);
+}
+
+// Two bars 0.1 mm wide along the line through the origin at angle a (radians), from 20 to 40
+// mm on either side of it, in stations 0.25 mm apart, from z0 up to z1.
+void spokes(Arena& arena, double a, double z0, double z1, Mesh* out) {
+  Bands bands;
+  for (const double side : {1.0, -1.0}) {
+    const double c = side * std::cos(a), s = side * std::sin(a);
+    std::vector<std::array<double, 4>> stations;
+    for (int k = 0; k <= 80; ++k) {
+      const double d = 20 + 0.25 * k;
+      stations.push_back({d * c - 0.05 * s, d * s + 0.05 * c, d * c + 0.05 * s, d * s - 0.05 * c});
+    }
+    bands.add(stations, z0, z1);
+  }
+  bands.weld(arena, out);
+}
+
+// Jaws that are not dental arches, each refused with what is wrong with it and the arena as it
+// was; the same shapes where they do make an arch are accepted.
+TEST(Outline, ShapesThatAreNoArchAreRefused) {
+  test::TestArena t{size_t{256} << 20};
+  const Context ctx(&t.arena);
+  struct Result {
+    Status status;
+    double arch_mm = 0;
+    size_t picks = 0;
+  };
+  // Both jaws made by `make`, the maxilla over z = 0.5 and the mandible under z = -0.5.
+  auto outline = [&](const std::function<void(double, double, Mesh*)>& make,
+                     const OutlineOptions& options) {
+    ArenaScope scope(t.arena);
+    Mesh jaws[2];
+    make(0.5, 10, &jaws[0]);
+    make(-10, -0.5, &jaws[1]);
+    const size_t used = t.arena.used();
+    Outline o;
+    Result r;
+    r.status = compute_outline(ctx, jaws[0], jaws[1], options, &o);
+    r.arch_mm = o.report.arch_length_mm;
+    r.picks = o.upper.size();
+    if (!r.status.is_ok()) {
+      EXPECT_EQ(t.arena.used(), used) << r.status.message();
+    }
+    return r;
+  };
+  // The number the message gives after `prefix`.
+  auto number_after = [](const Status& s, const char* prefix) {
+    const std::string m = s.message();
+    EXPECT_EQ(m.rfind(prefix, 0), 0u) << m;
+    return std::strtod(m.c_str() + std::strlen(prefix), nullptr);
+  };
+  const OutlineOptions defaults;
+
+  // Two thin bars on a line through their centre (at 0.9 degrees: the middle of a sector):
+  // every point lies in one of two directions from the centre.
+  {
+    const Result r = outline(
+        [&](double z0, double z1, Mesh* m) { spokes(t.arena, 0.0157, z0, z1, m); }, defaults);
+    EXPECT_EQ(r.status.code(), StatusCode::kInvalidArgument);
+    EXPECT_STREQ(r.status.message(),
+                 "outline: the arch is too short: the teeth fill only 2 of 128 sectors around "
+                 "their centre");
+  }
+  // A horseshoe 2 mm wide of centre radius 4 mm round 4.1 radians (16.4 mm, less the ends
+  // that curl): under the 20 mm an arch needs end to end. With a radius of 25 mm it is one.
+  {
+    auto small = [&](double z0, double z1, Mesh* m) {
+      horseshoe(t.arena, 4, -0.5, 3.6, 40, z0, z1, m);
+    };
+    const Result r = outline(small, defaults);
+    EXPECT_EQ(r.status.code(), StatusCode::kInvalidArgument);
+    const double mm = number_after(r.status, "outline: the arch is too short: ");
+    EXPECT_EQ(mm, r.arch_mm);
+    EXPECT_GT(mm, 12.0);
+    EXPECT_LT(mm, 16.4);
+    EXPECT_NE(std::string(r.status.message()).find(" mm end to end (at least 20)"),
+              std::string::npos);
+    const Result big = outline(
+        [&](double z0, double z1, Mesh* m) { horseshoe(t.arena, 25, -0.5, 3.6, 100, z0, z1, m); },
+        defaults);
+    EXPECT_TRUE(big.status.is_ok()) << big.status.message();
+    EXPECT_GT(big.arch_mm, 90.0);  // 102.5 mm along the centre, less the ends
+  }
+  // A ring of centre radius 110 mm round 5.9 radians (649 mm, and the overhang at both ends):
+  // more than 256 picks 2 mm apart; 3 mm apart (the default) it has its picks.
+  {
+    auto ring = [&](double z0, double z1, Mesh* m) {
+      horseshoe(t.arena, 110, -1.4, 4.5, 400, z0, z1, m);
+    };
+    OutlineOptions two;
+    two.pick_spacing_mm = 2;
+    const Result r = outline(ring, two);
+    EXPECT_EQ(r.status.code(), StatusCode::kInvalidArgument);
+    const double mm = number_after(r.status, "outline: the arch is ");
+    EXPECT_GT(mm, 600.0);
+    EXPECT_LT(mm, 653.0);
+    EXPECT_NE(std::string(r.status.message()).find(" mm long: more than 256 picks at 2 mm apart"),
+              std::string::npos)
+        << r.status.message();
+    const Result three = outline(ring, defaults);
+    EXPECT_TRUE(three.status.is_ok()) << three.status.message();
+    EXPECT_GT(three.picks, 200u);
+    EXPECT_LE(three.picks, 256u);
+  }
 }
 
 // The jaws are moved (and checked finite) in chunks on the executor: the first bad vertex in
