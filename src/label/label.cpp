@@ -704,7 +704,7 @@ struct GlyphBuilder {
           return make_error(StatusCode::kInvalidArgument, "label: glyphs ", a, " ('", ca, "') and ",
                             b, " ('", cb,
                             "') would touch; the wall bends too sharply for this text: use a "
-                            "smaller height or stroke width")
+                            "smaller height, stroke width or depth")
               .at_index(a);
         }
       }

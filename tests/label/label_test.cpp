@@ -340,6 +340,51 @@ TEST(LabelTest, RayThatMissesTheSplintIsAnError) {
   EXPECT_EQ(t.arena.used(), 0u);
 }
 
+// On the front of the arch the wall is convex: glyphs cut 5 mm deep meet below the surface (the
+// message names the depth among what to change); 3 mm deep they stay apart.
+TEST(LabelTest, GlyphsThatWouldMeetOnABendAreRefused) {
+  ASSERT_TRUE(fixture().ok);
+  for (const double depth : {5.0, 3.0}) {
+    TestArena t(size_t{256} << 20);
+    LabelOptions o;
+    o.text = "WWWW";
+    o.depth_mm = depth;
+    Labelled l = run(t, o, false);
+    if (depth == 3.0) {
+      EXPECT_TRUE(l.status.is_ok()) << l.status.message();
+      continue;
+    }
+    EXPECT_EQ(l.status.code(), StatusCode::kInvalidArgument);
+    EXPECT_STREQ(l.status.message(),
+                 "label: glyphs 0 ('W') and 1 ('W') would touch; the wall bends too sharply for "
+                 "this text: use a smaller height, stroke width or depth");
+    EXPECT_EQ(l.status.index(), 0u);
+    EXPECT_EQ(t.arena.used(), 0u);
+  }
+}
+
+// A 20 mm glyph at the finest voxel the options take (the stroke width / 32) would need 312
+// million samples: refused before any is taken, the character named.
+TEST(LabelTest, GlyphWithTooManySamplesIsRefused) {
+  ASSERT_TRUE(fixture().ok);
+  TestArena t(size_t{64} << 20);
+  LabelOptions o;
+  o.text = "W";
+  o.placement = LabelPlacement::kExplicit;
+  o.position = Vec3{27.9, 3.7, 0};
+  o.normal = Vec3{1, 0, 0};
+  o.up = Vec3{0, 0, 1};
+  o.height_mm = 20;
+  o.voxel_mm = o.stroke_width_mm / 32;
+  Labelled l = run(t, o, false);
+  EXPECT_EQ(l.status.code(), StatusCode::kLimitExceeded);
+  EXPECT_STREQ(l.status.message(),
+               "label: character 0 needs 311959746 samples at voxel 0.0109375 mm; at most "
+               "16777216");
+  EXPECT_EQ(l.status.index(), 0u);
+  EXPECT_EQ(t.arena.used(), 0u);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Engrave and emboss on the paper-scale base.
 
