@@ -255,6 +255,102 @@ TEST(CtRegionGrow, BadSeedsAreNamed) {
   SPLINTCORE_EXPECT_OK(run({voxel_seed(1, 2, 2, 2), voxel_seed(1, 2, 2, 2)}));
 }
 
+// Arguments that do not fit together, each refused with its text before anything is read or
+// written (the labels as they were, nothing taken from the arena).
+TEST(CtSegment, ArgumentsThatDoNotFitAreNamed) {
+  SmallVolume sv(6, 6, 6);
+  sv.box(1, 1, 1, 4, 4, 2, 1500);
+  TestArena ta(1 << 16);
+  Context ctx(&ta.arena);
+  LabelVolume labels;
+  SPLINTCORE_ASSERT_OK(threshold_window(ctx, sv.v, HuWindow{300, 4000}, &labels));
+  const std::vector<uint8_t> before(labels.labels, labels.labels + labels.voxel_count());
+  const size_t used = ta.arena.used();
+  const RegionSeed seed = voxel_seed(1, 2, 2, 2);
+  auto grow = [&](const CtVolume& volume, Span<const RegionSeed> seeds, const SplitPlane* plane,
+                  LabelVolume* l) {
+    RegionGrowOptions options;
+    options.plane = plane;
+    return grow_regions(ctx, volume, seeds, options, l);
+  };
+  auto expect = [&](const Status& s, StatusCode code, const char* text) {
+    EXPECT_EQ(s.code(), code) << text;
+    EXPECT_STREQ(s.message(), text);
+    EXPECT_EQ(ta.arena.used(), used) << text;
+    EXPECT_TRUE(std::equal(before.begin(), before.end(), labels.labels)) << text;
+  };
+  const Span<const RegionSeed> one(&seed, 1);
+  const char* mismatch =
+      "region growing: the label volume does not match the CT volume (6 x 6 x 6)";
+  expect(grow(sv.v, one, nullptr, nullptr), StatusCode::kInvalidArgument, mismatch);
+  LabelVolume narrow = labels;
+  narrow.nx = 5;
+  expect(grow(sv.v, one, nullptr, &narrow), StatusCode::kInvalidArgument, mismatch);
+  const std::vector<RegionSeed> many(kMaxSeeds + 1, seed);
+  expect(grow(sv.v, Span<const RegionSeed>(many.data(), many.size()), nullptr, &labels),
+         StatusCode::kInvalidArgument, "region growing: 257 seeds, at most 256");
+  // 2^33 voxels: refused from the sizes alone (nothing of them is read).
+  CtVolume huge = sv.v;
+  huge.nx = huge.ny = 2048;
+  huge.nz = 2048;
+  LabelVolume huge_labels = labels;
+  huge_labels.nx = huge_labels.ny = huge_labels.nz = 2048;
+  expect(grow(huge, one, nullptr, &huge_labels), StatusCode::kLimitExceeded,
+         "region growing: 8589934592 voxels; at most 4294967295 (32-bit voxel indices)");
+  const char* bad_plane =
+      "split plane: the point and normal must be finite and the normal not zero";
+  const char* bad_labels = "split plane: its two labels must differ and lie in 1..15";
+  const std::pair<void (*)(SplitPlane*), const char*> planes[] = {
+      {[](SplitPlane* p) {
+         p->normal = Vec3{0, 0, 0};
+       },
+       bad_plane},
+      {[](SplitPlane* p) { p->point.y = std::nan(""); }, bad_plane},
+      {[](SplitPlane* p) { p->normal.x = HUGE_VAL; }, bad_plane},
+      {[](SplitPlane* p) { p->label_positive = p->label_negative; }, bad_labels},
+      {[](SplitPlane* p) { p->label_negative = 0; }, bad_labels},
+      {[](SplitPlane* p) { p->label_positive = kMaxRegionLabel + 1; }, bad_labels}};
+  for (const auto& [edit, text] : planes) {
+    SplitPlane plane;
+    edit(&plane);
+    expect(grow(sv.v, one, &plane, &labels), StatusCode::kInvalidArgument, text);
+  }
+
+  // reconstruct_region's own.
+  auto reconstruct = [&](const CtVolume& volume, const LabelVolume& l, uint8_t label, int32_t hu_lo,
+                         Mesh* out) {
+    ReconstructOptions ro;
+    ro.label = label;
+    ro.hu_lo = hu_lo;
+    return reconstruct_region(ctx, volume, l, ro, out);
+  };
+  Mesh mesh(&ta.arena);
+  for (const uint8_t label : {uint8_t{0}, uint8_t{kMaxRegionLabel + 1}, kLabelUnclaimed}) {
+    const std::string text =
+        "reconstruct: label " + std::to_string(label) + " is not a region label (1..15)";
+    expect(reconstruct(sv.v, labels, label, 300, &mesh), StatusCode::kInvalidArgument,
+           text.c_str());
+  }
+  expect(reconstruct(sv.v, narrow, 1, 300, &mesh), StatusCode::kInvalidArgument,
+         "reconstruct: the label volume does not match the CT volume (6 x 6 x 6)");
+  CtVolume no_hu = sv.v;
+  no_hu.hu = nullptr;
+  expect(reconstruct(no_hu, labels, 1, 300, &mesh), StatusCode::kInvalidArgument,
+         "reconstruct: the label volume does not match the CT volume (6 x 6 x 6)");
+  expect(reconstruct(sv.v, labels, 1, 1 << 22, &mesh), StatusCode::kInvalidArgument,
+         "reconstruct: threshold 4194304 HU is out of range");
+  expect(reconstruct(sv.v, labels, 1, -(1 << 22), &mesh), StatusCode::kInvalidArgument,
+         "reconstruct: threshold -4194304 HU is out of range");
+  expect(reconstruct(sv.v, labels, 1, 300, nullptr), StatusCode::kInvalidArgument,
+         "reconstruct: the output mesh must be empty");
+  TestArena other(1 << 10);
+  Mesh full(&other.arena);
+  ASSERT_TRUE(full.triangles.push_back(Triangle{{0, 1, 2}}));
+  expect(reconstruct(sv.v, labels, 1, 300, &full), StatusCode::kInvalidArgument,
+         "reconstruct: the output mesh must be empty");
+  EXPECT_EQ(full.triangles.size(), 1u);
+}
+
 // A block of bone in soft tissue: closed, oriented, outward; its volume close to the block's.
 TEST(CtReconstruct, BlockIsAClosedOutwardSolid) {
   SmallVolume sv(8, 7, 6, 40);
