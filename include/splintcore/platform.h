@@ -59,10 +59,15 @@ class AtomicFile {
   Status sync_in_background();
   Status commit();
   void abort();
+  // `s` with the cause of this file's first failed write appended, in the system's words
+  // ("write failed: No space left on device", "...: File too large"), when a write failed and
+  // `s` is an I/O error (what a writer returns when its sink refuses bytes); else `s`.
+  Status with_write_cause(Status s) const;
 
  private:
   static bool write(void* self, const uint8_t* data, size_t bytes);
   static bool seek(void* self, uint64_t offset);
+  bool write_failed();  // keeps errno (the first failure's); false
 
   std::FILE* file_ = nullptr;
   std::thread syncer_;    // sync_in_background()'s fsync, when started
@@ -70,8 +75,20 @@ class AtomicFile {
   uint64_t started_ = 0;  // the bytes before this have had their writeback started
   char path_[4096] = {};
   char temp_path_[4096 + 32] = {};
-  bool failed_ = false;
+  int slot_ = -1;        // where temp_path_ is registered for the signal handler (-1: nowhere)
+  int write_errno_ = 0;  // errno of the first failed write (0: none)
 };
+
+// For a program's main(), once, before any output is opened: a run stopped by a signal leaves
+// no temporary output file behind. SIGINT, SIGTERM, SIGHUP and SIGPIPE first remove the
+// temporary file of every AtomicFile still open (the first 64 open at once; unlink, which a
+// signal handler may call), then end the process by the same signal with its default action,
+// as if nothing had been installed. SIGXFSZ is ignored, so that a write past the file size
+// limit (`ulimit -f`) fails as a write to a full disk does ("cannot write output file: File
+// too large", the temporary file removed) instead of killing the process with the file half
+// written. A signal ignored when this is called stays ignored (nohup, background jobs). The
+// library never calls this itself: an embedding program owns its signals.
+void remove_temporary_outputs_on_signals();
 
 // Reads a whole file into arena memory (for tools and tests).
 Status read_file(Arena& arena, const char* path, uint64_t max_bytes, Span<uint8_t>* out);

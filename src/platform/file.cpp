@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cerrno>
+#include <csignal>
 
 #include "splintcore/platform.h"
 
@@ -31,7 +32,55 @@ Status errno_error(const char* what, const char* path) {
 
 std::atomic<uint32_t> g_temp_counter{0};  // distinct temporary names within one process
 
+// The temporary files of the AtomicFiles open now, for the signal handler: a slot holds a
+// temp_path_ from before its file is created until after it is renamed or removed.
+constexpr int kTempSlots = 64;
+std::atomic<const char*> g_temp_paths[kTempSlots];
+
+int register_temp_path(const char* path) {
+  for (int i = 0; i < kTempSlots; ++i) {
+    const char* none = nullptr;
+    if (g_temp_paths[i].compare_exchange_strong(none, path)) return i;
+  }
+  return -1;  // more open at once than the slots: this one is not removed on a signal
+}
+
+void unregister_temp_path(int* slot) {
+  if (*slot >= 0) g_temp_paths[*slot].store(nullptr);
+  *slot = -1;
+}
+
+// Only what a signal handler may do: atomic loads, unlink, signal and raise.
+extern "C" void remove_temporary_outputs(int sig) {
+  for (std::atomic<const char*>& slot : g_temp_paths) {
+    const char* path = slot.load();
+    if (path != nullptr) (void)::unlink(path);
+  }
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+// The handler for `sig`, unless the signal is ignored now.
+void remove_on(int sig) {
+  if (std::signal(sig, remove_temporary_outputs) == SIG_IGN) std::signal(sig, SIG_IGN);
+}
+
 }  // namespace
+
+void remove_temporary_outputs_on_signals() {
+  static_assert(ATOMIC_POINTER_LOCK_FREE == 2, "the signal handler reads the slots lock-free");
+  remove_on(SIGINT);
+  remove_on(SIGTERM);
+#ifdef SIGHUP
+  remove_on(SIGHUP);
+#endif
+#ifdef SIGPIPE
+  remove_on(SIGPIPE);
+#endif
+#ifdef SIGXFSZ
+  std::signal(SIGXFSZ, SIG_IGN);
+#endif
+}
 
 FileSource::~FileSource() { close(); }
 
@@ -85,16 +134,23 @@ Status AtomicFile::open(const char* path) {
   std::memcpy(path_, path, n + 1);
   std::snprintf(temp_path_, sizeof(temp_path_), "%s.tmp-%ld-%u", path, static_cast<long>(getpid()),
                 g_temp_counter.fetch_add(1));
+  slot_ = register_temp_path(temp_path_);  // (the name has this process's id: ours to remove)
   // O_EXCL: never write through a name something else already uses.
   int fd = ::open(temp_path_, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  if (fd < 0) return errno_error("cannot create temporary output file", temp_path_);
+  if (fd < 0) {
+    Status s = errno_error("cannot create temporary output file", temp_path_);
+    unregister_temp_path(&slot_);
+    return s;
+  }
   file_ = fdopen(fd, "wb");
   if (file_ == nullptr) {
+    Status s = errno_error("cannot open temporary output file", temp_path_);
     ::close(fd);
     std::remove(temp_path_);
-    return errno_error("cannot open temporary output file", temp_path_);
+    unregister_temp_path(&slot_);
+    return s;
   }
-  failed_ = false;
+  write_errno_ = 0;
   started_ = 0;
   sync_errno_ = 0;
   return Status::ok();
@@ -114,12 +170,12 @@ ByteSink AtomicFile::sink() {
 // does it all, as before (the bytes are the same either way).
 bool AtomicFile::write(void* self, const uint8_t* data, size_t bytes) {
   AtomicFile* f = static_cast<AtomicFile*>(self);
-  if (std::fwrite(data, 1, bytes, f->file_) != bytes) return false;
+  if (std::fwrite(data, 1, bytes, f->file_) != bytes) return f->write_failed();
 #ifdef SYNC_FILE_RANGE_WRITE
   const off_t at = ftello(f->file_);
   if (at > 0 && static_cast<uint64_t>(at) > f->started_ &&
       static_cast<uint64_t>(at) - f->started_ >= kWritebackStep) {
-    if (std::fflush(f->file_) != 0) return false;
+    if (std::fflush(f->file_) != 0) return f->write_failed();
     const uint64_t from = f->started_;
     (void)sync_file_range(fileno(f->file_), static_cast<off_t>(from),
                           static_cast<off_t>(static_cast<uint64_t>(at) - from),
@@ -128,6 +184,18 @@ bool AtomicFile::write(void* self, const uint8_t* data, size_t bytes) {
   }
 #endif
   return true;
+}
+
+bool AtomicFile::write_failed() {
+  if (write_errno_ == 0) write_errno_ = errno != 0 ? errno : EIO;
+  return false;
+}
+
+Status AtomicFile::with_write_cause(Status s) const {
+  if (write_errno_ != 0 && s.code() == StatusCode::kIoError) {
+    s.append(": ").append(std::strerror(write_errno_));
+  }
+  return s;
 }
 
 bool AtomicFile::seek(void* self, uint64_t offset) {
@@ -168,15 +236,18 @@ Status AtomicFile::commit() {
     errno = saved;
     Status s = errno_error("cannot write output file", path_);
     std::remove(temp_path_);
+    unregister_temp_path(&slot_);
     temp_path_[0] = '\0';
     return s;
   }
   if (std::rename(temp_path_, path_) != 0) {
     Status s = errno_error("cannot move the output into place", path_);
     std::remove(temp_path_);
+    unregister_temp_path(&slot_);
     temp_path_[0] = '\0';
     return s;
   }
+  unregister_temp_path(&slot_);
   temp_path_[0] = '\0';
   return Status::ok();
 }
@@ -189,6 +260,7 @@ void AtomicFile::abort() {
   }
   if (temp_path_[0] != '\0') {
     std::remove(temp_path_);
+    unregister_temp_path(&slot_);
     temp_path_[0] = '\0';
   }
 }

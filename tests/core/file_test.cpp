@@ -1,8 +1,11 @@
 // The hosted layer's atomic output (AtomicFile): what is in place after a commit, and that
 // nothing is left behind otherwise, with and without the fsync started in the background.
+#include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 
 #include <cerrno>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <string>
@@ -139,6 +142,72 @@ TEST(AtomicFile, RefusalsAndAFailedRenameLeaveNothingBehind) {
   EXPECT_EQ(std::string(s.file()), folder.string());
   EXPECT_EQ(entries(dir.path), 1u);  // the temporary file is gone
   EXPECT_TRUE(fs::is_directory(folder / "inside"));
+}
+
+// A write past the file size limit (as a full disk: the write fails, here with EFBIG) fails
+// cleanly: the writer's error gets the system's cause, and nothing is left behind. (The test
+// ignores SIGXFSZ itself, as remove_temporary_outputs_on_signals() does for the tools.)
+TEST(AtomicFile, AWritePastTheFileSizeLimitFailsWithItsCause) {
+  TempDir dir("file", "fsize");
+  const fs::path path = dir.path / "splint.stl";
+  AtomicFile f;
+  SPLINTCORE_ASSERT_OK(f.open(path.string().c_str()));
+  const Status unrelated = Status::error(StatusCode::kInvalidMesh, "not about the file");
+  EXPECT_STREQ(f.with_write_cause(unrelated).message(), "not about the file");
+  const std::vector<uint8_t> bytes = pattern(size_t{1} << 20);
+  const ByteSink sink = f.sink();
+  auto previous = std::signal(SIGXFSZ, SIG_IGN);
+  rlimit saved;
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &saved), 0);
+  rlimit small = saved;
+  small.rlim_cur = 64 << 10;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  bool written = true;
+  for (size_t at = 0; at < bytes.size() && written; at += 64000) {
+    written = sink.write(sink.user, bytes.data() + at, std::min<size_t>(64000, bytes.size() - at));
+  }
+  const Status s = written
+                       ? f.commit()
+                       : f.with_write_cause(Status::error(StatusCode::kIoError, "write failed"));
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &saved), 0);
+  std::signal(SIGXFSZ, previous);
+  EXPECT_FALSE(written);
+  EXPECT_STREQ(s.message(), "write failed: File too large");
+  EXPECT_EQ(f.with_write_cause(unrelated).code(), StatusCode::kInvalidMesh);
+  f.abort();
+  EXPECT_EQ(entries(dir.path), 0u);
+}
+
+// The child of the test below: two outputs open (one written to), SIGHUP ignored beforehand
+// and raised (nothing happens), then `sig`. Its exit status says which step went wrong.
+[[noreturn]] void open_two_then_raise(const fs::path& dir, int sig) {
+  std::signal(SIGHUP, SIG_IGN);
+  remove_temporary_outputs_on_signals();
+  AtomicFile first;
+  AtomicFile second;
+  if (!first.open((dir / "a.stl").string().c_str()).is_ok() ||
+      !second.open((dir / "b.stl").string().c_str()).is_ok()) {
+    std::_Exit(3);
+  }
+  const std::vector<uint8_t> bytes = pattern(1000);
+  const ByteSink sink = first.sink();
+  if (!sink.write(sink.user, bytes.data(), bytes.size())) std::_Exit(4);
+  if (entries(dir) != 2) std::_Exit(5);
+  std::raise(SIGHUP);
+  if (entries(dir) != 2) std::_Exit(6);
+  std::raise(sig);
+  std::_Exit(7);
+}
+
+// Stopped by a signal while outputs are open: with remove_temporary_outputs_on_signals() the
+// temporary files go and the process still ends by that signal; a signal ignored before it
+// was called stays ignored.
+TEST(AtomicFileDeathTest, ASignalRemovesTheTemporaryFilesAndStillEndsTheProcess) {
+  TempDir dir("file", "signal");
+  for (const int sig : {SIGTERM, SIGINT, SIGPIPE}) {
+    EXPECT_EXIT(open_two_then_raise(dir.path, sig), testing::KilledBySignal(sig), "");
+    EXPECT_EQ(entries(dir.path), 0u) << sig;
+  }
 }
 
 // FileSource and read_file: a folder is refused by name, a device is not a regular file, a

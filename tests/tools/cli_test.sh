@@ -126,6 +126,14 @@ check "cap message" -- grep -q "arena exhausted: need" "$work/err"
 check "existing output untouched" -- cmp -s "$work/a.stl" "$work/keep.stl"
 check "no temporary files left" -- test -z "$(ls "$work" | grep '\.tmp-')"
 expect_exit 1 "unwritable output folder" -- "$tool" convert "$fixtures/stl/torus_binary.stl" -o "$work/no/such/dir/x.stl"
+# A full disk, as the file size limit makes one (ulimit -f: 1024-byte blocks): the program
+# is not killed (SIGXFSZ), the write fails with the system's cause, the existing output stays
+# as it was and no temporary file is left. (A coverage build's profile goes to /dev/null
+# there, which no file size limit cuts short, not into the job's merged profiles.)
+expect_exit 1 "convert past ulimit -f 64" -- bash -c 'ulimit -f 64 && LLVM_PROFILE_FILE=/dev/null exec "$@"' limited "$tool" convert "$fixtures/stl/torus_binary.stl" -o "$work/keep.stl"
+check "the write's cause named" -- grep -q "keep.stl: byte [0-9]*: write failed: File too large" "$work/err"
+check "existing output untouched by the failed write" -- cmp -s "$work/a.stl" "$work/keep.stl"
+check "no temporary files left by the failed write" -- test -z "$(find "$work" -maxdepth 1 -name '*.tmp-*')"
 
 # The initial splint base from a case file.
 expect_exit 0 "base --help" -- "$tool" base --help

@@ -1627,6 +1627,7 @@ void bench_dicom_jpeg_series(Harness& h, Arena& arena) {
 }
 
 int run(int argc, char** argv) {
+  remove_temporary_outputs_on_signals();  // (--export-realcase writes files)
   Harness h;
   std::string realdata = "../shared/realdata/open-full-jaw-patient26";
   std::string fixtures = "fixtures";

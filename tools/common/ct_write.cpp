@@ -63,7 +63,8 @@ Status write_bytes(const std::string& path, const std::vector<uint8_t>& head,
   }
   if (!ok) {
     file.abort();
-    return make_error(StatusCode::kIoError, "cannot write ", path.c_str()).in_file(path.c_str());
+    return file.with_write_cause(
+        Status::error(StatusCode::kIoError, "cannot write").in_file(path.c_str()));
   }
   return file.commit();
 }

@@ -155,7 +155,8 @@ Status write_marked_png_file(const Context& ctx, const std::vector<RenderMesh>& 
   SPLINTCORE_RETURN_IF_ERROR(file.open(path.c_str()));
   ByteSink out = file.sink();
   if (!out.write(out.user, png.data(), png.size())) {
-    return Status::error(StatusCode::kIoError, "cannot write the PNG").in_file(path.c_str());
+    return file.with_write_cause(
+        Status::error(StatusCode::kIoError, "cannot write the PNG").in_file(path.c_str()));
   }
   SPLINTCORE_RETURN_IF_ERROR(file.commit());  // on error ~AtomicFile removes the temporary
   if (info != nullptr) {

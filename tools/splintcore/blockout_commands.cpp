@@ -103,14 +103,15 @@ Status sweep_to_file(const Context& ctx, const std::vector<Mesh>& jaws, const Sw
   SPLINTCORE_RETURN_IF_ERROR(file.open(a.output));
   StlWriteOptions wo;
   wo.format = a.ascii ? StlFormat::kAscii : StlFormat::kBinary;
-  SPLINTCORE_RETURN_IF_ERROR(writer->begin(ctx, file.sink(), wo, kUnknownSize));
+  SPLINTCORE_RETURN_IF_ERROR(
+      file.with_write_cause(writer->begin(ctx, file.sink(), wo, kUnknownSize)));
   SweepToStl to_stl{writer};
   MarchingCubesVisitor visitor;
   visitor.triangle = SweepToStl::triangle;
   visitor.user = &to_stl;
-  SPLINTCORE_RETURN_IF_ERROR(
-      sweep_volume(ctx, Span<const Mesh>(jaws.data(), jaws.size()), so, visitor, st));
-  SPLINTCORE_RETURN_IF_ERROR(writer->finish());
+  SPLINTCORE_RETURN_IF_ERROR(file.with_write_cause(
+      sweep_volume(ctx, Span<const Mesh>(jaws.data(), jaws.size()), so, visitor, st)));
+  SPLINTCORE_RETURN_IF_ERROR(file.with_write_cause(writer->finish()));
   return file.commit();  // on any error ~AtomicFile removes the temporary file
 }
 

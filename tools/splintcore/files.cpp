@@ -213,7 +213,7 @@ Status write_mesh_uncommitted(const Context& ctx, const Mesh& mesh, const char* 
   if (has_threads(ctx.executor) && arena.cap() - arena.used() >= kTaskWriteBuffer * 4) {
     wo.buffer_bytes = kTaskWriteBuffer;
   }
-  const Status s = write_stl(ctx, mesh, file->sink(), wo);
+  const Status s = file->with_write_cause(write_stl(ctx, mesh, file->sink(), wo));
   if (!s.is_ok()) file->abort();
   return s;
 }
@@ -229,7 +229,8 @@ Status write_bytes_atomically(const std::string& path, const void* data, size_t 
   SPLINTCORE_RETURN_IF_ERROR(file.open(path.c_str()));
   ByteSink sink = file.sink();
   if (!sink.write(sink.user, static_cast<const uint8_t*>(data), size)) {
-    return Status::error(StatusCode::kIoError, "cannot write").in_file(path.c_str());
+    return file.with_write_cause(
+        Status::error(StatusCode::kIoError, "cannot write").in_file(path.c_str()));
   }
   return file.commit();
 }
@@ -245,7 +246,7 @@ Status write_hashed_atomically(const std::string& path,
   SPLINTCORE_RETURN_IF_ERROR(file.open(path.c_str()));
   HashSink h;  // hashes what it passes on to the file
   h.next = file.sink();
-  SPLINTCORE_RETURN_IF_ERROR(write(hash_sink(&h)));  // ~AtomicFile cleans up
+  SPLINTCORE_RETURN_IF_ERROR(file.with_write_cause(write(hash_sink(&h))));  // ~AtomicFile cleans up
   SPLINTCORE_RETURN_IF_ERROR(file.commit());
   uint8_t digest[32];
   h.sha.finish(digest);

@@ -328,6 +328,9 @@ void print_usage(std::FILE* out) {
 
 int main(int argc, char** argv) {
   using namespace splintcore::tool;
+  // Stopped by a signal (Ctrl-C, kill, a closed pipe) or past `ulimit -f`: no half-written
+  // output left behind (platform.h).
+  splintcore::remove_temporary_outputs_on_signals();
   if (argc < 2) {
     print_usage(stderr);
     return kExitUsage;
