@@ -57,12 +57,18 @@ class AtomicFile {
   // 2, whole process, 16 alternated rounds). commit() waits for it; so do abort() and the
   // destructor. Nothing may be written after it.
   Status sync_in_background();
+  // Optional: flushes, syncs (or waits for sync_in_background's fsync) and closes the
+  // temporary file, which stays where it is until commit() or abort(); on an error it is
+  // removed. For outputs placed together: each finished as it is written, then all renamed.
+  Status finish();
+  // Renames the temporary file over the destination (finishing it first, if not yet).
   Status commit();
   void abort();
   // `s` with the cause of this file's first failed write appended, in the system's words
   // ("write failed: No space left on device", "...: File too large"), when a write failed and
   // `s` is an I/O error (what a writer returns when its sink refuses bytes); else `s`.
   Status with_write_cause(Status s) const;
+  const char* destination() const { return path_; }  // the path given to open()
 
  private:
   static bool write(void* self, const uint8_t* data, size_t bytes);

@@ -218,7 +218,7 @@ Status AtomicFile::sync_in_background() {
   return Status::ok();
 }
 
-Status AtomicFile::commit() {
+Status AtomicFile::finish() {
   if (file_ == nullptr) return Status::error(StatusCode::kInvalidArgument, "no open output file");
   bool ok;
   int saved;
@@ -235,16 +235,20 @@ Status AtomicFile::commit() {
   if (!ok) {
     errno = saved;
     Status s = errno_error("cannot write output file", path_);
-    std::remove(temp_path_);
-    unregister_temp_path(&slot_);
-    temp_path_[0] = '\0';
+    abort();
     return s;
+  }
+  return Status::ok();
+}
+
+Status AtomicFile::commit() {
+  if (file_ != nullptr) SPLINTCORE_RETURN_IF_ERROR(finish());
+  if (temp_path_[0] == '\0') {
+    return Status::error(StatusCode::kInvalidArgument, "no open output file");
   }
   if (std::rename(temp_path_, path_) != 0) {
     Status s = errno_error("cannot move the output into place", path_);
-    std::remove(temp_path_);
-    unregister_temp_path(&slot_);
-    temp_path_[0] = '\0';
+    abort();
     return s;
   }
   unregister_temp_path(&slot_);

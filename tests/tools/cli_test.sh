@@ -416,6 +416,14 @@ check "design splint has the golden bytes" -- grep -q "\"splint_sha256\":\"$gold
 check "report has the case hash" -- grep -q '"case_sha256":"[0-9a-f]\{64\}"' "$work/design/report.json"
 check "report has the stages" -- grep -q '"stage":"boolean"' "$work/design/report.json"
 expect_exit 0 "the designed splint is printable" -- "$tool" check "$work/design/splint.stl"
+# The run's files are placed together: one that cannot be placed (a folder named report.json
+# in the way) leaves the earlier run's splint as it was and no temporary file.
+mkdir -p "$work/design-blocked/report.json"
+printf 'old' >"$work/design-blocked/splint.stl"
+expect_exit 1 "design with a folder in the report's place" -- "$tool" design "$work/case/case.json" -o "$work/design-blocked"
+check "the folder in the way named" -- grep -q "design-blocked/report.json: cannot move the output into place: a folder has its name" "$work/err"
+check "the earlier splint left as it was" -- test "$(cat "$work/design-blocked/splint.stl")" = old
+check "no other file left" -- test "$(find "$work/design-blocked" -mindepth 1 | wc -l)" -eq 2
 # One splint's print job ("output": {"job": NAME}, issue 32): the splint alone on the Eden260
 # tray as a 3MF, its triangles and volume those of the STL (Python's zipfile and XML parser),
 # named in the report with its SHA-256; the STL's bytes unchanged.

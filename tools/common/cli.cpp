@@ -155,5 +155,27 @@ bool read_whole_file(const std::string& path, std::vector<uint8_t>* out) {
   return read_whole_file(path, kMaxMeshBytes, out).is_ok();
 }
 
+Status OutputSet::keep(std::unique_ptr<AtomicFile> file) {
+  SPLINTCORE_RETURN_IF_ERROR(file->finish());
+  std::lock_guard<std::mutex> lock(mutex_);
+  files_.push_back(std::move(file));
+  return Status::ok();
+}
+
+Status OutputSet::commit() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const std::unique_ptr<AtomicFile>& f : files_) {
+    struct stat st;
+    if (::stat(f->destination(), &st) == 0 && S_ISDIR(st.st_mode)) {
+      return Status::error(StatusCode::kIoError,
+                           "cannot move the output into place: a folder has its name")
+          .in_file(f->destination());
+    }
+  }
+  for (const std::unique_ptr<AtomicFile>& f : files_) SPLINTCORE_RETURN_IF_ERROR(f->commit());
+  files_.clear();
+  return Status::ok();
+}
+
 }  // namespace cli
 }  // namespace splintcore

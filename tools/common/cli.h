@@ -4,12 +4,15 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
 #include "splintcore/core.h"
 #include "splintcore/geometry.h"
 #include "splintcore/io.h"
+#include "splintcore/platform.h"
 
 namespace splintcore {
 namespace cli {
@@ -69,6 +72,25 @@ bool read_whole_file(const std::string& path, std::vector<uint8_t>* out);
 
 // Prints "splintcore: <formatted status>" to stderr.
 void print_error(const Status& status);
+
+// The output files of one run, placed together: each is written whole, synced and closed as a
+// temporary file (AtomicFile::finish) when it is kept, and none is renamed into place before
+// commit(), which renames them all in the order kept. So a run that fails at any of its files
+// (a full disk at the report, after the splint) leaves none of this run's files in place, and
+// the files of an earlier run as they were, not new and old mixed. commit() first refuses a
+// destination that is a folder (the one way left for a rename to fail once the temporary files
+// exist), so the renames do not stop half way for it. Destroyed without commit(), it removes
+// every temporary file. keep() may be called from several threads.
+class OutputSet {
+ public:
+  // Keeps `file` (open, written) for commit(): finished now; on an error it is removed.
+  Status keep(std::unique_ptr<AtomicFile> file);
+  Status commit();
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<AtomicFile>> files_;
+};
 
 }  // namespace cli
 }  // namespace splintcore

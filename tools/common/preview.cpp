@@ -132,10 +132,12 @@ Status render_with_marks(const Context& ctx, const std::vector<RenderMesh>& scen
   return Status::ok();
 }
 
-// write_png_file with marks drawn over the scene (render_with_marks; marks may be null).
+// write_png_file with marks drawn over the scene (render_with_marks; marks may be null), the
+// file kept in `outputs` when not null (write_preview).
 Status write_marked_png_file(const Context& ctx, const std::vector<RenderMesh>& meshes,
                              const Mesh* marks, const RenderOptions& options,
-                             const std::string& path, PreviewInfo* info) {
+                             const std::string& path, PreviewInfo* info,
+                             OutputSet* outputs = nullptr) {
   std::vector<uint8_t> png;
   const double t0 = monotonic_seconds();
   double render_seconds = 0;
@@ -151,14 +153,15 @@ Status write_marked_png_file(const Context& ctx, const std::vector<RenderMesh>& 
     SPLINTCORE_RETURN_IF_ERROR(write_png(ctx, image, sink));
   }
   const double t2 = monotonic_seconds();
-  AtomicFile file;
-  SPLINTCORE_RETURN_IF_ERROR(file.open(path.c_str()));
-  ByteSink out = file.sink();
+  auto file = std::make_unique<AtomicFile>();
+  SPLINTCORE_RETURN_IF_ERROR(file->open(path.c_str()));
+  ByteSink out = file->sink();
   if (!out.write(out.user, png.data(), png.size())) {
-    return file.with_write_cause(
+    return file->with_write_cause(
         Status::error(StatusCode::kIoError, "cannot write the PNG").in_file(path.c_str()));
   }
-  SPLINTCORE_RETURN_IF_ERROR(file.commit());  // on error ~AtomicFile removes the temporary
+  // (On an error ~AtomicFile removes the temporary file.)
+  SPLINTCORE_RETURN_IF_ERROR(outputs != nullptr ? outputs->keep(std::move(file)) : file->commit());
   if (info != nullptr) {
     info->path = path;
     info->sha256 = sha256_hex(png);
@@ -226,8 +229,8 @@ Status write_png_file(const Context& ctx, const std::vector<RenderMesh>& meshes,
 
 Status write_preview(const Context& ctx, const Mesh& splint, const std::vector<const Mesh*>& jaws,
                      const std::vector<RigidTransform>& moves, const std::string& path,
-                     uint32_t width, uint32_t height, PreviewInfo* info,
-                     const PreviewMarks* marks) {
+                     uint32_t width, uint32_t height, PreviewInfo* info, const PreviewMarks* marks,
+                     OutputSet* outputs) {
   if (!moves.empty() && moves.size() != jaws.size()) {
     return make_error(StatusCode::kInvalidArgument, "preview: ", moves.size(), " transforms for ",
                       jaws.size(), " jaws");
@@ -276,10 +279,10 @@ Status write_preview(const Context& ctx, const Mesh& splint, const std::vector<c
   RenderOptions options;
   options.width = width;
   options.height = height;
-  if (marks == nullptr) return write_png_file(ctx, meshes, options, path, info);
   Mesh mark_mesh;
-  SPLINTCORE_RETURN_IF_ERROR(marks_mesh(arena, *marks, &mark_mesh));
-  return write_marked_png_file(ctx, meshes, &mark_mesh, options, path, info);
+  if (marks != nullptr) SPLINTCORE_RETURN_IF_ERROR(marks_mesh(arena, *marks, &mark_mesh));
+  return write_marked_png_file(ctx, meshes, marks != nullptr ? &mark_mesh : nullptr, options, path,
+                               info, outputs);
 }
 
 Status write_distance_png(const Context& ctx, const Mesh& mesh,

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "cli.h"
 #include "splintcore/core.h"
 #include "splintcore/mesh.h"
 #include "splintcore/render.h"
@@ -65,11 +66,12 @@ std::string sha256_hex(const std::vector<uint8_t>& bytes);
 // kInvalidArgument when moves has another size than jaws.
 // With `marks` (may be null) the picks and the arch are drawn over everything, seen through
 // the splint and the jaws: the marks are drawn alone in a second pass given the first pass's
-// framing (RenderOptions::framing), and their pixels are copied over.
+// framing (RenderOptions::framing), and their pixels are copied over. With `outputs` the file
+// is kept there for its commit with the run's other outputs (cli.h), not placed now.
 Status write_preview(const Context& ctx, const Mesh& splint, const std::vector<const Mesh*>& jaws,
                      const std::vector<RigidTransform>& moves, const std::string& path,
                      uint32_t width, uint32_t height, PreviewInfo* info,
-                     const PreviewMarks* marks = nullptr);
+                     const PreviewMarks* marks = nullptr, OutputSet* outputs = nullptr);
 
 // `mesh` coloured per pixel by `distances` (one per vertex) on the blue-green-red ramp over
 // [0, range] (render_ramp_colour; range > 0), four views, with the ramp's legend bar at the

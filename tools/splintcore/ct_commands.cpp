@@ -219,6 +219,7 @@ class Reconstruct {
   ThresholdStats ts_;
   RegionStats rs_;
   std::string rows_, warnings_;
+  cli::OutputSet outputs_;  // both jaws placed together
 };
 
 void Reconstruct::stage(const char* name) {
@@ -236,6 +237,8 @@ int Reconstruct::run() {
     s = mesh_jaw(jaw);
     if (!s.is_ok()) return run_.reject(s);
   }
+  s = outputs_.commit();
+  if (!s.is_ok()) return run_.reject(s);
   print_report();
   return kExitOk;
 }
@@ -310,7 +313,7 @@ Status Reconstruct::mesh_jaw(int jaw) {
   double volume_mm3 = 0;
   SPLINTCORE_RETURN_IF_ERROR(check_closed_oriented(ctx, mesh, &volume_mm3));
   const std::string path = std::string(a_.output) + "/" + kNames[jaw] + ".stl";
-  Status s = write_mesh_atomically(ctx, mesh, path.c_str(), false);
+  Status s = write_mesh_atomically(ctx, mesh, path.c_str(), false, &outputs_);
   if (!s.is_ok()) return s.in_file(path.c_str());
   stage(jaw == 0 ? "write maxilla" : "write mandible");
   if (rs_.touches_border[ro.label]) {

@@ -112,7 +112,7 @@ class Design {
   Status write_resolved_case(const std::string& path);
   void print_outline() const;
   Status write_splint();
-  Status write_mesh_file(const Mesh& m, const std::string& path, std::string* hash) const;
+  Status write_mesh_file(const Mesh& m, const std::string& path, std::string* hash);
   Status write_plan_stls();
   void write_preview();
   void preview_splint(const Mesh& splint, const DesignReport& report,
@@ -160,6 +160,8 @@ class Design {
   Status preview_status_;
   char preview_error_[512] = "";
   double t_read_ = 0, t_design_ = 0, t_end_ = 0;
+  // The run's files, placed together once the last is written (a failure places none).
+  cli::OutputSet outputs_;
 
   // Two-jaw surgery ("plan"): [0] the intermediate splint, [1] the final one.
   Mesh plan_splints_[2];
@@ -220,6 +222,7 @@ int Design::run() {
   write_preview();
   t_end_ = monotonic_seconds();
   s = write_report();
+  if (s.is_ok()) s = outputs_.commit();
   if (!s.is_ok()) return run_.reject(s);
   if (args_.common.json) {
     std::printf("%s\n", report_text_.c_str());
@@ -330,7 +333,8 @@ Status Design::write_resolved_case(const std::string& path) {
   written.ct_volume = absolute(c_.ct_volume);
   std::string text;
   SPLINTCORE_RETURN_IF_ERROR(write_case(written, cli::string_sink(&text)));
-  return write_bytes_atomically(path, text + "\n");
+  // (Alone, --outline writes it now; else it is one of the run's files.)
+  return write_bytes_atomically(path, text + "\n", args_.outline_only ? nullptr : &outputs_);
 }
 
 void Design::print_outline() const {
@@ -374,22 +378,23 @@ namespace {
 
 // A splint's binary STL (the writer's buffer from ctx's arena), streamed to the file and
 // hashed as it goes.
-Status write_stl_file(const Context& ctx, const Mesh& m, const std::string& path,
-                      std::string* hash) {
+Status write_stl_file(const Context& ctx, const Mesh& m, const std::string& path, std::string* hash,
+                      cli::OutputSet* outputs) {
   return write_hashed_atomically(
-      path, [&](const ByteSink& sink) { return write_stl(ctx, m, sink, StlWriteOptions{}); }, hash);
+      path, [&](const ByteSink& sink) { return write_stl(ctx, m, sink, StlWriteOptions{}); }, hash,
+      outputs);
 }
 
 }  // namespace
 
-Status Design::write_mesh_file(const Mesh& m, const std::string& path, std::string* hash) const {
-  return write_stl_file(ctx_, m, path, hash);
+Status Design::write_mesh_file(const Mesh& m, const std::string& path, std::string* hash) {
+  return write_stl_file(ctx_, m, path, hash, &outputs_);
 }
 
 // OUTDIR/intermediate.stl and final.stl. With more than one thread, in two tasks, each
 // writer's buffer in its own slice of the arena (given back after): the same bytes, about 20
 // ms less on the real case (issue 32). A failure is the intermediate's first, as in the
-// serial order; the other file may then be written already (whole, as always).
+// serial order; neither is placed then (outputs_).
 Status Design::write_plan_stls() {
   Arena& arena = *ctx_.arena;
   ArenaScope scope(arena);
@@ -407,8 +412,8 @@ Status Design::write_plan_stls() {
   Arena slices[2] = {Arena(base, slice), Arena(base + slice, slice)};
   Status status[2];
   auto task = [&](uint32_t k) {
-    status[k] =
-        write_stl_file(Context(&slices[k]), plan_splints_[k], plan_paths_[k], &plan_hashes_[k]);
+    status[k] = write_stl_file(Context(&slices[k]), plan_splints_[k], plan_paths_[k],
+                               &plan_hashes_[k], &outputs_);
   };
   parallel_for_each(ctx_.executor, 2, task);
   return status[0].is_ok() ? status[1] : status[0];
@@ -450,12 +455,10 @@ void Design::write_preview() {
   if (report_.placed_on_tray) marks.move = RigidTransform::translation(report_.tray_translation);
   preview_status_ = cli::write_preview(ctx_, splint_, preview_jaws, preview_moves,
                                        std::string(args_.output) + "/preview.png", 1024, 1024,
-                                       &preview_, outlined_ ? &marks : nullptr);
+                                       &preview_, outlined_ ? &marks : nullptr, &outputs_);
   if (!preview_status_.is_ok()) {
     preview_status_.format(preview_error_, sizeof(preview_error_));
     std::fprintf(stderr, "splintcore: warning: no preview: %s\n", preview_error_);
-  } else if (!args_.common.json) {
-    std::printf("preview: %s\n", preview_.path.c_str());
   }
 }
 
@@ -518,7 +521,7 @@ Status Design::write_report() {
   SPLINTCORE_RETURN_IF_ERROR(
       write_design_report(ctx_, c_, Span<const Mesh>(jaws_.data(), jaws_.size()), splint_, report_,
                           files, &run_info, cli::string_sink(&report_text_)));
-  return write_bytes_atomically(report_path_, report_text_ + "\n");
+  return write_bytes_atomically(report_path_, report_text_ + "\n", &outputs_);
 }
 
 // Two-jaw surgery: both splints (design_plan), OUTDIR/intermediate.stl and final.stl, a
@@ -550,6 +553,7 @@ int Design::run_plan() {
   t_end_ = monotonic_seconds();
   report_path_ = out_dir + "/" + (c_.output_report != nullptr ? c_.output_report : "report.json");
   s = write_plan_report();
+  if (s.is_ok()) s = outputs_.commit();
   if (!s.is_ok()) return run_.reject(s);
   if (args_.common.json) {
     std::printf("%s\n", report_text_.c_str());
@@ -589,7 +593,7 @@ Status Design::write_plan_job(const std::string& path) {
         return splintcore::write_plan_job(ctx_, c_, plan_splints_[0], plan_splints_[1], hashes,
                                           sink, nullptr);
       },
-      &job_sha256_));
+      &job_sha256_, &outputs_));
   job_path_ = path;
   return Status::ok();
 }
@@ -602,7 +606,7 @@ Status Design::write_splint_job(const std::string& path) {
       [&](const ByteSink& sink) {
         return splintcore::write_splint_job(ctx_, c_, splint_, splint_hash_.c_str(), sink, nullptr);
       },
-      &job_sha256_));
+      &job_sha256_, &outputs_));
   job_path_ = path;
   return Status::ok();
 }
@@ -627,7 +631,8 @@ void Design::preview_splint(const Mesh& splint, const DesignReport& report,
             ? compose(RigidTransform::translation(report.tray_translation), transforms[i])
             : transforms[i]);
   }
-  *status = cli::write_preview(ctx_, splint, preview_jaws, moves, path, 1024, 1024, info);
+  *status = cli::write_preview(ctx_, splint, preview_jaws, moves, path, 1024, 1024, info, nullptr,
+                               &outputs_);
   if (!status->is_ok()) {
     status->format(error, error_size);
     std::fprintf(stderr, "splintcore: warning: no preview: %s\n", error);
@@ -696,7 +701,7 @@ Status Design::write_plan_report() {
   SPLINTCORE_RETURN_IF_ERROR(splintcore::write_plan_report(
       ctx_, c_, Span<const Mesh>(jaws_.data(), jaws_.size()), plan_splints_[0], plan_splints_[1],
       plan_report_, files, &run_info, cli::string_sink(&report_text_)));
-  return write_bytes_atomically(report_path_, report_text_ + "\n");
+  return write_bytes_atomically(report_path_, report_text_ + "\n", &outputs_);
 }
 
 void Design::print_summary() const {
@@ -791,6 +796,7 @@ void Design::print_summary() const {
     std::printf("wrote %s (the splint on the tray, sha256 %s)\n", job_path_.c_str(),
                 job_sha256_.c_str());
   }
+  if (preview_status_.is_ok()) std::printf("preview: %s\n", preview_.path.c_str());
   std::printf("time: read %.3f s, design %.3f s, total %.3f s; peak arena %llu bytes\n",
               t_read_ - run_.start, t_design_ - t_read_, t_end_ - run_.start,
               static_cast<unsigned long long>(run_.peak_arena()));

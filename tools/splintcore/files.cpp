@@ -218,36 +218,47 @@ Status write_mesh_uncommitted(const Context& ctx, const Mesh& mesh, const char* 
   return s;
 }
 
-Status write_mesh_atomically(const Context& ctx, const Mesh& mesh, const char* path, bool ascii) {
-  AtomicFile out;
-  SPLINTCORE_RETURN_IF_ERROR(write_mesh_uncommitted(ctx, mesh, path, ascii, &out));
-  return out.commit();
+namespace {
+// The file written whole: committed now, or kept in `outputs` (not null) for its commit.
+Status place(std::unique_ptr<AtomicFile> file, cli::OutputSet* outputs) {
+  return outputs != nullptr ? outputs->keep(std::move(file)) : file->commit();
+}
+}  // namespace
+
+Status write_mesh_atomically(const Context& ctx, const Mesh& mesh, const char* path, bool ascii,
+                             cli::OutputSet* outputs) {
+  auto file = std::make_unique<AtomicFile>();
+  SPLINTCORE_RETURN_IF_ERROR(write_mesh_uncommitted(ctx, mesh, path, ascii, file.get()));
+  return place(std::move(file), outputs);
 }
 
-Status write_bytes_atomically(const std::string& path, const void* data, size_t size) {
-  AtomicFile file;
-  SPLINTCORE_RETURN_IF_ERROR(file.open(path.c_str()));
-  ByteSink sink = file.sink();
+Status write_bytes_atomically(const std::string& path, const void* data, size_t size,
+                              cli::OutputSet* outputs) {
+  auto file = std::make_unique<AtomicFile>();
+  SPLINTCORE_RETURN_IF_ERROR(file->open(path.c_str()));
+  ByteSink sink = file->sink();
   if (!sink.write(sink.user, static_cast<const uint8_t*>(data), size)) {
-    return file.with_write_cause(
+    return file->with_write_cause(
         Status::error(StatusCode::kIoError, "cannot write").in_file(path.c_str()));
   }
-  return file.commit();
+  return place(std::move(file), outputs);
 }
 
-Status write_bytes_atomically(const std::string& path, const std::string& bytes) {
-  return write_bytes_atomically(path, bytes.data(), bytes.size());
+Status write_bytes_atomically(const std::string& path, const std::string& bytes,
+                              cli::OutputSet* outputs) {
+  return write_bytes_atomically(path, bytes.data(), bytes.size(), outputs);
 }
 
 Status write_hashed_atomically(const std::string& path,
                                const std::function<Status(const ByteSink&)>& write,
-                               std::string* sha256) {
-  AtomicFile file;
-  SPLINTCORE_RETURN_IF_ERROR(file.open(path.c_str()));
+                               std::string* sha256, cli::OutputSet* outputs) {
+  auto file = std::make_unique<AtomicFile>();
+  SPLINTCORE_RETURN_IF_ERROR(file->open(path.c_str()));
   HashSink h;  // hashes what it passes on to the file
-  h.next = file.sink();
-  SPLINTCORE_RETURN_IF_ERROR(file.with_write_cause(write(hash_sink(&h))));  // ~AtomicFile cleans up
-  SPLINTCORE_RETURN_IF_ERROR(file.commit());
+  h.next = file->sink();
+  SPLINTCORE_RETURN_IF_ERROR(
+      file->with_write_cause(write(hash_sink(&h))));  // ~AtomicFile cleans up
+  SPLINTCORE_RETURN_IF_ERROR(place(std::move(file), outputs));
   uint8_t digest[32];
   h.sha.finish(digest);
   char hex[65];

@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "../common/cli.h"
 #include "splintcore/core.h"
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
@@ -119,8 +120,10 @@ Status read_whole_input(const char* path, uint64_t max_bytes, std::vector<uint8_
 const char* encoding_name(MeshFormat format);
 
 // Writes a mesh as STL through the streaming writer into a temporary file renamed over `path`
-// only when everything succeeded.
-Status write_mesh_atomically(const Context& ctx, const Mesh& mesh, const char* path, bool ascii);
+// only when everything succeeded. With `outputs`, the file is kept there (written whole and
+// synced) and placed by its commit() with the run's other outputs, instead of now.
+Status write_mesh_atomically(const Context& ctx, const Mesh& mesh, const char* path, bool ascii,
+                             cli::OutputSet* outputs = nullptr);
 
 // The same without the commit: `file` opened on `path` and the STL written into it; the
 // caller commits it (or it is removed: on an error here, by abort() or the destructor).
@@ -128,16 +131,19 @@ Status write_mesh_uncommitted(const Context& ctx, const Mesh& mesh, const char* 
                               AtomicFile* file);
 
 // Writes bytes the same way.
-Status write_bytes_atomically(const std::string& path, const void* data, size_t size);
-Status write_bytes_atomically(const std::string& path, const std::string& bytes);
+Status write_bytes_atomically(const std::string& path, const void* data, size_t size,
+                              cli::OutputSet* outputs = nullptr);
+Status write_bytes_atomically(const std::string& path, const std::string& bytes,
+                              cli::OutputSet* outputs = nullptr);
 
 // Writes what `write` puts into the sink it is given (in order: the sink cannot seek) the same
 // way, streamed to the file as it comes, and the SHA-256 of those bytes (hex) into *sha256: no
 // copy of the whole file in memory (for the splints' STL and 3MF files, several MB each, that
-// copy cost more than the write; issue 32). A `write` that fails leaves no file.
+// copy cost more than the write; issue 32). A `write` that fails leaves no file. `outputs` as
+// for write_bytes_atomically.
 Status write_hashed_atomically(const std::string& path,
                                const std::function<Status(const ByteSink&)>& write,
-                               std::string* sha256);
+                               std::string* sha256, cli::OutputSet* outputs = nullptr);
 
 }  // namespace tool
 }  // namespace splintcore

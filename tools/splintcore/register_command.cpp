@@ -173,11 +173,13 @@ int run_register(const Command& command, int argc, char** argv) {
   Status s = register_rigid(run.ctx, meshes[0], meshes[1], a.options, &r);
   if (!s.is_ok()) return run.reject(s);  // a fit over --max-rms too: nothing is written
   const std::string json = result_json(a, r, s);
-  s = write_bytes_atomically(a.output, json);
+  cli::OutputSet outputs;  // the result and the moved scan placed together
+  s = write_bytes_atomically(a.output, json, &outputs);
   if (s.is_ok() && a.moved != nullptr) {
     for (Vec3& v : meshes[0].vertices) v = r.transform.apply_point(v);
-    s = write_mesh_atomically(run.ctx, meshes[0], a.moved, false);
+    s = write_mesh_atomically(run.ctx, meshes[0], a.moved, false, &outputs);
   }
+  if (s.is_ok()) s = outputs.commit();
   if (!s.is_ok()) return run.reject(s);
   print_register(run, a, r, json);
   return kExitOk;

@@ -1,5 +1,7 @@
 // The commands that build a splint step by step: base, boolean, and the synthetic jaws they are
 // tried on (phantom).
+#include <sys/stat.h>
+
 #include <string>
 #include <vector>
 
@@ -327,7 +329,8 @@ std::vector<OptionSpec> phantom_options(PhantomArgs* a) {
 }
 
 // Writes DIR/NAME.stl for one jaw; `row` gets its JSON object or its summary is printed.
-Status write_phantom_jaw(const PhantomArgs& a, int index, std::string* row) {
+Status write_phantom_jaw(const PhantomArgs& a, int index, std::string* row,
+                         cli::OutputSet* outputs) {
   const char* names[2] = {"maxilla", "mandible"};
   phantom::JawMesh jaw;
   phantom::PhantomOptions po;
@@ -337,7 +340,7 @@ Status write_phantom_jaw(const PhantomArgs& a, int index, std::string* row) {
   std::vector<uint8_t> bytes;
   SPLINTCORE_RETURN_IF_ERROR(phantom::stl_bytes(jaw, &bytes));
   const std::string path = std::string(a.output) + "/" + names[index] + ".stl";
-  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(path, bytes.data(), bytes.size()));
+  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(path, bytes.data(), bytes.size(), outputs));
   const std::string hex = hex_sha256(bytes.data(), bytes.size());
   if (a.common.json) {
     JsonObject r;
@@ -356,7 +359,7 @@ Status write_phantom_jaw(const PhantomArgs& a, int index, std::string* row) {
 
 // Writes DIR/NAME_scan.stl and .ply for one scan-like jaw; `row` gets its JSON object or its
 // summary is printed.
-Status write_scan_jaw(const PhantomArgs& a, int index, std::string* row) {
+Status write_scan_jaw(const PhantomArgs& a, int index, std::string* row, cli::OutputSet* outputs) {
   const char* names[2] = {"maxilla", "mandible"};
   phantom::ScanJaw jaw;
   phantom::ScanOptions so;
@@ -373,8 +376,8 @@ Status write_scan_jaw(const PhantomArgs& a, int index, std::string* row) {
   SPLINTCORE_RETURN_IF_ERROR(
       write_ply(mesh, Span<const uint8_t>(jaw.rgb.data(), jaw.rgb.size()), cli::string_sink(&ply)));
   const std::string base = std::string(a.output) + "/" + names[index] + "_scan";
-  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(base + ".stl", stl));
-  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(base + ".ply", ply));
+  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(base + ".stl", stl, outputs));
+  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(base + ".ply", ply, outputs));
   if (a.common.json) {
     JsonObject r;
     r.add("jaw", names[index]);
@@ -404,12 +407,15 @@ Status write_scan_jaw(const PhantomArgs& a, int index, std::string* row) {
 int run_scan_phantom(const Command& command, const PhantomArgs& a) {
   const double t0 = monotonic_seconds();
   std::string rows;
+  cli::OutputSet outputs;  // the four files placed together
   for (int j = 0; j < 2; ++j) {
     std::string row;
-    const Status s = write_scan_jaw(a, j, &row);
+    const Status s = write_scan_jaw(a, j, &row, &outputs);
     if (!s.is_ok()) return rejected(a.common, command.name, s, nullptr);
     if (a.common.json) rows += (j > 0 ? "," : "") + row;
   }
+  const Status placed = outputs.commit();
+  if (!placed.is_ok()) return rejected(a.common, command.name, placed, nullptr);
   if (!a.common.json) return kExitOk;
   JsonObject j;
   j.add("command", "phantom");
@@ -546,6 +552,7 @@ int run_phantom(const Command& command, int argc, char** argv) {
   if (early >= 0) return early;
   if (!a.common.positional.empty()) return line.usage_error("phantom takes no input file");
   if (a.output == nullptr) return line.usage_error("phantom needs -o DIR");
+  ::mkdir(a.output, 0777);  // as design's OUTDIR: an existing folder is fine
   if (a.scan) {
     if (a.triangles != 0) return line.usage_error("phantom --scan takes no --triangles");
     return run_scan_phantom(command, a);
@@ -555,9 +562,10 @@ int run_phantom(const Command& command, int argc, char** argv) {
   }
   const double t0 = monotonic_seconds();
   std::string rows;
+  cli::OutputSet outputs;  // the jaws and the case placed together
   for (int j = 0; j < 2; ++j) {
     std::string row;
-    const Status s = write_phantom_jaw(a, j, &row);
+    const Status s = write_phantom_jaw(a, j, &row, &outputs);
     if (!s.is_ok()) return rejected(a.common, command.name, s, nullptr);
     if (a.common.json) rows += (j > 0 ? "," : "") + row;
   }
@@ -565,7 +573,8 @@ int run_phantom(const Command& command, int argc, char** argv) {
   // `splintcore design DIR/case.json -o OUT`.
   const std::string text = phantom::case_json(("phantom-" + std::to_string(a.triangles)).c_str());
   const std::string path = std::string(a.output) + "/case.json";
-  const Status s = write_bytes_atomically(path, text);
+  Status s = write_bytes_atomically(path, text, &outputs);
+  if (s.is_ok()) s = outputs.commit();
   if (!s.is_ok()) return rejected(a.common, command.name, s, nullptr);
   if (!a.common.json) {
     std::printf("case: %s\n", path.c_str());

@@ -1,0 +1,117 @@
+// The tools' OutputSet (tools/common/cli.h): a run's files placed together or not at all.
+// Nothing is in place before commit(); a failure at any file (a write past the file size
+// limit, as on a full disk; the set destroyed) leaves none of them in place and the files of an
+// earlier run as they were; a destination that is a folder is refused before any rename.
+#include <gtest/gtest.h>
+#include <sys/resource.h>
+
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/cli.h"
+#include "splintcore/platform.h"
+#include "support/test_util.h"
+
+namespace splintcore {
+namespace {
+
+namespace fs = std::filesystem;
+using test::TempDir;
+
+std::string contents(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+void put(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
+
+size_t entries(const fs::path& dir) {
+  size_t n = 0;
+  for (const auto& e : fs::directory_iterator(dir)) n += e.exists() ? 1 : 0;
+  return n;
+}
+
+// `text` written into a fresh AtomicFile on `path` and kept in `set`; the write's status
+// (with its cause) when the sink refuses the bytes.
+Status keep_text(cli::OutputSet* set, const fs::path& path, const std::string& text) {
+  auto file = std::make_unique<AtomicFile>();
+  SPLINTCORE_RETURN_IF_ERROR(file->open(path.string().c_str()));
+  const ByteSink sink = file->sink();
+  if (!sink.write(sink.user, reinterpret_cast<const uint8_t*>(text.data()), text.size())) {
+    return file->with_write_cause(Status::error(StatusCode::kIoError, "write failed"));
+  }
+  return set->keep(std::move(file));
+}
+
+TEST(OutputSet, FilesArePlacedTogetherAtTheCommit) {
+  TempDir dir("outputs", "commit");
+  const fs::path splint = dir.path / "splint.stl", report = dir.path / "report.json";
+  put(report, "old report");
+  cli::OutputSet set;
+  SPLINTCORE_ASSERT_OK(keep_text(&set, splint, "new splint"));
+  SPLINTCORE_ASSERT_OK(keep_text(&set, report, "new report"));
+  EXPECT_FALSE(fs::exists(splint));  // kept, not placed
+  EXPECT_EQ(contents(report), "old report");
+  EXPECT_EQ(entries(dir.path), 3u);  // the old report and two temporary files
+  SPLINTCORE_ASSERT_OK(set.commit());
+  EXPECT_EQ(contents(splint), "new splint");
+  EXPECT_EQ(contents(report), "new report");
+  EXPECT_EQ(entries(dir.path), 2u);
+  SPLINTCORE_EXPECT_OK(set.commit());  // nothing more to place
+}
+
+TEST(OutputSet, ARunThatFailsAtAnyFilePlacesNone) {
+  TempDir dir("outputs", "fail");
+  const fs::path splint = dir.path / "splint.stl", report = dir.path / "report.json";
+  put(splint, "old splint");
+  put(report, "old report");
+  {
+    cli::OutputSet set;  // destroyed without a commit (the run stopped at an error)
+    SPLINTCORE_ASSERT_OK(keep_text(&set, splint, "new splint"));
+  }
+  EXPECT_EQ(contents(splint), "old splint");
+  EXPECT_EQ(entries(dir.path), 2u);
+
+  // The second file's write fails past the file size limit (as on a full disk) after the
+  // first was written whole and kept: neither is placed, the old ones stay.
+  cli::OutputSet set;
+  SPLINTCORE_ASSERT_OK(keep_text(&set, splint, "new splint"));
+  auto previous = std::signal(SIGXFSZ, SIG_IGN);
+  rlimit saved;
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &saved), 0);
+  rlimit small = saved;
+  small.rlim_cur = 64 << 10;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  const Status s = keep_text(&set, report, std::string(size_t{1} << 20, 'r'));
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &saved), 0);
+  std::signal(SIGXFSZ, previous);
+  EXPECT_STREQ(s.message(), "write failed: File too large");
+  EXPECT_EQ(contents(report), "old report");
+  EXPECT_EQ(contents(splint), "old splint");
+}
+
+TEST(OutputSet, AFolderInTheWayIsRefusedBeforeAnyRename) {
+  TempDir dir("outputs", "folder");
+  const fs::path splint = dir.path / "splint.stl", report = dir.path / "report.json";
+  put(splint, "old splint");
+  fs::create_directories(report / "inside");
+  {
+    cli::OutputSet set;
+    SPLINTCORE_ASSERT_OK(keep_text(&set, splint, "new splint"));
+    SPLINTCORE_ASSERT_OK(keep_text(&set, report, "new report"));
+    const Status s = set.commit();
+    EXPECT_EQ(s.code(), StatusCode::kIoError);
+    EXPECT_STREQ(s.message(), "cannot move the output into place: a folder has its name");
+    EXPECT_EQ(std::string(s.file()), report.string());
+  }
+  EXPECT_EQ(contents(splint), "old splint");
+  EXPECT_TRUE(fs::is_directory(report / "inside"));
+  EXPECT_EQ(entries(dir.path), 2u);  // no temporary file left
+}
+
+}  // namespace
+}  // namespace splintcore
