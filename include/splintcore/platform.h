@@ -36,6 +36,9 @@ class FileSource {
 // Output written atomically: bytes go to a temporary file in the destination's folder; commit()
 // flushes, syncs and renames it over the destination. Anything else (an error, a destructor
 // without commit) removes the temporary file, so a failed run never leaves an output behind.
+// A destination that exists and is neither a regular file nor a folder (/dev/null,
+// /dev/stdout, a FIFO) is written in place instead, as a stream: renaming over it would
+// replace the device or the pipe itself.
 // On Linux the disk writes start while the rest is being written: each MiB written is handed
 // to the kernel's writeback (sync_file_range, SYNC_FILE_RANGE_WRITE: it starts the writes and
 // waits for none), so commit()'s fsync waits for the last of them, not all. Measured on the
@@ -64,8 +67,8 @@ class AtomicFile {
   // Renames the temporary file over the destination (finishing it first, if not yet).
   Status commit();
   void abort();
-  // `s` with the cause of this file's first failed write appended, in the system's words
-  // ("write failed: No space left on device", "...: File too large"), when a write failed and
+  // `s` with the cause of this file's first failed write or seek appended, in the system's
+  // words ("write failed: No space left on device", "...: File too large"), when one failed and
   // `s` is an I/O error (what a writer returns when its sink refuses bytes); else `s`.
   Status with_write_cause(Status s) const;
   const char* destination() const { return path_; }  // the path given to open()
@@ -83,6 +86,7 @@ class AtomicFile {
   char temp_path_[4096 + 32] = {};
   int slot_ = -1;        // where temp_path_ is registered for the signal handler (-1: nowhere)
   int write_errno_ = 0;  // errno of the first failed write (0: none)
+  bool direct_ = false;  // written in place: a device or a pipe (open())
 };
 
 // For a program's main(), once, before any output is opened: a run stopped by a signal leaves

@@ -132,6 +132,19 @@ Status AtomicFile::open(const char* path) {
     return make_error(StatusCode::kInvalidArgument, "output path is empty or too long");
   }
   std::memcpy(path_, path, n + 1);
+  write_errno_ = 0;
+  started_ = 0;
+  sync_errno_ = 0;
+  // A destination that exists and is neither a regular file nor a folder (/dev/null,
+  // /dev/stdout, a FIFO) is written in place: renaming over it would replace the device or the
+  // pipe itself with a regular file (as root, /dev/null), and a stream has no whole to swap in.
+  struct stat st;
+  if (::stat(path, &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) {
+    file_ = std::fopen(path, "wb");
+    if (file_ == nullptr) return errno_error("cannot open for writing", path);
+    direct_ = true;
+    return Status::ok();
+  }
   std::snprintf(temp_path_, sizeof(temp_path_), "%s.tmp-%ld-%u", path, static_cast<long>(getpid()),
                 g_temp_counter.fetch_add(1));
   slot_ = register_temp_path(temp_path_);  // (the name has this process's id: ours to remove)
@@ -150,9 +163,6 @@ Status AtomicFile::open(const char* path) {
     unregister_temp_path(&slot_);
     return s;
   }
-  write_errno_ = 0;
-  started_ = 0;
-  sync_errno_ = 0;
   return Status::ok();
 }
 
@@ -201,7 +211,8 @@ Status AtomicFile::with_write_cause(Status s) const {
 bool AtomicFile::seek(void* self, uint64_t offset) {
   AtomicFile* f = static_cast<AtomicFile*>(self);
   if (offset > static_cast<uint64_t>(INT64_MAX)) return false;
-  return fseeko(f->file_, static_cast<off_t>(offset), SEEK_SET) == 0;
+  // (A pipe cannot seek: ESPIPE, "Illegal seek", then becomes the write's cause.)
+  return fseeko(f->file_, static_cast<off_t>(offset), SEEK_SET) == 0 || f->write_failed();
 }
 
 Status AtomicFile::sync_in_background() {
@@ -213,6 +224,7 @@ Status AtomicFile::sync_in_background() {
     abort();
     return s;
   }
+  if (direct_) return Status::ok();  // (a device or a pipe: no disk to sync)
   const int fd = fileno(file_);
   syncer_ = std::thread([this, fd] { sync_errno_ = fsync(fd) == 0 ? 0 : errno; });
   return Status::ok();
@@ -227,7 +239,7 @@ Status AtomicFile::finish() {
     ok = sync_errno_ == 0;
     saved = sync_errno_;
   } else {
-    ok = std::fflush(file_) == 0 && fsync(fileno(file_)) == 0;
+    ok = std::fflush(file_) == 0 && (direct_ || fsync(fileno(file_)) == 0);
     saved = errno;
   }
   ok = (std::fclose(file_) == 0) && ok;
@@ -243,6 +255,10 @@ Status AtomicFile::finish() {
 
 Status AtomicFile::commit() {
   if (file_ != nullptr) SPLINTCORE_RETURN_IF_ERROR(finish());
+  if (direct_) {  // written in place: nothing to rename
+    direct_ = false;
+    return Status::ok();
+  }
   if (temp_path_[0] == '\0') {
     return Status::error(StatusCode::kInvalidArgument, "no open output file");
   }
@@ -262,6 +278,7 @@ void AtomicFile::abort() {
     std::fclose(file_);
     file_ = nullptr;
   }
+  direct_ = false;
   if (temp_path_[0] != '\0') {
     std::remove(temp_path_);
     unregister_temp_path(&slot_);

@@ -1,14 +1,18 @@
 // The hosted layer's atomic output (AtomicFile): what is in place after a commit, and that
 // nothing is left behind otherwise, with and without the fsync started in the background.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "splintcore/platform.h"
@@ -197,6 +201,54 @@ TEST(AtomicFile, AWritePastTheFileSizeLimitFailsWithItsCause) {
   if (entries(dir) != 2) std::_Exit(6);
   std::raise(sig);
   std::_Exit(7);
+}
+
+// A destination that is a pipe or a device is written in place: it stays a pipe (renaming over
+// it would have replaced it with a regular file; as root, /dev/null too), the reader gets the
+// bytes, and a seek (which a pipe cannot do) fails with the system's cause.
+TEST(AtomicFile, APipeOrADeviceIsWrittenInPlace) {
+  TempDir dir("file", "fifo");
+  const fs::path fifo = dir.path / "splint.stl";
+  ASSERT_EQ(::mkfifo(fifo.string().c_str(), 0600), 0);
+  const std::vector<uint8_t> bytes = pattern(300000);  // more than a pipe holds
+  // The read end opened first (without waiting for a writer), so that open() does not wait
+  // for it; read from once open() is done: should open() not write to the pipe, the reader
+  // sees no writer and ends at once (the test fails, it does not hang).
+  const int read_end = ::open(fifo.string().c_str(), O_RDONLY | O_NONBLOCK);
+  ASSERT_GE(read_end, 0);
+  AtomicFile f;
+  SPLINTCORE_ASSERT_OK(f.open(fifo.string().c_str()));
+  std::vector<uint8_t> got;
+  std::thread reader([&] {
+    ::fcntl(read_end, F_SETFL, ::fcntl(read_end, F_GETFL) & ~O_NONBLOCK);
+    uint8_t buffer[4096];
+    for (ssize_t n; (n = ::read(read_end, buffer, sizeof buffer)) > 0;) {
+      got.insert(got.end(), buffer, buffer + n);
+    }
+    ::close(read_end);
+  });
+  const ByteSink sink = f.sink();
+  EXPECT_TRUE(sink.write(sink.user, bytes.data(), bytes.size()));
+  EXPECT_FALSE(sink.seek(sink.user, 80));
+  EXPECT_STREQ(f.with_write_cause(Status::error(StatusCode::kIoError, "could not patch")).message(),
+               "could not patch: Illegal seek");
+  SPLINTCORE_EXPECT_OK(f.commit());
+  reader.join();
+  EXPECT_EQ(got, bytes);
+  struct stat st;
+  ASSERT_EQ(::stat(fifo.string().c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode));
+  EXPECT_EQ(entries(dir.path), 1u);
+  EXPECT_STREQ(f.commit().message(), "no open output file");
+  // A device (the null device's numbers, made here; only root may make one).
+  const fs::path device = dir.path / "null";
+  if (::mknod(device.string().c_str(), S_IFCHR | 0600, makedev(1, 3)) != 0) return;
+  SPLINTCORE_ASSERT_OK(f.open(device.string().c_str()));
+  EXPECT_TRUE(sink.write(sink.user, bytes.data(), bytes.size()));
+  SPLINTCORE_EXPECT_OK(f.commit());
+  ASSERT_EQ(::stat(device.string().c_str(), &st), 0);
+  EXPECT_TRUE(S_ISCHR(st.st_mode));
+  EXPECT_EQ(entries(dir.path), 2u);
 }
 
 // Stopped by a signal while outputs are open: with remove_temporary_outputs_on_signals() the

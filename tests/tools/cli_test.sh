@@ -134,6 +134,15 @@ expect_exit 1 "convert past ulimit -f 64" -- bash -c 'ulimit -f 64 && LLVM_PROFI
 check "the write's cause named" -- grep -q "keep.stl: byte [0-9]*: write failed: File too large" "$work/err"
 check "existing output untouched by the failed write" -- cmp -s "$work/a.stl" "$work/keep.stl"
 check "no temporary files left by the failed write" -- test -z "$(find "$work" -maxdepth 1 -name '*.tmp-*')"
+# A pipe as the output (a FIFO here; /dev/stdout is one too): written in place, not renamed
+# over (which would leave a regular file where the pipe was). The reader gives up after 60 s.
+mkfifo "$work/pipe.stl"
+timeout 60 cat "$work/pipe.stl" >"$work/piped.stl" &
+reader=$!
+expect_exit 0 "convert into a pipe" -- "$tool" convert "$fixtures/stl/torus_binary.stl" -o "$work/pipe.stl"
+wait "$reader"
+check "the pipe carried the same bytes" -- cmp -s "$work/a.stl" "$work/piped.stl"
+check "the pipe is still a pipe" -- test -p "$work/pipe.stl"
 
 # The initial splint base from a case file.
 expect_exit 0 "base --help" -- "$tool" base --help
