@@ -143,6 +143,14 @@ expect_exit 0 "convert into a pipe" -- "$tool" convert "$fixtures/stl/torus_bina
 wait "$reader"
 check "the pipe carried the same bytes" -- cmp -s "$work/a.stl" "$work/piped.stl"
 check "the pipe is still a pipe" -- test -p "$work/pipe.stl"
+# What a command prints must reach its standard output: a closed one or a full disk
+# (/dev/full, where there is one) fails the run, so --json is never taken cut off.
+expect_exit 1 "check with its standard output closed" -- bash -c 'exec "$@" >&-' closed "$tool" check "$fixtures/stl/torus_binary.stl" --json
+check "the closed output named" -- grep -q "cannot write the standard output: Bad file descriptor" "$work/err"
+if [ -c /dev/full ]; then
+  expect_exit 1 "check --json into a full disk" -- bash -c 'exec "$@" >/dev/full' full "$tool" check "$fixtures/stl/torus_binary.stl" --json
+  check "the full disk named" -- grep -q "cannot write the standard output: No space left on device" "$work/err"
+fi
 
 # The initial splint base from a case file.
 expect_exit 0 "base --help" -- "$tool" base --help

@@ -7,6 +7,7 @@
 // (mesh_commands.cpp, splint_commands.cpp, design_command.cpp, blockout_commands.cpp,
 // ct_commands.cpp), read by the one option parser (options.h); its --help is its usage text
 // followed by that table.
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 
@@ -326,11 +327,11 @@ void print_usage(std::FILE* out) {
 }  // namespace tool
 }  // namespace splintcore
 
-int main(int argc, char** argv) {
-  using namespace splintcore::tool;
-  // Stopped by a signal (Ctrl-C, kill, a closed pipe) or past `ulimit -f`: no half-written
-  // output left behind (platform.h).
-  splintcore::remove_temporary_outputs_on_signals();
+namespace splintcore {
+namespace tool {
+namespace {
+
+int run_command(int argc, char** argv) {
   if (argc < 2) {
     print_usage(stderr);
     return kExitUsage;
@@ -347,4 +348,27 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "splintcore: unknown command '%s'\n\n", command);
   print_usage(stderr);
   return kExitUsage;
+}
+
+// What the command printed must have reached the standard output (a full disk, a closed
+// descriptor): else the run fails, so that a reader of --json never takes a cut-off object
+// for the whole one (as GNU programs check at exit).
+int with_output_checked(int code) {
+  errno = 0;
+  if (std::fflush(stdout) == 0 && std::ferror(stdout) == 0) return code;
+  std::fprintf(stderr, "splintcore: error: cannot write the standard output%s%s\n",
+               errno != 0 ? ": " : "", errno != 0 ? std::strerror(errno) : "");
+  return code == kExitOk ? kExitRejected : code;
+}
+
+}  // namespace
+}  // namespace tool
+}  // namespace splintcore
+
+int main(int argc, char** argv) {
+  using namespace splintcore::tool;
+  // Stopped by a signal (Ctrl-C, kill, a closed pipe) or past `ulimit -f`: no half-written
+  // output left behind (platform.h).
+  splintcore::remove_temporary_outputs_on_signals();
+  return with_output_checked(run_command(argc, argv));
 }
