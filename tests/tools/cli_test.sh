@@ -143,6 +143,11 @@ expect_exit 0 "convert into a pipe" -- "$tool" convert "$fixtures/stl/torus_bina
 wait "$reader"
 check "the pipe carried the same bytes" -- cmp -s "$work/a.stl" "$work/piped.stl"
 check "the pipe is still a pipe" -- test -p "$work/pipe.stl"
+# "-o -" is refused (it would have made a file named "-"), as is an empty name.
+expect_exit 2 "convert -o -" -- "$tool" convert "$fixtures/stl/torus_binary.stl" -o -
+check "-o - refused with why" -- grep -q 'needs a file name (not "-": the summary goes to the standard output)' "$work/err"
+check "no file named -" -- test ! -e ./-
+expect_exit 2 "convert -o ''" -- "$tool" convert "$fixtures/stl/torus_binary.stl" -o ""
 # What a command prints must reach its standard output: a closed one or a full disk
 # (/dev/full, where there is one) fails the run, so --json is never taken cut off.
 expect_exit 1 "check with its standard output closed" -- bash -c 'exec "$@" >&-' closed "$tool" check "$fixtures/stl/torus_binary.stl" --json

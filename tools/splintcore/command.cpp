@@ -1,6 +1,7 @@
 #include "command.h"
 
 #include <cstdlib>
+#include <cstring>
 #include <thread>
 
 namespace splintcore {
@@ -19,8 +20,21 @@ std::vector<OptionSpec> common_options(CommonArgs* a) {
   };
 }
 
+namespace {
+// An output's name: not empty, and not "-", which would name a file "-" where the standard
+// output is meant (that carries the command's summary; /dev/stdout is written as a stream).
+bool parse_output_name(const char* value, const char** out) {
+  if (value[0] == '\0' || std::strcmp(value, "-") == 0) return false;
+  *out = value;
+  return true;
+}
+}  // namespace
+
 OptionSpec output_option(const char* value_name, const char** target, const char* help) {
-  return text("-o", value_name, target, help, "-o needs a file name").or_as("--output");
+  return custom<const char*, parse_output_name>(
+             "-o", value_name, target, help,
+             "-o needs a file name (not \"-\": the summary goes to the standard output)")
+      .or_as("--output");
 }
 
 CommandLine::CommandLine(const Command& command, CommonArgs* common, std::vector<OptionSpec> own)
