@@ -162,6 +162,11 @@ Status OutputSet::keep(std::unique_ptr<AtomicFile> file) {
   return Status::ok();
 }
 
+Status OutputSet::place(std::unique_ptr<AtomicFile> file, OutputSet* set) {
+  if (set != nullptr) return set->keep(std::move(file));
+  return file->commit();
+}
+
 Status OutputSet::commit() {
   std::lock_guard<std::mutex> lock(mutex_);
   for (const std::unique_ptr<AtomicFile>& f : files_) {

@@ -86,6 +86,8 @@ class OutputSet {
   // Keeps `file` (open, written) for commit(): finished now; on an error it is removed.
   Status keep(std::unique_ptr<AtomicFile> file);
   Status commit();
+  // A file written whole: kept in `set`, or committed now when `set` is null.
+  static Status place(std::unique_ptr<AtomicFile> file, OutputSet* set);
 
  private:
   std::mutex mutex_;

@@ -161,7 +161,7 @@ Status write_marked_png_file(const Context& ctx, const std::vector<RenderMesh>& 
         Status::error(StatusCode::kIoError, "cannot write the PNG").in_file(path.c_str()));
   }
   // (On an error ~AtomicFile removes the temporary file.)
-  SPLINTCORE_RETURN_IF_ERROR(outputs != nullptr ? outputs->keep(std::move(file)) : file->commit());
+  SPLINTCORE_RETURN_IF_ERROR(OutputSet::place(std::move(file), outputs));
   if (info != nullptr) {
     info->path = path;
     info->sha256 = sha256_hex(png);

@@ -218,18 +218,11 @@ Status write_mesh_uncommitted(const Context& ctx, const Mesh& mesh, const char* 
   return s;
 }
 
-namespace {
-// The file written whole: committed now, or kept in `outputs` (not null) for its commit.
-Status place(std::unique_ptr<AtomicFile> file, cli::OutputSet* outputs) {
-  return outputs != nullptr ? outputs->keep(std::move(file)) : file->commit();
-}
-}  // namespace
-
 Status write_mesh_atomically(const Context& ctx, const Mesh& mesh, const char* path, bool ascii,
                              cli::OutputSet* outputs) {
   auto file = std::make_unique<AtomicFile>();
   SPLINTCORE_RETURN_IF_ERROR(write_mesh_uncommitted(ctx, mesh, path, ascii, file.get()));
-  return place(std::move(file), outputs);
+  return cli::OutputSet::place(std::move(file), outputs);
 }
 
 Status write_bytes_atomically(const std::string& path, const void* data, size_t size,
@@ -241,7 +234,7 @@ Status write_bytes_atomically(const std::string& path, const void* data, size_t 
     return file->with_write_cause(
         Status::error(StatusCode::kIoError, "cannot write").in_file(path.c_str()));
   }
-  return place(std::move(file), outputs);
+  return cli::OutputSet::place(std::move(file), outputs);
 }
 
 Status write_bytes_atomically(const std::string& path, const std::string& bytes,
@@ -258,7 +251,7 @@ Status write_hashed_atomically(const std::string& path,
   h.next = file->sink();
   SPLINTCORE_RETURN_IF_ERROR(
       file->with_write_cause(write(hash_sink(&h))));  // ~AtomicFile cleans up
-  SPLINTCORE_RETURN_IF_ERROR(place(std::move(file), outputs));
+  SPLINTCORE_RETURN_IF_ERROR(cli::OutputSet::place(std::move(file), outputs));
   uint8_t digest[32];
   h.sha.finish(digest);
   char hex[65];
