@@ -2,7 +2,6 @@
 // nothing is left behind otherwise, with and without the fsync started in the background.
 #include <fcntl.h>
 #include <gtest/gtest.h>
-#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 #include <unistd.h>
@@ -149,8 +148,7 @@ TEST(AtomicFile, RefusalsAndAFailedRenameLeaveNothingBehind) {
 }
 
 // A write past the file size limit (as a full disk: the write fails, here with EFBIG) fails
-// cleanly: the writer's error gets the system's cause, and nothing is left behind. (The test
-// ignores SIGXFSZ itself, as remove_temporary_outputs_on_signals() does for the tools.)
+// cleanly: the writer's error gets the system's cause, and nothing is left behind.
 TEST(AtomicFile, AWritePastTheFileSizeLimitFailsWithItsCause) {
   TempDir dir("file", "fsize");
   const fs::path path = dir.path / "splint.stl";
@@ -160,21 +158,17 @@ TEST(AtomicFile, AWritePastTheFileSizeLimitFailsWithItsCause) {
   EXPECT_STREQ(f.with_write_cause(unrelated).message(), "not about the file");
   const std::vector<uint8_t> bytes = pattern(size_t{1} << 20);
   const ByteSink sink = f.sink();
-  auto previous = std::signal(SIGXFSZ, SIG_IGN);
-  rlimit saved;
-  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &saved), 0);
-  rlimit small = saved;
-  small.rlim_cur = 64 << 10;
-  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
   bool written = true;
-  for (size_t at = 0; at < bytes.size() && written; at += 64000) {
-    written = sink.write(sink.user, bytes.data() + at, std::min<size_t>(64000, bytes.size() - at));
+  Status s;
+  {
+    test::FileSizeLimit limit(64 << 10);
+    for (size_t at = 0; at < bytes.size() && written; at += 64000) {
+      written =
+          sink.write(sink.user, bytes.data() + at, std::min<size_t>(64000, bytes.size() - at));
+    }
+    s = written ? f.commit()
+                : f.with_write_cause(Status::error(StatusCode::kIoError, "write failed"));
   }
-  const Status s = written
-                       ? f.commit()
-                       : f.with_write_cause(Status::error(StatusCode::kIoError, "write failed"));
-  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &saved), 0);
-  std::signal(SIGXFSZ, previous);
   EXPECT_FALSE(written);
   EXPECT_STREQ(s.message(), "write failed: File too large");
   EXPECT_EQ(f.with_write_cause(unrelated).code(), StatusCode::kInvalidMesh);

@@ -36,10 +36,36 @@
 #include "splintcore/io.h"
 #include "splintcore/mesh.h"
 
+#include <sys/resource.h>
 #include <unistd.h>
+
+#include <csignal>
 
 namespace splintcore {
 namespace test {
+
+// For its lifetime, files this process writes are limited to `bytes` (RLIMIT_FSIZE, as a
+// full disk: a write past it fails with EFBIG) and SIGXFSZ is ignored, as
+// remove_temporary_outputs_on_signals() has the tools do; both as they were afterwards.
+class FileSizeLimit {
+ public:
+  explicit FileSizeLimit(rlim_t bytes) : previous_(std::signal(SIGXFSZ, SIG_IGN)) {
+    EXPECT_EQ(getrlimit(RLIMIT_FSIZE, &saved_), 0);
+    rlimit small = saved_;
+    small.rlim_cur = bytes;
+    EXPECT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  }
+  ~FileSizeLimit() {
+    EXPECT_EQ(setrlimit(RLIMIT_FSIZE, &saved_), 0);
+    std::signal(SIGXFSZ, previous_);
+  }
+  FileSizeLimit(const FileSizeLimit&) = delete;
+  FileSizeLimit& operator=(const FileSizeLimit&) = delete;
+
+ private:
+  void (*previous_)(int);
+  rlimit saved_{};
+};
 
 // A fresh folder in the system's temporary folder (splintcore_PREFIX_NAME_PID), removed with
 // everything in it when the test is done.

@@ -3,9 +3,7 @@
 // limit, as on a full disk; the set destroyed) leaves none of them in place and the files of an
 // earlier run as they were; a destination that is a folder is refused before any rename.
 #include <gtest/gtest.h>
-#include <sys/resource.h>
 
-#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -80,15 +78,11 @@ TEST(OutputSet, ARunThatFailsAtAnyFilePlacesNone) {
   // first was written whole and kept: neither is placed, the old ones stay.
   cli::OutputSet set;
   SPLINTCORE_ASSERT_OK(keep_text(&set, splint, "new splint"));
-  auto previous = std::signal(SIGXFSZ, SIG_IGN);
-  rlimit saved;
-  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &saved), 0);
-  rlimit small = saved;
-  small.rlim_cur = 64 << 10;
-  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
-  const Status s = keep_text(&set, report, std::string(size_t{1} << 20, 'r'));
-  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &saved), 0);
-  std::signal(SIGXFSZ, previous);
+  Status s;
+  {
+    test::FileSizeLimit limit(64 << 10);
+    s = keep_text(&set, report, std::string(size_t{1} << 20, 'r'));
+  }
   EXPECT_STREQ(s.message(), "write failed: File too large");
   EXPECT_EQ(contents(report), "old report");
   EXPECT_EQ(contents(splint), "old splint");
