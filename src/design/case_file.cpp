@@ -181,6 +181,22 @@ struct Reader {
     *out = v.string;
     return Status::ok();
   }
+
+  // A file's path: a string without control characters. One would reach a terminal as it is
+  // wherever the tools print the path (in a message, a summary); the other strings are names
+  // and words checked against their own rules (a plain name, a known printer).
+  Status path(const JsonValue& v, const char* key, const char** out) const {
+    SPLINTCORE_RETURN_IF_ERROR(string(v, key, out));
+    for (uint32_t i = 0; i < v.length; ++i) {
+      const unsigned char c = static_cast<unsigned char>(v.string[i]);
+      if (c < 0x20 || c == 0x7F) {
+        Status s = json_error(*doc, v, StatusCode::kInvalidArgument, "\"");
+        s.append(key).append("\" holds a control character (byte ").append_u64(c);
+        return s.append(" at character ").append_u64(i).append("): a file's path has none");
+      }
+    }
+    return Status::ok();
+  }
 };
 
 Status parse_picks(const Reader& r, const JsonValue& list, const char* key, double inner_default,
@@ -233,7 +249,7 @@ Status parse_scan(const Reader& r, const JsonValue& v, CaseScan* out) {
   if (path == nullptr) {
     return r.fail(v, StatusCode::kInvalidArgument, "\"scan\" needs \"path\" (the scan's mesh)");
   }
-  SPLINTCORE_RETURN_IF_ERROR(r.string(*path, "path", &out->path));
+  SPLINTCORE_RETURN_IF_ERROR(r.path(*path, "path", &out->path));
   if (const JsonValue* l = doc.member(v, "landmarks")) {
     SPLINTCORE_RETURN_IF_ERROR(r.expect_type(*l, JsonType::kArray, "landmarks"));
     if (l->child_count < 3 || l->child_count > 64) {
@@ -299,7 +315,7 @@ Status parse_jaws(const Reader& r, const JsonValue* jaws, CaseFile* out) {
                     "\"role\" must be \"maxilla\" or \"mandible\"");
     }
     if (mesh != nullptr) {
-      SPLINTCORE_RETURN_IF_ERROR(r.string(*mesh, "mesh", &jaw.mesh));
+      SPLINTCORE_RETURN_IF_ERROR(r.path(*mesh, "mesh", &jaw.mesh));
     } else {
       SPLINTCORE_RETURN_IF_ERROR(r.vec3(*seed, "seed", &jaw.seed));
       jaw.has_seed = true;
@@ -516,7 +532,7 @@ Status parse_ct(const Reader& r, const JsonValue* ct, CaseFile* out) {
     return r.fail(*ct, StatusCode::kInvalidArgument,
                   "\"ct\" needs \"volume\" (a .nrrd/.mha/.mhd file or a DICOM folder)");
   }
-  SPLINTCORE_RETURN_IF_ERROR(r.string(*vol, "volume", &out->ct_volume));
+  SPLINTCORE_RETURN_IF_ERROR(r.path(*vol, "volume", &out->ct_volume));
   double x = 0;
   if (const JsonValue* e = doc.member(*ct, "hu_min")) {
     SPLINTCORE_RETURN_IF_ERROR(r.number(*e, "ct.hu_min", 0, &x));

@@ -881,6 +881,20 @@ TEST(CaseBase, RoundedCornersAddPointsPerSection) {
 namespace splintcore {
 namespace {
 
+// A control character in a file's path (escaped in the JSON, so the document is valid) is
+// refused where it stands, named by its byte and place; the message holds none itself. (Names
+// have their own rules: a tab in "case_id" breaks the plain-name rule, CaseIdCharacters.)
+TEST(CaseFileErrors, ControlCharactersInPaths) {
+  expect_invalid(
+      with_root("  \"jaws\": [{\"role\": \"maxilla\", \"mesh\": @\"\\u001b[31mred.stl\"}],\n"),
+      {"\"mesh\" holds a control character (byte 27 at character 0): a file's path has none"});
+  expect_invalid(with_root("  \"jaws\": [{\"role\": \"maxilla\", \"mesh\": \"a.stl\",\n"
+                           "    \"scan\": {\"path\": @\"scan\\n.stl\"}}],\n"),
+                 {"\"path\" holds a control character (byte 10 at character 4)"});
+  expect_invalid(with_root("  \"ct\": {\"volume\": @\"ct\\u007f.nrrd\"},\n"),
+                 {"\"volume\" holds a control character (byte 127 at character 2)"});
+}
+
 TEST(CaseFileErrors, TwoJawsWithTheSameRole) {
   expect_invalid(with_root("  \"jaws\": [{\"role\": \"maxilla\", \"mesh\": \"a.stl\"},\n"
                            "           {\"role\": @\"maxilla\", \"mesh\": \"b.stl\"}],\n"),

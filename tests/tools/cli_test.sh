@@ -168,6 +168,12 @@ printf '{"splintcore_case": 1,\n  "base": {"upper": [], "lower": [], "frob": 1}}
 expect_exit 1 "base with an unknown key" -- "$tool" base "$work/bad.json" -o "$work/bad.stl"
 check "unknown key message has line:column" -- grep -q "bad.json:2:.*unknown key \"frob\"" "$work/err"
 check "no output after a bad case" -- test ! -e "$work/bad.stl"
+# What an error quotes from an input reaches the terminal inert: an unknown key holding an
+# escape sequence (clear the screen) is written out as \x1b, never as the byte itself.
+printf '{"splintcore_case": 1,\n  "base": {"upper": [], "lower": [], "\\u001b[2Jx": 1}}\n' > "$work/esc.json"
+expect_exit 1 "base with an escape sequence in a key" -- "$tool" base "$work/esc.json" -o "$work/esc.stl"
+check "the key quoted with its escape written out" -- grep -qF 'unknown key "\x1b[2Jx"' "$work/err"
+check "no escape byte reaches the terminal" -- test "$(tr -d -c '\033' <"$work/err" | wc -c)" -eq 0
 printf '{"splintcore_case": 1, "base": {"upper": [{"position": [0,0,1]}, {"position": [0,0,1]}],\n "lower": [{"position": [0,0,0]}, {"position": [5,0,0]}]}}\n' > "$work/dup.json"
 expect_exit 1 "base with a repeated pick" -- "$tool" base "$work/dup.json" -o "$work/dup.stl"
 check "repeated pick named" -- grep -q "upper pick 1: same position" "$work/err"

@@ -1,7 +1,8 @@
-// The tools' OutputSet (tools/common/cli.h): a run's files placed together or not at all.
-// Nothing is in place before commit(); a failure at any file (a write past the file size
-// limit, as on a full disk; the set destroyed) leaves none of them in place and the files of an
-// earlier run as they were; a destination that is a folder is refused before any rename.
+// What the tools put out (tools/common/cli.h). OutputSet: a run's files placed together or not
+// at all. Nothing is in place before commit(); a failure at any file (a write past the file
+// size limit, as on a full disk; the set destroyed) leaves none of them in place and the files
+// of an earlier run as they were; a destination that is a folder is refused before any
+// rename. printable(): what a message quotes from an input reaches the terminal inert.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -105,6 +106,21 @@ TEST(OutputSet, AFolderInTheWayIsRefusedBeforeAnyRename) {
   EXPECT_EQ(contents(splint), "old splint");
   EXPECT_TRUE(fs::is_directory(report / "inside"));
   EXPECT_EQ(entries(dir.path), 2u);  // no temporary file left
+}
+
+TEST(Printable, ControlBytesAreWrittenOutAndTextIsKept) {
+  EXPECT_EQ(cli::printable(""), "");
+  EXPECT_EQ(cli::printable("plain ascii, UTF-8: \xc3\xbcn\xc3\xaf \xe2\x80\x94 ok"),
+            "plain ascii, UTF-8: \xc3\xbcn\xc3\xaf \xe2\x80\x94 ok");
+  EXPECT_EQ(cli::printable("\x1b[31mred\x1b[0m"), "\\x1b[31mred\\x1b[0m");
+  EXPECT_EQ(cli::printable("a\nsplintcore: fake\tline\x7f"),
+            "a\\x0asplintcore: fake\\x09line\\x7f");
+  // C1 controls as UTF-8 (U+009B, the one-byte CSI) go; U+00A0 and beyond stay.
+  EXPECT_EQ(cli::printable("\xc2\x9b"
+                           "2J \xc2\xa0"),
+            "\\xc2\\x9b"
+            "2J \xc2\xa0");
+  EXPECT_EQ(cli::printable("\xc2"), "\xc2");  // a lone lead byte at the end: kept, no overread
 }
 
 }  // namespace

@@ -94,10 +94,30 @@ void JsonObject::add_status(const Status& s) {
   if (s.index() != kNoPosition) add("index", s.index());
 }
 
+std::string printable(const char* text) {
+  std::string out;
+  for (const unsigned char* p = reinterpret_cast<const unsigned char*>(text); *p != 0; ++p) {
+    const bool c1 = p[0] == 0xC2 && p[1] >= 0x80 && p[1] <= 0x9F;
+    if (p[0] >= 0x20 && p[0] != 0x7F && !c1) {
+      out += static_cast<char>(p[0]);
+      continue;
+    }
+    const int bytes = c1 ? 2 : 1;
+    for (int k = 0; k < bytes; ++k) {
+      static const char kHex[] = "0123456789abcdef";
+      out += "\\x";
+      out += kHex[p[k] >> 4];
+      out += kHex[p[k] & 15];
+    }
+    p += bytes - 1;
+  }
+  return out;
+}
+
 void print_error(const Status& status) {
   char text[512];
   status.format(text, sizeof(text));
-  std::fprintf(stderr, "splintcore: error: %s\n", text);
+  std::fprintf(stderr, "splintcore: error: %s\n", printable(text).c_str());
 }
 
 Status read_whole_file(const std::string& path, uint64_t max_bytes, std::vector<uint8_t>* out) {

@@ -70,7 +70,14 @@ Status read_whole_file(const std::string& path, uint64_t max_bytes, std::vector<
 // The same with the mesh cap (kMaxMeshBytes); false on any error.
 bool read_whole_file(const std::string& path, std::vector<uint8_t>* out);
 
-// Prints "splintcore: <formatted status>" to stderr.
+// `text` with every byte a terminal would act on written out as \xNN: the C0 controls
+// (newline and tab too: a message is one line), DEL, and the C1 controls as UTF-8 writes them
+// (C2 80 to C2 9F); everything else as it is. For messages that quote what an input holds (a
+// token of an ASCII STL, a key of a case file): such bytes could move the cursor, recolour or
+// retitle the terminal, or fake a line of output.
+std::string printable(const char* text);
+
+// Prints "splintcore: error: <formatted status>" to stderr (printable()).
 void print_error(const Status& status);
 
 // The output files of one run, placed together: each is written whole, synced and closed as a

@@ -458,7 +458,8 @@ void Design::write_preview() {
                                        &preview_, outlined_ ? &marks : nullptr, &outputs_);
   if (!preview_status_.is_ok()) {
     preview_status_.format(preview_error_, sizeof(preview_error_));
-    std::fprintf(stderr, "splintcore: warning: no preview: %s\n", preview_error_);
+    std::fprintf(stderr, "splintcore: warning: no preview: %s\n",
+                 cli::printable(preview_error_).c_str());
   }
 }
 
@@ -635,7 +636,7 @@ void Design::preview_splint(const Mesh& splint, const DesignReport& report,
                                &outputs_);
   if (!status->is_ok()) {
     status->format(error, error_size);
-    std::fprintf(stderr, "splintcore: warning: no preview: %s\n", error);
+    std::fprintf(stderr, "splintcore: warning: no preview: %s\n", cli::printable(error).c_str());
   }
 }
 
