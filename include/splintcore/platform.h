@@ -38,7 +38,8 @@ class FileSource {
 // without commit) removes the temporary file, so a failed run never leaves an output behind.
 // A destination that exists and is neither a regular file nor a folder (/dev/null,
 // /dev/stdout, a FIFO) is written in place instead, as a stream: renaming over it would
-// replace the device or the pipe itself.
+// replace the device or the pipe itself. A symbolic link to a regular file has that file
+// replaced (its temporary file beside it), the link left as it is.
 // On Linux the disk writes start while the rest is being written: each MiB written is handed
 // to the kernel's writeback (sync_file_range, SYNC_FILE_RANGE_WRITE: it starts the writes and
 // waits for none), so commit()'s fsync waits for the last of them, not all. Measured on the

@@ -1,6 +1,7 @@
 // Files for hosted builds: a ByteSource over a FILE*, and atomic output (temporary file in the
 // destination's folder, fsync, rename), so a failed run never leaves a partial output file.
 #include <fcntl.h>
+#include <limits.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -139,11 +140,27 @@ Status AtomicFile::open(const char* path) {
   // /dev/stdout, a FIFO) is written in place: renaming over it would replace the device or the
   // pipe itself with a regular file (as root, /dev/null), and a stream has no whole to swap in.
   struct stat st;
-  if (::stat(path, &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) {
+  const bool exists = ::stat(path, &st) == 0;
+  if (exists && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) {
     file_ = std::fopen(path, "wb");
     if (file_ == nullptr) return errno_error("cannot open for writing", path);
     direct_ = true;
     return Status::ok();
+  }
+  // A symbolic link to a regular file: the file it names is replaced, beside itself, and the
+  // link stays. (Replacing the link would put the output where the link was, away from the
+  // file meant; and /dev/stdout with the standard output redirected to a file is such a link,
+  // in /dev.) A link to nothing yet is replaced by the output.
+  struct stat link;
+  char resolved[PATH_MAX];
+  if (exists && ::lstat(path, &link) == 0 && S_ISLNK(link.st_mode) &&
+      ::realpath(path, resolved) != nullptr) {
+    n = std::strlen(resolved);
+    if (n + 32 >= sizeof(path_)) {
+      return make_error(StatusCode::kInvalidArgument, "output path is empty or too long");
+    }
+    std::memcpy(path_, resolved, n + 1);
+    path = path_;
   }
   std::snprintf(temp_path_, sizeof(temp_path_), "%s.tmp-%ld-%u", path, static_cast<long>(getpid()),
                 g_temp_counter.fetch_add(1));

@@ -245,6 +245,36 @@ TEST(AtomicFile, APipeOrADeviceIsWrittenInPlace) {
   EXPECT_EQ(entries(dir.path), 2u);
 }
 
+// A symbolic link to a regular file: the file it names gets the bytes, atomically, and the link
+// stays a link (as /dev/stdout redirected to a file must). A link to nothing is replaced.
+TEST(AtomicFile, ALinkToAFileHasTheFileReplacedAndStays) {
+  TempDir dir("file", "link");
+  fs::create_directories(dir.path / "real");
+  const fs::path target = dir.path / "real" / "splint.stl", link = dir.path / "latest.stl";
+  std::ofstream(target) << "old";
+  fs::create_symlink(target, link);
+  const std::vector<uint8_t> bytes = pattern(1000);
+  AtomicFile f;
+  SPLINTCORE_ASSERT_OK(f.open(link.string().c_str()));
+  ByteSink sink = f.sink();
+  ASSERT_TRUE(sink.write(sink.user, bytes.data(), bytes.size()));
+  EXPECT_EQ(entries(dir.path / "real"), 2u);  // the temporary file beside the target
+  SPLINTCORE_ASSERT_OK(f.commit());
+  EXPECT_TRUE(fs::is_symlink(link));
+  EXPECT_EQ(contents(target), bytes);
+  EXPECT_EQ(entries(dir.path / "real"), 1u);
+  EXPECT_EQ(entries(dir.path), 2u);
+
+  const fs::path dangling = dir.path / "dangling.stl";
+  fs::create_symlink(dir.path / "nowhere" / "x.stl", dangling);
+  SPLINTCORE_ASSERT_OK(f.open(dangling.string().c_str()));
+  sink = f.sink();
+  ASSERT_TRUE(sink.write(sink.user, bytes.data(), bytes.size()));
+  SPLINTCORE_ASSERT_OK(f.commit());
+  EXPECT_FALSE(fs::is_symlink(dangling));
+  EXPECT_EQ(contents(dangling), bytes);
+}
+
 // Stopped by a signal while outputs are open: with remove_temporary_outputs_on_signals() the
 // temporary files go and the process still ends by that signal; a signal ignored before it
 // was called stays ignored.
