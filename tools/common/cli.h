@@ -85,9 +85,10 @@ void print_error(const Status& status);
 // commit(), which renames them all in the order kept. So a run that fails at any of its files
 // (a full disk at the report, after the splint) leaves none of this run's files in place, and
 // the files of an earlier run as they were, not new and old mixed. commit() first refuses a
-// destination that is a folder (the one way left for a rename to fail once the temporary files
-// exist), so the renames do not stop half way for it. Destroyed without commit(), it removes
-// every temporary file. keep() may be called from several threads.
+// destination that is a folder (the likely way left for a rename to fail once the temporary
+// files exist beside their destinations), so the renames do not stop half way for it; a rename
+// that still fails (a busy or read-only mount) leaves the ones before it placed. Destroyed
+// without commit(), it removes every temporary file. keep() may be called from several threads.
 class OutputSet {
  public:
   // Keeps `file` (open, written) for commit(): finished now; on an error it is removed.
