@@ -172,6 +172,9 @@ Status AtomicFile::open(const char* path) {
     unregister_temp_path(&slot_);
     return s;
   }
+  // A file replaced keeps its permissions (a new one has 0644 less the umask). Where they
+  // cannot be given (another owner's file), the new file has the default ones.
+  if (exists && S_ISREG(st.st_mode)) (void)::fchmod(fd, st.st_mode & 07777);
   file_ = fdopen(fd, "wb");
   if (file_ == nullptr) {
     Status s = errno_error("cannot open temporary output file", temp_path_);

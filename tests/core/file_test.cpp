@@ -275,6 +275,23 @@ TEST(AtomicFile, ALinkToAFileHasTheFileReplacedAndStays) {
   EXPECT_EQ(contents(dangling), bytes);
 }
 
+// A file replaced keeps its permissions; a new one has the default ones.
+TEST(AtomicFile, AReplacedFileKeepsItsPermissions) {
+  TempDir dir("file", "mode");
+  const fs::path path = dir.path / "report.json";
+  std::ofstream(path) << "old";
+  fs::permissions(path, fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  AtomicFile f;
+  SPLINTCORE_ASSERT_OK(f.open(path.string().c_str()));
+  const uint8_t byte = 'x';
+  const ByteSink sink = f.sink();
+  ASSERT_TRUE(sink.write(sink.user, &byte, 1));
+  SPLINTCORE_ASSERT_OK(f.commit());
+  EXPECT_EQ(fs::status(path).permissions(),
+            fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  EXPECT_EQ(contents(path), std::vector<uint8_t>{'x'});
+}
+
 // Stopped by a signal while outputs are open: with remove_temporary_outputs_on_signals() the
 // temporary files go and the process still ends by that signal; a signal ignored before it
 // was called stays ignored.
