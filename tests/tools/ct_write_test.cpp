@@ -270,6 +270,48 @@ TEST(CtWrite, DicomWriterRefusesAFolderWithOtherFiles) {
   EXPECT_EQ(test::read_file_bytes(files[1]), first);
 }
 
+// The files of one call are placed together: a call that fails at its last file (here a
+// folder with that file's name, refused when they are placed) leaves the files of an earlier
+// call as they were, not new data under an old header or new slices among old ones.
+TEST(CtWrite, AFailedCallLeavesTheEarlierFilesAsTheyWere) {
+  Phantom p;
+  TempDir dir("together");
+  SPLINTCORE_ASSERT_OK(cli::write_nrrd(p.v, dir / "v.nhdr", CtWriteOptions{}));
+  const std::vector<uint8_t> raw = test::read_file_bytes(dir / "v.raw");
+  fs::remove(dir / "v.nhdr");
+  fs::create_directories(dir / "v.nhdr/inside");
+  Phantom q;
+  q.hu[5] = static_cast<int16_t>(q.hu[5] + 1);
+  Status s = cli::write_nrrd(q.v, dir / "v.nhdr", CtWriteOptions{});
+  EXPECT_EQ(s.code(), StatusCode::kIoError);
+  EXPECT_STREQ(s.message(), "cannot move the output into place: a folder has its name");
+  EXPECT_EQ(test::read_file_bytes(dir / "v.raw"), raw);
+
+  const std::string folder = dir / "series";
+  SPLINTCORE_ASSERT_OK(cli::write_dicom_series(p.v, folder, CtWriteOptions{}));
+  std::vector<std::string> files;
+  SPLINTCORE_ASSERT_OK(cli::list_dicom_folder(folder, &files));
+  ASSERT_EQ(files.size(), 3u);
+  std::vector<std::vector<uint8_t>> before;
+  for (const std::string& f : files) before.push_back(test::read_file_bytes(f));
+  for (size_t blocked = 0; blocked < files.size(); ++blocked) {  // whichever is written last
+    fs::remove(files[blocked]);
+    fs::create_directories(files[blocked] + "/inside");
+    s = cli::write_dicom_series(q.v, folder, CtWriteOptions{});
+    EXPECT_EQ(s.code(), StatusCode::kIoError) << blocked;
+    for (size_t i = 0; i < files.size(); ++i) {
+      if (i != blocked) {
+        EXPECT_EQ(test::read_file_bytes(files[i]), before[i]) << blocked << " " << i;
+      }
+    }
+    fs::remove_all(files[blocked]);
+    std::ofstream(files[blocked], std::ios::binary)
+        .write(reinterpret_cast<const char*>(before[blocked].data()),
+               static_cast<std::streamsize>(before[blocked].size()));
+  }
+  EXPECT_EQ(std::distance(fs::directory_iterator(folder), fs::directory_iterator()), 3);
+}
+
 TEST(CtWrite, WritersAreDeterministic) {
   Phantom p;
   TempDir dir("determinism");

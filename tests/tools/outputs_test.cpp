@@ -2,7 +2,8 @@
 // at all. Nothing is in place before commit(); a failure at any file (a write past the file
 // size limit, as on a full disk; the set destroyed) leaves none of them in place and the files
 // of an earlier run as they were; a destination that is a folder is refused before any
-// rename. printable(): what a message quotes from an input reaches the terminal inert.
+// rename. write_bytes_atomically: bytes written that way. printable(): what a message quotes
+// from an input reaches the terminal inert.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -106,6 +107,36 @@ TEST(OutputSet, AFolderInTheWayIsRefusedBeforeAnyRename) {
   EXPECT_EQ(contents(splint), "old splint");
   EXPECT_TRUE(fs::is_directory(report / "inside"));
   EXPECT_EQ(entries(dir.path), 2u);  // no temporary file left
+}
+
+// write_bytes_atomically: the parts in order, placed now or kept in a set; a failed write
+// says why and leaves the old file and no temporary file.
+TEST(WriteBytesAtomically, PartsInOrderAndAFailedWriteLeavesTheOldFile) {
+  TempDir dir("outputs", "bytes");
+  const fs::path a = dir.path / "a.txt", b = dir.path / "b.txt";
+  const std::string head = "head,", tail = "tail";
+  SPLINTCORE_ASSERT_OK(cli::write_bytes_atomically(
+      a.string(), {cli::ByteSpan{head.data(), head.size()}, cli::ByteSpan{nullptr, 0},
+                   cli::ByteSpan{tail.data(), tail.size()}}));
+  EXPECT_EQ(contents(a), "head,tail");
+  {
+    cli::OutputSet set;
+    SPLINTCORE_ASSERT_OK(cli::write_bytes_atomically(b.string(), std::string("kept"), &set));
+    EXPECT_FALSE(fs::exists(b));
+    SPLINTCORE_ASSERT_OK(set.commit());
+  }
+  EXPECT_EQ(contents(b), "kept");
+  Status s;
+  {
+    test::FileSizeLimit limit(64 << 10);
+    const std::string big(size_t{1} << 20, 'x');
+    s = cli::write_bytes_atomically(a.string(), big.data(), big.size());
+  }
+  EXPECT_EQ(s.code(), StatusCode::kIoError);
+  EXPECT_STREQ(s.message(), "cannot write: File too large");
+  EXPECT_EQ(std::string(s.file()), a.string());
+  EXPECT_EQ(contents(a), "head,tail");
+  EXPECT_EQ(entries(dir.path), 2u);
 }
 
 TEST(Printable, ControlBytesAreWrittenOutAndTextIsKept) {

@@ -202,5 +202,30 @@ Status OutputSet::commit() {
   return Status::ok();
 }
 
+Status write_bytes_atomically(const std::string& path, std::initializer_list<ByteSpan> parts,
+                              OutputSet* set) {
+  auto file = std::make_unique<AtomicFile>();
+  SPLINTCORE_RETURN_IF_ERROR(file->open(path.c_str()));
+  const ByteSink sink = file->sink();
+  for (const ByteSpan& part : parts) {
+    if (part.size != 0 &&
+        !sink.write(sink.user, static_cast<const uint8_t*>(part.data), part.size)) {
+      // (~AtomicFile removes the temporary file.)
+      return file->with_write_cause(
+          Status::error(StatusCode::kIoError, "cannot write").in_file(path.c_str()));
+    }
+  }
+  return OutputSet::place(std::move(file), set);
+}
+
+Status write_bytes_atomically(const std::string& path, const void* data, size_t size,
+                              OutputSet* set) {
+  return write_bytes_atomically(path, {ByteSpan{data, size}}, set);
+}
+
+Status write_bytes_atomically(const std::string& path, const std::string& bytes, OutputSet* set) {
+  return write_bytes_atomically(path, {ByteSpan{bytes.data(), bytes.size()}}, set);
+}
+
 }  // namespace cli
 }  // namespace splintcore

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <initializer_list>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -101,6 +102,22 @@ class OutputSet {
   std::mutex mutex_;
   std::vector<std::unique_ptr<AtomicFile>> files_;
 };
+
+// A stretch of bytes to write.
+struct ByteSpan {
+  const void* data;
+  size_t size;
+};
+
+// Writes `parts` one after the other into a temporary file beside `path`, placed as
+// OutputSet::place does: kept in `set`, or renamed over `path` now when `set` is null. A write
+// that fails leaves no file and says why ("cannot write: No space left on device", in `path`).
+Status write_bytes_atomically(const std::string& path, std::initializer_list<ByteSpan> parts,
+                              OutputSet* set = nullptr);
+Status write_bytes_atomically(const std::string& path, const void* data, size_t size,
+                              OutputSet* set = nullptr);
+Status write_bytes_atomically(const std::string& path, const std::string& bytes,
+                              OutputSet* set = nullptr);
 
 }  // namespace cli
 }  // namespace splintcore

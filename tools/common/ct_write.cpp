@@ -9,6 +9,7 @@
 #include <set>
 #include <vector>
 
+#include "cli.h"
 #include "jpeg_lossless_write.h"
 #include "splintcore/platform.h"
 
@@ -52,21 +53,16 @@ Status check_volume(const CtVolume& v) {
   return Status::ok();
 }
 
-Status write_bytes(const std::string& path, const std::vector<uint8_t>& head,
-                   const std::vector<uint8_t>* tail) {
-  AtomicFile file;
-  SPLINTCORE_RETURN_IF_ERROR(file.open(path.c_str()));
-  ByteSink sink = file.sink();
-  bool ok = head.empty() || sink.write(sink.user, head.data(), head.size());
-  if (ok && tail != nullptr && !tail->empty()) {
-    ok = sink.write(sink.user, tail->data(), tail->size());
-  }
-  if (!ok) {
-    file.abort();
-    return file.with_write_cause(
-        Status::error(StatusCode::kIoError, "cannot write").in_file(path.c_str()));
-  }
-  return file.commit();
+// A header and its data: one file, or (`data_path` not empty) two placed together.
+Status write_header_and_data(const std::string& path, const std::string& header,
+                             const std::string& data_path, const std::vector<uint8_t>& data) {
+  const ByteSpan head{header.data(), header.size()};
+  const ByteSpan voxels{data.data(), data.size()};
+  if (data_path.empty()) return write_bytes_atomically(path, {head, voxels});
+  OutputSet set;
+  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(data_path, {voxels}, &set));
+  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(path, {head}, &set));
+  return set.commit();
 }
 
 std::vector<uint8_t> voxel_bytes(const CtVolume& v, bool big_endian) {
@@ -78,10 +74,6 @@ std::vector<uint8_t> voxel_bytes(const CtVolume& v, bool big_endian) {
     out[2 * i + (big_endian ? 0 : 1)] = static_cast<uint8_t>(u >> 8);
   }
   return out;
-}
-
-std::vector<uint8_t> bytes_of(const std::string& s) {
-  return std::vector<uint8_t>(s.begin(), s.end());
 }
 
 std::string vec3(const Vec3& v, const char* sep) {
@@ -120,11 +112,10 @@ Status write_nrrd(const CtVolume& v, const std::string& path, const CtWriteOptio
     std::string data_path, data_name;
     raw_path(path, &data_path, &data_name);
     h += "data file: " + data_name + "\n";
-    SPLINTCORE_RETURN_IF_ERROR(write_bytes(data_path, data, nullptr));
-    return write_bytes(path, bytes_of(h), nullptr);
+    return write_header_and_data(path, h, data_path, data);
   }
   h += "\n";
-  return write_bytes(path, bytes_of(h), &data);
+  return write_header_and_data(path, h, std::string(), data);
 }
 
 Status write_metaimage(const CtVolume& v, const std::string& path, const CtWriteOptions& options) {
@@ -151,11 +142,10 @@ Status write_metaimage(const CtVolume& v, const std::string& path, const CtWrite
     std::string data_path, data_name;
     raw_path(path, &data_path, &data_name);
     h += "ElementDataFile = " + data_name + "\n";
-    SPLINTCORE_RETURN_IF_ERROR(write_bytes(data_path, data, nullptr));
-    return write_bytes(path, bytes_of(h), nullptr);
+    return write_header_and_data(path, h, data_path, data);
   }
   h += "ElementDataFile = LOCAL\n";
-  return write_bytes(path, bytes_of(h), &data);
+  return write_header_and_data(path, h, std::string(), data);
 }
 
 namespace {
@@ -321,6 +311,7 @@ Status write_dicom_series(const CtVolume& v, const std::string& folder,
                                   ds(v.axis_y.z);
   const uint64_t per_slice = uint64_t{v.nx} * v.ny;
 
+  OutputSet slices;  // a series placed whole: no new slices among an earlier run's
   for (uint32_t k = 0; k < n; ++k) {
     const std::string instance = root + ".3." + std::to_string(number[k]);
     DicomBuffer meta;
@@ -391,10 +382,10 @@ Status write_dicom_series(const CtVolume& v, const std::string& folder,
       d.element(0x7FE0, 0x0010, "OW", pixels.data(), pixels.size(), 0);
     }
     file.b.insert(file.b.end(), d.b.begin(), d.b.end());
-    SPLINTCORE_RETURN_IF_ERROR(
-        write_bytes((fs::path(folder) / names[k]).string(), file.b, nullptr));
+    SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically((fs::path(folder) / names[k]).string(),
+                                                      file.b.data(), file.b.size(), &slices));
   }
-  return Status::ok();
+  return slices.commit();
 }
 
 }  // namespace cli

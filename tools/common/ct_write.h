@@ -4,7 +4,9 @@
 // spacing, so they agree to within an ulp or two, not bit for bit; DICOM: z spacing and the
 // normal are recomputed from positions). Output bytes are deterministic (no time stamps;
 // numbers in shortest round-trip form; DICOM UIDs derived from a hash of the volume).
-// Every file is written through a temporary file and renamed (AtomicFile).
+// Every file is written through a temporary file and renamed (AtomicFile); the files of one
+// call (a header and its data, a series' slices) are placed together (OutputSet), so a failed
+// call leaves none of them, and an earlier call's files as they were.
 #ifndef SPLINTCORE_TOOLS_CT_WRITE_H
 #define SPLINTCORE_TOOLS_CT_WRITE_H
 

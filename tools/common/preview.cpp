@@ -153,15 +153,7 @@ Status write_marked_png_file(const Context& ctx, const std::vector<RenderMesh>& 
     SPLINTCORE_RETURN_IF_ERROR(write_png(ctx, image, sink));
   }
   const double t2 = monotonic_seconds();
-  auto file = std::make_unique<AtomicFile>();
-  SPLINTCORE_RETURN_IF_ERROR(file->open(path.c_str()));
-  ByteSink out = file->sink();
-  if (!out.write(out.user, png.data(), png.size())) {
-    return file->with_write_cause(
-        Status::error(StatusCode::kIoError, "cannot write the PNG").in_file(path.c_str()));
-  }
-  // (On an error ~AtomicFile removes the temporary file.)
-  SPLINTCORE_RETURN_IF_ERROR(OutputSet::place(std::move(file), outputs));
+  SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically(path, png.data(), png.size(), outputs));
   if (info != nullptr) {
     info->path = path;
     info->sha256 = sha256_hex(png);

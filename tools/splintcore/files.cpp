@@ -225,23 +225,6 @@ Status write_mesh_atomically(const Context& ctx, const Mesh& mesh, const char* p
   return cli::OutputSet::place(std::move(file), outputs);
 }
 
-Status write_bytes_atomically(const std::string& path, const void* data, size_t size,
-                              cli::OutputSet* outputs) {
-  auto file = std::make_unique<AtomicFile>();
-  SPLINTCORE_RETURN_IF_ERROR(file->open(path.c_str()));
-  ByteSink sink = file->sink();
-  if (!sink.write(sink.user, static_cast<const uint8_t*>(data), size)) {
-    return file->with_write_cause(
-        Status::error(StatusCode::kIoError, "cannot write").in_file(path.c_str()));
-  }
-  return cli::OutputSet::place(std::move(file), outputs);
-}
-
-Status write_bytes_atomically(const std::string& path, const std::string& bytes,
-                              cli::OutputSet* outputs) {
-  return write_bytes_atomically(path, bytes.data(), bytes.size(), outputs);
-}
-
 Status write_hashed_atomically(const std::string& path,
                                const std::function<Status(const ByteSink&)>& write,
                                std::string* sha256, cli::OutputSet* outputs) {

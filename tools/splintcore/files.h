@@ -130,17 +130,14 @@ Status write_mesh_atomically(const Context& ctx, const Mesh& mesh, const char* p
 Status write_mesh_uncommitted(const Context& ctx, const Mesh& mesh, const char* path, bool ascii,
                               AtomicFile* file);
 
-// Writes bytes the same way.
-Status write_bytes_atomically(const std::string& path, const void* data, size_t size,
-                              cli::OutputSet* outputs = nullptr);
-Status write_bytes_atomically(const std::string& path, const std::string& bytes,
-                              cli::OutputSet* outputs = nullptr);
+// Bytes are written the same way by cli::write_bytes_atomically.
+using cli::write_bytes_atomically;
 
 // Writes what `write` puts into the sink it is given (in order: the sink cannot seek) the same
 // way, streamed to the file as it comes, and the SHA-256 of those bytes (hex) into *sha256: no
 // copy of the whole file in memory (for the splints' STL and 3MF files, several MB each, that
 // copy cost more than the write; issue 32). A `write` that fails leaves no file. `outputs` as
-// for write_bytes_atomically.
+// for write_mesh_atomically.
 Status write_hashed_atomically(const std::string& path,
                                const std::function<Status(const ByteSink&)>& write,
                                std::string* sha256, cli::OutputSet* outputs = nullptr);
