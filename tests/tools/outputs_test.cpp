@@ -6,10 +6,17 @@
 // from an input reaches the terminal inert.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "common/cli.h"
@@ -107,6 +114,32 @@ TEST(OutputSet, AFolderInTheWayIsRefusedBeforeAnyRename) {
   EXPECT_EQ(contents(splint), "old splint");
   EXPECT_TRUE(fs::is_directory(report / "inside"));
   EXPECT_EQ(entries(dir.path), 2u);  // no temporary file left
+}
+
+// While another holder (another run; here another thread's open of the folder) has the folder
+// locked, commit() places nothing; it places the set when the lock is released.
+TEST(OutputSet, CommitWaitsInAThreadWhileTheFolderIsLocked) {
+  TempDir dir("outputs", "lock");
+  const fs::path splint = dir.path / "splint.stl";
+  put(splint, "old splint");
+  cli::OutputSet set;
+  SPLINTCORE_ASSERT_OK(keep_text(&set, splint, "new splint"));
+  const int fd = ::open(dir.path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+  std::atomic<bool> done{false};
+  Status s;
+  std::thread committer([&] {
+    s = set.commit();
+    done = true;
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  EXPECT_FALSE(done.load());
+  EXPECT_EQ(contents(splint), "old splint");
+  ::close(fd);  // releases the lock
+  committer.join();
+  SPLINTCORE_EXPECT_OK(s);
+  EXPECT_EQ(contents(splint), "new splint");
 }
 
 // write_bytes_atomically: the parts in order, placed now or kept in a set; a failed write

@@ -2,8 +2,12 @@
 
 #include "splintcore/json.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
@@ -187,8 +191,49 @@ Status OutputSet::place(std::unique_ptr<AtomicFile> file, OutputSet* set) {
   return file->commit();
 }
 
+namespace {
+
+// Exclusive flock()s on the folders of a set's destinations, taken in name order (so two sets
+// that share folders cannot wait on each other) and released by the destructor. A folder that
+// cannot be opened is left unlocked: its rename then says what is wrong.
+class FolderLocks {
+ public:
+  explicit FolderLocks(std::vector<std::string> folders) {
+    std::sort(folders.begin(), folders.end());
+    folders.erase(std::unique(folders.begin(), folders.end()), folders.end());
+    for (const std::string& folder : folders) {
+      const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+      if (fd < 0) continue;
+      while (::flock(fd, LOCK_EX) != 0 && errno == EINTR) {
+      }
+      fds_.push_back(fd);
+    }
+  }
+  ~FolderLocks() {
+    for (const int fd : fds_) ::close(fd);  // closing releases the lock
+  }
+  FolderLocks(const FolderLocks&) = delete;
+  FolderLocks& operator=(const FolderLocks&) = delete;
+
+ private:
+  std::vector<int> fds_;
+};
+
+std::string folder_of(const char* path) {
+  const char* slash = std::strrchr(path, '/');
+  if (slash == nullptr) return ".";
+  if (slash == path) return "/";
+  return std::string(path, static_cast<size_t>(slash - path));
+}
+
+}  // namespace
+
 Status OutputSet::commit() {
   std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<std::string> folders;
+  for (const std::unique_ptr<AtomicFile>& f : files_)
+    folders.push_back(folder_of(f->destination()));
+  const FolderLocks locks(std::move(folders));  // one run's renames at a time in a folder
   for (const std::unique_ptr<AtomicFile>& f : files_) {
     struct stat st;
     if (::stat(f->destination(), &st) == 0 && S_ISDIR(st.st_mode)) {

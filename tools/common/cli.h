@@ -90,6 +90,9 @@ void print_error(const Status& status);
 // files exist beside their destinations), so the renames do not stop half way for it; a rename
 // that still fails (a busy or read-only mount) leaves the ones before it placed. Destroyed
 // without commit(), it removes every temporary file. keep() may be called from several threads.
+// commit() holds an exclusive flock() on each destination's folder while it renames, so two runs
+// writing the same files at once place theirs one set after the other (the later set whole),
+// not interleaved; another program that takes the same lock waits for the renames to end.
 class OutputSet {
  public:
   // Keeps `file` (open, written) for commit(): finished now; on an error it is removed.
