@@ -122,6 +122,11 @@ int Run::no_memory() const {
                   nullptr);
 }
 
+void Run::print_time(double seconds) const {
+  std::printf("time: %.3f s, peak arena: %llu bytes\n", seconds,
+              static_cast<unsigned long long>(peak_arena()));
+}
+
 void add_mesh_report(JsonObject* j, const MeshReport& r) {
   // An open mesh (a scan) has no volume, genus or outward side: those are null for it.
   const bool closed = r.closed();

@@ -120,6 +120,8 @@ struct Run {
   // rejected() with this run's command and arena.
   int reject(const Status& s) const { return rejected(args, command, s, &arena); }
   uint64_t peak_arena() const { return arena.high_water(); }
+  // The summary's last line: "time: <seconds> s, peak arena: <bytes> bytes".
+  void print_time(double seconds) const;
 };
 
 // A mesh check's figures, as JSON fields and as the human summary's lines.

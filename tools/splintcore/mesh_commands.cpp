@@ -72,8 +72,7 @@ void print_check_text(const Run& run, const char* input, const MeshFileInfo& inf
               static_cast<unsigned long long>(pc.layers));
   if (pc.units_suspect) std::printf("warning: the size suggests wrong units (not mm?)\n");
   std::printf("printable: %s\n", pc.printable ? "yes" : "no");
-  std::printf("time: %.3f s, peak arena: %llu bytes\n", seconds,
-              static_cast<unsigned long long>(run.peak_arena()));
+  run.print_time(seconds);
 }
 
 // ---- convert ----------------------------------------------------------------------------------
@@ -224,8 +223,7 @@ void print_compare_text(const Run& run, const CompareArgs& a, const Mesh& ma, co
     std::printf("png: %s (colour range [0, %.6f] mm, blue to red)\n", a.png,
                 a.range > 0 ? a.range : 1.0);
   }
-  std::printf("time: %.3f s, peak arena: %llu bytes\n", r.seconds,
-              static_cast<unsigned long long>(run.peak_arena()));
+  run.print_time(r.seconds);
 }
 
 // ---- render -----------------------------------------------------------------------------------
@@ -437,8 +435,7 @@ void print_autorotate(const Run& run, const AutorotateArgs& a, const AutorotateR
   }
   std::printf("  0 0 0 1\n");
   if (a.output != nullptr) std::printf("output: %s\n", a.output);
-  std::printf("time: %.3f s, peak arena: %llu bytes\n", seconds,
-              static_cast<unsigned long long>(run.peak_arena()));
+  run.print_time(seconds);
 }
 
 }  // namespace
@@ -523,8 +520,7 @@ int run_convert(const Command& command, int argc, char** argv) {
                 static_cast<unsigned long long>(info.triangles));
     print_mesh_report(report);
     std::printf("output: %s (%s STL)\n", a.output, a.ascii ? "ascii" : "binary");
-    std::printf("time: %.3f s, peak arena: %llu bytes\n", seconds,
-                static_cast<unsigned long long>(run.peak_arena()));
+    run.print_time(seconds);
   }
   return kExitOk;
 }

@@ -105,8 +105,7 @@ void print_prepare(const Run& run, const PrepareArgs& a, const char* input, cons
   }
   print_mesh_report(after);
   std::printf("output: %s (%s STL)\n", a.output, a.ascii ? "ascii" : "binary");
-  std::printf("time: %.3f s, peak arena: %llu bytes\n", seconds,
-              static_cast<unsigned long long>(run.peak_arena()));
+  run.print_time(seconds);
 }
 
 }  // namespace

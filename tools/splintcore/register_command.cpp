@@ -144,8 +144,7 @@ void print_register(const Run& run, const RegisterArgs& a, const RegisterResult&
   }
   std::printf("  0 0 0 1\noutput: %s\n", a.output);
   if (a.moved != nullptr) std::printf("moved scan: %s\n", a.moved);
-  std::printf("time: %.3f s, peak arena: %llu bytes\n", seconds,
-              static_cast<unsigned long long>(run.peak_arena()));
+  run.print_time(seconds);
 }
 
 }  // namespace
