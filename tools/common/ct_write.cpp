@@ -244,6 +244,143 @@ Status series_folder(const std::string& folder, const std::vector<std::string>& 
   return Status::ok();
 }
 
+// File number (1..n) and file name of slice k of n: a fixed permutation (k p + (n + 1) / 2)
+// mod n, p coprime with n and not n - 1 (for n > 2 neither the slice order nor its reverse).
+void slice_names(uint32_t n, std::vector<std::string>* names, std::vector<uint32_t>* number) {
+  uint32_t p = 1;
+  for (uint32_t c = n / 2 + 1; c + 1 < n; ++c) {
+    if (gcd(c, n) == 1) {
+      p = c;
+      break;
+    }
+  }
+  const int width = n < 10000 ? 4 : 10;
+  names->assign(n, std::string());
+  number->assign(n, 0);
+  for (uint32_t k = 0; k < n; ++k) {
+    (*number)[k] = static_cast<uint32_t>((uint64_t{k} * p + (n + 1) / 2) % n) + 1;
+    char buf[32];
+    std::snprintf(buf, sizeof(buf), "CT%0*u.dcm", width, (*number)[k]);
+    (*names)[k] = buf;
+  }
+}
+
+// The root of a series' UIDs, from a hash of the volume (deterministic, distinct per volume).
+std::string series_uid_root(const CtVolume& v) {
+  Sha256 sha;
+  sha.update(v.hu, static_cast<size_t>(v.voxel_count() * 2));
+  const double geometry[15] = {v.spacing.x, v.spacing.y, v.spacing.z, v.origin.x, v.origin.y,
+                               v.origin.z,  v.axis_x.x,  v.axis_x.y,  v.axis_x.z, v.axis_y.x,
+                               v.axis_y.y,  v.axis_y.z,  v.axis_z.x,  v.axis_z.y, v.axis_z.z};
+  sha.update(geometry, sizeof(geometry));
+  const uint32_t dims[3] = {v.nx, v.ny, v.nz};
+  sha.update(dims, sizeof(dims));
+  uint8_t digest[32];
+  sha.finish(digest);
+  uint64_t h = 0;
+  for (int i = 0; i < 8; ++i) h = (h << 8) | digest[i];
+  return "2.25." + std::to_string(h >> 1);
+}
+
+constexpr const char* kCtImageStorage = "1.2.840.10008.5.1.4.1.1.2";  // the SOP class
+
+// What the slices of one series share.
+struct Series {
+  const CtVolume& v;
+  const CtWriteOptions& options;
+  std::string root;         // of the UIDs
+  std::string syntax;       // the transfer syntax's UID
+  std::string orientation;  // Image Orientation (Patient)
+  int32_t intercept;        // Rescale Intercept: stored value + intercept = HU
+};
+
+// The preamble, "DICM" and the file meta group of one slice's file.
+void slice_file_meta(const Series& series, const std::string& instance, DicomBuffer* file) {
+  DicomBuffer meta;
+  meta.str(0x0002, 0x0001, "OB", std::string("\0\1", 2));
+  meta.str(0x0002, 0x0002, "UI", kCtImageStorage);
+  meta.str(0x0002, 0x0003, "UI", instance);
+  meta.str(0x0002, 0x0010, "UI", series.syntax);
+  meta.str(0x0002, 0x0012, "UI", "2.25.329800735698586629295641978511506172918");
+  meta.str(0x0002, 0x0013, "SH", "SPLINTCORE");
+  file->b.assign(128, 0);
+  file->b.insert(file->b.end(), {'D', 'I', 'C', 'M'});
+  DicomBuffer length;
+  const uint32_t meta_bytes = static_cast<uint32_t>(meta.b.size());
+  const uint8_t d[4] = {static_cast<uint8_t>(meta_bytes), static_cast<uint8_t>(meta_bytes >> 8),
+                        static_cast<uint8_t>(meta_bytes >> 16),
+                        static_cast<uint8_t>(meta_bytes >> 24)};
+  length.element(0x0002, 0x0000, "UL", d, 4, 0);
+  file->b.insert(file->b.end(), length.b.begin(), length.b.end());
+  file->b.insert(file->b.end(), meta.b.begin(), meta.b.end());
+}
+
+// Slice k's Pixel Data: its stored values, native or JPEG lossless.
+void slice_pixels(const Series& series, uint32_t k, DicomBuffer* d) {
+  const CtVolume& v = series.v;
+  const uint64_t per_slice = uint64_t{v.nx} * v.ny;
+  std::vector<uint16_t> stored(static_cast<size_t>(per_slice));
+  const int16_t* slice = v.hu + static_cast<size_t>(k * per_slice);
+  for (size_t i = 0; i < stored.size(); ++i) {
+    stored[i] = static_cast<uint16_t>(static_cast<int32_t>(slice[i]) - series.intercept);
+  }
+  if (series.options.dicom_jpeg_lossless) {
+    d->encapsulated(jpeg_lossless_encode(stored.data(), v.ny, v.nx, 1));
+    return;
+  }
+  std::vector<uint8_t> pixels(stored.size() * 2);
+  for (size_t i = 0; i < stored.size(); ++i) {
+    pixels[2 * i] = static_cast<uint8_t>(stored[i] & 0xFF);
+    pixels[2 * i + 1] = static_cast<uint8_t>(stored[i] >> 8);
+  }
+  d->element(0x7FE0, 0x0010, "OW", pixels.data(), pixels.size(), 0);
+}
+
+// The whole file of slice k, whose file and Instance Number is `number`.
+std::vector<uint8_t> slice_file(const Series& series, uint32_t k, uint32_t number) {
+  const CtVolume& v = series.v;
+  const CtWriteOptions& options = series.options;
+  const std::string& root = series.root;
+  const std::string instance = root + ".3." + std::to_string(number);
+  DicomBuffer file;
+  slice_file_meta(series, instance, &file);
+  DicomBuffer d;
+  d.implicit = options.dicom_implicit_vr;
+  const Vec3 position = options.slice_positions.empty()
+                            ? v.origin + v.axis_z * (static_cast<double>(k) * v.spacing.z)
+                            : options.slice_positions[k];
+  d.str(0x0008, 0x0008, "CS", "ORIGINAL\\PRIMARY\\AXIAL");
+  d.str(0x0008, 0x0016, "UI", kCtImageStorage);
+  d.str(0x0008, 0x0018, "UI", instance);
+  d.str(0x0008, 0x0060, "CS", "CT");
+  d.str(0x0008, 0x103E, "LO", "splintcore phantom");
+  d.str(0x0010, 0x0010, "PN", "Phantom");
+  d.str(0x0010, 0x0020, "LO", "PHANTOM");
+  d.str(0x0018, 0x0050, "DS", ds(v.spacing.z));
+  d.str(0x0018, 0x0088, "DS", ds(v.spacing.z));
+  d.str(0x0020, 0x000D, "UI", root + ".1");
+  d.str(0x0020, 0x000E, "UI", root + ".2");
+  d.str(0x0020, 0x0011, "IS", "1");
+  d.str(0x0020, 0x0013, "IS", std::to_string(number));
+  d.str(0x0020, 0x0032, "DS", ds(position.x) + "\\" + ds(position.y) + "\\" + ds(position.z));
+  d.str(0x0020, 0x0037, "DS", series.orientation);
+  d.str(0x0020, 0x0052, "UI", root + ".4");
+  d.us(0x0028, 0x0002, 1);
+  d.str(0x0028, 0x0004, "CS", "MONOCHROME2");
+  d.us(0x0028, 0x0010, v.ny);
+  d.us(0x0028, 0x0011, v.nx);
+  d.str(0x0028, 0x0030, "DS", ds(v.spacing.y) + "\\" + ds(v.spacing.x));
+  d.us(0x0028, 0x0100, 16);
+  d.us(0x0028, 0x0101, 16);
+  d.us(0x0028, 0x0102, 15);
+  d.us(0x0028, 0x0103, options.dicom_signed ? 1 : 0);
+  d.str(0x0028, 0x1052, "DS", std::to_string(series.intercept));
+  d.str(0x0028, 0x1053, "DS", "1");
+  slice_pixels(series, k, &d);
+  file.b.insert(file.b.end(), d.b.begin(), d.b.end());
+  return std::move(file.b);
+}
+
 }  // namespace
 
 Status write_dicom_series(const CtVolume& v, const std::string& folder,
@@ -258,24 +395,13 @@ Status write_dicom_series(const CtVolume& v, const std::string& folder,
                       static_cast<uint64_t>(options.slice_positions.size()),
                       " positions for a volume of ", n, " slices");
   }
-  // File number of slice k: a fixed permutation (k p + (n + 1) / 2) mod n, p coprime with n
-  // and not n - 1 (for n > 2 neither the slice order nor its reverse).
-  uint32_t p = 1;
-  for (uint32_t c = n / 2 + 1; c + 1 < n; ++c) {
-    if (gcd(c, n) == 1) {
-      p = c;
-      break;
-    }
+  if (options.dicom_jpeg_lossless && options.dicom_implicit_vr) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "JPEG lossless DICOM is explicit VR: not with implicit VR");
   }
-  const int width = n < 10000 ? 4 : 10;
-  std::vector<std::string> names(n);
-  std::vector<uint32_t> number(n);
-  for (uint32_t k = 0; k < n; ++k) {
-    number[k] = static_cast<uint32_t>((uint64_t{k} * p + (n + 1) / 2) % n) + 1;
-    char buf[32];
-    std::snprintf(buf, sizeof(buf), "CT%0*u.dcm", width, number[k]);
-    names[k] = buf;
-  }
+  std::vector<std::string> names;
+  std::vector<uint32_t> number;
+  slice_names(n, &names, &number);
   SPLINTCORE_RETURN_IF_ERROR(series_folder(folder, names));
 
   // Stored values: unsigned with intercept min(-1024, min HU), or signed with intercept 0.
@@ -284,106 +410,20 @@ Status write_dicom_series(const CtVolume& v, const std::string& folder,
   for (uint64_t i = 0; i < count; ++i) min_hu = std::min<int32_t>(min_hu, v.hu[i]);
   const int32_t intercept = options.dicom_signed ? 0 : min_hu;
 
-  // UIDs from a hash of the volume (deterministic, distinct per volume).
-  Sha256 sha;
-  sha.update(v.hu, static_cast<size_t>(count * 2));
-  const double geometry[15] = {v.spacing.x, v.spacing.y, v.spacing.z, v.origin.x, v.origin.y,
-                               v.origin.z,  v.axis_x.x,  v.axis_x.y,  v.axis_x.z, v.axis_y.x,
-                               v.axis_y.y,  v.axis_y.z,  v.axis_z.x,  v.axis_z.y, v.axis_z.z};
-  sha.update(geometry, sizeof(geometry));
-  const uint32_t dims[3] = {v.nx, v.ny, v.nz};
-  sha.update(dims, sizeof(dims));
-  uint8_t digest[32];
-  sha.finish(digest);
-  uint64_t h = 0;
-  for (int i = 0; i < 8; ++i) h = (h << 8) | digest[i];
-  const std::string root = "2.25." + std::to_string(h >> 1);
-  const std::string sop_class = "1.2.840.10008.5.1.4.1.1.2";  // CT Image Storage
-  if (options.dicom_jpeg_lossless && options.dicom_implicit_vr) {
-    return make_error(StatusCode::kInvalidArgument,
-                      "JPEG lossless DICOM is explicit VR: not with implicit VR");
-  }
-  const std::string syntax = options.dicom_jpeg_lossless ? "1.2.840.10008.1.2.4.70"
-                             : options.dicom_implicit_vr ? "1.2.840.10008.1.2"
-                                                         : "1.2.840.10008.1.2.1";
-  const std::string orientation = ds(v.axis_x.x) + "\\" + ds(v.axis_x.y) + "\\" + ds(v.axis_x.z) +
-                                  "\\" + ds(v.axis_y.x) + "\\" + ds(v.axis_y.y) + "\\" +
-                                  ds(v.axis_y.z);
-  const uint64_t per_slice = uint64_t{v.nx} * v.ny;
-
+  const Series series{v,
+                      options,
+                      series_uid_root(v),
+                      options.dicom_jpeg_lossless ? "1.2.840.10008.1.2.4.70"
+                      : options.dicom_implicit_vr ? "1.2.840.10008.1.2"
+                                                  : "1.2.840.10008.1.2.1",
+                      ds(v.axis_x.x) + "\\" + ds(v.axis_x.y) + "\\" + ds(v.axis_x.z) + "\\" +
+                          ds(v.axis_y.x) + "\\" + ds(v.axis_y.y) + "\\" + ds(v.axis_y.z),
+                      intercept};
   OutputSet slices;  // a series placed whole: no new slices among an earlier run's
   for (uint32_t k = 0; k < n; ++k) {
-    const std::string instance = root + ".3." + std::to_string(number[k]);
-    DicomBuffer meta;
-    meta.str(0x0002, 0x0001, "OB", std::string("\0\1", 2));
-    meta.str(0x0002, 0x0002, "UI", sop_class);
-    meta.str(0x0002, 0x0003, "UI", instance);
-    meta.str(0x0002, 0x0010, "UI", syntax);
-    meta.str(0x0002, 0x0012, "UI", "2.25.329800735698586629295641978511506172918");
-    meta.str(0x0002, 0x0013, "SH", "SPLINTCORE");
-    DicomBuffer file;
-    file.b.assign(128, 0);
-    file.b.insert(file.b.end(), {'D', 'I', 'C', 'M'});
-    {
-      DicomBuffer length;
-      const uint32_t meta_bytes = static_cast<uint32_t>(meta.b.size());
-      const uint8_t d[4] = {static_cast<uint8_t>(meta_bytes), static_cast<uint8_t>(meta_bytes >> 8),
-                            static_cast<uint8_t>(meta_bytes >> 16),
-                            static_cast<uint8_t>(meta_bytes >> 24)};
-      length.element(0x0002, 0x0000, "UL", d, 4, 0);
-      file.b.insert(file.b.end(), length.b.begin(), length.b.end());
-      file.b.insert(file.b.end(), meta.b.begin(), meta.b.end());
-    }
-    DicomBuffer d;
-    d.implicit = options.dicom_implicit_vr;
-    const Vec3 position = options.slice_positions.empty()
-                              ? v.origin + v.axis_z * (static_cast<double>(k) * v.spacing.z)
-                              : options.slice_positions[k];
-    d.str(0x0008, 0x0008, "CS", "ORIGINAL\\PRIMARY\\AXIAL");
-    d.str(0x0008, 0x0016, "UI", sop_class);
-    d.str(0x0008, 0x0018, "UI", instance);
-    d.str(0x0008, 0x0060, "CS", "CT");
-    d.str(0x0008, 0x103E, "LO", "splintcore phantom");
-    d.str(0x0010, 0x0010, "PN", "Phantom");
-    d.str(0x0010, 0x0020, "LO", "PHANTOM");
-    d.str(0x0018, 0x0050, "DS", ds(v.spacing.z));
-    d.str(0x0018, 0x0088, "DS", ds(v.spacing.z));
-    d.str(0x0020, 0x000D, "UI", root + ".1");
-    d.str(0x0020, 0x000E, "UI", root + ".2");
-    d.str(0x0020, 0x0011, "IS", "1");
-    d.str(0x0020, 0x0013, "IS", std::to_string(number[k]));
-    d.str(0x0020, 0x0032, "DS", ds(position.x) + "\\" + ds(position.y) + "\\" + ds(position.z));
-    d.str(0x0020, 0x0037, "DS", orientation);
-    d.str(0x0020, 0x0052, "UI", root + ".4");
-    d.us(0x0028, 0x0002, 1);
-    d.str(0x0028, 0x0004, "CS", "MONOCHROME2");
-    d.us(0x0028, 0x0010, v.ny);
-    d.us(0x0028, 0x0011, v.nx);
-    d.str(0x0028, 0x0030, "DS", ds(v.spacing.y) + "\\" + ds(v.spacing.x));
-    d.us(0x0028, 0x0100, 16);
-    d.us(0x0028, 0x0101, 16);
-    d.us(0x0028, 0x0102, 15);
-    d.us(0x0028, 0x0103, options.dicom_signed ? 1 : 0);
-    d.str(0x0028, 0x1052, "DS", std::to_string(intercept));
-    d.str(0x0028, 0x1053, "DS", "1");
-    std::vector<uint16_t> stored(static_cast<size_t>(per_slice));
-    const int16_t* slice = v.hu + static_cast<size_t>(k * per_slice);
-    for (size_t i = 0; i < stored.size(); ++i) {
-      stored[i] = static_cast<uint16_t>(static_cast<int32_t>(slice[i]) - intercept);
-    }
-    if (options.dicom_jpeg_lossless) {
-      d.encapsulated(jpeg_lossless_encode(stored.data(), v.ny, v.nx, 1));
-    } else {
-      std::vector<uint8_t> pixels(stored.size() * 2);
-      for (size_t i = 0; i < stored.size(); ++i) {
-        pixels[2 * i] = static_cast<uint8_t>(stored[i] & 0xFF);
-        pixels[2 * i + 1] = static_cast<uint8_t>(stored[i] >> 8);
-      }
-      d.element(0x7FE0, 0x0010, "OW", pixels.data(), pixels.size(), 0);
-    }
-    file.b.insert(file.b.end(), d.b.begin(), d.b.end());
+    const std::vector<uint8_t> file = slice_file(series, k, number[k]);
     SPLINTCORE_RETURN_IF_ERROR(write_bytes_atomically((fs::path(folder) / names[k]).string(),
-                                                      file.b.data(), file.b.size(), &slices));
+                                                      file.data(), file.size(), &slices));
   }
   return slices.commit();
 }
