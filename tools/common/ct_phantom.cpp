@@ -110,9 +110,8 @@ bool box_contains_xy(const Aabb& b, double x, double y, double m) {
   return x >= b.lo.x - m && x <= b.hi.x + m && y >= b.lo.y - m && y <= b.hi.y + m;
 }
 
-}  // namespace
-
-Status CtPhantom::init(const CtPhantomOptions& o) {
+// The options' ranges and the axes' orthonormality.
+Status check_options(const CtPhantomOptions& o) {
   const uint32_t n[3] = {o.nx, o.ny, o.nz};
   for (int a = 0; a < 3; ++a) {
     if (n[a] == 0 || n[a] > 2048) {
@@ -144,6 +143,13 @@ Status CtPhantom::init(const CtPhantomOptions& o) {
       }
     }
   }
+  return Status::ok();
+}
+
+}  // namespace
+
+Status CtPhantom::init(const CtPhantomOptions& o) {
+  SPLINTCORE_RETURN_IF_ERROR(check_options(o));
   options_ = o;
   min_spacing_ = o.spacing.x;
   if (o.spacing.y < min_spacing_) min_spacing_ = o.spacing.y;
@@ -166,6 +172,12 @@ Status CtPhantom::init(const CtPhantomOptions& o) {
   header_.origin = -(((o.axis_x * centre_.x) + (o.axis_y * centre_.y)) + (o.axis_z * centre_.z));
   noise_key_ = hash_mix(o.seed ^ 0x5c7a11c0ffee1234ull);
 
+  lay_out_anatomy();
+  return check_fits();
+}
+
+// The teeth along the arch, the bone's segments under them and the streak's centre.
+void CtPhantom::lay_out_anatomy() {
   // The arch polyline and its arc length from the apex (x = 0, the middle point).
   double px[kArchPoints], py[kArchPoints], arc[kArchPoints];
   const int mid = kArchPoints / 2;
@@ -237,8 +249,11 @@ Status CtPhantom::init(const CtPhantomOptions& o) {
   }
   const RoundCone& molar = teeth_[1];
   streak_centre_ = molar.a;
+}
 
-  // The anatomy must fit in the volume, with two voxels to spare on every side.
+// The anatomy must fit in the volume, with two voxels to spare on every side.
+Status CtPhantom::check_fits() const {
+  const CtPhantomOptions& o = options_;
   Aabb anatomy;
   for (const RoundCone& c : teeth_) anatomy.add(c.box);
   for (const Segment& g : segments_) anatomy.add(g.box);

@@ -102,6 +102,8 @@ class CtPhantom {
     double x0, y0, x1, y1;
     Aabb box;  // of the swept slab part (both jaws' z ranges not included)
   };
+  void lay_out_anatomy();
+  Status check_fits() const;
   Vec3 to_anatomy(const Vec3& patient) const;
   static double round_cone(const RoundCone& c, const Vec3& p);
   double bone(const Vec3& p, double zc, double min_xy_distance) const;
