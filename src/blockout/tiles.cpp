@@ -349,6 +349,89 @@ Status decimate_tile(TileDecimator& d, const Patch& p, uint32_t** vmap, uint32_t
   return Status::ok();
 }
 
+// What a tile's decimated triangles become: emitted (and their vertices, counted in p.out
+// without numbers) or carried, a triangle that reaches the top kCarryLayers cell layers above
+// w_cut (none after the last tile); carried ones and their vertices numbered for the carry.
+struct CarryCount {
+  uint64_t emitted_v = 0, emitted_t = 0;
+  uint32_t next_nc = 0, next_nt = 0;  // the carry's vertices and triangles
+};
+
+CarryCount mark_carried(Patch& p, const Mesh& dec, const uint32_t* source, bool last, double w_cut,
+                        uint32_t* carry_id, uint8_t* carried, uint32_t* carried_index) {
+  const bool sampled = carried_index != nullptr;
+  CarryCount c;
+  for (size_t t = 0; t < dec.triangles.size(); ++t) {
+    const uint32_t* v = dec.triangles[t].v;
+    bool top = false;
+    for (int k = 0; k < 3; ++k) top = top || (!last && p.w[source[v[k]]] >= w_cut);
+    carried[t] = top ? 1 : 0;
+    if (sampled) carried_index[t] = top ? c.next_nt : kGone;
+    if (top) {
+      ++c.next_nt;
+      for (int k = 0; k < 3; ++k) {
+        if (carry_id[v[k]] == kGone) carry_id[v[k]] = c.next_nc++;
+      }
+    } else {
+      ++c.emitted_t;
+      for (int k = 0; k < 3; ++k) {
+        uint32_t& o_id = p.out[source[v[k]]];
+        if (o_id == kGone) {
+          o_id = kGone - 1;  // counted; numbered below
+          ++c.emitted_v;
+        }
+      }
+    }
+  }
+  for (size_t i = 0; i < dec.vertices.size(); ++i) {
+    if (p.out[source[i]] == kGone - 1) p.out[source[i]] = kGone;
+  }
+  return c;
+}
+
+// The tile's final part, in order, with its vertices by first use: streamed to d.out, or
+// (logging: d.out null) written into `block` after its {vertices, triangles} header.
+Status emit_final_part(TileDecimator& d, Patch& p, const Mesh& dec, const uint32_t* source,
+                       const uint8_t* carried, uint64_t emitted_v, uint64_t emitted_t,
+                       uint8_t* block) {
+  const bool logging = d.out == nullptr;
+  if (logging) {
+    const uint64_t header[2] = {emitted_v, emitted_t};
+    std::memcpy(block, header, sizeof(header));
+  }
+  uint8_t* vdst = logging ? block + 16 : nullptr;
+  uint8_t* tdst = logging ? vdst + 24 * emitted_v : nullptr;
+  uint32_t next_vertex = static_cast<uint32_t>(d.out_vertices);
+  for (size_t t = 0; t < dec.triangles.size(); ++t) {
+    if (carried[t] != 0) continue;
+    Triangle tri;
+    Vec3 q[3];
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t i = source[dec.triangles[t].v[k]];
+      q[k] = p.mesh.vertices[i];
+      if (p.out[i] == kGone) {
+        p.out[i] = next_vertex++;
+        if (logging) {
+          std::memcpy(vdst, &q[k], sizeof(Vec3));
+          vdst += sizeof(Vec3);
+        } else if (d.out->vertex != nullptr) {
+          SPLINTCORE_RETURN_IF_ERROR(d.out->vertex(d.out->user, p.out[i], q[k]));
+        }
+      }
+      tri.v[k] = p.out[i];
+    }
+    if (logging) {
+      std::memcpy(tdst, &tri, sizeof(Triangle));
+      tdst += sizeof(Triangle);
+    } else if (d.out->triangle != nullptr) {
+      SPLINTCORE_RETURN_IF_ERROR(d.out->triangle(d.out->user, tri, q[0], q[1], q[2]));
+    }
+  }
+  d.out_vertices = next_vertex;
+  d.out_triangles += emitted_t;
+  return Status::ok();
+}
+
 // Decimates the tile; streams (or logs) the triangles below the carry band, in order, with
 // their vertices by first use; writes the rest as the next carry.
 Status flush(TileDecimator& d, int64_t cz) {
@@ -384,33 +467,9 @@ Status flush(TileDecimator& d, int64_t cz) {
   // Carried: a triangle that reaches the top kCarryLayers cell layers (none after the last).
   const bool last = cz >= d.last_layer;
   const double w_cut = d.lo.z + d.spacing_w * static_cast<double>(cz + 1 - kCarryLayers);
-  uint64_t emitted_v = 0, emitted_t = 0;
-  uint32_t next_nc = 0, next_nt = 0;
-  for (size_t t = 0; t < dt; ++t) {
-    const uint32_t* v = dec.triangles[t].v;
-    bool top = false;
-    for (int k = 0; k < 3; ++k) top = top || (!last && p.w[source[v[k]]] >= w_cut);
-    carried[t] = top ? 1 : 0;
-    if (sampled) carried_index[t] = top ? next_nt : kGone;
-    if (top) {
-      ++next_nt;
-      for (int k = 0; k < 3; ++k) {
-        if (carry_id[v[k]] == kGone) carry_id[v[k]] = next_nc++;
-      }
-    } else {
-      ++emitted_t;
-      for (int k = 0; k < 3; ++k) {
-        uint32_t& o_id = p.out[source[v[k]]];
-        if (o_id == kGone) {
-          o_id = kGone - 1;  // counted; numbered below
-          ++emitted_v;
-        }
-      }
-    }
-  }
-  for (size_t i = 0; i < dv; ++i) {
-    if (p.out[source[i]] == kGone - 1) p.out[source[i]] = kGone;
-  }
+  const CarryCount c = mark_carried(p, dec, source, last, w_cut, carry_id, carried, carried_index);
+  const uint64_t emitted_v = c.emitted_v, emitted_t = c.emitted_t;
+  const uint32_t next_nc = c.next_nc, next_nt = c.next_nt;
   if (d.out_vertices + emitted_v >= kGone - 1) {
     return make_error(StatusCode::kLimitExceeded,
                       "sweep: more than 2^32 - 2 vertices after decimation");
@@ -427,41 +486,8 @@ Status flush(TileDecimator& d, int64_t cz) {
   const uint64_t carry = last ? 0 : carry_bytes(next_nc, next_nt, n_new, next_ns);
   uint8_t* block = static_cast<uint8_t*>(arena.allocate(static_cast<size_t>(chunk + carry), 8));
   if (chunk + carry > 0 && block == nullptr) return arena.exhausted_status();
-  // The final part, by first use.
-  if (logging) {
-    const uint64_t header[2] = {emitted_v, emitted_t};
-    std::memcpy(block, header, sizeof(header));
-  }
-  uint8_t* vdst = block + 16;
-  uint8_t* tdst = vdst + 24 * emitted_v;
-  uint32_t next_vertex = static_cast<uint32_t>(d.out_vertices);
-  for (size_t t = 0; t < dt; ++t) {
-    if (carried[t] != 0) continue;
-    Triangle tri;
-    Vec3 q[3];
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t i = source[dec.triangles[t].v[k]];
-      q[k] = p.mesh.vertices[i];
-      if (p.out[i] == kGone) {
-        p.out[i] = next_vertex++;
-        if (logging) {
-          std::memcpy(vdst, &q[k], sizeof(Vec3));
-          vdst += sizeof(Vec3);
-        } else if (d.out->vertex != nullptr) {
-          SPLINTCORE_RETURN_IF_ERROR(d.out->vertex(d.out->user, p.out[i], q[k]));
-        }
-      }
-      tri.v[k] = p.out[i];
-    }
-    if (logging) {
-      std::memcpy(tdst, &tri, sizeof(Triangle));
-      tdst += sizeof(Triangle);
-    } else if (d.out->triangle != nullptr) {
-      SPLINTCORE_RETURN_IF_ERROR(d.out->triangle(d.out->user, tri, q[0], q[1], q[2]));
-    }
-  }
-  d.out_vertices = next_vertex;
-  d.out_triangles += emitted_t;
+  SPLINTCORE_RETURN_IF_ERROR(
+      emit_final_part(d, p, dec, source, carried, emitted_v, emitted_t, block));
   // The carry: the other triangles and their vertices, and the map of this tile's new ones.
   if (!last) {
     const CarryParts parts{&p,      &dec,  source, carry_id,   carried,     vmap,          next_nc,
