@@ -1002,6 +1002,93 @@ uint64_t projector_bound() {
          cell_grid_bound();
 }
 
+namespace {
+
+// Where the arch runs along its centre line: the ends along it and the centre.
+struct ArchExtent {
+  double s_lo = 0, s_hi = 0;  // the band's points' places along the arch, least and greatest
+  double cx = 0, cy = 0;      // their centre
+};
+
+// The arch's centre line through the band's points (`line_pts`), smoothed; every point of
+// `line_pts` and `pts` given its place along it (s, o).
+Status centre_line(const Context& ctx, ArenaArray<ArchPoint>& line_pts, Span<ArchPoint> pts,
+                   Polyline* arch, ArchExtent* extent) {
+  Arena& arena = *ctx.arena;
+  Polyline first;
+  SPLINTCORE_RETURN_IF_ERROR(sector_line(arena, line_pts.span(), &first));
+  *arch = first;
+  for (int pass = 0; pass < kSmoothPasses; ++pass) {
+    Polyline next;
+    SPLINTCORE_RETURN_IF_ERROR(smooth_line(ctx, line_pts.span(), *arch, &next));
+    *arch = next;
+  }
+  // The ends and the centre from the band's vertices (they move with the jaws; see
+  // occlusal_points), the columns' places along the arch for the picks' windows.
+  double s_lo = HUGE_VAL, s_hi = -HUGE_VAL, cx = 0, cy = 0;
+  {
+    ArenaScope scope(arena);  // the projector goes when done
+    Projector proj;
+    SPLINTCORE_RETURN_IF_ERROR(make_projector(arena, *arch, &proj));
+    SPLINTCORE_RETURN_IF_ERROR(project_all(ctx, proj, line_pts.span()));
+    SPLINTCORE_RETURN_IF_ERROR(project_all(ctx, proj, pts));
+    for (const ArchPoint& a : line_pts) {
+      s_lo = std::min(s_lo, a.s);
+      s_hi = std::max(s_hi, a.s);
+      cx += a.x;
+      cy += a.y;
+    }
+  }
+  cx /= static_cast<double>(line_pts.size());
+  cy /= static_cast<double>(line_pts.size());
+  *extent = ArchExtent{s_lo, s_hi, cx, cy};
+  return Status::ok();
+}
+
+// The picks at `places` (their data gathered): each pair's faces the depth into the tooth
+// under it, their reach across the arch; the wafer's thinnest and thickest into `report`.
+Status set_picks(const Polyline& arch, const PickPlaces& places, const PickData* data,
+                 const Frame& f, double side, const OutlineOptions& options, Pick* up, Pick* lo,
+                 OutlineReport* report) {
+  const size_t n = places.size();
+  const double depth = options.indentation_depth_mm;
+  report->min_wafer_mm = HUGE_VAL;
+  report->max_wafer_mm = 0;
+  for (size_t i = 0; i < n; ++i) {
+    double x, y, lx, ly;
+    point_at(arch, places.at(i), &x, &y, &lx, &ly);
+    // The face: the depth below (above) the tooth under the pick, but never deeper than the
+    // depth and kDeepSlackMm into any tooth within the bound's reach.
+    const double top = std::min(data[i].near_h[0] + depth, data[i].h[0] + depth + kDeepSlackMm);
+    const double bottom = std::max(data[i].near_h[1] - depth, data[i].h[1] - depth - kDeepSlackMm);
+    const double wafer = top - bottom;
+    if (!(wafer >= kMinWaferMm)) {
+      return make_error(StatusCode::kInvalidArgument, "outline: the wafer would be ", wafer,
+                        " mm thick at pick ", i, " (at least ", kMinWaferMm,
+                        "): the jaws are too close there; open the bite (\"bite_opening_mm\") "
+                        "or indent less")
+          .at_index(i);
+    }
+    report->min_wafer_mm = std::min(report->min_wafer_mm, wafer);
+    report->max_wafer_mm = std::max(report->max_wafer_mm, wafer);
+    const Vec3 flat = f.e1 * x + f.e2 * y;
+    const Vec3 buccal = (f.e1 * lx + f.e2 * ly) * side;
+    for (int jaw = 0; jaw < 2; ++jaw) {
+      Pick& p = jaw == 0 ? up[i] : lo[i];
+      p = Pick{};  // the buffers are raw arena memory: no normal (zero) unless set
+      p.position = flat + f.n * (jaw == 0 ? top : bottom);
+      p.direction = buccal;
+      p.inner_length =
+          std::min(std::max(data[i].lingual, 0.0), kMaxReachAcrossMm) + options.overhang_mm;
+      p.outside_length =
+          std::min(std::max(data[i].buccal, 0.0), kMaxReachAcrossMm) + options.overhang_mm;
+    }
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
 Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
                       const Vec3& lower_offset, const Frame& f, const Grid& g, const Plane& plane,
                       const OutlineOptions& options, const OutlineBuffers& buffers, Outline* out) {
@@ -1012,32 +1099,10 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
       occlusal_points(ctx, upper, lower, lower_offset, f, g, plane, &pts, &line_pts, counts));
   out->report.cells_upper = counts[0];
   out->report.cells_lower = counts[1];
-  Polyline first, arch;
-  SPLINTCORE_RETURN_IF_ERROR(sector_line(arena, line_pts.span(), &first));
-  arch = first;
-  for (int pass = 0; pass < kSmoothPasses; ++pass) {
-    Polyline next;
-    SPLINTCORE_RETURN_IF_ERROR(smooth_line(ctx, line_pts.span(), arch, &next));
-    arch = next;
-  }
-  // The ends and the centre from the band's vertices (they move with the jaws; see
-  // occlusal_points), the columns' places along the arch for the picks' windows.
-  double s_lo = HUGE_VAL, s_hi = -HUGE_VAL, cx = 0, cy = 0;
-  {
-    ArenaScope scope(arena);  // the projector goes when done
-    Projector proj;
-    SPLINTCORE_RETURN_IF_ERROR(make_projector(arena, arch, &proj));
-    SPLINTCORE_RETURN_IF_ERROR(project_all(ctx, proj, line_pts.span()));
-    SPLINTCORE_RETURN_IF_ERROR(project_all(ctx, proj, pts.span()));
-    for (const ArchPoint& a : line_pts) {
-      s_lo = std::min(s_lo, a.s);
-      s_hi = std::max(s_hi, a.s);
-      cx += a.x;
-      cy += a.y;
-    }
-  }
-  cx /= static_cast<double>(line_pts.size());
-  cy /= static_cast<double>(line_pts.size());
+  Polyline arch;
+  ArchExtent extent;
+  SPLINTCORE_RETURN_IF_ERROR(centre_line(ctx, line_pts, pts.span(), &arch, &extent));
+  const double s_lo = extent.s_lo, s_hi = extent.s_hi, cx = extent.cx, cy = extent.cy;
   out->report.arch_length_mm = s_hi - s_lo;
   if (s_hi - s_lo < kMinArchMm) {
     return make_error(StatusCode::kInvalidArgument, "outline: the arch is too short: ", s_hi - s_lo,
@@ -1081,39 +1146,7 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
     return Status::error(StatusCode::kInvalidArgument,
                          "outline: a jaw shows no occlusal surface along the arch");
   }
-  const double depth = options.indentation_depth_mm;
-  out->report.min_wafer_mm = HUGE_VAL;
-  out->report.max_wafer_mm = 0;
-  for (size_t i = 0; i < n; ++i) {
-    double x, y, lx, ly;
-    point_at(arch, places.at(i), &x, &y, &lx, &ly);
-    // The face: the depth below (above) the tooth under the pick, but never deeper than the
-    // depth and kDeepSlackMm into any tooth within the bound's reach.
-    const double top = std::min(data[i].near_h[0] + depth, data[i].h[0] + depth + kDeepSlackMm);
-    const double bottom = std::max(data[i].near_h[1] - depth, data[i].h[1] - depth - kDeepSlackMm);
-    const double wafer = top - bottom;
-    if (!(wafer >= kMinWaferMm)) {
-      return make_error(StatusCode::kInvalidArgument, "outline: the wafer would be ", wafer,
-                        " mm thick at pick ", i, " (at least ", kMinWaferMm,
-                        "): the jaws are too close there; open the bite (\"bite_opening_mm\") "
-                        "or indent less")
-          .at_index(i);
-    }
-    out->report.min_wafer_mm = std::min(out->report.min_wafer_mm, wafer);
-    out->report.max_wafer_mm = std::max(out->report.max_wafer_mm, wafer);
-    const Vec3 flat = f.e1 * x + f.e2 * y;
-    const Vec3 buccal = (f.e1 * lx + f.e2 * ly) * side;
-    for (int jaw = 0; jaw < 2; ++jaw) {
-      Pick& p = jaw == 0 ? up[i] : lo[i];
-      p = Pick{};  // the buffers are raw arena memory: no normal (zero) unless set
-      p.position = flat + f.n * (jaw == 0 ? top : bottom);
-      p.direction = buccal;
-      p.inner_length =
-          std::min(std::max(data[i].lingual, 0.0), kMaxReachAcrossMm) + options.overhang_mm;
-      p.outside_length =
-          std::min(std::max(data[i].buccal, 0.0), kMaxReachAcrossMm) + options.overhang_mm;
-    }
-  }
+  SPLINTCORE_RETURN_IF_ERROR(set_picks(arch, places, data, f, side, options, up, lo, &out->report));
   for (size_t i = 0; i < arch.n; ++i) {
     line[i] =
         f.e1 * arch.x[i] + f.e2 * arch.y[i] + f.n * plane.at(arch.x[i] - g.cx, arch.y[i] - g.cy);
