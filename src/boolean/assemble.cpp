@@ -476,6 +476,41 @@ bool moves_to_itself(const Mesh& a, const Vec3& d) {
   return true;
 }
 
+// What a run takes: A (as moved), the part of B it runs on and B whole, with the ids of
+// that part in B.
+boolean_detail::Inputs boolean_inputs(const Mesh& a, bool a_solid, const Mesh& run_b, const Mesh& b,
+                                      const NearB& near) {
+  boolean_detail::Inputs in;
+  in.a = &a;
+  in.a_solid = a_solid;
+  in.b = &run_b;
+  in.b_whole = &b;
+  in.b_vertex_ids = near.vertex_ids;
+  in.b_triangle_ids = near.triangle_ids;
+  in.nva = static_cast<uint32_t>(a.vertices.size());
+  in.nvb = static_cast<uint32_t>(run_b.vertices.size());
+  in.nta = static_cast<uint32_t>(a.triangles.size());
+  in.ntb = static_cast<uint32_t>(run_b.triangles.size());
+  return in;
+}
+
+// A moved by d (rounded to float32 for STL output): new vertices in the arena, A's triangles.
+Status moved_a(Arena& arena, const Mesh& a, const Vec3& d, bool float32, Mesh* moved) {
+  Vec3* v = arena.allocate_array<Vec3>(a.vertices.empty() ? 1 : a.vertices.size());
+  if (v == nullptr) return arena.exhausted_status();
+  bool in_range = true;
+  for (size_t i = 0; i < a.vertices.size(); ++i) {
+    Vec3 p = a.vertices[i] + d;
+    if (float32) in_range = round_to_float32(&p) && in_range;
+    v[i] = p;
+  }
+  if (!in_range) {
+    return Status::error(StatusCode::kLimitExceeded, "A has a coordinate beyond float32 range");
+  }
+  *moved = mesh_view(Span<const Vec3>(v, a.vertices.size()), a.triangles.span());
+  return Status::ok();
+}
+
 }  // namespace
 
 Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
@@ -531,38 +566,14 @@ Status mesh_boolean_single(const Context& ctx, const Mesh& a, const Mesh& b,
     // into a coarser binade). The moved A shares A's triangles: only its vertices are new.
     const Vec3 d{attempt * step, 3.0 * attempt * step, 7.0 * attempt * step};
     if (attempt > 0 || (options.float32_output && !moves_to_itself(a, d))) {
-      Vec3* v = arena.allocate_array<Vec3>(a.vertices.empty() ? 1 : a.vertices.size());
-      if (v == nullptr) {
-        s = arena.exhausted_status();
-        break;
-      }
-      bool in_range = true;
-      for (size_t i = 0; i < a.vertices.size(); ++i) {
-        Vec3 p = a.vertices[i] + d;
-        if (options.float32_output) in_range = round_to_float32(&p) && in_range;
-        v[i] = p;
-      }
-      if (!in_range) {
-        s = Status::error(StatusCode::kLimitExceeded, "A has a coordinate beyond float32 range");
-        break;
-      }
-      moved = mesh_view(Span<const Vec3>(v, a.vertices.size()), a.triangles.span());
+      s = moved_a(arena, a, d, options.float32_output, &moved);
+      if (!s.is_ok()) break;
       pa = &moved;
       stats->nudge = d;
       stats->nudge_sum = d;
     }
     stats->attempts = attempt + 1;
-    Inputs in;
-    in.a = pa;
-    in.a_solid = a_solid && pa == &a;
-    in.b = &run_b;
-    in.b_whole = &b;
-    in.b_vertex_ids = near.vertex_ids;
-    in.b_triangle_ids = near.triangle_ids;
-    in.nva = static_cast<uint32_t>(a.vertices.size());
-    in.nvb = static_cast<uint32_t>(run_b.vertices.size());
-    in.nta = static_cast<uint32_t>(a.triangles.size());
-    in.ntb = static_cast<uint32_t>(run_b.triangles.size());
+    const Inputs in = boolean_inputs(*pa, a_solid && pa == &a, run_b, b, near);
     result = Mesh();
     BooleanRun run(ctx, in, bp, options, stats);
     run.set_pair_budget(budget - used);
