@@ -845,19 +845,10 @@ JsonLimits case_json_limits() {
   return limits;
 }
 
-Status parse_case_document(const Context& ctx, const char* text, size_t length, const char* name,
-                           CaseFile* out) {
-  JsonDocument doc;
-  SPLINTCORE_RETURN_IF_ERROR(parse_json(ctx, text, length, case_json_limits(), name, &doc));
-  Reader r{&doc, ctx.arena};
-  const JsonValue& root = doc.root();
-  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(root, JsonType::kObject, "the case"));
-  static const char* const kRootKeys[] = {
-      "splintcore_case", "case_id", "units",   "jaws",       "base",          "insertion_direction",
-      "blockout",        "ct",      "printer", "memory_cap", "min_thickness", "placement",
-      "label",           "output",  "plan",    nullptr};
-  SPLINTCORE_RETURN_IF_ERROR(r.known_keys(root, kRootKeys, "the case"));
-
+// "splintcore_case" (the format's version, required), "case_id" and "units".
+Status parse_version_and_id(const Reader& r, const JsonValue& root, const char* name,
+                            CaseFile* out) {
+  const JsonDocument& doc = *r.doc;
   const JsonValue* version = doc.member(root, "splintcore_case");
   if (version == nullptr) {
     return r.fail(root, StatusCode::kInvalidArgument,
@@ -891,6 +882,37 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
                     "\"): convert the meshes and the case to millimetres");
     }
   }
+  return Status::ok();
+}
+
+// "placement": "case" (the default) or "tray".
+Status parse_placement(const Reader& r, const JsonValue& pl, CaseFile* out) {
+  const char* placement = "";
+  SPLINTCORE_RETURN_IF_ERROR(r.string(pl, "placement", &placement));
+  if (std::strcmp(placement, "tray") == 0) {
+    out->place_on_tray = true;
+  } else if (std::strcmp(placement, "case") != 0) {
+    return r.fail(pl, StatusCode::kInvalidArgument,
+                  "\"placement\" must be \"case\" (the splint stays in the case's frame) or "
+                  "\"tray\" (moved onto the printer's build tray)");
+  }
+  return Status::ok();
+}
+
+Status parse_case_document(const Context& ctx, const char* text, size_t length, const char* name,
+                           CaseFile* out) {
+  JsonDocument doc;
+  SPLINTCORE_RETURN_IF_ERROR(parse_json(ctx, text, length, case_json_limits(), name, &doc));
+  Reader r{&doc, ctx.arena};
+  const JsonValue& root = doc.root();
+  SPLINTCORE_RETURN_IF_ERROR(r.expect_type(root, JsonType::kObject, "the case"));
+  static const char* const kRootKeys[] = {
+      "splintcore_case", "case_id", "units",   "jaws",       "base",          "insertion_direction",
+      "blockout",        "ct",      "printer", "memory_cap", "min_thickness", "placement",
+      "label",           "output",  "plan",    nullptr};
+  SPLINTCORE_RETURN_IF_ERROR(r.known_keys(root, kRootKeys, "the case"));
+
+  SPLINTCORE_RETURN_IF_ERROR(parse_version_and_id(r, root, name, out));
 
   if (const JsonValue* jaws = doc.member(root, "jaws")) {
     SPLINTCORE_RETURN_IF_ERROR(parse_jaws(r, jaws, out));
@@ -927,15 +949,7 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
     SPLINTCORE_RETURN_IF_ERROR(r.number(*t, "min_thickness", 0, &out->min_thickness));
   }
   if (const JsonValue* pl = doc.member(root, "placement")) {
-    const char* placement = "";
-    SPLINTCORE_RETURN_IF_ERROR(r.string(*pl, "placement", &placement));
-    if (std::strcmp(placement, "tray") == 0) {
-      out->place_on_tray = true;
-    } else if (std::strcmp(placement, "case") != 0) {
-      return r.fail(*pl, StatusCode::kInvalidArgument,
-                    "\"placement\" must be \"case\" (the splint stays in the case's frame) or "
-                    "\"tray\" (moved onto the printer's build tray)");
-    }
+    SPLINTCORE_RETURN_IF_ERROR(parse_placement(r, *pl, out));
   }
   if (const JsonValue* p = doc.member(root, "printer")) {
     SPLINTCORE_RETURN_IF_ERROR(r.string(*p, "printer", &out->printer));
