@@ -1626,52 +1626,43 @@ void bench_dicom_jpeg_series(Harness& h, Arena& arena) {
   ::rmdir(dir);
 }
 
-int run(int argc, char** argv) {
-  remove_temporary_outputs_on_signals();  // (--export-realcase writes files)
-  Harness h;
+// The command line's settings.
+struct BenchArgs {
   std::string realdata = "../shared/realdata/open-full-jaw-patient26";
   std::string fixtures = "fixtures";
-  std::string inflate_input;  // a zlib stream for inflate_ct16_zlib6
-  std::string dicom_input;    // a DICOM slice for dicom_read_slice
+  std::string inflate_input;         // a zlib stream for inflate_ct16_zlib6
+  std::string dicom_input;           // a DICOM slice for dicom_read_slice
+  const char* export_dir = nullptr;  // --export-realcase
   uint64_t cap = uint64_t{4} << 30;
+};
+
+// The arguments into `args` and `h`: -1 to go on, else the exit code (usage or --help).
+int parse_bench_args(int argc, char** argv, BenchArgs* args, Harness* h) {
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
     uint64_t v = 0;
     if (a == "--filter" && i + 1 < argc) {
-      h.filter = argv[++i];
+      h->filter = argv[++i];
     } else if (a == "--repeat" && i + 1 < argc && cli::parse_unsigned(argv[i + 1], &v) && v > 0) {
-      h.repeat = static_cast<int>(v);
+      h->repeat = static_cast<int>(v);
       ++i;
     } else if (a == "--realdata" && i + 1 < argc) {
-      realdata = argv[++i];
+      args->realdata = argv[++i];
     } else if (a == "--fixtures" && i + 1 < argc) {
-      fixtures = argv[++i];
+      args->fixtures = argv[++i];
     } else if (a == "--inflate-input" && i + 1 < argc) {
-      inflate_input = argv[++i];
+      args->inflate_input = argv[++i];
     } else if (a == "--dicom-input" && i + 1 < argc) {
-      dicom_input = argv[++i];
-    } else if (a == "--memory-cap" && i + 1 < argc && cli::parse_size(argv[i + 1], &cap)) {
+      args->dicom_input = argv[++i];
+    } else if (a == "--memory-cap" && i + 1 < argc && cli::parse_size(argv[i + 1], &args->cap)) {
       ++i;
     } else if (a == "--threads" && i + 1 < argc && cli::parse_unsigned(argv[i + 1], &v) && v > 0 &&
                v <= ThreadExecutor::kMaxThreads) {
-      h.threads = static_cast<unsigned>(v);
+      h->threads = static_cast<unsigned>(v);
       ++i;
     } else if (a == "--export-realcase" && i + 1 < argc) {
-      // The real case as a folder `splintcore design` takes (tools/bench/table1.sh).
-      realcase::RealCase rc;
-      std::string error;
-      if (::mkdir(argv[i + 1], 0777) != 0 && errno != EEXIST) {
-        std::fprintf(stderr, "splintcore-bench: cannot create %s: %s\n", argv[i + 1],
-                     std::strerror(errno));
-        return 1;
-      }
-      if (!realcase::load(realdata, 2.0, 1.5, 6.0, &rc, &error) ||
-          !realcase::write_case_folder(rc, argv[i + 1], 0.5, &error)) {
-        std::fprintf(stderr, "splintcore-bench: %s\n", error.c_str());
-        return 1;
-      }
-      std::printf("%s/case.json\n", argv[i + 1]);
-      return 0;
+      args->export_dir = argv[++i];
+      return -1;  // as before: what follows it is not read
     } else {
       std::fprintf(stderr,
                    "usage: splintcore-bench [--filter SUBSTRING] [--repeat N] "
@@ -1681,6 +1672,69 @@ int run(int argc, char** argv) {
       return a == "--help" ? 0 : 2;
     }
   }
+  return -1;
+}
+
+// The real case as a folder `splintcore design` takes (tools/bench/table1.sh).
+int export_realcase(const std::string& realdata, const char* dir) {
+  realcase::RealCase rc;
+  std::string error;
+  if (::mkdir(dir, 0777) != 0 && errno != EEXIST) {
+    std::fprintf(stderr, "splintcore-bench: cannot create %s: %s\n", dir, std::strerror(errno));
+    return 1;
+  }
+  if (!realcase::load(realdata, 2.0, 1.5, 6.0, &rc, &error) ||
+      !realcase::write_case_folder(rc, dir, 0.5, &error)) {
+    std::fprintf(stderr, "splintcore-bench: %s\n", error.c_str());
+    return 1;
+  }
+  std::printf("%s/case.json\n", dir);
+  return 0;
+}
+
+// The real CBCT dentition, all 31 teeth in one soup: read and distance (skipped when absent).
+void bench_realdata_soup(Harness& h, Arena& arena, const std::string& realdata) {
+  std::vector<uint8_t> all;
+  uint32_t count = 0;
+  for (int tooth = 1; tooth <= 32; ++tooth) {
+    std::string dir = tooth <= 16 ? "/maxilla/" : "/mandible/";
+    std::vector<uint8_t> one =
+        read_whole(realdata + dir + "tooth_" + std::to_string(tooth) + ".stl");
+    if (one.size() < 84) continue;
+    if (all.empty()) all.assign(84, 0);
+    all.insert(all.end(), one.begin() + 84, one.end());
+    count += static_cast<uint32_t>((one.size() - 84) / 50);
+  }
+  if (all.empty()) {
+    std::printf("# realdata not found at %s: skipped\n", realdata.c_str());
+    return;
+  }
+  std::memcpy(all.data() + 80, &count, 4);
+  bench_stl(h, arena, "_realdata", all);
+  Arena::Marker m = arena.mark();
+  Context ctx(&arena);
+  Mesh mesh(&arena);
+  MemorySource ms{all.data(), all.size(), 0, 0};
+  Status s = read_stl_mesh(ctx, memory_source(&ms), StlReadOptions{}, &mesh, nullptr);
+  if (s.is_ok()) {
+    bench_distance(h, arena, "_realdata", mesh, DistanceIndexOptions{});
+    DistanceIndexOptions oriented;
+    oriented.oriented_boxes = true;
+    bench_distance(h, arena, "_oriented_realdata", mesh, oriented);
+  }
+  arena.rewind(m);
+}
+
+int run(int argc, char** argv) {
+  remove_temporary_outputs_on_signals();  // (--export-realcase writes files)
+  Harness h;
+  BenchArgs args;
+  const int early = parse_bench_args(argc, argv, &args, &h);
+  if (early >= 0) return early;
+  if (args.export_dir != nullptr) return export_realcase(args.realdata, args.export_dir);
+  const std::string& realdata = args.realdata;
+  const std::string& fixtures = args.fixtures;
+  const uint64_t cap = args.cap;
   void* buffer = std::malloc(static_cast<size_t>(cap));
   if (buffer == nullptr) {
     std::fprintf(stderr, "splintcore-bench: cannot reserve %llu bytes\n",
@@ -1698,8 +1752,8 @@ int run(int argc, char** argv) {
     bench_mesh_pair_distance(h, arena, realdata);
     bench_remesh(h, arena);
     bench_ct_reconstruct(h, arena);
-    bench_inflate(h, arena, inflate_input);
-    bench_dicom_input(h, arena, dicom_input);
+    bench_inflate(h, arena, args.inflate_input);
+    bench_dicom_input(h, arena, args.dicom_input);
     bench_dicom_jpeg_series(h, arena);
     bench_write_3mf(h, arena);
     bench_marching_cubes(h, arena);
@@ -1713,39 +1767,7 @@ int run(int argc, char** argv) {
     std::vector<uint8_t> torus = to_binary_stl(shapes::torus(521, 521, 30.0, 8.0));
     bench_stl(h, arena, "", torus);
     bench_stl_phantom(h, arena);
-
-    // The real CBCT dentition, all 31 teeth in one soup (skipped when absent).
-    std::vector<uint8_t> all;
-    uint32_t count = 0;
-    for (int tooth = 1; tooth <= 32; ++tooth) {
-      std::string dir = tooth <= 16 ? "/maxilla/" : "/mandible/";
-      std::vector<uint8_t> one =
-          read_whole(realdata + dir + "tooth_" + std::to_string(tooth) + ".stl");
-      if (one.size() < 84) continue;
-      if (all.empty()) all.assign(84, 0);
-      all.insert(all.end(), one.begin() + 84, one.end());
-      count += static_cast<uint32_t>((one.size() - 84) / 50);
-    }
-    if (!all.empty()) {
-      std::memcpy(all.data() + 80, &count, 4);
-      bench_stl(h, arena, "_realdata", all);
-      {
-        Arena::Marker m = arena.mark();
-        Context ctx(&arena);
-        Mesh mesh(&arena);
-        MemorySource ms{all.data(), all.size(), 0, 0};
-        Status s = read_stl_mesh(ctx, memory_source(&ms), StlReadOptions{}, &mesh, nullptr);
-        if (s.is_ok()) {
-          bench_distance(h, arena, "_realdata", mesh, DistanceIndexOptions{});
-          DistanceIndexOptions oriented;
-          oriented.oriented_boxes = true;
-          bench_distance(h, arena, "_oriented_realdata", mesh, oriented);
-        }
-        arena.rewind(m);
-      }
-    } else {
-      std::printf("# realdata not found at %s: skipped\n", realdata.c_str());
-    }
+    bench_realdata_soup(h, arena, realdata);
   }
   std::free(buffer);
   return h.failed ? 1 : 0;
