@@ -530,6 +530,12 @@ expect_exit 0 "the reconstructed mandible is a printable solid" -- "$tool" check
 expect_exit 0 "reconstruct again, 26-connectivity" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jaws26" "${seeds[@]}" --connectivity 26 --threads 2
 expect_exit 0 "reconstruct nrrd again" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jaws2" "${seeds[@]}"
 check "reconstruct is deterministic" -- cmp -s "$work/jaws/maxilla.stl" "$work/jaws2/maxilla.stl"
+# Both jaws are placed together, and the summary names them only once they are: a folder in
+# the mandible's place leaves no maxilla and no line for it.
+mkdir -p "$work/jawsblocked/mandible.stl/x"
+expect_exit 1 "reconstruct with a folder in the mandible's place" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jawsblocked" "${seeds[@]}"
+check "no maxilla placed" -- test ! -e "$work/jawsblocked/maxilla.stl"
+check "no jaw line printed" -- test ! -s "$work/out"
 expect_exit 2 "reconstruct with a bad --decimate" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jawsbad" "${seeds[@]}" --decimate 2
 expect_exit 0 "reconstruct, smoothed and decimated" -- "$tool" reconstruct "$work/ct.nrrd" -o "$work/jawsdec" "${seeds[@]}" --smooth 5 --decimate 20000 --json
 check "decimation reported" -- grep -q '"decimated_from_triangles":' "$work/out"

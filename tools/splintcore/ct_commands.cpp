@@ -219,6 +219,7 @@ class Reconstruct {
   ThresholdStats ts_;
   RegionStats rs_;
   std::string rows_, warnings_;
+  std::string jaw_lines_;   // the text summary's lines, printed once the files are placed
   cli::OutputSet outputs_;  // both jaws placed together
 };
 
@@ -322,11 +323,11 @@ Status Reconstruct::mesh_jaw(int jaw) {
     std::fprintf(stderr, "splintcore: warning: the %s touches the volume's border\n", kNames[jaw]);
   }
   add_jaw_row(jaw, path, mesh, volume_mm3, st, smoothed, decimated);
-  if (!a_.common.json) {
-    std::printf("%s: %s, %llu voxels, %zu triangles, %.1f mm^3\n", kNames[jaw], path.c_str(),
+  char line[64];
+  std::snprintf(line, sizeof(line), ", %llu voxels, %zu triangles, %.1f mm^3\n",
                 static_cast<unsigned long long>(rs_.voxels[ro.label]), mesh.triangles.size(),
                 volume_mm3);
-  }
+  jaw_lines_ += std::string(kNames[jaw]) + ": " + path + line;
   return Status::ok();
 }
 
@@ -361,6 +362,7 @@ void Reconstruct::add_jaw_row(int jaw, const std::string& path, const Mesh& mesh
 
 void Reconstruct::print_report() const {
   if (!a_.common.json) {
+    std::fputs(jaw_lines_.c_str(), stdout);
     if (info_.resampled) {
       std::printf(
           "resampled onto a regular grid: %u slices -> %u, gantry tilt %.2f deg, largest "
