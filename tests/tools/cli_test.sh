@@ -200,6 +200,13 @@ check "phantom wrote the mandible" -- test -s "$work/mandible.stl"
 cp "$work/maxilla.stl" "$work/maxilla.first"
 expect_exit 0 "phantom again" -- "$tool" phantom --triangles 6000 -o "$work"
 check "phantom bytes are the same every run" -- cmp -s "$work/maxilla.stl" "$work/maxilla.first"
+check "phantom names its jaws and its case" -- test "$(grep -c -E '^(maxilla|mandible): |^case: ' "$work/out")" -eq 3
+# Its files are placed together and named only then: a folder in the case's place leaves no jaw
+# and prints no jaw line.
+mkdir -p "$work/phantom-blocked/case.json/x"
+expect_exit 1 "phantom with a folder in the case's place" -- "$tool" phantom --triangles 2000 -o "$work/phantom-blocked"
+check "phantom placed no jaw" -- test ! -e "$work/phantom-blocked/maxilla.stl"
+check "phantom printed no jaw line" -- test ! -s "$work/out"
 
 # Hinge-axis autorotation (issue 32) of the phantom's mandible (in occlusion: opened, then closed
 # to 2 mm), the turned mandible written atomically; the same bytes every run.

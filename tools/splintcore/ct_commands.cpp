@@ -323,11 +323,9 @@ Status Reconstruct::mesh_jaw(int jaw) {
     std::fprintf(stderr, "splintcore: warning: the %s touches the volume's border\n", kNames[jaw]);
   }
   add_jaw_row(jaw, path, mesh, volume_mm3, st, smoothed, decimated);
-  char line[64];
-  std::snprintf(line, sizeof(line), ", %llu voxels, %zu triangles, %.1f mm^3\n",
-                static_cast<unsigned long long>(rs_.voxels[ro.label]), mesh.triangles.size(),
-                volume_mm3);
-  jaw_lines_ += std::string(kNames[jaw]) + ": " + path + line;
+  jaw_lines_ += cli::format("%s: %s, %llu voxels, %zu triangles, %.1f mm^3\n", kNames[jaw],
+                            path.c_str(), static_cast<unsigned long long>(rs_.voxels[ro.label]),
+                            mesh.triangles.size(), volume_mm3);
   return Status::ok();
 }
 

@@ -328,7 +328,8 @@ std::vector<OptionSpec> phantom_options(PhantomArgs* a) {
   };
 }
 
-// Writes DIR/NAME.stl for one jaw; `row` gets its JSON object or its summary is printed.
+// Writes DIR/NAME.stl for one jaw; `row` gets its JSON object or its summary line (printed
+// once the run's files are placed).
 Status write_phantom_jaw(const PhantomArgs& a, int index, std::string* row,
                          cli::OutputSet* outputs) {
   const char* names[2] = {"maxilla", "mandible"};
@@ -351,14 +352,14 @@ Status write_phantom_jaw(const PhantomArgs& a, int index, std::string* row,
     r.add("sha256", hex);
     *row = r.str();
   } else {
-    std::printf("%s: %s, %zu triangles, %zu vertices, sha256 %s\n", names[index], path.c_str(),
-                jaw.triangles.size(), jaw.vertices.size(), hex.c_str());
+    *row = cli::format("%s: %s, %zu triangles, %zu vertices, sha256 %s\n", names[index],
+                       path.c_str(), jaw.triangles.size(), jaw.vertices.size(), hex.c_str());
   }
   return Status::ok();
 }
 
 // Writes DIR/NAME_scan.stl and .ply for one scan-like jaw; `row` gets its JSON object or its
-// summary is printed.
+// summary line.
 Status write_scan_jaw(const PhantomArgs& a, int index, std::string* row, cli::OutputSet* outputs) {
   const char* names[2] = {"maxilla", "mandible"};
   phantom::ScanJaw jaw;
@@ -394,7 +395,7 @@ Status write_scan_jaw(const PhantomArgs& a, int index, std::string* row, cli::Ou
     r.add("flipped_triangles", jaw.flipped_triangles);
     *row = r.str();
   } else {
-    std::printf(
+    *row = cli::format(
         "%s: %s.stl and .ply, %zu triangles; planted: %u holes (at most %u edges), %u islands, "
         "%u non-manifold edges, %u duplicate triangles, %u triangles wound the other way\n",
         names[index], base.c_str(), jaw.triangles.size(), jaw.holes, jaw.max_hole_edges,
@@ -412,11 +413,14 @@ int run_scan_phantom(const Command& command, const PhantomArgs& a) {
     std::string row;
     const Status s = write_scan_jaw(a, j, &row, &outputs);
     if (!s.is_ok()) return rejected(a.common, command.name, s, nullptr);
-    if (a.common.json) rows += (j > 0 ? "," : "") + row;
+    rows += (a.common.json && j > 0 ? "," : "") + row;
   }
   const Status placed = outputs.commit();
   if (!placed.is_ok()) return rejected(a.common, command.name, placed, nullptr);
-  if (!a.common.json) return kExitOk;
+  if (!a.common.json) {
+    std::fputs(rows.c_str(), stdout);
+    return kExitOk;
+  }
   JsonObject j;
   j.add("command", "phantom");
   j.add_status(Status::ok());
@@ -567,7 +571,7 @@ int run_phantom(const Command& command, int argc, char** argv) {
     std::string row;
     const Status s = write_phantom_jaw(a, j, &row, &outputs);
     if (!s.is_ok()) return rejected(a.common, command.name, s, nullptr);
-    if (a.common.json) rows += (j > 0 ? "," : "") + row;
+    rows += (a.common.json && j > 0 ? "," : "") + row;
   }
   // The case that goes with them (the paper-scale picks): design it with
   // `splintcore design DIR/case.json -o OUT`.
@@ -577,7 +581,7 @@ int run_phantom(const Command& command, int argc, char** argv) {
   if (s.is_ok()) s = outputs.commit();
   if (!s.is_ok()) return rejected(a.common, command.name, s, nullptr);
   if (!a.common.json) {
-    std::printf("case: %s\n", path.c_str());
+    std::printf("%scase: %s\n", rows.c_str(), path.c_str());
     return kExitOk;
   }
   JsonObject j;
