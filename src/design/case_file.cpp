@@ -206,8 +206,9 @@ Status parse_picks(const Reader& r, const JsonValue& list, const char* key, doub
   if (picks == nullptr && list.child_count > 0) return r.arena->exhausted_status();
   static const char* const kPickKeys[] = {
       "position", "normal", "direction", "inner_length_mm", "outside_length_mm", nullptr};
-  uint32_t i = 0;
-  for (uint32_t k = list.first_child; k != kJsonNone; k = r.doc->at(k).next_sibling, ++i) {
+  uint32_t i = 0;  // (the children number child_count: the bound only states it)
+  for (uint32_t k = list.first_child; k != kJsonNone && i < list.child_count;
+       k = r.doc->at(k).next_sibling, ++i) {
     const JsonValue& p = r.doc->at(k);
     SPLINTCORE_RETURN_IF_ERROR(r.expect_type(p, JsonType::kObject, key));
     SPLINTCORE_RETURN_IF_ERROR(r.known_keys(p, kPickKeys, "a pick"));

@@ -78,13 +78,6 @@ bool read_whole_file(const std::string& path, std::vector<uint8_t>* out);
 // retitle the terminal, or fake a line of output.
 std::string printable(const char* text);
 
-// printf into a string (for summary lines kept until a run's files are placed).
-#if defined(__GNUC__)
-__attribute__((format(printf, 1, 2)))
-#endif
-std::string
-format(const char* fmt, ...);
-
 // Prints "splintcore: error: <formatted status>" to stderr (printable()).
 void print_error(const Status& status);
 

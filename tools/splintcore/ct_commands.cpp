@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -219,8 +220,8 @@ class Reconstruct {
   ThresholdStats ts_;
   RegionStats rs_;
   std::string rows_, warnings_;
-  std::string jaw_lines_;   // the text summary's lines, printed once the files are placed
-  cli::OutputSet outputs_;  // both jaws placed together
+  std::function<void()> jaw_lines_[2];  // the summary's lines, printed once the files are placed
+  cli::OutputSet outputs_;              // both jaws placed together
 };
 
 void Reconstruct::stage(const char* name) {
@@ -323,9 +324,12 @@ Status Reconstruct::mesh_jaw(int jaw) {
     std::fprintf(stderr, "splintcore: warning: the %s touches the volume's border\n", kNames[jaw]);
   }
   add_jaw_row(jaw, path, mesh, volume_mm3, st, smoothed, decimated);
-  jaw_lines_ += cli::format("%s: %s, %llu voxels, %zu triangles, %.1f mm^3\n", kNames[jaw],
-                            path.c_str(), static_cast<unsigned long long>(rs_.voxels[ro.label]),
-                            mesh.triangles.size(), volume_mm3);
+  const uint64_t voxels = rs_.voxels[ro.label];
+  const size_t triangles = mesh.triangles.size();
+  jaw_lines_[jaw] = [=] {
+    std::printf("%s: %s, %llu voxels, %zu triangles, %.1f mm^3\n", kNames[jaw], path.c_str(),
+                static_cast<unsigned long long>(voxels), triangles, volume_mm3);
+  };
   return Status::ok();
 }
 
@@ -360,7 +364,7 @@ void Reconstruct::add_jaw_row(int jaw, const std::string& path, const Mesh& mesh
 
 void Reconstruct::print_report() const {
   if (!a_.common.json) {
-    std::fputs(jaw_lines_.c_str(), stdout);
+    for (const std::function<void()>& print : jaw_lines_) print();
     if (info_.resampled) {
       std::printf(
           "resampled onto a regular grid: %u slices -> %u, gantry tilt %.2f deg, largest "

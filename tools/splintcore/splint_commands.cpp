@@ -2,6 +2,7 @@
 // tried on (phantom).
 #include <sys/stat.h>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -328,10 +329,10 @@ std::vector<OptionSpec> phantom_options(PhantomArgs* a) {
   };
 }
 
-// Writes DIR/NAME.stl for one jaw; `row` gets its JSON object or its summary line (printed
-// once the run's files are placed).
+// Writes DIR/NAME.stl for one jaw; `row` gets its JSON object, or `line` what prints its
+// summary line (once the run's files are placed).
 Status write_phantom_jaw(const PhantomArgs& a, int index, std::string* row,
-                         cli::OutputSet* outputs) {
+                         std::function<void()>* line, cli::OutputSet* outputs) {
   const char* names[2] = {"maxilla", "mandible"};
   phantom::JawMesh jaw;
   phantom::PhantomOptions po;
@@ -352,15 +353,19 @@ Status write_phantom_jaw(const PhantomArgs& a, int index, std::string* row,
     r.add("sha256", hex);
     *row = r.str();
   } else {
-    *row = cli::format("%s: %s, %zu triangles, %zu vertices, sha256 %s\n", names[index],
-                       path.c_str(), jaw.triangles.size(), jaw.vertices.size(), hex.c_str());
+    const char* name = names[index];
+    const size_t triangles = jaw.triangles.size(), vertices = jaw.vertices.size();
+    *line = [=] {
+      std::printf("%s: %s, %zu triangles, %zu vertices, sha256 %s\n", name, path.c_str(), triangles,
+                  vertices, hex.c_str());
+    };
   }
   return Status::ok();
 }
 
-// Writes DIR/NAME_scan.stl and .ply for one scan-like jaw; `row` gets its JSON object or its
-// summary line.
-Status write_scan_jaw(const PhantomArgs& a, int index, std::string* row, cli::OutputSet* outputs) {
+// Writes DIR/NAME_scan.stl and .ply for one scan-like jaw; `row` and `line` as above.
+Status write_scan_jaw(const PhantomArgs& a, int index, std::string* row,
+                      std::function<void()>* line, cli::OutputSet* outputs) {
   const char* names[2] = {"maxilla", "mandible"};
   phantom::ScanJaw jaw;
   phantom::ScanOptions so;
@@ -395,11 +400,16 @@ Status write_scan_jaw(const PhantomArgs& a, int index, std::string* row, cli::Ou
     r.add("flipped_triangles", jaw.flipped_triangles);
     *row = r.str();
   } else {
-    *row = cli::format(
-        "%s: %s.stl and .ply, %zu triangles; planted: %u holes (at most %u edges), %u islands, "
-        "%u non-manifold edges, %u duplicate triangles, %u triangles wound the other way\n",
-        names[index], base.c_str(), jaw.triangles.size(), jaw.holes, jaw.max_hole_edges,
-        jaw.islands, jaw.nonmanifold_edges, jaw.duplicates, jaw.flipped_triangles);
+    const char* name = names[index];
+    const size_t triangles = jaw.triangles.size();
+    *line = [name, base, triangles, holes = jaw.holes, edges = jaw.max_hole_edges,
+             islands = jaw.islands, nonmanifold = jaw.nonmanifold_edges,
+             duplicates = jaw.duplicates, flipped = jaw.flipped_triangles] {
+      std::printf(
+          "%s: %s.stl and .ply, %zu triangles; planted: %u holes (at most %u edges), %u islands, "
+          "%u non-manifold edges, %u duplicate triangles, %u triangles wound the other way\n",
+          name, base.c_str(), triangles, holes, edges, islands, nonmanifold, duplicates, flipped);
+    };
   }
   return Status::ok();
 }
@@ -408,17 +418,18 @@ Status write_scan_jaw(const PhantomArgs& a, int index, std::string* row, cli::Ou
 int run_scan_phantom(const Command& command, const PhantomArgs& a) {
   const double t0 = monotonic_seconds();
   std::string rows;
-  cli::OutputSet outputs;  // the four files placed together
+  std::function<void()> lines[2];  // printed once the files are placed
+  cli::OutputSet outputs;          // the four files placed together
   for (int j = 0; j < 2; ++j) {
     std::string row;
-    const Status s = write_scan_jaw(a, j, &row, &outputs);
+    const Status s = write_scan_jaw(a, j, &row, &lines[j], &outputs);
     if (!s.is_ok()) return rejected(a.common, command.name, s, nullptr);
-    rows += (a.common.json && j > 0 ? "," : "") + row;
+    if (a.common.json) rows += (j > 0 ? "," : "") + row;
   }
   const Status placed = outputs.commit();
   if (!placed.is_ok()) return rejected(a.common, command.name, placed, nullptr);
   if (!a.common.json) {
-    std::fputs(rows.c_str(), stdout);
+    for (const std::function<void()>& print : lines) print();
     return kExitOk;
   }
   JsonObject j;
@@ -566,12 +577,13 @@ int run_phantom(const Command& command, int argc, char** argv) {
   }
   const double t0 = monotonic_seconds();
   std::string rows;
-  cli::OutputSet outputs;  // the jaws and the case placed together
+  std::function<void()> lines[2];  // printed once the files are placed
+  cli::OutputSet outputs;          // the jaws and the case placed together
   for (int j = 0; j < 2; ++j) {
     std::string row;
-    const Status s = write_phantom_jaw(a, j, &row, &outputs);
+    const Status s = write_phantom_jaw(a, j, &row, &lines[j], &outputs);
     if (!s.is_ok()) return rejected(a.common, command.name, s, nullptr);
-    rows += (a.common.json && j > 0 ? "," : "") + row;
+    if (a.common.json) rows += (j > 0 ? "," : "") + row;
   }
   // The case that goes with them (the paper-scale picks): design it with
   // `splintcore design DIR/case.json -o OUT`.
@@ -581,7 +593,8 @@ int run_phantom(const Command& command, int argc, char** argv) {
   if (s.is_ok()) s = outputs.commit();
   if (!s.is_ok()) return rejected(a.common, command.name, s, nullptr);
   if (!a.common.json) {
-    std::printf("%scase: %s\n", rows.c_str(), path.c_str());
+    for (const std::function<void()>& print : lines) print();
+    std::printf("case: %s\n", path.c_str());
     return kExitOk;
   }
   JsonObject j;
