@@ -137,6 +137,29 @@ struct ColumnCounts {
   uint64_t inside_columns = 0;
 };
 
+// The edge of triangle abc nearest the vertical line through (px, py) in plan: its squared
+// plan distance (*best) and the height of that edge point (*best_w); the first edge of the
+// least distance.
+inline void nearest_edge_in_plan(const Vec3& a, const Vec3& b, const Vec3& c, double px, double py,
+                                 double* best, double* best_w) {
+  const Vec3* v[3] = {&a, &b, &c};
+  for (int edge = 0; edge < 3; ++edge) {
+    const Vec3& e0 = *v[edge];
+    const Vec3& e1 = *v[(edge + 1) % 3];
+    const double ex = e1.x - e0.x, ey = e1.y - e0.y;
+    const double rx = px - e0.x, ry = py - e0.y;
+    const double len2 = ex * ex + ey * ey;
+    double t = len2 > 0 ? (rx * ex + ry * ey) / len2 : 0.0;
+    t = clamp01(t);
+    const double dx = rx - ex * t, dy = ry - ey * t;
+    const double dd = dx * dx + dy * dy;
+    if (dd < *best) {
+      *best = dd;
+      *best_w = e0.z + (e1.z - e0.z) * t;
+    }
+  }
+}
+
 // Advances the column state of rows [y_begin, y_end) over the segment [w_lo, w_hi] against
 // the active triangles. Rows are independent, so bands of rows may run at once.
 void sweep_rows(Sweep& s, double w_lo, double w_hi, int64_t y_begin, int64_t y_end,
@@ -210,23 +233,8 @@ void sweep_rows(Sweep& s, double w_lo, double w_hi, int64_t y_begin, int64_t y_e
             // edge, at its plan distance and at the height of that edge point; the distance
             // along the column is convex, so on [w_lo, w_hi] it is least at that height
             // clamped into the segment.
-            const Vec3* v[3] = {&a, &b, &c};
             double best = HUGE_VAL, best_w = 0;
-            for (int edge = 0; edge < 3; ++edge) {
-              const Vec3& e0 = *v[edge];
-              const Vec3& e1 = *v[(edge + 1) % 3];
-              const double ex = e1.x - e0.x, ey = e1.y - e0.y;
-              const double rx = px - e0.x, ry = py - e0.y;
-              const double len2 = ex * ex + ey * ey;
-              double t = len2 > 0 ? (rx * ex + ry * ey) / len2 : 0.0;
-              t = clamp01(t);
-              const double dx = rx - ex * t, dy = ry - ey * t;
-              const double dd = dx * dx + dy * dy;
-              if (dd < best) {
-                best = dd;
-                best_w = e0.z + (e1.z - e0.z) * t;
-              }
-            }
+            nearest_edge_in_plan(a, b, c, px, py, &best, &best_w);
             if (best >= band2) continue;
             ++counts->distance_evaluations;
             if (best_w >= w_lo && best_w <= w_hi) {
