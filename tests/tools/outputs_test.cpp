@@ -118,7 +118,7 @@ TEST(OutputSet, AFolderInTheWayIsRefusedBeforeAnyRename) {
 
 // While another holder (another run; here another thread's open of the folder) has the folder
 // locked, commit() places nothing; it places the set when the lock is released.
-TEST(OutputSet, CommitWaitsInAThreadWhileTheFolderIsLocked) {
+TEST(OutputSet, ACommitInParallelWaitsForTheFolderLock) {
   TempDir dir("outputs", "lock");
   const fs::path splint = dir.path / "splint.stl";
   put(splint, "old splint");
