@@ -36,8 +36,6 @@ constexpr uint32_t kKeepLayers = 1;
 constexpr uint64_t kKeepPoolShare = 4;
 constexpr float kTinyPositive = 1.17549435e-38f;  // FLT_MIN: an outside distance that rounded to 0
 
-inline double clamp01(double t) { return t < 0 ? 0 : (t > 1 ? 1 : t); }
-
 // Squared distance between the segments p1q1 and p2q2 (the distance module's).
 inline double segment_segment_d2(const Vec3& p1, const Vec3& q1, const Vec3& p2, const Vec3& q2) {
   Vec3 x, y;

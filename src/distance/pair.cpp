@@ -8,14 +8,13 @@
 #include <cmath>
 #include <cstring>
 
+#include "core/fminmax.h"
 #include "geometry/lanes2.h"
 #include "splintcore/distance.h"
 
 namespace splintcore {
 
 namespace {
-
-inline double clamp01(double t) { return t < 0 ? 0 : (t > 1 ? 1 : t); }
 
 // p0 + (p1 - p0) s, with the endpoints themselves at s = 0 and 1 (no rounding there).
 inline Vec3 along(const Vec3& p0, const Vec3& p1, const Vec3& d, double s) {
