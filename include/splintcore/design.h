@@ -357,9 +357,11 @@ uint32_t exact_blockout_jaws(const DesignReport& report);
 // the case, unknown printer, a case with "plan": design_plan() makes its splints), kNonFinite (a
 // jaw vertex that is NaN or infinite), kLimitExceeded (a jaw moved beyond float32 range),
 // kInvalidMesh for a jaw that is no jaw, named before anything runs ("design: jaw j (role) is a
-// triangle soup" or "has no teeth": fewer than 4 triangles per piece connected through shared
-// corners, or every vertex within 1 mm of one plane; 5 bytes of arena a vertex of the jaws and
-// scans together, returned), and kInvalidMesh when the result is not printable
+// triangle soup", "is X x Y x Z across: too small (large) for a jaw in mm" or "has no teeth":
+// fewer than 4 triangles per piece connected through shared corners, a longest side under 10
+// mm or over 1000 mm (a file in other units: the message gives the factor to mm), or every
+// vertex within 1 mm of one plane; 5 bytes of arena a vertex of the jaws and scans together,
+// returned), and kInvalidMesh when the result is not printable
 // (require_printable's reason).
 Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* splint,
                      DesignReport* report);

@@ -282,6 +282,16 @@ Status remove_small_shells(const Context& ctx, double min_volume, Mesh* mesh, Sm
 // Applies a rigid transform to every vertex in place.
 void transform_mesh(const RigidTransform& x, Mesh* mesh);
 
+// Scales every vertex by `factor` about the origin, in place, each coordinate rounded to the
+// nearest float32 (what an STL holds): a mesh in other units brought to mm (x25.4 from inches,
+// x1000 from metres, x0.001 from micrometres). The product is rounded once to double, then to
+// float32, so the same mesh and factor give the same bits everywhere. Errors, with *mesh
+// unchanged: kInvalidArgument (factor not finite or not above 0: a negative one would turn
+// the mesh inside out), kNonFinite (a vertex that is NaN or infinite, named), kLimitExceeded
+// (a vertex that would leave float32 range, named). Distinct vertices that round to the same
+// point stay distinct (check_mesh then counts the triangles that became degenerate).
+Status scale_mesh(double factor, Mesh* mesh);
+
 }  // namespace splintcore
 
 #endif  // SPLINTCORE_MESH_H

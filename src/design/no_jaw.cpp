@@ -1,6 +1,7 @@
 // Jaws that are no jaws (no_jaw.h): a triangle soup or a flat sheet given as a jaw or a scan.
-// Two measures, each linear and far from any real jaw: the triangles per connected piece
-// (union-find over the vertices) and the relief across the plane of the summed area vectors.
+// Three measures, each linear and far from any real jaw: the triangles per connected piece
+// (union-find over the vertices), the box of the corners (a jaw in other units than mm) and
+// the relief across the plane of the summed area vectors.
 #include "design/no_jaw.h"
 
 #include <cmath>
@@ -18,7 +19,15 @@ struct JawShape {
   uint64_t pieces = 0;    // connected through shared vertices
   double relief = 0;      // mm across `normal`
   Vec3 normal{};          // unit
+  Aabb box;               // of the triangles' corners
+  bool in_range = true;   // every corner in float32 range (else check_jaws names the first not)
 };
+
+// |v| is at most float32's largest finite value (false for NaN and infinities).
+bool in_float32_range(double v) {
+  constexpr double kMax = 3.4028234663852886e38;  // FLT_MAX
+  return v >= -kMax && v <= kMax;
+}
 
 // The pieces: referenced vertices less the unions that joined two of them. `uf` and `used`
 // (one byte a vertex) are the mesh's own, set up by the caller.
@@ -36,6 +45,13 @@ void count_pieces(const Mesh& m, UnionFind* uf, uint8_t* used, JawShape* out) {
     unions += uf->unite(t.v[1], t.v[2]) ? 1u : 0u;
   }
   out->pieces = referenced - unions;
+  for (size_t i = 0; i < n; ++i) {
+    if (used[i] == 0) continue;
+    const Vec3& p = m.vertices[i];
+    out->in_range =
+        out->in_range && in_float32_range(p.x) && in_float32_range(p.y) && in_float32_range(p.z);
+    out->box.add(p);
+  }
 }
 
 // The relief: the plane's normal is the sum of the triangles' area vectors, each turned to
@@ -93,6 +109,20 @@ Status check_one(const Mesh& m, UnionFind* uf, uint8_t* used, size_t j, const ch
                       ") is a triangle soup, not a jaw: its ", triangles, " triangles form ",
                       shape.pieces, " pieces (a jaw is one piece or a few); check ", file,
                       ": its triangles must meet at their corners (export it again)")
+        .at_index(j);
+  }
+  const Vec3 e = shape.box.extent();
+  const double longest = e.x > e.y ? (e.x > e.z ? e.x : e.z) : (e.y > e.z ? e.y : e.z);
+  if (shape.in_range && (longest < kMinJawExtentMm || longest > kMaxJawExtentMm)) {
+    const bool small = longest < kMinJawExtentMm;
+    return make_error(StatusCode::kInvalidMesh, "design: ", of, "jaw ", j, " (", role, ") is ",
+                      shown(e.x), " x ", shown(e.y), " x ", shown(e.z), " across: too ",
+                      small ? "small" : "large", " for a jaw in mm (",
+                      small ? "at least " : "at most ", small ? kMinJawExtentMm : kMaxJawExtentMm,
+                      " mm); check ", file,
+                      small ? ": if it is in inches, centimetres or metres, scale it to mm (x25.4, "
+                              "x10 or x1000)"
+                            : ": if it is in micrometres, scale it to mm (x0.001)")
         .at_index(j);
   }
   measure_relief(m, &shape);

@@ -15,11 +15,20 @@ constexpr double kMinJawReliefMm = 1.0;
 // At least this many triangles a connected piece, on average: a jaw's surface is one piece or
 // a few (teeth, islands of a scan), never hundreds of loose triangles.
 constexpr uint32_t kMinTrianglesPerPiece = 4;
+// A jaw in mm spans at least this much along its longest side (a dental arch is 35-65 mm
+// wide, a quadrant's scan over 20 mm) and at most this much (a head's CT is about 250 mm):
+// outside, the file is in other units. A full arch in inches (about 2.4), centimetres (about
+// 6) or metres (about 0.06), or in micrometres (about 60,000), is told apart from a jaw in mm.
+constexpr double kMinJawExtentMm = 10.0;
+constexpr double kMaxJawExtentMm = 1000.0;
 
 // Each jaw of `c` (jaws[j]) and each scan (scans[j] where c.jaws[j].has_scan; `scans` may be
 // empty): kInvalidMesh naming the jaw (its index and role, "the scan of" for a scan) when it is
 //   - a triangle soup: fewer than kMinTrianglesPerPiece triangles a piece, the pieces being
 //     the triangles connected through shared vertices (loose triangles, an unwelded export);
+//   - in other units: the longest side of the box of its triangles' corners under
+//     kMinJawExtentMm or over kMaxJawExtentMm (the case's units are mm: the message gives the
+//     scale factors to mm);
 //   - flat: every corner within kMinJawReliefMm of one plane, the plane of its triangles'
 //     area vectors summed with the sign of the largest one's (a sheet, a plate: no tooth).
 // The message says what was found and what to do (the first such mesh in that order: each jaw,

@@ -38,6 +38,33 @@ void transform_mesh(const RigidTransform& x, Mesh* mesh) {
   for (Vec3& v : mesh->vertices) v = x.apply_point(v);
 }
 
+Status scale_mesh(double factor, Mesh* mesh) {
+  if (!(factor > 0.0) || !std::isfinite(factor)) {
+    return make_error(StatusCode::kInvalidArgument,
+                      "scale factor must be a finite number above 0 (got ", factor, ")");
+  }
+  // Every vertex checked before any is changed.
+  const size_t n = mesh->vertices.size();
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3& v = mesh->vertices[i];
+    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
+      return make_error(StatusCode::kNonFinite, "vertex ", i, " is not finite (NaN or infinity)")
+          .at_index(i);
+    }
+    Vec3 p = v * factor;
+    if (!round_to_float32(&p)) {
+      return make_error(StatusCode::kLimitExceeded, "vertex ", i, " scaled by ", factor,
+                        " is beyond float32 range")
+          .at_index(i);
+    }
+  }
+  for (Vec3& v : mesh->vertices) {
+    v = v * factor;
+    (void)round_to_float32(&v);  // in range: checked above
+  }
+  return Status::ok();
+}
+
 uint64_t remove_small_shells_bound(uint64_t vertex_count) {
   return arena_array_bound<uint32_t>(vertex_count) + arena_array_bound<double>(vertex_count) +
          arena_array_bound<uint32_t>(vertex_count);

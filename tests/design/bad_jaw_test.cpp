@@ -246,12 +246,87 @@ TEST(DesignBadJaws, TheLinesAreWhereTheDocumentationDrawsThem) {
     }
   }
   SPLINTCORE_EXPECT_OK(design_with(pieces));
+  // The size line: the same 50 tetrahedra 9.9 mm across are too small for a jaw in mm, 10.1 mm
+  // across are not.
+  for (double across : {9.9, 10.1}) {
+    Mesh row(&f.t.arena);
+    const double step = (across - 0.5) / 49;
+    for (uint32_t k = 0; k < 50; ++k) {
+      for (uint32_t c = 0; c < 4; ++c) {
+        ASSERT_TRUE(row.vertices.push_back(pieces.vertices[4 * k + c] +
+                                           Vec3{(25.0 + k * (step - 1.0)), 0, 0}));
+      }
+      for (uint32_t c = 0; c < 4; ++c)
+        ASSERT_TRUE(row.triangles.push_back(pieces.triangles[4 * k + c]));
+    }
+    const Status s = design_with(row);
+    if (across < 10) {
+      EXPECT_NE(std::string(s.message()).find("is 9.9 x 0.5 x 0.5 across: too small"),
+                std::string::npos)
+          << s.message();
+    } else {
+      SPLINTCORE_EXPECT_OK(s);
+    }
+  }
   const Status fan = design_with(fans);
   EXPECT_NE(std::string(fan.message())
                 .find("is a triangle soup, not a jaw: its 150 triangles "
                       "form 50 pieces"),
             std::string::npos)
       << fan.message();
+}
+
+// A jaw whose file is in other units than the case's mm (issue 29's review: with the case's
+// picks, a maxilla in inches made a splint that imprinted only the mandible, with no word of
+// it): named with its size and the factor to mm, as a jaw and as a scan.
+TEST(DesignBadJaws, AJawInOtherUnitsIsNamedWithTheFactorToMm) {
+  BadJaws f;
+  ASSERT_TRUE(f.ok);
+  Context ctx(&f.t.arena);
+  struct Units {
+    double scale;  // from mm to the file's units
+    const char* says;
+    const char* factor;
+  };
+  const Units units[] = {{1 / 25.4, "across: too small for a jaw in mm (at least 10 mm)", "x25.4"},
+                         {0.1, "too small", "x10"},
+                         {0.001, "too small", "x1000"},
+                         {1000, "across: too large for a jaw in mm (at most 1000 mm)", "x0.001"}};
+  for (const Units& u : units) {
+    SCOPED_TRACE(u.scale);
+    Mesh scaled(&f.t.arena);
+    for (Vec3 p : f.jaws[0].vertices) {
+      p = p * u.scale;
+      ASSERT_TRUE(round_to_float32(&p));
+      ASSERT_TRUE(scaled.vertices.push_back(p));
+    }
+    for (const Triangle& t : f.jaws[0].triangles) ASSERT_TRUE(scaled.triangles.push_back(t));
+    const Mesh given[2] = {scaled, f.jaws[1]};
+    for (bool automatic : {false, true}) {
+      CaseFile c = f.c;
+      c.has_auto_outline = automatic;
+      const size_t used = f.t.arena.used();
+      Mesh splint;
+      DesignReport r;
+      const Status s = design_splint(ctx, c, Span<const Mesh>(given, 2), &splint, &r);
+      expect_named(s, "design: jaw 0 (maxilla) is ", u.says, splint, used, f.t.arena);
+      EXPECT_NE(std::string(s.message()).find(u.factor), std::string::npos) << s.message();
+      EXPECT_EQ(s.index(), 0u);
+    }
+    CaseJaw scanned[2] = {f.c.jaws[0], f.c.jaws[1]};
+    scanned[0].has_scan = true;
+    scanned[0].scan.path = "scan_in_other_units.stl";
+    CaseFile c = f.c;
+    c.jaws = Span<const CaseJaw>(scanned, 2);
+    const Mesh scans[2] = {scaled, Mesh()};
+    const size_t used = f.t.arena.used();
+    Mesh splint;
+    DesignReport r;
+    const Status s =
+        design_splint(ctx, c, Span<const Mesh>(f.jaws, 2), Span<const Mesh>(scans, 2), &splint, &r);
+    expect_named(s, "design: the scan of jaw 0 (maxilla) is ", u.says, splint, used, f.t.arena);
+    EXPECT_NE(std::string(s.message()).find("check the scan's file"), std::string::npos);
+  }
 }
 
 TEST(DesignBadJaws, TwoScansOfTheSameJaw) {

@@ -640,5 +640,52 @@ TEST(SmallShells, AnIndexOutOfRangeIsNamed) {
       << test::format(s);
 }
 
+// scale_mesh: the box from inches to mm, each coordinate the float32 nearest the double
+// product (computed here apart); 1/1000 from micrometres; and the refusals, the mesh unchanged.
+TEST(ScaleMesh, EachCoordinateIsTheFloat32NearestTheProduct) {
+  TestArena t;
+  Context ctx(&t.arena);
+  const float lo[3] = {0.1f, -0.3f, 1.7f}, hi[3] = {2.3f, 1.9f, 4.1f};
+  Mesh mesh;
+  SPLINTCORE_ASSERT_OK(test::mesh_from_soup(t.arena, shapes::box(lo, hi), &mesh));
+  std::vector<Vec3> before(mesh.vertices.begin(), mesh.vertices.end());
+  SPLINTCORE_ASSERT_OK(scale_mesh(25.4, &mesh));
+  ASSERT_EQ(mesh.vertices.size(), before.size());
+  for (size_t i = 0; i < before.size(); ++i) {
+    for (int a = 0; a < 3; ++a) {
+      const float expected = static_cast<float>(before[i][a] * 25.4);
+      EXPECT_EQ(mesh.vertices[i][a], static_cast<double>(expected)) << i << " " << a;
+    }
+  }
+  MeshReport r;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, mesh, &r));
+  EXPECT_TRUE(r.is_valid_solid());
+  const double mm3 = 2.2 * 2.2 * 2.4 * 25.4 * 25.4 * 25.4;
+  EXPECT_NEAR(r.volume, mm3, 1e-6 * mm3);  // the float32 sides are not 2.2 and 2.4 exactly
+  SPLINTCORE_ASSERT_OK(scale_mesh(0.001, &mesh));
+  EXPECT_EQ(mesh.vertices[0][0],
+            static_cast<double>(static_cast<float>(
+                static_cast<double>(static_cast<float>(before[0][0] * 25.4)) * 0.001)));
+  // Refused, nothing changed: a factor that is no scale, a vertex that is not finite, a vertex
+  // that would leave float32 range (named).
+  const std::string kept = test::mesh_sha256(mesh);
+  for (double bad : {0.0, -1.0, std::nan(""), HUGE_VAL}) {
+    const Status s = scale_mesh(bad, &mesh);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << bad;
+    EXPECT_NE(std::string(s.message()).find("finite number above 0"), std::string::npos);
+  }
+  mesh.vertices[5].y = 1e38;
+  const std::string with_big = test::mesh_sha256(mesh);
+  Status s = scale_mesh(10, &mesh);
+  EXPECT_EQ(s.code(), StatusCode::kLimitExceeded);
+  EXPECT_EQ(std::string(s.message()), "vertex 5 scaled by 10 is beyond float32 range");
+  EXPECT_EQ(test::mesh_sha256(mesh), with_big);
+  mesh.vertices[3].z = std::nan("");
+  s = scale_mesh(2, &mesh);
+  EXPECT_EQ(s.code(), StatusCode::kNonFinite);
+  EXPECT_EQ(s.index(), 3u);
+  EXPECT_NE(kept, with_big);
+}
+
 }  // namespace
 }  // namespace splintcore

@@ -459,6 +459,20 @@ expect_exit 1 "design with a folder in the report's place" -- "$tool" design "$w
 check "the folder in the way named" -- grep -q "design-blocked/report.json: cannot move the output into place: a folder has its name" "$work/err"
 check "the earlier splint left as it was" -- test "$(cat "$work/design-blocked/splint.stl")" = old
 check "no other file left" -- test "$(find "$work/design-blocked" -mindepth 1 | wc -l)" -eq 2
+# A jaw in other units than the case's mm (here the maxilla in inches, written by convert
+# --scale): refused, its size and the factor to mm named, nothing written; convert --scale 25.4
+# brings it back to mm and the case designs.
+expect_exit 0 "convert a jaw to inches" -- "$tool" convert "$work/case/maxilla.stl" -o "$work/case/maxilla_in.stl" --scale 0.03937007874015748 --json
+check "convert says the scale" -- grep -q '"scale":0.03937007874015748' "$work/out"
+sed 's/"maxilla.stl"/"maxilla_in.stl"/' "$work/case/case.json" >"$work/case/inches.json"
+expect_exit 1 "design with a jaw in inches" -- "$tool" design "$work/case/inches.json" -o "$work/design-inches"
+check "the jaw's size and the factor named" -- grep -q "jaw 0 (maxilla) is [0-9.]* x [0-9.]* x [0-9.]* across: too small for a jaw in mm (at least 10 mm).*x25.4" "$work/err"
+check "nothing written for a jaw in inches" -- test ! -e "$work/design-inches/splint.stl"
+expect_exit 0 "convert the jaw back to mm" -- "$tool" convert "$work/case/maxilla_in.stl" -o "$work/case/maxilla_mm.stl" --scale 25.4
+sed 's/"maxilla.stl"/"maxilla_mm.stl"/' "$work/case/case.json" >"$work/case/back.json"
+expect_exit 0 "design with the jaw back in mm" -- "$tool" design "$work/case/back.json" -o "$work/design-back"
+expect_exit 2 "convert with a scale of 0" -- "$tool" convert "$work/case/maxilla.stl" -o "$work/case/never.stl" --scale 0
+check "no file for a scale of 0" -- test ! -e "$work/case/never.stl"
 # One splint's print job ("output": {"job": NAME}, issue 32): the splint alone on the Eden260
 # tray as a 3MF, its triangles and volume those of the STL (Python's zipfile and XML parser),
 # named in the report with its SHA-256; the STL's bytes unchanged.

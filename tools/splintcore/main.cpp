@@ -40,12 +40,15 @@ const char kCheckUsage[] =
     "Printers: eden260 (Stratasys Eden260-class PolyJet, 255 x 252 x 200 mm, 16 um layers).\n";
 
 const char kConvertUsage[] =
-    "usage: splintcore convert IN.stl -o OUT.stl [--ascii] [--json]\n"
+    "usage: splintcore convert IN.stl -o OUT.stl [--ascii] [--scale F] [--json]\n"
     "                         [--memory-cap SIZE] [--threads N]\n"
     "\n"
-    "Reads a binary or ASCII STL, welds identical vertices, checks it, and writes it through\n"
+    "Reads a binary or ASCII STL, welds identical vertices, optionally scales it about the\n"
+    "origin (a mesh in other units to mm: --scale 25.4 from inches, 1000 from metres, 0.001\n"
+    "from micrometres; each coordinate rounded to float32), checks it, and writes it through\n"
     "the streaming writer (binary unless --ascii). The output is written atomically: on any\n"
-    "error no output file is left behind. The bytes depend only on the input's triangles.\n";
+    "error no output file is left behind. The bytes depend only on the input's triangles\n"
+    "and the scale.\n";
 
 const char kBaseUsage[] =
     "usage: splintcore base CASE.json -o BASE.stl [--ascii] [--json]\n"

@@ -81,6 +81,7 @@ struct ConvertArgs {
   CommonArgs common;
   const char* output = nullptr;
   bool ascii = false;
+  double scale = 1.0;
 };
 
 // `convert`'s options, in the order its --help lists them.
@@ -88,6 +89,8 @@ std::vector<OptionSpec> convert_options(ConvertArgs* a) {
   return {
       output_option("OUT.stl", &a->output, "the STL to write"),
       flag("--ascii", &a->ascii, "write ASCII STL (default binary)"),
+      positive("--scale", "F", &a->scale, "multiply every coordinate by F (default 1)",
+               "--scale needs a number > 0, e.g. 25.4 for a mesh in inches"),
   };
 }
 
@@ -494,6 +497,10 @@ int run_convert(const Command& command, int argc, char** argv) {
   MeshFileInfo info;
   Status s = read_mesh_file(run.ctx, input, kNoInputLimit, false, &mesh, &info);
   if (!s.is_ok()) return run.reject(s);
+  if (a.scale != 1.0) {
+    s = scale_mesh(a.scale, &mesh);
+    if (!s.is_ok()) return run.reject(s.in_file(input));
+  }
   MeshReport report;
   s = check_mesh(run.ctx, mesh, &report);
   if (!s.is_ok()) return run.reject(s.in_file(input));
@@ -509,6 +516,7 @@ int run_convert(const Command& command, int argc, char** argv) {
     j.add_status(Status::ok());
     j.add("input_format", encoding_name(info.format));
     j.add("output_format", a.ascii ? "ascii" : "binary");
+    j.add("scale", a.scale);
     j.add("input_triangles", info.triangles);
     add_mesh_report(&j, report);
     j.add("valid_solid", report.is_valid_solid());
@@ -518,6 +526,7 @@ int run_convert(const Command& command, int argc, char** argv) {
   } else {
     std::printf("input: %s (%s, %llu triangles)\n", input, mesh_format_name(info.format),
                 static_cast<unsigned long long>(info.triangles));
+    if (a.scale != 1.0) std::printf("scaled by %.17g about the origin\n", a.scale);
     print_mesh_report(report);
     std::printf("output: %s (%s STL)\n", a.output, a.ascii ? "ascii" : "binary");
     run.print_time(seconds);
