@@ -361,7 +361,9 @@ uint32_t exact_blockout_jaws(const DesignReport& report);
 // fewer than 4 triangles per piece connected through shared corners, a longest side under 10
 // mm or over 1000 mm (a file in other units: the message gives the factor to mm), or every
 // vertex within 1 mm of one plane; 5 bytes of arena a vertex of the jaws and scans together,
-// returned), and kInvalidMesh when the result is not printable
+// returned), kInvalidMesh for a jaw that does not reach the base once it is made ("design: jaw
+// j (role) does not reach the base: placed, it spans [..] - [..] and the base [..] - [..] mm":
+// no triangle of it within the Boolean's region of the base, so it could leave no imprint), and kInvalidMesh when the result is not printable
 // (require_printable's reason).
 Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* splint,
                      DesignReport* report);

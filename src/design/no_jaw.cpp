@@ -7,6 +7,8 @@
 #include <cmath>
 
 #include "core/union_find.h"
+#include "design/b_vertex.h"
+#include "splintcore/boolean.h"
 
 namespace splintcore {
 namespace design_detail {
@@ -179,6 +181,68 @@ Status refuse_no_jaw(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   };
   parallel_for_each(ctx.executor, n, task);
   for (uint32_t i = 0; i < n; ++i) SPLINTCORE_RETURN_IF_ERROR(items[i].status);
+  return Status::ok();
+}
+
+namespace {
+
+// Whether a triangle of jaw j, placed (b_vertex), has corners not all beyond one side of
+// `region`: the first such triangle ends the scan.
+bool jaw_reaches(const CaseFile& c, Span<const Mesh> jaws, size_t j, const Aabb& region) {
+  for (const Triangle& t : jaws[j].triangles) {
+    uint8_t beyond = 0x3f;
+    for (uint32_t v : t.v) {
+      Vec3 p;
+      if (!b_vertex(c, jaws, j, v, &p)) return true;  // beyond float32: check_jaws names it
+      beyond &= region.outcode(p);
+    }
+    if (beyond == 0) return true;
+  }
+  return false;
+}
+
+// "[x, y, z]" of a box corner, to 3 decimals, for a message.
+void append_corner(Status* s, const Vec3& p) {
+  s->append("[").append_f64(shown(p.x)).append(", ").append_f64(shown(p.y));
+  s->append(", ").append_f64(shown(p.z)).append("]");
+}
+
+}  // namespace
+
+Status refuse_out_of_reach(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                           const Mesh& base) {
+  const size_t n = jaws.size() < c.jaws.size() ? jaws.size() : c.jaws.size();
+  if (n == 0 || base.triangles.empty()) return Status::ok();
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);
+  uint8_t* reaches = arena.allocate_array<uint8_t>(n);
+  if (reaches == nullptr) return arena.exhausted_status();
+  const Aabb region = boolean_region(base, BooleanOptions{});
+  auto task = [&](uint32_t j) {
+    reaches[j] = jaws[j].triangles.empty() || jaw_reaches(c, jaws, j, region) ? 1 : 0;
+  };
+  parallel_for_each(ctx.executor, static_cast<uint32_t>(n), task);
+  for (size_t j = 0; j < n; ++j) {
+    if (reaches[j] != 0) continue;
+    Aabb placed;
+    for (size_t v = 0; v < jaws[j].vertices.size(); ++v) {
+      Vec3 p;
+      (void)b_vertex(c, jaws, j, v, &p);  // in range: jaw_reaches returned at one that is not
+      placed.add(p);
+    }
+    const Aabb b = mesh_bounds(base);
+    Status s = make_error(StatusCode::kInvalidMesh, "design: jaw ", j, " (", c.jaws[j].role,
+                          ") does not reach the base: placed, it spans ");
+    append_corner(&s, placed.lo);
+    s.append(" - ");
+    append_corner(&s, placed.hi);
+    s.append(" and the base ");
+    append_corner(&s, b.lo);
+    s.append(" - ");
+    append_corner(&s, b.hi);
+    s.append(" mm; check its transform and the picks");
+    return s.at_index(j);
+  }
   return Status::ok();
 }
 

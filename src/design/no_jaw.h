@@ -1,6 +1,7 @@
 // Jaws that are no jaws (issue 30, "a jaw that is a single triangle soup without any tooth"):
 // refused up front, naming the cause, before the outline, the fusion or the Boolean make
-// something of them (an outline of noise, a fit to a plane, or a base with nothing subtracted).
+// something of them (an outline of noise, a fit to a plane, or a base with nothing subtracted);
+// and, once the base is made, jaws that do not reach it (no imprint).
 #ifndef SPLINTCORE_DESIGN_NO_JAW_H
 #define SPLINTCORE_DESIGN_NO_JAW_H
 
@@ -38,6 +39,18 @@ constexpr double kMaxJawExtentMm = 1000.0;
 // kInvalidMesh, kArenaExhausted.
 Status refuse_no_jaw(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                      Span<const Mesh> scans);
+
+// Each jaw of `c` (jaws[j], placed by its transform and rounded as B holds it: b_vertex) must
+// reach the splint's base: one of its triangles at least must have corners not all beyond one
+// side of boolean_region(base) (the Boolean's own crop, boolean.h), else the jaw could leave no
+// imprint (its part of B would be empty) and the splint would be made without it, as it was
+// for a jaw given in another frame or by a wrong transform. kInvalidMesh naming the first such
+// jaw, with its box as placed and the base's, and what to check. The scan in the triangles'
+// corners stops at the first that reaches (a jaw that reaches is usually found within its first
+// triangles); a jaw that does not is read whole, twice (the box for the message). Threads: each
+// jaw in a task of its own on ctx.executor. Arena: a byte a jaw, returned.
+Status refuse_out_of_reach(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                           const Mesh& base);
 
 }  // namespace design_detail
 }  // namespace splintcore

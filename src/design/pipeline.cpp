@@ -769,6 +769,7 @@ Status cut_base_with(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   SPLINTCORE_RETURN_IF_ERROR(stage("design: base"));
   Mesh base(&arena);
   SPLINTCORE_RETURN_IF_ERROR(stage_error(build_case_base(ctx, c, &base, &report->base), "base"));
+  SPLINTCORE_RETURN_IF_ERROR(design_detail::refuse_out_of_reach(ctx, c, jaws, base));
   // Where the splint sits with nothing of use above it (blockout_jaws moves its results there).
   Arena::Marker cut_low = before_base;
   const bool heightfield = c.has_blockout && c.blockout_method == BlockoutMethod::kHeightfield;

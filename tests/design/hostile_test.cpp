@@ -360,13 +360,19 @@ TEST_F(Hostile, IdenticalTrianglesCrossingTheBase) {
 }
 
 TEST_F(Hostile, JawsFarFromTheBase) {
-  // Both jaws 500 mm away: nothing to subtract. The Boolean gives the base back unchanged.
+  // Both jaws 500 mm away: nothing to subtract. The design refuses to give the base back as a
+  // splint with no imprint, naming the first jaw; the Boolean alone gives the base back
+  // unchanged.
   Jaw up = maxilla(), down = mandible();
   for (Vec3& v : up.vertices) v = v + Vec3{0, 0, 500};
   for (Vec3& v : down.vertices) v = v + Vec3{0, 0, -500};
   Result d = design(up, down);
-  ASSERT_EQ(d.outcome, Outcome::kSplint) << format(d.status);
-  EXPECT_EQ(d.triangles, fixture().base.triangles.size());
+  ASSERT_EQ(d.outcome, Outcome::kError);
+  EXPECT_EQ(d.status.code(), StatusCode::kInvalidMesh) << format(d.status);
+  EXPECT_TRUE(mentions(d.status, "jaw 0 (maxilla) does not reach the base")) << d.status.message();
+  Result b = boolean(down);
+  ASSERT_EQ(b.outcome, Outcome::kSplint) << format(b.status);
+  EXPECT_EQ(b.triangles, fixture().base.triangles.size());
 }
 
 TEST_F(Hostile, JawEntirelyInsideTheBase) {
