@@ -363,7 +363,11 @@ uint32_t exact_blockout_jaws(const DesignReport& report);
 // vertex within 1 mm of one plane; 5 bytes of arena a vertex of the jaws and scans together,
 // returned), kInvalidMesh for a jaw that does not reach the base once it is made ("design: jaw
 // j (role) does not reach the base: placed, it spans [..] - [..] and the base [..] - [..] mm":
-// no triangle of it within the Boolean's region of the base, so it could leave no imprint), and kInvalidMesh when the result is not printable
+// no triangle of it within the Boolean's region of the base, so it could leave no imprint),
+// kInvalidArgument for a case with a blockout whose maxilla is not above its mandible along
+// the insertion direction ("design: jaw j (maxilla) is below jaw k (mandible) along the
+// insertion direction": swapped roles or a reversed direction, which would sweep each jaw back
+// through the splint), and kInvalidMesh when the result is not printable
 // (require_printable's reason).
 Status design_splint(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Mesh* splint,
                      DesignReport* report);

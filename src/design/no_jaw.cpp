@@ -5,6 +5,7 @@
 #include "design/no_jaw.h"
 
 #include <cmath>
+#include <cstring>
 
 #include "core/union_find.h"
 #include "design/b_vertex.h"
@@ -244,6 +245,35 @@ Status refuse_out_of_reach(const Context& ctx, const CaseFile& c, Span<const Mes
     return s.at_index(j);
   }
   return Status::ok();
+}
+
+Status refuse_swapped_roles(const CaseFile& c, Span<const Mesh> jaws) {
+  if (!c.has_blockout) return Status::ok();
+  const Vec3 d = c.insertion_direction;
+  int upper = -1, lower = -1;
+  double mean[2] = {0, 0};  // along d: the maxilla's, the mandible's
+  const size_t n = jaws.size() < c.jaws.size() ? jaws.size() : c.jaws.size();
+  for (size_t j = 0; j < n; ++j) {
+    const bool maxilla = std::strcmp(c.jaws[j].role, "maxilla") == 0;
+    const bool mandible = std::strcmp(c.jaws[j].role, "mandible") == 0;
+    if ((!maxilla && !mandible) || jaws[j].vertices.empty()) continue;
+    double sum = 0;
+    for (size_t v = 0; v < jaws[j].vertices.size(); ++v) {
+      Vec3 p;
+      (void)b_vertex(c, jaws, j, v, &p);  // in range: check_jaws
+      sum += dot(p, d);
+    }
+    (maxilla ? upper : lower) = static_cast<int>(j);
+    mean[maxilla ? 0 : 1] = sum / static_cast<double>(jaws[j].vertices.size());
+  }
+  if (upper < 0 || lower < 0 || mean[0] > mean[1]) return Status::ok();
+  Status s =
+      make_error(StatusCode::kInvalidArgument, "design: jaw ", upper, " (maxilla) is below jaw ",
+                 lower, " (mandible) along the insertion direction [");
+  s.append_f64(shown(d.x)).append(", ").append_f64(shown(d.y)).append(", ").append_f64(shown(d.z));
+  s.append("] (mean heights ").append_f64(shown(mean[0])).append(", ").append_f64(shown(mean[1]));
+  s.append(" mm); check the roles and the insertion direction (mandible to maxilla)");
+  return s.at_index(static_cast<uint64_t>(upper));
 }
 
 }  // namespace design_detail

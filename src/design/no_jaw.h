@@ -52,6 +52,17 @@ Status refuse_no_jaw(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
 Status refuse_out_of_reach(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                            const Mesh& base);
 
+// With a blockout, the maxilla must lie on the side of the mandible the insertion direction d
+// points to (its vertices' mean along d, placed by b_vertex, above the mandible's): the
+// maxilla's swept volume goes along d, the mandible's along -d, so with the roles swapped (or d
+// reversed) each sweep would run back through the splint and leave it with hardly an imprint,
+// a valid solid all the same. kInvalidArgument naming both jaws, their means along d and what
+// to check. Only for a case with a blockout and both roles (without a blockout the roles
+// change nothing the Boolean makes; the automatic outline turns its normal, and so its
+// insertion direction, from the mandible to the maxilla). Linear in the jaws' vertices, no
+// arena.
+Status refuse_swapped_roles(const CaseFile& c, Span<const Mesh> jaws);
+
 }  // namespace design_detail
 }  // namespace splintcore
 

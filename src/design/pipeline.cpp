@@ -924,6 +924,7 @@ Status design_detail::design_splint_registered(const Context& ctx, const CaseFil
 
   SPLINTCORE_RETURN_IF_ERROR(stage("design: jaws"));
   SPLINTCORE_RETURN_IF_ERROR(check_jaws(ctx, c, jaws));
+  SPLINTCORE_RETURN_IF_ERROR(design_detail::refuse_swapped_roles(c, jaws));
   Mesh cut;
   SPLINTCORE_RETURN_IF_ERROR(cut_base(ctx, c, jaws, &cut, report));
   if (c.has_label) {

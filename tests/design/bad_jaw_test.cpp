@@ -374,6 +374,55 @@ TEST(DesignBadJaws, AJawThatDoesNotReachTheBaseIsNamed) {
   SPLINTCORE_EXPECT_OK(design_splint(ctx, f.c, Span<const Mesh>(f.jaws, 2), &splint, &r));
 }
 
+// With a blockout the roles say which way each jaw is swept: the maxilla along the insertion
+// direction, the mandible against it. Swapped (or the direction reversed), each sweep would run
+// back through the splint, leaving a valid solid with hardly an imprint: refused, naming both
+// jaws. Without a blockout the roles change nothing: the same splint either way.
+TEST(DesignBadJaws, SwappedRolesWithABlockoutAreNamed) {
+  BadJaws f;
+  ASSERT_TRUE(f.ok);
+  Context ctx(&f.t.arena);
+  CaseJaw swapped[2] = {f.c.jaws[0], f.c.jaws[1]};
+  swapped[0].role = "mandible";
+  swapped[1].role = "maxilla";
+  for (BlockoutMethod m :
+       {BlockoutMethod::kExact, BlockoutMethod::kVoxel, BlockoutMethod::kHeightfield}) {
+    SCOPED_TRACE(blockout_method_name(m));
+    CaseFile c = f.c;
+    c.has_blockout = true;
+    c.blockout_method = m;
+    c.blockout.voxel = 0.5;
+    CaseFile roles = c, reversed = c;
+    roles.jaws = Span<const CaseJaw>(swapped, 2);
+    reversed.insertion_direction = -c.insertion_direction;
+    for (const CaseFile* bad : {&roles, &reversed}) {
+      const size_t used = f.t.arena.used();
+      Mesh splint;
+      DesignReport r;
+      const Status s = design_splint(ctx, *bad, Span<const Mesh>(f.jaws, 2), &splint, &r);
+      EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << test::format(s);
+      const std::string m = s.message();
+      const std::string expected = bad == &roles
+                                       ? "design: jaw 1 (maxilla) is below jaw 0 (mandible) along"
+                                       : "design: jaw 0 (maxilla) is below jaw 1 (mandible) along";
+      EXPECT_EQ(m.rfind(expected, 0), 0u) << m;
+      EXPECT_NE(m.find("check the roles and the insertion direction"), std::string::npos) << m;
+      EXPECT_TRUE(splint.triangles.empty());
+      EXPECT_EQ(f.t.arena.used(), used);
+    }
+    Mesh splint;
+    DesignReport r;
+    SPLINTCORE_EXPECT_OK(design_splint(ctx, c, Span<const Mesh>(f.jaws, 2), &splint, &r));
+  }
+  CaseFile plain = f.c;
+  plain.jaws = Span<const CaseJaw>(swapped, 2);
+  Mesh a, b;
+  DesignReport ra, rb;
+  SPLINTCORE_ASSERT_OK(design_splint(ctx, f.c, Span<const Mesh>(f.jaws, 2), &a, &ra));
+  SPLINTCORE_ASSERT_OK(design_splint(ctx, plain, Span<const Mesh>(f.jaws, 2), &b, &rb));
+  EXPECT_EQ(test::mesh_sha256(a), test::mesh_sha256(b));
+}
+
 TEST(DesignBadJaws, TwoScansOfTheSameJaw) {
   test::TestArena t(size_t{4} << 20);
   Context ctx(&t.arena);
