@@ -364,6 +364,8 @@ uint32_t exact_blockout_jaws(const DesignReport& report);
 // returned), kInvalidMesh for a jaw that does not reach the base once it is made ("design: jaw
 // j (role) does not reach the base: placed, it spans [..] - [..] and the base [..] - [..] mm":
 // no triangle of it within the Boolean's region of the base, so it could leave no imprint),
+// kInvalidArgument for two jaws that are one ("design: jaw k (role) is jaw j (role) again":
+// the same triangles and vertices under the same transform, one file given twice),
 // kInvalidArgument for a case with a blockout whose maxilla is not above its mandible along
 // the insertion direction ("design: jaw j (maxilla) is below jaw k (mandible) along the
 // insertion direction": swapped roles or a reversed direction, which would sweep each jaw back

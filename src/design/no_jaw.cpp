@@ -141,6 +141,35 @@ Status check_one(const Mesh& m, UnionFind* uf, uint8_t* used, size_t j, const ch
   return Status::ok();
 }
 
+// Two jaws that are one: the same triangles and vertices, bit for bit, moved by the same
+// transform (the same file given twice). Their Boolean meets its own surface everywhere and
+// fails on coinciding intersection points, a message that does not say why.
+Status refuse_same_jaw_twice(const CaseFile& c, Span<const Mesh> jaws) {
+  const size_t n = jaws.size() < c.jaws.size() ? jaws.size() : c.jaws.size();
+  for (size_t k = 1; k < n; ++k) {
+    const Mesh& b = jaws[k];
+    for (size_t j = 0; j < k; ++j) {
+      const Mesh& a = jaws[j];
+      if (a.triangles.empty() || a.vertices.size() != b.vertices.size() ||
+          a.triangles.size() != b.triangles.size() ||
+          std::memcmp(&c.jaws[j].transform, &c.jaws[k].transform, sizeof(RigidTransform)) != 0 ||
+          std::memcmp(a.triangles.data(), b.triangles.data(),
+                      a.triangles.size() * sizeof(Triangle)) != 0 ||
+          std::memcmp(a.vertices.data(), b.vertices.data(), a.vertices.size() * sizeof(Vec3)) !=
+              0) {
+        continue;
+      }
+      return make_error(StatusCode::kInvalidArgument, "design: jaw ", k, " (", c.jaws[k].role,
+                        ") is jaw ", j, " (", c.jaws[j].role, ") again: the same ",
+                        b.triangles.size(),
+                        " triangles at the same place; check the case's jaw files (one file "
+                        "given for both?)")
+          .at_index(k);
+    }
+  }
+  return Status::ok();
+}
+
 }  // namespace
 
 Status refuse_no_jaw(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
@@ -182,7 +211,7 @@ Status refuse_no_jaw(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   };
   parallel_for_each(ctx.executor, n, task);
   for (uint32_t i = 0; i < n; ++i) SPLINTCORE_RETURN_IF_ERROR(items[i].status);
-  return Status::ok();
+  return refuse_same_jaw_twice(c, jaws);
 }
 
 namespace {

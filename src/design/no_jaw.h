@@ -32,6 +32,8 @@ constexpr double kMaxJawExtentMm = 1000.0;
 //     scale factors to mm);
 //   - flat: every corner within kMinJawReliefMm of one plane, the plane of its triangles'
 //     area vectors summed with the sign of the largest one's (a sheet, a plate: no tooth).
+// Then two jaws that are one (the same triangles and vertices bit for bit under the same
+// transform: the same file given twice) are kInvalidArgument naming both.
 // The message says what was found and what to do (the first such mesh in that order: each jaw,
 // then its scan). An empty mesh, a triangle with a vertex id out of range or a mesh of zero
 // area is left to the stage that names it. Threads: each mesh is measured in a task of its own

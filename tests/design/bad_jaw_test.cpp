@@ -423,6 +423,35 @@ TEST(DesignBadJaws, SwappedRolesWithABlockoutAreNamed) {
   EXPECT_EQ(test::mesh_sha256(a), test::mesh_sha256(b));
 }
 
+// The same jaw given twice (one file for both roles, the same transform): named up front, not
+// left to the Boolean, which fails on its own surface meeting itself everywhere.
+TEST(DesignBadJaws, TheSameJawTwiceIsNamed) {
+  BadJaws f;
+  ASSERT_TRUE(f.ok);
+  Context ctx(&f.t.arena);
+  CaseJaw same[2] = {f.c.jaws[0], f.c.jaws[1]};
+  same[1].transform = same[0].transform;
+  CaseFile c = f.c;
+  c.jaws = Span<const CaseJaw>(same, 2);
+  const Mesh twice[2] = {f.jaws[0], f.jaws[0]};
+  const size_t used = f.t.arena.used();
+  Mesh splint;
+  DesignReport r;
+  Status s = design_splint(ctx, c, Span<const Mesh>(twice, 2), &splint, &r);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << test::format(s);
+  EXPECT_EQ(std::string(s.message()),
+            "design: jaw 1 (mandible) is jaw 0 (maxilla) again: the same " +
+                std::to_string(f.jaws[0].triangles.size()) +
+                " triangles at the same place; check the case's jaw files (one file given for "
+                "both?)");
+  EXPECT_EQ(s.index(), 1u);
+  EXPECT_TRUE(splint.triangles.empty());
+  EXPECT_EQ(f.t.arena.used(), used);
+  // Moved apart by the case's own transforms, they are two jaws to this check.
+  s = design_splint(ctx, f.c, Span<const Mesh>(twice, 2), &splint, &r);
+  EXPECT_EQ(std::string(s.message()).find("again"), std::string::npos) << s.message();
+}
+
 TEST(DesignBadJaws, TwoScansOfTheSameJaw) {
   test::TestArena t(size_t{4} << 20);
   Context ctx(&t.arena);
