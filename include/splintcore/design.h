@@ -219,8 +219,10 @@ Status build_case_base(const Context& ctx, const CaseFile& c, Mesh* out, BaseRep
 // the bite opening's move, the insertion direction (the occlusal normal, unless the case gives
 // one); has_auto_outline is false in it, so designing it gives the same splint. `outline`
 // receives the report and the arch (may be null). The resolved lists stay in the arena, the
-// rest is returned. Errors: compute_outline()'s, prefixed "outline: "; kInvalidArgument (not
-// an auto case, not one maxilla and one mandible, jaw count differs from the case).
+// rest is returned. Errors: first a jaw that is no jaw, as design_splint() names it (a triangle
+// soup, flat, in other units than mm, two jaws that are one); compute_outline()'s, prefixed
+// "outline: "; kInvalidArgument (not an auto case, not one maxilla and one mandible, jaw count
+// differs from the case).
 Status resolve_case_outline(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                             CaseFile* resolved, Outline* outline);
 

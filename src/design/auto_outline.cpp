@@ -4,6 +4,8 @@
 
 #include "design/b_vertex.h"
 #include "design/case_json.h"
+#include "design/fusion.h"
+#include "design/no_jaw.h"
 #include "splintcore/design.h"
 
 namespace splintcore {
@@ -170,6 +172,17 @@ Status moved_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, 
 
 Status resolve_case_outline(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                             CaseFile* resolved, Outline* outline) {
+  // A jaw that is no jaw (a soup, a flat sheet, a file in other units) named as design names
+  // it, before the outline makes something else of it ("the jaws do not face each other").
+  if (c.has_auto_outline && jaws.size() == c.jaws.size()) {
+    SPLINTCORE_RETURN_IF_ERROR(design_detail::refuse_no_jaw(ctx, c, jaws, Span<const Mesh>()));
+  }
+  return design_detail::resolve_case_outline_vetted(ctx, c, jaws, resolved, outline);
+}
+
+Status design_detail::resolve_case_outline_vetted(const Context& ctx, const CaseFile& c,
+                                                  Span<const Mesh> jaws, CaseFile* resolved,
+                                                  Outline* outline) {
   if (!c.has_auto_outline) {
     return Status::error(StatusCode::kInvalidArgument,
                          "outline: the case gives its picks (no \"auto\" in \"base\")");

@@ -29,6 +29,10 @@ Status design_splint_registered(const Context& ctx, const CaseFile& c, Span<cons
                                 Span<const Mesh> scans, const FusionReport* registered, bool vetted,
                                 Mesh* splint, DesignReport* report);
 
+// resolve_case_outline without its refuse_no_jaw, for a design that ran it already.
+Status resolve_case_outline_vetted(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                                   CaseFile* resolved, Outline* outline);
+
 }  // namespace design_detail
 }  // namespace splintcore
 

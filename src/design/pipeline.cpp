@@ -895,7 +895,8 @@ Status design_detail::design_splint_registered(const Context& ctx, const CaseFil
   if (case_given.has_auto_outline) {
     SPLINTCORE_RETURN_IF_ERROR(stage("design: outline"));
     Outline o;
-    SPLINTCORE_RETURN_IF_ERROR(resolve_case_outline(ctx, case_given, jaws_given, &outlined, &o));
+    SPLINTCORE_RETURN_IF_ERROR(
+        design_detail::resolve_case_outline_vetted(ctx, case_given, jaws_given, &outlined, &o));
     report->outlined = true;
     report->outline = o.report;
   }

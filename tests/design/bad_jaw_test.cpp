@@ -315,6 +315,12 @@ TEST(DesignBadJaws, AJawInOtherUnitsIsNamedWithTheFactorToMm) {
       expect_named(s, "design: jaw 0 (maxilla) is ", u.says, splint, used, f.t.arena);
       EXPECT_NE(std::string(s.message()).find(u.factor), std::string::npos) << s.message();
       EXPECT_EQ(s.index(), 0u);
+      if (automatic) {  // the outline alone (as the CLI resolves it first) names it the same way
+        CaseFile resolved;
+        const Status o =
+            resolve_case_outline(ctx, c, Span<const Mesh>(given, 2), &resolved, nullptr);
+        expect_named(o, "design: jaw 0 (maxilla) is ", u.says, splint, used, f.t.arena);
+      }
     }
     CaseJaw scanned[2] = {f.c.jaws[0], f.c.jaws[1]};
     scanned[0].has_scan = true;
