@@ -114,6 +114,17 @@ void expect_named(const Status& s, const std::string& starts, const char* says, 
   EXPECT_EQ(arena.used(), used_before);
 }
 
+// design_splint of the fixture's case with `given`, with its picks or (automatic) the
+// automatic outline; *used is the arena's use before the call.
+Status design_as(BadJaws& f, const Context& ctx, const Mesh (&given)[2], bool automatic,
+                 Mesh* splint, size_t* used) {
+  CaseFile c = f.c;
+  c.has_auto_outline = automatic;
+  *used = f.t.arena.used();
+  DesignReport r;
+  return design_splint(ctx, c, Span<const Mesh>(given, 2), splint, &r);
+}
+
 TEST(DesignBadJaws, TriangleSoupWithoutAnyToothIsNamedWhereverItGoes) {
   BadJaws f;
   ASSERT_TRUE(f.ok);
@@ -124,12 +135,9 @@ TEST(DesignBadJaws, TriangleSoupWithoutAnyToothIsNamedWhereverItGoes) {
     // the base back, nothing subtracted) and with the automatic outline.
     const Mesh given[2] = {f.jaws[0], soup.mesh};
     for (bool automatic : {false, true}) {
-      CaseFile c = f.c;
-      c.has_auto_outline = automatic;
-      const size_t used = f.t.arena.used();
+      size_t used = 0;
       Mesh splint;
-      DesignReport r;
-      const Status s = design_splint(ctx, c, Span<const Mesh>(given, 2), &splint, &r);
+      const Status s = design_as(f, ctx, given, automatic, &splint, &used);
       expect_named(s, "design: jaw 1 (mandible) ", soup.says, splint, used, f.t.arena);
       EXPECT_EQ(s.index(), 1u);
     }
@@ -306,17 +314,15 @@ TEST(DesignBadJaws, AJawInOtherUnitsIsNamedWithTheFactorToMm) {
     for (const Triangle& t : f.jaws[0].triangles) ASSERT_TRUE(scaled.triangles.push_back(t));
     const Mesh given[2] = {scaled, f.jaws[1]};
     for (bool automatic : {false, true}) {
-      CaseFile c = f.c;
-      c.has_auto_outline = automatic;
-      const size_t used = f.t.arena.used();
+      size_t used = 0;
       Mesh splint;
-      DesignReport r;
-      const Status s = design_splint(ctx, c, Span<const Mesh>(given, 2), &splint, &r);
+      const Status s = design_as(f, ctx, given, automatic, &splint, &used);
       expect_named(s, "design: jaw 0 (maxilla) is ", u.says, splint, used, f.t.arena);
       EXPECT_NE(std::string(s.message()).find(u.factor), std::string::npos) << s.message();
       EXPECT_EQ(s.index(), 0u);
       if (automatic) {  // the outline alone (as the CLI resolves it first) names it the same way
-        CaseFile resolved;
+        CaseFile c = f.c, resolved;
+        c.has_auto_outline = true;
         const Status o =
             resolve_case_outline(ctx, c, Span<const Mesh>(given, 2), &resolved, nullptr);
         expect_named(o, "design: jaw 0 (maxilla) is ", u.says, splint, used, f.t.arena);
