@@ -141,19 +141,13 @@ Status check_one(const Mesh& m, UnionFind* uf, uint8_t* used, size_t j, const ch
   return Status::ok();
 }
 
-// The same bits in every entry (as a file's numbers read twice give them).
+// The same bits in every entry.
 bool same_transform(const RigidTransform& a, const RigidTransform& b) {
   const double x[12] = {a.r[0][0], a.r[0][1], a.r[0][2], a.r[1][0], a.r[1][1], a.r[1][2],
                         a.r[2][0], a.r[2][1], a.r[2][2], a.t.x,     a.t.y,     a.t.z};
   const double y[12] = {b.r[0][0], b.r[0][1], b.r[0][2], b.r[1][0], b.r[1][1], b.r[1][2],
                         b.r[2][0], b.r[2][1], b.r[2][2], b.t.x,     b.t.y,     b.t.z};
-  for (int i = 0; i < 12; ++i) {
-    uint64_t u, v;
-    std::memcpy(&u, &x[i], sizeof(u));
-    std::memcpy(&v, &y[i], sizeof(v));
-    if (u != v) return false;
-  }
-  return true;
+  return same_bits(x, y, 12);
 }
 
 // Two jaws that are one: the same triangles and vertices, bit for bit, moved by the same

@@ -257,13 +257,7 @@ Status gather_jaws(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
 // The same bits in every coordinate (+0 and -0 differ, as they would in the output).
 bool same_bits(const Vec3& a, const Vec3& b) {
   const double pa[3] = {a.x, a.y, a.z}, pb[3] = {b.x, b.y, b.z};
-  for (int i = 0; i < 3; ++i) {
-    uint64_t u, v;
-    std::memcpy(&u, &pa[i], sizeof(u));
-    std::memcpy(&v, &pb[i], sizeof(v));
-    if (u != v) return false;
-  }
-  return true;
+  return design_detail::same_bits(pa, pb, 3);
 }
 
 // Jaw k's vertices as B holds them (moved by its transform, rounded to float32): the jaw's
