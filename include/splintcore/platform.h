@@ -15,7 +15,9 @@
 
 namespace splintcore {
 
-// A file opened for reading as a ByteSource (size known from the file system).
+// A file opened for reading as a ByteSource: a regular file's size from the file system; a
+// pipe, a device, or a regular file that reports size 0 but has bytes (procfs, sysfs) as a
+// stream of unknown size (kUnknownSize), whose readers count as they go.
 class FileSource {
  public:
   FileSource() = default;
@@ -24,11 +26,19 @@ class FileSource {
   FileSource& operator=(const FileSource&) = delete;
 
   Status open(const char* path);
+  // The process's standard input (a pipe, a terminal or a redirected file), named
+  // kStandardInputName in messages; close() leaves stdin open.
+  Status open_standard_input();
   ByteSource source();
   void close();
 
+  static constexpr const char* kStandardInputName = "(standard input)";
+
  private:
+  Status opened(const char* path);  // the size and the name, file_ being open
+
   std::FILE* file_ = nullptr;
+  bool owned_ = false;  // file_ is closed by close()
   uint64_t size_ = kUnknownSize;
   char path_[Status::kFileCapacity] = {};
 };

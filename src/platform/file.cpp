@@ -89,9 +89,31 @@ Status FileSource::open(const char* path) {
   close();
   file_ = std::fopen(path, "rb");
   if (file_ == nullptr) return errno_error("cannot open for reading", path);
+  owned_ = true;
+  return opened(path);
+}
+
+Status FileSource::open_standard_input() {
+  close();
+  file_ = stdin;
+  owned_ = false;
+  return opened(kStandardInputName);
+}
+
+Status FileSource::opened(const char* path) {
   struct stat st;
   if (fstat(fileno(file_), &st) == 0 && S_ISREG(st.st_mode)) {
     size_ = static_cast<uint64_t>(st.st_size);
+    // A regular file of size 0 may still hold bytes: procfs and sysfs report 0 for what they
+    // make as they are read. One byte read ahead (and pushed back) tells them from an empty
+    // file; such a file is then read as a stream.
+    if (size_ == 0) {
+      const int c = std::fgetc(file_);
+      if (c != EOF) {
+        std::ungetc(c, file_);
+        size_ = kUnknownSize;
+      }
+    }
   } else if (fstat(fileno(file_), &st) == 0 && S_ISDIR(st.st_mode)) {
     close();
     errno = EISDIR;
@@ -119,8 +141,9 @@ ByteSource FileSource::source() {
 }
 
 void FileSource::close() {
-  if (file_ != nullptr) std::fclose(file_);
+  if (file_ != nullptr && owned_) std::fclose(file_);
   file_ = nullptr;
+  owned_ = false;
   size_ = kUnknownSize;
 }
 

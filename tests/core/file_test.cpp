@@ -347,5 +347,36 @@ TEST(FileSource, AFolderADeviceALimitAndALongPath) {
   EXPECT_EQ(src.source().size, 100u);
 }
 
+// A regular file that stat calls empty: truly empty, its size is 0 and reading gives nothing;
+// one that makes its bytes as it is read (procfs) is a stream of unknown size, read whole
+// (its first byte, read ahead to tell them apart, is not lost).
+TEST(FileSource, ARegularFileOfSizeZeroThatHasBytesIsAStream) {
+  TempDir dir("file", "zero");
+  const fs::path empty = dir.path / "empty.stl";
+  std::ofstream(empty, std::ios::binary).close();
+  FileSource src;
+  SPLINTCORE_ASSERT_OK(src.open(empty.string().c_str()));
+  ByteSource in = src.source();
+  EXPECT_EQ(in.size, 0u);
+  uint8_t buffer[4096];
+  EXPECT_EQ(in.read(in.user, buffer, sizeof(buffer)), 0);
+
+  const char* const kProc = "/proc/self/status";
+  struct stat st;
+  if (::stat(kProc, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size != 0) {
+    GTEST_SKIP() << kProc << " is not a regular file of size 0 here";
+  }
+  SPLINTCORE_ASSERT_OK(src.open(kProc));
+  in = src.source();
+  EXPECT_EQ(in.size, kUnknownSize);
+  std::string text;
+  int64_t n = 0;
+  while ((n = in.read(in.user, buffer, sizeof(buffer))) > 0) {
+    text.append(reinterpret_cast<const char*>(buffer), static_cast<size_t>(n));
+  }
+  EXPECT_EQ(n, 0);
+  EXPECT_EQ(text.compare(0, 5, "Name:"), 0) << text.substr(0, 40);
+}
+
 }  // namespace
 }  // namespace splintcore

@@ -148,6 +148,38 @@ expect_exit 2 "convert -o -" -- "$tool" convert "$fixtures/stl/torus_binary.stl"
 check "-o - refused with why" -- grep -q 'needs a file name (not "-": the summary goes to the standard output)' "$work/err"
 check "no file named -" -- test ! -e ./-
 expect_exit 2 "convert -o ''" -- "$tool" convert "$fixtures/stl/torus_binary.stl" -o ""
+# "-" as an input is the standard input (a pipe here, then a redirected file): the same mesh
+# and bytes; given twice it is refused, naming why. A procfs file (size 0 to stat, bytes when
+# read) is read as a stream: its text is no mesh, and the error is not "0 bytes".
+expect_exit 0 "convert from a pipe" -- bash -c 'cat "$1" | exec "$2" convert - -o "$3"' piped "$fixtures/stl/torus_binary.stl" "$tool" "$work/from_pipe.stl"
+check "the pipe's mesh has the same bytes" -- cmp -s "$work/a.stl" "$work/from_pipe.stl"
+expect_exit 0 "check from standard input" -- bash -c 'exec "$2" check - --json <"$1"' redirected "$fixtures/stl/torus_binary.stl" "$tool"
+check "the standard input's mesh checked" -- grep -q '"closed":true' "$work/out"
+expect_exit 1 "boolean with - twice" -- bash -c 'exec "$2" boolean --difference - - -o "$3" <"$1"' twice "$fixtures/stl/torus_binary.stl" "$tool" "$work/never.stl"
+check "- twice named" -- grep -q 'standard input ("-") given for more than one input' "$work/err"
+check "nothing written for - twice" -- test ! -e "$work/never.stl"
+if [ -r /proc/self/status ]; then
+  expect_exit 1 "check a procfs file" -- "$tool" check /proc/self/status
+  check "a procfs file is read, not taken as empty" -- bash -c '! grep -q "0 bytes" "$1"' grep0 "$work/err"
+fi
+# The output's name picks its format: .ply is binary PLY (read back: the same mesh, checked);
+# a name of another mesh format is refused before any work, as is --ascii with .ply and a PLY
+# where the output is streamed as STL (sweep).
+expect_exit 0 "convert to PLY" -- "$tool" convert "$work/a.stl" -o "$work/a.ply"
+check "the summary says PLY" -- grep -q "output: .*a.ply (binary PLY)" "$work/out"
+check "a PLY header" -- bash -c 'head -c 64 "$1" | grep -q "^format binary_little_endian 1.0"' ply "$work/a.ply"
+expect_exit 0 "convert the PLY back" -- "$tool" convert "$work/a.ply" -o "$work/from_ply.stl"
+check "STL -> PLY -> STL is exact" -- cmp -s "$work/a.stl" "$work/from_ply.stl"
+for other in obj 3mf OFF; do
+  expect_exit 1 "convert to .$other" -- "$tool" convert "$work/a.stl" -o "$work/never.$other"
+  check ".$other refused, the formats named" -- grep -q "never.$other: cannot write a mesh as .$(printf %s "$other" | tr A-Z a-z): splintcore writes meshes as STL (.stl, or any other name) or binary PLY (.ply)" "$work/err"
+  check "nothing written as .$other" -- test ! -e "$work/never.$other"
+done
+expect_exit 1 "convert to an ASCII PLY" -- "$tool" convert "$work/a.stl" -o "$work/never.ply" --ascii
+check "--ascii with .ply named" -- grep -q "never.ply: PLY is written binary only" "$work/err"
+expect_exit 1 "sweep to a PLY" -- "$tool" sweep "$work/a.stl" -o "$work/never.ply" --direction 0,0,1 --voxel 1
+check "sweep's PLY refused" -- grep -q "never.ply: this output is streamed as STL" "$work/err"
+check "no PLY left" -- test ! -e "$work/never.ply"
 # What a command prints must reach its standard output: a closed one or a full disk
 # (/dev/full, where there is one) fails the run, so --json is never taken cut off.
 expect_exit 1 "check with its standard output closed" -- bash -c 'exec "$@" >&-' closed "$tool" check "$fixtures/stl/torus_binary.stl" --json

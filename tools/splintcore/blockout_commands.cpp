@@ -252,7 +252,7 @@ void print_blockout_text(const Run& run, const SweepArgs& a, const BlockoutResul
     std::printf("removed: %.4f mm^3 of interference (inset %.4g mm)\n", r.removed, r.inset);
   }
   print_mesh_report(r.report);
-  std::printf("output: %s (%s STL)\n", a.output, a.ascii ? "ascii" : "binary");
+  std::printf("output: %s (%s)\n", a.output, mesh_output_format(a.output, a.ascii));
   std::printf("time: read %.4f s, blockout %.4f s, total %.4f s; peak arena %llu bytes\n",
               r.t_read - run.start, r.t_op - r.t_read, r.t_end - run.start,
               static_cast<unsigned long long>(run.peak_arena()));
@@ -270,6 +270,8 @@ int run_sweep(const Command& command, int argc, char** argv) {
   if (!problem.empty()) return line.usage_error(problem);
   Run run(command, a.common);
   if (!run.has_memory()) return run.no_memory();
+  if (const Status out = check_mesh_output(a.output, a.ascii, true); !out.is_ok())
+    return run.reject(out);
 
   std::vector<Mesh> jaws;
   Status s = read_mesh_files(run.ctx, a.common.positional, kNoInputLimit, false, &jaws, nullptr);
@@ -302,6 +304,7 @@ int run_blockout(const Command& command, int argc, char** argv) {
   if (!problem.empty()) return line.usage_error(problem);
   Run run(command, a.common);
   if (!run.has_memory()) return run.no_memory();
+  if (const Status out = check_mesh_output(a.output, a.ascii); !out.is_ok()) return run.reject(out);
 
   Mesh splint(&run.arena);
   std::vector<Mesh> jaws;

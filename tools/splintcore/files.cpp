@@ -1,6 +1,9 @@
 #include "files.h"
 
 #include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cstring>
 #include <memory>
 
 namespace splintcore {
@@ -66,7 +69,18 @@ Status InputFile::open(const char* path, uint64_t max_bytes) {
   max_bytes_ = max_bytes;
   count_ = 0;
   over_limit_ = false;
-  SPLINTCORE_RETURN_IF_ERROR(file_.open(path));
+  if (std::strcmp(path, "-") == 0) {
+    // Standard input can be read once: a second "-" would find it at its end.
+    static std::atomic<bool> taken{false};
+    if (taken.exchange(true)) {
+      return make_error(StatusCode::kInvalidArgument,
+                        "standard input (\"-\") given for more than one input");
+    }
+    SPLINTCORE_RETURN_IF_ERROR(file_.open_standard_input());
+    path_ = FileSource::kStandardInputName;
+  } else {
+    SPLINTCORE_RETURN_IF_ERROR(file_.open(path));
+  }
   inner_ = file_.source();
   if (inner_.size != kUnknownSize && inner_.size > max_bytes) {
     file_.close();
@@ -202,9 +216,60 @@ const char* encoding_name(MeshFormat format) {
 
 constexpr size_t kTaskWriteBuffer = size_t{1} << 20;
 
+namespace {
+
+// The extension of `path`'s last component, lower case ("" when it has none).
+std::string extension_of(const char* path) {
+  const char* name = std::strrchr(path, '/');
+  name = name != nullptr ? name + 1 : path;
+  const char* dot = std::strrchr(name, '.');
+  std::string ext = dot != nullptr ? dot + 1 : "";
+  for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return ext;
+}
+
+}  // namespace
+
+const char* mesh_output_format(const char* path, bool ascii) {
+  if (extension_of(path) == "ply") return "binary PLY";
+  return ascii ? "ascii STL" : "binary STL";
+}
+
+Status check_mesh_output(const char* path, bool ascii, bool stl_only) {
+  const std::string ext = extension_of(path);
+  if (ext == "ply" && stl_only) {
+    return make_error(StatusCode::kUnsupported,
+                      "this output is streamed as STL: name it .stl (convert makes a PLY of it)")
+        .in_file(path);
+  }
+  if (ext == "ply" && ascii) {
+    return make_error(StatusCode::kUnsupported,
+                      "PLY is written binary only: drop --ascii, or name the output .stl")
+        .in_file(path);
+  }
+  // Formats other programs read by name: STL bytes under such a name would not open there.
+  static const char* const kOther[] = {"obj",  "3mf", "off", "amf",  "wrl", "vrml", "x3d", "glb",
+                                       "gltf", "dae", "fbx", "step", "stp", "iges", "igs"};
+  for (const char* other : kOther) {
+    if (ext == other) {
+      return make_error(StatusCode::kUnsupported, "cannot write a mesh as .", other,
+                        ": splintcore writes meshes as STL (.stl, or any other name) or binary "
+                        "PLY (.ply)")
+          .in_file(path);
+    }
+  }
+  return Status::ok();
+}
+
 Status write_mesh_uncommitted(const Context& ctx, const Mesh& mesh, const char* path, bool ascii,
                               AtomicFile* file) {
+  SPLINTCORE_RETURN_IF_ERROR(check_mesh_output(path, ascii));
   SPLINTCORE_RETURN_IF_ERROR(file->open(path));
+  if (extension_of(path) == "ply") {
+    const Status s = file->with_write_cause(write_ply(mesh, Span<const uint8_t>(), file->sink()));
+    if (!s.is_ok()) file->abort();
+    return s;
+  }
   StlWriteOptions wo;
   wo.format = ascii ? StlFormat::kAscii : StlFormat::kBinary;
   // With threads, a buffer large enough for the records to be encoded in tasks (add_mesh),

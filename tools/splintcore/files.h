@@ -26,7 +26,8 @@ constexpr uint64_t kNoInputLimit = UINT64_MAX;
 // through it (meshes stream from source() into the library's read_mesh, case files are read
 // whole), so a missing, unreadable or oversized file gets the same message everywhere. A
 // regular file larger than `max_bytes` is refused before anything is read; a pipe or device
-// is counted as it is read.
+// is counted as it is read. The path "-" is standard input (once per run; named
+// "(standard input)" in messages).
 // SHA-256 on a thread of its own: the bytes handed to add() are copied into one of a few
 // slots and hashed in order while the caller goes on (reading a mesh hashes its file this way
 // when the run has more than one thread: the same digest, without the hash's time in the read).
@@ -119,8 +120,19 @@ Status read_whole_input(const char* path, uint64_t max_bytes, std::vector<uint8_
 // "ascii" for the text formats (STL ASCII, PLY ASCII, OBJ), else "binary".
 const char* encoding_name(MeshFormat format);
 
-// Writes a mesh as STL through the streaming writer into a temporary file renamed over `path`
-// only when everything succeeded. With `outputs`, the file is kept there (written whole and
+// What write_mesh_atomically writes to `path`: "binary PLY" for a name ending in .ply (any
+// case), else "ascii STL" or "binary STL".
+const char* mesh_output_format(const char* path, bool ascii);
+
+// Refuses (kUnsupported, naming the path) an output name whose extension is another mesh
+// format (.obj .3mf .off ...: STL bytes there would not open in the program that reads it by
+// name), and --ascii with .ply; with `stl_only` (an output streamed as STL) .ply too.
+// Commands call it before their work; write_mesh_atomically again.
+Status check_mesh_output(const char* path, bool ascii, bool stl_only = false);
+
+// Writes a mesh into a temporary file renamed over `path` only when everything succeeded: as
+// binary PLY (write_ply) when `path` ends in .ply, else as STL through the streaming writer
+// (check_mesh_output's refusals first). With `outputs`, the file is kept there (written whole and
 // synced) and placed by its commit() with the run's other outputs, instead of now.
 Status write_mesh_atomically(const Context& ctx, const Mesh& mesh, const char* path, bool ascii,
                              cli::OutputSet* outputs = nullptr);

@@ -43,12 +43,14 @@ const char kConvertUsage[] =
     "usage: splintcore convert IN.stl -o OUT.stl [--ascii] [--scale F] [--json]\n"
     "                         [--memory-cap SIZE] [--threads N]\n"
     "\n"
-    "Reads a binary or ASCII STL, welds identical vertices, optionally scales it about the\n"
-    "origin (a mesh in other units to mm: --scale 25.4 from inches, 1000 from metres, 0.001\n"
-    "from micrometres; each coordinate rounded to float32), checks it, and writes it through\n"
-    "the streaming writer (binary unless --ascii). The output is written atomically: on any\n"
-    "error no output file is left behind. The bytes depend only on the input's triangles\n"
-    "and the scale.\n";
+    "Reads a mesh (STL binary or ASCII, PLY or OBJ, by content; IN - is the standard input),\n"
+    "welds identical vertices, optionally scales it about the origin (a mesh in other units\n"
+    "to mm: --scale 25.4 from inches, 1000 from metres, 0.001 from micrometres; each\n"
+    "coordinate rounded to float32), checks it, and writes it: OUT.ply as binary PLY, any\n"
+    "other name as STL through the streaming writer (binary unless --ascii; .obj, .3mf and\n"
+    "other mesh formats' names are refused). The output is written atomically: on any error\n"
+    "no output file is left behind. The bytes depend only on the input's triangles and the\n"
+    "scale.\n";
 
 const char kBaseUsage[] =
     "usage: splintcore base CASE.json -o BASE.stl [--ascii] [--json]\n"

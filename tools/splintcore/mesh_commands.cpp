@@ -492,6 +492,7 @@ int run_convert(const Command& command, int argc, char** argv) {
   const char* input = a.common.positional[0];
   Run run(command, a.common);
   if (!run.has_memory()) return run.no_memory();
+  if (const Status out = check_mesh_output(a.output, a.ascii); !out.is_ok()) return run.reject(out);
 
   Mesh mesh(&run.arena);
   MeshFileInfo info;
@@ -528,7 +529,7 @@ int run_convert(const Command& command, int argc, char** argv) {
                 static_cast<unsigned long long>(info.triangles));
     if (a.scale != 1.0) std::printf("scaled by %.17g about the origin\n", a.scale);
     print_mesh_report(report);
-    std::printf("output: %s (%s STL)\n", a.output, a.ascii ? "ascii" : "binary");
+    std::printf("output: %s (%s)\n", a.output, mesh_output_format(a.output, a.ascii));
     run.print_time(seconds);
   }
   return kExitOk;
@@ -685,6 +686,11 @@ int run_autorotate(const Command& command, int argc, char** argv) {
   if (!a.has_opening) return line.usage_error("autorotate needs --opening MM");
   Run run(command, a.common);
   if (!run.has_memory()) return run.no_memory();
+  if (a.output != nullptr) {
+    if (const Status out = check_mesh_output(a.output, a.ascii); !out.is_ok()) {
+      return run.reject(out);
+    }
+  }
   std::vector<Mesh> jaws;
   {
     const Status s =

@@ -104,7 +104,7 @@ void print_prepare(const Run& run, const PrepareArgs& a, const char* input, cons
     }
   }
   print_mesh_report(after);
-  std::printf("output: %s (%s STL)\n", a.output, a.ascii ? "ascii" : "binary");
+  std::printf("output: %s (%s)\n", a.output, mesh_output_format(a.output, a.ascii));
   run.print_time(seconds);
 }
 
@@ -120,6 +120,7 @@ int run_prepare(const Command& command, int argc, char** argv) {
   const char* input = a.common.positional[0];
   Run run(command, a.common);
   if (!run.has_memory()) return run.no_memory();
+  if (const Status out = check_mesh_output(a.output, a.ascii); !out.is_ok()) return run.reject(out);
 
   Mesh mesh(&run.arena);
   Status s = read_mesh_file(run.ctx, input, kNoInputLimit, false, &mesh, nullptr);

@@ -161,6 +161,9 @@ int run_register(const Command& command, int argc, char** argv) {
   if (a.options.overlap > 1) return line.usage_error("--overlap needs a fraction in (0, 1]");
   Run run(command, a.common);
   if (!run.has_memory()) return run.no_memory();
+  if (a.moved != nullptr) {
+    if (const Status out = check_mesh_output(a.moved, false); !out.is_ok()) return run.reject(out);
+  }
   Mesh meshes[2] = {Mesh(&run.arena), Mesh(&run.arena)};
   for (size_t j = 0; j < 2; ++j) {
     const Status s =

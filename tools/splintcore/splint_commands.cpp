@@ -77,7 +77,7 @@ void print_base_report(const Run& run, const BaseArgs& a, const CaseFile& c, con
       "checked: closed, edge-manifold, outward, no self-intersection (%llu candidate "
       "pairs tested)\n",
       static_cast<unsigned long long>(report.self_intersection_candidates));
-  std::printf("output: %s (%s STL)\n", a.output, a.ascii ? "ascii" : "binary");
+  std::printf("output: %s (%s)\n", a.output, mesh_output_format(a.output, a.ascii));
   std::printf("time: build %.4f s, total %.4f s, peak arena: %llu bytes\n", r.t_build - r.t_parse,
               r.t_end - t0, static_cast<unsigned long long>(run.peak_arena()));
 }
@@ -285,7 +285,7 @@ void print_boolean_text(const Run& run, const BooleanArgs& a, const BooleanResul
   }
   print_mesh_report(r.report);
   std::printf("self-intersection: %s\n", a.self_check ? "none (exact check)" : "not checked");
-  std::printf("output: %s (%s STL)\n", a.output, a.ascii ? "ascii" : "binary");
+  std::printf("output: %s (%s)\n", a.output, mesh_output_format(a.output, a.ascii));
   std::printf(
       "time: read %.4f s, boolean %.4f s, check %.4f s, write %.4f s, total %.4f s; peak "
       "arena %llu bytes\n",
@@ -454,6 +454,7 @@ int run_base(const Command& command, int argc, char** argv) {
   const char* case_path = a.common.positional[0];
   Run run(command, a.common);
   if (!run.has_memory()) return run.no_memory();
+  if (const Status out = check_mesh_output(a.output, a.ascii); !out.is_ok()) return run.reject(out);
 
   std::vector<uint8_t> text;
   Status s = read_whole_input(case_path, a.max_input_bytes, &text);
@@ -488,6 +489,7 @@ int run_boolean(const Command& command, int argc, char** argv) {
   }
   Run run(command, a.common);
   if (!run.has_memory()) return run.no_memory();
+  if (const Status out = check_mesh_output(a.output, a.ascii); !out.is_ok()) return run.reject(out);
 
   BooleanOptions bo;
   bo.max_candidate_pairs = a.max_pairs;
