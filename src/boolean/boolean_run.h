@@ -507,6 +507,7 @@ class BooleanRun {
   int8_t uncut_state(uint32_t t, const uint32_t c[3]) const;
   Status classify();
   Status assemble(Mesh* result);
+  void move_over_pieces(uint32_t nv_all, size_t kept, uint32_t** remap, Triangle** out_t);
   Status pair_result_edges(const Mesh& result, bool* paired);
   Status check_result(Mesh* result);
   Status check_merged_fans(const Triangle* tris, size_t nt, const uint32_t* remap, uint32_t nv);

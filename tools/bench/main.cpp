@@ -307,6 +307,61 @@ void bench_base(Harness& h, Arena& arena, const std::string& fixtures) {
   }
 }
 
+// issue 4's query points: a random triangle, a random point on it, moved along the normal by
+// a uniform offset in [-2, 2] mm (fixed seed).
+std::vector<Vec3> distance_queries(const Mesh& mesh, size_t count) {
+  std::vector<Vec3> queries(count);
+  const size_t nt = mesh.triangles.size();
+  uint64_t state = 0x9e3779b97f4a7c15ull;
+  auto next = [&]() {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) * (1.0 / 9007199254740992.0);
+  };
+  const Vec3* v = mesh.vertices.data();
+  for (Vec3& q : queries) {
+    const Triangle& t = mesh.triangles[static_cast<size_t>(next() * static_cast<double>(nt)) % nt];
+    double a = next(), b = next();
+    if (a + b > 1) {
+      a = 1 - a;
+      b = 1 - b;
+    }
+    const Vec3 p = v[t.v[0]] + (v[t.v[1]] - v[t.v[0]]) * a + (v[t.v[2]] - v[t.v[0]]) * b;
+    Vec3 n = cross(v[t.v[1]] - v[t.v[0]], v[t.v[2]] - v[t.v[0]]);
+    const double len = length(n);
+    n = len > 0 ? n * (1.0 / len) : Vec3{};
+    q = p + n * (4.0 * next() - 2.0);
+  }
+  return queries;
+}
+
+// The narrow-band sampler as the tiled marching cubes calls it: every layer of a grid over the
+// mesh's box and 1 mm around it, 0.5 mm apart, band 1 mm, one thread.
+void bench_sdf_volume(Harness& h, Arena& arena, const std::string& sdf_name, const Mesh& mesh,
+                      const DistanceIndex& index) {
+  const Aabb box = mesh_bounds(mesh);
+  SdfGrid grid;
+  grid.spacing = 0.5;
+  grid.band = 1.0;
+  grid.origin = box.lo - Vec3{1, 1, 1};
+  grid.nx = static_cast<uint32_t>((box.hi.x - box.lo.x + 2) / grid.spacing) + 1;
+  grid.ny = static_cast<uint32_t>((box.hi.y - box.lo.y + 2) / grid.spacing) + 1;
+  grid.nz = static_cast<uint32_t>((box.hi.z - box.lo.z + 2) / grid.spacing) + 1;
+  std::vector<float> volume(size_t{grid.nx} * grid.ny * grid.nz);
+  const Span<float> out(volume.data(), volume.size());
+  Result r = h.measure(sdf_name.c_str(), volume.size(), arena, [&](Arena& a) {
+    Context c(&a);
+    return sample_sdf(c, index, grid, SignMethod::kAuto, 0, grid.nz, out);
+  });
+  size_t within = 0;
+  for (float d : volume) within += std::fabs(d) < 1.0f ? size_t{1} : size_t{0};
+  std::printf(
+      "# %s: %ux%ux%u samples, %zu within the band: %.0f samples/s, %.0f within the "
+      "band/s (one thread, %s)\n",
+      sdf_name.c_str(), grid.nx, grid.ny, grid.nz, within,
+      static_cast<double>(volume.size()) / r.median, static_cast<double>(within) / r.median,
+      index.closed_manifold ? "pseudonormals" : "winding numbers");
+}
+
 // The distance engine (issue 4's protocol): build the index over a mesh, then answer
 // 1,000,000 closest-point queries within 2 mm of the surface on one core: one at a time, and
 // as a batch (Morton-ordered, seeded). Query points: a random triangle, a random point on it,
@@ -345,26 +400,7 @@ void bench_distance(Harness& h, Arena& arena, const char* label, const Mesh& mes
   }
   std::printf("# %s: index keeps %zu bytes (%.1f MiB) for %zu triangles\n", build_name.c_str(),
               arena.used() - before, static_cast<double>(arena.used() - before) / 1048576.0, nt);
-  std::vector<Vec3> queries(1000000);
-  uint64_t state = 0x9e3779b97f4a7c15ull;
-  auto next = [&]() {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return static_cast<double>(state >> 11) * (1.0 / 9007199254740992.0);
-  };
-  const Vec3* v = mesh.vertices.data();
-  for (Vec3& q : queries) {
-    const Triangle& t = mesh.triangles[static_cast<size_t>(next() * static_cast<double>(nt)) % nt];
-    double a = next(), b = next();
-    if (a + b > 1) {
-      a = 1 - a;
-      b = 1 - b;
-    }
-    const Vec3 p = v[t.v[0]] + (v[t.v[1]] - v[t.v[0]]) * a + (v[t.v[2]] - v[t.v[0]]) * b;
-    Vec3 n = cross(v[t.v[1]] - v[t.v[0]], v[t.v[2]] - v[t.v[0]]);
-    const double len = length(n);
-    n = len > 0 ? n * (1.0 / len) : Vec3{};
-    q = p + n * (4.0 * next() - 2.0);
-  }
+  const std::vector<Vec3> queries = distance_queries(mesh, 1000000);
   std::vector<ClosestPoint> results(queries.size());
   if (h.wanted(closest_name.c_str())) {
     Result r = h.measure(closest_name.c_str(), queries.size(), arena, [&](Arena&) {
@@ -394,32 +430,7 @@ void bench_distance(Harness& h, Arena& arena, const char* label, const Mesh& mes
                 static_cast<double>(queries.size()) / r.median,
                 index.closed_manifold ? "pseudonormals" : "winding numbers");
   }
-  if (h.wanted(sdf_name.c_str())) {
-    // The narrow-band sampler as the tiled marching cubes calls it: every layer of a grid over
-    // the mesh's box and 1 mm around it, 0.5 mm apart, band 1 mm, one thread.
-    const Aabb box = mesh_bounds(mesh);
-    SdfGrid grid;
-    grid.spacing = 0.5;
-    grid.band = 1.0;
-    grid.origin = box.lo - Vec3{1, 1, 1};
-    grid.nx = static_cast<uint32_t>((box.hi.x - box.lo.x + 2) / grid.spacing) + 1;
-    grid.ny = static_cast<uint32_t>((box.hi.y - box.lo.y + 2) / grid.spacing) + 1;
-    grid.nz = static_cast<uint32_t>((box.hi.z - box.lo.z + 2) / grid.spacing) + 1;
-    std::vector<float> volume(size_t{grid.nx} * grid.ny * grid.nz);
-    const Span<float> out(volume.data(), volume.size());
-    Result r = h.measure(sdf_name.c_str(), volume.size(), arena, [&](Arena& a) {
-      Context c(&a);
-      return sample_sdf(c, index, grid, SignMethod::kAuto, 0, grid.nz, out);
-    });
-    size_t within = 0;
-    for (float d : volume) within += std::fabs(d) < 1.0f ? size_t{1} : size_t{0};
-    std::printf(
-        "# %s: %ux%ux%u samples, %zu within the band: %.0f samples/s, %.0f within the "
-        "band/s (one thread, %s)\n",
-        sdf_name.c_str(), grid.nx, grid.ny, grid.nz, within,
-        static_cast<double>(volume.size()) / r.median, static_cast<double>(within) / r.median,
-        index.closed_manifold ? "pseudonormals" : "winding numbers");
-  }
+  if (h.wanted(sdf_name.c_str())) bench_sdf_volume(h, arena, sdf_name, mesh, index);
 }
 
 void bench_distance_sizes(Harness& h, Arena& arena) {
@@ -763,6 +774,43 @@ Status reconstruct_phantom_jaws(const Context& ctx, const CtVolume& volume,
   return Status::ok();
 }
 
+// Time per progress stage ("threshold", "region growing", "reconstruct: region box",
+// "marching cubes"), last run: where reconstruction's time goes (a Progress's report).
+struct Stages {
+  std::vector<std::string> names;
+  std::vector<double> seconds;
+  std::string current;
+  double since = 0;
+  static bool report(void* user, const char* stage, uint64_t, uint64_t) {
+    Stages* c = static_cast<Stages*>(user);
+    const double now = monotonic_seconds();
+    if (!c->current.empty()) {
+      size_t i = 0;
+      while (i < c->names.size() && c->names[i] != c->current) ++i;
+      if (i == c->names.size()) {
+        c->names.push_back(c->current);
+        c->seconds.push_back(0);
+      }
+      c->seconds[i] += now - c->since;
+    }
+    c->current = stage;
+    c->since = now;
+    return true;
+  }
+};
+
+// The 512^3 phantom's volume, its voxels in `arena`.
+Status phantom_512_in(Arena& arena, cli::CtPhantom* phantom, CtVolume* volume) {
+  SPLINTCORE_RETURN_IF_ERROR(init_phantom_512(phantom));
+  std::vector<int16_t> hu;
+  phantom->generate(&hu, volume);
+  int16_t* in_arena = arena.allocate_array<int16_t>(hu.size());
+  if (in_arena == nullptr) return arena.exhausted_status();
+  std::memcpy(in_arena, hu.data(), hu.size() * sizeof(int16_t));
+  volume->hu = in_arena;
+  return Status::ok();
+}
+
 void bench_ct_reconstruct(Harness& h, Arena& arena) {
   const char* name = "ct_reconstruct_512";
   if (!h.wanted(name)) return;
@@ -777,20 +825,9 @@ void bench_ct_reconstruct(Harness& h, Arena& arena) {
   {
     Arena ct_arena(slice, static_cast<size_t>(kCap));
     cli::CtPhantom phantom;
-    Status s = init_phantom_512(&phantom);
     CtVolume volume;
     const double t0 = monotonic_seconds();
-    if (s.is_ok()) {
-      std::vector<int16_t> hu;
-      phantom.generate(&hu, &volume);
-      int16_t* in_arena = ct_arena.allocate_array<int16_t>(hu.size());
-      if (in_arena == nullptr) {
-        s = ct_arena.exhausted_status();
-      } else {
-        std::memcpy(in_arena, hu.data(), hu.size() * sizeof(int16_t));
-        volume.hu = in_arena;
-      }
-    }
+    const Status s = phantom_512_in(ct_arena, &phantom, &volume);
     if (!s.is_ok()) {
       cli::print_error(s);
       h.failed = true;
@@ -801,30 +838,7 @@ void bench_ct_reconstruct(Harness& h, Arena& arena) {
     double stage[5] = {0, 0, 0, 0, 0};
     uint64_t window = 0, triangles[2] = {0, 0}, voxels[2] = {0, 0};
     uint32_t layers = 0;
-    // Time per progress stage ("threshold", "region growing", "reconstruct: region box",
-    // "marching cubes"), last run: where reconstruction's time goes.
-    struct Stages {
-      std::vector<std::string> names;
-      std::vector<double> seconds;
-      std::string current;
-      double since = 0;
-      static bool report(void* user, const char* stage, uint64_t, uint64_t) {
-        Stages* c = static_cast<Stages*>(user);
-        const double now = monotonic_seconds();
-        if (!c->current.empty()) {
-          size_t i = 0;
-          while (i < c->names.size() && c->names[i] != c->current) ++i;
-          if (i == c->names.size()) {
-            c->names.push_back(c->current);
-            c->seconds.push_back(0);
-          }
-          c->seconds[i] += now - c->since;
-        }
-        c->current = stage;
-        c->since = now;
-        return true;
-      }
-    } clock;
+    Stages clock;
     Progress progress;
     progress.report = &Stages::report;
     progress.user = &clock;
