@@ -1871,6 +1871,80 @@ TEST(SweepDecimate, RunsInExactlyItsHighWaterAndFailsCleanlyBelow) {
   EXPECT_GT(failures, 3u);
 }
 
+// The decimated sweep's mesh variant over two tiles (its output logged between them and
+// moved down over the tile's working set at each) in an arena of 4 KiB blocks (caller hooks):
+// with the allocator refusing each block request in turn, and under caps from half of what
+// the blocks reserve in a run to all of it (there the log's move can need a block of its own,
+// refused by the cap: tiles.cpp's move_down), every run fails with kArenaExhausted naming the
+// need, the arena's top where it was, `out` empty and every block given back, or makes the
+// same mesh as in one buffer.
+TEST(SweepDecimate, InAnArenaOfBlocksEveryFailureIsClean) {
+  TestArena big(size_t{256} << 20);
+  const Mesh torus = tilted_torus(&big.arena);
+  SweepOptions o;
+  o.direction = Vec3{0.2, -0.3, 1.0};
+  o.voxel = 0.15;
+  o.decimate_error = 0.015;
+  std::vector<Triangle> want_t;
+  std::vector<Vec3> want_v;
+  {
+    TestArena ta(size_t{256} << 20);
+    Context ctx(&ta.arena);
+    Mesh out(&ta.arena);
+    SweepStats stats;
+    SPLINTCORE_ASSERT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(&torus, 1), o, &out, &stats));
+    ASSERT_GE(stats.decimated_tiles, 2u);
+    want_t.assign(out.triangles.begin(), out.triangles.end());
+    want_v.assign(out.vertices.begin(), out.vertices.end());
+  }
+  // One run: refusing the sweep's request number `refuse` (-1: none) under `cap`; true when
+  // it made the mesh. *reserved: what the blocks took at most.
+  auto run = [&](int64_t refuse, size_t cap, size_t* reserved) {
+    test::FailNthBlock blocks;
+    bool made = false;
+    {
+      Arena arena(blocks.hooks(), cap, 4096);
+      EXPECT_NE(arena.allocate(16), nullptr);  // the top above a block already there
+      if (refuse >= 0) blocks.fail_at = blocks.calls + refuse;
+      const size_t used = arena.used();
+      Context ctx(&arena);
+      Mesh out(&arena);
+      const Status st = sweep_volume_mesh(ctx, Span<const Mesh>(&torus, 1), o, &out);
+      made = st.is_ok();
+      if (made) {
+        EXPECT_TRUE(std::equal(want_t.begin(), want_t.end(), out.triangles.begin(),
+                               out.triangles.end(), [](const Triangle& a, const Triangle& b) {
+                                 return std::memcmp(a.v, b.v, sizeof(a.v)) == 0;
+                               }));
+        EXPECT_TRUE(std::equal(
+            want_v.begin(), want_v.end(), out.vertices.begin(), out.vertices.end(),
+            [](const Vec3& a, const Vec3& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }));
+      } else {
+        EXPECT_EQ(st.code(), StatusCode::kArenaExhausted) << test::format(st);
+        EXPECT_NE(std::string(st.message()).find("need"), std::string::npos) << st.message();
+        EXPECT_EQ(arena.used(), used);
+        EXPECT_TRUE(out.triangles.empty() && out.vertices.empty());
+      }
+      if (reserved != nullptr) *reserved = arena.reserved();
+    }
+    EXPECT_EQ(blocks.outstanding, 0);
+    return made;
+  };
+  size_t reserved = 0;
+  ASSERT_TRUE(run(-1, size_t{1} << 30, &reserved));
+  int failures = 0;
+  for (int64_t n = 0; n < 1000; ++n) {
+    SCOPED_TRACE(testing::Message() << "block request " << n << " refused");
+    if (run(n, size_t{1} << 30, nullptr)) break;
+    ++failures;
+  }
+  EXPECT_GT(failures, 4);
+  for (size_t k = 32; k <= 36; ++k) {
+    SCOPED_TRACE(testing::Message() << "cap " << k << "/64 of " << reserved);
+    EXPECT_FALSE(run(-1, reserved / 64 * k, nullptr));
+  }
+}
+
 TEST(Blockout, DecimatedSweepPassesTheIndependentCheck) {
   TestArena ta(size_t{1} << 30);
   Context ctx(&ta.arena);

@@ -695,21 +695,6 @@ TEST(CtCommonCoverage, RawVolumeDataFiles) {
   EXPECT_STREQ(r.status.file(), "head.nhdr");
 }
 
-struct FailNth {
-  int calls = 0;
-  int fail_at = 0;
-  static void* allocate(void* user, size_t bytes) {
-    FailNth* f = static_cast<FailNth*>(user);
-    if (f->calls++ == f->fail_at) return nullptr;
-    return ::operator new (bytes, std::align_val_t{16});
-  }
-  static void release(void* user, void* pointer, size_t bytes) {
-    (void)user;
-    (void)bytes;
-    ::operator delete (pointer, std::align_val_t{16});
-  }
-};
-
 TEST(CtCommonCoverage, RawVolumeLimitsAndAllocations) {
   RawData data;
   data.format.bytes = 8;
@@ -727,13 +712,9 @@ TEST(CtCommonCoverage, RawVolumeLimitsAndAllocations) {
   data.ny = data.nz = 1;
   data.data_file = "d.raw";
   for (int fail_at : {0, 1}) {
-    FailNth hooks_state;
+    test::FailNthBlock hooks_state;
     hooks_state.fail_at = fail_at;
-    AllocatorHooks hooks;
-    hooks.allocate = &FailNth::allocate;
-    hooks.release = &FailNth::release;
-    hooks.user = &hooks_state;
-    Arena arena(hooks, size_t{1} << 20, 256);
+    Arena arena(hooks_state.hooks(), size_t{1} << 20, 256);
     r = raw_volume(data, nullptr, &arena);
     EXPECT_EQ(r.status.code(), StatusCode::kArenaExhausted) << test::format(r.status);
   }

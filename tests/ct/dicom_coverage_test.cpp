@@ -671,19 +671,6 @@ TEST(DicomCoverage, FilesThatChangeBetweenPasses) {
   }
 }
 
-struct FailNth {
-  int calls = 0;
-  int fail_at = 0;
-  static void* allocate(void* user, size_t bytes) {
-    FailNth* f = static_cast<FailNth*>(user);
-    if (f->calls++ == f->fail_at) return nullptr;
-    return ::operator new (bytes, std::align_val_t{16});
-  }
-  static void release(void*, void* pointer, size_t) {
-    ::operator delete (pointer, std::align_val_t{16});
-  }
-};
-
 TEST(DicomCoverage, EachAllocationCanFail) {
   // 300 slices of one pixel: the records, keys, scratch and buffer each need a block of their
   // own (blocks are 4 KiB), so failing the Nth block request fails the Nth allocation.
@@ -697,13 +684,9 @@ TEST(DicomCoverage, EachAllocationCanFail) {
   }
   int failures = 0;
   for (int n = 0; n < 10; ++n) {
-    FailNth state;
+    test::FailNthBlock state;
     state.fail_at = n;
-    AllocatorHooks hooks;
-    hooks.allocate = &FailNth::allocate;
-    hooks.release = &FailNth::release;
-    hooks.user = &state;
-    Arena arena(hooks, size_t{1} << 20, 4096);
+    Arena arena(state.hooks(), size_t{1} << 20, 4096);
     SeriesRead r = read(s, true, CtReadOptions{}, &arena);
     if (r.status.is_ok()) break;
     EXPECT_EQ(r.status.code(), StatusCode::kArenaExhausted) << test::format(r.status);

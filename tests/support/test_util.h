@@ -44,6 +44,32 @@
 namespace splintcore {
 namespace test {
 
+// Allocator hooks (an arena of blocks) that refuse the block request numbered fail_at
+// (0-based; -1: none) and count the requests and the bytes still out (0 once the arena is
+// gone: every block given back).
+struct FailNthBlock {
+  int64_t calls = 0;
+  int64_t fail_at = -1;
+  int64_t outstanding = 0;
+  static void* allocate(void* user, size_t bytes) {
+    FailNthBlock* f = static_cast<FailNthBlock*>(user);
+    if (f->calls++ == f->fail_at) return nullptr;
+    f->outstanding += static_cast<int64_t>(bytes);
+    return ::operator new (bytes, std::align_val_t{16});
+  }
+  static void release(void* user, void* pointer, size_t bytes) {
+    static_cast<FailNthBlock*>(user)->outstanding -= static_cast<int64_t>(bytes);
+    ::operator delete (pointer, std::align_val_t{16});
+  }
+  AllocatorHooks hooks() {
+    AllocatorHooks h;
+    h.allocate = &FailNthBlock::allocate;
+    h.release = &FailNthBlock::release;
+    h.user = this;
+    return h;
+  }
+};
+
 // For its lifetime, files this process writes are limited to `bytes` (RLIMIT_FSIZE, as a
 // full disk: a write past it fails with EFBIG) and SIGXFSZ is ignored, as
 // remove_temporary_outputs_on_signals() has the tools do; both as they were afterwards.
