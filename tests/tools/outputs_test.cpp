@@ -142,6 +142,32 @@ TEST(OutputSet, ACommitInParallelWaitsForTheFolderLock) {
   EXPECT_EQ(contents(splint), "new splint");
 }
 
+// A lock held past the set's wait (a run stopped while it renames): commit() gives up with an
+// error naming the folder, places nothing, and the set's temporary files go with it.
+TEST(OutputSet, ALockHeldPastTheWaitIsAnErrorAndPlacesNothing) {
+  TempDir dir("outputs", "stuck");
+  const fs::path splint = dir.path / "splint.stl";
+  put(splint, "old splint");
+  const int fd = ::open(dir.path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+  Status s;
+  {
+    cli::OutputSet set;
+    set.set_lock_wait(0.2);
+    SPLINTCORE_ASSERT_OK(keep_text(&set, splint, "new splint"));
+    s = set.commit();
+  }
+  ::close(fd);
+  EXPECT_EQ(s.code(), StatusCode::kIoError);
+  EXPECT_NE(std::string(s.message()).find("another process has held this folder's lock for 0 s"),
+            std::string::npos)
+      << s.message();
+  EXPECT_EQ(std::string(s.file()), dir.path.string());
+  EXPECT_EQ(contents(splint), "old splint");
+  EXPECT_EQ(entries(dir.path), 1u);  // no temporary file left
+}
+
 // write_bytes_atomically: the parts in order, placed now or kept in a set; a failed write
 // says why and leaves the old file and no temporary file.
 TEST(WriteBytesAtomically, PartsInOrderAndAFailedWriteLeavesTheOldFile) {

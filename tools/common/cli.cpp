@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cstring>
+#include <ctime>
 
 namespace splintcore {
 namespace cli {
@@ -195,19 +196,23 @@ namespace {
 
 // Exclusive flock()s on the folders of a set's destinations, taken in name order (so two sets
 // that share folders cannot wait on each other) and released by the destructor. A folder that
-// cannot be opened is left unlocked: its rename then says what is wrong.
+// cannot be opened or locked is left unlocked: its rename then says what is wrong. A lock held
+// elsewhere is waited for, polled every 10 ms: after a second the wait is said on stderr, and
+// past `wait_seconds` it is an error naming the folder (a run stopped while it renames, with
+// Ctrl-Z, would otherwise keep every later run waiting without a word).
 class FolderLocks {
  public:
-  explicit FolderLocks(std::vector<std::string> folders) {
+  FolderLocks() = default;
+  Status take(std::vector<std::string> folders, double wait_seconds) {
     std::sort(folders.begin(), folders.end());
     folders.erase(std::unique(folders.begin(), folders.end()), folders.end());
     for (const std::string& folder : folders) {
       const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
       if (fd < 0) continue;
-      while (::flock(fd, LOCK_EX) != 0 && errno == EINTR) {
-      }
       fds_.push_back(fd);
+      SPLINTCORE_RETURN_IF_ERROR(wait_for(fd, folder, wait_seconds));
     }
+    return Status::ok();
   }
   ~FolderLocks() {
     for (const int fd : fds_) ::close(fd);  // closing releases the lock
@@ -216,6 +221,33 @@ class FolderLocks {
   FolderLocks& operator=(const FolderLocks&) = delete;
 
  private:
+  static Status wait_for(int fd, const std::string& folder, double wait_seconds) {
+    const double start = monotonic_seconds();
+    bool told = false;
+    for (;;) {
+      if (::flock(fd, LOCK_EX | LOCK_NB) == 0) return Status::ok();
+      if (errno == EINTR) continue;
+      if (errno != EWOULDBLOCK) return Status::ok();  // no lock here: the renames go on
+      const double waited = monotonic_seconds() - start;
+      if (waited >= wait_seconds) {
+        return make_error(StatusCode::kIoError,
+                          "cannot place the outputs: another process has held this folder's "
+                          "lock for ",
+                          static_cast<uint64_t>(waited),
+                          " s (a splintcore run stopped while it "
+                          "renames its files?); nothing of this run was placed")
+            .in_file(folder.c_str());
+      }
+      if (!told && waited >= 1.0) {
+        std::fprintf(stderr, "splintcore: waiting for %s: another run is placing its files there\n",
+                     printable(folder.c_str()).c_str());
+        told = true;
+      }
+      struct timespec pause = {0, 10 * 1000 * 1000};
+      ::nanosleep(&pause, nullptr);
+    }
+  }
+
   std::vector<int> fds_;
 };
 
@@ -233,7 +265,8 @@ Status OutputSet::commit() {
   std::vector<std::string> folders;
   for (const std::unique_ptr<AtomicFile>& f : files_)
     folders.push_back(folder_of(f->destination()));
-  const FolderLocks locks(std::move(folders));  // one run's renames at a time in a folder
+  FolderLocks locks;  // one run's renames at a time in a folder
+  SPLINTCORE_RETURN_IF_ERROR(locks.take(std::move(folders), lock_wait_seconds_));
   for (const std::unique_ptr<AtomicFile>& f : files_) {
     struct stat st;
     if (::stat(f->destination(), &st) == 0 && S_ISDIR(st.st_mode)) {

@@ -92,7 +92,8 @@ void print_error(const Status& status);
 // without commit(), it removes every temporary file. keep() may be called from several threads.
 // commit() holds an exclusive flock() on each destination's folder while it renames, so two runs
 // writing the same files at once place theirs one set after the other (the later set whole),
-// not interleaved; another program that takes the same lock waits for the renames to end.
+// not interleaved; another program that takes the same lock waits for the renames to end. A
+// lock held elsewhere longer than the wait (set_lock_wait) is an error: nothing is placed.
 class OutputSet {
  public:
   // Keeps `file` (open, written) for commit(): finished now; on an error it is removed.
@@ -100,8 +101,12 @@ class OutputSet {
   Status commit();
   // A file written whole: kept in `set`, or committed now when `set` is null.
   static Status place(std::unique_ptr<AtomicFile> file, OutputSet* set);
+  // How long commit() waits for a folder's lock held elsewhere before it gives up, placing
+  // nothing (default 60 s; the renames themselves take milliseconds).
+  void set_lock_wait(double seconds) { lock_wait_seconds_ = seconds; }
 
  private:
+  double lock_wait_seconds_ = 60;
   std::mutex mutex_;
   std::vector<std::unique_ptr<AtomicFile>> files_;
 };
