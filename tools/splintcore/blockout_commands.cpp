@@ -35,7 +35,8 @@ std::vector<OptionSpec> sweep_options(SweepArgs* a, bool blockout) {
           .marks(&a->has_direction),
       non_negative("--voxel", "H", &a->voxel, "the voxel size, mm (> 0)",
                    "--voxel needs a number of mm >= 0"),
-      output_option(blockout ? "OUT.stl" : "SWEPT.stl", &a->output, "the STL to write"),
+      output_option(blockout ? "OUT.stl" : "SWEPT.stl", &a->output,
+                    blockout ? "the STL to write (OUT.ply: binary PLY)" : "the STL to write"),
   };
   if (!blockout) {
     specs.push_back(non_negative("--extent", "E", &a->extent,

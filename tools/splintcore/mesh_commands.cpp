@@ -87,7 +87,7 @@ struct ConvertArgs {
 // `convert`'s options, in the order its --help lists them.
 std::vector<OptionSpec> convert_options(ConvertArgs* a) {
   return {
-      output_option("OUT.stl", &a->output, "the STL to write"),
+      output_option("OUT.stl", &a->output, "the mesh to write: STL (OUT.ply: binary PLY)"),
       flag("--ascii", &a->ascii, "write ASCII STL (default binary)"),
       positive("--scale", "F", &a->scale, "multiply every coordinate by F (default 1)",
                "--scale needs a number > 0, e.g. 25.4 for a mesh in inches"),

@@ -25,7 +25,7 @@ struct PrepareArgs {
 // `prepare`'s options, in the order its --help lists them.
 std::vector<OptionSpec> prepare_options(PrepareArgs* a) {
   return {
-      output_option("OUT.stl", &a->output, "the prepared mesh (STL)"),
+      output_option("OUT.stl", &a->output, "the prepared mesh: STL (OUT.ply: binary PLY)"),
       flag("--ascii", &a->ascii, "write ASCII STL (default binary)"),
       non_negative("--min-island", "MM2", &a->min_island,
                    "remove components under this area, mm^2 (default 10; the largest stays)",

@@ -29,7 +29,7 @@ struct BaseArgs {
 // `base`'s options, in the order its --help lists them.
 std::vector<OptionSpec> base_options(BaseArgs* a) {
   return {
-      output_option("BASE.stl", &a->output, "the STL to write"),
+      output_option("BASE.stl", &a->output, "the base to write: STL (BASE.ply: binary PLY)"),
       flag("--ascii", &a->ascii, "write ASCII STL (default binary)"),
       size("--max-input-bytes", "SIZE", &a->max_input_bytes,
            "refuse a larger case file (default 16M)",
@@ -104,7 +104,7 @@ std::vector<OptionSpec> boolean_options(BooleanArgs* a) {
       one_of("--difference", &a->op, 0, "A minus B", one),
       one_of("--union", &a->op, 1, "A or B", one),
       one_of("--intersection", &a->op, 2, "A and B", one),
-      output_option("OUT.stl", &a->output, "the STL to write"),
+      output_option("OUT.stl", &a->output, "the result to write: STL (OUT.ply: binary PLY)"),
       point_list("--translate-b", "X,Y,Z", &a->translate_b,
                  "move B, mm: once for every B file, or once per B file",
                  "--translate-b needs X,Y,Z (three finite numbers, mm)"),
