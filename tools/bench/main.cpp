@@ -774,31 +774,6 @@ Status reconstruct_phantom_jaws(const Context& ctx, const CtVolume& volume,
   return Status::ok();
 }
 
-// Time per progress stage ("threshold", "region growing", "reconstruct: region box",
-// "marching cubes"), last run: where reconstruction's time goes (a Progress's report).
-struct Stages {
-  std::vector<std::string> names;
-  std::vector<double> seconds;
-  std::string current;
-  double since = 0;
-  static bool report(void* user, const char* stage, uint64_t, uint64_t) {
-    Stages* c = static_cast<Stages*>(user);
-    const double now = monotonic_seconds();
-    if (!c->current.empty()) {
-      size_t i = 0;
-      while (i < c->names.size() && c->names[i] != c->current) ++i;
-      if (i == c->names.size()) {
-        c->names.push_back(c->current);
-        c->seconds.push_back(0);
-      }
-      c->seconds[i] += now - c->since;
-    }
-    c->current = stage;
-    c->since = now;
-    return true;
-  }
-};
-
 // The 512^3 phantom's volume, its voxels in `arena`.
 Status phantom_512_in(Arena& arena, cli::CtPhantom* phantom, CtVolume* volume) {
   SPLINTCORE_RETURN_IF_ERROR(init_phantom_512(phantom));
@@ -838,9 +813,11 @@ void bench_ct_reconstruct(Harness& h, Arena& arena) {
     double stage[5] = {0, 0, 0, 0, 0};
     uint64_t window = 0, triangles[2] = {0, 0}, voxels[2] = {0, 0};
     uint32_t layers = 0;
-    Stages clock;
+    // Time per progress stage ("threshold", "region growing", "reconstruct: region box",
+    // "marching cubes"), last run: where reconstruction's time goes.
+    StageClock clock;
     Progress progress;
-    progress.report = &Stages::report;
+    progress.report = &StageClock::report;
     progress.user = &clock;
     h.measure(name, volume.voxel_count(), ct_arena, [&](Arena& a) {
       Context ctx(&a, nullptr, &progress);
@@ -856,7 +833,7 @@ void bench_ct_reconstruct(Harness& h, Arena& arena) {
       PhantomJaws jaws;
       SPLINTCORE_RETURN_IF_ERROR(
           reconstruct_phantom_jaws(ctx, volume, phantom, &jaws, [&](int stage_index) {
-            if (stage_index >= 2) Stages::report(&clock, "reconstruct: returned", 0, 0);
+            if (stage_index >= 2) StageClock::report(&clock, "reconstruct: returned", 0, 0);
             lap(stage_index);
           }));
       window = jaws.in_window;
