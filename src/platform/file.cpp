@@ -102,7 +102,18 @@ Status FileSource::open_standard_input() {
 
 Status FileSource::opened(const char* path) {
   struct stat st;
-  if (fstat(fileno(file_), &st) == 0 && S_ISREG(st.st_mode)) {
+  if (fstat(fileno(file_), &st) != 0) {  // e.g. a closed standard input
+    const int cause = errno;
+    close();
+    errno = cause;
+    return errno_error("cannot read", path);
+  }
+  if (S_ISDIR(st.st_mode)) {
+    close();
+    errno = EISDIR;
+    return errno_error("cannot read", path);
+  }
+  if (S_ISREG(st.st_mode)) {
     size_ = static_cast<uint64_t>(st.st_size);
     // A regular file of size 0 may still hold bytes: procfs and sysfs report 0 for what they
     // make as they are read. One byte read ahead (and pushed back) tells them from an empty
@@ -114,10 +125,6 @@ Status FileSource::opened(const char* path) {
         size_ = kUnknownSize;
       }
     }
-  } else if (fstat(fileno(file_), &st) == 0 && S_ISDIR(st.st_mode)) {
-    close();
-    errno = EISDIR;
-    return errno_error("cannot read", path);
   } else {
     size_ = kUnknownSize;  // a pipe or device: readers check counts as they go
   }

@@ -158,6 +158,8 @@ check "the standard input's mesh checked" -- grep -q '"closed":true' "$work/out"
 expect_exit 1 "boolean with - twice" -- bash -c 'exec "$2" boolean --difference - - -o "$3" <"$1"' twice "$fixtures/stl/torus_binary.stl" "$tool" "$work/never.stl"
 check "- twice named" -- grep -q 'standard input ("-") given for more than one input' "$work/err"
 check "nothing written for - twice" -- test ! -e "$work/never.stl"
+expect_exit 1 "check - with the standard input closed" -- bash -c 'exec "$@" <&-' closed_in "$tool" check -
+check "the closed standard input named" -- grep -q "(standard input): cannot read: Bad file descriptor" "$work/err"
 if [ -r /proc/self/status ]; then
   expect_exit 1 "check a procfs file" -- "$tool" check /proc/self/status
   check "a procfs file is read, not taken as empty" -- bash -c '! grep -q "0 bytes" "$1"' grep0 "$work/err"
