@@ -228,26 +228,41 @@ std::string extension_of(const char* path) {
   return ext;
 }
 
+// The output is binary PLY (its name ends in .ply, any case), else STL.
+bool writes_ply(const char* path) { return extension_of(path) == "ply"; }
+
+// The streaming writer's options: with threads, a buffer large enough for the records to be
+// encoded in tasks (add_mesh), where the arena has room to spare for it.
+StlWriteOptions stl_options(const Context& ctx, bool ascii) {
+  StlWriteOptions wo;
+  wo.format = ascii ? StlFormat::kAscii : StlFormat::kBinary;
+  const Arena& arena = *ctx.arena;
+  if (has_threads(ctx.executor) && arena.cap() - arena.used() >= kTaskWriteBuffer * 4) {
+    wo.buffer_bytes = kTaskWriteBuffer;
+  }
+  return wo;
+}
+
 }  // namespace
 
 const char* mesh_output_format(const char* path, bool ascii) {
-  if (extension_of(path) == "ply") return "binary PLY";
+  if (writes_ply(path)) return "binary PLY";
   return ascii ? "ascii STL" : "binary STL";
 }
 
 Status check_mesh_output(const char* path, bool ascii, bool stl_only) {
-  const std::string ext = extension_of(path);
-  if (ext == "ply" && stl_only) {
+  if (writes_ply(path) && stl_only) {
     return make_error(StatusCode::kUnsupported,
                       "this output is streamed as STL: name it .stl (convert makes a PLY of it)")
         .in_file(path);
   }
-  if (ext == "ply" && ascii) {
+  if (writes_ply(path) && ascii) {
     return make_error(StatusCode::kUnsupported,
                       "PLY is written binary only: drop --ascii, or name the output .stl")
         .in_file(path);
   }
   // Formats other programs read by name: STL bytes under such a name would not open there.
+  const std::string ext = extension_of(path);
   static const char* const kOther[] = {"obj",  "3mf", "off", "amf",  "wrl", "vrml", "x3d", "glb",
                                        "gltf", "dae", "fbx", "step", "stp", "iges", "igs"};
   for (const char* other : kOther) {
@@ -265,20 +280,9 @@ Status write_mesh_uncommitted(const Context& ctx, const Mesh& mesh, const char* 
                               AtomicFile* file) {
   SPLINTCORE_RETURN_IF_ERROR(check_mesh_output(path, ascii));
   SPLINTCORE_RETURN_IF_ERROR(file->open(path));
-  if (extension_of(path) == "ply") {
-    const Status s = file->with_write_cause(write_ply(mesh, Span<const uint8_t>(), file->sink()));
-    if (!s.is_ok()) file->abort();
-    return s;
-  }
-  StlWriteOptions wo;
-  wo.format = ascii ? StlFormat::kAscii : StlFormat::kBinary;
-  // With threads, a buffer large enough for the records to be encoded in tasks (add_mesh),
-  // where the arena has room to spare for it.
-  const Arena& arena = *ctx.arena;
-  if (has_threads(ctx.executor) && arena.cap() - arena.used() >= kTaskWriteBuffer * 4) {
-    wo.buffer_bytes = kTaskWriteBuffer;
-  }
-  const Status s = file->with_write_cause(write_stl(ctx, mesh, file->sink(), wo));
+  const Status s = file->with_write_cause(
+      writes_ply(path) ? write_ply(mesh, Span<const uint8_t>(), file->sink())
+                       : write_stl(ctx, mesh, file->sink(), stl_options(ctx, ascii)));
   if (!s.is_ok()) file->abort();
   return s;
 }
