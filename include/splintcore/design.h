@@ -122,6 +122,12 @@ struct CaseFile {
   // The wall-thickness check ("min_thickness", mm; 0: not run): thin spots are reported
   // (DesignReport::thickness), not refused.
   double min_thickness = 0;
+  // The side-wall check (DesignReport::walls) runs on every design; with "max_wall_crossing" (a
+  // share of the arch, 0 to 1) a jaw that crosses the base's outer or inner wall along more
+  // than that share of the base's length along the arch is refused. The default, 1, never
+  // refuses: a base narrower than the teeth crosses its walls as a misplaced jaw does.
+  static constexpr double kDefaultMaxWallCrossing = 1.0;
+  double max_wall_crossing = kDefaultMaxWallCrossing;
   // "placement": "case" (false: the splint stays in the case's frame) or "tray" (true: the
   // whole case is moved onto the printer's build tray first; DesignReport::tray_translation).
   bool place_on_tray = false;
@@ -282,6 +288,21 @@ struct FusionReport {
   uint64_t scan_triangles = 0;
 };
 
+// Where a jaw, placed, crosses the base's side walls (BaseSide::kOuter, kInner): along the arch
+// its imprint would open through the splint's side there, the teeth not held by it. Lengths
+// along the arch: the base's section centres (the mean of a section's points) joined in order;
+// a stretch between two sections counts when the jaw meets a wall triangle of it (exactly).
+struct WallCrossing {
+  double arch_mm = 0;          // the base's whole length along the arch
+  double outer_mm = 0;         // where the jaw crosses the outer (buccal) wall
+  double inner_mm = 0;         // the inner (lingual) wall
+  double either_mm = 0;        // either wall: max_wall_crossing bounds either_mm / arch_mm
+  uint32_t stretches = 0;      // the base's stretches (sections - 1)
+  uint32_t crossed = 0;        // of them, those where the jaw crosses either wall
+  uint32_t first_stretch = 0;  // the first crossed (between sections k and k + 1), if any
+  Vec3 first_at{};             // its centre: the mean of its two section centres (mm)
+};
+
 struct DesignReport {
   uint64_t jaw_triangles = 0;  // all jaws together, as given
   // Scan-CT fusion: per jaw in case order (fused[j]: jaw j has a scan), at most kMaxFusedJaws.
@@ -318,6 +339,9 @@ struct DesignReport {
   char blockout_fallback[Status::kMessageCapacity] = {};
   bool labelled = false;  // the case has "label"
   LabelStats label;
+  // The side-wall check: per jaw in case order, the first kMaxBlockoutJaws of them.
+  uint32_t wall_jaws = 0;
+  WallCrossing walls[kMaxBlockoutJaws];
   bool thickness_checked = false;  // the case has "min_thickness"
   ThicknessReport thickness;
   // "placement": "tray": the case was moved by this translation (mm, a multiple of 1/64)
@@ -366,6 +390,9 @@ uint32_t exact_blockout_jaws(const DesignReport& report);
 // returned), kInvalidMesh for a jaw that does not reach the base once it is made ("design: jaw
 // j (role) does not reach the base: placed, it spans [..] - [..] and the base [..] - [..] mm":
 // no triangle of it within the Boolean's region of the base, so it could leave no imprint),
+// kInvalidMesh for a jaw that crosses the base's side walls along more than the case's
+// max_wall_crossing share of the arch ("design: jaw j (role) crosses the base's side walls
+// along ..."; the crossing of every jaw is in report->walls, measured on every design),
 // kInvalidArgument for two jaws that are one ("design: jaw k (role) is jaw j (role) again":
 // the same triangles and vertices under the same transform, one file given twice),
 // kInvalidArgument for a case with a blockout whose maxilla is not above its mandible along

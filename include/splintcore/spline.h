@@ -100,6 +100,18 @@ uint64_t splint_base_bound(uint64_t sections, uint32_t points_per_section);
 Status build_splint_base(const Context& ctx, Span<const Line> upper, Span<const Line> lower,
                          const BaseParams& params, Mesh* out, BaseReport* report);
 
+// The side of the base's section that a section segment lies on, for callers that need to tell
+// the base's faces apart (the design's side-wall check). The base's layout: section k's points
+// are vertices k * P .. k * P + P - 1 (P = points_per_section), corner after corner (upper
+// inner, upper outside, lower outside, lower inner), each corner one point, or
+// corner_segments + 1 points along its arc when rounded; segment j runs from point j to point
+// (j + 1) mod P, and triangles 2 (k P + j) and 2 (k P + j) + 1 are the ruled surface along
+// segment j between sections k and k + 1 (the end caps follow all of those). A side is the
+// straight segment between two corners and the half of each corner's arc next to it; the
+// middle segment of an arc of one segment belongs to neither (kCorner).
+enum class BaseSide : uint8_t { kTop, kOuter, kBottom, kInner, kCorner };
+BaseSide base_segment_side(const BaseParams& params, uint32_t segment);
+
 }  // namespace splintcore
 
 #endif  // SPLINTCORE_SPLINE_H

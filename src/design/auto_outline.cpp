@@ -332,6 +332,9 @@ void write_later_stages(JsonWriter& w, const CaseFile& c) {
     w.end_object();
   }
   if (c.min_thickness > 0) w.add("min_thickness", c.min_thickness);
+  if (c.max_wall_crossing != CaseFile::kDefaultMaxWallCrossing) {
+    w.add("max_wall_crossing", c.max_wall_crossing);
+  }
   w.add("placement", c.place_on_tray ? "tray" : "case");
   w.add("printer", c.printer);
   if (c.memory_cap > 0) w.add("memory_cap", c.memory_cap);

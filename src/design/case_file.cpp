@@ -46,6 +46,7 @@ const CaseNumber kCaseNumbers[] = {
     {"label.stroke_mm", "mm", 0.05, 5, false, kNoCap, false, "0.35", ""},
     {"label.depth_mm", "mm", 0.05, 5, false, kNoCap, false, "0.4", ""},
     {"min_thickness", "mm", 0.05, 20, false, kNoCap, false, "not checked", ""},
+    {"max_wall_crossing", "", 0, 1, false, kNoCap, false, "1 (not refused)", "a share of the arch"},
     {"plan.maxilla", "mm", -1e6, 1e6, false, kNoCap, false, "required",
      "each of the 16 entries; rigid (see Jaw)"},
     {"plan.mandible", "mm", -1e6, 1e6, false, kNoCap, false, "required",
@@ -909,8 +910,8 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(root, JsonType::kObject, "the case"));
   static const char* const kRootKeys[] = {
       "splintcore_case", "case_id", "units",   "jaws",       "base",          "insertion_direction",
-      "blockout",        "ct",      "printer", "memory_cap", "min_thickness", "placement",
-      "label",           "output",  "plan",    nullptr};
+      "blockout",        "ct",      "printer", "memory_cap", "min_thickness", "max_wall_crossing",
+      "placement",       "label",   "output",  "plan",       nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(root, kRootKeys, "the case"));
 
   SPLINTCORE_RETURN_IF_ERROR(parse_version_and_id(r, root, name, out));
@@ -948,6 +949,9 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   }
   if (const JsonValue* t = doc.member(root, "min_thickness")) {
     SPLINTCORE_RETURN_IF_ERROR(r.number(*t, "min_thickness", 0, &out->min_thickness));
+  }
+  if (const JsonValue* w = doc.member(root, "max_wall_crossing")) {
+    SPLINTCORE_RETURN_IF_ERROR(r.number(*w, "max_wall_crossing", 0, &out->max_wall_crossing));
   }
   if (const JsonValue* pl = doc.member(root, "placement")) {
     SPLINTCORE_RETURN_IF_ERROR(parse_placement(r, *pl, out));

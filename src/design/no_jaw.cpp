@@ -1,7 +1,9 @@
 // Jaws that are no jaws (no_jaw.h): a triangle soup or a flat sheet given as a jaw or a scan.
 // Three measures, each linear and far from any real jaw: the triangles per connected piece
 // (union-find over the vertices), the box of the corners (a jaw in other units than mm) and
-// the relief across the plane of the summed area vectors.
+// the relief across the plane of the summed area vectors. Once the base is made: jaws that do
+// not reach it, and where jaws cross its side walls (the stretches of the arch where a placed
+// jaw meets a wall triangle, through a grid of the walls).
 #include "design/no_jaw.h"
 
 #include <cmath>
@@ -280,6 +282,253 @@ Status refuse_out_of_reach(const Context& ctx, const CaseFile& c, Span<const Mes
     s.append(" - ");
     append_corner(&s, b.hi);
     s.append(" mm; check its transform and the picks");
+    return s.at_index(j);
+  }
+  return Status::ok();
+}
+
+namespace {
+
+// The base's side-wall triangles, stretch by stretch (wall w lies in stretch w / per_stretch),
+// and a uniform grid of them over their box.
+struct WallIndex {
+  uint32_t stretches = 0;
+  uint32_t per_stretch = 0;
+  uint32_t* tri = nullptr;   // the base triangle of wall w
+  uint8_t* outer = nullptr;  // 1: the outer wall, 0: the inner
+  Aabb box;                  // of the wall triangles
+  double cell = 1.0;         // mm, the grid's edge
+  uint32_t n[3] = {1, 1, 1};
+  uint32_t* start = nullptr;  // the walls of cell c: items[start[c] .. start[c + 1])
+  uint32_t* items = nullptr;
+};
+
+constexpr uint32_t kMaxWallGridCells = uint32_t{1} << 16;
+
+double coordinate(const Vec3& p, int axis) { return axis == 0 ? p.x : axis == 1 ? p.y : p.z; }
+
+// The cells a box covers, per axis [lo, hi] (the box overlaps the grid's).
+void cell_span(const WallIndex& g, const Aabb& b, uint32_t lo[3], uint32_t hi[3]) {
+  for (int a = 0; a < 3; ++a) {
+    const double o = coordinate(g.box.lo, a), last = static_cast<double>(g.n[a] - 1);
+    const double l = std::floor((coordinate(b.lo, a) - o) / g.cell);
+    const double h = std::floor((coordinate(b.hi, a) - o) / g.cell);
+    lo[a] = static_cast<uint32_t>(l < 0 ? 0 : l > last ? last : l);
+    hi[a] = static_cast<uint32_t>(h < 0 ? 0 : h > last ? last : h);
+  }
+}
+
+Aabb triangle_box(const Mesh& m, const Triangle& t) {
+  Aabb b;
+  for (uint32_t v : t.v) b.add(m.vertices[v]);
+  return b;
+}
+
+// Each cell's walls: counted, summed, then filled (`fill` true) into the arena.
+Status grid_walls(Arena& arena, const Mesh& base, WallIndex* g) {
+  const uint64_t walls = uint64_t{g->stretches} * g->per_stretch;
+  const Vec3 e = g->box.extent();
+  auto cells_at = [&](double cell) {
+    return (static_cast<uint64_t>(e.x / cell) + 1) * (static_cast<uint64_t>(e.y / cell) + 1) *
+           (static_cast<uint64_t>(e.z / cell) + 1);
+  };
+  while (cells_at(g->cell) > kMaxWallGridCells) g->cell *= 2;
+  g->n[0] = static_cast<uint32_t>(e.x / g->cell) + 1;
+  g->n[1] = static_cast<uint32_t>(e.y / g->cell) + 1;
+  g->n[2] = static_cast<uint32_t>(e.z / g->cell) + 1;
+  const uint32_t cells = g->n[0] * g->n[1] * g->n[2];
+  g->start = arena.allocate_array<uint32_t>(size_t{cells} + 1);
+  uint32_t* cursor = arena.allocate_array<uint32_t>(cells);
+  if (g->start == nullptr || cursor == nullptr) return arena.exhausted_status();
+  std::memset(g->start, 0, (size_t{cells} + 1) * sizeof(uint32_t));
+  for (int pass = 0; pass < 2; ++pass) {
+    for (uint64_t w = 0; w < walls; ++w) {
+      uint32_t lo[3], hi[3];
+      cell_span(*g, triangle_box(base, base.triangles[g->tri[w]]), lo, hi);
+      for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
+        for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
+          for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
+            const uint32_t c = (z * g->n[1] + y) * g->n[0] + x;
+            if (pass == 0) {
+              ++g->start[c + 1];
+            } else {
+              g->items[cursor[c]++] = static_cast<uint32_t>(w);
+            }
+          }
+        }
+      }
+    }
+    if (pass == 1) break;
+    for (uint32_t c = 0; c < cells; ++c) g->start[c + 1] += g->start[c];
+    std::memcpy(cursor, g->start, size_t{cells} * sizeof(uint32_t));
+    g->items = arena.allocate_array<uint32_t>(g->start[cells]);
+    if (g->items == nullptr && g->start[cells] > 0) return arena.exhausted_status();
+  }
+  return Status::ok();
+}
+
+// The side-wall triangles of `base` (built with `params`: S sections of P points) and their
+// grid; stretches 0 when the base is not laid out as build_splint_base makes it.
+Status index_walls(Arena& arena, const Mesh& base, const BaseParams& params,
+                   const BaseReport& built, WallIndex* g) {
+  const uint32_t S = built.sections, P = built.points_per_section;
+  if (S < 2 || P < 4 || P > 4 * 17 || base.triangles.size() < 2 * uint64_t{S - 1} * P ||
+      base.vertices.size() < uint64_t{S} * P) {
+    return Status::ok();
+  }
+  uint32_t segment[4 * 17];
+  uint8_t outer[4 * 17];
+  uint32_t m = 0;
+  for (uint32_t j = 0; j < P; ++j) {
+    const BaseSide side = base_segment_side(params, j);
+    if (side != BaseSide::kOuter && side != BaseSide::kInner) continue;
+    segment[m] = j;
+    outer[m++] = side == BaseSide::kOuter ? 1 : 0;
+  }
+  g->per_stretch = 2 * m;
+  const size_t walls = size_t{S - 1} * g->per_stretch;
+  g->tri = arena.allocate_array<uint32_t>(walls);
+  g->outer = arena.allocate_array<uint8_t>(walls);
+  if ((g->tri == nullptr || g->outer == nullptr) && walls > 0) return arena.exhausted_status();
+  size_t w = 0;
+  for (uint32_t k = 0; k + 1 < S; ++k) {
+    for (uint32_t i = 0; i < m; ++i) {
+      for (uint32_t h = 0; h < 2; ++h, ++w) {
+        g->tri[w] = 2 * (k * P + segment[i]) + h;
+        g->outer[w] = outer[i];
+        g->box.add(triangle_box(base, base.triangles[g->tri[w]]));
+      }
+    }
+  }
+  g->stretches = S - 1;
+  return grid_walls(arena, base, g);
+}
+
+// The walls' box in jaw j's own frame (its 8 corners taken back through the transform), grown
+// by a margin for the rounding of placed vertices to float32: a triangle whose corners as given
+// are all beyond one side of it cannot meet a wall once placed.
+Aabb walls_in_jaw_frame(const CaseFile& c, size_t j, const Aabb& box) {
+  const RigidTransform back = inverse(c.jaws[j].transform);
+  Aabb local;
+  for (int i = 0; i < 8; ++i) {
+    local.add(back.apply_point(Vec3{(i & 1) != 0 ? box.hi.x : box.lo.x,
+                                    (i & 2) != 0 ? box.hi.y : box.lo.y,
+                                    (i & 4) != 0 ? box.hi.z : box.lo.z}));
+  }
+  const Vec3 e = local.extent();
+  const double margin = 1e-3 + 1e-5 * (std::fabs(local.lo.x) + std::fabs(local.lo.y) +
+                                       std::fabs(local.lo.z) + e.x + e.y + e.z);
+  local.lo = local.lo - Vec3{margin, margin, margin};
+  local.hi = local.hi + Vec3{margin, margin, margin};
+  return local;
+}
+
+// Jaw j against the walls: hit[k] gets bit 1 where it meets stretch k's outer wall, 2 its inner.
+void cross_walls(const CaseFile& c, Span<const Mesh> jaws, size_t j, const Mesh& base,
+                 const WallIndex& g, uint8_t* hit) {
+  const Mesh& jaw = jaws[j];
+  const Aabb local = walls_in_jaw_frame(c, j, g.box);
+  for (const Triangle& t : jaw.triangles) {
+    uint8_t beyond = 0x3f;
+    for (uint32_t v : t.v) beyond &= local.outcode(jaw.vertices[v]);
+    if (beyond != 0) continue;
+    Vec3 p[3];
+    Aabb tb;
+    bool placed = true;
+    for (int i = 0; i < 3; ++i) {
+      placed = placed && b_vertex(c, jaws, j, t.v[i], &p[i]);
+      tb.add(p[i]);
+    }
+    if (!placed || !tb.overlaps(g.box) || collinear3d(p[0], p[1], p[2])) continue;
+    uint32_t lo[3], hi[3];
+    cell_span(g, tb, lo, hi);
+    for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
+      for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
+        for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
+          const uint32_t cell = (z * g.n[1] + y) * g.n[0] + x;
+          for (uint32_t e = g.start[cell]; e < g.start[cell + 1]; ++e) {
+            const uint32_t w = g.items[e];
+            const uint32_t k = w / g.per_stretch;
+            const uint8_t bit = g.outer[w] != 0 ? 1 : 2;
+            if ((hit[k] & bit) != 0) continue;
+            const Triangle& b = base.triangles[g.tri[w]];
+            const Vec3& a0 = base.vertices[b.v[0]];
+            const Vec3& a1 = base.vertices[b.v[1]];
+            const Vec3& a2 = base.vertices[b.v[2]];
+            if (!tb.overlaps(triangle_box(base, b)) || collinear3d(a0, a1, a2)) continue;
+            if (triangles_intersect(p[0], p[1], p[2], a0, a1, a2)) hit[k] |= bit;
+          }
+        }
+      }
+    }
+  }
+}
+
+// The mean of section k's points.
+Vec3 section_centre(const Mesh& base, uint32_t points, uint32_t k) {
+  Vec3 sum{};
+  for (uint32_t i = 0; i < points; ++i) sum = sum + base.vertices[size_t{k} * points + i];
+  return sum * (1.0 / points);
+}
+
+// The lengths along the arch of jaw j's crossings (hit, per stretch).
+WallCrossing crossing_lengths(const Mesh& base, const BaseReport& built, const uint8_t* hit) {
+  WallCrossing w;
+  w.stretches = built.sections - 1;
+  bool first = true;
+  Vec3 a = section_centre(base, built.points_per_section, 0);
+  for (uint32_t k = 0; k < w.stretches; ++k) {
+    const Vec3 b = section_centre(base, built.points_per_section, k + 1);
+    const double len = length(b - a);
+    w.arch_mm += len;
+    if ((hit[k] & 1) != 0) w.outer_mm += len;
+    if ((hit[k] & 2) != 0) w.inner_mm += len;
+    if (hit[k] != 0) {
+      w.either_mm += len;
+      ++w.crossed;
+      if (first) {
+        w.first_stretch = k;
+        w.first_at = (a + b) * 0.5;
+        first = false;
+      }
+    }
+    a = b;
+  }
+  return w;
+}
+
+}  // namespace
+
+Status measure_side_walls(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                          const Mesh& base, const BaseReport& built, DesignReport* report) {
+  const size_t n = jaws.size() < c.jaws.size() ? jaws.size() : c.jaws.size();
+  report->wall_jaws = 0;
+  if (n == 0) return Status::ok();
+  Arena& arena = *ctx.arena;
+  ArenaScope scope(arena);
+  WallIndex g;
+  SPLINTCORE_RETURN_IF_ERROR(index_walls(arena, base, c.base, built, &g));
+  if (g.stretches == 0 || g.per_stretch == 0) return Status::ok();
+  uint8_t* hit = arena.allocate_array<uint8_t>(n * g.stretches);
+  if (hit == nullptr) return arena.exhausted_status();
+  std::memset(hit, 0, n * g.stretches);
+  auto task = [&](uint32_t j) { cross_walls(c, jaws, j, base, g, hit + size_t{j} * g.stretches); };
+  parallel_for_each(ctx.executor, static_cast<uint32_t>(n), task);
+  for (size_t j = 0; j < n; ++j) {
+    const WallCrossing w = crossing_lengths(base, built, hit + j * g.stretches);
+    if (j < DesignReport::kMaxBlockoutJaws) {
+      report->walls[j] = w;
+      report->wall_jaws = static_cast<uint32_t>(j + 1);
+    }
+    const double share = w.arch_mm > 0 ? w.either_mm / w.arch_mm : 0.0;  // as reported
+    if (!(share > c.max_wall_crossing)) continue;
+    Status s = make_error(StatusCode::kInvalidMesh, "design: jaw ", j, " (", c.jaws[j].role,
+                          ") crosses the base's side walls along ");
+    s.append_f64(shown(w.either_mm)).append(" of its ").append_f64(shown(w.arch_mm));
+    s.append(" mm (share ").append_f64(shown(share));
+    s.append(", max_wall_crossing ").append_f64(c.max_wall_crossing).append("), first at ");
+    append_corner(&s, w.first_at);
+    s.append(": its teeth lie outside the outline there; check the jaw's transform and the picks");
     return s.at_index(j);
   }
   return Status::ok();

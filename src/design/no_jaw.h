@@ -1,7 +1,8 @@
 // Jaws that are no jaws (issue 30, "a jaw that is a single triangle soup without any tooth"):
 // refused up front, naming the cause, before the outline, the fusion or the Boolean make
 // something of them (an outline of noise, a fit to a plane, or a base with nothing subtracted);
-// and, once the base is made, jaws that do not reach it (no imprint).
+// and, once the base is made, jaws that do not reach it (no imprint) and jaws whose teeth cross
+// its side walls (a jaw moved sideways, picks off the arch).
 #ifndef SPLINTCORE_DESIGN_NO_JAW_H
 #define SPLINTCORE_DESIGN_NO_JAW_H
 
@@ -53,6 +54,23 @@ Status refuse_no_jaw(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
 // jaw in a task of its own on ctx.executor. Arena: a byte a jaw, returned.
 Status refuse_out_of_reach(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
                            const Mesh& base);
+
+// The side-wall check: each jaw of `c` (placed by b_vertex) against the side walls of `base`
+// (build_case_base's mesh for c.base, its sections and points per section in `built`): the
+// stretches between consecutive sections where a jaw triangle meets an outer or an inner wall
+// triangle (BaseSide; exactly, triangles_intersect; degenerate triangles skipped), as lengths
+// along the arch (WallCrossing) into report->walls (the first kMaxBlockoutJaws jaws;
+// report->wall_jaws). There the jaw's imprint would open through the splint's side: its teeth
+// lie outside the outline, as they do for a jaw moved sideways by a wrong transform, or picks
+// off the arch. A jaw crossing more than c.max_wall_crossing of the arch is kInvalidMesh
+// naming it (the first in case order), the lengths, where the first crossing is and what to
+// check. Only the jaw triangles whose corners, as given, are not all beyond one side of the
+// walls' box taken back into the jaw's frame are placed and tested, through a uniform grid of
+// the wall triangles. Threads: each jaw in a task of its own on ctx.executor. Arena: 5 bytes a
+// wall triangle, 8 a grid cell (at most 2^16 cells), 4 a (cell, wall triangle) pair and a byte
+// a stretch per jaw, all returned. Errors: kInvalidMesh, kArenaExhausted.
+Status measure_side_walls(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws,
+                          const Mesh& base, const BaseReport& built, DesignReport* report);
 
 // With a blockout, the maxilla must lie on the side of the mandible the insertion direction d
 // points to (its vertices' mean along d, placed by b_vertex, above the mandible's): the

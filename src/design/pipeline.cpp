@@ -764,6 +764,8 @@ Status cut_base_with(const Context& ctx, const CaseFile& c, Span<const Mesh> jaw
   Mesh base(&arena);
   SPLINTCORE_RETURN_IF_ERROR(stage_error(build_case_base(ctx, c, &base, &report->base), "base"));
   SPLINTCORE_RETURN_IF_ERROR(design_detail::refuse_out_of_reach(ctx, c, jaws, base));
+  SPLINTCORE_RETURN_IF_ERROR(
+      design_detail::measure_side_walls(ctx, c, jaws, base, report->base, report));
   // Where the splint sits with nothing of use above it (blockout_jaws moves its results there).
   Arena::Marker cut_low = before_base;
   const bool heightfield = c.has_blockout && c.blockout_method == BlockoutMethod::kHeightfield;
@@ -818,6 +820,7 @@ Status cut_base(const Context& ctx, const CaseFile& c, Span<const Mesh> jaws, Me
     report->blockout_exact[j] = report->blockout_heightfield[j] = false;
   }
   report->blockout_jaws = 0;
+  report->wall_jaws = 0;
   report->imprint_offset = report->imprint_swept = report->imprint_heightfield = false;
   report->self_intersection_checked = false;
   report->self_intersection_checked_by = "";

@@ -281,6 +281,29 @@ void write_thickness(JsonWriter& w, const ThicknessReport& t) {
   w.end_object();
 }
 
+void write_side_walls(JsonWriter& w, const CaseFile& c, const DesignReport& report) {
+  w.begin_object("side_walls");
+  w.add("max_wall_crossing", c.max_wall_crossing);
+  w.begin_array("jaws");
+  for (uint32_t j = 0; j < report.wall_jaws && j < c.jaws.size(); ++j) {
+    const WallCrossing& x = report.walls[j];
+    w.begin_object();
+    w.add("jaw", j);
+    w.add("role", c.jaws[j].role);
+    w.add("arch_mm", x.arch_mm);
+    w.add("outer_mm", x.outer_mm);
+    w.add("inner_mm", x.inner_mm);
+    w.add("either_mm", x.either_mm);
+    w.add("share", x.arch_mm > 0 ? x.either_mm / x.arch_mm : 0.0);  // as the check compares
+    w.add("stretches", x.stretches);
+    w.add("crossed", x.crossed);
+    if (x.crossed > 0) w.add("first_at", x.first_at);
+    w.end_object();
+  }
+  w.end_array();
+  w.end_object();
+}
+
 void write_checks(JsonWriter& w, const CaseFile& c, const DesignReport& report) {
   w.begin_object("checks");
   w.add("base_sections", report.base.sections);
@@ -319,6 +342,7 @@ void write_checks(JsonWriter& w, const CaseFile& c, const DesignReport& report) 
     if (l.glyphs > 0) w.add("first_glyph_at", l.placements[0].surface_point);
     w.end_object();
   }
+  write_side_walls(w, c, report);
   if (report.thickness_checked) write_thickness(w, report.thickness);
   w.add("self_intersection_free", report.self_intersection_checked);
   w.add("self_intersection_checked_by", report.self_intersection_checked_by);

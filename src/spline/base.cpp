@@ -222,6 +222,21 @@ Status make_lines(const Context& ctx, Span<const Pick> picks, const Vec3& occlus
   return s;
 }
 
+BaseSide base_segment_side(const BaseParams& params, uint32_t segment) {
+  // BaseBuilder's layout: corner c's points start at c * corner_points; the straight side c
+  // (corner c to corner c + 1) is the segment from corner c's last point.
+  const bool rounded = params.corner_radius_mm > 0.0;
+  const uint32_t segs = rounded ? params.corner_segments : 0;
+  const uint32_t corner_points = segs + 1;
+  const uint32_t corner = (segment / corner_points) % 4;
+  const uint32_t i = segment % corner_points;  // segs: the straight side; else arc segment i
+  static constexpr BaseSide kSides[4] = {BaseSide::kTop, BaseSide::kOuter, BaseSide::kBottom,
+                                         BaseSide::kInner};
+  if (i == segs) return kSides[corner];
+  if (2 * i + 1 == segs) return BaseSide::kCorner;                  // the middle of an odd arc
+  return 2 * i < segs ? kSides[(corner + 3) % 4] : kSides[corner];  // the side it leans to
+}
+
 uint64_t splint_base_bound(uint64_t sections, uint32_t points_per_section) {
   const uint64_t v = sections * points_per_section;
   const uint64_t t = 2 * v;

@@ -7,9 +7,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <string>
 #include <vector>
 
+#include "design/no_jaw.h"
 #include "splintcore/design.h"
 #include "splintcore/platform.h"
 #include "splintcore/registration.h"
@@ -384,6 +386,168 @@ TEST(DesignBadJaws, AJawThatDoesNotReachTheBaseIsNamed) {
   Mesh splint;
   DesignReport r;
   SPLINTCORE_EXPECT_OK(design_splint(ctx, f.c, Span<const Mesh>(f.jaws, 2), &splint, &r));
+}
+
+// The stretches of the base where jaw j, placed (its transform, then float32), meets the base's
+// outer (bit 1) or inner (bit 2) wall, by brute force: every triangle of the jaw against every
+// wall triangle, with none of the check's culling, grid or side rule. The paper-scale base has
+// sharp corners: four points a section, segment 1 (upper outside to lower outside) the outer
+// wall, segment 3 (lower inner to upper inner) the inner one (spline.h's layout).
+std::vector<uint8_t> crossings_by_brute_force(const CaseFile& c, const Mesh& jaw, size_t j,
+                                              const Mesh& base, const BaseReport& built) {
+  EXPECT_EQ(built.points_per_section, 4u);
+  std::vector<uint8_t> hit(built.sections - 1, 0);
+  for (const Triangle& t : jaw.triangles) {
+    Vec3 p[3];
+    for (int i = 0; i < 3; ++i) {
+      p[i] = c.jaws[j].transform.apply_point(jaw.vertices[t.v[i]]);
+      EXPECT_TRUE(round_to_float32(&p[i]));
+    }
+    if (collinear3d(p[0], p[1], p[2])) continue;
+    Aabb tb;
+    for (const Vec3& q : p) tb.add(q);
+    for (uint32_t k = 0; k + 1 < built.sections; ++k) {
+      for (uint32_t segment : {1u, 3u}) {
+        for (uint32_t h = 0; h < 2; ++h) {
+          const Triangle& w = base.triangles[2 * (k * 4 + segment) + h];
+          Aabb wb;
+          for (uint32_t v : w.v) wb.add(base.vertices[v]);
+          if (tb.overlaps(wb) &&
+              triangles_intersect(p[0], p[1], p[2], base.vertices[w.v[0]], base.vertices[w.v[1]],
+                                  base.vertices[w.v[2]])) {
+            hit[k] |= segment == 1 ? 1 : 2;
+          }
+        }
+      }
+    }
+  }
+  return hit;
+}
+
+// The report's figures for jaw j against the brute force's stretches: the same stretches, the
+// lengths of the same section centres.
+void expect_walls_as_brute_force(const CaseFile& c, const Mesh (&jaws)[2], const DesignReport& r) {
+  test::TestArena t{size_t{32} << 20};
+  Mesh base(&t.arena);
+  BaseReport built;
+  SPLINTCORE_ASSERT_OK(build_case_base(Context(&t.arena), c, &base, &built));
+  ASSERT_EQ(r.wall_jaws, 2u);
+  for (size_t j = 0; j < 2; ++j) {
+    SCOPED_TRACE(c.jaws[j].role);
+    const std::vector<uint8_t> hit = crossings_by_brute_force(c, jaws[j], j, base, built);
+    auto centre = [&](uint32_t k) {
+      Vec3 sum{};
+      for (uint32_t i = 0; i < 4; ++i) sum = sum + base.vertices[k * 4 + i];
+      return sum * 0.25;
+    };
+    double arch = 0, outer = 0, inner = 0, either = 0;
+    uint32_t crossed = 0, first = 0;
+    for (uint32_t k = 0; k < hit.size(); ++k) {
+      const double len = length(centre(k + 1) - centre(k));
+      arch += len;
+      outer += (hit[k] & 1) != 0 ? len : 0;
+      inner += (hit[k] & 2) != 0 ? len : 0;
+      either += hit[k] != 0 ? len : 0;
+      if (hit[k] != 0 && crossed++ == 0) first = k;
+    }
+    const WallCrossing& w = r.walls[j];
+    EXPECT_EQ(w.stretches, built.sections - 1);
+    EXPECT_EQ(w.crossed, crossed);
+    if (crossed > 0) {
+      EXPECT_EQ(w.first_stretch, first);
+    }
+    EXPECT_NEAR(w.arch_mm, arch, 1e-9);
+    EXPECT_NEAR(w.outer_mm, outer, 1e-9);
+    EXPECT_NEAR(w.inner_mm, inner, 1e-9);
+    EXPECT_NEAR(w.either_mm, either, 1e-9);
+  }
+}
+
+// A jaw moved sideways by a wrong transform, still touching the base: its imprint crosses the
+// base's side walls (its teeth outside the outline), which the base's reach check cannot see.
+// Measured on every design against a brute force (the case's own jaws: no crossing; the
+// mandible 3 mm to the side: much of the arch); the report holds it and, by default, the splint
+// is made. With max_wall_crossing below the share the design is refused naming the jaw, the
+// lengths and where, nothing made; at exactly the share it is not.
+TEST(DesignBadJaws, AJawMovedSidewaysCrossesTheSideWalls) {
+  BadJaws f;
+  ASSERT_TRUE(f.ok);
+  Context ctx(&f.t.arena);
+  Mesh splint(&f.t.arena);
+  DesignReport r;
+  SPLINTCORE_ASSERT_OK(design_splint(ctx, f.c, Span<const Mesh>(f.jaws, 2), &splint, &r));
+  expect_walls_as_brute_force(f.c, f.jaws, r);
+  EXPECT_EQ(r.walls[0].crossed + r.walls[1].crossed, 0u);
+  EXPECT_GT(r.walls[0].arch_mm, 100.0);  // the paper's arch
+
+  CaseJaw moved[2] = {f.c.jaws[0], f.c.jaws[1]};
+  moved[1].transform = compose(RigidTransform::translation(Vec3{3, 0, 0}), moved[1].transform);
+  CaseFile c = f.c;
+  c.jaws = Span<const CaseJaw>(moved, 2);
+  Mesh shifted(&f.t.arena);
+  DesignReport rs;
+  SPLINTCORE_ASSERT_OK(design_splint(ctx, c, Span<const Mesh>(f.jaws, 2), &shifted, &rs));
+  expect_walls_as_brute_force(c, f.jaws, rs);
+  EXPECT_EQ(rs.walls[0].crossed, 0u);
+  const WallCrossing& w = rs.walls[1];
+  EXPECT_GT(w.outer_mm, 10.0);
+  EXPECT_GT(w.inner_mm, 10.0);
+  const double share = w.either_mm / w.arch_mm;
+  EXPECT_GT(share, 0.3);
+
+  c.max_wall_crossing = 0.1;
+  Mesh refused;
+  const size_t used = f.t.arena.used();
+  const Status s = design_splint(ctx, c, Span<const Mesh>(f.jaws, 2), &refused, &rs);
+  expect_named(s, "design: jaw 1 (mandible) crosses the base's side walls along ", "), first at [",
+               refused, used, f.t.arena);
+  EXPECT_EQ(s.index(), 1u);
+  c.max_wall_crossing = share;
+  Mesh at_share(&f.t.arena);
+  SPLINTCORE_EXPECT_OK(design_splint(ctx, c, Span<const Mesh>(f.jaws, 2), &at_share, &rs));
+}
+
+// The check's figures (its culling in the jaw's frame, its grid of the walls, its side rule)
+// against the brute force, on random placements of the mandible (up to 4 mm sideways and along,
+// 1.5 mm up or down, turned up to 6 degrees about the occlusal normal), serially and on two
+// workers (the same figures, bit for bit).
+TEST(DesignBadJaws, PropertySideWallCrossingsAreTheBruteForces) {
+  BadJaws f;
+  ASSERT_TRUE(f.ok);
+  Mesh base(&f.t.arena);
+  BaseReport built;
+  SPLINTCORE_ASSERT_OK(build_case_base(Context(&f.t.arena), f.c, &base, &built));
+  ThreadExecutor pool(2);
+  Uniform u{2026};
+  uint32_t crossing = 0;
+  for (int trial = 0; trial < 8; ++trial) {
+    const double angle = (u() - 0.5) * 0.21;
+    RigidTransform turn;
+    turn.r[0][0] = turn.r[1][1] = std::cos(angle);
+    turn.r[0][1] = -std::sin(angle);
+    turn.r[1][0] = std::sin(angle);
+    turn.t = Vec3{8 * (u() - 0.5), 8 * (u() - 0.5), 3 * (u() - 0.5)};
+    CaseJaw moved[2] = {f.c.jaws[0], f.c.jaws[1]};
+    moved[1].transform = compose(turn, moved[1].transform);
+    CaseFile c = f.c;
+    c.jaws = Span<const CaseJaw>(moved, 2);
+    SCOPED_TRACE(testing::Message() << "trial " << trial << ": angle " << angle << ", move "
+                                    << turn.t.x << ", " << turn.t.y << ", " << turn.t.z);
+    DesignReport serial, two;
+    const size_t used = f.t.arena.used();
+    SPLINTCORE_ASSERT_OK(design_detail::measure_side_walls(
+        Context(&f.t.arena), c, Span<const Mesh>(f.jaws, 2), base, built, &serial));
+    EXPECT_EQ(f.t.arena.used(), used);
+    SPLINTCORE_ASSERT_OK(
+        design_detail::measure_side_walls(Context(&f.t.arena, &pool.executor(), nullptr), c,
+                                          Span<const Mesh>(f.jaws, 2), base, built, &two));
+    expect_walls_as_brute_force(c, f.jaws, serial);
+    for (size_t j = 0; j < 2; ++j) {
+      EXPECT_EQ(std::memcmp(&serial.walls[j], &two.walls[j], sizeof(WallCrossing)), 0);
+    }
+    crossing += serial.walls[1].crossed > 0 ? 1 : 0;
+  }
+  EXPECT_GE(crossing, 4u);  // the placements cross the walls, most of them
 }
 
 // With a blockout the roles say which way each jaw is swept: the maxilla along the insertion

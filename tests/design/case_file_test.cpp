@@ -427,7 +427,8 @@ TEST(CaseFileErrors, UnknownKeysAtEveryLevel) {
   expect_invalid(with_root("  \"colour\": @\"red\",\n"),
                  {"unknown key \"colour\" in the case",
                   "(allowed: splintcore_case case_id units jaws base insertion_direction "
-                  "blockout ct printer memory_cap min_thickness placement label output plan)"});
+                  "blockout ct printer memory_cap min_thickness max_wall_crossing placement label "
+                  "output plan)"});
   expect_invalid(with_base("    \"spacing\": @1,\n"),
                  {"unknown key \"spacing\" in \"base\"",
                   "(allowed: occlusal_normal spacing_mm corner_radius_mm corner_segments "
@@ -941,6 +942,29 @@ TEST(CaseFile, BlockoutTakesItsDefaultsAndChecksItsRanges) {
     EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << test::format(s);
     EXPECT_NE(std::string(s.message()).find(names[i]), std::string::npos) << s.message();
     EXPECT_NE(s.line(), kNoPosition);
+  }
+}
+
+// "max_wall_crossing": read, written back by write_case (the resolved case) when it is not the
+// default, and absent when it is (so a resolved case reads as before).
+TEST(CaseFile, MaxWallCrossingIsReadAndWrittenBack) {
+  test::TestArena a(size_t{1} << 20);
+  struct Given {
+    const char* text;
+    double value;
+  };
+  for (const Given& g : {Given{"", 1.0}, Given{"\"max_wall_crossing\": 0.2,\n", 0.2},
+                         Given{"\"max_wall_crossing\": 0,\n", 0.0}}) {
+    SCOPED_TRACE(g.text);
+    CaseFile c;
+    SPLINTCORE_ASSERT_OK(parse(a.arena, with_root(g.text).text(), &c));
+    EXPECT_EQ(c.max_wall_crossing, g.value);
+    std::string written;
+    SPLINTCORE_ASSERT_OK(write_case(c, test::string_sink(&written)));
+    EXPECT_EQ(written.find("max_wall_crossing") != std::string::npos, g.text[0] != '\0') << written;
+    CaseFile again;
+    SPLINTCORE_ASSERT_OK(parse(a.arena, written, &again));
+    EXPECT_EQ(again.max_wall_crossing, g.value);
   }
 }
 

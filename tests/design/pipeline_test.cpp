@@ -701,7 +701,8 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
   CaseFile c;
   std::string ok = with(
       "\"blockout\": {\"voxel\": 0.1, \"clearance\": 0.1}, \"min_thickness\": 1.5, "
-      "\"placement\": \"tray\", \"label\": {\"text\": \"AB-1\", \"mode\": "
+      "\"max_wall_crossing\": 0.25, \"placement\": \"tray\", \"label\": {\"text\": \"AB-1\", "
+      "\"mode\": "
       "\"emboss\", \"height_mm\": 2, \"stroke_mm\": 0.3, \"depth_mm\": 0.5}");
   SPLINTCORE_ASSERT_OK(parse_case(ctx, ok.data(), ok.size(), "ok", &c));
   EXPECT_TRUE(c.has_label);
@@ -713,6 +714,7 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
   EXPECT_EQ(c.blockout.offset, 0.1);
   EXPECT_EQ(c.blockout.inset, 0.0);  // a clearance takes the surface outside
   EXPECT_EQ(c.min_thickness, 1.5);
+  EXPECT_EQ(c.max_wall_crossing, 0.25);
   EXPECT_TRUE(c.place_on_tray);
   // The defaults said out loud; the clearance's cap is 20 voxels below 0.1 mm voxels, else 2 mm.
   std::string plain = with(
@@ -721,6 +723,7 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
       "\"engrave\"}");
   SPLINTCORE_ASSERT_OK(parse_case(ctx, plain.data(), plain.size(), "plain", &c));
   EXPECT_FALSE(c.place_on_tray);
+  EXPECT_EQ(c.max_wall_crossing, 1.0);  // reported, never refused
   EXPECT_EQ(c.label.mode, LabelMode::kEngrave);
   EXPECT_EQ(c.blockout.offset, 1.0);
   std::string over = with("\"blockout\": {\"voxel\": 0.05, \"clearance\": 1.01}");
@@ -733,6 +736,7 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
       "\"blockout\": {\"voxel\": 0.1, \"clearance\": 0.1, \"inset\": 0.05}",
       "\"blockout\": {\"voxel\": 0.1, \"clearance\": 2.5}",
       "\"min_thickness\": 0",
+      "\"max_wall_crossing\": 1.5",
       "\"placement\": \"floor\"",
       "\"placement\": 1",
       "\"label\": {\"mode\": \"engrave\"}",
@@ -740,16 +744,13 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
       "\"label\": {\"text\": \"X\", \"size\": 3}",
       "\"label\": {\"text\": \"X\", \"depth_mm\": 9}",
   };
-  const char* expect[] = {"exclude each other",
-                          "clearance",
-                          "min_thickness",
-                          "\"placement\" must be",
-                          "placement",
-                          "needs \"text\"",
-                          "\"mode\" must be",
-                          "unknown key \"size\"",
-                          "depth_mm"};
-  for (size_t i = 0; i < 9; ++i) {
+  const char* expect[] = {"exclude each other",    "clearance",
+                          "min_thickness",         "\"max_wall_crossing\" is 1.5, outside [0, 1]",
+                          "\"placement\" must be", "placement",
+                          "needs \"text\"",        "\"mode\" must be",
+                          "unknown key \"size\"",  "depth_mm"};
+  static_assert(sizeof(bad) == sizeof(expect), "one expectation a case");
+  for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); ++i) {
     const std::string s = with(bad[i]);
     Status st = parse_case(ctx, s.data(), s.size(), "bad", &c);
     EXPECT_EQ(st.code(), StatusCode::kInvalidArgument) << bad[i];

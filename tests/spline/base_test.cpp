@@ -106,6 +106,49 @@ TEST(SplintBase, RoundedPrismMatchesTheRoundedRectangleArea) {
   EXPECT_GT(r.volume, 30.0 * (6.0 * 4.0 - 4.0));  // more than with the corners cut square
 }
 
+// base_segment_side against the geometry: on a prism (y in [-2, 3] inner to outside, z in
+// [0, 4] lower to upper) each segment of a section lies on the side whose face its midpoint is
+// nearest (top z = 4, outer y = 3, bottom z = 0, inner y = -2); a segment whose midpoint is as
+// near two faces (the middle of a corner arc of one segment, three, ...) is kCorner. Sharp
+// corners and rounded ones of 1, 2, 4 and 16 segments.
+TEST(SplintBase, EachSegmentsSideIsTheFaceItLiesOn) {
+  struct Corners {
+    double radius;
+    uint32_t segments;
+  };
+  for (const Corners& k :
+       {Corners{0, 4}, Corners{1, 1}, Corners{1, 2}, Corners{1, 4}, Corners{0.8, 16}}) {
+    SCOPED_TRACE(testing::Message() << "radius " << k.radius << ", " << k.segments);
+    TestArena t;
+    std::vector<Pick> up, lo;
+    prism(2, 10.0, 2.0, 3.0, 4.0, &up, &lo);
+    BaseParams params;
+    params.corner_radius_mm = k.radius;
+    params.corner_segments = k.segments;
+    Built b = build(t, up, lo, params);
+    ASSERT_TRUE(b.status.is_ok()) << test::format(b.status);
+    const uint32_t P = b.report.points_per_section;
+    uint32_t count[5] = {0, 0, 0, 0, 0};
+    for (uint32_t j = 0; j < P; ++j) {
+      const Vec3 m = (b.mesh.vertices[j] + b.mesh.vertices[(j + 1) % P]) * 0.5;
+      const double d[4] = {4.0 - m.z, 3.0 - m.y, m.z, m.y + 2.0};  // top, outer, bottom, inner
+      int nearest = 0;
+      for (int f = 1; f < 4; ++f) nearest = d[f] < d[nearest] ? f : nearest;
+      bool tie = false;
+      for (int f = 0; f < 4; ++f)
+        tie = tie || (f != nearest && std::fabs(d[f] - d[nearest]) < 1e-6);
+      const BaseSide expected = tie ? BaseSide::kCorner : static_cast<BaseSide>(nearest);
+      EXPECT_EQ(static_cast<int>(base_segment_side(params, j)), static_cast<int>(expected))
+          << "segment " << j;
+      ++count[static_cast<int>(base_segment_side(params, j))];
+    }
+    // Each side has its straight segment and half of each arc next to it.
+    const uint32_t half = k.radius > 0 ? k.segments / 2 : 0;
+    for (int f = 0; f < 4; ++f) EXPECT_EQ(count[f], 1 + 2 * half) << "side " << f;
+    EXPECT_EQ(count[4], k.radius > 0 ? 4 * (k.segments % 2) : 0);
+  }
+}
+
 TEST(SplintBase, CircularArcRingVolumeWithinOnePercent) {
   TestArena t;
   const double R = 25.0, a = 3.0, b = 4.0, h = 3.0, sweep = 3.0;  // radians

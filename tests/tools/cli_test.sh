@@ -478,6 +478,7 @@ mkdir -p "$work/case" "$work/design"
 cp "$fixtures/cases/paper_scale.json" "$work/case/case.json"
 expect_exit 2 "design without -o" -- "$tool" design "$work/case/case.json"
 expect_exit 0 "design" -- "$tool" design "$work/case/case.json" -o "$work/design"
+cp "$work/out" "$work/out.design"
 check "design wrote the splint" -- test -s "$work/design/splint.stl"
 check "design wrote the report" -- json_ok "$work/design/report.json"
 golden=$(grep "boolean:paper_scale-phantom6000" "$fixtures/golden.sha256" | cut -d' ' -f1)
@@ -507,6 +508,25 @@ sed 's/"maxilla.stl"/"maxilla_mm.stl"/' "$work/case/case.json" >"$work/case/back
 expect_exit 0 "design with the jaw back in mm" -- "$tool" design "$work/case/back.json" -o "$work/design-back"
 expect_exit 2 "convert with a scale of 0" -- "$tool" convert "$work/case/maxilla.stl" -o "$work/case/never.stl" --scale 0
 check "no file for a scale of 0" -- test ! -e "$work/case/never.stl"
+# The side-wall check: the case's jaws cross no wall (no summary line; the report has both
+# jaws). The mandible moved 3 mm sideways still reaches the base, but its teeth cross the
+# walls: designed by default with a summary line saying where, refused with
+# "max_wall_crossing": 0.1, nothing written.
+check "design says nothing of the side walls when no jaw crosses them" -- sh -c "! grep -q '^side walls' '$work/out.design'"
+check "report: both jaws' side walls" -- grep -q '"side_walls":{"max_wall_crossing":1,"jaws":\[{"jaw":0,"role":"maxilla","arch_mm":[0-9.]*,"outer_mm":0,"inner_mm":0,"either_mm":0,"share":0,"stretches":[0-9]*,"crossed":0},{"jaw":1,"role":"mandible"' "$work/design/report.json"
+python3 - "$work/case/case.json" "$work/case/sideways.json" <<'PY'
+import json, sys
+case = json.load(open(sys.argv[1]))
+case["jaws"][1]["transform"][3] += 3.0  # x of the translation
+json.dump(case, open(sys.argv[2], "w"), indent=1)
+PY
+expect_exit 0 "design with the mandible 3 mm sideways" -- "$tool" design "$work/case/sideways.json" -o "$work/design-sideways"
+check "the summary says where the mandible crosses the side walls" -- grep -q '^side walls (mandible): crossed along [0-9.]* of [0-9.]* mm of the arch ([0-9]*%; outer [0-9.]*, inner [0-9.]* mm), first at (' "$work/out"
+check "report: the mandible's crossing" -- grep -q '"role":"mandible","arch_mm":[0-9.]*,"outer_mm":[1-9][0-9.]*,"inner_mm":[1-9][0-9.]*,"either_mm":[0-9.]*,"share":0\.[3-9][0-9]*,"stretches":[0-9]*,"crossed":[1-9][0-9]*,"first_at":\[' "$work/design-sideways/report.json"
+sed 's/"printer":/"max_wall_crossing": 0.1,\n  "printer":/' "$work/case/sideways.json" >"$work/case/sideways-refused.json"
+expect_exit 1 "design with the mandible sideways and max_wall_crossing 0.1" -- "$tool" design "$work/case/sideways-refused.json" -o "$work/design-sideways-refused"
+check "the refusal names the jaw, the share and what to check" -- grep -q "design: jaw 1 (mandible) crosses the base's side walls along [0-9.]* of its [0-9.]* mm (share 0\.[3-9][0-9]*, max_wall_crossing 0.1), first at \[.*check the jaw's transform and the picks" "$work/err"
+check "nothing written when refused" -- test ! -e "$work/design-sideways-refused/splint.stl"
 # One splint's print job ("output": {"job": NAME}, issue 32): the splint alone on the Eden260
 # tray as a 3MF, its triangles and volume those of the STL (Python's zipfile and XML parser),
 # named in the report with its SHA-256; the STL's bytes unchanged.

@@ -124,6 +124,7 @@ class Design {
   Status write_splint_job(const std::string& path);
   Status write_plan_report();
   void print_summary() const;
+  void print_checks() const;
 
   Run& run_;
   const DesignArgs& args_;
@@ -525,6 +526,21 @@ Status Design::write_report() {
   return write_bytes_atomically(report_path_, report_text_ + "\n", &outputs_);
 }
 
+// A line for each jaw that crosses the base's side walls (none when no jaw does); `splint`
+// ("intermediate: ", "final: " or "") starts it.
+void print_side_walls(const char* splint, const CaseFile& c, const DesignReport& report) {
+  for (uint32_t i = 0; i < report.wall_jaws; ++i) {
+    const WallCrossing& w = report.walls[i];
+    if (w.crossed == 0) continue;
+    std::printf(
+        "%sside walls (%s): crossed along %.1f of %.1f mm of the arch (%.0f%%; outer %.1f, "
+        "inner %.1f mm), first at (%.2f, %.2f, %.2f): the imprint opens through the splint's "
+        "side there\n",
+        splint, c.jaws[i].role, w.either_mm, w.arch_mm, 100 * w.either_mm / w.arch_mm, w.outer_mm,
+        w.inner_mm, w.first_at.x, w.first_at.y, w.first_at.z);
+  }
+}
+
 // Two-jaw surgery: both splints (design_plan), OUTDIR/intermediate.stl and final.stl, a
 // preview of each (intermediate.png, final.png: not fatal) and one report.json for both.
 int Design::run_plan() {
@@ -575,6 +591,8 @@ int Design::run_plan() {
         kNames[k], r.autorotation.angle_rad, r.angle_deg, r.autorotation.opening,
         plan_splints_[k].triangles.size(), r.design.print.mesh.volume, plan_paths_[k].c_str(),
         plan_hashes_[k].c_str());
+    const std::string prefix = std::string(kNames[k]) + ": ";
+    print_side_walls(prefix.c_str(), c_, r.design);
   }
   std::printf(
       "wrote %s (both on the tray, %.0f mm apart) and %s; time: design %.3f s, total %.3f s; peak "
@@ -705,6 +723,36 @@ Status Design::write_plan_report() {
   return write_bytes_atomically(report_path_, report_text_ + "\n", &outputs_);
 }
 
+// The summary's lines of the label and the checks (side walls, thickness, crumbs).
+void Design::print_checks() const {
+  const DesignReport& report = report_;
+  if (report.labelled) {
+    std::printf("label: \"%s\" %s, %u glyphs, %.1f mm long\n", report.label.text,
+                c_.label.mode == LabelMode::kEmboss ? "embossed" : "engraved", report.label.glyphs,
+                report.label.text_length_mm);
+  }
+  print_side_walls("", c_, report);
+  if (report.thickness_checked) {
+    const ThicknessReport& t = report.thickness;
+    if (t.thin_triangles == 0) {
+      std::printf("thickness: no wall thinner than %.3g mm\n", t.min_required);
+    } else {
+      std::printf(
+          "thickness: %llu triangles (%.3f mm^2) thinner than %.3g mm; thinnest "
+          "%.3f mm at (%.2f, %.2f, %.2f); %u spot(s) in report.json\n",
+          static_cast<unsigned long long>(t.thin_triangles), t.thin_area_mm2, t.min_required,
+          t.thinnest, t.spots[0].position.x, t.spots[0].position.y, t.spots[0].position.z,
+          t.spot_count);
+    }
+  }
+  if (report.crumbs.removed > 0) {
+    std::printf(
+        "crumbs: %llu separate shell(s) of %.3g mm^3 in all taken out (under the printer's "
+        "thinnest wall cubed)\n",
+        static_cast<unsigned long long>(report.crumbs.removed), report.crumbs.volume_mm3);
+  }
+}
+
 void Design::print_summary() const {
   const DesignReport& report = report_;
   std::printf("case %s (%s): %zu jaw(s), %llu triangles; base %u sections, %zu + %zu picks\n",
@@ -761,30 +809,7 @@ void Design::print_summary() const {
         static_cast<unsigned long long>(e.walls), static_cast<unsigned long long>(e.fold_vertices),
         static_cast<unsigned long long>(report.blockout[i].swept_triangles));
   }
-  if (report.labelled) {
-    std::printf("label: \"%s\" %s, %u glyphs, %.1f mm long\n", report.label.text,
-                c_.label.mode == LabelMode::kEmboss ? "embossed" : "engraved", report.label.glyphs,
-                report.label.text_length_mm);
-  }
-  if (report.thickness_checked) {
-    const ThicknessReport& t = report.thickness;
-    if (t.thin_triangles == 0) {
-      std::printf("thickness: no wall thinner than %.3g mm\n", t.min_required);
-    } else {
-      std::printf(
-          "thickness: %llu triangles (%.3f mm^2) thinner than %.3g mm; thinnest "
-          "%.3f mm at (%.2f, %.2f, %.2f); %u spot(s) in report.json\n",
-          static_cast<unsigned long long>(t.thin_triangles), t.thin_area_mm2, t.min_required,
-          t.thinnest, t.spots[0].position.x, t.spots[0].position.y, t.spots[0].position.z,
-          t.spot_count);
-    }
-  }
-  if (report.crumbs.removed > 0) {
-    std::printf(
-        "crumbs: %llu separate shell(s) of %.3g mm^3 in all taken out (under the printer's "
-        "thinnest wall cubed)\n",
-        static_cast<unsigned long long>(report.crumbs.removed), report.crumbs.volume_mm3);
-  }
+  print_checks();
   std::printf(
       "splint: %zu triangles, %.3f mm^3, closed, manifold, no self-intersection; "
       "printable on %s (%s%s)\n",
