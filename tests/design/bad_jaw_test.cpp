@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "common/realcase.h"
 #include "design/no_jaw.h"
 #include "splintcore/design.h"
 #include "splintcore/platform.h"
@@ -548,6 +549,70 @@ TEST(DesignBadJaws, PropertySideWallCrossingsAreTheBruteForces) {
     crossing += serial.walls[1].crossed > 0 ? 1 : 0;
   }
   EXPECT_GE(crossing, 4u);  // the placements cross the walls, most of them
+}
+
+// The real dentition's picks case, as splintcore-bench --export-realcase writes it (the mandible
+// opened 2 mm, crowns 1.5 mm into the wafer, lines 6 mm each way): its jaws cross no side
+// wall, nor does either moved 1 mm sideways; moved 3 mm, either crosses along more than a fifth
+// of the arch (measured: 27% the mandible, 34% the maxilla), which max_wall_crossing 0.1
+// refuses. Skipped without the data.
+TEST(DesignBadJaws, RealDentitionMovedSidewaysCrossesTheSideWalls) {
+  realcase::RealCase rc;
+  std::string error;
+  if (!realcase::load(SPLINTCORE_REALDATA_DIR, 2.0, 1.5, 6.0, &rc, &error)) {
+    GTEST_SKIP() << "real dentition absent: " << error;
+  }
+  test::TestArena t{size_t{256} << 20};
+  Mesh jaws[2] = {Mesh(&t.arena), Mesh(&t.arena)};
+  for (const realcase::Tooth& tooth : rc.teeth) {
+    Mesh& m = jaws[tooth.number <= 16 ? 0 : 1];
+    const uint32_t first = static_cast<uint32_t>(m.vertices.size());
+    for (const Vec3& v : tooth.vertices) ASSERT_TRUE(m.vertices.push_back(v));
+    for (const Triangle& tr : tooth.triangles) {
+      ASSERT_TRUE(
+          m.triangles.push_back(Triangle{{tr.v[0] + first, tr.v[1] + first, tr.v[2] + first}}));
+    }
+  }
+  CaseJaw placed[2];
+  placed[0].role = "maxilla";
+  placed[1].role = "mandible";
+  CaseFile c;
+  c.jaws = Span<const CaseJaw>(placed, 2);
+  c.upper = Span<const Pick>(rc.upper.data(), rc.upper.size());
+  c.lower = Span<const Pick>(rc.lower.data(), rc.lower.size());
+  c.occlusal_normal = Vec3{0, 0, 1};
+  c.base.spacing_mm = 0.5;
+  const Context ctx(&t.arena);
+  Mesh base(&t.arena);
+  BaseReport built;
+  SPLINTCORE_ASSERT_OK(build_case_base(ctx, c, &base, &built));
+  DesignReport r;
+  SPLINTCORE_ASSERT_OK(
+      design_detail::measure_side_walls(ctx, c, Span<const Mesh>(jaws, 2), base, built, &r));
+  EXPECT_EQ(r.walls[0].crossed + r.walls[1].crossed, 0u);
+  for (size_t j = 0; j < 2; ++j) {
+    for (double dx : {1.0, 3.0}) {
+      SCOPED_TRACE(testing::Message() << placed[j].role << " moved " << dx << " mm");
+      CaseJaw moved[2] = {placed[0], placed[1]};
+      moved[j].transform = RigidTransform::translation(Vec3{dx, 0, 0});
+      CaseFile m = c;
+      m.jaws = Span<const CaseJaw>(moved, 2);
+      SPLINTCORE_ASSERT_OK(
+          design_detail::measure_side_walls(ctx, m, Span<const Mesh>(jaws, 2), base, built, &r));
+      EXPECT_EQ(r.walls[1 - j].crossed, 0u);
+      const double share = r.walls[j].either_mm / r.walls[j].arch_mm;
+      if (dx == 1.0) {
+        EXPECT_EQ(r.walls[j].crossed, 0u);
+      } else {
+        EXPECT_GT(share, 0.2);
+        m.max_wall_crossing = 0.1;
+        const Status s =
+            design_detail::measure_side_walls(ctx, m, Span<const Mesh>(jaws, 2), base, built, &r);
+        EXPECT_EQ(s.code(), StatusCode::kInvalidMesh) << test::format(s);
+        EXPECT_EQ(s.index(), j);
+      }
+    }
+  }
 }
 
 // With a blockout the roles say which way each jaw is swept: the maxilla along the insertion
