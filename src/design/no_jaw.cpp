@@ -423,11 +423,31 @@ Aabb walls_in_jaw_frame(const CaseFile& c, size_t j, const Aabb& box) {
   return local;
 }
 
+// Jaw j's triangle p (placed, its box tb) against wall w: hit[k] gets bit 1 where it meets
+// stretch k's outer wall, 2 its inner.
+void cross_wall(const Mesh& base, const WallIndex& g, const Vec3 (&p)[3], const Aabb& tb,
+                uint32_t w, uint8_t* hit) {
+  const uint32_t k = w / g.per_stretch;
+  const uint8_t bit = g.outer[w] != 0 ? 1 : 2;
+  if ((hit[k] & bit) != 0) return;
+  const Triangle& b = base.triangles[g.tri[w]];
+  const Vec3& a0 = base.vertices[b.v[0]];
+  const Vec3& a1 = base.vertices[b.v[1]];
+  const Vec3& a2 = base.vertices[b.v[2]];
+  if (!tb.overlaps(triangle_box(base, b)) || collinear3d(a0, a1, a2)) return;
+  if (triangles_intersect(p[0], p[1], p[2], a0, a1, a2)) hit[k] |= bit;
+}
+
+// A jaw triangle over more cells than this is tested against every wall instead: a few large
+// triangles (a hostile mesh's, or a coarse jaw's) cannot cost cells times walls each.
+constexpr uint64_t kMaxCellsPerTriangle = 64;
+
 // Jaw j against the walls: hit[k] gets bit 1 where it meets stretch k's outer wall, 2 its inner.
 void cross_walls(const CaseFile& c, Span<const Mesh> jaws, size_t j, const Mesh& base,
                  const WallIndex& g, uint8_t* hit) {
   const Mesh& jaw = jaws[j];
   const Aabb local = walls_in_jaw_frame(c, j, g.box);
+  const uint32_t walls = g.stretches * g.per_stretch;
   for (const Triangle& t : jaw.triangles) {
     uint8_t beyond = 0x3f;
     for (uint32_t v : t.v) beyond &= local.outcode(jaw.vertices[v]);
@@ -442,21 +462,17 @@ void cross_walls(const CaseFile& c, Span<const Mesh> jaws, size_t j, const Mesh&
     if (!placed || !tb.overlaps(g.box) || collinear3d(p[0], p[1], p[2])) continue;
     uint32_t lo[3], hi[3];
     cell_span(g, tb, lo, hi);
+    const uint64_t cells = uint64_t{hi[0] - lo[0] + 1} * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
+    if (cells > kMaxCellsPerTriangle) {
+      for (uint32_t w = 0; w < walls; ++w) cross_wall(base, g, p, tb, w, hit);
+      continue;
+    }
     for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
       for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
         for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
           const uint32_t cell = (z * g.n[1] + y) * g.n[0] + x;
           for (uint32_t e = g.start[cell]; e < g.start[cell + 1]; ++e) {
-            const uint32_t w = g.items[e];
-            const uint32_t k = w / g.per_stretch;
-            const uint8_t bit = g.outer[w] != 0 ? 1 : 2;
-            if ((hit[k] & bit) != 0) continue;
-            const Triangle& b = base.triangles[g.tri[w]];
-            const Vec3& a0 = base.vertices[b.v[0]];
-            const Vec3& a1 = base.vertices[b.v[1]];
-            const Vec3& a2 = base.vertices[b.v[2]];
-            if (!tb.overlaps(triangle_box(base, b)) || collinear3d(a0, a1, a2)) continue;
-            if (triangles_intersect(p[0], p[1], p[2], a0, a1, a2)) hit[k] |= bit;
+            cross_wall(base, g, p, tb, g.items[e], hit);
           }
         }
       }

@@ -549,6 +549,27 @@ TEST(DesignBadJaws, PropertySideWallCrossingsAreTheBruteForces) {
     crossing += serial.walls[1].crossed > 0 ? 1 : 0;
   }
   EXPECT_GE(crossing, 4u);  // the placements cross the walls, most of them
+  // A coarse jaw: a box 50 x 50 x 3 mm of 12 triangles about the base's middle (its top and
+  // bottom cut the walls), each spanning more grid cells than the check walks: tested against
+  // every wall instead, the same crossings.
+  Mesh coarse(&f.t.arena);
+  const Vec3 mid = mesh_bounds(base).center() + Vec3{0, 0, 2};  // the mandible's move undone
+  for (int i = 0; i < 8; ++i) {
+    ASSERT_TRUE(coarse.vertices.push_back(mid + Vec3{(i & 1) != 0 ? 25.0 : -25.0,
+                                                     (i & 2) != 0 ? 25.0 : -25.0,
+                                                     (i & 4) != 0 ? 1.5 : -1.5}));
+  }
+  static const uint32_t kFaces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6},
+                                         {0, 1, 4}, {1, 5, 4}, {2, 6, 3}, {3, 6, 7},
+                                         {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (const auto& t : kFaces)
+    ASSERT_TRUE(coarse.triangles.push_back(Triangle{{t[0], t[1], t[2]}}));
+  const Mesh with_coarse[2] = {f.jaws[0], coarse};
+  DesignReport r;
+  SPLINTCORE_ASSERT_OK(design_detail::measure_side_walls(
+      Context(&f.t.arena), f.c, Span<const Mesh>(with_coarse, 2), base, built, &r));
+  expect_walls_as_brute_force(f.c, with_coarse, r);
+  EXPECT_GT(r.walls[1].crossed, 10u);
 }
 
 // The real dentition's picks case, as splintcore-bench --export-realcase writes it (the mandible
