@@ -324,7 +324,8 @@ Aabb triangle_box(const Mesh& m, const Triangle& t) {
   return b;
 }
 
-// Each cell's walls: counted, summed, then filled (`fill` true) into the arena.
+// Each cell's walls: counted (pass 0), summed into starts, then listed (pass 1), in the arena;
+// the cell's edge doubles from 1 mm until the grid has at most kMaxWallGridCells cells.
 Status grid_walls(Arena& arena, const Mesh& base, WallIndex* g) {
   const uint64_t walls = uint64_t{g->stretches} * g->per_stretch;
   const Vec3 e = g->box.extent();
@@ -405,7 +406,9 @@ Status index_walls(Arena& arena, const Mesh& base, const BaseParams& params,
 }
 
 // The walls' box in jaw j's own frame (its 8 corners taken back through the transform), grown
-// by a margin for the rounding of placed vertices to float32: a triangle whose corners as given
+// by a margin for the rounding of placed vertices to float32 (2^-24 of the world coordinates)
+// and for the transform's rotation being orthonormal only to 1e-6 (the case's tolerance: the
+// transpose undoes it to about 3e-6 of the local coordinates): a triangle whose corners as given
 // are all beyond one side of it cannot meet a wall once placed.
 Aabb walls_in_jaw_frame(const CaseFile& c, size_t j, const Aabb& box) {
   const RigidTransform back = inverse(c.jaws[j].transform);
@@ -416,8 +419,10 @@ Aabb walls_in_jaw_frame(const CaseFile& c, size_t j, const Aabb& box) {
                                     (i & 4) != 0 ? box.hi.z : box.lo.z}));
   }
   const Vec3 e = local.extent();
-  const double margin = 1e-3 + 1e-5 * (std::fabs(local.lo.x) + std::fabs(local.lo.y) +
-                                       std::fabs(local.lo.z) + e.x + e.y + e.z);
+  const double margin =
+      1e-3 + 1e-5 * (std::fabs(local.lo.x) + std::fabs(local.lo.y) + std::fabs(local.lo.z) + e.x +
+                     e.y + e.z + std::fabs(box.lo.x) + std::fabs(box.lo.y) + std::fabs(box.lo.z) +
+                     std::fabs(box.hi.x) + std::fabs(box.hi.y) + std::fabs(box.hi.z));
   local.lo = local.lo - Vec3{margin, margin, margin};
   local.hi = local.hi + Vec3{margin, margin, margin};
   return local;
