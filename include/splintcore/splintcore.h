@@ -410,6 +410,9 @@ typedef struct sc_case_params {
   /* "survey": when the case gives no insertion direction, the direction within 15 degrees of
    * the occlusal normal that leaves the least undercut (else the normal itself). */
   int auto_survey;
+  /* "max_wall_crossing", 0 .. 1: a jaw whose teeth cross the base's side walls along more than
+   * this share of the arch is refused (SC_INVALID_MESH naming it); 1 (the default) never. */
+  double max_wall_crossing;
 } sc_case_params;
 
 /* Reads the case's parameters into *out. */
@@ -553,6 +556,12 @@ typedef struct sc_design_report {
    * out before the printer check, and their total volume: crumbs a Boolean can leave. */
   uint64_t crumbs_removed;
   double crumbs_volume_mm3;
+  /* The side-wall check, per jaw in case order (the first SC_MAX_BLOCKOUT_JAWS; wall_jaws of
+   * them): the base's length along the arch, and of it where the placed jaw crosses the base's
+   * outer or inner wall, its imprint opening through the splint's side (mm). */
+  uint32_t wall_jaws;
+  double wall_arch_mm;
+  double wall_crossing_mm[SC_MAX_BLOCKOUT_JAWS];
 } sc_design_report;
 
 /* Designs the splint for `c` from `jaws` (jaws[i] is the mesh of the case's jaw i, as read; it

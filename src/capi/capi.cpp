@@ -241,6 +241,8 @@ Status check_auto_params(const sc_case_params& p) {
 Status check_params(const sc_case_params& p, const PrinterProfile** profile) {
   SPLINTCORE_RETURN_IF_ERROR(check_range("spacing_mm", p.spacing_mm, "base.spacing_mm"));
   SPLINTCORE_RETURN_IF_ERROR(
+      check_range("max_wall_crossing", p.max_wall_crossing, "max_wall_crossing"));
+  SPLINTCORE_RETURN_IF_ERROR(
       check_range("corner_radius_mm", p.corner_radius_mm, "base.corner_radius_mm"));
   const uint32_t s = p.corner_segments;
   if (s != 1 && s != 2 && s != 4 && s != 8 && s != 16) {
@@ -884,6 +886,7 @@ sc_status sc_case_get_params(sc_context* ctx, const sc_case* c, sc_case_params* 
   out->auto_has_distal_ends = f.outline.has_distal_ends ? 1 : 0;
   for (int i = 0; i < 2; ++i) put(f.outline.distal_ends[i], out->auto_distal_ends[i]);
   out->auto_survey = f.outline.survey ? 1 : 0;
+  out->max_wall_crossing = f.max_wall_crossing;
   return keep(ctx, Status::ok());
 }
 
@@ -925,6 +928,7 @@ sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* 
     }
   }
   f.printer = profile->name;  // static text: the caller's string need not outlive the case
+  f.max_wall_crossing = params->max_wall_crossing;
   f.has_auto_outline = params->auto_outline != 0;
   if (f.has_auto_outline) {
     f.outline.indentation_depth_mm = params->auto_indentation_depth_mm;
@@ -1119,6 +1123,11 @@ sc_status sc_design_scans(sc_context* ctx, const sc_case* c, const sc_mesh* cons
   report->layers = r.print.layers;
   report->crumbs_removed = r.crumbs.removed;
   report->crumbs_volume_mm3 = r.crumbs.volume_mm3;
+  report->wall_jaws = r.wall_jaws < SC_MAX_BLOCKOUT_JAWS ? r.wall_jaws : SC_MAX_BLOCKOUT_JAWS;
+  report->wall_arch_mm = r.wall_jaws > 0 ? r.walls[0].arch_mm : 0;
+  for (uint32_t i = 0; i < report->wall_jaws; ++i) {
+    report->wall_crossing_mm[i] = r.walls[i].either_mm;
+  }
   report->printer = r.printer;
   report->outlined = r.outlined ? 1 : 0;
   for (size_t i = 0; i < jaw_count && i < DesignReport::kMaxFusedJaws; ++i) {

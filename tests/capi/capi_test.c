@@ -906,6 +906,9 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
   CHECK(report.base_sections > 0);
   CHECK(report.splint_volume_mm3 > 0 && report.splint_volume_mm3 < report.base_volume_mm3);
   CHECK(report.blockout_jaws == 0);
+  /* The side-wall check: the case's jaws cross neither wall of its 119 mm arch. */
+  CHECK(report.wall_jaws == 2 && report.wall_arch_mm > 100);
+  CHECK(report.wall_crossing_mm[0] == 0 && report.wall_crossing_mm[1] == 0);
   CHECK(strcmp(report.printer, "eden260") == 0);
   stl_cap = (size_t)sc_stl_binary_size(report.splint_triangles);
   stl = (unsigned char*)malloc(stl_cap);
@@ -1257,6 +1260,27 @@ static void test_auto_params(sc_context* ctx, sc_case* c) {
 
 static int near(double a, double b) { return a - b < 1e-4 && b - a < 1e-4; }
 
+/* max_wall_crossing through the parameters: 1 as parsed (never refused), out of [0, 1]
+ * refused naming it (nothing changed), a share kept. */
+static void test_max_wall_crossing(sc_context* ctx, sc_case* c) {
+  sc_case_params p, q;
+  char text[512];
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &p));
+  CHECK(p.max_wall_crossing == 1);
+  q = p;
+  q.max_wall_crossing = 1.5;
+  CHECK(sc_case_set_params(ctx, c, &q) == SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "max_wall_crossing is 1.5, must be in [0, 1]"));
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &q));
+  CHECK(q.max_wall_crossing == 1);
+  q.max_wall_crossing = 0.25;
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &q));
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &q));
+  CHECK(q.max_wall_crossing == 0.25);
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &p));
+}
+
 /* The survey through the C API: auto_survey kept by the parameters; sc_outline then tries
  * directions within 15 degrees of the occlusal normal and keeps one that leaves no more undercut
  * than the normal. */
@@ -1493,6 +1517,7 @@ static void test_outline(const char* jaws_dir) {
   if (resolved_splint != NULL) test_set_pick(f.ctx, resolved, jaws, h_resolved);
   test_outline_distal_ends(f.ctx, c, resolved, jaws);
   test_outline_survey(f.ctx, c, jaws);
+  test_max_wall_crossing(f.ctx, c);
   if (reread != NULL) {
     CHECK_OK(f.ctx, sc_design(f.ctx, reread, jaws, 2, &reread_splint, NULL));
     if (reread_splint != NULL) splint_hash(f.ctx, reread_splint, h_reread);
