@@ -146,6 +146,12 @@ Status require_valid_solid(const MeshReport& report);
 
 // Individual measures (deterministic: summed in triangle order, relative to the box centre).
 Aabb mesh_bounds(const Mesh& mesh);
+// Triangle t's box (its three corners).
+inline Aabb triangle_box(const Mesh& mesh, uint32_t t) {
+  Aabb box;
+  for (uint32_t v : mesh.triangles[t].v) box.add(mesh.vertices[v]);
+  return box;
+}
 double mesh_area(const Mesh& mesh);
 double mesh_volume(const Mesh& mesh);
 

@@ -186,12 +186,6 @@ Status find_shells(Arena& arena, const Mesh& b, Shells* sh, bool* usable) {
 // The i-th triangle in shell order.
 inline uint32_t tri_at(const Shells& sh, uint32_t i) { return sh.tris != nullptr ? sh.tris[i] : i; }
 
-Aabb triangle_box(const Mesh& m, uint32_t t) {
-  Aabb box;
-  for (uint32_t v : m.triangles[t].v) box.add(m.vertices[v]);
-  return box;
-}
-
 // The triangles of shell s whose boxes meet `region`: their ids and boxes.
 struct RegionTriangles {
   Aabb* boxes = nullptr;

@@ -305,23 +305,15 @@ struct WallIndex {
 
 constexpr uint32_t kMaxWallGridCells = uint32_t{1} << 16;
 
-double coordinate(const Vec3& p, int axis) { return axis == 0 ? p.x : axis == 1 ? p.y : p.z; }
-
 // The cells a box covers, per axis [lo, hi] (the box overlaps the grid's).
 void cell_span(const WallIndex& g, const Aabb& b, uint32_t lo[3], uint32_t hi[3]) {
   for (int a = 0; a < 3; ++a) {
-    const double o = coordinate(g.box.lo, a), last = static_cast<double>(g.n[a] - 1);
-    const double l = std::floor((coordinate(b.lo, a) - o) / g.cell);
-    const double h = std::floor((coordinate(b.hi, a) - o) / g.cell);
+    const double o = g.box.lo[a], last = static_cast<double>(g.n[a] - 1);
+    const double l = std::floor((b.lo[a] - o) / g.cell);
+    const double h = std::floor((b.hi[a] - o) / g.cell);
     lo[a] = static_cast<uint32_t>(l < 0 ? 0 : l > last ? last : l);
     hi[a] = static_cast<uint32_t>(h < 0 ? 0 : h > last ? last : h);
   }
-}
-
-Aabb triangle_box(const Mesh& m, const Triangle& t) {
-  Aabb b;
-  for (uint32_t v : t.v) b.add(m.vertices[v]);
-  return b;
 }
 
 // Each cell's walls: counted (pass 0), summed into starts, then listed (pass 1), in the arena;
@@ -345,7 +337,7 @@ Status grid_walls(Arena& arena, const Mesh& base, WallIndex* g) {
   for (int pass = 0; pass < 2; ++pass) {
     for (uint64_t w = 0; w < walls; ++w) {
       uint32_t lo[3], hi[3];
-      cell_span(*g, triangle_box(base, base.triangles[g->tri[w]]), lo, hi);
+      cell_span(*g, triangle_box(base, g->tri[w]), lo, hi);
       for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
         for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
           for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
@@ -397,7 +389,7 @@ Status index_walls(Arena& arena, const Mesh& base, const BaseParams& params,
       for (uint32_t h = 0; h < 2; ++h, ++w) {
         g->tri[w] = 2 * (k * P + segment[i]) + h;
         g->outer[w] = outer[i];
-        g->box.add(triangle_box(base, base.triangles[g->tri[w]]));
+        g->box.add(triangle_box(base, g->tri[w]));
       }
     }
   }
@@ -439,7 +431,7 @@ void cross_wall(const Mesh& base, const WallIndex& g, const Vec3 (&p)[3], const 
   const Vec3& a0 = base.vertices[b.v[0]];
   const Vec3& a1 = base.vertices[b.v[1]];
   const Vec3& a2 = base.vertices[b.v[2]];
-  if (!tb.overlaps(triangle_box(base, b)) || collinear3d(a0, a1, a2)) return;
+  if (!tb.overlaps(triangle_box(base, g.tri[w])) || collinear3d(a0, a1, a2)) return;
   if (triangles_intersect(p[0], p[1], p[2], a0, a1, a2)) hit[k] |= bit;
 }
 

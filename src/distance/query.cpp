@@ -798,17 +798,6 @@ bool segment_intersects_mesh(const DistanceIndex& index, const Vec3& p, const Ve
 
 namespace {
 
-// Triangle t's bounds.
-Aabb triangle_box(const Mesh& mesh, uint32_t t) {
-  const Vec3* v = mesh.vertices.data();
-  const Triangle& tri = mesh.triangles[t];
-  Aabb tb;
-  tb.add(v[tri.v[0]]);
-  tb.add(v[tri.v[1]]);
-  tb.add(v[tri.v[2]]);
-  return tb;
-}
-
 // Does triangle t of `mesh` come within reach of abc (`box`: reach_box(a, b, c, reach))?
 // triangle_within_reach() once t's box is known to meet abc's reach box.
 bool triangle_within_reach_boxed(const Mesh& mesh, uint32_t t, const Vec3& a, const Vec3& b,
