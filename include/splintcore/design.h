@@ -296,11 +296,13 @@ struct WallCrossing {
   double arch_mm = 0;          // the base's whole length along the arch
   double outer_mm = 0;         // where the jaw crosses the outer (buccal) wall
   double inner_mm = 0;         // the inner (lingual) wall
-  double either_mm = 0;        // either wall: max_wall_crossing bounds either_mm / arch_mm
+  double either_mm = 0;        // either wall
   uint32_t stretches = 0;      // the base's stretches (sections - 1)
   uint32_t crossed = 0;        // of them, those where the jaw crosses either wall
   uint32_t first_stretch = 0;  // the first crossed (between sections k and k + 1), if any
   Vec3 first_at{};             // its centre: the mean of its two section centres (mm)
+  // either_mm / arch_mm (0 for no arch): what max_wall_crossing bounds and the report gives.
+  double share() const { return arch_mm > 0 ? either_mm / arch_mm : 0.0; }
 };
 
 struct DesignReport {

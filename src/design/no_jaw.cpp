@@ -316,10 +316,20 @@ void cell_span(const WallIndex& g, const Aabb& b, uint32_t lo[3], uint32_t hi[3]
   }
 }
 
+// f(cell) for each cell of the span [lo, hi].
+template <typename F>
+void for_each_cell(const WallIndex& g, const uint32_t lo[3], const uint32_t hi[3], F f) {
+  for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
+    for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
+      for (uint32_t x = lo[0]; x <= hi[0]; ++x) f((z * g.n[1] + y) * g.n[0] + x);
+    }
+  }
+}
+
 // Each cell's walls: counted (pass 0), summed into starts, then listed (pass 1), in the arena;
 // the cell's edge doubles from 1 mm until the grid has at most kMaxWallGridCells cells.
 Status grid_walls(Arena& arena, const Mesh& base, WallIndex* g) {
-  const uint64_t walls = uint64_t{g->stretches} * g->per_stretch;
+  const uint32_t walls = g->stretches * g->per_stretch;
   const Vec3 e = g->box.extent();
   auto cells_at = [&](double cell) {
     return (static_cast<uint64_t>(e.x / cell) + 1) * (static_cast<uint64_t>(e.y / cell) + 1) *
@@ -334,29 +344,19 @@ Status grid_walls(Arena& arena, const Mesh& base, WallIndex* g) {
   uint32_t* cursor = arena.allocate_array<uint32_t>(cells);
   if (g->start == nullptr || cursor == nullptr) return arena.exhausted_status();
   std::memset(g->start, 0, (size_t{cells} + 1) * sizeof(uint32_t));
-  for (int pass = 0; pass < 2; ++pass) {
-    for (uint64_t w = 0; w < walls; ++w) {
+  auto each_wall = [&](auto f) {
+    for (uint32_t w = 0; w < walls; ++w) {
       uint32_t lo[3], hi[3];
       cell_span(*g, triangle_box(base, g->tri[w]), lo, hi);
-      for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
-        for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
-          for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
-            const uint32_t c = (z * g->n[1] + y) * g->n[0] + x;
-            if (pass == 0) {
-              ++g->start[c + 1];
-            } else {
-              g->items[cursor[c]++] = static_cast<uint32_t>(w);
-            }
-          }
-        }
-      }
+      for_each_cell(*g, lo, hi, [&](uint32_t c) { f(w, c); });
     }
-    if (pass == 1) break;
-    for (uint32_t c = 0; c < cells; ++c) g->start[c + 1] += g->start[c];
-    std::memcpy(cursor, g->start, size_t{cells} * sizeof(uint32_t));
-    g->items = arena.allocate_array<uint32_t>(g->start[cells]);
-    if (g->items == nullptr && g->start[cells] > 0) return arena.exhausted_status();
-  }
+  };
+  each_wall([&](uint32_t, uint32_t c) { ++g->start[c + 1]; });
+  for (uint32_t c = 0; c < cells; ++c) g->start[c + 1] += g->start[c];
+  std::memcpy(cursor, g->start, size_t{cells} * sizeof(uint32_t));
+  g->items = arena.allocate_array<uint32_t>(g->start[cells]);
+  if (g->items == nullptr && g->start[cells] > 0) return arena.exhausted_status();
+  each_wall([&](uint32_t w, uint32_t c) { g->items[cursor[c]++] = w; });
   return Status::ok();
 }
 
@@ -464,16 +464,11 @@ void cross_walls(const CaseFile& c, Span<const Mesh> jaws, size_t j, const Mesh&
       for (uint32_t w = 0; w < walls; ++w) cross_wall(base, g, p, tb, w, hit);
       continue;
     }
-    for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
-      for (uint32_t y = lo[1]; y <= hi[1]; ++y) {
-        for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
-          const uint32_t cell = (z * g.n[1] + y) * g.n[0] + x;
-          for (uint32_t e = g.start[cell]; e < g.start[cell + 1]; ++e) {
-            cross_wall(base, g, p, tb, g.items[e], hit);
-          }
-        }
+    for_each_cell(g, lo, hi, [&](uint32_t cell) {
+      for (uint32_t e = g.start[cell]; e < g.start[cell + 1]; ++e) {
+        cross_wall(base, g, p, tb, g.items[e], hit);
       }
-    }
+    });
   }
 }
 
@@ -533,7 +528,7 @@ Status measure_side_walls(const Context& ctx, const CaseFile& c, Span<const Mesh
       report->walls[j] = w;
       report->wall_jaws = static_cast<uint32_t>(j + 1);
     }
-    const double share = w.arch_mm > 0 ? w.either_mm / w.arch_mm : 0.0;  // as reported
+    const double share = w.share();
     if (!(share > c.max_wall_crossing)) continue;
     Status s = make_error(StatusCode::kInvalidMesh, "design: jaw ", j, " (", c.jaws[j].role,
                           ") crosses the base's side walls along ");

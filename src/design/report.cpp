@@ -294,7 +294,7 @@ void write_side_walls(JsonWriter& w, const CaseFile& c, const DesignReport& repo
     w.add("outer_mm", x.outer_mm);
     w.add("inner_mm", x.inner_mm);
     w.add("either_mm", x.either_mm);
-    w.add("share", x.arch_mm > 0 ? x.either_mm / x.arch_mm : 0.0);  // as the check compares
+    w.add("share", x.share());
     w.add("stretches", x.stretches);
     w.add("crossed", x.crossed);
     if (x.crossed > 0) w.add("first_at", x.first_at);
