@@ -73,7 +73,10 @@ endif()
 
 if(SPLINTCORE_FUZZ)
   # Coverage instrumentation for everything; the fuzz targets add the libFuzzer main.
-  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer)
+  # Undefined behaviour stops the run as ASan's findings do (without it UBSan prints and goes
+  # on, and a corpus replay passes over it).
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all
+                      -fno-omit-frame-pointer)
   add_link_options(-fsanitize=address,undefined)
 endif()
 

@@ -135,8 +135,10 @@ struct JlsBits {
   uint64_t appended = 0;       // bits put into the cache so far
   uint64_t real = UINT64_MAX;  // bits before the marker, once it is reached
 
-  // At least 57 bits held afterwards.
+  // At least 57 bits held afterwards (nothing to do when they already are: a shift by 64
+  // below, undefined, for a whole-bytes take of 0).
   void refill() {
+    if (valid > 56) return;
     // Whole bytes at once while the next 8 hold no 0xFF (most of the time).
     if (!after_ff && size - pos >= 8) {
       uint64_t w = 0;

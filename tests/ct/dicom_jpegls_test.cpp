@@ -572,6 +572,25 @@ TEST(CtDicomJpegLs, MarkerClasses) {
   }
 }
 
+// Coded data going on past the last sample while the bit cache still holds 57 or more unread
+// bits (a 4 x 5 image at precision 7, then 47 bytes of codes): found by the ct_codecs fuzz
+// target once undefined behaviour stopped its runs (fixtures/fuzz/ct_codecs/crash-jls-end-
+// with-full-cache). Refilling a cache that full shifted a 64-bit word by 64, undefined (x86
+// and AArch64 take the shift mod 64, ARMv7 does not); now it is an error like any other data
+// past the last sample, and under the sanitizers (the asan job) any such shift stops the run.
+TEST(CtDicomJpegLs, CodedDataPastAFullCacheIsAnError) {
+  const Bytes frame = {0xFF, 0xD8, 0xFF, 0xF7, 0x00, 0x0B, 0x07, 0x00, 0x04, 0x00, 0x05,
+                       0x01, 0x01, 0x11, 0x00, 0xFF, 0xDA, 0x00, 0x08, 0x01, 0x01, 0x00,
+                       0x00, 0x00, 0x00, 0x80, 0x00, 0x01, 0xF6, 0x00, 0x00, 0x05, 0xEB,
+                       0xC7, 0x40, 0x00, 0x00, 0x5A, 0x00, 0x01, 0x71, 0x00, 0x00, 0x05,
+                       0xA8, 0xA0, 0x00, 0xD4, 0x00, 0x3C, 0x0A, 0x00, 0x00, 0xAD, 0x19,
+                       0x30, 0x53, 0x3E, 0xB9, 0x63, 0x77, 0xCD, 0x80, 0xFF, 0xD9};
+  std::vector<uint32_t> got;
+  const Status s = decode_size(frame, 4, 5, 7, &got);
+  EXPECT_EQ(s.code(), StatusCode::kParseError) << test::format(s);
+  EXPECT_NE(message(s).find("continues past the last sample"), std::string::npos) << message(s);
+}
+
 TEST(CtDicomJpegLs, MoreMalformedSegments) {
   size_t at = 0;
   const Bytes good = fragment_of(fixture("jls16_0.dcm"), &at);
