@@ -485,12 +485,14 @@ constexpr double kBandCutSlackMm = 0.01;  // over the rounding of the band cut (
 // into r, the band's limit, and the band's vertices marked (their indices in band). *found:
 // the columns that show the other jaw.
 struct JawBandPart {
-  double limit = 0;
+  double limit = 0;         // the band's vertices (the centre line)
+  double column_limit = 0;  // its columns (the picks' heights and reach across)
   size_t found = 0, in_band = 0;
 };
 
 void jaw_band_part(const Mesh& m, const Vec3& offset, uint32_t jaw, const Frame& f, const Grid& g,
-                   const Plane& plane, double* r, uint32_t* band, JawBandPart* out) {
+                   const Plane& plane, double column_band, double* r, uint32_t* band,
+                   JawBandPart* out) {
   const size_t cells = static_cast<size_t>(g.nx) * g.ny;
   // Distance from the plane towards the jaw's own side (>= about 0 at the tips).
   const PlaneAxes axes(f);
@@ -509,6 +511,7 @@ void jaw_band_part(const Mesh& m, const Vec3& offset, uint32_t jaw, const Frame&
   std::nth_element(r, r + used / 100, r + used);
   const double limit = r[used / 100] + kOcclusalBandMm;
   out->limit = limit;
+  out->column_limit = r[used / 100] + column_band;
   // The band's vertices marked in one pass (their indices in `band`), every k-th taken later.
   // Most of a jaw lies far from the plane: every vertex's place in the plane lies within
   // kMaxSpanMm of the lattice's origin (grid_layout refuses a wider extent, and the origin
@@ -530,18 +533,18 @@ void jaw_band_part(const Mesh& m, const Vec3& offset, uint32_t jaw, const Frame&
   out->in_band = in_band;
 }
 
-// The occlusal surfaces of both jaws: the columns within kOcclusalBandMm of the jaw's tips (the
+// The occlusal surfaces of both jaws: the columns within `column_band` of the jaw's tips (the
 // hundredth lowest distance from the plane) as ArchPoints in `cells` (their extremes set the
-// picks' heights and widths), and the vertices within the same band in `line` (every k-th in
-// index order, at most kLinePoints a jaw: the centre line's points). The line takes vertices,
-// not columns, so that it moves with the jaws: which vertex a column shows can change with a
-// rounding when the jaws move, which vertices lie in the band only where one lies on its edge.
-// The jaws' parts in two tasks (each its own depths and band marks), then their points in jaw
-// order: the same points as one jaw after the other.
+// picks' heights and widths), and the vertices within kOcclusalBandMm of the tips in `line`
+// (every k-th in index order, at most kLinePoints a jaw: the centre line's points). The line
+// takes vertices, not columns, so that it moves with the jaws: which vertex a column shows can
+// change with a rounding when the jaws move, which vertices lie in the band only where one
+// lies on its edge. The jaws' parts in two tasks (each its own depths and band marks), then
+// their points in jaw order: the same points as one jaw after the other.
 Status occlusal_points(const Context& ctx, const Mesh& upper, const Mesh& lower,
                        const Vec3& lower_offset, const Frame& f, const Grid& g, const Plane& plane,
-                       ArenaArray<ArchPoint>* cells_out, ArenaArray<ArchPoint>* line,
-                       uint64_t counts[2]) {
+                       double column_band, ArenaArray<ArchPoint>* cells_out,
+                       ArenaArray<ArchPoint>* line, uint64_t counts[2]) {
   Arena& arena = *ctx.arena;
   const size_t cells = static_cast<size_t>(g.nx) * g.ny;
   const Mesh* jaws[2] = {&upper, &lower};
@@ -563,7 +566,8 @@ Status occlusal_points(const Context& ctx, const Mesh& upper, const Mesh& lower,
   }
   JawBandPart parts[2];
   auto part = [&](uint32_t jaw) {
-    jaw_band_part(*jaws[jaw], offsets[jaw], jaw, f, g, plane, r[jaw], band[jaw], &parts[jaw]);
+    jaw_band_part(*jaws[jaw], offsets[jaw], jaw, f, g, plane, column_band, r[jaw], band[jaw],
+                  &parts[jaw]);
   };
   parallel_for_each(ctx.executor, 2, part);
   for (uint32_t jaw = 0; jaw < 2; ++jaw) {
@@ -588,7 +592,8 @@ Status occlusal_points(const Context& ctx, const Mesh& upper, const Mesh& lower,
       if (g.tip[jaw][i] == kNoTip) continue;
       ArchPoint a;
       a.jaw = jaw;
-      if (depth_of(m.vertices[g.tip[jaw][i]] + offset, &a.x, &a.y, &a.h) > parts[jaw].limit) {
+      if (depth_of(m.vertices[g.tip[jaw][i]] + offset, &a.x, &a.y, &a.h) >
+          parts[jaw].column_limit) {
         continue;
       }
       if (!cells_out->push_back(a)) return arena.exhausted_status();
@@ -1095,8 +1100,14 @@ Status arch_and_picks(const Context& ctx, const Mesh& upper, const Mesh& lower,
   Arena& arena = *ctx.arena;
   ArenaArray<ArchPoint> pts(&arena), line_pts(&arena);
   uint64_t counts[2] = {0, 0};
-  SPLINTCORE_RETURN_IF_ERROR(
-      occlusal_points(ctx, upper, lower, lower_offset, f, g, plane, &pts, &line_pts, counts));
+  // The columns reach deeper by as much as the indentation goes past kBandIndentationMm, so
+  // that the picks' reach across the arch holds every column the slab between the faces
+  // meets (the palate and the gums beside teeth indented deeply): the base's side walls then
+  // pass outside them (DesignReport::walls). At the default indentation and below, the band.
+  const double column_band =
+      kOcclusalBandMm + std::max(0.0, options.indentation_depth_mm - kBandIndentationMm);
+  SPLINTCORE_RETURN_IF_ERROR(occlusal_points(ctx, upper, lower, lower_offset, f, g, plane,
+                                             column_band, &pts, &line_pts, counts));
   out->report.cells_upper = counts[0];
   out->report.cells_lower = counts[1];
   Polyline arch;

@@ -16,6 +16,9 @@ constexpr double kContactBandMm = 3.0;     // columns within this of the closest
 constexpr uint64_t kMinContactCells = 20;  // columns that see both jaws, at least
 constexpr int kFrameRounds = 3;            // plane fits (each tilts the normal)
 constexpr double kOcclusalBandMm = 3.5;    // an occlusal column: this near the jaw's tips
+// The indentation the band was made for (the default): the picks' columns reach deeper by as
+// much as the indentation goes past it (arch_and_picks).
+constexpr double kBandIndentationMm = 2.0;
 constexpr uint64_t kMinOcclusalCells = 20;
 constexpr size_t kLinePoints = 16384;      // band vertices per jaw for the centre line, at most
 constexpr uint32_t kSectors = 128;         // around the arch's centre (pseudo-angle)

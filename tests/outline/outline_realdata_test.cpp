@@ -318,6 +318,30 @@ TEST(OutlineRealData, WholeDesignIn64MiB) {
   EXPECT_EQ(test::mesh_sha256(splint), test::mesh_sha256(reference));  // the same bytes
 }
 
+// Indented 4 and 5 mm, the maxilla's palate lies within the slab between the faces lingual to
+// the incisors: the picks reach past it, so neither jaw crosses the base's side walls (before
+// the columns reached past the faces, the palate crossed the inner wall along 2.8 mm at 4 mm).
+TEST(OutlineRealData, DeepIndentationsCrossNoSideWall) {
+  RealJaws r;
+  if (!r.ok) GTEST_SKIP() << "realdata not found";
+  for (const double depth : {4.0, 5.0}) {
+    ArenaScope scope(r.t.arena);
+    CaseFile c = auto_case(r.t.arena, 2.0);
+    c.outline.indentation_depth_mm = depth;
+    Mesh splint;
+    DesignReport report;
+    SPLINTCORE_ASSERT_OK(
+        design_splint(Context(&r.t.arena), c, Span<const Mesh>(r.jaw, 2), &splint, &report));
+    EXPECT_TRUE(report.print.printable) << depth;
+    ASSERT_EQ(report.wall_jaws, 2u);
+    for (uint32_t j = 0; j < 2; ++j) {
+      std::printf("indentation %g mm, jaw %u: side walls crossed along %.3f of %.3f mm\n", depth, j,
+                  report.walls[j].either_mm, report.walls[j].arch_mm);
+      EXPECT_EQ(report.walls[j].either_mm, 0.0) << "depth " << depth << " jaw " << j;
+    }
+  }
+}
+
 TEST(OutlineRealData, FrameInvariance) {
   RealJaws r;
   if (!r.ok) GTEST_SKIP() << "realdata not found";

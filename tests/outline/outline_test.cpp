@@ -194,6 +194,38 @@ TEST(Outline, PhantomSplintIndentsEveryToothAsAsked) {
   }
 }
 
+// Indented deeper than the default, the slab between the faces reaches further up the teeth:
+// the picks' reach across the arch must hold what it meets there, or the jaw crosses the
+// base's side walls and its imprint opens through them (DesignReport::walls). The phantom's
+// crowns have no palate or gums, so this holds with the occlusal band alone too; the real
+// dentition's palate is what needed the deeper columns (OutlineRealData's test of the same).
+TEST(Outline, DeepIndentationsCrossNoSideWall) {
+  PhantomJaws p(20000);
+  test::TestArena t{size_t{256} << 20};
+  for (const double depth : {2.0, 3.0, 4.0, 5.0}) {
+    ArenaScope scope(t.arena);
+    char extra[64];
+    std::snprintf(extra, sizeof extra, "\"indentation_depth_mm\": %g", depth);
+    CaseFile c;
+    SPLINTCORE_ASSERT_OK(parse(t.arena, auto_case(extra, -2.0), &c));
+    Mesh jaws[2];
+    copy_mesh(p.jaw[0], t.arena, &jaws[0], RigidTransform{});
+    copy_mesh(p.jaw[1], t.arena, &jaws[1], RigidTransform{});
+    Mesh splint;
+    DesignReport r;
+    SPLINTCORE_ASSERT_OK(
+        design_splint(Context(&t.arena), c, Span<const Mesh>(jaws, 2), &splint, &r));
+    EXPECT_TRUE(r.print.printable) << depth;
+    ASSERT_EQ(r.wall_jaws, 2u);
+    for (uint32_t j = 0; j < 2; ++j) {
+      EXPECT_GT(r.walls[j].arch_mm, 50.0) << depth;
+      EXPECT_EQ(r.walls[j].either_mm, 0.0)
+          << "depth " << depth << " jaw " << j << ": crossed " << r.walls[j].crossed << " of "
+          << r.walls[j].stretches << " stretches";
+    }
+  }
+}
+
 // Brute force, sharing no code with the library's pair search: the smallest distance between
 // the triangles of two meshes near their contact (heights within 4 mm of it).
 Vec3 closest_on_segment(const Vec3& p, const Vec3& a, const Vec3& b) {
