@@ -128,6 +128,13 @@ struct CaseFile {
   // refuses: a base narrower than the teeth crosses its walls as a misplaced jaw does.
   static constexpr double kDefaultMaxWallCrossing = 1.0;
   double max_wall_crossing = kDefaultMaxWallCrossing;
+  // "max_sideways_crossing" (0 to 1): a jaw crossing the outer wall in one half of the arch and
+  // the inner wall in the other (WallCrossing::sideways_mm) along more than this share of the
+  // arch is refused: it sits to one side of the outline, as a jaw moved sideways by a wrong
+  // transform does (3 mm on the real dentition: 11-15%), which a narrow base does not (its
+  // teeth cross the same wall on both halves). 1 never refuses.
+  static constexpr double kDefaultMaxSidewaysCrossing = 0.05;
+  double max_sideways_crossing = kDefaultMaxSidewaysCrossing;
   // "placement": "case" (false: the splint stays in the case's frame) or "tray" (true: the
   // whole case is moved onto the printer's build tray first; DesignReport::tray_translation).
   bool place_on_tray = false;
@@ -301,8 +308,22 @@ struct WallCrossing {
   uint32_t crossed = 0;        // of them, those where the jaw crosses either wall
   uint32_t first_stretch = 0;  // the first crossed (between sections k and k + 1), if any
   Vec3 first_at{};             // its centre: the mean of its two section centres (mm)
+  // outer_mm and inner_mm split between the arch's halves in section order (a stretch belongs
+  // to the half its middle lies in, along the arch's length).
+  double half_outer_mm[2] = {0, 0};
+  double half_inner_mm[2] = {0, 0};
   // either_mm / arch_mm (0 for no arch): what max_wall_crossing bounds and the report gives.
   double share() const { return arch_mm > 0 ? either_mm / arch_mm : 0.0; }
+  // The outer wall crossed in one half and the inner in the other, the lesser of the two (the
+  // larger such pair): a jaw to one side of the outline. A base narrower (or wider) than the
+  // teeth gives the same wall on both halves, and 0 here.
+  double sideways_mm() const {
+    const double a = half_outer_mm[0] < half_inner_mm[1] ? half_outer_mm[0] : half_inner_mm[1];
+    const double b = half_inner_mm[0] < half_outer_mm[1] ? half_inner_mm[0] : half_outer_mm[1];
+    return a > b ? a : b;
+  }
+  // sideways_mm() / arch_mm: what max_sideways_crossing bounds.
+  double sideways_share() const { return arch_mm > 0 ? sideways_mm() / arch_mm : 0.0; }
 };
 
 struct DesignReport {
@@ -394,7 +415,9 @@ uint32_t exact_blockout_jaws(const DesignReport& report);
 // no triangle of it within the Boolean's region of the base, so it could leave no imprint),
 // kInvalidMesh for a jaw that crosses the base's side walls along more than the case's
 // max_wall_crossing share of the arch ("design: jaw j (role) crosses the base's side walls
-// along ..."; the crossing of every jaw is in report->walls, measured on every design),
+// along ..."; the crossing of every jaw is in report->walls, measured on every design) or
+// sideways of it along more than max_sideways_crossing ("design: jaw j (role) sits to one side
+// of the base: ..."),
 // kInvalidArgument for two jaws that are one ("design: jaw k (role) is jaw j (role) again":
 // the same triangles and vertices under the same transform, one file given twice),
 // kInvalidArgument for a case with a blockout whose maxilla is not above its mandible along

@@ -413,6 +413,10 @@ typedef struct sc_case_params {
   /* "max_wall_crossing", 0 .. 1: a jaw whose teeth cross the base's side walls along more than
    * this share of the arch is refused (SC_INVALID_MESH naming it); 1 (the default) never. */
   double max_wall_crossing;
+  /* "max_sideways_crossing", 0 .. 1: a jaw crossing the outer wall in one half of the arch and
+   * the inner wall in the other (sideways of the outline, as a wrong transform puts it) along
+   * more than this share of the arch is refused (SC_INVALID_MESH); 0.05 by default, 1 never. */
+  double max_sideways_crossing;
 } sc_case_params;
 
 /* Reads the case's parameters into *out. */
@@ -562,6 +566,9 @@ typedef struct sc_design_report {
   uint32_t wall_jaws;
   double wall_arch_mm;
   double wall_crossing_mm[SC_MAX_BLOCKOUT_JAWS];
+  /* Of it, the outer wall crossed in one half of the arch and the inner in the other, the
+   * lesser (mm): the jaw sideways of the outline (max_sideways_crossing bounds it). */
+  double wall_sideways_mm[SC_MAX_BLOCKOUT_JAWS];
 } sc_design_report;
 
 /* Designs the splint for `c` from `jaws` (jaws[i] is the mesh of the case's jaw i, as read; it

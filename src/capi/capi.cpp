@@ -243,6 +243,8 @@ Status check_params(const sc_case_params& p, const PrinterProfile** profile) {
   SPLINTCORE_RETURN_IF_ERROR(
       check_range("max_wall_crossing", p.max_wall_crossing, "max_wall_crossing"));
   SPLINTCORE_RETURN_IF_ERROR(
+      check_range("max_sideways_crossing", p.max_sideways_crossing, "max_sideways_crossing"));
+  SPLINTCORE_RETURN_IF_ERROR(
       check_range("corner_radius_mm", p.corner_radius_mm, "base.corner_radius_mm"));
   const uint32_t s = p.corner_segments;
   if (s != 1 && s != 2 && s != 4 && s != 8 && s != 16) {
@@ -887,6 +889,7 @@ sc_status sc_case_get_params(sc_context* ctx, const sc_case* c, sc_case_params* 
   for (int i = 0; i < 2; ++i) put(f.outline.distal_ends[i], out->auto_distal_ends[i]);
   out->auto_survey = f.outline.survey ? 1 : 0;
   out->max_wall_crossing = f.max_wall_crossing;
+  out->max_sideways_crossing = f.max_sideways_crossing;
   return keep(ctx, Status::ok());
 }
 
@@ -929,6 +932,7 @@ sc_status sc_case_set_params(sc_context* ctx, sc_case* c, const sc_case_params* 
   }
   f.printer = profile->name;  // static text: the caller's string need not outlive the case
   f.max_wall_crossing = params->max_wall_crossing;
+  f.max_sideways_crossing = params->max_sideways_crossing;
   f.has_auto_outline = params->auto_outline != 0;
   if (f.has_auto_outline) {
     f.outline.indentation_depth_mm = params->auto_indentation_depth_mm;
@@ -1127,6 +1131,7 @@ sc_status sc_design_scans(sc_context* ctx, const sc_case* c, const sc_mesh* cons
   report->wall_arch_mm = r.wall_jaws > 0 ? r.walls[0].arch_mm : 0;
   for (uint32_t i = 0; i < report->wall_jaws; ++i) {
     report->wall_crossing_mm[i] = r.walls[i].either_mm;
+    report->wall_sideways_mm[i] = r.walls[i].sideways_mm();
   }
   report->printer = r.printer;
   report->outlined = r.outlined ? 1 : 0;

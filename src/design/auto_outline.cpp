@@ -335,6 +335,9 @@ void write_later_stages(JsonWriter& w, const CaseFile& c) {
   if (c.max_wall_crossing != CaseFile::kDefaultMaxWallCrossing) {
     w.add("max_wall_crossing", c.max_wall_crossing);
   }
+  if (c.max_sideways_crossing != CaseFile::kDefaultMaxSidewaysCrossing) {
+    w.add("max_sideways_crossing", c.max_sideways_crossing);
+  }
   w.add("placement", c.place_on_tray ? "tray" : "case");
   w.add("printer", c.printer);
   if (c.memory_cap > 0) w.add("memory_cap", c.memory_cap);

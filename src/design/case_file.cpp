@@ -47,6 +47,7 @@ const CaseNumber kCaseNumbers[] = {
     {"label.depth_mm", "mm", 0.05, 5, false, kNoCap, false, "0.4", ""},
     {"min_thickness", "mm", 0.05, 20, false, kNoCap, false, "not checked", ""},
     {"max_wall_crossing", "", 0, 1, false, kNoCap, false, "1 (not refused)", "a share of the arch"},
+    {"max_sideways_crossing", "", 0, 1, false, kNoCap, false, "0.05", "a share of the arch"},
     {"plan.maxilla", "mm", -1e6, 1e6, false, kNoCap, false, "required",
      "each of the 16 entries; rigid (see Jaw)"},
     {"plan.mandible", "mm", -1e6, 1e6, false, kNoCap, false, "required",
@@ -908,10 +909,24 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   Reader r{&doc, ctx.arena};
   const JsonValue& root = doc.root();
   SPLINTCORE_RETURN_IF_ERROR(r.expect_type(root, JsonType::kObject, "the case"));
-  static const char* const kRootKeys[] = {
-      "splintcore_case", "case_id", "units",   "jaws",       "base",          "insertion_direction",
-      "blockout",        "ct",      "printer", "memory_cap", "min_thickness", "max_wall_crossing",
-      "placement",       "label",   "output",  "plan",       nullptr};
+  static const char* const kRootKeys[] = {"splintcore_case",
+                                          "case_id",
+                                          "units",
+                                          "jaws",
+                                          "base",
+                                          "insertion_direction",
+                                          "blockout",
+                                          "ct",
+                                          "printer",
+                                          "memory_cap",
+                                          "min_thickness",
+                                          "max_wall_crossing",
+                                          "max_sideways_crossing",
+                                          "placement",
+                                          "label",
+                                          "output",
+                                          "plan",
+                                          nullptr};
   SPLINTCORE_RETURN_IF_ERROR(r.known_keys(root, kRootKeys, "the case"));
 
   SPLINTCORE_RETURN_IF_ERROR(parse_version_and_id(r, root, name, out));
@@ -952,6 +967,10 @@ Status parse_case_document(const Context& ctx, const char* text, size_t length, 
   }
   if (const JsonValue* w = doc.member(root, "max_wall_crossing")) {
     SPLINTCORE_RETURN_IF_ERROR(r.number(*w, "max_wall_crossing", 0, &out->max_wall_crossing));
+  }
+  if (const JsonValue* w = doc.member(root, "max_sideways_crossing")) {
+    SPLINTCORE_RETURN_IF_ERROR(
+        r.number(*w, "max_sideways_crossing", 0, &out->max_sideways_crossing));
   }
   if (const JsonValue* pl = doc.member(root, "placement")) {
     SPLINTCORE_RETURN_IF_ERROR(parse_placement(r, *pl, out));

@@ -6,6 +6,7 @@
 // jaw meets a wall triangle, through a grid of the walls).
 #include "design/no_jaw.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -483,14 +484,26 @@ Vec3 section_centre(const Mesh& base, uint32_t points, uint32_t k) {
 WallCrossing crossing_lengths(const Mesh& base, const BaseReport& built, const uint8_t* hit) {
   WallCrossing w;
   w.stretches = built.sections - 1;
-  bool first = true;
-  Vec3 a = section_centre(base, built.points_per_section, 0);
+  const uint32_t p = built.points_per_section;
   for (uint32_t k = 0; k < w.stretches; ++k) {
-    const Vec3 b = section_centre(base, built.points_per_section, k + 1);
+    w.arch_mm += length(section_centre(base, p, k + 1) - section_centre(base, p, k));
+  }
+  bool first = true;
+  double along = 0;  // the arch's length before stretch k
+  Vec3 a = section_centre(base, p, 0);
+  for (uint32_t k = 0; k < w.stretches; ++k) {
+    const Vec3 b = section_centre(base, p, k + 1);
     const double len = length(b - a);
-    w.arch_mm += len;
-    if ((hit[k] & 1) != 0) w.outer_mm += len;
-    if ((hit[k] & 2) != 0) w.inner_mm += len;
+    const int half = along + 0.5 * len < 0.5 * w.arch_mm ? 0 : 1;
+    along += len;
+    if ((hit[k] & 1) != 0) {
+      w.outer_mm += len;
+      w.half_outer_mm[half] += len;
+    }
+    if ((hit[k] & 2) != 0) {
+      w.inner_mm += len;
+      w.half_inner_mm[half] += len;
+    }
     if (hit[k] != 0) {
       w.either_mm += len;
       ++w.crossed;
@@ -503,6 +516,37 @@ WallCrossing crossing_lengths(const Mesh& base, const BaseReport& built, const u
     a = b;
   }
   return w;
+}
+
+// The error for jaw j's crossing `w` over c's bounds (ok when within them).
+Status refuse_crossing(const CaseFile& c, size_t j, const WallCrossing& w) {
+  const double share = w.share(), sideways = w.sideways_share();
+  if (share > c.max_wall_crossing) {
+    Status s = make_error(StatusCode::kInvalidMesh, "design: jaw ", j, " (", c.jaws[j].role,
+                          ") crosses the base's side walls along ");
+    s.append_f64(shown(w.either_mm)).append(" of its ").append_f64(shown(w.arch_mm));
+    s.append(" mm (share ").append_f64(shown(share));
+    s.append(", max_wall_crossing ").append_f64(c.max_wall_crossing).append("), first at ");
+    append_corner(&s, w.first_at);
+    s.append(": its teeth lie outside the outline there; check the jaw's transform and the picks");
+    return s.at_index(j);
+  }
+  if (sideways > c.max_sideways_crossing) {
+    // The pair sideways_mm() took: the outer wall in the first half, or the inner.
+    const bool outer_first = std::min(w.half_outer_mm[0], w.half_inner_mm[1]) >=
+                             std::min(w.half_inner_mm[0], w.half_outer_mm[1]);
+    Status s = make_error(StatusCode::kInvalidMesh, "design: jaw ", j, " (", c.jaws[j].role,
+                          ") sits to one side of the base: it crosses the ");
+    s.append(outer_first ? "outer" : "inner").append(" wall along ");
+    s.append_f64(shown(outer_first ? w.half_outer_mm[0] : w.half_inner_mm[0]));
+    s.append(" mm in one half of the arch, the ").append(outer_first ? "inner" : "outer");
+    s.append(" along ").append_f64(shown(outer_first ? w.half_inner_mm[1] : w.half_outer_mm[1]));
+    s.append(" in the other (share ").append_f64(shown(sideways));
+    s.append(", max_sideways_crossing ").append_f64(c.max_sideways_crossing);
+    s.append("); check the jaw's transform and the picks");
+    return s.at_index(j);
+  }
+  return Status::ok();
 }
 
 }  // namespace
@@ -528,16 +572,7 @@ Status measure_side_walls(const Context& ctx, const CaseFile& c, Span<const Mesh
       report->walls[j] = w;
       report->wall_jaws = static_cast<uint32_t>(j + 1);
     }
-    const double share = w.share();
-    if (!(share > c.max_wall_crossing)) continue;
-    Status s = make_error(StatusCode::kInvalidMesh, "design: jaw ", j, " (", c.jaws[j].role,
-                          ") crosses the base's side walls along ");
-    s.append_f64(shown(w.either_mm)).append(" of its ").append_f64(shown(w.arch_mm));
-    s.append(" mm (share ").append_f64(shown(share));
-    s.append(", max_wall_crossing ").append_f64(c.max_wall_crossing).append("), first at ");
-    append_corner(&s, w.first_at);
-    s.append(": its teeth lie outside the outline there; check the jaw's transform and the picks");
-    return s.at_index(j);
+    SPLINTCORE_RETURN_IF_ERROR(refuse_crossing(c, j, w));
   }
   return Status::ok();
 }

@@ -62,7 +62,8 @@ Status refuse_out_of_reach(const Context& ctx, const CaseFile& c, Span<const Mes
 // along the arch (WallCrossing) into report->walls (the first kMaxBlockoutJaws jaws;
 // report->wall_jaws). There the jaw's imprint would open through the splint's side: its teeth
 // lie outside the outline, as they do for a jaw moved sideways by a wrong transform, or picks
-// off the arch. A jaw crossing more than c.max_wall_crossing of the arch is kInvalidMesh
+// off the arch. A jaw crossing more than c.max_wall_crossing of the arch, or sideways of it
+// (WallCrossing::sideways_mm) more than c.max_sideways_crossing, is kInvalidMesh
 // naming it (the first in case order), the lengths, where the first crossing is and what to
 // check. Only the jaw triangles whose corners, as given, are not all beyond one side of the
 // walls' box taken back into the jaw's frame are placed and tested, through a uniform grid of

@@ -284,6 +284,7 @@ void write_thickness(JsonWriter& w, const ThicknessReport& t) {
 void write_side_walls(JsonWriter& w, const CaseFile& c, const DesignReport& report) {
   w.begin_object("side_walls");
   w.add("max_wall_crossing", c.max_wall_crossing);
+  w.add("max_sideways_crossing", c.max_sideways_crossing);
   w.begin_array("jaws");
   for (uint32_t j = 0; j < report.wall_jaws && j < c.jaws.size(); ++j) {
     const WallCrossing& x = report.walls[j];
@@ -295,6 +296,16 @@ void write_side_walls(JsonWriter& w, const CaseFile& c, const DesignReport& repo
     w.add("inner_mm", x.inner_mm);
     w.add("either_mm", x.either_mm);
     w.add("share", x.share());
+    w.begin_array("halves");  // the arch's two halves in section order
+    for (int h = 0; h < 2; ++h) {
+      w.begin_object();
+      w.add("outer_mm", x.half_outer_mm[h]);
+      w.add("inner_mm", x.half_inner_mm[h]);
+      w.end_object();
+    }
+    w.end_array();
+    w.add("sideways_mm", x.sideways_mm());
+    w.add("sideways_share", x.sideways_share());
     w.add("stretches", x.stretches);
     w.add("crossed", x.crossed);
     if (x.crossed > 0) w.add("first_at", x.first_at);

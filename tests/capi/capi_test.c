@@ -909,6 +909,7 @@ static void test_design(const Bytes* case_text, const char* jaws_dir) {
   /* The side-wall check: the case's jaws cross neither wall of its 119 mm arch. */
   CHECK(report.wall_jaws == 2 && report.wall_arch_mm > 100);
   CHECK(report.wall_crossing_mm[0] == 0 && report.wall_crossing_mm[1] == 0);
+  CHECK(report.wall_sideways_mm[0] == 0 && report.wall_sideways_mm[1] == 0);
   CHECK(strcmp(report.printer, "eden260") == 0);
   stl_cap = (size_t)sc_stl_binary_size(report.splint_triangles);
   stl = (unsigned char*)malloc(stl_cap);
@@ -1278,6 +1279,20 @@ static void test_max_wall_crossing(sc_context* ctx, sc_case* c) {
   CHECK_OK(ctx, sc_case_set_params(ctx, c, &q));
   CHECK_OK(ctx, sc_case_get_params(ctx, c, &q));
   CHECK(q.max_wall_crossing == 0.25);
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &p));
+  /* max_sideways_crossing likewise: 0.05 as parsed, out of [0, 1] refused, a share kept. */
+  CHECK(p.max_sideways_crossing == 0.05);
+  q = p;
+  q.max_sideways_crossing = -0.5;
+  CHECK(sc_case_set_params(ctx, c, &q) == SC_INVALID_ARGUMENT);
+  last_message(ctx, text, sizeof text);
+  CHECK(contains(text, "max_sideways_crossing is -0.5, must be in [0, 1]"));
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &q));
+  CHECK(q.max_sideways_crossing == 0.05);
+  q.max_sideways_crossing = 1;
+  CHECK_OK(ctx, sc_case_set_params(ctx, c, &q));
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &q));
+  CHECK(q.max_sideways_crossing == 1);
   CHECK_OK(ctx, sc_case_set_params(ctx, c, &p));
 }
 

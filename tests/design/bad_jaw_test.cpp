@@ -451,6 +451,17 @@ void expect_walls_as_brute_force(const CaseFile& c, const Mesh (&jaws)[2], const
       either += hit[k] != 0 ? len : 0;
       if (hit[k] != 0 && crossed++ == 0) first = k;
     }
+    // The halves: a stretch whose middle lies before half the arch's length is the first's.
+    double half_outer[2] = {0, 0}, half_inner[2] = {0, 0}, before = 0;
+    for (uint32_t k = 0; k < hit.size(); ++k) {
+      const double len = length(centre(k + 1) - centre(k));
+      const int h = before + len / 2 < arch / 2 ? 0 : 1;
+      before += len;
+      half_outer[h] += (hit[k] & 1) != 0 ? len : 0;
+      half_inner[h] += (hit[k] & 2) != 0 ? len : 0;
+    }
+    const double sideways =
+        std::max(std::min(half_outer[0], half_inner[1]), std::min(half_inner[0], half_outer[1]));
     const WallCrossing& w = r.walls[j];
     EXPECT_EQ(w.stretches, built.sections - 1);
     EXPECT_EQ(w.crossed, crossed);
@@ -461,15 +472,22 @@ void expect_walls_as_brute_force(const CaseFile& c, const Mesh (&jaws)[2], const
     EXPECT_NEAR(w.outer_mm, outer, 1e-9);
     EXPECT_NEAR(w.inner_mm, inner, 1e-9);
     EXPECT_NEAR(w.either_mm, either, 1e-9);
+    for (int h = 0; h < 2; ++h) {
+      EXPECT_NEAR(w.half_outer_mm[h], half_outer[h], 1e-9) << "half " << h;
+      EXPECT_NEAR(w.half_inner_mm[h], half_inner[h], 1e-9) << "half " << h;
+    }
+    EXPECT_NEAR(w.sideways_mm(), sideways, 1e-9);
   }
 }
 
 // A jaw moved sideways by a wrong transform, still touching the base: its imprint crosses the
 // base's side walls (its teeth outside the outline), which the base's reach check cannot see.
 // Measured on every design against a brute force (the case's own jaws: no crossing; the
-// mandible 3 mm to the side: much of the arch); the report holds it and, by default, the splint
-// is made. With max_wall_crossing below the share the design is refused naming the jaw, the
-// lengths and where, nothing made; at exactly the share it is not.
+// mandible 3 mm to the side: much of the arch, the outer wall in one half, the inner in the
+// other). By default (max_sideways_crossing 0.05) that is refused, naming the jaw and both
+// lengths, nothing made; with 1 the splint is made and the report holds it. With
+// max_wall_crossing below the share the design is refused naming the jaw, the lengths and
+// where; at exactly either share it is not.
 TEST(DesignBadJaws, AJawMovedSidewaysCrossesTheSideWalls) {
   BadJaws f;
   ASSERT_TRUE(f.ok);
@@ -485,16 +503,35 @@ TEST(DesignBadJaws, AJawMovedSidewaysCrossesTheSideWalls) {
   moved[1].transform = compose(RigidTransform::translation(Vec3{3, 0, 0}), moved[1].transform);
   CaseFile c = f.c;
   c.jaws = Span<const CaseJaw>(moved, 2);
-  Mesh shifted(&f.t.arena);
   DesignReport rs;
+  {
+    Mesh refused;
+    const size_t used = f.t.arena.used();
+    const Status s = design_splint(ctx, c, Span<const Mesh>(f.jaws, 2), &refused, &rs);
+    expect_named(s, "design: jaw 1 (mandible) sits to one side of the base: it crosses the ",
+                 "max_sideways_crossing 0.05); check the jaw's transform and the picks", refused,
+                 used, f.t.arena);
+    EXPECT_EQ(s.index(), 1u);
+  }
+  c.max_sideways_crossing = 1;
+  Mesh shifted(&f.t.arena);
   SPLINTCORE_ASSERT_OK(design_splint(ctx, c, Span<const Mesh>(f.jaws, 2), &shifted, &rs));
   expect_walls_as_brute_force(c, f.jaws, rs);
   EXPECT_EQ(rs.walls[0].crossed, 0u);
-  const WallCrossing& w = rs.walls[1];
+  const WallCrossing w = rs.walls[1];
   EXPECT_GT(w.outer_mm, 10.0);
   EXPECT_GT(w.inner_mm, 10.0);
   const double share = w.either_mm / w.arch_mm;
   EXPECT_GT(share, 0.3);
+  // The outer wall in one half, the inner in the other: sideways, most of each.
+  EXPECT_GT(w.sideways_share(), 0.25);
+  EXPECT_EQ(std::min(w.half_inner_mm[0], w.half_outer_mm[1]), 0.0);
+  {
+    CaseFile at = c;
+    at.max_sideways_crossing = w.sideways_share();
+    Mesh made(&f.t.arena);
+    SPLINTCORE_EXPECT_OK(design_splint(ctx, at, Span<const Mesh>(f.jaws, 2), &made, &rs));
+  }
 
   c.max_wall_crossing = 0.1;
   Mesh refused;
@@ -508,10 +545,11 @@ TEST(DesignBadJaws, AJawMovedSidewaysCrossesTheSideWalls) {
   SPLINTCORE_EXPECT_OK(design_splint(ctx, c, Span<const Mesh>(f.jaws, 2), &at_share, &rs));
 }
 
-// The check's figures (its culling in the jaw's frame, its grid of the walls, its side rule)
-// against the brute force, on random placements of the mandible (up to 4 mm sideways and along,
-// 1.5 mm up or down, turned up to 6 degrees about the occlusal normal), serially and on two
-// workers (the same figures, bit for bit).
+// The check's figures (its culling in the jaw's frame, its grid of the walls, its side rule,
+// the arch's halves) against the brute force, on random placements of the mandible (up to 4 mm
+// sideways and along, 1.5 mm up or down, turned up to 6 degrees about the occlusal normal),
+// serially and on two workers (the same figures, bit for bit); measured, not refused
+// (max_sideways_crossing 1).
 TEST(DesignBadJaws, PropertySideWallCrossingsAreTheBruteForces) {
   BadJaws f;
   ASSERT_TRUE(f.ok);
@@ -532,6 +570,7 @@ TEST(DesignBadJaws, PropertySideWallCrossingsAreTheBruteForces) {
     moved[1].transform = compose(turn, moved[1].transform);
     CaseFile c = f.c;
     c.jaws = Span<const CaseJaw>(moved, 2);
+    c.max_sideways_crossing = 1;
     SCOPED_TRACE(testing::Message() << "trial " << trial << ": angle " << angle << ", move "
                                     << turn.t.x << ", " << turn.t.y << ", " << turn.t.z);
     DesignReport serial, two;
@@ -565,10 +604,12 @@ TEST(DesignBadJaws, PropertySideWallCrossingsAreTheBruteForces) {
   for (const auto& t : kFaces)
     ASSERT_TRUE(coarse.triangles.push_back(Triangle{{t[0], t[1], t[2]}}));
   const Mesh with_coarse[2] = {f.jaws[0], coarse};
+  CaseFile measured = f.c;  // (the box's sides cross the walls unevenly: sideways too)
+  measured.max_sideways_crossing = 1;
   DesignReport r;
   SPLINTCORE_ASSERT_OK(design_detail::measure_side_walls(
-      Context(&f.t.arena), f.c, Span<const Mesh>(with_coarse, 2), base, built, &r));
-  expect_walls_as_brute_force(f.c, with_coarse, r);
+      Context(&f.t.arena), measured, Span<const Mesh>(with_coarse, 2), base, built, &r));
+  expect_walls_as_brute_force(measured, with_coarse, r);
   EXPECT_GT(r.walls[1].crossed, 10u);
 }
 
@@ -576,7 +617,9 @@ TEST(DesignBadJaws, PropertySideWallCrossingsAreTheBruteForces) {
 // opened 2 mm, crowns 1.5 mm into the wafer, lines 6 mm each way): its jaws cross no side
 // wall, nor does either moved 1 mm sideways; moved 3 mm, either crosses along more than a fifth
 // of the arch (measured: 27% the mandible, 34% the maxilla), which max_wall_crossing 0.1
-// refuses. Skipped without the data.
+// refuses, and sideways (the outer wall in one half, the inner in the other) along more than a
+// tenth (10.8%, 14.9%), which the default max_sideways_crossing refuses. Skipped without the
+// data.
 TEST(DesignBadJaws, RealDentitionMovedSidewaysCrossesTheSideWalls) {
   realcase::RealCase rc;
   std::string error;
@@ -618,14 +661,24 @@ TEST(DesignBadJaws, RealDentitionMovedSidewaysCrossesTheSideWalls) {
       moved[j].transform = RigidTransform::translation(Vec3{dx, 0, 0});
       CaseFile m = c;
       m.jaws = Span<const CaseJaw>(moved, 2);
+      const Status by_default =
+          design_detail::measure_side_walls(ctx, m, Span<const Mesh>(jaws, 2), base, built, &r);
+      m.max_sideways_crossing = 1;
       SPLINTCORE_ASSERT_OK(
           design_detail::measure_side_walls(ctx, m, Span<const Mesh>(jaws, 2), base, built, &r));
       EXPECT_EQ(r.walls[1 - j].crossed, 0u);
       const double share = r.walls[j].either_mm / r.walls[j].arch_mm;
       if (dx == 1.0) {
+        SPLINTCORE_EXPECT_OK(by_default);
         EXPECT_EQ(r.walls[j].crossed, 0u);
       } else {
         EXPECT_GT(share, 0.2);
+        EXPECT_GT(r.walls[j].sideways_share(), 0.1);
+        EXPECT_EQ(by_default.code(), StatusCode::kInvalidMesh) << test::format(by_default);
+        EXPECT_NE(std::string(by_default.message()).find("sits to one side of the base"),
+                  std::string::npos)
+            << by_default.message();
+        EXPECT_EQ(by_default.index(), j);
         m.max_wall_crossing = 0.1;
         const Status s =
             design_detail::measure_side_walls(ctx, m, Span<const Mesh>(jaws, 2), base, built, &r);

@@ -427,8 +427,8 @@ TEST(CaseFileErrors, UnknownKeysAtEveryLevel) {
   expect_invalid(with_root("  \"colour\": @\"red\",\n"),
                  {"unknown key \"colour\" in the case",
                   "(allowed: splintcore_case case_id units jaws base insertion_direction "
-                  "blockout ct printer memory_cap min_thickness max_wall_crossing placement label "
-                  "output plan)"});
+                  "blockout ct printer memory_cap min_thickness max_wall_crossing "
+                  "max_sideways_crossing placement label output plan)"});
   expect_invalid(with_base("    \"spacing\": @1,\n"),
                  {"unknown key \"spacing\" in \"base\"",
                   "(allowed: occlusal_normal spacing_mm corner_radius_mm corner_segments "
@@ -966,6 +966,35 @@ TEST(CaseFile, MaxWallCrossingIsReadAndWrittenBack) {
     SPLINTCORE_ASSERT_OK(parse(a.arena, written, &again));
     EXPECT_EQ(again.max_wall_crossing, g.value);
   }
+}
+
+// "max_sideways_crossing" likewise: 0.05 when absent (and then not written back).
+TEST(CaseFile, MaxSidewaysCrossingIsReadAndWrittenBack) {
+  test::TestArena a(size_t{1} << 20);
+  struct Given {
+    const char* text;
+    double value;
+  };
+  for (const Given& g : {Given{"", 0.05}, Given{"\"max_sideways_crossing\": 1,\n", 1.0},
+                         Given{"\"max_sideways_crossing\": 0,\n", 0.0}}) {
+    SCOPED_TRACE(g.text);
+    CaseFile c;
+    SPLINTCORE_ASSERT_OK(parse(a.arena, with_root(g.text).text(), &c));
+    EXPECT_EQ(c.max_sideways_crossing, g.value);
+    std::string written;
+    SPLINTCORE_ASSERT_OK(write_case(c, test::string_sink(&written)));
+    EXPECT_EQ(written.find("max_sideways_crossing") != std::string::npos, g.text[0] != '\0')
+        << written;
+    CaseFile again;
+    SPLINTCORE_ASSERT_OK(parse(a.arena, written, &again));
+    EXPECT_EQ(again.max_sideways_crossing, g.value);
+  }
+  CaseFile c;
+  const Status s = parse(a.arena, with_root("\"max_sideways_crossing\": 1.5,\n").text(), &c);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(s.message()).find("\"max_sideways_crossing\" is 1.5, outside [0, 1]"),
+            std::string::npos)
+      << s.message();
 }
 
 TEST(CaseFile, BlockoutMethodIsAutoExactVoxelOrHeightfieldAndExactTakesNoVoxelKeys) {

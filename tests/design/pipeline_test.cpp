@@ -701,7 +701,8 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
   CaseFile c;
   std::string ok = with(
       "\"blockout\": {\"voxel\": 0.1, \"clearance\": 0.1}, \"min_thickness\": 1.5, "
-      "\"max_wall_crossing\": 0.25, \"placement\": \"tray\", \"label\": {\"text\": \"AB-1\", "
+      "\"max_wall_crossing\": 0.25, \"max_sideways_crossing\": 0.5, \"placement\": \"tray\", "
+      "\"label\": {\"text\": \"AB-1\", "
       "\"mode\": "
       "\"emboss\", \"height_mm\": 2, \"stroke_mm\": 0.3, \"depth_mm\": 0.5}");
   SPLINTCORE_ASSERT_OK(parse_case(ctx, ok.data(), ok.size(), "ok", &c));
@@ -715,6 +716,7 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
   EXPECT_EQ(c.blockout.inset, 0.0);  // a clearance takes the surface outside
   EXPECT_EQ(c.min_thickness, 1.5);
   EXPECT_EQ(c.max_wall_crossing, 0.25);
+  EXPECT_EQ(c.max_sideways_crossing, 0.5);
   EXPECT_TRUE(c.place_on_tray);
   // The defaults said out loud; the clearance's cap is 20 voxels below 0.1 mm voxels, else 2 mm.
   std::string plain = with(
@@ -724,6 +726,7 @@ TEST(DesignOptions, CaseKeysAreCheckedWithTheirPlace) {
   SPLINTCORE_ASSERT_OK(parse_case(ctx, plain.data(), plain.size(), "plain", &c));
   EXPECT_FALSE(c.place_on_tray);
   EXPECT_EQ(c.max_wall_crossing, 1.0);  // reported, never refused
+  EXPECT_EQ(c.max_sideways_crossing, 0.05);
   EXPECT_EQ(c.label.mode, LabelMode::kEngrave);
   EXPECT_EQ(c.blockout.offset, 1.0);
   std::string over = with("\"blockout\": {\"voxel\": 0.05, \"clearance\": 1.01}");

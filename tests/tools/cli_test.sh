@@ -510,19 +510,25 @@ expect_exit 2 "convert with a scale of 0" -- "$tool" convert "$work/case/maxilla
 check "no file for a scale of 0" -- test ! -e "$work/case/never.stl"
 # The side-wall check: the case's jaws cross no wall (no summary line; the report has both
 # jaws). The mandible moved 3 mm sideways still reaches the base, but its teeth cross the
-# walls: designed by default with a summary line saying where, refused with
-# "max_wall_crossing": 0.1, nothing written.
+# walls, the outer in one half of the arch and the inner in the other: refused by default
+# (max_sideways_crossing 0.05), nothing written; designed with "max_sideways_crossing": 1, with
+# a summary line saying where; refused with "max_wall_crossing": 0.1.
 check "design says nothing of the side walls when no jaw crosses them" -- sh -c "! grep -q '^side walls' '$work/out.design'"
-check "report: both jaws' side walls" -- grep -q '"side_walls":{"max_wall_crossing":1,"jaws":\[{"jaw":0,"role":"maxilla","arch_mm":[0-9.]*,"outer_mm":0,"inner_mm":0,"either_mm":0,"share":0,"stretches":[0-9]*,"crossed":0},{"jaw":1,"role":"mandible"' "$work/design/report.json"
+check "report: both jaws' side walls" -- grep -q '"side_walls":{"max_wall_crossing":1,"max_sideways_crossing":0.05,"jaws":\[{"jaw":0,"role":"maxilla","arch_mm":[0-9.]*,"outer_mm":0,"inner_mm":0,"either_mm":0,"share":0,"halves":\[{"outer_mm":0,"inner_mm":0},{"outer_mm":0,"inner_mm":0}\],"sideways_mm":0,"sideways_share":0,"stretches":[0-9]*,"crossed":0},{"jaw":1,"role":"mandible"' "$work/design/report.json"
 python3 - "$work/case/case.json" "$work/case/sideways.json" <<'PY'
 import json, sys
 case = json.load(open(sys.argv[1]))
 case["jaws"][1]["transform"][3] += 3.0  # x of the translation
 json.dump(case, open(sys.argv[2], "w"), indent=1)
+case["max_sideways_crossing"] = 1
+json.dump(case, open(sys.argv[2].replace(".json", "-measured.json"), "w"), indent=1)
 PY
-expect_exit 0 "design with the mandible 3 mm sideways" -- "$tool" design "$work/case/sideways.json" -o "$work/design-sideways"
-check "the summary says where the mandible crosses the side walls" -- grep -q '^side walls (mandible): crossed along [0-9.]* of [0-9.]* mm of the arch ([0-9]*%; outer [0-9.]*, inner [0-9.]* mm), first at (' "$work/out"
-check "report: the mandible's crossing" -- grep -q '"role":"mandible","arch_mm":[0-9.]*,"outer_mm":[1-9][0-9.]*,"inner_mm":[1-9][0-9.]*,"either_mm":[0-9.]*,"share":0\.[3-9][0-9]*,"stretches":[0-9]*,"crossed":[1-9][0-9]*,"first_at":\[' "$work/design-sideways/report.json"
+expect_exit 1 "design with the mandible 3 mm sideways" -- "$tool" design "$work/case/sideways.json" -o "$work/design-sideways-default"
+check "the sideways refusal names the jaw, both walls, the share and what to check" -- grep -q "design: jaw 1 (mandible) sits to one side of the base: it crosses the outer wall along [0-9.]* mm in one half of the arch, the inner along [0-9.]* in the other (share 0\.[2-9][0-9]*, max_sideways_crossing 0.05); check the jaw's transform and the picks" "$work/err"
+check "nothing written when refused sideways" -- test ! -e "$work/design-sideways-default/splint.stl"
+expect_exit 0 "design with the mandible 3 mm sideways, max_sideways_crossing 1" -- "$tool" design "$work/case/sideways-measured.json" -o "$work/design-sideways"
+check "the summary says where the mandible crosses the side walls" -- grep -q '^side walls (mandible): crossed along [0-9.]* of [0-9.]* mm of the arch ([0-9]*%; outer [0-9.]*, inner [0-9.]* mm; sideways [0-9.]* mm, [2-9][0-9]%), first at (' "$work/out"
+check "report: the mandible's crossing" -- grep -q '"role":"mandible","arch_mm":[0-9.]*,"outer_mm":[1-9][0-9.]*,"inner_mm":[1-9][0-9.]*,"either_mm":[0-9.]*,"share":0\.[3-9][0-9]*,"halves":\[{"outer_mm":[1-9][0-9.]*,"inner_mm":0},{"outer_mm":0,"inner_mm":[1-9][0-9.]*}\],"sideways_mm":[1-9][0-9.]*,"sideways_share":0\.[2-9][0-9]*,"stretches":[0-9]*,"crossed":[1-9][0-9]*,"first_at":\[' "$work/design-sideways/report.json"
 sed 's/"printer":/"max_wall_crossing": 0.1,\n  "printer":/' "$work/case/sideways.json" >"$work/case/sideways-refused.json"
 expect_exit 1 "design with the mandible sideways and max_wall_crossing 0.1" -- "$tool" design "$work/case/sideways-refused.json" -o "$work/design-sideways-refused"
 check "the refusal names the jaw, the share and what to check" -- grep -q "design: jaw 1 (mandible) crosses the base's side walls along [0-9.]* of its [0-9.]* mm (share 0\.[3-9][0-9]*, max_wall_crossing 0.1), first at \[.*check the jaw's transform and the picks" "$work/err"

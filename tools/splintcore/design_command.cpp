@@ -534,10 +534,10 @@ void print_side_walls(const char* splint, const CaseFile& c, const DesignReport&
     if (w.crossed == 0) continue;
     std::printf(
         "%sside walls (%s): crossed along %.1f of %.1f mm of the arch (%.0f%%; outer %.1f, "
-        "inner %.1f mm), first at (%.2f, %.2f, %.2f): the imprint opens through the splint's "
-        "side there\n",
+        "inner %.1f mm; sideways %.1f mm, %.0f%%), first at (%.2f, %.2f, %.2f): the imprint "
+        "opens through the splint's side there\n",
         splint, c.jaws[i].role, w.either_mm, w.arch_mm, 100 * w.share(), w.outer_mm, w.inner_mm,
-        w.first_at.x, w.first_at.y, w.first_at.z);
+        w.sideways_mm(), 100 * w.sideways_share(), w.first_at.x, w.first_at.y, w.first_at.z);
   }
 }
 
