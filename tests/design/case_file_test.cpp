@@ -945,56 +945,42 @@ TEST(CaseFile, BlockoutTakesItsDefaultsAndChecksItsRanges) {
   }
 }
 
-// "max_wall_crossing": read, written back by write_case (the resolved case) when it is not the
-// default, and absent when it is (so a resolved case reads as before).
-TEST(CaseFile, MaxWallCrossingIsReadAndWrittenBack) {
+// The side-wall check's bounds, "max_wall_crossing" (1 by default) and "max_sideways_crossing"
+// (0.05): read, written back by write_case (the resolved case) when not the default, and
+// absent when it is (so a resolved case reads as before); out of [0, 1] refused naming it.
+TEST(CaseFile, SideWallBoundsAreReadAndWrittenBack) {
   test::TestArena a(size_t{1} << 20);
-  struct Given {
-    const char* text;
-    double value;
+  struct Key {
+    const char* name;
+    double fallback;
+    double CaseFile::*field;
   };
-  for (const Given& g : {Given{"", 1.0}, Given{"\"max_wall_crossing\": 0.2,\n", 0.2},
-                         Given{"\"max_wall_crossing\": 0,\n", 0.0}}) {
-    SCOPED_TRACE(g.text);
+  for (const Key& k : {Key{"max_wall_crossing", 1.0, &CaseFile::max_wall_crossing},
+                       Key{"max_sideways_crossing", 0.05, &CaseFile::max_sideways_crossing}}) {
+    for (const double given : {-1.0, 0.2, 0.0}) {  // -1: not given
+      const std::string text =
+          given < 0 ? "" : "\"" + std::string(k.name) + "\": " + std::to_string(given) + ",\n";
+      const double value = given < 0 ? k.fallback : given;
+      SCOPED_TRACE(text.empty() ? std::string(k.name) + " absent" : text);
+      CaseFile c;
+      SPLINTCORE_ASSERT_OK(parse(a.arena, with_root(text).text(), &c));
+      EXPECT_EQ(c.*k.field, value);
+      std::string written;
+      SPLINTCORE_ASSERT_OK(write_case(c, test::string_sink(&written)));
+      EXPECT_EQ(written.find(k.name) != std::string::npos, given >= 0) << written;
+      CaseFile again;
+      SPLINTCORE_ASSERT_OK(parse(a.arena, written, &again));
+      EXPECT_EQ(again.*k.field, value);
+    }
     CaseFile c;
-    SPLINTCORE_ASSERT_OK(parse(a.arena, with_root(g.text).text(), &c));
-    EXPECT_EQ(c.max_wall_crossing, g.value);
-    std::string written;
-    SPLINTCORE_ASSERT_OK(write_case(c, test::string_sink(&written)));
-    EXPECT_EQ(written.find("max_wall_crossing") != std::string::npos, g.text[0] != '\0') << written;
-    CaseFile again;
-    SPLINTCORE_ASSERT_OK(parse(a.arena, written, &again));
-    EXPECT_EQ(again.max_wall_crossing, g.value);
+    const std::string bad = "\"" + std::string(k.name) + "\": 1.5,\n";
+    const Status s = parse(a.arena, with_root(bad).text(), &c);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+    EXPECT_NE(
+        std::string(s.message()).find("\"" + std::string(k.name) + "\" is 1.5, outside [0, 1]"),
+        std::string::npos)
+        << s.message();
   }
-}
-
-// "max_sideways_crossing" likewise: 0.05 when absent (and then not written back).
-TEST(CaseFile, MaxSidewaysCrossingIsReadAndWrittenBack) {
-  test::TestArena a(size_t{1} << 20);
-  struct Given {
-    const char* text;
-    double value;
-  };
-  for (const Given& g : {Given{"", 0.05}, Given{"\"max_sideways_crossing\": 1,\n", 1.0},
-                         Given{"\"max_sideways_crossing\": 0,\n", 0.0}}) {
-    SCOPED_TRACE(g.text);
-    CaseFile c;
-    SPLINTCORE_ASSERT_OK(parse(a.arena, with_root(g.text).text(), &c));
-    EXPECT_EQ(c.max_sideways_crossing, g.value);
-    std::string written;
-    SPLINTCORE_ASSERT_OK(write_case(c, test::string_sink(&written)));
-    EXPECT_EQ(written.find("max_sideways_crossing") != std::string::npos, g.text[0] != '\0')
-        << written;
-    CaseFile again;
-    SPLINTCORE_ASSERT_OK(parse(a.arena, written, &again));
-    EXPECT_EQ(again.max_sideways_crossing, g.value);
-  }
-  CaseFile c;
-  const Status s = parse(a.arena, with_root("\"max_sideways_crossing\": 1.5,\n").text(), &c);
-  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(std::string(s.message()).find("\"max_sideways_crossing\" is 1.5, outside [0, 1]"),
-            std::string::npos)
-      << s.message();
 }
 
 TEST(CaseFile, BlockoutMethodIsAutoExactVoxelOrHeightfieldAndExactTakesNoVoxelKeys) {
