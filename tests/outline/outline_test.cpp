@@ -157,22 +157,27 @@ std::vector<double> indentation(const phantom::JawMesh& jaw, const Mesh& moved, 
   return depth;
 }
 
+// The automatic case on the phantom's jaws (the mandible 2 mm down), indented `depth` mm.
+Status design_phantom_at_depth(const PhantomJaws& p, Arena& arena, double depth, Mesh* splint,
+                               DesignReport* r) {
+  char extra[64];
+  std::snprintf(extra, sizeof extra, "\"indentation_depth_mm\": %g", depth);
+  CaseFile c;
+  SPLINTCORE_RETURN_IF_ERROR(parse(arena, auto_case(extra, -2.0), &c));
+  Mesh jaws[2];
+  copy_mesh(p.jaw[0], arena, &jaws[0], RigidTransform{});
+  copy_mesh(p.jaw[1], arena, &jaws[1], RigidTransform{});
+  return design_splint(Context(&arena), c, Span<const Mesh>(jaws, 2), splint, r);
+}
+
 TEST(Outline, PhantomSplintIndentsEveryToothAsAsked) {
   PhantomJaws p(87000);
   test::TestArena t{size_t{512} << 20};
   for (const double depth : {2.0, 1.0}) {
     ArenaScope scope(t.arena);
-    char extra[64];
-    std::snprintf(extra, sizeof extra, "\"indentation_depth_mm\": %g", depth);
-    CaseFile c;
-    SPLINTCORE_ASSERT_OK(parse(t.arena, auto_case(extra, -2.0), &c));
-    Mesh jaws[2];
-    copy_mesh(p.jaw[0], t.arena, &jaws[0], RigidTransform{});
-    copy_mesh(p.jaw[1], t.arena, &jaws[1], RigidTransform{});
     Mesh splint;
     DesignReport r;
-    SPLINTCORE_ASSERT_OK(
-        design_splint(Context(&t.arena), c, Span<const Mesh>(jaws, 2), &splint, &r));
+    SPLINTCORE_ASSERT_OK(design_phantom_at_depth(p, t.arena, depth, &splint, &r));
     EXPECT_TRUE(r.outlined);
     EXPECT_TRUE(r.print.printable);
     EXPECT_TRUE(r.self_intersection_checked);
@@ -204,17 +209,9 @@ TEST(Outline, DeepIndentationsCrossNoSideWall) {
   test::TestArena t{size_t{256} << 20};
   for (const double depth : {2.0, 3.0, 4.0, 5.0}) {
     ArenaScope scope(t.arena);
-    char extra[64];
-    std::snprintf(extra, sizeof extra, "\"indentation_depth_mm\": %g", depth);
-    CaseFile c;
-    SPLINTCORE_ASSERT_OK(parse(t.arena, auto_case(extra, -2.0), &c));
-    Mesh jaws[2];
-    copy_mesh(p.jaw[0], t.arena, &jaws[0], RigidTransform{});
-    copy_mesh(p.jaw[1], t.arena, &jaws[1], RigidTransform{});
     Mesh splint;
     DesignReport r;
-    SPLINTCORE_ASSERT_OK(
-        design_splint(Context(&t.arena), c, Span<const Mesh>(jaws, 2), &splint, &r));
+    SPLINTCORE_ASSERT_OK(design_phantom_at_depth(p, t.arena, depth, &splint, &r));
     EXPECT_TRUE(r.print.printable) << depth;
     ASSERT_EQ(r.wall_jaws, 2u);
     for (uint32_t j = 0; j < 2; ++j) {
