@@ -123,7 +123,11 @@ constexpr size_t kSweepStep = 1;
 
 // An arena over a heap buffer owned by the test.
 // The buffer is not zeroed (nothing may depend on arena contents), so a large cap costs
-// nothing until it is touched. It is 16-byte aligned (Arena::kDefaultAlignment): plain new[]
+// nothing until it is touched. Nor is it left as the system hands it out, which for a large
+// buffer is a fresh mapping, all zeros: the first time the arena reaches a stretch of it, the
+// stretch is filled with 0xA5 bytes (a touch hook, scribble()), so that code reading memory it
+// never wrote (a count it did not clear) fails here as it would for an embedder whose arena
+// still holds the last job's data. It is 16-byte aligned (Arena::kDefaultAlignment): plain new[]
 // gives only 8 on 32-bit ARM (glibc armhf), which would add padding to used()/high_water()
 // and make the exact-accounting tests differ from x86-64.
 // The buffer is aligned to a cache line, the largest alignment any allocation asks for
@@ -165,7 +169,14 @@ struct TestArena {
   Arena arena;
   explicit TestArena(size_t bytes = size_t{256} << 20)
       : buffer(allocate(bytes > 0 ? bytes : 1), Free{bytes > 0 ? bytes : 1}),
-        arena(buffer.get(), bytes) {}
+        arena(buffer.get(), bytes) {
+    TouchHook hook;
+    hook.touch = &scribble;
+    hook.step = 4096;
+    arena.set_touch_hook(hook);
+  }
+  // The touch hook: arena memory never handed out before, about to be.
+  static void scribble(void*, void* begin, size_t bytes) { std::memset(begin, 0xA5, bytes); }
 };
 
 inline std::string format(const Status& s) {
