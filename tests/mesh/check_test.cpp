@@ -459,6 +459,34 @@ TEST(CheckMesh, PropertyEdgePassAgreesWithAPlainModel) {
   }
 }
 
+// A closed surface pinched at a vertex (a torus with two far-apart vertices made one) is still
+// closed, edge-manifold and oriented, but not a surface at that vertex: its Euler
+// characteristic is odd (-1), so it has no genus (-1), as in the plain model.
+TEST(CheckMesh, APinchedTorusHasNoGenus) {
+  TestArena t;
+  Mesh mesh;
+  ASSERT_TRUE(test::mesh_from_soup(t.arena, shapes::torus(32, 16, 10, 3), &mesh).is_ok());
+  // Vertex 0 and the vertex nearest its mirror image through the torus' centre: no common
+  // neighbour, so making them one adds no edge and leaves every edge with two uses.
+  const Vec3 mirror = mesh.vertices[0] * -1.0;
+  uint32_t far = 1;
+  for (uint32_t v = 1; v < mesh.vertices.size(); ++v) {
+    if (length(mesh.vertices[v] - mirror) < length(mesh.vertices[far] - mirror)) far = v;
+  }
+  ASSERT_GT(length(mesh.vertices[far] - mesh.vertices[0]), 20.0);
+  for (Triangle& tri : mesh.triangles) {
+    for (uint32_t& v : tri.v) v = v == far ? 0 : v;
+  }
+  MeshReport r;
+  ASSERT_TRUE(check_mesh(Context(&t.arena), mesh, &r).is_ok());
+  EXPECT_TRUE(r.closed() && r.edge_manifold() && r.oriented());
+  EXPECT_EQ(r.shells, 1u);
+  EXPECT_EQ(r.unreferenced_vertices, 1u);
+  EXPECT_EQ(r.euler_characteristic, -1);
+  EXPECT_EQ(r.genus, -1);
+  test::expect_same_topology(r, model_report(mesh));
+}
+
 // check_closed_oriented is linear however many triangles share a vertex: a bipyramid whose
 // apex (vertex 0, the first bucket) is in 100,000 triangles. Bucket-local pair counting took
 // (2 * 10^5)^2 steps there. Also: the first bad edge is the one named.
