@@ -112,7 +112,9 @@ static int refused_with(const sc_context* ctx, sc_status got, const char* part) 
   return got == SC_INVALID_ARGUMENT && contains(text, part);
 }
 
-/* The context every test uses: storage and arena from the heap here, before counting. */
+/* The context every test uses: storage and arena from the heap here, before counting. Both
+ * filled with 0xA5 first, as an embedder's reused buffers hold the last job's bytes (a large
+ * malloc is a fresh mapping, all zeros, which would hide a read of memory never written). */
 typedef struct Fixture {
   unsigned char* storage;
   unsigned char* arena;
@@ -123,6 +125,8 @@ static Fixture open_fixture(size_t arena_bytes) {
   Fixture f;
   f.storage = (unsigned char*)malloc(SC_CONTEXT_BYTES);
   f.arena = (unsigned char*)malloc(arena_bytes > 0 ? arena_bytes : 1);
+  memset(f.storage, 0xA5, SC_CONTEXT_BYTES);
+  memset(f.arena, 0xA5, arena_bytes > 0 ? arena_bytes : 1);
   f.ctx = NULL;
   /* Deliberately misaligned storage: the context aligns itself. */
   if (sc_context_init(f.storage + 1, SC_CONTEXT_BYTES - 1, f.arena, arena_bytes, &f.ctx) != SC_OK) {
