@@ -102,6 +102,13 @@ TEST(ArrangeOnTray, RowCentredWithTheGapAndRefusalsNamed) {
   const Aabb empty[1] = {Aabb{}};
   EXPECT_EQ(arrange_on_tray(p, Span<const Aabb>(empty, 1), 5.0, unused).code(),
             StatusCode::kInvalidArgument);
+  // The bounds of what is allowed: no gap (the parts touch), and a part flat along every axis
+  // (a point: its bounds are finite, so it is placed, however little it is).
+  SPLINTCORE_ASSERT_OK(arrange_on_tray(p, Span<const Aabb>(boxes, 2), 0.0, t));
+  EXPECT_DOUBLE_EQ(boxes[1].lo.x + t[1].x, boxes[0].hi.x + t[0].x);
+  const Aabb point[1] = {Aabb{{1, 2, 3}, {1, 2, 3}}};
+  SPLINTCORE_ASSERT_OK(arrange_on_tray(p, Span<const Aabb>(point, 1), 5.0, t));
+  EXPECT_EQ(point[0].lo + t[0], (Vec3{0.5 * p.build_volume_mm.x, 0.5 * p.build_volume_mm.y, 0.0}));
 }
 
 }  // namespace
