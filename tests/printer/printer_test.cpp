@@ -59,6 +59,40 @@ TEST(Printer, TooLargeAndRotatedFits) {
   EXPECT_TRUE(pc.printable);
 }
 
+// The fit is inclusive: a part exactly as large as the room (the tray less its margins, the
+// whole height) fits, as a row of parts exactly as wide as the tray and a part exactly as deep
+// and high as it are placed. A profile without a positive build volume or layer thickness is
+// refused by name.
+TEST(Printer, ExactFitsFitAndABadProfileIsRefused) {
+  TestArena t;
+  const float lo[3] = {0, 0, 0}, room[3] = {245, 242, 200};
+  PrintCheck pc = run_check(t, shapes::box(lo, room));
+  EXPECT_TRUE(pc.fits);
+  EXPECT_TRUE(pc.printable);
+  const PrinterProfile& p = eden260_profile();
+  const Aabb row[2] = {Aabb{{0, 0, 0}, {125, 10, 10}}, Aabb{{0, 0, 0}, {125, 252, 200}}};
+  Vec3 moved[2];
+  SPLINTCORE_EXPECT_OK(arrange_on_tray(p, Span<const Aabb>(row, 2), 5.0, moved));
+  EXPECT_DOUBLE_EQ(moved[0].x, 0.0);
+  Mesh mesh;
+  ASSERT_TRUE(test::mesh_from_soup(t.arena, shapes::box(lo, room), &mesh).is_ok());
+  for (int k = 0; k < 4; ++k) {
+    PrinterProfile bad = p;
+    if (k < 3) {
+      (k == 0   ? bad.build_volume_mm.x
+       : k == 1 ? bad.build_volume_mm.y
+                : bad.build_volume_mm.z) = 0.0;
+    } else {
+      bad.layer_thickness_mm = 0.0;
+    }
+    PrintCheck out;
+    const Status s = check_printable(Context(&t.arena), mesh, bad, PrintCheckOptions{}, &out);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << k;
+    EXPECT_NE(test::format(s).find("'eden260' has a non-positive"), std::string::npos)
+        << test::format(s);
+  }
+}
+
 TEST(Printer, MetresAreSuspect) {
   TestArena t;
   const float lo[3] = {0, 0, 0}, hi[3] = {0.07f, 0.06f, 0.02f};
