@@ -973,6 +973,62 @@ TEST(StlReadTest, FailedReadLeavesTheArenaWhereItWas) {
   EXPECT_LE(arena.used() - before, 12 * sizeof(splintcore::Triangle) + 8 * sizeof(Vec3) + 64);
 }
 
+// The limit is inclusive on both readers (the streamed weld's bit test and the soup reader's
+// comparison): with a limit a float holds exactly, a corner at +-the limit is read, the next
+// float beyond is refused naming its triangle and that coordinate (not one of the corner's
+// others, set exactly at +limit and -limit); a limit of 0 reads a file at the origin (both
+// zeros) and refuses the least float above 0.
+TEST(StlRead, ACoordinateExactlyAtTheLimitIsRead) {
+  const std::vector<SoupTriangle> torus = splintcore::shapes::torus(17, 13, 30.0, 8.0);
+  const SoupTriangle origin{{{0.0f, -0.0f, 0.0f}, {0.0f, 0.0f, -0.0f}, {-0.0f, 0.0f, 0.0f}}};
+  struct Case {
+    double limit;
+    float value;
+    bool read;
+  };
+  const float at = 40.25f, beyond = std::nextafter(at, 100.0f);
+  const float least = std::numeric_limits<float>::denorm_min();
+  const Case cases[] = {{40.25, at, true},       {40.25, -at, true},  {40.25, beyond, false},
+                        {40.25, -beyond, false}, {0.0, 0.0f, true},   {0.0, -0.0f, true},
+                        {0.0, least, false},     {0.0, -least, false}};
+  for (const Case& c : cases) {
+    std::vector<SoupTriangle> soup =
+        c.limit > 0 ? torus : std::vector<SoupTriangle>{origin, origin};
+    soup[soup.size() / 2].p[1][2] = c.value;
+    if (!c.read) {
+      soup[soup.size() / 2].p[1][0] = static_cast<float>(c.limit);
+      soup[soup.size() / 2].p[1][1] = -static_cast<float>(c.limit);
+    }
+    char named[64] = "has coordinate ";
+    const size_t n = std::strlen(named);
+    *std::to_chars(named + n, named + sizeof(named) - 4, static_cast<double>(c.value)).ptr = '\0';
+    std::strcat(named, " mm");
+    const std::vector<uint8_t> file = binary_stl(soup, "limit");
+    for (int sized = 0; sized < 2; ++sized) {
+      SCOPED_TRACE(std::to_string(c.limit) + " " + std::to_string(c.value) + " sized " +
+                   std::to_string(sized));
+      splintcore::test::TestArena t(size_t{16} << 20);
+      StlReadOptions options;
+      options.max_abs_coordinate = c.limit;
+      MemorySource ms{file.data(), file.size(), 0, 0};
+      ByteSource source = splintcore::memory_source(&ms, "t.stl");
+      source.size = sized == 0 ? kUnknownSize : file.size();
+      Mesh mesh(&t.arena);
+      const Status st =
+          splintcore::read_stl_mesh(Context(&t.arena), source, options, &mesh, nullptr);
+      if (c.read) {
+        EXPECT_TRUE(st.is_ok()) << format(st);
+        EXPECT_EQ(mesh.triangles.size(), soup.size());
+      } else {
+        EXPECT_EQ(st.code(), StatusCode::kLimitExceeded) << format(st);
+        EXPECT_EQ(st.index(), soup.size() / 2);
+        EXPECT_NE(format(st).find("beyond the limit"), std::string::npos) << format(st);
+        EXPECT_NE(format(st).find(named), std::string::npos) << format(st) << " / " << named;
+      }
+    }
+  }
+}
+
 // A binary STL from a source that knows its size is welded straight from the read buffer; from
 // one that does not, it is read whole and welded. Both must give the same mesh bytes, or the
 // same error (code, text, byte, triangle), whatever the chunk size: coordinates at and just
