@@ -191,8 +191,19 @@ TEST(ReadCrop, SidesBetweenAndOnFloatsDecideAsInDouble) {
     float f = std::nextafter(std::nextafter(base, -HUGE_VALF), -HUGE_VALF);
     for (int i = 0; i < 5; ++i, f = std::nextafter(f, HUGE_VALF)) {
       const float g = std::nextafter(f, HUGE_VALF);
-      soup.push_back(SoupTriangle{{{f, f, f}, {g, f, f}, {f, g, f}}});
-      soup.push_back(SoupTriangle{{{f, f, f}, {f, f, g}, {g, g, g}}});
+      // Each triangle with its corners turned twice, so that each corner (the record's first,
+      // second or third) is in turn the one on a side with the others beyond it.
+      for (const SoupTriangle& tri : {SoupTriangle{{{f, f, f}, {g, f, f}, {f, g, f}}},
+                                      SoupTriangle{{{f, f, f}, {f, f, g}, {g, g, g}}},
+                                      SoupTriangle{{{g, g, g}, {f, g, g}, {g, f, g}}}}) {
+        for (int turn = 0; turn < 3; ++turn) {
+          SoupTriangle turned;
+          for (int k = 0; k < 3; ++k) {
+            for (int a = 0; a < 3; ++a) turned.p[k][a] = tri.p[(k + turn) % 3][a];
+          }
+          soup.push_back(turned);
+        }
+      }
     }
   }
   std::vector<double> sides;
@@ -270,6 +281,15 @@ TEST(ReadCrop, CornersOfLeftOutTrianglesAreStillChecked) {
     if (left_out(soup[i], box)) far = i;
   }
   ASSERT_LT(far, soup.size());
+  // A coordinate exactly at the limit is within it: the triangle is still left out.
+  for (int c = 1; c < 9; ++c) {
+    if (c % 3 == 0) continue;  // (its x keeps it beyond the low x side)
+    std::vector<SoupTriangle> edge = soup;
+    edge[far].p[c / 3][c % 3] = 1.0e6f;
+    ASSERT_TRUE(left_out(edge[far], box));
+    expect_same_mesh(read(t.arena, test::binary_stl(edge), "a.stl", box),
+                     read(t.arena, test::binary_stl(kept_by(edge, box)), "want.stl", Aabb{}));
+  }
   for (int c = 0; c < 9; ++c) {
     for (const float bad : {std::nanf(""), 1e30f, -1e30f, -INFINITY}) {
       std::vector<SoupTriangle> broken = soup;
