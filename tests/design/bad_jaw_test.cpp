@@ -545,6 +545,37 @@ TEST(DesignBadJaws, AJawMovedSidewaysCrossesTheSideWalls) {
   SPLINTCORE_EXPECT_OK(design_splint(ctx, c, Span<const Mesh>(f.jaws, 2), &at_share, &rs));
 }
 
+// A base with rounded corners has more points a section (4 (segments + 1): 8 with one arc
+// segment, 68 with 16, the most the case allows); its walls are measured as the sharp base's:
+// the jaws in place cross none, the mandible 3 mm sideways is refused.
+TEST(DesignBadJaws, RoundedBasesMeasureTheSideWallsToo) {
+  BadJaws f;
+  ASSERT_TRUE(f.ok);
+  Context ctx(&f.t.arena);
+  for (uint32_t segments : {1u, 16u}) {
+    SCOPED_TRACE(segments);
+    CaseFile c = f.c;
+    c.base.corner_radius_mm = 0.8;
+    c.base.corner_segments = segments;
+    Mesh splint(&f.t.arena);
+    DesignReport r;
+    SPLINTCORE_ASSERT_OK(design_splint(ctx, c, Span<const Mesh>(f.jaws, 2), &splint, &r));
+    EXPECT_EQ(r.base.points_per_section, 4 * (segments + 1));
+    ASSERT_EQ(r.wall_jaws, 2u);
+    EXPECT_GT(r.walls[0].arch_mm, 100.0);
+    EXPECT_EQ(r.walls[0].crossed + r.walls[1].crossed, 0u);
+    CaseJaw moved[2] = {f.c.jaws[0], f.c.jaws[1]};
+    moved[1].transform = compose(RigidTransform::translation(Vec3{3, 0, 0}), moved[1].transform);
+    c.jaws = Span<const CaseJaw>(moved, 2);
+    Mesh refused;
+    const size_t used = f.t.arena.used();
+    const Status s = design_splint(ctx, c, Span<const Mesh>(f.jaws, 2), &refused, &r);
+    expect_named(s, "design: jaw 1 (mandible) sits to one side of the base: it crosses the ",
+                 "max_sideways_crossing 0.05); check the jaw's transform and the picks", refused,
+                 used, f.t.arena);
+  }
+}
+
 // The check's figures (its culling in the jaw's frame, its grid of the walls, its side rule,
 // the arch's halves) against the brute force, on random placements of the mandible (up to 4 mm
 // sideways and along, 1.5 mm up or down, turned up to 6 degrees about the occlusal normal),
