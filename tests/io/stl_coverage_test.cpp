@@ -82,6 +82,30 @@ TEST(StlCoverage, AsciiWhiteSpaceCaseAndNames) {
   EXPECT_STREQ(r.info.header, "");
 }
 
+// The ends of the text range, ' ' (0x20) and '~' (0x7e), are text everywhere: auto-detection
+// says ASCII, the solid name keeps them, and in a number '~' is a bad number, not a non-text
+// byte; the byte after '~' (DEL, 0x7f) is not text.
+TEST(StlCoverage, AsciiTextRangeEndsAreText) {
+  std::string named = kTetra;
+  named.replace(0, 7, "solid ~jaw ~1\n");
+  Read r = read(named);  // not forced: detected
+  SPLINTCORE_ASSERT_OK(r.status);
+  EXPECT_EQ(r.info.format, StlFormat::kAscii);
+  EXPECT_STREQ(r.info.header, "~jaw ~1");
+  EXPECT_EQ(r.soup.size(), 4u);
+  named.replace(0, 14, "solid ~jaw\x7f~1\n");
+  StlReadOptions ascii;
+  ascii.format = StlFormat::kAscii;
+  r = read(named, true, "t.stl", ascii);
+  SPLINTCORE_ASSERT_OK(r.status);
+  EXPECT_STREQ(r.info.header, "~jaw~1");
+  const std::string tilde = replace_all(kTetra, "vertex 0 1 0", "vertex 0 1~ 0");
+  r = read(tilde);
+  EXPECT_EQ(r.status.code(), StatusCode::kParseError) << test::format(r.status);
+  EXPECT_EQ(std::string(r.status.message()).find("non-text"), std::string::npos)
+      << test::format(r.status);
+}
+
 TEST(StlCoverage, AsciiNonFiniteSpellings) {
   for (const char* word :
        {"nan", "NaN", "-nan", "-NAN", "inf", "-inf", "Inf", "-Infinity", "INF", "-Inf"}) {
