@@ -1067,13 +1067,13 @@ sc_status sc_design(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaw
 sc_status sc_design_scans(sc_context* ctx, const sc_case* c, const sc_mesh* const* jaws,
                           const sc_mesh* const* scans, size_t jaw_count, sc_mesh** splint,
                           sc_design_report* report) {
+  const char* function = scans != nullptr ? "sc_design_scans" : "sc_design";
   if (ctx == nullptr || c == nullptr || splint == nullptr) {
-    return null_argument(ctx, scans != nullptr ? "sc_design_scans" : "sc_design",
-                         "the case or the output");
+    return null_argument(ctx, function, "the case or the output");
   }
   *splint = nullptr;
   Mesh local[SC_MAX_BLOCKOUT_JAWS];
-  Status s = gather_meshes(jaws, jaw_count, "sc_design", local, SC_MAX_BLOCKOUT_JAWS);
+  Status s = gather_meshes(jaws, jaw_count, function, local, SC_MAX_BLOCKOUT_JAWS);
   if (!s.is_ok()) return keep(ctx, s);
   Mesh scan_meshes[SC_MAX_BLOCKOUT_JAWS];  // empty for a jaw without a scan
   if (scans != nullptr) {
@@ -1218,17 +1218,17 @@ sc_status sc_design_plan_scans(sc_context* ctx, const sc_case* c, const sc_mesh*
                                const sc_mesh* const* scans, size_t jaw_count,
                                sc_mesh** intermediate, sc_mesh** final_splint, const sc_sink* job,
                                sc_plan_report* report) {
+  const char* function = scans != nullptr ? "sc_design_plan_scans" : "sc_design_plan";
   if (ctx == nullptr || c == nullptr || intermediate == nullptr || final_splint == nullptr) {
-    return null_argument(ctx, scans != nullptr ? "sc_design_plan_scans" : "sc_design_plan",
-                         "the case or an output");
+    return null_argument(ctx, function, "the case or an output");
   }
   *intermediate = nullptr;
   *final_splint = nullptr;
   if (job != nullptr && job->write == nullptr) {
-    return null_argument(ctx, "sc_design_plan", "the job sink's write function");
+    return null_argument(ctx, function, "the job sink's write function");
   }
   Mesh local[2];
-  Status s = gather_meshes(jaws, jaw_count, "sc_design_plan", local, 2);
+  Status s = gather_meshes(jaws, jaw_count, function, local, 2);
   if (!s.is_ok()) return keep(ctx, s);
   const Context core = core_context(ctx);
   ArenaScope scope(ctx->arena);  // on an error nothing stays

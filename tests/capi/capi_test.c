@@ -1943,6 +1943,177 @@ static void test_null_and_range_refusals(const Bytes* torus, const Bytes* case_t
   close_fixture(&f);
 }
 
+/* A NULL context, everywhere: every call that reports a status refuses it
+ * (SC_INVALID_ARGUMENT) and touches nothing, the queries answer 0, "" or an empty mark, the
+ * setters and the arena's calls ignore it. Then the pointers each call needs, NULL one at a
+ * time with a context: refused, the call named (the other refusal test takes one each). And
+ * the "ok" message cut to a short buffer. */
+static void test_null_context_everywhere(const Bytes* torus, const Bytes* case_text) {
+  Fixture f = open_fixture((size_t)4 << 20);
+  sc_context* ctx = f.ctx;
+  sc_mesh *m = NULL, *out = NULL, *keep = NULL;
+  sc_case *c = NULL, *resolved = NULL;
+  sc_memory_sink_state sink_state;
+  unsigned char buffer[64];
+  const sc_sink sink = sc_memory_sink(&sink_state, buffer, sizeof buffer, "buffer");
+  sc_memory_source_state source_state;
+  sc_source source;
+  const double z[3] = {0, 0, 1};
+  const sc_mesh* jaws[2];
+  double vertices[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, mm = 0;
+  uint32_t ids[3] = {0, 1, 2};
+  sc_mesh_report report;
+  sc_register_result registered;
+  sc_case_params params;
+  sc_design_report design;
+  sc_plan_report plan;
+  sc_location where;
+  sc_arena_mark mark;
+  char text[64];
+  size_t used;
+  CHECK_OK(ctx, read_mesh(ctx, torus, "torus", &m));
+  CHECK_OK(ctx, sc_case_parse(ctx, (const char*)case_text->data, case_text->size,
+                              "paper_scale.json", &c));
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &params));
+  jaws[0] = jaws[1] = m;
+  source = sc_memory_source(&source_state, torus->data, torus->size, "torus");
+  used = sc_arena_used(ctx);
+  keep = m;
+  /* The context's last status is OK here, and stays OK through the NULL-context calls. */
+  CHECK(sc_mesh_read_stl(NULL, &source, NULL, &out) == SC_INVALID_ARGUMENT);
+  CHECK(sc_mesh_from_arrays(NULL, vertices, 3, ids, 1, &out) == SC_INVALID_ARGUMENT);
+  CHECK(sc_mesh_copy_vertices(NULL, m, vertices, 9) == SC_INVALID_ARGUMENT);
+  CHECK(sc_mesh_copy_triangles(NULL, m, ids, 3) == SC_INVALID_ARGUMENT);
+  CHECK(sc_mesh_write_stl(NULL, m, &sink, NULL) == SC_INVALID_ARGUMENT);
+  CHECK(sc_mesh_check(NULL, m, &report) == SC_INVALID_ARGUMENT);
+  CHECK(sc_mesh_require_solid(NULL, m) == SC_INVALID_ARGUMENT);
+  CHECK(sc_mesh_boolean(NULL, m, m, 0, &out) == SC_INVALID_ARGUMENT);
+  CHECK(sc_sweep(NULL, jaws, 1, z, 0.5, &out) == SC_INVALID_ARGUMENT);
+  CHECK(sc_blockout(NULL, m, jaws, 1, z, 0.5, 0, &out) == SC_INVALID_ARGUMENT);
+  CHECK(sc_blockout_exact(NULL, m, jaws, 1, z, &out) == SC_INVALID_ARGUMENT);
+  CHECK(sc_register_rigid(NULL, m, m, NULL, &registered) == SC_INVALID_ARGUMENT);
+  CHECK(sc_case_parse(NULL, (const char*)case_text->data, case_text->size, "x", &resolved) ==
+        SC_INVALID_ARGUMENT);
+  CHECK(sc_case_get_params(NULL, c, &params) == SC_INVALID_ARGUMENT);
+  CHECK(sc_case_set_params(NULL, c, &params) == SC_INVALID_ARGUMENT);
+  CHECK(sc_case_get_blockout_clearance(NULL, c, &mm) == SC_INVALID_ARGUMENT);
+  CHECK(sc_case_set_blockout_clearance(NULL, c, 0.1) == SC_INVALID_ARGUMENT);
+  CHECK(sc_case_write(NULL, c, &sink) == SC_INVALID_ARGUMENT);
+  CHECK(sc_case_set_pick(NULL, c, SC_PICKS_UPPER, 0, z, NULL, 1, 1) == SC_INVALID_ARGUMENT);
+  CHECK(sc_outline(NULL, c, jaws, 2, &resolved, NULL) == SC_INVALID_ARGUMENT);
+  CHECK(sc_design(NULL, c, jaws, 2, &out, &design) == SC_INVALID_ARGUMENT);
+  CHECK(sc_design_scans(NULL, c, jaws, jaws, 2, &out, &design) == SC_INVALID_ARGUMENT);
+  CHECK(sc_write_splint_job(NULL, c, m, &sink) == SC_INVALID_ARGUMENT);
+  CHECK(sc_design_write_report(NULL, c, jaws, 2, m, NULL, &sink) == SC_INVALID_ARGUMENT);
+  CHECK(sc_design_blockout_used(NULL, m, 0, &mm, &mm) == SC_INVALID_ARGUMENT);
+  CHECK(sc_design_plan(NULL, c, jaws, 2, &out, &out, &sink, &plan) == SC_INVALID_ARGUMENT);
+  CHECK(sc_design_plan_scans(NULL, c, jaws, jaws, 2, &out, &out, &sink, &plan) ==
+        SC_INVALID_ARGUMENT);
+  CHECK(sc_last_status(NULL) == SC_INVALID_ARGUMENT);
+  CHECK(sc_last_status(ctx) == SC_OK);
+  CHECK(sink_state.size == 0);
+  text[0] = 'x';
+  CHECK(sc_status_message(NULL, text, sizeof text) == 0 && text[0] == '\0');
+  CHECK(sc_status_message(NULL, NULL, 0) == 0);
+  where.index = 7;
+  sc_status_location(NULL, &where);
+  CHECK(where.index == SC_NO_POSITION && where.byte_offset == SC_NO_POSITION);
+  sc_status_location(ctx, NULL); /* nothing to write to: ignored */
+  CHECK(sc_arena_used(NULL) == 0 && sc_arena_cap(NULL) == 0 && sc_arena_high_water(NULL) == 0);
+  mark = sc_arena_mark_get(NULL);
+  CHECK(mark.block == NULL && mark.offset == 0 && mark.used == 0);
+  sc_arena_rewind(NULL, mark);
+  sc_arena_reset(NULL);
+  sc_context_set_progress(NULL, NULL, NULL);
+  sc_context_set_executor(NULL, NULL, NULL, 2);
+  sc_context_destroy(NULL);
+  CHECK(sc_mesh_vertex_count(NULL) == 0 && sc_mesh_triangle_count(NULL) == 0);
+  CHECK(strcmp(sc_case_id(NULL), "") == 0 && sc_case_jaw_count(NULL) == 0);
+  CHECK(sc_case_jaw_role(NULL, 0) == NULL && sc_case_jaw_mesh(NULL, 0) == NULL);
+  CHECK(sc_case_jaw_role(c, 2) == NULL && sc_case_jaw_mesh(c, 2) == NULL);
+  CHECK(sc_case_pick_count(NULL, SC_PICKS_UPPER) == 0);
+  CHECK(sc_case_pick(NULL, SC_PICKS_UPPER, 0, vertices, NULL, NULL, NULL) == 0);
+  CHECK(sc_case_arch_count(NULL) == 0 && sc_case_arch_point(NULL, 0, vertices) == 0);
+  CHECK(sc_arena_used(ctx) == used && m == keep);
+  /* With a context: each needed pointer NULL in turn. */
+  CHECK(refused_with(ctx, sc_mesh_read_stl(ctx, &source, NULL, NULL), "sc_mesh_read_stl: out"));
+  source.read = NULL;
+  CHECK(refused_with(ctx, sc_mesh_read_stl(ctx, &source, NULL, &out),
+                     "sc_mesh_read_stl: the source or its read function is NULL"));
+  CHECK(out == NULL);
+  CHECK(refused_with(ctx, sc_mesh_from_arrays(ctx, vertices, 3, ids, 1, NULL),
+                     "sc_mesh_from_arrays: out"));
+  CHECK(refused_with(ctx, sc_mesh_from_arrays(ctx, vertices, 3, NULL, 1, &out),
+                     "sc_mesh_from_arrays: an array with a non-zero count is NULL"));
+  CHECK(refused_with(ctx, sc_mesh_copy_vertices(ctx, m, NULL, 9), "sc_mesh_copy_vertices"));
+  CHECK(refused_with(ctx, sc_mesh_copy_triangles(ctx, NULL, ids, 3), "sc_mesh_copy_triangles"));
+  CHECK(refused_with(ctx, sc_mesh_write_stl(ctx, NULL, &sink, NULL), "sc_mesh_write_stl"));
+  CHECK(refused_with(ctx, sc_mesh_check(ctx, NULL, &report), "sc_mesh_check"));
+  CHECK(refused_with(ctx, sc_mesh_require_solid(ctx, NULL), "sc_mesh_require_solid: mesh"));
+  CHECK(refused_with(ctx, sc_mesh_boolean(ctx, NULL, m, 0, &out), "sc_mesh_boolean"));
+  CHECK(refused_with(ctx, sc_mesh_boolean(ctx, m, m, 0, NULL), "sc_mesh_boolean"));
+  CHECK(refused_with(ctx, sc_sweep(ctx, jaws, 1, z, 0.5, NULL), "sc_sweep"));
+  CHECK(refused_with(ctx, sc_blockout(ctx, NULL, jaws, 1, z, 0.5, 0, &out), "sc_blockout"));
+  CHECK(refused_with(ctx, sc_blockout(ctx, m, jaws, 1, NULL, 0.5, 0, &out), "sc_blockout"));
+  CHECK(refused_with(ctx, sc_blockout(ctx, m, jaws, 1, z, 0.5, 0, NULL), "sc_blockout"));
+  CHECK(refused_with(ctx, sc_register_rigid(ctx, NULL, m, NULL, &registered), "sc_register_rigid"));
+  CHECK(refused_with(ctx, sc_register_rigid(ctx, m, NULL, NULL, &registered), "sc_register_rigid"));
+  CHECK(refused_with(ctx, sc_case_parse(ctx, "{}", 2, "x", NULL), "sc_case_parse"));
+  CHECK(refused_with(ctx, sc_case_get_params(ctx, NULL, &params), "sc_case_get_params"));
+  CHECK(refused_with(ctx, sc_case_set_params(ctx, NULL, &params), "sc_case_set_params"));
+  CHECK(refused_with(ctx, sc_case_get_blockout_clearance(ctx, NULL, &mm),
+                     "sc_case_get_blockout_clearance"));
+  CHECK(refused_with(ctx, sc_case_get_blockout_clearance(ctx, c, NULL),
+                     "sc_case_get_blockout_clearance"));
+  CHECK(refused_with(ctx, sc_case_write(ctx, NULL, &sink), "sc_case_write"));
+  CHECK(refused_with(ctx, sc_case_set_pick(ctx, NULL, SC_PICKS_UPPER, 0, z, NULL, 1, 1),
+                     "sc_case_set_pick: the case is NULL"));
+  CHECK(refused_with(ctx, sc_outline(ctx, NULL, jaws, 2, &resolved, NULL), "sc_outline"));
+  CHECK(refused_with(ctx, sc_outline(ctx, c, jaws, 2, NULL, NULL), "sc_outline"));
+  CHECK(refused_with(ctx, sc_design(ctx, c, jaws, 2, NULL, &design), "sc_design:"));
+  CHECK(refused_with(ctx, sc_design_scans(ctx, NULL, jaws, jaws, 2, &out, &design),
+                     "sc_design_scans"));
+  CHECK(refused_with(ctx, sc_design_scans(ctx, c, NULL, jaws, 2, &out, &design),
+                     "sc_design_scans: the mesh array is NULL"));
+  CHECK(refused_with(ctx, sc_design_plan_scans(ctx, c, NULL, jaws, 2, &out, &out, &sink, &plan),
+                     "sc_design_plan_scans: the mesh array is NULL"));
+  CHECK(refused_with(ctx, sc_write_splint_job(ctx, NULL, m, &sink), "sc_write_splint_job"));
+  CHECK(refused_with(ctx, sc_write_splint_job(ctx, c, NULL, &sink), "sc_write_splint_job"));
+  CHECK(refused_with(ctx, sc_write_splint_job(ctx, c, m, NULL), "sc_write_splint_job"));
+  CHECK(refused_with(ctx, sc_design_write_report(ctx, NULL, jaws, 2, m, NULL, &sink),
+                     "sc_design_write_report"));
+  CHECK(refused_with(ctx, sc_design_write_report(ctx, c, jaws, 2, NULL, NULL, &sink),
+                     "sc_design_write_report"));
+  CHECK(refused_with(ctx, sc_design_plan(ctx, c, jaws, 2, NULL, &out, &sink, &plan),
+                     "sc_design_plan"));
+  CHECK(refused_with(ctx, sc_design_plan(ctx, c, jaws, 2, &out, NULL, &sink, &plan),
+                     "sc_design_plan"));
+  {
+    sc_sink no_write = sink;
+    no_write.write = NULL;
+    CHECK(refused_with(ctx,
+                       sc_design_plan_scans(ctx, c, jaws, jaws, 2, &out, &out, &no_write, &plan),
+                       "sc_design_plan_scans: the job sink's write function is NULL"));
+  }
+  {
+    sc_sink no_write = sink;
+    no_write.write = NULL;
+    CHECK(refused_with(ctx, sc_mesh_write_stl(ctx, m, &no_write, NULL), "sc_mesh_write_stl"));
+    CHECK(refused_with(ctx, sc_case_write(ctx, c, &no_write), "sc_case_write"));
+    CHECK(refused_with(ctx, sc_write_splint_job(ctx, c, m, &no_write), "sc_write_splint_job"));
+  }
+  CHECK(sc_arena_used(ctx) == used && sink_state.size == 0);
+  /* "ok" into buffers of 0, 1, 2 and 3 bytes: the full length (2) each time. */
+  CHECK_OK(ctx, sc_case_get_params(ctx, c, &params));
+  memset(text, 'x', sizeof text);
+  CHECK(sc_status_message(ctx, text, 0) == 2 && text[0] == 'x');
+  CHECK(sc_status_message(ctx, NULL, 5) == 2);
+  CHECK(sc_status_message(ctx, text, 1) == 2 && text[0] == '\0');
+  CHECK(sc_status_message(ctx, text, 2) == 2 && strcmp(text, "o") == 0);
+  CHECK(sc_status_message(ctx, text, 3) == 2 && strcmp(text, "ok") == 0);
+  close_fixture(&f);
+}
+
 int main(int argc, char** argv) {
   Bytes torus, case_text;
   if (argc < 2) {
@@ -1974,6 +2145,7 @@ int main(int argc, char** argv) {
   test_operations();
   test_case_params(&case_text);
   test_null_and_range_refusals(&torus, &case_text);
+  test_null_context_everywhere(&torus, &case_text);
   if (argc >= 3) {
     test_design(&case_text, argv[2]);
     test_design_scans(&case_text, argv[2]);
