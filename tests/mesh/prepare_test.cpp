@@ -257,5 +257,98 @@ TEST(PrepareScan, ANonOrientableStripIsCountedAndABadIslandAreaRefused) {
   }
 }
 
+// A triangle with a repeated corner is degenerate wherever the repeat is: corners 0 = 1,
+// 1 = 2 and 2 = 0 each, beside the planted collinear one.
+TEST(PrepareScan, ARepeatedCornerIsDegenerateInEveryPlace) {
+  TestArena ta;
+  Planted p;
+  p.t.push_back(Triangle{{30, 30, 31}});  // (distinct sets: not duplicates of each other)
+  p.t.push_back(Triangle{{32, 33, 33}});
+  p.t.push_back(Triangle{{35, 34, 35}});
+  const Mesh in = p.mesh(ta.arena);
+  PrepareOptions o;
+  o.max_hole_edges = 8;
+  Mesh out;
+  PrepareReport r;
+  SPLINTCORE_ASSERT_OK(prepare_scan(Context(&ta.arena), in, o, &out, &r));
+  EXPECT_EQ(r.degenerate_triangles, 4u);
+  EXPECT_EQ(r.output_triangles, 74u);  // as without them
+}
+
+// The occlusal direction along x or y (not only z) turns the mesh to face it: the planted grid
+// (facing +z) turned by a rotation to face +x, then +y.
+TEST(PrepareScan, TheOcclusalDirectionMayBeAnyAxis) {
+  for (int axis = 0; axis < 2; ++axis) {
+    SCOPED_TRACE(axis);
+    TestArena ta;
+    Planted p;
+    for (Vec3& v : p.v) {
+      // (x, y, z) -> (z, y, -x) takes +z to +x; (x, y, z) -> (x, z, -y) takes +z to +y.
+      v = axis == 0 ? Vec3{v.z, v.y, -v.x} : Vec3{v.x, v.z, -v.y};
+    }
+    const Mesh in = p.mesh(ta.arena);
+    const Vec3 facing = axis == 0 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+    for (double sense : {1.0, -1.0}) {
+      PrepareOptions o;
+      o.max_hole_edges = 8;
+      o.occlusal = facing * sense;
+      Mesh out;
+      PrepareReport r;
+      SPLINTCORE_ASSERT_OK(prepare_scan(Context(&ta.arena), in, o, &out, &r));
+      if (sense > 0) {
+        EXPECT_EQ(r.flipped_triangles, 1u);  // the one planted the other way
+      } else {
+        EXPECT_GT(r.flipped_triangles, 60u);
+      }
+      const Triangle& t0 = out.triangles[0];
+      const Vec3 n = cross(out.vertices[t0.v[1]] - out.vertices[t0.v[0]],
+                           out.vertices[t0.v[2]] - out.vertices[t0.v[0]]);
+      EXPECT_GT(dot(n, o.occlusal), 0.0);
+    }
+  }
+}
+
+// A crack, not a hole: a closed solid whose edge a-c has, on one side only, extra vertices on
+// the segment (a T-junction, as scans have), leaves a boundary loop along one line. Its fill
+// would have zero area, so it is left open: three collinear corners (no centroid), and four
+// (their centroid on the line too).
+TEST(PrepareScan, ACollinearLoopIsLeftOpen) {
+  for (int extra = 1; extra <= 2; ++extra) {
+    SCOPED_TRACE(extra);
+    TestArena ta;
+    Mesh m(&ta.arena);
+    // 0 = a, 1 = c, 2 = r (the base triangle a c r), 3 = top, 4 = bottom, then the extra
+    // vertices on a-c.
+    for (const Vec3& v : {Vec3{0, 0, 0}, Vec3{2, 0, 0}, Vec3{1, 2, 0}, Vec3{1, 0.7, 1},
+                          Vec3{1, 0.7, -1}, Vec3{0.5, 0, 0}, Vec3{1.25, 0, 0}}) {
+      ASSERT_TRUE(m.vertices.push_back(v));
+    }
+    const uint32_t a = 0, c = 1, r = 2, top = 3, bottom = 4;
+    // Above: a -> (extra vertices) -> c, each segment with the top apex; then c r and r a.
+    uint32_t from = a;
+    for (int k = 0; k < extra; ++k) {
+      const uint32_t x = 5 + static_cast<uint32_t>(k);
+      ASSERT_TRUE(m.triangles.push_back(Triangle{{from, x, top}}));
+      from = x;
+    }
+    ASSERT_TRUE(m.triangles.push_back(Triangle{{from, c, top}}));
+    ASSERT_TRUE(m.triangles.push_back(Triangle{{c, r, top}}));
+    ASSERT_TRUE(m.triangles.push_back(Triangle{{r, a, top}}));
+    // Below: the whole edge c -> a.
+    ASSERT_TRUE(m.triangles.push_back(Triangle{{r, c, bottom}}));
+    ASSERT_TRUE(m.triangles.push_back(Triangle{{a, r, bottom}}));
+    ASSERT_TRUE(m.triangles.push_back(Triangle{{c, a, bottom}}));
+    Mesh out;
+    PrepareReport rep;
+    SPLINTCORE_ASSERT_OK(prepare_scan(Context(&ta.arena), m, PrepareOptions{}, &out, &rep));
+    EXPECT_EQ(rep.degenerate_triangles, 0u);
+    EXPECT_EQ(rep.holes_filled, 0u);
+    EXPECT_EQ(rep.holes_left, 1u);
+    EXPECT_EQ(rep.hole_triangles, 0u);
+    EXPECT_EQ(out.triangles.size(), m.triangles.size());
+    EXPECT_EQ(out.vertices.size(), m.vertices.size() - 2 + static_cast<size_t>(extra));
+  }
+}
+
 }  // namespace
 }  // namespace splintcore
