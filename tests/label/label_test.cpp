@@ -212,6 +212,51 @@ TEST(LabelTest, OptionsOutOfRangeAreErrors) {
               o.up = Vec3{0, 2, 0};
             }),
             StatusCode::kInvalidArgument);
+  // Each bound's other side and NaN, refused by the check of that very option (its message).
+  auto refusal = [&](void (*edit)(LabelOptions&)) {
+    LabelOptions o;
+    o.text = "A1";
+    edit(o);
+    Labelled l = run(t, o, false);
+    EXPECT_EQ(l.status.code(), StatusCode::kInvalidArgument);
+    EXPECT_EQ(t.arena.used(), 0u);
+    return std::string(l.status.message());
+  };
+  auto starts = [](const std::string& text, const char* prefix) {
+    return text.rfind(prefix, 0) == 0;
+  };
+  EXPECT_PRED2(starts, refusal([](LabelOptions& o) { o.height_mm = 20.5; }), "label: height");
+  EXPECT_PRED2(starts, refusal([](LabelOptions& o) { o.stroke_width_mm = NAN; }),
+               "label: stroke width");
+  EXPECT_PRED2(starts, refusal([](LabelOptions& o) { o.stroke_width_mm = 0; }),
+               "label: stroke width");
+  EXPECT_PRED2(starts, refusal([](LabelOptions& o) { o.depth_mm = NAN; }), "label: depth");
+  EXPECT_PRED2(starts, refusal([](LabelOptions& o) { o.depth_mm = 0; }), "label: depth");
+  EXPECT_PRED2(starts, refusal([](LabelOptions& o) { o.depth_mm = 5.01; }), "label: depth");
+  EXPECT_PRED2(starts, refusal([](LabelOptions& o) { o.voxel_mm = NAN; }), "label: voxel");
+  EXPECT_PRED2(starts, refusal([](LabelOptions& o) { o.wall_margin_mm = NAN; }),
+               "label: wall margin");
+  EXPECT_PRED2(starts, refusal([](LabelOptions& o) { o.wall_margin_mm = 5.01; }),
+               "label: wall margin");
+  for (void (*edit)(LabelOptions&) : {
+           +[](LabelOptions& o) { o.position.y = NAN; },
+           +[](LabelOptions& o) { o.normal.x = NAN; },
+           +[](LabelOptions& o) {
+             o.normal = Vec3{0, 0, 0};
+           },
+           +[](LabelOptions& o) { o.up.z = NAN; },
+       }) {
+    LabelOptions o;
+    o.text = "A1";
+    o.placement = LabelPlacement::kExplicit;
+    o.normal = Vec3{0, 1, 0};
+    o.up = Vec3{0, 0, 1};
+    edit(o);
+    Labelled l = run(t, o, false);
+    EXPECT_EQ(l.status.code(), StatusCode::kInvalidArgument);
+    EXPECT_PRED2(starts, std::string(l.status.message()), "label: explicit placement needs");
+    EXPECT_EQ(t.arena.used(), 0u);
+  }
   // Lists that do not pair up.
   Fixture& f = fixture();
   LabelOptions o;
