@@ -265,6 +265,7 @@ class Arena {
   bool new_block(size_t min_payload, size_t alignment);
   void new_high_water();
   void touch_up_to(size_t end);
+  void unpoison_down_to(Block* block, size_t offset);
 
   Block* current_ = nullptr;  // block the top is in (header of 48 bytes at most)
   size_t offset_ = 0;         // top within current_ payload

@@ -20,6 +20,36 @@ struct Arena::Block {
 namespace {
 constexpr size_t kHeaderBytes = 64;  // header rounded up so payloads stay 64-byte aligned
 
+// Under AddressSanitizer (g++ defines __SANITIZE_ADDRESS__, clang++ has the feature) the
+// alignment gap an allocation skips is poisoned, so that an array overrun by an element, or
+// read one before its start, is reported where a gap follows or precedes it (an arena is one
+// block to ASan, and without this it sees nothing inside). Everything above the top is kept
+// unpoisoned: a rewind unpoisons what it frees (callers may read rewound bytes to move a
+// result down, and every destination's gap lies below its source), and so does the end of the
+// arena. The gaps are whole allocations' padding only: sizes, bounds and bytes are the same.
+#if defined(__SANITIZE_ADDRESS__)
+#define SPLINTCORE_ARENA_POISON 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define SPLINTCORE_ARENA_POISON 1
+#endif
+#endif
+#ifdef SPLINTCORE_ARENA_POISON
+}  // namespace
+extern "C" void __asan_poison_memory_region(void const volatile* addr, size_t size);
+extern "C" void __asan_unpoison_memory_region(void const volatile* addr, size_t size);
+namespace {
+void poison(const unsigned char* p, size_t bytes) {
+  if (bytes > 0) __asan_poison_memory_region(p, bytes);
+}
+void unpoison(const unsigned char* p, size_t bytes) {
+  if (bytes > 0) __asan_unpoison_memory_region(p, bytes);
+}
+#else
+void poison(const unsigned char*, size_t) {}
+void unpoison(const unsigned char*, size_t) {}
+#endif
+
 size_t align_up(size_t value, size_t alignment) {
   return (value + alignment - 1) & ~(alignment - 1);
 }
@@ -44,7 +74,10 @@ Arena::Arena(const AllocatorHooks& hooks, size_t cap, size_t block_bytes)
 }
 
 Arena::~Arena() {
-  if (!owns_blocks_) return;
+  if (!owns_blocks_) {
+    if (current_->payload != nullptr) unpoison(current_->payload, offset_);  // the caller's
+    return;
+  }
   reset();
   release_unused_blocks();
 }
@@ -125,9 +158,11 @@ void* Arena::allocate(size_t bytes, size_t alignment) {
     const size_t start = align_up(base + offset_, alignment) - base;
     if (start <= current_->payload_bytes && bytes <= current_->payload_bytes - start) {
       failing_ = false;
+      const size_t gap = offset_;
       offset_ = start + bytes;
       used_ = current_->used_before + offset_;
       if (used_ > high_water_) new_high_water();
+      poison(current_->payload + gap, start - gap);  // after the touch hook, which writes there
       return current_->payload + start;
     }
     if (!owns_blocks_) {
@@ -205,6 +240,7 @@ Arena::Marker Arena::mark() const {
 }
 
 void Arena::rewind(const Marker& marker) {
+  unpoison_down_to(static_cast<Block*>(marker.block), marker.offset);
   // Blocks above the marker stay cached (linked through next) for reuse.
   current_ = static_cast<Block*>(marker.block);
   offset_ = marker.offset;
@@ -215,9 +251,29 @@ void Arena::rewind(const Marker& marker) {
 void Arena::reset() {
   Block* b = current_;
   while (b->previous != nullptr) b = b->previous;
+  unpoison_down_to(b, 0);
   current_ = b;
   offset_ = 0;
   used_ = 0;
+}
+
+// (AddressSanitizer builds) The gaps from the top down to `offset` in `block` unpoisoned:
+// the current block's up to the top, each block between them whole.
+void Arena::unpoison_down_to(Block* block, size_t offset) {
+#ifdef SPLINTCORE_ARENA_POISON
+  size_t end = offset_;
+  for (Block* b = current_; b != nullptr; b = b->previous) {
+    if (b == block) {
+      if (b->payload != nullptr && end > offset) unpoison(b->payload + offset, end - offset);
+      return;
+    }
+    if (b->payload != nullptr) unpoison(b->payload, end);
+    if (b->previous != nullptr) end = b->previous->payload_bytes;
+  }
+#else
+  (void)block;
+  (void)offset;
+#endif
 }
 
 void Arena::release_unused_blocks() {

@@ -456,5 +456,46 @@ TEST(ArenaMemory, ToucherStaysAheadOfTheArenaAndNoFurther) {
   release_arena_memory(p, bytes);
 }
 
+#if defined(SPLINTCORE_TEST_ASAN)
+// Under AddressSanitizer the alignment gap before an allocation is poisoned, so that an array
+// overrun by an element into it is reported: in buffer and in hooks mode; a rewind unpoisons
+// what it frees (rewound bytes stay readable) and the end of a buffer arena the whole buffer.
+TEST(ArenaPoison, TheGapBeforeAnAllocationIsPoisonedUntilItIsFreed) {
+  HookCounts counts;
+  AllocatorHooks hooks{counting_allocate, counting_release, &counts};
+  alignas(Arena::kDefaultAlignment) static unsigned char buffer[4096];
+  for (int mode = 0; mode < 2; ++mode) {
+    SCOPED_TRACE(mode);
+    std::unique_ptr<Arena> owned(mode == 0 ? new Arena(buffer, sizeof buffer)
+                                           : new Arena(hooks, 64 * 1024, 4096));
+    Arena& arena = *owned;
+    uint32_t* three = arena.allocate_array<uint32_t>(3);  // 12 bytes, a 4-byte gap after it
+    ASSERT_NE(three, nullptr);
+    const Arena::Marker after_three = arena.mark();
+    uint8_t* next = arena.allocate_array<uint8_t>(5);
+    ASSERT_EQ(next, reinterpret_cast<uint8_t*>(three) + 16);
+    EXPECT_FALSE(__asan_address_is_poisoned(three + 2));
+    EXPECT_TRUE(__asan_address_is_poisoned(three + 3));  // one element past the end
+    EXPECT_FALSE(__asan_address_is_poisoned(next));
+    EXPECT_FALSE(__asan_address_is_poisoned(next + 5));  // above the top: not poisoned
+    uint64_t* wide = arena.allocate_array<uint64_t>(1);  // 11 bytes of gap after next
+    ASSERT_EQ(reinterpret_cast<uint8_t*>(wide), next + 16);
+    EXPECT_TRUE(__asan_address_is_poisoned(next + 5));
+    EXPECT_TRUE(__asan_address_is_poisoned(next + 15));
+    arena.rewind(after_three);
+    EXPECT_FALSE(__asan_address_is_poisoned(three + 3));
+    EXPECT_FALSE(__asan_address_is_poisoned(next + 5));
+    EXPECT_FALSE(__asan_address_is_poisoned(next + 15));
+    // Again, then the arena ends: its caller's buffer is left unpoisoned.
+    ASSERT_EQ(arena.allocate_array<uint8_t>(5), next);
+    ASSERT_NE(arena.allocate_array<uint64_t>(1), nullptr);
+    EXPECT_TRUE(__asan_address_is_poisoned(next + 5));
+    owned.reset();
+    if (mode == 0) EXPECT_FALSE(__asan_address_is_poisoned(next + 5));  // (the buffer)
+  }
+  EXPECT_EQ(counts.live_bytes, 0u);
+}
+#endif
+
 }  // namespace
 }  // namespace splintcore
