@@ -153,6 +153,14 @@ TEST(BooleanMerge, NeedleCrossedNearItsTip) {
   EXPECT_EQ(r.stats.attempts, 1u);
   EXPECT_GE(r.stats.merged_points, 1u);
   EXPECT_NEAR(r.volume, 40.0 * 40 * 20 - (x0 - 50) * 10 * 10, 1e-3);
+  // B on the tip's side instead: the needle's long part, whose pieces beside the collapsed
+  // segment take their state from their corners, is now outside B (it was inside).
+  const Mesh beyond = box(ta.arena, {x0, 55, 30}, {90, 65, 50});
+  const Result o = difference(a, beyond, 0);
+  ASSERT_TRUE(o.status.is_ok()) << test::format(o.status);
+  EXPECT_EQ(o.stats.attempts, 1u);
+  EXPECT_GE(o.stats.merged_points, 1u);
+  EXPECT_NEAR(o.volume, 40.0 * 40 * 20 - (80 - x0) * 10 * 10, 1e-3);
 }
 
 // B's apex one step above A's top face with every edge from it going down: the exact result
