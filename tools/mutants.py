@@ -16,7 +16,10 @@ at the end, on an error and on SIGINT/SIGTERM), e.g.:
       -DCMAKE_BUILD_TYPE=Release && ninja -C /tmp/mut/build/rel splintcore_tests
   python3 tools/mutants.py --tree /tmp/mut src/mesh/check.cpp 95 600 \\
       'CheckMesh.*:SmallShells.*' --wider '*Check*:*Mesh*:*Exhaust*'
-Not part of CI: a file of 500 lines makes 150-200 mutants, about 10 s each.
+Not part of CI: a file of 500 lines makes 150-200 mutants, about 10 s each. --build DIR takes
+another Ninja build of the tree, e.g. one with -DSPLINTCORE_SANITIZE=ON: there the arena
+poisons the gap before each allocation, so a mutant that writes one element past an arena
+array into a gap fails too (slower: each rebuild and run is under ASan).
 """
 import argparse
 import os
