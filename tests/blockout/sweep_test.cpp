@@ -1237,6 +1237,23 @@ TEST(ExactSweep, TrianglesThatCannotReachTheRegionAreLeftOut) {
   for (const Triangle& t : up.triangles) {
     for (uint32_t v : t.v) EXPECT_LE(up.vertices[v].x, 11.0);
   }
+  // "Strictly beyond": a region whose sides run through slab corners (x = 5 and x = 11) keeps
+  // the slabs that only touch them, [4, 5] and [11, 12], beside those from 5 to 11; with the
+  // corners of every triangle rotated in turn, so that the touching corner takes each place.
+  for (uint32_t turn = 0; turn < 3; ++turn) {
+    SCOPED_TRACE(turn);
+    Mesh turned(&ta.arena);
+    for (const Vec3& v : fine.vertices) ASSERT_TRUE(turned.vertices.push_back(v));
+    for (const Triangle& t : fine.triangles) {
+      ASSERT_TRUE(turned.triangles.push_back(
+          Triangle{{t.v[turn], t.v[(turn + 1) % 3], t.v[(turn + 2) % 3]}}));
+    }
+    const Aabb touching{Vec3{5, -1, 1}, Vec3{11, 3, 5}};
+    Mesh out;
+    ExactSweepStats s;
+    SPLINTCORE_ASSERT_OK(sweep_exact_mesh(ctx, turned, Vec3{0, 0, 1}, touching, &out, &s));
+    EXPECT_EQ(s.kept_triangles, 2u * 8);
+  }
   // Along +x the region lies ahead of every slab beyond it: all are kept.
   Mesh along;
   ExactSweepStats st2;
