@@ -1793,9 +1793,37 @@ TEST(SweepDecimate, StaysWithinHalfAVoxelOfTheSurface) {
 // Every slab size at one thread, two of them (one slab a tile, the default) at three threads,
 // and the mesh variant once at three threads: seven sweeps where every pairing was sixteen (the
 // test took 132 s at clang -O0).
+// A visitor that keeps the streamed vertices (their ids must come in order, 0 up) and the
+// triangles by id, the positions each gives agreeing with its vertices, and hashes the
+// triangles as HashVisitor does.
+struct IndexedVisitor {
+  HashVisitor hash;
+  std::vector<Vec3> vertices;
+  std::vector<Triangle> triangles;
+  bool consistent = true;
+  static Status vertex(void* user, uint32_t id, const Vec3& p) {
+    IndexedVisitor& x = *static_cast<IndexedVisitor*>(user);
+    if (id != x.vertices.size()) x.consistent = false;
+    x.vertices.push_back(p);
+    return Status::ok();
+  }
+  static Status triangle(void* user, const Triangle& t, const Vec3& a, const Vec3& b,
+                         const Vec3& c) {
+    IndexedVisitor& x = *static_cast<IndexedVisitor*>(user);
+    const Vec3* q[3] = {&a, &b, &c};
+    for (int k = 0; k < 3; ++k) {
+      if (t.v[k] >= x.vertices.size() || !(x.vertices[t.v[k]] == *q[k])) x.consistent = false;
+    }
+    x.triangles.push_back(t);
+    return HashVisitor::triangle(&x.hash, t, a, b, c);
+  }
+};
+
 TEST(SweepDecimate, SameBytesForEverySlabSizeAndThreadCount) {
   TestArena ta(size_t{256} << 20);
   const Mesh torus = tilted_torus(&ta.arena);
+  std::vector<Vec3> streamed_vertices;  // the first streamed run's, by id
+  std::vector<Triangle> streamed_triangles;
   struct Run {
     uint32_t layers;
     unsigned threads;
@@ -1820,20 +1848,37 @@ TEST(SweepDecimate, SameBytesForEverySlabSizeAndThreadCount) {
     o.decimate_error = 0.015;
     o.layers_per_tile = r.layers;
     HashVisitor hv;
-    if (r.mesh) {  // the mesh variant is the same surface, triangle for triangle
+    if (r.mesh) {  // the mesh variant is the same surface, triangle for triangle, and the
+                   // same vertices and ids as the stream gave
       Mesh m(&ta.arena);
       SPLINTCORE_ASSERT_OK(sweep_volume_mesh(ctx, Span<const Mesh>(&torus, 1), o, &m));
       for (const Triangle& t : m.triangles) {
         SPLINTCORE_ASSERT_OK(HashVisitor::triangle(&hv, t, m.vertices[t.v[0]], m.vertices[t.v[1]],
                                                    m.vertices[t.v[2]]));
       }
+      ASSERT_EQ(m.vertices.size(), streamed_vertices.size());
+      ASSERT_EQ(m.triangles.size(), streamed_triangles.size());
+      EXPECT_EQ(std::memcmp(m.vertices.data(), streamed_vertices.data(),
+                            streamed_vertices.size() * sizeof(Vec3)),
+                0);
+      EXPECT_EQ(std::memcmp(m.triangles.data(), streamed_triangles.data(),
+                            streamed_triangles.size() * sizeof(Triangle)),
+                0);
     } else {
+      IndexedVisitor iv;
       MarchingCubesVisitor v;
-      v.triangle = HashVisitor::triangle;
-      v.user = &hv;
+      v.vertex = IndexedVisitor::vertex;
+      v.triangle = IndexedVisitor::triangle;
+      v.user = &iv;
       SweepStats stats;
       SPLINTCORE_ASSERT_OK(sweep_volume(ctx, Span<const Mesh>(&torus, 1), o, v, &stats));
       EXPECT_GT(stats.decimated_tiles, 1u);
+      EXPECT_TRUE(iv.consistent);
+      if (streamed_vertices.empty()) {
+        streamed_vertices = iv.vertices;
+        streamed_triangles = iv.triangles;
+      }
+      hv = iv.hash;
     }
     const std::string hex = hv.hex();
     if (first.empty()) first = hex;
