@@ -539,6 +539,22 @@ TEST(StlWriteTest, CountMismatches) {
       Status s = w.add(tris[2].a, tris[2].b, tris[2].c);
       EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << format(s);
       EXPECT_TRUE(std::string(s.message()).find("2 declared") != std::string::npos) << format(s);
+      // The error closed the writer: nothing more is taken, and nothing may seal the output.
+      const size_t bytes = out.state.size;
+      for (int call = 0; call < 2; ++call) {
+        s = call == 0 ? w.add(tris[0].a, tris[0].b, tris[0].c) : w.finish();
+        EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << format(s);
+        EXPECT_STREQ(s.message(),
+                     "STL writer is not open (begin() failed, or an earlier error closed it)");
+      }
+      EXPECT_EQ(out.state.size, bytes);
+      EXPECT_EQ(w.triangles_written(), 2u);
+    }
+    {
+      StlWriter never_begun;
+      EXPECT_EQ(never_begun.add(tris[0].a, tris[0].b, tris[0].c).code(),
+                StatusCode::kInvalidArgument);
+      EXPECT_EQ(never_begun.finish().code(), StatusCode::kInvalidArgument);
     }
     {
       Output out;

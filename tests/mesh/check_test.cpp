@@ -668,6 +668,36 @@ TEST(SmallShells, AnIndexOutOfRangeIsNamed) {
       << test::format(s);
 }
 
+// transform_mesh (the plan's repositioning of a jaw, segment.h): every vertex is the
+// transform's apply_point of the one before, the triangles as they were; the volume kept and
+// the inverse bringing the box back within rounding.
+TEST(TransformMesh, MovesEveryVertexAndKeepsTheTriangles) {
+  TestArena t;
+  Context ctx(&t.arena);
+  const float lo[3] = {0.1f, -0.3f, 1.7f}, hi[3] = {2.3f, 1.9f, 4.1f};
+  Mesh mesh;
+  SPLINTCORE_ASSERT_OK(test::mesh_from_soup(t.arena, shapes::box(lo, hi), &mesh));
+  const std::vector<Vec3> before(mesh.vertices.begin(), mesh.vertices.end());
+  const std::vector<Triangle> triangles(mesh.triangles.begin(), mesh.triangles.end());
+  RigidTransform x = rotation_about_axis(Vec3{1, 2, 3}, Vec3{1.0 / 3, -2.0 / 3, 2.0 / 3}, 0.7);
+  x.t[0] += 5;
+  transform_mesh(x, &mesh);
+  ASSERT_EQ(mesh.vertices.size(), before.size());
+  for (size_t i = 0; i < before.size(); ++i) {
+    EXPECT_TRUE(mesh.vertices[i] == x.apply_point(before[i])) << i;
+  }
+  ASSERT_EQ(mesh.triangles.size(), triangles.size());
+  EXPECT_EQ(
+      std::memcmp(mesh.triangles.data(), triangles.data(), triangles.size() * sizeof(Triangle)), 0);
+  MeshReport r;
+  SPLINTCORE_ASSERT_OK(check_mesh(ctx, mesh, &r));
+  EXPECT_NEAR(r.volume, 2.2 * 2.2 * 2.4, 1e-5);
+  transform_mesh(inverse(x), &mesh);
+  for (size_t i = 0; i < before.size(); ++i) {
+    EXPECT_LT(length(mesh.vertices[i] - before[i]), 1e-12) << i;
+  }
+}
+
 // scale_mesh: the box from inches to mm, each coordinate the float32 nearest the double
 // product (computed here apart); 1/1000 from micrometres; and the refusals, the mesh unchanged.
 TEST(ScaleMesh, EachCoordinateIsTheFloat32NearestTheProduct) {
