@@ -198,8 +198,10 @@ Status AtomicFile::open(const char* path) {
   // O_EXCL: never write through a name something else already uses.
   int fd = ::open(temp_path_, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) {
+    // Not ours (EEXIST: another file has the name): neither commit() nor abort() may touch it.
     Status s = errno_error("cannot create temporary output file", temp_path_);
     unregister_temp_path(&slot_);
+    temp_path_[0] = '\0';
     return s;
   }
   // A file replaced keeps its permissions (a new one has 0644 less the umask). Where they
@@ -211,6 +213,7 @@ Status AtomicFile::open(const char* path) {
     ::close(fd);
     std::remove(temp_path_);
     unregister_temp_path(&slot_);
+    temp_path_[0] = '\0';
     return s;
   }
   return Status::ok();

@@ -130,6 +130,18 @@ TEST(AtomicFile, RefusalsAndAFailedRenameLeaveNothingBehind) {
   EXPECT_STREQ(f.commit().message(), "no open output file");
   EXPECT_STREQ(f.sync_in_background().message(), "no open output file to sync");
   EXPECT_EQ(entries(dir.path), 0u);
+  // A folder that does not exist: the temporary file cannot be made (the cause given), and
+  // the writer is left closed, with no temporary name that commit() or abort() would rename
+  // or remove (after EEXIST, the same path, that name is another file's).
+  const fs::path nowhere = dir.path / "no such folder" / "splint.stl";
+  s = f.open(nowhere.string().c_str());
+  EXPECT_EQ(s.code(), StatusCode::kIoError);
+  EXPECT_EQ(std::string(s.message()).rfind("cannot create temporary output file: ", 0), 0u)
+      << s.message();
+  EXPECT_NE(std::string(s.message()).find("No such file or directory"), std::string::npos)
+      << s.message();
+  EXPECT_STREQ(f.commit().message(), "no open output file");
+  EXPECT_EQ(entries(dir.path), 0u);
 
   const fs::path folder = dir.path / "splint.stl";
   fs::create_directories(folder / "inside");
@@ -145,6 +157,38 @@ TEST(AtomicFile, RefusalsAndAFailedRenameLeaveNothingBehind) {
   EXPECT_EQ(std::string(s.file()), folder.string());
   EXPECT_EQ(entries(dir.path), 1u);  // the temporary file is gone
   EXPECT_TRUE(fs::is_directory(folder / "inside"));
+}
+
+// The temporary name taken (O_EXCL): a file that already has it is another's, and stays as it
+// was through the failed open, commit() and abort(). Its name is predicted from a first open's
+// (the counter is this process's, one more each open).
+TEST(AtomicFile, ATemporaryNameTakenByAnotherFileLeavesThatFileAlone) {
+  TempDir dir("file", "taken");
+  AtomicFile f;
+  const fs::path first = dir.path / "first.stl";
+  SPLINTCORE_ASSERT_OK(f.open(first.string().c_str()));
+  std::string temp;
+  for (const auto& e : fs::directory_iterator(dir.path)) temp = e.path().filename().string();
+  f.abort();
+  const std::string prefix = "first.stl.tmp-" + std::to_string(::getpid()) + "-";
+  ASSERT_EQ(temp.rfind(prefix, 0), 0u) << temp;
+  const unsigned next = static_cast<unsigned>(std::stoul(temp.substr(prefix.size()))) + 1;
+  const fs::path other =
+      dir.path / ("second.stl.tmp-" + std::to_string(::getpid()) + "-" + std::to_string(next));
+  const std::vector<uint8_t> theirs = pattern(100);
+  {
+    std::ofstream out(other, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(theirs.data()),
+              static_cast<std::streamsize>(theirs.size()));
+  }
+  const Status s = f.open((dir.path / "second.stl").string().c_str());
+  EXPECT_EQ(s.code(), StatusCode::kIoError);
+  EXPECT_NE(std::string(s.message()).find("File exists"), std::string::npos) << s.message();
+  EXPECT_STREQ(f.commit().message(), "no open output file");
+  f.abort();
+  EXPECT_EQ(contents(other), theirs);
+  EXPECT_FALSE(fs::exists(dir.path / "second.stl"));
+  EXPECT_EQ(entries(dir.path), 1u);
 }
 
 // A write past the file size limit (as a full disk: the write fails, here with EFBIG) fails
