@@ -543,6 +543,45 @@ TEST(BooleanTest, EmptyBLeavesAAndHostileBIsNamed) {
   }
 }
 
+// Inputs the Boolean cannot decide are refused, nothing kept: A with two vertices at one point
+// (two boxes meeting at a corner, each with its own vertex there) and a vertex of B exactly on
+// it; B with a zero-area triangle (a closed box whose vertical edge is split at a
+// midpoint on one side and glued by a sliver) across A's face.
+TEST(BooleanTest, CoincidentVerticesOfAAndADegenerateTriangleOfBAreRefused) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  const Mesh upper = box_mesh(arena, {1, 1, 1}, {2, 2, 2}, RigidTransform{});
+  for (const Vec3& v : upper.vertices) ASSERT_TRUE(a.vertices.push_back(v));
+  for (const Triangle& t : upper.triangles) {
+    ASSERT_TRUE(a.triangles.push_back(Triangle{{t.v[0] + 8, t.v[1] + 8, t.v[2] + 8}}));
+  }
+  const Mesh b = box_mesh(arena, {0.5, 0.5, 0.5}, {1, 1, 1}, RigidTransform{});
+  const size_t top = arena.used();
+  // (Refused by the result's check: the two corners make the result cross itself there.)
+  Result r = run_op(arena, a, b, BooleanOp::kDifference, true);
+  EXPECT_FALSE(r.status.is_ok());
+  EXPECT_NE(std::string(r.status.message()).find("self-intersects"), std::string::npos)
+      << test::format(r.status);
+  EXPECT_EQ(arena.used(), top);
+
+  const Mesh unit = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  Mesh sliver = box_mesh(arena, {0.3, 0.3, 0.3}, {0.7, 0.7, 1.3}, RigidTransform{});
+  ASSERT_TRUE(sliver.vertices.push_back(Vec3{0.3, 0.3, 0.8}));  // 8, on the edge 0 - 4
+  ASSERT_EQ(sliver.triangles[8].v[1], 4u);                      // {0, 4, 6}, the face x = 0.3
+  sliver.triangles[8] = Triangle{{0, 8, 6}};
+  ASSERT_TRUE(sliver.triangles.push_back(Triangle{{8, 4, 6}}));
+  ASSERT_TRUE(sliver.triangles.push_back(Triangle{{4, 8, 0}}));  // zero area: 4, 8, 0 on a line
+  const MeshReport closed = report_of(arena, sliver);
+  EXPECT_EQ(closed.boundary_edges + closed.nonmanifold_edges, 0u);
+  r = run_op(arena, unit, sliver, BooleanOp::kDifference, true);
+  EXPECT_EQ(r.status.code(), StatusCode::kInvalidMesh) << test::format(r.status);
+  EXPECT_NE(std::string(r.status.message()).find("is degenerate (zero area) and meets A"),
+            std::string::npos)
+      << test::format(r.status);
+  EXPECT_EQ(r.status.index(), 13u);
+}
+
 // The result check (a faster edge pairing first, check_closed_oriented only for the error):
 // an open B is fine for the difference when its border lies outside A, but the union keeps
 // that border, and the error names the first boundary edge as check_closed_oriented does.
