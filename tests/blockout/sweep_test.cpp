@@ -1371,6 +1371,9 @@ TEST(ExactSweep, PocketsClearOfTheSplintAreTakenIn) {
   SPLINTCORE_ASSERT_OK(blockout(ctx, splint, Span<const Mesh>(&jaws[0], 1), o, &blocked, &st));
   EXPECT_EQ(sa.exact.pockets_clear, 0u);
   EXPECT_GT(st.exact.pockets_clear, 10u);
+  // Every pocket found clear or shallow was checked first (the report's counts).
+  EXPECT_GE(st.exact.pockets_checked, st.exact.pockets_clear + st.exact.pockets_shallow);
+  EXPECT_GE(sa.exact.pockets_checked, sa.exact.pockets_clear + sa.exact.pockets_shallow);
   EXPECT_GT(st.exact.absorbed_triangles, sa.exact.absorbed_triangles + 100);  // the band
   MeshReport alone_report, report;
   SPLINTCORE_ASSERT_OK(check_mesh(ctx, alone, &alone_report));
