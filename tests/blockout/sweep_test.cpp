@@ -1328,6 +1328,8 @@ TEST(ExactSweep, AnOverhangIsRefusedNotTakenInAsAFold) {
   EXPECT_NE(s.index(), kNoPosition);
   EXPECT_TRUE(swept.triangles.empty());
   EXPECT_GT(es.absorbed_triangles, 100u);  // the rounds took the band in before the check
+  EXPECT_GE(es.fold_rounds, 1u);
+  EXPECT_GE(es.fold_vertices, 1u);
   BlockoutOptions o;
   o.exact = true;
   o.sweep.direction = Vec3{0, 0, 1};
@@ -1515,6 +1517,22 @@ TEST(ExactSweep, BadInputIsNamedAndTheArenaBoundHolds) {
             StatusCode::kInvalidArgument);
   EXPECT_EQ(sweep_exact_mesh(ctx, cone, Vec3{0, 0, 1}, Aabb{}, &out).code(),
             StatusCode::kInvalidArgument);
+  // A region empty but finite (lo above hi), and one not empty but reaching infinity.
+  EXPECT_EQ(
+      sweep_exact_mesh(ctx, cone, Vec3{0, 0, 1}, Aabb{Vec3{1, 1, 1}, Vec3{0, 0, 0}}, &out).code(),
+      StatusCode::kInvalidArgument);
+  const Aabb endless{Vec3{-7, -7, 4}, Vec3{7, 7, std::numeric_limits<double>::infinity()}};
+  EXPECT_EQ(sweep_exact_mesh(ctx, cone, Vec3{0, 0, 1}, endless, &out).code(),
+            StatusCode::kInvalidArgument);
+  // An output with only vertices, or only triangles, is not empty.
+  for (int part = 0; part < 2; ++part) {
+    Mesh used(&ta.arena);
+    const bool pushed =
+        part == 0 ? used.vertices.push_back(Vec3{}) : used.triangles.push_back(Triangle{{0, 0, 0}});
+    ASSERT_TRUE(pushed);
+    EXPECT_EQ(sweep_exact_mesh(ctx, cone, Vec3{0, 0, 1}, region, &used).code(),
+              StatusCode::kInvalidArgument);
+  }
   Mesh bad(&ta.arena);
   for (const Vec3& p : cone.vertices) ASSERT_TRUE(bad.vertices.push_back(p));
   for (const Triangle& t : cone.triangles) ASSERT_TRUE(bad.triangles.push_back(t));
