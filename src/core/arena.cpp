@@ -4,6 +4,25 @@
 
 #include "splintcore/core.h"
 
+// Under AddressSanitizer (g++ defines __SANITIZE_ADDRESS__, clang++ has the feature) the
+// alignment gap an allocation skips is poisoned, so that an array overrun by an element, or
+// read one before its start, is reported where a gap follows or precedes it (an arena is one
+// block to ASan, and without this it sees nothing inside). Everything above the top is kept
+// unpoisoned: a rewind unpoisons what it frees (callers may read rewound bytes to move a
+// result down, and every destination's gap lies below its source), and so does the end of the
+// arena. The gaps are whole allocations' padding only: sizes, bounds and bytes are the same.
+#if defined(__SANITIZE_ADDRESS__)
+#define SPLINTCORE_ARENA_POISON 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define SPLINTCORE_ARENA_POISON 1
+#endif
+#endif
+#ifdef SPLINTCORE_ARENA_POISON
+extern "C" void __asan_poison_memory_region(void const volatile* addr, size_t size);
+extern "C" void __asan_unpoison_memory_region(void const volatile* addr, size_t size);
+#endif
+
 namespace splintcore {
 
 // Every block starts with this header; the payload follows it. In buffer mode the one block
@@ -20,25 +39,7 @@ struct Arena::Block {
 namespace {
 constexpr size_t kHeaderBytes = 64;  // header rounded up so payloads stay 64-byte aligned
 
-// Under AddressSanitizer (g++ defines __SANITIZE_ADDRESS__, clang++ has the feature) the
-// alignment gap an allocation skips is poisoned, so that an array overrun by an element, or
-// read one before its start, is reported where a gap follows or precedes it (an arena is one
-// block to ASan, and without this it sees nothing inside). Everything above the top is kept
-// unpoisoned: a rewind unpoisons what it frees (callers may read rewound bytes to move a
-// result down, and every destination's gap lies below its source), and so does the end of the
-// arena. The gaps are whole allocations' padding only: sizes, bounds and bytes are the same.
-#if defined(__SANITIZE_ADDRESS__)
-#define SPLINTCORE_ARENA_POISON 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define SPLINTCORE_ARENA_POISON 1
-#endif
-#endif
 #ifdef SPLINTCORE_ARENA_POISON
-}  // namespace
-extern "C" void __asan_poison_memory_region(void const volatile* addr, size_t size);
-extern "C" void __asan_unpoison_memory_region(void const volatile* addr, size_t size);
-namespace {
 void poison(const unsigned char* p, size_t bytes) {
   if (bytes > 0) __asan_poison_memory_region(p, bytes);
 }
