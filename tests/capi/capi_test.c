@@ -2094,10 +2094,6 @@ static void test_null_context_everywhere(const Bytes* torus, const Bytes* case_t
     CHECK(refused_with(ctx,
                        sc_design_plan_scans(ctx, c, jaws, jaws, 2, &out, &out, &no_write, &plan),
                        "sc_design_plan_scans: the job sink's write function is NULL"));
-  }
-  {
-    sc_sink no_write = sink;
-    no_write.write = NULL;
     CHECK(refused_with(ctx, sc_mesh_write_stl(ctx, m, &no_write, NULL), "sc_mesh_write_stl"));
     CHECK(refused_with(ctx, sc_case_write(ctx, c, &no_write), "sc_case_write"));
     CHECK(refused_with(ctx, sc_write_splint_job(ctx, c, m, &no_write), "sc_write_splint_job"));

@@ -189,17 +189,27 @@ TEST(LabelTest, UnsupportedCharacterIsNamed) {
   EXPECT_EQ(t.arena.used(), 0u);
 }
 
+// o placed explicitly: normal +y, up +z (valid); for a test to spoil one part.
+LabelOptions& placed_explicitly(LabelOptions& o) {
+  o.placement = LabelPlacement::kExplicit;
+  o.normal = Vec3{0, 1, 0};
+  o.up = Vec3{0, 0, 1};
+  return o;
+}
+
 TEST(LabelTest, OptionsOutOfRangeAreErrors) {
   ASSERT_TRUE(fixture().ok);
   TestArena t(size_t{16} << 20);
-  auto code = [&](void (*edit)(LabelOptions&)) {
+  // The status of "A1" with the options `edit` sets; the arena as it was.
+  auto status = [&](void (*edit)(LabelOptions&)) {
     LabelOptions o;
     o.text = "A1";
     edit(o);
     Labelled l = run(t, o, false);
     EXPECT_EQ(t.arena.used(), 0u);
-    return l.status.code();
+    return l.status;
   };
+  auto code = [&](void (*edit)(LabelOptions&)) { return status(edit).code(); };
   EXPECT_EQ(code([](LabelOptions& o) { o.height_mm = 0; }), StatusCode::kInvalidArgument);
   EXPECT_EQ(code([](LabelOptions& o) { o.height_mm = NAN; }), StatusCode::kInvalidArgument);
   EXPECT_EQ(code([](LabelOptions& o) { o.stroke_width_mm = 1.0; }), StatusCode::kInvalidArgument);
@@ -214,13 +224,9 @@ TEST(LabelTest, OptionsOutOfRangeAreErrors) {
             StatusCode::kInvalidArgument);
   // Each bound's other side and NaN, refused by the check of that very option (its message).
   auto refusal = [&](void (*edit)(LabelOptions&)) {
-    LabelOptions o;
-    o.text = "A1";
-    edit(o);
-    Labelled l = run(t, o, false);
-    EXPECT_EQ(l.status.code(), StatusCode::kInvalidArgument);
-    EXPECT_EQ(t.arena.used(), 0u);
-    return std::string(l.status.message());
+    const Status s = status(edit);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+    return std::string(s.message());
   };
   auto starts = [](const std::string& text, const char* prefix) {
     return text.rfind(prefix, 0) == 0;
@@ -238,24 +244,16 @@ TEST(LabelTest, OptionsOutOfRangeAreErrors) {
                "label: wall margin");
   EXPECT_PRED2(starts, refusal([](LabelOptions& o) { o.wall_margin_mm = 5.01; }),
                "label: wall margin");
+  // Explicit placement (normal +y, up +z) with one part bad.
   for (void (*edit)(LabelOptions&) : {
-           +[](LabelOptions& o) { o.position.y = NAN; },
-           +[](LabelOptions& o) { o.normal.x = NAN; },
+           +[](LabelOptions& o) { placed_explicitly(o).position.y = NAN; },
+           +[](LabelOptions& o) { placed_explicitly(o).normal.x = NAN; },
            +[](LabelOptions& o) {
-             o.normal = Vec3{0, 0, 0};
+             placed_explicitly(o).normal = Vec3{0, 0, 0};
            },
-           +[](LabelOptions& o) { o.up.z = NAN; },
+           +[](LabelOptions& o) { placed_explicitly(o).up.z = NAN; },
        }) {
-    LabelOptions o;
-    o.text = "A1";
-    o.placement = LabelPlacement::kExplicit;
-    o.normal = Vec3{0, 1, 0};
-    o.up = Vec3{0, 0, 1};
-    edit(o);
-    Labelled l = run(t, o, false);
-    EXPECT_EQ(l.status.code(), StatusCode::kInvalidArgument);
-    EXPECT_PRED2(starts, std::string(l.status.message()), "label: explicit placement needs");
-    EXPECT_EQ(t.arena.used(), 0u);
+    EXPECT_PRED2(starts, refusal(edit), "label: explicit placement needs");
   }
   // Lists that do not pair up.
   Fixture& f = fixture();
