@@ -558,7 +558,10 @@ Status sweep_exact_mesh(const Context& ctx, const Mesh& jaw, const Vec3& directi
     uint32_t joined_count = 0;
     const uint32_t folds =
         absorb_folds(f, d, region, used, state, fold_list, joined, &joined_count);
-    if (folds == 0) break;
+    // Folds with no back triangle left around them (every one taken in already) are the same
+    // in the next round: what they leave crossing is the Boolean's to refuse, as after the
+    // last round.
+    if (folds == 0 || joined_count == 0) break;
     update_walls(&f, joined, joined_count);
     st->fold_vertices += folds;
     ++st->fold_rounds;

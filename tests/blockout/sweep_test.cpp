@@ -1340,6 +1340,72 @@ TEST(ExactSweep, AnOverhangIsRefusedNotTakenInAsAFold) {
   EXPECT_TRUE(blocked.triangles.empty());
 }
 
+// A fold wider than the bound seen along d, with and without front surface within the bound
+// over it. A fan of six front triangles (facing -z, against d = +z) around v at the origin,
+// its rim at radius 1, except that w1 is turned back past w0 (to -20 degrees): the triangle
+// (v, w1, w0) faces +z (a back triangle about 0.34 mm wide seen along d) and (v, w2, w1) spans
+// 140 degrees, over v's wall to w0, so v is a fold and the back triangle is taken in. Over its
+// centroid lies (v, w2, w1), at height 0.177 of w2's (w5 is below: (v, w0, w5) lies under the
+// centroid and does not cover it). With w2 at z = `w2_height`, the pocket is that deep there.
+Mesh fold_fan(Arena* arena, double w2_height) {
+  Mesh m(arena);
+  const double kDeg = 3.14159265358979323846 / 180;
+  const double angle[6] = {0, -20, 120, 180, 240, 300};
+  const double height[6] = {0, 0, w2_height, 0, 0, -0.5};
+  SPLINTCORE_ASSERT(m.vertices.push_back(Vec3{0, 0, 0}));
+  for (int k = 0; k < 6; ++k) {
+    SPLINTCORE_ASSERT(m.vertices.push_back(
+        Vec3{std::cos(angle[k] * kDeg), std::sin(angle[k] * kDeg), height[k]}));
+  }
+  for (uint32_t k = 0; k < 6; ++k) {
+    SPLINTCORE_ASSERT(m.triangles.push_back(Triangle{{0, 1 + (k + 1) % 6, 1 + k}}));
+  }
+  return m;
+}
+
+TEST(ExactSweep, AFoldPocketNoDeeperThanTheBoundIsTakenInADeeperOneRefused) {
+  TestArena ta(size_t{16} << 20);
+  Context ctx(&ta.arena);
+  Aabb region;
+  region.add(Vec3{-2, -2, -1});
+  region.add(Vec3{2, 2, 3});
+  const Vec3 d{0, 0, 1};
+  for (const double w2 : {0.06, 0.27, 0.29, 2.0}) {
+    SCOPED_TRACE(w2);
+    const Mesh fan = fold_fan(&ta.arena, w2);
+    for (uint32_t t = 0; t < 6; ++t) {  // the one back triangle, as the comment says
+      const Triangle& g = fan.triangles[t];
+      const double nz =
+          normal_dot(fan.vertices[g.v[0]], fan.vertices[g.v[1]], fan.vertices[g.v[2]], d);
+      EXPECT_EQ(nz > 0, t == 0) << t;
+    }
+    const Arena::Marker before = ta.arena.mark();
+    Mesh swept;
+    ExactSweepStats es;
+    const Status s = sweep_exact_mesh(ctx, fan, d, region, &swept, &es);
+    // One round, at v, w0 and w5 (the rim folds over the fan there too). The next finds w0
+    // and w5 again with no back triangle left around them and stops: it went on to the 64th
+    // round, counting them each time.
+    EXPECT_EQ(es.fold_rounds, 1u);
+    EXPECT_EQ(es.fold_vertices, 3u);
+    EXPECT_EQ(es.absorbed_triangles, 1u);
+    EXPECT_EQ(es.pockets_checked, 1u);
+    // 0.177 of w2's height over the centroid: within 0.05 mm up to w2 = 0.28 mm.
+    if (w2 < 0.28) {
+      SPLINTCORE_EXPECT_OK(s);
+      EXPECT_EQ(es.pockets_shallow, 1u);
+      EXPECT_EQ(swept.triangles.size(), 6u + 2 * es.walls);  // every triangle kept
+    } else {
+      EXPECT_EQ(s.code(), StatusCode::kUnsupported) << test::format(s);
+      EXPECT_NE(std::strstr(s.message(), "mm of undercut unswept"), nullptr) << s.message();
+      EXPECT_EQ(s.index(), 0u);  // the back triangle
+      EXPECT_EQ(es.pockets_shallow, 0u);
+      EXPECT_TRUE(swept.triangles.empty());
+    }
+    ta.arena.rewind(before);
+  }
+}
+
 // The neck band's pockets again, now with the splint a plate that only the crowns' tips
 // reach and a pillar beside the arch reaching above the necks: the region (the splint's box)
 // takes the band in, but no pocket's column along d meets the splint, so the blockout takes
