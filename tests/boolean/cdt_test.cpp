@@ -875,6 +875,26 @@ TEST(Cdt, InputErrorsNameTheIds) {
   }
 }
 
+// A segment along a vertical line (so "ahead of its start" is decided on y): points on its
+// line beyond either end are not on it, one between its ends is. The points beside its middle
+// keep a-b from being a Delaunay edge, so the search around a meets the point behind it.
+TEST(Cdt, PointsOnAVerticalSegmentsLineOnlyBetweenItsEndsAreOnIt) {
+  TestArena ta(1 << 20);
+  const std::vector<CdtPoint> square = {{0, 0}, {4, 0}, {4, 4}, {0, 4}};
+  // 4 = a, 5 = b, 6 behind a, 7 behind b, 8 and 9 beside the middle.
+  const std::vector<CdtPoint> inner = {{2, 1}, {2, 3}, {2, 0.5}, {2, 3.5}, {1.7, 2}, {2.3, 2}};
+  for (const bool upwards : {true, false}) {
+    SCOPED_TRACE(upwards);
+    Input in = polygon(square, inner);
+    in.segs.push_back(upwards ? CdtSegment{4, 5} : CdtSegment{5, 4});
+    std::vector<CdtTriangle> tris;
+    expect_valid(ta.arena, in, "vertical segment", &tris);
+    EXPECT_TRUE(has_edge(tris, 4, 5));
+    in.pts.push_back({2, 2});  // 10, between a and b
+    expect_error(ta.arena, in, {"point 10 lies on segment 4"});
+  }
+}
+
 // ---- memory ---------------------------------------------------------------------------------
 
 TEST(Cdt, ArenaExhaustionAndBound) {
