@@ -784,6 +784,33 @@ Status run_passes_in_order(const Context& ctx, const Mesh& a, const Mesh& b, con
 
 }  // namespace
 
+// A result that failed its own check (kInternal, or kUnsupported as fragile) from an operand
+// that crosses itself is that operand's fault: said as such (kInvalidMesh, naming its first
+// pair), the check's words kept. A must be a solid; B only for the union, and only when it is
+// one shell (elsewhere B's parts away from A, and its shells among themselves, may cross).
+// Checked only then (find_self_intersections, in the arena as the run left it: when that does
+// not fit, or neither crosses itself, `s` stands as it is).
+Status blame_crossing_operand(const Context& ctx, const Mesh& a, const Mesh& b, uint32_t b_shells,
+                              BooleanOp op, Status s) {
+  if (s.code() != StatusCode::kInternal && s.code() != StatusCode::kUnsupported) return s;
+  const Mesh* operands[2] = {&a, op == BooleanOp::kUnion && b_shells == 1 ? &b : nullptr};
+  for (int k = 0; k < 2; ++k) {
+    if (operands[k] == nullptr) continue;
+    SelfIntersectionReport si;
+    if (!find_self_intersections(ctx, *operands[k], 1, &si).is_ok()) {
+      ctx.arena->forget_failure();
+      return s;
+    }
+    if (si.self_intersecting()) {
+      return make_error(StatusCode::kInvalidMesh, "Boolean ", boolean_op_name(op), ": ",
+                        k == 0 ? "A" : "B", " crosses itself (its triangles ", si.first_a, " and ",
+                        si.first_b, " meet), so no solid comes of it: ", s.message())
+          .at_index(si.first_a);
+    }
+  }
+  return s;
+}
+
 Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b, const BooleanOptions& options,
                     Mesh* out, BooleanStats* stats) {
   Arena& arena = *ctx.arena;
@@ -825,6 +852,7 @@ Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b, const Bool
   stats->shells = sh.count;
   stats->shell_groups = groups;
   if (groups == 1) stats->passes = 1;
+  if (!s.is_ok()) s = blame_crossing_operand(ctx, a, b, sh.count, options.op, s);
   return s;
 }
 

@@ -612,6 +612,53 @@ TEST(BooleanTest, ResultCheckNamesTheOpenEdgeOfAUnion) {
   EXPECT_GT(w.volume, 1.0);
 }
 
+// A solid that crosses itself (closed, edge-manifold and oriented, so check_mesh calls it
+// valid: a cube [0, 2]^3 whose corner (2, 2, 2) is pulled through the bottom to (1.5, 1.5,
+// -1)) against a box. The runs fail as they did (a cut that cannot be re-triangulated, an
+// inside/outside that does not agree), but the error now names the operand that crosses
+// itself: A in every operation, B in the union (kInvalidMesh, at A's or B's first crossing
+// triangle); before, each was kUnsupported "nearly degenerate contact". A B that crosses
+// itself in the difference or the intersection may do so away from A: that error stands.
+TEST(BooleanTest, AnOperandCrossingItselfIsNamedWhenTheRunFails) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  Mesh crossing = box_mesh(arena, {0, 0, 0}, {2, 2, 2}, RigidTransform{});
+  crossing.vertices[7] = Vec3{1.5, 1.5, -1};
+  SelfIntersectionReport si;
+  SPLINTCORE_ASSERT_OK(find_self_intersections(Context(&arena), crossing, 1, &si));
+  ASSERT_TRUE(si.self_intersecting());
+  const Mesh cube = box_mesh(arena, {0.5, 0.5, -0.5}, {1.25, 1.25, 1.5}, RigidTransform{});
+  for (const BooleanOp op : {BooleanOp::kDifference, BooleanOp::kUnion, BooleanOp::kIntersection}) {
+    for (const bool swap : {false, true}) {
+      for (const bool f32 : {false, true}) {
+        SCOPED_TRACE(std::string(boolean_op_name(op)) + (swap ? " swapped" : "") +
+                     (f32 ? " float32" : ""));
+        Mesh out;
+        BooleanOptions o = opts(op);
+        o.float32_output = f32;
+        const Arena::Marker before = arena.mark();
+        const Status s = mesh_boolean(Context(&arena), swap ? cube : crossing,
+                                      swap ? crossing : cube, o, &out, nullptr);
+        EXPECT_EQ(arena.mark().offset, before.offset);  // as it was, after the extra check too
+        const std::string m = s.message();
+        if (!swap || op == BooleanOp::kUnion) {
+          EXPECT_EQ(s.code(), StatusCode::kInvalidMesh) << m;
+          const std::string who = swap ? "B" : "A";
+          EXPECT_NE(
+              m.find(": " + who + " crosses itself (its triangles " + std::to_string(si.first_a) +
+                     " and " + std::to_string(si.first_b) + " meet), so no solid comes of it: "),
+              std::string::npos)
+              << m;
+          EXPECT_EQ(s.index(), si.first_a);
+        } else {
+          EXPECT_EQ(s.code(), StatusCode::kUnsupported) << m;
+          EXPECT_EQ(m.find("crosses itself"), std::string::npos) << m;
+        }
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace splintcore
 
