@@ -172,7 +172,9 @@ struct BooleanStats {
 // only the part of A its cells list, on one thread: the same result, stats and errors in less
 // memory (stats.hit_batches; a sphere minus a crossing sphere: 48% less). Errors: kInvalidMesh (A
 // is not a solid, a degenerate triangle of B meets A, an index out of range: named; for the
-// intersection with overlapping shells also a group of them that is not a solid), kNonFinite,
+// intersection with overlapping shells also a group of them that is not a solid; and, when a
+// run fails with kUnsupported or kInternal, A crossing itself, or B in the union as one shell:
+// checked then with find_self_intersections, the pair named, the run's error kept), kNonFinite,
 // kInvalidArgument (B not float32 with float32 output), kUnsupported (a degenerate contact the
 // exact rule cannot return, or a float32-fragile one, that no nudge resolved: named),
 // kArenaExhausted (the message says how much was needed at that point), kLimitExceeded (more than
