@@ -862,9 +862,16 @@ TEST(Cdt, InputErrorsNameTheIds) {
     Input in = polygon(square);
     in.boundary = 2;
     expect_error(ta.arena, in, {"boundary"});
+    Input more = polygon(square);  // more boundary segments than segments
+    more.boundary = 5;
+    expect_error(ta.arena, more, {"the boundary needs 3 to 4 segments", "got 5"});
     Input bad = polygon(square);
     bad.segs.push_back({1, 9});
     expect_error(ta.arena, bad, {"segment 4", "does not exist"});
+    bad.segs.back() = {4, 1};  // one past the last point, either end
+    expect_error(ta.arena, bad, {"segment 4 (4-1)", "does not exist (4 points)"});
+    bad.segs.back() = {1, 4};
+    expect_error(ta.arena, bad, {"segment 4 (1-4)", "does not exist (4 points)"});
     Input zero = polygon(square);
     zero.segs.push_back({2, 2});
     expect_error(ta.arena, zero, {"segment 4", "point 2"});
