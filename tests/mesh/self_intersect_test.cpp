@@ -656,6 +656,29 @@ TEST(SelfIntersection, AStarTurningTwiceIsNotCleared) {
   EXPECT_EQ(pairs_of(rising.first, rising.second), 0u);
 }
 
+// A flat fan of six triangles around the origin whose rim runs to 0, 55, 115, 25, 205 and
+// 290 degrees: the third triangle turns back (it faces -z, the others +z) over the first
+// two, yet the rim still turns once around the origin, so only the faces' signs tell that
+// the star is not embedded. The first and third triangles share only the origin: only its
+// star can clear them (an edge's pairs are tested through the rim's stars, which are open).
+// Each triangle is first in the list once (the star's fan starts there), so the one turned
+// back takes every place in the fan; each time the overlaps are found, as brute force finds
+// them.
+TEST(SelfIntersection, AStarWithOneTriangleTurnedBackIsNotClearedWhereverItStarts) {
+  const double kDeg = 3.14159265358979323846 / 180;
+  const double angle[6] = {0, 55, 115, 25, 205, 290};
+  std::vector<Vec3> v = {{0, 0, 0}};
+  for (const double a : angle) v.push_back(Vec3{std::cos(a * kDeg), std::sin(a * kDeg), 0});
+  for (uint32_t first = 0; first < 6; ++first) {
+    std::vector<Triangle> tris;
+    for (uint32_t j = 0; j < 6; ++j) {
+      const uint32_t i = (first + j) % 6;
+      tris.push_back(Triangle{{0, 1 + i, 1 + (i + 1) % 6}});
+    }
+    EXPECT_GT(pairs_of(v, tris), 0u) << "first " << first;
+  }
+}
+
 // A closed prism over a thin triangle with a 5-degree corner, swept along a gentle arc: at the
 // sharp edge, the sum of the normals of the big faces leaves the narrow ones nearly edge-on,
 // the case the stars retry with normals scaled alike. Valid, so nothing may be reported;
