@@ -782,8 +782,6 @@ Status run_passes_in_order(const Context& ctx, const Mesh& a, const Mesh& b, con
   return s;
 }
 
-}  // namespace
-
 // A result that failed its own check (kInternal, or kUnsupported as fragile) from an operand
 // that crosses itself is that operand's fault: said as such (kInvalidMesh, naming its first
 // pair), the check's words kept. A must be a solid; B only for the union, and only when it is
@@ -810,6 +808,8 @@ Status blame_crossing_operand(const Context& ctx, const Mesh& a, const Mesh& b, 
   }
   return s;
 }
+
+}  // namespace
 
 Status mesh_boolean(const Context& ctx, const Mesh& a, const Mesh& b, const BooleanOptions& options,
                     Mesh* out, BooleanStats* stats) {
