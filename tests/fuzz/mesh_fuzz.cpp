@@ -199,16 +199,17 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const size_t record = lattice ? 9 : 36;
   size_t n = size / record;
   if (n > kMaxTriangles) n = kMaxTriangles;
-  float ground[kMaxTriangles][9];
-  if ((mode & 128) != 0) n = terrain(data, size, ground);
+  const bool ground = (mode & 128) != 0;
+  float terrain_corners[kMaxTriangles][9];
+  if (ground) n = terrain(data, size, terrain_corners);
   std::memset(stl, 0, sizeof(stl));
   put_u32(stl + 80, static_cast<uint32_t>(n));
   for (size_t t = 0; t < n; ++t) {
     uint8_t* r = stl + 84 + 50 * t + 12;
     for (size_t k = 0; k < 9; ++k) {
       float f = 0;
-      if ((mode & 128) != 0) {
-        f = ground[t][k];
+      if (ground) {
+        f = terrain_corners[t][k];
       } else if (lattice) {
         f = static_cast<float>(static_cast<int>(data[t * 9 + k] % 9) - 4) * 0.5f;
       } else {
