@@ -268,6 +268,10 @@ TEST(CtDicomJpegErrors, FrameAndTableSegments) {
   expect_error(decode(jpeg({segment(0xC0, {8, 0, 2, 0, 2, 1, 1, 0x11, 0})})),
                StatusCode::kUnsupported, "not lossless process 14");
   expect_error(decode(jpeg({segment(0xCC, {0})})), StatusCode::kUnsupported, "DAC");
+  // The last SOFn (15: lossless, differential, arithmetic) and the last RSTn.
+  expect_error(decode(jpeg({segment(0xCF, {8, 0, 2, 0, 2, 1, 1, 0x11, 0})})),
+               StatusCode::kUnsupported, "not lossless process 14");
+  expect_error(decode(jpeg({sof(), {0xFF, 0xD7}})), StatusCode::kParseError, "unexpected marker");
   expect_error(decode(jpeg({{0xFF, 0x01}})), StatusCode::kParseError, "unexpected marker");
   expect_error(decode(jpeg({{0xFF, 0xD8}})), StatusCode::kParseError, "unexpected marker");
   // Two tables in one segment; APPn skipped.
@@ -277,6 +281,14 @@ TEST(CtDicomJpegErrors, FrameAndTableSegments) {
   two[3] = static_cast<uint8_t>(two.size() - 2);
   SPLINTCORE_EXPECT_OK(
       decode(jpeg({segment(0xE0, {'J', 'F', 'I', 'F', 0}), sof(), two, sos(1), kScan, kEoi})));
+  // Table 3, the last there is, defined and used.
+  SPLINTCORE_EXPECT_OK(decode(jpeg({sof(), dht(0x03), sos(3), kScan, kEoi})));
+  // A table of no codes is a whole table (17 bytes): read, and the scan's first code is none.
+  Bytes empty(17, 0);
+  expect_error(decode(jpeg({sof(), segment(0xC4, empty), sos(), {0x00, 0x00}, kEoi})),
+               StatusCode::kParseError, "invalid Huffman code");
+  empty.pop_back();
+  expect_error(decode(jpeg({sof(), segment(0xC4, empty)})), StatusCode::kParseError, "too short");
 }
 
 TEST(CtDicomJpegErrors, ScanHeader) {
@@ -284,6 +296,11 @@ TEST(CtDicomJpegErrors, ScanHeader) {
   expect_error(decode(jpeg({sof(), dht(), sos(), kScan, sos()})), StatusCode::kUnsupported,
                "more than one scan");
   expect_error(decode(jpeg({sof(), dht(), segment(0xDA, {2, 1, 0, 2, 0, 1, 0, 0})})),
+               StatusCode::kParseError, "one component");
+  // Two components in a segment of one's length; one in a longer segment.
+  expect_error(decode(jpeg({sof(), dht(), segment(0xDA, {2, 1, 0, 1, 0, 0})})),
+               StatusCode::kParseError, "one component");
+  expect_error(decode(jpeg({sof(), dht(), segment(0xDA, {1, 1, 0, 1, 0, 0, 0, 0})})),
                StatusCode::kParseError, "one component");
   expect_error(decode(jpeg({sof(), dht(), sos(1)})), StatusCode::kParseError, "undefined");
   expect_error(decode(jpeg({sof(), dht(), sos(5)})), StatusCode::kParseError, "undefined");
@@ -347,6 +364,20 @@ TEST(CtDicomJpegErrors, RestartMarkers) {
                StatusCode::kParseError, "continues past a restart interval");
   expect_error(decode(jpeg({sof(), dht(), dri, sos(), {0x5F, 0xFF}})), StatusCode::kTruncated,
                "before RSTn");
+  // Category 0 as "0000": a line of two samples is one whole byte, so one byte more before
+  // the RSTn (or after the last sample) is all that is left over, and still too much.
+  Bytes body = {0x00, 0, 0, 0, 1};
+  body.resize(17, 0);
+  body.push_back(0);
+  const Bytes four = segment(0xC4, body);
+  SPLINTCORE_EXPECT_OK(
+      decode(jpeg({sof(), four, dri, sos(), {0x00, 0xFF, 0xD0, 0x00}, kEoi}), &out));
+  EXPECT_EQ(out, (Bytes{128, 0, 128, 0, 128, 0, 128, 0}));
+  expect_error(decode(jpeg({sof(), four, dri, sos(), {0x00, 0x00, 0xFF, 0xD0, 0x00}, kEoi})),
+               StatusCode::kParseError, "continues past a restart interval");
+  SPLINTCORE_EXPECT_OK(decode(jpeg({sof(), four, sos(), {0x00, 0x00}, kEoi})));
+  expect_error(decode(jpeg({sof(), four, sos(), {0x00, 0x00, 0x00}, kEoi})),
+               StatusCode::kParseError, "continues past the last sample");
 }
 
 }  // namespace

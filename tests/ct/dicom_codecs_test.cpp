@@ -350,6 +350,53 @@ TEST(CtDicomJpeg, HuffmanDecodeWithByteStuffing) {
   EXPECT_NE(message(s).find("invalid Huffman code"), std::string::npos) << message(s);
 }
 
+// The longest codes (16 bits: one per length 1..15, then two of 16, a complete code), a code
+// that ends exactly where the data does (at a marker), and tables of 256 codes (the most) and
+// 257.
+TEST(CtDicomJpeg, HuffmanLongestCodesAndTheLastBits) {
+  uint8_t counts[16];
+  for (uint8_t& c : counts) c = 1;
+  counts[15] = 2;
+  uint8_t symbols[17];
+  for (uint8_t i = 0; i < 17; ++i) symbols[i] = i;
+  JpegHuffman table;
+  SPLINTCORE_ASSERT_OK(ct_detail::jpeg_build_huffman(counts, symbols, 17, &table));
+  // 1111 1111 1111 1110 (symbol 15), 1111 1111 1111 1111 (16), then "0" (0) and seven more
+  // zeros: FF 00 FE FF 00 FF 00 00, then a marker.
+  const Bytes data = {0xFF, 0x00, 0xFE, 0xFF, 0x00, 0xFF, 0x00, 0x00, 0xFF, 0xD9};
+  JpegBits bits;
+  bits.data = data.data();
+  bits.size = data.size();
+  uint32_t got = 0;
+  for (uint32_t want : {15u, 16u, 0u, 0u, 0u, 0u, 0u, 0u, 0u, 0u}) {
+    SPLINTCORE_ASSERT_OK(bits.decode(table, &got));
+    EXPECT_EQ(got, want);
+  }
+  EXPECT_EQ(bits.decode(table, &got).code(), StatusCode::kTruncated);
+  // The table of HuffmanDecodeWithByteStuffing ("00" is 0): four codes fill the byte before
+  // the marker, the last ending on its last bit.
+  const uint8_t short_counts[16] = {0, 3, 1, 1};
+  const uint8_t short_symbols[] = {0, 1, 2, 16, 5};
+  SPLINTCORE_ASSERT_OK(ct_detail::jpeg_build_huffman(short_counts, short_symbols, 5, &table));
+  const Bytes zeros = {0x00, 0xFF, 0xD9};
+  JpegBits b2;
+  b2.data = zeros.data();
+  b2.size = zeros.size();
+  for (int i = 0; i < 4; ++i) {
+    SPLINTCORE_ASSERT_OK(b2.decode(table, &got));
+    EXPECT_EQ(got, 0u);
+  }
+  EXPECT_EQ(b2.decode(table, &got).code(), StatusCode::kTruncated);
+  // 255 codes of 8 bits and one of 9: 256, the most a table holds; one more of 9 is refused.
+  uint8_t many[16] = {0, 0, 0, 0, 0, 0, 0, 255, 1};
+  const std::vector<uint8_t> values(257, 3);
+  SPLINTCORE_EXPECT_OK(ct_detail::jpeg_build_huffman(many, values.data(), 256, &table));
+  many[8] = 2;
+  const Status s = ct_detail::jpeg_build_huffman(many, values.data(), 257, &table);
+  EXPECT_NE(message(s).find("257 codes for 257 symbols (at most 256)"), std::string::npos)
+      << message(s);
+}
+
 TEST(CtDicomJpeg, HuffmanTableErrors) {
   JpegHuffman table;
   const uint8_t over[16] = {3};
