@@ -541,6 +541,26 @@ TEST(BooleanTest, EmptyBLeavesAAndHostileBIsNamed) {
     Status s = mesh_boolean(Context(&arena), a, c, o, &out, nullptr);
     EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << test::format(s);
   }
+  // With float32 output, A (which is rounded to float32 as it is moved into place) with a
+  // corner beyond float32 range: refused as such, in every operation, nothing kept.
+  Mesh far = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  for (Vec3& p : far.vertices) {
+    if (p.x > 0.5 && p.y > 0.5 && p.z > 0.5) p.x = 4e38;
+  }
+  Mesh small = box_mesh(arena, {0.25f, 0.25f, 0.25f}, {0.75f, 0.75f, 0.75f}, RigidTransform{});
+  for (BooleanOp op : {BooleanOp::kDifference, BooleanOp::kUnion, BooleanOp::kIntersection}) {
+    const size_t used = arena.used();
+    Mesh out;
+    BooleanOptions o;
+    o.op = op;
+    Status s = mesh_boolean(Context(&arena), far, small, o, &out, nullptr);
+    EXPECT_EQ(s.code(), StatusCode::kLimitExceeded) << test::format(s);
+    EXPECT_NE(std::string(s.message()).find("A has a coordinate beyond float32 range"),
+              std::string::npos)
+        << test::format(s);
+    EXPECT_EQ(arena.used(), used);
+    EXPECT_TRUE(out.triangles.empty());
+  }
 }
 
 // Inputs the Boolean cannot decide are refused, nothing kept: A with two vertices at one point
