@@ -310,6 +310,20 @@ TEST(CtDicomRle, FrameOf16BitSamplesMostSignificantPlaneFirst) {
   s = ct_detail::rle_decode_frame(cut.data(), cut.size(), 1, 2, 2, out.data());
   EXPECT_NE(message(s).find("RLE segment 1"), std::string::npos) << message(s);
   EXPECT_EQ(s.byte_offset(), 67u);
+  // At the edges: a frame of its header alone, its one segment empty at the frame's end
+  // (read: the segment is short, at 64); 15 segments, the most allowed (read: not the one per
+  // byte of a sample expected), and 16.
+  const Bytes bare = rle_header({1, 64});
+  s = ct_detail::rle_decode_frame(bare.data(), bare.size(), 1, 2, 1, out.data());
+  EXPECT_NE(message(s).find("output short"), std::string::npos) << message(s);
+  EXPECT_EQ(s.byte_offset(), 64u);
+  for (uint32_t segments : {15u, 16u}) {
+    const Bytes many = rle_header({segments, 64});
+    s = ct_detail::rle_decode_frame(many.data(), many.size(), 1, 2, 2, out.data());
+    EXPECT_NE(message(s).find(segments == 15 ? "15 segments, expected 2" : "more than the 15"),
+              std::string::npos)
+        << message(s);
+  }
 }
 
 // ---- JPEG: Huffman codes and bits on hand-made bytes ----------------------------------------
