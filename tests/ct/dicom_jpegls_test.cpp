@@ -519,36 +519,69 @@ TEST(CtDicomJpegLs, PresetParametersAreChecked) {
   size_t at = 0;
   const Bytes lossless = fragment_of(fixture("jls8.dcm"), &at);
   const Bytes near = fragment_of(fixture("jlsn8.dcm"), &at);
+  const uint8_t n = near[marker(near, 0xDA) + 7];  // its NEAR
+  ASSERT_GT(n, 0u);
+  ASSERT_LT(n, 100u);
+  // refused: with the text; else accepted at the edge of its range: the encoder's samples
+  // (same) or, other parameters making other contexts, other samples or an error that is not
+  // a refusal of the parameters (no "LSE" or "SOS" in it).
+  enum Kind { kRefused, kSame, kAccepted };
   struct Case {
     const Bytes* frame;
     Bytes segment;
-    const char* text;  // nullptr: decodes
+    Kind kind;
+    const char* text;
   };
+  const char* kThresholds = "LSE thresholds not NEAR + 1 <= T1 <= T2 <= T3 <= MAXVAL";
   const std::vector<Case> cases = {
-      {&lossless, lse(256, 0, 0, 0, 0), "MAXVAL over 2^P - 1"},
-      {&lossless, lse(0, 256, 0, 0, 0), "thresholds"},  // T1 > MAXVAL
-      {&lossless, lse(0, 0, 256, 0, 0), "thresholds"},  // T2 > MAXVAL
-      {&lossless, lse(0, 0, 0, 256, 0), "thresholds"},  // T3 > MAXVAL
-      {&lossless, lse(0, 0, 0, 1, 0), "thresholds"},    // T3 < T2
-      {&lossless, lse(0, 0, 0, 0, 256), "RESET"},       // over max(255, MAXVAL)
-      {&near, lse(0, 1, 0, 0, 0), "thresholds"},        // T1 < NEAR + 1
-      {&lossless, lse(0, 100, 0, 0, 0), nullptr},       // T2, T3 raised to T1
+      {&lossless, lse(256, 0, 0, 0, 0), kRefused, "MAXVAL over 2^P - 1"},
+      {&lossless, lse(255, 0, 0, 0, 0), kSame, "MAXVAL 2^P - 1, the default"},
+      {&lossless, lse(0, 256, 0, 0, 0), kRefused, kThresholds},  // T1 > MAXVAL
+      {&lossless, lse(0, 0, 256, 0, 0), kRefused, kThresholds},  // T2 > MAXVAL
+      {&lossless, lse(0, 0, 0, 256, 0), kRefused, kThresholds},  // T3 > MAXVAL
+      {&lossless, lse(0, 255, 255, 255, 0), kAccepted, "T1 = T2 = T3 = MAXVAL"},
+      {&lossless, lse(0, 0, 0, 1, 0), kRefused, kThresholds},  // T3 < T2
+      {&lossless, lse(0, 1, 1, 1, 0), kAccepted, "T1 = T2 = T3 = NEAR + 1"},
+      {&lossless, lse(0, 0, 0, 0, 256), kRefused, "RESET"},  // over max(255, MAXVAL)
+      {&lossless, lse(0, 0, 0, 0, 255), kAccepted, "RESET 255"},
+      {&lossless, lse(0, 0, 0, 0, 2), kRefused, "RESET not in 3..max(255, MAXVAL)"},
+      {&lossless, lse(0, 0, 0, 0, 3), kAccepted, "RESET 3"},
+      {&near, lse(0, n, 0, 0, 0), kRefused, kThresholds},  // T1 < NEAR + 1
+      {&near, lse(0, n + 1u, n + 1u, n + 1u, 0), kAccepted, "near: T1 = T2 = T3 = NEAR + 1"},
+      {&lossless, lse(0, 100, 0, 0, 0), kAccepted, "T2, T3 raised to T1"},
   };
+  std::vector<uint32_t> original, got;
   for (const Case& c : cases) {
+    SCOPED_TRACE(c.text);
     const Bytes frame = inserted(*c.frame, marker(*c.frame, 0xDA), c.segment);
-    std::vector<uint32_t> got;
     const Status s = decode(frame, &got, 8);
-    if (c.text == nullptr) {
-      // Other thresholds than the encoder's: other contexts, so other samples (or an error).
-      std::vector<uint32_t> original;
-      SPLINTCORE_ASSERT_OK(decode(*c.frame, &original, 8));
-      EXPECT_TRUE(!s.is_ok() || got != original);
+    if (c.kind == kRefused) {
+      EXPECT_EQ(s.code(), StatusCode::kParseError) << test::format(s);
+      EXPECT_NE(message(s).find(c.text), std::string::npos) << message(s);
+      EXPECT_EQ(s.byte_offset(), marker(*c.frame, 0xDA)) << message(s);
       continue;
     }
-    EXPECT_EQ(s.code(), StatusCode::kParseError) << c.text << ": " << test::format(s);
-    EXPECT_NE(message(s).find(c.text), std::string::npos) << c.text << ": " << message(s);
-    EXPECT_EQ(s.byte_offset(), marker(*c.frame, 0xDA)) << message(s);
+    SPLINTCORE_ASSERT_OK(decode(*c.frame, &original, 8));
+    if (c.kind == kSame) {
+      SPLINTCORE_EXPECT_OK(s);
+      EXPECT_TRUE(got == original);
+      continue;
+    }
+    EXPECT_TRUE(!s.is_ok() || got != original);
+    EXPECT_EQ(message(s).find("LSE"), std::string::npos) << message(s);
+    EXPECT_EQ(message(s).find("SOS"), std::string::npos) << message(s);
   }
+  // In the scan header: NEAR up to MAXVAL / 2 (127 here) is taken, 128 refused; ILV 2 (the
+  // most) is taken and, one component, decodes the same samples.
+  const size_t sos = marker(lossless, 0xDA);
+  SPLINTCORE_ASSERT_OK(decode(lossless, &original, 8));
+  Status s = decode(with(lossless, sos + 7, {127}), &got, 8);
+  EXPECT_EQ(message(s).find("NEAR"), std::string::npos) << message(s);
+  EXPECT_TRUE(!s.is_ok() || got != original);
+  s = decode(with(lossless, sos + 7, {128}), &got, 8);
+  EXPECT_NE(message(s).find("SOS NEAR over MAXVAL / 2"), std::string::npos) << message(s);
+  SPLINTCORE_EXPECT_OK(decode(with(lossless, sos + 8, {2}), &got, 8));
+  EXPECT_TRUE(got == original);
 }
 
 // Every marker class before SOF55: skipped, refused as another process, or unexpected.
