@@ -411,6 +411,22 @@ TEST(CtDicomJpegLs, SmallStreamsDecodeToTheirSamples) {
     SPLINTCORE_ASSERT_OK(decode_size(sd.frame, sd.rows, sd.columns, sd.precision, &got));
     EXPECT_EQ(got, c.want) << c.name;
   }
+  // 40 x 40 at precisions 2, 4, 7 and 8 with the default thresholds (computed from MAXVAL,
+  // clamped at small ones): local gradients of every size around them, so every context
+  // boundary is met (a 4 x 5 image meets few).
+  for (uint32_t p : {2u, 4u, 7u, 8u}) {
+    std::vector<uint32_t> want;
+    for (uint32_t y = 0; y < 40; ++y) {
+      for (uint32_t x = 0; x < 40; ++x) want.push_back(((x * y) / 3 + (x * x) / 7) % (1u << p));
+    }
+    const std::string name = "jls_grad_p" + std::to_string(p) + ".bin";
+    const Seed sd = seed(name);
+    ASSERT_EQ(sd.precision, p);
+    ASSERT_EQ(sd.rows * sd.columns, 1600u);
+    std::vector<uint32_t> got;
+    SPLINTCORE_ASSERT_OK(decode_size(sd.frame, sd.rows, sd.columns, sd.precision, &got));
+    EXPECT_EQ(got, want) << name;
+  }
   // NEAR 2.
   const Seed near = seed("jls_near.bin");
   std::vector<uint32_t> got;

@@ -371,6 +371,10 @@ for name, f in (("jls_c_high.bin", lambda x, y: 170 * x * y),  # the bias C up t
                 ("jls_c_low.bin", lambda x, y: 170 * x * (19 - y))):  # down to -128
     codec_seed(name, 3 | (14 << 2), 20, 20,
                jpegls_encode.encode([f(x, y) for y in range(20) for x in range(20)], 20, 20, 16))
+for p in (2, 4, 7, 8):  # 40 x 40, gradients of every size around the default thresholds
+    codec_seed("jls_grad_p%d.bin" % p, 3 | ((p - 2) << 2), 40, 40,
+               jpegls_encode.encode([((x * y) // 3 + (x * x) // 7) % (1 << p)
+                                     for y in range(40) for x in range(40)], 40, 40, p))
 two_bits = [0, 0, 0, 1, 2, 3, 0, 1, 2, 0, 1, 1, 0, 3, 2, 0, 2, 1, 0, 3]  # a run, interrupted
 for kind in ("regular", "run"):  # refused: a mapped error over 2 RANGE + 2
     codec_seed("jls_bad_%s.bin" % kind, 3, 4, 5,
