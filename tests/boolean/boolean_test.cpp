@@ -563,6 +563,32 @@ TEST(BooleanTest, EmptyBLeavesAAndHostileBIsNamed) {
   }
 }
 
+// A contact the predicates are not proved exact for (a coordinate of magnitude under 2^-300,
+// here 1e-100, in a triangle of B lying in A's top face) is not decided: kUnsupported naming
+// the pair and the range; with nudges A moves off the contact, and then B's triangle, cut,
+// is refused by the triangulation's own range (2^-200 .. 2^200): kUnsupported still, named,
+// nothing kept either way.
+TEST(BooleanTest, ACoordinateBelowTheExactRangeIsRefusedByName) {
+  test::TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = box_mesh(arena, {0, 0, 0}, {1, 1, 1}, RigidTransform{});
+  const Mesh b = box_mesh(arena, {1e-100, 0.25, 0.5}, {0.5, 0.75, 1}, RigidTransform{});
+  BooleanOptions o = opts(BooleanOp::kDifference);
+  for (uint32_t nudges : {0u, 8u}) {
+    o.max_nudges = nudges;
+    const size_t used = arena.used();
+    Mesh out;
+    const Status s = mesh_boolean(Context(&arena), a, b, o, &out, nullptr);
+    EXPECT_EQ(s.code(), StatusCode::kUnsupported) << test::format(s);
+    const char* want = nudges == 0 ? "of B not decided: a coordinate is outside the exact "
+                                     "predicates' range (0, or 2^-300 .. 2^330 in magnitude)"
+                                   : "not within [2^-200, 2^200] in magnitude";
+    EXPECT_NE(std::string(s.message()).find(want), std::string::npos) << test::format(s);
+    EXPECT_TRUE(out.triangles.empty());
+    EXPECT_EQ(arena.used(), used);
+  }
+}
+
 // Inputs the Boolean cannot decide are refused, nothing kept: A with two vertices at one point
 // (two boxes meeting at a corner, each with its own vertex there) and a vertex of B exactly on
 // it; B with a zero-area triangle (a closed box whose vertical edge is split at a
