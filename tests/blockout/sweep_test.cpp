@@ -2023,21 +2023,21 @@ TEST(SweepDecimate, RunsInExactlyItsHighWaterAndFailsCleanlyBelow) {
 // The border edges of an open surface (edges one triangle uses) as their ends' positions, the
 // lesser end first, sorted: comparable between meshes whatever their vertex ids.
 std::vector<std::array<double, 6>> border_by_position(const Mesh& m) {
-  std::vector<std::pair<uint64_t, int>> edges;
+  std::vector<uint64_t> edges;  // (smaller id << 32) | larger id
   for (const Triangle& t : m.triangles) {
     for (int k = 0; k < 3; ++k) {
       const uint32_t a = t.v[k], b = t.v[(k + 1) % 3];
-      edges.push_back({(uint64_t{std::min(a, b)} << 32) | std::max(a, b), 0});
+      edges.push_back((uint64_t{std::min(a, b)} << 32) | std::max(a, b));
     }
   }
   std::sort(edges.begin(), edges.end());
   std::vector<std::array<double, 6>> out;
   for (size_t i = 0; i < edges.size();) {
     size_t j = i;
-    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
     if (j - i == 1) {
-      const Vec3& p = m.vertices[edges[i].first >> 32];
-      const Vec3& q = m.vertices[edges[i].first & 0xffffffffu];
+      const Vec3& p = m.vertices[edges[i] >> 32];
+      const Vec3& q = m.vertices[edges[i] & 0xffffffffu];
       std::array<double, 6> e{p.x, p.y, p.z, q.x, q.y, q.z};
       if (std::lexicographical_compare(e.begin() + 3, e.end(), e.begin(), e.begin() + 3)) {
         e = {q.x, q.y, q.z, p.x, p.y, p.z};

@@ -547,7 +547,7 @@ TEST(BooleanTest, EmptyBLeavesAAndHostileBIsNamed) {
   for (Vec3& p : far.vertices) {
     if (p.x > 0.5 && p.y > 0.5 && p.z > 0.5) p.x = 4e38;
   }
-  Mesh small = box_mesh(arena, {0.25f, 0.25f, 0.25f}, {0.75f, 0.75f, 0.75f}, RigidTransform{});
+  Mesh small = box_mesh(arena, {0.25, 0.25, 0.25}, {0.75, 0.75, 0.75}, RigidTransform{});
   for (BooleanOp op : {BooleanOp::kDifference, BooleanOp::kUnion, BooleanOp::kIntersection}) {
     const size_t used = arena.used();
     Mesh out;

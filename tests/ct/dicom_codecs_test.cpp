@@ -328,18 +328,25 @@ TEST(CtDicomRle, FrameOf16BitSamplesMostSignificantPlaneFirst) {
 
 // ---- JPEG: Huffman codes and bits on hand-made bytes ----------------------------------------
 
-TEST(CtDicomJpeg, HuffmanDecodeWithByteStuffing) {
-  // Codes: 0 -> "00", 1 -> "01", 2 -> "10", 16 -> "110", 5 -> "1110".
-  const uint8_t counts[16] = {0, 3, 1, 1};
-  const uint8_t symbols[] = {0, 1, 2, 16, 5};
-  JpegHuffman table;
-  SPLINTCORE_ASSERT_OK(ct_detail::jpeg_build_huffman(counts, symbols, 5, &table));
-  // 110 1110 10 01 00, then 11 ones = 1101 1101 | 0010 0111 | 1111 1111 (stuffed: FF 00);
-  // then a marker FF D9.
-  const Bytes data = {0xDD, 0x27, 0xFF, 0x00, 0xFF, 0xD9};
+// Codes: 0 -> "00", 1 -> "01", 2 -> "10", 16 -> "110", 5 -> "1110".
+constexpr uint8_t kShortCounts[16] = {0, 3, 1, 1};
+constexpr uint8_t kShortSymbols[] = {0, 1, 2, 16, 5};
+
+// A bit reader over `data` (which must outlive it).
+JpegBits bits_over(const Bytes& data) {
   JpegBits bits;
   bits.data = data.data();
   bits.size = data.size();
+  return bits;
+}
+
+TEST(CtDicomJpeg, HuffmanDecodeWithByteStuffing) {
+  JpegHuffman table;
+  SPLINTCORE_ASSERT_OK(ct_detail::jpeg_build_huffman(kShortCounts, kShortSymbols, 5, &table));
+  // 110 1110 10 01 00, then 11 ones = 1101 1101 | 0010 0111 | 1111 1111 (stuffed: FF 00);
+  // then a marker FF D9.
+  const Bytes data = {0xDD, 0x27, 0xFF, 0x00, 0xFF, 0xD9};
+  JpegBits bits = bits_over(data);
   uint32_t got = 0;
   for (uint32_t want : {16u, 5u, 2u, 1u, 0u}) {
     SPLINTCORE_ASSERT_OK(bits.decode(table, &got));
@@ -357,9 +364,7 @@ TEST(CtDicomJpeg, HuffmanDecodeWithByteStuffing) {
   EXPECT_EQ(s.code(), StatusCode::kTruncated) << message(s);
   // "1111" matches no code of up to 16 bits.
   const Bytes ones = {0xFF, 0x00, 0xFF, 0x00, 0xFF, 0x00};
-  JpegBits b2;
-  b2.data = ones.data();
-  b2.size = ones.size();
+  JpegBits b2 = bits_over(ones);
   s = b2.decode(table, &got);
   EXPECT_NE(message(s).find("invalid Huffman code"), std::string::npos) << message(s);
 }
@@ -378,24 +383,18 @@ TEST(CtDicomJpeg, HuffmanLongestCodesAndTheLastBits) {
   // 1111 1111 1111 1110 (symbol 15), 1111 1111 1111 1111 (16), then "0" (0) and seven more
   // zeros: FF 00 FE FF 00 FF 00 00, then a marker.
   const Bytes data = {0xFF, 0x00, 0xFE, 0xFF, 0x00, 0xFF, 0x00, 0x00, 0xFF, 0xD9};
-  JpegBits bits;
-  bits.data = data.data();
-  bits.size = data.size();
+  JpegBits bits = bits_over(data);
   uint32_t got = 0;
   for (uint32_t want : {15u, 16u, 0u, 0u, 0u, 0u, 0u, 0u, 0u, 0u}) {
     SPLINTCORE_ASSERT_OK(bits.decode(table, &got));
     EXPECT_EQ(got, want);
   }
   EXPECT_EQ(bits.decode(table, &got).code(), StatusCode::kTruncated);
-  // The table of HuffmanDecodeWithByteStuffing ("00" is 0): four codes fill the byte before
-  // the marker, the last ending on its last bit.
-  const uint8_t short_counts[16] = {0, 3, 1, 1};
-  const uint8_t short_symbols[] = {0, 1, 2, 16, 5};
-  SPLINTCORE_ASSERT_OK(ct_detail::jpeg_build_huffman(short_counts, short_symbols, 5, &table));
+  // The short table ("00" is 0): four codes fill the byte before the marker, the last
+  // ending on its last bit.
+  SPLINTCORE_ASSERT_OK(ct_detail::jpeg_build_huffman(kShortCounts, kShortSymbols, 5, &table));
   const Bytes zeros = {0x00, 0xFF, 0xD9};
-  JpegBits b2;
-  b2.data = zeros.data();
-  b2.size = zeros.size();
+  JpegBits b2 = bits_over(zeros);
   for (int i = 0; i < 4; ++i) {
     SPLINTCORE_ASSERT_OK(b2.decode(table, &got));
     EXPECT_EQ(got, 0u);
