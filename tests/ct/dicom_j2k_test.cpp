@@ -296,6 +296,55 @@ TEST(CtDicomJ2k, MqDecoderRoundTripsTheEncoder) {
   }
 }
 
+// ---- Packet header bits (B.10.1) -------------------------------------------------------------
+
+// The header's bit reader at its edges: after a 0xFF byte only 7 bits of the next are read
+// (bit stuffing); a header ending on 0xFF owns the byte after it, which align() skips; the
+// last byte is read and one bit more is "truncated" (a 0), as is a stuffed byte that is not
+// there.
+TEST(CtDicomJ2k, PacketHeaderBitsAtTheirEdges) {
+  const uint8_t stuffed[] = {0xFF, 0x55, 0xA0};
+  J2kBits b;
+  b.data = stuffed;
+  b.size = 3;
+  EXPECT_EQ(b.bits(8), 0xFFu);
+  EXPECT_EQ(b.bits(7), 0x55u);  // the stuffed byte's top bit is not read
+  EXPECT_EQ(b.pos, 2u);
+  EXPECT_EQ(b.bits(8), 0xA0u);
+  EXPECT_FALSE(b.truncated);
+  EXPECT_EQ(b.bit(), 0u);  // one past the end
+  EXPECT_TRUE(b.truncated);
+
+  const uint8_t ends_on_ff[] = {0xFF, 0x00, 0x80};
+  J2kBits e;
+  e.data = ends_on_ff;
+  e.size = 3;
+  EXPECT_EQ(e.bits(8), 0xFFu);
+  e.align();  // the 0x00 belongs to the header
+  EXPECT_EQ(e.pos, 2u);
+  EXPECT_FALSE(e.truncated);
+  EXPECT_EQ(e.bit(), 1u);  // the next header starts at 0x80
+
+  J2kBits cut;  // the stuffed byte missing
+  cut.data = ends_on_ff;
+  cut.size = 1;
+  EXPECT_EQ(cut.bits(8), 0xFFu);
+  cut.align();
+  EXPECT_TRUE(cut.truncated);
+  EXPECT_EQ(cut.pos, 1u);
+
+  J2kBits plain;  // no 0xFF: align() only drops the rest of the byte
+  plain.data = stuffed + 1;
+  plain.size = 2;
+  EXPECT_EQ(plain.bits(3), 0x2u);
+  plain.align();
+  EXPECT_EQ(plain.pos, 1u);
+  EXPECT_EQ(plain.bits(8), 0xA0u);
+  EXPECT_FALSE(plain.truncated);
+  EXPECT_EQ(ct_detail::j2k_tag_tree_nodes(0, 4), 0u);
+  EXPECT_EQ(ct_detail::j2k_tag_tree_nodes(4, 0), 0u);
+}
+
 // ---- Tag trees (B.10.2) ----------------------------------------------------------------------
 
 TEST(CtDicomJ2k, TagTreeHandCase) {
