@@ -343,6 +343,8 @@ TEST(CtDicomJ2k, PacketHeaderBitsAtTheirEdges) {
   EXPECT_FALSE(plain.truncated);
   EXPECT_EQ(ct_detail::j2k_tag_tree_nodes(0, 4), 0u);
   EXPECT_EQ(ct_detail::j2k_tag_tree_nodes(4, 0), 0u);
+  ct_detail::j2k_tag_tree_init(nullptr, 0, 4);  // nothing to set up (and no endless halving)
+  ct_detail::j2k_tag_tree_init(nullptr, 4, 0);
 }
 
 // ---- Tag trees (B.10.2) ----------------------------------------------------------------------
@@ -958,28 +960,39 @@ std::vector<uint16_t> j2k_style_samples() {
   return out;
 }
 
+// fixtures/ct/`name` (make_j2k_styles.py) decodes, lossless, to j2k_style_samples().
+void expect_style_image(const std::string& name) {
+  static const std::vector<uint16_t> image = j2k_style_samples();
+  const Bytes cs = fixture(name);
+  Bytes out;
+  const Status s = decode(cs, &out, 0, 12);
+  ASSERT_TRUE(s.is_ok()) << name << ": " << test::format(s);
+  size_t wrong = 0, first = image.size();
+  for (size_t i = 0; i < image.size(); ++i) {
+    const uint16_t v = static_cast<uint16_t>(out[2 * i] | (out[2 * i + 1] << 8));
+    if (v != image[i] && wrong++ == 0) first = i;
+  }
+  EXPECT_EQ(wrong, 0u) << name << ": first wrong sample " << first;
+}
+
 // The code-block styles the decoder reads (T.800 Table A.19), each on the same image coded by
 // openjpeg (opj_compress -M; 16 x 16 code-blocks, 3 levels): context reset after each pass,
 // vertically causal contexts, predictable termination, segmentation symbols, and all four.
 // Each decodes to the image itself, lossless. (Before these, the styles were only set on a
 // stream coded without them, which checks that nothing crashes, not that they decode.)
 TEST(CtDicomJ2k, CodeBlockStylesDecodeLossless) {
-  const std::vector<uint16_t> image = j2k_style_samples();
   for (int style : {0, 2, 8, 16, 32, 58}) {
-    const std::string name = "j2k_style" + std::to_string(style) + ".j2k";
-    const Bytes cs = fixture(name);
-    Bytes out;
-    const Status s = decode(cs, &out, 0, 12);
-    ASSERT_TRUE(s.is_ok()) << name << ": " << test::format(s);
-    size_t wrong = 0, first = image.size();
-    for (size_t i = 0; i < image.size(); ++i) {
-      const uint16_t v = static_cast<uint16_t>(out[2 * i] | (out[2 * i + 1] << 8));
-      if (v != image[i]) {
-        if (wrong++ == 0) first = i;
-      }
-    }
-    EXPECT_EQ(wrong, 0u) << name << ": first wrong sample " << first;
+    expect_style_image("j2k_style" + std::to_string(style) + ".j2k");
   }
+}
+
+// Tiles that leave one-sample signals to the inverse wavelet (F.3.7): 63 x 55 tiles, whose
+// last column and row of tiles are one sample wide at odd indices (a high-pass sample,
+// halved), and the image at offset (1, 1) in 64 x 56 tiles, whose first tile starts at odd
+// indices and whose last column and row are one sample at even indices (low-pass, kept).
+TEST(CtDicomJ2k, OneSampleTilesDecodeLossless) {
+  expect_style_image("j2k_tiles63x55.j2k");
+  expect_style_image("j2k_offset_tiles.j2k");
 }
 
 }  // namespace
