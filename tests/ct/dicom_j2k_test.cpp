@@ -995,5 +995,48 @@ TEST(CtDicomJ2k, OneSampleTilesDecodeLossless) {
   expect_style_image("j2k_offset_tiles.j2k");
 }
 
+// The same image in the codestream's other layouts: three quality layers (the last one
+// lossless) in each of the five progression orders; and in the three orders that allow
+// several precincts a resolution, precincts (16 x 16 at the top resolution, smaller below)
+// that cap the 32 x 32 code-blocks, with SOP and EPH markers. (The other fixtures have one
+// layer and one precinct a resolution, where the orders read the packets alike.)
+TEST(CtDicomJ2k, LayoutsDecodeLossless) {
+  for (const char* order : {"lrcp", "rlcp", "rpcl", "pcrl", "cprl"}) {
+    expect_style_image(std::string("j2k_layers_") + order + ".j2k");
+  }
+  for (const char* order : {"lrcp", "rlcp", "rpcl"}) {
+    expect_style_image(std::string("j2k_precincts_") + order + ".j2k");
+  }
+}
+
+// The 9/7 wavelet at rate 6 overshoots at the image's sharp edges and in its noise: each
+// sample is clamped to the precision's range (12 bits unsigned, then signed), and equals
+// openjpeg's decoding within 1 (it computes in float, we in double). openjpeg's has samples at
+// both ends of the range, so the clamp decides there.
+TEST(CtDicomJ2k, IrreversibleIsClampedToThePrecision) {
+  for (const char* stem : {"j2k_u97", "j2k_s97"}) {
+    const bool is_signed = stem[4] == 's';
+    const int lo = is_signed ? -2048 : 0, hi = is_signed ? 2047 : 4095;
+    const Bytes oracle = fixture(std::string(stem) + ".opj");
+    ASSERT_EQ(oracle.size(), 2 * kRows * kColumns) << stem;
+    Bytes out;
+    const Status s = decode(fixture(std::string(stem) + ".j2k"), &out, 0, 12);
+    ASSERT_TRUE(s.is_ok()) << stem << ": " << test::format(s);
+    size_t at_lo = 0, at_hi = 0, outside = 0, apart = 0;
+    for (size_t i = 0; i < kRows * kColumns; ++i) {
+      const int v = static_cast<int16_t>(out[2 * i] | (out[2 * i + 1] << 8));
+      const int o = static_cast<int16_t>(oracle[2 * i] | (oracle[2 * i + 1] << 8));
+      at_lo += o == lo ? 1 : 0;
+      at_hi += o == hi ? 1 : 0;
+      outside += v < lo || v > hi ? 1 : 0;
+      apart += std::abs(v - o) > 1 ? 1 : 0;
+    }
+    EXPECT_GT(at_lo, 10u) << stem;
+    EXPECT_GT(at_hi, 10u) << stem;
+    EXPECT_EQ(outside, 0u) << stem;
+    EXPECT_EQ(apart, 0u) << stem;
+  }
+}
+
 }  // namespace
 }  // namespace splintcore

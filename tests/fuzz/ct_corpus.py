@@ -359,9 +359,11 @@ def j2k_codestream(name):
 
 for name, precision in (("j2k16_0", 16), ("j2k97", 16), ("j2k_tiles", 16), ("j2k8", 8)):
     codec_seed(name + ".bin", 4 | ((precision - 2) << 3), 56, 64, j2k_codestream(name + ".dcm"))
-# Every code-block style the decoder reads, together (make_j2k_styles.py, 12 bits).
-codec_seed("j2k_style58.bin", 4 | ((12 - 2) << 3), 56, 64,
-           open(os.path.join(ROOT, "..", "ct", "j2k_style58.j2k"), "rb").read())
+# make_j2k_styles.py's codestreams (12 bits): every code-block style the decoder reads
+# together; layers, precincts, SOP and EPH; the 9/7 wavelet on signed samples.
+for name in ("j2k_style58", "j2k_precincts_rpcl", "j2k_s97"):
+    codec_seed(name + ".bin", 4 | ((12 - 2) << 3), 56, 64,
+               open(os.path.join(ROOT, "..", "ct", name + ".j2k"), "rb").read())
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "fixtures", "ct"))
 import jpegls_encode  # noqa: E402 (T.87, one component)
