@@ -528,6 +528,8 @@ TEST(CtDicomJ2k, TilePartErrors) {
   s = with(sot + 4, {0x00, 0x05});  // tile 5 of 1
   EXPECT_EQ(s.code(), StatusCode::kParseError);
   EXPECT_NE(std::string(s.message()).find("tile index"), std::string::npos) << s.message();
+  s = with(sot + 4, {0x00, 0x01});  // tile 1 of 1: one past the last
+  EXPECT_NE(std::string(s.message()).find("tile index"), std::string::npos) << s.message();
   s = with(sot + 6, {0, 0, 0, 13});
   EXPECT_NE(std::string(s.message()).find("Psot under 14"), std::string::npos) << s.message();
   s = with(sot, {0xFF, 0x91});
@@ -552,6 +554,28 @@ TEST(CtDicomJ2k, TilePartErrors) {
   // A too small arena is a clean exhaustion.
   s = decode(cs, &out, 4096);
   EXPECT_EQ(s.code(), StatusCode::kArenaExhausted);
+}
+
+// COD's limits on both sides of each edge, in j2k16_0's header (levels at 54, xcb at 55, ycb
+// at 56, each stored as the exponent - 2): 32 levels and code-blocks of 1024 x 4 or 4 x 1024
+// pass these checks (the stream, coded otherwise, may fail later on something else), one more
+// is refused by name.
+TEST(CtDicomJ2k, CodingStyleLimitsAtTheirEdges) {
+  const Bytes cs = fragment_of(fixture("j2k16_0.dcm"));
+  ASSERT_EQ(cs[54], 4);
+  auto message = [&](std::initializer_list<std::pair<size_t, uint8_t>> changes) {
+    Bytes b = cs;
+    for (const auto& c : changes) b[c.first] = c.second;
+    Bytes out;
+    return std::string(decode(b, &out).message());
+  };
+  const std::string kLevels = "more than 32 levels", kBlock = "code-block size";
+  EXPECT_EQ(message({{54, 32}}).find(kLevels), std::string::npos);
+  EXPECT_NE(message({{54, 33}}).find(kLevels), std::string::npos);
+  EXPECT_EQ(message({{55, 8}, {56, 0}}).find(kBlock), std::string::npos);  // 1024 x 4
+  EXPECT_NE(message({{55, 9}, {56, 0}}).find(kBlock), std::string::npos);
+  EXPECT_EQ(message({{55, 0}, {56, 8}}).find(kBlock), std::string::npos);  // 4 x 1024
+  EXPECT_NE(message({{55, 0}, {56, 9}}).find(kBlock), std::string::npos);
 }
 
 // Through the DICOM reader: a broken codestream's offset is an offset in the file.
@@ -999,7 +1023,8 @@ TEST(CtDicomJ2k, OneSampleTilesDecodeLossless) {
 // lossless) in each of the five progression orders; and in the three orders that allow
 // several precincts a resolution, precincts (16 x 16 at the top resolution, smaller below)
 // that cap the 32 x 32 code-blocks, with SOP and EPH markers. (The other fixtures have one
-// layer and one precinct a resolution, where the orders read the packets alike.)
+// layer and one precinct a resolution, where the orders read the packets alike.) And 4 tiles
+// in 3 tile-parts each, one after the other.
 TEST(CtDicomJ2k, LayoutsDecodeLossless) {
   for (const char* order : {"lrcp", "rlcp", "rpcl", "pcrl", "cprl"}) {
     expect_style_image(std::string("j2k_layers_") + order + ".j2k");
@@ -1007,6 +1032,7 @@ TEST(CtDicomJ2k, LayoutsDecodeLossless) {
   for (const char* order : {"lrcp", "rlcp", "rpcl"}) {
     expect_style_image(std::string("j2k_precincts_") + order + ".j2k");
   }
+  expect_style_image("j2k_tileparts.j2k");
 }
 
 // The 9/7 wavelet at rate 6 overshoots at the image's sharp edges and in its noise: each
