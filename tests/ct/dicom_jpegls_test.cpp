@@ -413,13 +413,24 @@ TEST(CtDicomJpegLs, SmallStreamsDecodeToTheirSamples) {
   }
   // 40 x 40 at precisions 2, 4, 7 and 8 with the default thresholds (computed from MAXVAL,
   // clamped at small ones): local gradients of every size around them, so every context
-  // boundary is met (a 4 x 5 image meets few).
-  for (uint32_t p : {2u, 4u, 7u, 8u}) {
+  // boundary is met (a 4 x 5 image meets few). Then MAXVAL 64 at precision 7 and 128 at 8,
+  // given in an LSE segment with the thresholds left to their defaults: there the two
+  // formulas of C.2.4.1.1 meet (128 takes the upper one; 64 divides 256 unevenly), which no
+  // MAXVAL of 2^P - 1 tells apart.
+  struct Grad {
+    uint32_t p, top;
+    std::string name;
+  };
+  for (const Grad& g :
+       {Grad{2, 3, "jls_grad_p2.bin"}, Grad{4, 15, "jls_grad_p4.bin"},
+        Grad{7, 127, "jls_grad_p7.bin"}, Grad{8, 255, "jls_grad_p8.bin"},
+        Grad{7, 64, "jls_grad_maxval64.bin"}, Grad{8, 128, "jls_grad_maxval128.bin"}}) {
+    const uint32_t p = g.p;
     std::vector<uint32_t> want;
     for (uint32_t y = 0; y < 40; ++y) {
-      for (uint32_t x = 0; x < 40; ++x) want.push_back(((x * y) / 3 + (x * x) / 7) % (1u << p));
+      for (uint32_t x = 0; x < 40; ++x) want.push_back(((x * y) / 3 + (x * x) / 7) % (g.top + 1));
     }
-    const std::string name = "jls_grad_p" + std::to_string(p) + ".bin";
+    const std::string& name = g.name;
     const Seed sd = seed(name);
     ASSERT_EQ(sd.precision, p);
     ASSERT_EQ(sd.rows * sd.columns, 1600u);

@@ -380,6 +380,13 @@ for p in (2, 4, 7, 8):  # 40 x 40, gradients of every size around the default th
     codec_seed("jls_grad_p%d.bin" % p, 3 | ((p - 2) << 2), 40, 40,
                jpegls_encode.encode([((x * y) // 3 + (x * x) // 7) % (1 << p)
                                      for y in range(40) for x in range(40)], 40, 40, p))
+for p, top in ((7, 64), (8, 128)):  # the same with MAXVAL in LSE, where the two default
+    # threshold formulas meet (C.2.4.1.1: FACTOR from 256 / (MAXVAL + 1) below 128, from
+    # (MAXVAL + 128) / 256 from 128 on)
+    codec_seed("jls_grad_maxval%d.bin" % top, 3 | ((p - 2) << 2), 40, 40,
+               jpegls_encode.encode([((x * y) // 3 + (x * x) // 7) % (top + 1)
+                                     for y in range(40) for x in range(40)], 40, 40, p,
+                                    maxval=top))
 two_bits = [0, 0, 0, 1, 2, 3, 0, 1, 2, 0, 1, 1, 0, 3, 2, 0, 2, 1, 0, 3]  # a run, interrupted
 for kind in ("regular", "run"):  # refused: a mapped error over 2 RANGE + 2
     codec_seed("jls_bad_%s.bin" % kind, 3, 4, 5,
