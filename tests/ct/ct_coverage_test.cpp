@@ -350,12 +350,26 @@ TEST(CtCommonCoverage, TextAndNumbers) {
     return std::string(t, n);
   };
   EXPECT_EQ(trimmed(std::string("\0 \t a b\r\t\0", 10)), "a b");
+  // Letters match in either case, on both sides, A and Z included; the characters just outside
+  // A-Z ('@', '[') are not letters ('`', '{' are their lower-case neighbours).
+  EXPECT_TRUE(equal_nocase("AZaz", 4, "azAZ"));
+  EXPECT_FALSE(equal_nocase("@", 1, "`"));
+  EXPECT_FALSE(equal_nocase("[", 1, "{"));
+  EXPECT_FALSE(equal_nocase("`", 1, "@"));
+  EXPECT_FALSE(equal_nocase("{", 1, "["));
+  EXPECT_FALSE(equal_nocase("ab", 2, "abc"));
   auto real = [](const std::string& in, double* out) {
     return parse_double(in.data(), in.size(), out);
   };
   double d = 0;
   EXPECT_FALSE(real("", &d));
   EXPECT_FALSE(real(std::string(65, '1'), &d));
+  EXPECT_TRUE(real(std::string(64, '1'), &d));  // the longest taken
+  EXPECT_EQ(d, 1.1111111111111111e63);
+  EXPECT_TRUE(real("1e+5", &d));  // a sign inside: the exponent's
+  EXPECT_EQ(d, 1e5);
+  EXPECT_TRUE(real("-.25E+1", &d));
+  EXPECT_EQ(d, -2.5);
   EXPECT_FALSE(real("+", &d));
   EXPECT_FALSE(real("+-1", &d));
   EXPECT_FALSE(real("++1", &d));
