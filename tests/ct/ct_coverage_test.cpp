@@ -389,6 +389,8 @@ TEST(CtCommonCoverage, TextAndNumbers) {
   EXPECT_EQ(i, 42);
   EXPECT_FALSE(integer("+", &i));
   EXPECT_FALSE(integer(std::string(25, '1'), &i));
+  EXPECT_TRUE(integer(std::string(22, '0') + "42", &i));  // 24 characters: the longest taken
+  EXPECT_EQ(i, 42);
   EXPECT_FALSE(integer("4x", &i));
   EXPECT_FALSE(integer("99999999999999999999", &i));
   double v[3];
@@ -423,6 +425,13 @@ TEST(CtCommonCoverage, SizesBudgetsSpacingAxes) {
   EXPECT_NE(std::strstr(s.message(), "does not fit in memory"), nullptr) << s.message();
   SPLINTCORE_EXPECT_OK(check_size(2, 3, 4, o, &bytes));
   EXPECT_EQ(bytes, 48u);
+  CtReadOptions tight;  // each limit met exactly is taken, one over is refused
+  tight.max_dimension = 4;
+  tight.max_voxels = 24;
+  SPLINTCORE_EXPECT_OK(check_size(2, 3, 4, tight, &bytes));
+  EXPECT_EQ(check_size(2, 3, 5, tight, &bytes).code(), StatusCode::kLimitExceeded);
+  tight.max_voxels = 23;
+  EXPECT_EQ(check_size(2, 3, 4, tight, &bytes).code(), StatusCode::kLimitExceeded);
 
   test::TestArena t(4096);
   s = check_budget(t.arena, ~uint64_t{0}, 10, 2);  // the need overflows
@@ -444,7 +453,9 @@ TEST(CtCommonCoverage, SizesBudgetsSpacingAxes) {
   s = check_spacing(std::nan(""), "y", o);
   EXPECT_NE(std::strstr(s.message(), "spacing along y is nan: must be a positive number"), nullptr)
       << s.message();
-  EXPECT_EQ(check_spacing(0, "x", o).code(), StatusCode::kParseError);
+  EXPECT_NE(std::strstr(check_spacing(0, "x", o).message(), "must be a positive number"), nullptr);
+  SPLINTCORE_EXPECT_OK(check_spacing(o.min_spacing, "x", o));  // both ends are inside
+  SPLINTCORE_EXPECT_OK(check_spacing(o.max_spacing, "x", o));
   EXPECT_NE(std::strstr(check_spacing(1e-4, "x", o).message(), "wrong units?"), nullptr);
   EXPECT_NE(std::strstr(check_spacing(101, "z", o).message(), "outside [0.001, 100] mm"), nullptr);
 
