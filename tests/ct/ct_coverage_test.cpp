@@ -570,6 +570,14 @@ TEST(CtCommonCoverage, VoxelConversion) {
   b12.big_endian = true;
   SPLINTCORE_ASSERT_OK(convert(std::string("\x0f\xff\x07\xff", 4), b12, 2, 1, 0, &hu, &saturated));
   EXPECT_EQ(hu, (std::vector<int16_t>{-1, 2047}));
+  // 32 bits allocated, 16 stored, little endian: the integer path but not the 16-bit fast one
+  // (each value 4 bytes, its high half masked off).
+  VoxelFormat i32b16;
+  i32b16.bytes = 4;
+  i32b16.bits_stored = 16;
+  SPLINTCORE_ASSERT_OK(convert(le_bytes(0xABCD0064u, 4) + le_bytes(0x1234FFFFu, 4), i32b16, 2, 1, 0,
+                               &hu, &saturated));
+  EXPECT_EQ(hu, (std::vector<int16_t>{100, -1}));
   // Not the integer path: a slope, a fractional intercept, a huge intercept.
   SPLINTCORE_ASSERT_OK(convert(le_bytes(10, 4), i32, 1, 2, 0, &hu, &saturated));
   EXPECT_EQ(hu[0], 20);
