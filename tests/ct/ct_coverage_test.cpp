@@ -164,6 +164,11 @@ TEST(CtNrrdCoverage, AcceptedSpellings) {
   EXPECT_EQ(r.volume.spacing.z, 2.0);
   EXPECT_EQ(std::string(r.info.space), space.substr(0, 63));
   EXPECT_TRUE(r.info.detached);
+  // Key/value pairs ("key:=value") are not fields, even when the key names one; one with
+  // nothing after ":=" too.
+  r = read_ct(Kind::kNrrd, nrrd("sizes:=9 9 9\ntype:=\nx:=\n"));
+  SPLINTCORE_ASSERT_OK(r.status);
+  EXPECT_EQ(r.volume.nx, 2u);
   // Without an info to fill.
   r = read_ct(Kind::kNrrd, nrrd(""), {}, CtReadOptions{}, false);
   SPLINTCORE_EXPECT_OK(r.status);
