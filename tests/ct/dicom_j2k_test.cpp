@@ -341,10 +341,6 @@ TEST(CtDicomJ2k, PacketHeaderBitsAtTheirEdges) {
   EXPECT_EQ(plain.pos, 1u);
   EXPECT_EQ(plain.bits(8), 0xA0u);
   EXPECT_FALSE(plain.truncated);
-  EXPECT_EQ(ct_detail::j2k_tag_tree_nodes(0, 4), 0u);
-  EXPECT_EQ(ct_detail::j2k_tag_tree_nodes(4, 0), 0u);
-  ct_detail::j2k_tag_tree_init(nullptr, 0, 4);  // nothing to set up (and no endless halving)
-  ct_detail::j2k_tag_tree_init(nullptr, 4, 0);
 }
 
 // ---- Tag trees (B.10.2) ----------------------------------------------------------------------
@@ -376,6 +372,11 @@ TEST(CtDicomJ2k, TagTreeHandCase) {
   EXPECT_EQ(tree[5].parent, 7u);
   EXPECT_EQ(tree[7].parent, 8u);
   EXPECT_EQ(tree[8].parent, 8u);
+  // No leaves along one side: no nodes, nothing to set up (and no endless halving).
+  EXPECT_EQ(ct_detail::j2k_tag_tree_nodes(0, 4), 0u);
+  EXPECT_EQ(ct_detail::j2k_tag_tree_nodes(4, 0), 0u);
+  ct_detail::j2k_tag_tree_init(nullptr, 0, 4);
+  ct_detail::j2k_tag_tree_init(nullptr, 4, 0);
 }
 
 // B.10.2's encoder (the same walk from the root, writing what the decoder reads) against
