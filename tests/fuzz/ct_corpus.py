@@ -376,15 +376,15 @@ for name, f in (("jls_c_high.bin", lambda x, y: 170 * x * y),  # the bias C up t
                 ("jls_c_low.bin", lambda x, y: 170 * x * (19 - y))):  # down to -128
     codec_seed(name, 3 | (14 << 2), 20, 20,
                jpegls_encode.encode([f(x, y) for y in range(20) for x in range(20)], 20, 20, 16))
-for p in (2, 4, 7, 8):  # 40 x 40, gradients of every size around the default thresholds
-    codec_seed("jls_grad_p%d.bin" % p, 3 | ((p - 2) << 2), 40, 40,
-               jpegls_encode.encode([((x * y) // 3 + (x * x) // 7) % (1 << p)
-                                     for y in range(40) for x in range(40)], 40, 40, p))
-for p, top in ((7, 64), (8, 128)):  # the same with MAXVAL in LSE, where the two default
-    # threshold formulas meet (C.2.4.1.1: FACTOR from 256 / (MAXVAL + 1) below 128, from
-    # (MAXVAL + 128) / 256 from 128 on)
-    codec_seed("jls_grad_maxval%d.bin" % top, 3 | ((p - 2) << 2), 40, 40,
-               jpegls_encode.encode([((x * y) // 3 + (x * x) // 7) % (top + 1)
+# 40 x 40, gradients of every size around the default thresholds, at precisions 2, 4, 7, 8;
+# then with MAXVAL 64 and 128 in LSE, where the two default threshold formulas meet
+# (C.2.4.1.1: FACTOR from 256 / (MAXVAL + 1) below 128, from (MAXVAL + 128) / 256 from 128 on).
+for name, p, top in (("jls_grad_p2", 2, None), ("jls_grad_p4", 4, None),
+                     ("jls_grad_p7", 7, None), ("jls_grad_p8", 8, None),
+                     ("jls_grad_maxval64", 7, 64), ("jls_grad_maxval128", 8, 128)):
+    levels = (1 << p) if top is None else top + 1
+    codec_seed(name + ".bin", 3 | ((p - 2) << 2), 40, 40,
+               jpegls_encode.encode([((x * y) // 3 + (x * x) // 7) % levels
                                      for y in range(40) for x in range(40)], 40, 40, p,
                                     maxval=top))
 two_bits = [0, 0, 0, 1, 2, 3, 0, 1, 2, 0, 1, 1, 0, 3, 2, 0, 2, 1, 0, 3]  # a run, interrupted
