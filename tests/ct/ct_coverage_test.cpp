@@ -203,6 +203,17 @@ TEST(CtMetaImageCoverage, KeyErrors) {
        StatusCode::kParseError, "bad DimSize (three positive integers)", 3},
       {"dims fraction", meta("", "ObjectType = Image\nNDims = 3\nDimSize = 2 1.5 1\n"),
        StatusCode::kParseError, "bad DimSize (three positive integers)", 3},
+      // 2^32 - 1 is a DimSize (refused later by the dimension limit), 2^32 is not.
+      {"dims 2^32 - 1",
+       meta("",
+            "ObjectType = Image\nNDims = 3\nDimSize = 2 4294967295 1\n"
+            "ElementType = MET_SHORT\n"),
+       StatusCode::kLimitExceeded, "size along y is 4294967295, more than the limit 4096", 0},
+      {"dims 2^32", meta("", "ObjectType = Image\nNDims = 3\nDimSize = 2 4294967296 1\n"),
+       StatusCode::kParseError, "bad DimSize (three positive integers)", 3},
+      // A direction matrix with no spacing key: its axes' error names the matrix's line.
+      {"matrix line", meta("TransformMatrix = 1 0 0 1 0 0 0 0 1\n"), StatusCode::kParseError,
+       "directions of axes x and y are not orthogonal (dot product 1", 5},
       {"element size", meta("ElementSize = 1 1\n"), StatusCode::kParseError,
        "bad element spacing (three numbers)", 5},
       {"origin", meta("Origin = 1 2\n"), StatusCode::kParseError, "bad origin (three numbers)", 5},
