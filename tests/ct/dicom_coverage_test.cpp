@@ -6,6 +6,7 @@
 // element by element (explicit or implicit VR little endian).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <functional>
 #include <new>
@@ -294,6 +295,22 @@ TEST(DicomCoverage, ElementsAndContainers) {
     w.b.push_back('T');
     return with([&](std::vector<El>* e) { raw_before(e, kRows, w.b); });
   };
+  Bytes syntax64;  // the longest UID (PS3.5 9.1): read, then refused by name
+  syntax64.element({tag(0x0002, 0x0010), "UI", text("1.2." + std::string(60, '3'))}, false);
+  const std::string syntax64_message = "unsupported transfer syntax 1.2." + std::string(60, '3');
+  // RLE Pixel Data: an empty offset table, then a fragment item of undefined length.
+  Bytes rle_meta;
+  rle_meta.element({tag(0x0002, 0x0010), "UI", text("1.2.840.10008.1.2.5")}, false);
+  std::vector<El> rle = slice(0);
+  drop(&rle, tag(0x7FE0, 0x0010));
+  El rle_pixels;
+  rle_pixels.raw = true;
+  rle_pixels.value = long_header(tag(0x7FE0, 0x0010), "OB", 0xFFFFFFFFu);
+  for (const auto& it :
+       {tag_length(tag(0xFFFE, 0xE000), 0), tag_length(tag(0xFFFE, 0xE000), 0xFFFFFFFFu)}) {
+    rle_pixels.value.insert(rle_pixels.value.end(), it.begin(), it.end());
+  }
+  rle.push_back(rle_pixels);
   std::vector<uint8_t> long_value = long_header(kPhotometric, "UT", 300);
   long_value.resize(long_value.size() + 300, 'M');
   const std::vector<FileCase> cases = {
@@ -301,6 +318,8 @@ TEST(DicomCoverage, ElementsAndContainers) {
        StatusCode::kParseError, "undefined length"},
       {"transfer syntax too long", file(slice(0), false, &long_syntax.b), StatusCode::kParseError,
        "Transfer Syntax UID: too long"},
+      {"transfer syntax of 64 characters", file(slice(0), false, &syntax64.b),
+       StatusCode::kUnsupported, syntax64_message.c_str()},
       {"item outside a sequence", with([&](std::vector<El>* e) { raw_before(e, kRows, item); }),
        StatusCode::kParseError, "Item: outside a sequence"},
       {"item in an item", with([&](std::vector<El>* e) { raw_before(e, kRows, item_in_item); }),
@@ -333,10 +352,28 @@ TEST(DicomCoverage, ElementsAndContainers) {
       {"VR first byte high", bad_vr("aS"), StatusCode::kParseError, "invalid VR"},
       {"VR second byte low", bad_vr("S\x01"), StatusCode::kParseError, "invalid VR"},
       {"VR second byte high", bad_vr("Sh"), StatusCode::kParseError, "invalid VR"},
+      {"VR first byte just below A", bad_vr("@S"), StatusCode::kParseError, "invalid VR"},
+      {"VR first byte just above Z", bad_vr("[S"), StatusCode::kParseError, "invalid VR"},
+      {"VR second byte just below A", bad_vr("S@"), StatusCode::kParseError, "invalid VR"},
+      {"VR second byte just above Z", bad_vr("S["), StatusCode::kParseError, "invalid VR"},
       {"undefined length OB", with([&](std::vector<El>* e) {
          raw_before(e, kRows, long_header(tag(0x0009, 0x0010), "OB", 0xFFFFFFFFu));
        }),
        StatusCode::kParseError, "undefined length on a VR other than SQ or UN"},
+      // UT and SV share a letter with UN and SQ.
+      {"undefined length UT", with([&](std::vector<El>* e) {
+         raw_before(e, kRows, long_header(tag(0x0009, 0x0010), "UT", 0xFFFFFFFFu));
+       }),
+       StatusCode::kParseError, "undefined length on a VR other than SQ or UN"},
+      {"undefined length SV", with([&](std::vector<El>* e) {
+         raw_before(e, kRows, long_header(tag(0x0009, 0x0010), "SV", 0xFFFFFFFFu));
+       }),
+       StatusCode::kParseError, "undefined length on a VR other than SQ or UN"},
+      {"fragment of undefined length", file(rle, false, &rle_meta.b), StatusCode::kParseError,
+       "expected a fragment Item (FFFE,E000) of defined length"},
+      // The data set is one 8-byte element (empty) at the end of the file.
+      {"one empty element", file({{tag(0x0008, 0x0050), "SH", {}}}), StatusCode::kParseError,
+       "no (7FE0,0010) Pixel Data in the file"},
       {"kept value too long", with([&](std::vector<El>* e) {
          drop(e, kPhotometric);
          raw_before(e, kRows, long_value);
@@ -373,6 +410,10 @@ TEST(DicomCoverage, HeaderChecks) {
   const std::vector<FileCase> cases = {
       {"long photometric", with([](std::vector<El>* e) {
          put(e, {tag(0x0028, 0x0004), "CS", text("MONOCHROME2_AND_MORE_TEXT")});
+       }),
+       StatusCode::kUnsupported, "Photometric Interpretation MONOCHROME2_AND_: only"},
+      {"photometric one over", with([](std::vector<El>* e) {  // 17 characters: 16 kept
+         put(e, {tag(0x0028, 0x0004), "CS", text("MONOCHROME2_AND_M")});
        }),
        StatusCode::kUnsupported, "Photometric Interpretation MONOCHROME2_AND_: only"},
       {"no rows", with([&](std::vector<El>* e) {
@@ -488,12 +529,31 @@ TEST(DicomCoverage, AcceptedVariants) {
     r = read_one(file(els));
     EXPECT_TRUE(r.status.is_ok()) << type << ": " << r.status.message();
   }
-  // The header limit.
+  // VRs at the ends of A-Z: AE and DA, and ZZ (not in PS3.5, read as a short VR), skipped.
+  els = slice(0);
+  put(&els, {tag(0x0008, 0x0020), "DA", text("20261207")});
+  put(&els, {tag(0x0008, 0x0054), "AE", text("SCANNER")});
+  put(&els, {tag(0x0009, 0x0010), "ZZ", text("AB")});
+  r = read_one(file(els));
+  SPLINTCORE_EXPECT_OK(r.status);
+  // The header limit: Pixel Data starting at exactly max_header_bytes is read, one byte later
+  // is not.
+  const std::vector<uint8_t> bytes = file(slice(0));
+  const uint8_t pixel_tag[4] = {0xE0, 0x7F, 0x10, 0x00};
+  const uint64_t pixel_at = static_cast<uint64_t>(
+      std::search(bytes.begin(), bytes.end(), pixel_tag, pixel_tag + 4) - bytes.begin());
   CtReadOptions small;
-  small.max_header_bytes = 150;
-  r = read_one(file(slice(0)), small);
+  small.max_header_bytes = pixel_at;
+  r = read_one(bytes, small);
+  SPLINTCORE_EXPECT_OK(r.status);
+  small.max_header_bytes = pixel_at - 1;
+  r = read_one(bytes, small);
   EXPECT_EQ(r.status.code(), StatusCode::kLimitExceeded);
-  EXPECT_TRUE(has(r.status, "no Pixel Data within the first 150 bytes")) << r.status.message();
+  EXPECT_TRUE(
+      has(r.status,
+          ("no Pixel Data within the first " + std::to_string(pixel_at - 1) + " bytes").c_str()))
+      << r.status.message();
+  EXPECT_EQ(r.status.byte_offset(), pixel_at);
 }
 
 TEST(DicomCoverage, SeriesArguments) {

@@ -385,6 +385,15 @@ TEST(CtDicomMultiFrameCodecs, TruncatedAndCorruptFrames) {
   EXPECT_TRUE(has(r.status, "frame 0: its fragments hold more than 122880 bytes"))
       << test::format(r.status);
   EXPECT_EQ(r.status.byte_offset(), huge.item_at[0]);
+  // A fragment item of undefined length (frame 1's): refused as such, not read as a frame of
+  // 2^32 - 1 bytes.
+  Encapsulated undefined = mf16_as("rle16", 1, Table::kNone);
+  test::put_le32(&undefined.file, undefined.item_at[1] + 4, 0xFFFFFFFFu);
+  r = read({undefined.file});
+  EXPECT_EQ(r.status.code(), StatusCode::kParseError);
+  EXPECT_TRUE(has(r.status, "expected a fragment Item (FFFE,E000) of defined length"))
+      << test::format(r.status);
+  EXPECT_EQ(r.status.byte_offset(), undefined.item_at[1]);
 }
 
 // A series of one file that is `first` when opened for its header (twice: a multi-frame file's
