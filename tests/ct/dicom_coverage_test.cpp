@@ -313,6 +313,8 @@ TEST(DicomCoverage, ElementsAndContainers) {
   rle.push_back(rle_pixels);
   std::vector<uint8_t> long_value = long_header(kPhotometric, "UT", 300);
   long_value.resize(long_value.size() + 300, 'M');
+  std::vector<uint8_t> value256 = long_header(kPhotometric, "UT", 256);  // the most kept
+  value256.resize(value256.size() + 256, 'M');
   const std::vector<FileCase> cases = {
       {"meta element of undefined length", file(slice(0), false, &meta_undefined),
        StatusCode::kParseError, "undefined length"},
@@ -379,6 +381,11 @@ TEST(DicomCoverage, ElementsAndContainers) {
          raw_before(e, kRows, long_value);
        }),
        StatusCode::kParseError, "value of 300 bytes is too long"},
+      {"kept value of 256 bytes", with([&](std::vector<El>* e) {
+         drop(e, kPhotometric);
+         raw_before(e, kRows, value256);
+       }),
+       StatusCode::kUnsupported, "Photometric Interpretation MMMMMMMMMMMMMMMM: only"},
       {"Rows of 4 bytes", with([&](std::vector<El>* e) {
          put(e, {kRows, "UL", {2, 0, 0, 0}});
        }),
@@ -529,6 +536,15 @@ TEST(DicomCoverage, AcceptedVariants) {
     r = read_one(file(els));
     EXPECT_TRUE(r.status.is_ok()) << type << ": " << r.status.message();
   }
+  // One frame (Number of Frames 1) with an Extended Offset Table of two entries: not read (a
+  // single frame is all of Pixel Data), so its length is not checked either.
+  els = slice(0);
+  put(&els, {tag(0x0028, 0x0008), "IS", text("1")});
+  std::vector<uint8_t> table = long_header(tag(0x7FE0, 0x0001), "OV", 16);
+  table.resize(table.size() + 16, 0);
+  raw_before(&els, tag(0x7FE0, 0x0010), table);
+  r = read_one(file(els));
+  SPLINTCORE_EXPECT_OK(r.status);
   // VRs at the ends of A-Z: AE and DA, and ZZ (not in PS3.5, read as a short VR), skipped.
   els = slice(0);
   put(&els, {tag(0x0008, 0x0020), "DA", text("20261207")});

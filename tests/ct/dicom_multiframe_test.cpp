@@ -142,6 +142,13 @@ TEST(CtDicomMultiFrame, AbsurdNumberOfFramesIsAnError) {
       << r.status.message();
   r = read({fixture("mf16.dcm")}, 1 << 20, 2);
   EXPECT_EQ(r.status.code(), StatusCode::kLimitExceeded) << r.status.message();
+  EXPECT_TRUE(has(r.status, "is 3: must be 1 to 2 (CtReadOptions::max_dimension)"))
+      << r.status.message();
+  // Number of Frames equal to the limit passes its check (mf16's slices are 64 wide): what
+  // stops this file is its 3 frame items.
+  r = read({with_value(0x0028, 0x0008, "64")}, 1 << 20, 64);
+  EXPECT_EQ(r.status.code(), StatusCode::kParseError);
+  EXPECT_TRUE(has(r.status, "Number of Frames is 64 but the (5200,9230)")) << r.status.message();
 }
 
 TEST(CtDicomMultiFrame, MalformedFunctionalGroupsAreErrors) {
