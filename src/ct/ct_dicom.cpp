@@ -771,13 +771,21 @@ class DataSetWalk {
   // A Per-frame Functional Groups item opens: frame h_->frame_items, at byte `at`.
   Status begin_frame(uint64_t at) {
     const uint32_t i = h_->frame_items;
-    if (int64_t{i} >= h_->frames || (frames_ != nullptr && i >= capacity_)) {
+    if (int64_t{i} >= h_->frames) {
       Status s = tag_error(StatusCode::kParseError, kPerFrameGroups,
                            "Per-frame Functional Groups Sequence",
                            "has more items than Number of Frames (", at);
       s.append_i64(h_->frames);
       s.append(")");
       return s;
+    }
+    // Pass 1 has room for the frames pass 0 found: more items here, the file has grown.
+    if (frames_ != nullptr && i >= capacity_) {
+      return make_error(StatusCode::kParseError,
+                        "the file changed between two reads: (5200,9230) Per-frame Functional "
+                        "Groups Sequence has more than the ",
+                        capacity_, " items read first")
+          .at_byte(at);
     }
     if (i == 0) {
       shared_slope_ = h_->slope;

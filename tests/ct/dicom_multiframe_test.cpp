@@ -308,6 +308,19 @@ TEST(CtDicomMultiFrame, FileChangedBetweenReadsIsAnError) {
   EXPECT_EQ(s.code(), StatusCode::kParseError);
   EXPECT_TRUE(has(s, "the file changed between two reads")) << s.message();
   EXPECT_EQ(file.opens, 2);
+  // Grown from two frames to three: the frames' records have room for two, and the third
+  // item is refused before anything is written for it.
+  file.first = b;
+  file.then = fixture("mf16.dcm");
+  file.opens = 0;
+  const Status grown = read_dicom_series(ctx, series, options, &volume, nullptr);
+  EXPECT_EQ(grown.code(), StatusCode::kParseError);
+  EXPECT_TRUE(has(grown,
+                  "the file changed between two reads: (5200,9230) Per-frame Functional Groups "
+                  "Sequence has more than the 2 items read first"))
+      << test::format(grown);
+  EXPECT_STREQ(grown.file(), "changing.dcm");
+  EXPECT_EQ(file.opens, 2);
 }
 
 }  // namespace
