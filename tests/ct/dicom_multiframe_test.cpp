@@ -52,6 +52,29 @@ Bytes with_value(uint16_t group, uint16_t element, const std::string& value) {
   return b;
 }
 
+// mf16 cut to its first `count` frames: Number of Frames `count`, the later per-frame items
+// dropped (the sequence is of defined length), `count` frames of pixels.
+Bytes mf16_first_frames(int count) {
+  Bytes b = with_value(0x0028, 0x0008, std::to_string(count) + (count < 10 ? " " : ""));
+  const size_t sq = test::find_bytes(b, test::dicom_tag(0x5200, 0x9230) + "SQ");
+  auto u32_at = [&](size_t at) {
+    return uint32_t{b[at]} | (uint32_t{b[at + 1]} << 8) | (uint32_t{b[at + 2]} << 16) |
+           (uint32_t{b[at + 3]} << 24);
+  };
+  size_t cut = sq + 12;
+  for (int k = 0; k < count; ++k) cut += 8 + u32_at(cut + 4);
+  size_t end = cut;
+  for (int k = count; k < 3; ++k) end += 8 + u32_at(end + 4);
+  test::put_le32(&b, sq + 8, static_cast<uint32_t>(u32_at(sq + 8) - (end - cut)));
+  b.erase(b.begin() + static_cast<std::ptrdiff_t>(cut),
+          b.begin() + static_cast<std::ptrdiff_t>(end));
+  const size_t pixels = test::find_bytes(b, test::dicom_tag(0x7FE0, 0x0010) + "OW");
+  const uint32_t frame_bytes = 64 * 56 * 2;
+  test::put_le32(&b, pixels + 8, static_cast<uint32_t>(count) * frame_bytes);
+  b.resize(pixels + 12 + count * frame_bytes);
+  return b;
+}
+
 void expect_same_volume(const Read& a, const Read& b) {
   ASSERT_TRUE(a.status.is_ok()) << a.status.message();
   ASSERT_TRUE(b.status.is_ok()) << b.status.message();
@@ -127,6 +150,12 @@ TEST(CtDicomMultiFrame, FrameCountMustMatchItemsAndPixels) {
   r = read({with_value(0x0028, 0x0008, "2 ")});
   EXPECT_EQ(r.status.code(), StatusCode::kParseError);
   EXPECT_TRUE(has(r.status, "has more items than Number of Frames (2)")) << r.status.message();
+}
+
+// One frame in an enhanced file: its position (the per-frame item's) and z spacing (the
+// shared Slice Thickness) as the single slice raw16_0.dcm gives them.
+TEST(CtDicomMultiFrame, OneFrameReadsLikeItsSlice) {
+  expect_same_volume(read({mf16_first_frames(1)}), read({fixture("raw16_0.dcm")}));
 }
 
 TEST(CtDicomMultiFrame, AbsurdNumberOfFramesIsAnError) {
@@ -271,23 +300,7 @@ struct ChangingFile {
 TEST(CtDicomMultiFrame, FileChangedBetweenReadsIsAnError) {
   ChangingFile file;
   file.first = fixture("mf16.dcm");
-  // mf16 cut to its first two frames: Number of Frames 2, the third per-frame item dropped
-  // (the sequence is of defined length), two frames of pixels.
-  Bytes b = with_value(0x0028, 0x0008, "2 ");
-  const size_t sq = test::find_bytes(b, test::dicom_tag(0x5200, 0x9230) + "SQ");
-  auto u32_at = [&](size_t at) {
-    return uint32_t{b[at]} | (uint32_t{b[at + 1]} << 8) | (uint32_t{b[at + 2]} << 16) |
-           (uint32_t{b[at + 3]} << 24);
-  };
-  size_t third = sq + 12;
-  for (int k = 0; k < 2; ++k) third += 8 + u32_at(third + 4);
-  const uint32_t third_bytes = 8 + u32_at(third + 4);
-  test::put_le32(&b, sq + 8, u32_at(sq + 8) - third_bytes);
-  b.erase(b.begin() + static_cast<std::ptrdiff_t>(third),
-          b.begin() + static_cast<std::ptrdiff_t>(third + third_bytes));
-  const size_t pixels = test::find_bytes(b, test::dicom_tag(0x7FE0, 0x0010) + "OW");
-  test::put_le32(&b, pixels + 8, 2 * 64 * 56 * 2);
-  b.resize(pixels + 12 + 2 * 64 * 56 * 2);
+  Bytes b = mf16_first_frames(2);
   ASSERT_TRUE(read({b}).status.is_ok()) << read({b}).status.message();  // valid alone
   file.then = b;
   CtSeries series;
