@@ -158,6 +158,40 @@ TEST(CtDicomMultiFrame, OneFrameReadsLikeItsSlice) {
   expect_same_volume(read({mf16_first_frames(1)}), read({fixture("raw16_0.dcm")}));
 }
 
+// A frame's orientation and pixel spacing may differ from frame 0's by the tolerance, not
+// more: mf16_rev (per-frame values, undefined lengths) with its second item's Image
+// Orientation and Pixel Spacing each 2^-10 off (exact in binary, as is the difference).
+TEST(CtDicomMultiFrame, FrameValuesWithinTheTolerance) {
+  Bytes b = fixture("mf16_rev.dcm");
+  auto replace_second = [&](uint16_t group, uint16_t element, const std::string& value) {
+    const size_t at = test::find_bytes(b, test::dicom_tag(group, element) + "DS", 1);
+    ASSERT_NE(at, std::string::npos);
+    const size_t old = b[at + 6] | (b[at + 7] << 8);
+    b.erase(b.begin() + static_cast<std::ptrdiff_t>(at + 8),
+            b.begin() + static_cast<std::ptrdiff_t>(at + 8 + old));
+    b.insert(b.begin() + static_cast<std::ptrdiff_t>(at + 8), value.begin(), value.end());
+    b[at + 6] = static_cast<uint8_t>(value.size());
+  };
+  replace_second(0x0020, 0x0037, "1\\0.0009765625\\0\\0\\1\\0");
+  const Bytes orientation = b;
+  b = fixture("mf16_rev.dcm");
+  replace_second(0x0028, 0x0030, "1.2009765625\\1.2");
+  const Bytes spacing = b;
+  const double tolerance = 0.0009765625;
+  for (const Bytes& f : {orientation, spacing}) {
+    const Read r = test::read_dicom_bytes({f}, {"f0.dcm"}, 1 << 20, 0, 4096, tolerance);
+    EXPECT_TRUE(r.status.is_ok()) << r.status.message();
+    EXPECT_EQ(r.volume.nz, 3u);
+  }
+  Read r = test::read_dicom_bytes({orientation}, {"f0.dcm"}, 1 << 20, 0, 4096, tolerance / 2);
+  EXPECT_EQ(r.status.code(), StatusCode::kUnsupported);
+  EXPECT_TRUE(has(r.status, "its Image Orientation (Patient) differs from frame 0's"))
+      << r.status.message();
+  r = test::read_dicom_bytes({spacing}, {"f0.dcm"}, 1 << 20, 0, 4096, tolerance / 2);
+  EXPECT_EQ(r.status.code(), StatusCode::kUnsupported);
+  EXPECT_TRUE(has(r.status, "its Pixel Spacing differs from frame 0's")) << r.status.message();
+}
+
 TEST(CtDicomMultiFrame, AbsurdNumberOfFramesIsAnError) {
   Read r = read({with_value(0x0028, 0x0008, "0 ")});
   EXPECT_EQ(r.status.code(), StatusCode::kParseError);

@@ -28,10 +28,11 @@ struct DicomRead {
 };
 
 // files[i] named names[i], read in 1 KiB chunks (max_chunk > 0: the memory files hand out at
-// most that many bytes a read) in an arena of arena_bytes.
+// most that many bytes a read) in an arena of arena_bytes, with the options given.
 inline DicomRead read_dicom_bytes(const std::vector<Bytes>& files,
                                   const std::vector<std::string>& names, size_t arena_bytes,
-                                  size_t max_chunk = 0, uint32_t max_dimension = 4096) {
+                                  size_t max_chunk = 0, uint32_t max_dimension = 4096,
+                                  double orientation_tolerance = 1.0e-4) {
   TestArena t(arena_bytes);
   std::vector<CtMemoryFile> mem;
   for (size_t i = 0; i < files.size(); ++i) {
@@ -42,6 +43,7 @@ inline DicomRead read_dicom_bytes(const std::vector<Bytes>& files,
   CtReadOptions options;
   options.chunk_bytes = 1024;
   options.max_dimension = max_dimension;
+  options.orientation_tolerance = orientation_tolerance;
   DicomRead r;
   r.status = read_dicom_series(ctx, ct_memory_series(&m), options, &r.volume, &r.info);
   if (r.status.is_ok()) r.hu.assign(r.volume.hu, r.volume.hu + r.volume.voxel_count());
