@@ -190,6 +190,9 @@ TEST(CtDicomDeflate, StreamErrorsNameTheFileAndOffset) {
     EXPECT_EQ(r.status.code(), StatusCode::kTruncated) << test::format(r.status);
     EXPECT_STREQ(r.status.file(), "s1.dcm");
     EXPECT_EQ(r.status.byte_offset(), cut) << test::format(r.status);
+    // The stream's own error, at its offset in the file: not called an inflated-data offset.
+    EXPECT_EQ(std::string(r.status.message()).find("inflated data set"), std::string::npos)
+        << test::format(r.status);
   }
   // An invalid block type at the stream's first byte.
   std::vector<uint8_t> bad = good;
