@@ -130,6 +130,16 @@ TEST(CtDicomEncapsulated, ItemErrors) {
   item(&items, 0xE0DD, 0);
   expect_error(read({with_pixel_data(undefined(items))}), StatusCode::kLimitExceeded,
                "more than 8 x the raw");
+  // Exactly 8 a sample + 64 KiB passes that check: the decoder is what refuses the zeros.
+  items.clear();
+  item(&items, 0xE000, 0);
+  item(&items, 0xE000, big - 2);
+  items.resize(items.size() + big - 2, 0);
+  item(&items, 0xE0DD, 0);
+  const Status at_limit = read({with_pixel_data(undefined(items))});
+  EXPECT_NE(at_limit.code(), StatusCode::kOk);
+  EXPECT_EQ(message(at_limit).find("more than 8 x the raw"), std::string::npos)
+      << test::format(at_limit);
   // Pixel Data of defined length in an encapsulated syntax.
   Bytes defined = {0, 0};
   put32(&defined, 4);

@@ -298,19 +298,6 @@ TEST(DicomCoverage, ElementsAndContainers) {
   Bytes syntax64;  // the longest UID (PS3.5 9.1): read, then refused by name
   syntax64.element({tag(0x0002, 0x0010), "UI", text("1.2." + std::string(60, '3'))}, false);
   const std::string syntax64_message = "unsupported transfer syntax 1.2." + std::string(60, '3');
-  // RLE Pixel Data: an empty offset table, then a fragment item of undefined length.
-  Bytes rle_meta;
-  rle_meta.element({tag(0x0002, 0x0010), "UI", text("1.2.840.10008.1.2.5")}, false);
-  std::vector<El> rle = slice(0);
-  drop(&rle, tag(0x7FE0, 0x0010));
-  El rle_pixels;
-  rle_pixels.raw = true;
-  rle_pixels.value = long_header(tag(0x7FE0, 0x0010), "OB", 0xFFFFFFFFu);
-  for (const auto& it :
-       {tag_length(tag(0xFFFE, 0xE000), 0), tag_length(tag(0xFFFE, 0xE000), 0xFFFFFFFFu)}) {
-    rle_pixels.value.insert(rle_pixels.value.end(), it.begin(), it.end());
-  }
-  rle.push_back(rle_pixels);
   std::vector<uint8_t> long_value = long_header(kPhotometric, "UT", 300);
   long_value.resize(long_value.size() + 300, 'M');
   std::vector<uint8_t> value256 = long_header(kPhotometric, "UT", 256);  // the most kept
@@ -371,8 +358,6 @@ TEST(DicomCoverage, ElementsAndContainers) {
          raw_before(e, kRows, long_header(tag(0x0009, 0x0010), "SV", 0xFFFFFFFFu));
        }),
        StatusCode::kParseError, "undefined length on a VR other than SQ or UN"},
-      {"fragment of undefined length", file(rle, false, &rle_meta.b), StatusCode::kParseError,
-       "expected a fragment Item (FFFE,E000) of defined length"},
       // The data set is one 8-byte element (empty) at the end of the file.
       {"one empty element", file({{tag(0x0008, 0x0050), "SH", {}}}), StatusCode::kParseError,
        "no (7FE0,0010) Pixel Data in the file"},
