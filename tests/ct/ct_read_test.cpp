@@ -814,6 +814,101 @@ TEST(CtDicom, SeriesGeometryErrors) {
   EXPECT_NE(message(r.status).find("wrong units?"), std::string::npos) << message(r.status);
 }
 
+// Edges of the series read: the file an orientation error names, slices that differ by
+// exactly the tolerance, rescale_varies, Pixel Data one odd byte long or twice too long, and
+// the progress of the header pass (its last report is every file; a cancel stops it).
+TEST(CtDicom, SeriesEdges) {
+  DicomSpec skew = slice(0, 0);
+  skew.orientation = "1\\0\\0\\0.6\\0.8\\0";
+  SeriesResult r = read_series({dicom_file(skew)});
+  EXPECT_NE(message(r.status).find("orthogonal"), std::string::npos) << message(r.status);
+  EXPECT_STREQ(r.status.file(), "f0.dcm");
+  EXPECT_EQ(r.status.index(), 0u);
+
+  // Slice 1's column spacing 2^-10 off slice 0's (exact in binary, as is the difference).
+  std::vector<std::vector<uint8_t>> files = {dicom_file(slice(0, 0)), {}, dicom_file(slice(2, 2))};
+  DicomSpec off = slice(1, 1);
+  off.pixel_spacing = "0.5\\0.2509765625";
+  files[1] = dicom_file(off);
+  CtReadOptions options;
+  options.orientation_tolerance = 0.0009765625;
+  r = read_series(files, 0, options);
+  EXPECT_TRUE(r.status.is_ok()) << message(r.status);
+  options.orientation_tolerance /= 2;
+  r = read_series(files, 0, options);
+  EXPECT_EQ(r.status.code(), StatusCode::kUnsupported);
+  EXPECT_NE(message(r.status).find("Pixel Spacing"), std::string::npos) << message(r.status);
+
+  // rescale_varies: not for equal slopes and intercepts; for another intercept, or slope.
+  for (int which = 0; which < 3; ++which) {
+    std::vector<std::vector<uint8_t>> series;
+    for (int k = 0; k < 3; ++k) {
+      DicomSpec s = slice(k, k);
+      s.slope = k == 1 && which == 2 ? "2" : "1";
+      s.intercept = k == 1 && which == 1 ? "-1023" : "-1024";
+      series.push_back(dicom_file(s));
+    }
+    r = read_series(series);
+    ASSERT_TRUE(r.status.is_ok()) << message(r.status);
+    EXPECT_EQ(r.info.rescale_varies, which != 0) << which;
+  }
+
+  // 1 x 3 8-bit pixels are 3 bytes: 4 (padded, PixelFormatsAndRescale) are read, 6 are not,
+  // and the message has no frames in it.
+  DicomSpec odd;
+  odd.bits_allocated = 8;
+  odd.bits_stored = 8;
+  odd.pixel_representation = 0;
+  odd.rows = 1;
+  odd.columns = 3;
+  odd.thickness = "1";
+  odd.pixels = {1, 2, 3, 0, 5, 6};
+  r = read_series({dicom_file(odd)});
+  EXPECT_EQ(r.status.code(), StatusCode::kParseError);
+  EXPECT_NE(message(r.status).find("Pixel Data has 6 bytes; rows x columns x bytes per pixel is 3"),
+            std::string::npos)
+      << message(r.status);
+
+  // Progress of the header pass.
+  struct Reports {
+    std::vector<std::pair<uint64_t, uint64_t>> headers;
+    bool cancel = false;
+    static bool report(void* user, const char* stage, uint64_t done, uint64_t total) {
+      Reports* self = static_cast<Reports*>(user);
+      if (std::string(stage) == "read DICOM headers") self->headers.emplace_back(done, total);
+      return !self->cancel;
+    }
+  };
+  files = {dicom_file(slice(0, 0)), dicom_file(slice(1, 1)), dicom_file(slice(2, 2))};
+  const std::vector<std::string> names = {"f0.dcm", "f1.dcm", "f2.dcm"};
+  std::vector<CtMemoryFile> mem;
+  for (size_t i = 0; i < files.size(); ++i) {
+    mem.push_back({names[i].c_str(), files[i].data(), files[i].size()});
+  }
+  for (bool cancel : {false, true}) {
+    CtMemoryFiles m{mem.data(), 3, 0, {}};
+    Reports reports;
+    reports.cancel = cancel;
+    Progress progress;
+    progress.report = &Reports::report;
+    progress.user = &reports;
+    TestArena t(1 << 20);
+    Context ctx(&t.arena, nullptr, &progress);
+    CtVolume volume;
+    const Status st =
+        read_dicom_series(ctx, ct_memory_series(&m), CtReadOptions{}, &volume, nullptr);
+    if (cancel) {
+      EXPECT_EQ(st.code(), StatusCode::kCancelled) << message(st);
+      EXPECT_EQ(reports.headers.size(), 1u);
+      EXPECT_EQ(t.arena.used(), 0u);
+      continue;
+    }
+    ASSERT_TRUE(st.is_ok()) << message(st);
+    const std::vector<std::pair<uint64_t, uint64_t>> expected = {{1, 3}, {2, 3}, {3, 3}};
+    EXPECT_EQ(reports.headers, expected);
+  }
+}
+
 // Geometry as scanners write it (issue 31): exact values on 2 x 3 slices (pixels 100 k + i,
 // row spacing 0.5 mm, column spacing 0.25 mm).
 TEST(CtDicomResample, UnevenSpacingInterpolatesBetweenNeighbours) {

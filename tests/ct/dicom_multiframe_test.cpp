@@ -89,6 +89,7 @@ void expect_same_volume(const Read& a, const Read& b) {
   EXPECT_TRUE(a.hu == b.hu);
   EXPECT_EQ(a.info.slope, b.info.slope);
   EXPECT_EQ(a.info.intercept, b.info.intercept);
+  EXPECT_EQ(a.info.rescale_varies, b.info.rescale_varies);
   EXPECT_EQ(a.info.slice_count, b.info.slice_count);
 }
 
