@@ -812,6 +812,33 @@ TEST(CtDicom, SeriesGeometryErrors) {
   units.pixel_spacing = "500\\500";
   r = read_series({dicom_file(units)});
   EXPECT_NE(message(r.status).find("wrong units?"), std::string::npos) << message(r.status);
+  // The messages name the pair of slices and their files; the mean spacing when uneven.
+  r = read_series(three(0, 1, 1));
+  EXPECT_NE(message(r.status).find("duplicate slice position: slices 1 and 2 (series files 1 "
+                                   "and 2) are 0 mm apart along the normal"),
+            std::string::npos)
+      << message(r.status);
+  EXPECT_EQ(r.status.index(), 2u);
+  r = read_series(three(0, 1, 3), 0, strict);
+  EXPECT_NE(message(r.status).find("slices 0 and 1 (series files 0 and 1) are 1 mm apart, the "
+                                   "mean spacing is 1.5 mm"),
+            std::string::npos)
+      << message(r.status);
+  // Slices exactly min_spacing apart are distinct; a gap exactly the tolerance off the mean
+  // is uniform (0.25 mm, all exact in binary).
+  CtReadOptions edge = strict;
+  edge.min_spacing = 0.25;  // the column spacing too
+  r = read_series(three(0, 0.25, 0.5), 0, edge);
+  EXPECT_TRUE(r.status.is_ok()) << message(r.status);
+  edge = strict;
+  edge.slice_spacing_tolerance_mm = 0.25;
+  edge.slice_spacing_tolerance_relative = 0;
+  r = read_series(three(0, 1.25, 2), 0, edge);
+  EXPECT_TRUE(r.status.is_ok()) << message(r.status);
+  EXPECT_EQ(r.volume.spacing.z, 1.0);
+  edge.slice_spacing_tolerance_mm = 0.125;
+  r = read_series(three(0, 1.25, 2), 0, edge);
+  EXPECT_EQ(r.status.code(), StatusCode::kUnsupported) << message(r.status);
 }
 
 // Edges of the series read: the file an orientation error names, slices that differ by
