@@ -806,12 +806,26 @@ TEST(CtDicom, SeriesGeometryErrors) {
   // One slice without a thickness.
   r = read_series({dicom_file(slice(0, 0))});
   EXPECT_EQ(r.status.code(), StatusCode::kParseError);
+  EXPECT_STREQ(r.status.file(), "f0.dcm");
   // Absurd pixel spacing.
   DicomSpec units = slice(0, 0);
   units.thickness = "1";
   units.pixel_spacing = "500\\500";
   r = read_series({dicom_file(units)});
   EXPECT_NE(message(r.status).find("wrong units?"), std::string::npos) << message(r.status);
+  EXPECT_STREQ(r.status.file(), "f0.dcm");
+  // Resampled onto 4 slices (0, 1, 2, 3 mm): within a max_dimension of 4, not of 3.
+  CtReadOptions limit;
+  limit.max_dimension = 4;
+  r = read_series(three(0, 1, 3), 0, limit);
+  ASSERT_TRUE(r.status.is_ok()) << message(r.status);
+  EXPECT_EQ(r.volume.nz, 4u);
+  limit.max_dimension = 3;
+  r = read_series(three(0, 1, 3), 0, limit);
+  EXPECT_EQ(r.status.code(), StatusCode::kLimitExceeded) << message(r.status);
+  EXPECT_NE(message(r.status).find("the series has 4 slices, more than the limit 3"),
+            std::string::npos)
+      << message(r.status);
   // The messages name the pair of slices and their files; the mean spacing when uneven.
   r = read_series(three(0, 1, 1));
   EXPECT_NE(message(r.status).find("duplicate slice position: slices 1 and 2 (series files 1 "

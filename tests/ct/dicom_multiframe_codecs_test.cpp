@@ -352,8 +352,9 @@ TEST(CtDicomMultiFrameCodecs, TruncatedAndCorruptFrames) {
                                 "): file ends inside a Pixel Data fragment"))
       << test::format(r.status);
   EXPECT_EQ(r.status.byte_offset(), cut);
-  // Frame 1's SOF3 precision 17: the decoder's error, at its byte in the file.
-  for (int pieces : {3, 40}) {
+  // Frame 1's SOF3 precision 17: the decoder's error, at its byte in the file (known for the
+  // first 32 fragments of a frame).
+  for (int pieces : {3, 32, 33}) {
     const Encapsulated c = mf16_as("jpeg70", pieces, Table::kBasic);
     b = c.file;
     const size_t frame1 = c.item_at[c.frame_item[1]];
@@ -366,12 +367,31 @@ TEST(CtDicomMultiFrameCodecs, TruncatedAndCorruptFrames) {
                                   " fragment item(s) from byte " + std::to_string(frame1) + "): "))
         << test::format(r.status);
     EXPECT_EQ(r.status.index(), 1u);
-    if (pieces == 3) {
+    if (pieces <= 32) {
       EXPECT_EQ(r.status.byte_offset(), at) << test::format(r.status);
     } else {
       EXPECT_TRUE(has(r.status, "(byte offset in the concatenated fragments)"))
           << test::format(r.status);
     }
+  }
+  // The same error (named at the SOF3 marker) at the first byte of a fragment: frame 1 cut
+  // just before the marker, which starts its second fragment.
+  {
+    Bytes whole = frame_fragments("jpeg70", 1, 1)[0];
+    size_t p = 0;
+    while (!(whole[p] == 0xFF && whole[p + 1] == 0xC3)) ++p;
+    ASSERT_EQ(p % 2, 0u);
+    whole[p + 4] = 17;
+    const std::vector<std::vector<Bytes>> frames = {
+        frame_fragments("jpeg70", 0, 1),
+        {Bytes(whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(p)),
+         Bytes(whole.begin() + static_cast<std::ptrdiff_t>(p), whole.end())},
+        frame_fragments("jpeg70", 2, 1)};
+    const Encapsulated cut =
+        encapsulate(fixture("mf16.dcm"), syntax_of("jpeg70"), frames, Table::kNone);
+    r = read({cut.file});
+    EXPECT_NE(r.status.code(), StatusCode::kOk);
+    EXPECT_EQ(r.status.byte_offset(), cut.item_at[2] + 8) << test::format(r.status);
   }
   // A frame of absurdly many bytes.
   std::vector<std::vector<Bytes>> big = {
@@ -566,6 +586,7 @@ TEST(CtDicomMultiFrameResample, FramesOutOfSliceOrderAreRefused) {
                   "frame 2 is slice 1 of 3"))
       << test::format(r.status);
   EXPECT_EQ(r.status.index(), 2u);
+  EXPECT_STREQ(r.status.file(), "m0.dcm");
 }
 
 // Frames out of slice order in a file without a name: refused, naming the frame.
