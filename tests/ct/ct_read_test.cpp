@@ -853,6 +853,20 @@ TEST(CtDicom, SeriesGeometryErrors) {
   edge.slice_spacing_tolerance_mm = 0.125;
   r = read_series(three(0, 1.25, 2), 0, edge);
   EXPECT_EQ(r.status.code(), StatusCode::kUnsupported) << message(r.status);
+  // A slice exactly the tolerance off the normal through slice 0 is on it (strict: no
+  // resampling).
+  std::vector<std::vector<uint8_t>> shifted = three(0, 1, 2);
+  DicomSpec off_normal = slice(1, 1);
+  off_normal.position = "10\\-19.75\\1";
+  shifted[1] = dicom_file(off_normal);
+  edge.slice_spacing_tolerance_mm = 0.25;
+  r = read_series(shifted, 0, edge);
+  EXPECT_TRUE(r.status.is_ok()) << message(r.status);
+  edge.slice_spacing_tolerance_mm = 0.125;
+  r = read_series(shifted, 0, edge);
+  EXPECT_NE(message(r.status).find("slice 1 (series file 1) lies 0.25 mm off the normal"),
+            std::string::npos)
+      << message(r.status);
 }
 
 // Edges of the series read: the file an orientation error names, slices that differ by
