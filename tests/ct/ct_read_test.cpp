@@ -871,7 +871,7 @@ TEST(CtDicom, SeriesGeometryErrors) {
 
 // Edges of the series read: the file an orientation error names, slices that differ by
 // exactly the tolerance, rescale_varies, Pixel Data one odd byte long or twice too long, and
-// the progress of the header pass (its last report is every file; a cancel stops it).
+// the progress of the header and pixel passes (each ends at every file; a cancel stops it).
 TEST(CtDicom, SeriesEdges) {
   DicomSpec skew = slice(0, 0);
   skew.orientation = "1\\0\\0\\0.6\\0.8\\0";
@@ -926,11 +926,12 @@ TEST(CtDicom, SeriesEdges) {
 
   // Progress of the header pass.
   struct Reports {
-    std::vector<std::pair<uint64_t, uint64_t>> headers;
+    std::vector<std::pair<uint64_t, uint64_t>> headers, pixels;
     bool cancel = false;
     static bool report(void* user, const char* stage, uint64_t done, uint64_t total) {
       Reports* self = static_cast<Reports*>(user);
       if (std::string(stage) == "read DICOM headers") self->headers.emplace_back(done, total);
+      if (std::string(stage) == "read DICOM pixels") self->pixels.emplace_back(done, total);
       return !self->cancel;
     }
   };
@@ -961,6 +962,7 @@ TEST(CtDicom, SeriesEdges) {
     ASSERT_TRUE(st.is_ok()) << message(st);
     const std::vector<std::pair<uint64_t, uint64_t>> expected = {{1, 3}, {2, 3}, {3, 3}};
     EXPECT_EQ(reports.headers, expected);
+    EXPECT_EQ(reports.pixels, expected);
   }
 }
 
