@@ -9,6 +9,7 @@
 
 #include "ct/ct_common.h"
 #include "splintcore/ct.h"
+#include "support/dicom_read.h"
 #include "support/test_util.h"
 
 namespace splintcore {
@@ -935,35 +936,43 @@ TEST(CtDicom, SeriesEdges) {
       return !self->cancel;
     }
   };
-  files = {dicom_file(slice(0, 0)), dicom_file(slice(1, 1)), dicom_file(slice(2, 2))};
-  const std::vector<std::string> names = {"f0.dcm", "f1.dcm", "f2.dcm"};
-  std::vector<CtMemoryFile> mem;
-  for (size_t i = 0; i < files.size(); ++i) {
-    mem.push_back({names[i].c_str(), files[i].data(), files[i].size()});
-  }
-  for (bool cancel : {false, true}) {
-    CtMemoryFiles m{mem.data(), 3, 0, {}};
-    Reports reports;
-    reports.cancel = cancel;
+  auto read_reporting = [](const std::vector<std::vector<uint8_t>>& series, bool cancel,
+                           Reports* reports) {
+    const std::vector<std::string> names = {"f0.dcm", "f1.dcm", "f2.dcm"};
+    std::vector<CtMemoryFile> mem;
+    for (size_t i = 0; i < series.size(); ++i) {
+      mem.push_back({names[i].c_str(), series[i].data(), series[i].size()});
+    }
+    CtMemoryFiles m{mem.data(), static_cast<uint32_t>(mem.size()), 0, {}};
+    reports->cancel = cancel;
     Progress progress;
     progress.report = &Reports::report;
-    progress.user = &reports;
+    progress.user = reports;
     TestArena t(1 << 20);
     Context ctx(&t.arena, nullptr, &progress);
     CtVolume volume;
     const Status st =
         read_dicom_series(ctx, ct_memory_series(&m), CtReadOptions{}, &volume, nullptr);
-    if (cancel) {
-      EXPECT_EQ(st.code(), StatusCode::kCancelled) << message(st);
-      EXPECT_EQ(reports.headers.size(), 1u);
-      EXPECT_EQ(t.arena.used(), 0u);
-      continue;
-    }
-    ASSERT_TRUE(st.is_ok()) << message(st);
-    const std::vector<std::pair<uint64_t, uint64_t>> expected = {{1, 3}, {2, 3}, {3, 3}};
-    EXPECT_EQ(reports.headers, expected);
-    EXPECT_EQ(reports.pixels, expected);
-  }
+    EXPECT_EQ(t.arena.used(), st.is_ok() ? volume.voxel_count() * 2 : 0u);
+    return st;
+  };
+  files = {dicom_file(slice(0, 0)), dicom_file(slice(1, 1)), dicom_file(slice(2, 2))};
+  const std::vector<std::pair<uint64_t, uint64_t>> each = {{1, 3}, {2, 3}, {3, 3}};
+  Reports reports;
+  Status st = read_reporting(files, false, &reports);
+  ASSERT_TRUE(st.is_ok()) << message(st);
+  EXPECT_EQ(reports.headers, each);
+  EXPECT_EQ(reports.pixels, each);
+  reports = Reports{};
+  st = read_reporting(files, true, &reports);
+  EXPECT_EQ(st.code(), StatusCode::kCancelled) << message(st);
+  EXPECT_EQ(reports.headers.size(), 1u);
+  // A multi-frame file: one header pass over its file, the pixels frame by frame.
+  reports = Reports{};
+  st = read_reporting({test::ct_fixture("mf16.dcm")}, false, &reports);
+  ASSERT_TRUE(st.is_ok()) << message(st);
+  EXPECT_EQ(reports.headers, (std::vector<std::pair<uint64_t, uint64_t>>{{1, 1}}));
+  EXPECT_EQ(reports.pixels, each);
 }
 
 // Geometry as scanners write it (issue 31): exact values on 2 x 3 slices (pixels 100 k + i,

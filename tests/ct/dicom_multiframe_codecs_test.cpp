@@ -367,6 +367,7 @@ TEST(CtDicomMultiFrameCodecs, TruncatedAndCorruptFrames) {
                                   " fragment item(s) from byte " + std::to_string(frame1) + "): "))
         << test::format(r.status);
     EXPECT_EQ(r.status.index(), 1u);
+    EXPECT_STREQ(r.status.file(), "m0.dcm");
     if (pieces <= 32) {
       EXPECT_EQ(r.status.byte_offset(), at) << test::format(r.status);
     } else {
