@@ -99,6 +99,28 @@ Mesh prism_mesh(Arena& arena, const Vec3& p0, const Vec3& p1, const Vec3& p2, co
   return m;
 }
 
+// The L-shaped prism [0,2]^2 minus (1,2]^2 in x-y, z in [z0, z1]: its edge x = y = 1 is
+// reflex. Caps fanned from the reflex corner (the L is star-shaped from it).
+Mesh l_prism_mesh(Arena& arena, double z0, double z1) {
+  const double xy[6][2] = {{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 2}, {0, 2}};  // counter-clockwise
+  Mesh m(&arena);
+  for (double z : {z0, z1}) {
+    for (const auto& p : xy) EXPECT_TRUE(m.vertices.push_back(Vec3{p[0], p[1], z}));
+  }
+  for (uint32_t k : {4u, 5u, 0u, 1u}) {  // fan triangles (3, k, k + 1)
+    const uint32_t n = (k + 1) % 6;
+    EXPECT_TRUE(m.triangles.push_back(Triangle{{3, n, k}}));          // bottom, facing -z
+    EXPECT_TRUE(m.triangles.push_back(Triangle{{9, k + 6, n + 6}}));  // top, facing +z
+  }
+  for (uint32_t i = 0; i < 6; ++i) {
+    const uint32_t j = (i + 1) % 6;
+    EXPECT_TRUE(m.triangles.push_back(Triangle{{i, j, j + 6}}));
+    EXPECT_TRUE(m.triangles.push_back(Triangle{{i, j + 6, i + 6}}));
+  }
+  EXPECT_EQ(mesh_volume(m), 3 * (z1 - z0));
+  return m;
+}
+
 // |det(p1 - p0, p2 - p0, p3 - p0)| / 6: exact products and sums for these coordinates.
 double tetra_volume(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3) {
   return std::fabs(dot(cross(p1 - p0, p2 - p0), p3 - p0)) / 6.0;
@@ -347,6 +369,21 @@ TEST(BooleanExact, VertexAndEdgeContacts) {
              {4, 132, 4}});
   }
   for (const Case& c : cases) check_case(arena, c, false, true, false);
+}
+
+// A face of A through B's reflex edge: A = the slab 1.5 <= x + y <= 2, |x - y| <= 1, z in
+// [0.5, 1.5] lies inside the L-prism B (z in [0, 2]) and touches its surface only along the
+// edge x = y = 1, which crosses A's face x + y = 2. On either side of that line the face lies
+// below one of the edge's two faces of B and above the other: inside B (at a reflex edge the
+// inside is the union of the two half-spaces). |A| = 0.5, |B| = 6.
+TEST(BooleanExact, FaceThroughAReflexEdge) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Case c{"face through a reflex edge",
+               hex_mesh(arena, {0.5, 1.5, 0.5}, {-0.25, -0.25, 0}, {1, -1, 0}, {0, 0, 1}),
+               l_prism_mesh(arena, 0, 2),
+               {0, 6, 0.5}};
+  check_case(arena, c, false, true, true);
 }
 
 // Exact results that are not edge-manifold solids: kUnsupported with max_nudges = 0, the nudge
