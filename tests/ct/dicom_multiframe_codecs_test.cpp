@@ -504,14 +504,7 @@ TEST(CtDicomMultiFrameCodecs, FileChangedBetweenThePasses) {
 // `file` with the n-th Image Position (Patient) set to `value` (lengths of undefined-length
 // sequences need no update; with defined lengths, keep the length).
 Bytes with_position(Bytes file, int n, std::string value) {
-  if (value.size() % 2 == 1) value.push_back(' ');
-  const size_t at = test::find_bytes(file, test::dicom_tag(0x0020, 0x0032) + "DS", n);
-  EXPECT_NE(at, std::string::npos);
-  const size_t old = file[at + 6] | (file[at + 7] << 8);
-  file.erase(file.begin() + static_cast<std::ptrdiff_t>(at + 8),
-             file.begin() + static_cast<std::ptrdiff_t>(at + 8 + old));
-  file.insert(file.begin() + static_cast<std::ptrdiff_t>(at + 8), value.begin(), value.end());
-  file[at + 6] = static_cast<uint8_t>(value.size());
+  EXPECT_TRUE(test::replace_short_value(&file, test::dicom_tag(0x0020, 0x0032) + "DS", n, value));
   return file;
 }
 

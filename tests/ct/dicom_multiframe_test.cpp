@@ -41,14 +41,7 @@ bool has(const Status& s, const char* text) {
 // short VR given `value` (its length updated).
 Bytes with_value(uint16_t group, uint16_t element, const std::string& value) {
   Bytes b = fixture("mf16.dcm");
-  const size_t at = test::find_bytes(b, test::dicom_tag(group, element));
-  EXPECT_NE(at, std::string::npos);
-  const size_t old = b[at + 6] | (b[at + 7] << 8);
-  b.erase(b.begin() + static_cast<std::ptrdiff_t>(at + 8),
-          b.begin() + static_cast<std::ptrdiff_t>(at + 8 + old));
-  b.insert(b.begin() + static_cast<std::ptrdiff_t>(at + 8), value.begin(), value.end());
-  b[at + 6] = static_cast<uint8_t>(value.size());
-  b[at + 7] = 0;
+  EXPECT_TRUE(test::replace_short_value(&b, test::dicom_tag(group, element), 0, value));
   return b;
 }
 
@@ -163,21 +156,12 @@ TEST(CtDicomMultiFrame, OneFrameReadsLikeItsSlice) {
 // more: mf16_rev (per-frame values, undefined lengths) with its second item's Image
 // Orientation and Pixel Spacing each 2^-10 off (exact in binary, as is the difference).
 TEST(CtDicomMultiFrame, FrameValuesWithinTheTolerance) {
-  Bytes b = fixture("mf16_rev.dcm");
-  auto replace_second = [&](uint16_t group, uint16_t element, const std::string& value) {
-    const size_t at = test::find_bytes(b, test::dicom_tag(group, element) + "DS", 1);
-    ASSERT_NE(at, std::string::npos);
-    const size_t old = b[at + 6] | (b[at + 7] << 8);
-    b.erase(b.begin() + static_cast<std::ptrdiff_t>(at + 8),
-            b.begin() + static_cast<std::ptrdiff_t>(at + 8 + old));
-    b.insert(b.begin() + static_cast<std::ptrdiff_t>(at + 8), value.begin(), value.end());
-    b[at + 6] = static_cast<uint8_t>(value.size());
-  };
-  replace_second(0x0020, 0x0037, "1\\0.0009765625\\0\\0\\1\\0");
-  const Bytes orientation = b;
-  b = fixture("mf16_rev.dcm");
-  replace_second(0x0028, 0x0030, "1.2009765625\\1.2");
-  const Bytes spacing = b;
+  Bytes orientation = fixture("mf16_rev.dcm");
+  ASSERT_TRUE(test::replace_short_value(&orientation, test::dicom_tag(0x0020, 0x0037) + "DS", 1,
+                                        "1\\0.0009765625\\0\\0\\1\\0"));
+  Bytes spacing = fixture("mf16_rev.dcm");
+  ASSERT_TRUE(test::replace_short_value(&spacing, test::dicom_tag(0x0028, 0x0030) + "DS", 1,
+                                        "1.2009765625\\1.2"));
   const double tolerance = 0.0009765625;
   for (const Bytes& f : {orientation, spacing}) {
     const Read r = test::read_dicom_bytes({f}, {"f0.dcm"}, 1 << 20, 0, 4096, tolerance);

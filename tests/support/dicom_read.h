@@ -72,6 +72,23 @@ inline void put_le32(Bytes* b, size_t at, uint32_t v) {
     (*b)[at + static_cast<size_t>(i)] = static_cast<uint8_t>(v >> (8 * i));
 }
 
+// Explicit VR little endian `b` with the value of the n-th (0-based) element starting with
+// `head` (its tag, and its VR if given), a short VR, replaced by `value` (padded to even
+// length with a space) and its 16-bit length updated. Containers of undefined length need no
+// other change; one of defined length around it must keep its length. False: no such element.
+inline bool replace_short_value(Bytes* b, const std::string& head, int n, std::string value) {
+  if (value.size() % 2 == 1) value.push_back(' ');
+  const size_t at = find_bytes(*b, head, n);
+  if (at == std::string::npos) return false;
+  const size_t old = (*b)[at + 6] | ((*b)[at + 7] << 8);
+  b->erase(b->begin() + static_cast<std::ptrdiff_t>(at + 8),
+           b->begin() + static_cast<std::ptrdiff_t>(at + 8 + old));
+  b->insert(b->begin() + static_cast<std::ptrdiff_t>(at + 8), value.begin(), value.end());
+  (*b)[at + 6] = static_cast<uint8_t>(value.size());
+  (*b)[at + 7] = static_cast<uint8_t>(value.size() >> 8);
+  return true;
+}
+
 // Names "<prefix>0.dcm", "<prefix>1.dcm", ...
 inline std::vector<std::string> numbered_names(size_t count, const char* prefix) {
   std::vector<std::string> names;
