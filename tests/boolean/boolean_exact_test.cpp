@@ -386,6 +386,54 @@ TEST(BooleanExact, FaceThroughAReflexEdge) {
   check_case(arena, c, false, true, true);
 }
 
+// Every arena cap below the peak of a run (contacts along a reflex edge, faces shared in
+// part, and a crossing in general position) fails cleanly or gives the same bytes, and the
+// peak itself works: every allocation of the splits of contact triangles (ContactSplit) and
+// of cut ones (CutSplit) can fail.
+TEST(BooleanExact, ArenaExhaustionIsCleanInTheExactRule) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const std::vector<Case> faces = face_cases(arena);
+  std::vector<Case> cases = {faces[1], faces[10]};
+  cases.push_back(Case{"face through a reflex edge",
+                       hex_mesh(arena, {0.5, 1.5, 0.5}, {-0.25, -0.25, 0}, {1, -1, 0}, {0, 0, 1}),
+                       l_prism_mesh(arena, 0, 2),
+                       {0, 6, 0.5}});
+  // And a skewed hexahedron crossing the cube's faces in general position (cut triangles).
+  cases.push_back(Case{"skewed hexahedron",
+                       box_mesh(arena, {0, 0, 0}, {1, 1, 1}),
+                       hex_mesh(arena, {0.25, 0.3125, -0.5}, {1, 0.125, 0.0625},
+                                {-0.125, 1, 0.1875}, {0.0625, -0.1875, 2}),
+                       {0, 0, 0}});
+  for (const Case& c : cases) {
+    for (BooleanOp op : kOps) {
+      SCOPED_TRACE(c.name + " " + boolean_op_name(op));
+      BooleanOptions o;
+      o.op = op;
+      o.max_nudges = 0;
+      size_t need = 0;
+      std::string want;
+      {
+        std::vector<unsigned char> big(size_t{4} << 20);
+        Arena probe(big.data(), big.size());
+        Mesh out;
+        SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&probe), c.a, c.b, o, &out, nullptr));
+        need = probe.high_water();
+        want = test::mesh_sha256(out);
+      }
+      const test::CapsTried tried =
+          test::expect_clean_or_same(test::caps_below(need, 8), want, [&](Arena& small, Mesh* out) {
+            return mesh_boolean(Context(&small), c.a, c.b, o, out, nullptr);
+          });
+      EXPECT_GT(tried.failed, 0);
+      std::vector<unsigned char> buf(need);
+      Arena exact(buf.data(), need);
+      Mesh out;
+      SPLINTCORE_EXPECT_OK(mesh_boolean(Context(&exact), c.a, c.b, o, &out, nullptr));
+    }
+  }
+}
+
 // Exact results that are not edge-manifold solids: kUnsupported with max_nudges = 0, the nudge
 // fallback (attempts > 1) with the default; the other operations of the same inputs are exact.
 TEST(BooleanExact, NonManifoldExactResultsFallBackToTheNudge) {
