@@ -1570,6 +1570,23 @@ TEST(ExactSweep, AShellCrossingItselfIsRefusedOnlyWhereItMeetsTheSplint) {
   EXPECT_NEAR(report.volume, 11.6679, 0.002);
 }
 
+// A cylinder along the direction: its sides are parallel to it (normal . d exactly 0), so
+// only the cap facing against d is front, either way along the axis.
+TEST(ExactSweep, SidesAlongTheDirectionAreNotFront) {
+  TestArena ta(size_t{1} << 24);
+  Context ctx(&ta.arena);
+  Mesh cylinder(&ta.arena);
+  frustum(&cylinder, 3.0, 3.0, 0.0, 8.0, 64);
+  const Aabb region{Vec3{-7, -7, -4}, Vec3{7, 7, 12}};
+  for (double dz : {-1.0, 1.0}) {
+    ArenaScope scope(ta.arena);
+    Mesh out;
+    ExactSweepStats st;
+    SPLINTCORE_ASSERT_OK(sweep_exact_mesh(ctx, cylinder, Vec3{0, 0, dz}, region, &out, &st));
+    EXPECT_EQ(st.front_triangles, 64u) << dz;
+  }
+}
+
 TEST(ExactSweep, BadInputIsNamedAndTheArenaBoundHolds) {
   TestArena ta(size_t{1} << 28);
   Context ctx(&ta.arena);
@@ -1606,6 +1623,10 @@ TEST(ExactSweep, BadInputIsNamedAndTheArenaBoundHolds) {
   Status s = sweep_exact_mesh(ctx, bad, Vec3{0, 0, 1}, region, &out);
   EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
   EXPECT_EQ(s.index(), 5u);
+  bad.triangles[5].v[1] = static_cast<uint32_t>(bad.vertices.size());  // one past the last
+  s = sweep_exact_mesh(ctx, bad, Vec3{0, 0, 1}, region, &out);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_STREQ(s.message(), "exact sweep: triangle 5 has a vertex id out of range");
   bad.triangles[5] = cone.triangles[5];
   bad.vertices[7].y = std::numeric_limits<double>::infinity();
   s = sweep_exact_mesh(ctx, bad, Vec3{0, 0, 1}, region, &out);
