@@ -1407,19 +1407,13 @@ TEST(ExactSweep, AFoldPocketNoDeeperThanTheBoundIsTakenInADeeperOneRefused) {
   // The fold taken in at every 8-byte cap below its peak: a clean kArenaExhausted, or the
   // same bytes.
   const Mesh fan = fold_fan(&ta.arena, 0.06);
-  std::string want;
-  size_t peak = 0;
-  {
-    std::vector<unsigned char> big(size_t{1} << 20);
-    Arena probe(big.data(), big.size());
-    Mesh m;
-    SPLINTCORE_ASSERT_OK(sweep_exact_mesh(Context(&probe), fan, d, region, &m));
-    peak = probe.high_water();
-    want = test::mesh_sha256(m);
-  }
-  const test::CapsTried tried = test::expect_clean_or_same(
-      test::caps_below(peak, 8), want,
-      [&](Arena& small, Mesh* m) { return sweep_exact_mesh(Context(&small), fan, d, region, m); });
+  auto sweep_fan = [&](Arena& a, Mesh* m) {
+    return sweep_exact_mesh(Context(&a), fan, d, region, m);
+  };
+  const test::AmpleRun ample = test::ample_run(size_t{1} << 20, sweep_fan);
+  ASSERT_TRUE(ample.ok);
+  const test::CapsTried tried =
+      test::expect_clean_or_same(test::caps_below(ample.peak, 8), ample.sha, sweep_fan);
   EXPECT_EQ(tried.failed, tried.tried);
 }
 
@@ -1667,18 +1661,14 @@ TEST(ExactSweep, BadInputIsNamedAndTheArenaBoundHolds) {
                         roomy.vertices.size() * sizeof(Vec3)),
             0);
   // Every 8-byte cap below the peak: a clean kArenaExhausted, or the same bytes.
-  size_t peak = 0;
-  {
-    std::vector<unsigned char> big(static_cast<size_t>(need));
-    Arena probe(big.data(), big.size());
-    Mesh m;
-    SPLINTCORE_ASSERT_OK(sweep_exact_mesh(Context(&probe), cone, Vec3{0, 0, -1}, region, &m));
-    peak = probe.high_water();
-  }
-  const test::CapsTried tried = test::expect_clean_or_same(
-      test::caps_below(peak, 8), test::mesh_sha256(roomy), [&](Arena& small, Mesh* m) {
-        return sweep_exact_mesh(Context(&small), cone, Vec3{0, 0, -1}, region, m);
-      });
+  auto sweep_cone = [&](Arena& a, Mesh* m) {
+    return sweep_exact_mesh(Context(&a), cone, Vec3{0, 0, -1}, region, m);
+  };
+  const test::AmpleRun ample = test::ample_run(static_cast<size_t>(need), sweep_cone);
+  ASSERT_TRUE(ample.ok);
+  EXPECT_EQ(ample.sha, test::mesh_sha256(roomy));
+  const test::CapsTried tried =
+      test::expect_clean_or_same(test::caps_below(ample.peak, 8), ample.sha, sweep_cone);
   EXPECT_EQ(tried.failed, tried.tried);
   // Too small an arena: a clean status, nothing left behind.
   std::vector<unsigned char> small(2048);

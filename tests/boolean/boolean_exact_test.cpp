@@ -376,14 +376,16 @@ TEST(BooleanExact, VertexAndEdgeContacts) {
 // edge x = y = 1, which crosses A's face x + y = 2. On either side of that line the face lies
 // below one of the edge's two faces of B and above the other: inside B (at a reflex edge the
 // inside is the union of the two half-spaces). |A| = 0.5, |B| = 6.
+Case reflex_edge_case(Arena& arena) {
+  return Case{"face through a reflex edge",
+              hex_mesh(arena, {0.5, 1.5, 0.5}, {-0.25, -0.25, 0}, {1, -1, 0}, {0, 0, 1}),
+              l_prism_mesh(arena, 0, 2),
+              {0, 6, 0.5}};
+}
+
 TEST(BooleanExact, FaceThroughAReflexEdge) {
   TestArena ta;
-  Arena& arena = ta.arena;
-  const Case c{"face through a reflex edge",
-               hex_mesh(arena, {0.5, 1.5, 0.5}, {-0.25, -0.25, 0}, {1, -1, 0}, {0, 0, 1}),
-               l_prism_mesh(arena, 0, 2),
-               {0, 6, 0.5}};
-  check_case(arena, c, false, true, true);
+  check_case(ta.arena, reflex_edge_case(ta.arena), false, true, true);
 }
 
 // Every arena cap below the peak of a run (contacts along a reflex edge, faces shared in
@@ -395,11 +397,9 @@ TEST(BooleanExact, ArenaExhaustionIsCleanInTheExactRule) {
   Arena& arena = ta.arena;
   const std::vector<Case> faces = face_cases(arena);
   std::vector<Case> cases = {faces[1], faces[10]};
-  cases.push_back(Case{"face through a reflex edge",
-                       hex_mesh(arena, {0.5, 1.5, 0.5}, {-0.25, -0.25, 0}, {1, -1, 0}, {0, 0, 1}),
-                       l_prism_mesh(arena, 0, 2),
-                       {0, 6, 0.5}});
-  // And a skewed hexahedron crossing the cube's faces in general position (cut triangles).
+  cases.push_back(reflex_edge_case(arena));
+  // And a skewed hexahedron crossing the cube's faces in general position (cut triangles;
+  // its volumes are not used here).
   cases.push_back(Case{"skewed hexahedron",
                        box_mesh(arena, {0, 0, 0}, {1, 1, 1}),
                        hex_mesh(arena, {0.25, 0.3125, -0.5}, {1, 0.125, 0.0625},
@@ -411,25 +411,18 @@ TEST(BooleanExact, ArenaExhaustionIsCleanInTheExactRule) {
       BooleanOptions o;
       o.op = op;
       o.max_nudges = 0;
-      size_t need = 0;
-      std::string want;
-      {
-        std::vector<unsigned char> big(size_t{4} << 20);
-        Arena probe(big.data(), big.size());
-        Mesh out;
-        SPLINTCORE_ASSERT_OK(mesh_boolean(Context(&probe), c.a, c.b, o, &out, nullptr));
-        need = probe.high_water();
-        want = test::mesh_sha256(out);
-      }
+      auto run = [&](Arena& a, Mesh* out) {
+        return mesh_boolean(Context(&a), c.a, c.b, o, out, nullptr);
+      };
+      const test::AmpleRun ample = test::ample_run(size_t{4} << 20, run);
+      ASSERT_TRUE(ample.ok);
       const test::CapsTried tried =
-          test::expect_clean_or_same(test::caps_below(need, 8), want, [&](Arena& small, Mesh* out) {
-            return mesh_boolean(Context(&small), c.a, c.b, o, out, nullptr);
-          });
+          test::expect_clean_or_same(test::caps_below(ample.peak, 8), ample.sha, run);
       EXPECT_GT(tried.failed, 0);
-      std::vector<unsigned char> buf(need);
-      Arena exact(buf.data(), need);
+      std::vector<unsigned char> buf(ample.peak);
+      Arena exact(buf.data(), ample.peak);
       Mesh out;
-      SPLINTCORE_EXPECT_OK(mesh_boolean(Context(&exact), c.a, c.b, o, &out, nullptr));
+      SPLINTCORE_EXPECT_OK(run(exact, &out));
     }
   }
 }

@@ -329,6 +329,27 @@ CapsTried expect_clean_or_same(const std::vector<size_t>& caps, const std::strin
   return c;
 }
 
+// A run with room to spare: its arena peak and its mesh's mesh_sha256 (what the runs at the
+// caps below the peak are held to by expect_clean_or_same); `ok` false if it failed.
+struct AmpleRun {
+  bool ok = false;
+  size_t peak = 0;
+  std::string sha;
+};
+template <class Run>
+AmpleRun ample_run(size_t bytes, Run run) {
+  std::vector<unsigned char> big(bytes);
+  Arena probe(big.data(), big.size());
+  Mesh out;
+  AmpleRun a;
+  const Status s = run(probe, &out);
+  EXPECT_TRUE(s.is_ok()) << format(s);
+  a.ok = s.is_ok();
+  a.peak = probe.high_water();
+  a.sha = mesh_sha256(out);
+  return a;
+}
+
 // 0, step, 2 step... up to but not including `end`.
 inline std::vector<size_t> caps_below(size_t end, size_t step) {
   std::vector<size_t> caps;
