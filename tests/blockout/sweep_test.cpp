@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
@@ -2802,6 +2803,104 @@ TEST(Heightfield, RefusesWhatItCannotDo) {
   s = blockout(ctx, box, jaws, b, &blocked);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(std::strstr(s.message(), "no inset"), nullptr) << s.message();
+}
+
+// Each option of the height field at its bound: the value at the bound is taken, the nearest
+// outside it refused by name (kInvalidArgument), with the output left empty. Bounds: voxel > 0
+// and finite, 0 < tolerance <= voxel, 0 <= offset <= 20 voxels with no inset or closing,
+// lower >= 0 and finite, each shift in [0, 1); and the output must be empty.
+TEST(Heightfield, EachOptionIsTakenAtItsBoundAndRefusedBeyond) {
+  TestArena ta(size_t{64} << 20);
+  Context ctx(&ta.arena);
+  Mesh cone(&ta.arena);
+  frustum(&cone, 3.0, 5.0, 0.0, 8.0, 24);
+  const Span<const Mesh> jaws(&cone, 1);
+  SweepOptions base;
+  base.direction = Vec3{0, 0, -1};
+  base.voxel = 0.5;  // a coarse grid: the runs that are taken stay quick
+  base.has_region = true;
+  base.region = Aabb{Vec3{-7, -7, 4}, Vec3{7, 7, 10}};
+  HeightfieldOptions hbase;
+  hbase.tolerance = 0.05;
+  const double below_one = std::nextafter(1.0, 0.0);
+  const double inf = std::numeric_limits<double>::infinity();
+  struct Case {
+    const char* what;
+    std::function<void(SweepOptions*, HeightfieldOptions*)> set;
+    bool taken;
+    const char* named;  // in the message when refused
+  };
+  const std::vector<Case> cases = {
+      {"voxel 0", [](SweepOptions* o, HeightfieldOptions*) { o->voxel = 0; }, false,
+       "the voxel must be > 0"},
+      {"voxel -0.5", [](SweepOptions* o, HeightfieldOptions*) { o->voxel = -0.5; }, false,
+       "the voxel must be > 0"},
+      {"voxel inf", [&](SweepOptions* o, HeightfieldOptions*) { o->voxel = inf; }, false,
+       "the voxel must be > 0"},
+      {"voxel NaN", [](SweepOptions* o, HeightfieldOptions*) { o->voxel = std::nan(""); }, false,
+       "the voxel must be > 0"},
+      {"tolerance 0", [](SweepOptions*, HeightfieldOptions* h) { h->tolerance = 0; }, false,
+       "the tolerance ("},
+      {"tolerance = voxel", [](SweepOptions*, HeightfieldOptions* h) { h->tolerance = 0.5; }, true,
+       nullptr},
+      {"tolerance past the voxel",
+       [](SweepOptions*, HeightfieldOptions* h) { h->tolerance = std::nextafter(0.5, 1.0); }, false,
+       "the tolerance ("},
+      {"offset 20 voxels", [](SweepOptions* o, HeightfieldOptions*) { o->offset = 10.0; }, true,
+       nullptr},
+      {"offset past 20 voxels",
+       [](SweepOptions* o, HeightfieldOptions*) { o->offset = std::nextafter(10.0, 11.0); }, false,
+       "offset"},
+      {"offset below 0", [](SweepOptions* o, HeightfieldOptions*) { o->offset = -1e-9; }, false,
+       "offset"},
+      {"an inset", [](SweepOptions* o, HeightfieldOptions*) { o->inset = 0.1; }, false, "inset"},
+      {"a closing", [](SweepOptions* o, HeightfieldOptions*) { o->closing_radius = 0.5; }, false,
+       "closing"},
+      {"lower below 0", [](SweepOptions*, HeightfieldOptions* h) { h->lower = -1e-9; }, false,
+       "lower"},
+      {"lower inf", [&](SweepOptions*, HeightfieldOptions* h) { h->lower = inf; }, false, "lower"},
+      {"shift_u just below 1",
+       [&](SweepOptions*, HeightfieldOptions* h) { h->shift_u = below_one; }, true, nullptr},
+      {"shift_v just below 1",
+       [&](SweepOptions*, HeightfieldOptions* h) { h->shift_v = below_one; }, true, nullptr},
+      {"shift_v 1", [](SweepOptions*, HeightfieldOptions* h) { h->shift_v = 1.0; }, false,
+       "shifts"},
+      {"shift_u below 0", [](SweepOptions*, HeightfieldOptions* h) { h->shift_u = -1e-9; }, false,
+       "shifts"},
+      {"shift_v below 0", [](SweepOptions*, HeightfieldOptions* h) { h->shift_v = -1e-9; }, false,
+       "shifts"},
+  };
+  for (const Case& c : cases) {
+    SweepOptions o = base;
+    HeightfieldOptions h = hbase;
+    c.set(&o, &h);
+    const size_t used = ta.arena.used();
+    const Arena::Marker mark = ta.arena.mark();
+    Mesh out(&ta.arena);
+    const Status s = sweep_heightfield_mesh(ctx, jaws, o, h, &out);
+    if (c.taken) {
+      EXPECT_TRUE(s.is_ok()) << c.what << ": " << s.message();
+      EXPECT_GT(out.triangles.size(), 0u) << c.what;
+    } else {
+      EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << c.what << ": " << s.message();
+      EXPECT_NE(std::strstr(s.message(), c.named), nullptr) << c.what << ": " << s.message();
+      EXPECT_TRUE(out.triangles.empty() && out.vertices.empty()) << c.what;
+      EXPECT_EQ(ta.arena.used(), used) << c.what;
+    }
+    ta.arena.rewind(mark);
+  }
+  // An output that is not empty, by its triangles or by its vertices alone.
+  for (int part = 0; part < 2; ++part) {
+    Mesh out(&ta.arena);
+    if (part == 0) {
+      ASSERT_TRUE(out.vertices.push_back(Vec3{0, 0, 0}));
+    } else {
+      ASSERT_TRUE(out.triangles.push_back(Triangle{{0, 0, 0}}));
+    }
+    const Status s = sweep_heightfield_mesh(ctx, jaws, base, hbase, &out);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << part;
+    EXPECT_NE(std::strstr(s.message(), "output mesh must be empty"), nullptr) << s.message();
+  }
 }
 
 }  // namespace
