@@ -334,6 +334,23 @@ TEST(BooleanTest, CubeMinusRotatedCube) {
   EXPECT_NEAR(u.volume + i.volume, 1.0 + vb, 1e-12);
 }
 
+// The cut triangles counted per operand: a slab through a cube. The slab's faces z = 0.5 and
+// z = 1.5 (B's triangles 0 to 3, its first among them) cross the cube's four side faces (A's
+// triangles 4 to 11); nothing else crosses. B's triangle 0 is the first triangle after A's,
+// where the count passes from A to B.
+TEST(BooleanTest, CutTrianglesAreCountedPerOperand) {
+  TestArena ta;
+  Arena& arena = ta.arena;
+  const Mesh a = box_mesh(arena, {0, 0, 0}, {2, 2, 2}, RigidTransform{});
+  const Mesh b = box_mesh(arena, {-1, -1, 0.5}, {3.5, 3, 1.5}, RigidTransform{});
+  for (BooleanOp op : {BooleanOp::kDifference, BooleanOp::kUnion, BooleanOp::kIntersection}) {
+    const Result r = run_op(arena, a, b, op, true);
+    ASSERT_TRUE(r.status.is_ok()) << test::format(r.status);
+    EXPECT_EQ(r.stats.cut_triangles_a, 8u) << boolean_op_name(op);
+    EXPECT_EQ(r.stats.cut_triangles_b, 4u) << boolean_op_name(op);
+  }
+}
+
 TEST(BooleanTest, CoplanarContactIsExact) {
   TestArena ta;
   Arena& arena = ta.arena;
