@@ -2805,6 +2805,38 @@ TEST(Heightfield, RefusesWhatItCannotDo) {
   EXPECT_NE(std::strstr(s.message(), "no inset"), nullptr) << s.message();
 }
 
+// A box's vertical sides, standing on grid lines (x, y = +-2 with the grid's vertices every
+// 0.5 mm from -4), face neither way along d (their shadows turn neither way, exactly): only
+// its top's two triangles are taken, and the sheet lies just over the top (3 mm) up to the
+// footprint's edge.
+TEST(Heightfield, VerticalSidesOnGridLinesAreNotTaken) {
+  TestArena ta(size_t{64} << 20);
+  Context ctx(&ta.arena);
+  const float lo[3] = {-2, -2, 0}, hi[3] = {2, 2, 3};
+  const Mesh box = box_mesh(&ta.arena, lo, hi);
+  SweepOptions o;
+  o.direction = Vec3{0, 0, -1};
+  o.voxel = 0.5;
+  o.has_region = true;
+  o.region = Aabb{Vec3{-3, -3, 1}, Vec3{3, 3, 5}};
+  HeightfieldOptions ho;
+  ho.tolerance = 0.05;
+  Mesh sheet;
+  HeightfieldStats st;
+  SPLINTCORE_ASSERT_OK(sweep_heightfield_mesh(ctx, Span<const Mesh>(&box, 1), o, ho, &sheet, &st));
+  EXPECT_EQ(st.triangles_in, 2u);
+  size_t over_top = 0, on_edge = 0;
+  for (const Vec3& p : sheet.vertices) {
+    if (std::fabs(p.x) > 2 || std::fabs(p.y) > 2) continue;
+    ++over_top;
+    if (std::fabs(p.x) == 2 || std::fabs(p.y) == 2) ++on_edge;
+    EXPECT_GT(p.z, 3.0) << p.x << " " << p.y;
+    EXPECT_LE(p.z, 3.0 + ho.tolerance + 1e-4) << p.x << " " << p.y;
+  }
+  EXPECT_GT(on_edge, 0u);
+  EXPECT_GT(over_top, on_edge);
+}
+
 // Each option of the height field at its bound: the value at the bound is taken, the nearest
 // outside it refused by name (kInvalidArgument), with the output left empty. Bounds: voxel > 0
 // and finite, 0 < tolerance <= voxel, 0 <= offset <= 20 voxels with no inset or closing,
