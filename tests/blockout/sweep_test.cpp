@@ -2837,6 +2837,38 @@ TEST(Heightfield, VerticalSidesOnGridLinesAreNotTaken) {
   EXPECT_GT(over_top, on_edge);
 }
 
+// A jaw triangle whose corner is one past the jaw's last vertex, at each corner in turn, in
+// the second of two jaws: refused by name (the triangle and its jaw), the output empty and the
+// arena as it was.
+TEST(Heightfield, AVertexIdOnePastTheLastIsNamedWithItsJaw) {
+  TestArena ta(size_t{64} << 20);
+  Context ctx(&ta.arena);
+  Mesh jaws[2] = {Mesh(&ta.arena), Mesh(&ta.arena)};
+  frustum(&jaws[0], 3.0, 5.0, 0.0, 8.0, 24);
+  frustum(&jaws[1], 3.0, 5.0, 0.0, 8.0, 24);
+  SweepOptions o;
+  o.direction = Vec3{0, 0, -1};
+  o.voxel = 0.5;
+  o.has_region = true;
+  o.region = Aabb{Vec3{-7, -7, 4}, Vec3{7, 7, 10}};
+  HeightfieldOptions ho;
+  ho.tolerance = 0.05;
+  const Triangle kept = jaws[1].triangles[7];
+  for (int k = 0; k < 3; ++k) {
+    jaws[1].triangles[7] = kept;
+    jaws[1].triangles[7].v[k] = static_cast<uint32_t>(jaws[1].vertices.size());
+    const size_t used = ta.arena.used();
+    Mesh out;
+    const Status s = sweep_heightfield_mesh(ctx, Span<const Mesh>(jaws, 2), o, ho, &out);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidMesh) << k;
+    EXPECT_STREQ(s.message(),
+                 "heightfield: triangle 7 of jaw 1 refers to a vertex that does not exist");
+    EXPECT_EQ(s.index(), 7u);
+    EXPECT_TRUE(out.triangles.empty() && out.vertices.empty());
+    EXPECT_EQ(ta.arena.used(), used);
+  }
+}
+
 // Each option of the height field at its bound: the value at the bound is taken, the nearest
 // outside it refused by name (kInvalidArgument), with the output left empty. Bounds: voxel > 0
 // and finite, 0 < tolerance <= voxel, 0 <= offset <= 20 voxels with no inset or closing,
