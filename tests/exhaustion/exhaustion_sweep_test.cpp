@@ -418,6 +418,23 @@ TEST(ExhaustionSweep, Mesh) {
     }
     return r;
   });
+  // The scan preparation's passes on the flawed torus and a small box beside it (an island).
+  std::vector<SoupTriangle> scan = faulty;
+  for (const SoupTriangle& t : box_soup(40, 40.5f)) scan.push_back(t);
+  HeldMesh scanned(scan);
+  sweep("prepare_scan (hole, duplicate, island)", [&](Arena& a) {
+    OpRun r;
+    Mesh out;
+    PrepareReport report;
+    r.status = prepare_scan(Context(&a), scanned.mesh, PrepareOptions{}, &out, &report);
+    r.outputs_empty = mesh_empty(out);
+    if (r.status.is_ok()) {
+      EXPECT_EQ(report.duplicate_triangles, 1u);
+      EXPECT_EQ(report.holes_filled, 1u);
+      append_mesh(&r.output, out);
+    }
+    return r;
+  });
   sweep("check_closed_oriented", [&](Arena& a) {
     OpRun r;
     double volume = 0;
