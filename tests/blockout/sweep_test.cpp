@@ -2259,6 +2259,16 @@ TEST(Blockout, DecimatedSweepPassesTheIndependentCheck) {
 
 // ---- the height field (sweep_heightfield_mesh, BlockoutOptions::heightfield)
 
+// Options for a height field along -z over `region` at `voxel` mm.
+SweepOptions down_over(const Aabb& region, double voxel) {
+  SweepOptions o;
+  o.direction = Vec3{0, 0, -1};
+  o.voxel = voxel;
+  o.has_region = true;
+  o.region = region;
+  return o;
+}
+
 // The big-end-up cone's height field along -z over a box: an open sheet whose border is the
 // grid's edge outside the region, every edge of it used once each way; flat over the cap and
 // within the tolerance above it (z from 8 up: w = -z lies below h = -8), nowhere below it.
@@ -2267,11 +2277,7 @@ TEST(Heightfield, ConeGivesAnOpenSheetOverTheCapWithinTheTolerance) {
   Context ctx(&ta.arena);
   Mesh cone(&ta.arena);
   frustum(&cone, 3.0, 5.0, 0.0, 8.0, 360);
-  SweepOptions o;
-  o.direction = Vec3{0, 0, -1};
-  o.voxel = 0.1;
-  o.has_region = true;
-  o.region = Aabb{Vec3{-7, -7, 4}, Vec3{7, 7, 10}};
+  SweepOptions o = down_over(Aabb{Vec3{-7, -7, 4}, Vec3{7, 7, 10}}, 0.1);
   HeightfieldOptions ho;
   ho.tolerance = 0.01;
   Mesh sheet;
@@ -2814,11 +2820,7 @@ TEST(Heightfield, VerticalSidesOnGridLinesAreNotTaken) {
   Context ctx(&ta.arena);
   const float lo[3] = {-2, -2, 0}, hi[3] = {2, 2, 3};
   const Mesh box = box_mesh(&ta.arena, lo, hi);
-  SweepOptions o;
-  o.direction = Vec3{0, 0, -1};
-  o.voxel = 0.5;
-  o.has_region = true;
-  o.region = Aabb{Vec3{-3, -3, 1}, Vec3{3, 3, 5}};
+  SweepOptions o = down_over(Aabb{Vec3{-3, -3, 1}, Vec3{3, 3, 5}}, 0.5);
   HeightfieldOptions ho;
   ho.tolerance = 0.05;
   Mesh sheet;
@@ -2846,11 +2848,7 @@ TEST(Heightfield, AVertexIdOnePastTheLastIsNamedWithItsJaw) {
   Mesh jaws[2] = {Mesh(&ta.arena), Mesh(&ta.arena)};
   frustum(&jaws[0], 3.0, 5.0, 0.0, 8.0, 24);
   frustum(&jaws[1], 3.0, 5.0, 0.0, 8.0, 24);
-  SweepOptions o;
-  o.direction = Vec3{0, 0, -1};
-  o.voxel = 0.5;
-  o.has_region = true;
-  o.region = Aabb{Vec3{-7, -7, 4}, Vec3{7, 7, 10}};
+  SweepOptions o = down_over(Aabb{Vec3{-7, -7, 4}, Vec3{7, 7, 10}}, 0.5);
   HeightfieldOptions ho;
   ho.tolerance = 0.05;
   const Triangle kept = jaws[1].triangles[7];
@@ -2879,11 +2877,8 @@ TEST(Heightfield, EachOptionIsTakenAtItsBoundAndRefusedBeyond) {
   Mesh cone(&ta.arena);
   frustum(&cone, 3.0, 5.0, 0.0, 8.0, 24);
   const Span<const Mesh> jaws(&cone, 1);
-  SweepOptions base;
-  base.direction = Vec3{0, 0, -1};
-  base.voxel = 0.5;  // a coarse grid: the runs that are taken stay quick
-  base.has_region = true;
-  base.region = Aabb{Vec3{-7, -7, 4}, Vec3{7, 7, 10}};
+  // A coarse grid: the runs that are taken stay quick.
+  const SweepOptions base = down_over(Aabb{Vec3{-7, -7, 4}, Vec3{7, 7, 10}}, 0.5);
   HeightfieldOptions hbase;
   hbase.tolerance = 0.05;
   const double below_one = std::nextafter(1.0, 0.0);
