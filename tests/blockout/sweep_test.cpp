@@ -2867,6 +2867,42 @@ TEST(Heightfield, AVertexIdOnePastTheLastIsNamedWithItsJaw) {
   }
 }
 
+// With an offset, two jaws give the bytes of the same two meshes as one: each jaw's vertices
+// keep their own offset faces (the jaws' vertices numbered on from the first's). Two cones
+// side by side, the second with fewer sides, so that its vertex ids are no copy of the first's.
+TEST(Heightfield, OffsetOverTwoJawsGivesTheBytesOfOneMeshOfBoth) {
+  TestArena ta(size_t{256} << 20);
+  Context ctx(&ta.arena);
+  Mesh jaws[2] = {Mesh(&ta.arena), Mesh(&ta.arena)};
+  const RigidTransform left = RigidTransform::translation(Vec3{-4, 0, 0});
+  const RigidTransform right = RigidTransform::translation(Vec3{4, 0, 1});
+  frustum(&jaws[0], 2.0, 3.0, 0.0, 6.0, 40, &left);
+  frustum(&jaws[1], 2.0, 3.0, 0.0, 6.0, 30, &right);
+  Mesh both(&ta.arena);
+  for (const Mesh& m : jaws) {
+    const uint32_t first = static_cast<uint32_t>(both.vertices.size());
+    for (const Vec3& p : m.vertices) ASSERT_TRUE(both.vertices.push_back(p));
+    for (const Triangle& t : m.triangles) {
+      ASSERT_TRUE(
+          both.triangles.push_back(Triangle{{t.v[0] + first, t.v[1] + first, t.v[2] + first}}));
+    }
+  }
+  SweepOptions o = down_over(Aabb{Vec3{-8, -4, 3}, Vec3{8, 4, 9}}, 0.2);
+  o.offset = 0.3;
+  HeightfieldOptions ho;
+  ho.tolerance = 0.02;
+  Mesh apart, one;
+  HeightfieldStats st_apart, st_one;
+  SPLINTCORE_ASSERT_OK(
+      sweep_heightfield_mesh(ctx, Span<const Mesh>(jaws, 2), o, ho, &apart, &st_apart));
+  SPLINTCORE_ASSERT_OK(
+      sweep_heightfield_mesh(ctx, Span<const Mesh>(&both, 1), o, ho, &one, &st_one));
+  EXPECT_EQ(st_apart.triangles_in, 70u);  // the two top caps' fans
+  EXPECT_EQ(st_one.triangles_in, 70u);
+  EXPECT_EQ(test::mesh_sha256(apart), test::mesh_sha256(one));
+  EXPECT_GT(apart.triangles.size(), 0u);
+}
+
 // Each option of the height field at its bound: the value at the bound is taken, the nearest
 // outside it refused by name (kInvalidArgument), with the output left empty. Bounds: voxel > 0
 // and finite, 0 < tolerance <= voxel, 0 <= offset <= 20 voxels with no inset or closing,
