@@ -77,30 +77,12 @@ struct Counts {
   uint64_t small_caps = 0;     // caps 0..256 run byte by byte
 };
 
-// The remedy's "at least N bytes" (the arena's and marching cubes' messages end with
-// "increase the memory cap to at least N bytes"), else "need N bytes" -> N (0 when absent).
-uint64_t need_of(const Status& s) {
-  const std::string m = s.message();
-  for (const std::string tag : {"to at least ", "need "}) {
-    const size_t at = m.rfind(tag);
-    if (at != std::string::npos) return std::strtoull(m.c_str() + at + tag.size(), nullptr, 10);
-  }
-  return 0;
-}
-
 // The failure's checks; returns the need (0 when the failure is not clean).
 uint64_t check_failure(const char* name, const OpRun& r, const Arena& arena, size_t used_before,
                        const std::string& where) {
   EXPECT_EQ(r.status.code(), StatusCode::kArenaExhausted)
       << name << " " << where << ": " << format(r.status);
-  uint64_t need = need_of(r.status);
-  // Marching cubes' id-pool message names the increase instead ("increase the memory cap by
-  // at least N bytes"): the need is then the cap plus N.
-  const std::string m = r.status.message();
-  const size_t by = m.rfind("by at least ");
-  if (need == 0 && by != std::string::npos) {
-    need = arena.cap() + std::strtoull(m.c_str() + by + 12, nullptr, 10);
-  }
+  const uint64_t need = test::need_of(r.status, arena.cap());
   EXPECT_NE(std::string(r.status.message()).find(" bytes"), std::string::npos)
       << name << " " << where << ": " << r.status.message();
   EXPECT_GT(need, 0u) << name << " " << where << ": " << r.status.message();

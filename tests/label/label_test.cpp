@@ -653,5 +653,46 @@ TEST(LabelTest, ArenaExhaustionIsCleanAtEveryCapTried) {
   EXPECT_EQ(test::mesh_sha256(l.mesh), reference);
 }
 
+// The glyph mesh alone, failed at every allocation that raises the arena's high water: from
+// cap 0, each failing run names its need (test::need_of) and the next run gets exactly that
+// much, so it passes that allocation and fails at a later one, until one works. Each failure
+// is clean; the run at the end gives the bytes of a run with room to spare. (The cap sweep
+// above steps by a 24th of the whole label's need: the glyphs' temporaries at the start, the
+// arc-length table and the jobs beside the segments, were never refused there one by one.)
+TEST(LabelTest, GlyphMeshFailsCleanlyAtEveryNewHighWater) {
+  ASSERT_TRUE(fixture().ok);
+  LabelOptions o;
+  o.text = "AB";
+  std::string reference;
+  size_t need = 0;
+  {
+    TestArena t(size_t{256} << 20);
+    const Labelled l = run(t, o, false);
+    ASSERT_TRUE(l.status.is_ok()) << test::format(l.status);
+    reference = test::mesh_sha256(l.mesh);
+    need = t.arena.high_water();
+  }
+  size_t cap = 0;
+  int points = 0;
+  for (; points < 10000; ++points) {
+    TestArena t(cap);
+    const Labelled l = run(t, o, false);
+    if (l.status.is_ok()) {
+      EXPECT_EQ(test::mesh_sha256(l.mesh), reference) << "cap " << cap;
+      break;
+    }
+    ASSERT_EQ(l.status.code(), StatusCode::kArenaExhausted) << cap << " " << test::format(l.status);
+    EXPECT_EQ(t.arena.used(), 0u) << "cap " << cap;
+    EXPECT_TRUE(l.mesh.vertices.empty() && l.mesh.triangles.empty()) << "cap " << cap;
+    const uint64_t named = test::need_of(l.status, cap);
+    ASSERT_GT(named, cap) << "a need within the cap: " << l.status.message();
+    // (A growth may name more than an unconstrained run takes: then the reference's need.)
+    cap = named < need ? static_cast<size_t>(named) : need;
+  }
+  EXPECT_LE(cap, need);
+  EXPECT_GT(points, 5);
+  std::printf("[ figures  ] glyph mesh: %d failure points up to %zu bytes\n", points, cap);
+}
+
 }  // namespace
 }  // namespace splintcore

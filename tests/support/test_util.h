@@ -293,6 +293,22 @@ inline bool copy_mesh(Arena& arena, const Mesh& from, Mesh* to) {
   return true;
 }
 
+// The bytes a kArenaExhausted status in an arena of `cap` bytes names as its need: the
+// remedy's "to at least N bytes" (the arena's and marching cubes' messages end with "increase
+// the memory cap to at least N bytes"), else "need N bytes" -> N; marching cubes' id pool names
+// the increase instead ("increase the memory cap by at least N bytes") -> cap + N. 0 when the
+// message names none.
+inline uint64_t need_of(const Status& s, uint64_t cap) {
+  const std::string m = s.message();
+  for (const std::string tag : {"to at least ", "need "}) {
+    const size_t at = m.rfind(tag);
+    if (at != std::string::npos) return std::strtoull(m.c_str() + at + tag.size(), nullptr, 10);
+  }
+  const size_t by = m.rfind("by at least ");
+  if (by != std::string::npos) return cap + std::strtoull(m.c_str() + by + 12, nullptr, 10);
+  return 0;
+}
+
 // What a run at caps below its ample peak did (expect_clean_or_same).
 struct CapsTried {
   int tried = 0;
