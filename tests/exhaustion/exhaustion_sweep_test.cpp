@@ -329,6 +329,47 @@ std::vector<SoupTriangle> box_soup(float lo, float hi) {
   return shapes::box(a, b);
 }
 
+// Thirteen tetrahedra on thirteen points, any two sharing exactly one corner: the blocks
+// {0, 1, 3, 9} + i mod 13 of the projective plane of order 3, on points of the moment curve
+// (i, i^2, i^3) (no four coplanar), each turned outward.
+std::vector<SoupTriangle> tetrahedra_of_the_plane_of_order_3() {
+  std::vector<SoupTriangle> plane;
+  float pt[13][3];
+  for (int i = 0; i < 13; ++i) {
+    pt[i][0] = static_cast<float>(i);
+    pt[i][1] = static_cast<float>(i * i);
+    pt[i][2] = static_cast<float>(i * i * i);
+  }
+  const int kBlock[4] = {0, 1, 3, 9};
+  for (int i = 0; i < 13; ++i) {
+    int c[4];
+    for (int k = 0; k < 4; ++k) c[k] = (kBlock[k] + i) % 13;
+    // Turned so that c[3] lies behind face (c[0], c[1], c[2]) (their volume negative): that
+    // face and the three others then face outward.
+    const auto vol = [&](int a, int b, int d, int e) {
+      double u[3], v[3], w[3];
+      for (int x = 0; x < 3; ++x) {
+        u[x] = double{pt[b][x]} - pt[a][x];
+        v[x] = double{pt[d][x]} - pt[a][x];
+        w[x] = double{pt[e][x]} - pt[a][x];
+      }
+      return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+             u[2] * (v[0] * w[1] - v[1] * w[0]);
+    };
+    if (vol(c[0], c[1], c[2], c[3]) > 0) std::swap(c[1], c[2]);
+    const int faces[4][3] = {
+        {c[0], c[1], c[2]}, {c[0], c[3], c[1]}, {c[1], c[3], c[2]}, {c[0], c[2], c[3]}};
+    for (const auto& f : faces) {
+      SoupTriangle t;
+      for (int k = 0; k < 3; ++k) {
+        for (int x = 0; x < 3; ++x) t.p[k][x] = pt[f[k]][x];
+      }
+      plane.push_back(t);
+    }
+  }
+  return plane;
+}
+
 // A mesh held in its own arena (the input of an operation under test).
 struct HeldMesh {
   test::TestArena t{size_t{64} << 20};
@@ -400,46 +441,10 @@ TEST(ExhaustionSweep, Mesh) {
     }
     return r;
   });
-  // Thirteen tetrahedra on thirteen points, any two sharing exactly one corner (the blocks
-  // {0, 1, 3, 9} + i mod 13 of the projective plane of order 3; points on the moment curve, no
-  // four coplanar): 13 shells, every vertex in four. The (vertex, shell) pairs of the shells'
-  // vertex counts then outgrow the edge pass, so their allocations raise the high water.
-  std::vector<SoupTriangle> plane;
-  {
-    float pt[13][3];
-    for (int i = 0; i < 13; ++i) {
-      pt[i][0] = static_cast<float>(i);
-      pt[i][1] = static_cast<float>(i * i);
-      pt[i][2] = static_cast<float>(i * i * i);
-    }
-    const int kBlock[4] = {0, 1, 3, 9};
-    for (int i = 0; i < 13; ++i) {
-      int c[4];
-      for (int k = 0; k < 4; ++k) c[k] = (kBlock[k] + i) % 13;
-      // Outward: the fourth corner below each face; the faces' turn from the first's volume.
-      const auto vol = [&](int a, int b, int d, int e) {
-        double u[3], v[3], w[3];
-        for (int x = 0; x < 3; ++x) {
-          u[x] = double{pt[b][x]} - pt[a][x];
-          v[x] = double{pt[d][x]} - pt[a][x];
-          w[x] = double{pt[e][x]} - pt[a][x];
-        }
-        return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
-               u[2] * (v[0] * w[1] - v[1] * w[0]);
-      };
-      if (vol(c[0], c[1], c[2], c[3]) > 0) std::swap(c[1], c[2]);
-      const int faces[4][3] = {
-          {c[0], c[1], c[2]}, {c[0], c[3], c[1]}, {c[1], c[3], c[2]}, {c[0], c[2], c[3]}};
-      for (const auto& f : faces) {
-        SoupTriangle t;
-        for (int k = 0; k < 3; ++k) {
-          for (int x = 0; x < 3; ++x) t.p[k][x] = pt[f[k]][x];
-        }
-        plane.push_back(t);
-      }
-    }
-  }
-  HeldMesh shared(plane);
+  // Thirteen tetrahedra any two of which share one corner: 13 shells, every vertex in four.
+  // The (vertex, shell) pairs of the shells' vertex counts then outgrow the edge pass, so
+  // their allocations raise the high water.
+  HeldMesh shared(tetrahedra_of_the_plane_of_order_3());
   sweep("check_mesh (shells sharing vertices)", [&](Arena& a) {
     OpRun r;
     MeshReport report;
