@@ -657,8 +657,8 @@ TEST(LabelTest, ArenaExhaustionIsCleanAtEveryCapTried) {
 // cap 0, each failing run names its need (test::need_of) and the next run gets exactly that
 // much, so it passes that allocation and fails at a later one, until one works. Each failure
 // is clean; the run at the end gives the bytes of a run with room to spare. (The cap sweep
-// above steps by a 24th of the whole label's need: the glyphs' temporaries at the start, the
-// arc-length table and the jobs beside the segments, were never refused there one by one.)
+// above steps by a 24th of the whole label's need. Allocations below a high water an earlier
+// stage left, such as the arc-length table and the jobs beside the segments, no cap refuses.)
 TEST(LabelTest, GlyphMeshFailsCleanlyAtEveryNewHighWater) {
   ASSERT_TRUE(fixture().ok);
   LabelOptions o;
