@@ -2402,14 +2402,7 @@ TEST(Heightfield, SlantedOverhangsGiveAValidUnlockedSolid) {
   SPLINTCORE_ASSERT_OK(find_self_intersections(ctx, blocked, 0, &si));
   EXPECT_FALSE(si.self_intersecting());
   Mesh both(&ta.arena);
-  for (const Mesh& m : jaws) {
-    const uint32_t base = static_cast<uint32_t>(both.vertices.size());
-    for (const Vec3& p : m.vertices) ASSERT_TRUE(both.vertices.push_back(p));
-    for (const Triangle& t : m.triangles) {
-      ASSERT_TRUE(
-          both.triangles.push_back(Triangle{{t.v[0] + base, t.v[1] + base, t.v[2] + base}}));
-    }
-  }
+  for (const Mesh& m : jaws) ASSERT_TRUE(test::append_mesh_to(m, &both));
   Vec3 u, v;
   test::axes_across(d, &u, &v);
   const LockReport after =
@@ -2879,14 +2872,7 @@ TEST(Heightfield, OffsetOverTwoJawsGivesTheBytesOfOneMeshOfBoth) {
   frustum(&jaws[0], 2.0, 3.0, 0.0, 6.0, 40, &left);
   frustum(&jaws[1], 2.0, 3.0, 0.0, 6.0, 30, &right);
   Mesh both(&ta.arena);
-  for (const Mesh& m : jaws) {
-    const uint32_t first = static_cast<uint32_t>(both.vertices.size());
-    for (const Vec3& p : m.vertices) ASSERT_TRUE(both.vertices.push_back(p));
-    for (const Triangle& t : m.triangles) {
-      ASSERT_TRUE(
-          both.triangles.push_back(Triangle{{t.v[0] + first, t.v[1] + first, t.v[2] + first}}));
-    }
-  }
+  for (const Mesh& m : jaws) ASSERT_TRUE(test::append_mesh_to(m, &both));
   SweepOptions o = down_over(Aabb{Vec3{-8, -4, 3}, Vec3{8, 4, 9}}, 0.2);
   o.offset = 0.3;
   HeightfieldOptions ho;

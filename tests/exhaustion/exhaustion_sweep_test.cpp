@@ -320,6 +320,29 @@ Counts sweep(const char* name, const Operation& op, size_t reference_cap = size_
   return counts;
 }
 
+// check_mesh of `mesh` as an operation for sweep(): its output the report's counts, genus
+// and volume; `expect` checks a report that came out.
+Operation check_mesh_of(const Mesh& mesh, std::function<void(const MeshReport&)> expect) {
+  return [&mesh, expect](Arena& a) {
+    OpRun r;
+    MeshReport report;
+    r.status = check_mesh(Context(&a), mesh, &report);
+    if (r.status.is_ok()) {
+      expect(report);
+      const uint64_t f[] = {report.edge_count,
+                            report.boundary_edges,
+                            report.boundary_loops,
+                            report.nonmanifold_edges,
+                            report.duplicate_triangles,
+                            report.shells,
+                            static_cast<uint64_t>(report.genus)};
+      append_bytes(&r.output, f, 7);
+      append_bytes(&r.output, &report.volume, 1);
+    }
+    return r;
+  };
+}
+
 // ---- inputs (outside any arena under test) -------------------------------------------------
 
 std::vector<SoupTriangle> torus_soup() { return shapes::torus(12, 8, 10, 3); }
@@ -407,58 +430,31 @@ TEST(ExhaustionSweep, Mesh) {
     return r;
   });
   HeldMesh torus(soup);
-  sweep("check_mesh", [&](Arena& a) {
-    OpRun r;
-    MeshReport report;
-    r.status = check_mesh(Context(&a), torus.mesh, &report);
-    if (r.status.is_ok()) {
-      EXPECT_TRUE(report.is_valid_solid());
-      EXPECT_EQ(report.genus, 1);
-      const uint64_t f[] = {report.edge_count, report.shells, static_cast<uint64_t>(report.genus),
-                            report.boundary_edges};
-      append_bytes(&r.output, f, 4);
-      append_bytes(&r.output, &report.volume, 1);
-    }
-    return r;
-  });
+  sweep("check_mesh", check_mesh_of(torus.mesh, [](const MeshReport& report) {
+          EXPECT_TRUE(report.is_valid_solid());
+          EXPECT_EQ(report.genus, 1);
+        }));
   // With a hole (a boundary loop) and a triangle twice (edges of 3 uses, a duplicate): the
   // check takes the boundary's union-find and the collected triangles only when it meets them.
   std::vector<SoupTriangle> faulty(soup.begin() + 1, soup.end());
   faulty.push_back(soup[40]);
   HeldMesh flawed(faulty);
-  sweep("check_mesh (a hole, a duplicate)", [&](Arena& a) {
-    OpRun r;
-    MeshReport report;
-    r.status = check_mesh(Context(&a), flawed.mesh, &report);
-    if (r.status.is_ok()) {
-      EXPECT_EQ(report.boundary_loops, 1u);
-      EXPECT_EQ(report.duplicate_triangles, 1u);
-      EXPECT_GT(report.nonmanifold_edges, 0u);
-      const uint64_t f[] = {report.edge_count,          report.boundary_edges,
-                            report.boundary_loops,      report.nonmanifold_edges,
-                            report.duplicate_triangles, report.shells};
-      append_bytes(&r.output, f, 6);
-    }
-    return r;
-  });
+  sweep("check_mesh (a hole, a duplicate)",
+        check_mesh_of(flawed.mesh, [](const MeshReport& report) {
+          EXPECT_EQ(report.boundary_loops, 1u);
+          EXPECT_EQ(report.duplicate_triangles, 1u);
+          EXPECT_GT(report.nonmanifold_edges, 0u);
+        }));
   // Thirteen tetrahedra any two of which share one corner: 13 shells, every vertex in four.
   // The (vertex, shell) pairs of the shells' vertex counts then outgrow the edge pass, so
   // their allocations raise the high water.
   HeldMesh shared(tetrahedra_of_the_plane_of_order_3());
-  sweep("check_mesh (shells sharing vertices)", [&](Arena& a) {
-    OpRun r;
-    MeshReport report;
-    r.status = check_mesh(Context(&a), shared.mesh, &report);
-    if (r.status.is_ok()) {
-      EXPECT_EQ(report.shells, 13u);
-      EXPECT_EQ(report.vertex_count, 13u);
-      EXPECT_TRUE(report.is_valid_solid()) << test::format(require_valid_solid(report));
-      append_bytes(&r.output, &report.shells, 1);
-      append_bytes(&r.output, &report.genus, 1);
-      append_bytes(&r.output, &report.volume, 1);
-    }
-    return r;
-  });
+  sweep("check_mesh (shells sharing vertices)",
+        check_mesh_of(shared.mesh, [](const MeshReport& report) {
+          EXPECT_EQ(report.shells, 13u);
+          EXPECT_EQ(report.vertex_count, 13u);
+          EXPECT_TRUE(report.is_valid_solid()) << test::format(require_valid_solid(report));
+        }));
   // The scan preparation's passes on the flawed torus and a small box beside it (an island).
   std::vector<SoupTriangle> scan = faulty;
   for (const SoupTriangle& t : box_soup(40, 40.5f)) scan.push_back(t);

@@ -293,6 +293,21 @@ inline bool copy_mesh(Arena& arena, const Mesh& from, Mesh* to) {
   return true;
 }
 
+// `from`'s vertices and triangles appended to `to` (its vertex ids moved past `to`'s
+// vertices): several meshes as one; false when `to`'s arena is exhausted.
+inline bool append_mesh_to(const Mesh& from, Mesh* to) {
+  const uint32_t base = static_cast<uint32_t>(to->vertices.size());
+  for (const Vec3& p : from.vertices) {
+    if (!to->vertices.push_back(p)) return false;
+  }
+  for (const Triangle& t : from.triangles) {
+    if (!to->triangles.push_back(Triangle{{t.v[0] + base, t.v[1] + base, t.v[2] + base}})) {
+      return false;
+    }
+  }
+  return true;
+}
+
 // The bytes a kArenaExhausted status in an arena of `cap` bytes names as its need: the
 // remedy's "to at least N bytes" (the arena's and marching cubes' messages end with "increase
 // the memory cap to at least N bytes"), else "need N bytes" -> N; marching cubes' id pool names
